@@ -1,0 +1,20 @@
+"""Saturating event counters."""
+
+from amaranth.hdl import *
+from amaranth.lib import wiring
+from amaranth.lib.wiring import In, Out
+
+
+class SaturatingCounter(wiring.Component):
+    """Counts ``inc`` strobes, sticks at the maximum, returns to 0 on ``clear``."""
+
+    def __init__(self, width):
+        super().__init__({"inc": In(1), "clear": In(1), "count": Out(width)})
+
+    def elaborate(self, platform):
+        m = Module()
+        with m.If(self.clear):
+            m.d.sync += self.count.eq(0)
+        with m.Elif(self.inc & ~self.count.all()):
+            m.d.sync += self.count.eq(self.count + 1)
+        return m

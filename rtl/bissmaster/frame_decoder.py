@@ -1,0 +1,140 @@
+"""Frame decoder: Ack, Start, CDS, then one or two single-cycle data words."""
+
+from amaranth.hdl import *
+from amaranth.lib import data, wiring
+from amaranth.lib.wiring import In, Out
+
+from .params import CRC_WIDTH, WORD_CONFIG, Crc
+from .word_crc import WordCrc
+from . import protocol
+
+
+def word_length(word):
+    """Bits of one word on the line, from its runtime configuration (a WORD_CONFIG view)."""
+    crc_bits = Mux(word.crc == Crc.CRC16, CRC_WIDTH[Crc.CRC16],
+                   Mux(word.crc == Crc.CRC6, CRC_WIDTH[Crc.CRC6], 0))
+    return (word.data_bits + Mux(word.nenw, protocol.NE_NW_BITS, 0)
+            + Mux(word.lc, protocol.LC_BITS, 0) + crc_bits)
+
+
+class FrameDecoder(wiring.Component):
+    """Turns the sampled slots of one cycle into fields.
+
+    Slots arrive from :class:`~bissmaster.slo_sampler.SloSampler`, slot 0 being the first Ack
+    slot. Low slots are Ack; the first high slot is Start; then CDS; then each word's data
+    (MSB first, right-justified in ``data``), nE, nW, LC and CRC. One more slot, the stop bit,
+    ends the frame: the encoder's timeout has begun, so the master may look for SLO high again.
+
+    Each word feeds its own CRC checker, so the CPW CRC-6 and SPW CRC-16 run concurrently.
+    ``crc_ok`` is combinational from the checker's register: valid in the clock after the
+    word's last bit was sampled, and held until the next frame.
+
+    The master holds it in reset between cycles (``ResetInserter``), which also clears the
+    data registers, so data fields are right-justified.
+
+    ``done`` strobes one clock after the last bit of the last word was sampled, when every
+    field and ``crc_ok`` is final.
+    """
+
+    def __init__(self, params):
+        self._params = params
+        words = params.words
+        super().__init__({
+            "sample": In(1),
+            "bit": In(1),
+            "words": In(data.ArrayLayout(WORD_CONFIG, words)),
+            "word_count": In(range(1, words + 1)),
+            "frame_bits": Out(8),           # bits after CDS, for the MA clock's stop
+            "started": Out(1),
+            "start_slot": Out(16),
+            "slots": Out(16),                # slots sampled so far (saturating)
+            "cds": Out(1),
+            **{f"data{w}": Out(params.max_data_bits[w]) for w in range(words)},
+            "ne": Out(words),
+            "nw": Out(words),
+            "lc": Out(protocol.LC_BITS),
+            "cpw_top": Out(params.max_data_bits[-1]),   # the first SPW-length bits of word 0
+            "crc_ok": Out(words),
+            "done": Out(1),
+            "stopped": Out(1),
+        })
+
+    def elaborate(self, platform):
+        m = Module()
+        p = self._params
+        last_word = self.word_count - 1
+
+        m.d.comb += self.frame_bits.eq(sum(
+            Mux(w <= last_word, word_length(self.words[w]), 0) for w in range(p.words)))
+
+        # Where the current bit sits: word ``word``, bit ``idx`` of that word.
+        word = Signal(range(p.words))
+        idx = Signal(7)
+        cfg = self.words[word]
+        data_end = cfg.data_bits
+        nenw_end = data_end + Mux(cfg.nenw, protocol.NE_NW_BITS, 0)
+        lc_end = nenw_end + Mux(cfg.lc, protocol.LC_BITS, 0)
+        word_end = word_length(cfg)
+
+        in_word = Signal()
+        m.d.sync += [self.done.eq(0), self.stopped.eq(0)]
+
+        with m.If(self.sample & (self.slots != 0xFFFF)):
+            m.d.sync += self.slots.eq(self.slots + 1)
+
+        with m.FSM(name="decoder_fsm"):
+            with m.State("ACK"):
+                with m.If(self.sample & self.bit):
+                    m.d.sync += [self.started.eq(1), self.start_slot.eq(self.slots)]
+                    m.next = "CDS"
+            with m.State("CDS"):
+                with m.If(self.sample):
+                    m.d.sync += [self.cds.eq(self.bit), word.eq(0), idx.eq(0)]
+                    m.next = "WORD"
+            with m.State("WORD"):
+                m.d.comb += in_word.eq(self.sample)
+                with m.If(self.sample):
+                    m.d.sync += idx.eq(idx + 1)
+                    with m.If(idx == word_end - 1):
+                        m.d.sync += idx.eq(0)
+                        with m.If(word == last_word):
+                            m.d.sync += self.done.eq(1)
+                            m.next = "STOP"
+                        with m.Else():
+                            m.d.sync += word.eq(word + 1)
+            with m.State("STOP"):
+                with m.If(self.sample):
+                    m.d.sync += self.stopped.eq(1)
+                    m.next = "END"
+            with m.State("END"):
+                pass
+
+        # Route each bit of a word to its field.
+        for w in range(p.words):
+            this_word = in_word & (word == w)
+            data_w = getattr(self, f"data{w}")
+            with m.If(this_word & (idx < data_end)):
+                m.d.sync += data_w.eq(Cat(self.bit, data_w))
+            with m.If(this_word & (idx == data_end)):
+                m.d.sync += self.ne[w].eq(self.bit)
+            with m.If(this_word & (idx == data_end + 1)):
+                m.d.sync += self.nw[w].eq(self.bit)
+        with m.If(in_word & (idx >= nenw_end) & (idx < lc_end)):
+            m.d.sync += self.lc.eq(Cat(self.bit, self.lc))
+        if p.words == 2:
+            # Word 0's leading bits, as many as word 1 has: the CPW with its extra low bits dropped.
+            with m.If(in_word & (word == 0) & (idx < self.words[1].data_bits)):
+                m.d.sync += self.cpw_top.eq(Cat(self.bit, self.cpw_top))
+
+        # One CRC checker per word, fed every bit of that word (data and the CRC itself).
+        for w in range(p.words):
+            m.submodules[f"crc{w}"] = checker = WordCrc(p.word_crcs[w])
+            m.d.comb += [
+                checker.kind.eq(self.words[w].crc),
+                checker.start.eq(in_word & (word == w) & (idx == 0)),
+                checker.valid.eq(in_word & (word == w)),
+                checker.bit.eq(self.bit),
+                self.crc_ok[w].eq(checker.ok),
+            ]
+
+        return m

@@ -1,0 +1,75 @@
+"""Generate the Verilog module ``biss_master``.
+
+    python -m bissmaster.generate [-o FILE] [--max-data-bits 55,40] [--sys-clk-hz N] ...
+
+The default configuration is committed as ``rtl/generated/biss_master.v`` for users who never
+run Python; ``make rtl`` regenerates it and the test suite checks it is up to date.
+"""
+
+import argparse
+import sys
+from importlib import metadata
+
+from amaranth.back import verilog
+
+from .master import BissMaster
+from .params import Crc, MasterParams
+
+
+def header(params):
+    lines = [
+        "BiSS C / BiSS Safety master: generated Verilog. DO NOT EDIT; edit the Amaranth source.",
+        f"Generator: bissmaster.generate, amaranth {metadata.version('amaranth')}",
+        "Parameters:",
+        *("  " + line for line in params.describe()),
+        "Ports: docs/ports.md. Constraints: constraints/.",
+    ]
+    return "".join(f"// {line}\n" for line in lines)
+
+
+def generate(params=None, name="biss_master"):
+    params = params or MasterParams()
+    body = verilog.convert(BissMaster(params), name=name, emit_src=False)
+    return header(params) + body
+
+
+def _parse_crcs(text):
+    # "6+16,16" -> ((CRC6, CRC16), (CRC16,))
+    kinds = {"6": Crc.CRC6, "16": Crc.CRC16}
+    try:
+        return tuple(tuple(kinds[k] for k in word.split("+")) for word in text.split(","))
+    except KeyError as e:
+        raise argparse.ArgumentTypeError(f"CRC must be 6 or 16, not {e.args[0]!r}")
+
+
+def main(argv=None):
+    defaults = MasterParams()
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("-o", "--output", default="-", help="output file (default: stdout)")
+    ap.add_argument("--name", default="biss_master", help="Verilog module name")
+    ap.add_argument("--sys-clk-hz", type=int, default=defaults.sys_clk_hz)
+    ap.add_argument("--max-data-bits", default=",".join(map(str, defaults.max_data_bits)),
+                    help="per word, e.g. 36 (BiSS C only) or 36,28")
+    ap.add_argument("--word-crcs", type=_parse_crcs, default=None,
+                    help="CRC checkers per word, e.g. 6 or 6+16,6+16 (default: both on each word)")
+    ap.add_argument("--max-line-delay", type=int, default=defaults.max_line_delay)
+    ap.add_argument("--counter-width", type=int, default=defaults.counter_width)
+    args = ap.parse_args(argv)
+
+    bits = tuple(int(b) for b in args.max_data_bits.split(","))
+    crcs = args.word_crcs or defaults.word_crcs[:len(bits)]
+    try:
+        params = MasterParams(sys_clk_hz=args.sys_clk_hz, max_data_bits=bits, word_crcs=crcs,
+                              max_line_delay=args.max_line_delay, counter_width=args.counter_width)
+    except ValueError as e:
+        ap.error(str(e))
+    text = generate(params, args.name)
+    if args.output == "-":
+        sys.stdout.write(text)
+    else:
+        with open(args.output, "w") as f:
+            f.write(text)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,81 @@
+"""MA clock generator."""
+
+from amaranth.hdl import *
+from amaranth.lib import wiring
+from amaranth.lib.wiring import In, Out
+
+
+class MaClock(wiring.Component):
+    """Generates the MA clock: idle high, 1:1 duty, falling edge first.
+
+    Every phase lasts exactly ``half_period`` system clocks, including the high phase after the
+    last rising edge, so MA never shows a high or low phase shorter than the half period, even
+    when ``run`` drops at an arbitrary moment (an abort): the clock then completes its current
+    period and stays high.
+
+    ``half_period`` is sampled at each edge; the master keeps it constant within a cycle.
+
+    Attributes
+    ----------
+    run : In(1)
+        Keep clocking. Sampled at the end of every high phase: low there means stop, MA stays high.
+    half_period : In(16)
+        System clocks per MA phase, at least 2.
+    ma : Out(1)
+        The MA line, registered.
+    rise : Out(1)
+        High in the first system clock in which ``ma`` is high after a rising edge.
+    rises : Out(16)
+        Rising edges since the cycle's first falling edge (saturating).
+    busy : Out(1)
+        A period is in progress (MA low, or in the high phase of a period).
+    """
+    run: In(1)
+    half_period: In(16)
+    ma: Out(1, init=1)
+    rise: Out(1)
+    rises: Out(16)
+    busy: Out(1)
+
+    def elaborate(self, platform):
+        m = Module()
+
+        phase_left = Signal(16)     # clocks left in the current phase, minus one
+        last_clock = phase_left == 0
+
+        m.d.sync += self.rise.eq(0)
+        with m.FSM(name="ma_fsm"):
+            with m.State("IDLE"):
+                with m.If(self.run):
+                    m.d.sync += [
+                        self.ma.eq(0),
+                        phase_left.eq(self.half_period - 1),
+                        self.rises.eq(0),
+                    ]
+                    m.next = "LOW"
+            with m.State("LOW"):
+                m.d.comb += self.busy.eq(1)
+                m.d.sync += phase_left.eq(phase_left - 1)
+                with m.If(last_clock):
+                    m.d.sync += [
+                        self.ma.eq(1),
+                        self.rise.eq(1),
+                        phase_left.eq(self.half_period - 1),
+                    ]
+                    with m.If(self.rises != 0xFFFF):
+                        m.d.sync += self.rises.eq(self.rises + 1)
+                    m.next = "HIGH"
+            with m.State("HIGH"):
+                m.d.comb += self.busy.eq(1)
+                m.d.sync += phase_left.eq(phase_left - 1)
+                with m.If(last_clock):
+                    with m.If(self.run):
+                        m.d.sync += [
+                            self.ma.eq(0),
+                            phase_left.eq(self.half_period - 1),
+                        ]
+                        m.next = "LOW"
+                    with m.Else():
+                        m.next = "IDLE"
+
+        return m

@@ -1,0 +1,409 @@
+"""BiSS C / BiSS Safety master: the top level."""
+
+from amaranth.hdl import *
+from amaranth.lib import cdc, data, wiring
+from amaranth.lib.wiring import In, Out
+
+from . import protocol
+from .counters import SaturatingCounter
+from .frame_decoder import FrameDecoder
+from .ma_clock import MaClock
+from .params import STATUS_WIDTH, WORD_CONFIG, Crc, MasterParams, Status
+from .sign_of_life import SignOfLife
+from .slo_sampler import SloSampler
+from .spw_check import SpwCheck
+
+
+#: Saturating error counters, each with a ``count_<name>`` output port.
+COUNTERS = (
+    "crc_word0", "crc_word1", "no_ack", "no_start", "delay_range", "slo_stuck_low",
+    "lc_repeat", "lc_skip", "lc_zero", "spw_mismatch", "overrun", "aborted",
+)
+
+
+def _word_fields(w):
+    """The flat ``cfg_w<w>_*`` ports of one word, from WORD_CONFIG."""
+    return {f"cfg_w{w}_{name}": In(shape) for name, shape in WORD_CONFIG.members.items()}
+
+
+class BissMaster(wiring.Component):
+    """BiSS C / BiSS Safety master for one encoder.
+
+    See ``docs/ports.md`` for the port table and ``docs/timing.md`` for one request cycle.
+    Runtime settings (``cfg_*``) are checked when a request arrives and latched for the
+    cycle: changing them mid-cycle never mixes two configurations in one frame.
+
+    Parameters
+    ----------
+    params : MasterParams
+    """
+
+    def __init__(self, params=None):
+        if params is None:
+            params = MasterParams()
+        if not isinstance(params, MasterParams):
+            raise TypeError(f"params must be a MasterParams, not {params!r}")
+        self.params = p = params
+        tw = p.timer_width
+        two = p.words == 2
+
+        ports = {
+            # Line
+            "ma": Out(1, init=1),
+            "slo": In(1, init=1),
+            # Control
+            "start": In(1),
+            "periodic": In(1),
+            "abort_cycle": In(1),
+            "clear_counters": In(1),
+            # Runtime configuration
+            "cfg_ma_half_period": In(16),
+            "cfg_request_period": In(tw),
+            "cfg_break_time": In(tw),
+            "cfg_ack_limit": In(tw),
+            "cfg_timeout_limit": In(tw),
+            "cfg_delay_limit": In(p.delay_limit_width),
+            **_word_fields(0),
+        }
+        if two:
+            ports.update({"cfg_w1_enable": In(1), **_word_fields(1),
+                          "cfg_spw_check": In(1), "cfg_spw_tolerance": In(8)})
+        ports.update({
+            # State
+            "busy": Out(1),
+            "config_error": Out(1),
+            "overrun": Out(1),
+            # Result of the last cycle
+            "done": Out(1),
+            "valid": Out(1),
+            "status": Out(STATUS_WIDTH),
+            "timestamp": Out(p.timestamp_width),
+            "line_delay": Out(p.delay_width),
+            "cds": Out(1),
+        })
+        for w in range(p.words):
+            ports.update({
+                f"word{w}_position": Out(p.max_data_bits[w]),
+                f"word{w}_ne": Out(1),
+                f"word{w}_nw": Out(1),
+                f"word{w}_crc_ok": Out(1),
+            })
+        ports.update({
+            "lc": Out(protocol.LC_BITS),
+            "lc_repeat": Out(1),
+            "lc_skip": Out(1),
+            "lc_zero": Out(1),
+        })
+        if two:
+            ports["spw_mismatch"] = Out(1)
+        for name in COUNTERS:
+            if two or name not in ("crc_word1", "spw_mismatch"):
+                ports[f"count_{name}"] = Out(p.counter_width)
+        super().__init__(ports)
+
+    def _config_layout(self):
+        fields = {name: len(getattr(self, name)) for name in self.signature.members
+                  if name.startswith("cfg_")}
+        return data.StructLayout(fields)
+
+    def _config_valid(self, cfg):
+        """Combinational: is the configuration within what this hardware can do?"""
+        p = self.params
+
+        def word_ok(w):
+            bits = cfg[f"cfg_w{w}_data_bits"]
+            crc = cfg[f"cfg_w{w}_crc"]
+            crc_ok = crc == Crc.NONE
+            for kind in p.word_crcs[w]:
+                crc_ok |= crc == kind
+            return (bits >= 1) & (bits <= p.max_data_bits[w]) & crc_ok
+
+        ok = (cfg.cfg_ma_half_period >= protocol.MA_HALF_PERIOD_MIN) & word_ok(0)
+        if p.max_line_delay < 2**p.delay_limit_width - 1:
+            ok &= cfg.cfg_delay_limit <= p.max_line_delay
+        if p.words == 2:
+            w1 = cfg.cfg_w1_enable
+            ok &= ~w1 | word_ok(1)
+            ok &= ~(w1 & cfg.cfg_w0_lc & cfg.cfg_w1_lc)            # one LC per frame
+            # The SPW check needs an SPW no longer than the CPW, and its CRC (the check is
+            # read after the CRC bits; see SpwCheck).
+            ok &= ~cfg.cfg_spw_check | (w1 & (cfg.cfg_w1_data_bits <= cfg.cfg_w0_data_bits)
+                                        & (cfg.cfg_w1_crc != Crc.NONE))
+        return ok
+
+    def elaborate(self, platform):
+        m = Module()
+        p = self.params
+        two = p.words == 2
+        tw = p.timer_width
+
+        # -- Blocks -------------------------------------------------------------------------
+        m.submodules.ma_clock = ma_clock = MaClock()
+        # The receiver is held in reset between cycles: every cycle starts from scratch.
+        receiver_clear = Signal()
+        sampler = SloSampler(p.delay_width)
+        decoder = FrameDecoder(p)
+        m.submodules.sampler = ResetInserter(receiver_clear)(sampler)
+        m.submodules.decoder = ResetInserter(receiver_clear)(decoder)
+        m.submodules.sign_of_life = sol = SignOfLife()
+        if two:
+            m.submodules.spw_check = spw_check = SpwCheck(p.max_data_bits[1])
+
+        # SLO is asynchronous: two flops; the sampler compensates their latency.
+        slo = Signal(init=1)
+        m.submodules.slo_sync = cdc.FFSynchronizer(self.slo, slo, init=1, stages=2)
+
+        # -- Configuration: checked live, latched when a cycle is accepted ---------------------
+        layout = self._config_layout()
+        live = Signal(layout)
+        m.d.comb += [live[name].eq(getattr(self, name)) for name in layout.members]
+        cfg = Signal(layout)        # the cycle's configuration
+        cfg_ok = self._config_valid(live)
+        m.d.comb += self.config_error.eq(~cfg_ok)
+
+        def or_default(value, default):
+            return Mux(value == 0, default, value)
+
+        break_time = or_default(live.cfg_break_time, p.break_default)
+        ack_limit = or_default(cfg.cfg_ack_limit, p.ack_limit_default)
+        timeout_limit = or_default(cfg.cfg_timeout_limit, p.timeout_limit_default)
+        delay_limit = or_default(cfg.cfg_delay_limit, p.max_line_delay)
+        word_count = (1 + cfg.cfg_w1_enable) if two else 1
+
+        m.d.comb += [
+            ma_clock.half_period.eq(cfg.cfg_ma_half_period),
+            sampler.slo.eq(slo),
+            sampler.half_period.eq(cfg.cfg_ma_half_period),
+            decoder.sample.eq(sampler.sample),
+            decoder.bit.eq(sampler.bit),
+            decoder.word_count.eq(word_count),
+            self.ma.eq(ma_clock.ma),
+        ]
+        for w in range(p.words):
+            word = decoder.words[w]
+            m.d.comb += [
+                word.data_bits.eq(cfg[f"cfg_w{w}_data_bits"]),
+                word.nenw.eq(cfg[f"cfg_w{w}_nenw"]),
+                word.lc.eq(cfg[f"cfg_w{w}_lc"]),
+                word.crc.eq(cfg[f"cfg_w{w}_crc"]),
+            ]
+
+        # -- Free-running time base and the SLO-low timer -----------------------------------
+        now = Signal(p.timestamp_width)
+        m.d.sync += now.eq(now + 1)
+        first_rise_time = Signal(p.timestamp_width)
+        with m.If(ma_clock.rise & (ma_clock.rises == 1)):
+            m.d.sync += first_rise_time.eq(now)
+
+        slo_low_time = Signal(tw)
+        with m.If(slo):
+            m.d.sync += slo_low_time.eq(0)
+        with m.Elif(~slo_low_time.all()):
+            m.d.sync += slo_low_time.eq(slo_low_time + 1)
+
+        timer = Signal(tw + 1)      # one bit more than the limits: Ack limit + 2 half periods
+        m.d.sync += timer.eq(Mux(timer.all(), timer, timer + 1))
+
+        # -- Requests ---------------------------------------------------------------------
+        period_count = Signal(tw)
+        as_fast_as_possible = self.periodic & (self.cfg_request_period == 0)
+        tick = self.periodic & ~as_fast_as_possible & (period_count == 0)
+        with m.If(~self.periodic | as_fast_as_possible
+                  | (period_count >= self.cfg_request_period - 1)):
+            m.d.sync += period_count.eq(0)
+        with m.Else():
+            m.d.sync += period_count.eq(period_count + 1)
+        request = self.start | tick | as_fast_as_possible
+        idle = Signal()
+        m.d.comb += self.overrun.eq((self.start | tick) & ~(idle & ~self.abort_cycle))
+
+        # -- Frame verdict ----------------------------------------------------------------
+        crc_ok = [decoder.crc_ok[w] for w in range(p.words)]
+        word1_on = cfg.cfg_w1_enable if two else C(0)
+        word_crc_ok = [crc_ok[0], crc_ok[1] | ~word1_on] if two else [crc_ok[0]]
+        crcs_ok = word_crc_ok[0] & word_crc_ok[-1]
+        lc_on = cfg.cfg_w0_lc | (word1_on & cfg.cfg_w1_lc) if two else cfg.cfg_w0_lc
+        lc_word_crc_ok = Mux(cfg.cfg_w0_lc, word_crc_ok[0], word_crc_ok[-1])
+        m.d.comb += [
+            sol.lc.eq(decoder.lc),
+            sol.check.eq(decoder.done & lc_on & lc_word_crc_ok),
+        ]
+        lc_repeat = sol.check & sol.repeat
+        lc_skip = sol.check & sol.skip
+        lc_zero = sol.check & sol.zero
+        if two:
+            m.d.comb += [
+                spw_check.cpw_top.eq(decoder.cpw_top),
+                spw_check.spw.eq(decoder.data1),
+                spw_check.bits.eq(cfg.cfg_w1_data_bits),
+                spw_check.tolerance.eq(cfg.cfg_spw_tolerance),
+            ]
+            mismatch = cfg.cfg_spw_check & word1_on & crcs_ok & ~spw_check.match
+        else:
+            mismatch = C(0)
+
+        frame_status = Signal(Status)
+        with m.If(~word_crc_ok[0] & ~word_crc_ok[-1]):
+            m.d.comb += frame_status.eq(Status.CRC_ERROR_BOTH if two else Status.CRC_ERROR_WORD0)
+        with m.Elif(~word_crc_ok[0]):
+            m.d.comb += frame_status.eq(Status.CRC_ERROR_WORD0)
+        with m.Elif(~word_crc_ok[-1]):
+            m.d.comb += frame_status.eq(Status.CRC_ERROR_WORD1)
+        with m.Elif(lc_repeat | lc_skip | lc_zero):
+            m.d.comb += frame_status.eq(Status.SIGN_OF_LIFE)
+        with m.Elif(mismatch):
+            m.d.comb += frame_status.eq(Status.SPW_MISMATCH)
+        with m.Else():
+            m.d.comb += frame_status.eq(Status.OK)
+
+        # -- Cycle controller ---------------------------------------------------------------
+        report = Signal()               # end of a request cycle: strobe done, set status
+        report_status = Signal(Status)
+        report_frame = Signal()         # ... with a decoded frame: update the fields
+        report_delay = Signal()         # ... with a measured delay
+        resync = Signal()               # encoder reset: the next LC is accepted as it is
+        target_rises = Signal(17)       # MA rising edges the frame needs, once Start is seen
+        started = Signal()
+        m.d.sync += [
+            target_rises.eq(decoder.start_slot + decoder.frame_bits + 4),
+            started.eq(decoder.started),
+        ]
+        ma_enough = started & (ma_clock.rises >= target_rises)
+        locked_seen = Signal()
+        armed = Signal()
+        arm = ma_clock.rise & (ma_clock.rises == 2)
+        m.d.comb += sampler.arm.eq(arm)
+
+        def fault(status, next_state="BREAK"):
+            m.d.comb += [report.eq(1), report_status.eq(status)]
+            m.d.sync += timer.eq(0)
+            m.next = next_state
+
+        with m.FSM(init="BREAK", name="cycle_fsm"):
+            # MA high for the break time: power-up, after an abort, after a line fault.
+            with m.State("BREAK"):
+                m.d.comb += [receiver_clear.eq(1), resync.eq(1)]
+                with m.If(ma_clock.busy | self.abort_cycle):
+                    m.d.sync += timer.eq(0)
+                with m.Elif(timer >= break_time):
+                    m.next = "IDLE"
+
+            with m.State("IDLE"):
+                m.d.comb += [idle.eq(1), receiver_clear.eq(1)]
+                with m.If(self.abort_cycle):
+                    m.d.sync += timer.eq(0)
+                    m.next = "BREAK"
+                with m.Elif(request & ~cfg_ok):
+                    fault(Status.BAD_CONFIG, "IDLE")
+                with m.Elif(request):
+                    m.d.sync += cfg.eq(live)
+                    m.next = "WAIT_READY"
+
+            # Never start while the encoder holds SLO low (its timeout is still running).
+            with m.State("WAIT_READY"):
+                m.d.comb += receiver_clear.eq(1)
+                m.d.sync += [timer.eq(0), armed.eq(0), locked_seen.eq(0)]
+                with m.If(self.abort_cycle):
+                    fault(Status.ABORTED)
+                with m.Elif(slo):
+                    m.next = "CLOCK"
+                with m.Elif(slo_low_time >= timeout_limit):
+                    fault(Status.SLO_STUCK_LOW)
+
+            # MA runs; the sampler and decoder follow SLO, the line delay behind.
+            with m.State("CLOCK"):
+                m.d.comb += ma_clock.run.eq(~ma_enough)
+                with m.If(arm):
+                    m.d.sync += [armed.eq(1), timer.eq(0)]
+                with m.If(sampler.locked & ~locked_seen):
+                    m.d.sync += [locked_seen.eq(1), timer.eq(0)]
+                with m.If(self.abort_cycle):
+                    fault(Status.ABORTED)
+                with m.Elif(armed & sampler.early):
+                    fault(Status.DELAY_RANGE)
+                with m.Elif(armed & ~locked_seen & ~sampler.locked & (timer >= ack_limit)):
+                    fault(Status.NO_ACK)
+                with m.Elif(sampler.locked & ~locked_seen & (sampler.delay > delay_limit)):
+                    m.d.comb += report_delay.eq(1)
+                    fault(Status.DELAY_RANGE)
+                with m.Elif(locked_seen & ~decoder.started
+                            & ((timer >= ack_limit + Cat(C(0, 1), cfg.cfg_ma_half_period))
+                               | decoder.slots.all())):
+                    fault(Status.NO_START)
+                with m.Elif(decoder.done):
+                    m.d.comb += [
+                        report.eq(1),
+                        report_status.eq(frame_status),
+                        report_frame.eq(1),
+                        report_delay.eq(1),
+                    ]
+                    m.next = "TAIL"
+
+            # The frame is reported; clock out the stop bit and let the sampler see it.
+            with m.State("TAIL"):
+                m.d.comb += ma_clock.run.eq(~ma_enough)
+                with m.If(self.abort_cycle):
+                    m.d.sync += timer.eq(0)
+                    m.next = "BREAK"
+                with m.Elif(decoder.stopped):
+                    m.next = "END"
+            with m.State("END"):
+                with m.If(~ma_clock.busy):
+                    m.next = "IDLE"
+
+        m.d.comb += [
+            self.busy.eq(~idle),
+            sol.resync.eq(resync),
+        ]
+
+        # -- Results ------------------------------------------------------------------------
+        m.d.sync += [self.done.eq(report), self.valid.eq(report & (report_status == Status.OK))]
+        with m.If(report):
+            m.d.sync += self.status.eq(report_status)
+        with m.If(report_delay):
+            m.d.sync += self.line_delay.eq(sampler.delay)
+        with m.If(report_frame):
+            m.d.sync += [
+                self.timestamp.eq(first_rise_time),
+                self.cds.eq(decoder.cds),
+                self.lc.eq(decoder.lc),
+                self.lc_repeat.eq(lc_repeat),
+                self.lc_skip.eq(lc_skip),
+                self.lc_zero.eq(lc_zero),
+            ]
+            for w in range(p.words):
+                m.d.sync += [
+                    getattr(self, f"word{w}_position").eq(getattr(decoder, f"data{w}")),
+                    getattr(self, f"word{w}_ne").eq(decoder.ne[w]),
+                    getattr(self, f"word{w}_nw").eq(decoder.nw[w]),
+                    getattr(self, f"word{w}_crc_ok").eq(word_crc_ok[w]),
+                ]
+            if two:
+                m.d.sync += self.spw_mismatch.eq(mismatch)
+
+        # -- Error counters -----------------------------------------------------------------
+        events = {
+            "crc_word0": report_frame & ~word_crc_ok[0],
+            "no_ack": report & (report_status == Status.NO_ACK),
+            "no_start": report & (report_status == Status.NO_START),
+            "delay_range": report & (report_status == Status.DELAY_RANGE),
+            "slo_stuck_low": report & (report_status == Status.SLO_STUCK_LOW),
+            "lc_repeat": report_frame & lc_repeat,
+            "lc_skip": report_frame & lc_skip,
+            "lc_zero": report_frame & lc_zero,
+            "overrun": self.overrun,
+            "aborted": report & (report_status == Status.ABORTED),
+        }
+        if two:
+            events["crc_word1"] = report_frame & ~word_crc_ok[1]
+            events["spw_mismatch"] = report_frame & mismatch
+        for name in COUNTERS:
+            if name in events:
+                m.submodules[f"count_{name}"] = counter = SaturatingCounter(p.counter_width)
+                m.d.comb += [
+                    counter.inc.eq(events[name]),
+                    counter.clear.eq(self.clear_counters),
+                    getattr(self, f"count_{name}").eq(counter.count),
+                ]
+
+        return m

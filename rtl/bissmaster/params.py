@@ -1,0 +1,166 @@
+"""Elaboration-time parameters, the runtime configuration layout and the status codes.
+
+:class:`MasterParams` fixes what the hardware *can* do (maximum word lengths, which CRCs exist,
+counter widths); the runtime configuration (:data:`WORD_CONFIG` and the ``cfg_*`` ports of
+:class:`~bissmaster.master.BissMaster`) chooses, within those limits, what it *does*.
+"""
+
+import enum
+import math
+from dataclasses import dataclass
+
+from amaranth.lib import data
+
+from . import protocol
+
+
+class Crc(enum.IntEnum):
+    """CRC of a data word (runtime code, 2 bits)."""
+    NONE = 0
+    CRC6 = 1    # 0x43, BiSS C / CPW / BP3
+    CRC16 = 2   # 0x190D9, BiSS Safety SPW
+
+
+CRC_WIDTH = {Crc.NONE: 0, Crc.CRC6: protocol.CRC6_WIDTH, Crc.CRC16: protocol.CRC16_WIDTH}
+
+
+class Status(enum.IntEnum):
+    """Outcome of one request cycle, reported with every ``done`` strobe.
+
+    When several apply, the lowest-numbered fault wins (a CRC error makes the LC meaningless, an
+    LC error makes the plausibility check moot).
+    """
+    OK = 0
+    CRC_ERROR_WORD0 = 1     # CPW / single word
+    CRC_ERROR_WORD1 = 2     # SPW
+    CRC_ERROR_BOTH = 3
+    SIGN_OF_LIFE = 4        # LC repeated, skipped or zero (see the lc_* flags)
+    SPW_MISMATCH = 5        # SPW does not match the CPW within the tolerance
+    NO_ACK = 6              # SLO never went low after the 2nd MA rise (encoder missing, line broken)
+    NO_START = 7            # Ack lasted longer than the Ack limit
+    DELAY_RANGE = 8         # round trip beyond the limit, or SLO low before the 2nd MA rise
+    SLO_STUCK_LOW = 9       # encoder never became ready (timeout never ended)
+    ABORTED = 10            # the abort input ended the cycle
+    BAD_CONFIG = 11         # runtime configuration out of range; no cycle was started
+
+
+STATUS_WIDTH = 4
+
+#: Runtime description of one data word. ``data_bits`` counts the position/data bits only.
+WORD_CONFIG = data.StructLayout({
+    "data_bits": 6,     # 1 .. MasterParams.max_data_bits[word]
+    "nenw": 1,          # word ends with nE, nW
+    "lc": 1,            # word carries the 6-bit sign-of-life counter after nE/nW
+    "crc": 2,           # Crc code
+})
+
+
+def _cycles(seconds, clk_hz):
+    return math.ceil(seconds * clk_hz - 1e-9)
+
+
+@dataclass(frozen=True)
+class MasterParams:
+    """What the generated hardware supports.
+
+    Parameters
+    ----------
+    sys_clk_hz : int
+        System clock the core runs on; only used to turn the protocol's default times
+        (break, Ack limit, timeout limit) into clock counts.
+    max_data_bits : tuple of int
+        Longest data field per word; its length (1 or 2) is the number of words the core can
+        decode. Default: 55 (BP3 DL_POS maximum) for word 0, 40 for the SPW.
+    word_crcs : tuple of tuple of Crc
+        The CRC checkers built for each word. A runtime choice outside this set is a
+        configuration error. :attr:`Crc.NONE` is always accepted.
+    max_line_delay : int
+        Longest round trip the delay counter can measure, in system clocks.
+    timer_width : int
+        Width of the time settings (period, break, Ack and timeout limits) in system clocks.
+    counter_width : int
+        Width of each saturating error counter.
+    """
+    sys_clk_hz: int = 100_000_000
+    max_data_bits: tuple = (protocol.BP3_POSITION_BITS_MAX, 40)
+    word_crcs: tuple = ((Crc.CRC6, Crc.CRC16), (Crc.CRC6, Crc.CRC16))
+    max_line_delay: int = 4095
+    timer_width: int = 24
+    counter_width: int = 16
+    timestamp_width: int = 32
+
+    def __post_init__(self):
+        if not isinstance(self.sys_clk_hz, int) or not 1_000_000 <= self.sys_clk_hz <= 1_000_000_000:
+            raise ValueError(f"sys_clk_hz must be an integer from 1 MHz to 1 GHz, not {self.sys_clk_hz!r}")
+        if not 1 <= len(self.max_data_bits) <= 2:
+            raise ValueError(f"max_data_bits must name 1 or 2 words, not {self.max_data_bits!r}")
+        for bits in self.max_data_bits:
+            if not isinstance(bits, int) or not 1 <= bits <= 63:
+                raise ValueError(f"each max_data_bits entry must be an integer from 1 to 63, "
+                                 f"not {bits!r}")
+        if len(self.word_crcs) != len(self.max_data_bits):
+            raise ValueError(f"word_crcs must have one entry per word ({len(self.max_data_bits)}), "
+                             f"not {self.word_crcs!r}")
+        for crcs in self.word_crcs:
+            for kind in crcs:
+                if kind not in (Crc.CRC6, Crc.CRC16):
+                    raise ValueError(f"word_crcs entries must be Crc.CRC6 or Crc.CRC16, not {kind!r}")
+        if not isinstance(self.max_line_delay, int) or not 16 <= self.max_line_delay < 2**20:
+            raise ValueError(f"max_line_delay must be an integer from 16 to 2**20-1 system clocks, "
+                             f"not {self.max_line_delay!r}")
+        if not isinstance(self.timer_width, int) or not 16 <= self.timer_width <= 32:
+            raise ValueError(f"timer_width must be an integer from 16 to 32, not {self.timer_width!r}")
+        for default in (self.break_default, self.ack_limit_default, self.timeout_limit_default):
+            if default >= 2**self.timer_width:
+                raise ValueError(f"timer_width {self.timer_width} cannot hold the default time "
+                                 f"{default} clocks at {self.sys_clk_hz} Hz")
+        if not isinstance(self.counter_width, int) or not 1 <= self.counter_width <= 32:
+            raise ValueError(f"counter_width must be an integer from 1 to 32, not {self.counter_width!r}")
+        if not isinstance(self.timestamp_width, int) or not 16 <= self.timestamp_width <= 64:
+            raise ValueError(f"timestamp_width must be an integer from 16 to 64, "
+                             f"not {self.timestamp_width!r}")
+
+    @property
+    def words(self):
+        return len(self.max_data_bits)
+
+    @property
+    def delay_limit_width(self):
+        """Width of the ``cfg_delay_limit`` port."""
+        return self.max_line_delay.bit_length()
+
+    @property
+    def delay_width(self):
+        """Width of the delay counter: one more than the limit needs, so that a saturated
+        count is out of range for every limit."""
+        return (self.max_line_delay + 1).bit_length()
+
+    # Defaults for runtime time settings left at 0.
+    @property
+    def break_default(self):
+        """Break after power-on, an abort or a line fault: 40 us."""
+        return _cycles(protocol.BREAK_TIME_S, self.sys_clk_hz)
+
+    @property
+    def ack_limit_default(self):
+        """Longest wait for the Ack edge, and for the Start bit after it: 40 us."""
+        return _cycles(max(protocol.PROCESSING_TIME_MAX_S, protocol.LINE_DELAY_MAX_S), self.sys_clk_hz)
+
+    @property
+    def timeout_limit_default(self):
+        """Longest time SLO may stay low before a cycle: twice the longest static slave timeout."""
+        return _cycles(2 * protocol.SLAVE_TIMEOUT_MAX_S, self.sys_clk_hz)
+
+    def describe(self):
+        """One line per parameter, for the header of generated Verilog."""
+        return [
+            f"sys_clk_hz      = {self.sys_clk_hz}",
+            f"max_data_bits   = {list(self.max_data_bits)}",
+            f"word_crcs       = {[[k.name for k in w] for w in self.word_crcs]}",
+            f"max_line_delay  = {self.max_line_delay} clocks",
+            f"timer_width     = {self.timer_width}",
+            f"counter_width   = {self.counter_width}",
+            f"timestamp_width = {self.timestamp_width}",
+            f"defaults (cfg = 0): break {self.break_default}, ack limit {self.ack_limit_default}, "
+            f"timeout limit {self.timeout_limit_default} clocks",
+        ]

@@ -1,0 +1,46 @@
+"""BiSS protocol facts, in one place.
+
+Every number here comes from ``shared/spec/biss-protocol.md`` (the datasheet digest). This
+module is pure Python with no imports beyond the standard library, so that both the RTL and the
+independent encoder model can name the same *facts* without sharing any *logic*.
+"""
+
+# -- MA clock (section 3, 9) -----------------------------------------------------------------
+MA_FREQ_MIN_HZ = 80e3           # protocol-wide minimum (BiSS C protocol description)
+MA_FREQ_MAX_HZ = 10e6
+MA_HALF_PERIOD_MIN = 2          # system clocks; below this MA cannot have a 1:1 duty cycle
+MA_HALF_PERIOD_MAX = 65535      # system clocks (16-bit runtime setting)
+
+# -- Encoder timing (section 2, 3) -----------------------------------------------------------
+SAMPLING_MOMENT_S = 3.250e-6        # typ; position latched this long after the 1st MA rise
+SAMPLING_MOMENT_MIN_S = 3.225e-6
+SAMPLING_MOMENT_MAX_S = 3.275e-6
+ENCODER_INTERNAL_DELAY_S = 42.5e-9  # MA to SLO inside the encoder (max)
+CABLE_ROUND_TRIP_S_PER_M = 10e-9    # master -> encoder -> master
+MIN_CYCLE_PERIOD_S = 31.25e-6       # 32 kHz maximum request rate (start-to-start)
+ACK_MAX_RESOLUTE_S = 16e-6
+ACK_MAX_EVOLUTE_S = 20e-6
+
+# -- Protocol-wide limits (section 9) --------------------------------------------------------
+PROCESSING_TIME_MAX_S = 40e-6       # latch edge to Start bit
+LINE_DELAY_MAX_S = 40e-6
+BREAK_TIME_S = 40e-6                # MA held high after power-on, an error or an abort
+SLAVE_TIMEOUT_MAX_S = 40e-6         # static slave timeout is 12.5 .. 40 us
+
+# -- Frame (section 5) -----------------------------------------------------------------------
+START_BIT = 1
+ACK_LEVEL = 0
+NE_NW_BITS = 2                  # nE, nW: active-low error and warning
+LC_BITS = 6                     # BiSS Safety sign-of-life counter
+LC_FIRST = 1                    # first value after power-on
+LC_MAX = 63                     # wraps to LC_FIRST; 0 is never sent
+BP3_POSITION_BITS_MAX = 55      # DL_POS = 1 .. 55
+
+# -- CRCs (section 6). Register polynomials without the top term; start 0; sent inverted. -----
+CRC6_WIDTH = 6
+CRC6_POLY = 0x03                # x^6 + x + 1 (0x43 with the top term)
+CRC6_XOR_OUT = 0x3F
+CRC16_WIDTH = 16
+CRC16_POLY = 0x90D9             # x^16+x^15+x^12+x^7+x^6+x^4+x^3+1 (0x190D9)
+CRC16_XOR_OUT = 0xFFFF
+CRC_INIT = 0

@@ -1,0 +1,55 @@
+"""BiSS Safety sign-of-life (LC) tracker."""
+
+from amaranth.hdl import *
+from amaranth.lib import wiring
+from amaranth.lib.wiring import In, Out
+
+from . import protocol
+
+
+class SignOfLife(wiring.Component):
+    """Checks that each frame's LC is the previous one plus 1, with 63 wrapping to 1.
+
+    The verdict flags are combinational from ``lc`` and the stored value, for the frame being
+    checked; ``check`` then stores the new value. 0 is never valid and is flagged as ``zero``;
+    it does not replace the stored value, so the frame after it is judged against the last good
+    LC. ``repeat`` (same value again: a stale frame) and ``skip`` (any other value: frames lost
+    or out of order) are told apart. After ``resync`` (reset, abort, encoder reset) the next
+    non-zero LC is accepted as it is.
+
+    Attributes
+    ----------
+    lc : In(6)
+    check : In(1)
+        Strobe: ``lc`` belongs to a frame whose CRC was good; judge it and store it.
+    resync : In(1)
+        Forget the stored value.
+    repeat, skip, zero : Out(1)
+        Verdict for ``lc`` (only meaningful when ``check`` is high).
+    synced : Out(1)
+    """
+    lc: In(protocol.LC_BITS)
+    check: In(1)
+    resync: In(1)
+    repeat: Out(1)
+    skip: Out(1)
+    zero: Out(1)
+    synced: Out(1)
+
+    def elaborate(self, platform):
+        m = Module()
+
+        last = Signal(protocol.LC_BITS)
+        expected = Mux(last == protocol.LC_MAX, protocol.LC_FIRST, last + 1)
+
+        m.d.comb += [
+            self.zero.eq(self.lc == 0),
+            self.repeat.eq(self.synced & ~self.zero & (self.lc == last)),
+            self.skip.eq(self.synced & ~self.zero & (self.lc != last) & (self.lc != expected)),
+        ]
+        with m.If(self.check & ~self.zero):
+            m.d.sync += [last.eq(self.lc), self.synced.eq(1)]
+        with m.If(self.resync):
+            m.d.sync += self.synced.eq(0)
+
+        return m

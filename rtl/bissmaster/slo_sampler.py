@@ -1,0 +1,112 @@
+"""SLO receiver with line-delay compensation."""
+
+from amaranth.hdl import *
+from amaranth.lib import wiring
+from amaranth.lib.wiring import In, Out
+
+
+#: Clocks between the SLO pin and the Ack-edge detector beyond the pin edge itself: the second
+#: synchronizer flop. The first flop's sampling uncertainty (< 1 clock) stays in the measurement,
+#: so the reported delay ``d`` satisfies ``true <= d < true + 1`` clock.
+SYNC_EXTRA_LATENCY = 1
+
+
+class SloSampler(wiring.Component):
+    """Measures the round trip and samples every SLO bit in the middle of its eye.
+
+    The round trip is counted from ``arm`` (the master's own second MA rising edge) to the
+    falling edge of Ack on the synchronized SLO. Every bit the encoder sends after that edge
+    arrives exactly one MA period after the previous one, shifted by the same round trip,
+    whatever its length: so the sampler does not follow MA at all. It runs its own period
+    timer, started at the Ack edge, and samples ``half_period`` clocks into every slot. That
+    works for round trips of any number of bit periods; slot ``k`` is the bit the encoder put on
+    SLO at MA rising edge ``k + 2``.
+
+    The master holds it in reset between cycles (``ResetInserter``).
+
+    Slot 0 must read low (it is inside the Ack): if it reads high the edge was a glitch, and the
+    sampler goes back to waiting for the Ack edge.
+
+    Attributes
+    ----------
+    slo : In(1)
+        Synchronized SLO.
+    half_period : In(16)
+        MA half period in system clocks (constant during the cycle).
+    arm : In(1)
+        Strobe on the master's second MA rising edge: start measuring.
+    delay : Out(bits)
+        Round trip in system clocks, compensated for the synchronizer. Saturates.
+    early : Out(1)
+        SLO was already low when armed: it fell before the second MA rise could have caused it.
+    locked : Out(1)
+        The Ack edge was found; samples are being produced.
+    sample : Out(1)
+        Strobe: ``bit`` holds the middle of the next slot.
+    bit : Out(1)
+    """
+
+    def __init__(self, delay_width):
+        self._delay_width = delay_width
+        super().__init__({
+            "slo": In(1),
+            "half_period": In(16),
+            "arm": In(1),
+            "delay": Out(delay_width),
+            "early": Out(1),
+            "locked": Out(1),
+            "sample": Out(1),
+            "bit": Out(1),
+        })
+
+    def elaborate(self, platform):
+        m = Module()
+
+        slo_prev = Signal(init=1)
+        m.d.sync += slo_prev.eq(self.slo)
+        fell = slo_prev & ~self.slo
+
+        elapsed = Signal(self._delay_width)        # clocks since arm
+        delay_max = (1 << self._delay_width) - 1
+        slot_left = Signal(17)                      # clocks to the next sample, minus one
+        first_slot = Signal()                       # the next sample is slot 0 (inside the Ack)
+
+        m.d.comb += self.bit.eq(self.slo)
+
+        with m.FSM(name="sampler_fsm"):
+            with m.State("IDLE"):
+                with m.If(self.arm):
+                    m.d.sync += [
+                        elapsed.eq(1),
+                        self.early.eq(~self.slo),
+                        self.locked.eq(0),
+                    ]
+                    m.next = "MEASURE"
+            with m.State("MEASURE"):
+                with m.If(elapsed != delay_max):
+                    m.d.sync += elapsed.eq(elapsed + 1)
+                with m.If(fell):
+                    # The edge entered the second flop ``elapsed - 1`` clocks after the MA edge.
+                    m.d.sync += [
+                        self.delay.eq(elapsed - SYNC_EXTRA_LATENCY),
+                        slot_left.eq(self.half_period - 1),
+                        first_slot.eq(1),
+                    ]
+                    m.next = "SAMPLE"
+            with m.State("SAMPLE"):
+                with m.If(elapsed != delay_max):
+                    m.d.sync += elapsed.eq(elapsed + 1)
+                m.d.sync += slot_left.eq(slot_left - 1)
+                with m.If(slot_left == 0):
+                    m.d.sync += [
+                        slot_left.eq(Cat(C(0, 1), self.half_period) - 1),   # one MA period
+                        first_slot.eq(0),
+                    ]
+                    with m.If(first_slot & self.slo):
+                        # Not an Ack after all: a glitch. Keep waiting for the real edge.
+                        m.next = "MEASURE"
+                    with m.Else():
+                        m.d.comb += self.sample.eq(1)
+                        m.d.sync += self.locked.eq(1)
+
+        return m

@@ -1,0 +1,230 @@
+"""cocotb bench for ``biss_master``: clock, reset, configuration, one request, and the checks.
+
+The expected values come from the encoder model (tb/encoder_model), never from the RTL: what
+the encoder sent (frames.py) and what happened on the wire (cocotb_encoder.CycleRecord).
+"""
+
+import math
+import os
+import random
+from dataclasses import dataclass, field
+
+import cocotb
+from cocotb.clock import Clock
+from cocotb.simtime import get_sim_time
+from cocotb.triggers import ClockCycles, FallingEdge, ReadOnly, RisingEdge, Timer, with_timeout
+
+from bissmaster import protocol
+from encoder_model import frames
+from encoder_model.cocotb_encoder import BissEncoder, Cable, Response
+
+CLK_HZ = int(os.environ.get("BISS_CLK_HZ", "100000000"))
+CLK_NS = 1e9 / CLK_HZ
+
+#: Status codes of the core (docs/ports.md). Kept here as the bench's own table: a renumbering in
+#: the RTL must show up as a failure, not silently follow.
+STATUS = {
+    "OK": 0, "CRC_ERROR_WORD0": 1, "CRC_ERROR_WORD1": 2, "CRC_ERROR_BOTH": 3,
+    "SIGN_OF_LIFE": 4, "SPW_MISMATCH": 5, "NO_ACK": 6, "NO_START": 7, "DELAY_RANGE": 8,
+    "SLO_STUCK_LOW": 9, "ABORTED": 10, "BAD_CONFIG": 11,
+}
+CRC_CODE = {frames.CRC_NONE: 0, frames.CRC6: 1, frames.CRC16: 2}
+COUNTERS = ("crc_word0", "crc_word1", "no_ack", "no_start", "delay_range", "slo_stuck_low",
+            "lc_repeat", "lc_skip", "lc_zero", "spw_mismatch", "overrun", "aborted")
+
+MA_RATES_HZ = (250e3, 1e6, 2.5e6, 5e6, 10e6)
+CABLES_M = (0, 20, 50, 100)
+
+
+def half_period_for(ma_hz):
+    hp = CLK_HZ / (2 * ma_hz)
+    assert hp == int(hp), f"MA {ma_hz} Hz is not a whole number of half periods at {CLK_HZ} Hz"
+    return int(hp)
+
+
+@dataclass
+class Result:
+    """All result ports, read right after ``done``."""
+    status: int
+    valid: int
+    fields: dict
+    counters: dict
+    t_done_s: float
+
+
+@dataclass
+class Sent:
+    """What the encoder was asked to send in one cycle."""
+    values: list
+    bits: list
+    faults: object = None
+    response: Response = None
+
+
+class Bench:
+    def __init__(self, dut, *, seed=1):
+        self.dut = dut
+        self.rng = random.Random(seed)
+        self.fmt = None
+        self.sent = []                # one Sent per respond() call
+        self.plan = []                # queued (values_or_None, FrameFaults, Response kwargs)
+        self.source = None
+        self.t_clk0 = None            # time of the first clock edge after reset release
+        self.encoder = None
+        self.pending = []             # MA-rise checks waiting for the encoder to end the cycle
+        self.sign_of_life = frames.SignOfLife()     # one encoder: its LC runs on across configs
+
+    # -- Setup ----------------------------------------------------------------------------
+    async def start(self, cable=Cable(), timeout_s=12.5e-6):
+        dut = self.dut
+        Clock(dut.clk, CLK_NS, unit="ns").start()
+        for name in ("start", "periodic", "abort_cycle", "clear_counters"):
+            getattr(dut, name).value = 0
+        dut.slo.value = 1
+        dut.rst.value = 1
+        self.encoder = BissEncoder(dut.ma, dut.slo, cable=cable, respond=self._respond,
+                                   timeout_s=timeout_s, rng=self.rng)
+        self.encoder.start()
+        await ClockCycles(dut.clk, 3)
+        dut.rst.value = 0
+        await RisingEdge(dut.clk)
+        self.t_clk0 = get_sim_time("step")
+        # Power-up break: the core is busy for 40 us before it accepts requests.
+        await self.wait_idle()
+
+    async def wait_idle(self, limit_s=1e-3):
+        """Until ``busy`` is low: a start is only honoured then (else it is an overrun)."""
+        await RisingEdge(self.dut.clk)
+        if int(self.dut.busy.value):
+            await with_timeout(FallingEdge(self.dut.busy), limit_s * 1e9, "ns")
+            await RisingEdge(self.dut.clk)
+
+    async def encoder_ready(self, limit_s=1e-3):
+        """Until the encoder model would start a cycle (its timeout is over)."""
+        for _ in range(int(limit_s / 1e-6)):
+            if self.encoder.ready:
+                return
+            await Timer(1, "us")
+        raise AssertionError("encoder model never became ready")
+
+    def configure(self, fmt, ma_hz=None, *, half_period=None, spw_tolerance=1, **cfg):
+        """Set the cfg_* ports for a frame format (frames.FrameFormat) and MA rate."""
+        dut = self.dut
+        self.fmt = fmt
+        hp = half_period if half_period is not None else half_period_for(ma_hz)
+        ports = {
+            "cfg_ma_half_period": hp, "cfg_request_period": 0, "cfg_break_time": 0,
+            "cfg_ack_limit": 0, "cfg_timeout_limit": 0, "cfg_delay_limit": 0,
+            "cfg_w1_enable": int(len(fmt.words) == 2),
+            "cfg_spw_check": int(len(fmt.words) == 2), "cfg_spw_tolerance": spw_tolerance,
+        }
+        for w in range(2):
+            word = fmt.words[w] if w < len(fmt.words) else frames.WordFormat(1)
+            ports.update({f"cfg_w{w}_data_bits": word.data_bits, f"cfg_w{w}_nenw": int(word.nenw),
+                          f"cfg_w{w}_lc": int(word.lc), f"cfg_w{w}_crc": CRC_CODE[word.crc]})
+        ports.update(cfg)
+        for name, value in ports.items():
+            getattr(dut, name).value = value
+        self.half_period = hp
+        self.source = frames.EncoderFrameSource(fmt, self._position_at,
+                                                 sign_of_life=self.sign_of_life)
+
+    def _position_at(self, t):
+        return self.rng.getrandbits(self.fmt.words[0].data_bits)
+
+    # -- The encoder's answer ---------------------------------------------------------------
+    def queue(self, *, values=None, faults=None, lc=None, **response):
+        """Plan the next cycle: explicit WordValues, frame faults, Response fields (fault=...)."""
+        self.plan.append((values, faults, lc, response))
+
+    def _respond(self, t_latch):
+        values, faults, lc, response = self.plan.pop(0) if self.plan else (None, None, None, {})
+        if values is None:
+            values = self.source.values_at(t_latch, lc=lc)
+        bits = frames.build_frame(self.fmt, values, faults)
+        response.setdefault("processing_time_s", self.rng.uniform(2e-6, 16e-6))
+        resp = Response(bits=bits, **response)
+        self.sent.append(Sent(values, bits, faults, resp))
+        return resp
+
+    # -- One request ------------------------------------------------------------------------
+    async def request(self, limit_s=3e-3):
+        """Wait until idle, pulse start, wait for done, return the Result."""
+        dut = self.dut
+        await self.wait_idle()
+        dut.start.value = 1
+        await RisingEdge(dut.clk)
+        dut.start.value = 0
+        return await self.wait_done(limit_s)
+
+    async def wait_done(self, limit_s=3e-3):
+        self.check_pending()
+        await with_timeout(RisingEdge(self.dut.done), limit_s * 1e9, "ns")
+        # Every result register changed on the same clock edge as done.
+        return self.read()
+
+    def read(self):
+        dut = self.dut
+        names = ["timestamp", "line_delay", "cds", "lc", "lc_repeat", "lc_skip", "lc_zero",
+                 "spw_mismatch"]
+        for w in range(2):
+            names += [f"word{w}_position", f"word{w}_ne", f"word{w}_nw", f"word{w}_crc_ok"]
+        fields = {n: int(getattr(dut, n).value) for n in names}
+        counters = {n: int(getattr(dut, f"count_{n}").value) for n in COUNTERS}
+        return Result(int(dut.status.value), int(dut.valid.value), fields, counters,
+                      get_sim_time("step") * 1e-12)
+
+    # -- Checks -------------------------------------------------------------------------------
+    def clocks(self, seconds):
+        return seconds * CLK_HZ
+
+    def check_frame(self, res, *, status="OK", sent=None, record=None, check_rises=True):
+        """Every field of a decoded frame against what the encoder sent and what the wire did."""
+        sent = sent or self.sent[-1]
+        record = record or self.encoder.records[-1]
+        assert res.status == STATUS[status], f"status {res.status}, expected {status}"
+        assert res.valid == int(status == "OK"), f"valid {res.valid} with status {status}"
+        f = res.fields
+        parsed = frames.parse_frame(self.fmt, sent.bits)
+        for w, word in enumerate(parsed["words"]):
+            assert f[f"word{w}_position"] == word["position"], \
+                f"word{w} position {f[f'word{w}_position']:#x} != sent {word['position']:#x}"
+            if self.fmt.words[w].nenw:
+                assert (f[f"word{w}_ne"], f[f"word{w}_nw"]) == (word["ne"], word["nw"])
+            assert f[f"word{w}_crc_ok"] == int(word["crc_ok"]), f"word{w} crc_ok"
+            if self.fmt.words[w].lc:
+                assert f["lc"] == word["lc"], f"lc {f['lc']} != sent {word['lc']}"
+        assert f["cds"] == parsed["cds"]
+        # Line delay: the core reports ceil(true round trip) in clocks.
+        rt = self.clocks(record.round_trip_s)
+        assert rt - 1e-6 <= f["line_delay"] < rt + 1 + 1e-6, \
+            f"line delay {f['line_delay']} clocks, true round trip {rt:.3f}"
+        # Timestamp: clock edges from the first one after reset to the first MA rise.
+        edges = round((record.t_first_rise_s * 1e12 - self.t_clk0) / (CLK_NS * 1e3))
+        assert f["timestamp"] == (edges + 1) % 2**32, \
+            f"timestamp {f['timestamp']} != {edges + 1}"
+        if check_rises:
+            self.pending.append((record, self.half_period, self.fmt, res.t_done_s))
+        return parsed
+
+    def check_pending(self):
+        """MA-rise checks of cycles the encoder has closed (MA high longer than its timeout)."""
+        for item in [i for i in self.pending if i[0].ended]:
+            self.pending.remove(item)
+            self.check_ma_rises(*item)
+
+    def check_ma_rises(self, record, half_period, fmt, t_done_s=None):
+        """MA gives the frame exactly the rising edges it needs, unless the round trip is longer
+        than the frame (the master learns where Start was only a round trip later)."""
+        period_s = 2 * half_period / CLK_HZ
+        start_edge = 1 + round((record.t_start_rise_s - record.t_first_rise_s) / period_s)
+        needed = start_edge + 1 + fmt.total_bits + 1      # Start, CDS, data, stop
+        late = self.clocks(record.round_trip_s) + half_period + 4
+        spare = 2 * half_period * (1 + fmt.total_bits + 1) - half_period
+        if late < spare:
+            assert record.ma_rises == needed, f"MA rises {record.ma_rises}, needed {needed}: done at {t_done_s}, {record}"
+        else:
+            extra = math.ceil(late / (2 * half_period)) + 1
+            assert needed <= record.ma_rises <= needed + extra, \
+                f"MA rises {record.ma_rises}, needed {needed} (+{extra} allowed)"
+        assert not record.aborted

@@ -1,0 +1,180 @@
+"""The model's CRCs against references it does not share code with.
+
+Three kinds of reference: amaranth's software CRC model (random messages), published catalogue
+check values (other CRC parameter sets through the same generic routine), and a published
+CRC-6 (x^6 + x + 1) lookup table.
+"""
+
+import random
+
+import pytest
+from amaranth.lib import crc as am_crc
+
+from bissmaster import protocol
+from encoder_model.crc import bits_to_int, crc6_biss, crc16_biss, crc_msb_first, int_to_bits
+
+N_RANDOM = 500
+MAX_RANDOM_BITS = 120       # longer than any BiSS word (BP3 55 + 2, SPW 36 + 2 + 6)
+CHECK_MESSAGE = b"123456789"
+
+
+def _bytes_msb_first(data):
+    return [bit for byte in data for bit in int_to_bits(byte, 8)]
+
+
+def _random_messages(seed):
+    rng = random.Random(seed)
+    for _ in range(N_RANDOM):
+        n = rng.randint(1, MAX_RANDOM_BITS)
+        yield [rng.getrandbits(1) for _ in range(n)]
+
+
+def _amaranth_params(width, poly, xor_out):
+    algo = am_crc.Algorithm(crc_width=width, polynomial=poly, initial_crc=0,
+                            reflect_input=False, reflect_output=False, xor_output=xor_out)
+    return algo(data_width=1)
+
+
+BISS_CRCS = [
+    pytest.param(crc6_biss, 6, 0x03, 0x3F, id="crc6"),
+    pytest.param(crc16_biss, 16, 0x90D9, 0xFFFF, id="crc16"),
+]
+
+
+@pytest.mark.parametrize("func, width, poly, xor_out", BISS_CRCS)
+def test_biss_crc_matches_amaranth_model(func, width, poly, xor_out):
+    # Literal parameters from spec section 6, not protocol.py, so a wrong constant there fails.
+    params = _amaranth_params(width, poly, xor_out)
+    for bits in _random_messages(seed=width):
+        assert func(bits) == params.compute(bits), bits
+
+
+def test_protocol_constants_are_the_spec_values():
+    assert (protocol.CRC6_WIDTH, protocol.CRC6_POLY, protocol.CRC6_XOR_OUT) == (6, 0x03, 0x3F)
+    assert (protocol.CRC16_WIDTH, protocol.CRC16_POLY, protocol.CRC16_XOR_OUT) == (
+        16, 0x90D9, 0xFFFF)
+    assert protocol.CRC_INIT == 0
+
+
+@pytest.mark.parametrize("func, width, poly, xor_out", BISS_CRCS)
+def test_sent_crc_leaves_constant_residue(func, width, poly, xor_out):
+    # Data followed by its (inverted) CRC always leaves the same register value: the residue.
+    residue = _amaranth_params(width, poly, xor_out).residue()
+    seen = set()
+    for bits in _random_messages(seed=width + 1):
+        codeword = bits + int_to_bits(func(bits), width)
+        seen.add(crc_msb_first(codeword, width=width, poly=poly))
+    assert seen == {residue}
+    assert residue != 0     # would mean the inversion is missing
+
+
+# CRC RevEng catalogue (https://reveng.sourceforge.io/crc-catalogue/all.htm), non-reflected
+# entries only: (width, poly, init, xor_out, check over b"123456789").
+CATALOGUE = {
+    "CRC-16/XMODEM": (16, 0x1021, 0x0000, 0x0000, 0x31C3),
+    "CRC-16/IBM-3740": (16, 0x1021, 0xFFFF, 0x0000, 0x29B1),
+    "CRC-16/GENIBUS": (16, 0x1021, 0xFFFF, 0xFFFF, 0xD64E),
+    "CRC-8/SMBUS": (8, 0x07, 0x00, 0x00, 0xF4),
+    "CRC-6/GSM": (6, 0x2F, 0x00, 0x3F, 0x13),
+    "CRC-6/CDMA2000-A": (6, 0x27, 0x3F, 0x00, 0x0D),
+    "CRC-6/CDMA2000-B": (6, 0x07, 0x3F, 0x00, 0x3B),
+    "CRC-5/EPC-C1G2": (5, 0x09, 0x09, 0x00, 0x00),
+    "CRC-32/BZIP2": (32, 0x04C11DB7, 0xFFFFFFFF, 0xFFFFFFFF, 0xFC891918),
+    "CRC-32/MPEG-2": (32, 0x04C11DB7, 0xFFFFFFFF, 0x00000000, 0x0376E6E7),
+}
+
+
+@pytest.mark.parametrize("name", CATALOGUE)
+def test_generic_crc_catalogue_check_values(name):
+    width, poly, init, xor_out, check = CATALOGUE[name]
+    bits = _bytes_msb_first(CHECK_MESSAGE)
+    assert crc_msb_first(bits, width=width, poly=poly, init=init, xor_out=xor_out) == check
+
+
+# Published CRC-6 lookup table for x^6 + x + 1 (0x43), start 0, *not* inverted: entry i is the
+# CRC register after feeding the 6-bit value i. The same table appears in iC-Haus' BiSS CRC
+# sample code and in the MT6701 sensor datasheet; copied here from
+# espressif/esp-iot-solution, components/motor/esp_simplefoc/port/angle_sensor/mt6701.cpp
+# (commit 8f2f077e2bdee929b178b227b88c82cafe81bfc1), ``tableCRC6``.
+TABLE_CRC6_0X43 = [
+    0x00, 0x03, 0x06, 0x05, 0x0C, 0x0F, 0x0A, 0x09,
+    0x18, 0x1B, 0x1E, 0x1D, 0x14, 0x17, 0x12, 0x11,
+    0x30, 0x33, 0x36, 0x35, 0x3C, 0x3F, 0x3A, 0x39,
+    0x28, 0x2B, 0x2E, 0x2D, 0x24, 0x27, 0x22, 0x21,
+    0x23, 0x20, 0x25, 0x26, 0x2F, 0x2C, 0x29, 0x2A,
+    0x3B, 0x38, 0x3D, 0x3E, 0x37, 0x34, 0x31, 0x32,
+    0x13, 0x10, 0x15, 0x16, 0x1F, 0x1C, 0x19, 0x1A,
+    0x0B, 0x08, 0x0D, 0x0E, 0x07, 0x04, 0x01, 0x02,
+]
+TABLE_INDEX_BITS = 6
+
+
+def test_crc6_matches_published_table():
+    for index, expected in enumerate(TABLE_CRC6_0X43):
+        bits = int_to_bits(index, TABLE_INDEX_BITS)
+        assert crc_msb_first(bits, width=6, poly=0x03) == expected, index
+        assert crc6_biss(bits) == expected ^ 0x3F, index
+
+
+def _table_crc6(value, n_bits):
+    """The table-driven algorithm of the same source (CRC6_43_18bit), 6 bits per step."""
+    assert n_bits % TABLE_INDEX_BITS == 0
+    crc = 0
+    for shift in range(n_bits - TABLE_INDEX_BITS, -1, -TABLE_INDEX_BITS):
+        crc = TABLE_CRC6_0X43[crc ^ ((value >> shift) & 0x3F)]
+    return crc
+
+
+def test_crc6_matches_published_table_algorithm_on_long_words():
+    rng = random.Random(6)
+    for n_bits in (18, 24, 36, 42):     # 42 = 36-bit position + nE + nW + 4 leading zeros
+        for _ in range(N_RANDOM // 4):
+            value = rng.getrandbits(n_bits)
+            bits = int_to_bits(value, n_bits)
+            assert crc6_biss(bits) == _table_crc6(value, n_bits) ^ 0x3F
+
+
+def test_hand_computed_crc6():
+    # 101010 * x^6 mod (x^6 + x + 1) = x^5 + x^4 + x^3 + x^2 + 1 = 0x3D by long division.
+    assert crc_msb_first([1, 0, 1, 0, 1, 0], width=6, poly=0x03) == 0x3D
+    assert crc6_biss([1, 0, 1, 0, 1, 0]) == 0x02
+
+
+def test_leading_zeros_do_not_change_crc_with_zero_start():
+    # Start value 0 makes leading zeros invisible: why BP3 right-justified data is unambiguous.
+    bits = [1, 1, 0, 1, 0, 0, 1]
+    assert crc6_biss([0, 0, 0] + bits) == crc6_biss(bits)
+    assert crc16_biss([0] * 5 + bits) == crc16_biss(bits)
+
+
+def test_bit_conversions():
+    assert int_to_bits(0b1011, 4) == [1, 0, 1, 1]
+    assert int_to_bits(1, 6) == [0, 0, 0, 0, 0, 1]
+    assert int_to_bits(0, 0) == []
+    assert bits_to_int([1, 0, 1, 1]) == 0b1011
+    assert bits_to_int([]) == 0
+    rng = random.Random(1)
+    for _ in range(100):
+        n = rng.randint(1, 64)
+        value = rng.getrandbits(n)
+        assert bits_to_int(int_to_bits(value, n)) == value
+
+
+@pytest.mark.parametrize("value, n", [(16, 4), (-1, 4), (1, 0)])
+def test_int_to_bits_rejects_values_that_do_not_fit(value, n):
+    with pytest.raises(ValueError):
+        int_to_bits(value, n)
+
+
+def test_non_binary_bits_rejected():
+    with pytest.raises(ValueError):
+        crc6_biss([0, 1, 2])
+    with pytest.raises(ValueError):
+        bits_to_int([1, True + 1])
+
+
+def test_crc_parameters_validated():
+    with pytest.raises(ValueError):
+        crc_msb_first([1], width=0, poly=0)
+    with pytest.raises(ValueError):
+        crc_msb_first([1], width=6, poly=0x43)

@@ -1,0 +1,308 @@
+"""Frame layout, round trips and fault injection of the encoder model."""
+
+import random
+
+import pytest
+from amaranth.lib import crc as am_crc
+
+from bissmaster import protocol
+from encoder_model.crc import bits_to_int
+from encoder_model.frames import (CRC6, CRC16, CRC_NONE, PRESETS, EncoderFrameSource,
+                                  FrameFaults, FrameFormat, SignOfLife, WordFormat, WordValue,
+                                  bp3, build_frame, parse_frame, word_bits)
+
+HEADER = 2          # Start + CDS
+N_RANDOM = 40
+
+# Word sizes from the spec, summed by hand: position + nE/nW (2) [+ LC (6)] + CRC (6 or 16).
+EXPECTED_TOTAL_BITS = {
+    "resolute_fs_lmm": (32 + 2 + 6) + (32 + 2 + 6 + 16),    # 96
+    "resolute_fs_rsm": (28 + 2 + 6) + (24 + 2 + 6 + 16),    # 84
+    "resolute_fs_rsh": (36 + 2 + 6) + (28 + 2 + 6 + 16),    # 96
+    "fortis_fs_rsh": (36 + 2 + 6) + (28 + 2 + 6 + 16),      # 96
+    "evolute_26": 34, "evolute_32": 40, "evolute_36": 44,
+    "resolute_c_18": 26, "resolute_c_26": 34, "resolute_c_32": 40, "resolute_c_36": 44,
+    "bp3_1": 9, "bp3_24": 32, "bp3_55": 63,
+}
+EXPECTED_SPW_SHIFT = {"resolute_fs_lmm": 0, "resolute_fs_rsm": 4, "resolute_fs_rsh": 8,
+                      "fortis_fs_rsh": 8}
+ALL_FORMATS = list(PRESETS.values()) + [bp3(n) for n in range(1, 56)]
+
+
+def _ref_crc(bits, width, poly, xor_out):
+    algo = am_crc.Algorithm(crc_width=width, polynomial=poly, initial_crc=0,
+                            reflect_input=False, reflect_output=False, xor_output=xor_out)
+    return algo(data_width=1).compute(bits)
+
+
+def _random_values(fmt, rng):
+    values = []
+    for w in fmt.words:
+        lc = rng.randint(1, 63) if w.lc else None
+        values.append(WordValue(rng.getrandbits(w.data_bits), rng.getrandbits(1),
+                                rng.getrandbits(1), lc))
+    return values
+
+
+# -- formats -------------------------------------------------------------------------------
+
+def test_preset_keys_exact():
+    assert set(PRESETS) == set(EXPECTED_TOTAL_BITS)
+
+
+@pytest.mark.parametrize("name", sorted(EXPECTED_TOTAL_BITS))
+def test_preset_total_bits(name):
+    fmt = PRESETS[name]
+    assert fmt.name == name
+    assert fmt.total_bits == EXPECTED_TOTAL_BITS[name]
+    assert fmt.is_safety == (name in EXPECTED_SPW_SHIFT)
+
+
+@pytest.mark.parametrize("name", sorted(EXPECTED_SPW_SHIFT))
+def test_safety_presets_layout(name):
+    cpw, spw = PRESETS[name].words
+    assert (cpw.nenw, cpw.lc, cpw.crc) == (True, False, CRC6)
+    assert (spw.nenw, spw.lc, spw.crc) == (True, True, CRC16)
+    assert PRESETS[name].spw_shift == EXPECTED_SPW_SHIFT[name]
+
+
+def test_single_word_presets_layout():
+    for name, fmt in PRESETS.items():
+        if name not in EXPECTED_SPW_SHIFT:
+            (word,) = fmt.words
+            assert (word.nenw, word.lc, word.crc) == (True, False, CRC6)
+            assert fmt.spw_shift == 0
+
+
+def test_bp3_range():
+    for n in range(1, 56):
+        fmt = bp3(n)
+        assert fmt.name == f"bp3_{n}"
+        assert fmt.total_bits == n + 2 + 6
+    for bad in (0, 56, -1):
+        with pytest.raises(ValueError):
+            bp3(bad)
+
+
+def test_word_format_total_bits_variants():
+    assert WordFormat(10, nenw=False, crc=CRC_NONE).total_bits == 10
+    assert WordFormat(10, nenw=False, lc=True, crc=CRC16).total_bits == 10 + 6 + 16
+    assert WordFormat(64).total_bits == 64 + 2 + 6
+
+
+@pytest.mark.parametrize("kwargs", [dict(data_bits=0), dict(data_bits=65),
+                                    dict(data_bits=8, crc="crc8"), dict(data_bits=8, crc=6)])
+def test_word_format_rejects_bad_values(kwargs):
+    with pytest.raises(ValueError):
+        WordFormat(**kwargs)
+
+
+def test_frame_format_rejects_bad_word_counts():
+    w = WordFormat(8)
+    with pytest.raises(ValueError):
+        FrameFormat("none", ())
+    with pytest.raises(ValueError):
+        FrameFormat("three", (w, w, w))
+    with pytest.raises(ValueError):
+        FrameFormat("finer_spw", (WordFormat(8), WordFormat(12, lc=True, crc=CRC16)))
+
+
+# -- word and frame bits -------------------------------------------------------------------
+
+def test_word_bits_hand_example():
+    # 4-bit position 1010, nE = 1, nW = 0; CRC register over 101010 is 0x3D (long division,
+    # see test_model_crc), sent inverted: 0x02 = 000010.
+    bits = word_bits(WordFormat(4), WordValue(0b1010, ne=1, nw=0))
+    assert bits == [1, 0, 1, 0, 1, 0, 0, 0, 0, 0, 1, 0]
+
+
+def test_word_bits_spw_fields():
+    fmt = WordFormat(28, lc=True, crc=CRC16)
+    value = WordValue(0xABCDEF1, ne=0, nw=1, lc=42)
+    bits = word_bits(fmt, value)
+    assert len(bits) == 28 + 2 + 6 + 16
+    assert bits_to_int(bits[:28]) == 0xABCDEF1
+    assert bits[28:30] == [0, 1]
+    assert bits_to_int(bits[30:36]) == 42
+    assert bits_to_int(bits[36:]) == _ref_crc(bits[:36], 16, 0x90D9, 0xFFFF)
+
+
+def test_word_bits_without_optional_fields():
+    assert word_bits(WordFormat(5, nenw=False, crc=CRC_NONE), WordValue(0b10011)) == [
+        1, 0, 0, 1, 1]
+
+
+def test_build_frame_layout():
+    fmt = PRESETS["resolute_fs_rsh"]
+    values = [WordValue(0x123456789, 1, 1), WordValue(0x1234567, 1, 0, lc=7)]
+    bits = build_frame(fmt, values)
+    assert len(bits) == HEADER + 96
+    assert bits[:HEADER] == [protocol.START_BIT, 0]
+    cpw = bits[HEADER:HEADER + 44]
+    spw = bits[HEADER + 44:]
+    assert cpw == word_bits(fmt.words[0], values[0])
+    assert spw == word_bits(fmt.words[1], values[1])
+    assert bits_to_int(cpw[38:]) == _ref_crc(cpw[:38], 6, 0x03, 0x3F)
+    assert bits_to_int(spw[36:]) == _ref_crc(spw[:36], 16, 0x90D9, 0xFFFF)
+
+
+@pytest.mark.parametrize("fmt", ALL_FORMATS, ids=lambda f: f.name)
+def test_round_trip(fmt):
+    rng = random.Random(fmt.name)
+    for _ in range(N_RANDOM):
+        values = _random_values(fmt, rng)
+        parsed = parse_frame(fmt, build_frame(fmt, values))
+        assert parsed["start"] == 1 and parsed["cds"] == 0 and parsed["crc_ok"]
+        for word, value in zip(parsed["words"], values):
+            assert (word["position"], word["ne"], word["nw"], word["lc"]) == (
+                value.position, value.ne, value.nw, value.lc)
+            assert word["crc_ok"]
+
+
+@pytest.mark.parametrize("fmt", list(PRESETS.values()), ids=lambda f: f.name)
+def test_every_single_bit_flip_in_a_word_is_caught(fmt):
+    rng = random.Random(fmt.name + "flip")
+    values = _random_values(fmt, rng)
+    clean = parse_frame(fmt, build_frame(fmt, values))
+    start = HEADER
+    for word_index, wfmt in enumerate(fmt.words):
+        for i in range(start, start + wfmt.total_bits):
+            parsed = parse_frame(fmt, build_frame(fmt, values, FrameFaults(flip_bits=(i,))))
+            assert not parsed["words"][word_index]["crc_ok"], i
+            assert not parsed["crc_ok"]
+            others = [w for k, w in enumerate(parsed["words"]) if k != word_index]
+            assert all(w["crc_ok"] for w in others)
+        start += wfmt.total_bits
+    assert clean["crc_ok"]
+
+
+def test_header_flips_are_not_crc_covered():
+    fmt = PRESETS["evolute_26"]
+    values = [WordValue(12345)]
+    parsed = parse_frame(fmt, build_frame(fmt, values, FrameFaults(flip_bits=(0, 1))))
+    assert (parsed["start"], parsed["cds"], parsed["crc_ok"]) == (0, 1, True)
+
+
+def test_cds_fault():
+    fmt = PRESETS["resolute_c_32"]
+    bits = build_frame(fmt, [WordValue(7)], FrameFaults(cds=1))
+    assert bits[:HEADER] == [1, 1]
+    assert parse_frame(fmt, bits)["cds"] == 1
+
+
+@pytest.mark.parametrize("name", sorted(EXPECTED_SPW_SHIFT))
+def test_crc_xor_corrupts_only_its_word(name):
+    fmt = PRESETS[name]
+    values = _random_values(fmt, random.Random(name))
+    for word_index, xor in ((0, 0x01), (1, 0x8000), (1, 0xFFFF)):
+        crc_xor = (0, xor) if word_index else (xor,)
+        parsed = parse_frame(fmt, build_frame(fmt, values, FrameFaults(crc_xor=crc_xor)))
+        assert [w["crc_ok"] for w in parsed["words"]] == [word_index != 0, word_index != 1]
+        clean = parse_frame(fmt, build_frame(fmt, values))["words"][word_index]["crc"]
+        assert parsed["words"][word_index]["crc"] == clean ^ xor
+
+
+def test_word_value_validation():
+    fmt = WordFormat(8)
+    spw = WordFormat(8, lc=True, crc=CRC16)
+    for bad in (WordValue(256), WordValue(-1), WordValue(1, ne=2), WordValue(1, nw=-1),
+                WordValue(1, lc=3)):
+        with pytest.raises(ValueError):
+            word_bits(fmt, bad)
+    for bad in (WordValue(1), WordValue(1, lc=64), WordValue(1, lc=-1)):
+        with pytest.raises(ValueError):
+            word_bits(spw, bad)
+    assert word_bits(spw, WordValue(1, lc=0))      # 0 is encodable (the zero fault)
+
+
+def test_build_and_parse_validation():
+    fmt = PRESETS["evolute_32"]
+    ok = [WordValue(1)]
+    with pytest.raises(ValueError):
+        build_frame(fmt, ok + ok)
+    with pytest.raises(ValueError):
+        build_frame(fmt, ok, FrameFaults(flip_bits=(HEADER + 40,)))
+    with pytest.raises(ValueError):
+        build_frame(fmt, ok, FrameFaults(crc_xor=(1, 1)))
+    with pytest.raises(ValueError):
+        build_frame(fmt, ok, FrameFaults(crc_xor=(0x40,)))
+    with pytest.raises(ValueError):
+        build_frame(fmt, ok, FrameFaults(cds=2))
+    with pytest.raises(ValueError):
+        word_bits(WordFormat(4, crc=CRC_NONE), WordValue(1), crc_xor=1)
+    with pytest.raises(ValueError):
+        parse_frame(fmt, build_frame(fmt, ok)[:-1])
+
+
+# -- sign of life --------------------------------------------------------------------------
+
+def test_sign_of_life_sequence_wraps_and_skips_zero():
+    sol = SignOfLife()
+    seq = [sol.next() for _ in range(200)]
+    assert seq[:3] == [1, 2, 3]
+    assert seq[62:65] == [63, 1, 2]
+    assert 0 not in seq
+    assert seq == [(i % 63) + 1 for i in range(200)]
+    assert protocol.LC_FIRST == 1 and protocol.LC_MAX == 63
+
+
+def test_sign_of_life_faults():
+    sol = SignOfLife()
+    with pytest.raises(ValueError):
+        sol.repeat()
+    assert [sol.next(), sol.next()] == [1, 2]
+    assert sol.repeat() == 2
+    assert sol.next() == 3
+    assert sol.zero() == 0
+    assert sol.next() == 4
+    assert sol.skip(2) == 7
+    assert sol.next() == 8
+    with pytest.raises(ValueError):
+        sol.skip(-1)
+    late = SignOfLife(first=62)
+    assert [late.next(), late.skip(1), late.next()] == [62, 1, 2]
+
+
+# -- encoder frame source ------------------------------------------------------------------
+
+@pytest.mark.parametrize("name", sorted(EXPECTED_SPW_SHIFT))
+def test_source_spw_is_cpw_with_low_bits_dropped(name):
+    fmt = PRESETS[name]
+    shift = EXPECTED_SPW_SHIFT[name]
+    speed = 123_456_789.0      # counts per second, arbitrary
+    src = EncoderFrameSource(fmt, lambda t: int(speed * t))
+    for k in range(50):
+        t = k * protocol.MIN_CYCLE_PERIOD_S
+        bits, values = src.frame_at(t)
+        cpw_bits = fmt.words[0].data_bits
+        expected = int(speed * t) % (1 << cpw_bits)
+        assert values[0].position == expected
+        assert values[1].position == expected >> shift
+        assert values[1].lc == (k % 63) + 1 and values[0].lc is None
+        parsed = parse_frame(fmt, bits)
+        assert parsed["crc_ok"]
+        assert parsed["words"][1]["position"] == parsed["words"][0]["position"] >> shift
+
+
+def test_source_wraps_position_and_applies_status():
+    fmt = PRESETS["resolute_c_18"]
+    src = EncoderFrameSource(fmt, lambda t: -1 if t < 0 else (1 << 18) + 5, ne=0, nw=0)
+    assert src.values_at(-1.0)[0] == WordValue((1 << 18) - 1, 0, 0, None)
+    assert src.values_at(1.0)[0].position == 5
+
+
+def test_source_lc_override_does_not_advance_counter():
+    fmt = PRESETS["resolute_fs_lmm"]
+    src = EncoderFrameSource(fmt, lambda t: 0)
+    assert src.values_at(0)[1].lc == 1
+    assert src.values_at(0, lc=src.sign_of_life.zero())[1].lc == 0
+    assert src.values_at(0, lc=src.sign_of_life.repeat())[1].lc == 1
+    assert src.values_at(0)[1].lc == 2
+
+
+def test_source_single_word_does_not_touch_counter():
+    src = EncoderFrameSource(PRESETS["evolute_26"], lambda t: 99)
+    bits, values = src.frame_at(0.0, FrameFaults(crc_xor=(1,)))
+    assert values == [WordValue(99)]
+    assert not parse_frame(PRESETS["evolute_26"], bits)["crc_ok"]
+    assert src.sign_of_life.next() == 1
