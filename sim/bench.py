@@ -32,6 +32,11 @@ CRC_CODE = {frames.CRC_NONE: 0, frames.CRC6: 1, frames.CRC16: 2}
 COUNTERS = ("crc_word0", "crc_word1", "no_ack", "no_start", "delay_range", "slo_stuck_low",
             "lc_repeat", "lc_skip", "lc_zero", "spw_mismatch", "overrun", "aborted")
 
+CFG_PORTS = ["cfg_ma_half_period", "cfg_request_period", "cfg_break_time", "cfg_ack_limit",
+             "cfg_timeout_limit", "cfg_delay_limit", "cfg_w1_enable", "cfg_spw_check",
+             "cfg_spw_tolerance"] + [f"cfg_w{w}_{f}" for w in range(2)
+                                     for f in ("data_bits", "nenw", "lc", "crc")]
+
 MA_RATES_HZ = (250e3, 1e6, 2.5e6, 5e6, 10e6)
 CABLES_M = (0, 20, 50, 100)
 
@@ -78,7 +83,10 @@ class Bench:
     async def start(self, cable=Cable(), timeout_s=12.5e-6):
         dut = self.dut
         Clock(dut.clk, CLK_NS, unit="ns").start()
+        # Drive every input from time 0 (an undriven input is X in a four-state simulator).
         for name in ("start", "periodic", "abort_cycle", "clear_counters"):
+            getattr(dut, name).value = 0
+        for name in CFG_PORTS:
             getattr(dut, name).value = 0
         dut.slo.value = 1
         dut.rst.value = 1
@@ -95,6 +103,13 @@ class Bench:
     async def wait_idle(self, limit_s=1e-3):
         """Until ``busy`` is low: a start is only honoured then (else it is an overrun)."""
         await RisingEdge(self.dut.clk)
+        # Icarus 11 runs Yosys's combinational blocks only on their first input change, so
+        # busy reads X until the power-up break ends: count that as busy.
+        waited = 0.0
+        while not self.dut.busy.value.is_resolvable:
+            await Timer(1, "us")
+            waited += 1e-6
+            assert waited < limit_s, "busy never resolved"
         if int(self.dut.busy.value):
             await with_timeout(FallingEdge(self.dut.busy), limit_s * 1e9, "ns")
             await RisingEdge(self.dut.clk)
@@ -153,15 +168,22 @@ class Bench:
         dut = self.dut
         await self.wait_idle()
         dut.start.value = 1
+        # Wait for done from now on: a bad configuration answers on the very next edge.
+        done = cocotb.start_soon(self.wait_done(limit_s))
         await RisingEdge(dut.clk)
         dut.start.value = 0
-        return await self.wait_done(limit_s)
+        return await done
 
     async def wait_done(self, limit_s=3e-3):
         self.check_pending()
         await with_timeout(RisingEdge(self.dut.done), limit_s * 1e9, "ns")
-        # Every result register changed on the same clock edge as done.
-        return self.read()
+        # Every result register changed on the same clock edge as done; read them once all
+        # updates of that time step are in (simulators order them differently), then step
+        # past the read-only phase so the caller may drive inputs again.
+        await ReadOnly()
+        res = self.read()
+        await Timer(1, "ps")
+        return res
 
     def read(self):
         dut = self.dut

@@ -7,7 +7,7 @@ Run through pytest (sim/test_sim.py) on Verilator and Icarus. Each test builds i
 import os
 
 import cocotb
-from cocotb.triggers import ClockCycles, RisingEdge, Timer
+from cocotb.triggers import ClockCycles, FallingEdge, RisingEdge, Timer
 
 from bench import CABLES_M, MA_RATES_HZ, STATUS, Bench, half_period_for
 from encoder_model import frames
@@ -265,14 +265,15 @@ async def abort_and_break(dut):
         await RisingEdge(dut.clk)
         dut.start.value = 0
         await Timer(delay_us, "us")
+        await FallingEdge(dut.clk)              # away from the sampling edge
         dut.abort_cycle.value = 1
-        await RisingEdge(dut.clk)
+        done = cocotb.start_soon(bench.wait_done(limit_s=10e-6))
+        await FallingEdge(dut.clk)
         dut.abort_cycle.value = 0
-        res = await bench.wait_done(limit_s=10e-6)
+        res = await done
         assert res.status == STATUS["ABORTED"] and res.valid == 0
         assert res.counters["aborted"] == before + 1
         # MA stays high for the break (40 us) before anything else.
-        t_abort = bench.encoder.records[-1]
         await bench.wait_idle()
         # The encoder saw an abort, and the next frame decodes (LC re-synchronised).
         assert bench.encoder.records[-1].aborted, (delay_us, bench.encoder.records[-2:])

@@ -27,8 +27,9 @@ def _build(sim):
     return _built[sim]
 
 
-@pytest.mark.parametrize("test", TESTS)
-@pytest.mark.parametrize("sim", SIMS)
+# With pytest-xdist (--dist loadgroup), one worker per simulator: each has one build directory.
+@pytest.mark.parametrize("sim,test", [pytest.param(sim, test, marks=pytest.mark.xdist_group(sim))
+                                      for sim in SIMS for test in TESTS])
 def test_cocotb(sim, test):
     r, build_dir = _build(sim)
     xml = runner.run(r, build_dir, "cocotb_master", testcase=test)

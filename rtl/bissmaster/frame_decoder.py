@@ -115,9 +115,12 @@ class FrameDecoder(wiring.Component):
             data_w = getattr(self, f"data{w}")
             with m.If(this_word & (idx < data_end)):
                 m.d.sync += data_w.eq(Cat(self.bit, data_w))
-            with m.If(this_word & (idx == data_end)):
+            # A word without nE/nW reads as "no error, no warning" (both high).
+            with m.If(~self.words[w].nenw):
+                m.d.sync += [self.ne[w].eq(1), self.nw[w].eq(1)]
+            with m.Elif(this_word & (idx == data_end)):
                 m.d.sync += self.ne[w].eq(self.bit)
-            with m.If(this_word & (idx == data_end + 1)):
+            with m.Elif(this_word & (idx == data_end + 1)):
                 m.d.sync += self.nw[w].eq(self.bit)
         with m.If(in_word & (idx >= nenw_end) & (idx < lc_end)):
             m.d.sync += self.lc.eq(Cat(self.bit, self.lc))

@@ -24,8 +24,8 @@ class SloSampler(wiring.Component):
 
     The master holds it in reset between cycles (``ResetInserter``).
 
-    Slot 0 must read low (it is inside the Ack): if it reads high the edge was a glitch, and the
-    sampler goes back to waiting for the Ack edge.
+    SLO must stay low from the edge to the slot-0 sample (it is inside the Ack): if it goes high
+    before, the edge was a glitch, and the sampler goes back to waiting for the Ack edge.
 
     Attributes
     ----------
@@ -87,8 +87,10 @@ class SloSampler(wiring.Component):
                     m.d.sync += elapsed.eq(elapsed + 1)
                 with m.If(fell):
                     # The edge entered the second flop ``elapsed - 1`` clocks after the MA edge.
+                    # A saturated count stays saturated: above every limit.
                     m.d.sync += [
-                        self.delay.eq(elapsed - SYNC_EXTRA_LATENCY),
+                        self.delay.eq(Mux(elapsed == delay_max, delay_max,
+                                          elapsed - SYNC_EXTRA_LATENCY)),
                         slot_left.eq(self.half_period - 1),
                         first_slot.eq(1),
                     ]
@@ -97,16 +99,16 @@ class SloSampler(wiring.Component):
                 with m.If(elapsed != delay_max):
                     m.d.sync += elapsed.eq(elapsed + 1)
                 m.d.sync += slot_left.eq(slot_left - 1)
-                with m.If(slot_left == 0):
+                with m.If(first_slot & self.slo):
+                    # SLO high again inside the first Ack slot: the edge was a glitch (or a
+                    # bounce before the real edge). Keep waiting for the real Ack edge.
+                    m.next = "MEASURE"
+                with m.Elif(slot_left == 0):
                     m.d.sync += [
                         slot_left.eq(Cat(C(0, 1), self.half_period) - 1),   # one MA period
                         first_slot.eq(0),
+                        self.locked.eq(1),
                     ]
-                    with m.If(first_slot & self.slo):
-                        # Not an Ack after all: a glitch. Keep waiting for the real edge.
-                        m.next = "MEASURE"
-                    with m.Else():
-                        m.d.comb += self.sample.eq(1)
-                        m.d.sync += self.locked.eq(1)
+                    m.d.comb += self.sample.eq(1)
 
         return m

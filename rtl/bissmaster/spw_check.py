@@ -33,9 +33,11 @@ class SpwCheck(wiring.Component):
         mask = Cat(*(self.bits > i for i in range(width)))     # 2**bits - 1
         ahead = Signal(width)
         behind = Signal(width)
+        tolerance = Signal(8)
         m.d.sync += [
             ahead.eq((self.cpw_top - self.spw)[:width] & mask),
             behind.eq((self.spw - self.cpw_top)[:width] & mask),
-            self.match.eq((ahead <= self.tolerance) | (behind <= self.tolerance)),
+            tolerance.eq(self.tolerance),
+            self.match.eq((ahead <= tolerance) | (behind <= tolerance)),
         ]
         return m

