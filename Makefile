@@ -20,9 +20,12 @@ setup:  ## install Debian packages if missing and the pinned venv (.venv)
 rtl: setup  ## regenerate rtl/generated/biss_master.v from the Amaranth source
 	PYTHONPATH=rtl $(PY) -m bissmaster.generate -o $(VERILOG)
 
-lint: setup  ## verilator --lint-only -Wall on the generated Verilog (waivers: rtl/lint.vlt)
+lint: setup  ## verilator --lint-only -Wall on the default Verilog and a BiSS-C-only build (waivers: rtl/lint.vlt)
 	verilator --lint-only -Wall rtl/lint.vlt $(VERILOG) --top-module biss_master
-	@echo "lint: clean"
+	@mkdir -p sim_build
+	PYTHONPATH=rtl $(PY) -m bissmaster.generate --max-data-bits 36 --word-crcs 6 -o sim_build/biss_master_c36.v
+	verilator --lint-only -Wall rtl/lint.vlt sim_build/biss_master_c36.v --top-module biss_master
+	@echo "lint: clean (default build and BiSS C 36-bit build)"
 
 unit: setup  ## fast tests: encoder model, RTL blocks (Amaranth simulator), generated Verilog up to date
 	$(PY) -m pytest tb/tests -q -n $(JOBS)
@@ -30,8 +33,8 @@ unit: setup  ## fast tests: encoder model, RTL blocks (Amaranth simulator), gene
 sim: setup  ## cocotb regression of the generated Verilog on one simulator (SIM=...)
 	cd sim && SIM=$(SIM) ../$(PY) -m pytest test_sim.py -q
 
-sim-all: setup  ## cocotb regression on Verilator and Icarus, one worker each
-	cd sim && ../$(PY) -m pytest test_sim.py -q -n 2 --dist loadgroup
+sim-all: setup  ## cocotb regression on Verilator and Icarus, $(JOBS) workers
+	cd sim && ../$(PY) -m pytest test_sim.py -q -n $(JOBS)
 
 test: lint unit sim-all  ## everything CI runs: lint, unit tests, both simulators
 

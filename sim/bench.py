@@ -20,6 +20,7 @@ from encoder_model.cocotb_encoder import BissEncoder, Cable, Response
 
 CLK_HZ = int(os.environ.get("BISS_CLK_HZ", "100000000"))
 CLK_NS = 1e9 / CLK_HZ
+FRAME_LOG = os.environ.get("BISS_FRAME_LOG")
 
 #: Status codes of the core (docs/ports.md). Kept here as the bench's own table: a renumbering in
 #: the RTL must show up as a failure, not silently follow.
@@ -183,6 +184,9 @@ class Bench:
         await ReadOnly()
         res = self.read()
         await Timer(1, "ps")
+        if FRAME_LOG:                   # optional tally of ended cycles (for reports)
+            with open(FRAME_LOG, "a") as f:
+                f.write(f"{res.status}\n")
         return res
 
     def read(self):

@@ -9,7 +9,9 @@ import os
 import cocotb
 from cocotb.triggers import ClockCycles, FallingEdge, RisingEdge, Timer
 
-from bench import CABLES_M, MA_RATES_HZ, STATUS, Bench, half_period_for
+from cocotb.simtime import get_sim_time
+
+from bench import CABLES_M, CLK_HZ, MA_RATES_HZ, STATUS, Bench, half_period_for
 from encoder_model import frames
 from encoder_model.cocotb_encoder import Cable
 
@@ -67,8 +69,9 @@ async def long_round_trip_many_bit_periods(dut):
         bench.configure(preset(name), 10e6)
         res = await frames_ok(bench, 4)
         assert res.fields["line_delay"] >= 200, res.fields["line_delay"]
-    # Up to the elaboration limit: 4095 clocks = 40.95 us at 100 MHz, here 30 us.
-    bench.encoder.set_cable(Cable(extra_round_trip_s=30e-6))
+    # Near the hardware limits: 3000 clocks of round trip (30 us at 100 MHz), inside both the
+    # delay counter (4095 clocks) and the default Ack limit (4000 clocks).
+    bench.encoder.set_cable(Cable(extra_round_trip_s=3000 / CLK_HZ))
     bench.configure(preset("resolute_fs_rsh"), 2.5e6)
     await frames_ok(bench, 2)
 
@@ -129,7 +132,7 @@ async def encoder_error_and_warning_bits(dut):
     for ne, nw in ((0, 1), (1, 0), (0, 0), (1, 1)):
         bench.queue(values=[frames.WordValue(0x123456789 & (2**36 - 1), ne, nw)])
         res = await bench.request()
-        parsed = bench.check_frame(res)       # a transfer can be fine while the encoder says no
+        bench.check_frame(res)                # a transfer can be fine while the encoder says no
         assert (res.fields["word0_ne"], res.fields["word0_nw"]) == (ne, nw)
         assert res.fields["word0_position"] == 0x123456789 & (2**36 - 1)
 
@@ -152,14 +155,9 @@ async def sign_of_life_faults(dut):
         flags = {k: res.fields[k] for k in expected}
         assert flags == {k: int(k == kind) for k in expected}, (kind, flags, bench.sent[-3:])
         assert {k: res.counters[k] for k in expected} == expected
-        res = await bench.request()
-        if kind == "lc_zero":
-            bench.check_frame(res)            # judged against the last good LC: in sequence
-        else:
-            bench.check_frame(res)
+        # The next frame is in sequence again (after a zero: judged against the last good LC).
+        bench.check_frame(await bench.request())
     # Wrap-around 63 -> 1 is in sequence.
-    for _ in range(70):
-        bench.queue()
     for _ in range(70):
         res = await bench.request()
         bench.check_frame(res, check_rises=False)
@@ -388,3 +386,34 @@ async def periodic_requests_and_overrun(dut):
     dut.clear_counters.value = 0
     await RisingEdge(dut.clk)
     assert all(v == 0 for v in bench.read().counters.values())
+
+
+@cocotb.test()
+async def verdict_latency(dut):
+    """done/valid come exactly 2 clocks after the last CRC bit is sampled, for both words'
+    CRCs and for a frame whose last CRC bit is corrupted."""
+    bench = Bench(dut, seed=14)
+    await bench.start(cable=Cable(length_m=100))
+    samples = []
+
+    async def watch():
+        while True:
+            await RisingEdge(dut.sample)        # the sampler's strobe, one per slot
+            samples.append(get_sim_time("step"))
+
+    watcher = cocotb.start_soon(watch())
+    clk_steps = round(1e12 / CLK_HZ)
+    for name, ma_hz in (("resolute_fs_rsh", 10e6), ("evolute_26", 2.5e6), ("bp3_1", 10e6)):
+        fmt = preset(name)
+        bench.configure(fmt, ma_hz)
+        for faults in (None, frames.FrameFaults(flip_bits=(2 + fmt.total_bits - 1,))):
+            bench.queue(faults=faults)
+            samples.clear()
+            res = await bench.request()
+            t_done = get_sim_time("step") - 1        # wait_done stepped 1 ps past the edge
+            bench.check_frame(res, status="OK" if faults is None else
+                              ("CRC_ERROR_WORD1" if len(fmt.words) == 2 else "CRC_ERROR_WORD0"))
+            last_bit = [t for t in samples if t <= t_done][-1]
+            assert t_done - last_bit == 2 * clk_steps, \
+                f"{name}: done {(t_done - last_bit) / clk_steps} clocks after the last CRC bit"
+    watcher.cancel()

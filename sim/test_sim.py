@@ -15,6 +15,7 @@ TESTS = [
     "edge_jitter", "crc_errors_each_word", "encoder_error_and_warning_bits",
     "sign_of_life_faults", "spw_plausibility", "line_faults_and_recovery", "abort_and_break",
     "bad_configuration", "config_change_during_a_cycle", "periodic_requests_and_overrun",
+    "verdict_latency",
 ]
 SIMS = [os.environ["SIM"]] if os.environ.get("SIM") else list(runner.SIMULATORS)
 
@@ -22,17 +23,29 @@ _built = {}
 
 
 def _build(sim):
+    # One build directory per pytest-xdist worker: workers never share a build in progress.
     if sim not in _built:
-        _built[sim] = runner.build(sim)
+        _built[sim] = runner.build(sim, tag=f"-{os.environ.get('PYTEST_XDIST_WORKER', 'main')}")
     return _built[sim]
 
 
-# With pytest-xdist (--dist loadgroup), one worker per simulator: each has one build directory.
-@pytest.mark.parametrize("sim,test", [pytest.param(sim, test, marks=pytest.mark.xdist_group(sim))
-                                      for sim in SIMS for test in TESTS])
-def test_cocotb(sim, test):
+#: The same Verilog at another system clock (the core's times are all in clocks): 200 MHz gives
+#: 10..400 clocks per MA half period over the five MA rates.
+FAST_CLOCK_TESTS = ["safety_and_biss_c_presets", "long_round_trip_many_bit_periods",
+                    "line_faults_and_recovery"]
+FAST_CLK_HZ = 200_000_000
+
+CASES = [pytest.param(sim, test, runner.CLK_HZ, id=f"{sim}-{test}")
+         for sim in SIMS for test in TESTS]
+CASES += [pytest.param("verilator", test, FAST_CLK_HZ, id=f"verilator-200MHz-{test}")
+          for test in FAST_CLOCK_TESTS if "verilator" in SIMS]
+
+
+@pytest.mark.parametrize("sim,test,clk_hz", CASES)
+def test_cocotb(sim, test, clk_hz):
     r, build_dir = _build(sim)
-    xml = runner.run(r, build_dir, "cocotb_master", testcase=test)
+    xml = runner.run(r, build_dir, "cocotb_master", testcase=test,
+                     extra_env={"BISS_CLK_HZ": str(clk_hz)})
     cases = ET.parse(xml).getroot().findall(".//testcase")
     assert len(cases) == 1, f"expected one cocotb test case, got {len(cases)}"
     failures = cases[0].findall("failure") + cases[0].findall("error")

@@ -68,7 +68,7 @@ class FrameDecoder(wiring.Component):
             Mux(w <= last_word, word_length(self.words[w]), 0) for w in range(p.words)))
 
         # Where the current bit sits: word ``word``, bit ``idx`` of that word.
-        word = Signal(range(p.words))
+        word = Signal(range(p.words), name="word") if p.words > 1 else C(0, 1)   # none in one-word builds
         idx = Signal(7)
         cfg = self.words[word]
         data_end = cfg.data_bits
@@ -89,7 +89,9 @@ class FrameDecoder(wiring.Component):
                     m.next = "CDS"
             with m.State("CDS"):
                 with m.If(self.sample):
-                    m.d.sync += [self.cds.eq(self.bit), word.eq(0), idx.eq(0)]
+                    m.d.sync += [self.cds.eq(self.bit), idx.eq(0)]
+                    if p.words > 1:
+                        m.d.sync += word.eq(0)
                     m.next = "WORD"
             with m.State("WORD"):
                 m.d.comb += in_word.eq(self.sample)
@@ -100,8 +102,9 @@ class FrameDecoder(wiring.Component):
                         with m.If(word == last_word):
                             m.d.sync += self.done.eq(1)
                             m.next = "STOP"
-                        with m.Else():
-                            m.d.sync += word.eq(word + 1)
+                        if p.words > 1:
+                            with m.Else():
+                                m.d.sync += word.eq(word + 1)
             with m.State("STOP"):
                 with m.If(self.sample):
                     m.d.sync += self.stopped.eq(1)

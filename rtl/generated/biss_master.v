@@ -2361,8 +2361,8 @@ module \biss_master.decoder (rst, word_count, frame_bits, words, receiver_clear,
   reg [15:0] \$121 ;
   reg [2:0] \$122 ;
   reg \$123 ;
-  reg \$124 ;
-  reg [6:0] \$125 ;
+  reg [6:0] \$124 ;
+  reg \$125 ;
   reg [54:0] \$126 ;
   reg [1:0] \$127 ;
   reg [1:0] \$128 ;
@@ -2692,9 +2692,9 @@ module \biss_master.decoder (rst, word_count, frame_bits, words, receiver_clear,
   always @(posedge clk)
     cds <= \$123 ;
   always @(posedge clk)
-    word <= \$124 ;
+    idx <= \$124 ;
   always @(posedge clk)
-    idx <= \$125 ;
+    word <= \$125 ;
   always @(posedge clk)
     data0 <= \$126 ;
   always @(posedge clk)
@@ -2882,13 +2882,38 @@ module \biss_master.decoder (rst, word_count, frame_bits, words, receiver_clear,
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
-    \$124  = word;
+    \$124  = idx;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
       3'h1:
           if (sample) begin
-            \$124  = 1'h0;
+            \$124  = 7'h00;
+          end
+      3'h2:
+          if (sample) begin
+            \$124  = \$44 [6:0];
+            if (\$60 ) begin
+              \$124  = 7'h00;
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$124  = 7'h00;
+    end
+    if (rst) begin
+      \$124  = 7'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
+    \$125  = word;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$125  = 1'h0;
           end
       3'h2:
           if (sample) begin
@@ -2896,41 +2921,16 @@ module \biss_master.decoder (rst, word_count, frame_bits, words, receiver_clear,
               (* full_case = 32'd1 *)
               if (\$62 ) begin
               end else begin
-                \$124  = \$63 [0];
+                \$125  = \$63 [0];
               end
             end
           end
     endcase
     if (receiver_clear) begin
-      \$124  = 1'h0;
+      \$125  = 1'h0;
     end
     if (rst) begin
-      \$124  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
-    \$125  = idx;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$125  = 7'h00;
-          end
-      3'h2:
-          if (sample) begin
-            \$125  = \$44 [6:0];
-            if (\$60 ) begin
-              \$125  = 7'h00;
-            end
-          end
-    endcase
-    if (receiver_clear) begin
-      \$125  = 7'h00;
-    end
-    if (rst) begin
-      \$125  = 7'h00;
+      \$125  = 1'h0;
     end
   end
   always @* begin
