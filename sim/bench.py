@@ -79,6 +79,19 @@ class Bench:
         self.encoder = None
         self.pending = []             # MA-rise checks waiting for the encoder to end the cycle
         self.sign_of_life = frames.SignOfLife()     # one encoder: its LC runs on across configs
+        # A one-word build (BiSS C only) has no word-1, SPW or CRC-16-word ports.
+        self.words = 2 if self._has("word1_position") else 1
+
+    def _has(self, name):
+        try:
+            getattr(self.dut, name)
+            return True
+        except AttributeError:
+            return False
+
+    def _ports(self, names):
+        return [n for n in names if self.words == 2 or not any(
+            k in n for k in ("w1_", "word1", "spw", "crc_word1"))]
 
     # -- Setup ----------------------------------------------------------------------------
     async def start(self, cable=Cable(), timeout_s=12.5e-6):
@@ -87,7 +100,7 @@ class Bench:
         # Drive every input from time 0 (an undriven input is X in a four-state simulator).
         for name in ("start", "periodic", "abort_cycle", "clear_counters"):
             getattr(dut, name).value = 0
-        for name in CFG_PORTS:
+        for name in self._ports(CFG_PORTS):
             getattr(dut, name).value = 0
         dut.slo.value = 1
         dut.rst.value = 1
@@ -139,8 +152,9 @@ class Bench:
             ports.update({f"cfg_w{w}_data_bits": word.data_bits, f"cfg_w{w}_nenw": int(word.nenw),
                           f"cfg_w{w}_lc": int(word.lc), f"cfg_w{w}_crc": CRC_CODE[word.crc]})
         ports.update(cfg)
-        for name, value in ports.items():
-            getattr(dut, name).value = value
+        assert len(fmt.words) <= self.words, f"{fmt.name} needs a two-word build"
+        for name in self._ports(ports):
+            getattr(dut, name).value = ports[name]
         self.half_period = hp
         self.source = frames.EncoderFrameSource(fmt, self._position_at,
                                                  sign_of_life=self.sign_of_life)
@@ -195,8 +209,8 @@ class Bench:
                  "spw_mismatch"]
         for w in range(2):
             names += [f"word{w}_position", f"word{w}_ne", f"word{w}_nw", f"word{w}_crc_ok"]
-        fields = {n: int(getattr(dut, n).value) for n in names}
-        counters = {n: int(getattr(dut, f"count_{n}").value) for n in COUNTERS}
+        fields = {n: int(getattr(dut, n).value) for n in self._ports(names)}
+        counters = {n: int(getattr(dut, f"count_{n}").value) for n in self._ports(COUNTERS)}
         return Result(int(dut.status.value), int(dut.valid.value), fields, counters,
                       get_sim_time("step") * 1e-12)
 

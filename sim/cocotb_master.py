@@ -417,3 +417,32 @@ async def verdict_latency(dut):
             assert t_done - last_bit == 2 * clk_steps, \
                 f"{name}: done {(t_done - last_bit) / clk_steps} clocks after the last CRC bit"
     watcher.cancel()
+
+
+@cocotb.test()
+async def biss_c_only_build(dut):
+    """The BiSS-C-only build (one 36-bit word, CRC-6): single-word presets up to 36 bits at every
+    MA rate over 0 and 100 m, a CRC error, and what that build must refuse."""
+    bench = Bench(dut, seed=15)
+    assert bench.words == 1, "run this on the one-word build"
+    await bench.start()
+    names = ["evolute_26", "evolute_32", "evolute_36", "resolute_c_18", "resolute_c_36",
+             "bp3_1", "bp3_13", "bp3_36"]
+    for cable_m in (0, 100):
+        bench.encoder.set_cable(Cable(length_m=cable_m))
+        for name in names:
+            for ma_hz in MA_RATES_HZ:
+                bench.configure(preset(name), ma_hz)
+                await frames_ok(bench, 1)
+    fmt = preset("evolute_36")
+    bench.configure(fmt, 10e6)
+    bench.queue(faults=frames.FrameFaults(flip_bits=(2 + fmt.total_bits - 1,)))
+    res = await bench.request()
+    bench.check_frame(res, status="CRC_ERROR_WORD0")
+    assert res.counters["crc_word0"] == 1
+    for bad in ({"cfg_w0_data_bits": 37}, {"cfg_w0_crc": 2}, {"cfg_w0_crc": 3}):
+        bench.configure(fmt, 10e6, **bad)       # 37 bits, or CRC-16: not in this build
+        res = await bench.request(limit_s=1e-6)
+        assert res.status == STATUS["BAD_CONFIG"] and res.valid == 0, bad
+    bench.configure(fmt, 10e6)
+    await frames_ok(bench, 1)

@@ -9,6 +9,7 @@ import xml.etree.ElementTree as ET
 import pytest
 
 import runner
+from bissmaster import generate
 
 TESTS = [
     "safety_and_biss_c_presets", "bp3_lengths", "long_round_trip_many_bit_periods",
@@ -41,11 +42,37 @@ CASES += [pytest.param("verilator", test, FAST_CLK_HZ, id=f"verilator-200MHz-{te
           for test in FAST_CLOCK_TESTS if "verilator" in SIMS]
 
 
+#: The BiSS-C-only build (one 36-bit word, CRC-6 only), generated at test time.
+ONE_WORD_ARGS = ["--max-data-bits", "36", "--word-crcs", "6"]
+
+
+def _build_one_word(sim):
+    key = (sim, "c36")
+    if key not in _built:
+        worker = os.environ.get("PYTEST_XDIST_WORKER", "main")
+        out = runner.BUILD / f"biss_master_c36-{worker}.v"
+        out.parent.mkdir(parents=True, exist_ok=True)
+        generate.main(ONE_WORD_ARGS + ["-o", str(out)])
+        _built[key] = runner.build(sim, verilog=out, tag=f"-c36-{worker}")
+    return _built[key]
+
+
+@pytest.mark.parametrize("sim", SIMS)
+def test_cocotb_biss_c_only_build(sim):
+    r, build_dir = _build_one_word(sim)
+    xml = runner.run(r, build_dir, "cocotb_master", testcase="biss_c_only_build")
+    _check(xml)
+
+
 @pytest.mark.parametrize("sim,test,clk_hz", CASES)
 def test_cocotb(sim, test, clk_hz):
     r, build_dir = _build(sim)
     xml = runner.run(r, build_dir, "cocotb_master", testcase=test,
                      extra_env={"BISS_CLK_HZ": str(clk_hz)})
+    _check(xml)
+
+
+def _check(xml):
     cases = ET.parse(xml).getroot().findall(".//testcase")
     assert len(cases) == 1, f"expected one cocotb test case, got {len(cases)}"
     failures = cases[0].findall("failure") + cases[0].findall("error")
