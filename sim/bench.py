@@ -80,14 +80,7 @@ class Bench:
         self.pending = []             # MA-rise checks waiting for the encoder to end the cycle
         self.sign_of_life = frames.SignOfLife()     # one encoder: its LC runs on across configs
         # A one-word build (BiSS C only) has no word-1, SPW or CRC-16-word ports.
-        self.words = 2 if self._has("word1_position") else 1
-
-    def _has(self, name):
-        try:
-            getattr(self.dut, name)
-            return True
-        except AttributeError:
-            return False
+        self.words = 2 if hasattr(dut, "word1_position") else 1
 
     def _ports(self, names):
         return [n for n in names if self.words == 2 or not any(

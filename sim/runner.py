@@ -85,8 +85,7 @@ def run(runner, build_dir, module, testcase=None, waves=False, extra_env=None, s
     if os.environ.get("BISS_FRAME_LOG"):
         env["BISS_FRAME_LOG"] = os.environ["BISS_FRAME_LOG"]
     env.update(extra_env or {})
-    clk = (extra_env or {}).get("BISS_CLK_HZ", str(CLK_HZ))
-    results = build_dir / f"results_{module}_{testcase or 'all'}_{clk}.xml"
+    results = build_dir / f"results_{module}_{testcase or 'all'}_{env['BISS_CLK_HZ']}.xml"
     runner.test(
         test_module=module,
         hdl_toplevel=TOPLEVEL,

@@ -23,11 +23,19 @@ SIMS = [os.environ["SIM"]] if os.environ.get("SIM") else list(runner.SIMULATORS)
 _built = {}
 
 
-def _build(sim):
-    # One build directory per pytest-xdist worker: workers never share a build in progress.
-    if sim not in _built:
-        _built[sim] = runner.build(sim, tag=f"-{os.environ.get('PYTEST_XDIST_WORKER', 'main')}")
-    return _built[sim]
+def _build(sim, one_word=False):
+    """Build once per process. One build directory per pytest-xdist worker: workers never
+    share a build in progress. ``one_word``: the BiSS-C-only build, generated here."""
+    key = (sim, one_word)
+    if key not in _built:
+        worker = os.environ.get("PYTEST_XDIST_WORKER", "main")
+        verilog, tag = runner.VERILOG, f"-{worker}"
+        if one_word:
+            verilog, tag = runner.BUILD / f"biss_master_c36-{worker}.v", f"-c36-{worker}"
+            verilog.parent.mkdir(parents=True, exist_ok=True)
+            generate.main(ONE_WORD_ARGS + ["-o", str(verilog)])
+        _built[key] = runner.build(sim, verilog=verilog, tag=tag)
+    return _built[key]
 
 
 #: The same Verilog at another system clock (the core's times are all in clocks): 200 MHz gives
@@ -46,20 +54,10 @@ CASES += [pytest.param("verilator", test, FAST_CLK_HZ, id=f"verilator-200MHz-{te
 ONE_WORD_ARGS = ["--max-data-bits", "36", "--word-crcs", "6"]
 
 
-def _build_one_word(sim):
-    key = (sim, "c36")
-    if key not in _built:
-        worker = os.environ.get("PYTEST_XDIST_WORKER", "main")
-        out = runner.BUILD / f"biss_master_c36-{worker}.v"
-        out.parent.mkdir(parents=True, exist_ok=True)
-        generate.main(ONE_WORD_ARGS + ["-o", str(out)])
-        _built[key] = runner.build(sim, verilog=out, tag=f"-c36-{worker}")
-    return _built[key]
-
 
 @pytest.mark.parametrize("sim", SIMS)
 def test_cocotb_biss_c_only_build(sim):
-    r, build_dir = _build_one_word(sim)
+    r, build_dir = _build(sim, one_word=True)
     xml = runner.run(r, build_dir, "cocotb_master", testcase="biss_c_only_build")
     _check(xml)
 
