@@ -21,6 +21,7 @@ from encoder_model.cocotb_encoder import BissEncoder, Cable, Response
 CLK_HZ = int(os.environ.get("BISS_CLK_HZ", "100000000"))
 CLK_NS = 1e9 / CLK_HZ
 FRAME_LOG = os.environ.get("BISS_FRAME_LOG")
+INTERNAL_CLOCK = bool(os.environ.get("BISS_INTERNAL_CLOCK"))
 
 #: Status codes of the core (docs/ports.md). Kept here as the bench's own table: a renumbering in
 #: the RTL must show up as a failure, not silently follow.
@@ -89,7 +90,8 @@ class Bench:
     # -- Setup ----------------------------------------------------------------------------
     async def start(self, cable=Cable(), timeout_s=12.5e-6):
         dut = self.dut
-        Clock(dut.clk, CLK_NS, unit="ns").start()
+        if not INTERNAL_CLOCK:              # else the wrapper makes it (sim/fastclk.py)
+            Clock(dut.clk, CLK_NS, unit="ns").start()
         # Drive every input from time 0 (an undriven input is X in a four-state simulator).
         for name in ("start", "periodic", "abort_cycle", "clear_counters"):
             getattr(dut, name).value = 0

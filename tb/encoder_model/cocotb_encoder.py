@@ -13,8 +13,8 @@ It shares no logic with the RTL and does not build frames itself: the bits of ev
 from the ``respond`` callback (for instance ``encoder_model.frames``).
 
 Implementation: both delay lines and the encoder's own timers are events on a single
-time-ordered queue (integer simulator steps, FIFO among equal times) that one coroutine works
-through. MA edges are timestamped by a monitor coroutine when they happen at the master pin and
+time-ordered queue (integer simulator steps, FIFO among equal times), worked through by short
+wake-up tasks, one per distinct wake-up time. MA edges are timestamped by a monitor coroutine when they happen at the master pin and
 queued for their arrival time at the encoder, so any number of edges can be "in flight" on the
 cable (a round trip of many MA periods). Jitter is drawn per edge and direction; the arrival
 times are clamped so that edges never overtake each other (and never arrive before they left).
@@ -67,7 +67,7 @@ from typing import Callable
 
 import cocotb
 from cocotb.simtime import convert, get_sim_time
-from cocotb.triggers import Event, First, Timer
+from cocotb.triggers import Timer
 
 from bissmaster import protocol
 
@@ -169,8 +169,9 @@ class BissEncoder:
         self.ignored_falls: list[float] = []
         self._queue: list[tuple[int, int, Callable, tuple]] = []
         self._seq = itertools.count()
-        self._wake = Event()
-        self._sleep_until = math.inf
+        self._armed: set[int] = set()    # times of pending wake-up tasks
+        self._timeout_deadline = 0      # encoder time the MA-quiet timeout runs out
+        self._timeout_pending = False
         self._tasks: list = []
         self._running = False
         # master side
@@ -201,7 +202,7 @@ class BissEncoder:
         self._ma_master_level = lvl
         self._ma_level = lvl
         self._drive_pin()
-        self._tasks = [cocotb.start_soon(self._ma_monitor()), cocotb.start_soon(self._scheduler())]
+        self._tasks = [cocotb.start_soon(self._ma_monitor())]
 
     def stop(self) -> None:
         self._running = False
@@ -210,6 +211,7 @@ class BissEncoder:
                 task.cancel()
         self._tasks = []
         self._queue.clear()
+        self._armed.clear()
 
     def force_slo(self, level: int | None) -> None:
         """Override the SLO level at the master pin (None releases to the cable's level)."""
@@ -255,8 +257,7 @@ class BissEncoder:
     # -- event queue ------------------------------------------------------------------------
     def _push(self, t: int, fn: Callable, *args) -> None:
         heapq.heappush(self._queue, (t, next(self._seq), fn, args))
-        if t < self._sleep_until:
-            self._wake.set()
+        self._ensure_waker()
 
     def _run_due(self) -> None:
         now = self._now()
@@ -264,16 +265,26 @@ class BissEncoder:
             _, _, fn, args = heapq.heappop(self._queue)
             fn(*args)
 
-    async def _scheduler(self) -> None:
-        while True:
+    def _ensure_waker(self) -> None:
+        # One Timer task per wake-up time, armed only when no earlier one is pending: cheaper
+        # than a long-lived scheduler waiting on First(Timer, Event), which costs two tasks
+        # and a cancellation per event.
+        if not self._queue or not self._running:
+            return
+        t = self._queue[0][0]
+        if any(w <= t for w in self._armed):
+            return
+        self._armed.add(t)
+        cocotb.start_soon(self._waker(t))
+
+    async def _waker(self, t: int) -> None:
+        now = self._now()
+        if t > now:
+            await Timer(t - now, "step")
+        self._armed.discard(t)
+        if self._running:
             self._run_due()
-            self._wake.clear()
-            if not self._queue:
-                self._sleep_until = math.inf
-                await self._wake.wait()
-            else:
-                self._sleep_until = self._queue[0][0]
-                await First(Timer(self._sleep_until - self._now(), "step"), self._wake.wait())
+            self._ensure_waker()
 
     # -- master -> encoder (MA) -------------------------------------------------------------
     async def _ma_monitor(self) -> None:
@@ -314,7 +325,7 @@ class BissEncoder:
                 and cyc.tm_second_rise is not None and math.isnan(cyc.record.round_trip_s)):
             cyc.record.round_trip_s = self._sec(tm - cyc.tm_second_rise)
         # (a zero delay is picked up by the running _run_due loop or, from outside it, by
-        # the scheduler woken in this same time step: no re-entrant processing)
+        # a wake-up task started in this same time step: no re-entrant processing)
         self._push(tm, self._on_slo_arrival, lvl)
 
     def _on_slo_arrival(self, lvl: int) -> None:
@@ -338,11 +349,9 @@ class BissEncoder:
                 self.records.append(rec)
                 self._cycle = _Cycle(te, rec)
                 self._state = "cycle"
-                self._push(te + self._steps(self.timeout_s), self._on_timeout_check,
-                           self._edge_count)
+                self._arm_timeout(te)
             elif self._state == "cycle":
-                self._push(te + self._steps(self.timeout_s), self._on_timeout_check,
-                           self._edge_count)
+                self._arm_timeout(te)
             else:
                 self.ignored_falls.append(self._sec(tm))
                 self.log.info("encoder model: MA fall at %.3f us ignored (encoder %s)",
@@ -350,7 +359,7 @@ class BissEncoder:
             return
         if self._state != "cycle":
             return
-        self._push(te + self._steps(self.timeout_s), self._on_timeout_check, self._edge_count)
+        self._arm_timeout(te)
         self._on_rise(te, tm)
 
     def _on_rise(self, te: int, tm: int) -> None:
@@ -406,6 +415,21 @@ class BissEncoder:
                 cyc.done = True
             self._update_output()
         # phase "stop": further rises keep SLO low
+
+    def _arm_timeout(self, te: int) -> None:
+        """MA changed at encoder time ``te``: the cycle ends when MA stays quiet for timeout_s.
+        One pending timer event, moved on as edges come (not one event per edge)."""
+        self._timeout_deadline = te + self._steps(self.timeout_s)
+        if not self._timeout_pending:
+            self._timeout_pending = True
+            self._push(self._timeout_deadline, self._on_timeout_timer)
+
+    def _on_timeout_timer(self) -> None:
+        if self._now() < self._timeout_deadline:
+            self._push(self._timeout_deadline, self._on_timeout_timer)
+            return
+        self._timeout_pending = False
+        self._on_timeout_check(self._edge_count)
 
     def _on_timeout_check(self, edge_count: int) -> None:
         # MA has not changed for timeout_s: the cycle ends. Normally MA is high (the master

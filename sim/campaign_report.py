@@ -1,0 +1,110 @@
+"""Tables of the reliability campaigns from their JSON results (sim/cocotb_campaign.py).
+
+    python sim/campaign_report.py [DIR]     (default: sim_build/campaign/slice)
+
+Prints Markdown tables (CRC detection, line faults and recovery, sign-of-life, configuration
+fuzz, throughput, functional coverage with its holes) and writes them to DIR/report.md.
+Exits non-zero if a coverage sample shows a fault ending in a status outside the legal table.
+"""
+
+import json
+import sys
+from collections import Counter
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tb"))
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "rtl"))
+
+import coverage  # noqa: E402
+
+
+def load(d):
+    runs = {}
+    for f in sorted(Path(d).glob("*.json")):
+        if f.name.endswith(".cov.json"):
+            continue
+        runs[f.stem] = json.loads(f.read_text())
+    return runs
+
+
+def crc_table(run):
+    out = ["| frame / word / error class | patterns | detected | undetected | rate | "
+           "theory | valid with corrupted data | must all be detected |",
+           "|---|---:|---:|---:|---:|---:|---:|---|"]
+    for key, r in run.get("crc_table", {}).items():
+        rate = r["undetected"] / r["patterns"] if r["patterns"] else 0
+        theory = f"{r['theory']:.2e}" if not r["must_detect"] else "0"
+        ok = "yes: all detected" if r["must_detect"] and r["undetected"] == 0 else (
+            "**NO**" if r["must_detect"] else "no (beyond HD)")
+        out.append(f"| {key} | {r['patterns']} | {r['detected']} | {r['undetected']} | "
+                   f"{rate:.2e} | {theory} | {r['valid_corrupted']} | {ok} |")
+    return out
+
+
+def fault_table(runs):
+    tally, recovery, blind = {}, {}, Counter()
+    for run in runs.values():
+        for kind, outcomes in run["tally"].items():
+            t = tally.setdefault(kind, Counter())
+            t.update(outcomes)
+        for kind, dist in run.get("recovery", {}).items():
+            r = recovery.setdefault(kind, Counter())
+            r.update({int(n): c for n, c in dist.items()})
+        for k, v in run.get("stats", {}).items():
+            if k.startswith("crc_blind_spot_"):
+                blind[k[len("crc_blind_spot_"):]] += v
+    out = ["| fault kind | cycles | outcomes (status: count) | recoveries | cycles to the next "
+           "valid frame (n: count) |", "|---|---:|---|---:|---|"]
+    for kind in sorted(tally):
+        t = tally[kind]
+        rec = recovery.get(kind, Counter())
+        outs = ", ".join(f"{s}: {n}" for s, n in t.most_common())
+        dist = ", ".join(f"{n}: {c}" for n, c in sorted(rec.items())) or "-"
+        out.append(f"| {kind} | {sum(t.values())} | {outs} | {sum(rec.values())} | {dist} |")
+    return out, blind
+
+
+def throughput(runs):
+    out = ["| campaign | simulator | cycles | wall time | cycles/s |", "|---|---|---:|---:|---:|"]
+    for name, run in sorted(runs.items()):
+        camp, _, sim = name.rpartition("-")
+        out.append(f"| {camp} | {sim} | {run['cycles']} | {run['wall_s']:.1f} s | "
+                   f"{run['cycles_per_s']:.0f} |")
+    total = sum(r["cycles"] for r in runs.values())
+    wall = sum(r["wall_s"] for r in runs.values())
+    out.append(f"| **all** | | {total} | {wall:.1f} s | {total / wall if wall else 0:.0f} |")
+    return out
+
+
+def main(argv=None):
+    argv = sys.argv[1:] if argv is None else argv
+    d = Path(argv[0]) if argv else Path(__file__).resolve().parent.parent / "sim_build" / \
+        "campaign" / "slice"
+    runs = load(d)
+    if not runs:
+        print(f"no campaign results in {d}")
+        return 1
+    lines = [f"# Campaign results ({d})", ""]
+    for name, run in runs.items():
+        if "crc_table" in run:
+            lines += [f"## CRC detection ({name})", ""] + crc_table(run) + [""]
+    table, blind = fault_table(runs)
+    lines += ["## Faults, outcomes and recovery (all campaigns)", ""] + table + [""]
+    lines.append("CRC blind spots (a corrupted word the CRC cannot see, explained by the "
+                 "fault's own bit pattern): " + (", ".join(f"{k}: {v}" for k, v in blind.items())
+                                                 or "none") + ".")
+    lines += ["", "## Throughput", ""] + throughput(runs) + [""]
+    cov = coverage.Coverage()
+    for f in sorted(d.glob("*.cov.json")):
+        cov.merge(coverage.Coverage.load(f))
+    cov_lines, illegal = coverage.report(cov)
+    lines += ["## Functional coverage", ""] + cov_lines + [""]
+    text = "\n".join(lines)
+    print(text)
+    (d / "report.md").write_text(text + "\n")
+    return 1 if illegal else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,632 @@
+"""Reliability campaigns against the generated ``biss_master`` (issue: faults, bad input,
+coverage). Each test is one campaign; ``BISS_CAMPAIGN_SCALE`` sets its size (1 = the fast slice
+of ``make test``; ``make soak`` runs more). Results and coverage go to JSON files in
+``BISS_CAMPAIGN_RESULTS`` for sim/campaign_report.py.
+
+The engine (sim/campaign.py) predicts every outcome with the reference model
+(sim/reference.py) and checks status, valid, every field, the LC flags and all counters.
+"""
+
+import itertools
+import math
+
+import cocotb
+from cocotb.simtime import get_sim_time
+from cocotb.triggers import ClockCycles, FallingEdge, RisingEdge, Timer
+
+from bench import CLK_HZ, MA_RATES_HZ
+from campaign import FAST_LIMITS, WATCHDOG_S, Campaign, CampaignFailure, preset, scaled
+from coverage import PRESETS
+from encoder_model import frames
+from encoder_model.cocotb_encoder import Cable
+from reference import STATUS, STATUS_NAMES, config_valid, format_of
+
+CRC_THEORY = {frames.CRC6: 2.0 ** -6, frames.CRC16: 2.0 ** -16}
+HAMMING = {frames.CRC6: 3, frames.CRC16: 6}      # spec: CRC-6 HD 3, CRC-16 HD 6
+
+
+def word_spans(fmt):
+    """(first frame-bit index, length, WordFormat) of every word: Start and CDS come first."""
+    first = frames.FRAME_HEADER_BITS
+    spans = []
+    for w in fmt.words:
+        spans.append((first, w.total_bits, w))
+        first += w.total_bits
+    return spans
+
+
+# -- CRC detection ------------------------------------------------------------------------------
+@cocotb.test()
+async def crc_detection(dut):
+    """Every 1- and 2-bit error in every word of BiSS C 36 and BiSS Safety RSH 36/28; random
+    3-, 4-, 5-bit errors and bursts, counted against the CRCs' theoretical miss rates."""
+    c = Campaign(dut, "crc_detection", seed=21)
+    await c.start(cable=Cable(length_m=20))
+    table = {}
+
+    async def run(name, w, cls, patterns, must_detect):
+        first, n, wfmt = word_spans(c.fmt)[w]
+        row = table.setdefault(f"{name} word{w} ({wfmt.crc}, {n} bits) {cls}", {
+            "crc": wfmt.crc, "patterns": 0, "detected": 0, "undetected": 0,
+            "frame_rejected": 0, "valid_corrupted": 0, "theory": CRC_THEORY[wfmt.crc],
+            "must_detect": must_detect})
+        kind = {"1-bit": "crc_1bit", "2-bit": "crc_2bit"}.get(cls, "crc_burst" if
+                                                               cls.startswith("burst")
+                                                               else "crc_3to5bit")
+        for pattern in patterns:
+            flips = tuple(first + i for i in pattern)
+            res, v = await c.frame(kind, faults=frames.FrameFaults(flip_bits=flips))
+            detected = not v.crc_ok[w]          # c.frame checked the core agrees with the model
+            row["patterns"] += 1
+            row["detected" if detected else "undetected"] += 1
+            row["frame_rejected"] += int(not res.valid)
+            row["valid_corrupted"] += int(bool(res.valid))
+            if must_detect:
+                c.expect(detected and not res.valid,
+                         f"{name} word{w}: {cls} pattern {pattern} not detected (valid "
+                         f"{res.valid}) within the CRC's Hamming distance")
+
+    def sample(n, k, count):
+        return [sorted(c.rng.sample(range(n), k)) for _ in range(count)]
+
+    def bursts(n, count, max_len):
+        out = []
+        for _ in range(count):
+            length = c.rng.randint(2, min(max_len, n))
+            start = c.rng.randint(0, n - length)
+            inner = [start + i for i in range(1, length - 1) if c.rng.getrandbits(1)]
+            out.append([start] + inner + [start + length - 1])
+        return out
+
+    for name in ("resolute_c_36", "resolute_fs_rsh"):
+        c.setup(name, 10e6)
+        await c.frame()
+        for w, (first, n, wfmt) in enumerate(word_spans(c.fmt)):
+            hd = HAMMING[wfmt.crc]
+            await run(name, w, "1-bit", [[i] for i in range(n)], True)
+            await run(name, w, "2-bit", [list(p) for p in itertools.combinations(range(n), 2)],
+                      True)
+            for k in (3, 4, 5):
+                count = scaled(300 if wfmt.crc == frames.CRC16 or name == "resolute_c_36"
+                               else 60)
+                await run(name, w, f"{k}-bit random", sample(n, k, count), k < hd)
+            # A CRC of degree r detects every burst of length <= r.
+            width = wfmt.crc_bits
+            await run(name, w, f"burst <= {width}", bursts(n, scaled(100), width), True)
+            await run(name, w, f"burst {width + 1}..{n}",
+                      [b for b in bursts(n, scaled(600), n) if b[-1] - b[0] >= width][:scaled(200)],
+                      False)
+    c.save({"crc_table": table})
+    for key, row in table.items():
+        dut._log.info("%-48s %6d patterns %6d undetected", key, row["patterns"], row["undetected"])
+
+
+# -- Building blocks shared by the campaigns and the random mix ---------------------------------
+LINE_PRESETS = ["resolute_c_36", "resolute_fs_rsh", "evolute_26", "bp3_13", "resolute_fs_lmm"]
+FAST_RATES = (1e6, 2.5e6, 5e6, 10e6)
+FRAME_STATUS_NAMES = ["OK", "CRC_ERROR_WORD0", "CRC_ERROR_WORD1", "CRC_ERROR_BOTH",
+                      "SIGN_OF_LIFE", "SPW_MISMATCH"]
+#: What a fault on the line may end in (beyond the frame statuses, which any corruption of the
+#: received bits can produce): see docs/verification.md for why each is possible.
+LINE_ALLOWED = {
+    "slo_stuck_low": FRAME_STATUS_NAMES + ["NO_START", "DELAY_RANGE", "SLO_STUCK_LOW"],
+    "slo_stuck_high": FRAME_STATUS_NAMES + ["NO_ACK"],
+    "glitch": FRAME_STATUS_NAMES + ["NO_ACK", "NO_START", "DELAY_RANGE"],
+    "jitter": FRAME_STATUS_NAMES,
+}
+
+
+def cycle_time_s(c):
+    """Rough length of one cycle at the current setup: where a fault may land."""
+    fmt_bits = 2 + c.fmt.total_bits + 4
+    return (fmt_bits + 6) / c.ma_hz + c.bench.encoder.cable.round_trip_s()
+
+
+def flips(bits):
+    """Every single-bit error (a glitch that hit one sample)."""
+    for i in range(1, len(bits)):
+        b = list(bits)
+        b[i] ^= 1
+        yield b
+
+
+def shifts(bits):
+    """The frame read with Start at another slot (a glitch taken for Start, or a shifted
+    sample phase): every window of the line around the frame, Start forced to 1."""
+    n = len(bits)
+    line = [0] * (n + 4) + list(bits) + [0] * (n + 4)
+    for p in range(len(line) - n + 1):
+        yield [1] + line[p + 1:p + n]
+
+
+def stuck_tails(level):
+    def gen(bits):
+        for k in range(len(bits) + 1):
+            yield list(bits[:k]) + [level] * (len(bits) - k)
+    return gen
+
+
+async def faulted_cycle(c, inject, limit_s=WATCHDOG_S):
+    """Wait until idle, start, run ``inject()`` alongside, return the result (watchdog)."""
+    bench = c.bench
+    c.queue(processing_time_s=c.processing())
+    await bench.wait_idle()
+    c.dut.start.value = 1
+    done = cocotb.start_soon(bench.wait_done(limit_s))
+    await RisingEdge(c.dut.clk)
+    c.dut.start.value = 0
+    task = cocotb.start_soon(inject())
+    res = await done
+    return res, task
+
+
+async def random_setup(c, names=LINE_PRESETS, rates=FAST_RATES, cable_m=None):
+    name = c.rng.choice(names)
+    ma_hz = c.rng.choice(rates)
+    length = c.rng.choice((0, 10, 50, 100)) if cable_m is None else cable_m
+    await c.set_cable(Cable(length_m=length))
+    c.setup(name, ma_hz)
+
+
+async def do_stuck(c, level):
+    kind = "slo_stuck_low" if level == 0 else "slo_stuck_high"
+    at = c.rng.uniform(0, cycle_time_s(c))
+
+    async def inject():
+        await Timer(max(1, round(at * 1e12)), "ps")
+        c.bench.encoder.force_slo(level)
+
+    res, task = await faulted_cycle(c, inject)
+    await task                                      # (the cycle may end before the fault)
+    outcome = c.judge_faulted(res, kind, LINE_ALLOWED[kind], explain=stuck_tails(level))
+    c.note(kind, res, c.bench.encoder.cable.round_trip_s(), outcome)
+    # While the line stays stuck, every request must fail the same defined way.
+    for _ in range(c.rng.randint(0, 2)):
+        res = await c.bench.request(limit_s=WATCHDOG_S)
+        want = "SLO_STUCK_LOW" if level == 0 else "NO_ACK"
+        c.judge_faulted(res, kind, [want])
+        c.note(kind, res, None)
+    c.bench.encoder.force_slo(None)
+    await c.settle()
+    await c.recover(kind)
+
+
+async def do_unplug(c):
+    await c.settle()
+    c.bench.encoder.force_slo(1)                    # RS-422 receiver fail-safe: open = high
+    for _ in range(c.rng.randint(1, 3)):
+        res = await c.bench.request(limit_s=WATCHDOG_S)
+        c.judge_faulted(res, "unplug", ["NO_ACK"])
+        c.note("unplug", res, None)
+    c.bench.encoder.force_slo(None)
+    await c.recover("unplug")
+
+
+async def do_glitch(c):
+    period = 1 / c.ma_hz
+    at = c.rng.uniform(0, cycle_time_s(c))
+    width = c.rng.uniform(1e-9, 0.5 * period)       # shorter than half a bit
+
+    async def inject():
+        await Timer(max(1, round(at * 1e12)), "ps")
+        level = int(c.dut.slo.value)
+        c.bench.encoder.force_slo(1 - level)
+        await Timer(max(1, round(width * 1e12)), "ps")
+        c.bench.encoder.force_slo(None)
+
+    res, task = await faulted_cycle(c, inject)
+    await task
+
+    def explain(bits):
+        yield from flips(bits)
+        yield from shifts(bits)
+
+    outcome = c.judge_faulted(res, "glitch", LINE_ALLOWED["glitch"], explain=explain)
+    c.note("glitch", res, c.bench.encoder.cable.round_trip_s(), outcome)
+    await c.settle()
+    if res.status != STATUS["OK"]:
+        await c.recover("glitch")
+
+
+async def do_jitter(c, frames_n=1):
+    """Edges jittered by up to +/-12.5 % of the MA period in each direction: up to +/-25 %
+    between the master's MA edge and the SLO edge it causes (the protocol's limit)."""
+    cable = c.bench.encoder.cable
+    await c.set_cable(Cable(length_m=cable.length_m, jitter_s=0.125 / c.ma_hz))
+    for _ in range(frames_n):
+        c.queue(processing_time_s=c.processing())
+        res = await c.bench.request(limit_s=WATCHDOG_S)
+        record = c.bench.encoder.records[-1]
+        outcome = c.judge_faulted(res, "jitter", LINE_ALLOWED["jitter"], explain=flips)
+        c.note("jitter", res, record.round_trip_s, outcome)
+        if res.status in (STATUS["OK"],):
+            c.check_delay(res, record, "jitter")
+    await c.set_cable(cable)
+    await c.recover("jitter")
+
+
+async def do_delay_change(c):
+    """A new round trip every frame, sometimes beyond the configured limit."""
+    length = c.rng.choice((0, 1, 5, 20, 50, 100, 200, 300))
+    extra = c.rng.choice((0, 0, c.rng.uniform(0, 30e-6)))
+    cable = Cable(length_m=length, extra_round_trip_s=extra)
+    await c.set_cable(cable)
+    rt = cable.round_trip_s() * CLK_HZ
+    limit = 0
+    if c.rng.random() < 0.4:
+        limit = c.rng.randint(1, 4095)
+        while abs(limit - rt) < 2:
+            limit = c.rng.randint(1, 4095)
+    c.dut.cfg_delay_limit.value = limit
+    c.cfg["cfg_delay_limit"] = limit
+    if limit and rt > limit:
+        c.queue(processing_time_s=c.processing())
+        res = await c.bench.request(limit_s=WATCHDOG_S)
+        c.judge_faulted(res, "delay_change", ["DELAY_RANGE"])
+        d = res.fields["line_delay"]
+        c.expect(rt - 1e-6 <= d < rt + 1 + 1e-6, f"delay_change: reported {d}, true {rt:.2f}")
+        c.note("delay_change", res, cable.round_trip_s())
+        c.dut.cfg_delay_limit.value = 0
+        c.cfg["cfg_delay_limit"] = 0
+        await c.settle()
+        await c.recover("delay_change")
+    else:
+        await c.frame("delay_change")
+
+
+async def do_abort(c):
+    """Abort at a random moment of a cycle: ABORTED, or (after the verdict) the frame alone;
+    never both, never nothing during a running cycle; then the break and a good frame."""
+    at = c.rng.uniform(0, cycle_time_s(c) + 2e-6)
+    bench, dut = c.bench, c.dut
+    c.queue(processing_time_s=c.processing())
+    await bench.wait_idle()
+    dut.start.value = 1
+    await RisingEdge(dut.clk)
+    dut.start.value = 0
+    results = []
+
+    async def collect():
+        while True:
+            await RisingEdge(dut.done)
+            await FallingEdge(dut.clk)
+            results.append(bench.read())
+
+    watcher = cocotb.start_soon(collect())
+    await Timer(max(1, round(at * 1e12)), "ps")
+    await FallingEdge(dut.clk)
+    dut.abort_cycle.value = 1
+    await FallingEdge(dut.clk)
+    dut.abort_cycle.value = 0
+    await ClockCycles(dut.clk, 4)
+    await bench.wait_idle(limit_s=WATCHDOG_S)        # the break, then IDLE: never a hang
+    watcher.cancel()
+    c.expect(len(results) <= 1, f"abort: {len(results)} done strobes in one cycle")
+    if results:
+        res = results[0]
+        if res.status == STATUS["ABORTED"]:
+            c.judge_faulted(res, "abort", ["ABORTED"])
+        else:
+            sent, record = bench.sent[-1], bench.encoder.records[-1]
+            v = c.ref.judge(c.fmt, sent.bits, **c.spw_opts())
+            c.check_verdict(res, v, record, "abort")
+            c.count_outcome(res)
+        c.note("abort", res, None)
+    else:
+        # No report: the abort came in IDLE (cycle over) or TAIL (frame already reported).
+        c.stats["abort_without_report"] += 1
+    c.ref.resync()                                  # every abort goes through the break
+    await c.settle()
+    await c.recover("abort")
+
+
+async def do_encoder_fault(c, kind):
+    """The encoder misbehaves: no answer, an Ack that never ends, a timeout that never ends."""
+    c.queue(fault=kind, processing_time_s=c.processing())
+    res = await c.bench.request(limit_s=WATCHDOG_S)
+    if kind == "timeout_stuck":                    # that frame is good; the next cycle fails
+        record = c.bench.encoder.records[-1]
+        v = c.ref.judge(c.fmt, c.bench.sent[-1].bits, **c.spw_opts())
+        c.check_verdict(res, v, record, kind)
+        c.count_outcome(res)
+        res = await c.bench.request(limit_s=WATCHDOG_S)
+        c.judge_faulted(res, kind, ["SLO_STUCK_LOW"])
+        c.bench.encoder.clear_fault()
+    else:
+        c.judge_faulted(res, kind, {"no_response": ["NO_ACK"], "ack_forever": ["NO_START"]}[kind])
+    c.note(kind, res, None)
+    await c.settle()
+    await c.recover(kind)
+
+
+@cocotb.test()
+async def line_faults(dut):
+    """Stuck lines from random points, unplug/replug, glitches, jitter at the protocol limit,
+    changing round trips, aborts at random points, encoders that misbehave."""
+    c = Campaign(dut, "line_faults", seed=31)
+    await c.start()
+    if __import__("os").environ.get("BISS_DEBUG_TS"):
+        c.bench.encoder.trace = []
+        c.debug_dump = True
+    kinds = [("slo_stuck_low", lambda: do_stuck(c, 0)), ("slo_stuck_high", lambda: do_stuck(c, 1)),
+             ("unplug", lambda: do_unplug(c)), ("glitch", lambda: do_glitch(c)),
+             ("jitter", lambda: do_jitter(c, 3)), ("delay_change", lambda: do_delay_change(c)),
+             ("abort", lambda: do_abort(c)),
+             ("no_response", lambda: do_encoder_fault(c, "no_response")),
+             ("ack_forever", lambda: do_encoder_fault(c, "ack_forever")),
+             ("timeout_stuck", lambda: do_encoder_fault(c, "timeout_stuck"))]
+    rounds = scaled(12)
+    for _ in range(rounds):
+        for kind, fn in kinds:
+            await random_setup(c)
+            try:
+                await c.frame()
+            except CampaignFailure:
+                with open("/tmp/enc_trace.txt", "w") as fh:
+                    for e in c.bench.encoder.trace or []:
+                        if e[1] > 1.8e9:
+                            fh.write(f"{e}\n")
+                raise
+            n = {"glitch": 4, "slo_stuck_low": 2, "slo_stuck_high": 2, "abort": 2}.get(kind, 1)
+            for _ in range(n):
+                dut._log.debug("%s at %.3f us", kind, get_sim_time("ns") / 1e3)
+                try:
+                    await fn()
+                except CampaignFailure:
+                    if c.bench.encoder.trace is not None:
+                        with open("/tmp/enc_trace.txt", "w") as fh:
+                            for e in c.bench.encoder.trace:
+                                if e[1] > 1.8e9:
+                                    fh.write(f"{e}\n")
+                    raise
+                c.stats[f"injected_{kind}"] += 1
+    c.save()
+
+
+# -- Sign-of-life ----------------------------------------------------------------------------
+LC_SINGLE_WORD = frames.FrameFormat("c32_lc16", (frames.WordFormat(32, lc=True,
+                                                                   crc=frames.CRC16),))
+
+
+async def do_lc(c, kind, arg=None):
+    sol = c.bench.sign_of_life
+    synced = c.ref.last_lc is not None          # after a resync any non-zero LC is accepted
+    lc = {"lc_repeat": lambda: sol.repeat(), "lc_zero": lambda: 0,
+          "lc_skip": lambda: sol.skip(arg), "lc_random": lambda: c.rng.randint(0, 63)}[kind]()
+    res, v = await c.frame(kind, lc=lc)
+    expected_kind = ("lc_zero" if v.lc_zero else "lc_repeat" if v.lc_repeat
+                     else "lc_skip" if v.lc_skip else "none")
+    c.tally[f"{kind} (flag raised)"][expected_kind] += 1
+    if kind != "lc_random" and (synced or kind == "lc_zero"):
+        # skip(62) lands on the previous value: indistinguishable from a repeat
+        want = "lc_repeat" if (kind == "lc_skip" and arg % 63 == 62) else kind
+        c.expect(expected_kind == want, f"{kind}({arg}): reference says {expected_kind}")
+    return res
+
+
+@cocotb.test()
+async def sign_of_life(dut):
+    """Repeats, every skip 1..62, zeros and random LC sequences, in the SPW (Safety) and in a
+    single-word LC format: every violation flagged with the right kind, counters matching."""
+    c = Campaign(dut, "sign_of_life", seed=41)
+    await c.start(cable=Cable(length_m=10))
+    for fmt in ("resolute_fs_rsh", LC_SINGLE_WORD):
+        c.setup(fmt, 10e6)
+        await c.frame()
+        for _ in range(scaled(2)):
+            for n in range(1, 63):
+                await do_lc(c, "lc_skip", n)
+                await c.frame()
+            for _ in range(8):
+                await do_lc(c, "lc_repeat")
+                await c.frame()
+                await do_lc(c, "lc_zero")
+                await c.frame()
+            for _ in range(40):                     # random sequences, several faults in a row
+                await do_lc(c, "lc_random")
+            await c.frame()
+    c.save()
+
+
+# -- Configuration fuzz --------------------------------------------------------------------------
+def random_config(c, two_words):
+    rng = c.rng
+    if rng.random() < 0.5:              # raw random: mostly invalid
+        cfg = {"cfg_ma_half_period": rng.choice((0, 1, 2, 3, 5, 7, 25, rng.randint(0, 65535))),
+               "cfg_delay_limit": rng.choice((0, rng.randint(0, 4095))),
+               "cfg_w1_enable": rng.getrandbits(1), "cfg_spw_check": rng.getrandbits(1),
+               "cfg_spw_tolerance": rng.randint(0, 255)}
+        for w in range(2):
+            cfg.update({f"cfg_w{w}_data_bits": rng.randint(0, 63),
+                        f"cfg_w{w}_nenw": rng.getrandbits(1), f"cfg_w{w}_lc": rng.getrandbits(1),
+                        f"cfg_w{w}_crc": rng.randint(0, 3)})
+    else:                               # built to be valid, then maybe broken in one field
+        w1 = int(two_words and rng.random() < 0.6)
+        b0 = rng.randint(1, 55)
+        cfg = {"cfg_ma_half_period": rng.choice((2, 3, 5, 8, 20, 50)), "cfg_delay_limit": 0,
+               "cfg_w1_enable": w1, "cfg_spw_tolerance": rng.randint(0, 3),
+               "cfg_w0_data_bits": b0, "cfg_w0_nenw": rng.getrandbits(1),
+               "cfg_w0_crc": rng.choice((0, 1, 2)), "cfg_w1_data_bits": rng.randint(1, min(40, b0)),
+               "cfg_w1_nenw": rng.getrandbits(1), "cfg_w1_crc": rng.choice((1, 2))}
+        lc_word = rng.choice((None, 0, 1) if w1 else (None, 0))
+        cfg["cfg_w0_lc"] = int(lc_word == 0)
+        cfg["cfg_w1_lc"] = int(lc_word == 1)
+        cfg["cfg_spw_check"] = int(w1 and rng.random() < 0.7)
+        if rng.random() < 0.3:          # one field out of range
+            field, value = rng.choice([("cfg_ma_half_period", rng.choice((0, 1))),
+                                       ("cfg_w0_data_bits", rng.choice((0, 56, 63))),
+                                       ("cfg_w0_crc", 3), ("cfg_w1_crc", 3),
+                                       ("cfg_w1_data_bits", rng.choice((0, 41)))])
+            cfg[field] = value
+    return cfg
+
+
+def fuzz_timing(c, cfg):
+    """Limits that are valid whatever the values (0 = default) but vary."""
+    rng = c.rng
+    cfg.update({"cfg_break_time": rng.choice((0, 250, 300, 1000)),
+                "cfg_ack_limit": rng.choice((0, 1500, 3000)),
+                "cfg_timeout_limit": rng.choice((0, 400, 1000)), "cfg_request_period": 0})
+    return cfg
+
+
+async def apply_config(c, cfg):
+    for name, value in cfg.items():
+        getattr(c.dut, name).value = value
+
+
+@cocotb.test()
+async def config_fuzz(dut):
+    """Random configurations, valid and invalid, between and during cycles: a valid one gives
+    exactly the frame the encoder sent (its format follows the configuration), an invalid one
+    BAD_CONFIG with nothing on the line and no field changed; a watchdog on every request."""
+    c = Campaign(dut, "config_fuzz", seed=51)
+    await c.start(cable=Cable(length_m=20))
+    c.setup("resolute_fs_rsh", 10e6)
+    await c.frame()
+    two = c.bench.words == 2
+    stats = c.stats
+    last_valid = {name: int(getattr(dut, name).value) for name in
+                  fuzz_timing(c, random_config(c, two))}
+    for i in range(scaled(400)):
+        cfg = fuzz_timing(c, random_config(c, two))
+        if config_valid(cfg) and cfg["cfg_ma_half_period"] > 150:
+            # Valid for the core, but slower than the fast encoder model's 2 us timeout can
+            # follow (it would end its cycle between two MA edges): keep the rate it supports.
+            cfg["cfg_ma_half_period"] = c.rng.randint(2, 150)
+            stats["slow_ma_clamped"] += 1
+        valid = config_valid(cfg)
+        during = c.rng.random() < 0.25
+        if during:
+            await apply_config(c, last_valid)       # the cycle runs on the last valid one
+            # Change the configuration while a (valid) cycle runs: that cycle keeps its own.
+            at = c.rng.uniform(0, cycle_time_s(c))
+
+            async def change():
+                await Timer(max(1, round(at * 1e12)), "ps")
+                await FallingEdge(dut.clk)
+                await apply_config(c, cfg)
+
+            res, task = await faulted_cycle(c, change)
+            await task
+            sent, record = c.bench.sent[-1], c.bench.encoder.records[-1]
+            v = c.ref.judge(c.fmt, sent.bits, **c.spw_opts())
+            c.check_verdict(res, v, record, "config_change")
+            c.count_outcome(res)
+            c.note("config_change", res, record.round_trip_s)
+            stats["changed_during_cycle"] += 1
+            await c.settle()
+        await apply_config(c, cfg)
+        await ClockCycles(dut.clk, 2)
+        c.expect(int(dut.config_error.value) == int(not valid),
+                 f"config_error {int(dut.config_error.value)} for {'valid' if valid else 'invalid'}"
+                 f" {cfg}")
+        if not valid:
+            before = c.bench.read()
+            cycles = len(c.bench.encoder.records)
+            res = await c.bench.request(limit_s=1e-6)
+            c.expect(res.status == STATUS["BAD_CONFIG"] and not res.valid,
+                     f"invalid {cfg}: status {STATUS_NAMES[res.status]}")
+            c.expect(res.fields == before.fields and res.counters == before.counters,
+                     "BAD_CONFIG changed a result field or a counter")
+            await Timer(2, "us")
+            c.expect(len(c.bench.encoder.records) == cycles and int(dut.ma.value) == 1,
+                     "a cycle started with an invalid configuration")
+            c.note("bad_config", res, None)
+            stats["invalid"] += 1
+            continue
+        # Valid: the encoder now sends what this configuration describes.
+        fmt = format_of(cfg, c.bench.words)
+        hp = cfg["cfg_ma_half_period"]
+        c.cfg = {**cfg, "spw_tolerance": cfg["cfg_spw_tolerance"]}
+        c.bench.fmt = fmt
+        c.bench.half_period = hp
+        c.bench.source = frames.EncoderFrameSource(fmt, c.bench._position_at,
+                                                   sign_of_life=c.bench.sign_of_life)
+        c.preset_name, c.ma_hz = None, CLK_HZ / (2 * hp)
+        rt = c.bench.encoder.cable.round_trip_s() * CLK_HZ
+        if cfg["cfg_delay_limit"] and abs(cfg["cfg_delay_limit"] - rt) < 2:
+            cfg["cfg_delay_limit"] = c.cfg["cfg_delay_limit"] = 0
+            dut.cfg_delay_limit.value = 0
+        if cfg["cfg_delay_limit"] and cfg["cfg_delay_limit"] < rt:
+            c.queue(processing_time_s=c.processing())
+            res = await c.bench.request(limit_s=WATCHDOG_S)
+            c.judge_faulted(res, "bad_config", ["DELAY_RANGE"])
+            stats["valid_delay_range"] += 1
+            await c.settle()
+            continue
+        await c.frame("none")
+        last_valid = dict(cfg)
+        stats["valid"] += 1
+    c.save()
+
+
+# -- The random mix: every kind of fault on every preset, rate and cable (soak) ---------------
+@cocotb.test()
+async def random_mix(dut):
+    seed = int(__import__("os").environ.get("BISS_SOAK_SEED", "61"))
+    c = Campaign(dut, f"random_mix_s{seed}", seed=seed)
+    await c.start()
+    rates = MA_RATES_HZ
+    actions = [
+        (30, "none", None), (6, "crc", None), (4, "slo_stuck_low", lambda: do_stuck(c, 0)),
+        (4, "slo_stuck_high", lambda: do_stuck(c, 1)), (3, "unplug", lambda: do_unplug(c)),
+        (6, "glitch", lambda: do_glitch(c)), (4, "jitter", lambda: do_jitter(c, 2)),
+        (4, "delay_change", lambda: do_delay_change(c)), (3, "abort", lambda: do_abort(c)),
+        (2, "no_response", lambda: do_encoder_fault(c, "no_response")),
+        (2, "ack_forever", lambda: do_encoder_fault(c, "ack_forever")),
+        (2, "timeout_stuck", lambda: do_encoder_fault(c, "timeout_stuck")),
+        (4, "lc", None), (2, "spw_offset", None),
+    ]
+    weights = [a[0] for a in actions]
+    target = scaled(600)
+    while c.stats["cycles"] < target:
+        # A long cable needs a slow enough MA for the default limits; pick the setup first.
+        name = c.rng.choice(PRESETS)
+        ma_hz = c.rng.choice(rates if c.rng.random() < 0.3 else FAST_RATES)
+        length = c.rng.choice((0, 0, 10, 50, 100, 200))
+        extra = c.rng.choice((0, 0, 0, c.rng.uniform(0, 36e-6)))
+        cable = Cable(length_m=length, extra_round_trip_s=extra)
+        await c.set_cable(cable)
+        c.setup(name, ma_hz)
+        for _ in range(c.rng.randint(1, 4)):
+            _, kind, fn = c.rng.choices(actions, weights)[0]
+            dut._log.debug("%s at %.3f us", kind, get_sim_time("ns") / 1e3)
+            safety = len(c.fmt.words) == 2
+            if fn is not None:
+                await fn()
+            elif kind == "crc":
+                w = c.rng.randrange(len(c.fmt.words))
+                first, n, wfmt = word_spans(c.fmt)[w]
+                k = c.rng.choice((1, 2, 2, 3, 4, 5))
+                pattern = tuple(first + i for i in c.rng.sample(range(n), k))
+                cls = {1: "crc_1bit", 2: "crc_2bit"}.get(k, "crc_3to5bit")
+                res, v = await c.frame(cls, faults=frames.FrameFaults(flip_bits=pattern))
+                if k < HAMMING[wfmt.crc]:
+                    c.expect(not v.crc_ok[w] and not res.valid, f"{k}-bit error not detected")
+            elif kind == "lc" and safety:
+                await do_lc(c, c.rng.choice(("lc_repeat", "lc_zero", "lc_skip", "lc_random")),
+                            c.rng.randint(1, 62))
+            elif kind == "spw_offset" and safety:
+                sol = c.bench.sign_of_life
+                cpw = c.rng.getrandbits(c.fmt.words[0].data_bits)
+                spw_bits = c.fmt.words[1].data_bits
+                off = c.rng.choice((0, 1, -1, 2, -2, c.rng.getrandbits(spw_bits)))
+                spw = ((cpw >> c.fmt.spw_shift) + off) % (1 << spw_bits)
+                await c.frame("spw_offset", values=[frames.WordValue(cpw),
+                                                    frames.WordValue(spw, lc=sol.next())])
+            else:
+                await c.frame()
+    c.save()
+
+
+@cocotb.test(skip=not __import__("os").environ.get("BISS_DEBUG_TS"))
+async def debug_long_rt(dut):
+    c = Campaign(dut, "dbg", seed=31)
+    await c.start()
+    await c.set_cable(Cable(length_m=0, extra_round_trip_s=13e-6))
+    c.setup("evolute_32", 10e6)
+    for i in range(20):
+        n = len(c.bench.encoder.records)
+        res, v = await c.frame()
+        print("FRAME", i, [(r.t_first_fall_s, r.ma_rises, r.ended, r.t_end_s) for r in c.bench.encoder.records[n - 1:]])

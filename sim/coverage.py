@@ -1,0 +1,145 @@
+"""Functional coverage of the campaigns: what was tried, as bins and crosses, with the holes.
+
+Every request cycle of a campaign is sampled once with its encoder preset, MA rate, round trip
+(in MA bit periods), injected fault kind and the status the core reported. Coverage is the
+fraction of the *defined* bins that were hit; the report names every bin never hit.
+
+Two crosses are defined, because the full product of all five points is mostly illegal (a CRC
+fault cannot end in NO_ACK, a stuck line cannot end OK):
+
+* ``setup``: preset x MA rate x delay range: every encoder at every rate over every cable;
+* ``fault x status``: each fault kind with each status it can legitimately produce
+  (:data:`LEGAL`), so a fault that never produced one of its outcomes shows as a hole.
+
+Each test writes its samples to a JSON file; :func:`merge` adds files together and
+:func:`report` prints the table. (cocotb-coverage would do the same with decorators; this keeps
+the dependency list short and the bins in one readable place.)
+"""
+
+import json
+from collections import Counter
+from pathlib import Path
+
+from reference import STATUS_NAMES
+
+PRESETS = ["resolute_fs_lmm", "resolute_fs_rsm", "resolute_fs_rsh", "fortis_fs_rsh",
+           "evolute_26", "evolute_32", "evolute_36", "resolute_c_18", "resolute_c_26",
+           "resolute_c_32", "resolute_c_36", "bp3_1", "bp3_13", "bp3_24", "bp3_40", "bp3_55"]
+MA_RATES = ["250k", "1M", "2.5M", "5M", "10M"]
+#: Round trip in MA bit periods: the sampler's hard cases are "less than one bit" and "many".
+DELAY_RANGES = ["<0.5 bit", "0.5-2 bits", "2-8 bits", ">8 bits"]
+FAULTS = ["none", "crc_1bit", "crc_2bit", "crc_3to5bit", "crc_burst", "slo_stuck_low",
+          "slo_stuck_high", "unplug", "glitch", "jitter", "delay_change", "abort",
+          "no_response", "ack_forever", "timeout_stuck", "lc_repeat", "lc_skip", "lc_zero",
+          "lc_random", "spw_offset", "bad_config", "config_change"]
+
+_FRAME_ERR = ["CRC_ERROR_WORD0", "CRC_ERROR_WORD1", "CRC_ERROR_BOTH"]
+#: Which statuses each fault kind can legitimately end in: the bins of the fault x status cross.
+LEGAL = {
+    # the frame after a fault on the LC (a random LC, a lost SPW) may show it as a skip
+    "none": ["OK", "SIGN_OF_LIFE"],
+    "crc_1bit": _FRAME_ERR[:2],                    # errors sit in one word: never both
+    "crc_2bit": _FRAME_ERR[:2],
+    # beyond the Hamming distance a CRC-6 misses 1/64: the frame may pass, and then fail the
+    # SPW plausibility or the sign-of-life check instead
+    "crc_3to5bit": ["OK", "SPW_MISMATCH", "SIGN_OF_LIFE"] + _FRAME_ERR[:2],
+    "crc_burst": ["OK", "SPW_MISMATCH", "SIGN_OF_LIFE"] + _FRAME_ERR[:2],
+    "slo_stuck_low": _FRAME_ERR + ["NO_START", "DELAY_RANGE", "SLO_STUCK_LOW"],
+    "slo_stuck_high": _FRAME_ERR + ["NO_ACK"],
+    "unplug": ["NO_ACK"],
+    "glitch": ["OK"] + _FRAME_ERR + ["NO_ACK", "NO_START", "DELAY_RANGE"],
+    "jitter": ["OK"],
+    "delay_change": ["OK", "DELAY_RANGE"],
+    "abort": ["ABORTED", "OK"],                    # OK: the abort came after the verdict
+    "no_response": ["NO_ACK"],
+    "ack_forever": ["NO_START"],
+    "timeout_stuck": ["SLO_STUCK_LOW"],
+    "lc_repeat": ["SIGN_OF_LIFE"],
+    "lc_skip": ["SIGN_OF_LIFE"],
+    "lc_zero": ["SIGN_OF_LIFE"],
+    "lc_random": ["OK", "SIGN_OF_LIFE"],
+    "spw_offset": ["OK", "SPW_MISMATCH"],
+    "bad_config": ["BAD_CONFIG", "DELAY_RANGE"],   # DELAY_RANGE: a valid but tight limit
+    "config_change": ["OK"],
+}
+
+
+def ma_bin(ma_hz):
+    for name, hz in zip(MA_RATES, (250e3, 1e6, 2.5e6, 5e6, 10e6)):
+        if abs(ma_hz - hz) < 1:
+            return name
+    return None
+
+
+def delay_bin(round_trip_s, ma_hz):
+    bits = round_trip_s * ma_hz
+    if bits < 0.5:
+        return DELAY_RANGES[0]
+    if bits < 2:
+        return DELAY_RANGES[1]
+    if bits < 8:
+        return DELAY_RANGES[2]
+    return DELAY_RANGES[3]
+
+
+class Coverage:
+    def __init__(self):
+        self.hits = Counter()
+
+    def sample(self, *, preset, ma_hz, round_trip_s, fault, status):
+        """One request cycle. ``preset`` None: a fuzzed format (counts for the fault cross)."""
+        fault = fault or "none"
+        assert fault in FAULTS, fault
+        status_name = STATUS_NAMES[status]
+        self.hits[("fault", fault, status_name)] += 1
+        ma = ma_bin(ma_hz) if ma_hz else None
+        if preset in PRESETS and ma is not None and round_trip_s is not None:
+            self.hits[("setup", preset, ma, delay_bin(round_trip_s, ma_hz))] += 1
+        self.hits[("status", status_name)] += 1
+
+    def save(self, path):
+        Path(path).write_text(json.dumps([[list(k), v] for k, v in self.hits.items()]))
+
+    @classmethod
+    def load(cls, path):
+        cov = cls()
+        for key, value in json.loads(Path(path).read_text()):
+            cov.hits[tuple(key)] += value
+        return cov
+
+    def merge(self, other):
+        self.hits.update(other.hits)
+        return self
+
+
+def bins():
+    """Every defined bin, per cross."""
+    setup = [("setup", p, m, d) for p in PRESETS for m in MA_RATES for d in DELAY_RANGES]
+    fault = [("fault", f, s) for f in FAULTS for s in LEGAL[f]]
+    status = [("status", s) for s in STATUS_NAMES]
+    return {"preset x MA rate x delay": setup, "fault x status": fault, "status": status}
+
+
+def report(cov, *, max_holes=40):
+    """Coverage table and holes, as text lines; also flags fault/status pairs outside LEGAL."""
+    lines = ["| cross | bins | hit | coverage |", "|---|---:|---:|---:|"]
+    holes = {}
+    for name, keys in bins().items():
+        hit = sum(1 for k in keys if cov.hits.get(k))
+        holes[name] = [k for k in keys if not cov.hits.get(k)]
+        lines.append(f"| {name} | {len(keys)} | {hit} | {100 * hit / len(keys):.1f} % |")
+    total = sum(len(k) for k in bins().values())
+    total_hit = total - sum(len(h) for h in holes.values())
+    lines.append(f"| **all** | {total} | {total_hit} | {100 * total_hit / total:.1f} % |")
+    illegal = [k for k in cov.hits if k[0] == "fault" and k[2] not in LEGAL.get(k[1], [])]
+    lines.append("")
+    for name, hs in holes.items():
+        if not hs:
+            continue
+        shown = ", ".join("/".join(k[1:]) for k in hs[:max_holes])
+        more = f" ... and {len(hs) - max_holes} more" if len(hs) > max_holes else ""
+        lines.append(f"Holes in {name} ({len(hs)}): {shown}{more}")
+    if illegal:
+        lines.append("Outcomes outside the legal table: "
+                     + ", ".join(f"{k[1]}->{k[2]} x{cov.hits[k]}" for k in illegal))
+    return lines, illegal

@@ -1,0 +1,159 @@
+"""Reference model of the master's verdicts, written from the documentation, not from the RTL.
+
+The campaigns (sim/cocotb_campaign.py) predict every outcome with this model and compare it
+with what the core reports. It knows nothing of the RTL's structure: it works on the bits the
+encoder model sent (tb/encoder_model/frames.py) and on the rules in docs/ports.md:
+
+* status priority: CRC errors, then sign-of-life, then SPW plausibility, then OK;
+* sign-of-life: judged only when the LC word's CRC is good; 0 is flagged (``zero``) and not
+  stored; the previous value again is a ``repeat``; anything but the successor (63 wraps to 1)
+  is a ``skip``; after a resync (power-up, abort, line fault: every cycle that goes through the
+  break) the next non-zero LC is accepted as it is;
+* SPW plausibility: only with both CRCs good; the CPW's leading SPW-length bits against the SPW,
+  distance taken both ways modulo 2^SPW bits, within the tolerance;
+* configuration validity: the table of ``cfg_*`` ports.
+"""
+
+from dataclasses import dataclass, field
+
+from bissmaster import protocol
+from encoder_model import frames
+
+STATUS_NAMES = ("OK", "CRC_ERROR_WORD0", "CRC_ERROR_WORD1", "CRC_ERROR_BOTH", "SIGN_OF_LIFE",
+                "SPW_MISMATCH", "NO_ACK", "NO_START", "DELAY_RANGE", "SLO_STUCK_LOW",
+                "ABORTED", "BAD_CONFIG")
+STATUS = {name: code for code, name in enumerate(STATUS_NAMES)}
+#: Cycles that end in the break (MA high 40 us): the encoder restarts its LC check from scratch.
+BREAK_STATUSES = {STATUS[n] for n in ("NO_ACK", "NO_START", "DELAY_RANGE", "SLO_STUCK_LOW",
+                                      "ABORTED")}
+FRAME_STATUSES = {STATUS[n] for n in ("OK", "CRC_ERROR_WORD0", "CRC_ERROR_WORD1",
+                                      "CRC_ERROR_BOTH", "SIGN_OF_LIFE", "SPW_MISMATCH")}
+
+
+def lc_successor(value):
+    return protocol.LC_FIRST if value >= protocol.LC_MAX else value + 1
+
+
+@dataclass
+class Verdict:
+    """What the core must report for one decoded frame."""
+    status: int
+    crc_ok: tuple
+    lc_repeat: int = 0
+    lc_skip: int = 0
+    lc_zero: int = 0
+    spw_mismatch: int = 0
+    parsed: dict = field(default_factory=dict)
+
+    @property
+    def name(self):
+        return STATUS_NAMES[self.status]
+
+
+class MasterReference:
+    """The master's state that outlives a cycle (the stored LC) and its frame verdict."""
+
+    def __init__(self):
+        self.last_lc = None         # None: not synchronised (the next LC is accepted as is)
+
+    def resync(self):
+        self.last_lc = None
+
+    def after_status(self, status):
+        """Update for a cycle that ended without a frame."""
+        if status in BREAK_STATUSES:
+            self.resync()
+
+    def judge(self, fmt, bits, *, spw_check=None, spw_tolerance=1, commit=True,
+              received_ok=None):
+        """Verdict for a frame whose received bits are ``bits`` ([Start, CDS, words...]).
+
+        ``received_ok``: per word, False if the line corrupted that word on the way (the core
+        saw a CRC error there) although ``bits`` is what the encoder sent.
+        """
+        parsed = frames.parse_frame(fmt, bits)
+        words = parsed["words"]
+        crc_ok = tuple(w["crc_ok"] and (received_ok is None or bool(received_ok[i]))
+                       for i, w in enumerate(words))
+        two = len(words) == 2
+        if spw_check is None:
+            spw_check = two
+        v = Verdict(STATUS["OK"], crc_ok, parsed=parsed)
+
+        lc_word = next((i for i, w in enumerate(fmt.words) if w.lc), None)
+        if lc_word is not None and crc_ok[lc_word]:
+            lc = words[lc_word]["lc"]
+            if lc == 0:
+                v.lc_zero = 1
+            elif self.last_lc is not None and lc == self.last_lc:
+                v.lc_repeat = 1
+            elif self.last_lc is not None and lc != lc_successor(self.last_lc):
+                v.lc_skip = 1
+            if commit and lc != 0:
+                self.last_lc = lc
+
+        if two and spw_check and all(crc_ok):
+            bits_spw = fmt.words[1].data_bits
+            cpw_top = words[0]["position"] >> (fmt.words[0].data_bits - bits_spw)
+            spw = words[1]["position"]
+            ahead = (cpw_top - spw) % (1 << bits_spw)
+            behind = (spw - cpw_top) % (1 << bits_spw)
+            v.spw_mismatch = int(min(ahead, behind) > spw_tolerance)
+
+        if not crc_ok[0] and not crc_ok[-1]:
+            v.status = STATUS["CRC_ERROR_BOTH" if two else "CRC_ERROR_WORD0"]
+        elif not crc_ok[0]:
+            v.status = STATUS["CRC_ERROR_WORD0"]
+        elif not crc_ok[-1]:
+            v.status = STATUS["CRC_ERROR_WORD1"]
+        elif v.lc_repeat or v.lc_skip or v.lc_zero:
+            v.status = STATUS["SIGN_OF_LIFE"]
+        elif v.spw_mismatch:
+            v.status = STATUS["SPW_MISMATCH"]
+        return v
+
+
+# -- Configuration rules (docs/ports.md, "Configuration") -------------------------------------
+CRC_CODES = {0: frames.CRC_NONE, 1: frames.CRC6, 2: frames.CRC16}
+
+
+def config_valid(cfg, *, max_data_bits=(55, 40), word_crcs=((1, 2), (1, 2)),
+                 max_line_delay=4095):
+    """Is a dict of ``cfg_*`` values valid for a core built with these parameters?"""
+    def word_ok(w):
+        crc = cfg[f"cfg_w{w}_crc"]
+        return (1 <= cfg[f"cfg_w{w}_data_bits"] <= max_data_bits[w]
+                and (crc == 0 or crc in word_crcs[w]))
+
+    ok = cfg["cfg_ma_half_period"] >= protocol.MA_HALF_PERIOD_MIN and word_ok(0)
+    ok = ok and cfg["cfg_delay_limit"] <= max_line_delay
+    if len(max_data_bits) == 2:
+        w1 = cfg["cfg_w1_enable"]
+        ok = ok and (not w1 or word_ok(1))
+        ok = ok and not (w1 and cfg["cfg_w0_lc"] and cfg["cfg_w1_lc"])
+        if cfg["cfg_spw_check"]:
+            ok = ok and w1 and cfg["cfg_w1_data_bits"] <= cfg["cfg_w0_data_bits"] \
+                and cfg["cfg_w1_crc"] != 0
+    return bool(ok)
+
+
+def format_of(cfg, words=2):
+    """The frame format a valid configuration describes (what the encoder must send)."""
+    ws = []
+    for w in range(2 if words == 2 and cfg["cfg_w1_enable"] else 1):
+        ws.append(frames.WordFormat(cfg[f"cfg_w{w}_data_bits"], nenw=bool(cfg[f"cfg_w{w}_nenw"]),
+                                    lc=bool(cfg[f"cfg_w{w}_lc"]),
+                                    crc=CRC_CODES[cfg[f"cfg_w{w}_crc"]]))
+    return _LooseFormat("fuzz", tuple(ws))
+
+
+class _LooseFormat(frames.FrameFormat):
+    """A FrameFormat for fuzzed configurations: the SPW may be longer than the CPW when the
+    plausibility check is off (the core does not care then)."""
+
+    def __post_init__(self):
+        object.__setattr__(self, "words", tuple(self.words))
+
+    @property
+    def spw_shift(self):
+        return max(0, self.words[0].data_bits - self.words[1].data_bits) if self.is_safety else 0

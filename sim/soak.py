@@ -1,0 +1,77 @@
+"""The long soak (``make soak``, not part of ``make test``): at least 100 000 request cycles of
+random frames with random faults on Verilator, then every campaign at a larger scale.
+
+    python sim/soak.py [--frames 100000] [--jobs 2] [--scale 10]
+
+The random mix is split over ``--jobs`` simulator processes with different seeds; each writes
+its figures to sim_build/campaign/soak/. Prints the campaign tables (sim/campaign_report.py)
+and the frames per second of wall time.
+"""
+
+import argparse
+import os
+import shutil
+import subprocess
+import sys
+import time
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))
+
+import campaign_report  # noqa: E402
+import runner  # noqa: E402
+from test_campaign import run  # noqa: E402
+
+RESULTS = runner.BUILD / "campaign" / "soak"
+MIX_CYCLES_AT_SCALE_1 = 600          # random_mix runs this many cycles at scale 1
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--frames", type=int, default=100_000, help="random-mix cycles in all")
+    ap.add_argument("--jobs", type=int, default=2, help="parallel simulator processes")
+    ap.add_argument("--scale", type=float, default=10, help="scale of the other campaigns")
+    args = ap.parse_args(argv)
+    shutil.rmtree(RESULTS, ignore_errors=True)
+    RESULTS.mkdir(parents=True)
+    os.environ.setdefault("PYTEST_XDIST_WORKER", "soak")
+    from test_campaign import build
+    build()                                             # once, before the parallel runs
+    per_job = args.frames / args.jobs / MIX_CYCLES_AT_SCALE_1
+    jobs = [("random_mix", per_job, 1000 + i) for i in range(args.jobs)]
+    jobs += [(name, args.scale, None) for name in
+             ("crc_detection", "line_faults", "sign_of_life", "config_fuzz")]
+    t0 = time.monotonic()
+    failures = []
+
+    def one(job):
+        name, scale, seed = job
+        env_seed = {"BISS_SOAK_SEED": str(seed)} if seed else {}
+        try:
+            run(name, scale, RESULTS, seed=seed, extra_env=env_seed)
+            return f"{name} (seed {seed}): pass"
+        except AssertionError as e:
+            failures.append(f"{name} (seed {seed}): {e}")
+            return f"{name} (seed {seed}): FAIL"
+
+    with ThreadPoolExecutor(max_workers=args.jobs) as pool:
+        for line in pool.map(one, jobs):
+            print(line, flush=True)
+    wall = time.monotonic() - t0
+    status = campaign_report.main([str(RESULTS)])
+    mix = [r for n, r in campaign_report.load(RESULTS).items() if n.startswith("random_mix")]
+    cycles = sum(r["cycles"] for r in mix)
+    sim_wall = max((r["wall_s"] for r in mix), default=0)
+    print(f"\nsoak: {cycles} random-mix cycles in {sim_wall:.0f} s per process x {len(mix)} "
+          f"processes: {cycles / sim_wall if sim_wall else 0:.0f} frames/s of wall time "
+          f"({sum(r['cycles_per_s'] for r in mix):.0f} summed over processes); "
+          f"whole soak {wall / 60:.1f} min")
+    for f in failures:
+        print("FAILED:", f)
+    return 1 if failures or status or cycles < args.frames * 0.99 else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,101 @@
+"""Unit tests of the campaigns' reference model (sim/reference.py) and coverage bins, against
+hand-worked cases from docs/ports.md: the model must be right before it judges the RTL."""
+
+import pytest
+
+from coverage import LEGAL, Coverage, bins, delay_bin, report
+from encoder_model import frames
+from reference import STATUS, MasterReference, config_valid
+
+RSH = frames.PRESETS["resolute_fs_rsh"]
+C36 = frames.PRESETS["resolute_c_36"]
+
+
+def rsh_bits(cpw, spw, lc, faults=None):
+    return frames.build_frame(RSH, [frames.WordValue(cpw), frames.WordValue(spw, lc=lc)], faults)
+
+
+def test_good_frame_and_crc_priorities():
+    ref = MasterReference()
+    assert ref.judge(RSH, rsh_bits(0x123456789, 0x1234567, 5)).status == STATUS["OK"]
+    cpw_bit, spw_bit = 2 + 3, 2 + 44 + 3
+    for flips, status in (((cpw_bit,), "CRC_ERROR_WORD0"), ((spw_bit,), "CRC_ERROR_WORD1"),
+                          ((cpw_bit, spw_bit), "CRC_ERROR_BOTH")):
+        v = ref.judge(RSH, rsh_bits(0x123456789, 0x1234567, 6,
+                                    frames.FrameFaults(flip_bits=flips)))
+        assert v.status == STATUS[status], status
+    single = frames.build_frame(C36, [frames.WordValue(7)], frames.FrameFaults(flip_bits=(2,)))
+    assert ref.judge(C36, single).status == STATUS["CRC_ERROR_WORD0"]
+
+
+def test_sign_of_life_rules():
+    ref = MasterReference()
+    judge = lambda lc: ref.judge(RSH, rsh_bits(0, 0, lc))          # noqa: E731
+    assert judge(40).status == STATUS["OK"]          # first after power-up: accepted as is
+    assert judge(41).status == STATUS["OK"]
+    assert judge(41).lc_repeat == 1
+    assert judge(45).lc_skip == 1                    # a skip is stored: 46 is in sequence
+    assert judge(46).status == STATUS["OK"]
+    assert judge(0).lc_zero == 1                     # zero is not stored
+    assert judge(47).status == STATUS["OK"]
+    ref.last_lc = 63
+    assert judge(1).status == STATUS["OK"]           # 63 wraps to 1, never 0
+    ref.resync()
+    assert judge(17).status == STATUS["OK"]
+    # A bad SPW CRC hides the LC: the next good frame shows the lost one as a skip.
+    bad = rsh_bits(0, 0, 18, frames.FrameFaults(crc_xor=(0, 1)))
+    assert ref.judge(RSH, bad).status == STATUS["CRC_ERROR_WORD1"]
+    assert judge(19).lc_skip == 1
+
+
+def test_spw_plausibility_and_priority():
+    ref = MasterReference()
+    cpw = (2**36 - 1)                                # top of the range; SPW wrapped to 0
+    v = ref.judge(RSH, rsh_bits(cpw, 0, 1), spw_tolerance=1)
+    assert v.status == STATUS["OK"]
+    v = ref.judge(RSH, rsh_bits(cpw, 2, 2), spw_tolerance=1)
+    assert v.status == STATUS["SPW_MISMATCH"]
+    v = ref.judge(RSH, rsh_bits(cpw, 2, 2), spw_tolerance=3)      # repeat beats mismatch
+    assert v.status == STATUS["SIGN_OF_LIFE"] and v.lc_repeat
+    v = ref.judge(RSH, rsh_bits(0x100, 0x1, 3), spw_check=False)
+    assert v.status == STATUS["OK"]
+
+
+GOOD = {"cfg_ma_half_period": 5, "cfg_delay_limit": 0, "cfg_w1_enable": 1,
+        "cfg_spw_check": 1, "cfg_spw_tolerance": 1, "cfg_w0_data_bits": 36, "cfg_w0_nenw": 1,
+        "cfg_w0_lc": 0, "cfg_w0_crc": 1, "cfg_w1_data_bits": 28, "cfg_w1_nenw": 1,
+        "cfg_w1_lc": 1, "cfg_w1_crc": 2}
+
+
+@pytest.mark.parametrize("change,valid", [
+    ({}, True), ({"cfg_ma_half_period": 1}, False), ({"cfg_ma_half_period": 2}, True),
+    ({"cfg_w0_data_bits": 0}, False), ({"cfg_w0_data_bits": 55}, True),
+    ({"cfg_w0_data_bits": 56}, False), ({"cfg_w1_data_bits": 41}, False),
+    ({"cfg_w0_crc": 3}, False), ({"cfg_w0_lc": 1}, False),
+    ({"cfg_w0_lc": 1, "cfg_w1_enable": 0, "cfg_spw_check": 0}, True),
+    ({"cfg_w1_data_bits": 37}, False), ({"cfg_w1_crc": 0}, False),
+    ({"cfg_w1_crc": 0, "cfg_spw_check": 0}, True),
+    ({"cfg_w1_enable": 0, "cfg_w1_crc": 3, "cfg_w1_data_bits": 0, "cfg_spw_check": 0}, True),
+])
+def test_config_rules(change, valid):
+    assert config_valid({**GOOD, **change}) == valid
+
+
+def test_config_rules_one_word_build():
+    one = dict(max_data_bits=(36,), word_crcs=((1,),))
+    assert config_valid({**GOOD, "cfg_w0_data_bits": 36}, **one)
+    assert not config_valid({**GOOD, "cfg_w0_data_bits": 37}, **one)
+    assert not config_valid({**GOOD, "cfg_w0_crc": 2}, **one)     # no CRC-16 in that build
+
+
+def test_coverage_bins_and_holes():
+    cov = Coverage()
+    cov.sample(preset="resolute_c_36", ma_hz=10e6, round_trip_s=2e-6, fault="none",
+               status=STATUS["OK"])
+    cov.sample(preset=None, ma_hz=None, round_trip_s=None, fault="unplug",
+               status=STATUS["CRC_ERROR_WORD0"])           # not legal for an unplug
+    lines, illegal = report(cov)
+    assert ("setup", "resolute_c_36", "10M", ">8 bits") in cov.hits
+    assert illegal == [("fault", "unplug", "CRC_ERROR_WORD0")]
+    assert delay_bin(0.04e-6, 10e6) == "<0.5 bit"
+    assert sum(len(b) for b in bins().values()) == 16 * 5 * 4 + sum(map(len, LEGAL.values())) + 12
