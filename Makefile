@@ -8,7 +8,7 @@ SIM ?= verilator
 VERILOG := rtl/generated/biss_master.v
 JOBS ?= 2
 
-.PHONY: help setup rtl lint unit sim sim-all test demo waves clean
+.PHONY: help setup rtl lint unit sim sim-all campaigns soak test demo waves clean
 
 help:  ## list the targets
 	@grep -E '^[a-z-]+:.*## ' $(MAKEFILE_LIST) | awk -F':.*## ' '{printf "  make %-9s %s\n", $$1, $$2}'
@@ -36,7 +36,15 @@ sim: setup  ## cocotb regression of the generated Verilog on one simulator (SIM=
 sim-all: setup  ## cocotb regression on Verilator and Icarus, $(JOBS) workers
 	cd sim && ../$(PY) -m pytest test_sim.py -q -n $(JOBS)
 
-test: lint unit sim-all  ## everything CI runs: lint, unit tests, both simulators
+campaigns: setup  ## reliability campaigns, fast slice (CRC, line faults, LC, config fuzz, random mix) + report
+	rm -rf sim_build/campaign/slice
+	cd sim && ../$(PY) -m pytest test_reference.py test_campaign.py -q -n $(JOBS)
+	$(PY) sim/campaign_report.py sim_build/campaign/slice
+
+soak: setup  ## long soak: >= 100k random frames with random faults (Verilator) + every campaign x10
+	$(PY) sim/soak.py --frames $(or $(FRAMES),100000) --jobs $(JOBS)
+
+test: lint unit sim-all campaigns  ## everything CI runs: lint, unit tests, both simulators, campaign slice
 
 demo: setup  ## RESOLUTE FS RSH at 10 MHz / 50 m and 5 MHz / 100 m: a table of frames and a waveform
 	$(PY) sim/demo.py --sim $(SIM)
@@ -45,6 +53,14 @@ waves: demo  ## the demo's waveform, rendered headless to sim_build/waves.png (G
 	@f=$$(ls sim_build/$(SIM)-waves-demo/dump.* | head -1); \
 	BISS_WAVES_PNG=$(CURDIR)/sim_build/waves.png xvfb-run -a gtkwave -S scripts/grab.tcl "$$f" >sim_build/gtkwave.log 2>&1; \
 	echo "waves: sim_build/waves.png (open interactively: gtkwave $$f scripts/biss_master.gtkw)"
+
+.PHONY: bench
+bench: setup  ## simulated performance: cycle overhead, verdict latency, line-delay error, sim speed
+	$(PY) sim/perf.py
+
+.PHONY: synth
+synth: setup  ## Yosys + nextpnr: LUT4/FF/carry and Fmax on ECP5-25k and iCE40 UP5K (docs/performance.md)
+	$(PY) scripts/synth.py
 
 clean:  ## remove build trees (keeps .venv)
 	rm -rf sim_build .pytest_cache tb/tests/sim_build

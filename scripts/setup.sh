@@ -23,7 +23,7 @@ fi
 # -- Python venv --------------------------------------------------------------------------------
 stamp=.venv/.requirements
 if [[ ! -f $stamp ]] || ! cmp -s requirements.txt "$stamp"; then
-  echo "setup: creating .venv with requirements.txt"
+  echo "setup: installing requirements.txt into .venv (new or changed)"
   python3 -m venv .venv
   .venv/bin/python -m pip install -q --upgrade pip
   .venv/bin/python -m pip install -q -r requirements.txt

@@ -13,8 +13,14 @@ class SaturatingCounter(wiring.Component):
 
     def elaborate(self, platform):
         m = Module()
+        # ``full`` is ``count.all()``, kept as a register so that no wide AND sits in the
+        # count enable.
+        full = Signal()
         with m.If(self.clear):
-            m.d.sync += self.count.eq(0)
-        with m.Elif(self.inc & ~self.count.all()):
-            m.d.sync += self.count.eq(self.count + 1)
+            m.d.sync += [self.count.eq(0), full.eq(0)]
+        with m.Elif(self.inc & ~full):
+            m.d.sync += [
+                self.count.eq(self.count + 1),
+                full.eq(self.count == 2**len(self.count) - 2),
+            ]
         return m

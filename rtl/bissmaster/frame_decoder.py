@@ -9,12 +9,28 @@ from .word_crc import WordCrc
 from . import protocol
 
 
-def word_length(word):
-    """Bits of one word on the line, from its runtime configuration (a WORD_CONFIG view)."""
-    crc_bits = Mux(word.crc == Crc.CRC16, CRC_WIDTH[Crc.CRC16],
-                   Mux(word.crc == Crc.CRC6, CRC_WIDTH[Crc.CRC6], 0))
-    return (word.data_bits + Mux(word.nenw, protocol.NE_NW_BITS, 0)
-            + Mux(word.lc, protocol.LC_BITS, 0) + crc_bits)
+def _table(index, values, width):
+    """``values[index]`` modulo ``2**width`` as a small lookup: one LUT level per result bit
+    instead of an adder chain."""
+    return Array(C(v % 2**width, width) for v in values)[index]
+
+
+def tail_bits(word, extra=0, width=7):
+    """Bits after a word's data field (nE/nW, LC, CRC), plus ``extra``, modulo ``2**width``:
+    a table on the four configuration bits instead of three chained adders. CRC code 3 counts
+    as no CRC."""
+    values = []
+    for i in range(16):
+        nenw, lc, crc = i & 1, (i >> 1) & 1, i >> 2
+        values.append(nenw * protocol.NE_NW_BITS + lc * protocol.LC_BITS
+                      + (CRC_WIDTH[Crc(crc)] if crc != 3 else 0) + extra)
+    return _table(Cat(word.nenw, word.lc, word.crc), values, width)
+
+
+def word_length(word, extra=0, width=7):
+    """Bits of one word on the line (plus ``extra``), from its runtime configuration (a
+    WORD_CONFIG view)."""
+    return word.data_bits + tail_bits(word, extra, width)
 
 
 class FrameDecoder(wiring.Component):
@@ -48,6 +64,7 @@ class FrameDecoder(wiring.Component):
             "started": Out(1),
             "start_slot": Out(16),
             "slots": Out(16),                # slots sampled so far (saturating)
+            "slots_full": Out(1),            # slots == 0xFFFF (registered)
             "cds": Out(1),
             **{f"data{w}": Out(params.max_data_bits[w]) for w in range(words)},
             "ne": Out(words),
@@ -70,17 +87,39 @@ class FrameDecoder(wiring.Component):
         # Where the current bit sits: word ``word``, bit ``idx`` of that word.
         word = Signal(range(p.words), name="word") if p.words > 1 else C(0, 1)   # none in one-word builds
         idx = Signal(7)
-        cfg = self.words[word]
-        data_end = cfg.data_bits
-        nenw_end = data_end + Mux(cfg.nenw, protocol.NE_NW_BITS, 0)
-        lc_end = nenw_end + Mux(cfg.lc, protocol.LC_BITS, 0)
-        word_end = word_length(cfg)
+        # Field boundaries of each word, registered from the configuration (no adders in front
+        # of the ``idx`` compares). They are not reset (they follow ``words`` in every clock),
+        # so they are valid one clock after ``words`` settles; the first word bit comes at
+        # least three samples (Ack, Start, CDS) after that.
+        ends = []
+        for w in range(p.words):
+            wcfg = self.words[w]
+            e = {name: Signal(7, name=f"w{w}_{name}", reset_less=True)
+                 for name in ("data_end_p1", "nenw_end", "lc_end", "word_end_m1")}
+            nenw_lc_bits = _table(Cat(wcfg.nenw, wcfg.lc),
+                                  [0, protocol.NE_NW_BITS, protocol.LC_BITS,
+                                   protocol.NE_NW_BITS + protocol.LC_BITS], 4)
+            m.d.sync += [
+                e["data_end_p1"].eq(wcfg.data_bits + 1),
+                e["nenw_end"].eq(wcfg.data_bits + Mux(wcfg.nenw, protocol.NE_NW_BITS, 0)),
+                e["lc_end"].eq(wcfg.data_bits + nenw_lc_bits),
+                # data_bits >= 1, so "- 1" folded into the table (modulo 128) never wraps.
+                e["word_end_m1"].eq((wcfg.data_bits + tail_bits(wcfg, extra=-1))[:7]),
+            ]
+            ends.append(e)
+
+        def end(name):
+            return ends[0][name] if p.words == 1 else Mux(word, ends[1][name], ends[0][name])
+
+        nenw_end = end("nenw_end")
+        lc_end = end("lc_end")
+        word_end_m1 = end("word_end_m1")
 
         in_word = Signal()
         m.d.sync += [self.done.eq(0), self.stopped.eq(0)]
 
-        with m.If(self.sample & (self.slots != 0xFFFF)):
-            m.d.sync += self.slots.eq(self.slots + 1)
+        with m.If(self.sample & ~self.slots_full):
+            m.d.sync += [self.slots.eq(self.slots + 1), self.slots_full.eq(self.slots == 0xFFFE)]
 
         with m.FSM(name="decoder_fsm"):
             with m.State("ACK"):
@@ -97,7 +136,7 @@ class FrameDecoder(wiring.Component):
                 m.d.comb += in_word.eq(self.sample)
                 with m.If(self.sample):
                     m.d.sync += idx.eq(idx + 1)
-                    with m.If(idx == word_end - 1):
+                    with m.If(idx == word_end_m1):
                         m.d.sync += idx.eq(0)
                         with m.If(word == last_word):
                             m.d.sync += self.done.eq(1)
@@ -116,14 +155,14 @@ class FrameDecoder(wiring.Component):
         for w in range(p.words):
             this_word = in_word & (word == w)
             data_w = getattr(self, f"data{w}")
-            with m.If(this_word & (idx < data_end)):
+            with m.If(this_word & (idx < self.words[w].data_bits)):
                 m.d.sync += data_w.eq(Cat(self.bit, data_w))
             # A word without nE/nW reads as "no error, no warning" (both high).
             with m.If(~self.words[w].nenw):
                 m.d.sync += [self.ne[w].eq(1), self.nw[w].eq(1)]
-            with m.Elif(this_word & (idx == data_end)):
+            with m.Elif(this_word & (idx == self.words[w].data_bits)):
                 m.d.sync += self.ne[w].eq(self.bit)
-            with m.Elif(this_word & (idx == data_end + 1)):
+            with m.Elif(this_word & (idx == ends[w]["data_end_p1"])):
                 m.d.sync += self.nw[w].eq(self.bit)
         with m.If(in_word & (idx >= nenw_end) & (idx < lc_end)):
             m.d.sync += self.lc.eq(Cat(self.bit, self.lc))

@@ -41,7 +41,9 @@ class MaClock(wiring.Component):
         m = Module()
 
         phase_left = Signal(16)     # clocks left in the current phase, minus one
-        last_clock = phase_left == 0
+        # ``phase_left == 0``, kept as a register: written wherever ``phase_left`` is.
+        last_clock = Signal(init=1)
+        reload_last = self.half_period == 1      # phase_left <- half_period - 1 == 0
 
         m.d.sync += self.rise.eq(0)
         with m.FSM(name="ma_fsm"):
@@ -50,29 +52,32 @@ class MaClock(wiring.Component):
                     m.d.sync += [
                         self.ma.eq(0),
                         phase_left.eq(self.half_period - 1),
+                        last_clock.eq(reload_last),
                         self.rises.eq(0),
                     ]
                     m.next = "LOW"
             with m.State("LOW"):
                 m.d.comb += self.busy.eq(1)
-                m.d.sync += phase_left.eq(phase_left - 1)
+                m.d.sync += [phase_left.eq(phase_left - 1), last_clock.eq(phase_left == 1)]
                 with m.If(last_clock):
                     m.d.sync += [
                         self.ma.eq(1),
                         self.rise.eq(1),
                         phase_left.eq(self.half_period - 1),
+                        last_clock.eq(reload_last),
                     ]
                     with m.If(self.rises != 0xFFFF):
                         m.d.sync += self.rises.eq(self.rises + 1)
                     m.next = "HIGH"
             with m.State("HIGH"):
                 m.d.comb += self.busy.eq(1)
-                m.d.sync += phase_left.eq(phase_left - 1)
+                m.d.sync += [phase_left.eq(phase_left - 1), last_clock.eq(phase_left == 1)]
                 with m.If(last_clock):
                     with m.If(self.run):
                         m.d.sync += [
                             self.ma.eq(0),
                             phase_left.eq(self.half_period - 1),
+                            last_clock.eq(reload_last),
                         ]
                         m.next = "LOW"
                     with m.Else():

@@ -6,7 +6,7 @@ from amaranth.lib.wiring import In, Out
 
 from . import protocol
 from .counters import SaturatingCounter
-from .frame_decoder import FrameDecoder
+from .frame_decoder import FrameDecoder, word_length
 from .ma_clock import MaClock
 from .params import STATUS_WIDTH, WORD_CONFIG, Crc, MasterParams, Status
 from .sign_of_life import SignOfLife
@@ -116,9 +116,10 @@ class BissMaster(wiring.Component):
             crc_ok = crc == Crc.NONE
             for kind in p.word_crcs[w]:
                 crc_ok |= crc == kind
-            return (bits >= 1) & (bits <= p.max_data_bits[w]) & crc_ok
+            return bits.any() & (bits <= p.max_data_bits[w]) & crc_ok
 
-        ok = (cfg.cfg_ma_half_period >= protocol.MA_HALF_PERIOD_MIN) & word_ok(0)
+        assert protocol.MA_HALF_PERIOD_MIN == 2
+        ok = cfg.cfg_ma_half_period[1:].any() & word_ok(0)        # half period >= 2
         if p.max_line_delay < 2**p.delay_limit_width - 1:
             ok &= cfg.cfg_delay_limit <= p.max_line_delay
         if p.words == 2:
@@ -164,10 +165,30 @@ class BissMaster(wiring.Component):
         def or_default(value, default):
             return Mux(value == 0, default, value)
 
-        break_time = or_default(live.cfg_break_time, p.break_default)
-        ack_limit = or_default(cfg.cfg_ack_limit, p.ack_limit_default)
-        timeout_limit = or_default(cfg.cfg_timeout_limit, p.timeout_limit_default)
-        delay_limit = or_default(cfg.cfg_delay_limit, p.max_line_delay)
+        # The limits of a cycle are resolved (0 -> default) when the configuration is latched,
+        # so that no default mux sits in front of a comparator. Every default is >= 1, so each
+        # limit is >= 1 and "limit - 1" below never wraps.
+        ack_limit_m1 = Signal(tw)           # Ack limit - 1
+        timeout_limit = Signal(tw)
+        delay_limit = Signal(p.delay_limit_width)
+        # The configuration is copied in every clock in IDLE, so the last copy is the one of
+        # the accepted request (IDLE -> WAIT_READY). Nothing reads ``cfg`` in IDLE (the MA clock
+        # is stopped, the receiver held in reset, no frame is reported), so this is the same as
+        # latching it on acceptance only, without the request decode in the enable.
+        idle = Signal()
+        with m.If(idle):
+            m.d.sync += [
+                cfg.eq(live),
+                ack_limit_m1.eq(Mux(live.cfg_ack_limit == 0, p.ack_limit_default - 1,
+                                    live.cfg_ack_limit - 1)),
+                timeout_limit.eq(or_default(live.cfg_timeout_limit, p.timeout_limit_default)),
+                delay_limit.eq(or_default(live.cfg_delay_limit, p.max_line_delay)),
+            ]
+        # NO_START limit - 1: the Ack limit plus one MA period. Computed every clock from the
+        # latched values; valid one clock after the latch, first read in CLOCK (WAIT_READY
+        # lasts at least one clock).
+        no_start_limit_m1 = Signal(tw + 1)
+        m.d.sync += no_start_limit_m1.eq(ack_limit_m1 + Cat(C(0, 1), cfg.cfg_ma_half_period))
         word_count = (1 + cfg.cfg_w1_enable) if two else 1
 
         m.d.comb += [
@@ -195,26 +216,55 @@ class BissMaster(wiring.Component):
         with m.If(ma_clock.rise & (ma_clock.rises == 1)):
             m.d.sync += first_rise_time.eq(now)
 
-        slo_low_time = Signal(tw)
-        with m.If(slo):
-            m.d.sync += slo_low_time.eq(0)
-        with m.Elif(~slo_low_time.all()):
-            m.d.sync += slo_low_time.eq(slo_low_time + 1)
+        # How long SLO has been low, plus one (saturating at 2**tw: SLO low for 2**tw - 1
+        # clocks or more). The "+ 1" turns the one-clock-ahead compare below into a plain one.
+        # Counted only while MA is idle: the encoder's timeout starts when MA stops, and the
+        # trailing zero bits of a frame (up to 6 CRC bits and the stop bit, 90 us at 80 kHz)
+        # must not count towards SLO_STUCK_LOW.
+        slo_low_time_p1 = Signal(tw + 1, init=1)
+        with m.If(slo | ma_clock.busy):
+            m.d.sync += slo_low_time_p1.eq(1)
+        with m.Elif(~slo_low_time_p1[tw]):
+            m.d.sync += slo_low_time_p1.eq(slo_low_time_p1 + 1)
+        # ``SLO-low time >= timeout limit``, registered one clock ahead: the next SLO-low time
+        # is 0 (never >= a limit >= 1) or, saturating, this one + 1. WAIT_READY reads it. In
+        # its first clock the limit was latched only at the clock edge that began it, so that
+        # clock uses the flag computed from the live setting.
+        stuck_latched = Signal()
+        stuck_live = Signal()
+        latched = Signal()      # the previous clock was IDLE: in WAIT_READY, its first clock
+        m.d.sync += [
+            stuck_latched.eq(~slo & ~ma_clock.busy & (slo_low_time_p1 >= timeout_limit)),
+            stuck_live.eq(~slo & ~ma_clock.busy & Mux(live.cfg_timeout_limit == 0,
+                                     slo_low_time_p1 >= p.timeout_limit_default,
+                                     slo_low_time_p1 >= live.cfg_timeout_limit)),
+            latched.eq(idle),
+        ]
+        slo_stuck = Mux(latched, stuck_live, stuck_latched)
 
         timer = Signal(tw + 1)      # one bit more than the limits: Ack limit + 2 half periods
-        m.d.sync += timer.eq(Mux(timer.all(), timer, timer + 1))
+        timer_clear = Signal()
+        m.d.sync += timer.eq(Mux(timer_clear, 0, Mux(timer.all(), timer, timer + 1)))
+        # ``timer >= limit`` for the Ack and NO_START limits: see the cycle controller.
+        ack_expired = Signal()
+        no_start_expired = Signal()
+        # BREAK reads cfg_break_time live: both compares in parallel, then the default mux.
+        break_over = Mux(live.cfg_break_time == 0, timer >= p.break_default,
+                         timer >= live.cfg_break_time)
 
         # -- Requests ---------------------------------------------------------------------
-        period_count = Signal(tw)
+        # Clocks since the last tick, plus one: the period restarts when it reaches the live
+        # cfg_request_period (one compare, no "- 1" in front of it). It never exceeds
+        # 2**tw - 1: it only counts up while below the period.
+        period_count_p1 = Signal(tw, init=1)
         as_fast_as_possible = self.periodic & (self.cfg_request_period == 0)
-        tick = self.periodic & ~as_fast_as_possible & (period_count == 0)
+        tick = self.periodic & ~as_fast_as_possible & (period_count_p1 == 1)
         with m.If(~self.periodic | as_fast_as_possible
-                  | (period_count >= self.cfg_request_period - 1)):
-            m.d.sync += period_count.eq(0)
+                  | (period_count_p1 >= self.cfg_request_period)):
+            m.d.sync += period_count_p1.eq(1)
         with m.Else():
-            m.d.sync += period_count.eq(period_count + 1)
+            m.d.sync += period_count_p1.eq(period_count_p1 + 1)
         request = self.start | tick | as_fast_as_possible
-        idle = Signal()
         m.d.comb += self.overrun.eq((self.start | tick) & ~(idle & ~self.abort_cycle))
 
         # -- Frame verdict ----------------------------------------------------------------
@@ -264,19 +314,50 @@ class BissMaster(wiring.Component):
         resync = Signal()               # encoder reset: the next LC is accepted as it is
         target_rises = Signal(17)       # MA rising edges the frame needs, once Start is seen
         started = Signal()
+        # ``decoder.frame_bits + 4``, from the cycle's configuration in two register stages
+        # (valid two clocks after the latch; first read when Start has been sampled).
+        word_len = [Signal(8, name=f"word{w}_len") for w in range(p.words)]
+        frame_len_p4 = Signal(9)
         m.d.sync += [
-            target_rises.eq(decoder.start_slot + decoder.frame_bits + 4),
+            word_len[0].eq(word_length(decoder.words[0], extra=4, width=8)),
+            frame_len_p4.eq(word_len[0] + (Mux(cfg.cfg_w1_enable, word_len[1], 0) if two else 0)),
+        ]
+        if two:
+            m.d.sync += word_len[1].eq(word_length(decoder.words[1], width=8))
+        m.d.sync += [
+            target_rises.eq(decoder.start_slot + frame_len_p4),
             started.eq(decoder.started),
         ]
         ma_enough = started & (ma_clock.rises >= target_rises)
         locked_seen = Signal()
         armed = Signal()
         arm = ma_clock.rise & (ma_clock.rises == 2)
+        in_clock = Signal()                 # the controller is in CLOCK
+        restart_timer = arm | (sampler.locked & ~locked_seen)      # in CLOCK
+        # CLOCK compares the timer with the Ack and NO_START limits. Both flags are registered
+        # one clock ahead: the timer's next value is 0 (cleared; never >= a limit >= 1) or,
+        # saturating, ``timer + 1``, which is >= limit exactly when ``timer >= limit - 1``.
+        # They need to be right only in CLOCK: after a clock in CLOCK that stays there (it
+        # clears the timer on ``restart_timer`` only), or after WAIT_READY (timer cleared: 0).
+        # The limits are constant from the latch on.
+        m.d.sync += [
+            ack_expired.eq(in_clock & ~restart_timer & (timer >= ack_limit_m1)),
+            no_start_expired.eq(in_clock & ~restart_timer & (timer >= no_start_limit_m1)),
+        ]
         m.d.comb += sampler.arm.eq(arm)
+        # The measured delay is final at least two clocks before ``sampler.locked`` rises (the
+        # first sample comes half an MA period, >= 2 clocks, after the Ack edge), and the
+        # check below reads it only then: compare it a clock early, registered.
+        delay_over = Signal()
+        m.d.sync += delay_over.eq(sampler.delay > delay_limit)
+
+        # One strobe per fault status, set only where that fault is reported: the counters
+        # decode these directly, not the status mux.
+        fault_event = {status: Signal(name=f"fault_{status.name.lower()}") for status in Status}
 
         def fault(status, next_state="BREAK"):
-            m.d.comb += [report.eq(1), report_status.eq(status)]
-            m.d.sync += timer.eq(0)
+            m.d.comb += [report.eq(1), report_status.eq(status), timer_clear.eq(1),
+                         fault_event[status].eq(1)]
             m.next = next_state
 
         with m.FSM(init="BREAK", name="cycle_fsm"):
@@ -284,51 +365,53 @@ class BissMaster(wiring.Component):
             with m.State("BREAK"):
                 m.d.comb += [receiver_clear.eq(1), resync.eq(1)]
                 with m.If(ma_clock.busy | self.abort_cycle):
-                    m.d.sync += timer.eq(0)
-                with m.Elif(timer >= break_time):
+                    m.d.comb += timer_clear.eq(1)
+                with m.Elif(break_over):
                     m.next = "IDLE"
 
             with m.State("IDLE"):
-                m.d.comb += [idle.eq(1), receiver_clear.eq(1)]
+                # The timer is not read in IDLE, and every way out of it (BREAK, WAIT_READY)
+                # starts from 0: hold it at 0 here, whatever the request decode says.
+                m.d.comb += [idle.eq(1), receiver_clear.eq(1), timer_clear.eq(1)]
                 with m.If(self.abort_cycle):
-                    m.d.sync += timer.eq(0)
                     m.next = "BREAK"
                 with m.Elif(request & ~cfg_ok):
                     fault(Status.BAD_CONFIG, "IDLE")
                 with m.Elif(request):
-                    m.d.sync += cfg.eq(live)
                     m.next = "WAIT_READY"
 
             # Never start while the encoder holds SLO low (its timeout is still running).
             with m.State("WAIT_READY"):
                 m.d.comb += receiver_clear.eq(1)
-                m.d.sync += [timer.eq(0), armed.eq(0), locked_seen.eq(0)]
+                m.d.comb += timer_clear.eq(1)
+                m.d.sync += [armed.eq(0), locked_seen.eq(0)]
                 with m.If(self.abort_cycle):
                     fault(Status.ABORTED)
                 with m.Elif(slo):
                     m.next = "CLOCK"
-                with m.Elif(slo_low_time >= timeout_limit):
+                with m.Elif(slo_stuck):
                     fault(Status.SLO_STUCK_LOW)
 
             # MA runs; the sampler and decoder follow SLO, the line delay behind.
             with m.State("CLOCK"):
-                m.d.comb += ma_clock.run.eq(~ma_enough)
+                m.d.comb += [ma_clock.run.eq(~ma_enough), in_clock.eq(1)]
+                with m.If(restart_timer):
+                    m.d.comb += timer_clear.eq(1)
                 with m.If(arm):
-                    m.d.sync += [armed.eq(1), timer.eq(0)]
+                    m.d.sync += armed.eq(1)
                 with m.If(sampler.locked & ~locked_seen):
-                    m.d.sync += [locked_seen.eq(1), timer.eq(0)]
+                    m.d.sync += locked_seen.eq(1)
                 with m.If(self.abort_cycle):
                     fault(Status.ABORTED)
                 with m.Elif(armed & sampler.early):
                     fault(Status.DELAY_RANGE)
-                with m.Elif(armed & ~locked_seen & ~sampler.locked & (timer >= ack_limit)):
+                with m.Elif(armed & ~locked_seen & ~sampler.locked & ack_expired):
                     fault(Status.NO_ACK)
-                with m.Elif(sampler.locked & ~locked_seen & (sampler.delay > delay_limit)):
+                with m.Elif(sampler.locked & ~locked_seen & delay_over):
                     m.d.comb += report_delay.eq(1)
                     fault(Status.DELAY_RANGE)
                 with m.Elif(locked_seen & ~decoder.started
-                            & ((timer >= ack_limit + Cat(C(0, 1), cfg.cfg_ma_half_period))
-                               | decoder.slots.all())):
+                            & (no_start_expired | decoder.slots_full)):
                     fault(Status.NO_START)
                 with m.Elif(decoder.done):
                     m.d.comb += [
@@ -343,7 +426,7 @@ class BissMaster(wiring.Component):
             with m.State("TAIL"):
                 m.d.comb += ma_clock.run.eq(~ma_enough)
                 with m.If(self.abort_cycle):
-                    m.d.sync += timer.eq(0)
+                    m.d.comb += timer_clear.eq(1)
                     m.next = "BREAK"
                 with m.Elif(decoder.stopped):
                     m.next = "END"
@@ -357,7 +440,10 @@ class BissMaster(wiring.Component):
         ]
 
         # -- Results ------------------------------------------------------------------------
-        m.d.sync += [self.done.eq(report), self.valid.eq(report & (report_status == Status.OK))]
+        m.d.sync += [
+            self.done.eq(report),
+            self.valid.eq(report_frame & (frame_status == Status.OK)),  # faults are never OK
+        ]
         with m.If(report):
             m.d.sync += self.status.eq(report_status)
         with m.If(report_delay):
@@ -384,15 +470,15 @@ class BissMaster(wiring.Component):
         # -- Error counters -----------------------------------------------------------------
         events = {
             "crc_word0": report_frame & ~word_crc_ok[0],
-            "no_ack": report & (report_status == Status.NO_ACK),
-            "no_start": report & (report_status == Status.NO_START),
-            "delay_range": report & (report_status == Status.DELAY_RANGE),
-            "slo_stuck_low": report & (report_status == Status.SLO_STUCK_LOW),
+            "no_ack": fault_event[Status.NO_ACK],
+            "no_start": fault_event[Status.NO_START],
+            "delay_range": fault_event[Status.DELAY_RANGE],
+            "slo_stuck_low": fault_event[Status.SLO_STUCK_LOW],
             "lc_repeat": report_frame & lc_repeat,
             "lc_skip": report_frame & lc_skip,
             "lc_zero": report_frame & lc_zero,
             "overrun": self.overrun,
-            "aborted": report & (report_status == Status.ABORTED),
+            "aborted": fault_event[Status.ABORTED],
         }
         if two:
             events["crc_word1"] = report_frame & ~word_crc_ok[1]

@@ -39,8 +39,13 @@ class SignOfLife(wiring.Component):
     def elaborate(self, platform):
         m = Module()
 
+        def successor(lc):
+            return Mux(lc == protocol.LC_MAX, protocol.LC_FIRST, lc + 1)
+
         last = Signal(protocol.LC_BITS)
-        expected = Mux(last == protocol.LC_MAX, protocol.LC_FIRST, last + 1)
+        # The successor of ``last``, stored with it (no incrementer in front of the compare).
+        # Its reset value is the successor of last's reset value 0.
+        expected = Signal(protocol.LC_BITS, init=1)
 
         m.d.comb += [
             self.zero.eq(self.lc == 0),
@@ -48,7 +53,7 @@ class SignOfLife(wiring.Component):
             self.skip.eq(self.synced & ~self.zero & (self.lc != last) & (self.lc != expected)),
         ]
         with m.If(self.check & ~self.zero):
-            m.d.sync += [last.eq(self.lc), self.synced.eq(1)]
+            m.d.sync += [last.eq(self.lc), expected.eq(successor(self.lc)), self.synced.eq(1)]
         with m.If(self.resync):
             m.d.sync += self.synced.eq(0)
 

@@ -70,6 +70,9 @@ class SloSampler(wiring.Component):
         delay_max = (1 << self._delay_width) - 1
         slot_left = Signal(17)                      # clocks to the next sample, minus one
         first_slot = Signal()                       # the next sample is slot 0 (inside the Ack)
+        # ``slot_left == 0``, kept as a register: written wherever ``slot_left`` is, from the
+        # value written. The sample strobe then needs no wide compare.
+        slot_zero = Signal(init=1)
 
         m.d.comb += self.bit.eq(self.slo)
 
@@ -92,20 +95,22 @@ class SloSampler(wiring.Component):
                         self.delay.eq(Mux(elapsed == delay_max, delay_max,
                                           elapsed - SYNC_EXTRA_LATENCY)),
                         slot_left.eq(self.half_period - 1),
+                        slot_zero.eq(self.half_period == 1),
                         first_slot.eq(1),
                     ]
                     m.next = "SAMPLE"
             with m.State("SAMPLE"):
                 with m.If(elapsed != delay_max):
                     m.d.sync += elapsed.eq(elapsed + 1)
-                m.d.sync += slot_left.eq(slot_left - 1)
+                m.d.sync += [slot_left.eq(slot_left - 1), slot_zero.eq(slot_left == 1)]
                 with m.If(first_slot & self.slo):
                     # SLO high again inside the first Ack slot: the edge was a glitch (or a
                     # bounce before the real edge). Keep waiting for the real Ack edge.
                     m.next = "MEASURE"
-                with m.Elif(slot_left == 0):
+                with m.Elif(slot_zero):
                     m.d.sync += [
                         slot_left.eq(Cat(C(0, 1), self.half_period) - 1),   # one MA period
+                        slot_zero.eq(0),                                    # odd: never 0
                         first_slot.eq(0),
                         self.locked.eq(1),
                     ]

@@ -53,7 +53,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \$128 ;
   wire \$129 ;
   wire \$13 ;
-  wire [23:0] \$130 ;
+  wire \$130 ;
   wire \$131 ;
   wire \$132 ;
   wire \$133 ;
@@ -65,21 +65,21 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \$139 ;
   wire \$14 ;
   wire \$140 ;
-  wire [23:0] \$141 ;
+  wire \$141 ;
   wire \$142 ;
   wire \$143 ;
   wire \$144 ;
   wire \$145 ;
   wire \$146 ;
-  wire [11:0] \$147 ;
+  wire \$147 ;
   wire \$148 ;
   wire \$149 ;
   wire \$15 ;
   wire \$150 ;
   wire \$151 ;
   wire \$152 ;
-  wire [23:0] \$153 ;
-  wire [24:0] \$154 ;
+  wire \$153 ;
+  wire \$154 ;
   wire \$155 ;
   wire \$156 ;
   wire \$157 ;
@@ -108,39 +108,39 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \$178 ;
   wire \$179 ;
   wire \$18 ;
-  wire \$180 ;
-  wire \$181 ;
+  wire [24:0] \$180 ;
+  wire [24:0] \$181 ;
   wire \$182 ;
-  wire \$183 ;
+  wire [23:0] \$183 ;
   wire \$184 ;
-  wire \$185 ;
-  wire \$186 ;
+  wire [11:0] \$185 ;
+  wire [24:0] \$186 ;
   wire [32:0] \$187 ;
   wire \$188 ;
   wire \$189 ;
   wire \$19 ;
   wire \$190 ;
   wire \$191 ;
-  wire [24:0] \$192 ;
+  wire [25:0] \$192 ;
   wire \$193 ;
-  wire [25:0] \$194 ;
-  wire [25:0] \$195 ;
+  wire \$194 ;
+  wire \$195 ;
   wire \$196 ;
   wire \$197 ;
   wire \$198 ;
   wire \$199 ;
   wire \$2 ;
   wire \$20 ;
-  wire [24:0] \$200 ;
+  wire \$200 ;
   wire \$201 ;
   wire \$202 ;
-  wire [24:0] \$203 ;
-  wire [16:0] \$204 ;
-  wire [17:0] \$205 ;
+  wire \$203 ;
+  wire \$204 ;
+  wire \$205 ;
   wire \$206 ;
-  wire \$207 ;
-  wire [23:0] \$208 ;
-  wire \$209 ;
+  wire [25:0] \$207 ;
+  wire [25:0] \$208 ;
+  wire [25:0] \$209 ;
   wire \$21 ;
   wire \$210 ;
   wire \$211 ;
@@ -148,15 +148,15 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \$213 ;
   wire \$214 ;
   wire \$215 ;
-  wire \$216 ;
-  wire \$217 ;
-  wire \$218 ;
-  wire \$219 ;
+  wire [24:0] \$216 ;
+  reg [7:0] \$217 ;
+  wire [8:0] \$218 ;
+  wire [7:0] \$219 ;
   wire \$22 ;
-  wire \$220 ;
-  wire \$221 ;
-  wire \$222 ;
-  wire \$223 ;
+  wire [8:0] \$220 ;
+  reg [7:0] \$221 ;
+  wire [8:0] \$222 ;
+  wire [16:0] \$223 ;
   wire \$224 ;
   wire \$225 ;
   wire \$226 ;
@@ -204,7 +204,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \$264 ;
   wire \$265 ;
   wire \$266 ;
-  wire [23:0] \$267 ;
+  wire \$267 ;
   wire \$268 ;
   wire \$269 ;
   wire \$27 ;
@@ -217,22 +217,22 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \$276 ;
   wire \$277 ;
   wire \$278 ;
-  wire [23:0] \$279 ;
+  wire \$279 ;
   wire \$28 ;
   wire \$280 ;
   wire \$281 ;
   wire \$282 ;
   wire \$283 ;
   wire \$284 ;
-  wire [11:0] \$285 ;
+  wire \$285 ;
   wire \$286 ;
   wire \$287 ;
   wire \$288 ;
   wire \$289 ;
   wire \$29 ;
   wire \$290 ;
-  wire [23:0] \$291 ;
-  wire [24:0] \$292 ;
+  wire \$291 ;
+  wire \$292 ;
   wire \$293 ;
   wire \$294 ;
   wire \$295 ;
@@ -255,42 +255,80 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \$31 ;
   wire \$310 ;
   wire \$311 ;
-  reg [31:0] \$312 ;
-  reg [31:0] \$313 ;
-  reg [23:0] \$314 ;
-  reg [24:0] \$315 ;
-  reg [23:0] \$316 ;
-  reg [16:0] \$317 ;
-  reg \$318 ;
-  reg [2:0] \$319 ;
+  wire \$312 ;
+  wire \$313 ;
+  wire \$314 ;
+  wire \$315 ;
+  wire \$316 ;
+  wire \$317 ;
+  wire \$318 ;
+  wire \$319 ;
   wire \$32 ;
-  reg [153:0] \$320 ;
-  reg \$321 ;
-  reg \$322 ;
-  reg \$323 ;
-  reg \$324 ;
-  reg [3:0] \$325 ;
-  reg [12:0] \$326 ;
-  reg [31:0] \$327 ;
-  reg \$328 ;
-  reg [5:0] \$329 ;
+  wire \$320 ;
+  wire \$321 ;
+  wire \$322 ;
+  wire \$323 ;
+  wire \$324 ;
+  wire \$325 ;
+  wire \$326 ;
+  wire \$327 ;
+  wire \$328 ;
+  wire \$329 ;
   wire \$33 ;
-  reg \$330 ;
-  reg \$331 ;
-  reg \$332 ;
-  reg [54:0] \$333 ;
-  reg \$334 ;
-  reg \$335 ;
-  reg \$336 ;
-  reg [39:0] \$337 ;
-  reg \$338 ;
-  reg \$339 ;
+  wire \$330 ;
+  wire \$331 ;
+  wire \$332 ;
+  wire \$333 ;
+  wire \$334 ;
+  wire \$335 ;
+  wire \$336 ;
+  reg [153:0] \$337 ;
+  reg [23:0] \$338 ;
+  reg [23:0] \$339 ;
   wire \$34 ;
-  reg \$340 ;
-  reg \$341 ;
+  reg [11:0] \$340 ;
+  reg [24:0] \$341 ;
+  reg [31:0] \$342 ;
+  reg [31:0] \$343 ;
+  reg [24:0] \$344 ;
+  reg \$345 ;
+  reg \$346 ;
+  reg \$347 ;
+  reg [24:0] \$348 ;
+  reg [23:0] \$349 ;
   wire \$35 ;
+  reg [7:0] \$350 ;
+  reg [8:0] \$351 ;
+  reg [7:0] \$352 ;
+  reg [16:0] \$353 ;
+  reg \$354 ;
+  reg \$355 ;
+  reg \$356 ;
+  reg \$357 ;
+  reg [2:0] \$358 ;
+  reg \$359 ;
   wire \$36 ;
+  reg \$360 ;
+  reg \$361 ;
+  reg \$362 ;
+  reg [3:0] \$363 ;
+  reg [12:0] \$364 ;
+  reg [31:0] \$365 ;
+  reg \$366 ;
+  reg [5:0] \$367 ;
+  reg \$368 ;
+  reg \$369 ;
   wire \$37 ;
+  reg \$370 ;
+  reg [54:0] \$371 ;
+  reg \$372 ;
+  reg \$373 ;
+  reg \$374 ;
+  reg [39:0] \$375 ;
+  reg \$376 ;
+  reg \$377 ;
+  reg \$378 ;
+  reg \$379 ;
   wire \$38 ;
   wire \$39 ;
   wire \$4 ;
@@ -361,6 +399,8 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \$99 ;
   input abort_cycle;
   wire abort_cycle;
+  reg ack_expired = 1'h0;
+  reg [23:0] ack_limit_m1 = 24'h000000;
   wire arm;
   reg armed = 1'h0;
   wire \bit ;
@@ -368,10 +408,10 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire [5:0] bits;
   output busy;
   wire busy;
-  wire \busy$153 ;
+  wire \busy$96 ;
   output cds;
   reg cds = 1'h0;
-  wire \cds$155 ;
+  wire \cds$175 ;
   reg [153:0] cfg = 154'h000000000000000000000000000000000000000;
   wire [23:0] \cfg.cfg_ack_limit ;
   wire [23:0] \cfg.cfg_break_time ;
@@ -426,17 +466,17 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire cfg_w1_nenw;
   wire check;
   wire clear;
-  wire \clear$117 ;
-  wire \clear$120 ;
-  wire \clear$123 ;
-  wire \clear$126 ;
-  wire \clear$129 ;
-  wire \clear$132 ;
-  wire \clear$135 ;
-  wire \clear$138 ;
-  wire \clear$141 ;
-  wire \clear$144 ;
-  wire \clear$147 ;
+  wire \clear$131 ;
+  wire \clear$134 ;
+  wire \clear$137 ;
+  wire \clear$140 ;
+  wire \clear$143 ;
+  wire \clear$146 ;
+  wire \clear$149 ;
+  wire \clear$152 ;
+  wire \clear$155 ;
+  wire \clear$158 ;
+  wire \clear$161 ;
   input clear_counters;
   wire clear_counters;
   input clk;
@@ -444,17 +484,17 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   output config_error;
   wire config_error;
   wire [15:0] count;
-  wire [15:0] \count$118 ;
-  wire [15:0] \count$121 ;
-  wire [15:0] \count$124 ;
-  wire [15:0] \count$127 ;
-  wire [15:0] \count$130 ;
-  wire [15:0] \count$133 ;
-  wire [15:0] \count$136 ;
-  wire [15:0] \count$139 ;
-  wire [15:0] \count$142 ;
-  wire [15:0] \count$145 ;
-  wire [15:0] \count$148 ;
+  wire [15:0] \count$132 ;
+  wire [15:0] \count$135 ;
+  wire [15:0] \count$138 ;
+  wire [15:0] \count$141 ;
+  wire [15:0] \count$144 ;
+  wire [15:0] \count$147 ;
+  wire [15:0] \count$150 ;
+  wire [15:0] \count$153 ;
+  wire [15:0] \count$156 ;
+  wire [15:0] \count$159 ;
+  wire [15:0] \count$162 ;
   output [15:0] count_aborted;
   wire [15:0] count_aborted;
   output [15:0] count_crc_word0;
@@ -486,12 +526,20 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire [54:0] data0;
   wire [39:0] data1;
   wire [12:0] delay;
+  reg [11:0] delay_limit = 12'h000;
+  reg delay_over = 1'h0;
   output done;
   reg done = 1'h0;
   wire \done$77 ;
   wire early;
+  reg fault_aborted;
+  reg fault_bad_config;
+  reg fault_delay_range;
+  reg fault_no_ack;
+  reg fault_no_start;
+  reg fault_slo_stuck_low;
   reg [31:0] first_rise_time = 32'd0;
-  wire [7:0] frame_bits;
+  reg [8:0] frame_len_p4 = 9'h000;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -509,18 +557,20 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire [15:0] half_period;
   wire [15:0] \half_period$64 ;
   reg idle;
+  reg in_clock;
   wire inc;
-  wire \inc$116 ;
-  wire \inc$119 ;
-  wire \inc$122 ;
-  wire \inc$125 ;
-  wire \inc$128 ;
-  wire \inc$131 ;
-  wire \inc$134 ;
-  wire \inc$137 ;
-  wire \inc$140 ;
-  wire \inc$143 ;
-  wire \inc$146 ;
+  wire \inc$130 ;
+  wire \inc$133 ;
+  wire \inc$136 ;
+  wire \inc$139 ;
+  wire \inc$142 ;
+  wire \inc$145 ;
+  wire \inc$148 ;
+  wire \inc$151 ;
+  wire \inc$154 ;
+  wire \inc$157 ;
+  wire \inc$160 ;
+  reg latched = 1'h0;
   output [5:0] lc;
   reg [5:0] lc = 6'h00;
   wire [5:0] \lc$74 ;
@@ -558,11 +608,13 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \ma$70 ;
   wire match;
   wire [1:0] ne;
+  reg no_start_expired = 1'h0;
+  reg [24:0] no_start_limit_m1 = 25'h0000000;
   reg [31:0] now = 32'd0;
   wire [1:0] nw;
   output overrun;
   wire overrun;
-  reg [23:0] period_count = 24'h000000;
+  reg [23:0] period_count_p1 = 24'h000001;
   input periodic;
   wire periodic;
   reg receiver_clear;
@@ -585,7 +637,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_1011 = "BAD_CONFIG" *)
   reg [3:0] report_status;
   reg resync;
-  wire \resync$112 ;
+  wire \resync$126 ;
   wire rise;
   wire [15:0] rises;
   input rst;
@@ -598,8 +650,8 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire slo;
   wire \slo$62 ;
   wire \slo$63 ;
-  reg [23:0] slo_low_time = 24'h000000;
-  wire [15:0] slots;
+  reg [24:0] slo_low_time_p1 = 25'h0000001;
+  wire slots_full;
   wire [39:0] spw;
   output spw_mismatch;
   reg spw_mismatch = 1'h0;
@@ -607,12 +659,16 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire start;
   wire [15:0] start_slot;
   reg started = 1'h0;
-  wire \started$108 ;
+  wire \started$117 ;
   output [3:0] status;
   reg [3:0] status = 4'h0;
   wire stopped;
+  reg stuck_latched = 1'h0;
+  reg stuck_live = 1'h0;
   reg [16:0] target_rises = 17'h00000;
+  reg [23:0] timeout_limit = 24'h000000;
   reg [24:0] timer = 25'h0000000;
+  reg timer_clear;
   output [31:0] timestamp;
   reg [31:0] timestamp = 32'd0;
   wire [7:0] tolerance;
@@ -620,6 +676,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   reg valid = 1'h0;
   output word0_crc_ok;
   reg word0_crc_ok = 1'h0;
+  reg [7:0] word0_len = 8'h00;
   output word0_ne;
   reg word0_ne = 1'h0;
   output word0_nw;
@@ -628,6 +685,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   reg [54:0] word0_position = 55'h00000000000000;
   output word1_crc_ok;
   reg word1_crc_ok = 1'h0;
+  reg [7:0] word1_len = 8'h00;
   output word1_ne;
   reg word1_ne = 1'h0;
   output word1_nw;
@@ -647,8 +705,8 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \words[1].lc ;
   wire \words[1].nenw ;
   wire zero;
-  assign \$1  = live[15:0] >= 2'h2;
-  assign \$2  = live[129:124] >= 1'h1;
+  assign \$1  = | live[15:1];
+  assign \$2  = | live[129:124];
   assign \$3  = live[129:124] <= 6'h37;
   assign \$4  = \$2  & \$3 ;
   assign \$5  = ! live[133:132];
@@ -659,7 +717,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \$10  = \$4  & \$9 ;
   assign \$11  = \$1  & \$10 ;
   assign \$12  = ~ live[134];
-  assign \$13  = live[140:135] >= 1'h1;
+  assign \$13  = | live[140:135];
   assign \$14  = live[140:135] <= 6'h28;
   assign \$15  = \$13  & \$14 ;
   assign \$16  = ! live[144:143];
@@ -687,7 +745,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \$36  = periodic & \$35 ;
   assign \$37  = ~ \$36 ;
   assign \$38  = periodic & \$37 ;
-  assign \$39  = ! period_count;
+  assign \$39  = period_count_p1 == 1'h1;
   assign \$40  = \$38  & \$39 ;
   assign \$41  = start | \$40 ;
   assign \$42  = ~ abort_cycle;
@@ -724,426 +782,469 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \$71  = \$69  & \$70 ;
   assign \$72  = rises == 2'h2;
   assign arm = rise & \$72 ;
-  assign \$73  = ! cfg_request_period;
-  assign \$74  = periodic & \$73 ;
-  assign \$75  = ~ \$74 ;
-  assign \$76  = periodic & \$75 ;
-  assign \$77  = ! period_count;
-  assign \$78  = \$76  & \$77 ;
-  assign \$79  = start | \$78 ;
-  assign \$80  = ! cfg_request_period;
+  assign \$73  = \busy$96  | abort_cycle;
+  assign \$74  = ! live[63:40];
+  assign \$75  = timer >= 12'hfa0;
+  assign \$76  = timer >= live[63:40];
+  assign \$77  = \$74  ? \$75  : \$76 ;
+  assign \$78  = ! cfg_request_period;
+  assign \$79  = periodic & \$78 ;
+  assign \$80  = ~ \$79 ;
   assign \$81  = periodic & \$80 ;
-  assign \$82  = \$79  | \$81 ;
-  assign \$83  = live[15:0] >= 2'h2;
-  assign \$84  = live[129:124] >= 1'h1;
-  assign \$85  = live[129:124] <= 6'h37;
-  assign \$86  = \$84  & \$85 ;
-  assign \$87  = ! live[133:132];
-  assign \$88  = live[133:132] == 1'h1;
-  assign \$89  = \$87  | \$88 ;
-  assign \$90  = live[133:132] == 2'h2;
-  assign \$91  = \$89  | \$90 ;
-  assign \$92  = \$86  & \$91 ;
-  assign \$93  = \$83  & \$92 ;
-  assign \$94  = ~ live[134];
-  assign \$95  = live[140:135] >= 1'h1;
-  assign \$96  = live[140:135] <= 6'h28;
-  assign \$97  = \$95  & \$96 ;
-  assign \$98  = ! live[144:143];
-  assign \$99  = live[144:143] == 1'h1;
-  assign \$100  = \$98  | \$99 ;
-  assign \$101  = live[144:143] == 2'h2;
-  assign \$102  = \$100  | \$101 ;
-  assign \$103  = \$97  & \$102 ;
-  assign \$104  = \$94  | \$103 ;
-  assign \$105  = \$93  & \$104 ;
-  assign \$106  = live[134] & live[131];
-  assign \$107  = \$106  & live[142];
-  assign \$108  = ~ \$107 ;
-  assign \$109  = \$105  & \$108 ;
-  assign \$110  = ~ live[145];
-  assign \$111  = live[140:135] <= live[129:124];
-  assign \$112  = live[134] & \$111 ;
-  assign \$113  = | live[144:143];
-  assign \$114  = \$112  & \$113 ;
-  assign \$115  = \$110  | \$114 ;
-  assign \$116  = \$109  & \$115 ;
-  assign \$117  = ~ \$116 ;
-  assign \$118  = \$82  & \$117 ;
-  assign \$119  = ! cfg_request_period;
-  assign \$120  = periodic & \$119 ;
-  assign \$121  = ~ \$120 ;
-  assign \$122  = periodic & \$121 ;
-  assign \$123  = ! period_count;
-  assign \$124  = \$122  & \$123 ;
-  assign \$125  = start | \$124 ;
-  assign \$126  = ! cfg_request_period;
+  assign \$82  = period_count_p1 == 1'h1;
+  assign \$83  = \$81  & \$82 ;
+  assign \$84  = start | \$83 ;
+  assign \$85  = ! cfg_request_period;
+  assign \$86  = periodic & \$85 ;
+  assign \$87  = \$84  | \$86 ;
+  assign \$88  = | live[15:1];
+  assign \$89  = | live[129:124];
+  assign \$90  = live[129:124] <= 6'h37;
+  assign \$91  = \$89  & \$90 ;
+  assign \$92  = ! live[133:132];
+  assign \$93  = live[133:132] == 1'h1;
+  assign \$94  = \$92  | \$93 ;
+  assign \$95  = live[133:132] == 2'h2;
+  assign \$96  = \$94  | \$95 ;
+  assign \$97  = \$91  & \$96 ;
+  assign \$98  = \$88  & \$97 ;
+  assign \$99  = ~ live[134];
+  assign \$100  = | live[140:135];
+  assign \$101  = live[140:135] <= 6'h28;
+  assign \$102  = \$100  & \$101 ;
+  assign \$103  = ! live[144:143];
+  assign \$104  = live[144:143] == 1'h1;
+  assign \$105  = \$103  | \$104 ;
+  assign \$106  = live[144:143] == 2'h2;
+  assign \$107  = \$105  | \$106 ;
+  assign \$108  = \$102  & \$107 ;
+  assign \$109  = \$99  | \$108 ;
+  assign \$110  = \$98  & \$109 ;
+  assign \$111  = live[134] & live[131];
+  assign \$112  = \$111  & live[142];
+  assign \$113  = ~ \$112 ;
+  assign \$114  = \$110  & \$113 ;
+  assign \$115  = ~ live[145];
+  assign \$116  = live[140:135] <= live[129:124];
+  assign \$117  = live[134] & \$116 ;
+  assign \$118  = | live[144:143];
+  assign \$119  = \$117  & \$118 ;
+  assign \$120  = \$115  | \$119 ;
+  assign \$121  = \$114  & \$120 ;
+  assign \$122  = ~ \$121 ;
+  assign \$123  = \$87  & \$122 ;
+  assign \$124  = ! cfg_request_period;
+  assign \$125  = periodic & \$124 ;
+  assign \$126  = ~ \$125 ;
   assign \$127  = periodic & \$126 ;
-  assign \$128  = \$125  | \$127 ;
-  assign \$129  = ! cfg[111:88];
-  assign \$130  = \$129  ? 24'h001f40 : cfg[111:88];
-  assign \$131  = slo_low_time >= \$130 ;
-  assign \$132  = rises >= target_rises;
-  assign \$133  = started & \$132 ;
-  assign \$134  = ~ \$133 ;
-  assign \$135  = armed & early;
-  assign \$136  = ~ locked_seen;
-  assign \$137  = armed & \$136 ;
-  assign \$138  = ~ locked;
-  assign \$139  = \$137  & \$138 ;
-  assign \$140  = ! cfg[87:64];
-  assign \$141  = \$140  ? 24'h000fa0 : cfg[87:64];
-  assign \$142  = timer >= \$141 ;
-  assign \$143  = \$139  & \$142 ;
+  assign \$128  = period_count_p1 == 1'h1;
+  assign \$129  = \$127  & \$128 ;
+  assign \$130  = start | \$129 ;
+  assign \$131  = ! cfg_request_period;
+  assign \$132  = periodic & \$131 ;
+  assign \$133  = \$130  | \$132 ;
+  assign \$134  = latched ? stuck_live : stuck_latched;
+  assign \$135  = rises >= target_rises;
+  assign \$136  = started & \$135 ;
+  assign \$137  = ~ \$136 ;
+  assign \$138  = rises == 2'h2;
+  assign \$139  = rise & \$138 ;
+  assign \$140  = ~ locked_seen;
+  assign \$141  = locked & \$140 ;
+  assign \$142  = \$139  | \$141 ;
+  assign \$143  = armed & early;
   assign \$144  = ~ locked_seen;
-  assign \$145  = locked & \$144 ;
-  assign \$146  = ! cfg[123:112];
-  assign \$147  = \$146  ? 12'hfff : cfg[123:112];
-  assign \$148  = delay > \$147 ;
-  assign \$149  = \$145  & \$148 ;
-  assign \$150  = ~ \started$108 ;
-  assign \$151  = locked_seen & \$150 ;
-  assign \$152  = ! cfg[87:64];
-  assign \$153  = \$152  ? 24'h000fa0 : cfg[87:64];
-  assign \$154  = \$153  + { cfg[15:0], 1'h0 };
-  assign \$155  = timer >= \$154 ;
-  assign \$156  = & slots;
-  assign \$157  = \$155  | \$156 ;
-  assign \$158  = \$151  & \$157 ;
-  assign \$159  = rises >= target_rises;
-  assign \$160  = started & \$159 ;
-  assign \$161  = ~ \$160 ;
+  assign \$145  = armed & \$144 ;
+  assign \$146  = ~ locked;
+  assign \$147  = \$145  & \$146 ;
+  assign \$148  = \$147  & ack_expired;
+  assign \$149  = ~ locked_seen;
+  assign \$150  = locked & \$149 ;
+  assign \$151  = \$150  & delay_over;
+  assign \$152  = ~ \started$117 ;
+  assign \$153  = locked_seen & \$152 ;
+  assign \$154  = no_start_expired | slots_full;
+  assign \$155  = \$153  & \$154 ;
+  assign \$156  = rises >= target_rises;
+  assign \$157  = started & \$156 ;
+  assign \$158  = ~ \$157 ;
   assign busy = ~ idle;
-  assign \$162  = ~ crc_ok[0];
-  assign inc = report_frame & \$162 ;
-  assign \$163  = ~ cfg[134];
-  assign \$164  = crc_ok[1] | \$163 ;
-  assign \$165  = ~ \$164 ;
-  assign \inc$116  = report_frame & \$165 ;
-  assign \$166  = report_status == 3'h6;
-  assign \inc$119  = report & \$166 ;
-  assign \$167  = report_status == 3'h7;
-  assign \inc$122  = report & \$167 ;
-  assign \$168  = report_status == 4'h8;
-  assign \inc$125  = report & \$168 ;
-  assign \$169  = report_status == 4'h9;
-  assign \inc$128  = report & \$169 ;
-  assign \$170  = check & \repeat ;
-  assign \inc$131  = report_frame & \$170 ;
-  assign \$171  = check & skip;
-  assign \inc$134  = report_frame & \$171 ;
-  assign \$172  = check & zero;
-  assign \inc$137  = report_frame & \$172 ;
-  assign \$173  = cfg[145] & cfg[134];
-  assign \$174  = ~ cfg[134];
-  assign \$175  = crc_ok[1] | \$174 ;
-  assign \$176  = crc_ok[0] & \$175 ;
-  assign \$177  = \$173  & \$176 ;
-  assign \$178  = ~ match;
-  assign \$179  = \$177  & \$178 ;
-  assign \inc$140  = report_frame & \$179 ;
-  assign \$180  = report_status == 4'ha;
-  assign \inc$146  = report & \$180 ;
-  assign \$181  = ! cycle_fsm_state;
-  assign \$182  = cycle_fsm_state == 1'h1;
-  assign \$183  = cycle_fsm_state == 2'h2;
-  assign \$184  = cycle_fsm_state == 2'h3;
-  assign \$185  = cycle_fsm_state == 3'h4;
-  assign \$186  = cycle_fsm_state == 3'h5;
+  assign \$159  = ~ crc_ok[0];
+  assign inc = report_frame & \$159 ;
+  assign \$160  = ~ cfg[134];
+  assign \$161  = crc_ok[1] | \$160 ;
+  assign \$162  = ~ \$161 ;
+  assign \inc$130  = report_frame & \$162 ;
+  assign \$163  = check & \repeat ;
+  assign \inc$145  = report_frame & \$163 ;
+  assign \$164  = check & skip;
+  assign \inc$148  = report_frame & \$164 ;
+  assign \$165  = check & zero;
+  assign \inc$151  = report_frame & \$165 ;
+  assign \$166  = cfg[145] & cfg[134];
+  assign \$167  = ~ cfg[134];
+  assign \$168  = crc_ok[1] | \$167 ;
+  assign \$169  = crc_ok[0] & \$168 ;
+  assign \$170  = \$166  & \$169 ;
+  assign \$171  = ~ match;
+  assign \$172  = \$170  & \$171 ;
+  assign \inc$154  = report_frame & \$172 ;
+  assign \$173  = ! cycle_fsm_state;
+  assign \$174  = cycle_fsm_state == 1'h1;
+  assign \$175  = cycle_fsm_state == 2'h2;
+  assign \$176  = cycle_fsm_state == 2'h3;
+  assign \$177  = cycle_fsm_state == 3'h4;
+  assign \$178  = cycle_fsm_state == 3'h5;
+  assign \$179  = ! live[87:64];
+  assign \$180  = live[87:64] - 1'h1;
+  assign \$181  = \$179  ? 25'h0000f9f : \$180 ;
+  assign \$182  = ! live[111:88];
+  assign \$183  = \$182  ? 24'h001f40 : live[111:88];
+  assign \$184  = ! live[123:112];
+  assign \$185  = \$184  ? 12'hfff : live[123:112];
+  assign \$186  = ack_limit_m1 + { cfg[15:0], 1'h0 };
   assign \$187  = now + 1'h1;
   assign \$188  = rises == 1'h1;
   assign \$189  = rise & \$188 ;
-  assign \$190  = & slo_low_time;
-  assign \$191  = ~ \$190 ;
-  assign \$192  = slo_low_time + 1'h1;
-  assign \$193  = & timer;
-  assign \$194  = timer + 1'h1;
-  assign \$195  = \$193  ? { 1'h0, timer } : \$194 ;
-  assign \$196  = ~ periodic;
-  assign \$197  = ! cfg_request_period;
-  assign \$198  = periodic & \$197 ;
-  assign \$199  = \$196  | \$198 ;
-  assign \$200  = cfg_request_period - 1'h1;
-  assign \$201  = $signed({ 1'h0, period_count }) >= $signed(\$200 );
-  assign \$202  = \$199  | \$201 ;
-  assign \$203  = period_count + 1'h1;
-  assign \$204  = start_slot + frame_bits;
-  assign \$205  = \$204  + 3'h4;
-  assign \$206  = \busy$153  | abort_cycle;
-  assign \$207  = ! live[63:40];
-  assign \$208  = \$207  ? 24'h000fa0 : live[63:40];
-  assign \$209  = timer >= \$208 ;
-  assign \$210  = ! cfg_request_period;
-  assign \$211  = periodic & \$210 ;
-  assign \$212  = ~ \$211 ;
-  assign \$213  = periodic & \$212 ;
-  assign \$214  = ! period_count;
-  assign \$215  = \$213  & \$214 ;
-  assign \$216  = start | \$215 ;
-  assign \$217  = ! cfg_request_period;
-  assign \$218  = periodic & \$217 ;
-  assign \$219  = \$216  | \$218 ;
-  assign \$220  = live[15:0] >= 2'h2;
-  assign \$221  = live[129:124] >= 1'h1;
-  assign \$222  = live[129:124] <= 6'h37;
-  assign \$223  = \$221  & \$222 ;
-  assign \$224  = ! live[133:132];
-  assign \$225  = live[133:132] == 1'h1;
-  assign \$226  = \$224  | \$225 ;
-  assign \$227  = live[133:132] == 2'h2;
-  assign \$228  = \$226  | \$227 ;
-  assign \$229  = \$223  & \$228 ;
-  assign \$230  = \$220  & \$229 ;
-  assign \$231  = ~ live[134];
-  assign \$232  = live[140:135] >= 1'h1;
-  assign \$233  = live[140:135] <= 6'h28;
-  assign \$234  = \$232  & \$233 ;
-  assign \$235  = ! live[144:143];
-  assign \$236  = live[144:143] == 1'h1;
-  assign \$237  = \$235  | \$236 ;
-  assign \$238  = live[144:143] == 2'h2;
-  assign \$239  = \$237  | \$238 ;
-  assign \$240  = \$234  & \$239 ;
-  assign \$241  = \$231  | \$240 ;
-  assign \$242  = \$230  & \$241 ;
-  assign \$243  = live[134] & live[131];
-  assign \$244  = \$243  & live[142];
-  assign \$245  = ~ \$244 ;
-  assign \$246  = \$242  & \$245 ;
-  assign \$247  = ~ live[145];
-  assign \$248  = live[140:135] <= live[129:124];
-  assign \$249  = live[134] & \$248 ;
-  assign \$250  = | live[144:143];
-  assign \$251  = \$249  & \$250 ;
-  assign \$252  = \$247  | \$251 ;
-  assign \$253  = \$246  & \$252 ;
-  assign \$254  = ~ \$253 ;
-  assign \$255  = \$219  & \$254 ;
-  assign \$256  = ! cfg_request_period;
-  assign \$257  = periodic & \$256 ;
-  assign \$258  = ~ \$257 ;
-  assign \$259  = periodic & \$258 ;
-  assign \$260  = ! period_count;
+  assign \$190  = \slo$62  | \busy$96 ;
+  assign \$191  = ~ slo_low_time_p1[24];
+  assign \$192  = slo_low_time_p1 + 1'h1;
+  assign \$193  = ~ \slo$62 ;
+  assign \$194  = ~ \busy$96 ;
+  assign \$195  = \$193  & \$194 ;
+  assign \$196  = slo_low_time_p1 >= timeout_limit;
+  assign \$197  = \$195  & \$196 ;
+  assign \$198  = ~ \slo$62 ;
+  assign \$199  = ~ \busy$96 ;
+  assign \$200  = \$198  & \$199 ;
+  assign \$201  = ! live[111:88];
+  assign \$202  = slo_low_time_p1 >= 13'h1f40;
+  assign \$203  = slo_low_time_p1 >= live[111:88];
+  assign \$204  = \$201  ? \$202  : \$203 ;
+  assign \$205  = \$200  & \$204 ;
+  assign \$206  = & timer;
+  assign \$207  = timer + 1'h1;
+  assign \$208  = \$206  ? { 1'h0, timer } : \$207 ;
+  assign \$209  = timer_clear ? 26'h0000000 : \$208 ;
+  assign \$210  = ~ periodic;
+  assign \$211  = ! cfg_request_period;
+  assign \$212  = periodic & \$211 ;
+  assign \$213  = \$210  | \$212 ;
+  assign \$214  = period_count_p1 >= cfg_request_period;
+  assign \$215  = \$213  | \$214 ;
+  assign \$216  = period_count_p1 + 1'h1;
+  assign \$218  = words[5:0] + \$217 ;
+  assign \$219  = cfg[134] ? word1_len : 8'h00;
+  assign \$220  = word0_len + \$219 ;
+  assign \$222  = words[15:10] + \$221 ;
+  assign \$223  = start_slot + frame_len_p4;
+  assign \$224  = rises == 2'h2;
+  assign \$225  = rise & \$224 ;
+  assign \$226  = ~ locked_seen;
+  assign \$227  = locked & \$226 ;
+  assign \$228  = \$225  | \$227 ;
+  assign \$229  = ~ \$228 ;
+  assign \$230  = in_clock & \$229 ;
+  assign \$231  = timer >= ack_limit_m1;
+  assign \$232  = \$230  & \$231 ;
+  assign \$233  = rises == 2'h2;
+  assign \$234  = rise & \$233 ;
+  assign \$235  = ~ locked_seen;
+  assign \$236  = locked & \$235 ;
+  assign \$237  = \$234  | \$236 ;
+  assign \$238  = ~ \$237 ;
+  assign \$239  = in_clock & \$238 ;
+  assign \$240  = timer >= no_start_limit_m1;
+  assign \$241  = \$239  & \$240 ;
+  assign \$242  = delay > delay_limit;
+  assign \$243  = \busy$96  | abort_cycle;
+  assign \$244  = ! live[63:40];
+  assign \$245  = timer >= 12'hfa0;
+  assign \$246  = timer >= live[63:40];
+  assign \$247  = \$244  ? \$245  : \$246 ;
+  assign \$248  = ! cfg_request_period;
+  assign \$249  = periodic & \$248 ;
+  assign \$250  = ~ \$249 ;
+  assign \$251  = periodic & \$250 ;
+  assign \$252  = period_count_p1 == 1'h1;
+  assign \$253  = \$251  & \$252 ;
+  assign \$254  = start | \$253 ;
+  assign \$255  = ! cfg_request_period;
+  assign \$256  = periodic & \$255 ;
+  assign \$257  = \$254  | \$256 ;
+  assign \$258  = | live[15:1];
+  assign \$259  = | live[129:124];
+  assign \$260  = live[129:124] <= 6'h37;
   assign \$261  = \$259  & \$260 ;
-  assign \$262  = start | \$261 ;
-  assign \$263  = ! cfg_request_period;
-  assign \$264  = periodic & \$263 ;
-  assign \$265  = \$262  | \$264 ;
-  assign \$266  = ! cfg[111:88];
-  assign \$267  = \$266  ? 24'h001f40 : cfg[111:88];
-  assign \$268  = slo_low_time >= \$267 ;
-  assign \$269  = rises == 2'h2;
-  assign \$270  = rise & \$269 ;
-  assign \$271  = ~ locked_seen;
-  assign \$272  = locked & \$271 ;
-  assign \$273  = armed & early;
-  assign \$274  = ~ locked_seen;
-  assign \$275  = armed & \$274 ;
-  assign \$276  = ~ locked;
-  assign \$277  = \$275  & \$276 ;
-  assign \$278  = ! cfg[87:64];
-  assign \$279  = \$278  ? 24'h000fa0 : cfg[87:64];
-  assign \$280  = timer >= \$279 ;
-  assign \$281  = \$277  & \$280 ;
-  assign \$282  = ~ locked_seen;
-  assign \$283  = locked & \$282 ;
-  assign \$284  = ! cfg[123:112];
-  assign \$285  = \$284  ? 12'hfff : cfg[123:112];
-  assign \$286  = delay > \$285 ;
-  assign \$287  = \$283  & \$286 ;
-  assign \$288  = ~ \started$108 ;
-  assign \$289  = locked_seen & \$288 ;
-  assign \$290  = ! cfg[87:64];
-  assign \$291  = \$290  ? 24'h000fa0 : cfg[87:64];
-  assign \$292  = \$291  + { cfg[15:0], 1'h0 };
-  assign \$293  = timer >= \$292 ;
-  assign \$294  = & slots;
-  assign \$295  = \$293  | \$294 ;
-  assign \$296  = \$289  & \$295 ;
-  assign \$297  = ~ \busy$153 ;
-  assign \$298  = ! report_status;
-  assign \$299  = report & \$298 ;
-  assign \$300  = check & \repeat ;
-  assign \$301  = check & skip;
-  assign \$302  = check & zero;
-  assign \$303  = ~ cfg[134];
-  assign \$304  = crc_ok[1] | \$303 ;
-  assign \$305  = cfg[145] & cfg[134];
-  assign \$306  = ~ cfg[134];
-  assign \$307  = crc_ok[1] | \$306 ;
-  assign \$308  = crc_ok[0] & \$307 ;
-  assign \$309  = \$305  & \$308 ;
-  assign \$310  = ~ match;
-  assign \$311  = \$309  & \$310 ;
+  assign \$262  = ! live[133:132];
+  assign \$263  = live[133:132] == 1'h1;
+  assign \$264  = \$262  | \$263 ;
+  assign \$265  = live[133:132] == 2'h2;
+  assign \$266  = \$264  | \$265 ;
+  assign \$267  = \$261  & \$266 ;
+  assign \$268  = \$258  & \$267 ;
+  assign \$269  = ~ live[134];
+  assign \$270  = | live[140:135];
+  assign \$271  = live[140:135] <= 6'h28;
+  assign \$272  = \$270  & \$271 ;
+  assign \$273  = ! live[144:143];
+  assign \$274  = live[144:143] == 1'h1;
+  assign \$275  = \$273  | \$274 ;
+  assign \$276  = live[144:143] == 2'h2;
+  assign \$277  = \$275  | \$276 ;
+  assign \$278  = \$272  & \$277 ;
+  assign \$279  = \$269  | \$278 ;
+  assign \$280  = \$268  & \$279 ;
+  assign \$281  = live[134] & live[131];
+  assign \$282  = \$281  & live[142];
+  assign \$283  = ~ \$282 ;
+  assign \$284  = \$280  & \$283 ;
+  assign \$285  = ~ live[145];
+  assign \$286  = live[140:135] <= live[129:124];
+  assign \$287  = live[134] & \$286 ;
+  assign \$288  = | live[144:143];
+  assign \$289  = \$287  & \$288 ;
+  assign \$290  = \$285  | \$289 ;
+  assign \$291  = \$284  & \$290 ;
+  assign \$292  = ~ \$291 ;
+  assign \$293  = \$257  & \$292 ;
+  assign \$294  = ! cfg_request_period;
+  assign \$295  = periodic & \$294 ;
+  assign \$296  = ~ \$295 ;
+  assign \$297  = periodic & \$296 ;
+  assign \$298  = period_count_p1 == 1'h1;
+  assign \$299  = \$297  & \$298 ;
+  assign \$300  = start | \$299 ;
+  assign \$301  = ! cfg_request_period;
+  assign \$302  = periodic & \$301 ;
+  assign \$303  = \$300  | \$302 ;
+  assign \$304  = latched ? stuck_live : stuck_latched;
+  assign \$305  = rises == 2'h2;
+  assign \$306  = rise & \$305 ;
+  assign \$307  = ~ locked_seen;
+  assign \$308  = locked & \$307 ;
+  assign \$309  = armed & early;
+  assign \$310  = ~ locked_seen;
+  assign \$311  = armed & \$310 ;
+  assign \$312  = ~ locked;
+  assign \$313  = \$311  & \$312 ;
+  assign \$314  = \$313  & ack_expired;
+  assign \$315  = ~ locked_seen;
+  assign \$316  = locked & \$315 ;
+  assign \$317  = \$316  & delay_over;
+  assign \$318  = ~ \started$117 ;
+  assign \$319  = locked_seen & \$318 ;
+  assign \$320  = no_start_expired | slots_full;
+  assign \$321  = \$319  & \$320 ;
+  assign \$322  = ~ \busy$96 ;
+  assign \$323  = ! frame_status;
+  assign \$324  = report_frame & \$323 ;
+  assign \$325  = check & \repeat ;
+  assign \$326  = check & skip;
+  assign \$327  = check & zero;
+  assign \$328  = ~ cfg[134];
+  assign \$329  = crc_ok[1] | \$328 ;
+  assign \$330  = cfg[145] & cfg[134];
+  assign \$331  = ~ cfg[134];
+  assign \$332  = crc_ok[1] | \$331 ;
+  assign \$333  = crc_ok[0] & \$332 ;
+  assign \$334  = \$330  & \$333 ;
+  assign \$335  = ~ match;
+  assign \$336  = \$334  & \$335 ;
   always @(posedge clk)
-    now <= \$312 ;
+    cfg <= \$337 ;
   always @(posedge clk)
-    first_rise_time <= \$313 ;
+    ack_limit_m1 <= \$338 ;
   always @(posedge clk)
-    slo_low_time <= \$314 ;
+    timeout_limit <= \$339 ;
   always @(posedge clk)
-    timer <= \$315 ;
+    delay_limit <= \$340 ;
   always @(posedge clk)
-    period_count <= \$316 ;
+    no_start_limit_m1 <= \$341 ;
   always @(posedge clk)
-    target_rises <= \$317 ;
+    now <= \$342 ;
   always @(posedge clk)
-    started <= \$318 ;
+    first_rise_time <= \$343 ;
   always @(posedge clk)
-    cycle_fsm_state <= \$319 ;
+    slo_low_time_p1 <= \$344 ;
   always @(posedge clk)
-    cfg <= \$320 ;
+    stuck_latched <= \$345 ;
   always @(posedge clk)
-    armed <= \$321 ;
+    stuck_live <= \$346 ;
   always @(posedge clk)
-    locked_seen <= \$322 ;
+    latched <= \$347 ;
   always @(posedge clk)
-    done <= \$323 ;
+    timer <= \$348 ;
   always @(posedge clk)
-    valid <= \$324 ;
+    period_count_p1 <= \$349 ;
   always @(posedge clk)
-    status <= \$325 ;
+    word0_len <= \$350 ;
   always @(posedge clk)
-    line_delay <= \$326 ;
+    frame_len_p4 <= \$351 ;
   always @(posedge clk)
-    timestamp <= \$327 ;
+    word1_len <= \$352 ;
   always @(posedge clk)
-    cds <= \$328 ;
+    target_rises <= \$353 ;
   always @(posedge clk)
-    lc <= \$329 ;
+    started <= \$354 ;
   always @(posedge clk)
-    lc_repeat <= \$330 ;
+    ack_expired <= \$355 ;
   always @(posedge clk)
-    lc_skip <= \$331 ;
+    no_start_expired <= \$356 ;
   always @(posedge clk)
-    lc_zero <= \$332 ;
+    delay_over <= \$357 ;
   always @(posedge clk)
-    word0_position <= \$333 ;
+    cycle_fsm_state <= \$358 ;
   always @(posedge clk)
-    word0_ne <= \$334 ;
+    armed <= \$359 ;
   always @(posedge clk)
-    word0_nw <= \$335 ;
+    locked_seen <= \$360 ;
   always @(posedge clk)
-    word0_crc_ok <= \$336 ;
+    done <= \$361 ;
   always @(posedge clk)
-    word1_position <= \$337 ;
+    valid <= \$362 ;
   always @(posedge clk)
-    word1_ne <= \$338 ;
+    status <= \$363 ;
   always @(posedge clk)
-    word1_nw <= \$339 ;
+    line_delay <= \$364 ;
   always @(posedge clk)
-    word1_crc_ok <= \$340 ;
+    timestamp <= \$365 ;
   always @(posedge clk)
-    spw_mismatch <= \$341 ;
-  \biss_master.count_aborted$176  \count_aborted$176  (
+    cds <= \$366 ;
+  always @(posedge clk)
+    lc <= \$367 ;
+  always @(posedge clk)
+    lc_repeat <= \$368 ;
+  always @(posedge clk)
+    lc_skip <= \$369 ;
+  always @(posedge clk)
+    lc_zero <= \$370 ;
+  always @(posedge clk)
+    word0_position <= \$371 ;
+  always @(posedge clk)
+    word0_ne <= \$372 ;
+  always @(posedge clk)
+    word0_nw <= \$373 ;
+  always @(posedge clk)
+    word0_crc_ok <= \$374 ;
+  always @(posedge clk)
+    word1_position <= \$375 ;
+  always @(posedge clk)
+    word1_ne <= \$376 ;
+  always @(posedge clk)
+    word1_nw <= \$377 ;
+  always @(posedge clk)
+    word1_crc_ok <= \$378 ;
+  always @(posedge clk)
+    spw_mismatch <= \$379 ;
+  \biss_master.count_aborted$196  \count_aborted$196  (
     .clear(clear_counters),
     .clk(clk),
     .count(count_aborted),
-    .inc(\inc$146 ),
+    .inc(fault_aborted),
     .rst(rst)
   );
-  \biss_master.count_crc_word0$165  \count_crc_word0$165  (
+  \biss_master.count_crc_word0$185  \count_crc_word0$185  (
     .clear(clear_counters),
     .clk(clk),
     .count(count_crc_word0),
     .inc(inc),
     .rst(rst)
   );
-  \biss_master.count_crc_word1$166  \count_crc_word1$166  (
+  \biss_master.count_crc_word1$186  \count_crc_word1$186  (
     .clear(clear_counters),
     .clk(clk),
     .count(count_crc_word1),
-    .inc(\inc$116 ),
+    .inc(\inc$130 ),
     .rst(rst)
   );
-  \biss_master.count_delay_range$169  \count_delay_range$169  (
+  \biss_master.count_delay_range$189  \count_delay_range$189  (
     .clear(clear_counters),
     .clk(clk),
     .count(count_delay_range),
-    .inc(\inc$125 ),
+    .inc(fault_delay_range),
     .rst(rst)
   );
-  \biss_master.count_lc_repeat$171  \count_lc_repeat$171  (
+  \biss_master.count_lc_repeat$191  \count_lc_repeat$191  (
     .clear(clear_counters),
     .clk(clk),
     .count(count_lc_repeat),
-    .inc(\inc$131 ),
+    .inc(\inc$145 ),
     .rst(rst)
   );
-  \biss_master.count_lc_skip$172  \count_lc_skip$172  (
+  \biss_master.count_lc_skip$192  \count_lc_skip$192  (
     .clear(clear_counters),
     .clk(clk),
     .count(count_lc_skip),
-    .inc(\inc$134 ),
+    .inc(\inc$148 ),
     .rst(rst)
   );
-  \biss_master.count_lc_zero$173  \count_lc_zero$173  (
+  \biss_master.count_lc_zero$193  \count_lc_zero$193  (
     .clear(clear_counters),
     .clk(clk),
     .count(count_lc_zero),
-    .inc(\inc$137 ),
+    .inc(\inc$151 ),
     .rst(rst)
   );
-  \biss_master.count_no_ack$167  \count_no_ack$167  (
+  \biss_master.count_no_ack$187  \count_no_ack$187  (
     .clear(clear_counters),
     .clk(clk),
     .count(count_no_ack),
-    .inc(\inc$119 ),
+    .inc(fault_no_ack),
     .rst(rst)
   );
-  \biss_master.count_no_start$168  \count_no_start$168  (
+  \biss_master.count_no_start$188  \count_no_start$188  (
     .clear(clear_counters),
     .clk(clk),
     .count(count_no_start),
-    .inc(\inc$122 ),
+    .inc(fault_no_start),
     .rst(rst)
   );
-  \biss_master.count_overrun$175  \count_overrun$175  (
+  \biss_master.count_overrun$195  \count_overrun$195  (
     .clear(clear_counters),
     .clk(clk),
     .count(count_overrun),
     .inc(overrun),
     .rst(rst)
   );
-  \biss_master.count_slo_stuck_low$170  \count_slo_stuck_low$170  (
+  \biss_master.count_slo_stuck_low$190  \count_slo_stuck_low$190  (
     .clear(clear_counters),
     .clk(clk),
     .count(count_slo_stuck_low),
-    .inc(\inc$128 ),
+    .inc(fault_slo_stuck_low),
     .rst(rst)
   );
-  \biss_master.count_spw_mismatch$174  \count_spw_mismatch$174  (
+  \biss_master.count_spw_mismatch$194  \count_spw_mismatch$194  (
     .clear(clear_counters),
     .clk(clk),
     .count(count_spw_mismatch),
-    .inc(\inc$140 ),
+    .inc(\inc$154 ),
     .rst(rst)
   );
   \biss_master.decoder  decoder (
     .\bit (\slo$62 ),
-    .cds(\cds$155 ),
+    .cds(\cds$175 ),
     .clk(clk),
     .cpw_top(cpw_top),
     .crc_ok(crc_ok),
     .data0(data0),
     .data1(spw),
     .done(\done$77 ),
-    .frame_bits(frame_bits),
     .lc(\lc$74 ),
     .ne(ne),
     .nw(nw),
     .receiver_clear(receiver_clear),
     .rst(rst),
     .sample(sample),
-    .slots(slots),
+    .slots_full(slots_full),
     .start_slot(start_slot),
-    .started(\started$108 ),
+    .started(\started$117 ),
     .stopped(stopped),
     .word_count(word_count),
     .words(words)
   );
   \biss_master.ma_clock  ma_clock (
-    .busy(\busy$153 ),
+    .busy(\busy$96 ),
     .clk(clk),
     .half_period(cfg[15:0]),
     .ma(ma),
@@ -1192,6 +1293,82 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
     (* full_case = 32'd1 *)
+    casez (words[9:6])
+      4'h0:
+          \$217  = 8'h04;
+      4'h1:
+          \$217  = 8'h06;
+      4'h2:
+          \$217  = 8'h0a;
+      4'h3:
+          \$217  = 8'h0c;
+      4'h4:
+          \$217  = 8'h0a;
+      4'h5:
+          \$217  = 8'h0c;
+      4'h6:
+          \$217  = 8'h10;
+      4'h7:
+          \$217  = 8'h12;
+      4'h8:
+          \$217  = 8'h14;
+      4'h9:
+          \$217  = 8'h16;
+      4'ha:
+          \$217  = 8'h1a;
+      4'hb:
+          \$217  = 8'h1c;
+      4'hc:
+          \$217  = 8'h04;
+      4'hd:
+          \$217  = 8'h06;
+      4'he:
+          \$217  = 8'h0a;
+      4'hf:
+          \$217  = 8'h0c;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    (* full_case = 32'd1 *)
+    casez (words[19:16])
+      4'h0:
+          \$221  = 8'h00;
+      4'h1:
+          \$221  = 8'h02;
+      4'h2:
+          \$221  = 8'h06;
+      4'h3:
+          \$221  = 8'h08;
+      4'h4:
+          \$221  = 8'h06;
+      4'h5:
+          \$221  = 8'h08;
+      4'h6:
+          \$221  = 8'h0c;
+      4'h7:
+          \$221  = 8'h0e;
+      4'h8:
+          \$221  = 8'h10;
+      4'h9:
+          \$221  = 8'h12;
+      4'ha:
+          \$221  = 8'h16;
+      4'hb:
+          \$221  = 8'h18;
+      4'hc:
+          \$221  = 8'h00;
+      4'hd:
+          \$221  = 8'h02;
+      4'he:
+          \$221  = 8'h06;
+      4'hf:
+          \$221  = 8'h08;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    (* full_case = 32'd1 *)
     if (\$55 ) begin
       frame_status = 4'h3;
     end else if (\$56 ) begin
@@ -1228,6 +1405,55 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    timer_clear = 1'h0;
+    casez (cycle_fsm_state)
+      3'h0:
+          if (\$73 ) begin
+            timer_clear = 1'h1;
+          end
+      3'h1:
+        begin
+          timer_clear = 1'h1;
+          if (abort_cycle) begin
+          end else if (\$123 ) begin
+            timer_clear = 1'h1;
+          end
+        end
+      3'h2:
+        begin
+          timer_clear = 1'h1;
+          if (abort_cycle) begin
+            timer_clear = 1'h1;
+          end else if (\slo$62 ) begin
+          end else if (\$134 ) begin
+            timer_clear = 1'h1;
+          end
+        end
+      3'h3:
+        begin
+          if (\$142 ) begin
+            timer_clear = 1'h1;
+          end
+          if (abort_cycle) begin
+            timer_clear = 1'h1;
+          end else if (\$143 ) begin
+            timer_clear = 1'h1;
+          end else if (\$148 ) begin
+            timer_clear = 1'h1;
+          end else if (\$151 ) begin
+            timer_clear = 1'h1;
+          end else if (\$155 ) begin
+            timer_clear = 1'h1;
+          end
+        end
+      3'h4:
+          if (abort_cycle) begin
+            timer_clear = 1'h1;
+          end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
     idle = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -1244,26 +1470,26 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
           /* empty */;
       3'h1:
           if (abort_cycle) begin
-          end else if (\$118 ) begin
+          end else if (\$123 ) begin
             report = 1'h1;
           end
       3'h2:
           if (abort_cycle) begin
             report = 1'h1;
           end else if (\slo$62 ) begin
-          end else if (\$131 ) begin
+          end else if (\$134 ) begin
             report = 1'h1;
           end
       3'h3:
           if (abort_cycle) begin
             report = 1'h1;
-          end else if (\$135 ) begin
-            report = 1'h1;
           end else if (\$143 ) begin
             report = 1'h1;
-          end else if (\$149 ) begin
+          end else if (\$148 ) begin
             report = 1'h1;
-          end else if (\$158 ) begin
+          end else if (\$151 ) begin
+            report = 1'h1;
+          end else if (\$155 ) begin
             report = 1'h1;
           end else if (\done$77 ) begin
             report = 1'h1;
@@ -1278,29 +1504,76 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
           /* empty */;
       3'h1:
           if (abort_cycle) begin
-          end else if (\$118 ) begin
+          end else if (\$123 ) begin
             report_status = 4'hb;
           end
       3'h2:
           if (abort_cycle) begin
             report_status = 4'ha;
           end else if (\slo$62 ) begin
-          end else if (\$131 ) begin
+          end else if (\$134 ) begin
             report_status = 4'h9;
           end
       3'h3:
           if (abort_cycle) begin
             report_status = 4'ha;
-          end else if (\$135 ) begin
-            report_status = 4'h8;
           end else if (\$143 ) begin
-            report_status = 4'h6;
-          end else if (\$149 ) begin
             report_status = 4'h8;
-          end else if (\$158 ) begin
+          end else if (\$148 ) begin
+            report_status = 4'h6;
+          end else if (\$151 ) begin
+            report_status = 4'h8;
+          end else if (\$155 ) begin
             report_status = 4'h7;
           end else if (\done$77 ) begin
             report_status = frame_status;
+          end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    fault_bad_config = 1'h0;
+    casez (cycle_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (abort_cycle) begin
+          end else if (\$123 ) begin
+            fault_bad_config = 1'h1;
+          end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    fault_aborted = 1'h0;
+    casez (cycle_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          if (abort_cycle) begin
+            fault_aborted = 1'h1;
+          end
+      3'h3:
+          if (abort_cycle) begin
+            fault_aborted = 1'h1;
+          end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    fault_slo_stuck_low = 1'h0;
+    casez (cycle_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          if (abort_cycle) begin
+          end else if (\slo$62 ) begin
+          end else if (\$134 ) begin
+            fault_slo_stuck_low = 1'h1;
           end
     endcase
   end
@@ -1315,9 +1588,61 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
       3'h2:
           /* empty */;
       3'h3:
-          run = \$134 ;
+          run = \$137 ;
       3'h4:
-          run = \$161 ;
+          run = \$158 ;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    in_clock = 1'h0;
+    casez (cycle_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h3:
+          in_clock = 1'h1;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    fault_delay_range = 1'h0;
+    casez (cycle_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h3:
+          if (abort_cycle) begin
+          end else if (\$143 ) begin
+            fault_delay_range = 1'h1;
+          end else if (\$148 ) begin
+          end else if (\$151 ) begin
+            fault_delay_range = 1'h1;
+          end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    fault_no_ack = 1'h0;
+    casez (cycle_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h3:
+          if (abort_cycle) begin
+          end else if (\$143 ) begin
+          end else if (\$148 ) begin
+            fault_no_ack = 1'h1;
+          end
     endcase
   end
   always @* begin
@@ -1332,13 +1657,33 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
           /* empty */;
       3'h3:
           if (abort_cycle) begin
-          end else if (\$135 ) begin
           end else if (\$143 ) begin
-          end else if (\$149 ) begin
+          end else if (\$148 ) begin
+          end else if (\$151 ) begin
             report_delay = 1'h1;
-          end else if (\$158 ) begin
+          end else if (\$155 ) begin
           end else if (\done$77 ) begin
             report_delay = 1'h1;
+          end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    fault_no_start = 1'h0;
+    casez (cycle_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h3:
+          if (abort_cycle) begin
+          end else if (\$143 ) begin
+          end else if (\$148 ) begin
+          end else if (\$151 ) begin
+          end else if (\$155 ) begin
+            fault_no_start = 1'h1;
           end
     endcase
   end
@@ -1354,10 +1699,10 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
           /* empty */;
       3'h3:
           if (abort_cycle) begin
-          end else if (\$135 ) begin
           end else if (\$143 ) begin
-          end else if (\$149 ) begin
-          end else if (\$158 ) begin
+          end else if (\$148 ) begin
+          end else if (\$151 ) begin
+          end else if (\$155 ) begin
           end else if (\done$77 ) begin
             report_frame = 1'h1;
           end
@@ -1365,403 +1710,450 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$312  = \$187 [31:0];
+    \$337  = cfg;
+    if (idle) begin
+      \$337  = live;
+    end
     if (rst) begin
-      \$312  = 32'd0;
+      \$337  = 154'h000000000000000000000000000000000000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$313  = first_rise_time;
+    \$338  = ack_limit_m1;
+    if (idle) begin
+      \$338  = \$181 [23:0];
+    end
+    if (rst) begin
+      \$338  = 24'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    \$339  = timeout_limit;
+    if (idle) begin
+      \$339  = \$183 ;
+    end
+    if (rst) begin
+      \$339  = 24'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    \$340  = delay_limit;
+    if (idle) begin
+      \$340  = \$185 ;
+    end
+    if (rst) begin
+      \$340  = 12'h000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    \$341  = \$186 ;
+    if (rst) begin
+      \$341  = 25'h0000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    \$342  = \$187 [31:0];
+    if (rst) begin
+      \$342  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    \$343  = first_rise_time;
     if (\$189 ) begin
-      \$313  = now;
+      \$343  = now;
     end
     if (rst) begin
-      \$313  = 32'd0;
+      \$343  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$314  = slo_low_time;
-    if (\slo$62 ) begin
-      \$314  = 24'h000000;
+    \$344  = slo_low_time_p1;
+    if (\$190 ) begin
+      \$344  = 25'h0000001;
     end else if (\$191 ) begin
-      \$314  = \$192 [23:0];
+      \$344  = \$192 [24:0];
     end
     if (rst) begin
-      \$314  = 24'h000000;
+      \$344  = 25'h0000001;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$315  = \$195 [24:0];
-    casez (cycle_fsm_state)
-      3'h0:
-          if (\$206 ) begin
-            \$315  = 25'h0000000;
-          end
-      3'h1:
-          if (abort_cycle) begin
-            \$315  = 25'h0000000;
-          end else if (\$255 ) begin
-            \$315  = 25'h0000000;
-          end
-      3'h2:
-        begin
-          \$315  = 25'h0000000;
-          if (abort_cycle) begin
-            \$315  = 25'h0000000;
-          end else if (\slo$62 ) begin
-          end else if (\$268 ) begin
-            \$315  = 25'h0000000;
-          end
-        end
-      3'h3:
-        begin
-          if (\$270 ) begin
-            \$315  = 25'h0000000;
-          end
-          if (\$272 ) begin
-            \$315  = 25'h0000000;
-          end
-          if (abort_cycle) begin
-            \$315  = 25'h0000000;
-          end else if (\$273 ) begin
-            \$315  = 25'h0000000;
-          end else if (\$281 ) begin
-            \$315  = 25'h0000000;
-          end else if (\$287 ) begin
-            \$315  = 25'h0000000;
-          end else if (\$296 ) begin
-            \$315  = 25'h0000000;
-          end
-        end
-      3'h4:
-          if (abort_cycle) begin
-            \$315  = 25'h0000000;
-          end
-    endcase
+    \$345  = \$197 ;
     if (rst) begin
-      \$315  = 25'h0000000;
+      \$345  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    \$346  = \$205 ;
+    if (rst) begin
+      \$346  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    \$347  = idle;
+    if (rst) begin
+      \$347  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    \$348  = \$209 [24:0];
+    if (rst) begin
+      \$348  = 25'h0000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
     (* full_case = 32'd1 *)
-    if (\$202 ) begin
-      \$316  = 24'h000000;
+    if (\$215 ) begin
+      \$349  = 24'h000001;
     end else begin
-      \$316  = \$203 [23:0];
+      \$349  = \$216 [23:0];
     end
     if (rst) begin
-      \$316  = 24'h000000;
+      \$349  = 24'h000001;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$317  = \$205 [16:0];
+    \$350  = \$218 [7:0];
     if (rst) begin
-      \$317  = 17'h00000;
+      \$350  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$318  = \started$108 ;
+    \$351  = \$220 ;
     if (rst) begin
-      \$318  = 1'h0;
+      \$351  = 9'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$319  = cycle_fsm_state;
+    \$352  = \$222 [7:0];
+    if (rst) begin
+      \$352  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    \$353  = \$223 ;
+    if (rst) begin
+      \$353  = 17'h00000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    \$354  = \started$117 ;
+    if (rst) begin
+      \$354  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    \$355  = \$232 ;
+    if (rst) begin
+      \$355  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    \$356  = \$241 ;
+    if (rst) begin
+      \$356  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    \$357  = \$242 ;
+    if (rst) begin
+      \$357  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    \$358  = cycle_fsm_state;
     casez (cycle_fsm_state)
       3'h0:
-          if (\$206 ) begin
-          end else if (\$209 ) begin
-            \$319  = 3'h1;
+          if (\$243 ) begin
+          end else if (\$247 ) begin
+            \$358  = 3'h1;
           end
       3'h1:
           if (abort_cycle) begin
-            \$319  = 3'h0;
-          end else if (\$255 ) begin
-            \$319  = 3'h1;
-          end else if (\$265 ) begin
-            \$319  = 3'h2;
+            \$358  = 3'h0;
+          end else if (\$293 ) begin
+            \$358  = 3'h1;
+          end else if (\$303 ) begin
+            \$358  = 3'h2;
           end
       3'h2:
           if (abort_cycle) begin
-            \$319  = 3'h0;
+            \$358  = 3'h0;
           end else if (\slo$62 ) begin
-            \$319  = 3'h3;
-          end else if (\$268 ) begin
-            \$319  = 3'h0;
+            \$358  = 3'h3;
+          end else if (\$304 ) begin
+            \$358  = 3'h0;
           end
       3'h3:
           if (abort_cycle) begin
-            \$319  = 3'h0;
-          end else if (\$273 ) begin
-            \$319  = 3'h0;
-          end else if (\$281 ) begin
-            \$319  = 3'h0;
-          end else if (\$287 ) begin
-            \$319  = 3'h0;
-          end else if (\$296 ) begin
-            \$319  = 3'h0;
+            \$358  = 3'h0;
+          end else if (\$309 ) begin
+            \$358  = 3'h0;
+          end else if (\$314 ) begin
+            \$358  = 3'h0;
+          end else if (\$317 ) begin
+            \$358  = 3'h0;
+          end else if (\$321 ) begin
+            \$358  = 3'h0;
           end else if (\done$77 ) begin
-            \$319  = 3'h4;
+            \$358  = 3'h4;
           end
       3'h4:
           if (abort_cycle) begin
-            \$319  = 3'h0;
+            \$358  = 3'h0;
           end else if (stopped) begin
-            \$319  = 3'h5;
+            \$358  = 3'h5;
           end
       3'h5:
-          if (\$297 ) begin
-            \$319  = 3'h1;
+          if (\$322 ) begin
+            \$358  = 3'h1;
           end
     endcase
     if (rst) begin
-      \$319  = 3'h0;
+      \$358  = 3'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$320  = cfg;
-    casez (cycle_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (abort_cycle) begin
-          end else if (\$255 ) begin
-          end else if (\$265 ) begin
-            \$320  = live;
-          end
-    endcase
-    if (rst) begin
-      \$320  = 154'h000000000000000000000000000000000000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$321  = armed;
+    \$359  = armed;
     casez (cycle_fsm_state)
       3'h0:
           /* empty */;
       3'h1:
           /* empty */;
       3'h2:
-          \$321  = 1'h0;
+          \$359  = 1'h0;
       3'h3:
-          if (\$270 ) begin
-            \$321  = 1'h1;
+          if (\$306 ) begin
+            \$359  = 1'h1;
           end
     endcase
     if (rst) begin
-      \$321  = 1'h0;
+      \$359  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$322  = locked_seen;
+    \$360  = locked_seen;
     casez (cycle_fsm_state)
       3'h0:
           /* empty */;
       3'h1:
           /* empty */;
       3'h2:
-          \$322  = 1'h0;
+          \$360  = 1'h0;
       3'h3:
-          if (\$272 ) begin
-            \$322  = 1'h1;
+          if (\$308 ) begin
+            \$360  = 1'h1;
           end
     endcase
     if (rst) begin
-      \$322  = 1'h0;
+      \$360  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$323  = report;
+    \$361  = report;
     if (rst) begin
-      \$323  = 1'h0;
+      \$361  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$324  = \$299 ;
+    \$362  = \$324 ;
     if (rst) begin
-      \$324  = 1'h0;
+      \$362  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$325  = status;
+    \$363  = status;
     if (report) begin
-      \$325  = report_status;
+      \$363  = report_status;
     end
     if (rst) begin
-      \$325  = 4'h0;
+      \$363  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$326  = line_delay;
+    \$364  = line_delay;
     if (report_delay) begin
-      \$326  = delay;
+      \$364  = delay;
     end
     if (rst) begin
-      \$326  = 13'h0000;
+      \$364  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$327  = timestamp;
+    \$365  = timestamp;
     if (report_frame) begin
-      \$327  = first_rise_time;
+      \$365  = first_rise_time;
     end
     if (rst) begin
-      \$327  = 32'd0;
+      \$365  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$328  = cds;
+    \$366  = cds;
     if (report_frame) begin
-      \$328  = \cds$155 ;
+      \$366  = \cds$175 ;
     end
     if (rst) begin
-      \$328  = 1'h0;
+      \$366  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$329  = lc;
+    \$367  = lc;
     if (report_frame) begin
-      \$329  = \lc$74 ;
+      \$367  = \lc$74 ;
     end
     if (rst) begin
-      \$329  = 6'h00;
+      \$367  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$330  = lc_repeat;
+    \$368  = lc_repeat;
     if (report_frame) begin
-      \$330  = \$300 ;
+      \$368  = \$325 ;
     end
     if (rst) begin
-      \$330  = 1'h0;
+      \$368  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$331  = lc_skip;
+    \$369  = lc_skip;
     if (report_frame) begin
-      \$331  = \$301 ;
+      \$369  = \$326 ;
     end
     if (rst) begin
-      \$331  = 1'h0;
+      \$369  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$332  = lc_zero;
+    \$370  = lc_zero;
     if (report_frame) begin
-      \$332  = \$302 ;
+      \$370  = \$327 ;
     end
     if (rst) begin
-      \$332  = 1'h0;
+      \$370  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$333  = word0_position;
+    \$371  = word0_position;
     if (report_frame) begin
-      \$333  = data0;
+      \$371  = data0;
     end
     if (rst) begin
-      \$333  = 55'h00000000000000;
+      \$371  = 55'h00000000000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$334  = word0_ne;
+    \$372  = word0_ne;
     if (report_frame) begin
-      \$334  = ne[0];
+      \$372  = ne[0];
     end
     if (rst) begin
-      \$334  = 1'h0;
+      \$372  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$335  = word0_nw;
+    \$373  = word0_nw;
     if (report_frame) begin
-      \$335  = nw[0];
+      \$373  = nw[0];
     end
     if (rst) begin
-      \$335  = 1'h0;
+      \$373  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$336  = word0_crc_ok;
+    \$374  = word0_crc_ok;
     if (report_frame) begin
-      \$336  = crc_ok[0];
+      \$374  = crc_ok[0];
     end
     if (rst) begin
-      \$336  = 1'h0;
+      \$374  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$337  = word1_position;
+    \$375  = word1_position;
     if (report_frame) begin
-      \$337  = spw;
+      \$375  = spw;
     end
     if (rst) begin
-      \$337  = 40'h0000000000;
+      \$375  = 40'h0000000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$338  = word1_ne;
+    \$376  = word1_ne;
     if (report_frame) begin
-      \$338  = ne[1];
+      \$376  = ne[1];
     end
     if (rst) begin
-      \$338  = 1'h0;
+      \$376  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$339  = word1_nw;
+    \$377  = word1_nw;
     if (report_frame) begin
-      \$339  = nw[1];
+      \$377  = nw[1];
     end
     if (rst) begin
-      \$339  = 1'h0;
+      \$377  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$340  = word1_crc_ok;
+    \$378  = word1_crc_ok;
     if (report_frame) begin
-      \$340  = \$304 ;
+      \$378  = \$329 ;
     end
     if (rst) begin
-      \$340  = 1'h0;
+      \$378  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$341  = spw_mismatch;
+    \$379  = spw_mismatch;
     if (report_frame) begin
-      \$341  = \$311 ;
+      \$379  = \$336 ;
     end
     if (rst) begin
-      \$341  = 1'h0;
+      \$379  = 1'h0;
     end
   end
   assign half_period = cfg[15:0];
@@ -1776,32 +2168,37 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign data1 = spw;
   assign bits = cfg[140:135];
   assign tolerance = cfg[153:146];
-  assign \resync$112  = resync;
+  assign \resync$126  = resync;
   assign clear = clear_counters;
   assign count = count_crc_word0;
-  assign \clear$117  = clear_counters;
-  assign \count$118  = count_crc_word1;
-  assign \clear$120  = clear_counters;
-  assign \count$121  = count_no_ack;
-  assign \clear$123  = clear_counters;
-  assign \count$124  = count_no_start;
-  assign \clear$126  = clear_counters;
-  assign \count$127  = count_delay_range;
-  assign \clear$129  = clear_counters;
-  assign \count$130  = count_slo_stuck_low;
-  assign \clear$132  = clear_counters;
-  assign \count$133  = count_lc_repeat;
-  assign \clear$135  = clear_counters;
-  assign \count$136  = count_lc_skip;
-  assign \clear$138  = clear_counters;
-  assign \count$139  = count_lc_zero;
-  assign \clear$141  = clear_counters;
-  assign \count$142  = count_spw_mismatch;
-  assign \inc$143  = overrun;
-  assign \clear$144  = clear_counters;
-  assign \count$145  = count_overrun;
-  assign \clear$147  = clear_counters;
-  assign \count$148  = count_aborted;
+  assign \clear$131  = clear_counters;
+  assign \count$132  = count_crc_word1;
+  assign \inc$133  = fault_no_ack;
+  assign \clear$134  = clear_counters;
+  assign \count$135  = count_no_ack;
+  assign \inc$136  = fault_no_start;
+  assign \clear$137  = clear_counters;
+  assign \count$138  = count_no_start;
+  assign \inc$139  = fault_delay_range;
+  assign \clear$140  = clear_counters;
+  assign \count$141  = count_delay_range;
+  assign \inc$142  = fault_slo_stuck_low;
+  assign \clear$143  = clear_counters;
+  assign \count$144  = count_slo_stuck_low;
+  assign \clear$146  = clear_counters;
+  assign \count$147  = count_lc_repeat;
+  assign \clear$149  = clear_counters;
+  assign \count$150  = count_lc_skip;
+  assign \clear$152  = clear_counters;
+  assign \count$153  = count_lc_zero;
+  assign \clear$155  = clear_counters;
+  assign \count$156  = count_spw_mismatch;
+  assign \inc$157  = overrun;
+  assign \clear$158  = clear_counters;
+  assign \count$159  = count_overrun;
+  assign \inc$160  = fault_aborted;
+  assign \clear$161  = clear_counters;
+  assign \count$162  = count_aborted;
   assign \live.cfg_ma_half_period  = live[15:0];
   assign \live.cfg_request_period  = live[39:16];
   assign \live.cfg_break_time  = live[63:40];
@@ -1874,612 +2271,758 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_aborted$176 (clk, rst, inc, count, clear);
+module \biss_master.count_aborted$196 (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$10  = 0;
   wire \$1 ;
   wire \$2 ;
-  wire \$3 ;
-  wire [16:0] \$4 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
   reg [15:0] \$5 ;
+  reg \$6 ;
   input clear;
   wire clear;
   input clk;
   wire clk;
   output [15:0] count;
   reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
   input inc;
   wire inc;
   input rst;
   wire rst;
+  assign \$4  = count == 16'hfffe;
   always @(posedge clk)
     count <= \$5 ;
-  assign \$1  = & count;
-  assign \$2  = ~ \$1 ;
-  assign \$3  = inc & \$2 ;
-  assign \$4  = count + 1'h1;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$5  = count;
     if (clear) begin
       \$5  = 16'h0000;
-    end else if (\$3 ) begin
-      \$5  = \$4 [15:0];
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
     end
     if (rst) begin
       \$5  = 16'h0000;
     end
   end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_crc_word0$165 (clk, rst, inc, count, clear);
+module \biss_master.count_crc_word0$185 (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$11  = 0;
   wire \$1 ;
   wire \$2 ;
-  wire \$3 ;
-  wire [16:0] \$4 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
   reg [15:0] \$5 ;
+  reg \$6 ;
   input clear;
   wire clear;
   input clk;
   wire clk;
   output [15:0] count;
   reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
   input inc;
   wire inc;
   input rst;
   wire rst;
+  assign \$4  = count == 16'hfffe;
   always @(posedge clk)
     count <= \$5 ;
-  assign \$1  = & count;
-  assign \$2  = ~ \$1 ;
-  assign \$3  = inc & \$2 ;
-  assign \$4  = count + 1'h1;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$11 ) begin end
     \$5  = count;
     if (clear) begin
       \$5  = 16'h0000;
-    end else if (\$3 ) begin
-      \$5  = \$4 [15:0];
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
     end
     if (rst) begin
       \$5  = 16'h0000;
     end
   end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$11 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_crc_word1$166 (clk, rst, inc, count, clear);
+module \biss_master.count_crc_word1$186 (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$12  = 0;
   wire \$1 ;
   wire \$2 ;
-  wire \$3 ;
-  wire [16:0] \$4 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
   reg [15:0] \$5 ;
+  reg \$6 ;
   input clear;
   wire clear;
   input clk;
   wire clk;
   output [15:0] count;
   reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
   input inc;
   wire inc;
   input rst;
   wire rst;
+  assign \$4  = count == 16'hfffe;
   always @(posedge clk)
     count <= \$5 ;
-  assign \$1  = & count;
-  assign \$2  = ~ \$1 ;
-  assign \$3  = inc & \$2 ;
-  assign \$4  = count + 1'h1;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$12 ) begin end
     \$5  = count;
     if (clear) begin
       \$5  = 16'h0000;
-    end else if (\$3 ) begin
-      \$5  = \$4 [15:0];
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
     end
     if (rst) begin
       \$5  = 16'h0000;
     end
   end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$12 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_delay_range$169 (clk, rst, inc, count, clear);
+module \biss_master.count_delay_range$189 (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$13  = 0;
   wire \$1 ;
   wire \$2 ;
-  wire \$3 ;
-  wire [16:0] \$4 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
   reg [15:0] \$5 ;
+  reg \$6 ;
   input clear;
   wire clear;
   input clk;
   wire clk;
   output [15:0] count;
   reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
   input inc;
   wire inc;
   input rst;
   wire rst;
+  assign \$4  = count == 16'hfffe;
   always @(posedge clk)
     count <= \$5 ;
-  assign \$1  = & count;
-  assign \$2  = ~ \$1 ;
-  assign \$3  = inc & \$2 ;
-  assign \$4  = count + 1'h1;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
     \$5  = count;
     if (clear) begin
       \$5  = 16'h0000;
-    end else if (\$3 ) begin
-      \$5  = \$4 [15:0];
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
     end
     if (rst) begin
       \$5  = 16'h0000;
     end
   end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_lc_repeat$171 (clk, rst, inc, count, clear);
+module \biss_master.count_lc_repeat$191 (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$14  = 0;
   wire \$1 ;
   wire \$2 ;
-  wire \$3 ;
-  wire [16:0] \$4 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
   reg [15:0] \$5 ;
+  reg \$6 ;
   input clear;
   wire clear;
   input clk;
   wire clk;
   output [15:0] count;
   reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
   input inc;
   wire inc;
   input rst;
   wire rst;
+  assign \$4  = count == 16'hfffe;
   always @(posedge clk)
     count <= \$5 ;
-  assign \$1  = & count;
-  assign \$2  = ~ \$1 ;
-  assign \$3  = inc & \$2 ;
-  assign \$4  = count + 1'h1;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$5  = count;
     if (clear) begin
       \$5  = 16'h0000;
-    end else if (\$3 ) begin
-      \$5  = \$4 [15:0];
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
     end
     if (rst) begin
       \$5  = 16'h0000;
     end
   end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_lc_skip$172 (clk, rst, inc, count, clear);
+module \biss_master.count_lc_skip$192 (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$15  = 0;
   wire \$1 ;
   wire \$2 ;
-  wire \$3 ;
-  wire [16:0] \$4 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
   reg [15:0] \$5 ;
+  reg \$6 ;
   input clear;
   wire clear;
   input clk;
   wire clk;
   output [15:0] count;
   reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
   input inc;
   wire inc;
   input rst;
   wire rst;
+  assign \$4  = count == 16'hfffe;
   always @(posedge clk)
     count <= \$5 ;
-  assign \$1  = & count;
-  assign \$2  = ~ \$1 ;
-  assign \$3  = inc & \$2 ;
-  assign \$4  = count + 1'h1;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
     \$5  = count;
     if (clear) begin
       \$5  = 16'h0000;
-    end else if (\$3 ) begin
-      \$5  = \$4 [15:0];
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
     end
     if (rst) begin
       \$5  = 16'h0000;
     end
   end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_lc_zero$173 (clk, rst, inc, count, clear);
+module \biss_master.count_lc_zero$193 (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$16  = 0;
   wire \$1 ;
   wire \$2 ;
-  wire \$3 ;
-  wire [16:0] \$4 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
   reg [15:0] \$5 ;
+  reg \$6 ;
   input clear;
   wire clear;
   input clk;
   wire clk;
   output [15:0] count;
   reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
   input inc;
   wire inc;
   input rst;
   wire rst;
+  assign \$4  = count == 16'hfffe;
   always @(posedge clk)
     count <= \$5 ;
-  assign \$1  = & count;
-  assign \$2  = ~ \$1 ;
-  assign \$3  = inc & \$2 ;
-  assign \$4  = count + 1'h1;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
     \$5  = count;
     if (clear) begin
       \$5  = 16'h0000;
-    end else if (\$3 ) begin
-      \$5  = \$4 [15:0];
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
     end
     if (rst) begin
       \$5  = 16'h0000;
     end
   end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_no_ack$167 (clk, rst, inc, count, clear);
+module \biss_master.count_no_ack$187 (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$17  = 0;
   wire \$1 ;
   wire \$2 ;
-  wire \$3 ;
-  wire [16:0] \$4 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
   reg [15:0] \$5 ;
+  reg \$6 ;
   input clear;
   wire clear;
   input clk;
   wire clk;
   output [15:0] count;
   reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
   input inc;
   wire inc;
   input rst;
   wire rst;
+  assign \$4  = count == 16'hfffe;
   always @(posedge clk)
     count <= \$5 ;
-  assign \$1  = & count;
-  assign \$2  = ~ \$1 ;
-  assign \$3  = inc & \$2 ;
-  assign \$4  = count + 1'h1;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$17 ) begin end
     \$5  = count;
     if (clear) begin
       \$5  = 16'h0000;
-    end else if (\$3 ) begin
-      \$5  = \$4 [15:0];
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
     end
     if (rst) begin
       \$5  = 16'h0000;
     end
   end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$17 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_no_start$168 (clk, rst, inc, count, clear);
+module \biss_master.count_no_start$188 (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$18  = 0;
   wire \$1 ;
   wire \$2 ;
-  wire \$3 ;
-  wire [16:0] \$4 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
   reg [15:0] \$5 ;
+  reg \$6 ;
   input clear;
   wire clear;
   input clk;
   wire clk;
   output [15:0] count;
   reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
   input inc;
   wire inc;
   input rst;
   wire rst;
+  assign \$4  = count == 16'hfffe;
   always @(posedge clk)
     count <= \$5 ;
-  assign \$1  = & count;
-  assign \$2  = ~ \$1 ;
-  assign \$3  = inc & \$2 ;
-  assign \$4  = count + 1'h1;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
     \$5  = count;
     if (clear) begin
       \$5  = 16'h0000;
-    end else if (\$3 ) begin
-      \$5  = \$4 [15:0];
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
     end
     if (rst) begin
       \$5  = 16'h0000;
     end
   end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_overrun$175 (clk, rst, inc, count, clear);
+module \biss_master.count_overrun$195 (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$19  = 0;
   wire \$1 ;
   wire \$2 ;
-  wire \$3 ;
-  wire [16:0] \$4 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
   reg [15:0] \$5 ;
+  reg \$6 ;
   input clear;
   wire clear;
   input clk;
   wire clk;
   output [15:0] count;
   reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
   input inc;
   wire inc;
   input rst;
   wire rst;
+  assign \$4  = count == 16'hfffe;
   always @(posedge clk)
     count <= \$5 ;
-  assign \$1  = & count;
-  assign \$2  = ~ \$1 ;
-  assign \$3  = inc & \$2 ;
-  assign \$4  = count + 1'h1;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
     \$5  = count;
     if (clear) begin
       \$5  = 16'h0000;
-    end else if (\$3 ) begin
-      \$5  = \$4 [15:0];
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
     end
     if (rst) begin
       \$5  = 16'h0000;
     end
   end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_slo_stuck_low$170 (clk, rst, inc, count, clear);
+module \biss_master.count_slo_stuck_low$190 (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$20  = 0;
   wire \$1 ;
   wire \$2 ;
-  wire \$3 ;
-  wire [16:0] \$4 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
   reg [15:0] \$5 ;
+  reg \$6 ;
   input clear;
   wire clear;
   input clk;
   wire clk;
   output [15:0] count;
   reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
   input inc;
   wire inc;
   input rst;
   wire rst;
+  assign \$4  = count == 16'hfffe;
   always @(posedge clk)
     count <= \$5 ;
-  assign \$1  = & count;
-  assign \$2  = ~ \$1 ;
-  assign \$3  = inc & \$2 ;
-  assign \$4  = count + 1'h1;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$20 ) begin end
     \$5  = count;
     if (clear) begin
       \$5  = 16'h0000;
-    end else if (\$3 ) begin
-      \$5  = \$4 [15:0];
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
     end
     if (rst) begin
       \$5  = 16'h0000;
     end
   end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$20 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_spw_mismatch$174 (clk, rst, inc, count, clear);
+module \biss_master.count_spw_mismatch$194 (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$21  = 0;
   wire \$1 ;
   wire \$2 ;
-  wire \$3 ;
-  wire [16:0] \$4 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
   reg [15:0] \$5 ;
+  reg \$6 ;
   input clear;
   wire clear;
   input clk;
   wire clk;
   output [15:0] count;
   reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
   input inc;
   wire inc;
   input rst;
   wire rst;
+  assign \$4  = count == 16'hfffe;
   always @(posedge clk)
     count <= \$5 ;
-  assign \$1  = & count;
-  assign \$2  = ~ \$1 ;
-  assign \$3  = inc & \$2 ;
-  assign \$4  = count + 1'h1;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$21 ) begin end
     \$5  = count;
     if (clear) begin
       \$5  = 16'h0000;
-    end else if (\$3 ) begin
-      \$5  = \$4 [15:0];
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
     end
     if (rst) begin
       \$5  = 16'h0000;
     end
   end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$21 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.decoder (rst, word_count, frame_bits, words, receiver_clear, sample, crc_ok, done, stopped, slots, started, start_slot, cds, data0, ne, nw, data1, lc, cpw_top, \bit , clk
-);
+module \biss_master.decoder (rst, word_count, words, receiver_clear, sample, crc_ok, done, stopped, slots_full, started, start_slot, cds, data0, ne, nw, data1, lc, cpw_top, \bit , clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$22  = 0;
   wire [2:0] \$1 ;
-  wire [4:0] \$10 ;
-  wire [1:0] \$100 ;
-  wire [6:0] \$101 ;
-  wire \$102 ;
-  wire \$103 ;
-  wire [9:0] \$104 ;
-  wire [9:0] \$105 ;
-  wire [1:0] \$106 ;
-  wire [6:0] \$107 ;
-  wire [9:0] \$108 ;
-  wire [2:0] \$109 ;
-  wire [8:0] \$11 ;
-  wire [7:0] \$110 ;
-  wire \$111 ;
-  wire \$112 ;
-  wire \$113 ;
-  wire \$114 ;
-  wire \$115 ;
-  wire \$116 ;
-  reg \$117 ;
-  reg \$118 ;
-  reg [15:0] \$119 ;
-  wire [8:0] \$12 ;
-  reg \$120 ;
-  reg [15:0] \$121 ;
-  reg [2:0] \$122 ;
-  reg \$123 ;
-  reg [6:0] \$124 ;
-  reg \$125 ;
-  reg [54:0] \$126 ;
-  reg [1:0] \$127 ;
-  reg [1:0] \$128 ;
-  reg [39:0] \$129 ;
-  wire [9:0] \$13 ;
-  reg [5:0] \$130 ;
-  reg [39:0] \$131 ;
-  wire [2:0] \$14 ;
+  wire [7:0] \$10 ;
+  reg [39:0] \$100 ;
+  reg [5:0] \$101 ;
+  reg [39:0] \$102 ;
+  wire [7:0] \$11 ;
+  wire [9:0] \$12 ;
+  wire \$13 ;
+  wire \$14 ;
   wire \$15 ;
-  wire [1:0] \$16 ;
-  wire [6:0] \$17 ;
-  wire [2:0] \$18 ;
-  wire [4:0] \$180 ;
-  wire [4:0] \$183 ;
-  wire [4:0] \$188 ;
-  wire [7:0] \$19 ;
-  wire [4:0] \$193 ;
-  wire [4:0] \$197 ;
+  wire \$16 ;
+  wire \$17 ;
+  wire \$18 ;
+  wire \$19 ;
   wire \$2 ;
   wire \$20 ;
   wire \$21 ;
-  wire [4:0] \$211 ;
-  wire [4:0] \$219 ;
-  wire [2:0] \$22 ;
-  wire [4:0] \$226 ;
-  wire [4:0] \$23 ;
-  wire [4:0] \$234 ;
-  wire [8:0] \$24 ;
-  wire [4:0] \$242 ;
-  wire [4:0] \$249 ;
-  wire [8:0] \$25 ;
-  wire [4:0] \$255 ;
-  wire [4:0] \$258 ;
-  wire [10:0] \$26 ;
-  wire [4:0] \$265 ;
-  wire [4:0] \$268 ;
-  wire \$27 ;
-  wire [4:0] \$273 ;
-  wire \$28 ;
-  wire \$29 ;
-  wire [1:0] \$3 ;
-  wire \$30 ;
-  wire \$31 ;
-  wire \$32 ;
-  wire \$33 ;
-  wire \$34 ;
-  wire \$35 ;
-  wire \$36 ;
-  wire \$37 ;
-  wire \$38 ;
-  wire \$39 ;
-  wire [6:0] \$4 ;
+  wire \$22 ;
+  wire \$23 ;
+  wire \$24 ;
+  wire \$25 ;
+  wire [6:0] \$26 ;
+  wire [1:0] \$27 ;
+  wire [6:0] \$28 ;
+  reg [3:0] \$29 ;
+  reg [6:0] \$3 ;
+  wire [6:0] \$30 ;
+  reg [6:0] \$31 ;
+  wire [7:0] \$32 ;
+  wire [6:0] \$33 ;
+  wire [1:0] \$34 ;
+  wire [6:0] \$35 ;
+  reg [3:0] \$36 ;
+  wire [6:0] \$37 ;
+  reg [6:0] \$38 ;
+  wire [7:0] \$39 ;
+  wire [7:0] \$4 ;
   wire \$40 ;
   wire \$41 ;
   wire [16:0] \$42 ;
   wire \$43 ;
-  wire [7:0] \$44 ;
-  wire [9:0] \$45 ;
-  wire [9:0] \$46 ;
-  wire [1:0] \$47 ;
-  wire [6:0] \$48 ;
-  wire [9:0] \$49 ;
-  wire [2:0] \$5 ;
-  wire [2:0] \$50 ;
-  wire [7:0] \$51 ;
-  wire [9:0] \$52 ;
+  wire \$44 ;
+  wire [7:0] \$45 ;
+  wire [6:0] \$46 ;
+  wire \$47 ;
+  wire [2:0] \$48 ;
+  wire \$49 ;
+  wire [7:0] \$5 ;
+  wire [1:0] \$50 ;
+  wire \$51 ;
+  wire \$52 ;
   wire \$53 ;
-  wire [9:0] \$54 ;
+  wire \$54 ;
   wire \$55 ;
-  wire [2:0] \$56 ;
-  wire [4:0] \$57 ;
-  wire [8:0] \$58 ;
-  wire [9:0] \$59 ;
-  wire [7:0] \$6 ;
+  wire \$56 ;
+  wire \$57 ;
+  wire \$58 ;
+  wire \$59 ;
+  wire [8:0] \$6 ;
   wire \$60 ;
-  wire [2:0] \$61 ;
+  wire \$61 ;
   wire \$62 ;
-  wire [1:0] \$63 ;
+  wire \$63 ;
   wire \$64 ;
   wire \$65 ;
-  wire [9:0] \$66 ;
+  wire \$66 ;
   wire \$67 ;
   wire \$68 ;
   wire \$69 ;
-  wire \$7 ;
+  wire [2:0] \$7 ;
   wire \$70 ;
   wire \$71 ;
-  wire [9:0] \$72 ;
+  wire \$72 ;
   wire \$73 ;
   wire \$74 ;
   wire \$75 ;
   wire \$76 ;
-  wire [9:0] \$77 ;
-  wire [6:0] \$78 ;
+  wire [6:0] \$77 ;
+  wire \$78 ;
   wire \$79 ;
   wire \$8 ;
-  wire \$80 ;
+  wire [6:0] \$80 ;
   wire \$81 ;
   wire \$82 ;
-  wire [9:0] \$83 ;
+  wire \$83 ;
   wire \$84 ;
   wire \$85 ;
   wire \$86 ;
-  wire \$87 ;
-  wire \$88 ;
-  wire [9:0] \$89 ;
-  wire [2:0] \$9 ;
-  wire \$90 ;
-  wire \$91 ;
-  wire \$92 ;
-  wire \$93 ;
-  wire [9:0] \$94 ;
-  wire [6:0] \$95 ;
-  wire \$96 ;
-  wire \$97 ;
-  wire [9:0] \$98 ;
-  wire [9:0] \$99 ;
+  reg \$87 ;
+  reg \$88 ;
+  reg [15:0] \$89 ;
+  reg [6:0] \$9 ;
+  reg \$90 ;
+  reg \$91 ;
+  reg [15:0] \$92 ;
+  reg [2:0] \$93 ;
+  reg \$94 ;
+  reg [6:0] \$95 ;
+  reg \$96 ;
+  reg [54:0] \$97 ;
+  reg [1:0] \$98 ;
+  reg [1:0] \$99 ;
   input \bit ;
   wire \bit ;
   wire \bit$12 ;
@@ -2499,7 +3042,6 @@ module \biss_master.decoder (rst, word_count, frame_bits, words, receiver_clear,
   reg [2:0] decoder_fsm_state = 3'h0;
   output done;
   reg done = 1'h0;
-  output [7:0] frame_bits;
   wire [7:0] frame_bits;
   reg [6:0] idx = 7'h00;
   reg in_word;
@@ -2519,8 +3061,9 @@ module \biss_master.decoder (rst, word_count, frame_bits, words, receiver_clear,
   wire rst;
   input sample;
   wire sample;
-  output [15:0] slots;
   reg [15:0] slots = 16'h0000;
+  output slots_full;
+  reg slots_full = 1'h0;
   wire start;
   wire \start$16 ;
   output [15:0] start_slot;
@@ -2531,6 +3074,14 @@ module \biss_master.decoder (rst, word_count, frame_bits, words, receiver_clear,
   reg stopped = 1'h0;
   wire valid;
   wire \valid$17 ;
+  reg [6:0] w0_data_end_p1 = 7'h00;
+  reg [6:0] w0_lc_end = 7'h00;
+  reg [6:0] w0_nenw_end = 7'h00;
+  reg [6:0] w0_word_end_m1 = 7'h00;
+  reg [6:0] w1_data_end_p1 = 7'h00;
+  reg [6:0] w1_lc_end = 7'h00;
+  reg [6:0] w1_nenw_end = 7'h00;
+  reg [6:0] w1_word_end_m1 = 7'h00;
   reg word = 1'h0;
   input [1:0] word_count;
   wire [1:0] word_count;
@@ -2548,165 +3099,131 @@ module \biss_master.decoder (rst, word_count, frame_bits, words, receiver_clear,
   wire \words[1].nenw ;
   assign \$1  = word_count - 1'h1;
   assign \$2  = $signed(\$1 ) >= $signed(1'h0);
-  assign \$3  = words[6] ? 2'h2 : 2'h0;
   assign \$4  = words[5:0] + \$3 ;
-  assign \$5  = words[7] ? 3'h6 : 3'h0;
-  assign \$6  = \$4  + \$5 ;
-  assign \$7  = words[9:8] == 2'h2;
-  assign \$8  = words[9:8] == 1'h1;
-  assign \$9  = \$8  ? 3'h6 : 3'h0;
-  assign \$10  = \$7  ? 5'h10 : { 2'h0, \$9  };
-  assign \$11  = \$6  + \$10 ;
-  assign \$12  = \$2  ? \$11  : 9'h000;
-  assign \$13  = 1'h0 + \$12 ;
-  assign \$14  = word_count - 1'h1;
-  assign \$15  = $signed(\$14 ) >= $signed(2'h1);
-  assign \$16  = words[16] ? 2'h2 : 2'h0;
-  assign \$17  = words[15:10] + \$16 ;
-  assign \$18  = words[17] ? 3'h6 : 3'h0;
-  assign \$19  = \$17  + \$18 ;
-  assign \$20  = words[19:18] == 2'h2;
-  assign \$21  = words[19:18] == 1'h1;
-  assign \$22  = \$21  ? 3'h6 : 3'h0;
-  assign \$23  = \$20  ? 5'h10 : { 2'h0, \$22  };
-  assign \$24  = \$19  + \$23 ;
-  assign \$25  = \$15  ? \$24  : 9'h000;
-  assign \$26  = \$13  + \$25 ;
-  assign \$27  = ! word;
-  assign \$28  = in_word & \$27 ;
-  assign \$29  = ! idx;
-  assign start = \$28  & \$29 ;
-  assign \$30  = ! word;
-  assign valid = in_word & \$30 ;
-  assign \$32  = in_word & \$31 ;
-  assign \$33  = ! idx;
-  assign \start$16  = \$32  & \$33 ;
-  assign \valid$17  = in_word & \$34 ;
-  assign \$35  = ! decoder_fsm_state;
-  assign \$36  = decoder_fsm_state == 1'h1;
-  assign \$37  = decoder_fsm_state == 2'h2;
-  assign \$38  = decoder_fsm_state == 2'h3;
-  assign \$39  = decoder_fsm_state == 3'h4;
-  assign \$40  = slots != 16'hffff;
+  assign \$5  = \$2  ? \$4  : 8'h00;
+  assign \$6  = 1'h0 + \$5 ;
+  assign \$7  = word_count - 1'h1;
+  assign \$8  = $signed(\$7 ) >= $signed(2'h1);
+  assign \$10  = words[15:10] + \$9 ;
+  assign \$11  = \$8  ? \$10  : 8'h00;
+  assign \$12  = \$6  + \$11 ;
+  assign \$13  = ! word;
+  assign \$14  = in_word & \$13 ;
+  assign \$15  = ! idx;
+  assign start = \$14  & \$15 ;
+  assign \$16  = ! word;
+  assign valid = in_word & \$16 ;
+  assign \$18  = in_word & \$17 ;
+  assign \$19  = ! idx;
+  assign \start$16  = \$18  & \$19 ;
+  assign \valid$17  = in_word & \$20 ;
+  assign \$21  = ! decoder_fsm_state;
+  assign \$22  = decoder_fsm_state == 1'h1;
+  assign \$23  = decoder_fsm_state == 2'h2;
+  assign \$24  = decoder_fsm_state == 2'h3;
+  assign \$25  = decoder_fsm_state == 3'h4;
+  assign \$26  = words[5:0] + 1'h1;
+  assign \$27  = words[6] ? 2'h2 : 2'h0;
+  assign \$28  = words[5:0] + \$27 ;
+  assign \$30  = words[5:0] + \$29 ;
+  assign \$32  = words[5:0] + \$31 ;
+  assign \$33  = words[15:10] + 1'h1;
+  assign \$34  = words[16] ? 2'h2 : 2'h0;
+  assign \$35  = words[15:10] + \$34 ;
+  assign \$37  = words[15:10] + \$36 ;
+  assign \$39  = words[15:10] + \$38 ;
+  assign \$40  = ~ slots_full;
   assign \$41  = sample & \$40 ;
   assign \$42  = slots + 1'h1;
-  assign \$43  = sample & \bit ;
-  assign \$44  = idx + 1'h1;
-  assign \$180  = word * 4'ha;
-  assign \$45  = words >> \$180 ;
-  assign \$183  = word * 4'ha;
-  assign \$46  = words >> \$183 ;
-  assign \$47  = \$46 [6] ? 2'h2 : 2'h0;
-  assign \$48  = \$45 [5:0] + \$47 ;
-  assign \$188  = word * 4'ha;
-  assign \$49  = words >> \$188 ;
-  assign \$50  = \$49 [7] ? 3'h6 : 3'h0;
-  assign \$51  = \$48  + \$50 ;
-  assign \$193  = word * 4'ha;
-  assign \$52  = words >> \$193 ;
-  assign \$53  = \$52 [9:8] == 2'h2;
-  assign \$197  = word * 4'ha;
-  assign \$54  = words >> \$197 ;
-  assign \$55  = \$54 [9:8] == 1'h1;
-  assign \$56  = \$55  ? 3'h6 : 3'h0;
-  assign \$57  = \$53  ? 5'h10 : { 2'h0, \$56  };
-  assign \$58  = \$51  + \$57 ;
-  assign \$59  = \$58  - 1'h1;
-  assign \$60  = idx == \$59 ;
-  assign \$61  = word_count - 1'h1;
-  assign \$62  = word == \$61 ;
-  assign \$63  = word + 1'h1;
-  assign \$64  = ! word;
+  assign \$43  = slots == 16'hfffe;
+  assign \$44  = sample & \bit ;
+  assign \$45  = idx + 1'h1;
+  assign \$46  = word ? w1_word_end_m1 : w0_word_end_m1;
+  assign \$47  = idx == \$46 ;
+  assign \$48  = word_count - 1'h1;
+  assign \$49  = word == \$48 ;
+  assign \$50  = word + 1'h1;
+  assign \$51  = ! word;
+  assign \$52  = in_word & \$51 ;
+  assign \$53  = idx < words[5:0];
+  assign \$54  = \$52  & \$53 ;
+  assign \$55  = ~ words[6];
+  assign \$56  = ! word;
+  assign \$57  = in_word & \$56 ;
+  assign \$58  = idx == words[5:0];
+  assign \$59  = \$57  & \$58 ;
+  assign \$60  = ! word;
+  assign \$61  = in_word & \$60 ;
+  assign \$62  = idx == w0_data_end_p1;
+  assign \$63  = \$61  & \$62 ;
   assign \$65  = in_word & \$64 ;
-  assign \$211  = word * 4'ha;
-  assign \$66  = words >> \$211 ;
-  assign \$67  = idx < \$66 [5:0];
-  assign \$68  = \$65  & \$67 ;
-  assign \$69  = ~ words[6];
-  assign \$70  = ! word;
-  assign \$71  = in_word & \$70 ;
-  assign \$219  = word * 4'ha;
-  assign \$72  = words >> \$219 ;
-  assign \$73  = idx == \$72 [5:0];
-  assign \$74  = \$71  & \$73 ;
-  assign \$75  = ! word;
-  assign \$76  = in_word & \$75 ;
-  assign \$226  = word * 4'ha;
-  assign \$77  = words >> \$226 ;
-  assign \$78  = \$77 [5:0] + 1'h1;
-  assign \$79  = idx == \$78 ;
-  assign \$80  = \$76  & \$79 ;
-  assign \$82  = in_word & \$81 ;
-  assign \$234  = word * 4'ha;
-  assign \$83  = words >> \$234 ;
-  assign \$84  = idx < \$83 [5:0];
-  assign \$85  = \$82  & \$84 ;
-  assign \$86  = ~ words[16];
-  assign \$88  = in_word & \$87 ;
-  assign \$242  = word * 4'ha;
-  assign \$89  = words >> \$242 ;
-  assign \$90  = idx == \$89 [5:0];
-  assign \$91  = \$88  & \$90 ;
-  assign \$93  = in_word & \$92 ;
-  assign \$249  = word * 4'ha;
-  assign \$94  = words >> \$249 ;
-  assign \$95  = \$94 [5:0] + 1'h1;
-  assign \$96  = idx == \$95 ;
-  assign \$97  = \$93  & \$96 ;
-  assign \$255  = word * 4'ha;
-  assign \$98  = words >> \$255 ;
-  assign \$258  = word * 4'ha;
-  assign \$99  = words >> \$258 ;
-  assign \$100  = \$99 [6] ? 2'h2 : 2'h0;
-  assign \$101  = \$98 [5:0] + \$100 ;
-  assign \$102  = idx >= \$101 ;
-  assign \$103  = in_word & \$102 ;
-  assign \$265  = word * 4'ha;
-  assign \$104  = words >> \$265 ;
-  assign \$268  = word * 4'ha;
-  assign \$105  = words >> \$268 ;
-  assign \$106  = \$105 [6] ? 2'h2 : 2'h0;
-  assign \$107  = \$104 [5:0] + \$106 ;
-  assign \$273  = word * 4'ha;
-  assign \$108  = words >> \$273 ;
-  assign \$109  = \$108 [7] ? 3'h6 : 3'h0;
-  assign \$110  = \$107  + \$109 ;
-  assign \$111  = idx < \$110 ;
-  assign \$112  = \$103  & \$111 ;
-  assign \$113  = ! word;
-  assign \$114  = in_word & \$113 ;
-  assign \$115  = idx < words[15:10];
-  assign \$116  = \$114  & \$115 ;
+  assign \$66  = idx < words[15:10];
+  assign \$67  = \$65  & \$66 ;
+  assign \$68  = ~ words[16];
+  assign \$70  = in_word & \$69 ;
+  assign \$71  = idx == words[15:10];
+  assign \$72  = \$70  & \$71 ;
+  assign \$74  = in_word & \$73 ;
+  assign \$75  = idx == w1_data_end_p1;
+  assign \$76  = \$74  & \$75 ;
+  assign \$77  = word ? w1_nenw_end : w0_nenw_end;
+  assign \$78  = idx >= \$77 ;
+  assign \$79  = in_word & \$78 ;
+  assign \$80  = word ? w1_lc_end : w0_lc_end;
+  assign \$81  = idx < \$80 ;
+  assign \$82  = \$79  & \$81 ;
+  assign \$83  = ! word;
+  assign \$84  = in_word & \$83 ;
+  assign \$85  = idx < words[15:10];
+  assign \$86  = \$84  & \$85 ;
   always @(posedge clk)
-    done <= \$117 ;
+    w0_data_end_p1 <= \$26 ;
   always @(posedge clk)
-    stopped <= \$118 ;
+    w0_nenw_end <= \$28 ;
   always @(posedge clk)
-    slots <= \$119 ;
+    w0_lc_end <= \$30 ;
   always @(posedge clk)
-    started <= \$120 ;
+    w0_word_end_m1 <= \$32 [6:0];
   always @(posedge clk)
-    start_slot <= \$121 ;
+    w1_data_end_p1 <= \$33 ;
   always @(posedge clk)
-    decoder_fsm_state <= \$122 ;
+    w1_nenw_end <= \$35 ;
   always @(posedge clk)
-    cds <= \$123 ;
+    w1_lc_end <= \$37 ;
   always @(posedge clk)
-    idx <= \$124 ;
+    w1_word_end_m1 <= \$39 [6:0];
   always @(posedge clk)
-    word <= \$125 ;
+    done <= \$87 ;
   always @(posedge clk)
-    data0 <= \$126 ;
+    stopped <= \$88 ;
   always @(posedge clk)
-    ne <= \$127 ;
+    slots <= \$89 ;
   always @(posedge clk)
-    nw <= \$128 ;
+    slots_full <= \$90 ;
   always @(posedge clk)
-    data1 <= \$129 ;
+    started <= \$91 ;
   always @(posedge clk)
-    lc <= \$130 ;
+    start_slot <= \$92 ;
   always @(posedge clk)
-    cpw_top <= \$131 ;
+    decoder_fsm_state <= \$93 ;
+  always @(posedge clk)
+    cds <= \$94 ;
+  always @(posedge clk)
+    idx <= \$95 ;
+  always @(posedge clk)
+    word <= \$96 ;
+  always @(posedge clk)
+    data0 <= \$97 ;
+  always @(posedge clk)
+    ne <= \$98 ;
+  always @(posedge clk)
+    nw <= \$99 ;
+  always @(posedge clk)
+    data1 <= \$100 ;
+  always @(posedge clk)
+    lc <= \$101 ;
+  always @(posedge clk)
+    cpw_top <= \$102 ;
   \biss_master.decoder.crc0  crc0 (
     .clk(clk),
     .data(\bit ),
@@ -2729,6 +3246,186 @@ module \biss_master.decoder (rst, word_count, frame_bits, words, receiver_clear,
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
+    (* full_case = 32'd1 *)
+    casez (words[9:6])
+      4'h0:
+          \$3  = 7'h00;
+      4'h1:
+          \$3  = 7'h02;
+      4'h2:
+          \$3  = 7'h06;
+      4'h3:
+          \$3  = 7'h08;
+      4'h4:
+          \$3  = 7'h06;
+      4'h5:
+          \$3  = 7'h08;
+      4'h6:
+          \$3  = 7'h0c;
+      4'h7:
+          \$3  = 7'h0e;
+      4'h8:
+          \$3  = 7'h10;
+      4'h9:
+          \$3  = 7'h12;
+      4'ha:
+          \$3  = 7'h16;
+      4'hb:
+          \$3  = 7'h18;
+      4'hc:
+          \$3  = 7'h00;
+      4'hd:
+          \$3  = 7'h02;
+      4'he:
+          \$3  = 7'h06;
+      4'hf:
+          \$3  = 7'h08;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
+    (* full_case = 32'd1 *)
+    casez (words[19:16])
+      4'h0:
+          \$9  = 7'h00;
+      4'h1:
+          \$9  = 7'h02;
+      4'h2:
+          \$9  = 7'h06;
+      4'h3:
+          \$9  = 7'h08;
+      4'h4:
+          \$9  = 7'h06;
+      4'h5:
+          \$9  = 7'h08;
+      4'h6:
+          \$9  = 7'h0c;
+      4'h7:
+          \$9  = 7'h0e;
+      4'h8:
+          \$9  = 7'h10;
+      4'h9:
+          \$9  = 7'h12;
+      4'ha:
+          \$9  = 7'h16;
+      4'hb:
+          \$9  = 7'h18;
+      4'hc:
+          \$9  = 7'h00;
+      4'hd:
+          \$9  = 7'h02;
+      4'he:
+          \$9  = 7'h06;
+      4'hf:
+          \$9  = 7'h08;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
+    (* full_case = 32'd1 *)
+    casez (words[7:6])
+      2'h0:
+          \$29  = 4'h0;
+      2'h1:
+          \$29  = 4'h2;
+      2'h2:
+          \$29  = 4'h6;
+      2'h3:
+          \$29  = 4'h8;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
+    (* full_case = 32'd1 *)
+    casez (words[9:6])
+      4'h0:
+          \$31  = 7'h7f;
+      4'h1:
+          \$31  = 7'h01;
+      4'h2:
+          \$31  = 7'h05;
+      4'h3:
+          \$31  = 7'h07;
+      4'h4:
+          \$31  = 7'h05;
+      4'h5:
+          \$31  = 7'h07;
+      4'h6:
+          \$31  = 7'h0b;
+      4'h7:
+          \$31  = 7'h0d;
+      4'h8:
+          \$31  = 7'h0f;
+      4'h9:
+          \$31  = 7'h11;
+      4'ha:
+          \$31  = 7'h15;
+      4'hb:
+          \$31  = 7'h17;
+      4'hc:
+          \$31  = 7'h7f;
+      4'hd:
+          \$31  = 7'h01;
+      4'he:
+          \$31  = 7'h05;
+      4'hf:
+          \$31  = 7'h07;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
+    (* full_case = 32'd1 *)
+    casez (words[17:16])
+      2'h0:
+          \$36  = 4'h0;
+      2'h1:
+          \$36  = 4'h2;
+      2'h2:
+          \$36  = 4'h6;
+      2'h3:
+          \$36  = 4'h8;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
+    (* full_case = 32'd1 *)
+    casez (words[19:16])
+      4'h0:
+          \$38  = 7'h7f;
+      4'h1:
+          \$38  = 7'h01;
+      4'h2:
+          \$38  = 7'h05;
+      4'h3:
+          \$38  = 7'h07;
+      4'h4:
+          \$38  = 7'h05;
+      4'h5:
+          \$38  = 7'h07;
+      4'h6:
+          \$38  = 7'h0b;
+      4'h7:
+          \$38  = 7'h0d;
+      4'h8:
+          \$38  = 7'h0f;
+      4'h9:
+          \$38  = 7'h11;
+      4'ha:
+          \$38  = 7'h15;
+      4'hb:
+          \$38  = 7'h17;
+      4'hc:
+          \$38  = 7'h7f;
+      4'hd:
+          \$38  = 7'h01;
+      4'he:
+          \$38  = 7'h05;
+      4'hf:
+          \$38  = 7'h07;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
     in_word = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -2741,7 +3438,7 @@ module \biss_master.decoder (rst, word_count, frame_bits, words, receiver_clear,
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
-    \$117  = 1'h0;
+    \$87  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
@@ -2749,23 +3446,23 @@ module \biss_master.decoder (rst, word_count, frame_bits, words, receiver_clear,
           /* empty */;
       3'h2:
           if (sample) begin
-            if (\$60 ) begin
-              if (\$62 ) begin
-                \$117  = 1'h1;
+            if (\$47 ) begin
+              if (\$49 ) begin
+                \$87  = 1'h1;
               end
             end
           end
     endcase
     if (receiver_clear) begin
-      \$117  = 1'h0;
+      \$87  = 1'h0;
     end
     if (rst) begin
-      \$117  = 1'h0;
+      \$87  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
-    \$118  = 1'h0;
+    \$88  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
@@ -2775,263 +3472,276 @@ module \biss_master.decoder (rst, word_count, frame_bits, words, receiver_clear,
           /* empty */;
       3'h3:
           if (sample) begin
-            \$118  = 1'h1;
+            \$88  = 1'h1;
           end
     endcase
     if (receiver_clear) begin
-      \$118  = 1'h0;
+      \$88  = 1'h0;
     end
     if (rst) begin
-      \$118  = 1'h0;
+      \$88  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
-    \$119  = slots;
+    \$89  = slots;
     if (\$41 ) begin
-      \$119  = \$42 [15:0];
+      \$89  = \$42 [15:0];
     end
     if (receiver_clear) begin
-      \$119  = 16'h0000;
+      \$89  = 16'h0000;
     end
     if (rst) begin
-      \$119  = 16'h0000;
+      \$89  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
-    \$120  = started;
+    \$90  = slots_full;
+    if (\$41 ) begin
+      \$90  = \$43 ;
+    end
+    if (receiver_clear) begin
+      \$90  = 1'h0;
+    end
+    if (rst) begin
+      \$90  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
+    \$91  = started;
     casez (decoder_fsm_state)
       3'h0:
-          if (\$43 ) begin
-            \$120  = 1'h1;
+          if (\$44 ) begin
+            \$91  = 1'h1;
           end
     endcase
     if (receiver_clear) begin
-      \$120  = 1'h0;
+      \$91  = 1'h0;
     end
     if (rst) begin
-      \$120  = 1'h0;
+      \$91  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
-    \$121  = start_slot;
+    \$92  = start_slot;
     casez (decoder_fsm_state)
       3'h0:
-          if (\$43 ) begin
-            \$121  = slots;
+          if (\$44 ) begin
+            \$92  = slots;
           end
     endcase
     if (receiver_clear) begin
-      \$121  = 16'h0000;
+      \$92  = 16'h0000;
     end
     if (rst) begin
-      \$121  = 16'h0000;
+      \$92  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
-    \$122  = decoder_fsm_state;
+    \$93  = decoder_fsm_state;
     casez (decoder_fsm_state)
       3'h0:
-          if (\$43 ) begin
-            \$122  = 3'h1;
+          if (\$44 ) begin
+            \$93  = 3'h1;
           end
       3'h1:
           if (sample) begin
-            \$122  = 3'h2;
+            \$93  = 3'h2;
           end
       3'h2:
           if (sample) begin
-            if (\$60 ) begin
-              if (\$62 ) begin
-                \$122  = 3'h3;
+            if (\$47 ) begin
+              if (\$49 ) begin
+                \$93  = 3'h3;
               end
             end
           end
       3'h3:
           if (sample) begin
-            \$122  = 3'h4;
+            \$93  = 3'h4;
           end
     endcase
     if (receiver_clear) begin
-      \$122  = 3'h0;
+      \$93  = 3'h0;
     end
     if (rst) begin
-      \$122  = 3'h0;
+      \$93  = 3'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
-    \$123  = cds;
+    \$94  = cds;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
       3'h1:
           if (sample) begin
-            \$123  = \bit ;
+            \$94  = \bit ;
           end
     endcase
     if (receiver_clear) begin
-      \$123  = 1'h0;
+      \$94  = 1'h0;
     end
     if (rst) begin
-      \$123  = 1'h0;
+      \$94  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
-    \$124  = idx;
+    \$95  = idx;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
       3'h1:
           if (sample) begin
-            \$124  = 7'h00;
+            \$95  = 7'h00;
           end
       3'h2:
           if (sample) begin
-            \$124  = \$44 [6:0];
-            if (\$60 ) begin
-              \$124  = 7'h00;
+            \$95  = \$45 [6:0];
+            if (\$47 ) begin
+              \$95  = 7'h00;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$124  = 7'h00;
+      \$95  = 7'h00;
     end
     if (rst) begin
-      \$124  = 7'h00;
+      \$95  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
-    \$125  = word;
+    \$96  = word;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
       3'h1:
           if (sample) begin
-            \$125  = 1'h0;
+            \$96  = 1'h0;
           end
       3'h2:
           if (sample) begin
-            if (\$60 ) begin
+            if (\$47 ) begin
               (* full_case = 32'd1 *)
-              if (\$62 ) begin
+              if (\$49 ) begin
               end else begin
-                \$125  = \$63 [0];
+                \$96  = \$50 [0];
               end
             end
           end
     endcase
     if (receiver_clear) begin
-      \$125  = 1'h0;
+      \$96  = 1'h0;
     end
     if (rst) begin
-      \$125  = 1'h0;
+      \$96  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
-    \$126  = data0;
+    \$97  = data0;
+    if (\$54 ) begin
+      \$97  = { data0[53:0], \bit  };
+    end
+    if (receiver_clear) begin
+      \$97  = 55'h00000000000000;
+    end
+    if (rst) begin
+      \$97  = 55'h00000000000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
+    \$98  = ne;
+    if (\$55 ) begin
+      \$98 [0] = 1'h1;
+    end else if (\$59 ) begin
+      \$98 [0] = \bit ;
+    end
     if (\$68 ) begin
-      \$126  = { data0[53:0], \bit  };
+      \$98 [1] = 1'h1;
+    end else if (\$72 ) begin
+      \$98 [1] = \bit ;
     end
     if (receiver_clear) begin
-      \$126  = 55'h00000000000000;
+      \$98  = 2'h0;
     end
     if (rst) begin
-      \$126  = 55'h00000000000000;
+      \$98  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
-    \$127  = ne;
-    if (\$69 ) begin
-      \$127 [0] = 1'h1;
-    end else if (\$74 ) begin
-      \$127 [0] = \bit ;
+    \$99  = nw;
+    if (\$55 ) begin
+      \$99 [0] = 1'h1;
+    end else if (\$59 ) begin
+    end else if (\$63 ) begin
+      \$99 [0] = \bit ;
     end
+    if (\$68 ) begin
+      \$99 [1] = 1'h1;
+    end else if (\$72 ) begin
+    end else if (\$76 ) begin
+      \$99 [1] = \bit ;
+    end
+    if (receiver_clear) begin
+      \$99  = 2'h0;
+    end
+    if (rst) begin
+      \$99  = 2'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
+    \$100  = data1;
+    if (\$67 ) begin
+      \$100  = { data1[38:0], \bit  };
+    end
+    if (receiver_clear) begin
+      \$100  = 40'h0000000000;
+    end
+    if (rst) begin
+      \$100  = 40'h0000000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
+    \$101  = lc;
+    if (\$82 ) begin
+      \$101  = { lc[4:0], \bit  };
+    end
+    if (receiver_clear) begin
+      \$101  = 6'h00;
+    end
+    if (rst) begin
+      \$101  = 6'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
+    \$102  = cpw_top;
     if (\$86 ) begin
-      \$127 [1] = 1'h1;
-    end else if (\$91 ) begin
-      \$127 [1] = \bit ;
+      \$102  = { cpw_top[38:0], \bit  };
     end
     if (receiver_clear) begin
-      \$127  = 2'h0;
+      \$102  = 40'h0000000000;
     end
     if (rst) begin
-      \$127  = 2'h0;
+      \$102  = 40'h0000000000;
     end
   end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
-    \$128  = nw;
-    if (\$69 ) begin
-      \$128 [0] = 1'h1;
-    end else if (\$74 ) begin
-    end else if (\$80 ) begin
-      \$128 [0] = \bit ;
-    end
-    if (\$86 ) begin
-      \$128 [1] = 1'h1;
-    end else if (\$91 ) begin
-    end else if (\$97 ) begin
-      \$128 [1] = \bit ;
-    end
-    if (receiver_clear) begin
-      \$128  = 2'h0;
-    end
-    if (rst) begin
-      \$128  = 2'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
-    \$129  = data1;
-    if (\$85 ) begin
-      \$129  = { data1[38:0], \bit  };
-    end
-    if (receiver_clear) begin
-      \$129  = 40'h0000000000;
-    end
-    if (rst) begin
-      \$129  = 40'h0000000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
-    \$130  = lc;
-    if (\$112 ) begin
-      \$130  = { lc[4:0], \bit  };
-    end
-    if (receiver_clear) begin
-      \$130  = 6'h00;
-    end
-    if (rst) begin
-      \$130  = 6'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
-    \$131  = cpw_top;
-    if (\$116 ) begin
-      \$131  = { cpw_top[38:0], \bit  };
-    end
-    if (receiver_clear) begin
-      \$131  = 40'h0000000000;
-    end
-    if (rst) begin
-      \$131  = 40'h0000000000;
-    end
-  end
+  assign frame_bits = \$12 [7:0];
   assign kind = words[9:8];
   assign \bit$12  = \bit ;
   assign \kind$15  = words[19:18];
   assign \bit$18  = \bit ;
-  assign frame_bits = \$26 [7:0];
   assign \words[0]  = words[9:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -3044,11 +3754,11 @@ module \biss_master.decoder (rst, word_count, frame_bits, words, receiver_clear,
   assign \words[1].crc  = words[19:18];
   assign crc_ok[1] = \ok$19 ;
   assign crc_ok[0] = ok;
-  assign \$31  = word;
-  assign \$34  = word;
-  assign \$81  = word;
-  assign \$87  = word;
-  assign \$92  = word;
+  assign \$17  = word;
+  assign \$20  = word;
+  assign \$64  = word;
+  assign \$69  = word;
+  assign \$73  = word;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -3674,20 +4384,24 @@ module \biss_master.ma_clock (rst, run, half_period, rise, ma, rises, busy, clk)
   reg \$auto$verilog_backend.cc:2355:dump_module$29  = 0;
   wire [16:0] \$1 ;
   wire \$10 ;
-  wire \$11 ;
+  wire [16:0] \$11 ;
   wire \$12 ;
-  reg \$13 ;
-  reg \$14 ;
-  reg [15:0] \$15 ;
-  reg [15:0] \$16 ;
-  reg [1:0] \$17 ;
-  wire [16:0] \$2 ;
-  wire \$3 ;
-  wire [16:0] \$4 ;
-  wire \$5 ;
-  wire [16:0] \$6 ;
-  wire [16:0] \$7 ;
-  wire \$8 ;
+  wire \$13 ;
+  wire \$14 ;
+  wire \$15 ;
+  reg \$16 ;
+  reg \$17 ;
+  reg [15:0] \$18 ;
+  reg \$19 ;
+  wire \$2 ;
+  reg [15:0] \$20 ;
+  reg [1:0] \$21 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  wire [16:0] \$5 ;
+  wire \$6 ;
+  wire \$7 ;
+  wire [16:0] \$8 ;
   wire [16:0] \$9 ;
   output busy;
   reg busy;
@@ -3695,6 +4409,7 @@ module \biss_master.ma_clock (rst, run, half_period, rise, ma, rises, busy, clk)
   wire clk;
   input [15:0] half_period;
   wire [15:0] half_period;
+  reg last_clock = 1'h1;
   output ma;
   reg ma = 1'h1;
   reg [1:0] ma_fsm_state = 2'h0;
@@ -3708,137 +4423,171 @@ module \biss_master.ma_clock (rst, run, half_period, rise, ma, rises, busy, clk)
   input run;
   wire run;
   assign \$1  = half_period - 1'h1;
-  assign \$2  = phase_left - 1'h1;
-  assign \$3  = ! phase_left;
-  assign \$4  = half_period - 1'h1;
-  assign \$5  = rises != 16'hffff;
-  assign \$6  = rises + 1'h1;
-  assign \$7  = phase_left - 1'h1;
-  assign \$8  = ! phase_left;
-  assign \$9  = half_period - 1'h1;
-  assign \$10  = ! ma_fsm_state;
-  assign \$11  = ma_fsm_state == 1'h1;
-  assign \$12  = ma_fsm_state == 2'h2;
+  assign \$2  = half_period == 1'h1;
+  assign \$3  = phase_left - 1'h1;
+  assign \$4  = phase_left == 1'h1;
+  assign \$5  = half_period - 1'h1;
+  assign \$6  = half_period == 1'h1;
+  assign \$7  = rises != 16'hffff;
+  assign \$8  = rises + 1'h1;
+  assign \$9  = phase_left - 1'h1;
+  assign \$10  = phase_left == 1'h1;
+  assign \$11  = half_period - 1'h1;
+  assign \$12  = half_period == 1'h1;
+  assign \$13  = ! ma_fsm_state;
+  assign \$14  = ma_fsm_state == 1'h1;
+  assign \$15  = ma_fsm_state == 2'h2;
   always @(posedge clk)
-    rise <= \$13 ;
+    rise <= \$16 ;
   always @(posedge clk)
-    ma <= \$14 ;
+    ma <= \$17 ;
   always @(posedge clk)
-    phase_left <= \$15 ;
+    phase_left <= \$18 ;
   always @(posedge clk)
-    rises <= \$16 ;
+    last_clock <= \$19 ;
   always @(posedge clk)
-    ma_fsm_state <= \$17 ;
+    rises <= \$20 ;
+  always @(posedge clk)
+    ma_fsm_state <= \$21 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
-    \$13  = 1'h0;
+    \$16  = 1'h0;
     casez (ma_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$3 ) begin
-            \$13  = 1'h1;
+          if (last_clock) begin
+            \$16  = 1'h1;
           end
     endcase
     if (rst) begin
-      \$13  = 1'h0;
+      \$16  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
-    \$14  = ma;
+    \$17  = ma;
     casez (ma_fsm_state)
       2'h0:
           if (run) begin
-            \$14  = 1'h0;
+            \$17  = 1'h0;
           end
       2'h1:
-          if (\$3 ) begin
-            \$14  = 1'h1;
+          if (last_clock) begin
+            \$17  = 1'h1;
           end
       2'h2:
-          if (\$8 ) begin
+          if (last_clock) begin
             if (run) begin
-              \$14  = 1'h0;
+              \$17  = 1'h0;
             end
           end
     endcase
     if (rst) begin
-      \$14  = 1'h1;
+      \$17  = 1'h1;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
-    \$15  = phase_left;
+    \$18  = phase_left;
     casez (ma_fsm_state)
       2'h0:
           if (run) begin
-            \$15  = \$1 [15:0];
+            \$18  = \$1 [15:0];
           end
       2'h1:
         begin
-          \$15  = \$2 [15:0];
-          if (\$3 ) begin
-            \$15  = \$4 [15:0];
+          \$18  = \$3 [15:0];
+          if (last_clock) begin
+            \$18  = \$5 [15:0];
           end
         end
       2'h2:
         begin
-          \$15  = \$7 [15:0];
-          if (\$8 ) begin
+          \$18  = \$9 [15:0];
+          if (last_clock) begin
             if (run) begin
-              \$15  = \$9 [15:0];
+              \$18  = \$11 [15:0];
             end
           end
         end
     endcase
     if (rst) begin
-      \$15  = 16'h0000;
+      \$18  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
-    \$16  = rises;
+    \$19  = last_clock;
     casez (ma_fsm_state)
       2'h0:
           if (run) begin
-            \$16  = 16'h0000;
+            \$19  = \$2 ;
           end
       2'h1:
-          if (\$3 ) begin
-            if (\$5 ) begin
-              \$16  = \$6 [15:0];
+        begin
+          \$19  = \$4 ;
+          if (last_clock) begin
+            \$19  = \$6 ;
+          end
+        end
+      2'h2:
+        begin
+          \$19  = \$10 ;
+          if (last_clock) begin
+            if (run) begin
+              \$19  = \$12 ;
+            end
+          end
+        end
+    endcase
+    if (rst) begin
+      \$19  = 1'h1;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    \$20  = rises;
+    casez (ma_fsm_state)
+      2'h0:
+          if (run) begin
+            \$20  = 16'h0000;
+          end
+      2'h1:
+          if (last_clock) begin
+            if (\$7 ) begin
+              \$20  = \$8 [15:0];
             end
           end
     endcase
     if (rst) begin
-      \$16  = 16'h0000;
+      \$20  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
-    \$17  = ma_fsm_state;
+    \$21  = ma_fsm_state;
     casez (ma_fsm_state)
       2'h0:
           if (run) begin
-            \$17  = 2'h1;
+            \$21  = 2'h1;
           end
       2'h1:
-          if (\$3 ) begin
-            \$17  = 2'h2;
+          if (last_clock) begin
+            \$21  = 2'h2;
           end
       2'h2:
-          if (\$8 ) begin
+          if (last_clock) begin
             (* full_case = 32'd1 *)
             if (run) begin
-              \$17  = 2'h1;
+              \$21  = 2'h1;
             end else begin
-              \$17  = 2'h0;
+              \$21  = 2'h0;
             end
           end
     endcase
     if (rst) begin
-      \$17  = 2'h0;
+      \$21  = 2'h0;
     end
   end
   always @* begin
@@ -3860,12 +4609,12 @@ module \biss_master.sampler (rst, arm, receiver_clear, half_period, early, locke
   reg \$auto$verilog_backend.cc:2355:dump_module$30  = 0;
   wire \$1 ;
   wire \$10 ;
-  wire [13:0] \$11 ;
-  wire [17:0] \$12 ;
-  wire \$13 ;
+  wire \$11 ;
+  wire [13:0] \$12 ;
+  wire [17:0] \$13 ;
   wire \$14 ;
-  wire [17:0] \$15 ;
-  wire \$16 ;
+  wire \$15 ;
+  wire [17:0] \$16 ;
   wire \$17 ;
   wire \$18 ;
   wire \$19 ;
@@ -3879,6 +4628,7 @@ module \biss_master.sampler (rst, arm, receiver_clear, half_period, early, locke
   reg [12:0] \$26 ;
   reg [16:0] \$27 ;
   reg \$28 ;
+  reg \$29 ;
   wire [13:0] \$3 ;
   wire \$4 ;
   wire \$5 ;
@@ -3912,6 +4662,7 @@ module \biss_master.sampler (rst, arm, receiver_clear, half_period, early, locke
   wire slo;
   reg slo_prev = 1'h1;
   reg [16:0] slot_left = 17'h00000;
+  reg slot_zero = 1'h1;
   assign \$1  = ~ slo;
   assign \$2  = elapsed != 13'h1fff;
   assign \$3  = elapsed + 1'h1;
@@ -3921,14 +4672,14 @@ module \biss_master.sampler (rst, arm, receiver_clear, half_period, early, locke
   assign \$7  = elapsed - 1'h1;
   assign \$8  = \$6  ? 14'h1fff : \$7 ;
   assign \$9  = half_period - 1'h1;
-  assign \$10  = elapsed != 13'h1fff;
-  assign \$11  = elapsed + 1'h1;
-  assign \$12  = slot_left - 1'h1;
-  assign \$13  = first_slot & slo;
-  assign \$14  = ! slot_left;
-  assign \$15  = { half_period, 1'h0 } - 1'h1;
-  assign \$16  = first_slot & slo;
-  assign \$17  = ! slot_left;
+  assign \$10  = half_period == 1'h1;
+  assign \$11  = elapsed != 13'h1fff;
+  assign \$12  = elapsed + 1'h1;
+  assign \$13  = slot_left - 1'h1;
+  assign \$14  = slot_left == 1'h1;
+  assign \$15  = first_slot & slo;
+  assign \$16  = { half_period, 1'h0 } - 1'h1;
+  assign \$17  = first_slot & slo;
   assign \$18  = ! sampler_fsm_state;
   assign \$19  = sampler_fsm_state == 1'h1;
   assign \$20  = sampler_fsm_state == 2'h2;
@@ -3947,7 +4698,9 @@ module \biss_master.sampler (rst, arm, receiver_clear, half_period, early, locke
   always @(posedge clk)
     slot_left <= \$27 ;
   always @(posedge clk)
-    first_slot <= \$28 ;
+    slot_zero <= \$28 ;
+  always @(posedge clk)
+    first_slot <= \$29 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$21  = slo;
@@ -3971,8 +4724,8 @@ module \biss_master.sampler (rst, arm, receiver_clear, half_period, early, locke
             \$22  = \$3 [12:0];
           end
       2'h2:
-          if (\$10 ) begin
-            \$22  = \$11 [12:0];
+          if (\$11 ) begin
+            \$22  = \$12 [12:0];
           end
     endcase
     if (receiver_clear) begin
@@ -4009,8 +4762,8 @@ module \biss_master.sampler (rst, arm, receiver_clear, half_period, early, locke
       2'h1:
           /* empty */;
       2'h2:
-          if (\$13 ) begin
-          end else if (\$14 ) begin
+          if (\$15 ) begin
+          end else if (slot_zero) begin
             \$24  = 1'h1;
           end
     endcase
@@ -4034,7 +4787,7 @@ module \biss_master.sampler (rst, arm, receiver_clear, half_period, early, locke
             \$25  = 2'h2;
           end
       2'h2:
-          if (\$13 ) begin
+          if (\$15 ) begin
             \$25  = 2'h1;
           end
     endcase
@@ -4075,10 +4828,10 @@ module \biss_master.sampler (rst, arm, receiver_clear, half_period, early, locke
           end
       2'h2:
         begin
-          \$27  = \$12 [16:0];
-          if (\$13 ) begin
-          end else if (\$14 ) begin
-            \$27  = \$15 [16:0];
+          \$27  = \$13 [16:0];
+          if (\$15 ) begin
+          end else if (slot_zero) begin
+            \$27  = \$16 [16:0];
           end
         end
     endcase
@@ -4091,25 +4844,51 @@ module \biss_master.sampler (rst, arm, receiver_clear, half_period, early, locke
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    \$28  = first_slot;
+    \$28  = slot_zero;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
           if (\$5 ) begin
-            \$28  = 1'h1;
+            \$28  = \$10 ;
           end
       2'h2:
-          if (\$13 ) begin
-          end else if (\$14 ) begin
+        begin
+          \$28  = \$14 ;
+          if (\$15 ) begin
+          end else if (slot_zero) begin
             \$28  = 1'h0;
+          end
+        end
+    endcase
+    if (receiver_clear) begin
+      \$28  = 1'h1;
+    end
+    if (rst) begin
+      \$28  = 1'h1;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    \$29  = first_slot;
+    casez (sampler_fsm_state)
+      2'h0:
+          /* empty */;
+      2'h1:
+          if (\$5 ) begin
+            \$29  = 1'h1;
+          end
+      2'h2:
+          if (\$15 ) begin
+          end else if (slot_zero) begin
+            \$29  = 1'h0;
           end
     endcase
     if (receiver_clear) begin
-      \$28  = 1'h0;
+      \$29  = 1'h0;
     end
     if (rst) begin
-      \$28  = 1'h0;
+      \$29  = 1'h0;
     end
   end
   always @* begin
@@ -4121,8 +4900,8 @@ module \biss_master.sampler (rst, arm, receiver_clear, half_period, early, locke
       2'h1:
           /* empty */;
       2'h2:
-          if (\$16 ) begin
-          end else if (\$17 ) begin
+          if (\$17 ) begin
+          end else if (slot_zero) begin
             sample = 1'h1;
           end
     endcase
@@ -4134,12 +4913,13 @@ endmodule
 module \biss_master.sign_of_life (rst, check, zero, \repeat , skip, resync, lc, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$31  = 0;
   wire \$1 ;
-  wire [6:0] \$10 ;
+  wire \$10 ;
   wire \$11 ;
-  wire \$12 ;
-  wire \$13 ;
+  wire [6:0] \$12 ;
+  wire [6:0] \$13 ;
   reg [5:0] \$14 ;
-  reg \$15 ;
+  reg [5:0] \$15 ;
+  reg \$16 ;
   wire \$2 ;
   wire \$3 ;
   wire \$4 ;
@@ -4147,11 +4927,12 @@ module \biss_master.sign_of_life (rst, check, zero, \repeat , skip, resync, lc, 
   wire \$6 ;
   wire \$7 ;
   wire \$8 ;
-  wire [6:0] \$9 ;
+  wire \$9 ;
   input check;
   wire check;
   input clk;
   wire clk;
+  reg [5:0] expected = 6'h01;
   reg [5:0] last = 6'h00;
   input [5:0] lc;
   wire [5:0] lc;
@@ -4175,21 +4956,23 @@ module \biss_master.sign_of_life (rst, check, zero, \repeat , skip, resync, lc, 
   assign \$5  = synced & \$4 ;
   assign \$6  = lc != last;
   assign \$7  = \$5  & \$6 ;
-  assign \$8  = last == 6'h3f;
-  assign \$9  = last + 1'h1;
-  assign \$10  = \$8  ? 7'h01 : \$9 ;
-  assign \$11  = lc != \$10 ;
-  assign skip = \$7  & \$11 ;
-  assign \$12  = ~ zero;
-  assign \$13  = check & \$12 ;
+  assign \$8  = lc != expected;
+  assign skip = \$7  & \$8 ;
+  assign \$9  = ~ zero;
+  assign \$10  = check & \$9 ;
+  assign \$11  = lc == 6'h3f;
+  assign \$12  = lc + 1'h1;
+  assign \$13  = \$11  ? 7'h01 : \$12 ;
   always @(posedge clk)
     last <= \$14 ;
   always @(posedge clk)
-    synced <= \$15 ;
+    expected <= \$15 ;
+  always @(posedge clk)
+    synced <= \$16 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     \$14  = last;
-    if (\$13 ) begin
+    if (\$10 ) begin
       \$14  = lc;
     end
     if (rst) begin
@@ -4198,15 +4981,25 @@ module \biss_master.sign_of_life (rst, check, zero, \repeat , skip, resync, lc, 
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
-    \$15  = synced;
-    if (\$13 ) begin
-      \$15  = 1'h1;
-    end
-    if (resync) begin
-      \$15  = 1'h0;
+    \$15  = expected;
+    if (\$10 ) begin
+      \$15  = \$13 [5:0];
     end
     if (rst) begin
-      \$15  = 1'h0;
+      \$15  = 6'h01;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
+    \$16  = synced;
+    if (\$10 ) begin
+      \$16  = 1'h1;
+    end
+    if (resync) begin
+      \$16  = 1'h0;
+    end
+    if (rst) begin
+      \$16  = 1'h0;
     end
   end
 endmodule

