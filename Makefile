@@ -42,7 +42,7 @@ campaigns: setup  ## reliability campaigns, fast slice (CRC, line faults, LC, co
 	$(PY) sim/campaign_report.py sim_build/campaign/slice
 
 soak: setup  ## long soak: >= 100k random frames with random faults (Verilator) + every campaign x10
-	$(PY) sim/soak.py --frames $(or $(FRAMES),100000) --jobs $(JOBS)
+	$(PY) sim/soak.py --frames $(or $(FRAMES),100000) --scale $(or $(SCALE),10) --jobs $(JOBS)
 
 test: lint unit sim-all campaigns  ## everything CI runs: lint, unit tests, both simulators, campaign slice
 
@@ -61,6 +61,10 @@ bench: setup  ## simulated performance: cycle overhead, verdict latency, line-de
 .PHONY: synth
 synth: setup  ## Yosys + nextpnr: LUT4/FF/carry and Fmax on ECP5-25k and iCE40 UP5K (docs/performance.md)
 	$(PY) scripts/synth.py
+
+.PHONY: formal
+formal: setup  ## formal checks (Yosys SMT flow + Yices): MA never glitches, back to idle, CRC; FAST=1: the slice
+	$(PY) tb/formal/run.py $(if $(FAST),--fast)
 
 clean:  ## remove build trees (keeps .venv)
 	rm -rf sim_build .pytest_cache tb/tests/sim_build

@@ -22,7 +22,8 @@ sys.path.insert(0, str(HERE))
 
 import campaign_report  # noqa: E402
 import runner  # noqa: E402
-from test_campaign import run  # noqa: E402
+os.environ.setdefault("PYTEST_XDIST_WORKER", "soak")     # one build directory for the soak
+from test_campaign import build, run  # noqa: E402
 
 RESULTS = runner.BUILD / "campaign" / "soak"
 MIX_CYCLES_AT_SCALE_1 = 600          # random_mix runs this many cycles at scale 1
@@ -33,11 +34,16 @@ def main(argv=None):
     ap.add_argument("--frames", type=int, default=100_000, help="random-mix cycles in all")
     ap.add_argument("--jobs", type=int, default=2, help="parallel simulator processes")
     ap.add_argument("--scale", type=float, default=10, help="scale of the other campaigns")
+    ap.add_argument("--one", nargs=3, metavar=("CAMPAIGN", "SCALE", "SEED"),
+                    help=argparse.SUPPRESS)     # internal: run one campaign in this process
     args = ap.parse_args(argv)
+    if args.one:
+        name, scale, seed = args.one
+        env = {"BISS_SOAK_SEED": seed} if seed else {}
+        run(name, float(scale), RESULTS, seed=int(seed) if seed else None, extra_env=env)
+        return 0
     shutil.rmtree(RESULTS, ignore_errors=True)
     RESULTS.mkdir(parents=True)
-    os.environ.setdefault("PYTEST_XDIST_WORKER", "soak")
-    from test_campaign import build
     build()                                             # once, before the parallel runs
     per_job = args.frames / args.jobs / MIX_CYCLES_AT_SCALE_1
     jobs = [("random_mix", per_job, 1000 + i) for i in range(args.jobs)]
@@ -47,14 +53,17 @@ def main(argv=None):
     failures = []
 
     def one(job):
+        # One simulator per subprocess: cocotb's runner object is not safe to share
+        # between threads (its test() keeps per-run state).
         name, scale, seed = job
-        env_seed = {"BISS_SOAK_SEED": str(seed)} if seed else {}
-        try:
-            run(name, scale, RESULTS, seed=seed, extra_env=env_seed)
-            return f"{name} (seed {seed}): pass"
-        except AssertionError as e:
-            failures.append(f"{name} (seed {seed}): {e}")
+        cmd = [sys.executable, __file__, "--one", name, str(scale), str(seed or "")]
+        proc = subprocess.run(cmd, cwd=HERE, capture_output=True, text=True)
+        log = RESULTS / f"{name}-{seed}.log"
+        log.write_text(proc.stdout + proc.stderr)
+        if proc.returncode:
+            failures.append(f"{name} (seed {seed}): see {log}")
             return f"{name} (seed {seed}): FAIL"
+        return f"{name} (seed {seed}): pass"
 
     with ThreadPoolExecutor(max_workers=args.jobs) as pool:
         for line in pool.map(one, jobs):
