@@ -1,0 +1,861 @@
+"""Formal harnesses: Amaranth elaboratables that wrap the real blocks of the core.
+
+Each harness drives the block's inputs from ``AnySeq`` (a fresh free value every clock) or
+``AnyConst`` (one free value for the whole trace), narrows them with ``Assume``, observes the
+outputs with counters and shift registers of its own, and states the property with ``Assert``
+(and ``Cover`` for non-vacuity). The clock domain has no reset: every register starts from its
+``init`` value in the base case, and from any value in an induction step.
+
+Expected values are never taken from the RTL: phase lengths are counted by the harness, the
+frame is parsed by the harness from its own reading of the configuration, and the CRCs are
+computed by a bit-serial LFSR written here from the protocol digest (section 6), not with
+``amaranth.lib.crc`` that the RTL uses.
+
+``mutation`` names a deliberate weakening (an assumption dropped, a wrong reference) for which
+the solver must find a counterexample: it shows that the assertions can fail, i.e. that a PASS
+is not vacuous. ``lemmas`` adds assertions about internal registers that make the properties
+k-inductive; they are proven like the others, never assumed.
+"""
+
+from amaranth.hdl import (Assert, Assume, C, Cat, ClockDomain, Cover, Elaboratable, Module, Mux,
+                          Signal)
+from amaranth.hdl._ast import AnyConst, AnySeq   # not re-exported by amaranth.hdl in 0.5
+
+from bissmaster import protocol
+from bissmaster.frame_decoder import FrameDecoder
+from bissmaster.ma_clock import MaClock
+from bissmaster.master import BissMaster
+from bissmaster.params import Crc, Status
+from bissmaster.slo_sampler import SloSampler
+
+from .flow import Internals
+
+
+class Harness(Elaboratable):
+    """Base: the harness owns the ``sync`` domain (no reset); its clock is the only port."""
+
+    def __init__(self):
+        self.cd = ClockDomain("sync", reset_less=True)
+
+    @property
+    def ports(self):
+        return [self.cd.clk]
+
+
+def _domain(m, harness):
+    m.domains.sync = harness.cd
+
+
+class _PhaseMonitor:
+    """Counts clocks between transitions of a line and checks every phase against a reference.
+
+    ``since`` is the number of clocks since the line last changed (saturating, starts high: the
+    line has been idle since long before the trace). At every transition the phase that just
+    ended is checked: at least ``hp_phase`` clocks; a low phase exactly ``hp_phase`` (1:1 duty);
+    a high phase exactly ``hp_phase`` too unless ``idle_seen`` (the clock stopped in between).
+    ``hp_phase`` is the reference latched at the transition that began the phase.
+    """
+
+    def __init__(self, m, line, hp_now, stopped, width=18):
+        self.prev = prev = Signal(init=1, name="mon_prev")
+        self.since = since = Signal(width, init=(1 << width) - 1, name="mon_since")
+        self.hp_phase = hp_phase = Signal(16, name="mon_hp_phase")
+        self.idle_seen = idle_seen = Signal(init=1, name="mon_idle_seen")
+        self.edge = edge = Signal(name="mon_edge")
+        self.fall = fall = Signal(name="mon_fall")
+        self.rise = rise = Signal(name="mon_rise")
+        m.d.comb += [edge.eq(line != prev), fall.eq(prev & ~line), rise.eq(~prev & line)]
+        m.d.sync += prev.eq(line)
+        # ``since`` counts the clocks of the current phase, the current clock included.
+        with m.If(edge):
+            m.d.sync += [since.eq(1), hp_phase.eq(hp_now), idle_seen.eq(stopped)]
+        with m.Else():
+            with m.If(since != (1 << width) - 1):
+                m.d.sync += since.eq(since + 1)
+            with m.If(stopped):
+                m.d.sync += idle_seen.eq(1)
+        # The phase that ends at this transition lasted ``since`` clocks.
+        self.short = short = Signal(name="mon_short")
+        self.low_wrong = low_wrong = Signal(name="mon_low_wrong")
+        self.high_wrong = high_wrong = Signal(name="mon_high_wrong")
+        m.d.comb += [
+            short.eq(edge & (since < hp_phase)),
+            low_wrong.eq(rise & (since != hp_phase)),
+            high_wrong.eq(fall & ~idle_seen & (since != hp_phase)),
+        ]
+
+
+# =============================================================================================
+# (a) MA: idles high, no phase shorter than the half period
+# =============================================================================================
+
+def _check_ma(m, ma, hp, clock_busy, fragment_path, inside, lemmas):
+    """The MA properties of one MaClock instance, with ``hp`` the half period it must honour.
+
+    ``clock_busy`` is the MaClock's own busy. Lemmas relate the harness's phase counter to the
+    block's FSM and phase timer; they are asserted (so proven), never assumed.
+    """
+    mon = _PhaseMonitor(m, ma, hp, stopped=~clock_busy)
+    m.d.comb += [
+        Assert(clock_busy | ma, "MA high while the clock is idle"),
+        Assert(~mon.short, "no MA phase shorter than the half period"),
+        Assert(~mon.low_wrong, "every low phase exactly one half period"),
+        Assert(~mon.high_wrong, "every high phase inside a burst exactly one half period"),
+    ]
+    if lemmas:
+        phase_left = inside.signal(fragment_path, "phase_left")
+        low = inside.in_state(fragment_path, "ma_fsm", "LOW")
+        high = inside.in_state(fragment_path, "ma_fsm", "HIGH")
+        edge = mon.edge
+        m.d.comb += [
+            Assert(ma == ~low, "lemma: MA low exactly in LOW"),
+            Assert(clock_busy == (low | high), "lemma: busy in LOW and HIGH"),
+            # An MA edge loads the phase timer with the half period.
+            Assert(~edge | (clock_busy & (phase_left + 1 == hp)), "lemma: edge loads timer"),
+            # In a phase: clocks spent (``since`` + this one) + clocks left = half period.
+            Assert(~clock_busy | edge | (mon.since + 1 + phase_left == mon.hp_phase),
+                   "lemma: phase counter"),
+            Assert(~clock_busy | edge | (mon.hp_phase == hp), "lemma: phase's half period"),
+            Assert(~low | edge | ~mon.idle_seen, "lemma: low phases never see idle"),
+            # Idle: the high phase so far already lasts a full half period.
+            Assert(clock_busy | (mon.since >= mon.hp_phase), "lemma: idle after a full phase"),
+        ]
+    return mon
+
+
+class MaClockHarness(Harness):
+    """MaClock alone: ``run`` free every clock; ``half_period`` free, at least 2, and held
+    while the clock is busy (the master latches it for the whole cycle).
+
+    Properties: MA is high whenever the block is not busy; every high and low phase lasts at
+    least the half period; low phases, and high phases inside a burst, last exactly the half
+    period. Lemmas (for induction, proven as well): the phase counter of the harness and the
+    block's ``phase_left`` add up to the half period; MA is low exactly in state LOW.
+
+    ``hp_max`` bounds the half period (None: any 16-bit value). Mutation ``"hp_unstable"``
+    lets the half period change in the middle of a burst: the solver must find a short phase.
+    """
+
+    def __init__(self, hp_max=None, lemmas=True, mutation=None):
+        super().__init__()
+        self.hp_max = hp_max
+        self.lemmas = lemmas
+        self.mutation = mutation
+
+    def elaborate(self, platform):
+        m = Module()
+        _domain(m, self)
+        dut = MaClock()
+        inside = Internals(dut)
+        m.submodules.dut = inside.fragment
+
+        run = AnySeq(1)
+        hp = AnySeq(16)
+        hp_prev = Signal(16)
+        m.d.sync += hp_prev.eq(hp)
+        m.d.comb += [dut.run.eq(run), dut.half_period.eq(hp)]
+        m.d.comb += Assume(hp >= protocol.MA_HALF_PERIOD_MIN)
+        if self.hp_max is not None:
+            m.d.comb += Assume(hp <= self.hp_max)
+        if self.mutation != "hp_unstable":
+            m.d.comb += Assume(~dut.busy | (hp == hp_prev))
+
+        mon = _check_ma(m, dut.ma, hp, dut.busy, "", inside, self.lemmas)
+
+        # Non-vacuity: three full periods at a half period of at least 3, stop, and a restart.
+        periods = Signal(4)
+        with m.If(mon.rise & (hp < 3)):
+            m.d.sync += periods.eq(0)
+        with m.Elif(mon.rise & (periods != 15)):
+            m.d.sync += periods.eq(periods + 1)
+        m.d.comb += Cover((periods >= 3) & mon.fall & mon.idle_seen)
+        return m
+
+
+class MasterMaHarness(Harness):
+    """The whole BissMaster's MA output. Every input is free at every clock (SLO, start,
+    abort_cycle, every cfg_*), except ``periodic``, held low: ``start`` already produces every
+    possible request pattern.
+
+    The harness latches the live ``cfg_ma_half_period`` itself when the master accepts a request
+    (idle, ``start``, no abort, no configuration error: all visible on the ports), and checks
+    every MA phase against it; MA must be high whenever the master is idle.
+
+    Lemmas (``lemmas=True``, for induction): the MaClock lemmas, the master's MaClock is idle
+    while the master is idle, and the half period MaClock sees is the one the harness latched.
+    Mutation ``"live_hp"``: check against the live setting instead of the latched one (the
+    setting may change during a cycle, so the solver must find a "short" phase).
+    """
+
+    def __init__(self, params, lemmas=False, hp_max=None, mutation=None):
+        super().__init__()
+        self.params = params
+        self.lemmas = lemmas
+        self.hp_max = hp_max
+        self.mutation = mutation
+
+    def elaborate(self, platform):
+        m = Module()
+        _domain(m, self)
+        dut = BissMaster(self.params)
+        inside = Internals(dut)
+        m.submodules.dut = inside.fragment
+
+        _drive_free(m, dut, exclude=("periodic",))
+        m.d.comb += dut.periodic.eq(0)
+        if self.hp_max is not None:
+            m.d.comb += Assume(dut.cfg_ma_half_period <= self.hp_max)
+
+        accept = ~dut.busy & dut.start & ~dut.abort_cycle & ~dut.config_error
+        hp_cycle = Signal(16)
+        with m.If(accept):
+            m.d.sync += hp_cycle.eq(dut.cfg_ma_half_period)
+        hp_ref = dut.cfg_ma_half_period if self.mutation == "live_hp" else hp_cycle
+
+        clock_busy = inside.signal("ma_clock", "busy")
+        m.d.comb += Assert(dut.busy | dut.ma, "MA high while the master is idle")
+        mon = _check_ma(m, dut.ma, hp_ref, clock_busy, "ma_clock", inside, self.lemmas)
+        if self.lemmas:
+            hp_dut = inside.signal("ma_clock", "half_period")
+            in_cycle = 0
+            for state in ("WAIT_READY", "CLOCK", "TAIL", "END"):
+                in_cycle = in_cycle | inside.in_state("", "cycle_fsm", state)
+            m.d.comb += [
+                Assert(dut.busy | ~clock_busy, "lemma: MaClock idle while the master is idle"),
+                # (The master may copy the settings in every idle clock: only a cycle's matter.)
+                Assert(~(clock_busy | in_cycle) | (hp_dut == hp_cycle),
+                       "lemma: MaClock's half period is the latched one"),
+                # Only a valid configuration (half period >= 2) is ever latched and clocked.
+                Assert(~(clock_busy | in_cycle) | (hp_cycle >= protocol.MA_HALF_PERIOD_MIN),
+                       "lemma: a cycle's half period is at least 2"),
+            ]
+
+        # Non-vacuity: two request cycles with MA clocking, and back to idle.
+        cycles = Signal(2)
+        with m.If(accept & (cycles != 3)):
+            m.d.sync += cycles.eq(cycles + 1)
+        rises = Signal(2)
+        with m.If(mon.rise & (rises != 3)):
+            m.d.sync += rises.eq(rises + 1)
+        m.d.comb += Cover((cycles >= 2) & (rises >= 3) & ~dut.busy)
+        return m
+
+
+# =============================================================================================
+# (b) Every request cycle ends, and the master returns to idle, within a bound
+# =============================================================================================
+
+def _word_bits(dut, w):
+    """Bits of word ``w`` on the line after CDS, from the live configuration ports (the
+    harness's own reading of protocol section 5: data, nE/nW, LC, CRC)."""
+    crc = getattr(dut, f"cfg_w{w}_crc")
+    crc_bits = Mux(crc == Crc.CRC6, 6, Mux(crc == Crc.CRC16, 16, 0))
+    return (getattr(dut, f"cfg_w{w}_data_bits")
+            + Mux(getattr(dut, f"cfg_w{w}_nenw"), 2, 0)
+            + Mux(getattr(dut, f"cfg_w{w}_lc"), 6, 0) + crc_bits)
+
+
+class LivenessLimits:
+    """Small ranges for the runtime settings, so that a whole worst-case cycle fits in a BMC
+    run: half period, Ack, timeout and break limits up to the given maxima; word formats from
+    the given choices (data bits up to ``data_bits_max``, nE/nW and LC allowed or not, the
+    CRC codes in ``crcs``)."""
+
+    def __init__(self, hp_max=2, ack_max=6, timeout_max=2, break_max=2, data_bits_max=1,
+                 nenw=False, lc=False, crcs=(Crc.NONE,)):
+        self.hp_max = hp_max
+        self.ack_max = ack_max
+        self.timeout_max = timeout_max
+        self.break_max = break_max
+        self.data_bits_max = data_bits_max
+        self.nenw = nenw
+        self.lc = lc
+        self.crcs = tuple(crcs)
+
+    def max_frame_bits(self, words):
+        crc = max({Crc.NONE: 0, Crc.CRC6: 6, Crc.CRC16: 16}[c] for c in self.crcs)
+        return words * (self.data_bits_max + 2 * self.nenw + crc) + 6 * self.lc
+
+    def max_bound(self, words, slack):
+        h = self.hp_max
+        return (1 + (self.timeout_max + 1) + (3 * h + 1) + (self.ack_max + 1)
+                + (self.ack_max + 2 * h) + (self.max_frame_bits(words) + 1) * 2 * h + 2 + slack)
+
+    def depth(self, words, slack):
+        """BMC depth that holds power-up, the break, and the longest cycle, with a margin."""
+        return self.break_max + 2 + self.max_bound(words, slack) + 3
+
+
+class MasterLivenessHarness(Harness):
+    """Bounded liveness of the whole BissMaster, as safety properties.
+
+    Inputs: SLO, start, periodic, abort_cycle, clear_counters free at every clock (glitches,
+    a missing or stuck encoder, any frame content); the cycle settings free at every clock
+    within ``limits`` (the master latches them per cycle); ``cfg_break_time`` (read live) one
+    free constant.
+
+    The harness latches the settings itself at each accepted request and computes a bound
+    from them (``bound_done``). Properties:
+
+    1. every accepted request is answered by ``done`` within ``bound_done`` clocks, whatever
+       SLO does, aborts included;
+    2. ``busy`` falls within ``bound_idle`` clocks of the last of: power-up, an accepted
+       request, an ``abort_cycle`` pulse.
+
+    ``slack`` is added to both bounds (clocks of pipeline latency not modelled by the
+    formula). Mutation ``"tight"`` drops the ``2 * half period`` per frame bit from the bound:
+    the solver must then find a frame that takes longer.
+    """
+
+    def __init__(self, params, limits, slack=8, mutation=None):
+        super().__init__()
+        self.params = params
+        self.limits = limits
+        self.slack = slack
+        self.mutation = mutation
+
+    def elaborate(self, platform):
+        m = Module()
+        _domain(m, self)
+        p, lim = self.params, self.limits
+        dut = BissMaster(p)
+        m.submodules.dut = dut
+
+        _drive_free(m, dut, exclude=("cfg_break_time",))
+        m.d.comb += dut.cfg_break_time.eq(AnyConst(len(dut.cfg_break_time)))
+        m.d.comb += [
+            Assume((dut.cfg_ma_half_period >= 2) & (dut.cfg_ma_half_period <= lim.hp_max)),
+            Assume((dut.cfg_ack_limit >= 1) & (dut.cfg_ack_limit <= lim.ack_max)),
+            Assume((dut.cfg_timeout_limit >= 1) & (dut.cfg_timeout_limit <= lim.timeout_max)),
+            Assume((dut.cfg_break_time >= 1) & (dut.cfg_break_time <= lim.break_max)),
+        ]
+        for w in range(p.words):
+            cfg = {name: getattr(dut, f"cfg_w{w}_{name}") for name in ("data_bits", "nenw", "lc", "crc")}
+            m.d.comb += Assume(cfg["data_bits"] <= lim.data_bits_max)
+            if not lim.nenw:
+                m.d.comb += Assume(~cfg["nenw"])
+            if not lim.lc:
+                m.d.comb += Assume(~cfg["lc"])
+            crc_ok = 0
+            for c in lim.crcs:
+                crc_ok = crc_ok | (cfg["crc"] == c)
+            m.d.comb += Assume(crc_ok)
+
+        # The harness's copy of the cycle's settings. A request was accepted in the previous
+        # clock if the master was idle there, saw no abort, and is busy now (an idle master
+        # only leaves idle for an abort or an accepted request); the settings it latched are
+        # the live ones of that clock.
+        frame_bits = _word_bits(dut, 0)
+        if p.words == 2:
+            frame_bits = frame_bits + Mux(dut.cfg_w1_enable, _word_bits(dut, 1), 0)
+        tw = p.timer_width
+        live = Cat(dut.cfg_ma_half_period, dut.cfg_ack_limit, dut.cfg_timeout_limit,
+                   frame_bits[:8])
+        snapshot = Signal(len(live))
+        could_accept = Signal()
+        m.d.sync += [snapshot.eq(live), could_accept.eq(~dut.busy & ~dut.abort_cycle)]
+        accepted = Signal()
+        m.d.comb += accepted.eq(could_accept & dut.busy)
+        hp, ack, timeout, bits = (snapshot[:16], snapshot[16:16 + tw], snapshot[16 + tw:16 + 2 * tw],
+                                  snapshot[16 + 2 * tw:])
+
+        # The bound, clock by clock: 1 to leave IDLE; WAIT_READY up to the timeout limit + 1;
+        # MA to its second rise (3 half periods + 1: the sampler is armed); the Ack edge and the
+        # slot-0 sample up to the Ack limit + 1; the Start sample up to the Ack limit + one MA
+        # period after that (the NO_START limit); CDS and the frame bits, one MA period (2 half
+        # periods) each; ``done`` 2 clocks after the last sample (decoder and output
+        # registers). The half period takes few values: one formula with constant factors per
+        # value (a product of two variables would slow the solver down a lot).
+        def formula(h):
+            per_bit = 0 if self.mutation == "tight" else 2 * h
+            return (1 + (timeout + 1) + (3 * h + 1) + (ack + 1) + (ack + 2 * h)
+                    + (bits + 1) * per_bit + 2 + self.slack)
+        bound = formula(lim.hp_max)
+        for h in range(lim.hp_max - 1, 1, -1):
+            bound = Mux(hp == h, formula(h), bound)
+        bound_done = Signal(16)
+        with m.If(accepted):
+            m.d.sync += bound_done.eq(bound)
+        bound_idle = Signal(16)
+        m.d.comb += bound_idle.eq(bound_done + 4 * lim.hp_max + dut.cfg_break_time + self.slack)
+
+        # 1. ``done`` answers every accepted request.
+        pending = Signal()
+        waited = Signal(10)
+        with m.If(accepted):
+            m.d.sync += [pending.eq(1), waited.eq(1)]
+        with m.Elif(dut.done):
+            m.d.sync += [pending.eq(0), waited.eq(0)]
+        with m.Elif(pending & (waited != 1023)):
+            m.d.sync += waited.eq(waited + 1)
+        m.d.comb += Assert(~pending | (waited <= bound_done), "done within the bound")
+
+        # 2. ``busy`` falls.
+        busy_for = Signal(10, init=1)
+        with m.If(~dut.busy | dut.abort_cycle | accepted):
+            m.d.sync += busy_for.eq(0)
+        with m.Elif(busy_for != 1023):
+            m.d.sync += busy_for.eq(busy_for + 1)
+        m.d.comb += Assert(~dut.busy | (busy_for <= bound_idle), "back to idle within the bound")
+
+        # Non-vacuity: a valid frame; a cycle that ends in a fault; back to idle after a frame.
+        had_frame, busy_prev = Signal(), Signal()
+        m.d.sync += busy_prev.eq(dut.busy)
+        with m.If(dut.valid):
+            m.d.sync += had_frame.eq(1)
+        m.d.comb += [
+            Cover(dut.valid),
+            Cover(dut.done & (dut.status == Status.NO_START)),
+            Cover(had_frame & busy_prev & ~dut.busy),
+        ]
+        return m
+
+
+class SamplerHarness(Harness):
+    """SloSampler alone: SLO and ``arm`` free at every clock (glitches, bounces, no encoder,
+    an encoder that answers at any time), the half period any free constant >= 2.
+
+    Properties (the receiver never stalls and never drifts once it has found the Ack edge):
+    once ``locked``, it stays locked, and ``sample`` strobes exactly every MA period (2 half
+    periods), whatever SLO does; the first sample (slot 0, which locks it) comes exactly one
+    half period after the Ack edge was registered. Lemmas: locked means the FSM is in SAMPLE
+    past slot 0; the slot timer + the clocks since the last sample = one MA period;
+    ``slot_zero`` mirrors ``slot_left == 0``.
+
+    Mutation ``"short_gap"``: assert a gap of one clock less; the solver must find a trace.
+    """
+
+    def __init__(self, delay_width, lemmas=True, mutation=None):
+        super().__init__()
+        self.delay_width = delay_width
+        self.lemmas = lemmas
+        self.mutation = mutation
+
+    def elaborate(self, platform):
+        m = Module()
+        _domain(m, self)
+        dut = SloSampler(self.delay_width)
+        inside = Internals(dut)
+        m.submodules.dut = inside.fragment
+
+        hp = AnyConst(16)
+        m.d.comb += [dut.slo.eq(AnySeq(1)), dut.arm.eq(AnySeq(1)), dut.half_period.eq(hp),
+                     Assume(hp >= protocol.MA_HALF_PERIOD_MIN)]
+        period = Cat(C(0, 1), hp)                    # 2 * hp, 17 bits
+        if self.mutation == "short_gap":
+            period = period - 1
+
+        # Clocks since the last sample strobe (saturating; 1 in the clock after a strobe).
+        since = Signal(18, init=(1 << 18) - 1)
+        with m.If(dut.sample):
+            m.d.sync += since.eq(1)
+        with m.Elif(since != (1 << 18) - 1):
+            m.d.sync += since.eq(since + 1)
+        # Clocks since SLO fell (as the sampler sees it: registered previous value).
+        slo_prev = Signal(init=1)
+        since_fell = Signal(18, init=(1 << 18) - 1)
+        m.d.sync += slo_prev.eq(dut.slo)
+        with m.If(slo_prev & ~dut.slo):
+            m.d.sync += since_fell.eq(1)
+        with m.Elif(since_fell != (1 << 18) - 1):
+            m.d.sync += since_fell.eq(since_fell + 1)
+        locked_prev = Signal()
+        m.d.sync += locked_prev.eq(dut.locked)
+
+        m.d.comb += [
+            Assert(~locked_prev | dut.locked, "locked stays locked"),
+            Assert(~(dut.sample & dut.locked) | (since == period), "one sample every MA period"),
+            Assert(~dut.locked | (since <= period), "no gap longer than an MA period once locked"),
+            Assert(~(dut.sample & ~dut.locked) | (since_fell == hp),
+                   "slot 0 one half period after the Ack edge"),
+        ]
+        if self.lemmas:
+            in_sample = inside.in_state("", "sampler_fsm", "SAMPLE")
+            in_measure = inside.in_state("", "sampler_fsm", "MEASURE")
+            slot_left = inside.signal("", "slot_left")
+            slot_zero = inside.signal("", "slot_zero")
+            first_slot = inside.signal("", "first_slot")
+            m.d.comb += [
+                Assert(dut.locked == (in_sample & ~first_slot), "lemma: locked past slot 0"),
+                Assert(~dut.locked | (since + slot_left == period), "lemma: slot timer"),
+                Assert(~in_sample | (slot_zero == (slot_left == 0)), "lemma: slot_zero"),
+                Assert(~(in_sample & first_slot) | (since_fell + slot_left == hp),
+                       "lemma: slot-0 timer"),
+            ]
+
+        m.d.comb += Cover(dut.locked & dut.sample & (hp >= 3) & ~dut.bit)
+        return m
+
+
+# =============================================================================================
+# (c) A frame with a CRC error is never reported valid
+# =============================================================================================
+
+#: The CRCs from the protocol digest, section 6: register polynomial without the top term,
+#: start 0, sent inverted, MSB first.
+CRC_SPEC = {Crc.CRC6: (6, 0x03), Crc.CRC16: (16, 0x90D9)}
+
+
+def _lfsr_step(reg, bit, width, poly):
+    """One bit into a Galois CRC register, MSB first: shift left, and if the bit that falls
+    out differs from the data bit, add the polynomial."""
+    feedback = reg[width - 1] ^ bit
+    shifted = Cat(C(0, 1), reg[:width - 1])
+    return shifted ^ Mux(feedback, C(poly, width), C(0, width))
+
+
+def _ideal_constants(width, poly):
+    """``C[j]``: the part of the receiver's register, after the data and the first ``j`` CRC
+    bits *as sent* (inverted, MSB first), that does not depend on the data: the register is then
+    ``(R << j) ^ C[j]`` with ``R`` its value after the data (the feedback is always
+    ``1 ^ C[j][msb]``). ``C[width]`` is the residue that a correct word leaves."""
+    consts, c = [0], 0
+    mask = (1 << width) - 1
+    for _ in range(width):
+        feedback = 1 ^ (c >> (width - 1))
+        c = ((c << 1) & mask) ^ (poly if feedback else 0)
+        consts.append(c)
+    return consts
+
+
+class _FrameParser:
+    """The harness's own reading of a frame, fed the same (sample, bit) stream as the decoder.
+
+    Configuration: per word ``cfg[w]`` = dict of data_bits, nenw, lc, crc; ``count`` words.
+    Phases: ACK (low slots) until a high slot (Start), then CDS, then the words, then DONE.
+
+    For each word and each CRC kind it keeps ``shadow``: an independent CRC register fed every
+    bit of the word (``_lfsr_step``, written from the spec). For the configured kind it keeps
+    the register after the data part (``data_crc``: over data, nE/nW, LC), the received CRC
+    bits (``rx``), and the verdict a master must reach: ``ok`` = (received CRC == inverted
+    ``data_crc``), a word without CRC always ok.
+
+    Lemmas (``lemmas=True``; asserted, so proven): during the CRC bits, the shadow register is
+    ``(data_crc << j) ^ C[j] ^ diff`` where ``diff`` is the CRC register of the *error* bits
+    (received xor expected) alone, and ``diff`` is 0 exactly while no bit was wrong (it keeps a
+    set bit below position ``j`` once one was). They split the XOR reasoning into one step per
+    bit, which the solver cannot find on its own for CRC-16 in reasonable time. With ``rtl``
+    (per word, per kind: the RTL's CRC register) it also asserts shadow == RTL register.
+
+    ``clear`` restarts the parse (a new cycle). ``mutation="poly"`` uses a wrong CRC-6
+    polynomial (x^6 + x^5 + 1) in ``data_crc``; ``"no_invert"`` forgets the inversion: the
+    solver must find a word on which the RTL and the harness disagree.
+    """
+
+    ACK, CDS, WORD, DONE = range(4)
+
+    def __init__(self, m, sample, bit, cfg, count, clear=C(0), lemmas=True, rtl=None,
+                 mutation=None):
+        words = len(cfg)
+        self.phase = phase = Signal(2, name="p_phase")
+        self.pos = pos = Signal(7, name="p_pos")
+        self.word = word = Signal(1, name="p_word")
+        self.done_strobe = done_strobe = Signal(name="p_done_strobe")
+        self.ok = [Signal(name=f"p_ok{w}") for w in range(words)]
+        self.length = []
+
+        data_spec = dict(CRC_SPEC)
+        if mutation == "poly":
+            data_spec[Crc.CRC6] = (6, 0x21)
+        for w in range(words):
+            c = cfg[w]
+            crc_bits = Mux(c["crc"] == Crc.CRC6, 6, Mux(c["crc"] == Crc.CRC16, 16, 0))
+            payload = Signal(7, name=f"p_payload{w}")
+            m.d.comb += payload.eq(c["data_bits"] + Mux(c["nenw"], 2, 0) + Mux(c["lc"], 6, 0))
+            length = Signal(7, name=f"p_len{w}")
+            m.d.comb += length.eq(payload + crc_bits)
+            self.length.append(length)
+            this = Signal(name=f"p_this{w}")
+            m.d.comb += this.eq((phase == self.WORD) & (word == w) & sample)
+
+            data_crc = Signal(16, name=f"p_data_crc{w}")
+            rx = Signal(16, name=f"p_rx{w}")
+            j = Signal(5, name=f"p_j{w}")                       # CRC bits received so far
+            diff = Signal(16, name=f"p_diff{w}")
+            wrong = Signal(name=f"p_wrong{w}")                  # a CRC bit differed
+            shadow = {k: Signal(wd, name=f"p_shadow{w}_{k.name}") for k, (wd, _) in CRC_SPEC.items()}
+            in_payload = pos < payload
+            with m.If(clear):
+                m.d.sync += [data_crc.eq(0), rx.eq(0), j.eq(0), diff.eq(0), wrong.eq(0)]
+                m.d.sync += [sh.eq(0) for sh in shadow.values()]
+            with m.Elif(this):
+                for k, (wd, poly) in CRC_SPEC.items():
+                    # The RTL restarts its registers at the word's first bit: so does this.
+                    src = Mux(pos == 0, 0, shadow[k])
+                    m.d.sync += shadow[k].eq(_lfsr_step(src, bit, wd, poly))
+                with m.If(in_payload):
+                    with m.Switch(c["crc"]):
+                        for k, (wd, poly) in data_spec.items():
+                            with m.Case(k):
+                                m.d.sync += data_crc.eq(_lfsr_step(data_crc[:wd], bit, wd, poly))
+                with m.Else():
+                    m.d.sync += [rx.eq(Cat(bit, rx[:15])), j.eq(j + 1)]
+                    with m.Switch(c["crc"]):
+                        for k, (wd, poly) in CRC_SPEC.items():
+                            with m.Case(k):
+                                sent = ~(data_crc[:wd] << j)[wd - 1]     # CRC bit j as sent
+                                error = bit ^ sent
+                                m.d.sync += [diff.eq(_lfsr_step(diff[:wd], error, wd, poly)),
+                                             wrong.eq(wrong | error)]
+            inv = 0 if mutation == "no_invert" else 0xFFFF
+            with m.Switch(c["crc"]):
+                with m.Case(Crc.NONE):
+                    m.d.comb += self.ok[w].eq(1)
+                for k, (wd, _) in CRC_SPEC.items():
+                    with m.Case(k):
+                        mask = (1 << wd) - 1
+                        m.d.comb += self.ok[w].eq((rx & mask) == ((data_crc ^ inv) & mask))
+
+            if lemmas:
+                with m.Switch(c["crc"]):
+                    for k, (wd, poly) in CRC_SPEC.items():
+                        consts = _ideal_constants(wd, poly)
+                        with m.Case(k):
+                            for jj in range(wd + 1):
+                                mask = (1 << wd) - 1
+                                expect = ((data_crc[:wd] << jj)[:wd] ^ consts[jj] ^ diff[:wd])
+                                # The received CRC bits so far against the ones sent.
+                                sent_top = (~data_crc[:wd])[wd - jj:wd] if jj else C(0, 0)
+                                with m.If(j == jj):
+                                    m.d.comb += [
+                                        Assert(shadow[k] == expect, "lemma: shadow = ideal ^ diff"),
+                                        Assert(wrong == (rx[:jj] != sent_top) if jj else ~wrong,
+                                               "lemma: wrong = some CRC bit differed"),
+                                        Assert(Mux(wrong, (diff[:wd] & ((1 << jj) - 1)) != 0,
+                                                   diff == 0),
+                                               "lemma: diff is 0 until a bit is wrong, then has "
+                                               "a set bit below j"),
+                                        Assert((diff[wd:] == 0) & (data_crc[wd:] == 0),
+                                               "lemma: unused register bits"),
+                                    ]
+                            with m.If(j > wd):
+                                m.d.comb += Assert(0, "lemma: j in range")
+                    with m.Case(Crc.NONE):
+                        m.d.comb += Assert(j == 0, "lemma: no CRC bits")
+                at_word = (phase == self.WORD) & (word == w)
+                not_started = ((phase == self.ACK) | (phase == self.CDS)
+                               | ((phase == self.WORD) & ((word < w) | (word == w) & (pos == 0))))
+                finished = (phase == self.DONE) | ((phase == self.WORD) & (word > w))
+                crc_width = Mux(c["crc"] == Crc.CRC6, 6, Mux(c["crc"] == Crc.CRC16, 16, 0))
+                m.d.comb += [
+                    Assert(~at_word | Mux(in_payload, j == 0, pos == payload + j),
+                           "lemma: j counts the CRC bits"),
+                    Assert(~not_started | ((data_crc == 0) & (rx == 0) & (j == 0) & (diff == 0)
+                                           & ~wrong), "lemma: word not started"),
+                    Assert(~finished | (count <= w) | (j == crc_width), "lemma: word finished"),
+                    Assert(~at_word | (pos < length), "lemma: pos in the word"),
+                    Assert((phase != self.WORD) | (word < count), "lemma: word in the frame"),
+                ]
+                if rtl is not None:
+                    for k, reg in rtl[w].items():
+                        m.d.comb += Assert(reg == shadow[k], f"lemma: word {w} {k.name} register")
+
+        length = self.length[0] if words == 1 else Mux(word, self.length[1], self.length[0])
+        m.d.sync += done_strobe.eq(0)
+        with m.If(clear):
+            m.d.sync += [phase.eq(self.ACK), pos.eq(0), word.eq(0)]
+        with m.Elif(sample):
+            with m.Switch(phase):
+                with m.Case(self.ACK):
+                    with m.If(bit):
+                        m.d.sync += phase.eq(self.CDS)
+                with m.Case(self.CDS):
+                    m.d.sync += [phase.eq(self.WORD), pos.eq(0), word.eq(0)]
+                with m.Case(self.WORD):
+                    m.d.sync += pos.eq(pos + 1)
+                    with m.If(pos == length - 1):
+                        m.d.sync += pos.eq(0)
+                        with m.If(word == count - 1):
+                            m.d.sync += [phase.eq(self.DONE), done_strobe.eq(1)]
+                        with m.Else():
+                            m.d.sync += word.eq(word + 1)
+
+
+def _assume_word_config(m, cfg, params, w):
+    """A configuration the master accepts for word ``w`` (see BissMaster._config_valid)."""
+    crc_ok = cfg["crc"] == Crc.NONE
+    for kind in params.word_crcs[w]:
+        crc_ok |= cfg["crc"] == kind
+    m.d.comb += Assume((cfg["data_bits"] >= 1) & (cfg["data_bits"] <= params.max_data_bits[w])
+                       & crc_ok)
+
+
+class DecoderCrcHarness(Harness):
+    """FrameDecoder alone: ``sample`` and ``bit`` free at every clock (any frame, any spacing of
+    the samples); the word configuration and word count free constants within what the master
+    accepts (one LC per frame).
+
+    Properties, checked against :class:`_FrameParser`: ``done`` strobes exactly when the
+    harness's parse of the configured frame ends; from then on each word's ``crc_ok`` equals
+    the independent check (received CRC == inverted CRC of the data part). So a word with a
+    wrong CRC is never reported ok, and a right one never reported wrong.
+    """
+
+    def __init__(self, params, lemmas=True, mutation=None):
+        super().__init__()
+        self.params = params
+        self.lemmas = lemmas
+        self.mutation = mutation
+
+    def elaborate(self, platform):
+        m = Module()
+        _domain(m, self)
+        p = self.params
+        dut = FrameDecoder(p)
+        inside = Internals(dut)
+        m.submodules.dut = inside.fragment
+
+        sample, bit = AnySeq(1), AnySeq(1)
+        m.d.comb += [dut.sample.eq(sample), dut.bit.eq(bit)]
+        cfg = []
+        for w in range(p.words):
+            c = {name: AnyConst(len(getattr(dut.words[w], name)))
+                 for name in ("data_bits", "nenw", "lc", "crc")}
+            m.d.comb += [getattr(dut.words[w], name).eq(v) for name, v in c.items()]
+            _assume_word_config(m, c, p, w)
+            cfg.append(c)
+        count = AnyConst(len(dut.word_count))
+        m.d.comb += [dut.word_count.eq(count), Assume((count >= 1) & (count <= p.words))]
+        if p.words == 2:
+            m.d.comb += Assume(~((count == 2) & cfg[0]["lc"] & cfg[1]["lc"]))
+
+        rtl = None
+        if self.lemmas:
+            rtl = [{k: inside.signal(f"crc{w}/{k.name.lower()}", "crc_reg") for k in p.word_crcs[w]}
+                   for w in range(p.words)]
+        parse = _FrameParser(m, sample, bit, cfg, count, lemmas=self.lemmas, rtl=rtl,
+                             mutation=self.mutation)
+        in_done = parse.phase == _FrameParser.DONE
+        m.d.comb += Assert(dut.done == parse.done_strobe, "done exactly when the frame ends")
+        if self.lemmas:
+            state = {n: inside.in_state("", "decoder_fsm", n)
+                     for n in ("ACK", "CDS", "WORD", "STOP", "END")}
+            idx = inside.signal("", "idx")
+            m.d.comb += [
+                Assert(state["ACK"] == (parse.phase == _FrameParser.ACK), "lemma: ACK"),
+                Assert(state["CDS"] == (parse.phase == _FrameParser.CDS), "lemma: CDS"),
+                Assert(state["WORD"] == (parse.phase == _FrameParser.WORD), "lemma: WORD"),
+                Assert(~state["WORD"] | (idx == parse.pos), "lemma: bit index"),
+            ]
+            if p.words == 2:
+                word = inside.signal("", "word")
+                m.d.comb += Assert(~state["WORD"] | (word == parse.word), "lemma: word index")
+        for w in range(p.words):
+            used = count > w
+            m.d.comb += Assert(~(in_done & used) | (dut.crc_ok[w] == parse.ok[w]),
+                               f"word {w}: crc_ok == independent CRC check")
+
+        # Non-vacuity: frames with good and bad CRCs of both kinds.
+        kinds = {c: Cat(*((cfg[w]["crc"] == c) & (count > w) for w in range(p.words))).any()
+                 for c in (Crc.CRC6, Crc.CRC16)}
+        all_ok = Cat(*(parse.ok[w] | (count <= w) for w in range(p.words))).all()
+        m.d.comb += [
+            Cover(dut.done & all_ok & kinds[Crc.CRC6] & kinds[Crc.CRC16]),
+            Cover(dut.done & ~all_ok & kinds[Crc.CRC16]),
+        ]
+        return m
+
+
+class MasterCrcHarness(Harness):
+    """The whole BissMaster: every input free at every clock (SLO, start, periodic, abort,
+    every cfg_* within ``limits``, as for liveness, which keeps frames short).
+
+    The harness detects an accepted request from the ports (as in the liveness harness),
+    latches the word configuration itself, and parses the bits the decoder consumes (the
+    sampler's ``sample``/``bit`` strobes, read inside the core) with :class:`_FrameParser`.
+    Properties: ``valid`` implies the independent CRC check passed for every word of the
+    frame; a reported frame whose independent check fails has a CRC error status, and one
+    whose check passes has none.
+    """
+
+    def __init__(self, params, limits, lemmas=True, mutation=None):
+        super().__init__()
+        self.params = params
+        self.limits = limits
+        self.lemmas = lemmas
+        self.mutation = mutation
+
+    def elaborate(self, platform):
+        m = Module()
+        _domain(m, self)
+        p, lim = self.params, self.limits
+        dut = BissMaster(p)
+        inside = Internals(dut)
+        m.submodules.dut = inside.fragment
+
+        _drive_free(m, dut)
+        m.d.comb += [
+            Assume((dut.cfg_ma_half_period >= 2) & (dut.cfg_ma_half_period <= lim.hp_max)),
+            Assume(dut.cfg_ack_limit <= lim.ack_max),
+            Assume(dut.cfg_timeout_limit <= lim.timeout_max),
+            Assume(dut.cfg_break_time <= lim.break_max),
+        ]
+        names = ("data_bits", "nenw", "lc", "crc")
+        for w in range(p.words):
+            m.d.comb += Assume(getattr(dut, f"cfg_w{w}_data_bits") <= lim.data_bits_max)
+            if not lim.nenw:
+                m.d.comb += Assume(~getattr(dut, f"cfg_w{w}_nenw"))
+            if not lim.lc:
+                m.d.comb += Assume(~getattr(dut, f"cfg_w{w}_lc"))
+
+        # Accepted request: idle and no abort in the previous clock, busy now.
+        live = Cat(*(getattr(dut, f"cfg_w{w}_{n}") for w in range(p.words) for n in names),
+                   dut.cfg_w1_enable if p.words == 2 else C(0, 1))
+        snapshot = Signal(len(live))
+        latched = Signal(len(live))
+        could_accept = Signal()
+        m.d.sync += [snapshot.eq(live), could_accept.eq(~dut.busy & ~dut.abort_cycle)]
+        accepted = could_accept & dut.busy
+        with m.If(accepted):
+            m.d.sync += latched.eq(snapshot)
+        cfg, offset = [], 0
+        for w in range(p.words):
+            c = {}
+            for n in names:
+                width = len(getattr(dut, f"cfg_w{w}_{n}"))
+                c[n] = latched[offset:offset + width]
+                offset += width
+            cfg.append(c)
+        count = 1 + latched[offset]
+
+        # The bits the decoder consumes, and the core's own "new cycle" reset of the receiver
+        # (the parse restarts with it; the configuration is the harness's copy).
+        sample = inside.signal("sampler", "sample")     # the master wires these to the decoder
+        bit = inside.signal("sampler", "bit")
+        clear = inside.signal("", "receiver_clear")
+        rtl = [{k: inside.signal(f"decoder/crc{w}/{k.name.lower()}", "crc_reg")
+                for k in p.word_crcs[w]} for w in range(p.words)]
+        parse = _FrameParser(m, sample, bit, cfg, count, clear=clear, lemmas=self.lemmas,
+                             rtl=rtl if self.lemmas else None, mutation=self.mutation)
+
+        all_ok = Cat(*(parse.ok[w] | (count <= w) for w in range(p.words))).all()
+        crc_status = ((dut.status == Status.CRC_ERROR_WORD0) | (dut.status == Status.CRC_ERROR_WORD1)
+                      | (dut.status == Status.CRC_ERROR_BOTH))
+        frame_status = crc_status | (dut.status == Status.OK) | (dut.status == Status.SIGN_OF_LIFE) \
+            | (dut.status == Status.SPW_MISMATCH)
+        in_done = parse.phase == _FrameParser.DONE
+        m.d.comb += [
+            Assert(~dut.valid | (in_done & all_ok), "valid only with every CRC right"),
+            Assert(~(dut.done & frame_status) | in_done, "a frame is reported only when parsed"),
+            Assert(~(dut.done & frame_status) | (crc_status == ~all_ok),
+                   "CRC error status exactly when the independent check fails"),
+        ]
+        for w in range(p.words):
+            m.d.comb += Assert(~(dut.done & frame_status & (count > w))
+                               | (getattr(dut, f"word{w}_crc_ok") == parse.ok[w]),
+                               f"word{w}_crc_ok == independent check")
+
+        m.d.comb += [
+            Cover(dut.valid & Cat(*(cfg[w]["crc"] != Crc.NONE for w in range(p.words))).any()),
+            Cover(dut.done & crc_status),
+        ]
+        return m
+
+
+def _drive_free(m, dut, exclude=()):
+    """Every input port of ``dut`` from AnySeq, except the names in ``exclude``."""
+    from amaranth.lib import wiring
+    for name, member in dut.signature.members.items():
+        if member.flow == wiring.In and name not in exclude:
+            port = getattr(dut, name)
+            m.d.comb += port.eq(AnySeq(len(port)))

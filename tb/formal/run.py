@@ -1,0 +1,198 @@
+"""Runs the formal checks and prints a table: check, method, depth, result, seconds.
+
+    python tb/formal/run.py            # every check (a few minutes)
+    python tb/formal/run.py --fast     # the fast slice (what pytest runs)
+    python tb/formal/run.py -k crc     # checks whose name contains "crc"
+    python tb/formal/run.py --list
+
+Methods: ``k-induction`` = BMC of depth k from reset (base case) + the induction step of depth k:
+a proof for every reachable state. ``BMC`` = no counterexample in the first ``depth`` clocks
+after reset. ``cover`` = the solver must reach every Cover statement within ``depth`` clocks
+(the properties are not vacuous). ``mutation`` = a deliberately weakened harness or a wrong
+reference: the solver must find a counterexample within ``depth`` clocks (the assertions can
+fail). Exit status 1 if any check does not give its expected answer.
+
+Environment: BISS_FORMAL_SOLVER=yices (default) or z3.
+"""
+
+import argparse
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+_REPO = Path(__file__).resolve().parents[2]
+for _p in (_REPO / "rtl", _REPO / "tb"):
+    if str(_p) not in sys.path:
+        sys.path.insert(0, str(_p))
+
+from bissmaster.params import Crc, MasterParams             # noqa: E402
+from formal import flow                                     # noqa: E402
+from formal.harnesses import (DecoderCrcHarness, LivenessLimits, MaClockHarness,  # noqa: E402
+                              MasterCrcHarness, MasterLivenessHarness, MasterMaHarness,
+                              SamplerHarness)
+
+# -- Parameter sets ------------------------------------------------------------------------------
+#: The shipped default build: two words (55 and 40 data bits), both CRCs on each, 24-bit timers.
+DEFAULT = MasterParams()
+#: The smallest build MasterParams allows (1 MHz system clock: 40/40/80-clock default limits;
+#: 16-bit timers; 5-bit delay counter), one word of up to 2 data bits with CRC-6: whole request
+#: cycles fit in a few dozen clocks.
+SMALL = MasterParams(sys_clk_hz=1_000_000, max_data_bits=(2,), word_crcs=((Crc.CRC6,),),
+                     max_line_delay=16, timer_width=16, counter_width=1, timestamp_width=16)
+#: One word of up to 4 data bits with CRC-6 only: the mutation checks (no lemmas) stay fast.
+TINY_DECODER = MasterParams(max_data_bits=(4,), word_crcs=((Crc.CRC6,),))
+
+#: Liveness settings. FAST: half period 2, Ack limit <= 6 (the Ack edge and the slot-0 sample
+#: need about 5 clocks after the second MA rise), timeout and break <= 2, a 1-bit word without
+#: nE/nW, LC or CRC. FULL: up to 2 data bits and nE/nW (a half period of 3 as well would need
+#: depth 72: more than 10 minutes).
+LIVE_FAST = LivenessLimits()
+LIVE_FULL = LivenessLimits(data_bits_max=2, nenw=True)
+LIVE_SLACK = 0       # the bound formula is exact to within one clock (slack -1 passes, -2 fails)
+#: CRC end to end through the master: CRC-6 or none, up to 2 data bits (frames of at most 8
+#: bits: the longest first cycle ends by clock 56).
+CRC_LIMITS = LivenessLimits(data_bits_max=2, crcs=(Crc.NONE, Crc.CRC6))
+
+
+@dataclass
+class Check:
+    name: str
+    prop: str           # (a), (b), (c)
+    method: str         # "k-induction", "BMC", "cover", "mutation"
+    depth: int
+    make: object        # () -> harness
+    fast: bool
+    timeout: float = 1800
+
+
+CHECKS = [
+    # (a) MA idles high, never glitches ----------------------------------------------------------
+    Check("ma_clock", "a", "k-induction", 2, lambda: MaClockHarness(), True),
+    Check("ma_clock", "a", "cover", 30, lambda: MaClockHarness(), True),
+    Check("ma_clock_hp_unstable", "a", "mutation", 12,
+          lambda: MaClockHarness(lemmas=False, mutation="hp_unstable"), True),
+    Check("master_ma_small", "a", "k-induction", 2, lambda: MasterMaHarness(SMALL, lemmas=True), True),
+    Check("master_ma_small", "a", "cover", 40, lambda: MasterMaHarness(SMALL, lemmas=True), True),
+    Check("master_ma_small_live_hp", "a", "mutation", 20,
+          lambda: MasterMaHarness(SMALL, mutation="live_hp"), True),
+    Check("master_ma_default", "a", "k-induction", 2,
+          lambda: MasterMaHarness(DEFAULT, lemmas=True), False),
+    Check("master_ma_small_nolemmas", "a", "BMC", 24, lambda: MasterMaHarness(SMALL), False),
+    # (b) every request cycle ends; the master returns to idle -----------------------------------
+    Check("liveness_small", "b", "BMC", LIVE_FAST.depth(SMALL.words, LIVE_SLACK),
+          lambda: MasterLivenessHarness(SMALL, LIVE_FAST, slack=LIVE_SLACK), True),
+    Check("liveness_small", "b", "cover", 40,
+          lambda: MasterLivenessHarness(SMALL, LIVE_FAST, slack=LIVE_SLACK), True),
+    Check("liveness_small_tight", "b", "mutation", LIVE_FAST.depth(SMALL.words, LIVE_SLACK),
+          lambda: MasterLivenessHarness(SMALL, LIVE_FAST, slack=LIVE_SLACK, mutation="tight"), True),
+    Check("liveness_small_slack-2", "b", "mutation", LIVE_FAST.depth(SMALL.words, -2),
+          lambda: MasterLivenessHarness(SMALL, LIVE_FAST, slack=-2), False),
+    Check("liveness_full", "b", "BMC", LIVE_FULL.depth(SMALL.words, LIVE_SLACK),
+          lambda: MasterLivenessHarness(SMALL, LIVE_FULL, slack=LIVE_SLACK), False),
+    Check("sampler_default", "b", "k-induction", 2,
+          lambda: SamplerHarness(DEFAULT.delay_width), True),
+    Check("sampler_default", "b", "cover", 20, lambda: SamplerHarness(DEFAULT.delay_width), True),
+    Check("sampler_short_gap", "b", "mutation", 20,
+          lambda: SamplerHarness(DEFAULT.delay_width, lemmas=False, mutation="short_gap"), True),
+    # (c) a frame with a CRC error is never reported valid ---------------------------------------
+    Check("decoder_crc_default", "c", "k-induction", 2, lambda: DecoderCrcHarness(DEFAULT), True),
+    Check("decoder_crc_default", "c", "cover", 30, lambda: DecoderCrcHarness(DEFAULT), True),
+    Check("decoder_crc_wrong_poly", "c", "mutation", 16,
+          lambda: DecoderCrcHarness(TINY_DECODER, lemmas=False, mutation="poly"), True),
+    Check("decoder_crc_no_invert", "c", "mutation", 16,
+          lambda: DecoderCrcHarness(TINY_DECODER, lemmas=False, mutation="no_invert"), True),
+    Check("master_crc_small", "c", "BMC", 56, lambda: MasterCrcHarness(SMALL, CRC_LIMITS), False),
+    Check("master_crc_small", "c", "cover", 60, lambda: MasterCrcHarness(SMALL, CRC_LIMITS), False),
+]
+
+
+@dataclass
+class Outcome:
+    check: Check
+    ok: bool
+    result: str
+    seconds: float
+    detail: str = ""
+
+
+def run_check(check):
+    """Builds the harness and runs the solver. Returns an Outcome (``ok``: as expected)."""
+    t0 = time.monotonic()
+    smt2 = flow.build(check.name, check.make())
+    detail = ""
+    if check.method == "k-induction":
+        status, _, log = flow.smtbmc(smt2, "bmc", check.depth, timeout=check.timeout)
+        if status == "PASSED":
+            status, _, log = flow.smtbmc(smt2, "induction", check.depth, timeout=check.timeout)
+            result = "proven" if status == "PASSED" else f"induction {status}"
+        else:
+            result = f"base case {status}"
+        ok = status == "PASSED"
+    elif check.method == "BMC":
+        status, _, log = flow.smtbmc(smt2, "bmc", check.depth, timeout=check.timeout)
+        ok = status == "PASSED"
+        result = "no counterexample" if ok else status
+    elif check.method == "cover":
+        status, _, log = flow.smtbmc(smt2, "cover", check.depth, timeout=check.timeout)
+        ok = status == "PASSED"
+        steps = flow.reached_cover_steps(log)
+        result = f"all reached (steps {', '.join(map(str, steps))})" if ok else f"{status}"
+    elif check.method == "mutation":
+        status, _, log = flow.smtbmc(smt2, "bmc", check.depth, timeout=check.timeout)
+        ok = status == "FAILED"
+        result = "counterexample found (expected)" if ok else f"{status} (expected a counterexample)"
+    else:
+        raise ValueError(check.method)
+    if not ok or check.method == "mutation":
+        failed = flow.failed_properties(log)
+        detail = "; ".join(failed)
+    return Outcome(check, ok, result, time.monotonic() - t0, detail)
+
+
+def table(outcomes):
+    rows = [("check", "prop", "method", "depth", "result", "seconds")]
+    for o in outcomes:
+        c = o.check
+        rows.append((c.name, c.prop, c.method, str(c.depth),
+                     ("PASS " if o.ok else "FAIL ") + o.result, f"{o.seconds:.1f}"))
+    widths = [max(len(r[i]) for r in rows) for i in range(len(rows[0]))]
+    lines = []
+    for i, r in enumerate(rows):
+        lines.append("  ".join(v.ljust(w) if j != 5 else v.rjust(w)
+                               for j, (v, w) in enumerate(zip(r, widths))))
+        if i == 0:
+            lines.append("  ".join("-" * w for w in widths))
+    return "\n".join(lines)
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--fast", action="store_true", help="only the fast slice")
+    ap.add_argument("-k", default="", help="only checks whose name contains this")
+    ap.add_argument("--list", action="store_true")
+    args = ap.parse_args(argv)
+    checks = [c for c in CHECKS if (c.fast or not args.fast) and args.k in c.name]
+    if args.list:
+        for c in checks:
+            print(f"{c.name:28} ({c.prop}) {c.method:11} depth {c.depth:3} {'fast' if c.fast else ''}")
+        return 0
+    print(f"formal: {len(checks)} checks, solver {flow.solver()}, build dir "
+          f"{flow.BUILD.relative_to(_REPO)}", flush=True)
+    outcomes = []
+    t0 = time.monotonic()
+    for c in checks:
+        o = run_check(c)
+        outcomes.append(o)
+        print(f"  {'ok  ' if o.ok else 'FAIL'} {c.name} {c.method} {c.depth}: {o.result} "
+              f"({o.seconds:.1f} s){'  [' + o.detail + ']' if o.detail else ''}", flush=True)
+    print()
+    print(table(outcomes))
+    bad = [o for o in outcomes if not o.ok]
+    print(f"\n{len(outcomes) - len(bad)} passed, {len(bad)} failed "
+          f"({time.monotonic() - t0:.0f} s)")
+    return 1 if bad else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,20 @@
+"""The fast slice of the formal checks (tb/formal): Yosys SMT flow + Yices, about a minute.
+
+Each test builds one Amaranth harness around the real RTL, writes SMT-LIB 2 with YoWASP Yosys
+and runs yosys-smtbmc: a k-induction proof, a BMC run, a cover run (the properties are not
+vacuous) or a mutation run (a weakened harness must produce a counterexample). The whole set,
+with the deeper runs, is ``make formal``; tb/formal/README.md says what each check proves.
+"""
+
+import pytest
+
+from formal.run import CHECKS, run_check
+
+FAST = [c for c in CHECKS if c.fast]
+
+
+@pytest.mark.parametrize("check", FAST, ids=[f"{c.name}-{c.method}" for c in FAST])
+def test_formal(check):
+    outcome = run_check(check)
+    assert outcome.ok, (f"{check.name} ({check.method}, depth {check.depth}): {outcome.result}"
+                        f" {outcome.detail}; logs and traces in sim_build/formal/")
