@@ -43,6 +43,11 @@ MA_RATES_HZ = (250e3, 1e6, 2.5e6, 5e6, 10e6)
 CABLES_M = (0, 20, 50, 100)
 
 
+def preset(name):
+    """A FrameFormat by name: a preset of frames.PRESETS, or ``bp3_N`` for any BP3 length."""
+    return frames.PRESETS[name] if name in frames.PRESETS else frames.bp3(int(name.split("_")[1]))
+
+
 def half_period_for(ma_hz):
     hp = CLK_HZ / (2 * ma_hz)
     assert hp == int(hp), f"MA {ma_hz} Hz is not a whole number of half periods at {CLK_HZ} Hz"

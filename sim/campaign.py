@@ -24,7 +24,7 @@ from pathlib import Path
 import cocotb
 from cocotb.triggers import FallingEdge, RisingEdge, Timer, with_timeout
 
-from bench import CLK_HZ, Bench
+from bench import CLK_HZ, Bench, preset  # noqa: F401 (campaigns import it from here)
 from coverage import Coverage
 from encoder_model import frames
 from encoder_model.cocotb_encoder import Cable
@@ -40,10 +40,6 @@ FAST_LIMITS = dict(cfg_break_time=FAST_BREAK, cfg_ack_limit=1500, cfg_timeout_li
 #: One cycle can never take longer than this (the slowest MA rate, the longest frame, the
 #: limits above): the watchdog on every request.
 WATCHDOG_S = 2e-3
-
-
-def preset(name):
-    return frames.PRESETS[name] if name in frames.PRESETS else frames.bp3(int(name.split("_")[1]))
 
 
 def scaled(n, minimum=1):

@@ -11,7 +11,7 @@ from cocotb.triggers import ClockCycles, FallingEdge, RisingEdge, Timer
 
 from cocotb.simtime import get_sim_time
 
-from bench import CABLES_M, CLK_HZ, MA_RATES_HZ, STATUS, Bench, half_period_for
+from bench import CABLES_M, CLK_HZ, MA_RATES_HZ, STATUS, Bench, half_period_for, preset
 from encoder_model import frames
 from encoder_model.cocotb_encoder import Cable
 
@@ -21,10 +21,6 @@ PRESETS = ["resolute_fs_lmm", "resolute_fs_rsm", "resolute_fs_rsh", "fortis_fs_r
            "resolute_c_18", "resolute_c_26", "resolute_c_32", "resolute_c_36"]
 BP3_LENGTHS = [1, 2, 13, 24, 40, 55]
 FRAMES_PER_POINT = int(os.environ.get("BISS_FRAMES_PER_POINT", "2"))
-
-
-def preset(name):
-    return frames.PRESETS[name] if name in frames.PRESETS else frames.bp3(int(name.split("_")[1]))
 
 
 async def frames_ok(bench, n, **check):

@@ -23,7 +23,7 @@ import cocotb
 from cocotb.simtime import get_sim_time
 from cocotb.triggers import RisingEdge
 
-from bench import CLK_HZ, Bench, half_period_for
+from bench import CLK_HZ, Bench, half_period_for, preset
 from encoder_model import frames
 from encoder_model.cocotb_encoder import Cable
 
@@ -56,10 +56,6 @@ SPEED_PRESET = "resolute_fs_rsh"
 SPEED_MA_HZ = 10e6
 SPEED_CABLE_M = TYPICAL_CABLE_M
 SPEED_FRAMES = int(os.environ.get("BISS_PERF_SPEED_FRAMES", "200"))
-
-
-def preset(name):
-    return frames.PRESETS[name] if name in frames.PRESETS else frames.bp3(int(name.split("_")[1]))
 
 
 def ps(seconds):
