@@ -4,7 +4,7 @@ its outcome predicted by the reference model (sim/reference.py) and compared fie
 A campaign cycle differs from the regression's (sim/bench.py) in three ways:
 
 * **fast timing**: the encoder's timeout is short (2 us, like an adaptive-timeout encoder), the
-  31.25 us start-to-start rule is off and the master's break is 3 us, so a cycle costs little
+  31.25 us start-to-start rule is off and the master's break is 3 us plus the round trip, so a cycle costs little
   more than its frame: the campaigns run hundreds of thousands of frames;
 * **expected results from the reference model**, including the sign-of-life state that frames
   carry from one cycle to the next, and the error counters;
@@ -36,7 +36,6 @@ RESULTS = os.environ.get("BISS_CAMPAIGN_RESULTS")       # directory for the JSON
 
 FAST_TIMEOUT_S = 2e-6           # encoder timeout (adaptive-timeout encoders: ~1.5 MA periods)
 FAST_BREAK = 300                # master break in clocks (3 us): longer than the encoder timeout
-FAST_LIMITS = dict(cfg_break_time=FAST_BREAK, cfg_ack_limit=1500, cfg_timeout_limit=1000)
 #: One cycle can never take longer than this (the slowest MA rate, the longest frame, the
 #: limits above): the watchdog on every request.
 WATCHDOG_S = 2e-3
@@ -122,7 +121,7 @@ class Campaign:
         self.ma_hz = rate
         # An adaptive-timeout encoder: about 1.5 MA periods, at least 2 us here.
         self.bench.encoder.timeout_s = max(FAST_TIMEOUT_S, 1.5 / rate)
-        self.cfg = {**FAST_LIMITS, **self.line_limits(), **cfg}
+        self.cfg = {**self.line_limits(), **cfg}
         self.bench.configure(fmt, ma_hz, half_period=hp, **self.cfg)
         if hp is not None:
             self.ma_hz = CLK_HZ / (2 * hp)

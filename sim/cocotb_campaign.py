@@ -15,7 +15,7 @@ from cocotb.simtime import get_sim_time
 from cocotb.triggers import ClockCycles, FallingEdge, RisingEdge, Timer
 
 from bench import CLK_HZ, MA_RATES_HZ
-from campaign import FAST_LIMITS, WATCHDOG_S, Campaign, CampaignFailure, preset, scaled
+from campaign import WATCHDOG_S, Campaign, CampaignFailure, preset, scaled
 from coverage import PRESETS
 from encoder_model import frames
 from encoder_model.cocotb_encoder import Cable
