@@ -42,7 +42,7 @@ class FrameDecoder(wiring.Component):
     ends the frame: the encoder's timeout has begun, so the master may look for SLO high again.
 
     Each word feeds its own CRC checker, so the CPW CRC-6 and SPW CRC-16 run concurrently.
-    ``crc_ok`` is combinational from the checker's register: valid in the clock after the
+    ``crc_ok`` comes from the checkers' flip-flops (one mux on the CRC kind): valid in the clock after the
     word's last bit was sampled, and held until the next frame.
 
     The master holds it in reset between cycles (``ResetInserter``), which also clears the
@@ -70,6 +70,8 @@ class FrameDecoder(wiring.Component):
             "ne": Out(words),
             "nw": Out(words),
             "lc": Out(protocol.LC_BITS),
+            "lc_next": Out(protocol.LC_BITS),   # what ``lc`` holds after a clock with lc_load
+            "lc_load": Out(1),                  # an LC bit is shifted in in this clock
             "cpw_top": Out(params.max_data_bits[-1]),   # the first SPW-length bits of word 0
             "crc_ok": Out(words),
             "done": Out(1),
@@ -95,26 +97,46 @@ class FrameDecoder(wiring.Component):
         for w in range(p.words):
             wcfg = self.words[w]
             e = {name: Signal(7, name=f"w{w}_{name}", reset_less=True)
-                 for name in ("data_end_p1", "nenw_end", "lc_end", "word_end_m1")}
+                 for name in ("data_end_p1", "data_end_m1", "nenw_end_m1", "lc_end_m1",
+                              "word_end_m1")}
+            # The fields at bit 0 of the word (only with an invalid data_bits = 0).
+            e["data_at0"] = Signal(name=f"w{w}_data_at0", reset_less=True)
+            e["lc_at0"] = Signal(name=f"w{w}_lc_at0", reset_less=True)
+            nenw_bits = Mux(wcfg.nenw, protocol.NE_NW_BITS, 0)
             nenw_lc_bits = _table(Cat(wcfg.nenw, wcfg.lc),
                                   [0, protocol.NE_NW_BITS, protocol.LC_BITS,
                                    protocol.NE_NW_BITS + protocol.LC_BITS], 4)
+            # "- 1" folded into the tables, modulo 128 (7 bits): a field end of 0 (only with
+            # data_bits = 0) becomes 127, which ``idx`` never reaches inside a word.
+            nenw_m1 = _table(wcfg.nenw, [-1, protocol.NE_NW_BITS - 1], 7)
+            nenw_lc_m1 = _table(Cat(wcfg.nenw, wcfg.lc),
+                                [-1, protocol.NE_NW_BITS - 1, protocol.LC_BITS - 1,
+                                 protocol.NE_NW_BITS + protocol.LC_BITS - 1], 7)
             m.d.sync += [
                 e["data_end_p1"].eq(wcfg.data_bits + 1),
-                e["nenw_end"].eq(wcfg.data_bits + Mux(wcfg.nenw, protocol.NE_NW_BITS, 0)),
-                e["lc_end"].eq(wcfg.data_bits + nenw_lc_bits),
+                e["data_end_m1"].eq((wcfg.data_bits + C(127, 7))[:7]),
+                e["nenw_end_m1"].eq((wcfg.data_bits + nenw_m1)[:7]),
+                e["lc_end_m1"].eq((wcfg.data_bits + nenw_lc_m1)[:7]),
                 # data_bits >= 1, so "- 1" folded into the table (modulo 128) never wraps.
                 e["word_end_m1"].eq((wcfg.data_bits + tail_bits(wcfg, extra=-1))[:7]),
+                e["data_at0"].eq(wcfg.data_bits != 0),
+                e["lc_at0"].eq((wcfg.data_bits + nenw_bits == 0)
+                               & (wcfg.data_bits + nenw_lc_bits != 0)),
             ]
             ends.append(e)
 
         def end(name):
             return ends[0][name] if p.words == 1 else Mux(word, ends[1][name], ends[0][name])
 
-        nenw_end = end("nenw_end")
-        lc_end = end("lc_end")
         word_end_m1 = end("word_end_m1")
 
+        # Which fields the current bit (``idx``) belongs to, as flip-flops: set for the
+        # word's first bit, then updated with each sample from ``idx`` and the registered
+        # field ends (``idx`` only ever counts up by one inside a word). No magnitude compare
+        # sits in front of the shift enables.
+        in_data = Signal()      # idx < data_bits of this word
+        in_lc = Signal()        # nenw_end <= idx < lc_end of this word
+        in_top = Signal()       # word 0 and idx < data_bits of word 1 (cpw_top)
         in_word = Signal()
         m.d.sync += [self.done.eq(0), self.stopped.eq(0)]
 
@@ -128,16 +150,29 @@ class FrameDecoder(wiring.Component):
                     m.next = "CDS"
             with m.State("CDS"):
                 with m.If(self.sample):
-                    m.d.sync += [self.cds.eq(self.bit), idx.eq(0)]
+                    m.d.sync += [self.cds.eq(self.bit), idx.eq(0),
+                                 in_data.eq(ends[0]["data_at0"]), in_lc.eq(ends[0]["lc_at0"])]
+                    if p.words > 1:
+                        m.d.sync += in_top.eq(self.words[1].data_bits != 0)
                     if p.words > 1:
                         m.d.sync += word.eq(0)
                     m.next = "WORD"
             with m.State("WORD"):
                 m.d.comb += in_word.eq(self.sample)
                 with m.If(self.sample):
-                    m.d.sync += idx.eq(idx + 1)
+                    m.d.sync += [
+                        idx.eq(idx + 1),
+                        in_data.eq(in_data & (idx != end("data_end_m1"))),
+                        in_lc.eq((in_lc | (idx == end("nenw_end_m1")))
+                                 & (idx != end("lc_end_m1"))),
+                    ]
+                    if p.words > 1:
+                        m.d.sync += in_top.eq(in_top & (idx != ends[1]["data_end_m1"]))
                     with m.If(idx == word_end_m1):
                         m.d.sync += idx.eq(0)
+                        # The next word (word 1) starts; after it nothing is read.
+                        m.d.sync += [in_data.eq(ends[-1]["data_at0"]),
+                                     in_lc.eq(ends[-1]["lc_at0"]), in_top.eq(0)]
                         with m.If(word == last_word):
                             m.d.sync += self.done.eq(1)
                             m.next = "STOP"
@@ -155,7 +190,7 @@ class FrameDecoder(wiring.Component):
         for w in range(p.words):
             this_word = in_word & (word == w)
             data_w = getattr(self, f"data{w}")
-            with m.If(this_word & (idx < self.words[w].data_bits)):
+            with m.If(this_word & in_data):
                 m.d.sync += data_w.eq(Cat(self.bit, data_w))
             # A word without nE/nW reads as "no error, no warning" (both high).
             with m.If(~self.words[w].nenw):
@@ -164,11 +199,15 @@ class FrameDecoder(wiring.Component):
                 m.d.sync += self.ne[w].eq(self.bit)
             with m.Elif(this_word & (idx == ends[w]["data_end_p1"])):
                 m.d.sync += self.nw[w].eq(self.bit)
-        with m.If(in_word & (idx >= nenw_end) & (idx < lc_end)):
-            m.d.sync += self.lc.eq(Cat(self.bit, self.lc))
+        m.d.comb += [
+            self.lc_load.eq(in_word & in_lc),
+            self.lc_next.eq(Cat(self.bit, self.lc)),
+        ]
+        with m.If(self.lc_load):
+            m.d.sync += self.lc.eq(self.lc_next)
         if p.words == 2:
             # Word 0's leading bits, as many as word 1 has: the CPW with its extra low bits dropped.
-            with m.If(in_word & (word == 0) & (idx < self.words[1].data_bits)):
+            with m.If(in_word & in_top):
                 m.d.sync += self.cpw_top.eq(Cat(self.bit, self.cpw_top))
 
         # One CRC checker per word, fed every bit of that word (data and the CRC itself).

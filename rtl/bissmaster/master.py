@@ -146,7 +146,7 @@ class BissMaster(wiring.Component):
         decoder = FrameDecoder(p)
         m.submodules.sampler = ResetInserter(receiver_clear)(sampler)
         m.submodules.decoder = ResetInserter(receiver_clear)(decoder)
-        m.submodules.sign_of_life = sol = SignOfLife()
+        m.submodules.sign_of_life = sol = SignOfLife(early=True)
         if two:
             m.submodules.spw_check = spw_check = SpwCheck(p.max_data_bits[1])
 
@@ -159,7 +159,12 @@ class BissMaster(wiring.Component):
         live = Signal(layout)
         m.d.comb += [live[name].eq(getattr(self, name)) for name in layout.members]
         cfg = Signal(layout)        # the cycle's configuration
-        cfg_ok = self._config_valid(live)
+        # The check is registered from the live inputs in every clock. In IDLE ``cfg`` below
+        # copies the same inputs in the same clocks, so in a cycle's first clock (WAIT_READY)
+        # ``cfg_ok`` is the verdict on exactly the configuration the cycle latched: WAIT_READY
+        # refuses it there. IDLE accepts every request, with no check in front of it.
+        cfg_ok = Signal()
+        m.d.sync += cfg_ok.eq(self._config_valid(live))
         m.d.comb += self.config_error.eq(~cfg_ok)
 
         def or_default(value, default):
@@ -167,8 +172,8 @@ class BissMaster(wiring.Component):
 
         # The limits of a cycle are resolved (0 -> default) when the configuration is latched,
         # so that no default mux sits in front of a comparator. Every default is >= 1, so each
-        # limit is >= 1 and "limit - 1" below never wraps.
-        ack_limit_m1 = Signal(tw)           # Ack limit - 1
+        # limit is >= 1.
+        ack_limit = Signal(tw)
         timeout_limit = Signal(tw)
         delay_limit = Signal(p.delay_limit_width)
         # The configuration is copied in every clock in IDLE, so the last copy is the one of
@@ -179,16 +184,15 @@ class BissMaster(wiring.Component):
         with m.If(idle):
             m.d.sync += [
                 cfg.eq(live),
-                ack_limit_m1.eq(Mux(live.cfg_ack_limit == 0, p.ack_limit_default - 1,
-                                    live.cfg_ack_limit - 1)),
+                ack_limit.eq(or_default(live.cfg_ack_limit, p.ack_limit_default)),
                 timeout_limit.eq(or_default(live.cfg_timeout_limit, p.timeout_limit_default)),
                 delay_limit.eq(or_default(live.cfg_delay_limit, p.max_line_delay)),
             ]
-        # NO_START limit - 1: the Ack limit plus one MA period. Computed every clock from the
+        # NO_START limit: the Ack limit plus one MA period. Computed every clock from the
         # latched values; valid one clock after the latch, first read in CLOCK (WAIT_READY
         # lasts at least one clock).
-        no_start_limit_m1 = Signal(tw + 1)
-        m.d.sync += no_start_limit_m1.eq(ack_limit_m1 + Cat(C(0, 1), cfg.cfg_ma_half_period))
+        no_start_limit = Signal(tw + 1)
+        m.d.sync += no_start_limit.eq(ack_limit + Cat(C(0, 1), cfg.cfg_ma_half_period))
         word_count = (1 + cfg.cfg_w1_enable) if two else 1
 
         m.d.comb += [
@@ -242,15 +246,25 @@ class BissMaster(wiring.Component):
         ]
         slo_stuck = Mux(latched, stuck_live, stuck_latched)
 
-        timer = Signal(tw + 1)      # one bit more than the limits: Ack limit + 2 half periods
+        # Clocks since the timer was cleared, *plus one*: a clear loads 1. So ``timer`` is
+        # already the value the elapsed time will have in the next clock, and the flags below,
+        # registered one clock ahead, compare it with a limit directly (no "+ 1" or "- 1"
+        # adder in series with the comparator). One bit more than the limits: Ack limit + 2
+        # half periods. Saturates (far above every limit).
+        timer = Signal(tw + 1, init=1)
         timer_clear = Signal()
-        m.d.sync += timer.eq(Mux(timer_clear, 0, Mux(timer.all(), timer, timer + 1)))
+        m.d.sync += timer.eq(Mux(timer_clear, 1, Mux(timer.all(), timer, timer + 1)))
         # ``timer >= limit`` for the Ack and NO_START limits: see the cycle controller.
         ack_expired = Signal()
         no_start_expired = Signal()
-        # BREAK reads cfg_break_time live: both compares in parallel, then the default mux.
-        break_over = Mux(live.cfg_break_time == 0, timer >= p.break_default,
-                         timer >= live.cfg_break_time)
+        # BREAK reads cfg_break_time live: ``elapsed >= break time``, registered one clock
+        # ahead like the limits below (the next elapsed time is 0 after a clear, never >= a
+        # time >= 1, or else ``timer``), from the setting of the clock before. Both compares
+        # in parallel, then the default mux.
+        break_over = Signal()
+        m.d.sync += break_over.eq(~timer_clear & Mux(live.cfg_break_time == 0,
+                                                     timer >= p.break_default,
+                                                     timer >= live.cfg_break_time))
 
         # -- Requests ---------------------------------------------------------------------
         # Clocks since the last tick, plus one: the period restarts when it reaches the live
@@ -276,6 +290,8 @@ class BissMaster(wiring.Component):
         lc_word_crc_ok = Mux(cfg.cfg_w0_lc, word_crc_ok[0], word_crc_ok[-1])
         m.d.comb += [
             sol.lc.eq(decoder.lc),
+            sol.lc_next.eq(decoder.lc_next),
+            sol.load.eq(decoder.lc_load),
             sol.check.eq(decoder.done & lc_on & lc_word_crc_ok),
         ]
         lc_repeat = sol.check & sol.repeat
@@ -334,15 +350,15 @@ class BissMaster(wiring.Component):
         arm = ma_clock.rise & (ma_clock.rises == 2)
         in_clock = Signal()                 # the controller is in CLOCK
         restart_timer = arm | (sampler.locked & ~locked_seen)      # in CLOCK
-        # CLOCK compares the timer with the Ack and NO_START limits. Both flags are registered
-        # one clock ahead: the timer's next value is 0 (cleared; never >= a limit >= 1) or,
-        # saturating, ``timer + 1``, which is >= limit exactly when ``timer >= limit - 1``.
-        # They need to be right only in CLOCK: after a clock in CLOCK that stays there (it
-        # clears the timer on ``restart_timer`` only), or after WAIT_READY (timer cleared: 0).
-        # The limits are constant from the latch on.
+        # CLOCK compares the elapsed time with the Ack and NO_START limits. Both flags are
+        # registered one clock ahead: the next elapsed time is 0 (cleared; never >= a limit
+        # >= 1) or ``timer`` (see above). They need to be right only in CLOCK: after a clock
+        # in CLOCK that stays there (it clears the timer on ``restart_timer`` and on an abort,
+        # which leaves CLOCK), or after WAIT_READY (timer cleared). The limits are constant
+        # from the latch on.
         m.d.sync += [
-            ack_expired.eq(in_clock & ~restart_timer & (timer >= ack_limit_m1)),
-            no_start_expired.eq(in_clock & ~restart_timer & (timer >= no_start_limit_m1)),
+            ack_expired.eq(in_clock & ~restart_timer & (timer >= ack_limit)),
+            no_start_expired.eq(in_clock & ~restart_timer & (timer >= no_start_limit)),
         ]
         m.d.comb += sampler.arm.eq(arm)
         # The measured delay is final at least two clocks before ``sampler.locked`` rises (the
@@ -355,9 +371,13 @@ class BissMaster(wiring.Component):
         # decode these directly, not the status mux.
         fault_event = {status: Signal(name=f"fault_{status.name.lower()}") for status in Status}
 
+        # A fault does not clear the timer itself: every state a fault can come from clears
+        # it (IDLE, WAIT_READY: always; CLOCK: on ``abort_cycle``), or MA is still running
+        # when BREAK begins (the line faults of CLOCK come before Start, so MA runs on), and
+        # BREAK clears it until MA has stopped. That keeps the fault decode out of the
+        # timer's enable.
         def fault(status, next_state="BREAK"):
-            m.d.comb += [report.eq(1), report_status.eq(status), timer_clear.eq(1),
-                         fault_event[status].eq(1)]
+            m.d.comb += [report.eq(1), report_status.eq(status), fault_event[status].eq(1)]
             m.next = next_state
 
         with m.FSM(init="BREAK", name="cycle_fsm"):
@@ -375,8 +395,6 @@ class BissMaster(wiring.Component):
                 m.d.comb += [idle.eq(1), receiver_clear.eq(1), timer_clear.eq(1)]
                 with m.If(self.abort_cycle):
                     m.next = "BREAK"
-                with m.Elif(request & ~cfg_ok):
-                    fault(Status.BAD_CONFIG, "IDLE")
                 with m.Elif(request):
                     m.next = "WAIT_READY"
 
@@ -385,7 +403,13 @@ class BissMaster(wiring.Component):
                 m.d.comb += receiver_clear.eq(1)
                 m.d.comb += timer_clear.eq(1)
                 m.d.sync += [armed.eq(0), locked_seen.eq(0)]
-                with m.If(self.abort_cycle):
+                with m.If(latched & ~cfg_ok):
+                    # The configuration latched at the request is invalid: no cycle. Nothing
+                    # has reached the line. An abort now is handled as IDLE would have.
+                    fault(Status.BAD_CONFIG, "IDLE")
+                    with m.If(self.abort_cycle):
+                        m.next = "BREAK"
+                with m.Elif(self.abort_cycle):
                     fault(Status.ABORTED)
                 with m.Elif(slo):
                     m.next = "CLOCK"
@@ -395,14 +419,26 @@ class BissMaster(wiring.Component):
             # MA runs; the sampler and decoder follow SLO, the line delay behind.
             with m.State("CLOCK"):
                 m.d.comb += [ma_clock.run.eq(~ma_enough), in_clock.eq(1)]
-                with m.If(restart_timer):
+                with m.If(restart_timer | self.abort_cycle):
                     m.d.comb += timer_clear.eq(1)
                 with m.If(arm):
                     m.d.sync += armed.eq(1)
                 with m.If(sampler.locked & ~locked_seen):
                     m.d.sync += locked_seen.eq(1)
+                # The end of the frame comes right after the abort: it excludes every line
+                # fault below (those all come before the first sample, or before Start), so
+                # this order reports the same as theirs, with fewer gates in front of the
+                # frame's verdict.
                 with m.If(self.abort_cycle):
                     fault(Status.ABORTED)
+                with m.Elif(decoder.done):
+                    m.d.comb += [
+                        report.eq(1),
+                        report_status.eq(frame_status),
+                        report_frame.eq(1),
+                        report_delay.eq(1),
+                    ]
+                    m.next = "TAIL"
                 with m.Elif(armed & sampler.early):
                     fault(Status.DELAY_RANGE)
                 with m.Elif(armed & ~locked_seen & ~sampler.locked & ack_expired):
@@ -413,14 +449,6 @@ class BissMaster(wiring.Component):
                 with m.Elif(locked_seen & ~decoder.started
                             & (no_start_expired | decoder.slots_full)):
                     fault(Status.NO_START)
-                with m.Elif(decoder.done):
-                    m.d.comb += [
-                        report.eq(1),
-                        report_status.eq(frame_status),
-                        report_frame.eq(1),
-                        report_delay.eq(1),
-                    ]
-                    m.next = "TAIL"
 
             # The frame is reported; clock out the stop bit and let the sampler see it.
             with m.State("TAIL"):

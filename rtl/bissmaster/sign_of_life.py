@@ -27,14 +27,29 @@ class SignOfLife(wiring.Component):
     repeat, skip, zero : Out(1)
         Verdict for ``lc`` (only meaningful when ``check`` is high).
     synced : Out(1)
+
+    With ``early=True`` two more inputs, ``lc_next`` and ``load``, give the LC while it is
+    shifted in (``lc_next`` is the value ``lc`` will hold after a clock with ``load`` high). The
+    three compares are then made on ``lc_next`` and registered, and ``repeat``, ``skip`` and
+    ``zero`` come from those flip-flops: right from the clock after the LC's last bit on, for as
+    long as neither the LC nor the stored value changes (the master checks once per frame, after
+    the LC field). No compare then sits in front of the master's frame verdict.
     """
-    lc: In(protocol.LC_BITS)
-    check: In(1)
-    resync: In(1)
-    repeat: Out(1)
-    skip: Out(1)
-    zero: Out(1)
-    synced: Out(1)
+
+    def __init__(self, early=False):
+        self._early = early
+        members = {
+            "lc": In(protocol.LC_BITS),
+            "check": In(1),
+            "resync": In(1),
+            "repeat": Out(1),
+            "skip": Out(1),
+            "zero": Out(1),
+            "synced": Out(1),
+        }
+        if early:
+            members.update({"lc_next": In(protocol.LC_BITS), "load": In(1)})
+        super().__init__(members)
 
     def elaborate(self, platform):
         m = Module()
@@ -47,10 +62,24 @@ class SignOfLife(wiring.Component):
         # Its reset value is the successor of last's reset value 0.
         expected = Signal(protocol.LC_BITS, init=1)
 
+        if self._early:
+            is_zero = Signal()
+            is_last = Signal()
+            is_expected = Signal()
+            with m.If(self.load):
+                m.d.sync += [
+                    is_zero.eq(self.lc_next == 0),
+                    is_last.eq(self.lc_next == last),
+                    is_expected.eq(self.lc_next == expected),
+                ]
+        else:
+            is_zero = self.lc == 0
+            is_last = self.lc == last
+            is_expected = self.lc == expected
         m.d.comb += [
-            self.zero.eq(self.lc == 0),
-            self.repeat.eq(self.synced & ~self.zero & (self.lc == last)),
-            self.skip.eq(self.synced & ~self.zero & (self.lc != last) & (self.lc != expected)),
+            self.zero.eq(is_zero),
+            self.repeat.eq(self.synced & ~is_zero & is_last),
+            self.skip.eq(self.synced & ~is_zero & ~is_last & ~is_expected),
         ]
         with m.If(self.check & ~self.zero):
             m.d.sync += [last.eq(self.lc), expected.eq(successor(self.lc)), self.synced.eq(1)]

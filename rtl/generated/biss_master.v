@@ -45,19 +45,19 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \$120 ;
   wire \$121 ;
   wire \$122 ;
-  wire \$123 ;
+  wire [23:0] \$123 ;
   wire \$124 ;
-  wire \$125 ;
+  wire [23:0] \$125 ;
   wire \$126 ;
-  wire \$127 ;
-  wire \$128 ;
-  wire \$129 ;
+  wire [11:0] \$127 ;
+  wire [24:0] \$128 ;
+  wire [32:0] \$129 ;
   wire \$13 ;
   wire \$130 ;
   wire \$131 ;
   wire \$132 ;
   wire \$133 ;
-  wire \$134 ;
+  wire [25:0] \$134 ;
   wire \$135 ;
   wire \$136 ;
   wire \$137 ;
@@ -73,10 +73,10 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \$146 ;
   wire \$147 ;
   wire \$148 ;
-  wire \$149 ;
+  wire [25:0] \$149 ;
   wire \$15 ;
-  wire \$150 ;
-  wire \$151 ;
+  wire [25:0] \$150 ;
+  wire [25:0] \$151 ;
   wire \$152 ;
   wire \$153 ;
   wire \$154 ;
@@ -90,15 +90,15 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \$161 ;
   wire \$162 ;
   wire \$163 ;
-  wire \$164 ;
-  wire \$165 ;
-  wire \$166 ;
-  wire \$167 ;
-  wire \$168 ;
-  wire \$169 ;
+  wire [24:0] \$164 ;
+  reg [7:0] \$165 ;
+  wire [8:0] \$166 ;
+  wire [7:0] \$167 ;
+  wire [8:0] \$168 ;
+  reg [7:0] \$169 ;
   wire \$17 ;
-  wire \$170 ;
-  wire \$171 ;
+  wire [8:0] \$170 ;
+  wire [16:0] \$171 ;
   wire \$172 ;
   wire \$173 ;
   wire \$174 ;
@@ -108,20 +108,20 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \$178 ;
   wire \$179 ;
   wire \$18 ;
-  wire [24:0] \$180 ;
-  wire [24:0] \$181 ;
+  wire \$180 ;
+  wire \$181 ;
   wire \$182 ;
-  wire [23:0] \$183 ;
+  wire \$183 ;
   wire \$184 ;
-  wire [11:0] \$185 ;
-  wire [24:0] \$186 ;
-  wire [32:0] \$187 ;
+  wire \$185 ;
+  wire \$186 ;
+  wire \$187 ;
   wire \$188 ;
   wire \$189 ;
   wire \$19 ;
   wire \$190 ;
   wire \$191 ;
-  wire [25:0] \$192 ;
+  wire \$192 ;
   wire \$193 ;
   wire \$194 ;
   wire \$195 ;
@@ -138,9 +138,9 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \$204 ;
   wire \$205 ;
   wire \$206 ;
-  wire [25:0] \$207 ;
-  wire [25:0] \$208 ;
-  wire [25:0] \$209 ;
+  wire \$207 ;
+  wire \$208 ;
+  wire \$209 ;
   wire \$21 ;
   wire \$210 ;
   wire \$211 ;
@@ -148,15 +148,15 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \$213 ;
   wire \$214 ;
   wire \$215 ;
-  wire [24:0] \$216 ;
-  reg [7:0] \$217 ;
-  wire [8:0] \$218 ;
-  wire [7:0] \$219 ;
+  wire \$216 ;
+  wire \$217 ;
+  wire \$218 ;
+  wire \$219 ;
   wire \$22 ;
-  wire [8:0] \$220 ;
-  reg [7:0] \$221 ;
-  wire [8:0] \$222 ;
-  wire [16:0] \$223 ;
+  wire \$220 ;
+  wire \$221 ;
+  wire \$222 ;
+  wire \$223 ;
   wire \$224 ;
   wire \$225 ;
   wire \$226 ;
@@ -171,164 +171,66 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \$234 ;
   wire \$235 ;
   wire \$236 ;
-  wire \$237 ;
-  wire \$238 ;
-  wire \$239 ;
+  reg \$237 ;
+  reg [153:0] \$238 ;
+  reg [23:0] \$239 ;
   wire \$24 ;
-  wire \$240 ;
-  wire \$241 ;
-  wire \$242 ;
-  wire \$243 ;
-  wire \$244 ;
-  wire \$245 ;
-  wire \$246 ;
-  wire \$247 ;
-  wire \$248 ;
-  wire \$249 ;
+  reg [23:0] \$240 ;
+  reg [11:0] \$241 ;
+  reg [24:0] \$242 ;
+  reg [31:0] \$243 ;
+  reg [31:0] \$244 ;
+  reg [24:0] \$245 ;
+  reg \$246 ;
+  reg \$247 ;
+  reg \$248 ;
+  reg [24:0] \$249 ;
   wire \$25 ;
-  wire \$250 ;
-  wire \$251 ;
-  wire \$252 ;
-  wire \$253 ;
-  wire \$254 ;
-  wire \$255 ;
-  wire \$256 ;
-  wire \$257 ;
-  wire \$258 ;
-  wire \$259 ;
+  reg \$250 ;
+  reg [23:0] \$251 ;
+  reg [7:0] \$252 ;
+  reg [8:0] \$253 ;
+  reg [7:0] \$254 ;
+  reg [16:0] \$255 ;
+  reg \$256 ;
+  reg \$257 ;
+  reg \$258 ;
+  reg \$259 ;
   wire \$26 ;
-  wire \$260 ;
-  wire \$261 ;
-  wire \$262 ;
-  wire \$263 ;
-  wire \$264 ;
-  wire \$265 ;
-  wire \$266 ;
-  wire \$267 ;
-  wire \$268 ;
-  wire \$269 ;
+  reg [2:0] \$260 ;
+  reg \$261 ;
+  reg \$262 ;
+  reg \$263 ;
+  reg \$264 ;
+  reg [3:0] \$265 ;
+  reg [12:0] \$266 ;
+  reg [31:0] \$267 ;
+  reg \$268 ;
+  reg [5:0] \$269 ;
   wire \$27 ;
-  wire \$270 ;
-  wire \$271 ;
-  wire \$272 ;
-  wire \$273 ;
-  wire \$274 ;
-  wire \$275 ;
-  wire \$276 ;
-  wire \$277 ;
-  wire \$278 ;
-  wire \$279 ;
+  reg \$270 ;
+  reg \$271 ;
+  reg \$272 ;
+  reg [54:0] \$273 ;
+  reg \$274 ;
+  reg \$275 ;
+  reg \$276 ;
+  reg [39:0] \$277 ;
+  reg \$278 ;
+  reg \$279 ;
   wire \$28 ;
-  wire \$280 ;
-  wire \$281 ;
-  wire \$282 ;
-  wire \$283 ;
-  wire \$284 ;
-  wire \$285 ;
-  wire \$286 ;
-  wire \$287 ;
-  wire \$288 ;
-  wire \$289 ;
+  reg \$280 ;
+  reg \$281 ;
   wire \$29 ;
-  wire \$290 ;
-  wire \$291 ;
-  wire \$292 ;
-  wire \$293 ;
-  wire \$294 ;
-  wire \$295 ;
-  wire \$296 ;
-  wire \$297 ;
-  wire \$298 ;
-  wire \$299 ;
   wire \$3 ;
   wire \$30 ;
-  wire \$300 ;
-  wire \$301 ;
-  wire \$302 ;
-  wire \$303 ;
-  wire \$304 ;
-  wire \$305 ;
-  wire \$306 ;
-  wire \$307 ;
-  wire \$308 ;
-  wire \$309 ;
   wire \$31 ;
-  wire \$310 ;
-  wire \$311 ;
-  wire \$312 ;
-  wire \$313 ;
-  wire \$314 ;
-  wire \$315 ;
-  wire \$316 ;
-  wire \$317 ;
-  wire \$318 ;
-  wire \$319 ;
   wire \$32 ;
-  wire \$320 ;
-  wire \$321 ;
-  wire \$322 ;
-  wire \$323 ;
-  wire \$324 ;
-  wire \$325 ;
-  wire \$326 ;
-  wire \$327 ;
-  wire \$328 ;
-  wire \$329 ;
   wire \$33 ;
-  wire \$330 ;
-  wire \$331 ;
-  wire \$332 ;
-  wire \$333 ;
-  wire \$334 ;
-  wire \$335 ;
-  wire \$336 ;
-  reg [153:0] \$337 ;
-  reg [23:0] \$338 ;
-  reg [23:0] \$339 ;
   wire \$34 ;
-  reg [11:0] \$340 ;
-  reg [24:0] \$341 ;
-  reg [31:0] \$342 ;
-  reg [31:0] \$343 ;
-  reg [24:0] \$344 ;
-  reg \$345 ;
-  reg \$346 ;
-  reg \$347 ;
-  reg [24:0] \$348 ;
-  reg [23:0] \$349 ;
   wire \$35 ;
-  reg [7:0] \$350 ;
-  reg [8:0] \$351 ;
-  reg [7:0] \$352 ;
-  reg [16:0] \$353 ;
-  reg \$354 ;
-  reg \$355 ;
-  reg \$356 ;
-  reg \$357 ;
-  reg [2:0] \$358 ;
-  reg \$359 ;
   wire \$36 ;
-  reg \$360 ;
-  reg \$361 ;
-  reg \$362 ;
-  reg [3:0] \$363 ;
-  reg [12:0] \$364 ;
-  reg [31:0] \$365 ;
-  reg \$366 ;
-  reg [5:0] \$367 ;
-  reg \$368 ;
-  reg \$369 ;
   wire \$37 ;
-  reg \$370 ;
-  reg [54:0] \$371 ;
-  reg \$372 ;
-  reg \$373 ;
-  reg \$374 ;
-  reg [39:0] \$375 ;
-  reg \$376 ;
-  reg \$377 ;
-  reg \$378 ;
-  reg \$379 ;
   wire \$38 ;
   wire \$39 ;
   wire \$4 ;
@@ -400,18 +302,19 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   input abort_cycle;
   wire abort_cycle;
   reg ack_expired = 1'h0;
-  reg [23:0] ack_limit_m1 = 24'h000000;
+  reg [23:0] ack_limit = 24'h000000;
   wire arm;
   reg armed = 1'h0;
   wire \bit ;
-  wire \bit$68 ;
+  wire \bit$69 ;
   wire [5:0] bits;
+  reg break_over = 1'h0;
   output busy;
   wire busy;
-  wire \busy$96 ;
+  wire \busy$101 ;
   output cds;
   reg cds = 1'h0;
-  wire \cds$175 ;
+  wire \cds$181 ;
   reg [153:0] cfg = 154'h000000000000000000000000000000000000000;
   wire [23:0] \cfg.cfg_ack_limit ;
   wire [23:0] \cfg.cfg_break_time ;
@@ -438,6 +341,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire [11:0] cfg_delay_limit;
   input [15:0] cfg_ma_half_period;
   wire [15:0] cfg_ma_half_period;
+  reg cfg_ok = 1'h0;
   input [23:0] cfg_request_period;
   wire [23:0] cfg_request_period;
   input cfg_spw_check;
@@ -466,17 +370,17 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire cfg_w1_nenw;
   wire check;
   wire clear;
-  wire \clear$131 ;
-  wire \clear$134 ;
-  wire \clear$137 ;
-  wire \clear$140 ;
-  wire \clear$143 ;
-  wire \clear$146 ;
-  wire \clear$149 ;
-  wire \clear$152 ;
-  wire \clear$155 ;
-  wire \clear$158 ;
-  wire \clear$161 ;
+  wire \clear$136 ;
+  wire \clear$139 ;
+  wire \clear$142 ;
+  wire \clear$145 ;
+  wire \clear$148 ;
+  wire \clear$151 ;
+  wire \clear$154 ;
+  wire \clear$157 ;
+  wire \clear$160 ;
+  wire \clear$163 ;
+  wire \clear$166 ;
   input clear_counters;
   wire clear_counters;
   input clk;
@@ -484,17 +388,17 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   output config_error;
   wire config_error;
   wire [15:0] count;
-  wire [15:0] \count$132 ;
-  wire [15:0] \count$135 ;
-  wire [15:0] \count$138 ;
-  wire [15:0] \count$141 ;
-  wire [15:0] \count$144 ;
-  wire [15:0] \count$147 ;
-  wire [15:0] \count$150 ;
-  wire [15:0] \count$153 ;
-  wire [15:0] \count$156 ;
-  wire [15:0] \count$159 ;
-  wire [15:0] \count$162 ;
+  wire [15:0] \count$137 ;
+  wire [15:0] \count$140 ;
+  wire [15:0] \count$143 ;
+  wire [15:0] \count$146 ;
+  wire [15:0] \count$149 ;
+  wire [15:0] \count$152 ;
+  wire [15:0] \count$155 ;
+  wire [15:0] \count$158 ;
+  wire [15:0] \count$161 ;
+  wire [15:0] \count$164 ;
+  wire [15:0] \count$167 ;
   output [15:0] count_aborted;
   wire [15:0] count_aborted;
   output [15:0] count_crc_word0;
@@ -520,7 +424,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   output [15:0] count_spw_mismatch;
   wire [15:0] count_spw_mismatch;
   wire [39:0] cpw_top;
-  wire [39:0] \cpw_top$80 ;
+  wire [39:0] \cpw_top$85 ;
   wire [1:0] crc_ok;
   reg [2:0] cycle_fsm_state = 3'h0;
   wire [54:0] data0;
@@ -530,7 +434,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   reg delay_over = 1'h0;
   output done;
   reg done = 1'h0;
-  wire \done$77 ;
+  wire \done$82 ;
   wire early;
   reg fault_aborted;
   reg fault_bad_config;
@@ -555,26 +459,29 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_1011 = "BAD_CONFIG" *)
   reg [3:0] frame_status;
   wire [15:0] half_period;
-  wire [15:0] \half_period$64 ;
+  wire [15:0] \half_period$65 ;
   reg idle;
   reg in_clock;
   wire inc;
-  wire \inc$130 ;
-  wire \inc$133 ;
-  wire \inc$136 ;
-  wire \inc$139 ;
-  wire \inc$142 ;
-  wire \inc$145 ;
-  wire \inc$148 ;
-  wire \inc$151 ;
-  wire \inc$154 ;
-  wire \inc$157 ;
-  wire \inc$160 ;
+  wire \inc$135 ;
+  wire \inc$138 ;
+  wire \inc$141 ;
+  wire \inc$144 ;
+  wire \inc$147 ;
+  wire \inc$150 ;
+  wire \inc$153 ;
+  wire \inc$156 ;
+  wire \inc$159 ;
+  wire \inc$162 ;
+  wire \inc$165 ;
   reg latched = 1'h0;
   output [5:0] lc;
   reg [5:0] lc = 6'h00;
-  wire [5:0] \lc$74 ;
   wire [5:0] \lc$75 ;
+  wire [5:0] \lc$76 ;
+  wire lc_load;
+  wire [5:0] lc_next;
+  wire [5:0] \lc_next$78 ;
   output lc_repeat;
   reg lc_repeat = 1'h0;
   output lc_skip;
@@ -601,15 +508,16 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \live.cfg_w1_enable ;
   wire \live.cfg_w1_lc ;
   wire \live.cfg_w1_nenw ;
+  wire load;
   wire locked;
   reg locked_seen = 1'h0;
   output ma;
   wire ma;
-  wire \ma$70 ;
+  wire \ma$71 ;
   wire match;
   wire [1:0] ne;
   reg no_start_expired = 1'h0;
-  reg [24:0] no_start_limit_m1 = 25'h0000000;
+  reg [24:0] no_start_limit = 25'h0000000;
   reg [31:0] now = 32'd0;
   wire [1:0] nw;
   output overrun;
@@ -637,19 +545,19 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_1011 = "BAD_CONFIG" *)
   reg [3:0] report_status;
   reg resync;
-  wire \resync$126 ;
+  wire \resync$131 ;
   wire rise;
   wire [15:0] rises;
   input rst;
   wire rst;
   reg run;
   wire sample;
-  wire \sample$66 ;
+  wire \sample$67 ;
   wire skip;
   input slo;
   wire slo;
-  wire \slo$62 ;
   wire \slo$63 ;
+  wire \slo$64 ;
   reg [24:0] slo_low_time_p1 = 25'h0000001;
   wire slots_full;
   wire [39:0] spw;
@@ -659,7 +567,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire start;
   wire [15:0] start_slot;
   reg started = 1'h0;
-  wire \started$117 ;
+  wire \started$122 ;
   output [3:0] status;
   reg [3:0] status = 4'h0;
   wire stopped;
@@ -667,7 +575,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   reg stuck_live = 1'h0;
   reg [16:0] target_rises = 17'h00000;
   reg [23:0] timeout_limit = 24'h000000;
-  reg [24:0] timer = 25'h0000000;
+  reg [24:0] timer = 25'h0000001;
   reg timer_clear;
   output [31:0] timestamp;
   reg [31:0] timestamp = 32'd0;
@@ -705,98 +613,105 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \words[1].lc ;
   wire \words[1].nenw ;
   wire zero;
-  assign \$1  = | live[15:1];
-  assign \$2  = | live[129:124];
-  assign \$3  = live[129:124] <= 6'h37;
-  assign \$4  = \$2  & \$3 ;
-  assign \$5  = ! live[133:132];
-  assign \$6  = live[133:132] == 1'h1;
-  assign \$7  = \$5  | \$6 ;
-  assign \$8  = live[133:132] == 2'h2;
-  assign \$9  = \$7  | \$8 ;
-  assign \$10  = \$4  & \$9 ;
-  assign \$11  = \$1  & \$10 ;
-  assign \$12  = ~ live[134];
-  assign \$13  = | live[140:135];
-  assign \$14  = live[140:135] <= 6'h28;
-  assign \$15  = \$13  & \$14 ;
-  assign \$16  = ! live[144:143];
-  assign \$17  = live[144:143] == 1'h1;
-  assign \$18  = \$16  | \$17 ;
-  assign \$19  = live[144:143] == 2'h2;
-  assign \$20  = \$18  | \$19 ;
-  assign \$21  = \$15  & \$20 ;
-  assign \$22  = \$12  | \$21 ;
-  assign \$23  = \$11  & \$22 ;
-  assign \$24  = live[134] & live[131];
-  assign \$25  = \$24  & live[142];
-  assign \$26  = ~ \$25 ;
-  assign \$27  = \$23  & \$26 ;
-  assign \$28  = ~ live[145];
-  assign \$29  = live[140:135] <= live[129:124];
-  assign \$30  = live[134] & \$29 ;
-  assign \$31  = | live[144:143];
-  assign \$32  = \$30  & \$31 ;
-  assign \$33  = \$28  | \$32 ;
-  assign \$34  = \$27  & \$33 ;
-  assign config_error = ~ \$34 ;
+  assign config_error = ~ cfg_ok;
   assign word_count = 1'h1 + cfg[134];
-  assign \$35  = ! cfg_request_period;
-  assign \$36  = periodic & \$35 ;
-  assign \$37  = ~ \$36 ;
-  assign \$38  = periodic & \$37 ;
-  assign \$39  = period_count_p1 == 1'h1;
-  assign \$40  = \$38  & \$39 ;
-  assign \$41  = start | \$40 ;
-  assign \$42  = ~ abort_cycle;
-  assign \$43  = idle & \$42 ;
-  assign \$44  = ~ \$43 ;
-  assign overrun = \$41  & \$44 ;
-  assign \$45  = cfg[134] & cfg[142];
-  assign \$46  = cfg[131] | \$45 ;
-  assign \$47  = \done$77  & \$46 ;
-  assign \$48  = ~ cfg[134];
-  assign \$49  = crc_ok[1] | \$48 ;
-  assign \$50  = cfg[131] ? crc_ok[0] : \$49 ;
-  assign check = \$47  & \$50 ;
-  assign \$51  = ~ crc_ok[0];
-  assign \$52  = ~ cfg[134];
-  assign \$53  = crc_ok[1] | \$52 ;
-  assign \$54  = ~ \$53 ;
-  assign \$55  = \$51  & \$54 ;
-  assign \$56  = ~ crc_ok[0];
-  assign \$57  = ~ cfg[134];
-  assign \$58  = crc_ok[1] | \$57 ;
-  assign \$59  = ~ \$58 ;
-  assign \$60  = check & \repeat ;
-  assign \$61  = check & skip;
-  assign \$62  = \$60  | \$61 ;
-  assign \$63  = check & zero;
-  assign \$64  = \$62  | \$63 ;
-  assign \$65  = cfg[145] & cfg[134];
-  assign \$66  = ~ cfg[134];
-  assign \$67  = crc_ok[1] | \$66 ;
-  assign \$68  = crc_ok[0] & \$67 ;
-  assign \$69  = \$65  & \$68 ;
-  assign \$70  = ~ match;
-  assign \$71  = \$69  & \$70 ;
-  assign \$72  = rises == 2'h2;
-  assign arm = rise & \$72 ;
-  assign \$73  = \busy$96  | abort_cycle;
-  assign \$74  = ! live[63:40];
-  assign \$75  = timer >= 12'hfa0;
-  assign \$76  = timer >= live[63:40];
-  assign \$77  = \$74  ? \$75  : \$76 ;
-  assign \$78  = ! cfg_request_period;
-  assign \$79  = periodic & \$78 ;
-  assign \$80  = ~ \$79 ;
-  assign \$81  = periodic & \$80 ;
-  assign \$82  = period_count_p1 == 1'h1;
-  assign \$83  = \$81  & \$82 ;
-  assign \$84  = start | \$83 ;
-  assign \$85  = ! cfg_request_period;
-  assign \$86  = periodic & \$85 ;
-  assign \$87  = \$84  | \$86 ;
+  assign \$1  = ! cfg_request_period;
+  assign \$2  = periodic & \$1 ;
+  assign \$3  = ~ \$2 ;
+  assign \$4  = periodic & \$3 ;
+  assign \$5  = period_count_p1 == 1'h1;
+  assign \$6  = \$4  & \$5 ;
+  assign \$7  = start | \$6 ;
+  assign \$8  = ~ abort_cycle;
+  assign \$9  = idle & \$8 ;
+  assign \$10  = ~ \$9 ;
+  assign overrun = \$7  & \$10 ;
+  assign \$11  = cfg[134] & cfg[142];
+  assign \$12  = cfg[131] | \$11 ;
+  assign \$13  = \done$82  & \$12 ;
+  assign \$14  = ~ cfg[134];
+  assign \$15  = crc_ok[1] | \$14 ;
+  assign \$16  = cfg[131] ? crc_ok[0] : \$15 ;
+  assign check = \$13  & \$16 ;
+  assign \$17  = ~ crc_ok[0];
+  assign \$18  = ~ cfg[134];
+  assign \$19  = crc_ok[1] | \$18 ;
+  assign \$20  = ~ \$19 ;
+  assign \$21  = \$17  & \$20 ;
+  assign \$22  = ~ crc_ok[0];
+  assign \$23  = ~ cfg[134];
+  assign \$24  = crc_ok[1] | \$23 ;
+  assign \$25  = ~ \$24 ;
+  assign \$26  = check & \repeat ;
+  assign \$27  = check & skip;
+  assign \$28  = \$26  | \$27 ;
+  assign \$29  = check & zero;
+  assign \$30  = \$28  | \$29 ;
+  assign \$31  = cfg[145] & cfg[134];
+  assign \$32  = ~ cfg[134];
+  assign \$33  = crc_ok[1] | \$32 ;
+  assign \$34  = crc_ok[0] & \$33 ;
+  assign \$35  = \$31  & \$34 ;
+  assign \$36  = ~ match;
+  assign \$37  = \$35  & \$36 ;
+  assign \$38  = rises == 2'h2;
+  assign arm = rise & \$38 ;
+  assign \$39  = \busy$101  | abort_cycle;
+  assign \$40  = ~ cfg_ok;
+  assign \$41  = latched & \$40 ;
+  assign \$42  = latched ? stuck_live : stuck_latched;
+  assign \$43  = rises >= target_rises;
+  assign \$44  = started & \$43 ;
+  assign \$45  = ~ \$44 ;
+  assign \$46  = rises == 2'h2;
+  assign \$47  = rise & \$46 ;
+  assign \$48  = ~ locked_seen;
+  assign \$49  = locked & \$48 ;
+  assign \$50  = \$47  | \$49 ;
+  assign \$51  = \$50  | abort_cycle;
+  assign \$52  = armed & early;
+  assign \$53  = ~ locked_seen;
+  assign \$54  = armed & \$53 ;
+  assign \$55  = ~ locked;
+  assign \$56  = \$54  & \$55 ;
+  assign \$57  = \$56  & ack_expired;
+  assign \$58  = ~ locked_seen;
+  assign \$59  = locked & \$58 ;
+  assign \$60  = \$59  & delay_over;
+  assign \$61  = ~ \started$122 ;
+  assign \$62  = locked_seen & \$61 ;
+  assign \$63  = no_start_expired | slots_full;
+  assign \$64  = \$62  & \$63 ;
+  assign \$65  = rises >= target_rises;
+  assign \$66  = started & \$65 ;
+  assign \$67  = ~ \$66 ;
+  assign busy = ~ idle;
+  assign \$68  = ~ crc_ok[0];
+  assign inc = report_frame & \$68 ;
+  assign \$69  = ~ cfg[134];
+  assign \$70  = crc_ok[1] | \$69 ;
+  assign \$71  = ~ \$70 ;
+  assign \inc$135  = report_frame & \$71 ;
+  assign \$72  = check & \repeat ;
+  assign \inc$150  = report_frame & \$72 ;
+  assign \$73  = check & skip;
+  assign \inc$153  = report_frame & \$73 ;
+  assign \$74  = check & zero;
+  assign \inc$156  = report_frame & \$74 ;
+  assign \$75  = cfg[145] & cfg[134];
+  assign \$76  = ~ cfg[134];
+  assign \$77  = crc_ok[1] | \$76 ;
+  assign \$78  = crc_ok[0] & \$77 ;
+  assign \$79  = \$75  & \$78 ;
+  assign \$80  = ~ match;
+  assign \$81  = \$79  & \$80 ;
+  assign \inc$159  = report_frame & \$81 ;
+  assign \$82  = ! cycle_fsm_state;
+  assign \$83  = cycle_fsm_state == 1'h1;
+  assign \$84  = cycle_fsm_state == 2'h2;
+  assign \$85  = cycle_fsm_state == 2'h3;
+  assign \$86  = cycle_fsm_state == 3'h4;
+  assign \$87  = cycle_fsm_state == 3'h5;
   assign \$88  = | live[15:1];
   assign \$89  = | live[129:124];
   assign \$90  = live[129:124] <= 6'h37;
@@ -831,406 +746,304 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \$119  = \$117  & \$118 ;
   assign \$120  = \$115  | \$119 ;
   assign \$121  = \$114  & \$120 ;
-  assign \$122  = ~ \$121 ;
-  assign \$123  = \$87  & \$122 ;
-  assign \$124  = ! cfg_request_period;
-  assign \$125  = periodic & \$124 ;
-  assign \$126  = ~ \$125 ;
-  assign \$127  = periodic & \$126 ;
-  assign \$128  = period_count_p1 == 1'h1;
-  assign \$129  = \$127  & \$128 ;
-  assign \$130  = start | \$129 ;
-  assign \$131  = ! cfg_request_period;
-  assign \$132  = periodic & \$131 ;
-  assign \$133  = \$130  | \$132 ;
-  assign \$134  = latched ? stuck_live : stuck_latched;
-  assign \$135  = rises >= target_rises;
-  assign \$136  = started & \$135 ;
-  assign \$137  = ~ \$136 ;
-  assign \$138  = rises == 2'h2;
-  assign \$139  = rise & \$138 ;
-  assign \$140  = ~ locked_seen;
-  assign \$141  = locked & \$140 ;
-  assign \$142  = \$139  | \$141 ;
-  assign \$143  = armed & early;
-  assign \$144  = ~ locked_seen;
-  assign \$145  = armed & \$144 ;
-  assign \$146  = ~ locked;
-  assign \$147  = \$145  & \$146 ;
-  assign \$148  = \$147  & ack_expired;
-  assign \$149  = ~ locked_seen;
-  assign \$150  = locked & \$149 ;
-  assign \$151  = \$150  & delay_over;
-  assign \$152  = ~ \started$117 ;
-  assign \$153  = locked_seen & \$152 ;
-  assign \$154  = no_start_expired | slots_full;
-  assign \$155  = \$153  & \$154 ;
-  assign \$156  = rises >= target_rises;
-  assign \$157  = started & \$156 ;
-  assign \$158  = ~ \$157 ;
-  assign busy = ~ idle;
-  assign \$159  = ~ crc_ok[0];
-  assign inc = report_frame & \$159 ;
-  assign \$160  = ~ cfg[134];
-  assign \$161  = crc_ok[1] | \$160 ;
-  assign \$162  = ~ \$161 ;
-  assign \inc$130  = report_frame & \$162 ;
-  assign \$163  = check & \repeat ;
-  assign \inc$145  = report_frame & \$163 ;
-  assign \$164  = check & skip;
-  assign \inc$148  = report_frame & \$164 ;
-  assign \$165  = check & zero;
-  assign \inc$151  = report_frame & \$165 ;
-  assign \$166  = cfg[145] & cfg[134];
-  assign \$167  = ~ cfg[134];
-  assign \$168  = crc_ok[1] | \$167 ;
-  assign \$169  = crc_ok[0] & \$168 ;
-  assign \$170  = \$166  & \$169 ;
-  assign \$171  = ~ match;
-  assign \$172  = \$170  & \$171 ;
-  assign \inc$154  = report_frame & \$172 ;
-  assign \$173  = ! cycle_fsm_state;
-  assign \$174  = cycle_fsm_state == 1'h1;
-  assign \$175  = cycle_fsm_state == 2'h2;
-  assign \$176  = cycle_fsm_state == 2'h3;
-  assign \$177  = cycle_fsm_state == 3'h4;
-  assign \$178  = cycle_fsm_state == 3'h5;
-  assign \$179  = ! live[87:64];
-  assign \$180  = live[87:64] - 1'h1;
-  assign \$181  = \$179  ? 25'h0000f9f : \$180 ;
-  assign \$182  = ! live[111:88];
-  assign \$183  = \$182  ? 24'h001f40 : live[111:88];
-  assign \$184  = ! live[123:112];
-  assign \$185  = \$184  ? 12'hfff : live[123:112];
-  assign \$186  = ack_limit_m1 + { cfg[15:0], 1'h0 };
-  assign \$187  = now + 1'h1;
-  assign \$188  = rises == 1'h1;
-  assign \$189  = rise & \$188 ;
-  assign \$190  = \slo$62  | \busy$96 ;
-  assign \$191  = ~ slo_low_time_p1[24];
-  assign \$192  = slo_low_time_p1 + 1'h1;
-  assign \$193  = ~ \slo$62 ;
-  assign \$194  = ~ \busy$96 ;
-  assign \$195  = \$193  & \$194 ;
-  assign \$196  = slo_low_time_p1 >= timeout_limit;
+  assign \$122  = ! live[87:64];
+  assign \$123  = \$122  ? 24'h000fa0 : live[87:64];
+  assign \$124  = ! live[111:88];
+  assign \$125  = \$124  ? 24'h001f40 : live[111:88];
+  assign \$126  = ! live[123:112];
+  assign \$127  = \$126  ? 12'hfff : live[123:112];
+  assign \$128  = ack_limit + { cfg[15:0], 1'h0 };
+  assign \$129  = now + 1'h1;
+  assign \$130  = rises == 1'h1;
+  assign \$131  = rise & \$130 ;
+  assign \$132  = \slo$63  | \busy$101 ;
+  assign \$133  = ~ slo_low_time_p1[24];
+  assign \$134  = slo_low_time_p1 + 1'h1;
+  assign \$135  = ~ \slo$63 ;
+  assign \$136  = ~ \busy$101 ;
+  assign \$137  = \$135  & \$136 ;
+  assign \$138  = slo_low_time_p1 >= timeout_limit;
+  assign \$139  = \$137  & \$138 ;
+  assign \$140  = ~ \slo$63 ;
+  assign \$141  = ~ \busy$101 ;
+  assign \$142  = \$140  & \$141 ;
+  assign \$143  = ! live[111:88];
+  assign \$144  = slo_low_time_p1 >= 13'h1f40;
+  assign \$145  = slo_low_time_p1 >= live[111:88];
+  assign \$146  = \$143  ? \$144  : \$145 ;
+  assign \$147  = \$142  & \$146 ;
+  assign \$148  = & timer;
+  assign \$149  = timer + 1'h1;
+  assign \$150  = \$148  ? { 1'h0, timer } : \$149 ;
+  assign \$151  = timer_clear ? 26'h0000001 : \$150 ;
+  assign \$152  = ~ timer_clear;
+  assign \$153  = ! live[63:40];
+  assign \$154  = timer >= 12'hfa0;
+  assign \$155  = timer >= live[63:40];
+  assign \$156  = \$153  ? \$154  : \$155 ;
+  assign \$157  = \$152  & \$156 ;
+  assign \$158  = ~ periodic;
+  assign \$159  = ! cfg_request_period;
+  assign \$160  = periodic & \$159 ;
+  assign \$161  = \$158  | \$160 ;
+  assign \$162  = period_count_p1 >= cfg_request_period;
+  assign \$163  = \$161  | \$162 ;
+  assign \$164  = period_count_p1 + 1'h1;
+  assign \$166  = words[5:0] + \$165 ;
+  assign \$167  = cfg[134] ? word1_len : 8'h00;
+  assign \$168  = word0_len + \$167 ;
+  assign \$170  = words[15:10] + \$169 ;
+  assign \$171  = start_slot + frame_len_p4;
+  assign \$172  = rises == 2'h2;
+  assign \$173  = rise & \$172 ;
+  assign \$174  = ~ locked_seen;
+  assign \$175  = locked & \$174 ;
+  assign \$176  = \$173  | \$175 ;
+  assign \$177  = ~ \$176 ;
+  assign \$178  = in_clock & \$177 ;
+  assign \$179  = timer >= ack_limit;
+  assign \$180  = \$178  & \$179 ;
+  assign \$181  = rises == 2'h2;
+  assign \$182  = rise & \$181 ;
+  assign \$183  = ~ locked_seen;
+  assign \$184  = locked & \$183 ;
+  assign \$185  = \$182  | \$184 ;
+  assign \$186  = ~ \$185 ;
+  assign \$187  = in_clock & \$186 ;
+  assign \$188  = timer >= no_start_limit;
+  assign \$189  = \$187  & \$188 ;
+  assign \$190  = delay > delay_limit;
+  assign \$191  = \busy$101  | abort_cycle;
+  assign \$192  = ! cfg_request_period;
+  assign \$193  = periodic & \$192 ;
+  assign \$194  = ~ \$193 ;
+  assign \$195  = periodic & \$194 ;
+  assign \$196  = period_count_p1 == 1'h1;
   assign \$197  = \$195  & \$196 ;
-  assign \$198  = ~ \slo$62 ;
-  assign \$199  = ~ \busy$96 ;
-  assign \$200  = \$198  & \$199 ;
-  assign \$201  = ! live[111:88];
-  assign \$202  = slo_low_time_p1 >= 13'h1f40;
-  assign \$203  = slo_low_time_p1 >= live[111:88];
-  assign \$204  = \$201  ? \$202  : \$203 ;
-  assign \$205  = \$200  & \$204 ;
-  assign \$206  = & timer;
-  assign \$207  = timer + 1'h1;
-  assign \$208  = \$206  ? { 1'h0, timer } : \$207 ;
-  assign \$209  = timer_clear ? 26'h0000000 : \$208 ;
-  assign \$210  = ~ periodic;
-  assign \$211  = ! cfg_request_period;
-  assign \$212  = periodic & \$211 ;
-  assign \$213  = \$210  | \$212 ;
-  assign \$214  = period_count_p1 >= cfg_request_period;
-  assign \$215  = \$213  | \$214 ;
-  assign \$216  = period_count_p1 + 1'h1;
-  assign \$218  = words[5:0] + \$217 ;
-  assign \$219  = cfg[134] ? word1_len : 8'h00;
-  assign \$220  = word0_len + \$219 ;
-  assign \$222  = words[15:10] + \$221 ;
-  assign \$223  = start_slot + frame_len_p4;
-  assign \$224  = rises == 2'h2;
-  assign \$225  = rise & \$224 ;
-  assign \$226  = ~ locked_seen;
-  assign \$227  = locked & \$226 ;
-  assign \$228  = \$225  | \$227 ;
-  assign \$229  = ~ \$228 ;
-  assign \$230  = in_clock & \$229 ;
-  assign \$231  = timer >= ack_limit_m1;
-  assign \$232  = \$230  & \$231 ;
-  assign \$233  = rises == 2'h2;
-  assign \$234  = rise & \$233 ;
-  assign \$235  = ~ locked_seen;
-  assign \$236  = locked & \$235 ;
-  assign \$237  = \$234  | \$236 ;
-  assign \$238  = ~ \$237 ;
-  assign \$239  = in_clock & \$238 ;
-  assign \$240  = timer >= no_start_limit_m1;
-  assign \$241  = \$239  & \$240 ;
-  assign \$242  = delay > delay_limit;
-  assign \$243  = \busy$96  | abort_cycle;
-  assign \$244  = ! live[63:40];
-  assign \$245  = timer >= 12'hfa0;
-  assign \$246  = timer >= live[63:40];
-  assign \$247  = \$244  ? \$245  : \$246 ;
-  assign \$248  = ! cfg_request_period;
-  assign \$249  = periodic & \$248 ;
-  assign \$250  = ~ \$249 ;
-  assign \$251  = periodic & \$250 ;
-  assign \$252  = period_count_p1 == 1'h1;
-  assign \$253  = \$251  & \$252 ;
-  assign \$254  = start | \$253 ;
-  assign \$255  = ! cfg_request_period;
-  assign \$256  = periodic & \$255 ;
-  assign \$257  = \$254  | \$256 ;
-  assign \$258  = | live[15:1];
-  assign \$259  = | live[129:124];
-  assign \$260  = live[129:124] <= 6'h37;
-  assign \$261  = \$259  & \$260 ;
-  assign \$262  = ! live[133:132];
-  assign \$263  = live[133:132] == 1'h1;
-  assign \$264  = \$262  | \$263 ;
-  assign \$265  = live[133:132] == 2'h2;
-  assign \$266  = \$264  | \$265 ;
-  assign \$267  = \$261  & \$266 ;
-  assign \$268  = \$258  & \$267 ;
-  assign \$269  = ~ live[134];
-  assign \$270  = | live[140:135];
-  assign \$271  = live[140:135] <= 6'h28;
-  assign \$272  = \$270  & \$271 ;
-  assign \$273  = ! live[144:143];
-  assign \$274  = live[144:143] == 1'h1;
-  assign \$275  = \$273  | \$274 ;
-  assign \$276  = live[144:143] == 2'h2;
-  assign \$277  = \$275  | \$276 ;
-  assign \$278  = \$272  & \$277 ;
-  assign \$279  = \$269  | \$278 ;
-  assign \$280  = \$268  & \$279 ;
-  assign \$281  = live[134] & live[131];
-  assign \$282  = \$281  & live[142];
-  assign \$283  = ~ \$282 ;
-  assign \$284  = \$280  & \$283 ;
-  assign \$285  = ~ live[145];
-  assign \$286  = live[140:135] <= live[129:124];
-  assign \$287  = live[134] & \$286 ;
-  assign \$288  = | live[144:143];
-  assign \$289  = \$287  & \$288 ;
-  assign \$290  = \$285  | \$289 ;
-  assign \$291  = \$284  & \$290 ;
-  assign \$292  = ~ \$291 ;
-  assign \$293  = \$257  & \$292 ;
-  assign \$294  = ! cfg_request_period;
-  assign \$295  = periodic & \$294 ;
-  assign \$296  = ~ \$295 ;
-  assign \$297  = periodic & \$296 ;
-  assign \$298  = period_count_p1 == 1'h1;
-  assign \$299  = \$297  & \$298 ;
-  assign \$300  = start | \$299 ;
-  assign \$301  = ! cfg_request_period;
-  assign \$302  = periodic & \$301 ;
-  assign \$303  = \$300  | \$302 ;
-  assign \$304  = latched ? stuck_live : stuck_latched;
-  assign \$305  = rises == 2'h2;
-  assign \$306  = rise & \$305 ;
-  assign \$307  = ~ locked_seen;
-  assign \$308  = locked & \$307 ;
-  assign \$309  = armed & early;
-  assign \$310  = ~ locked_seen;
-  assign \$311  = armed & \$310 ;
-  assign \$312  = ~ locked;
-  assign \$313  = \$311  & \$312 ;
-  assign \$314  = \$313  & ack_expired;
-  assign \$315  = ~ locked_seen;
-  assign \$316  = locked & \$315 ;
-  assign \$317  = \$316  & delay_over;
-  assign \$318  = ~ \started$117 ;
-  assign \$319  = locked_seen & \$318 ;
-  assign \$320  = no_start_expired | slots_full;
-  assign \$321  = \$319  & \$320 ;
-  assign \$322  = ~ \busy$96 ;
-  assign \$323  = ! frame_status;
-  assign \$324  = report_frame & \$323 ;
-  assign \$325  = check & \repeat ;
-  assign \$326  = check & skip;
-  assign \$327  = check & zero;
-  assign \$328  = ~ cfg[134];
-  assign \$329  = crc_ok[1] | \$328 ;
-  assign \$330  = cfg[145] & cfg[134];
-  assign \$331  = ~ cfg[134];
-  assign \$332  = crc_ok[1] | \$331 ;
-  assign \$333  = crc_ok[0] & \$332 ;
-  assign \$334  = \$330  & \$333 ;
-  assign \$335  = ~ match;
-  assign \$336  = \$334  & \$335 ;
+  assign \$198  = start | \$197 ;
+  assign \$199  = ! cfg_request_period;
+  assign \$200  = periodic & \$199 ;
+  assign \$201  = \$198  | \$200 ;
+  assign \$202  = ~ cfg_ok;
+  assign \$203  = latched & \$202 ;
+  assign \$204  = latched ? stuck_live : stuck_latched;
+  assign \$205  = rises == 2'h2;
+  assign \$206  = rise & \$205 ;
+  assign \$207  = ~ locked_seen;
+  assign \$208  = locked & \$207 ;
+  assign \$209  = armed & early;
+  assign \$210  = ~ locked_seen;
+  assign \$211  = armed & \$210 ;
+  assign \$212  = ~ locked;
+  assign \$213  = \$211  & \$212 ;
+  assign \$214  = \$213  & ack_expired;
+  assign \$215  = ~ locked_seen;
+  assign \$216  = locked & \$215 ;
+  assign \$217  = \$216  & delay_over;
+  assign \$218  = ~ \started$122 ;
+  assign \$219  = locked_seen & \$218 ;
+  assign \$220  = no_start_expired | slots_full;
+  assign \$221  = \$219  & \$220 ;
+  assign \$222  = ~ \busy$101 ;
+  assign \$223  = ! frame_status;
+  assign \$224  = report_frame & \$223 ;
+  assign \$225  = check & \repeat ;
+  assign \$226  = check & skip;
+  assign \$227  = check & zero;
+  assign \$228  = ~ cfg[134];
+  assign \$229  = crc_ok[1] | \$228 ;
+  assign \$230  = cfg[145] & cfg[134];
+  assign \$231  = ~ cfg[134];
+  assign \$232  = crc_ok[1] | \$231 ;
+  assign \$233  = crc_ok[0] & \$232 ;
+  assign \$234  = \$230  & \$233 ;
+  assign \$235  = ~ match;
+  assign \$236  = \$234  & \$235 ;
   always @(posedge clk)
-    cfg <= \$337 ;
+    cfg_ok <= \$237 ;
   always @(posedge clk)
-    ack_limit_m1 <= \$338 ;
+    cfg <= \$238 ;
   always @(posedge clk)
-    timeout_limit <= \$339 ;
+    ack_limit <= \$239 ;
   always @(posedge clk)
-    delay_limit <= \$340 ;
+    timeout_limit <= \$240 ;
   always @(posedge clk)
-    no_start_limit_m1 <= \$341 ;
+    delay_limit <= \$241 ;
   always @(posedge clk)
-    now <= \$342 ;
+    no_start_limit <= \$242 ;
   always @(posedge clk)
-    first_rise_time <= \$343 ;
+    now <= \$243 ;
   always @(posedge clk)
-    slo_low_time_p1 <= \$344 ;
+    first_rise_time <= \$244 ;
   always @(posedge clk)
-    stuck_latched <= \$345 ;
+    slo_low_time_p1 <= \$245 ;
   always @(posedge clk)
-    stuck_live <= \$346 ;
+    stuck_latched <= \$246 ;
   always @(posedge clk)
-    latched <= \$347 ;
+    stuck_live <= \$247 ;
   always @(posedge clk)
-    timer <= \$348 ;
+    latched <= \$248 ;
   always @(posedge clk)
-    period_count_p1 <= \$349 ;
+    timer <= \$249 ;
   always @(posedge clk)
-    word0_len <= \$350 ;
+    break_over <= \$250 ;
   always @(posedge clk)
-    frame_len_p4 <= \$351 ;
+    period_count_p1 <= \$251 ;
   always @(posedge clk)
-    word1_len <= \$352 ;
+    word0_len <= \$252 ;
   always @(posedge clk)
-    target_rises <= \$353 ;
+    frame_len_p4 <= \$253 ;
   always @(posedge clk)
-    started <= \$354 ;
+    word1_len <= \$254 ;
   always @(posedge clk)
-    ack_expired <= \$355 ;
+    target_rises <= \$255 ;
   always @(posedge clk)
-    no_start_expired <= \$356 ;
+    started <= \$256 ;
   always @(posedge clk)
-    delay_over <= \$357 ;
+    ack_expired <= \$257 ;
   always @(posedge clk)
-    cycle_fsm_state <= \$358 ;
+    no_start_expired <= \$258 ;
   always @(posedge clk)
-    armed <= \$359 ;
+    delay_over <= \$259 ;
   always @(posedge clk)
-    locked_seen <= \$360 ;
+    cycle_fsm_state <= \$260 ;
   always @(posedge clk)
-    done <= \$361 ;
+    armed <= \$261 ;
   always @(posedge clk)
-    valid <= \$362 ;
+    locked_seen <= \$262 ;
   always @(posedge clk)
-    status <= \$363 ;
+    done <= \$263 ;
   always @(posedge clk)
-    line_delay <= \$364 ;
+    valid <= \$264 ;
   always @(posedge clk)
-    timestamp <= \$365 ;
+    status <= \$265 ;
   always @(posedge clk)
-    cds <= \$366 ;
+    line_delay <= \$266 ;
   always @(posedge clk)
-    lc <= \$367 ;
+    timestamp <= \$267 ;
   always @(posedge clk)
-    lc_repeat <= \$368 ;
+    cds <= \$268 ;
   always @(posedge clk)
-    lc_skip <= \$369 ;
+    lc <= \$269 ;
   always @(posedge clk)
-    lc_zero <= \$370 ;
+    lc_repeat <= \$270 ;
   always @(posedge clk)
-    word0_position <= \$371 ;
+    lc_skip <= \$271 ;
   always @(posedge clk)
-    word0_ne <= \$372 ;
+    lc_zero <= \$272 ;
   always @(posedge clk)
-    word0_nw <= \$373 ;
+    word0_position <= \$273 ;
   always @(posedge clk)
-    word0_crc_ok <= \$374 ;
+    word0_ne <= \$274 ;
   always @(posedge clk)
-    word1_position <= \$375 ;
+    word0_nw <= \$275 ;
   always @(posedge clk)
-    word1_ne <= \$376 ;
+    word0_crc_ok <= \$276 ;
   always @(posedge clk)
-    word1_nw <= \$377 ;
+    word1_position <= \$277 ;
   always @(posedge clk)
-    word1_crc_ok <= \$378 ;
+    word1_ne <= \$278 ;
   always @(posedge clk)
-    spw_mismatch <= \$379 ;
-  \biss_master.count_aborted$196  \count_aborted$196  (
+    word1_nw <= \$279 ;
+  always @(posedge clk)
+    word1_crc_ok <= \$280 ;
+  always @(posedge clk)
+    spw_mismatch <= \$281 ;
+  \biss_master.count_aborted$202  \count_aborted$202  (
     .clear(clear_counters),
     .clk(clk),
     .count(count_aborted),
     .inc(fault_aborted),
     .rst(rst)
   );
-  \biss_master.count_crc_word0$185  \count_crc_word0$185  (
+  \biss_master.count_crc_word0$191  \count_crc_word0$191  (
     .clear(clear_counters),
     .clk(clk),
     .count(count_crc_word0),
     .inc(inc),
     .rst(rst)
   );
-  \biss_master.count_crc_word1$186  \count_crc_word1$186  (
+  \biss_master.count_crc_word1$192  \count_crc_word1$192  (
     .clear(clear_counters),
     .clk(clk),
     .count(count_crc_word1),
-    .inc(\inc$130 ),
+    .inc(\inc$135 ),
     .rst(rst)
   );
-  \biss_master.count_delay_range$189  \count_delay_range$189  (
+  \biss_master.count_delay_range$195  \count_delay_range$195  (
     .clear(clear_counters),
     .clk(clk),
     .count(count_delay_range),
     .inc(fault_delay_range),
     .rst(rst)
   );
-  \biss_master.count_lc_repeat$191  \count_lc_repeat$191  (
+  \biss_master.count_lc_repeat$197  \count_lc_repeat$197  (
     .clear(clear_counters),
     .clk(clk),
     .count(count_lc_repeat),
-    .inc(\inc$145 ),
+    .inc(\inc$150 ),
     .rst(rst)
   );
-  \biss_master.count_lc_skip$192  \count_lc_skip$192  (
+  \biss_master.count_lc_skip$198  \count_lc_skip$198  (
     .clear(clear_counters),
     .clk(clk),
     .count(count_lc_skip),
-    .inc(\inc$148 ),
+    .inc(\inc$153 ),
     .rst(rst)
   );
-  \biss_master.count_lc_zero$193  \count_lc_zero$193  (
+  \biss_master.count_lc_zero$199  \count_lc_zero$199  (
     .clear(clear_counters),
     .clk(clk),
     .count(count_lc_zero),
-    .inc(\inc$151 ),
+    .inc(\inc$156 ),
     .rst(rst)
   );
-  \biss_master.count_no_ack$187  \count_no_ack$187  (
+  \biss_master.count_no_ack$193  \count_no_ack$193  (
     .clear(clear_counters),
     .clk(clk),
     .count(count_no_ack),
     .inc(fault_no_ack),
     .rst(rst)
   );
-  \biss_master.count_no_start$188  \count_no_start$188  (
+  \biss_master.count_no_start$194  \count_no_start$194  (
     .clear(clear_counters),
     .clk(clk),
     .count(count_no_start),
     .inc(fault_no_start),
     .rst(rst)
   );
-  \biss_master.count_overrun$195  \count_overrun$195  (
+  \biss_master.count_overrun$201  \count_overrun$201  (
     .clear(clear_counters),
     .clk(clk),
     .count(count_overrun),
     .inc(overrun),
     .rst(rst)
   );
-  \biss_master.count_slo_stuck_low$190  \count_slo_stuck_low$190  (
+  \biss_master.count_slo_stuck_low$196  \count_slo_stuck_low$196  (
     .clear(clear_counters),
     .clk(clk),
     .count(count_slo_stuck_low),
     .inc(fault_slo_stuck_low),
     .rst(rst)
   );
-  \biss_master.count_spw_mismatch$194  \count_spw_mismatch$194  (
+  \biss_master.count_spw_mismatch$200  \count_spw_mismatch$200  (
     .clear(clear_counters),
     .clk(clk),
     .count(count_spw_mismatch),
-    .inc(\inc$154 ),
+    .inc(\inc$159 ),
     .rst(rst)
   );
   \biss_master.decoder  decoder (
-    .\bit (\slo$62 ),
-    .cds(\cds$175 ),
+    .\bit (\slo$63 ),
+    .cds(\cds$181 ),
     .clk(clk),
     .cpw_top(cpw_top),
     .crc_ok(crc_ok),
     .data0(data0),
     .data1(spw),
-    .done(\done$77 ),
-    .lc(\lc$74 ),
+    .done(\done$82 ),
+    .lc(\lc$75 ),
+    .lc_load(load),
     .ne(ne),
     .nw(nw),
     .receiver_clear(receiver_clear),
@@ -1238,13 +1051,13 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .sample(sample),
     .slots_full(slots_full),
     .start_slot(start_slot),
-    .started(\started$117 ),
+    .started(\started$122 ),
     .stopped(stopped),
     .word_count(word_count),
     .words(words)
   );
   \biss_master.ma_clock  ma_clock (
-    .busy(\busy$96 ),
+    .busy(\busy$101 ),
     .clk(clk),
     .half_period(cfg[15:0]),
     .ma(ma),
@@ -1263,23 +1076,25 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .receiver_clear(receiver_clear),
     .rst(rst),
     .sample(sample),
-    .slo(\slo$62 )
+    .slo(\slo$63 )
   );
   \biss_master.sign_of_life  sign_of_life (
     .check(check),
     .clk(clk),
-    .lc(\lc$74 ),
+    .is_zero(zero),
+    .lc(\lc$75 ),
+    .load(load),
+    .\port$1146$0 (\slo$63 ),
     .\repeat (\repeat ),
     .resync(resync),
     .rst(rst),
-    .skip(skip),
-    .zero(zero)
+    .skip(skip)
   );
   \biss_master.slo_sync  slo_sync (
     .clk(clk),
     .rst(rst),
     .slo(slo),
-    .stage1(\slo$62 )
+    .stage1(\slo$63 )
   );
   \biss_master.spw_check  spw_check (
     .bits(cfg[140:135]),
@@ -1295,37 +1110,37 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     (* full_case = 32'd1 *)
     casez (words[9:6])
       4'h0:
-          \$217  = 8'h04;
+          \$165  = 8'h04;
       4'h1:
-          \$217  = 8'h06;
+          \$165  = 8'h06;
       4'h2:
-          \$217  = 8'h0a;
+          \$165  = 8'h0a;
       4'h3:
-          \$217  = 8'h0c;
+          \$165  = 8'h0c;
       4'h4:
-          \$217  = 8'h0a;
+          \$165  = 8'h0a;
       4'h5:
-          \$217  = 8'h0c;
+          \$165  = 8'h0c;
       4'h6:
-          \$217  = 8'h10;
+          \$165  = 8'h10;
       4'h7:
-          \$217  = 8'h12;
+          \$165  = 8'h12;
       4'h8:
-          \$217  = 8'h14;
+          \$165  = 8'h14;
       4'h9:
-          \$217  = 8'h16;
+          \$165  = 8'h16;
       4'ha:
-          \$217  = 8'h1a;
+          \$165  = 8'h1a;
       4'hb:
-          \$217  = 8'h1c;
+          \$165  = 8'h1c;
       4'hc:
-          \$217  = 8'h04;
+          \$165  = 8'h04;
       4'hd:
-          \$217  = 8'h06;
+          \$165  = 8'h06;
       4'he:
-          \$217  = 8'h0a;
+          \$165  = 8'h0a;
       4'hf:
-          \$217  = 8'h0c;
+          \$165  = 8'h0c;
     endcase
   end
   always @* begin
@@ -1333,51 +1148,51 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     (* full_case = 32'd1 *)
     casez (words[19:16])
       4'h0:
-          \$221  = 8'h00;
+          \$169  = 8'h00;
       4'h1:
-          \$221  = 8'h02;
+          \$169  = 8'h02;
       4'h2:
-          \$221  = 8'h06;
+          \$169  = 8'h06;
       4'h3:
-          \$221  = 8'h08;
+          \$169  = 8'h08;
       4'h4:
-          \$221  = 8'h06;
+          \$169  = 8'h06;
       4'h5:
-          \$221  = 8'h08;
+          \$169  = 8'h08;
       4'h6:
-          \$221  = 8'h0c;
+          \$169  = 8'h0c;
       4'h7:
-          \$221  = 8'h0e;
+          \$169  = 8'h0e;
       4'h8:
-          \$221  = 8'h10;
+          \$169  = 8'h10;
       4'h9:
-          \$221  = 8'h12;
+          \$169  = 8'h12;
       4'ha:
-          \$221  = 8'h16;
+          \$169  = 8'h16;
       4'hb:
-          \$221  = 8'h18;
+          \$169  = 8'h18;
       4'hc:
-          \$221  = 8'h00;
+          \$169  = 8'h00;
       4'hd:
-          \$221  = 8'h02;
+          \$169  = 8'h02;
       4'he:
-          \$221  = 8'h06;
+          \$169  = 8'h06;
       4'hf:
-          \$221  = 8'h08;
+          \$169  = 8'h08;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
     (* full_case = 32'd1 *)
-    if (\$55 ) begin
+    if (\$21 ) begin
       frame_status = 4'h3;
-    end else if (\$56 ) begin
+    end else if (\$22 ) begin
       frame_status = 4'h1;
-    end else if (\$59 ) begin
+    end else if (\$25 ) begin
       frame_status = 4'h2;
-    end else if (\$64 ) begin
+    end else if (\$30 ) begin
       frame_status = 4'h4;
-    end else if (\$71 ) begin
+    end else if (\$37 ) begin
       frame_status = 4'h5;
     end else begin
       frame_status = 4'h0;
@@ -1408,44 +1223,17 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     timer_clear = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
-          if (\$73 ) begin
+          if (\$39 ) begin
             timer_clear = 1'h1;
           end
       3'h1:
-        begin
           timer_clear = 1'h1;
-          if (abort_cycle) begin
-          end else if (\$123 ) begin
-            timer_clear = 1'h1;
-          end
-        end
       3'h2:
-        begin
           timer_clear = 1'h1;
-          if (abort_cycle) begin
-            timer_clear = 1'h1;
-          end else if (\slo$62 ) begin
-          end else if (\$134 ) begin
-            timer_clear = 1'h1;
-          end
-        end
       3'h3:
-        begin
-          if (\$142 ) begin
+          if (\$51 ) begin
             timer_clear = 1'h1;
           end
-          if (abort_cycle) begin
-            timer_clear = 1'h1;
-          end else if (\$143 ) begin
-            timer_clear = 1'h1;
-          end else if (\$148 ) begin
-            timer_clear = 1'h1;
-          end else if (\$151 ) begin
-            timer_clear = 1'h1;
-          end else if (\$155 ) begin
-            timer_clear = 1'h1;
-          end
-        end
       3'h4:
           if (abort_cycle) begin
             timer_clear = 1'h1;
@@ -1469,29 +1257,28 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
       3'h0:
           /* empty */;
       3'h1:
-          if (abort_cycle) begin
-          end else if (\$123 ) begin
-            report = 1'h1;
-          end
+          /* empty */;
       3'h2:
-          if (abort_cycle) begin
+          if (\$41 ) begin
             report = 1'h1;
-          end else if (\slo$62 ) begin
-          end else if (\$134 ) begin
+          end else if (abort_cycle) begin
+            report = 1'h1;
+          end else if (\slo$63 ) begin
+          end else if (\$42 ) begin
             report = 1'h1;
           end
       3'h3:
           if (abort_cycle) begin
             report = 1'h1;
-          end else if (\$143 ) begin
+          end else if (\done$82 ) begin
             report = 1'h1;
-          end else if (\$148 ) begin
+          end else if (\$52 ) begin
             report = 1'h1;
-          end else if (\$151 ) begin
+          end else if (\$57 ) begin
             report = 1'h1;
-          end else if (\$155 ) begin
+          end else if (\$60 ) begin
             report = 1'h1;
-          end else if (\done$77 ) begin
+          end else if (\$64 ) begin
             report = 1'h1;
           end
     endcase
@@ -1503,30 +1290,29 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
       3'h0:
           /* empty */;
       3'h1:
-          if (abort_cycle) begin
-          end else if (\$123 ) begin
-            report_status = 4'hb;
-          end
+          /* empty */;
       3'h2:
-          if (abort_cycle) begin
+          if (\$41 ) begin
+            report_status = 4'hb;
+          end else if (abort_cycle) begin
             report_status = 4'ha;
-          end else if (\slo$62 ) begin
-          end else if (\$134 ) begin
+          end else if (\slo$63 ) begin
+          end else if (\$42 ) begin
             report_status = 4'h9;
           end
       3'h3:
           if (abort_cycle) begin
             report_status = 4'ha;
-          end else if (\$143 ) begin
-            report_status = 4'h8;
-          end else if (\$148 ) begin
-            report_status = 4'h6;
-          end else if (\$151 ) begin
-            report_status = 4'h8;
-          end else if (\$155 ) begin
-            report_status = 4'h7;
-          end else if (\done$77 ) begin
+          end else if (\done$82 ) begin
             report_status = frame_status;
+          end else if (\$52 ) begin
+            report_status = 4'h8;
+          end else if (\$57 ) begin
+            report_status = 4'h6;
+          end else if (\$60 ) begin
+            report_status = 4'h8;
+          end else if (\$64 ) begin
+            report_status = 4'h7;
           end
     endcase
   end
@@ -1537,8 +1323,9 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
       3'h0:
           /* empty */;
       3'h1:
-          if (abort_cycle) begin
-          end else if (\$123 ) begin
+          /* empty */;
+      3'h2:
+          if (\$41 ) begin
             fault_bad_config = 1'h1;
           end
     endcase
@@ -1552,7 +1339,8 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
       3'h1:
           /* empty */;
       3'h2:
-          if (abort_cycle) begin
+          if (\$41 ) begin
+          end else if (abort_cycle) begin
             fault_aborted = 1'h1;
           end
       3'h3:
@@ -1570,9 +1358,10 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
       3'h1:
           /* empty */;
       3'h2:
-          if (abort_cycle) begin
-          end else if (\slo$62 ) begin
-          end else if (\$134 ) begin
+          if (\$41 ) begin
+          end else if (abort_cycle) begin
+          end else if (\slo$63 ) begin
+          end else if (\$42 ) begin
             fault_slo_stuck_low = 1'h1;
           end
     endcase
@@ -1588,9 +1377,9 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
       3'h2:
           /* empty */;
       3'h3:
-          run = \$137 ;
+          run = \$45 ;
       3'h4:
-          run = \$158 ;
+          run = \$67 ;
     endcase
   end
   always @* begin
@@ -1609,6 +1398,44 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    report_frame = 1'h0;
+    casez (cycle_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h3:
+          if (abort_cycle) begin
+          end else if (\done$82 ) begin
+            report_frame = 1'h1;
+          end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    report_delay = 1'h0;
+    casez (cycle_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h3:
+          if (abort_cycle) begin
+          end else if (\done$82 ) begin
+            report_delay = 1'h1;
+          end else if (\$52 ) begin
+          end else if (\$57 ) begin
+          end else if (\$60 ) begin
+            report_delay = 1'h1;
+          end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
     fault_delay_range = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -1619,10 +1446,11 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
           /* empty */;
       3'h3:
           if (abort_cycle) begin
-          end else if (\$143 ) begin
+          end else if (\done$82 ) begin
+          end else if (\$52 ) begin
             fault_delay_range = 1'h1;
-          end else if (\$148 ) begin
-          end else if (\$151 ) begin
+          end else if (\$57 ) begin
+          end else if (\$60 ) begin
             fault_delay_range = 1'h1;
           end
     endcase
@@ -1639,31 +1467,10 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
           /* empty */;
       3'h3:
           if (abort_cycle) begin
-          end else if (\$143 ) begin
-          end else if (\$148 ) begin
+          end else if (\done$82 ) begin
+          end else if (\$52 ) begin
+          end else if (\$57 ) begin
             fault_no_ack = 1'h1;
-          end
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    report_delay = 1'h0;
-    casez (cycle_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h3:
-          if (abort_cycle) begin
-          end else if (\$143 ) begin
-          end else if (\$148 ) begin
-          end else if (\$151 ) begin
-            report_delay = 1'h1;
-          end else if (\$155 ) begin
-          end else if (\done$77 ) begin
-            report_delay = 1'h1;
           end
     endcase
   end
@@ -1679,526 +1486,526 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
           /* empty */;
       3'h3:
           if (abort_cycle) begin
-          end else if (\$143 ) begin
-          end else if (\$148 ) begin
-          end else if (\$151 ) begin
-          end else if (\$155 ) begin
+          end else if (\done$82 ) begin
+          end else if (\$52 ) begin
+          end else if (\$57 ) begin
+          end else if (\$60 ) begin
+          end else if (\$64 ) begin
             fault_no_start = 1'h1;
           end
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    report_frame = 1'h0;
-    casez (cycle_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h3:
-          if (abort_cycle) begin
-          end else if (\$143 ) begin
-          end else if (\$148 ) begin
-          end else if (\$151 ) begin
-          end else if (\$155 ) begin
-          end else if (\done$77 ) begin
-            report_frame = 1'h1;
-          end
-    endcase
+    \$237  = \$121 ;
+    if (rst) begin
+      \$237  = 1'h0;
+    end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$337  = cfg;
+    \$238  = cfg;
     if (idle) begin
-      \$337  = live;
+      \$238  = live;
     end
     if (rst) begin
-      \$337  = 154'h000000000000000000000000000000000000000;
+      \$238  = 154'h000000000000000000000000000000000000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$338  = ack_limit_m1;
+    \$239  = ack_limit;
     if (idle) begin
-      \$338  = \$181 [23:0];
+      \$239  = \$123 ;
     end
     if (rst) begin
-      \$338  = 24'h000000;
+      \$239  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$339  = timeout_limit;
+    \$240  = timeout_limit;
     if (idle) begin
-      \$339  = \$183 ;
+      \$240  = \$125 ;
     end
     if (rst) begin
-      \$339  = 24'h000000;
+      \$240  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$340  = delay_limit;
+    \$241  = delay_limit;
     if (idle) begin
-      \$340  = \$185 ;
+      \$241  = \$127 ;
     end
     if (rst) begin
-      \$340  = 12'h000;
+      \$241  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$341  = \$186 ;
+    \$242  = \$128 ;
     if (rst) begin
-      \$341  = 25'h0000000;
+      \$242  = 25'h0000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$342  = \$187 [31:0];
+    \$243  = \$129 [31:0];
     if (rst) begin
-      \$342  = 32'd0;
+      \$243  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$343  = first_rise_time;
-    if (\$189 ) begin
-      \$343  = now;
+    \$244  = first_rise_time;
+    if (\$131 ) begin
+      \$244  = now;
     end
     if (rst) begin
-      \$343  = 32'd0;
+      \$244  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$344  = slo_low_time_p1;
-    if (\$190 ) begin
-      \$344  = 25'h0000001;
-    end else if (\$191 ) begin
-      \$344  = \$192 [24:0];
+    \$245  = slo_low_time_p1;
+    if (\$132 ) begin
+      \$245  = 25'h0000001;
+    end else if (\$133 ) begin
+      \$245  = \$134 [24:0];
     end
     if (rst) begin
-      \$344  = 25'h0000001;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$345  = \$197 ;
-    if (rst) begin
-      \$345  = 1'h0;
+      \$245  = 25'h0000001;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$346  = \$205 ;
+    \$246  = \$139 ;
     if (rst) begin
-      \$346  = 1'h0;
+      \$246  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$347  = idle;
+    \$247  = \$147 ;
     if (rst) begin
-      \$347  = 1'h0;
+      \$247  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$348  = \$209 [24:0];
+    \$248  = idle;
     if (rst) begin
-      \$348  = 25'h0000000;
+      \$248  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    \$249  = \$151 [24:0];
+    if (rst) begin
+      \$249  = 25'h0000001;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    \$250  = \$157 ;
+    if (rst) begin
+      \$250  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
     (* full_case = 32'd1 *)
-    if (\$215 ) begin
-      \$349  = 24'h000001;
+    if (\$163 ) begin
+      \$251  = 24'h000001;
     end else begin
-      \$349  = \$216 [23:0];
+      \$251  = \$164 [23:0];
     end
     if (rst) begin
-      \$349  = 24'h000001;
+      \$251  = 24'h000001;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$350  = \$218 [7:0];
+    \$252  = \$166 [7:0];
     if (rst) begin
-      \$350  = 8'h00;
+      \$252  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$351  = \$220 ;
+    \$253  = \$168 ;
     if (rst) begin
-      \$351  = 9'h000;
+      \$253  = 9'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$352  = \$222 [7:0];
+    \$254  = \$170 [7:0];
     if (rst) begin
-      \$352  = 8'h00;
+      \$254  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$353  = \$223 ;
+    \$255  = \$171 ;
     if (rst) begin
-      \$353  = 17'h00000;
+      \$255  = 17'h00000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$354  = \started$117 ;
+    \$256  = \started$122 ;
     if (rst) begin
-      \$354  = 1'h0;
+      \$256  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$355  = \$232 ;
+    \$257  = \$180 ;
     if (rst) begin
-      \$355  = 1'h0;
+      \$257  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$356  = \$241 ;
+    \$258  = \$189 ;
     if (rst) begin
-      \$356  = 1'h0;
+      \$258  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$357  = \$242 ;
+    \$259  = \$190 ;
     if (rst) begin
-      \$357  = 1'h0;
+      \$259  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$358  = cycle_fsm_state;
+    \$260  = cycle_fsm_state;
     casez (cycle_fsm_state)
       3'h0:
-          if (\$243 ) begin
-          end else if (\$247 ) begin
-            \$358  = 3'h1;
+          if (\$191 ) begin
+          end else if (break_over) begin
+            \$260  = 3'h1;
           end
       3'h1:
           if (abort_cycle) begin
-            \$358  = 3'h0;
-          end else if (\$293 ) begin
-            \$358  = 3'h1;
-          end else if (\$303 ) begin
-            \$358  = 3'h2;
+            \$260  = 3'h0;
+          end else if (\$201 ) begin
+            \$260  = 3'h2;
           end
       3'h2:
-          if (abort_cycle) begin
-            \$358  = 3'h0;
-          end else if (\slo$62 ) begin
-            \$358  = 3'h3;
-          end else if (\$304 ) begin
-            \$358  = 3'h0;
+          if (\$203 ) begin
+            \$260  = 3'h1;
+            if (abort_cycle) begin
+              \$260  = 3'h0;
+            end
+          end else if (abort_cycle) begin
+            \$260  = 3'h0;
+          end else if (\slo$63 ) begin
+            \$260  = 3'h3;
+          end else if (\$204 ) begin
+            \$260  = 3'h0;
           end
       3'h3:
           if (abort_cycle) begin
-            \$358  = 3'h0;
-          end else if (\$309 ) begin
-            \$358  = 3'h0;
-          end else if (\$314 ) begin
-            \$358  = 3'h0;
-          end else if (\$317 ) begin
-            \$358  = 3'h0;
-          end else if (\$321 ) begin
-            \$358  = 3'h0;
-          end else if (\done$77 ) begin
-            \$358  = 3'h4;
+            \$260  = 3'h0;
+          end else if (\done$82 ) begin
+            \$260  = 3'h4;
+          end else if (\$209 ) begin
+            \$260  = 3'h0;
+          end else if (\$214 ) begin
+            \$260  = 3'h0;
+          end else if (\$217 ) begin
+            \$260  = 3'h0;
+          end else if (\$221 ) begin
+            \$260  = 3'h0;
           end
       3'h4:
           if (abort_cycle) begin
-            \$358  = 3'h0;
+            \$260  = 3'h0;
           end else if (stopped) begin
-            \$358  = 3'h5;
+            \$260  = 3'h5;
           end
       3'h5:
-          if (\$322 ) begin
-            \$358  = 3'h1;
+          if (\$222 ) begin
+            \$260  = 3'h1;
           end
     endcase
     if (rst) begin
-      \$358  = 3'h0;
+      \$260  = 3'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$359  = armed;
+    \$261  = armed;
     casez (cycle_fsm_state)
       3'h0:
           /* empty */;
       3'h1:
           /* empty */;
       3'h2:
-          \$359  = 1'h0;
+          \$261  = 1'h0;
       3'h3:
-          if (\$306 ) begin
-            \$359  = 1'h1;
+          if (\$206 ) begin
+            \$261  = 1'h1;
           end
     endcase
     if (rst) begin
-      \$359  = 1'h0;
+      \$261  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$360  = locked_seen;
+    \$262  = locked_seen;
     casez (cycle_fsm_state)
       3'h0:
           /* empty */;
       3'h1:
           /* empty */;
       3'h2:
-          \$360  = 1'h0;
+          \$262  = 1'h0;
       3'h3:
-          if (\$308 ) begin
-            \$360  = 1'h1;
+          if (\$208 ) begin
+            \$262  = 1'h1;
           end
     endcase
     if (rst) begin
-      \$360  = 1'h0;
+      \$262  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$361  = report;
+    \$263  = report;
     if (rst) begin
-      \$361  = 1'h0;
+      \$263  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$362  = \$324 ;
+    \$264  = \$224 ;
     if (rst) begin
-      \$362  = 1'h0;
+      \$264  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$363  = status;
+    \$265  = status;
     if (report) begin
-      \$363  = report_status;
+      \$265  = report_status;
     end
     if (rst) begin
-      \$363  = 4'h0;
+      \$265  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$364  = line_delay;
+    \$266  = line_delay;
     if (report_delay) begin
-      \$364  = delay;
+      \$266  = delay;
     end
     if (rst) begin
-      \$364  = 13'h0000;
+      \$266  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$365  = timestamp;
+    \$267  = timestamp;
     if (report_frame) begin
-      \$365  = first_rise_time;
+      \$267  = first_rise_time;
     end
     if (rst) begin
-      \$365  = 32'd0;
+      \$267  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$366  = cds;
+    \$268  = cds;
     if (report_frame) begin
-      \$366  = \cds$175 ;
+      \$268  = \cds$181 ;
     end
     if (rst) begin
-      \$366  = 1'h0;
+      \$268  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$367  = lc;
+    \$269  = lc;
     if (report_frame) begin
-      \$367  = \lc$74 ;
+      \$269  = \lc$75 ;
     end
     if (rst) begin
-      \$367  = 6'h00;
+      \$269  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$368  = lc_repeat;
+    \$270  = lc_repeat;
     if (report_frame) begin
-      \$368  = \$325 ;
+      \$270  = \$225 ;
     end
     if (rst) begin
-      \$368  = 1'h0;
+      \$270  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$369  = lc_skip;
+    \$271  = lc_skip;
     if (report_frame) begin
-      \$369  = \$326 ;
+      \$271  = \$226 ;
     end
     if (rst) begin
-      \$369  = 1'h0;
+      \$271  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$370  = lc_zero;
+    \$272  = lc_zero;
     if (report_frame) begin
-      \$370  = \$327 ;
+      \$272  = \$227 ;
     end
     if (rst) begin
-      \$370  = 1'h0;
+      \$272  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$371  = word0_position;
+    \$273  = word0_position;
     if (report_frame) begin
-      \$371  = data0;
+      \$273  = data0;
     end
     if (rst) begin
-      \$371  = 55'h00000000000000;
+      \$273  = 55'h00000000000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$372  = word0_ne;
+    \$274  = word0_ne;
     if (report_frame) begin
-      \$372  = ne[0];
+      \$274  = ne[0];
     end
     if (rst) begin
-      \$372  = 1'h0;
+      \$274  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$373  = word0_nw;
+    \$275  = word0_nw;
     if (report_frame) begin
-      \$373  = nw[0];
+      \$275  = nw[0];
     end
     if (rst) begin
-      \$373  = 1'h0;
+      \$275  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$374  = word0_crc_ok;
+    \$276  = word0_crc_ok;
     if (report_frame) begin
-      \$374  = crc_ok[0];
+      \$276  = crc_ok[0];
     end
     if (rst) begin
-      \$374  = 1'h0;
+      \$276  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$375  = word1_position;
+    \$277  = word1_position;
     if (report_frame) begin
-      \$375  = spw;
+      \$277  = spw;
     end
     if (rst) begin
-      \$375  = 40'h0000000000;
+      \$277  = 40'h0000000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$376  = word1_ne;
+    \$278  = word1_ne;
     if (report_frame) begin
-      \$376  = ne[1];
+      \$278  = ne[1];
     end
     if (rst) begin
-      \$376  = 1'h0;
+      \$278  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$377  = word1_nw;
+    \$279  = word1_nw;
     if (report_frame) begin
-      \$377  = nw[1];
+      \$279  = nw[1];
     end
     if (rst) begin
-      \$377  = 1'h0;
+      \$279  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$378  = word1_crc_ok;
+    \$280  = word1_crc_ok;
     if (report_frame) begin
-      \$378  = \$329 ;
+      \$280  = \$229 ;
     end
     if (rst) begin
-      \$378  = 1'h0;
+      \$280  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$379  = spw_mismatch;
+    \$281  = spw_mismatch;
     if (report_frame) begin
-      \$379  = \$336 ;
+      \$281  = \$236 ;
     end
     if (rst) begin
-      \$379  = 1'h0;
+      \$281  = 1'h0;
     end
   end
   assign half_period = cfg[15:0];
-  assign \slo$63  = \slo$62 ;
-  assign \half_period$64  = cfg[15:0];
-  assign \sample$66  = sample;
-  assign \bit  = \slo$62 ;
-  assign \bit$68  = \slo$62 ;
-  assign \ma$70  = ma;
-  assign \lc$75  = \lc$74 ;
-  assign \cpw_top$80  = cpw_top;
+  assign \slo$64  = \slo$63 ;
+  assign \half_period$65  = cfg[15:0];
+  assign \sample$67  = sample;
+  assign \bit  = \slo$63 ;
+  assign \bit$69  = \slo$63 ;
+  assign \ma$71  = ma;
+  assign \lc$76  = \lc$75 ;
+  assign lc_next = { \lc$75 [4:0], \slo$63  };
+  assign \lc_next$78  = { \lc$75 [4:0], \slo$63  };
+  assign lc_load = load;
+  assign \cpw_top$85  = cpw_top;
   assign data1 = spw;
   assign bits = cfg[140:135];
   assign tolerance = cfg[153:146];
-  assign \resync$126  = resync;
+  assign \resync$131  = resync;
   assign clear = clear_counters;
   assign count = count_crc_word0;
-  assign \clear$131  = clear_counters;
-  assign \count$132  = count_crc_word1;
-  assign \inc$133  = fault_no_ack;
-  assign \clear$134  = clear_counters;
-  assign \count$135  = count_no_ack;
-  assign \inc$136  = fault_no_start;
-  assign \clear$137  = clear_counters;
-  assign \count$138  = count_no_start;
-  assign \inc$139  = fault_delay_range;
-  assign \clear$140  = clear_counters;
-  assign \count$141  = count_delay_range;
-  assign \inc$142  = fault_slo_stuck_low;
-  assign \clear$143  = clear_counters;
-  assign \count$144  = count_slo_stuck_low;
-  assign \clear$146  = clear_counters;
-  assign \count$147  = count_lc_repeat;
-  assign \clear$149  = clear_counters;
-  assign \count$150  = count_lc_skip;
-  assign \clear$152  = clear_counters;
-  assign \count$153  = count_lc_zero;
-  assign \clear$155  = clear_counters;
-  assign \count$156  = count_spw_mismatch;
-  assign \inc$157  = overrun;
-  assign \clear$158  = clear_counters;
-  assign \count$159  = count_overrun;
-  assign \inc$160  = fault_aborted;
-  assign \clear$161  = clear_counters;
-  assign \count$162  = count_aborted;
+  assign \clear$136  = clear_counters;
+  assign \count$137  = count_crc_word1;
+  assign \inc$138  = fault_no_ack;
+  assign \clear$139  = clear_counters;
+  assign \count$140  = count_no_ack;
+  assign \inc$141  = fault_no_start;
+  assign \clear$142  = clear_counters;
+  assign \count$143  = count_no_start;
+  assign \inc$144  = fault_delay_range;
+  assign \clear$145  = clear_counters;
+  assign \count$146  = count_delay_range;
+  assign \inc$147  = fault_slo_stuck_low;
+  assign \clear$148  = clear_counters;
+  assign \count$149  = count_slo_stuck_low;
+  assign \clear$151  = clear_counters;
+  assign \count$152  = count_lc_repeat;
+  assign \clear$154  = clear_counters;
+  assign \count$155  = count_lc_skip;
+  assign \clear$157  = clear_counters;
+  assign \count$158  = count_lc_zero;
+  assign \clear$160  = clear_counters;
+  assign \count$161  = count_spw_mismatch;
+  assign \inc$162  = overrun;
+  assign \clear$163  = clear_counters;
+  assign \count$164  = count_overrun;
+  assign \inc$165  = fault_aborted;
+  assign \clear$166  = clear_counters;
+  assign \count$167  = count_aborted;
   assign \live.cfg_ma_half_period  = live[15:0];
   assign \live.cfg_request_period  = live[39:16];
   assign \live.cfg_break_time  = live[63:40];
@@ -2271,7 +2078,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_aborted$196 (clk, rst, inc, count, clear);
+module \biss_master.count_aborted$202 (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$10  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -2325,7 +2132,7 @@ module \biss_master.count_aborted$196 (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_crc_word0$185 (clk, rst, inc, count, clear);
+module \biss_master.count_crc_word0$191 (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$11  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -2379,7 +2186,7 @@ module \biss_master.count_crc_word0$185 (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_crc_word1$186 (clk, rst, inc, count, clear);
+module \biss_master.count_crc_word1$192 (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$12  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -2433,7 +2240,7 @@ module \biss_master.count_crc_word1$186 (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_delay_range$189 (clk, rst, inc, count, clear);
+module \biss_master.count_delay_range$195 (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$13  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -2487,7 +2294,7 @@ module \biss_master.count_delay_range$189 (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_lc_repeat$191 (clk, rst, inc, count, clear);
+module \biss_master.count_lc_repeat$197 (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$14  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -2541,7 +2348,7 @@ module \biss_master.count_lc_repeat$191 (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_lc_skip$192 (clk, rst, inc, count, clear);
+module \biss_master.count_lc_skip$198 (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$15  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -2595,7 +2402,7 @@ module \biss_master.count_lc_skip$192 (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_lc_zero$193 (clk, rst, inc, count, clear);
+module \biss_master.count_lc_zero$199 (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$16  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -2649,7 +2456,7 @@ module \biss_master.count_lc_zero$193 (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_no_ack$187 (clk, rst, inc, count, clear);
+module \biss_master.count_no_ack$193 (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$17  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -2703,7 +2510,7 @@ module \biss_master.count_no_ack$187 (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_no_start$188 (clk, rst, inc, count, clear);
+module \biss_master.count_no_start$194 (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$18  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -2757,7 +2564,7 @@ module \biss_master.count_no_start$188 (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_overrun$195 (clk, rst, inc, count, clear);
+module \biss_master.count_overrun$201 (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$19  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -2811,7 +2618,7 @@ module \biss_master.count_overrun$195 (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_slo_stuck_low$190 (clk, rst, inc, count, clear);
+module \biss_master.count_slo_stuck_low$196 (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$20  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -2865,7 +2672,7 @@ module \biss_master.count_slo_stuck_low$190 (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_spw_mismatch$194 (clk, rst, inc, count, clear);
+module \biss_master.count_spw_mismatch$200 (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$21  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -2919,15 +2726,38 @@ module \biss_master.count_spw_mismatch$194 (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.decoder (rst, word_count, words, receiver_clear, sample, crc_ok, done, stopped, slots_full, started, start_slot, cds, data0, ne, nw, data1, lc, cpw_top, \bit , clk);
+module \biss_master.decoder (rst, word_count, lc_load, words, receiver_clear, sample, crc_ok, done, stopped, slots_full, started, start_slot, cds, data0, ne, nw, data1, lc, cpw_top, \bit , clk
+);
   reg \$auto$verilog_backend.cc:2355:dump_module$22  = 0;
   wire [2:0] \$1 ;
   wire [7:0] \$10 ;
-  reg [39:0] \$100 ;
-  reg [5:0] \$101 ;
-  reg [39:0] \$102 ;
+  wire \$100 ;
+  wire \$101 ;
+  wire \$102 ;
+  wire \$103 ;
+  wire \$104 ;
+  wire \$105 ;
+  reg \$106 ;
+  reg \$107 ;
+  reg [15:0] \$108 ;
+  reg \$109 ;
   wire [7:0] \$11 ;
+  reg \$110 ;
+  reg [15:0] \$111 ;
+  reg [2:0] \$112 ;
+  reg \$113 ;
+  reg [6:0] \$114 ;
+  reg \$115 ;
+  reg \$116 ;
+  reg \$117 ;
+  reg \$118 ;
+  reg [54:0] \$119 ;
   wire [9:0] \$12 ;
+  reg [1:0] \$120 ;
+  reg [1:0] \$121 ;
+  reg [39:0] \$122 ;
+  reg [5:0] \$123 ;
+  reg [39:0] \$124 ;
   wire \$13 ;
   wire \$14 ;
   wire \$15 ;
@@ -2943,90 +2773,90 @@ module \biss_master.decoder (rst, word_count, words, receiver_clear, sample, crc
   wire \$24 ;
   wire \$25 ;
   wire [6:0] \$26 ;
-  wire [1:0] \$27 ;
-  wire [6:0] \$28 ;
-  reg [3:0] \$29 ;
+  wire [7:0] \$27 ;
+  reg [6:0] \$28 ;
+  wire [7:0] \$29 ;
   reg [6:0] \$3 ;
-  wire [6:0] \$30 ;
-  reg [6:0] \$31 ;
-  wire [7:0] \$32 ;
-  wire [6:0] \$33 ;
-  wire [1:0] \$34 ;
-  wire [6:0] \$35 ;
-  reg [3:0] \$36 ;
-  wire [6:0] \$37 ;
-  reg [6:0] \$38 ;
-  wire [7:0] \$39 ;
+  reg [6:0] \$30 ;
+  wire [7:0] \$31 ;
+  reg [6:0] \$32 ;
+  wire [7:0] \$33 ;
+  wire \$34 ;
+  wire [1:0] \$35 ;
+  wire [6:0] \$36 ;
+  wire \$37 ;
+  reg [3:0] \$38 ;
+  wire [6:0] \$39 ;
   wire [7:0] \$4 ;
   wire \$40 ;
   wire \$41 ;
-  wire [16:0] \$42 ;
-  wire \$43 ;
-  wire \$44 ;
+  wire [6:0] \$42 ;
+  wire [7:0] \$43 ;
+  reg [6:0] \$44 ;
   wire [7:0] \$45 ;
-  wire [6:0] \$46 ;
-  wire \$47 ;
-  wire [2:0] \$48 ;
-  wire \$49 ;
+  reg [6:0] \$46 ;
+  wire [7:0] \$47 ;
+  reg [6:0] \$48 ;
+  wire [7:0] \$49 ;
   wire [7:0] \$5 ;
-  wire [1:0] \$50 ;
-  wire \$51 ;
-  wire \$52 ;
+  wire \$50 ;
+  wire [1:0] \$51 ;
+  wire [6:0] \$52 ;
   wire \$53 ;
-  wire \$54 ;
-  wire \$55 ;
+  reg [3:0] \$54 ;
+  wire [6:0] \$55 ;
   wire \$56 ;
   wire \$57 ;
   wire \$58 ;
   wire \$59 ;
   wire [8:0] \$6 ;
-  wire \$60 ;
+  wire [16:0] \$60 ;
   wire \$61 ;
   wire \$62 ;
   wire \$63 ;
-  wire \$64 ;
-  wire \$65 ;
+  wire [7:0] \$64 ;
+  wire [6:0] \$65 ;
   wire \$66 ;
   wire \$67 ;
-  wire \$68 ;
+  wire [6:0] \$68 ;
   wire \$69 ;
   wire [2:0] \$7 ;
   wire \$70 ;
-  wire \$71 ;
+  wire [6:0] \$71 ;
   wire \$72 ;
   wire \$73 ;
   wire \$74 ;
   wire \$75 ;
-  wire \$76 ;
-  wire [6:0] \$77 ;
-  wire \$78 ;
+  wire [6:0] \$76 ;
+  wire \$77 ;
+  wire [2:0] \$78 ;
   wire \$79 ;
   wire \$8 ;
-  wire [6:0] \$80 ;
+  wire [1:0] \$80 ;
   wire \$81 ;
   wire \$82 ;
   wire \$83 ;
   wire \$84 ;
   wire \$85 ;
   wire \$86 ;
-  reg \$87 ;
-  reg \$88 ;
-  reg [15:0] \$89 ;
+  wire \$87 ;
+  wire \$88 ;
+  wire \$89 ;
   reg [6:0] \$9 ;
-  reg \$90 ;
-  reg \$91 ;
-  reg [15:0] \$92 ;
-  reg [2:0] \$93 ;
-  reg \$94 ;
-  reg [6:0] \$95 ;
-  reg \$96 ;
-  reg [54:0] \$97 ;
-  reg [1:0] \$98 ;
-  reg [1:0] \$99 ;
+  wire \$90 ;
+  wire \$91 ;
+  wire \$92 ;
+  wire \$93 ;
+  wire \$94 ;
+  wire \$95 ;
+  wire \$96 ;
+  wire \$97 ;
+  wire \$98 ;
+  wire \$99 ;
   input \bit ;
   wire \bit ;
-  wire \bit$12 ;
-  wire \bit$18 ;
+  wire \bit$16 ;
+  wire \bit$22 ;
   output cds;
   reg cds = 1'h0;
   input clk;
@@ -3044,17 +2874,23 @@ module \biss_master.decoder (rst, word_count, words, receiver_clear, sample, crc
   reg done = 1'h0;
   wire [7:0] frame_bits;
   reg [6:0] idx = 7'h00;
+  reg in_data = 1'h0;
+  reg in_lc = 1'h0;
+  reg in_top = 1'h0;
   reg in_word;
   wire [1:0] kind;
-  wire [1:0] \kind$15 ;
+  wire [1:0] \kind$19 ;
   output [5:0] lc;
   reg [5:0] lc = 6'h00;
+  output lc_load;
+  wire lc_load;
+  wire [5:0] lc_next;
   output [1:0] ne;
   reg [1:0] ne = 2'h0;
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire ok;
-  wire \ok$19 ;
+  wire \ok$23 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -3065,7 +2901,7 @@ module \biss_master.decoder (rst, word_count, words, receiver_clear, sample, crc
   output slots_full;
   reg slots_full = 1'h0;
   wire start;
-  wire \start$16 ;
+  wire \start$20 ;
   output [15:0] start_slot;
   reg [15:0] start_slot = 16'h0000;
   output started;
@@ -3073,14 +2909,20 @@ module \biss_master.decoder (rst, word_count, words, receiver_clear, sample, crc
   output stopped;
   reg stopped = 1'h0;
   wire valid;
-  wire \valid$17 ;
+  wire \valid$21 ;
+  reg w0_data_at0 = 1'h0;
+  reg [6:0] w0_data_end_m1 = 7'h00;
   reg [6:0] w0_data_end_p1 = 7'h00;
-  reg [6:0] w0_lc_end = 7'h00;
-  reg [6:0] w0_nenw_end = 7'h00;
+  reg w0_lc_at0 = 1'h0;
+  reg [6:0] w0_lc_end_m1 = 7'h00;
+  reg [6:0] w0_nenw_end_m1 = 7'h00;
   reg [6:0] w0_word_end_m1 = 7'h00;
+  reg w1_data_at0 = 1'h0;
+  reg [6:0] w1_data_end_m1 = 7'h00;
   reg [6:0] w1_data_end_p1 = 7'h00;
-  reg [6:0] w1_lc_end = 7'h00;
-  reg [6:0] w1_nenw_end = 7'h00;
+  reg w1_lc_at0 = 1'h0;
+  reg [6:0] w1_lc_end_m1 = 7'h00;
+  reg [6:0] w1_nenw_end_m1 = 7'h00;
   reg [6:0] w1_word_end_m1 = 7'h00;
   reg word = 1'h0;
   input [1:0] word_count;
@@ -3107,6 +2949,7 @@ module \biss_master.decoder (rst, word_count, words, receiver_clear, sample, crc
   assign \$10  = words[15:10] + \$9 ;
   assign \$11  = \$8  ? \$10  : 8'h00;
   assign \$12  = \$6  + \$11 ;
+  assign lc_load = in_word & in_lc;
   assign \$13  = ! word;
   assign \$14  = in_word & \$13 ;
   assign \$15  = ! idx;
@@ -3115,118 +2958,151 @@ module \biss_master.decoder (rst, word_count, words, receiver_clear, sample, crc
   assign valid = in_word & \$16 ;
   assign \$18  = in_word & \$17 ;
   assign \$19  = ! idx;
-  assign \start$16  = \$18  & \$19 ;
-  assign \valid$17  = in_word & \$20 ;
+  assign \start$20  = \$18  & \$19 ;
+  assign \valid$21  = in_word & \$20 ;
   assign \$21  = ! decoder_fsm_state;
   assign \$22  = decoder_fsm_state == 1'h1;
   assign \$23  = decoder_fsm_state == 2'h2;
   assign \$24  = decoder_fsm_state == 2'h3;
   assign \$25  = decoder_fsm_state == 3'h4;
   assign \$26  = words[5:0] + 1'h1;
-  assign \$27  = words[6] ? 2'h2 : 2'h0;
-  assign \$28  = words[5:0] + \$27 ;
-  assign \$30  = words[5:0] + \$29 ;
-  assign \$32  = words[5:0] + \$31 ;
-  assign \$33  = words[15:10] + 1'h1;
-  assign \$34  = words[16] ? 2'h2 : 2'h0;
-  assign \$35  = words[15:10] + \$34 ;
-  assign \$37  = words[15:10] + \$36 ;
-  assign \$39  = words[15:10] + \$38 ;
-  assign \$40  = ~ slots_full;
-  assign \$41  = sample & \$40 ;
-  assign \$42  = slots + 1'h1;
-  assign \$43  = slots == 16'hfffe;
-  assign \$44  = sample & \bit ;
-  assign \$45  = idx + 1'h1;
-  assign \$46  = word ? w1_word_end_m1 : w0_word_end_m1;
-  assign \$47  = idx == \$46 ;
-  assign \$48  = word_count - 1'h1;
-  assign \$49  = word == \$48 ;
-  assign \$50  = word + 1'h1;
-  assign \$51  = ! word;
-  assign \$52  = in_word & \$51 ;
-  assign \$53  = idx < words[5:0];
-  assign \$54  = \$52  & \$53 ;
-  assign \$55  = ~ words[6];
-  assign \$56  = ! word;
-  assign \$57  = in_word & \$56 ;
-  assign \$58  = idx == words[5:0];
-  assign \$59  = \$57  & \$58 ;
-  assign \$60  = ! word;
-  assign \$61  = in_word & \$60 ;
-  assign \$62  = idx == w0_data_end_p1;
-  assign \$63  = \$61  & \$62 ;
-  assign \$65  = in_word & \$64 ;
-  assign \$66  = idx < words[15:10];
-  assign \$67  = \$65  & \$66 ;
-  assign \$68  = ~ words[16];
-  assign \$70  = in_word & \$69 ;
-  assign \$71  = idx == words[15:10];
-  assign \$72  = \$70  & \$71 ;
-  assign \$74  = in_word & \$73 ;
-  assign \$75  = idx == w1_data_end_p1;
-  assign \$76  = \$74  & \$75 ;
-  assign \$77  = word ? w1_nenw_end : w0_nenw_end;
-  assign \$78  = idx >= \$77 ;
-  assign \$79  = in_word & \$78 ;
-  assign \$80  = word ? w1_lc_end : w0_lc_end;
-  assign \$81  = idx < \$80 ;
-  assign \$82  = \$79  & \$81 ;
-  assign \$83  = ! word;
-  assign \$84  = in_word & \$83 ;
-  assign \$85  = idx < words[15:10];
-  assign \$86  = \$84  & \$85 ;
+  assign \$27  = words[5:0] + 7'h7f;
+  assign \$29  = words[5:0] + \$28 ;
+  assign \$31  = words[5:0] + \$30 ;
+  assign \$33  = words[5:0] + \$32 ;
+  assign \$34  = | words[5:0];
+  assign \$35  = words[6] ? 2'h2 : 2'h0;
+  assign \$36  = words[5:0] + \$35 ;
+  assign \$37  = ! \$36 ;
+  assign \$39  = words[5:0] + \$38 ;
+  assign \$40  = | \$39 ;
+  assign \$41  = \$37  & \$40 ;
+  assign \$42  = words[15:10] + 1'h1;
+  assign \$43  = words[15:10] + 7'h7f;
+  assign \$45  = words[15:10] + \$44 ;
+  assign \$47  = words[15:10] + \$46 ;
+  assign \$49  = words[15:10] + \$48 ;
+  assign \$50  = | words[15:10];
+  assign \$51  = words[16] ? 2'h2 : 2'h0;
+  assign \$52  = words[15:10] + \$51 ;
+  assign \$53  = ! \$52 ;
+  assign \$55  = words[15:10] + \$54 ;
+  assign \$56  = | \$55 ;
+  assign \$57  = \$53  & \$56 ;
+  assign \$58  = ~ slots_full;
+  assign \$59  = sample & \$58 ;
+  assign \$60  = slots + 1'h1;
+  assign \$61  = slots == 16'hfffe;
+  assign \$62  = sample & \bit ;
+  assign \$63  = | words[15:10];
+  assign \$64  = idx + 1'h1;
+  assign \$65  = word ? w1_data_end_m1 : w0_data_end_m1;
+  assign \$66  = idx != \$65 ;
+  assign \$67  = in_data & \$66 ;
+  assign \$68  = word ? w1_nenw_end_m1 : w0_nenw_end_m1;
+  assign \$69  = idx == \$68 ;
+  assign \$70  = in_lc | \$69 ;
+  assign \$71  = word ? w1_lc_end_m1 : w0_lc_end_m1;
+  assign \$72  = idx != \$71 ;
+  assign \$73  = \$70  & \$72 ;
+  assign \$74  = idx != w1_data_end_m1;
+  assign \$75  = in_top & \$74 ;
+  assign \$76  = word ? w1_word_end_m1 : w0_word_end_m1;
+  assign \$77  = idx == \$76 ;
+  assign \$78  = word_count - 1'h1;
+  assign \$79  = word == \$78 ;
+  assign \$80  = word + 1'h1;
+  assign \$81  = ! word;
+  assign \$82  = in_word & \$81 ;
+  assign \$83  = \$82  & in_data;
+  assign \$84  = ~ words[6];
+  assign \$85  = ! word;
+  assign \$86  = in_word & \$85 ;
+  assign \$87  = idx == words[5:0];
+  assign \$88  = \$86  & \$87 ;
+  assign \$89  = ! word;
+  assign \$90  = in_word & \$89 ;
+  assign \$91  = idx == w0_data_end_p1;
+  assign \$92  = \$90  & \$91 ;
+  assign \$94  = in_word & \$93 ;
+  assign \$95  = \$94  & in_data;
+  assign \$96  = ~ words[16];
+  assign \$98  = in_word & \$97 ;
+  assign \$99  = idx == words[15:10];
+  assign \$100  = \$98  & \$99 ;
+  assign \$102  = in_word & \$101 ;
+  assign \$103  = idx == w1_data_end_p1;
+  assign \$104  = \$102  & \$103 ;
+  assign \$105  = in_word & in_top;
   always @(posedge clk)
     w0_data_end_p1 <= \$26 ;
   always @(posedge clk)
-    w0_nenw_end <= \$28 ;
+    w0_data_end_m1 <= \$27 [6:0];
   always @(posedge clk)
-    w0_lc_end <= \$30 ;
+    w0_nenw_end_m1 <= \$29 [6:0];
   always @(posedge clk)
-    w0_word_end_m1 <= \$32 [6:0];
+    w0_lc_end_m1 <= \$31 [6:0];
   always @(posedge clk)
-    w1_data_end_p1 <= \$33 ;
+    w0_word_end_m1 <= \$33 [6:0];
   always @(posedge clk)
-    w1_nenw_end <= \$35 ;
+    w0_data_at0 <= \$34 ;
   always @(posedge clk)
-    w1_lc_end <= \$37 ;
+    w0_lc_at0 <= \$41 ;
   always @(posedge clk)
-    w1_word_end_m1 <= \$39 [6:0];
+    w1_data_end_p1 <= \$42 ;
   always @(posedge clk)
-    done <= \$87 ;
+    w1_data_end_m1 <= \$43 [6:0];
   always @(posedge clk)
-    stopped <= \$88 ;
+    w1_nenw_end_m1 <= \$45 [6:0];
   always @(posedge clk)
-    slots <= \$89 ;
+    w1_lc_end_m1 <= \$47 [6:0];
   always @(posedge clk)
-    slots_full <= \$90 ;
+    w1_word_end_m1 <= \$49 [6:0];
   always @(posedge clk)
-    started <= \$91 ;
+    w1_data_at0 <= \$50 ;
   always @(posedge clk)
-    start_slot <= \$92 ;
+    w1_lc_at0 <= \$57 ;
   always @(posedge clk)
-    decoder_fsm_state <= \$93 ;
+    done <= \$106 ;
   always @(posedge clk)
-    cds <= \$94 ;
+    stopped <= \$107 ;
   always @(posedge clk)
-    idx <= \$95 ;
+    slots <= \$108 ;
   always @(posedge clk)
-    word <= \$96 ;
+    slots_full <= \$109 ;
   always @(posedge clk)
-    data0 <= \$97 ;
+    started <= \$110 ;
   always @(posedge clk)
-    ne <= \$98 ;
+    start_slot <= \$111 ;
   always @(posedge clk)
-    nw <= \$99 ;
+    decoder_fsm_state <= \$112 ;
   always @(posedge clk)
-    data1 <= \$100 ;
+    cds <= \$113 ;
   always @(posedge clk)
-    lc <= \$101 ;
+    idx <= \$114 ;
   always @(posedge clk)
-    cpw_top <= \$102 ;
+    in_data <= \$115 ;
+  always @(posedge clk)
+    in_lc <= \$116 ;
+  always @(posedge clk)
+    in_top <= \$117 ;
+  always @(posedge clk)
+    word <= \$118 ;
+  always @(posedge clk)
+    data0 <= \$119 ;
+  always @(posedge clk)
+    ne <= \$120 ;
+  always @(posedge clk)
+    nw <= \$121 ;
+  always @(posedge clk)
+    data1 <= \$122 ;
+  always @(posedge clk)
+    lc <= \$123 ;
+  always @(posedge clk)
+    cpw_top <= \$124 ;
   \biss_master.decoder.crc0  crc0 (
+    .\bit (\bit ),
     .clk(clk),
-    .data(\bit ),
     .kind(words[9:8]),
     .ok(ok),
     .receiver_clear(receiver_clear),
@@ -3235,14 +3111,14 @@ module \biss_master.decoder (rst, word_count, words, receiver_clear, sample, crc
     .valid(valid)
   );
   \biss_master.decoder.crc1  crc1 (
+    .\bit (\bit ),
     .clk(clk),
-    .data(\bit ),
     .kind(words[19:18]),
-    .ok(\ok$19 ),
+    .ok(\ok$23 ),
     .receiver_clear(receiver_clear),
     .rst(rst),
-    .start(\start$16 ),
-    .valid(\valid$17 )
+    .start(\start$20 ),
+    .valid(\valid$21 )
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
@@ -3323,15 +3199,25 @@ module \biss_master.decoder (rst, word_count, words, receiver_clear, sample, crc
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
     (* full_case = 32'd1 *)
+    casez (words[6])
+      1'h0:
+          \$28  = 7'h7f;
+      1'h1:
+          \$28  = 7'h01;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
+    (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
-          \$29  = 4'h0;
+          \$30  = 7'h7f;
       2'h1:
-          \$29  = 4'h2;
+          \$30  = 7'h01;
       2'h2:
-          \$29  = 4'h6;
+          \$30  = 7'h05;
       2'h3:
-          \$29  = 4'h8;
+          \$30  = 7'h07;
     endcase
   end
   always @* begin
@@ -3339,37 +3225,61 @@ module \biss_master.decoder (rst, word_count, words, receiver_clear, sample, crc
     (* full_case = 32'd1 *)
     casez (words[9:6])
       4'h0:
-          \$31  = 7'h7f;
+          \$32  = 7'h7f;
       4'h1:
-          \$31  = 7'h01;
+          \$32  = 7'h01;
       4'h2:
-          \$31  = 7'h05;
+          \$32  = 7'h05;
       4'h3:
-          \$31  = 7'h07;
+          \$32  = 7'h07;
       4'h4:
-          \$31  = 7'h05;
+          \$32  = 7'h05;
       4'h5:
-          \$31  = 7'h07;
+          \$32  = 7'h07;
       4'h6:
-          \$31  = 7'h0b;
+          \$32  = 7'h0b;
       4'h7:
-          \$31  = 7'h0d;
+          \$32  = 7'h0d;
       4'h8:
-          \$31  = 7'h0f;
+          \$32  = 7'h0f;
       4'h9:
-          \$31  = 7'h11;
+          \$32  = 7'h11;
       4'ha:
-          \$31  = 7'h15;
+          \$32  = 7'h15;
       4'hb:
-          \$31  = 7'h17;
+          \$32  = 7'h17;
       4'hc:
-          \$31  = 7'h7f;
+          \$32  = 7'h7f;
       4'hd:
-          \$31  = 7'h01;
+          \$32  = 7'h01;
       4'he:
-          \$31  = 7'h05;
+          \$32  = 7'h05;
       4'hf:
-          \$31  = 7'h07;
+          \$32  = 7'h07;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
+    (* full_case = 32'd1 *)
+    casez (words[7:6])
+      2'h0:
+          \$38  = 4'h0;
+      2'h1:
+          \$38  = 4'h2;
+      2'h2:
+          \$38  = 4'h6;
+      2'h3:
+          \$38  = 4'h8;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
+    (* full_case = 32'd1 *)
+    casez (words[16])
+      1'h0:
+          \$44  = 7'h7f;
+      1'h1:
+          \$44  = 7'h01;
     endcase
   end
   always @* begin
@@ -3377,13 +3287,13 @@ module \biss_master.decoder (rst, word_count, words, receiver_clear, sample, crc
     (* full_case = 32'd1 *)
     casez (words[17:16])
       2'h0:
-          \$36  = 4'h0;
+          \$46  = 7'h7f;
       2'h1:
-          \$36  = 4'h2;
+          \$46  = 7'h01;
       2'h2:
-          \$36  = 4'h6;
+          \$46  = 7'h05;
       2'h3:
-          \$36  = 4'h8;
+          \$46  = 7'h07;
     endcase
   end
   always @* begin
@@ -3391,37 +3301,51 @@ module \biss_master.decoder (rst, word_count, words, receiver_clear, sample, crc
     (* full_case = 32'd1 *)
     casez (words[19:16])
       4'h0:
-          \$38  = 7'h7f;
+          \$48  = 7'h7f;
       4'h1:
-          \$38  = 7'h01;
+          \$48  = 7'h01;
       4'h2:
-          \$38  = 7'h05;
+          \$48  = 7'h05;
       4'h3:
-          \$38  = 7'h07;
+          \$48  = 7'h07;
       4'h4:
-          \$38  = 7'h05;
+          \$48  = 7'h05;
       4'h5:
-          \$38  = 7'h07;
+          \$48  = 7'h07;
       4'h6:
-          \$38  = 7'h0b;
+          \$48  = 7'h0b;
       4'h7:
-          \$38  = 7'h0d;
+          \$48  = 7'h0d;
       4'h8:
-          \$38  = 7'h0f;
+          \$48  = 7'h0f;
       4'h9:
-          \$38  = 7'h11;
+          \$48  = 7'h11;
       4'ha:
-          \$38  = 7'h15;
+          \$48  = 7'h15;
       4'hb:
-          \$38  = 7'h17;
+          \$48  = 7'h17;
       4'hc:
-          \$38  = 7'h7f;
+          \$48  = 7'h7f;
       4'hd:
-          \$38  = 7'h01;
+          \$48  = 7'h01;
       4'he:
-          \$38  = 7'h05;
+          \$48  = 7'h05;
       4'hf:
-          \$38  = 7'h07;
+          \$48  = 7'h07;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
+    (* full_case = 32'd1 *)
+    casez (words[17:16])
+      2'h0:
+          \$54  = 4'h0;
+      2'h1:
+          \$54  = 4'h2;
+      2'h2:
+          \$54  = 4'h6;
+      2'h3:
+          \$54  = 4'h8;
     endcase
   end
   always @* begin
@@ -3438,7 +3362,7 @@ module \biss_master.decoder (rst, word_count, words, receiver_clear, sample, crc
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
-    \$87  = 1'h0;
+    \$106  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
@@ -3446,23 +3370,23 @@ module \biss_master.decoder (rst, word_count, words, receiver_clear, sample, crc
           /* empty */;
       3'h2:
           if (sample) begin
-            if (\$47 ) begin
-              if (\$49 ) begin
-                \$87  = 1'h1;
+            if (\$77 ) begin
+              if (\$79 ) begin
+                \$106  = 1'h1;
               end
             end
           end
     endcase
     if (receiver_clear) begin
-      \$87  = 1'h0;
+      \$106  = 1'h0;
     end
     if (rst) begin
-      \$87  = 1'h0;
+      \$106  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
-    \$88  = 1'h0;
+    \$107  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
@@ -3472,276 +3396,352 @@ module \biss_master.decoder (rst, word_count, words, receiver_clear, sample, crc
           /* empty */;
       3'h3:
           if (sample) begin
-            \$88  = 1'h1;
+            \$107  = 1'h1;
           end
     endcase
     if (receiver_clear) begin
-      \$88  = 1'h0;
+      \$107  = 1'h0;
     end
     if (rst) begin
-      \$88  = 1'h0;
+      \$107  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
-    \$89  = slots;
-    if (\$41 ) begin
-      \$89  = \$42 [15:0];
+    \$108  = slots;
+    if (\$59 ) begin
+      \$108  = \$60 [15:0];
     end
     if (receiver_clear) begin
-      \$89  = 16'h0000;
+      \$108  = 16'h0000;
     end
     if (rst) begin
-      \$89  = 16'h0000;
+      \$108  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
-    \$90  = slots_full;
-    if (\$41 ) begin
-      \$90  = \$43 ;
+    \$109  = slots_full;
+    if (\$59 ) begin
+      \$109  = \$61 ;
     end
     if (receiver_clear) begin
-      \$90  = 1'h0;
+      \$109  = 1'h0;
     end
     if (rst) begin
-      \$90  = 1'h0;
+      \$109  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
-    \$91  = started;
+    \$110  = started;
     casez (decoder_fsm_state)
       3'h0:
-          if (\$44 ) begin
-            \$91  = 1'h1;
+          if (\$62 ) begin
+            \$110  = 1'h1;
           end
     endcase
     if (receiver_clear) begin
-      \$91  = 1'h0;
+      \$110  = 1'h0;
     end
     if (rst) begin
-      \$91  = 1'h0;
+      \$110  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
-    \$92  = start_slot;
+    \$111  = start_slot;
     casez (decoder_fsm_state)
       3'h0:
-          if (\$44 ) begin
-            \$92  = slots;
+          if (\$62 ) begin
+            \$111  = slots;
           end
     endcase
     if (receiver_clear) begin
-      \$92  = 16'h0000;
+      \$111  = 16'h0000;
     end
     if (rst) begin
-      \$92  = 16'h0000;
+      \$111  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
-    \$93  = decoder_fsm_state;
+    \$112  = decoder_fsm_state;
     casez (decoder_fsm_state)
       3'h0:
-          if (\$44 ) begin
-            \$93  = 3'h1;
+          if (\$62 ) begin
+            \$112  = 3'h1;
           end
       3'h1:
           if (sample) begin
-            \$93  = 3'h2;
+            \$112  = 3'h2;
           end
       3'h2:
           if (sample) begin
-            if (\$47 ) begin
-              if (\$49 ) begin
-                \$93  = 3'h3;
+            if (\$77 ) begin
+              if (\$79 ) begin
+                \$112  = 3'h3;
               end
             end
           end
       3'h3:
           if (sample) begin
-            \$93  = 3'h4;
+            \$112  = 3'h4;
           end
     endcase
     if (receiver_clear) begin
-      \$93  = 3'h0;
+      \$112  = 3'h0;
     end
     if (rst) begin
-      \$93  = 3'h0;
+      \$112  = 3'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
-    \$94  = cds;
+    \$113  = cds;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
       3'h1:
           if (sample) begin
-            \$94  = \bit ;
+            \$113  = \bit ;
           end
     endcase
     if (receiver_clear) begin
-      \$94  = 1'h0;
+      \$113  = 1'h0;
     end
     if (rst) begin
-      \$94  = 1'h0;
+      \$113  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
-    \$95  = idx;
+    \$114  = idx;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
       3'h1:
           if (sample) begin
-            \$95  = 7'h00;
+            \$114  = 7'h00;
           end
       3'h2:
           if (sample) begin
-            \$95  = \$45 [6:0];
-            if (\$47 ) begin
-              \$95  = 7'h00;
+            \$114  = \$64 [6:0];
+            if (\$77 ) begin
+              \$114  = 7'h00;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$95  = 7'h00;
+      \$114  = 7'h00;
     end
     if (rst) begin
-      \$95  = 7'h00;
+      \$114  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
-    \$96  = word;
+    \$115  = in_data;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
       3'h1:
           if (sample) begin
-            \$96  = 1'h0;
+            \$115  = w0_data_at0;
           end
       3'h2:
           if (sample) begin
-            if (\$47 ) begin
+            \$115  = \$67 ;
+            if (\$77 ) begin
+              \$115  = w1_data_at0;
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$115  = 1'h0;
+    end
+    if (rst) begin
+      \$115  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
+    \$116  = in_lc;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$116  = w0_lc_at0;
+          end
+      3'h2:
+          if (sample) begin
+            \$116  = \$73 ;
+            if (\$77 ) begin
+              \$116  = w1_lc_at0;
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$116  = 1'h0;
+    end
+    if (rst) begin
+      \$116  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
+    \$117  = in_top;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$117  = \$63 ;
+          end
+      3'h2:
+          if (sample) begin
+            \$117  = \$75 ;
+            if (\$77 ) begin
+              \$117  = 1'h0;
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$117  = 1'h0;
+    end
+    if (rst) begin
+      \$117  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
+    \$118  = word;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$118  = 1'h0;
+          end
+      3'h2:
+          if (sample) begin
+            if (\$77 ) begin
               (* full_case = 32'd1 *)
-              if (\$49 ) begin
+              if (\$79 ) begin
               end else begin
-                \$96  = \$50 [0];
+                \$118  = \$80 [0];
               end
             end
           end
     endcase
     if (receiver_clear) begin
-      \$96  = 1'h0;
+      \$118  = 1'h0;
     end
     if (rst) begin
-      \$96  = 1'h0;
+      \$118  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
-    \$97  = data0;
-    if (\$54 ) begin
-      \$97  = { data0[53:0], \bit  };
+    \$119  = data0;
+    if (\$83 ) begin
+      \$119  = { data0[53:0], \bit  };
     end
     if (receiver_clear) begin
-      \$97  = 55'h00000000000000;
+      \$119  = 55'h00000000000000;
     end
     if (rst) begin
-      \$97  = 55'h00000000000000;
+      \$119  = 55'h00000000000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
-    \$98  = ne;
-    if (\$55 ) begin
-      \$98 [0] = 1'h1;
-    end else if (\$59 ) begin
-      \$98 [0] = \bit ;
+    \$120  = ne;
+    if (\$84 ) begin
+      \$120 [0] = 1'h1;
+    end else if (\$88 ) begin
+      \$120 [0] = \bit ;
     end
-    if (\$68 ) begin
-      \$98 [1] = 1'h1;
-    end else if (\$72 ) begin
-      \$98 [1] = \bit ;
+    if (\$96 ) begin
+      \$120 [1] = 1'h1;
+    end else if (\$100 ) begin
+      \$120 [1] = \bit ;
     end
     if (receiver_clear) begin
-      \$98  = 2'h0;
+      \$120  = 2'h0;
     end
     if (rst) begin
-      \$98  = 2'h0;
+      \$120  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
-    \$99  = nw;
-    if (\$55 ) begin
-      \$99 [0] = 1'h1;
-    end else if (\$59 ) begin
-    end else if (\$63 ) begin
-      \$99 [0] = \bit ;
+    \$121  = nw;
+    if (\$84 ) begin
+      \$121 [0] = 1'h1;
+    end else if (\$88 ) begin
+    end else if (\$92 ) begin
+      \$121 [0] = \bit ;
     end
-    if (\$68 ) begin
-      \$99 [1] = 1'h1;
-    end else if (\$72 ) begin
-    end else if (\$76 ) begin
-      \$99 [1] = \bit ;
+    if (\$96 ) begin
+      \$121 [1] = 1'h1;
+    end else if (\$100 ) begin
+    end else if (\$104 ) begin
+      \$121 [1] = \bit ;
     end
     if (receiver_clear) begin
-      \$99  = 2'h0;
+      \$121  = 2'h0;
     end
     if (rst) begin
-      \$99  = 2'h0;
+      \$121  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
-    \$100  = data1;
-    if (\$67 ) begin
-      \$100  = { data1[38:0], \bit  };
+    \$122  = data1;
+    if (\$95 ) begin
+      \$122  = { data1[38:0], \bit  };
     end
     if (receiver_clear) begin
-      \$100  = 40'h0000000000;
+      \$122  = 40'h0000000000;
     end
     if (rst) begin
-      \$100  = 40'h0000000000;
+      \$122  = 40'h0000000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
-    \$101  = lc;
-    if (\$82 ) begin
-      \$101  = { lc[4:0], \bit  };
+    \$123  = lc;
+    if (lc_load) begin
+      \$123  = { lc[4:0], \bit  };
     end
     if (receiver_clear) begin
-      \$101  = 6'h00;
+      \$123  = 6'h00;
     end
     if (rst) begin
-      \$101  = 6'h00;
+      \$123  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
-    \$102  = cpw_top;
-    if (\$86 ) begin
-      \$102  = { cpw_top[38:0], \bit  };
+    \$124  = cpw_top;
+    if (\$105 ) begin
+      \$124  = { cpw_top[38:0], \bit  };
     end
     if (receiver_clear) begin
-      \$102  = 40'h0000000000;
+      \$124  = 40'h0000000000;
     end
     if (rst) begin
-      \$102  = 40'h0000000000;
+      \$124  = 40'h0000000000;
     end
   end
   assign frame_bits = \$12 [7:0];
+  assign lc_next = { lc[4:0], \bit  };
   assign kind = words[9:8];
-  assign \bit$12  = \bit ;
-  assign \kind$15  = words[19:18];
-  assign \bit$18  = \bit ;
+  assign \bit$16  = \bit ;
+  assign \kind$19  = words[19:18];
+  assign \bit$22  = \bit ;
   assign \words[0]  = words[9:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -3752,28 +3752,64 @@ module \biss_master.decoder (rst, word_count, words, receiver_clear, sample, crc
   assign \words[1].nenw  = words[16];
   assign \words[1].lc  = words[17];
   assign \words[1].crc  = words[19:18];
-  assign crc_ok[1] = \ok$19 ;
+  assign crc_ok[1] = \ok$23 ;
   assign crc_ok[0] = ok;
   assign \$17  = word;
   assign \$20  = word;
-  assign \$64  = word;
-  assign \$69  = word;
-  assign \$73  = word;
+  assign \$93  = word;
+  assign \$97  = word;
+  assign \$101  = word;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.decoder.crc0 (rst, start, valid, kind, receiver_clear, ok, data, clk);
+module \biss_master.decoder.crc0 (rst, start, valid, kind, receiver_clear, ok, \bit , clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$23  = 0;
+  wire [5:0] \$1 ;
+  wire \$10 ;
+  wire [5:0] \$11 ;
+  wire \$12 ;
+  wire \$13 ;
+  wire \$14 ;
+  wire \$15 ;
+  wire [15:0] \$16 ;
+  wire [15:0] \$17 ;
+  wire \$18 ;
+  wire [15:0] \$19 ;
+  wire [5:0] \$2 ;
+  wire [15:0] \$20 ;
+  wire [15:0] \$21 ;
+  wire \$22 ;
+  wire \$23 ;
+  wire [15:0] \$24 ;
+  wire \$25 ;
+  wire [15:0] \$26 ;
+  wire \$27 ;
+  wire \$28 ;
+  wire \$29 ;
+  wire \$3 ;
+  wire \$30 ;
+  reg [5:0] \$31 ;
+  reg \$32 ;
+  reg [15:0] \$33 ;
+  reg \$34 ;
+  wire [1:0] \$4 ;
+  wire [5:0] \$5 ;
+  wire [5:0] \$6 ;
+  wire \$7 ;
+  wire \$8 ;
+  wire [5:0] \$9 ;
+  wire [1:0] \$auto$rtlil.cc:2739:Not$6 ;
+  wire [6:0] \$auto$rtlil.cc:2739:Not$8 ;
+  input \bit ;
   wire \bit ;
   input clk;
   wire clk;
-  input data;
-  wire data;
-  wire \data$8 ;
+  reg crc16_match = 1'h0;
+  reg [15:0] crc16_reg = 16'h0000;
+  reg crc6_match = 1'h0;
+  reg [5:0] crc6_reg = 6'h00;
   input [1:0] kind;
   wire [1:0] kind;
-  wire match_detected;
-  wire \match_detected$12 ;
   output ok;
   reg ok;
   input receiver_clear;
@@ -3782,30 +3818,104 @@ module \biss_master.decoder.crc0 (rst, start, valid, kind, receiver_clear, ok, d
   wire rst;
   input start;
   wire start;
-  wire \start$1 ;
-  wire \start$6 ;
   input valid;
   wire valid;
-  wire \valid$3 ;
-  wire \valid$7 ;
-  \biss_master.decoder.crc0.crc16  crc16 (
-    .clk(clk),
-    .data_in(data),
-    .match_detected(\match_detected$12 ),
-    .receiver_clear(receiver_clear),
-    .rst(rst),
-    .start(start),
-    .valid(valid)
-  );
-  \biss_master.decoder.crc0.crc6  crc6 (
-    .clk(clk),
-    .data_in(data),
-    .match_detected(match_detected),
-    .receiver_clear(receiver_clear),
-    .rst(rst),
-    .start(start),
-    .valid(valid)
-  );
+  assign \$1  = start ? 6'h00 : crc6_reg;
+  assign \$2  = start ? 6'h00 : crc6_reg;
+  assign \$3  = \$2 [5] ^ \bit ;
+  assign \$4  = \$3  ? 2'h3 : 2'h0;
+  assign \$5  = { \$1 [4:0], 1'h0 } ^ { 4'h0, \$4  };
+  assign \$6  = start ? 6'h00 : crc6_reg;
+  assign \$7  = \$6 [5] ^ \bit ;
+  assign \$9  = start ? 6'h00 : crc6_reg;
+  assign \$10  = \$9 [5] ^ \bit ;
+  assign \$12  = \$11  == 2'h2;
+  assign \$13  = crc6_reg[4:0] == 5'h01;
+  assign \$14  = \$10  ? \$12  : \$13 ;
+  assign \$15  = start ? 1'h0 : \$14 ;
+  assign \$16  = start ? 16'h0000 : crc16_reg;
+  assign \$17  = start ? 16'h0000 : crc16_reg;
+  assign \$18  = \$17 [15] ^ \bit ;
+  assign \$19  = \$18  ? 16'h90d9 : 16'h0000;
+  assign \$20  = { \$16 [14:0], 1'h0 } ^ \$19 ;
+  assign \$21  = start ? 16'h0000 : crc16_reg;
+  assign \$22  = \$21 [15] ^ \bit ;
+  assign \$24  = start ? 16'h0000 : crc16_reg;
+  assign \$25  = \$24 [15] ^ \bit ;
+  assign \$27  = \$26  == 16'he82e;
+  assign \$28  = crc16_reg[14:0] == 15'h7417;
+  assign \$29  = \$25  ? \$27  : \$28 ;
+  assign \$30  = start ? 1'h0 : \$29 ;
+  always @(posedge clk)
+    crc6_reg <= \$31 ;
+  always @(posedge clk)
+    crc6_match <= \$32 ;
+  always @(posedge clk)
+    crc16_reg <= \$33 ;
+  always @(posedge clk)
+    crc16_match <= \$34 ;
+  assign \$auto$rtlil.cc:2739:Not$6  = ~ { crc6_reg[0], 1'h0 };
+  assign \$auto$rtlil.cc:2739:Not$8  = ~ { crc16_reg[14], crc16_reg[11], crc16_reg[6:5], crc16_reg[3:2], 1'h0 };
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
+    \$31  = crc6_reg;
+    if (valid) begin
+      \$31  = \$5 ;
+    end else if (start) begin
+      \$31  = 6'h00;
+    end
+    if (receiver_clear) begin
+      \$31  = 6'h00;
+    end
+    if (rst) begin
+      \$31  = 6'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
+    \$32  = crc6_match;
+    if (valid) begin
+      \$32  = \$15 ;
+    end else if (start) begin
+      \$32  = 1'h0;
+    end
+    if (receiver_clear) begin
+      \$32  = 1'h0;
+    end
+    if (rst) begin
+      \$32  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
+    \$33  = crc16_reg;
+    if (valid) begin
+      \$33  = \$20 ;
+    end else if (start) begin
+      \$33  = 16'h0000;
+    end
+    if (receiver_clear) begin
+      \$33  = 16'h0000;
+    end
+    if (rst) begin
+      \$33  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
+    \$34  = crc16_match;
+    if (valid) begin
+      \$34  = \$30 ;
+    end else if (start) begin
+      \$34  = 1'h0;
+    end
+    if (receiver_clear) begin
+      \$34  = 1'h0;
+    end
+    if (rst) begin
+      \$34  = 1'h0;
+    end
+  end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
     ok = 1'h0;
@@ -3813,276 +3923,68 @@ module \biss_master.decoder.crc0 (rst, start, valid, kind, receiver_clear, ok, d
       2'h0:
           ok = 1'h1;
       2'h1:
-          ok = match_detected;
+          ok = crc6_match;
       2'h2:
-          ok = \match_detected$12 ;
+          ok = crc16_match;
     endcase
   end
-  assign \start$1  = start;
-  assign \valid$3  = valid;
-  assign \bit  = data;
-  assign \start$6  = start;
-  assign \valid$7  = valid;
-  assign \data$8  = data;
+  assign \$8  = 1'h0;
+  assign \$11 [5:2] = crc6_reg[4:1];
+  assign \$11 [1:0] = \$auto$rtlil.cc:2739:Not$6 ;
+  assign \$23  = 1'h0;
+  assign { \$26 [14:13], \$26 [11:8], \$26 [5], \$26 [2:1] } = { crc16_reg[13:12], crc16_reg[10:7], crc16_reg[4], crc16_reg[1:0] };
+  assign { \$26 [15], \$26 [12], \$26 [7:6], \$26 [4:3], \$26 [0] } = \$auto$rtlil.cc:2739:Not$8 ;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.decoder.crc0.crc16 (rst, start, valid, match_detected, receiver_clear, data_in, clk);
+module \biss_master.decoder.crc1 (rst, start, valid, kind, receiver_clear, ok, \bit , clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$24  = 0;
-  wire [15:0] \$1 ;
-  wire [15:0] \$10 ;
-  wire \$11 ;
-  wire \$12 ;
-  wire [15:0] \$13 ;
-  wire \$14 ;
-  wire [15:0] \$15 ;
-  wire \$16 ;
-  wire \$17 ;
-  wire [15:0] \$18 ;
-  wire \$19 ;
-  wire \$2 ;
-  wire [15:0] \$20 ;
-  wire \$21 ;
-  wire [15:0] \$22 ;
-  wire \$23 ;
-  wire \$24 ;
-  wire [15:0] \$25 ;
-  wire \$26 ;
-  wire [15:0] \$27 ;
-  wire \$28 ;
-  wire \$29 ;
-  wire \$3 ;
-  wire [15:0] \$30 ;
-  wire \$31 ;
-  wire [15:0] \$32 ;
-  wire \$33 ;
-  wire [15:0] \$34 ;
-  wire \$35 ;
-  wire [15:0] \$36 ;
-  wire \$37 ;
-  wire [15:0] \$38 ;
-  wire \$39 ;
-  wire [15:0] \$4 ;
-  wire [15:0] \$40 ;
-  wire \$41 ;
-  wire \$42 ;
-  wire [15:0] \$43 ;
-  wire \$44 ;
-  wire [15:0] \$45 ;
-  wire \$46 ;
-  wire [15:0] \$47 ;
-  wire \$48 ;
-  wire [15:0] \$49 ;
-  wire \$5 ;
-  wire \$50 ;
-  wire \$51 ;
-  reg [15:0] \$52 ;
-  wire [15:0] \$6 ;
-  wire \$7 ;
-  wire [15:0] \$8 ;
-  wire \$9 ;
-  wire [15:0] \$auto$rtlil.cc:2739:Not$6 ;
-  input clk;
-  wire clk;
-  wire [15:0] crc;
-  reg [15:0] crc_reg = 16'h0000;
-  wire data;
-  input data_in;
-  wire data_in;
-  output match_detected;
-  wire match_detected;
-  input receiver_clear;
-  wire receiver_clear;
-  input rst;
-  wire rst;
-  input start;
-  wire start;
-  input valid;
-  wire valid;
-  assign \$47  = start ? 16'h0000 : crc_reg;
-  assign \$49  = start ? 16'h0000 : crc_reg;
-  assign \$50  = \$48  ^ \$49 [15];
-  assign \$51  = \$50  ^ data_in;
-  always @(posedge clk)
-    crc_reg <= \$52 ;
-  assign match_detected = crc_reg == 16'he82e;
-  assign \$1  = start ? 16'h0000 : crc_reg;
-  assign \$3  = \$2  ^ data_in;
-  assign \$4  = start ? 16'h0000 : crc_reg;
-  assign \$6  = start ? 16'h0000 : crc_reg;
-  assign \$8  = start ? 16'h0000 : crc_reg;
-  assign \$10  = start ? 16'h0000 : crc_reg;
-  assign \$11  = \$9  ^ \$10 [15];
-  assign \$12  = \$11  ^ data_in;
-  assign \$13  = start ? 16'h0000 : crc_reg;
-  assign \$15  = start ? 16'h0000 : crc_reg;
-  assign \$16  = \$14  ^ \$15 [15];
-  assign \$17  = \$16  ^ data_in;
-  assign \$18  = start ? 16'h0000 : crc_reg;
-  assign \$20  = start ? 16'h0000 : crc_reg;
-  assign \$22  = start ? 16'h0000 : crc_reg;
-  assign \$23  = \$21  ^ \$22 [15];
-  assign \$24  = \$23  ^ data_in;
-  assign \$25  = start ? 16'h0000 : crc_reg;
-  assign \$27  = start ? 16'h0000 : crc_reg;
-  assign \$28  = \$26  ^ \$27 [15];
-  assign \$29  = \$28  ^ data_in;
-  assign \$30  = start ? 16'h0000 : crc_reg;
-  assign \$32  = start ? 16'h0000 : crc_reg;
-  assign \$34  = start ? 16'h0000 : crc_reg;
-  assign \$36  = start ? 16'h0000 : crc_reg;
-  assign \$38  = start ? 16'h0000 : crc_reg;
-  assign \$40  = start ? 16'h0000 : crc_reg;
-  assign \$41  = \$39  ^ \$40 [15];
-  assign \$42  = \$41  ^ data_in;
-  assign \$43  = start ? 16'h0000 : crc_reg;
-  assign \$45  = start ? 16'h0000 : crc_reg;
-  assign \$auto$rtlil.cc:2739:Not$6  = ~ crc_reg;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
-    \$52  = crc_reg;
-    if (valid) begin
-      \$52 [0] = \$3 ;
-      \$52 [1] = \$5 ;
-      \$52 [2] = \$7 ;
-      \$52 [3] = \$12 ;
-      \$52 [4] = \$17 ;
-      \$52 [5] = \$19 ;
-      \$52 [6] = \$24 ;
-      \$52 [7] = \$29 ;
-      \$52 [8] = \$31 ;
-      \$52 [9] = \$33 ;
-      \$52 [10] = \$35 ;
-      \$52 [11] = \$37 ;
-      \$52 [12] = \$42 ;
-      \$52 [13] = \$44 ;
-      \$52 [14] = \$46 ;
-      \$52 [15] = \$51 ;
-    end else if (start) begin
-      \$52  = 16'h0000;
-    end
-    if (receiver_clear) begin
-      \$52  = 16'h0000;
-    end
-    if (rst) begin
-      \$52  = 16'h0000;
-    end
-  end
-  assign data = data_in;
-  assign crc = \$auto$rtlil.cc:2739:Not$6 ;
-  assign \$2  = \$1 [15];
-  assign \$5  = \$4 [0];
-  assign \$7  = \$6 [1];
-  assign \$9  = \$8 [2];
-  assign \$14  = \$13 [3];
-  assign \$19  = \$18 [4];
-  assign \$21  = \$20 [5];
-  assign \$26  = \$25 [6];
-  assign \$31  = \$30 [7];
-  assign \$33  = \$32 [8];
-  assign \$35  = \$34 [9];
-  assign \$37  = \$36 [10];
-  assign \$39  = \$38 [11];
-  assign \$44  = \$43 [12];
-  assign \$46  = \$45 [13];
-  assign \$48  = \$47 [14];
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master.decoder.crc0.crc6 (rst, start, valid, match_detected, receiver_clear, data_in, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$25  = 0;
   wire [5:0] \$1 ;
   wire \$10 ;
   wire [5:0] \$11 ;
   wire \$12 ;
-  wire [5:0] \$13 ;
+  wire \$13 ;
   wire \$14 ;
-  wire [5:0] \$15 ;
-  wire \$16 ;
-  reg [5:0] \$17 ;
-  wire \$2 ;
+  wire \$15 ;
+  wire [15:0] \$16 ;
+  wire [15:0] \$17 ;
+  wire \$18 ;
+  wire [15:0] \$19 ;
+  wire [5:0] \$2 ;
+  wire [15:0] \$20 ;
+  wire [15:0] \$21 ;
+  wire \$22 ;
+  wire \$23 ;
+  wire [15:0] \$24 ;
+  wire \$25 ;
+  wire [15:0] \$26 ;
+  wire \$27 ;
+  wire \$28 ;
+  wire \$29 ;
   wire \$3 ;
-  wire [5:0] \$4 ;
-  wire \$5 ;
+  wire \$30 ;
+  reg [5:0] \$31 ;
+  reg \$32 ;
+  reg [15:0] \$33 ;
+  reg \$34 ;
+  wire [1:0] \$4 ;
+  wire [5:0] \$5 ;
   wire [5:0] \$6 ;
   wire \$7 ;
   wire \$8 ;
   wire [5:0] \$9 ;
-  wire [5:0] \$auto$rtlil.cc:2739:Not$8 ;
-  input clk;
-  wire clk;
-  wire [5:0] crc;
-  reg [5:0] crc_reg = 6'h00;
-  wire data;
-  input data_in;
-  wire data_in;
-  output match_detected;
-  wire match_detected;
-  input receiver_clear;
-  wire receiver_clear;
-  input rst;
-  wire rst;
-  input start;
-  wire start;
-  input valid;
-  wire valid;
-  assign match_detected = crc_reg == 2'h2;
-  assign \$1  = start ? 6'h00 : crc_reg;
-  assign \$3  = \$2  ^ data_in;
-  assign \$4  = start ? 6'h00 : crc_reg;
-  assign \$6  = start ? 6'h00 : crc_reg;
-  assign \$7  = \$5  ^ \$6 [5];
-  assign \$8  = \$7  ^ data_in;
-  assign \$9  = start ? 6'h00 : crc_reg;
-  assign \$11  = start ? 6'h00 : crc_reg;
-  assign \$13  = start ? 6'h00 : crc_reg;
-  assign \$15  = start ? 6'h00 : crc_reg;
-  always @(posedge clk)
-    crc_reg <= \$17 ;
-  assign \$auto$rtlil.cc:2739:Not$8  = ~ crc_reg;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$25 ) begin end
-    \$17  = crc_reg;
-    if (valid) begin
-      \$17 [0] = \$3 ;
-      \$17 [1] = \$8 ;
-      \$17 [2] = \$10 ;
-      \$17 [3] = \$12 ;
-      \$17 [4] = \$14 ;
-      \$17 [5] = \$16 ;
-    end else if (start) begin
-      \$17  = 6'h00;
-    end
-    if (receiver_clear) begin
-      \$17  = 6'h00;
-    end
-    if (rst) begin
-      \$17  = 6'h00;
-    end
-  end
-  assign data = data_in;
-  assign crc = \$auto$rtlil.cc:2739:Not$8 ;
-  assign \$2  = \$1 [5];
-  assign \$5  = \$4 [0];
-  assign \$10  = \$9 [1];
-  assign \$12  = \$11 [2];
-  assign \$14  = \$13 [3];
-  assign \$16  = \$15 [4];
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master.decoder.crc1 (rst, start, valid, kind, receiver_clear, ok, data, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$26  = 0;
+  wire [1:0] \$auto$rtlil.cc:2739:Not$2 ;
+  wire [6:0] \$auto$rtlil.cc:2739:Not$4 ;
+  input \bit ;
   wire \bit ;
   input clk;
   wire clk;
-  input data;
-  wire data;
-  wire \data$8 ;
+  reg crc16_match = 1'h0;
+  reg [15:0] crc16_reg = 16'h0000;
+  reg crc6_match = 1'h0;
+  reg [5:0] crc6_reg = 6'h00;
   input [1:0] kind;
   wire [1:0] kind;
-  wire match_detected;
-  wire \match_detected$12 ;
   output ok;
   reg ok;
   input receiver_clear;
@@ -4091,297 +3993,127 @@ module \biss_master.decoder.crc1 (rst, start, valid, kind, receiver_clear, ok, d
   wire rst;
   input start;
   wire start;
-  wire \start$1 ;
-  wire \start$6 ;
   input valid;
   wire valid;
-  wire \valid$3 ;
-  wire \valid$7 ;
-  \biss_master.decoder.crc1.crc16  crc16 (
-    .clk(clk),
-    .data_in(data),
-    .match_detected(\match_detected$12 ),
-    .receiver_clear(receiver_clear),
-    .rst(rst),
-    .start(start),
-    .valid(valid)
-  );
-  \biss_master.decoder.crc1.crc6  crc6 (
-    .clk(clk),
-    .data_in(data),
-    .match_detected(match_detected),
-    .receiver_clear(receiver_clear),
-    .rst(rst),
-    .start(start),
-    .valid(valid)
-  );
+  assign \$1  = start ? 6'h00 : crc6_reg;
+  assign \$2  = start ? 6'h00 : crc6_reg;
+  assign \$3  = \$2 [5] ^ \bit ;
+  assign \$4  = \$3  ? 2'h3 : 2'h0;
+  assign \$5  = { \$1 [4:0], 1'h0 } ^ { 4'h0, \$4  };
+  assign \$6  = start ? 6'h00 : crc6_reg;
+  assign \$7  = \$6 [5] ^ \bit ;
+  assign \$9  = start ? 6'h00 : crc6_reg;
+  assign \$10  = \$9 [5] ^ \bit ;
+  assign \$12  = \$11  == 2'h2;
+  assign \$13  = crc6_reg[4:0] == 5'h01;
+  assign \$14  = \$10  ? \$12  : \$13 ;
+  assign \$15  = start ? 1'h0 : \$14 ;
+  assign \$16  = start ? 16'h0000 : crc16_reg;
+  assign \$17  = start ? 16'h0000 : crc16_reg;
+  assign \$18  = \$17 [15] ^ \bit ;
+  assign \$19  = \$18  ? 16'h90d9 : 16'h0000;
+  assign \$20  = { \$16 [14:0], 1'h0 } ^ \$19 ;
+  assign \$21  = start ? 16'h0000 : crc16_reg;
+  assign \$22  = \$21 [15] ^ \bit ;
+  assign \$24  = start ? 16'h0000 : crc16_reg;
+  assign \$25  = \$24 [15] ^ \bit ;
+  assign \$27  = \$26  == 16'he82e;
+  assign \$28  = crc16_reg[14:0] == 15'h7417;
+  assign \$29  = \$25  ? \$27  : \$28 ;
+  assign \$30  = start ? 1'h0 : \$29 ;
+  always @(posedge clk)
+    crc6_reg <= \$31 ;
+  always @(posedge clk)
+    crc6_match <= \$32 ;
+  always @(posedge clk)
+    crc16_reg <= \$33 ;
+  always @(posedge clk)
+    crc16_match <= \$34 ;
+  assign \$auto$rtlil.cc:2739:Not$2  = ~ { crc6_reg[0], 1'h0 };
+  assign \$auto$rtlil.cc:2739:Not$4  = ~ { crc16_reg[14], crc16_reg[11], crc16_reg[6:5], crc16_reg[3:2], 1'h0 };
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
+    \$31  = crc6_reg;
+    if (valid) begin
+      \$31  = \$5 ;
+    end else if (start) begin
+      \$31  = 6'h00;
+    end
+    if (receiver_clear) begin
+      \$31  = 6'h00;
+    end
+    if (rst) begin
+      \$31  = 6'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
+    \$32  = crc6_match;
+    if (valid) begin
+      \$32  = \$15 ;
+    end else if (start) begin
+      \$32  = 1'h0;
+    end
+    if (receiver_clear) begin
+      \$32  = 1'h0;
+    end
+    if (rst) begin
+      \$32  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
+    \$33  = crc16_reg;
+    if (valid) begin
+      \$33  = \$20 ;
+    end else if (start) begin
+      \$33  = 16'h0000;
+    end
+    if (receiver_clear) begin
+      \$33  = 16'h0000;
+    end
+    if (rst) begin
+      \$33  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
+    \$34  = crc16_match;
+    if (valid) begin
+      \$34  = \$30 ;
+    end else if (start) begin
+      \$34  = 1'h0;
+    end
+    if (receiver_clear) begin
+      \$34  = 1'h0;
+    end
+    if (rst) begin
+      \$34  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
     ok = 1'h0;
     casez (kind)
       2'h0:
           ok = 1'h1;
       2'h1:
-          ok = match_detected;
+          ok = crc6_match;
       2'h2:
-          ok = \match_detected$12 ;
+          ok = crc16_match;
     endcase
   end
-  assign \start$1  = start;
-  assign \valid$3  = valid;
-  assign \bit  = data;
-  assign \start$6  = start;
-  assign \valid$7  = valid;
-  assign \data$8  = data;
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master.decoder.crc1.crc16 (rst, start, valid, match_detected, receiver_clear, data_in, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$27  = 0;
-  wire [15:0] \$1 ;
-  wire [15:0] \$10 ;
-  wire \$11 ;
-  wire \$12 ;
-  wire [15:0] \$13 ;
-  wire \$14 ;
-  wire [15:0] \$15 ;
-  wire \$16 ;
-  wire \$17 ;
-  wire [15:0] \$18 ;
-  wire \$19 ;
-  wire \$2 ;
-  wire [15:0] \$20 ;
-  wire \$21 ;
-  wire [15:0] \$22 ;
-  wire \$23 ;
-  wire \$24 ;
-  wire [15:0] \$25 ;
-  wire \$26 ;
-  wire [15:0] \$27 ;
-  wire \$28 ;
-  wire \$29 ;
-  wire \$3 ;
-  wire [15:0] \$30 ;
-  wire \$31 ;
-  wire [15:0] \$32 ;
-  wire \$33 ;
-  wire [15:0] \$34 ;
-  wire \$35 ;
-  wire [15:0] \$36 ;
-  wire \$37 ;
-  wire [15:0] \$38 ;
-  wire \$39 ;
-  wire [15:0] \$4 ;
-  wire [15:0] \$40 ;
-  wire \$41 ;
-  wire \$42 ;
-  wire [15:0] \$43 ;
-  wire \$44 ;
-  wire [15:0] \$45 ;
-  wire \$46 ;
-  wire [15:0] \$47 ;
-  wire \$48 ;
-  wire [15:0] \$49 ;
-  wire \$5 ;
-  wire \$50 ;
-  wire \$51 ;
-  reg [15:0] \$52 ;
-  wire [15:0] \$6 ;
-  wire \$7 ;
-  wire [15:0] \$8 ;
-  wire \$9 ;
-  wire [15:0] \$auto$rtlil.cc:2739:Not$2 ;
-  input clk;
-  wire clk;
-  wire [15:0] crc;
-  reg [15:0] crc_reg = 16'h0000;
-  wire data;
-  input data_in;
-  wire data_in;
-  output match_detected;
-  wire match_detected;
-  input receiver_clear;
-  wire receiver_clear;
-  input rst;
-  wire rst;
-  input start;
-  wire start;
-  input valid;
-  wire valid;
-  assign \$47  = start ? 16'h0000 : crc_reg;
-  assign \$49  = start ? 16'h0000 : crc_reg;
-  assign \$50  = \$48  ^ \$49 [15];
-  assign \$51  = \$50  ^ data_in;
-  always @(posedge clk)
-    crc_reg <= \$52 ;
-  assign match_detected = crc_reg == 16'he82e;
-  assign \$1  = start ? 16'h0000 : crc_reg;
-  assign \$3  = \$2  ^ data_in;
-  assign \$4  = start ? 16'h0000 : crc_reg;
-  assign \$6  = start ? 16'h0000 : crc_reg;
-  assign \$8  = start ? 16'h0000 : crc_reg;
-  assign \$10  = start ? 16'h0000 : crc_reg;
-  assign \$11  = \$9  ^ \$10 [15];
-  assign \$12  = \$11  ^ data_in;
-  assign \$13  = start ? 16'h0000 : crc_reg;
-  assign \$15  = start ? 16'h0000 : crc_reg;
-  assign \$16  = \$14  ^ \$15 [15];
-  assign \$17  = \$16  ^ data_in;
-  assign \$18  = start ? 16'h0000 : crc_reg;
-  assign \$20  = start ? 16'h0000 : crc_reg;
-  assign \$22  = start ? 16'h0000 : crc_reg;
-  assign \$23  = \$21  ^ \$22 [15];
-  assign \$24  = \$23  ^ data_in;
-  assign \$25  = start ? 16'h0000 : crc_reg;
-  assign \$27  = start ? 16'h0000 : crc_reg;
-  assign \$28  = \$26  ^ \$27 [15];
-  assign \$29  = \$28  ^ data_in;
-  assign \$30  = start ? 16'h0000 : crc_reg;
-  assign \$32  = start ? 16'h0000 : crc_reg;
-  assign \$34  = start ? 16'h0000 : crc_reg;
-  assign \$36  = start ? 16'h0000 : crc_reg;
-  assign \$38  = start ? 16'h0000 : crc_reg;
-  assign \$40  = start ? 16'h0000 : crc_reg;
-  assign \$41  = \$39  ^ \$40 [15];
-  assign \$42  = \$41  ^ data_in;
-  assign \$43  = start ? 16'h0000 : crc_reg;
-  assign \$45  = start ? 16'h0000 : crc_reg;
-  assign \$auto$rtlil.cc:2739:Not$2  = ~ crc_reg;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
-    \$52  = crc_reg;
-    if (valid) begin
-      \$52 [0] = \$3 ;
-      \$52 [1] = \$5 ;
-      \$52 [2] = \$7 ;
-      \$52 [3] = \$12 ;
-      \$52 [4] = \$17 ;
-      \$52 [5] = \$19 ;
-      \$52 [6] = \$24 ;
-      \$52 [7] = \$29 ;
-      \$52 [8] = \$31 ;
-      \$52 [9] = \$33 ;
-      \$52 [10] = \$35 ;
-      \$52 [11] = \$37 ;
-      \$52 [12] = \$42 ;
-      \$52 [13] = \$44 ;
-      \$52 [14] = \$46 ;
-      \$52 [15] = \$51 ;
-    end else if (start) begin
-      \$52  = 16'h0000;
-    end
-    if (receiver_clear) begin
-      \$52  = 16'h0000;
-    end
-    if (rst) begin
-      \$52  = 16'h0000;
-    end
-  end
-  assign data = data_in;
-  assign crc = \$auto$rtlil.cc:2739:Not$2 ;
-  assign \$2  = \$1 [15];
-  assign \$5  = \$4 [0];
-  assign \$7  = \$6 [1];
-  assign \$9  = \$8 [2];
-  assign \$14  = \$13 [3];
-  assign \$19  = \$18 [4];
-  assign \$21  = \$20 [5];
-  assign \$26  = \$25 [6];
-  assign \$31  = \$30 [7];
-  assign \$33  = \$32 [8];
-  assign \$35  = \$34 [9];
-  assign \$37  = \$36 [10];
-  assign \$39  = \$38 [11];
-  assign \$44  = \$43 [12];
-  assign \$46  = \$45 [13];
-  assign \$48  = \$47 [14];
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master.decoder.crc1.crc6 (rst, start, valid, match_detected, receiver_clear, data_in, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$28  = 0;
-  wire [5:0] \$1 ;
-  wire \$10 ;
-  wire [5:0] \$11 ;
-  wire \$12 ;
-  wire [5:0] \$13 ;
-  wire \$14 ;
-  wire [5:0] \$15 ;
-  wire \$16 ;
-  reg [5:0] \$17 ;
-  wire \$2 ;
-  wire \$3 ;
-  wire [5:0] \$4 ;
-  wire \$5 ;
-  wire [5:0] \$6 ;
-  wire \$7 ;
-  wire \$8 ;
-  wire [5:0] \$9 ;
-  wire [5:0] \$auto$rtlil.cc:2739:Not$4 ;
-  input clk;
-  wire clk;
-  wire [5:0] crc;
-  reg [5:0] crc_reg = 6'h00;
-  wire data;
-  input data_in;
-  wire data_in;
-  output match_detected;
-  wire match_detected;
-  input receiver_clear;
-  wire receiver_clear;
-  input rst;
-  wire rst;
-  input start;
-  wire start;
-  input valid;
-  wire valid;
-  assign match_detected = crc_reg == 2'h2;
-  assign \$1  = start ? 6'h00 : crc_reg;
-  assign \$3  = \$2  ^ data_in;
-  assign \$4  = start ? 6'h00 : crc_reg;
-  assign \$6  = start ? 6'h00 : crc_reg;
-  assign \$7  = \$5  ^ \$6 [5];
-  assign \$8  = \$7  ^ data_in;
-  assign \$9  = start ? 6'h00 : crc_reg;
-  assign \$11  = start ? 6'h00 : crc_reg;
-  assign \$13  = start ? 6'h00 : crc_reg;
-  assign \$15  = start ? 6'h00 : crc_reg;
-  always @(posedge clk)
-    crc_reg <= \$17 ;
-  assign \$auto$rtlil.cc:2739:Not$4  = ~ crc_reg;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
-    \$17  = crc_reg;
-    if (valid) begin
-      \$17 [0] = \$3 ;
-      \$17 [1] = \$8 ;
-      \$17 [2] = \$10 ;
-      \$17 [3] = \$12 ;
-      \$17 [4] = \$14 ;
-      \$17 [5] = \$16 ;
-    end else if (start) begin
-      \$17  = 6'h00;
-    end
-    if (receiver_clear) begin
-      \$17  = 6'h00;
-    end
-    if (rst) begin
-      \$17  = 6'h00;
-    end
-  end
-  assign data = data_in;
-  assign crc = \$auto$rtlil.cc:2739:Not$4 ;
-  assign \$2  = \$1 [5];
-  assign \$5  = \$4 [0];
-  assign \$10  = \$9 [1];
-  assign \$12  = \$11 [2];
-  assign \$14  = \$13 [3];
-  assign \$16  = \$15 [4];
+  assign \$8  = 1'h0;
+  assign \$11 [5:2] = crc6_reg[4:1];
+  assign \$11 [1:0] = \$auto$rtlil.cc:2739:Not$2 ;
+  assign \$23  = 1'h0;
+  assign { \$26 [14:13], \$26 [11:8], \$26 [5], \$26 [2:1] } = { crc16_reg[13:12], crc16_reg[10:7], crc16_reg[4], crc16_reg[1:0] };
+  assign { \$26 [15], \$26 [12], \$26 [7:6], \$26 [4:3], \$26 [0] } = \$auto$rtlil.cc:2739:Not$4 ;
 endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.ma_clock (rst, run, half_period, rise, ma, rises, busy, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$29  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$25  = 0;
   wire [16:0] \$1 ;
   wire \$10 ;
   wire [16:0] \$11 ;
@@ -4450,7 +4182,7 @@ module \biss_master.ma_clock (rst, run, half_period, rise, ma, rises, busy, clk)
   always @(posedge clk)
     ma_fsm_state <= \$21 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$25 ) begin end
     \$16  = 1'h0;
     casez (ma_fsm_state)
       2'h0:
@@ -4465,7 +4197,7 @@ module \biss_master.ma_clock (rst, run, half_period, rise, ma, rises, busy, clk)
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$25 ) begin end
     \$17  = ma;
     casez (ma_fsm_state)
       2'h0:
@@ -4488,7 +4220,7 @@ module \biss_master.ma_clock (rst, run, half_period, rise, ma, rises, busy, clk)
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$25 ) begin end
     \$18  = phase_left;
     casez (ma_fsm_state)
       2'h0:
@@ -4517,7 +4249,7 @@ module \biss_master.ma_clock (rst, run, half_period, rise, ma, rises, busy, clk)
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$25 ) begin end
     \$19  = last_clock;
     casez (ma_fsm_state)
       2'h0:
@@ -4546,7 +4278,7 @@ module \biss_master.ma_clock (rst, run, half_period, rise, ma, rises, busy, clk)
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$25 ) begin end
     \$20  = rises;
     casez (ma_fsm_state)
       2'h0:
@@ -4565,7 +4297,7 @@ module \biss_master.ma_clock (rst, run, half_period, rise, ma, rises, busy, clk)
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$25 ) begin end
     \$21  = ma_fsm_state;
     casez (ma_fsm_state)
       2'h0:
@@ -4591,7 +4323,7 @@ module \biss_master.ma_clock (rst, run, half_period, rise, ma, rises, busy, clk)
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$25 ) begin end
     busy = 1'h0;
     casez (ma_fsm_state)
       2'h0:
@@ -4606,7 +4338,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.sampler (rst, arm, receiver_clear, half_period, early, locked, delay, sample, slo, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$30  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$26  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -4702,7 +4434,7 @@ module \biss_master.sampler (rst, arm, receiver_clear, half_period, early, locke
   always @(posedge clk)
     first_slot <= \$29 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$21  = slo;
     if (receiver_clear) begin
       \$21  = 1'h1;
@@ -4712,7 +4444,7 @@ module \biss_master.sampler (rst, arm, receiver_clear, half_period, early, locke
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$22  = elapsed;
     casez (sampler_fsm_state)
       2'h0:
@@ -4736,7 +4468,7 @@ module \biss_master.sampler (rst, arm, receiver_clear, half_period, early, locke
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$23  = early;
     casez (sampler_fsm_state)
       2'h0:
@@ -4752,7 +4484,7 @@ module \biss_master.sampler (rst, arm, receiver_clear, half_period, early, locke
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$24  = locked;
     casez (sampler_fsm_state)
       2'h0:
@@ -4775,7 +4507,7 @@ module \biss_master.sampler (rst, arm, receiver_clear, half_period, early, locke
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$25  = sampler_fsm_state;
     casez (sampler_fsm_state)
       2'h0:
@@ -4799,7 +4531,7 @@ module \biss_master.sampler (rst, arm, receiver_clear, half_period, early, locke
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$26  = delay;
     casez (sampler_fsm_state)
       2'h0:
@@ -4817,7 +4549,7 @@ module \biss_master.sampler (rst, arm, receiver_clear, half_period, early, locke
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$27  = slot_left;
     casez (sampler_fsm_state)
       2'h0:
@@ -4843,7 +4575,7 @@ module \biss_master.sampler (rst, arm, receiver_clear, half_period, early, locke
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$28  = slot_zero;
     casez (sampler_fsm_state)
       2'h0:
@@ -4869,7 +4601,7 @@ module \biss_master.sampler (rst, arm, receiver_clear, half_period, early, locke
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$29  = first_slot;
     casez (sampler_fsm_state)
       2'h0:
@@ -4892,7 +4624,7 @@ module \biss_master.sampler (rst, arm, receiver_clear, half_period, early, locke
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     sample = 1'h0;
     casez (sampler_fsm_state)
       2'h0:
@@ -4910,32 +4642,46 @@ module \biss_master.sampler (rst, arm, receiver_clear, half_period, early, locke
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.sign_of_life (rst, check, zero, \repeat , skip, resync, lc, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$31  = 0;
+module \biss_master.sign_of_life (rst, check, load, \repeat , skip, resync, lc, is_zero, \port$1146$0 , clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$27  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
-  wire [6:0] \$12 ;
-  wire [6:0] \$13 ;
-  reg [5:0] \$14 ;
-  reg [5:0] \$15 ;
+  wire \$12 ;
+  wire \$13 ;
+  wire \$14 ;
+  wire \$15 ;
   reg \$16 ;
+  reg \$17 ;
+  reg \$18 ;
+  reg [5:0] \$19 ;
   wire \$2 ;
+  reg [5:0] \$20 ;
+  reg \$21 ;
   wire \$3 ;
   wire \$4 ;
   wire \$5 ;
   wire \$6 ;
-  wire \$7 ;
-  wire \$8 ;
+  wire [6:0] \$7 ;
+  wire [6:0] \$8 ;
   wire \$9 ;
   input check;
   wire check;
   input clk;
   wire clk;
   reg [5:0] expected = 6'h01;
+  reg is_expected = 1'h0;
+  reg is_last = 1'h0;
+  output is_zero;
+  reg is_zero = 1'h0;
   reg [5:0] last = 6'h00;
   input [5:0] lc;
   wire [5:0] lc;
+  wire [5:0] lc_next;
+  input load;
+  wire load;
+  input \port$1146$0 ;
+  wire \port$1146$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -4945,63 +4691,102 @@ module \biss_master.sign_of_life (rst, check, zero, \repeat , skip, resync, lc, 
   output skip;
   wire skip;
   reg synced = 1'h0;
-  output zero;
+  (* init = 1'h0 *)
   wire zero;
-  assign zero = ! lc;
-  assign \$1  = ~ zero;
-  assign \$2  = synced & \$1 ;
-  assign \$3  = lc == last;
-  assign \repeat  = \$2  & \$3 ;
-  assign \$4  = ~ zero;
-  assign \$5  = synced & \$4 ;
-  assign \$6  = lc != last;
-  assign \$7  = \$5  & \$6 ;
-  assign \$8  = lc != expected;
-  assign skip = \$7  & \$8 ;
-  assign \$9  = ~ zero;
-  assign \$10  = check & \$9 ;
-  assign \$11  = lc == 6'h3f;
-  assign \$12  = lc + 1'h1;
-  assign \$13  = \$11  ? 7'h01 : \$12 ;
+  assign \$1  = ! { lc[4:0], \port$1146$0  };
+  assign \$2  = { lc[4:0], \port$1146$0  } == last;
+  assign \$3  = { lc[4:0], \port$1146$0  } == expected;
+  assign \$4  = ~ is_zero;
+  assign \$5  = check & \$4 ;
+  assign \$6  = lc == 6'h3f;
+  assign \$7  = lc + 1'h1;
+  assign \$8  = \$6  ? 7'h01 : \$7 ;
+  assign \$9  = ~ is_zero;
+  assign \$10  = synced & \$9 ;
+  assign \repeat  = \$10  & is_last;
+  assign \$11  = ~ is_zero;
+  assign \$12  = synced & \$11 ;
+  assign \$13  = ~ is_last;
+  assign \$14  = \$12  & \$13 ;
+  assign \$15  = ~ is_expected;
+  assign skip = \$14  & \$15 ;
   always @(posedge clk)
-    last <= \$14 ;
+    is_zero <= \$16 ;
   always @(posedge clk)
-    expected <= \$15 ;
+    is_last <= \$17 ;
   always @(posedge clk)
-    synced <= \$16 ;
+    is_expected <= \$18 ;
+  always @(posedge clk)
+    last <= \$19 ;
+  always @(posedge clk)
+    expected <= \$20 ;
+  always @(posedge clk)
+    synced <= \$21 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
-    \$14  = last;
-    if (\$10 ) begin
-      \$14  = lc;
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    \$16  = is_zero;
+    if (load) begin
+      \$16  = \$1 ;
     end
     if (rst) begin
-      \$14  = 6'h00;
+      \$16  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
-    \$15  = expected;
-    if (\$10 ) begin
-      \$15  = \$13 [5:0];
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    \$17  = is_last;
+    if (load) begin
+      \$17  = \$2 ;
     end
     if (rst) begin
-      \$15  = 6'h01;
+      \$17  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
-    \$16  = synced;
-    if (\$10 ) begin
-      \$16  = 1'h1;
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    \$18  = is_expected;
+    if (load) begin
+      \$18  = \$3 ;
+    end
+    if (rst) begin
+      \$18  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    \$19  = last;
+    if (\$5 ) begin
+      \$19  = lc;
+    end
+    if (rst) begin
+      \$19  = 6'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    \$20  = expected;
+    if (\$5 ) begin
+      \$20  = \$8 [5:0];
+    end
+    if (rst) begin
+      \$20  = 6'h01;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    \$21  = synced;
+    if (\$5 ) begin
+      \$21  = 1'h1;
     end
     if (resync) begin
-      \$16  = 1'h0;
+      \$21  = 1'h0;
     end
     if (rst) begin
-      \$16  = 1'h0;
+      \$21  = 1'h0;
     end
   end
+  assign lc_next = { lc[4:0], \port$1146$0  };
+  assign zero = is_zero;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -5026,7 +4811,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.spw_check (rst, bits, \tolerance$8 , spw, cpw_top, match, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$32  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$28  = 0;
   wire [40:0] \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -5231,28 +5016,28 @@ module \biss_master.spw_check (rst, bits, \tolerance$8 , spw, cpw_top, match, cl
   assign \$7  = bits > 3'h5;
   assign \$8  = bits > 3'h6;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$32 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
     \$88  = \$42 ;
     if (rst) begin
       \$88  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$32 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
     \$89  = \$84 ;
     if (rst) begin
       \$89  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$32 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
     \$90  = \tolerance$8 ;
     if (rst) begin
       \$90  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$32 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
     \$91  = \$87 ;
     if (rst) begin
       \$91  = 1'h0;
