@@ -27,6 +27,9 @@ class MaClock(wiring.Component):
         High in the first system clock in which ``ma`` is high after a rising edge.
     rises : Out(16)
         Rising edges since the cycle's first falling edge (saturating).
+    first_rise, second_rise : Out(1)
+        ``rise`` for the first and for the second rising edge of the cycle (``rise`` and
+        ``rises`` == 1 or 2), registered: no compare of ``rises`` behind them.
     busy : Out(1)
         A period is in progress (MA low, or in the high phase of a period).
     """
@@ -35,6 +38,8 @@ class MaClock(wiring.Component):
     ma: Out(1, init=1)
     rise: Out(1)
     rises: Out(16)
+    first_rise: Out(1)
+    second_rise: Out(1)
     busy: Out(1)
 
     def elaborate(self, platform):
@@ -45,7 +50,7 @@ class MaClock(wiring.Component):
         last_clock = Signal(init=1)
         reload_last = self.half_period == 1      # phase_left <- half_period - 1 == 0
 
-        m.d.sync += self.rise.eq(0)
+        m.d.sync += [self.rise.eq(0), self.first_rise.eq(0), self.second_rise.eq(0)]
         with m.FSM(name="ma_fsm"):
             with m.State("IDLE"):
                 with m.If(self.run):
@@ -63,6 +68,8 @@ class MaClock(wiring.Component):
                     m.d.sync += [
                         self.ma.eq(1),
                         self.rise.eq(1),
+                        self.first_rise.eq(self.rises == 0),
+                        self.second_rise.eq(self.rises == 1),
                         phase_left.eq(self.half_period - 1),
                         last_clock.eq(reload_last),
                     ]

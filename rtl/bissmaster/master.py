@@ -217,7 +217,7 @@ class BissMaster(wiring.Component):
         now = Signal(p.timestamp_width)
         m.d.sync += now.eq(now + 1)
         first_rise_time = Signal(p.timestamp_width)
-        with m.If(ma_clock.rise & (ma_clock.rises == 1)):
+        with m.If(ma_clock.first_rise):
             m.d.sync += first_rise_time.eq(now)
 
         # How long SLO has been low, plus one (saturating at 2**tw: SLO low for 2**tw - 1
@@ -271,13 +271,16 @@ class BissMaster(wiring.Component):
         # cfg_request_period (one compare, no "- 1" in front of it). It never exceeds
         # 2**tw - 1: it only counts up while below the period.
         period_count_p1 = Signal(tw, init=1)
+        # ``period_count_p1 == 1``, kept as a register (written with it; the count never
+        # wraps to 1): no wide compare in front of the request decode.
+        period_start = Signal(init=1)
         as_fast_as_possible = self.periodic & (self.cfg_request_period == 0)
-        tick = self.periodic & ~as_fast_as_possible & (period_count_p1 == 1)
+        tick = self.periodic & ~as_fast_as_possible & period_start
         with m.If(~self.periodic | as_fast_as_possible
                   | (period_count_p1 >= self.cfg_request_period)):
-            m.d.sync += period_count_p1.eq(1)
+            m.d.sync += [period_count_p1.eq(1), period_start.eq(1)]
         with m.Else():
-            m.d.sync += period_count_p1.eq(period_count_p1 + 1)
+            m.d.sync += [period_count_p1.eq(period_count_p1 + 1), period_start.eq(0)]
         request = self.start | tick | as_fast_as_possible
         m.d.comb += self.overrun.eq((self.start | tick) & ~(idle & ~self.abort_cycle))
 
@@ -347,7 +350,7 @@ class BissMaster(wiring.Component):
         ma_enough = started & (ma_clock.rises >= target_rises)
         locked_seen = Signal()
         armed = Signal()
-        arm = ma_clock.rise & (ma_clock.rises == 2)
+        arm = ma_clock.second_rise
         in_clock = Signal()                 # the controller is in CLOCK
         restart_timer = arm | (sampler.locked & ~locked_seen)      # in CLOCK
         # CLOCK compares the elapsed time with the Ack and NO_START limits. Both flags are

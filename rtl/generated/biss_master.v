@@ -40,24 +40,24 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \$116 ;
   wire \$117 ;
   wire \$118 ;
-  wire \$119 ;
+  wire [23:0] \$119 ;
   wire \$12 ;
   wire \$120 ;
-  wire \$121 ;
+  wire [23:0] \$121 ;
   wire \$122 ;
-  wire [23:0] \$123 ;
-  wire \$124 ;
-  wire [23:0] \$125 ;
+  wire [11:0] \$123 ;
+  wire [24:0] \$124 ;
+  wire [32:0] \$125 ;
   wire \$126 ;
-  wire [11:0] \$127 ;
-  wire [24:0] \$128 ;
-  wire [32:0] \$129 ;
+  wire \$127 ;
+  wire [25:0] \$128 ;
+  wire \$129 ;
   wire \$13 ;
   wire \$130 ;
   wire \$131 ;
   wire \$132 ;
   wire \$133 ;
-  wire [25:0] \$134 ;
+  wire \$134 ;
   wire \$135 ;
   wire \$136 ;
   wire \$137 ;
@@ -67,38 +67,38 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \$140 ;
   wire \$141 ;
   wire \$142 ;
-  wire \$143 ;
-  wire \$144 ;
-  wire \$145 ;
+  wire [25:0] \$143 ;
+  wire [25:0] \$144 ;
+  wire [25:0] \$145 ;
   wire \$146 ;
   wire \$147 ;
   wire \$148 ;
-  wire [25:0] \$149 ;
+  wire \$149 ;
   wire \$15 ;
-  wire [25:0] \$150 ;
-  wire [25:0] \$151 ;
+  wire \$150 ;
+  wire \$151 ;
   wire \$152 ;
   wire \$153 ;
   wire \$154 ;
   wire \$155 ;
   wire \$156 ;
   wire \$157 ;
-  wire \$158 ;
-  wire \$159 ;
+  wire [24:0] \$158 ;
+  reg [7:0] \$159 ;
   wire \$16 ;
-  wire \$160 ;
-  wire \$161 ;
-  wire \$162 ;
-  wire \$163 ;
-  wire [24:0] \$164 ;
-  reg [7:0] \$165 ;
-  wire [8:0] \$166 ;
-  wire [7:0] \$167 ;
-  wire [8:0] \$168 ;
-  reg [7:0] \$169 ;
+  wire [8:0] \$160 ;
+  wire [7:0] \$161 ;
+  wire [8:0] \$162 ;
+  reg [7:0] \$163 ;
+  wire [8:0] \$164 ;
+  wire [16:0] \$165 ;
+  wire \$166 ;
+  wire \$167 ;
+  wire \$168 ;
+  wire \$169 ;
   wire \$17 ;
-  wire [8:0] \$170 ;
-  wire [16:0] \$171 ;
+  wire \$170 ;
+  wire \$171 ;
   wire \$172 ;
   wire \$173 ;
   wire \$174 ;
@@ -157,70 +157,58 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \$221 ;
   wire \$222 ;
   wire \$223 ;
-  wire \$224 ;
-  wire \$225 ;
-  wire \$226 ;
-  wire \$227 ;
-  wire \$228 ;
-  wire \$229 ;
+  reg \$224 ;
+  reg [153:0] \$225 ;
+  reg [23:0] \$226 ;
+  reg [23:0] \$227 ;
+  reg [11:0] \$228 ;
+  reg [24:0] \$229 ;
   wire \$23 ;
-  wire \$230 ;
-  wire \$231 ;
-  wire \$232 ;
-  wire \$233 ;
-  wire \$234 ;
-  wire \$235 ;
-  wire \$236 ;
+  reg [31:0] \$230 ;
+  reg [31:0] \$231 ;
+  reg [24:0] \$232 ;
+  reg \$233 ;
+  reg \$234 ;
+  reg \$235 ;
+  reg [24:0] \$236 ;
   reg \$237 ;
-  reg [153:0] \$238 ;
-  reg [23:0] \$239 ;
+  reg [23:0] \$238 ;
+  reg \$239 ;
   wire \$24 ;
-  reg [23:0] \$240 ;
-  reg [11:0] \$241 ;
-  reg [24:0] \$242 ;
-  reg [31:0] \$243 ;
-  reg [31:0] \$244 ;
-  reg [24:0] \$245 ;
+  reg [7:0] \$240 ;
+  reg [8:0] \$241 ;
+  reg [7:0] \$242 ;
+  reg [16:0] \$243 ;
+  reg \$244 ;
+  reg \$245 ;
   reg \$246 ;
   reg \$247 ;
-  reg \$248 ;
-  reg [24:0] \$249 ;
+  reg [2:0] \$248 ;
+  reg \$249 ;
   wire \$25 ;
   reg \$250 ;
-  reg [23:0] \$251 ;
-  reg [7:0] \$252 ;
-  reg [8:0] \$253 ;
-  reg [7:0] \$254 ;
-  reg [16:0] \$255 ;
+  reg \$251 ;
+  reg \$252 ;
+  reg [3:0] \$253 ;
+  reg [12:0] \$254 ;
+  reg [31:0] \$255 ;
   reg \$256 ;
-  reg \$257 ;
+  reg [5:0] \$257 ;
   reg \$258 ;
   reg \$259 ;
   wire \$26 ;
-  reg [2:0] \$260 ;
-  reg \$261 ;
+  reg \$260 ;
+  reg [54:0] \$261 ;
   reg \$262 ;
   reg \$263 ;
   reg \$264 ;
-  reg [3:0] \$265 ;
-  reg [12:0] \$266 ;
-  reg [31:0] \$267 ;
+  reg [39:0] \$265 ;
+  reg \$266 ;
+  reg \$267 ;
   reg \$268 ;
-  reg [5:0] \$269 ;
+  reg \$269 ;
   wire \$27 ;
-  reg \$270 ;
-  reg \$271 ;
-  reg \$272 ;
-  reg [54:0] \$273 ;
-  reg \$274 ;
-  reg \$275 ;
-  reg \$276 ;
-  reg [39:0] \$277 ;
-  reg \$278 ;
-  reg \$279 ;
   wire \$28 ;
-  reg \$280 ;
-  reg \$281 ;
   wire \$29 ;
   wire \$3 ;
   wire \$30 ;
@@ -311,10 +299,10 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   reg break_over = 1'h0;
   output busy;
   wire busy;
-  wire \busy$101 ;
+  wire \busy$100 ;
   output cds;
   reg cds = 1'h0;
-  wire \cds$181 ;
+  wire \cds$183 ;
   reg [153:0] cfg = 154'h000000000000000000000000000000000000000;
   wire [23:0] \cfg.cfg_ack_limit ;
   wire [23:0] \cfg.cfg_break_time ;
@@ -442,6 +430,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   reg fault_no_ack;
   reg fault_no_start;
   reg fault_slo_stuck_low;
+  wire first_rise;
   reg [31:0] first_rise_time = 32'd0;
   reg [8:0] frame_len_p4 = 9'h000;
   (* enum_base_type = "Status" *)
@@ -523,6 +512,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   output overrun;
   wire overrun;
   reg [23:0] period_count_p1 = 24'h000001;
+  reg period_start = 1'h1;
   input periodic;
   wire periodic;
   reg receiver_clear;
@@ -546,13 +536,13 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   reg [3:0] report_status;
   reg resync;
   wire \resync$131 ;
-  wire rise;
   wire [15:0] rises;
   input rst;
   wire rst;
   reg run;
   wire sample;
   wire \sample$67 ;
+  wire second_rise;
   wire skip;
   input slo;
   wire slo;
@@ -619,414 +609,402 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \$2  = periodic & \$1 ;
   assign \$3  = ~ \$2 ;
   assign \$4  = periodic & \$3 ;
-  assign \$5  = period_count_p1 == 1'h1;
-  assign \$6  = \$4  & \$5 ;
-  assign \$7  = start | \$6 ;
-  assign \$8  = ~ abort_cycle;
-  assign \$9  = idle & \$8 ;
-  assign \$10  = ~ \$9 ;
-  assign overrun = \$7  & \$10 ;
-  assign \$11  = cfg[134] & cfg[142];
-  assign \$12  = cfg[131] | \$11 ;
-  assign \$13  = \done$82  & \$12 ;
-  assign \$14  = ~ cfg[134];
-  assign \$15  = crc_ok[1] | \$14 ;
-  assign \$16  = cfg[131] ? crc_ok[0] : \$15 ;
-  assign check = \$13  & \$16 ;
-  assign \$17  = ~ crc_ok[0];
-  assign \$18  = ~ cfg[134];
-  assign \$19  = crc_ok[1] | \$18 ;
-  assign \$20  = ~ \$19 ;
-  assign \$21  = \$17  & \$20 ;
-  assign \$22  = ~ crc_ok[0];
-  assign \$23  = ~ cfg[134];
-  assign \$24  = crc_ok[1] | \$23 ;
-  assign \$25  = ~ \$24 ;
-  assign \$26  = check & \repeat ;
-  assign \$27  = check & skip;
-  assign \$28  = \$26  | \$27 ;
-  assign \$29  = check & zero;
-  assign \$30  = \$28  | \$29 ;
-  assign \$31  = cfg[145] & cfg[134];
-  assign \$32  = ~ cfg[134];
-  assign \$33  = crc_ok[1] | \$32 ;
-  assign \$34  = crc_ok[0] & \$33 ;
-  assign \$35  = \$31  & \$34 ;
-  assign \$36  = ~ match;
-  assign \$37  = \$35  & \$36 ;
-  assign \$38  = rises == 2'h2;
-  assign arm = rise & \$38 ;
-  assign \$39  = \busy$101  | abort_cycle;
-  assign \$40  = ~ cfg_ok;
-  assign \$41  = latched & \$40 ;
-  assign \$42  = latched ? stuck_live : stuck_latched;
-  assign \$43  = rises >= target_rises;
-  assign \$44  = started & \$43 ;
-  assign \$45  = ~ \$44 ;
-  assign \$46  = rises == 2'h2;
-  assign \$47  = rise & \$46 ;
-  assign \$48  = ~ locked_seen;
-  assign \$49  = locked & \$48 ;
-  assign \$50  = \$47  | \$49 ;
-  assign \$51  = \$50  | abort_cycle;
-  assign \$52  = armed & early;
-  assign \$53  = ~ locked_seen;
-  assign \$54  = armed & \$53 ;
-  assign \$55  = ~ locked;
-  assign \$56  = \$54  & \$55 ;
-  assign \$57  = \$56  & ack_expired;
-  assign \$58  = ~ locked_seen;
-  assign \$59  = locked & \$58 ;
-  assign \$60  = \$59  & delay_over;
-  assign \$61  = ~ \started$122 ;
-  assign \$62  = locked_seen & \$61 ;
-  assign \$63  = no_start_expired | slots_full;
-  assign \$64  = \$62  & \$63 ;
-  assign \$65  = rises >= target_rises;
-  assign \$66  = started & \$65 ;
-  assign \$67  = ~ \$66 ;
+  assign \$5  = \$4  & period_start;
+  assign \$6  = start | \$5 ;
+  assign \$7  = ~ abort_cycle;
+  assign \$8  = idle & \$7 ;
+  assign \$9  = ~ \$8 ;
+  assign overrun = \$6  & \$9 ;
+  assign \$10  = cfg[134] & cfg[142];
+  assign \$11  = cfg[131] | \$10 ;
+  assign \$12  = \done$82  & \$11 ;
+  assign \$13  = ~ cfg[134];
+  assign \$14  = crc_ok[1] | \$13 ;
+  assign \$15  = cfg[131] ? crc_ok[0] : \$14 ;
+  assign check = \$12  & \$15 ;
+  assign \$16  = ~ crc_ok[0];
+  assign \$17  = ~ cfg[134];
+  assign \$18  = crc_ok[1] | \$17 ;
+  assign \$19  = ~ \$18 ;
+  assign \$20  = \$16  & \$19 ;
+  assign \$21  = ~ crc_ok[0];
+  assign \$22  = ~ cfg[134];
+  assign \$23  = crc_ok[1] | \$22 ;
+  assign \$24  = ~ \$23 ;
+  assign \$25  = check & \repeat ;
+  assign \$26  = check & skip;
+  assign \$27  = \$25  | \$26 ;
+  assign \$28  = check & zero;
+  assign \$29  = \$27  | \$28 ;
+  assign \$30  = cfg[145] & cfg[134];
+  assign \$31  = ~ cfg[134];
+  assign \$32  = crc_ok[1] | \$31 ;
+  assign \$33  = crc_ok[0] & \$32 ;
+  assign \$34  = \$30  & \$33 ;
+  assign \$35  = ~ match;
+  assign \$36  = \$34  & \$35 ;
+  assign \$37  = \busy$100  | abort_cycle;
+  assign \$38  = ~ cfg_ok;
+  assign \$39  = latched & \$38 ;
+  assign \$40  = latched ? stuck_live : stuck_latched;
+  assign \$41  = rises >= target_rises;
+  assign \$42  = started & \$41 ;
+  assign \$43  = ~ \$42 ;
+  assign \$44  = ~ locked_seen;
+  assign \$45  = locked & \$44 ;
+  assign \$46  = arm | \$45 ;
+  assign \$47  = \$46  | abort_cycle;
+  assign \$48  = armed & early;
+  assign \$49  = ~ locked_seen;
+  assign \$50  = armed & \$49 ;
+  assign \$51  = ~ locked;
+  assign \$52  = \$50  & \$51 ;
+  assign \$53  = \$52  & ack_expired;
+  assign \$54  = ~ locked_seen;
+  assign \$55  = locked & \$54 ;
+  assign \$56  = \$55  & delay_over;
+  assign \$57  = ~ \started$122 ;
+  assign \$58  = locked_seen & \$57 ;
+  assign \$59  = no_start_expired | slots_full;
+  assign \$60  = \$58  & \$59 ;
+  assign \$61  = rises >= target_rises;
+  assign \$62  = started & \$61 ;
+  assign \$63  = ~ \$62 ;
   assign busy = ~ idle;
-  assign \$68  = ~ crc_ok[0];
-  assign inc = report_frame & \$68 ;
-  assign \$69  = ~ cfg[134];
-  assign \$70  = crc_ok[1] | \$69 ;
-  assign \$71  = ~ \$70 ;
-  assign \inc$135  = report_frame & \$71 ;
-  assign \$72  = check & \repeat ;
-  assign \inc$150  = report_frame & \$72 ;
-  assign \$73  = check & skip;
-  assign \inc$153  = report_frame & \$73 ;
-  assign \$74  = check & zero;
-  assign \inc$156  = report_frame & \$74 ;
-  assign \$75  = cfg[145] & cfg[134];
-  assign \$76  = ~ cfg[134];
-  assign \$77  = crc_ok[1] | \$76 ;
-  assign \$78  = crc_ok[0] & \$77 ;
-  assign \$79  = \$75  & \$78 ;
-  assign \$80  = ~ match;
-  assign \$81  = \$79  & \$80 ;
-  assign \inc$159  = report_frame & \$81 ;
-  assign \$82  = ! cycle_fsm_state;
-  assign \$83  = cycle_fsm_state == 1'h1;
-  assign \$84  = cycle_fsm_state == 2'h2;
-  assign \$85  = cycle_fsm_state == 2'h3;
-  assign \$86  = cycle_fsm_state == 3'h4;
-  assign \$87  = cycle_fsm_state == 3'h5;
-  assign \$88  = | live[15:1];
-  assign \$89  = | live[129:124];
-  assign \$90  = live[129:124] <= 6'h37;
-  assign \$91  = \$89  & \$90 ;
-  assign \$92  = ! live[133:132];
-  assign \$93  = live[133:132] == 1'h1;
-  assign \$94  = \$92  | \$93 ;
-  assign \$95  = live[133:132] == 2'h2;
-  assign \$96  = \$94  | \$95 ;
-  assign \$97  = \$91  & \$96 ;
-  assign \$98  = \$88  & \$97 ;
-  assign \$99  = ~ live[134];
-  assign \$100  = | live[140:135];
-  assign \$101  = live[140:135] <= 6'h28;
-  assign \$102  = \$100  & \$101 ;
-  assign \$103  = ! live[144:143];
-  assign \$104  = live[144:143] == 1'h1;
-  assign \$105  = \$103  | \$104 ;
-  assign \$106  = live[144:143] == 2'h2;
-  assign \$107  = \$105  | \$106 ;
-  assign \$108  = \$102  & \$107 ;
-  assign \$109  = \$99  | \$108 ;
-  assign \$110  = \$98  & \$109 ;
-  assign \$111  = live[134] & live[131];
-  assign \$112  = \$111  & live[142];
-  assign \$113  = ~ \$112 ;
-  assign \$114  = \$110  & \$113 ;
-  assign \$115  = ~ live[145];
-  assign \$116  = live[140:135] <= live[129:124];
-  assign \$117  = live[134] & \$116 ;
-  assign \$118  = | live[144:143];
-  assign \$119  = \$117  & \$118 ;
-  assign \$120  = \$115  | \$119 ;
-  assign \$121  = \$114  & \$120 ;
-  assign \$122  = ! live[87:64];
-  assign \$123  = \$122  ? 24'h000fa0 : live[87:64];
-  assign \$124  = ! live[111:88];
-  assign \$125  = \$124  ? 24'h001f40 : live[111:88];
-  assign \$126  = ! live[123:112];
-  assign \$127  = \$126  ? 12'hfff : live[123:112];
-  assign \$128  = ack_limit + { cfg[15:0], 1'h0 };
-  assign \$129  = now + 1'h1;
-  assign \$130  = rises == 1'h1;
-  assign \$131  = rise & \$130 ;
-  assign \$132  = \slo$63  | \busy$101 ;
-  assign \$133  = ~ slo_low_time_p1[24];
-  assign \$134  = slo_low_time_p1 + 1'h1;
-  assign \$135  = ~ \slo$63 ;
-  assign \$136  = ~ \busy$101 ;
-  assign \$137  = \$135  & \$136 ;
-  assign \$138  = slo_low_time_p1 >= timeout_limit;
-  assign \$139  = \$137  & \$138 ;
-  assign \$140  = ~ \slo$63 ;
-  assign \$141  = ~ \busy$101 ;
-  assign \$142  = \$140  & \$141 ;
-  assign \$143  = ! live[111:88];
-  assign \$144  = slo_low_time_p1 >= 13'h1f40;
-  assign \$145  = slo_low_time_p1 >= live[111:88];
-  assign \$146  = \$143  ? \$144  : \$145 ;
-  assign \$147  = \$142  & \$146 ;
-  assign \$148  = & timer;
-  assign \$149  = timer + 1'h1;
-  assign \$150  = \$148  ? { 1'h0, timer } : \$149 ;
-  assign \$151  = timer_clear ? 26'h0000001 : \$150 ;
-  assign \$152  = ~ timer_clear;
-  assign \$153  = ! live[63:40];
-  assign \$154  = timer >= 12'hfa0;
-  assign \$155  = timer >= live[63:40];
-  assign \$156  = \$153  ? \$154  : \$155 ;
-  assign \$157  = \$152  & \$156 ;
-  assign \$158  = ~ periodic;
-  assign \$159  = ! cfg_request_period;
-  assign \$160  = periodic & \$159 ;
-  assign \$161  = \$158  | \$160 ;
-  assign \$162  = period_count_p1 >= cfg_request_period;
-  assign \$163  = \$161  | \$162 ;
-  assign \$164  = period_count_p1 + 1'h1;
-  assign \$166  = words[5:0] + \$165 ;
-  assign \$167  = cfg[134] ? word1_len : 8'h00;
-  assign \$168  = word0_len + \$167 ;
-  assign \$170  = words[15:10] + \$169 ;
-  assign \$171  = start_slot + frame_len_p4;
-  assign \$172  = rises == 2'h2;
-  assign \$173  = rise & \$172 ;
-  assign \$174  = ~ locked_seen;
-  assign \$175  = locked & \$174 ;
-  assign \$176  = \$173  | \$175 ;
-  assign \$177  = ~ \$176 ;
-  assign \$178  = in_clock & \$177 ;
-  assign \$179  = timer >= ack_limit;
-  assign \$180  = \$178  & \$179 ;
-  assign \$181  = rises == 2'h2;
-  assign \$182  = rise & \$181 ;
-  assign \$183  = ~ locked_seen;
-  assign \$184  = locked & \$183 ;
-  assign \$185  = \$182  | \$184 ;
-  assign \$186  = ~ \$185 ;
-  assign \$187  = in_clock & \$186 ;
-  assign \$188  = timer >= no_start_limit;
-  assign \$189  = \$187  & \$188 ;
-  assign \$190  = delay > delay_limit;
-  assign \$191  = \busy$101  | abort_cycle;
-  assign \$192  = ! cfg_request_period;
-  assign \$193  = periodic & \$192 ;
-  assign \$194  = ~ \$193 ;
-  assign \$195  = periodic & \$194 ;
-  assign \$196  = period_count_p1 == 1'h1;
-  assign \$197  = \$195  & \$196 ;
-  assign \$198  = start | \$197 ;
-  assign \$199  = ! cfg_request_period;
-  assign \$200  = periodic & \$199 ;
-  assign \$201  = \$198  | \$200 ;
-  assign \$202  = ~ cfg_ok;
-  assign \$203  = latched & \$202 ;
-  assign \$204  = latched ? stuck_live : stuck_latched;
-  assign \$205  = rises == 2'h2;
-  assign \$206  = rise & \$205 ;
-  assign \$207  = ~ locked_seen;
-  assign \$208  = locked & \$207 ;
-  assign \$209  = armed & early;
-  assign \$210  = ~ locked_seen;
-  assign \$211  = armed & \$210 ;
-  assign \$212  = ~ locked;
-  assign \$213  = \$211  & \$212 ;
-  assign \$214  = \$213  & ack_expired;
-  assign \$215  = ~ locked_seen;
-  assign \$216  = locked & \$215 ;
-  assign \$217  = \$216  & delay_over;
-  assign \$218  = ~ \started$122 ;
-  assign \$219  = locked_seen & \$218 ;
-  assign \$220  = no_start_expired | slots_full;
-  assign \$221  = \$219  & \$220 ;
-  assign \$222  = ~ \busy$101 ;
-  assign \$223  = ! frame_status;
-  assign \$224  = report_frame & \$223 ;
-  assign \$225  = check & \repeat ;
-  assign \$226  = check & skip;
-  assign \$227  = check & zero;
-  assign \$228  = ~ cfg[134];
-  assign \$229  = crc_ok[1] | \$228 ;
-  assign \$230  = cfg[145] & cfg[134];
-  assign \$231  = ~ cfg[134];
-  assign \$232  = crc_ok[1] | \$231 ;
-  assign \$233  = crc_ok[0] & \$232 ;
-  assign \$234  = \$230  & \$233 ;
-  assign \$235  = ~ match;
-  assign \$236  = \$234  & \$235 ;
+  assign \$64  = ~ crc_ok[0];
+  assign inc = report_frame & \$64 ;
+  assign \$65  = ~ cfg[134];
+  assign \$66  = crc_ok[1] | \$65 ;
+  assign \$67  = ~ \$66 ;
+  assign \inc$135  = report_frame & \$67 ;
+  assign \$68  = check & \repeat ;
+  assign \inc$150  = report_frame & \$68 ;
+  assign \$69  = check & skip;
+  assign \inc$153  = report_frame & \$69 ;
+  assign \$70  = check & zero;
+  assign \inc$156  = report_frame & \$70 ;
+  assign \$71  = cfg[145] & cfg[134];
+  assign \$72  = ~ cfg[134];
+  assign \$73  = crc_ok[1] | \$72 ;
+  assign \$74  = crc_ok[0] & \$73 ;
+  assign \$75  = \$71  & \$74 ;
+  assign \$76  = ~ match;
+  assign \$77  = \$75  & \$76 ;
+  assign \inc$159  = report_frame & \$77 ;
+  assign \$78  = ! cycle_fsm_state;
+  assign \$79  = cycle_fsm_state == 1'h1;
+  assign \$80  = cycle_fsm_state == 2'h2;
+  assign \$81  = cycle_fsm_state == 2'h3;
+  assign \$82  = cycle_fsm_state == 3'h4;
+  assign \$83  = cycle_fsm_state == 3'h5;
+  assign \$84  = | live[15:1];
+  assign \$85  = | live[129:124];
+  assign \$86  = live[129:124] <= 6'h37;
+  assign \$87  = \$85  & \$86 ;
+  assign \$88  = ! live[133:132];
+  assign \$89  = live[133:132] == 1'h1;
+  assign \$90  = \$88  | \$89 ;
+  assign \$91  = live[133:132] == 2'h2;
+  assign \$92  = \$90  | \$91 ;
+  assign \$93  = \$87  & \$92 ;
+  assign \$94  = \$84  & \$93 ;
+  assign \$95  = ~ live[134];
+  assign \$96  = | live[140:135];
+  assign \$97  = live[140:135] <= 6'h28;
+  assign \$98  = \$96  & \$97 ;
+  assign \$99  = ! live[144:143];
+  assign \$100  = live[144:143] == 1'h1;
+  assign \$101  = \$99  | \$100 ;
+  assign \$102  = live[144:143] == 2'h2;
+  assign \$103  = \$101  | \$102 ;
+  assign \$104  = \$98  & \$103 ;
+  assign \$105  = \$95  | \$104 ;
+  assign \$106  = \$94  & \$105 ;
+  assign \$107  = live[134] & live[131];
+  assign \$108  = \$107  & live[142];
+  assign \$109  = ~ \$108 ;
+  assign \$110  = \$106  & \$109 ;
+  assign \$111  = ~ live[145];
+  assign \$112  = live[140:135] <= live[129:124];
+  assign \$113  = live[134] & \$112 ;
+  assign \$114  = | live[144:143];
+  assign \$115  = \$113  & \$114 ;
+  assign \$116  = \$111  | \$115 ;
+  assign \$117  = \$110  & \$116 ;
+  assign \$118  = ! live[87:64];
+  assign \$119  = \$118  ? 24'h000fa0 : live[87:64];
+  assign \$120  = ! live[111:88];
+  assign \$121  = \$120  ? 24'h001f40 : live[111:88];
+  assign \$122  = ! live[123:112];
+  assign \$123  = \$122  ? 12'hfff : live[123:112];
+  assign \$124  = ack_limit + { cfg[15:0], 1'h0 };
+  assign \$125  = now + 1'h1;
+  assign \$126  = \slo$63  | \busy$100 ;
+  assign \$127  = ~ slo_low_time_p1[24];
+  assign \$128  = slo_low_time_p1 + 1'h1;
+  assign \$129  = ~ \slo$63 ;
+  assign \$130  = ~ \busy$100 ;
+  assign \$131  = \$129  & \$130 ;
+  assign \$132  = slo_low_time_p1 >= timeout_limit;
+  assign \$133  = \$131  & \$132 ;
+  assign \$134  = ~ \slo$63 ;
+  assign \$135  = ~ \busy$100 ;
+  assign \$136  = \$134  & \$135 ;
+  assign \$137  = ! live[111:88];
+  assign \$138  = slo_low_time_p1 >= 13'h1f40;
+  assign \$139  = slo_low_time_p1 >= live[111:88];
+  assign \$140  = \$137  ? \$138  : \$139 ;
+  assign \$141  = \$136  & \$140 ;
+  assign \$142  = & timer;
+  assign \$143  = timer + 1'h1;
+  assign \$144  = \$142  ? { 1'h0, timer } : \$143 ;
+  assign \$145  = timer_clear ? 26'h0000001 : \$144 ;
+  assign \$146  = ~ timer_clear;
+  assign \$147  = ! live[63:40];
+  assign \$148  = timer >= 12'hfa0;
+  assign \$149  = timer >= live[63:40];
+  assign \$150  = \$147  ? \$148  : \$149 ;
+  assign \$151  = \$146  & \$150 ;
+  assign \$152  = ~ periodic;
+  assign \$153  = ! cfg_request_period;
+  assign \$154  = periodic & \$153 ;
+  assign \$155  = \$152  | \$154 ;
+  assign \$156  = period_count_p1 >= cfg_request_period;
+  assign \$157  = \$155  | \$156 ;
+  assign \$158  = period_count_p1 + 1'h1;
+  assign \$160  = words[5:0] + \$159 ;
+  assign \$161  = cfg[134] ? word1_len : 8'h00;
+  assign \$162  = word0_len + \$161 ;
+  assign \$164  = words[15:10] + \$163 ;
+  assign \$165  = start_slot + frame_len_p4;
+  assign \$166  = ~ locked_seen;
+  assign \$167  = locked & \$166 ;
+  assign \$168  = arm | \$167 ;
+  assign \$169  = ~ \$168 ;
+  assign \$170  = in_clock & \$169 ;
+  assign \$171  = timer >= ack_limit;
+  assign \$172  = \$170  & \$171 ;
+  assign \$173  = ~ locked_seen;
+  assign \$174  = locked & \$173 ;
+  assign \$175  = arm | \$174 ;
+  assign \$176  = ~ \$175 ;
+  assign \$177  = in_clock & \$176 ;
+  assign \$178  = timer >= no_start_limit;
+  assign \$179  = \$177  & \$178 ;
+  assign \$180  = delay > delay_limit;
+  assign \$181  = \busy$100  | abort_cycle;
+  assign \$182  = ! cfg_request_period;
+  assign \$183  = periodic & \$182 ;
+  assign \$184  = ~ \$183 ;
+  assign \$185  = periodic & \$184 ;
+  assign \$186  = \$185  & period_start;
+  assign \$187  = start | \$186 ;
+  assign \$188  = ! cfg_request_period;
+  assign \$189  = periodic & \$188 ;
+  assign \$190  = \$187  | \$189 ;
+  assign \$191  = ~ cfg_ok;
+  assign \$192  = latched & \$191 ;
+  assign \$193  = latched ? stuck_live : stuck_latched;
+  assign \$194  = ~ locked_seen;
+  assign \$195  = locked & \$194 ;
+  assign \$196  = armed & early;
+  assign \$197  = ~ locked_seen;
+  assign \$198  = armed & \$197 ;
+  assign \$199  = ~ locked;
+  assign \$200  = \$198  & \$199 ;
+  assign \$201  = \$200  & ack_expired;
+  assign \$202  = ~ locked_seen;
+  assign \$203  = locked & \$202 ;
+  assign \$204  = \$203  & delay_over;
+  assign \$205  = ~ \started$122 ;
+  assign \$206  = locked_seen & \$205 ;
+  assign \$207  = no_start_expired | slots_full;
+  assign \$208  = \$206  & \$207 ;
+  assign \$209  = ~ \busy$100 ;
+  assign \$210  = ! frame_status;
+  assign \$211  = report_frame & \$210 ;
+  assign \$212  = check & \repeat ;
+  assign \$213  = check & skip;
+  assign \$214  = check & zero;
+  assign \$215  = ~ cfg[134];
+  assign \$216  = crc_ok[1] | \$215 ;
+  assign \$217  = cfg[145] & cfg[134];
+  assign \$218  = ~ cfg[134];
+  assign \$219  = crc_ok[1] | \$218 ;
+  assign \$220  = crc_ok[0] & \$219 ;
+  assign \$221  = \$217  & \$220 ;
+  assign \$222  = ~ match;
+  assign \$223  = \$221  & \$222 ;
   always @(posedge clk)
-    cfg_ok <= \$237 ;
+    cfg_ok <= \$224 ;
   always @(posedge clk)
-    cfg <= \$238 ;
+    cfg <= \$225 ;
   always @(posedge clk)
-    ack_limit <= \$239 ;
+    ack_limit <= \$226 ;
   always @(posedge clk)
-    timeout_limit <= \$240 ;
+    timeout_limit <= \$227 ;
   always @(posedge clk)
-    delay_limit <= \$241 ;
+    delay_limit <= \$228 ;
   always @(posedge clk)
-    no_start_limit <= \$242 ;
+    no_start_limit <= \$229 ;
   always @(posedge clk)
-    now <= \$243 ;
+    now <= \$230 ;
   always @(posedge clk)
-    first_rise_time <= \$244 ;
+    first_rise_time <= \$231 ;
   always @(posedge clk)
-    slo_low_time_p1 <= \$245 ;
+    slo_low_time_p1 <= \$232 ;
   always @(posedge clk)
-    stuck_latched <= \$246 ;
+    stuck_latched <= \$233 ;
   always @(posedge clk)
-    stuck_live <= \$247 ;
+    stuck_live <= \$234 ;
   always @(posedge clk)
-    latched <= \$248 ;
+    latched <= \$235 ;
   always @(posedge clk)
-    timer <= \$249 ;
+    timer <= \$236 ;
   always @(posedge clk)
-    break_over <= \$250 ;
+    break_over <= \$237 ;
   always @(posedge clk)
-    period_count_p1 <= \$251 ;
+    period_count_p1 <= \$238 ;
   always @(posedge clk)
-    word0_len <= \$252 ;
+    period_start <= \$239 ;
   always @(posedge clk)
-    frame_len_p4 <= \$253 ;
+    word0_len <= \$240 ;
   always @(posedge clk)
-    word1_len <= \$254 ;
+    frame_len_p4 <= \$241 ;
   always @(posedge clk)
-    target_rises <= \$255 ;
+    word1_len <= \$242 ;
   always @(posedge clk)
-    started <= \$256 ;
+    target_rises <= \$243 ;
   always @(posedge clk)
-    ack_expired <= \$257 ;
+    started <= \$244 ;
   always @(posedge clk)
-    no_start_expired <= \$258 ;
+    ack_expired <= \$245 ;
   always @(posedge clk)
-    delay_over <= \$259 ;
+    no_start_expired <= \$246 ;
   always @(posedge clk)
-    cycle_fsm_state <= \$260 ;
+    delay_over <= \$247 ;
   always @(posedge clk)
-    armed <= \$261 ;
+    cycle_fsm_state <= \$248 ;
   always @(posedge clk)
-    locked_seen <= \$262 ;
+    armed <= \$249 ;
   always @(posedge clk)
-    done <= \$263 ;
+    locked_seen <= \$250 ;
   always @(posedge clk)
-    valid <= \$264 ;
+    done <= \$251 ;
   always @(posedge clk)
-    status <= \$265 ;
+    valid <= \$252 ;
   always @(posedge clk)
-    line_delay <= \$266 ;
+    status <= \$253 ;
   always @(posedge clk)
-    timestamp <= \$267 ;
+    line_delay <= \$254 ;
   always @(posedge clk)
-    cds <= \$268 ;
+    timestamp <= \$255 ;
   always @(posedge clk)
-    lc <= \$269 ;
+    cds <= \$256 ;
   always @(posedge clk)
-    lc_repeat <= \$270 ;
+    lc <= \$257 ;
   always @(posedge clk)
-    lc_skip <= \$271 ;
+    lc_repeat <= \$258 ;
   always @(posedge clk)
-    lc_zero <= \$272 ;
+    lc_skip <= \$259 ;
   always @(posedge clk)
-    word0_position <= \$273 ;
+    lc_zero <= \$260 ;
   always @(posedge clk)
-    word0_ne <= \$274 ;
+    word0_position <= \$261 ;
   always @(posedge clk)
-    word0_nw <= \$275 ;
+    word0_ne <= \$262 ;
   always @(posedge clk)
-    word0_crc_ok <= \$276 ;
+    word0_nw <= \$263 ;
   always @(posedge clk)
-    word1_position <= \$277 ;
+    word0_crc_ok <= \$264 ;
   always @(posedge clk)
-    word1_ne <= \$278 ;
+    word1_position <= \$265 ;
   always @(posedge clk)
-    word1_nw <= \$279 ;
+    word1_ne <= \$266 ;
   always @(posedge clk)
-    word1_crc_ok <= \$280 ;
+    word1_nw <= \$267 ;
   always @(posedge clk)
-    spw_mismatch <= \$281 ;
-  \biss_master.count_aborted$202  \count_aborted$202  (
+    word1_crc_ok <= \$268 ;
+  always @(posedge clk)
+    spw_mismatch <= \$269 ;
+  \biss_master.count_aborted$204  \count_aborted$204  (
     .clear(clear_counters),
     .clk(clk),
     .count(count_aborted),
     .inc(fault_aborted),
     .rst(rst)
   );
-  \biss_master.count_crc_word0$191  \count_crc_word0$191  (
+  \biss_master.count_crc_word0$193  \count_crc_word0$193  (
     .clear(clear_counters),
     .clk(clk),
     .count(count_crc_word0),
     .inc(inc),
     .rst(rst)
   );
-  \biss_master.count_crc_word1$192  \count_crc_word1$192  (
+  \biss_master.count_crc_word1$194  \count_crc_word1$194  (
     .clear(clear_counters),
     .clk(clk),
     .count(count_crc_word1),
     .inc(\inc$135 ),
     .rst(rst)
   );
-  \biss_master.count_delay_range$195  \count_delay_range$195  (
+  \biss_master.count_delay_range$197  \count_delay_range$197  (
     .clear(clear_counters),
     .clk(clk),
     .count(count_delay_range),
     .inc(fault_delay_range),
     .rst(rst)
   );
-  \biss_master.count_lc_repeat$197  \count_lc_repeat$197  (
+  \biss_master.count_lc_repeat$199  \count_lc_repeat$199  (
     .clear(clear_counters),
     .clk(clk),
     .count(count_lc_repeat),
     .inc(\inc$150 ),
     .rst(rst)
   );
-  \biss_master.count_lc_skip$198  \count_lc_skip$198  (
+  \biss_master.count_lc_skip$200  \count_lc_skip$200  (
     .clear(clear_counters),
     .clk(clk),
     .count(count_lc_skip),
     .inc(\inc$153 ),
     .rst(rst)
   );
-  \biss_master.count_lc_zero$199  \count_lc_zero$199  (
+  \biss_master.count_lc_zero$201  \count_lc_zero$201  (
     .clear(clear_counters),
     .clk(clk),
     .count(count_lc_zero),
     .inc(\inc$156 ),
     .rst(rst)
   );
-  \biss_master.count_no_ack$193  \count_no_ack$193  (
+  \biss_master.count_no_ack$195  \count_no_ack$195  (
     .clear(clear_counters),
     .clk(clk),
     .count(count_no_ack),
     .inc(fault_no_ack),
     .rst(rst)
   );
-  \biss_master.count_no_start$194  \count_no_start$194  (
+  \biss_master.count_no_start$196  \count_no_start$196  (
     .clear(clear_counters),
     .clk(clk),
     .count(count_no_start),
     .inc(fault_no_start),
     .rst(rst)
   );
-  \biss_master.count_overrun$201  \count_overrun$201  (
+  \biss_master.count_overrun$203  \count_overrun$203  (
     .clear(clear_counters),
     .clk(clk),
     .count(count_overrun),
     .inc(overrun),
     .rst(rst)
   );
-  \biss_master.count_slo_stuck_low$196  \count_slo_stuck_low$196  (
+  \biss_master.count_slo_stuck_low$198  \count_slo_stuck_low$198  (
     .clear(clear_counters),
     .clk(clk),
     .count(count_slo_stuck_low),
     .inc(fault_slo_stuck_low),
     .rst(rst)
   );
-  \biss_master.count_spw_mismatch$200  \count_spw_mismatch$200  (
+  \biss_master.count_spw_mismatch$202  \count_spw_mismatch$202  (
     .clear(clear_counters),
     .clk(clk),
     .count(count_spw_mismatch),
@@ -1035,7 +1013,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   );
   \biss_master.decoder  decoder (
     .\bit (\slo$63 ),
-    .cds(\cds$181 ),
+    .cds(\cds$183 ),
     .clk(clk),
     .cpw_top(cpw_top),
     .crc_ok(crc_ok),
@@ -1057,14 +1035,15 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .words(words)
   );
   \biss_master.ma_clock  ma_clock (
-    .busy(\busy$101 ),
+    .busy(\busy$100 ),
     .clk(clk),
+    .first_rise(first_rise),
     .half_period(cfg[15:0]),
     .ma(ma),
-    .rise(rise),
     .rises(rises),
     .rst(rst),
-    .run(run)
+    .run(run),
+    .second_rise(arm)
   );
   \biss_master.sampler  sampler (
     .arm(arm),
@@ -1084,7 +1063,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .is_zero(zero),
     .lc(\lc$75 ),
     .load(load),
-    .\port$1146$0 (\slo$63 ),
+    .\port$1140$0 (\slo$63 ),
     .\repeat (\repeat ),
     .resync(resync),
     .rst(rst),
@@ -1110,37 +1089,37 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     (* full_case = 32'd1 *)
     casez (words[9:6])
       4'h0:
-          \$165  = 8'h04;
+          \$159  = 8'h04;
       4'h1:
-          \$165  = 8'h06;
+          \$159  = 8'h06;
       4'h2:
-          \$165  = 8'h0a;
+          \$159  = 8'h0a;
       4'h3:
-          \$165  = 8'h0c;
+          \$159  = 8'h0c;
       4'h4:
-          \$165  = 8'h0a;
+          \$159  = 8'h0a;
       4'h5:
-          \$165  = 8'h0c;
+          \$159  = 8'h0c;
       4'h6:
-          \$165  = 8'h10;
+          \$159  = 8'h10;
       4'h7:
-          \$165  = 8'h12;
+          \$159  = 8'h12;
       4'h8:
-          \$165  = 8'h14;
+          \$159  = 8'h14;
       4'h9:
-          \$165  = 8'h16;
+          \$159  = 8'h16;
       4'ha:
-          \$165  = 8'h1a;
+          \$159  = 8'h1a;
       4'hb:
-          \$165  = 8'h1c;
+          \$159  = 8'h1c;
       4'hc:
-          \$165  = 8'h04;
+          \$159  = 8'h04;
       4'hd:
-          \$165  = 8'h06;
+          \$159  = 8'h06;
       4'he:
-          \$165  = 8'h0a;
+          \$159  = 8'h0a;
       4'hf:
-          \$165  = 8'h0c;
+          \$159  = 8'h0c;
     endcase
   end
   always @* begin
@@ -1148,51 +1127,51 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     (* full_case = 32'd1 *)
     casez (words[19:16])
       4'h0:
-          \$169  = 8'h00;
+          \$163  = 8'h00;
       4'h1:
-          \$169  = 8'h02;
+          \$163  = 8'h02;
       4'h2:
-          \$169  = 8'h06;
+          \$163  = 8'h06;
       4'h3:
-          \$169  = 8'h08;
+          \$163  = 8'h08;
       4'h4:
-          \$169  = 8'h06;
+          \$163  = 8'h06;
       4'h5:
-          \$169  = 8'h08;
+          \$163  = 8'h08;
       4'h6:
-          \$169  = 8'h0c;
+          \$163  = 8'h0c;
       4'h7:
-          \$169  = 8'h0e;
+          \$163  = 8'h0e;
       4'h8:
-          \$169  = 8'h10;
+          \$163  = 8'h10;
       4'h9:
-          \$169  = 8'h12;
+          \$163  = 8'h12;
       4'ha:
-          \$169  = 8'h16;
+          \$163  = 8'h16;
       4'hb:
-          \$169  = 8'h18;
+          \$163  = 8'h18;
       4'hc:
-          \$169  = 8'h00;
+          \$163  = 8'h00;
       4'hd:
-          \$169  = 8'h02;
+          \$163  = 8'h02;
       4'he:
-          \$169  = 8'h06;
+          \$163  = 8'h06;
       4'hf:
-          \$169  = 8'h08;
+          \$163  = 8'h08;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
     (* full_case = 32'd1 *)
-    if (\$21 ) begin
+    if (\$20 ) begin
       frame_status = 4'h3;
-    end else if (\$22 ) begin
+    end else if (\$21 ) begin
       frame_status = 4'h1;
-    end else if (\$25 ) begin
+    end else if (\$24 ) begin
       frame_status = 4'h2;
-    end else if (\$30 ) begin
+    end else if (\$29 ) begin
       frame_status = 4'h4;
-    end else if (\$37 ) begin
+    end else if (\$36 ) begin
       frame_status = 4'h5;
     end else begin
       frame_status = 4'h0;
@@ -1223,7 +1202,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     timer_clear = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
-          if (\$39 ) begin
+          if (\$37 ) begin
             timer_clear = 1'h1;
           end
       3'h1:
@@ -1231,7 +1210,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
       3'h2:
           timer_clear = 1'h1;
       3'h3:
-          if (\$51 ) begin
+          if (\$47 ) begin
             timer_clear = 1'h1;
           end
       3'h4:
@@ -1259,12 +1238,12 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
       3'h1:
           /* empty */;
       3'h2:
-          if (\$41 ) begin
+          if (\$39 ) begin
             report = 1'h1;
           end else if (abort_cycle) begin
             report = 1'h1;
           end else if (\slo$63 ) begin
-          end else if (\$42 ) begin
+          end else if (\$40 ) begin
             report = 1'h1;
           end
       3'h3:
@@ -1272,13 +1251,13 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
             report = 1'h1;
           end else if (\done$82 ) begin
             report = 1'h1;
-          end else if (\$52 ) begin
+          end else if (\$48 ) begin
             report = 1'h1;
-          end else if (\$57 ) begin
+          end else if (\$53 ) begin
+            report = 1'h1;
+          end else if (\$56 ) begin
             report = 1'h1;
           end else if (\$60 ) begin
-            report = 1'h1;
-          end else if (\$64 ) begin
             report = 1'h1;
           end
     endcase
@@ -1292,12 +1271,12 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
       3'h1:
           /* empty */;
       3'h2:
-          if (\$41 ) begin
+          if (\$39 ) begin
             report_status = 4'hb;
           end else if (abort_cycle) begin
             report_status = 4'ha;
           end else if (\slo$63 ) begin
-          end else if (\$42 ) begin
+          end else if (\$40 ) begin
             report_status = 4'h9;
           end
       3'h3:
@@ -1305,13 +1284,13 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
             report_status = 4'ha;
           end else if (\done$82 ) begin
             report_status = frame_status;
-          end else if (\$52 ) begin
+          end else if (\$48 ) begin
             report_status = 4'h8;
-          end else if (\$57 ) begin
+          end else if (\$53 ) begin
             report_status = 4'h6;
-          end else if (\$60 ) begin
+          end else if (\$56 ) begin
             report_status = 4'h8;
-          end else if (\$64 ) begin
+          end else if (\$60 ) begin
             report_status = 4'h7;
           end
     endcase
@@ -1325,7 +1304,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
       3'h1:
           /* empty */;
       3'h2:
-          if (\$41 ) begin
+          if (\$39 ) begin
             fault_bad_config = 1'h1;
           end
     endcase
@@ -1339,7 +1318,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
       3'h1:
           /* empty */;
       3'h2:
-          if (\$41 ) begin
+          if (\$39 ) begin
           end else if (abort_cycle) begin
             fault_aborted = 1'h1;
           end
@@ -1358,10 +1337,10 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
       3'h1:
           /* empty */;
       3'h2:
-          if (\$41 ) begin
+          if (\$39 ) begin
           end else if (abort_cycle) begin
           end else if (\slo$63 ) begin
-          end else if (\$42 ) begin
+          end else if (\$40 ) begin
             fault_slo_stuck_low = 1'h1;
           end
     endcase
@@ -1377,9 +1356,9 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
       3'h2:
           /* empty */;
       3'h3:
-          run = \$45 ;
+          run = \$43 ;
       3'h4:
-          run = \$67 ;
+          run = \$63 ;
     endcase
   end
   always @* begin
@@ -1427,9 +1406,9 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
           if (abort_cycle) begin
           end else if (\done$82 ) begin
             report_delay = 1'h1;
-          end else if (\$52 ) begin
-          end else if (\$57 ) begin
-          end else if (\$60 ) begin
+          end else if (\$48 ) begin
+          end else if (\$53 ) begin
+          end else if (\$56 ) begin
             report_delay = 1'h1;
           end
     endcase
@@ -1447,10 +1426,10 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
       3'h3:
           if (abort_cycle) begin
           end else if (\done$82 ) begin
-          end else if (\$52 ) begin
+          end else if (\$48 ) begin
             fault_delay_range = 1'h1;
-          end else if (\$57 ) begin
-          end else if (\$60 ) begin
+          end else if (\$53 ) begin
+          end else if (\$56 ) begin
             fault_delay_range = 1'h1;
           end
     endcase
@@ -1468,8 +1447,8 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
       3'h3:
           if (abort_cycle) begin
           end else if (\done$82 ) begin
-          end else if (\$52 ) begin
-          end else if (\$57 ) begin
+          end else if (\$48 ) begin
+          end else if (\$53 ) begin
             fault_no_ack = 1'h1;
           end
     endcase
@@ -1487,344 +1466,476 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
       3'h3:
           if (abort_cycle) begin
           end else if (\done$82 ) begin
-          end else if (\$52 ) begin
-          end else if (\$57 ) begin
+          end else if (\$48 ) begin
+          end else if (\$53 ) begin
+          end else if (\$56 ) begin
           end else if (\$60 ) begin
-          end else if (\$64 ) begin
             fault_no_start = 1'h1;
           end
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$237  = \$121 ;
+    \$224  = \$117 ;
+    if (rst) begin
+      \$224  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    \$225  = cfg;
+    if (idle) begin
+      \$225  = live;
+    end
+    if (rst) begin
+      \$225  = 154'h000000000000000000000000000000000000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    \$226  = ack_limit;
+    if (idle) begin
+      \$226  = \$119 ;
+    end
+    if (rst) begin
+      \$226  = 24'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    \$227  = timeout_limit;
+    if (idle) begin
+      \$227  = \$121 ;
+    end
+    if (rst) begin
+      \$227  = 24'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    \$228  = delay_limit;
+    if (idle) begin
+      \$228  = \$123 ;
+    end
+    if (rst) begin
+      \$228  = 12'h000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    \$229  = \$124 ;
+    if (rst) begin
+      \$229  = 25'h0000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    \$230  = \$125 [31:0];
+    if (rst) begin
+      \$230  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    \$231  = first_rise_time;
+    if (first_rise) begin
+      \$231  = now;
+    end
+    if (rst) begin
+      \$231  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    \$232  = slo_low_time_p1;
+    if (\$126 ) begin
+      \$232  = 25'h0000001;
+    end else if (\$127 ) begin
+      \$232  = \$128 [24:0];
+    end
+    if (rst) begin
+      \$232  = 25'h0000001;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    \$233  = \$133 ;
+    if (rst) begin
+      \$233  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    \$234  = \$141 ;
+    if (rst) begin
+      \$234  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    \$235  = idle;
+    if (rst) begin
+      \$235  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    \$236  = \$145 [24:0];
+    if (rst) begin
+      \$236  = 25'h0000001;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    \$237  = \$151 ;
     if (rst) begin
       \$237  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$238  = cfg;
-    if (idle) begin
-      \$238  = live;
+    (* full_case = 32'd1 *)
+    if (\$157 ) begin
+      \$238  = 24'h000001;
+    end else begin
+      \$238  = \$158 [23:0];
     end
     if (rst) begin
-      \$238  = 154'h000000000000000000000000000000000000000;
+      \$238  = 24'h000001;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$239  = ack_limit;
-    if (idle) begin
-      \$239  = \$123 ;
+    (* full_case = 32'd1 *)
+    if (\$157 ) begin
+      \$239  = 1'h1;
+    end else begin
+      \$239  = 1'h0;
     end
     if (rst) begin
-      \$239  = 24'h000000;
+      \$239  = 1'h1;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$240  = timeout_limit;
-    if (idle) begin
-      \$240  = \$125 ;
-    end
+    \$240  = \$160 [7:0];
     if (rst) begin
-      \$240  = 24'h000000;
+      \$240  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$241  = delay_limit;
-    if (idle) begin
-      \$241  = \$127 ;
-    end
+    \$241  = \$162 ;
     if (rst) begin
-      \$241  = 12'h000;
+      \$241  = 9'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$242  = \$128 ;
+    \$242  = \$164 [7:0];
     if (rst) begin
-      \$242  = 25'h0000000;
+      \$242  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$243  = \$129 [31:0];
+    \$243  = \$165 ;
     if (rst) begin
-      \$243  = 32'd0;
+      \$243  = 17'h00000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$244  = first_rise_time;
-    if (\$131 ) begin
-      \$244  = now;
-    end
+    \$244  = \started$122 ;
     if (rst) begin
-      \$244  = 32'd0;
+      \$244  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$245  = slo_low_time_p1;
-    if (\$132 ) begin
-      \$245  = 25'h0000001;
-    end else if (\$133 ) begin
-      \$245  = \$134 [24:0];
-    end
+    \$245  = \$172 ;
     if (rst) begin
-      \$245  = 25'h0000001;
+      \$245  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$246  = \$139 ;
+    \$246  = \$179 ;
     if (rst) begin
       \$246  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$247  = \$147 ;
+    \$247  = \$180 ;
     if (rst) begin
       \$247  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$248  = idle;
+    \$248  = cycle_fsm_state;
+    casez (cycle_fsm_state)
+      3'h0:
+          if (\$181 ) begin
+          end else if (break_over) begin
+            \$248  = 3'h1;
+          end
+      3'h1:
+          if (abort_cycle) begin
+            \$248  = 3'h0;
+          end else if (\$190 ) begin
+            \$248  = 3'h2;
+          end
+      3'h2:
+          if (\$192 ) begin
+            \$248  = 3'h1;
+            if (abort_cycle) begin
+              \$248  = 3'h0;
+            end
+          end else if (abort_cycle) begin
+            \$248  = 3'h0;
+          end else if (\slo$63 ) begin
+            \$248  = 3'h3;
+          end else if (\$193 ) begin
+            \$248  = 3'h0;
+          end
+      3'h3:
+          if (abort_cycle) begin
+            \$248  = 3'h0;
+          end else if (\done$82 ) begin
+            \$248  = 3'h4;
+          end else if (\$196 ) begin
+            \$248  = 3'h0;
+          end else if (\$201 ) begin
+            \$248  = 3'h0;
+          end else if (\$204 ) begin
+            \$248  = 3'h0;
+          end else if (\$208 ) begin
+            \$248  = 3'h0;
+          end
+      3'h4:
+          if (abort_cycle) begin
+            \$248  = 3'h0;
+          end else if (stopped) begin
+            \$248  = 3'h5;
+          end
+      3'h5:
+          if (\$209 ) begin
+            \$248  = 3'h1;
+          end
+    endcase
     if (rst) begin
-      \$248  = 1'h0;
+      \$248  = 3'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$249  = \$151 [24:0];
+    \$249  = armed;
+    casez (cycle_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          \$249  = 1'h0;
+      3'h3:
+          if (arm) begin
+            \$249  = 1'h1;
+          end
+    endcase
     if (rst) begin
-      \$249  = 25'h0000001;
+      \$249  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$250  = \$157 ;
+    \$250  = locked_seen;
+    casez (cycle_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          \$250  = 1'h0;
+      3'h3:
+          if (\$195 ) begin
+            \$250  = 1'h1;
+          end
+    endcase
     if (rst) begin
       \$250  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    (* full_case = 32'd1 *)
-    if (\$163 ) begin
-      \$251  = 24'h000001;
-    end else begin
-      \$251  = \$164 [23:0];
-    end
+    \$251  = report;
     if (rst) begin
-      \$251  = 24'h000001;
+      \$251  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$252  = \$166 [7:0];
+    \$252  = \$211 ;
     if (rst) begin
-      \$252  = 8'h00;
+      \$252  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$253  = \$168 ;
+    \$253  = status;
+    if (report) begin
+      \$253  = report_status;
+    end
     if (rst) begin
-      \$253  = 9'h000;
+      \$253  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$254  = \$170 [7:0];
+    \$254  = line_delay;
+    if (report_delay) begin
+      \$254  = delay;
+    end
     if (rst) begin
-      \$254  = 8'h00;
+      \$254  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$255  = \$171 ;
+    \$255  = timestamp;
+    if (report_frame) begin
+      \$255  = first_rise_time;
+    end
     if (rst) begin
-      \$255  = 17'h00000;
+      \$255  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$256  = \started$122 ;
+    \$256  = cds;
+    if (report_frame) begin
+      \$256  = \cds$183 ;
+    end
     if (rst) begin
       \$256  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$257  = \$180 ;
+    \$257  = lc;
+    if (report_frame) begin
+      \$257  = \lc$75 ;
+    end
     if (rst) begin
-      \$257  = 1'h0;
+      \$257  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$258  = \$189 ;
+    \$258  = lc_repeat;
+    if (report_frame) begin
+      \$258  = \$212 ;
+    end
     if (rst) begin
       \$258  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$259  = \$190 ;
+    \$259  = lc_skip;
+    if (report_frame) begin
+      \$259  = \$213 ;
+    end
     if (rst) begin
       \$259  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$260  = cycle_fsm_state;
-    casez (cycle_fsm_state)
-      3'h0:
-          if (\$191 ) begin
-          end else if (break_over) begin
-            \$260  = 3'h1;
-          end
-      3'h1:
-          if (abort_cycle) begin
-            \$260  = 3'h0;
-          end else if (\$201 ) begin
-            \$260  = 3'h2;
-          end
-      3'h2:
-          if (\$203 ) begin
-            \$260  = 3'h1;
-            if (abort_cycle) begin
-              \$260  = 3'h0;
-            end
-          end else if (abort_cycle) begin
-            \$260  = 3'h0;
-          end else if (\slo$63 ) begin
-            \$260  = 3'h3;
-          end else if (\$204 ) begin
-            \$260  = 3'h0;
-          end
-      3'h3:
-          if (abort_cycle) begin
-            \$260  = 3'h0;
-          end else if (\done$82 ) begin
-            \$260  = 3'h4;
-          end else if (\$209 ) begin
-            \$260  = 3'h0;
-          end else if (\$214 ) begin
-            \$260  = 3'h0;
-          end else if (\$217 ) begin
-            \$260  = 3'h0;
-          end else if (\$221 ) begin
-            \$260  = 3'h0;
-          end
-      3'h4:
-          if (abort_cycle) begin
-            \$260  = 3'h0;
-          end else if (stopped) begin
-            \$260  = 3'h5;
-          end
-      3'h5:
-          if (\$222 ) begin
-            \$260  = 3'h1;
-          end
-    endcase
+    \$260  = lc_zero;
+    if (report_frame) begin
+      \$260  = \$214 ;
+    end
     if (rst) begin
-      \$260  = 3'h0;
+      \$260  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$261  = armed;
-    casez (cycle_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          \$261  = 1'h0;
-      3'h3:
-          if (\$206 ) begin
-            \$261  = 1'h1;
-          end
-    endcase
+    \$261  = word0_position;
+    if (report_frame) begin
+      \$261  = data0;
+    end
     if (rst) begin
-      \$261  = 1'h0;
+      \$261  = 55'h00000000000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$262  = locked_seen;
-    casez (cycle_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          \$262  = 1'h0;
-      3'h3:
-          if (\$208 ) begin
-            \$262  = 1'h1;
-          end
-    endcase
+    \$262  = word0_ne;
+    if (report_frame) begin
+      \$262  = ne[0];
+    end
     if (rst) begin
       \$262  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$263  = report;
+    \$263  = word0_nw;
+    if (report_frame) begin
+      \$263  = nw[0];
+    end
     if (rst) begin
       \$263  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$264  = \$224 ;
+    \$264  = word0_crc_ok;
+    if (report_frame) begin
+      \$264  = crc_ok[0];
+    end
     if (rst) begin
       \$264  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$265  = status;
-    if (report) begin
-      \$265  = report_status;
-    end
-    if (rst) begin
-      \$265  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$266  = line_delay;
-    if (report_delay) begin
-      \$266  = delay;
-    end
-    if (rst) begin
-      \$266  = 13'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$267  = timestamp;
+    \$265  = word1_position;
     if (report_frame) begin
-      \$267  = first_rise_time;
+      \$265  = spw;
     end
     if (rst) begin
-      \$267  = 32'd0;
+      \$265  = 40'h0000000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$268  = cds;
+    \$266  = word1_ne;
     if (report_frame) begin
-      \$268  = \cds$181 ;
+      \$266  = ne[1];
+    end
+    if (rst) begin
+      \$266  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    \$267  = word1_nw;
+    if (report_frame) begin
+      \$267  = nw[1];
+    end
+    if (rst) begin
+      \$267  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    \$268  = word1_crc_ok;
+    if (report_frame) begin
+      \$268  = \$216 ;
     end
     if (rst) begin
       \$268  = 1'h0;
@@ -1832,132 +1943,12 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$269  = lc;
+    \$269  = spw_mismatch;
     if (report_frame) begin
-      \$269  = \lc$75 ;
+      \$269  = \$223 ;
     end
     if (rst) begin
-      \$269  = 6'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$270  = lc_repeat;
-    if (report_frame) begin
-      \$270  = \$225 ;
-    end
-    if (rst) begin
-      \$270  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$271  = lc_skip;
-    if (report_frame) begin
-      \$271  = \$226 ;
-    end
-    if (rst) begin
-      \$271  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$272  = lc_zero;
-    if (report_frame) begin
-      \$272  = \$227 ;
-    end
-    if (rst) begin
-      \$272  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$273  = word0_position;
-    if (report_frame) begin
-      \$273  = data0;
-    end
-    if (rst) begin
-      \$273  = 55'h00000000000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$274  = word0_ne;
-    if (report_frame) begin
-      \$274  = ne[0];
-    end
-    if (rst) begin
-      \$274  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$275  = word0_nw;
-    if (report_frame) begin
-      \$275  = nw[0];
-    end
-    if (rst) begin
-      \$275  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$276  = word0_crc_ok;
-    if (report_frame) begin
-      \$276  = crc_ok[0];
-    end
-    if (rst) begin
-      \$276  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$277  = word1_position;
-    if (report_frame) begin
-      \$277  = spw;
-    end
-    if (rst) begin
-      \$277  = 40'h0000000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$278  = word1_ne;
-    if (report_frame) begin
-      \$278  = ne[1];
-    end
-    if (rst) begin
-      \$278  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$279  = word1_nw;
-    if (report_frame) begin
-      \$279  = nw[1];
-    end
-    if (rst) begin
-      \$279  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$280  = word1_crc_ok;
-    if (report_frame) begin
-      \$280  = \$229 ;
-    end
-    if (rst) begin
-      \$280  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$281  = spw_mismatch;
-    if (report_frame) begin
-      \$281  = \$236 ;
-    end
-    if (rst) begin
-      \$281  = 1'h0;
+      \$269  = 1'h0;
     end
   end
   assign half_period = cfg[15:0];
@@ -1975,6 +1966,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign data1 = spw;
   assign bits = cfg[140:135];
   assign tolerance = cfg[153:146];
+  assign second_rise = arm;
   assign \resync$131  = resync;
   assign clear = clear_counters;
   assign count = count_crc_word0;
@@ -2078,7 +2070,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_aborted$202 (clk, rst, inc, count, clear);
+module \biss_master.count_aborted$204 (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$10  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -2132,7 +2124,7 @@ module \biss_master.count_aborted$202 (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_crc_word0$191 (clk, rst, inc, count, clear);
+module \biss_master.count_crc_word0$193 (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$11  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -2186,7 +2178,7 @@ module \biss_master.count_crc_word0$191 (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_crc_word1$192 (clk, rst, inc, count, clear);
+module \biss_master.count_crc_word1$194 (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$12  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -2240,7 +2232,7 @@ module \biss_master.count_crc_word1$192 (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_delay_range$195 (clk, rst, inc, count, clear);
+module \biss_master.count_delay_range$197 (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$13  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -2294,7 +2286,7 @@ module \biss_master.count_delay_range$195 (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_lc_repeat$197 (clk, rst, inc, count, clear);
+module \biss_master.count_lc_repeat$199 (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$14  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -2348,7 +2340,7 @@ module \biss_master.count_lc_repeat$197 (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_lc_skip$198 (clk, rst, inc, count, clear);
+module \biss_master.count_lc_skip$200 (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$15  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -2402,7 +2394,7 @@ module \biss_master.count_lc_skip$198 (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_lc_zero$199 (clk, rst, inc, count, clear);
+module \biss_master.count_lc_zero$201 (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$16  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -2456,7 +2448,7 @@ module \biss_master.count_lc_zero$199 (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_no_ack$193 (clk, rst, inc, count, clear);
+module \biss_master.count_no_ack$195 (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$17  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -2510,7 +2502,7 @@ module \biss_master.count_no_ack$193 (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_no_start$194 (clk, rst, inc, count, clear);
+module \biss_master.count_no_start$196 (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$18  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -2564,7 +2556,7 @@ module \biss_master.count_no_start$194 (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_overrun$201 (clk, rst, inc, count, clear);
+module \biss_master.count_overrun$203 (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$19  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -2618,7 +2610,7 @@ module \biss_master.count_overrun$201 (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_slo_stuck_low$196 (clk, rst, inc, count, clear);
+module \biss_master.count_slo_stuck_low$198 (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$20  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -2672,7 +2664,7 @@ module \biss_master.count_slo_stuck_low$196 (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_spw_mismatch$200 (clk, rst, inc, count, clear);
+module \biss_master.count_spw_mismatch$202 (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$21  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -4112,33 +4104,39 @@ module \biss_master.decoder.crc1 (rst, start, valid, kind, receiver_clear, ok, \
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.ma_clock (rst, run, half_period, rise, ma, rises, busy, clk);
+module \biss_master.ma_clock (rst, run, half_period, first_rise, second_rise, ma, rises, busy, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$25  = 0;
   wire [16:0] \$1 ;
-  wire \$10 ;
+  wire [16:0] \$10 ;
   wire [16:0] \$11 ;
   wire \$12 ;
-  wire \$13 ;
+  wire [16:0] \$13 ;
   wire \$14 ;
   wire \$15 ;
-  reg \$16 ;
-  reg \$17 ;
-  reg [15:0] \$18 ;
+  wire \$16 ;
+  wire \$17 ;
+  reg \$18 ;
   reg \$19 ;
   wire \$2 ;
-  reg [15:0] \$20 ;
-  reg [1:0] \$21 ;
+  reg \$20 ;
+  reg \$21 ;
+  reg [15:0] \$22 ;
+  reg \$23 ;
+  reg [15:0] \$24 ;
+  reg [1:0] \$25 ;
   wire [16:0] \$3 ;
   wire \$4 ;
-  wire [16:0] \$5 ;
+  wire \$5 ;
   wire \$6 ;
-  wire \$7 ;
-  wire [16:0] \$8 ;
-  wire [16:0] \$9 ;
+  wire [16:0] \$7 ;
+  wire \$8 ;
+  wire \$9 ;
   output busy;
   reg busy;
   input clk;
   wire clk;
+  output first_rise;
+  reg first_rise = 1'h0;
   input [15:0] half_period;
   wire [15:0] half_period;
   reg last_clock = 1'h1;
@@ -4146,7 +4144,6 @@ module \biss_master.ma_clock (rst, run, half_period, rise, ma, rises, busy, clk)
   reg ma = 1'h1;
   reg [1:0] ma_fsm_state = 2'h0;
   reg [15:0] phase_left = 16'h0000;
-  output rise;
   reg rise = 1'h0;
   output [15:0] rises;
   reg [15:0] rises = 16'h0000;
@@ -4154,172 +4151,210 @@ module \biss_master.ma_clock (rst, run, half_period, rise, ma, rises, busy, clk)
   wire rst;
   input run;
   wire run;
+  output second_rise;
+  reg second_rise = 1'h0;
   assign \$1  = half_period - 1'h1;
   assign \$2  = half_period == 1'h1;
   assign \$3  = phase_left - 1'h1;
   assign \$4  = phase_left == 1'h1;
-  assign \$5  = half_period - 1'h1;
-  assign \$6  = half_period == 1'h1;
-  assign \$7  = rises != 16'hffff;
-  assign \$8  = rises + 1'h1;
-  assign \$9  = phase_left - 1'h1;
-  assign \$10  = phase_left == 1'h1;
-  assign \$11  = half_period - 1'h1;
-  assign \$12  = half_period == 1'h1;
-  assign \$13  = ! ma_fsm_state;
-  assign \$14  = ma_fsm_state == 1'h1;
-  assign \$15  = ma_fsm_state == 2'h2;
+  assign \$5  = ! rises;
+  assign \$6  = rises == 1'h1;
+  assign \$7  = half_period - 1'h1;
+  assign \$8  = half_period == 1'h1;
+  assign \$9  = rises != 16'hffff;
+  assign \$10  = rises + 1'h1;
+  assign \$11  = phase_left - 1'h1;
+  assign \$12  = phase_left == 1'h1;
+  assign \$13  = half_period - 1'h1;
+  assign \$14  = half_period == 1'h1;
+  assign \$15  = ! ma_fsm_state;
+  assign \$16  = ma_fsm_state == 1'h1;
+  assign \$17  = ma_fsm_state == 2'h2;
   always @(posedge clk)
-    rise <= \$16 ;
+    rise <= \$18 ;
   always @(posedge clk)
-    ma <= \$17 ;
+    first_rise <= \$19 ;
   always @(posedge clk)
-    phase_left <= \$18 ;
+    second_rise <= \$20 ;
   always @(posedge clk)
-    last_clock <= \$19 ;
+    ma <= \$21 ;
   always @(posedge clk)
-    rises <= \$20 ;
+    phase_left <= \$22 ;
   always @(posedge clk)
-    ma_fsm_state <= \$21 ;
+    last_clock <= \$23 ;
+  always @(posedge clk)
+    rises <= \$24 ;
+  always @(posedge clk)
+    ma_fsm_state <= \$25 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$25 ) begin end
-    \$16  = 1'h0;
+    \$18  = 1'h0;
     casez (ma_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
           if (last_clock) begin
-            \$16  = 1'h1;
+            \$18  = 1'h1;
           end
     endcase
     if (rst) begin
-      \$16  = 1'h0;
+      \$18  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$25 ) begin end
-    \$17  = ma;
+    \$19  = 1'h0;
+    casez (ma_fsm_state)
+      2'h0:
+          /* empty */;
+      2'h1:
+          if (last_clock) begin
+            \$19  = \$5 ;
+          end
+    endcase
+    if (rst) begin
+      \$19  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$25 ) begin end
+    \$20  = 1'h0;
+    casez (ma_fsm_state)
+      2'h0:
+          /* empty */;
+      2'h1:
+          if (last_clock) begin
+            \$20  = \$6 ;
+          end
+    endcase
+    if (rst) begin
+      \$20  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$25 ) begin end
+    \$21  = ma;
     casez (ma_fsm_state)
       2'h0:
           if (run) begin
-            \$17  = 1'h0;
+            \$21  = 1'h0;
           end
       2'h1:
           if (last_clock) begin
-            \$17  = 1'h1;
+            \$21  = 1'h1;
           end
       2'h2:
           if (last_clock) begin
             if (run) begin
-              \$17  = 1'h0;
+              \$21  = 1'h0;
             end
           end
     endcase
     if (rst) begin
-      \$17  = 1'h1;
+      \$21  = 1'h1;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$25 ) begin end
-    \$18  = phase_left;
+    \$22  = phase_left;
     casez (ma_fsm_state)
       2'h0:
           if (run) begin
-            \$18  = \$1 [15:0];
+            \$22  = \$1 [15:0];
           end
       2'h1:
         begin
-          \$18  = \$3 [15:0];
+          \$22  = \$3 [15:0];
           if (last_clock) begin
-            \$18  = \$5 [15:0];
+            \$22  = \$7 [15:0];
           end
         end
       2'h2:
         begin
-          \$18  = \$9 [15:0];
+          \$22  = \$11 [15:0];
           if (last_clock) begin
             if (run) begin
-              \$18  = \$11 [15:0];
+              \$22  = \$13 [15:0];
             end
           end
         end
     endcase
     if (rst) begin
-      \$18  = 16'h0000;
+      \$22  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$25 ) begin end
-    \$19  = last_clock;
+    \$23  = last_clock;
     casez (ma_fsm_state)
       2'h0:
           if (run) begin
-            \$19  = \$2 ;
+            \$23  = \$2 ;
           end
       2'h1:
         begin
-          \$19  = \$4 ;
+          \$23  = \$4 ;
           if (last_clock) begin
-            \$19  = \$6 ;
+            \$23  = \$8 ;
           end
         end
       2'h2:
         begin
-          \$19  = \$10 ;
+          \$23  = \$12 ;
           if (last_clock) begin
             if (run) begin
-              \$19  = \$12 ;
+              \$23  = \$14 ;
             end
           end
         end
     endcase
     if (rst) begin
-      \$19  = 1'h1;
+      \$23  = 1'h1;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$25 ) begin end
-    \$20  = rises;
+    \$24  = rises;
     casez (ma_fsm_state)
       2'h0:
           if (run) begin
-            \$20  = 16'h0000;
+            \$24  = 16'h0000;
           end
       2'h1:
           if (last_clock) begin
-            if (\$7 ) begin
-              \$20  = \$8 [15:0];
+            if (\$9 ) begin
+              \$24  = \$10 [15:0];
             end
           end
     endcase
     if (rst) begin
-      \$20  = 16'h0000;
+      \$24  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$25 ) begin end
-    \$21  = ma_fsm_state;
+    \$25  = ma_fsm_state;
     casez (ma_fsm_state)
       2'h0:
           if (run) begin
-            \$21  = 2'h1;
+            \$25  = 2'h1;
           end
       2'h1:
           if (last_clock) begin
-            \$21  = 2'h2;
+            \$25  = 2'h2;
           end
       2'h2:
           if (last_clock) begin
             (* full_case = 32'd1 *)
             if (run) begin
-              \$21  = 2'h1;
+              \$25  = 2'h1;
             end else begin
-              \$21  = 2'h0;
+              \$25  = 2'h0;
             end
           end
     endcase
     if (rst) begin
-      \$21  = 2'h0;
+      \$25  = 2'h0;
     end
   end
   always @* begin
@@ -4337,7 +4372,7 @@ module \biss_master.ma_clock (rst, run, half_period, rise, ma, rises, busy, clk)
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.sampler (rst, arm, receiver_clear, half_period, early, locked, delay, sample, slo, clk);
+module \biss_master.sampler (rst, receiver_clear, half_period, arm, early, locked, delay, sample, slo, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$26  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -4642,7 +4677,7 @@ module \biss_master.sampler (rst, arm, receiver_clear, half_period, early, locke
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.sign_of_life (rst, check, load, \repeat , skip, resync, lc, is_zero, \port$1146$0 , clk);
+module \biss_master.sign_of_life (rst, check, load, \repeat , skip, resync, lc, is_zero, \port$1140$0 , clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$27  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -4680,8 +4715,8 @@ module \biss_master.sign_of_life (rst, check, load, \repeat , skip, resync, lc, 
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$1146$0 ;
-  wire \port$1146$0 ;
+  input \port$1140$0 ;
+  wire \port$1140$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -4693,9 +4728,9 @@ module \biss_master.sign_of_life (rst, check, load, \repeat , skip, resync, lc, 
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$1146$0  };
-  assign \$2  = { lc[4:0], \port$1146$0  } == last;
-  assign \$3  = { lc[4:0], \port$1146$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$1140$0  };
+  assign \$2  = { lc[4:0], \port$1140$0  } == last;
+  assign \$3  = { lc[4:0], \port$1140$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = lc == 6'h3f;
@@ -4785,7 +4820,7 @@ module \biss_master.sign_of_life (rst, check, load, \repeat , skip, resync, lc, 
       \$21  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$1146$0  };
+  assign lc_next = { lc[4:0], \port$1140$0  };
   assign zero = is_zero;
 endmodule
 
