@@ -42,8 +42,8 @@ class FrameDecoder(wiring.Component):
     ends the frame: the encoder's timeout has begun, so the master may look for SLO high again.
 
     Each word feeds its own CRC checker, so the CPW CRC-6 and SPW CRC-16 run concurrently.
-    ``crc_ok`` comes from the checkers' flip-flops (one mux on the CRC kind): valid in the clock after the
-    word's last bit was sampled, and held until the next frame.
+    ``crc_ok`` comes from the checkers' flip-flops (one mux on the CRC kind): valid in the
+    clock after the word's last bit was sampled, and held until the next frame.
 
     The master holds it in reset between cycles (``ResetInserter``), which also clears the
     data registers, so data fields are right-justified.
