@@ -27,6 +27,7 @@ from bissmaster.ma_clock import MaClock
 from bissmaster.master import BissMaster
 from bissmaster.params import Crc, Status
 from bissmaster.slo_sampler import SloSampler
+from bissmaster.word_crc import ALGORITHMS
 
 from .flow import Internals
 
@@ -206,7 +207,8 @@ class MasterMaHarness(Harness):
         if self.hp_max is not None:
             m.d.comb += Assume(dut.cfg_ma_half_period <= self.hp_max)
 
-        accept = ~dut.busy & dut.start & ~dut.abort_cycle & ~dut.config_error
+        # IDLE takes every request; an invalid configuration is refused in WAIT_READY.
+        accept = ~dut.busy & dut.start & ~dut.abort_cycle
         hp_cycle = Signal(16)
         with m.If(accept):
             m.d.sync += hp_cycle.eq(dut.cfg_ma_half_period)
@@ -220,13 +222,21 @@ class MasterMaHarness(Harness):
             in_cycle = 0
             for state in ("WAIT_READY", "CLOCK", "TAIL", "END"):
                 in_cycle = in_cycle | inside.in_state("", "cycle_fsm", state)
+            clocking = 0
+            for state in ("CLOCK", "TAIL", "END"):
+                clocking = clocking | inside.in_state("", "cycle_fsm", state)
+            waiting = inside.in_state("", "cycle_fsm", "WAIT_READY")
+            first = inside.signal("", "latched")        # WAIT_READY's first clock
+            cfg_ok = inside.signal("", "cfg_ok")        # registered configuration check
+            hp_ok = hp_cycle >= protocol.MA_HALF_PERIOD_MIN
             m.d.comb += [
                 Assert(dut.busy | ~clock_busy, "lemma: MaClock idle while the master is idle"),
                 # (The master may copy the settings in every idle clock: only a cycle's matter.)
                 Assert(~(clock_busy | in_cycle) | (hp_dut == hp_cycle),
                        "lemma: MaClock's half period is the latched one"),
-                # Only a valid configuration (half period >= 2) is ever latched and clocked.
-                Assert(~(clock_busy | in_cycle) | (hp_cycle >= protocol.MA_HALF_PERIOD_MIN),
+                # Only a valid configuration (half period >= 2) is ever clocked: WAIT_READY
+                # refuses an invalid one in its first clock, from the registered check.
+                Assert(~(clock_busy | clocking | waiting & (~first | cfg_ok)) | hp_ok,
                        "lemma: a cycle's half period is at least 2"),
             ]
 
@@ -496,6 +506,14 @@ class SamplerHarness(Harness):
 CRC_SPEC = {Crc.CRC6: (6, 0x03), Crc.CRC16: (16, 0x90D9)}
 
 
+def _crc_state(inside, path, kind):
+    """A WordCrc's shift register, its registered residue match, and the residue (a lemma
+    input only: the properties compare with the harness's own CRC model)."""
+    name = kind.name.lower()
+    residue = ALGORITHMS[kind](data_width=1).residue()
+    return inside.signal(path, f"{name}_reg"), inside.signal(path, f"{name}_match"), residue
+
+
 def _lfsr_step(reg, bit, width, poly):
     """One bit into a Galois CRC register, MSB first: shift left, and if the bit that falls
     out differs from the data bit, add the polynomial."""
@@ -647,8 +665,12 @@ class _FrameParser:
                     Assert((phase != self.WORD) | (word < count), "lemma: word in the frame"),
                 ]
                 if rtl is not None:
-                    for k, reg in rtl[w].items():
-                        m.d.comb += Assert(reg == shadow[k], f"lemma: word {w} {k.name} register")
+                    for k, (reg, matched, residue) in rtl[w].items():
+                        m.d.comb += [
+                            Assert(reg == shadow[k], f"lemma: word {w} {k.name} register"),
+                            Assert(matched == (reg == residue),
+                                   f"lemma: word {w} {k.name} registered residue match"),
+                        ]
 
         length = self.length[0] if words == 1 else Mux(word, self.length[1], self.length[0])
         m.d.sync += done_strobe.eq(0)
@@ -721,7 +743,7 @@ class DecoderCrcHarness(Harness):
 
         rtl = None
         if self.lemmas:
-            rtl = [{k: inside.signal(f"crc{w}/{k.name.lower()}", "crc_reg") for k in p.word_crcs[w]}
+            rtl = [{k: _crc_state(inside, f"crc{w}", k) for k in p.word_crcs[w]}
                    for w in range(p.words)]
         parse = _FrameParser(m, sample, bit, cfg, count, lemmas=self.lemmas, rtl=rtl,
                              mutation=self.mutation)
@@ -823,7 +845,7 @@ class MasterCrcHarness(Harness):
         sample = inside.signal("sampler", "sample")     # the master wires these to the decoder
         bit = inside.signal("sampler", "bit")
         clear = inside.signal("", "receiver_clear")
-        rtl = [{k: inside.signal(f"decoder/crc{w}/{k.name.lower()}", "crc_reg")
+        rtl = [{k: _crc_state(inside, f"decoder/crc{w}", k)
                 for k in p.word_crcs[w]} for w in range(p.words)]
         parse = _FrameParser(m, sample, bit, cfg, count, clear=clear, lemmas=self.lemmas,
                              rtl=rtl if self.lemmas else None, mutation=self.mutation)
