@@ -28,14 +28,15 @@ INTERNAL_CLOCK = bool(os.environ.get("BISS_INTERNAL_CLOCK"))
 STATUS = {
     "OK": 0, "CRC_ERROR_WORD0": 1, "CRC_ERROR_WORD1": 2, "CRC_ERROR_BOTH": 3,
     "SIGN_OF_LIFE": 4, "SPW_MISMATCH": 5, "NO_ACK": 6, "NO_START": 7, "DELAY_RANGE": 8,
-    "SLO_STUCK_LOW": 9, "ABORTED": 10, "BAD_CONFIG": 11,
+    "SLO_STUCK_LOW": 9, "ABORTED": 10, "BAD_CONFIG": 11, "NO_STOP": 12,
 }
 CRC_CODE = {frames.CRC_NONE: 0, frames.CRC6: 1, frames.CRC16: 2}
 COUNTERS = ("crc_word0", "crc_word1", "no_ack", "no_start", "delay_range", "slo_stuck_low",
-            "lc_repeat", "lc_skip", "lc_zero", "spw_mismatch", "overrun", "aborted")
+            "lc_repeat", "lc_skip", "lc_zero", "spw_mismatch", "overrun", "aborted",
+            "no_stop")
 
 CFG_PORTS = ["cfg_ma_half_period", "cfg_request_period", "cfg_break_time", "cfg_ack_limit",
-             "cfg_timeout_limit", "cfg_delay_limit", "cfg_w1_enable", "cfg_spw_check",
+             "cfg_timeout_limit", "cfg_delay_limit", "cfg_end_check", "cfg_w1_enable", "cfg_spw_check",
              "cfg_spw_tolerance"] + [f"cfg_w{w}_{f}" for w in range(2)
                                      for f in ("data_bits", "nenw", "lc", "crc")]
 
@@ -143,7 +144,7 @@ class Bench:
         hp = half_period if half_period is not None else half_period_for(ma_hz)
         ports = {
             "cfg_ma_half_period": hp, "cfg_request_period": 0, "cfg_break_time": 0,
-            "cfg_ack_limit": 0, "cfg_timeout_limit": 0, "cfg_delay_limit": 0,
+            "cfg_ack_limit": 0, "cfg_timeout_limit": 0, "cfg_delay_limit": 0, "cfg_end_check": 0,
             "cfg_w1_enable": int(len(fmt.words) == 2),
             "cfg_spw_check": int(len(fmt.words) == 2), "cfg_spw_tolerance": spw_tolerance,
         }

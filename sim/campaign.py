@@ -128,6 +128,10 @@ class Campaign:
         return fmt
 
     @property
+    def end_check(self):
+        return bool(self.cfg.get("cfg_end_check", 0))
+
+    @property
     def fmt(self):
         return self.bench.fmt
 
@@ -232,7 +236,7 @@ class Campaign:
                 inc("spw_mismatch")
         for status, counter in (("NO_ACK", "no_ack"), ("NO_START", "no_start"),
                                 ("DELAY_RANGE", "delay_range"), ("SLO_STUCK_LOW", "slo_stuck_low"),
-                                ("ABORTED", "aborted")):
+                                ("ABORTED", "aborted"), ("NO_STOP", "no_stop")):
             if name == status:
                 inc(counter)
         self.expect(res.counters == c, f"[{self.name}] counters {res.counters} != expected {c}")
@@ -264,6 +268,11 @@ class Campaign:
             wrong = [w for w, word in enumerate(v.parsed["words"])
                      if f[f"word{w}_crc_ok"] and not self._word_matches(f, w, word)]
             if wrong:
+                # With the end check a stuck tail never gets this far (NO_STOP or
+                # SLO_STUCK_LOW instead): any wrong CRC-good word is then a defect.
+                self.expect(not self.end_check,
+                            f"{where}: end check on, yet CRC-good word(s) {wrong} differ from "
+                            f"what was sent: status {name}, fields {f}, sent {sent.bits}")
                 cand = self._explained(f, sent.bits, explain)
                 self.expect(cand is not None,
                             f"{where}: CRC-good word(s) {wrong} differ from what was sent, and "

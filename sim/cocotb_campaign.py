@@ -110,8 +110,8 @@ FRAME_STATUS_NAMES = ["OK", "CRC_ERROR_WORD0", "CRC_ERROR_WORD1", "CRC_ERROR_BOT
 #: received bits can produce): see docs/verification.md for why each is possible.
 LINE_ALLOWED = {
     "slo_stuck_low": FRAME_STATUS_NAMES + ["NO_START", "DELAY_RANGE", "SLO_STUCK_LOW"],
-    "slo_stuck_high": FRAME_STATUS_NAMES + ["NO_ACK"],
-    "glitch": FRAME_STATUS_NAMES + ["NO_ACK", "NO_START", "DELAY_RANGE"],
+    "slo_stuck_high": FRAME_STATUS_NAMES + ["NO_ACK", "NO_STOP"],
+    "glitch": FRAME_STATUS_NAMES + ["NO_ACK", "NO_START", "DELAY_RANGE", "NO_STOP"],
     "jitter": FRAME_STATUS_NAMES,
 }
 
@@ -165,7 +165,8 @@ async def random_setup(c, names=LINE_PRESETS, rates=FAST_RATES, cable_m=None):
     ma_hz = c.rng.choice(rates)
     length = c.rng.choice((0, 10, 50, 100)) if cable_m is None else cable_m
     await c.set_cable(Cable(length_m=length))
-    c.setup(name, ma_hz)
+    # Half the cycles with the end check (docs/ports.md, cfg_end_check).
+    c.setup(name, ma_hz, cfg_end_check=int(c.rng.random() < 0.5))
 
 
 async def do_stuck(c, level):
@@ -179,6 +180,7 @@ async def do_stuck(c, level):
     res, task = await faulted_cycle(c, inject)
     await task                                      # (the cycle may end before the fault)
     outcome = c.judge_faulted(res, kind, LINE_ALLOWED[kind], explain=stuck_tails(level))
+    c.stats[f"{kind}_cycles_{'with' if c.end_check else 'without'}_end_check"] += 1
     c.note(kind, res, c.bench.encoder.cable.round_trip_s(), outcome)
     # While the line stays stuck, every request must fail the same defined way.
     for _ in range(c.rng.randint(0, 2)):
@@ -326,7 +328,10 @@ async def do_encoder_fault(c, kind):
     """The encoder misbehaves: no answer, an Ack that never ends, a timeout that never ends."""
     c.queue(fault=kind, processing_time_s=c.processing())
     res = await c.bench.request(limit_s=WATCHDOG_S)
-    if kind == "timeout_stuck":                    # that frame is good; the next cycle fails
+    if kind == "timeout_stuck" and c.end_check:    # caught in the frame's own cycle
+        c.judge_faulted(res, kind, ["SLO_STUCK_LOW"])
+        c.bench.encoder.clear_fault()
+    elif kind == "timeout_stuck":                  # that frame is good; the next cycle fails
         record = c.bench.encoder.records[-1]
         v = c.ref.judge(c.fmt, c.bench.sent[-1].bits, **c.spw_opts())
         c.check_verdict(res, v, record, kind)
@@ -421,7 +426,7 @@ def random_config(c, two_words):
         cfg = {"cfg_ma_half_period": rng.choice((0, 1, 2, 3, 5, 7, 25, rng.randint(0, 65535))),
                "cfg_delay_limit": rng.choice((0, rng.randint(0, 4095))),
                "cfg_w1_enable": rng.getrandbits(1), "cfg_spw_check": rng.getrandbits(1),
-               "cfg_spw_tolerance": rng.randint(0, 255)}
+               "cfg_spw_tolerance": rng.randint(0, 255), "cfg_end_check": rng.getrandbits(1)}
         for w in range(2):
             cfg.update({f"cfg_w{w}_data_bits": rng.randint(0, 63),
                         f"cfg_w{w}_nenw": rng.getrandbits(1), f"cfg_w{w}_lc": rng.getrandbits(1),
@@ -431,6 +436,7 @@ def random_config(c, two_words):
         b0 = rng.randint(1, 55)
         cfg = {"cfg_ma_half_period": rng.choice((2, 3, 5, 8, 20, 50)), "cfg_delay_limit": 0,
                "cfg_w1_enable": w1, "cfg_spw_tolerance": rng.randint(0, 3),
+               "cfg_end_check": rng.getrandbits(1),
                "cfg_w0_data_bits": b0, "cfg_w0_nenw": rng.getrandbits(1),
                "cfg_w0_crc": rng.choice((0, 1, 2)), "cfg_w1_data_bits": rng.randint(1, min(40, b0)),
                "cfg_w1_nenw": rng.getrandbits(1), "cfg_w1_crc": rng.choice((1, 2))}
@@ -576,7 +582,7 @@ async def random_mix(dut):
         extra = c.rng.choice((0, 0, 0, c.rng.uniform(0, 36e-6)))
         cable = Cable(length_m=length, extra_round_trip_s=extra)
         await c.set_cable(cable)
-        c.setup(name, ma_hz)
+        c.setup(name, ma_hz, cfg_end_check=int(c.rng.random() < 0.5))
         for _ in range(c.rng.randint(1, 4)):
             _, kind, fn = c.rng.choices(actions, weights)[0]
             dut._log.debug("%s at %.3f us", kind, get_sim_time("ns") / 1e3)

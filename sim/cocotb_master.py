@@ -442,3 +442,79 @@ async def biss_c_only_build(dut):
         assert res.status == STATUS["BAD_CONFIG"] and res.valid == 0, bad
     bench.configure(fmt, 10e6)
     await frames_ok(bench, 1)
+
+
+async def at_stop_bit(bench):
+    """Wait until the encoder of the cycle just started drives its stop bit (the first low
+    after the frame)."""
+    for phase in ("data", "stop"):
+        while bench.encoder.phase != phase:
+            await RisingEdge(bench.dut.clk)
+    # The encoder's output reaches the master pin half a round trip later; the master samples
+    # the stop slot later still (near the middle of the bit).
+    await Timer(round(bench.encoder.cable.round_trip_s() / 2 * 1e12) + 10_000, "ps")
+
+
+@cocotb.test()
+async def end_check(dut):
+    """cfg_end_check: a frame is reported only after the encoder's timeout has ended (SLO back
+    high); SLO high at the stop bit is NO_STOP and SLO low past the timeout limit is
+    SLO_STUCK_LOW, in the same cycle, without reporting the frame. Without the check the
+    same faults let the frame through and show up in the next cycle."""
+    bench = Bench(dut, seed=21)
+    await bench.start(cable=Cable(length_m=20))
+    count = lambda name: bench.read().counters[name]
+    for name, ma_hz in (("resolute_c_36", 5e6), ("resolute_fs_rsh", 10e6), ("evolute_26", 1e6)):
+        bench.configure(preset(name), ma_hz, cfg_end_check=1)
+        for _ in range(3):
+            res = await bench.request()
+            bench.check_frame(res)
+            assert dut.slo.value == 1 and bench.encoder.ready, "end check: done before the timeout ended"
+        bench.configure(preset(name), ma_hz, cfg_end_check=0)
+        res = await bench.request()
+        bench.check_frame(res)
+        assert not bench.encoder.ready, "no end check: done only after the encoder's timeout"
+
+        for level, status, counter in ((1, "NO_STOP", "no_stop"), (0, "SLO_STUCK_LOW", "slo_stuck_low")):
+            # The line goes to `level` as the encoder starts its stop bit.
+            bench.configure(preset(name), ma_hz, cfg_end_check=1)
+            await bench.wait_idle()
+            before = count(counter), count("crc_word0")
+            bench.queue()
+            dut.start.value = 1
+            done = cocotb.start_soon(bench.wait_done())
+            await RisingEdge(dut.clk)
+            dut.start.value = 0
+            await at_stop_bit(bench)
+            bench.encoder.force_slo(level)
+            res = await done
+            assert res.status == STATUS[status] and res.valid == 0, \
+                f"{name}: stuck {level} at the stop bit gave status {res.status}"
+            assert (count(counter), count("crc_word0")) == (before[0] + 1, before[1]), counter
+            bench.encoder.force_slo(None)
+            await frames_ok(bench, 1)
+
+        # Without the check the frame is reported (it was good) before the stop bit.
+        bench.configure(preset(name), ma_hz, cfg_end_check=0)
+        await bench.wait_idle()
+        bench.queue()
+        dut.start.value = 1
+        done = cocotb.start_soon(bench.wait_done())
+        await RisingEdge(dut.clk)
+        dut.start.value = 0
+        await at_stop_bit(bench)
+        bench.encoder.force_slo(1)
+        bench.check_frame(await done)
+        await bench.encoder_ready()         # (the master cannot see the timeout through the short)
+        res = await bench.request()
+        assert res.status == STATUS["NO_ACK"], res.status
+        bench.encoder.force_slo(None)
+        await frames_ok(bench, 1)
+
+        # The encoder's timeout never ends: caught in the frame's own cycle.
+        bench.configure(preset(name), ma_hz, cfg_end_check=1)
+        bench.queue(fault="timeout_stuck")
+        res = await bench.request()
+        assert res.status == STATUS["SLO_STUCK_LOW"] and res.valid == 0, res.status
+        bench.encoder.clear_fault()
+        await frames_ok(bench, 1)

@@ -46,9 +46,9 @@ LEGAL = {
     "crc_3to5bit": ["OK", "SPW_MISMATCH", _SOL] + _FRAME_ERR[:2],
     "crc_burst": ["OK", "SPW_MISMATCH", _SOL] + _FRAME_ERR[:2],
     "slo_stuck_low": _LATE + _FRAME_ERR + ["NO_START", "DELAY_RANGE", "SLO_STUCK_LOW"],
-    "slo_stuck_high": _LATE + _FRAME_ERR + ["NO_ACK"],
+    "slo_stuck_high": _LATE + _FRAME_ERR + ["NO_ACK", "NO_STOP"],     # NO_STOP: end check
     "unplug": ["NO_ACK"],
-    "glitch": _LATE + _FRAME_ERR + ["DELAY_RANGE"],
+    "glitch": _LATE + _FRAME_ERR + ["DELAY_RANGE", "NO_STOP"],
     # at +/-25 % the eye closes in the worst case: a rare bit error, caught by the CRC
     "jitter": _LATE + _FRAME_ERR,
     "delay_change": _LATE + ["DELAY_RANGE"],

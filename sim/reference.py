@@ -21,11 +21,11 @@ from encoder_model import frames
 
 STATUS_NAMES = ("OK", "CRC_ERROR_WORD0", "CRC_ERROR_WORD1", "CRC_ERROR_BOTH", "SIGN_OF_LIFE",
                 "SPW_MISMATCH", "NO_ACK", "NO_START", "DELAY_RANGE", "SLO_STUCK_LOW",
-                "ABORTED", "BAD_CONFIG")
+                "ABORTED", "BAD_CONFIG", "NO_STOP")
 STATUS = {name: code for code, name in enumerate(STATUS_NAMES)}
 #: Cycles that end in the break (MA high 40 us): the encoder restarts its LC check from scratch.
 BREAK_STATUSES = {STATUS[n] for n in ("NO_ACK", "NO_START", "DELAY_RANGE", "SLO_STUCK_LOW",
-                                      "ABORTED")}
+                                      "ABORTED", "NO_STOP")}
 FRAME_STATUSES = {STATUS[n] for n in ("OK", "CRC_ERROR_WORD0", "CRC_ERROR_WORD1",
                                       "CRC_ERROR_BOTH", "SIGN_OF_LIFE", "SPW_MISMATCH")}
 

@@ -16,7 +16,7 @@ TESTS = [
     "edge_jitter", "crc_errors_each_word", "encoder_error_and_warning_bits",
     "sign_of_life_faults", "spw_plausibility", "line_faults_and_recovery", "abort_and_break",
     "bad_configuration", "config_change_during_a_cycle", "periodic_requests_and_overrun",
-    "verdict_latency",
+    "verdict_latency", "end_check",
 ]
 SIMS = [os.environ["SIM"]] if os.environ.get("SIM") else list(runner.SIMULATORS)
 

@@ -76,6 +76,7 @@ class FrameDecoder(wiring.Component):
             "crc_ok": Out(words),
             "done": Out(1),
             "stopped": Out(1),
+            "stop_bit": Out(1),             # the stop slot's level (0 from a good encoder)
         })
 
     def elaborate(self, platform):
@@ -181,7 +182,7 @@ class FrameDecoder(wiring.Component):
                                 m.d.sync += word.eq(word + 1)
             with m.State("STOP"):
                 with m.If(self.sample):
-                    m.d.sync += self.stopped.eq(1)
+                    m.d.sync += [self.stopped.eq(1), self.stop_bit.eq(self.bit)]
                     m.next = "END"
             with m.State("END"):
                 pass

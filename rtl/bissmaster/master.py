@@ -18,6 +18,7 @@ from .spw_check import SpwCheck
 COUNTERS = (
     "crc_word0", "crc_word1", "no_ack", "no_start", "delay_range", "slo_stuck_low",
     "lc_repeat", "lc_skip", "lc_zero", "spw_mismatch", "overrun", "aborted",
+    "no_stop",
 )
 
 
@@ -63,6 +64,7 @@ class BissMaster(wiring.Component):
             "cfg_ack_limit": In(tw),
             "cfg_timeout_limit": In(tw),
             "cfg_delay_limit": In(p.delay_limit_width),
+            "cfg_end_check": In(1),
             **_word_fields(0),
         }
         if two:
@@ -285,6 +287,7 @@ class BissMaster(wiring.Component):
         m.d.comb += self.overrun.eq((self.start | tick) & ~(idle & ~self.abort_cycle))
 
         # -- Frame verdict ----------------------------------------------------------------
+        report_frame = Signal()         # the cycle controller reports the decoded frame
         crc_ok = [decoder.crc_ok[w] for w in range(p.words)]
         word1_on = cfg.cfg_w1_enable if two else C(0)
         word_crc_ok = [crc_ok[0], crc_ok[1] | ~word1_on] if two else [crc_ok[0]]
@@ -295,7 +298,7 @@ class BissMaster(wiring.Component):
             sol.lc.eq(decoder.lc),
             sol.lc_next.eq(decoder.lc_next),
             sol.load.eq(decoder.lc_load),
-            sol.check.eq(decoder.done & lc_on & lc_word_crc_ok),
+            sol.check.eq(report_frame & lc_on & lc_word_crc_ok),
         ]
         lc_repeat = sol.check & sol.repeat
         lc_skip = sol.check & sol.skip
@@ -328,7 +331,6 @@ class BissMaster(wiring.Component):
         # -- Cycle controller ---------------------------------------------------------------
         report = Signal()               # end of a request cycle: strobe done, set status
         report_status = Signal(Status)
-        report_frame = Signal()         # ... with a decoded frame: update the fields
         report_delay = Signal()         # ... with a measured delay
         resync = Signal()               # encoder reset: the next LC is accepted as it is
         target_rises = Signal(17)       # MA rising edges the frame needs, once Start is seen
@@ -383,6 +385,11 @@ class BissMaster(wiring.Component):
             m.d.comb += [report.eq(1), report_status.eq(status), fault_event[status].eq(1)]
             m.next = next_state
 
+        def report_verdict():
+            """Report the decoded frame: its verdict, fields and line delay."""
+            m.d.comb += [report.eq(1), report_status.eq(frame_status), report_frame.eq(1),
+                         report_delay.eq(1)]
+
         with m.FSM(init="BREAK", name="cycle_fsm"):
             # MA high for the break time: power-up, after an abort, after a line fault.
             with m.State("BREAK"):
@@ -435,12 +442,9 @@ class BissMaster(wiring.Component):
                 with m.If(self.abort_cycle):
                     fault(Status.ABORTED)
                 with m.Elif(decoder.done):
-                    m.d.comb += [
-                        report.eq(1),
-                        report_status.eq(frame_status),
-                        report_frame.eq(1),
-                        report_delay.eq(1),
-                    ]
+                    # With the end check the verdict waits for the end of the frame (CONFIRM).
+                    with m.If(~cfg.cfg_end_check):
+                        report_verdict()
                     m.next = "TAIL"
                 with m.Elif(armed & sampler.early):
                     fault(Status.DELAY_RANGE)
@@ -453,17 +457,46 @@ class BissMaster(wiring.Component):
                             & (no_start_expired | decoder.slots_full)):
                     fault(Status.NO_START)
 
-            # The frame is reported; clock out the stop bit and let the sampler see it.
+            # Clock out the stop bit and let the sampler see it. Without the end check the
+            # frame is reported already; with it, nothing is, and the faults below (and an
+            # abort) replace the frame's verdict. They clear the timer themselves: MA may
+            # have stopped already, and the break must then start from 0.
             with m.State("TAIL"):
                 m.d.comb += ma_clock.run.eq(~ma_enough)
                 with m.If(self.abort_cycle):
                     m.d.comb += timer_clear.eq(1)
-                    m.next = "BREAK"
+                    with m.If(cfg.cfg_end_check):
+                        fault(Status.ABORTED)
+                    with m.Else():
+                        m.next = "BREAK"
                 with m.Elif(decoder.stopped):
-                    m.next = "END"
+                    with m.If(~cfg.cfg_end_check):
+                        m.next = "END"
+                    with m.Elif(decoder.stop_bit):
+                        # A good encoder holds SLO low from the stop bit through its timeout.
+                        # High here: the line went (or is stuck) high, or the frame is longer
+                        # than configured. Either way the bits before it are not trusted: a
+                        # stuck tail can be a CRC codeword.
+                        m.d.comb += timer_clear.eq(1)
+                        fault(Status.NO_STOP)
+                    with m.Else():
+                        m.next = "CONFIRM"
             with m.State("END"):
                 with m.If(~ma_clock.busy):
                     m.next = "IDLE"
+            # End check: the frame counts only once the encoder's timeout has ended (SLO back
+            # high with MA stopped). SLO held low past the timeout limit is a line stuck low,
+            # whose tail can also be a CRC codeword.
+            with m.State("CONFIRM"):
+                with m.If(self.abort_cycle):
+                    m.d.comb += timer_clear.eq(1)
+                    fault(Status.ABORTED)
+                with m.Elif(~ma_clock.busy & slo):
+                    report_verdict()
+                    m.next = "IDLE"
+                with m.Elif(stuck_latched):
+                    m.d.comb += timer_clear.eq(1)
+                    fault(Status.SLO_STUCK_LOW)
 
         m.d.comb += [
             self.busy.eq(~idle),
@@ -510,6 +543,7 @@ class BissMaster(wiring.Component):
             "lc_zero": report_frame & lc_zero,
             "overrun": self.overrun,
             "aborted": fault_event[Status.ABORTED],
+            "no_stop": fault_event[Status.NO_STOP],
         }
         if two:
             events["crc_word1"] = report_frame & ~word_crc_ok[1]

@@ -27,8 +27,11 @@ CRC_WIDTH = {Crc.NONE: 0, Crc.CRC6: protocol.CRC6_WIDTH, Crc.CRC16: protocol.CRC
 class Status(enum.IntEnum):
     """Outcome of one request cycle, reported with every ``done`` strobe.
 
-    When several apply, the lowest-numbered fault wins (a CRC error makes the LC meaningless, an
-    LC error makes the plausibility check moot).
+    Codes 0..5 judge a received frame: when several apply, the lowest-numbered wins (a CRC
+    error makes the LC meaningless, an LC error makes the plausibility check moot). Codes 6..12
+    end a cycle without a frame; with ``cfg_end_check``, NO_STOP and SLO_STUCK_LOW can end a
+    cycle whose frame was received, and then replace the frame's verdict (the frame is not
+    reported).
     """
     OK = 0
     CRC_ERROR_WORD0 = 1     # CPW / single word
@@ -42,6 +45,7 @@ class Status(enum.IntEnum):
     SLO_STUCK_LOW = 9       # encoder never became ready (timeout never ended)
     ABORTED = 10            # the abort input ended the cycle
     BAD_CONFIG = 11         # runtime configuration out of range; no cycle was started
+    NO_STOP = 12            # cfg_end_check: SLO high at the stop bit (line stuck high, long frame)
 
 
 STATUS_WIDTH = 4

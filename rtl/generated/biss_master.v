@@ -14,9 +14,9 @@
 
 (* top =  1  *)
 (* generator = "Amaranth" *)
-module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_period, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_delay_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_enable, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_spw_check, cfg_spw_tolerance
-, clk, rst, ma, busy, config_error, overrun, done, valid, status, timestamp, line_delay, cds, word0_position, word0_ne, word0_nw, word0_crc_ok, word1_position, word1_ne, word1_nw, word1_crc_ok, lc
-, lc_repeat, lc_skip, lc_zero, spw_mismatch, count_crc_word0, count_crc_word1, count_no_ack, count_no_start, count_delay_range, count_slo_stuck_low, count_lc_repeat, count_lc_skip, count_lc_zero, count_spw_mismatch, count_overrun, count_aborted, slo);
+module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_period, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_delay_limit, cfg_end_check, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_enable, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_spw_check
+, cfg_spw_tolerance, clk, rst, ma, busy, config_error, overrun, done, valid, status, timestamp, line_delay, cds, word0_position, word0_ne, word0_nw, word0_crc_ok, word1_position, word1_ne, word1_nw, word1_crc_ok
+, lc, lc_repeat, lc_skip, lc_zero, spw_mismatch, count_crc_word0, count_crc_word1, count_no_ack, count_no_start, count_delay_range, count_slo_stuck_low, count_lc_repeat, count_lc_skip, count_lc_zero, count_spw_mismatch, count_overrun, count_aborted, count_no_stop, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$9  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -40,23 +40,23 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \$116 ;
   wire \$117 ;
   wire \$118 ;
-  wire [23:0] \$119 ;
+  wire \$119 ;
   wire \$12 ;
   wire \$120 ;
-  wire [23:0] \$121 ;
+  wire \$121 ;
   wire \$122 ;
-  wire [11:0] \$123 ;
-  wire [24:0] \$124 ;
-  wire [32:0] \$125 ;
-  wire \$126 ;
+  wire \$123 ;
+  wire [23:0] \$124 ;
+  wire \$125 ;
+  wire [23:0] \$126 ;
   wire \$127 ;
-  wire [25:0] \$128 ;
-  wire \$129 ;
+  wire [11:0] \$128 ;
+  wire [24:0] \$129 ;
   wire \$13 ;
-  wire \$130 ;
+  wire [32:0] \$130 ;
   wire \$131 ;
   wire \$132 ;
-  wire \$133 ;
+  wire [25:0] \$133 ;
   wire \$134 ;
   wire \$135 ;
   wire \$136 ;
@@ -67,15 +67,15 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \$140 ;
   wire \$141 ;
   wire \$142 ;
-  wire [25:0] \$143 ;
-  wire [25:0] \$144 ;
-  wire [25:0] \$145 ;
+  wire \$143 ;
+  wire \$144 ;
+  wire \$145 ;
   wire \$146 ;
   wire \$147 ;
-  wire \$148 ;
-  wire \$149 ;
+  wire [25:0] \$148 ;
+  wire [25:0] \$149 ;
   wire \$15 ;
-  wire \$150 ;
+  wire [25:0] \$150 ;
   wire \$151 ;
   wire \$152 ;
   wire \$153 ;
@@ -83,21 +83,21 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \$155 ;
   wire \$156 ;
   wire \$157 ;
-  wire [24:0] \$158 ;
-  reg [7:0] \$159 ;
+  wire \$158 ;
+  wire \$159 ;
   wire \$16 ;
-  wire [8:0] \$160 ;
-  wire [7:0] \$161 ;
-  wire [8:0] \$162 ;
-  reg [7:0] \$163 ;
-  wire [8:0] \$164 ;
-  wire [16:0] \$165 ;
-  wire \$166 ;
-  wire \$167 ;
-  wire \$168 ;
-  wire \$169 ;
+  wire \$160 ;
+  wire \$161 ;
+  wire \$162 ;
+  wire [24:0] \$163 ;
+  reg [7:0] \$164 ;
+  wire [8:0] \$165 ;
+  wire [7:0] \$166 ;
+  wire [8:0] \$167 ;
+  reg [7:0] \$168 ;
+  wire [8:0] \$169 ;
   wire \$17 ;
-  wire \$170 ;
+  wire [16:0] \$170 ;
   wire \$171 ;
   wire \$172 ;
   wire \$173 ;
@@ -157,57 +157,65 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \$221 ;
   wire \$222 ;
   wire \$223 ;
-  reg \$224 ;
-  reg [153:0] \$225 ;
-  reg [23:0] \$226 ;
-  reg [23:0] \$227 ;
-  reg [11:0] \$228 ;
-  reg [24:0] \$229 ;
+  wire \$224 ;
+  wire \$225 ;
+  wire \$226 ;
+  wire \$227 ;
+  wire \$228 ;
+  wire \$229 ;
   wire \$23 ;
-  reg [31:0] \$230 ;
-  reg [31:0] \$231 ;
-  reg [24:0] \$232 ;
-  reg \$233 ;
-  reg \$234 ;
-  reg \$235 ;
-  reg [24:0] \$236 ;
-  reg \$237 ;
-  reg [23:0] \$238 ;
-  reg \$239 ;
+  wire \$230 ;
+  wire \$231 ;
+  reg \$232 ;
+  reg [154:0] \$233 ;
+  reg [23:0] \$234 ;
+  reg [23:0] \$235 ;
+  reg [11:0] \$236 ;
+  reg [24:0] \$237 ;
+  reg [31:0] \$238 ;
+  reg [31:0] \$239 ;
   wire \$24 ;
-  reg [7:0] \$240 ;
-  reg [8:0] \$241 ;
-  reg [7:0] \$242 ;
-  reg [16:0] \$243 ;
-  reg \$244 ;
+  reg [24:0] \$240 ;
+  reg \$241 ;
+  reg \$242 ;
+  reg \$243 ;
+  reg [24:0] \$244 ;
   reg \$245 ;
-  reg \$246 ;
+  reg [23:0] \$246 ;
   reg \$247 ;
-  reg [2:0] \$248 ;
-  reg \$249 ;
+  reg [7:0] \$248 ;
+  reg [8:0] \$249 ;
   wire \$25 ;
-  reg \$250 ;
-  reg \$251 ;
+  reg [7:0] \$250 ;
+  reg [16:0] \$251 ;
   reg \$252 ;
-  reg [3:0] \$253 ;
-  reg [12:0] \$254 ;
-  reg [31:0] \$255 ;
-  reg \$256 ;
-  reg [5:0] \$257 ;
+  reg \$253 ;
+  reg \$254 ;
+  reg \$255 ;
+  reg [2:0] \$256 ;
+  reg \$257 ;
   reg \$258 ;
   reg \$259 ;
   wire \$26 ;
   reg \$260 ;
-  reg [54:0] \$261 ;
-  reg \$262 ;
-  reg \$263 ;
+  reg [3:0] \$261 ;
+  reg [12:0] \$262 ;
+  reg [31:0] \$263 ;
   reg \$264 ;
-  reg [39:0] \$265 ;
+  reg [5:0] \$265 ;
   reg \$266 ;
   reg \$267 ;
   reg \$268 ;
-  reg \$269 ;
+  reg [54:0] \$269 ;
   wire \$27 ;
+  reg \$270 ;
+  reg \$271 ;
+  reg \$272 ;
+  reg [39:0] \$273 ;
+  reg \$274 ;
+  reg \$275 ;
+  reg \$276 ;
+  reg \$277 ;
   wire \$28 ;
   wire \$29 ;
   wire \$3 ;
@@ -294,19 +302,20 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire arm;
   reg armed = 1'h0;
   wire \bit ;
-  wire \bit$69 ;
+  wire \bit$71 ;
   wire [5:0] bits;
   reg break_over = 1'h0;
   output busy;
   wire busy;
-  wire \busy$100 ;
+  wire \busy$102 ;
   output cds;
   reg cds = 1'h0;
-  wire \cds$183 ;
-  reg [153:0] cfg = 154'h000000000000000000000000000000000000000;
+  wire \cds$190 ;
+  reg [154:0] cfg = 155'h000000000000000000000000000000000000000;
   wire [23:0] \cfg.cfg_ack_limit ;
   wire [23:0] \cfg.cfg_break_time ;
   wire [11:0] \cfg.cfg_delay_limit ;
+  wire \cfg.cfg_end_check ;
   wire [15:0] \cfg.cfg_ma_half_period ;
   wire [23:0] \cfg.cfg_request_period ;
   wire \cfg.cfg_spw_check ;
@@ -327,6 +336,8 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire [23:0] cfg_break_time;
   input [11:0] cfg_delay_limit;
   wire [11:0] cfg_delay_limit;
+  input cfg_end_check;
+  wire cfg_end_check;
   input [15:0] cfg_ma_half_period;
   wire [15:0] cfg_ma_half_period;
   reg cfg_ok = 1'h0;
@@ -358,17 +369,18 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire cfg_w1_nenw;
   wire check;
   wire clear;
-  wire \clear$136 ;
-  wire \clear$139 ;
-  wire \clear$142 ;
-  wire \clear$145 ;
-  wire \clear$148 ;
-  wire \clear$151 ;
-  wire \clear$154 ;
-  wire \clear$157 ;
-  wire \clear$160 ;
-  wire \clear$163 ;
-  wire \clear$166 ;
+  wire \clear$140 ;
+  wire \clear$143 ;
+  wire \clear$146 ;
+  wire \clear$149 ;
+  wire \clear$152 ;
+  wire \clear$155 ;
+  wire \clear$158 ;
+  wire \clear$161 ;
+  wire \clear$164 ;
+  wire \clear$167 ;
+  wire \clear$170 ;
+  wire \clear$173 ;
   input clear_counters;
   wire clear_counters;
   input clk;
@@ -376,17 +388,18 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   output config_error;
   wire config_error;
   wire [15:0] count;
-  wire [15:0] \count$137 ;
-  wire [15:0] \count$140 ;
-  wire [15:0] \count$143 ;
-  wire [15:0] \count$146 ;
-  wire [15:0] \count$149 ;
-  wire [15:0] \count$152 ;
-  wire [15:0] \count$155 ;
-  wire [15:0] \count$158 ;
-  wire [15:0] \count$161 ;
-  wire [15:0] \count$164 ;
-  wire [15:0] \count$167 ;
+  wire [15:0] \count$141 ;
+  wire [15:0] \count$144 ;
+  wire [15:0] \count$147 ;
+  wire [15:0] \count$150 ;
+  wire [15:0] \count$153 ;
+  wire [15:0] \count$156 ;
+  wire [15:0] \count$159 ;
+  wire [15:0] \count$162 ;
+  wire [15:0] \count$165 ;
+  wire [15:0] \count$168 ;
+  wire [15:0] \count$171 ;
+  wire [15:0] \count$174 ;
   output [15:0] count_aborted;
   wire [15:0] count_aborted;
   output [15:0] count_crc_word0;
@@ -405,6 +418,8 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire [15:0] count_no_ack;
   output [15:0] count_no_start;
   wire [15:0] count_no_start;
+  output [15:0] count_no_stop;
+  wire [15:0] count_no_stop;
   output [15:0] count_overrun;
   wire [15:0] count_overrun;
   output [15:0] count_slo_stuck_low;
@@ -412,7 +427,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   output [15:0] count_spw_mismatch;
   wire [15:0] count_spw_mismatch;
   wire [39:0] cpw_top;
-  wire [39:0] \cpw_top$85 ;
+  wire [39:0] \cpw_top$87 ;
   wire [1:0] crc_ok;
   reg [2:0] cycle_fsm_state = 3'h0;
   wire [54:0] data0;
@@ -422,13 +437,14 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   reg delay_over = 1'h0;
   output done;
   reg done = 1'h0;
-  wire \done$82 ;
+  wire \done$120 ;
   wire early;
   reg fault_aborted;
   reg fault_bad_config;
   reg fault_delay_range;
   reg fault_no_ack;
   reg fault_no_start;
+  reg fault_no_stop;
   reg fault_slo_stuck_low;
   wire first_rise;
   reg [31:0] first_rise_time = 32'd0;
@@ -446,31 +462,33 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_1001 = "SLO_STUCK_LOW" *)
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
+  (* enum_value_1100 = "NO_STOP" *)
   reg [3:0] frame_status;
   wire [15:0] half_period;
-  wire [15:0] \half_period$65 ;
+  wire [15:0] \half_period$67 ;
   reg idle;
   reg in_clock;
   wire inc;
-  wire \inc$135 ;
-  wire \inc$138 ;
-  wire \inc$141 ;
-  wire \inc$144 ;
-  wire \inc$147 ;
-  wire \inc$150 ;
-  wire \inc$153 ;
-  wire \inc$156 ;
-  wire \inc$159 ;
-  wire \inc$162 ;
-  wire \inc$165 ;
+  wire \inc$139 ;
+  wire \inc$142 ;
+  wire \inc$145 ;
+  wire \inc$148 ;
+  wire \inc$151 ;
+  wire \inc$154 ;
+  wire \inc$157 ;
+  wire \inc$160 ;
+  wire \inc$163 ;
+  wire \inc$166 ;
+  wire \inc$169 ;
+  wire \inc$172 ;
   reg latched = 1'h0;
   output [5:0] lc;
   reg [5:0] lc = 6'h00;
-  wire [5:0] \lc$75 ;
-  wire [5:0] \lc$76 ;
+  wire [5:0] \lc$77 ;
+  wire [5:0] \lc$78 ;
   wire lc_load;
   wire [5:0] lc_next;
-  wire [5:0] \lc_next$78 ;
+  wire [5:0] \lc_next$80 ;
   output lc_repeat;
   reg lc_repeat = 1'h0;
   output lc_skip;
@@ -479,10 +497,11 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   reg lc_zero = 1'h0;
   output [12:0] line_delay;
   reg [12:0] line_delay = 13'h0000;
-  wire [153:0] live;
+  wire [154:0] live;
   wire [23:0] \live.cfg_ack_limit ;
   wire [23:0] \live.cfg_break_time ;
   wire [11:0] \live.cfg_delay_limit ;
+  wire \live.cfg_end_check ;
   wire [15:0] \live.cfg_ma_half_period ;
   wire [23:0] \live.cfg_request_period ;
   wire \live.cfg_spw_check ;
@@ -502,7 +521,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   reg locked_seen = 1'h0;
   output ma;
   wire ma;
-  wire \ma$71 ;
+  wire \ma$73 ;
   wire match;
   wire [1:0] ne;
   reg no_start_expired = 1'h0;
@@ -533,21 +552,22 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_1001 = "SLO_STUCK_LOW" *)
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
+  (* enum_value_1100 = "NO_STOP" *)
   reg [3:0] report_status;
   reg resync;
-  wire \resync$131 ;
+  wire \resync$135 ;
   wire [15:0] rises;
   input rst;
   wire rst;
   reg run;
   wire sample;
-  wire \sample$67 ;
+  wire \sample$69 ;
   wire second_rise;
   wire skip;
   input slo;
   wire slo;
-  wire \slo$63 ;
-  wire \slo$64 ;
+  wire \slo$65 ;
+  wire \slo$66 ;
   reg [24:0] slo_low_time_p1 = 25'h0000001;
   wire slots_full;
   wire [39:0] spw;
@@ -557,9 +577,10 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire start;
   wire [15:0] start_slot;
   reg started = 1'h0;
-  wire \started$122 ;
+  wire \started$125 ;
   output [3:0] status;
   reg [3:0] status = 4'h0;
+  wire stop_bit;
   wire stopped;
   reg stuck_latched = 1'h0;
   reg stuck_live = 1'h0;
@@ -604,7 +625,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \words[1].nenw ;
   wire zero;
   assign config_error = ~ cfg_ok;
-  assign word_count = 1'h1 + cfg[134];
+  assign word_count = 1'h1 + cfg[135];
   assign \$1  = ! cfg_request_period;
   assign \$2  = periodic & \$1 ;
   assign \$3  = ~ \$2 ;
@@ -615,20 +636,20 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \$8  = idle & \$7 ;
   assign \$9  = ~ \$8 ;
   assign overrun = \$6  & \$9 ;
-  assign \$10  = cfg[134] & cfg[142];
-  assign \$11  = cfg[131] | \$10 ;
-  assign \$12  = \done$82  & \$11 ;
-  assign \$13  = ~ cfg[134];
+  assign \$10  = cfg[135] & cfg[143];
+  assign \$11  = cfg[132] | \$10 ;
+  assign \$12  = report_frame & \$11 ;
+  assign \$13  = ~ cfg[135];
   assign \$14  = crc_ok[1] | \$13 ;
-  assign \$15  = cfg[131] ? crc_ok[0] : \$14 ;
+  assign \$15  = cfg[132] ? crc_ok[0] : \$14 ;
   assign check = \$12  & \$15 ;
   assign \$16  = ~ crc_ok[0];
-  assign \$17  = ~ cfg[134];
+  assign \$17  = ~ cfg[135];
   assign \$18  = crc_ok[1] | \$17 ;
   assign \$19  = ~ \$18 ;
   assign \$20  = \$16  & \$19 ;
   assign \$21  = ~ crc_ok[0];
-  assign \$22  = ~ cfg[134];
+  assign \$22  = ~ cfg[135];
   assign \$23  = crc_ok[1] | \$22 ;
   assign \$24  = ~ \$23 ;
   assign \$25  = check & \repeat ;
@@ -636,14 +657,14 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \$27  = \$25  | \$26 ;
   assign \$28  = check & zero;
   assign \$29  = \$27  | \$28 ;
-  assign \$30  = cfg[145] & cfg[134];
-  assign \$31  = ~ cfg[134];
+  assign \$30  = cfg[146] & cfg[135];
+  assign \$31  = ~ cfg[135];
   assign \$32  = crc_ok[1] | \$31 ;
   assign \$33  = crc_ok[0] & \$32 ;
   assign \$34  = \$30  & \$33 ;
   assign \$35  = ~ match;
   assign \$36  = \$34  & \$35 ;
-  assign \$37  = \busy$100  | abort_cycle;
+  assign \$37  = \busy$102  | abort_cycle;
   assign \$38  = ~ cfg_ok;
   assign \$39  = latched & \$38 ;
   assign \$40  = latched ? stuck_live : stuck_latched;
@@ -663,364 +684,379 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \$54  = ~ locked_seen;
   assign \$55  = locked & \$54 ;
   assign \$56  = \$55  & delay_over;
-  assign \$57  = ~ \started$122 ;
+  assign \$57  = ~ \started$125 ;
   assign \$58  = locked_seen & \$57 ;
   assign \$59  = no_start_expired | slots_full;
   assign \$60  = \$58  & \$59 ;
-  assign \$61  = rises >= target_rises;
-  assign \$62  = started & \$61 ;
-  assign \$63  = ~ \$62 ;
+  assign \$61  = ~ cfg[124];
+  assign \$62  = rises >= target_rises;
+  assign \$63  = started & \$62 ;
+  assign \$64  = ~ \$63 ;
+  assign \$65  = ~ cfg[124];
+  assign \$66  = ~ \busy$102 ;
+  assign \$67  = \$66  & \slo$65 ;
   assign busy = ~ idle;
-  assign \$64  = ~ crc_ok[0];
-  assign inc = report_frame & \$64 ;
-  assign \$65  = ~ cfg[134];
-  assign \$66  = crc_ok[1] | \$65 ;
-  assign \$67  = ~ \$66 ;
-  assign \inc$135  = report_frame & \$67 ;
-  assign \$68  = check & \repeat ;
-  assign \inc$150  = report_frame & \$68 ;
-  assign \$69  = check & skip;
-  assign \inc$153  = report_frame & \$69 ;
-  assign \$70  = check & zero;
-  assign \inc$156  = report_frame & \$70 ;
-  assign \$71  = cfg[145] & cfg[134];
-  assign \$72  = ~ cfg[134];
-  assign \$73  = crc_ok[1] | \$72 ;
-  assign \$74  = crc_ok[0] & \$73 ;
-  assign \$75  = \$71  & \$74 ;
-  assign \$76  = ~ match;
-  assign \$77  = \$75  & \$76 ;
-  assign \inc$159  = report_frame & \$77 ;
-  assign \$78  = ! cycle_fsm_state;
-  assign \$79  = cycle_fsm_state == 1'h1;
-  assign \$80  = cycle_fsm_state == 2'h2;
-  assign \$81  = cycle_fsm_state == 2'h3;
-  assign \$82  = cycle_fsm_state == 3'h4;
-  assign \$83  = cycle_fsm_state == 3'h5;
-  assign \$84  = | live[15:1];
-  assign \$85  = | live[129:124];
-  assign \$86  = live[129:124] <= 6'h37;
-  assign \$87  = \$85  & \$86 ;
-  assign \$88  = ! live[133:132];
-  assign \$89  = live[133:132] == 1'h1;
-  assign \$90  = \$88  | \$89 ;
-  assign \$91  = live[133:132] == 2'h2;
-  assign \$92  = \$90  | \$91 ;
-  assign \$93  = \$87  & \$92 ;
-  assign \$94  = \$84  & \$93 ;
-  assign \$95  = ~ live[134];
-  assign \$96  = | live[140:135];
-  assign \$97  = live[140:135] <= 6'h28;
-  assign \$98  = \$96  & \$97 ;
-  assign \$99  = ! live[144:143];
-  assign \$100  = live[144:143] == 1'h1;
-  assign \$101  = \$99  | \$100 ;
-  assign \$102  = live[144:143] == 2'h2;
-  assign \$103  = \$101  | \$102 ;
-  assign \$104  = \$98  & \$103 ;
-  assign \$105  = \$95  | \$104 ;
-  assign \$106  = \$94  & \$105 ;
-  assign \$107  = live[134] & live[131];
-  assign \$108  = \$107  & live[142];
-  assign \$109  = ~ \$108 ;
-  assign \$110  = \$106  & \$109 ;
-  assign \$111  = ~ live[145];
-  assign \$112  = live[140:135] <= live[129:124];
-  assign \$113  = live[134] & \$112 ;
-  assign \$114  = | live[144:143];
-  assign \$115  = \$113  & \$114 ;
-  assign \$116  = \$111  | \$115 ;
-  assign \$117  = \$110  & \$116 ;
-  assign \$118  = ! live[87:64];
-  assign \$119  = \$118  ? 24'h000fa0 : live[87:64];
-  assign \$120  = ! live[111:88];
-  assign \$121  = \$120  ? 24'h001f40 : live[111:88];
-  assign \$122  = ! live[123:112];
-  assign \$123  = \$122  ? 12'hfff : live[123:112];
-  assign \$124  = ack_limit + { cfg[15:0], 1'h0 };
-  assign \$125  = now + 1'h1;
-  assign \$126  = \slo$63  | \busy$100 ;
-  assign \$127  = ~ slo_low_time_p1[24];
-  assign \$128  = slo_low_time_p1 + 1'h1;
-  assign \$129  = ~ \slo$63 ;
-  assign \$130  = ~ \busy$100 ;
-  assign \$131  = \$129  & \$130 ;
-  assign \$132  = slo_low_time_p1 >= timeout_limit;
-  assign \$133  = \$131  & \$132 ;
-  assign \$134  = ~ \slo$63 ;
-  assign \$135  = ~ \busy$100 ;
+  assign \$68  = ~ crc_ok[0];
+  assign inc = report_frame & \$68 ;
+  assign \$69  = ~ cfg[135];
+  assign \$70  = crc_ok[1] | \$69 ;
+  assign \$71  = ~ \$70 ;
+  assign \inc$139  = report_frame & \$71 ;
+  assign \$72  = check & \repeat ;
+  assign \inc$154  = report_frame & \$72 ;
+  assign \$73  = check & skip;
+  assign \inc$157  = report_frame & \$73 ;
+  assign \$74  = check & zero;
+  assign \inc$160  = report_frame & \$74 ;
+  assign \$75  = cfg[146] & cfg[135];
+  assign \$76  = ~ cfg[135];
+  assign \$77  = crc_ok[1] | \$76 ;
+  assign \$78  = crc_ok[0] & \$77 ;
+  assign \$79  = \$75  & \$78 ;
+  assign \$80  = ~ match;
+  assign \$81  = \$79  & \$80 ;
+  assign \inc$163  = report_frame & \$81 ;
+  assign \$82  = ! cycle_fsm_state;
+  assign \$83  = cycle_fsm_state == 1'h1;
+  assign \$84  = cycle_fsm_state == 2'h2;
+  assign \$85  = cycle_fsm_state == 2'h3;
+  assign \$86  = cycle_fsm_state == 3'h4;
+  assign \$87  = cycle_fsm_state == 3'h5;
+  assign \$88  = cycle_fsm_state == 3'h6;
+  assign \$89  = | live[15:1];
+  assign \$90  = | live[130:125];
+  assign \$91  = live[130:125] <= 6'h37;
+  assign \$92  = \$90  & \$91 ;
+  assign \$93  = ! live[134:133];
+  assign \$94  = live[134:133] == 1'h1;
+  assign \$95  = \$93  | \$94 ;
+  assign \$96  = live[134:133] == 2'h2;
+  assign \$97  = \$95  | \$96 ;
+  assign \$98  = \$92  & \$97 ;
+  assign \$99  = \$89  & \$98 ;
+  assign \$100  = ~ live[135];
+  assign \$101  = | live[141:136];
+  assign \$102  = live[141:136] <= 6'h28;
+  assign \$103  = \$101  & \$102 ;
+  assign \$104  = ! live[145:144];
+  assign \$105  = live[145:144] == 1'h1;
+  assign \$106  = \$104  | \$105 ;
+  assign \$107  = live[145:144] == 2'h2;
+  assign \$108  = \$106  | \$107 ;
+  assign \$109  = \$103  & \$108 ;
+  assign \$110  = \$100  | \$109 ;
+  assign \$111  = \$99  & \$110 ;
+  assign \$112  = live[135] & live[132];
+  assign \$113  = \$112  & live[143];
+  assign \$114  = ~ \$113 ;
+  assign \$115  = \$111  & \$114 ;
+  assign \$116  = ~ live[146];
+  assign \$117  = live[141:136] <= live[130:125];
+  assign \$118  = live[135] & \$117 ;
+  assign \$119  = | live[145:144];
+  assign \$120  = \$118  & \$119 ;
+  assign \$121  = \$116  | \$120 ;
+  assign \$122  = \$115  & \$121 ;
+  assign \$123  = ! live[87:64];
+  assign \$124  = \$123  ? 24'h000fa0 : live[87:64];
+  assign \$125  = ! live[111:88];
+  assign \$126  = \$125  ? 24'h001f40 : live[111:88];
+  assign \$127  = ! live[123:112];
+  assign \$128  = \$127  ? 12'hfff : live[123:112];
+  assign \$129  = ack_limit + { cfg[15:0], 1'h0 };
+  assign \$130  = now + 1'h1;
+  assign \$131  = \slo$65  | \busy$102 ;
+  assign \$132  = ~ slo_low_time_p1[24];
+  assign \$133  = slo_low_time_p1 + 1'h1;
+  assign \$134  = ~ \slo$65 ;
+  assign \$135  = ~ \busy$102 ;
   assign \$136  = \$134  & \$135 ;
-  assign \$137  = ! live[111:88];
-  assign \$138  = slo_low_time_p1 >= 13'h1f40;
-  assign \$139  = slo_low_time_p1 >= live[111:88];
-  assign \$140  = \$137  ? \$138  : \$139 ;
-  assign \$141  = \$136  & \$140 ;
-  assign \$142  = & timer;
-  assign \$143  = timer + 1'h1;
-  assign \$144  = \$142  ? { 1'h0, timer } : \$143 ;
-  assign \$145  = timer_clear ? 26'h0000001 : \$144 ;
-  assign \$146  = ~ timer_clear;
-  assign \$147  = ! live[63:40];
-  assign \$148  = timer >= 12'hfa0;
-  assign \$149  = timer >= live[63:40];
-  assign \$150  = \$147  ? \$148  : \$149 ;
-  assign \$151  = \$146  & \$150 ;
-  assign \$152  = ~ periodic;
-  assign \$153  = ! cfg_request_period;
-  assign \$154  = periodic & \$153 ;
-  assign \$155  = \$152  | \$154 ;
-  assign \$156  = period_count_p1 >= cfg_request_period;
-  assign \$157  = \$155  | \$156 ;
-  assign \$158  = period_count_p1 + 1'h1;
-  assign \$160  = words[5:0] + \$159 ;
-  assign \$161  = cfg[134] ? word1_len : 8'h00;
-  assign \$162  = word0_len + \$161 ;
-  assign \$164  = words[15:10] + \$163 ;
-  assign \$165  = start_slot + frame_len_p4;
-  assign \$166  = ~ locked_seen;
-  assign \$167  = locked & \$166 ;
-  assign \$168  = arm | \$167 ;
-  assign \$169  = ~ \$168 ;
-  assign \$170  = in_clock & \$169 ;
-  assign \$171  = timer >= ack_limit;
-  assign \$172  = \$170  & \$171 ;
-  assign \$173  = ~ locked_seen;
-  assign \$174  = locked & \$173 ;
-  assign \$175  = arm | \$174 ;
-  assign \$176  = ~ \$175 ;
-  assign \$177  = in_clock & \$176 ;
-  assign \$178  = timer >= no_start_limit;
-  assign \$179  = \$177  & \$178 ;
-  assign \$180  = delay > delay_limit;
-  assign \$181  = \busy$100  | abort_cycle;
-  assign \$182  = ! cfg_request_period;
-  assign \$183  = periodic & \$182 ;
-  assign \$184  = ~ \$183 ;
-  assign \$185  = periodic & \$184 ;
-  assign \$186  = \$185  & period_start;
-  assign \$187  = start | \$186 ;
-  assign \$188  = ! cfg_request_period;
-  assign \$189  = periodic & \$188 ;
-  assign \$190  = \$187  | \$189 ;
-  assign \$191  = ~ cfg_ok;
-  assign \$192  = latched & \$191 ;
-  assign \$193  = latched ? stuck_live : stuck_latched;
-  assign \$194  = ~ locked_seen;
-  assign \$195  = locked & \$194 ;
-  assign \$196  = armed & early;
-  assign \$197  = ~ locked_seen;
-  assign \$198  = armed & \$197 ;
-  assign \$199  = ~ locked;
-  assign \$200  = \$198  & \$199 ;
-  assign \$201  = \$200  & ack_expired;
+  assign \$137  = slo_low_time_p1 >= timeout_limit;
+  assign \$138  = \$136  & \$137 ;
+  assign \$139  = ~ \slo$65 ;
+  assign \$140  = ~ \busy$102 ;
+  assign \$141  = \$139  & \$140 ;
+  assign \$142  = ! live[111:88];
+  assign \$143  = slo_low_time_p1 >= 13'h1f40;
+  assign \$144  = slo_low_time_p1 >= live[111:88];
+  assign \$145  = \$142  ? \$143  : \$144 ;
+  assign \$146  = \$141  & \$145 ;
+  assign \$147  = & timer;
+  assign \$148  = timer + 1'h1;
+  assign \$149  = \$147  ? { 1'h0, timer } : \$148 ;
+  assign \$150  = timer_clear ? 26'h0000001 : \$149 ;
+  assign \$151  = ~ timer_clear;
+  assign \$152  = ! live[63:40];
+  assign \$153  = timer >= 12'hfa0;
+  assign \$154  = timer >= live[63:40];
+  assign \$155  = \$152  ? \$153  : \$154 ;
+  assign \$156  = \$151  & \$155 ;
+  assign \$157  = ~ periodic;
+  assign \$158  = ! cfg_request_period;
+  assign \$159  = periodic & \$158 ;
+  assign \$160  = \$157  | \$159 ;
+  assign \$161  = period_count_p1 >= cfg_request_period;
+  assign \$162  = \$160  | \$161 ;
+  assign \$163  = period_count_p1 + 1'h1;
+  assign \$165  = words[5:0] + \$164 ;
+  assign \$166  = cfg[135] ? word1_len : 8'h00;
+  assign \$167  = word0_len + \$166 ;
+  assign \$169  = words[15:10] + \$168 ;
+  assign \$170  = start_slot + frame_len_p4;
+  assign \$171  = ~ locked_seen;
+  assign \$172  = locked & \$171 ;
+  assign \$173  = arm | \$172 ;
+  assign \$174  = ~ \$173 ;
+  assign \$175  = in_clock & \$174 ;
+  assign \$176  = timer >= ack_limit;
+  assign \$177  = \$175  & \$176 ;
+  assign \$178  = ~ locked_seen;
+  assign \$179  = locked & \$178 ;
+  assign \$180  = arm | \$179 ;
+  assign \$181  = ~ \$180 ;
+  assign \$182  = in_clock & \$181 ;
+  assign \$183  = timer >= no_start_limit;
+  assign \$184  = \$182  & \$183 ;
+  assign \$185  = delay > delay_limit;
+  assign \$186  = \busy$102  | abort_cycle;
+  assign \$187  = ! cfg_request_period;
+  assign \$188  = periodic & \$187 ;
+  assign \$189  = ~ \$188 ;
+  assign \$190  = periodic & \$189 ;
+  assign \$191  = \$190  & period_start;
+  assign \$192  = start | \$191 ;
+  assign \$193  = ! cfg_request_period;
+  assign \$194  = periodic & \$193 ;
+  assign \$195  = \$192  | \$194 ;
+  assign \$196  = ~ cfg_ok;
+  assign \$197  = latched & \$196 ;
+  assign \$198  = latched ? stuck_live : stuck_latched;
+  assign \$199  = ~ locked_seen;
+  assign \$200  = locked & \$199 ;
+  assign \$201  = armed & early;
   assign \$202  = ~ locked_seen;
-  assign \$203  = locked & \$202 ;
-  assign \$204  = \$203  & delay_over;
-  assign \$205  = ~ \started$122 ;
-  assign \$206  = locked_seen & \$205 ;
-  assign \$207  = no_start_expired | slots_full;
-  assign \$208  = \$206  & \$207 ;
-  assign \$209  = ~ \busy$100 ;
-  assign \$210  = ! frame_status;
-  assign \$211  = report_frame & \$210 ;
-  assign \$212  = check & \repeat ;
-  assign \$213  = check & skip;
-  assign \$214  = check & zero;
-  assign \$215  = ~ cfg[134];
-  assign \$216  = crc_ok[1] | \$215 ;
-  assign \$217  = cfg[145] & cfg[134];
-  assign \$218  = ~ cfg[134];
-  assign \$219  = crc_ok[1] | \$218 ;
-  assign \$220  = crc_ok[0] & \$219 ;
-  assign \$221  = \$217  & \$220 ;
-  assign \$222  = ~ match;
-  assign \$223  = \$221  & \$222 ;
+  assign \$203  = armed & \$202 ;
+  assign \$204  = ~ locked;
+  assign \$205  = \$203  & \$204 ;
+  assign \$206  = \$205  & ack_expired;
+  assign \$207  = ~ locked_seen;
+  assign \$208  = locked & \$207 ;
+  assign \$209  = \$208  & delay_over;
+  assign \$210  = ~ \started$125 ;
+  assign \$211  = locked_seen & \$210 ;
+  assign \$212  = no_start_expired | slots_full;
+  assign \$213  = \$211  & \$212 ;
+  assign \$214  = ~ cfg[124];
+  assign \$215  = ~ \busy$102 ;
+  assign \$216  = ~ \busy$102 ;
+  assign \$217  = \$216  & \slo$65 ;
+  assign \$218  = ! frame_status;
+  assign \$219  = report_frame & \$218 ;
+  assign \$220  = check & \repeat ;
+  assign \$221  = check & skip;
+  assign \$222  = check & zero;
+  assign \$223  = ~ cfg[135];
+  assign \$224  = crc_ok[1] | \$223 ;
+  assign \$225  = cfg[146] & cfg[135];
+  assign \$226  = ~ cfg[135];
+  assign \$227  = crc_ok[1] | \$226 ;
+  assign \$228  = crc_ok[0] & \$227 ;
+  assign \$229  = \$225  & \$228 ;
+  assign \$230  = ~ match;
+  assign \$231  = \$229  & \$230 ;
   always @(posedge clk)
-    cfg_ok <= \$224 ;
+    cfg_ok <= \$232 ;
   always @(posedge clk)
-    cfg <= \$225 ;
+    cfg <= \$233 ;
   always @(posedge clk)
-    ack_limit <= \$226 ;
+    ack_limit <= \$234 ;
   always @(posedge clk)
-    timeout_limit <= \$227 ;
+    timeout_limit <= \$235 ;
   always @(posedge clk)
-    delay_limit <= \$228 ;
+    delay_limit <= \$236 ;
   always @(posedge clk)
-    no_start_limit <= \$229 ;
+    no_start_limit <= \$237 ;
   always @(posedge clk)
-    now <= \$230 ;
+    now <= \$238 ;
   always @(posedge clk)
-    first_rise_time <= \$231 ;
+    first_rise_time <= \$239 ;
   always @(posedge clk)
-    slo_low_time_p1 <= \$232 ;
+    slo_low_time_p1 <= \$240 ;
   always @(posedge clk)
-    stuck_latched <= \$233 ;
+    stuck_latched <= \$241 ;
   always @(posedge clk)
-    stuck_live <= \$234 ;
+    stuck_live <= \$242 ;
   always @(posedge clk)
-    latched <= \$235 ;
+    latched <= \$243 ;
   always @(posedge clk)
-    timer <= \$236 ;
+    timer <= \$244 ;
   always @(posedge clk)
-    break_over <= \$237 ;
+    break_over <= \$245 ;
   always @(posedge clk)
-    period_count_p1 <= \$238 ;
+    period_count_p1 <= \$246 ;
   always @(posedge clk)
-    period_start <= \$239 ;
+    period_start <= \$247 ;
   always @(posedge clk)
-    word0_len <= \$240 ;
+    word0_len <= \$248 ;
   always @(posedge clk)
-    frame_len_p4 <= \$241 ;
+    frame_len_p4 <= \$249 ;
   always @(posedge clk)
-    word1_len <= \$242 ;
+    word1_len <= \$250 ;
   always @(posedge clk)
-    target_rises <= \$243 ;
+    target_rises <= \$251 ;
   always @(posedge clk)
-    started <= \$244 ;
+    started <= \$252 ;
   always @(posedge clk)
-    ack_expired <= \$245 ;
+    ack_expired <= \$253 ;
   always @(posedge clk)
-    no_start_expired <= \$246 ;
+    no_start_expired <= \$254 ;
   always @(posedge clk)
-    delay_over <= \$247 ;
+    delay_over <= \$255 ;
   always @(posedge clk)
-    cycle_fsm_state <= \$248 ;
+    cycle_fsm_state <= \$256 ;
   always @(posedge clk)
-    armed <= \$249 ;
+    armed <= \$257 ;
   always @(posedge clk)
-    locked_seen <= \$250 ;
+    locked_seen <= \$258 ;
   always @(posedge clk)
-    done <= \$251 ;
+    done <= \$259 ;
   always @(posedge clk)
-    valid <= \$252 ;
+    valid <= \$260 ;
   always @(posedge clk)
-    status <= \$253 ;
+    status <= \$261 ;
   always @(posedge clk)
-    line_delay <= \$254 ;
+    line_delay <= \$262 ;
   always @(posedge clk)
-    timestamp <= \$255 ;
+    timestamp <= \$263 ;
   always @(posedge clk)
-    cds <= \$256 ;
+    cds <= \$264 ;
   always @(posedge clk)
-    lc <= \$257 ;
+    lc <= \$265 ;
   always @(posedge clk)
-    lc_repeat <= \$258 ;
+    lc_repeat <= \$266 ;
   always @(posedge clk)
-    lc_skip <= \$259 ;
+    lc_skip <= \$267 ;
   always @(posedge clk)
-    lc_zero <= \$260 ;
+    lc_zero <= \$268 ;
   always @(posedge clk)
-    word0_position <= \$261 ;
+    word0_position <= \$269 ;
   always @(posedge clk)
-    word0_ne <= \$262 ;
+    word0_ne <= \$270 ;
   always @(posedge clk)
-    word0_nw <= \$263 ;
+    word0_nw <= \$271 ;
   always @(posedge clk)
-    word0_crc_ok <= \$264 ;
+    word0_crc_ok <= \$272 ;
   always @(posedge clk)
-    word1_position <= \$265 ;
+    word1_position <= \$273 ;
   always @(posedge clk)
-    word1_ne <= \$266 ;
+    word1_ne <= \$274 ;
   always @(posedge clk)
-    word1_nw <= \$267 ;
+    word1_nw <= \$275 ;
   always @(posedge clk)
-    word1_crc_ok <= \$268 ;
+    word1_crc_ok <= \$276 ;
   always @(posedge clk)
-    spw_mismatch <= \$269 ;
-  \biss_master.count_aborted$204  \count_aborted$204  (
+    spw_mismatch <= \$277 ;
+  \biss_master.count_aborted$211  \count_aborted$211  (
     .clear(clear_counters),
     .clk(clk),
     .count(count_aborted),
     .inc(fault_aborted),
     .rst(rst)
   );
-  \biss_master.count_crc_word0$193  \count_crc_word0$193  (
+  \biss_master.count_crc_word0$200  \count_crc_word0$200  (
     .clear(clear_counters),
     .clk(clk),
     .count(count_crc_word0),
     .inc(inc),
     .rst(rst)
   );
-  \biss_master.count_crc_word1$194  \count_crc_word1$194  (
+  \biss_master.count_crc_word1$201  \count_crc_word1$201  (
     .clear(clear_counters),
     .clk(clk),
     .count(count_crc_word1),
-    .inc(\inc$135 ),
+    .inc(\inc$139 ),
     .rst(rst)
   );
-  \biss_master.count_delay_range$197  \count_delay_range$197  (
+  \biss_master.count_delay_range$204  \count_delay_range$204  (
     .clear(clear_counters),
     .clk(clk),
     .count(count_delay_range),
     .inc(fault_delay_range),
     .rst(rst)
   );
-  \biss_master.count_lc_repeat$199  \count_lc_repeat$199  (
+  \biss_master.count_lc_repeat$206  \count_lc_repeat$206  (
     .clear(clear_counters),
     .clk(clk),
     .count(count_lc_repeat),
-    .inc(\inc$150 ),
+    .inc(\inc$154 ),
     .rst(rst)
   );
-  \biss_master.count_lc_skip$200  \count_lc_skip$200  (
+  \biss_master.count_lc_skip$207  \count_lc_skip$207  (
     .clear(clear_counters),
     .clk(clk),
     .count(count_lc_skip),
-    .inc(\inc$153 ),
+    .inc(\inc$157 ),
     .rst(rst)
   );
-  \biss_master.count_lc_zero$201  \count_lc_zero$201  (
+  \biss_master.count_lc_zero$208  \count_lc_zero$208  (
     .clear(clear_counters),
     .clk(clk),
     .count(count_lc_zero),
-    .inc(\inc$156 ),
+    .inc(\inc$160 ),
     .rst(rst)
   );
-  \biss_master.count_no_ack$195  \count_no_ack$195  (
+  \biss_master.count_no_ack$202  \count_no_ack$202  (
     .clear(clear_counters),
     .clk(clk),
     .count(count_no_ack),
     .inc(fault_no_ack),
     .rst(rst)
   );
-  \biss_master.count_no_start$196  \count_no_start$196  (
+  \biss_master.count_no_start$203  \count_no_start$203  (
     .clear(clear_counters),
     .clk(clk),
     .count(count_no_start),
     .inc(fault_no_start),
     .rst(rst)
   );
-  \biss_master.count_overrun$203  \count_overrun$203  (
+  \biss_master.count_no_stop$212  \count_no_stop$212  (
+    .clear(clear_counters),
+    .clk(clk),
+    .count(count_no_stop),
+    .inc(fault_no_stop),
+    .rst(rst)
+  );
+  \biss_master.count_overrun$210  \count_overrun$210  (
     .clear(clear_counters),
     .clk(clk),
     .count(count_overrun),
     .inc(overrun),
     .rst(rst)
   );
-  \biss_master.count_slo_stuck_low$198  \count_slo_stuck_low$198  (
+  \biss_master.count_slo_stuck_low$205  \count_slo_stuck_low$205  (
     .clear(clear_counters),
     .clk(clk),
     .count(count_slo_stuck_low),
     .inc(fault_slo_stuck_low),
     .rst(rst)
   );
-  \biss_master.count_spw_mismatch$202  \count_spw_mismatch$202  (
+  \biss_master.count_spw_mismatch$209  \count_spw_mismatch$209  (
     .clear(clear_counters),
     .clk(clk),
     .count(count_spw_mismatch),
-    .inc(\inc$159 ),
+    .inc(\inc$163 ),
     .rst(rst)
   );
   \biss_master.decoder  decoder (
-    .\bit (\slo$63 ),
-    .cds(\cds$183 ),
+    .\bit (\slo$65 ),
+    .cds(\cds$190 ),
     .clk(clk),
     .cpw_top(cpw_top),
     .crc_ok(crc_ok),
     .data0(data0),
     .data1(spw),
-    .done(\done$82 ),
-    .lc(\lc$75 ),
+    .done(\done$120 ),
+    .lc(\lc$77 ),
     .lc_load(load),
     .ne(ne),
     .nw(nw),
@@ -1029,13 +1065,14 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .sample(sample),
     .slots_full(slots_full),
     .start_slot(start_slot),
-    .started(\started$122 ),
+    .started(\started$125 ),
+    .stop_bit(stop_bit),
     .stopped(stopped),
     .word_count(word_count),
     .words(words)
   );
   \biss_master.ma_clock  ma_clock (
-    .busy(\busy$100 ),
+    .busy(\busy$102 ),
     .clk(clk),
     .first_rise(first_rise),
     .half_period(cfg[15:0]),
@@ -1055,15 +1092,15 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .receiver_clear(receiver_clear),
     .rst(rst),
     .sample(sample),
-    .slo(\slo$63 )
+    .slo(\slo$65 )
   );
   \biss_master.sign_of_life  sign_of_life (
     .check(check),
     .clk(clk),
     .is_zero(zero),
-    .lc(\lc$75 ),
+    .lc(\lc$77 ),
     .load(load),
-    .\port$1140$0 (\slo$63 ),
+    .\port$1177$0 (\slo$65 ),
     .\repeat (\repeat ),
     .resync(resync),
     .rst(rst),
@@ -1073,53 +1110,53 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .clk(clk),
     .rst(rst),
     .slo(slo),
-    .stage1(\slo$63 )
+    .stage1(\slo$65 )
   );
   \biss_master.spw_check  spw_check (
-    .bits(cfg[140:135]),
+    .bits(cfg[141:136]),
     .clk(clk),
     .cpw_top(cpw_top),
     .match(match),
     .rst(rst),
     .spw(spw),
-    .\tolerance$8 (cfg[153:146])
+    .\tolerance$8 (cfg[154:147])
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
     (* full_case = 32'd1 *)
     casez (words[9:6])
       4'h0:
-          \$159  = 8'h04;
+          \$164  = 8'h04;
       4'h1:
-          \$159  = 8'h06;
+          \$164  = 8'h06;
       4'h2:
-          \$159  = 8'h0a;
+          \$164  = 8'h0a;
       4'h3:
-          \$159  = 8'h0c;
+          \$164  = 8'h0c;
       4'h4:
-          \$159  = 8'h0a;
+          \$164  = 8'h0a;
       4'h5:
-          \$159  = 8'h0c;
+          \$164  = 8'h0c;
       4'h6:
-          \$159  = 8'h10;
+          \$164  = 8'h10;
       4'h7:
-          \$159  = 8'h12;
+          \$164  = 8'h12;
       4'h8:
-          \$159  = 8'h14;
+          \$164  = 8'h14;
       4'h9:
-          \$159  = 8'h16;
+          \$164  = 8'h16;
       4'ha:
-          \$159  = 8'h1a;
+          \$164  = 8'h1a;
       4'hb:
-          \$159  = 8'h1c;
+          \$164  = 8'h1c;
       4'hc:
-          \$159  = 8'h04;
+          \$164  = 8'h04;
       4'hd:
-          \$159  = 8'h06;
+          \$164  = 8'h06;
       4'he:
-          \$159  = 8'h0a;
+          \$164  = 8'h0a;
       4'hf:
-          \$159  = 8'h0c;
+          \$164  = 8'h0c;
     endcase
   end
   always @* begin
@@ -1127,37 +1164,37 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     (* full_case = 32'd1 *)
     casez (words[19:16])
       4'h0:
-          \$163  = 8'h00;
+          \$168  = 8'h00;
       4'h1:
-          \$163  = 8'h02;
+          \$168  = 8'h02;
       4'h2:
-          \$163  = 8'h06;
+          \$168  = 8'h06;
       4'h3:
-          \$163  = 8'h08;
+          \$168  = 8'h08;
       4'h4:
-          \$163  = 8'h06;
+          \$168  = 8'h06;
       4'h5:
-          \$163  = 8'h08;
+          \$168  = 8'h08;
       4'h6:
-          \$163  = 8'h0c;
+          \$168  = 8'h0c;
       4'h7:
-          \$163  = 8'h0e;
+          \$168  = 8'h0e;
       4'h8:
-          \$163  = 8'h10;
+          \$168  = 8'h10;
       4'h9:
-          \$163  = 8'h12;
+          \$168  = 8'h12;
       4'ha:
-          \$163  = 8'h16;
+          \$168  = 8'h16;
       4'hb:
-          \$163  = 8'h18;
+          \$168  = 8'h18;
       4'hc:
-          \$163  = 8'h00;
+          \$168  = 8'h00;
       4'hd:
-          \$163  = 8'h02;
+          \$168  = 8'h02;
       4'he:
-          \$163  = 8'h06;
+          \$168  = 8'h06;
       4'hf:
-          \$163  = 8'h08;
+          \$168  = 8'h08;
     endcase
   end
   always @* begin
@@ -1216,6 +1253,20 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
       3'h4:
           if (abort_cycle) begin
             timer_clear = 1'h1;
+          end else if (stopped) begin
+            if (\$65 ) begin
+            end else if (stop_bit) begin
+              timer_clear = 1'h1;
+            end
+          end
+      3'h5:
+          /* empty */;
+      3'h6:
+          if (abort_cycle) begin
+            timer_clear = 1'h1;
+          end else if (\$67 ) begin
+          end else if (stuck_latched) begin
+            timer_clear = 1'h1;
           end
     endcase
   end
@@ -1242,15 +1293,17 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
             report = 1'h1;
           end else if (abort_cycle) begin
             report = 1'h1;
-          end else if (\slo$63 ) begin
+          end else if (\slo$65 ) begin
           end else if (\$40 ) begin
             report = 1'h1;
           end
       3'h3:
           if (abort_cycle) begin
             report = 1'h1;
-          end else if (\done$82 ) begin
-            report = 1'h1;
+          end else if (\done$120 ) begin
+            if (\$61 ) begin
+              report = 1'h1;
+            end
           end else if (\$48 ) begin
             report = 1'h1;
           end else if (\$53 ) begin
@@ -1258,6 +1311,27 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
           end else if (\$56 ) begin
             report = 1'h1;
           end else if (\$60 ) begin
+            report = 1'h1;
+          end
+      3'h4:
+          if (abort_cycle) begin
+            if (cfg[124]) begin
+              report = 1'h1;
+            end
+          end else if (stopped) begin
+            if (\$65 ) begin
+            end else if (stop_bit) begin
+              report = 1'h1;
+            end
+          end
+      3'h5:
+          /* empty */;
+      3'h6:
+          if (abort_cycle) begin
+            report = 1'h1;
+          end else if (\$67 ) begin
+            report = 1'h1;
+          end else if (stuck_latched) begin
             report = 1'h1;
           end
     endcase
@@ -1275,15 +1349,17 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
             report_status = 4'hb;
           end else if (abort_cycle) begin
             report_status = 4'ha;
-          end else if (\slo$63 ) begin
+          end else if (\slo$65 ) begin
           end else if (\$40 ) begin
             report_status = 4'h9;
           end
       3'h3:
           if (abort_cycle) begin
             report_status = 4'ha;
-          end else if (\done$82 ) begin
-            report_status = frame_status;
+          end else if (\done$120 ) begin
+            if (\$61 ) begin
+              report_status = frame_status;
+            end
           end else if (\$48 ) begin
             report_status = 4'h8;
           end else if (\$53 ) begin
@@ -1292,6 +1368,27 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
             report_status = 4'h8;
           end else if (\$60 ) begin
             report_status = 4'h7;
+          end
+      3'h4:
+          if (abort_cycle) begin
+            if (cfg[124]) begin
+              report_status = 4'ha;
+            end
+          end else if (stopped) begin
+            if (\$65 ) begin
+            end else if (stop_bit) begin
+              report_status = 4'hc;
+            end
+          end
+      3'h5:
+          /* empty */;
+      3'h6:
+          if (abort_cycle) begin
+            report_status = 4'ha;
+          end else if (\$67 ) begin
+            report_status = frame_status;
+          end else if (stuck_latched) begin
+            report_status = 4'h9;
           end
     endcase
   end
@@ -1326,6 +1423,18 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
           if (abort_cycle) begin
             fault_aborted = 1'h1;
           end
+      3'h4:
+          if (abort_cycle) begin
+            if (cfg[124]) begin
+              fault_aborted = 1'h1;
+            end
+          end
+      3'h5:
+          /* empty */;
+      3'h6:
+          if (abort_cycle) begin
+            fault_aborted = 1'h1;
+          end
     endcase
   end
   always @* begin
@@ -1339,8 +1448,20 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
       3'h2:
           if (\$39 ) begin
           end else if (abort_cycle) begin
-          end else if (\slo$63 ) begin
+          end else if (\slo$65 ) begin
           end else if (\$40 ) begin
+            fault_slo_stuck_low = 1'h1;
+          end
+      3'h3:
+          /* empty */;
+      3'h4:
+          /* empty */;
+      3'h5:
+          /* empty */;
+      3'h6:
+          if (abort_cycle) begin
+          end else if (\$67 ) begin
+          end else if (stuck_latched) begin
             fault_slo_stuck_low = 1'h1;
           end
     endcase
@@ -1358,7 +1479,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
       3'h3:
           run = \$43 ;
       3'h4:
-          run = \$63 ;
+          run = \$64 ;
     endcase
   end
   always @* begin
@@ -1387,7 +1508,18 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
           /* empty */;
       3'h3:
           if (abort_cycle) begin
-          end else if (\done$82 ) begin
+          end else if (\done$120 ) begin
+            if (\$61 ) begin
+              report_frame = 1'h1;
+            end
+          end
+      3'h4:
+          /* empty */;
+      3'h5:
+          /* empty */;
+      3'h6:
+          if (abort_cycle) begin
+          end else if (\$67 ) begin
             report_frame = 1'h1;
           end
     endcase
@@ -1404,11 +1536,22 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
           /* empty */;
       3'h3:
           if (abort_cycle) begin
-          end else if (\done$82 ) begin
-            report_delay = 1'h1;
+          end else if (\done$120 ) begin
+            if (\$61 ) begin
+              report_delay = 1'h1;
+            end
           end else if (\$48 ) begin
           end else if (\$53 ) begin
           end else if (\$56 ) begin
+            report_delay = 1'h1;
+          end
+      3'h4:
+          /* empty */;
+      3'h5:
+          /* empty */;
+      3'h6:
+          if (abort_cycle) begin
+          end else if (\$67 ) begin
             report_delay = 1'h1;
           end
     endcase
@@ -1425,7 +1568,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
           /* empty */;
       3'h3:
           if (abort_cycle) begin
-          end else if (\done$82 ) begin
+          end else if (\done$120 ) begin
           end else if (\$48 ) begin
             fault_delay_range = 1'h1;
           end else if (\$53 ) begin
@@ -1446,7 +1589,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
           /* empty */;
       3'h3:
           if (abort_cycle) begin
-          end else if (\done$82 ) begin
+          end else if (\done$120 ) begin
           end else if (\$48 ) begin
           end else if (\$53 ) begin
             fault_no_ack = 1'h1;
@@ -1465,7 +1608,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
           /* empty */;
       3'h3:
           if (abort_cycle) begin
-          end else if (\done$82 ) begin
+          end else if (\done$120 ) begin
           end else if (\$48 ) begin
           end else if (\$53 ) begin
           end else if (\$56 ) begin
@@ -1476,426 +1619,388 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$224  = \$117 ;
+    fault_no_stop = 1'h0;
+    casez (cycle_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h3:
+          /* empty */;
+      3'h4:
+          if (abort_cycle) begin
+          end else if (stopped) begin
+            if (\$65 ) begin
+            end else if (stop_bit) begin
+              fault_no_stop = 1'h1;
+            end
+          end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    \$232  = \$122 ;
     if (rst) begin
-      \$224  = 1'h0;
+      \$232  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$225  = cfg;
+    \$233  = cfg;
     if (idle) begin
-      \$225  = live;
+      \$233  = live;
     end
     if (rst) begin
-      \$225  = 154'h000000000000000000000000000000000000000;
+      \$233  = 155'h000000000000000000000000000000000000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$226  = ack_limit;
+    \$234  = ack_limit;
     if (idle) begin
-      \$226  = \$119 ;
+      \$234  = \$124 ;
     end
     if (rst) begin
-      \$226  = 24'h000000;
+      \$234  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$227  = timeout_limit;
+    \$235  = timeout_limit;
     if (idle) begin
-      \$227  = \$121 ;
+      \$235  = \$126 ;
     end
     if (rst) begin
-      \$227  = 24'h000000;
+      \$235  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$228  = delay_limit;
+    \$236  = delay_limit;
     if (idle) begin
-      \$228  = \$123 ;
+      \$236  = \$128 ;
     end
     if (rst) begin
-      \$228  = 12'h000;
+      \$236  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$229  = \$124 ;
+    \$237  = \$129 ;
     if (rst) begin
-      \$229  = 25'h0000000;
+      \$237  = 25'h0000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$230  = \$125 [31:0];
+    \$238  = \$130 [31:0];
     if (rst) begin
-      \$230  = 32'd0;
+      \$238  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$231  = first_rise_time;
+    \$239  = first_rise_time;
     if (first_rise) begin
-      \$231  = now;
+      \$239  = now;
     end
     if (rst) begin
-      \$231  = 32'd0;
+      \$239  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$232  = slo_low_time_p1;
-    if (\$126 ) begin
-      \$232  = 25'h0000001;
-    end else if (\$127 ) begin
-      \$232  = \$128 [24:0];
+    \$240  = slo_low_time_p1;
+    if (\$131 ) begin
+      \$240  = 25'h0000001;
+    end else if (\$132 ) begin
+      \$240  = \$133 [24:0];
     end
     if (rst) begin
-      \$232  = 25'h0000001;
+      \$240  = 25'h0000001;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$233  = \$133 ;
+    \$241  = \$138 ;
     if (rst) begin
-      \$233  = 1'h0;
+      \$241  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$234  = \$141 ;
+    \$242  = \$146 ;
     if (rst) begin
-      \$234  = 1'h0;
+      \$242  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$235  = idle;
+    \$243  = idle;
     if (rst) begin
-      \$235  = 1'h0;
+      \$243  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$236  = \$145 [24:0];
+    \$244  = \$150 [24:0];
     if (rst) begin
-      \$236  = 25'h0000001;
+      \$244  = 25'h0000001;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$237  = \$151 ;
-    if (rst) begin
-      \$237  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    (* full_case = 32'd1 *)
-    if (\$157 ) begin
-      \$238  = 24'h000001;
-    end else begin
-      \$238  = \$158 [23:0];
-    end
-    if (rst) begin
-      \$238  = 24'h000001;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    (* full_case = 32'd1 *)
-    if (\$157 ) begin
-      \$239  = 1'h1;
-    end else begin
-      \$239  = 1'h0;
-    end
-    if (rst) begin
-      \$239  = 1'h1;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$240  = \$160 [7:0];
-    if (rst) begin
-      \$240  = 8'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$241  = \$162 ;
-    if (rst) begin
-      \$241  = 9'h000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$242  = \$164 [7:0];
-    if (rst) begin
-      \$242  = 8'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$243  = \$165 ;
-    if (rst) begin
-      \$243  = 17'h00000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$244  = \started$122 ;
-    if (rst) begin
-      \$244  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$245  = \$172 ;
+    \$245  = \$156 ;
     if (rst) begin
       \$245  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$246  = \$179 ;
+    (* full_case = 32'd1 *)
+    if (\$162 ) begin
+      \$246  = 24'h000001;
+    end else begin
+      \$246  = \$163 [23:0];
+    end
     if (rst) begin
-      \$246  = 1'h0;
+      \$246  = 24'h000001;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$247  = \$180 ;
-    if (rst) begin
+    (* full_case = 32'd1 *)
+    if (\$162 ) begin
+      \$247  = 1'h1;
+    end else begin
       \$247  = 1'h0;
     end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$248  = cycle_fsm_state;
-    casez (cycle_fsm_state)
-      3'h0:
-          if (\$181 ) begin
-          end else if (break_over) begin
-            \$248  = 3'h1;
-          end
-      3'h1:
-          if (abort_cycle) begin
-            \$248  = 3'h0;
-          end else if (\$190 ) begin
-            \$248  = 3'h2;
-          end
-      3'h2:
-          if (\$192 ) begin
-            \$248  = 3'h1;
-            if (abort_cycle) begin
-              \$248  = 3'h0;
-            end
-          end else if (abort_cycle) begin
-            \$248  = 3'h0;
-          end else if (\slo$63 ) begin
-            \$248  = 3'h3;
-          end else if (\$193 ) begin
-            \$248  = 3'h0;
-          end
-      3'h3:
-          if (abort_cycle) begin
-            \$248  = 3'h0;
-          end else if (\done$82 ) begin
-            \$248  = 3'h4;
-          end else if (\$196 ) begin
-            \$248  = 3'h0;
-          end else if (\$201 ) begin
-            \$248  = 3'h0;
-          end else if (\$204 ) begin
-            \$248  = 3'h0;
-          end else if (\$208 ) begin
-            \$248  = 3'h0;
-          end
-      3'h4:
-          if (abort_cycle) begin
-            \$248  = 3'h0;
-          end else if (stopped) begin
-            \$248  = 3'h5;
-          end
-      3'h5:
-          if (\$209 ) begin
-            \$248  = 3'h1;
-          end
-    endcase
     if (rst) begin
-      \$248  = 3'h0;
+      \$247  = 1'h1;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$249  = armed;
-    casez (cycle_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          \$249  = 1'h0;
-      3'h3:
-          if (arm) begin
-            \$249  = 1'h1;
-          end
-    endcase
+    \$248  = \$165 [7:0];
     if (rst) begin
-      \$249  = 1'h0;
+      \$248  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$250  = locked_seen;
-    casez (cycle_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          \$250  = 1'h0;
-      3'h3:
-          if (\$195 ) begin
-            \$250  = 1'h1;
-          end
-    endcase
+    \$249  = \$167 ;
     if (rst) begin
-      \$250  = 1'h0;
+      \$249  = 9'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$251  = report;
+    \$250  = \$169 [7:0];
     if (rst) begin
-      \$251  = 1'h0;
+      \$250  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$252  = \$211 ;
+    \$251  = \$170 ;
+    if (rst) begin
+      \$251  = 17'h00000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    \$252  = \started$125 ;
     if (rst) begin
       \$252  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$253  = status;
-    if (report) begin
-      \$253  = report_status;
-    end
+    \$253  = \$177 ;
     if (rst) begin
-      \$253  = 4'h0;
+      \$253  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$254  = line_delay;
-    if (report_delay) begin
-      \$254  = delay;
-    end
+    \$254  = \$184 ;
     if (rst) begin
-      \$254  = 13'h0000;
+      \$254  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$255  = timestamp;
-    if (report_frame) begin
-      \$255  = first_rise_time;
-    end
+    \$255  = \$185 ;
     if (rst) begin
-      \$255  = 32'd0;
+      \$255  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$256  = cds;
-    if (report_frame) begin
-      \$256  = \cds$183 ;
-    end
+    \$256  = cycle_fsm_state;
+    casez (cycle_fsm_state)
+      3'h0:
+          if (\$186 ) begin
+          end else if (break_over) begin
+            \$256  = 3'h1;
+          end
+      3'h1:
+          if (abort_cycle) begin
+            \$256  = 3'h0;
+          end else if (\$195 ) begin
+            \$256  = 3'h2;
+          end
+      3'h2:
+          if (\$197 ) begin
+            \$256  = 3'h1;
+            if (abort_cycle) begin
+              \$256  = 3'h0;
+            end
+          end else if (abort_cycle) begin
+            \$256  = 3'h0;
+          end else if (\slo$65 ) begin
+            \$256  = 3'h3;
+          end else if (\$198 ) begin
+            \$256  = 3'h0;
+          end
+      3'h3:
+          if (abort_cycle) begin
+            \$256  = 3'h0;
+          end else if (\done$120 ) begin
+            \$256  = 3'h4;
+          end else if (\$201 ) begin
+            \$256  = 3'h0;
+          end else if (\$206 ) begin
+            \$256  = 3'h0;
+          end else if (\$209 ) begin
+            \$256  = 3'h0;
+          end else if (\$213 ) begin
+            \$256  = 3'h0;
+          end
+      3'h4:
+          if (abort_cycle) begin
+            (* full_case = 32'd1 *)
+            if (cfg[124]) begin
+              \$256  = 3'h0;
+            end else begin
+              \$256  = 3'h0;
+            end
+          end else if (stopped) begin
+            (* full_case = 32'd1 *)
+            if (\$214 ) begin
+              \$256  = 3'h5;
+            end else if (stop_bit) begin
+              \$256  = 3'h0;
+            end else begin
+              \$256  = 3'h6;
+            end
+          end
+      3'h5:
+          if (\$215 ) begin
+            \$256  = 3'h1;
+          end
+      3'h6:
+          if (abort_cycle) begin
+            \$256  = 3'h0;
+          end else if (\$217 ) begin
+            \$256  = 3'h1;
+          end else if (stuck_latched) begin
+            \$256  = 3'h0;
+          end
+    endcase
     if (rst) begin
-      \$256  = 1'h0;
+      \$256  = 3'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$257  = lc;
-    if (report_frame) begin
-      \$257  = \lc$75 ;
-    end
+    \$257  = armed;
+    casez (cycle_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          \$257  = 1'h0;
+      3'h3:
+          if (arm) begin
+            \$257  = 1'h1;
+          end
+    endcase
     if (rst) begin
-      \$257  = 6'h00;
+      \$257  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$258  = lc_repeat;
-    if (report_frame) begin
-      \$258  = \$212 ;
-    end
+    \$258  = locked_seen;
+    casez (cycle_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          \$258  = 1'h0;
+      3'h3:
+          if (\$200 ) begin
+            \$258  = 1'h1;
+          end
+    endcase
     if (rst) begin
       \$258  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$259  = lc_skip;
-    if (report_frame) begin
-      \$259  = \$213 ;
-    end
+    \$259  = report;
     if (rst) begin
       \$259  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$260  = lc_zero;
-    if (report_frame) begin
-      \$260  = \$214 ;
-    end
+    \$260  = \$219 ;
     if (rst) begin
       \$260  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$261  = word0_position;
-    if (report_frame) begin
-      \$261  = data0;
+    \$261  = status;
+    if (report) begin
+      \$261  = report_status;
     end
     if (rst) begin
-      \$261  = 55'h00000000000000;
+      \$261  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$262  = word0_ne;
-    if (report_frame) begin
-      \$262  = ne[0];
+    \$262  = line_delay;
+    if (report_delay) begin
+      \$262  = delay;
     end
     if (rst) begin
-      \$262  = 1'h0;
+      \$262  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$263  = word0_nw;
+    \$263  = timestamp;
     if (report_frame) begin
-      \$263  = nw[0];
+      \$263  = first_rise_time;
     end
     if (rst) begin
-      \$263  = 1'h0;
+      \$263  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$264  = word0_crc_ok;
+    \$264  = cds;
     if (report_frame) begin
-      \$264  = crc_ok[0];
+      \$264  = \cds$190 ;
     end
     if (rst) begin
       \$264  = 1'h0;
@@ -1903,19 +2008,19 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$265  = word1_position;
+    \$265  = lc;
     if (report_frame) begin
-      \$265  = spw;
+      \$265  = \lc$77 ;
     end
     if (rst) begin
-      \$265  = 40'h0000000000;
+      \$265  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$266  = word1_ne;
+    \$266  = lc_repeat;
     if (report_frame) begin
-      \$266  = ne[1];
+      \$266  = \$220 ;
     end
     if (rst) begin
       \$266  = 1'h0;
@@ -1923,9 +2028,9 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$267  = word1_nw;
+    \$267  = lc_skip;
     if (report_frame) begin
-      \$267  = nw[1];
+      \$267  = \$221 ;
     end
     if (rst) begin
       \$267  = 1'h0;
@@ -1933,9 +2038,9 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$268  = word1_crc_ok;
+    \$268  = lc_zero;
     if (report_frame) begin
-      \$268  = \$216 ;
+      \$268  = \$222 ;
     end
     if (rst) begin
       \$268  = 1'h0;
@@ -1943,95 +2048,180 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$269  = spw_mismatch;
+    \$269  = word0_position;
     if (report_frame) begin
-      \$269  = \$223 ;
+      \$269  = data0;
     end
     if (rst) begin
-      \$269  = 1'h0;
+      \$269  = 55'h00000000000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    \$270  = word0_ne;
+    if (report_frame) begin
+      \$270  = ne[0];
+    end
+    if (rst) begin
+      \$270  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    \$271  = word0_nw;
+    if (report_frame) begin
+      \$271  = nw[0];
+    end
+    if (rst) begin
+      \$271  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    \$272  = word0_crc_ok;
+    if (report_frame) begin
+      \$272  = crc_ok[0];
+    end
+    if (rst) begin
+      \$272  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    \$273  = word1_position;
+    if (report_frame) begin
+      \$273  = spw;
+    end
+    if (rst) begin
+      \$273  = 40'h0000000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    \$274  = word1_ne;
+    if (report_frame) begin
+      \$274  = ne[1];
+    end
+    if (rst) begin
+      \$274  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    \$275  = word1_nw;
+    if (report_frame) begin
+      \$275  = nw[1];
+    end
+    if (rst) begin
+      \$275  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    \$276  = word1_crc_ok;
+    if (report_frame) begin
+      \$276  = \$224 ;
+    end
+    if (rst) begin
+      \$276  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    \$277  = spw_mismatch;
+    if (report_frame) begin
+      \$277  = \$231 ;
+    end
+    if (rst) begin
+      \$277  = 1'h0;
     end
   end
   assign half_period = cfg[15:0];
-  assign \slo$64  = \slo$63 ;
-  assign \half_period$65  = cfg[15:0];
-  assign \sample$67  = sample;
-  assign \bit  = \slo$63 ;
-  assign \bit$69  = \slo$63 ;
-  assign \ma$71  = ma;
-  assign \lc$76  = \lc$75 ;
-  assign lc_next = { \lc$75 [4:0], \slo$63  };
-  assign \lc_next$78  = { \lc$75 [4:0], \slo$63  };
+  assign \slo$66  = \slo$65 ;
+  assign \half_period$67  = cfg[15:0];
+  assign \sample$69  = sample;
+  assign \bit  = \slo$65 ;
+  assign \bit$71  = \slo$65 ;
+  assign \ma$73  = ma;
+  assign \lc$78  = \lc$77 ;
+  assign lc_next = { \lc$77 [4:0], \slo$65  };
+  assign \lc_next$80  = { \lc$77 [4:0], \slo$65  };
   assign lc_load = load;
-  assign \cpw_top$85  = cpw_top;
+  assign \cpw_top$87  = cpw_top;
   assign data1 = spw;
-  assign bits = cfg[140:135];
-  assign tolerance = cfg[153:146];
+  assign bits = cfg[141:136];
+  assign tolerance = cfg[154:147];
   assign second_rise = arm;
-  assign \resync$131  = resync;
+  assign \resync$135  = resync;
   assign clear = clear_counters;
   assign count = count_crc_word0;
-  assign \clear$136  = clear_counters;
-  assign \count$137  = count_crc_word1;
-  assign \inc$138  = fault_no_ack;
-  assign \clear$139  = clear_counters;
-  assign \count$140  = count_no_ack;
-  assign \inc$141  = fault_no_start;
-  assign \clear$142  = clear_counters;
-  assign \count$143  = count_no_start;
-  assign \inc$144  = fault_delay_range;
-  assign \clear$145  = clear_counters;
-  assign \count$146  = count_delay_range;
-  assign \inc$147  = fault_slo_stuck_low;
-  assign \clear$148  = clear_counters;
-  assign \count$149  = count_slo_stuck_low;
-  assign \clear$151  = clear_counters;
-  assign \count$152  = count_lc_repeat;
-  assign \clear$154  = clear_counters;
-  assign \count$155  = count_lc_skip;
-  assign \clear$157  = clear_counters;
-  assign \count$158  = count_lc_zero;
-  assign \clear$160  = clear_counters;
-  assign \count$161  = count_spw_mismatch;
-  assign \inc$162  = overrun;
-  assign \clear$163  = clear_counters;
-  assign \count$164  = count_overrun;
-  assign \inc$165  = fault_aborted;
-  assign \clear$166  = clear_counters;
-  assign \count$167  = count_aborted;
+  assign \clear$140  = clear_counters;
+  assign \count$141  = count_crc_word1;
+  assign \inc$142  = fault_no_ack;
+  assign \clear$143  = clear_counters;
+  assign \count$144  = count_no_ack;
+  assign \inc$145  = fault_no_start;
+  assign \clear$146  = clear_counters;
+  assign \count$147  = count_no_start;
+  assign \inc$148  = fault_delay_range;
+  assign \clear$149  = clear_counters;
+  assign \count$150  = count_delay_range;
+  assign \inc$151  = fault_slo_stuck_low;
+  assign \clear$152  = clear_counters;
+  assign \count$153  = count_slo_stuck_low;
+  assign \clear$155  = clear_counters;
+  assign \count$156  = count_lc_repeat;
+  assign \clear$158  = clear_counters;
+  assign \count$159  = count_lc_skip;
+  assign \clear$161  = clear_counters;
+  assign \count$162  = count_lc_zero;
+  assign \clear$164  = clear_counters;
+  assign \count$165  = count_spw_mismatch;
+  assign \inc$166  = overrun;
+  assign \clear$167  = clear_counters;
+  assign \count$168  = count_overrun;
+  assign \inc$169  = fault_aborted;
+  assign \clear$170  = clear_counters;
+  assign \count$171  = count_aborted;
+  assign \inc$172  = fault_no_stop;
+  assign \clear$173  = clear_counters;
+  assign \count$174  = count_no_stop;
   assign \live.cfg_ma_half_period  = live[15:0];
   assign \live.cfg_request_period  = live[39:16];
   assign \live.cfg_break_time  = live[63:40];
   assign \live.cfg_ack_limit  = live[87:64];
   assign \live.cfg_timeout_limit  = live[111:88];
   assign \live.cfg_delay_limit  = live[123:112];
-  assign \live.cfg_w0_data_bits  = live[129:124];
-  assign \live.cfg_w0_nenw  = live[130];
-  assign \live.cfg_w0_lc  = live[131];
-  assign \live.cfg_w0_crc  = live[133:132];
-  assign \live.cfg_w1_enable  = live[134];
-  assign \live.cfg_w1_data_bits  = live[140:135];
-  assign \live.cfg_w1_nenw  = live[141];
-  assign \live.cfg_w1_lc  = live[142];
-  assign \live.cfg_w1_crc  = live[144:143];
-  assign \live.cfg_spw_check  = live[145];
-  assign \live.cfg_spw_tolerance  = live[153:146];
+  assign \live.cfg_end_check  = live[124];
+  assign \live.cfg_w0_data_bits  = live[130:125];
+  assign \live.cfg_w0_nenw  = live[131];
+  assign \live.cfg_w0_lc  = live[132];
+  assign \live.cfg_w0_crc  = live[134:133];
+  assign \live.cfg_w1_enable  = live[135];
+  assign \live.cfg_w1_data_bits  = live[141:136];
+  assign \live.cfg_w1_nenw  = live[142];
+  assign \live.cfg_w1_lc  = live[143];
+  assign \live.cfg_w1_crc  = live[145:144];
+  assign \live.cfg_spw_check  = live[146];
+  assign \live.cfg_spw_tolerance  = live[154:147];
   assign \cfg.cfg_ma_half_period  = cfg[15:0];
   assign \cfg.cfg_request_period  = cfg[39:16];
   assign \cfg.cfg_break_time  = cfg[63:40];
   assign \cfg.cfg_ack_limit  = cfg[87:64];
   assign \cfg.cfg_timeout_limit  = cfg[111:88];
   assign \cfg.cfg_delay_limit  = cfg[123:112];
-  assign \cfg.cfg_w0_data_bits  = cfg[129:124];
-  assign \cfg.cfg_w0_nenw  = cfg[130];
-  assign \cfg.cfg_w0_lc  = cfg[131];
-  assign \cfg.cfg_w0_crc  = cfg[133:132];
-  assign \cfg.cfg_w1_enable  = cfg[134];
-  assign \cfg.cfg_w1_data_bits  = cfg[140:135];
-  assign \cfg.cfg_w1_nenw  = cfg[141];
-  assign \cfg.cfg_w1_lc  = cfg[142];
-  assign \cfg.cfg_w1_crc  = cfg[144:143];
-  assign \cfg.cfg_spw_check  = cfg[145];
-  assign \cfg.cfg_spw_tolerance  = cfg[153:146];
+  assign \cfg.cfg_end_check  = cfg[124];
+  assign \cfg.cfg_w0_data_bits  = cfg[130:125];
+  assign \cfg.cfg_w0_nenw  = cfg[131];
+  assign \cfg.cfg_w0_lc  = cfg[132];
+  assign \cfg.cfg_w0_crc  = cfg[134:133];
+  assign \cfg.cfg_w1_enable  = cfg[135];
+  assign \cfg.cfg_w1_data_bits  = cfg[141:136];
+  assign \cfg.cfg_w1_nenw  = cfg[142];
+  assign \cfg.cfg_w1_lc  = cfg[143];
+  assign \cfg.cfg_w1_crc  = cfg[145:144];
+  assign \cfg.cfg_spw_check  = cfg[146];
+  assign \cfg.cfg_spw_tolerance  = cfg[154:147];
   assign \words[0]  = words[9:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -2042,25 +2232,26 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \words[1].nenw  = words[16];
   assign \words[1].lc  = words[17];
   assign \words[1].crc  = words[19:18];
-  assign words[19:18] = cfg[144:143];
-  assign words[17] = cfg[142];
-  assign words[16] = cfg[141];
-  assign words[15:10] = cfg[140:135];
-  assign words[9:8] = cfg[133:132];
-  assign words[7] = cfg[131];
-  assign words[6] = cfg[130];
-  assign words[5:0] = cfg[129:124];
-  assign live[153:146] = cfg_spw_tolerance;
-  assign live[145] = cfg_spw_check;
-  assign live[144:143] = cfg_w1_crc;
-  assign live[142] = cfg_w1_lc;
-  assign live[141] = cfg_w1_nenw;
-  assign live[140:135] = cfg_w1_data_bits;
-  assign live[134] = cfg_w1_enable;
-  assign live[133:132] = cfg_w0_crc;
-  assign live[131] = cfg_w0_lc;
-  assign live[130] = cfg_w0_nenw;
-  assign live[129:124] = cfg_w0_data_bits;
+  assign words[19:18] = cfg[145:144];
+  assign words[17] = cfg[143];
+  assign words[16] = cfg[142];
+  assign words[15:10] = cfg[141:136];
+  assign words[9:8] = cfg[134:133];
+  assign words[7] = cfg[132];
+  assign words[6] = cfg[131];
+  assign words[5:0] = cfg[130:125];
+  assign live[154:147] = cfg_spw_tolerance;
+  assign live[146] = cfg_spw_check;
+  assign live[145:144] = cfg_w1_crc;
+  assign live[143] = cfg_w1_lc;
+  assign live[142] = cfg_w1_nenw;
+  assign live[141:136] = cfg_w1_data_bits;
+  assign live[135] = cfg_w1_enable;
+  assign live[134:133] = cfg_w0_crc;
+  assign live[132] = cfg_w0_lc;
+  assign live[131] = cfg_w0_nenw;
+  assign live[130:125] = cfg_w0_data_bits;
+  assign live[124] = cfg_end_check;
   assign live[123:112] = cfg_delay_limit;
   assign live[111:88] = cfg_timeout_limit;
   assign live[87:64] = cfg_ack_limit;
@@ -2070,7 +2261,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_aborted$204 (clk, rst, inc, count, clear);
+module \biss_master.count_aborted$211 (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$10  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -2124,7 +2315,7 @@ module \biss_master.count_aborted$204 (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_crc_word0$193 (clk, rst, inc, count, clear);
+module \biss_master.count_crc_word0$200 (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$11  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -2178,7 +2369,7 @@ module \biss_master.count_crc_word0$193 (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_crc_word1$194 (clk, rst, inc, count, clear);
+module \biss_master.count_crc_word1$201 (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$12  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -2232,7 +2423,7 @@ module \biss_master.count_crc_word1$194 (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_delay_range$197 (clk, rst, inc, count, clear);
+module \biss_master.count_delay_range$204 (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$13  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -2286,7 +2477,7 @@ module \biss_master.count_delay_range$197 (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_lc_repeat$199 (clk, rst, inc, count, clear);
+module \biss_master.count_lc_repeat$206 (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$14  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -2340,7 +2531,7 @@ module \biss_master.count_lc_repeat$199 (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_lc_skip$200 (clk, rst, inc, count, clear);
+module \biss_master.count_lc_skip$207 (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$15  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -2394,7 +2585,7 @@ module \biss_master.count_lc_skip$200 (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_lc_zero$201 (clk, rst, inc, count, clear);
+module \biss_master.count_lc_zero$208 (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$16  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -2448,7 +2639,7 @@ module \biss_master.count_lc_zero$201 (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_no_ack$195 (clk, rst, inc, count, clear);
+module \biss_master.count_no_ack$202 (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$17  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -2502,7 +2693,7 @@ module \biss_master.count_no_ack$195 (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_no_start$196 (clk, rst, inc, count, clear);
+module \biss_master.count_no_start$203 (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$18  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -2556,7 +2747,7 @@ module \biss_master.count_no_start$196 (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_overrun$203 (clk, rst, inc, count, clear);
+module \biss_master.count_no_stop$212 (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$19  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -2610,7 +2801,7 @@ module \biss_master.count_overrun$203 (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_slo_stuck_low$198 (clk, rst, inc, count, clear);
+module \biss_master.count_overrun$210 (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$20  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -2664,7 +2855,7 @@ module \biss_master.count_slo_stuck_low$198 (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_spw_mismatch$202 (clk, rst, inc, count, clear);
+module \biss_master.count_slo_stuck_low$205 (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$21  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -2718,9 +2909,63 @@ module \biss_master.count_spw_mismatch$202 (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.decoder (rst, word_count, lc_load, words, receiver_clear, sample, crc_ok, done, stopped, slots_full, started, start_slot, cds, data0, ne, nw, data1, lc, cpw_top, \bit , clk
-);
+module \biss_master.count_spw_mismatch$209 (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$22  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master.decoder (rst, word_count, lc_load, words, receiver_clear, sample, crc_ok, done, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1, lc, cpw_top, \bit 
+, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$23  = 0;
   wire [2:0] \$1 ;
   wire [7:0] \$10 ;
   wire \$100 ;
@@ -2743,13 +2988,14 @@ module \biss_master.decoder (rst, word_count, lc_load, words, receiver_clear, sa
   reg \$116 ;
   reg \$117 ;
   reg \$118 ;
-  reg [54:0] \$119 ;
+  reg \$119 ;
   wire [9:0] \$12 ;
-  reg [1:0] \$120 ;
+  reg [54:0] \$120 ;
   reg [1:0] \$121 ;
-  reg [39:0] \$122 ;
-  reg [5:0] \$123 ;
-  reg [39:0] \$124 ;
+  reg [1:0] \$122 ;
+  reg [39:0] \$123 ;
+  reg [5:0] \$124 ;
+  reg [39:0] \$125 ;
   wire \$13 ;
   wire \$14 ;
   wire \$15 ;
@@ -2898,6 +3144,8 @@ module \biss_master.decoder (rst, word_count, lc_load, words, receiver_clear, sa
   reg [15:0] start_slot = 16'h0000;
   output started;
   reg started = 1'h0;
+  output stop_bit;
+  reg stop_bit = 1'h0;
   output stopped;
   reg stopped = 1'h0;
   wire valid;
@@ -3081,17 +3329,19 @@ module \biss_master.decoder (rst, word_count, lc_load, words, receiver_clear, sa
   always @(posedge clk)
     word <= \$118 ;
   always @(posedge clk)
-    data0 <= \$119 ;
+    stop_bit <= \$119 ;
   always @(posedge clk)
-    ne <= \$120 ;
+    data0 <= \$120 ;
   always @(posedge clk)
-    nw <= \$121 ;
+    ne <= \$121 ;
   always @(posedge clk)
-    data1 <= \$122 ;
+    nw <= \$122 ;
   always @(posedge clk)
-    lc <= \$123 ;
+    data1 <= \$123 ;
   always @(posedge clk)
-    cpw_top <= \$124 ;
+    lc <= \$124 ;
+  always @(posedge clk)
+    cpw_top <= \$125 ;
   \biss_master.decoder.crc0  crc0 (
     .\bit (\bit ),
     .clk(clk),
@@ -3113,7 +3363,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, receiver_clear, sa
     .valid(\valid$21 )
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
     (* full_case = 32'd1 *)
     casez (words[9:6])
       4'h0:
@@ -3151,7 +3401,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, receiver_clear, sa
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:16])
       4'h0:
@@ -3189,7 +3439,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, receiver_clear, sa
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
     (* full_case = 32'd1 *)
     casez (words[6])
       1'h0:
@@ -3199,7 +3449,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, receiver_clear, sa
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -3213,7 +3463,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, receiver_clear, sa
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
     (* full_case = 32'd1 *)
     casez (words[9:6])
       4'h0:
@@ -3251,7 +3501,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, receiver_clear, sa
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -3265,7 +3515,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, receiver_clear, sa
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
     (* full_case = 32'd1 *)
     casez (words[16])
       1'h0:
@@ -3275,7 +3525,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, receiver_clear, sa
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
     (* full_case = 32'd1 *)
     casez (words[17:16])
       2'h0:
@@ -3289,7 +3539,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, receiver_clear, sa
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:16])
       4'h0:
@@ -3327,7 +3577,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, receiver_clear, sa
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
     (* full_case = 32'd1 *)
     casez (words[17:16])
       2'h0:
@@ -3341,7 +3591,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, receiver_clear, sa
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
     in_word = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -3353,7 +3603,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, receiver_clear, sa
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
     \$106  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -3377,7 +3627,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, receiver_clear, sa
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
     \$107  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -3399,7 +3649,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, receiver_clear, sa
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
     \$108  = slots;
     if (\$59 ) begin
       \$108  = \$60 [15:0];
@@ -3412,7 +3662,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, receiver_clear, sa
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
     \$109  = slots_full;
     if (\$59 ) begin
       \$109  = \$61 ;
@@ -3425,7 +3675,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, receiver_clear, sa
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
     \$110  = started;
     casez (decoder_fsm_state)
       3'h0:
@@ -3441,7 +3691,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, receiver_clear, sa
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
     \$111  = start_slot;
     casez (decoder_fsm_state)
       3'h0:
@@ -3457,7 +3707,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, receiver_clear, sa
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
     \$112  = decoder_fsm_state;
     casez (decoder_fsm_state)
       3'h0:
@@ -3489,7 +3739,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, receiver_clear, sa
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
     \$113  = cds;
     casez (decoder_fsm_state)
       3'h0:
@@ -3507,7 +3757,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, receiver_clear, sa
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
     \$114  = idx;
     casez (decoder_fsm_state)
       3'h0:
@@ -3532,7 +3782,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, receiver_clear, sa
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
     \$115  = in_data;
     casez (decoder_fsm_state)
       3'h0:
@@ -3557,7 +3807,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, receiver_clear, sa
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
     \$116  = in_lc;
     casez (decoder_fsm_state)
       3'h0:
@@ -3582,7 +3832,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, receiver_clear, sa
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
     \$117  = in_top;
     casez (decoder_fsm_state)
       3'h0:
@@ -3607,7 +3857,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, receiver_clear, sa
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
     \$118  = word;
     casez (decoder_fsm_state)
       3'h0:
@@ -3635,51 +3885,51 @@ module \biss_master.decoder (rst, word_count, lc_load, words, receiver_clear, sa
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
-    \$119  = data0;
+    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
+    \$119  = stop_bit;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h3:
+          if (sample) begin
+            \$119  = \bit ;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$119  = 1'h0;
+    end
+    if (rst) begin
+      \$119  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
+    \$120  = data0;
     if (\$83 ) begin
-      \$119  = { data0[53:0], \bit  };
+      \$120  = { data0[53:0], \bit  };
     end
     if (receiver_clear) begin
-      \$119  = 55'h00000000000000;
+      \$120  = 55'h00000000000000;
     end
     if (rst) begin
-      \$119  = 55'h00000000000000;
+      \$120  = 55'h00000000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
-    \$120  = ne;
-    if (\$84 ) begin
-      \$120 [0] = 1'h1;
-    end else if (\$88 ) begin
-      \$120 [0] = \bit ;
-    end
-    if (\$96 ) begin
-      \$120 [1] = 1'h1;
-    end else if (\$100 ) begin
-      \$120 [1] = \bit ;
-    end
-    if (receiver_clear) begin
-      \$120  = 2'h0;
-    end
-    if (rst) begin
-      \$120  = 2'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
-    \$121  = nw;
+    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
+    \$121  = ne;
     if (\$84 ) begin
       \$121 [0] = 1'h1;
     end else if (\$88 ) begin
-    end else if (\$92 ) begin
       \$121 [0] = \bit ;
     end
     if (\$96 ) begin
       \$121 [1] = 1'h1;
     end else if (\$100 ) begin
-    end else if (\$104 ) begin
       \$121 [1] = \bit ;
     end
     if (receiver_clear) begin
@@ -3690,42 +3940,64 @@ module \biss_master.decoder (rst, word_count, lc_load, words, receiver_clear, sa
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
-    \$122  = data1;
+    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
+    \$122  = nw;
+    if (\$84 ) begin
+      \$122 [0] = 1'h1;
+    end else if (\$88 ) begin
+    end else if (\$92 ) begin
+      \$122 [0] = \bit ;
+    end
+    if (\$96 ) begin
+      \$122 [1] = 1'h1;
+    end else if (\$100 ) begin
+    end else if (\$104 ) begin
+      \$122 [1] = \bit ;
+    end
+    if (receiver_clear) begin
+      \$122  = 2'h0;
+    end
+    if (rst) begin
+      \$122  = 2'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
+    \$123  = data1;
     if (\$95 ) begin
-      \$122  = { data1[38:0], \bit  };
+      \$123  = { data1[38:0], \bit  };
     end
     if (receiver_clear) begin
-      \$122  = 40'h0000000000;
+      \$123  = 40'h0000000000;
     end
     if (rst) begin
-      \$122  = 40'h0000000000;
+      \$123  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
-    \$123  = lc;
+    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
+    \$124  = lc;
     if (lc_load) begin
-      \$123  = { lc[4:0], \bit  };
+      \$124  = { lc[4:0], \bit  };
     end
     if (receiver_clear) begin
-      \$123  = 6'h00;
+      \$124  = 6'h00;
     end
     if (rst) begin
-      \$123  = 6'h00;
+      \$124  = 6'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
-    \$124  = cpw_top;
+    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
+    \$125  = cpw_top;
     if (\$105 ) begin
-      \$124  = { cpw_top[38:0], \bit  };
+      \$125  = { cpw_top[38:0], \bit  };
     end
     if (receiver_clear) begin
-      \$124  = 40'h0000000000;
+      \$125  = 40'h0000000000;
     end
     if (rst) begin
-      \$124  = 40'h0000000000;
+      \$125  = 40'h0000000000;
     end
   end
   assign frame_bits = \$12 [7:0];
@@ -3755,7 +4027,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.decoder.crc0 (rst, start, valid, kind, receiver_clear, ok, \bit , clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$23  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$24  = 0;
   wire [5:0] \$1 ;
   wire \$10 ;
   wire [5:0] \$11 ;
@@ -3849,7 +4121,7 @@ module \biss_master.decoder.crc0 (rst, start, valid, kind, receiver_clear, ok, \
   assign \$auto$rtlil.cc:2739:Not$6  = ~ { crc6_reg[0], 1'h0 };
   assign \$auto$rtlil.cc:2739:Not$8  = ~ { crc16_reg[14], crc16_reg[11], crc16_reg[6:5], crc16_reg[3:2], 1'h0 };
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
     \$31  = crc6_reg;
     if (valid) begin
       \$31  = \$5 ;
@@ -3864,7 +4136,7 @@ module \biss_master.decoder.crc0 (rst, start, valid, kind, receiver_clear, ok, \
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
     \$32  = crc6_match;
     if (valid) begin
       \$32  = \$15 ;
@@ -3879,7 +4151,7 @@ module \biss_master.decoder.crc0 (rst, start, valid, kind, receiver_clear, ok, \
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
     \$33  = crc16_reg;
     if (valid) begin
       \$33  = \$20 ;
@@ -3894,7 +4166,7 @@ module \biss_master.decoder.crc0 (rst, start, valid, kind, receiver_clear, ok, \
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
     \$34  = crc16_match;
     if (valid) begin
       \$34  = \$30 ;
@@ -3909,7 +4181,7 @@ module \biss_master.decoder.crc0 (rst, start, valid, kind, receiver_clear, ok, \
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
     ok = 1'h0;
     casez (kind)
       2'h0:
@@ -3930,7 +4202,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.decoder.crc1 (rst, start, valid, kind, receiver_clear, ok, \bit , clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$24  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$25  = 0;
   wire [5:0] \$1 ;
   wire \$10 ;
   wire [5:0] \$11 ;
@@ -4024,7 +4296,7 @@ module \biss_master.decoder.crc1 (rst, start, valid, kind, receiver_clear, ok, \
   assign \$auto$rtlil.cc:2739:Not$2  = ~ { crc6_reg[0], 1'h0 };
   assign \$auto$rtlil.cc:2739:Not$4  = ~ { crc16_reg[14], crc16_reg[11], crc16_reg[6:5], crc16_reg[3:2], 1'h0 };
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$25 ) begin end
     \$31  = crc6_reg;
     if (valid) begin
       \$31  = \$5 ;
@@ -4039,7 +4311,7 @@ module \biss_master.decoder.crc1 (rst, start, valid, kind, receiver_clear, ok, \
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$25 ) begin end
     \$32  = crc6_match;
     if (valid) begin
       \$32  = \$15 ;
@@ -4054,7 +4326,7 @@ module \biss_master.decoder.crc1 (rst, start, valid, kind, receiver_clear, ok, \
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$25 ) begin end
     \$33  = crc16_reg;
     if (valid) begin
       \$33  = \$20 ;
@@ -4069,7 +4341,7 @@ module \biss_master.decoder.crc1 (rst, start, valid, kind, receiver_clear, ok, \
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$25 ) begin end
     \$34  = crc16_match;
     if (valid) begin
       \$34  = \$30 ;
@@ -4084,7 +4356,7 @@ module \biss_master.decoder.crc1 (rst, start, valid, kind, receiver_clear, ok, \
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$25 ) begin end
     ok = 1'h0;
     casez (kind)
       2'h0:
@@ -4105,7 +4377,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.ma_clock (rst, run, half_period, first_rise, second_rise, ma, rises, busy, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$25  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$26  = 0;
   wire [16:0] \$1 ;
   wire [16:0] \$10 ;
   wire [16:0] \$11 ;
@@ -4187,7 +4459,7 @@ module \biss_master.ma_clock (rst, run, half_period, first_rise, second_rise, ma
   always @(posedge clk)
     ma_fsm_state <= \$25 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$25 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$18  = 1'h0;
     casez (ma_fsm_state)
       2'h0:
@@ -4202,7 +4474,7 @@ module \biss_master.ma_clock (rst, run, half_period, first_rise, second_rise, ma
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$25 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$19  = 1'h0;
     casez (ma_fsm_state)
       2'h0:
@@ -4217,7 +4489,7 @@ module \biss_master.ma_clock (rst, run, half_period, first_rise, second_rise, ma
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$25 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$20  = 1'h0;
     casez (ma_fsm_state)
       2'h0:
@@ -4232,7 +4504,7 @@ module \biss_master.ma_clock (rst, run, half_period, first_rise, second_rise, ma
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$25 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$21  = ma;
     casez (ma_fsm_state)
       2'h0:
@@ -4255,7 +4527,7 @@ module \biss_master.ma_clock (rst, run, half_period, first_rise, second_rise, ma
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$25 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$22  = phase_left;
     casez (ma_fsm_state)
       2'h0:
@@ -4284,7 +4556,7 @@ module \biss_master.ma_clock (rst, run, half_period, first_rise, second_rise, ma
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$25 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$23  = last_clock;
     casez (ma_fsm_state)
       2'h0:
@@ -4313,7 +4585,7 @@ module \biss_master.ma_clock (rst, run, half_period, first_rise, second_rise, ma
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$25 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$24  = rises;
     casez (ma_fsm_state)
       2'h0:
@@ -4332,7 +4604,7 @@ module \biss_master.ma_clock (rst, run, half_period, first_rise, second_rise, ma
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$25 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$25  = ma_fsm_state;
     casez (ma_fsm_state)
       2'h0:
@@ -4358,7 +4630,7 @@ module \biss_master.ma_clock (rst, run, half_period, first_rise, second_rise, ma
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$25 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     busy = 1'h0;
     casez (ma_fsm_state)
       2'h0:
@@ -4373,7 +4645,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.sampler (rst, receiver_clear, half_period, arm, early, locked, delay, sample, slo, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$26  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$27  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -4469,7 +4741,7 @@ module \biss_master.sampler (rst, receiver_clear, half_period, arm, early, locke
   always @(posedge clk)
     first_slot <= \$29 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     \$21  = slo;
     if (receiver_clear) begin
       \$21  = 1'h1;
@@ -4479,7 +4751,7 @@ module \biss_master.sampler (rst, receiver_clear, half_period, arm, early, locke
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     \$22  = elapsed;
     casez (sampler_fsm_state)
       2'h0:
@@ -4503,7 +4775,7 @@ module \biss_master.sampler (rst, receiver_clear, half_period, arm, early, locke
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     \$23  = early;
     casez (sampler_fsm_state)
       2'h0:
@@ -4519,7 +4791,7 @@ module \biss_master.sampler (rst, receiver_clear, half_period, arm, early, locke
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     \$24  = locked;
     casez (sampler_fsm_state)
       2'h0:
@@ -4542,7 +4814,7 @@ module \biss_master.sampler (rst, receiver_clear, half_period, arm, early, locke
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     \$25  = sampler_fsm_state;
     casez (sampler_fsm_state)
       2'h0:
@@ -4566,7 +4838,7 @@ module \biss_master.sampler (rst, receiver_clear, half_period, arm, early, locke
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     \$26  = delay;
     casez (sampler_fsm_state)
       2'h0:
@@ -4584,7 +4856,7 @@ module \biss_master.sampler (rst, receiver_clear, half_period, arm, early, locke
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     \$27  = slot_left;
     casez (sampler_fsm_state)
       2'h0:
@@ -4610,7 +4882,7 @@ module \biss_master.sampler (rst, receiver_clear, half_period, arm, early, locke
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     \$28  = slot_zero;
     casez (sampler_fsm_state)
       2'h0:
@@ -4636,7 +4908,7 @@ module \biss_master.sampler (rst, receiver_clear, half_period, arm, early, locke
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     \$29  = first_slot;
     casez (sampler_fsm_state)
       2'h0:
@@ -4659,7 +4931,7 @@ module \biss_master.sampler (rst, receiver_clear, half_period, arm, early, locke
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     sample = 1'h0;
     casez (sampler_fsm_state)
       2'h0:
@@ -4677,8 +4949,8 @@ module \biss_master.sampler (rst, receiver_clear, half_period, arm, early, locke
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.sign_of_life (rst, check, load, \repeat , skip, resync, lc, is_zero, \port$1140$0 , clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$27  = 0;
+module \biss_master.sign_of_life (rst, check, load, \repeat , skip, resync, lc, is_zero, \port$1177$0 , clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$28  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -4715,8 +4987,8 @@ module \biss_master.sign_of_life (rst, check, load, \repeat , skip, resync, lc, 
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$1140$0 ;
-  wire \port$1140$0 ;
+  input \port$1177$0 ;
+  wire \port$1177$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -4728,9 +5000,9 @@ module \biss_master.sign_of_life (rst, check, load, \repeat , skip, resync, lc, 
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$1140$0  };
-  assign \$2  = { lc[4:0], \port$1140$0  } == last;
-  assign \$3  = { lc[4:0], \port$1140$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$1177$0  };
+  assign \$2  = { lc[4:0], \port$1177$0  } == last;
+  assign \$3  = { lc[4:0], \port$1177$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = lc == 6'h3f;
@@ -4758,7 +5030,7 @@ module \biss_master.sign_of_life (rst, check, load, \repeat , skip, resync, lc, 
   always @(posedge clk)
     synced <= \$21 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
     \$16  = is_zero;
     if (load) begin
       \$16  = \$1 ;
@@ -4768,7 +5040,7 @@ module \biss_master.sign_of_life (rst, check, load, \repeat , skip, resync, lc, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
     \$17  = is_last;
     if (load) begin
       \$17  = \$2 ;
@@ -4778,7 +5050,7 @@ module \biss_master.sign_of_life (rst, check, load, \repeat , skip, resync, lc, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
     \$18  = is_expected;
     if (load) begin
       \$18  = \$3 ;
@@ -4788,7 +5060,7 @@ module \biss_master.sign_of_life (rst, check, load, \repeat , skip, resync, lc, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
     \$19  = last;
     if (\$5 ) begin
       \$19  = lc;
@@ -4798,7 +5070,7 @@ module \biss_master.sign_of_life (rst, check, load, \repeat , skip, resync, lc, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
     \$20  = expected;
     if (\$5 ) begin
       \$20  = \$8 [5:0];
@@ -4808,7 +5080,7 @@ module \biss_master.sign_of_life (rst, check, load, \repeat , skip, resync, lc, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
     \$21  = synced;
     if (\$5 ) begin
       \$21  = 1'h1;
@@ -4820,7 +5092,7 @@ module \biss_master.sign_of_life (rst, check, load, \repeat , skip, resync, lc, 
       \$21  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$1140$0  };
+  assign lc_next = { lc[4:0], \port$1177$0  };
   assign zero = is_zero;
 endmodule
 
@@ -4846,7 +5118,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.spw_check (rst, bits, \tolerance$8 , spw, cpw_top, match, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$28  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$29  = 0;
   wire [40:0] \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -5051,28 +5323,28 @@ module \biss_master.spw_check (rst, bits, \tolerance$8 , spw, cpw_top, match, cl
   assign \$7  = bits > 3'h5;
   assign \$8  = bits > 3'h6;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
     \$88  = \$42 ;
     if (rst) begin
       \$88  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
     \$89  = \$84 ;
     if (rst) begin
       \$89  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
     \$90  = \tolerance$8 ;
     if (rst) begin
       \$90  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
     \$91  = \$87 ;
     if (rst) begin
       \$91  = 1'h0;

@@ -233,6 +233,11 @@ class BissEncoder:
         self._update_output()
 
     @property
+    def phase(self) -> str | None:
+        """The running cycle's phase (wait_ack, ack, data, stop, silent), None between cycles."""
+        return None if self._cycle is None else self._cycle.phase
+
+    @property
     def ready(self) -> bool:
         """True when the encoder would start a cycle on the next MA falling edge."""
         return self._state == "ready"

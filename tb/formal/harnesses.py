@@ -289,7 +289,8 @@ class LivenessLimits:
     def max_bound(self, words, slack):
         h = self.hp_max
         return (1 + (self.timeout_max + 1) + (3 * h + 1) + (self.ack_max + 1)
-                + (self.ack_max + 2 * h) + (self.max_frame_bits(words) + 1) * 2 * h + 2 + slack)
+                + (self.ack_max + 2 * h) + (self.max_frame_bits(words) + 1) * 2 * h + 2 + slack
+                + 3 * h + (self.timeout_max + 1) + 2)        # the end check
 
     def depth(self, words, slack):
         """BMC depth that holds power-up, the break, and the longest cycle, with a margin."""
@@ -360,26 +361,30 @@ class MasterLivenessHarness(Harness):
             frame_bits = frame_bits + Mux(dut.cfg_w1_enable, _word_bits(dut, 1), 0)
         tw = p.timer_width
         live = Cat(dut.cfg_ma_half_period, dut.cfg_ack_limit, dut.cfg_timeout_limit,
-                   frame_bits[:8])
+                   frame_bits[:8], dut.cfg_end_check)
         snapshot = Signal(len(live))
         could_accept = Signal()
         m.d.sync += [snapshot.eq(live), could_accept.eq(~dut.busy & ~dut.abort_cycle)]
         accepted = Signal()
         m.d.comb += accepted.eq(could_accept & dut.busy)
         hp, ack, timeout, bits = (snapshot[:16], snapshot[16:16 + tw], snapshot[16 + tw:16 + 2 * tw],
-                                  snapshot[16 + 2 * tw:])
+                                  snapshot[16 + 2 * tw:16 + 2 * tw + 8])
+        end_check = snapshot[-1]
 
         # The bound, clock by clock: 1 to leave IDLE; WAIT_READY up to the timeout limit + 1;
         # MA to its second rise (3 half periods + 1: the sampler is armed); the Ack edge and the
         # slot-0 sample up to the Ack limit + 1; the Start sample up to the Ack limit + one MA
         # period after that (the NO_START limit); CDS and the frame bits, one MA period (2 half
         # periods) each; ``done`` 2 clocks after the last sample (decoder and output
-        # registers). The half period takes few values: one formula with constant factors per
-        # value (a product of two variables would slow the solver down a lot).
+        # registers). With the end check, ``done`` waits for the stop bit's sample and MA's
+        # stop (at most 3 half periods), then SLO high up to the timeout limit + 1, then the
+        # verdict (2 clocks). The half period takes few values: one formula with constant
+        # factors per value (a product of two variables would slow the solver down a lot).
         def formula(h):
             per_bit = 0 if self.mutation == "tight" else 2 * h
             return (1 + (timeout + 1) + (3 * h + 1) + (ack + 1) + (ack + 2 * h)
-                    + (bits + 1) * per_bit + 2 + self.slack)
+                    + (bits + 1) * per_bit + 2 + self.slack
+                    + Mux(end_check, 3 * h + (timeout + 1) + 2, 0))
         bound = formula(lim.hp_max)
         for h in range(lim.hp_max - 1, 1, -1):
             bound = Mux(hp == h, formula(h), bound)
