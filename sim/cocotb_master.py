@@ -444,15 +444,23 @@ async def biss_c_only_build(dut):
     await frames_ok(bench, 1)
 
 
-async def at_stop_bit(bench):
-    """Wait until the encoder of the cycle just started drives its stop bit (the first low
-    after the frame)."""
+async def stuck_from_stop_bit(bench, level):
+    """One request whose line goes to ``level`` (and stays there) as the encoder starts its
+    stop bit (the first low after the frame); returns the Result."""
+    await bench.wait_idle()
+    bench.queue()
+    bench.dut.start.value = 1
+    done = cocotb.start_soon(bench.wait_done())
+    await RisingEdge(bench.dut.clk)
+    bench.dut.start.value = 0
     for phase in ("data", "stop"):
         while bench.encoder.phase != phase:
             await RisingEdge(bench.dut.clk)
     # The encoder's output reaches the master pin half a round trip later; the master samples
     # the stop slot later still (near the middle of the bit).
     await Timer(round(bench.encoder.cable.round_trip_s() / 2 * 1e12) + 10_000, "ps")
+    bench.encoder.force_slo(level)
+    return await done
 
 
 @cocotb.test()
@@ -476,18 +484,10 @@ async def end_check(dut):
         assert not bench.encoder.ready, "no end check: done only after the encoder's timeout"
 
         for level, status, counter in ((1, "NO_STOP", "no_stop"), (0, "SLO_STUCK_LOW", "slo_stuck_low")):
-            # The line goes to `level` as the encoder starts its stop bit.
             bench.configure(preset(name), ma_hz, cfg_end_check=1)
             await bench.wait_idle()
             before = count(counter), count("crc_word0")
-            bench.queue()
-            dut.start.value = 1
-            done = cocotb.start_soon(bench.wait_done())
-            await RisingEdge(dut.clk)
-            dut.start.value = 0
-            await at_stop_bit(bench)
-            bench.encoder.force_slo(level)
-            res = await done
+            res = await stuck_from_stop_bit(bench, level)
             assert res.status == STATUS[status] and res.valid == 0, \
                 f"{name}: stuck {level} at the stop bit gave status {res.status}"
             assert (count(counter), count("crc_word0")) == (before[0] + 1, before[1]), counter
@@ -496,15 +496,7 @@ async def end_check(dut):
 
         # Without the check the frame is reported (it was good) before the stop bit.
         bench.configure(preset(name), ma_hz, cfg_end_check=0)
-        await bench.wait_idle()
-        bench.queue()
-        dut.start.value = 1
-        done = cocotb.start_soon(bench.wait_done())
-        await RisingEdge(dut.clk)
-        dut.start.value = 0
-        await at_stop_bit(bench)
-        bench.encoder.force_slo(1)
-        bench.check_frame(await done)
+        bench.check_frame(await stuck_from_stop_bit(bench, 1))
         await bench.encoder_ready()         # (the master cannot see the timeout through the short)
         res = await bench.request()
         assert res.status == STATUS["NO_ACK"], res.status
