@@ -52,7 +52,7 @@ LEGAL = {
     # at +/-25 % the eye closes in the worst case: a rare bit error, caught by the CRC
     "jitter": _LATE + _FRAME_ERR,
     "delay_change": _LATE + ["DELAY_RANGE"],
-    "abort": ["ABORTED", "OK"],                    # OK: the abort came after the verdict
+    "abort": ["ABORTED"] + _LATE,                  # _LATE: the abort came after the verdict
     "no_response": ["NO_ACK"],
     "ack_forever": ["NO_START"],
     "timeout_stuck": ["SLO_STUCK_LOW"],
