@@ -20,12 +20,14 @@ setup:  ## install Debian packages if missing and the pinned venv (.venv)
 rtl: setup  ## regenerate rtl/generated/biss_master.v from the Amaranth source
 	PYTHONPATH=rtl $(PY) -m bissmaster.generate -o $(VERILOG)
 
-lint: setup  ## verilator --lint-only -Wall on the default Verilog and a BiSS-C-only build (waivers: rtl/lint.vlt)
+lint: setup  ## verilator --lint-only -Wall on the default Verilog, a BiSS-C-only and a lean build (waivers: rtl/lint.vlt)
 	verilator --lint-only -Wall rtl/lint.vlt $(VERILOG) --top-module biss_master
 	@mkdir -p sim_build
-	PYTHONPATH=rtl $(PY) -m bissmaster.generate --max-data-bits 36 --word-crcs 6 -o sim_build/biss_master_c36.v
+	PYTHONPATH=rtl $(PY) -m bissmaster.generate --preset biss-c -o sim_build/biss_master_c36.v
 	verilator --lint-only -Wall rtl/lint.vlt sim_build/biss_master_c36.v --top-module biss_master
-	@echo "lint: clean (default build and BiSS C 36-bit build)"
+	PYTHONPATH=rtl $(PY) -m bissmaster.generate --preset biss-c-lean -o sim_build/biss_master_lean.v
+	verilator --lint-only -Wall rtl/lint.vlt sim_build/biss_master_lean.v --top-module biss_master
+	@echo "lint: clean (default build, BiSS C 36-bit build, lean BiSS C build)"
 
 unit: setup  ## fast tests: encoder model, RTL blocks (Amaranth simulator), generated Verilog up to date
 	$(PY) -m pytest tb/tests -q -n $(JOBS)

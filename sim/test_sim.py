@@ -23,17 +23,18 @@ SIMS = [os.environ["SIM"]] if os.environ.get("SIM") else list(runner.SIMULATORS)
 _built = {}
 
 
-def _build(sim, one_word=False):
+def _build(sim, preset="default"):
     """Build once per process. One build directory per pytest-xdist worker: workers never
-    share a build in progress. ``one_word``: the BiSS-C-only build, generated here."""
-    key = (sim, one_word)
+    share a build in progress. A ``preset`` other than the default (the committed Verilog) is
+    generated here (bissmaster.generate's presets)."""
+    key = (sim, preset)
     if key not in _built:
         worker = os.environ.get("PYTEST_XDIST_WORKER", "main")
         verilog, tag = runner.VERILOG, f"-{worker}"
-        if one_word:
-            verilog, tag = runner.BUILD / f"biss_master_c36-{worker}.v", f"-c36-{worker}"
+        if preset != "default":
+            verilog, tag = runner.BUILD / f"biss_master_{preset}-{worker}.v", f"-{preset}-{worker}"
             verilog.parent.mkdir(parents=True, exist_ok=True)
-            generate.main(ONE_WORD_ARGS + ["-o", str(verilog)])
+            generate.main(["--preset", preset, "-o", str(verilog)])
         _built[key] = runner.build(sim, verilog=verilog, tag=tag)
     return _built[key]
 
@@ -50,14 +51,12 @@ CASES += [pytest.param("verilator", test, FAST_CLK_HZ, id=f"verilator-200MHz-{te
           for test in FAST_CLOCK_TESTS if "verilator" in SIMS]
 
 
-#: The BiSS-C-only build (one 36-bit word, CRC-6 only), generated at test time.
-ONE_WORD_ARGS = ["--max-data-bits", "36", "--word-crcs", "6"]
-
-
-
+#: The BiSS-C-only builds (one 36-bit word, CRC-6 only; the lean one also without counters
+#: and timestamp, with 16-bit time settings), generated at test time.
 @pytest.mark.parametrize("sim", SIMS)
-def test_cocotb_biss_c_only_build(sim):
-    r, build_dir = _build(sim, one_word=True)
+@pytest.mark.parametrize("preset", ["biss-c", "biss-c-lean"])
+def test_cocotb_biss_c_only_build(sim, preset):
+    r, build_dir = _build(sim, preset)
     xml = runner.run(r, build_dir, "cocotb_master", testcase="biss_c_only_build")
     _check(xml)
 

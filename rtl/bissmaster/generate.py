@@ -1,6 +1,6 @@
 """Generate the Verilog module ``biss_master``.
 
-    python -m bissmaster.generate [-o FILE] [--max-data-bits 55,40] [--sys-clk-hz N] ...
+    python -m bissmaster.generate [-o FILE] [--preset NAME] [--max-data-bits 55,40] ...
 
 The default configuration is committed as ``rtl/generated/biss_master.v`` for users who never
 run Python; ``make rtl`` regenerates it and the test suite checks it is up to date.
@@ -33,6 +33,22 @@ def generate(params=None, name="biss_master"):
     return header(params) + body
 
 
+#: Named builds: generator options for ``--preset``. Options given besides a preset win.
+#: scripts/synth.py measures these, and the test suite simulates each one.
+PRESETS = {
+    "default": ("the committed rtl/generated/biss_master.v: 2 words of up to 55/40 bits, "
+                "both CRCs on each", []),
+    "biss-c": ("BiSS C only: one word of up to 36 bits, CRC-6",
+               ["--max-data-bits", "36", "--word-crcs", "6"]),
+    "biss-c-lean": ("BiSS C only, smallest: as biss-c, without error counters and timestamp, "
+                    "16-bit time settings",
+                    ["--max-data-bits", "36", "--word-crcs", "6", "--counter-width", "0",
+                     "--timestamp-width", "0", "--timer-width", "16"]),
+    "safety": ("BiSS Safety: CPW up to 36 bits with CRC-6, SPW up to 28 bits with CRC-16",
+               ["--max-data-bits", "36,28", "--word-crcs", "6,16"]),
+}
+
+
 def _parse_crcs(text):
     # "6+16,16" -> ((CRC6, CRC16), (CRC16,))
     kinds = {"6": Crc.CRC6, "16": Crc.CRC16}
@@ -44,7 +60,11 @@ def _parse_crcs(text):
 
 def main(argv=None):
     defaults = MasterParams()
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(
+        description=__doc__.splitlines()[0],
+        epilog="presets: " + "; ".join(f"{k}: {v[0]}" for k, v in PRESETS.items()))
+    ap.add_argument("--preset", choices=PRESETS, default="default",
+                    help="a named build (below); other options given override it")
     ap.add_argument("-o", "--output", default="-", help="output file (default: stdout)")
     ap.add_argument("--name", default="biss_master", help="Verilog module name")
     ap.add_argument("--sys-clk-hz", type=int, default=defaults.sys_clk_hz)
@@ -53,14 +73,23 @@ def main(argv=None):
     ap.add_argument("--word-crcs", type=_parse_crcs, default=None,
                     help="CRC checkers per word, e.g. 6 or 6+16,6+16 (default: both on each word)")
     ap.add_argument("--max-line-delay", type=int, default=defaults.max_line_delay)
-    ap.add_argument("--counter-width", type=int, default=defaults.counter_width)
-    args = ap.parse_args(argv)
+    ap.add_argument("--timer-width", type=int, default=defaults.timer_width,
+                    help="width of the time settings in system clocks (16 .. 32)")
+    ap.add_argument("--counter-width", type=int, default=defaults.counter_width,
+                    help="width of the error counters; 0: no counters")
+    ap.add_argument("--timestamp-width", type=int, default=defaults.timestamp_width,
+                    help="width of the time base behind `timestamp`; 0: no timestamp")
+    argv = sys.argv[1:] if argv is None else list(argv)
+    preset = ap.parse_known_args(argv)[0].preset
+    args = ap.parse_args(PRESETS[preset][1] + argv)     # later options win
 
     bits = tuple(int(b) for b in args.max_data_bits.split(","))
     crcs = args.word_crcs or defaults.word_crcs[:len(bits)]
     try:
         params = MasterParams(sys_clk_hz=args.sys_clk_hz, max_data_bits=bits, word_crcs=crcs,
-                              max_line_delay=args.max_line_delay, counter_width=args.counter_width)
+                              max_line_delay=args.max_line_delay, timer_width=args.timer_width,
+                              counter_width=args.counter_width,
+                              timestamp_width=args.timestamp_width)
     except ValueError as e:
         ap.error(str(e))
     text = generate(params, args.name)

@@ -56,7 +56,7 @@ class BissMaster(wiring.Component):
             "start": In(1),
             "periodic": In(1),
             "abort_cycle": In(1),
-            "clear_counters": In(1),
+            **({"clear_counters": In(1)} if p.counters else {}),
             # Runtime configuration
             "cfg_ma_half_period": In(16),
             "cfg_request_period": In(tw),
@@ -79,7 +79,7 @@ class BissMaster(wiring.Component):
             "done": Out(1),
             "valid": Out(1),
             "status": Out(STATUS_WIDTH),
-            "timestamp": Out(p.timestamp_width),
+            **({"timestamp": Out(p.timestamp_width)} if p.timestamped else {}),
             "line_delay": Out(p.delay_width),
             "cds": Out(1),
         })
@@ -98,10 +98,18 @@ class BissMaster(wiring.Component):
         })
         if two:
             ports["spw_mismatch"] = Out(1)
-        for name in COUNTERS:
-            if two or name not in ("crc_word1", "spw_mismatch"):
-                ports[f"count_{name}"] = Out(p.counter_width)
+        for name in self.counter_names:
+            ports[f"count_{name}"] = Out(p.counter_width)
         super().__init__(ports)
+
+    @property
+    def counter_names(self):
+        """The COUNTERS this build has: none without counters, no word-1 ones for one word."""
+        p = self.params
+        if not p.counters:
+            return ()
+        return tuple(name for name in COUNTERS
+                     if p.words == 2 or name not in ("crc_word1", "spw_mismatch"))
 
     def _config_layout(self):
         fields = {name: len(getattr(self, name)) for name in self.signature.members
@@ -216,11 +224,12 @@ class BissMaster(wiring.Component):
             ]
 
         # -- Free-running time base and the SLO-low timer -----------------------------------
-        now = Signal(p.timestamp_width)
-        m.d.sync += now.eq(now + 1)
-        first_rise_time = Signal(p.timestamp_width)
-        with m.If(ma_clock.first_rise):
-            m.d.sync += first_rise_time.eq(now)
+        if p.timestamped:
+            now = Signal(p.timestamp_width)
+            m.d.sync += now.eq(now + 1)
+            first_rise_time = Signal(p.timestamp_width)
+            with m.If(ma_clock.first_rise):
+                m.d.sync += first_rise_time.eq(now)
 
         # How long SLO has been low, plus one (saturating at 2**tw: SLO low for 2**tw - 1
         # clocks or more). The "+ 1" turns the one-clock-ahead compare below into a plain one.
@@ -513,8 +522,9 @@ class BissMaster(wiring.Component):
         with m.If(report_delay):
             m.d.sync += self.line_delay.eq(sampler.delay)
         with m.If(report_frame):
+            if p.timestamped:
+                m.d.sync += self.timestamp.eq(first_rise_time)
             m.d.sync += [
-                self.timestamp.eq(first_rise_time),
                 self.cds.eq(decoder.cds),
                 self.lc.eq(decoder.lc),
                 self.lc_repeat.eq(lc_repeat),
@@ -548,13 +558,12 @@ class BissMaster(wiring.Component):
         if two:
             events["crc_word1"] = report_frame & ~word_crc_ok[1]
             events["spw_mismatch"] = report_frame & mismatch
-        for name in COUNTERS:
-            if name in events:
-                m.submodules[f"count_{name}"] = counter = SaturatingCounter(p.counter_width)
-                m.d.comb += [
-                    counter.inc.eq(events[name]),
-                    counter.clear.eq(self.clear_counters),
-                    getattr(self, f"count_{name}").eq(counter.count),
-                ]
+        for name in self.counter_names:
+            m.submodules[f"count_{name}"] = counter = SaturatingCounter(p.counter_width)
+            m.d.comb += [
+                counter.inc.eq(events[name]),
+                counter.clear.eq(self.clear_counters),
+                getattr(self, f"count_{name}").eq(counter.count),
+            ]
 
         return m

@@ -83,7 +83,10 @@ class MasterParams:
     timer_width : int
         Width of the time settings (period, break, Ack and timeout limits) in system clocks.
     counter_width : int
-        Width of each saturating error counter.
+        Width of each saturating error counter; 0 builds no counters (no ``count_*`` ports and
+        no ``clear_counters``), for the smallest core.
+    timestamp_width : int
+        Width of the free-running time base behind the ``timestamp`` output; 0 builds neither.
     """
     sys_clk_hz: int = 100_000_000
     max_data_bits: tuple = (protocol.BP3_POSITION_BITS_MAX, 40)
@@ -118,11 +121,23 @@ class MasterParams:
             if default >= 2**self.timer_width:
                 raise ValueError(f"timer_width {self.timer_width} cannot hold the default time "
                                  f"{default} clocks at {self.sys_clk_hz} Hz")
-        if not isinstance(self.counter_width, int) or not 1 <= self.counter_width <= 32:
-            raise ValueError(f"counter_width must be an integer from 1 to 32, not {self.counter_width!r}")
-        if not isinstance(self.timestamp_width, int) or not 16 <= self.timestamp_width <= 64:
-            raise ValueError(f"timestamp_width must be an integer from 16 to 64, "
-                             f"not {self.timestamp_width!r}")
+        if not isinstance(self.counter_width, int) or not 0 <= self.counter_width <= 32:
+            raise ValueError(f"counter_width must be an integer from 0 (no counters) to 32, "
+                             f"not {self.counter_width!r}")
+        if not isinstance(self.timestamp_width, int) or not (
+                self.timestamp_width == 0 or 16 <= self.timestamp_width <= 64):
+            raise ValueError(f"timestamp_width must be 0 (no timestamp) or an integer from 16 "
+                             f"to 64, not {self.timestamp_width!r}")
+
+    @property
+    def counters(self):
+        """The error counters are built."""
+        return self.counter_width > 0
+
+    @property
+    def timestamped(self):
+        """The time base and the ``timestamp`` output are built."""
+        return self.timestamp_width > 0
 
     @property
     def words(self):
@@ -163,8 +178,8 @@ class MasterParams:
             f"word_crcs       = {[[k.name for k in w] for w in self.word_crcs]}",
             f"max_line_delay  = {self.max_line_delay} clocks",
             f"timer_width     = {self.timer_width}",
-            f"counter_width   = {self.counter_width}",
-            f"timestamp_width = {self.timestamp_width}",
+            f"counter_width   = {self.counter_width}" + ("" if self.counters else " (no counters)"),
+            f"timestamp_width = {self.timestamp_width}" + ("" if self.timestamped else " (no timestamp)"),
             f"defaults (cfg = 0): break {self.break_default}, ack limit {self.ack_limit_default}, "
             f"timeout limit {self.timeout_limit_default} clocks",
         ]

@@ -5,7 +5,7 @@ from pathlib import Path
 
 import pytest
 
-from bissmaster.generate import generate
+from bissmaster.generate import PRESETS, generate, main
 from bissmaster.params import Crc, MasterParams
 
 COMMITTED = Path(__file__).resolve().parents[2] / "rtl" / "generated" / "biss_master.v"
@@ -30,6 +30,8 @@ def test_header_names_generator_and_parameters():
     ({"sys_clk_hz": 100}, "sys_clk_hz"),
     ({"max_line_delay": 3}, "max_line_delay"),
     ({"sys_clk_hz": 1_000_000_000, "timer_width": 16}, "cannot hold"),
+    ({"counter_width": -1}, "counter_width"),
+    ({"timestamp_width": 8}, "timestamp_width"),
 ])
 def test_bad_parameters_are_refused(kwargs, message):
     with pytest.raises(ValueError, match=message):
@@ -40,3 +42,28 @@ def test_biss_c_only_configuration_generates():
     text = generate(MasterParams(max_data_bits=(36,), word_crcs=((Crc.CRC6,),)))
     assert "word1_position" not in text and "cfg_w1_enable" not in text
     assert "input [5:0] cfg_w0_data_bits" in text
+
+
+def test_lean_build_has_no_counters_and_no_timestamp(tmp_path):
+    out = tmp_path / "lean.v"
+    main(["--preset", "biss-c-lean", "-o", str(out)])
+    text = out.read_text()
+    assert "counter_width   = 0 (no counters)" in text and "timer_width     = 16" in text
+    ports = text[text.index("module biss_master("):].split(";")[0]
+    assert "count_" not in ports and "clear_counters" not in ports and "timestamp" not in ports
+    assert "word0_position" in ports and "cfg_request_period" in ports
+    assert "input [15:0] cfg_request_period" in text
+
+
+def test_preset_options_can_be_overridden(tmp_path):
+    out = tmp_path / "x.v"
+    main(["--preset", "biss-c-lean", "--counter-width", "8", "-o", str(out)])
+    assert "output [7:0] count_no_ack" in out.read_text()
+    for name in PRESETS:        # every preset names a valid build
+        main(["--preset", name, "-o", str(out)])
+
+
+def test_bad_generator_option_exits_with_message(capsys):
+    with pytest.raises(SystemExit):
+        main(["--preset", "biss-c", "--timestamp-width", "8", "-o", "/dev/null"])
+    assert "timestamp_width must be 0" in capsys.readouterr().err
