@@ -358,7 +358,15 @@ class BissMaster(wiring.Component):
             target_rises.eq(decoder.start_slot + frame_len_p4),
             started.eq(decoder.started),
         ]
-        ma_enough = started & (ma_clock.rises >= target_rises)
+        # Enough MA rising edges for the frame, registered (a 17-bit compare is too slow in
+        # front of the MA generator). The lag is harmless for ``rises``: it changes at a rising
+        # edge and the MA generator reads ``run`` only at the end of the high phase, >= 2
+        # clocks later. ``started`` and ``target_rises`` change together (both registered from
+        # the decoder), so the flag sees them consistently, one clock late: when the round
+        # trip is longer than the frame, MA may stop one clock (rarely one period) later. The
+        # receiver is cleared before every cycle, so the flag is 0 in a cycle's first clock.
+        ma_enough = Signal()
+        m.d.sync += ma_enough.eq(started & (ma_clock.rises >= target_rises) & ~receiver_clear)
         locked_seen = Signal()
         armed = Signal()
         arm = ma_clock.second_rise

@@ -42,21 +42,21 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \$118 ;
   wire \$119 ;
   wire \$12 ;
-  wire \$120 ;
+  wire [23:0] \$120 ;
   wire \$121 ;
-  wire \$122 ;
+  wire [23:0] \$122 ;
   wire \$123 ;
-  wire [23:0] \$124 ;
-  wire \$125 ;
-  wire [23:0] \$126 ;
+  wire [11:0] \$124 ;
+  wire [24:0] \$125 ;
+  wire [32:0] \$126 ;
   wire \$127 ;
-  wire [11:0] \$128 ;
-  wire [24:0] \$129 ;
+  wire \$128 ;
+  wire [25:0] \$129 ;
   wire \$13 ;
-  wire [32:0] \$130 ;
+  wire \$130 ;
   wire \$131 ;
   wire \$132 ;
-  wire [25:0] \$133 ;
+  wire \$133 ;
   wire \$134 ;
   wire \$135 ;
   wire \$136 ;
@@ -68,14 +68,14 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \$141 ;
   wire \$142 ;
   wire \$143 ;
-  wire \$144 ;
-  wire \$145 ;
-  wire \$146 ;
+  wire [25:0] \$144 ;
+  wire [25:0] \$145 ;
+  wire [25:0] \$146 ;
   wire \$147 ;
-  wire [25:0] \$148 ;
-  wire [25:0] \$149 ;
+  wire \$148 ;
+  wire \$149 ;
   wire \$15 ;
-  wire [25:0] \$150 ;
+  wire \$150 ;
   wire \$151 ;
   wire \$152 ;
   wire \$153 ;
@@ -84,20 +84,20 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \$156 ;
   wire \$157 ;
   wire \$158 ;
-  wire \$159 ;
+  wire [24:0] \$159 ;
   wire \$16 ;
-  wire \$160 ;
-  wire \$161 ;
-  wire \$162 ;
-  wire [24:0] \$163 ;
+  reg [7:0] \$160 ;
+  wire [8:0] \$161 ;
+  wire [7:0] \$162 ;
+  wire [8:0] \$163 ;
   reg [7:0] \$164 ;
   wire [8:0] \$165 ;
-  wire [7:0] \$166 ;
-  wire [8:0] \$167 ;
-  reg [7:0] \$168 ;
-  wire [8:0] \$169 ;
+  wire [16:0] \$166 ;
+  wire \$167 ;
+  wire \$168 ;
+  wire \$169 ;
   wire \$17 ;
-  wire [16:0] \$170 ;
+  wire \$170 ;
   wire \$171 ;
   wire \$172 ;
   wire \$173 ;
@@ -192,30 +192,31 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   reg \$253 ;
   reg \$254 ;
   reg \$255 ;
-  reg [2:0] \$256 ;
-  reg \$257 ;
+  reg \$256 ;
+  reg [2:0] \$257 ;
   reg \$258 ;
   reg \$259 ;
   wire \$26 ;
   reg \$260 ;
-  reg [3:0] \$261 ;
-  reg [12:0] \$262 ;
-  reg [31:0] \$263 ;
-  reg \$264 ;
-  reg [5:0] \$265 ;
-  reg \$266 ;
+  reg \$261 ;
+  reg [3:0] \$262 ;
+  reg [12:0] \$263 ;
+  reg [31:0] \$264 ;
+  reg \$265 ;
+  reg [5:0] \$266 ;
   reg \$267 ;
   reg \$268 ;
-  reg [54:0] \$269 ;
+  reg \$269 ;
   wire \$27 ;
-  reg \$270 ;
+  reg [54:0] \$270 ;
   reg \$271 ;
   reg \$272 ;
-  reg [39:0] \$273 ;
-  reg \$274 ;
+  reg \$273 ;
+  reg [39:0] \$274 ;
   reg \$275 ;
   reg \$276 ;
   reg \$277 ;
+  reg \$278 ;
   wire \$28 ;
   wire \$29 ;
   wire \$3 ;
@@ -310,7 +311,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \busy$102 ;
   output cds;
   reg cds = 1'h0;
-  wire \cds$190 ;
+  wire \cds$191 ;
   reg [154:0] cfg = 155'h000000000000000000000000000000000000000;
   wire [23:0] \cfg.cfg_ack_limit ;
   wire [23:0] \cfg.cfg_break_time ;
@@ -369,18 +370,18 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire cfg_w1_nenw;
   wire check;
   wire clear;
-  wire \clear$140 ;
-  wire \clear$143 ;
-  wire \clear$146 ;
-  wire \clear$149 ;
-  wire \clear$152 ;
-  wire \clear$155 ;
-  wire \clear$158 ;
-  wire \clear$161 ;
-  wire \clear$164 ;
-  wire \clear$167 ;
-  wire \clear$170 ;
-  wire \clear$173 ;
+  wire \clear$138 ;
+  wire \clear$141 ;
+  wire \clear$144 ;
+  wire \clear$147 ;
+  wire \clear$150 ;
+  wire \clear$153 ;
+  wire \clear$156 ;
+  wire \clear$159 ;
+  wire \clear$162 ;
+  wire \clear$165 ;
+  wire \clear$168 ;
+  wire \clear$171 ;
   input clear_counters;
   wire clear_counters;
   input clk;
@@ -388,18 +389,18 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   output config_error;
   wire config_error;
   wire [15:0] count;
-  wire [15:0] \count$141 ;
-  wire [15:0] \count$144 ;
-  wire [15:0] \count$147 ;
-  wire [15:0] \count$150 ;
-  wire [15:0] \count$153 ;
-  wire [15:0] \count$156 ;
-  wire [15:0] \count$159 ;
-  wire [15:0] \count$162 ;
-  wire [15:0] \count$165 ;
-  wire [15:0] \count$168 ;
-  wire [15:0] \count$171 ;
-  wire [15:0] \count$174 ;
+  wire [15:0] \count$139 ;
+  wire [15:0] \count$142 ;
+  wire [15:0] \count$145 ;
+  wire [15:0] \count$148 ;
+  wire [15:0] \count$151 ;
+  wire [15:0] \count$154 ;
+  wire [15:0] \count$157 ;
+  wire [15:0] \count$160 ;
+  wire [15:0] \count$163 ;
+  wire [15:0] \count$166 ;
+  wire [15:0] \count$169 ;
+  wire [15:0] \count$172 ;
   output [15:0] count_aborted;
   wire [15:0] count_aborted;
   output [15:0] count_crc_word0;
@@ -437,7 +438,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   reg delay_over = 1'h0;
   output done;
   reg done = 1'h0;
-  wire \done$120 ;
+  wire \done$118 ;
   wire early;
   reg fault_aborted;
   reg fault_bad_config;
@@ -469,18 +470,18 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   reg idle;
   reg in_clock;
   wire inc;
-  wire \inc$139 ;
-  wire \inc$142 ;
-  wire \inc$145 ;
-  wire \inc$148 ;
-  wire \inc$151 ;
-  wire \inc$154 ;
-  wire \inc$157 ;
-  wire \inc$160 ;
-  wire \inc$163 ;
-  wire \inc$166 ;
-  wire \inc$169 ;
-  wire \inc$172 ;
+  wire \inc$137 ;
+  wire \inc$140 ;
+  wire \inc$143 ;
+  wire \inc$146 ;
+  wire \inc$149 ;
+  wire \inc$152 ;
+  wire \inc$155 ;
+  wire \inc$158 ;
+  wire \inc$161 ;
+  wire \inc$164 ;
+  wire \inc$167 ;
+  wire \inc$170 ;
   reg latched = 1'h0;
   output [5:0] lc;
   reg [5:0] lc = 6'h00;
@@ -522,6 +523,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   output ma;
   wire ma;
   wire \ma$73 ;
+  reg ma_enough = 1'h0;
   wire match;
   wire [1:0] ne;
   reg no_start_expired = 1'h0;
@@ -555,7 +557,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_1100 = "NO_STOP" *)
   reg [3:0] report_status;
   reg resync;
-  wire \resync$135 ;
+  wire \resync$133 ;
   wire [15:0] rises;
   input rst;
   wire rst;
@@ -576,8 +578,8 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   input start;
   wire start;
   wire [15:0] start_slot;
-  reg started = 1'h0;
-  wire \started$125 ;
+  wire started;
+  reg \started$188  = 1'h0;
   output [3:0] status;
   reg [3:0] status = 4'h0;
   wire stop_bit;
@@ -668,141 +670,141 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \$38  = ~ cfg_ok;
   assign \$39  = latched & \$38 ;
   assign \$40  = latched ? stuck_live : stuck_latched;
-  assign \$41  = rises >= target_rises;
-  assign \$42  = started & \$41 ;
-  assign \$43  = ~ \$42 ;
-  assign \$44  = ~ locked_seen;
-  assign \$45  = locked & \$44 ;
-  assign \$46  = arm | \$45 ;
-  assign \$47  = \$46  | abort_cycle;
-  assign \$48  = armed & early;
-  assign \$49  = ~ locked_seen;
-  assign \$50  = armed & \$49 ;
-  assign \$51  = ~ locked;
-  assign \$52  = \$50  & \$51 ;
-  assign \$53  = \$52  & ack_expired;
-  assign \$54  = ~ locked_seen;
-  assign \$55  = locked & \$54 ;
-  assign \$56  = \$55  & delay_over;
-  assign \$57  = ~ \started$125 ;
-  assign \$58  = locked_seen & \$57 ;
-  assign \$59  = no_start_expired | slots_full;
-  assign \$60  = \$58  & \$59 ;
+  assign \$41  = ~ ma_enough;
+  assign \$42  = ~ locked_seen;
+  assign \$43  = locked & \$42 ;
+  assign \$44  = arm | \$43 ;
+  assign \$45  = \$44  | abort_cycle;
+  assign \$46  = armed & early;
+  assign \$47  = ~ locked_seen;
+  assign \$48  = armed & \$47 ;
+  assign \$49  = ~ locked;
+  assign \$50  = \$48  & \$49 ;
+  assign \$51  = \$50  & ack_expired;
+  assign \$52  = ~ locked_seen;
+  assign \$53  = locked & \$52 ;
+  assign \$54  = \$53  & delay_over;
+  assign \$55  = ~ started;
+  assign \$56  = locked_seen & \$55 ;
+  assign \$57  = no_start_expired | slots_full;
+  assign \$58  = \$56  & \$57 ;
+  assign \$59  = ~ cfg[124];
+  assign \$60  = ~ ma_enough;
   assign \$61  = ~ cfg[124];
-  assign \$62  = rises >= target_rises;
-  assign \$63  = started & \$62 ;
-  assign \$64  = ~ \$63 ;
-  assign \$65  = ~ cfg[124];
-  assign \$66  = ~ \busy$102 ;
-  assign \$67  = \$66  & \slo$65 ;
+  assign \$62  = ~ \busy$102 ;
+  assign \$63  = \$62  & \slo$65 ;
   assign busy = ~ idle;
-  assign \$68  = ~ crc_ok[0];
-  assign inc = report_frame & \$68 ;
-  assign \$69  = ~ cfg[135];
-  assign \$70  = crc_ok[1] | \$69 ;
-  assign \$71  = ~ \$70 ;
-  assign \inc$139  = report_frame & \$71 ;
-  assign \$72  = check & \repeat ;
-  assign \inc$154  = report_frame & \$72 ;
-  assign \$73  = check & skip;
-  assign \inc$157  = report_frame & \$73 ;
-  assign \$74  = check & zero;
-  assign \inc$160  = report_frame & \$74 ;
-  assign \$75  = cfg[146] & cfg[135];
-  assign \$76  = ~ cfg[135];
-  assign \$77  = crc_ok[1] | \$76 ;
-  assign \$78  = crc_ok[0] & \$77 ;
-  assign \$79  = \$75  & \$78 ;
-  assign \$80  = ~ match;
-  assign \$81  = \$79  & \$80 ;
-  assign \inc$163  = report_frame & \$81 ;
-  assign \$82  = ! cycle_fsm_state;
-  assign \$83  = cycle_fsm_state == 1'h1;
-  assign \$84  = cycle_fsm_state == 2'h2;
-  assign \$85  = cycle_fsm_state == 2'h3;
-  assign \$86  = cycle_fsm_state == 3'h4;
-  assign \$87  = cycle_fsm_state == 3'h5;
-  assign \$88  = cycle_fsm_state == 3'h6;
-  assign \$89  = | live[15:1];
-  assign \$90  = | live[130:125];
-  assign \$91  = live[130:125] <= 6'h37;
-  assign \$92  = \$90  & \$91 ;
-  assign \$93  = ! live[134:133];
-  assign \$94  = live[134:133] == 1'h1;
-  assign \$95  = \$93  | \$94 ;
-  assign \$96  = live[134:133] == 2'h2;
-  assign \$97  = \$95  | \$96 ;
-  assign \$98  = \$92  & \$97 ;
-  assign \$99  = \$89  & \$98 ;
-  assign \$100  = ~ live[135];
-  assign \$101  = | live[141:136];
-  assign \$102  = live[141:136] <= 6'h28;
-  assign \$103  = \$101  & \$102 ;
-  assign \$104  = ! live[145:144];
-  assign \$105  = live[145:144] == 1'h1;
-  assign \$106  = \$104  | \$105 ;
-  assign \$107  = live[145:144] == 2'h2;
-  assign \$108  = \$106  | \$107 ;
-  assign \$109  = \$103  & \$108 ;
-  assign \$110  = \$100  | \$109 ;
-  assign \$111  = \$99  & \$110 ;
-  assign \$112  = live[135] & live[132];
-  assign \$113  = \$112  & live[143];
-  assign \$114  = ~ \$113 ;
-  assign \$115  = \$111  & \$114 ;
-  assign \$116  = ~ live[146];
-  assign \$117  = live[141:136] <= live[130:125];
-  assign \$118  = live[135] & \$117 ;
-  assign \$119  = | live[145:144];
-  assign \$120  = \$118  & \$119 ;
-  assign \$121  = \$116  | \$120 ;
-  assign \$122  = \$115  & \$121 ;
-  assign \$123  = ! live[87:64];
-  assign \$124  = \$123  ? 24'h000fa0 : live[87:64];
-  assign \$125  = ! live[111:88];
-  assign \$126  = \$125  ? 24'h001f40 : live[111:88];
-  assign \$127  = ! live[123:112];
-  assign \$128  = \$127  ? 12'hfff : live[123:112];
-  assign \$129  = ack_limit + { cfg[15:0], 1'h0 };
-  assign \$130  = now + 1'h1;
-  assign \$131  = \slo$65  | \busy$102 ;
-  assign \$132  = ~ slo_low_time_p1[24];
-  assign \$133  = slo_low_time_p1 + 1'h1;
-  assign \$134  = ~ \slo$65 ;
-  assign \$135  = ~ \busy$102 ;
-  assign \$136  = \$134  & \$135 ;
-  assign \$137  = slo_low_time_p1 >= timeout_limit;
-  assign \$138  = \$136  & \$137 ;
-  assign \$139  = ~ \slo$65 ;
-  assign \$140  = ~ \busy$102 ;
-  assign \$141  = \$139  & \$140 ;
-  assign \$142  = ! live[111:88];
-  assign \$143  = slo_low_time_p1 >= 13'h1f40;
-  assign \$144  = slo_low_time_p1 >= live[111:88];
-  assign \$145  = \$142  ? \$143  : \$144 ;
-  assign \$146  = \$141  & \$145 ;
-  assign \$147  = & timer;
-  assign \$148  = timer + 1'h1;
-  assign \$149  = \$147  ? { 1'h0, timer } : \$148 ;
-  assign \$150  = timer_clear ? 26'h0000001 : \$149 ;
-  assign \$151  = ~ timer_clear;
-  assign \$152  = ! live[63:40];
-  assign \$153  = timer >= 12'hfa0;
-  assign \$154  = timer >= live[63:40];
-  assign \$155  = \$152  ? \$153  : \$154 ;
-  assign \$156  = \$151  & \$155 ;
-  assign \$157  = ~ periodic;
-  assign \$158  = ! cfg_request_period;
-  assign \$159  = periodic & \$158 ;
-  assign \$160  = \$157  | \$159 ;
-  assign \$161  = period_count_p1 >= cfg_request_period;
-  assign \$162  = \$160  | \$161 ;
-  assign \$163  = period_count_p1 + 1'h1;
-  assign \$165  = words[5:0] + \$164 ;
-  assign \$166  = cfg[135] ? word1_len : 8'h00;
-  assign \$167  = word0_len + \$166 ;
-  assign \$169  = words[15:10] + \$168 ;
-  assign \$170  = start_slot + frame_len_p4;
+  assign \$64  = ~ crc_ok[0];
+  assign inc = report_frame & \$64 ;
+  assign \$65  = ~ cfg[135];
+  assign \$66  = crc_ok[1] | \$65 ;
+  assign \$67  = ~ \$66 ;
+  assign \inc$137  = report_frame & \$67 ;
+  assign \$68  = check & \repeat ;
+  assign \inc$152  = report_frame & \$68 ;
+  assign \$69  = check & skip;
+  assign \inc$155  = report_frame & \$69 ;
+  assign \$70  = check & zero;
+  assign \inc$158  = report_frame & \$70 ;
+  assign \$71  = cfg[146] & cfg[135];
+  assign \$72  = ~ cfg[135];
+  assign \$73  = crc_ok[1] | \$72 ;
+  assign \$74  = crc_ok[0] & \$73 ;
+  assign \$75  = \$71  & \$74 ;
+  assign \$76  = ~ match;
+  assign \$77  = \$75  & \$76 ;
+  assign \inc$161  = report_frame & \$77 ;
+  assign \$78  = ! cycle_fsm_state;
+  assign \$79  = cycle_fsm_state == 1'h1;
+  assign \$80  = cycle_fsm_state == 2'h2;
+  assign \$81  = cycle_fsm_state == 2'h3;
+  assign \$82  = cycle_fsm_state == 3'h4;
+  assign \$83  = cycle_fsm_state == 3'h5;
+  assign \$84  = cycle_fsm_state == 3'h6;
+  assign \$85  = | live[15:1];
+  assign \$86  = | live[130:125];
+  assign \$87  = live[130:125] <= 6'h37;
+  assign \$88  = \$86  & \$87 ;
+  assign \$89  = ! live[134:133];
+  assign \$90  = live[134:133] == 1'h1;
+  assign \$91  = \$89  | \$90 ;
+  assign \$92  = live[134:133] == 2'h2;
+  assign \$93  = \$91  | \$92 ;
+  assign \$94  = \$88  & \$93 ;
+  assign \$95  = \$85  & \$94 ;
+  assign \$96  = ~ live[135];
+  assign \$97  = | live[141:136];
+  assign \$98  = live[141:136] <= 6'h28;
+  assign \$99  = \$97  & \$98 ;
+  assign \$100  = ! live[145:144];
+  assign \$101  = live[145:144] == 1'h1;
+  assign \$102  = \$100  | \$101 ;
+  assign \$103  = live[145:144] == 2'h2;
+  assign \$104  = \$102  | \$103 ;
+  assign \$105  = \$99  & \$104 ;
+  assign \$106  = \$96  | \$105 ;
+  assign \$107  = \$95  & \$106 ;
+  assign \$108  = live[135] & live[132];
+  assign \$109  = \$108  & live[143];
+  assign \$110  = ~ \$109 ;
+  assign \$111  = \$107  & \$110 ;
+  assign \$112  = ~ live[146];
+  assign \$113  = live[141:136] <= live[130:125];
+  assign \$114  = live[135] & \$113 ;
+  assign \$115  = | live[145:144];
+  assign \$116  = \$114  & \$115 ;
+  assign \$117  = \$112  | \$116 ;
+  assign \$118  = \$111  & \$117 ;
+  assign \$119  = ! live[87:64];
+  assign \$120  = \$119  ? 24'h000fa0 : live[87:64];
+  assign \$121  = ! live[111:88];
+  assign \$122  = \$121  ? 24'h001f40 : live[111:88];
+  assign \$123  = ! live[123:112];
+  assign \$124  = \$123  ? 12'hfff : live[123:112];
+  assign \$125  = ack_limit + { cfg[15:0], 1'h0 };
+  assign \$126  = now + 1'h1;
+  assign \$127  = \slo$65  | \busy$102 ;
+  assign \$128  = ~ slo_low_time_p1[24];
+  assign \$129  = slo_low_time_p1 + 1'h1;
+  assign \$130  = ~ \slo$65 ;
+  assign \$131  = ~ \busy$102 ;
+  assign \$132  = \$130  & \$131 ;
+  assign \$133  = slo_low_time_p1 >= timeout_limit;
+  assign \$134  = \$132  & \$133 ;
+  assign \$135  = ~ \slo$65 ;
+  assign \$136  = ~ \busy$102 ;
+  assign \$137  = \$135  & \$136 ;
+  assign \$138  = ! live[111:88];
+  assign \$139  = slo_low_time_p1 >= 13'h1f40;
+  assign \$140  = slo_low_time_p1 >= live[111:88];
+  assign \$141  = \$138  ? \$139  : \$140 ;
+  assign \$142  = \$137  & \$141 ;
+  assign \$143  = & timer;
+  assign \$144  = timer + 1'h1;
+  assign \$145  = \$143  ? { 1'h0, timer } : \$144 ;
+  assign \$146  = timer_clear ? 26'h0000001 : \$145 ;
+  assign \$147  = ~ timer_clear;
+  assign \$148  = ! live[63:40];
+  assign \$149  = timer >= 12'hfa0;
+  assign \$150  = timer >= live[63:40];
+  assign \$151  = \$148  ? \$149  : \$150 ;
+  assign \$152  = \$147  & \$151 ;
+  assign \$153  = ~ periodic;
+  assign \$154  = ! cfg_request_period;
+  assign \$155  = periodic & \$154 ;
+  assign \$156  = \$153  | \$155 ;
+  assign \$157  = period_count_p1 >= cfg_request_period;
+  assign \$158  = \$156  | \$157 ;
+  assign \$159  = period_count_p1 + 1'h1;
+  assign \$161  = words[5:0] + \$160 ;
+  assign \$162  = cfg[135] ? word1_len : 8'h00;
+  assign \$163  = word0_len + \$162 ;
+  assign \$165  = words[15:10] + \$164 ;
+  assign \$166  = start_slot + frame_len_p4;
+  assign \$167  = rises >= target_rises;
+  assign \$168  = \started$188  & \$167 ;
+  assign \$169  = ~ receiver_clear;
+  assign \$170  = \$168  & \$169 ;
   assign \$171  = ~ locked_seen;
   assign \$172  = locked & \$171 ;
   assign \$173  = arm | \$172 ;
@@ -842,7 +844,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \$207  = ~ locked_seen;
   assign \$208  = locked & \$207 ;
   assign \$209  = \$208  & delay_over;
-  assign \$210  = ~ \started$125 ;
+  assign \$210  = ~ started;
   assign \$211  = locked_seen & \$210 ;
   assign \$212  = no_start_expired | slots_full;
   assign \$213  = \$211  & \$212 ;
@@ -905,157 +907,159 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   always @(posedge clk)
     target_rises <= \$251 ;
   always @(posedge clk)
-    started <= \$252 ;
+    \started$188  <= \$252 ;
   always @(posedge clk)
-    ack_expired <= \$253 ;
+    ma_enough <= \$253 ;
   always @(posedge clk)
-    no_start_expired <= \$254 ;
+    ack_expired <= \$254 ;
   always @(posedge clk)
-    delay_over <= \$255 ;
+    no_start_expired <= \$255 ;
   always @(posedge clk)
-    cycle_fsm_state <= \$256 ;
+    delay_over <= \$256 ;
   always @(posedge clk)
-    armed <= \$257 ;
+    cycle_fsm_state <= \$257 ;
   always @(posedge clk)
-    locked_seen <= \$258 ;
+    armed <= \$258 ;
   always @(posedge clk)
-    done <= \$259 ;
+    locked_seen <= \$259 ;
   always @(posedge clk)
-    valid <= \$260 ;
+    done <= \$260 ;
   always @(posedge clk)
-    status <= \$261 ;
+    valid <= \$261 ;
   always @(posedge clk)
-    line_delay <= \$262 ;
+    status <= \$262 ;
   always @(posedge clk)
-    timestamp <= \$263 ;
+    line_delay <= \$263 ;
   always @(posedge clk)
-    cds <= \$264 ;
+    timestamp <= \$264 ;
   always @(posedge clk)
-    lc <= \$265 ;
+    cds <= \$265 ;
   always @(posedge clk)
-    lc_repeat <= \$266 ;
+    lc <= \$266 ;
   always @(posedge clk)
-    lc_skip <= \$267 ;
+    lc_repeat <= \$267 ;
   always @(posedge clk)
-    lc_zero <= \$268 ;
+    lc_skip <= \$268 ;
   always @(posedge clk)
-    word0_position <= \$269 ;
+    lc_zero <= \$269 ;
   always @(posedge clk)
-    word0_ne <= \$270 ;
+    word0_position <= \$270 ;
   always @(posedge clk)
-    word0_nw <= \$271 ;
+    word0_ne <= \$271 ;
   always @(posedge clk)
-    word0_crc_ok <= \$272 ;
+    word0_nw <= \$272 ;
   always @(posedge clk)
-    word1_position <= \$273 ;
+    word0_crc_ok <= \$273 ;
   always @(posedge clk)
-    word1_ne <= \$274 ;
+    word1_position <= \$274 ;
   always @(posedge clk)
-    word1_nw <= \$275 ;
+    word1_ne <= \$275 ;
   always @(posedge clk)
-    word1_crc_ok <= \$276 ;
+    word1_nw <= \$276 ;
   always @(posedge clk)
-    spw_mismatch <= \$277 ;
-  \biss_master.count_aborted$211  \count_aborted$211  (
+    word1_crc_ok <= \$277 ;
+  always @(posedge clk)
+    spw_mismatch <= \$278 ;
+  \biss_master.count_aborted$212  \count_aborted$212  (
     .clear(clear_counters),
     .clk(clk),
     .count(count_aborted),
     .inc(fault_aborted),
     .rst(rst)
   );
-  \biss_master.count_crc_word0$200  \count_crc_word0$200  (
+  \biss_master.count_crc_word0$201  \count_crc_word0$201  (
     .clear(clear_counters),
     .clk(clk),
     .count(count_crc_word0),
     .inc(inc),
     .rst(rst)
   );
-  \biss_master.count_crc_word1$201  \count_crc_word1$201  (
+  \biss_master.count_crc_word1$202  \count_crc_word1$202  (
     .clear(clear_counters),
     .clk(clk),
     .count(count_crc_word1),
-    .inc(\inc$139 ),
+    .inc(\inc$137 ),
     .rst(rst)
   );
-  \biss_master.count_delay_range$204  \count_delay_range$204  (
+  \biss_master.count_delay_range$205  \count_delay_range$205  (
     .clear(clear_counters),
     .clk(clk),
     .count(count_delay_range),
     .inc(fault_delay_range),
     .rst(rst)
   );
-  \biss_master.count_lc_repeat$206  \count_lc_repeat$206  (
+  \biss_master.count_lc_repeat$207  \count_lc_repeat$207  (
     .clear(clear_counters),
     .clk(clk),
     .count(count_lc_repeat),
-    .inc(\inc$154 ),
+    .inc(\inc$152 ),
     .rst(rst)
   );
-  \biss_master.count_lc_skip$207  \count_lc_skip$207  (
+  \biss_master.count_lc_skip$208  \count_lc_skip$208  (
     .clear(clear_counters),
     .clk(clk),
     .count(count_lc_skip),
-    .inc(\inc$157 ),
+    .inc(\inc$155 ),
     .rst(rst)
   );
-  \biss_master.count_lc_zero$208  \count_lc_zero$208  (
+  \biss_master.count_lc_zero$209  \count_lc_zero$209  (
     .clear(clear_counters),
     .clk(clk),
     .count(count_lc_zero),
-    .inc(\inc$160 ),
+    .inc(\inc$158 ),
     .rst(rst)
   );
-  \biss_master.count_no_ack$202  \count_no_ack$202  (
+  \biss_master.count_no_ack$203  \count_no_ack$203  (
     .clear(clear_counters),
     .clk(clk),
     .count(count_no_ack),
     .inc(fault_no_ack),
     .rst(rst)
   );
-  \biss_master.count_no_start$203  \count_no_start$203  (
+  \biss_master.count_no_start$204  \count_no_start$204  (
     .clear(clear_counters),
     .clk(clk),
     .count(count_no_start),
     .inc(fault_no_start),
     .rst(rst)
   );
-  \biss_master.count_no_stop$212  \count_no_stop$212  (
+  \biss_master.count_no_stop$213  \count_no_stop$213  (
     .clear(clear_counters),
     .clk(clk),
     .count(count_no_stop),
     .inc(fault_no_stop),
     .rst(rst)
   );
-  \biss_master.count_overrun$210  \count_overrun$210  (
+  \biss_master.count_overrun$211  \count_overrun$211  (
     .clear(clear_counters),
     .clk(clk),
     .count(count_overrun),
     .inc(overrun),
     .rst(rst)
   );
-  \biss_master.count_slo_stuck_low$205  \count_slo_stuck_low$205  (
+  \biss_master.count_slo_stuck_low$206  \count_slo_stuck_low$206  (
     .clear(clear_counters),
     .clk(clk),
     .count(count_slo_stuck_low),
     .inc(fault_slo_stuck_low),
     .rst(rst)
   );
-  \biss_master.count_spw_mismatch$209  \count_spw_mismatch$209  (
+  \biss_master.count_spw_mismatch$210  \count_spw_mismatch$210  (
     .clear(clear_counters),
     .clk(clk),
     .count(count_spw_mismatch),
-    .inc(\inc$163 ),
+    .inc(\inc$161 ),
     .rst(rst)
   );
   \biss_master.decoder  decoder (
     .\bit (\slo$65 ),
-    .cds(\cds$190 ),
+    .cds(\cds$191 ),
     .clk(clk),
     .cpw_top(cpw_top),
     .crc_ok(crc_ok),
     .data0(data0),
     .data1(spw),
-    .done(\done$120 ),
+    .done(\done$118 ),
     .lc(\lc$77 ),
     .lc_load(load),
     .ne(ne),
@@ -1065,7 +1069,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .sample(sample),
     .slots_full(slots_full),
     .start_slot(start_slot),
-    .started(\started$125 ),
+    .started(started),
     .stop_bit(stop_bit),
     .stopped(stopped),
     .word_count(word_count),
@@ -1100,7 +1104,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .is_zero(zero),
     .lc(\lc$77 ),
     .load(load),
-    .\port$1177$0 (\slo$65 ),
+    .\port$1179$0 (\slo$65 ),
     .\repeat (\repeat ),
     .resync(resync),
     .rst(rst),
@@ -1126,37 +1130,37 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     (* full_case = 32'd1 *)
     casez (words[9:6])
       4'h0:
-          \$164  = 8'h04;
+          \$160  = 8'h04;
       4'h1:
-          \$164  = 8'h06;
+          \$160  = 8'h06;
       4'h2:
-          \$164  = 8'h0a;
+          \$160  = 8'h0a;
       4'h3:
-          \$164  = 8'h0c;
+          \$160  = 8'h0c;
       4'h4:
-          \$164  = 8'h0a;
+          \$160  = 8'h0a;
       4'h5:
-          \$164  = 8'h0c;
+          \$160  = 8'h0c;
       4'h6:
-          \$164  = 8'h10;
+          \$160  = 8'h10;
       4'h7:
-          \$164  = 8'h12;
+          \$160  = 8'h12;
       4'h8:
-          \$164  = 8'h14;
+          \$160  = 8'h14;
       4'h9:
-          \$164  = 8'h16;
+          \$160  = 8'h16;
       4'ha:
-          \$164  = 8'h1a;
+          \$160  = 8'h1a;
       4'hb:
-          \$164  = 8'h1c;
+          \$160  = 8'h1c;
       4'hc:
-          \$164  = 8'h04;
+          \$160  = 8'h04;
       4'hd:
-          \$164  = 8'h06;
+          \$160  = 8'h06;
       4'he:
-          \$164  = 8'h0a;
+          \$160  = 8'h0a;
       4'hf:
-          \$164  = 8'h0c;
+          \$160  = 8'h0c;
     endcase
   end
   always @* begin
@@ -1164,37 +1168,37 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     (* full_case = 32'd1 *)
     casez (words[19:16])
       4'h0:
-          \$168  = 8'h00;
+          \$164  = 8'h00;
       4'h1:
-          \$168  = 8'h02;
+          \$164  = 8'h02;
       4'h2:
-          \$168  = 8'h06;
+          \$164  = 8'h06;
       4'h3:
-          \$168  = 8'h08;
+          \$164  = 8'h08;
       4'h4:
-          \$168  = 8'h06;
+          \$164  = 8'h06;
       4'h5:
-          \$168  = 8'h08;
+          \$164  = 8'h08;
       4'h6:
-          \$168  = 8'h0c;
+          \$164  = 8'h0c;
       4'h7:
-          \$168  = 8'h0e;
+          \$164  = 8'h0e;
       4'h8:
-          \$168  = 8'h10;
+          \$164  = 8'h10;
       4'h9:
-          \$168  = 8'h12;
+          \$164  = 8'h12;
       4'ha:
-          \$168  = 8'h16;
+          \$164  = 8'h16;
       4'hb:
-          \$168  = 8'h18;
+          \$164  = 8'h18;
       4'hc:
-          \$168  = 8'h00;
+          \$164  = 8'h00;
       4'hd:
-          \$168  = 8'h02;
+          \$164  = 8'h02;
       4'he:
-          \$168  = 8'h06;
+          \$164  = 8'h06;
       4'hf:
-          \$168  = 8'h08;
+          \$164  = 8'h08;
     endcase
   end
   always @* begin
@@ -1247,14 +1251,14 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
       3'h2:
           timer_clear = 1'h1;
       3'h3:
-          if (\$47 ) begin
+          if (\$45 ) begin
             timer_clear = 1'h1;
           end
       3'h4:
           if (abort_cycle) begin
             timer_clear = 1'h1;
           end else if (stopped) begin
-            if (\$65 ) begin
+            if (\$61 ) begin
             end else if (stop_bit) begin
               timer_clear = 1'h1;
             end
@@ -1264,7 +1268,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
       3'h6:
           if (abort_cycle) begin
             timer_clear = 1'h1;
-          end else if (\$67 ) begin
+          end else if (\$63 ) begin
           end else if (stuck_latched) begin
             timer_clear = 1'h1;
           end
@@ -1300,17 +1304,17 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
       3'h3:
           if (abort_cycle) begin
             report = 1'h1;
-          end else if (\done$120 ) begin
-            if (\$61 ) begin
+          end else if (\done$118 ) begin
+            if (\$59 ) begin
               report = 1'h1;
             end
-          end else if (\$48 ) begin
+          end else if (\$46 ) begin
             report = 1'h1;
-          end else if (\$53 ) begin
+          end else if (\$51 ) begin
             report = 1'h1;
-          end else if (\$56 ) begin
+          end else if (\$54 ) begin
             report = 1'h1;
-          end else if (\$60 ) begin
+          end else if (\$58 ) begin
             report = 1'h1;
           end
       3'h4:
@@ -1319,7 +1323,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
               report = 1'h1;
             end
           end else if (stopped) begin
-            if (\$65 ) begin
+            if (\$61 ) begin
             end else if (stop_bit) begin
               report = 1'h1;
             end
@@ -1329,7 +1333,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
       3'h6:
           if (abort_cycle) begin
             report = 1'h1;
-          end else if (\$67 ) begin
+          end else if (\$63 ) begin
             report = 1'h1;
           end else if (stuck_latched) begin
             report = 1'h1;
@@ -1356,17 +1360,17 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
       3'h3:
           if (abort_cycle) begin
             report_status = 4'ha;
-          end else if (\done$120 ) begin
-            if (\$61 ) begin
+          end else if (\done$118 ) begin
+            if (\$59 ) begin
               report_status = frame_status;
             end
-          end else if (\$48 ) begin
+          end else if (\$46 ) begin
             report_status = 4'h8;
-          end else if (\$53 ) begin
+          end else if (\$51 ) begin
             report_status = 4'h6;
-          end else if (\$56 ) begin
+          end else if (\$54 ) begin
             report_status = 4'h8;
-          end else if (\$60 ) begin
+          end else if (\$58 ) begin
             report_status = 4'h7;
           end
       3'h4:
@@ -1375,7 +1379,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
               report_status = 4'ha;
             end
           end else if (stopped) begin
-            if (\$65 ) begin
+            if (\$61 ) begin
             end else if (stop_bit) begin
               report_status = 4'hc;
             end
@@ -1385,7 +1389,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
       3'h6:
           if (abort_cycle) begin
             report_status = 4'ha;
-          end else if (\$67 ) begin
+          end else if (\$63 ) begin
             report_status = frame_status;
           end else if (stuck_latched) begin
             report_status = 4'h9;
@@ -1460,7 +1464,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
           /* empty */;
       3'h6:
           if (abort_cycle) begin
-          end else if (\$67 ) begin
+          end else if (\$63 ) begin
           end else if (stuck_latched) begin
             fault_slo_stuck_low = 1'h1;
           end
@@ -1477,9 +1481,9 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
       3'h2:
           /* empty */;
       3'h3:
-          run = \$43 ;
+          run = \$41 ;
       3'h4:
-          run = \$64 ;
+          run = \$60 ;
     endcase
   end
   always @* begin
@@ -1508,8 +1512,8 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
           /* empty */;
       3'h3:
           if (abort_cycle) begin
-          end else if (\done$120 ) begin
-            if (\$61 ) begin
+          end else if (\done$118 ) begin
+            if (\$59 ) begin
               report_frame = 1'h1;
             end
           end
@@ -1519,7 +1523,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
           /* empty */;
       3'h6:
           if (abort_cycle) begin
-          end else if (\$67 ) begin
+          end else if (\$63 ) begin
             report_frame = 1'h1;
           end
     endcase
@@ -1536,13 +1540,13 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
           /* empty */;
       3'h3:
           if (abort_cycle) begin
-          end else if (\done$120 ) begin
-            if (\$61 ) begin
+          end else if (\done$118 ) begin
+            if (\$59 ) begin
               report_delay = 1'h1;
             end
-          end else if (\$48 ) begin
-          end else if (\$53 ) begin
-          end else if (\$56 ) begin
+          end else if (\$46 ) begin
+          end else if (\$51 ) begin
+          end else if (\$54 ) begin
             report_delay = 1'h1;
           end
       3'h4:
@@ -1551,7 +1555,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
           /* empty */;
       3'h6:
           if (abort_cycle) begin
-          end else if (\$67 ) begin
+          end else if (\$63 ) begin
             report_delay = 1'h1;
           end
     endcase
@@ -1568,11 +1572,11 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
           /* empty */;
       3'h3:
           if (abort_cycle) begin
-          end else if (\done$120 ) begin
-          end else if (\$48 ) begin
+          end else if (\done$118 ) begin
+          end else if (\$46 ) begin
             fault_delay_range = 1'h1;
-          end else if (\$53 ) begin
-          end else if (\$56 ) begin
+          end else if (\$51 ) begin
+          end else if (\$54 ) begin
             fault_delay_range = 1'h1;
           end
     endcase
@@ -1589,9 +1593,9 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
           /* empty */;
       3'h3:
           if (abort_cycle) begin
-          end else if (\done$120 ) begin
-          end else if (\$48 ) begin
-          end else if (\$53 ) begin
+          end else if (\done$118 ) begin
+          end else if (\$46 ) begin
+          end else if (\$51 ) begin
             fault_no_ack = 1'h1;
           end
     endcase
@@ -1608,11 +1612,11 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
           /* empty */;
       3'h3:
           if (abort_cycle) begin
-          end else if (\done$120 ) begin
-          end else if (\$48 ) begin
-          end else if (\$53 ) begin
-          end else if (\$56 ) begin
-          end else if (\$60 ) begin
+          end else if (\done$118 ) begin
+          end else if (\$46 ) begin
+          end else if (\$51 ) begin
+          end else if (\$54 ) begin
+          end else if (\$58 ) begin
             fault_no_start = 1'h1;
           end
     endcase
@@ -1632,7 +1636,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
       3'h4:
           if (abort_cycle) begin
           end else if (stopped) begin
-            if (\$65 ) begin
+            if (\$61 ) begin
             end else if (stop_bit) begin
               fault_no_stop = 1'h1;
             end
@@ -1641,7 +1645,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$232  = \$122 ;
+    \$232  = \$118 ;
     if (rst) begin
       \$232  = 1'h0;
     end
@@ -1660,7 +1664,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
     \$234  = ack_limit;
     if (idle) begin
-      \$234  = \$124 ;
+      \$234  = \$120 ;
     end
     if (rst) begin
       \$234  = 24'h000000;
@@ -1670,7 +1674,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
     \$235  = timeout_limit;
     if (idle) begin
-      \$235  = \$126 ;
+      \$235  = \$122 ;
     end
     if (rst) begin
       \$235  = 24'h000000;
@@ -1680,7 +1684,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
     \$236  = delay_limit;
     if (idle) begin
-      \$236  = \$128 ;
+      \$236  = \$124 ;
     end
     if (rst) begin
       \$236  = 12'h000;
@@ -1688,14 +1692,14 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$237  = \$129 ;
+    \$237  = \$125 ;
     if (rst) begin
       \$237  = 25'h0000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$238  = \$130 [31:0];
+    \$238  = \$126 [31:0];
     if (rst) begin
       \$238  = 32'd0;
     end
@@ -1713,10 +1717,10 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
     \$240  = slo_low_time_p1;
-    if (\$131 ) begin
+    if (\$127 ) begin
       \$240  = 25'h0000001;
-    end else if (\$132 ) begin
-      \$240  = \$133 [24:0];
+    end else if (\$128 ) begin
+      \$240  = \$129 [24:0];
     end
     if (rst) begin
       \$240  = 25'h0000001;
@@ -1724,14 +1728,14 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$241  = \$138 ;
+    \$241  = \$134 ;
     if (rst) begin
       \$241  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$242  = \$146 ;
+    \$242  = \$142 ;
     if (rst) begin
       \$242  = 1'h0;
     end
@@ -1745,14 +1749,14 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$244  = \$150 [24:0];
+    \$244  = \$146 [24:0];
     if (rst) begin
       \$244  = 25'h0000001;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$245  = \$156 ;
+    \$245  = \$152 ;
     if (rst) begin
       \$245  = 1'h0;
     end
@@ -1760,10 +1764,10 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
     (* full_case = 32'd1 *)
-    if (\$162 ) begin
+    if (\$158 ) begin
       \$246  = 24'h000001;
     end else begin
-      \$246  = \$163 [23:0];
+      \$246  = \$159 [23:0];
     end
     if (rst) begin
       \$246  = 24'h000001;
@@ -1772,7 +1776,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
     (* full_case = 32'd1 *)
-    if (\$162 ) begin
+    if (\$158 ) begin
       \$247  = 1'h1;
     end else begin
       \$247  = 1'h0;
@@ -1783,159 +1787,147 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$248  = \$165 [7:0];
+    \$248  = \$161 [7:0];
     if (rst) begin
       \$248  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$249  = \$167 ;
+    \$249  = \$163 ;
     if (rst) begin
       \$249  = 9'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$250  = \$169 [7:0];
+    \$250  = \$165 [7:0];
     if (rst) begin
       \$250  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$251  = \$170 ;
+    \$251  = \$166 ;
     if (rst) begin
       \$251  = 17'h00000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$252  = \started$125 ;
+    \$252  = started;
     if (rst) begin
       \$252  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$253  = \$177 ;
+    \$253  = \$170 ;
     if (rst) begin
       \$253  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$254  = \$184 ;
+    \$254  = \$177 ;
     if (rst) begin
       \$254  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$255  = \$185 ;
+    \$255  = \$184 ;
     if (rst) begin
       \$255  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$256  = cycle_fsm_state;
+    \$256  = \$185 ;
+    if (rst) begin
+      \$256  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    \$257  = cycle_fsm_state;
     casez (cycle_fsm_state)
       3'h0:
           if (\$186 ) begin
           end else if (break_over) begin
-            \$256  = 3'h1;
+            \$257  = 3'h1;
           end
       3'h1:
           if (abort_cycle) begin
-            \$256  = 3'h0;
+            \$257  = 3'h0;
           end else if (\$195 ) begin
-            \$256  = 3'h2;
+            \$257  = 3'h2;
           end
       3'h2:
           if (\$197 ) begin
-            \$256  = 3'h1;
+            \$257  = 3'h1;
             if (abort_cycle) begin
-              \$256  = 3'h0;
+              \$257  = 3'h0;
             end
           end else if (abort_cycle) begin
-            \$256  = 3'h0;
+            \$257  = 3'h0;
           end else if (\slo$65 ) begin
-            \$256  = 3'h3;
+            \$257  = 3'h3;
           end else if (\$198 ) begin
-            \$256  = 3'h0;
+            \$257  = 3'h0;
           end
       3'h3:
           if (abort_cycle) begin
-            \$256  = 3'h0;
-          end else if (\done$120 ) begin
-            \$256  = 3'h4;
+            \$257  = 3'h0;
+          end else if (\done$118 ) begin
+            \$257  = 3'h4;
           end else if (\$201 ) begin
-            \$256  = 3'h0;
+            \$257  = 3'h0;
           end else if (\$206 ) begin
-            \$256  = 3'h0;
+            \$257  = 3'h0;
           end else if (\$209 ) begin
-            \$256  = 3'h0;
+            \$257  = 3'h0;
           end else if (\$213 ) begin
-            \$256  = 3'h0;
+            \$257  = 3'h0;
           end
       3'h4:
           if (abort_cycle) begin
             (* full_case = 32'd1 *)
             if (cfg[124]) begin
-              \$256  = 3'h0;
+              \$257  = 3'h0;
             end else begin
-              \$256  = 3'h0;
+              \$257  = 3'h0;
             end
           end else if (stopped) begin
             (* full_case = 32'd1 *)
             if (\$214 ) begin
-              \$256  = 3'h5;
+              \$257  = 3'h5;
             end else if (stop_bit) begin
-              \$256  = 3'h0;
+              \$257  = 3'h0;
             end else begin
-              \$256  = 3'h6;
+              \$257  = 3'h6;
             end
           end
       3'h5:
           if (\$215 ) begin
-            \$256  = 3'h1;
+            \$257  = 3'h1;
           end
       3'h6:
           if (abort_cycle) begin
-            \$256  = 3'h0;
+            \$257  = 3'h0;
           end else if (\$217 ) begin
-            \$256  = 3'h1;
+            \$257  = 3'h1;
           end else if (stuck_latched) begin
-            \$256  = 3'h0;
+            \$257  = 3'h0;
           end
     endcase
     if (rst) begin
-      \$256  = 3'h0;
+      \$257  = 3'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$257  = armed;
-    casez (cycle_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          \$257  = 1'h0;
-      3'h3:
-          if (arm) begin
-            \$257  = 1'h1;
-          end
-    endcase
-    if (rst) begin
-      \$257  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$258  = locked_seen;
+    \$258  = armed;
     casez (cycle_fsm_state)
       3'h0:
           /* empty */;
@@ -1944,7 +1936,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
       3'h2:
           \$258  = 1'h0;
       3'h3:
-          if (\$200 ) begin
+          if (arm) begin
             \$258  = 1'h1;
           end
     endcase
@@ -1954,83 +1946,92 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$259  = report;
+    \$259  = locked_seen;
+    casez (cycle_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          \$259  = 1'h0;
+      3'h3:
+          if (\$200 ) begin
+            \$259  = 1'h1;
+          end
+    endcase
     if (rst) begin
       \$259  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$260  = \$219 ;
+    \$260  = report;
     if (rst) begin
       \$260  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$261  = status;
+    \$261  = \$219 ;
+    if (rst) begin
+      \$261  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    \$262  = status;
     if (report) begin
-      \$261  = report_status;
+      \$262  = report_status;
     end
     if (rst) begin
-      \$261  = 4'h0;
+      \$262  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$262  = line_delay;
+    \$263  = line_delay;
     if (report_delay) begin
-      \$262  = delay;
+      \$263  = delay;
     end
     if (rst) begin
-      \$262  = 13'h0000;
+      \$263  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$263  = timestamp;
+    \$264  = timestamp;
     if (report_frame) begin
-      \$263  = first_rise_time;
+      \$264  = first_rise_time;
     end
     if (rst) begin
-      \$263  = 32'd0;
+      \$264  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$264  = cds;
+    \$265  = cds;
     if (report_frame) begin
-      \$264  = \cds$190 ;
+      \$265  = \cds$191 ;
     end
     if (rst) begin
-      \$264  = 1'h0;
+      \$265  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$265  = lc;
+    \$266  = lc;
     if (report_frame) begin
-      \$265  = \lc$77 ;
+      \$266  = \lc$77 ;
     end
     if (rst) begin
-      \$265  = 6'h00;
+      \$266  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$266  = lc_repeat;
+    \$267  = lc_repeat;
     if (report_frame) begin
-      \$266  = \$220 ;
-    end
-    if (rst) begin
-      \$266  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$267  = lc_skip;
-    if (report_frame) begin
-      \$267  = \$221 ;
+      \$267  = \$220 ;
     end
     if (rst) begin
       \$267  = 1'h0;
@@ -2038,9 +2039,9 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$268  = lc_zero;
+    \$268  = lc_skip;
     if (report_frame) begin
-      \$268  = \$222 ;
+      \$268  = \$221 ;
     end
     if (rst) begin
       \$268  = 1'h0;
@@ -2048,29 +2049,29 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$269  = word0_position;
+    \$269  = lc_zero;
     if (report_frame) begin
-      \$269  = data0;
+      \$269  = \$222 ;
     end
     if (rst) begin
-      \$269  = 55'h00000000000000;
+      \$269  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$270  = word0_ne;
+    \$270  = word0_position;
     if (report_frame) begin
-      \$270  = ne[0];
+      \$270  = data0;
     end
     if (rst) begin
-      \$270  = 1'h0;
+      \$270  = 55'h00000000000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$271  = word0_nw;
+    \$271  = word0_ne;
     if (report_frame) begin
-      \$271  = nw[0];
+      \$271  = ne[0];
     end
     if (rst) begin
       \$271  = 1'h0;
@@ -2078,9 +2079,9 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$272  = word0_crc_ok;
+    \$272  = word0_nw;
     if (report_frame) begin
-      \$272  = crc_ok[0];
+      \$272  = nw[0];
     end
     if (rst) begin
       \$272  = 1'h0;
@@ -2088,29 +2089,29 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$273  = word1_position;
+    \$273  = word0_crc_ok;
     if (report_frame) begin
-      \$273  = spw;
+      \$273  = crc_ok[0];
     end
     if (rst) begin
-      \$273  = 40'h0000000000;
+      \$273  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$274  = word1_ne;
+    \$274  = word1_position;
     if (report_frame) begin
-      \$274  = ne[1];
+      \$274  = spw;
     end
     if (rst) begin
-      \$274  = 1'h0;
+      \$274  = 40'h0000000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$275  = word1_nw;
+    \$275  = word1_ne;
     if (report_frame) begin
-      \$275  = nw[1];
+      \$275  = ne[1];
     end
     if (rst) begin
       \$275  = 1'h0;
@@ -2118,9 +2119,9 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$276  = word1_crc_ok;
+    \$276  = word1_nw;
     if (report_frame) begin
-      \$276  = \$224 ;
+      \$276  = nw[1];
     end
     if (rst) begin
       \$276  = 1'h0;
@@ -2128,12 +2129,22 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$277  = spw_mismatch;
+    \$277  = word1_crc_ok;
     if (report_frame) begin
-      \$277  = \$231 ;
+      \$277  = \$224 ;
     end
     if (rst) begin
       \$277  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    \$278  = spw_mismatch;
+    if (report_frame) begin
+      \$278  = \$231 ;
+    end
+    if (rst) begin
+      \$278  = 1'h0;
     end
   end
   assign half_period = cfg[15:0];
@@ -2152,40 +2163,40 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign bits = cfg[141:136];
   assign tolerance = cfg[154:147];
   assign second_rise = arm;
-  assign \resync$135  = resync;
+  assign \resync$133  = resync;
   assign clear = clear_counters;
   assign count = count_crc_word0;
-  assign \clear$140  = clear_counters;
-  assign \count$141  = count_crc_word1;
-  assign \inc$142  = fault_no_ack;
-  assign \clear$143  = clear_counters;
-  assign \count$144  = count_no_ack;
-  assign \inc$145  = fault_no_start;
-  assign \clear$146  = clear_counters;
-  assign \count$147  = count_no_start;
-  assign \inc$148  = fault_delay_range;
-  assign \clear$149  = clear_counters;
-  assign \count$150  = count_delay_range;
-  assign \inc$151  = fault_slo_stuck_low;
-  assign \clear$152  = clear_counters;
-  assign \count$153  = count_slo_stuck_low;
-  assign \clear$155  = clear_counters;
-  assign \count$156  = count_lc_repeat;
-  assign \clear$158  = clear_counters;
-  assign \count$159  = count_lc_skip;
-  assign \clear$161  = clear_counters;
-  assign \count$162  = count_lc_zero;
-  assign \clear$164  = clear_counters;
-  assign \count$165  = count_spw_mismatch;
-  assign \inc$166  = overrun;
-  assign \clear$167  = clear_counters;
-  assign \count$168  = count_overrun;
-  assign \inc$169  = fault_aborted;
-  assign \clear$170  = clear_counters;
-  assign \count$171  = count_aborted;
-  assign \inc$172  = fault_no_stop;
-  assign \clear$173  = clear_counters;
-  assign \count$174  = count_no_stop;
+  assign \clear$138  = clear_counters;
+  assign \count$139  = count_crc_word1;
+  assign \inc$140  = fault_no_ack;
+  assign \clear$141  = clear_counters;
+  assign \count$142  = count_no_ack;
+  assign \inc$143  = fault_no_start;
+  assign \clear$144  = clear_counters;
+  assign \count$145  = count_no_start;
+  assign \inc$146  = fault_delay_range;
+  assign \clear$147  = clear_counters;
+  assign \count$148  = count_delay_range;
+  assign \inc$149  = fault_slo_stuck_low;
+  assign \clear$150  = clear_counters;
+  assign \count$151  = count_slo_stuck_low;
+  assign \clear$153  = clear_counters;
+  assign \count$154  = count_lc_repeat;
+  assign \clear$156  = clear_counters;
+  assign \count$157  = count_lc_skip;
+  assign \clear$159  = clear_counters;
+  assign \count$160  = count_lc_zero;
+  assign \clear$162  = clear_counters;
+  assign \count$163  = count_spw_mismatch;
+  assign \inc$164  = overrun;
+  assign \clear$165  = clear_counters;
+  assign \count$166  = count_overrun;
+  assign \inc$167  = fault_aborted;
+  assign \clear$168  = clear_counters;
+  assign \count$169  = count_aborted;
+  assign \inc$170  = fault_no_stop;
+  assign \clear$171  = clear_counters;
+  assign \count$172  = count_no_stop;
   assign \live.cfg_ma_half_period  = live[15:0];
   assign \live.cfg_request_period  = live[39:16];
   assign \live.cfg_break_time  = live[63:40];
@@ -2261,7 +2272,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_aborted$211 (clk, rst, inc, count, clear);
+module \biss_master.count_aborted$212 (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$10  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -2315,7 +2326,7 @@ module \biss_master.count_aborted$211 (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_crc_word0$200 (clk, rst, inc, count, clear);
+module \biss_master.count_crc_word0$201 (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$11  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -2369,7 +2380,7 @@ module \biss_master.count_crc_word0$200 (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_crc_word1$201 (clk, rst, inc, count, clear);
+module \biss_master.count_crc_word1$202 (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$12  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -2423,7 +2434,7 @@ module \biss_master.count_crc_word1$201 (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_delay_range$204 (clk, rst, inc, count, clear);
+module \biss_master.count_delay_range$205 (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$13  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -2477,7 +2488,7 @@ module \biss_master.count_delay_range$204 (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_lc_repeat$206 (clk, rst, inc, count, clear);
+module \biss_master.count_lc_repeat$207 (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$14  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -2531,7 +2542,7 @@ module \biss_master.count_lc_repeat$206 (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_lc_skip$207 (clk, rst, inc, count, clear);
+module \biss_master.count_lc_skip$208 (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$15  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -2585,7 +2596,7 @@ module \biss_master.count_lc_skip$207 (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_lc_zero$208 (clk, rst, inc, count, clear);
+module \biss_master.count_lc_zero$209 (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$16  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -2639,7 +2650,7 @@ module \biss_master.count_lc_zero$208 (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_no_ack$202 (clk, rst, inc, count, clear);
+module \biss_master.count_no_ack$203 (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$17  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -2693,7 +2704,7 @@ module \biss_master.count_no_ack$202 (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_no_start$203 (clk, rst, inc, count, clear);
+module \biss_master.count_no_start$204 (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$18  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -2747,7 +2758,7 @@ module \biss_master.count_no_start$203 (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_no_stop$212 (clk, rst, inc, count, clear);
+module \biss_master.count_no_stop$213 (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$19  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -2801,7 +2812,7 @@ module \biss_master.count_no_stop$212 (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_overrun$210 (clk, rst, inc, count, clear);
+module \biss_master.count_overrun$211 (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$20  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -2855,7 +2866,7 @@ module \biss_master.count_overrun$210 (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_slo_stuck_low$205 (clk, rst, inc, count, clear);
+module \biss_master.count_slo_stuck_low$206 (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$21  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -2909,7 +2920,7 @@ module \biss_master.count_slo_stuck_low$205 (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_spw_mismatch$209 (clk, rst, inc, count, clear);
+module \biss_master.count_spw_mismatch$210 (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$22  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -4949,7 +4960,7 @@ module \biss_master.sampler (rst, receiver_clear, half_period, arm, early, locke
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.sign_of_life (rst, check, load, \repeat , skip, resync, lc, is_zero, \port$1177$0 , clk);
+module \biss_master.sign_of_life (rst, check, load, \repeat , skip, resync, lc, is_zero, \port$1179$0 , clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$28  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -4987,8 +4998,8 @@ module \biss_master.sign_of_life (rst, check, load, \repeat , skip, resync, lc, 
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$1177$0 ;
-  wire \port$1177$0 ;
+  input \port$1179$0 ;
+  wire \port$1179$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -5000,9 +5011,9 @@ module \biss_master.sign_of_life (rst, check, load, \repeat , skip, resync, lc, 
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$1177$0  };
-  assign \$2  = { lc[4:0], \port$1177$0  } == last;
-  assign \$3  = { lc[4:0], \port$1177$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$1179$0  };
+  assign \$2  = { lc[4:0], \port$1179$0  } == last;
+  assign \$3  = { lc[4:0], \port$1179$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = lc == 6'h3f;
@@ -5092,7 +5103,7 @@ module \biss_master.sign_of_life (rst, check, load, \repeat , skip, resync, lc, 
       \$21  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$1177$0  };
+  assign lc_next = { lc[4:0], \port$1179$0  };
   assign zero = is_zero;
 endmodule
 
