@@ -33,18 +33,23 @@ from .flow import Internals
 
 
 class Harness(Elaboratable):
-    """Base: the harness owns the ``sync`` domain (no reset); its clock is the only port."""
+    """Base: the harness owns the ``sync`` domain (no reset); its clock is the only port.
+    The keyword arguments (a subclass's settings) become attributes."""
 
-    def __init__(self):
+    def __init__(self, **settings):
         self.cd = ClockDomain("sync", reset_less=True)
+        for name, value in settings.items():
+            setattr(self, name, value)
 
     @property
     def ports(self):
         return [self.cd.clk]
 
-
-def _domain(m, harness):
-    m.domains.sync = harness.cd
+    def _module(self):
+        """A Module whose ``sync`` domain is the harness's."""
+        m = Module()
+        m.domains.sync = self.cd
+        return m
 
 
 class _PhaseMonitor:
@@ -138,14 +143,10 @@ class MaClockHarness(Harness):
     """
 
     def __init__(self, hp_max=None, lemmas=True, mutation=None):
-        super().__init__()
-        self.hp_max = hp_max
-        self.lemmas = lemmas
-        self.mutation = mutation
+        super().__init__(hp_max=hp_max, lemmas=lemmas, mutation=mutation)
 
     def elaborate(self, platform):
-        m = Module()
-        _domain(m, self)
+        m = self._module()
         dut = MaClock()
         inside = Internals(dut)
         m.submodules.dut = inside.fragment
@@ -189,15 +190,10 @@ class MasterMaHarness(Harness):
     """
 
     def __init__(self, params, lemmas=False, hp_max=None, mutation=None):
-        super().__init__()
-        self.params = params
-        self.lemmas = lemmas
-        self.hp_max = hp_max
-        self.mutation = mutation
+        super().__init__(params=params, lemmas=lemmas, hp_max=hp_max, mutation=mutation)
 
     def elaborate(self, platform):
-        m = Module()
-        _domain(m, self)
+        m = self._module()
         dut = BissMaster(self.params)
         inside = Internals(dut)
         m.submodules.dut = inside.fragment
@@ -282,6 +278,30 @@ class LivenessLimits:
         self.lc = lc
         self.crcs = tuple(crcs)
 
+    def assume(self, m, dut, words, *, time_min=0, crcs=True):
+        """Assume the master's live settings within these limits. ``time_min`` 1 excludes
+        the value 0 (the built-in default) for the Ack, timeout and break settings;
+        ``crcs`` False leaves the CRC codes free."""
+        m.d.comb += [
+            Assume((dut.cfg_ma_half_period >= 2) & (dut.cfg_ma_half_period <= self.hp_max)),
+            Assume((dut.cfg_ack_limit >= time_min) & (dut.cfg_ack_limit <= self.ack_max)),
+            Assume((dut.cfg_timeout_limit >= time_min)
+                   & (dut.cfg_timeout_limit <= self.timeout_max)),
+            Assume((dut.cfg_break_time >= time_min) & (dut.cfg_break_time <= self.break_max)),
+        ]
+        for w in range(words):
+            cfg = {name: getattr(dut, f"cfg_w{w}_{name}") for name in ("data_bits", "nenw", "lc", "crc")}
+            m.d.comb += Assume(cfg["data_bits"] <= self.data_bits_max)
+            if not self.nenw:
+                m.d.comb += Assume(~cfg["nenw"])
+            if not self.lc:
+                m.d.comb += Assume(~cfg["lc"])
+            if crcs:
+                crc_ok = 0
+                for c in self.crcs:
+                    crc_ok = crc_ok | (cfg["crc"] == c)
+                m.d.comb += Assume(crc_ok)
+
     def max_frame_bits(self, words):
         crc = max({Crc.NONE: 0, Crc.CRC6: 6, Crc.CRC16: 16}[c] for c in self.crcs)
         return words * (self.data_bits_max + 2 * self.nenw + crc) + 6 * self.lc
@@ -319,38 +339,17 @@ class MasterLivenessHarness(Harness):
     """
 
     def __init__(self, params, limits, slack=8, mutation=None):
-        super().__init__()
-        self.params = params
-        self.limits = limits
-        self.slack = slack
-        self.mutation = mutation
+        super().__init__(params=params, limits=limits, slack=slack, mutation=mutation)
 
     def elaborate(self, platform):
-        m = Module()
-        _domain(m, self)
+        m = self._module()
         p, lim = self.params, self.limits
         dut = BissMaster(p)
         m.submodules.dut = dut
 
         _drive_free(m, dut, exclude=("cfg_break_time",))
         m.d.comb += dut.cfg_break_time.eq(AnyConst(len(dut.cfg_break_time)))
-        m.d.comb += [
-            Assume((dut.cfg_ma_half_period >= 2) & (dut.cfg_ma_half_period <= lim.hp_max)),
-            Assume((dut.cfg_ack_limit >= 1) & (dut.cfg_ack_limit <= lim.ack_max)),
-            Assume((dut.cfg_timeout_limit >= 1) & (dut.cfg_timeout_limit <= lim.timeout_max)),
-            Assume((dut.cfg_break_time >= 1) & (dut.cfg_break_time <= lim.break_max)),
-        ]
-        for w in range(p.words):
-            cfg = {name: getattr(dut, f"cfg_w{w}_{name}") for name in ("data_bits", "nenw", "lc", "crc")}
-            m.d.comb += Assume(cfg["data_bits"] <= lim.data_bits_max)
-            if not lim.nenw:
-                m.d.comb += Assume(~cfg["nenw"])
-            if not lim.lc:
-                m.d.comb += Assume(~cfg["lc"])
-            crc_ok = 0
-            for c in lim.crcs:
-                crc_ok = crc_ok | (cfg["crc"] == c)
-            m.d.comb += Assume(crc_ok)
+        lim.assume(m, dut, p.words, time_min=1)
 
         # The harness's copy of the cycle's settings. A request was accepted in the previous
         # clock if the master was idle there, saw no abort, and is busy now (an idle master
@@ -441,14 +440,10 @@ class SamplerHarness(Harness):
     """
 
     def __init__(self, delay_width, lemmas=True, mutation=None):
-        super().__init__()
-        self.delay_width = delay_width
-        self.lemmas = lemmas
-        self.mutation = mutation
+        super().__init__(delay_width=delay_width, lemmas=lemmas, mutation=mutation)
 
     def elaborate(self, platform):
-        m = Module()
-        _domain(m, self)
+        m = self._module()
         dut = SloSampler(self.delay_width)
         inside = Internals(dut)
         m.submodules.dut = inside.fragment
@@ -719,14 +714,10 @@ class DecoderCrcHarness(Harness):
     """
 
     def __init__(self, params, lemmas=True, mutation=None):
-        super().__init__()
-        self.params = params
-        self.lemmas = lemmas
-        self.mutation = mutation
+        super().__init__(params=params, lemmas=lemmas, mutation=mutation)
 
     def elaborate(self, platform):
-        m = Module()
-        _domain(m, self)
+        m = self._module()
         p = self.params
         dut = FrameDecoder(p)
         inside = Internals(dut)
@@ -796,34 +787,18 @@ class MasterCrcHarness(Harness):
     """
 
     def __init__(self, params, limits, lemmas=True, mutation=None):
-        super().__init__()
-        self.params = params
-        self.limits = limits
-        self.lemmas = lemmas
-        self.mutation = mutation
+        super().__init__(params=params, limits=limits, lemmas=lemmas, mutation=mutation)
 
     def elaborate(self, platform):
-        m = Module()
-        _domain(m, self)
+        m = self._module()
         p, lim = self.params, self.limits
         dut = BissMaster(p)
         inside = Internals(dut)
         m.submodules.dut = inside.fragment
 
         _drive_free(m, dut)
-        m.d.comb += [
-            Assume((dut.cfg_ma_half_period >= 2) & (dut.cfg_ma_half_period <= lim.hp_max)),
-            Assume(dut.cfg_ack_limit <= lim.ack_max),
-            Assume(dut.cfg_timeout_limit <= lim.timeout_max),
-            Assume(dut.cfg_break_time <= lim.break_max),
-        ]
+        lim.assume(m, dut, p.words, crcs=False)
         names = ("data_bits", "nenw", "lc", "crc")
-        for w in range(p.words):
-            m.d.comb += Assume(getattr(dut, f"cfg_w{w}_data_bits") <= lim.data_bits_max)
-            if not lim.nenw:
-                m.d.comb += Assume(~getattr(dut, f"cfg_w{w}_nenw"))
-            if not lim.lc:
-                m.d.comb += Assume(~getattr(dut, f"cfg_w{w}_lc"))
 
         # Accepted request: idle and no abort in the previous clock, busy now.
         live = Cat(*(getattr(dut, f"cfg_w{w}_{n}") for w in range(p.words) for n in names),
