@@ -17,6 +17,8 @@ is not vacuous. ``lemmas`` adds assertions about internal registers that make th
 k-inductive; they are proven like the others, never assumed.
 """
 
+from dataclasses import dataclass
+
 from amaranth.hdl import (Assert, Assume, C, Cat, ClockDomain, Cover, Elaboratable, Module, Mux,
                           Signal)
 from amaranth.hdl._ast import AnyConst, AnySeq   # not re-exported by amaranth.hdl in 0.5
@@ -261,22 +263,20 @@ def _word_bits(dut, w):
             + Mux(getattr(dut, f"cfg_w{w}_lc"), 6, 0) + crc_bits)
 
 
+@dataclass(frozen=True)
 class LivenessLimits:
     """Small ranges for the runtime settings, so that a whole worst-case cycle fits in a BMC
     run: half period, Ack, timeout and break limits up to the given maxima; word formats from
     the given choices (data bits up to ``data_bits_max``, nE/nW and LC allowed or not, the
     CRC codes in ``crcs``)."""
-
-    def __init__(self, hp_max=2, ack_max=6, timeout_max=2, break_max=2, data_bits_max=1,
-                 nenw=False, lc=False, crcs=(Crc.NONE,)):
-        self.hp_max = hp_max
-        self.ack_max = ack_max
-        self.timeout_max = timeout_max
-        self.break_max = break_max
-        self.data_bits_max = data_bits_max
-        self.nenw = nenw
-        self.lc = lc
-        self.crcs = tuple(crcs)
+    hp_max: int = 2
+    ack_max: int = 6
+    timeout_max: int = 2
+    break_max: int = 2
+    data_bits_max: int = 1
+    nenw: bool = False
+    lc: bool = False
+    crcs: tuple = (Crc.NONE,)
 
     def assume(self, m, dut, words, *, time_min=0, crcs=True):
         """Assume the master's live settings within these limits. ``time_min`` 1 excludes
