@@ -33,17 +33,18 @@ def generate(params=None, name="biss_master"):
     return header(params) + body
 
 
+_BISS_C = ["--max-data-bits", "36", "--word-crcs", "6"]
+
 #: Named builds: generator options for ``--preset``. Options given besides a preset win.
 #: scripts/synth.py measures these, and the test suite simulates each one.
 PRESETS = {
     "default": ("the committed rtl/generated/biss_master.v: 2 words of up to 55/40 bits, "
                 "both CRCs on each", []),
-    "biss-c": ("BiSS C only: one word of up to 36 bits, CRC-6",
-               ["--max-data-bits", "36", "--word-crcs", "6"]),
+    "biss-c": ("BiSS C only: one word of up to 36 bits, CRC-6", _BISS_C),
     "biss-c-lean": ("BiSS C only, smallest: as biss-c, without error counters and timestamp, "
                     "16-bit time settings",
-                    ["--max-data-bits", "36", "--word-crcs", "6", "--counter-width", "0",
-                     "--timestamp-width", "0", "--timer-width", "16"]),
+                    _BISS_C + ["--counter-width", "0", "--timestamp-width", "0",
+                               "--timer-width", "16"]),
     "safety": ("BiSS Safety: CPW up to 36 bits with CRC-6, SPW up to 28 bits with CRC-16",
                ["--max-data-bits", "36,28", "--word-crcs", "6,16"]),
 }
