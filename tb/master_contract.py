@@ -1,0 +1,28 @@
+"""What the documentation promises about ``biss_master``'s ports, as the test side's own table.
+
+Written from docs/ports.md, never imported from ``rtl/``: a renumbered status code or a renamed
+counter in the RTL must show up as a failing test, not be followed silently. Every test, bench,
+campaign and tool on the test side takes these facts from here and nowhere else.
+"""
+
+#: ``status`` codes (docs/ports.md, "Status codes").
+STATUS = {
+    "OK": 0, "CRC_ERROR_WORD0": 1, "CRC_ERROR_WORD1": 2, "CRC_ERROR_BOTH": 3,
+    "SIGN_OF_LIFE": 4, "SPW_MISMATCH": 5, "NO_ACK": 6, "NO_START": 7, "DELAY_RANGE": 8,
+    "SLO_STUCK_LOW": 9, "ABORTED": 10, "BAD_CONFIG": 11, "NO_STOP": 12,
+}
+STATUS_NAME = {code: name for name, code in STATUS.items()}
+
+#: Statuses that judge a received frame (the frame fields are new with them).
+FRAME_STATUSES = ("OK", "CRC_ERROR_WORD0", "CRC_ERROR_WORD1", "CRC_ERROR_BOTH",
+                  "SIGN_OF_LIFE", "SPW_MISMATCH")
+
+#: ``cfg_wN_crc`` codes.
+CRC_CODE = {"none": 0, "crc6": 1, "crc16": 2}
+
+#: The ``count_<name>`` outputs of the default build, in port order.
+COUNTERS = ("crc_word0", "crc_word1", "no_ack", "no_start", "delay_range", "slo_stuck_low",
+            "lc_repeat", "lc_skip", "lc_zero", "spw_mismatch", "overrun", "aborted",
+            "no_stop")
+#: Counters a one-word build does not have.
+WORD1_COUNTERS = ("crc_word1", "spw_mismatch")
