@@ -51,10 +51,9 @@ test: lint unit sim-all campaigns  ## everything CI runs: lint, unit tests, both
 demo: setup  ## RESOLUTE FS RSH at 10 MHz / 50 m and 5 MHz / 100 m: a table of frames and a waveform
 	$(PY) sim/demo.py --sim $(SIM)
 
-waves: demo  ## the demo's waveform, rendered headless to sim_build/waves.png (GTKWave)
-	@f=$$(ls sim_build/$(SIM)-waves-demo/dump.* | head -1); \
-	BISS_WAVES_PNG=$(CURDIR)/sim_build/waves.png xvfb-run -a gtkwave -S scripts/grab.tcl "$$f" >sim_build/gtkwave.log 2>&1; \
-	echo "waves: sim_build/waves.png (open interactively: gtkwave $$f scripts/biss_master.gtkw)"
+waves: demo  ## the demo waveform, FSM states and status by name: one frame (FRAME=N, default 1) to sim_build/waves.png
+	$(PY) scripts/waves.py $$(ls sim_build/$(SIM)-waves-demo/dump.* | head -1) \
+	  --png sim_build/waves.png $(if $(FRAME),--frame $(FRAME))
 
 .PHONY: bench
 bench: setup  ## simulated performance: cycle overhead, verdict latency, line-delay error, sim speed

