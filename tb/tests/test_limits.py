@@ -314,3 +314,16 @@ def test_overrun_start_held_two_clocks():
                    start_at(10, 11))
     assert run.cycles("overrun") == [11] and run.counts["overrun"] == 1
     assert run.falls[0] == 13 and len(run.dones) == 1
+
+
+def test_timeout_limit_late_request_reports_at_once():
+    """A request that comes when SLO has already been seen low longer than T: SLO_STUCK_LOW in
+    the request's next clock, done 2 clocks after the request."""
+    t_lim = 12
+    cfg = base_config(HP, cfg_break_time=BREAK, cfg_timeout_limit=t_lim)
+    m = 5 + cycle_length() - 1 - 4            # first request at 5, ld = 1: idle in m + 5
+    q = m + t_lim + 4
+    run = simulate(cfg, Encoder(HP, FRAME, release=40), q + 10, start_at(5, q))
+    assert run.rises[-1] + HP == m
+    assert run.dones[1:] == [(q + 2, STATUS["SLO_STUCK_LOW"])]
+    assert run.counts["slo_stuck_low"] == 1 and len(run.falls) == target_rises(1)
