@@ -19,8 +19,8 @@ from dataclasses import dataclass, field
 
 from amaranth.sim import Simulator
 
-from bissmaster.master import BissMaster
-from bissmaster.params import Crc, MasterParams
+# The package's exports, not its module layout: the top may move between modules.
+from bissmaster import BissMaster, Crc, MasterParams
 from encoder_model.frames import CRC6, FrameFormat, WordFormat, WordValue, build_frame
 from master_contract import CRC_CODE
 
@@ -28,8 +28,10 @@ from master_contract import CRC_CODE
 #: (``cfg_* = 0``) can be probed at its boundary in a short simulation.
 SYS_CLK_HZ = 1_000_000
 #: A small one-word build: the limits do not depend on the word widths, and it simulates fast.
+MAX_LINE_DELAY = 63                 # also the default of cfg_delay_limit = 0
 PARAMS = MasterParams(sys_clk_hz=SYS_CLK_HZ, max_data_bits=(8,), word_crcs=((Crc.CRC6,),),
-                      max_line_delay=63, timer_width=16, counter_width=8, timestamp_width=0)
+                      max_line_delay=MAX_LINE_DELAY, timer_width=16, counter_width=8,
+                      timestamp_width=0)
 #: Word 0 of every frame: 4 position bits, nE, nW and CRC-6 (12 frame bits).
 WORD = WordFormat(4, nenw=True, crc=CRC6)
 POSITION = 0b1011

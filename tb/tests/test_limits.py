@@ -16,7 +16,8 @@ digest (40 us at the bench's 1 MHz clock), frames from tb/encoder_model: nothing
 
 import pytest
 
-from limits_bench import FRAME, POSITION, WORD, Encoder, base_config, clocks, simulate
+from limits_bench import (FRAME, MAX_LINE_DELAY, POSITION, WORD, Encoder, base_config, clocks,
+                          simulate)
 from master_contract import STATUS
 
 HP = 2
@@ -70,7 +71,7 @@ def assert_fault(run, status, done, counter, hp=HP):
     assert not run.cycles("valid")
     assert {k: v for k, v in run.counts.items() if v} == {counter: 1}
     assert all(f <= done for f in run.falls)
-    m = max(run.rises[-1] + hp, done) if run.rises else done
+    m = max(run.rises[-1] + hp, done)
     assert all(x["ma"] for x in run.trace[m:])
     assert busy_falls(run)[-1] == m + BREAK + 1
 
@@ -117,10 +118,7 @@ def test_no_start_limit(hp, ack_slots, offset):
     if offset <= 0:
         assert_frame(run, s, ld, ack_slots, hp=hp)
     else:
-        done = sample_clock(s, ld, 0, hp) + a + 2 * hp + 3
-        assert run.dones == [(done, STATUS["NO_START"])]
-        assert run.counts["no_start"] == 1 and run.counts["no_ack"] == 0
-        assert all(f <= done for f in run.falls)
+        assert_fault(run, "NO_START", sample_clock(s, ld, 0, hp) + a + 2 * hp + 3, "no_start", hp)
         assert len(run.rises) < target_rises(ack_slots)
 
 
@@ -130,7 +128,7 @@ def test_no_start_limit(hp, ack_slots, offset):
 @pytest.mark.parametrize("offset", (-1, 0, 1), ids=("D-1_frame", "D_frame", "D+1_DELAY_RANGE"))
 def test_delay_limit(limit, offset):
     """line_delay <= D is accepted, D + 1 is DELAY_RANGE (line_delay shows the value)."""
-    d = limit or 63                           # the bench's max_line_delay
+    d = limit or MAX_LINE_DELAY
     ld = d + offset
     hp = 3                  # a frame longer than the round trip: MA makes just the frame's rises
     cfg = base_config(hp, cfg_break_time=BREAK, cfg_delay_limit=limit, cfg_ack_limit=200)
