@@ -13,10 +13,10 @@ set slo_port  biss_slo
 # The system clock (create_clock on clk) is defined by your design, not here.
 
 # ---------------------------------------------------------------------------------------------
-# (a) SLO synchronizer: registers slo_sync|stage0 -> slo_sync|stage1. slo is asynchronous to
+# (a) SLO synchronizer: registers sampler|sync|stage0 -> sampler|sync|stage1. slo is asynchronous to
 #     clk, and the pin-to-stage0 delay is part of the round trip that the core measures in
 #     every frame.
-set_false_path -from [get_ports $slo_port] -to [get_registers "${biss_inst}|slo_sync|stage0"]
+set_false_path -from [get_ports $slo_port] -to [get_registers "${biss_inst}|sampler|sync|stage0"]
 
 # ---------------------------------------------------------------------------------------------
 # (b) MA output: a register (ma_clock|ma) straight to the pin; put it in the I/O register

@@ -14,16 +14,16 @@ set slo_port  biss_slo
 # The system clock (create_clock on clk) is defined by your design, not here.
 
 # ---------------------------------------------------------------------------------------------
-# (a) SLO synchronizer: submodule slo_sync, registers stage0 -> stage1 (cells <reg>_reg after
+# (a) SLO synchronizer: instance sampler/sync, registers stage0 -> stage1 (cells <reg>_reg after
 #     synthesis). slo is asynchronous to clk. The first flop may go metastable; the second
 #     gives it a clock to settle.
-set_property ASYNC_REG TRUE [get_cells [list $biss_inst/slo_sync/stage0_reg $biss_inst/slo_sync/stage1_reg]]
+set_property ASYNC_REG TRUE [get_cells [list $biss_inst/sampler/sync/stage0_reg $biss_inst/sampler/sync/stage1_reg]]
 
 # No timing relation exists between the encoder and clk. The pin-to-stage0 delay is part of the
 # round trip that the core measures in every frame, so it needs no bound.
-set_false_path -from [get_ports $slo_port] -to [get_cells $biss_inst/slo_sync/stage0_reg]
+set_false_path -from [get_ports $slo_port] -to [get_cells $biss_inst/sampler/sync/stage0_reg]
 # Instead of the false path, if your flow wants every path bounded (the value is an example):
-# set_max_delay -datapath_only -from [get_ports $slo_port] -to [get_cells $biss_inst/slo_sync/stage0_reg] 5.000
+# set_max_delay -datapath_only -from [get_ports $slo_port] -to [get_cells $biss_inst/sampler/sync/stage0_reg] 5.000
 
 # ---------------------------------------------------------------------------------------------
 # (b) MA output: driven straight from the register ma in submodule ma_clock. Putting it in the

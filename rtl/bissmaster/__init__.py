@@ -1,16 +1,28 @@
 """BiSS C / BiSS Safety master IP core (Amaranth HDL).
 
-The blocks, one hardware concept each:
+The blocks, one hardware concept each (docs/architecture.md draws how they connect):
 
-=====================  =====================================================================
-``MaClock``            MA clock generator (``ma_clock``)
-``SloSampler``         line-delay measurement and mid-eye sampling of SLO (``slo_sampler``)
-``FrameDecoder``       Ack / Start / CDS / words / stop (``frame_decoder``)
-``WordCrc``            CRC-6 / CRC-16 check of one word (``word_crc``)
-``SignOfLife``         BiSS Safety LC tracker (``sign_of_life``)
-``SpwCheck``           CPW/SPW plausibility (``spw_check``)
-``BissMaster``         the top level (``master``)
-=====================  =====================================================================
+=======================  ===================================================================
+``Configuration``        configuration check, per-cycle latch, defaults (``configuration``)
+``RequestScheduler``     single shot, periodic, overrun (``request_scheduler``)
+``CycleController``      the request cycle's state machine (``cycle_controller``)
+``LimitTimers``          break, Ack, NO_START, SLO-low and delay limits (``limit_timers``)
+``MaClock``              MA clock generator (``ma_clock``)
+``MaStop``               when MA has clocked out the whole frame (``ma_stop``)
+``SloSampler``           SLO synchronizer, line delay, mid-eye sampling (``slo_sampler``)
+``FrameDecoder``         Ack / Start / CDS / words / stop (``frame_decoder``)
+``WordCrc``              CRC-6 / CRC-16 check of one word (``word_crc``)
+``SignOfLife``           BiSS Safety LC tracker (``sign_of_life``)
+``SpwCheck``             CPW/SPW plausibility (``spw_check``)
+``FrameVerdict``         status priority and ``valid`` (``frame_verdict``)
+``ResultRegisters``      the last cycle's result (``results``)
+``TimeBase``             the time base behind ``timestamp`` (``time_base``)
+``CounterBank``          saturating error counters (``counters``)
+``BissMaster``           the top level, which only connects (``master``)
+=======================  ===================================================================
+
+Interfaces: ``layouts`` (configuration, result, faults, counters as data layouts, and the flat
+port names made from them), ``params`` (``MasterParams``, the ``Status`` and ``Crc`` enums).
 
 ``bissmaster.protocol`` holds the protocol facts and imports nothing, so the encoder model can
 use it without pulling in Amaranth.

@@ -1,7 +1,7 @@
 """Saturating event counters."""
 
 from amaranth.hdl import *
-from amaranth.lib import wiring
+from amaranth.lib import data, wiring
 from amaranth.lib.wiring import In, Out
 
 
@@ -22,5 +22,45 @@ class SaturatingCounter(wiring.Component):
             m.d.sync += [
                 self.count.eq(self.count + 1),
                 full.eq(self.count == 2**len(self.count) - 2),
+            ]
+        return m
+
+
+class CounterBank(wiring.Component):
+    """One :class:`SaturatingCounter` per name, cleared together.
+
+    Parameters
+    ----------
+    names : tuple of str
+        The counters, in order.
+    width : int
+        Bits per counter.
+
+    Attributes
+    ----------
+    events : In(StructLayout of 1-bit members)
+        One strobe per counter.
+    clear : In(1)
+        Overrides counting while high.
+    counts : Out(StructLayout of ``width``-bit members)
+    """
+
+    def __init__(self, names, width):
+        self._names = tuple(names)
+        self._width = width
+        super().__init__({
+            "events": In(data.StructLayout({name: 1 for name in self._names})),
+            "clear": In(1),
+            "counts": Out(data.StructLayout({name: width for name in self._names})),
+        })
+
+    def elaborate(self, platform):
+        m = Module()
+        for name in self._names:
+            m.submodules[f"count_{name}"] = counter = SaturatingCounter(self._width)
+            m.d.comb += [
+                counter.inc.eq(self.events[name]),
+                counter.clear.eq(self.clear),
+                self.counts[name].eq(counter.count),
             ]
         return m

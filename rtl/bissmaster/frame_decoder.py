@@ -4,7 +4,7 @@ from amaranth.hdl import *
 from amaranth.lib import data, wiring
 from amaranth.lib.wiring import In, Out
 
-from .params import CRC_WIDTH, WORD_CONFIG, Crc
+from .params import CRC_WIDTH, SLOT_WIDTH, WORD_CONFIG, WORD_INDEX_WIDTH, Crc
 from .word_crc import WordCrc
 from . import protocol
 
@@ -15,7 +15,7 @@ def _table(index, values, width):
     return Array(C(v % 2**width, width) for v in values)[index]
 
 
-def tail_bits(word, extra=0, width=7):
+def tail_bits(word, extra=0, width=WORD_INDEX_WIDTH):
     """Bits after a word's data field (nE/nW, LC, CRC), plus ``extra``, modulo ``2**width``:
     a table on the four configuration bits instead of three chained adders. CRC code 3 counts
     as no CRC."""
@@ -27,7 +27,7 @@ def tail_bits(word, extra=0, width=7):
     return _table(Cat(word.nenw, word.lc, word.crc), values, width)
 
 
-def word_length(word, extra=0, width=7):
+def word_length(word, extra=0, width=WORD_INDEX_WIDTH):
     """Bits of one word on the line (plus ``extra``), from its runtime configuration (a
     WORD_CONFIG view)."""
     return word.data_bits + tail_bits(word, extra, width)
@@ -60,11 +60,10 @@ class FrameDecoder(wiring.Component):
             "bit": In(1),
             "words": In(data.ArrayLayout(WORD_CONFIG, words)),
             "word_count": In(range(1, words + 1)),
-            "frame_bits": Out(8),           # bits after CDS, for the MA clock's stop
             "started": Out(1),
-            "start_slot": Out(16),
-            "slots": Out(16),                # slots sampled so far (saturating)
-            "slots_full": Out(1),            # slots == 0xFFFF (registered)
+            "start_slot": Out(SLOT_WIDTH),
+            "slots": Out(SLOT_WIDTH),                # slots sampled so far (saturating)
+            "slots_full": Out(1),            # slots saturated (registered)
             "cds": Out(1),
             **{f"data{w}": Out(params.max_data_bits[w]) for w in range(words)},
             "ne": Out(words),
@@ -84,20 +83,18 @@ class FrameDecoder(wiring.Component):
         p = self._params
         last_word = self.word_count - 1
 
-        m.d.comb += self.frame_bits.eq(sum(
-            Mux(w <= last_word, word_length(self.words[w]), 0) for w in range(p.words)))
-
         # Where the current bit sits: word ``word``, bit ``idx`` of that word.
         word = Signal(range(p.words), name="word") if p.words > 1 else C(0, 1)   # none in one-word builds
-        idx = Signal(7)
+        idx = Signal(WORD_INDEX_WIDTH)
         # Field boundaries of each word, registered from the configuration (no adders in front
         # of the ``idx`` compares). They are not reset (they follow ``words`` in every clock),
         # so they are valid one clock after ``words`` settles; the first word bit comes at
         # least three samples (Ack, Start, CDS) after that.
         ends = []
+        iw = WORD_INDEX_WIDTH
         for w in range(p.words):
             wcfg = self.words[w]
-            e = {name: Signal(7, name=f"w{w}_{name}", reset_less=True)
+            e = {name: Signal(WORD_INDEX_WIDTH, name=f"w{w}_{name}", reset_less=True)
                  for name in ("data_end_p1", "data_end_m1", "nenw_end_m1", "lc_end_m1",
                               "word_end_m1")}
             # The fields at bit 0 of the word (only with an invalid data_bits = 0).
@@ -107,19 +104,19 @@ class FrameDecoder(wiring.Component):
             nenw_lc_bits = _table(Cat(wcfg.nenw, wcfg.lc),
                                   [0, protocol.NE_NW_BITS, protocol.LC_BITS,
                                    protocol.NE_NW_BITS + protocol.LC_BITS], 4)
-            # "- 1" folded into the tables, modulo 128 (7 bits): a field end of 0 (only with
-            # data_bits = 0) becomes 127, which ``idx`` never reaches inside a word.
-            nenw_m1 = _table(wcfg.nenw, [-1, protocol.NE_NW_BITS - 1], 7)
+            # "- 1" folded into the tables, modulo 2**iw: a field end of 0 (only with
+            # data_bits = 0) becomes 2**iw - 1, which ``idx`` never reaches inside a word.
+            nenw_m1 = _table(wcfg.nenw, [-1, protocol.NE_NW_BITS - 1], iw)
             nenw_lc_m1 = _table(Cat(wcfg.nenw, wcfg.lc),
                                 [-1, protocol.NE_NW_BITS - 1, protocol.LC_BITS - 1,
-                                 protocol.NE_NW_BITS + protocol.LC_BITS - 1], 7)
+                                 protocol.NE_NW_BITS + protocol.LC_BITS - 1], iw)
             m.d.sync += [
                 e["data_end_p1"].eq(wcfg.data_bits + 1),
-                e["data_end_m1"].eq((wcfg.data_bits + C(127, 7))[:7]),
-                e["nenw_end_m1"].eq((wcfg.data_bits + nenw_m1)[:7]),
-                e["lc_end_m1"].eq((wcfg.data_bits + nenw_lc_m1)[:7]),
-                # data_bits >= 1, so "- 1" folded into the table (modulo 128) never wraps.
-                e["word_end_m1"].eq((wcfg.data_bits + tail_bits(wcfg, extra=-1))[:7]),
+                e["data_end_m1"].eq((wcfg.data_bits + C(2**iw - 1, iw))[:iw]),
+                e["nenw_end_m1"].eq((wcfg.data_bits + nenw_m1)[:iw]),
+                e["lc_end_m1"].eq((wcfg.data_bits + nenw_lc_m1)[:iw]),
+                # data_bits >= 1, so "- 1" folded into the table (modulo 2**iw) never wraps.
+                e["word_end_m1"].eq((wcfg.data_bits + tail_bits(wcfg, extra=-1))[:iw]),
                 e["data_at0"].eq(wcfg.data_bits != 0),
                 e["lc_at0"].eq((wcfg.data_bits + nenw_bits == 0)
                                & (wcfg.data_bits + nenw_lc_bits != 0)),
@@ -142,7 +139,7 @@ class FrameDecoder(wiring.Component):
         m.d.sync += [self.done.eq(0), self.stopped.eq(0)]
 
         with m.If(self.sample & ~self.slots_full):
-            m.d.sync += [self.slots.eq(self.slots + 1), self.slots_full.eq(self.slots == 0xFFFE)]
+            m.d.sync += [self.slots.eq(self.slots + 1), self.slots_full.eq(self.slots == 2**SLOT_WIDTH - 2)]
 
         with m.FSM(name="decoder_fsm"):
             with m.State("ACK"):

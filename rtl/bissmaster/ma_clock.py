@@ -4,6 +4,8 @@ from amaranth.hdl import *
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
+from .params import HALF_PERIOD_WIDTH, SLOT_WIDTH
+
 
 class MaClock(wiring.Component):
     """Generates the MA clock: idle high, 1:1 duty, falling edge first.
@@ -34,10 +36,10 @@ class MaClock(wiring.Component):
         A period is in progress (MA low, or in the high phase of a period).
     """
     run: In(1)
-    half_period: In(16)
+    half_period: In(HALF_PERIOD_WIDTH)
     ma: Out(1, init=1)
     rise: Out(1)
-    rises: Out(16)
+    rises: Out(SLOT_WIDTH)
     first_rise: Out(1)
     second_rise: Out(1)
     busy: Out(1)
@@ -45,7 +47,7 @@ class MaClock(wiring.Component):
     def elaborate(self, platform):
         m = Module()
 
-        phase_left = Signal(16)     # clocks left in the current phase, minus one
+        phase_left = Signal(HALF_PERIOD_WIDTH)     # clocks left in the current phase, minus one
         # ``phase_left == 0``, kept as a register: written wherever ``phase_left`` is.
         last_clock = Signal(init=1)
         reload_last = self.half_period == 1      # phase_left <- half_period - 1 == 0
@@ -73,7 +75,7 @@ class MaClock(wiring.Component):
                         phase_left.eq(self.half_period - 1),
                         last_clock.eq(reload_last),
                     ]
-                    with m.If(self.rises != 0xFFFF):
+                    with m.If(~self.rises.all()):
                         m.d.sync += self.rises.eq(self.rises + 1)
                     m.next = "HIGH"
             with m.State("HIGH"):

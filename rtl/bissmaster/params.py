@@ -5,16 +5,16 @@ counter widths); the runtime configuration (:data:`WORD_CONFIG` and the ``cfg_*`
 :class:`~bissmaster.master.BissMaster`) chooses, within those limits, what it *does*.
 """
 
-import enum
 import math
 from dataclasses import dataclass
 
-from amaranth.lib import data
+from amaranth.hdl import Shape
+from amaranth.lib import data, enum
 
 from . import protocol
 
 
-class Crc(enum.IntEnum):
+class Crc(enum.IntEnum, shape=2):
     """CRC of a data word (runtime code, 2 bits)."""
     NONE = 0
     CRC6 = 1    # 0x43, BiSS C / CPW / BP3
@@ -24,7 +24,7 @@ class Crc(enum.IntEnum):
 CRC_WIDTH = {Crc.NONE: 0, Crc.CRC6: protocol.CRC6_WIDTH, Crc.CRC16: protocol.CRC16_WIDTH}
 
 
-class Status(enum.IntEnum):
+class Status(enum.IntEnum, shape=4):
     """Outcome of one request cycle, reported with every ``done`` strobe.
 
     Codes 0..5 judge a received frame: when several apply, the lowest-numbered wins (a CRC
@@ -48,14 +48,29 @@ class Status(enum.IntEnum):
     NO_STOP = 12            # cfg_end_check: SLO high at the stop bit (line stuck high, long frame)
 
 
-STATUS_WIDTH = 4
+STATUS_WIDTH = Shape.cast(Status).width
+
+#: Width of the MA half-period setting, and of the timers that count within one MA phase.
+HALF_PERIOD_WIDTH = protocol.MA_HALF_PERIOD_MAX.bit_length()
+#: Width of the slot and MA-edge counters of one cycle (saturating): Ack slots plus the frame.
+#: 2**16 - 1 slots outlast every Ack limit the timers can hold at the shortest half period.
+SLOT_WIDTH = 16
+#: Width of a bit index inside one word: data, nE/nW, LC and the longest CRC.
+WORD_INDEX_WIDTH = (63 + protocol.NE_NW_BITS + protocol.LC_BITS
+                    + protocol.CRC16_WIDTH).bit_length()
+#: Width of a frame's length in bits (two words, plus the slots around them).
+FRAME_LENGTH_WIDTH = WORD_INDEX_WIDTH + 1
+
+#: The statuses that end a cycle without a frame verdict (codes 6..12): each has a one-clock
+#: event strobe in :func:`~bissmaster.layouts.fault_layout`.
+FAULTS = tuple(s for s in Status if s >= Status.NO_ACK)
 
 #: Runtime description of one data word. ``data_bits`` counts the position/data bits only.
 WORD_CONFIG = data.StructLayout({
     "data_bits": 6,     # 1 .. MasterParams.max_data_bits[word]
     "nenw": 1,          # word ends with nE, nW
     "lc": 1,            # word carries the 6-bit sign-of-life counter after nE/nW
-    "crc": 2,           # Crc code
+    "crc": Crc,         # Crc code
 })
 
 

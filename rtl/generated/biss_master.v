@@ -17,206 +17,1400 @@
 module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_period, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_delay_limit, cfg_end_check, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_enable, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_spw_check
 , cfg_spw_tolerance, clk, rst, ma, busy, config_error, overrun, done, valid, status, timestamp, line_delay, cds, word0_position, word0_ne, word0_nw, word0_crc_ok, word1_position, word1_ne, word1_nw, word1_crc_ok
 , lc, lc_repeat, lc_skip, lc_zero, spw_mismatch, count_crc_word0, count_crc_word1, count_no_ack, count_no_start, count_delay_range, count_slo_stuck_low, count_lc_repeat, count_lc_skip, count_lc_zero, count_spw_mismatch, count_overrun, count_aborted, count_no_stop, slo);
+  wire \$1 ;
+  wire \$2 ;
+  wire abort;
+  wire \abort$72 ;
+  input abort_cycle;
+  wire abort_cycle;
+  wire ack_expired;
+  wire \ack_expired$102 ;
+  wire [23:0] ack_limit;
+  wire [23:0] \ack_limit$122 ;
+  wire arm;
+  wire \bit ;
+  wire \bit$146 ;
+  wire [5:0] bits;
+  wire break_over;
+  wire \break_over$100 ;
+  wire [23:0] break_time;
+  output busy;
+  wire busy;
+  wire \busy$80 ;
+  output cds;
+  wire cds;
+  wire \cds$194 ;
+  wire [154:0] cfg;
+  wire [23:0] \cfg.ack_limit ;
+  wire [23:0] \cfg.break_time ;
+  wire [11:0] \cfg.delay_limit ;
+  wire \cfg.end_check ;
+  wire [15:0] \cfg.ma_half_period ;
+  wire [23:0] \cfg.request_period ;
+  wire \cfg.spw_check ;
+  wire [7:0] \cfg.spw_tolerance ;
+  wire [23:0] \cfg.timeout_limit ;
+  wire [9:0] \cfg.w0 ;
+  (* enum_base_type = "Crc" *)
+  (* enum_value_00 = "NONE" *)
+  (* enum_value_01 = "CRC6" *)
+  (* enum_value_10 = "CRC16" *)
+  wire [1:0] \cfg.w0.crc ;
+  wire [5:0] \cfg.w0.data_bits ;
+  wire \cfg.w0.lc ;
+  wire \cfg.w0.nenw ;
+  wire [9:0] \cfg.w1 ;
+  (* enum_base_type = "Crc" *)
+  (* enum_value_00 = "NONE" *)
+  (* enum_value_01 = "CRC6" *)
+  (* enum_value_10 = "CRC16" *)
+  wire [1:0] \cfg.w1.crc ;
+  wire [5:0] \cfg.w1.data_bits ;
+  wire \cfg.w1.lc ;
+  wire \cfg.w1.nenw ;
+  wire \cfg.w1_enable ;
+  input [23:0] cfg_ack_limit;
+  wire [23:0] cfg_ack_limit;
+  input [23:0] cfg_break_time;
+  wire [23:0] cfg_break_time;
+  input [11:0] cfg_delay_limit;
+  wire [11:0] cfg_delay_limit;
+  input cfg_end_check;
+  wire cfg_end_check;
+  input [15:0] cfg_ma_half_period;
+  wire [15:0] cfg_ma_half_period;
+  input [23:0] cfg_request_period;
+  wire [23:0] cfg_request_period;
+  input cfg_spw_check;
+  wire cfg_spw_check;
+  input [7:0] cfg_spw_tolerance;
+  wire [7:0] cfg_spw_tolerance;
+  input [23:0] cfg_timeout_limit;
+  wire [23:0] cfg_timeout_limit;
+  (* enum_base_type = "Crc" *)
+  (* enum_value_00 = "NONE" *)
+  (* enum_value_01 = "CRC6" *)
+  (* enum_value_10 = "CRC16" *)
+  input [1:0] cfg_w0_crc;
+  wire [1:0] cfg_w0_crc;
+  input [5:0] cfg_w0_data_bits;
+  wire [5:0] cfg_w0_data_bits;
+  input cfg_w0_lc;
+  wire cfg_w0_lc;
+  input cfg_w0_nenw;
+  wire cfg_w0_nenw;
+  (* enum_base_type = "Crc" *)
+  (* enum_value_00 = "NONE" *)
+  (* enum_value_01 = "CRC6" *)
+  (* enum_value_10 = "CRC16" *)
+  input [1:0] cfg_w1_crc;
+  wire [1:0] cfg_w1_crc;
+  input [5:0] cfg_w1_data_bits;
+  wire [5:0] cfg_w1_data_bits;
+  input cfg_w1_enable;
+  wire cfg_w1_enable;
+  input cfg_w1_lc;
+  wire cfg_w1_lc;
+  input cfg_w1_nenw;
+  wire cfg_w1_nenw;
+  wire check;
+  wire clear;
+  wire \clear$139 ;
+  wire \clear$210 ;
+  input clear_counters;
+  wire clear_counters;
+  input clk;
+  wire clk;
+  output config_error;
+  wire config_error;
+  wire config_ok;
+  output [15:0] count_aborted;
+  wire [15:0] count_aborted;
+  output [15:0] count_crc_word0;
+  wire [15:0] count_crc_word0;
+  output [15:0] count_crc_word1;
+  wire [15:0] count_crc_word1;
+  output [15:0] count_delay_range;
+  wire [15:0] count_delay_range;
+  output [15:0] count_lc_repeat;
+  wire [15:0] count_lc_repeat;
+  output [15:0] count_lc_skip;
+  wire [15:0] count_lc_skip;
+  output [15:0] count_lc_zero;
+  wire [15:0] count_lc_zero;
+  output [15:0] count_no_ack;
+  wire [15:0] count_no_ack;
+  output [15:0] count_no_start;
+  wire [15:0] count_no_start;
+  output [15:0] count_no_stop;
+  wire [15:0] count_no_stop;
+  output [15:0] count_overrun;
+  wire [15:0] count_overrun;
+  output [15:0] count_slo_stuck_low;
+  wire [15:0] count_slo_stuck_low;
+  output [15:0] count_spw_mismatch;
+  wire [15:0] count_spw_mismatch;
+  wire [207:0] counts;
+  wire [15:0] \counts.aborted ;
+  wire [15:0] \counts.crc_word0 ;
+  wire [15:0] \counts.crc_word1 ;
+  wire [15:0] \counts.delay_range ;
+  wire [15:0] \counts.lc_repeat ;
+  wire [15:0] \counts.lc_skip ;
+  wire [15:0] \counts.lc_zero ;
+  wire [15:0] \counts.no_ack ;
+  wire [15:0] \counts.no_start ;
+  wire [15:0] \counts.no_stop ;
+  wire [15:0] \counts.overrun ;
+  wire [15:0] \counts.slo_stuck_low ;
+  wire [15:0] \counts.spw_mismatch ;
+  wire [39:0] cpw_top;
+  wire [39:0] \cpw_top$163 ;
+  wire [1:0] crc_error;
+  wire [1:0] crc_ok;
+  wire [1:0] \crc_ok$178 ;
+  wire [154:0] cycle;
+  wire [23:0] \cycle.ack_limit ;
+  wire [23:0] \cycle.break_time ;
+  wire [11:0] \cycle.delay_limit ;
+  wire \cycle.end_check ;
+  wire [15:0] \cycle.ma_half_period ;
+  wire [23:0] \cycle.request_period ;
+  wire \cycle.spw_check ;
+  wire [7:0] \cycle.spw_tolerance ;
+  wire [23:0] \cycle.timeout_limit ;
+  wire [9:0] \cycle.w0 ;
+  (* enum_base_type = "Crc" *)
+  (* enum_value_00 = "NONE" *)
+  (* enum_value_01 = "CRC6" *)
+  (* enum_value_10 = "CRC16" *)
+  wire [1:0] \cycle.w0.crc ;
+  wire [5:0] \cycle.w0.data_bits ;
+  wire \cycle.w0.lc ;
+  wire \cycle.w0.nenw ;
+  wire [9:0] \cycle.w1 ;
+  (* enum_base_type = "Crc" *)
+  (* enum_value_00 = "NONE" *)
+  (* enum_value_01 = "CRC6" *)
+  (* enum_value_10 = "CRC16" *)
+  wire [1:0] \cycle.w1.crc ;
+  wire [5:0] \cycle.w1.data_bits ;
+  wire \cycle.w1.lc ;
+  wire \cycle.w1.nenw ;
+  wire \cycle.w1_enable ;
+  wire [54:0] data0;
+  wire [39:0] data1;
+  wire [12:0] delay;
+  wire [12:0] \delay$128 ;
+  wire [11:0] delay_limit;
+  wire [11:0] \delay_limit$130 ;
+  wire delay_over;
+  wire \delay_over$110 ;
+  output done;
+  wire done;
+  wire \done$213 ;
+  wire \done$90 ;
+  wire early;
+  wire \early$88 ;
+  wire end_check;
+  wire enough;
+  wire [12:0] events;
+  wire \events.aborted ;
+  wire \events.crc_word0 ;
+  wire \events.crc_word1 ;
+  wire \events.delay_range ;
+  wire \events.lc_repeat ;
+  wire \events.lc_skip ;
+  wire \events.lc_zero ;
+  wire \events.no_ack ;
+  wire \events.no_start ;
+  wire \events.no_stop ;
+  wire \events.overrun ;
+  wire \events.slo_stuck_low ;
+  wire \events.spw_mismatch ;
+  wire fault;
+  wire \fault$174 ;
+  (* enum_base_type = "Status" *)
+  (* enum_value_0000 = "OK" *)
+  (* enum_value_0001 = "CRC_ERROR_WORD0" *)
+  (* enum_value_0010 = "CRC_ERROR_WORD1" *)
+  (* enum_value_0011 = "CRC_ERROR_BOTH" *)
+  (* enum_value_0100 = "SIGN_OF_LIFE" *)
+  (* enum_value_0101 = "SPW_MISMATCH" *)
+  (* enum_value_0110 = "NO_ACK" *)
+  (* enum_value_0111 = "NO_START" *)
+  (* enum_value_1000 = "DELAY_RANGE" *)
+  (* enum_value_1001 = "SLO_STUCK_LOW" *)
+  (* enum_value_1010 = "ABORTED" *)
+  (* enum_value_1011 = "BAD_CONFIG" *)
+  (* enum_value_1100 = "NO_STOP" *)
+  wire [3:0] fault_status;
+  (* enum_base_type = "Status" *)
+  (* enum_value_0000 = "OK" *)
+  (* enum_value_0001 = "CRC_ERROR_WORD0" *)
+  (* enum_value_0010 = "CRC_ERROR_WORD1" *)
+  (* enum_value_0011 = "CRC_ERROR_BOTH" *)
+  (* enum_value_0100 = "SIGN_OF_LIFE" *)
+  (* enum_value_0101 = "SPW_MISMATCH" *)
+  (* enum_value_0110 = "NO_ACK" *)
+  (* enum_value_0111 = "NO_START" *)
+  (* enum_value_1000 = "DELAY_RANGE" *)
+  (* enum_value_1001 = "SLO_STUCK_LOW" *)
+  (* enum_value_1010 = "ABORTED" *)
+  (* enum_value_1011 = "BAD_CONFIG" *)
+  (* enum_value_1100 = "NO_STOP" *)
+  wire [3:0] \fault_status$176 ;
+  wire [6:0] faults;
+  wire \faults.aborted ;
+  wire \faults.bad_config ;
+  wire \faults.delay_range ;
+  wire \faults.no_ack ;
+  wire \faults.no_start ;
+  wire \faults.no_stop ;
+  wire \faults.slo_stuck_low ;
+  wire first_rise;
+  wire \first_rise$204 ;
+  wire [31:0] first_rise_time;
+  wire [160:0] frame;
+  wire \frame.cds ;
+  wire [5:0] \frame.lc ;
+  wire \frame.lc_repeat ;
+  wire \frame.lc_skip ;
+  wire \frame.lc_zero ;
+  wire [12:0] \frame.line_delay ;
+  wire \frame.spw_mismatch ;
+  (* enum_base_type = "Status" *)
+  (* enum_value_0000 = "OK" *)
+  (* enum_value_0001 = "CRC_ERROR_WORD0" *)
+  (* enum_value_0010 = "CRC_ERROR_WORD1" *)
+  (* enum_value_0011 = "CRC_ERROR_BOTH" *)
+  (* enum_value_0100 = "SIGN_OF_LIFE" *)
+  (* enum_value_0101 = "SPW_MISMATCH" *)
+  (* enum_value_0110 = "NO_ACK" *)
+  (* enum_value_0111 = "NO_START" *)
+  (* enum_value_1000 = "DELAY_RANGE" *)
+  (* enum_value_1001 = "SLO_STUCK_LOW" *)
+  (* enum_value_1010 = "ABORTED" *)
+  (* enum_value_1011 = "BAD_CONFIG" *)
+  (* enum_value_1100 = "NO_STOP" *)
+  wire [3:0] \frame.status ;
+  wire [31:0] \frame.timestamp ;
+  wire [57:0] \frame.word0 ;
+  wire \frame.word0.crc_ok ;
+  wire \frame.word0.ne ;
+  wire \frame.word0.nw ;
+  wire [54:0] \frame.word0.position ;
+  wire [42:0] \frame.word1 ;
+  wire \frame.word1.crc_ok ;
+  wire \frame.word1.ne ;
+  wire \frame.word1.nw ;
+  wire [39:0] \frame.word1.position ;
+  wire frame_done;
+  wire [15:0] half_period;
+  wire [15:0] \half_period$141 ;
+  wire idle;
+  wire \idle$63 ;
+  wire \idle$68 ;
+  wire in_clock;
+  wire \in_clock$116 ;
+  output [5:0] lc;
+  wire [5:0] lc;
+  wire [5:0] \lc$149 ;
+  wire [5:0] \lc$150 ;
+  wire lc_check;
+  wire lc_load;
+  wire [5:0] lc_next;
+  wire [5:0] \lc_next$152 ;
+  output lc_repeat;
+  wire lc_repeat;
+  wire \lc_repeat$195 ;
+  wire lc_repeat_seen;
+  output lc_skip;
+  wire lc_skip;
+  wire \lc_skip$196 ;
+  wire lc_skip_seen;
+  output lc_zero;
+  wire lc_zero;
+  wire \lc_zero$197 ;
+  wire lc_zero_seen;
+  wire level;
+  output [12:0] line_delay;
+  wire [12:0] line_delay;
+  wire [154:0] live;
+  wire [23:0] \live.ack_limit ;
+  wire [23:0] \live.break_time ;
+  wire [11:0] \live.delay_limit ;
+  wire \live.end_check ;
+  wire [15:0] \live.ma_half_period ;
+  wire [23:0] \live.request_period ;
+  wire \live.spw_check ;
+  wire [7:0] \live.spw_tolerance ;
+  wire [23:0] \live.timeout_limit ;
+  wire [9:0] \live.w0 ;
+  (* enum_base_type = "Crc" *)
+  (* enum_value_00 = "NONE" *)
+  (* enum_value_01 = "CRC6" *)
+  (* enum_value_10 = "CRC16" *)
+  wire [1:0] \live.w0.crc ;
+  wire [5:0] \live.w0.data_bits ;
+  wire \live.w0.lc ;
+  wire \live.w0.nenw ;
+  wire [9:0] \live.w1 ;
+  (* enum_base_type = "Crc" *)
+  (* enum_value_00 = "NONE" *)
+  (* enum_value_01 = "CRC6" *)
+  (* enum_value_10 = "CRC16" *)
+  wire [1:0] \live.w1.crc ;
+  wire [5:0] \live.w1.data_bits ;
+  wire \live.w1.lc ;
+  wire \live.w1.nenw ;
+  wire \live.w1_enable ;
+  wire load;
+  wire locked;
+  wire \locked$86 ;
+  output ma;
+  wire ma;
+  wire \ma$212 ;
+  wire ma_arm;
+  wire ma_busy;
+  wire \ma_busy$112 ;
+  wire ma_enough;
+  wire ma_run;
+  wire match;
+  wire [1:0] ne;
+  wire no_start_expired;
+  wire \no_start_expired$104 ;
+  wire [24:0] no_start_limit;
+  wire [24:0] \no_start_limit$126 ;
+  wire [1:0] nw;
+  wire ok;
+  output overrun;
+  wire overrun;
+  wire \overrun$209 ;
+  wire [23:0] period;
+  input periodic;
+  wire periodic;
+  wire \periodic$65 ;
+  wire receiver_clear;
+  wire \repeat ;
+  wire report;
+  wire \report$186 ;
+  wire report_delay;
+  wire \report_delay$189 ;
+  wire report_frame;
+  wire \report_frame$172 ;
+  wire \report_frame$187 ;
+  wire request;
+  wire \request$71 ;
+  wire restart;
+  wire restart_timer;
+  wire [160:0] result;
+  wire \result.cds ;
+  wire [5:0] \result.lc ;
+  wire \result.lc_repeat ;
+  wire \result.lc_skip ;
+  wire \result.lc_zero ;
+  wire [12:0] \result.line_delay ;
+  wire \result.spw_mismatch ;
+  (* enum_base_type = "Status" *)
+  (* enum_value_0000 = "OK" *)
+  (* enum_value_0001 = "CRC_ERROR_WORD0" *)
+  (* enum_value_0010 = "CRC_ERROR_WORD1" *)
+  (* enum_value_0011 = "CRC_ERROR_BOTH" *)
+  (* enum_value_0100 = "SIGN_OF_LIFE" *)
+  (* enum_value_0101 = "SPW_MISMATCH" *)
+  (* enum_value_0110 = "NO_ACK" *)
+  (* enum_value_0111 = "NO_START" *)
+  (* enum_value_1000 = "DELAY_RANGE" *)
+  (* enum_value_1001 = "SLO_STUCK_LOW" *)
+  (* enum_value_1010 = "ABORTED" *)
+  (* enum_value_1011 = "BAD_CONFIG" *)
+  (* enum_value_1100 = "NO_STOP" *)
+  wire [3:0] \result.status ;
+  wire [31:0] \result.timestamp ;
+  wire [57:0] \result.word0 ;
+  wire \result.word0.crc_ok ;
+  wire \result.word0.ne ;
+  wire \result.word0.nw ;
+  wire [54:0] \result.word0.position ;
+  wire [42:0] \result.word1 ;
+  wire \result.word1.crc_ok ;
+  wire \result.word1.ne ;
+  wire \result.word1.nw ;
+  wire [39:0] \result.word1.position ;
+  wire resync;
+  wire \resync$158 ;
+  wire [15:0] rises;
+  wire [15:0] \rises$138 ;
+  input rst;
+  wire rst;
+  wire run;
+  wire sample;
+  wire \sample$144 ;
+  wire second_rise;
+  wire skip;
+  input slo;
+  wire slo;
+  wire \slo$111 ;
+  wire \slo$69 ;
+  wire \slo$77 ;
+  wire slo_stuck;
+  wire \slo_stuck$106 ;
+  wire slo_stuck_live;
+  wire \slo_stuck_live$108 ;
+  wire slots_full;
+  wire \slots_full$94 ;
+  wire [39:0] spw;
+  wire spw_match;
+  output spw_mismatch;
+  wire spw_mismatch;
+  wire \spw_mismatch$202 ;
+  input start;
+  wire start;
+  wire \start$64 ;
+  wire [15:0] start_slot;
+  wire [15:0] \start_slot$136 ;
+  wire started;
+  wire \started$134 ;
+  wire \started$92 ;
+  (* enum_base_type = "Status" *)
+  (* enum_value_0000 = "OK" *)
+  (* enum_value_0001 = "CRC_ERROR_WORD0" *)
+  (* enum_value_0010 = "CRC_ERROR_WORD1" *)
+  (* enum_value_0011 = "CRC_ERROR_BOTH" *)
+  (* enum_value_0100 = "SIGN_OF_LIFE" *)
+  (* enum_value_0101 = "SPW_MISMATCH" *)
+  (* enum_value_0110 = "NO_ACK" *)
+  (* enum_value_0111 = "NO_START" *)
+  (* enum_value_1000 = "DELAY_RANGE" *)
+  (* enum_value_1001 = "SLO_STUCK_LOW" *)
+  (* enum_value_1010 = "ABORTED" *)
+  (* enum_value_1011 = "BAD_CONFIG" *)
+  (* enum_value_1100 = "NO_STOP" *)
+  output [3:0] status;
+  wire [3:0] status;
+  (* enum_base_type = "Status" *)
+  (* enum_value_0000 = "OK" *)
+  (* enum_value_0001 = "CRC_ERROR_WORD0" *)
+  (* enum_value_0010 = "CRC_ERROR_WORD1" *)
+  (* enum_value_0011 = "CRC_ERROR_BOTH" *)
+  (* enum_value_0100 = "SIGN_OF_LIFE" *)
+  (* enum_value_0101 = "SPW_MISMATCH" *)
+  (* enum_value_0110 = "NO_ACK" *)
+  (* enum_value_0111 = "NO_START" *)
+  (* enum_value_1000 = "DELAY_RANGE" *)
+  (* enum_value_1001 = "SLO_STUCK_LOW" *)
+  (* enum_value_1010 = "ABORTED" *)
+  (* enum_value_1011 = "BAD_CONFIG" *)
+  (* enum_value_1100 = "NO_STOP" *)
+  wire [3:0] \status$193 ;
+  wire stop_bit;
+  wire \stop_bit$98 ;
+  wire stopped;
+  wire \stopped$96 ;
+  wire [23:0] timeout_limit;
+  wire [23:0] \timeout_limit$124 ;
+  wire [23:0] timeout_live;
+  wire timer_clear;
+  output [31:0] timestamp;
+  wire [31:0] timestamp;
+  wire [7:0] tolerance;
+  output valid;
+  wire valid;
+  wire \valid$190 ;
+  wire \valid$191 ;
+  wire valid_out;
+  wire w1_enable;
+  output word0_crc_ok;
+  wire word0_crc_ok;
+  output word0_ne;
+  wire word0_ne;
+  output word0_nw;
+  wire word0_nw;
+  output [54:0] word0_position;
+  wire [54:0] word0_position;
+  output word1_crc_ok;
+  wire word1_crc_ok;
+  output word1_ne;
+  wire word1_ne;
+  output word1_nw;
+  wire word1_nw;
+  output [39:0] word1_position;
+  wire [39:0] word1_position;
+  wire [1:0] word_count;
+  wire [1:0] \word_count$148 ;
+  wire [1:0] word_crc_ok;
+  wire [19:0] words;
+  wire [19:0] \words$160 ;
+  wire [9:0] \words$160[0] ;
+  (* enum_base_type = "Crc" *)
+  (* enum_value_00 = "NONE" *)
+  (* enum_value_01 = "CRC6" *)
+  (* enum_value_10 = "CRC16" *)
+  wire [1:0] \words$160[0].crc ;
+  wire [5:0] \words$160[0].data_bits ;
+  wire \words$160[0].lc ;
+  wire \words$160[0].nenw ;
+  wire [9:0] \words$160[1] ;
+  (* enum_base_type = "Crc" *)
+  (* enum_value_00 = "NONE" *)
+  (* enum_value_01 = "CRC6" *)
+  (* enum_value_10 = "CRC16" *)
+  wire [1:0] \words$160[1].crc ;
+  wire [5:0] \words$160[1].data_bits ;
+  wire \words$160[1].lc ;
+  wire \words$160[1].nenw ;
+  wire [9:0] \words[0] ;
+  (* enum_base_type = "Crc" *)
+  (* enum_value_00 = "NONE" *)
+  (* enum_value_01 = "CRC6" *)
+  (* enum_value_10 = "CRC16" *)
+  wire [1:0] \words[0].crc ;
+  wire [5:0] \words[0].data_bits ;
+  wire \words[0].lc ;
+  wire \words[0].nenw ;
+  wire [9:0] \words[1] ;
+  (* enum_base_type = "Crc" *)
+  (* enum_value_00 = "NONE" *)
+  (* enum_value_01 = "CRC6" *)
+  (* enum_value_10 = "CRC16" *)
+  wire [1:0] \words[1].crc ;
+  wire [5:0] \words[1].data_bits ;
+  wire \words[1].lc ;
+  wire \words[1].nenw ;
+  wire zero;
+  assign \$1  = report_frame & \spw_mismatch$202 ;
+  assign busy = ~ idle;
+  assign config_error = ~ config_ok;
+  \biss_master.config  \config  (
+    .ack_limit(ack_limit),
+    .clk(clk),
+    .cycle(cycle),
+    .delay_limit(delay_limit),
+    .idle(idle),
+    .live(live),
+    .no_start_limit(no_start_limit),
+    .ok(config_ok),
+    .rst(rst),
+    .timeout_limit(timeout_limit),
+    .word_count(word_count)
+  );
+  \biss_master.controller  controller (
+    .abort(abort_cycle),
+    .ack_expired(ack_expired),
+    .break_over(break_over),
+    .clk(clk),
+    .config_ok(config_ok),
+    .delay_over(delay_over),
+    .early(early),
+    .end_check(cycle[124]),
+    .fault(fault),
+    .fault_status(fault_status),
+    .faults(faults),
+    .frame_done(frame_done),
+    .idle(idle),
+    .in_clock(in_clock),
+    .locked(locked),
+    .ma_arm(ma_arm),
+    .ma_busy(ma_busy),
+    .ma_enough(ma_enough),
+    .ma_run(run),
+    .no_start_expired(no_start_expired),
+    .receiver_clear(\clear$139 ),
+    .report_delay(report_delay),
+    .report_frame(report_frame),
+    .request(request),
+    .restart_timer(restart),
+    .resync(resync),
+    .rst(rst),
+    .slo(\slo$77 ),
+    .slo_stuck(slo_stuck),
+    .slo_stuck_live(slo_stuck_live),
+    .slots_full(slots_full),
+    .started(started),
+    .stop_bit(stop_bit),
+    .stopped(stopped),
+    .timer_clear(clear)
+  );
+  \biss_master.counters  counters (
+    .clear(clear_counters),
+    .clk(clk),
+    .counts(counts),
+    .events(events),
+    .rst(rst)
+  );
+  \biss_master.decoder  decoder (
+    .\bit (\slo$77 ),
+    .cds(\cds$194 ),
+    .clk(clk),
+    .cpw_top(cpw_top),
+    .crc_ok(crc_ok),
+    .data0(data0),
+    .data1(spw),
+    .done(frame_done),
+    .lc(\lc$149 ),
+    .lc_load(load),
+    .ne(ne),
+    .nw(nw),
+    .receiver_clear(\clear$139 ),
+    .rst(rst),
+    .sample(sample),
+    .slots_full(slots_full),
+    .start_slot(start_slot),
+    .started(started),
+    .stop_bit(stop_bit),
+    .stopped(stopped),
+    .word_count(word_count),
+    .words(words)
+  );
+  \biss_master.ma_clock  ma_clock (
+    .busy(ma_busy),
+    .clk(clk),
+    .first_rise(first_rise),
+    .half_period(cycle[15:0]),
+    .ma(ma),
+    .rises(rises),
+    .rst(rst),
+    .run(run),
+    .second_rise(ma_arm)
+  );
+  \biss_master.ma_stop  ma_stop (
+    .clear(\clear$139 ),
+    .clk(clk),
+    .enough(ma_enough),
+    .rises(rises),
+    .rst(rst),
+    .start_slot(start_slot),
+    .\started$10 (started),
+    .w1_enable(cycle[135]),
+    .words(\words$160 )
+  );
+  \biss_master.results  results (
+    .clk(clk),
+    .done(done),
+    .frame(frame),
+    .report(report),
+    .report_delay(report_delay),
+    .report_frame(report_frame),
+    .result(result),
+    .rst(rst),
+    .valid(\valid$190 ),
+    .valid_out(valid)
+  );
+  \biss_master.sampler  sampler (
+    .arm(ma_arm),
+    .clk(clk),
+    .delay(delay),
+    .early(early),
+    .half_period(cycle[15:0]),
+    .level(\slo$77 ),
+    .locked(locked),
+    .receiver_clear(\clear$139 ),
+    .rst(rst),
+    .sample(sample),
+    .slo(slo)
+  );
+  \biss_master.scheduler  scheduler (
+    .abort(abort_cycle),
+    .clk(clk),
+    .idle(idle),
+    .overrun(overrun),
+    .period(cfg_request_period),
+    .periodic(periodic),
+    .request(request),
+    .rst(rst),
+    .start(start)
+  );
+  \biss_master.sign_of_life  sign_of_life (
+    .check(check),
+    .clk(clk),
+    .is_zero(lc_zero_seen),
+    .lc(\lc$149 ),
+    .load(load),
+    .\port$991$0 (\slo$77 ),
+    .\repeat (lc_repeat_seen),
+    .resync(resync),
+    .rst(rst),
+    .skip(lc_skip_seen)
+  );
+  \biss_master.spw_check  spw_check (
+    .bits(cycle[141:136]),
+    .clk(clk),
+    .cpw_top(cpw_top),
+    .match(spw_match),
+    .rst(rst),
+    .spw(spw),
+    .\tolerance$8 (cycle[154:147])
+  );
+  \biss_master.time_base  time_base (
+    .clk(clk),
+    .first_rise(first_rise),
+    .first_rise_time(first_rise_time),
+    .rst(rst)
+  );
+  \biss_master.timers  timers (
+    .ack_expired(ack_expired),
+    .ack_limit(ack_limit),
+    .break_over(break_over),
+    .break_time(cfg_break_time),
+    .clear(clear),
+    .clk(clk),
+    .delay(delay),
+    .delay_limit(delay_limit),
+    .delay_over(delay_over),
+    .in_clock(in_clock),
+    .ma_busy(ma_busy),
+    .no_start_expired(no_start_expired),
+    .no_start_limit(no_start_limit),
+    .restart(restart),
+    .rst(rst),
+    .slo(\slo$77 ),
+    .slo_stuck(slo_stuck),
+    .slo_stuck_live(slo_stuck_live),
+    .timeout_limit(timeout_limit),
+    .timeout_live(cfg_timeout_limit)
+  );
+  \biss_master.verdict  verdict (
+    .cfg(cycle),
+    .crc_error(crc_error),
+    .crc_ok(crc_ok),
+    .fault(fault),
+    .fault_status(fault_status),
+    .lc_check(check),
+    .lc_repeat(\lc_repeat$195 ),
+    .lc_repeat_seen(lc_repeat_seen),
+    .lc_skip(\lc_skip$196 ),
+    .lc_skip_seen(lc_skip_seen),
+    .lc_zero(\lc_zero$197 ),
+    .lc_zero_seen(lc_zero_seen),
+    .\port$739$0 (\$2 ),
+    .report(report),
+    .report_frame(report_frame),
+    .spw_match(spw_match),
+    .spw_mismatch(\spw_mismatch$202 ),
+    .status(\status$193 ),
+    .valid(\valid$190 )
+  );
+  assign \idle$63  = idle;
+  assign \start$64  = start;
+  assign \periodic$65  = periodic;
+  assign period = cfg_request_period;
+  assign abort = abort_cycle;
+  assign \idle$68  = idle;
+  assign \slo$69  = slo;
+  assign \request$71  = request;
+  assign \abort$72  = abort_cycle;
+  assign ok = config_ok;
+  assign end_check = cycle[124];
+  assign level = \slo$77 ;
+  assign \busy$80  = ma_busy;
+  assign second_rise = ma_arm;
+  assign enough = ma_enough;
+  assign \locked$86  = locked;
+  assign \early$88  = early;
+  assign \done$90  = frame_done;
+  assign \started$92  = started;
+  assign \slots_full$94  = slots_full;
+  assign \stopped$96  = stopped;
+  assign \stop_bit$98  = stop_bit;
+  assign \break_over$100  = break_over;
+  assign \ack_expired$102  = ack_expired;
+  assign \no_start_expired$104  = no_start_expired;
+  assign \slo_stuck$106  = slo_stuck;
+  assign \slo_stuck_live$108  = slo_stuck_live;
+  assign \delay_over$110  = delay_over;
+  assign \slo$111  = \slo$77 ;
+  assign \ma_busy$112  = ma_busy;
+  assign timer_clear = clear;
+  assign \in_clock$116  = in_clock;
+  assign restart_timer = restart;
+  assign break_time = cfg_break_time;
+  assign timeout_live = cfg_timeout_limit;
+  assign \ack_limit$122  = ack_limit;
+  assign \timeout_limit$124  = timeout_limit;
+  assign \no_start_limit$126  = no_start_limit;
+  assign \delay$128  = delay;
+  assign \delay_limit$130  = delay_limit;
+  assign ma_run = run;
+  assign half_period = cycle[15:0];
+  assign \started$134  = started;
+  assign \start_slot$136  = start_slot;
+  assign \rises$138  = rises;
+  assign receiver_clear = \clear$139 ;
+  assign \half_period$141  = cycle[15:0];
+  assign arm = ma_arm;
+  assign \sample$144  = sample;
+  assign \bit  = \slo$77 ;
+  assign \bit$146  = \slo$77 ;
+  assign \word_count$148  = word_count;
+  assign \lc$150  = \lc$149 ;
+  assign lc_next = { \lc$149 [4:0], \slo$77  };
+  assign \lc_next$152  = { \lc$149 [4:0], \slo$77  };
+  assign lc_load = load;
+  assign lc_check = check;
+  assign \resync$158  = resync;
+  assign w1_enable = cycle[135];
+  assign \cpw_top$163  = cpw_top;
+  assign data1 = spw;
+  assign bits = cycle[141:136];
+  assign tolerance = cycle[154:147];
+  assign match = spw_match;
+  assign cfg = cycle;
+  assign \report_frame$172  = report_frame;
+  assign \fault$174  = fault;
+  assign \fault_status$176  = fault_status;
+  assign \crc_ok$178  = crc_ok;
+  assign \repeat  = lc_repeat_seen;
+  assign skip = lc_skip_seen;
+  assign zero = lc_zero_seen;
+  assign \report$186  = report;
+  assign \report_frame$187  = report_frame;
+  assign \report_delay$189  = report_delay;
+  assign \valid$191  = \valid$190 ;
+  assign word_crc_ok = { \$2 , crc_ok[0] };
+  assign \first_rise$204  = first_rise;
+  assign \overrun$209  = overrun;
+  assign \clear$210  = clear_counters;
+  assign \ma$212  = ma;
+  assign \done$213  = done;
+  assign valid_out = valid;
+  assign status = result[3:0];
+  assign timestamp = result[35:4];
+  assign line_delay = result[48:36];
+  assign cds = result[49];
+  assign word0_position = result[104:50];
+  assign word0_ne = result[105];
+  assign word0_nw = result[106];
+  assign word0_crc_ok = result[107];
+  assign word1_position = result[147:108];
+  assign word1_ne = result[148];
+  assign word1_nw = result[149];
+  assign word1_crc_ok = result[150];
+  assign lc = result[156:151];
+  assign lc_repeat = result[157];
+  assign lc_skip = result[158];
+  assign lc_zero = result[159];
+  assign spw_mismatch = result[160];
+  assign count_crc_word0 = counts[15:0];
+  assign count_crc_word1 = counts[31:16];
+  assign count_no_ack = counts[47:32];
+  assign count_no_start = counts[63:48];
+  assign count_delay_range = counts[79:64];
+  assign count_slo_stuck_low = counts[95:80];
+  assign count_lc_repeat = counts[111:96];
+  assign count_lc_skip = counts[127:112];
+  assign count_lc_zero = counts[143:128];
+  assign count_spw_mismatch = counts[159:144];
+  assign count_overrun = counts[175:160];
+  assign count_aborted = counts[191:176];
+  assign count_no_stop = counts[207:192];
+  assign \live.ma_half_period  = live[15:0];
+  assign \live.request_period  = live[39:16];
+  assign \live.break_time  = live[63:40];
+  assign \live.ack_limit  = live[87:64];
+  assign \live.timeout_limit  = live[111:88];
+  assign \live.delay_limit  = live[123:112];
+  assign \live.end_check  = live[124];
+  assign \live.w0  = live[134:125];
+  assign \live.w0.data_bits  = live[130:125];
+  assign \live.w0.nenw  = live[131];
+  assign \live.w0.lc  = live[132];
+  assign \live.w0.crc  = live[134:133];
+  assign \live.w1_enable  = live[135];
+  assign \live.w1  = live[145:136];
+  assign \live.w1.data_bits  = live[141:136];
+  assign \live.w1.nenw  = live[142];
+  assign \live.w1.lc  = live[143];
+  assign \live.w1.crc  = live[145:144];
+  assign \live.spw_check  = live[146];
+  assign \live.spw_tolerance  = live[154:147];
+  assign \cycle.ma_half_period  = cycle[15:0];
+  assign \cycle.request_period  = cycle[39:16];
+  assign \cycle.break_time  = cycle[63:40];
+  assign \cycle.ack_limit  = cycle[87:64];
+  assign \cycle.timeout_limit  = cycle[111:88];
+  assign \cycle.delay_limit  = cycle[123:112];
+  assign \cycle.end_check  = cycle[124];
+  assign \cycle.w0  = cycle[134:125];
+  assign \cycle.w0.data_bits  = cycle[130:125];
+  assign \cycle.w0.nenw  = cycle[131];
+  assign \cycle.w0.lc  = cycle[132];
+  assign \cycle.w0.crc  = cycle[134:133];
+  assign \cycle.w1_enable  = cycle[135];
+  assign \cycle.w1  = cycle[145:136];
+  assign \cycle.w1.data_bits  = cycle[141:136];
+  assign \cycle.w1.nenw  = cycle[142];
+  assign \cycle.w1.lc  = cycle[143];
+  assign \cycle.w1.crc  = cycle[145:144];
+  assign \cycle.spw_check  = cycle[146];
+  assign \cycle.spw_tolerance  = cycle[154:147];
+  assign \words[0]  = words[9:0];
+  assign \words[0].data_bits  = words[5:0];
+  assign \words[0].nenw  = words[6];
+  assign \words[0].lc  = words[7];
+  assign \words[0].crc  = words[9:8];
+  assign \words[1]  = words[19:10];
+  assign \words[1].data_bits  = words[15:10];
+  assign \words[1].nenw  = words[16];
+  assign \words[1].lc  = words[17];
+  assign \words[1].crc  = words[19:18];
+  assign \words$160[0]  = \words$160 [9:0];
+  assign \words$160[0].data_bits  = \words$160 [5:0];
+  assign \words$160[0].nenw  = \words$160 [6];
+  assign \words$160[0].lc  = \words$160 [7];
+  assign \words$160[0].crc  = \words$160 [9:8];
+  assign \words$160[1]  = \words$160 [19:10];
+  assign \words$160[1].data_bits  = \words$160 [15:10];
+  assign \words$160[1].nenw  = \words$160 [16];
+  assign \words$160[1].lc  = \words$160 [17];
+  assign \words$160[1].crc  = \words$160 [19:18];
+  assign \cfg.ma_half_period  = cycle[15:0];
+  assign \cfg.request_period  = cycle[39:16];
+  assign \cfg.break_time  = cycle[63:40];
+  assign \cfg.ack_limit  = cycle[87:64];
+  assign \cfg.timeout_limit  = cycle[111:88];
+  assign \cfg.delay_limit  = cycle[123:112];
+  assign \cfg.end_check  = cycle[124];
+  assign \cfg.w0  = cycle[134:125];
+  assign \cfg.w0.data_bits  = cycle[130:125];
+  assign \cfg.w0.nenw  = cycle[131];
+  assign \cfg.w0.lc  = cycle[132];
+  assign \cfg.w0.crc  = cycle[134:133];
+  assign \cfg.w1_enable  = cycle[135];
+  assign \cfg.w1  = cycle[145:136];
+  assign \cfg.w1.data_bits  = cycle[141:136];
+  assign \cfg.w1.nenw  = cycle[142];
+  assign \cfg.w1.lc  = cycle[143];
+  assign \cfg.w1.crc  = cycle[145:144];
+  assign \cfg.spw_check  = cycle[146];
+  assign \cfg.spw_tolerance  = cycle[154:147];
+  assign \frame.status  = frame[3:0];
+  assign \frame.timestamp  = frame[35:4];
+  assign \frame.line_delay  = frame[48:36];
+  assign \frame.cds  = frame[49];
+  assign \frame.word0  = frame[107:50];
+  assign \frame.word0.position  = frame[104:50];
+  assign \frame.word0.ne  = frame[105];
+  assign \frame.word0.nw  = frame[106];
+  assign \frame.word0.crc_ok  = frame[107];
+  assign \frame.word1  = frame[150:108];
+  assign \frame.word1.position  = frame[147:108];
+  assign \frame.word1.ne  = frame[148];
+  assign \frame.word1.nw  = frame[149];
+  assign \frame.word1.crc_ok  = frame[150];
+  assign \frame.lc  = frame[156:151];
+  assign \frame.lc_repeat  = frame[157];
+  assign \frame.lc_skip  = frame[158];
+  assign \frame.lc_zero  = frame[159];
+  assign \frame.spw_mismatch  = frame[160];
+  assign \events.crc_word0  = events[0];
+  assign \events.crc_word1  = events[1];
+  assign \events.no_ack  = events[2];
+  assign \events.no_start  = events[3];
+  assign \events.delay_range  = events[4];
+  assign \events.slo_stuck_low  = events[5];
+  assign \events.lc_repeat  = events[6];
+  assign \events.lc_skip  = events[7];
+  assign \events.lc_zero  = events[8];
+  assign \events.spw_mismatch  = events[9];
+  assign \events.overrun  = events[10];
+  assign \events.aborted  = events[11];
+  assign \events.no_stop  = events[12];
+  assign \faults.no_ack  = faults[0];
+  assign \faults.no_start  = faults[1];
+  assign \faults.delay_range  = faults[2];
+  assign \faults.slo_stuck_low  = faults[3];
+  assign \faults.aborted  = faults[4];
+  assign \faults.bad_config  = faults[5];
+  assign \faults.no_stop  = faults[6];
+  assign \counts.crc_word0  = counts[15:0];
+  assign \counts.crc_word1  = counts[31:16];
+  assign \counts.no_ack  = counts[47:32];
+  assign \counts.no_start  = counts[63:48];
+  assign \counts.delay_range  = counts[79:64];
+  assign \counts.slo_stuck_low  = counts[95:80];
+  assign \counts.lc_repeat  = counts[111:96];
+  assign \counts.lc_skip  = counts[127:112];
+  assign \counts.lc_zero  = counts[143:128];
+  assign \counts.spw_mismatch  = counts[159:144];
+  assign \counts.overrun  = counts[175:160];
+  assign \counts.aborted  = counts[191:176];
+  assign \counts.no_stop  = counts[207:192];
+  assign \result.status  = result[3:0];
+  assign \result.timestamp  = result[35:4];
+  assign \result.line_delay  = result[48:36];
+  assign \result.cds  = result[49];
+  assign \result.word0  = result[107:50];
+  assign \result.word0.position  = result[104:50];
+  assign \result.word0.ne  = result[105];
+  assign \result.word0.nw  = result[106];
+  assign \result.word0.crc_ok  = result[107];
+  assign \result.word1  = result[150:108];
+  assign \result.word1.position  = result[147:108];
+  assign \result.word1.ne  = result[148];
+  assign \result.word1.nw  = result[149];
+  assign \result.word1.crc_ok  = result[150];
+  assign \result.lc  = result[156:151];
+  assign \result.lc_repeat  = result[157];
+  assign \result.lc_skip  = result[158];
+  assign \result.lc_zero  = result[159];
+  assign \result.spw_mismatch  = result[160];
+  assign events[12] = faults[6];
+  assign events[11] = faults[4];
+  assign events[10] = overrun;
+  assign events[9] = \$1 ;
+  assign events[8] = \lc_zero$197 ;
+  assign events[7] = \lc_skip$196 ;
+  assign events[6] = \lc_repeat$195 ;
+  assign events[5] = faults[3];
+  assign events[4] = faults[2];
+  assign events[3] = faults[1];
+  assign events[2] = faults[0];
+  assign events[1] = crc_error[1];
+  assign events[0] = crc_error[0];
+  assign frame[35:4] = first_rise_time;
+  assign frame[160] = \spw_mismatch$202 ;
+  assign frame[150] = \$2 ;
+  assign frame[149] = nw[1];
+  assign frame[148] = ne[1];
+  assign frame[147:108] = spw;
+  assign frame[107] = crc_ok[0];
+  assign frame[106] = nw[0];
+  assign frame[105] = ne[0];
+  assign frame[104:50] = data0;
+  assign frame[159] = \lc_zero$197 ;
+  assign frame[158] = \lc_skip$196 ;
+  assign frame[157] = \lc_repeat$195 ;
+  assign frame[156:151] = \lc$149 ;
+  assign frame[49] = \cds$194 ;
+  assign frame[48:36] = delay;
+  assign frame[3:0] = \status$193 ;
+  assign \words$160 [19:10] = cycle[145:136];
+  assign \words$160 [9:0] = cycle[134:125];
+  assign words[19:10] = cycle[145:136];
+  assign words[9:0] = cycle[134:125];
+  assign live[154:147] = cfg_spw_tolerance;
+  assign live[146] = cfg_spw_check;
+  assign live[145:144] = cfg_w1_crc;
+  assign live[143] = cfg_w1_lc;
+  assign live[142] = cfg_w1_nenw;
+  assign live[141:136] = cfg_w1_data_bits;
+  assign live[135] = cfg_w1_enable;
+  assign live[134:133] = cfg_w0_crc;
+  assign live[132] = cfg_w0_lc;
+  assign live[131] = cfg_w0_nenw;
+  assign live[130:125] = cfg_w0_data_bits;
+  assign live[124] = cfg_end_check;
+  assign live[123:112] = cfg_delay_limit;
+  assign live[111:88] = cfg_timeout_limit;
+  assign live[87:64] = cfg_ack_limit;
+  assign live[63:40] = cfg_break_time;
+  assign live[39:16] = cfg_request_period;
+  assign live[15:0] = cfg_ma_half_period;
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout_limit, delay_limit, no_start_limit, idle, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$9  = 0;
   wire \$1 ;
   wire \$10 ;
-  wire \$100 ;
-  wire \$101 ;
-  wire \$102 ;
-  wire \$103 ;
-  wire \$104 ;
-  wire \$105 ;
-  wire \$106 ;
-  wire \$107 ;
-  wire \$108 ;
-  wire \$109 ;
   wire \$11 ;
-  wire \$110 ;
-  wire \$111 ;
-  wire \$112 ;
-  wire \$113 ;
-  wire \$114 ;
-  wire \$115 ;
-  wire \$116 ;
-  wire \$117 ;
-  wire \$118 ;
-  wire \$119 ;
   wire \$12 ;
-  wire [23:0] \$120 ;
-  wire \$121 ;
-  wire [23:0] \$122 ;
-  wire \$123 ;
-  wire [11:0] \$124 ;
-  wire [24:0] \$125 ;
-  wire [32:0] \$126 ;
-  wire \$127 ;
-  wire \$128 ;
-  wire [25:0] \$129 ;
   wire \$13 ;
-  wire \$130 ;
-  wire \$131 ;
-  wire \$132 ;
-  wire \$133 ;
-  wire \$134 ;
-  wire \$135 ;
-  wire \$136 ;
-  wire \$137 ;
-  wire \$138 ;
-  wire \$139 ;
   wire \$14 ;
-  wire \$140 ;
-  wire \$141 ;
-  wire \$142 ;
-  wire \$143 ;
-  wire [25:0] \$144 ;
-  wire [25:0] \$145 ;
-  wire [25:0] \$146 ;
-  wire \$147 ;
-  wire \$148 ;
-  wire \$149 ;
   wire \$15 ;
-  wire \$150 ;
-  wire \$151 ;
-  wire \$152 ;
-  wire \$153 ;
-  wire \$154 ;
-  wire \$155 ;
-  wire \$156 ;
-  wire \$157 ;
-  wire \$158 ;
-  wire [24:0] \$159 ;
   wire \$16 ;
-  reg [7:0] \$160 ;
-  wire [8:0] \$161 ;
-  wire [7:0] \$162 ;
-  wire [8:0] \$163 ;
-  reg [7:0] \$164 ;
-  wire [8:0] \$165 ;
-  wire [16:0] \$166 ;
-  wire \$167 ;
-  wire \$168 ;
-  wire \$169 ;
   wire \$17 ;
-  wire \$170 ;
-  wire \$171 ;
-  wire \$172 ;
-  wire \$173 ;
-  wire \$174 ;
-  wire \$175 ;
-  wire \$176 ;
-  wire \$177 ;
-  wire \$178 ;
-  wire \$179 ;
   wire \$18 ;
-  wire \$180 ;
-  wire \$181 ;
-  wire \$182 ;
-  wire \$183 ;
-  wire \$184 ;
-  wire \$185 ;
-  wire \$186 ;
-  wire \$187 ;
-  wire \$188 ;
-  wire \$189 ;
   wire \$19 ;
-  wire \$190 ;
-  wire \$191 ;
-  wire \$192 ;
-  wire \$193 ;
-  wire \$194 ;
-  wire \$195 ;
-  wire \$196 ;
-  wire \$197 ;
-  wire \$198 ;
-  wire \$199 ;
   wire \$2 ;
   wire \$20 ;
-  wire \$200 ;
-  wire \$201 ;
-  wire \$202 ;
-  wire \$203 ;
-  wire \$204 ;
-  wire \$205 ;
-  wire \$206 ;
-  wire \$207 ;
-  wire \$208 ;
-  wire \$209 ;
   wire \$21 ;
-  wire \$210 ;
-  wire \$211 ;
-  wire \$212 ;
-  wire \$213 ;
-  wire \$214 ;
-  wire \$215 ;
-  wire \$216 ;
-  wire \$217 ;
-  wire \$218 ;
-  wire \$219 ;
   wire \$22 ;
-  wire \$220 ;
-  wire \$221 ;
-  wire \$222 ;
-  wire \$223 ;
-  wire \$224 ;
-  wire \$225 ;
-  wire \$226 ;
-  wire \$227 ;
-  wire \$228 ;
-  wire \$229 ;
   wire \$23 ;
-  wire \$230 ;
-  wire \$231 ;
-  reg \$232 ;
-  reg [154:0] \$233 ;
-  reg [23:0] \$234 ;
-  reg [23:0] \$235 ;
-  reg [11:0] \$236 ;
-  reg [24:0] \$237 ;
-  reg [31:0] \$238 ;
-  reg [31:0] \$239 ;
   wire \$24 ;
-  reg [24:0] \$240 ;
-  reg \$241 ;
-  reg \$242 ;
-  reg \$243 ;
-  reg [24:0] \$244 ;
-  reg \$245 ;
-  reg [23:0] \$246 ;
-  reg \$247 ;
-  reg [7:0] \$248 ;
-  reg [8:0] \$249 ;
   wire \$25 ;
-  reg [7:0] \$250 ;
-  reg [16:0] \$251 ;
-  reg \$252 ;
-  reg \$253 ;
-  reg \$254 ;
-  reg \$255 ;
-  reg \$256 ;
-  reg [2:0] \$257 ;
-  reg \$258 ;
-  reg \$259 ;
   wire \$26 ;
-  reg \$260 ;
-  reg \$261 ;
-  reg [3:0] \$262 ;
-  reg [12:0] \$263 ;
-  reg [31:0] \$264 ;
-  reg \$265 ;
-  reg [5:0] \$266 ;
-  reg \$267 ;
-  reg \$268 ;
-  reg \$269 ;
   wire \$27 ;
-  reg [54:0] \$270 ;
-  reg \$271 ;
-  reg \$272 ;
-  reg \$273 ;
-  reg [39:0] \$274 ;
-  reg \$275 ;
-  reg \$276 ;
-  reg \$277 ;
-  reg \$278 ;
+  wire \$28 ;
+  wire \$29 ;
+  wire \$3 ;
+  wire \$30 ;
+  wire \$31 ;
+  wire \$32 ;
+  wire \$33 ;
+  wire \$34 ;
+  wire \$35 ;
+  wire [23:0] \$36 ;
+  wire \$37 ;
+  wire [23:0] \$38 ;
+  wire \$39 ;
+  wire \$4 ;
+  wire [11:0] \$40 ;
+  wire [24:0] \$41 ;
+  reg \$42 ;
+  reg [154:0] \$43 ;
+  reg [23:0] \$44 ;
+  reg [23:0] \$45 ;
+  reg [11:0] \$46 ;
+  reg [24:0] \$47 ;
+  wire \$5 ;
+  wire \$6 ;
+  wire \$7 ;
+  wire \$8 ;
+  wire \$9 ;
+  output [23:0] ack_limit;
+  reg [23:0] ack_limit = 24'h000000;
+  input clk;
+  wire clk;
+  output [154:0] cycle;
+  reg [154:0] cycle = 155'h000000000000000000000000000000000000000;
+  wire [23:0] \cycle.ack_limit ;
+  wire [23:0] \cycle.break_time ;
+  wire [11:0] \cycle.delay_limit ;
+  wire \cycle.end_check ;
+  wire [15:0] \cycle.ma_half_period ;
+  wire [23:0] \cycle.request_period ;
+  wire \cycle.spw_check ;
+  wire [7:0] \cycle.spw_tolerance ;
+  wire [23:0] \cycle.timeout_limit ;
+  wire [9:0] \cycle.w0 ;
+  (* enum_base_type = "Crc" *)
+  (* enum_value_00 = "NONE" *)
+  (* enum_value_01 = "CRC6" *)
+  (* enum_value_10 = "CRC16" *)
+  wire [1:0] \cycle.w0.crc ;
+  wire [5:0] \cycle.w0.data_bits ;
+  wire \cycle.w0.lc ;
+  wire \cycle.w0.nenw ;
+  wire [9:0] \cycle.w1 ;
+  (* enum_base_type = "Crc" *)
+  (* enum_value_00 = "NONE" *)
+  (* enum_value_01 = "CRC6" *)
+  (* enum_value_10 = "CRC16" *)
+  wire [1:0] \cycle.w1.crc ;
+  wire [5:0] \cycle.w1.data_bits ;
+  wire \cycle.w1.lc ;
+  wire \cycle.w1.nenw ;
+  wire \cycle.w1_enable ;
+  output [11:0] delay_limit;
+  reg [11:0] delay_limit = 12'h000;
+  input idle;
+  wire idle;
+  input [154:0] live;
+  wire [154:0] live;
+  wire [23:0] \live.ack_limit ;
+  wire [23:0] \live.break_time ;
+  wire [11:0] \live.delay_limit ;
+  wire \live.end_check ;
+  wire [15:0] \live.ma_half_period ;
+  wire [23:0] \live.request_period ;
+  wire \live.spw_check ;
+  wire [7:0] \live.spw_tolerance ;
+  wire [23:0] \live.timeout_limit ;
+  wire [9:0] \live.w0 ;
+  (* enum_base_type = "Crc" *)
+  (* enum_value_00 = "NONE" *)
+  (* enum_value_01 = "CRC6" *)
+  (* enum_value_10 = "CRC16" *)
+  wire [1:0] \live.w0.crc ;
+  wire [5:0] \live.w0.data_bits ;
+  wire \live.w0.lc ;
+  wire \live.w0.nenw ;
+  wire [9:0] \live.w1 ;
+  (* enum_base_type = "Crc" *)
+  (* enum_value_00 = "NONE" *)
+  (* enum_value_01 = "CRC6" *)
+  (* enum_value_10 = "CRC16" *)
+  wire [1:0] \live.w1.crc ;
+  wire [5:0] \live.w1.data_bits ;
+  wire \live.w1.lc ;
+  wire \live.w1.nenw ;
+  wire \live.w1_enable ;
+  output [24:0] no_start_limit;
+  reg [24:0] no_start_limit = 25'h0000000;
+  output ok;
+  reg ok = 1'h0;
+  input rst;
+  wire rst;
+  output [23:0] timeout_limit;
+  reg [23:0] timeout_limit = 24'h000000;
+  output [1:0] word_count;
+  wire [1:0] word_count;
+  always @(posedge clk)
+    no_start_limit <= \$47 ;
+  assign \$1  = | live[15:1];
+  assign \$2  = | live[130:125];
+  assign \$3  = live[130:125] <= 6'h37;
+  assign \$4  = \$2  & \$3 ;
+  assign \$5  = ! live[134:133];
+  assign \$6  = live[134:133] == 1'h1;
+  assign \$7  = \$5  | \$6 ;
+  assign \$8  = live[134:133] == 2'h2;
+  assign \$9  = \$7  | \$8 ;
+  assign \$10  = \$4  & \$9 ;
+  assign \$11  = \$1  & \$10 ;
+  assign \$12  = ~ live[135];
+  assign \$13  = | live[141:136];
+  assign \$14  = live[141:136] <= 6'h28;
+  assign \$15  = \$13  & \$14 ;
+  assign \$16  = ! live[145:144];
+  assign \$17  = live[145:144] == 1'h1;
+  assign \$18  = \$16  | \$17 ;
+  assign \$19  = live[145:144] == 2'h2;
+  assign \$20  = \$18  | \$19 ;
+  assign \$21  = \$15  & \$20 ;
+  assign \$22  = \$12  | \$21 ;
+  assign \$23  = \$11  & \$22 ;
+  assign \$24  = live[135] & live[132];
+  assign \$25  = \$24  & live[143];
+  assign \$26  = ~ \$25 ;
+  assign \$27  = \$23  & \$26 ;
+  assign \$28  = ~ live[146];
+  assign \$29  = live[141:136] <= live[130:125];
+  assign \$30  = live[135] & \$29 ;
+  assign \$31  = | live[145:144];
+  assign \$32  = \$30  & \$31 ;
+  assign \$33  = \$28  | \$32 ;
+  assign \$34  = \$27  & \$33 ;
+  assign \$35  = ! live[87:64];
+  assign \$36  = \$35  ? 24'h000fa0 : live[87:64];
+  assign \$37  = ! live[111:88];
+  assign \$38  = \$37  ? 24'h001f40 : live[111:88];
+  assign \$39  = ! live[123:112];
+  assign \$40  = \$39  ? 12'hfff : live[123:112];
+  assign \$41  = ack_limit + { cycle[15:0], 1'h0 };
+  assign word_count = 1'h1 + cycle[135];
+  always @(posedge clk)
+    ok <= \$42 ;
+  always @(posedge clk)
+    cycle <= \$43 ;
+  always @(posedge clk)
+    ack_limit <= \$44 ;
+  always @(posedge clk)
+    timeout_limit <= \$45 ;
+  always @(posedge clk)
+    delay_limit <= \$46 ;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    \$47  = \$41 ;
+    if (rst) begin
+      \$47  = 25'h0000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    \$42  = \$34 ;
+    if (rst) begin
+      \$42  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    \$43  = cycle;
+    if (idle) begin
+      \$43  = live;
+    end
+    if (rst) begin
+      \$43  = 155'h000000000000000000000000000000000000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    \$44  = ack_limit;
+    if (idle) begin
+      \$44  = \$36 ;
+    end
+    if (rst) begin
+      \$44  = 24'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    \$45  = timeout_limit;
+    if (idle) begin
+      \$45  = \$38 ;
+    end
+    if (rst) begin
+      \$45  = 24'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    \$46  = delay_limit;
+    if (idle) begin
+      \$46  = \$40 ;
+    end
+    if (rst) begin
+      \$46  = 12'h000;
+    end
+  end
+  assign \live.ma_half_period  = live[15:0];
+  assign \live.request_period  = live[39:16];
+  assign \live.break_time  = live[63:40];
+  assign \live.ack_limit  = live[87:64];
+  assign \live.timeout_limit  = live[111:88];
+  assign \live.delay_limit  = live[123:112];
+  assign \live.end_check  = live[124];
+  assign \live.w0  = live[134:125];
+  assign \live.w0.data_bits  = live[130:125];
+  assign \live.w0.nenw  = live[131];
+  assign \live.w0.lc  = live[132];
+  assign \live.w0.crc  = live[134:133];
+  assign \live.w1_enable  = live[135];
+  assign \live.w1  = live[145:136];
+  assign \live.w1.data_bits  = live[141:136];
+  assign \live.w1.nenw  = live[142];
+  assign \live.w1.lc  = live[143];
+  assign \live.w1.crc  = live[145:144];
+  assign \live.spw_check  = live[146];
+  assign \live.spw_tolerance  = live[154:147];
+  assign \cycle.ma_half_period  = cycle[15:0];
+  assign \cycle.request_period  = cycle[39:16];
+  assign \cycle.break_time  = cycle[63:40];
+  assign \cycle.ack_limit  = cycle[87:64];
+  assign \cycle.timeout_limit  = cycle[111:88];
+  assign \cycle.delay_limit  = cycle[123:112];
+  assign \cycle.end_check  = cycle[124];
+  assign \cycle.w0  = cycle[134:125];
+  assign \cycle.w0.data_bits  = cycle[130:125];
+  assign \cycle.w0.nenw  = cycle[131];
+  assign \cycle.w0.lc  = cycle[132];
+  assign \cycle.w0.crc  = cycle[134:133];
+  assign \cycle.w1_enable  = cycle[135];
+  assign \cycle.w1  = cycle[145:136];
+  assign \cycle.w1.data_bits  = cycle[141:136];
+  assign \cycle.w1.nenw  = cycle[142];
+  assign \cycle.w1.lc  = cycle[143];
+  assign \cycle.w1.crc  = cycle[145:144];
+  assign \cycle.spw_check  = cycle[146];
+  assign \cycle.spw_tolerance  = cycle[154:147];
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master.controller (clk, rst, request, restart_timer, config_ok, end_check, receiver_clear, resync, timer_clear, idle, fault, fault_status, faults, ma_run, in_clock, report_frame, report_delay, slo_stuck, slo_stuck_live, break_over, ack_expired
+, no_start_expired, delay_over, ma_arm, ma_busy, ma_enough, early, locked, slo, frame_done, stopped, slots_full, started, stop_bit, abort);
+  reg \$auto$verilog_backend.cc:2355:dump_module$10  = 0;
+  wire \$1 ;
+  wire \$10 ;
+  wire \$11 ;
+  wire \$12 ;
+  wire \$13 ;
+  wire \$14 ;
+  wire \$15 ;
+  wire \$16 ;
+  wire \$17 ;
+  wire \$18 ;
+  wire \$19 ;
+  wire \$2 ;
+  wire \$20 ;
+  wire \$21 ;
+  wire \$22 ;
+  wire \$23 ;
+  wire \$24 ;
+  wire \$25 ;
+  wire \$26 ;
+  wire \$27 ;
   wire \$28 ;
   wire \$29 ;
   wire \$3 ;
@@ -249,207 +1443,34 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \$54 ;
   wire \$55 ;
   wire \$56 ;
-  wire \$57 ;
-  wire \$58 ;
-  wire \$59 ;
+  reg \$57 ;
+  reg [2:0] \$58 ;
+  reg \$59 ;
   wire \$6 ;
-  wire \$60 ;
-  wire \$61 ;
-  wire \$62 ;
-  wire \$63 ;
-  wire \$64 ;
-  wire \$65 ;
-  wire \$66 ;
-  wire \$67 ;
-  wire \$68 ;
-  wire \$69 ;
+  reg \$60 ;
   wire \$7 ;
-  wire \$70 ;
-  wire \$71 ;
-  wire \$72 ;
-  wire \$73 ;
-  wire \$74 ;
-  wire \$75 ;
-  wire \$76 ;
-  wire \$77 ;
-  wire \$78 ;
-  wire \$79 ;
   wire \$8 ;
-  wire \$80 ;
-  wire \$81 ;
-  wire \$82 ;
-  wire \$83 ;
-  wire \$84 ;
-  wire \$85 ;
-  wire \$86 ;
-  wire \$87 ;
-  wire \$88 ;
-  wire \$89 ;
   wire \$9 ;
-  wire \$90 ;
-  wire \$91 ;
-  wire \$92 ;
-  wire \$93 ;
-  wire \$94 ;
-  wire \$95 ;
-  wire \$96 ;
-  wire \$97 ;
-  wire \$98 ;
-  wire \$99 ;
-  input abort_cycle;
-  wire abort_cycle;
-  reg ack_expired = 1'h0;
-  reg [23:0] ack_limit = 24'h000000;
-  wire arm;
+  input abort;
+  wire abort;
+  input ack_expired;
+  wire ack_expired;
   reg armed = 1'h0;
-  wire \bit ;
-  wire \bit$71 ;
-  wire [5:0] bits;
-  reg break_over = 1'h0;
-  output busy;
-  wire busy;
-  wire \busy$102 ;
-  output cds;
-  reg cds = 1'h0;
-  wire \cds$191 ;
-  reg [154:0] cfg = 155'h000000000000000000000000000000000000000;
-  wire [23:0] \cfg.cfg_ack_limit ;
-  wire [23:0] \cfg.cfg_break_time ;
-  wire [11:0] \cfg.cfg_delay_limit ;
-  wire \cfg.cfg_end_check ;
-  wire [15:0] \cfg.cfg_ma_half_period ;
-  wire [23:0] \cfg.cfg_request_period ;
-  wire \cfg.cfg_spw_check ;
-  wire [7:0] \cfg.cfg_spw_tolerance ;
-  wire [23:0] \cfg.cfg_timeout_limit ;
-  wire [1:0] \cfg.cfg_w0_crc ;
-  wire [5:0] \cfg.cfg_w0_data_bits ;
-  wire \cfg.cfg_w0_lc ;
-  wire \cfg.cfg_w0_nenw ;
-  wire [1:0] \cfg.cfg_w1_crc ;
-  wire [5:0] \cfg.cfg_w1_data_bits ;
-  wire \cfg.cfg_w1_enable ;
-  wire \cfg.cfg_w1_lc ;
-  wire \cfg.cfg_w1_nenw ;
-  input [23:0] cfg_ack_limit;
-  wire [23:0] cfg_ack_limit;
-  input [23:0] cfg_break_time;
-  wire [23:0] cfg_break_time;
-  input [11:0] cfg_delay_limit;
-  wire [11:0] cfg_delay_limit;
-  input cfg_end_check;
-  wire cfg_end_check;
-  input [15:0] cfg_ma_half_period;
-  wire [15:0] cfg_ma_half_period;
-  reg cfg_ok = 1'h0;
-  input [23:0] cfg_request_period;
-  wire [23:0] cfg_request_period;
-  input cfg_spw_check;
-  wire cfg_spw_check;
-  input [7:0] cfg_spw_tolerance;
-  wire [7:0] cfg_spw_tolerance;
-  input [23:0] cfg_timeout_limit;
-  wire [23:0] cfg_timeout_limit;
-  input [1:0] cfg_w0_crc;
-  wire [1:0] cfg_w0_crc;
-  input [5:0] cfg_w0_data_bits;
-  wire [5:0] cfg_w0_data_bits;
-  input cfg_w0_lc;
-  wire cfg_w0_lc;
-  input cfg_w0_nenw;
-  wire cfg_w0_nenw;
-  input [1:0] cfg_w1_crc;
-  wire [1:0] cfg_w1_crc;
-  input [5:0] cfg_w1_data_bits;
-  wire [5:0] cfg_w1_data_bits;
-  input cfg_w1_enable;
-  wire cfg_w1_enable;
-  input cfg_w1_lc;
-  wire cfg_w1_lc;
-  input cfg_w1_nenw;
-  wire cfg_w1_nenw;
-  wire check;
-  wire clear;
-  wire \clear$138 ;
-  wire \clear$141 ;
-  wire \clear$144 ;
-  wire \clear$147 ;
-  wire \clear$150 ;
-  wire \clear$153 ;
-  wire \clear$156 ;
-  wire \clear$159 ;
-  wire \clear$162 ;
-  wire \clear$165 ;
-  wire \clear$168 ;
-  wire \clear$171 ;
-  input clear_counters;
-  wire clear_counters;
+  input break_over;
+  wire break_over;
   input clk;
   wire clk;
-  output config_error;
-  wire config_error;
-  wire [15:0] count;
-  wire [15:0] \count$139 ;
-  wire [15:0] \count$142 ;
-  wire [15:0] \count$145 ;
-  wire [15:0] \count$148 ;
-  wire [15:0] \count$151 ;
-  wire [15:0] \count$154 ;
-  wire [15:0] \count$157 ;
-  wire [15:0] \count$160 ;
-  wire [15:0] \count$163 ;
-  wire [15:0] \count$166 ;
-  wire [15:0] \count$169 ;
-  wire [15:0] \count$172 ;
-  output [15:0] count_aborted;
-  wire [15:0] count_aborted;
-  output [15:0] count_crc_word0;
-  wire [15:0] count_crc_word0;
-  output [15:0] count_crc_word1;
-  wire [15:0] count_crc_word1;
-  output [15:0] count_delay_range;
-  wire [15:0] count_delay_range;
-  output [15:0] count_lc_repeat;
-  wire [15:0] count_lc_repeat;
-  output [15:0] count_lc_skip;
-  wire [15:0] count_lc_skip;
-  output [15:0] count_lc_zero;
-  wire [15:0] count_lc_zero;
-  output [15:0] count_no_ack;
-  wire [15:0] count_no_ack;
-  output [15:0] count_no_start;
-  wire [15:0] count_no_start;
-  output [15:0] count_no_stop;
-  wire [15:0] count_no_stop;
-  output [15:0] count_overrun;
-  wire [15:0] count_overrun;
-  output [15:0] count_slo_stuck_low;
-  wire [15:0] count_slo_stuck_low;
-  output [15:0] count_spw_mismatch;
-  wire [15:0] count_spw_mismatch;
-  wire [39:0] cpw_top;
-  wire [39:0] \cpw_top$87 ;
-  wire [1:0] crc_ok;
+  input config_ok;
+  wire config_ok;
   reg [2:0] cycle_fsm_state = 3'h0;
-  wire [54:0] data0;
-  wire [39:0] data1;
-  wire [12:0] delay;
-  reg [11:0] delay_limit = 12'h000;
-  reg delay_over = 1'h0;
-  output done;
-  reg done = 1'h0;
-  wire \done$118 ;
+  input delay_over;
+  wire delay_over;
+  input early;
   wire early;
-  reg fault_aborted;
-  reg fault_bad_config;
-  reg fault_delay_range;
-  reg fault_no_ack;
-  reg fault_no_start;
-  reg fault_no_stop;
-  reg fault_slo_stuck_low;
-  wire first_rise;
-  reg [31:0] first_rise_time = 32'd0;
-  reg [8:0] frame_len_p4 = 9'h000;
+  input end_check;
+  wire end_check;
+  output fault;
+  reg fault;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -464,762 +1485,134 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
-  reg [3:0] frame_status;
-  wire [15:0] half_period;
-  wire [15:0] \half_period$67 ;
+  output [3:0] fault_status;
+  reg [3:0] fault_status;
+  output [6:0] faults;
+  reg [6:0] faults;
+  wire \faults.aborted ;
+  wire \faults.bad_config ;
+  wire \faults.delay_range ;
+  wire \faults.no_ack ;
+  wire \faults.no_start ;
+  wire \faults.no_stop ;
+  wire \faults.slo_stuck_low ;
+  reg first_clock = 1'h0;
+  input frame_done;
+  wire frame_done;
+  output idle;
   reg idle;
+  output in_clock;
   reg in_clock;
-  wire inc;
-  wire \inc$137 ;
-  wire \inc$140 ;
-  wire \inc$143 ;
-  wire \inc$146 ;
-  wire \inc$149 ;
-  wire \inc$152 ;
-  wire \inc$155 ;
-  wire \inc$158 ;
-  wire \inc$161 ;
-  wire \inc$164 ;
-  wire \inc$167 ;
-  wire \inc$170 ;
-  reg latched = 1'h0;
-  output [5:0] lc;
-  reg [5:0] lc = 6'h00;
-  wire [5:0] \lc$77 ;
-  wire [5:0] \lc$78 ;
-  wire lc_load;
-  wire [5:0] lc_next;
-  wire [5:0] \lc_next$80 ;
-  output lc_repeat;
-  reg lc_repeat = 1'h0;
-  output lc_skip;
-  reg lc_skip = 1'h0;
-  output lc_zero;
-  reg lc_zero = 1'h0;
-  output [12:0] line_delay;
-  reg [12:0] line_delay = 13'h0000;
-  wire [154:0] live;
-  wire [23:0] \live.cfg_ack_limit ;
-  wire [23:0] \live.cfg_break_time ;
-  wire [11:0] \live.cfg_delay_limit ;
-  wire \live.cfg_end_check ;
-  wire [15:0] \live.cfg_ma_half_period ;
-  wire [23:0] \live.cfg_request_period ;
-  wire \live.cfg_spw_check ;
-  wire [7:0] \live.cfg_spw_tolerance ;
-  wire [23:0] \live.cfg_timeout_limit ;
-  wire [1:0] \live.cfg_w0_crc ;
-  wire [5:0] \live.cfg_w0_data_bits ;
-  wire \live.cfg_w0_lc ;
-  wire \live.cfg_w0_nenw ;
-  wire [1:0] \live.cfg_w1_crc ;
-  wire [5:0] \live.cfg_w1_data_bits ;
-  wire \live.cfg_w1_enable ;
-  wire \live.cfg_w1_lc ;
-  wire \live.cfg_w1_nenw ;
-  wire load;
+  input locked;
   wire locked;
   reg locked_seen = 1'h0;
-  output ma;
-  wire ma;
-  wire \ma$73 ;
-  reg ma_enough = 1'h0;
-  wire match;
-  wire [1:0] ne;
-  reg no_start_expired = 1'h0;
-  reg [24:0] no_start_limit = 25'h0000000;
-  reg [31:0] now = 32'd0;
-  wire [1:0] nw;
-  output overrun;
-  wire overrun;
-  reg [23:0] period_count_p1 = 24'h000001;
-  reg period_start = 1'h1;
-  input periodic;
-  wire periodic;
+  input ma_arm;
+  wire ma_arm;
+  input ma_busy;
+  wire ma_busy;
+  input ma_enough;
+  wire ma_enough;
+  output ma_run;
+  reg ma_run;
+  input no_start_expired;
+  wire no_start_expired;
+  output receiver_clear;
   reg receiver_clear;
-  wire \repeat ;
-  reg report;
+  output report_delay;
   reg report_delay;
+  output report_frame;
   reg report_frame;
-  (* enum_base_type = "Status" *)
-  (* enum_value_0000 = "OK" *)
-  (* enum_value_0001 = "CRC_ERROR_WORD0" *)
-  (* enum_value_0010 = "CRC_ERROR_WORD1" *)
-  (* enum_value_0011 = "CRC_ERROR_BOTH" *)
-  (* enum_value_0100 = "SIGN_OF_LIFE" *)
-  (* enum_value_0101 = "SPW_MISMATCH" *)
-  (* enum_value_0110 = "NO_ACK" *)
-  (* enum_value_0111 = "NO_START" *)
-  (* enum_value_1000 = "DELAY_RANGE" *)
-  (* enum_value_1001 = "SLO_STUCK_LOW" *)
-  (* enum_value_1010 = "ABORTED" *)
-  (* enum_value_1011 = "BAD_CONFIG" *)
-  (* enum_value_1100 = "NO_STOP" *)
-  reg [3:0] report_status;
+  input request;
+  wire request;
+  output restart_timer;
+  wire restart_timer;
+  output resync;
   reg resync;
-  wire \resync$133 ;
-  wire [15:0] rises;
   input rst;
   wire rst;
-  reg run;
-  wire sample;
-  wire \sample$69 ;
-  wire second_rise;
-  wire skip;
   input slo;
   wire slo;
-  wire \slo$65 ;
-  wire \slo$66 ;
-  reg [24:0] slo_low_time_p1 = 25'h0000001;
+  input slo_stuck;
+  wire slo_stuck;
+  input slo_stuck_live;
+  wire slo_stuck_live;
+  input slots_full;
   wire slots_full;
-  wire [39:0] spw;
-  output spw_mismatch;
-  reg spw_mismatch = 1'h0;
-  input start;
-  wire start;
-  wire [15:0] start_slot;
+  input started;
   wire started;
-  reg \started$188  = 1'h0;
-  output [3:0] status;
-  reg [3:0] status = 4'h0;
+  input stop_bit;
   wire stop_bit;
+  input stopped;
   wire stopped;
-  reg stuck_latched = 1'h0;
-  reg stuck_live = 1'h0;
-  reg [16:0] target_rises = 17'h00000;
-  reg [23:0] timeout_limit = 24'h000000;
-  reg [24:0] timer = 25'h0000001;
+  output timer_clear;
   reg timer_clear;
-  output [31:0] timestamp;
-  reg [31:0] timestamp = 32'd0;
-  wire [7:0] tolerance;
-  output valid;
-  reg valid = 1'h0;
-  output word0_crc_ok;
-  reg word0_crc_ok = 1'h0;
-  reg [7:0] word0_len = 8'h00;
-  output word0_ne;
-  reg word0_ne = 1'h0;
-  output word0_nw;
-  reg word0_nw = 1'h0;
-  output [54:0] word0_position;
-  reg [54:0] word0_position = 55'h00000000000000;
-  output word1_crc_ok;
-  reg word1_crc_ok = 1'h0;
-  reg [7:0] word1_len = 8'h00;
-  output word1_ne;
-  reg word1_ne = 1'h0;
-  output word1_nw;
-  reg word1_nw = 1'h0;
-  output [39:0] word1_position;
-  reg [39:0] word1_position = 40'h0000000000;
-  wire [1:0] word_count;
-  wire [19:0] words;
-  wire [9:0] \words[0] ;
-  wire [1:0] \words[0].crc ;
-  wire [5:0] \words[0].data_bits ;
-  wire \words[0].lc ;
-  wire \words[0].nenw ;
-  wire [9:0] \words[1] ;
-  wire [1:0] \words[1].crc ;
-  wire [5:0] \words[1].data_bits ;
-  wire \words[1].lc ;
-  wire \words[1].nenw ;
-  wire zero;
-  assign config_error = ~ cfg_ok;
-  assign word_count = 1'h1 + cfg[135];
-  assign \$1  = ! cfg_request_period;
-  assign \$2  = periodic & \$1 ;
-  assign \$3  = ~ \$2 ;
-  assign \$4  = periodic & \$3 ;
-  assign \$5  = \$4  & period_start;
-  assign \$6  = start | \$5 ;
-  assign \$7  = ~ abort_cycle;
-  assign \$8  = idle & \$7 ;
-  assign \$9  = ~ \$8 ;
-  assign overrun = \$6  & \$9 ;
-  assign \$10  = cfg[135] & cfg[143];
-  assign \$11  = cfg[132] | \$10 ;
-  assign \$12  = report_frame & \$11 ;
-  assign \$13  = ~ cfg[135];
-  assign \$14  = crc_ok[1] | \$13 ;
-  assign \$15  = cfg[132] ? crc_ok[0] : \$14 ;
-  assign check = \$12  & \$15 ;
-  assign \$16  = ~ crc_ok[0];
-  assign \$17  = ~ cfg[135];
-  assign \$18  = crc_ok[1] | \$17 ;
-  assign \$19  = ~ \$18 ;
-  assign \$20  = \$16  & \$19 ;
-  assign \$21  = ~ crc_ok[0];
-  assign \$22  = ~ cfg[135];
-  assign \$23  = crc_ok[1] | \$22 ;
-  assign \$24  = ~ \$23 ;
-  assign \$25  = check & \repeat ;
-  assign \$26  = check & skip;
-  assign \$27  = \$25  | \$26 ;
-  assign \$28  = check & zero;
-  assign \$29  = \$27  | \$28 ;
-  assign \$30  = cfg[146] & cfg[135];
-  assign \$31  = ~ cfg[135];
-  assign \$32  = crc_ok[1] | \$31 ;
-  assign \$33  = crc_ok[0] & \$32 ;
-  assign \$34  = \$30  & \$33 ;
-  assign \$35  = ~ match;
-  assign \$36  = \$34  & \$35 ;
-  assign \$37  = \busy$102  | abort_cycle;
-  assign \$38  = ~ cfg_ok;
-  assign \$39  = latched & \$38 ;
-  assign \$40  = latched ? stuck_live : stuck_latched;
-  assign \$41  = ~ ma_enough;
-  assign \$42  = ~ locked_seen;
-  assign \$43  = locked & \$42 ;
-  assign \$44  = arm | \$43 ;
-  assign \$45  = \$44  | abort_cycle;
-  assign \$46  = armed & early;
-  assign \$47  = ~ locked_seen;
-  assign \$48  = armed & \$47 ;
-  assign \$49  = ~ locked;
-  assign \$50  = \$48  & \$49 ;
-  assign \$51  = \$50  & ack_expired;
-  assign \$52  = ~ locked_seen;
-  assign \$53  = locked & \$52 ;
-  assign \$54  = \$53  & delay_over;
-  assign \$55  = ~ started;
-  assign \$56  = locked_seen & \$55 ;
-  assign \$57  = no_start_expired | slots_full;
-  assign \$58  = \$56  & \$57 ;
-  assign \$59  = ~ cfg[124];
-  assign \$60  = ~ ma_enough;
-  assign \$61  = ~ cfg[124];
-  assign \$62  = ~ \busy$102 ;
-  assign \$63  = \$62  & \slo$65 ;
-  assign busy = ~ idle;
-  assign \$64  = ~ crc_ok[0];
-  assign inc = report_frame & \$64 ;
-  assign \$65  = ~ cfg[135];
-  assign \$66  = crc_ok[1] | \$65 ;
-  assign \$67  = ~ \$66 ;
-  assign \inc$137  = report_frame & \$67 ;
-  assign \$68  = check & \repeat ;
-  assign \inc$152  = report_frame & \$68 ;
-  assign \$69  = check & skip;
-  assign \inc$155  = report_frame & \$69 ;
-  assign \$70  = check & zero;
-  assign \inc$158  = report_frame & \$70 ;
-  assign \$71  = cfg[146] & cfg[135];
-  assign \$72  = ~ cfg[135];
-  assign \$73  = crc_ok[1] | \$72 ;
-  assign \$74  = crc_ok[0] & \$73 ;
-  assign \$75  = \$71  & \$74 ;
-  assign \$76  = ~ match;
-  assign \$77  = \$75  & \$76 ;
-  assign \inc$161  = report_frame & \$77 ;
-  assign \$78  = ! cycle_fsm_state;
-  assign \$79  = cycle_fsm_state == 1'h1;
-  assign \$80  = cycle_fsm_state == 2'h2;
-  assign \$81  = cycle_fsm_state == 2'h3;
-  assign \$82  = cycle_fsm_state == 3'h4;
-  assign \$83  = cycle_fsm_state == 3'h5;
-  assign \$84  = cycle_fsm_state == 3'h6;
-  assign \$85  = | live[15:1];
-  assign \$86  = | live[130:125];
-  assign \$87  = live[130:125] <= 6'h37;
-  assign \$88  = \$86  & \$87 ;
-  assign \$89  = ! live[134:133];
-  assign \$90  = live[134:133] == 1'h1;
-  assign \$91  = \$89  | \$90 ;
-  assign \$92  = live[134:133] == 2'h2;
-  assign \$93  = \$91  | \$92 ;
-  assign \$94  = \$88  & \$93 ;
-  assign \$95  = \$85  & \$94 ;
-  assign \$96  = ~ live[135];
-  assign \$97  = | live[141:136];
-  assign \$98  = live[141:136] <= 6'h28;
-  assign \$99  = \$97  & \$98 ;
-  assign \$100  = ! live[145:144];
-  assign \$101  = live[145:144] == 1'h1;
-  assign \$102  = \$100  | \$101 ;
-  assign \$103  = live[145:144] == 2'h2;
-  assign \$104  = \$102  | \$103 ;
-  assign \$105  = \$99  & \$104 ;
-  assign \$106  = \$96  | \$105 ;
-  assign \$107  = \$95  & \$106 ;
-  assign \$108  = live[135] & live[132];
-  assign \$109  = \$108  & live[143];
-  assign \$110  = ~ \$109 ;
-  assign \$111  = \$107  & \$110 ;
-  assign \$112  = ~ live[146];
-  assign \$113  = live[141:136] <= live[130:125];
-  assign \$114  = live[135] & \$113 ;
-  assign \$115  = | live[145:144];
-  assign \$116  = \$114  & \$115 ;
-  assign \$117  = \$112  | \$116 ;
-  assign \$118  = \$111  & \$117 ;
-  assign \$119  = ! live[87:64];
-  assign \$120  = \$119  ? 24'h000fa0 : live[87:64];
-  assign \$121  = ! live[111:88];
-  assign \$122  = \$121  ? 24'h001f40 : live[111:88];
-  assign \$123  = ! live[123:112];
-  assign \$124  = \$123  ? 12'hfff : live[123:112];
-  assign \$125  = ack_limit + { cfg[15:0], 1'h0 };
-  assign \$126  = now + 1'h1;
-  assign \$127  = \slo$65  | \busy$102 ;
-  assign \$128  = ~ slo_low_time_p1[24];
-  assign \$129  = slo_low_time_p1 + 1'h1;
-  assign \$130  = ~ \slo$65 ;
-  assign \$131  = ~ \busy$102 ;
-  assign \$132  = \$130  & \$131 ;
-  assign \$133  = slo_low_time_p1 >= timeout_limit;
-  assign \$134  = \$132  & \$133 ;
-  assign \$135  = ~ \slo$65 ;
-  assign \$136  = ~ \busy$102 ;
-  assign \$137  = \$135  & \$136 ;
-  assign \$138  = ! live[111:88];
-  assign \$139  = slo_low_time_p1 >= 13'h1f40;
-  assign \$140  = slo_low_time_p1 >= live[111:88];
-  assign \$141  = \$138  ? \$139  : \$140 ;
-  assign \$142  = \$137  & \$141 ;
-  assign \$143  = & timer;
-  assign \$144  = timer + 1'h1;
-  assign \$145  = \$143  ? { 1'h0, timer } : \$144 ;
-  assign \$146  = timer_clear ? 26'h0000001 : \$145 ;
-  assign \$147  = ~ timer_clear;
-  assign \$148  = ! live[63:40];
-  assign \$149  = timer >= 12'hfa0;
-  assign \$150  = timer >= live[63:40];
-  assign \$151  = \$148  ? \$149  : \$150 ;
-  assign \$152  = \$147  & \$151 ;
-  assign \$153  = ~ periodic;
-  assign \$154  = ! cfg_request_period;
-  assign \$155  = periodic & \$154 ;
-  assign \$156  = \$153  | \$155 ;
-  assign \$157  = period_count_p1 >= cfg_request_period;
-  assign \$158  = \$156  | \$157 ;
-  assign \$159  = period_count_p1 + 1'h1;
-  assign \$161  = words[5:0] + \$160 ;
-  assign \$162  = cfg[135] ? word1_len : 8'h00;
-  assign \$163  = word0_len + \$162 ;
-  assign \$165  = words[15:10] + \$164 ;
-  assign \$166  = start_slot + frame_len_p4;
-  assign \$167  = rises >= target_rises;
-  assign \$168  = \started$188  & \$167 ;
-  assign \$169  = ~ receiver_clear;
-  assign \$170  = \$168  & \$169 ;
-  assign \$171  = ~ locked_seen;
-  assign \$172  = locked & \$171 ;
-  assign \$173  = arm | \$172 ;
-  assign \$174  = ~ \$173 ;
-  assign \$175  = in_clock & \$174 ;
-  assign \$176  = timer >= ack_limit;
-  assign \$177  = \$175  & \$176 ;
-  assign \$178  = ~ locked_seen;
-  assign \$179  = locked & \$178 ;
-  assign \$180  = arm | \$179 ;
-  assign \$181  = ~ \$180 ;
-  assign \$182  = in_clock & \$181 ;
-  assign \$183  = timer >= no_start_limit;
-  assign \$184  = \$182  & \$183 ;
-  assign \$185  = delay > delay_limit;
-  assign \$186  = \busy$102  | abort_cycle;
-  assign \$187  = ! cfg_request_period;
-  assign \$188  = periodic & \$187 ;
-  assign \$189  = ~ \$188 ;
-  assign \$190  = periodic & \$189 ;
-  assign \$191  = \$190  & period_start;
-  assign \$192  = start | \$191 ;
-  assign \$193  = ! cfg_request_period;
-  assign \$194  = periodic & \$193 ;
-  assign \$195  = \$192  | \$194 ;
-  assign \$196  = ~ cfg_ok;
-  assign \$197  = latched & \$196 ;
-  assign \$198  = latched ? stuck_live : stuck_latched;
-  assign \$199  = ~ locked_seen;
-  assign \$200  = locked & \$199 ;
-  assign \$201  = armed & early;
-  assign \$202  = ~ locked_seen;
-  assign \$203  = armed & \$202 ;
-  assign \$204  = ~ locked;
-  assign \$205  = \$203  & \$204 ;
-  assign \$206  = \$205  & ack_expired;
-  assign \$207  = ~ locked_seen;
-  assign \$208  = locked & \$207 ;
-  assign \$209  = \$208  & delay_over;
-  assign \$210  = ~ started;
-  assign \$211  = locked_seen & \$210 ;
-  assign \$212  = no_start_expired | slots_full;
-  assign \$213  = \$211  & \$212 ;
-  assign \$214  = ~ cfg[124];
-  assign \$215  = ~ \busy$102 ;
-  assign \$216  = ~ \busy$102 ;
-  assign \$217  = \$216  & \slo$65 ;
-  assign \$218  = ! frame_status;
-  assign \$219  = report_frame & \$218 ;
-  assign \$220  = check & \repeat ;
-  assign \$221  = check & skip;
-  assign \$222  = check & zero;
-  assign \$223  = ~ cfg[135];
-  assign \$224  = crc_ok[1] | \$223 ;
-  assign \$225  = cfg[146] & cfg[135];
-  assign \$226  = ~ cfg[135];
-  assign \$227  = crc_ok[1] | \$226 ;
-  assign \$228  = crc_ok[0] & \$227 ;
-  assign \$229  = \$225  & \$228 ;
-  assign \$230  = ~ match;
-  assign \$231  = \$229  & \$230 ;
+  assign \$39  = locked & \$38 ;
+  assign \$40  = armed & early;
+  assign \$41  = ~ locked_seen;
+  assign \$42  = armed & \$41 ;
+  assign \$43  = ~ locked;
+  assign \$44  = \$42  & \$43 ;
+  assign \$45  = \$44  & ack_expired;
+  assign \$46  = ~ locked_seen;
+  assign \$47  = locked & \$46 ;
+  assign \$48  = \$47  & delay_over;
+  assign \$49  = ~ started;
+  assign \$50  = locked_seen & \$49 ;
+  assign \$51  = no_start_expired | slots_full;
+  assign \$52  = \$50  & \$51 ;
+  assign \$53  = ~ end_check;
+  assign \$54  = ~ ma_busy;
+  assign \$55  = ~ ma_busy;
+  assign \$56  = \$55  & slo;
   always @(posedge clk)
-    cfg_ok <= \$232 ;
+    first_clock <= \$57 ;
   always @(posedge clk)
-    cfg <= \$233 ;
+    cycle_fsm_state <= \$58 ;
   always @(posedge clk)
-    ack_limit <= \$234 ;
+    armed <= \$59 ;
   always @(posedge clk)
-    timeout_limit <= \$235 ;
-  always @(posedge clk)
-    delay_limit <= \$236 ;
-  always @(posedge clk)
-    no_start_limit <= \$237 ;
-  always @(posedge clk)
-    now <= \$238 ;
-  always @(posedge clk)
-    first_rise_time <= \$239 ;
-  always @(posedge clk)
-    slo_low_time_p1 <= \$240 ;
-  always @(posedge clk)
-    stuck_latched <= \$241 ;
-  always @(posedge clk)
-    stuck_live <= \$242 ;
-  always @(posedge clk)
-    latched <= \$243 ;
-  always @(posedge clk)
-    timer <= \$244 ;
-  always @(posedge clk)
-    break_over <= \$245 ;
-  always @(posedge clk)
-    period_count_p1 <= \$246 ;
-  always @(posedge clk)
-    period_start <= \$247 ;
-  always @(posedge clk)
-    word0_len <= \$248 ;
-  always @(posedge clk)
-    frame_len_p4 <= \$249 ;
-  always @(posedge clk)
-    word1_len <= \$250 ;
-  always @(posedge clk)
-    target_rises <= \$251 ;
-  always @(posedge clk)
-    \started$188  <= \$252 ;
-  always @(posedge clk)
-    ma_enough <= \$253 ;
-  always @(posedge clk)
-    ack_expired <= \$254 ;
-  always @(posedge clk)
-    no_start_expired <= \$255 ;
-  always @(posedge clk)
-    delay_over <= \$256 ;
-  always @(posedge clk)
-    cycle_fsm_state <= \$257 ;
-  always @(posedge clk)
-    armed <= \$258 ;
-  always @(posedge clk)
-    locked_seen <= \$259 ;
-  always @(posedge clk)
-    done <= \$260 ;
-  always @(posedge clk)
-    valid <= \$261 ;
-  always @(posedge clk)
-    status <= \$262 ;
-  always @(posedge clk)
-    line_delay <= \$263 ;
-  always @(posedge clk)
-    timestamp <= \$264 ;
-  always @(posedge clk)
-    cds <= \$265 ;
-  always @(posedge clk)
-    lc <= \$266 ;
-  always @(posedge clk)
-    lc_repeat <= \$267 ;
-  always @(posedge clk)
-    lc_skip <= \$268 ;
-  always @(posedge clk)
-    lc_zero <= \$269 ;
-  always @(posedge clk)
-    word0_position <= \$270 ;
-  always @(posedge clk)
-    word0_ne <= \$271 ;
-  always @(posedge clk)
-    word0_nw <= \$272 ;
-  always @(posedge clk)
-    word0_crc_ok <= \$273 ;
-  always @(posedge clk)
-    word1_position <= \$274 ;
-  always @(posedge clk)
-    word1_ne <= \$275 ;
-  always @(posedge clk)
-    word1_nw <= \$276 ;
-  always @(posedge clk)
-    word1_crc_ok <= \$277 ;
-  always @(posedge clk)
-    spw_mismatch <= \$278 ;
-  \biss_master.count_aborted$212  \count_aborted$212  (
-    .clear(clear_counters),
-    .clk(clk),
-    .count(count_aborted),
-    .inc(fault_aborted),
-    .rst(rst)
-  );
-  \biss_master.count_crc_word0$201  \count_crc_word0$201  (
-    .clear(clear_counters),
-    .clk(clk),
-    .count(count_crc_word0),
-    .inc(inc),
-    .rst(rst)
-  );
-  \biss_master.count_crc_word1$202  \count_crc_word1$202  (
-    .clear(clear_counters),
-    .clk(clk),
-    .count(count_crc_word1),
-    .inc(\inc$137 ),
-    .rst(rst)
-  );
-  \biss_master.count_delay_range$205  \count_delay_range$205  (
-    .clear(clear_counters),
-    .clk(clk),
-    .count(count_delay_range),
-    .inc(fault_delay_range),
-    .rst(rst)
-  );
-  \biss_master.count_lc_repeat$207  \count_lc_repeat$207  (
-    .clear(clear_counters),
-    .clk(clk),
-    .count(count_lc_repeat),
-    .inc(\inc$152 ),
-    .rst(rst)
-  );
-  \biss_master.count_lc_skip$208  \count_lc_skip$208  (
-    .clear(clear_counters),
-    .clk(clk),
-    .count(count_lc_skip),
-    .inc(\inc$155 ),
-    .rst(rst)
-  );
-  \biss_master.count_lc_zero$209  \count_lc_zero$209  (
-    .clear(clear_counters),
-    .clk(clk),
-    .count(count_lc_zero),
-    .inc(\inc$158 ),
-    .rst(rst)
-  );
-  \biss_master.count_no_ack$203  \count_no_ack$203  (
-    .clear(clear_counters),
-    .clk(clk),
-    .count(count_no_ack),
-    .inc(fault_no_ack),
-    .rst(rst)
-  );
-  \biss_master.count_no_start$204  \count_no_start$204  (
-    .clear(clear_counters),
-    .clk(clk),
-    .count(count_no_start),
-    .inc(fault_no_start),
-    .rst(rst)
-  );
-  \biss_master.count_no_stop$213  \count_no_stop$213  (
-    .clear(clear_counters),
-    .clk(clk),
-    .count(count_no_stop),
-    .inc(fault_no_stop),
-    .rst(rst)
-  );
-  \biss_master.count_overrun$211  \count_overrun$211  (
-    .clear(clear_counters),
-    .clk(clk),
-    .count(count_overrun),
-    .inc(overrun),
-    .rst(rst)
-  );
-  \biss_master.count_slo_stuck_low$206  \count_slo_stuck_low$206  (
-    .clear(clear_counters),
-    .clk(clk),
-    .count(count_slo_stuck_low),
-    .inc(fault_slo_stuck_low),
-    .rst(rst)
-  );
-  \biss_master.count_spw_mismatch$210  \count_spw_mismatch$210  (
-    .clear(clear_counters),
-    .clk(clk),
-    .count(count_spw_mismatch),
-    .inc(\inc$161 ),
-    .rst(rst)
-  );
-  \biss_master.decoder  decoder (
-    .\bit (\slo$65 ),
-    .cds(\cds$191 ),
-    .clk(clk),
-    .cpw_top(cpw_top),
-    .crc_ok(crc_ok),
-    .data0(data0),
-    .data1(spw),
-    .done(\done$118 ),
-    .lc(\lc$77 ),
-    .lc_load(load),
-    .ne(ne),
-    .nw(nw),
-    .receiver_clear(receiver_clear),
-    .rst(rst),
-    .sample(sample),
-    .slots_full(slots_full),
-    .start_slot(start_slot),
-    .started(started),
-    .stop_bit(stop_bit),
-    .stopped(stopped),
-    .word_count(word_count),
-    .words(words)
-  );
-  \biss_master.ma_clock  ma_clock (
-    .busy(\busy$102 ),
-    .clk(clk),
-    .first_rise(first_rise),
-    .half_period(cfg[15:0]),
-    .ma(ma),
-    .rises(rises),
-    .rst(rst),
-    .run(run),
-    .second_rise(arm)
-  );
-  \biss_master.sampler  sampler (
-    .arm(arm),
-    .clk(clk),
-    .delay(delay),
-    .early(early),
-    .half_period(cfg[15:0]),
-    .locked(locked),
-    .receiver_clear(receiver_clear),
-    .rst(rst),
-    .sample(sample),
-    .slo(\slo$65 )
-  );
-  \biss_master.sign_of_life  sign_of_life (
-    .check(check),
-    .clk(clk),
-    .is_zero(zero),
-    .lc(\lc$77 ),
-    .load(load),
-    .\port$1179$0 (\slo$65 ),
-    .\repeat (\repeat ),
-    .resync(resync),
-    .rst(rst),
-    .skip(skip)
-  );
-  \biss_master.slo_sync  slo_sync (
-    .clk(clk),
-    .rst(rst),
-    .slo(slo),
-    .stage1(\slo$65 )
-  );
-  \biss_master.spw_check  spw_check (
-    .bits(cfg[141:136]),
-    .clk(clk),
-    .cpw_top(cpw_top),
-    .match(match),
-    .rst(rst),
-    .spw(spw),
-    .\tolerance$8 (cfg[154:147])
-  );
+    locked_seen <= \$60 ;
+  assign \$1  = ~ locked_seen;
+  assign \$2  = locked & \$1 ;
+  assign restart_timer = ma_arm | \$2 ;
+  assign \$3  = ma_busy | abort;
+  assign \$4  = ~ config_ok;
+  assign \$5  = first_clock & \$4 ;
+  assign \$6  = first_clock ? slo_stuck_live : slo_stuck;
+  assign \$7  = ~ ma_enough;
+  assign \$8  = restart_timer | abort;
+  assign \$9  = armed & early;
+  assign \$10  = ~ locked_seen;
+  assign \$11  = armed & \$10 ;
+  assign \$12  = ~ locked;
+  assign \$13  = \$11  & \$12 ;
+  assign \$14  = \$13  & ack_expired;
+  assign \$15  = ~ locked_seen;
+  assign \$16  = locked & \$15 ;
+  assign \$17  = \$16  & delay_over;
+  assign \$18  = ~ started;
+  assign \$19  = locked_seen & \$18 ;
+  assign \$20  = no_start_expired | slots_full;
+  assign \$21  = \$19  & \$20 ;
+  assign \$22  = ~ end_check;
+  assign \$23  = ~ ma_enough;
+  assign \$24  = ~ end_check;
+  assign \$25  = ~ ma_busy;
+  assign \$26  = \$25  & slo;
+  assign \$27  = ! cycle_fsm_state;
+  assign \$28  = cycle_fsm_state == 1'h1;
+  assign \$29  = cycle_fsm_state == 2'h2;
+  assign \$30  = cycle_fsm_state == 2'h3;
+  assign \$31  = cycle_fsm_state == 3'h4;
+  assign \$32  = cycle_fsm_state == 3'h5;
+  assign \$33  = cycle_fsm_state == 3'h6;
+  assign \$34  = ma_busy | abort;
+  assign \$35  = ~ config_ok;
+  assign \$36  = first_clock & \$35 ;
+  assign \$37  = first_clock ? slo_stuck_live : slo_stuck;
+  assign \$38  = ~ locked_seen;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    (* full_case = 32'd1 *)
-    casez (words[9:6])
-      4'h0:
-          \$160  = 8'h04;
-      4'h1:
-          \$160  = 8'h06;
-      4'h2:
-          \$160  = 8'h0a;
-      4'h3:
-          \$160  = 8'h0c;
-      4'h4:
-          \$160  = 8'h0a;
-      4'h5:
-          \$160  = 8'h0c;
-      4'h6:
-          \$160  = 8'h10;
-      4'h7:
-          \$160  = 8'h12;
-      4'h8:
-          \$160  = 8'h14;
-      4'h9:
-          \$160  = 8'h16;
-      4'ha:
-          \$160  = 8'h1a;
-      4'hb:
-          \$160  = 8'h1c;
-      4'hc:
-          \$160  = 8'h04;
-      4'hd:
-          \$160  = 8'h06;
-      4'he:
-          \$160  = 8'h0a;
-      4'hf:
-          \$160  = 8'h0c;
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    (* full_case = 32'd1 *)
-    casez (words[19:16])
-      4'h0:
-          \$164  = 8'h00;
-      4'h1:
-          \$164  = 8'h02;
-      4'h2:
-          \$164  = 8'h06;
-      4'h3:
-          \$164  = 8'h08;
-      4'h4:
-          \$164  = 8'h06;
-      4'h5:
-          \$164  = 8'h08;
-      4'h6:
-          \$164  = 8'h0c;
-      4'h7:
-          \$164  = 8'h0e;
-      4'h8:
-          \$164  = 8'h10;
-      4'h9:
-          \$164  = 8'h12;
-      4'ha:
-          \$164  = 8'h16;
-      4'hb:
-          \$164  = 8'h18;
-      4'hc:
-          \$164  = 8'h00;
-      4'hd:
-          \$164  = 8'h02;
-      4'he:
-          \$164  = 8'h06;
-      4'hf:
-          \$164  = 8'h08;
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    (* full_case = 32'd1 *)
-    if (\$20 ) begin
-      frame_status = 4'h3;
-    end else if (\$21 ) begin
-      frame_status = 4'h1;
-    end else if (\$24 ) begin
-      frame_status = 4'h2;
-    end else if (\$29 ) begin
-      frame_status = 4'h4;
-    end else if (\$36 ) begin
-      frame_status = 4'h5;
-    end else begin
-      frame_status = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     receiver_clear = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -1231,7 +1624,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     resync = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -1239,11 +1632,11 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     timer_clear = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
-          if (\$37 ) begin
+          if (\$3 ) begin
             timer_clear = 1'h1;
           end
       3'h1:
@@ -1251,14 +1644,14 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
       3'h2:
           timer_clear = 1'h1;
       3'h3:
-          if (\$45 ) begin
+          if (\$8 ) begin
             timer_clear = 1'h1;
           end
       3'h4:
-          if (abort_cycle) begin
+          if (abort) begin
             timer_clear = 1'h1;
           end else if (stopped) begin
-            if (\$61 ) begin
+            if (\$24 ) begin
             end else if (stop_bit) begin
               timer_clear = 1'h1;
             end
@@ -1266,16 +1659,16 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
       3'h5:
           /* empty */;
       3'h6:
-          if (abort_cycle) begin
+          if (abort) begin
             timer_clear = 1'h1;
-          end else if (\$63 ) begin
-          end else if (stuck_latched) begin
+          end else if (\$26 ) begin
+          end else if (slo_stuck) begin
             timer_clear = 1'h1;
           end
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     idle = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -1285,194 +1678,164 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    report = 1'h0;
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    fault = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
           /* empty */;
       3'h1:
           /* empty */;
       3'h2:
-          if (\$39 ) begin
-            report = 1'h1;
-          end else if (abort_cycle) begin
-            report = 1'h1;
-          end else if (\slo$65 ) begin
-          end else if (\$40 ) begin
-            report = 1'h1;
+          if (\$5 ) begin
+            fault = 1'h1;
+          end else if (abort) begin
+            fault = 1'h1;
+          end else if (slo) begin
+          end else if (\$6 ) begin
+            fault = 1'h1;
           end
       3'h3:
-          if (abort_cycle) begin
-            report = 1'h1;
-          end else if (\done$118 ) begin
-            if (\$59 ) begin
-              report = 1'h1;
-            end
-          end else if (\$46 ) begin
-            report = 1'h1;
-          end else if (\$51 ) begin
-            report = 1'h1;
-          end else if (\$54 ) begin
-            report = 1'h1;
-          end else if (\$58 ) begin
-            report = 1'h1;
+          if (abort) begin
+            fault = 1'h1;
+          end else if (frame_done) begin
+          end else if (\$9 ) begin
+            fault = 1'h1;
+          end else if (\$14 ) begin
+            fault = 1'h1;
+          end else if (\$17 ) begin
+            fault = 1'h1;
+          end else if (\$21 ) begin
+            fault = 1'h1;
           end
       3'h4:
-          if (abort_cycle) begin
-            if (cfg[124]) begin
-              report = 1'h1;
+          if (abort) begin
+            if (end_check) begin
+              fault = 1'h1;
             end
           end else if (stopped) begin
-            if (\$61 ) begin
+            if (\$24 ) begin
             end else if (stop_bit) begin
-              report = 1'h1;
+              fault = 1'h1;
             end
           end
       3'h5:
           /* empty */;
       3'h6:
-          if (abort_cycle) begin
-            report = 1'h1;
-          end else if (\$63 ) begin
-            report = 1'h1;
-          end else if (stuck_latched) begin
-            report = 1'h1;
+          if (abort) begin
+            fault = 1'h1;
+          end else if (\$26 ) begin
+          end else if (slo_stuck) begin
+            fault = 1'h1;
           end
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    report_status = 4'h0;
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    fault_status = 4'h0;
     casez (cycle_fsm_state)
       3'h0:
           /* empty */;
       3'h1:
           /* empty */;
       3'h2:
-          if (\$39 ) begin
-            report_status = 4'hb;
-          end else if (abort_cycle) begin
-            report_status = 4'ha;
-          end else if (\slo$65 ) begin
-          end else if (\$40 ) begin
-            report_status = 4'h9;
+          if (\$5 ) begin
+            fault_status = 4'hb;
+          end else if (abort) begin
+            fault_status = 4'ha;
+          end else if (slo) begin
+          end else if (\$6 ) begin
+            fault_status = 4'h9;
           end
       3'h3:
-          if (abort_cycle) begin
-            report_status = 4'ha;
-          end else if (\done$118 ) begin
-            if (\$59 ) begin
-              report_status = frame_status;
-            end
-          end else if (\$46 ) begin
-            report_status = 4'h8;
-          end else if (\$51 ) begin
-            report_status = 4'h6;
-          end else if (\$54 ) begin
-            report_status = 4'h8;
-          end else if (\$58 ) begin
-            report_status = 4'h7;
+          if (abort) begin
+            fault_status = 4'ha;
+          end else if (frame_done) begin
+          end else if (\$9 ) begin
+            fault_status = 4'h8;
+          end else if (\$14 ) begin
+            fault_status = 4'h6;
+          end else if (\$17 ) begin
+            fault_status = 4'h8;
+          end else if (\$21 ) begin
+            fault_status = 4'h7;
           end
       3'h4:
-          if (abort_cycle) begin
-            if (cfg[124]) begin
-              report_status = 4'ha;
+          if (abort) begin
+            if (end_check) begin
+              fault_status = 4'ha;
             end
           end else if (stopped) begin
-            if (\$61 ) begin
+            if (\$24 ) begin
             end else if (stop_bit) begin
-              report_status = 4'hc;
+              fault_status = 4'hc;
             end
           end
       3'h5:
           /* empty */;
       3'h6:
-          if (abort_cycle) begin
-            report_status = 4'ha;
-          end else if (\$63 ) begin
-            report_status = frame_status;
-          end else if (stuck_latched) begin
-            report_status = 4'h9;
+          if (abort) begin
+            fault_status = 4'ha;
+          end else if (\$26 ) begin
+          end else if (slo_stuck) begin
+            fault_status = 4'h9;
           end
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    fault_bad_config = 1'h0;
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    faults = 7'h00;
     casez (cycle_fsm_state)
       3'h0:
           /* empty */;
       3'h1:
           /* empty */;
       3'h2:
-          if (\$39 ) begin
-            fault_bad_config = 1'h1;
-          end
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    fault_aborted = 1'h0;
-    casez (cycle_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          if (\$39 ) begin
-          end else if (abort_cycle) begin
-            fault_aborted = 1'h1;
+          if (\$5 ) begin
+            faults[5] = 1'h1;
+          end else if (abort) begin
+            faults[4] = 1'h1;
+          end else if (slo) begin
+          end else if (\$6 ) begin
+            faults[3] = 1'h1;
           end
       3'h3:
-          if (abort_cycle) begin
-            fault_aborted = 1'h1;
+          if (abort) begin
+            faults[4] = 1'h1;
+          end else if (frame_done) begin
+          end else if (\$9 ) begin
+            faults[2] = 1'h1;
+          end else if (\$14 ) begin
+            faults[0] = 1'h1;
+          end else if (\$17 ) begin
+            faults[2] = 1'h1;
+          end else if (\$21 ) begin
+            faults[1] = 1'h1;
           end
       3'h4:
-          if (abort_cycle) begin
-            if (cfg[124]) begin
-              fault_aborted = 1'h1;
+          if (abort) begin
+            if (end_check) begin
+              faults[4] = 1'h1;
+            end
+          end else if (stopped) begin
+            if (\$24 ) begin
+            end else if (stop_bit) begin
+              faults[6] = 1'h1;
             end
           end
       3'h5:
           /* empty */;
       3'h6:
-          if (abort_cycle) begin
-            fault_aborted = 1'h1;
+          if (abort) begin
+            faults[4] = 1'h1;
+          end else if (\$26 ) begin
+          end else if (slo_stuck) begin
+            faults[3] = 1'h1;
           end
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    fault_slo_stuck_low = 1'h0;
-    casez (cycle_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          if (\$39 ) begin
-          end else if (abort_cycle) begin
-          end else if (\slo$65 ) begin
-          end else if (\$40 ) begin
-            fault_slo_stuck_low = 1'h1;
-          end
-      3'h3:
-          /* empty */;
-      3'h4:
-          /* empty */;
-      3'h5:
-          /* empty */;
-      3'h6:
-          if (abort_cycle) begin
-          end else if (\$63 ) begin
-          end else if (stuck_latched) begin
-            fault_slo_stuck_low = 1'h1;
-          end
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    run = 1'h0;
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    ma_run = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
           /* empty */;
@@ -1481,13 +1844,13 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
       3'h2:
           /* empty */;
       3'h3:
-          run = \$41 ;
+          ma_run = \$7 ;
       3'h4:
-          run = \$60 ;
+          ma_run = \$23 ;
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     in_clock = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -1501,7 +1864,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     report_frame = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -1511,9 +1874,9 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
       3'h2:
           /* empty */;
       3'h3:
-          if (abort_cycle) begin
-          end else if (\done$118 ) begin
-            if (\$59 ) begin
+          if (abort) begin
+          end else if (frame_done) begin
+            if (\$22 ) begin
               report_frame = 1'h1;
             end
           end
@@ -1522,14 +1885,14 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
       3'h5:
           /* empty */;
       3'h6:
-          if (abort_cycle) begin
-          end else if (\$63 ) begin
+          if (abort) begin
+          end else if (\$26 ) begin
             report_frame = 1'h1;
           end
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     report_delay = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -1539,14 +1902,14 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
       3'h2:
           /* empty */;
       3'h3:
-          if (abort_cycle) begin
-          end else if (\done$118 ) begin
-            if (\$59 ) begin
+          if (abort) begin
+          end else if (frame_done) begin
+            if (\$22 ) begin
               report_delay = 1'h1;
             end
-          end else if (\$46 ) begin
-          end else if (\$51 ) begin
-          end else if (\$54 ) begin
+          end else if (\$9 ) begin
+          end else if (\$14 ) begin
+          end else if (\$17 ) begin
             report_delay = 1'h1;
           end
       3'h4:
@@ -1554,779 +1917,380 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
       3'h5:
           /* empty */;
       3'h6:
-          if (abort_cycle) begin
-          end else if (\$63 ) begin
+          if (abort) begin
+          end else if (\$26 ) begin
             report_delay = 1'h1;
           end
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    fault_delay_range = 1'h0;
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$57  = idle;
+    if (rst) begin
+      \$57  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$58  = cycle_fsm_state;
     casez (cycle_fsm_state)
       3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h3:
-          if (abort_cycle) begin
-          end else if (\done$118 ) begin
-          end else if (\$46 ) begin
-            fault_delay_range = 1'h1;
-          end else if (\$51 ) begin
-          end else if (\$54 ) begin
-            fault_delay_range = 1'h1;
-          end
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    fault_no_ack = 1'h0;
-    casez (cycle_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h3:
-          if (abort_cycle) begin
-          end else if (\done$118 ) begin
-          end else if (\$46 ) begin
-          end else if (\$51 ) begin
-            fault_no_ack = 1'h1;
-          end
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    fault_no_start = 1'h0;
-    casez (cycle_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h3:
-          if (abort_cycle) begin
-          end else if (\done$118 ) begin
-          end else if (\$46 ) begin
-          end else if (\$51 ) begin
-          end else if (\$54 ) begin
-          end else if (\$58 ) begin
-            fault_no_start = 1'h1;
-          end
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    fault_no_stop = 1'h0;
-    casez (cycle_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h3:
-          /* empty */;
-      3'h4:
-          if (abort_cycle) begin
-          end else if (stopped) begin
-            if (\$61 ) begin
-            end else if (stop_bit) begin
-              fault_no_stop = 1'h1;
-            end
-          end
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$232  = \$118 ;
-    if (rst) begin
-      \$232  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$233  = cfg;
-    if (idle) begin
-      \$233  = live;
-    end
-    if (rst) begin
-      \$233  = 155'h000000000000000000000000000000000000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$234  = ack_limit;
-    if (idle) begin
-      \$234  = \$120 ;
-    end
-    if (rst) begin
-      \$234  = 24'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$235  = timeout_limit;
-    if (idle) begin
-      \$235  = \$122 ;
-    end
-    if (rst) begin
-      \$235  = 24'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$236  = delay_limit;
-    if (idle) begin
-      \$236  = \$124 ;
-    end
-    if (rst) begin
-      \$236  = 12'h000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$237  = \$125 ;
-    if (rst) begin
-      \$237  = 25'h0000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$238  = \$126 [31:0];
-    if (rst) begin
-      \$238  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$239  = first_rise_time;
-    if (first_rise) begin
-      \$239  = now;
-    end
-    if (rst) begin
-      \$239  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$240  = slo_low_time_p1;
-    if (\$127 ) begin
-      \$240  = 25'h0000001;
-    end else if (\$128 ) begin
-      \$240  = \$129 [24:0];
-    end
-    if (rst) begin
-      \$240  = 25'h0000001;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$241  = \$134 ;
-    if (rst) begin
-      \$241  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$242  = \$142 ;
-    if (rst) begin
-      \$242  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$243  = idle;
-    if (rst) begin
-      \$243  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$244  = \$146 [24:0];
-    if (rst) begin
-      \$244  = 25'h0000001;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$245  = \$152 ;
-    if (rst) begin
-      \$245  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    (* full_case = 32'd1 *)
-    if (\$158 ) begin
-      \$246  = 24'h000001;
-    end else begin
-      \$246  = \$159 [23:0];
-    end
-    if (rst) begin
-      \$246  = 24'h000001;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    (* full_case = 32'd1 *)
-    if (\$158 ) begin
-      \$247  = 1'h1;
-    end else begin
-      \$247  = 1'h0;
-    end
-    if (rst) begin
-      \$247  = 1'h1;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$248  = \$161 [7:0];
-    if (rst) begin
-      \$248  = 8'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$249  = \$163 ;
-    if (rst) begin
-      \$249  = 9'h000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$250  = \$165 [7:0];
-    if (rst) begin
-      \$250  = 8'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$251  = \$166 ;
-    if (rst) begin
-      \$251  = 17'h00000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$252  = started;
-    if (rst) begin
-      \$252  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$253  = \$170 ;
-    if (rst) begin
-      \$253  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$254  = \$177 ;
-    if (rst) begin
-      \$254  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$255  = \$184 ;
-    if (rst) begin
-      \$255  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$256  = \$185 ;
-    if (rst) begin
-      \$256  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$257  = cycle_fsm_state;
-    casez (cycle_fsm_state)
-      3'h0:
-          if (\$186 ) begin
+          if (\$34 ) begin
           end else if (break_over) begin
-            \$257  = 3'h1;
+            \$58  = 3'h1;
           end
       3'h1:
-          if (abort_cycle) begin
-            \$257  = 3'h0;
-          end else if (\$195 ) begin
-            \$257  = 3'h2;
+          if (abort) begin
+            \$58  = 3'h0;
+          end else if (request) begin
+            \$58  = 3'h2;
           end
       3'h2:
-          if (\$197 ) begin
-            \$257  = 3'h1;
-            if (abort_cycle) begin
-              \$257  = 3'h0;
+          if (\$36 ) begin
+            \$58  = 3'h1;
+            if (abort) begin
+              \$58  = 3'h0;
             end
-          end else if (abort_cycle) begin
-            \$257  = 3'h0;
-          end else if (\slo$65 ) begin
-            \$257  = 3'h3;
-          end else if (\$198 ) begin
-            \$257  = 3'h0;
+          end else if (abort) begin
+            \$58  = 3'h0;
+          end else if (slo) begin
+            \$58  = 3'h3;
+          end else if (\$37 ) begin
+            \$58  = 3'h0;
           end
       3'h3:
-          if (abort_cycle) begin
-            \$257  = 3'h0;
-          end else if (\done$118 ) begin
-            \$257  = 3'h4;
-          end else if (\$201 ) begin
-            \$257  = 3'h0;
-          end else if (\$206 ) begin
-            \$257  = 3'h0;
-          end else if (\$209 ) begin
-            \$257  = 3'h0;
-          end else if (\$213 ) begin
-            \$257  = 3'h0;
+          if (abort) begin
+            \$58  = 3'h0;
+          end else if (frame_done) begin
+            \$58  = 3'h4;
+          end else if (\$40 ) begin
+            \$58  = 3'h0;
+          end else if (\$45 ) begin
+            \$58  = 3'h0;
+          end else if (\$48 ) begin
+            \$58  = 3'h0;
+          end else if (\$52 ) begin
+            \$58  = 3'h0;
           end
       3'h4:
-          if (abort_cycle) begin
+          if (abort) begin
             (* full_case = 32'd1 *)
-            if (cfg[124]) begin
-              \$257  = 3'h0;
+            if (end_check) begin
+              \$58  = 3'h0;
             end else begin
-              \$257  = 3'h0;
+              \$58  = 3'h0;
             end
           end else if (stopped) begin
             (* full_case = 32'd1 *)
-            if (\$214 ) begin
-              \$257  = 3'h5;
+            if (\$53 ) begin
+              \$58  = 3'h5;
             end else if (stop_bit) begin
-              \$257  = 3'h0;
+              \$58  = 3'h0;
             end else begin
-              \$257  = 3'h6;
+              \$58  = 3'h6;
             end
           end
       3'h5:
-          if (\$215 ) begin
-            \$257  = 3'h1;
+          if (\$54 ) begin
+            \$58  = 3'h1;
           end
       3'h6:
-          if (abort_cycle) begin
-            \$257  = 3'h0;
-          end else if (\$217 ) begin
-            \$257  = 3'h1;
-          end else if (stuck_latched) begin
-            \$257  = 3'h0;
+          if (abort) begin
+            \$58  = 3'h0;
+          end else if (\$56 ) begin
+            \$58  = 3'h1;
+          end else if (slo_stuck) begin
+            \$58  = 3'h0;
           end
     endcase
     if (rst) begin
-      \$257  = 3'h0;
+      \$58  = 3'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$258  = armed;
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$59  = armed;
     casez (cycle_fsm_state)
       3'h0:
           /* empty */;
       3'h1:
           /* empty */;
       3'h2:
-          \$258  = 1'h0;
+          \$59  = 1'h0;
       3'h3:
-          if (arm) begin
-            \$258  = 1'h1;
+          if (ma_arm) begin
+            \$59  = 1'h1;
           end
     endcase
     if (rst) begin
-      \$258  = 1'h0;
+      \$59  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$259  = locked_seen;
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$60  = locked_seen;
     casez (cycle_fsm_state)
       3'h0:
           /* empty */;
       3'h1:
           /* empty */;
       3'h2:
-          \$259  = 1'h0;
+          \$60  = 1'h0;
       3'h3:
-          if (\$200 ) begin
-            \$259  = 1'h1;
+          if (\$39 ) begin
+            \$60  = 1'h1;
           end
     endcase
     if (rst) begin
-      \$259  = 1'h0;
+      \$60  = 1'h0;
     end
   end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$260  = report;
-    if (rst) begin
-      \$260  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$261  = \$219 ;
-    if (rst) begin
-      \$261  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$262  = status;
-    if (report) begin
-      \$262  = report_status;
-    end
-    if (rst) begin
-      \$262  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$263  = line_delay;
-    if (report_delay) begin
-      \$263  = delay;
-    end
-    if (rst) begin
-      \$263  = 13'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$264  = timestamp;
-    if (report_frame) begin
-      \$264  = first_rise_time;
-    end
-    if (rst) begin
-      \$264  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$265  = cds;
-    if (report_frame) begin
-      \$265  = \cds$191 ;
-    end
-    if (rst) begin
-      \$265  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$266  = lc;
-    if (report_frame) begin
-      \$266  = \lc$77 ;
-    end
-    if (rst) begin
-      \$266  = 6'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$267  = lc_repeat;
-    if (report_frame) begin
-      \$267  = \$220 ;
-    end
-    if (rst) begin
-      \$267  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$268  = lc_skip;
-    if (report_frame) begin
-      \$268  = \$221 ;
-    end
-    if (rst) begin
-      \$268  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$269  = lc_zero;
-    if (report_frame) begin
-      \$269  = \$222 ;
-    end
-    if (rst) begin
-      \$269  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$270  = word0_position;
-    if (report_frame) begin
-      \$270  = data0;
-    end
-    if (rst) begin
-      \$270  = 55'h00000000000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$271  = word0_ne;
-    if (report_frame) begin
-      \$271  = ne[0];
-    end
-    if (rst) begin
-      \$271  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$272  = word0_nw;
-    if (report_frame) begin
-      \$272  = nw[0];
-    end
-    if (rst) begin
-      \$272  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$273  = word0_crc_ok;
-    if (report_frame) begin
-      \$273  = crc_ok[0];
-    end
-    if (rst) begin
-      \$273  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$274  = word1_position;
-    if (report_frame) begin
-      \$274  = spw;
-    end
-    if (rst) begin
-      \$274  = 40'h0000000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$275  = word1_ne;
-    if (report_frame) begin
-      \$275  = ne[1];
-    end
-    if (rst) begin
-      \$275  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$276  = word1_nw;
-    if (report_frame) begin
-      \$276  = nw[1];
-    end
-    if (rst) begin
-      \$276  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$277  = word1_crc_ok;
-    if (report_frame) begin
-      \$277  = \$224 ;
-    end
-    if (rst) begin
-      \$277  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$278  = spw_mismatch;
-    if (report_frame) begin
-      \$278  = \$231 ;
-    end
-    if (rst) begin
-      \$278  = 1'h0;
-    end
-  end
-  assign half_period = cfg[15:0];
-  assign \slo$66  = \slo$65 ;
-  assign \half_period$67  = cfg[15:0];
-  assign \sample$69  = sample;
-  assign \bit  = \slo$65 ;
-  assign \bit$71  = \slo$65 ;
-  assign \ma$73  = ma;
-  assign \lc$78  = \lc$77 ;
-  assign lc_next = { \lc$77 [4:0], \slo$65  };
-  assign \lc_next$80  = { \lc$77 [4:0], \slo$65  };
-  assign lc_load = load;
-  assign \cpw_top$87  = cpw_top;
-  assign data1 = spw;
-  assign bits = cfg[141:136];
-  assign tolerance = cfg[154:147];
-  assign second_rise = arm;
-  assign \resync$133  = resync;
-  assign clear = clear_counters;
-  assign count = count_crc_word0;
-  assign \clear$138  = clear_counters;
-  assign \count$139  = count_crc_word1;
-  assign \inc$140  = fault_no_ack;
-  assign \clear$141  = clear_counters;
-  assign \count$142  = count_no_ack;
-  assign \inc$143  = fault_no_start;
-  assign \clear$144  = clear_counters;
-  assign \count$145  = count_no_start;
-  assign \inc$146  = fault_delay_range;
-  assign \clear$147  = clear_counters;
-  assign \count$148  = count_delay_range;
-  assign \inc$149  = fault_slo_stuck_low;
-  assign \clear$150  = clear_counters;
-  assign \count$151  = count_slo_stuck_low;
-  assign \clear$153  = clear_counters;
-  assign \count$154  = count_lc_repeat;
-  assign \clear$156  = clear_counters;
-  assign \count$157  = count_lc_skip;
-  assign \clear$159  = clear_counters;
-  assign \count$160  = count_lc_zero;
-  assign \clear$162  = clear_counters;
-  assign \count$163  = count_spw_mismatch;
-  assign \inc$164  = overrun;
-  assign \clear$165  = clear_counters;
-  assign \count$166  = count_overrun;
-  assign \inc$167  = fault_aborted;
-  assign \clear$168  = clear_counters;
-  assign \count$169  = count_aborted;
-  assign \inc$170  = fault_no_stop;
-  assign \clear$171  = clear_counters;
-  assign \count$172  = count_no_stop;
-  assign \live.cfg_ma_half_period  = live[15:0];
-  assign \live.cfg_request_period  = live[39:16];
-  assign \live.cfg_break_time  = live[63:40];
-  assign \live.cfg_ack_limit  = live[87:64];
-  assign \live.cfg_timeout_limit  = live[111:88];
-  assign \live.cfg_delay_limit  = live[123:112];
-  assign \live.cfg_end_check  = live[124];
-  assign \live.cfg_w0_data_bits  = live[130:125];
-  assign \live.cfg_w0_nenw  = live[131];
-  assign \live.cfg_w0_lc  = live[132];
-  assign \live.cfg_w0_crc  = live[134:133];
-  assign \live.cfg_w1_enable  = live[135];
-  assign \live.cfg_w1_data_bits  = live[141:136];
-  assign \live.cfg_w1_nenw  = live[142];
-  assign \live.cfg_w1_lc  = live[143];
-  assign \live.cfg_w1_crc  = live[145:144];
-  assign \live.cfg_spw_check  = live[146];
-  assign \live.cfg_spw_tolerance  = live[154:147];
-  assign \cfg.cfg_ma_half_period  = cfg[15:0];
-  assign \cfg.cfg_request_period  = cfg[39:16];
-  assign \cfg.cfg_break_time  = cfg[63:40];
-  assign \cfg.cfg_ack_limit  = cfg[87:64];
-  assign \cfg.cfg_timeout_limit  = cfg[111:88];
-  assign \cfg.cfg_delay_limit  = cfg[123:112];
-  assign \cfg.cfg_end_check  = cfg[124];
-  assign \cfg.cfg_w0_data_bits  = cfg[130:125];
-  assign \cfg.cfg_w0_nenw  = cfg[131];
-  assign \cfg.cfg_w0_lc  = cfg[132];
-  assign \cfg.cfg_w0_crc  = cfg[134:133];
-  assign \cfg.cfg_w1_enable  = cfg[135];
-  assign \cfg.cfg_w1_data_bits  = cfg[141:136];
-  assign \cfg.cfg_w1_nenw  = cfg[142];
-  assign \cfg.cfg_w1_lc  = cfg[143];
-  assign \cfg.cfg_w1_crc  = cfg[145:144];
-  assign \cfg.cfg_spw_check  = cfg[146];
-  assign \cfg.cfg_spw_tolerance  = cfg[154:147];
-  assign \words[0]  = words[9:0];
-  assign \words[0].data_bits  = words[5:0];
-  assign \words[0].nenw  = words[6];
-  assign \words[0].lc  = words[7];
-  assign \words[0].crc  = words[9:8];
-  assign \words[1]  = words[19:10];
-  assign \words[1].data_bits  = words[15:10];
-  assign \words[1].nenw  = words[16];
-  assign \words[1].lc  = words[17];
-  assign \words[1].crc  = words[19:18];
-  assign words[19:18] = cfg[145:144];
-  assign words[17] = cfg[143];
-  assign words[16] = cfg[142];
-  assign words[15:10] = cfg[141:136];
-  assign words[9:8] = cfg[134:133];
-  assign words[7] = cfg[132];
-  assign words[6] = cfg[131];
-  assign words[5:0] = cfg[130:125];
-  assign live[154:147] = cfg_spw_tolerance;
-  assign live[146] = cfg_spw_check;
-  assign live[145:144] = cfg_w1_crc;
-  assign live[143] = cfg_w1_lc;
-  assign live[142] = cfg_w1_nenw;
-  assign live[141:136] = cfg_w1_data_bits;
-  assign live[135] = cfg_w1_enable;
-  assign live[134:133] = cfg_w0_crc;
-  assign live[132] = cfg_w0_lc;
-  assign live[131] = cfg_w0_nenw;
-  assign live[130:125] = cfg_w0_data_bits;
-  assign live[124] = cfg_end_check;
-  assign live[123:112] = cfg_delay_limit;
-  assign live[111:88] = cfg_timeout_limit;
-  assign live[87:64] = cfg_ack_limit;
-  assign live[63:40] = cfg_break_time;
-  assign live[39:16] = cfg_request_period;
-  assign live[15:0] = cfg_ma_half_period;
+  assign \faults.no_ack  = faults[0];
+  assign \faults.no_start  = faults[1];
+  assign \faults.delay_range  = faults[2];
+  assign \faults.slo_stuck_low  = faults[3];
+  assign \faults.aborted  = faults[4];
+  assign \faults.bad_config  = faults[5];
+  assign \faults.no_stop  = faults[6];
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_aborted$212 (clk, rst, inc, count, clear);
-  reg \$auto$verilog_backend.cc:2355:dump_module$10  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
+module \biss_master.counters (clk, rst, events, counts, clear);
   input clear;
   wire clear;
+  wire \clear$10 ;
+  wire \clear$13 ;
+  wire \clear$16 ;
+  wire \clear$19 ;
+  wire \clear$22 ;
+  wire \clear$25 ;
+  wire \clear$28 ;
+  wire \clear$3 ;
+  wire \clear$31 ;
+  wire \clear$34 ;
+  wire \clear$37 ;
+  wire \clear$40 ;
+  wire \clear$7 ;
   input clk;
   wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
+  wire [15:0] count;
+  wire [15:0] \count$11 ;
+  wire [15:0] \count$14 ;
+  wire [15:0] \count$17 ;
+  wire [15:0] \count$20 ;
+  wire [15:0] \count$23 ;
+  wire [15:0] \count$26 ;
+  wire [15:0] \count$29 ;
+  wire [15:0] \count$32 ;
+  wire [15:0] \count$35 ;
+  wire [15:0] \count$38 ;
+  wire [15:0] \count$41 ;
+  wire [15:0] \count$8 ;
+  output [207:0] counts;
+  wire [207:0] counts;
+  wire [15:0] \counts.aborted ;
+  wire [15:0] \counts.crc_word0 ;
+  wire [15:0] \counts.crc_word1 ;
+  wire [15:0] \counts.delay_range ;
+  wire [15:0] \counts.lc_repeat ;
+  wire [15:0] \counts.lc_skip ;
+  wire [15:0] \counts.lc_zero ;
+  wire [15:0] \counts.no_ack ;
+  wire [15:0] \counts.no_start ;
+  wire [15:0] \counts.no_stop ;
+  wire [15:0] \counts.overrun ;
+  wire [15:0] \counts.slo_stuck_low ;
+  wire [15:0] \counts.spw_mismatch ;
+  input [12:0] events;
+  wire [12:0] events;
+  wire \events.aborted ;
+  wire \events.crc_word0 ;
+  wire \events.crc_word1 ;
+  wire \events.delay_range ;
+  wire \events.lc_repeat ;
+  wire \events.lc_skip ;
+  wire \events.lc_zero ;
+  wire \events.no_ack ;
+  wire \events.no_start ;
+  wire \events.no_stop ;
+  wire \events.overrun ;
+  wire \events.slo_stuck_low ;
+  wire \events.spw_mismatch ;
   wire inc;
+  wire \inc$12 ;
+  wire \inc$15 ;
+  wire \inc$18 ;
+  wire \inc$21 ;
+  wire \inc$24 ;
+  wire \inc$27 ;
+  wire \inc$30 ;
+  wire \inc$33 ;
+  wire \inc$36 ;
+  wire \inc$39 ;
+  wire \inc$6 ;
+  wire \inc$9 ;
   input rst;
   wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
+  \biss_master.counters.count_aborted  count_aborted (
+    .clear(clear),
+    .clk(clk),
+    .count(\count$38 ),
+    .inc(events[11]),
+    .rst(rst)
+  );
+  \biss_master.counters.count_crc_word0  count_crc_word0 (
+    .clear(clear),
+    .clk(clk),
+    .count(count),
+    .inc(events[0]),
+    .rst(rst)
+  );
+  \biss_master.counters.count_crc_word1  count_crc_word1 (
+    .clear(clear),
+    .clk(clk),
+    .count(\count$8 ),
+    .inc(events[1]),
+    .rst(rst)
+  );
+  \biss_master.counters.count_delay_range  count_delay_range (
+    .clear(clear),
+    .clk(clk),
+    .count(\count$17 ),
+    .inc(events[4]),
+    .rst(rst)
+  );
+  \biss_master.counters.count_lc_repeat  count_lc_repeat (
+    .clear(clear),
+    .clk(clk),
+    .count(\count$23 ),
+    .inc(events[6]),
+    .rst(rst)
+  );
+  \biss_master.counters.count_lc_skip  count_lc_skip (
+    .clear(clear),
+    .clk(clk),
+    .count(\count$26 ),
+    .inc(events[7]),
+    .rst(rst)
+  );
+  \biss_master.counters.count_lc_zero  count_lc_zero (
+    .clear(clear),
+    .clk(clk),
+    .count(\count$29 ),
+    .inc(events[8]),
+    .rst(rst)
+  );
+  \biss_master.counters.count_no_ack  count_no_ack (
+    .clear(clear),
+    .clk(clk),
+    .count(\count$11 ),
+    .inc(events[2]),
+    .rst(rst)
+  );
+  \biss_master.counters.count_no_start  count_no_start (
+    .clear(clear),
+    .clk(clk),
+    .count(\count$14 ),
+    .inc(events[3]),
+    .rst(rst)
+  );
+  \biss_master.counters.count_no_stop  count_no_stop (
+    .clear(clear),
+    .clk(clk),
+    .count(\count$41 ),
+    .inc(events[12]),
+    .rst(rst)
+  );
+  \biss_master.counters.count_overrun  count_overrun (
+    .clear(clear),
+    .clk(clk),
+    .count(\count$35 ),
+    .inc(events[10]),
+    .rst(rst)
+  );
+  \biss_master.counters.count_slo_stuck_low  count_slo_stuck_low (
+    .clear(clear),
+    .clk(clk),
+    .count(\count$20 ),
+    .inc(events[5]),
+    .rst(rst)
+  );
+  \biss_master.counters.count_spw_mismatch  count_spw_mismatch (
+    .clear(clear),
+    .clk(clk),
+    .count(\count$32 ),
+    .inc(events[9]),
+    .rst(rst)
+  );
+  assign inc = events[0];
+  assign \clear$3  = clear;
+  assign \inc$6  = events[1];
+  assign \clear$7  = clear;
+  assign \inc$9  = events[2];
+  assign \clear$10  = clear;
+  assign \inc$12  = events[3];
+  assign \clear$13  = clear;
+  assign \inc$15  = events[4];
+  assign \clear$16  = clear;
+  assign \inc$18  = events[5];
+  assign \clear$19  = clear;
+  assign \inc$21  = events[6];
+  assign \clear$22  = clear;
+  assign \inc$24  = events[7];
+  assign \clear$25  = clear;
+  assign \inc$27  = events[8];
+  assign \clear$28  = clear;
+  assign \inc$30  = events[9];
+  assign \clear$31  = clear;
+  assign \inc$33  = events[10];
+  assign \clear$34  = clear;
+  assign \inc$36  = events[11];
+  assign \clear$37  = clear;
+  assign \inc$39  = events[12];
+  assign \clear$40  = clear;
+  assign \events.crc_word0  = events[0];
+  assign \events.crc_word1  = events[1];
+  assign \events.no_ack  = events[2];
+  assign \events.no_start  = events[3];
+  assign \events.delay_range  = events[4];
+  assign \events.slo_stuck_low  = events[5];
+  assign \events.lc_repeat  = events[6];
+  assign \events.lc_skip  = events[7];
+  assign \events.lc_zero  = events[8];
+  assign \events.spw_mismatch  = events[9];
+  assign \events.overrun  = events[10];
+  assign \events.aborted  = events[11];
+  assign \events.no_stop  = events[12];
+  assign \counts.crc_word0  = counts[15:0];
+  assign \counts.crc_word1  = counts[31:16];
+  assign \counts.no_ack  = counts[47:32];
+  assign \counts.no_start  = counts[63:48];
+  assign \counts.delay_range  = counts[79:64];
+  assign \counts.slo_stuck_low  = counts[95:80];
+  assign \counts.lc_repeat  = counts[111:96];
+  assign \counts.lc_skip  = counts[127:112];
+  assign \counts.lc_zero  = counts[143:128];
+  assign \counts.spw_mismatch  = counts[159:144];
+  assign \counts.overrun  = counts[175:160];
+  assign \counts.aborted  = counts[191:176];
+  assign \counts.no_stop  = counts[207:192];
+  assign counts[207:192] = \count$41 ;
+  assign counts[191:176] = \count$38 ;
+  assign counts[175:160] = \count$35 ;
+  assign counts[159:144] = \count$32 ;
+  assign counts[143:128] = \count$29 ;
+  assign counts[127:112] = \count$26 ;
+  assign counts[111:96] = \count$23 ;
+  assign counts[95:80] = \count$20 ;
+  assign counts[79:64] = \count$17 ;
+  assign counts[63:48] = \count$14 ;
+  assign counts[47:32] = \count$11 ;
+  assign counts[31:16] = \count$8 ;
+  assign counts[15:0] = count;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_crc_word0$201 (clk, rst, inc, count, clear);
+module \biss_master.counters.count_aborted (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$11  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -2380,7 +2344,7 @@ module \biss_master.count_crc_word0$201 (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_crc_word1$202 (clk, rst, inc, count, clear);
+module \biss_master.counters.count_crc_word0 (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$12  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -2434,7 +2398,7 @@ module \biss_master.count_crc_word1$202 (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_delay_range$205 (clk, rst, inc, count, clear);
+module \biss_master.counters.count_crc_word1 (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$13  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -2488,7 +2452,7 @@ module \biss_master.count_delay_range$205 (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_lc_repeat$207 (clk, rst, inc, count, clear);
+module \biss_master.counters.count_delay_range (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$14  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -2542,7 +2506,7 @@ module \biss_master.count_lc_repeat$207 (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_lc_skip$208 (clk, rst, inc, count, clear);
+module \biss_master.counters.count_lc_repeat (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$15  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -2596,7 +2560,7 @@ module \biss_master.count_lc_skip$208 (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_lc_zero$209 (clk, rst, inc, count, clear);
+module \biss_master.counters.count_lc_skip (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$16  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -2650,7 +2614,7 @@ module \biss_master.count_lc_zero$209 (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_no_ack$203 (clk, rst, inc, count, clear);
+module \biss_master.counters.count_lc_zero (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$17  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -2704,7 +2668,7 @@ module \biss_master.count_no_ack$203 (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_no_start$204 (clk, rst, inc, count, clear);
+module \biss_master.counters.count_no_ack (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$18  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -2758,7 +2722,7 @@ module \biss_master.count_no_start$204 (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_no_stop$213 (clk, rst, inc, count, clear);
+module \biss_master.counters.count_no_start (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$19  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -2812,7 +2776,7 @@ module \biss_master.count_no_stop$213 (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_overrun$211 (clk, rst, inc, count, clear);
+module \biss_master.counters.count_no_stop (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$20  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -2866,7 +2830,7 @@ module \biss_master.count_overrun$211 (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_slo_stuck_low$206 (clk, rst, inc, count, clear);
+module \biss_master.counters.count_overrun (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$21  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -2920,7 +2884,7 @@ module \biss_master.count_slo_stuck_low$206 (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.count_spw_mismatch$210 (clk, rst, inc, count, clear);
+module \biss_master.counters.count_slo_stuck_low (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$22  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -2974,114 +2938,156 @@ module \biss_master.count_spw_mismatch$210 (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.decoder (rst, word_count, lc_load, words, receiver_clear, sample, crc_ok, done, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1, lc, cpw_top, \bit 
-, clk);
+module \biss_master.counters.count_spw_mismatch (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$23  = 0;
-  wire [2:0] \$1 ;
-  wire [7:0] \$10 ;
-  wire \$100 ;
-  wire \$101 ;
-  wire \$102 ;
-  wire \$103 ;
-  wire \$104 ;
-  wire \$105 ;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master.decoder (rst, word_count, lc_load, words, receiver_clear, sample, \bit , done, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1, lc, cpw_top, crc_ok
+, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$24  = 0;
+  wire [6:0] \$1 ;
+  wire [1:0] \$10 ;
+  reg [2:0] \$100 ;
+  reg \$101 ;
+  reg [6:0] \$102 ;
+  reg \$103 ;
+  reg \$104 ;
+  reg \$105 ;
   reg \$106 ;
   reg \$107 ;
-  reg [15:0] \$108 ;
-  reg \$109 ;
-  wire [7:0] \$11 ;
-  reg \$110 ;
-  reg [15:0] \$111 ;
-  reg [2:0] \$112 ;
-  reg \$113 ;
-  reg [6:0] \$114 ;
-  reg \$115 ;
-  reg \$116 ;
-  reg \$117 ;
-  reg \$118 ;
-  reg \$119 ;
-  wire [9:0] \$12 ;
-  reg [54:0] \$120 ;
-  reg [1:0] \$121 ;
-  reg [1:0] \$122 ;
-  reg [39:0] \$123 ;
-  reg [5:0] \$124 ;
-  reg [39:0] \$125 ;
-  wire \$13 ;
-  wire \$14 ;
+  reg [54:0] \$108 ;
+  reg [1:0] \$109 ;
+  wire [6:0] \$11 ;
+  reg [1:0] \$110 ;
+  reg [39:0] \$111 ;
+  reg [5:0] \$112 ;
+  reg [39:0] \$113 ;
+  wire \$12 ;
+  reg [3:0] \$13 ;
+  wire [6:0] \$14 ;
   wire \$15 ;
   wire \$16 ;
-  wire \$17 ;
-  wire \$18 ;
-  wire \$19 ;
-  wire \$2 ;
-  wire \$20 ;
-  wire \$21 ;
-  wire \$22 ;
-  wire \$23 ;
-  wire \$24 ;
+  wire [6:0] \$17 ;
+  wire [7:0] \$18 ;
+  reg [6:0] \$19 ;
+  wire [7:0] \$2 ;
+  wire [7:0] \$20 ;
+  reg [6:0] \$21 ;
+  wire [7:0] \$22 ;
+  reg [6:0] \$23 ;
+  wire [7:0] \$24 ;
   wire \$25 ;
-  wire [6:0] \$26 ;
-  wire [7:0] \$27 ;
-  reg [6:0] \$28 ;
-  wire [7:0] \$29 ;
+  wire [1:0] \$26 ;
+  wire [6:0] \$27 ;
+  wire \$28 ;
+  reg [3:0] \$29 ;
   reg [6:0] \$3 ;
-  reg [6:0] \$30 ;
-  wire [7:0] \$31 ;
-  reg [6:0] \$32 ;
-  wire [7:0] \$33 ;
+  wire [6:0] \$30 ;
+  wire \$31 ;
+  wire \$32 ;
+  wire \$33 ;
   wire \$34 ;
-  wire [1:0] \$35 ;
-  wire [6:0] \$36 ;
+  wire [16:0] \$35 ;
+  wire \$36 ;
   wire \$37 ;
-  reg [3:0] \$38 ;
-  wire [6:0] \$39 ;
+  wire \$38 ;
+  wire [7:0] \$39 ;
   wire [7:0] \$4 ;
-  wire \$40 ;
+  wire [6:0] \$40 ;
   wire \$41 ;
-  wire [6:0] \$42 ;
-  wire [7:0] \$43 ;
-  reg [6:0] \$44 ;
-  wire [7:0] \$45 ;
-  reg [6:0] \$46 ;
-  wire [7:0] \$47 ;
-  reg [6:0] \$48 ;
-  wire [7:0] \$49 ;
-  wire [7:0] \$5 ;
+  wire \$42 ;
+  wire [6:0] \$43 ;
+  wire \$44 ;
+  wire \$45 ;
+  wire [6:0] \$46 ;
+  wire \$47 ;
+  wire \$48 ;
+  wire \$49 ;
+  reg [6:0] \$5 ;
   wire \$50 ;
-  wire [1:0] \$51 ;
-  wire [6:0] \$52 ;
-  wire \$53 ;
-  reg [3:0] \$54 ;
-  wire [6:0] \$55 ;
+  wire [6:0] \$51 ;
+  wire \$52 ;
+  wire [2:0] \$53 ;
+  wire \$54 ;
+  wire [1:0] \$55 ;
   wire \$56 ;
   wire \$57 ;
   wire \$58 ;
   wire \$59 ;
-  wire [8:0] \$6 ;
-  wire [16:0] \$60 ;
+  wire [7:0] \$6 ;
+  wire \$60 ;
   wire \$61 ;
   wire \$62 ;
   wire \$63 ;
-  wire [7:0] \$64 ;
-  wire [6:0] \$65 ;
+  wire \$64 ;
+  wire \$65 ;
   wire \$66 ;
   wire \$67 ;
-  wire [6:0] \$68 ;
+  wire \$68 ;
   wire \$69 ;
-  wire [2:0] \$7 ;
+  reg [6:0] \$7 ;
   wire \$70 ;
-  wire [6:0] \$71 ;
+  wire \$71 ;
   wire \$72 ;
   wire \$73 ;
   wire \$74 ;
   wire \$75 ;
-  wire [6:0] \$76 ;
+  wire \$76 ;
   wire \$77 ;
-  wire [2:0] \$78 ;
+  wire \$78 ;
   wire \$79 ;
-  wire \$8 ;
-  wire [1:0] \$80 ;
+  wire [7:0] \$8 ;
+  wire \$80 ;
   wire \$81 ;
   wire \$82 ;
   wire \$83 ;
@@ -3091,21 +3097,21 @@ module \biss_master.decoder (rst, word_count, lc_load, words, receiver_clear, sa
   wire \$87 ;
   wire \$88 ;
   wire \$89 ;
-  reg [6:0] \$9 ;
+  wire \$9 ;
   wire \$90 ;
   wire \$91 ;
   wire \$92 ;
   wire \$93 ;
-  wire \$94 ;
-  wire \$95 ;
-  wire \$96 ;
-  wire \$97 ;
-  wire \$98 ;
-  wire \$99 ;
+  reg \$94 ;
+  reg \$95 ;
+  reg [15:0] \$96 ;
+  reg \$97 ;
+  reg \$98 ;
+  reg [15:0] \$99 ;
   input \bit ;
   wire \bit ;
-  wire \bit$16 ;
-  wire \bit$22 ;
+  wire \bit$47 ;
+  wire \bit$53 ;
   output cds;
   reg cds = 1'h0;
   input clk;
@@ -3121,14 +3127,13 @@ module \biss_master.decoder (rst, word_count, lc_load, words, receiver_clear, sa
   reg [2:0] decoder_fsm_state = 3'h0;
   output done;
   reg done = 1'h0;
-  wire [7:0] frame_bits;
   reg [6:0] idx = 7'h00;
   reg in_data = 1'h0;
   reg in_lc = 1'h0;
   reg in_top = 1'h0;
   reg in_word;
   wire [1:0] kind;
-  wire [1:0] \kind$19 ;
+  wire [1:0] \kind$50 ;
   output [5:0] lc;
   reg [5:0] lc = 6'h00;
   output lc_load;
@@ -3139,7 +3144,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, receiver_clear, sa
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire ok;
-  wire \ok$23 ;
+  wire \ok$54 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -3150,7 +3155,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, receiver_clear, sa
   output slots_full;
   reg slots_full = 1'h0;
   wire start;
-  wire \start$20 ;
+  wire \start$51 ;
   output [15:0] start_slot;
   reg [15:0] start_slot = 16'h0000;
   output started;
@@ -3160,7 +3165,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, receiver_clear, sa
   output stopped;
   reg stopped = 1'h0;
   wire valid;
-  wire \valid$21 ;
+  wire \valid$52 ;
   reg w0_data_at0 = 1'h0;
   reg [6:0] w0_data_end_m1 = 7'h00;
   reg [6:0] w0_data_end_p1 = 7'h00;
@@ -3181,178 +3186,176 @@ module \biss_master.decoder (rst, word_count, lc_load, words, receiver_clear, sa
   input [19:0] words;
   wire [19:0] words;
   wire [9:0] \words[0] ;
+  (* enum_base_type = "Crc" *)
+  (* enum_value_00 = "NONE" *)
+  (* enum_value_01 = "CRC6" *)
+  (* enum_value_10 = "CRC16" *)
   wire [1:0] \words[0].crc ;
   wire [5:0] \words[0].data_bits ;
   wire \words[0].lc ;
   wire \words[0].nenw ;
   wire [9:0] \words[1] ;
+  (* enum_base_type = "Crc" *)
+  (* enum_value_00 = "NONE" *)
+  (* enum_value_01 = "CRC6" *)
+  (* enum_value_10 = "CRC16" *)
   wire [1:0] \words[1].crc ;
   wire [5:0] \words[1].data_bits ;
   wire \words[1].lc ;
   wire \words[1].nenw ;
-  assign \$1  = word_count - 1'h1;
-  assign \$2  = $signed(\$1 ) >= $signed(1'h0);
+  assign \$1  = words[5:0] + 1'h1;
+  assign \$2  = words[5:0] + 7'h7f;
   assign \$4  = words[5:0] + \$3 ;
-  assign \$5  = \$2  ? \$4  : 8'h00;
-  assign \$6  = 1'h0 + \$5 ;
-  assign \$7  = word_count - 1'h1;
-  assign \$8  = $signed(\$7 ) >= $signed(2'h1);
-  assign \$10  = words[15:10] + \$9 ;
-  assign \$11  = \$8  ? \$10  : 8'h00;
-  assign \$12  = \$6  + \$11 ;
+  assign \$6  = words[5:0] + \$5 ;
+  assign \$8  = words[5:0] + \$7 ;
+  assign \$9  = | words[5:0];
+  assign \$10  = words[6] ? 2'h2 : 2'h0;
+  assign \$11  = words[5:0] + \$10 ;
+  assign \$12  = ! \$11 ;
+  assign \$14  = words[5:0] + \$13 ;
+  assign \$15  = | \$14 ;
+  assign \$16  = \$12  & \$15 ;
+  assign \$17  = words[15:10] + 1'h1;
+  assign \$18  = words[15:10] + 7'h7f;
+  assign \$20  = words[15:10] + \$19 ;
+  assign \$22  = words[15:10] + \$21 ;
+  assign \$24  = words[15:10] + \$23 ;
+  assign \$25  = | words[15:10];
+  assign \$26  = words[16] ? 2'h2 : 2'h0;
+  assign \$27  = words[15:10] + \$26 ;
+  assign \$28  = ! \$27 ;
+  assign \$30  = words[15:10] + \$29 ;
+  assign \$31  = | \$30 ;
+  assign \$32  = \$28  & \$31 ;
+  assign \$33  = ~ slots_full;
+  assign \$34  = sample & \$33 ;
+  assign \$35  = slots + 1'h1;
+  assign \$36  = slots == 16'hfffe;
+  assign \$37  = sample & \bit ;
+  assign \$38  = | words[15:10];
+  assign \$39  = idx + 1'h1;
+  assign \$40  = word ? w1_data_end_m1 : w0_data_end_m1;
+  assign \$41  = idx != \$40 ;
+  assign \$42  = in_data & \$41 ;
+  assign \$43  = word ? w1_nenw_end_m1 : w0_nenw_end_m1;
+  assign \$44  = idx == \$43 ;
+  assign \$45  = in_lc | \$44 ;
+  assign \$46  = word ? w1_lc_end_m1 : w0_lc_end_m1;
+  assign \$47  = idx != \$46 ;
+  assign \$48  = \$45  & \$47 ;
+  assign \$49  = idx != w1_data_end_m1;
+  assign \$50  = in_top & \$49 ;
+  assign \$51  = word ? w1_word_end_m1 : w0_word_end_m1;
+  assign \$52  = idx == \$51 ;
+  assign \$53  = word_count - 1'h1;
+  assign \$54  = word == \$53 ;
+  assign \$55  = word + 1'h1;
+  assign \$56  = ! word;
+  assign \$57  = in_word & \$56 ;
+  assign \$58  = \$57  & in_data;
+  assign \$59  = ~ words[6];
+  assign \$60  = ! word;
+  assign \$61  = in_word & \$60 ;
+  assign \$62  = idx == words[5:0];
+  assign \$63  = \$61  & \$62 ;
+  assign \$64  = ! word;
+  assign \$65  = in_word & \$64 ;
+  assign \$66  = idx == w0_data_end_p1;
+  assign \$67  = \$65  & \$66 ;
+  assign \$69  = in_word & \$68 ;
+  assign \$70  = \$69  & in_data;
+  assign \$71  = ~ words[16];
+  assign \$73  = in_word & \$72 ;
+  assign \$74  = idx == words[15:10];
+  assign \$75  = \$73  & \$74 ;
+  assign \$77  = in_word & \$76 ;
+  assign \$78  = idx == w1_data_end_p1;
+  assign \$79  = \$77  & \$78 ;
+  assign \$80  = in_word & in_top;
   assign lc_load = in_word & in_lc;
-  assign \$13  = ! word;
-  assign \$14  = in_word & \$13 ;
-  assign \$15  = ! idx;
-  assign start = \$14  & \$15 ;
-  assign \$16  = ! word;
-  assign valid = in_word & \$16 ;
-  assign \$18  = in_word & \$17 ;
-  assign \$19  = ! idx;
-  assign \start$20  = \$18  & \$19 ;
-  assign \valid$21  = in_word & \$20 ;
-  assign \$21  = ! decoder_fsm_state;
-  assign \$22  = decoder_fsm_state == 1'h1;
-  assign \$23  = decoder_fsm_state == 2'h2;
-  assign \$24  = decoder_fsm_state == 2'h3;
-  assign \$25  = decoder_fsm_state == 3'h4;
-  assign \$26  = words[5:0] + 1'h1;
-  assign \$27  = words[5:0] + 7'h7f;
-  assign \$29  = words[5:0] + \$28 ;
-  assign \$31  = words[5:0] + \$30 ;
-  assign \$33  = words[5:0] + \$32 ;
-  assign \$34  = | words[5:0];
-  assign \$35  = words[6] ? 2'h2 : 2'h0;
-  assign \$36  = words[5:0] + \$35 ;
-  assign \$37  = ! \$36 ;
-  assign \$39  = words[5:0] + \$38 ;
-  assign \$40  = | \$39 ;
-  assign \$41  = \$37  & \$40 ;
-  assign \$42  = words[15:10] + 1'h1;
-  assign \$43  = words[15:10] + 7'h7f;
-  assign \$45  = words[15:10] + \$44 ;
-  assign \$47  = words[15:10] + \$46 ;
-  assign \$49  = words[15:10] + \$48 ;
-  assign \$50  = | words[15:10];
-  assign \$51  = words[16] ? 2'h2 : 2'h0;
-  assign \$52  = words[15:10] + \$51 ;
-  assign \$53  = ! \$52 ;
-  assign \$55  = words[15:10] + \$54 ;
-  assign \$56  = | \$55 ;
-  assign \$57  = \$53  & \$56 ;
-  assign \$58  = ~ slots_full;
-  assign \$59  = sample & \$58 ;
-  assign \$60  = slots + 1'h1;
-  assign \$61  = slots == 16'hfffe;
-  assign \$62  = sample & \bit ;
-  assign \$63  = | words[15:10];
-  assign \$64  = idx + 1'h1;
-  assign \$65  = word ? w1_data_end_m1 : w0_data_end_m1;
-  assign \$66  = idx != \$65 ;
-  assign \$67  = in_data & \$66 ;
-  assign \$68  = word ? w1_nenw_end_m1 : w0_nenw_end_m1;
-  assign \$69  = idx == \$68 ;
-  assign \$70  = in_lc | \$69 ;
-  assign \$71  = word ? w1_lc_end_m1 : w0_lc_end_m1;
-  assign \$72  = idx != \$71 ;
-  assign \$73  = \$70  & \$72 ;
-  assign \$74  = idx != w1_data_end_m1;
-  assign \$75  = in_top & \$74 ;
-  assign \$76  = word ? w1_word_end_m1 : w0_word_end_m1;
-  assign \$77  = idx == \$76 ;
-  assign \$78  = word_count - 1'h1;
-  assign \$79  = word == \$78 ;
-  assign \$80  = word + 1'h1;
   assign \$81  = ! word;
   assign \$82  = in_word & \$81 ;
-  assign \$83  = \$82  & in_data;
-  assign \$84  = ~ words[6];
-  assign \$85  = ! word;
+  assign \$83  = ! idx;
+  assign start = \$82  & \$83 ;
+  assign \$84  = ! word;
+  assign valid = in_word & \$84 ;
   assign \$86  = in_word & \$85 ;
-  assign \$87  = idx == words[5:0];
-  assign \$88  = \$86  & \$87 ;
-  assign \$89  = ! word;
-  assign \$90  = in_word & \$89 ;
-  assign \$91  = idx == w0_data_end_p1;
-  assign \$92  = \$90  & \$91 ;
-  assign \$94  = in_word & \$93 ;
-  assign \$95  = \$94  & in_data;
-  assign \$96  = ~ words[16];
-  assign \$98  = in_word & \$97 ;
-  assign \$99  = idx == words[15:10];
-  assign \$100  = \$98  & \$99 ;
-  assign \$102  = in_word & \$101 ;
-  assign \$103  = idx == w1_data_end_p1;
-  assign \$104  = \$102  & \$103 ;
-  assign \$105  = in_word & in_top;
+  assign \$87  = ! idx;
+  assign \start$51  = \$86  & \$87 ;
+  assign \valid$52  = in_word & \$88 ;
+  assign \$89  = ! decoder_fsm_state;
+  assign \$90  = decoder_fsm_state == 1'h1;
+  assign \$91  = decoder_fsm_state == 2'h2;
+  assign \$92  = decoder_fsm_state == 2'h3;
+  assign \$93  = decoder_fsm_state == 3'h4;
   always @(posedge clk)
-    w0_data_end_p1 <= \$26 ;
+    w0_data_end_p1 <= \$1 ;
   always @(posedge clk)
-    w0_data_end_m1 <= \$27 [6:0];
+    w0_data_end_m1 <= \$2 [6:0];
   always @(posedge clk)
-    w0_nenw_end_m1 <= \$29 [6:0];
+    w0_nenw_end_m1 <= \$4 [6:0];
   always @(posedge clk)
-    w0_lc_end_m1 <= \$31 [6:0];
+    w0_lc_end_m1 <= \$6 [6:0];
   always @(posedge clk)
-    w0_word_end_m1 <= \$33 [6:0];
+    w0_word_end_m1 <= \$8 [6:0];
   always @(posedge clk)
-    w0_data_at0 <= \$34 ;
+    w0_data_at0 <= \$9 ;
   always @(posedge clk)
-    w0_lc_at0 <= \$41 ;
+    w0_lc_at0 <= \$16 ;
   always @(posedge clk)
-    w1_data_end_p1 <= \$42 ;
+    w1_data_end_p1 <= \$17 ;
   always @(posedge clk)
-    w1_data_end_m1 <= \$43 [6:0];
+    w1_data_end_m1 <= \$18 [6:0];
   always @(posedge clk)
-    w1_nenw_end_m1 <= \$45 [6:0];
+    w1_nenw_end_m1 <= \$20 [6:0];
   always @(posedge clk)
-    w1_lc_end_m1 <= \$47 [6:0];
+    w1_lc_end_m1 <= \$22 [6:0];
   always @(posedge clk)
-    w1_word_end_m1 <= \$49 [6:0];
+    w1_word_end_m1 <= \$24 [6:0];
   always @(posedge clk)
-    w1_data_at0 <= \$50 ;
+    w1_data_at0 <= \$25 ;
   always @(posedge clk)
-    w1_lc_at0 <= \$57 ;
+    w1_lc_at0 <= \$32 ;
   always @(posedge clk)
-    done <= \$106 ;
+    done <= \$94 ;
   always @(posedge clk)
-    stopped <= \$107 ;
+    stopped <= \$95 ;
   always @(posedge clk)
-    slots <= \$108 ;
+    slots <= \$96 ;
   always @(posedge clk)
-    slots_full <= \$109 ;
+    slots_full <= \$97 ;
   always @(posedge clk)
-    started <= \$110 ;
+    started <= \$98 ;
   always @(posedge clk)
-    start_slot <= \$111 ;
+    start_slot <= \$99 ;
   always @(posedge clk)
-    decoder_fsm_state <= \$112 ;
+    decoder_fsm_state <= \$100 ;
   always @(posedge clk)
-    cds <= \$113 ;
+    cds <= \$101 ;
   always @(posedge clk)
-    idx <= \$114 ;
+    idx <= \$102 ;
   always @(posedge clk)
-    in_data <= \$115 ;
+    in_data <= \$103 ;
   always @(posedge clk)
-    in_lc <= \$116 ;
+    in_lc <= \$104 ;
   always @(posedge clk)
-    in_top <= \$117 ;
+    in_top <= \$105 ;
   always @(posedge clk)
-    word <= \$118 ;
+    word <= \$106 ;
   always @(posedge clk)
-    stop_bit <= \$119 ;
+    stop_bit <= \$107 ;
   always @(posedge clk)
-    data0 <= \$120 ;
+    data0 <= \$108 ;
   always @(posedge clk)
-    ne <= \$121 ;
+    ne <= \$109 ;
   always @(posedge clk)
-    nw <= \$122 ;
+    nw <= \$110 ;
   always @(posedge clk)
-    data1 <= \$123 ;
+    data1 <= \$111 ;
   always @(posedge clk)
-    lc <= \$124 ;
+    lc <= \$112 ;
   always @(posedge clk)
-    cpw_top <= \$125 ;
+    cpw_top <= \$113 ;
   \biss_master.decoder.crc0  crc0 (
     .\bit (\bit ),
     .clk(clk),
@@ -3367,242 +3370,564 @@ module \biss_master.decoder (rst, word_count, lc_load, words, receiver_clear, sa
     .\bit (\bit ),
     .clk(clk),
     .kind(words[19:18]),
-    .ok(\ok$23 ),
+    .ok(\ok$54 ),
     .receiver_clear(receiver_clear),
     .rst(rst),
-    .start(\start$20 ),
-    .valid(\valid$21 )
+    .start(\start$51 ),
+    .valid(\valid$52 )
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
-    (* full_case = 32'd1 *)
-    casez (words[9:6])
-      4'h0:
-          \$3  = 7'h00;
-      4'h1:
-          \$3  = 7'h02;
-      4'h2:
-          \$3  = 7'h06;
-      4'h3:
-          \$3  = 7'h08;
-      4'h4:
-          \$3  = 7'h06;
-      4'h5:
-          \$3  = 7'h08;
-      4'h6:
-          \$3  = 7'h0c;
-      4'h7:
-          \$3  = 7'h0e;
-      4'h8:
-          \$3  = 7'h10;
-      4'h9:
-          \$3  = 7'h12;
-      4'ha:
-          \$3  = 7'h16;
-      4'hb:
-          \$3  = 7'h18;
-      4'hc:
-          \$3  = 7'h00;
-      4'hd:
-          \$3  = 7'h02;
-      4'he:
-          \$3  = 7'h06;
-      4'hf:
-          \$3  = 7'h08;
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
-    (* full_case = 32'd1 *)
-    casez (words[19:16])
-      4'h0:
-          \$9  = 7'h00;
-      4'h1:
-          \$9  = 7'h02;
-      4'h2:
-          \$9  = 7'h06;
-      4'h3:
-          \$9  = 7'h08;
-      4'h4:
-          \$9  = 7'h06;
-      4'h5:
-          \$9  = 7'h08;
-      4'h6:
-          \$9  = 7'h0c;
-      4'h7:
-          \$9  = 7'h0e;
-      4'h8:
-          \$9  = 7'h10;
-      4'h9:
-          \$9  = 7'h12;
-      4'ha:
-          \$9  = 7'h16;
-      4'hb:
-          \$9  = 7'h18;
-      4'hc:
-          \$9  = 7'h00;
-      4'hd:
-          \$9  = 7'h02;
-      4'he:
-          \$9  = 7'h06;
-      4'hf:
-          \$9  = 7'h08;
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
     (* full_case = 32'd1 *)
     casez (words[6])
       1'h0:
-          \$28  = 7'h7f;
+          \$3  = 7'h7f;
       1'h1:
-          \$28  = 7'h01;
+          \$3  = 7'h01;
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
-          \$30  = 7'h7f;
+          \$5  = 7'h7f;
       2'h1:
-          \$30  = 7'h01;
+          \$5  = 7'h01;
       2'h2:
-          \$30  = 7'h05;
+          \$5  = 7'h05;
       2'h3:
-          \$30  = 7'h07;
+          \$5  = 7'h07;
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
     (* full_case = 32'd1 *)
     casez (words[9:6])
       4'h0:
-          \$32  = 7'h7f;
+          \$7  = 7'h7f;
       4'h1:
-          \$32  = 7'h01;
+          \$7  = 7'h01;
       4'h2:
-          \$32  = 7'h05;
+          \$7  = 7'h05;
       4'h3:
-          \$32  = 7'h07;
+          \$7  = 7'h07;
       4'h4:
-          \$32  = 7'h05;
+          \$7  = 7'h05;
       4'h5:
-          \$32  = 7'h07;
+          \$7  = 7'h07;
       4'h6:
-          \$32  = 7'h0b;
+          \$7  = 7'h0b;
       4'h7:
-          \$32  = 7'h0d;
+          \$7  = 7'h0d;
       4'h8:
-          \$32  = 7'h0f;
+          \$7  = 7'h0f;
       4'h9:
-          \$32  = 7'h11;
+          \$7  = 7'h11;
       4'ha:
-          \$32  = 7'h15;
+          \$7  = 7'h15;
       4'hb:
-          \$32  = 7'h17;
+          \$7  = 7'h17;
       4'hc:
-          \$32  = 7'h7f;
+          \$7  = 7'h7f;
       4'hd:
-          \$32  = 7'h01;
+          \$7  = 7'h01;
       4'he:
-          \$32  = 7'h05;
+          \$7  = 7'h05;
       4'hf:
-          \$32  = 7'h07;
+          \$7  = 7'h07;
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
-          \$38  = 4'h0;
+          \$13  = 4'h0;
       2'h1:
-          \$38  = 4'h2;
+          \$13  = 4'h2;
       2'h2:
-          \$38  = 4'h6;
+          \$13  = 4'h6;
       2'h3:
-          \$38  = 4'h8;
+          \$13  = 4'h8;
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
     (* full_case = 32'd1 *)
     casez (words[16])
       1'h0:
-          \$44  = 7'h7f;
+          \$19  = 7'h7f;
       1'h1:
-          \$44  = 7'h01;
+          \$19  = 7'h01;
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
     (* full_case = 32'd1 *)
     casez (words[17:16])
       2'h0:
-          \$46  = 7'h7f;
+          \$21  = 7'h7f;
       2'h1:
-          \$46  = 7'h01;
+          \$21  = 7'h01;
       2'h2:
-          \$46  = 7'h05;
+          \$21  = 7'h05;
       2'h3:
-          \$46  = 7'h07;
+          \$21  = 7'h07;
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:16])
       4'h0:
-          \$48  = 7'h7f;
+          \$23  = 7'h7f;
       4'h1:
-          \$48  = 7'h01;
+          \$23  = 7'h01;
       4'h2:
-          \$48  = 7'h05;
+          \$23  = 7'h05;
       4'h3:
-          \$48  = 7'h07;
+          \$23  = 7'h07;
       4'h4:
-          \$48  = 7'h05;
+          \$23  = 7'h05;
       4'h5:
-          \$48  = 7'h07;
+          \$23  = 7'h07;
       4'h6:
-          \$48  = 7'h0b;
+          \$23  = 7'h0b;
       4'h7:
-          \$48  = 7'h0d;
+          \$23  = 7'h0d;
       4'h8:
-          \$48  = 7'h0f;
+          \$23  = 7'h0f;
       4'h9:
-          \$48  = 7'h11;
+          \$23  = 7'h11;
       4'ha:
-          \$48  = 7'h15;
+          \$23  = 7'h15;
       4'hb:
-          \$48  = 7'h17;
+          \$23  = 7'h17;
       4'hc:
-          \$48  = 7'h7f;
+          \$23  = 7'h7f;
       4'hd:
-          \$48  = 7'h01;
+          \$23  = 7'h01;
       4'he:
-          \$48  = 7'h05;
+          \$23  = 7'h05;
       4'hf:
-          \$48  = 7'h07;
+          \$23  = 7'h07;
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
     (* full_case = 32'd1 *)
     casez (words[17:16])
       2'h0:
-          \$54  = 4'h0;
+          \$29  = 4'h0;
       2'h1:
-          \$54  = 4'h2;
+          \$29  = 4'h2;
       2'h2:
-          \$54  = 4'h6;
+          \$29  = 4'h6;
       2'h3:
-          \$54  = 4'h8;
+          \$29  = 4'h8;
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
+    \$94  = 1'h0;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          if (sample) begin
+            if (\$52 ) begin
+              if (\$54 ) begin
+                \$94  = 1'h1;
+              end
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$94  = 1'h0;
+    end
+    if (rst) begin
+      \$94  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
+    \$95  = 1'h0;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h3:
+          if (sample) begin
+            \$95  = 1'h1;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$95  = 1'h0;
+    end
+    if (rst) begin
+      \$95  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
+    \$96  = slots;
+    if (\$34 ) begin
+      \$96  = \$35 [15:0];
+    end
+    if (receiver_clear) begin
+      \$96  = 16'h0000;
+    end
+    if (rst) begin
+      \$96  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
+    \$97  = slots_full;
+    if (\$34 ) begin
+      \$97  = \$36 ;
+    end
+    if (receiver_clear) begin
+      \$97  = 1'h0;
+    end
+    if (rst) begin
+      \$97  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
+    \$98  = started;
+    casez (decoder_fsm_state)
+      3'h0:
+          if (\$37 ) begin
+            \$98  = 1'h1;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$98  = 1'h0;
+    end
+    if (rst) begin
+      \$98  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
+    \$99  = start_slot;
+    casez (decoder_fsm_state)
+      3'h0:
+          if (\$37 ) begin
+            \$99  = slots;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$99  = 16'h0000;
+    end
+    if (rst) begin
+      \$99  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
+    \$100  = decoder_fsm_state;
+    casez (decoder_fsm_state)
+      3'h0:
+          if (\$37 ) begin
+            \$100  = 3'h1;
+          end
+      3'h1:
+          if (sample) begin
+            \$100  = 3'h2;
+          end
+      3'h2:
+          if (sample) begin
+            if (\$52 ) begin
+              if (\$54 ) begin
+                \$100  = 3'h3;
+              end
+            end
+          end
+      3'h3:
+          if (sample) begin
+            \$100  = 3'h4;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$100  = 3'h0;
+    end
+    if (rst) begin
+      \$100  = 3'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
+    \$101  = cds;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$101  = \bit ;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$101  = 1'h0;
+    end
+    if (rst) begin
+      \$101  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
+    \$102  = idx;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$102  = 7'h00;
+          end
+      3'h2:
+          if (sample) begin
+            \$102  = \$39 [6:0];
+            if (\$52 ) begin
+              \$102  = 7'h00;
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$102  = 7'h00;
+    end
+    if (rst) begin
+      \$102  = 7'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
+    \$103  = in_data;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$103  = w0_data_at0;
+          end
+      3'h2:
+          if (sample) begin
+            \$103  = \$42 ;
+            if (\$52 ) begin
+              \$103  = w1_data_at0;
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$103  = 1'h0;
+    end
+    if (rst) begin
+      \$103  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
+    \$104  = in_lc;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$104  = w0_lc_at0;
+          end
+      3'h2:
+          if (sample) begin
+            \$104  = \$48 ;
+            if (\$52 ) begin
+              \$104  = w1_lc_at0;
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$104  = 1'h0;
+    end
+    if (rst) begin
+      \$104  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
+    \$105  = in_top;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$105  = \$38 ;
+          end
+      3'h2:
+          if (sample) begin
+            \$105  = \$50 ;
+            if (\$52 ) begin
+              \$105  = 1'h0;
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$105  = 1'h0;
+    end
+    if (rst) begin
+      \$105  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
+    \$106  = word;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$106  = 1'h0;
+          end
+      3'h2:
+          if (sample) begin
+            if (\$52 ) begin
+              (* full_case = 32'd1 *)
+              if (\$54 ) begin
+              end else begin
+                \$106  = \$55 [0];
+              end
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$106  = 1'h0;
+    end
+    if (rst) begin
+      \$106  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
+    \$107  = stop_bit;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h3:
+          if (sample) begin
+            \$107  = \bit ;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$107  = 1'h0;
+    end
+    if (rst) begin
+      \$107  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
+    \$108  = data0;
+    if (\$58 ) begin
+      \$108  = { data0[53:0], \bit  };
+    end
+    if (receiver_clear) begin
+      \$108  = 55'h00000000000000;
+    end
+    if (rst) begin
+      \$108  = 55'h00000000000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
+    \$109  = ne;
+    if (\$59 ) begin
+      \$109 [0] = 1'h1;
+    end else if (\$63 ) begin
+      \$109 [0] = \bit ;
+    end
+    if (\$71 ) begin
+      \$109 [1] = 1'h1;
+    end else if (\$75 ) begin
+      \$109 [1] = \bit ;
+    end
+    if (receiver_clear) begin
+      \$109  = 2'h0;
+    end
+    if (rst) begin
+      \$109  = 2'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
+    \$110  = nw;
+    if (\$59 ) begin
+      \$110 [0] = 1'h1;
+    end else if (\$63 ) begin
+    end else if (\$67 ) begin
+      \$110 [0] = \bit ;
+    end
+    if (\$71 ) begin
+      \$110 [1] = 1'h1;
+    end else if (\$75 ) begin
+    end else if (\$79 ) begin
+      \$110 [1] = \bit ;
+    end
+    if (receiver_clear) begin
+      \$110  = 2'h0;
+    end
+    if (rst) begin
+      \$110  = 2'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
+    \$111  = data1;
+    if (\$70 ) begin
+      \$111  = { data1[38:0], \bit  };
+    end
+    if (receiver_clear) begin
+      \$111  = 40'h0000000000;
+    end
+    if (rst) begin
+      \$111  = 40'h0000000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
+    \$112  = lc;
+    if (lc_load) begin
+      \$112  = { lc[4:0], \bit  };
+    end
+    if (receiver_clear) begin
+      \$112  = 6'h00;
+    end
+    if (rst) begin
+      \$112  = 6'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
+    \$113  = cpw_top;
+    if (\$80 ) begin
+      \$113  = { cpw_top[38:0], \bit  };
+    end
+    if (receiver_clear) begin
+      \$113  = 40'h0000000000;
+    end
+    if (rst) begin
+      \$113  = 40'h0000000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
     in_word = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -3613,410 +3938,11 @@ module \biss_master.decoder (rst, word_count, lc_load, words, receiver_clear, sa
           in_word = sample;
     endcase
   end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
-    \$106  = 1'h0;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          if (sample) begin
-            if (\$77 ) begin
-              if (\$79 ) begin
-                \$106  = 1'h1;
-              end
-            end
-          end
-    endcase
-    if (receiver_clear) begin
-      \$106  = 1'h0;
-    end
-    if (rst) begin
-      \$106  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
-    \$107  = 1'h0;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h3:
-          if (sample) begin
-            \$107  = 1'h1;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$107  = 1'h0;
-    end
-    if (rst) begin
-      \$107  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
-    \$108  = slots;
-    if (\$59 ) begin
-      \$108  = \$60 [15:0];
-    end
-    if (receiver_clear) begin
-      \$108  = 16'h0000;
-    end
-    if (rst) begin
-      \$108  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
-    \$109  = slots_full;
-    if (\$59 ) begin
-      \$109  = \$61 ;
-    end
-    if (receiver_clear) begin
-      \$109  = 1'h0;
-    end
-    if (rst) begin
-      \$109  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
-    \$110  = started;
-    casez (decoder_fsm_state)
-      3'h0:
-          if (\$62 ) begin
-            \$110  = 1'h1;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$110  = 1'h0;
-    end
-    if (rst) begin
-      \$110  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
-    \$111  = start_slot;
-    casez (decoder_fsm_state)
-      3'h0:
-          if (\$62 ) begin
-            \$111  = slots;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$111  = 16'h0000;
-    end
-    if (rst) begin
-      \$111  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
-    \$112  = decoder_fsm_state;
-    casez (decoder_fsm_state)
-      3'h0:
-          if (\$62 ) begin
-            \$112  = 3'h1;
-          end
-      3'h1:
-          if (sample) begin
-            \$112  = 3'h2;
-          end
-      3'h2:
-          if (sample) begin
-            if (\$77 ) begin
-              if (\$79 ) begin
-                \$112  = 3'h3;
-              end
-            end
-          end
-      3'h3:
-          if (sample) begin
-            \$112  = 3'h4;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$112  = 3'h0;
-    end
-    if (rst) begin
-      \$112  = 3'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
-    \$113  = cds;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$113  = \bit ;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$113  = 1'h0;
-    end
-    if (rst) begin
-      \$113  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
-    \$114  = idx;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$114  = 7'h00;
-          end
-      3'h2:
-          if (sample) begin
-            \$114  = \$64 [6:0];
-            if (\$77 ) begin
-              \$114  = 7'h00;
-            end
-          end
-    endcase
-    if (receiver_clear) begin
-      \$114  = 7'h00;
-    end
-    if (rst) begin
-      \$114  = 7'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
-    \$115  = in_data;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$115  = w0_data_at0;
-          end
-      3'h2:
-          if (sample) begin
-            \$115  = \$67 ;
-            if (\$77 ) begin
-              \$115  = w1_data_at0;
-            end
-          end
-    endcase
-    if (receiver_clear) begin
-      \$115  = 1'h0;
-    end
-    if (rst) begin
-      \$115  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
-    \$116  = in_lc;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$116  = w0_lc_at0;
-          end
-      3'h2:
-          if (sample) begin
-            \$116  = \$73 ;
-            if (\$77 ) begin
-              \$116  = w1_lc_at0;
-            end
-          end
-    endcase
-    if (receiver_clear) begin
-      \$116  = 1'h0;
-    end
-    if (rst) begin
-      \$116  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
-    \$117  = in_top;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$117  = \$63 ;
-          end
-      3'h2:
-          if (sample) begin
-            \$117  = \$75 ;
-            if (\$77 ) begin
-              \$117  = 1'h0;
-            end
-          end
-    endcase
-    if (receiver_clear) begin
-      \$117  = 1'h0;
-    end
-    if (rst) begin
-      \$117  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
-    \$118  = word;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$118  = 1'h0;
-          end
-      3'h2:
-          if (sample) begin
-            if (\$77 ) begin
-              (* full_case = 32'd1 *)
-              if (\$79 ) begin
-              end else begin
-                \$118  = \$80 [0];
-              end
-            end
-          end
-    endcase
-    if (receiver_clear) begin
-      \$118  = 1'h0;
-    end
-    if (rst) begin
-      \$118  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
-    \$119  = stop_bit;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h3:
-          if (sample) begin
-            \$119  = \bit ;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$119  = 1'h0;
-    end
-    if (rst) begin
-      \$119  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
-    \$120  = data0;
-    if (\$83 ) begin
-      \$120  = { data0[53:0], \bit  };
-    end
-    if (receiver_clear) begin
-      \$120  = 55'h00000000000000;
-    end
-    if (rst) begin
-      \$120  = 55'h00000000000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
-    \$121  = ne;
-    if (\$84 ) begin
-      \$121 [0] = 1'h1;
-    end else if (\$88 ) begin
-      \$121 [0] = \bit ;
-    end
-    if (\$96 ) begin
-      \$121 [1] = 1'h1;
-    end else if (\$100 ) begin
-      \$121 [1] = \bit ;
-    end
-    if (receiver_clear) begin
-      \$121  = 2'h0;
-    end
-    if (rst) begin
-      \$121  = 2'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
-    \$122  = nw;
-    if (\$84 ) begin
-      \$122 [0] = 1'h1;
-    end else if (\$88 ) begin
-    end else if (\$92 ) begin
-      \$122 [0] = \bit ;
-    end
-    if (\$96 ) begin
-      \$122 [1] = 1'h1;
-    end else if (\$100 ) begin
-    end else if (\$104 ) begin
-      \$122 [1] = \bit ;
-    end
-    if (receiver_clear) begin
-      \$122  = 2'h0;
-    end
-    if (rst) begin
-      \$122  = 2'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
-    \$123  = data1;
-    if (\$95 ) begin
-      \$123  = { data1[38:0], \bit  };
-    end
-    if (receiver_clear) begin
-      \$123  = 40'h0000000000;
-    end
-    if (rst) begin
-      \$123  = 40'h0000000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
-    \$124  = lc;
-    if (lc_load) begin
-      \$124  = { lc[4:0], \bit  };
-    end
-    if (receiver_clear) begin
-      \$124  = 6'h00;
-    end
-    if (rst) begin
-      \$124  = 6'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
-    \$125  = cpw_top;
-    if (\$105 ) begin
-      \$125  = { cpw_top[38:0], \bit  };
-    end
-    if (receiver_clear) begin
-      \$125  = 40'h0000000000;
-    end
-    if (rst) begin
-      \$125  = 40'h0000000000;
-    end
-  end
-  assign frame_bits = \$12 [7:0];
   assign lc_next = { lc[4:0], \bit  };
   assign kind = words[9:8];
-  assign \bit$16  = \bit ;
-  assign \kind$19  = words[19:18];
-  assign \bit$22  = \bit ;
+  assign \bit$47  = \bit ;
+  assign \kind$50  = words[19:18];
+  assign \bit$53  = \bit ;
   assign \words[0]  = words[9:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -4027,18 +3953,18 @@ module \biss_master.decoder (rst, word_count, lc_load, words, receiver_clear, sa
   assign \words[1].nenw  = words[16];
   assign \words[1].lc  = words[17];
   assign \words[1].crc  = words[19:18];
-  assign crc_ok[1] = \ok$23 ;
+  assign crc_ok[1] = \ok$54 ;
   assign crc_ok[0] = ok;
-  assign \$17  = word;
-  assign \$20  = word;
-  assign \$93  = word;
-  assign \$97  = word;
-  assign \$101  = word;
+  assign \$68  = word;
+  assign \$72  = word;
+  assign \$76  = word;
+  assign \$85  = word;
+  assign \$88  = word;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.decoder.crc0 (rst, start, valid, kind, receiver_clear, ok, \bit , clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$24  = 0;
+module \biss_master.decoder.crc0 (rst, start, valid, kind, receiver_clear, \bit , ok, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$25  = 0;
   wire [5:0] \$1 ;
   wire \$10 ;
   wire [5:0] \$11 ;
@@ -4132,7 +4058,7 @@ module \biss_master.decoder.crc0 (rst, start, valid, kind, receiver_clear, ok, \
   assign \$auto$rtlil.cc:2739:Not$6  = ~ { crc6_reg[0], 1'h0 };
   assign \$auto$rtlil.cc:2739:Not$8  = ~ { crc16_reg[14], crc16_reg[11], crc16_reg[6:5], crc16_reg[3:2], 1'h0 };
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$25 ) begin end
     \$31  = crc6_reg;
     if (valid) begin
       \$31  = \$5 ;
@@ -4147,7 +4073,7 @@ module \biss_master.decoder.crc0 (rst, start, valid, kind, receiver_clear, ok, \
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$25 ) begin end
     \$32  = crc6_match;
     if (valid) begin
       \$32  = \$15 ;
@@ -4162,7 +4088,7 @@ module \biss_master.decoder.crc0 (rst, start, valid, kind, receiver_clear, ok, \
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$25 ) begin end
     \$33  = crc16_reg;
     if (valid) begin
       \$33  = \$20 ;
@@ -4177,7 +4103,7 @@ module \biss_master.decoder.crc0 (rst, start, valid, kind, receiver_clear, ok, \
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$25 ) begin end
     \$34  = crc16_match;
     if (valid) begin
       \$34  = \$30 ;
@@ -4192,7 +4118,7 @@ module \biss_master.decoder.crc0 (rst, start, valid, kind, receiver_clear, ok, \
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$25 ) begin end
     ok = 1'h0;
     casez (kind)
       2'h0:
@@ -4203,17 +4129,17 @@ module \biss_master.decoder.crc0 (rst, start, valid, kind, receiver_clear, ok, \
           ok = crc16_match;
     endcase
   end
-  assign \$8  = 1'h0;
   assign \$11 [5:2] = crc6_reg[4:1];
   assign \$11 [1:0] = \$auto$rtlil.cc:2739:Not$6 ;
+  assign \$8  = 1'h0;
   assign \$23  = 1'h0;
   assign { \$26 [14:13], \$26 [11:8], \$26 [5], \$26 [2:1] } = { crc16_reg[13:12], crc16_reg[10:7], crc16_reg[4], crc16_reg[1:0] };
   assign { \$26 [15], \$26 [12], \$26 [7:6], \$26 [4:3], \$26 [0] } = \$auto$rtlil.cc:2739:Not$8 ;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.decoder.crc1 (rst, start, valid, kind, receiver_clear, ok, \bit , clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$25  = 0;
+module \biss_master.decoder.crc1 (rst, start, valid, kind, receiver_clear, \bit , ok, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$26  = 0;
   wire [5:0] \$1 ;
   wire \$10 ;
   wire [5:0] \$11 ;
@@ -4307,7 +4233,7 @@ module \biss_master.decoder.crc1 (rst, start, valid, kind, receiver_clear, ok, \
   assign \$auto$rtlil.cc:2739:Not$2  = ~ { crc6_reg[0], 1'h0 };
   assign \$auto$rtlil.cc:2739:Not$4  = ~ { crc16_reg[14], crc16_reg[11], crc16_reg[6:5], crc16_reg[3:2], 1'h0 };
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$25 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$31  = crc6_reg;
     if (valid) begin
       \$31  = \$5 ;
@@ -4322,7 +4248,7 @@ module \biss_master.decoder.crc1 (rst, start, valid, kind, receiver_clear, ok, \
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$25 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$32  = crc6_match;
     if (valid) begin
       \$32  = \$15 ;
@@ -4337,7 +4263,7 @@ module \biss_master.decoder.crc1 (rst, start, valid, kind, receiver_clear, ok, \
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$25 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$33  = crc16_reg;
     if (valid) begin
       \$33  = \$20 ;
@@ -4352,7 +4278,7 @@ module \biss_master.decoder.crc1 (rst, start, valid, kind, receiver_clear, ok, \
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$25 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$34  = crc16_match;
     if (valid) begin
       \$34  = \$30 ;
@@ -4367,7 +4293,7 @@ module \biss_master.decoder.crc1 (rst, start, valid, kind, receiver_clear, ok, \
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$25 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     ok = 1'h0;
     casez (kind)
       2'h0:
@@ -4378,35 +4304,36 @@ module \biss_master.decoder.crc1 (rst, start, valid, kind, receiver_clear, ok, \
           ok = crc16_match;
     endcase
   end
-  assign \$8  = 1'h0;
   assign \$11 [5:2] = crc6_reg[4:1];
   assign \$11 [1:0] = \$auto$rtlil.cc:2739:Not$2 ;
+  assign \$8  = 1'h0;
   assign \$23  = 1'h0;
   assign { \$26 [14:13], \$26 [11:8], \$26 [5], \$26 [2:1] } = { crc16_reg[13:12], crc16_reg[10:7], crc16_reg[4], crc16_reg[1:0] };
   assign { \$26 [15], \$26 [12], \$26 [7:6], \$26 [4:3], \$26 [0] } = \$auto$rtlil.cc:2739:Not$4 ;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.ma_clock (rst, run, half_period, first_rise, second_rise, ma, rises, busy, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$26  = 0;
+module \biss_master.ma_clock (rst, half_period, run, first_rise, second_rise, ma, rises, busy, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$27  = 0;
   wire [16:0] \$1 ;
-  wire [16:0] \$10 ;
+  wire \$10 ;
   wire [16:0] \$11 ;
-  wire \$12 ;
-  wire [16:0] \$13 ;
-  wire \$14 ;
+  wire [16:0] \$12 ;
+  wire \$13 ;
+  wire [16:0] \$14 ;
   wire \$15 ;
   wire \$16 ;
   wire \$17 ;
-  reg \$18 ;
+  wire \$18 ;
   reg \$19 ;
   wire \$2 ;
   reg \$20 ;
   reg \$21 ;
-  reg [15:0] \$22 ;
-  reg \$23 ;
-  reg [15:0] \$24 ;
-  reg [1:0] \$25 ;
+  reg \$22 ;
+  reg [15:0] \$23 ;
+  reg \$24 ;
+  reg [15:0] \$25 ;
+  reg [1:0] \$26 ;
   wire [16:0] \$3 ;
   wire \$4 ;
   wire \$5 ;
@@ -4444,55 +4371,41 @@ module \biss_master.ma_clock (rst, run, half_period, first_rise, second_rise, ma
   assign \$6  = rises == 1'h1;
   assign \$7  = half_period - 1'h1;
   assign \$8  = half_period == 1'h1;
-  assign \$9  = rises != 16'hffff;
-  assign \$10  = rises + 1'h1;
-  assign \$11  = phase_left - 1'h1;
-  assign \$12  = phase_left == 1'h1;
-  assign \$13  = half_period - 1'h1;
-  assign \$14  = half_period == 1'h1;
-  assign \$15  = ! ma_fsm_state;
-  assign \$16  = ma_fsm_state == 1'h1;
-  assign \$17  = ma_fsm_state == 2'h2;
+  assign \$9  = & rises;
+  assign \$10  = ~ \$9 ;
+  assign \$11  = rises + 1'h1;
+  assign \$12  = phase_left - 1'h1;
+  assign \$13  = phase_left == 1'h1;
+  assign \$14  = half_period - 1'h1;
+  assign \$15  = half_period == 1'h1;
+  assign \$16  = ! ma_fsm_state;
+  assign \$17  = ma_fsm_state == 1'h1;
+  assign \$18  = ma_fsm_state == 2'h2;
   always @(posedge clk)
-    rise <= \$18 ;
+    rise <= \$19 ;
   always @(posedge clk)
-    first_rise <= \$19 ;
+    first_rise <= \$20 ;
   always @(posedge clk)
-    second_rise <= \$20 ;
+    second_rise <= \$21 ;
   always @(posedge clk)
-    ma <= \$21 ;
+    ma <= \$22 ;
   always @(posedge clk)
-    phase_left <= \$22 ;
+    phase_left <= \$23 ;
   always @(posedge clk)
-    last_clock <= \$23 ;
+    last_clock <= \$24 ;
   always @(posedge clk)
-    rises <= \$24 ;
+    rises <= \$25 ;
   always @(posedge clk)
-    ma_fsm_state <= \$25 ;
+    ma_fsm_state <= \$26 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$18  = 1'h0;
-    casez (ma_fsm_state)
-      2'h0:
-          /* empty */;
-      2'h1:
-          if (last_clock) begin
-            \$18  = 1'h1;
-          end
-    endcase
-    if (rst) begin
-      \$18  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     \$19  = 1'h0;
     casez (ma_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
           if (last_clock) begin
-            \$19  = \$5 ;
+            \$19  = 1'h1;
           end
     endcase
     if (rst) begin
@@ -4500,14 +4413,14 @@ module \biss_master.ma_clock (rst, run, half_period, first_rise, second_rise, ma
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     \$20  = 1'h0;
     casez (ma_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
           if (last_clock) begin
-            \$20  = \$6 ;
+            \$20  = \$5 ;
           end
     endcase
     if (rst) begin
@@ -4515,133 +4428,148 @@ module \biss_master.ma_clock (rst, run, half_period, first_rise, second_rise, ma
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$21  = ma;
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    \$21  = 1'h0;
+    casez (ma_fsm_state)
+      2'h0:
+          /* empty */;
+      2'h1:
+          if (last_clock) begin
+            \$21  = \$6 ;
+          end
+    endcase
+    if (rst) begin
+      \$21  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    \$22  = ma;
     casez (ma_fsm_state)
       2'h0:
           if (run) begin
-            \$21  = 1'h0;
+            \$22  = 1'h0;
           end
       2'h1:
           if (last_clock) begin
-            \$21  = 1'h1;
+            \$22  = 1'h1;
           end
       2'h2:
           if (last_clock) begin
             if (run) begin
-              \$21  = 1'h0;
+              \$22  = 1'h0;
             end
           end
     endcase
     if (rst) begin
-      \$21  = 1'h1;
+      \$22  = 1'h1;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$22  = phase_left;
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    \$23  = phase_left;
     casez (ma_fsm_state)
       2'h0:
           if (run) begin
-            \$22  = \$1 [15:0];
+            \$23  = \$1 [15:0];
           end
       2'h1:
         begin
-          \$22  = \$3 [15:0];
+          \$23  = \$3 [15:0];
           if (last_clock) begin
-            \$22  = \$7 [15:0];
+            \$23  = \$7 [15:0];
           end
         end
       2'h2:
         begin
-          \$22  = \$11 [15:0];
+          \$23  = \$12 [15:0];
           if (last_clock) begin
             if (run) begin
-              \$22  = \$13 [15:0];
+              \$23  = \$14 [15:0];
             end
           end
         end
     endcase
     if (rst) begin
-      \$22  = 16'h0000;
+      \$23  = 16'h0000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$23  = last_clock;
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    \$24  = last_clock;
     casez (ma_fsm_state)
       2'h0:
           if (run) begin
-            \$23  = \$2 ;
+            \$24  = \$2 ;
           end
       2'h1:
         begin
-          \$23  = \$4 ;
+          \$24  = \$4 ;
           if (last_clock) begin
-            \$23  = \$8 ;
+            \$24  = \$8 ;
           end
         end
       2'h2:
         begin
-          \$23  = \$12 ;
+          \$24  = \$13 ;
           if (last_clock) begin
             if (run) begin
-              \$23  = \$14 ;
+              \$24  = \$15 ;
             end
           end
         end
     endcase
     if (rst) begin
-      \$23  = 1'h1;
+      \$24  = 1'h1;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$24  = rises;
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    \$25  = rises;
     casez (ma_fsm_state)
       2'h0:
           if (run) begin
-            \$24  = 16'h0000;
+            \$25  = 16'h0000;
           end
       2'h1:
           if (last_clock) begin
-            if (\$9 ) begin
-              \$24  = \$10 [15:0];
+            if (\$10 ) begin
+              \$25  = \$11 [15:0];
             end
           end
     endcase
     if (rst) begin
-      \$24  = 16'h0000;
+      \$25  = 16'h0000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$25  = ma_fsm_state;
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    \$26  = ma_fsm_state;
     casez (ma_fsm_state)
       2'h0:
           if (run) begin
-            \$25  = 2'h1;
+            \$26  = 2'h1;
           end
       2'h1:
           if (last_clock) begin
-            \$25  = 2'h2;
+            \$26  = 2'h2;
           end
       2'h2:
           if (last_clock) begin
             (* full_case = 32'd1 *)
             if (run) begin
-              \$25  = 2'h1;
+              \$26  = 2'h1;
             end else begin
-              \$25  = 2'h0;
+              \$26  = 2'h0;
             end
           end
     endcase
     if (rst) begin
-      \$25  = 2'h0;
+      \$26  = 2'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     busy = 1'h0;
     casez (ma_fsm_state)
       2'h0:
@@ -4655,8 +4583,396 @@ module \biss_master.ma_clock (rst, run, half_period, first_rise, second_rise, ma
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.sampler (rst, receiver_clear, half_period, arm, early, locked, delay, sample, slo, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$27  = 0;
+module \biss_master.ma_stop (rst, words, w1_enable, clear, rises, enough, \started$10 , start_slot, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$28  = 0;
+  reg [7:0] \$1 ;
+  reg [7:0] \$10 ;
+  wire [8:0] \$11 ;
+  reg [7:0] \$12 ;
+  reg [8:0] \$13 ;
+  reg [16:0] \$14 ;
+  reg \$15 ;
+  reg \$16 ;
+  reg [7:0] \$17 ;
+  wire [8:0] \$2 ;
+  wire [7:0] \$3 ;
+  wire [8:0] \$4 ;
+  wire [16:0] \$5 ;
+  wire \$6 ;
+  wire \$7 ;
+  wire \$8 ;
+  wire \$9 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output enough;
+  reg enough = 1'h0;
+  reg [8:0] frame_len = 9'h000;
+  input [15:0] rises;
+  wire [15:0] rises;
+  input rst;
+  wire rst;
+  input [15:0] start_slot;
+  wire [15:0] start_slot;
+  reg started = 1'h0;
+  input \started$10 ;
+  wire \started$10 ;
+  reg [16:0] target_rises = 17'h00000;
+  input w1_enable;
+  wire w1_enable;
+  reg [7:0] word0_len = 8'h00;
+  reg [7:0] word1_len = 8'h00;
+  input [19:0] words;
+  wire [19:0] words;
+  wire [9:0] \words[0] ;
+  (* enum_base_type = "Crc" *)
+  (* enum_value_00 = "NONE" *)
+  (* enum_value_01 = "CRC6" *)
+  (* enum_value_10 = "CRC16" *)
+  wire [1:0] \words[0].crc ;
+  wire [5:0] \words[0].data_bits ;
+  wire \words[0].lc ;
+  wire \words[0].nenw ;
+  wire [9:0] \words[1] ;
+  (* enum_base_type = "Crc" *)
+  (* enum_value_00 = "NONE" *)
+  (* enum_value_01 = "CRC6" *)
+  (* enum_value_10 = "CRC16" *)
+  wire [1:0] \words[1].crc ;
+  wire [5:0] \words[1].data_bits ;
+  wire \words[1].lc ;
+  wire \words[1].nenw ;
+  assign \$2  = words[5:0] + \$1 ;
+  assign \$3  = w1_enable ? word1_len : 8'h00;
+  assign \$4  = word0_len + \$3 ;
+  assign \$5  = start_slot + frame_len;
+  assign \$6  = rises >= target_rises;
+  assign \$7  = started & \$6 ;
+  assign \$8  = ~ clear;
+  assign \$9  = \$7  & \$8 ;
+  assign \$11  = words[15:10] + \$10 ;
+  always @(posedge clk)
+    word0_len <= \$12 ;
+  always @(posedge clk)
+    frame_len <= \$13 ;
+  always @(posedge clk)
+    target_rises <= \$14 ;
+  always @(posedge clk)
+    started <= \$15 ;
+  always @(posedge clk)
+    enough <= \$16 ;
+  always @(posedge clk)
+    word1_len <= \$17 ;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
+    (* full_case = 32'd1 *)
+    casez (words[9:6])
+      4'h0:
+          \$1  = 8'h04;
+      4'h1:
+          \$1  = 8'h06;
+      4'h2:
+          \$1  = 8'h0a;
+      4'h3:
+          \$1  = 8'h0c;
+      4'h4:
+          \$1  = 8'h0a;
+      4'h5:
+          \$1  = 8'h0c;
+      4'h6:
+          \$1  = 8'h10;
+      4'h7:
+          \$1  = 8'h12;
+      4'h8:
+          \$1  = 8'h14;
+      4'h9:
+          \$1  = 8'h16;
+      4'ha:
+          \$1  = 8'h1a;
+      4'hb:
+          \$1  = 8'h1c;
+      4'hc:
+          \$1  = 8'h04;
+      4'hd:
+          \$1  = 8'h06;
+      4'he:
+          \$1  = 8'h0a;
+      4'hf:
+          \$1  = 8'h0c;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
+    (* full_case = 32'd1 *)
+    casez (words[19:16])
+      4'h0:
+          \$10  = 8'h00;
+      4'h1:
+          \$10  = 8'h02;
+      4'h2:
+          \$10  = 8'h06;
+      4'h3:
+          \$10  = 8'h08;
+      4'h4:
+          \$10  = 8'h06;
+      4'h5:
+          \$10  = 8'h08;
+      4'h6:
+          \$10  = 8'h0c;
+      4'h7:
+          \$10  = 8'h0e;
+      4'h8:
+          \$10  = 8'h10;
+      4'h9:
+          \$10  = 8'h12;
+      4'ha:
+          \$10  = 8'h16;
+      4'hb:
+          \$10  = 8'h18;
+      4'hc:
+          \$10  = 8'h00;
+      4'hd:
+          \$10  = 8'h02;
+      4'he:
+          \$10  = 8'h06;
+      4'hf:
+          \$10  = 8'h08;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
+    \$12  = \$2 [7:0];
+    if (rst) begin
+      \$12  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
+    \$13  = \$4 ;
+    if (rst) begin
+      \$13  = 9'h000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
+    \$14  = \$5 ;
+    if (rst) begin
+      \$14  = 17'h00000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
+    \$15  = \started$10 ;
+    if (rst) begin
+      \$15  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
+    \$16  = \$9 ;
+    if (rst) begin
+      \$16  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
+    \$17  = \$11 [7:0];
+    if (rst) begin
+      \$17  = 8'h00;
+    end
+  end
+  assign \words[0]  = words[9:0];
+  assign \words[0].data_bits  = words[5:0];
+  assign \words[0].nenw  = words[6];
+  assign \words[0].lc  = words[7];
+  assign \words[0].crc  = words[9:8];
+  assign \words[1]  = words[19:10];
+  assign \words[1].data_bits  = words[15:10];
+  assign \words[1].nenw  = words[16];
+  assign \words[1].lc  = words[17];
+  assign \words[1].crc  = words[19:18];
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master.results (rst, report, valid, frame, report_frame, report_delay, done, valid_out, result, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$29  = 0;
+  reg \$1 ;
+  reg \$2 ;
+  reg [160:0] \$3 ;
+  input clk;
+  wire clk;
+  output done;
+  reg done = 1'h0;
+  input [160:0] frame;
+  wire [160:0] frame;
+  wire \frame.cds ;
+  wire [5:0] \frame.lc ;
+  wire \frame.lc_repeat ;
+  wire \frame.lc_skip ;
+  wire \frame.lc_zero ;
+  wire [12:0] \frame.line_delay ;
+  wire \frame.spw_mismatch ;
+  (* enum_base_type = "Status" *)
+  (* enum_value_0000 = "OK" *)
+  (* enum_value_0001 = "CRC_ERROR_WORD0" *)
+  (* enum_value_0010 = "CRC_ERROR_WORD1" *)
+  (* enum_value_0011 = "CRC_ERROR_BOTH" *)
+  (* enum_value_0100 = "SIGN_OF_LIFE" *)
+  (* enum_value_0101 = "SPW_MISMATCH" *)
+  (* enum_value_0110 = "NO_ACK" *)
+  (* enum_value_0111 = "NO_START" *)
+  (* enum_value_1000 = "DELAY_RANGE" *)
+  (* enum_value_1001 = "SLO_STUCK_LOW" *)
+  (* enum_value_1010 = "ABORTED" *)
+  (* enum_value_1011 = "BAD_CONFIG" *)
+  (* enum_value_1100 = "NO_STOP" *)
+  wire [3:0] \frame.status ;
+  wire [31:0] \frame.timestamp ;
+  wire [57:0] \frame.word0 ;
+  wire \frame.word0.crc_ok ;
+  wire \frame.word0.ne ;
+  wire \frame.word0.nw ;
+  wire [54:0] \frame.word0.position ;
+  wire [42:0] \frame.word1 ;
+  wire \frame.word1.crc_ok ;
+  wire \frame.word1.ne ;
+  wire \frame.word1.nw ;
+  wire [39:0] \frame.word1.position ;
+  input report;
+  wire report;
+  input report_delay;
+  wire report_delay;
+  input report_frame;
+  wire report_frame;
+  output [160:0] result;
+  reg [160:0] result = 161'h00000000000000000000000000000000000000000;
+  wire \result.cds ;
+  wire [5:0] \result.lc ;
+  wire \result.lc_repeat ;
+  wire \result.lc_skip ;
+  wire \result.lc_zero ;
+  wire [12:0] \result.line_delay ;
+  wire \result.spw_mismatch ;
+  (* enum_base_type = "Status" *)
+  (* enum_value_0000 = "OK" *)
+  (* enum_value_0001 = "CRC_ERROR_WORD0" *)
+  (* enum_value_0010 = "CRC_ERROR_WORD1" *)
+  (* enum_value_0011 = "CRC_ERROR_BOTH" *)
+  (* enum_value_0100 = "SIGN_OF_LIFE" *)
+  (* enum_value_0101 = "SPW_MISMATCH" *)
+  (* enum_value_0110 = "NO_ACK" *)
+  (* enum_value_0111 = "NO_START" *)
+  (* enum_value_1000 = "DELAY_RANGE" *)
+  (* enum_value_1001 = "SLO_STUCK_LOW" *)
+  (* enum_value_1010 = "ABORTED" *)
+  (* enum_value_1011 = "BAD_CONFIG" *)
+  (* enum_value_1100 = "NO_STOP" *)
+  wire [3:0] \result.status ;
+  wire [31:0] \result.timestamp ;
+  wire [57:0] \result.word0 ;
+  wire \result.word0.crc_ok ;
+  wire \result.word0.ne ;
+  wire \result.word0.nw ;
+  wire [54:0] \result.word0.position ;
+  wire [42:0] \result.word1 ;
+  wire \result.word1.crc_ok ;
+  wire \result.word1.ne ;
+  wire \result.word1.nw ;
+  wire [39:0] \result.word1.position ;
+  input rst;
+  wire rst;
+  input valid;
+  wire valid;
+  output valid_out;
+  reg valid_out = 1'h0;
+  always @(posedge clk)
+    done <= \$1 ;
+  always @(posedge clk)
+    valid_out <= \$2 ;
+  always @(posedge clk)
+    result <= \$3 ;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    \$1  = report;
+    if (rst) begin
+      \$1  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    \$2  = valid;
+    if (rst) begin
+      \$2  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    \$3  = result;
+    if (report) begin
+      \$3 [3:0] = frame[3:0];
+    end
+    if (report_delay) begin
+      \$3 [48:36] = frame[48:36];
+    end
+    if (report_frame) begin
+      \$3 [35:4] = frame[35:4];
+      \$3 [49] = frame[49];
+      \$3 [107:50] = frame[107:50];
+      \$3 [150:108] = frame[150:108];
+      \$3 [156:151] = frame[156:151];
+      \$3 [157] = frame[157];
+      \$3 [158] = frame[158];
+      \$3 [159] = frame[159];
+      \$3 [160] = frame[160];
+    end
+    if (rst) begin
+      \$3  = 161'h00000000000000000000000000000000000000000;
+    end
+  end
+  assign \result.status  = result[3:0];
+  assign \result.timestamp  = result[35:4];
+  assign \result.line_delay  = result[48:36];
+  assign \result.cds  = result[49];
+  assign \result.word0  = result[107:50];
+  assign \result.word0.position  = result[104:50];
+  assign \result.word0.ne  = result[105];
+  assign \result.word0.nw  = result[106];
+  assign \result.word0.crc_ok  = result[107];
+  assign \result.word1  = result[150:108];
+  assign \result.word1.position  = result[147:108];
+  assign \result.word1.ne  = result[148];
+  assign \result.word1.nw  = result[149];
+  assign \result.word1.crc_ok  = result[150];
+  assign \result.lc  = result[156:151];
+  assign \result.lc_repeat  = result[157];
+  assign \result.lc_skip  = result[158];
+  assign \result.lc_zero  = result[159];
+  assign \result.spw_mismatch  = result[160];
+  assign \frame.status  = frame[3:0];
+  assign \frame.timestamp  = frame[35:4];
+  assign \frame.line_delay  = frame[48:36];
+  assign \frame.cds  = frame[49];
+  assign \frame.word0  = frame[107:50];
+  assign \frame.word0.position  = frame[104:50];
+  assign \frame.word0.ne  = frame[105];
+  assign \frame.word0.nw  = frame[106];
+  assign \frame.word0.crc_ok  = frame[107];
+  assign \frame.word1  = frame[150:108];
+  assign \frame.word1.position  = frame[147:108];
+  assign \frame.word1.ne  = frame[148];
+  assign \frame.word1.nw  = frame[149];
+  assign \frame.word1.crc_ok  = frame[150];
+  assign \frame.lc  = frame[156:151];
+  assign \frame.lc_repeat  = frame[157];
+  assign \frame.lc_skip  = frame[158];
+  assign \frame.lc_zero  = frame[159];
+  assign \frame.spw_mismatch  = frame[160];
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master.sampler (clk, rst, half_period, receiver_clear, arm, early, locked, delay, sample, level, slo);
+  reg \$auto$verilog_backend.cc:2355:dump_module$30  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -4699,6 +5015,8 @@ module \biss_master.sampler (rst, receiver_clear, half_period, arm, early, locke
   reg first_slot = 1'h0;
   input [15:0] half_period;
   wire [15:0] half_period;
+  output level;
+  wire level;
   output locked;
   reg locked = 1'h0;
   input receiver_clear;
@@ -4713,10 +5031,10 @@ module \biss_master.sampler (rst, receiver_clear, half_period, arm, early, locke
   reg slo_prev = 1'h1;
   reg [16:0] slot_left = 17'h00000;
   reg slot_zero = 1'h1;
-  assign \$1  = ~ slo;
+  assign \$1  = ~ level;
   assign \$2  = elapsed != 13'h1fff;
   assign \$3  = elapsed + 1'h1;
-  assign \$4  = ~ slo;
+  assign \$4  = ~ level;
   assign \$5  = slo_prev & \$4 ;
   assign \$6  = elapsed == 13'h1fff;
   assign \$7  = elapsed - 1'h1;
@@ -4727,9 +5045,9 @@ module \biss_master.sampler (rst, receiver_clear, half_period, arm, early, locke
   assign \$12  = elapsed + 1'h1;
   assign \$13  = slot_left - 1'h1;
   assign \$14  = slot_left == 1'h1;
-  assign \$15  = first_slot & slo;
+  assign \$15  = first_slot & level;
   assign \$16  = { half_period, 1'h0 } - 1'h1;
-  assign \$17  = first_slot & slo;
+  assign \$17  = first_slot & level;
   assign \$18  = ! sampler_fsm_state;
   assign \$19  = sampler_fsm_state == 1'h1;
   assign \$20  = sampler_fsm_state == 2'h2;
@@ -4751,9 +5069,16 @@ module \biss_master.sampler (rst, receiver_clear, half_period, arm, early, locke
     slot_zero <= \$28 ;
   always @(posedge clk)
     first_slot <= \$29 ;
+  \biss_master.sampler.sync  sync (
+    .clk(clk),
+    .receiver_clear(receiver_clear),
+    .rst(rst),
+    .slo(slo),
+    .stage1(level)
+  );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
-    \$21  = slo;
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    \$21  = level;
     if (receiver_clear) begin
       \$21  = 1'h1;
     end
@@ -4762,7 +5087,7 @@ module \biss_master.sampler (rst, receiver_clear, half_period, arm, early, locke
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$22  = elapsed;
     casez (sampler_fsm_state)
       2'h0:
@@ -4786,7 +5111,7 @@ module \biss_master.sampler (rst, receiver_clear, half_period, arm, early, locke
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$23  = early;
     casez (sampler_fsm_state)
       2'h0:
@@ -4802,7 +5127,7 @@ module \biss_master.sampler (rst, receiver_clear, half_period, arm, early, locke
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$24  = locked;
     casez (sampler_fsm_state)
       2'h0:
@@ -4825,7 +5150,7 @@ module \biss_master.sampler (rst, receiver_clear, half_period, arm, early, locke
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$25  = sampler_fsm_state;
     casez (sampler_fsm_state)
       2'h0:
@@ -4849,7 +5174,7 @@ module \biss_master.sampler (rst, receiver_clear, half_period, arm, early, locke
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$26  = delay;
     casez (sampler_fsm_state)
       2'h0:
@@ -4867,7 +5192,7 @@ module \biss_master.sampler (rst, receiver_clear, half_period, arm, early, locke
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$27  = slot_left;
     casez (sampler_fsm_state)
       2'h0:
@@ -4893,7 +5218,7 @@ module \biss_master.sampler (rst, receiver_clear, half_period, arm, early, locke
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$28  = slot_zero;
     casez (sampler_fsm_state)
       2'h0:
@@ -4919,7 +5244,7 @@ module \biss_master.sampler (rst, receiver_clear, half_period, arm, early, locke
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$29  = first_slot;
     casez (sampler_fsm_state)
       2'h0:
@@ -4942,7 +5267,7 @@ module \biss_master.sampler (rst, receiver_clear, half_period, arm, early, locke
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     sample = 1'h0;
     casez (sampler_fsm_state)
       2'h0:
@@ -4956,12 +5281,145 @@ module \biss_master.sampler (rst, receiver_clear, half_period, arm, early, locke
           end
     endcase
   end
-  assign \bit  = slo;
+  assign \bit  = level;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.sign_of_life (rst, check, load, \repeat , skip, resync, lc, is_zero, \port$1179$0 , clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$28  = 0;
+module \biss_master.sampler.sync (clk, rst, receiver_clear, stage1, slo);
+  input clk;
+  wire clk;
+  (* init = 1'h1 *)
+  wire level;
+  input receiver_clear;
+  wire receiver_clear;
+  input rst;
+  wire rst;
+  input slo;
+  wire slo;
+  reg stage0 = 1'h1;
+  output stage1;
+  reg stage1 = 1'h1;
+  always @(posedge clk)
+    stage0 <= slo;
+  always @(posedge clk)
+    stage1 <= stage0;
+  assign level = stage1;
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master.scheduler (periodic, abort, period, clk, rst, request, overrun, idle, start);
+  reg \$auto$verilog_backend.cc:2355:dump_module$31  = 0;
+  wire \$1 ;
+  wire \$10 ;
+  wire \$11 ;
+  wire \$12 ;
+  wire \$13 ;
+  wire \$14 ;
+  wire \$15 ;
+  wire \$16 ;
+  wire \$17 ;
+  wire \$18 ;
+  wire \$19 ;
+  wire \$2 ;
+  wire \$20 ;
+  wire \$21 ;
+  wire \$22 ;
+  wire \$23 ;
+  wire \$24 ;
+  wire \$25 ;
+  wire \$26 ;
+  reg [23:0] \$27 ;
+  reg \$28 ;
+  wire \$3 ;
+  wire \$4 ;
+  wire \$5 ;
+  wire \$6 ;
+  wire [24:0] \$7 ;
+  wire \$8 ;
+  wire \$9 ;
+  input abort;
+  wire abort;
+  input clk;
+  wire clk;
+  reg [23:0] count_p1 = 24'h000001;
+  input idle;
+  wire idle;
+  output overrun;
+  wire overrun;
+  input [23:0] period;
+  wire [23:0] period;
+  reg period_start = 1'h1;
+  input periodic;
+  wire periodic;
+  output request;
+  wire request;
+  input rst;
+  wire rst;
+  input start;
+  wire start;
+  wire trigger;
+  assign \$1  = ~ periodic;
+  assign \$2  = ! period;
+  assign \$3  = periodic & \$2 ;
+  assign \$4  = \$1  | \$3 ;
+  assign \$5  = count_p1 >= period;
+  assign \$6  = \$4  | \$5 ;
+  assign \$7  = count_p1 + 1'h1;
+  assign \$9  = ! period;
+  assign \$10  = periodic & \$9 ;
+  assign \$11  = ~ \$10 ;
+  assign \$12  = periodic & \$11 ;
+  assign \$13  = \$12  & period_start;
+  assign \$14  = \$8  | \$13 ;
+  assign \$15  = ! period;
+  assign \$16  = periodic & \$15 ;
+  assign request = \$14  | \$16 ;
+  assign \$18  = ! period;
+  assign \$19  = periodic & \$18 ;
+  assign \$20  = ~ \$19 ;
+  assign \$21  = periodic & \$20 ;
+  assign \$22  = \$21  & period_start;
+  assign \$23  = \$17  | \$22 ;
+  assign \$24  = ~ abort;
+  assign \$25  = idle & \$24 ;
+  assign \$26  = ~ \$25 ;
+  assign overrun = \$23  & \$26 ;
+  always @(posedge clk)
+    count_p1 <= \$27 ;
+  always @(posedge clk)
+    period_start <= \$28 ;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
+    (* full_case = 32'd1 *)
+    if (\$6 ) begin
+      \$27  = 24'h000001;
+    end else begin
+      \$27  = \$7 [23:0];
+    end
+    if (rst) begin
+      \$27  = 24'h000001;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
+    (* full_case = 32'd1 *)
+    if (\$6 ) begin
+      \$28  = 1'h1;
+    end else begin
+      \$28  = 1'h0;
+    end
+    if (rst) begin
+      \$28  = 1'h1;
+    end
+  end
+  assign trigger = 1'h0;
+  assign \$8  = start;
+  assign \$17  = start;
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master.sign_of_life (rst, load, \repeat , skip, check, resync, \port$991$0 , lc, is_zero, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$32  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -4998,8 +5456,8 @@ module \biss_master.sign_of_life (rst, check, load, \repeat , skip, resync, lc, 
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$1179$0 ;
-  wire \port$1179$0 ;
+  input \port$991$0 ;
+  wire \port$991$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -5011,9 +5469,9 @@ module \biss_master.sign_of_life (rst, check, load, \repeat , skip, resync, lc, 
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$1179$0  };
-  assign \$2  = { lc[4:0], \port$1179$0  } == last;
-  assign \$3  = { lc[4:0], \port$1179$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$991$0  };
+  assign \$2  = { lc[4:0], \port$991$0  } == last;
+  assign \$3  = { lc[4:0], \port$991$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = lc == 6'h3f;
@@ -5041,7 +5499,7 @@ module \biss_master.sign_of_life (rst, check, load, \repeat , skip, resync, lc, 
   always @(posedge clk)
     synced <= \$21 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$32 ) begin end
     \$16  = is_zero;
     if (load) begin
       \$16  = \$1 ;
@@ -5051,7 +5509,7 @@ module \biss_master.sign_of_life (rst, check, load, \repeat , skip, resync, lc, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$32 ) begin end
     \$17  = is_last;
     if (load) begin
       \$17  = \$2 ;
@@ -5061,7 +5519,7 @@ module \biss_master.sign_of_life (rst, check, load, \repeat , skip, resync, lc, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$32 ) begin end
     \$18  = is_expected;
     if (load) begin
       \$18  = \$3 ;
@@ -5071,7 +5529,7 @@ module \biss_master.sign_of_life (rst, check, load, \repeat , skip, resync, lc, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$32 ) begin end
     \$19  = last;
     if (\$5 ) begin
       \$19  = lc;
@@ -5081,7 +5539,7 @@ module \biss_master.sign_of_life (rst, check, load, \repeat , skip, resync, lc, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$32 ) begin end
     \$20  = expected;
     if (\$5 ) begin
       \$20  = \$8 [5:0];
@@ -5091,7 +5549,7 @@ module \biss_master.sign_of_life (rst, check, load, \repeat , skip, resync, lc, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$32 ) begin end
     \$21  = synced;
     if (\$5 ) begin
       \$21  = 1'h1;
@@ -5103,33 +5561,13 @@ module \biss_master.sign_of_life (rst, check, load, \repeat , skip, resync, lc, 
       \$21  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$1179$0  };
+  assign lc_next = { lc[4:0], \port$991$0  };
   assign zero = is_zero;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.slo_sync (clk, rst, stage1, slo);
-  input clk;
-  wire clk;
-  input rst;
-  wire rst;
-  input slo;
-  wire slo;
-  (* init = 1'h1 *)
-  wire \slo$5 ;
-  reg stage0 = 1'h1;
-  output stage1;
-  reg stage1 = 1'h1;
-  always @(posedge clk)
-    stage0 <= slo;
-  always @(posedge clk)
-    stage1 <= stage0;
-  assign \slo$5  = stage1;
-endmodule
-
-(* generator = "Amaranth" *)
 module \biss_master.spw_check (rst, bits, \tolerance$8 , spw, cpw_top, match, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$29  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$33  = 0;
   wire [40:0] \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -5334,31 +5772,473 @@ module \biss_master.spw_check (rst, bits, \tolerance$8 , spw, cpw_top, match, cl
   assign \$7  = bits > 3'h5;
   assign \$8  = bits > 3'h6;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
     \$88  = \$42 ;
     if (rst) begin
       \$88  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
     \$89  = \$84 ;
     if (rst) begin
       \$89  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
     \$90  = \tolerance$8 ;
     if (rst) begin
       \$90  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
     \$91  = \$87 ;
     if (rst) begin
       \$91  = 1'h0;
     end
   end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master.time_base (rst, first_rise, first_rise_time, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$34  = 0;
+  wire [32:0] \$1 ;
+  reg [31:0] \$2 ;
+  reg [31:0] \$3 ;
+  input clk;
+  wire clk;
+  input first_rise;
+  wire first_rise;
+  output [31:0] first_rise_time;
+  reg [31:0] first_rise_time = 32'd0;
+  reg [31:0] now = 32'd0;
+  input rst;
+  wire rst;
+  assign \$1  = now + 1'h1;
+  always @(posedge clk)
+    now <= \$2 ;
+  always @(posedge clk)
+    first_rise_time <= \$3 ;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    \$2  = \$1 [31:0];
+    if (rst) begin
+      \$2  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    \$3  = first_rise_time;
+    if (first_rise) begin
+      \$3  = now;
+    end
+    if (rst) begin
+      \$3  = 32'd0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master.timers (timeout_live, clk, rst, restart, ack_limit, timeout_limit, delay_limit, no_start_limit, clear, in_clock, slo_stuck, slo_stuck_live, break_over, ack_expired, no_start_expired, delay_over, ma_busy, delay, slo, break_time);
+  reg \$auto$verilog_backend.cc:2355:dump_module$35  = 0;
+  wire \$1 ;
+  wire \$10 ;
+  wire \$11 ;
+  wire \$12 ;
+  wire \$13 ;
+  wire \$14 ;
+  wire \$15 ;
+  wire \$16 ;
+  wire \$17 ;
+  wire [25:0] \$18 ;
+  wire [25:0] \$19 ;
+  wire \$2 ;
+  wire [25:0] \$20 ;
+  wire \$21 ;
+  wire \$22 ;
+  wire \$23 ;
+  wire \$24 ;
+  wire \$25 ;
+  wire \$26 ;
+  wire \$27 ;
+  wire \$28 ;
+  wire \$29 ;
+  wire [25:0] \$3 ;
+  wire \$30 ;
+  wire \$31 ;
+  wire \$32 ;
+  wire \$33 ;
+  wire \$34 ;
+  wire \$35 ;
+  reg [24:0] \$36 ;
+  reg \$37 ;
+  reg \$38 ;
+  reg [24:0] \$39 ;
+  wire \$4 ;
+  reg \$40 ;
+  reg \$41 ;
+  reg \$42 ;
+  reg \$43 ;
+  wire \$5 ;
+  wire \$6 ;
+  wire \$7 ;
+  wire \$8 ;
+  wire \$9 ;
+  output ack_expired;
+  reg ack_expired = 1'h0;
+  input [23:0] ack_limit;
+  wire [23:0] ack_limit;
+  output break_over;
+  reg break_over = 1'h0;
+  input [23:0] break_time;
+  wire [23:0] break_time;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  input [12:0] delay;
+  wire [12:0] delay;
+  input [11:0] delay_limit;
+  wire [11:0] delay_limit;
+  output delay_over;
+  reg delay_over = 1'h0;
+  input in_clock;
+  wire in_clock;
+  input ma_busy;
+  wire ma_busy;
+  output no_start_expired;
+  reg no_start_expired = 1'h0;
+  input [24:0] no_start_limit;
+  wire [24:0] no_start_limit;
+  input restart;
+  wire restart;
+  input rst;
+  wire rst;
+  input slo;
+  wire slo;
+  reg [24:0] slo_low_time_p1 = 25'h0000001;
+  output slo_stuck;
+  reg slo_stuck = 1'h0;
+  output slo_stuck_live;
+  reg slo_stuck_live = 1'h0;
+  input [23:0] timeout_limit;
+  wire [23:0] timeout_limit;
+  input [23:0] timeout_live;
+  wire [23:0] timeout_live;
+  reg [24:0] timer = 25'h0000001;
+  assign \$1  = slo | ma_busy;
+  assign \$2  = ~ slo_low_time_p1[24];
+  assign \$3  = slo_low_time_p1 + 1'h1;
+  assign \$4  = ~ slo;
+  assign \$5  = ~ ma_busy;
+  assign \$6  = \$4  & \$5 ;
+  assign \$7  = slo_low_time_p1 >= timeout_limit;
+  assign \$8  = \$6  & \$7 ;
+  assign \$9  = ~ slo;
+  assign \$10  = ~ ma_busy;
+  assign \$11  = \$9  & \$10 ;
+  assign \$12  = ! timeout_live;
+  assign \$13  = slo_low_time_p1 >= 13'h1f40;
+  assign \$14  = slo_low_time_p1 >= timeout_live;
+  assign \$15  = \$12  ? \$13  : \$14 ;
+  assign \$16  = \$11  & \$15 ;
+  assign \$17  = & timer;
+  assign \$18  = timer + 1'h1;
+  assign \$19  = \$17  ? { 1'h0, timer } : \$18 ;
+  assign \$20  = clear ? 26'h0000001 : \$19 ;
+  assign \$21  = ~ clear;
+  assign \$22  = ! break_time;
+  assign \$23  = timer >= 12'hfa0;
+  assign \$24  = timer >= break_time;
+  assign \$25  = \$22  ? \$23  : \$24 ;
+  assign \$26  = \$21  & \$25 ;
+  assign \$27  = ~ restart;
+  assign \$28  = in_clock & \$27 ;
+  assign \$29  = timer >= ack_limit;
+  assign \$30  = \$28  & \$29 ;
+  assign \$31  = ~ restart;
+  assign \$32  = in_clock & \$31 ;
+  assign \$33  = timer >= no_start_limit;
+  assign \$34  = \$32  & \$33 ;
+  assign \$35  = delay > delay_limit;
+  always @(posedge clk)
+    slo_low_time_p1 <= \$36 ;
+  always @(posedge clk)
+    slo_stuck <= \$37 ;
+  always @(posedge clk)
+    slo_stuck_live <= \$38 ;
+  always @(posedge clk)
+    timer <= \$39 ;
+  always @(posedge clk)
+    break_over <= \$40 ;
+  always @(posedge clk)
+    ack_expired <= \$41 ;
+  always @(posedge clk)
+    no_start_expired <= \$42 ;
+  always @(posedge clk)
+    delay_over <= \$43 ;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    \$36  = slo_low_time_p1;
+    if (\$1 ) begin
+      \$36  = 25'h0000001;
+    end else if (\$2 ) begin
+      \$36  = \$3 [24:0];
+    end
+    if (rst) begin
+      \$36  = 25'h0000001;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    \$37  = \$8 ;
+    if (rst) begin
+      \$37  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    \$38  = \$16 ;
+    if (rst) begin
+      \$38  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    \$39  = \$20 [24:0];
+    if (rst) begin
+      \$39  = 25'h0000001;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    \$40  = \$26 ;
+    if (rst) begin
+      \$40  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    \$41  = \$30 ;
+    if (rst) begin
+      \$41  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    \$42  = \$34 ;
+    if (rst) begin
+      \$42  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    \$43  = \$35 ;
+    if (rst) begin
+      \$43  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master.verdict (lc_skip_seen, \port$739$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
+  reg \$auto$verilog_backend.cc:2355:dump_module$36  = 0;
+  wire \$1 ;
+  wire \$10 ;
+  wire \$11 ;
+  wire \$12 ;
+  wire \$13 ;
+  wire \$14 ;
+  wire \$15 ;
+  wire \$16 ;
+  wire \$17 ;
+  wire \$18 ;
+  wire [1:0] \$19 ;
+  wire \$2 ;
+  wire \$3 ;
+  wire \$4 ;
+  wire \$5 ;
+  wire \$6 ;
+  wire \$7 ;
+  wire \$8 ;
+  wire \$9 ;
+  input [154:0] cfg;
+  wire [154:0] cfg;
+  wire [23:0] \cfg.ack_limit ;
+  wire [23:0] \cfg.break_time ;
+  wire [11:0] \cfg.delay_limit ;
+  wire \cfg.end_check ;
+  wire [15:0] \cfg.ma_half_period ;
+  wire [23:0] \cfg.request_period ;
+  wire \cfg.spw_check ;
+  wire [7:0] \cfg.spw_tolerance ;
+  wire [23:0] \cfg.timeout_limit ;
+  wire [9:0] \cfg.w0 ;
+  (* enum_base_type = "Crc" *)
+  (* enum_value_00 = "NONE" *)
+  (* enum_value_01 = "CRC6" *)
+  (* enum_value_10 = "CRC16" *)
+  wire [1:0] \cfg.w0.crc ;
+  wire [5:0] \cfg.w0.data_bits ;
+  wire \cfg.w0.lc ;
+  wire \cfg.w0.nenw ;
+  wire [9:0] \cfg.w1 ;
+  (* enum_base_type = "Crc" *)
+  (* enum_value_00 = "NONE" *)
+  (* enum_value_01 = "CRC6" *)
+  (* enum_value_10 = "CRC16" *)
+  wire [1:0] \cfg.w1.crc ;
+  wire [5:0] \cfg.w1.data_bits ;
+  wire \cfg.w1.lc ;
+  wire \cfg.w1.nenw ;
+  wire \cfg.w1_enable ;
+  output [1:0] crc_error;
+  wire [1:0] crc_error;
+  input [1:0] crc_ok;
+  wire [1:0] crc_ok;
+  input fault;
+  wire fault;
+  (* enum_base_type = "Status" *)
+  (* enum_value_0000 = "OK" *)
+  (* enum_value_0001 = "CRC_ERROR_WORD0" *)
+  (* enum_value_0010 = "CRC_ERROR_WORD1" *)
+  (* enum_value_0011 = "CRC_ERROR_BOTH" *)
+  (* enum_value_0100 = "SIGN_OF_LIFE" *)
+  (* enum_value_0101 = "SPW_MISMATCH" *)
+  (* enum_value_0110 = "NO_ACK" *)
+  (* enum_value_0111 = "NO_START" *)
+  (* enum_value_1000 = "DELAY_RANGE" *)
+  (* enum_value_1001 = "SLO_STUCK_LOW" *)
+  (* enum_value_1010 = "ABORTED" *)
+  (* enum_value_1011 = "BAD_CONFIG" *)
+  (* enum_value_1100 = "NO_STOP" *)
+  input [3:0] fault_status;
+  wire [3:0] fault_status;
+  (* enum_base_type = "Status" *)
+  (* enum_value_0000 = "OK" *)
+  (* enum_value_0001 = "CRC_ERROR_WORD0" *)
+  (* enum_value_0010 = "CRC_ERROR_WORD1" *)
+  (* enum_value_0011 = "CRC_ERROR_BOTH" *)
+  (* enum_value_0100 = "SIGN_OF_LIFE" *)
+  (* enum_value_0101 = "SPW_MISMATCH" *)
+  (* enum_value_0110 = "NO_ACK" *)
+  (* enum_value_0111 = "NO_START" *)
+  (* enum_value_1000 = "DELAY_RANGE" *)
+  (* enum_value_1001 = "SLO_STUCK_LOW" *)
+  (* enum_value_1010 = "ABORTED" *)
+  (* enum_value_1011 = "BAD_CONFIG" *)
+  (* enum_value_1100 = "NO_STOP" *)
+  reg [3:0] frame_status;
+  output lc_check;
+  wire lc_check;
+  output lc_repeat;
+  wire lc_repeat;
+  input lc_repeat_seen;
+  wire lc_repeat_seen;
+  output lc_skip;
+  wire lc_skip;
+  input lc_skip_seen;
+  wire lc_skip_seen;
+  output lc_zero;
+  wire lc_zero;
+  input lc_zero_seen;
+  wire lc_zero_seen;
+  output \port$739$0 ;
+  wire \port$739$0 ;
+  output report;
+  wire report;
+  input report_frame;
+  wire report_frame;
+  input spw_match;
+  wire spw_match;
+  output spw_mismatch;
+  wire spw_mismatch;
+  (* enum_base_type = "Status" *)
+  (* enum_value_0000 = "OK" *)
+  (* enum_value_0001 = "CRC_ERROR_WORD0" *)
+  (* enum_value_0010 = "CRC_ERROR_WORD1" *)
+  (* enum_value_0011 = "CRC_ERROR_BOTH" *)
+  (* enum_value_0100 = "SIGN_OF_LIFE" *)
+  (* enum_value_0101 = "SPW_MISMATCH" *)
+  (* enum_value_0110 = "NO_ACK" *)
+  (* enum_value_0111 = "NO_START" *)
+  (* enum_value_1000 = "DELAY_RANGE" *)
+  (* enum_value_1001 = "SLO_STUCK_LOW" *)
+  (* enum_value_1010 = "ABORTED" *)
+  (* enum_value_1011 = "BAD_CONFIG" *)
+  (* enum_value_1100 = "NO_STOP" *)
+  output [3:0] status;
+  wire [3:0] status;
+  output valid;
+  wire valid;
+  wire [1:0] word_crc_ok;
+  assign \$1  = ~ cfg[135];
+  assign \$2  = crc_ok[1] | \$1 ;
+  assign \$3  = cfg[135] & cfg[143];
+  assign \$4  = cfg[132] | \$3 ;
+  assign \$5  = report_frame & \$4 ;
+  assign \$6  = cfg[132] ? crc_ok[0] : \$2 ;
+  assign lc_check = \$5  & \$6 ;
+  assign lc_repeat = lc_check & lc_repeat_seen;
+  assign lc_skip = lc_check & lc_skip_seen;
+  assign lc_zero = lc_check & lc_zero_seen;
+  assign \$7  = cfg[146] & cfg[135];
+  assign \$8  = crc_ok[0] & \$2 ;
+  assign \$9  = \$7  & \$8 ;
+  assign \$10  = ~ spw_match;
+  assign spw_mismatch = \$9  & \$10 ;
+  assign \$11  = ~ crc_ok[0];
+  assign \$12  = ~ \$2 ;
+  assign \$13  = \$11  & \$12 ;
+  assign \$14  = ~ crc_ok[0];
+  assign \$15  = ~ \$2 ;
+  assign \$16  = lc_repeat | lc_skip;
+  assign \$17  = \$16  | lc_zero;
+  assign report = report_frame | fault;
+  assign status = report_frame ? frame_status : fault_status;
+  assign \$18  = ! frame_status;
+  assign valid = report_frame & \$18 ;
+  assign \$19  = ~ { \$2 , crc_ok[0] };
+  assign crc_error = report_frame ? \$19  : 2'h0;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    (* full_case = 32'd1 *)
+    if (\$13 ) begin
+      frame_status = 4'h3;
+    end else if (\$14 ) begin
+      frame_status = 4'h1;
+    end else if (\$15 ) begin
+      frame_status = 4'h2;
+    end else if (\$17 ) begin
+      frame_status = 4'h4;
+    end else if (spw_mismatch) begin
+      frame_status = 4'h5;
+    end else begin
+      frame_status = 4'h0;
+    end
+  end
+  assign word_crc_ok = { \$2 , crc_ok[0] };
+  assign \port$739$0  = \$2 ;
+  assign \cfg.ma_half_period  = cfg[15:0];
+  assign \cfg.request_period  = cfg[39:16];
+  assign \cfg.break_time  = cfg[63:40];
+  assign \cfg.ack_limit  = cfg[87:64];
+  assign \cfg.timeout_limit  = cfg[111:88];
+  assign \cfg.delay_limit  = cfg[123:112];
+  assign \cfg.end_check  = cfg[124];
+  assign \cfg.w0  = cfg[134:125];
+  assign \cfg.w0.data_bits  = cfg[130:125];
+  assign \cfg.w0.nenw  = cfg[131];
+  assign \cfg.w0.lc  = cfg[132];
+  assign \cfg.w0.crc  = cfg[134:133];
+  assign \cfg.w1_enable  = cfg[135];
+  assign \cfg.w1  = cfg[145:136];
+  assign \cfg.w1.data_bits  = cfg[141:136];
+  assign \cfg.w1.nenw  = cfg[142];
+  assign \cfg.w1.lc  = cfg[143];
+  assign \cfg.w1.crc  = cfg[145:144];
+  assign \cfg.spw_check  = cfg[146];
+  assign \cfg.spw_tolerance  = cfg[154:147];
 endmodule

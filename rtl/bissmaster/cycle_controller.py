@@ -1,0 +1,237 @@
+"""The request cycle's state machine."""
+
+from amaranth.hdl import *
+from amaranth.lib import wiring
+from amaranth.lib.wiring import In, Out
+
+from .layouts import fault_layout
+from .params import Status
+
+
+class CycleController(wiring.Component):
+    """Runs one request cycle: BREAK -> IDLE -> WAIT_READY -> CLOCK -> TAIL -> END / CONFIRM.
+
+    ``docs/timing.md`` draws a cycle; ``docs/ports.md`` states every limit to the clock. The
+    controller decides, the other blocks measure: the timers and their flags come from
+    :class:`~bissmaster.limit_timers.LimitTimers`, the frame from the sampler and decoder, the
+    frame's verdict is made by :class:`~bissmaster.frame_verdict.FrameVerdict` when the
+    controller says ``report_frame``.
+
+    States:
+
+    - BREAK: MA high for the break time (power-up, after an abort or a line fault). The
+      receiver is cleared and the sign of life resynchronised.
+    - IDLE: wait for a request; the configuration is copied (``idle``).
+    - WAIT_READY: one clock or more. A configuration refused by the check ends the request with
+      BAD_CONFIG (nothing reaches the line); never start while the encoder holds SLO low (its
+      timeout is still running); SLO low past the timeout limit is SLO_STUCK_LOW.
+    - CLOCK: MA runs; the sampler and decoder follow SLO, the line delay behind. Line faults:
+      NO_ACK, DELAY_RANGE, NO_START.
+    - TAIL: clock out the stop bit and let the sampler see it. Without the end check the frame
+      was reported at its last word bit; with it, NO_STOP if the stop bit is high.
+    - END: the last half period of MA, then IDLE.
+    - CONFIRM (end check): the frame counts once SLO is back high with MA stopped (the
+      encoder's timeout ended); SLO low past the timeout limit is SLO_STUCK_LOW.
+
+    A fault reports its status (``fault``, ``fault_status`` and its own strobe in ``faults``) and
+    goes to BREAK, except BAD_CONFIG (back to IDLE). A fault does not clear the timer itself:
+    every state a fault can come from clears it (IDLE, WAIT_READY: always; CLOCK: on ``abort``),
+    or MA is still running when BREAK begins (the line faults of CLOCK come before Start, so MA
+    runs on), and BREAK clears it until MA has stopped; TAIL and CONFIRM clear it with their
+    faults (MA may have stopped already). That keeps the fault decode out of the timer's enable.
+
+    Seam for the control channel (CDM): the MA level after a frame is decided where the cycle
+    ends (END / CONFIRM, then IDLE); a CDM = 1 would hold MA low there through the encoder's
+    timeout, with :class:`~bissmaster.ma_clock.MaClock` keeping its no-short-phase guarantee.
+
+    Attributes
+    ----------
+    request, abort : In(1)
+        From the request scheduler, and ``abort_cycle``.
+    config_ok, end_check : In(1)
+        The configuration check (of the latched configuration, in the cycle's first clock) and
+        the cycle's ``cfg_end_check``.
+    slo : In(1)
+        Synchronized SLO.
+    ma_busy, ma_arm, ma_enough : In(1)
+        MA is in a period; the cycle's second MA rise; MA made every rise the frame needs.
+    locked, early : In(1)
+        The sampler found the Ack edge; SLO was low when armed.
+    frame_done, started, slots_full, stopped, stop_bit : In(1)
+        From the decoder.
+    break_over, ack_expired, no_start_expired, slo_stuck, slo_stuck_live, delay_over : In(1)
+        From the limit timers.
+    idle : Out(1)
+    first_clock : Out(1)
+        The previous clock was IDLE: in WAIT_READY, its first clock.
+    receiver_clear, resync : Out(1)
+        Hold the sampler and decoder in reset; forget the stored sign of life.
+    timer_clear, in_clock, restart_timer : Out(1)
+        To the limit timers.
+    ma_run : Out(1)
+    report_frame : Out(1)
+        Report the decoded frame (its verdict, fields and line delay) in this clock.
+    report_delay : Out(1)
+        Report the measured line delay (with the frame, or with its DELAY_RANGE fault).
+    fault : Out(1)
+        Report ``fault_status`` in this clock, without a frame.
+    fault_status : Out(Status)
+    faults : Out(fault_layout())
+        One strobe per fault status.
+    """
+
+    request: In(1)
+    abort: In(1)
+    config_ok: In(1)
+    end_check: In(1)
+    slo: In(1)
+    ma_busy: In(1)
+    ma_arm: In(1)
+    ma_enough: In(1)
+    locked: In(1)
+    early: In(1)
+    frame_done: In(1)
+    started: In(1)
+    slots_full: In(1)
+    stopped: In(1)
+    stop_bit: In(1)
+    break_over: In(1)
+    ack_expired: In(1)
+    no_start_expired: In(1)
+    slo_stuck: In(1)
+    slo_stuck_live: In(1)
+    delay_over: In(1)
+    idle: Out(1)
+    first_clock: Out(1)
+    receiver_clear: Out(1)
+    resync: Out(1)
+    timer_clear: Out(1)
+    in_clock: Out(1)
+    restart_timer: Out(1)
+    ma_run: Out(1)
+    report_frame: Out(1)
+    report_delay: Out(1)
+    fault: Out(1)
+    fault_status: Out(Status)
+    faults: Out(fault_layout())
+
+    def elaborate(self, platform):
+        m = Module()
+
+        armed = Signal()            # the second MA rise has been made (the sampler is armed)
+        locked_seen = Signal()      # ``locked`` was already high in an earlier clock
+        newly_locked = self.locked & ~locked_seen
+        m.d.comb += self.restart_timer.eq(self.ma_arm | newly_locked)
+        m.d.sync += self.first_clock.eq(self.idle)
+        # In WAIT_READY's first clock the latched timeout limit is not valid yet: use the flag
+        # computed from the live setting.
+        slo_stuck = Mux(self.first_clock, self.slo_stuck_live, self.slo_stuck)
+
+        def fault(status, next_state="BREAK"):
+            m.d.comb += [self.fault.eq(1), self.fault_status.eq(status),
+                         self.faults[status.name.lower()].eq(1)]
+            m.next = next_state
+
+        def report_verdict():
+            m.d.comb += [self.report_frame.eq(1), self.report_delay.eq(1)]
+
+        with m.FSM(init="BREAK", name="cycle_fsm"):
+            with m.State("BREAK"):
+                m.d.comb += [self.receiver_clear.eq(1), self.resync.eq(1)]
+                with m.If(self.ma_busy | self.abort):
+                    m.d.comb += self.timer_clear.eq(1)
+                with m.Elif(self.break_over):
+                    m.next = "IDLE"
+
+            with m.State("IDLE"):
+                # The timer is not read in IDLE, and every way out of it (BREAK, WAIT_READY)
+                # starts from 0: hold it at 0 here, whatever the request decode says.
+                m.d.comb += [self.idle.eq(1), self.receiver_clear.eq(1), self.timer_clear.eq(1)]
+                with m.If(self.abort):
+                    m.next = "BREAK"
+                with m.Elif(self.request):
+                    m.next = "WAIT_READY"
+
+            with m.State("WAIT_READY"):
+                m.d.comb += [self.receiver_clear.eq(1), self.timer_clear.eq(1)]
+                m.d.sync += [armed.eq(0), locked_seen.eq(0)]
+                with m.If(self.first_clock & ~self.config_ok):
+                    # The configuration latched at the request is invalid: no cycle. Nothing
+                    # has reached the line. An abort now is handled as IDLE would have.
+                    fault(Status.BAD_CONFIG, "IDLE")
+                    with m.If(self.abort):
+                        m.next = "BREAK"
+                with m.Elif(self.abort):
+                    fault(Status.ABORTED)
+                with m.Elif(self.slo):
+                    m.next = "CLOCK"
+                with m.Elif(slo_stuck):
+                    fault(Status.SLO_STUCK_LOW)
+
+            with m.State("CLOCK"):
+                m.d.comb += [self.ma_run.eq(~self.ma_enough), self.in_clock.eq(1)]
+                with m.If(self.restart_timer | self.abort):
+                    m.d.comb += self.timer_clear.eq(1)
+                with m.If(self.ma_arm):
+                    m.d.sync += armed.eq(1)
+                with m.If(newly_locked):
+                    m.d.sync += locked_seen.eq(1)
+                # The end of the frame comes right after the abort: it excludes every line
+                # fault below (those all come before the first sample, or before Start), so
+                # this order reports the same as theirs, with fewer gates in front of the
+                # frame's verdict.
+                with m.If(self.abort):
+                    fault(Status.ABORTED)
+                with m.Elif(self.frame_done):
+                    # With the end check the verdict waits for the end of the frame (CONFIRM).
+                    with m.If(~self.end_check):
+                        report_verdict()
+                    m.next = "TAIL"
+                with m.Elif(armed & self.early):
+                    fault(Status.DELAY_RANGE)
+                with m.Elif(armed & ~locked_seen & ~self.locked & self.ack_expired):
+                    fault(Status.NO_ACK)
+                with m.Elif(newly_locked & self.delay_over):
+                    m.d.comb += self.report_delay.eq(1)
+                    fault(Status.DELAY_RANGE)
+                with m.Elif(locked_seen & ~self.started
+                            & (self.no_start_expired | self.slots_full)):
+                    fault(Status.NO_START)
+
+            with m.State("TAIL"):
+                m.d.comb += self.ma_run.eq(~self.ma_enough)
+                with m.If(self.abort):
+                    m.d.comb += self.timer_clear.eq(1)
+                    with m.If(self.end_check):
+                        fault(Status.ABORTED)
+                    with m.Else():
+                        m.next = "BREAK"
+                with m.Elif(self.stopped):
+                    with m.If(~self.end_check):
+                        m.next = "END"
+                    with m.Elif(self.stop_bit):
+                        # A good encoder holds SLO low from the stop bit through its timeout.
+                        # High here: the line went (or is stuck) high, or the frame is longer
+                        # than configured. Either way the bits before it are not trusted: a
+                        # stuck tail can be a CRC codeword.
+                        m.d.comb += self.timer_clear.eq(1)
+                        fault(Status.NO_STOP)
+                    with m.Else():
+                        m.next = "CONFIRM"
+
+            with m.State("END"):
+                with m.If(~self.ma_busy):
+                    m.next = "IDLE"
+
+            with m.State("CONFIRM"):
+                with m.If(self.abort):
+                    m.d.comb += self.timer_clear.eq(1)
+                    fault(Status.ABORTED)
+                with m.Elif(~self.ma_busy & self.slo):
+                    report_verdict()
+                    m.next = "IDLE"
+                with m.Elif(self.slo_stuck):
+                    m.d.comb += self.timer_clear.eq(1)
+                    fault(Status.SLO_STUCK_LOW)
+
+        return m

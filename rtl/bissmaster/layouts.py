@@ -1,0 +1,107 @@
+"""The master's interfaces as data layouts, and the flat Verilog port names derived from them.
+
+The configuration, a frame's result and the counters are :mod:`amaranth.lib.data` structures:
+a word's settings and a word's result are nested structs. The components pass these views to
+each other; only :class:`~bissmaster.master.BissMaster` flattens them into Verilog ports, with
+:func:`flat_fields`, the one place where a port name is made from a field's path.
+"""
+
+from amaranth.lib import data
+
+from . import protocol
+from .params import FAULTS, HALF_PERIOD_WIDTH, Status, WORD_CONFIG
+
+
+def config_layout(params):
+    """Runtime configuration (the ``cfg_*`` ports): the MA clock, the time limits, each word.
+
+    The member order is the port order.
+    """
+    tw = params.timer_width
+    members = {
+        "ma_half_period": HALF_PERIOD_WIDTH,
+        "request_period": tw,
+        "break_time": tw,
+        "ack_limit": tw,
+        "timeout_limit": tw,
+        "delay_limit": params.delay_limit_width,
+        "end_check": 1,
+        "w0": WORD_CONFIG,
+    }
+    if params.words == 2:
+        members.update({"w1_enable": 1, "w1": WORD_CONFIG, "spw_check": 1, "spw_tolerance": 8})
+    return data.StructLayout(members)
+
+
+def config_words(cfg, params):
+    """The per-word settings of a :func:`config_layout` view, word 0 first."""
+    return [cfg.w0, cfg.w1] if params.words == 2 else [cfg.w0]
+
+
+def word_result_layout(bits):
+    """One decoded word: its data field (right-justified), nE, nW and its CRC verdict."""
+    return data.StructLayout({"position": bits, "ne": 1, "nw": 1, "crc_ok": 1})
+
+
+def result_layout(params):
+    """The result of the last cycle, held from one ``done`` to the next (docs/ports.md).
+
+    The member order is the port order. Seam for chains of slaves: the words are separate
+    members ``word0``, ``word1``, ... so that a chain adds ``word<n>`` per slave word.
+    """
+    members = {"status": Status}
+    if params.timestamped:
+        members["timestamp"] = params.timestamp_width
+    members.update({"line_delay": params.delay_width, "cds": 1})
+    for w, bits in enumerate(params.max_data_bits):
+        members[f"word{w}"] = word_result_layout(bits)
+    members.update({"lc": protocol.LC_BITS, "lc_repeat": 1, "lc_skip": 1, "lc_zero": 1})
+    if params.words == 2:
+        members["spw_mismatch"] = 1
+    return data.StructLayout(members)
+
+
+def fault_layout():
+    """One event strobe per status that ends a cycle without a frame verdict."""
+    return data.StructLayout({status.name.lower(): 1 for status in FAULTS})
+
+
+#: Saturating error counters, each with a ``count_<name>`` output port, in port order.
+COUNTERS = (
+    "crc_word0", "crc_word1", "no_ack", "no_start", "delay_range", "slo_stuck_low",
+    "lc_repeat", "lc_skip", "lc_zero", "spw_mismatch", "overrun", "aborted",
+    "no_stop",
+)
+#: The counters that only a two-word build has.
+WORD1_COUNTERS = ("crc_word1", "spw_mismatch")
+
+
+def counter_names(params):
+    """The :data:`COUNTERS` a build has: none without counters, no word-1 ones for one word."""
+    if not params.counters:
+        return ()
+    return tuple(name for name in COUNTERS
+                 if params.words == 2 or name not in WORD1_COUNTERS)
+
+
+def flat_fields(layout, prefix=""):
+    """``(port name, path, shape)`` for every leaf of a struct layout, in member order.
+
+    A nested member's name joins its path with ``_``: ``w0`` / ``data_bits`` under the prefix
+    ``cfg_`` is the port ``cfg_w0_data_bits``.
+    """
+    fields = []
+    for name, field in layout:
+        if isinstance(field.shape, data.StructLayout):
+            fields += [(full, (name, *path), shape)
+                       for full, path, shape in flat_fields(field.shape, f"{prefix}{name}_")]
+        else:
+            fields.append((f"{prefix}{name}", (name,), field.shape))
+    return fields
+
+
+def field(view, path):
+    """The member of a view at ``path`` (as given by :func:`flat_fields`)."""
+    for name in path:
+        view = view[name]
+    return view
