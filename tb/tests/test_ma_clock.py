@@ -83,10 +83,9 @@ def _ma_run_wave(hp, rng):
     return run, 3 * len(offsets) + 1
 
 
-@pytest.mark.parametrize("hp", MA_HALF_PERIODS)
-def test_ma_clock_phases_rise_and_stop_at_any_offset(hp):
-    rng = random.Random(1000 + hp)
-    run, designed_bursts = _ma_run_wave(hp, rng)
+def _ma_sim(hp, run):
+    """MaClock at half period ``hp`` with ``run`` one value per cycle: per cycle
+    (ma, rise, rises, busy)."""
     dut = MaClock()
     trace = []
 
@@ -99,6 +98,14 @@ def test_ma_clock_phases_rise_and_stop_at_any_offset(hp):
             await ctx.tick()
 
     simulate(dut, tb)
+    return trace
+
+
+@pytest.mark.parametrize("hp", MA_HALF_PERIODS)
+def test_ma_clock_phases_rise_and_stop_at_any_offset(hp):
+    rng = random.Random(1000 + hp)
+    run, designed_bursts = _ma_run_wave(hp, rng)
+    trace = _ma_sim(hp, run)
     ma = [x[0] for x in trace]
     rise = [x[1] for x in trace]
     rises = [x[2] for x in trace]
@@ -158,21 +165,11 @@ def test_ma_clock_abort_mid_low_completes_period_then_idles():
     hp = 5
     # run: 2 full periods, then dropped 2 clocks into the third low phase.
     run = [0, 0] + [1] * (2 * 2 * hp + 2) + [0] * (4 * hp)
-    dut = MaClock()
-    trace = []
-
-    async def tb(ctx):
-        ctx.set(dut.half_period, hp)
-        for value in run:
-            ctx.set(dut.run, value)
-            trace.append((ctx.get(dut.ma), ctx.get(dut.busy), ctx.get(dut.rises)))
-            await ctx.tick()
-
-    simulate(dut, tb)
+    trace = _ma_sim(hp, run)
     ma = [x[0] for x in trace]
     # Hand-written: idle(3) low5 high5 low5 high5 low5 high5, then idle high.
     assert _runs(ma) == [(1, 3), (0, 5), (1, 5), (0, 5), (1, 5), (0, 5), (1, len(run) - 28)]
-    busy = [x[1] for x in trace]
+    busy = [x[3] for x in trace]
     assert _runs(busy) == [(0, 3), (1, 30), (0, len(run) - 33)]
     assert trace[-1][2] == 3
 
