@@ -75,10 +75,10 @@ INTERNALS = {
     "master.ma_clock": ("block", "ma_clock", None),
     "master.sampler": ("block", "sampler", None),
     "master.decoder": ("block", "decoder", None),
-    "master.cycle_fsm": ("fsm", "", "cycle_fsm"),               # WAIT_READY, CLOCK, TAIL, END
-    "master.latched": ("signal", "", "latched"),                # WAIT_READY's first clock
-    "master.cfg_ok": ("signal", "", "cfg_ok"),                  # registered configuration check
-    "master.receiver_clear": ("signal", "", "receiver_clear"),  # sampler/decoder reset
+    "master.cycle_fsm": ("fsm", "controller", "cycle_fsm"),     # WAIT_READY, CLOCK, TAIL, END
+    "master.latched": ("signal", "controller", "first_clock"),  # WAIT_READY's first clock
+    "master.cfg_ok": ("signal", "config", "ok"),                # registered configuration check
+    "master.receiver_clear": ("signal", "controller", "receiver_clear"),  # sampler/decoder reset
 }
 
 
@@ -565,7 +565,7 @@ class SamplerHarness(Harness):
 
     def elaborate(self, platform):
         m = self._module()
-        dut = SloSampler(self.delay_width)
+        dut = SloSampler(self.delay_width, synchronizer=False)
         inside = Inside(dut)
         m.submodules.dut = inside.fragment
 

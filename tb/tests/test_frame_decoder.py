@@ -9,7 +9,7 @@ import pytest
 
 from bissmaster.frame_decoder import FrameDecoder
 from bissmaster.params import Crc, MasterParams
-from encoder_model.frames import (CRC16, CRC_NONE, PRESETS, FrameFaults, WordFormat, WordValue,
+from encoder_model.frames import (CRC16, PRESETS, FrameFaults, WordFormat, WordValue,
                                   bp3, build_frame)
 from master_contract import CRC_CODE
 
@@ -44,7 +44,7 @@ def _decode(params, fmt, values, *, acks, faults=None, hw_word1=None, seed=0):
     if params.words == 2 and len(cfgs) == 1:
         cfgs.append(_cfg(hw_word1))
     fields = ["done", "stopped", "started", "start_slot", "slots", "cds", "ne", "nw", "lc",
-              "cpw_top", "crc_ok", "frame_bits"] + [f"data{w}" for w in range(params.words)]
+              "cpw_top", "crc_ok"] + [f"data{w}" for w in range(params.words)]
     trace, sample_cycles = [], []
 
     async def tb(ctx):
@@ -120,7 +120,6 @@ def test_frame_decoder_fields_and_strobes(case):
             x = trace[when]
             assert x["start_slot"] == acks
             assert x["cds"] == (faults.cds if faults else 0)
-            assert x["frame_bits"] == fmt.total_bits
             for w, (wf, v) in enumerate(zip(fmt.words, values)):
                 assert x[f"data{w}"] == v.position, (when, w)
                 assert (x["ne"] >> w) & 1 == v.ne and (x["nw"] >> w) & 1 == v.nw
@@ -139,25 +138,6 @@ def test_frame_decoder_fields_and_strobes(case):
         assert trace[-1]["slots"] == acks + len(frame) + 3
         # Nothing that ends the frame happens before its last bit.
         assert not any(x["done"] or x["stopped"] for x in trace[:last_bit_sample + 1])
-
-
-def test_frame_decoder_frame_bits_and_word_count():
-    # frame_bits is combinational from the configuration: word 1 only counts when enabled.
-    dut = FrameDecoder(MasterParams())
-    got = []
-
-    async def tb(ctx):
-        rsh = PRESETS["resolute_fs_rsh"]
-        for count, words in ((2, rsh.words), (1, rsh.words),
-                             (2, (WordFormat(55), WordFormat(40, lc=True, crc=CRC16))),
-                             (1, (WordFormat(7, nenw=False, crc=CRC_NONE), rsh.words[1]))):
-            ctx.set(dut.words, [_cfg(w) for w in words])
-            ctx.set(dut.word_count, count)
-            got.append(ctx.get(dut.frame_bits))
-            await ctx.tick()
-
-    simulate(dut, tb)
-    assert got == [96, 44, 63 + 64, 7]
 
 
 @pytest.mark.parametrize("word", (0, 1))

@@ -64,7 +64,7 @@ def _sampler_sim(width, hp, scenarios, *, extra=0):
 
     Returns one trace per scenario: per relative cycle c = 0 (arm) .. cycles-1, a dict of outputs.
     """
-    sampler = SloSampler(width)
+    sampler = SloSampler(width, synchronizer=False)
     rst = Signal()
     top = ResetInserter(rst)(sampler)
     traces = []
