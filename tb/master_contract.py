@@ -1,10 +1,10 @@
 """What the documentation promises about ``biss_master``'s ports, as the test side's own table.
 
 Written from docs/ports.md, never imported from ``rtl/``: a renumbered status code or a renamed
-counter in the RTL must show up as a failing test, not be followed silently. Every test, bench,
-campaign and tool on the test side takes these facts from here and nowhere else: status codes,
-CRC codes, counters, the encoder presets the regression and the coverage name, and the system
-clock the simulations run at.
+counter in the RTL must show up as a failing test, not be followed silently. Every test,
+testbench, campaign and tool on the test side takes these facts from here and nowhere else:
+status codes, CRC codes, counters, the encoder presets the regression and the coverage name, and
+the system clock the simulations run at.
 """
 
 #: ``status`` codes (docs/ports.md, "Status codes").

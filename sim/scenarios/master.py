@@ -1,7 +1,9 @@
 """cocotb regression of the generated ``biss_master`` against the encoder model.
 
 Run through pytest (sim/test_regression.py) on Verilator and Icarus. Each test builds its
-scenario on ``testbench.Testbench`` and checks every decoded field and status, not just the absence of exceptions.
+scenario on ``testbench.Testbench`` and checks every decoded field and status, not just the
+absence of exceptions. Every ``@cocotb.test`` here runs; markers from sim/shared/discovery.py say
+when a scenario needs another build or clock (sim/README.md).
 """
 
 import os

@@ -1,9 +1,10 @@
 """make bench: performance measurements of ``biss_master`` against the encoder model (issue 4).
 
-Run by sim/tools/perf.py, one cocotb test per run. Each test measures, checks every frame it uses
-(``Testbench.check_frame``) and writes its raw figures as JSON to ``$BISS_PERF_OUT/<test>-<sim>.json``;
-sim/tools/perf.py turns them into tables and judges them against the goals. Nothing here asserts a goal:
-a missed goal must show up in the tables, not as a crashed test.
+Run by sim/tools/perf.py, one cocotb test per run. Each test measures, checks every frame it
+uses (``Testbench.check_frame``) and writes its raw figures as JSON to
+``$BISS_PERF_OUT/<test>-<sim>.json``; sim/tools/perf.py turns them into tables and judges them
+against the goals. Nothing here asserts a goal: a missed goal must show up in the tables, not as
+a crashed test.
 
 * ``request_cycle_overhead``: periodic "as fast as possible" mode (``cfg_request_period`` = 0),
   start-to-start time from the master's MA falling edges, the protocol minimum, and the

@@ -44,8 +44,8 @@ def _verilator_args(waves):
 def build(sim, waves=False, verilog=VERILOG, tag="", internal_clock=False):
     """Build (incrementally) and return (runner, build_dir).
 
-    ``internal_clock``: wrap the core so the simulator makes the clock (sim/shared/fastclk.py), about
-    ten times faster on Verilator; run() then needs ``internal_clock=True`` too.
+    ``internal_clock``: wrap the core so the simulator makes the clock (sim/shared/fastclk.py),
+    about ten times faster on Verilator; run() then needs ``internal_clock=True`` too.
     """
     if sim not in SIMULATORS:
         raise ValueError(f"SIM must be one of {SIMULATORS}, not {sim!r}")

@@ -82,8 +82,8 @@ def tool_versions():
 def run_sim(sim, tests, env, keep_build, status, internal_clock=False):
     """Build (timed) and run each test in its own simulator process (timed).
 
-    ``internal_clock``: the core wrapped by sim/shared/fastclk.py, its clock made in Verilog instead of
-    by cocotb (what the campaigns use); results are keyed "<sim>-iclk"."""
+    ``internal_clock``: the core wrapped by sim/shared/fastclk.py, its clock made in Verilog
+    instead of by cocotb (what the campaigns use); results are keyed "<sim>-iclk"."""
     key = f"{sim}-{ICLK}" if internal_clock else sim
     build_dir = runner.BUILD / f"{sim}{TAG}{'-' + ICLK if internal_clock else ''}"
     fresh = not keep_build or not build_dir.exists()

@@ -16,7 +16,7 @@ import sys
 import time
 from concurrent.futures import ThreadPoolExecutor
 
-from sim.shared import runner
+from sim.shared import discovery, runner
 from sim.tools import campaign_report
 
 os.environ.setdefault("PYTEST_XDIST_WORKER", "soak")     # one build directory for the soak
@@ -44,8 +44,8 @@ def main(argv=None):
     runner.build_once("verilator", internal_clock=True)   # once, before the parallel runs
     per_job = args.frames / args.jobs / MIX_CYCLES_AT_SCALE_1
     jobs = [("random_mix", per_job, 1000 + i) for i in range(args.jobs)]
-    jobs += [(name, args.scale, None) for name in
-             ("crc_detection", "line_faults", "sign_of_life", "config_fuzz")]
+    jobs += [(s.name, args.scale, None) for s in discovery.scenarios(runner.CAMPAIGN_SCENARIOS)
+             if s.name != "random_mix"]
     t0 = time.monotonic()
     failures = []
 
