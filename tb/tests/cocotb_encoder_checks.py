@@ -11,20 +11,13 @@ Run by tb/tests/test_encoder_driver.py (Icarus, timescale 1ns/1ps).
 from __future__ import annotations
 
 import random
-import sys
-from pathlib import Path
 
-_REPO = Path(__file__).resolve().parents[2]
-for _p in (_REPO / "rtl", _REPO / "tb"):
-    if str(_p) not in sys.path:
-        sys.path.insert(0, str(_p))
+import cocotb
+from cocotb.simtime import get_sim_time
+from cocotb.triggers import Timer
 
-import cocotb  # noqa: E402
-from cocotb.simtime import get_sim_time  # noqa: E402
-from cocotb.triggers import Timer  # noqa: E402
-
-from bissmaster import protocol  # noqa: E402
-from encoder_model.cocotb_encoder import BissEncoder, Cable, Response  # noqa: E402
+from bissmaster import protocol
+from encoder_model.cocotb_encoder import BissEncoder, Cable, Response
 
 PS_PER_S = 10**12
 TIMEOUT_S = 12.5e-6

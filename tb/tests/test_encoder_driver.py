@@ -4,17 +4,13 @@ Builds the empty harness tb/tests/hdl/ma_loopback.v and runs tb/tests/cocotb_enc
 (Python is the master; the model under test drives SLO).
 """
 
-import sys
 from pathlib import Path
+
+from cocotb_tools.check_results import get_results
+from cocotb_tools.runner import get_runner
 
 _HERE = Path(__file__).resolve().parent
 _REPO = _HERE.parents[1]
-for _p in (_REPO / "rtl", _REPO / "tb", _HERE):
-    if str(_p) not in sys.path:
-        sys.path.insert(0, str(_p))
-
-from cocotb_tools.check_results import get_results  # noqa: E402
-from cocotb_tools.runner import get_runner  # noqa: E402
 
 # frame_timing 6 + processing_time_edges 1 + early_request_ignored 1 + abort 5 + faults 5
 # + jitter 2 + ma_held_low_at_end 2 + force_and_set_cable 1
@@ -31,6 +27,8 @@ def test_encoder_model():
         timescale=("1ns", "1ps"),
         always=True,
     )
+    # The simulator's Python gets this process's sys.path (cocotb's runner passes it on):
+    # pytest.ini's pythonpath and this test folder, which pytest puts there for its tests.
     results = runner.test(
         test_module="cocotb_encoder_checks",
         hdl_toplevel="ma_loopback",

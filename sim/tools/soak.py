@@ -1,10 +1,10 @@
 """The long soak (``make soak``, not part of ``make test``): at least 100 000 request cycles of
 random frames with random faults on Verilator, then every campaign at a larger scale.
 
-    python sim/soak.py [--frames 100000] [--jobs 2] [--scale 10]
+    python -m sim.tools.soak [--frames 100000] [--jobs 2] [--scale 10]
 
 The random mix is split over ``--jobs`` simulator processes with different seeds; each writes
-its figures to sim_build/campaign/soak/. Prints the campaign tables (sim/campaign_report.py)
+its figures to sim_build/campaign/soak/. Prints the campaign tables (sim/tools/campaign_report.py)
 and the frames per second of wall time.
 """
 
@@ -15,15 +15,11 @@ import subprocess
 import sys
 import time
 from concurrent.futures import ThreadPoolExecutor
-from pathlib import Path
 
-HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE))
+from sim.shared import discovery, runner
+from sim.tools import campaign_report
 
-import campaign_report  # noqa: E402
-import runner  # noqa: E402
 os.environ.setdefault("PYTEST_XDIST_WORKER", "soak")     # one build directory for the soak
-from test_campaign import build, run  # noqa: E402
 
 RESULTS = runner.BUILD / "campaign" / "soak"
 MIX_CYCLES_AT_SCALE_1 = 600          # random_mix runs this many cycles at scale 1
@@ -40,15 +36,16 @@ def main(argv=None):
     if args.one:
         name, scale, seed = args.one
         env = {"BISS_SOAK_SEED": seed} if seed else {}
-        run(name, float(scale), RESULTS, seed=int(seed) if seed else None, extra_env=env)
+        runner.run_campaign(name, float(scale), RESULTS, seed=int(seed) if seed else None,
+                            extra_env=env)
         return 0
     shutil.rmtree(RESULTS, ignore_errors=True)
     RESULTS.mkdir(parents=True)
-    build()                                             # once, before the parallel runs
+    runner.build_once("verilator", internal_clock=True)   # once, before the parallel runs
     per_job = args.frames / args.jobs / MIX_CYCLES_AT_SCALE_1
     jobs = [("random_mix", per_job, 1000 + i) for i in range(args.jobs)]
-    jobs += [(name, args.scale, None) for name in
-             ("crc_detection", "line_faults", "sign_of_life", "config_fuzz")]
+    jobs += [(s.name, args.scale, None) for s in discovery.scenarios(runner.CAMPAIGN_SCENARIOS)
+             if s.name != "random_mix"]
     t0 = time.monotonic()
     failures = []
 
@@ -56,8 +53,8 @@ def main(argv=None):
         # One simulator per subprocess: cocotb's runner object is not safe to share
         # between threads (its test() keeps per-run state).
         name, scale, seed = job
-        cmd = [sys.executable, __file__, "--one", name, str(scale), str(seed or "")]
-        proc = subprocess.run(cmd, cwd=HERE, capture_output=True, text=True)
+        cmd = [sys.executable, "-m", __spec__.name, "--one", name, str(scale), str(seed or "")]
+        proc = subprocess.run(cmd, cwd=runner.ROOT, capture_output=True, text=True)
         log = RESULTS / f"{name}-{seed}.log"
         log.write_text(proc.stdout + proc.stderr)
         if proc.returncode:

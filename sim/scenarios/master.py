@@ -1,7 +1,9 @@
 """cocotb regression of the generated ``biss_master`` against the encoder model.
 
-Run through pytest (sim/test_sim.py) on Verilator and Icarus. Each test builds its scenario on
-``bench.Bench`` and checks every decoded field and status, not just the absence of exceptions.
+Run through pytest (sim/test_regression.py) on Verilator and Icarus. Each test builds its
+scenario on ``testbench.Testbench`` and checks every decoded field and status, not just the
+absence of exceptions. Every ``@cocotb.test`` here runs; markers from sim/shared/discovery.py say
+when a scenario needs another build or clock (sim/README.md).
 """
 
 import os
@@ -11,43 +13,43 @@ from cocotb.triggers import ClockCycles, FallingEdge, RisingEdge, Timer
 
 from cocotb.simtime import get_sim_time
 
-from bench import CABLES_M, CLK_HZ, MA_RATES_HZ, STATUS, Bench, half_period_for, preset
 from encoder_model import frames
 from encoder_model.cocotb_encoder import Cable
+from master_contract import ENCODER_PRESETS, STATUS
+from sim.shared.discovery import also_at_fast_clock, only_on_builds
+from sim.shared.testbench import CABLES_M, CLK_HZ, MA_RATES_HZ, Testbench, half_period_for, preset
 
-#: Every preset of the issue: BiSS Safety, EVOLUTE, RESOLUTE BiSS C and BP3 lengths.
-PRESETS = ["resolute_fs_lmm", "resolute_fs_rsm", "resolute_fs_rsh", "fortis_fs_rsh",
-           "evolute_26", "evolute_32", "evolute_36",
-           "resolute_c_18", "resolute_c_26", "resolute_c_32", "resolute_c_36"]
+#: Every preset of the issue: BiSS Safety, EVOLUTE, RESOLUTE BiSS C (master_contract) and BP3.
 BP3_LENGTHS = [1, 2, 13, 24, 40, 55]
 FRAMES_PER_POINT = int(os.environ.get("BISS_FRAMES_PER_POINT", "2"))
 
 
-async def frames_ok(bench, n, **check):
+async def frames_ok(tb, n, **check):
     for _ in range(n):
-        res = await bench.request()
-        bench.check_frame(res, **check)
+        res = await tb.request()
+        tb.check_frame(res, **check)
     return res
 
 
 async def matrix(dut, names):
     """Every preset x MA rate x cable length, FRAMES_PER_POINT random frames each."""
-    bench = Bench(dut, seed=hash(tuple(names)) & 0xFFFF)
-    await bench.start()
+    tb = Testbench(dut, seed=hash(tuple(names)) & 0xFFFF)
+    await tb.start()
     count = 0
     for cable_m in CABLES_M:
-        bench.encoder.set_cable(Cable(length_m=cable_m))
+        tb.encoder.set_cable(Cable(length_m=cable_m))
         for name in names:
             for ma_hz in MA_RATES_HZ:
-                bench.configure(preset(name), ma_hz)
-                await frames_ok(bench, FRAMES_PER_POINT)
+                tb.configure(preset(name), ma_hz)
+                await frames_ok(tb, FRAMES_PER_POINT)
                 count += FRAMES_PER_POINT
     dut._log.info("%d frames decoded and checked", count)
 
 
 @cocotb.test()
+@also_at_fast_clock
 async def safety_and_biss_c_presets(dut):
-    await matrix(dut, PRESETS)
+    await matrix(dut, ENCODER_PRESETS)
 
 
 @cocotb.test()
@@ -56,42 +58,43 @@ async def bp3_lengths(dut):
 
 
 @cocotb.test()
+@also_at_fast_clock
 async def long_round_trip_many_bit_periods(dut):
     """2 us of round trip at 10 MHz (20 bit periods), on the longest and the shortest frame:
     the shortest is over long before the master learns where Start was."""
-    bench = Bench(dut, seed=7)
-    await bench.start(cable=Cable(length_m=200))
+    tb = Testbench(dut, seed=7)
+    await tb.start(cable=Cable(length_m=200))
     for name in ("resolute_fs_rsh", "bp3_1", "evolute_26"):
-        bench.configure(preset(name), 10e6)
-        res = await frames_ok(bench, 4)
+        tb.configure(preset(name), 10e6)
+        res = await frames_ok(tb, 4)
         assert res.fields["line_delay"] >= 200, res.fields["line_delay"]
     # Near the hardware limits: 3000 clocks of round trip (30 us at 100 MHz), inside both the
     # delay counter (4095 clocks) and the default Ack limit (4000 clocks).
-    bench.encoder.set_cable(Cable(extra_round_trip_s=3000 / CLK_HZ))
-    bench.configure(preset("resolute_fs_rsh"), 2.5e6)
-    await frames_ok(bench, 2)
+    tb.encoder.set_cable(Cable(extra_round_trip_s=3000 / CLK_HZ))
+    tb.configure(preset("resolute_fs_rsh"), 2.5e6)
+    await frames_ok(tb, 2)
 
 
 @cocotb.test()
 async def edge_jitter(dut):
     """Random jitter on every edge, both directions, 10 % of the MA period each way."""
-    bench = Bench(dut, seed=11)
-    await bench.start()
+    tb = Testbench(dut, seed=11)
+    await tb.start()
     for ma_hz in (1e6, 5e6, 10e6):
-        bench.encoder.set_cable(Cable(length_m=50, jitter_s=0.1 / ma_hz))
-        bench.configure(preset("resolute_fs_rsh"), ma_hz)
+        tb.encoder.set_cable(Cable(length_m=50, jitter_s=0.1 / ma_hz))
+        tb.configure(preset("resolute_fs_rsh"), ma_hz)
         for _ in range(4):
-            res = await bench.request()
-            bench.check_frame(res, check_rises=False)
+            res = await tb.request()
+            tb.check_frame(res, check_rises=False)
 
 
 @cocotb.test()
 async def crc_errors_each_word(dut):
-    bench = Bench(dut, seed=3)
-    await bench.start(cable=Cable(length_m=20))
+    tb = Testbench(dut, seed=3)
+    await tb.start(cable=Cable(length_m=20))
     fmt = preset("resolute_fs_rsh")
-    bench.configure(fmt, 5e6)
-    await frames_ok(bench, 1)
+    tb.configure(fmt, 5e6)
+    await frames_ok(tb, 1)
     w0_first = 2                                  # after Start and CDS
     w1_first = 2 + fmt.words[0].total_bits
     cases = [
@@ -104,156 +107,157 @@ async def crc_errors_each_word(dut):
         ("CRC_ERROR_WORD1", frames.FrameFaults(flip_bits=(2 + fmt.total_bits - 1,)), (0, 1)),
     ]
     for status, faults, (e0, e1) in cases:
-        before = bench.read().counters
-        bench.queue(faults=faults)
-        res = await bench.request()
-        bench.check_frame(res, status=status)
+        before = tb.read().counters
+        tb.queue(faults=faults)
+        res = await tb.request()
+        tb.check_frame(res, status=status)
         assert res.counters["crc_word0"] == before["crc_word0"] + e0
         assert res.counters["crc_word1"] == before["crc_word1"] + e1
         # The LC of a frame with a bad SPW CRC is not trusted: the next good frame is judged
         # against the last good one and shows the lost frame as a skip.
-        res = await bench.request()
+        res = await tb.request()
         if e1:
-            bench.check_frame(res, status="SIGN_OF_LIFE")
+            tb.check_frame(res, status="SIGN_OF_LIFE")
             assert res.fields["lc_skip"] == 1
         else:
-            bench.check_frame(res)
+            tb.check_frame(res)
 
 
 @cocotb.test()
 async def encoder_error_and_warning_bits(dut):
-    bench = Bench(dut, seed=4)
-    await bench.start()
-    bench.configure(preset("evolute_36"), 2.5e6)
+    tb = Testbench(dut, seed=4)
+    await tb.start()
+    tb.configure(preset("evolute_36"), 2.5e6)
     for ne, nw in ((0, 1), (1, 0), (0, 0), (1, 1)):
-        bench.queue(values=[frames.WordValue(0x123456789 & (2**36 - 1), ne, nw)])
-        res = await bench.request()
-        bench.check_frame(res)                # a transfer can be fine while the encoder says no
+        tb.queue(values=[frames.WordValue(0x123456789 & (2**36 - 1), ne, nw)])
+        res = await tb.request()
+        tb.check_frame(res)                # a transfer can be fine while the encoder says no
         assert (res.fields["word0_ne"], res.fields["word0_nw"]) == (ne, nw)
         assert res.fields["word0_position"] == 0x123456789 & (2**36 - 1)
 
 
 @cocotb.test()
 async def sign_of_life_faults(dut):
-    bench = Bench(dut, seed=5)
-    await bench.start()
-    bench.configure(preset("resolute_fs_lmm"), 10e6)
-    sol = bench.sign_of_life
-    await frames_ok(bench, 3)
+    tb = Testbench(dut, seed=5)
+    await tb.start()
+    tb.configure(preset("resolute_fs_lmm"), 10e6)
+    sol = tb.sign_of_life
+    await frames_ok(tb, 3)
     expected = {"lc_repeat": 0, "lc_skip": 0, "lc_zero": 0}
     for kind, lc in (("lc_repeat", sol.repeat), ("lc_zero", sol.zero),
                      ("lc_skip", lambda: sol.skip(5)), ("lc_skip", lambda: sol.skip(61)),   # 62 would land on the same value: a repeat
                      ("lc_repeat", sol.repeat)):
-        bench.queue(lc=lc())
-        res = await bench.request()
-        bench.check_frame(res, status="SIGN_OF_LIFE")
+        tb.queue(lc=lc())
+        res = await tb.request()
+        tb.check_frame(res, status="SIGN_OF_LIFE")
         expected[kind] += 1
         flags = {k: res.fields[k] for k in expected}
-        assert flags == {k: int(k == kind) for k in expected}, (kind, flags, bench.sent[-3:])
+        assert flags == {k: int(k == kind) for k in expected}, (kind, flags, tb.sent[-3:])
         assert {k: res.counters[k] for k in expected} == expected
         # The next frame is in sequence again (after a zero: judged against the last good LC).
-        bench.check_frame(await bench.request())
+        tb.check_frame(await tb.request())
     # Wrap-around 63 -> 1 is in sequence.
     for _ in range(70):
-        res = await bench.request()
-        bench.check_frame(res, check_rises=False)
+        res = await tb.request()
+        tb.check_frame(res, check_rises=False)
 
 
 @cocotb.test()
 async def spw_plausibility(dut):
-    bench = Bench(dut, seed=6)
-    await bench.start()
+    tb = Testbench(dut, seed=6)
+    await tb.start()
     fmt = preset("resolute_fs_rsm")          # CPW 28, SPW 24: 4 low bits dropped
-    bench.configure(fmt, 2.5e6, spw_tolerance=1)
-    sol = bench.sign_of_life
+    tb.configure(fmt, 2.5e6, spw_tolerance=1)
+    sol = tb.sign_of_life
     for offset, status in ((0, "OK"), (1, "OK"), (-1, "OK"), (2, "SPW_MISMATCH"),
                            (-2, "SPW_MISMATCH"), (1 << 20, "SPW_MISMATCH")):
-        cpw = bench.rng.getrandbits(28)
+        cpw = tb.rng.getrandbits(28)
         spw = ((cpw >> 4) + offset) % (1 << 24)
-        bench.queue(values=[frames.WordValue(cpw), frames.WordValue(spw, lc=sol.next())])
-        res = await bench.request()
-        bench.check_frame(res, status=status)
+        tb.queue(values=[frames.WordValue(cpw), frames.WordValue(spw, lc=sol.next())])
+        res = await tb.request()
+        tb.check_frame(res, status=status)
         assert res.fields["spw_mismatch"] == int(status != "OK")
     # Wrap-around: CPW at the top of its range, SPW already wrapped to 0.
-    bench.queue(values=[frames.WordValue(2**28 - 1), frames.WordValue(0, lc=sol.next())])
-    bench.check_frame(await bench.request())
+    tb.queue(values=[frames.WordValue(2**28 - 1), frames.WordValue(0, lc=sol.next())])
+    tb.check_frame(await tb.request())
     # Tolerance 0 is exact.
-    bench.configure(fmt, 2.5e6, spw_tolerance=0)
-    bench.queue(values=[frames.WordValue(0x1230), frames.WordValue(0x124, lc=sol.next())])
-    bench.check_frame(await bench.request(), status="SPW_MISMATCH")
+    tb.configure(fmt, 2.5e6, spw_tolerance=0)
+    tb.queue(values=[frames.WordValue(0x1230), frames.WordValue(0x124, lc=sol.next())])
+    tb.check_frame(await tb.request(), status="SPW_MISMATCH")
 
 
 @cocotb.test()
+@also_at_fast_clock
 async def line_faults_and_recovery(dut):
-    bench = Bench(dut, seed=8)
-    await bench.start(cable=Cable(length_m=50))
-    bench.configure(preset("resolute_fs_rsh"), 5e6)
-    await frames_ok(bench, 1)
+    tb = Testbench(dut, seed=8)
+    await tb.start(cable=Cable(length_m=50))
+    tb.configure(preset("resolute_fs_rsh"), 5e6)
+    await frames_ok(tb, 1)
 
     async def expect(status, counter):
-        before = bench.read().counters[counter]
-        res = await bench.request()
+        before = tb.read().counters[counter]
+        res = await tb.request()
         assert res.status == STATUS[status], f"status {res.status}, expected {status}"
         assert res.valid == 0
         assert res.counters[counter] == before + 1, counter
         return res
 
     # Encoder missing / line broken: SLO stays high.
-    bench.queue(fault="no_response")
+    tb.queue(fault="no_response")
     await expect("NO_ACK", "no_ack")
-    await frames_ok(bench, 1)
-    bench.queue(fault="stuck_high")
+    await frames_ok(tb, 1)
+    tb.queue(fault="stuck_high")
     await expect("NO_ACK", "no_ack")
-    await frames_ok(bench, 1)
+    await frames_ok(tb, 1)
     # Ack never ends.
-    bench.queue(fault="ack_forever")
+    tb.queue(fault="ack_forever")
     await expect("NO_START", "no_start")
-    await frames_ok(bench, 1)
+    await frames_ok(tb, 1)
     # Ack longer than the configured limit (20 us) but finite.
     dut.cfg_ack_limit.value = 2000
-    bench.queue(processing_time_s=30e-6)
+    tb.queue(processing_time_s=30e-6)
     await expect("NO_START", "no_start")
     dut.cfg_ack_limit.value = 0
-    await frames_ok(bench, 1)
+    await frames_ok(tb, 1)
     # Timeout never ends after a good frame: that frame is fine, the next request reports it.
-    bench.queue(fault="timeout_stuck")
-    await frames_ok(bench, 1)
+    tb.queue(fault="timeout_stuck")
+    await frames_ok(tb, 1)
     await expect("SLO_STUCK_LOW", "slo_stuck_low")
     await expect("SLO_STUCK_LOW", "slo_stuck_low")
-    bench.encoder.clear_fault()
-    res = await bench.request()
-    bench.check_frame(res)
+    tb.encoder.clear_fault()
+    res = await tb.request()
+    tb.check_frame(res)
     # SLO shorted low on the cable, then repaired.
-    bench.encoder.force_slo(0)
+    tb.encoder.force_slo(0)
     await expect("SLO_STUCK_LOW", "slo_stuck_low")
-    bench.encoder.force_slo(None)
-    await frames_ok(bench, 1)
+    tb.encoder.force_slo(None)
+    await frames_ok(tb, 1)
     # Cable unplugged (receiver fail-safe high) and plugged back. Unplug between cycles: with
     # SLO forced high the master cannot see that the encoder is still in its timeout.
-    await bench.encoder_ready()
-    bench.encoder.force_slo(1)
+    await tb.encoder_ready()
+    tb.encoder.force_slo(1)
     await expect("NO_ACK", "no_ack")
-    bench.encoder.force_slo(None)
-    await frames_ok(bench, 1)
+    tb.encoder.force_slo(None)
+    await frames_ok(tb, 1)
     # Round trip beyond the configured limit: reported with the measured delay.
     dut.cfg_delay_limit.value = 40
     res = await expect("DELAY_RANGE", "delay_range")
-    rt = bench.clocks(Cable(length_m=50).round_trip_s())
+    rt = tb.clocks(Cable(length_m=50).round_trip_s())
     assert rt <= res.fields["line_delay"] < rt + 1
     dut.cfg_delay_limit.value = 0
-    await frames_ok(bench, 1)
+    await frames_ok(tb, 1)
 
 
 @cocotb.test()
 async def abort_and_break(dut):
-    bench = Bench(dut, seed=9)
-    await bench.start(cable=Cable(length_m=20))
-    bench.configure(preset("resolute_fs_rsh"), 1e6)
-    await frames_ok(bench, 1)
+    tb = Testbench(dut, seed=9)
+    await tb.start(cable=Cable(length_m=20))
+    tb.configure(preset("resolute_fs_rsh"), 1e6)
+    await frames_ok(tb, 1)
     for delay_us in (0.5, 3, 20, 60):
-        before = bench.read().counters["aborted"]
-        await bench.wait_idle()
-        await bench.encoder_ready()             # so that the abort hits a clocking cycle
+        before = tb.read().counters["aborted"]
+        await tb.wait_idle()
+        await tb.encoder_ready()             # so that the abort hits a clocking cycle
         await RisingEdge(dut.clk)
         dut.start.value = 1
         await RisingEdge(dut.clk)
@@ -261,23 +265,23 @@ async def abort_and_break(dut):
         await Timer(delay_us, "us")
         await FallingEdge(dut.clk)              # away from the sampling edge
         dut.abort_cycle.value = 1
-        done = cocotb.start_soon(bench.wait_done(limit_s=10e-6))
+        done = cocotb.start_soon(tb.wait_done(limit_s=10e-6))
         await FallingEdge(dut.clk)
         dut.abort_cycle.value = 0
         res = await done
         assert res.status == STATUS["ABORTED"] and res.valid == 0
         assert res.counters["aborted"] == before + 1
         # MA stays high for the break (40 us) before anything else.
-        await bench.wait_idle()
+        await tb.wait_idle()
         # The encoder saw an abort, and the next frame decodes (LC re-synchronised).
-        assert bench.encoder.records[-1].aborted, (delay_us, bench.encoder.records[-2:])
-        await frames_ok(bench, 2)
+        assert tb.encoder.records[-1].aborted, (delay_us, tb.encoder.records[-2:])
+        await frames_ok(tb, 2)
 
 
 @cocotb.test()
 async def bad_configuration(dut):
-    bench = Bench(dut, seed=10)
-    await bench.start()
+    tb = Testbench(dut, seed=10)
+    await tb.start()
     fmt = preset("resolute_fs_rsh")
     bad = [
         {"cfg_ma_half_period": 1}, {"cfg_ma_half_period": 0},
@@ -288,28 +292,28 @@ async def bad_configuration(dut):
         {"cfg_w1_crc": 0},                                  # SPW check without the SPW CRC
     ]
     for override in bad:
-        bench.configure(fmt, 5e6, **override)
+        tb.configure(fmt, 5e6, **override)
         await ClockCycles(dut.clk, 2)               # written at the next edge, then seen
         assert int(dut.config_error.value) == 1, override
-        cycles = len(bench.encoder.records)
-        res = await bench.request(limit_s=1e-6)
+        cycles = len(tb.encoder.records)
+        res = await tb.request(limit_s=1e-6)
         assert res.status == STATUS["BAD_CONFIG"] and res.valid == 0, override
         await Timer(5, "us")
-        assert len(bench.encoder.records) == cycles, "a cycle started with a bad configuration"
+        assert len(tb.encoder.records) == cycles, "a cycle started with a bad configuration"
         assert int(dut.ma.value) == 1
-    bench.configure(fmt, 5e6)
+    tb.configure(fmt, 5e6)
     await RisingEdge(dut.clk)
     await RisingEdge(dut.clk)
     assert int(dut.config_error.value) == 0
-    await frames_ok(bench, 2)
+    await frames_ok(tb, 2)
 
 
 @cocotb.test()
 async def config_change_during_a_cycle(dut):
     """The cycle keeps the configuration it started with."""
-    bench = Bench(dut, seed=12)
-    await bench.start()
-    bench.configure(preset("evolute_36"), 1e6)
+    tb = Testbench(dut, seed=12)
+    await tb.start()
+    tb.configure(preset("evolute_36"), 1e6)
     await RisingEdge(dut.clk)
     dut.start.value = 1
     await RisingEdge(dut.clk)
@@ -317,23 +321,23 @@ async def config_change_during_a_cycle(dut):
     await Timer(10, "us")
     dut.cfg_w0_data_bits.value = 26
     dut.cfg_ma_half_period.value = 20
-    res = await bench.wait_done()
-    bench.check_frame(res)
+    res = await tb.wait_done()
+    tb.check_frame(res)
 
 
 @cocotb.test()
 async def periodic_requests_and_overrun(dut):
-    bench = Bench(dut, seed=13)
-    await bench.start(cable=Cable(length_m=100))
+    tb = Testbench(dut, seed=13)
+    await tb.start(cable=Cable(length_m=100))
     fmt = preset("resolute_fs_rsh")
-    bench.configure(fmt, 10e6)
+    tb.configure(fmt, 10e6)
     # As fast as possible: the encoder's 31.25 us rule sets the pace; no overruns.
     dut.periodic.value = 1
-    first = len(bench.encoder.records)
+    first = len(tb.encoder.records)
     for _ in range(6):
-        res = await bench.wait_done()
-        bench.check_frame(res)
-    records = bench.encoder.records[first:]
+        res = await tb.wait_done()
+        tb.check_frame(res)
+    records = tb.encoder.records[first:]
     starts = [r.t_first_fall_s for r in records]
     assert min(b - a for a, b in zip(starts, starts[1:])) >= 31.25e-6 - 1e-9
     # The master's own dead time: from SLO high at its pin to its next MA fall, at most one
@@ -344,52 +348,52 @@ async def periodic_requests_and_overrun(dut):
         dead = nxt.t_first_fall_s - slo_high_at_master
         assert 0 < dead <= 0.1e-6, f"dead time {dead * 1e9:.1f} ns"
     assert res.counters["overrun"] == 0
-    assert not bench.encoder.ignored_falls
+    assert not tb.encoder.ignored_falls
     # A fixed period of 50 us: one frame per period, start-to-start exact.
     dut.periodic.value = 0
-    await bench.wait_idle()
+    await tb.wait_idle()
     dut.cfg_request_period.value = 5000
     dut.periodic.value = 1
-    first = len(bench.encoder.records)
+    first = len(tb.encoder.records)
     for _ in range(5):
-        bench.check_frame(await bench.wait_done())
+        tb.check_frame(await tb.wait_done())
     # The first request of the new period may wait for the encoder (SLO low): skip it.
-    starts = [r.t_first_fall_s for r in bench.encoder.records[first + 1:]]
+    starts = [r.t_first_fall_s for r in tb.encoder.records[first + 1:]]
     gaps = {round((b - a) * 1e9) for a, b in zip(starts, starts[1:])}
     assert gaps == {50_000}, gaps
     # A period shorter than the frame: requests are reported as overruns, not dropped silently.
     dut.periodic.value = 0
-    await bench.wait_idle()
+    await tb.wait_idle()
     dut.cfg_request_period.value = 500              # 5 us
     dut.periodic.value = 1
     for _ in range(3):
-        bench.check_frame(await bench.wait_done())
+        tb.check_frame(await tb.wait_done())
     dut.periodic.value = 0
-    assert bench.read().counters["overrun"] > 0
+    assert tb.read().counters["overrun"] > 0
     # A single-shot start while busy is an overrun too.
-    await bench.wait_idle()
-    before = bench.read().counters["overrun"]
+    await tb.wait_idle()
+    before = tb.read().counters["overrun"]
     await RisingEdge(dut.clk)
     dut.start.value = 1
     await RisingEdge(dut.clk)
     await RisingEdge(dut.clk)                       # second clock of start: core already busy
     dut.start.value = 0
-    bench.check_frame(await bench.wait_done())
-    assert bench.read().counters["overrun"] == before + 1
+    tb.check_frame(await tb.wait_done())
+    assert tb.read().counters["overrun"] == before + 1
     # Counters clear.
     dut.clear_counters.value = 1
     await RisingEdge(dut.clk)
     dut.clear_counters.value = 0
     await RisingEdge(dut.clk)
-    assert all(v == 0 for v in bench.read().counters.values())
+    assert all(v == 0 for v in tb.read().counters.values())
 
 
 @cocotb.test()
 async def verdict_latency(dut):
     """done/valid come exactly 2 clocks after the last CRC bit is sampled, for both words'
     CRCs and for a frame whose last CRC bit is corrupted."""
-    bench = Bench(dut, seed=14)
-    await bench.start(cable=Cable(length_m=100))
+    tb = Testbench(dut, seed=14)
+    await tb.start(cable=Cable(length_m=100))
     samples = []
 
     async def watch():
@@ -401,13 +405,13 @@ async def verdict_latency(dut):
     clk_steps = round(1e12 / CLK_HZ)
     for name, ma_hz in (("resolute_fs_rsh", 10e6), ("evolute_26", 2.5e6), ("bp3_1", 10e6)):
         fmt = preset(name)
-        bench.configure(fmt, ma_hz)
+        tb.configure(fmt, ma_hz)
         for faults in (None, frames.FrameFaults(flip_bits=(2 + fmt.total_bits - 1,))):
-            bench.queue(faults=faults)
+            tb.queue(faults=faults)
             samples.clear()
-            res = await bench.request()
+            res = await tb.request()
             t_done = get_sim_time("step") - 1        # wait_done stepped 1 ps past the edge
-            bench.check_frame(res, status="OK" if faults is None else
+            tb.check_frame(res, status="OK" if faults is None else
                               ("CRC_ERROR_WORD1" if len(fmt.words) == 2 else "CRC_ERROR_WORD0"))
             last_bit = [t for t in samples if t <= t_done][-1]
             assert t_done - last_bit == 2 * clk_steps, \
@@ -416,54 +420,55 @@ async def verdict_latency(dut):
 
 
 @cocotb.test()
+@only_on_builds("biss-c", "biss-c-lean")
 async def biss_c_only_build(dut):
     """The BiSS-C-only builds (one 36-bit word, CRC-6; the lean one without counters and
     timestamp): single-word presets up to 36 bits at every MA rate over 0 and 100 m, a CRC
     error, and what that build must refuse."""
-    bench = Bench(dut, seed=15)
-    assert bench.words == 1, "run this on the one-word build"
-    await bench.start()
+    tb = Testbench(dut, seed=15)
+    assert tb.words == 1, "run this on the one-word build"
+    await tb.start()
     names = ["evolute_26", "evolute_32", "evolute_36", "resolute_c_18", "resolute_c_36",
              "bp3_1", "bp3_13", "bp3_36"]
     for cable_m in (0, 100):
-        bench.encoder.set_cable(Cable(length_m=cable_m))
+        tb.encoder.set_cable(Cable(length_m=cable_m))
         for name in names:
             for ma_hz in MA_RATES_HZ:
-                bench.configure(preset(name), ma_hz)
-                await frames_ok(bench, 1)
+                tb.configure(preset(name), ma_hz)
+                await frames_ok(tb, 1)
     fmt = preset("evolute_36")
-    bench.configure(fmt, 10e6)
-    bench.queue(faults=frames.FrameFaults(flip_bits=(2 + fmt.total_bits - 1,)))
-    res = await bench.request()
-    bench.check_frame(res, status="CRC_ERROR_WORD0")
-    if bench.has_counters:
+    tb.configure(fmt, 10e6)
+    tb.queue(faults=frames.FrameFaults(flip_bits=(2 + fmt.total_bits - 1,)))
+    res = await tb.request()
+    tb.check_frame(res, status="CRC_ERROR_WORD0")
+    if tb.has_counters:
         assert res.counters["crc_word0"] == 1
     else:   # the lean build: no counter ports, no timestamp
         assert res.counters == {} and "timestamp" not in res.fields
     for bad in ({"cfg_w0_data_bits": 37}, {"cfg_w0_crc": 2}, {"cfg_w0_crc": 3}):
-        bench.configure(fmt, 10e6, **bad)       # 37 bits, or CRC-16: not in this build
-        res = await bench.request(limit_s=1e-6)
+        tb.configure(fmt, 10e6, **bad)       # 37 bits, or CRC-16: not in this build
+        res = await tb.request(limit_s=1e-6)
         assert res.status == STATUS["BAD_CONFIG"] and res.valid == 0, bad
-    bench.configure(fmt, 10e6)
-    await frames_ok(bench, 1)
+    tb.configure(fmt, 10e6)
+    await frames_ok(tb, 1)
 
 
-async def stuck_from_stop_bit(bench, level):
+async def stuck_from_stop_bit(tb, level):
     """One request whose line goes to ``level`` (and stays there) as the encoder starts its
     stop bit (the first low after the frame); returns the Result."""
-    await bench.wait_idle()
-    bench.queue()
-    bench.dut.start.value = 1
-    done = cocotb.start_soon(bench.wait_done())
-    await RisingEdge(bench.dut.clk)
-    bench.dut.start.value = 0
+    await tb.wait_idle()
+    tb.queue()
+    tb.dut.start.value = 1
+    done = cocotb.start_soon(tb.wait_done())
+    await RisingEdge(tb.dut.clk)
+    tb.dut.start.value = 0
     for phase in ("data", "stop"):
-        while bench.encoder.phase != phase:
-            await RisingEdge(bench.dut.clk)
+        while tb.encoder.phase != phase:
+            await RisingEdge(tb.dut.clk)
     # The encoder's output reaches the master pin half a round trip later; the master samples
     # the stop slot later still (near the middle of the bit).
-    await Timer(round(bench.encoder.cable.round_trip_s() / 2 * 1e12) + 10_000, "ps")
-    bench.encoder.force_slo(level)
+    await Timer(round(tb.encoder.cable.round_trip_s() / 2 * 1e12) + 10_000, "ps")
+    tb.encoder.force_slo(level)
     return await done
 
 
@@ -473,44 +478,44 @@ async def end_check(dut):
     high); SLO high at the stop bit is NO_STOP and SLO low past the timeout limit is
     SLO_STUCK_LOW, in the same cycle, without reporting the frame. Without the check the
     same faults let the frame through and show up in the next cycle."""
-    bench = Bench(dut, seed=21)
-    await bench.start(cable=Cable(length_m=20))
-    count = lambda name: bench.read().counters[name]
+    tb = Testbench(dut, seed=21)
+    await tb.start(cable=Cable(length_m=20))
+    count = lambda name: tb.read().counters[name]
     for name, ma_hz in (("resolute_c_36", 5e6), ("resolute_fs_rsh", 10e6), ("evolute_26", 1e6)):
-        bench.configure(preset(name), ma_hz, cfg_end_check=1)
+        tb.configure(preset(name), ma_hz, cfg_end_check=1)
         for _ in range(3):
-            res = await bench.request()
-            bench.check_frame(res)
-            assert dut.slo.value == 1 and bench.encoder.ready, "end check: done before the timeout ended"
-        bench.configure(preset(name), ma_hz, cfg_end_check=0)
-        res = await bench.request()
-        bench.check_frame(res)
-        assert not bench.encoder.ready, "no end check: done only after the encoder's timeout"
+            res = await tb.request()
+            tb.check_frame(res)
+            assert dut.slo.value == 1 and tb.encoder.ready, "end check: done before the timeout ended"
+        tb.configure(preset(name), ma_hz, cfg_end_check=0)
+        res = await tb.request()
+        tb.check_frame(res)
+        assert not tb.encoder.ready, "no end check: done only after the encoder's timeout"
 
         for level, status, counter in ((1, "NO_STOP", "no_stop"), (0, "SLO_STUCK_LOW", "slo_stuck_low")):
-            bench.configure(preset(name), ma_hz, cfg_end_check=1)
-            await bench.wait_idle()
+            tb.configure(preset(name), ma_hz, cfg_end_check=1)
+            await tb.wait_idle()
             before = count(counter), count("crc_word0")
-            res = await stuck_from_stop_bit(bench, level)
+            res = await stuck_from_stop_bit(tb, level)
             assert res.status == STATUS[status] and res.valid == 0, \
                 f"{name}: stuck {level} at the stop bit gave status {res.status}"
             assert (count(counter), count("crc_word0")) == (before[0] + 1, before[1]), counter
-            bench.encoder.force_slo(None)
-            await frames_ok(bench, 1)
+            tb.encoder.force_slo(None)
+            await frames_ok(tb, 1)
 
         # Without the check the frame is reported (it was good) before the stop bit.
-        bench.configure(preset(name), ma_hz, cfg_end_check=0)
-        bench.check_frame(await stuck_from_stop_bit(bench, 1))
-        await bench.encoder_ready()         # (the master cannot see the timeout through the short)
-        res = await bench.request()
+        tb.configure(preset(name), ma_hz, cfg_end_check=0)
+        tb.check_frame(await stuck_from_stop_bit(tb, 1))
+        await tb.encoder_ready()         # (the master cannot see the timeout through the short)
+        res = await tb.request()
         assert res.status == STATUS["NO_ACK"], res.status
-        bench.encoder.force_slo(None)
-        await frames_ok(bench, 1)
+        tb.encoder.force_slo(None)
+        await frames_ok(tb, 1)
 
         # The encoder's timeout never ends: caught in the frame's own cycle.
-        bench.configure(preset(name), ma_hz, cfg_end_check=1)
-        bench.queue(fault="timeout_stuck")
-        res = await bench.request()
+        tb.configure(preset(name), ma_hz, cfg_end_check=1)
+        tb.queue(fault="timeout_stuck")
+        res = await tb.request()
         assert res.status == STATUS["SLO_STUCK_LOW"] and res.valid == 0, res.status
-        bench.encoder.clear_fault()
-        await frames_ok(bench, 1)
+        tb.encoder.clear_fault()
+        await frames_ok(tb, 1)

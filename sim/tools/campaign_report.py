@@ -1,6 +1,6 @@
-"""Tables of the reliability campaigns from their JSON results (sim/cocotb_campaign.py).
+"""Tables of the reliability campaigns from their JSON results (sim/scenarios/campaigns.py).
 
-    python sim/campaign_report.py [DIR]     (default: sim_build/campaign/slice)
+    python -m sim.tools.campaign_report [DIR]     (default: sim_build/campaign/slice)
 
 Prints Markdown tables (CRC detection, line faults and recovery, sign-of-life, configuration
 fuzz, throughput, functional coverage with its holes) and writes them to DIR/report.md.
@@ -12,11 +12,7 @@ import sys
 from collections import Counter
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tb"))
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "rtl"))
-
-import coverage  # noqa: E402
+from sim.shared import functional_coverage as coverage
 
 
 def load(d):
@@ -79,7 +75,7 @@ def throughput(runs):
 
 def main(argv=None):
     argv = sys.argv[1:] if argv is None else argv
-    d = Path(argv[0]) if argv else Path(__file__).resolve().parent.parent / "sim_build" / \
+    d = Path(argv[0]) if argv else Path(__file__).resolve().parents[2] / "sim_build" / \
         "campaign" / "slice"
     runs = load(d)
     if not runs:

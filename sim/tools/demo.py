@@ -1,34 +1,17 @@
 """make demo: simulate a RESOLUTE FS RSH encoder on the generated Verilog, print its frames.
 
-    python sim/demo.py [--sim verilator|icarus]
+    python -m sim.tools.demo [--sim verilator|icarus]
 """
 
 import argparse
-import contextlib
 import os
 import sys
 import xml.etree.ElementTree as ET
-from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-import runner  # noqa: E402
+from sim.shared import runner
+from sim.shared.runner import output_to
 
 GTKW = runner.ROOT / "scripts" / "biss_master.gtkw"
-
-
-@contextlib.contextmanager
-def output_to(path):
-    """Send this process's and its children's stdout/stderr to a log file."""
-    sys.stdout.flush(); sys.stderr.flush()
-    saved = os.dup(1), os.dup(2)
-    with open(path, "w") as log:
-        os.dup2(log.fileno(), 1); os.dup2(log.fileno(), 2)
-        try:
-            yield
-        finally:
-            sys.stdout.flush(); sys.stderr.flush()
-            os.dup2(saved[0], 1); os.dup2(saved[1], 2)
-            os.close(saved[0]); os.close(saved[1])
 
 
 def main():
@@ -46,7 +29,7 @@ def main():
     try:
         with output_to(log):
             r, build_dir = runner.build(args.sim, waves=True, tag="-demo")
-            xml = runner.run(r, build_dir, "cocotb_demo", waves=True,
+            xml = runner.run(r, build_dir, "sim.scenarios.demo", waves=True,
                              extra_env={"BISS_DEMO_TABLE": str(table)})
         ok = all(not c.findall("failure") and not c.findall("error")
                  for c in ET.parse(xml).getroot().iter("testcase"))

@@ -1,7 +1,7 @@
-"""Engine of the reliability campaigns (sim/cocotb_campaign.py): one request cycle at a time,
-its outcome predicted by the reference model (sim/reference.py) and compared field by field.
+"""Engine of the reliability campaigns (sim/scenarios/campaigns.py): one request cycle at a time,
+its outcome predicted by the reference model (sim/shared/reference.py) and compared field by field.
 
-A campaign cycle differs from the regression's (sim/bench.py) in three ways:
+A campaign cycle differs from the regression's (sim/shared/testbench.py) in three ways:
 
 * **fast timing**: the encoder's timeout is short (2 us, like an adaptive-timeout encoder), the
   31.25 us start-to-start rule is off and the master's break is 3 us plus the round trip, so a cycle costs little
@@ -24,11 +24,12 @@ from pathlib import Path
 import cocotb
 from cocotb.triggers import FallingEdge, RisingEdge, Timer, with_timeout
 
-from bench import CLK_HZ, Bench, preset  # noqa: F401 (campaigns import it from here)
-from coverage import Coverage
 from encoder_model import frames
 from encoder_model.cocotb_encoder import Cable
-from reference import BREAK_STATUSES, FRAME_STATUSES, STATUS, STATUS_NAMES, MasterReference
+from master_contract import STATUS, STATUS_NAME
+from sim.shared.functional_coverage import Coverage
+from sim.shared.reference import BREAK_STATUSES, FRAME_STATUS_CODES, MasterReference
+from sim.shared.testbench import CLK_HZ, Testbench, preset
 
 #: Scale of every campaign: 1 is the fast slice of `make test`, `make soak` sets more.
 SCALE = float(os.environ.get("BISS_CAMPAIGN_SCALE", "1"))
@@ -58,8 +59,8 @@ class Campaign:
     def __init__(self, dut, name, *, seed):
         self.dut = dut
         self.name = name
-        self.bench = Bench(dut, seed=seed)
-        self.rng = self.bench.rng
+        self.tb = Testbench(dut, seed=seed)
+        self.rng = self.tb.rng
         self.ref = MasterReference()
         self.cov = Coverage()
         self.tally = defaultdict(Counter)       # per fault kind: outcome -> count
@@ -74,10 +75,10 @@ class Campaign:
 
     # -- setup ------------------------------------------------------------------------------
     async def start(self, cable=Cable()):
-        await self.bench.start(cable=cable, timeout_s=FAST_TIMEOUT_S)
-        enc = self.bench.encoder
+        await self.tb.start(cable=cable, timeout_s=FAST_TIMEOUT_S)
+        enc = self.tb.encoder
         enc.min_cycle_s = 0.0
-        self.expected_counters = dict(self.bench.read().counters)
+        self.expected_counters = dict(self.tb.read().counters)
         self.counter_max = (1 << len(self.dut.count_no_ack)) - 1
         self.t0 = time.monotonic()
 
@@ -85,9 +86,9 @@ class Campaign:
         """Until the line is quiet: the master idle, every MA edge it sent arrived at the
         encoder (a long cable holds many), the encoder ready, and its "ready" back at the
         master. Test bookkeeping (which cycle answered what) needs it; the core does not."""
-        await self.bench.wait_idle(limit_s=WATCHDOG_S)
-        await Timer(round(self.bench.encoder.cable.round_trip_s() * 1e9) + 100, "ns")
-        await self.bench.encoder_ready()
+        await self.tb.wait_idle(limit_s=WATCHDOG_S)
+        await Timer(round(self.tb.encoder.cable.round_trip_s() * 1e9) + 100, "ns")
+        await self.tb.encoder_ready()
         for _ in range(1000):
             if int(self.dut.slo.value):
                 return
@@ -97,8 +98,8 @@ class Campaign:
         """Break and Ack limit for a cable: the break must outlast the encoder's timeout plus
         the round trip, or bits still on the line after a fault would look like a ready
         encoder (docs/ports.md, cfg_break_time)."""
-        rt = round((cable or self.bench.encoder.cable).round_trip_s() * CLK_HZ)
-        slave_timeout = round(self.bench.encoder.timeout_s * CLK_HZ)
+        rt = round((cable or self.tb.encoder.cable).round_trip_s() * CLK_HZ)
+        slave_timeout = round(self.tb.encoder.timeout_s * CLK_HZ)
         return dict(cfg_break_time=max(FAST_BREAK, slave_timeout + rt + 100),
                     # the processing time is up to 6 MA periods (Campaign.processing)
                     cfg_ack_limit=max(1500, round(7 * CLK_HZ / (self.ma_hz or 1e6))) + rt,
@@ -108,7 +109,7 @@ class Campaign:
         """Change the cable between cycles (a cable cannot change length within a frame: the
         master would sample the stop bit on the old delay and start early)."""
         await self.settle()
-        self.bench.encoder.set_cable(cable)
+        self.tb.encoder.set_cable(cable)
         limits = self.line_limits(cable)
         self.cfg.update(limits)
         for name, value in limits.items():
@@ -123,9 +124,9 @@ class Campaign:
         rate = ma_hz if hp is None else CLK_HZ / (2 * hp)
         self.ma_hz = rate
         # An adaptive-timeout encoder: about 1.5 MA periods, at least 2 us here.
-        self.bench.encoder.timeout_s = max(FAST_TIMEOUT_S, 1.5 / rate)
+        self.tb.encoder.timeout_s = max(FAST_TIMEOUT_S, 1.5 / rate)
         self.cfg = {**self.line_limits(), **cfg}
-        self.bench.configure(fmt, ma_hz, half_period=hp, **self.cfg)
+        self.tb.configure(fmt, ma_hz, half_period=hp, **self.cfg)
         if hp is not None:
             self.ma_hz = CLK_HZ / (2 * hp)
         return fmt
@@ -136,7 +137,7 @@ class Campaign:
 
     @property
     def fmt(self):
-        return self.bench.fmt
+        return self.tb.fmt
 
     def spw_opts(self):
         two = len(self.fmt.words) == 2
@@ -150,8 +151,8 @@ class Campaign:
     def queue(self, **kw):
         """Plan the next cycle's answer; a plan left over from a cycle that never reached the
         encoder (a stuck line, a bad configuration) is dropped first."""
-        self.bench.plan.clear()
-        self.bench.queue(**kw)
+        self.tb.plan.clear()
+        self.tb.queue(**kw)
 
     # -- one cycle ----------------------------------------------------------------------------
     async def frame(self, fault="none", *, faults=None, values=None, lc=None, record_cov=True,
@@ -159,14 +160,14 @@ class Campaign:
         """One request with a clean line: everything must be exactly as the reference says."""
         response.setdefault("processing_time_s", self.processing())
         self.queue(values=values, faults=faults, lc=lc, **response)
-        n_sent, n_rec = len(self.bench.sent), len(self.bench.encoder.records)
-        res = await self.bench.request(limit_s=WATCHDOG_S)
-        self.expect(len(self.bench.sent) == n_sent + 1,
-                    f"{self.where(fault)}: the encoder answered {len(self.bench.sent) - n_sent} "
-                    f"times, {len(self.bench.encoder.records) - n_rec} new cycles, status "
-                    f"{STATUS_NAMES[res.status]}, last records {self.bench.encoder.records[-3:]}")
-        sent = self.bench.sent[-1]
-        record = self.bench.encoder.records[-1]
+        n_sent, n_rec = len(self.tb.sent), len(self.tb.encoder.records)
+        res = await self.tb.request(limit_s=WATCHDOG_S)
+        self.expect(len(self.tb.sent) == n_sent + 1,
+                    f"{self.where(fault)}: the encoder answered {len(self.tb.sent) - n_sent} "
+                    f"times, {len(self.tb.encoder.records) - n_rec} new cycles, status "
+                    f"{STATUS_NAME[res.status]}, last records {self.tb.encoder.records[-3:]}")
+        sent = self.tb.sent[-1]
+        record = self.tb.encoder.records[-1]
         verdict = self.ref.judge(self.fmt, sent.bits, **self.spw_opts())
         self.check_verdict(res, verdict, record, fault)
         self.count_outcome(res)
@@ -178,7 +179,7 @@ class Campaign:
         where = self.where(fault)
         f = res.fields
         self.expect(res.status == v.status,
-                    f"{where}: status {STATUS_NAMES[res.status]}, expected {v.name}")
+                    f"{where}: status {STATUS_NAME[res.status]}, expected {v.name}")
         self.expect(res.valid == int(v.status == STATUS["OK"]), f"{where}: valid {res.valid}")
         for w, word in enumerate(v.parsed["words"]):
             self.expect(f[f"word{w}_crc_ok"] == int(word["crc_ok"]), f"{where}: word{w} crc_ok")
@@ -198,7 +199,7 @@ class Campaign:
         self.check_delay(res, record, where)
 
     def where(self, fault):
-        cable = self.bench.encoder.cable
+        cable = self.tb.encoder.cable
         return (f"[{self.name}/{fault} cycle {self.stats['cycles']}] "
                 f"{self.preset_name or self.fmt} at {self.ma_hz / 1e6:g} MHz, round trip "
                 f"{cable.round_trip_s() * 1e9:.1f} ns, cfg {self.cfg}")
@@ -220,13 +221,13 @@ class Campaign:
     def count_outcome(self, res, *, frame=True):
         """Advance the expected counters by what this result must have counted; compare."""
         f, c = res.fields, self.expected_counters
-        name = STATUS_NAMES[res.status]
+        name = STATUS_NAME[res.status]
 
         def inc(counter):
             if counter in c:
                 c[counter] = min(c[counter] + 1, self.counter_max)
 
-        if res.status in FRAME_STATUSES and frame:
+        if res.status in FRAME_STATUS_CODES and frame:
             words = len(self.fmt.words)
             if not f["word0_crc_ok"]:
                 inc("crc_word0")
@@ -248,7 +249,7 @@ class Campaign:
     def note(self, fault, res, round_trip_s, outcome=None):
         self.cov.sample(preset=self.preset_name, ma_hz=self.ma_hz, round_trip_s=round_trip_s,
                         fault=fault, status=res.status)
-        self.tally[fault][outcome or STATUS_NAMES[res.status]] += 1
+        self.tally[fault][outcome or STATUS_NAME[res.status]] += 1
         self.stats["cycles"] += 1
 
     # -- faulted cycles -------------------------------------------------------------------------
@@ -261,11 +262,11 @@ class Campaign:
         as undetected by the CRC (the protocol's residual error), never silently.
         """
         where = self.where(fault)
-        name = STATUS_NAMES[res.status]
+        name = STATUS_NAME[res.status]
         self.expect(name in allowed, f"{where}: status {name}, allowed {allowed}")
         outcome = name
-        if res.status in FRAME_STATUSES:
-            sent = self.bench.sent[-1]
+        if res.status in FRAME_STATUS_CODES:
+            sent = self.tb.sent[-1]
             v = self.ref.judge(self.fmt, sent.bits, commit=False, **self.spw_opts())
             f = res.fields
             wrong = [w for w, word in enumerate(v.parsed["words"])

@@ -1,36 +1,36 @@
 """The demo scenario: a RESOLUTE FS RSH (BiSS Safety 36/28) encoder read by biss_master at
 10 MHz over 50 m and at 5 MHz over 100 m, every frame checked, a table of frames written
-to $BISS_DEMO_TABLE for sim/demo.py to print."""
+to $BISS_DEMO_TABLE for sim/tools/demo.py to print."""
 
 import os
 
 import cocotb
 
-from bench import CLK_HZ, STATUS, Bench
 from encoder_model import frames
 from encoder_model.cocotb_encoder import Cable
+from master_contract import STATUS_NAME
+from sim.shared.testbench import CLK_HZ, Testbench
 
-STATUS_NAME = {v: k for k, v in STATUS.items()}
 FRAMES_EACH = 6
 
 
 @cocotb.test()
 async def demo(dut):
-    bench = Bench(dut, seed=2026)
+    tb = Testbench(dut, seed=2026)
     fmt = frames.PRESETS["resolute_fs_rsh"]
     # A linear axis moving at 0.5 m/s, 1 nm CPW resolution: position follows the latch time.
-    bench._position_at = lambda t: int(123_456_789 + 0.5e9 * t)
-    await bench.start()
+    tb._position_at = lambda t: int(123_456_789 + 0.5e9 * t)
+    await tb.start()
     rows = []
     for ma_hz, cable_m in ((10e6, 50), (5e6, 100)):
         cable = Cable(length_m=cable_m)
-        bench.encoder.set_cable(cable)
-        bench.configure(fmt, ma_hz)
+        tb.encoder.set_cable(cable)
+        tb.configure(fmt, ma_hz)
         for _ in range(FRAMES_EACH):
-            res = await bench.request()
-            bench.check_frame(res)                 # every field against what the encoder sent
+            res = await tb.request()
+            tb.check_frame(res)                 # every field against what the encoder sent
             f = res.fields
-            rec = bench.encoder.records[-1]
+            rec = tb.encoder.records[-1]
             rows.append(
                 f"{len(rows) + 1:>3} {ma_hz / 1e6:>5.1f} {cable_m:>5} "
                 f"{f['word0_position']:>13} {f['word1_position']:>11} "

@@ -1,9 +1,10 @@
 """make bench: performance measurements of ``biss_master`` against the encoder model (issue 4).
 
-Run by sim/perf.py, one cocotb test per run. Each test measures, checks every frame it uses
-(``Bench.check_frame``) and writes its raw figures as JSON to ``$BISS_PERF_OUT/<test>-<sim>.json``;
-perf.py turns them into tables and judges them against the goals. Nothing here asserts a goal:
-a missed goal must show up in the tables, not as a crashed test.
+Run by sim/tools/perf.py, one cocotb test per run. Each test measures, checks every frame it
+uses (``Testbench.check_frame``) and writes its raw figures as JSON to
+``$BISS_PERF_OUT/<test>-<sim>.json``; sim/tools/perf.py turns them into tables and judges them
+against the goals. Nothing here asserts a goal: a missed goal must show up in the tables, not as
+a crashed test.
 
 * ``request_cycle_overhead``: periodic "as fast as possible" mode (``cfg_request_period`` = 0),
   start-to-start time from the master's MA falling edges, the protocol minimum, and the
@@ -23,9 +24,9 @@ import cocotb
 from cocotb.simtime import get_sim_time
 from cocotb.triggers import RisingEdge
 
-from bench import CLK_HZ, Bench, half_period_for, preset
 from encoder_model import frames
 from encoder_model.cocotb_encoder import Cable
+from sim.shared.testbench import CLK_HZ, Testbench, half_period_for, preset
 
 PS_PER_CLK = round(1e12 / CLK_HZ)
 
@@ -77,8 +78,8 @@ def dump(test, data):
             json.dump(data, f, indent=1)
 
 
-class PerfBench(Bench):
-    """The regression bench with a fixed encoder processing time (the regression draws it at
+class PerfTestbench(Testbench):
+    """The regression testbench with a fixed encoder processing time (the regression draws it at
     random per frame) and a tally of frame checks that failed, instead of stopping at the first."""
 
     processing_time_s = 5e-6
@@ -123,12 +124,12 @@ async def log_edges(signal, edge, times):
 # -- 1. Request-cycle overhead --------------------------------------------------------------------
 @cocotb.test()
 async def request_cycle_overhead(dut):
-    bench = PerfBench(dut, seed=41)
+    tb = PerfTestbench(dut, seed=41)
     cable = Cable(length_m=TYPICAL_CABLE_M)
-    await bench.start(cable=cable)
+    await tb.start(cable=cable)
     # A generic BiSS C slave: no 31.25 us request-rate rule (a RESOLUTE/EVOLUTE would hold SLO
     # low until 31.25 us after the cycle's start, and that rule would set the pace instead).
-    bench.encoder.min_cycle_s = 0.0
+    tb.encoder.min_cycle_s = 0.0
     slo_rises = []                      # SLO rising edges at the master's pin (after the cable)
     cocotb.start_soon(log_edges(dut.slo, RisingEdge, slo_rises))
     rows = []
@@ -138,19 +139,19 @@ async def request_cycle_overhead(dut):
             for ma_hz in OVERHEAD_RATES_HZ:
                 t_ma = 1 / ma_hz
                 timeout_s = 1.5 * t_ma if timeout == "1.5T" else timeout
-                bench.processing_time_s = 0.0 if proc_s is None else proc_s
-                await bench.wait_idle()
-                await bench.encoder_ready()
-                bench.encoder.timeout_s = timeout_s
-                bench.configure(fmt, ma_hz)               # cfg_request_period = 0
-                first = len(bench.encoder.records)
+                tb.processing_time_s = 0.0 if proc_s is None else proc_s
+                await tb.wait_idle()
+                await tb.encoder_ready()
+                tb.encoder.timeout_s = timeout_s
+                tb.configure(fmt, ma_hz)               # cfg_request_period = 0
+                first = len(tb.encoder.records)
                 dut.periodic.value = 1
                 for _ in range(OVERHEAD_INTERVALS + 1):
-                    bench.check(await bench.wait_done())
+                    tb.check(await tb.wait_done())
                 dut.periodic.value = 0
-                await bench.wait_idle()
-                await bench.encoder_ready()               # the last cycle has ended
-                recs = bench.encoder.records[first:first + OVERHEAD_INTERVALS + 1]
+                await tb.wait_idle()
+                await tb.encoder_ready()               # the last cycle has ended
+                recs = tb.encoder.records[first:first + OVERHEAD_INTERVALS + 1]
                 falls = [ps(r.t_first_fall_s) for r in recs]
                 intervals = [b - a for a, b in zip(falls, falls[1:])]
                 dead = []
@@ -163,7 +164,7 @@ async def request_cycle_overhead(dut):
                 # beyond its first slot: Start comes on MA rise k >= 3, the first at or after the
                 # encoder's processing time past the latch edge, i.e. (k - 3) extra MA periods.
                 ks = {start_index(r, t_ma) for r in recs}
-                k_model = max(3, 1 + math.ceil(bench.processing_time_s / t_ma - 1e-9))
+                k_model = max(3, 1 + math.ceil(tb.processing_time_s / t_ma - 1e-9))
                 proc_extra_s = (k_model - 3) * t_ma
                 d_bits = fmt.total_bits
                 line_delay_s = cable.round_trip_s()
@@ -172,7 +173,7 @@ async def request_cycle_overhead(dut):
                 rows.append({
                     "profile": profile, "preset": name, "ma_hz": ma_hz, "t_ma_s": t_ma,
                     "data_crc_bits": d_bits, "cable_m": TYPICAL_CABLE_M,
-                    "line_delay_s": line_delay_s, "processing_time_s": bench.processing_time_s,
+                    "line_delay_s": line_delay_s, "processing_time_s": tb.processing_time_s,
                     "start_rise": sorted(ks), "start_rise_model": k_model,
                     "proc_extra_s": proc_extra_s, "timeout_s": timeout_s,
                     "minimum_s": minimum_s,
@@ -189,30 +190,30 @@ async def request_cycle_overhead(dut):
     # phase with a random 0..20 ns transceiver delay per run (fastest slave, 10 MHz).
     sweep = []
     fmt = preset(OVERHEAD_PRESETS[0])
-    bench.processing_time_s = 0.0
+    tb.processing_time_s = 0.0
     for _ in range(DEAD_SWEEP_RUNS):
-        await bench.wait_idle()
-        await bench.encoder_ready()
-        bench.encoder.set_cable(Cable(length_m=TYPICAL_CABLE_M,
-                                      extra_round_trip_s=bench.rng.uniform(0, 20e-9)))
-        bench.encoder.timeout_s = 1.5 / DEAD_SWEEP_MA_HZ
-        bench.configure(fmt, DEAD_SWEEP_MA_HZ)
-        first = len(bench.encoder.records)
+        await tb.wait_idle()
+        await tb.encoder_ready()
+        tb.encoder.set_cable(Cable(length_m=TYPICAL_CABLE_M,
+                                      extra_round_trip_s=tb.rng.uniform(0, 20e-9)))
+        tb.encoder.timeout_s = 1.5 / DEAD_SWEEP_MA_HZ
+        tb.configure(fmt, DEAD_SWEEP_MA_HZ)
+        first = len(tb.encoder.records)
         dut.periodic.value = 1
         for _ in range(3):
-            bench.check(await bench.wait_done())
+            tb.check(await tb.wait_done())
         dut.periodic.value = 0
-        await bench.wait_idle()
-        await bench.encoder_ready()
-        falls = [ps(r.t_first_fall_s) for r in bench.encoder.records[first:first + 3]]
+        await tb.wait_idle()
+        await tb.encoder_ready()
+        falls = [ps(r.t_first_fall_s) for r in tb.encoder.records[first:first + 3]]
         sweep += [(f - max(t for t in slo_rises if t < f)) * 1e-12 for f in falls[1:]]
-    await bench.wait_idle()
-    dump("request_cycle_overhead", {"rows": rows, "checked": bench.checked,
+    await tb.wait_idle()
+    dump("request_cycle_overhead", {"rows": rows, "checked": tb.checked,
                                     "dead_sweep_s": sweep, "dead_sweep_preset": fmt.name,
                                     "dead_sweep_ma_hz": DEAD_SWEEP_MA_HZ,
-                                    "failures": bench.failures,
-                                    "ignored_falls": len(bench.encoder.ignored_falls),
-                                    "overrun": bench.read().counters["overrun"]})
+                                    "failures": tb.failures,
+                                    "ignored_falls": len(tb.encoder.ignored_falls),
+                                    "overrun": tb.read().counters["overrun"]})
 
 
 # -- 2. Latency from the last CRC bit to the verdict --------------------------------------------
@@ -225,31 +226,31 @@ async def verdict_latency(dut):
     CRC bit) and, independently of the RTL, by predicting its clock edge from the model's edge
     times: first clock edge after the Ack fall reaches the SLO pin, + 1 (second synchronizer
     flop) + half period + slot x MA period."""
-    bench = PerfBench(dut, seed=42)
-    await bench.start()
-    bench.encoder.min_cycle_s = 0.0
+    tb = PerfTestbench(dut, seed=42)
+    await tb.start()
+    tb.encoder.min_cycle_s = 0.0
     strobes, dones, valids = [], [], []
     for sig, times in ((dut.sample, strobes), (dut.done, dones), (dut.valid, valids)):
         cocotb.start_soon(log_edges(sig, RisingEdge, times))
     rows = []
     for cable_m in LATENCY_CABLES_M:
         cable = Cable(length_m=cable_m)
-        bench.encoder.set_cable(cable)
+        tb.encoder.set_cable(cable)
         for name in LATENCY_PRESETS:
             fmt = preset(name)
             for ma_hz in LATENCY_RATES_HZ:
-                bench.configure(fmt, ma_hz)
+                tb.configure(fmt, ma_hz)
                 hp = half_period_for(ma_hz)
                 for corrupt in (False, True):
                     faults = frames.FrameFaults(flip_bits=(2 + fmt.total_bits - 1,)) \
                         if corrupt else None
-                    bench.queue(faults=faults, processing_time_s=bench.processing_time_s)
+                    tb.queue(faults=faults, processing_time_s=tb.processing_time_s)
                     mark = len(strobes), len(dones), len(valids)
-                    res = await bench.request()
+                    res = await tb.request()
                     status = "OK" if not corrupt else \
                         ("CRC_ERROR_WORD1" if len(fmt.words) == 2 else "CRC_ERROR_WORD0")
-                    bench.check(res, status=status)
-                    rec = bench.encoder.records[-1]
+                    tb.check(res, status=status)
+                    rec = tb.encoder.records[-1]
                     t_done = dones[mark[1]]
                     t_valid = valids[mark[2]] if len(valids) > mark[2] else None
                     # (the previous cycle's stop-bit strobe comes after its done: skip it)
@@ -259,7 +260,7 @@ async def verdict_latency(dut):
                     expected_strobes = (k - 2) + 2 + fmt.total_bits   # Ack slots, Start, CDS, D
                     # Model prediction of the last CRC bit's strobe edge.
                     t_ack_pin = ps(rec.t_first_rise_s) + 2 * hp * PS_PER_CLK + ps(rec.round_trip_s)
-                    phase = bench.t_clk0 % PS_PER_CLK        # clock edges: phase + n x T_clk
+                    phase = tb.t_clk0 % PS_PER_CLK        # clock edges: phase + n x T_clk
                     first_edge = ((t_ack_pin - phase) // PS_PER_CLK + 1) * PS_PER_CLK + phase
                     slot = expected_strobes - 1
                     predicted = first_edge + (1 + hp + 2 * hp * slot) * PS_PER_CLK
@@ -277,8 +278,8 @@ async def verdict_latency(dut):
                     if corrupt and len(fmt.words) == 2:
                         # The LC of a frame with a bad SPW CRC is not trusted: the next frame
                         # shows the lost frame as a sign-of-life skip (not measured).
-                        bench.check(await bench.request(), status="SIGN_OF_LIFE")
-    dump("verdict_latency", {"rows": rows, "checked": bench.checked, "failures": bench.failures})
+                        tb.check(await tb.request(), status="SIGN_OF_LIFE")
+    dump("verdict_latency", {"rows": rows, "checked": tb.checked, "failures": tb.failures})
 
 
 # -- 3. Line-delay measurement error ---------------------------------------------------------------
@@ -287,25 +288,25 @@ async def line_delay_error(dut):
     """Reported ``line_delay`` minus the model's realised round trip (master's 2nd MA rise to the
     Ack fall at its SLO pin, jitter included). Each frame adds a random 0..20 ns of transceiver
     delay, so the round trip takes every phase against the system clock."""
-    bench = PerfBench(dut, seed=43)
-    await bench.start()
-    bench.encoder.min_cycle_s = 0.0
+    tb = PerfTestbench(dut, seed=43)
+    await tb.start()
+    tb.encoder.min_cycle_s = 0.0
     fmt = preset(DELAY_PRESET)
     rows = []
     for ma_hz in DELAY_RATES_HZ:
-        bench.configure(fmt, ma_hz)
+        tb.configure(fmt, ma_hz)
         for cable_m in DELAY_CABLES_M:
             for jitter in DELAY_JITTER:
                 errors, trips, reported = [], [], []
                 for _ in range(DELAY_FRAMES):
-                    await bench.wait_idle()
-                    await bench.encoder_ready()
-                    bench.encoder.set_cable(Cable(length_m=cable_m,
-                                                  extra_round_trip_s=bench.rng.uniform(0, 20e-9),
+                    await tb.wait_idle()
+                    await tb.encoder_ready()
+                    tb.encoder.set_cable(Cable(length_m=cable_m,
+                                                  extra_round_trip_s=tb.rng.uniform(0, 20e-9),
                                                   jitter_s=jitter / ma_hz))
-                    res = await bench.request()
-                    bench.check(res, check_rises=jitter == 0)
-                    rec = bench.encoder.records[-1]
+                    res = await tb.request()
+                    tb.check(res, check_rises=jitter == 0)
+                    rec = tb.encoder.records[-1]
                     errors.append(res.fields["line_delay"] - rec.round_trip_s * CLK_HZ)
                     trips.append(rec.round_trip_s)
                     reported.append(res.fields["line_delay"])
@@ -313,7 +314,7 @@ async def line_delay_error(dut):
                              "nominal_round_trip_s": Cable(length_m=cable_m).round_trip_s(),
                              "errors_clk": errors, "round_trips_s": trips,
                              "line_delays_clk": reported})
-    dump("line_delay_error", {"rows": rows, "checked": bench.checked, "failures": bench.failures,
+    dump("line_delay_error", {"rows": rows, "checked": tb.checked, "failures": tb.failures,
                               "preset": DELAY_PRESET})
 
 
@@ -323,21 +324,21 @@ async def sim_speed(dut):
     """SPEED_FRAMES frames of a RESOLUTE FS RSH (BiSS Safety 36/28) at 10 MHz over 25 m, periodic
     as fast as the encoder allows (its 31.25 us rule included), every frame checked. Only the
     frame loop is timed: no build, no simulator start-up, no reset and power-up break."""
-    bench = PerfBench(dut, seed=44)
-    await bench.start(cable=Cable(length_m=SPEED_CABLE_M))
-    bench.configure(preset(SPEED_PRESET), SPEED_MA_HZ)
-    await bench.wait_idle()
+    tb = PerfTestbench(dut, seed=44)
+    await tb.start(cable=Cable(length_m=SPEED_CABLE_M))
+    tb.configure(preset(SPEED_PRESET), SPEED_MA_HZ)
+    await tb.wait_idle()
     t_sim0 = get_sim_time("step")
     wall0 = time.perf_counter()
     cpu0 = time.process_time()
     dut.periodic.value = 1
     for _ in range(SPEED_FRAMES):
-        bench.check(await bench.wait_done())
+        tb.check(await tb.wait_done())
     dut.periodic.value = 0
     wall = time.perf_counter() - wall0
     cpu = time.process_time() - cpu0
     sim_s = (get_sim_time("step") - t_sim0) * 1e-12
     dump("sim_speed", {"frames": SPEED_FRAMES, "wall_s": wall, "cpu_s": cpu, "sim_time_s": sim_s,
                        "preset": SPEED_PRESET, "ma_hz": SPEED_MA_HZ, "cable_m": SPEED_CABLE_M,
-                       "checked": bench.checked, "failures": bench.failures,
+                       "checked": tb.checked, "failures": tb.failures,
                        "python": platform.python_version()})

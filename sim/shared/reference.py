@@ -1,6 +1,6 @@
 """Reference model of the master's verdicts, written from the documentation, not from the RTL.
 
-The campaigns (sim/cocotb_campaign.py) predict every outcome with this model and compare it
+The campaigns (sim/scenarios/campaigns.py) predict every outcome with this model and compare it
 with what the core reports. It knows nothing of the RTL's structure: it works on the bits the
 encoder model sent (tb/encoder_model/frames.py) and on the rules in docs/ports.md:
 
@@ -18,16 +18,13 @@ from dataclasses import dataclass, field
 
 from bissmaster import protocol
 from encoder_model import frames
+from master_contract import CRC_CODE, FRAME_STATUSES, STATUS, STATUS_NAME
 
-STATUS_NAMES = ("OK", "CRC_ERROR_WORD0", "CRC_ERROR_WORD1", "CRC_ERROR_BOTH", "SIGN_OF_LIFE",
-                "SPW_MISMATCH", "NO_ACK", "NO_START", "DELAY_RANGE", "SLO_STUCK_LOW",
-                "ABORTED", "BAD_CONFIG", "NO_STOP")
-STATUS = {name: code for code, name in enumerate(STATUS_NAMES)}
 #: Cycles that end in the break (MA high 40 us): the encoder restarts its LC check from scratch.
 BREAK_STATUSES = {STATUS[n] for n in ("NO_ACK", "NO_START", "DELAY_RANGE", "SLO_STUCK_LOW",
                                       "ABORTED", "NO_STOP")}
-FRAME_STATUSES = {STATUS[n] for n in ("OK", "CRC_ERROR_WORD0", "CRC_ERROR_WORD1",
-                                      "CRC_ERROR_BOTH", "SIGN_OF_LIFE", "SPW_MISMATCH")}
+#: Codes of the statuses that judge a received frame.
+FRAME_STATUS_CODES = {STATUS[n] for n in FRAME_STATUSES}
 
 
 def lc_successor(value):
@@ -47,7 +44,7 @@ class Verdict:
 
     @property
     def name(self):
-        return STATUS_NAMES[self.status]
+        return STATUS_NAME[self.status]
 
 
 class MasterReference:
@@ -114,7 +111,7 @@ class MasterReference:
 
 
 # -- Configuration rules (docs/ports.md, "Configuration") -------------------------------------
-CRC_CODES = {0: frames.CRC_NONE, 1: frames.CRC6, 2: frames.CRC16}
+CRC_KIND = {code: kind for kind, code in CRC_CODE.items()}
 
 
 def config_valid(cfg, *, max_data_bits=(55, 40), word_crcs=((1, 2), (1, 2)),
@@ -143,7 +140,7 @@ def format_of(cfg, words=2):
     for w in range(2 if words == 2 and cfg["cfg_w1_enable"] else 1):
         ws.append(frames.WordFormat(cfg[f"cfg_w{w}_data_bits"], nenw=bool(cfg[f"cfg_w{w}_nenw"]),
                                     lc=bool(cfg[f"cfg_w{w}_lc"]),
-                                    crc=CRC_CODES[cfg[f"cfg_w{w}_crc"]]))
+                                    crc=CRC_KIND[cfg[f"cfg_w{w}_crc"]]))
     return _LooseFormat("fuzz", tuple(ws))
 
 

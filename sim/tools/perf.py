@@ -1,6 +1,6 @@
 """make bench: measure the core's performance in simulation and print the tables (issue 4).
 
-    python sim/perf.py [--frames N] [--keep-build] [--sims verilator,icarus]
+    python -m sim.tools.perf [--frames N] [--keep-build] [--sims verilator,icarus]
 
 1. Request-cycle overhead in periodic "as fast as possible" mode against the protocol minimum
    T_MA x (5 + data bits + CRC bits) + line delay + processing time + timeout, and the master's
@@ -11,7 +11,7 @@
    fixed clock is compensated in the core).
 4. Simulation speed: the same scenario on Verilator and Icarus, frames per wall second.
 
-The measurements are cocotb tests in sim/cocotb_perf.py; they write JSON, this script judges
+The measurements are cocotb tests in sim/scenarios/perf.py; they write JSON, this script judges
 them. Output: the tables on stdout, sim_build/bench/report.md and report.json, simulator logs in
 sim_build/bench/logs/. Exit status 1 if a goal is missed or a run failed.
 """
@@ -28,11 +28,9 @@ import sys
 import time
 import xml.etree.ElementTree as ET
 from importlib import metadata
-from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-import runner  # noqa: E402
-from demo import output_to  # noqa: E402
+from sim.shared import runner
+from sim.shared.runner import output_to
 
 OUT = runner.BUILD / "bench"
 JSON_DIR = OUT / "json"
@@ -84,8 +82,8 @@ def tool_versions():
 def run_sim(sim, tests, env, keep_build, status, internal_clock=False):
     """Build (timed) and run each test in its own simulator process (timed).
 
-    ``internal_clock``: the core wrapped by sim/fastclk.py, its clock made in Verilog instead of
-    by cocotb (what the campaigns use); results are keyed "<sim>-iclk"."""
+    ``internal_clock``: the core wrapped by sim/shared/fastclk.py, its clock made in Verilog
+    instead of by cocotb (what the campaigns use); results are keyed "<sim>-iclk"."""
     key = f"{sim}-{ICLK}" if internal_clock else sim
     build_dir = runner.BUILD / f"{sim}{TAG}{'-' + ICLK if internal_clock else ''}"
     fresh = not keep_build or not build_dir.exists()
@@ -111,7 +109,7 @@ def run_sim(sim, tests, env, keep_build, status, internal_clock=False):
         t0 = time.perf_counter()
         try:
             with output_to(log):
-                xml = runner.run(r, b, "cocotb_perf", testcase=test, extra_env=env,
+                xml = runner.run(r, b, "sim.scenarios.perf", testcase=test, extra_env=env,
                                  **({"internal_clock": True} if internal_clock else {}))
             cases = ET.parse(xml).getroot().findall(".//testcase")
             bad = [c for c in cases if c.findall("failure") or c.findall("error")]
@@ -334,7 +332,7 @@ def speed_section(status, goals):
                "reset or power-up break); \"process wall\" is the whole simulator run; "
                "\"kclk/s\": simulated 100 MHz system clocks per wall second. Clock \"cocotb\": "
                "cocotb's Clock drives clk, as in the regression (make sim); \"Verilog\": "
-               "sim/fastclk.py's wrapper makes it, as the campaigns do. Wall-time figures depend "
+               "sim/shared/fastclk.py's wrapper makes it, as the campaigns do. Wall-time figures depend "
                "on the machine's load (see Tools); the CPU-time figures less so.")
     goals.append(("simulation speed measured on Verilator and Icarus", ok,
                   "Verilator/Icarus = " + ", ".join(
@@ -353,7 +351,7 @@ def main():
                     help="reuse sim_build/<sim>-bench (build time is then incremental)")
     ap.add_argument("--sims", default=",".join(runner.SIMULATORS))
     ap.add_argument("--no-internal-clock", action="store_true",
-                    help="skip the sim-speed runs with the clock made in Verilog (sim/fastclk.py)")
+                    help="skip the sim-speed runs with the clock made in Verilog (sim/shared/fastclk.py)")
     args = ap.parse_args()
     sims = [s for s in args.sims.split(",") if s]
 

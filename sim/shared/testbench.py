@@ -1,4 +1,4 @@
-"""cocotb bench for ``biss_master``: clock, reset, configuration, one request, and the checks.
+"""cocotb testbench for ``biss_master``: clock, reset, configuration, one request, and the checks.
 
 The expected values come from the encoder model (tb/encoder_model), never from the RTL: what
 the encoder sent (frames.py) and what happened on the wire (cocotb_encoder.CycleRecord).
@@ -17,23 +17,12 @@ from cocotb.triggers import ClockCycles, FallingEdge, ReadOnly, RisingEdge, Time
 from bissmaster import protocol
 from encoder_model import frames
 from encoder_model.cocotb_encoder import BissEncoder, Cable, Response
+from master_contract import COUNTERS, CRC_CODE, STATUS, SYS_CLK_HZ
 
-CLK_HZ = int(os.environ.get("BISS_CLK_HZ", "100000000"))
+CLK_HZ = int(os.environ.get("BISS_CLK_HZ", str(SYS_CLK_HZ)))
 CLK_NS = 1e9 / CLK_HZ
 FRAME_LOG = os.environ.get("BISS_FRAME_LOG")
 INTERNAL_CLOCK = bool(os.environ.get("BISS_INTERNAL_CLOCK"))
-
-#: Status codes of the core (docs/ports.md). Kept here as the bench's own table: a renumbering in
-#: the RTL must show up as a failure, not silently follow.
-STATUS = {
-    "OK": 0, "CRC_ERROR_WORD0": 1, "CRC_ERROR_WORD1": 2, "CRC_ERROR_BOTH": 3,
-    "SIGN_OF_LIFE": 4, "SPW_MISMATCH": 5, "NO_ACK": 6, "NO_START": 7, "DELAY_RANGE": 8,
-    "SLO_STUCK_LOW": 9, "ABORTED": 10, "BAD_CONFIG": 11, "NO_STOP": 12,
-}
-CRC_CODE = {frames.CRC_NONE: 0, frames.CRC6: 1, frames.CRC16: 2}
-COUNTERS = ("crc_word0", "crc_word1", "no_ack", "no_start", "delay_range", "slo_stuck_low",
-            "lc_repeat", "lc_skip", "lc_zero", "spw_mismatch", "overrun", "aborted",
-            "no_stop")
 
 CFG_PORTS = ["cfg_ma_half_period", "cfg_request_period", "cfg_break_time", "cfg_ack_limit",
              "cfg_timeout_limit", "cfg_delay_limit", "cfg_end_check", "cfg_w1_enable", "cfg_spw_check",
@@ -74,7 +63,7 @@ class Sent:
     response: Response = None
 
 
-class Bench:
+class Testbench:
     def __init__(self, dut, *, seed=1):
         self.dut = dut
         self.rng = random.Random(seed)
@@ -99,7 +88,7 @@ class Bench:
     # -- Setup ----------------------------------------------------------------------------
     async def start(self, cable=Cable(), timeout_s=12.5e-6):
         dut = self.dut
-        if not INTERNAL_CLOCK:              # else the wrapper makes it (sim/fastclk.py)
+        if not INTERNAL_CLOCK:              # else the wrapper makes it (sim/shared/fastclk.py)
             Clock(dut.clk, CLK_NS, unit="ns").start()
         # Drive every input from time 0 (an undriven input is X in a four-state simulator).
         for name in ("start", "periodic", "abort_cycle") + (

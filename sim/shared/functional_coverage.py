@@ -20,11 +20,10 @@ import json
 from collections import Counter
 from pathlib import Path
 
-from reference import STATUS_NAMES
+from master_contract import ENCODER_PRESETS, STATUS, STATUS_NAME
 
-PRESETS = ["resolute_fs_lmm", "resolute_fs_rsm", "resolute_fs_rsh", "fortis_fs_rsh",
-           "evolute_26", "evolute_32", "evolute_36", "resolute_c_18", "resolute_c_26",
-           "resolute_c_32", "resolute_c_36", "bp3_1", "bp3_13", "bp3_24", "bp3_40", "bp3_55"]
+#: The setup cross's presets: every named encoder and five BP3 lengths.
+PRESETS = [*ENCODER_PRESETS, "bp3_1", "bp3_13", "bp3_24", "bp3_40", "bp3_55"]
 MA_RATES = ["250k", "1M", "2.5M", "5M", "10M"]
 #: Round trip in MA bit periods: the sampler's hard cases are "less than one bit" and "many".
 DELAY_RANGES = ["<0.5 bit", "0.5-2 bits", "2-8 bits", ">8 bits"]
@@ -93,7 +92,7 @@ class Coverage:
         """One request cycle. ``preset`` None: a fuzzed format (counts for the fault cross)."""
         fault = fault or "none"
         assert fault in FAULTS, fault
-        status_name = STATUS_NAMES[status]
+        status_name = STATUS_NAME[status]
         self.hits[("fault", fault, status_name)] += 1
         ma = ma_bin(ma_hz) if ma_hz else None
         if preset in PRESETS and ma is not None and round_trip_s is not None:
@@ -119,7 +118,7 @@ def bins():
     """Every defined bin, per cross."""
     setup = [("setup", p, m, d) for p in PRESETS for m in MA_RATES for d in DELAY_RANGES]
     fault = [("fault", f, s) for f in FAULTS for s in LEGAL[f]]
-    status = [("status", s) for s in STATUS_NAMES]
+    status = [("status", s) for s in STATUS]
     return {"preset x MA rate x delay": setup, "fault x status": fault, "status": status}
 
 

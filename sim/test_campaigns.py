@@ -1,0 +1,24 @@
+"""pytest entry: the reliability campaigns (sim/scenarios/campaigns.py) on Verilator.
+
+Every ``@cocotb.test`` of the scenario module is a campaign and runs here (found by
+sim/shared/discovery.py). ``make campaigns`` runs them at ``BISS_CAMPAIGN_SCALE`` = 1 (the fast
+slice); ``make soak`` runs sim/tools/soak.py instead. Every campaign writes its figures and
+coverage to sim_build/campaign/, and sim/tools/campaign_report.py turns them into tables.
+"""
+
+import os
+
+import pytest
+
+from sim.shared import discovery, runner
+
+RESULTS = runner.BUILD / "campaign" / "slice"
+CASES = [pytest.param(s.name, build, id=s.name if build == discovery.DEFAULT_BUILD
+                      else f"{build}-{s.name}")
+         for s in discovery.scenarios(runner.CAMPAIGN_SCENARIOS) for build in s.builds]
+
+
+@pytest.mark.parametrize("campaign,build", CASES)
+def test_campaign(campaign, build):
+    runner.run_campaign(campaign, os.environ.get("BISS_CAMPAIGN_SCALE", "1"), RESULTS,
+                        preset=build)
