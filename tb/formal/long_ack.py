@@ -20,11 +20,6 @@ then SLO high (timeout over).
 import sys
 from pathlib import Path
 
-_REPO = Path(__file__).resolve().parents[2]
-for _p in (_REPO / "rtl", _REPO / "tb"):
-    if str(_p) not in sys.path:
-        sys.path.insert(0, str(_p))
-
 from amaranth.hdl import Elaboratable, Module, Signal
 from amaranth.sim import Simulator
 

@@ -21,14 +21,9 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-_REPO = Path(__file__).resolve().parents[2]
-for _p in (_REPO / "rtl", _REPO / "tb"):
-    if str(_p) not in sys.path:
-        sys.path.insert(0, str(_p))
-
-from bissmaster.params import Crc, MasterParams             # noqa: E402
-from formal import flow                                     # noqa: E402
-from formal.harnesses import (DecoderCrcHarness, LivenessLimits, MaClockHarness,  # noqa: E402
+from bissmaster.params import Crc, MasterParams
+from formal import flow
+from formal.harnesses import (DecoderCrcHarness, LivenessLimits, MaClockHarness,
                               MasterCrcHarness, MasterLivenessHarness, MasterMaHarness,
                               SamplerHarness)
 

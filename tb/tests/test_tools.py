@@ -13,7 +13,6 @@ from amaranth.hdl import Elaboratable, Module, Signal
 from amaranth.lib import enum as hdl_enum
 
 # scripts/ is a folder of scripts, not a package: its modules import each other by file name.
-sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "scripts"))
 import venvtools  # noqa: E402
 import waves  # noqa: E402
 import wavenames  # noqa: E402
