@@ -103,7 +103,7 @@ class CycleController(wiring.Component):
     delay_over: In(1)
     idle: Out(1)
     first_clock: Out(1)
-    receiver_clear: Out(1)
+    receiver_clear: Out(1, init=1)
     resync: Out(1)
     timer_clear: Out(1)
     in_clock: Out(1)
@@ -127,44 +127,54 @@ class CycleController(wiring.Component):
         # computed from the live setting.
         slo_stuck = Mux(self.first_clock, self.slo_stuck_live, self.slo_stuck)
 
+        # ``idle`` and ``receiver_clear`` are decodes of the state, kept as registers: written
+        # with every transition from the state it goes to (no decode in front of the resets of
+        # the receiver, the configuration latch and the request logic).
+        cleared_states = ("BREAK", "IDLE", "WAIT_READY")
+
+        def goto(state):
+            m.next = state
+            m.d.sync += [self.idle.eq(state == "IDLE"),
+                         self.receiver_clear.eq(state in cleared_states)]
+
         def fault(status, next_state="BREAK"):
             m.d.comb += [self.fault.eq(1), self.fault_status.eq(status),
                          self.faults[status.name.lower()].eq(1)]
-            m.next = next_state
+            goto(next_state)
 
         def report_verdict():
             m.d.comb += [self.report_frame.eq(1), self.report_delay.eq(1)]
 
         with m.FSM(init="BREAK", name="cycle_fsm"):
             with m.State("BREAK"):
-                m.d.comb += [self.receiver_clear.eq(1), self.resync.eq(1)]
+                m.d.comb += self.resync.eq(1)
                 with m.If(self.ma_busy | self.abort):
                     m.d.comb += self.timer_clear.eq(1)
                 with m.Elif(self.break_over):
-                    m.next = "IDLE"
+                    goto("IDLE")
 
             with m.State("IDLE"):
                 # The timer is not read in IDLE, and every way out of it (BREAK, WAIT_READY)
                 # starts from 0: hold it at 0 here, whatever the request decode says.
-                m.d.comb += [self.idle.eq(1), self.receiver_clear.eq(1), self.timer_clear.eq(1)]
+                m.d.comb += self.timer_clear.eq(1)
                 with m.If(self.abort):
-                    m.next = "BREAK"
+                    goto("BREAK")
                 with m.Elif(self.request):
-                    m.next = "WAIT_READY"
+                    goto("WAIT_READY")
 
             with m.State("WAIT_READY"):
-                m.d.comb += [self.receiver_clear.eq(1), self.timer_clear.eq(1)]
+                m.d.comb += self.timer_clear.eq(1)
                 m.d.sync += [armed.eq(0), locked_seen.eq(0)]
                 with m.If(self.first_clock & ~self.config_ok):
                     # The configuration latched at the request is invalid: no cycle. Nothing
                     # has reached the line. An abort now is handled as IDLE would have.
                     fault(Status.BAD_CONFIG, "IDLE")
                     with m.If(self.abort):
-                        m.next = "BREAK"
+                        goto("BREAK")
                 with m.Elif(self.abort):
                     fault(Status.ABORTED)
                 with m.Elif(self.slo):
-                    m.next = "CLOCK"
+                    goto("CLOCK")
                 with m.Elif(slo_stuck):
                     fault(Status.SLO_STUCK_LOW)
 
@@ -186,7 +196,7 @@ class CycleController(wiring.Component):
                     # With the end check the verdict waits for the end of the frame (CONFIRM).
                     with m.If(~self.end_check):
                         report_verdict()
-                    m.next = "TAIL"
+                    goto("TAIL")
                 with m.Elif(armed & self.early):
                     fault(Status.DELAY_RANGE)
                 with m.Elif(armed & ~locked_seen & ~self.locked & self.ack_expired):
@@ -205,10 +215,10 @@ class CycleController(wiring.Component):
                     with m.If(self.end_check):
                         fault(Status.ABORTED)
                     with m.Else():
-                        m.next = "BREAK"
+                        goto("BREAK")
                 with m.Elif(self.stopped):
                     with m.If(~self.end_check):
-                        m.next = "END"
+                        goto("END")
                     with m.Elif(self.stop_bit):
                         # A good encoder holds SLO low from the stop bit through its timeout.
                         # High here: the line went (or is stuck) high, or the frame is longer
@@ -217,11 +227,11 @@ class CycleController(wiring.Component):
                         m.d.comb += self.timer_clear.eq(1)
                         fault(Status.NO_STOP)
                     with m.Else():
-                        m.next = "CONFIRM"
+                        goto("CONFIRM")
 
             with m.State("END"):
                 with m.If(~self.ma_busy):
-                    m.next = "IDLE"
+                    goto("IDLE")
 
             with m.State("CONFIRM"):
                 with m.If(self.abort):
@@ -229,7 +239,7 @@ class CycleController(wiring.Component):
                     fault(Status.ABORTED)
                 with m.Elif(~self.ma_busy & self.slo):
                     report_verdict()
-                    m.next = "IDLE"
+                    goto("IDLE")
                 with m.Elif(self.slo_stuck):
                     m.d.comb += self.timer_clear.eq(1)
                     fault(Status.SLO_STUCK_LOW)

@@ -727,7 +727,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .is_zero(lc_zero_seen),
     .lc(\lc$149 ),
     .load(load),
-    .\port$991$0 (\slo$77 ),
+    .\port$993$0 (\slo$77 ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -1388,7 +1388,7 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.controller (clk, rst, request, restart_timer, config_ok, end_check, receiver_clear, resync, timer_clear, idle, fault, fault_status, faults, ma_run, in_clock, report_frame, report_delay, slo_stuck, slo_stuck_live, break_over, ack_expired
+module \biss_master.controller (clk, rst, request, restart_timer, config_ok, end_check, resync, timer_clear, fault, fault_status, faults, ma_run, in_clock, report_frame, report_delay, idle, receiver_clear, slo_stuck, slo_stuck_live, break_over, ack_expired
 , no_start_expired, delay_over, ma_arm, ma_busy, ma_enough, early, locked, slo, frame_done, stopped, slots_full, started, stop_bit, abort);
   reg \$auto$verilog_backend.cc:2355:dump_module$10  = 0;
   wire \$1 ;
@@ -1448,6 +1448,8 @@ module \biss_master.controller (clk, rst, request, restart_timer, config_ok, end
   reg \$59 ;
   wire \$6 ;
   reg \$60 ;
+  reg \$61 ;
+  reg \$62 ;
   wire \$7 ;
   wire \$8 ;
   wire \$9 ;
@@ -1500,7 +1502,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, config_ok, end
   input frame_done;
   wire frame_done;
   output idle;
-  reg idle;
+  reg idle = 1'h0;
   output in_clock;
   reg in_clock;
   input locked;
@@ -1517,7 +1519,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, config_ok, end
   input no_start_expired;
   wire no_start_expired;
   output receiver_clear;
-  reg receiver_clear;
+  reg receiver_clear = 1'h1;
   output report_delay;
   reg report_delay;
   output report_frame;
@@ -1546,6 +1548,8 @@ module \biss_master.controller (clk, rst, request, restart_timer, config_ok, end
   wire stopped;
   output timer_clear;
   reg timer_clear;
+  assign \$37  = first_clock ? slo_stuck_live : slo_stuck;
+  assign \$38  = ~ locked_seen;
   assign \$39  = locked & \$38 ;
   assign \$40  = armed & early;
   assign \$41  = ~ locked_seen;
@@ -1569,9 +1573,13 @@ module \biss_master.controller (clk, rst, request, restart_timer, config_ok, end
   always @(posedge clk)
     cycle_fsm_state <= \$58 ;
   always @(posedge clk)
-    armed <= \$59 ;
+    idle <= \$59 ;
   always @(posedge clk)
-    locked_seen <= \$60 ;
+    receiver_clear <= \$60 ;
+  always @(posedge clk)
+    armed <= \$61 ;
+  always @(posedge clk)
+    locked_seen <= \$62 ;
   assign \$1  = ~ locked_seen;
   assign \$2  = locked & \$1 ;
   assign restart_timer = ma_arm | \$2 ;
@@ -1609,20 +1617,6 @@ module \biss_master.controller (clk, rst, request, restart_timer, config_ok, end
   assign \$34  = ma_busy | abort;
   assign \$35  = ~ config_ok;
   assign \$36  = first_clock & \$35 ;
-  assign \$37  = first_clock ? slo_stuck_live : slo_stuck;
-  assign \$38  = ~ locked_seen;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    receiver_clear = 1'h0;
-    casez (cycle_fsm_state)
-      3'h0:
-          receiver_clear = 1'h1;
-      3'h1:
-          receiver_clear = 1'h1;
-      3'h2:
-          receiver_clear = 1'h1;
-    endcase
-  end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     resync = 1'h0;
@@ -1665,16 +1659,6 @@ module \biss_master.controller (clk, rst, request, restart_timer, config_ok, end
           end else if (slo_stuck) begin
             timer_clear = 1'h1;
           end
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    idle = 1'h0;
-    casez (cycle_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          idle = 1'h1;
     endcase
   end
   always @* begin
@@ -2009,17 +1993,75 @@ module \biss_master.controller (clk, rst, request, restart_timer, config_ok, end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$59  = armed;
+    \$59  = idle;
     casez (cycle_fsm_state)
       3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          \$59  = 1'h0;
-      3'h3:
-          if (ma_arm) begin
+          if (\$34 ) begin
+          end else if (break_over) begin
             \$59  = 1'h1;
+          end
+      3'h1:
+          if (abort) begin
+            \$59  = 1'h0;
+          end else if (request) begin
+            \$59  = 1'h0;
+          end
+      3'h2:
+          if (\$36 ) begin
+            \$59  = 1'h1;
+            if (abort) begin
+              \$59  = 1'h0;
+            end
+          end else if (abort) begin
+            \$59  = 1'h0;
+          end else if (slo) begin
+            \$59  = 1'h0;
+          end else if (\$37 ) begin
+            \$59  = 1'h0;
+          end
+      3'h3:
+          if (abort) begin
+            \$59  = 1'h0;
+          end else if (frame_done) begin
+            \$59  = 1'h0;
+          end else if (\$40 ) begin
+            \$59  = 1'h0;
+          end else if (\$45 ) begin
+            \$59  = 1'h0;
+          end else if (\$48 ) begin
+            \$59  = 1'h0;
+          end else if (\$52 ) begin
+            \$59  = 1'h0;
+          end
+      3'h4:
+          if (abort) begin
+            (* full_case = 32'd1 *)
+            if (end_check) begin
+              \$59  = 1'h0;
+            end else begin
+              \$59  = 1'h0;
+            end
+          end else if (stopped) begin
+            (* full_case = 32'd1 *)
+            if (\$53 ) begin
+              \$59  = 1'h0;
+            end else if (stop_bit) begin
+              \$59  = 1'h0;
+            end else begin
+              \$59  = 1'h0;
+            end
+          end
+      3'h5:
+          if (\$54 ) begin
+            \$59  = 1'h1;
+          end
+      3'h6:
+          if (abort) begin
+            \$59  = 1'h0;
+          end else if (\$56 ) begin
+            \$59  = 1'h1;
+          end else if (slo_stuck) begin
+            \$59  = 1'h0;
           end
     endcase
     if (rst) begin
@@ -2028,21 +2070,117 @@ module \biss_master.controller (clk, rst, request, restart_timer, config_ok, end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$60  = locked_seen;
+    \$60  = receiver_clear;
+    casez (cycle_fsm_state)
+      3'h0:
+          if (\$34 ) begin
+          end else if (break_over) begin
+            \$60  = 1'h1;
+          end
+      3'h1:
+          if (abort) begin
+            \$60  = 1'h1;
+          end else if (request) begin
+            \$60  = 1'h1;
+          end
+      3'h2:
+          if (\$36 ) begin
+            \$60  = 1'h1;
+            if (abort) begin
+              \$60  = 1'h1;
+            end
+          end else if (abort) begin
+            \$60  = 1'h1;
+          end else if (slo) begin
+            \$60  = 1'h0;
+          end else if (\$37 ) begin
+            \$60  = 1'h1;
+          end
+      3'h3:
+          if (abort) begin
+            \$60  = 1'h1;
+          end else if (frame_done) begin
+            \$60  = 1'h0;
+          end else if (\$40 ) begin
+            \$60  = 1'h1;
+          end else if (\$45 ) begin
+            \$60  = 1'h1;
+          end else if (\$48 ) begin
+            \$60  = 1'h1;
+          end else if (\$52 ) begin
+            \$60  = 1'h1;
+          end
+      3'h4:
+          if (abort) begin
+            (* full_case = 32'd1 *)
+            if (end_check) begin
+              \$60  = 1'h1;
+            end else begin
+              \$60  = 1'h1;
+            end
+          end else if (stopped) begin
+            (* full_case = 32'd1 *)
+            if (\$53 ) begin
+              \$60  = 1'h0;
+            end else if (stop_bit) begin
+              \$60  = 1'h1;
+            end else begin
+              \$60  = 1'h0;
+            end
+          end
+      3'h5:
+          if (\$54 ) begin
+            \$60  = 1'h1;
+          end
+      3'h6:
+          if (abort) begin
+            \$60  = 1'h1;
+          end else if (\$56 ) begin
+            \$60  = 1'h1;
+          end else if (slo_stuck) begin
+            \$60  = 1'h1;
+          end
+    endcase
+    if (rst) begin
+      \$60  = 1'h1;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$61  = armed;
     casez (cycle_fsm_state)
       3'h0:
           /* empty */;
       3'h1:
           /* empty */;
       3'h2:
-          \$60  = 1'h0;
+          \$61  = 1'h0;
       3'h3:
-          if (\$39 ) begin
-            \$60  = 1'h1;
+          if (ma_arm) begin
+            \$61  = 1'h1;
           end
     endcase
     if (rst) begin
-      \$60  = 1'h0;
+      \$61  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$62  = locked_seen;
+    casez (cycle_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          \$62  = 1'h0;
+      3'h3:
+          if (\$39 ) begin
+            \$62  = 1'h1;
+          end
+    endcase
+    if (rst) begin
+      \$62  = 1'h0;
     end
   end
   assign \faults.no_ack  = faults[0];
@@ -5418,7 +5556,7 @@ module \biss_master.scheduler (periodic, abort, period, clk, rst, request, overr
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.sign_of_life (rst, load, \repeat , skip, check, resync, \port$991$0 , lc, is_zero, clk);
+module \biss_master.sign_of_life (rst, load, \repeat , skip, check, resync, \port$993$0 , lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$32  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -5456,8 +5594,8 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, resync, \por
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$991$0 ;
-  wire \port$991$0 ;
+  input \port$993$0 ;
+  wire \port$993$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -5469,9 +5607,9 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, resync, \por
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$991$0  };
-  assign \$2  = { lc[4:0], \port$991$0  } == last;
-  assign \$3  = { lc[4:0], \port$991$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$993$0  };
+  assign \$2  = { lc[4:0], \port$993$0  } == last;
+  assign \$3  = { lc[4:0], \port$993$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = lc == 6'h3f;
@@ -5561,7 +5699,7 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, resync, \por
       \$21  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$991$0  };
+  assign lc_next = { lc[4:0], \port$993$0  };
   assign zero = is_zero;
 endmodule
 
