@@ -60,10 +60,13 @@ def run_clocks(dut, steps, outputs, *, defaults=None):
     trace = []
 
     async def tb(ctx):
+        held = {}
         for step in steps:
             for path, value in {**(defaults or {}), **step}.items():
-                obj = member(dut, path)
-                ctx.set(_settable(obj, value), value)
+                if path not in held or held[path] != value:     # set only what changes
+                    obj = member(dut, path)
+                    ctx.set(_settable(obj, value), value)
+                    held[path] = value
             row = {}
             for path in outputs:
                 obj = member(dut, path)
