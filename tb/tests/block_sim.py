@@ -18,6 +18,7 @@ the test files. The RTL is imported only for the blocks under test and ``MasterP
 the ``Crc`` names it takes) to build them.
 """
 
+from amaranth.hdl import ClockDomain, Module
 from amaranth.lib import data
 from amaranth.sim import Simulator
 
@@ -28,8 +29,14 @@ CLOCK_PERIOD_S = 1e-8
 
 
 def simulate(dut, testbench):
-    """Run ``testbench`` (an async ``ctx`` function) against ``dut`` on one clock."""
-    sim = Simulator(dut)
+    """Run ``testbench`` (an async ``ctx`` function) against ``dut`` on one clock.
+
+    The ``sync`` domain is made at the top, so that a purely combinational block runs the same
+    way (one clock per testbench step)."""
+    top = Module()
+    top.domains.sync = ClockDomain()
+    top.submodules.dut = dut
+    sim = Simulator(top)
     sim.add_clock(CLOCK_PERIOD_S)
     sim.add_testbench(testbench)
     sim.run()
