@@ -18,6 +18,8 @@ the test files. The RTL is imported only for the blocks under test and ``MasterP
 the ``Crc`` names it takes) to build them.
 """
 
+from amaranth.hdl import ClockDomain, Module
+from amaranth.lib import data
 from amaranth.sim import Simulator
 
 #: The slave's Start bit is a 1 (protocol digest, section 2).
@@ -27,8 +29,82 @@ CLOCK_PERIOD_S = 1e-8
 
 
 def simulate(dut, testbench):
-    """Run ``testbench`` (an async ``ctx`` function) against ``dut`` on one clock."""
-    sim = Simulator(dut)
+    """Run ``testbench`` (an async ``ctx`` function) against ``dut`` on one clock.
+
+    The ``sync`` domain is made at the top, so that a purely combinational block runs the same
+    way (one clock per testbench step)."""
+    top = Module()
+    top.domains.sync = ClockDomain()
+    top.submodules.dut = dut
+    sim = Simulator(top)
     sim.add_clock(CLOCK_PERIOD_S)
     sim.add_testbench(testbench)
     sim.run()
+
+
+def member(obj, path):
+    """The member of a component or view at a dotted path: ``"live.w0.data_bits"``, ``"words.1"``."""
+    for name in path.split("."):
+        obj = obj[int(name)] if name.isdigit() else getattr(obj, name)
+    return obj
+
+
+def _settable(obj, value):
+    # A whole struct set from an int is set bit for bit (see ``pack``).
+    if isinstance(obj, data.View) and isinstance(value, int):
+        return obj.as_value()
+    return obj
+
+
+def run_clocks(dut, steps, outputs, *, defaults=None):
+    """Drive ``dut`` for one clock per step, and read ``outputs`` in every clock.
+
+    A step is a dict ``{input path: value}`` (paths as for :func:`member`); in each clock the
+    inputs of ``defaults`` are set first, then the step's, then every path of ``outputs`` is read
+    (a struct as its raw bits, an enum as its integer code), then the clock ticks. Returns one
+    ``{path: value}`` per clock.
+    """
+    trace = []
+
+    async def tb(ctx):
+        held = {}
+        for step in steps:
+            for path, value in {**(defaults or {}), **step}.items():
+                if path not in held or held[path] != value:     # set only what changes
+                    obj = member(dut, path)
+                    ctx.set(_settable(obj, value), value)
+                    held[path] = value
+            row = {}
+            for path in outputs:
+                obj = member(dut, path)
+                row[path] = int(ctx.get(obj.as_value() if isinstance(obj, data.View) else obj))
+            trace.append(row)
+            await ctx.tick()
+
+    simulate(dut, tb)
+    return trace
+
+
+def unpack(layout, value):
+    """The fields of the raw bits ``value`` of a struct layout, as nested dicts of ints."""
+    out = {}
+    for name, fld in layout:
+        bits = (value >> fld.offset) & ((1 << fld.width) - 1)
+        out[name] = unpack(fld.shape, bits) if isinstance(fld.shape, data.StructLayout) else bits
+    return out
+
+
+def pack(layout, values):
+    """The raw bits of nested dicts of ints (missing fields 0) for a struct layout."""
+    raw = 0
+    for name, fld in layout:
+        value = values.get(name, 0)
+        if isinstance(fld.shape, data.StructLayout):
+            value = pack(fld.shape, value)
+        raw |= (value & ((1 << fld.width) - 1)) << fld.offset
+    return raw
+
+
+def protocol_clocks(microseconds, clk_hz):
+    """A protocol time in whole system clocks, rounded up (the defaults: 40 us, 80 us)."""
+    return -(-microseconds * clk_hz // 1_000_000)

@@ -1,13 +1,17 @@
-"""SaturatingCounter on Amaranth's simulator: counts, saturates, clear wins.
+"""SaturatingCounter and CounterBank on Amaranth's simulator: counts, saturates, clear wins;
+in the bank each event counts only its own counter.
 
 Cycle conventions and where expected values come from: ``block_sim.py``.
 """
 
 import random
 
-from bissmaster.counters import SaturatingCounter
+import pytest
 
-from block_sim import simulate
+from bissmaster.counters import CounterBank, SaturatingCounter
+from master_contract import COUNTERS
+
+from block_sim import run_clocks, simulate
 
 
 def test_saturating_counter_counts_saturates_and_clear_wins():
@@ -36,3 +40,39 @@ def test_saturating_counter_counts_saturates_and_clear_wins():
     assert got.count(7) > 10
 
 
+# -- CounterBank ---------------------------------------------------------------------------------
+
+def _bank(names, width, steps):
+    """Drive ``events`` (a dict per clock) and ``clear``; returns the counts per clock, each the
+    value after the edge that ended the step's clock."""
+    trace = run_clocks(CounterBank(names, width),
+                       [{**{f"events.{n}": e.get(n, 0) for n in names}, "clear": c}
+                        for e, c in steps + [({}, 0)]],
+                       [f"counts.{n}" for n in names])
+    return [{n: x[f"counts.{n}"] for n in names} for x in trace[1:]]
+
+
+@pytest.mark.parametrize("name", COUNTERS)
+def test_counter_bank_event_counts_only_its_own_counter(name):
+    width = 3
+    counts = _bank(COUNTERS, width, [({name: 1}, 0)] * 3 + [({}, 0)] * 2)
+    assert [c[name] for c in counts] == [1, 2, 3, 3, 3]
+    assert all(c[other] == 0 for c in counts for other in COUNTERS if other != name)
+
+
+def test_counter_bank_random_clear_overrides_saturates():
+    width = 3
+    names = COUNTERS[:5]
+    rng = random.Random(6001)
+    steps = [({n: int(rng.random() < 0.5) for n in names}, int(rng.random() < 0.03))
+             for _ in range(400)]
+    # A clear in the same clock as every event: the clear wins.
+    steps[50] = ({n: 1 for n in names}, 1)
+    got = _bank(names, width, steps)
+    count = dict.fromkeys(names, 0)
+    for (events, clear), row in zip(steps, got):
+        for n in names:
+            count[n] = 0 if clear else min(count[n] + events[n], 2**width - 1)
+        assert row == count
+    assert got[50] == dict.fromkeys(names, 0)
+    assert sum(row[n] == 2**width - 1 for row in got for n in names) > 100

@@ -6,12 +6,12 @@ Cycle conventions and where expected values come from: ``block_sim.py``.
 import random
 
 import pytest
-from amaranth.hdl import ResetInserter, Signal
+from amaranth.hdl import Module, ResetInserter, Signal
 
 from bissmaster.params import MasterParams
 from bissmaster.slo_sampler import SloSampler
 
-from block_sim import START_BIT, simulate
+from block_sim import CLOCK_PERIOD_S, START_BIT, simulate
 
 # Timing reference. Cycle ``r`` is the cycle in which the master's MA is high for the second time
 # (``arm`` strobes in it). The Ack falling edge "appears at clock r + d" means the sampler's
@@ -232,3 +232,96 @@ def test_slo_sampler_edge_after_saturation_reads_beyond_max_line_delay(max_line_
     assert trace[-1]["delay"] > max_line_delay
 
 
+
+
+# -- The product configuration: SloSampler(width), the 2-flop synchronizer inside ------------------
+#
+# The pin is driven with sub-clock timing: the true round trip is T = p + f clocks (f strictly
+# between 0 and 1) from the MA edge that starts the arm cycle, so the Ack edge reaches the pin a
+# fraction f into cycle r + p, and every later slot edge 2*hp clocks after the one before. The
+# same pin also drives a sampler without the synchronizer, for the comparison.
+
+PIN_FRACTIONS = (0.1, 0.5, 0.9)
+
+
+def _pin_sim(hp, scenarios):
+    """Run scenarios [(encoder, cycles, f)] back to back, both samplers reset in between.
+
+    The encoder's ``level(c)`` is the pin after the fraction f of cycle r + c (and so
+    ``level(c - 1)`` before it). Returns one trace per scenario: per relative cycle, the pin after
+    the fraction, and each sampler's outputs read after it."""
+    product = SloSampler(SAMPLER_DELAY_WIDTH)
+    bare = SloSampler(SAMPLER_DELAY_WIDTH, synchronizer=False)
+    rst = Signal()
+    top = Module()
+    top.submodules.product = ResetInserter(rst)(product)
+    top.submodules.bare = ResetInserter(rst)(bare)
+    traces = []
+
+    async def tb(ctx):
+        def pin(level):
+            ctx.set(product.slo, level)
+            ctx.set(bare.slo, level)
+
+        def read(dut):
+            return {"sample": ctx.get(dut.sample), "bit": ctx.get(dut.bit),
+                    "delay": ctx.get(dut.delay), "early": ctx.get(dut.early),
+                    "level": ctx.get(dut.level)}
+
+        for dut in (product, bare):
+            ctx.set(dut.half_period, hp)
+        for enc, cycles, f in scenarios:
+            ctx.set(rst, 1)
+            pin(1)
+            await ctx.tick()
+            ctx.set(rst, 0)
+            await ctx.tick().repeat(3)              # the synchronizer flushed to the high pin
+            trace = []
+            for c in range(cycles):
+                ctx.set(product.arm, int(c == 0))
+                ctx.set(bare.arm, int(c == 0))
+                pin(enc.level(c - 1))
+                await ctx.delay(f * CLOCK_PERIOD_S)
+                pin(enc.level(c))
+                trace.append({"pin": enc.level(c), "product": read(product), "bare": read(bare)})
+                await ctx.tick()
+            traces.append(trace)
+
+    simulate(top, tb)
+    return traces
+
+
+def _sample_list(trace, which):
+    return [(c, x[which]["bit"]) for c, x in enumerate(trace) if x[which]["sample"]]
+
+
+@pytest.mark.parametrize("hp", (2, 3, 5))
+def test_slo_sampler_with_synchronizer_delay_samples_and_level_from_the_pin(hp):
+    rng = random.Random(2100 + hp)
+    scenarios = []
+    for p in range(0, 13):
+        for f in PIN_FRACTIONS:
+            enc = DelayedEncoder(hp, p, _random_slots(rng, 6))
+            scenarios.append((enc, p + 2 * hp * len(enc.slots) + 4, f))
+    traces = _pin_sim(hp, scenarios)
+    for (enc, _, f), trace in zip(scenarios, traces):
+        true = enc.d + f
+        where = f"hp={hp} round trip {true} clocks"
+        delay = trace[-1]["product"]["delay"]
+        # Measured from the pin: true <= reported < true + 1 clock.
+        assert true <= delay < true + 1, where
+        assert not any(x["product"]["early"] for x in trace), where
+        # Every slot sampled once, its bit, two clocks later than without the synchronizer, in
+        # the clock docs/timing.md gives: arm + line_delay + 1 + hp + 2*hp*k.
+        # (The trace runs on past the last slot: only the frame's samples are compared.)
+        n = len(enc.slots)
+        product, bare = _sample_list(trace, "product")[:n], _sample_list(trace, "bare")[:n]
+        assert [b for _, b in product] == enc.slots, where
+        assert [c for c, _ in product] == [delay + 1 + hp + 2 * hp * k for k in range(n)], where
+        if enc.d >= 1:      # (p = 0: the bare sampler sees the edge in the arm clock, early)
+            assert [b for _, b in bare] == enc.slots, where
+            assert [c for c, _ in product] == [c + 2 for c, _ in bare], where
+        # ``level`` is the pin two clocks later (the bare sampler's is the pin itself).
+        assert all(trace[c]["product"]["level"] == trace[c - 2]["pin"]
+                   for c in range(2, len(trace))), where
+        assert all(x["bare"]["level"] == x["pin"] for x in trace), where
