@@ -41,7 +41,7 @@ class Configuration(wiring.Component):
         ``cfg_ack_limit`` and ``cfg_timeout_limit`` of the cycle, 0 replaced by the default.
     delay_limit : Out(delay_limit_width)
         ``cfg_delay_limit`` of the cycle, 0 replaced by ``max_line_delay``.
-    no_start_limit : Out(timer_width + 1)
+    no_start_limit : Out(cycle_timer_width)
         The Ack limit plus one MA period (NO_START), registered from the latched values: valid
         one clock after the latch (the controller reads it in CLOCK, after at least one clock in
         WAIT_READY).
@@ -60,7 +60,7 @@ class Configuration(wiring.Component):
             "ack_limit": Out(tw),
             "timeout_limit": Out(tw),
             "delay_limit": Out(p.delay_limit_width),
-            "no_start_limit": Out(tw + 1),
+            "no_start_limit": Out(p.cycle_timer_width),
             "word_count": Out(range(1, p.words + 1)),
         })
 

@@ -11,8 +11,9 @@ class LimitTimers(wiring.Component):
     **The cycle timer** counts clocks since ``clear``, *plus one*: a clear loads 1, so the timer
     already holds the value the elapsed time will have in the next clock, and each flag below,
     registered one clock ahead, compares it with a limit directly (no "+ 1" or "- 1" adder in
-    series with a comparator). It is one bit wider than the limits (Ack limit + 2 half periods)
-    and saturates, far above every limit. The flags are exact for the elapsed time of the clock
+    series with a comparator). It is ``cycle_timer_width`` bits, one more than the longest limit
+    (the Ack limit + 2 half periods, up to 17 bits of half periods on a 16-bit timer build) needs,
+    and saturates, above every limit. The flags are exact for the elapsed time of the clock
     in which they are read:
 
     - ``break_over``: elapsed >= ``break_time`` (live; 0 -> ``break_default``). The next
@@ -51,7 +52,7 @@ class LimitTimers(wiring.Component):
             "timeout_live": In(tw),
             "ack_limit": In(tw),
             "timeout_limit": In(tw),
-            "no_start_limit": In(tw + 1),
+            "no_start_limit": In(p.cycle_timer_width),
             "delay": In(p.delay_width),
             "delay_limit": In(p.delay_limit_width),
             "break_over": Out(1),
@@ -82,7 +83,7 @@ class LimitTimers(wiring.Component):
         ]
 
         # The cycle timer and its flags. Both break compares in parallel, then the default mux.
-        timer = Signal(tw + 1, init=1)
+        timer = Signal(p.cycle_timer_width, init=1)
         m.d.sync += timer.eq(Mux(self.clear, 1, Mux(timer.all(), timer, timer + 1)))
         counting = self.in_clock & ~self.restart
         m.d.sync += [

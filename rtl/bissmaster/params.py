@@ -159,6 +159,12 @@ class MasterParams:
         return len(self.max_data_bits)
 
     @property
+    def cycle_timer_width(self):
+        """Width of the cycle timer and the NO_START limit: the longest limit it compares with
+        is the Ack limit plus one MA period (two half periods), and one bit more for it."""
+        return max(self.timer_width, HALF_PERIOD_WIDTH + 1) + 1
+
+    @property
     def delay_limit_width(self):
         """Width of the ``cfg_delay_limit`` port."""
         return self.max_line_delay.bit_length()

@@ -233,7 +233,7 @@ def test_configuration_no_start_limit_one_clock_after_the_latch():
 
 @pytest.mark.parametrize("ack_limit, half_period", ((65535, 65535), (60000, 40000), (1000, 65535)))
 def test_configuration_no_start_limit_fits_on_a_16_bit_timer_build(ack_limit, half_period):
-    """RTL bug (see report): ``no_start_limit`` is ``timer_width + 1`` bits, but the Ack limit
+    """Fixed RTL bug: ``no_start_limit`` was ``timer_width + 1`` bits, but the Ack limit
     (``timer_width`` bits) plus one MA period (2 x a 16-bit half period) needs
     ``max(timer_width, 17) + 1``. With ``timer_width = 16`` (``--timer-width 16``, the preset
     ``biss-c-lean``) a sum >= 2**17 wraps, and NO_START fires long before the documented

@@ -206,3 +206,26 @@ def test_limit_timers_saturate_instead_of_wrapping():
                     "slo_stuck_live": low_up, "delay_over": 0,
                     "no_start_expired": int(elapsed >= 2**(tw + 1) - 1)}
         assert flags == expected, elapsed
+
+
+def test_limit_timers_no_start_limit_above_17_bits_on_a_16_bit_build():
+    # The longest NO_START limit of a 16-bit timer build, Ack limit 2**16 - 1 plus one MA period
+    # of 2 x (2**16 - 1) clocks, needs 18 bits: the flag rises exactly there, not at a wrapped
+    # or saturated value.
+    limit = (2**16 - 1) + 2 * (2**16 - 1)
+    dut = LimitTimers(PARAMS)
+    seen = {}
+
+    async def tb(ctx):
+        for name, value in {**QUIET, "in_clock": 1, "clear": 1, "no_start_limit": limit}.items():
+            ctx.set(getattr(dut, name), value)
+        await ctx.tick()
+        ctx.set(dut.clear, 0)
+        elapsed = 0
+        for checkpoint in (2**17 - 1, limit - 1, limit, limit + 1):
+            await ctx.tick().repeat(checkpoint - elapsed)
+            elapsed = checkpoint
+            seen[elapsed] = ctx.get(dut.no_start_expired)
+
+    simulate(dut, tb)
+    assert seen == {2**17 - 1: 0, limit - 1: 0, limit: 1, limit + 1: 1}
