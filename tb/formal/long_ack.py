@@ -18,7 +18,6 @@ then SLO high (timeout over).
 """
 
 import sys
-from pathlib import Path
 
 from amaranth.hdl import Elaboratable, Module, Signal
 from amaranth.sim import Simulator

@@ -19,7 +19,6 @@ import argparse
 import sys
 import time
 from dataclasses import dataclass
-from pathlib import Path
 
 from bissmaster.params import Crc, MasterParams
 from formal import flow
@@ -173,7 +172,7 @@ def main(argv=None):
             print(f"{c.name:28} ({c.prop}) {c.method:11} depth {c.depth:3} {'fast' if c.fast else ''}")
         return 0
     print(f"formal: {len(checks)} checks, solver {flow.solver()}, build dir "
-          f"{flow.BUILD.relative_to(_REPO)}", flush=True)
+          f"{flow.BUILD.relative_to(flow.REPO)}", flush=True)
     outcomes = []
     t0 = time.monotonic()
     for c in checks:
