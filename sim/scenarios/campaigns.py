@@ -690,7 +690,9 @@ def valid_wrong(c, res, sent):
 async def glitched_cycle(c, table, cls, glitches):
     """One request with the glitches ``[(class, width_s), ...]`` on SLO, judged like any line
     fault (sim/shared/campaign.py), counted under ``cls``; then the next cycle at once."""
-    n_ack = c.rng.randint(2, 4)
+    # 2..6 Ack slots: a glitch high on an Ack sample slips the frame by 1..5 slots (a BiSS C 36
+    # CRC-6 word passes a slip of 4 for 1 value in 64, and no other of these: sim/shared/glitch.py)
+    n_ack = c.rng.randint(2, 6)
     classes = glitch.slot_classes(c.fmt, n_ack)
     rt = c.tb.encoder.cable.round_trip_s()
     touched, placed = [], []

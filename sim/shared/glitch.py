@@ -95,3 +95,34 @@ def slipped_reading(fmt, bits, n_ack, glitch_slot):
     for Start: the parsed frame (``frames.parse_frame``)."""
     line = line_after_ack(bits, n_ack)
     return frames.parse_frame(fmt, read_from(line, glitch_slot, len(bits)))
+
+
+def tail_reading(fmt, bits, n_ack, glitch_slot):
+    """What a master reads in the cycle it starts at once after the slipped cycle of
+    :func:`slipped_reading`, on the tail of the frame the encoder is still sending: the parsed
+    frame, or None if it cannot read one (it waits for SLO high, SLO is low when it arms, or no
+    Start comes).
+
+    The slipped cycle gives the MA rises of a frame whose Start was rise ``glitch_slot + 2``:
+    ``d = n_ack - glitch_slot`` rises short of the encoder's frame, which holds ``bits[N - d]``.
+    If that is high, the next cycle's MA continues the encoder's frame (it has not timed out):
+    the master arms at its 2nd rise, on the bit its 1st rise brought (low: DELAY_RANGE), takes
+    the next falling edge for the Ack, the first high slot after it for Start, and reads on
+    into the stop bit and the low line after it (MA still running)."""
+    n, d = len(bits), n_ack - glitch_slot
+    if d < 2 or not bits[n - d] or not bits[n - d + 1]:
+        return None
+    line = list(bits[n - d + 2:]) + [0] * (n + 4)       # slots from the 2nd MA rise on
+    edge = line.index(0)
+    start = next((k for k in range(edge + 1, len(line) - n + 1) if line[k]), None)
+    return None if start is None else frames.parse_frame(fmt, read_from(line, start, n))
+
+
+def search_values(fmt, rng, accept, tries=100_000):
+    """Random single-word positions until ``accept(bits)`` returns something: (value, it)."""
+    for _ in range(tries):
+        value = frames.WordValue(rng.getrandbits(fmt.words[0].data_bits))
+        found = accept(frames.build_frame(fmt, [value]))
+        if found is not None:
+            return value, found
+    raise AssertionError("no such frame found")
