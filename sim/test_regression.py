@@ -13,11 +13,19 @@ from sim.shared import discovery, runner
 
 SIMS = [os.environ["SIM"]] if os.environ.get("SIM") else list(runner.SIMULATORS)
 SCENARIOS = discovery.scenarios(runner.MASTER_SCENARIOS)
+
+
+def marks(s):
+    """A scenario marked ``expected_to_fail`` is a strict xfail: passing fails the run."""
+    return [pytest.mark.xfail(strict=True, reason=s.xfail)] if s.xfail else []
+
+
 CASES = [pytest.param(sim, build, s.name, runner.CLK_HZ, id="-".join(
-             [sim] + ([] if build == discovery.DEFAULT_BUILD else [build]) + [s.name]))
+             [sim] + ([] if build == discovery.DEFAULT_BUILD else [build]) + [s.name]),
+             marks=marks(s))
          for sim in SIMS for s in SCENARIOS for build in s.builds]
 CASES += [pytest.param("verilator", discovery.DEFAULT_BUILD, s.name, discovery.FAST_CLK_HZ,
-                       id=f"verilator-200MHz-{s.name}")
+                       id=f"verilator-200MHz-{s.name}", marks=marks(s))
           for s in SCENARIOS if s.fast_clock and "verilator" in SIMS]
 
 

@@ -7,6 +7,7 @@ when a scenario needs another build or clock (sim/README.md).
 """
 
 import os
+import random
 
 import cocotb
 from cocotb.triggers import ClockCycles, FallingEdge, RisingEdge, Timer
@@ -15,8 +16,9 @@ from cocotb.simtime import get_sim_time
 
 from encoder_model import frames
 from encoder_model.cocotb_encoder import Cable
-from master_contract import ENCODER_PRESETS, STATUS
-from sim.shared.discovery import also_at_fast_clock, only_on_builds
+from master_contract import ENCODER_PRESETS, STATUS, STATUS_NAME
+from sim.shared import glitch
+from sim.shared.discovery import also_at_fast_clock, expected_to_fail, only_on_builds
 from sim.shared.testbench import CABLES_M, CLK_HZ, MA_RATES_HZ, Testbench, half_period_for, preset
 
 #: Every preset of the issue: BiSS Safety, EVOLUTE, RESOLUTE BiSS C (master_contract) and BP3.
@@ -539,3 +541,93 @@ async def cds_bit_of_every_frame(dut):
     tb.queue(faults=frames.FrameFaults(cds=1, crc_xor=(1,)))
     res = await tb.request()
     assert res.status == STATUS["CRC_ERROR_WORD0"] and res.fields["cds"] == 1
+# -- Noise immunity: crafted glitches (issue 12) -------------------------------------------------
+NOISE_RATE_HZ = 1e6
+NOISE_PRESET = "resolute_c_36"
+
+
+async def glitch_on_ack_sample(tb, values, n_ack, glitch_slot):
+    """One request whose frame ``values`` comes after ``n_ack`` Ack slots, with a glitch high
+    (30 % of a bit) centred on the middle of Ack slot ``glitch_slot``; returns the Result."""
+    rt = tb.encoder.cable.round_trip_s()
+
+    async def inject():
+        timing = await glitch.cycle_timing(tb.dut, NOISE_RATE_HZ, rt)
+        width = round(0.3 * timing.period)
+        await Timer(timing.slot_start(glitch_slot) + timing.period // 2 - width // 2
+                    - get_sim_time("step"), "step")
+        await tb.encoder.glitch_slo(width * 1e-12)
+
+    tb.queue(values=[values], processing_time_s=glitch.processing_for_ack_slots(
+        n_ack, NOISE_RATE_HZ))
+    task = cocotb.start_soon(inject())
+    res = await tb.request()
+    await task
+    return res
+
+
+def assert_safe(tb, res, n_sent, what):
+    """Not valid, or valid with the position the encoder latched in this very cycle."""
+    new = len(tb.sent) == n_sent + 1
+    true = frames.parse_frame(tb.fmt, tb.sent[-1].bits)["words"][0]["position"] if new else None
+    got = res.fields["word0_position"]
+    assert not res.valid or got == true, (
+        f"{what}: status {STATUS_NAME[res.status]}, valid {res.valid}, position read {got:#x}, "
+        + (f"true {true:#x}" if new else "the encoder latched none in this cycle"))
+
+
+@cocotb.test()
+@expected_to_fail("issue 12: a glitch high on an Ack sample is taken for Start and the "
+                  "slipped bits can carry a good CRC-6")
+async def glitch_in_the_ack_slips_the_frame(dut):
+    """A glitch high on the sample of Ack slot 1 (of 5): the master takes it for Start and reads
+    the frame 4 slots early. The position is chosen (the encoder model's CRC) so that the
+    slipped bits pass the CRC-6: the safe outcome is not valid, or the true position."""
+    tb = Testbench(dut, seed=12)
+    await tb.start()
+    fmt = preset(NOISE_PRESET)
+    n_ack, slot = 5, 1
+    value, slipped = glitch.search_values(fmt, random.Random(12), lambda bits: (
+        r if (r := glitch.slipped_reading(fmt, bits, n_ack, slot))["crc_ok"] else None))
+    dut._log.info("sends %#x; the slipped reading is %#x, its CRC good", value.position,
+                  slipped["words"][0]["position"])
+    for end_check in (0, 1):
+        tb.configure(fmt, NOISE_RATE_HZ, cfg_end_check=end_check)
+        await frames_ok(tb, 1)
+        n_sent = len(tb.sent)
+        res = await glitch_on_ack_sample(tb, value, n_ack, slot)
+        assert_safe(tb, res, n_sent, f"end check {end_check}")
+        await tb.encoder_ready()
+
+
+@cocotb.test()
+@expected_to_fail("issue 12: after a CRC error the next cycle starts without a pause and "
+                  "reads the tail of the slipped frame")
+async def clean_frame_after_a_slipped_one(dut):
+    """A glitch high on Ack slot 1 (of 12) slips the frame by 11 slots: the master reads it as a
+    CRC error and stops the clock while the encoder still has 11 bits to send. The next request
+    comes at once, the line clean: it must read a new frame (the encoder's next position) or
+    report a fault, never the tail of the old one. The position is chosen so that the tail, read
+    as a frame, has a good CRC-6 (sim/shared/glitch.tail_reading)."""
+    tb = Testbench(dut, seed=13)
+    await tb.start()
+    fmt = preset(NOISE_PRESET)
+    n_ack, slot = 12, 1
+
+    def accept(bits):
+        if glitch.slipped_reading(fmt, bits, n_ack, slot)["crc_ok"]:
+            return None                         # the glitched cycle itself must be a CRC error
+        r = glitch.tail_reading(fmt, bits, n_ack, slot)
+        return r if r is not None and r["crc_ok"] else None
+
+    value, tail = glitch.search_values(fmt, random.Random(13), accept)
+    dut._log.info("sends %#x; the next cycle would read its tail as %#x, CRC good",
+                  value.position, tail["words"][0]["position"])
+    tb.configure(fmt, NOISE_RATE_HZ)
+    await frames_ok(tb, 1)
+    res = await glitch_on_ack_sample(tb, value, n_ack, slot)
+    assert not res.valid, f"the slipped frame: status {STATUS_NAME[res.status]}"
+    n_sent = len(tb.sent)
+    tb.queue()
+    res = await tb.request()
+    assert_safe(tb, res, n_sent, "the cycle after the slipped frame")

@@ -30,7 +30,7 @@ DELAY_RANGES = ["<0.5 bit", "0.5-2 bits", "2-8 bits", ">8 bits"]
 FAULTS = ["none", "crc_1bit", "crc_2bit", "crc_3to5bit", "crc_burst", "slo_stuck_low",
           "slo_stuck_high", "unplug", "glitch", "jitter", "delay_change", "abort",
           "no_response", "ack_forever", "timeout_stuck", "lc_repeat", "lc_skip", "lc_zero",
-          "lc_random", "spw_offset", "bad_config", "config_change"]
+          "lc_random", "spw_offset", "bad_config", "config_change", "after_glitch"]
 
 _FRAME_ERR = ["CRC_ERROR_WORD0", "CRC_ERROR_WORD1", "CRC_ERROR_BOTH"]
 #: Which statuses each fault kind can legitimately end in: the bins of the fault x status cross.
@@ -47,7 +47,8 @@ LEGAL = {
     "slo_stuck_low": _LATE + _FRAME_ERR + ["NO_START", "DELAY_RANGE", "SLO_STUCK_LOW"],
     "slo_stuck_high": _LATE + _FRAME_ERR + ["NO_ACK", "NO_STOP"],     # NO_STOP: end check
     "unplug": ["NO_ACK"],
-    "glitch": _LATE + _FRAME_ERR + ["DELAY_RANGE", "NO_STOP"],
+    # a glitch on the Ack edge or in the Ack: NO_ACK, NO_START, DELAY_RANGE (see LINE_ALLOWED)
+    "glitch": _LATE + _FRAME_ERR + ["NO_ACK", "NO_START", "DELAY_RANGE", "NO_STOP"],
     # at +/-25 % the eye closes in the worst case: a rare bit error, caught by the CRC
     "jitter": _LATE + _FRAME_ERR,
     "delay_change": _LATE + ["DELAY_RANGE"],
@@ -63,6 +64,9 @@ LEGAL = {
     "spw_offset": ["OK", "SPW_MISMATCH", _SOL],
     "bad_config": ["BAD_CONFIG"],
     "config_change": ["OK"],
+    # the clean cycle requested right after a glitched one (glitch_immunity): it may clock the
+    # tail of a slipped frame the encoder is still sending (issue 12)
+    "after_glitch": _LATE + _FRAME_ERR + ["NO_ACK", "NO_START", "DELAY_RANGE", "NO_STOP"],
 }
 
 

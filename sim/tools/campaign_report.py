@@ -2,8 +2,8 @@
 
     python -m sim.tools.campaign_report [DIR]     (default: sim_build/campaign/slice)
 
-Prints Markdown tables (CRC detection, line faults and recovery, sign-of-life, configuration
-fuzz, throughput, functional coverage with its holes) and writes them to DIR/report.md.
+Prints Markdown tables (CRC detection, noise immunity, line faults and recovery, sign-of-life,
+configuration fuzz, throughput, functional coverage with its holes) and writes them to DIR/report.md.
 Exits non-zero if a coverage sample shows a fault ending in a status outside the legal table.
 """
 
@@ -61,6 +61,32 @@ def fault_table(runs):
     return out, blind
 
 
+def glitch_table(run, by=("class", "length", "ma_mhz")):
+    """The glitch campaign's figures, rows merged over what ``by`` leaves out: frames, OK, each
+    fault status, and results valid with a wrong position (issue 12's figure)."""
+    rows = {}
+    for r in run["glitch_table"].values():
+        key = tuple(r[k] for k in by)
+        row = rows.setdefault(key, {"frames": 0, "statuses": Counter(), "valid_wrong": 0})
+        row["frames"] += r["frames"]
+        row["statuses"].update(r["statuses"])
+        row["valid_wrong"] += r["valid_wrong"]
+    statuses = sorted({s for row in rows.values() for s in row["statuses"]} - {"OK"})
+    names = {"class": "class", "length": "glitch length (of a bit)", "ma_mhz": "MA (MHz)"}
+    out = ["| " + " | ".join(names[k] for k in by) + " | frames | OK | "
+           + " | ".join(statuses) + " | **valid, wrong position** |",
+           "|" + "---|" * len(by) + "---:|" * (3 + len(statuses))]
+    classes = list(dict.fromkeys(k[0] for k in rows))       # the campaign's order
+    order = sorted(rows, key=lambda k: (k[0] == "next cycle", classes.index(k[0])))
+    for key in order:
+        row = rows[key]
+        out.append("| " + " | ".join(f"{k:g}" if isinstance(k, float) else str(k) for k in key)
+                   + f" | {row['frames']} | {row['statuses']['OK']} | "
+                   + " | ".join(str(row["statuses"][s]) for s in statuses)
+                   + f" | {row['valid_wrong']} |")
+    return out
+
+
 def throughput(runs):
     out = ["| campaign | simulator | cycles | wall time | cycles/s |", "|---|---|---:|---:|---:|"]
     for name, run in sorted(runs.items()):
@@ -85,6 +111,12 @@ def main(argv=None):
     for name, run in runs.items():
         if "crc_table" in run:
             lines += [f"## CRC detection ({name})", ""] + crc_table(run) + [""]
+        if "glitch_table" in run:
+            lines += [f"## Noise immunity, per class and MA rate ({name})", ""]
+            lines += glitch_table(run, ("class", "ma_mhz")) + [""]
+            lines += [f"## Noise immunity, per class and glitch length ({name})", ""]
+            lines += glitch_table(run, ("class", "length")) + [""]
+            lines += [f"## Noise immunity, every class ({name})", ""] + glitch_table(run) + [""]
     table, blind = fault_table(runs)
     lines += ["## Faults, outcomes and recovery (all campaigns)", ""] + table + [""]
     lines.append("CRC blind spots (a corrupted word the CRC cannot see, explained by the "

@@ -53,6 +53,11 @@ Faults (``Response.fault``):
 
 ``force_slo(level)`` overrides the line at the master pin (broken / unplugged cable) on top of
 all that; ``force_slo(None)`` gives the pin back to the cable.
+
+``invert_slo(True)`` inverts the line at the master pin (noise coupled into the cable near the
+master: whatever the encoder sends, and any edge it makes meanwhile, arrives inverted) until
+``invert_slo(False)``; ``await glitch_slo(width_s)`` is one such glitch, from now for
+``width_s``. A force wins over an inversion.
 """
 
 from __future__ import annotations
@@ -178,6 +183,7 @@ class BissEncoder:
         self._ma_master_level: int | None = None
         self._slo_line = 1              # level that arrived at the master over the cable
         self._force: int | None = None  # force_slo()
+        self._invert = 0                # invert_slo(): 1 while the pin shows the inverted line
         self._slo_pin: int | None = None
         self._last_ma_arrival = -1      # encoder time of the last MA edge (order clamp)
         self._last_slo_arrival = -1     # master time of the last SLO change (order clamp)
@@ -217,6 +223,18 @@ class BissEncoder:
         """Override the SLO level at the master pin (None releases to the cable's level)."""
         self._force = None if level is None else int(level)
         self._drive_pin()
+
+    def invert_slo(self, on: bool) -> None:
+        """Invert the SLO level at the master pin (a glitch) while ``on``; edges the cable
+        brings meanwhile arrive inverted too."""
+        self._invert = int(bool(on))
+        self._drive_pin()
+
+    async def glitch_slo(self, width_s: float) -> None:
+        """One glitch: the SLO pin inverted from now for ``width_s`` (at least one step)."""
+        self.invert_slo(True)
+        await Timer(max(1, self._steps(width_s)), "step")
+        self.invert_slo(False)
 
     def set_cable(self, cable: Cable) -> None:
         """Change the cable (applies to edges that happen from now on)."""
@@ -338,7 +356,7 @@ class BissEncoder:
         self._drive_pin()
 
     def _drive_pin(self) -> None:
-        lvl = self._force if self._force is not None else self._slo_line
+        lvl = self._force if self._force is not None else self._slo_line ^ self._invert
         if lvl != self._slo_pin:
             self._slo_pin = lvl
             self.slo.value = lvl
