@@ -9,7 +9,8 @@ from .params import Status
 
 
 class CycleController(wiring.Component):
-    """Runs one request cycle: BREAK -> IDLE -> WAIT_READY -> CLOCK -> TAIL -> END / CONFIRM.
+    """Runs one request cycle: BREAK -> IDLE -> WAIT_READY -> CLOCK -> TAIL -> END / CONFIRM
+    (-> PAUSE after a doubtful frame).
 
     ``docs/timing.md`` draws a cycle; ``docs/ports.md`` states every limit to the clock. The
     controller decides, the other blocks measure: the timers and their flags come from
@@ -32,13 +33,19 @@ class CycleController(wiring.Component):
     - END: the last half period of MA, then IDLE.
     - CONFIRM (end check): the frame counts once SLO is back high with MA stopped (the
       encoder's timeout ended); SLO low past the timeout limit is SLO_STUCK_LOW.
+    - PAUSE: after a frame whose verdict is not OK (``frame_doubtful`` when it is reported: a CRC
+      error, a sign-of-life or plausibility fault), MA high for the break time, as in BREAK but
+      the sign of life stays synchronised. Such a frame may have been misread (a glitch taken
+      for Start slips the frame): the encoder may still be sending the rest of it, and a cycle
+      started at once would read that tail as a new frame. The pause lets the encoder's
+      timeout run out first (protocol: the master pauses after an error).
 
     A fault reports its status (``fault``, ``fault_status`` and its own strobe in ``faults``) and
     goes to BREAK, except BAD_CONFIG (back to IDLE). A fault does not clear the timer itself:
     every state a fault can come from clears it (IDLE, WAIT_READY: always; CLOCK: on ``abort``),
     or MA is still running when BREAK begins (the line faults of CLOCK come before Start, so MA
     runs on), and BREAK clears it until MA has stopped; TAIL and CONFIRM clear it with their
-    faults (MA may have stopped already). That keeps the fault decode out of the timer's enable.
+    faults and on the way to PAUSE (MA may have stopped already). That keeps the fault decode out of the timer's enable.
 
     Seam for the control channel (CDM): the MA level after a frame is decided where the cycle
     ends (END / CONFIRM, then IDLE); a CDM = 1 would hold MA low there through the encoder's
@@ -59,6 +66,8 @@ class CycleController(wiring.Component):
         The sampler found the Ack edge; SLO was low when armed.
     frame_done, started, slots_full, stopped, stop_bit : In(1)
         From the decoder.
+    frame_doubtful : In(1)
+        From the verdict: the frame being reported is not OK (read with ``report_frame``).
     break_over, ack_expired, no_start_expired, slo_stuck, slo_stuck_live, delay_over : In(1)
         From the limit timers.
     idle : Out(1)
@@ -95,6 +104,7 @@ class CycleController(wiring.Component):
     slots_full: In(1)
     stopped: In(1)
     stop_bit: In(1)
+    frame_doubtful: In(1)
     break_over: In(1)
     ack_expired: In(1)
     no_start_expired: In(1)
@@ -130,7 +140,7 @@ class CycleController(wiring.Component):
         # ``idle`` and ``receiver_clear`` are decodes of the state, kept as registers: written
         # with every transition from the state it goes to (no decode in front of the resets of
         # the receiver, the configuration latch and the request logic).
-        cleared_states = ("BREAK", "IDLE", "WAIT_READY")
+        cleared_states = ("BREAK", "PAUSE", "IDLE", "WAIT_READY")
 
         def goto(state):
             m.next = state
@@ -142,8 +152,12 @@ class CycleController(wiring.Component):
                          self.faults[status.name.lower()].eq(1)]
             goto(next_state)
 
+        # The reported frame was doubtful: after MA stops, PAUSE instead of END.
+        pause = Signal()
+
         def report_verdict():
             m.d.comb += [self.report_frame.eq(1), self.report_delay.eq(1)]
+            m.d.sync += pause.eq(self.frame_doubtful)
 
         with m.FSM(init="BREAK", name="cycle_fsm"):
             with m.State("BREAK"):
@@ -218,7 +232,12 @@ class CycleController(wiring.Component):
                         goto("BREAK")
                 with m.Elif(self.stopped):
                     with m.If(~self.end_check):
-                        goto("END")
+                        with m.If(pause):
+                            # MA may have stopped already: the pause starts from 0.
+                            m.d.comb += self.timer_clear.eq(1)
+                            goto("PAUSE")
+                        with m.Else():
+                            goto("END")
                     with m.Elif(self.stop_bit):
                         # A good encoder holds SLO low from the stop bit through its timeout.
                         # High here: the line went (or is stuck) high, or the frame is longer
@@ -228,6 +247,12 @@ class CycleController(wiring.Component):
                         fault(Status.NO_STOP)
                     with m.Else():
                         goto("CONFIRM")
+
+            with m.State("PAUSE"):
+                with m.If(self.ma_busy | self.abort):
+                    m.d.comb += self.timer_clear.eq(1)
+                with m.Elif(self.break_over):
+                    goto("IDLE")
 
             with m.State("END"):
                 with m.If(~self.ma_busy):
@@ -239,7 +264,11 @@ class CycleController(wiring.Component):
                     fault(Status.ABORTED)
                 with m.Elif(~self.ma_busy & self.slo):
                     report_verdict()
-                    goto("IDLE")
+                    with m.If(self.frame_doubtful):
+                        m.d.comb += self.timer_clear.eq(1)
+                        goto("PAUSE")
+                    with m.Else():
+                        goto("IDLE")
                 with m.Elif(self.slo_stuck):
                     m.d.comb += self.timer_clear.eq(1)
                     fault(Status.SLO_STUCK_LOW)

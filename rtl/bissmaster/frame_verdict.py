@@ -48,6 +48,9 @@ class FrameVerdict(wiring.Component):
         The status to report (valid with ``report``).
     valid : Out(1)
         ``report_frame`` with status OK.
+    doubtful : Out(1)
+        The frame's status is not OK (a CRC, sign-of-life or plausibility fault): the frame may
+        have been misread, and the controller pauses before the next cycle.
     word_crc_ok : Out(words)
         Per word, the CRC verdict as reported (a word not in the frame is good).
     lc_repeat, lc_skip, lc_zero, spw_mismatch : Out(1)
@@ -72,6 +75,7 @@ class FrameVerdict(wiring.Component):
             "report": Out(1),
             "status": Out(Status),
             "valid": Out(1),
+            "doubtful": Out(1),
             "word_crc_ok": Out(p.words),
             "lc_repeat": Out(1),
             "lc_skip": Out(1),
@@ -128,6 +132,7 @@ class FrameVerdict(wiring.Component):
             self.report.eq(self.report_frame | self.fault),
             self.status.eq(Mux(self.report_frame, frame_status, self.fault_status)),
             self.valid.eq(self.report_frame & (frame_status == Status.OK)),   # faults never OK
+            self.doubtful.eq(frame_status != Status.OK),
             self.crc_error.eq(Mux(self.report_frame, ~ok, 0)),
         ]
         return m

@@ -142,6 +142,7 @@ class BissMaster(wiring.Component):
             controller.slots_full.eq(decoder.slots_full),
             controller.stopped.eq(decoder.stopped),
             controller.stop_bit.eq(decoder.stop_bit),
+            controller.frame_doubtful.eq(verdict.doubtful),
             controller.break_over.eq(timers.break_over),
             controller.ack_expired.eq(timers.ack_expired),
             controller.no_start_expired.eq(timers.no_start_expired),

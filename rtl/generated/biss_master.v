@@ -24,22 +24,22 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   input abort_cycle;
   wire abort_cycle;
   wire ack_expired;
-  wire \ack_expired$102 ;
+  wire \ack_expired$104 ;
   wire [23:0] ack_limit;
-  wire [23:0] \ack_limit$122 ;
+  wire [23:0] \ack_limit$124 ;
   wire arm;
   wire \bit ;
-  wire \bit$146 ;
+  wire \bit$148 ;
   wire [5:0] bits;
   wire break_over;
-  wire \break_over$100 ;
+  wire \break_over$102 ;
   wire [23:0] break_time;
   output busy;
   wire busy;
   wire \busy$80 ;
   output cds;
   wire cds;
-  wire \cds$194 ;
+  wire \cds$196 ;
   wire [154:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
@@ -115,8 +115,8 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire cfg_w1_nenw;
   wire check;
   wire clear;
-  wire \clear$139 ;
-  wire \clear$210 ;
+  wire \clear$141 ;
+  wire \clear$212 ;
   input clear_counters;
   wire clear_counters;
   input clk;
@@ -165,10 +165,10 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire [15:0] \counts.slo_stuck_low ;
   wire [15:0] \counts.spw_mismatch ;
   wire [39:0] cpw_top;
-  wire [39:0] \cpw_top$163 ;
+  wire [39:0] \cpw_top$165 ;
   wire [1:0] crc_error;
   wire [1:0] crc_ok;
-  wire [1:0] \crc_ok$178 ;
+  wire [1:0] \crc_ok$180 ;
   wire [154:0] cycle;
   wire [23:0] \cycle.ack_limit ;
   wire [23:0] \cycle.break_time ;
@@ -201,15 +201,16 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire [54:0] data0;
   wire [39:0] data1;
   wire [12:0] delay;
-  wire [12:0] \delay$128 ;
+  wire [12:0] \delay$130 ;
   wire [11:0] delay_limit;
-  wire [11:0] \delay_limit$130 ;
+  wire [11:0] \delay_limit$132 ;
   wire delay_over;
-  wire \delay_over$110 ;
+  wire \delay_over$112 ;
   output done;
   wire done;
-  wire \done$213 ;
+  wire \done$215 ;
   wire \done$90 ;
+  wire doubtful;
   wire early;
   wire \early$88 ;
   wire end_check;
@@ -229,7 +230,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \events.slo_stuck_low ;
   wire \events.spw_mismatch ;
   wire fault;
-  wire \fault$174 ;
+  wire \fault$176 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -259,7 +260,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
-  wire [3:0] \fault_status$176 ;
+  wire [3:0] \fault_status$178 ;
   wire [6:0] faults;
   wire \faults.aborted ;
   wire \faults.bad_config ;
@@ -269,7 +270,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \faults.no_stop ;
   wire \faults.slo_stuck_low ;
   wire first_rise;
-  wire \first_rise$204 ;
+  wire \first_rise$206 ;
   wire [31:0] first_rise_time;
   wire [160:0] frame;
   wire \frame.cds ;
@@ -306,32 +307,33 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \frame.word1.nw ;
   wire [39:0] \frame.word1.position ;
   wire frame_done;
+  wire frame_doubtful;
   wire [15:0] half_period;
-  wire [15:0] \half_period$141 ;
+  wire [15:0] \half_period$143 ;
   wire idle;
   wire \idle$63 ;
   wire \idle$68 ;
   wire in_clock;
-  wire \in_clock$116 ;
+  wire \in_clock$118 ;
   output [5:0] lc;
   wire [5:0] lc;
-  wire [5:0] \lc$149 ;
-  wire [5:0] \lc$150 ;
+  wire [5:0] \lc$151 ;
+  wire [5:0] \lc$152 ;
   wire lc_check;
   wire lc_load;
   wire [5:0] lc_next;
-  wire [5:0] \lc_next$152 ;
+  wire [5:0] \lc_next$154 ;
   output lc_repeat;
   wire lc_repeat;
-  wire \lc_repeat$195 ;
+  wire \lc_repeat$197 ;
   wire lc_repeat_seen;
   output lc_skip;
   wire lc_skip;
-  wire \lc_skip$196 ;
+  wire \lc_skip$198 ;
   wire lc_skip_seen;
   output lc_zero;
   wire lc_zero;
-  wire \lc_zero$197 ;
+  wire \lc_zero$199 ;
   wire lc_zero_seen;
   wire level;
   output [12:0] line_delay;
@@ -370,23 +372,23 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \locked$86 ;
   output ma;
   wire ma;
-  wire \ma$212 ;
+  wire \ma$214 ;
   wire ma_arm;
   wire ma_busy;
-  wire \ma_busy$112 ;
+  wire \ma_busy$114 ;
   wire ma_enough;
   wire ma_run;
   wire match;
   wire [1:0] ne;
   wire no_start_expired;
-  wire \no_start_expired$104 ;
+  wire \no_start_expired$106 ;
   wire [24:0] no_start_limit;
-  wire [24:0] \no_start_limit$126 ;
+  wire [24:0] \no_start_limit$128 ;
   wire [1:0] nw;
   wire ok;
   output overrun;
   wire overrun;
-  wire \overrun$209 ;
+  wire \overrun$211 ;
   wire [23:0] period;
   input periodic;
   wire periodic;
@@ -394,12 +396,12 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire receiver_clear;
   wire \repeat ;
   wire report;
-  wire \report$186 ;
+  wire \report$188 ;
   wire report_delay;
-  wire \report_delay$189 ;
+  wire \report_delay$191 ;
   wire report_frame;
-  wire \report_frame$172 ;
-  wire \report_frame$187 ;
+  wire \report_frame$174 ;
+  wire \report_frame$189 ;
   wire request;
   wire \request$71 ;
   wire restart;
@@ -439,39 +441,39 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \result.word1.nw ;
   wire [39:0] \result.word1.position ;
   wire resync;
-  wire \resync$158 ;
+  wire \resync$160 ;
   wire [15:0] rises;
-  wire [15:0] \rises$138 ;
+  wire [15:0] \rises$140 ;
   input rst;
   wire rst;
   wire run;
   wire sample;
-  wire \sample$144 ;
+  wire \sample$146 ;
   wire second_rise;
   wire skip;
   input slo;
   wire slo;
-  wire \slo$111 ;
+  wire \slo$113 ;
   wire \slo$69 ;
   wire \slo$77 ;
   wire slo_stuck;
-  wire \slo_stuck$106 ;
+  wire \slo_stuck$108 ;
   wire slo_stuck_live;
-  wire \slo_stuck_live$108 ;
+  wire \slo_stuck_live$110 ;
   wire slots_full;
   wire \slots_full$94 ;
   wire [39:0] spw;
   wire spw_match;
   output spw_mismatch;
   wire spw_mismatch;
-  wire \spw_mismatch$202 ;
+  wire \spw_mismatch$204 ;
   input start;
   wire start;
   wire \start$64 ;
   wire [15:0] start_slot;
-  wire [15:0] \start_slot$136 ;
+  wire [15:0] \start_slot$138 ;
   wire started;
-  wire \started$134 ;
+  wire \started$136 ;
   wire \started$92 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
@@ -503,13 +505,13 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
-  wire [3:0] \status$193 ;
+  wire [3:0] \status$195 ;
   wire stop_bit;
   wire \stop_bit$98 ;
   wire stopped;
   wire \stopped$96 ;
   wire [23:0] timeout_limit;
-  wire [23:0] \timeout_limit$124 ;
+  wire [23:0] \timeout_limit$126 ;
   wire [23:0] timeout_live;
   wire timer_clear;
   output [31:0] timestamp;
@@ -517,8 +519,8 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire [7:0] tolerance;
   output valid;
   wire valid;
-  wire \valid$190 ;
-  wire \valid$191 ;
+  wire \valid$192 ;
+  wire \valid$193 ;
   wire valid_out;
   wire w1_enable;
   output word0_crc_ok;
@@ -538,28 +540,28 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   output [39:0] word1_position;
   wire [39:0] word1_position;
   wire [1:0] word_count;
-  wire [1:0] \word_count$148 ;
+  wire [1:0] \word_count$150 ;
   wire [1:0] word_crc_ok;
   wire [19:0] words;
-  wire [19:0] \words$160 ;
-  wire [9:0] \words$160[0] ;
+  wire [19:0] \words$162 ;
+  wire [9:0] \words$162[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
-  wire [1:0] \words$160[0].crc ;
-  wire [5:0] \words$160[0].data_bits ;
-  wire \words$160[0].lc ;
-  wire \words$160[0].nenw ;
-  wire [9:0] \words$160[1] ;
+  wire [1:0] \words$162[0].crc ;
+  wire [5:0] \words$162[0].data_bits ;
+  wire \words$162[0].lc ;
+  wire \words$162[0].nenw ;
+  wire [9:0] \words$162[1] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
-  wire [1:0] \words$160[1].crc ;
-  wire [5:0] \words$160[1].data_bits ;
-  wire \words$160[1].lc ;
-  wire \words$160[1].nenw ;
+  wire [1:0] \words$162[1].crc ;
+  wire [5:0] \words$162[1].data_bits ;
+  wire \words$162[1].lc ;
+  wire \words$162[1].nenw ;
   wire [9:0] \words[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
@@ -579,7 +581,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \words[1].lc ;
   wire \words[1].nenw ;
   wire zero;
-  assign \$1  = report_frame & \spw_mismatch$202 ;
+  assign \$1  = report_frame & \spw_mismatch$204 ;
   assign busy = ~ idle;
   assign config_error = ~ config_ok;
   \biss_master.config  \config  (
@@ -608,6 +610,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .fault_status(fault_status),
     .faults(faults),
     .frame_done(frame_done),
+    .frame_doubtful(frame_doubtful),
     .idle(idle),
     .in_clock(in_clock),
     .locked(locked),
@@ -616,7 +619,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .ma_enough(ma_enough),
     .ma_run(run),
     .no_start_expired(no_start_expired),
-    .receiver_clear(\clear$139 ),
+    .receiver_clear(\clear$141 ),
     .report_delay(report_delay),
     .report_frame(report_frame),
     .request(request),
@@ -641,18 +644,18 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   );
   \biss_master.decoder  decoder (
     .\bit (\slo$77 ),
-    .cds(\cds$194 ),
+    .cds(\cds$196 ),
     .clk(clk),
     .cpw_top(cpw_top),
     .crc_ok(crc_ok),
     .data0(data0),
     .data1(spw),
     .done(frame_done),
-    .lc(\lc$149 ),
+    .lc(\lc$151 ),
     .lc_load(load),
     .ne(ne),
     .nw(nw),
-    .receiver_clear(\clear$139 ),
+    .receiver_clear(\clear$141 ),
     .rst(rst),
     .sample(sample),
     .slots_full(slots_full),
@@ -675,7 +678,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .second_rise(ma_arm)
   );
   \biss_master.ma_stop  ma_stop (
-    .clear(\clear$139 ),
+    .clear(\clear$141 ),
     .clk(clk),
     .enough(ma_enough),
     .rises(rises),
@@ -683,7 +686,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .start_slot(start_slot),
     .\started$10 (started),
     .w1_enable(cycle[135]),
-    .words(\words$160 )
+    .words(\words$162 )
   );
   \biss_master.results  results (
     .clk(clk),
@@ -694,7 +697,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .report_frame(report_frame),
     .result(result),
     .rst(rst),
-    .valid(\valid$190 ),
+    .valid(\valid$192 ),
     .valid_out(valid)
   );
   \biss_master.sampler  sampler (
@@ -705,7 +708,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .half_period(cycle[15:0]),
     .level(\slo$77 ),
     .locked(locked),
-    .receiver_clear(\clear$139 ),
+    .receiver_clear(\clear$141 ),
     .rst(rst),
     .sample(sample),
     .slo(slo)
@@ -725,9 +728,9 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .check(check),
     .clk(clk),
     .is_zero(lc_zero_seen),
-    .lc(\lc$149 ),
+    .lc(\lc$151 ),
     .load(load),
-    .\port$993$0 (\slo$77 ),
+    .\port$1015$0 (\slo$77 ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -774,22 +777,23 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .cfg(cycle),
     .crc_error(crc_error),
     .crc_ok(crc_ok),
+    .doubtful(frame_doubtful),
     .fault(fault),
     .fault_status(fault_status),
     .lc_check(check),
-    .lc_repeat(\lc_repeat$195 ),
+    .lc_repeat(\lc_repeat$197 ),
     .lc_repeat_seen(lc_repeat_seen),
-    .lc_skip(\lc_skip$196 ),
+    .lc_skip(\lc_skip$198 ),
     .lc_skip_seen(lc_skip_seen),
-    .lc_zero(\lc_zero$197 ),
+    .lc_zero(\lc_zero$199 ),
     .lc_zero_seen(lc_zero_seen),
-    .\port$739$0 (\$2 ),
+    .\port$758$0 (\$2 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
-    .spw_mismatch(\spw_mismatch$202 ),
-    .status(\status$193 ),
-    .valid(\valid$190 )
+    .spw_mismatch(\spw_mismatch$204 ),
+    .status(\status$195 ),
+    .valid(\valid$192 )
   );
   assign \idle$63  = idle;
   assign \start$64  = start;
@@ -813,66 +817,67 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \slots_full$94  = slots_full;
   assign \stopped$96  = stopped;
   assign \stop_bit$98  = stop_bit;
-  assign \break_over$100  = break_over;
-  assign \ack_expired$102  = ack_expired;
-  assign \no_start_expired$104  = no_start_expired;
-  assign \slo_stuck$106  = slo_stuck;
-  assign \slo_stuck_live$108  = slo_stuck_live;
-  assign \delay_over$110  = delay_over;
-  assign \slo$111  = \slo$77 ;
-  assign \ma_busy$112  = ma_busy;
+  assign doubtful = frame_doubtful;
+  assign \break_over$102  = break_over;
+  assign \ack_expired$104  = ack_expired;
+  assign \no_start_expired$106  = no_start_expired;
+  assign \slo_stuck$108  = slo_stuck;
+  assign \slo_stuck_live$110  = slo_stuck_live;
+  assign \delay_over$112  = delay_over;
+  assign \slo$113  = \slo$77 ;
+  assign \ma_busy$114  = ma_busy;
   assign timer_clear = clear;
-  assign \in_clock$116  = in_clock;
+  assign \in_clock$118  = in_clock;
   assign restart_timer = restart;
   assign break_time = cfg_break_time;
   assign timeout_live = cfg_timeout_limit;
-  assign \ack_limit$122  = ack_limit;
-  assign \timeout_limit$124  = timeout_limit;
-  assign \no_start_limit$126  = no_start_limit;
-  assign \delay$128  = delay;
-  assign \delay_limit$130  = delay_limit;
+  assign \ack_limit$124  = ack_limit;
+  assign \timeout_limit$126  = timeout_limit;
+  assign \no_start_limit$128  = no_start_limit;
+  assign \delay$130  = delay;
+  assign \delay_limit$132  = delay_limit;
   assign ma_run = run;
   assign half_period = cycle[15:0];
-  assign \started$134  = started;
-  assign \start_slot$136  = start_slot;
-  assign \rises$138  = rises;
-  assign receiver_clear = \clear$139 ;
-  assign \half_period$141  = cycle[15:0];
+  assign \started$136  = started;
+  assign \start_slot$138  = start_slot;
+  assign \rises$140  = rises;
+  assign receiver_clear = \clear$141 ;
+  assign \half_period$143  = cycle[15:0];
   assign arm = ma_arm;
-  assign \sample$144  = sample;
+  assign \sample$146  = sample;
   assign \bit  = \slo$77 ;
-  assign \bit$146  = \slo$77 ;
-  assign \word_count$148  = word_count;
-  assign \lc$150  = \lc$149 ;
-  assign lc_next = { \lc$149 [4:0], \slo$77  };
-  assign \lc_next$152  = { \lc$149 [4:0], \slo$77  };
+  assign \bit$148  = \slo$77 ;
+  assign \word_count$150  = word_count;
+  assign \lc$152  = \lc$151 ;
+  assign lc_next = { \lc$151 [4:0], \slo$77  };
+  assign \lc_next$154  = { \lc$151 [4:0], \slo$77  };
   assign lc_load = load;
   assign lc_check = check;
-  assign \resync$158  = resync;
+  assign \resync$160  = resync;
   assign w1_enable = cycle[135];
-  assign \cpw_top$163  = cpw_top;
+  assign \cpw_top$165  = cpw_top;
   assign data1 = spw;
   assign bits = cycle[141:136];
   assign tolerance = cycle[154:147];
   assign match = spw_match;
   assign cfg = cycle;
-  assign \report_frame$172  = report_frame;
-  assign \fault$174  = fault;
-  assign \fault_status$176  = fault_status;
-  assign \crc_ok$178  = crc_ok;
+  assign \report_frame$174  = report_frame;
+  assign \fault$176  = fault;
+  assign \fault_status$178  = fault_status;
+  assign \crc_ok$180  = crc_ok;
   assign \repeat  = lc_repeat_seen;
   assign skip = lc_skip_seen;
   assign zero = lc_zero_seen;
-  assign \report$186  = report;
-  assign \report_frame$187  = report_frame;
-  assign \report_delay$189  = report_delay;
-  assign \valid$191  = \valid$190 ;
+  assign \report$188  = report;
+  assign \report_frame$189  = report_frame;
+  assign \report_delay$191  = report_delay;
+  assign \valid$193  = \valid$192 ;
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \first_rise$204  = first_rise;
-  assign \overrun$209  = overrun;
-  assign \clear$210  = clear_counters;
-  assign \ma$212  = ma;
-  assign \done$213  = done;
+  assign \first_rise$206  = first_rise;
+  assign \overrun$211  = overrun;
+  assign \clear$212  = clear_counters;
+  assign \ma$214  = ma;
+  assign \done$215  = done;
   assign valid_out = valid;
   assign status = result[3:0];
   assign timestamp = result[35:4];
@@ -954,16 +959,16 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \words[1].nenw  = words[16];
   assign \words[1].lc  = words[17];
   assign \words[1].crc  = words[19:18];
-  assign \words$160[0]  = \words$160 [9:0];
-  assign \words$160[0].data_bits  = \words$160 [5:0];
-  assign \words$160[0].nenw  = \words$160 [6];
-  assign \words$160[0].lc  = \words$160 [7];
-  assign \words$160[0].crc  = \words$160 [9:8];
-  assign \words$160[1]  = \words$160 [19:10];
-  assign \words$160[1].data_bits  = \words$160 [15:10];
-  assign \words$160[1].nenw  = \words$160 [16];
-  assign \words$160[1].lc  = \words$160 [17];
-  assign \words$160[1].crc  = \words$160 [19:18];
+  assign \words$162[0]  = \words$162 [9:0];
+  assign \words$162[0].data_bits  = \words$162 [5:0];
+  assign \words$162[0].nenw  = \words$162 [6];
+  assign \words$162[0].lc  = \words$162 [7];
+  assign \words$162[0].crc  = \words$162 [9:8];
+  assign \words$162[1]  = \words$162 [19:10];
+  assign \words$162[1].data_bits  = \words$162 [15:10];
+  assign \words$162[1].nenw  = \words$162 [16];
+  assign \words$162[1].lc  = \words$162 [17];
+  assign \words$162[1].crc  = \words$162 [19:18];
   assign \cfg.ma_half_period  = cycle[15:0];
   assign \cfg.request_period  = cycle[39:16];
   assign \cfg.break_time  = cycle[63:40];
@@ -1059,9 +1064,9 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign events[11] = faults[4];
   assign events[10] = overrun;
   assign events[9] = \$1 ;
-  assign events[8] = \lc_zero$197 ;
-  assign events[7] = \lc_skip$196 ;
-  assign events[6] = \lc_repeat$195 ;
+  assign events[8] = \lc_zero$199 ;
+  assign events[7] = \lc_skip$198 ;
+  assign events[6] = \lc_repeat$197 ;
   assign events[5] = faults[3];
   assign events[4] = faults[2];
   assign events[3] = faults[1];
@@ -1069,7 +1074,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign events[1] = crc_error[1];
   assign events[0] = crc_error[0];
   assign frame[35:4] = first_rise_time;
-  assign frame[160] = \spw_mismatch$202 ;
+  assign frame[160] = \spw_mismatch$204 ;
   assign frame[150] = \$2 ;
   assign frame[149] = nw[1];
   assign frame[148] = ne[1];
@@ -1078,15 +1083,15 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign frame[106] = nw[0];
   assign frame[105] = ne[0];
   assign frame[104:50] = data0;
-  assign frame[159] = \lc_zero$197 ;
-  assign frame[158] = \lc_skip$196 ;
-  assign frame[157] = \lc_repeat$195 ;
-  assign frame[156:151] = \lc$149 ;
-  assign frame[49] = \cds$194 ;
+  assign frame[159] = \lc_zero$199 ;
+  assign frame[158] = \lc_skip$198 ;
+  assign frame[157] = \lc_repeat$197 ;
+  assign frame[156:151] = \lc$151 ;
+  assign frame[49] = \cds$196 ;
   assign frame[48:36] = delay;
-  assign frame[3:0] = \status$193 ;
-  assign \words$160 [19:10] = cycle[145:136];
-  assign \words$160 [9:0] = cycle[134:125];
+  assign frame[3:0] = \status$195 ;
+  assign \words$162 [19:10] = cycle[145:136];
+  assign \words$162 [9:0] = cycle[134:125];
   assign words[19:10] = cycle[145:136];
   assign words[9:0] = cycle[134:125];
   assign live[154:147] = cfg_spw_tolerance;
@@ -1388,8 +1393,8 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.controller (clk, rst, request, restart_timer, config_ok, end_check, resync, timer_clear, fault, fault_status, faults, ma_run, in_clock, report_frame, report_delay, idle, receiver_clear, slo_stuck, slo_stuck_live, break_over, ack_expired
-, no_start_expired, delay_over, ma_arm, ma_busy, ma_enough, early, locked, slo, frame_done, stopped, slots_full, started, stop_bit, abort);
+module \biss_master.controller (clk, rst, request, restart_timer, frame_doubtful, config_ok, end_check, resync, timer_clear, fault, fault_status, faults, ma_run, in_clock, report_frame, report_delay, idle, receiver_clear, slo_stuck, slo_stuck_live, break_over
+, ack_expired, no_start_expired, delay_over, ma_arm, ma_busy, ma_enough, early, locked, slo, frame_done, stopped, slots_full, started, stop_bit, abort);
   reg \$auto$verilog_backend.cc:2355:dump_module$10  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -1443,13 +1448,18 @@ module \biss_master.controller (clk, rst, request, restart_timer, config_ok, end
   wire \$54 ;
   wire \$55 ;
   wire \$56 ;
-  reg \$57 ;
-  reg [2:0] \$58 ;
-  reg \$59 ;
+  wire \$57 ;
+  wire \$58 ;
+  wire \$59 ;
   wire \$6 ;
-  reg \$60 ;
+  wire \$60 ;
   reg \$61 ;
-  reg \$62 ;
+  reg [2:0] \$62 ;
+  reg \$63 ;
+  reg \$64 ;
+  reg \$65 ;
+  reg \$66 ;
+  reg \$67 ;
   wire \$7 ;
   wire \$8 ;
   wire \$9 ;
@@ -1501,6 +1511,8 @@ module \biss_master.controller (clk, rst, request, restart_timer, config_ok, end
   reg first_clock = 1'h0;
   input frame_done;
   wire frame_done;
+  input frame_doubtful;
+  wire frame_doubtful;
   output idle;
   reg idle = 1'h0;
   output in_clock;
@@ -1518,6 +1530,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, config_ok, end
   reg ma_run;
   input no_start_expired;
   wire no_start_expired;
+  reg pause = 1'h0;
   output receiver_clear;
   reg receiver_clear = 1'h1;
   output report_delay;
@@ -1548,38 +1561,49 @@ module \biss_master.controller (clk, rst, request, restart_timer, config_ok, end
   wire stopped;
   output timer_clear;
   reg timer_clear;
-  assign \$37  = first_clock ? slo_stuck_live : slo_stuck;
-  assign \$38  = ~ locked_seen;
-  assign \$39  = locked & \$38 ;
-  assign \$40  = armed & early;
-  assign \$41  = ~ locked_seen;
-  assign \$42  = armed & \$41 ;
-  assign \$43  = ~ locked;
-  assign \$44  = \$42  & \$43 ;
-  assign \$45  = \$44  & ack_expired;
-  assign \$46  = ~ locked_seen;
-  assign \$47  = locked & \$46 ;
-  assign \$48  = \$47  & delay_over;
-  assign \$49  = ~ started;
-  assign \$50  = locked_seen & \$49 ;
-  assign \$51  = no_start_expired | slots_full;
-  assign \$52  = \$50  & \$51 ;
-  assign \$53  = ~ end_check;
-  assign \$54  = ~ ma_busy;
-  assign \$55  = ~ ma_busy;
-  assign \$56  = \$55  & slo;
+  assign \$32  = cycle_fsm_state == 3'h4;
+  assign \$33  = cycle_fsm_state == 3'h5;
+  assign \$34  = cycle_fsm_state == 3'h6;
+  assign \$35  = cycle_fsm_state == 3'h7;
+  assign \$36  = ma_busy | abort;
+  assign \$37  = ~ config_ok;
+  assign \$38  = first_clock & \$37 ;
+  assign \$39  = first_clock ? slo_stuck_live : slo_stuck;
+  assign \$40  = ~ locked_seen;
+  assign \$41  = locked & \$40 ;
+  assign \$42  = armed & early;
+  assign \$43  = ~ locked_seen;
+  assign \$44  = armed & \$43 ;
+  assign \$45  = ~ locked;
+  assign \$46  = \$44  & \$45 ;
+  assign \$47  = \$46  & ack_expired;
+  assign \$48  = ~ locked_seen;
+  assign \$49  = locked & \$48 ;
+  assign \$50  = \$49  & delay_over;
+  assign \$51  = ~ started;
+  assign \$52  = locked_seen & \$51 ;
+  assign \$53  = no_start_expired | slots_full;
+  assign \$54  = \$52  & \$53 ;
+  assign \$55  = ~ end_check;
+  assign \$56  = ~ end_check;
+  assign \$57  = ma_busy | abort;
+  assign \$58  = ~ ma_busy;
+  assign \$59  = ~ ma_busy;
+  assign \$60  = \$59  & slo;
   always @(posedge clk)
-    first_clock <= \$57 ;
+    first_clock <= \$61 ;
   always @(posedge clk)
-    cycle_fsm_state <= \$58 ;
+    cycle_fsm_state <= \$62 ;
   always @(posedge clk)
-    idle <= \$59 ;
+    idle <= \$63 ;
   always @(posedge clk)
-    receiver_clear <= \$60 ;
+    receiver_clear <= \$64 ;
   always @(posedge clk)
-    armed <= \$61 ;
+    armed <= \$65 ;
   always @(posedge clk)
-    locked_seen <= \$62 ;
+    locked_seen <= \$66 ;
+  always @(posedge clk)
+    pause <= \$67 ;
   assign \$1  = ~ locked_seen;
   assign \$2  = locked & \$1 ;
   assign restart_timer = ma_arm | \$2 ;
@@ -1605,18 +1629,13 @@ module \biss_master.controller (clk, rst, request, restart_timer, config_ok, end
   assign \$22  = ~ end_check;
   assign \$23  = ~ ma_enough;
   assign \$24  = ~ end_check;
-  assign \$25  = ~ ma_busy;
-  assign \$26  = \$25  & slo;
-  assign \$27  = ! cycle_fsm_state;
-  assign \$28  = cycle_fsm_state == 1'h1;
-  assign \$29  = cycle_fsm_state == 2'h2;
-  assign \$30  = cycle_fsm_state == 2'h3;
-  assign \$31  = cycle_fsm_state == 3'h4;
-  assign \$32  = cycle_fsm_state == 3'h5;
-  assign \$33  = cycle_fsm_state == 3'h6;
-  assign \$34  = ma_busy | abort;
-  assign \$35  = ~ config_ok;
-  assign \$36  = first_clock & \$35 ;
+  assign \$25  = ma_busy | abort;
+  assign \$26  = ~ ma_busy;
+  assign \$27  = \$26  & slo;
+  assign \$28  = ! cycle_fsm_state;
+  assign \$29  = cycle_fsm_state == 1'h1;
+  assign \$30  = cycle_fsm_state == 2'h2;
+  assign \$31  = cycle_fsm_state == 2'h3;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     resync = 1'h0;
@@ -1628,6 +1647,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, config_ok, end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     timer_clear = 1'h0;
+    (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
       3'h0:
           if (\$3 ) begin
@@ -1646,16 +1666,26 @@ module \biss_master.controller (clk, rst, request, restart_timer, config_ok, end
             timer_clear = 1'h1;
           end else if (stopped) begin
             if (\$24 ) begin
+              if (pause) begin
+                timer_clear = 1'h1;
+              end
             end else if (stop_bit) begin
               timer_clear = 1'h1;
             end
           end
       3'h5:
-          /* empty */;
+          if (\$25 ) begin
+            timer_clear = 1'h1;
+          end
       3'h6:
+          /* empty */;
+      3'h7:
           if (abort) begin
             timer_clear = 1'h1;
-          end else if (\$26 ) begin
+          end else if (\$27 ) begin
+            if (frame_doubtful) begin
+              timer_clear = 1'h1;
+            end
           end else if (slo_stuck) begin
             timer_clear = 1'h1;
           end
@@ -1664,6 +1694,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, config_ok, end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     fault = 1'h0;
+    (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
       3'h0:
           /* empty */;
@@ -1705,9 +1736,11 @@ module \biss_master.controller (clk, rst, request, restart_timer, config_ok, end
       3'h5:
           /* empty */;
       3'h6:
+          /* empty */;
+      3'h7:
           if (abort) begin
             fault = 1'h1;
-          end else if (\$26 ) begin
+          end else if (\$27 ) begin
           end else if (slo_stuck) begin
             fault = 1'h1;
           end
@@ -1716,6 +1749,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, config_ok, end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     fault_status = 4'h0;
+    (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
       3'h0:
           /* empty */;
@@ -1757,9 +1791,11 @@ module \biss_master.controller (clk, rst, request, restart_timer, config_ok, end
       3'h5:
           /* empty */;
       3'h6:
+          /* empty */;
+      3'h7:
           if (abort) begin
             fault_status = 4'ha;
-          end else if (\$26 ) begin
+          end else if (\$27 ) begin
           end else if (slo_stuck) begin
             fault_status = 4'h9;
           end
@@ -1768,6 +1804,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, config_ok, end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     faults = 7'h00;
+    (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
       3'h0:
           /* empty */;
@@ -1809,9 +1846,11 @@ module \biss_master.controller (clk, rst, request, restart_timer, config_ok, end
       3'h5:
           /* empty */;
       3'h6:
+          /* empty */;
+      3'h7:
           if (abort) begin
             faults[4] = 1'h1;
-          end else if (\$26 ) begin
+          end else if (\$27 ) begin
           end else if (slo_stuck) begin
             faults[3] = 1'h1;
           end
@@ -1850,6 +1889,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, config_ok, end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     report_frame = 1'h0;
+    (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
       3'h0:
           /* empty */;
@@ -1869,8 +1909,10 @@ module \biss_master.controller (clk, rst, request, restart_timer, config_ok, end
       3'h5:
           /* empty */;
       3'h6:
+          /* empty */;
+      3'h7:
           if (abort) begin
-          end else if (\$26 ) begin
+          end else if (\$27 ) begin
             report_frame = 1'h1;
           end
     endcase
@@ -1878,6 +1920,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, config_ok, end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     report_delay = 1'h0;
+    (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
       3'h0:
           /* empty */;
@@ -1901,286 +1944,370 @@ module \biss_master.controller (clk, rst, request, restart_timer, config_ok, end
       3'h5:
           /* empty */;
       3'h6:
+          /* empty */;
+      3'h7:
           if (abort) begin
-          end else if (\$26 ) begin
+          end else if (\$27 ) begin
             report_delay = 1'h1;
           end
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$57  = idle;
-    if (rst) begin
-      \$57  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$58  = cycle_fsm_state;
-    casez (cycle_fsm_state)
-      3'h0:
-          if (\$34 ) begin
-          end else if (break_over) begin
-            \$58  = 3'h1;
-          end
-      3'h1:
-          if (abort) begin
-            \$58  = 3'h0;
-          end else if (request) begin
-            \$58  = 3'h2;
-          end
-      3'h2:
-          if (\$36 ) begin
-            \$58  = 3'h1;
-            if (abort) begin
-              \$58  = 3'h0;
-            end
-          end else if (abort) begin
-            \$58  = 3'h0;
-          end else if (slo) begin
-            \$58  = 3'h3;
-          end else if (\$37 ) begin
-            \$58  = 3'h0;
-          end
-      3'h3:
-          if (abort) begin
-            \$58  = 3'h0;
-          end else if (frame_done) begin
-            \$58  = 3'h4;
-          end else if (\$40 ) begin
-            \$58  = 3'h0;
-          end else if (\$45 ) begin
-            \$58  = 3'h0;
-          end else if (\$48 ) begin
-            \$58  = 3'h0;
-          end else if (\$52 ) begin
-            \$58  = 3'h0;
-          end
-      3'h4:
-          if (abort) begin
-            (* full_case = 32'd1 *)
-            if (end_check) begin
-              \$58  = 3'h0;
-            end else begin
-              \$58  = 3'h0;
-            end
-          end else if (stopped) begin
-            (* full_case = 32'd1 *)
-            if (\$53 ) begin
-              \$58  = 3'h5;
-            end else if (stop_bit) begin
-              \$58  = 3'h0;
-            end else begin
-              \$58  = 3'h6;
-            end
-          end
-      3'h5:
-          if (\$54 ) begin
-            \$58  = 3'h1;
-          end
-      3'h6:
-          if (abort) begin
-            \$58  = 3'h0;
-          end else if (\$56 ) begin
-            \$58  = 3'h1;
-          end else if (slo_stuck) begin
-            \$58  = 3'h0;
-          end
-    endcase
-    if (rst) begin
-      \$58  = 3'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$59  = idle;
-    casez (cycle_fsm_state)
-      3'h0:
-          if (\$34 ) begin
-          end else if (break_over) begin
-            \$59  = 1'h1;
-          end
-      3'h1:
-          if (abort) begin
-            \$59  = 1'h0;
-          end else if (request) begin
-            \$59  = 1'h0;
-          end
-      3'h2:
-          if (\$36 ) begin
-            \$59  = 1'h1;
-            if (abort) begin
-              \$59  = 1'h0;
-            end
-          end else if (abort) begin
-            \$59  = 1'h0;
-          end else if (slo) begin
-            \$59  = 1'h0;
-          end else if (\$37 ) begin
-            \$59  = 1'h0;
-          end
-      3'h3:
-          if (abort) begin
-            \$59  = 1'h0;
-          end else if (frame_done) begin
-            \$59  = 1'h0;
-          end else if (\$40 ) begin
-            \$59  = 1'h0;
-          end else if (\$45 ) begin
-            \$59  = 1'h0;
-          end else if (\$48 ) begin
-            \$59  = 1'h0;
-          end else if (\$52 ) begin
-            \$59  = 1'h0;
-          end
-      3'h4:
-          if (abort) begin
-            (* full_case = 32'd1 *)
-            if (end_check) begin
-              \$59  = 1'h0;
-            end else begin
-              \$59  = 1'h0;
-            end
-          end else if (stopped) begin
-            (* full_case = 32'd1 *)
-            if (\$53 ) begin
-              \$59  = 1'h0;
-            end else if (stop_bit) begin
-              \$59  = 1'h0;
-            end else begin
-              \$59  = 1'h0;
-            end
-          end
-      3'h5:
-          if (\$54 ) begin
-            \$59  = 1'h1;
-          end
-      3'h6:
-          if (abort) begin
-            \$59  = 1'h0;
-          end else if (\$56 ) begin
-            \$59  = 1'h1;
-          end else if (slo_stuck) begin
-            \$59  = 1'h0;
-          end
-    endcase
-    if (rst) begin
-      \$59  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$60  = receiver_clear;
-    casez (cycle_fsm_state)
-      3'h0:
-          if (\$34 ) begin
-          end else if (break_over) begin
-            \$60  = 1'h1;
-          end
-      3'h1:
-          if (abort) begin
-            \$60  = 1'h1;
-          end else if (request) begin
-            \$60  = 1'h1;
-          end
-      3'h2:
-          if (\$36 ) begin
-            \$60  = 1'h1;
-            if (abort) begin
-              \$60  = 1'h1;
-            end
-          end else if (abort) begin
-            \$60  = 1'h1;
-          end else if (slo) begin
-            \$60  = 1'h0;
-          end else if (\$37 ) begin
-            \$60  = 1'h1;
-          end
-      3'h3:
-          if (abort) begin
-            \$60  = 1'h1;
-          end else if (frame_done) begin
-            \$60  = 1'h0;
-          end else if (\$40 ) begin
-            \$60  = 1'h1;
-          end else if (\$45 ) begin
-            \$60  = 1'h1;
-          end else if (\$48 ) begin
-            \$60  = 1'h1;
-          end else if (\$52 ) begin
-            \$60  = 1'h1;
-          end
-      3'h4:
-          if (abort) begin
-            (* full_case = 32'd1 *)
-            if (end_check) begin
-              \$60  = 1'h1;
-            end else begin
-              \$60  = 1'h1;
-            end
-          end else if (stopped) begin
-            (* full_case = 32'd1 *)
-            if (\$53 ) begin
-              \$60  = 1'h0;
-            end else if (stop_bit) begin
-              \$60  = 1'h1;
-            end else begin
-              \$60  = 1'h0;
-            end
-          end
-      3'h5:
-          if (\$54 ) begin
-            \$60  = 1'h1;
-          end
-      3'h6:
-          if (abort) begin
-            \$60  = 1'h1;
-          end else if (\$56 ) begin
-            \$60  = 1'h1;
-          end else if (slo_stuck) begin
-            \$60  = 1'h1;
-          end
-    endcase
-    if (rst) begin
-      \$60  = 1'h1;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$61  = armed;
-    casez (cycle_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          \$61  = 1'h0;
-      3'h3:
-          if (ma_arm) begin
-            \$61  = 1'h1;
-          end
-    endcase
+    \$61  = idle;
     if (rst) begin
       \$61  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$62  = locked_seen;
+    \$62  = cycle_fsm_state;
+    (* full_case = 32'd1 *)
+    casez (cycle_fsm_state)
+      3'h0:
+          if (\$36 ) begin
+          end else if (break_over) begin
+            \$62  = 3'h1;
+          end
+      3'h1:
+          if (abort) begin
+            \$62  = 3'h0;
+          end else if (request) begin
+            \$62  = 3'h2;
+          end
+      3'h2:
+          if (\$38 ) begin
+            \$62  = 3'h1;
+            if (abort) begin
+              \$62  = 3'h0;
+            end
+          end else if (abort) begin
+            \$62  = 3'h0;
+          end else if (slo) begin
+            \$62  = 3'h3;
+          end else if (\$39 ) begin
+            \$62  = 3'h0;
+          end
+      3'h3:
+          if (abort) begin
+            \$62  = 3'h0;
+          end else if (frame_done) begin
+            \$62  = 3'h4;
+          end else if (\$42 ) begin
+            \$62  = 3'h0;
+          end else if (\$47 ) begin
+            \$62  = 3'h0;
+          end else if (\$50 ) begin
+            \$62  = 3'h0;
+          end else if (\$54 ) begin
+            \$62  = 3'h0;
+          end
+      3'h4:
+          if (abort) begin
+            (* full_case = 32'd1 *)
+            if (end_check) begin
+              \$62  = 3'h0;
+            end else begin
+              \$62  = 3'h0;
+            end
+          end else if (stopped) begin
+            (* full_case = 32'd1 *)
+            if (\$56 ) begin
+              (* full_case = 32'd1 *)
+              if (pause) begin
+                \$62  = 3'h5;
+              end else begin
+                \$62  = 3'h6;
+              end
+            end else if (stop_bit) begin
+              \$62  = 3'h0;
+            end else begin
+              \$62  = 3'h7;
+            end
+          end
+      3'h5:
+          if (\$57 ) begin
+          end else if (break_over) begin
+            \$62  = 3'h1;
+          end
+      3'h6:
+          if (\$58 ) begin
+            \$62  = 3'h1;
+          end
+      3'h7:
+          if (abort) begin
+            \$62  = 3'h0;
+          end else if (\$60 ) begin
+            (* full_case = 32'd1 *)
+            if (frame_doubtful) begin
+              \$62  = 3'h5;
+            end else begin
+              \$62  = 3'h1;
+            end
+          end else if (slo_stuck) begin
+            \$62  = 3'h0;
+          end
+    endcase
+    if (rst) begin
+      \$62  = 3'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$63  = idle;
+    (* full_case = 32'd1 *)
+    casez (cycle_fsm_state)
+      3'h0:
+          if (\$36 ) begin
+          end else if (break_over) begin
+            \$63  = 1'h1;
+          end
+      3'h1:
+          if (abort) begin
+            \$63  = 1'h0;
+          end else if (request) begin
+            \$63  = 1'h0;
+          end
+      3'h2:
+          if (\$38 ) begin
+            \$63  = 1'h1;
+            if (abort) begin
+              \$63  = 1'h0;
+            end
+          end else if (abort) begin
+            \$63  = 1'h0;
+          end else if (slo) begin
+            \$63  = 1'h0;
+          end else if (\$39 ) begin
+            \$63  = 1'h0;
+          end
+      3'h3:
+          if (abort) begin
+            \$63  = 1'h0;
+          end else if (frame_done) begin
+            \$63  = 1'h0;
+          end else if (\$42 ) begin
+            \$63  = 1'h0;
+          end else if (\$47 ) begin
+            \$63  = 1'h0;
+          end else if (\$50 ) begin
+            \$63  = 1'h0;
+          end else if (\$54 ) begin
+            \$63  = 1'h0;
+          end
+      3'h4:
+          if (abort) begin
+            (* full_case = 32'd1 *)
+            if (end_check) begin
+              \$63  = 1'h0;
+            end else begin
+              \$63  = 1'h0;
+            end
+          end else if (stopped) begin
+            (* full_case = 32'd1 *)
+            if (\$56 ) begin
+              (* full_case = 32'd1 *)
+              if (pause) begin
+                \$63  = 1'h0;
+              end else begin
+                \$63  = 1'h0;
+              end
+            end else if (stop_bit) begin
+              \$63  = 1'h0;
+            end else begin
+              \$63  = 1'h0;
+            end
+          end
+      3'h5:
+          if (\$57 ) begin
+          end else if (break_over) begin
+            \$63  = 1'h1;
+          end
+      3'h6:
+          if (\$58 ) begin
+            \$63  = 1'h1;
+          end
+      3'h7:
+          if (abort) begin
+            \$63  = 1'h0;
+          end else if (\$60 ) begin
+            (* full_case = 32'd1 *)
+            if (frame_doubtful) begin
+              \$63  = 1'h0;
+            end else begin
+              \$63  = 1'h1;
+            end
+          end else if (slo_stuck) begin
+            \$63  = 1'h0;
+          end
+    endcase
+    if (rst) begin
+      \$63  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$64  = receiver_clear;
+    (* full_case = 32'd1 *)
+    casez (cycle_fsm_state)
+      3'h0:
+          if (\$36 ) begin
+          end else if (break_over) begin
+            \$64  = 1'h1;
+          end
+      3'h1:
+          if (abort) begin
+            \$64  = 1'h1;
+          end else if (request) begin
+            \$64  = 1'h1;
+          end
+      3'h2:
+          if (\$38 ) begin
+            \$64  = 1'h1;
+            if (abort) begin
+              \$64  = 1'h1;
+            end
+          end else if (abort) begin
+            \$64  = 1'h1;
+          end else if (slo) begin
+            \$64  = 1'h0;
+          end else if (\$39 ) begin
+            \$64  = 1'h1;
+          end
+      3'h3:
+          if (abort) begin
+            \$64  = 1'h1;
+          end else if (frame_done) begin
+            \$64  = 1'h0;
+          end else if (\$42 ) begin
+            \$64  = 1'h1;
+          end else if (\$47 ) begin
+            \$64  = 1'h1;
+          end else if (\$50 ) begin
+            \$64  = 1'h1;
+          end else if (\$54 ) begin
+            \$64  = 1'h1;
+          end
+      3'h4:
+          if (abort) begin
+            (* full_case = 32'd1 *)
+            if (end_check) begin
+              \$64  = 1'h1;
+            end else begin
+              \$64  = 1'h1;
+            end
+          end else if (stopped) begin
+            (* full_case = 32'd1 *)
+            if (\$56 ) begin
+              (* full_case = 32'd1 *)
+              if (pause) begin
+                \$64  = 1'h1;
+              end else begin
+                \$64  = 1'h0;
+              end
+            end else if (stop_bit) begin
+              \$64  = 1'h1;
+            end else begin
+              \$64  = 1'h0;
+            end
+          end
+      3'h5:
+          if (\$57 ) begin
+          end else if (break_over) begin
+            \$64  = 1'h1;
+          end
+      3'h6:
+          if (\$58 ) begin
+            \$64  = 1'h1;
+          end
+      3'h7:
+          if (abort) begin
+            \$64  = 1'h1;
+          end else if (\$60 ) begin
+            (* full_case = 32'd1 *)
+            if (frame_doubtful) begin
+              \$64  = 1'h1;
+            end else begin
+              \$64  = 1'h1;
+            end
+          end else if (slo_stuck) begin
+            \$64  = 1'h1;
+          end
+    endcase
+    if (rst) begin
+      \$64  = 1'h1;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$65  = armed;
     casez (cycle_fsm_state)
       3'h0:
           /* empty */;
       3'h1:
           /* empty */;
       3'h2:
-          \$62  = 1'h0;
+          \$65  = 1'h0;
       3'h3:
-          if (\$39 ) begin
-            \$62  = 1'h1;
+          if (ma_arm) begin
+            \$65  = 1'h1;
           end
     endcase
     if (rst) begin
-      \$62  = 1'h0;
+      \$65  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$66  = locked_seen;
+    casez (cycle_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          \$66  = 1'h0;
+      3'h3:
+          if (\$41 ) begin
+            \$66  = 1'h1;
+          end
+    endcase
+    if (rst) begin
+      \$66  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$67  = pause;
+    (* full_case = 32'd1 *)
+    casez (cycle_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h3:
+          if (abort) begin
+          end else if (frame_done) begin
+            if (\$55 ) begin
+              \$67  = frame_doubtful;
+            end
+          end
+      3'h4:
+          /* empty */;
+      3'h5:
+          /* empty */;
+      3'h6:
+          /* empty */;
+      3'h7:
+          if (abort) begin
+          end else if (\$60 ) begin
+            \$67  = frame_doubtful;
+          end
+    endcase
+    if (rst) begin
+      \$67  = 1'h0;
     end
   end
   assign \faults.no_ack  = faults[0];
@@ -5556,7 +5683,7 @@ module \biss_master.scheduler (periodic, abort, period, clk, rst, request, overr
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.sign_of_life (rst, load, \repeat , skip, check, resync, \port$993$0 , lc, is_zero, clk);
+module \biss_master.sign_of_life (rst, load, \repeat , skip, check, resync, \port$1015$0 , lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$32  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -5594,8 +5721,8 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, resync, \por
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$993$0 ;
-  wire \port$993$0 ;
+  input \port$1015$0 ;
+  wire \port$1015$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -5607,9 +5734,9 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, resync, \por
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$993$0  };
-  assign \$2  = { lc[4:0], \port$993$0  } == last;
-  assign \$3  = { lc[4:0], \port$993$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$1015$0  };
+  assign \$2  = { lc[4:0], \port$1015$0  } == last;
+  assign \$3  = { lc[4:0], \port$1015$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = lc == 6'h3f;
@@ -5699,7 +5826,7 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, resync, \por
       \$21  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$993$0  };
+  assign lc_next = { lc[4:0], \port$1015$0  };
   assign zero = is_zero;
 endmodule
 
@@ -6181,7 +6308,7 @@ module \biss_master.timers (timeout_live, clk, rst, restart, ack_limit, timeout_
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.verdict (lc_skip_seen, \port$739$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
+module \biss_master.verdict (lc_skip_seen, \port$758$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$36  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -6236,6 +6363,8 @@ module \biss_master.verdict (lc_skip_seen, \port$739$0 , lc_check, lc_repeat, lc
   wire [1:0] crc_error;
   input [1:0] crc_ok;
   wire [1:0] crc_ok;
+  output doubtful;
+  wire doubtful;
   input fault;
   wire fault;
   (* enum_base_type = "Status" *)
@@ -6283,8 +6412,8 @@ module \biss_master.verdict (lc_skip_seen, \port$739$0 , lc_check, lc_repeat, lc
   wire lc_zero;
   input lc_zero_seen;
   wire lc_zero_seen;
-  output \port$739$0 ;
-  wire \port$739$0 ;
+  output \port$758$0 ;
+  wire \port$758$0 ;
   output report;
   wire report;
   input report_frame;
@@ -6338,6 +6467,7 @@ module \biss_master.verdict (lc_skip_seen, \port$739$0 , lc_check, lc_repeat, lc
   assign status = report_frame ? frame_status : fault_status;
   assign \$18  = ! frame_status;
   assign valid = report_frame & \$18 ;
+  assign doubtful = | frame_status;
   assign \$19  = ~ { \$2 , crc_ok[0] };
   assign crc_error = report_frame ? \$19  : 2'h0;
   always @* begin
@@ -6358,7 +6488,7 @@ module \biss_master.verdict (lc_skip_seen, \port$739$0 , lc_check, lc_repeat, lc
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$739$0  = \$2 ;
+  assign \port$758$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

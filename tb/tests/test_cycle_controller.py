@@ -20,7 +20,8 @@ FAULT_NAMES = [name for name, code in STATUS.items() if code >= STATUS["NO_ACK"]
 QUIET = {"request": 0, "abort": 0, "config_ok": 1, "end_check": 0, "slo": 1, "ma_busy": 0,
          "ma_arm": 0, "ma_enough": 0, "locked": 0, "early": 0, "frame_done": 0, "started": 0,
          "slots_full": 0, "stopped": 0, "stop_bit": 0, "break_over": 0, "ack_expired": 0,
-         "no_start_expired": 0, "slo_stuck": 0, "slo_stuck_live": 0, "delay_over": 0}
+         "no_start_expired": 0, "slo_stuck": 0, "slo_stuck_live": 0, "delay_over": 0,
+         "frame_doubtful": 0}
 SIGNALS = ["idle", "first_clock", "receiver_clear", "resync", "timer_clear", "in_clock",
            "restart_timer", "ma_run", "report_frame", "report_delay", "fault", "fault_status"]
 OUTPUTS = SIGNALS + [f"faults.{name.lower()}" for name in FAULT_NAMES]
@@ -229,3 +230,34 @@ def test_cycle_controller_break_after_fault_waits_for_break_over(name):
     assert trace[-5]["timer_clear"] == 1            # MA still running: the break restarts
     # The receiver is held and the sign of life resyncs in BREAK.
     assert all(x["receiver_clear"] and x["resync"] for x in trace[-5:-1])
+
+
+@pytest.mark.parametrize("end_check", (0, 1), ids=("end_check0", "end_check1"))
+def test_cycle_controller_pause_after_a_doubtful_frame(end_check):
+    """A frame reported with ``frame_doubtful`` (its verdict is not OK) is followed by PAUSE: the
+    receiver held, the sign of life kept (no resync), MA stopped, the timer cleared on the way in
+    and while MA runs, IDLE only after ``break_over``. No fault is reported."""
+    through_done = [s for s, _, _ in GOOD_CYCLE[:16]]
+    done = {"locked": 1, "started": 1, "frame_done": 1,
+            "frame_doubtful": 0 if end_check else 1}
+    if end_check:
+        tail = [{}, {"stopped": 1, "stop_bit": 0}, {"slo": 1, "frame_doubtful": 1}]
+    else:
+        tail = [{}, {"stopped": 1}]
+    pause = [{"ma_busy": 1}, {}, {}, {"break_over": 1}, {}]
+    trace = run(through_done + [done] + tail + pause, end_check=end_check)
+    entry = len(through_done) + 1 + len(tail) - 1     # the clock that leaves for PAUSE
+    assert trace[entry]["timer_clear"] == 1
+    assert [t for t, x in enumerate(trace) if x["report_frame"]] == \
+        [entry if end_check else len(through_done)]
+    in_pause = trace[entry + 1:entry + 5]
+    assert all(x["receiver_clear"] and not x["resync"] and not x["idle"] and not x["ma_run"]
+               and not x["in_clock"] for x in in_pause)
+    assert in_pause[0]["timer_clear"] == 1          # MA still running: the pause restarts
+    assert trace[entry + 5]["idle"] == 1
+    assert not any(x["fault"] for x in trace)
+
+
+def test_cycle_controller_good_frame_does_not_pause():
+    trace = run([s for s, _, _ in GOOD_CYCLE])
+    assert trace[-1]["idle"] == 1 and not any(x["resync"] for x in trace[5:])

@@ -16,6 +16,7 @@ digest (40 us at the bench's 1 MHz clock), frames from tb/encoder_model: nothing
 
 import pytest
 
+from encoder_model.frames import FrameFaults, FrameFormat, WordValue, build_frame
 from limits_bench import (FRAME, MAX_LINE_DELAY, POSITION, WORD, Encoder, base_config, clocks,
                           simulate)
 from master_contract import STATUS
@@ -325,3 +326,45 @@ def test_timeout_limit_late_request_reports_at_once():
     assert run.rises[-1] + HP == m
     assert run.dones[1:] == [(q + 2, STATUS["SLO_STUCK_LOW"])]
     assert run.counts["slo_stuck_low"] == 1 and len(run.falls) == target_rises(1)
+
+
+# -- The pause after a doubtful frame (issue 12) --------------------------------------------------
+
+BAD_CRC_FRAME = build_frame(FrameFormat("limits", (WORD,)), [WordValue(POSITION)],
+                            FrameFaults(crc_xor=(1,)))
+
+
+@pytest.mark.parametrize("end_check", (0, 1), ids=("end_check0", "end_check1"))
+@pytest.mark.parametrize("offset", (-1, 0, 1), ids=("I-1_overrun", "I_accepted", "I+1_accepted"))
+def test_pause_after_a_crc_error(end_check, offset):
+    """A frame with a CRC error is reported (done, CRC_ERROR_WORD0, counted), then the master
+    pauses for cfg_break_time clocks with MA high before it is idle again, so that the encoder's
+    timeout ends before the next cycle: idle (I) in m + ld + 4 + B without the end check (a good
+    frame: m + ld + 4), in done + B + 1 with it (a good frame: done). A start before I is an
+    overrun; the first one accepted starts a clean cycle."""
+    ld = 1
+    encoder = Encoder(HP, BAD_CRC_FRAME, release=1)
+    probe = {}
+
+    def idle_clock(run):
+        first_done = run.dones[0][0]
+        m = run.rises[target_rises(1) - 1] + HP
+        return first_done + BREAK + 1 if end_check else m + ld + 4 + BREAK
+
+    def drive(t, run):
+        if run.dones and "q" not in probe:
+            probe["q"] = idle_clock(run) + offset
+        return {"start": int(t == 10 or t == probe.get("q"))}
+
+    cfg = base_config(HP, cfg_break_time=BREAK, cfg_end_check=end_check)
+    run = simulate(cfg, encoder, 260, drive)
+    first_done, status = run.dones[0]
+    assert status == STATUS["CRC_ERROR_WORD0"] and run.counts["crc_word0"] >= 1
+    idle = idle_clock(run)
+    assert [f for f in busy_falls(run) if f > first_done][0] == idle
+    assert all(x["ma"] for x in run.trace[first_done:probe["q"] + 3])
+    if offset < 0:
+        assert run.cycles("overrun") == [probe["q"]] and len(run.dones) == 1
+    else:
+        assert not run.cycles("overrun") and len(run.dones) == 2
+        assert run.falls[target_rises(1)] == probe["q"] + 3
