@@ -347,7 +347,10 @@ class MasterMaHarness(Harness):
             first = inside("master.latched")            # WAIT_READY's first clock
             cfg_ok = inside("master.cfg_ok")            # registered configuration check
             hp_ok = hp_cycle >= protocol.MA_HALF_PERIOD_MIN
+            idle_state = inside.in_state("master.cycle_fsm", "IDLE")
             m.d.comb += [
+                # The controller keeps ``idle`` as a register written with every transition.
+                Assert(dut.busy == ~idle_state, "lemma: busy is the IDLE state's decode"),
                 Assert(dut.busy | ~clock_busy, "lemma: MaClock idle while the master is idle"),
                 # (The master may copy the settings in every idle clock: only a cycle's matter.)
                 Assert(~(clock_busy | in_cycle) | (hp_dut == hp_cycle),
