@@ -643,7 +643,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .rst(rst)
   );
   \biss_master.decoder  decoder (
-    .\bit (\slo$77 ),
+    .\bit (\bit ),
     .cds(\cds$196 ),
     .clk(clk),
     .cpw_top(cpw_top),
@@ -702,6 +702,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   );
   \biss_master.sampler  sampler (
     .arm(ma_arm),
+    .\bit (\bit ),
     .clk(clk),
     .delay(delay),
     .early(early),
@@ -730,7 +731,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .is_zero(lc_zero_seen),
     .lc(\lc$151 ),
     .load(load),
-    .\port$1015$0 (\slo$77 ),
+    .\port$431$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -787,7 +788,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .lc_skip_seen(lc_skip_seen),
     .lc_zero(\lc_zero$199 ),
     .lc_zero_seen(lc_zero_seen),
-    .\port$758$0 (\$2 ),
+    .\port$834$0 (\$2 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -845,12 +846,11 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \half_period$143  = cycle[15:0];
   assign arm = ma_arm;
   assign \sample$146  = sample;
-  assign \bit  = \slo$77 ;
-  assign \bit$148  = \slo$77 ;
+  assign \bit$148  = \bit ;
   assign \word_count$150  = word_count;
   assign \lc$152  = \lc$151 ;
-  assign lc_next = { \lc$151 [4:0], \slo$77  };
-  assign \lc_next$154  = { \lc$151 [4:0], \slo$77  };
+  assign lc_next = { \lc$151 [4:0], \bit  };
+  assign \lc_next$154  = { \lc$151 [4:0], \bit  };
   assign lc_load = load;
   assign lc_check = check;
   assign \resync$160  = resync;
@@ -3257,7 +3257,7 @@ module \biss_master.counters.count_spw_mismatch (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.decoder (rst, word_count, lc_load, words, receiver_clear, sample, \bit , done, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1, lc, cpw_top, crc_ok
+module \biss_master.decoder (rst, word_count, \bit , lc_load, words, receiver_clear, sample, done, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1, lc, cpw_top, crc_ok
 , clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$24  = 0;
   wire [6:0] \$1 ;
@@ -4228,7 +4228,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, receiver_clear, sa
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.decoder.crc0 (rst, start, valid, kind, receiver_clear, \bit , ok, clk);
+module \biss_master.decoder.crc0 (rst, \bit , start, valid, kind, receiver_clear, ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$25  = 0;
   wire [5:0] \$1 ;
   wire \$10 ;
@@ -4403,7 +4403,7 @@ module \biss_master.decoder.crc0 (rst, start, valid, kind, receiver_clear, \bit 
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.decoder.crc1 (rst, start, valid, kind, receiver_clear, \bit , ok, clk);
+module \biss_master.decoder.crc1 (rst, \bit , start, valid, kind, receiver_clear, ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$26  = 0;
   wire [5:0] \$1 ;
   wire \$10 ;
@@ -5236,54 +5236,129 @@ module \biss_master.results (rst, report, valid, frame, report_frame, report_del
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.sampler (clk, rst, half_period, receiver_clear, arm, early, locked, delay, sample, level, slo);
+module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$30  = 0;
   wire \$1 ;
   wire \$10 ;
-  wire \$11 ;
-  wire [13:0] \$12 ;
-  wire [17:0] \$13 ;
+  wire [15:0] \$11 ;
+  wire \$12 ;
+  wire \$13 ;
   wire \$14 ;
   wire \$15 ;
-  wire [17:0] \$16 ;
-  wire \$17 ;
-  wire \$18 ;
-  wire \$19 ;
-  wire \$2 ;
-  wire \$20 ;
-  reg \$21 ;
-  reg [12:0] \$22 ;
-  reg \$23 ;
-  reg \$24 ;
-  reg [1:0] \$25 ;
-  reg [12:0] \$26 ;
-  reg [16:0] \$27 ;
-  reg \$28 ;
-  reg \$29 ;
-  wire [13:0] \$3 ;
-  wire \$4 ;
-  wire \$5 ;
-  wire \$6 ;
-  wire [13:0] \$7 ;
-  wire [13:0] \$8 ;
-  wire [16:0] \$9 ;
+  wire [13:0] \$16 ;
+  wire [13:0] \$17 ;
+  wire [13:0] \$18 ;
+  wire [14:0] \$19 ;
+  wire [14:0] \$2 ;
+  wire [14:0] \$20 ;
+  wire [16:0] \$21 ;
+  wire \$22 ;
+  wire [13:0] \$23 ;
+  wire [14:0] \$24 ;
+  wire [13:0] \$25 ;
+  wire [17:0] \$26 ;
+  wire \$27 ;
+  wire \$28 ;
+  wire \$29 ;
+  wire \$3 ;
+  wire \$30 ;
+  wire \$31 ;
+  wire [14:0] \$32 ;
+  wire \$33 ;
+  wire [13:0] \$34 ;
+  wire \$35 ;
+  wire [15:0] \$36 ;
+  wire [17:0] \$37 ;
+  wire \$38 ;
+  wire \$39 ;
+  wire [15:0] \$4 ;
+  wire \$40 ;
+  wire \$41 ;
+  wire \$42 ;
+  wire \$43 ;
+  wire \$44 ;
+  wire \$45 ;
+  wire \$46 ;
+  wire [17:0] \$47 ;
+  wire \$48 ;
+  wire \$49 ;
+  wire [17:0] \$5 ;
+  wire \$50 ;
+  wire \$51 ;
+  wire \$52 ;
+  wire \$53 ;
+  wire \$54 ;
+  wire \$55 ;
+  wire \$56 ;
+  wire \$57 ;
+  wire \$58 ;
+  wire \$59 ;
+  wire [18:0] \$6 ;
+  wire \$60 ;
+  wire \$61 ;
+  wire \$62 ;
+  wire \$63 ;
+  wire \$64 ;
+  wire \$65 ;
+  wire \$66 ;
+  wire \$67 ;
+  wire \$68 ;
+  wire \$69 ;
+  wire \$7 ;
+  wire \$70 ;
+  wire \$71 ;
+  wire \$72 ;
+  wire \$73 ;
+  wire \$74 ;
+  wire \$75 ;
+  wire \$76 ;
+  wire \$77 ;
+  wire \$78 ;
+  wire \$79 ;
+  wire \$8 ;
+  reg \$80 ;
+  reg [12:0] \$81 ;
+  reg \$82 ;
+  reg \$83 ;
+  reg [14:0] \$84 ;
+  reg [1:0] \$85 ;
+  reg [12:0] \$86 ;
+  reg [16:0] \$87 ;
+  reg \$88 ;
+  reg \$89 ;
+  wire [13:0] \$9 ;
+  reg \$90 ;
+  reg \$91 ;
+  reg \$92 ;
+  reg \$93 ;
+  reg [12:0] \$94 ;
+  reg [14:0] \$95 ;
   input arm;
   wire arm;
+  output \bit ;
   wire \bit ;
   input clk;
   wire clk;
+  reg decided;
   output [12:0] delay;
   reg [12:0] delay = 13'h0000;
   output early;
   reg early = 1'h0;
   reg [12:0] elapsed = 13'h0000;
+  reg [12:0] first_fall = 13'h0000;
   reg first_slot = 1'h0;
+  reg [14:0] gap = 15'h0000;
+  reg [14:0] grace = 15'h0000;
   input [15:0] half_period;
   wire [15:0] half_period;
   output level;
   wire level;
   output locked;
   reg locked = 1'h0;
+  reg [16:0] post_at = 17'h00000;
+  reg post_vote = 1'h0;
+  reg [16:0] pre_at = 17'h00000;
+  reg pre_vote = 1'h0;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -5291,49 +5366,135 @@ module \biss_master.sampler (clk, rst, half_period, receiver_clear, arm, early, 
   output sample;
   reg sample;
   reg [1:0] sampler_fsm_state = 2'h0;
+  reg single = 1'h0;
   input slo;
   wire slo;
   reg slo_prev = 1'h1;
   reg [16:0] slot_left = 17'h00000;
   reg slot_zero = 1'h1;
-  assign \$1  = ~ level;
-  assign \$2  = elapsed != 13'h1fff;
-  assign \$3  = elapsed + 1'h1;
-  assign \$4  = ~ level;
-  assign \$5  = slo_prev & \$4 ;
-  assign \$6  = elapsed == 13'h1fff;
-  assign \$7  = elapsed - 1'h1;
-  assign \$8  = \$6  ? 14'h1fff : \$7 ;
-  assign \$9  = half_period - 1'h1;
-  assign \$10  = half_period == 1'h1;
-  assign \$11  = elapsed != 13'h1fff;
-  assign \$12  = elapsed + 1'h1;
-  assign \$13  = slot_left - 1'h1;
-  assign \$14  = slot_left == 1'h1;
-  assign \$15  = first_slot & level;
-  assign \$16  = { half_period, 1'h0 } - 1'h1;
-  assign \$17  = first_slot & level;
-  assign \$18  = ! sampler_fsm_state;
-  assign \$19  = sampler_fsm_state == 1'h1;
-  assign \$20  = sampler_fsm_state == 2'h2;
+  reg [14:0] vote = 15'h0000;
+  reg vote1 = 1'h0;
+  reg vote2 = 1'h0;
+  assign \$5  = { half_period, 1'h0 } - vote;
+  assign \$6  = $signed(\$5 ) + $signed(2'h1);
+  assign \$7  = ~ level;
+  assign \$8  = elapsed != 13'h1fff;
+  assign \$9  = elapsed + 1'h1;
+  assign \$10  = | gap;
+  assign \$11  = gap - 1'h1;
+  assign \$12  = ~ level;
+  assign \$13  = slo_prev & \$12 ;
+  assign \$14  = elapsed == 13'h1fff;
+  assign \$15  = | gap;
+  assign \$16  = elapsed - first_fall;
+  assign \$17  = first_fall + \$16 [13:1];
+  assign \$18  = \$15  ? \$17  : { 1'h0, elapsed };
+  assign \$19  = \$18  - 1'h1;
+  assign \$20  = \$14  ? 15'h1fff : \$19 ;
+  assign \$21  = half_period - 1'h1;
+  assign \$22  = | gap;
+  assign \$23  = elapsed - first_fall;
+  assign \$24  = \$23  + 1'h1;
+  assign \$25  = \$22  ? \$24 [14:1] : 14'h0000;
+  assign \$26  = $signed(\$21 ) - $signed({ 1'h0, \$25  });
+  assign \$27  = half_period == 1'h1;
+  assign \$28  = | gap;
+  assign \$29  = ~ \$28 ;
+  assign \$30  = \$27  & \$29 ;
+  assign \$31  = | gap;
+  assign \$32  = \$31  ? 15'h0000 : vote;
+  assign \$33  = elapsed != 13'h1fff;
+  assign \$34  = elapsed + 1'h1;
+  assign \$35  = | grace;
+  assign \$36  = grace - 1'h1;
+  assign \$37  = slot_left - 1'h1;
+  assign \$38  = slot_left == 1'h1;
+  assign \$39  = slot_left == pre_at;
+  assign \$40  = slot_left == post_at;
+  assign \$41  = first_slot & level;
+  assign \$42  = | grace;
+  assign \$43  = ~ slot_zero;
+  assign \$44  = \$42  & \$43 ;
+  assign \$45  = single | \$44 ;
+  assign \$46  = \$41  & \$45 ;
+  assign \$47  = { half_period, 1'h0 } - 1'h1;
+  assign \$48  = vote == 1'h1;
+  assign \$49  = decided & first_slot;
+  assign \$50  = vote1 & vote2;
+  assign \$51  = vote1 & level;
+  assign \$52  = \$50  | \$51 ;
+  assign \$53  = vote2 & level;
+  assign \$54  = \$52  | \$53 ;
+  assign \$55  = single ? level : \$54 ;
+  assign \$56  = ~ first_slot;
+  assign \$57  = decided & \$56 ;
+  assign \$58  = vote1 & vote2;
+  assign \$59  = vote1 & level;
+  assign \$60  = \$58  | \$59 ;
+  assign \$61  = vote2 & level;
+  assign \$62  = \$60  | \$61 ;
+  assign \bit  = single ? level : \$62 ;
+  assign \$63  = first_slot & level;
+  assign \$64  = | grace;
+  assign \$65  = ~ slot_zero;
+  assign \$66  = \$64  & \$65 ;
+  assign \$67  = single | \$66 ;
+  assign \$68  = \$63  & \$67 ;
+  assign \$69  = ~ single;
+  assign \$70  = decided & first_slot;
+  assign \$71  = vote1 & vote2;
+  assign \$72  = vote1 & level;
+  assign \$73  = \$71  | \$72 ;
+  assign \$74  = vote2 & level;
+  assign \$75  = \$73  | \$74 ;
+  assign \$76  = single ? level : \$75 ;
+  assign \$77  = ! sampler_fsm_state;
+  assign \$78  = sampler_fsm_state == 1'h1;
+  assign \$79  = sampler_fsm_state == 2'h2;
   always @(posedge clk)
-    slo_prev <= \$21 ;
+    slo_prev <= \$80 ;
   always @(posedge clk)
-    elapsed <= \$22 ;
+    vote <= \$2 ;
   always @(posedge clk)
-    early <= \$23 ;
+    single <= \$3 ;
   always @(posedge clk)
-    locked <= \$24 ;
+    pre_at <= { 1'h0, \$4  };
   always @(posedge clk)
-    sampler_fsm_state <= \$25 ;
+    post_at <= \$6 [16:0];
   always @(posedge clk)
-    delay <= \$26 ;
+    elapsed <= \$81 ;
   always @(posedge clk)
-    slot_left <= \$27 ;
+    early <= \$82 ;
   always @(posedge clk)
-    slot_zero <= \$28 ;
+    locked <= \$83 ;
   always @(posedge clk)
-    first_slot <= \$29 ;
+    gap <= \$84 ;
+  always @(posedge clk)
+    sampler_fsm_state <= \$85 ;
+  always @(posedge clk)
+    delay <= \$86 ;
+  always @(posedge clk)
+    slot_left <= \$87 ;
+  always @(posedge clk)
+    slot_zero <= \$88 ;
+  always @(posedge clk)
+    pre_vote <= \$89 ;
+  always @(posedge clk)
+    post_vote <= \$90 ;
+  always @(posedge clk)
+    vote1 <= \$91 ;
+  always @(posedge clk)
+    vote2 <= \$92 ;
+  always @(posedge clk)
+    first_slot <= \$93 ;
+  always @(posedge clk)
+    first_fall <= \$94 ;
+  always @(posedge clk)
+    grace <= \$95 ;
+  assign \$1  = half_period >= 2'h3;
+  assign \$2  = \$1  ? half_period[15:1] : 15'h0000;
+  assign \$3  = half_period < 2'h3;
+  assign \$4  = vote + 1'h1;
   \biss_master.sampler.sync  sync (
     .clk(clk),
     .receiver_clear(receiver_clear),
@@ -5343,210 +5504,408 @@ module \biss_master.sampler (clk, rst, half_period, receiver_clear, arm, early, 
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    \$21  = level;
+    \$80  = level;
     if (receiver_clear) begin
-      \$21  = 1'h1;
+      \$80  = 1'h1;
     end
     if (rst) begin
-      \$21  = 1'h1;
+      \$80  = 1'h1;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    \$22  = elapsed;
+    \$81  = elapsed;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$22  = 13'h0001;
+            \$81  = 13'h0001;
           end
       2'h1:
-          if (\$2 ) begin
-            \$22  = \$3 [12:0];
+          if (\$8 ) begin
+            \$81  = \$9 [12:0];
           end
       2'h2:
-          if (\$11 ) begin
-            \$22  = \$12 [12:0];
+          if (\$33 ) begin
+            \$81  = \$34 [12:0];
           end
     endcase
     if (receiver_clear) begin
-      \$22  = 13'h0000;
+      \$81  = 13'h0000;
     end
     if (rst) begin
-      \$22  = 13'h0000;
+      \$81  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    \$23  = early;
+    \$82  = early;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$23  = \$1 ;
+            \$82  = \$7 ;
           end
     endcase
     if (receiver_clear) begin
-      \$23  = 1'h0;
+      \$82  = 1'h0;
     end
     if (rst) begin
-      \$23  = 1'h0;
+      \$82  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    \$24  = locked;
+    \$83  = locked;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$24  = 1'h0;
+            \$83  = 1'h0;
           end
       2'h1:
           /* empty */;
       2'h2:
-          if (\$15 ) begin
-          end else if (slot_zero) begin
-            \$24  = 1'h1;
+          if (\$49 ) begin
+            (* full_case = 32'd1 *)
+            if (\$55 ) begin
+            end else begin
+              \$83  = 1'h1;
+            end
           end
     endcase
     if (receiver_clear) begin
-      \$24  = 1'h0;
+      \$83  = 1'h0;
     end
     if (rst) begin
-      \$24  = 1'h0;
+      \$83  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    \$25  = sampler_fsm_state;
+    \$84  = gap;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$25  = 2'h1;
+            \$84  = 15'h0000;
           end
       2'h1:
-          if (\$5 ) begin
-            \$25  = 2'h2;
+        begin
+          if (\$10 ) begin
+            \$84  = \$11 [14:0];
           end
+          if (\$13 ) begin
+            \$84  = 15'h0000;
+          end
+        end
       2'h2:
-          if (\$15 ) begin
-            \$25  = 2'h1;
+          if (\$46 ) begin
+            \$84  = vote;
           end
     endcase
     if (receiver_clear) begin
-      \$25  = 2'h0;
+      \$84  = 15'h0000;
     end
     if (rst) begin
-      \$25  = 2'h0;
+      \$84  = 15'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    \$26  = delay;
+    \$85  = sampler_fsm_state;
     casez (sampler_fsm_state)
       2'h0:
-          /* empty */;
-      2'h1:
-          if (\$5 ) begin
-            \$26  = \$8 [12:0];
+          if (arm) begin
+            \$85  = 2'h1;
           end
-    endcase
-    if (receiver_clear) begin
-      \$26  = 13'h0000;
-    end
-    if (rst) begin
-      \$26  = 13'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    \$27  = slot_left;
-    casez (sampler_fsm_state)
-      2'h0:
-          /* empty */;
       2'h1:
-          if (\$5 ) begin
-            \$27  = \$9 ;
+          if (\$13 ) begin
+            \$85  = 2'h2;
           end
       2'h2:
         begin
-          \$27  = \$13 [16:0];
-          if (\$15 ) begin
-          end else if (slot_zero) begin
-            \$27  = \$16 [16:0];
+          if (\$46 ) begin
+            \$85  = 2'h1;
+          end
+          if (\$49 ) begin
+            if (\$55 ) begin
+              \$85  = 2'h1;
+            end
           end
         end
     endcase
     if (receiver_clear) begin
-      \$27  = 17'h00000;
+      \$85  = 2'h0;
     end
     if (rst) begin
-      \$27  = 17'h00000;
+      \$85  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    \$28  = slot_zero;
+    \$86  = delay;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$5 ) begin
-            \$28  = \$10 ;
+          if (\$13 ) begin
+            \$86  = \$20 [12:0];
+          end
+    endcase
+    if (receiver_clear) begin
+      \$86  = 13'h0000;
+    end
+    if (rst) begin
+      \$86  = 13'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    \$87  = slot_left;
+    casez (sampler_fsm_state)
+      2'h0:
+          /* empty */;
+      2'h1:
+          if (\$13 ) begin
+            \$87  = \$26 [16:0];
           end
       2'h2:
         begin
-          \$28  = \$14 ;
-          if (\$15 ) begin
+          \$87  = \$37 [16:0];
+          if (\$46 ) begin
           end else if (slot_zero) begin
-            \$28  = 1'h0;
+            \$87  = \$47 [16:0];
           end
         end
     endcase
     if (receiver_clear) begin
-      \$28  = 1'h1;
+      \$87  = 17'h00000;
     end
     if (rst) begin
-      \$28  = 1'h1;
+      \$87  = 17'h00000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    \$29  = first_slot;
+    \$88  = slot_zero;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$5 ) begin
-            \$29  = 1'h1;
+          if (\$13 ) begin
+            \$88  = \$30 ;
           end
       2'h2:
-          if (\$15 ) begin
+        begin
+          \$88  = \$38 ;
+          if (\$46 ) begin
           end else if (slot_zero) begin
-            \$29  = 1'h0;
+            \$88  = 1'h0;
+          end
+        end
+    endcase
+    if (receiver_clear) begin
+      \$88  = 1'h1;
+    end
+    if (rst) begin
+      \$88  = 1'h1;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    \$89  = pre_vote;
+    casez (sampler_fsm_state)
+      2'h0:
+          /* empty */;
+      2'h1:
+          if (\$13 ) begin
+            \$89  = 1'h0;
+          end
+      2'h2:
+        begin
+          \$89  = \$39 ;
+          if (\$46 ) begin
+          end else if (slot_zero) begin
+            \$89  = 1'h0;
+          end
+        end
+    endcase
+    if (receiver_clear) begin
+      \$89  = 1'h0;
+    end
+    if (rst) begin
+      \$89  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    \$90  = post_vote;
+    casez (sampler_fsm_state)
+      2'h0:
+          /* empty */;
+      2'h1:
+          if (\$13 ) begin
+            \$90  = 1'h0;
+          end
+      2'h2:
+        begin
+          \$90  = \$40 ;
+          if (\$46 ) begin
+          end else if (slot_zero) begin
+            \$90  = \$48 ;
+          end
+        end
+    endcase
+    if (receiver_clear) begin
+      \$90  = 1'h0;
+    end
+    if (rst) begin
+      \$90  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    \$91  = vote1;
+    casez (sampler_fsm_state)
+      2'h0:
+          /* empty */;
+      2'h1:
+          if (\$13 ) begin
+            \$91  = 1'h0;
+          end
+      2'h2:
+          if (pre_vote) begin
+            \$91  = level;
           end
     endcase
     if (receiver_clear) begin
-      \$29  = 1'h0;
+      \$91  = 1'h0;
     end
     if (rst) begin
-      \$29  = 1'h0;
+      \$91  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    sample = 1'h0;
+    \$92  = vote2;
+    casez (sampler_fsm_state)
+      2'h0:
+          /* empty */;
+      2'h1:
+          if (\$13 ) begin
+            \$92  = 1'h0;
+          end
+      2'h2:
+          if (\$46 ) begin
+          end else if (slot_zero) begin
+            \$92  = level;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$92  = 1'h0;
+    end
+    if (rst) begin
+      \$92  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    \$93  = first_slot;
+    casez (sampler_fsm_state)
+      2'h0:
+          /* empty */;
+      2'h1:
+          if (\$13 ) begin
+            \$93  = 1'h1;
+          end
+      2'h2:
+          if (\$49 ) begin
+            (* full_case = 32'd1 *)
+            if (\$55 ) begin
+            end else begin
+              \$93  = 1'h0;
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$93  = 1'h0;
+    end
+    if (rst) begin
+      \$93  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    \$94  = first_fall;
+    casez (sampler_fsm_state)
+      2'h0:
+          /* empty */;
+      2'h1:
+          if (\$13 ) begin
+            \$94  = elapsed;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$94  = 13'h0000;
+    end
+    if (rst) begin
+      \$94  = 13'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    \$95  = grace;
+    casez (sampler_fsm_state)
+      2'h0:
+          /* empty */;
+      2'h1:
+          if (\$13 ) begin
+            \$95  = \$32 ;
+          end
+      2'h2:
+          if (\$35 ) begin
+            \$95  = \$36 [14:0];
+          end
+    endcase
+    if (receiver_clear) begin
+      \$95  = 15'h0000;
+    end
+    if (rst) begin
+      \$95  = 15'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    sample = \$57 ;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
           /* empty */;
       2'h2:
-          if (\$17 ) begin
-          end else if (slot_zero) begin
-            sample = 1'h1;
+          if (\$70 ) begin
+            (* full_case = 32'd1 *)
+            if (\$76 ) begin
+            end else begin
+              sample = 1'h1;
+            end
           end
     endcase
   end
-  assign \bit  = level;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    decided = 1'h0;
+    casez (sampler_fsm_state)
+      2'h0:
+          /* empty */;
+      2'h1:
+          /* empty */;
+      2'h2:
+          if (\$68 ) begin
+          end else if (slot_zero) begin
+            decided = single;
+          end else if (post_vote) begin
+            decided = \$69 ;
+          end
+    endcase
+  end
 endmodule
 
 (* generator = "Amaranth" *)
@@ -5683,7 +6042,7 @@ module \biss_master.scheduler (periodic, abort, period, clk, rst, request, overr
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.sign_of_life (rst, load, \repeat , skip, check, resync, \port$1015$0 , lc, is_zero, clk);
+module \biss_master.sign_of_life (rst, \port$431$0 , load, \repeat , skip, check, resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$32  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -5721,8 +6080,8 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, resync, \por
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$1015$0 ;
-  wire \port$1015$0 ;
+  input \port$431$0 ;
+  wire \port$431$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -5734,9 +6093,9 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, resync, \por
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$1015$0  };
-  assign \$2  = { lc[4:0], \port$1015$0  } == last;
-  assign \$3  = { lc[4:0], \port$1015$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$431$0  };
+  assign \$2  = { lc[4:0], \port$431$0  } == last;
+  assign \$3  = { lc[4:0], \port$431$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = lc == 6'h3f;
@@ -5826,7 +6185,7 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, resync, \por
       \$21  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$1015$0  };
+  assign lc_next = { lc[4:0], \port$431$0  };
   assign zero = is_zero;
 endmodule
 
@@ -6308,7 +6667,7 @@ module \biss_master.timers (timeout_live, clk, rst, restart, ack_limit, timeout_
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.verdict (lc_skip_seen, \port$758$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
+module \biss_master.verdict (lc_skip_seen, \port$834$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$36  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -6412,8 +6771,8 @@ module \biss_master.verdict (lc_skip_seen, \port$758$0 , lc_check, lc_repeat, lc
   wire lc_zero;
   input lc_zero_seen;
   wire lc_zero_seen;
-  output \port$758$0 ;
-  wire \port$758$0 ;
+  output \port$834$0 ;
+  wire \port$834$0 ;
   output report;
   wire report;
   input report_frame;
@@ -6488,7 +6847,7 @@ module \biss_master.verdict (lc_skip_seen, \port$758$0 , lc_check, lc_repeat, lc
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$758$0  = \$2 ;
+  assign \port$834$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
