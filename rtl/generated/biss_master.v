@@ -731,7 +731,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .is_zero(lc_zero_seen),
     .lc(\lc$151 ),
     .load(load),
-    .\port$431$0 (\bit ),
+    .\port$441$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -788,7 +788,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .lc_skip_seen(lc_skip_seen),
     .lc_zero(\lc_zero$199 ),
     .lc_zero_seen(lc_zero_seen),
-    .\port$834$0 (\$2 ),
+    .\port$844$0 (\$2 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -5240,22 +5240,26 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
   reg \$auto$verilog_backend.cc:2355:dump_module$30  = 0;
   wire \$1 ;
   wire \$10 ;
-  wire [15:0] \$11 ;
-  wire \$12 ;
+  reg \$100 ;
+  reg \$101 ;
+  reg \$102 ;
+  reg [14:0] \$103 ;
+  wire \$11 ;
+  wire [13:0] \$12 ;
   wire \$13 ;
-  wire \$14 ;
+  wire [15:0] \$14 ;
   wire \$15 ;
-  wire [13:0] \$16 ;
-  wire [13:0] \$17 ;
-  wire [13:0] \$18 ;
-  wire [14:0] \$19 ;
+  wire \$16 ;
+  wire \$17 ;
+  wire \$18 ;
+  wire \$19 ;
   wire [14:0] \$2 ;
-  wire [14:0] \$20 ;
-  wire [16:0] \$21 ;
-  wire \$22 ;
+  wire \$20 ;
+  wire [13:0] \$21 ;
+  wire [13:0] \$22 ;
   wire [13:0] \$23 ;
-  wire [14:0] \$24 ;
-  wire [13:0] \$25 ;
+  wire \$24 ;
+  wire [16:0] \$25 ;
   wire [17:0] \$26 ;
   wire \$27 ;
   wire \$28 ;
@@ -5265,28 +5269,28 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
   wire \$31 ;
   wire [14:0] \$32 ;
   wire \$33 ;
-  wire [13:0] \$34 ;
-  wire \$35 ;
-  wire [15:0] \$36 ;
-  wire [17:0] \$37 ;
-  wire \$38 ;
+  wire \$34 ;
+  wire [16:0] \$35 ;
+  wire \$36 ;
+  wire [13:0] \$37 ;
+  wire [13:0] \$38 ;
   wire \$39 ;
   wire [15:0] \$4 ;
-  wire \$40 ;
+  wire [13:0] \$40 ;
   wire \$41 ;
-  wire \$42 ;
-  wire \$43 ;
+  wire [15:0] \$42 ;
+  wire [17:0] \$43 ;
   wire \$44 ;
   wire \$45 ;
   wire \$46 ;
-  wire [17:0] \$47 ;
+  wire \$47 ;
   wire \$48 ;
   wire \$49 ;
   wire [17:0] \$5 ;
   wire \$50 ;
   wire \$51 ;
   wire \$52 ;
-  wire \$53 ;
+  wire [17:0] \$53 ;
   wire \$54 ;
   wire \$55 ;
   wire \$56 ;
@@ -5304,7 +5308,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
   wire \$67 ;
   wire \$68 ;
   wire \$69 ;
-  wire \$7 ;
+  wire [13:0] \$7 ;
   wire \$70 ;
   wire \$71 ;
   wire \$72 ;
@@ -5315,24 +5319,28 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
   wire \$77 ;
   wire \$78 ;
   wire \$79 ;
-  wire \$8 ;
-  reg \$80 ;
-  reg [12:0] \$81 ;
-  reg \$82 ;
-  reg \$83 ;
-  reg [14:0] \$84 ;
-  reg [1:0] \$85 ;
-  reg [12:0] \$86 ;
-  reg [16:0] \$87 ;
-  reg \$88 ;
+  wire [17:0] \$8 ;
+  wire \$80 ;
+  wire \$81 ;
+  wire \$82 ;
+  wire \$83 ;
+  wire \$84 ;
+  wire \$85 ;
+  reg \$86 ;
+  reg [12:0] \$87 ;
+  reg [16:0] \$88 ;
   reg \$89 ;
-  wire [13:0] \$9 ;
-  reg \$90 ;
+  wire \$9 ;
+  reg [12:0] \$90 ;
   reg \$91 ;
   reg \$92 ;
-  reg \$93 ;
-  reg [12:0] \$94 ;
-  reg [14:0] \$95 ;
+  reg [14:0] \$93 ;
+  reg [1:0] \$94 ;
+  reg [12:0] \$95 ;
+  reg [16:0] \$96 ;
+  reg \$97 ;
+  reg \$98 ;
+  reg \$99 ;
   input arm;
   wire arm;
   output \bit ;
@@ -5345,7 +5353,6 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
   output early;
   reg early = 1'h0;
   reg [12:0] elapsed = 13'h0000;
-  reg [12:0] first_fall = 13'h0000;
   reg first_slot = 1'h0;
   reg [14:0] gap = 15'h0000;
   reg [14:0] grace = 15'h0000;
@@ -5355,6 +5362,9 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
   wire level;
   output locked;
   reg locked = 1'h0;
+  reg [12:0] mid_delay = 13'h0000;
+  reg [16:0] mid_slot = 17'h00000;
+  reg odd = 1'h0;
   reg [16:0] post_at = 17'h00000;
   reg post_vote = 1'h0;
   reg [16:0] pre_at = 17'h00000;
@@ -5375,84 +5385,94 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
   reg [14:0] vote = 15'h0000;
   reg vote1 = 1'h0;
   reg vote2 = 1'h0;
+  assign \$1  = half_period >= 2'h3;
+  assign \$2  = \$1  ? half_period[15:1] : 15'h0000;
+  assign \$3  = half_period < 2'h3;
+  assign \$4  = vote + 1'h1;
   assign \$5  = { half_period, 1'h0 } - vote;
   assign \$6  = $signed(\$5 ) + $signed(2'h1);
-  assign \$7  = ~ level;
-  assign \$8  = elapsed != 13'h1fff;
-  assign \$9  = elapsed + 1'h1;
-  assign \$10  = | gap;
-  assign \$11  = gap - 1'h1;
-  assign \$12  = ~ level;
-  assign \$13  = slo_prev & \$12 ;
-  assign \$14  = elapsed == 13'h1fff;
-  assign \$15  = | gap;
-  assign \$16  = elapsed - first_fall;
-  assign \$17  = first_fall + \$16 [13:1];
-  assign \$18  = \$15  ? \$17  : { 1'h0, elapsed };
-  assign \$19  = \$18  - 1'h1;
-  assign \$20  = \$14  ? 15'h1fff : \$19 ;
-  assign \$21  = half_period - 1'h1;
-  assign \$22  = | gap;
-  assign \$23  = elapsed - first_fall;
-  assign \$24  = \$23  + 1'h1;
-  assign \$25  = \$22  ? \$24 [14:1] : 14'h0000;
-  assign \$26  = $signed(\$21 ) - $signed({ 1'h0, \$25  });
+  assign \$7  = mid_delay + 1'h1;
+  assign \$8  = mid_slot - 1'h1;
+  assign \$9  = ~ odd;
+  assign \$10  = ~ level;
+  assign \$11  = elapsed != 13'h1fff;
+  assign \$12  = elapsed + 1'h1;
+  assign \$13  = | gap;
+  assign \$14  = gap - 1'h1;
+  assign \$15  = ~ level;
+  assign \$16  = slo_prev & \$15 ;
+  assign \$17  = | gap;
+  assign \$18  = elapsed != 13'h1fff;
+  assign \$19  = \$17  & \$18 ;
+  assign \$20  = elapsed == 13'h1fff;
+  assign \$21  = elapsed - 1'h1;
+  assign \$22  = \$20  ? 14'h1fff : \$21 ;
+  assign \$23  = \$19  ? { 1'h0, mid_delay } : \$22 ;
+  assign \$24  = | gap;
+  assign \$25  = half_period - 1'h1;
+  assign \$26  = \$24  ? { 1'h0, mid_slot } : { \$25 [16], \$25  };
   assign \$27  = half_period == 1'h1;
   assign \$28  = | gap;
   assign \$29  = ~ \$28 ;
   assign \$30  = \$27  & \$29 ;
   assign \$31  = | gap;
   assign \$32  = \$31  ? 15'h0000 : vote;
-  assign \$33  = elapsed != 13'h1fff;
-  assign \$34  = elapsed + 1'h1;
-  assign \$35  = | grace;
-  assign \$36  = grace - 1'h1;
-  assign \$37  = slot_left - 1'h1;
-  assign \$38  = slot_left == 1'h1;
-  assign \$39  = slot_left == pre_at;
-  assign \$40  = slot_left == post_at;
-  assign \$41  = first_slot & level;
-  assign \$42  = | grace;
-  assign \$43  = ~ slot_zero;
-  assign \$44  = \$42  & \$43 ;
-  assign \$45  = single | \$44 ;
-  assign \$46  = \$41  & \$45 ;
-  assign \$47  = { half_period, 1'h0 } - 1'h1;
-  assign \$48  = vote == 1'h1;
-  assign \$49  = decided & first_slot;
-  assign \$50  = vote1 & vote2;
-  assign \$51  = vote1 & level;
-  assign \$52  = \$50  | \$51 ;
-  assign \$53  = vote2 & level;
-  assign \$54  = \$52  | \$53 ;
-  assign \$55  = single ? level : \$54 ;
-  assign \$56  = ~ first_slot;
-  assign \$57  = decided & \$56 ;
-  assign \$58  = vote1 & vote2;
-  assign \$59  = vote1 & level;
+  assign \$33  = | gap;
+  assign \$34  = ~ \$33 ;
+  assign \$35  = half_period - 2'h2;
+  assign \$36  = elapsed == 13'h1fff;
+  assign \$37  = elapsed - 1'h1;
+  assign \$38  = \$36  ? 14'h1fff : \$37 ;
+  assign \$39  = elapsed != 13'h1fff;
+  assign \$40  = elapsed + 1'h1;
+  assign \$41  = | grace;
+  assign \$42  = grace - 1'h1;
+  assign \$43  = slot_left - 1'h1;
+  assign \$44  = slot_left == 1'h1;
+  assign \$45  = slot_left == pre_at;
+  assign \$46  = slot_left == post_at;
+  assign \$47  = first_slot & level;
+  assign \$48  = | grace;
+  assign \$49  = ~ slot_zero;
+  assign \$50  = \$48  & \$49 ;
+  assign \$51  = single | \$50 ;
+  assign \$52  = \$47  & \$51 ;
+  assign \$53  = { half_period, 1'h0 } - 1'h1;
+  assign \$54  = vote == 1'h1;
+  assign \$55  = decided & first_slot;
+  assign \$56  = vote1 & vote2;
+  assign \$57  = vote1 & level;
+  assign \$58  = \$56  | \$57 ;
+  assign \$59  = vote2 & level;
   assign \$60  = \$58  | \$59 ;
-  assign \$61  = vote2 & level;
-  assign \$62  = \$60  | \$61 ;
-  assign \bit  = single ? level : \$62 ;
-  assign \$63  = first_slot & level;
-  assign \$64  = | grace;
-  assign \$65  = ~ slot_zero;
-  assign \$66  = \$64  & \$65 ;
-  assign \$67  = single | \$66 ;
-  assign \$68  = \$63  & \$67 ;
-  assign \$69  = ~ single;
-  assign \$70  = decided & first_slot;
-  assign \$71  = vote1 & vote2;
-  assign \$72  = vote1 & level;
-  assign \$73  = \$71  | \$72 ;
-  assign \$74  = vote2 & level;
-  assign \$75  = \$73  | \$74 ;
-  assign \$76  = single ? level : \$75 ;
-  assign \$77  = ! sampler_fsm_state;
-  assign \$78  = sampler_fsm_state == 1'h1;
-  assign \$79  = sampler_fsm_state == 2'h2;
+  assign \$61  = single ? level : \$60 ;
+  assign \$62  = ~ first_slot;
+  assign \$63  = decided & \$62 ;
+  assign \$64  = vote1 & vote2;
+  assign \$65  = vote1 & level;
+  assign \$66  = \$64  | \$65 ;
+  assign \$67  = vote2 & level;
+  assign \$68  = \$66  | \$67 ;
+  assign \bit  = single ? level : \$68 ;
+  assign \$69  = first_slot & level;
+  assign \$70  = | grace;
+  assign \$71  = ~ slot_zero;
+  assign \$72  = \$70  & \$71 ;
+  assign \$73  = single | \$72 ;
+  assign \$74  = \$69  & \$73 ;
+  assign \$75  = ~ single;
+  assign \$76  = decided & first_slot;
+  assign \$77  = vote1 & vote2;
+  assign \$78  = vote1 & level;
+  assign \$79  = \$77  | \$78 ;
+  assign \$80  = vote2 & level;
+  assign \$81  = \$79  | \$80 ;
+  assign \$82  = single ? level : \$81 ;
+  assign \$83  = ! sampler_fsm_state;
+  assign \$84  = sampler_fsm_state == 1'h1;
+  assign \$85  = sampler_fsm_state == 2'h2;
   always @(posedge clk)
-    slo_prev <= \$80 ;
+    slo_prev <= \$86 ;
   always @(posedge clk)
     vote <= \$2 ;
   always @(posedge clk)
@@ -5462,39 +5482,39 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
   always @(posedge clk)
     post_at <= \$6 [16:0];
   always @(posedge clk)
-    elapsed <= \$81 ;
+    mid_delay <= \$87 ;
   always @(posedge clk)
-    early <= \$82 ;
+    mid_slot <= \$88 ;
   always @(posedge clk)
-    locked <= \$83 ;
+    odd <= \$89 ;
   always @(posedge clk)
-    gap <= \$84 ;
+    elapsed <= \$90 ;
   always @(posedge clk)
-    sampler_fsm_state <= \$85 ;
+    early <= \$91 ;
   always @(posedge clk)
-    delay <= \$86 ;
+    locked <= \$92 ;
   always @(posedge clk)
-    slot_left <= \$87 ;
+    gap <= \$93 ;
   always @(posedge clk)
-    slot_zero <= \$88 ;
+    sampler_fsm_state <= \$94 ;
   always @(posedge clk)
-    pre_vote <= \$89 ;
+    delay <= \$95 ;
   always @(posedge clk)
-    post_vote <= \$90 ;
+    slot_left <= \$96 ;
   always @(posedge clk)
-    vote1 <= \$91 ;
+    slot_zero <= \$97 ;
   always @(posedge clk)
-    vote2 <= \$92 ;
+    pre_vote <= \$98 ;
   always @(posedge clk)
-    first_slot <= \$93 ;
+    post_vote <= \$99 ;
   always @(posedge clk)
-    first_fall <= \$94 ;
+    vote1 <= \$100 ;
   always @(posedge clk)
-    grace <= \$95 ;
-  assign \$1  = half_period >= 2'h3;
-  assign \$2  = \$1  ? half_period[15:1] : 15'h0000;
-  assign \$3  = half_period < 2'h3;
-  assign \$4  = vote + 1'h1;
+    vote2 <= \$101 ;
+  always @(posedge clk)
+    first_slot <= \$102 ;
+  always @(posedge clk)
+    grace <= \$103 ;
   \biss_master.sampler.sync  sync (
     .clk(clk),
     .receiver_clear(receiver_clear),
@@ -5504,385 +5524,435 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    \$80  = level;
+    \$86  = level;
     if (receiver_clear) begin
-      \$80  = 1'h1;
+      \$86  = 1'h1;
     end
     if (rst) begin
-      \$80  = 1'h1;
+      \$86  = 1'h1;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    \$81  = elapsed;
+    \$87  = mid_delay;
+    if (odd) begin
+      \$87  = \$7 [12:0];
+    end
+    casez (sampler_fsm_state)
+      2'h0:
+          /* empty */;
+      2'h1:
+          if (\$16 ) begin
+            if (\$34 ) begin
+              \$87  = \$38 [12:0];
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$87  = 13'h0000;
+    end
+    if (rst) begin
+      \$87  = 13'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    \$88  = mid_slot;
+    (* full_case = 32'd1 *)
+    if (odd) begin
+    end else begin
+      \$88  = \$8 [16:0];
+    end
+    casez (sampler_fsm_state)
+      2'h0:
+          /* empty */;
+      2'h1:
+          if (\$16 ) begin
+            if (\$34 ) begin
+              \$88  = \$35 ;
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$88  = 17'h00000;
+    end
+    if (rst) begin
+      \$88  = 17'h00000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    \$89  = \$9 ;
+    casez (sampler_fsm_state)
+      2'h0:
+          /* empty */;
+      2'h1:
+          if (\$16 ) begin
+            if (\$34 ) begin
+              \$89  = 1'h1;
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$89  = 1'h0;
+    end
+    if (rst) begin
+      \$89  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    \$90  = elapsed;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$81  = 13'h0001;
+            \$90  = 13'h0001;
           end
       2'h1:
-          if (\$8 ) begin
-            \$81  = \$9 [12:0];
+          if (\$11 ) begin
+            \$90  = \$12 [12:0];
           end
       2'h2:
-          if (\$33 ) begin
-            \$81  = \$34 [12:0];
+          if (\$39 ) begin
+            \$90  = \$40 [12:0];
           end
     endcase
     if (receiver_clear) begin
-      \$81  = 13'h0000;
+      \$90  = 13'h0000;
     end
     if (rst) begin
-      \$81  = 13'h0000;
+      \$90  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    \$82  = early;
+    \$91  = early;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$82  = \$7 ;
+            \$91  = \$10 ;
           end
     endcase
     if (receiver_clear) begin
-      \$82  = 1'h0;
+      \$91  = 1'h0;
     end
     if (rst) begin
-      \$82  = 1'h0;
+      \$91  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    \$83  = locked;
+    \$92  = locked;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$83  = 1'h0;
+            \$92  = 1'h0;
           end
       2'h1:
           /* empty */;
       2'h2:
-          if (\$49 ) begin
+          if (\$55 ) begin
             (* full_case = 32'd1 *)
-            if (\$55 ) begin
+            if (\$61 ) begin
             end else begin
-              \$83  = 1'h1;
+              \$92  = 1'h1;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$83  = 1'h0;
+      \$92  = 1'h0;
     end
     if (rst) begin
-      \$83  = 1'h0;
+      \$92  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    \$84  = gap;
+    \$93  = gap;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$84  = 15'h0000;
+            \$93  = 15'h0000;
           end
       2'h1:
         begin
-          if (\$10 ) begin
-            \$84  = \$11 [14:0];
-          end
           if (\$13 ) begin
-            \$84  = 15'h0000;
+            \$93  = \$14 [14:0];
+          end
+          if (\$16 ) begin
+            \$93  = 15'h0000;
           end
         end
       2'h2:
-          if (\$46 ) begin
-            \$84  = vote;
+          if (\$52 ) begin
+            \$93  = vote;
           end
     endcase
     if (receiver_clear) begin
-      \$84  = 15'h0000;
+      \$93  = 15'h0000;
     end
     if (rst) begin
-      \$84  = 15'h0000;
+      \$93  = 15'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    \$85  = sampler_fsm_state;
+    \$94  = sampler_fsm_state;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$85  = 2'h1;
+            \$94  = 2'h1;
           end
       2'h1:
-          if (\$13 ) begin
-            \$85  = 2'h2;
+          if (\$16 ) begin
+            \$94  = 2'h2;
           end
       2'h2:
         begin
-          if (\$46 ) begin
-            \$85  = 2'h1;
+          if (\$52 ) begin
+            \$94  = 2'h1;
           end
-          if (\$49 ) begin
-            if (\$55 ) begin
-              \$85  = 2'h1;
+          if (\$55 ) begin
+            if (\$61 ) begin
+              \$94  = 2'h1;
             end
           end
         end
     endcase
     if (receiver_clear) begin
-      \$85  = 2'h0;
+      \$94  = 2'h0;
     end
     if (rst) begin
-      \$85  = 2'h0;
+      \$94  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    \$86  = delay;
+    \$95  = delay;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$13 ) begin
-            \$86  = \$20 [12:0];
+          if (\$16 ) begin
+            \$95  = \$23 [12:0];
           end
     endcase
     if (receiver_clear) begin
-      \$86  = 13'h0000;
+      \$95  = 13'h0000;
     end
     if (rst) begin
-      \$86  = 13'h0000;
+      \$95  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    \$87  = slot_left;
+    \$96  = slot_left;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$13 ) begin
-            \$87  = \$26 [16:0];
+          if (\$16 ) begin
+            \$96  = \$26 [16:0];
           end
       2'h2:
         begin
-          \$87  = \$37 [16:0];
-          if (\$46 ) begin
+          \$96  = \$43 [16:0];
+          if (\$52 ) begin
           end else if (slot_zero) begin
-            \$87  = \$47 [16:0];
+            \$96  = \$53 [16:0];
           end
         end
     endcase
     if (receiver_clear) begin
-      \$87  = 17'h00000;
+      \$96  = 17'h00000;
     end
     if (rst) begin
-      \$87  = 17'h00000;
+      \$96  = 17'h00000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    \$88  = slot_zero;
+    \$97  = slot_zero;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$13 ) begin
-            \$88  = \$30 ;
+          if (\$16 ) begin
+            \$97  = \$30 ;
           end
       2'h2:
         begin
-          \$88  = \$38 ;
-          if (\$46 ) begin
+          \$97  = \$44 ;
+          if (\$52 ) begin
           end else if (slot_zero) begin
-            \$88  = 1'h0;
+            \$97  = 1'h0;
           end
         end
     endcase
     if (receiver_clear) begin
-      \$88  = 1'h1;
+      \$97  = 1'h1;
     end
     if (rst) begin
-      \$88  = 1'h1;
+      \$97  = 1'h1;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    \$89  = pre_vote;
+    \$98  = pre_vote;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$13 ) begin
-            \$89  = 1'h0;
+          if (\$16 ) begin
+            \$98  = 1'h0;
           end
       2'h2:
         begin
-          \$89  = \$39 ;
-          if (\$46 ) begin
+          \$98  = \$45 ;
+          if (\$52 ) begin
           end else if (slot_zero) begin
-            \$89  = 1'h0;
+            \$98  = 1'h0;
           end
         end
     endcase
     if (receiver_clear) begin
-      \$89  = 1'h0;
+      \$98  = 1'h0;
     end
     if (rst) begin
-      \$89  = 1'h0;
+      \$98  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    \$90  = post_vote;
+    \$99  = post_vote;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$13 ) begin
-            \$90  = 1'h0;
+          if (\$16 ) begin
+            \$99  = 1'h0;
           end
       2'h2:
         begin
-          \$90  = \$40 ;
-          if (\$46 ) begin
+          \$99  = \$46 ;
+          if (\$52 ) begin
           end else if (slot_zero) begin
-            \$90  = \$48 ;
+            \$99  = \$54 ;
           end
         end
     endcase
     if (receiver_clear) begin
-      \$90  = 1'h0;
+      \$99  = 1'h0;
     end
     if (rst) begin
-      \$90  = 1'h0;
+      \$99  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    \$91  = vote1;
+    \$100  = vote1;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$13 ) begin
-            \$91  = 1'h0;
+          if (\$16 ) begin
+            \$100  = 1'h0;
           end
       2'h2:
           if (pre_vote) begin
-            \$91  = level;
+            \$100  = level;
           end
     endcase
     if (receiver_clear) begin
-      \$91  = 1'h0;
+      \$100  = 1'h0;
     end
     if (rst) begin
-      \$91  = 1'h0;
+      \$100  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    \$92  = vote2;
+    \$101  = vote2;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$13 ) begin
-            \$92  = 1'h0;
+          if (\$16 ) begin
+            \$101  = 1'h0;
           end
       2'h2:
-          if (\$46 ) begin
+          if (\$52 ) begin
           end else if (slot_zero) begin
-            \$92  = level;
+            \$101  = level;
           end
     endcase
     if (receiver_clear) begin
-      \$92  = 1'h0;
+      \$101  = 1'h0;
     end
     if (rst) begin
-      \$92  = 1'h0;
+      \$101  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    \$93  = first_slot;
+    \$102  = first_slot;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$13 ) begin
-            \$93  = 1'h1;
+          if (\$16 ) begin
+            \$102  = 1'h1;
           end
       2'h2:
-          if (\$49 ) begin
+          if (\$55 ) begin
             (* full_case = 32'd1 *)
-            if (\$55 ) begin
+            if (\$61 ) begin
             end else begin
-              \$93  = 1'h0;
+              \$102  = 1'h0;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$93  = 1'h0;
+      \$102  = 1'h0;
     end
     if (rst) begin
-      \$93  = 1'h0;
+      \$102  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    \$94  = first_fall;
+    \$103  = grace;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$13 ) begin
-            \$94  = elapsed;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$94  = 13'h0000;
-    end
-    if (rst) begin
-      \$94  = 13'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    \$95  = grace;
-    casez (sampler_fsm_state)
-      2'h0:
-          /* empty */;
-      2'h1:
-          if (\$13 ) begin
-            \$95  = \$32 ;
+          if (\$16 ) begin
+            \$103  = \$32 ;
           end
       2'h2:
-          if (\$35 ) begin
-            \$95  = \$36 [14:0];
+          if (\$41 ) begin
+            \$103  = \$42 [14:0];
           end
     endcase
     if (receiver_clear) begin
-      \$95  = 15'h0000;
+      \$103  = 15'h0000;
     end
     if (rst) begin
-      \$95  = 15'h0000;
+      \$103  = 15'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    sample = \$57 ;
+    sample = \$63 ;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
           /* empty */;
       2'h2:
-          if (\$70 ) begin
+          if (\$76 ) begin
             (* full_case = 32'd1 *)
-            if (\$76 ) begin
+            if (\$82 ) begin
             end else begin
               sample = 1'h1;
             end
@@ -5898,11 +5968,11 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
       2'h1:
           /* empty */;
       2'h2:
-          if (\$68 ) begin
+          if (\$74 ) begin
           end else if (slot_zero) begin
             decided = single;
           end else if (post_vote) begin
-            decided = \$69 ;
+            decided = \$75 ;
           end
     endcase
   end
@@ -6042,7 +6112,7 @@ module \biss_master.scheduler (periodic, abort, period, clk, rst, request, overr
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.sign_of_life (rst, \port$431$0 , load, \repeat , skip, check, resync, lc, is_zero, clk);
+module \biss_master.sign_of_life (rst, \port$441$0 , load, \repeat , skip, check, resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$32  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -6080,8 +6150,8 @@ module \biss_master.sign_of_life (rst, \port$431$0 , load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$431$0 ;
-  wire \port$431$0 ;
+  input \port$441$0 ;
+  wire \port$441$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -6093,9 +6163,9 @@ module \biss_master.sign_of_life (rst, \port$431$0 , load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$431$0  };
-  assign \$2  = { lc[4:0], \port$431$0  } == last;
-  assign \$3  = { lc[4:0], \port$431$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$441$0  };
+  assign \$2  = { lc[4:0], \port$441$0  } == last;
+  assign \$3  = { lc[4:0], \port$441$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = lc == 6'h3f;
@@ -6185,7 +6255,7 @@ module \biss_master.sign_of_life (rst, \port$431$0 , load, \repeat , skip, check
       \$21  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$431$0  };
+  assign lc_next = { lc[4:0], \port$441$0  };
   assign zero = is_zero;
 endmodule
 
@@ -6667,7 +6737,7 @@ module \biss_master.timers (timeout_live, clk, rst, restart, ack_limit, timeout_
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.verdict (lc_skip_seen, \port$834$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
+module \biss_master.verdict (lc_skip_seen, \port$844$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$36  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -6771,8 +6841,8 @@ module \biss_master.verdict (lc_skip_seen, \port$834$0 , lc_check, lc_repeat, lc
   wire lc_zero;
   input lc_zero_seen;
   wire lc_zero_seen;
-  output \port$834$0 ;
-  wire \port$834$0 ;
+  output \port$844$0 ;
+  wire \port$844$0 ;
   output report;
   wire report;
   input report_frame;
@@ -6847,7 +6917,7 @@ module \biss_master.verdict (lc_skip_seen, \port$834$0 , lc_check, lc_repeat, lc
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$834$0  = \$2 ;
+  assign \port$844$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
