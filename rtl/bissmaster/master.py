@@ -1,5 +1,7 @@
 """BiSS C / BiSS Safety master: the top level, which only connects the blocks."""
 
+from types import SimpleNamespace
+
 from amaranth.hdl import *
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
@@ -84,10 +86,20 @@ class BissMaster(wiring.Component):
 
     def elaborate(self, platform):
         m = Module()
+        b = self._blocks(m)
+        self._connect_inputs(m, b)
+        self._connect_control(m, b)
+        self._connect_receiver(m, b)
+        self._connect_results(m, b)
+        if self.params.counters:
+            self._connect_counters(m, b)
+        self._connect_outputs(m, b)
+        return m
+
+    def _blocks(self, m):
+        """Every block of the master, as attributes of one namespace."""
         p = self.params
         two = p.words == 2
-
-        # -- Blocks ---------------------------------------------------------------------------
         m.submodules.config = config = Configuration(p)
         m.submodules.scheduler = scheduler = RequestScheduler(p.timer_width)
         m.submodules.controller = controller = CycleController()
@@ -111,164 +123,180 @@ class BissMaster(wiring.Component):
 
         cycle = config.cycle
         words = config_words(cycle, p)
+        return SimpleNamespace(
+            config=config, scheduler=scheduler, controller=controller, timers=timers,
+            ma_clock=ma_clock, ma_stop=ma_stop, sampler=sampler, decoder=decoder, sol=sol,
+            spw_check=spw_check if two else None, verdict=verdict, results=results,
+            time_base=time_base if p.timestamped else None,
+            counters=counters if p.counters else None, cycle=cycle, words=words)
 
-        # -- Ports in: control and the flat configuration ---------------------------------------
-        m.d.comb += [field(config.live, path).eq(getattr(self, name))
+    def _connect_inputs(self, m, b):
+        """The control ports and the flat configuration, in."""
+        m.d.comb += [field(b.config.live, path).eq(getattr(self, name))
                      for name, path, _ in self._config_fields]
         m.d.comb += [
-            config.idle.eq(controller.idle),
-            scheduler.start.eq(self.start),
-            scheduler.periodic.eq(self.periodic),
-            scheduler.period.eq(self.cfg_request_period),
-            scheduler.abort.eq(self.abort_cycle),
-            scheduler.idle.eq(controller.idle),
-            sampler.slo.eq(self.slo),
+            b.config.idle.eq(b.controller.idle),
+            b.scheduler.start.eq(self.start),
+            b.scheduler.periodic.eq(self.periodic),
+            b.scheduler.period.eq(self.cfg_request_period),
+            b.scheduler.abort.eq(self.abort_cycle),
+            b.scheduler.idle.eq(b.controller.idle),
+            b.sampler.slo.eq(self.slo),
         ]
 
-        # -- Controller, its limits and the MA clock -----------------------------------------------
+    def _connect_control(self, m, b):
+        """The controller, its limits and the MA clock."""
         m.d.comb += [
-            controller.request.eq(scheduler.request),
-            controller.abort.eq(self.abort_cycle),
-            controller.config_ok.eq(config.ok),
-            controller.end_check.eq(cycle.end_check),
-            controller.slo.eq(sampler.level),
-            controller.ma_busy.eq(ma_clock.busy),
-            controller.ma_arm.eq(ma_clock.second_rise),
-            controller.ma_enough.eq(ma_stop.enough),
-            controller.locked.eq(sampler.locked),
-            controller.early.eq(sampler.early),
-            controller.frame_done.eq(decoder.done),
-            controller.started.eq(decoder.started),
-            controller.slots_full.eq(decoder.slots_full),
-            controller.stopped.eq(decoder.stopped),
-            controller.stop_bit.eq(decoder.stop_bit),
-            controller.frame_doubtful.eq(verdict.doubtful),
-            controller.break_over.eq(timers.break_over),
-            controller.ack_expired.eq(timers.ack_expired),
-            controller.no_start_expired.eq(timers.no_start_expired),
-            controller.slo_stuck.eq(timers.slo_stuck),
-            controller.slo_stuck_live.eq(timers.slo_stuck_live),
-            controller.delay_over.eq(timers.delay_over),
+            b.controller.request.eq(b.scheduler.request),
+            b.controller.abort.eq(self.abort_cycle),
+            b.controller.config_ok.eq(b.config.ok),
+            b.controller.end_check.eq(b.cycle.end_check),
+            b.controller.slo.eq(b.sampler.level),
+            b.controller.ma_busy.eq(b.ma_clock.busy),
+            b.controller.ma_arm.eq(b.ma_clock.second_rise),
+            b.controller.ma_enough.eq(b.ma_stop.enough),
+            b.controller.locked.eq(b.sampler.locked),
+            b.controller.early.eq(b.sampler.early),
+            b.controller.frame_done.eq(b.decoder.done),
+            b.controller.started.eq(b.decoder.started),
+            b.controller.slots_full.eq(b.decoder.slots_full),
+            b.controller.stopped.eq(b.decoder.stopped),
+            b.controller.stop_bit.eq(b.decoder.stop_bit),
+            b.controller.frame_doubtful.eq(b.verdict.doubtful),
+            b.controller.break_over.eq(b.timers.break_over),
+            b.controller.ack_expired.eq(b.timers.ack_expired),
+            b.controller.no_start_expired.eq(b.timers.no_start_expired),
+            b.controller.slo_stuck.eq(b.timers.slo_stuck),
+            b.controller.slo_stuck_live.eq(b.timers.slo_stuck_live),
+            b.controller.delay_over.eq(b.timers.delay_over),
 
-            timers.slo.eq(sampler.level),
-            timers.ma_busy.eq(ma_clock.busy),
-            timers.clear.eq(controller.timer_clear),
-            timers.in_clock.eq(controller.in_clock),
-            timers.restart.eq(controller.restart_timer),
-            timers.break_time.eq(self.cfg_break_time),
-            timers.timeout_live.eq(self.cfg_timeout_limit),
-            timers.ack_limit.eq(config.ack_limit),
-            timers.timeout_limit.eq(config.timeout_limit),
-            timers.no_start_limit.eq(config.no_start_limit),
-            timers.delay.eq(sampler.delay),
-            timers.delay_limit.eq(config.delay_limit),
+            b.timers.slo.eq(b.sampler.level),
+            b.timers.ma_busy.eq(b.ma_clock.busy),
+            b.timers.clear.eq(b.controller.timer_clear),
+            b.timers.in_clock.eq(b.controller.in_clock),
+            b.timers.restart.eq(b.controller.restart_timer),
+            b.timers.break_time.eq(self.cfg_break_time),
+            b.timers.timeout_live.eq(self.cfg_timeout_limit),
+            b.timers.ack_limit.eq(b.config.ack_limit),
+            b.timers.timeout_limit.eq(b.config.timeout_limit),
+            b.timers.no_start_limit.eq(b.config.no_start_limit),
+            b.timers.delay.eq(b.sampler.delay),
+            b.timers.delay_limit.eq(b.config.delay_limit),
 
-            ma_clock.run.eq(controller.ma_run),
-            ma_clock.half_period.eq(cycle.ma_half_period),
-            ma_stop.started.eq(decoder.started),
-            ma_stop.start_slot.eq(decoder.start_slot),
-            ma_stop.rises.eq(ma_clock.rises),
-            ma_stop.clear.eq(controller.receiver_clear),
+            b.ma_clock.run.eq(b.controller.ma_run),
+            b.ma_clock.half_period.eq(b.cycle.ma_half_period),
+            b.ma_stop.started.eq(b.decoder.started),
+            b.ma_stop.start_slot.eq(b.decoder.start_slot),
+            b.ma_stop.rises.eq(b.ma_clock.rises),
+            b.ma_stop.clear.eq(b.controller.receiver_clear),
         ]
 
-        # -- Receiver: sampler -> decoder -> checks -----------------------------------------------
+    def _connect_receiver(self, m, b):
+        """Sampler -> decoder -> checks."""
+        p = self.params
+        two = p.words == 2
         m.d.comb += [
-            sampler.half_period.eq(cycle.ma_half_period),
-            sampler.arm.eq(ma_clock.second_rise),
-            decoder.sample.eq(sampler.sample),
-            decoder.bit.eq(sampler.bit),
-            decoder.word_count.eq(config.word_count),
-            sol.lc.eq(decoder.lc),
-            sol.lc_next.eq(decoder.lc_next),
-            sol.load.eq(decoder.lc_load),
-            sol.check.eq(verdict.lc_check),
-            sol.resync.eq(controller.resync),
+            b.sampler.half_period.eq(b.cycle.ma_half_period),
+            b.sampler.arm.eq(b.ma_clock.second_rise),
+            b.decoder.sample.eq(b.sampler.sample),
+            b.decoder.bit.eq(b.sampler.bit),
+            b.decoder.word_count.eq(b.config.word_count),
+            b.sol.lc.eq(b.decoder.lc),
+            b.sol.lc_next.eq(b.decoder.lc_next),
+            b.sol.load.eq(b.decoder.lc_load),
+            b.sol.check.eq(b.verdict.lc_check),
+            b.sol.resync.eq(b.controller.resync),
         ]
-        for w, word in enumerate(words):
-            m.d.comb += [decoder.words[w].eq(word), ma_stop.words[w].eq(word)]
+        for w, word in enumerate(b.words):
+            m.d.comb += [b.decoder.words[w].eq(word), b.ma_stop.words[w].eq(word)]
         if two:
             m.d.comb += [
-                ma_stop.w1_enable.eq(cycle.w1_enable),
-                spw_check.cpw_top.eq(decoder.cpw_top),
-                spw_check.spw.eq(decoder.data1),
-                spw_check.bits.eq(cycle.w1.data_bits),
-                spw_check.tolerance.eq(cycle.spw_tolerance),
-                verdict.spw_match.eq(spw_check.match),
+                b.ma_stop.w1_enable.eq(b.cycle.w1_enable),
+                b.spw_check.cpw_top.eq(b.decoder.cpw_top),
+                b.spw_check.spw.eq(b.decoder.data1),
+                b.spw_check.bits.eq(b.cycle.w1.data_bits),
+                b.spw_check.tolerance.eq(b.cycle.spw_tolerance),
+                b.verdict.spw_match.eq(b.spw_check.match),
             ]
 
-        # -- Verdict -> results ---------------------------------------------------------------------
+    def _connect_results(self, m, b):
+        """Verdict -> result registers."""
+        p = self.params
+        two = p.words == 2
         m.d.comb += [
-            verdict.cfg.eq(cycle),
-            verdict.report_frame.eq(controller.report_frame),
-            verdict.fault.eq(controller.fault),
-            verdict.fault_status.eq(controller.fault_status),
-            verdict.crc_ok.eq(decoder.crc_ok),
-            verdict.lc_repeat_seen.eq(sol.repeat),
-            verdict.lc_skip_seen.eq(sol.skip),
-            verdict.lc_zero_seen.eq(sol.zero),
+            b.verdict.cfg.eq(b.cycle),
+            b.verdict.report_frame.eq(b.controller.report_frame),
+            b.verdict.fault.eq(b.controller.fault),
+            b.verdict.fault_status.eq(b.controller.fault_status),
+            b.verdict.crc_ok.eq(b.decoder.crc_ok),
+            b.verdict.lc_repeat_seen.eq(b.sol.repeat),
+            b.verdict.lc_skip_seen.eq(b.sol.skip),
+            b.verdict.lc_zero_seen.eq(b.sol.zero),
 
-            results.report.eq(verdict.report),
-            results.report_frame.eq(controller.report_frame),
-            results.report_delay.eq(controller.report_delay),
-            results.valid.eq(verdict.valid),
+            b.results.report.eq(b.verdict.report),
+            b.results.report_frame.eq(b.controller.report_frame),
+            b.results.report_delay.eq(b.controller.report_delay),
+            b.results.valid.eq(b.verdict.valid),
         ]
-        frame = results.frame
+        frame = b.results.frame
         m.d.comb += [
-            frame.status.eq(verdict.status),
-            frame.line_delay.eq(sampler.delay),
-            frame.cds.eq(decoder.cds),
-            frame.lc.eq(decoder.lc),
-            frame.lc_repeat.eq(verdict.lc_repeat),
-            frame.lc_skip.eq(verdict.lc_skip),
-            frame.lc_zero.eq(verdict.lc_zero),
+            frame.status.eq(b.verdict.status),
+            frame.line_delay.eq(b.sampler.delay),
+            frame.cds.eq(b.decoder.cds),
+            frame.lc.eq(b.decoder.lc),
+            frame.lc_repeat.eq(b.verdict.lc_repeat),
+            frame.lc_skip.eq(b.verdict.lc_skip),
+            frame.lc_zero.eq(b.verdict.lc_zero),
         ]
         for w in range(p.words):
             word = frame[f"word{w}"]
             m.d.comb += [
-                word.position.eq(getattr(decoder, f"data{w}")),
-                word.ne.eq(decoder.ne[w]),
-                word.nw.eq(decoder.nw[w]),
-                word.crc_ok.eq(verdict.word_crc_ok[w]),
+                word.position.eq(getattr(b.decoder, f"data{w}")),
+                word.ne.eq(b.decoder.ne[w]),
+                word.nw.eq(b.decoder.nw[w]),
+                word.crc_ok.eq(b.verdict.word_crc_ok[w]),
             ]
         if two:
-            m.d.comb += frame.spw_mismatch.eq(verdict.spw_mismatch)
+            m.d.comb += frame.spw_mismatch.eq(b.verdict.spw_mismatch)
         if p.timestamped:
-            m.d.comb += [time_base.first_rise.eq(ma_clock.first_rise),
-                         frame.timestamp.eq(time_base.first_rise_time)]
+            m.d.comb += [b.time_base.first_rise.eq(b.ma_clock.first_rise),
+                         frame.timestamp.eq(b.time_base.first_rise_time)]
 
-        # -- Counters -------------------------------------------------------------------------------
-        if p.counters:
-            faults = controller.faults
-            events = {
-                "crc_word0": verdict.crc_error[0],
-                "no_ack": faults.no_ack,
-                "no_start": faults.no_start,
-                "delay_range": faults.delay_range,
-                "slo_stuck_low": faults.slo_stuck_low,
-                "lc_repeat": verdict.lc_repeat,
-                "lc_skip": verdict.lc_skip,
-                "lc_zero": verdict.lc_zero,
-                "overrun": scheduler.overrun,
-                "aborted": faults.aborted,
-                "no_stop": faults.no_stop,
-            }
-            if two:
-                events["crc_word1"] = verdict.crc_error[1]
-                events["spw_mismatch"] = controller.report_frame & verdict.spw_mismatch
-            m.d.comb += [counters.events[name].eq(events[name]) for name in self.counter_names]
-            m.d.comb += counters.clear.eq(self.clear_counters)
-            m.d.comb += [getattr(self, f"count_{name}").eq(counters.counts[name])
-                         for name in self.counter_names]
+    def _connect_counters(self, m, b):
+        """The counter bank's events."""
+        p = self.params
+        two = p.words == 2
+        faults = b.controller.faults
+        events = {
+            "crc_word0": b.verdict.crc_error[0],
+            "no_ack": faults.no_ack,
+            "no_start": faults.no_start,
+            "delay_range": faults.delay_range,
+            "slo_stuck_low": faults.slo_stuck_low,
+            "lc_repeat": b.verdict.lc_repeat,
+            "lc_skip": b.verdict.lc_skip,
+            "lc_zero": b.verdict.lc_zero,
+            "overrun": b.scheduler.overrun,
+            "aborted": faults.aborted,
+            "no_stop": faults.no_stop,
+        }
+        if two:
+            events["crc_word1"] = b.verdict.crc_error[1]
+            events["spw_mismatch"] = b.controller.report_frame & b.verdict.spw_mismatch
+        m.d.comb += [b.counters.events[name].eq(events[name]) for name in self.counter_names]
+        m.d.comb += b.counters.clear.eq(self.clear_counters)
+        m.d.comb += [getattr(self, f"count_{name}").eq(b.counters.counts[name])
+                     for name in self.counter_names]
 
-        # -- Ports out ------------------------------------------------------------------------------
+    def _connect_outputs(self, m, b):
+        """The state and result ports, out."""
         m.d.comb += [
-            self.ma.eq(ma_clock.ma),
-            self.busy.eq(~controller.idle),
-            self.config_error.eq(~config.ok),
-            self.overrun.eq(scheduler.overrun),
-            self.done.eq(results.done),
-            self.valid.eq(results.valid_out),
+            self.ma.eq(b.ma_clock.ma),
+            self.busy.eq(~b.controller.idle),
+            self.config_error.eq(~b.config.ok),
+            self.overrun.eq(b.scheduler.overrun),
+            self.done.eq(b.results.done),
+            self.valid.eq(b.results.valid_out),
         ]
-        m.d.comb += [getattr(self, name).eq(field(results.result, path))
+        m.d.comb += [getattr(self, name).eq(field(b.results.result, path))
                      for name, path, _ in self._result_fields]
-        return m
