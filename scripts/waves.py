@@ -22,8 +22,7 @@ from pathlib import Path
 
 from vcd.gtkw import GTKWSave       # pyvcd, installed with Amaranth
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-import wavenames  # noqa: E402
+import wavenames                    # scripts/, this file's folder (on the path when run or tested)
 
 ROOT = Path(__file__).resolve().parent.parent
 OUT = ROOT / "sim_build" / "waves"
