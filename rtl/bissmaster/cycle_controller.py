@@ -67,7 +67,7 @@ class CycleController(wiring.Component):
     frame_done, started, slots_full, stopped, stop_bit : In(1)
         From the decoder.
     frame_doubtful : In(1)
-        From the verdict: the frame being reported is not OK (read with ``report_frame``).
+        From the verdict: the frame's status will not be OK (registered with ``frame_done``).
     break_over, ack_expired, no_start_expired, slo_stuck, slo_stuck_live, delay_over : In(1)
         From the limit timers.
     idle : Out(1)
@@ -152,12 +152,11 @@ class CycleController(wiring.Component):
                          self.faults[status.name.lower()].eq(1)]
             goto(next_state)
 
-        # The reported frame was doubtful: after MA stops, PAUSE instead of END.
+        # The frame is doubtful (taken when it ends): after it, PAUSE instead of END / IDLE.
         pause = Signal()
 
         def report_verdict():
             m.d.comb += [self.report_frame.eq(1), self.report_delay.eq(1)]
-            m.d.sync += pause.eq(self.frame_doubtful)
 
         with m.FSM(init="BREAK", name="cycle_fsm"):
             with m.State("BREAK"):
@@ -207,6 +206,7 @@ class CycleController(wiring.Component):
                 with m.If(self.abort):
                     fault(Status.ABORTED)
                 with m.Elif(self.frame_done):
+                    m.d.sync += pause.eq(self.frame_doubtful)
                     # With the end check the verdict waits for the end of the frame (CONFIRM).
                     with m.If(~self.end_check):
                         report_verdict()
@@ -264,7 +264,7 @@ class CycleController(wiring.Component):
                     fault(Status.ABORTED)
                 with m.Elif(~self.ma_busy & self.slo):
                     report_verdict()
-                    with m.If(self.frame_doubtful):
+                    with m.If(pause):
                         m.d.comb += self.timer_clear.eq(1)
                         goto("PAUSE")
                     with m.Else():

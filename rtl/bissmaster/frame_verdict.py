@@ -49,8 +49,10 @@ class FrameVerdict(wiring.Component):
     valid : Out(1)
         ``report_frame`` with status OK.
     doubtful : Out(1)
-        The frame's status is not OK (a CRC, sign-of-life or plausibility fault): the frame may
-        have been misread, and the controller pauses before the next cycle.
+        The frame's status will not be OK (a CRC, sign-of-life or plausibility fault): the frame
+        may have been misread, and the controller pauses before the next cycle. Not gated by
+        ``report_frame``: final from the decoder's ``done`` on, so the controller can register
+        it there (no verdict logic in front of its transitions).
     word_crc_ok : Out(words)
         Per word, the CRC verdict as reported (a word not in the frame is good).
     lc_repeat, lc_skip, lc_zero, spw_mismatch : Out(1)
@@ -132,7 +134,10 @@ class FrameVerdict(wiring.Component):
             self.report.eq(self.report_frame | self.fault),
             self.status.eq(Mux(self.report_frame, frame_status, self.fault_status)),
             self.valid.eq(self.report_frame & (frame_status == Status.OK)),   # faults never OK
-            self.doubtful.eq(frame_status != Status.OK),
+            # The same verdict without the report gate: final from the decoder's ``done`` on
+            # (CRCs, LC flags and the SPW check are registered and settled by then).
+            self.doubtful.eq(~crcs_ok | self.spw_mismatch | lc_on & lc_word_crc_ok
+                             & (self.lc_repeat_seen | self.lc_skip_seen | self.lc_zero_seen)),
             self.crc_error.eq(Mux(self.report_frame, ~ok, 0)),
         ]
         return m

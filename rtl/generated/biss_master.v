@@ -730,7 +730,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .is_zero(lc_zero_seen),
     .lc(\lc$151 ),
     .load(load),
-    .\port$1015$0 (\slo$77 ),
+    .\port$1022$0 (\slo$77 ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -787,7 +787,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .lc_skip_seen(lc_skip_seen),
     .lc_zero(\lc_zero$199 ),
     .lc_zero_seen(lc_zero_seen),
-    .\port$758$0 (\$2 ),
+    .\port$755$0 (\$2 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -1452,14 +1452,13 @@ module \biss_master.controller (clk, rst, request, restart_timer, frame_doubtful
   wire \$58 ;
   wire \$59 ;
   wire \$6 ;
-  wire \$60 ;
-  reg \$61 ;
-  reg [2:0] \$62 ;
+  reg \$60 ;
+  reg [2:0] \$61 ;
+  reg \$62 ;
   reg \$63 ;
   reg \$64 ;
   reg \$65 ;
   reg \$66 ;
-  reg \$67 ;
   wire \$7 ;
   wire \$8 ;
   wire \$9 ;
@@ -1561,7 +1560,6 @@ module \biss_master.controller (clk, rst, request, restart_timer, frame_doubtful
   wire stopped;
   output timer_clear;
   reg timer_clear;
-  assign \$32  = cycle_fsm_state == 3'h4;
   assign \$33  = cycle_fsm_state == 3'h5;
   assign \$34  = cycle_fsm_state == 3'h6;
   assign \$35  = cycle_fsm_state == 3'h7;
@@ -1585,25 +1583,24 @@ module \biss_master.controller (clk, rst, request, restart_timer, frame_doubtful
   assign \$53  = no_start_expired | slots_full;
   assign \$54  = \$52  & \$53 ;
   assign \$55  = ~ end_check;
-  assign \$56  = ~ end_check;
-  assign \$57  = ma_busy | abort;
+  assign \$56  = ma_busy | abort;
+  assign \$57  = ~ ma_busy;
   assign \$58  = ~ ma_busy;
-  assign \$59  = ~ ma_busy;
-  assign \$60  = \$59  & slo;
+  assign \$59  = \$58  & slo;
   always @(posedge clk)
-    first_clock <= \$61 ;
+    first_clock <= \$60 ;
   always @(posedge clk)
-    cycle_fsm_state <= \$62 ;
+    cycle_fsm_state <= \$61 ;
   always @(posedge clk)
-    idle <= \$63 ;
+    idle <= \$62 ;
   always @(posedge clk)
-    receiver_clear <= \$64 ;
+    receiver_clear <= \$63 ;
   always @(posedge clk)
-    armed <= \$65 ;
+    armed <= \$64 ;
   always @(posedge clk)
-    locked_seen <= \$66 ;
+    locked_seen <= \$65 ;
   always @(posedge clk)
-    pause <= \$67 ;
+    pause <= \$66 ;
   assign \$1  = ~ locked_seen;
   assign \$2  = locked & \$1 ;
   assign restart_timer = ma_arm | \$2 ;
@@ -1636,6 +1633,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, frame_doubtful
   assign \$29  = cycle_fsm_state == 1'h1;
   assign \$30  = cycle_fsm_state == 2'h2;
   assign \$31  = cycle_fsm_state == 2'h3;
+  assign \$32  = cycle_fsm_state == 3'h4;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     resync = 1'h0;
@@ -1683,7 +1681,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, frame_doubtful
           if (abort) begin
             timer_clear = 1'h1;
           end else if (\$27 ) begin
-            if (frame_doubtful) begin
+            if (pause) begin
               timer_clear = 1'h1;
             end
           end else if (slo_stuck) begin
@@ -1954,107 +1952,200 @@ module \biss_master.controller (clk, rst, request, restart_timer, frame_doubtful
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$61  = idle;
+    \$60  = idle;
     if (rst) begin
-      \$61  = 1'h0;
+      \$60  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$62  = cycle_fsm_state;
+    \$61  = cycle_fsm_state;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
       3'h0:
           if (\$36 ) begin
           end else if (break_over) begin
-            \$62  = 3'h1;
+            \$61  = 3'h1;
           end
       3'h1:
           if (abort) begin
-            \$62  = 3'h0;
+            \$61  = 3'h0;
           end else if (request) begin
-            \$62  = 3'h2;
+            \$61  = 3'h2;
           end
       3'h2:
           if (\$38 ) begin
-            \$62  = 3'h1;
+            \$61  = 3'h1;
             if (abort) begin
-              \$62  = 3'h0;
+              \$61  = 3'h0;
             end
           end else if (abort) begin
-            \$62  = 3'h0;
+            \$61  = 3'h0;
           end else if (slo) begin
-            \$62  = 3'h3;
+            \$61  = 3'h3;
           end else if (\$39 ) begin
-            \$62  = 3'h0;
+            \$61  = 3'h0;
           end
       3'h3:
           if (abort) begin
-            \$62  = 3'h0;
+            \$61  = 3'h0;
           end else if (frame_done) begin
-            \$62  = 3'h4;
+            \$61  = 3'h4;
           end else if (\$42 ) begin
-            \$62  = 3'h0;
+            \$61  = 3'h0;
           end else if (\$47 ) begin
-            \$62  = 3'h0;
+            \$61  = 3'h0;
           end else if (\$50 ) begin
-            \$62  = 3'h0;
+            \$61  = 3'h0;
           end else if (\$54 ) begin
-            \$62  = 3'h0;
+            \$61  = 3'h0;
           end
       3'h4:
           if (abort) begin
             (* full_case = 32'd1 *)
             if (end_check) begin
-              \$62  = 3'h0;
+              \$61  = 3'h0;
             end else begin
-              \$62  = 3'h0;
+              \$61  = 3'h0;
             end
           end else if (stopped) begin
             (* full_case = 32'd1 *)
-            if (\$56 ) begin
+            if (\$55 ) begin
               (* full_case = 32'd1 *)
               if (pause) begin
-                \$62  = 3'h5;
+                \$61  = 3'h5;
               end else begin
-                \$62  = 3'h6;
+                \$61  = 3'h6;
               end
             end else if (stop_bit) begin
-              \$62  = 3'h0;
+              \$61  = 3'h0;
             end else begin
-              \$62  = 3'h7;
+              \$61  = 3'h7;
             end
           end
       3'h5:
-          if (\$57 ) begin
+          if (\$56 ) begin
           end else if (break_over) begin
-            \$62  = 3'h1;
+            \$61  = 3'h1;
           end
       3'h6:
-          if (\$58 ) begin
-            \$62  = 3'h1;
+          if (\$57 ) begin
+            \$61  = 3'h1;
           end
       3'h7:
           if (abort) begin
-            \$62  = 3'h0;
-          end else if (\$60 ) begin
+            \$61  = 3'h0;
+          end else if (\$59 ) begin
             (* full_case = 32'd1 *)
-            if (frame_doubtful) begin
-              \$62  = 3'h5;
+            if (pause) begin
+              \$61  = 3'h5;
             end else begin
-              \$62  = 3'h1;
+              \$61  = 3'h1;
             end
           end else if (slo_stuck) begin
-            \$62  = 3'h0;
+            \$61  = 3'h0;
           end
     endcase
     if (rst) begin
-      \$62  = 3'h0;
+      \$61  = 3'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$63  = idle;
+    \$62  = idle;
+    (* full_case = 32'd1 *)
+    casez (cycle_fsm_state)
+      3'h0:
+          if (\$36 ) begin
+          end else if (break_over) begin
+            \$62  = 1'h1;
+          end
+      3'h1:
+          if (abort) begin
+            \$62  = 1'h0;
+          end else if (request) begin
+            \$62  = 1'h0;
+          end
+      3'h2:
+          if (\$38 ) begin
+            \$62  = 1'h1;
+            if (abort) begin
+              \$62  = 1'h0;
+            end
+          end else if (abort) begin
+            \$62  = 1'h0;
+          end else if (slo) begin
+            \$62  = 1'h0;
+          end else if (\$39 ) begin
+            \$62  = 1'h0;
+          end
+      3'h3:
+          if (abort) begin
+            \$62  = 1'h0;
+          end else if (frame_done) begin
+            \$62  = 1'h0;
+          end else if (\$42 ) begin
+            \$62  = 1'h0;
+          end else if (\$47 ) begin
+            \$62  = 1'h0;
+          end else if (\$50 ) begin
+            \$62  = 1'h0;
+          end else if (\$54 ) begin
+            \$62  = 1'h0;
+          end
+      3'h4:
+          if (abort) begin
+            (* full_case = 32'd1 *)
+            if (end_check) begin
+              \$62  = 1'h0;
+            end else begin
+              \$62  = 1'h0;
+            end
+          end else if (stopped) begin
+            (* full_case = 32'd1 *)
+            if (\$55 ) begin
+              (* full_case = 32'd1 *)
+              if (pause) begin
+                \$62  = 1'h0;
+              end else begin
+                \$62  = 1'h0;
+              end
+            end else if (stop_bit) begin
+              \$62  = 1'h0;
+            end else begin
+              \$62  = 1'h0;
+            end
+          end
+      3'h5:
+          if (\$56 ) begin
+          end else if (break_over) begin
+            \$62  = 1'h1;
+          end
+      3'h6:
+          if (\$57 ) begin
+            \$62  = 1'h1;
+          end
+      3'h7:
+          if (abort) begin
+            \$62  = 1'h0;
+          end else if (\$59 ) begin
+            (* full_case = 32'd1 *)
+            if (pause) begin
+              \$62  = 1'h0;
+            end else begin
+              \$62  = 1'h1;
+            end
+          end else if (slo_stuck) begin
+            \$62  = 1'h0;
+          end
+    endcase
+    if (rst) begin
+      \$62  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$63  = receiver_clear;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
       3'h0:
@@ -2064,183 +2155,109 @@ module \biss_master.controller (clk, rst, request, restart_timer, frame_doubtful
           end
       3'h1:
           if (abort) begin
-            \$63  = 1'h0;
+            \$63  = 1'h1;
           end else if (request) begin
-            \$63  = 1'h0;
+            \$63  = 1'h1;
           end
       3'h2:
           if (\$38 ) begin
             \$63  = 1'h1;
             if (abort) begin
-              \$63  = 1'h0;
+              \$63  = 1'h1;
             end
           end else if (abort) begin
-            \$63  = 1'h0;
+            \$63  = 1'h1;
           end else if (slo) begin
             \$63  = 1'h0;
           end else if (\$39 ) begin
-            \$63  = 1'h0;
+            \$63  = 1'h1;
           end
       3'h3:
           if (abort) begin
-            \$63  = 1'h0;
+            \$63  = 1'h1;
           end else if (frame_done) begin
             \$63  = 1'h0;
           end else if (\$42 ) begin
-            \$63  = 1'h0;
+            \$63  = 1'h1;
           end else if (\$47 ) begin
-            \$63  = 1'h0;
+            \$63  = 1'h1;
           end else if (\$50 ) begin
-            \$63  = 1'h0;
+            \$63  = 1'h1;
           end else if (\$54 ) begin
-            \$63  = 1'h0;
+            \$63  = 1'h1;
           end
       3'h4:
           if (abort) begin
             (* full_case = 32'd1 *)
             if (end_check) begin
-              \$63  = 1'h0;
+              \$63  = 1'h1;
             end else begin
-              \$63  = 1'h0;
+              \$63  = 1'h1;
             end
           end else if (stopped) begin
             (* full_case = 32'd1 *)
-            if (\$56 ) begin
+            if (\$55 ) begin
               (* full_case = 32'd1 *)
               if (pause) begin
-                \$63  = 1'h0;
+                \$63  = 1'h1;
               end else begin
                 \$63  = 1'h0;
               end
             end else if (stop_bit) begin
-              \$63  = 1'h0;
+              \$63  = 1'h1;
             end else begin
               \$63  = 1'h0;
             end
           end
       3'h5:
-          if (\$57 ) begin
+          if (\$56 ) begin
           end else if (break_over) begin
             \$63  = 1'h1;
           end
       3'h6:
-          if (\$58 ) begin
+          if (\$57 ) begin
             \$63  = 1'h1;
           end
       3'h7:
           if (abort) begin
-            \$63  = 1'h0;
-          end else if (\$60 ) begin
+            \$63  = 1'h1;
+          end else if (\$59 ) begin
             (* full_case = 32'd1 *)
-            if (frame_doubtful) begin
-              \$63  = 1'h0;
+            if (pause) begin
+              \$63  = 1'h1;
             end else begin
               \$63  = 1'h1;
             end
           end else if (slo_stuck) begin
-            \$63  = 1'h0;
+            \$63  = 1'h1;
           end
     endcase
     if (rst) begin
-      \$63  = 1'h0;
+      \$63  = 1'h1;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$64  = receiver_clear;
-    (* full_case = 32'd1 *)
+    \$64  = armed;
     casez (cycle_fsm_state)
       3'h0:
-          if (\$36 ) begin
-          end else if (break_over) begin
-            \$64  = 1'h1;
-          end
+          /* empty */;
       3'h1:
-          if (abort) begin
-            \$64  = 1'h1;
-          end else if (request) begin
-            \$64  = 1'h1;
-          end
+          /* empty */;
       3'h2:
-          if (\$38 ) begin
-            \$64  = 1'h1;
-            if (abort) begin
-              \$64  = 1'h1;
-            end
-          end else if (abort) begin
-            \$64  = 1'h1;
-          end else if (slo) begin
-            \$64  = 1'h0;
-          end else if (\$39 ) begin
-            \$64  = 1'h1;
-          end
+          \$64  = 1'h0;
       3'h3:
-          if (abort) begin
-            \$64  = 1'h1;
-          end else if (frame_done) begin
-            \$64  = 1'h0;
-          end else if (\$42 ) begin
-            \$64  = 1'h1;
-          end else if (\$47 ) begin
-            \$64  = 1'h1;
-          end else if (\$50 ) begin
-            \$64  = 1'h1;
-          end else if (\$54 ) begin
-            \$64  = 1'h1;
-          end
-      3'h4:
-          if (abort) begin
-            (* full_case = 32'd1 *)
-            if (end_check) begin
-              \$64  = 1'h1;
-            end else begin
-              \$64  = 1'h1;
-            end
-          end else if (stopped) begin
-            (* full_case = 32'd1 *)
-            if (\$56 ) begin
-              (* full_case = 32'd1 *)
-              if (pause) begin
-                \$64  = 1'h1;
-              end else begin
-                \$64  = 1'h0;
-              end
-            end else if (stop_bit) begin
-              \$64  = 1'h1;
-            end else begin
-              \$64  = 1'h0;
-            end
-          end
-      3'h5:
-          if (\$57 ) begin
-          end else if (break_over) begin
-            \$64  = 1'h1;
-          end
-      3'h6:
-          if (\$58 ) begin
-            \$64  = 1'h1;
-          end
-      3'h7:
-          if (abort) begin
-            \$64  = 1'h1;
-          end else if (\$60 ) begin
-            (* full_case = 32'd1 *)
-            if (frame_doubtful) begin
-              \$64  = 1'h1;
-            end else begin
-              \$64  = 1'h1;
-            end
-          end else if (slo_stuck) begin
+          if (ma_arm) begin
             \$64  = 1'h1;
           end
     endcase
     if (rst) begin
-      \$64  = 1'h1;
+      \$64  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$65  = armed;
+    \$65  = locked_seen;
     casez (cycle_fsm_state)
       3'h0:
           /* empty */;
@@ -2249,7 +2266,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, frame_doubtful
       3'h2:
           \$65  = 1'h0;
       3'h3:
-          if (ma_arm) begin
+          if (\$41 ) begin
             \$65  = 1'h1;
           end
     endcase
@@ -2259,27 +2276,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, frame_doubtful
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$66  = locked_seen;
-    casez (cycle_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          \$66  = 1'h0;
-      3'h3:
-          if (\$41 ) begin
-            \$66  = 1'h1;
-          end
-    endcase
-    if (rst) begin
-      \$66  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$67  = pause;
-    (* full_case = 32'd1 *)
+    \$66  = pause;
     casez (cycle_fsm_state)
       3'h0:
           /* empty */;
@@ -2290,24 +2287,11 @@ module \biss_master.controller (clk, rst, request, restart_timer, frame_doubtful
       3'h3:
           if (abort) begin
           end else if (frame_done) begin
-            if (\$55 ) begin
-              \$67  = frame_doubtful;
-            end
-          end
-      3'h4:
-          /* empty */;
-      3'h5:
-          /* empty */;
-      3'h6:
-          /* empty */;
-      3'h7:
-          if (abort) begin
-          end else if (\$60 ) begin
-            \$67  = frame_doubtful;
+            \$66  = frame_doubtful;
           end
     endcase
     if (rst) begin
-      \$67  = 1'h0;
+      \$66  = 1'h0;
     end
   end
   assign \faults.no_ack  = faults[0];
@@ -5683,7 +5667,7 @@ module \biss_master.scheduler (periodic, abort, period, clk, rst, request, overr
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.sign_of_life (rst, load, \repeat , skip, check, resync, \port$1015$0 , lc, is_zero, clk);
+module \biss_master.sign_of_life (rst, load, \repeat , skip, check, resync, \port$1022$0 , lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$32  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -5721,8 +5705,8 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, resync, \por
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$1015$0 ;
-  wire \port$1015$0 ;
+  input \port$1022$0 ;
+  wire \port$1022$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -5734,9 +5718,9 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, resync, \por
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$1015$0  };
-  assign \$2  = { lc[4:0], \port$1015$0  } == last;
-  assign \$3  = { lc[4:0], \port$1015$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$1022$0  };
+  assign \$2  = { lc[4:0], \port$1022$0  } == last;
+  assign \$3  = { lc[4:0], \port$1022$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = lc == 6'h3f;
@@ -5826,7 +5810,7 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, resync, \por
       \$21  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$1015$0  };
+  assign lc_next = { lc[4:0], \port$1022$0  };
   assign zero = is_zero;
 endmodule
 
@@ -6308,7 +6292,7 @@ module \biss_master.timers (timeout_live, clk, rst, restart, ack_limit, timeout_
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.verdict (lc_skip_seen, \port$758$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
+module \biss_master.verdict (lc_skip_seen, \port$755$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$36  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -6320,8 +6304,18 @@ module \biss_master.verdict (lc_skip_seen, \port$758$0 , lc_check, lc_repeat, lc
   wire \$16 ;
   wire \$17 ;
   wire \$18 ;
-  wire [1:0] \$19 ;
+  wire \$19 ;
   wire \$2 ;
+  wire \$20 ;
+  wire \$21 ;
+  wire \$22 ;
+  wire \$23 ;
+  wire \$24 ;
+  wire \$25 ;
+  wire \$26 ;
+  wire \$27 ;
+  wire \$28 ;
+  wire [1:0] \$29 ;
   wire \$3 ;
   wire \$4 ;
   wire \$5 ;
@@ -6412,8 +6406,8 @@ module \biss_master.verdict (lc_skip_seen, \port$758$0 , lc_check, lc_repeat, lc
   wire lc_zero;
   input lc_zero_seen;
   wire lc_zero_seen;
-  output \port$758$0 ;
-  wire \port$758$0 ;
+  output \port$755$0 ;
+  wire \port$755$0 ;
   output report;
   wire report;
   input report_frame;
@@ -6467,9 +6461,19 @@ module \biss_master.verdict (lc_skip_seen, \port$758$0 , lc_check, lc_repeat, lc
   assign status = report_frame ? frame_status : fault_status;
   assign \$18  = ! frame_status;
   assign valid = report_frame & \$18 ;
-  assign doubtful = | frame_status;
-  assign \$19  = ~ { \$2 , crc_ok[0] };
-  assign crc_error = report_frame ? \$19  : 2'h0;
+  assign \$19  = crc_ok[0] & \$2 ;
+  assign \$20  = ~ \$19 ;
+  assign \$21  = \$20  | spw_mismatch;
+  assign \$22  = cfg[135] & cfg[143];
+  assign \$23  = cfg[132] | \$22 ;
+  assign \$24  = cfg[132] ? crc_ok[0] : \$2 ;
+  assign \$25  = \$23  & \$24 ;
+  assign \$26  = lc_repeat_seen | lc_skip_seen;
+  assign \$27  = \$26  | lc_zero_seen;
+  assign \$28  = \$25  & \$27 ;
+  assign doubtful = \$21  | \$28 ;
+  assign \$29  = ~ { \$2 , crc_ok[0] };
+  assign crc_error = report_frame ? \$29  : 2'h0;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
     (* full_case = 32'd1 *)
@@ -6488,7 +6492,7 @@ module \biss_master.verdict (lc_skip_seen, \port$758$0 , lc_check, lc_repeat, lc
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$758$0  = \$2 ;
+  assign \port$755$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

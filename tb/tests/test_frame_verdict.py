@@ -21,8 +21,8 @@ from block_sim import pack, run_clocks
 
 TWO = MasterParams()
 ONE = MasterParams(max_data_bits=(36,), word_crcs=((Crc.CRC6,),))
-OUTPUTS = ["lc_check", "report", "status", "valid", "word_crc_ok", "lc_repeat", "lc_skip",
-           "lc_zero", "spw_mismatch", "crc_error"]
+OUTPUTS = ["doubtful", "lc_check", "report", "status", "valid", "word_crc_ok", "lc_repeat",
+           "lc_skip", "lc_zero", "spw_mismatch", "crc_error"]
 FAULT_NAMES = [name for name, code in STATUS.items() if code >= STATUS["NO_ACK"]]
 
 
@@ -69,7 +69,10 @@ def reference(p, s, cfg):
     else:
         status = STATUS["OK"]
     ok_bits = ok0 | (int(ok1) << 1) if two else ok0
-    out = {"lc_check": lc_check, "report": int(bool(rf or s["fault"])),
+    # The frame will not be OK (the pause after it): the same verdict, reported or not.
+    seen_any = any(s[f"lc_{f}_seen"] for f in ("repeat", "skip", "zero"))
+    doubtful = int(not ok0 or not ok1 or bool(lc_word_ok and seen_any) or bool(spw))
+    out = {"doubtful": doubtful, "lc_check": lc_check, "report": int(bool(rf or s["fault"])),
            "valid": int(bool(rf and status == STATUS["OK"])), "word_crc_ok": ok_bits,
            "lc_repeat": flags[0], "lc_skip": flags[1], "lc_zero": flags[2],
            "crc_error": (~ok_bits & (2**p.words - 1)) if rf else 0}
@@ -105,13 +108,14 @@ def _check(p, cases):
 
 
 @pytest.mark.parametrize("p", (TWO, ONE), ids=("two_words", "one_word"))
-def test_frame_verdict_reported_frame_exhaustive(p):
+@pytest.mark.parametrize("report_frame", (1, 0), ids=("reported", "not_yet_reported"))
+def test_frame_verdict_reported_frame_exhaustive(p, report_frame):
     cases = []
     for cfg in _settings(p):
         for crc_ok, seen, match in itertools.product(range(2**p.words),
                                                      itertools.product((0, 1), repeat=3),
                                                      (0, 1) if p.words == 2 else (0,)):
-            cases.append((cfg, {"report_frame": 1, "crc_ok": crc_ok, "seen": seen,
+            cases.append((cfg, {"report_frame": report_frame, "crc_ok": crc_ok, "seen": seen,
                                 "spw_match": match}))
     _check(p, cases)
 
