@@ -44,3 +44,23 @@ CRC16_WIDTH = 16
 CRC16_POLY = 0x90D9             # x^16+x^15+x^12+x^7+x^6+x^4+x^3+1 (0x190D9)
 CRC16_XOR_OUT = 0xFFFF
 CRC_INIT = 0
+
+# -- Control communication (section 10) ------------------------------------------------------
+CRC4_WIDTH = 4
+CRC4_POLY = 0x03                # x^4 + x + 1 (0x13 with the top term); start 0, sent inverted
+CRC4_XOR_OUT = 0x0F
+CONTROL_ID_BITS = 3             # slave ID: position in the chain, 0 for a single encoder
+CONTROL_ADDRESS_BITS = 7        # register address 0x00 .. 0x7F
+REGISTER_BITS = 8
+BANK_BYTES = 64                 # registers 0x00..0x3F show the selected bank
+REG_BANK_SELECT = 0x40          # R/W: the bank that 0x00..0x3F shows
+REG_EDS_BANK = 0x41             # read only: the bank where the EDS starts
+EDS_BANK_NONE = (0x00, 0xFF)    # EDS pointer values that mean "no EDS"
+REG_PROFILE_ID = 0x42           # 0x42 profile ID, 0x43 data length (BP3, section 7)
+
+# -- BP3 Standard Encoder Profile (section 7) ------------------------------------------------
+BP3_PROFILE_ID = 0b0110         # register 0x42 bits 7:4
+BP3_VERSION = 1                 # register 0x42 bits 3:1 (0 not allowed, 2..7 reserved)
+BP3_DL_MIN = 0x02               # register 0x43 DL: data length without CRC
+BP3_DL_MAX_SEPARATE_CRC = 0x39  # C = 0: DL = DL_POS + nE + nW
+BP3_DL_MAX_SAFETY = 0x3F        # C = 1
