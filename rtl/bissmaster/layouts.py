@@ -33,6 +33,16 @@ def config_layout(params):
     return data.StructLayout(members)
 
 
+def config_ports(params):
+    """``(port name, path, shape)`` of every ``cfg_*`` port, in port order.
+
+    The one place a configuration field gets its port name: :class:`~bissmaster.master.BissMaster`
+    makes its ports from it, and host-side code (:func:`bissmaster.bp3.derive_config`) names the
+    settings it derives with it.
+    """
+    return flat_fields(config_layout(params), "cfg_")
+
+
 def config_words(cfg, params):
     """The per-word settings of a :func:`config_layout` view, word 0 first."""
     return [cfg.w0, cfg.w1] if params.words == 2 else [cfg.w0]

@@ -11,7 +11,7 @@ from .counters import CounterBank
 from .cycle_controller import CycleController
 from .frame_decoder import FrameDecoder
 from .frame_verdict import FrameVerdict
-from .layouts import (config_layout, config_words, counter_names, field, flat_fields,
+from .layouts import (config_ports, config_words, counter_names, field, flat_fields,
                       result_layout)
 from .limit_timers import LimitTimers
 from .ma_clock import MaClock
@@ -53,7 +53,7 @@ class BissMaster(wiring.Component):
         if not isinstance(params, MasterParams):
             raise TypeError(f"params must be a MasterParams, not {params!r}")
         self.params = p = params
-        self._config_fields = flat_fields(config_layout(p), "cfg_")
+        self._config_fields = config_ports(p)
         self._result_fields = flat_fields(result_layout(p))
         ports = {
             # Line
