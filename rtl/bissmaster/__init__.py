@@ -24,6 +24,9 @@ The blocks, one hardware concept each (docs/architecture.md draws how they conne
 Interfaces: ``layouts`` (configuration, result, faults, counters as data layouts, and the flat
 port names made from them), ``params`` (``MasterParams``, the ``Status`` and ``Crc`` enums).
 
+Host side, no hardware: ``control_crc`` (the CRC-4 of register access) and ``bp3`` (BP3
+identification, EDS decoding, the settings derived from them; docs/control-channel.md).
+
 ``bissmaster.protocol`` holds the protocol facts and imports nothing, so the encoder model can
 use it without pulling in Amaranth.
 """
