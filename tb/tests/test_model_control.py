@@ -392,6 +392,8 @@ def test_legal_control_frames_never_have_14_zeros():
         for adr in range(128):
             worst = max(worst, longest_zero_run(control_frame_cdm(
                 RegisterAccess.read(adr, 2, slave_id=ident))))
+            worst = max(worst, longest_zero_run(control_frame_cdm(
+                RegisterAccess.write(adr, b"\x00\x00", slave_id=ident))))
     for value in range(256):
         worst = max(worst, longest_zero_run(control_frame_cdm(
             RegisterAccess.write(0x48, bytes([value, value])))))
