@@ -54,6 +54,16 @@ Faults (``Response.fault``):
 ``force_slo(level)`` overrides the line at the master pin (broken / unplugged cable) on top of
 all that; ``force_slo(None)`` gives the pin back to the cable.
 
+Control channel (BiSS C CDM/CDS, spec section 10), only with ``control=ControlSlave(...)``
+(``encoder_model.control``): the CDS slot of every frame (``bits[1]`` of the Response) is
+replaced by ``control.cds`` when ``respond`` is called, and at the end of every cycle (step 5)
+the encoder steps the control slave with that cycle's ``cdm`` (the inverted MA level when the
+timeout ran out), which sets the CDS of the next frame. Cycles that ended without the encoder's
+logic seeing them (``no_response``, ``stuck_low``, ``timeout_stuck``) do not step it; aborted
+cycles do. MA held low at the end of the timeout does not start a cycle: SLO returns high as in
+5 and the next cycle starts on the first MA fall after that (MA must rise first). Without a
+control slave nothing changes: CDS is whatever ``respond`` put in ``bits[1]``.
+
 ``invert_slo(True)`` inverts the line at the master pin (noise coupled into the cable near the
 master: whatever the encoder sends, and any edge it makes meanwhile, arrives inverted) until
 ``invert_slo(False)``; ``await glitch_slo(width_s)`` is one such glitch, from now for
@@ -67,8 +77,8 @@ import itertools
 import logging
 import math
 import random
-from dataclasses import dataclass, field
-from typing import Callable
+from dataclasses import dataclass, field, replace
+from typing import TYPE_CHECKING, Callable
 
 import cocotb
 from cocotb.simtime import convert, get_sim_time
@@ -76,7 +86,13 @@ from cocotb.triggers import Timer
 
 from bissmaster import protocol
 
+if TYPE_CHECKING:
+    from .control import ControlSlave
+
 FAULTS = (None, "no_response", "stuck_low", "stuck_high", "timeout_stuck", "ack_forever")
+# Faults whose cycles the encoder's logic does not live through: no CDM sampled after them.
+_NO_CONTROL_STEP = ("no_response", "stuck_low", "timeout_stuck")
+CDS_INDEX = 1                           # Response.bits: [Start, CDS, data...]
 
 
 @dataclass
@@ -130,6 +146,8 @@ class CycleRecord:
     t_ready_s: float = math.nan         # encoder time SLO was released high again (nan: stuck)
     cdm: int = 0                        # 1 if the cycle ended with MA held low (BiSS C CDM)
     ended: bool = False
+    cds: int | None = None              # CDS the control slave put in this frame (None: no
+                                        # control slave, or respond() was not called)
 
 
 class _Cycle:
@@ -155,7 +173,8 @@ class BissEncoder:
 
     def __init__(self, ma, slo, *, cable: Cable, respond: Callable[[float], Response],
                  timeout_s: float = 12.5e-6, min_cycle_s: float = protocol.MIN_CYCLE_PERIOD_S,
-                 rng: random.Random | None = None, log: logging.Logger | None = None):
+                 rng: random.Random | None = None, log: logging.Logger | None = None,
+                 control: ControlSlave | None = None):
         self.ma = ma
         self.slo = slo
         self.cable = cable
@@ -163,6 +182,7 @@ class BissEncoder:
         self.timeout_s = timeout_s
         self.min_cycle_s = min_cycle_s
         self.rng = rng if rng is not None else random.Random(0)
+        self.control = control          # BiSS C control side (module doc); None: CDS as sent
         self.log = log if log is not None else logging.getLogger("cocotb.encoder_model")
         # Optional event trace for debugging / self-checks: set to a list to collect
         # ("ma", t_master_steps, t_encoder_steps, level) and
@@ -397,6 +417,10 @@ class BissEncoder:
             resp = self.respond(rec.t_latch_s)
             if resp.fault not in FAULTS:
                 raise ValueError(f"unknown fault {resp.fault!r}")
+            if self.control is not None and len(resp.bits) > CDS_INDEX:
+                bits = list(resp.bits)
+                bits[CDS_INDEX] = rec.cds = self.control.cds
+                resp = replace(resp, bits=bits)
             cyc.resp = resp
             cyc.fault = rec.fault = resp.fault
             cyc.proc_steps = self._steps(resp.processing_time_s)
@@ -465,6 +489,8 @@ class BissEncoder:
         rec.t_end_s = self._sec(te)
         rec.cdm = 1 - self._ma_level
         rec.ended = True
+        if self.control is not None and cyc.fault not in _NO_CONTROL_STEP:
+            self.control.step(rec.cdm)      # sampled now: answered in the next frame's CDS
         rec.aborted = cyc.fault not in ("no_response", "stuck_low", "stuck_high") and not cyc.done
         if math.isnan(rec.round_trip_s):
             rec.round_trip_s = self._sec(self._steps(self.cable.m2e_s())

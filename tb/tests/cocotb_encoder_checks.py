@@ -18,6 +18,8 @@ from cocotb.triggers import Timer
 
 from bissmaster import protocol
 from encoder_model.cocotb_encoder import BissEncoder, Cable, Response
+from encoder_model.control import Bp3Eds, ControlSlave, RegisterFile
+from encoder_model.control_master import ControlMaster, ControlStatus, RegisterAccess
 
 PS_PER_S = 10**12
 TIMEOUT_S = 12.5e-6
@@ -528,4 +530,52 @@ async def force_and_set_cable(dut):
     await Timer(40, "us")
     assert mon.between(t0, now_ps()) == [] and enc.records[-1].bits_sent == resp.bits
     enc.force_slo(None)
+    enc.stop()
+
+
+@cocotb.test()
+async def control_channel(dut):
+    """With a ControlSlave: CDM is MA held low through the timeout, CDS comes in the next
+    frame's slot. A sequential read of 0x42/0x43 over 100 m, one data frame per CDM bit, each
+    CDS sampled at the master pin and decoded by the reference master."""
+    cable = CABLES["100m"]
+    f_hz = 10e6
+    m2e, dout = delays_ps(cable)
+    slave = ControlSlave(RegisterFile.bp3(Bp3Eds(24)))
+    enc, responder, mon, master = await setup(dut, cable, control=slave)
+    reference = ControlMaster()
+    reference.submit(RegisterAccess.read(0x42, 2))
+    rng = random.Random(31)
+    events_all, sent_cdm, seen_cds = [], [], []
+    t_begin = now_ps()
+    while reference.busy:
+        resp = Response(bits=random_bits(rng, 12), processing_time_s=1e-6)   # CDS slot 0
+        responder.queue.append(resp)
+        falls, rises = await master.clock(f_hz, rises_needed(f_hz, resp, cable))
+        k = expected_cycle(falls, rises, resp, cable)[2]
+        # the CDS bit at the master pin, mid-way through its bit time
+        cds = level_at(mon.changes, rises[k + 1] + m2e + dout + ps(0.5 / f_hz), 1)
+        cdm = reference.step(cds)
+        t_low = None
+        if cdm:
+            dut.ma.value = 0                # MA held low through the timeout: CDM = 1
+            t_low = now_ps()
+        sent = Response(bits=[resp.bits[0], cds] + resp.bits[2:], processing_time_s=1e-6)
+        events, ready, _ = expected_cycle(falls, rises, sent, cable, last_edge=t_low)
+        events_all += events
+        await wait_until(ready + dout + 1)
+        assert enc.ready and int(dut.slo.value) == 1
+        rec = enc.records[-1]
+        assert (rec.cds, rec.bits_sent[1], rec.cdm) == (cds, cds, cdm)
+        check_record(rec, falls, rises, sent, cable, k)
+        sent_cdm.append(cdm)
+        seen_cds.append(cds)
+        if cdm:
+            dut.ma.value = 1                # back to idle: a rise, not a new cycle
+            await Timer(1, "us")
+    (result,) = reference.results
+    assert result.status is ControlStatus.OK and result.data == b"\x62\x1a", result
+    assert len(enc.records) == len(sent_cdm) == 14 + 32 + 14 + 1 and not enc.ignored_falls
+    assert slave.frame == len(sent_cdm) and sum(seen_cds) > 0
+    assert mon.between(t_begin, now_ps()) == transitions(events_all)
     enc.stop()

@@ -13,8 +13,8 @@ _HERE = Path(__file__).resolve().parent
 _REPO = _HERE.parents[1]
 
 # frame_timing 6 + processing_time_edges 1 + early_request_ignored 1 + abort 5 + faults 5
-# + jitter 2 + ma_held_low_at_end 2 + force_and_set_cable 1
-EXPECTED_TESTS = 23
+# + jitter 2 + ma_held_low_at_end 2 + force_and_set_cable 1 + control_channel 1
+EXPECTED_TESTS = 24
 
 
 def test_encoder_model():
