@@ -68,6 +68,13 @@ synth: setup  ## Yosys + nextpnr: LUT4/FF/carry and Fmax on ECP5-25k and iCE40 U
 formal: setup  ## formal checks (Yosys SMT flow + Yices): MA never glitches, back to idle, CRC; FAST=1: the slice
 	$(PY) tb/formal/run.py $(if $(FAST),--fast)
 
+.PHONY: package
+package: setup  ## wheel of the bissmaster package and its bissmaster-generate command to dist/ (offline)
+	rm -rf dist
+	$(PY) -m pip wheel . --no-deps --no-build-isolation --no-index -q -w dist
+	rm -rf build rtl/bissmaster.egg-info
+	@ls dist/*.whl
+
 clean:  ## remove build trees (keeps .venv)
-	rm -rf sim_build .pytest_cache tb/tests/sim_build
+	rm -rf sim_build .pytest_cache tb/tests/sim_build dist build rtl/bissmaster.egg-info
 	find . -name __pycache__ -not -path './.venv/*' -prune -exec rm -rf {} +

@@ -31,6 +31,10 @@ identification, EDS decoding, the settings derived from them; docs/control-chann
 use it without pulling in Amaranth.
 """
 
+#: The package's version, the one place it is written: pyproject.toml reads it from here, and
+#: biss_master.core's VLNV must match it (tb/tests/test_fusesoc.py).
+__version__ = "0.1.0"
+
 _EXPORTS = {
     "BissMaster": "master", "MasterParams": "params", "Status": "params", "Crc": "params",
 }

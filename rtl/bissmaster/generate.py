@@ -1,41 +1,88 @@
-"""Generate the Verilog module ``biss_master``.
+"""Generate the Verilog of the BiSS master.
 
-    python -m bissmaster.generate [-o FILE] [--preset NAME] [--max-data-bits 55,40] ...
+    bissmaster-generate [-o FILE] [--preset NAME] [--max-data-bits 55,40] ...
+    python -m bissmaster.generate ...           (the same command, from a source checkout)
 
 The default configuration is committed as ``rtl/generated/biss_master.v`` for users who never
 run Python; ``make rtl`` regenerates it and the test suite checks it is up to date.
+
+What is built is a *top* (``--top``) made of cores of one configuration (``--preset`` and the
+core options). Today there is one top, ``core``: the module ``biss_master`` with every setting
+and result a port. :data:`TOPS` is where the bus tops of issue 14 (``axil``, ``wb``: several
+channels behind AXI4-Lite or Wishbone) are added, each with its own options (``--channels``);
+every existing command line keeps its meaning when they come.
 """
 
 import argparse
 import sys
+from dataclasses import dataclass, field
 from importlib import metadata
 
 from amaranth.back import verilog
 
+from . import __version__
 from .master import BissMaster
 from .params import Crc, MasterParams
 
 
-def header(params):
+def header(params, top_lines=()):
+    """The comment block on top of a generated file: generator, parameters (``top_lines``: a
+    top's own parameters, after the core's), where the ports and constraints are described."""
     lines = [
         "BiSS C / BiSS Safety master: generated Verilog. DO NOT EDIT; edit the Amaranth source.",
         f"Generator: bissmaster.generate, amaranth {metadata.version('amaranth')}",
         "Parameters:",
         *("  " + line for line in params.describe()),
+        *("  " + line for line in top_lines),
         "Ports: docs/ports.md. Constraints: constraints/.",
     ]
     return "".join(f"// {line}\n" for line in lines)
 
 
-def generate(params=None, name="biss_master"):
+@dataclass(frozen=True)
+class Top:
+    """A top-level module the generator can build from cores of one :class:`MasterParams`.
+
+    ``build(params, **options)`` returns the Elaboratable; ``options`` are the top's own
+    command-line options as ``(flags, argparse keywords)`` pairs, passed to ``build`` by their
+    ``dest`` (give each ``default=None`` on the command line and its real default in ``build``:
+    an option left out is not passed); ``describe(**options)`` gives the header lines of those
+    options. Several tops may share an option (same flags, same keywords).
+    """
+    summary: str
+    module: str
+    build: object
+    options: tuple = ()
+    describe: object = field(default=lambda **options: ())
+
+
+#: The tops ``--top`` chooses from; the first is the default.
+TOPS = {
+    "core": Top("one master core (module biss_master): every cfg_* setting and result is a port",
+                "biss_master", BissMaster),
+    # Issue 14's bus tops go here, with the option they add; for example:
+    #   "axil": Top("CHANNELS cores behind AXI4-Lite (module biss_master_axil)",
+    #               "biss_master_axil", BissMasterAxil,
+    #               options=((("--channels",), dict(type=int, default=None, metavar="N",
+    #                                                help="channels, 1..8 (default 1)")),),
+    #               describe=lambda channels=1: [f"channels        = {channels}"]),
+    #   "wb": the same with Wishbone B4 (module biss_master_wb).
+}
+
+
+def generate(params=None, name=None, top="core", **options):
+    """The Verilog text of ``top`` (a :data:`TOPS` name) built from cores of ``params`` (default:
+    :class:`MasterParams`), module ``name`` (default: the top's), with the top's ``options``."""
     params = params or MasterParams()
-    body = verilog.convert(BissMaster(params), name=name, emit_src=False)
-    return header(params) + body
+    spec = TOPS[top]
+    body = verilog.convert(spec.build(params, **options), name=name or spec.module,
+                           emit_src=False)
+    return header(params, spec.describe(**options)) + body
 
 
 _BISS_C = ["--max-data-bits", "36", "--word-crcs", "6"]
 
-#: Named builds: generator options for ``--preset``. Options given besides a preset win.
+#: Named builds: core options for ``--preset``. Options given besides a preset win.
 #: scripts/synth.py measures these, and the test suite simulates each one.
 PRESETS = {
     "default": ("the committed rtl/generated/biss_master.v: 2 words of up to 55/40 bits, "
@@ -59,41 +106,134 @@ def _parse_crcs(text):
         raise argparse.ArgumentTypeError(f"CRC must be 6 or 16, not {e.args[0]!r}")
 
 
-def main(argv=None):
+_EXAMPLES = """\
+examples:
+  %(prog)s -o biss_master.v                      the committed default build
+  %(prog)s --preset biss-c-lean -o lean.v        the smallest BiSS C core
+  %(prog)s --preset safety --sys-clk-hz 50000000 -o fs.v
+  %(prog)s --preset biss-c --max-data-bits 26    a preset with one option changed
+  %(prog)s --list-presets                        what each preset builds
+
+Ports: docs/ports.md; constraints: constraints/README.md.
+"""
+
+
+def _parser():
     defaults = MasterParams()
     ap = argparse.ArgumentParser(
-        description=__doc__.splitlines()[0],
-        epilog="presets: " + "; ".join(f"{k}: {v[0]}" for k, v in PRESETS.items()))
-    ap.add_argument("--preset", choices=PRESETS, default="default",
-                    help="a named build (below); other options given override it")
-    ap.add_argument("-o", "--output", default="-", help="output file (default: stdout)")
-    ap.add_argument("--name", default="biss_master", help="Verilog module name")
-    ap.add_argument("--sys-clk-hz", type=int, default=defaults.sys_clk_hz)
-    ap.add_argument("--max-data-bits", default=",".join(map(str, defaults.max_data_bits)),
-                    help="per word, e.g. 36 (BiSS C only) or 36,28")
-    ap.add_argument("--word-crcs", type=_parse_crcs, default=None,
-                    help="CRC checkers per word, e.g. 6 or 6+16,6+16 (default: both on each word)")
-    ap.add_argument("--max-line-delay", type=int, default=defaults.max_line_delay)
-    ap.add_argument("--timer-width", type=int, default=defaults.timer_width,
-                    help="width of the time settings in system clocks (16 .. 32)")
-    ap.add_argument("--counter-width", type=int, default=defaults.counter_width,
-                    help="width of the error counters; 0: no counters")
-    ap.add_argument("--timestamp-width", type=int, default=defaults.timestamp_width,
-                    help="width of the time base behind `timestamp`; 0: no timestamp")
+        prog="bissmaster-generate",
+        description="Generate the Verilog of the BiSS C / BiSS Safety master "
+                    "(Amaranth HDL -> Verilog, through Yosys).",
+        epilog=_EXAMPLES, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--version", action="version",
+                    version=f"%(prog)s {__version__} (amaranth {metadata.version('amaranth')})")
+
+    what = ap.add_argument_group("what to build")
+    what.add_argument("--top", choices=TOPS, default=next(iter(TOPS)),
+                      help="the top-level module: " + "; ".join(
+                          f"{k}: {v.summary}" for k, v in TOPS.items())
+                      + " (default: %(default)s)")
+    what.add_argument("--preset", choices=PRESETS, default="default",
+                      help="a named core configuration (--list-presets); core options given "
+                           "besides it override it (default: %(default)s)")
+    what.add_argument("--list-presets", action="store_true",
+                      help="list the presets with their options and parameters, and exit")
+
+    out = ap.add_argument_group("output")
+    out.add_argument("-o", "--output", default="-", metavar="FILE",
+                     help="output file (default: stdout)")
+    out.add_argument("--name", default=None,
+                     help="Verilog module name (default: the top's, e.g. biss_master)")
+
+    core = ap.add_argument_group("core options (override the preset)")
+    core.add_argument("--sys-clk-hz", type=int, default=defaults.sys_clk_hz, metavar="HZ",
+                      help="system clock; turns the protocol's default times into clocks "
+                           "(default: %(default)s)")
+    core.add_argument("--max-data-bits", default=",".join(map(str, defaults.max_data_bits)),
+                      metavar="N[,N]",
+                      help="longest data field per word, 1 or 2 words, 1..63 each: 36 (BiSS C "
+                           "only), 36,28 (CPW, SPW) (default: %(default)s)")
+    core.add_argument("--word-crcs", type=_parse_crcs, default=None, metavar="C[+C][,...]",
+                      help="CRC checkers built per word, 6 and/or 16: 6, 6,16, 6+16,6+16 "
+                           "(default: both on each word)")
+    core.add_argument("--max-line-delay", type=int, default=defaults.max_line_delay,
+                      metavar="CLOCKS",
+                      help="longest measurable round trip, in system clocks "
+                           "(default: %(default)s)")
+    core.add_argument("--timer-width", type=int, default=defaults.timer_width, metavar="BITS",
+                      help="width of the time settings in system clocks, 16..32 "
+                           "(default: %(default)s)")
+    core.add_argument("--counter-width", type=int, default=defaults.counter_width,
+                      metavar="BITS",
+                      help="width of the error counters, 0: no counters (default: %(default)s)")
+    core.add_argument("--timestamp-width", type=int, default=defaults.timestamp_width,
+                      metavar="BITS",
+                      help="width of the time base behind `timestamp`, 0: no timestamp "
+                           "(default: %(default)s)")
+
+    # The tops' own options, once each even when several tops share one.
+    shared = {}
+    for top_name, spec in TOPS.items():
+        for flags, kwargs in spec.options:
+            shared.setdefault(tuple(flags), (kwargs, []))[1].append(top_name)
+    top_options = {}      # dest -> the tops that take it
+    if shared:
+        group = ap.add_argument_group("options of the bus tops")
+        for flags, (kwargs, tops) in shared.items():
+            kwargs = dict(kwargs, help=f"{kwargs.get('help', '')} (--top {', '.join(tops)})")
+            top_options[group.add_argument(*flags, **kwargs).dest] = tops
+    return ap, top_options
+
+
+def _params(ap, args):
+    defaults = MasterParams()
+    try:
+        bits = tuple(int(b) for b in args.max_data_bits.split(","))
+    except ValueError:
+        ap.error(f"--max-data-bits takes 1 or 2 integers, e.g. 36 or 36,28, "
+                 f"not {args.max_data_bits!r}")
+    crcs = args.word_crcs or defaults.word_crcs[:len(bits)]
+    try:
+        return MasterParams(sys_clk_hz=args.sys_clk_hz, max_data_bits=bits, word_crcs=crcs,
+                            max_line_delay=args.max_line_delay, timer_width=args.timer_width,
+                            counter_width=args.counter_width,
+                            timestamp_width=args.timestamp_width)
+    except ValueError as e:
+        ap.error(str(e))
+
+
+def list_presets(ap=None):
+    """The text of ``--list-presets``: each preset's summary, options and parameters."""
+    ap = ap or _parser()[0]
+    out = ["Presets (--preset NAME); core options given besides a preset override it.", ""]
+    for name, (summary, options) in PRESETS.items():
+        params = _params(ap, ap.parse_args(options))
+        out += [f"{name}", f"    {summary}",
+                f"    options: {' '.join(options) or '(none: the defaults)'}",
+                *(f"    {line}" for line in params.describe()), ""]
+    return "\n".join(out)
+
+
+def main(argv=None):
+    """The command line (``bissmaster-generate``, ``python -m bissmaster.generate``)."""
+    ap, top_options = _parser()
     argv = sys.argv[1:] if argv is None else list(argv)
     preset = ap.parse_known_args(argv)[0].preset
     args = ap.parse_args(PRESETS[preset][1] + argv)     # later options win
-
-    bits = tuple(int(b) for b in args.max_data_bits.split(","))
-    crcs = args.word_crcs or defaults.word_crcs[:len(bits)]
-    try:
-        params = MasterParams(sys_clk_hz=args.sys_clk_hz, max_data_bits=bits, word_crcs=crcs,
-                              max_line_delay=args.max_line_delay, timer_width=args.timer_width,
-                              counter_width=args.counter_width,
-                              timestamp_width=args.timestamp_width)
-    except ValueError as e:
-        ap.error(str(e))
-    text = generate(params, args.name)
+    if args.list_presets:
+        sys.stdout.write(list_presets(ap))
+        return
+    options = {}
+    for dest, tops in top_options.items():
+        value = getattr(args, dest)
+        if args.top in tops:
+            if value is not None:
+                options[dest] = value
+        elif value is not None:
+            ap.error(f"--{dest.replace('_', '-')} applies to --top {', '.join(tops)}, "
+                     f"not --top {args.top}")
+    params = _params(ap, args)
+    text = generate(params, args.name, args.top, **options)
     if args.output == "-":
         sys.stdout.write(text)
     else:
