@@ -13,16 +13,43 @@ from .params import HALF_PERIOD_WIDTH
 SYNC_EXTRA_LATENCY = 1
 
 
+def vote_spacing(half_period):
+    """Clocks between the three votes of a slot, for a half period of ``half_period`` clocks:
+    a quarter bit (``half_period // 2``) where the eye allows it, none (a single sample) at
+    ``half_period`` = 2. A Python model of the rule the hardware applies, for documentation and
+    tools (tests derive the same rule themselves from docs/ports.md)."""
+    return half_period // 2 if half_period >= 3 else 0
+
+
 class SloSampler(wiring.Component):
-    """Measures the round trip and samples every SLO bit in the middle of its eye.
+    """Measures the round trip and decides every SLO bit from three votes around its centre.
 
     The round trip is counted from ``arm`` (the master's own second MA rising edge) to the
     falling edge of Ack on the synchronized SLO. Every bit the encoder sends after that edge
     arrives exactly one MA period after the previous one, shifted by the same round trip,
     whatever its length: so the sampler does not follow MA at all. It runs its own period
-    timer, started at the Ack edge, and samples ``half_period`` clocks into every slot. That
-    works for round trips of any number of bit periods; slot ``k`` is the bit the encoder put on
-    SLO at MA rising edge ``k + 2``.
+    timer, started at the Ack edge; the centre of slot ``k`` is ``half_period + 2 * half_period *
+    k`` clocks after the edge. That works for round trips of any number of bit periods; slot
+    ``k`` is the bit the encoder put on SLO at MA rising edge ``k + 2``.
+
+    **Votes (noise immunity).** Each slot is decided by the majority of three samples: ``v``
+    clocks before its centre, at its centre, and ``v`` clocks after it, with ``v`` =
+    :func:`vote_spacing` (``half_period // 2``; 0, a single sample, at a half period of 2). The
+    decision (``sample`` with ``bit``) comes with the third vote, ``v`` clocks after the centre.
+    A glitch (the line inverted for a while) can change a decision only by inverting two votes,
+    so one glitch shorter than ``v`` clocks never changes a decided bit, fakes a Start or ends an
+    Ack early.
+
+    **The Ack edge.** SLO must be low at slot 0 (it is inside the Ack), decided by the same
+    votes; slot 0 high by the majority means the edge was not an Ack edge, and the sampler waits
+    for the next one. SLO high again within ``v`` clocks of the edge (at a half period of 2:
+    before the centre) may mean a glitch was taken for the edge: the sampler waits for the next
+    fall, and if that comes within ``v`` clocks of the rise (one glitch right at the real edge,
+    either a short low before it or a short high after it: the two cannot be told apart), it
+    takes the edge halfway between the two falls, at most ``v`` clocks from the true one, and
+    the votes keep every decision right. Later high blips in slot 0 are votes like any other.
+    So the delay is exact (``true <= delay < true + 1``) unless a glitch shorter than ``v`` clocks
+    touches the edge itself; then it is off by at most ``v`` clocks.
 
     SLO is asynchronous: it passes a two-flop synchronizer
     (:class:`amaranth.lib.cdc.FFSynchronizer`) first, whose flops are reset-less, so the
@@ -31,9 +58,6 @@ class SloSampler(wiring.Component):
     synchronizer's latency (:data:`SYNC_EXTRA_LATENCY`). ``synchronizer=False`` leaves the
     flops out for block tests and formal harnesses of the sampler alone: they drive ``slo`` as
     the output of such a synchronizer (the compensation stays).
-
-    SLO must stay low from the edge to the slot-0 sample (it is inside the Ack): if it goes high
-    before, the edge was a glitch, and the sampler goes back to waiting for the Ack edge.
 
     Attributes
     ----------
@@ -50,9 +74,10 @@ class SloSampler(wiring.Component):
     early : Out(1)
         SLO was already low when armed: it fell before the second MA rise could have caused it.
     locked : Out(1)
-        The Ack edge was found; samples are being produced.
+        Slot 0 was decided low: the Ack edge is confirmed; decisions are being produced (from
+        the clock after slot 0's decision).
     sample : Out(1)
-        Strobe: ``bit`` holds the middle of the next slot.
+        Strobe: ``bit`` is the decision of the next slot (``v`` clocks after its centre).
     bit : Out(1)
     """
 
@@ -73,6 +98,7 @@ class SloSampler(wiring.Component):
 
     def elaborate(self, platform):
         m = Module()
+        hp = self.half_period
 
         if self._synchronizer:
             m.submodules.sync = cdc.FFSynchronizer(self.slo, self.level, init=1, stages=2)
@@ -84,15 +110,47 @@ class SloSampler(wiring.Component):
         m.d.sync += slo_prev.eq(slo)
         fell = slo_prev & ~slo
 
+        # The vote spacing and the slot-timer values of the votes, from the cycle's half period
+        # (constant within a cycle): reset-less registers that follow it in every clock, valid
+        # a few clocks after the configuration latch, long before the first edge.
+        vw = HALF_PERIOD_WIDTH - 1
+        vote = Signal(vw, reset_less=True)
+        single = Signal(reset_less=True)                        # one sample per slot
+        pre_at = Signal(HALF_PERIOD_WIDTH + 1, reset_less=True)  # vote + 1
+        post_at = Signal(HALF_PERIOD_WIDTH + 1, reset_less=True)  # 2 * hp - vote + 1
+        m.d.sync += [
+            vote.eq(Mux(hp >= 3, hp[1:], 0)),
+            single.eq(hp < 3),
+            pre_at.eq(vote + 1),
+            post_at.eq(Cat(C(0, 1), hp) - vote + 1),
+        ]
+
         elapsed = Signal(self._delay_width)        # clocks since arm
         delay_max = (1 << self._delay_width) - 1
-        slot_left = Signal(HALF_PERIOD_WIDTH + 1)                     # clocks to the next sample, minus one
-        first_slot = Signal()                       # the next sample is slot 0 (inside the Ack)
-        # ``slot_left == 0``, kept as a register: written wherever ``slot_left`` is, from the
-        # value written. The sample strobe then needs no wide compare.
+        slot_left = Signal(HALF_PERIOD_WIDTH + 1)  # clocks to the next slot centre, minus one
+        first_slot = Signal()                       # slot 0 (inside the Ack) not decided yet
+        # ``slot_left == 0`` (the centre), ``== vote`` (the first vote) and ``== 2 * hp - vote``
+        # (the third vote, after the centre's reload), kept as registers written wherever
+        # ``slot_left`` is, from the value written: no wide compare in front of the strobes.
         slot_zero = Signal(init=1)
+        pre_vote = Signal()
+        post_vote = Signal()
+        vote1 = Signal()                            # the first vote of the slot
+        vote2 = Signal()                            # its centre
+        # Slot 0: clocks left (after the edge) in which SLO high may mean a glitch was taken for
+        # the edge; after such a rise, clocks left in which the next fall is ambiguous.
+        grace = Signal(vw)
+        gap = Signal(vw)
+        first_fall = Signal(self._delay_width)      # ``elapsed`` at the edge's fall
 
-        m.d.comb += self.bit.eq(slo)
+        def count_down(counter):
+            with m.If(counter != 0):
+                m.d.sync += counter.eq(counter - 1)
+
+        majority = (vote1 & vote2) | (vote1 & slo) | (vote2 & slo)
+        decided = Signal()                          # a slot's decision in this clock
+        decision = Mux(single, slo, majority)
+        m.d.comb += [self.sample.eq(decided & ~first_slot), self.bit.eq(decision)]
 
         with m.FSM(name="sampler_fsm"):
             with m.State("IDLE"):
@@ -101,37 +159,72 @@ class SloSampler(wiring.Component):
                         elapsed.eq(1),
                         self.early.eq(~slo),
                         self.locked.eq(0),
+                        gap.eq(0),
                     ]
                     m.next = "MEASURE"
             with m.State("MEASURE"):
                 with m.If(elapsed != delay_max):
                     m.d.sync += elapsed.eq(elapsed + 1)
+                count_down(gap)
                 with m.If(fell):
                     # The edge entered the second flop ``elapsed - 1`` clocks after the MA edge.
+                    # After a glitch at the edge, the edge is halfway between the two falls.
+                    span = (elapsed - first_fall)[:vw + 1]
+                    ambiguous = gap != 0
+                    edge = Mux(ambiguous, first_fall + span[1:], elapsed)
+                    late = Mux(ambiguous, (span + 1)[1:], 0)    # clocks since that edge
                     # A saturated count stays saturated: above every limit.
                     m.d.sync += [
                         self.delay.eq(Mux(elapsed == delay_max, delay_max,
-                                          elapsed - SYNC_EXTRA_LATENCY)),
-                        slot_left.eq(self.half_period - 1),
-                        slot_zero.eq(self.half_period == 1),
+                                          edge - SYNC_EXTRA_LATENCY)),
+                        slot_left.eq(hp - 1 - late),
+                        slot_zero.eq((hp == 1) & ~ambiguous),
+                        pre_vote.eq(0),
+                        post_vote.eq(0),
+                        vote1.eq(0),
+                        vote2.eq(0),
                         first_slot.eq(1),
+                        first_fall.eq(elapsed),
+                        grace.eq(Mux(ambiguous, 0, vote)),
+                        gap.eq(0),
                     ]
                     m.next = "SAMPLE"
             with m.State("SAMPLE"):
                 with m.If(elapsed != delay_max):
                     m.d.sync += elapsed.eq(elapsed + 1)
-                m.d.sync += [slot_left.eq(slot_left - 1), slot_zero.eq(slot_left == 1)]
-                with m.If(first_slot & slo):
-                    # SLO high again inside the first Ack slot: the edge was a glitch (or a
-                    # bounce before the real edge). Keep waiting for the real Ack edge.
+                count_down(grace)
+                m.d.sync += [
+                    slot_left.eq(slot_left - 1),
+                    slot_zero.eq(slot_left == 1),
+                    pre_vote.eq(slot_left == pre_at),
+                    post_vote.eq(slot_left == post_at),
+                ]
+                with m.If(pre_vote):
+                    m.d.sync += vote1.eq(slo)
+                with m.If(first_slot & slo & (single | (grace != 0) & ~slot_zero)):
+                    # SLO high right after the edge: maybe a glitch was taken for the edge.
+                    # Wait for the next fall; if it comes within ``vote`` clocks, it and this
+                    # edge are one glitch at the real edge.
+                    m.d.sync += gap.eq(vote)
                     m.next = "MEASURE"
                 with m.Elif(slot_zero):
+                    # The slot's centre: the second vote; the timer runs on to the next centre.
                     m.d.sync += [
-                        slot_left.eq(Cat(C(0, 1), self.half_period) - 1),   # one MA period
-                        slot_zero.eq(0),                                    # odd: never 0
-                        first_slot.eq(0),
-                        self.locked.eq(1),
+                        vote2.eq(slo),
+                        slot_left.eq(Cat(C(0, 1), hp) - 1),    # one MA period
+                        slot_zero.eq(0),                        # odd: never 0
+                        pre_vote.eq(0),                         # 2 * hp - 1 > vote
+                        post_vote.eq(vote == 1),                # 2 * hp - 1 == 2 * hp - vote
                     ]
-                    m.d.comb += self.sample.eq(1)
+                    m.d.comb += decided.eq(single)
+                with m.Elif(post_vote):
+                    m.d.comb += decided.eq(~single)
+                with m.If(decided & first_slot):
+                    with m.If(decision):
+                        # Slot 0 high: that was no Ack edge. Wait for the next one.
+                        m.next = "MEASURE"
+                    with m.Else():
+                        m.d.sync += [first_slot.eq(0), self.locked.eq(1)]
+                        m.d.comb += self.sample.eq(1)
 
         return m

@@ -62,7 +62,16 @@ INTERNALS = {
     "sampler.fsm": ("fsm", "", "sampler_fsm"),                  # states MEASURE, SAMPLE
     "sampler.slot_left": ("signal", "", "slot_left"),           # clocks to the next sample
     "sampler.slot_zero": ("signal", "", "slot_zero"),
-    "sampler.first_slot": ("signal", "", "first_slot"),         # slot 0 (the Ack) not sampled
+    "sampler.first_slot": ("signal", "", "first_slot"),         # slot 0 (the Ack) not decided
+    "sampler.post_vote": ("signal", "", "post_vote"),           # the third vote of a slot
+    "sampler.vote": ("signal", "", "vote"),                     # the vote spacing
+    "sampler.single": ("signal", "", "single"),                 # one sample per slot (hp 2)
+    "sampler.pre_at": ("signal", "", "pre_at"),                 # slot timer at the first vote + 1
+    "sampler.post_at": ("signal", "", "post_at"),               # ... at the third vote + 1
+    "sampler.grace": ("signal", "", "grace"),                   # slot 0: a rise may undo the edge
+    "sampler.gap": ("signal", "", "gap"),                       # a fall now is ambiguous
+    "sampler.first_fall": ("signal", "", "first_fall"),         # ``elapsed`` at the last edge
+    "sampler.elapsed": ("signal", "", "elapsed"),               # clocks since arm
     "sampler.sample": ("port", "", "sample"),
     "sampler.bit": ("port", "", "bit"),
     # FrameDecoder
@@ -549,16 +558,24 @@ class MasterLivenessHarness(Harness):
         return m
 
 
+def _vote_spacing(hp):
+    """Clocks between the three votes of a slot, from docs/ports.md ("Noise immunity"): a
+    quarter bit (hp // 2) for hp >= 3, none (one sample) for hp = 2. The harnesses' own reading."""
+    return Mux(hp >= 3, hp >> 1, 0)
+
+
 class SamplerHarness(Harness):
     """SloSampler alone: SLO and ``arm`` free at every clock (glitches, bounces, no encoder,
     an encoder that answers at any time), the half period any free constant >= 2.
 
     Properties (the receiver never stalls and never drifts once it has found the Ack edge):
     once ``locked``, it stays locked, and ``sample`` strobes exactly every MA period (2 half
-    periods), whatever SLO does; the first sample (slot 0, which locks it) comes exactly one
-    half period after the Ack edge was registered. Lemmas: locked means the FSM is in SAMPLE
-    past slot 0; the slot timer + the clocks since the last sample = one MA period;
-    ``slot_zero`` mirrors ``slot_left == 0``.
+    periods), whatever SLO does; slot 0 (whose decision locks it) is always decided low. (Where
+    slot 0 falls after the edge is SamplerImmunityHarness's and the block tests' business: with
+    one glitch at the edge it may move by up to the vote spacing v.) Lemmas: locked means the FSM is in SAMPLE past slot 0; the slot timer and the
+    clocks since the last decision add up to one MA period less v (before the slot's centre)
+    or two less v (after it); ``slot_zero`` and ``post_vote`` mirror ``slot_left`` at the centre
+    and at the third vote; the vote registers follow the half period.
 
     Mutation ``"short_gap"``: assert a gap of one clock less; the solver must find a trace.
     """
@@ -577,6 +594,7 @@ class SamplerHarness(Harness):
                      dut.half_period.eq(hp),
                      Assume(hp >= protocol.MA_HALF_PERIOD_MIN)]
         period = Cat(C(0, 1), hp)                    # 2 * hp, 17 bits
+        v = _vote_spacing(hp)
         if self.mutation == "short_gap":
             period = period - 1
 
@@ -586,14 +604,6 @@ class SamplerHarness(Harness):
             m.d.sync += since.eq(1)
         with m.Elif(since != (1 << 18) - 1):
             m.d.sync += since.eq(since + 1)
-        # Clocks since SLO fell (as the sampler sees it: registered previous value).
-        slo_prev = Signal(init=1)
-        since_fell = Signal(18, init=(1 << 18) - 1)
-        m.d.sync += slo_prev.eq(dut.slo)
-        with m.If(slo_prev & ~dut.slo):
-            m.d.sync += since_fell.eq(1)
-        with m.Elif(since_fell != (1 << 18) - 1):
-            m.d.sync += since_fell.eq(since_fell + 1)
         locked_prev = Signal()
         m.d.sync += locked_prev.eq(dut.locked)
 
@@ -601,23 +611,126 @@ class SamplerHarness(Harness):
             Assert(~locked_prev | dut.locked, "locked stays locked"),
             Assert(~(dut.sample & dut.locked) | (since == period), "one sample every MA period"),
             Assert(~dut.locked | (since <= period), "no gap longer than an MA period once locked"),
-            Assert(~(dut.sample & ~dut.locked) | (since_fell == hp),
-                   "slot 0 one half period after the Ack edge"),
+            Assert(~(dut.sample & ~dut.locked) | ~dut.bit, "slot 0 is decided low"),
         ]
         if self.lemmas:
+            # The vote registers follow the (constant) half period two clocks after the start.
+            settled = Signal(2)
+            with m.If(settled != 3):
+                m.d.sync += settled.eq(settled + 1)
             in_sample = inside.in_state("sampler.fsm", "SAMPLE")
             slot_left = inside("sampler.slot_left")
             slot_zero = inside("sampler.slot_zero")
+            post_vote = inside("sampler.post_vote")
             first_slot = inside("sampler.first_slot")
+            in_measure = inside.in_state("sampler.fsm", "MEASURE")
+            grace, gap = inside("sampler.grace"), inside("sampler.gap")
+            elapsed, first_fall = inside("sampler.elapsed"), inside("sampler.first_fall")
+            before_centre = since <= period - v
+            in_idle = inside.in_state("sampler.fsm", "IDLE")
             m.d.comb += [
+                # The master arms the sampler long after the half period is latched.
+                Assume((settled >= 2) | ~dut.arm),
+                Assert((settled >= 2) | in_idle & (gap == 0) & (grace == 0),
+                       "lemma: idle until armed"),
+                Assert((settled < 2) | (inside("sampler.vote") == v), "lemma: vote spacing"),
+                Assert((settled < 2) | (inside("sampler.single") == (hp < 3)), "lemma: single"),
+                Assert((settled < 3) | (inside("sampler.pre_at") == v + 1), "lemma: pre_at"),
+                Assert((settled < 3) | (inside("sampler.post_at") == period - v + 1),
+                       "lemma: post_at"),
                 Assert(dut.locked == (in_sample & ~first_slot), "lemma: locked past slot 0"),
-                Assert(~dut.locked | (since + slot_left == period), "lemma: slot timer"),
+                Assert(~dut.locked | before_centre & (since + slot_left == period - v)
+                       | ~before_centre & (since + slot_left == 2 * period - v),
+                       "lemma: slot timer"),
                 Assert(~in_sample | (slot_zero == (slot_left == 0)), "lemma: slot_zero"),
-                Assert(~(in_sample & first_slot) | (since_fell + slot_left == hp),
-                       "lemma: slot-0 timer"),
+                Assert(~in_sample | (settled < 3) | (post_vote == (slot_left == period - v)),
+                       "lemma: post_vote"),
+                # The glitch-at-the-edge bookkeeping stays within the vote spacing.
+                Assert((settled < 2) | (grace <= v), "lemma: grace"),
+                Assert((settled < 2) | (gap <= v), "lemma: gap"),
+                Assert(~in_sample | (gap == 0), "lemma: no ambiguity once past the edge"),
+                Assert((settled < 2) | ~in_measure | (gap == 0)
+                       | (elapsed >= first_fall) & (elapsed - first_fall + gap <= 2 * v + 1),
+                       "lemma: an ambiguous fall is within 2v of the first"),
+                Assert(~in_sample | (slot_left < period), "lemma: slot timer range"),
+                Assert((settled < 2) | ~(in_sample & first_slot & (grace != 0))
+                       | (elapsed >= first_fall) & (elapsed - first_fall + grace <= v + 1),
+                       "lemma: grace counts from the edge"),
             ]
 
         m.d.comb += Cover(dut.locked & dut.sample & (hp >= 3) & ~dut.bit)
+        return m
+
+
+class SamplerImmunityHarness(Harness):
+    """SloSampler alone, the noise-immunity property: an ideal encoder line with one glitch.
+
+    SLO is high, falls at a free clock (the Ack edge) and then holds free slot values (slot 0
+    low, the Ack), each one MA period long, the half period a free constant from 3 to
+    ``hp_max``; over it, one glitch inverts the line for a free number of clocks from 1 to the
+    vote spacing v (hp // 2), starting at any clock. Property: every slot the sampler decides
+    is decided as the encoder sent it (so no Start is faked and the frame never shifts), unless
+    the glitch made SLO low at the arming clock (``early``: the master's DELAY_RANGE fault).
+    Mutation ``"long"``: a glitch of v + 1
+    clocks; the solver must find a wrong decision.
+    """
+
+    def __init__(self, delay_width, hp_max=4, slots=4, mutation=None):
+        super().__init__(delay_width=delay_width, hp_max=hp_max, slots=slots,
+                         mutation=mutation)
+
+    def elaborate(self, platform):
+        m = self._module()
+        dut = SloSampler(self.delay_width, synchronizer=False)
+        m.submodules.dut = dut
+
+        hp = self.any_const(m, 4, "half_period")
+        v = _vote_spacing(hp)
+        edge = self.any_const(m, 5, "edge")                 # clocks from arm to the Ack edge
+        values = self.any_const(m, self.slots, "slots")     # slot k's level, slot 0 low
+        g_start = self.any_const(m, 8, "glitch_start")
+        g_len = self.any_const(m, 4, "glitch_len")
+        longest = v + 1 if self.mutation == "long" else v
+        m.d.comb += [
+            Assume((hp >= 3) & (hp <= self.hp_max)),
+            Assume(edge >= 2),
+            Assume(~values[0]),
+            Assume((g_len >= 1) & (g_len <= longest)),
+        ]
+
+        # The harness's clock: arm in clock 1.
+        t = Signal(8)
+        with m.If(t != 255):
+            m.d.sync += t.eq(t + 1)
+        m.d.comb += [dut.arm.eq(t == 1), dut.half_period.eq(hp)]
+        # The ideal line: high before the edge, then slot k for 2 * hp clocks each, high after.
+        since_edge = (t - 1 - edge)[:8]
+        slot = Signal(range(self.slots + 2))
+        m.d.comb += slot.eq(self.slots + 1)                 # past the frame
+        for k in reversed(range(self.slots)):
+            with m.If((since_edge < 2 * hp * (k + 1))):
+                m.d.comb += slot.eq(k)
+        ideal = Signal()
+        with m.If(t < 1 + edge):
+            m.d.comb += ideal.eq(1)
+        with m.Elif(slot < self.slots):
+            m.d.comb += ideal.eq(values.bit_select(slot, 1))
+        with m.Else():
+            m.d.comb += ideal.eq(1)
+        glitch = (t >= g_start) & (t < g_start + g_len)
+        m.d.comb += dut.slo.eq(ideal ^ glitch)
+
+        # Every decision is the sent slot value, in order.
+        decided = Signal(range(self.slots + 2))
+        with m.If(dut.sample & (decided < self.slots)):
+            m.d.sync += decided.eq(decided + 1)
+        # (A glitch over the arming clock makes SLO low there: ``early``, which the master
+        # reports as DELAY_RANGE, a fault; the sampler's decisions are then not used.)
+        m.d.comb += Assert(~dut.sample | dut.early | (decided >= self.slots)
+                           | (dut.bit == values.bit_select(decided, 1)),
+                           "every decided slot as sent")
+        # Not vacuous: the whole frame is decided.
+        m.d.comb += Cover((decided == self.slots) & (hp == self.hp_max) & (g_len == v))
         return m
 
 
