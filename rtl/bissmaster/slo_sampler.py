@@ -141,7 +141,18 @@ class SloSampler(wiring.Component):
         # the edge; after such a rise, clocks left in which the next fall is ambiguous.
         grace = Signal(vw)
         gap = Signal(vw)
-        first_fall = Signal(self._delay_width)      # ``elapsed`` at the edge's fall
+        # The edge halfway between the last fall and now, kept up to date clock by clock (so
+        # that no arithmetic sits between the fall and the registers it loads): with ``span``
+        # clocks since that fall, ``mid_slot`` = hp - 1 - ceil(span / 2) (the slot timer had the
+        # edge been halfway) and ``mid_delay`` = its delay + floor(span / 2); ``odd`` = span % 2.
+        mid_slot = Signal(HALF_PERIOD_WIDTH + 1)
+        mid_delay = Signal(self._delay_width)
+        odd = Signal()
+        with m.If(odd):
+            m.d.sync += mid_delay.eq(mid_delay + 1)
+        with m.Else():
+            m.d.sync += mid_slot.eq(mid_slot - 1)
+        m.d.sync += odd.eq(~odd)
 
         def count_down(counter):
             with m.If(counter != 0):
@@ -169,25 +180,24 @@ class SloSampler(wiring.Component):
                 with m.If(fell):
                     # The edge entered the second flop ``elapsed - 1`` clocks after the MA edge.
                     # After a glitch at the edge, the edge is halfway between the two falls.
-                    span = (elapsed - first_fall)[:vw + 1]
                     ambiguous = gap != 0
-                    edge = Mux(ambiguous, first_fall + span[1:], elapsed)
-                    late = Mux(ambiguous, (span + 1)[1:], 0)    # clocks since that edge
+                    delay = Mux(elapsed == delay_max, delay_max, elapsed - SYNC_EXTRA_LATENCY)
                     # A saturated count stays saturated: above every limit.
                     m.d.sync += [
-                        self.delay.eq(Mux(elapsed == delay_max, delay_max,
-                                          edge - SYNC_EXTRA_LATENCY)),
-                        slot_left.eq(hp - 1 - late),
+                        self.delay.eq(Mux(ambiguous & (elapsed != delay_max), mid_delay, delay)),
+                        slot_left.eq(Mux(ambiguous, mid_slot, hp - 1)),
                         slot_zero.eq((hp == 1) & ~ambiguous),
                         pre_vote.eq(0),
                         post_vote.eq(0),
                         vote1.eq(0),
                         vote2.eq(0),
                         first_slot.eq(1),
-                        first_fall.eq(elapsed),
                         grace.eq(Mux(ambiguous, 0, vote)),
                         gap.eq(0),
                     ]
+                    with m.If(~ambiguous):
+                        # Halfway values for a fall in the next clock (span 1).
+                        m.d.sync += [mid_slot.eq(hp - 2), mid_delay.eq(delay), odd.eq(1)]
                     m.next = "SAMPLE"
             with m.State("SAMPLE"):
                 with m.If(elapsed != delay_max):

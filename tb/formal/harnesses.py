@@ -70,8 +70,8 @@ INTERNALS = {
     "sampler.post_at": ("signal", "", "post_at"),               # ... at the third vote + 1
     "sampler.grace": ("signal", "", "grace"),                   # slot 0: a rise may undo the edge
     "sampler.gap": ("signal", "", "gap"),                       # a fall now is ambiguous
-    "sampler.first_fall": ("signal", "", "first_fall"),         # ``elapsed`` at the last edge
-    "sampler.elapsed": ("signal", "", "elapsed"),               # clocks since arm
+    "sampler.mid_slot": ("signal", "", "mid_slot"),             # slot timer, edge halfway
+    "sampler.odd": ("signal", "", "odd"),                       # clocks since the fall, odd
     "sampler.sample": ("port", "", "sample"),
     "sampler.bit": ("port", "", "bit"),
     # FrameDecoder
@@ -625,7 +625,9 @@ class SamplerHarness(Harness):
             first_slot = inside("sampler.first_slot")
             in_measure = inside.in_state("sampler.fsm", "MEASURE")
             grace, gap = inside("sampler.grace"), inside("sampler.gap")
-            elapsed, first_fall = inside("sampler.elapsed"), inside("sampler.first_fall")
+            mid_slot, odd = inside("sampler.mid_slot"), inside("sampler.odd")
+            # 2 * ceil(span / 2) - span % 2 = span, the clocks since the edge's fall.
+            span = 2 * (hp - 1 - mid_slot) - odd
             before_centre = since <= period - v
             in_idle = inside.in_state("sampler.fsm", "IDLE")
             m.d.comb += [
@@ -650,11 +652,11 @@ class SamplerHarness(Harness):
                 Assert((settled < 2) | (gap <= v), "lemma: gap"),
                 Assert(~in_sample | (gap == 0), "lemma: no ambiguity once past the edge"),
                 Assert((settled < 2) | ~in_measure | (gap == 0)
-                       | (elapsed >= first_fall) & (elapsed - first_fall + gap <= 2 * v + 1),
+                       | (span - (v + 1 - gap) >= 1) & (span - (v + 1 - gap) <= v),
                        "lemma: an ambiguous fall is within 2v of the first"),
                 Assert(~in_sample | (slot_left < period), "lemma: slot timer range"),
                 Assert((settled < 2) | ~(in_sample & first_slot & (grace != 0))
-                       | (elapsed >= first_fall) & (elapsed - first_fall + grace <= v + 1),
+                       | (span == v + 1 - grace),
                        "lemma: grace counts from the edge"),
             ]
 
