@@ -42,14 +42,19 @@ class SloSampler(wiring.Component):
 
     **The Ack edge.** SLO must be low at slot 0 (it is inside the Ack), decided by the same
     votes; slot 0 high by the majority means the edge was not an Ack edge, and the sampler waits
-    for the next one. SLO high again within ``v`` clocks of the edge (at a half period of 2:
-    before the centre) may mean a glitch was taken for the edge: the sampler waits for the next
-    fall, and if that comes within ``v`` clocks of the rise (one glitch right at the real edge,
-    either a short low before it or a short high after it: the two cannot be told apart), it
-    takes the edge halfway between the two falls, at most ``v`` clocks from the true one, and
-    the votes keep every decision right. Later high blips in slot 0 are votes like any other.
-    So the delay is exact (``true <= delay < true + 1``) unless a glitch shorter than ``v`` clocks
-    touches the edge itself; then it is off by at most ``v`` clocks.
+    for the next one. SLO high again before slot 0's first vote (within ``u = half_period - v``
+    clocks of the fall; at a half period of 2: before its only sample) may mean a glitch was
+    taken for the edge: the sampler waits for the next fall, and if that comes within ``v``
+    clocks of the rise (one glitch right at the real edge, either a short low before it or a
+    short high after it: the two cannot be told apart), it takes the edge halfway between the
+    two falls, at most ``v`` clocks from the true one, and the votes keep every decision right.
+    Later high blips in slot 0 are votes like any other. So the delay is exact (``true <= delay
+    < true + 1``) unless a glitch starts within ``u`` clocks after the edge or ends within ``v``
+    clocks before it; then it is off by at most ``v`` clocks.
+
+    **Area.** The slot timer only counts down to zero and reloads, from four values kept as
+    reset-less registers (edge to first vote, vote to vote, third vote to the next slot's first,
+    and the halfway edge): no comparator on the timer's width anywhere.
 
     SLO is asynchronous: it passes a two-flop synchronizer
     (:class:`amaranth.lib.cdc.FFSynchronizer`) first, whose flops are reset-less, so the
@@ -110,41 +115,47 @@ class SloSampler(wiring.Component):
         m.d.sync += slo_prev.eq(slo)
         fell = slo_prev & ~slo
 
-        # The vote spacing and the slot-timer values of the votes, from the cycle's half period
-        # (constant within a cycle): reset-less registers that follow it in every clock, valid
-        # a few clocks after the configuration latch, long before the first edge.
+        # The vote spacing ``v`` and the slot timer's reload values, from the cycle's half
+        # period (constant within a cycle): reset-less registers that follow it in every clock,
+        # valid a few clocks after the configuration latch, long before the first edge. With
+        # ``u = hp - v``, a slot's events are: first vote ``u`` clocks after its start, the
+        # centre ``v`` later, the third vote (the decision) ``v`` later again, and the next
+        # slot's first vote ``2 * u`` after that (``2 * u + 2 * v`` = one MA period). The timer
+        # only ever counts down to zero and reloads: no wide compare anywhere.
         vw = HALF_PERIOD_WIDTH - 1
         vote = Signal(vw, reset_less=True)
-        single = Signal(reset_less=True)                        # one sample per slot
-        pre_at = Signal(HALF_PERIOD_WIDTH + 1, reset_less=True)  # vote + 1
-        post_at = Signal(HALF_PERIOD_WIDTH + 1, reset_less=True)  # 2 * hp - vote + 1
+        single = Signal(reset_less=True)                        # one sample per slot (hp = 2)
+        first_load = Signal(HALF_PERIOD_WIDTH, reset_less=True)  # u - 1: edge to first vote
+        vote_load = Signal(vw, reset_less=True)                  # v - 1: vote to vote
+        vote_one = Signal(reset_less=True)                       # v == 1: vote_load is 0
+        period_load = Signal(HALF_PERIOD_WIDTH + 1, reset_less=True)  # 2u - 1: third to first
         m.d.sync += [
             vote.eq(Mux(hp >= 3, hp[1:], 0)),
             single.eq(hp < 3),
-            pre_at.eq(vote + 1),
-            post_at.eq(Cat(C(0, 1), hp) - vote + 1),
+            first_load.eq(hp - vote - 1),
+            vote_load.eq(vote - 1),
+            vote_one.eq(vote == 1),
+            period_load.eq(Cat(C(1, 1), first_load)),
         ]
 
         elapsed = Signal(self._delay_width)        # clocks since arm
         delay_max = (1 << self._delay_width) - 1
-        slot_left = Signal(HALF_PERIOD_WIDTH + 1)  # clocks to the next slot centre, minus one
-        first_slot = Signal()                       # slot 0 (inside the Ack) not decided yet
-        # ``slot_left == 0`` (the centre), ``== vote`` (the first vote) and ``== 2 * hp - vote``
-        # (the third vote, after the centre's reload), kept as registers written wherever
-        # ``slot_left`` is, from the value written: no wide compare in front of the strobes.
+        slot_left = Signal(HALF_PERIOD_WIDTH + 1)  # clocks to the slot's next event, minus one
+        # ``slot_left == 0`` kept as a register, written wherever ``slot_left`` is, from the
+        # value written: the event strobe needs no wide compare.
         slot_zero = Signal(init=1)
-        pre_vote = Signal()
-        post_vote = Signal()
-        vote1 = Signal()                            # the first vote of the slot
+        phase = Signal(2)                           # next event: 0 first vote, 1 centre, 2 third
+        first_slot = Signal()                       # slot 0 (inside the Ack) not decided yet
+        vote1 = Signal()                            # the slot's first vote
         vote2 = Signal()                            # its centre
-        # Slot 0: clocks left (after the edge) in which SLO high may mean a glitch was taken for
-        # the edge; after such a rise, clocks left in which the next fall is ambiguous.
-        grace = Signal(vw)
-        gap = Signal(vw)
+        # After SLO went high again right after the edge: the next fall within ``v`` clocks is
+        # ambiguous (the slot timer counts the window down).
+        gap = Signal()
         # The edge halfway between the last fall and now, kept up to date clock by clock (so
         # that no arithmetic sits between the fall and the registers it loads): with ``span``
-        # clocks since that fall, ``mid_slot`` = hp - 1 - ceil(span / 2) (the slot timer had the
-        # edge been halfway) and ``mid_delay`` = its delay + floor(span / 2); ``odd`` = span % 2.
+        # clocks since that fall, ``mid_slot`` = hp - 1 - ceil(span / 2) (the timer to the
+        # slot's centre had the edge been halfway) and ``mid_delay`` = its delay + floor(span /
+        # 2); ``odd`` = span % 2.
         mid_slot = Signal(HALF_PERIOD_WIDTH + 1)
         mid_delay = Signal(self._delay_width)
         odd = Signal()
@@ -154,9 +165,8 @@ class SloSampler(wiring.Component):
             m.d.sync += mid_slot.eq(mid_slot - 1)
         m.d.sync += odd.eq(~odd)
 
-        def count_down(counter):
-            with m.If(counter != 0):
-                m.d.sync += counter.eq(counter - 1)
+        def load(value, zero):
+            m.d.sync += [slot_left.eq(value), slot_zero.eq(zero)]
 
         majority = (vote1 & vote2) | (vote1 & slo) | (vote2 & slo)
         decided = Signal()                          # a slot's decision in this clock
@@ -176,59 +186,70 @@ class SloSampler(wiring.Component):
             with m.State("MEASURE"):
                 with m.If(elapsed != delay_max):
                     m.d.sync += elapsed.eq(elapsed + 1)
-                count_down(gap)
+                with m.If(gap):
+                    # The ambiguity window after a rise right after the edge.
+                    load(slot_left - 1, slot_left == 1)
+                    with m.If(slot_zero):
+                        m.d.sync += gap.eq(0)
                 with m.If(fell):
                     # The edge entered the second flop ``elapsed - 1`` clocks after the MA edge.
-                    # After a glitch at the edge, the edge is halfway between the two falls.
-                    ambiguous = gap != 0
-                    delay = Mux(elapsed == delay_max, delay_max, elapsed - SYNC_EXTRA_LATENCY)
                     # A saturated count stays saturated: above every limit.
+                    delay = Mux(elapsed == delay_max, delay_max, elapsed - SYNC_EXTRA_LATENCY)
                     m.d.sync += [
-                        self.delay.eq(Mux(ambiguous & (elapsed != delay_max), mid_delay, delay)),
-                        slot_left.eq(Mux(ambiguous, mid_slot, hp - 1)),
-                        slot_zero.eq((hp == 1) & ~ambiguous),
-                        pre_vote.eq(0),
-                        post_vote.eq(0),
                         vote1.eq(0),
                         vote2.eq(0),
                         first_slot.eq(1),
-                        grace.eq(Mux(ambiguous, 0, vote)),
                         gap.eq(0),
                     ]
-                    with m.If(~ambiguous):
-                        # Halfway values for a fall in the next clock (span 1).
-                        m.d.sync += [mid_slot.eq(hp - 2), mid_delay.eq(delay), odd.eq(1)]
+                    with m.If(gap):
+                        # One glitch right at the edge, a short low before it or a short high
+                        # after it (the two cannot be told apart): the edge is halfway between
+                        # the two falls. Its first vote is now or later: SLO is low, so the
+                        # vote is taken now and the timer runs to the centre.
+                        m.d.sync += [
+                            self.delay.eq(Mux(elapsed == delay_max, delay_max, mid_delay)),
+                            phase.eq(1),
+                        ]
+                        load(mid_slot, mid_slot == 0)
+                    with m.Else():
+                        m.d.sync += [
+                            self.delay.eq(delay),
+                            phase.eq(0),
+                            # Halfway values for a fall in the next clock (span 1).
+                            mid_slot.eq(hp - 2),
+                            mid_delay.eq(delay),
+                            odd.eq(1),
+                        ]
+                        load(first_load, 0)                 # u >= 2
                     m.next = "SAMPLE"
             with m.State("SAMPLE"):
                 with m.If(elapsed != delay_max):
                     m.d.sync += elapsed.eq(elapsed + 1)
-                count_down(grace)
-                m.d.sync += [
-                    slot_left.eq(slot_left - 1),
-                    slot_zero.eq(slot_left == 1),
-                    pre_vote.eq(slot_left == pre_at),
-                    post_vote.eq(slot_left == post_at),
-                ]
-                with m.If(pre_vote):
-                    m.d.sync += vote1.eq(slo)
-                with m.If(first_slot & slo & (single | (grace != 0) & ~slot_zero)):
-                    # SLO high right after the edge: maybe a glitch was taken for the edge.
-                    # Wait for the next fall; if it comes within ``vote`` clocks, it and this
-                    # edge are one glitch at the real edge.
-                    m.d.sync += gap.eq(vote)
+                load(slot_left - 1, slot_left == 1)
+                with m.If(first_slot & (phase == 0) & slo):
+                    # SLO high before slot 0's first vote (at a half period of 2: before its
+                    # only sample): maybe a glitch was taken for the edge. Wait for the next
+                    # fall; if it comes within ``v`` clocks, it and this edge are one glitch at
+                    # the real edge.
+                    m.d.sync += gap.eq(~single)
+                    load(vote_load, vote_one)
                     m.next = "MEASURE"
                 with m.Elif(slot_zero):
-                    # The slot's centre: the second vote; the timer runs on to the next centre.
-                    m.d.sync += [
-                        vote2.eq(slo),
-                        slot_left.eq(Cat(C(0, 1), hp) - 1),    # one MA period
-                        slot_zero.eq(0),                        # odd: never 0
-                        pre_vote.eq(0),                         # 2 * hp - 1 > vote
-                        post_vote.eq(vote == 1),                # 2 * hp - 1 == 2 * hp - vote
-                    ]
-                    m.d.comb += decided.eq(single)
-                with m.Elif(post_vote):
-                    m.d.comb += decided.eq(~single)
+                    with m.Switch(phase):
+                        with m.Case(0):
+                            with m.If(single):
+                                m.d.comb += decided.eq(1)
+                                load(period_load, 0)
+                            with m.Else():
+                                m.d.sync += [vote1.eq(slo), phase.eq(1)]
+                                load(vote_load, vote_one)
+                        with m.Case(1):
+                            m.d.sync += [vote2.eq(slo), phase.eq(2)]
+                            load(vote_load, vote_one)
+                        with m.Default():
+                            m.d.comb += decided.eq(1)
+                            m.d.sync += phase.eq(0)
+                            load(period_load, 0)
                 with m.If(decided & first_slot):
                     with m.If(decision):
                         # Slot 0 high: that was no Ack edge. Wait for the next one.

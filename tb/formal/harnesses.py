@@ -60,15 +60,16 @@ INTERNALS = {
     "ma_clock.half_period": ("port", "", "half_period"),
     # SloSampler
     "sampler.fsm": ("fsm", "", "sampler_fsm"),                  # states MEASURE, SAMPLE
-    "sampler.slot_left": ("signal", "", "slot_left"),           # clocks to the next sample
+    "sampler.slot_left": ("signal", "", "slot_left"),           # clocks to the next event
     "sampler.slot_zero": ("signal", "", "slot_zero"),
+    "sampler.phase": ("signal", "", "phase"),                   # next event: vote 1, centre, 3
     "sampler.first_slot": ("signal", "", "first_slot"),         # slot 0 (the Ack) not decided
-    "sampler.post_vote": ("signal", "", "post_vote"),           # the third vote of a slot
     "sampler.vote": ("signal", "", "vote"),                     # the vote spacing
     "sampler.single": ("signal", "", "single"),                 # one sample per slot (hp 2)
-    "sampler.pre_at": ("signal", "", "pre_at"),                 # slot timer at the first vote + 1
-    "sampler.post_at": ("signal", "", "post_at"),               # ... at the third vote + 1
-    "sampler.grace": ("signal", "", "grace"),                   # slot 0: a rise may undo the edge
+    "sampler.first_load": ("signal", "", "first_load"),         # timer: edge to the first vote
+    "sampler.vote_load": ("signal", "", "vote_load"),           # ... vote to vote
+    "sampler.vote_one": ("signal", "", "vote_one"),             # the vote spacing is 1
+    "sampler.period_load": ("signal", "", "period_load"),       # ... third vote to the next first
     "sampler.gap": ("signal", "", "gap"),                       # a fall now is ambiguous
     "sampler.mid_slot": ("signal", "", "mid_slot"),             # slot timer, edge halfway
     "sampler.odd": ("signal", "", "odd"),                       # clocks since the fall, odd
@@ -572,10 +573,11 @@ class SamplerHarness(Harness):
     once ``locked``, it stays locked, and ``sample`` strobes exactly every MA period (2 half
     periods), whatever SLO does; slot 0 (whose decision locks it) is always decided low. (Where
     slot 0 falls after the edge is SamplerImmunityHarness's and the block tests' business: with
-    one glitch at the edge it may move by up to the vote spacing v.) Lemmas: locked means the FSM is in SAMPLE past slot 0; the slot timer and the
-    clocks since the last decision add up to one MA period less v (before the slot's centre)
-    or two less v (after it); ``slot_zero`` and ``post_vote`` mirror ``slot_left`` at the centre
-    and at the third vote; the vote registers follow the half period.
+    one glitch at the edge it may move by up to the vote spacing v.) Lemmas: locked means the
+    FSM is in SAMPLE past slot 0; the slot timer and the clocks since the last decision add up
+    to the clocks from that decision to the next event (2u to the first vote, u = hp - v, then v and 2v more); ``slot_zero``
+    mirrors ``slot_left``; the vote registers and the timer's reload values follow the half
+    period; slot 0 counts from the edge's fall, and an ambiguous fall comes within u + v of it.
 
     Mutation ``"short_gap"``: assert a gap of one clock less; the solver must find a trace.
     """
@@ -614,50 +616,63 @@ class SamplerHarness(Harness):
             Assert(~(dut.sample & ~dut.locked) | ~dut.bit, "slot 0 is decided low"),
         ]
         if self.lemmas:
-            # The vote registers follow the (constant) half period two clocks after the start.
-            settled = Signal(2)
-            with m.If(settled != 3):
+            # The vote registers follow the (constant) half period: the spacing one clock after
+            # the start, the timer's reload values two and three clocks after it.
+            settled = Signal(3)
+            with m.If(settled != 4):
                 m.d.sync += settled.eq(settled + 1)
             in_sample = inside.in_state("sampler.fsm", "SAMPLE")
+            in_measure = inside.in_state("sampler.fsm", "MEASURE")
+            in_idle = inside.in_state("sampler.fsm", "IDLE")
             slot_left = inside("sampler.slot_left")
             slot_zero = inside("sampler.slot_zero")
-            post_vote = inside("sampler.post_vote")
+            phase = inside("sampler.phase")
             first_slot = inside("sampler.first_slot")
-            in_measure = inside.in_state("sampler.fsm", "MEASURE")
-            grace, gap = inside("sampler.grace"), inside("sampler.gap")
+            gap = inside("sampler.gap")
             mid_slot, odd = inside("sampler.mid_slot"), inside("sampler.odd")
             # 2 * ceil(span / 2) - span % 2 = span, the clocks since the edge's fall.
             span = 2 * (hp - 1 - mid_slot) - odd
-            before_centre = since <= period - v
-            in_idle = inside.in_state("sampler.fsm", "IDLE")
+            u = hp - v                                 # edge (or third vote) to the first vote
             m.d.comb += [
                 # The master arms the sampler long after the half period is latched.
-                Assume((settled >= 2) | ~dut.arm),
-                Assert((settled >= 2) | in_idle & (gap == 0) & (grace == 0),
-                       "lemma: idle until armed"),
+                Assume((settled == 4) | ~dut.arm),
+                Assert((settled == 4) | in_idle & ~gap, "lemma: idle until armed"),
                 Assert((settled < 2) | (inside("sampler.vote") == v), "lemma: vote spacing"),
                 Assert((settled < 2) | (inside("sampler.single") == (hp < 3)), "lemma: single"),
-                Assert((settled < 3) | (inside("sampler.pre_at") == v + 1), "lemma: pre_at"),
-                Assert((settled < 3) | (inside("sampler.post_at") == period - v + 1),
-                       "lemma: post_at"),
+                Assert((settled < 3) | (inside("sampler.first_load") == u - 1),
+                       "lemma: first_load"),
+                Assert((settled < 3) | (inside("sampler.vote_load") == (v - 1)[:15]),
+                       "lemma: vote_load"),
+                Assert((settled < 3) | (inside("sampler.vote_one") == (v == 1)),
+                       "lemma: vote_one"),
+                Assert((settled < 4) | (inside("sampler.period_load") == 2 * u - 1),
+                       "lemma: period_load"),
                 Assert(dut.locked == (in_sample & ~first_slot), "lemma: locked past slot 0"),
-                Assert(~dut.locked | before_centre & (since + slot_left == period - v)
-                       | ~before_centre & (since + slot_left == 2 * period - v),
-                       "lemma: slot timer"),
-                Assert(~in_sample | (slot_zero == (slot_left == 0)), "lemma: slot_zero"),
-                Assert(~in_sample | (settled < 3) | (post_vote == (slot_left == period - v)),
-                       "lemma: post_vote"),
-                # The glitch-at-the-edge bookkeeping stays within the vote spacing.
-                Assert((settled < 2) | (grace <= v), "lemma: grace"),
-                Assert((settled < 2) | (gap <= v), "lemma: gap"),
-                Assert(~in_sample | (gap == 0), "lemma: no ambiguity once past the edge"),
-                Assert((settled < 2) | ~in_measure | (gap == 0)
-                       | (span - (v + 1 - gap) >= 1) & (span - (v + 1 - gap) <= v),
-                       "lemma: an ambiguous fall is within 2v of the first"),
+                # Once locked: the clocks since the last decision and the slot timer add up to
+                # the clocks from that decision to the next event (2u, then + v, then + 2v).
+                Assert(~in_sample | (phase <= 2) & ((hp >= 3) | (phase == 0)),
+                       "lemma: phase range"),
+                Assert(~(in_sample & first_slot & (phase == 1)) | (slot_left < hp),
+                       "lemma: slot 0 timer to the centre"),
+                Assert(~(in_sample & first_slot & (phase == 2)) | (slot_left < v),
+                       "lemma: slot 0 timer to the third vote"),
+                Assert(~dut.locked | (phase != 0) | (since + slot_left == 2 * u),
+                       "lemma: slot timer to the first vote"),
+                Assert(~dut.locked | (phase != 1) | (since + slot_left == 2 * u + v),
+                       "lemma: slot timer to the centre"),
+                Assert(~dut.locked | (phase != 2) | (since + slot_left == period),
+                       "lemma: slot timer to the third vote"),
+                Assert(~(in_sample | gap) | (slot_zero == (slot_left == 0)), "lemma: slot_zero"),
                 Assert(~in_sample | (slot_left < period), "lemma: slot timer range"),
-                Assert((settled < 2) | ~(in_sample & first_slot & (grace != 0))
-                       | (span == v + 1 - grace),
-                       "lemma: grace counts from the edge"),
+                # Slot 0, before its first vote, counts from the edge's fall.
+                Assert((settled < 3) | ~(in_sample & first_slot & (phase == 0))
+                       | (span + slot_left == u) & (slot_left < u),
+                       "lemma: slot 0 counts from the fall"),
+                # The ambiguity window: v clocks after a rise within u clocks of the fall.
+                Assert(~gap | in_measure, "lemma: gap only while measuring"),
+                Assert((settled < 3) | ~gap | (slot_left < v) & (span - (v - slot_left) >= 1)
+                       & (span - (v - slot_left) <= u),
+                       "lemma: an ambiguous fall is within u + v of the first"),
             ]
 
         m.d.comb += Cover(dut.locked & dut.sample & (hp >= 3) & ~dut.bit)

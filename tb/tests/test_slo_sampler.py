@@ -380,15 +380,17 @@ def test_slo_sampler_one_glitch_up_to_the_vote_spacing_never_changes_a_decision(
     """Noise immunity (docs/ports.md): the line inverted for up to v clocks (v = hp // 2), once,
     anywhere (before the Ack edge, at it, inside the Ack, on any vote of any slot): every slot is
     still decided as sent, so no Start is faked and the frame never shifts; the delay is exact
-    unless the glitch touches the edge, and then off by at most v clocks."""
+    unless the glitch touches the edge (starts within u = hp - v clocks after it, the clocks up
+    to slot 0's first vote, or ends within v before it), and then off by at most v clocks."""
     v = vote_spacing(hp)
+    u = hp - v
     d = 7
     for length in range(1, v + 1):
         for start, bits, delay in _glitch_sweep(hp, length, GLITCH_SLOTS, d):
             where = f"hp {hp}: {length}-clock glitch from cycle {start}"
             assert bits == GLITCH_SLOTS, where
             assert abs(delay - (d - 1)) <= v, where
-            if start > d + v or start + length < d - v:
+            if start > d + u or start + length < d - v:
                 assert delay == d - 1, where
 
 
