@@ -643,7 +643,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .rst(rst)
   );
   \biss_master.decoder  decoder (
-    .\bit (\slo$77 ),
+    .\bit (\bit ),
     .cds(\cds$196 ),
     .clk(clk),
     .cpw_top(cpw_top),
@@ -702,6 +702,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   );
   \biss_master.sampler  sampler (
     .arm(ma_arm),
+    .\bit (\bit ),
     .clk(clk),
     .delay(delay),
     .early(early),
@@ -730,7 +731,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .is_zero(lc_zero_seen),
     .lc(\lc$151 ),
     .load(load),
-    .\port$1022$0 (\slo$77 ),
+    .\port$421$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -787,7 +788,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .lc_skip_seen(lc_skip_seen),
     .lc_zero(\lc_zero$199 ),
     .lc_zero_seen(lc_zero_seen),
-    .\port$755$0 (\$2 ),
+    .\port$821$0 (\$2 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -845,12 +846,11 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \half_period$143  = cycle[15:0];
   assign arm = ma_arm;
   assign \sample$146  = sample;
-  assign \bit  = \slo$77 ;
-  assign \bit$148  = \slo$77 ;
+  assign \bit$148  = \bit ;
   assign \word_count$150  = word_count;
   assign \lc$152  = \lc$151 ;
-  assign lc_next = { \lc$151 [4:0], \slo$77  };
-  assign \lc_next$154  = { \lc$151 [4:0], \slo$77  };
+  assign lc_next = { \lc$151 [4:0], \bit  };
+  assign \lc_next$154  = { \lc$151 [4:0], \bit  };
   assign lc_load = load;
   assign lc_check = check;
   assign \resync$160  = resync;
@@ -3241,7 +3241,7 @@ module \biss_master.counters.count_spw_mismatch (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.decoder (rst, word_count, lc_load, words, receiver_clear, sample, \bit , done, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1, lc, cpw_top, crc_ok
+module \biss_master.decoder (rst, word_count, \bit , lc_load, words, receiver_clear, sample, done, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1, lc, cpw_top, crc_ok
 , clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$24  = 0;
   wire [6:0] \$1 ;
@@ -4212,7 +4212,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, receiver_clear, sa
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.decoder.crc0 (rst, start, valid, kind, receiver_clear, \bit , ok, clk);
+module \biss_master.decoder.crc0 (rst, \bit , start, valid, kind, receiver_clear, ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$25  = 0;
   wire [5:0] \$1 ;
   wire \$10 ;
@@ -4387,7 +4387,7 @@ module \biss_master.decoder.crc0 (rst, start, valid, kind, receiver_clear, \bit 
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.decoder.crc1 (rst, start, valid, kind, receiver_clear, \bit , ok, clk);
+module \biss_master.decoder.crc1 (rst, \bit , start, valid, kind, receiver_clear, ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$26  = 0;
   wire [5:0] \$1 ;
   wire \$10 ;
@@ -5220,54 +5220,112 @@ module \biss_master.results (rst, report, valid, frame, report_frame, report_del
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.sampler (clk, rst, half_period, receiver_clear, arm, early, locked, delay, sample, level, slo);
+module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$30  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
-  wire [13:0] \$12 ;
-  wire [17:0] \$13 ;
-  wire \$14 ;
+  wire \$12 ;
+  wire [13:0] \$13 ;
+  wire [17:0] \$14 ;
   wire \$15 ;
-  wire [17:0] \$16 ;
+  wire \$16 ;
   wire \$17 ;
   wire \$18 ;
-  wire \$19 ;
-  wire \$2 ;
+  wire [12:0] \$19 ;
+  wire [14:0] \$2 ;
   wire \$20 ;
-  reg \$21 ;
-  reg [12:0] \$22 ;
-  reg \$23 ;
-  reg \$24 ;
-  reg [1:0] \$25 ;
-  reg [12:0] \$26 ;
-  reg [16:0] \$27 ;
-  reg \$28 ;
-  reg \$29 ;
-  wire [13:0] \$3 ;
-  wire \$4 ;
-  wire \$5 ;
-  wire \$6 ;
-  wire [13:0] \$7 ;
+  wire \$21 ;
+  wire [13:0] \$22 ;
+  wire [13:0] \$23 ;
+  wire [16:0] \$24 ;
+  wire \$25 ;
+  wire [13:0] \$26 ;
+  wire [13:0] \$27 ;
+  wire \$28 ;
+  wire [13:0] \$29 ;
+  wire \$3 ;
+  wire [17:0] \$30 ;
+  wire \$31 ;
+  wire \$32 ;
+  wire \$33 ;
+  wire \$34 ;
+  wire \$35 ;
+  wire \$36 ;
+  wire \$37 ;
+  wire \$38 ;
+  wire \$39 ;
+  wire [16:0] \$4 ;
+  wire \$40 ;
+  wire \$41 ;
+  wire \$42 ;
+  wire \$43 ;
+  wire \$44 ;
+  wire \$45 ;
+  wire \$46 ;
+  wire \$47 ;
+  wire \$48 ;
+  wire \$49 ;
+  wire [17:0] \$5 ;
+  wire \$50 ;
+  wire \$51 ;
+  wire \$52 ;
+  wire \$53 ;
+  wire \$54 ;
+  wire \$55 ;
+  wire \$56 ;
+  wire \$57 ;
+  wire \$58 ;
+  wire \$59 ;
+  wire [15:0] \$6 ;
+  wire \$60 ;
+  wire \$61 ;
+  wire \$62 ;
+  reg \$63 ;
+  reg [12:0] \$64 ;
+  reg [16:0] \$65 ;
+  reg \$66 ;
+  reg [12:0] \$67 ;
+  reg \$68 ;
+  reg \$69 ;
+  wire \$7 ;
+  reg \$70 ;
+  reg [1:0] \$71 ;
+  reg [16:0] \$72 ;
+  reg \$73 ;
+  reg \$74 ;
+  reg \$75 ;
+  reg \$76 ;
+  reg [12:0] \$77 ;
+  reg [1:0] \$78 ;
   wire [13:0] \$8 ;
-  wire [16:0] \$9 ;
+  wire [17:0] \$9 ;
   input arm;
   wire arm;
+  output \bit ;
   wire \bit ;
   input clk;
   wire clk;
+  reg decided;
   output [12:0] delay;
   reg [12:0] delay = 13'h0000;
   output early;
   reg early = 1'h0;
   reg [12:0] elapsed = 13'h0000;
+  reg [15:0] first_load = 16'h0000;
   reg first_slot = 1'h0;
+  reg gap = 1'h0;
   input [15:0] half_period;
   wire [15:0] half_period;
   output level;
   wire level;
   output locked;
   reg locked = 1'h0;
+  reg [12:0] mid_delay = 13'h0000;
+  reg [16:0] mid_slot = 17'h00000;
+  reg odd = 1'h0;
+  reg [16:0] period_load = 17'h00000;
+  reg [1:0] phase = 2'h0;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -5275,49 +5333,124 @@ module \biss_master.sampler (clk, rst, half_period, receiver_clear, arm, early, 
   output sample;
   reg sample;
   reg [1:0] sampler_fsm_state = 2'h0;
+  reg single = 1'h0;
   input slo;
   wire slo;
   reg slo_prev = 1'h1;
   reg [16:0] slot_left = 17'h00000;
   reg slot_zero = 1'h1;
-  assign \$1  = ~ level;
-  assign \$2  = elapsed != 13'h1fff;
-  assign \$3  = elapsed + 1'h1;
-  assign \$4  = ~ level;
-  assign \$5  = slo_prev & \$4 ;
-  assign \$6  = elapsed == 13'h1fff;
-  assign \$7  = elapsed - 1'h1;
-  assign \$8  = \$6  ? 14'h1fff : \$7 ;
-  assign \$9  = half_period - 1'h1;
-  assign \$10  = half_period == 1'h1;
-  assign \$11  = elapsed != 13'h1fff;
-  assign \$12  = elapsed + 1'h1;
-  assign \$13  = slot_left - 1'h1;
-  assign \$14  = slot_left == 1'h1;
-  assign \$15  = first_slot & level;
-  assign \$16  = { half_period, 1'h0 } - 1'h1;
-  assign \$17  = first_slot & level;
-  assign \$18  = ! sampler_fsm_state;
-  assign \$19  = sampler_fsm_state == 1'h1;
-  assign \$20  = sampler_fsm_state == 2'h2;
+  reg [14:0] vote = 15'h0000;
+  reg vote1 = 1'h0;
+  reg vote2 = 1'h0;
+  reg [14:0] vote_load = 15'h0000;
+  reg vote_one = 1'h0;
+  assign \$22  = elapsed - 1'h1;
+  assign \$23  = \$21  ? 14'h1fff : \$22 ;
+  assign \$24  = half_period - 2'h2;
+  assign \$25  = elapsed == 13'h1fff;
+  assign \$26  = elapsed - 1'h1;
+  assign \$27  = \$25  ? 14'h1fff : \$26 ;
+  assign \$28  = elapsed != 13'h1fff;
+  assign \$29  = elapsed + 1'h1;
+  assign \$30  = slot_left - 1'h1;
+  assign \$31  = slot_left == 1'h1;
+  assign \$32  = ! phase;
+  assign \$33  = first_slot & \$32 ;
+  assign \$34  = \$33  & level;
+  assign \$35  = ~ single;
+  assign \$36  = decided & first_slot;
+  assign \$37  = vote1 & vote2;
+  assign \$38  = vote1 & level;
+  assign \$39  = \$37  | \$38 ;
+  assign \$40  = vote2 & level;
+  assign \$41  = \$39  | \$40 ;
+  assign \$42  = single ? level : \$41 ;
+  assign \$43  = ~ first_slot;
+  assign \$44  = decided & \$43 ;
+  assign \$45  = vote1 & vote2;
+  assign \$46  = vote1 & level;
+  assign \$47  = \$45  | \$46 ;
+  assign \$48  = vote2 & level;
+  assign \$49  = \$47  | \$48 ;
+  assign \bit  = single ? level : \$49 ;
+  assign \$50  = ! phase;
+  assign \$51  = first_slot & \$50 ;
+  assign \$52  = \$51  & level;
+  assign \$53  = decided & first_slot;
+  assign \$54  = vote1 & vote2;
+  assign \$55  = vote1 & level;
+  assign \$56  = \$54  | \$55 ;
+  assign \$57  = vote2 & level;
+  assign \$58  = \$56  | \$57 ;
+  assign \$59  = single ? level : \$58 ;
+  assign \$60  = ! sampler_fsm_state;
+  assign \$61  = sampler_fsm_state == 1'h1;
+  assign \$62  = sampler_fsm_state == 2'h2;
   always @(posedge clk)
-    slo_prev <= \$21 ;
+    slo_prev <= \$63 ;
   always @(posedge clk)
-    elapsed <= \$22 ;
+    vote <= \$2 ;
   always @(posedge clk)
-    early <= \$23 ;
+    single <= \$3 ;
   always @(posedge clk)
-    locked <= \$24 ;
+    first_load <= \$5 [15:0];
   always @(posedge clk)
-    sampler_fsm_state <= \$25 ;
+    vote_load <= \$6 [14:0];
   always @(posedge clk)
-    delay <= \$26 ;
+    vote_one <= \$7 ;
   always @(posedge clk)
-    slot_left <= \$27 ;
+    period_load <= { first_load, 1'h1 };
   always @(posedge clk)
-    slot_zero <= \$28 ;
+    mid_delay <= \$64 ;
   always @(posedge clk)
-    first_slot <= \$29 ;
+    mid_slot <= \$65 ;
+  always @(posedge clk)
+    odd <= \$66 ;
+  always @(posedge clk)
+    elapsed <= \$67 ;
+  always @(posedge clk)
+    early <= \$68 ;
+  always @(posedge clk)
+    locked <= \$69 ;
+  always @(posedge clk)
+    gap <= \$70 ;
+  always @(posedge clk)
+    sampler_fsm_state <= \$71 ;
+  always @(posedge clk)
+    slot_left <= \$72 ;
+  always @(posedge clk)
+    slot_zero <= \$73 ;
+  always @(posedge clk)
+    vote1 <= \$74 ;
+  always @(posedge clk)
+    vote2 <= \$75 ;
+  always @(posedge clk)
+    first_slot <= \$76 ;
+  always @(posedge clk)
+    delay <= \$77 ;
+  always @(posedge clk)
+    phase <= \$78 ;
+  assign \$1  = half_period >= 2'h3;
+  assign \$2  = \$1  ? half_period[15:1] : 15'h0000;
+  assign \$3  = half_period < 2'h3;
+  assign \$4  = half_period - vote;
+  assign \$5  = $signed(\$4 ) - $signed(2'h1);
+  assign \$6  = vote - 1'h1;
+  assign \$7  = vote == 1'h1;
+  assign \$8  = mid_delay + 1'h1;
+  assign \$9  = mid_slot - 1'h1;
+  assign \$10  = ~ odd;
+  assign \$11  = ~ level;
+  assign \$12  = elapsed != 13'h1fff;
+  assign \$13  = elapsed + 1'h1;
+  assign \$14  = slot_left - 1'h1;
+  assign \$15  = slot_left == 1'h1;
+  assign \$16  = ~ level;
+  assign \$17  = slo_prev & \$16 ;
+  assign \$18  = elapsed == 13'h1fff;
+  assign \$19  = \$18  ? 13'h1fff : mid_delay;
+  assign \$20  = ! mid_slot;
+  assign \$21  = elapsed == 13'h1fff;
   \biss_master.sampler.sync  sync (
     .clk(clk),
     .receiver_clear(receiver_clear),
@@ -5327,210 +5460,506 @@ module \biss_master.sampler (clk, rst, half_period, receiver_clear, arm, early, 
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    \$21  = level;
+    \$63  = level;
     if (receiver_clear) begin
-      \$21  = 1'h1;
+      \$63  = 1'h1;
     end
     if (rst) begin
-      \$21  = 1'h1;
+      \$63  = 1'h1;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    \$22  = elapsed;
-    casez (sampler_fsm_state)
-      2'h0:
-          if (arm) begin
-            \$22  = 13'h0001;
-          end
-      2'h1:
-          if (\$2 ) begin
-            \$22  = \$3 [12:0];
-          end
-      2'h2:
-          if (\$11 ) begin
-            \$22  = \$12 [12:0];
-          end
-    endcase
-    if (receiver_clear) begin
-      \$22  = 13'h0000;
+    \$64  = mid_delay;
+    if (odd) begin
+      \$64  = \$8 [12:0];
     end
-    if (rst) begin
-      \$22  = 13'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    \$23  = early;
-    casez (sampler_fsm_state)
-      2'h0:
-          if (arm) begin
-            \$23  = \$1 ;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$23  = 1'h0;
-    end
-    if (rst) begin
-      \$23  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    \$24  = locked;
-    casez (sampler_fsm_state)
-      2'h0:
-          if (arm) begin
-            \$24  = 1'h0;
-          end
-      2'h1:
-          /* empty */;
-      2'h2:
-          if (\$15 ) begin
-          end else if (slot_zero) begin
-            \$24  = 1'h1;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$24  = 1'h0;
-    end
-    if (rst) begin
-      \$24  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    \$25  = sampler_fsm_state;
-    casez (sampler_fsm_state)
-      2'h0:
-          if (arm) begin
-            \$25  = 2'h1;
-          end
-      2'h1:
-          if (\$5 ) begin
-            \$25  = 2'h2;
-          end
-      2'h2:
-          if (\$15 ) begin
-            \$25  = 2'h1;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$25  = 2'h0;
-    end
-    if (rst) begin
-      \$25  = 2'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    \$26  = delay;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$5 ) begin
-            \$26  = \$8 [12:0];
-          end
-    endcase
-    if (receiver_clear) begin
-      \$26  = 13'h0000;
-    end
-    if (rst) begin
-      \$26  = 13'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    \$27  = slot_left;
-    casez (sampler_fsm_state)
-      2'h0:
-          /* empty */;
-      2'h1:
-          if (\$5 ) begin
-            \$27  = \$9 ;
-          end
-      2'h2:
-        begin
-          \$27  = \$13 [16:0];
-          if (\$15 ) begin
-          end else if (slot_zero) begin
-            \$27  = \$16 [16:0];
-          end
-        end
-    endcase
-    if (receiver_clear) begin
-      \$27  = 17'h00000;
-    end
-    if (rst) begin
-      \$27  = 17'h00000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    \$28  = slot_zero;
-    casez (sampler_fsm_state)
-      2'h0:
-          /* empty */;
-      2'h1:
-          if (\$5 ) begin
-            \$28  = \$10 ;
-          end
-      2'h2:
-        begin
-          \$28  = \$14 ;
-          if (\$15 ) begin
-          end else if (slot_zero) begin
-            \$28  = 1'h0;
-          end
-        end
-    endcase
-    if (receiver_clear) begin
-      \$28  = 1'h1;
-    end
-    if (rst) begin
-      \$28  = 1'h1;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    \$29  = first_slot;
-    casez (sampler_fsm_state)
-      2'h0:
-          /* empty */;
-      2'h1:
-          if (\$5 ) begin
-            \$29  = 1'h1;
-          end
-      2'h2:
-          if (\$15 ) begin
-          end else if (slot_zero) begin
-            \$29  = 1'h0;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$29  = 1'h0;
-    end
-    if (rst) begin
-      \$29  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    sample = 1'h0;
-    casez (sampler_fsm_state)
-      2'h0:
-          /* empty */;
-      2'h1:
-          /* empty */;
-      2'h2:
           if (\$17 ) begin
+            (* full_case = 32'd1 *)
+            if (gap) begin
+            end else begin
+              \$64  = \$27 [12:0];
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$64  = 13'h0000;
+    end
+    if (rst) begin
+      \$64  = 13'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    \$65  = mid_slot;
+    (* full_case = 32'd1 *)
+    if (odd) begin
+    end else begin
+      \$65  = \$9 [16:0];
+    end
+    casez (sampler_fsm_state)
+      2'h0:
+          /* empty */;
+      2'h1:
+          if (\$17 ) begin
+            (* full_case = 32'd1 *)
+            if (gap) begin
+            end else begin
+              \$65  = \$24 ;
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$65  = 17'h00000;
+    end
+    if (rst) begin
+      \$65  = 17'h00000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    \$66  = \$10 ;
+    casez (sampler_fsm_state)
+      2'h0:
+          /* empty */;
+      2'h1:
+          if (\$17 ) begin
+            (* full_case = 32'd1 *)
+            if (gap) begin
+            end else begin
+              \$66  = 1'h1;
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$66  = 1'h0;
+    end
+    if (rst) begin
+      \$66  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    \$67  = elapsed;
+    casez (sampler_fsm_state)
+      2'h0:
+          if (arm) begin
+            \$67  = 13'h0001;
+          end
+      2'h1:
+          if (\$12 ) begin
+            \$67  = \$13 [12:0];
+          end
+      2'h2:
+          if (\$28 ) begin
+            \$67  = \$29 [12:0];
+          end
+    endcase
+    if (receiver_clear) begin
+      \$67  = 13'h0000;
+    end
+    if (rst) begin
+      \$67  = 13'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    \$68  = early;
+    casez (sampler_fsm_state)
+      2'h0:
+          if (arm) begin
+            \$68  = \$11 ;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$68  = 1'h0;
+    end
+    if (rst) begin
+      \$68  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    \$69  = locked;
+    casez (sampler_fsm_state)
+      2'h0:
+          if (arm) begin
+            \$69  = 1'h0;
+          end
+      2'h1:
+          /* empty */;
+      2'h2:
+          if (\$36 ) begin
+            (* full_case = 32'd1 *)
+            if (\$42 ) begin
+            end else begin
+              \$69  = 1'h1;
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$69  = 1'h0;
+    end
+    if (rst) begin
+      \$69  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    \$70  = gap;
+    casez (sampler_fsm_state)
+      2'h0:
+          if (arm) begin
+            \$70  = 1'h0;
+          end
+      2'h1:
+        begin
+          if (gap) begin
+            if (slot_zero) begin
+              \$70  = 1'h0;
+            end
+          end
+          if (\$17 ) begin
+            \$70  = 1'h0;
+          end
+        end
+      2'h2:
+          if (\$34 ) begin
+            \$70  = \$35 ;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$70  = 1'h0;
+    end
+    if (rst) begin
+      \$70  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    \$71  = sampler_fsm_state;
+    casez (sampler_fsm_state)
+      2'h0:
+          if (arm) begin
+            \$71  = 2'h1;
+          end
+      2'h1:
+          if (\$17 ) begin
+            \$71  = 2'h2;
+          end
+      2'h2:
+        begin
+          if (\$34 ) begin
+            \$71  = 2'h1;
+          end
+          if (\$36 ) begin
+            if (\$42 ) begin
+              \$71  = 2'h1;
+            end
+          end
+        end
+    endcase
+    if (receiver_clear) begin
+      \$71  = 2'h0;
+    end
+    if (rst) begin
+      \$71  = 2'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    \$72  = slot_left;
+    casez (sampler_fsm_state)
+      2'h0:
+          /* empty */;
+      2'h1:
+        begin
+          if (gap) begin
+            \$72  = \$14 [16:0];
+          end
+          if (\$17 ) begin
+            (* full_case = 32'd1 *)
+            if (gap) begin
+              \$72  = mid_slot;
+            end else begin
+              \$72  = { 1'h0, first_load };
+            end
+          end
+        end
+      2'h2:
+        begin
+          \$72  = \$30 [16:0];
+          if (\$34 ) begin
+            \$72  = { 2'h0, vote_load };
           end else if (slot_zero) begin
-            sample = 1'h1;
+            (* full_case = 32'd1 *)
+            casez (phase)
+              2'h0:
+                  (* full_case = 32'd1 *)
+                  if (single) begin
+                    \$72  = period_load;
+                  end else begin
+                    \$72  = { 2'h0, vote_load };
+                  end
+              2'h1:
+                  \$72  = { 2'h0, vote_load };
+              default:
+                  \$72  = period_load;
+            endcase
+          end
+        end
+    endcase
+    if (receiver_clear) begin
+      \$72  = 17'h00000;
+    end
+    if (rst) begin
+      \$72  = 17'h00000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    \$73  = slot_zero;
+    casez (sampler_fsm_state)
+      2'h0:
+          /* empty */;
+      2'h1:
+        begin
+          if (gap) begin
+            \$73  = \$15 ;
+          end
+          if (\$17 ) begin
+            (* full_case = 32'd1 *)
+            if (gap) begin
+              \$73  = \$20 ;
+            end else begin
+              \$73  = 1'h0;
+            end
+          end
+        end
+      2'h2:
+        begin
+          \$73  = \$31 ;
+          if (\$34 ) begin
+            \$73  = vote_one;
+          end else if (slot_zero) begin
+            (* full_case = 32'd1 *)
+            casez (phase)
+              2'h0:
+                  (* full_case = 32'd1 *)
+                  if (single) begin
+                    \$73  = 1'h0;
+                  end else begin
+                    \$73  = vote_one;
+                  end
+              2'h1:
+                  \$73  = vote_one;
+              default:
+                  \$73  = 1'h0;
+            endcase
+          end
+        end
+    endcase
+    if (receiver_clear) begin
+      \$73  = 1'h1;
+    end
+    if (rst) begin
+      \$73  = 1'h1;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    \$74  = vote1;
+    casez (sampler_fsm_state)
+      2'h0:
+          /* empty */;
+      2'h1:
+          if (\$17 ) begin
+            \$74  = 1'h0;
+          end
+      2'h2:
+          if (\$34 ) begin
+          end else if (slot_zero) begin
+            casez (phase)
+              2'h0:
+                  (* full_case = 32'd1 *)
+                  if (single) begin
+                  end else begin
+                    \$74  = level;
+                  end
+            endcase
+          end
+    endcase
+    if (receiver_clear) begin
+      \$74  = 1'h0;
+    end
+    if (rst) begin
+      \$74  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    \$75  = vote2;
+    casez (sampler_fsm_state)
+      2'h0:
+          /* empty */;
+      2'h1:
+          if (\$17 ) begin
+            \$75  = 1'h0;
+          end
+      2'h2:
+          if (\$34 ) begin
+          end else if (slot_zero) begin
+            casez (phase)
+              2'h0:
+                  /* empty */;
+              2'h1:
+                  \$75  = level;
+            endcase
+          end
+    endcase
+    if (receiver_clear) begin
+      \$75  = 1'h0;
+    end
+    if (rst) begin
+      \$75  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    \$76  = first_slot;
+    casez (sampler_fsm_state)
+      2'h0:
+          /* empty */;
+      2'h1:
+          if (\$17 ) begin
+            \$76  = 1'h1;
+          end
+      2'h2:
+          if (\$36 ) begin
+            (* full_case = 32'd1 *)
+            if (\$42 ) begin
+            end else begin
+              \$76  = 1'h0;
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$76  = 1'h0;
+    end
+    if (rst) begin
+      \$76  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    \$77  = delay;
+    casez (sampler_fsm_state)
+      2'h0:
+          /* empty */;
+      2'h1:
+          if (\$17 ) begin
+            (* full_case = 32'd1 *)
+            if (gap) begin
+              \$77  = \$19 ;
+            end else begin
+              \$77  = \$23 [12:0];
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$77  = 13'h0000;
+    end
+    if (rst) begin
+      \$77  = 13'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    \$78  = phase;
+    casez (sampler_fsm_state)
+      2'h0:
+          /* empty */;
+      2'h1:
+          if (\$17 ) begin
+            (* full_case = 32'd1 *)
+            if (gap) begin
+              \$78  = 2'h1;
+            end else begin
+              \$78  = 2'h0;
+            end
+          end
+      2'h2:
+          if (\$34 ) begin
+          end else if (slot_zero) begin
+            (* full_case = 32'd1 *)
+            casez (phase)
+              2'h0:
+                  (* full_case = 32'd1 *)
+                  if (single) begin
+                  end else begin
+                    \$78  = 2'h1;
+                  end
+              2'h1:
+                  \$78  = 2'h2;
+              default:
+                  \$78  = 2'h0;
+            endcase
+          end
+    endcase
+    if (receiver_clear) begin
+      \$78  = 2'h0;
+    end
+    if (rst) begin
+      \$78  = 2'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    sample = \$44 ;
+    casez (sampler_fsm_state)
+      2'h0:
+          /* empty */;
+      2'h1:
+          /* empty */;
+      2'h2:
+          if (\$53 ) begin
+            (* full_case = 32'd1 *)
+            if (\$59 ) begin
+            end else begin
+              sample = 1'h1;
+            end
           end
     endcase
   end
-  assign \bit  = level;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    decided = 1'h0;
+    casez (sampler_fsm_state)
+      2'h0:
+          /* empty */;
+      2'h1:
+          /* empty */;
+      2'h2:
+          if (\$52 ) begin
+          end else if (slot_zero) begin
+            (* full_case = 32'd1 *)
+            casez (phase)
+              2'h0:
+                  if (single) begin
+                    decided = 1'h1;
+                  end
+              2'h1:
+                  /* empty */;
+              default:
+                  decided = 1'h1;
+            endcase
+          end
+    endcase
+  end
 endmodule
 
 (* generator = "Amaranth" *)
@@ -5667,7 +6096,7 @@ module \biss_master.scheduler (periodic, abort, period, clk, rst, request, overr
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.sign_of_life (rst, load, \repeat , skip, check, resync, \port$1022$0 , lc, is_zero, clk);
+module \biss_master.sign_of_life (rst, \port$421$0 , load, \repeat , skip, check, resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$32  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -5705,8 +6134,8 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, resync, \por
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$1022$0 ;
-  wire \port$1022$0 ;
+  input \port$421$0 ;
+  wire \port$421$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -5718,9 +6147,9 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, resync, \por
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$1022$0  };
-  assign \$2  = { lc[4:0], \port$1022$0  } == last;
-  assign \$3  = { lc[4:0], \port$1022$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$421$0  };
+  assign \$2  = { lc[4:0], \port$421$0  } == last;
+  assign \$3  = { lc[4:0], \port$421$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = lc == 6'h3f;
@@ -5810,7 +6239,7 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, resync, \por
       \$21  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$1022$0  };
+  assign lc_next = { lc[4:0], \port$421$0  };
   assign zero = is_zero;
 endmodule
 
@@ -6292,7 +6721,7 @@ module \biss_master.timers (timeout_live, clk, rst, restart, ack_limit, timeout_
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.verdict (lc_skip_seen, \port$755$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
+module \biss_master.verdict (lc_skip_seen, \port$821$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$36  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -6406,8 +6835,8 @@ module \biss_master.verdict (lc_skip_seen, \port$755$0 , lc_check, lc_repeat, lc
   wire lc_zero;
   input lc_zero_seen;
   wire lc_zero_seen;
-  output \port$755$0 ;
-  wire \port$755$0 ;
+  output \port$821$0 ;
+  wire \port$821$0 ;
   output report;
   wire report;
   input report_frame;
@@ -6492,7 +6921,7 @@ module \biss_master.verdict (lc_skip_seen, \port$755$0 , lc_check, lc_repeat, lc
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$755$0  = \$2 ;
+  assign \port$821$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

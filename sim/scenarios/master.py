@@ -18,7 +18,7 @@ from encoder_model import frames
 from encoder_model.cocotb_encoder import Cable
 from master_contract import ENCODER_PRESETS, STATUS, STATUS_NAME
 from sim.shared import glitch
-from sim.shared.discovery import also_at_fast_clock, expected_to_fail, only_on_builds
+from sim.shared.discovery import also_at_fast_clock, only_on_builds
 from sim.shared.testbench import CABLES_M, CLK_HZ, MA_RATES_HZ, Testbench, half_period_for, preset
 
 #: Every preset of the issue: BiSS Safety, EVOLUTE, RESOLUTE BiSS C (master_contract) and BP3.
@@ -546,17 +546,19 @@ NOISE_RATE_HZ = 1e6
 NOISE_PRESET = "resolute_c_36"
 
 
-async def glitch_on_ack_sample(tb, values, n_ack, glitch_slot):
+async def glitch_on_ack_sample(tb, values, n_ack, glitch_slot, *, width=0.3, centre=0.0):
     """One request whose frame ``values`` comes after ``n_ack`` Ack slots, with a glitch high
-    (30 % of a bit) centred on the middle of Ack slot ``glitch_slot``; returns the Result."""
+    (``width`` of a bit) centred ``centre`` bits after the middle of Ack slot ``glitch_slot``;
+    returns the Result."""
     rt = tb.encoder.cable.round_trip_s()
 
     async def inject():
         timing = await glitch.cycle_timing(tb.dut, NOISE_RATE_HZ, rt)
-        width = round(0.3 * timing.period)
-        await Timer(timing.slot_start(glitch_slot) + timing.period // 2 - width // 2
-                    - get_sim_time("step"), "step")
-        await tb.encoder.glitch_slo(width * 1e-12)
+        length = round(width * timing.period)
+        middle = timing.slot_start(glitch_slot) + timing.period // 2 + round(centre * timing.period)
+        await Timer(middle - length // 2 - get_sim_time("step"), "step")
+        width_steps = length
+        await tb.encoder.glitch_slo(width_steps * 1e-12)
 
     tb.queue(values=[values], processing_time_s=glitch.processing_for_ack_slots(
         n_ack, NOISE_RATE_HZ))
@@ -577,12 +579,13 @@ def assert_safe(tb, res, n_sent, what):
 
 
 @cocotb.test()
-@expected_to_fail("issue 12: a glitch high on an Ack sample is taken for Start and the "
-                  "slipped bits can carry a good CRC-6")
 async def glitch_in_the_ack_slips_the_frame(dut):
-    """A glitch high on the sample of Ack slot 1 (of 5): the master takes it for Start and reads
-    the frame 4 slots early. The position is chosen (the encoder model's CRC) so that the
-    slipped bits pass the CRC-6: the safe outcome is not valid, or the true position."""
+    """A glitch high of 30 % of a bit on the middle of Ack slot 1 (of 5). A master that decides
+    each bit from one mid-eye sample (this core before issue 12) takes it for Start and reads
+    the frame 4 slots early; the position is chosen (the encoder model's CRC) so that the
+    slipped bits pass the CRC-6, and it reported a wrong position as valid. The safe outcome:
+    not valid, or the true position (with three votes a quarter bit apart, the glitch inverts
+    only the middle one)."""
     tb = Testbench(dut, seed=12)
     await tb.start()
     fmt = preset(NOISE_PRESET)
@@ -602,9 +605,10 @@ async def glitch_in_the_ack_slips_the_frame(dut):
 
 @cocotb.test()
 async def clean_frame_after_a_slipped_one(dut):
-    """A glitch high on Ack slot 1 (of 12) slips the frame by 11 slots: the master reads it as a
+    """A glitch high of 45 % of a bit over two of the three votes of Ack slot 1 (of 12: longer
+    than the immunity, so Start is faked) slips the frame by 11 slots: the master reads it as a
     CRC error and stops the clock while the encoder still has 11 bits to send. The next request
-    comes at once, the line clean: it must read a new frame (the encoder's next position) or
+    comes as soon as the master takes it, the line clean: it must read a new frame (the encoder's next position) or
     report a fault, never the tail of the old one. The position is chosen so that the tail, read
     as a frame, has a good CRC-6 (sim/shared/glitch.tail_reading)."""
     tb = Testbench(dut, seed=13)
@@ -623,7 +627,9 @@ async def clean_frame_after_a_slipped_one(dut):
                   value.position, tail["words"][0]["position"])
     tb.configure(fmt, NOISE_RATE_HZ)
     await frames_ok(tb, 1)
-    res = await glitch_on_ack_sample(tb, value, n_ack, slot)
+    # [-0.3, +0.15] bit around the middle: the first vote (a quarter bit before it) and the
+    # middle one.
+    res = await glitch_on_ack_sample(tb, value, n_ack, slot, width=0.45, centre=-0.075)
     assert not res.valid, f"the slipped frame: status {STATUS_NAME[res.status]}"
     n_sent = len(tb.sent)
     tb.queue()

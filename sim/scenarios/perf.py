@@ -219,13 +219,14 @@ async def request_cycle_overhead(dut):
 # -- 2. Latency from the last CRC bit to the verdict --------------------------------------------
 @cocotb.test()
 async def verdict_latency(dut):
-    """The sampler's ``sample`` strobe marks the clock in which the synchronized SLO holds the
-    middle of a slot: the clock edge that starts it is "the core samples the bit" (the decoder
-    and CRC registers take it at the next edge). The last strobe before ``done`` must be the
+    """The sampler's ``sample`` strobe marks the clock in which a slot is decided: its third vote,
+    v = hp // 2 clocks after the middle of the slot (v = 0 at hp = 2; docs/ports.md, "Noise
+    immunity"): the clock edge that starts it is "the core decides the bit" (the decoder and CRC
+    registers take it at the next edge). The last strobe before ``done`` must be the
     last CRC bit: that is checked by counting strobes (Ack slots + Start + CDS + every data and
     CRC bit) and, independently of the RTL, by predicting its clock edge from the model's edge
     times: first clock edge after the Ack fall reaches the SLO pin, + 1 (second synchronizer
-    flop) + half period + slot x MA period."""
+    flop) + half period + slot x MA period + v."""
     tb = PerfTestbench(dut, seed=42)
     await tb.start()
     tb.encoder.min_cycle_s = 0.0
@@ -263,7 +264,8 @@ async def verdict_latency(dut):
                     phase = tb.t_clk0 % PS_PER_CLK        # clock edges: phase + n x T_clk
                     first_edge = ((t_ack_pin - phase) // PS_PER_CLK + 1) * PS_PER_CLK + phase
                     slot = expected_strobes - 1
-                    predicted = first_edge + (1 + hp + 2 * hp * slot) * PS_PER_CLK
+                    vote = hp // 2 if hp >= 3 else 0
+                    predicted = first_edge + (1 + hp + 2 * hp * slot + vote) * PS_PER_CLK
                     rows.append({
                         "preset": name, "ma_hz": ma_hz, "cable_m": cable_m,
                         "corrupt_last_crc_bit": corrupt, "status": res.status,
@@ -272,6 +274,7 @@ async def verdict_latency(dut):
                         "t_last_strobe_ps": cyc_strobes[-1], "t_predicted_ps": predicted,
                         "t_done_ps": t_done, "t_valid_ps": t_valid,
                         "done_clocks": (t_done - cyc_strobes[-1]) / PS_PER_CLK,
+                        "vote_clocks": vote,
                         "valid_clocks": None if t_valid is None or corrupt
                         else (t_valid - cyc_strobes[-1]) / PS_PER_CLK,
                     })

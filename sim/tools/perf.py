@@ -197,7 +197,7 @@ def overhead_section(d, goals):
 
 # -- 2. Verdict latency -------------------------------------------------------------------------
 def latency_section(d, goals):
-    out = ["### 2. Latency: last CRC bit sampled -> done / valid", ""]
+    out = ["### 2. Latency: last CRC bit decided -> done / valid", ""]
     if d is None:
         goals.append(("verdict latency", False, "no results"))
         return out + ["(no results)"]
@@ -216,18 +216,21 @@ def latency_section(d, goals):
         worst = max(worst, max(x for x in lat if x is not None))
         all_ok &= ok
         rows.append([name, f"{ma / 1e6:g}", cable, good["expected_strobes"] - 1,
-                     "yes" if located else "NO", f"{good['done_clocks']:g}",
+                     "yes" if located else "NO", good.get("vote_clocks", 0),
+                     f"{good['done_clocks']:g}",
                      f"{good['valid_clocks']:g}" if good["valid_clocks"] is not None else "-",
                      f"{bad['done_clocks']:g} (status {bad['status']})", verdict(ok)])
     all_ok &= not d["failures"]
-    goals.append((f"latency last CRC bit sampled -> valid <= {LATENCY_GOAL_CLK} clocks", all_ok,
+    goals.append((f"latency last CRC bit decided -> valid <= {LATENCY_GOAL_CLK} clocks", all_ok,
                   f"worst {worst:g} clocks"))
-    out += [md_table(["preset", "MA/MHz", "cable/m", "last slot", "edge located",
+    out += [md_table(["preset", "MA/MHz", "cable/m", "last slot", "edge located", "v/clk",
                       "done/clk (good)", "valid/clk (good)", "done/clk (bad CRC bit)", "goal"],
-                     rows, ["l"] + ["r"] * 8), ""]
+                     rows, ["l"] + ["r"] * 9), ""]
     out.append(f"{d['checked']} frames checked, {len(d['failures'])} check failures. "
                "\"edge located\": the strobe count (Ack slots + Start + CDS + data + CRC bits) "
-               "and the model-predicted clock edge both match the observed sample strobe.")
+               "and the model-predicted clock edge both match the observed sample strobe. "
+               "The decision is the third vote, v clocks after the bit's middle: from the "
+               "middle, done comes v + 2 clocks later.")
     return out
 
 

@@ -60,9 +60,19 @@ INTERNALS = {
     "ma_clock.half_period": ("port", "", "half_period"),
     # SloSampler
     "sampler.fsm": ("fsm", "", "sampler_fsm"),                  # states MEASURE, SAMPLE
-    "sampler.slot_left": ("signal", "", "slot_left"),           # clocks to the next sample
+    "sampler.slot_left": ("signal", "", "slot_left"),           # clocks to the next event
     "sampler.slot_zero": ("signal", "", "slot_zero"),
-    "sampler.first_slot": ("signal", "", "first_slot"),         # slot 0 (the Ack) not sampled
+    "sampler.phase": ("signal", "", "phase"),                   # next event: vote 1, centre, 3
+    "sampler.first_slot": ("signal", "", "first_slot"),         # slot 0 (the Ack) not decided
+    "sampler.vote": ("signal", "", "vote"),                     # the vote spacing
+    "sampler.single": ("signal", "", "single"),                 # one sample per slot (hp 2)
+    "sampler.first_load": ("signal", "", "first_load"),         # timer: edge to the first vote
+    "sampler.vote_load": ("signal", "", "vote_load"),           # ... vote to vote
+    "sampler.vote_one": ("signal", "", "vote_one"),             # the vote spacing is 1
+    "sampler.period_load": ("signal", "", "period_load"),       # ... third vote to the next first
+    "sampler.gap": ("signal", "", "gap"),                       # a fall now is ambiguous
+    "sampler.mid_slot": ("signal", "", "mid_slot"),             # slot timer, edge halfway
+    "sampler.odd": ("signal", "", "odd"),                       # clocks since the fall, odd
     "sampler.sample": ("port", "", "sample"),
     "sampler.bit": ("port", "", "bit"),
     # FrameDecoder
@@ -549,16 +559,25 @@ class MasterLivenessHarness(Harness):
         return m
 
 
+def _vote_spacing(hp):
+    """Clocks between the three votes of a slot, from docs/ports.md ("Noise immunity"): a
+    quarter bit (hp // 2) for hp >= 3, none (one sample) for hp = 2. The harnesses' own reading."""
+    return Mux(hp >= 3, hp >> 1, 0)
+
+
 class SamplerHarness(Harness):
     """SloSampler alone: SLO and ``arm`` free at every clock (glitches, bounces, no encoder,
     an encoder that answers at any time), the half period any free constant >= 2.
 
     Properties (the receiver never stalls and never drifts once it has found the Ack edge):
     once ``locked``, it stays locked, and ``sample`` strobes exactly every MA period (2 half
-    periods), whatever SLO does; the first sample (slot 0, which locks it) comes exactly one
-    half period after the Ack edge was registered. Lemmas: locked means the FSM is in SAMPLE
-    past slot 0; the slot timer + the clocks since the last sample = one MA period;
-    ``slot_zero`` mirrors ``slot_left == 0``.
+    periods), whatever SLO does; slot 0 (whose decision locks it) is always decided low. (Where
+    slot 0 falls after the edge is SamplerImmunityHarness's and the block tests' business: with
+    one glitch at the edge it may move by up to the vote spacing v.) Lemmas: locked means the
+    FSM is in SAMPLE past slot 0; the slot timer and the clocks since the last decision add up
+    to the clocks from that decision to the next event (2u to the first vote, u = hp - v, then v and 2v more); ``slot_zero``
+    mirrors ``slot_left``; the vote registers and the timer's reload values follow the half
+    period; slot 0 counts from the edge's fall, and an ambiguous fall comes within u + v of it.
 
     Mutation ``"short_gap"``: assert a gap of one clock less; the solver must find a trace.
     """
@@ -577,6 +596,7 @@ class SamplerHarness(Harness):
                      dut.half_period.eq(hp),
                      Assume(hp >= protocol.MA_HALF_PERIOD_MIN)]
         period = Cat(C(0, 1), hp)                    # 2 * hp, 17 bits
+        v = _vote_spacing(hp)
         if self.mutation == "short_gap":
             period = period - 1
 
@@ -586,14 +606,6 @@ class SamplerHarness(Harness):
             m.d.sync += since.eq(1)
         with m.Elif(since != (1 << 18) - 1):
             m.d.sync += since.eq(since + 1)
-        # Clocks since SLO fell (as the sampler sees it: registered previous value).
-        slo_prev = Signal(init=1)
-        since_fell = Signal(18, init=(1 << 18) - 1)
-        m.d.sync += slo_prev.eq(dut.slo)
-        with m.If(slo_prev & ~dut.slo):
-            m.d.sync += since_fell.eq(1)
-        with m.Elif(since_fell != (1 << 18) - 1):
-            m.d.sync += since_fell.eq(since_fell + 1)
         locked_prev = Signal()
         m.d.sync += locked_prev.eq(dut.locked)
 
@@ -601,23 +613,141 @@ class SamplerHarness(Harness):
             Assert(~locked_prev | dut.locked, "locked stays locked"),
             Assert(~(dut.sample & dut.locked) | (since == period), "one sample every MA period"),
             Assert(~dut.locked | (since <= period), "no gap longer than an MA period once locked"),
-            Assert(~(dut.sample & ~dut.locked) | (since_fell == hp),
-                   "slot 0 one half period after the Ack edge"),
+            Assert(~(dut.sample & ~dut.locked) | ~dut.bit, "slot 0 is decided low"),
         ]
         if self.lemmas:
+            # The vote registers follow the (constant) half period: the spacing one clock after
+            # the start, the timer's reload values two and three clocks after it.
+            settled = Signal(3)
+            with m.If(settled != 4):
+                m.d.sync += settled.eq(settled + 1)
             in_sample = inside.in_state("sampler.fsm", "SAMPLE")
+            in_measure = inside.in_state("sampler.fsm", "MEASURE")
+            in_idle = inside.in_state("sampler.fsm", "IDLE")
             slot_left = inside("sampler.slot_left")
             slot_zero = inside("sampler.slot_zero")
+            phase = inside("sampler.phase")
             first_slot = inside("sampler.first_slot")
+            gap = inside("sampler.gap")
+            mid_slot, odd = inside("sampler.mid_slot"), inside("sampler.odd")
+            # 2 * ceil(span / 2) - span % 2 = span, the clocks since the edge's fall.
+            span = 2 * (hp - 1 - mid_slot) - odd
+            u = hp - v                                 # edge (or third vote) to the first vote
             m.d.comb += [
+                # The master arms the sampler long after the half period is latched.
+                Assume((settled == 4) | ~dut.arm),
+                Assert((settled == 4) | in_idle & ~gap, "lemma: idle until armed"),
+                Assert((settled < 2) | (inside("sampler.vote") == v), "lemma: vote spacing"),
+                Assert((settled < 2) | (inside("sampler.single") == (hp < 3)), "lemma: single"),
+                Assert((settled < 3) | (inside("sampler.first_load") == u - 1),
+                       "lemma: first_load"),
+                Assert((settled < 3) | (inside("sampler.vote_load") == (v - 1)[:15]),
+                       "lemma: vote_load"),
+                Assert((settled < 3) | (inside("sampler.vote_one") == (v == 1)),
+                       "lemma: vote_one"),
+                Assert((settled < 4) | (inside("sampler.period_load") == 2 * u - 1),
+                       "lemma: period_load"),
                 Assert(dut.locked == (in_sample & ~first_slot), "lemma: locked past slot 0"),
-                Assert(~dut.locked | (since + slot_left == period), "lemma: slot timer"),
-                Assert(~in_sample | (slot_zero == (slot_left == 0)), "lemma: slot_zero"),
-                Assert(~(in_sample & first_slot) | (since_fell + slot_left == hp),
-                       "lemma: slot-0 timer"),
+                # Once locked: the clocks since the last decision and the slot timer add up to
+                # the clocks from that decision to the next event (2u, then + v, then + 2v).
+                Assert(~in_sample | (phase <= 2) & ((hp >= 3) | (phase == 0)),
+                       "lemma: phase range"),
+                Assert(~(in_sample & first_slot & (phase == 1)) | (slot_left < hp),
+                       "lemma: slot 0 timer to the centre"),
+                Assert(~(in_sample & first_slot & (phase == 2)) | (slot_left < v),
+                       "lemma: slot 0 timer to the third vote"),
+                Assert(~dut.locked | (phase != 0) | (since + slot_left == 2 * u),
+                       "lemma: slot timer to the first vote"),
+                Assert(~dut.locked | (phase != 1) | (since + slot_left == 2 * u + v),
+                       "lemma: slot timer to the centre"),
+                Assert(~dut.locked | (phase != 2) | (since + slot_left == period),
+                       "lemma: slot timer to the third vote"),
+                Assert(~(in_sample | gap) | (slot_zero == (slot_left == 0)), "lemma: slot_zero"),
+                Assert(~in_sample | (slot_left < period), "lemma: slot timer range"),
+                # Slot 0, before its first vote, counts from the edge's fall.
+                Assert((settled < 3) | ~(in_sample & first_slot & (phase == 0))
+                       | (span + slot_left == u) & (slot_left < u),
+                       "lemma: slot 0 counts from the fall"),
+                # The ambiguity window: v clocks after a rise within u clocks of the fall.
+                Assert(~gap | in_measure, "lemma: gap only while measuring"),
+                Assert((settled < 3) | ~gap | (slot_left < v) & (span - (v - slot_left) >= 1)
+                       & (span - (v - slot_left) <= u),
+                       "lemma: an ambiguous fall is within u + v of the first"),
             ]
 
         m.d.comb += Cover(dut.locked & dut.sample & (hp >= 3) & ~dut.bit)
+        return m
+
+
+class SamplerImmunityHarness(Harness):
+    """SloSampler alone, the noise-immunity property: an ideal encoder line with one glitch.
+
+    SLO is high, falls at a free clock (the Ack edge) and then holds free slot values (slot 0
+    low, the Ack), each one MA period long, the half period a free constant from 3 to
+    ``hp_max``; over it, one glitch inverts the line for a free number of clocks from 1 to the
+    vote spacing v (hp // 2), starting at any clock. Property: every slot the sampler decides
+    is decided as the encoder sent it (so no Start is faked and the frame never shifts), unless
+    the glitch made SLO low at the arming clock (``early``: the master's DELAY_RANGE fault).
+    Mutation ``"long"``: a glitch of v + 1
+    clocks; the solver must find a wrong decision.
+    """
+
+    def __init__(self, delay_width, hp_max=4, slots=4, mutation=None):
+        super().__init__(delay_width=delay_width, hp_max=hp_max, slots=slots,
+                         mutation=mutation)
+
+    def elaborate(self, platform):
+        m = self._module()
+        dut = SloSampler(self.delay_width, synchronizer=False)
+        m.submodules.dut = dut
+
+        hp = self.any_const(m, 4, "half_period")
+        v = _vote_spacing(hp)
+        edge = self.any_const(m, 5, "edge")                 # clocks from arm to the Ack edge
+        values = self.any_const(m, self.slots, "slots")     # slot k's level, slot 0 low
+        g_start = self.any_const(m, 8, "glitch_start")
+        g_len = self.any_const(m, 4, "glitch_len")
+        longest = v + 1 if self.mutation == "long" else v
+        m.d.comb += [
+            Assume((hp >= 3) & (hp <= self.hp_max)),
+            Assume(edge >= 2),
+            Assume(~values[0]),
+            Assume((g_len >= 1) & (g_len <= longest)),
+        ]
+
+        # The harness's clock: arm in clock 1.
+        t = Signal(8)
+        with m.If(t != 255):
+            m.d.sync += t.eq(t + 1)
+        m.d.comb += [dut.arm.eq(t == 1), dut.half_period.eq(hp)]
+        # The ideal line: high before the edge, then slot k for 2 * hp clocks each, high after.
+        since_edge = (t - 1 - edge)[:8]
+        slot = Signal(range(self.slots + 2))
+        m.d.comb += slot.eq(self.slots + 1)                 # past the frame
+        for k in reversed(range(self.slots)):
+            with m.If((since_edge < 2 * hp * (k + 1))):
+                m.d.comb += slot.eq(k)
+        ideal = Signal()
+        with m.If(t < 1 + edge):
+            m.d.comb += ideal.eq(1)
+        with m.Elif(slot < self.slots):
+            m.d.comb += ideal.eq(values.bit_select(slot, 1))
+        with m.Else():
+            m.d.comb += ideal.eq(1)
+        glitch = (t >= g_start) & (t < g_start + g_len)
+        m.d.comb += dut.slo.eq(ideal ^ glitch)
+
+        # Every decision is the sent slot value, in order.
+        decided = Signal(range(self.slots + 2))
+        with m.If(dut.sample & (decided < self.slots)):
+            m.d.sync += decided.eq(decided + 1)
+        # (A glitch over the arming clock makes SLO low there: ``early``, which the master
+        # reports as DELAY_RANGE, a fault; the sampler's decisions are then not used.)
+        m.d.comb += Assert(~dut.sample | dut.early | (decided >= self.slots)
+                           | (dut.bit == values.bit_select(decided, 1)),
+                           "every decided slot as sent")
+        # Not vacuous: the whole frame is decided.
+        m.d.comb += Cover((decided == self.slots) & (hp == self.hp_max) & (g_len == v))
         return m
 
 

@@ -24,7 +24,7 @@ from bissmaster.params import Crc, MasterParams
 from formal import flow
 from formal.harnesses import (DecoderCrcHarness, LivenessLimits, MaClockHarness,
                               MasterCrcHarness, MasterLivenessHarness, MasterMaHarness,
-                              SamplerHarness)
+                              SamplerHarness, SamplerImmunityHarness)
 
 # -- Parameter sets ------------------------------------------------------------------------------
 #: The shipped default build: two words (55 and 40 data bits), both CRCs on each, 24-bit timers.
@@ -89,6 +89,11 @@ CHECKS = [
     Check("sampler_default", "b", "cover", 20, lambda: SamplerHarness(DEFAULT.delay_width), True),
     Check("sampler_short_gap", "b", "mutation", 20,
           lambda: SamplerHarness(DEFAULT.delay_width, lemmas=False, mutation="short_gap"), True),
+    # (d) One glitch up to the vote spacing never changes a decided bit (issue 12).
+    Check("sampler_immunity", "d", "BMC", 60, lambda: SamplerImmunityHarness(8), False),
+    Check("sampler_immunity", "d", "cover", 60, lambda: SamplerImmunityHarness(8), True),
+    Check("sampler_immunity_long", "d", "mutation", 60,
+          lambda: SamplerImmunityHarness(8, mutation="long"), True),
     # (c) a frame with a CRC error is never reported valid ---------------------------------------
     Check("decoder_crc_default", "c", "k-induction", 2, lambda: DecoderCrcHarness(DEFAULT), True),
     Check("decoder_crc_default", "c", "cover", 30, lambda: DecoderCrcHarness(DEFAULT), True),

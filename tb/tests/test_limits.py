@@ -8,7 +8,8 @@ controller is ready again. The test ids name the probe and the outcome expected 
 Clock references (all seen on the ports, see limits_bench.py for the cycle convention):
   s   the 2nd MA rise: the first clock with MA high after the 2nd rising edge;
   m   MA stopped: the last rise + hp, the clock in which MA would have fallen again;
-  ld  ``line_delay``; slot k is sampled in clock s + ld + 1 + hp + 2*hp*k.
+  ld  ``line_delay``; slot k is centred in clock s + ld + 1 + hp + 2*hp*k and decided v clocks
+      later, v = hp // 2 the vote spacing (0 at hp = 2; ports.md, "Noise immunity").
 
 Status codes and counter names come from tb/master_contract.py, protocol times from the spec
 digest (40 us at the bench's 1 MHz clock), frames from tb/encoder_model: nothing from rtl/.
@@ -29,9 +30,14 @@ DEFAULT_ACK = clocks(40e-6)         # spec section 9: processing time and line d
 DEFAULT_TIMEOUT = 2 * clocks(40e-6)  # ports.md: twice the longest static slave timeout (40 us)
 
 
+def vote_spacing(hp):
+    """Clocks between the three votes of a slot (ports.md): a quarter bit, none at hp = 2."""
+    return hp // 2 if hp >= 3 else 0
+
+
 def sample_clock(s, ld, k, hp=HP):
-    """The clock in which slot k is sampled (timing.md)."""
-    return s + ld + 1 + hp + 2 * hp * k
+    """The clock in which slot k is decided (timing.md): its third vote, v after its centre."""
+    return s + ld + 1 + hp + 2 * hp * k + vote_spacing(hp)
 
 
 def target_rises(ack_slots):

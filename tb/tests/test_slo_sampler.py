@@ -30,10 +30,18 @@ from block_sim import CLOCK_PERIOD_S, START_BIT, simulate
 # open only for asynchronous edges.)
 #
 # Slots: slot k spans cycles r + d + 2*hp*k .. r + d + 2*hp*(k + 1) - 1; slot 0 is inside the
-# Ack. Its middle (the sample) is hp clocks after the slot start: cycle r + d + hp + 2*hp*k.
+# Ack. Its middle is hp clocks after the slot start: cycle r + d + hp + 2*hp*k. The slot is
+# decided by three votes, v clocks before the middle, at it and v clocks after it, and the
+# decision (the ``sample`` strobe) comes with the third: cycle r + d + hp + 2*hp*k + v, where
+# v = hp // 2 for hp >= 3 and 0 (one sample) for hp = 2 (docs/ports.md, "Noise immunity").
 
 #: The synchronizer's whole clock of latency that the sampler subtracts (see above).
 SYNC_LATENCY = 1
+
+
+def vote_spacing(hp):
+    """Clocks between a slot's votes (docs/ports.md): a quarter bit, none at hp = 2."""
+    return hp // 2 if hp >= 3 else 0
 SAMPLER_HALF_PERIODS = (2, 3, 5, 10)
 SAMPLER_DELAY_WIDTH = MasterParams().delay_width
 
@@ -56,7 +64,9 @@ class DelayedEncoder:
         return self.slots[k] if k < len(self.slots) else self.after
 
     def sample_cycles(self):
-        return [self.d + self.hp + 2 * self.hp * k for k in range(len(self.slots))]
+        """The decision of every slot: its third vote."""
+        return [self.d + self.hp + 2 * self.hp * k + vote_spacing(self.hp)
+                for k in range(len(self.slots))]
 
 
 def _sampler_sim(width, hp, scenarios, *, extra=0):
@@ -172,22 +182,31 @@ def test_slo_sampler_glitch_before_slot0_sample_is_ignored(hp):
 
 @pytest.mark.parametrize("hp", (3, 5))
 def test_slo_sampler_glitch_then_real_edge_within_half_period_uses_real_edge(hp):
-    """RTL bug (see report): a one-clock glitch, high again at once, followed by the real Ack edge
-    *before* the glitch's slot-0 sample point.
+    """A one-clock low glitch, high again at once, then the real Ack edge before the glitch's
+    slot-0 centre (once an RTL bug: the sampler locked on the glitch's timing, every later
+    sample that many clocks early, at d = g + hp on the bit's first clock).
 
-    The sampler only looks at SLO again at the glitch's slot-0 sample; by then the real Ack holds
-    it low, so it locks on the glitch's timing: the delay is short by (real - glitch) clocks and
-    every later sample sits that many clocks before the middle of its bit (at d = g + hp, on the
-    bit's first clock: no margin at all). The glitch must be ignored and the real edge used.
-    """
+    The rise right after the glitch sends the sampler back to wait for an edge. If the high
+    lasts more than v clocks (the vote spacing), the glitch cannot have been the edge: the real
+    edge is used, exactly. If it lasts v clocks or less, one glitch right at the real edge
+    explains the line both ways (a short low before it, or a short high after an edge at g):
+    the edge is taken halfway between the two falls, at most v clocks early, and every slot is
+    still decided right."""
     g = 4
+    v = vote_spacing(hp)
     scenarios = []
     for d in range(g + 2, g + hp + 1):
         enc = DelayedEncoder(hp, d, [0, 0, 1, 1, 0, 1, 0], glitches=(g,))
-        scenarios.append((enc, d + 2 * hp * len(enc.slots)))
+        scenarios.append((enc, d + 2 * hp * len(enc.slots) + hp))
     for (enc, _), trace in zip(scenarios, _sampler_sim(SAMPLER_DELAY_WIDTH, hp, scenarios)):
-        assert (trace[-1]["delay"], [c for c, _ in _samples(trace)]) == \
-            (enc.d - 1, enc.sample_cycles()), f"glitch at {g}, real Ack edge at {enc.d}"
+        where = f"glitch at {g}, real Ack edge at {enc.d}"
+        high = enc.d - g - 1                        # clocks of high between the two falls
+        edge = enc.d if high > v else g + (enc.d - g) // 2
+        assert trace[-1]["delay"] == edge - 1, where
+        assert 0 <= enc.d - edge <= v, where
+        samples = _samples(trace)[:len(enc.slots)]
+        assert [b for _, b in samples] == enc.slots, where
+        assert [c for c, _ in samples] == [c - (enc.d - edge) for c in enc.sample_cycles()], where
 
 
 def test_slo_sampler_never_locks_when_no_edge_comes():
@@ -317,7 +336,8 @@ def test_slo_sampler_with_synchronizer_delay_samples_and_level_from_the_pin(hp):
         n = len(enc.slots)
         product, bare = _sample_list(trace, "product")[:n], _sample_list(trace, "bare")[:n]
         assert [b for _, b in product] == enc.slots, where
-        assert [c for c, _ in product] == [delay + 1 + hp + 2 * hp * k for k in range(n)], where
+        assert [c for c, _ in product] == [delay + 1 + hp + 2 * hp * k + vote_spacing(hp)
+                                           for k in range(n)], where
         if enc.d >= 1:      # (p = 0: the bare sampler sees the edge in the arm clock, early)
             assert [b for _, b in bare] == enc.slots, where
             assert [c for c, _ in product] == [c + 2 for c, _ in bare], where
@@ -325,3 +345,60 @@ def test_slo_sampler_with_synchronizer_delay_samples_and_level_from_the_pin(hp):
         assert all(trace[c]["product"]["level"] == trace[c - 2]["pin"]
                    for c in range(2, len(trace))), where
         assert all(x["bare"]["level"] == x["pin"] for x in trace), where
+
+
+class GlitchedEncoder(DelayedEncoder):
+    """A DelayedEncoder whose line is inverted in cycles ``start`` .. ``start + length - 1``."""
+
+    def __init__(self, hp, d, slots, start, length):
+        super().__init__(hp, d, slots)
+        self.window = range(start, start + length)
+
+    def level(self, c):
+        return super().level(c) ^ int(c in self.window)
+
+
+def _glitch_sweep(hp, length, slots, d=7):
+    """One glitch of ``length`` clocks at every position from before the Ack edge to past the
+    last slot: the decided bits and the delay per position."""
+    frame_end = d + 2 * hp * len(slots)
+    scenarios = [(GlitchedEncoder(hp, d, slots, start, length), frame_end + 2 * hp)
+                 for start in range(1, frame_end)]
+    results = []
+    for (enc, _), trace in zip(scenarios, _sampler_sim(SAMPLER_DELAY_WIDTH, hp, scenarios)):
+        bits = [b for _, b in _samples(trace)][:len(slots)]
+        results.append((enc.window.start, bits, trace[-1]["delay"]))
+    return results
+
+
+#: Ack, Ack, Start, CDS, data with both levels and runs of each.
+GLITCH_SLOTS = [0, 0, 1, 0, 1, 1, 0, 0, 1, 0]
+
+
+@pytest.mark.parametrize("hp", (3, 4, 5, 8))
+def test_slo_sampler_one_glitch_up_to_the_vote_spacing_never_changes_a_decision(hp):
+    """Noise immunity (docs/ports.md): the line inverted for up to v clocks (v = hp // 2), once,
+    anywhere (before the Ack edge, at it, inside the Ack, on any vote of any slot): every slot is
+    still decided as sent, so no Start is faked and the frame never shifts; the delay is exact
+    unless the glitch touches the edge (starts within u = hp - v clocks after it, the clocks up
+    to slot 0's first vote, or ends within v before it), and then off by at most v clocks."""
+    v = vote_spacing(hp)
+    u = hp - v
+    d = 7
+    for length in range(1, v + 1):
+        for start, bits, delay in _glitch_sweep(hp, length, GLITCH_SLOTS, d):
+            where = f"hp {hp}: {length}-clock glitch from cycle {start}"
+            assert bits == GLITCH_SLOTS, where
+            assert abs(delay - (d - 1)) <= v, where
+            if start > d + u or start + length < d - v:
+                assert delay == d - 1, where
+
+
+@pytest.mark.parametrize("hp", (3, 4, 5, 8))
+def test_slo_sampler_a_glitch_longer_than_the_vote_spacing_can_change_a_decision(hp):
+    """The immunity bound is tight: one glitch of v + 1 clocks, placed over two votes of a slot,
+    changes that slot's decision (the sweep above would fail with it)."""
+    v = vote_spacing(hp)
+    wrong = [start for start, bits, _ in _glitch_sweep(hp, v + 1, GLITCH_SLOTS)
+             if bits != GLITCH_SLOTS]
+    assert wrong
