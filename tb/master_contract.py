@@ -3,8 +3,9 @@
 Written from docs/ports.md, never imported from ``rtl/``: a renumbered status code or a renamed
 counter in the RTL must show up as a failing test, not be followed silently. Every test,
 testbench, campaign and tool on the test side takes these facts from here and nowhere else:
-status codes, CRC codes, counters, the encoder presets the regression and the coverage name, and
-the system clock the simulations run at.
+status codes, CRC codes, counters, the encoder presets the regression and the coverage name,
+the system clock the simulations run at, and the shortest MA half period the core accepts. The
+protocol's own numbers are in tb/protocol_facts.py.
 """
 
 #: ``status`` codes (docs/ports.md, "Status codes").
@@ -37,3 +38,7 @@ ENCODER_PRESETS = ("resolute_fs_lmm", "resolute_fs_rsm", "resolute_fs_rsh", "for
 
 #: System clock of the simulations (Hz); the default build's core parameters assume the same.
 SYS_CLK_HZ = 100_000_000
+
+#: Shortest ``cfg_ma_half_period`` the core accepts (docs/ports.md, "Configuration": "Must be
+#: >= 2; otherwise the configuration is invalid"). A fact of the ports, not of the protocol.
+MA_HALF_PERIOD_MIN = 2

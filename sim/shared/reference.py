@@ -16,9 +16,9 @@ encoder model sent (tb/encoder_model/frames.py) and on the rules in docs/ports.m
 
 from dataclasses import dataclass, field
 
-from bissmaster import protocol
+import protocol_facts as facts
 from encoder_model import frames
-from master_contract import CRC_CODE, FRAME_STATUSES, STATUS, STATUS_NAME
+from master_contract import CRC_CODE, FRAME_STATUSES, MA_HALF_PERIOD_MIN, STATUS, STATUS_NAME
 
 #: Cycles that end in the break (MA high 40 us): the encoder restarts its LC check from scratch.
 BREAK_STATUSES = {STATUS[n] for n in ("NO_ACK", "NO_START", "DELAY_RANGE", "SLO_STUCK_LOW",
@@ -28,7 +28,7 @@ FRAME_STATUS_CODES = {STATUS[n] for n in FRAME_STATUSES}
 
 
 def lc_successor(value):
-    return protocol.LC_FIRST if value >= protocol.LC_MAX else value + 1
+    return facts.LC_FIRST if value >= facts.LC_MAX else value + 1
 
 
 @dataclass
@@ -122,7 +122,7 @@ def config_valid(cfg, *, max_data_bits=(55, 40), word_crcs=((1, 2), (1, 2)),
         return (1 <= cfg[f"cfg_w{w}_data_bits"] <= max_data_bits[w]
                 and (crc == 0 or crc in word_crcs[w]))
 
-    ok = cfg["cfg_ma_half_period"] >= protocol.MA_HALF_PERIOD_MIN and word_ok(0)
+    ok = cfg["cfg_ma_half_period"] >= MA_HALF_PERIOD_MIN and word_ok(0)
     ok = ok and cfg["cfg_delay_limit"] <= max_line_delay
     if len(max_data_bits) == 2:
         w1 = cfg["cfg_w1_enable"]

@@ -14,7 +14,6 @@ from cocotb.clock import Clock
 from cocotb.simtime import get_sim_time
 from cocotb.triggers import ClockCycles, FallingEdge, ReadOnly, RisingEdge, Timer, with_timeout
 
-from bissmaster import protocol
 from encoder_model import frames
 from encoder_model.cocotb_encoder import BissEncoder, Cable, Response
 from master_contract import COUNTERS, CRC_CODE, STATUS, SYS_CLK_HZ

@@ -84,7 +84,7 @@ import cocotb
 from cocotb.simtime import convert, get_sim_time
 from cocotb.triggers import Timer
 
-from bissmaster import protocol
+import protocol_facts as facts
 
 if TYPE_CHECKING:
     from .control import ControlSlave
@@ -103,7 +103,7 @@ class Cable:
     jitter_s: float = 0.0               # peak, uniform +/- per edge on each direction
 
     def _one_way_s(self) -> float:
-        return (self.length_m * protocol.CABLE_ROUND_TRIP_S_PER_M + self.extra_round_trip_s) / 2
+        return (self.length_m * facts.CABLE_ROUND_TRIP_S_PER_M + self.extra_round_trip_s) / 2
 
     def m2e_s(self) -> float:
         """Master -> encoder delay (MA)."""
@@ -115,7 +115,7 @@ class Cable:
 
     def round_trip_s(self) -> float:
         """The true round trip a master measures (2nd MA rise to Ack fall), without jitter."""
-        return self.m2e_s() + self.e2m_s() + protocol.ENCODER_INTERNAL_DELAY_S
+        return self.m2e_s() + self.e2m_s() + facts.ENCODER_INTERNAL_DELAY_S
 
 
 @dataclass
@@ -172,7 +172,7 @@ class BissEncoder:
     """BiSS encoder + cable model. See the module doc string."""
 
     def __init__(self, ma, slo, *, cable: Cable, respond: Callable[[float], Response],
-                 timeout_s: float = 12.5e-6, min_cycle_s: float = protocol.MIN_CYCLE_PERIOD_S,
+                 timeout_s: float = 12.5e-6, min_cycle_s: float = facts.MIN_CYCLE_PERIOD_S,
                  rng: random.Random | None = None, log: logging.Logger | None = None,
                  control: ControlSlave | None = None):
         self.ma = ma
@@ -357,14 +357,14 @@ class BissEncoder:
             return
         self._out_sent = lvl
         now = self._now()
-        tm = now + self._steps(protocol.ENCODER_INTERNAL_DELAY_S + self.cable.e2m_s()
+        tm = now + self._steps(facts.ENCODER_INTERNAL_DELAY_S + self.cable.e2m_s()
                                + self._jitter())
         tm = max(tm, now, self._last_slo_arrival)
         self._last_slo_arrival = tm
         if self.trace is not None:
             self.trace.append(("slo", now, tm, lvl))
         cyc = self._cycle
-        if (cyc is not None and lvl == protocol.ACK_LEVEL and cyc.phase == "ack"
+        if (cyc is not None and lvl == facts.ACK_LEVEL and cyc.phase == "ack"
                 and cyc.tm_second_rise is not None and math.isnan(cyc.record.round_trip_s)):
             cyc.record.round_trip_s = self._sec(tm - cyc.tm_second_rise)
         # (a zero delay is picked up by the running _run_due loop or, from outside it, by
@@ -413,7 +413,7 @@ class BissEncoder:
         if cyc.rises == 1:
             cyc.te_first_rise = te
             rec.t_first_rise_s = self._sec(tm)
-            rec.t_latch_s = self._sec(te) + protocol.SAMPLING_MOMENT_S
+            rec.t_latch_s = self._sec(te) + facts.SAMPLING_MOMENT_S
             resp = self.respond(rec.t_latch_s)
             if resp.fault not in FAULTS:
                 raise ValueError(f"unknown fault {resp.fault!r}")
@@ -441,7 +441,7 @@ class BissEncoder:
                 cyc.phase = "silent"
                 return
             cyc.phase = "ack"
-            self._enc_out = protocol.ACK_LEVEL
+            self._enc_out = facts.ACK_LEVEL
             self._update_output()
             return
         if cyc.phase == "ack":
@@ -494,7 +494,7 @@ class BissEncoder:
         rec.aborted = cyc.fault not in ("no_response", "stuck_low", "stuck_high") and not cyc.done
         if math.isnan(rec.round_trip_s):
             rec.round_trip_s = self._sec(self._steps(self.cable.m2e_s())
-                                         + self._steps(protocol.ENCODER_INTERNAL_DELAY_S
+                                         + self._steps(facts.ENCODER_INTERNAL_DELAY_S
                                                        + self.cable.e2m_s()))
         if cyc.fault_active and cyc.fault in ("stuck_low", "timeout_stuck"):
             self._override = 0

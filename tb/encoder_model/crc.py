@@ -3,10 +3,11 @@
 The RTL computes its CRCs one received bit at a time; this module does the same arithmetic in
 plain Python, written from the textbook shift-register definition (non-reflected, MSB first),
 so that a test can compare the two without the model sharing any code with the RTL. Only the
-protocol *numbers* (polynomials, widths, output inversion) come from :mod:`bissmaster.protocol`.
+protocol *numbers* (polynomials, widths, output inversion) come from the test side's own
+:mod:`protocol_facts` (tb/protocol_facts.py, written from the spec), never from ``rtl/``.
 """
 
-from bissmaster import protocol
+import protocol_facts as facts
 
 __all__ = ["crc_msb_first", "crc6_biss", "crc16_biss", "int_to_bits", "bits_to_int"]
 
@@ -54,14 +55,14 @@ def crc_msb_first(bits, *, width, poly, init=0, xor_out=0):
 
 def crc6_biss(bits):
     """CRC-6 of a CPW / BiSS C / BP3 data word, as sent (inverted)."""
-    return crc_msb_first(bits, width=protocol.CRC6_WIDTH, poly=protocol.CRC6_POLY,
-                         init=protocol.CRC_INIT, xor_out=protocol.CRC6_XOR_OUT)
+    return crc_msb_first(bits, width=facts.CRC6_WIDTH, poly=facts.CRC6_POLY,
+                         init=facts.CRC_INIT, xor_out=facts.CRC6_XOR_OUT)
 
 
 def crc16_biss(bits):
     """CRC-16 of a BiSS Safety SPW, as sent (inverted)."""
-    return crc_msb_first(bits, width=protocol.CRC16_WIDTH, poly=protocol.CRC16_POLY,
-                         init=protocol.CRC_INIT, xor_out=protocol.CRC16_XOR_OUT)
+    return crc_msb_first(bits, width=facts.CRC16_WIDTH, poly=facts.CRC16_POLY,
+                         init=facts.CRC_INIT, xor_out=facts.CRC16_XOR_OUT)
 
 
 def int_to_bits(value, n):

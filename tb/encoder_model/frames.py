@@ -8,13 +8,13 @@ check the master against frames that are right, and frames that are wrong on pur
 
 from dataclasses import dataclass
 
-from bissmaster import protocol
+import protocol_facts as facts
 
 from .crc import bits_to_int, crc6_biss, crc16_biss, int_to_bits
 
 CRC_NONE, CRC6, CRC16 = "none", "crc6", "crc16"
 
-CRC_WIDTHS = {CRC_NONE: 0, CRC6: protocol.CRC6_WIDTH, CRC16: protocol.CRC16_WIDTH}
+CRC_WIDTHS = {CRC_NONE: 0, CRC6: facts.CRC6_WIDTH, CRC16: facts.CRC16_WIDTH}
 _CRC_FUNCS = {CRC6: crc6_biss, CRC16: crc16_biss}
 
 DATA_BITS_MAX = 64          # widest position field the model accepts (BiSS C data word limit)
@@ -41,8 +41,8 @@ class WordFormat:
 
     @property
     def total_bits(self):
-        return (self.data_bits + (protocol.NE_NW_BITS if self.nenw else 0)
-                + (protocol.LC_BITS if self.lc else 0) + self.crc_bits)
+        return (self.data_bits + (facts.NE_NW_BITS if self.nenw else 0)
+                + (facts.LC_BITS if self.lc else 0) + self.crc_bits)
 
 
 @dataclass(frozen=True)
@@ -86,8 +86,8 @@ def _safety(name, cpw_bits, spw_bits):
 
 def bp3(dl_pos):
     """BP3 Standard Encoder Profile frame with a DL_POS-bit position (C = 0: separate CRC-6)."""
-    if not 1 <= dl_pos <= protocol.BP3_POSITION_BITS_MAX:
-        raise ValueError(f"BP3 DL_POS must be 1..{protocol.BP3_POSITION_BITS_MAX}, got {dl_pos}")
+    if not 1 <= dl_pos <= facts.BP3_POSITION_BITS_MAX:
+        raise ValueError(f"BP3 DL_POS must be 1..{facts.BP3_POSITION_BITS_MAX}, got {dl_pos}")
     return _single(f"bp3_{dl_pos}", dl_pos)
 
 
@@ -100,7 +100,7 @@ PRESETS = {f.name: f for f in (
     # BiSS C unidirectional single word, spec 5.1
     *(_single(f"evolute_{n}", n) for n in (26, 32, 36)),
     *(_single(f"resolute_c_{n}", n) for n in (18, 26, 32, 36)),
-    *(bp3(n) for n in (1, 24, protocol.BP3_POSITION_BITS_MAX)),
+    *(bp3(n) for n in (1, 24, facts.BP3_POSITION_BITS_MAX)),
 )}
 
 
@@ -145,8 +145,8 @@ def word_bits(fmt, value, *, crc_xor=0):
     if fmt.lc:
         if value.lc is None:
             raise ValueError("this word has an LC field: WordValue.lc is required")
-        _check_field("lc", value.lc, protocol.LC_BITS)
-        bits += int_to_bits(value.lc, protocol.LC_BITS)
+        _check_field("lc", value.lc, facts.LC_BITS)
+        bits += int_to_bits(value.lc, facts.LC_BITS)
     elif value.lc is not None:
         raise ValueError("WordValue.lc given but this word has no LC field")
     if fmt.crc == CRC_NONE:
@@ -166,7 +166,7 @@ def build_frame(fmt, words, faults=None):
         raise ValueError("more crc_xor entries than words")
     _check_field("cds", faults.cds, 1)
     crc_xor = tuple(faults.crc_xor) + (0,) * (len(fmt.words) - len(faults.crc_xor))
-    bits = [protocol.START_BIT, faults.cds]
+    bits = [facts.START_BIT, faults.cds]
     for wfmt, value, xor in zip(fmt.words, words, crc_xor):
         bits += word_bits(wfmt, value, crc_xor=xor)
     for index in faults.flip_bits:
@@ -200,11 +200,11 @@ def parse_frame(fmt, bits):
         word = {"position": bits_to_int(covered), "ne": None, "nw": None, "lc": None,
                 "crc": None, "crc_ok": True}
         if wfmt.nenw:
-            nenw = take(protocol.NE_NW_BITS)
+            nenw = take(facts.NE_NW_BITS)
             word["ne"], word["nw"] = nenw
             covered += nenw
         if wfmt.lc:
-            lc = take(protocol.LC_BITS)
+            lc = take(facts.LC_BITS)
             word["lc"] = bits_to_int(lc)
             covered += lc
         if wfmt.crc != CRC_NONE:
@@ -224,14 +224,14 @@ class SignOfLife:
     except that :meth:`skip` really consumes the skipped values.
     """
 
-    def __init__(self, first=protocol.LC_FIRST):
-        _check_field("first", first, protocol.LC_BITS)
+    def __init__(self, first=facts.LC_FIRST):
+        _check_field("first", first, facts.LC_BITS)
         self._upcoming = first
         self._last = None
 
     @staticmethod
     def successor(value):
-        return protocol.LC_FIRST if value >= protocol.LC_MAX else value + 1
+        return facts.LC_FIRST if value >= facts.LC_MAX else value + 1
 
     def next(self):
         self._last, self._upcoming = self._upcoming, self.successor(self._upcoming)

@@ -30,13 +30,13 @@ from amaranth.hdl import (Assert, Assume, C, Cat, ClockDomain, Cover, Elaboratab
                           Signal)
 from amaranth.lib import wiring
 
-from bissmaster import protocol
+import protocol_facts as facts
 from bissmaster.frame_decoder import FrameDecoder
 from bissmaster.ma_clock import MaClock
 from bissmaster.master import BissMaster
 from bissmaster.params import Crc
 from bissmaster.slo_sampler import SloSampler
-from master_contract import FRAME_STATUSES, STATUS
+from master_contract import FRAME_STATUSES, MA_HALF_PERIOD_MIN, STATUS
 
 from .flow import Internals
 
@@ -287,7 +287,7 @@ class MaClockHarness(Harness):
         hp_prev = Signal(16)
         m.d.sync += hp_prev.eq(hp)
         m.d.comb += [dut.run.eq(run), dut.half_period.eq(hp)]
-        m.d.comb += Assume(hp >= protocol.MA_HALF_PERIOD_MIN)
+        m.d.comb += Assume(hp >= MA_HALF_PERIOD_MIN)
         if self.hp_max is not None:
             m.d.comb += Assume(hp <= self.hp_max)
         if self.mutation != "hp_unstable":
@@ -356,7 +356,7 @@ class MasterMaHarness(Harness):
             waiting = inside.in_state("master.cycle_fsm", "WAIT_READY")
             first = inside("master.latched")            # WAIT_READY's first clock
             cfg_ok = inside("master.cfg_ok")            # registered configuration check
-            hp_ok = hp_cycle >= protocol.MA_HALF_PERIOD_MIN
+            hp_ok = hp_cycle >= MA_HALF_PERIOD_MIN
             idle_state = inside.in_state("master.cycle_fsm", "IDLE")
             m.d.comb += [
                 # The controller keeps ``idle`` as a register written with every transition.
@@ -594,7 +594,7 @@ class SamplerHarness(Harness):
         hp = self.any_const(m, 16, "half_period")
         m.d.comb += [dut.slo.eq(self.any_seq(1, "slo")), dut.arm.eq(self.any_seq(1, "arm")),
                      dut.half_period.eq(hp),
-                     Assume(hp >= protocol.MA_HALF_PERIOD_MIN)]
+                     Assume(hp >= MA_HALF_PERIOD_MIN)]
         period = Cat(C(0, 1), hp)                    # 2 * hp, 17 bits
         v = _vote_spacing(hp)
         if self.mutation == "short_gap":
@@ -755,9 +755,10 @@ class SamplerImmunityHarness(Harness):
 # (c) A frame with a CRC error is never reported valid
 # =============================================================================================
 
-#: The CRCs from the protocol digest, section 6: register polynomial without the top term,
-#: start 0, sent inverted, MSB first.
-CRC_SPEC = {Crc.CRC6: (6, 0x03), Crc.CRC16: (16, 0x90D9)}
+#: The CRCs from the protocol digest, section 6 (tb/protocol_facts.py): register polynomial
+#: without the top term, start 0, sent inverted, MSB first.
+CRC_SPEC = {Crc.CRC6: (facts.CRC6_WIDTH, facts.CRC6_POLY),
+            Crc.CRC16: (facts.CRC16_WIDTH, facts.CRC16_POLY)}
 
 
 def _crc_state(inside, w, kind):

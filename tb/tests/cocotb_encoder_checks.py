@@ -16,7 +16,7 @@ import cocotb
 from cocotb.simtime import get_sim_time
 from cocotb.triggers import Timer
 
-from bissmaster import protocol
+import protocol_facts as facts
 from encoder_model.cocotb_encoder import BissEncoder, Cable, Response
 from encoder_model.control import Bp3Eds, ControlSlave, RegisterFile
 from encoder_model.control_master import ControlMaster, ControlStatus, RegisterAccess
@@ -36,20 +36,20 @@ def now_ps() -> int:
 CABLES = {
     "0m": Cable(),
     "100m": Cable(length_m=100),
-    "rt2us": Cable(extra_round_trip_s=2e-6 - protocol.ENCODER_INTERNAL_DELAY_S),
+    "rt2us": Cable(extra_round_trip_s=2e-6 - facts.ENCODER_INTERNAL_DELAY_S),
 }
 
 
 def delays_ps(cable: Cable) -> tuple[int, int]:
     """(m2e, encoder MA -> master SLO) in ps, each rounded to the 1 ps simulator precision."""
-    return (ps(cable.length_m * protocol.CABLE_ROUND_TRIP_S_PER_M / 2 + cable.extra_round_trip_s / 2),
-            ps(protocol.ENCODER_INTERNAL_DELAY_S
-               + cable.length_m * protocol.CABLE_ROUND_TRIP_S_PER_M / 2
+    return (ps(cable.length_m * facts.CABLE_ROUND_TRIP_S_PER_M / 2 + cable.extra_round_trip_s / 2),
+            ps(facts.ENCODER_INTERNAL_DELAY_S
+               + cable.length_m * facts.CABLE_ROUND_TRIP_S_PER_M / 2
                + cable.extra_round_trip_s / 2))
 
 
 def random_bits(rng: random.Random, n: int) -> list[int]:
-    return [protocol.START_BIT, 0] + [rng.randint(0, 1) for _ in range(n)]
+    return [facts.START_BIT, 0] + [rng.randint(0, 1) for _ in range(n)]
 
 
 # -- the ideal master --------------------------------------------------------------------------
@@ -111,7 +111,7 @@ class Responder:
 
 # -- the independent expectation -------------------------------------------------------------
 def expected_cycle(falls, rises, resp: Response, cable: Cable, *,
-                   min_cycle_s=protocol.MIN_CYCLE_PERIOD_S, last_edge=None):
+                   min_cycle_s=facts.MIN_CYCLE_PERIOD_S, last_edge=None):
     """Expected encoder output of one cycle: (list of (master time ps, level) the encoder
     launches, in order, without de-duplication; ready time at the encoder in ps or None;
     Start rise index or None). last_edge: master time of the last MA edge if it is not the
@@ -189,7 +189,7 @@ def check_record(rec, falls, rises, resp, cable, k, *, aborted=False, n_sent=Non
     assert rec.ended
     assert abs(ps(rec.t_first_fall_s) - falls[0]) <= 1, (rec.t_first_fall_s, falls[0])
     assert abs(ps(rec.t_first_rise_s) - rises[0]) <= 1
-    assert abs(ps(rec.t_latch_s) - (rises[0] + m2e + ps(protocol.SAMPLING_MOMENT_S))) <= 1
+    assert abs(ps(rec.t_latch_s) - (rises[0] + m2e + ps(facts.SAMPLING_MOMENT_S))) <= 1
     assert rec.ma_rises == len(rises), (rec.ma_rises, len(rises))
     want = resp.bits if n_sent is None else resp.bits[:n_sent]
     assert rec.bits_sent == want, (rec.bits_sent, want)
@@ -245,14 +245,14 @@ async def frame_timing(dut, f_hz, cable_name):
         want_k = max(2, -(-ps(resp.processing_time_s) * round(f_hz) // PS_PER_S))
         assert k == want_k, (k, want_k)
         # 31.25 us rule / timeout: SLO high again at the master
-        t_high = max(rises[-1] + ps(TIMEOUT_S), falls[0] + ps(protocol.MIN_CYCLE_PERIOD_S)) + rt
+        t_high = max(rises[-1] + ps(TIMEOUT_S), falls[0] + ps(facts.MIN_CYCLE_PERIOD_S)) + rt
         assert (t_high, 1) in got
         # sampled at the master with the measured round trip, the bits are the frame
         sampled = [level_at(got, r + rt, 1) for r in rises[k:k + len(resp.bits) + 3]]
         assert sampled == resp.bits + [0, 0, 0], sampled
     if f_hz == 10e6:   # short frames: the 31.25 us rule decides
         falls, rises = cycles[0][0], cycles[0][1]
-        assert falls[0] + ps(protocol.MIN_CYCLE_PERIOD_S) > rises[-1] + ps(TIMEOUT_S)
+        assert falls[0] + ps(facts.MIN_CYCLE_PERIOD_S) > rises[-1] + ps(TIMEOUT_S)
     enc.stop()
 
 
@@ -479,7 +479,7 @@ async def ma_held_low_at_end(dut, f_hz):
     await wait_until(ready + dout + 1)
     assert enc.ready and int(dut.slo.value) == 1
     assert mon.between(t0, now_ps()) == transitions(events)
-    assert ready == max(t_low + m2e + ps(TIMEOUT_S), falls[0] + m2e + ps(protocol.MIN_CYCLE_PERIOD_S))
+    assert ready == max(t_low + m2e + ps(TIMEOUT_S), falls[0] + m2e + ps(facts.MIN_CYCLE_PERIOD_S))
     rec = enc.records[-1]
     check_record(rec, falls, rises, resp, cable, k)
     assert rec.cdm == 1

@@ -10,7 +10,7 @@ import random
 
 import pytest
 
-from bissmaster import protocol
+import protocol_facts as facts
 from bissmaster.control_crc import CRC4, crc4, crc4_address, crc4_data
 
 # Published CRC-4 lookup table for x^4 + x + 1, start 0, *not* inverted: entry n is the CRC
@@ -48,8 +48,8 @@ def _bits(value, n):
 
 
 def test_protocol_constants_are_the_spec_values():
-    assert (protocol.CRC4_WIDTH, protocol.CRC4_POLY, protocol.CRC4_XOR_OUT) == (4, 0x03, 0x0F)
-    assert protocol.CRC_INIT == 0
+    assert (facts.CRC4_WIDTH, facts.CRC4_POLY, facts.CRC4_XOR_OUT) == (4, 0x03, 0x0F)
+    assert facts.CRC_INIT == 0
     assert (CRC4.crc_width, CRC4.polynomial, CRC4.initial_crc, CRC4.xor_output) == (4, 3, 0, 15)
     assert not CRC4.reflect_input and not CRC4.reflect_output
 

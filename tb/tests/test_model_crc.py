@@ -10,7 +10,7 @@ import random
 import pytest
 from amaranth.lib import crc as am_crc
 
-from bissmaster import protocol
+import protocol_facts as facts
 from encoder_model.crc import bits_to_int, crc6_biss, crc16_biss, crc_msb_first, int_to_bits
 
 N_RANDOM = 500
@@ -43,17 +43,17 @@ BISS_CRCS = [
 
 @pytest.mark.parametrize("func, width, poly, xor_out", BISS_CRCS)
 def test_biss_crc_matches_amaranth_model(func, width, poly, xor_out):
-    # Literal parameters from spec section 6, not protocol.py, so a wrong constant there fails.
+    # Literal parameters from spec section 6, not protocol_facts, so a wrong constant there fails.
     params = _amaranth_params(width, poly, xor_out)
     for bits in _random_messages(seed=width):
         assert func(bits) == params.compute(bits), bits
 
 
 def test_protocol_constants_are_the_spec_values():
-    assert (protocol.CRC6_WIDTH, protocol.CRC6_POLY, protocol.CRC6_XOR_OUT) == (6, 0x03, 0x3F)
-    assert (protocol.CRC16_WIDTH, protocol.CRC16_POLY, protocol.CRC16_XOR_OUT) == (
+    assert (facts.CRC6_WIDTH, facts.CRC6_POLY, facts.CRC6_XOR_OUT) == (6, 0x03, 0x3F)
+    assert (facts.CRC16_WIDTH, facts.CRC16_POLY, facts.CRC16_XOR_OUT) == (
         16, 0x90D9, 0xFFFF)
-    assert protocol.CRC_INIT == 0
+    assert facts.CRC_INIT == 0
 
 
 @pytest.mark.parametrize("func, width, poly, xor_out", BISS_CRCS)

@@ -5,7 +5,7 @@ import random
 import pytest
 from amaranth.lib import crc as am_crc
 
-from bissmaster import protocol
+import protocol_facts as facts
 from encoder_model.crc import bits_to_int
 from encoder_model.frames import (CRC6, CRC16, CRC_NONE, PRESETS, EncoderFrameSource,
                                   FrameFaults, FrameFormat, SignOfLife, WordFormat, WordValue,
@@ -137,7 +137,7 @@ def test_build_frame_layout():
     values = [WordValue(0x123456789, 1, 1), WordValue(0x1234567, 1, 0, lc=7)]
     bits = build_frame(fmt, values)
     assert len(bits) == HEADER + 96
-    assert bits[:HEADER] == [protocol.START_BIT, 0]
+    assert bits[:HEADER] == [facts.START_BIT, 0]
     cpw = bits[HEADER:HEADER + 44]
     spw = bits[HEADER + 44:]
     assert cpw == word_bits(fmt.words[0], values[0])
@@ -243,7 +243,7 @@ def test_sign_of_life_sequence_wraps_and_skips_zero():
     assert seq[62:65] == [63, 1, 2]
     assert 0 not in seq
     assert seq == [(i % 63) + 1 for i in range(200)]
-    assert protocol.LC_FIRST == 1 and protocol.LC_MAX == 63
+    assert facts.LC_FIRST == 1 and facts.LC_MAX == 63
 
 
 def test_sign_of_life_faults():
@@ -272,7 +272,7 @@ def test_source_spw_is_cpw_with_low_bits_dropped(name):
     speed = 123_456_789.0      # counts per second, arbitrary
     src = EncoderFrameSource(fmt, lambda t: int(speed * t))
     for k in range(50):
-        t = k * protocol.MIN_CYCLE_PERIOD_S
+        t = k * facts.MIN_CYCLE_PERIOD_S
         bits, values = src.frame_at(t)
         cpw_bits = fmt.words[0].data_bits
         expected = int(speed * t) % (1 << cpw_bits)
