@@ -33,20 +33,24 @@ def generate(params=None, name="biss_master"):
     return header(params) + body
 
 
-_BISS_C = ["--max-data-bits", "36", "--word-crcs", "6"]
+# The Renishaw encoders are unidirectional (CDS always 0): their builds leave the
+# register-access engine out.
+_NO_ACCESS = ["--register-access", "0"]
+_BISS_C = ["--max-data-bits", "36", "--word-crcs", "6"] + _NO_ACCESS
 
 #: Named builds: generator options for ``--preset``. Options given besides a preset win.
 #: scripts/synth.py measures these, and the test suite simulates each one.
 PRESETS = {
     "default": ("the committed rtl/generated/biss_master.v: 2 words of up to 55/40 bits, "
-                "both CRCs on each", []),
-    "biss-c": ("BiSS C only: one word of up to 36 bits, CRC-6", _BISS_C),
+                "both CRCs on each, the register-access engine (BP3 identification, EDS)", []),
+    "biss-c": ("BiSS C only: one word of up to 36 bits, CRC-6, no register access", _BISS_C),
     "biss-c-lean": ("BiSS C only, smallest: as biss-c, without error counters and timestamp, "
                     "16-bit time settings",
                     _BISS_C + ["--counter-width", "0", "--timestamp-width", "0",
                                "--timer-width", "16"]),
-    "safety": ("BiSS Safety: CPW up to 36 bits with CRC-6, SPW up to 28 bits with CRC-16",
-               ["--max-data-bits", "36,28", "--word-crcs", "6,16"]),
+    "safety": ("BiSS Safety: CPW up to 36 bits with CRC-6, SPW up to 28 bits with CRC-16, "
+               "no register access",
+               ["--max-data-bits", "36,28", "--word-crcs", "6,16"] + _NO_ACCESS),
 }
 
 
@@ -80,6 +84,11 @@ def main(argv=None):
                     help="width of the error counters; 0: no counters")
     ap.add_argument("--timestamp-width", type=int, default=defaults.timestamp_width,
                     help="width of the time base behind `timestamp`; 0: no timestamp")
+    ap.add_argument("--register-access", type=int, choices=(0, 1),
+                    default=int(defaults.register_access),
+                    help="1: build the register-access engine (ca_* ports, CDM hold); 0: leave it out")
+    ap.add_argument("--start-wait-frames", type=int, default=defaults.start_wait_frames,
+                    help="register reads: frames to wait for a late slave start bit (1 .. 255)")
     argv = sys.argv[1:] if argv is None else list(argv)
     preset = ap.parse_known_args(argv)[0].preset
     args = ap.parse_args(PRESETS[preset][1] + argv)     # later options win
@@ -90,7 +99,9 @@ def main(argv=None):
         params = MasterParams(sys_clk_hz=args.sys_clk_hz, max_data_bits=bits, word_crcs=crcs,
                               max_line_delay=args.max_line_delay, timer_width=args.timer_width,
                               counter_width=args.counter_width,
-                              timestamp_width=args.timestamp_width)
+                              timestamp_width=args.timestamp_width,
+                              register_access=bool(args.register_access),
+                              start_wait_frames=args.start_wait_frames)
     except ValueError as e:
         ap.error(str(e))
     text = generate(params, args.name)

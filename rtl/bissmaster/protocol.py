@@ -44,3 +44,12 @@ CRC16_WIDTH = 16
 CRC16_POLY = 0x90D9             # x^16+x^15+x^12+x^7+x^6+x^4+x^3+1 (0x190D9)
 CRC16_XOR_OUT = 0xFFFF
 CRC_INIT = 0
+
+# -- Control channel, register access (section 10) -------------------------------------------
+CDM_IDLE_FRAMES = 14            # CDM = 0 frames before a control frame; as many cancel one
+SLAVE_ID_BITS = 3               # ID[2:0]
+REGISTER_ADDRESS_BITS = 7       # ADR[6:0]: registers 0x00 .. 0x7F
+REGISTER_BYTES_MAX = 64         # one EDS bank per access at most (the engine's buffers)
+CRC4_WIDTH = 4
+CRC4_POLY = 0x3                 # x^4 + x + 1 (0x13 with the top term)
+CRC4_XOR_OUT = 0xF              # sent inverted
