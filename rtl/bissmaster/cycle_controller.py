@@ -47,9 +47,19 @@ class CycleController(wiring.Component):
     runs on), and BREAK clears it until MA has stopped; TAIL and CONFIRM clear it with their
     faults and on the way to PAUSE (MA may have stopped already). That keeps the fault decode out of the timer's enable.
 
-    Seam for the control channel (CDM): the MA level after a frame is decided where the cycle
-    ends (END / CONFIRM, then IDLE); a CDM = 1 would hold MA low there through the encoder's
-    timeout, with :class:`~bissmaster.ma_clock.MaClock` keeping its no-short-phase guarantee.
+    **CDM** (``cdm=True`` builds, the control channel): ``cdm`` is copied in every IDLE clock
+    like the configuration, so a cycle carries the bit of its accepted request
+    (``cdm_cycle``). With ``cdm_cycle`` = 1 the controller asks
+    :class:`~bissmaster.ma_clock.MaClock` to hold MA low after the frame (``ma_hold`` in CLOCK
+    and TAIL: MaClock reads it only at the end of the last high phase, so only a frame that
+    clocked out every rise is followed by a hold; a fault or an abort goes to BREAK, which never
+    holds). MA then stays low through the encoder's timeout, and END, CONFIRM and PAUSE release
+    it (``ma_hold`` low) in the first clock in which SLO is seen high (the timeout ended), SLO
+    has been low for the timeout limit since MA stopped (SLO_STUCK_LOW is then reported by the
+    next cycle, or by CONFIRM with the end check), or ``abort`` is high (END then goes to
+    BREAK). END and CONFIRM wait for MaClock to be idle (its release phase of one half period
+    high) before IDLE: the master is never idle with MA low. CONFIRM accepts SLO high while MA
+    is held (``ma_held``), as it does with MA stopped.
 
     Attributes
     ----------
@@ -87,46 +97,76 @@ class CycleController(wiring.Component):
     fault_status : Out(Status)
     faults : Out(fault_layout())
         One strobe per fault status.
+    cdm : In(1)
+        ``cdm`` builds: the CDM bit for the next cycle (from the register-access engine).
+    ma_held : In(1)
+        ``cdm`` builds: MaClock holds MA low (its ``held``).
+    ma_hold : Out(1)
+        ``cdm`` builds: to MaClock's ``hold``.
+    cdm_cycle : Out(1)
+        ``cdm`` builds: the CDM bit this cycle carries (copied while idle).
+
+    Parameters
+    ----------
+    cdm : bool
+        Build the CDM hold.
     """
 
-    request: In(1)
-    abort: In(1)
-    config_ok: In(1)
-    end_check: In(1)
-    slo: In(1)
-    ma_busy: In(1)
-    ma_arm: In(1)
-    ma_enough: In(1)
-    locked: In(1)
-    early: In(1)
-    frame_done: In(1)
-    started: In(1)
-    slots_full: In(1)
-    stopped: In(1)
-    stop_bit: In(1)
-    frame_doubtful: In(1)
-    break_over: In(1)
-    ack_expired: In(1)
-    no_start_expired: In(1)
-    slo_stuck: In(1)
-    slo_stuck_live: In(1)
-    delay_over: In(1)
-    idle: Out(1)
-    first_clock: Out(1)
-    receiver_clear: Out(1, init=1)
-    resync: Out(1)
-    timer_clear: Out(1)
-    in_clock: Out(1)
-    restart_timer: Out(1)
-    ma_run: Out(1)
-    report_frame: Out(1)
-    report_delay: Out(1)
-    fault: Out(1)
-    fault_status: Out(Status)
-    faults: Out(fault_layout())
+    def __init__(self, cdm=False):
+        self._cdm = bool(cdm)
+        members = {
+            "request": In(1),
+            "abort": In(1),
+            "config_ok": In(1),
+            "end_check": In(1),
+            "slo": In(1),
+            "ma_busy": In(1),
+            "ma_arm": In(1),
+            "ma_enough": In(1),
+            "locked": In(1),
+            "early": In(1),
+            "frame_done": In(1),
+            "started": In(1),
+            "slots_full": In(1),
+            "stopped": In(1),
+            "stop_bit": In(1),
+            "frame_doubtful": In(1),
+            "break_over": In(1),
+            "ack_expired": In(1),
+            "no_start_expired": In(1),
+            "slo_stuck": In(1),
+            "slo_stuck_live": In(1),
+            "delay_over": In(1),
+            "idle": Out(1),
+            "first_clock": Out(1),
+            "receiver_clear": Out(1, init=1),
+            "resync": Out(1),
+            "timer_clear": Out(1),
+            "in_clock": Out(1),
+            "restart_timer": Out(1),
+            "ma_run": Out(1),
+            "report_frame": Out(1),
+            "report_delay": Out(1),
+            "fault": Out(1),
+            "fault_status": Out(Status),
+            "faults": Out(fault_layout()),
+        }
+        if self._cdm:
+            members.update({"cdm": In(1), "ma_held": In(1), "ma_hold": Out(1),
+                            "cdm_cycle": Out(1)})
+        super().__init__(members)
 
     def elaborate(self, platform):
         m = Module()
+        cdm = self._cdm
+        if cdm:
+            # The cycle's CDM bit, copied while idle like the configuration.
+            with m.If(self.idle):
+                m.d.sync += self.cdm_cycle.eq(self.cdm)
+            # Release the hold: the encoder's timeout ended (SLO high), it never ends (the
+            # timeout limit), or an abort.
+            release = self.slo | self.slo_stuck | self.abort
+            holding = self.cdm_cycle & ~release
 
         armed = Signal()            # the second MA rise has been made (the sampler is armed)
         locked_seen = Signal()      # ``locked`` was already high in an earlier clock
@@ -193,6 +233,8 @@ class CycleController(wiring.Component):
 
             with m.State("CLOCK"):
                 m.d.comb += [self.ma_run.eq(~self.ma_enough), self.in_clock.eq(1)]
+                if cdm:
+                    m.d.comb += self.ma_hold.eq(self.cdm_cycle & ~self.abort)
                 with m.If(self.restart_timer | self.abort):
                     m.d.comb += self.timer_clear.eq(1)
                 with m.If(self.ma_arm):
@@ -224,6 +266,8 @@ class CycleController(wiring.Component):
 
             with m.State("TAIL"):
                 m.d.comb += self.ma_run.eq(~self.ma_enough)
+                if cdm:
+                    m.d.comb += self.ma_hold.eq(self.cdm_cycle & ~self.abort)
                 with m.If(self.abort):
                     m.d.comb += self.timer_clear.eq(1)
                     with m.If(self.end_check):
@@ -249,24 +293,43 @@ class CycleController(wiring.Component):
                         goto("CONFIRM")
 
             with m.State("PAUSE"):
+                if cdm:
+                    m.d.comb += self.ma_hold.eq(holding)
                 with m.If(self.ma_busy | self.abort):
                     m.d.comb += self.timer_clear.eq(1)
                 with m.Elif(self.break_over):
                     goto("IDLE")
 
             with m.State("END"):
-                with m.If(~self.ma_busy):
-                    goto("IDLE")
+                if cdm:
+                    m.d.comb += self.ma_hold.eq(holding)
+                    # An abort releases a CDM hold at once, and pauses as after any abort.
+                    with m.If(self.cdm_cycle & self.abort):
+                        goto("BREAK")
+                    with m.Elif(~self.ma_busy):
+                        goto("IDLE")
+                else:
+                    with m.If(~self.ma_busy):
+                        goto("IDLE")
 
             with m.State("CONFIRM"):
+                if cdm:
+                    m.d.comb += self.ma_hold.eq(holding)
+                    ma_stopped = ~self.ma_busy | self.ma_held
+                else:
+                    ma_stopped = ~self.ma_busy
                 with m.If(self.abort):
                     m.d.comb += self.timer_clear.eq(1)
                     fault(Status.ABORTED)
-                with m.Elif(~self.ma_busy & self.slo):
+                with m.Elif(ma_stopped & self.slo):
                     report_verdict()
                     with m.If(pause):
                         m.d.comb += self.timer_clear.eq(1)
                         goto("PAUSE")
+                    if cdm:
+                        # MA is released now: END waits for its half period high.
+                        with m.Elif(self.cdm_cycle):
+                            goto("END")
                     with m.Else():
                         goto("IDLE")
                 with m.Elif(self.slo_stuck):

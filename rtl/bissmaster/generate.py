@@ -80,20 +80,24 @@ def generate(params=None, name=None, top="core", **options):
     return header(params, spec.describe(**options)) + body
 
 
-_BISS_C = ["--max-data-bits", "36", "--word-crcs", "6"]
+# The Renishaw encoders are unidirectional (CDS always 0): their builds leave the
+# register-access engine out.
+_NO_ACCESS = ["--register-access", "0"]
+_BISS_C = ["--max-data-bits", "36", "--word-crcs", "6"] + _NO_ACCESS
 
 #: Named builds: core options for ``--preset``. Options given besides a preset win.
 #: scripts/synth.py measures these, and the test suite simulates each one.
 PRESETS = {
     "default": ("the committed rtl/generated/biss_master.v: 2 words of up to 55/40 bits, "
-                "both CRCs on each", []),
-    "biss-c": ("BiSS C only: one word of up to 36 bits, CRC-6", _BISS_C),
+                "both CRCs on each, the register-access engine (BP3 identification, EDS)", []),
+    "biss-c": ("BiSS C only: one word of up to 36 bits, CRC-6, no register access", _BISS_C),
     "biss-c-lean": ("BiSS C only, smallest: as biss-c, without error counters and timestamp, "
                     "16-bit time settings",
                     _BISS_C + ["--counter-width", "0", "--timestamp-width", "0",
                                "--timer-width", "16"]),
-    "safety": ("BiSS Safety: CPW up to 36 bits with CRC-6, SPW up to 28 bits with CRC-16",
-               ["--max-data-bits", "36,28", "--word-crcs", "6,16"]),
+    "safety": ("BiSS Safety: CPW up to 36 bits with CRC-6, SPW up to 28 bits with CRC-16, "
+               "no register access",
+               ["--max-data-bits", "36,28", "--word-crcs", "6,16"] + _NO_ACCESS),
 }
 
 
@@ -170,6 +174,14 @@ def _parser():
                       metavar="BITS",
                       help="width of the time base behind `timestamp`, 0: no timestamp "
                            "(default: %(default)s)")
+    core.add_argument("--register-access", type=int, choices=(0, 1),
+                      default=int(defaults.register_access),
+                      help="1: build the register-access engine (ca_* ports, CDM hold); "
+                           "0: leave it out (default: %(default)s)")
+    core.add_argument("--start-wait-frames", type=int, default=defaults.start_wait_frames,
+                      metavar="FRAMES",
+                      help="register reads: frames to wait for a late slave start bit, 1..255 "
+                           "(default: %(default)s)")
 
     # The tops' own options, once each even when several tops share one.
     shared = {}
@@ -197,7 +209,9 @@ def _params(ap, args):
         return MasterParams(sys_clk_hz=args.sys_clk_hz, max_data_bits=bits, word_crcs=crcs,
                             max_line_delay=args.max_line_delay, timer_width=args.timer_width,
                             counter_width=args.counter_width,
-                            timestamp_width=args.timestamp_width)
+                            timestamp_width=args.timestamp_width,
+                            register_access=bool(args.register_access),
+                            start_wait_frames=args.start_wait_frames)
     except ValueError as e:
         ap.error(str(e))
 

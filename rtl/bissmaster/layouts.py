@@ -9,7 +9,7 @@ each other; only :class:`~bissmaster.master.BissMaster` flattens them into Veril
 from amaranth.lib import data
 
 from . import protocol
-from .params import FAULTS, HALF_PERIOD_WIDTH, Status, WORD_CONFIG
+from .params import FAULTS, HALF_PERIOD_WIDTH, AccessStatus, Status, WORD_CONFIG
 
 
 def config_layout(params):
@@ -76,22 +76,55 @@ def fault_layout():
     return data.StructLayout({status.name.lower(): 1 for status in FAULTS})
 
 
+#: A buffer byte's index: up to 64 bytes per register access.
+BUFFER_ADDRESS_BITS = (protocol.BANK_BYTES - 1).bit_length()
+
+
+def access_request_layout():
+    """A register access as the host asks for it (the ``ca_*`` request ports), in port order."""
+    return data.StructLayout({
+        "slave_id": protocol.CONTROL_ID_BITS,
+        "address": protocol.CONTROL_ADDRESS_BITS,
+        "count": protocol.BANK_BYTES.bit_length(),     # 1 .. 64
+        "write": 1,
+    })
+
+
+def access_result_layout():
+    """The result of the last register access, held from one ``ca_done`` to the next."""
+    return data.StructLayout({
+        "status": AccessStatus,
+        "bytes_done": protocol.BANK_BYTES.bit_length(),
+    })
+
+
+def buffer_write_layout():
+    """The host's write port into the write buffer (bytes to write, index 0 = start address)."""
+    return data.StructLayout({"addr": BUFFER_ADDRESS_BITS, "data": 8, "en": 1})
+
+
 #: Saturating error counters, each with a ``count_<name>`` output port, in port order.
 COUNTERS = (
     "crc_word0", "crc_word1", "no_ack", "no_start", "delay_range", "slo_stuck_low",
     "lc_repeat", "lc_skip", "lc_zero", "spw_mismatch", "overrun", "aborted",
     "no_stop",
+    "ca_crc4_error", "ca_no_answer", "ca_refused", "ca_aborted", "ca_data_fault",
 )
 #: The counters that only a two-word build has.
 WORD1_COUNTERS = ("crc_word1", "spw_mismatch")
+#: The counters of the register-access statuses (builds with the engine), named
+#: ``ca_<status>``.
+ACCESS_COUNTERS = ("ca_crc4_error", "ca_no_answer", "ca_refused", "ca_aborted", "ca_data_fault")
 
 
 def counter_names(params):
-    """The :data:`COUNTERS` a build has: none without counters, no word-1 ones for one word."""
+    """The :data:`COUNTERS` a build has: none without counters, no word-1 ones for one word,
+    no access ones without the register-access engine."""
     if not params.counters:
         return ()
     return tuple(name for name in COUNTERS
-                 if params.words == 2 or name not in WORD1_COUNTERS)
+                 if (params.words == 2 or name not in WORD1_COUNTERS)
+                 and (params.register_access or name not in ACCESS_COUNTERS))
 
 
 def flat_fields(layout, prefix=""):

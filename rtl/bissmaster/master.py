@@ -11,12 +11,14 @@ from .counters import CounterBank
 from .cycle_controller import CycleController
 from .frame_decoder import FrameDecoder
 from .frame_verdict import FrameVerdict
-from .layouts import (config_ports, config_words, counter_names, field, flat_fields,
-                      result_layout)
+from .layouts import (BUFFER_ADDRESS_BITS, access_request_layout, access_result_layout,
+                      buffer_write_layout, config_ports, config_words, counter_names, field,
+                      flat_fields, result_layout)
 from .limit_timers import LimitTimers
 from .ma_clock import MaClock
 from .ma_stop import MaStop
-from .params import MasterParams
+from .params import AccessStatus, MasterParams
+from .register_access import RegisterAccess
 from .request_scheduler import RequestScheduler
 from .results import ResultRegisters
 from .sign_of_life import SignOfLife
@@ -40,7 +42,9 @@ class BissMaster(wiring.Component):
     :class:`Configuration`, :class:`LimitTimers`) -> :class:`MaClock` -> line ->
     :class:`SloSampler` -> :class:`FrameDecoder` (:class:`WordCrc` per word) ->
     :class:`SignOfLife`, :class:`SpwCheck` -> :class:`FrameVerdict` -> :class:`ResultRegisters`,
-    :class:`CounterBank`.
+    :class:`CounterBank`. With ``register_access``, :class:`RegisterAccess` supplies each
+    cycle's CDM bit to the controller (which holds MA low through the encoder's timeout for
+    CDM = 1) and takes each frame's CDS (``ca_*`` ports, docs/control-channel.md).
 
     Parameters
     ----------
@@ -55,6 +59,23 @@ class BissMaster(wiring.Component):
         self.params = p = params
         self._config_fields = config_ports(p)
         self._result_fields = flat_fields(result_layout(p))
+        if p.register_access:
+            self._access_request_fields = flat_fields(access_request_layout(), "ca_")
+            self._access_wbuf_fields = flat_fields(buffer_write_layout(), "ca_wbuf_")
+            self._access_result_fields = flat_fields(access_result_layout(), "ca_")
+            access_ports = {
+                **{name: In(shape) for name, _, shape in self._access_request_fields},
+                "ca_start": In(1),
+                "ca_abort": In(1),
+                **{name: In(shape) for name, _, shape in self._access_wbuf_fields},
+                "ca_rbuf_addr": In(BUFFER_ADDRESS_BITS),
+                "ca_rbuf_data": Out(8),
+                "ca_busy": Out(1),
+                "ca_done": Out(1),
+                **{name: Out(shape) for name, _, shape in self._access_result_fields},
+            }
+        else:
+            access_ports = {}
         ports = {
             # Line
             "ma": Out(1, init=1),
@@ -74,6 +95,8 @@ class BissMaster(wiring.Component):
             "done": Out(1),
             "valid": Out(1),
             **{name: Out(shape) for name, _, shape in self._result_fields},
+            # Register access (control channel)
+            **access_ports,
             # Error counters
             **{f"count_{name}": Out(p.counter_width) for name in self.counter_names},
         }
@@ -91,6 +114,8 @@ class BissMaster(wiring.Component):
         self._connect_control(m, b)
         self._connect_receiver(m, b)
         self._connect_results(m, b)
+        if self.params.register_access:
+            self._connect_register_access(m, b)
         if self.params.counters:
             self._connect_counters(m, b)
         self._connect_outputs(m, b)
@@ -102,9 +127,10 @@ class BissMaster(wiring.Component):
         two = p.words == 2
         m.submodules.config = config = Configuration(p)
         m.submodules.scheduler = scheduler = RequestScheduler(p.timer_width)
-        m.submodules.controller = controller = CycleController()
+        cdm = p.register_access
+        m.submodules.controller = controller = CycleController(cdm=cdm)
         m.submodules.timers = timers = LimitTimers(p)
-        m.submodules.ma_clock = ma_clock = MaClock()
+        m.submodules.ma_clock = ma_clock = MaClock(cdm=cdm)
         m.submodules.ma_stop = ma_stop = MaStop(p.words)
         # The receiver is held in reset between cycles: every cycle starts from scratch.
         sampler = SloSampler(p.delay_width)
@@ -120,6 +146,8 @@ class BissMaster(wiring.Component):
             m.submodules.time_base = time_base = TimeBase(p.timestamp_width)
         if p.counters:
             m.submodules.counters = counters = CounterBank(self.counter_names, p.counter_width)
+        if cdm:
+            m.submodules.register_access = access = RegisterAccess(p.start_wait_frames)
 
         cycle = config.cycle
         words = config_words(cycle, p)
@@ -128,7 +156,8 @@ class BissMaster(wiring.Component):
             ma_clock=ma_clock, ma_stop=ma_stop, sampler=sampler, decoder=decoder, sol=sol,
             spw_check=spw_check if two else None, verdict=verdict, results=results,
             time_base=time_base if p.timestamped else None,
-            counters=counters if p.counters else None, cycle=cycle, words=words)
+            counters=counters if p.counters else None,
+            access=access if cdm else None, cycle=cycle, words=words)
 
     def _connect_inputs(self, m, b):
         """The control ports and the flat configuration, in."""
@@ -137,7 +166,9 @@ class BissMaster(wiring.Component):
         m.d.comb += [
             b.config.idle.eq(b.controller.idle),
             b.scheduler.start.eq(self.start),
-            b.scheduler.periodic.eq(self.periodic),
+            # A register access asks for periodic cycles when the host does not.
+            b.scheduler.periodic.eq(self.periodic | b.access.frames if b.access is not None
+                                    else self.periodic),
             b.scheduler.period.eq(self.cfg_request_period),
             b.scheduler.abort.eq(self.abort_cycle),
             b.scheduler.idle.eq(b.controller.idle),
@@ -171,7 +202,10 @@ class BissMaster(wiring.Component):
             b.controller.delay_over.eq(b.timers.delay_over),
 
             b.timers.slo.eq(b.sampler.level),
-            b.timers.ma_busy.eq(b.ma_clock.busy),
+            # The SLO-low timer counts while MA is not clocking: a CDM hold is the encoder's
+            # timeout too.
+            b.timers.ma_busy.eq(b.ma_clock.clocking if b.access is not None
+                                else b.ma_clock.busy),
             b.timers.clear.eq(b.controller.timer_clear),
             b.timers.in_clock.eq(b.controller.in_clock),
             b.timers.restart.eq(b.controller.restart_timer),
@@ -262,6 +296,34 @@ class BissMaster(wiring.Component):
             m.d.comb += [b.time_base.first_rise.eq(b.ma_clock.first_rise),
                          frame.timestamp.eq(b.time_base.first_rise_time)]
 
+    def _connect_register_access(self, m, b):
+        """The register-access engine: its ports, the CDM bit to the controller and MA, the
+        CDS of every reported frame back."""
+        access = b.access
+        m.d.comb += [field(access.request, path).eq(getattr(self, name))
+                     for name, path, _ in self._access_request_fields]
+        m.d.comb += [field(access.wbuf, path).eq(getattr(self, name))
+                     for name, path, _ in self._access_wbuf_fields]
+        m.d.comb += [getattr(self, name).eq(field(access.result, path))
+                     for name, path, _ in self._access_result_fields]
+        m.d.comb += [
+            access.start.eq(self.ca_start),
+            access.abort.eq(self.ca_abort),
+            access.rbuf_addr.eq(self.ca_rbuf_addr),
+            self.ca_rbuf_data.eq(access.rbuf_data),
+            self.ca_busy.eq(access.busy),
+            self.ca_done.eq(access.done),
+
+            b.controller.cdm.eq(access.cdm),
+            b.controller.ma_held.eq(b.ma_clock.held),
+            b.ma_clock.hold.eq(b.controller.ma_hold),
+
+            access.frame_end.eq(b.verdict.report),
+            access.frame_ok.eq(b.verdict.valid),
+            access.frame_cds.eq(b.decoder.cds),
+            access.frame_cdm.eq(b.controller.cdm_cycle),
+        ]
+
     def _connect_counters(self, m, b):
         """The counter bank's events."""
         p = self.params
@@ -280,6 +342,11 @@ class BissMaster(wiring.Component):
             "aborted": faults.aborted,
             "no_stop": faults.no_stop,
         }
+        if b.access is not None:
+            for status in (AccessStatus.CRC4_ERROR, AccessStatus.NO_ANSWER,
+                           AccessStatus.REFUSED, AccessStatus.ABORTED, AccessStatus.DATA_FAULT):
+                events[f"ca_{status.name.lower()}"] = (b.access.done
+                                                       & (b.access.result.status == status))
         if two:
             events["crc_word1"] = b.verdict.crc_error[1]
             events["spw_mismatch"] = b.controller.report_frame & b.verdict.spw_mismatch

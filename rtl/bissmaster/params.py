@@ -50,6 +50,20 @@ class Status(enum.IntEnum, shape=4):
 
 STATUS_WIDTH = Shape.cast(Status).width
 
+
+class AccessStatus(enum.IntEnum, shape=3):
+    """Outcome of one register access (control channel), reported with ``ca_done``.
+
+    See :class:`~bissmaster.register_access.RegisterAccess` and docs/control-channel.md.
+    """
+    OK = 0
+    CRC4_ERROR = 1      # a read byte's CRC-4 (or a write's echoed CRC-4) is wrong
+    NO_ANSWER = 2       # no IDL0 from the slave: CDS always 0 (unidirectional encoder, no slave)
+    REFUSED = 3         # R/W echo, slave start bit or P echo missing, or a write echoed differently
+    ABORTED = 4         # ``ca_abort``: the control frame was cancelled with 14 CDM = 0 frames
+    DATA_FAULT = 5      # a frame carrying a control bit did not end OK (status != OK)
+    BAD_REQUEST = 6     # byte count 0 or > 64, or address + count beyond 0x7F; nothing sent
+
 #: Width of the MA half-period setting, and of the timers that count within one MA phase.
 HALF_PERIOD_WIDTH = protocol.MA_HALF_PERIOD_MAX.bit_length()
 #: Width of the slot and MA-edge counters of one cycle (saturating): Ack slots plus the frame.
@@ -102,6 +116,12 @@ class MasterParams:
         no ``clear_counters``), for the smallest core.
     timestamp_width : int
         Width of the free-running time base behind the ``timestamp`` output; 0 builds neither.
+    register_access : bool
+        Build the register-access engine (control channel, CDM/CDS; the ``ca_*`` ports) and
+        the CDM hold of MA. Without it MA is never held low after a frame.
+    start_wait_frames : int
+        Register reads: frames the engine waits (CDM = 1) for a slave start bit delayed by the
+        slave's processing time, before it gives up with REFUSED (1 .. 255).
     """
     sys_clk_hz: int = 100_000_000
     max_data_bits: tuple = (protocol.BP3_POSITION_BITS_MAX, 40)
@@ -110,6 +130,8 @@ class MasterParams:
     timer_width: int = 24
     counter_width: int = 16
     timestamp_width: int = 32
+    register_access: bool = True
+    start_wait_frames: int = 16
 
     def __post_init__(self):
         if not isinstance(self.sys_clk_hz, int) or not 1_000_000 <= self.sys_clk_hz <= 1_000_000_000:
@@ -143,6 +165,11 @@ class MasterParams:
                 self.timestamp_width == 0 or 16 <= self.timestamp_width <= 64):
             raise ValueError(f"timestamp_width must be 0 (no timestamp) or an integer from 16 "
                              f"to 64, not {self.timestamp_width!r}")
+        if not isinstance(self.register_access, bool):
+            raise ValueError(f"register_access must be a bool, not {self.register_access!r}")
+        if not isinstance(self.start_wait_frames, int) or not 1 <= self.start_wait_frames <= 255:
+            raise ValueError(f"start_wait_frames must be an integer from 1 to 255, "
+                             f"not {self.start_wait_frames!r}")
 
     @property
     def counters(self):
@@ -201,6 +228,8 @@ class MasterParams:
             f"timer_width     = {self.timer_width}",
             f"counter_width   = {self.counter_width}" + ("" if self.counters else " (no counters)"),
             f"timestamp_width = {self.timestamp_width}" + ("" if self.timestamped else " (no timestamp)"),
+            *([f"register_access = on, start wait {self.start_wait_frames} frames"]
+              if self.register_access else []),
             f"defaults (cfg = 0): break {self.break_default}, ack limit {self.ack_limit_default}, "
             f"timeout limit {self.timeout_limit_default} clocks",
         ]

@@ -57,6 +57,7 @@ REG_BANK_SELECT = 0x40          # R/W: the bank that 0x00..0x3F shows
 REG_EDS_BANK = 0x41             # read only: the bank where the EDS starts
 EDS_BANK_NONE = (0x00, 0xFF)    # EDS pointer values that mean "no EDS"
 REG_PROFILE_ID = 0x42           # 0x42 profile ID, 0x43 data length (BP3, section 7)
+CDM_IDLE_FRAMES = 14            # CDM = 0 frames before a control frame; as many cancel one
 
 # -- BP3 Standard Encoder Profile (section 7) ------------------------------------------------
 BP3_PROFILE_ID = 0b0110         # register 0x42 bits 7:4

@@ -58,6 +58,8 @@ INTERNALS = {
     "ma_clock.phase_left": ("signal", "", "phase_left"),        # clocks left in the MA phase
     "ma_clock.busy": ("port", "", "busy"),
     "ma_clock.half_period": ("port", "", "half_period"),
+    "ma_clock.run": ("port", "", "run"),
+    "ma_clock.hold": ("port", "", "hold"),                      # CDM builds: hold MA low
     # SloSampler
     "sampler.fsm": ("fsm", "", "sampler_fsm"),                  # states MEASURE, SAMPLE
     "sampler.slot_left": ("signal", "", "slot_left"),           # clocks to the next event
@@ -89,6 +91,8 @@ INTERNALS = {
     "master.latched": ("signal", "controller", "first_clock"),  # WAIT_READY's first clock
     "master.cfg_ok": ("signal", "config", "ok"),                # registered configuration check
     "master.receiver_clear": ("signal", "controller", "receiver_clear"),  # sampler/decoder reset
+    "master.request": ("port", "scheduler", "request"),         # the controller's request input
+    "master.cdm_cycle": ("port", "controller", "cdm_cycle"),    # the cycle's CDM bit
 }
 
 
@@ -226,17 +230,34 @@ class _PhaseMonitor:
 # (a) MA: idles high, no phase shorter than the half period
 # =============================================================================================
 
-def _check_ma(m, ma, hp, clock_busy, inside, lemmas):
+def _check_ma(m, ma, hp, clock_busy, inside, lemmas, run=None, hold=None):
     """The MA properties of one MaClock instance, with ``hp`` the half period it must honour.
 
     ``clock_busy`` is the MaClock's own busy, ``inside`` its :class:`Inside`. Lemmas relate the harness's phase counter to the
     block's FSM and phase timer; they are asserted (so proven), never assumed.
+
+    With the CDM hold (``run`` and ``hold``, MaClock's inputs, given): a fall that follows a
+    high phase whose last clock had ``run`` low is a hold; such a low phase may be longer than
+    the half period (never shorter), and it only happens when ``hold`` was high there: with
+    ``hold`` low (CDM = 0) MA idles high exactly as without the hold.
     """
     mon = _PhaseMonitor(m, ma, hp, stopped=~clock_busy)
+    cdm = hold is not None
+    low_wrong = mon.low_wrong
+    if cdm:
+        run_prev = Signal(name="mon_run_prev")
+        hold_prev = Signal(name="mon_hold_prev")
+        in_hold = Signal(name="mon_in_hold")        # the current low phase is a CDM hold
+        m.d.sync += [run_prev.eq(run), hold_prev.eq(hold)]
+        with m.If(mon.fall):
+            m.d.sync += in_hold.eq(~run_prev)
+        low_wrong = mon.low_wrong & ~in_hold
+        m.d.comb += Assert(~(mon.fall & ~run_prev) | hold_prev,
+                           "MA falls after a stop only for CDM = 1 (hold high)")
     m.d.comb += [
         Assert(clock_busy | ma, "MA high while the clock is idle"),
         Assert(~mon.short, "no MA phase shorter than the half period"),
-        Assert(~mon.low_wrong, "every low phase exactly one half period"),
+        Assert(~low_wrong, "every low phase exactly one half period (CDM holds: at least)"),
         Assert(~mon.high_wrong, "every high phase inside a burst exactly one half period"),
     ]
     if lemmas:
@@ -244,14 +265,33 @@ def _check_ma(m, ma, hp, clock_busy, inside, lemmas):
         low = inside.in_state("ma_clock.fsm", "LOW")
         high = inside.in_state("ma_clock.fsm", "HIGH")
         edge = mon.edge
+        if cdm:
+            held = inside.in_state("ma_clock.fsm", "HOLD")
+            release = inside.in_state("ma_clock.fsm", "RELEASE")
+            idle = inside.in_state("ma_clock.fsm", "IDLE")
+            m.d.comb += [
+                Assert(idle | low | high | held | release, "lemma: MaClock in a state"),
+                Assert(ma == ~(low | held), "lemma: MA low exactly in LOW and HOLD"),
+                Assert(clock_busy == (low | high | held | release), "lemma: busy states"),
+                Assert(ma | edge | (in_hold == held), "lemma: a hold phase is HOLD"),
+                # HOLD counts its half period down to 0 and stays there.
+                Assert(~held | edge | (mon.since + 1 + phase_left == mon.hp_phase)
+                       | (phase_left == 0) & (mon.since + 1 >= mon.hp_phase),
+                       "lemma: hold phase counter"),
+                Assert(~clock_busy | held | edge | (mon.since + 1 + phase_left == mon.hp_phase),
+                       "lemma: phase counter"),
+            ]
+        else:
+            m.d.comb += [
+                Assert(ma == ~low, "lemma: MA low exactly in LOW"),
+                Assert(clock_busy == (low | high), "lemma: busy in LOW and HIGH"),
+                # In a phase: clocks spent (``since`` + this one) + clocks left = half period.
+                Assert(~clock_busy | edge | (mon.since + 1 + phase_left == mon.hp_phase),
+                       "lemma: phase counter"),
+            ]
         m.d.comb += [
-            Assert(ma == ~low, "lemma: MA low exactly in LOW"),
-            Assert(clock_busy == (low | high), "lemma: busy in LOW and HIGH"),
             # An MA edge loads the phase timer with the half period.
             Assert(~edge | (clock_busy & (phase_left + 1 == hp)), "lemma: edge loads timer"),
-            # In a phase: clocks spent (``since`` + this one) + clocks left = half period.
-            Assert(~clock_busy | edge | (mon.since + 1 + phase_left == mon.hp_phase),
-                   "lemma: phase counter"),
             Assert(~clock_busy | edge | (mon.hp_phase == hp), "lemma: phase's half period"),
             Assert(~low | edge | ~mon.idle_seen, "lemma: low phases never see idle"),
             # Idle: the high phase so far already lasts a full half period.
@@ -273,15 +313,19 @@ class MaClockHarness(Harness):
     lets the half period change in the middle of a burst: the solver must find a short phase.
     """
 
-    def __init__(self, hp_max=None, lemmas=True, mutation=None):
-        super().__init__(hp_max=hp_max, lemmas=lemmas, mutation=mutation)
+    def __init__(self, hp_max=None, lemmas=True, mutation=None, cdm=False):
+        super().__init__(hp_max=hp_max, lemmas=lemmas, mutation=mutation, cdm=cdm)
 
     def elaborate(self, platform):
         m = self._module()
-        dut = MaClock()
+        dut = MaClock(cdm=self.cdm)
         inside = Inside(dut)
         m.submodules.dut = inside.fragment
 
+        hold = None
+        if self.cdm:
+            hold = self.any_seq(1, "hold")
+            m.d.comb += dut.hold.eq(hold)
         run = self.any_seq(1, "run")
         hp = self.any_seq(16, "half_period")
         hp_prev = Signal(16)
@@ -293,7 +337,10 @@ class MaClockHarness(Harness):
         if self.mutation != "hp_unstable":
             m.d.comb += Assume(~dut.busy | (hp == hp_prev))
 
-        mon = _check_ma(m, dut.ma, hp, dut.busy, inside, self.lemmas)
+        mon = _check_ma(m, dut.ma, hp, dut.busy, inside, self.lemmas, run=run, hold=hold)
+        if self.cdm:
+            # Non-vacuity of the hold: a low phase longer than the half period.
+            m.d.comb += Cover(mon.rise & (mon.since > mon.hp_phase) & (hp >= 3))
 
         # Non-vacuity: three full periods at a half period of at least 3, stop, and a restart.
         periods = Signal(4)
@@ -334,8 +381,11 @@ class MasterMaHarness(Harness):
         if self.hp_max is not None:
             m.d.comb += Assume(dut.cfg_ma_half_period <= self.hp_max)
 
-        # IDLE takes every request; an invalid configuration is refused in WAIT_READY.
-        accept = ~dut.busy & dut.start & ~dut.abort_cycle
+        # IDLE takes every request; an invalid configuration is refused in WAIT_READY. With the
+        # register-access engine, the scheduler also requests cycles for it (periodic ticks
+        # that the ports do not show): the request is then taken from the scheduler's output.
+        request = inside("master.request") if self.params.register_access else dut.start
+        accept = ~dut.busy & request & ~dut.abort_cycle
         hp_cycle = Signal(16)
         with m.If(accept):
             m.d.sync += hp_cycle.eq(dut.cfg_ma_half_period)
@@ -344,14 +394,18 @@ class MasterMaHarness(Harness):
         ma_clock = inside.block("master.ma_clock")
         clock_busy = ma_clock("ma_clock.busy")
         m.d.comb += Assert(dut.busy | dut.ma, "MA high while the master is idle")
-        mon = _check_ma(m, dut.ma, hp_ref, clock_busy, ma_clock, self.lemmas)
+        cdm = self.params.register_access
+        mon = _check_ma(m, dut.ma, hp_ref, clock_busy, ma_clock, self.lemmas,
+                        run=ma_clock("ma_clock.run") if cdm else None,
+                        hold=ma_clock("ma_clock.hold") if cdm else None)
         if self.lemmas:
             hp_dut = ma_clock("ma_clock.half_period")
             in_cycle = 0
-            for state in ("WAIT_READY", "CLOCK", "TAIL", "END"):
+            # (CONFIRM: with the CDM hold it goes on to END.)
+            for state in ("WAIT_READY", "CLOCK", "TAIL", "END", "CONFIRM"):
                 in_cycle = in_cycle | inside.in_state("master.cycle_fsm", state)
             clocking = 0
-            for state in ("CLOCK", "TAIL", "END"):
+            for state in ("CLOCK", "TAIL", "END", "CONFIRM"):
                 clocking = clocking | inside.in_state("master.cycle_fsm", state)
             waiting = inside.in_state("master.cycle_fsm", "WAIT_READY")
             first = inside("master.latched")            # WAIT_READY's first clock
@@ -370,6 +424,13 @@ class MasterMaHarness(Harness):
                 Assert(~(clock_busy | clocking | waiting & (~first | cfg_ok)) | hp_ok,
                        "lemma: a cycle's half period is at least 2"),
             ]
+            if cdm:
+                # MaClock holds (and releases) only in a cycle whose CDM bit is 1; the bit is
+                # copied only while idle, and the master is never idle while MaClock is busy.
+                holding = (ma_clock.in_state("ma_clock.fsm", "HOLD")
+                           | ma_clock.in_state("ma_clock.fsm", "RELEASE"))
+                m.d.comb += Assert(~holding | inside("master.cdm_cycle"),
+                                   "lemma: a hold only with the cycle's CDM = 1")
 
         # Non-vacuity: two request cycles with MA clocking, and back to idle.
         cycles = Signal(2)

@@ -33,7 +33,13 @@ DEFAULT = MasterParams()
 #: 16-bit timers; 5-bit delay counter), one word of up to 2 data bits with CRC-6: whole request
 #: cycles fit in a few dozen clocks.
 SMALL = MasterParams(sys_clk_hz=1_000_000, max_data_bits=(2,), word_crcs=((Crc.CRC6,),),
-                     max_line_delay=16, timer_width=16, counter_width=1, timestamp_width=16)
+                     max_line_delay=16, timer_width=16, counter_width=1, timestamp_width=16,
+                     register_access=False)
+#: SMALL with the register-access engine: the MA proof with the CDM hold (every ``ca_*``
+#: input free, so every CDM sequence the engine can make).
+SMALL_CA = MasterParams(sys_clk_hz=1_000_000, max_data_bits=(2,), word_crcs=((Crc.CRC6,),),
+                        max_line_delay=16, timer_width=16, counter_width=1, timestamp_width=16,
+                        start_wait_frames=2)
 #: One word of up to 4 data bits with CRC-6 only: the mutation checks (no lemmas) stay fast.
 TINY_DECODER = MasterParams(max_data_bits=(4,), word_crcs=((Crc.CRC6,),))
 
@@ -64,10 +70,16 @@ CHECKS = [
     # (a) MA idles high, never glitches ----------------------------------------------------------
     Check("ma_clock", "a", "k-induction", 2, lambda: MaClockHarness(), True),
     Check("ma_clock", "a", "cover", 30, lambda: MaClockHarness(), True),
+    Check("ma_clock_cdm", "a", "k-induction", 2, lambda: MaClockHarness(cdm=True), True),
+    Check("ma_clock_cdm", "a", "cover", 30, lambda: MaClockHarness(cdm=True), True),
     Check("ma_clock_hp_unstable", "a", "mutation", 12,
           lambda: MaClockHarness(lemmas=False, mutation="hp_unstable"), True),
     Check("master_ma_small", "a", "k-induction", 2, lambda: MasterMaHarness(SMALL, lemmas=True), True),
     Check("master_ma_small", "a", "cover", 40, lambda: MasterMaHarness(SMALL, lemmas=True), True),
+    Check("master_ma_small_cdm", "a", "k-induction", 2,
+          lambda: MasterMaHarness(SMALL_CA, lemmas=True), True),
+    Check("master_ma_small_cdm", "a", "cover", 40,
+          lambda: MasterMaHarness(SMALL_CA, lemmas=True), False),
     Check("master_ma_small_live_hp", "a", "mutation", 20,
           lambda: MasterMaHarness(SMALL, mutation="live_hp"), True),
     Check("master_ma_default", "a", "k-induction", 2,

@@ -261,3 +261,94 @@ def test_cycle_controller_pause_after_a_doubtful_frame(end_check):
 def test_cycle_controller_good_frame_does_not_pause():
     trace = run([s for s, _, _ in GOOD_CYCLE])
     assert trace[-1]["idle"] == 1 and not any(x["resync"] for x in trace[5:])
+
+
+# -- CDM (control channel): the cycle's bit, the hold after the frame, its release ----------------
+
+CDM_OUTPUTS = OUTPUTS + ["ma_hold", "cdm_cycle"]
+
+
+def run_cdm(steps, *, end_check=0):
+    trace = run_clocks(CycleController(cdm=True), steps, CDM_OUTPUTS,
+                       defaults={**QUIET, "end_check": end_check, "cdm": 0, "ma_held": 0})
+    for row in trace:
+        row["state"] = state(row)
+    return trace
+
+
+def _good_cycle_with_cdm(cdm):
+    """GOOD_CYCLE up to the stop bit, the engine's bit ``cdm`` offered while idle (and changed
+    to the other value right after the request: the cycle keeps the bit it was accepted with)."""
+    steps = [dict(s) for s, _, _ in GOOD_CYCLE[:20]]
+    for t, s in enumerate(steps):
+        s["cdm"] = cdm if t <= 5 else 1 - cdm
+    return steps
+
+
+def test_cycle_controller_cdm_bit_is_the_accepted_requests():
+    trace = run_cdm(_good_cycle_with_cdm(1))
+    # Accepted in clock 5 (IDLE with request): the bit of that clock, kept through the cycle.
+    assert [x["cdm_cycle"] for x in trace[6:20]] == [1] * 14
+    trace = run_cdm(_good_cycle_with_cdm(0))
+    assert [x["cdm_cycle"] for x in trace[6:20]] == [0] * 14
+    assert not any(x["ma_hold"] for x in trace)
+
+
+def test_cycle_controller_cdm1_holds_until_slo_high_then_waits_for_ma():
+    """CDM = 1: ``ma_hold`` high in CLOCK and TAIL (MaClock reads it when its last high phase
+    ends) and in END while SLO (seen) is low; the first clock with SLO high releases; END goes
+    to IDLE only when MaClock is idle (after its release phase)."""
+    steps = _good_cycle_with_cdm(1) + [
+        {"ma_busy": 1, "ma_held": 1, "slo": 0},     # 20 END: held, timeout running
+        {"ma_busy": 1, "ma_held": 1, "slo": 0},     # 21
+        {"ma_busy": 1, "ma_held": 1, "slo": 1},     # 22 SLO high: release
+        {"ma_busy": 1, "slo": 1},                   # 23 MaClock's release phase (MA high)
+        {"ma_busy": 0, "slo": 1},                   # 24 MaClock idle
+        {},                                         # 25 IDLE
+    ]
+    trace = run_cdm(steps)
+    assert all(x["ma_hold"] for x in trace[9:19] if x["state"] in ("CLOCK", "TAIL"))
+    assert [x["ma_hold"] for x in trace[20:23]] == [1, 1, 0]
+    assert [x["state"] for x in trace[20:26]] == ["END/CONFIRM"] * 5 + ["IDLE"]
+    assert not any(x["fault"] for x in trace)
+
+
+@pytest.mark.parametrize("why", ["slo_stuck", "abort"])
+def test_cycle_controller_cdm1_hold_released_by_timeout_limit_or_abort(why):
+    steps = _good_cycle_with_cdm(1) + [
+        {"ma_busy": 1, "ma_held": 1, "slo": 0},
+        {"ma_busy": 1, "ma_held": 1, "slo": 0, why: 1},
+        {"ma_busy": 1, "slo": 0}, {"ma_busy": 0, "slo": 0}, {"slo": 0},
+    ]
+    trace = run_cdm(steps)
+    assert [x["ma_hold"] for x in trace[20:22]] == [1, 0]
+    # The timeout limit: no report here (the next cycle reports SLO_STUCK_LOW), IDLE once MA is
+    # idle. An abort: BREAK (MA then stays high for the break time).
+    after = "IDLE" if why == "slo_stuck" else "BREAK"
+    assert trace[-1]["state"] == after
+    assert not any(x["fault"] for x in trace)
+
+
+def test_cycle_controller_cdm1_with_end_check_reports_while_held():
+    steps = [dict(s, cdm=1 if t <= 5 else 0) for t, (s, _, _) in enumerate(GOOD_CYCLE[:17])] + [
+        {},                                                   # 17 TAIL
+        {"stopped": 1, "stop_bit": 0},                        # 18 CONFIRM next
+        {"ma_busy": 1, "ma_held": 1, "slo": 0},               # 19 held, timeout running
+        {"ma_busy": 1, "ma_held": 1, "slo": 1},               # 20 SLO high: report, release
+        {"ma_busy": 1},                                       # 21 END: MaClock's release phase
+        {"ma_busy": 0},                                       # 22
+        {},                                                   # 23 IDLE
+    ]
+    trace = run_cdm(steps, end_check=1)
+    assert [t for t, x in enumerate(trace) if x["report_frame"]] == [20]
+    assert [x["ma_hold"] for x in trace[19:21]] == [1, 0]
+    assert [x["state"] for x in trace[21:24]] == ["END/CONFIRM", "END/CONFIRM", "IDLE"]
+
+
+def test_cycle_controller_cdm1_no_hold_after_a_fault():
+    """A fault goes to BREAK, which never holds MA (the frame did not end: CDM is not sent)."""
+    steps = [dict(s, cdm=1) for s in PREFIX["locked"]] + [
+        {"abort": 1, "locked": 1, "cdm": 1}, {"ma_busy": 1}, {"ma_busy": 1}]
+    trace = run_cdm(steps)
+    assert trace[-3]["fault"] and trace[-3]["ma_hold"] == 0
+    assert trace[-1]["state"] == "BREAK" and not trace[-1]["ma_hold"]

@@ -67,3 +67,26 @@ def test_bad_generator_option_exits_with_message(capsys):
     with pytest.raises(SystemExit):
         main(["--preset", "biss-c", "--timestamp-width", "8", "-o", "/dev/null"])
     assert "timestamp_width must be 0" in capsys.readouterr().err
+
+
+def test_register_access_only_where_asked(tmp_path):
+    """The default build has the register-access engine (ca_* ports and their counters); the
+    Renishaw presets (unidirectional encoders) and the lean build leave it out, and
+    ``--register-access`` overrides a preset."""
+    out = tmp_path / "x.v"
+
+    def ports(*args):
+        main([*args, "-o", str(out)])
+        text = out.read_text()
+        return text[text.index("module biss_master("):].split(";")[0]
+
+    assert "ca_start" in ports() and "count_ca_refused" in ports()
+    for preset in ("biss-c", "biss-c-lean", "safety"):
+        assert "ca_" not in ports("--preset", preset), preset
+    assert "ca_start" in ports("--preset", "biss-c", "--register-access", "1")
+    assert "ca_start" not in ports("--register-access", "0")
+
+
+def test_bad_start_wait_is_refused():
+    with pytest.raises(ValueError, match="start_wait_frames"):
+        MasterParams(start_wait_frames=0)

@@ -173,3 +173,84 @@ def test_ma_clock_abort_mid_low_completes_period_then_idles():
     assert _runs(busy) == [(0, 3), (1, 30), (0, len(run) - 33)]
     assert trace[-1][2] == 3
 
+
+
+# -- CDM hold (control channel): MA held low through the encoder's timeout -------------------------
+
+def _hold_sim(hp, run, hold):
+    """MaClock with the CDM hold: per cycle (ma, rise, rises, busy, held, clocking)."""
+    dut = MaClock(cdm=True)
+    trace = []
+
+    async def tb(ctx):
+        ctx.set(dut.half_period, hp)
+        for r, h in zip(run, hold):
+            ctx.set(dut.run, r)
+            ctx.set(dut.hold, h)
+            trace.append(tuple(ctx.get(x) for x in (dut.ma, dut.rise, dut.rises, dut.busy,
+                                                     dut.held, dut.clocking)))
+            await ctx.tick()
+
+    simulate(dut, tb)
+    return trace
+
+
+@pytest.mark.parametrize("hp", (2, 3, 5))
+@pytest.mark.parametrize("release", (-3, 0, 1, 2, 7), ids=lambda r: f"release{r:+d}")
+def test_ma_clock_cdm_hold_low_through_timeout_then_one_half_period_high(hp, release):
+    """Spec section 10: CDM = 1 is MA held low through the encoder's timeout. Expected from the
+    period rule alone: ``run`` for P periods; ``hold`` high when the last high phase ends (its
+    last clock, 2*hp*P) makes MA fall in the next clock, m = 2*hp*P + 1, exactly when a next
+    period would have begun. ``hold`` drops in clock m + ``release`` (negative: before m, where
+    MaClock does not look at it): MA rises at max(m + release + 1, m + hp) (no low phase shorter
+    than hp), stays high exactly hp busy clocks, then idles high. No ``rise`` strobe, ``rises``
+    kept."""
+    periods = 3
+    n = 2 * hp * periods + 4 * hp + 30
+    last_high = 2 * hp * periods
+    m = last_high + 1
+    run = [1] * (2 * hp * (periods - 1) + 1) + [0] * n
+    run = run[:n]
+    drop = m + release
+    hold = [int(t < drop or t < last_high + 1 and t >= last_high) for t in range(n)]
+    if release < 0:
+        hold = [int(t == last_high) for t in range(n)]       # high only where it is read
+    trace = _hold_sim(hp, run, hold)
+    ma = [x[0] for x in trace]
+    rise_at = max(m + max(release, -1) + 1, m + hp) if release >= 0 else m + hp
+    exp = [1] * n
+    for t in range(1, last_high + 1):
+        k, phase = divmod(t - 1, 2 * hp)
+        exp[t] = 0 if phase < hp else 1
+    for t in range(m, rise_at):
+        exp[t] = 0
+    assert ma == exp, (f"got {_runs(ma)}, expected {_runs(exp)}")
+    busy = [x[3] for x in trace]
+    assert busy == [int(1 <= t < rise_at + hp) for t in range(n)]
+    assert [x[4] for x in trace] == [int(m <= t < rise_at) for t in range(n)], "held"
+    assert [x[5] for x in trace] == [int(1 <= t < m) for t in range(n)], "clocking"
+    assert sum(x[1] for x in trace) == periods and trace[-1][2] == periods
+
+
+def test_ma_clock_cdm_release_is_remembered():
+    """``hold`` low for one clock inside the minimum low phase releases MA at its end, even
+    when ``hold`` comes back high."""
+    hp = 5
+    run = [1] + [0] * 40
+    hold = [1] * 41
+    m = 2 * hp + 1
+    hold[m + 1] = 0
+    trace = _hold_sim(hp, run, hold)
+    ma = [x[0] for x in trace]
+    assert _runs(ma) == [(1, 1), (0, hp), (1, hp), (0, hp), (1, 41 - 1 - 3 * hp)]
+
+
+def test_ma_clock_without_hold_is_unchanged():
+    """``hold`` low: the waveform of the build without the hold (the reference above)."""
+    hp = 3
+    rng = random.Random(7)
+    run, _ = _ma_run_wave(hp, rng)
+    trace = _hold_sim(hp, run, [0] * len(run))
+    exp_ma, exp_rise, exp_rises, exp_busy, _ = _ma_reference(hp, run)
+    assert [x[0] for x in trace] == exp_ma and [x[3] for x in trace] == exp_busy
+    assert [x[3] for x in trace] == [x[5] for x in trace]          # clocking == busy

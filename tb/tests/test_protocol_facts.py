@@ -47,6 +47,7 @@ CONTROL = {
     "CONTROL_ADDRESS_BITS": control.ADDRESS_BITS,
     "REGISTER_BITS": control.DATA_BITS,
     "BANK_BYTES": control.BANK_SIZE,
+    "CDM_IDLE_FRAMES": control.IDLE_FRAMES,
     "REG_BANK_SELECT": control.BANK_SELECT,
     "REG_EDS_BANK": control.EDS_BANK,
     "REG_PROFILE_ID": control.PROFILE_ID,
