@@ -37,8 +37,9 @@ from bissmaster.generate import PRESETS
 from venvtools import tool  # scripts/, this file's folder
 
 #: The named builds measured (bissmaster.generate's presets): the issue's two configurations,
-#: and the smallest BiSS C build (no error counters, no timestamp, 16-bit time settings).
-CONFIGS = ("biss-c", "biss-c-lean", "safety")
+#: the smallest BiSS C build (no error counters, no timestamp, 16-bit time settings), and the
+#: BP3 build with the register-access engine.
+CONFIGS = ("biss-c", "biss-c-lean", "safety", "bp3")
 
 #: arch -> yosys synth command, nextpnr tool and device options, Fmax target (MHz), and the
 #: nextpnr clock constraint (MHz; a little above the target so that the placer works for it).

@@ -95,6 +95,10 @@ PRESETS = {
                     "16-bit time settings",
                     _BISS_C + ["--counter-width", "0", "--timestamp-width", "0",
                                "--timer-width", "16"]),
+    "bp3": ("BiSS C / BP3 Standard Encoder Profile: one word of up to 55 bits (the profile's "
+            "longest position), CRC-6, the register-access engine (identification, EDS, "
+            "encoder registers)",
+            ["--max-data-bits", "55", "--word-crcs", "6", "--register-access", "1"]),
     "safety": ("BiSS Safety: CPW up to 36 bits with CRC-6, SPW up to 28 bits with CRC-16, "
                "no register access",
                ["--max-data-bits", "36,28", "--word-crcs", "6,16"] + _NO_ACCESS),
