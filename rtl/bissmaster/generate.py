@@ -1,9 +1,11 @@
-"""Generate the Verilog module ``biss_master``.
+"""Generate the Verilog module ``biss_master``, or a bus top of several channels.
 
     python -m bissmaster.generate [-o FILE] [--preset NAME] [--max-data-bits 55,40] ...
+    python -m bissmaster.generate --bus axil|wb [--channels N] [--preset NAME] ...
 
-The default configuration is committed as ``rtl/generated/biss_master.v`` for users who never
-run Python; ``make rtl`` regenerates it and the test suite checks it is up to date.
+The default configurations are committed (``rtl/generated/biss_master.v``,
+``biss_master_axil.v``, ``biss_master_wb.v``) for users who never run Python; ``make rtl``
+regenerates them and the test suite checks they are up to date.
 """
 
 import argparse
@@ -12,6 +14,7 @@ from importlib import metadata
 
 from amaranth.back import verilog
 
+from .bus_top import BUSES, BusTop
 from .master import BissMaster
 from .params import Crc, MasterParams
 
@@ -31,6 +34,32 @@ def generate(params=None, name="biss_master"):
     params = params or MasterParams()
     body = verilog.convert(BissMaster(params), name=name, emit_src=False)
     return header(params) + body
+
+
+def header_bus(bus, channels, params):
+    lines = [
+        f"BiSS master bus top ({'AXI4-Lite' if bus == 'axil' else 'Wishbone B4'}, "
+        f"{channels} channel{'s' * (channels > 1)}): generated Verilog. DO NOT EDIT; edit the "
+        "Amaranth source or the register map.",
+        f"Generator: bissmaster.generate --bus {bus}, amaranth {metadata.version('amaranth')}",
+        "Register map: rtl/regmap/biss_master.rdl (docs/registers.md, docs/bus.md).",
+        "Parameters of each channel's core:",
+        *("  " + line for line in params.describe()),
+        "Ports: docs/bus.md. Constraints: constraints/.",
+    ]
+    return "".join(f"// {line}\n" for line in lines)
+
+
+#: Channels of the committed bus tops.
+BUS_CHANNELS = 2
+
+
+def generate_bus(bus="axil", channels=BUS_CHANNELS, params=None, name=None):
+    """Verilog of a bus top (every channel with the same ``params``)."""
+    params = params or MasterParams()
+    top = BusTop(bus, channels, params)
+    body = verilog.convert(top, name=name or f"biss_master_{bus}", emit_src=False)
+    return header_bus(bus, channels, params) + body
 
 
 _BISS_C = ["--max-data-bits", "36", "--word-crcs", "6"]
@@ -67,7 +96,12 @@ def main(argv=None):
     ap.add_argument("--preset", choices=PRESETS, default="default",
                     help="a named build (below); other options given override it")
     ap.add_argument("-o", "--output", default="-", help="output file (default: stdout)")
-    ap.add_argument("--name", default="biss_master", help="Verilog module name")
+    ap.add_argument("--name", default=None,
+                    help="Verilog module name (default: biss_master, or biss_master_<bus>)")
+    ap.add_argument("--bus", choices=sorted(BUSES), default=None,
+                    help="generate a bus top: AXI4-Lite (axil) or Wishbone B4 (wb)")
+    ap.add_argument("--channels", type=int, default=BUS_CHANNELS,
+                    help=f"channels of a bus top, 1..8 (default {BUS_CHANNELS})")
     ap.add_argument("--sys-clk-hz", type=int, default=defaults.sys_clk_hz)
     ap.add_argument("--max-data-bits", default=",".join(map(str, defaults.max_data_bits)),
                     help="per word, e.g. 36 (BiSS C only) or 36,28")
@@ -93,7 +127,13 @@ def main(argv=None):
                               timestamp_width=args.timestamp_width)
     except ValueError as e:
         ap.error(str(e))
-    text = generate(params, args.name)
+    if args.bus:
+        try:
+            text = generate_bus(args.bus, args.channels, params, args.name)
+        except ValueError as e:
+            ap.error(str(e))
+    else:
+        text = generate(params, args.name or "biss_master")
     if args.output == "-":
         sys.stdout.write(text)
     else:

@@ -45,27 +45,38 @@ class BissMaster(wiring.Component):
     Parameters
     ----------
     params : MasterParams
+    trigger : bool
+        Add the input ``trigger`` (a request, exactly like ``start``): the seam a multi-channel
+        top drives to start several channels in the same clock. The standalone core has none.
     """
 
-    def __init__(self, params=None):
+    def __init__(self, params=None, *, trigger=False):
         if params is None:
             params = MasterParams()
         if not isinstance(params, MasterParams):
             raise TypeError(f"params must be a MasterParams, not {params!r}")
         self.params = p = params
+        self.has_trigger = bool(trigger)
         self._config_fields = config_ports(p)
         self._result_fields = flat_fields(result_layout(p))
-        ports = {
+        super().__init__(self.ports(p, trigger=trigger))
+
+    @staticmethod
+    def ports(params, *, trigger=False):
+        """``{port name: wiring member}`` of the core built with ``params``, in port order."""
+        p = params
+        return {
             # Line
             "ma": Out(1, init=1),
             "slo": In(1, init=1),
             # Control
             "start": In(1),
+            **({"trigger": In(1)} if trigger else {}),
             "periodic": In(1),
             "abort_cycle": In(1),
             **({"clear_counters": In(1)} if p.counters else {}),
             # Runtime configuration
-            **{name: In(shape) for name, _, shape in self._config_fields},
+            **{name: In(shape) for name, _, shape in config_ports(p)},
             # State
             "busy": Out(1),
             "config_error": Out(1),
@@ -73,11 +84,10 @@ class BissMaster(wiring.Component):
             # Result of the last cycle
             "done": Out(1),
             "valid": Out(1),
-            **{name: Out(shape) for name, _, shape in self._result_fields},
+            **{name: Out(shape) for name, _, shape in flat_fields(result_layout(p))},
             # Error counters
-            **{f"count_{name}": Out(p.counter_width) for name in self.counter_names},
+            **{f"count_{name}": Out(p.counter_width) for name in counter_names(p)},
         }
-        super().__init__(ports)
 
     @property
     def counter_names(self):
@@ -143,6 +153,8 @@ class BissMaster(wiring.Component):
             b.scheduler.idle.eq(b.controller.idle),
             b.sampler.slo.eq(self.slo),
         ]
+        if self.has_trigger:
+            m.d.comb += b.scheduler.trigger.eq(self.trigger)
 
     def _connect_control(self, m, b):
         """The controller, its limits and the MA clock."""
