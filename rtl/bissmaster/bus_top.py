@@ -132,9 +132,9 @@ class BusTop(wiring.Component):
         to the ``trigger`` register does.
     irq : Out(1)
         Registered: some channel has an enabled interrupt cause set.
-    ma : Out(channels)
-    slo : In(channels)
-        One MA/SLO pair per channel (asynchronous SLO, synchronized in each core).
+    ch<n>_ma : Out(1)
+    ch<n>_slo : In(1)
+        One MA/SLO pair per channel n (asynchronous SLO, synchronized in each core).
     """
 
     def __init__(self, bus="axil", channels=2, params=None, regmap=None):
@@ -164,8 +164,8 @@ class BusTop(wiring.Component):
             **{prefix + path[-1]: member for path, member in self._bus_members},
             "trigger": In(1),
             "irq": Out(1),
-            "ma": Out(channels, init=2**channels - 1),
-            "slo": In(channels, init=2**channels - 1),
+            **{f"ch{n}_{pin}": member for n in range(channels)
+               for pin, member in (("ma", Out(1, init=1)), ("slo", In(1, init=1)))},
         })
 
     def elaborate(self, platform):
@@ -190,8 +190,9 @@ class BusTop(wiring.Component):
         for n, channel in enumerate(self._channels):
             m.submodules[f"ch{n}"] = channel
             wiring.connect(m, getattr(bank, f"ch{n}"), channel.regs)
-            m.d.comb += [channel.trigger.eq(trigger), self.ma[n].eq(channel.ma),
-                         channel.slo.eq(self.slo[n])]
+            m.d.comb += [channel.trigger.eq(trigger),
+                         getattr(self, f"ch{n}_ma").eq(channel.ma),
+                         channel.slo.eq(getattr(self, f"ch{n}_slo"))]
 
         m.d.comb += [bank.glob.channels.eq(self.channels), bank.glob.irq_pending.eq(bank.irq)]
         m.d.sync += self.irq.eq(bank.irq.any())
