@@ -7,6 +7,7 @@ WishboneMaster), every address and field comes from the SystemRDL source through
 result's timestamp (the clock count of the frame's first MA rise), never from the RTL.
 """
 
+import logging
 import os
 import random
 
@@ -32,6 +33,8 @@ class AxiLiteBus:
     def __init__(self, dut):
         from cocotbext.axi import AxiLiteBus as Bus, AxiLiteMaster
         self.master = AxiLiteMaster(Bus.from_prefix(dut, "s_axil"), dut.clk, dut.rst)
+        for side in (self.master.write_if, self.master.read_if):
+            side.log.setLevel(logging.WARNING)          # no line per transaction
 
     async def read(self, addr):
         r = await self.master.read(addr, 4)
@@ -107,15 +110,17 @@ class BusTestbench:
         self.t_clk0 = None
 
     # -- Setup ----------------------------------------------------------------------------
-    async def start(self, formats=(), cables=()):
-        """Clock, reset, and one encoder per entry of ``formats`` (channel 0, 1, ...)."""
+    async def start(self, formats=(), cables=(), positions=()):
+        """Clock, reset, and one encoder per entry of ``formats`` (channel 0, 1, ...);
+        ``positions``: per channel, a position function of time (default: random)."""
         dut = self.dut
         Clock(dut.clk, CLK_NS, unit="ns").start()
         dut.trigger.value = 0
         dut.rst.value = 1
         for n, fmt in enumerate(formats):
             cable = cables[n] if n < len(cables) else Cable()
-            self.channels[n] = Channel(self, n, fmt, cable)
+            position = positions[n] if n < len(positions) else None
+            self.channels[n] = Channel(self, n, fmt, cable, position)
             self.channels[n].encoder.start()
         await ClockCycles(dut.clk, 4)
         dut.rst.value = 0
@@ -190,14 +195,18 @@ class BusTestbench:
             res[f"word{w}"] = lo | hi << 32
         return res
 
-    def check_result(self, ch, res, status="OK"):
-        """The result against the frame its channel's encoder sent at its timestamp."""
+    def check_result(self, ch, res, status="OK", seq=False):
+        """The result against the frame its channel's encoder sent at its timestamp; with
+        ``seq``, also that ``result.seq`` counts every frame sent up to that one (none lost)."""
         chan = self.channels[ch]
         assert res["status"] == STATUS[status], f"ch{ch}: status {res['status']} != {status}"
         bits = chan.sent.get(res["time"])
         assert bits is not None, \
             f"ch{ch}: no frame sent at timestamp {res['time']} (sent: {sorted(chan.sent)[-4:]})"
         parsed = frames.parse_frame(chan.fmt, bits)
+        if seq:
+            n = sorted(chan.sent).index(res["time"]) + 1
+            assert res["seq"] == n % 2**16, f"ch{ch}: seq {res['seq']}, frame {n} since reset"
         for w, word in enumerate(parsed["words"]):
             assert res[f"word{w}"] == word["position"], \
                 f"ch{ch} word{w}: {res[f'word{w}']:#x} != sent {word['position']:#x}"
@@ -223,7 +232,8 @@ class BusTestbench:
         return self.fields("irq_status", word, ch)
 
     async def request(self, ch, limit_s=1e-3):
-        """ctrl.start, wait for done (irq_status, cleared), return the result."""
+        """Wait until idle, ctrl.start, wait for done (irq_status, cleared), return the result."""
+        await self.wait_idle(ch)
         await self.write("irq_status", self.map.channel["irq_status"].fields["done"].mask, ch)
         await self.write_fields("ctrl", ch, start=1, **await self._ctrl_keep(ch))
         await self.wait_irq_status(ch, "done", limit_s)
