@@ -101,7 +101,8 @@ class BusChannel(wiring.Component):
                 m.d.comb += port.eq(signal) if member.flow == In else signal.eq(port)
 
         # Every ended cycle counted, so a host sees a lost result.
-        m.d.sync += regs.done_count.eq(regs.done_count + core.done)
+        with m.If(core.done):
+            m.d.sync += regs.done_count.eq(regs.done_count + 1)
         # The global trigger starts the core only when enabled.
         m.d.comb += [
             core.trigger.eq(self.trigger & regs.trigger_enable),

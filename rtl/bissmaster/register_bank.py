@@ -91,10 +91,14 @@ class RegisterBank(wiring.Component):
         blocks += [(getattr(self, f"ch{n}"), rm.channel_base + n * rm.channel_stride,
                     rm.channel, f"ch{n}") for n in range(self.channels)]
         read_words = {}
+        irqs = []
         for port, base, registers, prefix in blocks:
             irq = self._block(m, port, base, registers, prefix, read_words)
             if prefix != "g":
-                m.d.comb += self.irq[int(prefix[2:])].eq(irq)
+                irqs.append(irq)
+        # Whole signals, never bit by bit: Icarus runs a combinational block written per bit
+        # only once an input changes, and would read X until then.
+        m.d.comb += self.irq.eq(Cat(irqs))
 
         # The read port: one registered word, loaded on r_en.
         with m.If(self.bus.r_en):
@@ -120,10 +124,9 @@ class RegisterBank(wiring.Component):
             read = Signal(name=f"{prefix}_{reg.path.replace('.', '_')}_read")
             m.d.comb += [write.eq(bus.w_en & (bus.w_addr == word)),
                          read.eq(bus.r_en & (bus.r_addr == word))]
-            value = Signal(DATA_WIDTH, name=f"{prefix}_{reg.path.replace('.', '_')}_value")
+            parts = []                 # (lsb, the field's read value)
             for f in reg.fields:
                 name = f"{prefix}_{reg.path.replace('.', '_')}_{f.name}"
-                bits = value[f.lsb:f.lsb + f.width]
                 data = bus.w_data[f.lsb:f.lsb + f.width]
                 # Bit i of the field is written only if its byte lane's strobe is set.
                 lanes = Cat(bus.w_strb[(f.lsb + i) // 8] for i in range(f.width))
@@ -132,7 +135,7 @@ class RegisterBank(wiring.Component):
                     storage[f"{reg.path}.{f.name}"] = reg_bits
                     with m.If(write):
                         m.d.sync += reg_bits.eq((reg_bits & ~lanes) | (data & lanes))
-                    m.d.comb += bits.eq(reg_bits)
+                    parts.append((f.lsb, reg_bits))
                     if f.signal:
                         m.d.comb += self._signal(port, f).eq(reg_bits)
                 elif f.kind == Kind.PULSE:
@@ -140,26 +143,32 @@ class RegisterBank(wiring.Component):
                     m.d.sync += pulse.eq(Mux(write, data & lanes, 0))
                     m.d.comb += self._signal(port, f).eq(pulse)
                 elif f.kind == Kind.CONST:
-                    m.d.comb += bits.eq(f.reset)
+                    parts.append((f.lsb, C(f.reset, f.width)))
                 elif f.kind == Kind.IRQ:
                     status = Signal(f.width, init=f.reset, name=name)
                     event = self._signal(port, f) if f.signal else C(0, f.width)
                     clear = Mux(write, data & lanes, 0)
-                    m.d.sync += status.eq((status & ~clear) | event)
-                    m.d.comb += bits.eq(status)
+                    for i in range(f.width):
+                        # A set wins over a clear in the same clock. Conditions, not logic:
+                        # an event that reads X in a four-state simulator then sets nothing.
+                        with m.If(event[i]):
+                            m.d.sync += status[i].eq(1)
+                        with m.Elif(clear[i]):
+                            m.d.sync += status[i].eq(0)
+                    parts.append((f.lsb, status))
                     irq_terms.append((status, f.enable))
                 elif f.kind == Kind.LIVE:
                     live = self._signal(port, f)
                     if reg.snapshot is None:
-                        m.d.comb += bits.eq(live)
+                        parts.append((f.lsb, live))
                     else:
                         copy = Signal(f.width, init=f.reset, name=f"{name}_snapshot")
                         snapshots.setdefault(reg.snapshot, []).append(copy.eq(live))
                         # The register that takes the snapshot reads the live value itself.
-                        m.d.comb += bits.eq(live if reg.takes_snapshot else copy)
+                        parts.append((f.lsb, live if reg.takes_snapshot else copy))
             if reg.takes_snapshot:
                 take[reg.snapshot] = read
-            read_words[word] = value
+            read_words[word] = self._word(parts)
         for group, copies in snapshots.items():
             with m.If(take[group]):
                 m.d.sync += copies
@@ -171,6 +180,22 @@ class RegisterBank(wiring.Component):
 
     @staticmethod
     def _signal(port, f):
-        """The bits of ``port``'s signal that field ``f`` holds."""
+        """The bits of ``port``'s signal that field ``f`` holds (the signal itself when the
+        field holds all of it)."""
         signal = getattr(port, f.signal)
+        if f.signal_lsb == 0 and f.width == len(signal):
+            return signal
         return signal[f.signal_lsb:f.signal_lsb + f.width]
+
+    @staticmethod
+    def _word(parts):
+        """A register's read value from its fields' ``(lsb, value)``, 0 between fields."""
+        pieces, at = [], 0
+        for lsb, value in sorted(parts, key=lambda p: p[0]):
+            if lsb > at:
+                pieces.append(C(0, lsb - at))
+            pieces.append(value)
+            at = lsb + len(value)
+        if at < DATA_WIDTH:
+            pieces.append(C(0, DATA_WIDTH - at))
+        return Cat(pieces)

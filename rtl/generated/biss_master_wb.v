@@ -18,12 +18,14 @@
 module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo, ch1_slo, clk, rst, wb_dat_r, wb_ack, wb_stall, irq, ch0_ma, ch1_ma, wb_cyc);
   reg \$auto$verilog_backend.cc:2355:dump_module$17  = 0;
   wire \$1 ;
+  wire [160:0] \$10 ;
+  wire [207:0] \$11 ;
   wire \$2 ;
   wire \$3 ;
   reg \$4 ;
   reg \$5 ;
-  wire [160:0] \$6 ;
-  wire [207:0] \$7 ;
+  wire \$6 ;
+  wire \$7 ;
   wire [160:0] \$8 ;
   wire [207:0] \$9 ;
   wire [10:0] bus__r_addr;
@@ -350,7 +352,7 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   assign \$1  = ~ trigger_in;
   assign \$2  = trigger & \$1 ;
   assign \trigger$40  = glob__trigger | \$2 ;
-  assign \$3  = | \irq$303 ;
+  assign \$3  = | { \$7 , \$6  };
   always @(posedge clk)
     trigger_in <= \$4 ;
   always @(posedge clk)
@@ -364,67 +366,68 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .bus__w_strb(wb_sel),
     .ch0__abort_cycle(regs__abort_cycle),
     .ch0__busy(ch0__busy),
+    .ch0__cfg_ack_limit(regs__cfg_ack_limit),
+    .ch0__cfg_break_time(regs__cfg_break_time),
+    .ch0__cfg_delay_limit(regs__cfg_delay_limit),
+    .ch0__cfg_end_check(regs__cfg_end_check),
+    .ch0__cfg_ma_half_period(regs__cfg_ma_half_period),
+    .ch0__cfg_request_period(regs__cfg_request_period),
+    .ch0__cfg_spw_check(regs__cfg_spw_check),
+    .ch0__cfg_spw_tolerance(regs__cfg_spw_tolerance),
+    .ch0__cfg_timeout_limit(regs__cfg_timeout_limit),
+    .ch0__cfg_w0_crc(regs__cfg_w0_crc),
+    .ch0__cfg_w0_data_bits(regs__cfg_w0_data_bits),
+    .ch0__cfg_w0_lc(regs__cfg_w0_lc),
+    .ch0__cfg_w0_nenw(regs__cfg_w0_nenw),
+    .ch0__cfg_w1_crc(regs__cfg_w1_crc),
+    .ch0__cfg_w1_data_bits(regs__cfg_w1_data_bits),
+    .ch0__cfg_w1_enable(regs__cfg_w1_enable),
+    .ch0__cfg_w1_lc(regs__cfg_w1_lc),
+    .ch0__cfg_w1_nenw(regs__cfg_w1_nenw),
     .ch0__clear_counters(regs__clear_counters),
     .ch0__config_error(ch0__config_error),
     .ch0__done(ch0__done),
     .ch0__done_count(ch0__done_count),
     .ch0__frame_error(ch0__frame_error),
+    .ch0__periodic(regs__periodic),
     .ch0__start(regs__start),
-    .ch0_cfg_ack_ack_limit(regs__cfg_ack_limit),
-    .ch0_cfg_break_break_time(regs__cfg_break_time),
-    .ch0_cfg_checks_end_check(regs__cfg_end_check),
-    .ch0_cfg_checks_spw_check(regs__cfg_spw_check),
-    .ch0_cfg_checks_spw_tolerance(regs__cfg_spw_tolerance),
-    .ch0_cfg_ma_delay_limit(regs__cfg_delay_limit),
-    .ch0_cfg_ma_ma_half_period(regs__cfg_ma_half_period),
-    .ch0_cfg_period_request_period(regs__cfg_request_period),
-    .ch0_cfg_timeout_timeout_limit(regs__cfg_timeout_limit),
-    .ch0_cfg_words_w0_crc(regs__cfg_w0_crc),
-    .ch0_cfg_words_w0_data_bits(regs__cfg_w0_data_bits),
-    .ch0_cfg_words_w0_lc(regs__cfg_w0_lc),
-    .ch0_cfg_words_w0_nenw(regs__cfg_w0_nenw),
-    .ch0_cfg_words_w1_crc(regs__cfg_w1_crc),
-    .ch0_cfg_words_w1_data_bits(regs__cfg_w1_data_bits),
-    .ch0_cfg_words_w1_enable(regs__cfg_w1_enable),
-    .ch0_cfg_words_w1_lc(regs__cfg_w1_lc),
-    .ch0_cfg_words_w1_nenw(regs__cfg_w1_nenw),
-    .ch0_ctrl_periodic(regs__periodic),
-    .ch0_ctrl_trigger_enable(regs__trigger_enable),
+    .ch0__trigger_enable(regs__trigger_enable),
+    .ch0_irq(\$6 ),
     .ch1__abort_cycle(\regs__abort_cycle$172 ),
     .ch1__busy(ch1__busy),
+    .ch1__cfg_ack_limit(\regs__cfg_ack_limit$188 ),
+    .ch1__cfg_break_time(\regs__cfg_break_time$190 ),
+    .ch1__cfg_delay_limit(\regs__cfg_delay_limit$192 ),
+    .ch1__cfg_end_check(\regs__cfg_end_check$194 ),
+    .ch1__cfg_ma_half_period(\regs__cfg_ma_half_period$196 ),
+    .ch1__cfg_request_period(\regs__cfg_request_period$198 ),
+    .ch1__cfg_spw_check(\regs__cfg_spw_check$200 ),
+    .ch1__cfg_spw_tolerance(\regs__cfg_spw_tolerance$202 ),
+    .ch1__cfg_timeout_limit(\regs__cfg_timeout_limit$204 ),
+    .ch1__cfg_w0_crc(\regs__cfg_w0_crc$206 ),
+    .ch1__cfg_w0_data_bits(\regs__cfg_w0_data_bits$208 ),
+    .ch1__cfg_w0_lc(\regs__cfg_w0_lc$210 ),
+    .ch1__cfg_w0_nenw(\regs__cfg_w0_nenw$212 ),
+    .ch1__cfg_w1_crc(\regs__cfg_w1_crc$214 ),
+    .ch1__cfg_w1_data_bits(\regs__cfg_w1_data_bits$216 ),
+    .ch1__cfg_w1_enable(\regs__cfg_w1_enable$218 ),
+    .ch1__cfg_w1_lc(\regs__cfg_w1_lc$220 ),
+    .ch1__cfg_w1_nenw(\regs__cfg_w1_nenw$222 ),
     .ch1__clear_counters(\regs__clear_counters$224 ),
     .ch1__config_error(ch1__config_error),
     .ch1__done(ch1__done),
     .ch1__done_count(ch1__done_count),
     .ch1__frame_error(ch1__frame_error),
+    .ch1__periodic(\regs__periodic$270 ),
     .ch1__start(\regs__start$274 ),
-    .ch1_cfg_ack_ack_limit(\regs__cfg_ack_limit$188 ),
-    .ch1_cfg_break_break_time(\regs__cfg_break_time$190 ),
-    .ch1_cfg_checks_end_check(\regs__cfg_end_check$194 ),
-    .ch1_cfg_checks_spw_check(\regs__cfg_spw_check$200 ),
-    .ch1_cfg_checks_spw_tolerance(\regs__cfg_spw_tolerance$202 ),
-    .ch1_cfg_ma_delay_limit(\regs__cfg_delay_limit$192 ),
-    .ch1_cfg_ma_ma_half_period(\regs__cfg_ma_half_period$196 ),
-    .ch1_cfg_period_request_period(\regs__cfg_request_period$198 ),
-    .ch1_cfg_timeout_timeout_limit(\regs__cfg_timeout_limit$204 ),
-    .ch1_cfg_words_w0_crc(\regs__cfg_w0_crc$206 ),
-    .ch1_cfg_words_w0_data_bits(\regs__cfg_w0_data_bits$208 ),
-    .ch1_cfg_words_w0_lc(\regs__cfg_w0_lc$210 ),
-    .ch1_cfg_words_w0_nenw(\regs__cfg_w0_nenw$212 ),
-    .ch1_cfg_words_w1_crc(\regs__cfg_w1_crc$214 ),
-    .ch1_cfg_words_w1_data_bits(\regs__cfg_w1_data_bits$216 ),
-    .ch1_cfg_words_w1_enable(\regs__cfg_w1_enable$218 ),
-    .ch1_cfg_words_w1_lc(\regs__cfg_w1_lc$220 ),
-    .ch1_cfg_words_w1_nenw(\regs__cfg_w1_nenw$222 ),
-    .ch1_ctrl_periodic(\regs__periodic$270 ),
-    .ch1_ctrl_trigger_enable(\regs__trigger_enable$280 ),
+    .ch1__trigger_enable(\regs__trigger_enable$280 ),
+    .ch1_irq(\$7 ),
     .clk(clk),
     .glob__trigger(glob__trigger),
-    .irq(\irq$303 ),
-    .\port$2894$0 (\$6 ),
-    .\port$2901$0 (\$7 ),
-    .\port$3220$0 (\$8 ),
-    .\port$3227$0 (\$9 ),
+    .\port$2848$0 (\$8 ),
+    .\port$2855$0 (\$9 ),
+    .\port$3174$0 (\$10 ),
+    .\port$3181$0 (\$11 ),
     .rst(rst)
   );
   \biss_master_wb.bus  bus (
@@ -465,8 +468,8 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .clk(clk),
     .ma(ch0_ma),
     .periodic(regs__periodic),
-    .\port$2894$0 (\$6 ),
-    .\port$2901$0 (\$7 ),
+    .\port$2848$0 (\$8 ),
+    .\port$2855$0 (\$9 ),
     .regs__busy(ch0__busy),
     .regs__config_error(ch0__config_error),
     .regs__done(ch0__done),
@@ -502,8 +505,8 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .clk(clk),
     .ma(ch1_ma),
     .periodic(\regs__periodic$270 ),
-    .\port$3220$0 (\$8 ),
-    .\port$3227$0 (\$9 ),
+    .\port$3174$0 (\$10 ),
+    .\port$3181$0 (\$11 ),
     .regs__busy(ch1__busy),
     .regs__config_error(ch1__config_error),
     .regs__done(ch1__done),
@@ -562,8 +565,8 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   assign regs__cap_timer_width = 6'h18;
   assign ch0__cap_timestamp = 1'h1;
   assign regs__cap_timestamp = 1'h1;
-  assign ch0__cds = \$6 [49];
-  assign regs__cds = \$6 [49];
+  assign ch0__cds = \$8 [49];
+  assign regs__cds = \$8 [49];
   assign ch0__cfg_ack_limit = regs__cfg_ack_limit;
   assign ch0__cfg_break_time = regs__cfg_break_time;
   assign ch0__cfg_delay_limit = regs__cfg_delay_limit;
@@ -584,70 +587,70 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   assign ch0__cfg_w1_nenw = regs__cfg_w1_nenw;
   assign ch0__clear_counters = regs__clear_counters;
   assign regs__config_error = ch0__config_error;
-  assign ch0__count_aborted = \$7 [191:176];
-  assign regs__count_aborted = \$7 [191:176];
-  assign ch0__count_crc_word0 = \$7 [15:0];
-  assign regs__count_crc_word0 = \$7 [15:0];
-  assign ch0__count_crc_word1 = \$7 [31:16];
-  assign regs__count_crc_word1 = \$7 [31:16];
-  assign ch0__count_delay_range = \$7 [79:64];
-  assign regs__count_delay_range = \$7 [79:64];
-  assign ch0__count_lc_repeat = \$7 [111:96];
-  assign regs__count_lc_repeat = \$7 [111:96];
-  assign ch0__count_lc_skip = \$7 [127:112];
-  assign regs__count_lc_skip = \$7 [127:112];
-  assign ch0__count_lc_zero = \$7 [143:128];
-  assign regs__count_lc_zero = \$7 [143:128];
-  assign ch0__count_no_ack = \$7 [47:32];
-  assign regs__count_no_ack = \$7 [47:32];
-  assign ch0__count_no_start = \$7 [63:48];
-  assign regs__count_no_start = \$7 [63:48];
-  assign ch0__count_no_stop = \$7 [207:192];
-  assign regs__count_no_stop = \$7 [207:192];
-  assign ch0__count_overrun = \$7 [175:160];
-  assign regs__count_overrun = \$7 [175:160];
-  assign ch0__count_slo_stuck_low = \$7 [95:80];
-  assign regs__count_slo_stuck_low = \$7 [95:80];
-  assign ch0__count_spw_mismatch = \$7 [159:144];
-  assign regs__count_spw_mismatch = \$7 [159:144];
+  assign ch0__count_aborted = \$9 [191:176];
+  assign regs__count_aborted = \$9 [191:176];
+  assign ch0__count_crc_word0 = \$9 [15:0];
+  assign regs__count_crc_word0 = \$9 [15:0];
+  assign ch0__count_crc_word1 = \$9 [31:16];
+  assign regs__count_crc_word1 = \$9 [31:16];
+  assign ch0__count_delay_range = \$9 [79:64];
+  assign regs__count_delay_range = \$9 [79:64];
+  assign ch0__count_lc_repeat = \$9 [111:96];
+  assign regs__count_lc_repeat = \$9 [111:96];
+  assign ch0__count_lc_skip = \$9 [127:112];
+  assign regs__count_lc_skip = \$9 [127:112];
+  assign ch0__count_lc_zero = \$9 [143:128];
+  assign regs__count_lc_zero = \$9 [143:128];
+  assign ch0__count_no_ack = \$9 [47:32];
+  assign regs__count_no_ack = \$9 [47:32];
+  assign ch0__count_no_start = \$9 [63:48];
+  assign regs__count_no_start = \$9 [63:48];
+  assign ch0__count_no_stop = \$9 [207:192];
+  assign regs__count_no_stop = \$9 [207:192];
+  assign ch0__count_overrun = \$9 [175:160];
+  assign regs__count_overrun = \$9 [175:160];
+  assign ch0__count_slo_stuck_low = \$9 [95:80];
+  assign regs__count_slo_stuck_low = \$9 [95:80];
+  assign ch0__count_spw_mismatch = \$9 [159:144];
+  assign regs__count_spw_mismatch = \$9 [159:144];
   assign regs__done = ch0__done;
   assign regs__done_count = ch0__done_count;
   assign regs__frame_error = ch0__frame_error;
-  assign ch0__lc = \$6 [156:151];
-  assign regs__lc = \$6 [156:151];
-  assign ch0__lc_repeat = \$6 [157];
-  assign regs__lc_repeat = \$6 [157];
-  assign ch0__lc_skip = \$6 [158];
-  assign regs__lc_skip = \$6 [158];
-  assign ch0__lc_zero = \$6 [159];
-  assign regs__lc_zero = \$6 [159];
-  assign ch0__line_delay = \$6 [48:36];
-  assign regs__line_delay = \$6 [48:36];
+  assign ch0__lc = \$8 [156:151];
+  assign regs__lc = \$8 [156:151];
+  assign ch0__lc_repeat = \$8 [157];
+  assign regs__lc_repeat = \$8 [157];
+  assign ch0__lc_skip = \$8 [158];
+  assign regs__lc_skip = \$8 [158];
+  assign ch0__lc_zero = \$8 [159];
+  assign regs__lc_zero = \$8 [159];
+  assign ch0__line_delay = \$8 [48:36];
+  assign regs__line_delay = \$8 [48:36];
   assign ch0__periodic = regs__periodic;
-  assign ch0__spw_mismatch = \$6 [160];
-  assign regs__spw_mismatch = \$6 [160];
+  assign ch0__spw_mismatch = \$8 [160];
+  assign regs__spw_mismatch = \$8 [160];
   assign ch0__start = regs__start;
-  assign ch0__status = \$6 [3:0];
-  assign regs__status = \$6 [3:0];
-  assign ch0__timestamp = \$6 [35:4];
-  assign regs__timestamp = \$6 [35:4];
+  assign ch0__status = \$8 [3:0];
+  assign regs__status = \$8 [3:0];
+  assign ch0__timestamp = \$8 [35:4];
+  assign regs__timestamp = \$8 [35:4];
   assign ch0__trigger_enable = regs__trigger_enable;
-  assign ch0__word0_crc_ok = \$6 [107];
-  assign regs__word0_crc_ok = \$6 [107];
-  assign ch0__word0_ne = \$6 [105];
-  assign regs__word0_ne = \$6 [105];
-  assign ch0__word0_nw = \$6 [106];
-  assign regs__word0_nw = \$6 [106];
-  assign ch0__word0_position = \$6 [104:50];
-  assign regs__word0_position = \$6 [104:50];
-  assign ch0__word1_crc_ok = \$6 [150];
-  assign regs__word1_crc_ok = \$6 [150];
-  assign ch0__word1_ne = \$6 [148];
-  assign regs__word1_ne = \$6 [148];
-  assign ch0__word1_nw = \$6 [149];
-  assign regs__word1_nw = \$6 [149];
-  assign ch0__word1_position = \$6 [147:108];
-  assign regs__word1_position = \$6 [147:108];
+  assign ch0__word0_crc_ok = \$8 [107];
+  assign regs__word0_crc_ok = \$8 [107];
+  assign ch0__word0_ne = \$8 [105];
+  assign regs__word0_ne = \$8 [105];
+  assign ch0__word0_nw = \$8 [106];
+  assign regs__word0_nw = \$8 [106];
+  assign ch0__word0_position = \$8 [104:50];
+  assign regs__word0_position = \$8 [104:50];
+  assign ch0__word1_crc_ok = \$8 [150];
+  assign regs__word1_crc_ok = \$8 [150];
+  assign ch0__word1_ne = \$8 [148];
+  assign regs__word1_ne = \$8 [148];
+  assign ch0__word1_nw = \$8 [149];
+  assign regs__word1_nw = \$8 [149];
+  assign ch0__word1_position = \$8 [147:108];
+  assign regs__word1_position = \$8 [147:108];
   assign \trigger$169  = \trigger$40 ;
   assign ma = ch0_ma;
   assign slo = ch0_slo;
@@ -663,8 +666,8 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   assign \regs__cap_timer_width$183  = 6'h18;
   assign ch1__cap_timestamp = 1'h1;
   assign \regs__cap_timestamp$185  = 1'h1;
-  assign ch1__cds = \$8 [49];
-  assign \regs__cds$187  = \$8 [49];
+  assign ch1__cds = \$10 [49];
+  assign \regs__cds$187  = \$10 [49];
   assign ch1__cfg_ack_limit = \regs__cfg_ack_limit$188 ;
   assign ch1__cfg_break_time = \regs__cfg_break_time$190 ;
   assign ch1__cfg_delay_limit = \regs__cfg_delay_limit$192 ;
@@ -685,83 +688,84 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   assign ch1__cfg_w1_nenw = \regs__cfg_w1_nenw$222 ;
   assign ch1__clear_counters = \regs__clear_counters$224 ;
   assign \regs__config_error$227  = ch1__config_error;
-  assign ch1__count_aborted = \$9 [191:176];
-  assign \regs__count_aborted$229  = \$9 [191:176];
-  assign ch1__count_crc_word0 = \$9 [15:0];
-  assign \regs__count_crc_word0$231  = \$9 [15:0];
-  assign ch1__count_crc_word1 = \$9 [31:16];
-  assign \regs__count_crc_word1$233  = \$9 [31:16];
-  assign ch1__count_delay_range = \$9 [79:64];
-  assign \regs__count_delay_range$235  = \$9 [79:64];
-  assign ch1__count_lc_repeat = \$9 [111:96];
-  assign \regs__count_lc_repeat$237  = \$9 [111:96];
-  assign ch1__count_lc_skip = \$9 [127:112];
-  assign \regs__count_lc_skip$239  = \$9 [127:112];
-  assign ch1__count_lc_zero = \$9 [143:128];
-  assign \regs__count_lc_zero$241  = \$9 [143:128];
-  assign ch1__count_no_ack = \$9 [47:32];
-  assign \regs__count_no_ack$243  = \$9 [47:32];
-  assign ch1__count_no_start = \$9 [63:48];
-  assign \regs__count_no_start$245  = \$9 [63:48];
-  assign ch1__count_no_stop = \$9 [207:192];
-  assign \regs__count_no_stop$247  = \$9 [207:192];
-  assign ch1__count_overrun = \$9 [175:160];
-  assign \regs__count_overrun$249  = \$9 [175:160];
-  assign ch1__count_slo_stuck_low = \$9 [95:80];
-  assign \regs__count_slo_stuck_low$251  = \$9 [95:80];
-  assign ch1__count_spw_mismatch = \$9 [159:144];
-  assign \regs__count_spw_mismatch$253  = \$9 [159:144];
+  assign ch1__count_aborted = \$11 [191:176];
+  assign \regs__count_aborted$229  = \$11 [191:176];
+  assign ch1__count_crc_word0 = \$11 [15:0];
+  assign \regs__count_crc_word0$231  = \$11 [15:0];
+  assign ch1__count_crc_word1 = \$11 [31:16];
+  assign \regs__count_crc_word1$233  = \$11 [31:16];
+  assign ch1__count_delay_range = \$11 [79:64];
+  assign \regs__count_delay_range$235  = \$11 [79:64];
+  assign ch1__count_lc_repeat = \$11 [111:96];
+  assign \regs__count_lc_repeat$237  = \$11 [111:96];
+  assign ch1__count_lc_skip = \$11 [127:112];
+  assign \regs__count_lc_skip$239  = \$11 [127:112];
+  assign ch1__count_lc_zero = \$11 [143:128];
+  assign \regs__count_lc_zero$241  = \$11 [143:128];
+  assign ch1__count_no_ack = \$11 [47:32];
+  assign \regs__count_no_ack$243  = \$11 [47:32];
+  assign ch1__count_no_start = \$11 [63:48];
+  assign \regs__count_no_start$245  = \$11 [63:48];
+  assign ch1__count_no_stop = \$11 [207:192];
+  assign \regs__count_no_stop$247  = \$11 [207:192];
+  assign ch1__count_overrun = \$11 [175:160];
+  assign \regs__count_overrun$249  = \$11 [175:160];
+  assign ch1__count_slo_stuck_low = \$11 [95:80];
+  assign \regs__count_slo_stuck_low$251  = \$11 [95:80];
+  assign ch1__count_spw_mismatch = \$11 [159:144];
+  assign \regs__count_spw_mismatch$253  = \$11 [159:144];
   assign \regs__done$255  = ch1__done;
   assign \regs__done_count$257  = ch1__done_count;
   assign \regs__frame_error$259  = ch1__frame_error;
-  assign ch1__lc = \$8 [156:151];
-  assign \regs__lc$261  = \$8 [156:151];
-  assign ch1__lc_repeat = \$8 [157];
-  assign \regs__lc_repeat$263  = \$8 [157];
-  assign ch1__lc_skip = \$8 [158];
-  assign \regs__lc_skip$265  = \$8 [158];
-  assign ch1__lc_zero = \$8 [159];
-  assign \regs__lc_zero$267  = \$8 [159];
-  assign ch1__line_delay = \$8 [48:36];
-  assign \regs__line_delay$269  = \$8 [48:36];
+  assign ch1__lc = \$10 [156:151];
+  assign \regs__lc$261  = \$10 [156:151];
+  assign ch1__lc_repeat = \$10 [157];
+  assign \regs__lc_repeat$263  = \$10 [157];
+  assign ch1__lc_skip = \$10 [158];
+  assign \regs__lc_skip$265  = \$10 [158];
+  assign ch1__lc_zero = \$10 [159];
+  assign \regs__lc_zero$267  = \$10 [159];
+  assign ch1__line_delay = \$10 [48:36];
+  assign \regs__line_delay$269  = \$10 [48:36];
   assign ch1__periodic = \regs__periodic$270 ;
-  assign ch1__spw_mismatch = \$8 [160];
-  assign \regs__spw_mismatch$273  = \$8 [160];
+  assign ch1__spw_mismatch = \$10 [160];
+  assign \regs__spw_mismatch$273  = \$10 [160];
   assign ch1__start = \regs__start$274 ;
-  assign ch1__status = \$8 [3:0];
-  assign \regs__status$277  = \$8 [3:0];
-  assign ch1__timestamp = \$8 [35:4];
-  assign \regs__timestamp$279  = \$8 [35:4];
+  assign ch1__status = \$10 [3:0];
+  assign \regs__status$277  = \$10 [3:0];
+  assign ch1__timestamp = \$10 [35:4];
+  assign \regs__timestamp$279  = \$10 [35:4];
   assign ch1__trigger_enable = \regs__trigger_enable$280 ;
-  assign ch1__word0_crc_ok = \$8 [107];
-  assign \regs__word0_crc_ok$283  = \$8 [107];
-  assign ch1__word0_ne = \$8 [105];
-  assign \regs__word0_ne$285  = \$8 [105];
-  assign ch1__word0_nw = \$8 [106];
-  assign \regs__word0_nw$287  = \$8 [106];
-  assign ch1__word0_position = \$8 [104:50];
-  assign \regs__word0_position$289  = \$8 [104:50];
-  assign ch1__word1_crc_ok = \$8 [150];
-  assign \regs__word1_crc_ok$291  = \$8 [150];
-  assign ch1__word1_ne = \$8 [148];
-  assign \regs__word1_ne$293  = \$8 [148];
-  assign ch1__word1_nw = \$8 [149];
-  assign \regs__word1_nw$295  = \$8 [149];
-  assign ch1__word1_position = \$8 [147:108];
-  assign \regs__word1_position$297  = \$8 [147:108];
+  assign ch1__word0_crc_ok = \$10 [107];
+  assign \regs__word0_crc_ok$283  = \$10 [107];
+  assign ch1__word0_ne = \$10 [105];
+  assign \regs__word0_ne$285  = \$10 [105];
+  assign ch1__word0_nw = \$10 [106];
+  assign \regs__word0_nw$287  = \$10 [106];
+  assign ch1__word0_position = \$10 [104:50];
+  assign \regs__word0_position$289  = \$10 [104:50];
+  assign ch1__word1_crc_ok = \$10 [150];
+  assign \regs__word1_crc_ok$291  = \$10 [150];
+  assign ch1__word1_ne = \$10 [148];
+  assign \regs__word1_ne$293  = \$10 [148];
+  assign ch1__word1_nw = \$10 [149];
+  assign \regs__word1_nw$295  = \$10 [149];
+  assign ch1__word1_position = \$10 [147:108];
+  assign \regs__word1_position$297  = \$10 [147:108];
   assign \trigger$298  = \trigger$40 ;
   assign \ma$299  = ch1_ma;
   assign \slo$300  = ch1_slo;
   assign glob__channels = 4'h2;
-  assign glob__irq_pending = { 6'h00, \irq$303  };
+  assign glob__irq_pending = { 6'h00, \$7 , \$6  };
+  assign \irq$303  = { \$7 , \$6  };
   assign wb_stall = wb_ack;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus__w_en, ch0__frame_error, ch0__busy, ch0__config_error, ch1__frame_error, ch1__busy, ch1__config_error, irq, glob__trigger, ch0__start, ch0__abort_cycle, ch0__clear_counters, ch0_ctrl_periodic, ch0_ctrl_trigger_enable, ch0_cfg_ma_ma_half_period, ch0_cfg_ma_delay_limit
-, ch0_cfg_period_request_period, ch0_cfg_break_break_time, ch0_cfg_ack_ack_limit, ch0_cfg_timeout_timeout_limit, ch0_cfg_words_w0_data_bits, ch0_cfg_words_w0_nenw, ch0_cfg_words_w0_lc, ch0_cfg_words_w0_crc, ch0_cfg_words_w1_data_bits, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_enable, ch0_cfg_checks_end_check, ch0_cfg_checks_spw_check, ch0_cfg_checks_spw_tolerance, ch1__start, ch1__abort_cycle, ch1__clear_counters, ch1_ctrl_periodic, ch1_ctrl_trigger_enable
-, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit, ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_enable, ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, bus__r_data, ch0__done_count, ch0__done
-, \port$2894$0 , \port$2901$0 , ch1__done_count, ch1__done, \port$3220$0 , \port$3227$0 , bus__w_addr);
+module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus__w_en, ch0_irq, ch1_irq, ch0__frame_error, ch0__busy, ch0__config_error, ch1__frame_error, ch1__busy, ch1__config_error, glob__trigger, ch0__start, ch0__abort_cycle, ch0__clear_counters, ch0__periodic, ch0__trigger_enable, ch0__cfg_ma_half_period
+, ch0__cfg_delay_limit, ch0__cfg_request_period, ch0__cfg_break_time, ch0__cfg_ack_limit, ch0__cfg_timeout_limit, ch0__cfg_w0_data_bits, ch0__cfg_w0_nenw, ch0__cfg_w0_lc, ch0__cfg_w0_crc, ch0__cfg_w1_data_bits, ch0__cfg_w1_nenw, ch0__cfg_w1_lc, ch0__cfg_w1_crc, ch0__cfg_w1_enable, ch0__cfg_end_check, ch0__cfg_spw_check, ch0__cfg_spw_tolerance, ch1__start, ch1__abort_cycle, ch1__clear_counters, ch1__periodic
+, ch1__trigger_enable, ch1__cfg_ma_half_period, ch1__cfg_delay_limit, ch1__cfg_request_period, ch1__cfg_break_time, ch1__cfg_ack_limit, ch1__cfg_timeout_limit, ch1__cfg_w0_data_bits, ch1__cfg_w0_nenw, ch1__cfg_w0_lc, ch1__cfg_w0_crc, ch1__cfg_w1_data_bits, ch1__cfg_w1_nenw, ch1__cfg_w1_lc, ch1__cfg_w1_crc, ch1__cfg_w1_enable, ch1__cfg_end_check, ch1__cfg_spw_check, ch1__cfg_spw_tolerance, bus__r_data, ch0__done_count
+, ch0__done, \port$2848$0 , \port$2855$0 , ch1__done_count, ch1__done, \port$3174$0 , \port$3181$0 , bus__w_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$18  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -832,24 +836,24 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire \$159 ;
   wire \$16 ;
   wire \$160 ;
-  wire \$161 ;
-  wire \$162 ;
-  wire \$163 ;
-  wire \$164 ;
-  wire \$165 ;
-  wire \$166 ;
-  wire \$167 ;
-  wire \$168 ;
-  wire \$169 ;
+  wire [15:0] \$161 ;
+  wire [15:0] \$162 ;
+  wire [15:0] \$163 ;
+  wire [15:0] \$164 ;
+  wire [11:0] \$165 ;
+  wire [11:0] \$166 ;
+  wire [11:0] \$167 ;
+  wire [11:0] \$168 ;
+  wire [23:0] \$169 ;
   wire \$17 ;
-  wire [15:0] \$170 ;
-  wire [15:0] \$171 ;
-  wire [15:0] \$172 ;
-  wire [15:0] \$173 ;
-  wire [11:0] \$174 ;
-  wire [11:0] \$175 ;
-  wire [11:0] \$176 ;
-  wire [11:0] \$177 ;
+  wire [23:0] \$170 ;
+  wire [23:0] \$171 ;
+  wire [23:0] \$172 ;
+  wire [23:0] \$173 ;
+  wire [23:0] \$174 ;
+  wire [23:0] \$175 ;
+  wire [23:0] \$176 ;
+  wire [23:0] \$177 ;
   wire [23:0] \$178 ;
   wire [23:0] \$179 ;
   wire \$18 ;
@@ -858,70 +862,70 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire [23:0] \$182 ;
   wire [23:0] \$183 ;
   wire [23:0] \$184 ;
-  wire [23:0] \$185 ;
-  wire [23:0] \$186 ;
-  wire [23:0] \$187 ;
-  wire [23:0] \$188 ;
-  wire [23:0] \$189 ;
+  wire [5:0] \$185 ;
+  wire [5:0] \$186 ;
+  wire [5:0] \$187 ;
+  wire [5:0] \$188 ;
+  wire \$189 ;
   wire \$19 ;
-  wire [23:0] \$190 ;
-  wire [23:0] \$191 ;
-  wire [23:0] \$192 ;
-  wire [23:0] \$193 ;
-  wire [5:0] \$194 ;
-  wire [5:0] \$195 ;
-  wire [5:0] \$196 ;
-  wire [5:0] \$197 ;
-  wire \$198 ;
-  wire \$199 ;
+  wire \$190 ;
+  wire \$191 ;
+  wire \$192 ;
+  wire \$193 ;
+  wire \$194 ;
+  wire \$195 ;
+  wire \$196 ;
+  wire [1:0] \$197 ;
+  wire [1:0] \$198 ;
+  wire [1:0] \$199 ;
   wire \$2 ;
   wire \$20 ;
-  wire \$200 ;
-  wire \$201 ;
-  wire \$202 ;
-  wire \$203 ;
-  wire \$204 ;
+  wire [1:0] \$200 ;
+  wire [5:0] \$201 ;
+  wire [5:0] \$202 ;
+  wire [5:0] \$203 ;
+  wire [5:0] \$204 ;
   wire \$205 ;
-  wire [1:0] \$206 ;
-  wire [1:0] \$207 ;
-  wire [1:0] \$208 ;
-  wire [1:0] \$209 ;
+  wire \$206 ;
+  wire \$207 ;
+  wire \$208 ;
+  wire \$209 ;
   wire \$21 ;
-  wire [5:0] \$210 ;
-  wire [5:0] \$211 ;
-  wire [5:0] \$212 ;
-  wire [5:0] \$213 ;
-  wire \$214 ;
-  wire \$215 ;
-  wire \$216 ;
+  wire \$210 ;
+  wire \$211 ;
+  wire \$212 ;
+  wire [1:0] \$213 ;
+  wire [1:0] \$214 ;
+  wire [1:0] \$215 ;
+  wire [1:0] \$216 ;
   wire \$217 ;
   wire \$218 ;
   wire \$219 ;
   wire \$22 ;
   wire \$220 ;
   wire \$221 ;
-  wire [1:0] \$222 ;
-  wire [1:0] \$223 ;
-  wire [1:0] \$224 ;
-  wire [1:0] \$225 ;
+  wire \$222 ;
+  wire \$223 ;
+  wire \$224 ;
+  wire \$225 ;
   wire \$226 ;
   wire \$227 ;
   wire \$228 ;
-  wire \$229 ;
+  wire [7:0] \$229 ;
   wire \$23 ;
-  wire \$230 ;
-  wire \$231 ;
-  wire \$232 ;
+  wire [7:0] \$230 ;
+  wire [7:0] \$231 ;
+  wire [7:0] \$232 ;
   wire \$233 ;
   wire \$234 ;
   wire \$235 ;
   wire \$236 ;
   wire \$237 ;
-  wire [7:0] \$238 ;
-  wire [7:0] \$239 ;
+  wire \$238 ;
+  wire \$239 ;
   wire \$24 ;
-  wire [7:0] \$240 ;
-  wire [7:0] \$241 ;
+  wire \$240 ;
+  wire \$241 ;
   wire \$242 ;
   wire \$243 ;
   wire \$244 ;
@@ -947,75 +951,75 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire \$262 ;
   wire \$263 ;
   wire \$264 ;
-  wire \$265 ;
-  wire \$266 ;
-  wire \$267 ;
-  wire \$268 ;
-  wire \$269 ;
+  wire [15:0] \$265 ;
+  wire [15:0] \$266 ;
+  wire [15:0] \$267 ;
+  wire [15:0] \$268 ;
+  wire [11:0] \$269 ;
   wire \$27 ;
-  wire \$270 ;
-  wire \$271 ;
-  wire \$272 ;
-  wire \$273 ;
-  wire \$274 ;
-  wire \$275 ;
-  wire \$276 ;
-  wire \$277 ;
-  wire \$278 ;
-  wire \$279 ;
+  wire [11:0] \$270 ;
+  wire [11:0] \$271 ;
+  wire [11:0] \$272 ;
+  wire [23:0] \$273 ;
+  wire [23:0] \$274 ;
+  wire [23:0] \$275 ;
+  wire [23:0] \$276 ;
+  wire [23:0] \$277 ;
+  wire [23:0] \$278 ;
+  wire [23:0] \$279 ;
   wire \$28 ;
-  wire \$280 ;
-  wire \$281 ;
-  wire \$282 ;
-  wire [15:0] \$283 ;
-  wire [15:0] \$284 ;
-  wire [15:0] \$285 ;
-  wire [15:0] \$286 ;
-  wire [11:0] \$287 ;
-  wire [11:0] \$288 ;
-  wire [11:0] \$289 ;
+  wire [23:0] \$280 ;
+  wire [23:0] \$281 ;
+  wire [23:0] \$282 ;
+  wire [23:0] \$283 ;
+  wire [23:0] \$284 ;
+  wire [23:0] \$285 ;
+  wire [23:0] \$286 ;
+  wire [23:0] \$287 ;
+  wire [23:0] \$288 ;
+  wire [5:0] \$289 ;
   wire \$29 ;
-  wire [11:0] \$290 ;
-  wire [23:0] \$291 ;
-  wire [23:0] \$292 ;
-  wire [23:0] \$293 ;
-  wire [23:0] \$294 ;
-  wire [23:0] \$295 ;
-  wire [23:0] \$296 ;
-  wire [23:0] \$297 ;
-  wire [23:0] \$298 ;
-  wire [23:0] \$299 ;
+  wire [5:0] \$290 ;
+  wire [5:0] \$291 ;
+  wire [5:0] \$292 ;
+  wire \$293 ;
+  wire \$294 ;
+  wire \$295 ;
+  wire \$296 ;
+  wire \$297 ;
+  wire \$298 ;
+  wire \$299 ;
   wire \$3 ;
   wire \$30 ;
-  wire [23:0] \$300 ;
-  wire [23:0] \$301 ;
-  wire [23:0] \$302 ;
-  wire [23:0] \$303 ;
-  wire [23:0] \$304 ;
-  wire [23:0] \$305 ;
-  wire [23:0] \$306 ;
+  wire \$300 ;
+  wire [1:0] \$301 ;
+  wire [1:0] \$302 ;
+  wire [1:0] \$303 ;
+  wire [1:0] \$304 ;
+  wire [5:0] \$305 ;
+  wire [5:0] \$306 ;
   wire [5:0] \$307 ;
   wire [5:0] \$308 ;
-  wire [5:0] \$309 ;
+  wire \$309 ;
   wire \$31 ;
-  wire [5:0] \$310 ;
+  wire \$310 ;
   wire \$311 ;
   wire \$312 ;
   wire \$313 ;
   wire \$314 ;
   wire \$315 ;
   wire \$316 ;
-  wire \$317 ;
-  wire \$318 ;
+  wire [1:0] \$317 ;
+  wire [1:0] \$318 ;
   wire [1:0] \$319 ;
   wire \$32 ;
   wire [1:0] \$320 ;
-  wire [1:0] \$321 ;
-  wire [1:0] \$322 ;
-  wire [5:0] \$323 ;
-  wire [5:0] \$324 ;
-  wire [5:0] \$325 ;
-  wire [5:0] \$326 ;
+  wire \$321 ;
+  wire \$322 ;
+  wire \$323 ;
+  wire \$324 ;
+  wire \$325 ;
+  wire \$326 ;
   wire \$327 ;
   wire \$328 ;
   wire \$329 ;
@@ -1023,65 +1027,65 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire \$330 ;
   wire \$331 ;
   wire \$332 ;
-  wire \$333 ;
-  wire \$334 ;
-  wire [1:0] \$335 ;
-  wire [1:0] \$336 ;
-  wire [1:0] \$337 ;
-  wire [1:0] \$338 ;
-  wire \$339 ;
+  wire [7:0] \$333 ;
+  wire [7:0] \$334 ;
+  wire [7:0] \$335 ;
+  wire [7:0] \$336 ;
+  reg \$337 ;
+  reg \$338 ;
+  reg \$339 ;
   wire \$34 ;
-  wire \$340 ;
-  wire \$341 ;
-  wire \$342 ;
-  wire \$343 ;
-  wire \$344 ;
-  wire \$345 ;
-  wire \$346 ;
-  wire \$347 ;
-  wire \$348 ;
-  wire \$349 ;
+  reg \$340 ;
+  reg \$341 ;
+  reg \$342 ;
+  reg \$343 ;
+  reg \$344 ;
+  reg \$345 ;
+  reg \$346 ;
+  reg \$347 ;
+  reg \$348 ;
+  reg [15:0] \$349 ;
   wire \$35 ;
-  wire \$350 ;
-  wire [7:0] \$351 ;
-  wire [7:0] \$352 ;
-  wire [7:0] \$353 ;
-  wire [7:0] \$354 ;
-  reg \$355 ;
+  reg [11:0] \$350 ;
+  reg [23:0] \$351 ;
+  reg [23:0] \$352 ;
+  reg [23:0] \$353 ;
+  reg [23:0] \$354 ;
+  reg [5:0] \$355 ;
   reg \$356 ;
   reg \$357 ;
-  reg \$358 ;
-  reg \$359 ;
+  reg [1:0] \$358 ;
+  reg [5:0] \$359 ;
   wire \$36 ;
   reg \$360 ;
   reg \$361 ;
-  reg \$362 ;
+  reg [1:0] \$362 ;
   reg \$363 ;
   reg \$364 ;
   reg \$365 ;
-  reg \$366 ;
-  reg [15:0] \$367 ;
-  reg [11:0] \$368 ;
-  reg [23:0] \$369 ;
+  reg [7:0] \$366 ;
+  reg [3:0] \$367 ;
+  reg \$368 ;
+  reg \$369 ;
   wire \$37 ;
-  reg [23:0] \$370 ;
-  reg [23:0] \$371 ;
-  reg [23:0] \$372 ;
-  reg [5:0] \$373 ;
+  reg \$370 ;
+  reg \$371 ;
+  reg \$372 ;
+  reg \$373 ;
   reg \$374 ;
   reg \$375 ;
-  reg [1:0] \$376 ;
-  reg [5:0] \$377 ;
+  reg \$376 ;
+  reg \$377 ;
   reg \$378 ;
-  reg \$379 ;
+  reg [5:0] \$379 ;
   wire \$38 ;
-  reg [1:0] \$380 ;
-  reg \$381 ;
-  reg \$382 ;
-  reg \$383 ;
-  reg [7:0] \$384 ;
-  reg [3:0] \$385 ;
-  reg \$386 ;
+  reg [15:0] \$380 ;
+  reg [12:0] \$381 ;
+  reg [31:0] \$382 ;
+  reg [22:0] \$383 ;
+  reg [31:0] \$384 ;
+  reg [7:0] \$385 ;
+  reg [31:0] \$386 ;
   reg \$387 ;
   reg \$388 ;
   reg \$389 ;
@@ -1093,71 +1097,53 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   reg \$394 ;
   reg \$395 ;
   reg \$396 ;
-  reg [5:0] \$397 ;
+  reg \$397 ;
   reg [15:0] \$398 ;
-  reg [12:0] \$399 ;
+  reg [11:0] \$399 ;
   wire \$4 ;
   wire \$40 ;
-  reg [31:0] \$400 ;
-  reg [22:0] \$401 ;
-  reg [31:0] \$402 ;
-  reg [7:0] \$403 ;
-  reg [31:0] \$404 ;
+  reg [23:0] \$400 ;
+  reg [23:0] \$401 ;
+  reg [23:0] \$402 ;
+  reg [23:0] \$403 ;
+  reg [5:0] \$404 ;
   reg \$405 ;
   reg \$406 ;
-  reg \$407 ;
-  reg \$408 ;
+  reg [1:0] \$407 ;
+  reg [5:0] \$408 ;
   reg \$409 ;
   wire \$41 ;
   reg \$410 ;
-  reg \$411 ;
+  reg [1:0] \$411 ;
   reg \$412 ;
   reg \$413 ;
   reg \$414 ;
-  reg \$415 ;
-  reg [15:0] \$416 ;
-  reg [11:0] \$417 ;
-  reg [23:0] \$418 ;
-  reg [23:0] \$419 ;
+  reg [7:0] \$415 ;
+  reg [3:0] \$416 ;
+  reg \$417 ;
+  reg \$418 ;
+  reg \$419 ;
   wire \$42 ;
-  reg [23:0] \$420 ;
-  reg [23:0] \$421 ;
-  reg [5:0] \$422 ;
+  reg \$420 ;
+  reg \$421 ;
+  reg \$422 ;
   reg \$423 ;
   reg \$424 ;
-  reg [1:0] \$425 ;
-  reg [5:0] \$426 ;
+  reg \$425 ;
+  reg \$426 ;
   reg \$427 ;
-  reg \$428 ;
-  reg [1:0] \$429 ;
+  reg [5:0] \$428 ;
+  reg [15:0] \$429 ;
   wire \$43 ;
-  reg \$430 ;
-  reg \$431 ;
-  reg \$432 ;
-  reg [7:0] \$433 ;
-  reg [3:0] \$434 ;
-  reg \$435 ;
-  reg \$436 ;
-  reg \$437 ;
-  reg \$438 ;
-  reg \$439 ;
+  reg [12:0] \$430 ;
+  reg [31:0] \$431 ;
+  reg [22:0] \$432 ;
+  reg [31:0] \$433 ;
+  reg [7:0] \$434 ;
+  reg [31:0] \$435 ;
+  reg [31:0] \$436 ;
   wire \$44 ;
-  reg \$440 ;
-  reg \$441 ;
-  reg \$442 ;
-  reg \$443 ;
-  reg \$444 ;
-  reg \$445 ;
-  reg [5:0] \$446 ;
-  reg [15:0] \$447 ;
-  reg [12:0] \$448 ;
-  reg [31:0] \$449 ;
   wire \$45 ;
-  reg [22:0] \$450 ;
-  reg [31:0] \$451 ;
-  reg [7:0] \$452 ;
-  reg [31:0] \$453 ;
-  reg [31:0] \$454 ;
   wire \$46 ;
   wire \$47 ;
   wire \$48 ;
@@ -1240,42 +1226,42 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire [5:0] ch0__cap_timer_width;
   wire ch0__cap_timestamp;
   wire ch0__cds;
-  (* init = 24'h000000 *)
-  wire [23:0] ch0__cfg_ack_limit;
-  (* init = 24'h000000 *)
-  wire [23:0] ch0__cfg_break_time;
-  (* init = 12'h000 *)
-  wire [11:0] ch0__cfg_delay_limit;
-  (* init = 1'h0 *)
-  wire ch0__cfg_end_check;
-  (* init = 16'h0000 *)
-  wire [15:0] ch0__cfg_ma_half_period;
-  (* init = 24'h000000 *)
-  wire [23:0] ch0__cfg_request_period;
-  (* init = 1'h0 *)
-  wire ch0__cfg_spw_check;
-  (* init = 8'h00 *)
-  wire [7:0] ch0__cfg_spw_tolerance;
-  (* init = 24'h000000 *)
-  wire [23:0] ch0__cfg_timeout_limit;
-  (* init = 2'h0 *)
-  wire [1:0] ch0__cfg_w0_crc;
-  (* init = 6'h00 *)
-  wire [5:0] ch0__cfg_w0_data_bits;
-  (* init = 1'h0 *)
-  wire ch0__cfg_w0_lc;
-  (* init = 1'h0 *)
-  wire ch0__cfg_w0_nenw;
-  (* init = 2'h0 *)
-  wire [1:0] ch0__cfg_w1_crc;
-  (* init = 6'h00 *)
-  wire [5:0] ch0__cfg_w1_data_bits;
-  (* init = 1'h0 *)
-  wire ch0__cfg_w1_enable;
-  (* init = 1'h0 *)
-  wire ch0__cfg_w1_lc;
-  (* init = 1'h0 *)
-  wire ch0__cfg_w1_nenw;
+  output [23:0] ch0__cfg_ack_limit;
+  reg [23:0] ch0__cfg_ack_limit = 24'h000000;
+  output [23:0] ch0__cfg_break_time;
+  reg [23:0] ch0__cfg_break_time = 24'h000000;
+  output [11:0] ch0__cfg_delay_limit;
+  reg [11:0] ch0__cfg_delay_limit = 12'h000;
+  output ch0__cfg_end_check;
+  reg ch0__cfg_end_check = 1'h0;
+  output [15:0] ch0__cfg_ma_half_period;
+  reg [15:0] ch0__cfg_ma_half_period = 16'h0000;
+  output [23:0] ch0__cfg_request_period;
+  reg [23:0] ch0__cfg_request_period = 24'h000000;
+  output ch0__cfg_spw_check;
+  reg ch0__cfg_spw_check = 1'h0;
+  output [7:0] ch0__cfg_spw_tolerance;
+  reg [7:0] ch0__cfg_spw_tolerance = 8'h00;
+  output [23:0] ch0__cfg_timeout_limit;
+  reg [23:0] ch0__cfg_timeout_limit = 24'h000000;
+  output [1:0] ch0__cfg_w0_crc;
+  reg [1:0] ch0__cfg_w0_crc = 2'h0;
+  output [5:0] ch0__cfg_w0_data_bits;
+  reg [5:0] ch0__cfg_w0_data_bits = 6'h00;
+  output ch0__cfg_w0_lc;
+  reg ch0__cfg_w0_lc = 1'h0;
+  output ch0__cfg_w0_nenw;
+  reg ch0__cfg_w0_nenw = 1'h0;
+  output [1:0] ch0__cfg_w1_crc;
+  reg [1:0] ch0__cfg_w1_crc = 2'h0;
+  output [5:0] ch0__cfg_w1_data_bits;
+  reg [5:0] ch0__cfg_w1_data_bits = 6'h00;
+  output ch0__cfg_w1_enable;
+  reg ch0__cfg_w1_enable = 1'h0;
+  output ch0__cfg_w1_lc;
+  reg ch0__cfg_w1_lc = 1'h0;
+  output ch0__cfg_w1_nenw;
+  reg ch0__cfg_w1_nenw = 1'h0;
   output ch0__clear_counters;
   reg ch0__clear_counters = 1'h0;
   input ch0__config_error;
@@ -1304,15 +1290,15 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire ch0__lc_skip;
   wire ch0__lc_zero;
   wire [12:0] ch0__line_delay;
-  (* init = 1'h0 *)
-  wire ch0__periodic;
+  output ch0__periodic;
+  reg ch0__periodic = 1'h0;
   wire ch0__spw_mismatch;
   output ch0__start;
   reg ch0__start = 1'h0;
   wire [3:0] ch0__status;
   wire [31:0] ch0__timestamp;
-  (* init = 1'h0 *)
-  wire ch0__trigger_enable;
+  output ch0__trigger_enable;
+  reg ch0__trigger_enable = 1'h0;
   wire ch0__word0_crc_ok;
   wire ch0__word0_ne;
   wire ch0__word0_nw;
@@ -1322,116 +1308,98 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire ch0__word1_nw;
   wire [39:0] ch0__word1_position;
   wire ch0_caps_read;
-  wire [31:0] ch0_caps_value;
   wire ch0_caps_write;
-  output [23:0] ch0_cfg_ack_ack_limit;
-  reg [23:0] ch0_cfg_ack_ack_limit = 24'h000000;
+  (* init = 24'h000000 *)
+  wire [23:0] ch0_cfg_ack_ack_limit;
   wire ch0_cfg_ack_read;
-  wire [31:0] ch0_cfg_ack_value;
   wire ch0_cfg_ack_write;
-  output [23:0] ch0_cfg_break_break_time;
-  reg [23:0] ch0_cfg_break_break_time = 24'h000000;
+  (* init = 24'h000000 *)
+  wire [23:0] ch0_cfg_break_break_time;
   wire ch0_cfg_break_read;
-  wire [31:0] ch0_cfg_break_value;
   wire ch0_cfg_break_write;
-  output ch0_cfg_checks_end_check;
-  reg ch0_cfg_checks_end_check = 1'h0;
+  (* init = 1'h0 *)
+  wire ch0_cfg_checks_end_check;
   wire ch0_cfg_checks_read;
-  output ch0_cfg_checks_spw_check;
-  reg ch0_cfg_checks_spw_check = 1'h0;
-  output [7:0] ch0_cfg_checks_spw_tolerance;
-  reg [7:0] ch0_cfg_checks_spw_tolerance = 8'h00;
-  wire [31:0] ch0_cfg_checks_value;
+  (* init = 1'h0 *)
+  wire ch0_cfg_checks_spw_check;
+  (* init = 8'h00 *)
+  wire [7:0] ch0_cfg_checks_spw_tolerance;
   wire ch0_cfg_checks_write;
-  output [11:0] ch0_cfg_ma_delay_limit;
-  reg [11:0] ch0_cfg_ma_delay_limit = 12'h000;
-  output [15:0] ch0_cfg_ma_ma_half_period;
-  reg [15:0] ch0_cfg_ma_ma_half_period = 16'h0000;
+  (* init = 12'h000 *)
+  wire [11:0] ch0_cfg_ma_delay_limit;
+  (* init = 16'h0000 *)
+  wire [15:0] ch0_cfg_ma_ma_half_period;
   wire ch0_cfg_ma_read;
-  wire [31:0] ch0_cfg_ma_value;
   wire ch0_cfg_ma_write;
   wire ch0_cfg_period_read;
-  output [23:0] ch0_cfg_period_request_period;
-  reg [23:0] ch0_cfg_period_request_period = 24'h000000;
-  wire [31:0] ch0_cfg_period_value;
+  (* init = 24'h000000 *)
+  wire [23:0] ch0_cfg_period_request_period;
   wire ch0_cfg_period_write;
   wire ch0_cfg_timeout_read;
-  output [23:0] ch0_cfg_timeout_timeout_limit;
-  reg [23:0] ch0_cfg_timeout_timeout_limit = 24'h000000;
-  wire [31:0] ch0_cfg_timeout_value;
+  (* init = 24'h000000 *)
+  wire [23:0] ch0_cfg_timeout_timeout_limit;
   wire ch0_cfg_timeout_write;
   wire ch0_cfg_words_read;
-  wire [31:0] ch0_cfg_words_value;
-  output [1:0] ch0_cfg_words_w0_crc;
-  reg [1:0] ch0_cfg_words_w0_crc = 2'h0;
-  output [5:0] ch0_cfg_words_w0_data_bits;
-  reg [5:0] ch0_cfg_words_w0_data_bits = 6'h00;
-  output ch0_cfg_words_w0_lc;
-  reg ch0_cfg_words_w0_lc = 1'h0;
-  output ch0_cfg_words_w0_nenw;
-  reg ch0_cfg_words_w0_nenw = 1'h0;
-  output [1:0] ch0_cfg_words_w1_crc;
-  reg [1:0] ch0_cfg_words_w1_crc = 2'h0;
-  output [5:0] ch0_cfg_words_w1_data_bits;
-  reg [5:0] ch0_cfg_words_w1_data_bits = 6'h00;
-  output ch0_cfg_words_w1_enable;
-  reg ch0_cfg_words_w1_enable = 1'h0;
-  output ch0_cfg_words_w1_lc;
-  reg ch0_cfg_words_w1_lc = 1'h0;
-  output ch0_cfg_words_w1_nenw;
-  reg ch0_cfg_words_w1_nenw = 1'h0;
+  (* init = 2'h0 *)
+  wire [1:0] ch0_cfg_words_w0_crc;
+  (* init = 6'h00 *)
+  wire [5:0] ch0_cfg_words_w0_data_bits;
+  (* init = 1'h0 *)
+  wire ch0_cfg_words_w0_lc;
+  (* init = 1'h0 *)
+  wire ch0_cfg_words_w0_nenw;
+  (* init = 2'h0 *)
+  wire [1:0] ch0_cfg_words_w1_crc;
+  (* init = 6'h00 *)
+  wire [5:0] ch0_cfg_words_w1_data_bits;
+  (* init = 1'h0 *)
+  wire ch0_cfg_words_w1_enable;
+  (* init = 1'h0 *)
+  wire ch0_cfg_words_w1_lc;
+  (* init = 1'h0 *)
+  wire ch0_cfg_words_w1_nenw;
   wire ch0_cfg_words_write;
   wire ch0_count_ack_read;
-  wire [31:0] ch0_count_ack_value;
   wire ch0_count_ack_write;
   wire ch0_count_check_read;
-  wire [31:0] ch0_count_check_value;
   wire ch0_count_check_write;
   wire ch0_count_crc_read;
-  wire [31:0] ch0_count_crc_value;
   wire ch0_count_crc_write;
   wire ch0_count_cycle_read;
-  wire [31:0] ch0_count_cycle_value;
   wire ch0_count_cycle_write;
   wire ch0_count_lc_read;
-  wire [31:0] ch0_count_lc_value;
   wire ch0_count_lc_write;
   wire ch0_count_line_read;
-  wire [31:0] ch0_count_line_value;
   wire ch0_count_line_write;
   wire ch0_count_stop_read;
-  wire [31:0] ch0_count_stop_value;
   wire ch0_count_stop_write;
   (* init = 1'h0 *)
   wire ch0_ctrl_abort;
   (* init = 1'h0 *)
   wire ch0_ctrl_clear_counters;
-  output ch0_ctrl_periodic;
-  reg ch0_ctrl_periodic = 1'h0;
+  (* init = 1'h0 *)
+  wire ch0_ctrl_periodic;
   wire ch0_ctrl_read;
   (* init = 1'h0 *)
   wire ch0_ctrl_start;
-  output ch0_ctrl_trigger_enable;
-  reg ch0_ctrl_trigger_enable = 1'h0;
-  wire [31:0] ch0_ctrl_value;
+  (* init = 1'h0 *)
+  wire ch0_ctrl_trigger_enable;
   wire ch0_ctrl_write;
+  output ch0_irq;
   wire ch0_irq;
   reg ch0_irq_enable_access_done = 1'h0;
   reg ch0_irq_enable_done = 1'h0;
   reg ch0_irq_enable_error = 1'h0;
   wire ch0_irq_enable_read;
-  wire [31:0] ch0_irq_enable_value;
   wire ch0_irq_enable_write;
   reg ch0_irq_status_access_done = 1'h0;
   reg ch0_irq_status_done = 1'h0;
   reg ch0_irq_status_error = 1'h0;
   wire ch0_irq_status_read;
-  wire [31:0] ch0_irq_status_value;
   wire ch0_irq_status_write;
   reg [12:0] ch0_result_seq_line_delay_snapshot = 13'h0000;
   wire ch0_result_seq_read;
   reg [15:0] ch0_result_seq_seq_snapshot = 16'h0000;
-  wire [31:0] ch0_result_seq_value;
   wire ch0_result_seq_write;
   reg ch0_result_status_cds_snapshot = 1'h0;
   reg ch0_result_status_lc_repeat_snapshot = 1'h0;
@@ -1441,7 +1409,6 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire ch0_result_status_read;
   reg ch0_result_status_spw_mismatch_snapshot = 1'h0;
   reg [3:0] ch0_result_status_status_snapshot = 4'h0;
-  wire [31:0] ch0_result_status_value;
   reg ch0_result_status_w0_crc_ok_snapshot = 1'h0;
   reg ch0_result_status_w0_ne_snapshot = 1'h0;
   reg ch0_result_status_w0_nw_snapshot = 1'h0;
@@ -1450,30 +1417,21 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   reg ch0_result_status_w1_nw_snapshot = 1'h0;
   wire ch0_result_status_write;
   wire ch0_result_timestamp_read;
-  (* init = 32'd0 *)
-  wire [31:0] ch0_result_timestamp_time_snapshot;
-  reg [31:0] ch0_result_timestamp_value = 32'd0;
+  reg [31:0] ch0_result_timestamp_time_snapshot = 32'd0;
   wire ch0_result_timestamp_write;
   reg [22:0] ch0_result_w0_hi_data_snapshot = 23'h000000;
   wire ch0_result_w0_hi_read;
-  wire [31:0] ch0_result_w0_hi_value;
   wire ch0_result_w0_hi_write;
-  (* init = 32'd0 *)
-  wire [31:0] ch0_result_w0_lo_data_snapshot;
+  reg [31:0] ch0_result_w0_lo_data_snapshot = 32'd0;
   wire ch0_result_w0_lo_read;
-  reg [31:0] ch0_result_w0_lo_value = 32'd0;
   wire ch0_result_w0_lo_write;
   reg [7:0] ch0_result_w1_hi_data_snapshot = 8'h00;
   wire ch0_result_w1_hi_read;
-  wire [31:0] ch0_result_w1_hi_value;
   wire ch0_result_w1_hi_write;
-  (* init = 32'd0 *)
-  wire [31:0] ch0_result_w1_lo_data_snapshot;
+  reg [31:0] ch0_result_w1_lo_data_snapshot = 32'd0;
   wire ch0_result_w1_lo_read;
-  reg [31:0] ch0_result_w1_lo_value = 32'd0;
   wire ch0_result_w1_lo_write;
   wire ch0_state_read;
-  wire [31:0] ch0_state_value;
   wire ch0_state_write;
   output ch1__abort_cycle;
   reg ch1__abort_cycle = 1'h0;
@@ -1485,42 +1443,42 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire [5:0] ch1__cap_timer_width;
   wire ch1__cap_timestamp;
   wire ch1__cds;
-  (* init = 24'h000000 *)
-  wire [23:0] ch1__cfg_ack_limit;
-  (* init = 24'h000000 *)
-  wire [23:0] ch1__cfg_break_time;
-  (* init = 12'h000 *)
-  wire [11:0] ch1__cfg_delay_limit;
-  (* init = 1'h0 *)
-  wire ch1__cfg_end_check;
-  (* init = 16'h0000 *)
-  wire [15:0] ch1__cfg_ma_half_period;
-  (* init = 24'h000000 *)
-  wire [23:0] ch1__cfg_request_period;
-  (* init = 1'h0 *)
-  wire ch1__cfg_spw_check;
-  (* init = 8'h00 *)
-  wire [7:0] ch1__cfg_spw_tolerance;
-  (* init = 24'h000000 *)
-  wire [23:0] ch1__cfg_timeout_limit;
-  (* init = 2'h0 *)
-  wire [1:0] ch1__cfg_w0_crc;
-  (* init = 6'h00 *)
-  wire [5:0] ch1__cfg_w0_data_bits;
-  (* init = 1'h0 *)
-  wire ch1__cfg_w0_lc;
-  (* init = 1'h0 *)
-  wire ch1__cfg_w0_nenw;
-  (* init = 2'h0 *)
-  wire [1:0] ch1__cfg_w1_crc;
-  (* init = 6'h00 *)
-  wire [5:0] ch1__cfg_w1_data_bits;
-  (* init = 1'h0 *)
-  wire ch1__cfg_w1_enable;
-  (* init = 1'h0 *)
-  wire ch1__cfg_w1_lc;
-  (* init = 1'h0 *)
-  wire ch1__cfg_w1_nenw;
+  output [23:0] ch1__cfg_ack_limit;
+  reg [23:0] ch1__cfg_ack_limit = 24'h000000;
+  output [23:0] ch1__cfg_break_time;
+  reg [23:0] ch1__cfg_break_time = 24'h000000;
+  output [11:0] ch1__cfg_delay_limit;
+  reg [11:0] ch1__cfg_delay_limit = 12'h000;
+  output ch1__cfg_end_check;
+  reg ch1__cfg_end_check = 1'h0;
+  output [15:0] ch1__cfg_ma_half_period;
+  reg [15:0] ch1__cfg_ma_half_period = 16'h0000;
+  output [23:0] ch1__cfg_request_period;
+  reg [23:0] ch1__cfg_request_period = 24'h000000;
+  output ch1__cfg_spw_check;
+  reg ch1__cfg_spw_check = 1'h0;
+  output [7:0] ch1__cfg_spw_tolerance;
+  reg [7:0] ch1__cfg_spw_tolerance = 8'h00;
+  output [23:0] ch1__cfg_timeout_limit;
+  reg [23:0] ch1__cfg_timeout_limit = 24'h000000;
+  output [1:0] ch1__cfg_w0_crc;
+  reg [1:0] ch1__cfg_w0_crc = 2'h0;
+  output [5:0] ch1__cfg_w0_data_bits;
+  reg [5:0] ch1__cfg_w0_data_bits = 6'h00;
+  output ch1__cfg_w0_lc;
+  reg ch1__cfg_w0_lc = 1'h0;
+  output ch1__cfg_w0_nenw;
+  reg ch1__cfg_w0_nenw = 1'h0;
+  output [1:0] ch1__cfg_w1_crc;
+  reg [1:0] ch1__cfg_w1_crc = 2'h0;
+  output [5:0] ch1__cfg_w1_data_bits;
+  reg [5:0] ch1__cfg_w1_data_bits = 6'h00;
+  output ch1__cfg_w1_enable;
+  reg ch1__cfg_w1_enable = 1'h0;
+  output ch1__cfg_w1_lc;
+  reg ch1__cfg_w1_lc = 1'h0;
+  output ch1__cfg_w1_nenw;
+  reg ch1__cfg_w1_nenw = 1'h0;
   output ch1__clear_counters;
   reg ch1__clear_counters = 1'h0;
   input ch1__config_error;
@@ -1549,15 +1507,15 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire ch1__lc_skip;
   wire ch1__lc_zero;
   wire [12:0] ch1__line_delay;
-  (* init = 1'h0 *)
-  wire ch1__periodic;
+  output ch1__periodic;
+  reg ch1__periodic = 1'h0;
   wire ch1__spw_mismatch;
   output ch1__start;
   reg ch1__start = 1'h0;
   wire [3:0] ch1__status;
   wire [31:0] ch1__timestamp;
-  (* init = 1'h0 *)
-  wire ch1__trigger_enable;
+  output ch1__trigger_enable;
+  reg ch1__trigger_enable = 1'h0;
   wire ch1__word0_crc_ok;
   wire ch1__word0_ne;
   wire ch1__word0_nw;
@@ -1567,116 +1525,98 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire ch1__word1_nw;
   wire [39:0] ch1__word1_position;
   wire ch1_caps_read;
-  wire [31:0] ch1_caps_value;
   wire ch1_caps_write;
-  output [23:0] ch1_cfg_ack_ack_limit;
-  reg [23:0] ch1_cfg_ack_ack_limit = 24'h000000;
+  (* init = 24'h000000 *)
+  wire [23:0] ch1_cfg_ack_ack_limit;
   wire ch1_cfg_ack_read;
-  wire [31:0] ch1_cfg_ack_value;
   wire ch1_cfg_ack_write;
-  output [23:0] ch1_cfg_break_break_time;
-  reg [23:0] ch1_cfg_break_break_time = 24'h000000;
+  (* init = 24'h000000 *)
+  wire [23:0] ch1_cfg_break_break_time;
   wire ch1_cfg_break_read;
-  wire [31:0] ch1_cfg_break_value;
   wire ch1_cfg_break_write;
-  output ch1_cfg_checks_end_check;
-  reg ch1_cfg_checks_end_check = 1'h0;
+  (* init = 1'h0 *)
+  wire ch1_cfg_checks_end_check;
   wire ch1_cfg_checks_read;
-  output ch1_cfg_checks_spw_check;
-  reg ch1_cfg_checks_spw_check = 1'h0;
-  output [7:0] ch1_cfg_checks_spw_tolerance;
-  reg [7:0] ch1_cfg_checks_spw_tolerance = 8'h00;
-  wire [31:0] ch1_cfg_checks_value;
+  (* init = 1'h0 *)
+  wire ch1_cfg_checks_spw_check;
+  (* init = 8'h00 *)
+  wire [7:0] ch1_cfg_checks_spw_tolerance;
   wire ch1_cfg_checks_write;
-  output [11:0] ch1_cfg_ma_delay_limit;
-  reg [11:0] ch1_cfg_ma_delay_limit = 12'h000;
-  output [15:0] ch1_cfg_ma_ma_half_period;
-  reg [15:0] ch1_cfg_ma_ma_half_period = 16'h0000;
+  (* init = 12'h000 *)
+  wire [11:0] ch1_cfg_ma_delay_limit;
+  (* init = 16'h0000 *)
+  wire [15:0] ch1_cfg_ma_ma_half_period;
   wire ch1_cfg_ma_read;
-  wire [31:0] ch1_cfg_ma_value;
   wire ch1_cfg_ma_write;
   wire ch1_cfg_period_read;
-  output [23:0] ch1_cfg_period_request_period;
-  reg [23:0] ch1_cfg_period_request_period = 24'h000000;
-  wire [31:0] ch1_cfg_period_value;
+  (* init = 24'h000000 *)
+  wire [23:0] ch1_cfg_period_request_period;
   wire ch1_cfg_period_write;
   wire ch1_cfg_timeout_read;
-  output [23:0] ch1_cfg_timeout_timeout_limit;
-  reg [23:0] ch1_cfg_timeout_timeout_limit = 24'h000000;
-  wire [31:0] ch1_cfg_timeout_value;
+  (* init = 24'h000000 *)
+  wire [23:0] ch1_cfg_timeout_timeout_limit;
   wire ch1_cfg_timeout_write;
   wire ch1_cfg_words_read;
-  wire [31:0] ch1_cfg_words_value;
-  output [1:0] ch1_cfg_words_w0_crc;
-  reg [1:0] ch1_cfg_words_w0_crc = 2'h0;
-  output [5:0] ch1_cfg_words_w0_data_bits;
-  reg [5:0] ch1_cfg_words_w0_data_bits = 6'h00;
-  output ch1_cfg_words_w0_lc;
-  reg ch1_cfg_words_w0_lc = 1'h0;
-  output ch1_cfg_words_w0_nenw;
-  reg ch1_cfg_words_w0_nenw = 1'h0;
-  output [1:0] ch1_cfg_words_w1_crc;
-  reg [1:0] ch1_cfg_words_w1_crc = 2'h0;
-  output [5:0] ch1_cfg_words_w1_data_bits;
-  reg [5:0] ch1_cfg_words_w1_data_bits = 6'h00;
-  output ch1_cfg_words_w1_enable;
-  reg ch1_cfg_words_w1_enable = 1'h0;
-  output ch1_cfg_words_w1_lc;
-  reg ch1_cfg_words_w1_lc = 1'h0;
-  output ch1_cfg_words_w1_nenw;
-  reg ch1_cfg_words_w1_nenw = 1'h0;
+  (* init = 2'h0 *)
+  wire [1:0] ch1_cfg_words_w0_crc;
+  (* init = 6'h00 *)
+  wire [5:0] ch1_cfg_words_w0_data_bits;
+  (* init = 1'h0 *)
+  wire ch1_cfg_words_w0_lc;
+  (* init = 1'h0 *)
+  wire ch1_cfg_words_w0_nenw;
+  (* init = 2'h0 *)
+  wire [1:0] ch1_cfg_words_w1_crc;
+  (* init = 6'h00 *)
+  wire [5:0] ch1_cfg_words_w1_data_bits;
+  (* init = 1'h0 *)
+  wire ch1_cfg_words_w1_enable;
+  (* init = 1'h0 *)
+  wire ch1_cfg_words_w1_lc;
+  (* init = 1'h0 *)
+  wire ch1_cfg_words_w1_nenw;
   wire ch1_cfg_words_write;
   wire ch1_count_ack_read;
-  wire [31:0] ch1_count_ack_value;
   wire ch1_count_ack_write;
   wire ch1_count_check_read;
-  wire [31:0] ch1_count_check_value;
   wire ch1_count_check_write;
   wire ch1_count_crc_read;
-  wire [31:0] ch1_count_crc_value;
   wire ch1_count_crc_write;
   wire ch1_count_cycle_read;
-  wire [31:0] ch1_count_cycle_value;
   wire ch1_count_cycle_write;
   wire ch1_count_lc_read;
-  wire [31:0] ch1_count_lc_value;
   wire ch1_count_lc_write;
   wire ch1_count_line_read;
-  wire [31:0] ch1_count_line_value;
   wire ch1_count_line_write;
   wire ch1_count_stop_read;
-  wire [31:0] ch1_count_stop_value;
   wire ch1_count_stop_write;
   (* init = 1'h0 *)
   wire ch1_ctrl_abort;
   (* init = 1'h0 *)
   wire ch1_ctrl_clear_counters;
-  output ch1_ctrl_periodic;
-  reg ch1_ctrl_periodic = 1'h0;
+  (* init = 1'h0 *)
+  wire ch1_ctrl_periodic;
   wire ch1_ctrl_read;
   (* init = 1'h0 *)
   wire ch1_ctrl_start;
-  output ch1_ctrl_trigger_enable;
-  reg ch1_ctrl_trigger_enable = 1'h0;
-  wire [31:0] ch1_ctrl_value;
+  (* init = 1'h0 *)
+  wire ch1_ctrl_trigger_enable;
   wire ch1_ctrl_write;
+  output ch1_irq;
   wire ch1_irq;
   reg ch1_irq_enable_access_done = 1'h0;
   reg ch1_irq_enable_done = 1'h0;
   reg ch1_irq_enable_error = 1'h0;
   wire ch1_irq_enable_read;
-  wire [31:0] ch1_irq_enable_value;
   wire ch1_irq_enable_write;
   reg ch1_irq_status_access_done = 1'h0;
   reg ch1_irq_status_done = 1'h0;
   reg ch1_irq_status_error = 1'h0;
   wire ch1_irq_status_read;
-  wire [31:0] ch1_irq_status_value;
   wire ch1_irq_status_write;
   reg [12:0] ch1_result_seq_line_delay_snapshot = 13'h0000;
   wire ch1_result_seq_read;
   reg [15:0] ch1_result_seq_seq_snapshot = 16'h0000;
-  wire [31:0] ch1_result_seq_value;
   wire ch1_result_seq_write;
   reg ch1_result_status_cds_snapshot = 1'h0;
   reg ch1_result_status_lc_repeat_snapshot = 1'h0;
@@ -1686,7 +1626,6 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire ch1_result_status_read;
   reg ch1_result_status_spw_mismatch_snapshot = 1'h0;
   reg [3:0] ch1_result_status_status_snapshot = 4'h0;
-  wire [31:0] ch1_result_status_value;
   reg ch1_result_status_w0_crc_ok_snapshot = 1'h0;
   reg ch1_result_status_w0_ne_snapshot = 1'h0;
   reg ch1_result_status_w0_nw_snapshot = 1'h0;
@@ -1695,243 +1634,142 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   reg ch1_result_status_w1_nw_snapshot = 1'h0;
   wire ch1_result_status_write;
   wire ch1_result_timestamp_read;
-  (* init = 32'd0 *)
-  wire [31:0] ch1_result_timestamp_time_snapshot;
-  reg [31:0] ch1_result_timestamp_value = 32'd0;
+  reg [31:0] ch1_result_timestamp_time_snapshot = 32'd0;
   wire ch1_result_timestamp_write;
   reg [22:0] ch1_result_w0_hi_data_snapshot = 23'h000000;
   wire ch1_result_w0_hi_read;
-  wire [31:0] ch1_result_w0_hi_value;
   wire ch1_result_w0_hi_write;
-  (* init = 32'd0 *)
-  wire [31:0] ch1_result_w0_lo_data_snapshot;
+  reg [31:0] ch1_result_w0_lo_data_snapshot = 32'd0;
   wire ch1_result_w0_lo_read;
-  reg [31:0] ch1_result_w0_lo_value = 32'd0;
   wire ch1_result_w0_lo_write;
   reg [7:0] ch1_result_w1_hi_data_snapshot = 8'h00;
   wire ch1_result_w1_hi_read;
-  wire [31:0] ch1_result_w1_hi_value;
   wire ch1_result_w1_hi_write;
-  (* init = 32'd0 *)
-  wire [31:0] ch1_result_w1_lo_data_snapshot;
+  reg [31:0] ch1_result_w1_lo_data_snapshot = 32'd0;
   wire ch1_result_w1_lo_read;
-  reg [31:0] ch1_result_w1_lo_value = 32'd0;
   wire ch1_result_w1_lo_write;
   wire ch1_state_read;
-  wire [31:0] ch1_state_value;
   wire ch1_state_write;
   input clk;
   wire clk;
   wire g_channels_read;
-  wire [31:0] g_channels_value;
   wire g_channels_write;
   wire g_id_read;
-  wire [31:0] g_id_value;
   wire g_id_write;
   wire g_irq;
   wire g_irq_pending_read;
-  wire [31:0] g_irq_pending_value;
   wire g_irq_pending_write;
   wire g_trigger_read;
   (* init = 1'h0 *)
   wire g_trigger_start;
-  wire [31:0] g_trigger_value;
   wire g_trigger_write;
   wire g_version_read;
-  wire [31:0] g_version_value;
   wire g_version_write;
   wire [3:0] glob__channels;
   wire [7:0] glob__irq_pending;
   output glob__trigger;
   reg glob__trigger = 1'h0;
-  output [1:0] irq;
   wire [1:0] irq;
-  input [160:0] \port$2894$0 ;
-  wire [160:0] \port$2894$0 ;
-  input [207:0] \port$2901$0 ;
-  wire [207:0] \port$2901$0 ;
-  input [160:0] \port$3220$0 ;
-  wire [160:0] \port$3220$0 ;
-  input [207:0] \port$3227$0 ;
-  wire [207:0] \port$3227$0 ;
+  input [160:0] \port$2848$0 ;
+  wire [160:0] \port$2848$0 ;
+  input [207:0] \port$2855$0 ;
+  wire [207:0] \port$2855$0 ;
+  input [160:0] \port$3174$0 ;
+  wire [160:0] \port$3174$0 ;
+  input [207:0] \port$3181$0 ;
+  wire [207:0] \port$3181$0 ;
   input rst;
   wire rst;
   always @(posedge clk)
-    ch0_cfg_ma_ma_half_period <= \$367 ;
+    ch1_irq_status_done <= \$392 ;
   always @(posedge clk)
-    ch0_cfg_ma_delay_limit <= \$368 ;
+    ch1_irq_status_error <= \$393 ;
   always @(posedge clk)
-    ch0_cfg_period_request_period <= \$369 ;
+    ch1_irq_status_access_done <= \$394 ;
   always @(posedge clk)
-    ch0_cfg_break_break_time <= \$370 ;
+    ch1_irq_enable_done <= \$395 ;
   always @(posedge clk)
-    ch0_cfg_ack_ack_limit <= \$371 ;
+    ch1_irq_enable_error <= \$396 ;
   always @(posedge clk)
-    ch0_cfg_timeout_timeout_limit <= \$372 ;
+    ch1_irq_enable_access_done <= \$397 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_data_bits <= \$373 ;
+    ch1__cfg_ma_half_period <= \$398 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_nenw <= \$374 ;
+    ch1__cfg_delay_limit <= \$399 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_lc <= \$375 ;
+    ch1__cfg_request_period <= \$400 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_crc <= \$376 ;
+    ch1__cfg_break_time <= \$401 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_data_bits <= \$377 ;
+    ch1__cfg_ack_limit <= \$402 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_nenw <= \$378 ;
+    ch1__cfg_timeout_limit <= \$403 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_lc <= \$379 ;
+    ch1__cfg_w0_data_bits <= \$404 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_crc <= \$380 ;
+    ch1__cfg_w0_nenw <= \$405 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_enable <= \$381 ;
+    ch1__cfg_w0_lc <= \$406 ;
   always @(posedge clk)
-    ch0_cfg_checks_end_check <= \$382 ;
+    ch1__cfg_w0_crc <= \$407 ;
   always @(posedge clk)
-    ch0_cfg_checks_spw_check <= \$383 ;
+    ch1__cfg_w1_data_bits <= \$408 ;
   always @(posedge clk)
-    ch0_cfg_checks_spw_tolerance <= \$384 ;
+    ch1__cfg_w1_nenw <= \$409 ;
   always @(posedge clk)
-    ch0_result_status_status_snapshot <= \$385 ;
+    ch1__cfg_w1_lc <= \$410 ;
   always @(posedge clk)
-    ch0_result_status_cds_snapshot <= \$386 ;
+    ch1__cfg_w1_crc <= \$411 ;
   always @(posedge clk)
-    ch0_result_status_w0_ne_snapshot <= \$387 ;
+    ch1__cfg_w1_enable <= \$412 ;
   always @(posedge clk)
-    ch0_result_status_w0_nw_snapshot <= \$388 ;
+    ch1__cfg_end_check <= \$413 ;
   always @(posedge clk)
-    ch0_result_status_w0_crc_ok_snapshot <= \$389 ;
+    ch1__cfg_spw_check <= \$414 ;
   always @(posedge clk)
-    ch0_result_status_w1_ne_snapshot <= \$390 ;
+    ch1__cfg_spw_tolerance <= \$415 ;
   always @(posedge clk)
-    ch0_result_status_w1_nw_snapshot <= \$391 ;
+    ch1_result_status_status_snapshot <= \$416 ;
   always @(posedge clk)
-    ch0_result_status_w1_crc_ok_snapshot <= \$392 ;
+    ch1_result_status_cds_snapshot <= \$417 ;
   always @(posedge clk)
-    ch0_result_status_lc_repeat_snapshot <= \$393 ;
+    ch1_result_status_w0_ne_snapshot <= \$418 ;
   always @(posedge clk)
-    ch0_result_status_lc_skip_snapshot <= \$394 ;
+    ch1_result_status_w0_nw_snapshot <= \$419 ;
   always @(posedge clk)
-    ch0_result_status_lc_zero_snapshot <= \$395 ;
+    ch1_result_status_w0_crc_ok_snapshot <= \$420 ;
   always @(posedge clk)
-    ch0_result_status_spw_mismatch_snapshot <= \$396 ;
+    ch1_result_status_w1_ne_snapshot <= \$421 ;
   always @(posedge clk)
-    ch0_result_status_lc_snapshot <= \$397 ;
+    ch1_result_status_w1_nw_snapshot <= \$422 ;
   always @(posedge clk)
-    ch0_result_seq_seq_snapshot <= \$398 ;
+    ch1_result_status_w1_crc_ok_snapshot <= \$423 ;
   always @(posedge clk)
-    ch0_result_seq_line_delay_snapshot <= \$399 ;
+    ch1_result_status_lc_repeat_snapshot <= \$424 ;
   always @(posedge clk)
-    ch0_result_w0_lo_value <= \$400 ;
+    ch1_result_status_lc_skip_snapshot <= \$425 ;
   always @(posedge clk)
-    ch0_result_w0_hi_data_snapshot <= \$401 ;
+    ch1_result_status_lc_zero_snapshot <= \$426 ;
   always @(posedge clk)
-    ch0_result_w1_lo_value <= \$402 ;
+    ch1_result_status_spw_mismatch_snapshot <= \$427 ;
   always @(posedge clk)
-    ch0_result_w1_hi_data_snapshot <= \$403 ;
+    ch1_result_status_lc_snapshot <= \$428 ;
   always @(posedge clk)
-    ch0_result_timestamp_value <= \$404 ;
+    ch1_result_seq_seq_snapshot <= \$429 ;
   always @(posedge clk)
-    ch1__start <= \$405 ;
+    ch1_result_seq_line_delay_snapshot <= \$430 ;
   always @(posedge clk)
-    ch1__abort_cycle <= \$406 ;
+    ch1_result_w0_lo_data_snapshot <= \$431 ;
   always @(posedge clk)
-    ch1__clear_counters <= \$407 ;
+    ch1_result_w0_hi_data_snapshot <= \$432 ;
   always @(posedge clk)
-    ch1_ctrl_periodic <= \$408 ;
+    ch1_result_w1_lo_data_snapshot <= \$433 ;
   always @(posedge clk)
-    ch1_ctrl_trigger_enable <= \$409 ;
+    ch1_result_w1_hi_data_snapshot <= \$434 ;
   always @(posedge clk)
-    ch1_irq_status_done <= \$410 ;
+    ch1_result_timestamp_time_snapshot <= \$435 ;
   always @(posedge clk)
-    ch1_irq_status_error <= \$411 ;
-  always @(posedge clk)
-    ch1_irq_status_access_done <= \$412 ;
-  always @(posedge clk)
-    ch1_irq_enable_done <= \$413 ;
-  always @(posedge clk)
-    ch1_irq_enable_error <= \$414 ;
-  always @(posedge clk)
-    ch1_irq_enable_access_done <= \$415 ;
-  always @(posedge clk)
-    ch1_cfg_ma_ma_half_period <= \$416 ;
-  always @(posedge clk)
-    ch1_cfg_ma_delay_limit <= \$417 ;
-  always @(posedge clk)
-    ch1_cfg_period_request_period <= \$418 ;
-  always @(posedge clk)
-    ch1_cfg_break_break_time <= \$419 ;
-  always @(posedge clk)
-    ch1_cfg_ack_ack_limit <= \$420 ;
-  always @(posedge clk)
-    ch1_cfg_timeout_timeout_limit <= \$421 ;
-  always @(posedge clk)
-    ch1_cfg_words_w0_data_bits <= \$422 ;
-  always @(posedge clk)
-    ch1_cfg_words_w0_nenw <= \$423 ;
-  always @(posedge clk)
-    ch1_cfg_words_w0_lc <= \$424 ;
-  always @(posedge clk)
-    ch1_cfg_words_w0_crc <= \$425 ;
-  always @(posedge clk)
-    ch1_cfg_words_w1_data_bits <= \$426 ;
-  always @(posedge clk)
-    ch1_cfg_words_w1_nenw <= \$427 ;
-  always @(posedge clk)
-    ch1_cfg_words_w1_lc <= \$428 ;
-  always @(posedge clk)
-    ch1_cfg_words_w1_crc <= \$429 ;
-  always @(posedge clk)
-    ch1_cfg_words_w1_enable <= \$430 ;
-  always @(posedge clk)
-    ch1_cfg_checks_end_check <= \$431 ;
-  always @(posedge clk)
-    ch1_cfg_checks_spw_check <= \$432 ;
-  always @(posedge clk)
-    ch1_cfg_checks_spw_tolerance <= \$433 ;
-  always @(posedge clk)
-    ch1_result_status_status_snapshot <= \$434 ;
-  always @(posedge clk)
-    ch1_result_status_cds_snapshot <= \$435 ;
-  always @(posedge clk)
-    ch1_result_status_w0_ne_snapshot <= \$436 ;
-  always @(posedge clk)
-    ch1_result_status_w0_nw_snapshot <= \$437 ;
-  always @(posedge clk)
-    ch1_result_status_w0_crc_ok_snapshot <= \$438 ;
-  always @(posedge clk)
-    ch1_result_status_w1_ne_snapshot <= \$439 ;
-  always @(posedge clk)
-    ch1_result_status_w1_nw_snapshot <= \$440 ;
-  always @(posedge clk)
-    ch1_result_status_w1_crc_ok_snapshot <= \$441 ;
-  always @(posedge clk)
-    ch1_result_status_lc_repeat_snapshot <= \$442 ;
-  always @(posedge clk)
-    ch1_result_status_lc_skip_snapshot <= \$443 ;
-  always @(posedge clk)
-    ch1_result_status_lc_zero_snapshot <= \$444 ;
-  always @(posedge clk)
-    ch1_result_status_spw_mismatch_snapshot <= \$445 ;
-  always @(posedge clk)
-    ch1_result_status_lc_snapshot <= \$446 ;
-  always @(posedge clk)
-    ch1_result_seq_seq_snapshot <= \$447 ;
-  always @(posedge clk)
-    ch1_result_seq_line_delay_snapshot <= \$448 ;
-  always @(posedge clk)
-    ch1_result_w0_lo_value <= \$449 ;
-  always @(posedge clk)
-    ch1_result_w0_hi_data_snapshot <= \$450 ;
-  always @(posedge clk)
-    ch1_result_w1_lo_value <= \$451 ;
-  always @(posedge clk)
-    ch1_result_w1_hi_data_snapshot <= \$452 ;
-  always @(posedge clk)
-    ch1_result_timestamp_value <= \$453 ;
-  always @(posedge clk)
-    bus__r_data <= \$454 ;
+    bus__r_data <= \$436 ;
   assign \$1  = ! bus__w_addr;
   assign g_id_write = bus__w_en & \$1 ;
   assign \$2  = ! bus__w_addr;
@@ -2177,502 +2015,324 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$133  = bus__w_data[2] & bus__w_strb[0];
   assign \$134  = ch0_ctrl_write ? \$133  : 1'h0;
   assign \$135  = ~ bus__w_strb[1];
-  assign \$136  = ch0_ctrl_periodic & \$135 ;
+  assign \$136  = ch0__periodic & \$135 ;
   assign \$137  = bus__w_data[8] & bus__w_strb[1];
   assign \$138  = \$136  | \$137 ;
   assign \$139  = ~ bus__w_strb[1];
-  assign \$140  = ch0_ctrl_trigger_enable & \$139 ;
+  assign \$140  = ch0__trigger_enable & \$139 ;
   assign \$141  = bus__w_data[9] & bus__w_strb[1];
   assign \$142  = \$140  | \$141 ;
   assign \$143  = bus__w_data[0] & bus__w_strb[0];
   assign \$144  = ch0_irq_status_write ? \$143  : 1'h0;
-  assign \$145  = ~ \$144 ;
-  assign \$146  = ch0_irq_status_done & \$145 ;
-  assign \$147  = \$146  | ch0__done;
-  assign \$148  = bus__w_data[1] & bus__w_strb[0];
-  assign \$149  = ch0_irq_status_write ? \$148  : 1'h0;
-  assign \$150  = ~ \$149 ;
-  assign \$151  = ch0_irq_status_error & \$150 ;
-  assign \$152  = \$151  | ch0__frame_error;
-  assign \$153  = bus__w_data[2] & bus__w_strb[0];
-  assign \$154  = ch0_irq_status_write ? \$153  : 1'h0;
-  assign \$155  = ~ \$154 ;
-  assign \$156  = ch0_irq_status_access_done & \$155 ;
-  assign \$158  = ~ bus__w_strb[0];
-  assign \$159  = ch0_irq_enable_done & \$158 ;
-  assign \$160  = bus__w_data[0] & bus__w_strb[0];
-  assign \$161  = \$159  | \$160 ;
-  assign \$162  = ~ bus__w_strb[0];
-  assign \$163  = ch0_irq_enable_error & \$162 ;
-  assign \$164  = bus__w_data[1] & bus__w_strb[0];
-  assign \$165  = \$163  | \$164 ;
-  assign \$166  = ~ bus__w_strb[0];
-  assign \$167  = ch0_irq_enable_access_done & \$166 ;
-  assign \$168  = bus__w_data[2] & bus__w_strb[0];
-  assign \$169  = \$167  | \$168 ;
-  assign \$170  = ~ { bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$171  = ch0_cfg_ma_ma_half_period & \$170 ;
-  assign \$172  = bus__w_data[15:0] & { bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$173  = \$171  | \$172 ;
-  assign \$174  = ~ { bus__w_strb[3], bus__w_strb[3], bus__w_strb[3], bus__w_strb[3:2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2] };
-  assign \$175  = ch0_cfg_ma_delay_limit & \$174 ;
-  assign \$176  = bus__w_data[27:16] & { bus__w_strb[3], bus__w_strb[3], bus__w_strb[3], bus__w_strb[3:2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2] };
-  assign \$177  = \$175  | \$176 ;
-  assign \$178  = ~ { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$179  = ch0_cfg_period_request_period & \$178 ;
-  assign \$180  = bus__w_data[23:0] & { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$181  = \$179  | \$180 ;
-  assign \$182  = ~ { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$183  = ch0_cfg_break_break_time & \$182 ;
-  assign \$184  = bus__w_data[23:0] & { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$185  = \$183  | \$184 ;
-  assign \$186  = ~ { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$187  = ch0_cfg_ack_ack_limit & \$186 ;
-  assign \$188  = bus__w_data[23:0] & { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$189  = \$187  | \$188 ;
-  assign \$190  = ~ { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$191  = ch0_cfg_timeout_timeout_limit & \$190 ;
-  assign \$192  = bus__w_data[23:0] & { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$193  = \$191  | \$192 ;
-  assign \$194  = ~ { bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$195  = ch0_cfg_words_w0_data_bits & \$194 ;
-  assign \$196  = bus__w_data[5:0] & { bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$197  = \$195  | \$196 ;
-  assign \$198  = ~ bus__w_strb[0];
-  assign \$199  = ch0_cfg_words_w0_nenw & \$198 ;
-  assign \$200  = bus__w_data[6] & bus__w_strb[0];
-  assign \$201  = \$199  | \$200 ;
-  assign \$202  = ~ bus__w_strb[0];
-  assign \$203  = ch0_cfg_words_w0_lc & \$202 ;
-  assign \$204  = bus__w_data[7] & bus__w_strb[0];
-  assign \$205  = \$203  | \$204 ;
-  assign \$206  = ~ { bus__w_strb[1], bus__w_strb[1] };
-  assign \$207  = ch0_cfg_words_w0_crc & \$206 ;
-  assign \$208  = bus__w_data[9:8] & { bus__w_strb[1], bus__w_strb[1] };
-  assign \$209  = \$207  | \$208 ;
-  assign \$210  = ~ { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2] };
-  assign \$211  = ch0_cfg_words_w1_data_bits & \$210 ;
-  assign \$212  = bus__w_data[21:16] & { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2] };
-  assign \$213  = \$211  | \$212 ;
-  assign \$214  = ~ bus__w_strb[2];
-  assign \$215  = ch0_cfg_words_w1_nenw & \$214 ;
-  assign \$216  = bus__w_data[22] & bus__w_strb[2];
-  assign \$217  = \$215  | \$216 ;
-  assign \$218  = ~ bus__w_strb[2];
-  assign \$219  = ch0_cfg_words_w1_lc & \$218 ;
-  assign \$220  = bus__w_data[23] & bus__w_strb[2];
-  assign \$221  = \$219  | \$220 ;
-  assign \$222  = ~ { bus__w_strb[3], bus__w_strb[3] };
-  assign \$223  = ch0_cfg_words_w1_crc & \$222 ;
-  assign \$224  = bus__w_data[25:24] & { bus__w_strb[3], bus__w_strb[3] };
-  assign \$225  = \$223  | \$224 ;
-  assign \$226  = ~ bus__w_strb[3];
-  assign \$227  = ch0_cfg_words_w1_enable & \$226 ;
-  assign \$228  = bus__w_data[31] & bus__w_strb[3];
-  assign \$229  = \$227  | \$228 ;
-  assign \$230  = ~ bus__w_strb[0];
-  assign \$231  = ch0_cfg_checks_end_check & \$230 ;
-  assign \$232  = bus__w_data[0] & bus__w_strb[0];
-  assign \$233  = \$231  | \$232 ;
-  assign \$234  = ~ bus__w_strb[0];
-  assign \$235  = ch0_cfg_checks_spw_check & \$234 ;
-  assign \$236  = bus__w_data[1] & bus__w_strb[0];
-  assign \$237  = \$235  | \$236 ;
-  assign \$238  = ~ { bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1] };
-  assign \$239  = ch0_cfg_checks_spw_tolerance & \$238 ;
-  assign \$240  = bus__w_data[15:8] & { bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1] };
-  assign \$241  = \$239  | \$240 ;
-  assign \$242  = bus__w_data[0] & bus__w_strb[0];
-  assign \$243  = ch1_ctrl_write ? \$242  : 1'h0;
-  assign \$244  = bus__w_data[1] & bus__w_strb[0];
-  assign \$245  = ch1_ctrl_write ? \$244  : 1'h0;
-  assign \$246  = bus__w_data[2] & bus__w_strb[0];
-  assign \$247  = ch1_ctrl_write ? \$246  : 1'h0;
-  assign \$248  = ~ bus__w_strb[1];
-  assign \$249  = ch1_ctrl_periodic & \$248 ;
-  assign \$250  = bus__w_data[8] & bus__w_strb[1];
-  assign \$251  = \$249  | \$250 ;
-  assign \$252  = ~ bus__w_strb[1];
-  assign \$253  = ch1_ctrl_trigger_enable & \$252 ;
-  assign \$254  = bus__w_data[9] & bus__w_strb[1];
-  assign \$255  = \$253  | \$254 ;
-  assign \$256  = bus__w_data[0] & bus__w_strb[0];
-  assign \$257  = ch1_irq_status_write ? \$256  : 1'h0;
-  assign \$258  = ~ \$257 ;
-  assign \$259  = ch1_irq_status_done & \$258 ;
-  assign \$260  = \$259  | ch1__done;
-  assign \$261  = bus__w_data[1] & bus__w_strb[0];
-  assign \$262  = ch1_irq_status_write ? \$261  : 1'h0;
-  assign \$263  = ~ \$262 ;
-  assign \$264  = ch1_irq_status_error & \$263 ;
-  assign \$265  = \$264  | ch1__frame_error;
-  assign \$266  = bus__w_data[2] & bus__w_strb[0];
-  assign \$267  = ch1_irq_status_write ? \$266  : 1'h0;
-  assign \$268  = ~ \$267 ;
-  assign \$269  = ch1_irq_status_access_done & \$268 ;
-  assign \$271  = ~ bus__w_strb[0];
-  assign \$272  = ch1_irq_enable_done & \$271 ;
-  assign \$273  = bus__w_data[0] & bus__w_strb[0];
-  assign \$274  = \$272  | \$273 ;
-  assign \$275  = ~ bus__w_strb[0];
-  assign \$276  = ch1_irq_enable_error & \$275 ;
-  assign \$277  = bus__w_data[1] & bus__w_strb[0];
-  assign \$278  = \$276  | \$277 ;
-  assign \$279  = ~ bus__w_strb[0];
-  assign \$280  = ch1_irq_enable_access_done & \$279 ;
-  assign \$281  = bus__w_data[2] & bus__w_strb[0];
-  assign \$282  = \$280  | \$281 ;
-  assign \$283  = ~ { bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$284  = ch1_cfg_ma_ma_half_period & \$283 ;
-  assign \$285  = bus__w_data[15:0] & { bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$286  = \$284  | \$285 ;
-  assign \$287  = ~ { bus__w_strb[3], bus__w_strb[3], bus__w_strb[3], bus__w_strb[3:2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2] };
-  assign \$288  = ch1_cfg_ma_delay_limit & \$287 ;
-  assign \$289  = bus__w_data[27:16] & { bus__w_strb[3], bus__w_strb[3], bus__w_strb[3], bus__w_strb[3:2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2] };
-  assign \$290  = \$288  | \$289 ;
-  assign \$291  = ~ { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$292  = ch1_cfg_period_request_period & \$291 ;
-  assign \$293  = bus__w_data[23:0] & { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$294  = \$292  | \$293 ;
-  assign \$295  = ~ { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$296  = ch1_cfg_break_break_time & \$295 ;
-  assign \$297  = bus__w_data[23:0] & { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$298  = \$296  | \$297 ;
-  assign \$299  = ~ { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$300  = ch1_cfg_ack_ack_limit & \$299 ;
-  assign \$301  = bus__w_data[23:0] & { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$302  = \$300  | \$301 ;
-  assign \$303  = ~ { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$304  = ch1_cfg_timeout_timeout_limit & \$303 ;
-  assign \$305  = bus__w_data[23:0] & { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$306  = \$304  | \$305 ;
-  assign \$307  = ~ { bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$308  = ch1_cfg_words_w0_data_bits & \$307 ;
-  assign \$309  = bus__w_data[5:0] & { bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$310  = \$308  | \$309 ;
-  assign \$311  = ~ bus__w_strb[0];
-  assign \$312  = ch1_cfg_words_w0_nenw & \$311 ;
-  assign \$313  = bus__w_data[6] & bus__w_strb[0];
-  assign \$314  = \$312  | \$313 ;
-  assign \$315  = ~ bus__w_strb[0];
-  assign \$316  = ch1_cfg_words_w0_lc & \$315 ;
-  assign \$317  = bus__w_data[7] & bus__w_strb[0];
-  assign \$318  = \$316  | \$317 ;
-  assign \$319  = ~ { bus__w_strb[1], bus__w_strb[1] };
-  assign \$320  = ch1_cfg_words_w0_crc & \$319 ;
-  assign \$321  = bus__w_data[9:8] & { bus__w_strb[1], bus__w_strb[1] };
-  assign \$322  = \$320  | \$321 ;
-  assign \$323  = ~ { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2] };
-  assign \$324  = ch1_cfg_words_w1_data_bits & \$323 ;
-  assign \$325  = bus__w_data[21:16] & { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2] };
-  assign \$326  = \$324  | \$325 ;
-  assign \$327  = ~ bus__w_strb[2];
-  assign \$328  = ch1_cfg_words_w1_nenw & \$327 ;
-  assign \$329  = bus__w_data[22] & bus__w_strb[2];
-  assign \$330  = \$328  | \$329 ;
-  assign \$331  = ~ bus__w_strb[2];
-  assign \$332  = ch1_cfg_words_w1_lc & \$331 ;
-  assign \$333  = bus__w_data[23] & bus__w_strb[2];
-  assign \$334  = \$332  | \$333 ;
-  assign \$335  = ~ { bus__w_strb[3], bus__w_strb[3] };
-  assign \$336  = ch1_cfg_words_w1_crc & \$335 ;
-  assign \$337  = bus__w_data[25:24] & { bus__w_strb[3], bus__w_strb[3] };
-  assign \$338  = \$336  | \$337 ;
-  assign \$339  = ~ bus__w_strb[3];
-  assign \$340  = ch1_cfg_words_w1_enable & \$339 ;
-  assign \$341  = bus__w_data[31] & bus__w_strb[3];
-  assign \$342  = \$340  | \$341 ;
-  assign \$343  = ~ bus__w_strb[0];
-  assign \$344  = ch1_cfg_checks_end_check & \$343 ;
-  assign \$345  = bus__w_data[0] & bus__w_strb[0];
-  assign \$346  = \$344  | \$345 ;
-  assign \$347  = ~ bus__w_strb[0];
-  assign \$348  = ch1_cfg_checks_spw_check & \$347 ;
-  assign \$349  = bus__w_data[1] & bus__w_strb[0];
-  assign \$350  = \$348  | \$349 ;
-  assign \$351  = ~ { bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1] };
-  assign \$352  = ch1_cfg_checks_spw_tolerance & \$351 ;
-  assign \$353  = bus__w_data[15:8] & { bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1] };
-  assign \$354  = \$352  | \$353 ;
+  assign \$145  = bus__w_data[1] & bus__w_strb[0];
+  assign \$146  = ch0_irq_status_write ? \$145  : 1'h0;
+  assign \$147  = bus__w_data[2] & bus__w_strb[0];
+  assign \$148  = ch0_irq_status_write ? \$147  : 1'h0;
+  assign \$149  = ~ bus__w_strb[0];
+  assign \$150  = ch0_irq_enable_done & \$149 ;
+  assign \$151  = bus__w_data[0] & bus__w_strb[0];
+  assign \$152  = \$150  | \$151 ;
+  assign \$153  = ~ bus__w_strb[0];
+  assign \$154  = ch0_irq_enable_error & \$153 ;
+  assign \$155  = bus__w_data[1] & bus__w_strb[0];
+  assign \$156  = \$154  | \$155 ;
+  assign \$157  = ~ bus__w_strb[0];
+  assign \$158  = ch0_irq_enable_access_done & \$157 ;
+  assign \$159  = bus__w_data[2] & bus__w_strb[0];
+  assign \$160  = \$158  | \$159 ;
+  assign \$161  = ~ { bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
+  assign \$162  = ch0__cfg_ma_half_period & \$161 ;
+  assign \$163  = bus__w_data[15:0] & { bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
+  assign \$164  = \$162  | \$163 ;
+  assign \$165  = ~ { bus__w_strb[3], bus__w_strb[3], bus__w_strb[3], bus__w_strb[3:2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2] };
+  assign \$166  = ch0__cfg_delay_limit & \$165 ;
+  assign \$167  = bus__w_data[27:16] & { bus__w_strb[3], bus__w_strb[3], bus__w_strb[3], bus__w_strb[3:2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2] };
+  assign \$168  = \$166  | \$167 ;
+  assign \$169  = ~ { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
+  assign \$170  = ch0__cfg_request_period & \$169 ;
+  assign \$171  = bus__w_data[23:0] & { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
+  assign \$172  = \$170  | \$171 ;
+  assign \$173  = ~ { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
+  assign \$174  = ch0__cfg_break_time & \$173 ;
+  assign \$175  = bus__w_data[23:0] & { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
+  assign \$176  = \$174  | \$175 ;
+  assign \$177  = ~ { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
+  assign \$178  = ch0__cfg_ack_limit & \$177 ;
+  assign \$179  = bus__w_data[23:0] & { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
+  assign \$180  = \$178  | \$179 ;
+  assign \$181  = ~ { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
+  assign \$182  = ch0__cfg_timeout_limit & \$181 ;
+  assign \$183  = bus__w_data[23:0] & { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
+  assign \$184  = \$182  | \$183 ;
+  assign \$185  = ~ { bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
+  assign \$186  = ch0__cfg_w0_data_bits & \$185 ;
+  assign \$187  = bus__w_data[5:0] & { bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
+  assign \$188  = \$186  | \$187 ;
+  assign \$189  = ~ bus__w_strb[0];
+  assign \$190  = ch0__cfg_w0_nenw & \$189 ;
+  assign \$191  = bus__w_data[6] & bus__w_strb[0];
+  assign \$192  = \$190  | \$191 ;
+  assign \$193  = ~ bus__w_strb[0];
+  assign \$194  = ch0__cfg_w0_lc & \$193 ;
+  assign \$195  = bus__w_data[7] & bus__w_strb[0];
+  assign \$196  = \$194  | \$195 ;
+  assign \$197  = ~ { bus__w_strb[1], bus__w_strb[1] };
+  assign \$198  = ch0__cfg_w0_crc & \$197 ;
+  assign \$199  = bus__w_data[9:8] & { bus__w_strb[1], bus__w_strb[1] };
+  assign \$200  = \$198  | \$199 ;
+  assign \$201  = ~ { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2] };
+  assign \$202  = ch0__cfg_w1_data_bits & \$201 ;
+  assign \$203  = bus__w_data[21:16] & { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2] };
+  assign \$204  = \$202  | \$203 ;
+  assign \$205  = ~ bus__w_strb[2];
+  assign \$206  = ch0__cfg_w1_nenw & \$205 ;
+  assign \$207  = bus__w_data[22] & bus__w_strb[2];
+  assign \$208  = \$206  | \$207 ;
+  assign \$209  = ~ bus__w_strb[2];
+  assign \$210  = ch0__cfg_w1_lc & \$209 ;
+  assign \$211  = bus__w_data[23] & bus__w_strb[2];
+  assign \$212  = \$210  | \$211 ;
+  assign \$213  = ~ { bus__w_strb[3], bus__w_strb[3] };
+  assign \$214  = ch0__cfg_w1_crc & \$213 ;
+  assign \$215  = bus__w_data[25:24] & { bus__w_strb[3], bus__w_strb[3] };
+  assign \$216  = \$214  | \$215 ;
+  assign \$217  = ~ bus__w_strb[3];
+  assign \$218  = ch0__cfg_w1_enable & \$217 ;
+  assign \$219  = bus__w_data[31] & bus__w_strb[3];
+  assign \$220  = \$218  | \$219 ;
+  assign \$221  = ~ bus__w_strb[0];
+  assign \$222  = ch0__cfg_end_check & \$221 ;
+  assign \$223  = bus__w_data[0] & bus__w_strb[0];
+  assign \$224  = \$222  | \$223 ;
+  assign \$225  = ~ bus__w_strb[0];
+  assign \$226  = ch0__cfg_spw_check & \$225 ;
+  assign \$227  = bus__w_data[1] & bus__w_strb[0];
+  assign \$228  = \$226  | \$227 ;
+  assign \$229  = ~ { bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1] };
+  assign \$230  = ch0__cfg_spw_tolerance & \$229 ;
+  assign \$231  = bus__w_data[15:8] & { bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1] };
+  assign \$232  = \$230  | \$231 ;
+  assign \$233  = bus__w_data[0] & bus__w_strb[0];
+  assign \$234  = ch1_ctrl_write ? \$233  : 1'h0;
+  assign \$235  = bus__w_data[1] & bus__w_strb[0];
+  assign \$236  = ch1_ctrl_write ? \$235  : 1'h0;
+  assign \$237  = bus__w_data[2] & bus__w_strb[0];
+  assign \$238  = ch1_ctrl_write ? \$237  : 1'h0;
+  assign \$239  = ~ bus__w_strb[1];
+  assign \$240  = ch1__periodic & \$239 ;
+  assign \$241  = bus__w_data[8] & bus__w_strb[1];
+  assign \$242  = \$240  | \$241 ;
+  assign \$243  = ~ bus__w_strb[1];
+  assign \$244  = ch1__trigger_enable & \$243 ;
+  assign \$245  = bus__w_data[9] & bus__w_strb[1];
+  assign \$246  = \$244  | \$245 ;
+  assign \$247  = bus__w_data[0] & bus__w_strb[0];
+  assign \$248  = ch1_irq_status_write ? \$247  : 1'h0;
+  assign \$249  = bus__w_data[1] & bus__w_strb[0];
+  assign \$250  = ch1_irq_status_write ? \$249  : 1'h0;
+  assign \$251  = bus__w_data[2] & bus__w_strb[0];
+  assign \$252  = ch1_irq_status_write ? \$251  : 1'h0;
+  assign \$253  = ~ bus__w_strb[0];
+  assign \$254  = ch1_irq_enable_done & \$253 ;
+  assign \$255  = bus__w_data[0] & bus__w_strb[0];
+  assign \$256  = \$254  | \$255 ;
+  assign \$257  = ~ bus__w_strb[0];
+  assign \$258  = ch1_irq_enable_error & \$257 ;
+  assign \$259  = bus__w_data[1] & bus__w_strb[0];
+  assign \$260  = \$258  | \$259 ;
+  assign \$261  = ~ bus__w_strb[0];
+  assign \$262  = ch1_irq_enable_access_done & \$261 ;
+  assign \$263  = bus__w_data[2] & bus__w_strb[0];
+  assign \$264  = \$262  | \$263 ;
+  assign \$265  = ~ { bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
+  assign \$266  = ch1__cfg_ma_half_period & \$265 ;
+  assign \$267  = bus__w_data[15:0] & { bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
+  assign \$268  = \$266  | \$267 ;
+  assign \$269  = ~ { bus__w_strb[3], bus__w_strb[3], bus__w_strb[3], bus__w_strb[3:2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2] };
+  assign \$270  = ch1__cfg_delay_limit & \$269 ;
+  assign \$271  = bus__w_data[27:16] & { bus__w_strb[3], bus__w_strb[3], bus__w_strb[3], bus__w_strb[3:2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2] };
+  assign \$272  = \$270  | \$271 ;
+  assign \$273  = ~ { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
+  assign \$274  = ch1__cfg_request_period & \$273 ;
+  assign \$275  = bus__w_data[23:0] & { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
+  assign \$276  = \$274  | \$275 ;
+  assign \$277  = ~ { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
+  assign \$278  = ch1__cfg_break_time & \$277 ;
+  assign \$279  = bus__w_data[23:0] & { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
+  assign \$280  = \$278  | \$279 ;
+  assign \$281  = ~ { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
+  assign \$282  = ch1__cfg_ack_limit & \$281 ;
+  assign \$283  = bus__w_data[23:0] & { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
+  assign \$284  = \$282  | \$283 ;
+  assign \$285  = ~ { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
+  assign \$286  = ch1__cfg_timeout_limit & \$285 ;
+  assign \$287  = bus__w_data[23:0] & { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
+  assign \$288  = \$286  | \$287 ;
+  assign \$289  = ~ { bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
+  assign \$290  = ch1__cfg_w0_data_bits & \$289 ;
+  assign \$291  = bus__w_data[5:0] & { bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
+  assign \$292  = \$290  | \$291 ;
+  assign \$293  = ~ bus__w_strb[0];
+  assign \$294  = ch1__cfg_w0_nenw & \$293 ;
+  assign \$295  = bus__w_data[6] & bus__w_strb[0];
+  assign \$296  = \$294  | \$295 ;
+  assign \$297  = ~ bus__w_strb[0];
+  assign \$298  = ch1__cfg_w0_lc & \$297 ;
+  assign \$299  = bus__w_data[7] & bus__w_strb[0];
+  assign \$300  = \$298  | \$299 ;
+  assign \$301  = ~ { bus__w_strb[1], bus__w_strb[1] };
+  assign \$302  = ch1__cfg_w0_crc & \$301 ;
+  assign \$303  = bus__w_data[9:8] & { bus__w_strb[1], bus__w_strb[1] };
+  assign \$304  = \$302  | \$303 ;
+  assign \$305  = ~ { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2] };
+  assign \$306  = ch1__cfg_w1_data_bits & \$305 ;
+  assign \$307  = bus__w_data[21:16] & { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2] };
+  assign \$308  = \$306  | \$307 ;
+  assign \$309  = ~ bus__w_strb[2];
+  assign \$310  = ch1__cfg_w1_nenw & \$309 ;
+  assign \$311  = bus__w_data[22] & bus__w_strb[2];
+  assign \$312  = \$310  | \$311 ;
+  assign \$313  = ~ bus__w_strb[2];
+  assign \$314  = ch1__cfg_w1_lc & \$313 ;
+  assign \$315  = bus__w_data[23] & bus__w_strb[2];
+  assign \$316  = \$314  | \$315 ;
+  assign \$317  = ~ { bus__w_strb[3], bus__w_strb[3] };
+  assign \$318  = ch1__cfg_w1_crc & \$317 ;
+  assign \$319  = bus__w_data[25:24] & { bus__w_strb[3], bus__w_strb[3] };
+  assign \$320  = \$318  | \$319 ;
+  assign \$321  = ~ bus__w_strb[3];
+  assign \$322  = ch1__cfg_w1_enable & \$321 ;
+  assign \$323  = bus__w_data[31] & bus__w_strb[3];
+  assign \$324  = \$322  | \$323 ;
+  assign \$325  = ~ bus__w_strb[0];
+  assign \$326  = ch1__cfg_end_check & \$325 ;
+  assign \$327  = bus__w_data[0] & bus__w_strb[0];
+  assign \$328  = \$326  | \$327 ;
+  assign \$329  = ~ bus__w_strb[0];
+  assign \$330  = ch1__cfg_spw_check & \$329 ;
+  assign \$331  = bus__w_data[1] & bus__w_strb[0];
+  assign \$332  = \$330  | \$331 ;
+  assign \$333  = ~ { bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1] };
+  assign \$334  = ch1__cfg_spw_tolerance & \$333 ;
+  assign \$335  = bus__w_data[15:8] & { bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1] };
+  assign \$336  = \$334  | \$335 ;
   always @(posedge clk)
-    glob__trigger <= \$355 ;
+    glob__trigger <= \$337 ;
   always @(posedge clk)
-    ch0__start <= \$356 ;
+    ch0__start <= \$338 ;
   always @(posedge clk)
-    ch0__abort_cycle <= \$357 ;
+    ch0__abort_cycle <= \$339 ;
   always @(posedge clk)
-    ch0__clear_counters <= \$358 ;
+    ch0__clear_counters <= \$340 ;
   always @(posedge clk)
-    ch0_ctrl_periodic <= \$359 ;
+    ch0__periodic <= \$341 ;
   always @(posedge clk)
-    ch0_ctrl_trigger_enable <= \$360 ;
+    ch0__trigger_enable <= \$342 ;
   always @(posedge clk)
-    ch0_irq_status_done <= \$361 ;
+    ch0_irq_status_done <= \$343 ;
   always @(posedge clk)
-    ch0_irq_status_error <= \$362 ;
+    ch0_irq_status_error <= \$344 ;
   always @(posedge clk)
-    ch0_irq_status_access_done <= \$363 ;
+    ch0_irq_status_access_done <= \$345 ;
   always @(posedge clk)
-    ch0_irq_enable_done <= \$364 ;
+    ch0_irq_enable_done <= \$346 ;
   always @(posedge clk)
-    ch0_irq_enable_error <= \$365 ;
+    ch0_irq_enable_error <= \$347 ;
   always @(posedge clk)
-    ch0_irq_enable_access_done <= \$366 ;
+    ch0_irq_enable_access_done <= \$348 ;
+  always @(posedge clk)
+    ch0__cfg_ma_half_period <= \$349 ;
+  always @(posedge clk)
+    ch0__cfg_delay_limit <= \$350 ;
+  always @(posedge clk)
+    ch0__cfg_request_period <= \$351 ;
+  always @(posedge clk)
+    ch0__cfg_break_time <= \$352 ;
+  always @(posedge clk)
+    ch0__cfg_ack_limit <= \$353 ;
+  always @(posedge clk)
+    ch0__cfg_timeout_limit <= \$354 ;
+  always @(posedge clk)
+    ch0__cfg_w0_data_bits <= \$355 ;
+  always @(posedge clk)
+    ch0__cfg_w0_nenw <= \$356 ;
+  always @(posedge clk)
+    ch0__cfg_w0_lc <= \$357 ;
+  always @(posedge clk)
+    ch0__cfg_w0_crc <= \$358 ;
+  always @(posedge clk)
+    ch0__cfg_w1_data_bits <= \$359 ;
+  always @(posedge clk)
+    ch0__cfg_w1_nenw <= \$360 ;
+  always @(posedge clk)
+    ch0__cfg_w1_lc <= \$361 ;
+  always @(posedge clk)
+    ch0__cfg_w1_crc <= \$362 ;
+  always @(posedge clk)
+    ch0__cfg_w1_enable <= \$363 ;
+  always @(posedge clk)
+    ch0__cfg_end_check <= \$364 ;
+  always @(posedge clk)
+    ch0__cfg_spw_check <= \$365 ;
+  always @(posedge clk)
+    ch0__cfg_spw_tolerance <= \$366 ;
+  always @(posedge clk)
+    ch0_result_status_status_snapshot <= \$367 ;
+  always @(posedge clk)
+    ch0_result_status_cds_snapshot <= \$368 ;
+  always @(posedge clk)
+    ch0_result_status_w0_ne_snapshot <= \$369 ;
+  always @(posedge clk)
+    ch0_result_status_w0_nw_snapshot <= \$370 ;
+  always @(posedge clk)
+    ch0_result_status_w0_crc_ok_snapshot <= \$371 ;
+  always @(posedge clk)
+    ch0_result_status_w1_ne_snapshot <= \$372 ;
+  always @(posedge clk)
+    ch0_result_status_w1_nw_snapshot <= \$373 ;
+  always @(posedge clk)
+    ch0_result_status_w1_crc_ok_snapshot <= \$374 ;
+  always @(posedge clk)
+    ch0_result_status_lc_repeat_snapshot <= \$375 ;
+  always @(posedge clk)
+    ch0_result_status_lc_skip_snapshot <= \$376 ;
+  always @(posedge clk)
+    ch0_result_status_lc_zero_snapshot <= \$377 ;
+  always @(posedge clk)
+    ch0_result_status_spw_mismatch_snapshot <= \$378 ;
+  always @(posedge clk)
+    ch0_result_status_lc_snapshot <= \$379 ;
+  always @(posedge clk)
+    ch0_result_seq_seq_snapshot <= \$380 ;
+  always @(posedge clk)
+    ch0_result_seq_line_delay_snapshot <= \$381 ;
+  always @(posedge clk)
+    ch0_result_w0_lo_data_snapshot <= \$382 ;
+  always @(posedge clk)
+    ch0_result_w0_hi_data_snapshot <= \$383 ;
+  always @(posedge clk)
+    ch0_result_w1_lo_data_snapshot <= \$384 ;
+  always @(posedge clk)
+    ch0_result_w1_hi_data_snapshot <= \$385 ;
+  always @(posedge clk)
+    ch0_result_timestamp_time_snapshot <= \$386 ;
+  always @(posedge clk)
+    ch1__start <= \$387 ;
+  always @(posedge clk)
+    ch1__abort_cycle <= \$388 ;
+  always @(posedge clk)
+    ch1__clear_counters <= \$389 ;
+  always @(posedge clk)
+    ch1__periodic <= \$390 ;
+  always @(posedge clk)
+    ch1__trigger_enable <= \$391 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$367  = ch0_cfg_ma_ma_half_period;
-    if (ch0_cfg_ma_write) begin
-      \$367  = \$173 ;
-    end
-    if (rst) begin
-      \$367  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$368  = ch0_cfg_ma_delay_limit;
-    if (ch0_cfg_ma_write) begin
-      \$368  = \$177 ;
-    end
-    if (rst) begin
-      \$368  = 12'h000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$369  = ch0_cfg_period_request_period;
-    if (ch0_cfg_period_write) begin
-      \$369  = \$181 ;
-    end
-    if (rst) begin
-      \$369  = 24'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$370  = ch0_cfg_break_break_time;
-    if (ch0_cfg_break_write) begin
-      \$370  = \$185 ;
-    end
-    if (rst) begin
-      \$370  = 24'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$371  = ch0_cfg_ack_ack_limit;
-    if (ch0_cfg_ack_write) begin
-      \$371  = \$189 ;
-    end
-    if (rst) begin
-      \$371  = 24'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$372  = ch0_cfg_timeout_timeout_limit;
-    if (ch0_cfg_timeout_write) begin
-      \$372  = \$193 ;
-    end
-    if (rst) begin
-      \$372  = 24'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$373  = ch0_cfg_words_w0_data_bits;
-    if (ch0_cfg_words_write) begin
-      \$373  = \$197 ;
-    end
-    if (rst) begin
-      \$373  = 6'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$374  = ch0_cfg_words_w0_nenw;
-    if (ch0_cfg_words_write) begin
-      \$374  = \$201 ;
-    end
-    if (rst) begin
-      \$374  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$375  = ch0_cfg_words_w0_lc;
-    if (ch0_cfg_words_write) begin
-      \$375  = \$205 ;
-    end
-    if (rst) begin
-      \$375  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$376  = ch0_cfg_words_w0_crc;
-    if (ch0_cfg_words_write) begin
-      \$376  = \$209 ;
-    end
-    if (rst) begin
-      \$376  = 2'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$377  = ch0_cfg_words_w1_data_bits;
-    if (ch0_cfg_words_write) begin
-      \$377  = \$213 ;
-    end
-    if (rst) begin
-      \$377  = 6'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$378  = ch0_cfg_words_w1_nenw;
-    if (ch0_cfg_words_write) begin
-      \$378  = \$217 ;
-    end
-    if (rst) begin
-      \$378  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$379  = ch0_cfg_words_w1_lc;
-    if (ch0_cfg_words_write) begin
-      \$379  = \$221 ;
-    end
-    if (rst) begin
-      \$379  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$380  = ch0_cfg_words_w1_crc;
-    if (ch0_cfg_words_write) begin
-      \$380  = \$225 ;
-    end
-    if (rst) begin
-      \$380  = 2'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$381  = ch0_cfg_words_w1_enable;
-    if (ch0_cfg_words_write) begin
-      \$381  = \$229 ;
-    end
-    if (rst) begin
-      \$381  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$382  = ch0_cfg_checks_end_check;
-    if (ch0_cfg_checks_write) begin
-      \$382  = \$233 ;
-    end
-    if (rst) begin
-      \$382  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$383  = ch0_cfg_checks_spw_check;
-    if (ch0_cfg_checks_write) begin
-      \$383  = \$237 ;
-    end
-    if (rst) begin
-      \$383  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$384  = ch0_cfg_checks_spw_tolerance;
-    if (ch0_cfg_checks_write) begin
-      \$384  = \$241 ;
-    end
-    if (rst) begin
-      \$384  = 8'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$385  = ch0_result_status_status_snapshot;
-    if (ch0_result_status_read) begin
-      \$385  = \port$2894$0 [3:0];
-    end
-    if (rst) begin
-      \$385  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$386  = ch0_result_status_cds_snapshot;
-    if (ch0_result_status_read) begin
-      \$386  = \port$2894$0 [49];
-    end
-    if (rst) begin
-      \$386  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$387  = ch0_result_status_w0_ne_snapshot;
-    if (ch0_result_status_read) begin
-      \$387  = \port$2894$0 [105];
-    end
-    if (rst) begin
-      \$387  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$388  = ch0_result_status_w0_nw_snapshot;
-    if (ch0_result_status_read) begin
-      \$388  = \port$2894$0 [106];
-    end
-    if (rst) begin
-      \$388  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$389  = ch0_result_status_w0_crc_ok_snapshot;
-    if (ch0_result_status_read) begin
-      \$389  = \port$2894$0 [107];
-    end
-    if (rst) begin
-      \$389  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$390  = ch0_result_status_w1_ne_snapshot;
-    if (ch0_result_status_read) begin
-      \$390  = \port$2894$0 [148];
-    end
-    if (rst) begin
-      \$390  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$391  = ch0_result_status_w1_nw_snapshot;
-    if (ch0_result_status_read) begin
-      \$391  = \port$2894$0 [149];
-    end
-    if (rst) begin
-      \$391  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$392  = ch0_result_status_w1_crc_ok_snapshot;
-    if (ch0_result_status_read) begin
-      \$392  = \port$2894$0 [150];
+    \$392  = ch1_irq_status_done;
+    if (ch1__done) begin
+      \$392  = 1'h1;
+    end else if (\$248 ) begin
+      \$392  = 1'h0;
     end
     if (rst) begin
       \$392  = 1'h0;
@@ -2680,9 +2340,11 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$393  = ch0_result_status_lc_repeat_snapshot;
-    if (ch0_result_status_read) begin
-      \$393  = \port$2894$0 [157];
+    \$393  = ch1_irq_status_error;
+    if (ch1__frame_error) begin
+      \$393  = 1'h1;
+    end else if (\$250 ) begin
+      \$393  = 1'h0;
     end
     if (rst) begin
       \$393  = 1'h0;
@@ -2690,19 +2352,20 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$394  = ch0_result_status_lc_skip_snapshot;
-    if (ch0_result_status_read) begin
-      \$394  = \port$2894$0 [158];
-    end
+    \$394  = ch1_irq_status_access_done;
+    casez ({ \$252 , 1'h0 })
+      2'b1?:
+          \$394  = 1'h0;
+    endcase
     if (rst) begin
       \$394  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$395  = ch0_result_status_lc_zero_snapshot;
-    if (ch0_result_status_read) begin
-      \$395  = \port$2894$0 [159];
+    \$395  = ch1_irq_enable_done;
+    if (ch1_irq_enable_write) begin
+      \$395  = \$256 ;
     end
     if (rst) begin
       \$395  = 1'h0;
@@ -2710,9 +2373,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$396  = ch0_result_status_spw_mismatch_snapshot;
-    if (ch0_result_status_read) begin
-      \$396  = \port$2894$0 [160];
+    \$396  = ch1_irq_enable_error;
+    if (ch1_irq_enable_write) begin
+      \$396  = \$260 ;
     end
     if (rst) begin
       \$396  = 1'h0;
@@ -2720,19 +2383,19 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$397  = ch0_result_status_lc_snapshot;
-    if (ch0_result_status_read) begin
-      \$397  = \port$2894$0 [156:151];
+    \$397  = ch1_irq_enable_access_done;
+    if (ch1_irq_enable_write) begin
+      \$397  = \$264 ;
     end
     if (rst) begin
-      \$397  = 6'h00;
+      \$397  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$398  = ch0_result_seq_seq_snapshot;
-    if (ch0_result_status_read) begin
-      \$398  = ch0__done_count;
+    \$398  = ch1__cfg_ma_half_period;
+    if (ch1_cfg_ma_write) begin
+      \$398  = \$268 ;
     end
     if (rst) begin
       \$398  = 16'h0000;
@@ -2740,100 +2403,109 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$399  = ch0_result_seq_line_delay_snapshot;
-    if (ch0_result_status_read) begin
-      \$399  = \port$2894$0 [48:36];
+    \$399  = ch1__cfg_delay_limit;
+    if (ch1_cfg_ma_write) begin
+      \$399  = \$272 ;
     end
     if (rst) begin
-      \$399  = 13'h0000;
+      \$399  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$400  = ch0_result_w0_lo_value;
-    if (ch0_result_status_read) begin
-      \$400  = \port$2894$0 [81:50];
+    \$400  = ch1__cfg_request_period;
+    if (ch1_cfg_period_write) begin
+      \$400  = \$276 ;
     end
     if (rst) begin
-      \$400  = 32'd0;
+      \$400  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$401  = ch0_result_w0_hi_data_snapshot;
-    if (ch0_result_status_read) begin
-      \$401  = \port$2894$0 [104:82];
+    \$401  = ch1__cfg_break_time;
+    if (ch1_cfg_break_write) begin
+      \$401  = \$280 ;
     end
     if (rst) begin
-      \$401  = 23'h000000;
+      \$401  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$402  = ch0_result_w1_lo_value;
-    if (ch0_result_status_read) begin
-      \$402  = \port$2894$0 [139:108];
+    \$402  = ch1__cfg_ack_limit;
+    if (ch1_cfg_ack_write) begin
+      \$402  = \$284 ;
     end
     if (rst) begin
-      \$402  = 32'd0;
+      \$402  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$403  = ch0_result_w1_hi_data_snapshot;
-    if (ch0_result_status_read) begin
-      \$403  = \port$2894$0 [147:140];
+    \$403  = ch1__cfg_timeout_limit;
+    if (ch1_cfg_timeout_write) begin
+      \$403  = \$288 ;
     end
     if (rst) begin
-      \$403  = 8'h00;
+      \$403  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$404  = ch0_result_timestamp_value;
-    if (ch0_result_status_read) begin
-      \$404  = \port$2894$0 [35:4];
+    \$404  = ch1__cfg_w0_data_bits;
+    if (ch1_cfg_words_write) begin
+      \$404  = \$292 ;
     end
     if (rst) begin
-      \$404  = 32'd0;
+      \$404  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$405  = \$243 ;
+    \$405  = ch1__cfg_w0_nenw;
+    if (ch1_cfg_words_write) begin
+      \$405  = \$296 ;
+    end
     if (rst) begin
       \$405  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$406  = \$245 ;
+    \$406  = ch1__cfg_w0_lc;
+    if (ch1_cfg_words_write) begin
+      \$406  = \$300 ;
+    end
     if (rst) begin
       \$406  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$407  = \$247 ;
+    \$407  = ch1__cfg_w0_crc;
+    if (ch1_cfg_words_write) begin
+      \$407  = \$304 ;
+    end
     if (rst) begin
-      \$407  = 1'h0;
+      \$407  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$408  = ch1_ctrl_periodic;
-    if (ch1_ctrl_write) begin
-      \$408  = \$251 ;
+    \$408  = ch1__cfg_w1_data_bits;
+    if (ch1_cfg_words_write) begin
+      \$408  = \$308 ;
     end
     if (rst) begin
-      \$408  = 1'h0;
+      \$408  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$409  = ch1_ctrl_trigger_enable;
-    if (ch1_ctrl_write) begin
-      \$409  = \$255 ;
+    \$409  = ch1__cfg_w1_nenw;
+    if (ch1_cfg_words_write) begin
+      \$409  = \$312 ;
     end
     if (rst) begin
       \$409  = 1'h0;
@@ -2841,30 +2513,39 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$410  = \$260 ;
+    \$410  = ch1__cfg_w1_lc;
+    if (ch1_cfg_words_write) begin
+      \$410  = \$316 ;
+    end
     if (rst) begin
       \$410  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$411  = \$265 ;
+    \$411  = ch1__cfg_w1_crc;
+    if (ch1_cfg_words_write) begin
+      \$411  = \$320 ;
+    end
     if (rst) begin
-      \$411  = 1'h0;
+      \$411  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$412  = \$270 ;
+    \$412  = ch1__cfg_w1_enable;
+    if (ch1_cfg_words_write) begin
+      \$412  = \$324 ;
+    end
     if (rst) begin
       \$412  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$413  = ch1_irq_enable_done;
-    if (ch1_irq_enable_write) begin
-      \$413  = \$274 ;
+    \$413  = ch1__cfg_end_check;
+    if (ch1_cfg_checks_write) begin
+      \$413  = \$328 ;
     end
     if (rst) begin
       \$413  = 1'h0;
@@ -2872,9 +2553,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$414  = ch1_irq_enable_error;
-    if (ch1_irq_enable_write) begin
-      \$414  = \$278 ;
+    \$414  = ch1__cfg_spw_check;
+    if (ch1_cfg_checks_write) begin
+      \$414  = \$332 ;
     end
     if (rst) begin
       \$414  = 1'h0;
@@ -2882,89 +2563,89 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$415  = ch1_irq_enable_access_done;
-    if (ch1_irq_enable_write) begin
-      \$415  = \$282 ;
+    \$415  = ch1__cfg_spw_tolerance;
+    if (ch1_cfg_checks_write) begin
+      \$415  = \$336 ;
     end
     if (rst) begin
-      \$415  = 1'h0;
+      \$415  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$416  = ch1_cfg_ma_ma_half_period;
-    if (ch1_cfg_ma_write) begin
-      \$416  = \$286 ;
+    \$416  = ch1_result_status_status_snapshot;
+    if (ch1_result_status_read) begin
+      \$416  = \port$3174$0 [3:0];
     end
     if (rst) begin
-      \$416  = 16'h0000;
+      \$416  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$417  = ch1_cfg_ma_delay_limit;
-    if (ch1_cfg_ma_write) begin
-      \$417  = \$290 ;
+    \$417  = ch1_result_status_cds_snapshot;
+    if (ch1_result_status_read) begin
+      \$417  = \port$3174$0 [49];
     end
     if (rst) begin
-      \$417  = 12'h000;
+      \$417  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$418  = ch1_cfg_period_request_period;
-    if (ch1_cfg_period_write) begin
-      \$418  = \$294 ;
+    \$418  = ch1_result_status_w0_ne_snapshot;
+    if (ch1_result_status_read) begin
+      \$418  = \port$3174$0 [105];
     end
     if (rst) begin
-      \$418  = 24'h000000;
+      \$418  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$419  = ch1_cfg_break_break_time;
-    if (ch1_cfg_break_write) begin
-      \$419  = \$298 ;
+    \$419  = ch1_result_status_w0_nw_snapshot;
+    if (ch1_result_status_read) begin
+      \$419  = \port$3174$0 [106];
     end
     if (rst) begin
-      \$419  = 24'h000000;
+      \$419  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$420  = ch1_cfg_ack_ack_limit;
-    if (ch1_cfg_ack_write) begin
-      \$420  = \$302 ;
+    \$420  = ch1_result_status_w0_crc_ok_snapshot;
+    if (ch1_result_status_read) begin
+      \$420  = \port$3174$0 [107];
     end
     if (rst) begin
-      \$420  = 24'h000000;
+      \$420  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$421  = ch1_cfg_timeout_timeout_limit;
-    if (ch1_cfg_timeout_write) begin
-      \$421  = \$306 ;
+    \$421  = ch1_result_status_w1_ne_snapshot;
+    if (ch1_result_status_read) begin
+      \$421  = \port$3174$0 [148];
     end
     if (rst) begin
-      \$421  = 24'h000000;
+      \$421  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$422  = ch1_cfg_words_w0_data_bits;
-    if (ch1_cfg_words_write) begin
-      \$422  = \$310 ;
+    \$422  = ch1_result_status_w1_nw_snapshot;
+    if (ch1_result_status_read) begin
+      \$422  = \port$3174$0 [149];
     end
     if (rst) begin
-      \$422  = 6'h00;
+      \$422  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$423  = ch1_cfg_words_w0_nenw;
-    if (ch1_cfg_words_write) begin
-      \$423  = \$314 ;
+    \$423  = ch1_result_status_w1_crc_ok_snapshot;
+    if (ch1_result_status_read) begin
+      \$423  = \port$3174$0 [150];
     end
     if (rst) begin
       \$423  = 1'h0;
@@ -2972,9 +2653,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$424  = ch1_cfg_words_w0_lc;
-    if (ch1_cfg_words_write) begin
-      \$424  = \$318 ;
+    \$424  = ch1_result_status_lc_repeat_snapshot;
+    if (ch1_result_status_read) begin
+      \$424  = \port$3174$0 [157];
     end
     if (rst) begin
       \$424  = 1'h0;
@@ -2982,29 +2663,29 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$425  = ch1_cfg_words_w0_crc;
-    if (ch1_cfg_words_write) begin
-      \$425  = \$322 ;
+    \$425  = ch1_result_status_lc_skip_snapshot;
+    if (ch1_result_status_read) begin
+      \$425  = \port$3174$0 [158];
     end
     if (rst) begin
-      \$425  = 2'h0;
+      \$425  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$426  = ch1_cfg_words_w1_data_bits;
-    if (ch1_cfg_words_write) begin
-      \$426  = \$326 ;
+    \$426  = ch1_result_status_lc_zero_snapshot;
+    if (ch1_result_status_read) begin
+      \$426  = \port$3174$0 [159];
     end
     if (rst) begin
-      \$426  = 6'h00;
+      \$426  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$427  = ch1_cfg_words_w1_nenw;
-    if (ch1_cfg_words_write) begin
-      \$427  = \$330 ;
+    \$427  = ch1_result_status_spw_mismatch_snapshot;
+    if (ch1_result_status_read) begin
+      \$427  = \port$3174$0 [160];
     end
     if (rst) begin
       \$427  = 1'h0;
@@ -3012,435 +2693,440 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$428  = ch1_cfg_words_w1_lc;
-    if (ch1_cfg_words_write) begin
-      \$428  = \$334 ;
-    end
-    if (rst) begin
-      \$428  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$429  = ch1_cfg_words_w1_crc;
-    if (ch1_cfg_words_write) begin
-      \$429  = \$338 ;
-    end
-    if (rst) begin
-      \$429  = 2'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$430  = ch1_cfg_words_w1_enable;
-    if (ch1_cfg_words_write) begin
-      \$430  = \$342 ;
-    end
-    if (rst) begin
-      \$430  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$431  = ch1_cfg_checks_end_check;
-    if (ch1_cfg_checks_write) begin
-      \$431  = \$346 ;
-    end
-    if (rst) begin
-      \$431  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$432  = ch1_cfg_checks_spw_check;
-    if (ch1_cfg_checks_write) begin
-      \$432  = \$350 ;
-    end
-    if (rst) begin
-      \$432  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$433  = ch1_cfg_checks_spw_tolerance;
-    if (ch1_cfg_checks_write) begin
-      \$433  = \$354 ;
-    end
-    if (rst) begin
-      \$433  = 8'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$434  = ch1_result_status_status_snapshot;
+    \$428  = ch1_result_status_lc_snapshot;
     if (ch1_result_status_read) begin
-      \$434  = \port$3220$0 [3:0];
+      \$428  = \port$3174$0 [156:151];
     end
     if (rst) begin
-      \$434  = 4'h0;
+      \$428  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$435  = ch1_result_status_cds_snapshot;
+    \$429  = ch1_result_seq_seq_snapshot;
     if (ch1_result_status_read) begin
-      \$435  = \port$3220$0 [49];
+      \$429  = ch1__done_count;
     end
     if (rst) begin
-      \$435  = 1'h0;
+      \$429  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$436  = ch1_result_status_w0_ne_snapshot;
+    \$430  = ch1_result_seq_line_delay_snapshot;
     if (ch1_result_status_read) begin
-      \$436  = \port$3220$0 [105];
+      \$430  = \port$3174$0 [48:36];
     end
     if (rst) begin
-      \$436  = 1'h0;
+      \$430  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$437  = ch1_result_status_w0_nw_snapshot;
+    \$431  = ch1_result_w0_lo_data_snapshot;
     if (ch1_result_status_read) begin
-      \$437  = \port$3220$0 [106];
+      \$431  = \port$3174$0 [81:50];
     end
     if (rst) begin
-      \$437  = 1'h0;
+      \$431  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$438  = ch1_result_status_w0_crc_ok_snapshot;
+    \$432  = ch1_result_w0_hi_data_snapshot;
     if (ch1_result_status_read) begin
-      \$438  = \port$3220$0 [107];
+      \$432  = \port$3174$0 [104:82];
     end
     if (rst) begin
-      \$438  = 1'h0;
+      \$432  = 23'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$439  = ch1_result_status_w1_ne_snapshot;
+    \$433  = ch1_result_w1_lo_data_snapshot;
     if (ch1_result_status_read) begin
-      \$439  = \port$3220$0 [148];
+      \$433  = \port$3174$0 [139:108];
     end
     if (rst) begin
-      \$439  = 1'h0;
+      \$433  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$440  = ch1_result_status_w1_nw_snapshot;
+    \$434  = ch1_result_w1_hi_data_snapshot;
     if (ch1_result_status_read) begin
-      \$440  = \port$3220$0 [149];
+      \$434  = \port$3174$0 [147:140];
     end
     if (rst) begin
-      \$440  = 1'h0;
+      \$434  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$441  = ch1_result_status_w1_crc_ok_snapshot;
+    \$435  = ch1_result_timestamp_time_snapshot;
     if (ch1_result_status_read) begin
-      \$441  = \port$3220$0 [150];
+      \$435  = \port$3174$0 [35:4];
     end
     if (rst) begin
-      \$441  = 1'h0;
+      \$435  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$442  = ch1_result_status_lc_repeat_snapshot;
-    if (ch1_result_status_read) begin
-      \$442  = \port$3220$0 [157];
-    end
-    if (rst) begin
-      \$442  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$443  = ch1_result_status_lc_skip_snapshot;
-    if (ch1_result_status_read) begin
-      \$443  = \port$3220$0 [158];
-    end
-    if (rst) begin
-      \$443  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$444  = ch1_result_status_lc_zero_snapshot;
-    if (ch1_result_status_read) begin
-      \$444  = \port$3220$0 [159];
-    end
-    if (rst) begin
-      \$444  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$445  = ch1_result_status_spw_mismatch_snapshot;
-    if (ch1_result_status_read) begin
-      \$445  = \port$3220$0 [160];
-    end
-    if (rst) begin
-      \$445  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$446  = ch1_result_status_lc_snapshot;
-    if (ch1_result_status_read) begin
-      \$446  = \port$3220$0 [156:151];
-    end
-    if (rst) begin
-      \$446  = 6'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$447  = ch1_result_seq_seq_snapshot;
-    if (ch1_result_status_read) begin
-      \$447  = ch1__done_count;
-    end
-    if (rst) begin
-      \$447  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$448  = ch1_result_seq_line_delay_snapshot;
-    if (ch1_result_status_read) begin
-      \$448  = \port$3220$0 [48:36];
-    end
-    if (rst) begin
-      \$448  = 13'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$449  = ch1_result_w0_lo_value;
-    if (ch1_result_status_read) begin
-      \$449  = \port$3220$0 [81:50];
-    end
-    if (rst) begin
-      \$449  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$450  = ch1_result_w0_hi_data_snapshot;
-    if (ch1_result_status_read) begin
-      \$450  = \port$3220$0 [104:82];
-    end
-    if (rst) begin
-      \$450  = 23'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$451  = ch1_result_w1_lo_value;
-    if (ch1_result_status_read) begin
-      \$451  = \port$3220$0 [139:108];
-    end
-    if (rst) begin
-      \$451  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$452  = ch1_result_w1_hi_data_snapshot;
-    if (ch1_result_status_read) begin
-      \$452  = \port$3220$0 [147:140];
-    end
-    if (rst) begin
-      \$452  = 8'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$453  = ch1_result_timestamp_value;
-    if (ch1_result_status_read) begin
-      \$453  = \port$3220$0 [35:4];
-    end
-    if (rst) begin
-      \$453  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$454  = bus__r_data;
+    \$436  = bus__r_data;
     if (bus__r_en) begin
       (* full_case = 32'd1 *)
       casez (bus__w_addr)
         11'h000:
-            \$454  = 32'd1114198867;
+            \$436  = 32'd1114198867;
         11'h001:
-            \$454  = g_version_value;
+            \$436  = 32'd65536;
         11'h002:
-            \$454  = g_channels_value;
+            \$436  = 32'd2;
         11'h003:
-            \$454  = 32'd0;
+            \$436  = 32'd0;
         11'h004:
-            \$454  = g_irq_pending_value;
+            \$436  = { 30'h00000000, ch1_irq, ch0_irq };
         11'h080:
-            \$454  = ch0_ctrl_value;
+            \$436  = { 22'h000000, ch0__trigger_enable, ch0__periodic, 8'h00 };
         11'h081:
-            \$454  = ch0_state_value;
+            \$436  = { 30'h00000000, ch0__config_error, ch0__busy };
         11'h082:
-            \$454  = ch0_caps_value;
+            \$436  = 32'd51914807;
         11'h084:
-            \$454  = ch0_irq_status_value;
+            \$436  = { 29'h00000000, ch0_irq_status_access_done, ch0_irq_status_error, ch0_irq_status_done };
         11'h085:
-            \$454  = ch0_irq_enable_value;
+            \$436  = { 29'h00000000, ch0_irq_enable_access_done, ch0_irq_enable_error, ch0_irq_enable_done };
         11'h088:
-            \$454  = ch0_cfg_ma_value;
+            \$436  = { 4'h0, ch0__cfg_delay_limit, ch0__cfg_ma_half_period };
         11'h089:
-            \$454  = ch0_cfg_period_value;
+            \$436  = { 8'h00, ch0__cfg_request_period };
         11'h08a:
-            \$454  = ch0_cfg_break_value;
+            \$436  = { 8'h00, ch0__cfg_break_time };
         11'h08b:
-            \$454  = ch0_cfg_ack_value;
+            \$436  = { 8'h00, ch0__cfg_ack_limit };
         11'h08c:
-            \$454  = ch0_cfg_timeout_value;
+            \$436  = { 8'h00, ch0__cfg_timeout_limit };
         11'h08d:
-            \$454  = ch0_cfg_words_value;
+            \$436  = { ch0__cfg_w1_enable, 5'h00, ch0__cfg_w1_crc, ch0__cfg_w1_lc, ch0__cfg_w1_nenw, ch0__cfg_w1_data_bits, 6'h00, ch0__cfg_w0_crc, ch0__cfg_w0_lc, ch0__cfg_w0_nenw, ch0__cfg_w0_data_bits };
         11'h08e:
-            \$454  = ch0_cfg_checks_value;
+            \$436  = { 16'h0000, ch0__cfg_spw_tolerance, 6'h00, ch0__cfg_spw_check, ch0__cfg_end_check };
         11'h090:
-            \$454  = ch0_result_status_value;
+            \$436  = { 2'h0, \port$2848$0 [156:151], 4'h0, \port$2848$0 [160:157], 1'h0, \port$2848$0 [150:148], 1'h0, \port$2848$0 [107:105], 3'h0, \port$2848$0 [49], \port$2848$0 [3:0] };
         11'h091:
-            \$454  = ch0_result_seq_value;
+            \$436  = { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot };
         11'h092:
-            \$454  = ch0_result_w0_lo_value;
+            \$436  = ch0_result_w0_lo_data_snapshot;
         11'h093:
-            \$454  = ch0_result_w0_hi_value;
+            \$436  = { 9'h000, ch0_result_w0_hi_data_snapshot };
         11'h094:
-            \$454  = ch0_result_w1_lo_value;
+            \$436  = ch0_result_w1_lo_data_snapshot;
         11'h095:
-            \$454  = ch0_result_w1_hi_value;
+            \$436  = { 24'h000000, ch0_result_w1_hi_data_snapshot };
         11'h096:
-            \$454  = ch0_result_timestamp_value;
+            \$436  = ch0_result_timestamp_time_snapshot;
         11'h098:
-            \$454  = ch0_count_crc_value;
+            \$436  = \port$2855$0 [31:0];
         11'h099:
-            \$454  = ch0_count_ack_value;
+            \$436  = \port$2855$0 [63:32];
         11'h09a:
-            \$454  = ch0_count_line_value;
+            \$436  = \port$2855$0 [95:64];
         11'h09b:
-            \$454  = ch0_count_lc_value;
+            \$436  = \port$2855$0 [127:96];
         11'h09c:
-            \$454  = ch0_count_check_value;
+            \$436  = \port$2855$0 [159:128];
         11'h09d:
-            \$454  = ch0_count_cycle_value;
+            \$436  = \port$2855$0 [191:160];
         11'h09e:
-            \$454  = ch0_count_stop_value;
+            \$436  = { 16'h0000, \port$2855$0 [207:192] };
         11'h100:
-            \$454  = ch1_ctrl_value;
+            \$436  = { 22'h000000, ch1__trigger_enable, ch1__periodic, 8'h00 };
         11'h101:
-            \$454  = ch1_state_value;
+            \$436  = { 30'h00000000, ch1__config_error, ch1__busy };
         11'h102:
-            \$454  = ch1_caps_value;
+            \$436  = 32'd51914807;
         11'h104:
-            \$454  = ch1_irq_status_value;
+            \$436  = { 29'h00000000, ch1_irq_status_access_done, ch1_irq_status_error, ch1_irq_status_done };
         11'h105:
-            \$454  = ch1_irq_enable_value;
+            \$436  = { 29'h00000000, ch1_irq_enable_access_done, ch1_irq_enable_error, ch1_irq_enable_done };
         11'h108:
-            \$454  = ch1_cfg_ma_value;
+            \$436  = { 4'h0, ch1__cfg_delay_limit, ch1__cfg_ma_half_period };
         11'h109:
-            \$454  = ch1_cfg_period_value;
+            \$436  = { 8'h00, ch1__cfg_request_period };
         11'h10a:
-            \$454  = ch1_cfg_break_value;
+            \$436  = { 8'h00, ch1__cfg_break_time };
         11'h10b:
-            \$454  = ch1_cfg_ack_value;
+            \$436  = { 8'h00, ch1__cfg_ack_limit };
         11'h10c:
-            \$454  = ch1_cfg_timeout_value;
+            \$436  = { 8'h00, ch1__cfg_timeout_limit };
         11'h10d:
-            \$454  = ch1_cfg_words_value;
+            \$436  = { ch1__cfg_w1_enable, 5'h00, ch1__cfg_w1_crc, ch1__cfg_w1_lc, ch1__cfg_w1_nenw, ch1__cfg_w1_data_bits, 6'h00, ch1__cfg_w0_crc, ch1__cfg_w0_lc, ch1__cfg_w0_nenw, ch1__cfg_w0_data_bits };
         11'h10e:
-            \$454  = ch1_cfg_checks_value;
+            \$436  = { 16'h0000, ch1__cfg_spw_tolerance, 6'h00, ch1__cfg_spw_check, ch1__cfg_end_check };
         11'h110:
-            \$454  = ch1_result_status_value;
+            \$436  = { 2'h0, \port$3174$0 [156:151], 4'h0, \port$3174$0 [160:157], 1'h0, \port$3174$0 [150:148], 1'h0, \port$3174$0 [107:105], 3'h0, \port$3174$0 [49], \port$3174$0 [3:0] };
         11'h111:
-            \$454  = ch1_result_seq_value;
+            \$436  = { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot };
         11'h112:
-            \$454  = ch1_result_w0_lo_value;
+            \$436  = ch1_result_w0_lo_data_snapshot;
         11'h113:
-            \$454  = ch1_result_w0_hi_value;
+            \$436  = { 9'h000, ch1_result_w0_hi_data_snapshot };
         11'h114:
-            \$454  = ch1_result_w1_lo_value;
+            \$436  = ch1_result_w1_lo_data_snapshot;
         11'h115:
-            \$454  = ch1_result_w1_hi_value;
+            \$436  = { 24'h000000, ch1_result_w1_hi_data_snapshot };
         11'h116:
-            \$454  = ch1_result_timestamp_value;
+            \$436  = ch1_result_timestamp_time_snapshot;
         11'h118:
-            \$454  = ch1_count_crc_value;
+            \$436  = \port$3181$0 [31:0];
         11'h119:
-            \$454  = ch1_count_ack_value;
+            \$436  = \port$3181$0 [63:32];
         11'h11a:
-            \$454  = ch1_count_line_value;
+            \$436  = \port$3181$0 [95:64];
         11'h11b:
-            \$454  = ch1_count_lc_value;
+            \$436  = \port$3181$0 [127:96];
         11'h11c:
-            \$454  = ch1_count_check_value;
+            \$436  = \port$3181$0 [159:128];
         11'h11d:
-            \$454  = ch1_count_cycle_value;
+            \$436  = \port$3181$0 [191:160];
         11'h11e:
-            \$454  = ch1_count_stop_value;
+            \$436  = { 16'h0000, \port$3181$0 [207:192] };
         default:
-            \$454  = 32'd0;
+            \$436  = 32'd0;
       endcase
     end
     if (rst) begin
-      \$454  = 32'd0;
+      \$436  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$355  = \$128 ;
+    \$337  = \$128 ;
     if (rst) begin
-      \$355  = 1'h0;
+      \$337  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$356  = \$130 ;
+    \$338  = \$130 ;
+    if (rst) begin
+      \$338  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    \$339  = \$132 ;
+    if (rst) begin
+      \$339  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    \$340  = \$134 ;
+    if (rst) begin
+      \$340  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    \$341  = ch0__periodic;
+    if (ch0_ctrl_write) begin
+      \$341  = \$138 ;
+    end
+    if (rst) begin
+      \$341  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    \$342  = ch0__trigger_enable;
+    if (ch0_ctrl_write) begin
+      \$342  = \$142 ;
+    end
+    if (rst) begin
+      \$342  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    \$343  = ch0_irq_status_done;
+    if (ch0__done) begin
+      \$343  = 1'h1;
+    end else if (\$144 ) begin
+      \$343  = 1'h0;
+    end
+    if (rst) begin
+      \$343  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    \$344  = ch0_irq_status_error;
+    if (ch0__frame_error) begin
+      \$344  = 1'h1;
+    end else if (\$146 ) begin
+      \$344  = 1'h0;
+    end
+    if (rst) begin
+      \$344  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    \$345  = ch0_irq_status_access_done;
+    casez ({ \$148 , 1'h0 })
+      2'b1?:
+          \$345  = 1'h0;
+    endcase
+    if (rst) begin
+      \$345  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    \$346  = ch0_irq_enable_done;
+    if (ch0_irq_enable_write) begin
+      \$346  = \$152 ;
+    end
+    if (rst) begin
+      \$346  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    \$347  = ch0_irq_enable_error;
+    if (ch0_irq_enable_write) begin
+      \$347  = \$156 ;
+    end
+    if (rst) begin
+      \$347  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    \$348  = ch0_irq_enable_access_done;
+    if (ch0_irq_enable_write) begin
+      \$348  = \$160 ;
+    end
+    if (rst) begin
+      \$348  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    \$349  = ch0__cfg_ma_half_period;
+    if (ch0_cfg_ma_write) begin
+      \$349  = \$164 ;
+    end
+    if (rst) begin
+      \$349  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    \$350  = ch0__cfg_delay_limit;
+    if (ch0_cfg_ma_write) begin
+      \$350  = \$168 ;
+    end
+    if (rst) begin
+      \$350  = 12'h000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    \$351  = ch0__cfg_request_period;
+    if (ch0_cfg_period_write) begin
+      \$351  = \$172 ;
+    end
+    if (rst) begin
+      \$351  = 24'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    \$352  = ch0__cfg_break_time;
+    if (ch0_cfg_break_write) begin
+      \$352  = \$176 ;
+    end
+    if (rst) begin
+      \$352  = 24'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    \$353  = ch0__cfg_ack_limit;
+    if (ch0_cfg_ack_write) begin
+      \$353  = \$180 ;
+    end
+    if (rst) begin
+      \$353  = 24'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    \$354  = ch0__cfg_timeout_limit;
+    if (ch0_cfg_timeout_write) begin
+      \$354  = \$184 ;
+    end
+    if (rst) begin
+      \$354  = 24'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    \$355  = ch0__cfg_w0_data_bits;
+    if (ch0_cfg_words_write) begin
+      \$355  = \$188 ;
+    end
+    if (rst) begin
+      \$355  = 6'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    \$356  = ch0__cfg_w0_nenw;
+    if (ch0_cfg_words_write) begin
+      \$356  = \$192 ;
+    end
     if (rst) begin
       \$356  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$357  = \$132 ;
+    \$357  = ch0__cfg_w0_lc;
+    if (ch0_cfg_words_write) begin
+      \$357  = \$196 ;
+    end
     if (rst) begin
       \$357  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$358  = \$134 ;
+    \$358  = ch0__cfg_w0_crc;
+    if (ch0_cfg_words_write) begin
+      \$358  = \$200 ;
+    end
     if (rst) begin
-      \$358  = 1'h0;
+      \$358  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$359  = ch0_ctrl_periodic;
-    if (ch0_ctrl_write) begin
-      \$359  = \$138 ;
+    \$359  = ch0__cfg_w1_data_bits;
+    if (ch0_cfg_words_write) begin
+      \$359  = \$204 ;
     end
     if (rst) begin
-      \$359  = 1'h0;
+      \$359  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$360  = ch0_ctrl_trigger_enable;
-    if (ch0_ctrl_write) begin
-      \$360  = \$142 ;
+    \$360  = ch0__cfg_w1_nenw;
+    if (ch0_cfg_words_write) begin
+      \$360  = \$208 ;
     end
     if (rst) begin
       \$360  = 1'h0;
@@ -3448,30 +3134,39 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$361  = \$147 ;
+    \$361  = ch0__cfg_w1_lc;
+    if (ch0_cfg_words_write) begin
+      \$361  = \$212 ;
+    end
     if (rst) begin
       \$361  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$362  = \$152 ;
+    \$362  = ch0__cfg_w1_crc;
+    if (ch0_cfg_words_write) begin
+      \$362  = \$216 ;
+    end
     if (rst) begin
-      \$362  = 1'h0;
+      \$362  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$363  = \$157 ;
+    \$363  = ch0__cfg_w1_enable;
+    if (ch0_cfg_words_write) begin
+      \$363  = \$220 ;
+    end
     if (rst) begin
       \$363  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$364  = ch0_irq_enable_done;
-    if (ch0_irq_enable_write) begin
-      \$364  = \$161 ;
+    \$364  = ch0__cfg_end_check;
+    if (ch0_cfg_checks_write) begin
+      \$364  = \$224 ;
     end
     if (rst) begin
       \$364  = 1'h0;
@@ -3479,9 +3174,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$365  = ch0_irq_enable_error;
-    if (ch0_irq_enable_write) begin
-      \$365  = \$165 ;
+    \$365  = ch0__cfg_spw_check;
+    if (ch0_cfg_checks_write) begin
+      \$365  = \$228 ;
     end
     if (rst) begin
       \$365  = 1'h0;
@@ -3489,310 +3184,376 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$366  = ch0_irq_enable_access_done;
-    if (ch0_irq_enable_write) begin
-      \$366  = \$169 ;
+    \$366  = ch0__cfg_spw_tolerance;
+    if (ch0_cfg_checks_write) begin
+      \$366  = \$232 ;
     end
     if (rst) begin
-      \$366  = 1'h0;
+      \$366  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    \$367  = ch0_result_status_status_snapshot;
+    if (ch0_result_status_read) begin
+      \$367  = \port$2848$0 [3:0];
+    end
+    if (rst) begin
+      \$367  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    \$368  = ch0_result_status_cds_snapshot;
+    if (ch0_result_status_read) begin
+      \$368  = \port$2848$0 [49];
+    end
+    if (rst) begin
+      \$368  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    \$369  = ch0_result_status_w0_ne_snapshot;
+    if (ch0_result_status_read) begin
+      \$369  = \port$2848$0 [105];
+    end
+    if (rst) begin
+      \$369  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    \$370  = ch0_result_status_w0_nw_snapshot;
+    if (ch0_result_status_read) begin
+      \$370  = \port$2848$0 [106];
+    end
+    if (rst) begin
+      \$370  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    \$371  = ch0_result_status_w0_crc_ok_snapshot;
+    if (ch0_result_status_read) begin
+      \$371  = \port$2848$0 [107];
+    end
+    if (rst) begin
+      \$371  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    \$372  = ch0_result_status_w1_ne_snapshot;
+    if (ch0_result_status_read) begin
+      \$372  = \port$2848$0 [148];
+    end
+    if (rst) begin
+      \$372  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    \$373  = ch0_result_status_w1_nw_snapshot;
+    if (ch0_result_status_read) begin
+      \$373  = \port$2848$0 [149];
+    end
+    if (rst) begin
+      \$373  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    \$374  = ch0_result_status_w1_crc_ok_snapshot;
+    if (ch0_result_status_read) begin
+      \$374  = \port$2848$0 [150];
+    end
+    if (rst) begin
+      \$374  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    \$375  = ch0_result_status_lc_repeat_snapshot;
+    if (ch0_result_status_read) begin
+      \$375  = \port$2848$0 [157];
+    end
+    if (rst) begin
+      \$375  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    \$376  = ch0_result_status_lc_skip_snapshot;
+    if (ch0_result_status_read) begin
+      \$376  = \port$2848$0 [158];
+    end
+    if (rst) begin
+      \$376  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    \$377  = ch0_result_status_lc_zero_snapshot;
+    if (ch0_result_status_read) begin
+      \$377  = \port$2848$0 [159];
+    end
+    if (rst) begin
+      \$377  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    \$378  = ch0_result_status_spw_mismatch_snapshot;
+    if (ch0_result_status_read) begin
+      \$378  = \port$2848$0 [160];
+    end
+    if (rst) begin
+      \$378  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    \$379  = ch0_result_status_lc_snapshot;
+    if (ch0_result_status_read) begin
+      \$379  = \port$2848$0 [156:151];
+    end
+    if (rst) begin
+      \$379  = 6'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    \$380  = ch0_result_seq_seq_snapshot;
+    if (ch0_result_status_read) begin
+      \$380  = ch0__done_count;
+    end
+    if (rst) begin
+      \$380  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    \$381  = ch0_result_seq_line_delay_snapshot;
+    if (ch0_result_status_read) begin
+      \$381  = \port$2848$0 [48:36];
+    end
+    if (rst) begin
+      \$381  = 13'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    \$382  = ch0_result_w0_lo_data_snapshot;
+    if (ch0_result_status_read) begin
+      \$382  = \port$2848$0 [81:50];
+    end
+    if (rst) begin
+      \$382  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    \$383  = ch0_result_w0_hi_data_snapshot;
+    if (ch0_result_status_read) begin
+      \$383  = \port$2848$0 [104:82];
+    end
+    if (rst) begin
+      \$383  = 23'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    \$384  = ch0_result_w1_lo_data_snapshot;
+    if (ch0_result_status_read) begin
+      \$384  = \port$2848$0 [139:108];
+    end
+    if (rst) begin
+      \$384  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    \$385  = ch0_result_w1_hi_data_snapshot;
+    if (ch0_result_status_read) begin
+      \$385  = \port$2848$0 [147:140];
+    end
+    if (rst) begin
+      \$385  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    \$386  = ch0_result_timestamp_time_snapshot;
+    if (ch0_result_status_read) begin
+      \$386  = \port$2848$0 [35:4];
+    end
+    if (rst) begin
+      \$386  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    \$387  = \$234 ;
+    if (rst) begin
+      \$387  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    \$388  = \$236 ;
+    if (rst) begin
+      \$388  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    \$389  = \$238 ;
+    if (rst) begin
+      \$389  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    \$390  = ch1__periodic;
+    if (ch1_ctrl_write) begin
+      \$390  = \$242 ;
+    end
+    if (rst) begin
+      \$390  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    \$391  = ch1__trigger_enable;
+    if (ch1_ctrl_write) begin
+      \$391  = \$246 ;
+    end
+    if (rst) begin
+      \$391  = 1'h0;
     end
   end
   assign bus__r_addr = bus__w_addr;
-  assign g_id_value = 32'd1114198867;
-  assign glob__channels = 4'h2;
   assign g_trigger_start = glob__trigger;
-  assign glob__irq_pending = { 6'h00, irq };
   assign ch0_ctrl_start = ch0__start;
   assign ch0_ctrl_abort = ch0__abort_cycle;
   assign ch0_ctrl_clear_counters = ch0__clear_counters;
-  assign ch0__periodic = ch0_ctrl_periodic;
-  assign ch0__trigger_enable = ch0_ctrl_trigger_enable;
+  assign ch0_ctrl_periodic = ch0__periodic;
+  assign ch0_ctrl_trigger_enable = ch0__trigger_enable;
+  assign ch0_cfg_ma_ma_half_period = ch0__cfg_ma_half_period;
+  assign ch0_cfg_ma_delay_limit = ch0__cfg_delay_limit;
+  assign ch0_cfg_period_request_period = ch0__cfg_request_period;
+  assign ch0_cfg_break_break_time = ch0__cfg_break_time;
+  assign ch0_cfg_ack_ack_limit = ch0__cfg_ack_limit;
+  assign ch0_cfg_timeout_timeout_limit = ch0__cfg_timeout_limit;
+  assign ch0_cfg_words_w0_data_bits = ch0__cfg_w0_data_bits;
+  assign ch0_cfg_words_w0_nenw = ch0__cfg_w0_nenw;
+  assign ch0_cfg_words_w0_lc = ch0__cfg_w0_lc;
+  assign ch0_cfg_words_w0_crc = ch0__cfg_w0_crc;
+  assign ch0_cfg_words_w1_data_bits = ch0__cfg_w1_data_bits;
+  assign ch0_cfg_words_w1_nenw = ch0__cfg_w1_nenw;
+  assign ch0_cfg_words_w1_lc = ch0__cfg_w1_lc;
+  assign ch0_cfg_words_w1_crc = ch0__cfg_w1_crc;
+  assign ch0_cfg_words_w1_enable = ch0__cfg_w1_enable;
+  assign ch0_cfg_checks_end_check = ch0__cfg_end_check;
+  assign ch0_cfg_checks_spw_check = ch0__cfg_spw_check;
+  assign ch0_cfg_checks_spw_tolerance = ch0__cfg_spw_tolerance;
+  assign ch1_ctrl_start = ch1__start;
+  assign ch1_ctrl_abort = ch1__abort_cycle;
+  assign ch1_ctrl_clear_counters = ch1__clear_counters;
+  assign ch1_ctrl_periodic = ch1__periodic;
+  assign ch1_ctrl_trigger_enable = ch1__trigger_enable;
+  assign ch1_cfg_ma_ma_half_period = ch1__cfg_ma_half_period;
+  assign ch1_cfg_ma_delay_limit = ch1__cfg_delay_limit;
+  assign ch1_cfg_period_request_period = ch1__cfg_request_period;
+  assign ch1_cfg_break_break_time = ch1__cfg_break_time;
+  assign ch1_cfg_ack_ack_limit = ch1__cfg_ack_limit;
+  assign ch1_cfg_timeout_timeout_limit = ch1__cfg_timeout_limit;
+  assign ch1_cfg_words_w0_data_bits = ch1__cfg_w0_data_bits;
+  assign ch1_cfg_words_w0_nenw = ch1__cfg_w0_nenw;
+  assign ch1_cfg_words_w0_lc = ch1__cfg_w0_lc;
+  assign ch1_cfg_words_w0_crc = ch1__cfg_w0_crc;
+  assign ch1_cfg_words_w1_data_bits = ch1__cfg_w1_data_bits;
+  assign ch1_cfg_words_w1_nenw = ch1__cfg_w1_nenw;
+  assign ch1_cfg_words_w1_lc = ch1__cfg_w1_lc;
+  assign ch1_cfg_words_w1_crc = ch1__cfg_w1_crc;
+  assign ch1_cfg_words_w1_enable = ch1__cfg_w1_enable;
+  assign ch1_cfg_checks_end_check = ch1__cfg_end_check;
+  assign ch1_cfg_checks_spw_check = ch1__cfg_spw_check;
+  assign ch1_cfg_checks_spw_tolerance = ch1__cfg_spw_tolerance;
+  assign irq = { ch1_irq, ch0_irq };
+  assign ch0__status = \port$2848$0 [3:0];
+  assign ch0__cds = \port$2848$0 [49];
+  assign ch0__word0_ne = \port$2848$0 [105];
+  assign ch0__word0_nw = \port$2848$0 [106];
+  assign ch0__word0_crc_ok = \port$2848$0 [107];
+  assign ch0__word1_ne = \port$2848$0 [148];
+  assign ch0__word1_nw = \port$2848$0 [149];
+  assign ch0__word1_crc_ok = \port$2848$0 [150];
+  assign ch0__lc_repeat = \port$2848$0 [157];
+  assign ch0__lc_skip = \port$2848$0 [158];
+  assign ch0__lc_zero = \port$2848$0 [159];
+  assign ch0__spw_mismatch = \port$2848$0 [160];
+  assign ch0__lc = \port$2848$0 [156:151];
+  assign ch0__line_delay = \port$2848$0 [48:36];
+  assign ch0__word0_position = \port$2848$0 [104:50];
+  assign ch0__word1_position = \port$2848$0 [147:108];
+  assign ch0__timestamp = \port$2848$0 [35:4];
+  assign ch1__status = \port$3174$0 [3:0];
+  assign ch1__cds = \port$3174$0 [49];
+  assign ch1__word0_ne = \port$3174$0 [105];
+  assign ch1__word0_nw = \port$3174$0 [106];
+  assign ch1__word0_crc_ok = \port$3174$0 [107];
+  assign ch1__word1_ne = \port$3174$0 [148];
+  assign ch1__word1_nw = \port$3174$0 [149];
+  assign ch1__word1_crc_ok = \port$3174$0 [150];
+  assign ch1__lc_repeat = \port$3174$0 [157];
+  assign ch1__lc_skip = \port$3174$0 [158];
+  assign ch1__lc_zero = \port$3174$0 [159];
+  assign ch1__spw_mismatch = \port$3174$0 [160];
+  assign ch1__lc = \port$3174$0 [156:151];
+  assign ch1__line_delay = \port$3174$0 [48:36];
+  assign ch1__word0_position = \port$3174$0 [104:50];
+  assign ch1__word1_position = \port$3174$0 [147:108];
+  assign ch1__timestamp = \port$3174$0 [35:4];
+  assign glob__channels = 4'h2;
+  assign glob__irq_pending = { 6'h00, ch1_irq, ch0_irq };
   assign ch0__cap_data_bits_w0 = 6'h37;
   assign ch0__cap_data_bits_w1 = 6'h28;
   assign ch0__cap_timer_width = 6'h18;
   assign ch0__cap_counters = 1'h1;
   assign ch0__cap_timestamp = 1'h1;
-  assign ch0__cfg_ma_half_period = ch0_cfg_ma_ma_half_period;
-  assign ch0__cfg_delay_limit = ch0_cfg_ma_delay_limit;
-  assign ch0__cfg_request_period = ch0_cfg_period_request_period;
-  assign ch0__cfg_break_time = ch0_cfg_break_break_time;
-  assign ch0__cfg_ack_limit = ch0_cfg_ack_ack_limit;
-  assign ch0__cfg_timeout_limit = ch0_cfg_timeout_timeout_limit;
-  assign ch0__cfg_w0_data_bits = ch0_cfg_words_w0_data_bits;
-  assign ch0__cfg_w0_nenw = ch0_cfg_words_w0_nenw;
-  assign ch0__cfg_w0_lc = ch0_cfg_words_w0_lc;
-  assign ch0__cfg_w0_crc = ch0_cfg_words_w0_crc;
-  assign ch0__cfg_w1_data_bits = ch0_cfg_words_w1_data_bits;
-  assign ch0__cfg_w1_nenw = ch0_cfg_words_w1_nenw;
-  assign ch0__cfg_w1_lc = ch0_cfg_words_w1_lc;
-  assign ch0__cfg_w1_crc = ch0_cfg_words_w1_crc;
-  assign ch0__cfg_w1_enable = ch0_cfg_words_w1_enable;
-  assign ch0__cfg_end_check = ch0_cfg_checks_end_check;
-  assign ch0__cfg_spw_check = ch0_cfg_checks_spw_check;
-  assign ch0__cfg_spw_tolerance = ch0_cfg_checks_spw_tolerance;
-  assign ch0__status = \port$2894$0 [3:0];
-  assign ch0__cds = \port$2894$0 [49];
-  assign ch0__word0_ne = \port$2894$0 [105];
-  assign ch0__word0_nw = \port$2894$0 [106];
-  assign ch0__word0_crc_ok = \port$2894$0 [107];
-  assign ch0__word1_ne = \port$2894$0 [148];
-  assign ch0__word1_nw = \port$2894$0 [149];
-  assign ch0__word1_crc_ok = \port$2894$0 [150];
-  assign ch0__lc_repeat = \port$2894$0 [157];
-  assign ch0__lc_skip = \port$2894$0 [158];
-  assign ch0__lc_zero = \port$2894$0 [159];
-  assign ch0__spw_mismatch = \port$2894$0 [160];
-  assign ch0__lc = \port$2894$0 [156:151];
-  assign ch0_result_w0_lo_data_snapshot = ch0_result_w0_lo_value;
-  assign ch0_result_w1_lo_data_snapshot = ch0_result_w1_lo_value;
-  assign ch0_result_timestamp_time_snapshot = ch0_result_timestamp_value;
-  assign ch0__count_crc_word0 = \port$2901$0 [15:0];
-  assign ch0__count_crc_word1 = \port$2901$0 [31:16];
-  assign ch0__count_no_ack = \port$2901$0 [47:32];
-  assign ch0__count_no_start = \port$2901$0 [63:48];
-  assign ch0__count_delay_range = \port$2901$0 [79:64];
-  assign ch0__count_slo_stuck_low = \port$2901$0 [95:80];
-  assign ch0__count_lc_repeat = \port$2901$0 [111:96];
-  assign ch0__count_lc_skip = \port$2901$0 [127:112];
-  assign ch0__count_lc_zero = \port$2901$0 [143:128];
-  assign ch0__count_spw_mismatch = \port$2901$0 [159:144];
-  assign ch0__count_overrun = \port$2901$0 [175:160];
-  assign ch0__count_aborted = \port$2901$0 [191:176];
-  assign ch0__count_no_stop = \port$2901$0 [207:192];
-  assign ch1_ctrl_start = ch1__start;
-  assign ch1_ctrl_abort = ch1__abort_cycle;
-  assign ch1_ctrl_clear_counters = ch1__clear_counters;
-  assign ch1__periodic = ch1_ctrl_periodic;
-  assign ch1__trigger_enable = ch1_ctrl_trigger_enable;
+  assign ch0__count_crc_word0 = \port$2855$0 [15:0];
+  assign ch0__count_crc_word1 = \port$2855$0 [31:16];
+  assign ch0__count_no_ack = \port$2855$0 [47:32];
+  assign ch0__count_no_start = \port$2855$0 [63:48];
+  assign ch0__count_delay_range = \port$2855$0 [79:64];
+  assign ch0__count_slo_stuck_low = \port$2855$0 [95:80];
+  assign ch0__count_lc_repeat = \port$2855$0 [111:96];
+  assign ch0__count_lc_skip = \port$2855$0 [127:112];
+  assign ch0__count_lc_zero = \port$2855$0 [143:128];
+  assign ch0__count_spw_mismatch = \port$2855$0 [159:144];
+  assign ch0__count_overrun = \port$2855$0 [175:160];
+  assign ch0__count_aborted = \port$2855$0 [191:176];
+  assign ch0__count_no_stop = \port$2855$0 [207:192];
   assign ch1__cap_data_bits_w0 = 6'h37;
   assign ch1__cap_data_bits_w1 = 6'h28;
   assign ch1__cap_timer_width = 6'h18;
   assign ch1__cap_counters = 1'h1;
   assign ch1__cap_timestamp = 1'h1;
-  assign ch1__cfg_ma_half_period = ch1_cfg_ma_ma_half_period;
-  assign ch1__cfg_delay_limit = ch1_cfg_ma_delay_limit;
-  assign ch1__cfg_request_period = ch1_cfg_period_request_period;
-  assign ch1__cfg_break_time = ch1_cfg_break_break_time;
-  assign ch1__cfg_ack_limit = ch1_cfg_ack_ack_limit;
-  assign ch1__cfg_timeout_limit = ch1_cfg_timeout_timeout_limit;
-  assign ch1__cfg_w0_data_bits = ch1_cfg_words_w0_data_bits;
-  assign ch1__cfg_w0_nenw = ch1_cfg_words_w0_nenw;
-  assign ch1__cfg_w0_lc = ch1_cfg_words_w0_lc;
-  assign ch1__cfg_w0_crc = ch1_cfg_words_w0_crc;
-  assign ch1__cfg_w1_data_bits = ch1_cfg_words_w1_data_bits;
-  assign ch1__cfg_w1_nenw = ch1_cfg_words_w1_nenw;
-  assign ch1__cfg_w1_lc = ch1_cfg_words_w1_lc;
-  assign ch1__cfg_w1_crc = ch1_cfg_words_w1_crc;
-  assign ch1__cfg_w1_enable = ch1_cfg_words_w1_enable;
-  assign ch1__cfg_end_check = ch1_cfg_checks_end_check;
-  assign ch1__cfg_spw_check = ch1_cfg_checks_spw_check;
-  assign ch1__cfg_spw_tolerance = ch1_cfg_checks_spw_tolerance;
-  assign ch1__status = \port$3220$0 [3:0];
-  assign ch1__cds = \port$3220$0 [49];
-  assign ch1__word0_ne = \port$3220$0 [105];
-  assign ch1__word0_nw = \port$3220$0 [106];
-  assign ch1__word0_crc_ok = \port$3220$0 [107];
-  assign ch1__word1_ne = \port$3220$0 [148];
-  assign ch1__word1_nw = \port$3220$0 [149];
-  assign ch1__word1_crc_ok = \port$3220$0 [150];
-  assign ch1__lc_repeat = \port$3220$0 [157];
-  assign ch1__lc_skip = \port$3220$0 [158];
-  assign ch1__lc_zero = \port$3220$0 [159];
-  assign ch1__spw_mismatch = \port$3220$0 [160];
-  assign ch1__lc = \port$3220$0 [156:151];
-  assign ch1_result_w0_lo_data_snapshot = ch1_result_w0_lo_value;
-  assign ch1_result_w1_lo_data_snapshot = ch1_result_w1_lo_value;
-  assign ch1_result_timestamp_time_snapshot = ch1_result_timestamp_value;
-  assign ch1__count_crc_word0 = \port$3227$0 [15:0];
-  assign ch1__count_crc_word1 = \port$3227$0 [31:16];
-  assign ch1__count_no_ack = \port$3227$0 [47:32];
-  assign ch1__count_no_start = \port$3227$0 [63:48];
-  assign ch1__count_delay_range = \port$3227$0 [79:64];
-  assign ch1__count_slo_stuck_low = \port$3227$0 [95:80];
-  assign ch1__count_lc_repeat = \port$3227$0 [111:96];
-  assign ch1__count_lc_skip = \port$3227$0 [127:112];
-  assign ch1__count_lc_zero = \port$3227$0 [143:128];
-  assign ch1__count_spw_mismatch = \port$3227$0 [159:144];
-  assign ch1__count_overrun = \port$3227$0 [175:160];
-  assign ch1__count_aborted = \port$3227$0 [191:176];
-  assign ch1__count_no_stop = \port$3227$0 [207:192];
-  assign ch0__line_delay = \port$2894$0 [48:36];
-  assign ch0__word0_position = \port$2894$0 [104:50];
-  assign ch0__word1_position = \port$2894$0 [147:108];
-  assign ch0__timestamp = \port$2894$0 [35:4];
-  assign ch1__line_delay = \port$3220$0 [48:36];
-  assign ch1__word0_position = \port$3220$0 [104:50];
-  assign ch1__word1_position = \port$3220$0 [147:108];
-  assign ch1__timestamp = \port$3220$0 [35:4];
-  assign g_trigger_value = 32'd0;
-  assign ch1_count_stop_value[15:0] = \port$3227$0 [207:192];
-  assign ch1_count_stop_value[31:16] = 16'h0000;
-  assign ch1_count_cycle_value[31:16] = \port$3227$0 [191:176];
-  assign ch1_count_cycle_value[15:0] = \port$3227$0 [175:160];
-  assign ch1_count_check_value[31:16] = \port$3227$0 [159:144];
-  assign ch1_count_check_value[15:0] = \port$3227$0 [143:128];
-  assign ch1_count_lc_value[31:16] = \port$3227$0 [127:112];
-  assign ch1_count_lc_value[15:0] = \port$3227$0 [111:96];
-  assign ch1_count_line_value[31:16] = \port$3227$0 [95:80];
-  assign ch1_count_line_value[15:0] = \port$3227$0 [79:64];
-  assign ch1_count_ack_value[31:16] = \port$3227$0 [63:48];
-  assign ch1_count_ack_value[15:0] = \port$3227$0 [47:32];
-  assign ch1_count_crc_value[31:16] = \port$3227$0 [31:16];
-  assign ch1_count_crc_value[15:0] = \port$3227$0 [15:0];
-  assign ch1_result_w1_hi_value[7:0] = ch1_result_w1_hi_data_snapshot;
-  assign ch1_result_w1_hi_value[31:8] = 24'h000000;
-  assign ch1_result_w0_hi_value[22:0] = ch1_result_w0_hi_data_snapshot;
-  assign ch1_result_w0_hi_value[31:23] = 9'h000;
-  assign ch1_result_seq_value[28:16] = ch1_result_seq_line_delay_snapshot;
-  assign ch1_result_seq_value[15:0] = ch1_result_seq_seq_snapshot;
-  assign ch1_result_seq_value[31:29] = 3'h0;
-  assign ch1_result_status_value[29:24] = \port$3220$0 [156:151];
-  assign ch1_result_status_value[19] = \port$3220$0 [160];
-  assign ch1_result_status_value[18] = \port$3220$0 [159];
-  assign ch1_result_status_value[17] = \port$3220$0 [158];
-  assign ch1_result_status_value[16] = \port$3220$0 [157];
-  assign ch1_result_status_value[14] = \port$3220$0 [150];
-  assign ch1_result_status_value[13] = \port$3220$0 [149];
-  assign ch1_result_status_value[12] = \port$3220$0 [148];
-  assign ch1_result_status_value[10] = \port$3220$0 [107];
-  assign ch1_result_status_value[9] = \port$3220$0 [106];
-  assign ch1_result_status_value[8] = \port$3220$0 [105];
-  assign ch1_result_status_value[4] = \port$3220$0 [49];
-  assign ch1_result_status_value[3:0] = \port$3220$0 [3:0];
-  assign { ch1_result_status_value[31:30], ch1_result_status_value[23:20], ch1_result_status_value[15], ch1_result_status_value[11], ch1_result_status_value[7:5] } = 11'h000;
-  assign ch1_cfg_checks_value[15:8] = ch1_cfg_checks_spw_tolerance;
-  assign ch1_cfg_checks_value[1] = ch1_cfg_checks_spw_check;
-  assign ch1_cfg_checks_value[0] = ch1_cfg_checks_end_check;
-  assign { ch1_cfg_checks_value[31:16], ch1_cfg_checks_value[7:2] } = 22'h000000;
-  assign ch1_cfg_words_value[31] = ch1_cfg_words_w1_enable;
-  assign ch1_cfg_words_value[25:24] = ch1_cfg_words_w1_crc;
-  assign ch1_cfg_words_value[23] = ch1_cfg_words_w1_lc;
-  assign ch1_cfg_words_value[22] = ch1_cfg_words_w1_nenw;
-  assign ch1_cfg_words_value[21:16] = ch1_cfg_words_w1_data_bits;
-  assign ch1_cfg_words_value[9:8] = ch1_cfg_words_w0_crc;
-  assign ch1_cfg_words_value[7] = ch1_cfg_words_w0_lc;
-  assign ch1_cfg_words_value[6] = ch1_cfg_words_w0_nenw;
-  assign ch1_cfg_words_value[5:0] = ch1_cfg_words_w0_data_bits;
-  assign { ch1_cfg_words_value[30:26], ch1_cfg_words_value[15:10] } = 11'h000;
-  assign ch1_cfg_timeout_value[23:0] = ch1_cfg_timeout_timeout_limit;
-  assign ch1_cfg_timeout_value[31:24] = 8'h00;
-  assign ch1_cfg_ack_value[23:0] = ch1_cfg_ack_ack_limit;
-  assign ch1_cfg_ack_value[31:24] = 8'h00;
-  assign ch1_cfg_break_value[23:0] = ch1_cfg_break_break_time;
-  assign ch1_cfg_break_value[31:24] = 8'h00;
-  assign ch1_cfg_period_value[23:0] = ch1_cfg_period_request_period;
-  assign ch1_cfg_period_value[31:24] = 8'h00;
-  assign ch1_cfg_ma_value[27:16] = ch1_cfg_ma_delay_limit;
-  assign ch1_cfg_ma_value[15:0] = ch1_cfg_ma_ma_half_period;
-  assign ch1_cfg_ma_value[31:28] = 4'h0;
-  assign ch1_irq_enable_value[2] = ch1_irq_enable_access_done;
-  assign ch1_irq_enable_value[1] = ch1_irq_enable_error;
-  assign ch1_irq_enable_value[0] = ch1_irq_enable_done;
-  assign ch1_irq_enable_value[31:3] = 29'h00000000;
-  assign ch1_irq_status_value[2] = ch1_irq_status_access_done;
-  assign ch1_irq_status_value[1] = ch1_irq_status_error;
-  assign ch1_irq_status_value[0] = ch1_irq_status_done;
-  assign ch1_irq_status_value[31:3] = 29'h00000000;
-  assign ch1_caps_value[25] = 1'h1;
-  assign ch1_caps_value[24] = 1'h1;
-  assign ch1_caps_value[21:16] = 6'h18;
-  assign ch1_caps_value[13:8] = 6'h28;
-  assign ch1_caps_value[5:0] = 6'h37;
-  assign { ch1_caps_value[31:26], ch1_caps_value[23:22], ch1_caps_value[15:14], ch1_caps_value[7:6] } = 12'h000;
-  assign ch1_state_value[1] = ch1__config_error;
-  assign ch1_state_value[0] = ch1__busy;
-  assign ch1_state_value[31:2] = 30'h00000000;
-  assign ch1_ctrl_value[9] = ch1_ctrl_trigger_enable;
-  assign ch1_ctrl_value[8] = ch1_ctrl_periodic;
-  assign { ch1_ctrl_value[31:10], ch1_ctrl_value[7:0] } = 30'h00000000;
-  assign irq[1] = ch1_irq;
-  assign irq[0] = ch0_irq;
-  assign ch0_count_stop_value[15:0] = \port$2901$0 [207:192];
-  assign ch0_count_stop_value[31:16] = 16'h0000;
-  assign ch0_count_cycle_value[31:16] = \port$2901$0 [191:176];
-  assign ch0_count_cycle_value[15:0] = \port$2901$0 [175:160];
-  assign ch0_count_check_value[31:16] = \port$2901$0 [159:144];
-  assign ch0_count_check_value[15:0] = \port$2901$0 [143:128];
-  assign ch0_count_lc_value[31:16] = \port$2901$0 [127:112];
-  assign ch0_count_lc_value[15:0] = \port$2901$0 [111:96];
-  assign ch0_count_line_value[31:16] = \port$2901$0 [95:80];
-  assign ch0_count_line_value[15:0] = \port$2901$0 [79:64];
-  assign ch0_count_ack_value[31:16] = \port$2901$0 [63:48];
-  assign ch0_count_ack_value[15:0] = \port$2901$0 [47:32];
-  assign ch0_count_crc_value[31:16] = \port$2901$0 [31:16];
-  assign ch0_count_crc_value[15:0] = \port$2901$0 [15:0];
-  assign ch0_result_w1_hi_value[7:0] = ch0_result_w1_hi_data_snapshot;
-  assign ch0_result_w1_hi_value[31:8] = 24'h000000;
-  assign ch0_result_w0_hi_value[22:0] = ch0_result_w0_hi_data_snapshot;
-  assign ch0_result_w0_hi_value[31:23] = 9'h000;
-  assign ch0_result_seq_value[28:16] = ch0_result_seq_line_delay_snapshot;
-  assign ch0_result_seq_value[15:0] = ch0_result_seq_seq_snapshot;
-  assign ch0_result_seq_value[31:29] = 3'h0;
-  assign ch0_result_status_value[29:24] = \port$2894$0 [156:151];
-  assign ch0_result_status_value[19] = \port$2894$0 [160];
-  assign ch0_result_status_value[18] = \port$2894$0 [159];
-  assign ch0_result_status_value[17] = \port$2894$0 [158];
-  assign ch0_result_status_value[16] = \port$2894$0 [157];
-  assign ch0_result_status_value[14] = \port$2894$0 [150];
-  assign ch0_result_status_value[13] = \port$2894$0 [149];
-  assign ch0_result_status_value[12] = \port$2894$0 [148];
-  assign ch0_result_status_value[10] = \port$2894$0 [107];
-  assign ch0_result_status_value[9] = \port$2894$0 [106];
-  assign ch0_result_status_value[8] = \port$2894$0 [105];
-  assign ch0_result_status_value[4] = \port$2894$0 [49];
-  assign ch0_result_status_value[3:0] = \port$2894$0 [3:0];
-  assign { ch0_result_status_value[31:30], ch0_result_status_value[23:20], ch0_result_status_value[15], ch0_result_status_value[11], ch0_result_status_value[7:5] } = 11'h000;
-  assign ch0_cfg_checks_value[15:8] = ch0_cfg_checks_spw_tolerance;
-  assign ch0_cfg_checks_value[1] = ch0_cfg_checks_spw_check;
-  assign ch0_cfg_checks_value[0] = ch0_cfg_checks_end_check;
-  assign { ch0_cfg_checks_value[31:16], ch0_cfg_checks_value[7:2] } = 22'h000000;
-  assign ch0_cfg_words_value[31] = ch0_cfg_words_w1_enable;
-  assign ch0_cfg_words_value[25:24] = ch0_cfg_words_w1_crc;
-  assign ch0_cfg_words_value[23] = ch0_cfg_words_w1_lc;
-  assign ch0_cfg_words_value[22] = ch0_cfg_words_w1_nenw;
-  assign ch0_cfg_words_value[21:16] = ch0_cfg_words_w1_data_bits;
-  assign ch0_cfg_words_value[9:8] = ch0_cfg_words_w0_crc;
-  assign ch0_cfg_words_value[7] = ch0_cfg_words_w0_lc;
-  assign ch0_cfg_words_value[6] = ch0_cfg_words_w0_nenw;
-  assign ch0_cfg_words_value[5:0] = ch0_cfg_words_w0_data_bits;
-  assign { ch0_cfg_words_value[30:26], ch0_cfg_words_value[15:10] } = 11'h000;
-  assign ch0_cfg_timeout_value[23:0] = ch0_cfg_timeout_timeout_limit;
-  assign ch0_cfg_timeout_value[31:24] = 8'h00;
-  assign ch0_cfg_ack_value[23:0] = ch0_cfg_ack_ack_limit;
-  assign ch0_cfg_ack_value[31:24] = 8'h00;
-  assign ch0_cfg_break_value[23:0] = ch0_cfg_break_break_time;
-  assign ch0_cfg_break_value[31:24] = 8'h00;
-  assign ch0_cfg_period_value[23:0] = ch0_cfg_period_request_period;
-  assign ch0_cfg_period_value[31:24] = 8'h00;
-  assign ch0_cfg_ma_value[27:16] = ch0_cfg_ma_delay_limit;
-  assign ch0_cfg_ma_value[15:0] = ch0_cfg_ma_ma_half_period;
-  assign ch0_cfg_ma_value[31:28] = 4'h0;
-  assign ch0_irq_enable_value[2] = ch0_irq_enable_access_done;
-  assign ch0_irq_enable_value[1] = ch0_irq_enable_error;
-  assign ch0_irq_enable_value[0] = ch0_irq_enable_done;
-  assign ch0_irq_enable_value[31:3] = 29'h00000000;
-  assign ch0_irq_status_value[2] = ch0_irq_status_access_done;
-  assign ch0_irq_status_value[1] = ch0_irq_status_error;
-  assign ch0_irq_status_value[0] = ch0_irq_status_done;
-  assign ch0_irq_status_value[31:3] = 29'h00000000;
-  assign ch0_caps_value[25] = 1'h1;
-  assign ch0_caps_value[24] = 1'h1;
-  assign ch0_caps_value[21:16] = 6'h18;
-  assign ch0_caps_value[13:8] = 6'h28;
-  assign ch0_caps_value[5:0] = 6'h37;
-  assign { ch0_caps_value[31:26], ch0_caps_value[23:22], ch0_caps_value[15:14], ch0_caps_value[7:6] } = 12'h000;
-  assign ch0_state_value[1] = ch0__config_error;
-  assign ch0_state_value[0] = ch0__busy;
-  assign ch0_state_value[31:2] = 30'h00000000;
-  assign ch0_ctrl_value[9] = ch0_ctrl_trigger_enable;
-  assign ch0_ctrl_value[8] = ch0_ctrl_periodic;
-  assign { ch0_ctrl_value[31:10], ch0_ctrl_value[7:0] } = 30'h00000000;
-  assign g_irq_pending_value[7:0] = { 6'h00, irq };
-  assign g_irq_pending_value[31:8] = 24'h000000;
-  assign g_channels_value[3:0] = 4'h2;
-  assign g_channels_value[31:4] = 28'h0000000;
-  assign g_version_value[31:16] = 16'h0001;
-  assign g_version_value[15:0] = 16'h0000;
+  assign ch1__count_crc_word0 = \port$3181$0 [15:0];
+  assign ch1__count_crc_word1 = \port$3181$0 [31:16];
+  assign ch1__count_no_ack = \port$3181$0 [47:32];
+  assign ch1__count_no_start = \port$3181$0 [63:48];
+  assign ch1__count_delay_range = \port$3181$0 [79:64];
+  assign ch1__count_slo_stuck_low = \port$3181$0 [95:80];
+  assign ch1__count_lc_repeat = \port$3181$0 [111:96];
+  assign ch1__count_lc_skip = \port$3181$0 [127:112];
+  assign ch1__count_lc_zero = \port$3181$0 [143:128];
+  assign ch1__count_spw_mismatch = \port$3181$0 [159:144];
+  assign ch1__count_overrun = \port$3181$0 [175:160];
+  assign ch1__count_aborted = \port$3181$0 [191:176];
+  assign ch1__count_no_stop = \port$3181$0 [207:192];
   assign g_irq = 1'h0;
   assign \$64  = \$63 ;
   assign \$66  = \$65 ;
@@ -3800,8 +3561,6 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$122  = \$121 ;
   assign \$124  = \$123 ;
   assign \$126  = \$125 ;
-  assign \$157  = \$156 ;
-  assign \$270  = \$269 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -3883,7 +3642,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch0 (clk, rst, \trigger$118 , regs__frame_error, regs__busy, regs__config_error, start, abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc
-, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, regs__done_count, ma, regs__done, \port$2894$0 , \port$2901$0 , slo);
+, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, regs__done_count, ma, regs__done, \port$2848$0 , \port$2855$0 , slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$20  = 0;
   wire \$1 ;
   wire [16:0] \$2 ;
@@ -3967,10 +3726,10 @@ module \biss_master_wb.ch0 (clk, rst, \trigger$118 , regs__frame_error, regs__bu
   wire \ma$121 ;
   input periodic;
   wire periodic;
-  output [160:0] \port$2894$0 ;
-  wire [160:0] \port$2894$0 ;
-  output [207:0] \port$2901$0 ;
-  wire [207:0] \port$2901$0 ;
+  output [160:0] \port$2848$0 ;
+  wire [160:0] \port$2848$0 ;
+  output [207:0] \port$2855$0 ;
+  wire [207:0] \port$2855$0 ;
   wire regs__abort_cycle;
   output regs__busy;
   wire regs__busy;
@@ -4089,7 +3848,7 @@ module \biss_master_wb.ch0 (clk, rst, \trigger$118 , regs__frame_error, regs__bu
   assign \$1  = ~ valid;
   assign regs__frame_error = regs__done & \$1 ;
   assign trigger = \trigger$118  & regs__trigger_enable;
-  assign \$2  = regs__done_count + regs__done;
+  assign \$2  = regs__done_count + 1'h1;
   \biss_master_wb.ch0.core  core (
     .abort(abort_cycle),
     .\busy$193 (regs__busy),
@@ -4127,7 +3886,10 @@ module \biss_master_wb.ch0 (clk, rst, \trigger$118 , regs__frame_error, regs__bu
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$20 ) begin end
-    \$3  = \$2 [15:0];
+    \$3  = regs__done_count;
+    if (regs__done) begin
+      \$3  = \$2 [15:0];
+    end
     if (rst) begin
       \$3  = 16'h0000;
     end
@@ -4224,8 +3986,8 @@ module \biss_master_wb.ch0 (clk, rst, \trigger$118 , regs__frame_error, regs__bu
   assign count_no_stop = \$5 [207:192];
   assign \ma$121  = ma;
   assign \slo$123  = slo;
-  assign \port$2894$0  = \$4 ;
-  assign \port$2901$0  = \$5 ;
+  assign \port$2848$0  = \$4 ;
+  assign \port$2855$0  = \$5 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -4919,7 +4681,7 @@ module \biss_master_wb.ch0.core (clk, rst, trigger, \busy$193 , config_error, st
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$2781$0 (\slo$40 ),
+    .\port$2735$0 (\slo$40 ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -4976,7 +4738,7 @@ module \biss_master_wb.ch0.core (clk, rst, trigger, \busy$193 , config_error, st
     .lc_skip_seen(lc_skip_seen),
     .lc_zero(lc_zero),
     .lc_zero_seen(lc_zero_seen),
-    .\port$1346$0 (\$2 ),
+    .\port$1348$0 (\$2 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -9857,7 +9619,7 @@ module \biss_master_wb.ch0.core.scheduler (rst, trigger, request, overrun, start
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, resync, \port$2781$0 , lc, is_zero, clk);
+module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, resync, \port$2735$0 , lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$44  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -9895,8 +9657,8 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$2781$0 ;
-  wire \port$2781$0 ;
+  input \port$2735$0 ;
+  wire \port$2735$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -9908,9 +9670,9 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$2781$0  };
-  assign \$2  = { lc[4:0], \port$2781$0  } == last;
-  assign \$3  = { lc[4:0], \port$2781$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$2735$0  };
+  assign \$2  = { lc[4:0], \port$2735$0  } == last;
+  assign \$3  = { lc[4:0], \port$2735$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = lc == 6'h3f;
@@ -10000,7 +9762,7 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
       \$21  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$2781$0  };
+  assign lc_next = { lc[4:0], \port$2735$0  };
   assign zero = is_zero;
 endmodule
 
@@ -10482,7 +10244,7 @@ module \biss_master_wb.ch0.core.timers (rst, restart, break_time, timeout_live, 
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.verdict (lc_skip_seen, \port$1346$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
+module \biss_master_wb.ch0.core.verdict (lc_skip_seen, \port$1348$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$48  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -10596,8 +10358,8 @@ module \biss_master_wb.ch0.core.verdict (lc_skip_seen, \port$1346$0 , lc_check, 
   wire lc_zero;
   input lc_zero_seen;
   wire lc_zero_seen;
-  output \port$1346$0 ;
-  wire \port$1346$0 ;
+  output \port$1348$0 ;
+  wire \port$1348$0 ;
   output report;
   wire report;
   input report_frame;
@@ -10682,7 +10444,7 @@ module \biss_master_wb.ch0.core.verdict (lc_skip_seen, \port$1346$0 , lc_check, 
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$1346$0  = \$2 ;
+  assign \port$1348$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -10707,7 +10469,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1 (clk, rst, \trigger$118 , regs__frame_error, regs__busy, regs__config_error, start, abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc
-, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, regs__done_count, ma, regs__done, \port$3220$0 , \port$3227$0 , slo);
+, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, regs__done_count, ma, regs__done, \port$3174$0 , \port$3181$0 , slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$49  = 0;
   wire \$1 ;
   wire [16:0] \$2 ;
@@ -10791,10 +10553,10 @@ module \biss_master_wb.ch1 (clk, rst, \trigger$118 , regs__frame_error, regs__bu
   wire \ma$121 ;
   input periodic;
   wire periodic;
-  output [160:0] \port$3220$0 ;
-  wire [160:0] \port$3220$0 ;
-  output [207:0] \port$3227$0 ;
-  wire [207:0] \port$3227$0 ;
+  output [160:0] \port$3174$0 ;
+  wire [160:0] \port$3174$0 ;
+  output [207:0] \port$3181$0 ;
+  wire [207:0] \port$3181$0 ;
   wire regs__abort_cycle;
   output regs__busy;
   wire regs__busy;
@@ -10913,7 +10675,7 @@ module \biss_master_wb.ch1 (clk, rst, \trigger$118 , regs__frame_error, regs__bu
   assign \$1  = ~ valid;
   assign regs__frame_error = regs__done & \$1 ;
   assign trigger = \trigger$118  & regs__trigger_enable;
-  assign \$2  = regs__done_count + regs__done;
+  assign \$2  = regs__done_count + 1'h1;
   \biss_master_wb.ch1.core  core (
     .abort(abort_cycle),
     .\busy$193 (regs__busy),
@@ -10951,7 +10713,10 @@ module \biss_master_wb.ch1 (clk, rst, \trigger$118 , regs__frame_error, regs__bu
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
-    \$3  = \$2 [15:0];
+    \$3  = regs__done_count;
+    if (regs__done) begin
+      \$3  = \$2 [15:0];
+    end
     if (rst) begin
       \$3  = 16'h0000;
     end
@@ -11048,8 +10813,8 @@ module \biss_master_wb.ch1 (clk, rst, \trigger$118 , regs__frame_error, regs__bu
   assign count_no_stop = \$5 [207:192];
   assign \ma$121  = ma;
   assign \slo$123  = slo;
-  assign \port$3220$0  = \$4 ;
-  assign \port$3227$0  = \$5 ;
+  assign \port$3174$0  = \$4 ;
+  assign \port$3181$0  = \$5 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -11743,7 +11508,7 @@ module \biss_master_wb.ch1.core (clk, rst, trigger, \busy$193 , config_error, st
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$3107$0 (\slo$40 ),
+    .\port$3061$0 (\slo$40 ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -11800,7 +11565,7 @@ module \biss_master_wb.ch1.core (clk, rst, trigger, \busy$193 , config_error, st
     .lc_skip_seen(lc_skip_seen),
     .lc_zero(lc_zero),
     .lc_zero_seen(lc_zero_seen),
-    .\port$2248$0 (\$2 ),
+    .\port$2252$0 (\$2 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -16681,7 +16446,7 @@ module \biss_master_wb.ch1.core.scheduler (rst, trigger, request, overrun, start
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, resync, \port$3107$0 , lc, is_zero, clk);
+module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, resync, \port$3061$0 , lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$73  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -16719,8 +16484,8 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, 
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$3107$0 ;
-  wire \port$3107$0 ;
+  input \port$3061$0 ;
+  wire \port$3061$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -16732,9 +16497,9 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, 
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$3107$0  };
-  assign \$2  = { lc[4:0], \port$3107$0  } == last;
-  assign \$3  = { lc[4:0], \port$3107$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$3061$0  };
+  assign \$2  = { lc[4:0], \port$3061$0  } == last;
+  assign \$3  = { lc[4:0], \port$3061$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = lc == 6'h3f;
@@ -16824,7 +16589,7 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, 
       \$21  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$3107$0  };
+  assign lc_next = { lc[4:0], \port$3061$0  };
   assign zero = is_zero;
 endmodule
 
@@ -17306,7 +17071,7 @@ module \biss_master_wb.ch1.core.timers (rst, restart, break_time, timeout_live, 
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.verdict (lc_skip_seen, \port$2248$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
+module \biss_master_wb.ch1.core.verdict (lc_skip_seen, \port$2252$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$77  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -17420,8 +17185,8 @@ module \biss_master_wb.ch1.core.verdict (lc_skip_seen, \port$2248$0 , lc_check, 
   wire lc_zero;
   input lc_zero_seen;
   wire lc_zero_seen;
-  output \port$2248$0 ;
-  wire \port$2248$0 ;
+  output \port$2252$0 ;
+  wire \port$2252$0 ;
   output report;
   wire report;
   input report_frame;
@@ -17506,7 +17271,7 @@ module \biss_master_wb.ch1.core.verdict (lc_skip_seen, \port$2248$0 , lc_check, 
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$2248$0  = \$2 ;
+  assign \port$2252$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
