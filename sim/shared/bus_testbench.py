@@ -52,16 +52,30 @@ class AxiLiteBus:
 
 
 class WishboneBus:
-    """32-bit reads and writes through cocotbext-wishbone's WishboneMaster (pipelined: the top
-    has ``wb_stall``); one cycle at a time, several operations per cycle back to back."""
+    """32-bit reads and writes through cocotbext-wishbone's WishboneMaster, as a **classic**
+    master (``stb`` held until ``ack``; the top's ``stall`` is not given to the model, whose
+    pipelined mode depends on when a simulator shows a register's new value after the clock
+    edge: it hangs on Icarus). Pipelined requests are driven by hand in the scenario
+    ``wishbone_pipelined_back_to_back``. One cycle at a time, several operations back to back
+    per cycle."""
 
     SIGNALS = {"cyc": "cyc", "stb": "stb", "we": "we", "adr": "adr", "datwr": "dat_w",
                "datrd": "dat_r", "ack": "ack"}
 
     def __init__(self, dut):
+        from cocotbext.wishbone import driver
         from cocotbext.wishbone.driver import WishboneMaster
-        self.master = WishboneMaster(dut, "wb", dut.clk, width=32, timeout=1000,
-                                     signals_dict=self.SIGNALS)
+
+        # The model sets its outputs' first values with immediate (VPI no-delay) writes; on
+        # Icarus such a write to a top-level input wire never reaches the logic behind it
+        # (the wire reads its value, what it drives stays Z). Ordinary writes instead.
+        driver.set_immediate = lambda sig, value: setattr(sig, "value", value)
+
+        class ClassicMaster(WishboneMaster):
+            _optional_signals = ["sel"]
+
+        self.master = ClassicMaster(dut, "wb", dut.clk, width=32, timeout=1000,
+                                    signals_dict=self.SIGNALS)
         self.lock = Lock()
 
     async def ops(self, ops):
