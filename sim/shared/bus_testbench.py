@@ -53,10 +53,10 @@ class AxiLiteBus:
 
 class WishboneBus:
     """32-bit reads and writes through cocotbext-wishbone's WishboneMaster, as a **classic**
-    master (``stb`` held until ``ack``; the top's ``stall`` is not given to the model, whose
-    pipelined mode depends on when a simulator shows a register's new value after the clock
-    edge: it hangs on Icarus). Pipelined requests are driven by hand in the scenario
-    ``wishbone_pipelined_back_to_back``. One cycle at a time, several operations back to back
+    master (``stb`` held until ``ack``; the top's ``stall`` is not given to the model), so that
+    the classic protocol is what every scenario runs; the pipelined one (requests held through
+    ``stall``, one after another) is driven by hand in ``wishbone_pipelined_back_to_back``. (The
+    model's pipelined mode passes too.) One cycle at a time, several operations back to back
     per cycle."""
 
     SIGNALS = {"cyc": "cyc", "stb": "stb", "we": "we", "adr": "adr", "datwr": "dat_w",
