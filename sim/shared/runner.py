@@ -24,6 +24,9 @@ SIMULATORS = ("verilator", "icarus")
 CLK_HZ = SYS_CLK_HZ
 #: The cocotb scenario modules (sim/scenarios/), as the simulator's Python imports them.
 MASTER_SCENARIOS = "sim.scenarios.master"
+BUS_SCENARIOS = "sim.scenarios.bus"
+#: The committed bus tops (bissmaster.generate --top axil|wb ...), by bus.
+BUSES = ("axil", "wb")
 CAMPAIGN_SCENARIOS = "sim.scenarios.campaigns"
 
 # cocotb looks up `verilator` on PATH and Verilator's makefiles call `python`: the venv that runs
@@ -47,7 +50,7 @@ def _verilator_args(waves):
     return args
 
 
-def build(sim, waves=False, verilog=VERILOG, tag="", internal_clock=False):
+def build(sim, waves=False, verilog=VERILOG, tag="", internal_clock=False, toplevel=TOPLEVEL):
     """Build (incrementally) and return (runner, build_dir).
 
     ``internal_clock``: wrap the core so the simulator makes the clock (sim/shared/fastclk.py),
@@ -62,7 +65,7 @@ def build(sim, waves=False, verilog=VERILOG, tag="", internal_clock=False):
         sources.append(str(fastclk.write(verilog, build_dir / "biss_master_tb.v", CLK_HZ)))
     kwargs = dict(
         sources=sources,
-        hdl_toplevel=fastclk.TOPLEVEL if internal_clock else TOPLEVEL,
+        hdl_toplevel=fastclk.TOPLEVEL if internal_clock else toplevel,
         build_dir=str(build_dir),
         timescale=("1ns", "1ps"),
         waves=waves,
@@ -92,7 +95,7 @@ def build(sim, waves=False, verilog=VERILOG, tag="", internal_clock=False):
 
 
 def run(runner, build_dir, module, testcase=None, waves=False, extra_env=None, seed=None,
-        internal_clock=False):
+        internal_clock=False, toplevel=TOPLEVEL):
     """Run cocotb tests of ``module``; returns the results XML path."""
     env = {"PYTHONPATH": python_path() + os.pathsep + os.environ.get("PYTHONPATH", ""),
            "BISS_CLK_HZ": str(CLK_HZ)}
@@ -105,7 +108,7 @@ def run(runner, build_dir, module, testcase=None, waves=False, extra_env=None, s
                            f"{'' if seed is None else f'_{seed}'}.xml")
     runner.test(
         test_module=module,
-        hdl_toplevel=fastclk.TOPLEVEL if internal_clock else TOPLEVEL,
+        hdl_toplevel=fastclk.TOPLEVEL if internal_clock else toplevel,
         testcase=testcase,
         build_dir=str(build_dir),
         test_dir=str(build_dir),
@@ -147,6 +150,21 @@ def build_once(sim, preset="default", *, internal_clock=False):
         if internal_clock:
             tag = f"-campaign{tag}"
         _built[key] = build(sim, verilog=verilog, tag=tag, internal_clock=internal_clock)
+    return _built[key]
+
+
+def bus_top(bus):
+    """The committed Verilog and the module name of a bus top."""
+    return ROOT / "rtl" / "generated" / f"biss_master_{bus}.v", f"biss_master_{bus}"
+
+
+def build_bus_once(sim, bus):
+    """Build the committed bus top once per process; returns (runner, build_dir)."""
+    key = (sim, "bus", bus)
+    if key not in _built:
+        worker = os.environ.get("PYTEST_XDIST_WORKER", "main")
+        verilog, toplevel = bus_top(bus)
+        _built[key] = build(sim, verilog=verilog, tag=f"-{bus}-{worker}", toplevel=toplevel)
     return _built[key]
 
 

@@ -79,8 +79,8 @@ CHANNELS = ((("--channels",), dict(type=int, default=None, metavar="N", help="ch
 
 @pytest.fixture
 def fake_tops(monkeypatch):
-    tops = dict(TOPS)
-    for name in ("fake_a", "fake_b"):       # two tops sharing one option, as axil and wb will
+    tops = {"core": TOPS["core"]}           # the core, and stand-ins for the bus tops
+    for name in ("fake_a", "fake_b"):       # two tops sharing one option, as axil and wb do
         tops[name] = Top(f"{name}: a stand-in", f"biss_master_{name}", FakeBusTop,
                          options=CHANNELS,
                          describe=lambda channels=1: [f"channels        = {channels}"])

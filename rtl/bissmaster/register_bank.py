@@ -1,0 +1,201 @@
+"""The register bank of the bus tops, built from the register map (:mod:`bissmaster.regmap`).
+
+Nothing here names a register: every register, field, reset value, access kind and the signal
+a field connects to come from the SystemRDL source, walked into a
+:class:`~bissmaster.regmap.RegisterMap`. The bank has one simple internal bus
+(:class:`RegisterBus`, what the AXI4-Lite and Wishbone adapters drive) and, per channel and for
+the global registers, one interface whose members are the map's signals.
+"""
+
+from amaranth.hdl import *
+from amaranth.lib import wiring
+from amaranth.lib.wiring import In, Out
+
+from .regmap import DATA_WIDTH, Kind
+
+STROBES = DATA_WIDTH // 8
+
+
+class RegisterBus(wiring.Signature):
+    """The bank's internal bus, as the initiator (a bus adapter) sees it.
+
+    Word addresses. A write happens in the clock ``w_en`` is high, byte lanes chosen by
+    ``w_strb``. A read: ``r_en`` high in one clock, ``r_data`` holds the register's value from
+    the next clock until the next ``r_en`` (a read with side effects, the snapshot, acts in
+    the ``r_en`` clock). A read and a write may come in the same clock; the read sees the
+    value before the write.
+    """
+
+    def __init__(self, addr_width):
+        self.addr_width = addr_width
+        super().__init__({
+            "r_en": Out(1),
+            "r_addr": Out(addr_width),
+            "r_data": In(DATA_WIDTH),
+            "w_en": Out(1),
+            "w_addr": Out(addr_width),
+            "w_data": Out(DATA_WIDTH),
+            "w_strb": Out(STROBES),
+        })
+
+
+def block_signature(regmap, registers):
+    """The hardware side of a block of registers, seen from the bank: a member per signal of
+    the map (:meth:`RegisterMap.signals`); the bank drives configuration and pulses, and reads
+    live values and interrupt events."""
+    members = {}
+    for name, (kind, width) in regmap.signals(registers).items():
+        members[name] = Out(width) if kind in (Kind.CONFIG, Kind.PULSE) else In(width)
+    return wiring.Signature(members)
+
+
+class RegisterBank(wiring.Component):
+    """The register map in hardware, for ``channels`` channel slots.
+
+    Field kinds (:class:`~bissmaster.regmap.Kind`): CONFIG fields are registers with their
+    reset values, written per byte lane; PULSE fields give a registered one-clock pulse for
+    each 1 written and read 0; LIVE fields read their signal (a snapshot group reads a copy
+    taken when its first register is read); CONST fields read their reset value; IRQ fields
+    are sticky, set by their event and cleared by writing 1, a set winning over a clear in the
+    same clock. Unmapped addresses read 0 and ignore writes.
+
+    Attributes
+    ----------
+    bus : In(RegisterBus)
+    glob : Out(block_signature)
+        The global registers' signals.
+    ch0 .. ch<channels-1> : Out(block_signature)
+        Each channel's signals.
+    irq : Out(channels)
+        Per channel: a cause is set in its IRQ fields and enabled.
+    """
+
+    def __init__(self, regmap, channels):
+        if not isinstance(channels, int) or not 1 <= channels <= regmap.channel_slots:
+            raise ValueError(f"channels must be an integer from 1 to {regmap.channel_slots}, "
+                             f"not {channels!r}")
+        self.regmap = regmap
+        self.channels = channels
+        members = {
+            "bus": In(RegisterBus(regmap.addr_width - 2)),
+            "glob": Out(block_signature(regmap, regmap.globals)),
+            **{f"ch{n}": Out(block_signature(regmap, regmap.channel)) for n in range(channels)},
+            "irq": Out(channels),
+        }
+        super().__init__(members)
+
+    def elaborate(self, platform):
+        m = Module()
+        rm = self.regmap
+        blocks = [(self.glob, 0, rm.globals, "g")]
+        blocks += [(getattr(self, f"ch{n}"), rm.channel_base + n * rm.channel_stride,
+                    rm.channel, f"ch{n}") for n in range(self.channels)]
+        read_words = {}
+        irqs = []
+        for port, base, registers, prefix in blocks:
+            irq = self._block(m, port, base, registers, prefix, read_words)
+            if prefix != "g":
+                irqs.append(irq)
+        # Whole signals, never bit by bit: Icarus runs a combinational block written per bit
+        # only once an input changes, and would read X until then.
+        m.d.comb += self.irq.eq(Cat(irqs))
+
+        # The read port: one registered word, loaded on r_en.
+        with m.If(self.bus.r_en):
+            with m.Switch(self.bus.r_addr):
+                for addr, value in read_words.items():
+                    with m.Case(addr):
+                        m.d.sync += self.bus.r_data.eq(value)
+                with m.Default():
+                    m.d.sync += self.bus.r_data.eq(0)
+        return m
+
+    def _block(self, m, port, base, registers, prefix, read_words):
+        """One block (the globals or a channel): storage, pulses, interrupts, snapshots and
+        its read words. Returns the block's interrupt request."""
+        bus = self.bus
+        storage = {}                   # "register.field" -> the Signal that holds it
+        irq_terms = []
+        snapshots = {}                 # group -> [(field, live value, copy)]
+        take = {}                      # group -> the clock its first register is read
+        for reg in registers:
+            word = (base + reg.offset) // 4
+            write = Signal(name=f"{prefix}_{reg.path.replace('.', '_')}_write")
+            read = Signal(name=f"{prefix}_{reg.path.replace('.', '_')}_read")
+            m.d.comb += [write.eq(bus.w_en & (bus.w_addr == word)),
+                         read.eq(bus.r_en & (bus.r_addr == word))]
+            parts = []                 # (lsb, the field's read value)
+            for f in reg.fields:
+                name = f"{prefix}_{reg.path.replace('.', '_')}_{f.name}"
+                data = bus.w_data[f.lsb:f.lsb + f.width]
+                # Bit i of the field is written only if its byte lane's strobe is set.
+                lanes = Cat(bus.w_strb[(f.lsb + i) // 8] for i in range(f.width))
+                if f.kind == Kind.CONFIG:
+                    reg_bits = Signal(f.width, init=f.reset, name=name)
+                    storage[f"{reg.path}.{f.name}"] = reg_bits
+                    with m.If(write):
+                        m.d.sync += reg_bits.eq((reg_bits & ~lanes) | (data & lanes))
+                    parts.append((f.lsb, reg_bits))
+                    if f.signal:
+                        m.d.comb += self._signal(port, f).eq(reg_bits)
+                elif f.kind == Kind.PULSE:
+                    pulse = Signal(f.width, name=name)
+                    m.d.sync += pulse.eq(Mux(write, data & lanes, 0))
+                    m.d.comb += self._signal(port, f).eq(pulse)
+                elif f.kind == Kind.CONST:
+                    parts.append((f.lsb, C(f.reset, f.width)))
+                elif f.kind == Kind.IRQ:
+                    status = Signal(f.width, init=f.reset, name=name)
+                    event = self._signal(port, f) if f.signal else C(0, f.width)
+                    clear = Mux(write, data & lanes, 0)
+                    for i in range(f.width):
+                        # A set wins over a clear in the same clock. Conditions, not logic:
+                        # an event that reads X in a four-state simulator then sets nothing.
+                        with m.If(event[i]):
+                            m.d.sync += status[i].eq(1)
+                        with m.Elif(clear[i]):
+                            m.d.sync += status[i].eq(0)
+                    parts.append((f.lsb, status))
+                    irq_terms.append((status, f.enable))
+                elif f.kind == Kind.LIVE:
+                    live = self._signal(port, f)
+                    if reg.snapshot is None:
+                        parts.append((f.lsb, live))
+                    else:
+                        copy = Signal(f.width, init=f.reset, name=f"{name}_snapshot")
+                        snapshots.setdefault(reg.snapshot, []).append(copy.eq(live))
+                        # The register that takes the snapshot reads the live value itself.
+                        parts.append((f.lsb, live if reg.takes_snapshot else copy))
+            if reg.takes_snapshot:
+                take[reg.snapshot] = read
+            read_words[word] = self._word(parts)
+        for group, copies in snapshots.items():
+            with m.If(take[group]):
+                m.d.sync += copies
+        # A cause requests an interrupt while set and enabled.
+        irq = Signal(name=f"{prefix}_irq")
+        m.d.comb += irq.eq(Cat((status & storage[enable]).any()
+                               for status, enable in irq_terms if enable).any())
+        return irq
+
+    @staticmethod
+    def _signal(port, f):
+        """The bits of ``port``'s signal that field ``f`` holds (the signal itself when the
+        field holds all of it)."""
+        signal = getattr(port, f.signal)
+        if f.signal_lsb == 0 and f.width == len(signal):
+            return signal
+        return signal[f.signal_lsb:f.signal_lsb + f.width]
+
+    @staticmethod
+    def _word(parts):
+        """A register's read value from its fields' ``(lsb, value)``, 0 between fields."""
+        pieces, at = [], 0
+        for lsb, value in sorted(parts, key=lambda p: p[0]):
+            if lsb > at:
+                pieces.append(C(0, lsb - at))
+            pieces.append(value)
+            at = lsb + len(value)
+        if at < DATA_WIDTH:
+            pieces.append(C(0, DATA_WIDTH - at))
+        return Cat(pieces)

@@ -1,0 +1,367 @@
+"""cocotb scenarios of the bus tops (biss_master_axil, biss_master_wb), two channels.
+
+Run through pytest (sim/test_bus.py) on Verilator and Icarus, each on both buses (the bus
+under test comes in ``BISS_BUS``). Registers, fields, reset values and access types are read
+from the SystemRDL source (sim/shared/regspec.py); positions are checked against what each
+channel's encoder model sent.
+"""
+
+import cocotb
+from cocotb.triggers import ClockCycles, FallingEdge, ReadOnly, RisingEdge, Timer
+
+from encoder_model import frames
+from master_contract import STATUS
+from sim.shared.bus_testbench import BUS, CLK_HZ, BusTestbench
+from sim.shared.discovery import only_on_buses
+
+#: The default bus tops have two channels; channel 0 reads a BiSS Safety encoder, channel 1 a
+#: BiSS C one (different presets at the same time).
+CHANNELS = 2
+SAFETY, BISS_C = frames.PRESETS["resolute_fs_rsh"], frames.PRESETS["evolute_36"]
+#: Addresses no register answers at (the reserved control-channel window, a gap, the slot of
+#: a channel the build lacks, beyond the map): read 0, writes ignored.
+UNMAPPED = (0x014, 0x1FC, 0x200 + 0x100, 0x200 + 0x1BC, 0x200 + 0x7C, 0x200 * (CHANNELS + 1),
+            0x11FC, 0x1FFC)
+
+
+def _stored(f):
+    """A field software writes and reads back (a configuration register)."""
+    return f.sw == "rw" and not f.singlepulse and not f.woclr
+
+
+@cocotb.test()
+async def reset_values_and_access_types(dut):
+    """Every register of the map: reset values (every field the RDL gives one), then access:
+    rw fields keep what is written (all ones, then 0), r fields ignore writes, singlepulse
+    fields read 0, woclr fields stay 0 when nothing sets them; unmapped addresses read 0."""
+    tb = BusTestbench(dut)
+    await tb.start()
+    m = tb.map
+    blocks = [(None, m.globals)] + [(ch, m.channel) for ch in range(CHANNELS)]
+    checked = 0
+    for ch, regs in blocks:
+        for path, spec in regs.items():
+            word = await tb.read(path, ch)
+            for f in spec.fields.values():
+                if f.reset is not None:
+                    assert f.get(word) == f.reset, \
+                        f"{path}.{f.name} (ch {ch}): reset {f.get(word):#x} != RDL {f.reset:#x}"
+                    checked += 1
+    dut._log.info("%d reset values checked", checked)
+
+    for ch, regs in blocks:
+        for path, spec in regs.items():
+            if path in ("trigger", "ctrl"):
+                continue                            # pulses that start cycles: below
+            before = await tb.read(path, ch)
+            stored = [f for f in spec.fields.values() if _stored(f)]
+            ones = sum(f.mask for f in stored)
+            # Everything written as ones: the stored fields take it, the rest ignore it.
+            await tb.write(path, 0xFFFFFFFF if stored else ~before & 0xFFFFFFFF, ch)
+            after = await tb.read(path, ch)
+            for f in spec.fields.values():
+                if _stored(f):
+                    assert f.get(after) == (1 << f.width) - 1, f"{path}.{f.name}: not rw"
+                elif f.woclr or f.sw == "r":
+                    if f.reset is not None:         # a deterministic value: unchanged
+                        assert f.get(after) == f.get(before), f"{path}.{f.name}: not r"
+            assert after & ~sum(f.mask for f in spec.fields.values()) == 0, \
+                f"{path}: bits outside every field read {after:#x}"
+            if stored:
+                await tb.write(path, 0, ch)
+                assert await tb.read(path, ch) & ones == 0, f"{path}: rw fields do not clear"
+    # Pulses read 0 after a write of 1 (ctrl.start on the unconfigured core is a BAD_CONFIG).
+    for ch in range(CHANNELS):
+        await tb.write_fields("ctrl", ch, start=1, abort=1, clear_counters=1)
+        assert (await tb.read_fields("ctrl", ch)) == {k: 0 for k in m.channel["ctrl"].fields}
+    await tb.write_fields("trigger", start=1)
+    assert await tb.read("trigger") == 0
+    for addr in UNMAPPED:
+        await tb.bus.write(addr, 0xFFFFFFFF)
+        assert await tb.bus.read(addr) == 0, f"unmapped {addr:#x} does not read 0"
+
+
+@cocotb.test()
+async def byte_strobes(dut):
+    """A write of some byte lanes changes those lanes only (wstrb / sel)."""
+    tb = BusTestbench(dut)
+    await tb.start()
+    addr = tb.addr("cfg_period", 1)          # request_period: 24 bits, lanes 0..2
+    await tb.bus.write(addr, 0x00ABCDEF)
+    for lane, value, expect in ((0, 0x11, 0xABCD11), (1, 0x2200, 0xAB2211), (2, 0x330000, 0x332211)):
+        await tb.bus.write(addr, value, 1 << lane)
+        assert await tb.bus.read(addr) == expect, f"lane {lane}"
+    await tb.bus.write(addr, 0x00445500, 0b0110)
+    assert await tb.bus.read(addr) == 0x445511
+    # The lane of a pulse is honoured too: ctrl.start is in lane 0.
+    await tb.bus.write(tb.addr("ctrl", 0), 0x1, 0b0010)
+    assert (await tb.read_fields("irq_status", 0))["done"] == 0, "a masked lane started a cycle"
+
+
+@cocotb.test()
+async def two_channels_two_presets(dut):
+    """Channel 0 reads a RESOLUTE FS (BiSS Safety, 36 + 28 bits), channel 1 an EVOLUTE 36
+    (BiSS C), both periodic at once at different MA rates; every result checked."""
+    tb = BusTestbench(dut, seed=2)
+    await tb.start([SAFETY, BISS_C])
+    await tb.configure(0, SAFETY, 5e6, request_period=8000)
+    await tb.configure(1, BISS_C, 2.5e6, request_period=6000)
+    await tb.encoders_ready()
+    for ch in range(CHANNELS):
+        await tb.write_fields("ctrl", ch, periodic=1)
+    seen = {0: set(), 1: set()}
+    while min(len(s) for s in seen.values()) < 6:
+        for ch in range(CHANNELS):
+            await tb.wait_irq_status(ch, "done")
+            res = await tb.result(ch)
+            tb.check_result(ch, res)
+            seen[ch].add(res["time"])
+    for ch in range(CHANNELS):
+        await tb.write_fields("ctrl", ch, periodic=0)
+    dut._log.info("results checked: %s", {ch: len(s) for ch, s in seen.items()})
+
+
+@cocotb.test()
+async def trigger_starts_channels_in_the_same_clock(dut):
+    """The trigger register and a pulse on the input `trigger` start every trigger-enabled
+    channel in the same clock: equal timestamps; a channel not enabled stays idle."""
+    tb = BusTestbench(dut, seed=3)
+    await tb.start([SAFETY, BISS_C])
+    for ch, fmt in ((0, SAFETY), (1, BISS_C)):
+        await tb.configure(ch, fmt, 5e6)           # one MA rate: the first MA rise in step too
+        await tb.write_fields("ctrl", ch, trigger_enable=1)
+    await tb.encoders_ready()
+    await tb.wait_idle(0)
+    await tb.wait_idle(1)
+
+    async def both(fire):
+        await fire()
+        res = []
+        for ch in range(CHANNELS):
+            await tb.wait_irq_status(ch, "done")
+            res.append(await tb.result(ch))
+            tb.check_result(ch, res[-1])
+        assert res[0]["time"] == res[1]["time"], f"timestamps {res[0]['time']} != {res[1]['time']}"
+        await tb.encoders_ready()
+        return res
+
+    async def register():
+        await tb.write_fields("trigger", start=1)
+
+    async def pin():
+        await FallingEdge(dut.clk)
+        dut.trigger.value = 1                       # a long pulse is one trigger (rising edge)
+        await ClockCycles(dut.clk, 20)
+        dut.trigger.value = 0
+
+    first = await both(register)
+    second = await both(pin)
+    assert [r["seq"] for r in second] == [r["seq"] + 1 for r in first], "one start per trigger"
+    # Channel 1 not enabled: only channel 0 starts.
+    await tb.write_fields("ctrl", 1, trigger_enable=0)
+    await register()
+    await tb.wait_irq_status(0, "done")
+    await Timer(100, "us")
+    assert (await tb.read_fields("irq_status", 1))["done"] == 0
+    assert (await tb.result(1))["seq"] == second[1]["seq"]
+
+
+@cocotb.test()
+async def interrupts_set_mask_clear(dut):
+    """irq_status per cause, irq_enable masks, write 1 clears, irq_pending and the irq pin;
+    `done` and `error` of one BAD_CONFIG cycle come in the same clock and both are kept."""
+    tb = BusTestbench(dut, seed=4)
+    await tb.start([BISS_C, BISS_C])
+    en = tb.map.channel["irq_enable"].fields
+
+    async def pin():
+        await ClockCycles(dut.clk, 3)               # irq is registered
+        return int(dut.irq.value)
+
+    await tb.configure(0, BISS_C, 2.5e6)
+    await tb.encoders_ready()
+    await tb.wait_idle(0)                           # the power-up break
+    assert await pin() == 0
+    # Enabled: a good frame sets done only, raises irq and channel 0's pending bit.
+    await tb.write_fields("irq_enable", 0, done=1, error=1)
+    await tb.write_fields("ctrl", 0, start=1)
+    status = await tb.wait_irq_status(0, "done", clear=False)
+    assert (status["done"], status["error"]) == (1, 0)
+    assert await pin() == 1 and await tb.read("irq_pending") == 0b01
+    await tb.write("irq_status", en["done"].mask, 0)                    # write 1 to clear
+    assert (await tb.read_fields("irq_status", 0))["done"] == 0
+    assert await pin() == 0 and await tb.read("irq_pending") == 0
+    # Masked: the status still sets, irq stays low.
+    await tb.write_fields("irq_enable", 0)
+    await tb.encoders_ready()
+    await tb.wait_idle(0)
+    await tb.write_fields("ctrl", 0, start=1)
+    await tb.wait_irq_status(0, "done", clear=False)
+    assert await pin() == 0 and await tb.read("irq_pending") == 0
+    await tb.write("irq_status", 0b111, 0)
+    # Two causes in the same clock: a BAD_CONFIG cycle ends with done and error together.
+    await tb.write_fields("cfg_ma", 1, ma_half_period=1)                 # invalid
+    await tb.write_fields("irq_enable", 1, error=1)
+    await tb.wait_idle(1)
+    await tb.write_fields("ctrl", 1, start=1)
+    status = await tb.wait_irq_status(1, "error", clear=False)
+    assert (status["done"], status["error"]) == (1, 1), status
+    assert (await tb.result(1))["status"] == STATUS["BAD_CONFIG"]
+    assert await pin() == 1 and await tb.read("irq_pending") == 0b10
+    await tb.write("irq_status", en["error"].mask, 1)                   # clear one cause only
+    assert await tb.read_fields("irq_status", 1) == {"done": 1, "error": 0, "access_done": 0}
+    assert await pin() == 0                                             # done not enabled
+    await tb.write("irq_status", en["done"].mask, 1)
+    assert await tb.read_fields("irq_status", 1) == {"done": 0, "error": 0, "access_done": 0}
+
+
+@cocotb.test()
+async def wide_result_never_tears(dut):
+    """Both halves of a 36-bit position change with every frame: reading `result.status`
+    takes a snapshot, a new frame arrives, and the halves read afterwards still belong to the
+    snapshot's frame."""
+    step = {"k": 0}
+
+    def moving(t):
+        step["k"] += 1
+        return step["k"] * 0x1_1111_1111            # every nibble moves, both halves
+
+    tb = BusTestbench(dut, seed=5)
+    await tb.start([SAFETY], positions=[moving])
+    await tb.configure(0, SAFETY, 10e6, request_period=4000)
+    await tb.encoders_ready()
+    await tb.write_fields("ctrl", 0, periodic=1)
+    for _ in range(5):
+        await tb.wait_irq_status(0, "done")
+        snap = await tb.read_fields("result.status", 0)         # the snapshot
+        await tb.wait_irq_status(0, "done")                     # the live result moves on
+        res = dict(snap)
+        res.update(await tb.read_fields("result.seq", 0))
+        res.update(await tb.read_fields("result.timestamp", 0))
+        for w in range(2):
+            res[f"word{w}"] = (await tb.read(f"result.w{w}_lo", 0)
+                               | await tb.read(f"result.w{w}_hi", 0) << 32)
+        tb.check_result(0, res)
+        assert (await tb.result(0))["time"] != res["time"], "no new frame came in between"
+    await tb.write_fields("ctrl", 0, periodic=0)
+
+
+@cocotb.test()
+async def bus_hammering_while_frames_arrive(dut):
+    """Both channels periodic while the bus is kept busy back to back (reads of every kind,
+    interrupt writes); every result read is the frame sent at its timestamp, and result.seq
+    shows that no frame was lost."""
+    tb = BusTestbench(dut, seed=6)
+    await tb.start([SAFETY, BISS_C])
+    await tb.configure(0, SAFETY, 10e6, request_period=5000)
+    await tb.configure(1, BISS_C, 5e6, request_period=4000)
+    await tb.encoders_ready()
+    for ch in range(CHANNELS):
+        await tb.wait_idle(ch)                      # else the first tick is an overrun
+        await tb.write_fields("ctrl", ch, periodic=1)
+    busy_paths = ["state", "caps", "count_crc", "count_cycle", "irq_status", "result.seq"]
+    stop = {"now": False}
+    counts = {"ops": 0}
+
+    async def hammer(seed):
+        rng = __import__("random").Random(seed)
+        while not stop["now"]:
+            ch = rng.randrange(CHANNELS)
+            if BUS == "wb":                         # one Wishbone cycle of 8 operations
+                ops = [(tb.addr(rng.choice(busy_paths), ch), None, 0xF) for _ in range(7)]
+                ops.append((tb.addr("irq_enable", ch), rng.randrange(2) << 2, 0xF))
+                await tb.bus.ops(ops)
+                counts["ops"] += len(ops)
+            else:
+                await tb.bus.read(tb.addr(rng.choice(busy_paths), ch))
+                counts["ops"] += 1
+
+    hammers = [cocotb.start_soon(hammer(s)) for s in range(3 if BUS == "axil" else 1)]
+    checked = 0
+    for _ in range(8):
+        for ch in range(CHANNELS):
+            res = await tb.result(ch)
+            if res["seq"]:
+                tb.check_result(ch, res, seq=True)
+                checked += 1
+            await Timer(7, "us")
+    stop["now"] = True
+    for h in hammers:
+        await h
+    for ch in range(CHANNELS):
+        await tb.write_fields("ctrl", ch, periodic=0)
+    await Timer(100, "us")
+    for ch in range(CHANNELS):
+        res = await tb.result(ch)
+        tb.check_result(ch, res, seq=True)
+        assert res["seq"] == len(tb.channels[ch].sent), "every frame sent was counted"
+        for path in ("count_crc", "count_ack", "count_line", "count_lc", "count_check",
+                     "count_cycle", "count_stop"):
+            assert await tb.read(path, ch) == 0, f"ch{ch} {path}"
+    dut._log.info("%d results checked during %d bus operations", checked, counts["ops"])
+
+
+@cocotb.test()
+async def bad_configuration_over_the_bus(dut):
+    """A configuration the core refuses, written over the bus: state.config_error, and a
+    request ends with BAD_CONFIG and an error interrupt; fixed, frames are good again."""
+    tb = BusTestbench(dut, seed=7)
+    await tb.start([BISS_C])
+    await tb.configure(0, BISS_C, 5e6)
+    await tb.encoders_ready()
+    assert (await tb.read_fields("state", 0))["config_error"] == 0
+    tb.check_result(0, await tb.request(0))
+    words = await tb.read_fields("cfg_words", 0)
+    for path, bad in (("cfg_words", dict(words, w0_crc=3)), ("cfg_words", dict(words, w0_data_bits=0)),
+                      ("cfg_ma", {"ma_half_period": 1})):
+        good = await tb.read(path, 0)
+        await tb.write_fields(path, 0, **bad)
+        assert (await tb.read_fields("state", 0))["config_error"] == 1, bad
+        await tb.write("irq_status", 0b111, 0)
+        res = await tb.request(0)
+        assert res["status"] == STATUS["BAD_CONFIG"], res
+        assert (await tb.read_fields("irq_status", 0))["error"] == 1
+        await tb.write(path, good, 0)
+        assert (await tb.read_fields("state", 0))["config_error"] == 0
+        await tb.encoders_ready()
+        tb.check_result(0, await tb.request(0))
+
+
+@cocotb.test()
+@only_on_buses("wb")
+async def wishbone_pipelined_back_to_back(dut):
+    """A pipelined Wishbone master, by hand: requests held on the bus while `stall` is high,
+    the next one put on in the clock after acceptance; every request acked once, in order,
+    reads returning what the writes before them wrote."""
+    tb = BusTestbench(dut)
+    await tb.start()
+    base = tb.addr("cfg_period", 0) >> 2
+    ops = [(base, 0x111111), (base + 1, 0x222222), (base, None), (base + 1, None),
+           (base + 2, 0x333333), (base + 2, None), (0, None)]
+    acks, issued, i = [], [], 0
+    await FallingEdge(dut.clk)
+    dut.wb_cyc.value = 1
+    dut.wb_sel.value = 0xF
+    for _ in range(100):
+        # This clock's request; `stall` (a register) says whether the edge ending it takes it.
+        if i < len(ops):
+            adr, dat = ops[i]
+            dut.wb_stb.value, dut.wb_adr.value = 1, adr
+            dut.wb_we.value, dut.wb_dat_w.value = int(dat is not None), dat or 0
+        else:
+            dut.wb_stb.value = 0
+        take = i < len(ops) and not int(dut.wb_stall.value)
+        await RisingEdge(dut.clk)
+        if take:
+            issued.append(i)
+            i += 1
+        await ReadOnly()
+        if int(dut.wb_ack.value):
+            acks.append(int(dut.wb_dat_r.value))
+        await FallingEdge(dut.clk)
+        if len(acks) == len(ops):
+            break
+    dut.wb_cyc.value = dut.wb_stb.value = 0
+    assert issued == list(range(len(ops)))
+    reads = [a for (adr, dat), a in zip(ops, acks) if dat is None]
+    assert reads == [0x111111, 0x222222, 0x333333, 0x42695353], [hex(r) for r in reads]

@@ -1,0 +1,277 @@
+"""cocotb testbench for the bus tops (``biss_master_axil``, ``biss_master_wb``).
+
+The bus is driven by bus models (cocotbext-axi's AxiLiteMaster, cocotbext-wishbone's
+WishboneMaster), every address and field comes from the SystemRDL source through
+:mod:`sim.shared.regspec`, and each channel's MA/SLO pair has its own encoder model
+(tb/encoder_model). Expected results come from what each encoder sent, looked up by the
+result's timestamp (the clock count of the frame's first MA rise), never from the RTL.
+"""
+
+import logging
+import os
+import random
+
+import cocotb
+from cocotb.clock import Clock
+from cocotb.simtime import get_sim_time
+from cocotb.triggers import ClockCycles, Lock, RisingEdge, Timer
+
+from encoder_model import frames
+from encoder_model.cocotb_encoder import BissEncoder, Cable, Response
+from master_contract import CRC_CODE, STATUS, SYS_CLK_HZ
+from sim.shared import regspec
+
+CLK_HZ = SYS_CLK_HZ
+CLK_NS = 1e9 / CLK_HZ
+BUS = os.environ.get("BISS_BUS", "axil")
+
+
+class AxiLiteBus:
+    """32-bit reads and writes through cocotbext-axi's AxiLiteMaster (concurrent calls are
+    queued by the model and run back to back)."""
+
+    def __init__(self, dut):
+        from cocotbext.axi import AxiLiteBus as Bus, AxiLiteMaster
+        self.master = AxiLiteMaster(Bus.from_prefix(dut, "s_axil"), dut.clk, dut.rst)
+        for side in (self.master.write_if, self.master.read_if):
+            side.log.setLevel(logging.WARNING)          # no line per transaction
+
+    async def read(self, addr):
+        r = await self.master.read(addr, 4)
+        assert r.resp == 0, f"read {addr:#x}: response {r.resp}"
+        return int.from_bytes(r.data, "little")
+
+    async def write(self, addr, value, lanes=0xF):
+        """Write the byte lanes set in ``lanes`` (contiguous) of ``value``."""
+        first = (lanes & -lanes).bit_length() - 1
+        count = bin(lanes).count("1")
+        assert lanes >> first == (1 << count) - 1, "lanes must be contiguous"
+        data = value.to_bytes(4, "little")[first:first + count]
+        r = await self.master.write(addr + first, data)
+        assert r.resp == 0, f"write {addr:#x}: response {r.resp}"
+
+
+class WishboneBus:
+    """32-bit reads and writes through cocotbext-wishbone's WishboneMaster, as a **classic**
+    master (``stb`` held until ``ack``; the top's ``stall`` is not given to the model), so that
+    the classic protocol is what every scenario runs; the pipelined one (requests held through
+    ``stall``, one after another) is driven by hand in ``wishbone_pipelined_back_to_back``. (The
+    model's pipelined mode passes too.) One cycle at a time, several operations back to back
+    per cycle."""
+
+    SIGNALS = {"cyc": "cyc", "stb": "stb", "we": "we", "adr": "adr", "datwr": "dat_w",
+               "datrd": "dat_r", "ack": "ack"}
+
+    def __init__(self, dut):
+        from cocotbext.wishbone import driver
+        from cocotbext.wishbone.driver import WishboneMaster
+
+        # The model sets its outputs' first values with immediate (VPI no-delay) writes; on
+        # Icarus such a write to a top-level input wire never reaches the logic behind it
+        # (the wire reads its value, what it drives stays Z). Ordinary writes instead.
+        driver.set_immediate = lambda sig, value: setattr(sig, "value", value)
+
+        class ClassicMaster(WishboneMaster):
+            _optional_signals = ["sel"]
+
+        self.master = ClassicMaster(dut, "wb", dut.clk, width=32, timeout=1000,
+                                    signals_dict=self.SIGNALS)
+        self.lock = Lock()
+
+    async def ops(self, ops):
+        from cocotbext.wishbone.driver import WBOp
+        async with self.lock:
+            res = await self.master.send_cycle(
+                [WBOp(adr=addr >> 2, dat=value, sel=lanes) for addr, value, lanes in ops])
+        assert all(r.ack == 1 for r in res), "every operation is acked (never err/rty)"
+        return [int(r.datrd) for r in res]
+
+    async def read(self, addr):
+        return (await self.ops([(addr, None, 0xF)]))[0]
+
+    async def write(self, addr, value, lanes=0xF):
+        await self.ops([(addr, value, lanes)])
+
+
+class Channel:
+    """One channel's encoder model and what it sent, by timestamp."""
+
+    def __init__(self, tb, n, fmt, cable=Cable(), position=None):
+        self.tb, self.n, self.fmt = tb, n, fmt
+        self.sign_of_life = frames.SignOfLife()
+        self.position = position or (lambda t: tb.rng.getrandbits(fmt.words[0].data_bits))
+        self.source = frames.EncoderFrameSource(fmt, lambda t: self.position(t),
+                                                sign_of_life=self.sign_of_life)
+        self.sent = {}          # expected timestamp -> frame bits
+        self.encoder = BissEncoder(getattr(tb.dut, f"ch{n}_ma"), getattr(tb.dut, f"ch{n}_slo"),
+                                   cable=cable, respond=self._respond, rng=tb.rng)
+
+    def _respond(self, t_latch):
+        values = self.source.values_at(t_latch)
+        bits = frames.build_frame(self.fmt, values)
+        record = self.encoder.records[-1]
+        self.sent[self.tb.timestamp_of(record.t_first_rise_s)] = bits
+        return Response(bits=bits, processing_time_s=self.tb.rng.uniform(2e-6, 8e-6))
+
+
+class BusTestbench:
+    def __init__(self, dut, *, seed=1):
+        self.dut = dut
+        self.rng = random.Random(seed)
+        self.map = regspec.load()
+        self.bus = AxiLiteBus(dut) if BUS == "axil" else WishboneBus(dut)
+        self.channels = {}
+        self.t_clk0 = None
+
+    # -- Setup ----------------------------------------------------------------------------
+    async def start(self, formats=(), cables=(), positions=()):
+        """Clock, reset, and one encoder per entry of ``formats`` (channel 0, 1, ...);
+        ``positions``: per channel, a position function of time (default: random)."""
+        dut = self.dut
+        Clock(dut.clk, CLK_NS, unit="ns").start()
+        dut.trigger.value = 0
+        dut.rst.value = 1
+        for n, fmt in enumerate(formats):
+            cable = cables[n] if n < len(cables) else Cable()
+            position = positions[n] if n < len(positions) else None
+            self.channels[n] = Channel(self, n, fmt, cable, position)
+            self.channels[n].encoder.start()
+        await ClockCycles(dut.clk, 4)
+        dut.rst.value = 0
+        await RisingEdge(dut.clk)
+        self.t_clk0 = get_sim_time("step")
+        # The power-up break (40 us): Icarus 11 runs some of Yosys's combinational blocks only
+        # on their first input change, so `busy` (state.busy) reads X until the break ends
+        # (README, Notes). Nothing else changes meanwhile: the registers still hold their
+        # reset values after it.
+        await Timer(45, "us")
+
+    def timestamp_of(self, t_first_rise_s):
+        """The core's timestamp of an MA rise at ``t_first_rise_s`` (docs/ports.md)."""
+        edges = round((t_first_rise_s * 1e12 - self.t_clk0) / (CLK_NS * 1e3))
+        return (edges + 1) % 2**32
+
+    # -- Registers --------------------------------------------------------------------------
+    def addr(self, path, ch=None):
+        return self.map.address(path, ch)
+
+    def fields(self, path, word, ch=None):
+        return {name: f.get(word) for name, f in self.map.reg(path, ch).fields.items()}
+
+    async def read(self, path, ch=None):
+        return await self.bus.read(self.addr(path, ch))
+
+    async def read_fields(self, path, ch=None):
+        return self.fields(path, await self.read(path, ch), ch)
+
+    async def write(self, path, value, ch=None, lanes=0xF):
+        await self.bus.write(self.addr(path, ch), value, lanes)
+
+    async def write_fields(self, path, ch=None, **values):
+        """Write a register from field values; fields not named are written 0."""
+        spec = self.map.reg(path, ch)
+        word = 0
+        for name, value in values.items():
+            word = spec.fields[name].put(word, value)
+        await self.write(path, word, ch)
+
+    async def configure(self, ch, fmt, ma_hz, **cfg):
+        """The cfg_* registers for a frame format and MA rate (every setting, as the core's
+        Testbench.configure does on its ports)."""
+        hp = CLK_HZ / (2 * ma_hz)
+        assert hp == int(hp)
+        words = {}
+        for w in range(2):
+            word = fmt.words[w] if w < len(fmt.words) else frames.WordFormat(1)
+            words.update({f"w{w}_data_bits": word.data_bits, f"w{w}_nenw": int(word.nenw),
+                          f"w{w}_lc": int(word.lc), f"w{w}_crc": CRC_CODE[word.crc]})
+        words["w1_enable"] = int(len(fmt.words) == 2)
+        settings = {
+            "cfg_ma": {"ma_half_period": int(hp), "delay_limit": 0},
+            "cfg_period": {"request_period": 0}, "cfg_break": {"break_time": 0},
+            "cfg_ack": {"ack_limit": 0}, "cfg_timeout": {"timeout_limit": 0},
+            "cfg_words": words,
+            "cfg_checks": {"end_check": 0, "spw_check": int(len(fmt.words) == 2),
+                           "spw_tolerance": 1},
+        }
+        for path, values in settings.items():
+            for name in list(cfg):
+                if name in self.map.channel[path].fields:
+                    values[name] = cfg.pop(name)
+            await self.write_fields(path, ch, **values)
+        assert not cfg, f"unknown settings {cfg}"
+
+    # -- Results ----------------------------------------------------------------------------
+    async def result(self, ch):
+        """The last result: ``result.status`` first (it takes the snapshot), then the rest."""
+        res = await self.read_fields("result.status", ch)
+        for path in ("result.seq", "result.timestamp"):
+            res.update(await self.read_fields(path, ch))
+        for w in range(2):
+            lo = await self.read(f"result.w{w}_lo", ch)
+            hi = await self.read(f"result.w{w}_hi", ch)
+            res[f"word{w}"] = lo | hi << 32
+        return res
+
+    def check_result(self, ch, res, status="OK", seq=False):
+        """The result against the frame its channel's encoder sent at its timestamp; with
+        ``seq``, also that ``result.seq`` counts every frame sent up to that one (none lost)."""
+        chan = self.channels[ch]
+        assert res["status"] == STATUS[status], f"ch{ch}: status {res['status']} != {status}"
+        bits = chan.sent.get(res["time"])
+        assert bits is not None, \
+            f"ch{ch}: no frame sent at timestamp {res['time']} (sent: {sorted(chan.sent)[-4:]})"
+        parsed = frames.parse_frame(chan.fmt, bits)
+        if seq:
+            n = sorted(chan.sent).index(res["time"]) + 1
+            assert res["seq"] == n % 2**16, f"ch{ch}: seq {res['seq']}, frame {n} since reset"
+        for w, word in enumerate(parsed["words"]):
+            assert res[f"word{w}"] == word["position"], \
+                f"ch{ch} word{w}: {res[f'word{w}']:#x} != sent {word['position']:#x}"
+            if chan.fmt.words[w].nenw:
+                assert (res[f"w{w}_ne"], res[f"w{w}_nw"]) == (word["ne"], word["nw"])
+            assert res[f"w{w}_crc_ok"] == 1
+            if chan.fmt.words[w].lc:
+                assert res["lc"] == word["lc"]
+        return parsed
+
+    async def wait_irq_status(self, ch, cause="done", limit_s=1e-3, clear=True):
+        """Poll ``irq_status`` until ``cause`` is set; clear it (write 1) if asked."""
+        spec = self.map.channel["irq_status"].fields[cause]
+        t_end = get_sim_time("step") + limit_s * 1e12
+        while True:
+            word = await self.read("irq_status", ch)
+            if spec.get(word):
+                break
+            assert get_sim_time("step") < t_end, f"ch{ch}: irq_status.{cause} never set"
+            await Timer(1, "us")
+        if clear:
+            await self.write("irq_status", spec.put(0, 1), ch)
+        return self.fields("irq_status", word, ch)
+
+    async def request(self, ch, limit_s=1e-3):
+        """Wait until idle, ctrl.start, wait for done (irq_status, cleared), return the result."""
+        await self.wait_idle(ch)
+        await self.write("irq_status", self.map.channel["irq_status"].fields["done"].mask, ch)
+        await self.write_fields("ctrl", ch, start=1, **await self._ctrl_keep(ch))
+        await self.wait_irq_status(ch, "done", limit_s)
+        return await self.result(ch)
+
+    async def _ctrl_keep(self, ch):
+        """The stored (non-pulse) fields of ``ctrl``, to write them back unchanged."""
+        fields = await self.read_fields("ctrl", ch)
+        spec = self.map.channel["ctrl"].fields
+        return {k: v for k, v in fields.items() if not spec[k].singlepulse}
+
+    async def encoders_ready(self, limit_s=1e-3):
+        for _ in range(int(limit_s / 1e-6)):
+            if all(c.encoder.ready for c in self.channels.values()):
+                return
+            await Timer(1, "us")
+        raise AssertionError("encoder models never became ready")
+
+    async def wait_idle(self, ch, limit_s=1e-3):
+        t_end = get_sim_time("step") + limit_s * 1e12
+        while (await self.read_fields("state", ch))["busy"]:
+            assert get_sim_time("step") < t_end, f"ch{ch} never idle"
+            await Timer(1, "us")
