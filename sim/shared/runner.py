@@ -24,6 +24,9 @@ SIMULATORS = ("verilator", "icarus")
 CLK_HZ = SYS_CLK_HZ
 #: The cocotb scenario modules (sim/scenarios/), as the simulator's Python imports them.
 MASTER_SCENARIOS = "sim.scenarios.master"
+CONTROL_SCENARIOS = "sim.scenarios.control_channel"
+#: The modules the regression (sim/test_regression.py) runs, every scenario of each.
+REGRESSION_SCENARIOS = (MASTER_SCENARIOS, CONTROL_SCENARIOS)
 CAMPAIGN_SCENARIOS = "sim.scenarios.campaigns"
 
 # cocotb looks up `verilator` on PATH and Verilator's makefiles call `python`: the venv that runs
