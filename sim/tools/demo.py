@@ -1,6 +1,7 @@
-"""make demo: simulate a RESOLUTE FS RSH encoder on the generated Verilog, print its frames.
+"""make demo / make demo-bp3: simulate an encoder model on the generated Verilog, print the result.
 
-    python -m sim.tools.demo [--sim verilator|icarus]
+    python -m sim.tools.demo [--sim verilator|icarus]          RESOLUTE FS RSH frames + waveform
+    python -m sim.tools.demo --bp3 [--sim verilator|icarus]    BP3 identification, EDS, positions
 """
 
 import argparse
@@ -11,24 +12,45 @@ import xml.etree.ElementTree as ET
 from sim.shared import runner
 from sim.shared.runner import output_to
 
+DEMOS = {
+    # flag: (scenario module, table file, what it simulates, waves, the notes printed after it)
+    False: ("sim.scenarios.demo", "frames.txt",
+            "a RESOLUTE FS RSH encoder model (BiSS Safety, CPW 36 + SPW 28 bits)", True,
+            ["Every frame was checked field by field against what the encoder model sent.",
+             "delay/ns: round trip measured by the core (ceil, in 10 ns clocks); "
+             "model/ns: cable + 42.5 ns encoder delay."]),
+    True: ("sim.scenarios.demo_bp3", "bp3.txt",
+           "a BP3 encoder model (12 + 20 bits, CRC-6) identified over the control channel",
+           False,
+           ["bissmaster.bp3.identify() ran against the simulated core through its ca_* ports; "
+            "every frame during and after it",
+            "was checked against the encoder model, the positions with the derived settings "
+            "only (docs/control-channel.md)."]),
+}
 
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--sim", default=os.environ.get("SIM", "verilator"), choices=runner.SIMULATORS)
+    ap.add_argument("--bp3", action="store_true",
+                    help="identify a BP3 encoder, print its EDS, configure from it, read positions")
     args = ap.parse_args()
+    module, table_name, what, waves, notes = DEMOS[args.bp3]
 
     out = runner.BUILD / "demo"
     out.mkdir(parents=True, exist_ok=True)
-    table = out / "frames.txt"
-    log = out / "demo.log"
+    table = out / table_name
+    log = out / ("demo-bp3.log" if args.bp3 else "demo.log")
     table.unlink(missing_ok=True)
-    print(f"Simulating biss_master ({args.sim}) with a RESOLUTE FS RSH encoder model "
-          f"(BiSS Safety, CPW 36 + SPW 28 bits) ...", flush=True)
+    print(f"Simulating biss_master ({args.sim}) with {what} ...", flush=True)
     try:
         with output_to(log):
-            r, build_dir = runner.build(args.sim, waves=True, tag="-demo")
-            xml = runner.run(r, build_dir, "sim.scenarios.demo", waves=True,
+            # Verilator: one build for both demos, with tracing compiled in (make waves reads
+            # the first demo's dump; it writes one only when the run asks). Icarus dumps
+            # whenever the build has tracing, so the BP3 demo has a build without.
+            traced = waves or args.sim == "verilator"
+            r, build_dir = runner.build(args.sim, waves=traced, tag="-demo")
+            xml = runner.run(r, build_dir, module, waves=waves,
                              extra_env={"BISS_DEMO_TABLE": str(table)})
         ok = all(not c.findall("failure") and not c.findall("error")
                  for c in ET.parse(xml).getroot().iter("testcase"))
@@ -41,13 +63,14 @@ def main():
     print()
     print(table.read_text(), end="")
     print()
-    print("Every frame was checked field by field against what the encoder model sent.")
-    print("delay/ns: round trip measured by the core (ceil, in 10 ns clocks); "
-          "model/ns: cable + 42.5 ns encoder delay.")
-    waves = sorted(build_dir.glob("dump.*"))
-    if waves:
-        print(f"\nWaveform: {waves[0]}")
-        print(f"Open it:  make waves (one frame as a PNG), then gtkwave {waves[0]} "
+    for line in notes:
+        print(line)
+    if not waves:
+        return
+    dumps = sorted(build_dir.glob("dump.*"))
+    if dumps:
+        print(f"\nWaveform: {dumps[0]}")
+        print(f"Open it:  make waves (one frame as a PNG), then gtkwave {dumps[0]} "
               "sim_build/waves/biss_master.gtkw")
     else:
         print(f"\n(no waveform was written; see {log})")
