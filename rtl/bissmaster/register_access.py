@@ -43,9 +43,11 @@ class RegisterAccess(wiring.Component):
     one clock of latency).
 
     **Frames** (spec section 10; f = 0 is the frame that carries S). Before S, CDM = 0 until 14
-    consecutive frames with CDM = 0 have ended (the count runs all the time, also between
-    accesses, so an access that follows another does not repeat them). Then, one CDM bit per
-    frame:
+    consecutive cycles with CDM = 0 have delivered a good frame (so the encoder saw them: a
+    cycle without an answer, NO_ACK, or a BAD_CONFIG report starts the count again; the count
+    runs all the time, also between accesses, so an access that follows another does not
+    repeat them). A cycle that fails before S ends the access with DATA_FAULT. Then, one CDM
+    bit per frame:
 
     - header, f = 0 .. 17: S=1, CTS=1, ID[2:0], ADR[6:0], CRC4[3:0] (over CTS, ID, ADR), R, W;
     - register ``i`` (``b`` = 18 + 14 i, its S frame): S=1 in ``b``; a write sends DATA[7:0] in
@@ -171,12 +173,22 @@ class RegisterAccess(wiring.Component):
         ending = Signal(AccessStatus)               # the status a cancel ends with
         m.d.comb += byte_to_send.addr.eq(index)
 
-        # Consecutive ended cycles with CDM = 0, up to 14: always counted.
+        # Consecutive ended cycles with CDM = 0, up to 14: always counted. ``idle_run`` counts
+        # every reported cycle (a cancel's 14 zeros: best effort, bounded even when the encoder
+        # stopped answering); ``idle_seen`` only cycles that delivered a good frame, so the
+        # encoder certainly saw their CDM = 0 (a NO_ACK cycle or a BAD_CONFIG report restarts
+        # it): S is sent only after 14 of those.
+        def run_after(run, reset):
+            return Mux(reset, 0, Mux(run == _IDLE, _IDLE, run + 1))
+
         idle_run = Signal(range(_IDLE + 1))
-        idle_after = Mux(self.frame_cdm, 0, Mux(idle_run == _IDLE, _IDLE, idle_run + 1))
+        idle_seen = Signal(range(_IDLE + 1))
+        idle_after = run_after(idle_run, self.frame_cdm)
+        seen_after = run_after(idle_seen, self.frame_cdm | ~self.frame_ok)
         with m.If(self.frame_end):
-            m.d.sync += idle_run.eq(idle_after)
+            m.d.sync += [idle_run.eq(idle_after), idle_seen.eq(seen_after)]
         idle_enough = Mux(self.frame_end, idle_after, idle_run) == _IDLE
+        seen_enough = Mux(self.frame_end, seen_after, idle_seen) == _IDLE
 
         frame = self.frame_end
         cds = self.frame_cds
@@ -216,10 +228,13 @@ class RegisterAccess(wiring.Component):
                         m.next = "LEAD"
 
             with m.State("LEAD"):
-                # Idle frames before S; nothing sent yet, so an abort ends at once.
+                # Idle frames before S; nothing sent yet, so an abort ends at once, and so does
+                # a frame that failed (the data channel is not fit to carry the access).
                 with m.If(self.abort):
                     finish(AccessStatus.ABORTED)
-                with m.Elif(idle_enough):
+                with m.Elif(self.frame_end & ~self.frame_ok):
+                    finish(AccessStatus.DATA_FAULT)
+                with m.Elif(seen_enough):
                     m.d.sync += step.eq(0)
                     m.next = "HEADER"
 

@@ -830,7 +830,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .request(\request$230 ),
     .result(result),
     .rst(rst),
-    .\start$41 (ca_start),
+    .\start$42 (ca_start),
     .wbuf(wbuf)
   );
   \biss_master.results  results (
@@ -5814,7 +5814,7 @@ module \biss_master.ma_stop (rst, words, w1_enable, clear, rises, enough, \start
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.register_access (abort, host_read__addr, clk, rst, frame_end, frame_ok, busy, rbuf_data, request, wbuf, frame_cdm, frame_cds, cdm, done, result, \start$41 );
+module \biss_master.register_access (abort, host_read__addr, clk, rst, frame_end, frame_ok, busy, rbuf_data, request, wbuf, frame_cdm, frame_cds, cdm, done, result, \start$42 );
   reg \$auto$verilog_backend.cc:2355:dump_module$38  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -5824,56 +5824,67 @@ module \biss_master.register_access (abort, host_read__addr, clk, rst, frame_end
   wire \$103 ;
   wire \$104 ;
   wire \$105 ;
-  wire \$106 ;
-  wire \$107 ;
+  wire [18:0] \$106 ;
+  wire [5:0] \$107 ;
   wire \$108 ;
   wire \$109 ;
   wire \$11 ;
-  wire [8:0] \$110 ;
+  wire \$110 ;
   wire \$111 ;
-  wire [8:0] \$112 ;
-  wire [5:0] \$113 ;
+  wire \$112 ;
+  wire \$113 ;
   wire \$114 ;
   wire \$115 ;
   wire \$116 ;
   wire \$117 ;
-  wire [6:0] \$118 ;
-  wire [6:0] \$119 ;
+  wire \$118 ;
+  wire \$119 ;
   wire \$12 ;
-  wire \$120 ;
-  wire [6:0] \$121 ;
-  wire \$122 ;
-  wire \$123 ;
+  wire [8:0] \$120 ;
+  wire \$121 ;
+  wire [8:0] \$122 ;
+  wire [5:0] \$123 ;
   wire \$124 ;
-  wire [5:0] \$125 ;
+  wire \$125 ;
   wire \$126 ;
   wire \$127 ;
-  wire \$128 ;
-  wire \$129 ;
+  wire [6:0] \$128 ;
+  wire [6:0] \$129 ;
   wire \$13 ;
   wire \$130 ;
-  wire [4:0] \$131 ;
-  wire [4:0] \$132 ;
-  wire [4:0] \$133 ;
-  wire [4:0] \$134 ;
-  wire \$135 ;
-  reg [3:0] \$136 ;
-  reg \$137 ;
-  reg [9:0] \$138 ;
-  reg [2:0] \$139 ;
+  wire [6:0] \$131 ;
+  wire \$132 ;
+  wire \$133 ;
+  wire \$134 ;
+  wire [5:0] \$135 ;
+  wire \$136 ;
+  wire \$137 ;
+  wire \$138 ;
+  wire \$139 ;
   wire \$14 ;
-  reg [17:0] \$140 ;
-  reg [5:0] \$141 ;
-  reg [17:0] \$142 ;
-  reg [4:0] \$143 ;
-  reg [2:0] \$144 ;
-  reg [7:0] \$145 ;
-  reg [7:0] \$146 ;
-  reg [4:0] \$147 ;
-  reg [7:0] \$148 ;
-  reg [2:0] \$149 ;
+  wire \$140 ;
+  wire [4:0] \$141 ;
+  wire [4:0] \$142 ;
+  wire [4:0] \$143 ;
+  wire [4:0] \$144 ;
+  wire \$145 ;
+  reg [3:0] \$146 ;
+  reg [3:0] \$147 ;
+  reg \$148 ;
+  reg [9:0] \$149 ;
   wire \$15 ;
+  reg [2:0] \$150 ;
+  reg [17:0] \$151 ;
+  reg [5:0] \$152 ;
+  reg [17:0] \$153 ;
+  reg [4:0] \$154 ;
+  reg [2:0] \$155 ;
+  reg [7:0] \$156 ;
+  reg [7:0] \$157 ;
+  reg [4:0] \$158 ;
+  reg [7:0] \$159 ;
   wire \$16 ;
+  reg [2:0] \$160 ;
   wire \$17 ;
   wire \$18 ;
   wire \$19 ;
@@ -5935,34 +5946,34 @@ module \biss_master.register_access (abort, host_read__addr, clk, rst, frame_end
   wire \$7 ;
   wire \$70 ;
   wire \$71 ;
-  wire [7:0] \$72 ;
-  wire \$73 ;
-  wire \$74 ;
+  wire [4:0] \$72 ;
+  wire [4:0] \$73 ;
+  wire [4:0] \$74 ;
   wire \$75 ;
   wire \$76 ;
-  wire [4:0] \$77 ;
-  wire [4:0] \$78 ;
-  wire [4:0] \$79 ;
+  wire \$77 ;
+  wire [7:0] \$78 ;
+  wire \$79 ;
   wire \$8 ;
-  wire [4:0] \$80 ;
+  wire \$80 ;
   wire \$81 ;
   wire \$82 ;
   wire \$83 ;
   wire \$84 ;
   wire \$85 ;
   wire \$86 ;
-  wire \$87 ;
-  wire \$88 ;
-  wire \$89 ;
+  wire [4:0] \$87 ;
+  wire [4:0] \$88 ;
+  wire [4:0] \$89 ;
   wire \$9 ;
-  wire \$90 ;
+  wire [4:0] \$90 ;
   wire \$91 ;
   wire \$92 ;
   wire \$93 ;
   wire \$94 ;
   wire \$95 ;
-  wire [18:0] \$96 ;
-  wire [5:0] \$97 ;
+  wire \$96 ;
+  wire \$97 ;
   wire \$98 ;
   wire \$99 ;
   input abort;
@@ -6013,6 +6024,7 @@ module \biss_master.register_access (abort, host_read__addr, clk, rst, frame_end
   wire [7:0] host_write__data;
   wire host_write__en;
   reg [3:0] idle_run = 4'h0;
+  reg [3:0] idle_seen = 4'h0;
   (* init = 6'h00 *)
   wire [5:0] index;
   wire [5:0] rbuf_addr;
@@ -6046,8 +6058,8 @@ module \biss_master.register_access (abort, host_read__addr, clk, rst, frame_end
   reg [7:0] sent = 8'h00;
   reg start;
   reg \start$25 ;
-  input \start$41 ;
-  wire \start$41 ;
+  input \start$42 ;
+  wire \start$42 ;
   reg [4:0] step = 5'h00;
   reg [7:0] to_send = 8'h00;
   reg valid;
@@ -6134,80 +6146,80 @@ module \biss_master.register_access (abort, host_read__addr, clk, rst, frame_end
     _0_ <= rbuf[host_read__addr];
   end
   assign rbuf_data = _0_;
-  reg [7:0] \wbuf$47  [63:0];
+  reg [7:0] \wbuf$48  [63:0];
   initial begin
-    \wbuf$47 [0] = 8'h00;
-    \wbuf$47 [1] = 8'h00;
-    \wbuf$47 [2] = 8'h00;
-    \wbuf$47 [3] = 8'h00;
-    \wbuf$47 [4] = 8'h00;
-    \wbuf$47 [5] = 8'h00;
-    \wbuf$47 [6] = 8'h00;
-    \wbuf$47 [7] = 8'h00;
-    \wbuf$47 [8] = 8'h00;
-    \wbuf$47 [9] = 8'h00;
-    \wbuf$47 [10] = 8'h00;
-    \wbuf$47 [11] = 8'h00;
-    \wbuf$47 [12] = 8'h00;
-    \wbuf$47 [13] = 8'h00;
-    \wbuf$47 [14] = 8'h00;
-    \wbuf$47 [15] = 8'h00;
-    \wbuf$47 [16] = 8'h00;
-    \wbuf$47 [17] = 8'h00;
-    \wbuf$47 [18] = 8'h00;
-    \wbuf$47 [19] = 8'h00;
-    \wbuf$47 [20] = 8'h00;
-    \wbuf$47 [21] = 8'h00;
-    \wbuf$47 [22] = 8'h00;
-    \wbuf$47 [23] = 8'h00;
-    \wbuf$47 [24] = 8'h00;
-    \wbuf$47 [25] = 8'h00;
-    \wbuf$47 [26] = 8'h00;
-    \wbuf$47 [27] = 8'h00;
-    \wbuf$47 [28] = 8'h00;
-    \wbuf$47 [29] = 8'h00;
-    \wbuf$47 [30] = 8'h00;
-    \wbuf$47 [31] = 8'h00;
-    \wbuf$47 [32] = 8'h00;
-    \wbuf$47 [33] = 8'h00;
-    \wbuf$47 [34] = 8'h00;
-    \wbuf$47 [35] = 8'h00;
-    \wbuf$47 [36] = 8'h00;
-    \wbuf$47 [37] = 8'h00;
-    \wbuf$47 [38] = 8'h00;
-    \wbuf$47 [39] = 8'h00;
-    \wbuf$47 [40] = 8'h00;
-    \wbuf$47 [41] = 8'h00;
-    \wbuf$47 [42] = 8'h00;
-    \wbuf$47 [43] = 8'h00;
-    \wbuf$47 [44] = 8'h00;
-    \wbuf$47 [45] = 8'h00;
-    \wbuf$47 [46] = 8'h00;
-    \wbuf$47 [47] = 8'h00;
-    \wbuf$47 [48] = 8'h00;
-    \wbuf$47 [49] = 8'h00;
-    \wbuf$47 [50] = 8'h00;
-    \wbuf$47 [51] = 8'h00;
-    \wbuf$47 [52] = 8'h00;
-    \wbuf$47 [53] = 8'h00;
-    \wbuf$47 [54] = 8'h00;
-    \wbuf$47 [55] = 8'h00;
-    \wbuf$47 [56] = 8'h00;
-    \wbuf$47 [57] = 8'h00;
-    \wbuf$47 [58] = 8'h00;
-    \wbuf$47 [59] = 8'h00;
-    \wbuf$47 [60] = 8'h00;
-    \wbuf$47 [61] = 8'h00;
-    \wbuf$47 [62] = 8'h00;
-    \wbuf$47 [63] = 8'h00;
+    \wbuf$48 [0] = 8'h00;
+    \wbuf$48 [1] = 8'h00;
+    \wbuf$48 [2] = 8'h00;
+    \wbuf$48 [3] = 8'h00;
+    \wbuf$48 [4] = 8'h00;
+    \wbuf$48 [5] = 8'h00;
+    \wbuf$48 [6] = 8'h00;
+    \wbuf$48 [7] = 8'h00;
+    \wbuf$48 [8] = 8'h00;
+    \wbuf$48 [9] = 8'h00;
+    \wbuf$48 [10] = 8'h00;
+    \wbuf$48 [11] = 8'h00;
+    \wbuf$48 [12] = 8'h00;
+    \wbuf$48 [13] = 8'h00;
+    \wbuf$48 [14] = 8'h00;
+    \wbuf$48 [15] = 8'h00;
+    \wbuf$48 [16] = 8'h00;
+    \wbuf$48 [17] = 8'h00;
+    \wbuf$48 [18] = 8'h00;
+    \wbuf$48 [19] = 8'h00;
+    \wbuf$48 [20] = 8'h00;
+    \wbuf$48 [21] = 8'h00;
+    \wbuf$48 [22] = 8'h00;
+    \wbuf$48 [23] = 8'h00;
+    \wbuf$48 [24] = 8'h00;
+    \wbuf$48 [25] = 8'h00;
+    \wbuf$48 [26] = 8'h00;
+    \wbuf$48 [27] = 8'h00;
+    \wbuf$48 [28] = 8'h00;
+    \wbuf$48 [29] = 8'h00;
+    \wbuf$48 [30] = 8'h00;
+    \wbuf$48 [31] = 8'h00;
+    \wbuf$48 [32] = 8'h00;
+    \wbuf$48 [33] = 8'h00;
+    \wbuf$48 [34] = 8'h00;
+    \wbuf$48 [35] = 8'h00;
+    \wbuf$48 [36] = 8'h00;
+    \wbuf$48 [37] = 8'h00;
+    \wbuf$48 [38] = 8'h00;
+    \wbuf$48 [39] = 8'h00;
+    \wbuf$48 [40] = 8'h00;
+    \wbuf$48 [41] = 8'h00;
+    \wbuf$48 [42] = 8'h00;
+    \wbuf$48 [43] = 8'h00;
+    \wbuf$48 [44] = 8'h00;
+    \wbuf$48 [45] = 8'h00;
+    \wbuf$48 [46] = 8'h00;
+    \wbuf$48 [47] = 8'h00;
+    \wbuf$48 [48] = 8'h00;
+    \wbuf$48 [49] = 8'h00;
+    \wbuf$48 [50] = 8'h00;
+    \wbuf$48 [51] = 8'h00;
+    \wbuf$48 [52] = 8'h00;
+    \wbuf$48 [53] = 8'h00;
+    \wbuf$48 [54] = 8'h00;
+    \wbuf$48 [55] = 8'h00;
+    \wbuf$48 [56] = 8'h00;
+    \wbuf$48 [57] = 8'h00;
+    \wbuf$48 [58] = 8'h00;
+    \wbuf$48 [59] = 8'h00;
+    \wbuf$48 [60] = 8'h00;
+    \wbuf$48 [61] = 8'h00;
+    \wbuf$48 [62] = 8'h00;
+    \wbuf$48 [63] = 8'h00;
   end
   always @(posedge clk) begin
     if (wbuf[14])
-      \wbuf$47 [wbuf[5:0]] <= wbuf[13:6];
+      \wbuf$48 [wbuf[5:0]] <= wbuf[13:6];
   end
   reg [7:0] _1_;
   always @(posedge clk) begin
-    _1_ <= \wbuf$47 [byte_to_send__addr];
+    _1_ <= \wbuf$48 [byte_to_send__addr];
   end
   assign byte_to_send__data = _1_;
   assign \$1  = step >= 4'hc;
@@ -6279,98 +6291,110 @@ module \biss_master.register_access (abort, host_read__addr, clk, rst, frame_end
   assign \$66  = idle_run + 1'h1;
   assign \$67  = \$65  ? 5'h0e : \$66 ;
   assign \$68  = frame_cdm ? 5'h00 : \$67 ;
-  assign \$69  = ! request[16:10];
-  assign \$70  = request[16:10] > 7'h40;
-  assign \$71  = \$69  | \$70 ;
-  assign \$72  = request[9:3] + request[16:10];
-  assign \$73  = \$72  > 8'h80;
-  assign \$74  = \$71  | \$73 ;
-  assign \$75  = ~ request[17];
-  assign \$76  = idle_run == 4'he;
-  assign \$77  = idle_run + 1'h1;
-  assign \$78  = \$76  ? 5'h0e : \$77 ;
-  assign \$79  = frame_cdm ? 5'h00 : \$78 ;
-  assign \$80  = frame_end ? \$79  : { 1'h0, idle_run };
-  assign \$81  = \$80  == 4'he;
-  assign \$82  = ! step;
+  assign \$69  = ~ frame_ok;
+  assign \$70  = frame_cdm | \$69 ;
+  assign \$71  = idle_seen == 4'he;
+  assign \$72  = idle_seen + 1'h1;
+  assign \$73  = \$71  ? 5'h0e : \$72 ;
+  assign \$74  = \$70  ? 5'h00 : \$73 ;
+  assign \$75  = ! request[16:10];
+  assign \$76  = request[16:10] > 7'h40;
+  assign \$77  = \$75  | \$76 ;
+  assign \$78  = request[9:3] + request[16:10];
+  assign \$79  = \$78  > 8'h80;
+  assign \$80  = \$77  | \$79 ;
+  assign \$81  = ~ request[17];
+  assign \$82  = ~ frame_ok;
   assign \$83  = frame_end & \$82 ;
-  assign \$84  = ~ frame_cdm;
-  assign \$85  = \$83  & \$84 ;
-  assign \$86  = ~ frame_ok;
-  assign \$87  = frame_end & \$86 ;
-  assign \$88  = step == 1'h1;
-  assign \$89  = frame_end & \$88 ;
-  assign \$90  = ~ frame_cds;
-  assign \$91  = \$89  & \$90 ;
-  assign \$92  = step == 5'h11;
+  assign \$84  = ~ frame_ok;
+  assign \$85  = frame_cdm | \$84 ;
+  assign \$86  = idle_seen == 4'he;
+  assign \$87  = idle_seen + 1'h1;
+  assign \$88  = \$86  ? 5'h0e : \$87 ;
+  assign \$89  = \$85  ? 5'h00 : \$88 ;
+  assign \$90  = frame_end ? \$89  : { 1'h0, idle_seen };
+  assign \$91  = \$90  == 4'he;
+  assign \$92  = ! step;
   assign \$93  = frame_end & \$92 ;
-  assign \$94  = frame_cds == req[17];
+  assign \$94  = ~ frame_cdm;
   assign \$95  = \$93  & \$94 ;
-  assign \$97  = step + 1'h1;
-  assign \$98  = step == 5'h11;
-  assign \$99  = ~ frame_ok;
-  assign \$100  = frame_end & \$99 ;
-  assign \$101  = ! step;
-  assign \$102  = frame_end & \$101 ;
-  assign \$103  = step == 1'h1;
-  assign \$104  = frame_end & \$103 ;
-  assign \$105  = step < 4'hd;
-  assign \$106  = frame_end & \$105 ;
-  assign \$107  = ! byte_to_send__addr;
-  assign \$108  = \$107  ? req[17] : 1'h0;
-  assign \$109  = frame_cds != \$108 ;
-  assign \$111  = ~ req[17];
-  assign \$113  = step + 1'h1;
-  assign \$114  = step <= 4'h9;
-  assign \$115  = { got_crc, frame_cds } != \crc$29 ;
-  assign \$116  = got != sent;
-  assign \$117  = req[17] & \$116 ;
-  assign \$118  = byte_to_send__addr + 1'h1;
-  assign \$119  = byte_to_send__addr + 1'h1;
-  assign \$120  = \$119  == req[16:10];
-  assign \$121  = byte_to_send__addr + 1'h1;
-  assign \$122  = ~ frame_ok;
-  assign \$123  = frame_end & \$122 ;
-  assign \$124  = frame_end & frame_cds;
-  assign \$125  = waited + 1'h1;
-  assign \$126  = waited == 4'hf;
-  assign \$127  = ~ frame_ok;
-  assign \$128  = frame_end & \$127 ;
-  assign \$129  = frame_end & frame_cds;
-  assign \$130  = idle_run == 4'he;
-  assign \$131  = idle_run + 1'h1;
-  assign \$132  = \$130  ? 5'h0e : \$131 ;
-  assign \$133  = frame_cdm ? 5'h00 : \$132 ;
-  assign \$134  = frame_end ? \$133  : { 1'h0, idle_run };
-  assign \$135  = \$134  == 4'he;
+  assign \$96  = ~ frame_ok;
+  assign \$97  = frame_end & \$96 ;
+  assign \$98  = step == 1'h1;
+  assign \$99  = frame_end & \$98 ;
+  assign \$100  = ~ frame_cds;
+  assign \$101  = \$99  & \$100 ;
+  assign \$102  = step == 5'h11;
+  assign \$103  = frame_end & \$102 ;
+  assign \$104  = frame_cds == req[17];
+  assign \$105  = \$103  & \$104 ;
+  assign \$107  = step + 1'h1;
+  assign \$108  = step == 5'h11;
+  assign \$109  = ~ frame_ok;
+  assign \$110  = frame_end & \$109 ;
+  assign \$111  = ! step;
+  assign \$112  = frame_end & \$111 ;
+  assign \$113  = step == 1'h1;
+  assign \$114  = frame_end & \$113 ;
+  assign \$115  = step < 4'hd;
+  assign \$116  = frame_end & \$115 ;
+  assign \$117  = ! byte_to_send__addr;
+  assign \$118  = \$117  ? req[17] : 1'h0;
+  assign \$119  = frame_cds != \$118 ;
+  assign \$121  = ~ req[17];
+  assign \$123  = step + 1'h1;
+  assign \$124  = step <= 4'h9;
+  assign \$125  = { got_crc, frame_cds } != \crc$29 ;
+  assign \$126  = got != sent;
+  assign \$127  = req[17] & \$126 ;
+  assign \$128  = byte_to_send__addr + 1'h1;
+  assign \$129  = byte_to_send__addr + 1'h1;
+  assign \$130  = \$129  == req[16:10];
+  assign \$131  = byte_to_send__addr + 1'h1;
+  assign \$132  = ~ frame_ok;
+  assign \$133  = frame_end & \$132 ;
+  assign \$134  = frame_end & frame_cds;
+  assign \$135  = waited + 1'h1;
+  assign \$136  = waited == 4'hf;
+  assign \$137  = ~ frame_ok;
+  assign \$138  = frame_end & \$137 ;
+  assign \$139  = frame_end & frame_cds;
+  assign \$140  = idle_run == 4'he;
+  assign \$141  = idle_run + 1'h1;
+  assign \$142  = \$140  ? 5'h0e : \$141 ;
+  assign \$143  = frame_cdm ? 5'h00 : \$142 ;
+  assign \$144  = frame_end ? \$143  : { 1'h0, idle_run };
+  assign \$145  = \$144  == 4'he;
   always @(posedge clk)
-    idle_run <= \$136 ;
+    idle_run <= \$146 ;
   always @(posedge clk)
-    done <= \$137 ;
+    idle_seen <= \$147 ;
   always @(posedge clk)
-    result <= \$138 ;
+    done <= \$148 ;
   always @(posedge clk)
-    access_fsm_state <= \$139 ;
+    result <= \$149 ;
   always @(posedge clk)
-    req <= \$140 ;
+    access_fsm_state <= \$150 ;
   always @(posedge clk)
-    byte_to_send__addr <= \$141 ;
+    req <= \$151 ;
   always @(posedge clk)
-    header <= \$142 ;
+    byte_to_send__addr <= \$152 ;
   always @(posedge clk)
-    step <= \$143 ;
+    header <= \$153 ;
   always @(posedge clk)
-    ending <= \$144 ;
+    step <= \$154 ;
   always @(posedge clk)
-    to_send <= \$145 ;
+    ending <= \$155 ;
   always @(posedge clk)
-    sent <= \$146 ;
+    to_send <= \$156 ;
   always @(posedge clk)
-    waited <= \$147 ;
+    sent <= \$157 ;
   always @(posedge clk)
-    got <= \$148 ;
+    waited <= \$158 ;
   always @(posedge clk)
-    got_crc <= \$149 ;
+    got <= \$159 ;
+  always @(posedge clk)
+    got_crc <= \$160 ;
   \biss_master.register_access.rx_crc  rx_crc (
     .clk(clk),
     .crc(\crc$29 ),
@@ -6626,27 +6650,39 @@ module \biss_master.register_access (abort, host_read__addr, clk, rst, frame_end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
-    \$136  = idle_run;
+    \$146  = idle_run;
     if (frame_end) begin
-      \$136  = \$68 [3:0];
+      \$146  = \$68 [3:0];
     end
     if (rst) begin
-      \$136  = 4'h0;
+      \$146  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
-    \$137  = 1'h0;
+    \$147  = idle_seen;
+    if (frame_end) begin
+      \$147  = \$74 [3:0];
+    end
+    if (rst) begin
+      \$147  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    \$148  = 1'h0;
     casez (access_fsm_state)
       3'h0:
-          if (\start$41 ) begin
-            if (\$74 ) begin
-              \$137  = 1'h1;
+          if (\start$42 ) begin
+            if (\$80 ) begin
+              \$148  = 1'h1;
             end
           end
       3'h1:
           if (abort) begin
-            \$137  = 1'h1;
+            \$148  = 1'h1;
+          end else if (\$83 ) begin
+            \$148  = 1'h1;
           end
       3'h2:
           /* empty */;
@@ -6656,194 +6692,198 @@ module \biss_master.register_access (abort, host_read__addr, clk, rst, frame_end
           /* empty */;
       3'h6:
           if (abort) begin
-          end else if (\$128 ) begin
-          end else if (\$129 ) begin
+          end else if (\$138 ) begin
+          end else if (\$139 ) begin
           end else if (frame_end) begin
-            \$137  = 1'h1;
+            \$148  = 1'h1;
           end
       3'h3:
-          if (\$135 ) begin
-            \$137  = 1'h1;
+          if (\$145 ) begin
+            \$148  = 1'h1;
           end
     endcase
     if (rst) begin
-      \$137  = 1'h0;
+      \$148  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
-    \$138  = result;
+    \$149  = result;
     casez (access_fsm_state)
       3'h0:
-          if (\start$41 ) begin
+          if (\start$42 ) begin
             (* full_case = 32'd1 *)
-            if (\$74 ) begin
-              \$138 [2:0] = 3'h6;
-              \$138 [9:3] = 7'h00;
+            if (\$80 ) begin
+              \$149 [2:0] = 3'h6;
+              \$149 [9:3] = 7'h00;
             end else begin
-              \$138 [9:3] = 7'h00;
+              \$149 [9:3] = 7'h00;
             end
           end
       3'h1:
           if (abort) begin
-            \$138 [2:0] = 3'h4;
+            \$149 [2:0] = 3'h4;
+          end else if (\$83 ) begin
+            \$149 [2:0] = 3'h5;
           end
       3'h2:
           /* empty */;
       3'h4:
           if (abort) begin
-          end else if (\$100 ) begin
-          end else if (\$102 ) begin
-          end else if (\$104 ) begin
-          end else if (\$106 ) begin
+          end else if (\$110 ) begin
+          end else if (\$112 ) begin
+          end else if (\$114 ) begin
+          end else if (\$116 ) begin
           end else if (frame_end) begin
             (* full_case = 32'd1 *)
-            if (\$115 ) begin
-            end else if (\$117 ) begin
+            if (\$125 ) begin
+            end else if (\$127 ) begin
             end else begin
-              \$138 [9:3] = \$118 ;
+              \$149 [9:3] = \$128 ;
             end
           end
       3'h5:
           /* empty */;
       3'h6:
           if (abort) begin
-          end else if (\$128 ) begin
-          end else if (\$129 ) begin
+          end else if (\$138 ) begin
+          end else if (\$139 ) begin
           end else if (frame_end) begin
-            \$138 [2:0] = 3'h0;
+            \$149 [2:0] = 3'h0;
           end
       3'h3:
-          if (\$135 ) begin
-            \$138 [2:0] = ending;
+          if (\$145 ) begin
+            \$149 [2:0] = ending;
           end
     endcase
     if (rst) begin
-      \$138  = 10'h000;
+      \$149  = 10'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
-    \$139  = access_fsm_state;
+    \$150  = access_fsm_state;
     casez (access_fsm_state)
       3'h0:
-          if (\start$41 ) begin
+          if (\start$42 ) begin
             (* full_case = 32'd1 *)
-            if (\$74 ) begin
-              \$139  = 3'h0;
+            if (\$80 ) begin
+              \$150  = 3'h0;
             end else begin
-              \$139  = 3'h1;
+              \$150  = 3'h1;
             end
           end
       3'h1:
           if (abort) begin
-            \$139  = 3'h0;
-          end else if (\$81 ) begin
-            \$139  = 3'h2;
-          end
-      3'h2:
-          if (abort) begin
-            \$139  = 3'h3;
-          end else if (\$85 ) begin
-          end else if (\$87 ) begin
-            \$139  = 3'h3;
+            \$150  = 3'h0;
+          end else if (\$83 ) begin
+            \$150  = 3'h0;
           end else if (\$91 ) begin
-            \$139  = 3'h3;
+            \$150  = 3'h2;
+          end
+      3'h2:
+          if (abort) begin
+            \$150  = 3'h3;
           end else if (\$95 ) begin
-            \$139  = 3'h3;
+          end else if (\$97 ) begin
+            \$150  = 3'h3;
+          end else if (\$101 ) begin
+            \$150  = 3'h3;
+          end else if (\$105 ) begin
+            \$150  = 3'h3;
           end else if (frame_end) begin
-            if (\$98 ) begin
-              \$139  = 3'h4;
+            if (\$108 ) begin
+              \$150  = 3'h4;
             end
           end
       3'h4:
           if (abort) begin
-            \$139  = 3'h3;
-          end else if (\$100 ) begin
-            \$139  = 3'h3;
-          end else if (\$102 ) begin
-            if (\$109 ) begin
-              \$139  = 3'h3;
+            \$150  = 3'h3;
+          end else if (\$110 ) begin
+            \$150  = 3'h3;
+          end else if (\$112 ) begin
+            if (\$119 ) begin
+              \$150  = 3'h3;
             end
-          end else if (\$104 ) begin
+          end else if (\$114 ) begin
             (* full_case = 32'd1 *)
             if (frame_cds) begin
-            end else if (\$111 ) begin
-              \$139  = 3'h5;
+            end else if (\$121 ) begin
+              \$150  = 3'h5;
             end else begin
-              \$139  = 3'h3;
+              \$150  = 3'h3;
             end
-          end else if (\$106 ) begin
+          end else if (\$116 ) begin
           end else if (frame_end) begin
             (* full_case = 32'd1 *)
-            if (\$115 ) begin
-              \$139  = 3'h3;
-            end else if (\$117 ) begin
-              \$139  = 3'h3;
+            if (\$125 ) begin
+              \$150  = 3'h3;
+            end else if (\$127 ) begin
+              \$150  = 3'h3;
             end else begin
-              if (\$120 ) begin
-                \$139  = 3'h6;
+              if (\$130 ) begin
+                \$150  = 3'h6;
               end
             end
           end
       3'h5:
           if (abort) begin
-            \$139  = 3'h3;
-          end else if (\$123 ) begin
-            \$139  = 3'h3;
-          end else if (\$124 ) begin
-            \$139  = 3'h4;
+            \$150  = 3'h3;
+          end else if (\$133 ) begin
+            \$150  = 3'h3;
+          end else if (\$134 ) begin
+            \$150  = 3'h4;
           end else if (frame_end) begin
-            if (\$126 ) begin
-              \$139  = 3'h3;
+            if (\$136 ) begin
+              \$150  = 3'h3;
             end
           end
       3'h6:
           if (abort) begin
-            \$139  = 3'h3;
-          end else if (\$128 ) begin
-            \$139  = 3'h3;
-          end else if (\$129 ) begin
-            \$139  = 3'h3;
+            \$150  = 3'h3;
+          end else if (\$138 ) begin
+            \$150  = 3'h3;
+          end else if (\$139 ) begin
+            \$150  = 3'h3;
           end else if (frame_end) begin
-            \$139  = 3'h0;
+            \$150  = 3'h0;
           end
       3'h3:
-          if (\$135 ) begin
-            \$139  = 3'h0;
+          if (\$145 ) begin
+            \$150  = 3'h0;
           end
     endcase
     if (rst) begin
-      \$139  = 3'h0;
+      \$150  = 3'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
-    \$140  = req;
+    \$151  = req;
     casez (access_fsm_state)
       3'h0:
-          if (\start$41 ) begin
+          if (\start$42 ) begin
             (* full_case = 32'd1 *)
-            if (\$74 ) begin
+            if (\$80 ) begin
             end else begin
-              \$140  = request;
+              \$151  = request;
             end
           end
     endcase
     if (rst) begin
-      \$140  = 18'h00000;
+      \$151  = 18'h00000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
-    \$141  = byte_to_send__addr;
+    \$152  = byte_to_send__addr;
     casez (access_fsm_state)
       3'h0:
-          if (\start$41 ) begin
+          if (\start$42 ) begin
             (* full_case = 32'd1 *)
-            if (\$74 ) begin
+            if (\$80 ) begin
             end else begin
-              \$141  = 6'h00;
+              \$152  = 6'h00;
             end
           end
       3'h1:
@@ -6852,115 +6892,116 @@ module \biss_master.register_access (abort, host_read__addr, clk, rst, frame_end
           /* empty */;
       3'h4:
           if (abort) begin
-          end else if (\$100 ) begin
-          end else if (\$102 ) begin
-          end else if (\$104 ) begin
-          end else if (\$106 ) begin
+          end else if (\$110 ) begin
+          end else if (\$112 ) begin
+          end else if (\$114 ) begin
+          end else if (\$116 ) begin
           end else if (frame_end) begin
             (* full_case = 32'd1 *)
-            if (\$115 ) begin
-            end else if (\$117 ) begin
+            if (\$125 ) begin
+            end else if (\$127 ) begin
             end else begin
               (* full_case = 32'd1 *)
-              if (\$120 ) begin
+              if (\$130 ) begin
               end else begin
-                \$141  = \$121 [5:0];
+                \$152  = \$131 [5:0];
               end
             end
           end
     endcase
     if (rst) begin
-      \$141  = 6'h00;
+      \$152  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
-    \$142  = header;
+    \$153  = header;
     casez (access_fsm_state)
       3'h0:
-          if (\start$41 ) begin
+          if (\start$42 ) begin
             (* full_case = 32'd1 *)
-            if (\$74 ) begin
+            if (\$80 ) begin
             end else begin
-              \$142  = { 2'h3, request[2:0], request[9:3], 4'h0, \$75 , request[17] };
+              \$153  = { 2'h3, request[2:0], request[9:3], 4'h0, \$81 , request[17] };
             end
           end
       3'h1:
           /* empty */;
       3'h2:
           if (abort) begin
-          end else if (\$85 ) begin
-          end else if (\$87 ) begin
-          end else if (\$91 ) begin
           end else if (\$95 ) begin
+          end else if (\$97 ) begin
+          end else if (\$101 ) begin
+          end else if (\$105 ) begin
           end else if (frame_end) begin
-            \$142  = \$96 [17:0];
+            \$153  = \$106 [17:0];
           end
     endcase
     if (rst) begin
-      \$142  = 18'h00000;
+      \$153  = 18'h00000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
-    \$143  = step;
+    \$154  = step;
     casez (access_fsm_state)
       3'h0:
           /* empty */;
       3'h1:
           if (abort) begin
-          end else if (\$81 ) begin
-            \$143  = 5'h00;
+          end else if (\$83 ) begin
+          end else if (\$91 ) begin
+            \$154  = 5'h00;
           end
       3'h2:
           if (abort) begin
-          end else if (\$85 ) begin
-          end else if (\$87 ) begin
-          end else if (\$91 ) begin
           end else if (\$95 ) begin
+          end else if (\$97 ) begin
+          end else if (\$101 ) begin
+          end else if (\$105 ) begin
           end else if (frame_end) begin
-            \$143  = \$97 [4:0];
-            if (\$98 ) begin
-              \$143  = 5'h00;
+            \$154  = \$107 [4:0];
+            if (\$108 ) begin
+              \$154  = 5'h00;
             end
           end
       3'h4:
           if (abort) begin
-          end else if (\$100 ) begin
-          end else if (\$102 ) begin
+          end else if (\$110 ) begin
+          end else if (\$112 ) begin
             (* full_case = 32'd1 *)
-            if (\$109 ) begin
+            if (\$119 ) begin
             end else begin
-              \$143  = 5'h01;
+              \$154  = 5'h01;
             end
-          end else if (\$104 ) begin
+          end else if (\$114 ) begin
             if (frame_cds) begin
-              \$143  = 5'h02;
+              \$154  = 5'h02;
             end
-          end else if (\$106 ) begin
-            \$143  = \$113 [4:0];
+          end else if (\$116 ) begin
+            \$154  = \$123 [4:0];
           end else if (frame_end) begin
             (* full_case = 32'd1 *)
-            if (\$115 ) begin
-            end else if (\$117 ) begin
+            if (\$125 ) begin
+            end else if (\$127 ) begin
             end else begin
-              \$143  = 5'h00;
+              \$154  = 5'h00;
             end
           end
       3'h5:
           if (abort) begin
-          end else if (\$123 ) begin
-          end else if (\$124 ) begin
-            \$143  = 5'h02;
+          end else if (\$133 ) begin
+          end else if (\$134 ) begin
+            \$154  = 5'h02;
           end
     endcase
     if (rst) begin
-      \$143  = 5'h00;
+      \$154  = 5'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
-    \$144  = ending;
+    \$155  = ending;
     casez (access_fsm_state)
       3'h0:
           /* empty */;
@@ -6968,66 +7009,66 @@ module \biss_master.register_access (abort, host_read__addr, clk, rst, frame_end
           /* empty */;
       3'h2:
           if (abort) begin
-            \$144  = 3'h4;
-          end else if (\$85 ) begin
-          end else if (\$87 ) begin
-            \$144  = 3'h5;
-          end else if (\$91 ) begin
-            \$144  = 3'h2;
+            \$155  = 3'h4;
           end else if (\$95 ) begin
-            \$144  = 3'h3;
+          end else if (\$97 ) begin
+            \$155  = 3'h5;
+          end else if (\$101 ) begin
+            \$155  = 3'h2;
+          end else if (\$105 ) begin
+            \$155  = 3'h3;
           end
       3'h4:
           if (abort) begin
-            \$144  = 3'h4;
-          end else if (\$100 ) begin
-            \$144  = 3'h5;
-          end else if (\$102 ) begin
-            if (\$109 ) begin
-              \$144  = 3'h3;
+            \$155  = 3'h4;
+          end else if (\$110 ) begin
+            \$155  = 3'h5;
+          end else if (\$112 ) begin
+            if (\$119 ) begin
+              \$155  = 3'h3;
             end
-          end else if (\$104 ) begin
+          end else if (\$114 ) begin
             (* full_case = 32'd1 *)
             if (frame_cds) begin
-            end else if (\$111 ) begin
+            end else if (\$121 ) begin
             end else begin
-              \$144  = 3'h3;
+              \$155  = 3'h3;
             end
-          end else if (\$106 ) begin
+          end else if (\$116 ) begin
           end else if (frame_end) begin
-            if (\$115 ) begin
-              \$144  = 3'h1;
-            end else if (\$117 ) begin
-              \$144  = 3'h3;
+            if (\$125 ) begin
+              \$155  = 3'h1;
+            end else if (\$127 ) begin
+              \$155  = 3'h3;
             end
           end
       3'h5:
           if (abort) begin
-            \$144  = 3'h4;
-          end else if (\$123 ) begin
-            \$144  = 3'h5;
-          end else if (\$124 ) begin
+            \$155  = 3'h4;
+          end else if (\$133 ) begin
+            \$155  = 3'h5;
+          end else if (\$134 ) begin
           end else if (frame_end) begin
-            if (\$126 ) begin
-              \$144  = 3'h3;
+            if (\$136 ) begin
+              \$155  = 3'h3;
             end
           end
       3'h6:
           if (abort) begin
-            \$144  = 3'h4;
-          end else if (\$128 ) begin
-            \$144  = 3'h5;
-          end else if (\$129 ) begin
-            \$144  = 3'h3;
+            \$155  = 3'h4;
+          end else if (\$138 ) begin
+            \$155  = 3'h5;
+          end else if (\$139 ) begin
+            \$155  = 3'h3;
           end
     endcase
     if (rst) begin
-      \$144  = 3'h0;
+      \$155  = 3'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
-    \$145  = to_send;
+    \$156  = to_send;
     casez (access_fsm_state)
       3'h0:
           /* empty */;
@@ -7037,26 +7078,26 @@ module \biss_master.register_access (abort, host_read__addr, clk, rst, frame_end
           /* empty */;
       3'h4:
           if (abort) begin
-          end else if (\$100 ) begin
-          end else if (\$102 ) begin
+          end else if (\$110 ) begin
+          end else if (\$112 ) begin
             (* full_case = 32'd1 *)
-            if (\$109 ) begin
+            if (\$119 ) begin
             end else begin
-              \$145  = byte_to_send__data;
+              \$156  = byte_to_send__data;
             end
-          end else if (\$104 ) begin
-            \$145  = \$110 [7:0];
-          end else if (\$106 ) begin
-            \$145  = \$112 [7:0];
+          end else if (\$114 ) begin
+            \$156  = \$120 [7:0];
+          end else if (\$116 ) begin
+            \$156  = \$122 [7:0];
           end
     endcase
     if (rst) begin
-      \$145  = 8'h00;
+      \$156  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
-    \$146  = sent;
+    \$157  = sent;
     casez (access_fsm_state)
       3'h0:
           /* empty */;
@@ -7066,22 +7107,22 @@ module \biss_master.register_access (abort, host_read__addr, clk, rst, frame_end
           /* empty */;
       3'h4:
           if (abort) begin
-          end else if (\$100 ) begin
-          end else if (\$102 ) begin
+          end else if (\$110 ) begin
+          end else if (\$112 ) begin
             (* full_case = 32'd1 *)
-            if (\$109 ) begin
+            if (\$119 ) begin
             end else begin
-              \$146  = byte_to_send__data;
+              \$157  = byte_to_send__data;
             end
           end
     endcase
     if (rst) begin
-      \$146  = 8'h00;
+      \$157  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
-    \$147  = waited;
+    \$158  = waited;
     casez (access_fsm_state)
       3'h0:
           /* empty */;
@@ -7091,29 +7132,29 @@ module \biss_master.register_access (abort, host_read__addr, clk, rst, frame_end
           /* empty */;
       3'h4:
           if (abort) begin
-          end else if (\$100 ) begin
-          end else if (\$102 ) begin
-          end else if (\$104 ) begin
+          end else if (\$110 ) begin
+          end else if (\$112 ) begin
+          end else if (\$114 ) begin
             if (frame_cds) begin
-            end else if (\$111 ) begin
-              \$147  = 5'h00;
+            end else if (\$121 ) begin
+              \$158  = 5'h00;
             end
           end
       3'h5:
           if (abort) begin
-          end else if (\$123 ) begin
-          end else if (\$124 ) begin
+          end else if (\$133 ) begin
+          end else if (\$134 ) begin
           end else if (frame_end) begin
-            \$147  = \$125 [4:0];
+            \$158  = \$135 [4:0];
           end
     endcase
     if (rst) begin
-      \$147  = 5'h00;
+      \$158  = 5'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
-    \$148  = got;
+    \$159  = got;
     casez (access_fsm_state)
       3'h0:
           /* empty */;
@@ -7123,22 +7164,22 @@ module \biss_master.register_access (abort, host_read__addr, clk, rst, frame_end
           /* empty */;
       3'h4:
           if (abort) begin
-          end else if (\$100 ) begin
-          end else if (\$102 ) begin
-          end else if (\$104 ) begin
-          end else if (\$106 ) begin
-            if (\$114 ) begin
-              \$148  = { got[6:0], frame_cds };
+          end else if (\$110 ) begin
+          end else if (\$112 ) begin
+          end else if (\$114 ) begin
+          end else if (\$116 ) begin
+            if (\$124 ) begin
+              \$159  = { got[6:0], frame_cds };
             end
           end
     endcase
     if (rst) begin
-      \$148  = 8'h00;
+      \$159  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
-    \$149  = got_crc;
+    \$160  = got_crc;
     casez (access_fsm_state)
       3'h0:
           /* empty */;
@@ -7148,19 +7189,19 @@ module \biss_master.register_access (abort, host_read__addr, clk, rst, frame_end
           /* empty */;
       3'h4:
           if (abort) begin
-          end else if (\$100 ) begin
-          end else if (\$102 ) begin
-          end else if (\$104 ) begin
-          end else if (\$106 ) begin
+          end else if (\$110 ) begin
+          end else if (\$112 ) begin
+          end else if (\$114 ) begin
+          end else if (\$116 ) begin
             (* full_case = 32'd1 *)
-            if (\$114 ) begin
+            if (\$124 ) begin
             end else begin
-              \$149  = { got_crc[1:0], frame_cds };
+              \$160  = { got_crc[1:0], frame_cds };
             end
           end
     endcase
     if (rst) begin
-      \$149  = 3'h0;
+      \$160  = 3'h0;
     end
   end
   assign host_write__addr = wbuf[5:0];
@@ -7183,9 +7224,9 @@ module \biss_master.register_access (abort, host_read__addr, clk, rst, frame_end
   assign \request.write  = request[17];
   assign \result.status  = result[2:0];
   assign \result.bytes_done  = result[9:3];
-  assign \$96  = { header, 1'h0 };
-  assign \$110  = { to_send, 1'h0 };
-  assign \$112  = { to_send, 1'h0 };
+  assign \$106  = { header, 1'h0 };
+  assign \$120  = { to_send, 1'h0 };
+  assign \$122  = { to_send, 1'h0 };
 endmodule
 
 (* generator = "Amaranth" *)

@@ -26,7 +26,6 @@ from encoder_model.cocotb_encoder import Cable
 from encoder_model.control import Bp3Eds, ControlFaults, ControlSlave, RegisterFile
 from master_contract import CA_STATUS, CRC_CODE, MAX_DATA_BITS, STATUS, ca_frame_bound
 from sim.shared.control_channel import IDLE_FRAMES, ControlChannel
-from sim.shared.discovery import expected_to_fail
 from sim.shared.testbench import CLK_HZ, Testbench, preset
 
 #: A BP3 encoder's processing time (Ack to Start) here: short, so that a 1,000-frame
@@ -412,20 +411,16 @@ def _queue(tb, **kwargs):
 
 
 @cocotb.test()
-@expected_to_fail("issue 13: the engine's idle count counts request cycles the encoder never "
-                  "saw (NO_ACK, BAD_CONFIG; also in a DATA_FAULT's cancel), so S goes out "
-                  "before the encoder has seen 14 idle frames: the next access ends NO_ANSWER")
 async def idle_count_skips_missed_cycles(dut):
     """The 14 idle frames before S must be frames the encoder saw (spec section 10: the slave
     counts them). After a write (its P and final cycle are 2 of them), 12 request cycles that
     the encoder does not answer (no Ack: unplugged, or its MA broken) and, separately, 12
     requests refused as BAD_CONFIG (no cycle on the line at all), and a read cancelled with
     DATA_FAULT by a cycle without an answer in its header, are each followed by a read. The
-    engine counts every reported cycle that carried CDM = 0 (register_access.py, ``idle_run``:
-    ``frame_end`` whatever ``frame_ok``), so it sends S in the read's first cycle; the encoder
-    has seen 2 idle frames (13 after the DATA_FAULT), ignores the S and the read ends NO_ANSWER
-    (a read at once after it is OK again: its cancel sent 14 zeros the encoder saw). Expected:
-    OK, the engine sending idle frames until 14 that ended with a frame. BP3 DL_POS 24 at
+    engine once counted every reported cycle that carried CDM = 0, sent S in the read's first
+    cycle, and the encoder (2 idle frames seen, 13 after the DATA_FAULT) ignored it: NO_ANSWER.
+    Now S waits for 14 cycles that delivered a good frame (register_access.py, ``idle_seen``):
+    every read is OK. BP3 DL_POS 24 at
     10 MHz, 0 m."""
     regs = bp3_registers(Bp3Eds(24))
     slave = ControlSlave(regs)
