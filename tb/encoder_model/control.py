@@ -62,6 +62,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from .crc import _check_bit, bits_to_int, int_to_bits
+
 __all__ = [
     "IDLE_FRAMES", "CRC4_WIDTH", "CRC4_POLY", "CRC4_XOR_OUT", "BANK_SIZE",
     "BANK_SELECT", "EDS_BANK", "PROFILE_ID", "DATA_LENGTH", "SERIAL_NUMBER", "DEVICE_ID",
@@ -108,12 +110,6 @@ BP3_DL_MAX = {0: 0x39, 1: 0x3F}     # by the C bit
 BP3_DL_MIN = 0x02
 
 
-def _check_bit(bit):
-    if bit not in (0, 1):
-        raise ValueError(f"bits must be 0 or 1, not {bit!r}")
-    return bit
-
-
 def _check_uint(name, value, n_bits):
     if not isinstance(value, int) or not 0 <= value < (1 << n_bits):
         raise ValueError(f"{name} must be an unsigned {n_bits}-bit int, not {value!r}")
@@ -122,16 +118,11 @@ def _check_uint(name, value, n_bits):
 
 def byte_bits(value, n=DATA_BITS):
     """``value`` as ``n`` bits, MSB first (the order every control field is sent in)."""
-    _check_uint("value", value, n)
-    return [(value >> (n - 1 - i)) & 1 for i in range(n)]
+    return int_to_bits(_check_uint("value", value, n), n)
 
 
-def bits_value(bits):
-    """Inverse of :func:`byte_bits`."""
-    value = 0
-    for bit in bits:
-        value = (value << 1) | _check_bit(bit)
-    return value
+#: Inverse of :func:`byte_bits` (the model's MSB-first conversion, :func:`crc.bits_to_int`).
+bits_value = bits_to_int
 
 
 def crc4(bits):
