@@ -23,6 +23,10 @@ rtl: setup  ## regenerate rtl/generated/ (the core, the AXI4-Lite and Wishbone b
 	$(PY) -m bissmaster.generate -o $(VERILOG)
 	for bus in $(BUS_TOPS); do $(PY) -m bissmaster.generate --top $$bus -o rtl/generated/biss_master_$$bus.v; done
 
+.PHONY: driver
+driver:  ## the C driver (sw/, strict C99): sw/build/libbissmaster.so and .a, the example of docs/driver.md compiled
+	$(MAKE) -C sw
+
 .PHONY: regmap
 regmap: setup  ## regenerate the register map's C header, docs/registers.md and IP-XACT from rtl/regmap/biss_master.rdl
 	$(PY) -m bissmaster.regmap --header sw/include/biss_master_regs.h --markdown docs/registers.md \
@@ -42,11 +46,11 @@ lint: setup  ## verilator --lint-only -Wall on the default Verilog, a BiSS-C-onl
 unit: setup  ## fast tests: encoder model, RTL blocks (Amaranth simulator), generated Verilog up to date
 	$(PY) -m pytest tb/tests -q -n $(JOBS)
 
-sim: setup  ## cocotb regression of the generated Verilog and the bus tops on one simulator (SIM=...)
-	SIM=$(SIM) $(PY) -m pytest sim/test_regression.py sim/test_bus.py -q
+sim: setup  ## cocotb regression of the generated Verilog, the bus tops and the C driver on one simulator (SIM=...)
+	SIM=$(SIM) $(PY) -m pytest sim/test_regression.py sim/test_bus.py sim/test_driver.py -q
 
-sim-all: setup  ## cocotb regression and bus-top scenarios on Verilator and Icarus, $(JOBS) workers
-	$(PY) -m pytest sim/test_regression.py sim/test_bus.py -q -n $(JOBS)
+sim-all: setup  ## cocotb regression, bus-top and C-driver scenarios on Verilator and Icarus, $(JOBS) workers
+	$(PY) -m pytest sim/test_regression.py sim/test_bus.py sim/test_driver.py -q -n $(JOBS)
 
 campaigns: setup  ## reliability campaigns, fast slice (CRC, line faults, LC, config fuzz, random mix) + report
 	rm -rf sim_build/campaign/slice
@@ -88,5 +92,5 @@ package: setup  ## wheel of the bissmaster package and its bissmaster-generate c
 	@ls dist/*.whl
 
 clean:  ## remove build trees (keeps .venv)
-	rm -rf sim_build .pytest_cache tb/tests/sim_build dist build rtl/bissmaster.egg-info
+	rm -rf sw/build sim_build .pytest_cache tb/tests/sim_build dist build rtl/bissmaster.egg-info
 	find . -name __pycache__ -not -path './.venv/*' -prune -exec rm -rf {} +

@@ -204,8 +204,13 @@ def load(path=RDL):
 
 # -- The PeakRDL outputs --------------------------------------------------------------------
 def write_header(root, path):
+    """C99 (no ``static_assert``, no ``<assert.h>``: the driver in sw/ builds with
+    ``-std=c99 -pedantic``), macro names from each register's path
+    (``BISS_MASTER_REGS__CHANNELX__IRQ_STATUS__DONE_bm``) rather than from its type, whose
+    name carries a hash wherever the RDL assigns a property from outside (``->enable``)."""
+    from peakrdl_cheader.c_standards import CStandard
     from peakrdl_cheader.exporter import CHeaderExporter
-    CHeaderExporter().export(root.top, str(path))
+    CHeaderExporter().export(root.top, str(path), std=CStandard.gnu99, reuse_typedefs=False)
 
 
 def write_markdown(root, path):

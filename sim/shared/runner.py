@@ -6,6 +6,7 @@ Shared by the pytest entries (sim/test_regression.py, sim/test_campaigns.py) and
 
 import contextlib
 import os
+import subprocess
 import sys
 import xml.etree.ElementTree as ET
 from pathlib import Path
@@ -25,6 +26,8 @@ CLK_HZ = SYS_CLK_HZ
 #: The cocotb scenario modules (sim/scenarios/), as the simulator's Python imports them.
 MASTER_SCENARIOS = "sim.scenarios.master"
 BUS_SCENARIOS = "sim.scenarios.bus"
+#: The C driver (sw/) against the AXI4-Lite bus top (sim/test_driver.py).
+DRIVER_SCENARIOS = "sim.scenarios.driver"
 #: The committed bus tops (bissmaster.generate --top axil|wb ...), by bus.
 BUSES = ("axil", "wb")
 CONTROL_SCENARIOS = "sim.scenarios.control_channel"
@@ -169,6 +172,15 @@ def build_bus_once(sim, bus):
         verilog, toplevel = bus_top(bus)
         _built[key] = build(sim, verilog=verilog, tag=f"-{bus}-{worker}", toplevel=toplevel)
     return _built[key]
+
+
+def build_driver():
+    """Build the C driver (sw/Makefile: strict C99, ``make driver`` does the same) into this
+    worker's own folder; returns the path of ``libbissmaster.so``."""
+    worker = os.environ.get("PYTEST_XDIST_WORKER", "main")
+    out = BUILD / f"driver-{worker}"
+    subprocess.run(["make", "-s", "-C", str(ROOT / "sw"), f"BUILD={out}"], check=True)
+    return out / "libbissmaster.so"
 
 
 def run_campaign(campaign, scale, results, sim="verilator", seed=None, extra_env=None,

@@ -1,0 +1,187 @@
+"""The C driver (sw/, ``libbissmaster.so``) called through ctypes, its bus hooks served by a
+bus model of the simulation.
+
+The driver is the software under test: the scenarios (sim/scenarios/driver.py) call its
+functions as a CPU would and check what it returns against the encoder models, never against
+the driver's own tables. Its structs are mirrored here field by field from
+sw/include/biss_master.h (a field out of place reads as garbage, which the checks catch).
+
+How a blocking C call meets the simulation (cocotb 2.x): :meth:`CDriver.call` runs the C
+function in a thread with ``cocotb.task.bridge``; the driver calls its read/write hooks, ctypes
+callbacks that block that thread on ``cocotb.task.resume(bus.read / bus.write)`` while the
+simulation performs the AXI4-Lite transaction. An exception in a hook (a bus error response)
+is kept and raised when the C call returns: ctypes itself would only print it.
+"""
+
+import ctypes
+from ctypes import (CFUNCTYPE, POINTER, Structure, byref, c_bool, c_char_p, c_int, c_size_t,
+                    c_uint, c_uint8, c_uint16, c_uint32, c_uint64, c_void_p)
+
+READ32 = CFUNCTYPE(c_uint32, c_void_p, c_size_t)             # uintptr_t is size_t wide here
+WRITE32 = CFUNCTYPE(None, c_void_p, c_size_t, c_uint32)
+
+
+class Bus(Structure):
+    _fields_ = [("base", c_size_t), ("read32", READ32), ("write32", WRITE32), ("ctx", c_void_p)]
+
+
+class Channel(Structure):
+    _fields_ = [("bus", Bus), ("base", c_size_t), ("index", c_uint8),
+                ("max_data_bits", c_uint8 * 2), ("timer_width", c_uint8),
+                ("has_counters", c_bool), ("has_timestamp", c_bool)]
+
+
+class WordFormat(Structure):
+    _fields_ = [("data_bits", c_uint8), ("crc", c_uint8), ("nenw", c_bool), ("lc", c_bool)]
+
+
+class Config(Structure):
+    _fields_ = [("ma_half_period", c_uint16), ("delay_limit", c_uint16),
+                ("request_period", c_uint32), ("break_time", c_uint32),
+                ("ack_limit", c_uint32), ("timeout_limit", c_uint32),
+                ("word", WordFormat * 2), ("word1_enable", c_bool), ("end_check", c_bool),
+                ("spw_check", c_bool), ("spw_tolerance", c_uint8)]
+
+
+class Preset(Structure):
+    _fields_ = [("name", c_char_p), ("words", c_uint8), ("word", WordFormat * 2),
+                ("spw_check", c_bool), ("spw_tolerance", c_uint8)]
+
+
+class State(Structure):
+    _fields_ = [(n, c_bool) for n in ("busy", "config_error", "periodic", "trigger_enable")]
+
+
+class Result(Structure):
+    _fields_ = [("word0", c_uint64), ("word1", c_uint64), ("timestamp", c_uint32),
+                ("seq", c_uint16), ("line_delay", c_uint16), ("status", c_uint8),
+                ("lc", c_uint8)] + [(n, c_bool) for n in (
+                    "cds", "w0_ne", "w0_nw", "w0_crc_ok", "w1_ne", "w1_nw", "w1_crc_ok",
+                    "lc_repeat", "lc_skip", "lc_zero", "spw_mismatch")]
+
+    def as_dict(self):
+        """The keys of ``BusTestbench.result`` (``time`` for the timestamp), so that
+        ``BusTestbench.check_result`` judges it against the encoder model."""
+        d = {name: getattr(self, name) for name, _ in self._fields_}
+        d = {k: int(v) for k, v in d.items()}
+        d["time"] = d.pop("timestamp")
+        return d
+
+
+#: biss_counters_t, in its field order.
+COUNTER_FIELDS = ("crc_word0", "crc_word1", "no_ack", "no_start", "delay_range", "slo_stuck_low",
+                  "lc_repeat", "lc_skip", "lc_zero", "spw_mismatch", "overrun", "aborted",
+                  "no_stop")
+
+
+class Counters(Structure):
+    _fields_ = [(n, c_uint16) for n in COUNTER_FIELDS]
+
+
+_P = POINTER
+#: Every function of biss_master.h: (restype, argtypes).
+PROTOTYPES = {
+    "biss_error_name": (c_char_p, [c_int]),
+    "biss_status_name": (c_char_p, [c_uint]),
+    "biss_probe": (c_int, [_P(Bus), _P(c_uint)]),
+    "biss_trigger": (c_int, [_P(Bus)]),
+    "biss_irq_pending": (c_uint32, [_P(Bus)]),
+    "biss_channel_init": (c_int, [_P(Channel), _P(Bus), c_uint]),
+    "biss_preset_count": (c_uint, []),
+    "biss_preset_at": (_P(Preset), [c_uint]),
+    "biss_preset_find": (_P(Preset), [c_char_p]),
+    "biss_config_from_preset": (c_int, [_P(Config), c_char_p, c_uint32, c_uint32]),
+    "biss_config_check": (c_int, [_P(Channel), _P(Config)]),
+    "biss_configure": (c_int, [_P(Channel), _P(Config)]),
+    "biss_configure_preset": (c_int, [_P(Channel), c_char_p, c_uint32, c_uint32]),
+    "biss_start": (c_int, [_P(Channel)]),
+    "biss_abort": (c_int, [_P(Channel)]),
+    "biss_clear_counters": (c_int, [_P(Channel)]),
+    "biss_set_periodic": (c_int, [_P(Channel), c_bool, c_uint32]),
+    "biss_set_trigger_enable": (c_int, [_P(Channel), c_bool]),
+    "biss_read_state": (c_int, [_P(Channel), _P(State)]),
+    "biss_wait_done": (c_int, [_P(Channel), c_uint32]),
+    "biss_read_result": (c_int, [_P(Channel), _P(Result)]),
+    "biss_read_counters": (c_int, [_P(Channel), _P(Counters)]),
+    "biss_irq_enable": (c_int, [_P(Channel), c_uint32]),
+    "biss_irq_status": (c_uint32, [_P(Channel)]),
+    "biss_irq_clear": (c_int, [_P(Channel), c_uint32]),
+}
+
+
+def load(path):
+    """The library at ``path`` with every prototype declared."""
+    lib = ctypes.CDLL(str(path))
+    for name, (restype, argtypes) in PROTOTYPES.items():
+        fn = getattr(lib, name)
+        fn.restype, fn.argtypes = restype, argtypes
+    return lib
+
+
+class CDriver:
+    """The driver on one bus model (``read(addr)`` / ``write(addr, value)`` coroutines, e.g.
+    ``bus_testbench.AxiLiteBus``) at byte address ``base``."""
+
+    def __init__(self, lib_path, bus_model, base=0):
+        self.lib = load(lib_path)
+        self.model = bus_model
+        self.transactions = 0
+        self._hook_error = None
+        # Kept as attributes: ctypes callbacks must outlive every call that may use them.
+        self._read32, self._write32 = READ32(self._read_hook), WRITE32(self._write_hook)
+        self.bus = Bus(base, self._read32, self._write32, None)
+
+    def _read_hook(self, ctx, addr):
+        from cocotb.task import resume
+        try:
+            self.transactions += 1
+            return resume(self.model.read)(addr)
+        except BaseException as e:          # noqa: BLE001 - re-raised by call()
+            self._hook_error = self._hook_error or e
+            return 0
+
+    def _write_hook(self, ctx, addr, value):
+        from cocotb.task import resume
+        try:
+            self.transactions += 1
+            resume(self.model.write)(addr, value)
+        except BaseException as e:          # noqa: BLE001 - re-raised by call()
+            self._hook_error = self._hook_error or e
+
+    async def call(self, name, *args):
+        """``name(*args)`` of the library, run as a CPU would while the simulation goes on."""
+        from cocotb.task import bridge
+        fn = getattr(self.lib, name)
+        self._hook_error = None
+
+        def blocking():                     # bridge() wants a Python function (__qualname__)
+            return fn(*args)
+        ret = await bridge(blocking)()
+        if self._hook_error is not None:
+            raise self._hook_error
+        return ret
+
+    def error_name(self, code):
+        return self.lib.biss_error_name(code).decode()
+
+    async def check(self, name, *args):
+        """``call``, and fail unless it returns BISS_OK."""
+        ret = await self.call(name, *args)
+        assert ret == 0, f"{name}: {self.error_name(ret)}"
+        return ret
+
+    # -- The handful of calls the scenarios make often ------------------------------------
+    async def channel(self, index):
+        ch = Channel()
+        await self.check("biss_channel_init", byref(ch), byref(self.bus), index)
+        return ch
+
+    async def result(self, ch):
+        res = Result()
+        await self.check("biss_read_result", byref(ch), byref(res))
+        return res.as_dict()
+
+    async def counters(self, ch):
+        cnt = Counters()
+        await self.check("biss_read_counters", byref(ch), byref(cnt))
+        return {n: getattr(cnt, n) for n in COUNTER_FIELDS}

@@ -1,0 +1,502 @@
+/*
+ * Bare-metal C driver for the BiSS master bus tops: see biss_master.h and docs/driver.md.
+ *
+ * Every address and field comes from the generated biss_master_regs.h: offsets through
+ * offsetof() on its biss_master_regs_t, fields through its _bm / _bp macros.
+ */
+#include "biss_master.h"
+
+/* -- Addresses and fields, from the generated header ------------------------------------ */
+
+#define GLOBAL_OFF(member) ((uintptr_t)offsetof(biss_master_regs_t, member))
+#define CHANNEL_OFF(member) \
+    ((uintptr_t)(offsetof(biss_master_regs_t, channel[0].member) - \
+                 offsetof(biss_master_regs_t, channel[0])))
+#define CHANNEL_STRIDE \
+    ((uintptr_t)(offsetof(biss_master_regs_t, channel[1]) - \
+                 offsetof(biss_master_regs_t, channel[0])))
+#define CHANNEL_BASE(n) ((uintptr_t)offsetof(biss_master_regs_t, channel[0]) + \
+                         (uintptr_t)(n) * CHANNEL_STRIDE)
+#define CHANNEL_SLOTS \
+    (sizeof(((biss_master_regs_t *)0)->channel) / sizeof(((biss_master_regs_t *)0)->channel[0]))
+
+/* F is a field's macro prefix, e.g. CH(CFG_MA__MA_HALF_PERIOD); two levels so that CH()
+ * expands before the pasting. */
+#define G(f) BISS_MASTER_REGS__##f
+#define CH(f) BISS_MASTER_REGS__CHANNELX__##f
+#define GET(word, F) GET_(word, F)
+#define GET_(word, F) (((uint32_t)(word) & (uint32_t)F##_bm) >> F##_bp)
+#define PUT(value, F) PUT_(value, F)
+#define PUT_(value, F) (((uint32_t)(value) << F##_bp) & (uint32_t)F##_bm)
+#define MAX(F) MAX_(F)
+#define MAX_(F) ((uint32_t)F##_bm >> F##_bp)
+
+/* The protocol's MA rate range (BiSS C: 80 kHz .. 10 MHz). */
+#define MA_HZ_MIN 80000u
+#define MA_HZ_MAX 10000000u
+
+static uint32_t rd(const biss_bus_t *bus, uintptr_t off)
+{
+    return bus->read32(bus->ctx, bus->base + off);
+}
+
+static void wr(const biss_bus_t *bus, uintptr_t off, uint32_t value)
+{
+    bus->write32(bus->ctx, bus->base + off, value);
+}
+
+static uint32_t ch_rd(const biss_channel_t *ch, uintptr_t off)
+{
+    return ch->bus.read32(ch->bus.ctx, ch->base + off);
+}
+
+static void ch_wr(const biss_channel_t *ch, uintptr_t off, uint32_t value)
+{
+    ch->bus.write32(ch->bus.ctx, ch->base + off, value);
+}
+
+static bool bus_ok(const biss_bus_t *bus)
+{
+    return bus != NULL && bus->read32 != NULL && bus->write32 != NULL;
+}
+
+static bool channel_ok(const biss_channel_t *ch)
+{
+    return ch != NULL && bus_ok(&ch->bus);
+}
+
+/* -- Names ------------------------------------------------------------------------------ */
+
+const char *biss_error_name(int err)
+{
+    static const char *const names[] = {
+        "BISS_OK", "BISS_ERR_ARG", "BISS_ERR_NO_DEVICE", "BISS_ERR_VERSION",
+        "BISS_ERR_CHANNEL", "BISS_ERR_UNKNOWN_PRESET", "BISS_ERR_MA_RATE",
+        "BISS_ERR_MA_HALF_PERIOD", "BISS_ERR_DATA_BITS", "BISS_ERR_CRC", "BISS_ERR_LC",
+        "BISS_ERR_WORD1", "BISS_ERR_SPW_CHECK", "BISS_ERR_TIME_RANGE", "BISS_ERR_DELAY_LIMIT",
+        "BISS_ERR_RUNNING", "BISS_ERR_REFUSED", "BISS_ERR_TIMEOUT",
+    };
+    if (err > 0 || (unsigned)-err >= sizeof names / sizeof names[0])
+        return "?";
+    return names[-err];
+}
+
+const char *biss_status_name(unsigned status)
+{
+    static const char *const names[] = {
+        "OK", "CRC_ERROR_WORD0", "CRC_ERROR_WORD1", "CRC_ERROR_BOTH", "SIGN_OF_LIFE",
+        "SPW_MISMATCH", "NO_ACK", "NO_START", "DELAY_RANGE", "SLO_STUCK_LOW", "ABORTED",
+        "BAD_CONFIG", "NO_STOP",
+    };
+    return status < sizeof names / sizeof names[0] ? names[status] : "?";
+}
+
+/* -- Device ------------------------------------------------------------------------------ */
+
+biss_err_t biss_probe(const biss_bus_t *bus, unsigned *channels)
+{
+    uint32_t version;
+    if (!bus_ok(bus))
+        return BISS_ERR_ARG;
+    if (GET(rd(bus, GLOBAL_OFF(id)), G(ID__ID)) != G(ID__ID_reset))
+        return BISS_ERR_NO_DEVICE;
+    version = rd(bus, GLOBAL_OFF(version));
+    if (GET(version, G(VERSION__MAJOR)) != G(VERSION__MAJOR_reset))
+        return BISS_ERR_VERSION;
+    if (channels != NULL)
+        *channels = GET(rd(bus, GLOBAL_OFF(channels)), G(CHANNELS__COUNT));
+    return BISS_OK;
+}
+
+biss_err_t biss_trigger(const biss_bus_t *bus)
+{
+    if (!bus_ok(bus))
+        return BISS_ERR_ARG;
+    wr(bus, GLOBAL_OFF(trigger), PUT(1, G(TRIGGER__START)));
+    return BISS_OK;
+}
+
+uint32_t biss_irq_pending(const biss_bus_t *bus)
+{
+    if (!bus_ok(bus))
+        return 0;
+    return GET(rd(bus, GLOBAL_OFF(irq_pending)), G(IRQ_PENDING__CHANNEL));
+}
+
+biss_err_t biss_channel_init(biss_channel_t *ch, const biss_bus_t *bus, unsigned index)
+{
+    unsigned channels;
+    uint32_t caps;
+    biss_err_t err;
+    if (ch == NULL || !bus_ok(bus))
+        return BISS_ERR_ARG;
+    err = biss_probe(bus, &channels);
+    if (err != BISS_OK)
+        return err;
+    if (index >= channels || index >= CHANNEL_SLOTS)
+        return BISS_ERR_CHANNEL;
+    ch->bus = *bus;
+    ch->index = (uint8_t)index;
+    ch->base = bus->base + CHANNEL_BASE(index);
+    caps = ch_rd(ch, CHANNEL_OFF(caps));
+    ch->max_data_bits[0] = (uint8_t)GET(caps, CH(CAPS__DATA_BITS_W0));
+    ch->max_data_bits[1] = (uint8_t)GET(caps, CH(CAPS__DATA_BITS_W1));
+    ch->timer_width = (uint8_t)GET(caps, CH(CAPS__TIMER_WIDTH));
+    ch->has_counters = GET(caps, CH(CAPS__COUNTERS)) != 0;
+    ch->has_timestamp = GET(caps, CH(CAPS__TIMESTAMP)) != 0;
+    return BISS_OK;
+}
+
+/* -- Presets ----------------------------------------------------------------------------- */
+
+/* Word 0 of every preset: position, nE nW, CRC-6. BiSS Safety's SPW: nE nW, LC, CRC-16. */
+#define CPW(bits) { (bits), BISS_CRC6, true, false }
+#define SPW(bits) { (bits), BISS_CRC16, true, true }
+#define NO_WORD { 0, BISS_CRC_NONE, false, false }
+#define BISS_C(name, bits) { name, 1, { CPW(bits), NO_WORD }, false, 0 }
+/* The SPW check accepts one SPW LSB of distance: CPW and SPW are separate conversions. */
+#define SAFETY(name, cpw, spw) { name, 2, { CPW(cpw), SPW(spw) }, true, 1 }
+
+static const biss_preset_t presets[] = {
+    /* BiSS Safety (RESOLUTE FS, FORTiS FS): CPW + SPW */
+    SAFETY("resolute_fs_lmm", 32, 32),
+    SAFETY("resolute_fs_rsm", 28, 24),
+    SAFETY("resolute_fs_rsh", 36, 28),
+    SAFETY("fortis_fs_rsh", 36, 28),
+    /* BiSS C, one word */
+    BISS_C("evolute_26", 26),
+    BISS_C("evolute_32", 32),
+    BISS_C("evolute_36", 36),
+    BISS_C("resolute_c_18", 18),
+    BISS_C("resolute_c_26", 26),
+    BISS_C("resolute_c_32", 32),
+    BISS_C("resolute_c_36", 36),
+};
+
+unsigned biss_preset_count(void)
+{
+    return (unsigned)(sizeof presets / sizeof presets[0]);
+}
+
+const biss_preset_t *biss_preset_at(unsigned i)
+{
+    return i < biss_preset_count() ? &presets[i] : NULL;
+}
+
+static bool same_name(const char *a, const char *b)
+{
+    while (*a != '\0' && *a == *b) {
+        a++;
+        b++;
+    }
+    return *a == *b;
+}
+
+const biss_preset_t *biss_preset_find(const char *name)
+{
+    unsigned i;
+    if (name == NULL)
+        return NULL;
+    for (i = 0; i < biss_preset_count(); i++)
+        if (same_name(presets[i].name, name))
+            return &presets[i];
+    return NULL;
+}
+
+biss_err_t biss_config_from_preset(biss_config_t *cfg, const char *name, uint32_t clk_hz,
+                                   uint32_t ma_hz)
+{
+    static const biss_config_t zero;
+    const biss_preset_t *p;
+    uint64_t half;
+    if (cfg == NULL || name == NULL)
+        return BISS_ERR_ARG;
+    p = biss_preset_find(name);
+    if (p == NULL)
+        return BISS_ERR_UNKNOWN_PRESET;
+    if (clk_hz == 0 || ma_hz < MA_HZ_MIN || ma_hz > MA_HZ_MAX)
+        return BISS_ERR_MA_RATE;
+    /* Rounded up: the MA rate is at most ma_hz. */
+    half = ((uint64_t)clk_hz + 2u * (uint64_t)ma_hz - 1u) / (2u * (uint64_t)ma_hz);
+    if (half < 2 || half > MAX(CH(CFG_MA__MA_HALF_PERIOD)))
+        return BISS_ERR_MA_HALF_PERIOD;
+    *cfg = zero;
+    cfg->ma_half_period = (uint16_t)half;
+    cfg->word[0] = p->word[0];
+    cfg->word1_enable = p->words == 2;
+    if (cfg->word1_enable)
+        cfg->word[1] = p->word[1];
+    cfg->spw_check = p->spw_check;
+    cfg->spw_tolerance = p->spw_tolerance;
+    return BISS_OK;
+}
+
+/* -- Configuration ------------------------------------------------------------------------ */
+
+/* A function, not a comparison in place: a field as wide as its C type would give a
+ * comparison that is always true (-Wtype-limits), and the map may widen or narrow it. */
+static bool fits(uint32_t value, uint32_t max)
+{
+    return value <= max;
+}
+
+static biss_err_t check_word(const biss_word_format_t *w, unsigned max_bits, unsigned field_max)
+{
+    if (w->data_bits == 0 || !fits(w->data_bits, max_bits) || !fits(w->data_bits, field_max))
+        return BISS_ERR_DATA_BITS;
+    if (!fits(w->crc, BISS_CRC16))
+        return BISS_ERR_CRC;
+    return BISS_OK;
+}
+
+static bool time_fits(const biss_channel_t *ch, uint32_t value, uint32_t field_max)
+{
+    if (!fits(value, field_max))
+        return false;
+    return ch->timer_width >= 32 || (value >> ch->timer_width) == 0;
+}
+
+biss_err_t biss_config_check(const biss_channel_t *ch, const biss_config_t *cfg)
+{
+    biss_err_t err;
+    if (!channel_ok(ch) || cfg == NULL)
+        return BISS_ERR_ARG;
+    if (cfg->ma_half_period < 2 || !fits(cfg->ma_half_period, MAX(CH(CFG_MA__MA_HALF_PERIOD))))
+        return BISS_ERR_MA_HALF_PERIOD;
+    if (!fits(cfg->delay_limit, MAX(CH(CFG_MA__DELAY_LIMIT))))
+        return BISS_ERR_DELAY_LIMIT;
+    if (!time_fits(ch, cfg->request_period, MAX(CH(CFG_PERIOD__REQUEST_PERIOD))) ||
+        !time_fits(ch, cfg->break_time, MAX(CH(CFG_BREAK__BREAK_TIME))) ||
+        !time_fits(ch, cfg->ack_limit, MAX(CH(CFG_ACK__ACK_LIMIT))) ||
+        !time_fits(ch, cfg->timeout_limit, MAX(CH(CFG_TIMEOUT__TIMEOUT_LIMIT))))
+        return BISS_ERR_TIME_RANGE;
+    err = check_word(&cfg->word[0], ch->max_data_bits[0], MAX(CH(CFG_WORDS__W0_DATA_BITS)));
+    if (err != BISS_OK)
+        return err;
+    if (cfg->word1_enable) {
+        if (ch->max_data_bits[1] == 0)
+            return BISS_ERR_WORD1;
+        err = check_word(&cfg->word[1], ch->max_data_bits[1],
+                         MAX(CH(CFG_WORDS__W1_DATA_BITS)));
+        if (err != BISS_OK)
+            return err;
+        if (cfg->word[0].lc && cfg->word[1].lc)
+            return BISS_ERR_LC;
+    }
+    if (cfg->spw_check && (!cfg->word1_enable || cfg->word[1].data_bits > cfg->word[0].data_bits
+                           || cfg->word[1].crc == BISS_CRC_NONE))
+        return BISS_ERR_SPW_CHECK;
+    if (!fits(cfg->spw_tolerance, MAX(CH(CFG_CHECKS__SPW_TOLERANCE))))
+        return BISS_ERR_SPW_CHECK;
+    return BISS_OK;
+}
+
+biss_err_t biss_configure(biss_channel_t *ch, const biss_config_t *cfg)
+{
+    const biss_word_format_t *w0, *w1;
+    uint32_t words;
+    biss_err_t err = biss_config_check(ch, cfg);
+    if (err != BISS_OK)
+        return err;
+    if (GET(ch_rd(ch, CHANNEL_OFF(ctrl)), CH(CTRL__PERIODIC)))
+        return BISS_ERR_RUNNING;
+    w0 = &cfg->word[0];
+    w1 = &cfg->word[1];
+    ch_wr(ch, CHANNEL_OFF(cfg_ma), PUT(cfg->ma_half_period, CH(CFG_MA__MA_HALF_PERIOD)) |
+                                   PUT(cfg->delay_limit, CH(CFG_MA__DELAY_LIMIT)));
+    ch_wr(ch, CHANNEL_OFF(cfg_period), PUT(cfg->request_period, CH(CFG_PERIOD__REQUEST_PERIOD)));
+    ch_wr(ch, CHANNEL_OFF(cfg_break), PUT(cfg->break_time, CH(CFG_BREAK__BREAK_TIME)));
+    ch_wr(ch, CHANNEL_OFF(cfg_ack), PUT(cfg->ack_limit, CH(CFG_ACK__ACK_LIMIT)));
+    ch_wr(ch, CHANNEL_OFF(cfg_timeout), PUT(cfg->timeout_limit, CH(CFG_TIMEOUT__TIMEOUT_LIMIT)));
+    words = PUT(w0->data_bits, CH(CFG_WORDS__W0_DATA_BITS)) | PUT(w0->nenw, CH(CFG_WORDS__W0_NENW))
+          | PUT(w0->lc, CH(CFG_WORDS__W0_LC)) | PUT(w0->crc, CH(CFG_WORDS__W0_CRC));
+    if (cfg->word1_enable)
+        words |= PUT(1, CH(CFG_WORDS__W1_ENABLE))
+               | PUT(w1->data_bits, CH(CFG_WORDS__W1_DATA_BITS))
+               | PUT(w1->nenw, CH(CFG_WORDS__W1_NENW)) | PUT(w1->lc, CH(CFG_WORDS__W1_LC))
+               | PUT(w1->crc, CH(CFG_WORDS__W1_CRC));
+    ch_wr(ch, CHANNEL_OFF(cfg_words), words);
+    ch_wr(ch, CHANNEL_OFF(cfg_checks), PUT(cfg->end_check, CH(CFG_CHECKS__END_CHECK))
+                                     | PUT(cfg->spw_check, CH(CFG_CHECKS__SPW_CHECK))
+                                     | PUT(cfg->spw_tolerance, CH(CFG_CHECKS__SPW_TOLERANCE)));
+    if (GET(ch_rd(ch, CHANNEL_OFF(state)), CH(STATE__CONFIG_ERROR)))
+        return BISS_ERR_REFUSED;
+    return BISS_OK;
+}
+
+biss_err_t biss_configure_preset(biss_channel_t *ch, const char *name, uint32_t clk_hz,
+                                 uint32_t ma_hz)
+{
+    biss_config_t cfg;
+    biss_err_t err = biss_config_from_preset(&cfg, name, clk_hz, ma_hz);
+    return err != BISS_OK ? err : biss_configure(ch, &cfg);
+}
+
+/* -- Control ----------------------------------------------------------------------------- */
+
+/* ctrl's stored fields (periodic, trigger_enable) with some pulse bits added: a write of ctrl
+ * must keep the stored ones, and its pulses read 0. */
+static biss_err_t ctrl_pulse(biss_channel_t *ch, uint32_t pulses)
+{
+    if (!channel_ok(ch))
+        return BISS_ERR_ARG;
+    ch_wr(ch, CHANNEL_OFF(ctrl), ch_rd(ch, CHANNEL_OFF(ctrl)) | pulses);
+    return BISS_OK;
+}
+
+biss_err_t biss_start(biss_channel_t *ch)
+{
+    return ctrl_pulse(ch, PUT(1, CH(CTRL__START)));
+}
+
+biss_err_t biss_abort(biss_channel_t *ch)
+{
+    return ctrl_pulse(ch, PUT(1, CH(CTRL__ABORT)));
+}
+
+biss_err_t biss_clear_counters(biss_channel_t *ch)
+{
+    return ctrl_pulse(ch, PUT(1, CH(CTRL__CLEAR_COUNTERS)));
+}
+
+biss_err_t biss_set_periodic(biss_channel_t *ch, bool enable, uint32_t period_clocks)
+{
+    uint32_t ctrl;
+    if (!channel_ok(ch))
+        return BISS_ERR_ARG;
+    if (!time_fits(ch, period_clocks, MAX(CH(CFG_PERIOD__REQUEST_PERIOD))))
+        return BISS_ERR_TIME_RANGE;
+    ctrl = ch_rd(ch, CHANNEL_OFF(ctrl)) & ~(uint32_t)CH(CTRL__PERIODIC_bm);
+    if (enable)
+        ch_wr(ch, CHANNEL_OFF(cfg_period), PUT(period_clocks, CH(CFG_PERIOD__REQUEST_PERIOD)));
+    ch_wr(ch, CHANNEL_OFF(ctrl), ctrl | PUT(enable, CH(CTRL__PERIODIC)));
+    return BISS_OK;
+}
+
+biss_err_t biss_set_trigger_enable(biss_channel_t *ch, bool enable)
+{
+    uint32_t ctrl;
+    if (!channel_ok(ch))
+        return BISS_ERR_ARG;
+    ctrl = ch_rd(ch, CHANNEL_OFF(ctrl)) & ~(uint32_t)CH(CTRL__TRIGGER_ENABLE_bm);
+    ch_wr(ch, CHANNEL_OFF(ctrl), ctrl | PUT(enable, CH(CTRL__TRIGGER_ENABLE)));
+    return BISS_OK;
+}
+
+biss_err_t biss_read_state(biss_channel_t *ch, biss_state_t *state)
+{
+    uint32_t s, c;
+    if (!channel_ok(ch) || state == NULL)
+        return BISS_ERR_ARG;
+    s = ch_rd(ch, CHANNEL_OFF(state));
+    c = ch_rd(ch, CHANNEL_OFF(ctrl));
+    state->busy = GET(s, CH(STATE__BUSY)) != 0;
+    state->config_error = GET(s, CH(STATE__CONFIG_ERROR)) != 0;
+    state->periodic = GET(c, CH(CTRL__PERIODIC)) != 0;
+    state->trigger_enable = GET(c, CH(CTRL__TRIGGER_ENABLE)) != 0;
+    return BISS_OK;
+}
+
+biss_err_t biss_wait_done(biss_channel_t *ch, uint32_t max_polls)
+{
+    uint32_t i;
+    if (!channel_ok(ch))
+        return BISS_ERR_ARG;
+    for (i = 0; i < max_polls; i++) {
+        if (ch_rd(ch, CHANNEL_OFF(irq_status)) & BISS_IRQ_DONE) {
+            ch_wr(ch, CHANNEL_OFF(irq_status), BISS_IRQ_DONE);
+            return BISS_OK;
+        }
+    }
+    return BISS_ERR_TIMEOUT;
+}
+
+/* -- Results ------------------------------------------------------------------------------ */
+
+biss_err_t biss_read_result(biss_channel_t *ch, biss_result_t *res)
+{
+    uint32_t s, seq, lo, hi;
+    if (!channel_ok(ch) || res == NULL)
+        return BISS_ERR_ARG;
+    /* result.status first: reading it takes the snapshot the other registers return. */
+    s = ch_rd(ch, CHANNEL_OFF(result.status));
+    res->status = (uint8_t)GET(s, CH(RESULT__STATUS__STATUS));
+    res->cds = GET(s, CH(RESULT__STATUS__CDS)) != 0;
+    res->w0_ne = GET(s, CH(RESULT__STATUS__W0_NE)) != 0;
+    res->w0_nw = GET(s, CH(RESULT__STATUS__W0_NW)) != 0;
+    res->w0_crc_ok = GET(s, CH(RESULT__STATUS__W0_CRC_OK)) != 0;
+    res->w1_ne = GET(s, CH(RESULT__STATUS__W1_NE)) != 0;
+    res->w1_nw = GET(s, CH(RESULT__STATUS__W1_NW)) != 0;
+    res->w1_crc_ok = GET(s, CH(RESULT__STATUS__W1_CRC_OK)) != 0;
+    res->lc_repeat = GET(s, CH(RESULT__STATUS__LC_REPEAT)) != 0;
+    res->lc_skip = GET(s, CH(RESULT__STATUS__LC_SKIP)) != 0;
+    res->lc_zero = GET(s, CH(RESULT__STATUS__LC_ZERO)) != 0;
+    res->spw_mismatch = GET(s, CH(RESULT__STATUS__SPW_MISMATCH)) != 0;
+    res->lc = (uint8_t)GET(s, CH(RESULT__STATUS__LC));
+    seq = ch_rd(ch, CHANNEL_OFF(result.seq));
+    res->seq = (uint16_t)GET(seq, CH(RESULT__SEQ__SEQ));
+    res->line_delay = (uint16_t)GET(seq, CH(RESULT__SEQ__LINE_DELAY));
+    lo = GET(ch_rd(ch, CHANNEL_OFF(result.w0_lo)), CH(RESULT__W0_LO__DATA));
+    hi = GET(ch_rd(ch, CHANNEL_OFF(result.w0_hi)), CH(RESULT__W0_HI__DATA));
+    res->word0 = (uint64_t)hi << CH(RESULT__W0_LO__DATA_bw) | lo;
+    lo = GET(ch_rd(ch, CHANNEL_OFF(result.w1_lo)), CH(RESULT__W1_LO__DATA));
+    hi = GET(ch_rd(ch, CHANNEL_OFF(result.w1_hi)), CH(RESULT__W1_HI__DATA));
+    res->word1 = (uint64_t)hi << CH(RESULT__W1_LO__DATA_bw) | lo;
+    res->timestamp = GET(ch_rd(ch, CHANNEL_OFF(result.timestamp)), CH(RESULT__TIMESTAMP__TIME));
+    return BISS_OK;
+}
+
+biss_err_t biss_read_counters(biss_channel_t *ch, biss_counters_t *cnt)
+{
+    uint32_t w;
+    if (!channel_ok(ch) || cnt == NULL)
+        return BISS_ERR_ARG;
+    w = ch_rd(ch, CHANNEL_OFF(count_crc));
+    cnt->crc_word0 = (uint16_t)GET(w, CH(COUNT_CRC__CRC_WORD0));
+    cnt->crc_word1 = (uint16_t)GET(w, CH(COUNT_CRC__CRC_WORD1));
+    w = ch_rd(ch, CHANNEL_OFF(count_ack));
+    cnt->no_ack = (uint16_t)GET(w, CH(COUNT_ACK__NO_ACK));
+    cnt->no_start = (uint16_t)GET(w, CH(COUNT_ACK__NO_START));
+    w = ch_rd(ch, CHANNEL_OFF(count_line));
+    cnt->delay_range = (uint16_t)GET(w, CH(COUNT_LINE__DELAY_RANGE));
+    cnt->slo_stuck_low = (uint16_t)GET(w, CH(COUNT_LINE__SLO_STUCK_LOW));
+    w = ch_rd(ch, CHANNEL_OFF(count_lc));
+    cnt->lc_repeat = (uint16_t)GET(w, CH(COUNT_LC__LC_REPEAT));
+    cnt->lc_skip = (uint16_t)GET(w, CH(COUNT_LC__LC_SKIP));
+    w = ch_rd(ch, CHANNEL_OFF(count_check));
+    cnt->lc_zero = (uint16_t)GET(w, CH(COUNT_CHECK__LC_ZERO));
+    cnt->spw_mismatch = (uint16_t)GET(w, CH(COUNT_CHECK__SPW_MISMATCH));
+    w = ch_rd(ch, CHANNEL_OFF(count_cycle));
+    cnt->overrun = (uint16_t)GET(w, CH(COUNT_CYCLE__OVERRUN));
+    cnt->aborted = (uint16_t)GET(w, CH(COUNT_CYCLE__ABORTED));
+    w = ch_rd(ch, CHANNEL_OFF(count_stop));
+    cnt->no_stop = (uint16_t)GET(w, CH(COUNT_STOP__NO_STOP));
+    return BISS_OK;
+}
+
+/* -- Interrupts ---------------------------------------------------------------------------- */
+
+biss_err_t biss_irq_enable(biss_channel_t *ch, uint32_t causes)
+{
+    if (!channel_ok(ch))
+        return BISS_ERR_ARG;
+    ch_wr(ch, CHANNEL_OFF(irq_enable),
+          PUT(GET(causes, CH(IRQ_STATUS__DONE)), CH(IRQ_ENABLE__DONE)) |
+          PUT(GET(causes, CH(IRQ_STATUS__ERROR)), CH(IRQ_ENABLE__ERROR)));
+    return BISS_OK;
+}
+
+uint32_t biss_irq_status(biss_channel_t *ch)
+{
+    if (!channel_ok(ch))
+        return 0;
+    return ch_rd(ch, CHANNEL_OFF(irq_status)) & (BISS_IRQ_DONE | BISS_IRQ_ERROR);
+}
+
+biss_err_t biss_irq_clear(biss_channel_t *ch, uint32_t causes)
+{
+    if (!channel_ok(ch))
+        return BISS_ERR_ARG;
+    ch_wr(ch, CHANNEL_OFF(irq_status), causes & (BISS_IRQ_DONE | BISS_IRQ_ERROR));
+    return BISS_OK;
+}
