@@ -114,3 +114,15 @@ def test_docs_example_is_the_compiled_example():
     example = (ROOT / "sw" / "examples" / "two_axes.c").read_text()
     body = example.split("\n", 1)[1]                      # without its first comment line
     assert body.strip() in (ROOT / "docs" / "driver.md").read_text()
+
+
+def test_error_names_are_the_headers(lib):
+    """biss_error_name gives, for every code of biss_err_t in biss_master.h, that code's name."""
+    header = (ROOT / "sw" / "include" / "biss_master.h").read_text()
+    enum = header.split("typedef enum {", 1)[1].split("} biss_err_t;", 1)[0]
+    codes = {name: int(value) for name, value in re.findall(r"(BISS_\w+) = (-?\d+)", enum)}
+    assert len(codes) > 10 and codes["BISS_OK"] == 0
+    for name, value in codes.items():
+        assert lib.biss_error_name(value).decode() == name
+    assert lib.biss_error_name(min(codes.values()) - 1).decode() == "?"
+    assert lib.biss_error_name(1).decode() == "?"
