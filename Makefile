@@ -73,7 +73,7 @@ waves: demo  ## the demo waveform, FSM states and status by name: one frame (FRA
 	  --png sim_build/waves.png $(if $(FRAME),--frame $(FRAME))
 
 .PHONY: bench
-bench: setup  ## simulated performance: cycle overhead, verdict latency, line-delay error, sim speed
+bench: setup  ## simulated performance: cycle overhead, verdict latency, line-delay error, sim speed, register-access cost
 	$(PY) -m sim.tools.perf
 
 .PHONY: synth

@@ -12,6 +12,8 @@ a crashed test.
 * ``verdict_latency``: clocks from the sampling of the last CRC bit to ``done`` / ``valid``.
 * ``line_delay_error``: reported ``line_delay`` against the model's realised round trip.
 * ``sim_speed``: N frames of one fixed scenario; wall time of the frame loop only.
+* ``register_access_cost``: data frames and time per register access (control channel) against
+  the protocol's floor, with request cycles as fast as the encoder allows.
 """
 
 import json
@@ -22,10 +24,16 @@ import time
 
 import cocotb
 from cocotb.simtime import get_sim_time
-from cocotb.triggers import RisingEdge
+from cocotb.triggers import ClockCycles, FallingEdge, RisingEdge
 
+import protocol_facts as facts
 from encoder_model import frames
 from encoder_model.cocotb_encoder import Cable
+from encoder_model.control import (ADDRESS_BITS, CRC4_WIDTH, DATA_BITS, ID_BITS, IDLE_FRAMES,
+                                   Bp3Eds, ControlSlave, RegisterFile)
+from encoder_model.control_master import RegisterAccess, control_frame_cdm
+from master_contract import CA_STATUS
+from sim.shared.control_channel import ControlChannel
 from sim.shared.testbench import CLK_HZ, Testbench, half_period_for, preset
 
 PS_PER_CLK = round(1e12 / CLK_HZ)
@@ -345,3 +353,152 @@ async def sim_speed(dut):
                        "preset": SPEED_PRESET, "ma_hz": SPEED_MA_HZ, "cable_m": SPEED_CABLE_M,
                        "checked": tb.checked, "failures": tb.failures,
                        "python": platform.python_version()})
+
+
+# -- 5. Register access: frames and time per access ------------------------------------------------
+#: A BP3 encoder with a 24-bit position (32 bits after CDS: position, nE, nW, CRC-6) at the
+#: protocol's fastest: 10 MHz, Start on the 3rd MA rise (the minimum processing time), the adaptive
+#: timeout of 1.5 MA periods (spec section 9), no 31.25 us rule; 100 m of cable.
+CONTROL_DL_POS = 24
+CONTROL_MA_HZ = 10e6
+CONTROL_CABLE_M = 100
+CONTROL_TIMEOUT_MA_PERIODS = 1.5
+CONTROL_BANK = 1            # the EDS bank (register 0x41), selected: 0x00..0x3F show it
+CONTROL_USER_REGISTER = 0x50
+
+
+def control_frame_bits(count):
+    """CDM bits of the control frame of an access to ``count`` consecutive registers, from spec
+    section 10: S, CTS, ID[2:0], ADR[6:0], CRC4[3:0], R, W (18 bits), then per register S, 8
+    data slots, 4 CRC-4 slots and P (14 bits; "14 more frames per register")."""
+    header = 1 + 1 + ID_BITS + ADDRESS_BITS + CRC4_WIDTH + 1 + 1
+    return header + count * (1 + DATA_BITS + CRC4_WIDTH + 1)
+
+
+def shortest_cycle_s(fmt, ma_hz, cable_m, timeout_s):
+    """Spec section 9, the minimum cycle time of one slave: TMA x (5 + data bits + CRC bits) +
+    line delay + processing time + timeout, with the processing time at its minimum (Start on
+    the 3rd MA rise: the 5 already hold it, as in section 1) and the line delay of ``cable_m``
+    (10 ns/m round trip + the encoder's 42.5 ns, section 3)."""
+    line_delay_s = cable_m * facts.CABLE_ROUND_TRIP_S_PER_M + facts.ENCODER_INTERNAL_DELAY_S
+    return (5 + fmt.total_bits) / ma_hz + line_delay_s + timeout_s
+
+
+async def power_up_again(tb):
+    """Reset the core as ``Testbench.start`` does (its count of CDM = 0 frames before S starts
+    again at 0, docs/control-channel.md) and wait out the power-up break."""
+    dut = tb.dut
+    await tb.wait_idle()
+    await tb.encoder_ready()
+    await FallingEdge(dut.clk)
+    dut.rst.value = 1
+    await ClockCycles(dut.clk, 3)
+    dut.rst.value = 0
+    await RisingEdge(dut.clk)
+    tb.t_clk0 = get_sim_time("step")
+    await tb.wait_idle()
+
+
+def idle_on_line(records, t_power_up_s, t_start_s):
+    """CDM = 0 frames in a row on the line since power-up, before ``t_start_s``: what the master
+    can know the encoder has seen (a cycle already running at ``t_start_s`` included)."""
+    n = 0
+    for r in reversed([r for r in records if t_power_up_s <= r.t_first_fall_s < t_start_s]):
+        if r.cdm:
+            break
+        n += 1
+    return n
+
+
+@cocotb.test()
+async def register_access_cost(dut):
+    """Register accesses through the ``ca_*`` ports against the encoder model's control slave,
+    request cycles as fast as the encoder allows (``cfg_request_period`` = 0: the engine's own
+    cycles with ``periodic`` = 0, and once with ``periodic`` = 1), every cycle checked field by
+    field and every OK access's CDM against the reference layout (``ControlChannel``).
+
+    Each access is timed from ``ca_start`` to ``ca_done`` in cycles reported (frames) and in
+    simulated time, against the protocol's floor: the CDM = 0 frames still missing of the 14
+    before S (14 after power-up; after a read none: its 12 slot zeros, P and final frame are
+    14 already) plus the control frame's CDM bits (:func:`control_frame_bits`). Also recorded:
+    the start-to-start time of every cycle of the access by its CDM (a CDM = 1 cycle holds MA
+    low through the timeout, docs/timing.md)."""
+    eds = Bp3Eds(CONTROL_DL_POS)
+    regs = RegisterFile.bp3(eds, eds_bank=CONTROL_BANK, bank_select=CONTROL_BANK)
+    fmt = frames.bp3(CONTROL_DL_POS)
+    timeout_s = CONTROL_TIMEOUT_MA_PERIODS / CONTROL_MA_HZ
+    tb = Testbench(dut, seed=45)
+    tb.processing_s = (0.0, 0.0)
+    cable = Cable(length_m=CONTROL_CABLE_M)
+    await tb.start(cable=cable, timeout_s=timeout_s, control=ControlSlave(regs), min_cycle_s=0)
+    tb.configure(fmt, CONTROL_MA_HZ)                    # cfg_request_period = 0
+    rows, checked = [], 0
+    t_power_up = 0.0
+    ctl = ControlChannel(tb)
+
+    async def measure(label, count, after, *, write=False, periodic=False):
+        if periodic:
+            await FallingEdge(dut.clk)
+            dut.periodic.value = 1
+            await ctl.monitor.wait_frames(ctl.monitor.count + IDLE_FRAMES)
+        address = CONTROL_USER_REGISTER if write else 0x00
+        data = bytes([0x5A ^ len(rows)]) if write else None
+        expected = None if write else bytes(regs.read(a) for a in range(address, address + count))
+        t0 = get_sim_time("step") * 1e-12
+        acc = await ctl.access(0, address, count, write=write, data=data)
+        if periodic:
+            await FallingEdge(dut.clk)
+            dut.periodic.value = 0
+        assert acc.status == CA_STATUS["OK"], str(acc)
+        if write:
+            assert regs.read(address) == data[0], "the write did not reach the register"
+        else:
+            assert acc.data == expected, acc.data.hex()
+        records = tb.encoder.records
+        own = [r for r in records if acc.t_start_s <= r.t_first_fall_s <= acc.t_done_s]
+        falls = [r.t_first_fall_s for r in own]
+        cycles = {0: [], 1: []}
+        for r, a, b in zip(own, falls, falls[1:]):
+            cycles[r.cdm].append(b - a)
+        cdm = [r.cdm for r in own]
+        request = (RegisterAccess.write(address, data) if write
+                   else RegisterAccess.read(address, count))
+        layout = control_frame_cdm(request)
+        assert len(layout) == control_frame_bits(count), "spec count and reference layout differ"
+        idle_known = min(IDLE_FRAMES, idle_on_line(records, t_power_up, t0))
+        rows.append({
+            "access": label, "count": count, "write": write, "periodic": periodic,
+            "after": after, "idle_on_line": idle_known,
+            "floor_frames": IDLE_FRAMES - idle_known + control_frame_bits(count),
+            "frames": acc.frames, "time_s": acc.t_done_s - acc.t_start_s,
+            "frames_in_flight": acc.frames - len(own), "idle_before_s": cdm.index(1),
+            "control_frames": len(layout),
+            "after_last_p": len(own) - cdm.index(1) - len(layout),
+            "cdm1_frames": sum(cdm), "cycle_cdm0_s": cycles[0], "cycle_cdm1_s": cycles[1],
+        })
+        dut._log.info("%s (%d idle frames on the line%s): %d frames, %.2f us", label,
+                      idle_known, ", periodic" if periodic else "", acc.frames,
+                      rows[-1]["time_s"] * 1e6)
+
+    await measure("read 1 register", 1, "power-up")
+    await measure("read 1 register", 1, "a read")
+    await measure("write 1 register", 1, "a read", write=True)
+    await measure("read 1 register", 1, "a write")
+    await measure("read 1 register", 1, "a read", periodic=True)    # positions read meanwhile
+    checked += ctl.monitor.count
+    ctl.monitor.stop()
+    for label, count, write in (("write 1 register", 1, True),
+                                ("read 64 registers (EDS bank)", 64, False)):
+        await power_up_again(tb)
+        t_power_up = get_sim_time("step") * 1e-12
+        ctl = ControlChannel(tb)
+        await measure(label, count, "power-up", write=write)
+        checked += ctl.monitor.count
+        ctl.monitor.stop()
+    await tb.wait_idle()
+    assert not tb.encoder.ignored_falls, tb.encoder.ignored_falls[:5]
+    dump("register_access_cost", {
+        "rows": rows, "checked": checked, "preset": fmt.name, "data_crc_bits": fmt.total_bits,
+        "ma_hz": CONTROL_MA_HZ, "cable_m": CONTROL_CABLE_M, "timeout_s": timeout_s,
+        "line_delay_s": cable.round_trip_s(), "idle_frames": IDLE_FRAMES,
+        "shortest_cycle_s": shortest_cycle_s(fmt, CONTROL_MA_HZ, CONTROL_CABLE_M, timeout_s)})

@@ -10,6 +10,11 @@
    clock, 0 <= error < 1 unless the Ack edge lands exactly on a clock edge; the synchronizer's
    fixed clock is compensated in the core).
 4. Simulation speed: the same scenario on Verilator and Icarus, frames per wall second.
+5. Register access (control channel): data frames and microseconds per access (one register read
+   or written, a 64-byte EDS bank read) at 10 MHz over 100 m, request cycles as fast as the
+   encoder allows, against the protocol's floor (the 14 idle frames + the control frame's CDM
+   bits, each at the protocol's minimum cycle time); goal: at most one frame more (the frame
+   that brings the echo of P), plus a cycle already running at ``ca_start``.
 
 The measurements are cocotb tests in sim/scenarios/perf.py; they write JSON, this script judges
 them. Output: the tables on stdout, sim_build/bench/report.md and report.json, simulator logs in
@@ -38,9 +43,13 @@ LOGS = OUT / "logs"
 TAG = "-bench"                        # build trees sim_build/verilator-bench, icarus-bench
 ICLK = "iclk"                         # ... and <sim>-bench-iclk: clock made in Verilog
 CLK_NS = 1e9 / runner.CLK_HZ
-TESTS_VERILATOR = ["request_cycle_overhead", "verdict_latency", "line_delay_error", "sim_speed"]
+TESTS_VERILATOR = ["request_cycle_overhead", "verdict_latency", "line_delay_error", "sim_speed",
+                   "register_access_cost"]
 TESTS_ICARUS = ["sim_speed"]
 LATENCY_GOAL_CLK = 2
+#: Frames a register access may take beyond the protocol's floor: the frame whose CDS brings the
+#: echo of P (spec section 10: the floor ends with P's CDM bit, its echo comes a frame later).
+ACCESS_EXTRA_FRAMES_GOAL = 1
 
 
 def sh(cmd):
@@ -347,6 +356,54 @@ def speed_section(status, goals):
     return out
 
 
+# -- 5. Register access ------------------------------------------------------------------------------
+def access_section(d, goals):
+    out = ["### 5. Register access (control channel): frames and time per access", ""]
+    if d is None:
+        goals.append(("register access frames", False, "no results"))
+        return out + ["(no results)"]
+    floor_cycle = d["shortest_cycle_s"]
+    rows, all_ok, worst = [], True, None
+    for r in d["rows"]:
+        extra = r["frames"] - r["floor_frames"]
+        allowed = ACCESS_EXTRA_FRAMES_GOAL + r["frames_in_flight"]
+        ok = extra <= allowed
+        all_ok &= ok
+        worst = extra if worst is None else max(worst, extra)
+        floor_s = r["floor_frames"] * floor_cycle
+        before = f"{r['after']} ({r['idle_on_line']})"
+        rows.append([r["access"], before, "1" if r["periodic"] else "0",
+                     r["frames"], f"{r['frames_in_flight']} / {r['idle_before_s']} / "
+                     f"{r['control_frames']} / {r['after_last_p']}", r["cdm1_frames"],
+                     r["floor_frames"], f"{extra:+d}", f"{r['time_s'] * 1e6:.2f}",
+                     f"{floor_s * 1e6:.2f}", f"{(r['time_s'] - floor_s) * 1e6:+.2f}",
+                     f"{(r['time_s'] / floor_s - 1) * 100:+.2f}", verdict(ok)])
+    goals.append((f"register access frames <= floor + {ACCESS_EXTRA_FRAMES_GOAL} "
+                  "(+ a cycle in flight at ca_start)", all_ok,
+                  f"worst {worst:+d} frame(s) over {len(d['rows'])} accesses"))
+    out += [md_table(["access", "after (CDM=0 on line)", "periodic", "frames",
+                      "in flight / idle / S..P / after P", "CDM=1", "floor frames", "+frames",
+                      "time/us", "floor/us", "+us", "+%", "goal"],
+                     rows, ["l", "l"] + ["r"] * 11), ""]
+    c0 = [t for r in d["rows"] for t in r["cycle_cdm0_s"]]
+    c1 = [t for r in d["rows"] for t in r["cycle_cdm1_s"]]
+
+    def span(ts):
+        lo, hi = min(ts, default=float("nan")), max(ts, default=float("nan"))
+        return f"{lo * 1e6:.3f} us" if hi - lo < 1e-12 else f"{lo * 1e6:.3f} .. {hi * 1e6:.3f} us"
+    out.append(
+        f"BP3 encoder model {d['preset']} ({d['data_crc_bits']} bits after CDS) at "
+        f"{d['ma_hz'] / 1e6:g} MHz over {d['cable_m']} m (round trip "
+        f"{d['line_delay_s'] * 1e9:.1f} ns), Start on the 3rd MA rise, adaptive timeout "
+        f"{d['timeout_s'] * 1e9:.0f} ns, cfg_request_period = 0; {d['checked']} cycles checked "
+        "field by field. Floor: the CDM = 0 frames still missing of the "
+        f"{d['idle_frames']} before S + the control frame's CDM bits (spec section 10), each "
+        f"frame at the minimum cycle time of spec section 9, {floor_cycle * 1e6:.4f} us. "
+        f"Start-to-start measured: CDM = 0 cycles {span(c0)} ({len(c0)}), CDM = 1 cycles "
+        f"{span(c1)} ({len(c1)}).")
+    return out
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--frames", type=int, default=200, help="frames of the sim-speed scenario")
@@ -380,6 +437,7 @@ def main():
     lines += latency_section(load("verdict_latency"), goals) + [""]
     lines += delay_section(load("line_delay_error"), goals) + [""]
     lines += speed_section(status, goals) + [""]
+    lines += access_section(load("register_access_cost"), goals) + [""]
     lines += ["### Goals", ""]
     lines.append(md_table(["goal", "result", "measured"],
                           [[g, verdict(ok), m] for g, ok, m in goals], ["l", "l", "l"]))
