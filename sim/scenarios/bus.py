@@ -371,10 +371,10 @@ async def wishbone_pipelined_back_to_back(dut):
 
 
 # -- Register access (the control channel behind the bus) -------------------------------------
-#: A BP3 encoder with a control side, made fast for simulation: a short frame (8-bit position),
+#: A BP3 encoder with a control side, made fast for simulation: a short frame (4-bit position),
 #: 10 MHz MA, an adaptive timeout of 1.5 MA periods, a processing time under a microsecond and
 #: no 31.25 us rule: a register access costs tens to hundreds of cycles of about 3 us.
-BP3_DL_POS = 8
+BP3_DL_POS = 4
 BP3_MA_HZ = 10e6
 BP3_EDS_BANK = 1
 
@@ -409,7 +409,7 @@ async def register_access_write_read_and_eds_bank(dut):
     """Over AXI4-Lite, the ca.* registers of channel 0 against a BP3 encoder model's control
     slave: 5 bytes written into its user registers (a full word and a single strobed byte of
     ca.wbuf) and read back through ca.rbuf; the bank select written and the EDS bank read
-    (64 bytes on Verilator, the first 16 on Icarus); every byte against the model's register
+    (64 bytes on Verilator, the first 8 on Icarus); every byte against the model's register
     file and the test's own values; the access_done interrupt (irq pin, irq_pending, cleared
     by writing 1) after every access; a BAD_REQUEST ends at once; the data channel's last
     frame checked against what the encoder sent."""
@@ -427,7 +427,7 @@ async def register_access_write_read_and_eds_bank(dut):
     state, _ = await tb.register_access(0, BANK_SELECT, data=bytes([BP3_EDS_BANK]))
     check_ok(state, 1)
     assert registers.bank_select == BP3_EDS_BANK
-    count = 16 if "icarus" in cocotb.SIM_NAME.lower() else 64
+    count = 8 if "icarus" in cocotb.SIM_NAME.lower() else 64
     state, got = await tb.register_access(0, 0x00, count=count, limit_s=20e-3)
     check_ok(state, count)
     want = eds.to_bytes()[:count]
