@@ -7,8 +7,8 @@ from amaranth.lib.wiring import In, Out
 
 from . import protocol
 from .control_crc import CRC4
-from .layouts import (BUFFER_ADDRESS_BITS, BUFFER_LANES, BUFFER_WORD_BITS, BUFFER_WORDS, access_request_layout,
-                      access_result_layout, buffer_write_layout)
+from .layouts import (BUFFER_ADDRESS_BITS, BUFFER_LANES, BUFFER_WORD_BITS, BUFFER_WORDS,
+                      access_request_layout, access_result_layout, buffer_write_layout)
 from .params import AccessStatus
 
 #: The header's CDM bits after S: CTS, ID[2:0], ADR[6:0], CRC4[3:0], R, W (then S of register 0).
@@ -182,7 +182,8 @@ class RegisterAccess(wiring.Component):
         got_crc = Signal(protocol.CRC4_WIDTH - 1)   # the first three CRC bits received
         waited = Signal(range(self._start_wait + 1))
         ending = Signal(AccessStatus)               # the status a cancel ends with
-        lane = index[:2]
+        lane = index[:2]                            # the byte's lane in its buffer word
+        lane_enable = Cat(lane == k for k in range(BUFFER_LANES))
         m.d.comb += word_to_send.addr.eq(index[2:])
         byte_to_send = word_to_send.data.word_select(lane, 8)
 
@@ -325,7 +326,7 @@ class RegisterAccess(wiring.Component):
                     with m.Else():
                         m.d.comb += [byte_received.addr.eq(index[2:]),
                                      byte_received.data.eq(got.replicate(BUFFER_LANES)),
-                                     byte_received.en.eq(Mux(write, 0, Cat(lane == k for k in range(BUFFER_LANES))))]
+                                     byte_received.en.eq(Mux(write, 0, lane_enable))]
                         m.d.sync += [self.result.bytes_done.eq(index + 1), step.eq(0)]
                         with m.If(index + 1 == req.count):
                             m.next = "FINAL"
