@@ -33,7 +33,7 @@ class Kind(enum.Enum):
     LIVE = "live"       # sw = r, hw = w: the hardware's value, read live (or through a snapshot)
     CONST = "const"     # sw = r, hw = na: the reset value
     IRQ = "irq"         # intr, woclr: sticky, set by its event, write 1 to clear
-    BUFFER = "buffer"   # a byte lane of a window (an external register array): the memory's
+    BUFFER = "buffer"   # a byte lane of a window (an external register array onto a memory)
 
 
 @dataclass(frozen=True)
