@@ -24,7 +24,8 @@ BUSES = {
 
 #: Channel signals of the register map that the channel makes itself (not core ports).
 CHANNEL_GLUE = ("trigger_enable", "frame_error", "done_count", "cap_data_bits_w0",
-                "cap_data_bits_w1", "cap_timer_width", "cap_counters", "cap_timestamp")
+                "cap_data_bits_w1", "cap_timer_width", "cap_counters", "cap_timestamp",
+                "cap_register_access")
 #: Global signals of the register map, made by the top.
 GLOBAL_SIGNALS = ("channels", "trigger", "irq_pending")
 
@@ -37,8 +38,9 @@ class BusChannel(wiring.Component):
     name (``cfg_ma_half_period``, ``start``, ``word0_position``, ``count_no_ack``, ...), or
     made here (:data:`CHANNEL_GLUE`): the trigger gate, ``frame_error`` (``done`` with a
     status other than OK), ``done_count`` and the build's capabilities. A signal that only
-    other builds of the core have (``word1_position`` in a one-word build) reads 0 and its
-    configuration is not used.
+    other builds of the core have (``word1_position`` in a one-word build, the ``ca_*`` ports
+    of the register-access engine in a build without it) reads 0 and its configuration is not
+    used.
 
     Parameters
     ----------
@@ -89,6 +91,7 @@ class BusChannel(wiring.Component):
             "cap_timer_width": p.timer_width,
             "cap_counters": int(p.counters),
             "cap_timestamp": int(p.timestamped),
+            "cap_register_access": int(p.register_access),
         }
         # The map's signals, by name: to and from the core's ports, or made here.
         for name, member in regs.signature.members.items():

@@ -14,7 +14,6 @@ every existing command line keeps its meaning when they come.
 """
 
 import argparse
-import dataclasses
 import sys
 from dataclasses import dataclass, field
 from importlib import metadata
@@ -64,10 +63,11 @@ BUS_CHANNELS = 2
 
 def _bus_top(bus):
     """A :class:`Top` for ``bus`` (a :data:`~bissmaster.bus_top.BUSES` name): ``channels`` cores
-    behind the register bank of rtl/regmap/biss_master.rdl. The cores are built without the
-    register-access engine: the map reserves its window, the bank does not wire it yet."""
+    behind the register bank of rtl/regmap/biss_master.rdl. The cores are the preset's, the
+    register-access engine included unless ``--register-access 0`` (the map's ``ca`` block then
+    reads 0, ``caps.register_access`` says so)."""
     def build(params, channels=BUS_CHANNELS):
-        return BusTop(bus, channels, dataclasses.replace(params, register_access=False))
+        return BusTop(bus, channels, params)
 
     def describe(channels=BUS_CHANNELS):
         return [f"bus             = {'AXI4-Lite' if bus == 'axil' else 'Wishbone B4'}",

@@ -78,6 +78,10 @@ def fault_layout():
 
 #: A buffer byte's index: up to 64 bytes per register access.
 BUFFER_ADDRESS_BITS = (protocol.BANK_BYTES - 1).bit_length()
+#: The buffers' host ports are 32 bits wide: byte i is lane i % 4 of word i // 4.
+BUFFER_LANES = 4
+BUFFER_WORDS = protocol.BANK_BYTES // BUFFER_LANES
+BUFFER_WORD_BITS = (BUFFER_WORDS - 1).bit_length()
 
 
 def access_request_layout():
@@ -99,8 +103,11 @@ def access_result_layout():
 
 
 def buffer_write_layout():
-    """The host's write port into the write buffer (bytes to write, index 0 = start address)."""
-    return data.StructLayout({"addr": BUFFER_ADDRESS_BITS, "data": 8, "en": 1})
+    """The host's write port into the write buffer: a word of 4 bytes (byte ``i`` of the access,
+    to register ``address + i``, is lane ``i % 4`` of word ``i // 4``), a write enable per
+    lane."""
+    return data.StructLayout({"addr": BUFFER_WORD_BITS, "data": BUFFER_LANES * 8,
+                              "en": BUFFER_LANES})
 
 
 #: Saturating error counters, each with a ``count_<name>`` output port, in port order.

@@ -11,7 +11,7 @@ from .counters import CounterBank
 from .cycle_controller import CycleController
 from .frame_decoder import FrameDecoder
 from .frame_verdict import FrameVerdict
-from .layouts import (BUFFER_ADDRESS_BITS, access_request_layout, access_result_layout,
+from .layouts import (BUFFER_LANES, BUFFER_WORD_BITS, access_request_layout, access_result_layout,
                       buffer_write_layout, config_ports, config_words, counter_names, field,
                       flat_fields, result_layout)
 from .limit_timers import LimitTimers
@@ -81,8 +81,9 @@ class BissMaster(wiring.Component):
                 "ca_abort": In(1),
                 **{name: In(shape) for name, _, shape in flat_fields(buffer_write_layout(),
                                                                      "ca_wbuf_")},
-                "ca_rbuf_addr": In(BUFFER_ADDRESS_BITS),
-                "ca_rbuf_data": Out(8),
+                "ca_rbuf_addr": In(BUFFER_WORD_BITS),
+                "ca_rbuf_en": In(1),
+                "ca_rbuf_data": Out(BUFFER_LANES * 8),
                 "ca_busy": Out(1),
                 "ca_done": Out(1),
                 **{name: Out(shape) for name, _, shape in flat_fields(access_result_layout(),
@@ -326,6 +327,7 @@ class BissMaster(wiring.Component):
             access.start.eq(self.ca_start),
             access.abort.eq(self.ca_abort),
             access.rbuf_addr.eq(self.ca_rbuf_addr),
+            access.rbuf_en.eq(self.ca_rbuf_en),
             self.ca_rbuf_data.eq(access.rbuf_data),
             self.ca_busy.eq(access.busy),
             self.ca_done.eq(access.done),

@@ -7,8 +7,8 @@ from amaranth.lib.wiring import In, Out
 
 from . import protocol
 from .control_crc import CRC4
-from .layouts import (BUFFER_ADDRESS_BITS, access_request_layout, access_result_layout,
-                      buffer_write_layout)
+from .layouts import (BUFFER_ADDRESS_BITS, BUFFER_LANES, BUFFER_WORD_BITS, BUFFER_WORDS,
+                      access_request_layout, access_result_layout, buffer_write_layout)
 from .params import AccessStatus
 
 #: The header's CDM bits after S: CTS, ID[2:0], ADR[6:0], CRC4[3:0], R, W (then S of register 0).
@@ -39,8 +39,14 @@ class RegisterAccess(wiring.Component):
     copies it while idle, so a cycle carries the bit it was accepted with) and takes the CDS bit
     of every reported frame (``frame_*``, in the clock the frame is reported). When the access
     ends, ``done`` strobes with ``result`` (status, bytes done) and the read buffer holds the
-    bytes read (index ``i`` from ``address + i``; read it through ``rbuf_addr`` / ``rbuf_data``,
-    one clock of latency).
+    bytes read (index ``i`` from ``address + i``).
+
+    **The buffers** are 16 words of 4 bytes each, little endian: byte ``i`` is byte lane
+    ``i % 4`` (bits ``8 (i % 4) + 7 .. 8 (i % 4)``) of word ``i // 4``. The write buffer is
+    written a word at a time with a byte enable per lane (``wbuf``); the read buffer is read a
+    word at a time through a registered port (``rbuf_addr``, ``rbuf_en`` -> ``rbuf_data``: in a
+    clock with ``rbuf_en`` high the word at ``rbuf_addr`` is read, ``rbuf_data`` holds it from
+    the next clock until the next read).
 
     **Frames** (spec section 10; f = 0 is the frame that carries S). Before S, CDM = 0 until 14
     consecutive cycles with CDM = 0 have delivered a good frame (so the encoder saw them: a
@@ -92,10 +98,11 @@ class RegisterAccess(wiring.Component):
     start, abort : In(1)
         Strobes; ``start`` is ignored while ``busy``.
     wbuf : In(buffer_write_layout)
-        The host's write port of the write buffer (64 x 8).
-    rbuf_addr : In(6)
-    rbuf_data : Out(8)
-        The host's read port of the read buffer (64 x 8), registered.
+        The host's write port of the write buffer (16 x 32, a byte enable per lane).
+    rbuf_addr : In(4)
+    rbuf_en : In(1)
+    rbuf_data : Out(32)
+        The host's read port of the read buffer (16 x 32), registered.
     busy : Out(1)
     done : Out(1)
         One-clock strobe: the access ended; ``result`` is new in the same clock.
@@ -126,8 +133,9 @@ class RegisterAccess(wiring.Component):
             "start": In(1),
             "abort": In(1),
             "wbuf": In(buffer_write_layout()),
-            "rbuf_addr": In(BUFFER_ADDRESS_BITS),
-            "rbuf_data": Out(8),
+            "rbuf_addr": In(BUFFER_WORD_BITS),
+            "rbuf_en": In(1),
+            "rbuf_data": Out(BUFFER_LANES * 8),
             "busy": Out(1),
             "done": Out(1),
             "result": Out(access_result_layout()),
@@ -143,17 +151,20 @@ class RegisterAccess(wiring.Component):
         m = Module()
         depth = protocol.BANK_BYTES
 
-        # The buffers: the host writes bytes to send and reads bytes received.
-        m.submodules.wbuf = wbuf = Memory(shape=8, depth=depth, init=[])
-        host_write = wbuf.write_port()
-        byte_to_send = wbuf.read_port()
-        m.submodules.rbuf = rbuf = Memory(shape=8, depth=depth, init=[])
-        byte_received = rbuf.write_port()
+        # The buffers: the host writes bytes to send and reads bytes received, a word (4 byte
+        # lanes) at a time; the engine takes and stores one byte (one lane) at a time.
+        width = BUFFER_LANES * 8
+        m.submodules.wbuf = wbuf = Memory(shape=width, depth=BUFFER_WORDS, init=[])
+        host_write = wbuf.write_port(granularity=8)
+        word_to_send = wbuf.read_port()
+        m.submodules.rbuf = rbuf = Memory(shape=width, depth=BUFFER_WORDS, init=[])
+        byte_received = rbuf.write_port(granularity=8)
         host_read = rbuf.read_port()
         m.d.comb += [
             host_write.addr.eq(self.wbuf.addr), host_write.data.eq(self.wbuf.data),
             host_write.en.eq(self.wbuf.en),
-            host_read.addr.eq(self.rbuf_addr), self.rbuf_data.eq(host_read.data),
+            host_read.addr.eq(self.rbuf_addr), host_read.en.eq(self.rbuf_en),
+            self.rbuf_data.eq(host_read.data),
         ]
 
         # CRC-4 of the bits sent (header, write data) and of the bits received (data, echo).
@@ -171,7 +182,10 @@ class RegisterAccess(wiring.Component):
         got_crc = Signal(protocol.CRC4_WIDTH - 1)   # the first three CRC bits received
         waited = Signal(range(self._start_wait + 1))
         ending = Signal(AccessStatus)               # the status a cancel ends with
-        m.d.comb += byte_to_send.addr.eq(index)
+        lane = index[:2]                            # the byte's lane in its buffer word
+        lane_enable = Cat(lane == k for k in range(BUFFER_LANES))
+        m.d.comb += word_to_send.addr.eq(index[2:])
+        byte_to_send = word_to_send.data.word_select(lane, 8)
 
         # Consecutive ended cycles with CDM = 0, up to 14: always counted. ``idle_run`` counts
         # every reported cycle (a cancel's 14 zeros: best effort, bounded even when the encoder
@@ -283,7 +297,7 @@ class RegisterAccess(wiring.Component):
                     with m.If(cds != Mux(index == 0, write, 0)):
                         cancel(AccessStatus.REFUSED)
                     with m.Else():
-                        m.d.sync += [to_send.eq(byte_to_send.data), sent.eq(byte_to_send.data),
+                        m.d.sync += [to_send.eq(byte_to_send), sent.eq(byte_to_send),
                                      step.eq(1)]
                         m.d.comb += tx_crc.start.eq(1)
                 with m.Elif(frame & (step == 1)):
@@ -310,8 +324,9 @@ class RegisterAccess(wiring.Component):
                     with m.Elif(write & (got != sent)):
                         cancel(AccessStatus.REFUSED)                # the slave kept another byte
                     with m.Else():
-                        m.d.comb += [byte_received.addr.eq(index), byte_received.data.eq(got),
-                                     byte_received.en.eq(~write)]
+                        m.d.comb += [byte_received.addr.eq(index[2:]),
+                                     byte_received.data.eq(got.replicate(BUFFER_LANES)),
+                                     byte_received.en.eq(Mux(write, 0, lane_enable))]
                         m.d.sync += [self.result.bytes_done.eq(index + 1), step.eq(0)]
                         with m.If(index + 1 == req.count):
                             m.next = "FINAL"

@@ -46,6 +46,10 @@ def block_signature(regmap, registers):
     members = {}
     for name, (kind, width) in regmap.signals(registers).items():
         members[name] = Out(width) if kind in (Kind.CONFIG, Kind.PULSE) else In(width)
+    for reg in registers:
+        if reg.window:
+            members.update({name: Out(width) if out else In(width)
+                            for name, (out, width) in reg.window_ports.items()})
     return wiring.Signature(members)
 
 
@@ -57,7 +61,11 @@ class RegisterBank(wiring.Component):
     each 1 written and read 0; LIVE fields read their signal (a snapshot group reads a copy
     taken when its first register is read); CONST fields read their reset value; IRQ fields
     are sticky, set by their event and cleared by writing 1, a set winning over a clear in the
-    same clock. Unmapped addresses read 0 and ignore writes.
+    same clock. Unmapped addresses read 0 and ignore writes. A window (an external register
+    array) is a memory's port: a write of word ``i`` writes its strobed byte lanes to word ``i``
+    (``<window>_en`` = the strobes, in the clock of the write); a read of word ``i`` enables
+    the memory's registered read port in the ``r_en`` clock, and its data is ``r_data`` from
+    the next clock on, as a register's is (the port must hold it until its next read).
 
     Attributes
     ----------
@@ -91,28 +99,38 @@ class RegisterBank(wiring.Component):
         blocks += [(getattr(self, f"ch{n}"), rm.channel_base + n * rm.channel_stride,
                     rm.channel, f"ch{n}") for n in range(self.channels)]
         read_words = {}
+        windows = []                   # (read, data) of every read window
         irqs = []
         for port, base, registers, prefix in blocks:
-            irq = self._block(m, port, base, registers, prefix, read_words)
+            irq = self._block(m, port, base, registers, prefix, read_words, windows)
             if prefix != "g":
                 irqs.append(irq)
         # Whole signals, never bit by bit: Icarus runs a combinational block written per bit
         # only once an input changes, and would read X until then.
         m.d.comb += self.irq.eq(Cat(irqs))
 
-        # The read port: one registered word, loaded on r_en.
+        # The read port: one registered word, loaded on r_en (0 for a window's address) ...
+        word = Signal(DATA_WIDTH)
         with m.If(self.bus.r_en):
             with m.Switch(self.bus.r_addr):
                 for addr, value in read_words.items():
                     with m.Case(addr):
-                        m.d.sync += self.bus.r_data.eq(value)
+                        m.d.sync += word.eq(value)
                 with m.Default():
-                    m.d.sync += self.bus.r_data.eq(0)
+                    m.d.sync += word.eq(0)
+        # ... or the registered data of the window that was read.
+        data = word
+        for n, (read, window_data) in enumerate(windows):
+            chosen = Signal(name=f"window{n}_read")
+            with m.If(self.bus.r_en):
+                m.d.sync += chosen.eq(read)
+            data = data | Mux(chosen, window_data, 0)
+        m.d.comb += self.bus.r_data.eq(data)
         return m
 
-    def _block(self, m, port, base, registers, prefix, read_words):
-        """One block (the globals or a channel): storage, pulses, interrupts, snapshots and
-        its read words. Returns the block's interrupt request."""
+    def _block(self, m, port, base, registers, prefix, read_words, windows):
+        """One block (the globals or a channel): storage, pulses, interrupts, snapshots,
+        windows and its read words. Returns the block's interrupt request."""
         bus = self.bus
         storage = {}                   # "register.field" -> the Signal that holds it
         irq_terms = []
@@ -120,6 +138,9 @@ class RegisterBank(wiring.Component):
         take = {}                      # group -> the clock its first register is read
         for reg in registers:
             word = (base + reg.offset) // 4
+            if reg.window:
+                self._window(m, port, word, reg, windows)
+                continue
             write = Signal(name=f"{prefix}_{reg.path.replace('.', '_')}_write")
             read = Signal(name=f"{prefix}_{reg.path.replace('.', '_')}_read")
             m.d.comb += [write.eq(bus.w_en & (bus.w_addr == word)),
@@ -177,6 +198,23 @@ class RegisterBank(wiring.Component):
         m.d.comb += irq.eq(Cat((status & storage[enable]).any()
                                for status, enable in irq_terms if enable).any())
         return irq
+
+    def _window(self, m, port, word, reg, windows):
+        """A window: the bus's word address inside it, its strobes or read enable, its data."""
+        bus = self.bus
+        bits = (reg.count - 1).bit_length()
+        if reg.count != 1 << bits or word % reg.count:
+            raise ValueError(f"{reg.path}: a window has a power-of-two number of words and is "
+                             f"aligned to its size")
+        ports = {name[len(reg.window) + 1:]: getattr(port, name) for name in reg.window_ports}
+        if reg.writable:
+            hit = bus.w_en & (bus.w_addr[bits:] == word >> bits)
+            m.d.comb += [ports["addr"].eq(bus.w_addr[:bits]), ports["data"].eq(bus.w_data),
+                         ports["en"].eq(Mux(hit, bus.w_strb, 0))]
+        else:
+            hit = bus.r_en & (bus.r_addr[bits:] == word >> bits)
+            m.d.comb += [ports["addr"].eq(bus.r_addr[:bits]), ports["en"].eq(hit)]
+            windows.append((hit, ports["data"]))
 
     @staticmethod
     def _signal(port, f):

@@ -33,6 +33,7 @@ class Kind(enum.Enum):
     LIVE = "live"       # sw = r, hw = w: the hardware's value, read live (or through a snapshot)
     CONST = "const"     # sw = r, hw = na: the reset value
     IRQ = "irq"         # intr, woclr: sticky, set by its event, write 1 to clear
+    BUFFER = "buffer"   # a byte lane of a window (an external register array onto a memory)
 
 
 @dataclass(frozen=True)
@@ -54,9 +55,21 @@ class Register:
     fields: tuple
     snapshot: str | None = None     # the snapshot group (regfile path) it is read through
     takes_snapshot: bool = False    # reading it copies the whole group
+    window: str | None = None   # a window: the memory's port name (ports <window>_addr, ...)
+    count: int = 1              # a window's words (array elements, 4 bytes apart)
+    writable: bool = False      # a window: written (sw = w) rather than read (sw = r)
 
     def field(self, name):
         return next(f for f in self.fields if f.name == name)
+
+    @property
+    def window_ports(self):
+        """A window's memory ports ``{name: (output of the bank?, width)}``: the word address,
+        the data (out for a write window, in for a read window), the enable (a write: one per
+        byte lane; a read: one)."""
+        return {f"{self.window}_addr": (True, (self.count - 1).bit_length()),
+                f"{self.window}_data": (self.writable, DATA_WIDTH),
+                f"{self.window}_en": (True, DATA_WIDTH // 8 if self.writable else 1)}
 
 
 @dataclass(frozen=True)
@@ -78,9 +91,15 @@ class RegisterMap:
 
     def signals(self, registers):
         """``{signal: (kind, width)}`` of every connected field of ``registers``; a signal made
-        of several fields (a position split over two registers) is as wide as all of them."""
+        of several fields (a position split over two registers) is as wide as all of them.
+        A window's ports have the kind :attr:`Kind.BUFFER` (their direction:
+        :attr:`Register.window_ports`)."""
         found = {}
         for reg in registers:
+            if reg.window:
+                found.update({name: (Kind.BUFFER, width)
+                              for name, (_, width) in reg.window_ports.items()})
+                continue
             for f in reg.fields:
                 if f.signal is None:
                     continue
@@ -96,6 +115,8 @@ _SLICE = re.compile(r"^(\w+)(?:\[(\d+):(\d+)\])?$")
 
 def _kind(node):
     sw_w, hw = node.is_sw_writable, node.get_property("hw").name
+    if node.parent.external:
+        return Kind.BUFFER
     if node.get_property("intr"):
         if node.get_property("onwrite") is None or node.get_property("onwrite").name != "woclr":
             raise ValueError(f"{node.get_path()}: an interrupt field must be woclr")
@@ -127,6 +148,9 @@ def _field(node, block):
             if hi - lo + 1 != node.width:
                 raise ValueError(f"{node.get_path()}: slice {path[0]} is not {node.width} bits")
             signal_lsb = lo
+    if kind == Kind.BUFFER and signal is not None:
+        raise ValueError(f"{node.get_path()}: a window's fields are byte lanes of its memory "
+                         f"(the register's hdl_path), not signals of their own")
     if kind in (Kind.PULSE, Kind.LIVE) and signal is None:
         raise ValueError(f"{node.get_path()}: a {kind.value} field needs hdl_path_slice")
     enable = None
@@ -156,11 +180,37 @@ def _registers(block, regs):
         parent = reg.parent
         if isinstance(parent, RegfileNode) and parent.get_property("snapshot", default=False):
             snapshot = _relative(parent, block)
-            first = min(r.absolute_address for r in parent.registers())
-            takes = reg.absolute_address == first
-        out.append(Register(_relative(reg, block), reg.absolute_address - block.absolute_address,
-                            tuple(_field(f, block) for f in reg.fields()), snapshot, takes))
+            first = min(r.raw_absolute_address for r in parent.registers())
+            takes = reg.raw_absolute_address == first
+        window, count, writable = _window(reg)
+        out.append(Register(_relative(reg, block),
+                            reg.raw_absolute_address - block.absolute_address,
+                            tuple(_field(f, block) for f in reg.fields()), snapshot, takes,
+                            window, count, writable))
     return tuple(sorted(out, key=lambda r: r.offset))
+
+
+def _window(reg):
+    """``(port name, words, writable)`` of an external register array (a window onto a memory),
+    ``(None, 1, False)`` of any other register."""
+    if not reg.external:
+        if reg.is_array:
+            raise ValueError(f"{reg.get_path()}: a register array must be an external window")
+        return None, 1, False
+    name = reg.get_property("hdl_path")
+    if not name or not reg.is_array or len(reg.array_dimensions) != 1 \
+            or reg.array_stride != DATA_WIDTH // 8:
+        raise ValueError(f"{reg.get_path()}: an external register must be a one-dimensional "
+                         f"array of adjacent words with an hdl_path (a window onto a memory)")
+    fields = list(reg.fields())
+    writable = all(f.is_sw_writable and not f.is_sw_readable for f in fields)
+    if not writable and not all(f.is_sw_readable and not f.is_sw_writable for f in fields):
+        raise ValueError(f"{reg.get_path()}: a window is written only (sw = w) or read only "
+                         f"(sw = r)")
+    if sorted((f.lsb, f.width) for f in fields) != [(8 * k, 8) for k in range(DATA_WIDTH // 8)]:
+        raise ValueError(f"{reg.get_path()}: a window's fields are its {DATA_WIDTH // 8} byte "
+                         f"lanes")
+    return name, reg.array_dimensions[0], writable
 
 
 def compile_rdl(path=RDL):

@@ -16,9 +16,9 @@
 (* top =  1  *)
 (* generator = "Amaranth" *)
 module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_period, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_delay_limit, cfg_end_check, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_enable, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_spw_check
-, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, ca_wbuf_addr, ca_wbuf_data, ca_wbuf_en, ca_rbuf_addr, clk, rst, ma, busy, config_error, overrun, done, valid, status, timestamp
-, line_delay, cds, word0_position, word0_ne, word0_nw, word0_crc_ok, word1_position, word1_ne, word1_nw, word1_crc_ok, lc, lc_repeat, lc_skip, lc_zero, spw_mismatch, ca_rbuf_data, ca_busy, ca_done, ca_status, ca_bytes_done, count_crc_word0
-, count_crc_word1, count_no_ack, count_no_start, count_delay_range, count_slo_stuck_low, count_lc_repeat, count_lc_skip, count_lc_zero, count_spw_mismatch, count_overrun, count_aborted, count_no_stop, count_ca_crc4_error, count_ca_no_answer, count_ca_refused, count_ca_aborted, count_ca_data_fault, slo);
+, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, ca_wbuf_addr, ca_wbuf_data, ca_wbuf_en, ca_rbuf_addr, ca_rbuf_en, clk, rst, ma, busy, config_error, overrun, done, valid, status
+, timestamp, line_delay, cds, word0_position, word0_ne, word0_nw, word0_crc_ok, word1_position, word1_ne, word1_nw, word1_crc_ok, lc, lc_repeat, lc_skip, lc_zero, spw_mismatch, ca_rbuf_data, ca_busy, ca_done, ca_status, ca_bytes_done
+, count_crc_word0, count_crc_word1, count_no_ack, count_no_start, count_delay_range, count_slo_stuck_low, count_lc_repeat, count_lc_skip, count_lc_zero, count_spw_mismatch, count_overrun, count_aborted, count_no_stop, count_ca_crc4_error, count_ca_no_answer, count_ca_refused, count_ca_aborted, count_ca_data_fault, slo);
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -32,25 +32,25 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \$8 ;
   wire \$9 ;
   wire abort;
-  wire \abort$234 ;
-  wire \abort$93 ;
+  wire \abort$235 ;
+  wire \abort$94 ;
   input abort_cycle;
   wire abort_cycle;
   wire ack_expired;
-  wire \ack_expired$125 ;
+  wire \ack_expired$126 ;
   wire [23:0] ack_limit;
-  wire [23:0] \ack_limit$146 ;
+  wire [23:0] \ack_limit$147 ;
   wire arm;
   wire \bit ;
-  wire \bit$170 ;
+  wire \bit$171 ;
   wire [5:0] bits;
   wire break_over;
-  wire \break_over$123 ;
+  wire \break_over$124 ;
   wire [23:0] break_time;
   output busy;
   wire busy;
-  wire \busy$101 ;
-  wire \busy$237 ;
+  wire \busy$102 ;
+  wire \busy$239 ;
   input ca_abort;
   wire ca_abort;
   input [6:0] ca_address;
@@ -63,10 +63,12 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire [6:0] ca_count;
   output ca_done;
   wire ca_done;
-  input [5:0] ca_rbuf_addr;
-  wire [5:0] ca_rbuf_addr;
-  output [7:0] ca_rbuf_data;
-  wire [7:0] ca_rbuf_data;
+  input [3:0] ca_rbuf_addr;
+  wire [3:0] ca_rbuf_addr;
+  output [31:0] ca_rbuf_data;
+  wire [31:0] ca_rbuf_data;
+  input ca_rbuf_en;
+  wire ca_rbuf_en;
   input [2:0] ca_slave_id;
   wire [2:0] ca_slave_id;
   input ca_start;
@@ -81,20 +83,20 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_110 = "BAD_REQUEST" *)
   output [2:0] ca_status;
   wire [2:0] ca_status;
-  input [5:0] ca_wbuf_addr;
-  wire [5:0] ca_wbuf_addr;
-  input [7:0] ca_wbuf_data;
-  wire [7:0] ca_wbuf_data;
-  input ca_wbuf_en;
-  wire ca_wbuf_en;
+  input [3:0] ca_wbuf_addr;
+  wire [3:0] ca_wbuf_addr;
+  input [31:0] ca_wbuf_data;
+  wire [31:0] ca_wbuf_data;
+  input [3:0] ca_wbuf_en;
+  wire [3:0] ca_wbuf_en;
   input ca_write;
   wire ca_write;
   wire cdm;
-  wire \cdm$240 ;
+  wire \cdm$242 ;
   wire cdm_cycle;
   output cds;
   wire cds;
-  wire \cds$218 ;
+  wire \cds$219 ;
   wire [154:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
@@ -170,8 +172,8 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire cfg_w1_nenw;
   wire check;
   wire clear;
-  wire \clear$163 ;
-  wire \clear$254 ;
+  wire \clear$164 ;
+  wire \clear$256 ;
   input clear_counters;
   wire clear_counters;
   input clk;
@@ -236,10 +238,10 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire [15:0] \counts.slo_stuck_low ;
   wire [15:0] \counts.spw_mismatch ;
   wire [39:0] cpw_top;
-  wire [39:0] \cpw_top$187 ;
+  wire [39:0] \cpw_top$188 ;
   wire [1:0] crc_error;
   wire [1:0] crc_ok;
-  wire [1:0] \crc_ok$202 ;
+  wire [1:0] \crc_ok$203 ;
   wire [154:0] cycle;
   wire [23:0] \cycle.ack_limit ;
   wire [23:0] \cycle.break_time ;
@@ -272,19 +274,19 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire [54:0] data0;
   wire [39:0] data1;
   wire [12:0] delay;
-  wire [12:0] \delay$152 ;
+  wire [12:0] \delay$153 ;
   wire [11:0] delay_limit;
-  wire [11:0] \delay_limit$154 ;
+  wire [11:0] \delay_limit$155 ;
   wire delay_over;
-  wire \delay_over$133 ;
+  wire \delay_over$134 ;
   output done;
   wire done;
-  wire \done$111 ;
-  wire \done$238 ;
-  wire \done$257 ;
+  wire \done$112 ;
+  wire \done$240 ;
+  wire \done$259 ;
   wire doubtful;
   wire early;
-  wire \early$109 ;
+  wire \early$110 ;
   wire end_check;
   wire enough;
   wire [17:0] events;
@@ -307,7 +309,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \events.slo_stuck_low ;
   wire \events.spw_mismatch ;
   wire fault;
-  wire \fault$198 ;
+  wire \fault$199 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -337,7 +339,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
-  wire [3:0] \fault_status$200 ;
+  wire [3:0] \fault_status$201 ;
   wire [6:0] faults;
   wire \faults.aborted ;
   wire \faults.bad_config ;
@@ -347,7 +349,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \faults.no_stop ;
   wire \faults.slo_stuck_low ;
   wire first_rise;
-  wire \first_rise$228 ;
+  wire \first_rise$229 ;
   wire [31:0] first_rise_time;
   wire [160:0] frame;
   wire \frame.cds ;
@@ -391,33 +393,33 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire frame_ok;
   wire frames;
   wire [15:0] half_period;
-  wire [15:0] \half_period$165 ;
+  wire [15:0] \half_period$166 ;
   wire held;
   wire hold;
   wire idle;
-  wire \idle$83 ;
-  wire \idle$89 ;
+  wire \idle$84 ;
+  wire \idle$90 ;
   wire in_clock;
-  wire \in_clock$140 ;
+  wire \in_clock$141 ;
   output [5:0] lc;
   wire [5:0] lc;
-  wire [5:0] \lc$173 ;
   wire [5:0] \lc$174 ;
+  wire [5:0] \lc$175 ;
   wire lc_check;
   wire lc_load;
   wire [5:0] lc_next;
-  wire [5:0] \lc_next$176 ;
+  wire [5:0] \lc_next$177 ;
   output lc_repeat;
   wire lc_repeat;
-  wire \lc_repeat$219 ;
+  wire \lc_repeat$220 ;
   wire lc_repeat_seen;
   output lc_skip;
   wire lc_skip;
-  wire \lc_skip$220 ;
+  wire \lc_skip$221 ;
   wire lc_skip_seen;
   output lc_zero;
   wire lc_zero;
-  wire \lc_zero$221 ;
+  wire \lc_zero$222 ;
   wire lc_zero_seen;
   wire level;
   output [12:0] line_delay;
@@ -453,13 +455,13 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \live.w1_enable ;
   wire load;
   wire locked;
-  wire \locked$107 ;
+  wire \locked$108 ;
   output ma;
   wire ma;
-  wire \ma$256 ;
+  wire \ma$258 ;
   wire ma_arm;
   wire ma_busy;
-  wire \ma_busy$135 ;
+  wire \ma_busy$136 ;
   wire ma_enough;
   wire ma_held;
   wire ma_hold;
@@ -467,47 +469,48 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire match;
   wire [1:0] ne;
   wire no_start_expired;
-  wire \no_start_expired$127 ;
+  wire \no_start_expired$128 ;
   wire [24:0] no_start_limit;
-  wire [24:0] \no_start_limit$150 ;
+  wire [24:0] \no_start_limit$151 ;
   wire [1:0] nw;
   wire ok;
   output overrun;
   wire overrun;
-  wire \overrun$253 ;
+  wire \overrun$255 ;
   wire [23:0] period;
   input periodic;
   wire periodic;
-  wire \periodic$85 ;
-  wire [5:0] rbuf_addr;
-  wire [7:0] rbuf_data;
+  wire \periodic$86 ;
+  wire [3:0] rbuf_addr;
+  wire [31:0] rbuf_data;
+  wire rbuf_en;
   wire receiver_clear;
   wire \repeat ;
   wire report;
-  wire \report$210 ;
+  wire \report$211 ;
   wire report_delay;
-  wire \report_delay$213 ;
+  wire \report_delay$214 ;
   wire report_frame;
-  wire \report_frame$196 ;
-  wire \report_frame$211 ;
+  wire \report_frame$197 ;
+  wire \report_frame$212 ;
   wire request;
-  wire [17:0] \request$230 ;
-  wire [6:0] \request$230.address ;
-  wire [6:0] \request$230.count ;
-  wire [2:0] \request$230.slave_id ;
-  wire \request$230.write ;
-  wire \request$92 ;
+  wire [17:0] \request$231 ;
+  wire [6:0] \request$231.address ;
+  wire [6:0] \request$231.count ;
+  wire [2:0] \request$231.slave_id ;
+  wire \request$231.write ;
+  wire \request$93 ;
   wire restart;
   wire restart_timer;
   wire [9:0] result;
-  wire [160:0] \result$259 ;
-  wire \result$259.cds ;
-  wire [5:0] \result$259.lc ;
-  wire \result$259.lc_repeat ;
-  wire \result$259.lc_skip ;
-  wire \result$259.lc_zero ;
-  wire [12:0] \result$259.line_delay ;
-  wire \result$259.spw_mismatch ;
+  wire [160:0] \result$261 ;
+  wire \result$261.cds ;
+  wire [5:0] \result$261.lc ;
+  wire \result$261.lc_repeat ;
+  wire \result$261.lc_skip ;
+  wire \result$261.lc_zero ;
+  wire [12:0] \result$261.line_delay ;
+  wire \result$261.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -522,18 +525,18 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
-  wire [3:0] \result$259.status ;
-  wire [31:0] \result$259.timestamp ;
-  wire [57:0] \result$259.word0 ;
-  wire \result$259.word0.crc_ok ;
-  wire \result$259.word0.ne ;
-  wire \result$259.word0.nw ;
-  wire [54:0] \result$259.word0.position ;
-  wire [42:0] \result$259.word1 ;
-  wire \result$259.word1.crc_ok ;
-  wire \result$259.word1.ne ;
-  wire \result$259.word1.nw ;
-  wire [39:0] \result$259.word1.position ;
+  wire [3:0] \result$261.status ;
+  wire [31:0] \result$261.timestamp ;
+  wire [57:0] \result$261.word0 ;
+  wire \result$261.word0.crc_ok ;
+  wire \result$261.word0.ne ;
+  wire \result$261.word0.nw ;
+  wire [54:0] \result$261.word0.position ;
+  wire [42:0] \result$261.word1 ;
+  wire \result$261.word1.crc_ok ;
+  wire \result$261.word1.ne ;
+  wire \result$261.word1.nw ;
+  wire [39:0] \result$261.word1.position ;
   wire [6:0] \result.bytes_done ;
   (* enum_base_type = "AccessStatus" *)
   (* enum_value_000 = "OK" *)
@@ -545,41 +548,41 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_110 = "BAD_REQUEST" *)
   wire [2:0] \result.status ;
   wire resync;
-  wire \resync$182 ;
+  wire \resync$183 ;
   wire [15:0] rises;
-  wire [15:0] \rises$162 ;
+  wire [15:0] \rises$163 ;
   input rst;
   wire rst;
   wire run;
   wire sample;
-  wire \sample$168 ;
+  wire \sample$169 ;
   wire second_rise;
   wire skip;
   input slo;
   wire slo;
-  wire \slo$134 ;
-  wire \slo$90 ;
-  wire \slo$98 ;
+  wire \slo$135 ;
+  wire \slo$91 ;
+  wire \slo$99 ;
   wire slo_stuck;
-  wire \slo_stuck$129 ;
+  wire \slo_stuck$130 ;
   wire slo_stuck_live;
-  wire \slo_stuck_live$131 ;
+  wire \slo_stuck_live$132 ;
   wire slots_full;
-  wire \slots_full$115 ;
+  wire \slots_full$116 ;
   wire [39:0] spw;
   wire spw_match;
   output spw_mismatch;
   wire spw_mismatch;
-  wire \spw_mismatch$226 ;
+  wire \spw_mismatch$227 ;
   input start;
   wire start;
-  wire \start$233 ;
-  wire \start$84 ;
+  wire \start$234 ;
+  wire \start$85 ;
   wire [15:0] start_slot;
-  wire [15:0] \start_slot$160 ;
+  wire [15:0] \start_slot$161 ;
   wire started;
-  wire \started$113 ;
-  wire \started$158 ;
+  wire \started$114 ;
+  wire \started$159 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -610,13 +613,13 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
-  wire [3:0] \status$217 ;
+  wire [3:0] \status$218 ;
   wire stop_bit;
-  wire \stop_bit$119 ;
+  wire \stop_bit$120 ;
   wire stopped;
-  wire \stopped$117 ;
+  wire \stopped$118 ;
   wire [23:0] timeout_limit;
-  wire [23:0] \timeout_limit$148 ;
+  wire [23:0] \timeout_limit$149 ;
   wire [23:0] timeout_live;
   wire timer_clear;
   output [31:0] timestamp;
@@ -624,14 +627,14 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire [7:0] tolerance;
   output valid;
   wire valid;
-  wire \valid$214 ;
   wire \valid$215 ;
+  wire \valid$216 ;
   wire valid_out;
   wire w1_enable;
-  wire [14:0] wbuf;
-  wire [5:0] \wbuf.addr ;
-  wire [7:0] \wbuf.data ;
-  wire \wbuf.en ;
+  wire [39:0] wbuf;
+  wire [3:0] \wbuf.addr ;
+  wire [31:0] \wbuf.data ;
+  wire [3:0] \wbuf.en ;
   output word0_crc_ok;
   wire word0_crc_ok;
   output word0_ne;
@@ -649,28 +652,28 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   output [39:0] word1_position;
   wire [39:0] word1_position;
   wire [1:0] word_count;
-  wire [1:0] \word_count$172 ;
+  wire [1:0] \word_count$173 ;
   wire [1:0] word_crc_ok;
   wire [19:0] words;
-  wire [19:0] \words$184 ;
-  wire [9:0] \words$184[0] ;
+  wire [19:0] \words$185 ;
+  wire [9:0] \words$185[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
-  wire [1:0] \words$184[0].crc ;
-  wire [5:0] \words$184[0].data_bits ;
-  wire \words$184[0].lc ;
-  wire \words$184[0].nenw ;
-  wire [9:0] \words$184[1] ;
+  wire [1:0] \words$185[0].crc ;
+  wire [5:0] \words$185[0].data_bits ;
+  wire \words$185[0].lc ;
+  wire \words$185[0].nenw ;
+  wire [9:0] \words$185[1] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
-  wire [1:0] \words$184[1].crc ;
-  wire [5:0] \words$184[1].data_bits ;
-  wire \words$184[1].lc ;
-  wire \words$184[1].nenw ;
+  wire [1:0] \words$185[1].crc ;
+  wire [5:0] \words$185[1].data_bits ;
+  wire \words$185[1].lc ;
+  wire \words$185[1].nenw ;
   wire [9:0] \words[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
@@ -690,8 +693,8 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \words[1].lc ;
   wire \words[1].nenw ;
   wire zero;
-  assign \periodic$85  = periodic | ca_busy;
-  assign \$1  = report_frame & \spw_mismatch$226 ;
+  assign \periodic$86  = periodic | ca_busy;
+  assign \$1  = report_frame & \spw_mismatch$227 ;
   assign \$2  = result[2:0] == 1'h1;
   assign \$3  = ca_done & \$2 ;
   assign \$4  = result[2:0] == 2'h2;
@@ -743,14 +746,14 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .ma_hold(hold),
     .ma_run(run),
     .no_start_expired(no_start_expired),
-    .receiver_clear(\clear$163 ),
+    .receiver_clear(\clear$164 ),
     .report_delay(report_delay),
     .report_frame(report_frame),
     .request(request),
     .restart_timer(restart),
     .resync(resync),
     .rst(rst),
-    .slo(\slo$98 ),
+    .slo(\slo$99 ),
     .slo_stuck(slo_stuck),
     .slo_stuck_live(slo_stuck_live),
     .slots_full(slots_full),
@@ -768,18 +771,18 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   );
   \biss_master.decoder  decoder (
     .\bit (\bit ),
-    .cds(\cds$218 ),
+    .cds(\cds$219 ),
     .clk(clk),
     .cpw_top(cpw_top),
     .crc_ok(crc_ok),
     .data0(data0),
     .data1(spw),
     .done(frame_done),
-    .lc(\lc$173 ),
+    .lc(\lc$174 ),
     .lc_load(load),
     .ne(ne),
     .nw(nw),
-    .receiver_clear(\clear$163 ),
+    .receiver_clear(\clear$164 ),
     .rst(rst),
     .sample(sample),
     .slots_full(slots_full),
@@ -793,7 +796,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   \biss_master.ma_clock  ma_clock (
     .busy(ma_busy),
     .clk(clk),
-    .\clocking (\ma_busy$135 ),
+    .\clocking (\ma_busy$136 ),
     .first_rise(first_rise),
     .half_period(cycle[15:0]),
     .held(ma_held),
@@ -805,7 +808,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .second_rise(ma_arm)
   );
   \biss_master.ma_stop  ma_stop (
-    .clear(\clear$163 ),
+    .clear(\clear$164 ),
     .clk(clk),
     .enough(ma_enough),
     .rises(rises),
@@ -813,7 +816,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .start_slot(start_slot),
     .\started$10 (started),
     .w1_enable(cycle[135]),
-    .words(\words$184 )
+    .words(\words$185 )
   );
   \biss_master.register_access  register_access (
     .abort(ca_abort),
@@ -822,15 +825,16 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .clk(clk),
     .done(ca_done),
     .frame_cdm(frame_cdm),
-    .frame_cds(\cds$218 ),
+    .frame_cds(\cds$219 ),
     .frame_end(report),
-    .frame_ok(\valid$214 ),
+    .frame_ok(\valid$215 ),
     .host_read__addr(ca_rbuf_addr),
+    .host_read__en(ca_rbuf_en),
     .rbuf_data(ca_rbuf_data),
-    .request(\request$230 ),
+    .request(\request$231 ),
     .result(result),
     .rst(rst),
-    .\start$42 (ca_start),
+    .\start$44 (ca_start),
     .wbuf(wbuf)
   );
   \biss_master.results  results (
@@ -840,9 +844,9 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .report(report),
     .report_delay(report_delay),
     .report_frame(report_frame),
-    .result(\result$259 ),
+    .result(\result$261 ),
     .rst(rst),
-    .valid(\valid$214 ),
+    .valid(\valid$215 ),
     .valid_out(valid)
   );
   \biss_master.sampler  sampler (
@@ -852,9 +856,9 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .delay(delay),
     .early(early),
     .half_period(cycle[15:0]),
-    .level(\slo$98 ),
+    .level(\slo$99 ),
     .locked(locked),
-    .receiver_clear(\clear$163 ),
+    .receiver_clear(\clear$164 ),
     .rst(rst),
     .sample(sample),
     .slo(slo)
@@ -865,7 +869,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .idle(idle),
     .overrun(overrun),
     .period(cfg_request_period),
-    .periodic(\periodic$85 ),
+    .periodic(\periodic$86 ),
     .request(request),
     .rst(rst),
     .start(start)
@@ -874,7 +878,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .check(check),
     .clk(clk),
     .is_zero(lc_zero_seen),
-    .lc(\lc$173 ),
+    .lc(\lc$174 ),
     .load(load),
     .\port$482$0 (\bit ),
     .\repeat (lc_repeat_seen),
@@ -908,12 +912,12 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .delay_limit(delay_limit),
     .delay_over(delay_over),
     .in_clock(in_clock),
-    .ma_busy(\ma_busy$135 ),
+    .ma_busy(\ma_busy$136 ),
     .no_start_expired(no_start_expired),
     .no_start_limit(no_start_limit),
     .restart(restart),
     .rst(rst),
-    .slo(\slo$98 ),
+    .slo(\slo$99 ),
     .slo_stuck(slo_stuck),
     .slo_stuck_live(slo_stuck_live),
     .timeout_limit(timeout_limit),
@@ -927,133 +931,134 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .fault(fault),
     .fault_status(fault_status),
     .lc_check(check),
-    .lc_repeat(\lc_repeat$219 ),
+    .lc_repeat(\lc_repeat$220 ),
     .lc_repeat_seen(lc_repeat_seen),
-    .lc_skip(\lc_skip$220 ),
+    .lc_skip(\lc_skip$221 ),
     .lc_skip_seen(lc_skip_seen),
-    .lc_zero(\lc_zero$221 ),
+    .lc_zero(\lc_zero$222 ),
     .lc_zero_seen(lc_zero_seen),
     .\port$882$0 (\$12 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
-    .spw_mismatch(\spw_mismatch$226 ),
-    .status(\status$217 ),
-    .valid(\valid$214 )
+    .spw_mismatch(\spw_mismatch$227 ),
+    .status(\status$218 ),
+    .valid(\valid$215 )
   );
-  assign \idle$83  = idle;
-  assign \start$84  = start;
+  assign \idle$84  = idle;
+  assign \start$85  = start;
   assign frames = ca_busy;
   assign period = cfg_request_period;
   assign abort = abort_cycle;
-  assign \idle$89  = idle;
-  assign \slo$90  = slo;
-  assign \request$92  = request;
-  assign \abort$93  = abort_cycle;
+  assign \idle$90  = idle;
+  assign \slo$91  = slo;
+  assign \request$93  = request;
+  assign \abort$94  = abort_cycle;
   assign ok = config_ok;
   assign end_check = cycle[124];
-  assign level = \slo$98 ;
-  assign \busy$101  = ma_busy;
+  assign level = \slo$99 ;
+  assign \busy$102  = ma_busy;
   assign second_rise = ma_arm;
   assign enough = ma_enough;
-  assign \locked$107  = locked;
-  assign \early$109  = early;
-  assign \done$111  = frame_done;
-  assign \started$113  = started;
-  assign \slots_full$115  = slots_full;
-  assign \stopped$117  = stopped;
-  assign \stop_bit$119  = stop_bit;
+  assign \locked$108  = locked;
+  assign \early$110  = early;
+  assign \done$112  = frame_done;
+  assign \started$114  = started;
+  assign \slots_full$116  = slots_full;
+  assign \stopped$118  = stopped;
+  assign \stop_bit$120  = stop_bit;
   assign doubtful = frame_doubtful;
-  assign \break_over$123  = break_over;
-  assign \ack_expired$125  = ack_expired;
-  assign \no_start_expired$127  = no_start_expired;
-  assign \slo_stuck$129  = slo_stuck;
-  assign \slo_stuck_live$131  = slo_stuck_live;
-  assign \delay_over$133  = delay_over;
-  assign \slo$134  = \slo$98 ;
-  assign \clocking  = \ma_busy$135 ;
+  assign \break_over$124  = break_over;
+  assign \ack_expired$126  = ack_expired;
+  assign \no_start_expired$128  = no_start_expired;
+  assign \slo_stuck$130  = slo_stuck;
+  assign \slo_stuck_live$132  = slo_stuck_live;
+  assign \delay_over$134  = delay_over;
+  assign \slo$135  = \slo$99 ;
+  assign \clocking  = \ma_busy$136 ;
   assign timer_clear = clear;
-  assign \in_clock$140  = in_clock;
+  assign \in_clock$141  = in_clock;
   assign restart_timer = restart;
   assign break_time = cfg_break_time;
   assign timeout_live = cfg_timeout_limit;
-  assign \ack_limit$146  = ack_limit;
-  assign \timeout_limit$148  = timeout_limit;
-  assign \no_start_limit$150  = no_start_limit;
-  assign \delay$152  = delay;
-  assign \delay_limit$154  = delay_limit;
+  assign \ack_limit$147  = ack_limit;
+  assign \timeout_limit$149  = timeout_limit;
+  assign \no_start_limit$151  = no_start_limit;
+  assign \delay$153  = delay;
+  assign \delay_limit$155  = delay_limit;
   assign ma_run = run;
   assign half_period = cycle[15:0];
-  assign \started$158  = started;
-  assign \start_slot$160  = start_slot;
-  assign \rises$162  = rises;
-  assign receiver_clear = \clear$163 ;
-  assign \half_period$165  = cycle[15:0];
+  assign \started$159  = started;
+  assign \start_slot$161  = start_slot;
+  assign \rises$163  = rises;
+  assign receiver_clear = \clear$164 ;
+  assign \half_period$166  = cycle[15:0];
   assign arm = ma_arm;
-  assign \sample$168  = sample;
-  assign \bit$170  = \bit ;
-  assign \word_count$172  = word_count;
-  assign \lc$174  = \lc$173 ;
-  assign lc_next = { \lc$173 [4:0], \bit  };
-  assign \lc_next$176  = { \lc$173 [4:0], \bit  };
+  assign \sample$169  = sample;
+  assign \bit$171  = \bit ;
+  assign \word_count$173  = word_count;
+  assign \lc$175  = \lc$174 ;
+  assign lc_next = { \lc$174 [4:0], \bit  };
+  assign \lc_next$177  = { \lc$174 [4:0], \bit  };
   assign lc_load = load;
   assign lc_check = check;
-  assign \resync$182  = resync;
+  assign \resync$183  = resync;
   assign w1_enable = cycle[135];
-  assign \cpw_top$187  = cpw_top;
+  assign \cpw_top$188  = cpw_top;
   assign data1 = spw;
   assign bits = cycle[141:136];
   assign tolerance = cycle[154:147];
   assign match = spw_match;
   assign cfg = cycle;
-  assign \report_frame$196  = report_frame;
-  assign \fault$198  = fault;
-  assign \fault_status$200  = fault_status;
-  assign \crc_ok$202  = crc_ok;
+  assign \report_frame$197  = report_frame;
+  assign \fault$199  = fault;
+  assign \fault_status$201  = fault_status;
+  assign \crc_ok$203  = crc_ok;
   assign \repeat  = lc_repeat_seen;
   assign skip = lc_skip_seen;
   assign zero = lc_zero_seen;
-  assign \report$210  = report;
-  assign \report_frame$211  = report_frame;
-  assign \report_delay$213  = report_delay;
-  assign \valid$215  = \valid$214 ;
+  assign \report$211  = report;
+  assign \report_frame$212  = report_frame;
+  assign \report_delay$214  = report_delay;
+  assign \valid$216  = \valid$215 ;
   assign word_crc_ok = { \$12 , crc_ok[0] };
-  assign \first_rise$228  = first_rise;
-  assign \start$233  = ca_start;
-  assign \abort$234  = ca_abort;
+  assign \first_rise$229  = first_rise;
+  assign \start$234  = ca_start;
+  assign \abort$235  = ca_abort;
   assign rbuf_addr = ca_rbuf_addr;
+  assign rbuf_en = ca_rbuf_en;
   assign rbuf_data = ca_rbuf_data;
-  assign \busy$237  = ca_busy;
-  assign \done$238  = ca_done;
-  assign \cdm$240  = cdm;
+  assign \busy$239  = ca_busy;
+  assign \done$240  = ca_done;
+  assign \cdm$242  = cdm;
   assign held = ma_held;
   assign ma_hold = hold;
   assign frame_end = report;
-  assign frame_ok = \valid$214 ;
-  assign frame_cds = \cds$218 ;
+  assign frame_ok = \valid$215 ;
+  assign frame_cds = \cds$219 ;
   assign cdm_cycle = frame_cdm;
-  assign \overrun$253  = overrun;
-  assign \clear$254  = clear_counters;
-  assign \ma$256  = ma;
-  assign \done$257  = done;
+  assign \overrun$255  = overrun;
+  assign \clear$256  = clear_counters;
+  assign \ma$258  = ma;
+  assign \done$259  = done;
   assign valid_out = valid;
-  assign status = \result$259 [3:0];
-  assign timestamp = \result$259 [35:4];
-  assign line_delay = \result$259 [48:36];
-  assign cds = \result$259 [49];
-  assign word0_position = \result$259 [104:50];
-  assign word0_ne = \result$259 [105];
-  assign word0_nw = \result$259 [106];
-  assign word0_crc_ok = \result$259 [107];
-  assign word1_position = \result$259 [147:108];
-  assign word1_ne = \result$259 [148];
-  assign word1_nw = \result$259 [149];
-  assign word1_crc_ok = \result$259 [150];
-  assign lc = \result$259 [156:151];
-  assign lc_repeat = \result$259 [157];
-  assign lc_skip = \result$259 [158];
-  assign lc_zero = \result$259 [159];
-  assign spw_mismatch = \result$259 [160];
+  assign status = \result$261 [3:0];
+  assign timestamp = \result$261 [35:4];
+  assign line_delay = \result$261 [48:36];
+  assign cds = \result$261 [49];
+  assign word0_position = \result$261 [104:50];
+  assign word0_ne = \result$261 [105];
+  assign word0_nw = \result$261 [106];
+  assign word0_crc_ok = \result$261 [107];
+  assign word1_position = \result$261 [147:108];
+  assign word1_ne = \result$261 [148];
+  assign word1_nw = \result$261 [149];
+  assign word1_crc_ok = \result$261 [150];
+  assign lc = \result$261 [156:151];
+  assign lc_repeat = \result$261 [157];
+  assign lc_skip = \result$261 [158];
+  assign lc_zero = \result$261 [159];
+  assign spw_mismatch = \result$261 [160];
   assign ca_status = result[2:0];
   assign ca_bytes_done = result[9:3];
   assign count_crc_word0 = counts[15:0];
@@ -1124,16 +1129,16 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \words[1].nenw  = words[16];
   assign \words[1].lc  = words[17];
   assign \words[1].crc  = words[19:18];
-  assign \words$184[0]  = \words$184 [9:0];
-  assign \words$184[0].data_bits  = \words$184 [5:0];
-  assign \words$184[0].nenw  = \words$184 [6];
-  assign \words$184[0].lc  = \words$184 [7];
-  assign \words$184[0].crc  = \words$184 [9:8];
-  assign \words$184[1]  = \words$184 [19:10];
-  assign \words$184[1].data_bits  = \words$184 [15:10];
-  assign \words$184[1].nenw  = \words$184 [16];
-  assign \words$184[1].lc  = \words$184 [17];
-  assign \words$184[1].crc  = \words$184 [19:18];
+  assign \words$185[0]  = \words$185 [9:0];
+  assign \words$185[0].data_bits  = \words$185 [5:0];
+  assign \words$185[0].nenw  = \words$185 [6];
+  assign \words$185[0].lc  = \words$185 [7];
+  assign \words$185[0].crc  = \words$185 [9:8];
+  assign \words$185[1]  = \words$185 [19:10];
+  assign \words$185[1].data_bits  = \words$185 [15:10];
+  assign \words$185[1].nenw  = \words$185 [16];
+  assign \words$185[1].lc  = \words$185 [17];
+  assign \words$185[1].crc  = \words$185 [19:18];
   assign \cfg.ma_half_period  = cycle[15:0];
   assign \cfg.request_period  = cycle[39:16];
   assign \cfg.break_time  = cycle[63:40];
@@ -1173,13 +1178,13 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \frame.lc_skip  = frame[158];
   assign \frame.lc_zero  = frame[159];
   assign \frame.spw_mismatch  = frame[160];
-  assign \request$230.slave_id  = \request$230 [2:0];
-  assign \request$230.address  = \request$230 [9:3];
-  assign \request$230.count  = \request$230 [16:10];
-  assign \request$230.write  = \request$230 [17];
-  assign \wbuf.addr  = wbuf[5:0];
-  assign \wbuf.data  = wbuf[13:6];
-  assign \wbuf.en  = wbuf[14];
+  assign \request$231.slave_id  = \request$231 [2:0];
+  assign \request$231.address  = \request$231 [9:3];
+  assign \request$231.count  = \request$231 [16:10];
+  assign \request$231.write  = \request$231 [17];
+  assign \wbuf.addr  = wbuf[3:0];
+  assign \wbuf.data  = wbuf[35:4];
+  assign \wbuf.en  = wbuf[39:36];
   assign \result.status  = result[2:0];
   assign \result.bytes_done  = result[9:3];
   assign \events.crc_word0  = events[0];
@@ -1225,25 +1230,25 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \counts.ca_refused  = counts[255:240];
   assign \counts.ca_aborted  = counts[271:256];
   assign \counts.ca_data_fault  = counts[287:272];
-  assign \result$259.status  = \result$259 [3:0];
-  assign \result$259.timestamp  = \result$259 [35:4];
-  assign \result$259.line_delay  = \result$259 [48:36];
-  assign \result$259.cds  = \result$259 [49];
-  assign \result$259.word0  = \result$259 [107:50];
-  assign \result$259.word0.position  = \result$259 [104:50];
-  assign \result$259.word0.ne  = \result$259 [105];
-  assign \result$259.word0.nw  = \result$259 [106];
-  assign \result$259.word0.crc_ok  = \result$259 [107];
-  assign \result$259.word1  = \result$259 [150:108];
-  assign \result$259.word1.position  = \result$259 [147:108];
-  assign \result$259.word1.ne  = \result$259 [148];
-  assign \result$259.word1.nw  = \result$259 [149];
-  assign \result$259.word1.crc_ok  = \result$259 [150];
-  assign \result$259.lc  = \result$259 [156:151];
-  assign \result$259.lc_repeat  = \result$259 [157];
-  assign \result$259.lc_skip  = \result$259 [158];
-  assign \result$259.lc_zero  = \result$259 [159];
-  assign \result$259.spw_mismatch  = \result$259 [160];
+  assign \result$261.status  = \result$261 [3:0];
+  assign \result$261.timestamp  = \result$261 [35:4];
+  assign \result$261.line_delay  = \result$261 [48:36];
+  assign \result$261.cds  = \result$261 [49];
+  assign \result$261.word0  = \result$261 [107:50];
+  assign \result$261.word0.position  = \result$261 [104:50];
+  assign \result$261.word0.ne  = \result$261 [105];
+  assign \result$261.word0.nw  = \result$261 [106];
+  assign \result$261.word0.crc_ok  = \result$261 [107];
+  assign \result$261.word1  = \result$261 [150:108];
+  assign \result$261.word1.position  = \result$261 [147:108];
+  assign \result$261.word1.ne  = \result$261 [148];
+  assign \result$261.word1.nw  = \result$261 [149];
+  assign \result$261.word1.crc_ok  = \result$261 [150];
+  assign \result$261.lc  = \result$261 [156:151];
+  assign \result$261.lc_repeat  = \result$261 [157];
+  assign \result$261.lc_skip  = \result$261 [158];
+  assign \result$261.lc_zero  = \result$261 [159];
+  assign \result$261.spw_mismatch  = \result$261 [160];
   assign events[17] = \$11 ;
   assign events[16] = \$9 ;
   assign events[15] = \$7 ;
@@ -1253,24 +1258,24 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign events[11] = faults[4];
   assign events[10] = overrun;
   assign events[9] = \$1 ;
-  assign events[8] = \lc_zero$221 ;
-  assign events[7] = \lc_skip$220 ;
-  assign events[6] = \lc_repeat$219 ;
+  assign events[8] = \lc_zero$222 ;
+  assign events[7] = \lc_skip$221 ;
+  assign events[6] = \lc_repeat$220 ;
   assign events[5] = faults[3];
   assign events[4] = faults[2];
   assign events[3] = faults[1];
   assign events[2] = faults[0];
   assign events[1] = crc_error[1];
   assign events[0] = crc_error[0];
-  assign wbuf[14] = ca_wbuf_en;
-  assign wbuf[13:6] = ca_wbuf_data;
-  assign wbuf[5:0] = ca_wbuf_addr;
-  assign \request$230 [17] = ca_write;
-  assign \request$230 [16:10] = ca_count;
-  assign \request$230 [9:3] = ca_address;
-  assign \request$230 [2:0] = ca_slave_id;
+  assign wbuf[39:36] = ca_wbuf_en;
+  assign wbuf[35:4] = ca_wbuf_data;
+  assign wbuf[3:0] = ca_wbuf_addr;
+  assign \request$231 [17] = ca_write;
+  assign \request$231 [16:10] = ca_count;
+  assign \request$231 [9:3] = ca_address;
+  assign \request$231 [2:0] = ca_slave_id;
   assign frame[35:4] = first_rise_time;
-  assign frame[160] = \spw_mismatch$226 ;
+  assign frame[160] = \spw_mismatch$227 ;
   assign frame[150] = \$12 ;
   assign frame[149] = nw[1];
   assign frame[148] = ne[1];
@@ -1279,15 +1284,15 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign frame[106] = nw[0];
   assign frame[105] = ne[0];
   assign frame[104:50] = data0;
-  assign frame[159] = \lc_zero$221 ;
-  assign frame[158] = \lc_skip$220 ;
-  assign frame[157] = \lc_repeat$219 ;
-  assign frame[156:151] = \lc$173 ;
-  assign frame[49] = \cds$218 ;
+  assign frame[159] = \lc_zero$222 ;
+  assign frame[158] = \lc_skip$221 ;
+  assign frame[157] = \lc_repeat$220 ;
+  assign frame[156:151] = \lc$174 ;
+  assign frame[49] = \cds$219 ;
   assign frame[48:36] = delay;
-  assign frame[3:0] = \status$217 ;
-  assign \words$184 [19:10] = cycle[145:136];
-  assign \words$184 [9:0] = cycle[134:125];
+  assign frame[3:0] = \status$218 ;
+  assign \words$185 [19:10] = cycle[145:136];
+  assign \words$185 [9:0] = cycle[134:125];
   assign words[19:10] = cycle[145:136];
   assign words[9:0] = cycle[134:125];
   assign live[154:147] = cfg_spw_tolerance;
@@ -5814,7 +5819,7 @@ module \biss_master.ma_stop (rst, words, w1_enable, clear, rises, enough, \start
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.register_access (abort, host_read__addr, clk, rst, frame_end, frame_ok, busy, rbuf_data, request, wbuf, frame_cdm, frame_cds, cdm, done, result, \start$42 );
+module \biss_master.register_access (abort, host_read__addr, host_read__en, clk, rst, frame_end, frame_ok, busy, rbuf_data, request, wbuf, frame_cdm, frame_cds, cdm, done, result, \start$44 );
   reg \$auto$verilog_backend.cc:2355:dump_module$38  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -5824,13 +5829,13 @@ module \biss_master.register_access (abort, host_read__addr, clk, rst, frame_end
   wire \$103 ;
   wire \$104 ;
   wire \$105 ;
-  wire [18:0] \$106 ;
-  wire [5:0] \$107 ;
+  wire \$106 ;
+  wire \$107 ;
   wire \$108 ;
   wire \$109 ;
   wire \$11 ;
-  wire \$110 ;
-  wire \$111 ;
+  wire [18:0] \$110 ;
+  wire [5:0] \$111 ;
   wire \$112 ;
   wire \$113 ;
   wire \$114 ;
@@ -5840,51 +5845,57 @@ module \biss_master.register_access (abort, host_read__addr, clk, rst, frame_end
   wire \$118 ;
   wire \$119 ;
   wire \$12 ;
-  wire [8:0] \$120 ;
+  wire \$120 ;
   wire \$121 ;
-  wire [8:0] \$122 ;
-  wire [5:0] \$123 ;
-  wire \$124 ;
-  wire \$125 ;
-  wire \$126 ;
+  wire \$122 ;
+  wire \$123 ;
+  wire [7:0] \$124 ;
+  wire [7:0] \$125 ;
+  wire [8:0] \$126 ;
   wire \$127 ;
-  wire [6:0] \$128 ;
-  wire [6:0] \$129 ;
+  wire [8:0] \$128 ;
+  wire [5:0] \$129 ;
   wire \$13 ;
   wire \$130 ;
-  wire [6:0] \$131 ;
+  wire \$131 ;
   wire \$132 ;
   wire \$133 ;
-  wire \$134 ;
-  wire [5:0] \$135 ;
+  wire [6:0] \$134 ;
+  wire [6:0] \$135 ;
   wire \$136 ;
-  wire \$137 ;
+  wire [6:0] \$137 ;
   wire \$138 ;
   wire \$139 ;
   wire \$14 ;
   wire \$140 ;
-  wire [4:0] \$141 ;
-  wire [4:0] \$142 ;
-  wire [4:0] \$143 ;
-  wire [4:0] \$144 ;
+  wire [5:0] \$141 ;
+  wire \$142 ;
+  wire \$143 ;
+  wire \$144 ;
   wire \$145 ;
-  reg [3:0] \$146 ;
-  reg [3:0] \$147 ;
-  reg \$148 ;
-  reg [9:0] \$149 ;
+  wire \$146 ;
+  wire [4:0] \$147 ;
+  wire [4:0] \$148 ;
+  wire [4:0] \$149 ;
   wire \$15 ;
-  reg [2:0] \$150 ;
-  reg [17:0] \$151 ;
-  reg [5:0] \$152 ;
-  reg [17:0] \$153 ;
-  reg [4:0] \$154 ;
-  reg [2:0] \$155 ;
-  reg [7:0] \$156 ;
-  reg [7:0] \$157 ;
-  reg [4:0] \$158 ;
-  reg [7:0] \$159 ;
+  wire [4:0] \$150 ;
+  wire \$151 ;
+  reg [3:0] \$152 ;
+  reg [3:0] \$153 ;
+  reg \$154 ;
+  reg [9:0] \$155 ;
+  reg [2:0] \$156 ;
+  reg [17:0] \$157 ;
+  reg [5:0] \$158 ;
+  reg [17:0] \$159 ;
   wire \$16 ;
-  reg [2:0] \$160 ;
+  reg [4:0] \$160 ;
+  reg [2:0] \$161 ;
+  reg [7:0] \$162 ;
+  reg [7:0] \$163 ;
+  reg [4:0] \$164 ;
+  reg [7:0] \$165 ;
+  reg [2:0] \$166 ;
   wire \$17 ;
   wire \$18 ;
   wire \$19 ;
@@ -5899,6 +5910,8 @@ module \biss_master.register_access (abort, host_read__addr, clk, rst, frame_end
   wire \$27 ;
   wire \$28 ;
   wire \$29 ;
+  wire [5:0] \$291 ;
+  wire [5:0] \$294 ;
   wire \$3 ;
   wire \$30 ;
   wire \$31 ;
@@ -5934,43 +5947,43 @@ module \biss_master.register_access (abort, host_read__addr, clk, rst, frame_end
   wire \$59 ;
   wire \$6 ;
   wire \$60 ;
-  wire \$61 ;
+  wire [3:0] \$61 ;
   wire \$62 ;
   wire \$63 ;
   wire \$64 ;
   wire \$65 ;
-  wire [4:0] \$66 ;
-  wire [4:0] \$67 ;
-  wire [4:0] \$68 ;
+  wire \$66 ;
+  wire \$67 ;
+  wire \$68 ;
   wire \$69 ;
   wire \$7 ;
-  wire \$70 ;
-  wire \$71 ;
+  wire [4:0] \$70 ;
+  wire [4:0] \$71 ;
   wire [4:0] \$72 ;
-  wire [4:0] \$73 ;
-  wire [4:0] \$74 ;
+  wire \$73 ;
+  wire \$74 ;
   wire \$75 ;
-  wire \$76 ;
-  wire \$77 ;
-  wire [7:0] \$78 ;
+  wire [4:0] \$76 ;
+  wire [4:0] \$77 ;
+  wire [4:0] \$78 ;
   wire \$79 ;
   wire \$8 ;
   wire \$80 ;
   wire \$81 ;
-  wire \$82 ;
+  wire [7:0] \$82 ;
   wire \$83 ;
   wire \$84 ;
   wire \$85 ;
   wire \$86 ;
-  wire [4:0] \$87 ;
-  wire [4:0] \$88 ;
-  wire [4:0] \$89 ;
+  wire \$87 ;
+  wire \$88 ;
+  wire \$89 ;
   wire \$9 ;
-  wire [4:0] \$90 ;
-  wire \$91 ;
-  wire \$92 ;
-  wire \$93 ;
-  wire \$94 ;
+  wire \$90 ;
+  wire [4:0] \$91 ;
+  wire [4:0] \$92 ;
+  wire [4:0] \$93 ;
+  wire [4:0] \$94 ;
   wire \$95 ;
   wire \$96 ;
   wire \$97 ;
@@ -5981,19 +5994,17 @@ module \biss_master.register_access (abort, host_read__addr, clk, rst, frame_end
   reg [2:0] access_fsm_state = 3'h0;
   output busy;
   wire busy;
-  reg [5:0] byte_received__addr;
-  reg [7:0] byte_received__data;
-  reg byte_received__en;
-  reg [5:0] byte_to_send__addr = 6'h00;
-  wire [7:0] byte_to_send__data;
+  reg [3:0] byte_received__addr;
+  reg [31:0] byte_received__data;
+  reg [3:0] byte_received__en;
   output cdm;
   reg cdm;
   input clk;
   wire clk;
   wire [3:0] crc;
-  wire [3:0] \crc$29 ;
+  wire [3:0] \crc$31 ;
   reg data;
-  reg \data$27 ;
+  reg \data$29 ;
   output done;
   reg done = 1'h0;
   (* enum_base_type = "AccessStatus" *)
@@ -6017,19 +6028,21 @@ module \biss_master.register_access (abort, host_read__addr, clk, rst, frame_end
   reg [7:0] got = 8'h00;
   reg [2:0] got_crc = 3'h0;
   reg [17:0] header = 18'h00000;
-  input [5:0] host_read__addr;
-  wire [5:0] host_read__addr;
-  wire [7:0] host_read__data;
-  wire [5:0] host_write__addr;
-  wire [7:0] host_write__data;
-  wire host_write__en;
+  input [3:0] host_read__addr;
+  wire [3:0] host_read__addr;
+  wire [31:0] host_read__data;
+  input host_read__en;
+  wire host_read__en;
+  wire [3:0] host_write__addr;
+  wire [31:0] host_write__data;
+  wire [3:0] host_write__en;
   reg [3:0] idle_run = 4'h0;
   reg [3:0] idle_seen = 4'h0;
-  (* init = 6'h00 *)
-  wire [5:0] index;
-  wire [5:0] rbuf_addr;
-  output [7:0] rbuf_data;
-  wire [7:0] rbuf_data;
+  reg [5:0] index = 6'h00;
+  wire [3:0] rbuf_addr;
+  output [31:0] rbuf_data;
+  wire [31:0] rbuf_data;
+  wire rbuf_en;
   reg [17:0] req = 18'h00000;
   wire [6:0] \req.address ;
   wire [6:0] \req.count ;
@@ -6057,171 +6070,91 @@ module \biss_master.register_access (abort, host_read__addr, clk, rst, frame_end
   wire rst;
   reg [7:0] sent = 8'h00;
   reg start;
-  reg \start$25 ;
-  input \start$42 ;
-  wire \start$42 ;
+  reg \start$27 ;
+  input \start$44 ;
+  wire \start$44 ;
   reg [4:0] step = 5'h00;
   reg [7:0] to_send = 8'h00;
   reg valid;
-  reg \valid$26 ;
+  reg \valid$28 ;
   reg [4:0] waited = 5'h00;
-  input [14:0] wbuf;
-  wire [14:0] wbuf;
-  wire [5:0] \wbuf.addr ;
-  wire [7:0] \wbuf.data ;
-  wire \wbuf.en ;
-  reg [7:0] rbuf [63:0];
+  input [39:0] wbuf;
+  wire [39:0] wbuf;
+  wire [3:0] \wbuf.addr ;
+  wire [31:0] \wbuf.data ;
+  wire [3:0] \wbuf.en ;
+  wire [3:0] word_to_send__addr;
+  wire [31:0] word_to_send__data;
+  reg [31:0] rbuf [15:0];
   initial begin
-    rbuf[0] = 8'h00;
-    rbuf[1] = 8'h00;
-    rbuf[2] = 8'h00;
-    rbuf[3] = 8'h00;
-    rbuf[4] = 8'h00;
-    rbuf[5] = 8'h00;
-    rbuf[6] = 8'h00;
-    rbuf[7] = 8'h00;
-    rbuf[8] = 8'h00;
-    rbuf[9] = 8'h00;
-    rbuf[10] = 8'h00;
-    rbuf[11] = 8'h00;
-    rbuf[12] = 8'h00;
-    rbuf[13] = 8'h00;
-    rbuf[14] = 8'h00;
-    rbuf[15] = 8'h00;
-    rbuf[16] = 8'h00;
-    rbuf[17] = 8'h00;
-    rbuf[18] = 8'h00;
-    rbuf[19] = 8'h00;
-    rbuf[20] = 8'h00;
-    rbuf[21] = 8'h00;
-    rbuf[22] = 8'h00;
-    rbuf[23] = 8'h00;
-    rbuf[24] = 8'h00;
-    rbuf[25] = 8'h00;
-    rbuf[26] = 8'h00;
-    rbuf[27] = 8'h00;
-    rbuf[28] = 8'h00;
-    rbuf[29] = 8'h00;
-    rbuf[30] = 8'h00;
-    rbuf[31] = 8'h00;
-    rbuf[32] = 8'h00;
-    rbuf[33] = 8'h00;
-    rbuf[34] = 8'h00;
-    rbuf[35] = 8'h00;
-    rbuf[36] = 8'h00;
-    rbuf[37] = 8'h00;
-    rbuf[38] = 8'h00;
-    rbuf[39] = 8'h00;
-    rbuf[40] = 8'h00;
-    rbuf[41] = 8'h00;
-    rbuf[42] = 8'h00;
-    rbuf[43] = 8'h00;
-    rbuf[44] = 8'h00;
-    rbuf[45] = 8'h00;
-    rbuf[46] = 8'h00;
-    rbuf[47] = 8'h00;
-    rbuf[48] = 8'h00;
-    rbuf[49] = 8'h00;
-    rbuf[50] = 8'h00;
-    rbuf[51] = 8'h00;
-    rbuf[52] = 8'h00;
-    rbuf[53] = 8'h00;
-    rbuf[54] = 8'h00;
-    rbuf[55] = 8'h00;
-    rbuf[56] = 8'h00;
-    rbuf[57] = 8'h00;
-    rbuf[58] = 8'h00;
-    rbuf[59] = 8'h00;
-    rbuf[60] = 8'h00;
-    rbuf[61] = 8'h00;
-    rbuf[62] = 8'h00;
-    rbuf[63] = 8'h00;
+    rbuf[0] = 32'd0;
+    rbuf[1] = 32'd0;
+    rbuf[2] = 32'd0;
+    rbuf[3] = 32'd0;
+    rbuf[4] = 32'd0;
+    rbuf[5] = 32'd0;
+    rbuf[6] = 32'd0;
+    rbuf[7] = 32'd0;
+    rbuf[8] = 32'd0;
+    rbuf[9] = 32'd0;
+    rbuf[10] = 32'd0;
+    rbuf[11] = 32'd0;
+    rbuf[12] = 32'd0;
+    rbuf[13] = 32'd0;
+    rbuf[14] = 32'd0;
+    rbuf[15] = 32'd0;
   end
   always @(posedge clk) begin
-    if (byte_received__en)
-      rbuf[byte_received__addr] <= byte_received__data;
+    if (byte_received__en[0])
+      rbuf[byte_received__addr][7:0] <= byte_received__data[7:0];
+    if (byte_received__en[1])
+      rbuf[byte_received__addr][15:8] <= byte_received__data[15:8];
+    if (byte_received__en[2])
+      rbuf[byte_received__addr][23:16] <= byte_received__data[23:16];
+    if (byte_received__en[3])
+      rbuf[byte_received__addr][31:24] <= byte_received__data[31:24];
   end
-  reg [7:0] _0_;
+  reg [31:0] _0_;
   always @(posedge clk) begin
-    _0_ <= rbuf[host_read__addr];
+    if (host_read__en) begin
+      _0_ <= rbuf[host_read__addr];
+    end
   end
   assign rbuf_data = _0_;
-  reg [7:0] \wbuf$48  [63:0];
+  reg [31:0] \wbuf$50  [15:0];
   initial begin
-    \wbuf$48 [0] = 8'h00;
-    \wbuf$48 [1] = 8'h00;
-    \wbuf$48 [2] = 8'h00;
-    \wbuf$48 [3] = 8'h00;
-    \wbuf$48 [4] = 8'h00;
-    \wbuf$48 [5] = 8'h00;
-    \wbuf$48 [6] = 8'h00;
-    \wbuf$48 [7] = 8'h00;
-    \wbuf$48 [8] = 8'h00;
-    \wbuf$48 [9] = 8'h00;
-    \wbuf$48 [10] = 8'h00;
-    \wbuf$48 [11] = 8'h00;
-    \wbuf$48 [12] = 8'h00;
-    \wbuf$48 [13] = 8'h00;
-    \wbuf$48 [14] = 8'h00;
-    \wbuf$48 [15] = 8'h00;
-    \wbuf$48 [16] = 8'h00;
-    \wbuf$48 [17] = 8'h00;
-    \wbuf$48 [18] = 8'h00;
-    \wbuf$48 [19] = 8'h00;
-    \wbuf$48 [20] = 8'h00;
-    \wbuf$48 [21] = 8'h00;
-    \wbuf$48 [22] = 8'h00;
-    \wbuf$48 [23] = 8'h00;
-    \wbuf$48 [24] = 8'h00;
-    \wbuf$48 [25] = 8'h00;
-    \wbuf$48 [26] = 8'h00;
-    \wbuf$48 [27] = 8'h00;
-    \wbuf$48 [28] = 8'h00;
-    \wbuf$48 [29] = 8'h00;
-    \wbuf$48 [30] = 8'h00;
-    \wbuf$48 [31] = 8'h00;
-    \wbuf$48 [32] = 8'h00;
-    \wbuf$48 [33] = 8'h00;
-    \wbuf$48 [34] = 8'h00;
-    \wbuf$48 [35] = 8'h00;
-    \wbuf$48 [36] = 8'h00;
-    \wbuf$48 [37] = 8'h00;
-    \wbuf$48 [38] = 8'h00;
-    \wbuf$48 [39] = 8'h00;
-    \wbuf$48 [40] = 8'h00;
-    \wbuf$48 [41] = 8'h00;
-    \wbuf$48 [42] = 8'h00;
-    \wbuf$48 [43] = 8'h00;
-    \wbuf$48 [44] = 8'h00;
-    \wbuf$48 [45] = 8'h00;
-    \wbuf$48 [46] = 8'h00;
-    \wbuf$48 [47] = 8'h00;
-    \wbuf$48 [48] = 8'h00;
-    \wbuf$48 [49] = 8'h00;
-    \wbuf$48 [50] = 8'h00;
-    \wbuf$48 [51] = 8'h00;
-    \wbuf$48 [52] = 8'h00;
-    \wbuf$48 [53] = 8'h00;
-    \wbuf$48 [54] = 8'h00;
-    \wbuf$48 [55] = 8'h00;
-    \wbuf$48 [56] = 8'h00;
-    \wbuf$48 [57] = 8'h00;
-    \wbuf$48 [58] = 8'h00;
-    \wbuf$48 [59] = 8'h00;
-    \wbuf$48 [60] = 8'h00;
-    \wbuf$48 [61] = 8'h00;
-    \wbuf$48 [62] = 8'h00;
-    \wbuf$48 [63] = 8'h00;
+    \wbuf$50 [0] = 32'd0;
+    \wbuf$50 [1] = 32'd0;
+    \wbuf$50 [2] = 32'd0;
+    \wbuf$50 [3] = 32'd0;
+    \wbuf$50 [4] = 32'd0;
+    \wbuf$50 [5] = 32'd0;
+    \wbuf$50 [6] = 32'd0;
+    \wbuf$50 [7] = 32'd0;
+    \wbuf$50 [8] = 32'd0;
+    \wbuf$50 [9] = 32'd0;
+    \wbuf$50 [10] = 32'd0;
+    \wbuf$50 [11] = 32'd0;
+    \wbuf$50 [12] = 32'd0;
+    \wbuf$50 [13] = 32'd0;
+    \wbuf$50 [14] = 32'd0;
+    \wbuf$50 [15] = 32'd0;
   end
   always @(posedge clk) begin
-    if (wbuf[14])
-      \wbuf$48 [wbuf[5:0]] <= wbuf[13:6];
+    if (wbuf[36])
+      \wbuf$50 [wbuf[3:0]][7:0] <= wbuf[11:4];
+    if (wbuf[37])
+      \wbuf$50 [wbuf[3:0]][15:8] <= wbuf[19:12];
+    if (wbuf[38])
+      \wbuf$50 [wbuf[3:0]][23:16] <= wbuf[27:20];
+    if (wbuf[39])
+      \wbuf$50 [wbuf[3:0]][31:24] <= wbuf[35:28];
   end
-  reg [7:0] _1_;
+  reg [31:0] _1_;
   always @(posedge clk) begin
-    _1_ <= \wbuf$48 [byte_to_send__addr];
+    _1_ <= \wbuf$50 [index[5:2]];
   end
-  assign byte_to_send__data = _1_;
+  assign word_to_send__data = _1_;
   assign \$1  = step >= 4'hc;
   assign \$2  = step < 5'h10;
   assign \$3  = \$1  & \$2 ;
@@ -6270,138 +6203,146 @@ module \biss_master.register_access (abort, host_read__addr, clk, rst, frame_end
   assign \$46  = frame_end & \$45 ;
   assign \$47  = step < 4'hd;
   assign \$48  = frame_end & \$47 ;
-  assign \$49  = ! byte_to_send__addr;
+  assign \$49  = ! index;
   assign \$50  = \$49  ? req[17] : 1'h0;
   assign \$51  = frame_cds != \$50 ;
   assign \$52  = step <= 4'h9;
   assign \$53  = step == 2'h2;
-  assign \$54  = { got_crc, frame_cds } != \crc$29 ;
+  assign \$54  = { got_crc, frame_cds } != \crc$31 ;
   assign \$55  = got != sent;
   assign \$56  = req[17] & \$55 ;
-  assign \$57  = ~ req[17];
-  assign busy = ~ \$58 ;
-  assign \$58  = ! access_fsm_state;
-  assign \$59  = access_fsm_state == 1'h1;
-  assign \$60  = access_fsm_state == 2'h2;
-  assign \$61  = access_fsm_state == 2'h3;
-  assign \$62  = access_fsm_state == 3'h4;
-  assign \$63  = access_fsm_state == 3'h5;
-  assign \$64  = access_fsm_state == 3'h6;
-  assign \$65  = idle_run == 4'he;
-  assign \$66  = idle_run + 1'h1;
-  assign \$67  = \$65  ? 5'h0e : \$66 ;
-  assign \$68  = frame_cdm ? 5'h00 : \$67 ;
-  assign \$69  = ~ frame_ok;
-  assign \$70  = frame_cdm | \$69 ;
-  assign \$71  = idle_seen == 4'he;
-  assign \$72  = idle_seen + 1'h1;
-  assign \$73  = \$71  ? 5'h0e : \$72 ;
-  assign \$74  = \$70  ? 5'h00 : \$73 ;
-  assign \$75  = ! request[16:10];
-  assign \$76  = request[16:10] > 7'h40;
-  assign \$77  = \$75  | \$76 ;
-  assign \$78  = request[9:3] + request[16:10];
-  assign \$79  = \$78  > 8'h80;
-  assign \$80  = \$77  | \$79 ;
-  assign \$81  = ~ request[17];
-  assign \$82  = ~ frame_ok;
-  assign \$83  = frame_end & \$82 ;
-  assign \$84  = ~ frame_ok;
-  assign \$85  = frame_cdm | \$84 ;
-  assign \$86  = idle_seen == 4'he;
-  assign \$87  = idle_seen + 1'h1;
-  assign \$88  = \$86  ? 5'h0e : \$87 ;
-  assign \$89  = \$85  ? 5'h00 : \$88 ;
-  assign \$90  = frame_end ? \$89  : { 1'h0, idle_seen };
-  assign \$91  = \$90  == 4'he;
-  assign \$92  = ! step;
-  assign \$93  = frame_end & \$92 ;
-  assign \$94  = ~ frame_cdm;
-  assign \$95  = \$93  & \$94 ;
-  assign \$96  = ~ frame_ok;
+  assign \$57  = ! index[1:0];
+  assign \$58  = index[1:0] == 1'h1;
+  assign \$59  = index[1:0] == 2'h2;
+  assign \$60  = index[1:0] == 2'h3;
+  assign \$61  = req[17] ? 4'h0 : { \$60 , \$59 , \$58 , \$57  };
+  assign busy = ~ \$62 ;
+  assign \$62  = ! access_fsm_state;
+  assign \$63  = access_fsm_state == 1'h1;
+  assign \$64  = access_fsm_state == 2'h2;
+  assign \$65  = access_fsm_state == 2'h3;
+  assign \$66  = access_fsm_state == 3'h4;
+  assign \$67  = access_fsm_state == 3'h5;
+  assign \$68  = access_fsm_state == 3'h6;
+  assign \$69  = idle_run == 4'he;
+  assign \$70  = idle_run + 1'h1;
+  assign \$71  = \$69  ? 5'h0e : \$70 ;
+  assign \$72  = frame_cdm ? 5'h00 : \$71 ;
+  assign \$73  = ~ frame_ok;
+  assign \$74  = frame_cdm | \$73 ;
+  assign \$75  = idle_seen == 4'he;
+  assign \$76  = idle_seen + 1'h1;
+  assign \$77  = \$75  ? 5'h0e : \$76 ;
+  assign \$78  = \$74  ? 5'h00 : \$77 ;
+  assign \$79  = ! request[16:10];
+  assign \$80  = request[16:10] > 7'h40;
+  assign \$81  = \$79  | \$80 ;
+  assign \$82  = request[9:3] + request[16:10];
+  assign \$83  = \$82  > 8'h80;
+  assign \$84  = \$81  | \$83 ;
+  assign \$85  = ~ request[17];
+  assign \$86  = ~ frame_ok;
+  assign \$87  = frame_end & \$86 ;
+  assign \$88  = ~ frame_ok;
+  assign \$89  = frame_cdm | \$88 ;
+  assign \$90  = idle_seen == 4'he;
+  assign \$91  = idle_seen + 1'h1;
+  assign \$92  = \$90  ? 5'h0e : \$91 ;
+  assign \$93  = \$89  ? 5'h00 : \$92 ;
+  assign \$94  = frame_end ? \$93  : { 1'h0, idle_seen };
+  assign \$95  = \$94  == 4'he;
+  assign \$96  = ! step;
   assign \$97  = frame_end & \$96 ;
-  assign \$98  = step == 1'h1;
-  assign \$99  = frame_end & \$98 ;
-  assign \$100  = ~ frame_cds;
-  assign \$101  = \$99  & \$100 ;
-  assign \$102  = step == 5'h11;
+  assign \$98  = ~ frame_cdm;
+  assign \$99  = \$97  & \$98 ;
+  assign \$100  = ~ frame_ok;
+  assign \$101  = frame_end & \$100 ;
+  assign \$102  = step == 1'h1;
   assign \$103  = frame_end & \$102 ;
-  assign \$104  = frame_cds == req[17];
+  assign \$104  = ~ frame_cds;
   assign \$105  = \$103  & \$104 ;
-  assign \$107  = step + 1'h1;
-  assign \$108  = step == 5'h11;
-  assign \$109  = ~ frame_ok;
-  assign \$110  = frame_end & \$109 ;
-  assign \$111  = ! step;
-  assign \$112  = frame_end & \$111 ;
-  assign \$113  = step == 1'h1;
+  assign \$106  = step == 5'h11;
+  assign \$107  = frame_end & \$106 ;
+  assign \$108  = frame_cds == req[17];
+  assign \$109  = \$107  & \$108 ;
+  assign \$111  = step + 1'h1;
+  assign \$112  = step == 5'h11;
+  assign \$113  = ~ frame_ok;
   assign \$114  = frame_end & \$113 ;
-  assign \$115  = step < 4'hd;
+  assign \$115  = ! step;
   assign \$116  = frame_end & \$115 ;
-  assign \$117  = ! byte_to_send__addr;
-  assign \$118  = \$117  ? req[17] : 1'h0;
-  assign \$119  = frame_cds != \$118 ;
-  assign \$121  = ~ req[17];
-  assign \$123  = step + 1'h1;
-  assign \$124  = step <= 4'h9;
-  assign \$125  = { got_crc, frame_cds } != \crc$29 ;
-  assign \$126  = got != sent;
-  assign \$127  = req[17] & \$126 ;
-  assign \$128  = byte_to_send__addr + 1'h1;
-  assign \$129  = byte_to_send__addr + 1'h1;
-  assign \$130  = \$129  == req[16:10];
-  assign \$131  = byte_to_send__addr + 1'h1;
-  assign \$132  = ~ frame_ok;
-  assign \$133  = frame_end & \$132 ;
-  assign \$134  = frame_end & frame_cds;
-  assign \$135  = waited + 1'h1;
-  assign \$136  = waited == 4'hf;
-  assign \$137  = ~ frame_ok;
-  assign \$138  = frame_end & \$137 ;
-  assign \$139  = frame_end & frame_cds;
-  assign \$140  = idle_run == 4'he;
-  assign \$141  = idle_run + 1'h1;
-  assign \$142  = \$140  ? 5'h0e : \$141 ;
-  assign \$143  = frame_cdm ? 5'h00 : \$142 ;
-  assign \$144  = frame_end ? \$143  : { 1'h0, idle_run };
-  assign \$145  = \$144  == 4'he;
+  assign \$117  = step == 1'h1;
+  assign \$118  = frame_end & \$117 ;
+  assign \$119  = step < 4'hd;
+  assign \$120  = frame_end & \$119 ;
+  assign \$121  = ! index;
+  assign \$122  = \$121  ? req[17] : 1'h0;
+  assign \$123  = frame_cds != \$122 ;
+  assign \$291  = index[1:0] * 4'h8;
+  assign \$124  = word_to_send__data >> \$291 ;
+  assign \$294  = index[1:0] * 4'h8;
+  assign \$125  = word_to_send__data >> \$294 ;
+  assign \$127  = ~ req[17];
+  assign \$129  = step + 1'h1;
+  assign \$130  = step <= 4'h9;
+  assign \$131  = { got_crc, frame_cds } != \crc$31 ;
+  assign \$132  = got != sent;
+  assign \$133  = req[17] & \$132 ;
+  assign \$134  = index + 1'h1;
+  assign \$135  = index + 1'h1;
+  assign \$136  = \$135  == req[16:10];
+  assign \$137  = index + 1'h1;
+  assign \$138  = ~ frame_ok;
+  assign \$139  = frame_end & \$138 ;
+  assign \$140  = frame_end & frame_cds;
+  assign \$141  = waited + 1'h1;
+  assign \$142  = waited == 4'hf;
+  assign \$143  = ~ frame_ok;
+  assign \$144  = frame_end & \$143 ;
+  assign \$145  = frame_end & frame_cds;
+  assign \$146  = idle_run == 4'he;
+  assign \$147  = idle_run + 1'h1;
+  assign \$148  = \$146  ? 5'h0e : \$147 ;
+  assign \$149  = frame_cdm ? 5'h00 : \$148 ;
+  assign \$150  = frame_end ? \$149  : { 1'h0, idle_run };
+  assign \$151  = \$150  == 4'he;
   always @(posedge clk)
-    idle_run <= \$146 ;
+    idle_run <= \$152 ;
   always @(posedge clk)
-    idle_seen <= \$147 ;
+    idle_seen <= \$153 ;
   always @(posedge clk)
-    done <= \$148 ;
+    done <= \$154 ;
   always @(posedge clk)
-    result <= \$149 ;
+    result <= \$155 ;
   always @(posedge clk)
-    access_fsm_state <= \$150 ;
+    access_fsm_state <= \$156 ;
   always @(posedge clk)
-    req <= \$151 ;
+    req <= \$157 ;
   always @(posedge clk)
-    byte_to_send__addr <= \$152 ;
+    index <= \$158 ;
   always @(posedge clk)
-    header <= \$153 ;
+    header <= \$159 ;
   always @(posedge clk)
-    step <= \$154 ;
+    step <= \$160 ;
   always @(posedge clk)
-    ending <= \$155 ;
+    ending <= \$161 ;
   always @(posedge clk)
-    to_send <= \$156 ;
+    to_send <= \$162 ;
   always @(posedge clk)
-    sent <= \$157 ;
+    sent <= \$163 ;
   always @(posedge clk)
-    waited <= \$158 ;
+    waited <= \$164 ;
   always @(posedge clk)
-    got <= \$159 ;
+    got <= \$165 ;
   always @(posedge clk)
-    got_crc <= \$160 ;
+    got_crc <= \$166 ;
   \biss_master.register_access.rx_crc  rx_crc (
     .clk(clk),
-    .crc(\crc$29 ),
-    .data_in(\data$27 ),
+    .crc(\crc$31 ),
+    .data_in(\data$29 ),
     .rst(rst),
-    .start(\start$25 ),
-    .valid(\valid$26 )
+    .start(\start$27 ),
+    .valid(\valid$28 )
   );
   \biss_master.register_access.tx_crc  tx_crc (
     .clk(clk),
@@ -6506,7 +6447,7 @@ module \biss_master.register_access (abort, host_read__addr, clk, rst, frame_end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
-    \start$25  = 1'h0;
+    \start$27  = 1'h0;
     casez (access_fsm_state)
       3'h0:
           /* empty */;
@@ -6521,14 +6462,14 @@ module \biss_master.register_access (abort, host_read__addr, clk, rst, frame_end
           end else if (\$46 ) begin
           end else if (\$48 ) begin
             if (\$52 ) begin
-              \start$25  = \$53 ;
+              \start$27  = \$53 ;
             end
           end
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
-    \valid$26  = 1'h0;
+    \valid$28  = 1'h0;
     casez (access_fsm_state)
       3'h0:
           /* empty */;
@@ -6543,14 +6484,14 @@ module \biss_master.register_access (abort, host_read__addr, clk, rst, frame_end
           end else if (\$46 ) begin
           end else if (\$48 ) begin
             if (\$52 ) begin
-              \valid$26  = 1'h1;
+              \valid$28  = 1'h1;
             end
           end
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
-    \data$27  = 1'h0;
+    \data$29  = 1'h0;
     casez (access_fsm_state)
       3'h0:
           /* empty */;
@@ -6565,14 +6506,14 @@ module \biss_master.register_access (abort, host_read__addr, clk, rst, frame_end
           end else if (\$46 ) begin
           end else if (\$48 ) begin
             if (\$52 ) begin
-              \data$27  = frame_cds;
+              \data$29  = frame_cds;
             end
           end
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
-    byte_received__addr = 6'h00;
+    byte_received__addr = 4'h0;
     casez (access_fsm_state)
       3'h0:
           /* empty */;
@@ -6591,14 +6532,14 @@ module \biss_master.register_access (abort, host_read__addr, clk, rst, frame_end
             if (\$54 ) begin
             end else if (\$56 ) begin
             end else begin
-              byte_received__addr = byte_to_send__addr;
+              byte_received__addr = index[5:2];
             end
           end
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
-    byte_received__data = 8'h00;
+    byte_received__data = 32'd0;
     casez (access_fsm_state)
       3'h0:
           /* empty */;
@@ -6617,14 +6558,14 @@ module \biss_master.register_access (abort, host_read__addr, clk, rst, frame_end
             if (\$54 ) begin
             end else if (\$56 ) begin
             end else begin
-              byte_received__data = got;
+              byte_received__data = { got, got, got, got };
             end
           end
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
-    byte_received__en = 1'h0;
+    byte_received__en = 4'h0;
     casez (access_fsm_state)
       3'h0:
           /* empty */;
@@ -6643,46 +6584,46 @@ module \biss_master.register_access (abort, host_read__addr, clk, rst, frame_end
             if (\$54 ) begin
             end else if (\$56 ) begin
             end else begin
-              byte_received__en = \$57 ;
+              byte_received__en = \$61 ;
             end
           end
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
-    \$146  = idle_run;
+    \$152  = idle_run;
     if (frame_end) begin
-      \$146  = \$68 [3:0];
+      \$152  = \$72 [3:0];
     end
     if (rst) begin
-      \$146  = 4'h0;
+      \$152  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
-    \$147  = idle_seen;
+    \$153  = idle_seen;
     if (frame_end) begin
-      \$147  = \$74 [3:0];
+      \$153  = \$78 [3:0];
     end
     if (rst) begin
-      \$147  = 4'h0;
+      \$153  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
-    \$148  = 1'h0;
+    \$154  = 1'h0;
     casez (access_fsm_state)
       3'h0:
-          if (\start$42 ) begin
-            if (\$80 ) begin
-              \$148  = 1'h1;
+          if (\start$44 ) begin
+            if (\$84 ) begin
+              \$154  = 1'h1;
             end
           end
       3'h1:
           if (abort) begin
-            \$148  = 1'h1;
-          end else if (\$83 ) begin
-            \$148  = 1'h1;
+            \$154  = 1'h1;
+          end else if (\$87 ) begin
+            \$154  = 1'h1;
           end
       3'h2:
           /* empty */;
@@ -6692,198 +6633,198 @@ module \biss_master.register_access (abort, host_read__addr, clk, rst, frame_end
           /* empty */;
       3'h6:
           if (abort) begin
-          end else if (\$138 ) begin
-          end else if (\$139 ) begin
+          end else if (\$144 ) begin
+          end else if (\$145 ) begin
           end else if (frame_end) begin
-            \$148  = 1'h1;
+            \$154  = 1'h1;
           end
       3'h3:
-          if (\$145 ) begin
-            \$148  = 1'h1;
+          if (\$151 ) begin
+            \$154  = 1'h1;
           end
     endcase
     if (rst) begin
-      \$148  = 1'h0;
+      \$154  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
-    \$149  = result;
+    \$155  = result;
     casez (access_fsm_state)
       3'h0:
-          if (\start$42 ) begin
+          if (\start$44 ) begin
             (* full_case = 32'd1 *)
-            if (\$80 ) begin
-              \$149 [2:0] = 3'h6;
-              \$149 [9:3] = 7'h00;
+            if (\$84 ) begin
+              \$155 [2:0] = 3'h6;
+              \$155 [9:3] = 7'h00;
             end else begin
-              \$149 [9:3] = 7'h00;
+              \$155 [9:3] = 7'h00;
             end
           end
       3'h1:
           if (abort) begin
-            \$149 [2:0] = 3'h4;
-          end else if (\$83 ) begin
-            \$149 [2:0] = 3'h5;
+            \$155 [2:0] = 3'h4;
+          end else if (\$87 ) begin
+            \$155 [2:0] = 3'h5;
           end
       3'h2:
           /* empty */;
       3'h4:
           if (abort) begin
-          end else if (\$110 ) begin
-          end else if (\$112 ) begin
           end else if (\$114 ) begin
           end else if (\$116 ) begin
+          end else if (\$118 ) begin
+          end else if (\$120 ) begin
           end else if (frame_end) begin
             (* full_case = 32'd1 *)
-            if (\$125 ) begin
-            end else if (\$127 ) begin
+            if (\$131 ) begin
+            end else if (\$133 ) begin
             end else begin
-              \$149 [9:3] = \$128 ;
+              \$155 [9:3] = \$134 ;
             end
           end
       3'h5:
           /* empty */;
       3'h6:
           if (abort) begin
-          end else if (\$138 ) begin
-          end else if (\$139 ) begin
+          end else if (\$144 ) begin
+          end else if (\$145 ) begin
           end else if (frame_end) begin
-            \$149 [2:0] = 3'h0;
+            \$155 [2:0] = 3'h0;
           end
       3'h3:
-          if (\$145 ) begin
-            \$149 [2:0] = ending;
+          if (\$151 ) begin
+            \$155 [2:0] = ending;
           end
     endcase
     if (rst) begin
-      \$149  = 10'h000;
+      \$155  = 10'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
-    \$150  = access_fsm_state;
+    \$156  = access_fsm_state;
     casez (access_fsm_state)
       3'h0:
-          if (\start$42 ) begin
+          if (\start$44 ) begin
             (* full_case = 32'd1 *)
-            if (\$80 ) begin
-              \$150  = 3'h0;
+            if (\$84 ) begin
+              \$156  = 3'h0;
             end else begin
-              \$150  = 3'h1;
+              \$156  = 3'h1;
             end
           end
       3'h1:
           if (abort) begin
-            \$150  = 3'h0;
-          end else if (\$83 ) begin
-            \$150  = 3'h0;
-          end else if (\$91 ) begin
-            \$150  = 3'h2;
+            \$156  = 3'h0;
+          end else if (\$87 ) begin
+            \$156  = 3'h0;
+          end else if (\$95 ) begin
+            \$156  = 3'h2;
           end
       3'h2:
           if (abort) begin
-            \$150  = 3'h3;
-          end else if (\$95 ) begin
-          end else if (\$97 ) begin
-            \$150  = 3'h3;
+            \$156  = 3'h3;
+          end else if (\$99 ) begin
           end else if (\$101 ) begin
-            \$150  = 3'h3;
+            \$156  = 3'h3;
           end else if (\$105 ) begin
-            \$150  = 3'h3;
+            \$156  = 3'h3;
+          end else if (\$109 ) begin
+            \$156  = 3'h3;
           end else if (frame_end) begin
-            if (\$108 ) begin
-              \$150  = 3'h4;
+            if (\$112 ) begin
+              \$156  = 3'h4;
             end
           end
       3'h4:
           if (abort) begin
-            \$150  = 3'h3;
-          end else if (\$110 ) begin
-            \$150  = 3'h3;
-          end else if (\$112 ) begin
-            if (\$119 ) begin
-              \$150  = 3'h3;
-            end
+            \$156  = 3'h3;
           end else if (\$114 ) begin
+            \$156  = 3'h3;
+          end else if (\$116 ) begin
+            if (\$123 ) begin
+              \$156  = 3'h3;
+            end
+          end else if (\$118 ) begin
             (* full_case = 32'd1 *)
             if (frame_cds) begin
-            end else if (\$121 ) begin
-              \$150  = 3'h5;
+            end else if (\$127 ) begin
+              \$156  = 3'h5;
             end else begin
-              \$150  = 3'h3;
+              \$156  = 3'h3;
             end
-          end else if (\$116 ) begin
+          end else if (\$120 ) begin
           end else if (frame_end) begin
             (* full_case = 32'd1 *)
-            if (\$125 ) begin
-              \$150  = 3'h3;
-            end else if (\$127 ) begin
-              \$150  = 3'h3;
+            if (\$131 ) begin
+              \$156  = 3'h3;
+            end else if (\$133 ) begin
+              \$156  = 3'h3;
             end else begin
-              if (\$130 ) begin
-                \$150  = 3'h6;
+              if (\$136 ) begin
+                \$156  = 3'h6;
               end
             end
           end
       3'h5:
           if (abort) begin
-            \$150  = 3'h3;
-          end else if (\$133 ) begin
-            \$150  = 3'h3;
-          end else if (\$134 ) begin
-            \$150  = 3'h4;
+            \$156  = 3'h3;
+          end else if (\$139 ) begin
+            \$156  = 3'h3;
+          end else if (\$140 ) begin
+            \$156  = 3'h4;
           end else if (frame_end) begin
-            if (\$136 ) begin
-              \$150  = 3'h3;
+            if (\$142 ) begin
+              \$156  = 3'h3;
             end
           end
       3'h6:
           if (abort) begin
-            \$150  = 3'h3;
-          end else if (\$138 ) begin
-            \$150  = 3'h3;
-          end else if (\$139 ) begin
-            \$150  = 3'h3;
+            \$156  = 3'h3;
+          end else if (\$144 ) begin
+            \$156  = 3'h3;
+          end else if (\$145 ) begin
+            \$156  = 3'h3;
           end else if (frame_end) begin
-            \$150  = 3'h0;
+            \$156  = 3'h0;
           end
       3'h3:
-          if (\$145 ) begin
-            \$150  = 3'h0;
+          if (\$151 ) begin
+            \$156  = 3'h0;
           end
     endcase
     if (rst) begin
-      \$150  = 3'h0;
+      \$156  = 3'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
-    \$151  = req;
+    \$157  = req;
     casez (access_fsm_state)
       3'h0:
-          if (\start$42 ) begin
+          if (\start$44 ) begin
             (* full_case = 32'd1 *)
-            if (\$80 ) begin
+            if (\$84 ) begin
             end else begin
-              \$151  = request;
+              \$157  = request;
             end
           end
     endcase
     if (rst) begin
-      \$151  = 18'h00000;
+      \$157  = 18'h00000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
-    \$152  = byte_to_send__addr;
+    \$158  = index;
     casez (access_fsm_state)
       3'h0:
-          if (\start$42 ) begin
+          if (\start$44 ) begin
             (* full_case = 32'd1 *)
-            if (\$80 ) begin
+            if (\$84 ) begin
             end else begin
-              \$152  = 6'h00;
+              \$158  = 6'h00;
             end
           end
       3'h1:
@@ -6892,116 +6833,116 @@ module \biss_master.register_access (abort, host_read__addr, clk, rst, frame_end
           /* empty */;
       3'h4:
           if (abort) begin
-          end else if (\$110 ) begin
-          end else if (\$112 ) begin
           end else if (\$114 ) begin
           end else if (\$116 ) begin
+          end else if (\$118 ) begin
+          end else if (\$120 ) begin
           end else if (frame_end) begin
             (* full_case = 32'd1 *)
-            if (\$125 ) begin
-            end else if (\$127 ) begin
+            if (\$131 ) begin
+            end else if (\$133 ) begin
             end else begin
               (* full_case = 32'd1 *)
-              if (\$130 ) begin
+              if (\$136 ) begin
               end else begin
-                \$152  = \$131 [5:0];
+                \$158  = \$137 [5:0];
               end
             end
           end
     endcase
     if (rst) begin
-      \$152  = 6'h00;
+      \$158  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
-    \$153  = header;
+    \$159  = header;
     casez (access_fsm_state)
       3'h0:
-          if (\start$42 ) begin
+          if (\start$44 ) begin
             (* full_case = 32'd1 *)
-            if (\$80 ) begin
+            if (\$84 ) begin
             end else begin
-              \$153  = { 2'h3, request[2:0], request[9:3], 4'h0, \$81 , request[17] };
+              \$159  = { 2'h3, request[2:0], request[9:3], 4'h0, \$85 , request[17] };
             end
           end
       3'h1:
           /* empty */;
       3'h2:
           if (abort) begin
-          end else if (\$95 ) begin
-          end else if (\$97 ) begin
+          end else if (\$99 ) begin
           end else if (\$101 ) begin
           end else if (\$105 ) begin
+          end else if (\$109 ) begin
           end else if (frame_end) begin
-            \$153  = \$106 [17:0];
+            \$159  = \$110 [17:0];
           end
     endcase
     if (rst) begin
-      \$153  = 18'h00000;
+      \$159  = 18'h00000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
-    \$154  = step;
+    \$160  = step;
     casez (access_fsm_state)
       3'h0:
           /* empty */;
       3'h1:
           if (abort) begin
-          end else if (\$83 ) begin
-          end else if (\$91 ) begin
-            \$154  = 5'h00;
+          end else if (\$87 ) begin
+          end else if (\$95 ) begin
+            \$160  = 5'h00;
           end
       3'h2:
           if (abort) begin
-          end else if (\$95 ) begin
-          end else if (\$97 ) begin
+          end else if (\$99 ) begin
           end else if (\$101 ) begin
           end else if (\$105 ) begin
+          end else if (\$109 ) begin
           end else if (frame_end) begin
-            \$154  = \$107 [4:0];
-            if (\$108 ) begin
-              \$154  = 5'h00;
+            \$160  = \$111 [4:0];
+            if (\$112 ) begin
+              \$160  = 5'h00;
             end
           end
       3'h4:
           if (abort) begin
-          end else if (\$110 ) begin
-          end else if (\$112 ) begin
-            (* full_case = 32'd1 *)
-            if (\$119 ) begin
-            end else begin
-              \$154  = 5'h01;
-            end
           end else if (\$114 ) begin
-            if (frame_cds) begin
-              \$154  = 5'h02;
-            end
           end else if (\$116 ) begin
-            \$154  = \$123 [4:0];
+            (* full_case = 32'd1 *)
+            if (\$123 ) begin
+            end else begin
+              \$160  = 5'h01;
+            end
+          end else if (\$118 ) begin
+            if (frame_cds) begin
+              \$160  = 5'h02;
+            end
+          end else if (\$120 ) begin
+            \$160  = \$129 [4:0];
           end else if (frame_end) begin
             (* full_case = 32'd1 *)
-            if (\$125 ) begin
-            end else if (\$127 ) begin
+            if (\$131 ) begin
+            end else if (\$133 ) begin
             end else begin
-              \$154  = 5'h00;
+              \$160  = 5'h00;
             end
           end
       3'h5:
           if (abort) begin
-          end else if (\$133 ) begin
-          end else if (\$134 ) begin
-            \$154  = 5'h02;
+          end else if (\$139 ) begin
+          end else if (\$140 ) begin
+            \$160  = 5'h02;
           end
     endcase
     if (rst) begin
-      \$154  = 5'h00;
+      \$160  = 5'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
-    \$155  = ending;
+    \$161  = ending;
     casez (access_fsm_state)
       3'h0:
           /* empty */;
@@ -7009,66 +6950,66 @@ module \biss_master.register_access (abort, host_read__addr, clk, rst, frame_end
           /* empty */;
       3'h2:
           if (abort) begin
-            \$155  = 3'h4;
-          end else if (\$95 ) begin
-          end else if (\$97 ) begin
-            \$155  = 3'h5;
+            \$161  = 3'h4;
+          end else if (\$99 ) begin
           end else if (\$101 ) begin
-            \$155  = 3'h2;
+            \$161  = 3'h5;
           end else if (\$105 ) begin
-            \$155  = 3'h3;
+            \$161  = 3'h2;
+          end else if (\$109 ) begin
+            \$161  = 3'h3;
           end
       3'h4:
           if (abort) begin
-            \$155  = 3'h4;
-          end else if (\$110 ) begin
-            \$155  = 3'h5;
-          end else if (\$112 ) begin
-            if (\$119 ) begin
-              \$155  = 3'h3;
-            end
+            \$161  = 3'h4;
           end else if (\$114 ) begin
+            \$161  = 3'h5;
+          end else if (\$116 ) begin
+            if (\$123 ) begin
+              \$161  = 3'h3;
+            end
+          end else if (\$118 ) begin
             (* full_case = 32'd1 *)
             if (frame_cds) begin
-            end else if (\$121 ) begin
-            end else begin
-              \$155  = 3'h3;
-            end
-          end else if (\$116 ) begin
-          end else if (frame_end) begin
-            if (\$125 ) begin
-              \$155  = 3'h1;
             end else if (\$127 ) begin
-              \$155  = 3'h3;
+            end else begin
+              \$161  = 3'h3;
+            end
+          end else if (\$120 ) begin
+          end else if (frame_end) begin
+            if (\$131 ) begin
+              \$161  = 3'h1;
+            end else if (\$133 ) begin
+              \$161  = 3'h3;
             end
           end
       3'h5:
           if (abort) begin
-            \$155  = 3'h4;
-          end else if (\$133 ) begin
-            \$155  = 3'h5;
-          end else if (\$134 ) begin
+            \$161  = 3'h4;
+          end else if (\$139 ) begin
+            \$161  = 3'h5;
+          end else if (\$140 ) begin
           end else if (frame_end) begin
-            if (\$136 ) begin
-              \$155  = 3'h3;
+            if (\$142 ) begin
+              \$161  = 3'h3;
             end
           end
       3'h6:
           if (abort) begin
-            \$155  = 3'h4;
-          end else if (\$138 ) begin
-            \$155  = 3'h5;
-          end else if (\$139 ) begin
-            \$155  = 3'h3;
+            \$161  = 3'h4;
+          end else if (\$144 ) begin
+            \$161  = 3'h5;
+          end else if (\$145 ) begin
+            \$161  = 3'h3;
           end
     endcase
     if (rst) begin
-      \$155  = 3'h0;
+      \$161  = 3'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
-    \$156  = to_send;
+    \$162  = to_send;
     casez (access_fsm_state)
       3'h0:
           /* empty */;
@@ -7078,26 +7019,26 @@ module \biss_master.register_access (abort, host_read__addr, clk, rst, frame_end
           /* empty */;
       3'h4:
           if (abort) begin
-          end else if (\$110 ) begin
-          end else if (\$112 ) begin
-            (* full_case = 32'd1 *)
-            if (\$119 ) begin
-            end else begin
-              \$156  = byte_to_send__data;
-            end
           end else if (\$114 ) begin
-            \$156  = \$120 [7:0];
           end else if (\$116 ) begin
-            \$156  = \$122 [7:0];
+            (* full_case = 32'd1 *)
+            if (\$123 ) begin
+            end else begin
+              \$162  = \$124 ;
+            end
+          end else if (\$118 ) begin
+            \$162  = \$126 [7:0];
+          end else if (\$120 ) begin
+            \$162  = \$128 [7:0];
           end
     endcase
     if (rst) begin
-      \$156  = 8'h00;
+      \$162  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
-    \$157  = sent;
+    \$163  = sent;
     casez (access_fsm_state)
       3'h0:
           /* empty */;
@@ -7107,22 +7048,22 @@ module \biss_master.register_access (abort, host_read__addr, clk, rst, frame_end
           /* empty */;
       3'h4:
           if (abort) begin
-          end else if (\$110 ) begin
-          end else if (\$112 ) begin
+          end else if (\$114 ) begin
+          end else if (\$116 ) begin
             (* full_case = 32'd1 *)
-            if (\$119 ) begin
+            if (\$123 ) begin
             end else begin
-              \$157  = byte_to_send__data;
+              \$163  = \$125 ;
             end
           end
     endcase
     if (rst) begin
-      \$157  = 8'h00;
+      \$163  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
-    \$158  = waited;
+    \$164  = waited;
     casez (access_fsm_state)
       3'h0:
           /* empty */;
@@ -7132,29 +7073,29 @@ module \biss_master.register_access (abort, host_read__addr, clk, rst, frame_end
           /* empty */;
       3'h4:
           if (abort) begin
-          end else if (\$110 ) begin
-          end else if (\$112 ) begin
           end else if (\$114 ) begin
+          end else if (\$116 ) begin
+          end else if (\$118 ) begin
             if (frame_cds) begin
-            end else if (\$121 ) begin
-              \$158  = 5'h00;
+            end else if (\$127 ) begin
+              \$164  = 5'h00;
             end
           end
       3'h5:
           if (abort) begin
-          end else if (\$133 ) begin
-          end else if (\$134 ) begin
+          end else if (\$139 ) begin
+          end else if (\$140 ) begin
           end else if (frame_end) begin
-            \$158  = \$135 [4:0];
+            \$164  = \$141 [4:0];
           end
     endcase
     if (rst) begin
-      \$158  = 5'h00;
+      \$164  = 5'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
-    \$159  = got;
+    \$165  = got;
     casez (access_fsm_state)
       3'h0:
           /* empty */;
@@ -7164,22 +7105,22 @@ module \biss_master.register_access (abort, host_read__addr, clk, rst, frame_end
           /* empty */;
       3'h4:
           if (abort) begin
-          end else if (\$110 ) begin
-          end else if (\$112 ) begin
           end else if (\$114 ) begin
           end else if (\$116 ) begin
-            if (\$124 ) begin
-              \$159  = { got[6:0], frame_cds };
+          end else if (\$118 ) begin
+          end else if (\$120 ) begin
+            if (\$130 ) begin
+              \$165  = { got[6:0], frame_cds };
             end
           end
     endcase
     if (rst) begin
-      \$159  = 8'h00;
+      \$165  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
-    \$160  = got_crc;
+    \$166  = got_crc;
     casez (access_fsm_state)
       3'h0:
           /* empty */;
@@ -7189,31 +7130,32 @@ module \biss_master.register_access (abort, host_read__addr, clk, rst, frame_end
           /* empty */;
       3'h4:
           if (abort) begin
-          end else if (\$110 ) begin
-          end else if (\$112 ) begin
           end else if (\$114 ) begin
           end else if (\$116 ) begin
+          end else if (\$118 ) begin
+          end else if (\$120 ) begin
             (* full_case = 32'd1 *)
-            if (\$124 ) begin
+            if (\$130 ) begin
             end else begin
-              \$160  = { got_crc[1:0], frame_cds };
+              \$166  = { got_crc[1:0], frame_cds };
             end
           end
     endcase
     if (rst) begin
-      \$160  = 3'h0;
+      \$166  = 3'h0;
     end
   end
-  assign host_write__addr = wbuf[5:0];
-  assign host_write__data = wbuf[13:6];
-  assign host_write__en = wbuf[14];
+  assign host_write__addr = wbuf[3:0];
+  assign host_write__data = wbuf[35:4];
+  assign host_write__en = wbuf[39:36];
   assign rbuf_addr = host_read__addr;
+  assign rbuf_en = host_read__en;
   assign host_read__data = rbuf_data;
-  assign index = byte_to_send__addr;
+  assign word_to_send__addr = index[5:2];
   assign frames = busy;
-  assign \wbuf.addr  = wbuf[5:0];
-  assign \wbuf.data  = wbuf[13:6];
-  assign \wbuf.en  = wbuf[14];
+  assign \wbuf.addr  = wbuf[3:0];
+  assign \wbuf.data  = wbuf[35:4];
+  assign \wbuf.en  = wbuf[39:36];
   assign \req.slave_id  = req[2:0];
   assign \req.address  = req[9:3];
   assign \req.count  = req[16:10];
@@ -7224,9 +7166,9 @@ module \biss_master.register_access (abort, host_read__addr, clk, rst, frame_end
   assign \request.write  = request[17];
   assign \result.status  = result[2:0];
   assign \result.bytes_done  = result[9:3];
-  assign \$106  = { header, 1'h0 };
-  assign \$120  = { to_send, 1'h0 };
-  assign \$122  = { to_send, 1'h0 };
+  assign \$110  = { header, 1'h0 };
+  assign \$126  = { to_send, 1'h0 };
+  assign \$128  = { to_send, 1'h0 };
 endmodule
 
 (* generator = "Amaranth" *)

@@ -19,10 +19,12 @@
 (* top =  1  *)
 (* generator = "Amaranth" *)
 module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo, ch1_slo, clk, rst, wb_dat_r, wb_ack, wb_stall, irq, ch0_ma, ch1_ma, wb_cyc);
-  reg \$auto$verilog_backend.cc:2355:dump_module$17  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$25  = 0;
   wire \$1 ;
-  wire [160:0] \$10 ;
-  wire [207:0] \$11 ;
+  wire [9:0] \$10 ;
+  wire [160:0] \$11 ;
+  wire [287:0] \$12 ;
+  wire [9:0] \$13 ;
   wire \$2 ;
   wire \$3 ;
   reg \$4 ;
@@ -30,7 +32,7 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   wire \$6 ;
   wire \$7 ;
   wire [160:0] \$8 ;
-  wire [207:0] \$9 ;
+  wire [287:0] \$9 ;
   wire [10:0] bus__r_addr;
   wire [31:0] bus__r_data;
   wire bus__r_en;
@@ -40,9 +42,26 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   wire [3:0] bus__w_strb;
   wire ch0__abort_cycle;
   wire ch0__busy;
+  wire ch0__ca_abort;
+  wire [6:0] ch0__ca_address;
+  wire ch0__ca_busy;
+  wire [6:0] ch0__ca_bytes_done;
+  wire [6:0] ch0__ca_count;
+  wire ch0__ca_done;
+  wire [3:0] ch0__ca_rbuf_addr;
+  wire [31:0] ch0__ca_rbuf_data;
+  wire ch0__ca_rbuf_en;
+  wire [2:0] ch0__ca_slave_id;
+  wire ch0__ca_start;
+  wire [2:0] ch0__ca_status;
+  wire [3:0] ch0__ca_wbuf_addr;
+  wire [31:0] ch0__ca_wbuf_data;
+  wire [3:0] ch0__ca_wbuf_en;
+  wire ch0__ca_write;
   wire ch0__cap_counters;
   wire [5:0] ch0__cap_data_bits_w0;
   wire [5:0] ch0__cap_data_bits_w1;
+  wire ch0__cap_register_access;
   wire [5:0] ch0__cap_timer_width;
   wire ch0__cap_timestamp;
   wire ch0__cds;
@@ -67,6 +86,11 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   wire ch0__clear_counters;
   wire ch0__config_error;
   wire [15:0] ch0__count_aborted;
+  wire [15:0] ch0__count_ca_aborted;
+  wire [15:0] ch0__count_ca_crc4_error;
+  wire [15:0] ch0__count_ca_data_fault;
+  wire [15:0] ch0__count_ca_no_answer;
+  wire [15:0] ch0__count_ca_refused;
   wire [15:0] ch0__count_crc_word0;
   wire [15:0] ch0__count_crc_word1;
   wire [15:0] ch0__count_delay_range;
@@ -107,9 +131,26 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   wire ch0_slo;
   wire ch1__abort_cycle;
   wire ch1__busy;
+  wire ch1__ca_abort;
+  wire [6:0] ch1__ca_address;
+  wire ch1__ca_busy;
+  wire [6:0] ch1__ca_bytes_done;
+  wire [6:0] ch1__ca_count;
+  wire ch1__ca_done;
+  wire [3:0] ch1__ca_rbuf_addr;
+  wire [31:0] ch1__ca_rbuf_data;
+  wire ch1__ca_rbuf_en;
+  wire [2:0] ch1__ca_slave_id;
+  wire ch1__ca_start;
+  wire [2:0] ch1__ca_status;
+  wire [3:0] ch1__ca_wbuf_addr;
+  wire [31:0] ch1__ca_wbuf_data;
+  wire [3:0] ch1__ca_wbuf_en;
+  wire ch1__ca_write;
   wire ch1__cap_counters;
   wire [5:0] ch1__cap_data_bits_w0;
   wire [5:0] ch1__cap_data_bits_w1;
+  wire ch1__cap_register_access;
   wire [5:0] ch1__cap_timer_width;
   wire ch1__cap_timestamp;
   wire ch1__cds;
@@ -134,6 +175,11 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   wire ch1__clear_counters;
   wire ch1__config_error;
   wire [15:0] ch1__count_aborted;
+  wire [15:0] ch1__count_ca_aborted;
+  wire [15:0] ch1__count_ca_crc4_error;
+  wire [15:0] ch1__count_ca_data_fault;
+  wire [15:0] ch1__count_ca_no_answer;
+  wire [15:0] ch1__count_ca_refused;
   wire [15:0] ch1__count_crc_word0;
   wire [15:0] ch1__count_crc_word1;
   wire [15:0] ch1__count_delay_range;
@@ -179,150 +225,194 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   wire glob__trigger;
   output irq;
   reg irq = 1'h0;
-  wire [1:0] \irq$303 ;
+  wire [1:0] \irq$391 ;
   wire ma;
-  wire \ma$299 ;
+  wire \ma$387 ;
   wire regs__abort_cycle;
-  wire \regs__abort_cycle$172 ;
+  wire \regs__abort_cycle$216 ;
   wire regs__busy;
-  wire \regs__busy$175 ;
+  wire \regs__busy$219 ;
+  wire regs__ca_abort;
+  wire \regs__ca_abort$220 ;
+  wire [6:0] regs__ca_address;
+  wire [6:0] \regs__ca_address$222 ;
+  wire regs__ca_busy;
+  wire \regs__ca_busy$225 ;
+  wire [6:0] regs__ca_bytes_done;
+  wire [6:0] \regs__ca_bytes_done$227 ;
+  wire [6:0] regs__ca_count;
+  wire [6:0] \regs__ca_count$228 ;
+  wire regs__ca_done;
+  wire \regs__ca_done$231 ;
+  wire [3:0] regs__ca_rbuf_addr;
+  wire [3:0] \regs__ca_rbuf_addr$232 ;
+  wire [31:0] regs__ca_rbuf_data;
+  wire [31:0] \regs__ca_rbuf_data$235 ;
+  wire regs__ca_rbuf_en;
+  wire \regs__ca_rbuf_en$236 ;
+  wire [2:0] regs__ca_slave_id;
+  wire [2:0] \regs__ca_slave_id$238 ;
+  wire regs__ca_start;
+  wire \regs__ca_start$240 ;
+  wire [2:0] regs__ca_status;
+  wire [2:0] \regs__ca_status$243 ;
+  wire [3:0] regs__ca_wbuf_addr;
+  wire [3:0] \regs__ca_wbuf_addr$244 ;
+  wire [31:0] regs__ca_wbuf_data;
+  wire [31:0] \regs__ca_wbuf_data$246 ;
+  wire [3:0] regs__ca_wbuf_en;
+  wire [3:0] \regs__ca_wbuf_en$248 ;
+  wire regs__ca_write;
+  wire \regs__ca_write$250 ;
   wire regs__cap_counters;
-  wire \regs__cap_counters$177 ;
+  wire \regs__cap_counters$253 ;
   wire [5:0] regs__cap_data_bits_w0;
-  wire [5:0] \regs__cap_data_bits_w0$179 ;
+  wire [5:0] \regs__cap_data_bits_w0$255 ;
   wire [5:0] regs__cap_data_bits_w1;
-  wire [5:0] \regs__cap_data_bits_w1$181 ;
+  wire [5:0] \regs__cap_data_bits_w1$257 ;
+  wire regs__cap_register_access;
+  wire \regs__cap_register_access$259 ;
   wire [5:0] regs__cap_timer_width;
-  wire [5:0] \regs__cap_timer_width$183 ;
+  wire [5:0] \regs__cap_timer_width$261 ;
   wire regs__cap_timestamp;
-  wire \regs__cap_timestamp$185 ;
+  wire \regs__cap_timestamp$263 ;
   wire regs__cds;
-  wire \regs__cds$187 ;
+  wire \regs__cds$265 ;
   wire [23:0] regs__cfg_ack_limit;
-  wire [23:0] \regs__cfg_ack_limit$188 ;
+  wire [23:0] \regs__cfg_ack_limit$266 ;
   wire [23:0] regs__cfg_break_time;
-  wire [23:0] \regs__cfg_break_time$190 ;
+  wire [23:0] \regs__cfg_break_time$268 ;
   wire [11:0] regs__cfg_delay_limit;
-  wire [11:0] \regs__cfg_delay_limit$192 ;
+  wire [11:0] \regs__cfg_delay_limit$270 ;
   wire regs__cfg_end_check;
-  wire \regs__cfg_end_check$194 ;
+  wire \regs__cfg_end_check$272 ;
   wire [15:0] regs__cfg_ma_half_period;
-  wire [15:0] \regs__cfg_ma_half_period$196 ;
+  wire [15:0] \regs__cfg_ma_half_period$274 ;
   wire [23:0] regs__cfg_request_period;
-  wire [23:0] \regs__cfg_request_period$198 ;
+  wire [23:0] \regs__cfg_request_period$276 ;
   wire regs__cfg_spw_check;
-  wire \regs__cfg_spw_check$200 ;
+  wire \regs__cfg_spw_check$278 ;
   wire [7:0] regs__cfg_spw_tolerance;
-  wire [7:0] \regs__cfg_spw_tolerance$202 ;
+  wire [7:0] \regs__cfg_spw_tolerance$280 ;
   wire [23:0] regs__cfg_timeout_limit;
-  wire [23:0] \regs__cfg_timeout_limit$204 ;
+  wire [23:0] \regs__cfg_timeout_limit$282 ;
   wire [1:0] regs__cfg_w0_crc;
-  wire [1:0] \regs__cfg_w0_crc$206 ;
+  wire [1:0] \regs__cfg_w0_crc$284 ;
   wire [5:0] regs__cfg_w0_data_bits;
-  wire [5:0] \regs__cfg_w0_data_bits$208 ;
+  wire [5:0] \regs__cfg_w0_data_bits$286 ;
   wire regs__cfg_w0_lc;
-  wire \regs__cfg_w0_lc$210 ;
+  wire \regs__cfg_w0_lc$288 ;
   wire regs__cfg_w0_nenw;
-  wire \regs__cfg_w0_nenw$212 ;
+  wire \regs__cfg_w0_nenw$290 ;
   wire [1:0] regs__cfg_w1_crc;
-  wire [1:0] \regs__cfg_w1_crc$214 ;
+  wire [1:0] \regs__cfg_w1_crc$292 ;
   wire [5:0] regs__cfg_w1_data_bits;
-  wire [5:0] \regs__cfg_w1_data_bits$216 ;
+  wire [5:0] \regs__cfg_w1_data_bits$294 ;
   wire regs__cfg_w1_enable;
-  wire \regs__cfg_w1_enable$218 ;
+  wire \regs__cfg_w1_enable$296 ;
   wire regs__cfg_w1_lc;
-  wire \regs__cfg_w1_lc$220 ;
+  wire \regs__cfg_w1_lc$298 ;
   wire regs__cfg_w1_nenw;
-  wire \regs__cfg_w1_nenw$222 ;
+  wire \regs__cfg_w1_nenw$300 ;
   wire regs__clear_counters;
-  wire \regs__clear_counters$224 ;
+  wire \regs__clear_counters$302 ;
   wire regs__config_error;
-  wire \regs__config_error$227 ;
+  wire \regs__config_error$305 ;
   wire [15:0] regs__count_aborted;
-  wire [15:0] \regs__count_aborted$229 ;
+  wire [15:0] \regs__count_aborted$307 ;
+  wire [15:0] regs__count_ca_aborted;
+  wire [15:0] \regs__count_ca_aborted$309 ;
+  wire [15:0] regs__count_ca_crc4_error;
+  wire [15:0] \regs__count_ca_crc4_error$311 ;
+  wire [15:0] regs__count_ca_data_fault;
+  wire [15:0] \regs__count_ca_data_fault$313 ;
+  wire [15:0] regs__count_ca_no_answer;
+  wire [15:0] \regs__count_ca_no_answer$315 ;
+  wire [15:0] regs__count_ca_refused;
+  wire [15:0] \regs__count_ca_refused$317 ;
   wire [15:0] regs__count_crc_word0;
-  wire [15:0] \regs__count_crc_word0$231 ;
+  wire [15:0] \regs__count_crc_word0$319 ;
   wire [15:0] regs__count_crc_word1;
-  wire [15:0] \regs__count_crc_word1$233 ;
+  wire [15:0] \regs__count_crc_word1$321 ;
   wire [15:0] regs__count_delay_range;
-  wire [15:0] \regs__count_delay_range$235 ;
+  wire [15:0] \regs__count_delay_range$323 ;
   wire [15:0] regs__count_lc_repeat;
-  wire [15:0] \regs__count_lc_repeat$237 ;
+  wire [15:0] \regs__count_lc_repeat$325 ;
   wire [15:0] regs__count_lc_skip;
-  wire [15:0] \regs__count_lc_skip$239 ;
+  wire [15:0] \regs__count_lc_skip$327 ;
   wire [15:0] regs__count_lc_zero;
-  wire [15:0] \regs__count_lc_zero$241 ;
+  wire [15:0] \regs__count_lc_zero$329 ;
   wire [15:0] regs__count_no_ack;
-  wire [15:0] \regs__count_no_ack$243 ;
+  wire [15:0] \regs__count_no_ack$331 ;
   wire [15:0] regs__count_no_start;
-  wire [15:0] \regs__count_no_start$245 ;
+  wire [15:0] \regs__count_no_start$333 ;
   wire [15:0] regs__count_no_stop;
-  wire [15:0] \regs__count_no_stop$247 ;
+  wire [15:0] \regs__count_no_stop$335 ;
   wire [15:0] regs__count_overrun;
-  wire [15:0] \regs__count_overrun$249 ;
+  wire [15:0] \regs__count_overrun$337 ;
   wire [15:0] regs__count_slo_stuck_low;
-  wire [15:0] \regs__count_slo_stuck_low$251 ;
+  wire [15:0] \regs__count_slo_stuck_low$339 ;
   wire [15:0] regs__count_spw_mismatch;
-  wire [15:0] \regs__count_spw_mismatch$253 ;
+  wire [15:0] \regs__count_spw_mismatch$341 ;
   wire regs__done;
-  wire \regs__done$255 ;
+  wire \regs__done$343 ;
   wire [15:0] regs__done_count;
-  wire [15:0] \regs__done_count$257 ;
+  wire [15:0] \regs__done_count$345 ;
   wire regs__frame_error;
-  wire \regs__frame_error$259 ;
+  wire \regs__frame_error$347 ;
   wire [5:0] regs__lc;
-  wire [5:0] \regs__lc$261 ;
+  wire [5:0] \regs__lc$349 ;
   wire regs__lc_repeat;
-  wire \regs__lc_repeat$263 ;
+  wire \regs__lc_repeat$351 ;
   wire regs__lc_skip;
-  wire \regs__lc_skip$265 ;
+  wire \regs__lc_skip$353 ;
   wire regs__lc_zero;
-  wire \regs__lc_zero$267 ;
+  wire \regs__lc_zero$355 ;
   wire [12:0] regs__line_delay;
-  wire [12:0] \regs__line_delay$269 ;
+  wire [12:0] \regs__line_delay$357 ;
   wire regs__periodic;
-  wire \regs__periodic$270 ;
+  wire \regs__periodic$358 ;
   wire [10:0] regs__r_addr;
   wire [31:0] regs__r_data;
   wire regs__r_en;
   wire regs__spw_mismatch;
-  wire \regs__spw_mismatch$273 ;
+  wire \regs__spw_mismatch$361 ;
   wire regs__start;
-  wire \regs__start$274 ;
+  wire \regs__start$362 ;
   wire [3:0] regs__status;
-  wire [3:0] \regs__status$277 ;
+  wire [3:0] \regs__status$365 ;
   wire [31:0] regs__timestamp;
-  wire [31:0] \regs__timestamp$279 ;
+  wire [31:0] \regs__timestamp$367 ;
   wire regs__trigger_enable;
-  wire \regs__trigger_enable$280 ;
+  wire \regs__trigger_enable$368 ;
   wire [10:0] regs__w_addr;
   wire [31:0] regs__w_data;
   wire regs__w_en;
   wire [3:0] regs__w_strb;
   wire regs__word0_crc_ok;
-  wire \regs__word0_crc_ok$283 ;
+  wire \regs__word0_crc_ok$371 ;
   wire regs__word0_ne;
-  wire \regs__word0_ne$285 ;
+  wire \regs__word0_ne$373 ;
   wire regs__word0_nw;
-  wire \regs__word0_nw$287 ;
+  wire \regs__word0_nw$375 ;
   wire [54:0] regs__word0_position;
-  wire [54:0] \regs__word0_position$289 ;
+  wire [54:0] \regs__word0_position$377 ;
   wire regs__word1_crc_ok;
-  wire \regs__word1_crc_ok$291 ;
+  wire \regs__word1_crc_ok$379 ;
   wire regs__word1_ne;
-  wire \regs__word1_ne$293 ;
+  wire \regs__word1_ne$381 ;
   wire regs__word1_nw;
-  wire \regs__word1_nw$295 ;
+  wire \regs__word1_nw$383 ;
   wire [39:0] regs__word1_position;
-  wire [39:0] \regs__word1_position$297 ;
+  wire [39:0] \regs__word1_position$385 ;
   input rst;
   wire rst;
   wire slo;
-  wire \slo$300 ;
+  wire \slo$388 ;
   input trigger;
   wire trigger;
-  wire \trigger$169 ;
-  wire \trigger$298 ;
+  wire \trigger$213 ;
+  wire \trigger$386 ;
   wire \trigger$40 ;
   reg trigger_in = 1'h0;
   wire wb__ack;
@@ -364,11 +454,22 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .bus__r_data(wb_dat_r),
     .bus__r_en(bus__r_en),
     .bus__w_addr(wb_adr),
-    .bus__w_data(wb_dat_w),
     .bus__w_en(bus__w_en),
     .bus__w_strb(wb_sel),
     .ch0__abort_cycle(regs__abort_cycle),
     .ch0__busy(ch0__busy),
+    .ch0__ca_abort(regs__ca_abort),
+    .ch0__ca_address(regs__ca_address),
+    .ch0__ca_busy(ch0__ca_busy),
+    .ch0__ca_count(regs__ca_count),
+    .ch0__ca_done(ch0__ca_done),
+    .ch0__ca_rbuf_data(ch0__ca_rbuf_data),
+    .ch0__ca_rbuf_en(regs__ca_rbuf_en),
+    .ch0__ca_slave_id(regs__ca_slave_id),
+    .ch0__ca_start(regs__ca_start),
+    .ch0__ca_wbuf_data(wb_dat_w),
+    .ch0__ca_wbuf_en(regs__ca_wbuf_en),
+    .ch0__ca_write(regs__ca_write),
     .ch0__cfg_ack_limit(regs__cfg_ack_limit),
     .ch0__cfg_break_time(regs__cfg_break_time),
     .ch0__cfg_delay_limit(regs__cfg_delay_limit),
@@ -396,41 +497,54 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .ch0__start(regs__start),
     .ch0__trigger_enable(regs__trigger_enable),
     .ch0_irq(\$6 ),
-    .ch1__abort_cycle(\regs__abort_cycle$172 ),
+    .ch1__abort_cycle(\regs__abort_cycle$216 ),
     .ch1__busy(ch1__busy),
-    .ch1__cfg_ack_limit(\regs__cfg_ack_limit$188 ),
-    .ch1__cfg_break_time(\regs__cfg_break_time$190 ),
-    .ch1__cfg_delay_limit(\regs__cfg_delay_limit$192 ),
-    .ch1__cfg_end_check(\regs__cfg_end_check$194 ),
-    .ch1__cfg_ma_half_period(\regs__cfg_ma_half_period$196 ),
-    .ch1__cfg_request_period(\regs__cfg_request_period$198 ),
-    .ch1__cfg_spw_check(\regs__cfg_spw_check$200 ),
-    .ch1__cfg_spw_tolerance(\regs__cfg_spw_tolerance$202 ),
-    .ch1__cfg_timeout_limit(\regs__cfg_timeout_limit$204 ),
-    .ch1__cfg_w0_crc(\regs__cfg_w0_crc$206 ),
-    .ch1__cfg_w0_data_bits(\regs__cfg_w0_data_bits$208 ),
-    .ch1__cfg_w0_lc(\regs__cfg_w0_lc$210 ),
-    .ch1__cfg_w0_nenw(\regs__cfg_w0_nenw$212 ),
-    .ch1__cfg_w1_crc(\regs__cfg_w1_crc$214 ),
-    .ch1__cfg_w1_data_bits(\regs__cfg_w1_data_bits$216 ),
-    .ch1__cfg_w1_enable(\regs__cfg_w1_enable$218 ),
-    .ch1__cfg_w1_lc(\regs__cfg_w1_lc$220 ),
-    .ch1__cfg_w1_nenw(\regs__cfg_w1_nenw$222 ),
-    .ch1__clear_counters(\regs__clear_counters$224 ),
+    .ch1__ca_abort(\regs__ca_abort$220 ),
+    .ch1__ca_address(\regs__ca_address$222 ),
+    .ch1__ca_busy(ch1__ca_busy),
+    .ch1__ca_count(\regs__ca_count$228 ),
+    .ch1__ca_done(ch1__ca_done),
+    .ch1__ca_rbuf_data(ch1__ca_rbuf_data),
+    .ch1__ca_rbuf_en(\regs__ca_rbuf_en$236 ),
+    .ch1__ca_slave_id(\regs__ca_slave_id$238 ),
+    .ch1__ca_start(\regs__ca_start$240 ),
+    .ch1__ca_wbuf_en(\regs__ca_wbuf_en$248 ),
+    .ch1__ca_write(\regs__ca_write$250 ),
+    .ch1__cfg_ack_limit(\regs__cfg_ack_limit$266 ),
+    .ch1__cfg_break_time(\regs__cfg_break_time$268 ),
+    .ch1__cfg_delay_limit(\regs__cfg_delay_limit$270 ),
+    .ch1__cfg_end_check(\regs__cfg_end_check$272 ),
+    .ch1__cfg_ma_half_period(\regs__cfg_ma_half_period$274 ),
+    .ch1__cfg_request_period(\regs__cfg_request_period$276 ),
+    .ch1__cfg_spw_check(\regs__cfg_spw_check$278 ),
+    .ch1__cfg_spw_tolerance(\regs__cfg_spw_tolerance$280 ),
+    .ch1__cfg_timeout_limit(\regs__cfg_timeout_limit$282 ),
+    .ch1__cfg_w0_crc(\regs__cfg_w0_crc$284 ),
+    .ch1__cfg_w0_data_bits(\regs__cfg_w0_data_bits$286 ),
+    .ch1__cfg_w0_lc(\regs__cfg_w0_lc$288 ),
+    .ch1__cfg_w0_nenw(\regs__cfg_w0_nenw$290 ),
+    .ch1__cfg_w1_crc(\regs__cfg_w1_crc$292 ),
+    .ch1__cfg_w1_data_bits(\regs__cfg_w1_data_bits$294 ),
+    .ch1__cfg_w1_enable(\regs__cfg_w1_enable$296 ),
+    .ch1__cfg_w1_lc(\regs__cfg_w1_lc$298 ),
+    .ch1__cfg_w1_nenw(\regs__cfg_w1_nenw$300 ),
+    .ch1__clear_counters(\regs__clear_counters$302 ),
     .ch1__config_error(ch1__config_error),
     .ch1__done(ch1__done),
     .ch1__done_count(ch1__done_count),
     .ch1__frame_error(ch1__frame_error),
-    .ch1__periodic(\regs__periodic$270 ),
-    .ch1__start(\regs__start$274 ),
-    .ch1__trigger_enable(\regs__trigger_enable$280 ),
+    .ch1__periodic(\regs__periodic$358 ),
+    .ch1__start(\regs__start$362 ),
+    .ch1__trigger_enable(\regs__trigger_enable$368 ),
     .ch1_irq(\$7 ),
     .clk(clk),
     .glob__trigger(glob__trigger),
-    .\port$3001$0 (\$8 ),
-    .\port$3008$0 (\$9 ),
-    .\port$3348$0 (\$10 ),
-    .\port$3355$0 (\$11 ),
+    .\port$3907$0 (\$8 ),
+    .\port$3914$0 (\$9 ),
+    .\port$4042$0 (\$10 ),
+    .\port$4342$0 (\$11 ),
+    .\port$4349$0 (\$12 ),
+    .\port$4477$0 (\$13 ),
     .rst(rst)
   );
   \biss_master_wb.bus  bus (
@@ -449,6 +563,16 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   );
   \biss_master_wb.ch0  ch0 (
     .abort_cycle(regs__abort_cycle),
+    .ca_abort(regs__ca_abort),
+    .ca_address(regs__ca_address),
+    .ca_count(regs__ca_count),
+    .ca_rbuf_en(regs__ca_rbuf_en),
+    .ca_slave_id(regs__ca_slave_id),
+    .ca_start(regs__ca_start),
+    .ca_wbuf_addr(wb_adr[3:0]),
+    .ca_wbuf_data(wb_dat_w),
+    .ca_wbuf_en(regs__ca_wbuf_en),
+    .ca_write(regs__ca_write),
     .cfg_ack_limit(regs__cfg_ack_limit),
     .cfg_break_time(regs__cfg_break_time),
     .cfg_delay_limit(regs__cfg_delay_limit),
@@ -471,9 +595,13 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .clk(clk),
     .ma(ch0_ma),
     .periodic(regs__periodic),
-    .\port$3001$0 (\$8 ),
-    .\port$3008$0 (\$9 ),
+    .\port$3907$0 (\$8 ),
+    .\port$3914$0 (\$9 ),
+    .\port$4042$0 (\$10 ),
     .regs__busy(ch0__busy),
+    .regs__ca_busy(ch0__ca_busy),
+    .regs__ca_done(ch0__ca_done),
+    .regs__ca_rbuf_data(ch0__ca_rbuf_data),
     .regs__config_error(ch0__config_error),
     .regs__done(ch0__done),
     .regs__done_count(ch0__done_count),
@@ -482,54 +610,68 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .rst(rst),
     .slo(ch0_slo),
     .start(regs__start),
-    .\trigger$118 (\trigger$40 )
+    .\trigger$161 (\trigger$40 )
   );
   \biss_master_wb.ch1  ch1 (
-    .abort_cycle(\regs__abort_cycle$172 ),
-    .cfg_ack_limit(\regs__cfg_ack_limit$188 ),
-    .cfg_break_time(\regs__cfg_break_time$190 ),
-    .cfg_delay_limit(\regs__cfg_delay_limit$192 ),
-    .cfg_end_check(\regs__cfg_end_check$194 ),
-    .cfg_ma_half_period(\regs__cfg_ma_half_period$196 ),
-    .cfg_request_period(\regs__cfg_request_period$198 ),
-    .cfg_spw_check(\regs__cfg_spw_check$200 ),
-    .cfg_spw_tolerance(\regs__cfg_spw_tolerance$202 ),
-    .cfg_timeout_limit(\regs__cfg_timeout_limit$204 ),
-    .cfg_w0_crc(\regs__cfg_w0_crc$206 ),
-    .cfg_w0_data_bits(\regs__cfg_w0_data_bits$208 ),
-    .cfg_w0_lc(\regs__cfg_w0_lc$210 ),
-    .cfg_w0_nenw(\regs__cfg_w0_nenw$212 ),
-    .cfg_w1_crc(\regs__cfg_w1_crc$214 ),
-    .cfg_w1_data_bits(\regs__cfg_w1_data_bits$216 ),
-    .cfg_w1_enable(\regs__cfg_w1_enable$218 ),
-    .cfg_w1_lc(\regs__cfg_w1_lc$220 ),
-    .cfg_w1_nenw(\regs__cfg_w1_nenw$222 ),
-    .clear_counters(\regs__clear_counters$224 ),
+    .abort_cycle(\regs__abort_cycle$216 ),
+    .ca_abort(\regs__ca_abort$220 ),
+    .ca_address(\regs__ca_address$222 ),
+    .ca_count(\regs__ca_count$228 ),
+    .ca_rbuf_en(\regs__ca_rbuf_en$236 ),
+    .ca_slave_id(\regs__ca_slave_id$238 ),
+    .ca_start(\regs__ca_start$240 ),
+    .ca_wbuf_addr(wb_adr[3:0]),
+    .ca_wbuf_data(wb_dat_w),
+    .ca_wbuf_en(\regs__ca_wbuf_en$248 ),
+    .ca_write(\regs__ca_write$250 ),
+    .cfg_ack_limit(\regs__cfg_ack_limit$266 ),
+    .cfg_break_time(\regs__cfg_break_time$268 ),
+    .cfg_delay_limit(\regs__cfg_delay_limit$270 ),
+    .cfg_end_check(\regs__cfg_end_check$272 ),
+    .cfg_ma_half_period(\regs__cfg_ma_half_period$274 ),
+    .cfg_request_period(\regs__cfg_request_period$276 ),
+    .cfg_spw_check(\regs__cfg_spw_check$278 ),
+    .cfg_spw_tolerance(\regs__cfg_spw_tolerance$280 ),
+    .cfg_timeout_limit(\regs__cfg_timeout_limit$282 ),
+    .cfg_w0_crc(\regs__cfg_w0_crc$284 ),
+    .cfg_w0_data_bits(\regs__cfg_w0_data_bits$286 ),
+    .cfg_w0_lc(\regs__cfg_w0_lc$288 ),
+    .cfg_w0_nenw(\regs__cfg_w0_nenw$290 ),
+    .cfg_w1_crc(\regs__cfg_w1_crc$292 ),
+    .cfg_w1_data_bits(\regs__cfg_w1_data_bits$294 ),
+    .cfg_w1_enable(\regs__cfg_w1_enable$296 ),
+    .cfg_w1_lc(\regs__cfg_w1_lc$298 ),
+    .cfg_w1_nenw(\regs__cfg_w1_nenw$300 ),
+    .clear_counters(\regs__clear_counters$302 ),
     .clk(clk),
     .ma(ch1_ma),
-    .periodic(\regs__periodic$270 ),
-    .\port$3348$0 (\$10 ),
-    .\port$3355$0 (\$11 ),
+    .periodic(\regs__periodic$358 ),
+    .\port$4342$0 (\$11 ),
+    .\port$4349$0 (\$12 ),
+    .\port$4477$0 (\$13 ),
     .regs__busy(ch1__busy),
+    .regs__ca_busy(ch1__ca_busy),
+    .regs__ca_done(ch1__ca_done),
+    .regs__ca_rbuf_data(ch1__ca_rbuf_data),
     .regs__config_error(ch1__config_error),
     .regs__done(ch1__done),
     .regs__done_count(ch1__done_count),
     .regs__frame_error(ch1__frame_error),
-    .regs__trigger_enable(\regs__trigger_enable$280 ),
+    .regs__trigger_enable(\regs__trigger_enable$368 ),
     .rst(rst),
     .slo(ch1_slo),
-    .start(\regs__start$274 ),
-    .\trigger$118 (\trigger$40 )
+    .start(\regs__start$362 ),
+    .\trigger$161 (\trigger$40 )
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$17 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$25 ) begin end
     \$4  = trigger;
     if (rst) begin
       \$4  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$17 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$25 ) begin end
     \$5  = \$3 ;
     if (rst) begin
       \$5  = 1'h0;
@@ -558,12 +700,35 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   assign wb__stall = wb_ack;
   assign ch0__abort_cycle = regs__abort_cycle;
   assign regs__busy = ch0__busy;
+  assign ch0__ca_abort = regs__ca_abort;
+  assign ch0__ca_address = regs__ca_address;
+  assign regs__ca_busy = ch0__ca_busy;
+  assign ch0__ca_bytes_done = \$10 [9:3];
+  assign regs__ca_bytes_done = \$10 [9:3];
+  assign ch0__ca_count = regs__ca_count;
+  assign regs__ca_done = ch0__ca_done;
+  assign regs__ca_rbuf_addr = wb_adr[3:0];
+  assign ch0__ca_rbuf_addr = wb_adr[3:0];
+  assign regs__ca_rbuf_data = ch0__ca_rbuf_data;
+  assign ch0__ca_rbuf_en = regs__ca_rbuf_en;
+  assign ch0__ca_slave_id = regs__ca_slave_id;
+  assign ch0__ca_start = regs__ca_start;
+  assign ch0__ca_status = \$10 [2:0];
+  assign regs__ca_status = \$10 [2:0];
+  assign regs__ca_wbuf_addr = wb_adr[3:0];
+  assign ch0__ca_wbuf_addr = wb_adr[3:0];
+  assign regs__ca_wbuf_data = wb_dat_w;
+  assign ch0__ca_wbuf_data = wb_dat_w;
+  assign ch0__ca_wbuf_en = regs__ca_wbuf_en;
+  assign ch0__ca_write = regs__ca_write;
   assign ch0__cap_counters = 1'h1;
   assign regs__cap_counters = 1'h1;
   assign ch0__cap_data_bits_w0 = 6'h37;
   assign regs__cap_data_bits_w0 = 6'h37;
   assign ch0__cap_data_bits_w1 = 6'h28;
   assign regs__cap_data_bits_w1 = 6'h28;
+  assign ch0__cap_register_access = 1'h1;
+  assign regs__cap_register_access = 1'h1;
   assign ch0__cap_timer_width = 6'h18;
   assign regs__cap_timer_width = 6'h18;
   assign ch0__cap_timestamp = 1'h1;
@@ -592,6 +757,16 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   assign regs__config_error = ch0__config_error;
   assign ch0__count_aborted = \$9 [191:176];
   assign regs__count_aborted = \$9 [191:176];
+  assign ch0__count_ca_aborted = \$9 [271:256];
+  assign regs__count_ca_aborted = \$9 [271:256];
+  assign ch0__count_ca_crc4_error = \$9 [223:208];
+  assign regs__count_ca_crc4_error = \$9 [223:208];
+  assign ch0__count_ca_data_fault = \$9 [287:272];
+  assign regs__count_ca_data_fault = \$9 [287:272];
+  assign ch0__count_ca_no_answer = \$9 [239:224];
+  assign regs__count_ca_no_answer = \$9 [239:224];
+  assign ch0__count_ca_refused = \$9 [255:240];
+  assign regs__count_ca_refused = \$9 [255:240];
   assign ch0__count_crc_word0 = \$9 [15:0];
   assign regs__count_crc_word0 = \$9 [15:0];
   assign ch0__count_crc_word1 = \$9 [31:16];
@@ -654,122 +829,156 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   assign regs__word1_nw = \$8 [149];
   assign ch0__word1_position = \$8 [147:108];
   assign regs__word1_position = \$8 [147:108];
-  assign \trigger$169  = \trigger$40 ;
+  assign \trigger$213  = \trigger$40 ;
   assign ma = ch0_ma;
   assign slo = ch0_slo;
-  assign ch1__abort_cycle = \regs__abort_cycle$172 ;
-  assign \regs__busy$175  = ch1__busy;
+  assign ch1__abort_cycle = \regs__abort_cycle$216 ;
+  assign \regs__busy$219  = ch1__busy;
+  assign ch1__ca_abort = \regs__ca_abort$220 ;
+  assign ch1__ca_address = \regs__ca_address$222 ;
+  assign \regs__ca_busy$225  = ch1__ca_busy;
+  assign ch1__ca_bytes_done = \$13 [9:3];
+  assign \regs__ca_bytes_done$227  = \$13 [9:3];
+  assign ch1__ca_count = \regs__ca_count$228 ;
+  assign \regs__ca_done$231  = ch1__ca_done;
+  assign \regs__ca_rbuf_addr$232  = wb_adr[3:0];
+  assign ch1__ca_rbuf_addr = wb_adr[3:0];
+  assign \regs__ca_rbuf_data$235  = ch1__ca_rbuf_data;
+  assign ch1__ca_rbuf_en = \regs__ca_rbuf_en$236 ;
+  assign ch1__ca_slave_id = \regs__ca_slave_id$238 ;
+  assign ch1__ca_start = \regs__ca_start$240 ;
+  assign ch1__ca_status = \$13 [2:0];
+  assign \regs__ca_status$243  = \$13 [2:0];
+  assign \regs__ca_wbuf_addr$244  = wb_adr[3:0];
+  assign ch1__ca_wbuf_addr = wb_adr[3:0];
+  assign \regs__ca_wbuf_data$246  = wb_dat_w;
+  assign ch1__ca_wbuf_data = wb_dat_w;
+  assign ch1__ca_wbuf_en = \regs__ca_wbuf_en$248 ;
+  assign ch1__ca_write = \regs__ca_write$250 ;
   assign ch1__cap_counters = 1'h1;
-  assign \regs__cap_counters$177  = 1'h1;
+  assign \regs__cap_counters$253  = 1'h1;
   assign ch1__cap_data_bits_w0 = 6'h37;
-  assign \regs__cap_data_bits_w0$179  = 6'h37;
+  assign \regs__cap_data_bits_w0$255  = 6'h37;
   assign ch1__cap_data_bits_w1 = 6'h28;
-  assign \regs__cap_data_bits_w1$181  = 6'h28;
+  assign \regs__cap_data_bits_w1$257  = 6'h28;
+  assign ch1__cap_register_access = 1'h1;
+  assign \regs__cap_register_access$259  = 1'h1;
   assign ch1__cap_timer_width = 6'h18;
-  assign \regs__cap_timer_width$183  = 6'h18;
+  assign \regs__cap_timer_width$261  = 6'h18;
   assign ch1__cap_timestamp = 1'h1;
-  assign \regs__cap_timestamp$185  = 1'h1;
-  assign ch1__cds = \$10 [49];
-  assign \regs__cds$187  = \$10 [49];
-  assign ch1__cfg_ack_limit = \regs__cfg_ack_limit$188 ;
-  assign ch1__cfg_break_time = \regs__cfg_break_time$190 ;
-  assign ch1__cfg_delay_limit = \regs__cfg_delay_limit$192 ;
-  assign ch1__cfg_end_check = \regs__cfg_end_check$194 ;
-  assign ch1__cfg_ma_half_period = \regs__cfg_ma_half_period$196 ;
-  assign ch1__cfg_request_period = \regs__cfg_request_period$198 ;
-  assign ch1__cfg_spw_check = \regs__cfg_spw_check$200 ;
-  assign ch1__cfg_spw_tolerance = \regs__cfg_spw_tolerance$202 ;
-  assign ch1__cfg_timeout_limit = \regs__cfg_timeout_limit$204 ;
-  assign ch1__cfg_w0_crc = \regs__cfg_w0_crc$206 ;
-  assign ch1__cfg_w0_data_bits = \regs__cfg_w0_data_bits$208 ;
-  assign ch1__cfg_w0_lc = \regs__cfg_w0_lc$210 ;
-  assign ch1__cfg_w0_nenw = \regs__cfg_w0_nenw$212 ;
-  assign ch1__cfg_w1_crc = \regs__cfg_w1_crc$214 ;
-  assign ch1__cfg_w1_data_bits = \regs__cfg_w1_data_bits$216 ;
-  assign ch1__cfg_w1_enable = \regs__cfg_w1_enable$218 ;
-  assign ch1__cfg_w1_lc = \regs__cfg_w1_lc$220 ;
-  assign ch1__cfg_w1_nenw = \regs__cfg_w1_nenw$222 ;
-  assign ch1__clear_counters = \regs__clear_counters$224 ;
-  assign \regs__config_error$227  = ch1__config_error;
-  assign ch1__count_aborted = \$11 [191:176];
-  assign \regs__count_aborted$229  = \$11 [191:176];
-  assign ch1__count_crc_word0 = \$11 [15:0];
-  assign \regs__count_crc_word0$231  = \$11 [15:0];
-  assign ch1__count_crc_word1 = \$11 [31:16];
-  assign \regs__count_crc_word1$233  = \$11 [31:16];
-  assign ch1__count_delay_range = \$11 [79:64];
-  assign \regs__count_delay_range$235  = \$11 [79:64];
-  assign ch1__count_lc_repeat = \$11 [111:96];
-  assign \regs__count_lc_repeat$237  = \$11 [111:96];
-  assign ch1__count_lc_skip = \$11 [127:112];
-  assign \regs__count_lc_skip$239  = \$11 [127:112];
-  assign ch1__count_lc_zero = \$11 [143:128];
-  assign \regs__count_lc_zero$241  = \$11 [143:128];
-  assign ch1__count_no_ack = \$11 [47:32];
-  assign \regs__count_no_ack$243  = \$11 [47:32];
-  assign ch1__count_no_start = \$11 [63:48];
-  assign \regs__count_no_start$245  = \$11 [63:48];
-  assign ch1__count_no_stop = \$11 [207:192];
-  assign \regs__count_no_stop$247  = \$11 [207:192];
-  assign ch1__count_overrun = \$11 [175:160];
-  assign \regs__count_overrun$249  = \$11 [175:160];
-  assign ch1__count_slo_stuck_low = \$11 [95:80];
-  assign \regs__count_slo_stuck_low$251  = \$11 [95:80];
-  assign ch1__count_spw_mismatch = \$11 [159:144];
-  assign \regs__count_spw_mismatch$253  = \$11 [159:144];
-  assign \regs__done$255  = ch1__done;
-  assign \regs__done_count$257  = ch1__done_count;
-  assign \regs__frame_error$259  = ch1__frame_error;
-  assign ch1__lc = \$10 [156:151];
-  assign \regs__lc$261  = \$10 [156:151];
-  assign ch1__lc_repeat = \$10 [157];
-  assign \regs__lc_repeat$263  = \$10 [157];
-  assign ch1__lc_skip = \$10 [158];
-  assign \regs__lc_skip$265  = \$10 [158];
-  assign ch1__lc_zero = \$10 [159];
-  assign \regs__lc_zero$267  = \$10 [159];
-  assign ch1__line_delay = \$10 [48:36];
-  assign \regs__line_delay$269  = \$10 [48:36];
-  assign ch1__periodic = \regs__periodic$270 ;
-  assign ch1__spw_mismatch = \$10 [160];
-  assign \regs__spw_mismatch$273  = \$10 [160];
-  assign ch1__start = \regs__start$274 ;
-  assign ch1__status = \$10 [3:0];
-  assign \regs__status$277  = \$10 [3:0];
-  assign ch1__timestamp = \$10 [35:4];
-  assign \regs__timestamp$279  = \$10 [35:4];
-  assign ch1__trigger_enable = \regs__trigger_enable$280 ;
-  assign ch1__word0_crc_ok = \$10 [107];
-  assign \regs__word0_crc_ok$283  = \$10 [107];
-  assign ch1__word0_ne = \$10 [105];
-  assign \regs__word0_ne$285  = \$10 [105];
-  assign ch1__word0_nw = \$10 [106];
-  assign \regs__word0_nw$287  = \$10 [106];
-  assign ch1__word0_position = \$10 [104:50];
-  assign \regs__word0_position$289  = \$10 [104:50];
-  assign ch1__word1_crc_ok = \$10 [150];
-  assign \regs__word1_crc_ok$291  = \$10 [150];
-  assign ch1__word1_ne = \$10 [148];
-  assign \regs__word1_ne$293  = \$10 [148];
-  assign ch1__word1_nw = \$10 [149];
-  assign \regs__word1_nw$295  = \$10 [149];
-  assign ch1__word1_position = \$10 [147:108];
-  assign \regs__word1_position$297  = \$10 [147:108];
-  assign \trigger$298  = \trigger$40 ;
-  assign \ma$299  = ch1_ma;
-  assign \slo$300  = ch1_slo;
+  assign \regs__cap_timestamp$263  = 1'h1;
+  assign ch1__cds = \$11 [49];
+  assign \regs__cds$265  = \$11 [49];
+  assign ch1__cfg_ack_limit = \regs__cfg_ack_limit$266 ;
+  assign ch1__cfg_break_time = \regs__cfg_break_time$268 ;
+  assign ch1__cfg_delay_limit = \regs__cfg_delay_limit$270 ;
+  assign ch1__cfg_end_check = \regs__cfg_end_check$272 ;
+  assign ch1__cfg_ma_half_period = \regs__cfg_ma_half_period$274 ;
+  assign ch1__cfg_request_period = \regs__cfg_request_period$276 ;
+  assign ch1__cfg_spw_check = \regs__cfg_spw_check$278 ;
+  assign ch1__cfg_spw_tolerance = \regs__cfg_spw_tolerance$280 ;
+  assign ch1__cfg_timeout_limit = \regs__cfg_timeout_limit$282 ;
+  assign ch1__cfg_w0_crc = \regs__cfg_w0_crc$284 ;
+  assign ch1__cfg_w0_data_bits = \regs__cfg_w0_data_bits$286 ;
+  assign ch1__cfg_w0_lc = \regs__cfg_w0_lc$288 ;
+  assign ch1__cfg_w0_nenw = \regs__cfg_w0_nenw$290 ;
+  assign ch1__cfg_w1_crc = \regs__cfg_w1_crc$292 ;
+  assign ch1__cfg_w1_data_bits = \regs__cfg_w1_data_bits$294 ;
+  assign ch1__cfg_w1_enable = \regs__cfg_w1_enable$296 ;
+  assign ch1__cfg_w1_lc = \regs__cfg_w1_lc$298 ;
+  assign ch1__cfg_w1_nenw = \regs__cfg_w1_nenw$300 ;
+  assign ch1__clear_counters = \regs__clear_counters$302 ;
+  assign \regs__config_error$305  = ch1__config_error;
+  assign ch1__count_aborted = \$12 [191:176];
+  assign \regs__count_aborted$307  = \$12 [191:176];
+  assign ch1__count_ca_aborted = \$12 [271:256];
+  assign \regs__count_ca_aborted$309  = \$12 [271:256];
+  assign ch1__count_ca_crc4_error = \$12 [223:208];
+  assign \regs__count_ca_crc4_error$311  = \$12 [223:208];
+  assign ch1__count_ca_data_fault = \$12 [287:272];
+  assign \regs__count_ca_data_fault$313  = \$12 [287:272];
+  assign ch1__count_ca_no_answer = \$12 [239:224];
+  assign \regs__count_ca_no_answer$315  = \$12 [239:224];
+  assign ch1__count_ca_refused = \$12 [255:240];
+  assign \regs__count_ca_refused$317  = \$12 [255:240];
+  assign ch1__count_crc_word0 = \$12 [15:0];
+  assign \regs__count_crc_word0$319  = \$12 [15:0];
+  assign ch1__count_crc_word1 = \$12 [31:16];
+  assign \regs__count_crc_word1$321  = \$12 [31:16];
+  assign ch1__count_delay_range = \$12 [79:64];
+  assign \regs__count_delay_range$323  = \$12 [79:64];
+  assign ch1__count_lc_repeat = \$12 [111:96];
+  assign \regs__count_lc_repeat$325  = \$12 [111:96];
+  assign ch1__count_lc_skip = \$12 [127:112];
+  assign \regs__count_lc_skip$327  = \$12 [127:112];
+  assign ch1__count_lc_zero = \$12 [143:128];
+  assign \regs__count_lc_zero$329  = \$12 [143:128];
+  assign ch1__count_no_ack = \$12 [47:32];
+  assign \regs__count_no_ack$331  = \$12 [47:32];
+  assign ch1__count_no_start = \$12 [63:48];
+  assign \regs__count_no_start$333  = \$12 [63:48];
+  assign ch1__count_no_stop = \$12 [207:192];
+  assign \regs__count_no_stop$335  = \$12 [207:192];
+  assign ch1__count_overrun = \$12 [175:160];
+  assign \regs__count_overrun$337  = \$12 [175:160];
+  assign ch1__count_slo_stuck_low = \$12 [95:80];
+  assign \regs__count_slo_stuck_low$339  = \$12 [95:80];
+  assign ch1__count_spw_mismatch = \$12 [159:144];
+  assign \regs__count_spw_mismatch$341  = \$12 [159:144];
+  assign \regs__done$343  = ch1__done;
+  assign \regs__done_count$345  = ch1__done_count;
+  assign \regs__frame_error$347  = ch1__frame_error;
+  assign ch1__lc = \$11 [156:151];
+  assign \regs__lc$349  = \$11 [156:151];
+  assign ch1__lc_repeat = \$11 [157];
+  assign \regs__lc_repeat$351  = \$11 [157];
+  assign ch1__lc_skip = \$11 [158];
+  assign \regs__lc_skip$353  = \$11 [158];
+  assign ch1__lc_zero = \$11 [159];
+  assign \regs__lc_zero$355  = \$11 [159];
+  assign ch1__line_delay = \$11 [48:36];
+  assign \regs__line_delay$357  = \$11 [48:36];
+  assign ch1__periodic = \regs__periodic$358 ;
+  assign ch1__spw_mismatch = \$11 [160];
+  assign \regs__spw_mismatch$361  = \$11 [160];
+  assign ch1__start = \regs__start$362 ;
+  assign ch1__status = \$11 [3:0];
+  assign \regs__status$365  = \$11 [3:0];
+  assign ch1__timestamp = \$11 [35:4];
+  assign \regs__timestamp$367  = \$11 [35:4];
+  assign ch1__trigger_enable = \regs__trigger_enable$368 ;
+  assign ch1__word0_crc_ok = \$11 [107];
+  assign \regs__word0_crc_ok$371  = \$11 [107];
+  assign ch1__word0_ne = \$11 [105];
+  assign \regs__word0_ne$373  = \$11 [105];
+  assign ch1__word0_nw = \$11 [106];
+  assign \regs__word0_nw$375  = \$11 [106];
+  assign ch1__word0_position = \$11 [104:50];
+  assign \regs__word0_position$377  = \$11 [104:50];
+  assign ch1__word1_crc_ok = \$11 [150];
+  assign \regs__word1_crc_ok$379  = \$11 [150];
+  assign ch1__word1_ne = \$11 [148];
+  assign \regs__word1_ne$381  = \$11 [148];
+  assign ch1__word1_nw = \$11 [149];
+  assign \regs__word1_nw$383  = \$11 [149];
+  assign ch1__word1_position = \$11 [147:108];
+  assign \regs__word1_position$385  = \$11 [147:108];
+  assign \trigger$386  = \trigger$40 ;
+  assign \ma$387  = ch1_ma;
+  assign \slo$388  = ch1_slo;
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, \$7 , \$6  };
-  assign \irq$303  = { \$7 , \$6  };
+  assign \irq$391  = { \$7 , \$6  };
   assign wb_stall = wb_ack;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus__w_en, ch0_irq, ch1_irq, ch0__frame_error, ch0__busy, ch0__config_error, ch1__frame_error, ch1__busy, ch1__config_error, glob__trigger, ch0__start, ch0__abort_cycle, ch0__clear_counters, ch0__periodic, ch0__trigger_enable, ch0__cfg_ma_half_period
-, ch0__cfg_delay_limit, ch0__cfg_request_period, ch0__cfg_break_time, ch0__cfg_ack_limit, ch0__cfg_timeout_limit, ch0__cfg_w0_data_bits, ch0__cfg_w0_nenw, ch0__cfg_w0_lc, ch0__cfg_w0_crc, ch0__cfg_w1_data_bits, ch0__cfg_w1_nenw, ch0__cfg_w1_lc, ch0__cfg_w1_crc, ch0__cfg_w1_enable, ch0__cfg_end_check, ch0__cfg_spw_check, ch0__cfg_spw_tolerance, ch1__start, ch1__abort_cycle, ch1__clear_counters, ch1__periodic
-, ch1__trigger_enable, ch1__cfg_ma_half_period, ch1__cfg_delay_limit, ch1__cfg_request_period, ch1__cfg_break_time, ch1__cfg_ack_limit, ch1__cfg_timeout_limit, ch1__cfg_w0_data_bits, ch1__cfg_w0_nenw, ch1__cfg_w0_lc, ch1__cfg_w0_crc, ch1__cfg_w1_data_bits, ch1__cfg_w1_nenw, ch1__cfg_w1_lc, ch1__cfg_w1_crc, ch1__cfg_w1_enable, ch1__cfg_end_check, ch1__cfg_spw_check, ch1__cfg_spw_tolerance, bus__r_data, ch0__done_count
-, ch0__done, \port$3001$0 , \port$3008$0 , ch1__done_count, ch1__done, \port$3348$0 , \port$3355$0 , bus__w_addr);
-  reg \$auto$verilog_backend.cc:2355:dump_module$18  = 0;
+module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en, bus__w_en, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, ch1__ca_wbuf_en, ch1__ca_rbuf_en, ch1_irq, bus__r_data, ch0__frame_error, ch0__busy, ch0__config_error, ch0__ca_busy, ch0__ca_rbuf_data, ch1__frame_error, ch1__busy, ch1__config_error
+, ch1__ca_busy, ch1__ca_rbuf_data, glob__trigger, ch0__start, ch0__abort_cycle, ch0__clear_counters, ch0__periodic, ch0__trigger_enable, ch0__cfg_ma_half_period, ch0__cfg_delay_limit, ch0__cfg_request_period, ch0__cfg_break_time, ch0__cfg_ack_limit, ch0__cfg_timeout_limit, ch0__cfg_w0_data_bits, ch0__cfg_w0_nenw, ch0__cfg_w0_lc, ch0__cfg_w0_crc, ch0__cfg_w1_data_bits, ch0__cfg_w1_nenw, ch0__cfg_w1_lc
+, ch0__cfg_w1_crc, ch0__cfg_w1_enable, ch0__cfg_end_check, ch0__cfg_spw_check, ch0__cfg_spw_tolerance, ch0__ca_slave_id, ch0__ca_address, ch0__ca_count, ch0__ca_write, ch0__ca_start, ch0__ca_abort, ch1__start, ch1__abort_cycle, ch1__clear_counters, ch1__periodic, ch1__trigger_enable, ch1__cfg_ma_half_period, ch1__cfg_delay_limit, ch1__cfg_request_period, ch1__cfg_break_time, ch1__cfg_ack_limit
+, ch1__cfg_timeout_limit, ch1__cfg_w0_data_bits, ch1__cfg_w0_nenw, ch1__cfg_w0_lc, ch1__cfg_w0_crc, ch1__cfg_w1_data_bits, ch1__cfg_w1_nenw, ch1__cfg_w1_lc, ch1__cfg_w1_crc, ch1__cfg_w1_enable, ch1__cfg_end_check, ch1__cfg_spw_check, ch1__cfg_spw_tolerance, ch1__ca_slave_id, ch1__ca_address, ch1__ca_count, ch1__ca_write, ch1__ca_start, ch1__ca_abort, ch0__done_count, ch0__done
+, \port$3907$0 , \port$3914$0 , ch0__ca_done, \port$4042$0 , ch1__done_count, ch1__done, \port$4342$0 , \port$4349$0 , ch1__ca_done, \port$4477$0 , bus__w_addr);
+  reg \$auto$verilog_backend.cc:2355:dump_module$26  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$100 ;
@@ -834,79 +1043,79 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire \$154 ;
   wire \$155 ;
   wire \$156 ;
-  wire \$157 ;
-  wire \$158 ;
-  wire \$159 ;
+  wire [31:0] \$157 ;
+  wire [31:0] \$158 ;
+  wire [31:0] \$159 ;
   wire \$16 ;
   wire \$160 ;
-  wire [15:0] \$161 ;
-  wire [15:0] \$162 ;
-  wire [15:0] \$163 ;
-  wire [15:0] \$164 ;
-  wire [11:0] \$165 ;
-  wire [11:0] \$166 ;
-  wire [11:0] \$167 ;
-  wire [11:0] \$168 ;
-  wire [23:0] \$169 ;
+  wire \$161 ;
+  wire \$162 ;
+  wire \$163 ;
+  wire \$164 ;
+  wire \$165 ;
+  wire \$166 ;
+  wire \$167 ;
+  wire \$168 ;
+  wire \$169 ;
   wire \$17 ;
-  wire [23:0] \$170 ;
-  wire [23:0] \$171 ;
-  wire [23:0] \$172 ;
-  wire [23:0] \$173 ;
-  wire [23:0] \$174 ;
-  wire [23:0] \$175 ;
-  wire [23:0] \$176 ;
-  wire [23:0] \$177 ;
-  wire [23:0] \$178 ;
-  wire [23:0] \$179 ;
+  wire \$170 ;
+  wire \$171 ;
+  wire \$172 ;
+  wire \$173 ;
+  wire \$174 ;
+  wire \$175 ;
+  wire \$176 ;
+  wire \$177 ;
+  wire \$178 ;
+  wire \$179 ;
   wire \$18 ;
-  wire [23:0] \$180 ;
-  wire [23:0] \$181 ;
-  wire [23:0] \$182 ;
-  wire [23:0] \$183 ;
-  wire [23:0] \$184 ;
-  wire [5:0] \$185 ;
-  wire [5:0] \$186 ;
-  wire [5:0] \$187 ;
-  wire [5:0] \$188 ;
+  wire \$180 ;
+  wire \$181 ;
+  wire \$182 ;
+  wire \$183 ;
+  wire \$184 ;
+  wire \$185 ;
+  wire \$186 ;
+  wire \$187 ;
+  wire \$188 ;
   wire \$189 ;
   wire \$19 ;
   wire \$190 ;
   wire \$191 ;
   wire \$192 ;
   wire \$193 ;
-  wire \$194 ;
-  wire \$195 ;
-  wire \$196 ;
-  wire [1:0] \$197 ;
-  wire [1:0] \$198 ;
-  wire [1:0] \$199 ;
+  wire [15:0] \$194 ;
+  wire [15:0] \$195 ;
+  wire [15:0] \$196 ;
+  wire [15:0] \$197 ;
+  wire [11:0] \$198 ;
+  wire [11:0] \$199 ;
   wire \$2 ;
   wire \$20 ;
-  wire [1:0] \$200 ;
-  wire [5:0] \$201 ;
-  wire [5:0] \$202 ;
-  wire [5:0] \$203 ;
-  wire [5:0] \$204 ;
-  wire \$205 ;
-  wire \$206 ;
-  wire \$207 ;
-  wire \$208 ;
-  wire \$209 ;
+  wire [11:0] \$200 ;
+  wire [11:0] \$201 ;
+  wire [23:0] \$202 ;
+  wire [23:0] \$203 ;
+  wire [23:0] \$204 ;
+  wire [23:0] \$205 ;
+  wire [23:0] \$206 ;
+  wire [23:0] \$207 ;
+  wire [23:0] \$208 ;
+  wire [23:0] \$209 ;
   wire \$21 ;
-  wire \$210 ;
-  wire \$211 ;
-  wire \$212 ;
-  wire [1:0] \$213 ;
-  wire [1:0] \$214 ;
-  wire [1:0] \$215 ;
-  wire [1:0] \$216 ;
-  wire \$217 ;
-  wire \$218 ;
-  wire \$219 ;
+  wire [23:0] \$210 ;
+  wire [23:0] \$211 ;
+  wire [23:0] \$212 ;
+  wire [23:0] \$213 ;
+  wire [23:0] \$214 ;
+  wire [23:0] \$215 ;
+  wire [23:0] \$216 ;
+  wire [23:0] \$217 ;
+  wire [5:0] \$218 ;
+  wire [5:0] \$219 ;
   wire \$22 ;
-  wire \$220 ;
-  wire \$221 ;
+  wire [5:0] \$220 ;
+  wire [5:0] \$221 ;
   wire \$222 ;
   wire \$223 ;
   wire \$224 ;
@@ -914,16 +1123,16 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire \$226 ;
   wire \$227 ;
   wire \$228 ;
-  wire [7:0] \$229 ;
+  wire \$229 ;
   wire \$23 ;
-  wire [7:0] \$230 ;
-  wire [7:0] \$231 ;
-  wire [7:0] \$232 ;
-  wire \$233 ;
-  wire \$234 ;
-  wire \$235 ;
-  wire \$236 ;
-  wire \$237 ;
+  wire [1:0] \$230 ;
+  wire [1:0] \$231 ;
+  wire [1:0] \$232 ;
+  wire [1:0] \$233 ;
+  wire [5:0] \$234 ;
+  wire [5:0] \$235 ;
+  wire [5:0] \$236 ;
+  wire [5:0] \$237 ;
   wire \$238 ;
   wire \$239 ;
   wire \$24 ;
@@ -933,10 +1142,10 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire \$243 ;
   wire \$244 ;
   wire \$245 ;
-  wire \$246 ;
-  wire \$247 ;
-  wire \$248 ;
-  wire \$249 ;
+  wire [1:0] \$246 ;
+  wire [1:0] \$247 ;
+  wire [1:0] \$248 ;
+  wire [1:0] \$249 ;
   wire \$25 ;
   wire \$250 ;
   wire \$251 ;
@@ -951,40 +1160,40 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire \$26 ;
   wire \$260 ;
   wire \$261 ;
-  wire \$262 ;
-  wire \$263 ;
-  wire \$264 ;
-  wire [15:0] \$265 ;
-  wire [15:0] \$266 ;
-  wire [15:0] \$267 ;
-  wire [15:0] \$268 ;
-  wire [11:0] \$269 ;
+  wire [7:0] \$262 ;
+  wire [7:0] \$263 ;
+  wire [7:0] \$264 ;
+  wire [7:0] \$265 ;
+  wire [2:0] \$266 ;
+  wire [2:0] \$267 ;
+  wire [2:0] \$268 ;
+  wire [2:0] \$269 ;
   wire \$27 ;
-  wire [11:0] \$270 ;
-  wire [11:0] \$271 ;
-  wire [11:0] \$272 ;
-  wire [23:0] \$273 ;
-  wire [23:0] \$274 ;
-  wire [23:0] \$275 ;
-  wire [23:0] \$276 ;
-  wire [23:0] \$277 ;
-  wire [23:0] \$278 ;
-  wire [23:0] \$279 ;
+  wire [6:0] \$270 ;
+  wire [6:0] \$271 ;
+  wire [6:0] \$272 ;
+  wire [6:0] \$273 ;
+  wire [6:0] \$274 ;
+  wire [6:0] \$275 ;
+  wire [6:0] \$276 ;
+  wire [6:0] \$277 ;
+  wire \$278 ;
+  wire \$279 ;
   wire \$28 ;
-  wire [23:0] \$280 ;
-  wire [23:0] \$281 ;
-  wire [23:0] \$282 ;
-  wire [23:0] \$283 ;
-  wire [23:0] \$284 ;
-  wire [23:0] \$285 ;
-  wire [23:0] \$286 ;
-  wire [23:0] \$287 ;
-  wire [23:0] \$288 ;
-  wire [5:0] \$289 ;
+  wire \$280 ;
+  wire \$281 ;
+  wire \$282 ;
+  wire \$283 ;
+  wire \$284 ;
+  wire \$285 ;
+  wire \$286 ;
+  wire \$287 ;
+  wire \$288 ;
+  wire \$289 ;
   wire \$29 ;
-  wire [5:0] \$290 ;
-  wire [5:0] \$291 ;
-  wire [5:0] \$292 ;
+  wire \$290 ;
+  wire \$291 ;
+  wire \$292 ;
   wire \$293 ;
   wire \$294 ;
   wire \$295 ;
@@ -995,14 +1204,14 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire \$3 ;
   wire \$30 ;
   wire \$300 ;
-  wire [1:0] \$301 ;
-  wire [1:0] \$302 ;
-  wire [1:0] \$303 ;
-  wire [1:0] \$304 ;
-  wire [5:0] \$305 ;
-  wire [5:0] \$306 ;
-  wire [5:0] \$307 ;
-  wire [5:0] \$308 ;
+  wire \$301 ;
+  wire \$302 ;
+  wire \$303 ;
+  wire \$304 ;
+  wire \$305 ;
+  wire \$306 ;
+  wire \$307 ;
+  wire \$308 ;
   wire \$309 ;
   wire \$31 ;
   wire \$310 ;
@@ -1012,117 +1221,117 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire \$314 ;
   wire \$315 ;
   wire \$316 ;
-  wire [1:0] \$317 ;
-  wire [1:0] \$318 ;
-  wire [1:0] \$319 ;
+  wire \$317 ;
+  wire [15:0] \$318 ;
+  wire [15:0] \$319 ;
   wire \$32 ;
-  wire [1:0] \$320 ;
-  wire \$321 ;
-  wire \$322 ;
-  wire \$323 ;
-  wire \$324 ;
-  wire \$325 ;
-  wire \$326 ;
-  wire \$327 ;
-  wire \$328 ;
-  wire \$329 ;
+  wire [15:0] \$320 ;
+  wire [15:0] \$321 ;
+  wire [11:0] \$322 ;
+  wire [11:0] \$323 ;
+  wire [11:0] \$324 ;
+  wire [11:0] \$325 ;
+  wire [23:0] \$326 ;
+  wire [23:0] \$327 ;
+  wire [23:0] \$328 ;
+  wire [23:0] \$329 ;
   wire \$33 ;
-  wire \$330 ;
-  wire \$331 ;
-  wire \$332 ;
-  wire [7:0] \$333 ;
-  wire [7:0] \$334 ;
-  wire [7:0] \$335 ;
-  wire [7:0] \$336 ;
-  reg \$337 ;
-  reg \$338 ;
-  reg \$339 ;
+  wire [23:0] \$330 ;
+  wire [23:0] \$331 ;
+  wire [23:0] \$332 ;
+  wire [23:0] \$333 ;
+  wire [23:0] \$334 ;
+  wire [23:0] \$335 ;
+  wire [23:0] \$336 ;
+  wire [23:0] \$337 ;
+  wire [23:0] \$338 ;
+  wire [23:0] \$339 ;
   wire \$34 ;
-  reg \$340 ;
-  reg \$341 ;
-  reg \$342 ;
-  reg \$343 ;
-  reg \$344 ;
-  reg \$345 ;
-  reg \$346 ;
-  reg \$347 ;
-  reg \$348 ;
-  reg [15:0] \$349 ;
+  wire [23:0] \$340 ;
+  wire [23:0] \$341 ;
+  wire [5:0] \$342 ;
+  wire [5:0] \$343 ;
+  wire [5:0] \$344 ;
+  wire [5:0] \$345 ;
+  wire \$346 ;
+  wire \$347 ;
+  wire \$348 ;
+  wire \$349 ;
   wire \$35 ;
-  reg [11:0] \$350 ;
-  reg [23:0] \$351 ;
-  reg [23:0] \$352 ;
-  reg [23:0] \$353 ;
-  reg [23:0] \$354 ;
-  reg [5:0] \$355 ;
-  reg \$356 ;
-  reg \$357 ;
-  reg [1:0] \$358 ;
-  reg [5:0] \$359 ;
+  wire \$350 ;
+  wire \$351 ;
+  wire \$352 ;
+  wire \$353 ;
+  wire [1:0] \$354 ;
+  wire [1:0] \$355 ;
+  wire [1:0] \$356 ;
+  wire [1:0] \$357 ;
+  wire [5:0] \$358 ;
+  wire [5:0] \$359 ;
   wire \$36 ;
-  reg \$360 ;
-  reg \$361 ;
-  reg [1:0] \$362 ;
-  reg \$363 ;
-  reg \$364 ;
-  reg \$365 ;
-  reg [7:0] \$366 ;
-  reg [3:0] \$367 ;
-  reg \$368 ;
-  reg \$369 ;
+  wire [5:0] \$360 ;
+  wire [5:0] \$361 ;
+  wire \$362 ;
+  wire \$363 ;
+  wire \$364 ;
+  wire \$365 ;
+  wire \$366 ;
+  wire \$367 ;
+  wire \$368 ;
+  wire \$369 ;
   wire \$37 ;
-  reg \$370 ;
-  reg \$371 ;
-  reg \$372 ;
-  reg \$373 ;
-  reg \$374 ;
-  reg \$375 ;
-  reg \$376 ;
-  reg \$377 ;
-  reg \$378 ;
-  reg [5:0] \$379 ;
+  wire [1:0] \$370 ;
+  wire [1:0] \$371 ;
+  wire [1:0] \$372 ;
+  wire [1:0] \$373 ;
+  wire \$374 ;
+  wire \$375 ;
+  wire \$376 ;
+  wire \$377 ;
+  wire \$378 ;
+  wire \$379 ;
   wire \$38 ;
-  reg [15:0] \$380 ;
-  reg [12:0] \$381 ;
-  reg [31:0] \$382 ;
-  reg [22:0] \$383 ;
-  reg [31:0] \$384 ;
-  reg [7:0] \$385 ;
-  reg [31:0] \$386 ;
-  reg \$387 ;
-  reg \$388 ;
-  reg \$389 ;
+  wire \$380 ;
+  wire \$381 ;
+  wire \$382 ;
+  wire \$383 ;
+  wire \$384 ;
+  wire \$385 ;
+  wire [7:0] \$386 ;
+  wire [7:0] \$387 ;
+  wire [7:0] \$388 ;
+  wire [7:0] \$389 ;
   wire \$39 ;
-  reg \$390 ;
-  reg \$391 ;
-  reg \$392 ;
-  reg \$393 ;
-  reg \$394 ;
-  reg \$395 ;
-  reg \$396 ;
-  reg \$397 ;
-  reg [15:0] \$398 ;
-  reg [11:0] \$399 ;
+  wire [2:0] \$390 ;
+  wire [2:0] \$391 ;
+  wire [2:0] \$392 ;
+  wire [2:0] \$393 ;
+  wire [6:0] \$394 ;
+  wire [6:0] \$395 ;
+  wire [6:0] \$396 ;
+  wire [6:0] \$397 ;
+  wire [6:0] \$398 ;
+  wire [6:0] \$399 ;
   wire \$4 ;
   wire \$40 ;
-  reg [23:0] \$400 ;
-  reg [23:0] \$401 ;
-  reg [23:0] \$402 ;
-  reg [23:0] \$403 ;
-  reg [5:0] \$404 ;
-  reg \$405 ;
-  reg \$406 ;
-  reg [1:0] \$407 ;
-  reg [5:0] \$408 ;
-  reg \$409 ;
+  wire [6:0] \$400 ;
+  wire [6:0] \$401 ;
+  wire \$402 ;
+  wire \$403 ;
+  wire \$404 ;
+  wire \$405 ;
+  wire \$406 ;
+  wire \$407 ;
+  wire \$408 ;
+  wire \$409 ;
   wire \$41 ;
-  reg \$410 ;
-  reg [1:0] \$411 ;
-  reg \$412 ;
-  reg \$413 ;
+  wire \$410 ;
+  wire \$411 ;
+  wire \$412 ;
+  wire \$413 ;
   reg \$414 ;
-  reg [7:0] \$415 ;
-  reg [3:0] \$416 ;
+  reg \$415 ;
+  reg \$416 ;
   reg \$417 ;
   reg \$418 ;
   reg \$419 ;
@@ -1133,28 +1342,119 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   reg \$423 ;
   reg \$424 ;
   reg \$425 ;
-  reg \$426 ;
-  reg \$427 ;
-  reg [5:0] \$428 ;
-  reg [15:0] \$429 ;
+  reg [15:0] \$426 ;
+  reg [11:0] \$427 ;
+  reg [23:0] \$428 ;
+  reg [23:0] \$429 ;
   wire \$43 ;
-  reg [12:0] \$430 ;
-  reg [31:0] \$431 ;
-  reg [22:0] \$432 ;
-  reg [31:0] \$433 ;
-  reg [7:0] \$434 ;
-  reg [31:0] \$435 ;
-  reg [31:0] \$436 ;
+  reg [23:0] \$430 ;
+  reg [23:0] \$431 ;
+  reg [5:0] \$432 ;
+  reg \$433 ;
+  reg \$434 ;
+  reg [1:0] \$435 ;
+  reg [5:0] \$436 ;
+  reg \$437 ;
+  reg \$438 ;
+  reg [1:0] \$439 ;
   wire \$44 ;
+  reg \$440 ;
+  reg \$441 ;
+  reg \$442 ;
+  reg [7:0] \$443 ;
+  reg [2:0] \$444 ;
+  reg [6:0] \$445 ;
+  reg [6:0] \$446 ;
+  reg \$447 ;
+  reg \$448 ;
+  reg \$449 ;
   wire \$45 ;
+  reg [3:0] \$450 ;
+  reg \$451 ;
+  reg \$452 ;
+  reg \$453 ;
+  reg \$454 ;
+  reg \$455 ;
+  reg \$456 ;
+  reg \$457 ;
+  reg \$458 ;
+  reg \$459 ;
   wire \$46 ;
+  reg \$460 ;
+  reg \$461 ;
+  reg [5:0] \$462 ;
+  reg [15:0] \$463 ;
+  reg [12:0] \$464 ;
+  reg [31:0] \$465 ;
+  reg [22:0] \$466 ;
+  reg [31:0] \$467 ;
+  reg [7:0] \$468 ;
+  reg [31:0] \$469 ;
   wire \$47 ;
+  reg \$470 ;
+  reg \$471 ;
+  reg \$472 ;
+  reg \$473 ;
+  reg \$474 ;
+  reg \$475 ;
+  reg \$476 ;
+  reg \$477 ;
+  reg \$478 ;
+  reg \$479 ;
   wire \$48 ;
+  reg \$480 ;
+  reg [15:0] \$481 ;
+  reg [11:0] \$482 ;
+  reg [23:0] \$483 ;
+  reg [23:0] \$484 ;
+  reg [23:0] \$485 ;
+  reg [23:0] \$486 ;
+  reg [5:0] \$487 ;
+  reg \$488 ;
+  reg \$489 ;
   wire \$49 ;
+  reg [1:0] \$490 ;
+  reg [5:0] \$491 ;
+  reg \$492 ;
+  reg \$493 ;
+  reg [1:0] \$494 ;
+  reg \$495 ;
+  reg \$496 ;
+  reg \$497 ;
+  reg [7:0] \$498 ;
+  reg [2:0] \$499 ;
   wire \$5 ;
   wire \$50 ;
+  reg [6:0] \$500 ;
+  reg [6:0] \$501 ;
+  reg \$502 ;
+  reg \$503 ;
+  reg \$504 ;
+  reg [3:0] \$505 ;
+  reg \$506 ;
+  reg \$507 ;
+  reg \$508 ;
+  reg \$509 ;
   wire \$51 ;
+  reg \$510 ;
+  reg \$511 ;
+  reg \$512 ;
+  reg \$513 ;
+  reg \$514 ;
+  reg \$515 ;
+  reg \$516 ;
+  reg [5:0] \$517 ;
+  reg [15:0] \$518 ;
+  reg [12:0] \$519 ;
   wire \$52 ;
+  reg [31:0] \$520 ;
+  reg [22:0] \$521 ;
+  reg [31:0] \$522 ;
+  reg [7:0] \$523 ;
+  reg [31:0] \$524 ;
+  reg [31:0] \$525 ;
+  reg \$526 ;
+  reg \$527 ;
   wire \$53 ;
   wire \$54 ;
   wire \$55 ;
@@ -1208,12 +1508,11 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire \$99 ;
   wire [10:0] bus__r_addr;
   output [31:0] bus__r_data;
-  reg [31:0] bus__r_data = 32'd0;
+  wire [31:0] bus__r_data;
   input bus__r_en;
   wire bus__r_en;
   input [10:0] bus__w_addr;
   wire [10:0] bus__w_addr;
-  input [31:0] bus__w_data;
   wire [31:0] bus__w_data;
   input bus__w_en;
   wire bus__w_en;
@@ -1223,9 +1522,38 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   reg ch0__abort_cycle = 1'h0;
   input ch0__busy;
   wire ch0__busy;
+  output ch0__ca_abort;
+  reg ch0__ca_abort = 1'h0;
+  output [6:0] ch0__ca_address;
+  reg [6:0] ch0__ca_address = 7'h00;
+  input ch0__ca_busy;
+  wire ch0__ca_busy;
+  wire [6:0] ch0__ca_bytes_done;
+  output [6:0] ch0__ca_count;
+  reg [6:0] ch0__ca_count = 7'h00;
+  input ch0__ca_done;
+  wire ch0__ca_done;
+  wire [3:0] ch0__ca_rbuf_addr;
+  input [31:0] ch0__ca_rbuf_data;
+  wire [31:0] ch0__ca_rbuf_data;
+  output ch0__ca_rbuf_en;
+  wire ch0__ca_rbuf_en;
+  output [2:0] ch0__ca_slave_id;
+  reg [2:0] ch0__ca_slave_id = 3'h0;
+  output ch0__ca_start;
+  reg ch0__ca_start = 1'h0;
+  wire [2:0] ch0__ca_status;
+  wire [3:0] ch0__ca_wbuf_addr;
+  input [31:0] ch0__ca_wbuf_data;
+  wire [31:0] ch0__ca_wbuf_data;
+  output [3:0] ch0__ca_wbuf_en;
+  wire [3:0] ch0__ca_wbuf_en;
+  output ch0__ca_write;
+  reg ch0__ca_write = 1'h0;
   wire ch0__cap_counters;
   wire [5:0] ch0__cap_data_bits_w0;
   wire [5:0] ch0__cap_data_bits_w1;
+  wire ch0__cap_register_access;
   wire [5:0] ch0__cap_timer_width;
   wire ch0__cap_timestamp;
   wire ch0__cds;
@@ -1270,6 +1598,11 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   input ch0__config_error;
   wire ch0__config_error;
   wire [15:0] ch0__count_aborted;
+  wire [15:0] ch0__count_ca_aborted;
+  wire [15:0] ch0__count_ca_crc4_error;
+  wire [15:0] ch0__count_ca_data_fault;
+  wire [15:0] ch0__count_ca_no_answer;
+  wire [15:0] ch0__count_ca_refused;
   wire [15:0] ch0__count_crc_word0;
   wire [15:0] ch0__count_crc_word1;
   wire [15:0] ch0__count_delay_range;
@@ -1310,6 +1643,30 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire ch0__word1_ne;
   wire ch0__word1_nw;
   wire [39:0] ch0__word1_position;
+  wire ch0_ca_count_crc4_answer_read;
+  wire ch0_ca_count_crc4_answer_write;
+  wire ch0_ca_count_data_fault_read;
+  wire ch0_ca_count_data_fault_write;
+  wire ch0_ca_count_refused_aborted_read;
+  wire ch0_ca_count_refused_aborted_write;
+  (* init = 1'h0 *)
+  wire ch0_ca_ctrl_abort;
+  wire ch0_ca_ctrl_read;
+  (* init = 1'h0 *)
+  wire ch0_ca_ctrl_start;
+  wire ch0_ca_ctrl_write;
+  (* init = 7'h00 *)
+  wire [6:0] ch0_ca_request_address;
+  (* init = 7'h00 *)
+  wire [6:0] ch0_ca_request_count;
+  wire ch0_ca_request_read;
+  (* init = 3'h0 *)
+  wire [2:0] ch0_ca_request_slave_id;
+  wire ch0_ca_request_write;
+  (* init = 1'h0 *)
+  wire \ch0_ca_request_write$124 ;
+  wire ch0_ca_state_read;
+  wire ch0_ca_state_write;
   wire ch0_caps_read;
   wire ch0_caps_write;
   (* init = 24'h000000 *)
@@ -1440,9 +1797,37 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   reg ch1__abort_cycle = 1'h0;
   input ch1__busy;
   wire ch1__busy;
+  output ch1__ca_abort;
+  reg ch1__ca_abort = 1'h0;
+  output [6:0] ch1__ca_address;
+  reg [6:0] ch1__ca_address = 7'h00;
+  input ch1__ca_busy;
+  wire ch1__ca_busy;
+  wire [6:0] ch1__ca_bytes_done;
+  output [6:0] ch1__ca_count;
+  reg [6:0] ch1__ca_count = 7'h00;
+  input ch1__ca_done;
+  wire ch1__ca_done;
+  wire [3:0] ch1__ca_rbuf_addr;
+  input [31:0] ch1__ca_rbuf_data;
+  wire [31:0] ch1__ca_rbuf_data;
+  output ch1__ca_rbuf_en;
+  wire ch1__ca_rbuf_en;
+  output [2:0] ch1__ca_slave_id;
+  reg [2:0] ch1__ca_slave_id = 3'h0;
+  output ch1__ca_start;
+  reg ch1__ca_start = 1'h0;
+  wire [2:0] ch1__ca_status;
+  wire [3:0] ch1__ca_wbuf_addr;
+  wire [31:0] ch1__ca_wbuf_data;
+  output [3:0] ch1__ca_wbuf_en;
+  wire [3:0] ch1__ca_wbuf_en;
+  output ch1__ca_write;
+  reg ch1__ca_write = 1'h0;
   wire ch1__cap_counters;
   wire [5:0] ch1__cap_data_bits_w0;
   wire [5:0] ch1__cap_data_bits_w1;
+  wire ch1__cap_register_access;
   wire [5:0] ch1__cap_timer_width;
   wire ch1__cap_timestamp;
   wire ch1__cds;
@@ -1487,6 +1872,11 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   input ch1__config_error;
   wire ch1__config_error;
   wire [15:0] ch1__count_aborted;
+  wire [15:0] ch1__count_ca_aborted;
+  wire [15:0] ch1__count_ca_crc4_error;
+  wire [15:0] ch1__count_ca_data_fault;
+  wire [15:0] ch1__count_ca_no_answer;
+  wire [15:0] ch1__count_ca_refused;
   wire [15:0] ch1__count_crc_word0;
   wire [15:0] ch1__count_crc_word1;
   wire [15:0] ch1__count_delay_range;
@@ -1527,6 +1917,30 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire ch1__word1_ne;
   wire ch1__word1_nw;
   wire [39:0] ch1__word1_position;
+  wire ch1_ca_count_crc4_answer_read;
+  wire ch1_ca_count_crc4_answer_write;
+  wire ch1_ca_count_data_fault_read;
+  wire ch1_ca_count_data_fault_write;
+  wire ch1_ca_count_refused_aborted_read;
+  wire ch1_ca_count_refused_aborted_write;
+  (* init = 1'h0 *)
+  wire ch1_ca_ctrl_abort;
+  wire ch1_ca_ctrl_read;
+  (* init = 1'h0 *)
+  wire ch1_ca_ctrl_start;
+  wire ch1_ca_ctrl_write;
+  (* init = 7'h00 *)
+  wire [6:0] ch1_ca_request_address;
+  (* init = 7'h00 *)
+  wire [6:0] ch1_ca_request_count;
+  wire ch1_ca_request_read;
+  (* init = 3'h0 *)
+  wire [2:0] ch1_ca_request_slave_id;
+  wire ch1_ca_request_write;
+  (* init = 1'h0 *)
+  wire \ch1_ca_request_write$260 ;
+  wire ch1_ca_state_read;
+  wire ch1_ca_state_write;
   wire ch1_caps_read;
   wire ch1_caps_write;
   (* init = 24'h000000 *)
@@ -1673,106 +2087,338 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   output glob__trigger;
   reg glob__trigger = 1'h0;
   wire [1:0] irq;
-  input [160:0] \port$3001$0 ;
-  wire [160:0] \port$3001$0 ;
-  input [207:0] \port$3008$0 ;
-  wire [207:0] \port$3008$0 ;
-  input [160:0] \port$3348$0 ;
-  wire [160:0] \port$3348$0 ;
-  input [207:0] \port$3355$0 ;
-  wire [207:0] \port$3355$0 ;
+  input [160:0] \port$3907$0 ;
+  wire [160:0] \port$3907$0 ;
+  input [287:0] \port$3914$0 ;
+  wire [287:0] \port$3914$0 ;
+  input [9:0] \port$4042$0 ;
+  wire [9:0] \port$4042$0 ;
+  input [160:0] \port$4342$0 ;
+  wire [160:0] \port$4342$0 ;
+  input [287:0] \port$4349$0 ;
+  wire [287:0] \port$4349$0 ;
+  input [9:0] \port$4477$0 ;
+  wire [9:0] \port$4477$0 ;
   input rst;
   wire rst;
+  reg window0_read = 1'h0;
+  reg window1_read = 1'h0;
+  reg [31:0] word = 32'd0;
+  assign \$327  = ch1__cfg_request_period & \$326 ;
+  assign \$328  = ch0__ca_wbuf_data[23:0] & { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
+  assign \$329  = \$327  | \$328 ;
+  assign \$330  = ~ { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
+  assign \$331  = ch1__cfg_break_time & \$330 ;
+  assign \$332  = ch0__ca_wbuf_data[23:0] & { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
+  assign \$333  = \$331  | \$332 ;
+  assign \$334  = ~ { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
+  assign \$335  = ch1__cfg_ack_limit & \$334 ;
+  assign \$336  = ch0__ca_wbuf_data[23:0] & { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
+  assign \$337  = \$335  | \$336 ;
+  assign \$338  = ~ { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
+  assign \$339  = ch1__cfg_timeout_limit & \$338 ;
+  assign \$340  = ch0__ca_wbuf_data[23:0] & { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
+  assign \$341  = \$339  | \$340 ;
+  assign \$342  = ~ { bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
+  assign \$343  = ch1__cfg_w0_data_bits & \$342 ;
+  assign \$344  = ch0__ca_wbuf_data[5:0] & { bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
+  assign \$345  = \$343  | \$344 ;
+  assign \$346  = ~ bus__w_strb[0];
+  assign \$347  = ch1__cfg_w0_nenw & \$346 ;
+  assign \$348  = ch0__ca_wbuf_data[6] & bus__w_strb[0];
+  assign \$349  = \$347  | \$348 ;
+  assign \$350  = ~ bus__w_strb[0];
+  assign \$351  = ch1__cfg_w0_lc & \$350 ;
+  assign \$352  = ch0__ca_wbuf_data[7] & bus__w_strb[0];
+  assign \$353  = \$351  | \$352 ;
+  assign \$354  = ~ { bus__w_strb[1], bus__w_strb[1] };
+  assign \$355  = ch1__cfg_w0_crc & \$354 ;
+  assign \$356  = ch0__ca_wbuf_data[9:8] & { bus__w_strb[1], bus__w_strb[1] };
+  assign \$357  = \$355  | \$356 ;
+  assign \$358  = ~ { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2] };
+  assign \$359  = ch1__cfg_w1_data_bits & \$358 ;
+  assign \$360  = ch0__ca_wbuf_data[21:16] & { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2] };
+  assign \$361  = \$359  | \$360 ;
+  assign \$362  = ~ bus__w_strb[2];
+  assign \$363  = ch1__cfg_w1_nenw & \$362 ;
+  assign \$364  = ch0__ca_wbuf_data[22] & bus__w_strb[2];
+  assign \$365  = \$363  | \$364 ;
+  assign \$366  = ~ bus__w_strb[2];
+  assign \$367  = ch1__cfg_w1_lc & \$366 ;
+  assign \$368  = ch0__ca_wbuf_data[23] & bus__w_strb[2];
+  assign \$369  = \$367  | \$368 ;
+  assign \$370  = ~ { bus__w_strb[3], bus__w_strb[3] };
+  assign \$371  = ch1__cfg_w1_crc & \$370 ;
+  assign \$372  = ch0__ca_wbuf_data[25:24] & { bus__w_strb[3], bus__w_strb[3] };
+  assign \$373  = \$371  | \$372 ;
+  assign \$374  = ~ bus__w_strb[3];
+  assign \$375  = ch1__cfg_w1_enable & \$374 ;
+  assign \$376  = ch0__ca_wbuf_data[31] & bus__w_strb[3];
+  assign \$377  = \$375  | \$376 ;
+  assign \$378  = ~ bus__w_strb[0];
+  assign \$379  = ch1__cfg_end_check & \$378 ;
+  assign \$380  = ch0__ca_wbuf_data[0] & bus__w_strb[0];
+  assign \$381  = \$379  | \$380 ;
+  assign \$382  = ~ bus__w_strb[0];
+  assign \$383  = ch1__cfg_spw_check & \$382 ;
+  assign \$384  = ch0__ca_wbuf_data[1] & bus__w_strb[0];
+  assign \$385  = \$383  | \$384 ;
+  assign \$386  = ~ { bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1] };
+  assign \$387  = ch1__cfg_spw_tolerance & \$386 ;
+  assign \$388  = ch0__ca_wbuf_data[15:8] & { bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1] };
+  assign \$389  = \$387  | \$388 ;
+  assign \$390  = ~ { bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
+  assign \$391  = ch1__ca_slave_id & \$390 ;
+  assign \$392  = ch0__ca_wbuf_data[2:0] & { bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
+  assign \$393  = \$391  | \$392 ;
+  assign \$394  = ~ { bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1] };
+  assign \$395  = ch1__ca_address & \$394 ;
+  assign \$396  = ch0__ca_wbuf_data[14:8] & { bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1] };
+  assign \$397  = \$395  | \$396 ;
+  assign \$398  = ~ { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2] };
+  assign \$399  = ch1__ca_count & \$398 ;
+  assign \$400  = ch0__ca_wbuf_data[22:16] & { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2] };
+  assign \$401  = \$399  | \$400 ;
+  assign \$402  = ~ bus__w_strb[3];
+  assign \$403  = ch1__ca_write & \$402 ;
+  assign \$404  = ch0__ca_wbuf_data[24] & bus__w_strb[3];
+  assign \$405  = \$403  | \$404 ;
+  assign \$406  = ch0__ca_wbuf_data[0] & bus__w_strb[0];
+  assign \$407  = ch1_ca_ctrl_write ? \$406  : 1'h0;
+  assign \$408  = ch0__ca_wbuf_data[1] & bus__w_strb[0];
+  assign \$409  = ch1_ca_ctrl_write ? \$408  : 1'h0;
+  assign \$410  = bus__w_addr[10:4] == 4'he;
+  assign \$411  = bus__r_en & \$410 ;
+  assign \$412  = bus__w_addr[10:4] == 5'h16;
+  assign \$413  = bus__r_en & \$412 ;
   always @(posedge clk)
-    ch1_irq_status_done <= \$392 ;
+    glob__trigger <= \$414 ;
   always @(posedge clk)
-    ch1_irq_status_error <= \$393 ;
+    ch0__start <= \$415 ;
   always @(posedge clk)
-    ch1_irq_status_access_done <= \$394 ;
+    ch0__abort_cycle <= \$416 ;
   always @(posedge clk)
-    ch1_irq_enable_done <= \$395 ;
+    ch0__clear_counters <= \$417 ;
   always @(posedge clk)
-    ch1_irq_enable_error <= \$396 ;
+    ch0__periodic <= \$418 ;
   always @(posedge clk)
-    ch1_irq_enable_access_done <= \$397 ;
+    ch0__trigger_enable <= \$419 ;
   always @(posedge clk)
-    ch1__cfg_ma_half_period <= \$398 ;
+    ch0_irq_status_done <= \$420 ;
   always @(posedge clk)
-    ch1__cfg_delay_limit <= \$399 ;
+    ch0_irq_status_error <= \$421 ;
   always @(posedge clk)
-    ch1__cfg_request_period <= \$400 ;
+    ch0_irq_status_access_done <= \$422 ;
   always @(posedge clk)
-    ch1__cfg_break_time <= \$401 ;
+    ch0_irq_enable_done <= \$423 ;
   always @(posedge clk)
-    ch1__cfg_ack_limit <= \$402 ;
+    ch0_irq_enable_error <= \$424 ;
   always @(posedge clk)
-    ch1__cfg_timeout_limit <= \$403 ;
+    ch0_irq_enable_access_done <= \$425 ;
   always @(posedge clk)
-    ch1__cfg_w0_data_bits <= \$404 ;
+    ch0__cfg_ma_half_period <= \$426 ;
   always @(posedge clk)
-    ch1__cfg_w0_nenw <= \$405 ;
+    ch0__cfg_delay_limit <= \$427 ;
   always @(posedge clk)
-    ch1__cfg_w0_lc <= \$406 ;
+    ch0__cfg_request_period <= \$428 ;
   always @(posedge clk)
-    ch1__cfg_w0_crc <= \$407 ;
+    ch0__cfg_break_time <= \$429 ;
   always @(posedge clk)
-    ch1__cfg_w1_data_bits <= \$408 ;
+    ch0__cfg_ack_limit <= \$430 ;
   always @(posedge clk)
-    ch1__cfg_w1_nenw <= \$409 ;
+    ch0__cfg_timeout_limit <= \$431 ;
   always @(posedge clk)
-    ch1__cfg_w1_lc <= \$410 ;
+    ch0__cfg_w0_data_bits <= \$432 ;
   always @(posedge clk)
-    ch1__cfg_w1_crc <= \$411 ;
+    ch0__cfg_w0_nenw <= \$433 ;
   always @(posedge clk)
-    ch1__cfg_w1_enable <= \$412 ;
+    ch0__cfg_w0_lc <= \$434 ;
   always @(posedge clk)
-    ch1__cfg_end_check <= \$413 ;
+    ch0__cfg_w0_crc <= \$435 ;
   always @(posedge clk)
-    ch1__cfg_spw_check <= \$414 ;
+    ch0__cfg_w1_data_bits <= \$436 ;
   always @(posedge clk)
-    ch1__cfg_spw_tolerance <= \$415 ;
+    ch0__cfg_w1_nenw <= \$437 ;
   always @(posedge clk)
-    ch1_result_status_status_snapshot <= \$416 ;
+    ch0__cfg_w1_lc <= \$438 ;
   always @(posedge clk)
-    ch1_result_status_cds_snapshot <= \$417 ;
+    ch0__cfg_w1_crc <= \$439 ;
   always @(posedge clk)
-    ch1_result_status_w0_ne_snapshot <= \$418 ;
+    ch0__cfg_w1_enable <= \$440 ;
   always @(posedge clk)
-    ch1_result_status_w0_nw_snapshot <= \$419 ;
+    ch0__cfg_end_check <= \$441 ;
   always @(posedge clk)
-    ch1_result_status_w0_crc_ok_snapshot <= \$420 ;
+    ch0__cfg_spw_check <= \$442 ;
   always @(posedge clk)
-    ch1_result_status_w1_ne_snapshot <= \$421 ;
+    ch0__cfg_spw_tolerance <= \$443 ;
   always @(posedge clk)
-    ch1_result_status_w1_nw_snapshot <= \$422 ;
+    ch0__ca_slave_id <= \$444 ;
   always @(posedge clk)
-    ch1_result_status_w1_crc_ok_snapshot <= \$423 ;
+    ch0__ca_address <= \$445 ;
   always @(posedge clk)
-    ch1_result_status_lc_repeat_snapshot <= \$424 ;
+    ch0__ca_count <= \$446 ;
   always @(posedge clk)
-    ch1_result_status_lc_skip_snapshot <= \$425 ;
+    ch0__ca_write <= \$447 ;
   always @(posedge clk)
-    ch1_result_status_lc_zero_snapshot <= \$426 ;
+    ch0__ca_start <= \$448 ;
   always @(posedge clk)
-    ch1_result_status_spw_mismatch_snapshot <= \$427 ;
+    ch0__ca_abort <= \$449 ;
   always @(posedge clk)
-    ch1_result_status_lc_snapshot <= \$428 ;
+    ch0_result_status_status_snapshot <= \$450 ;
   always @(posedge clk)
-    ch1_result_seq_seq_snapshot <= \$429 ;
+    ch0_result_status_cds_snapshot <= \$451 ;
   always @(posedge clk)
-    ch1_result_seq_line_delay_snapshot <= \$430 ;
+    ch0_result_status_w0_ne_snapshot <= \$452 ;
   always @(posedge clk)
-    ch1_result_w0_lo_data_snapshot <= \$431 ;
+    ch0_result_status_w0_nw_snapshot <= \$453 ;
   always @(posedge clk)
-    ch1_result_w0_hi_data_snapshot <= \$432 ;
+    ch0_result_status_w0_crc_ok_snapshot <= \$454 ;
   always @(posedge clk)
-    ch1_result_w1_lo_data_snapshot <= \$433 ;
+    ch0_result_status_w1_ne_snapshot <= \$455 ;
   always @(posedge clk)
-    ch1_result_w1_hi_data_snapshot <= \$434 ;
+    ch0_result_status_w1_nw_snapshot <= \$456 ;
   always @(posedge clk)
-    ch1_result_timestamp_time_snapshot <= \$435 ;
+    ch0_result_status_w1_crc_ok_snapshot <= \$457 ;
   always @(posedge clk)
-    bus__r_data <= \$436 ;
+    ch0_result_status_lc_repeat_snapshot <= \$458 ;
+  always @(posedge clk)
+    ch0_result_status_lc_skip_snapshot <= \$459 ;
+  always @(posedge clk)
+    ch0_result_status_lc_zero_snapshot <= \$460 ;
+  always @(posedge clk)
+    ch0_result_status_spw_mismatch_snapshot <= \$461 ;
+  always @(posedge clk)
+    ch0_result_status_lc_snapshot <= \$462 ;
+  always @(posedge clk)
+    ch0_result_seq_seq_snapshot <= \$463 ;
+  always @(posedge clk)
+    ch0_result_seq_line_delay_snapshot <= \$464 ;
+  always @(posedge clk)
+    ch0_result_w0_lo_data_snapshot <= \$465 ;
+  always @(posedge clk)
+    ch0_result_w0_hi_data_snapshot <= \$466 ;
+  always @(posedge clk)
+    ch0_result_w1_lo_data_snapshot <= \$467 ;
+  always @(posedge clk)
+    ch0_result_w1_hi_data_snapshot <= \$468 ;
+  always @(posedge clk)
+    ch0_result_timestamp_time_snapshot <= \$469 ;
+  always @(posedge clk)
+    ch1__start <= \$470 ;
+  always @(posedge clk)
+    ch1__abort_cycle <= \$471 ;
+  always @(posedge clk)
+    ch1__clear_counters <= \$472 ;
+  always @(posedge clk)
+    ch1__periodic <= \$473 ;
+  always @(posedge clk)
+    ch1__trigger_enable <= \$474 ;
+  always @(posedge clk)
+    ch1_irq_status_done <= \$475 ;
+  always @(posedge clk)
+    ch1_irq_status_error <= \$476 ;
+  always @(posedge clk)
+    ch1_irq_status_access_done <= \$477 ;
+  always @(posedge clk)
+    ch1_irq_enable_done <= \$478 ;
+  always @(posedge clk)
+    ch1_irq_enable_error <= \$479 ;
+  always @(posedge clk)
+    ch1_irq_enable_access_done <= \$480 ;
+  always @(posedge clk)
+    ch1__cfg_ma_half_period <= \$481 ;
+  always @(posedge clk)
+    ch1__cfg_delay_limit <= \$482 ;
+  always @(posedge clk)
+    ch1__cfg_request_period <= \$483 ;
+  always @(posedge clk)
+    ch1__cfg_break_time <= \$484 ;
+  always @(posedge clk)
+    ch1__cfg_ack_limit <= \$485 ;
+  always @(posedge clk)
+    ch1__cfg_timeout_limit <= \$486 ;
+  always @(posedge clk)
+    ch1__cfg_w0_data_bits <= \$487 ;
+  always @(posedge clk)
+    ch1__cfg_w0_nenw <= \$488 ;
+  always @(posedge clk)
+    ch1__cfg_w0_lc <= \$489 ;
+  always @(posedge clk)
+    ch1__cfg_w0_crc <= \$490 ;
+  always @(posedge clk)
+    ch1__cfg_w1_data_bits <= \$491 ;
+  always @(posedge clk)
+    ch1__cfg_w1_nenw <= \$492 ;
+  always @(posedge clk)
+    ch1__cfg_w1_lc <= \$493 ;
+  always @(posedge clk)
+    ch1__cfg_w1_crc <= \$494 ;
+  always @(posedge clk)
+    ch1__cfg_w1_enable <= \$495 ;
+  always @(posedge clk)
+    ch1__cfg_end_check <= \$496 ;
+  always @(posedge clk)
+    ch1__cfg_spw_check <= \$497 ;
+  always @(posedge clk)
+    ch1__cfg_spw_tolerance <= \$498 ;
+  always @(posedge clk)
+    ch1__ca_slave_id <= \$499 ;
+  always @(posedge clk)
+    ch1__ca_address <= \$500 ;
+  always @(posedge clk)
+    ch1__ca_count <= \$501 ;
+  always @(posedge clk)
+    ch1__ca_write <= \$502 ;
+  always @(posedge clk)
+    ch1__ca_start <= \$503 ;
+  always @(posedge clk)
+    ch1__ca_abort <= \$504 ;
+  always @(posedge clk)
+    ch1_result_status_status_snapshot <= \$505 ;
+  always @(posedge clk)
+    ch1_result_status_cds_snapshot <= \$506 ;
+  always @(posedge clk)
+    ch1_result_status_w0_ne_snapshot <= \$507 ;
+  always @(posedge clk)
+    ch1_result_status_w0_nw_snapshot <= \$508 ;
+  always @(posedge clk)
+    ch1_result_status_w0_crc_ok_snapshot <= \$509 ;
+  always @(posedge clk)
+    ch1_result_status_w1_ne_snapshot <= \$510 ;
+  always @(posedge clk)
+    ch1_result_status_w1_nw_snapshot <= \$511 ;
+  always @(posedge clk)
+    ch1_result_status_w1_crc_ok_snapshot <= \$512 ;
+  always @(posedge clk)
+    ch1_result_status_lc_repeat_snapshot <= \$513 ;
+  always @(posedge clk)
+    ch1_result_status_lc_skip_snapshot <= \$514 ;
+  always @(posedge clk)
+    ch1_result_status_lc_zero_snapshot <= \$515 ;
+  always @(posedge clk)
+    ch1_result_status_spw_mismatch_snapshot <= \$516 ;
+  always @(posedge clk)
+    ch1_result_status_lc_snapshot <= \$517 ;
+  always @(posedge clk)
+    ch1_result_seq_seq_snapshot <= \$518 ;
+  always @(posedge clk)
+    ch1_result_seq_line_delay_snapshot <= \$519 ;
+  always @(posedge clk)
+    ch1_result_w0_lo_data_snapshot <= \$520 ;
+  always @(posedge clk)
+    ch1_result_w0_hi_data_snapshot <= \$521 ;
+  always @(posedge clk)
+    ch1_result_w1_lo_data_snapshot <= \$522 ;
+  always @(posedge clk)
+    ch1_result_w1_hi_data_snapshot <= \$523 ;
+  always @(posedge clk)
+    ch1_result_timestamp_time_snapshot <= \$524 ;
+  always @(posedge clk)
+    word <= \$525 ;
+  always @(posedge clk)
+    window0_read <= \$526 ;
+  always @(posedge clk)
+    window1_read <= \$527 ;
   assign \$1  = ! bus__w_addr;
   assign g_id_write = bus__w_en & \$1 ;
   assign \$2  = ! bus__w_addr;
@@ -1897,1543 +2543,1606 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign ch0_count_stop_write = bus__w_en & \$61 ;
   assign \$62  = bus__w_addr == 8'h9e;
   assign ch0_count_stop_read = bus__r_en & \$62 ;
-  assign \$63  = ch0_irq_status_done & ch0_irq_enable_done;
-  assign \$65  = ch0_irq_status_error & ch0_irq_enable_error;
-  assign \$67  = ch0_irq_status_access_done & ch0_irq_enable_access_done;
-  assign ch0_irq = | { \$68 , \$66 , \$64  };
-  assign \$69  = bus__w_addr == 9'h100;
-  assign ch1_ctrl_write = bus__w_en & \$69 ;
-  assign \$70  = bus__w_addr == 9'h100;
-  assign ch1_ctrl_read = bus__r_en & \$70 ;
-  assign \$71  = bus__w_addr == 9'h101;
-  assign ch1_state_write = bus__w_en & \$71 ;
-  assign \$72  = bus__w_addr == 9'h101;
-  assign ch1_state_read = bus__r_en & \$72 ;
-  assign \$73  = bus__w_addr == 9'h102;
-  assign ch1_caps_write = bus__w_en & \$73 ;
-  assign \$74  = bus__w_addr == 9'h102;
-  assign ch1_caps_read = bus__r_en & \$74 ;
-  assign \$75  = bus__w_addr == 9'h104;
-  assign ch1_irq_status_write = bus__w_en & \$75 ;
-  assign \$76  = bus__w_addr == 9'h104;
-  assign ch1_irq_status_read = bus__r_en & \$76 ;
-  assign \$77  = bus__w_addr == 9'h105;
-  assign ch1_irq_enable_write = bus__w_en & \$77 ;
-  assign \$78  = bus__w_addr == 9'h105;
-  assign ch1_irq_enable_read = bus__r_en & \$78 ;
-  assign \$79  = bus__w_addr == 9'h108;
-  assign ch1_cfg_ma_write = bus__w_en & \$79 ;
-  assign \$80  = bus__w_addr == 9'h108;
-  assign ch1_cfg_ma_read = bus__r_en & \$80 ;
-  assign \$81  = bus__w_addr == 9'h109;
-  assign ch1_cfg_period_write = bus__w_en & \$81 ;
-  assign \$82  = bus__w_addr == 9'h109;
-  assign ch1_cfg_period_read = bus__r_en & \$82 ;
-  assign \$83  = bus__w_addr == 9'h10a;
-  assign ch1_cfg_break_write = bus__w_en & \$83 ;
-  assign \$84  = bus__w_addr == 9'h10a;
-  assign ch1_cfg_break_read = bus__r_en & \$84 ;
-  assign \$85  = bus__w_addr == 9'h10b;
-  assign ch1_cfg_ack_write = bus__w_en & \$85 ;
-  assign \$86  = bus__w_addr == 9'h10b;
-  assign ch1_cfg_ack_read = bus__r_en & \$86 ;
-  assign \$87  = bus__w_addr == 9'h10c;
-  assign ch1_cfg_timeout_write = bus__w_en & \$87 ;
-  assign \$88  = bus__w_addr == 9'h10c;
-  assign ch1_cfg_timeout_read = bus__r_en & \$88 ;
-  assign \$89  = bus__w_addr == 9'h10d;
-  assign ch1_cfg_words_write = bus__w_en & \$89 ;
-  assign \$90  = bus__w_addr == 9'h10d;
-  assign ch1_cfg_words_read = bus__r_en & \$90 ;
-  assign \$91  = bus__w_addr == 9'h10e;
-  assign ch1_cfg_checks_write = bus__w_en & \$91 ;
-  assign \$92  = bus__w_addr == 9'h10e;
-  assign ch1_cfg_checks_read = bus__r_en & \$92 ;
-  assign \$93  = bus__w_addr == 9'h110;
-  assign ch1_result_status_write = bus__w_en & \$93 ;
-  assign \$94  = bus__w_addr == 9'h110;
-  assign ch1_result_status_read = bus__r_en & \$94 ;
-  assign \$95  = bus__w_addr == 9'h111;
-  assign ch1_result_seq_write = bus__w_en & \$95 ;
-  assign \$96  = bus__w_addr == 9'h111;
-  assign ch1_result_seq_read = bus__r_en & \$96 ;
-  assign \$97  = bus__w_addr == 9'h112;
-  assign ch1_result_w0_lo_write = bus__w_en & \$97 ;
-  assign \$98  = bus__w_addr == 9'h112;
-  assign ch1_result_w0_lo_read = bus__r_en & \$98 ;
-  assign \$99  = bus__w_addr == 9'h113;
-  assign ch1_result_w0_hi_write = bus__w_en & \$99 ;
-  assign \$100  = bus__w_addr == 9'h113;
-  assign ch1_result_w0_hi_read = bus__r_en & \$100 ;
-  assign \$101  = bus__w_addr == 9'h114;
-  assign ch1_result_w1_lo_write = bus__w_en & \$101 ;
-  assign \$102  = bus__w_addr == 9'h114;
-  assign ch1_result_w1_lo_read = bus__r_en & \$102 ;
-  assign \$103  = bus__w_addr == 9'h115;
-  assign ch1_result_w1_hi_write = bus__w_en & \$103 ;
-  assign \$104  = bus__w_addr == 9'h115;
-  assign ch1_result_w1_hi_read = bus__r_en & \$104 ;
-  assign \$105  = bus__w_addr == 9'h116;
-  assign ch1_result_timestamp_write = bus__w_en & \$105 ;
-  assign \$106  = bus__w_addr == 9'h116;
-  assign ch1_result_timestamp_read = bus__r_en & \$106 ;
-  assign \$107  = bus__w_addr == 9'h118;
-  assign ch1_count_crc_write = bus__w_en & \$107 ;
-  assign \$108  = bus__w_addr == 9'h118;
-  assign ch1_count_crc_read = bus__r_en & \$108 ;
-  assign \$109  = bus__w_addr == 9'h119;
-  assign ch1_count_ack_write = bus__w_en & \$109 ;
-  assign \$110  = bus__w_addr == 9'h119;
-  assign ch1_count_ack_read = bus__r_en & \$110 ;
-  assign \$111  = bus__w_addr == 9'h11a;
-  assign ch1_count_line_write = bus__w_en & \$111 ;
-  assign \$112  = bus__w_addr == 9'h11a;
-  assign ch1_count_line_read = bus__r_en & \$112 ;
-  assign \$113  = bus__w_addr == 9'h11b;
-  assign ch1_count_lc_write = bus__w_en & \$113 ;
-  assign \$114  = bus__w_addr == 9'h11b;
-  assign ch1_count_lc_read = bus__r_en & \$114 ;
-  assign \$115  = bus__w_addr == 9'h11c;
-  assign ch1_count_check_write = bus__w_en & \$115 ;
-  assign \$116  = bus__w_addr == 9'h11c;
-  assign ch1_count_check_read = bus__r_en & \$116 ;
-  assign \$117  = bus__w_addr == 9'h11d;
-  assign ch1_count_cycle_write = bus__w_en & \$117 ;
-  assign \$118  = bus__w_addr == 9'h11d;
-  assign ch1_count_cycle_read = bus__r_en & \$118 ;
-  assign \$119  = bus__w_addr == 9'h11e;
-  assign ch1_count_stop_write = bus__w_en & \$119 ;
-  assign \$120  = bus__w_addr == 9'h11e;
-  assign ch1_count_stop_read = bus__r_en & \$120 ;
-  assign \$121  = ch1_irq_status_done & ch1_irq_enable_done;
-  assign \$123  = ch1_irq_status_error & ch1_irq_enable_error;
-  assign \$125  = ch1_irq_status_access_done & ch1_irq_enable_access_done;
-  assign ch1_irq = | { \$126 , \$124 , \$122  };
-  assign \$127  = bus__w_data[0] & bus__w_strb[0];
-  assign \$128  = g_trigger_write ? \$127  : 1'h0;
-  assign \$129  = bus__w_data[0] & bus__w_strb[0];
-  assign \$130  = ch0_ctrl_write ? \$129  : 1'h0;
-  assign \$131  = bus__w_data[1] & bus__w_strb[0];
-  assign \$132  = ch0_ctrl_write ? \$131  : 1'h0;
-  assign \$133  = bus__w_data[2] & bus__w_strb[0];
-  assign \$134  = ch0_ctrl_write ? \$133  : 1'h0;
-  assign \$135  = ~ bus__w_strb[1];
-  assign \$136  = ch0__periodic & \$135 ;
-  assign \$137  = bus__w_data[8] & bus__w_strb[1];
-  assign \$138  = \$136  | \$137 ;
-  assign \$139  = ~ bus__w_strb[1];
-  assign \$140  = ch0__trigger_enable & \$139 ;
-  assign \$141  = bus__w_data[9] & bus__w_strb[1];
-  assign \$142  = \$140  | \$141 ;
-  assign \$143  = bus__w_data[0] & bus__w_strb[0];
-  assign \$144  = ch0_irq_status_write ? \$143  : 1'h0;
-  assign \$145  = bus__w_data[1] & bus__w_strb[0];
-  assign \$146  = ch0_irq_status_write ? \$145  : 1'h0;
-  assign \$147  = bus__w_data[2] & bus__w_strb[0];
-  assign \$148  = ch0_irq_status_write ? \$147  : 1'h0;
-  assign \$149  = ~ bus__w_strb[0];
-  assign \$150  = ch0_irq_enable_done & \$149 ;
-  assign \$151  = bus__w_data[0] & bus__w_strb[0];
-  assign \$152  = \$150  | \$151 ;
-  assign \$153  = ~ bus__w_strb[0];
-  assign \$154  = ch0_irq_enable_error & \$153 ;
-  assign \$155  = bus__w_data[1] & bus__w_strb[0];
-  assign \$156  = \$154  | \$155 ;
-  assign \$157  = ~ bus__w_strb[0];
-  assign \$158  = ch0_irq_enable_access_done & \$157 ;
-  assign \$159  = bus__w_data[2] & bus__w_strb[0];
-  assign \$160  = \$158  | \$159 ;
-  assign \$161  = ~ { bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$162  = ch0__cfg_ma_half_period & \$161 ;
-  assign \$163  = bus__w_data[15:0] & { bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$164  = \$162  | \$163 ;
-  assign \$165  = ~ { bus__w_strb[3], bus__w_strb[3], bus__w_strb[3], bus__w_strb[3:2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2] };
-  assign \$166  = ch0__cfg_delay_limit & \$165 ;
-  assign \$167  = bus__w_data[27:16] & { bus__w_strb[3], bus__w_strb[3], bus__w_strb[3], bus__w_strb[3:2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2] };
-  assign \$168  = \$166  | \$167 ;
-  assign \$169  = ~ { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$170  = ch0__cfg_request_period & \$169 ;
-  assign \$171  = bus__w_data[23:0] & { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$172  = \$170  | \$171 ;
-  assign \$173  = ~ { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$174  = ch0__cfg_break_time & \$173 ;
-  assign \$175  = bus__w_data[23:0] & { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$176  = \$174  | \$175 ;
-  assign \$177  = ~ { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$178  = ch0__cfg_ack_limit & \$177 ;
-  assign \$179  = bus__w_data[23:0] & { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$180  = \$178  | \$179 ;
-  assign \$181  = ~ { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$182  = ch0__cfg_timeout_limit & \$181 ;
-  assign \$183  = bus__w_data[23:0] & { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$184  = \$182  | \$183 ;
-  assign \$185  = ~ { bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$186  = ch0__cfg_w0_data_bits & \$185 ;
-  assign \$187  = bus__w_data[5:0] & { bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$188  = \$186  | \$187 ;
-  assign \$189  = ~ bus__w_strb[0];
-  assign \$190  = ch0__cfg_w0_nenw & \$189 ;
-  assign \$191  = bus__w_data[6] & bus__w_strb[0];
-  assign \$192  = \$190  | \$191 ;
-  assign \$193  = ~ bus__w_strb[0];
-  assign \$194  = ch0__cfg_w0_lc & \$193 ;
-  assign \$195  = bus__w_data[7] & bus__w_strb[0];
-  assign \$196  = \$194  | \$195 ;
-  assign \$197  = ~ { bus__w_strb[1], bus__w_strb[1] };
-  assign \$198  = ch0__cfg_w0_crc & \$197 ;
-  assign \$199  = bus__w_data[9:8] & { bus__w_strb[1], bus__w_strb[1] };
-  assign \$200  = \$198  | \$199 ;
-  assign \$201  = ~ { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2] };
-  assign \$202  = ch0__cfg_w1_data_bits & \$201 ;
-  assign \$203  = bus__w_data[21:16] & { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2] };
-  assign \$204  = \$202  | \$203 ;
-  assign \$205  = ~ bus__w_strb[2];
-  assign \$206  = ch0__cfg_w1_nenw & \$205 ;
-  assign \$207  = bus__w_data[22] & bus__w_strb[2];
-  assign \$208  = \$206  | \$207 ;
-  assign \$209  = ~ bus__w_strb[2];
-  assign \$210  = ch0__cfg_w1_lc & \$209 ;
-  assign \$211  = bus__w_data[23] & bus__w_strb[2];
-  assign \$212  = \$210  | \$211 ;
-  assign \$213  = ~ { bus__w_strb[3], bus__w_strb[3] };
-  assign \$214  = ch0__cfg_w1_crc & \$213 ;
-  assign \$215  = bus__w_data[25:24] & { bus__w_strb[3], bus__w_strb[3] };
-  assign \$216  = \$214  | \$215 ;
-  assign \$217  = ~ bus__w_strb[3];
-  assign \$218  = ch0__cfg_w1_enable & \$217 ;
-  assign \$219  = bus__w_data[31] & bus__w_strb[3];
-  assign \$220  = \$218  | \$219 ;
-  assign \$221  = ~ bus__w_strb[0];
-  assign \$222  = ch0__cfg_end_check & \$221 ;
-  assign \$223  = bus__w_data[0] & bus__w_strb[0];
-  assign \$224  = \$222  | \$223 ;
-  assign \$225  = ~ bus__w_strb[0];
-  assign \$226  = ch0__cfg_spw_check & \$225 ;
-  assign \$227  = bus__w_data[1] & bus__w_strb[0];
-  assign \$228  = \$226  | \$227 ;
-  assign \$229  = ~ { bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1] };
-  assign \$230  = ch0__cfg_spw_tolerance & \$229 ;
-  assign \$231  = bus__w_data[15:8] & { bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1] };
-  assign \$232  = \$230  | \$231 ;
-  assign \$233  = bus__w_data[0] & bus__w_strb[0];
-  assign \$234  = ch1_ctrl_write ? \$233  : 1'h0;
-  assign \$235  = bus__w_data[1] & bus__w_strb[0];
-  assign \$236  = ch1_ctrl_write ? \$235  : 1'h0;
-  assign \$237  = bus__w_data[2] & bus__w_strb[0];
-  assign \$238  = ch1_ctrl_write ? \$237  : 1'h0;
-  assign \$239  = ~ bus__w_strb[1];
-  assign \$240  = ch1__periodic & \$239 ;
-  assign \$241  = bus__w_data[8] & bus__w_strb[1];
-  assign \$242  = \$240  | \$241 ;
-  assign \$243  = ~ bus__w_strb[1];
-  assign \$244  = ch1__trigger_enable & \$243 ;
-  assign \$245  = bus__w_data[9] & bus__w_strb[1];
-  assign \$246  = \$244  | \$245 ;
-  assign \$247  = bus__w_data[0] & bus__w_strb[0];
-  assign \$248  = ch1_irq_status_write ? \$247  : 1'h0;
-  assign \$249  = bus__w_data[1] & bus__w_strb[0];
-  assign \$250  = ch1_irq_status_write ? \$249  : 1'h0;
-  assign \$251  = bus__w_data[2] & bus__w_strb[0];
-  assign \$252  = ch1_irq_status_write ? \$251  : 1'h0;
-  assign \$253  = ~ bus__w_strb[0];
-  assign \$254  = ch1_irq_enable_done & \$253 ;
-  assign \$255  = bus__w_data[0] & bus__w_strb[0];
-  assign \$256  = \$254  | \$255 ;
-  assign \$257  = ~ bus__w_strb[0];
-  assign \$258  = ch1_irq_enable_error & \$257 ;
-  assign \$259  = bus__w_data[1] & bus__w_strb[0];
-  assign \$260  = \$258  | \$259 ;
-  assign \$261  = ~ bus__w_strb[0];
-  assign \$262  = ch1_irq_enable_access_done & \$261 ;
-  assign \$263  = bus__w_data[2] & bus__w_strb[0];
-  assign \$264  = \$262  | \$263 ;
-  assign \$265  = ~ { bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$266  = ch1__cfg_ma_half_period & \$265 ;
-  assign \$267  = bus__w_data[15:0] & { bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$268  = \$266  | \$267 ;
-  assign \$269  = ~ { bus__w_strb[3], bus__w_strb[3], bus__w_strb[3], bus__w_strb[3:2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2] };
-  assign \$270  = ch1__cfg_delay_limit & \$269 ;
-  assign \$271  = bus__w_data[27:16] & { bus__w_strb[3], bus__w_strb[3], bus__w_strb[3], bus__w_strb[3:2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2] };
-  assign \$272  = \$270  | \$271 ;
-  assign \$273  = ~ { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$274  = ch1__cfg_request_period & \$273 ;
-  assign \$275  = bus__w_data[23:0] & { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$276  = \$274  | \$275 ;
-  assign \$277  = ~ { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$278  = ch1__cfg_break_time & \$277 ;
-  assign \$279  = bus__w_data[23:0] & { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$280  = \$278  | \$279 ;
-  assign \$281  = ~ { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$282  = ch1__cfg_ack_limit & \$281 ;
-  assign \$283  = bus__w_data[23:0] & { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$284  = \$282  | \$283 ;
-  assign \$285  = ~ { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$286  = ch1__cfg_timeout_limit & \$285 ;
-  assign \$287  = bus__w_data[23:0] & { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$288  = \$286  | \$287 ;
-  assign \$289  = ~ { bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$290  = ch1__cfg_w0_data_bits & \$289 ;
-  assign \$291  = bus__w_data[5:0] & { bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$292  = \$290  | \$291 ;
-  assign \$293  = ~ bus__w_strb[0];
-  assign \$294  = ch1__cfg_w0_nenw & \$293 ;
-  assign \$295  = bus__w_data[6] & bus__w_strb[0];
-  assign \$296  = \$294  | \$295 ;
-  assign \$297  = ~ bus__w_strb[0];
-  assign \$298  = ch1__cfg_w0_lc & \$297 ;
-  assign \$299  = bus__w_data[7] & bus__w_strb[0];
-  assign \$300  = \$298  | \$299 ;
-  assign \$301  = ~ { bus__w_strb[1], bus__w_strb[1] };
-  assign \$302  = ch1__cfg_w0_crc & \$301 ;
-  assign \$303  = bus__w_data[9:8] & { bus__w_strb[1], bus__w_strb[1] };
-  assign \$304  = \$302  | \$303 ;
-  assign \$305  = ~ { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2] };
-  assign \$306  = ch1__cfg_w1_data_bits & \$305 ;
-  assign \$307  = bus__w_data[21:16] & { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2] };
-  assign \$308  = \$306  | \$307 ;
-  assign \$309  = ~ bus__w_strb[2];
-  assign \$310  = ch1__cfg_w1_nenw & \$309 ;
-  assign \$311  = bus__w_data[22] & bus__w_strb[2];
-  assign \$312  = \$310  | \$311 ;
-  assign \$313  = ~ bus__w_strb[2];
-  assign \$314  = ch1__cfg_w1_lc & \$313 ;
-  assign \$315  = bus__w_data[23] & bus__w_strb[2];
-  assign \$316  = \$314  | \$315 ;
-  assign \$317  = ~ { bus__w_strb[3], bus__w_strb[3] };
-  assign \$318  = ch1__cfg_w1_crc & \$317 ;
-  assign \$319  = bus__w_data[25:24] & { bus__w_strb[3], bus__w_strb[3] };
-  assign \$320  = \$318  | \$319 ;
-  assign \$321  = ~ bus__w_strb[3];
-  assign \$322  = ch1__cfg_w1_enable & \$321 ;
-  assign \$323  = bus__w_data[31] & bus__w_strb[3];
-  assign \$324  = \$322  | \$323 ;
-  assign \$325  = ~ bus__w_strb[0];
-  assign \$326  = ch1__cfg_end_check & \$325 ;
-  assign \$327  = bus__w_data[0] & bus__w_strb[0];
-  assign \$328  = \$326  | \$327 ;
-  assign \$329  = ~ bus__w_strb[0];
-  assign \$330  = ch1__cfg_spw_check & \$329 ;
-  assign \$331  = bus__w_data[1] & bus__w_strb[0];
-  assign \$332  = \$330  | \$331 ;
-  assign \$333  = ~ { bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1] };
-  assign \$334  = ch1__cfg_spw_tolerance & \$333 ;
-  assign \$335  = bus__w_data[15:8] & { bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1] };
-  assign \$336  = \$334  | \$335 ;
-  always @(posedge clk)
-    glob__trigger <= \$337 ;
-  always @(posedge clk)
-    ch0__start <= \$338 ;
-  always @(posedge clk)
-    ch0__abort_cycle <= \$339 ;
-  always @(posedge clk)
-    ch0__clear_counters <= \$340 ;
-  always @(posedge clk)
-    ch0__periodic <= \$341 ;
-  always @(posedge clk)
-    ch0__trigger_enable <= \$342 ;
-  always @(posedge clk)
-    ch0_irq_status_done <= \$343 ;
-  always @(posedge clk)
-    ch0_irq_status_error <= \$344 ;
-  always @(posedge clk)
-    ch0_irq_status_access_done <= \$345 ;
-  always @(posedge clk)
-    ch0_irq_enable_done <= \$346 ;
-  always @(posedge clk)
-    ch0_irq_enable_error <= \$347 ;
-  always @(posedge clk)
-    ch0_irq_enable_access_done <= \$348 ;
-  always @(posedge clk)
-    ch0__cfg_ma_half_period <= \$349 ;
-  always @(posedge clk)
-    ch0__cfg_delay_limit <= \$350 ;
-  always @(posedge clk)
-    ch0__cfg_request_period <= \$351 ;
-  always @(posedge clk)
-    ch0__cfg_break_time <= \$352 ;
-  always @(posedge clk)
-    ch0__cfg_ack_limit <= \$353 ;
-  always @(posedge clk)
-    ch0__cfg_timeout_limit <= \$354 ;
-  always @(posedge clk)
-    ch0__cfg_w0_data_bits <= \$355 ;
-  always @(posedge clk)
-    ch0__cfg_w0_nenw <= \$356 ;
-  always @(posedge clk)
-    ch0__cfg_w0_lc <= \$357 ;
-  always @(posedge clk)
-    ch0__cfg_w0_crc <= \$358 ;
-  always @(posedge clk)
-    ch0__cfg_w1_data_bits <= \$359 ;
-  always @(posedge clk)
-    ch0__cfg_w1_nenw <= \$360 ;
-  always @(posedge clk)
-    ch0__cfg_w1_lc <= \$361 ;
-  always @(posedge clk)
-    ch0__cfg_w1_crc <= \$362 ;
-  always @(posedge clk)
-    ch0__cfg_w1_enable <= \$363 ;
-  always @(posedge clk)
-    ch0__cfg_end_check <= \$364 ;
-  always @(posedge clk)
-    ch0__cfg_spw_check <= \$365 ;
-  always @(posedge clk)
-    ch0__cfg_spw_tolerance <= \$366 ;
-  always @(posedge clk)
-    ch0_result_status_status_snapshot <= \$367 ;
-  always @(posedge clk)
-    ch0_result_status_cds_snapshot <= \$368 ;
-  always @(posedge clk)
-    ch0_result_status_w0_ne_snapshot <= \$369 ;
-  always @(posedge clk)
-    ch0_result_status_w0_nw_snapshot <= \$370 ;
-  always @(posedge clk)
-    ch0_result_status_w0_crc_ok_snapshot <= \$371 ;
-  always @(posedge clk)
-    ch0_result_status_w1_ne_snapshot <= \$372 ;
-  always @(posedge clk)
-    ch0_result_status_w1_nw_snapshot <= \$373 ;
-  always @(posedge clk)
-    ch0_result_status_w1_crc_ok_snapshot <= \$374 ;
-  always @(posedge clk)
-    ch0_result_status_lc_repeat_snapshot <= \$375 ;
-  always @(posedge clk)
-    ch0_result_status_lc_skip_snapshot <= \$376 ;
-  always @(posedge clk)
-    ch0_result_status_lc_zero_snapshot <= \$377 ;
-  always @(posedge clk)
-    ch0_result_status_spw_mismatch_snapshot <= \$378 ;
-  always @(posedge clk)
-    ch0_result_status_lc_snapshot <= \$379 ;
-  always @(posedge clk)
-    ch0_result_seq_seq_snapshot <= \$380 ;
-  always @(posedge clk)
-    ch0_result_seq_line_delay_snapshot <= \$381 ;
-  always @(posedge clk)
-    ch0_result_w0_lo_data_snapshot <= \$382 ;
-  always @(posedge clk)
-    ch0_result_w0_hi_data_snapshot <= \$383 ;
-  always @(posedge clk)
-    ch0_result_w1_lo_data_snapshot <= \$384 ;
-  always @(posedge clk)
-    ch0_result_w1_hi_data_snapshot <= \$385 ;
-  always @(posedge clk)
-    ch0_result_timestamp_time_snapshot <= \$386 ;
-  always @(posedge clk)
-    ch1__start <= \$387 ;
-  always @(posedge clk)
-    ch1__abort_cycle <= \$388 ;
-  always @(posedge clk)
-    ch1__clear_counters <= \$389 ;
-  always @(posedge clk)
-    ch1__periodic <= \$390 ;
-  always @(posedge clk)
-    ch1__trigger_enable <= \$391 ;
+  assign \$63  = bus__w_addr == 8'hc0;
+  assign ch0_ca_request_write = bus__w_en & \$63 ;
+  assign \$64  = bus__w_addr == 8'hc0;
+  assign ch0_ca_request_read = bus__r_en & \$64 ;
+  assign \$65  = bus__w_addr == 8'hc1;
+  assign ch0_ca_ctrl_write = bus__w_en & \$65 ;
+  assign \$66  = bus__w_addr == 8'hc1;
+  assign ch0_ca_ctrl_read = bus__r_en & \$66 ;
+  assign \$67  = bus__w_addr == 8'hc2;
+  assign ch0_ca_state_write = bus__w_en & \$67 ;
+  assign \$68  = bus__w_addr == 8'hc2;
+  assign ch0_ca_state_read = bus__r_en & \$68 ;
+  assign \$69  = bus__w_addr == 8'hc3;
+  assign ch0_ca_count_crc4_answer_write = bus__w_en & \$69 ;
+  assign \$70  = bus__w_addr == 8'hc3;
+  assign ch0_ca_count_crc4_answer_read = bus__r_en & \$70 ;
+  assign \$71  = bus__w_addr == 8'hc4;
+  assign ch0_ca_count_refused_aborted_write = bus__w_en & \$71 ;
+  assign \$72  = bus__w_addr == 8'hc4;
+  assign ch0_ca_count_refused_aborted_read = bus__r_en & \$72 ;
+  assign \$73  = bus__w_addr == 8'hc5;
+  assign ch0_ca_count_data_fault_write = bus__w_en & \$73 ;
+  assign \$74  = bus__w_addr == 8'hc5;
+  assign ch0_ca_count_data_fault_read = bus__r_en & \$74 ;
+  assign \$75  = bus__w_addr[10:4] == 4'hd;
+  assign \$76  = bus__w_en & \$75 ;
+  assign ch0__ca_wbuf_en = \$76  ? bus__w_strb : 4'h0;
+  assign \$77  = bus__w_addr[10:4] == 4'he;
+  assign ch0__ca_rbuf_en = bus__r_en & \$77 ;
+  assign \$78  = ch0_irq_status_done & ch0_irq_enable_done;
+  assign \$80  = ch0_irq_status_error & ch0_irq_enable_error;
+  assign \$82  = ch0_irq_status_access_done & ch0_irq_enable_access_done;
+  assign ch0_irq = | { \$83 , \$81 , \$79  };
+  assign \$84  = bus__w_addr == 9'h100;
+  assign ch1_ctrl_write = bus__w_en & \$84 ;
+  assign \$85  = bus__w_addr == 9'h100;
+  assign ch1_ctrl_read = bus__r_en & \$85 ;
+  assign \$86  = bus__w_addr == 9'h101;
+  assign ch1_state_write = bus__w_en & \$86 ;
+  assign \$87  = bus__w_addr == 9'h101;
+  assign ch1_state_read = bus__r_en & \$87 ;
+  assign \$88  = bus__w_addr == 9'h102;
+  assign ch1_caps_write = bus__w_en & \$88 ;
+  assign \$89  = bus__w_addr == 9'h102;
+  assign ch1_caps_read = bus__r_en & \$89 ;
+  assign \$90  = bus__w_addr == 9'h104;
+  assign ch1_irq_status_write = bus__w_en & \$90 ;
+  assign \$91  = bus__w_addr == 9'h104;
+  assign ch1_irq_status_read = bus__r_en & \$91 ;
+  assign \$92  = bus__w_addr == 9'h105;
+  assign ch1_irq_enable_write = bus__w_en & \$92 ;
+  assign \$93  = bus__w_addr == 9'h105;
+  assign ch1_irq_enable_read = bus__r_en & \$93 ;
+  assign \$94  = bus__w_addr == 9'h108;
+  assign ch1_cfg_ma_write = bus__w_en & \$94 ;
+  assign \$95  = bus__w_addr == 9'h108;
+  assign ch1_cfg_ma_read = bus__r_en & \$95 ;
+  assign \$96  = bus__w_addr == 9'h109;
+  assign ch1_cfg_period_write = bus__w_en & \$96 ;
+  assign \$97  = bus__w_addr == 9'h109;
+  assign ch1_cfg_period_read = bus__r_en & \$97 ;
+  assign \$98  = bus__w_addr == 9'h10a;
+  assign ch1_cfg_break_write = bus__w_en & \$98 ;
+  assign \$99  = bus__w_addr == 9'h10a;
+  assign ch1_cfg_break_read = bus__r_en & \$99 ;
+  assign \$100  = bus__w_addr == 9'h10b;
+  assign ch1_cfg_ack_write = bus__w_en & \$100 ;
+  assign \$101  = bus__w_addr == 9'h10b;
+  assign ch1_cfg_ack_read = bus__r_en & \$101 ;
+  assign \$102  = bus__w_addr == 9'h10c;
+  assign ch1_cfg_timeout_write = bus__w_en & \$102 ;
+  assign \$103  = bus__w_addr == 9'h10c;
+  assign ch1_cfg_timeout_read = bus__r_en & \$103 ;
+  assign \$104  = bus__w_addr == 9'h10d;
+  assign ch1_cfg_words_write = bus__w_en & \$104 ;
+  assign \$105  = bus__w_addr == 9'h10d;
+  assign ch1_cfg_words_read = bus__r_en & \$105 ;
+  assign \$106  = bus__w_addr == 9'h10e;
+  assign ch1_cfg_checks_write = bus__w_en & \$106 ;
+  assign \$107  = bus__w_addr == 9'h10e;
+  assign ch1_cfg_checks_read = bus__r_en & \$107 ;
+  assign \$108  = bus__w_addr == 9'h110;
+  assign ch1_result_status_write = bus__w_en & \$108 ;
+  assign \$109  = bus__w_addr == 9'h110;
+  assign ch1_result_status_read = bus__r_en & \$109 ;
+  assign \$110  = bus__w_addr == 9'h111;
+  assign ch1_result_seq_write = bus__w_en & \$110 ;
+  assign \$111  = bus__w_addr == 9'h111;
+  assign ch1_result_seq_read = bus__r_en & \$111 ;
+  assign \$112  = bus__w_addr == 9'h112;
+  assign ch1_result_w0_lo_write = bus__w_en & \$112 ;
+  assign \$113  = bus__w_addr == 9'h112;
+  assign ch1_result_w0_lo_read = bus__r_en & \$113 ;
+  assign \$114  = bus__w_addr == 9'h113;
+  assign ch1_result_w0_hi_write = bus__w_en & \$114 ;
+  assign \$115  = bus__w_addr == 9'h113;
+  assign ch1_result_w0_hi_read = bus__r_en & \$115 ;
+  assign \$116  = bus__w_addr == 9'h114;
+  assign ch1_result_w1_lo_write = bus__w_en & \$116 ;
+  assign \$117  = bus__w_addr == 9'h114;
+  assign ch1_result_w1_lo_read = bus__r_en & \$117 ;
+  assign \$118  = bus__w_addr == 9'h115;
+  assign ch1_result_w1_hi_write = bus__w_en & \$118 ;
+  assign \$119  = bus__w_addr == 9'h115;
+  assign ch1_result_w1_hi_read = bus__r_en & \$119 ;
+  assign \$120  = bus__w_addr == 9'h116;
+  assign ch1_result_timestamp_write = bus__w_en & \$120 ;
+  assign \$121  = bus__w_addr == 9'h116;
+  assign ch1_result_timestamp_read = bus__r_en & \$121 ;
+  assign \$122  = bus__w_addr == 9'h118;
+  assign ch1_count_crc_write = bus__w_en & \$122 ;
+  assign \$123  = bus__w_addr == 9'h118;
+  assign ch1_count_crc_read = bus__r_en & \$123 ;
+  assign \$124  = bus__w_addr == 9'h119;
+  assign ch1_count_ack_write = bus__w_en & \$124 ;
+  assign \$125  = bus__w_addr == 9'h119;
+  assign ch1_count_ack_read = bus__r_en & \$125 ;
+  assign \$126  = bus__w_addr == 9'h11a;
+  assign ch1_count_line_write = bus__w_en & \$126 ;
+  assign \$127  = bus__w_addr == 9'h11a;
+  assign ch1_count_line_read = bus__r_en & \$127 ;
+  assign \$128  = bus__w_addr == 9'h11b;
+  assign ch1_count_lc_write = bus__w_en & \$128 ;
+  assign \$129  = bus__w_addr == 9'h11b;
+  assign ch1_count_lc_read = bus__r_en & \$129 ;
+  assign \$130  = bus__w_addr == 9'h11c;
+  assign ch1_count_check_write = bus__w_en & \$130 ;
+  assign \$131  = bus__w_addr == 9'h11c;
+  assign ch1_count_check_read = bus__r_en & \$131 ;
+  assign \$132  = bus__w_addr == 9'h11d;
+  assign ch1_count_cycle_write = bus__w_en & \$132 ;
+  assign \$133  = bus__w_addr == 9'h11d;
+  assign ch1_count_cycle_read = bus__r_en & \$133 ;
+  assign \$134  = bus__w_addr == 9'h11e;
+  assign ch1_count_stop_write = bus__w_en & \$134 ;
+  assign \$135  = bus__w_addr == 9'h11e;
+  assign ch1_count_stop_read = bus__r_en & \$135 ;
+  assign \$136  = bus__w_addr == 9'h140;
+  assign ch1_ca_request_write = bus__w_en & \$136 ;
+  assign \$137  = bus__w_addr == 9'h140;
+  assign ch1_ca_request_read = bus__r_en & \$137 ;
+  assign \$138  = bus__w_addr == 9'h141;
+  assign ch1_ca_ctrl_write = bus__w_en & \$138 ;
+  assign \$139  = bus__w_addr == 9'h141;
+  assign ch1_ca_ctrl_read = bus__r_en & \$139 ;
+  assign \$140  = bus__w_addr == 9'h142;
+  assign ch1_ca_state_write = bus__w_en & \$140 ;
+  assign \$141  = bus__w_addr == 9'h142;
+  assign ch1_ca_state_read = bus__r_en & \$141 ;
+  assign \$142  = bus__w_addr == 9'h143;
+  assign ch1_ca_count_crc4_answer_write = bus__w_en & \$142 ;
+  assign \$143  = bus__w_addr == 9'h143;
+  assign ch1_ca_count_crc4_answer_read = bus__r_en & \$143 ;
+  assign \$144  = bus__w_addr == 9'h144;
+  assign ch1_ca_count_refused_aborted_write = bus__w_en & \$144 ;
+  assign \$145  = bus__w_addr == 9'h144;
+  assign ch1_ca_count_refused_aborted_read = bus__r_en & \$145 ;
+  assign \$146  = bus__w_addr == 9'h145;
+  assign ch1_ca_count_data_fault_write = bus__w_en & \$146 ;
+  assign \$147  = bus__w_addr == 9'h145;
+  assign ch1_ca_count_data_fault_read = bus__r_en & \$147 ;
+  assign \$148  = bus__w_addr[10:4] == 5'h15;
+  assign \$149  = bus__w_en & \$148 ;
+  assign ch1__ca_wbuf_en = \$149  ? bus__w_strb : 4'h0;
+  assign \$150  = bus__w_addr[10:4] == 5'h16;
+  assign ch1__ca_rbuf_en = bus__r_en & \$150 ;
+  assign \$151  = ch1_irq_status_done & ch1_irq_enable_done;
+  assign \$153  = ch1_irq_status_error & ch1_irq_enable_error;
+  assign \$155  = ch1_irq_status_access_done & ch1_irq_enable_access_done;
+  assign ch1_irq = | { \$156 , \$154 , \$152  };
+  assign \$157  = window0_read ? ch0__ca_rbuf_data : 32'd0;
+  assign \$158  = word | \$157 ;
+  assign \$159  = window1_read ? ch1__ca_rbuf_data : 32'd0;
+  assign bus__r_data = \$158  | \$159 ;
+  assign \$160  = ch0__ca_wbuf_data[0] & bus__w_strb[0];
+  assign \$161  = g_trigger_write ? \$160  : 1'h0;
+  assign \$162  = ch0__ca_wbuf_data[0] & bus__w_strb[0];
+  assign \$163  = ch0_ctrl_write ? \$162  : 1'h0;
+  assign \$164  = ch0__ca_wbuf_data[1] & bus__w_strb[0];
+  assign \$165  = ch0_ctrl_write ? \$164  : 1'h0;
+  assign \$166  = ch0__ca_wbuf_data[2] & bus__w_strb[0];
+  assign \$167  = ch0_ctrl_write ? \$166  : 1'h0;
+  assign \$168  = ~ bus__w_strb[1];
+  assign \$169  = ch0__periodic & \$168 ;
+  assign \$170  = ch0__ca_wbuf_data[8] & bus__w_strb[1];
+  assign \$171  = \$169  | \$170 ;
+  assign \$172  = ~ bus__w_strb[1];
+  assign \$173  = ch0__trigger_enable & \$172 ;
+  assign \$174  = ch0__ca_wbuf_data[9] & bus__w_strb[1];
+  assign \$175  = \$173  | \$174 ;
+  assign \$176  = ch0__ca_wbuf_data[0] & bus__w_strb[0];
+  assign \$177  = ch0_irq_status_write ? \$176  : 1'h0;
+  assign \$178  = ch0__ca_wbuf_data[1] & bus__w_strb[0];
+  assign \$179  = ch0_irq_status_write ? \$178  : 1'h0;
+  assign \$180  = ch0__ca_wbuf_data[2] & bus__w_strb[0];
+  assign \$181  = ch0_irq_status_write ? \$180  : 1'h0;
+  assign \$182  = ~ bus__w_strb[0];
+  assign \$183  = ch0_irq_enable_done & \$182 ;
+  assign \$184  = ch0__ca_wbuf_data[0] & bus__w_strb[0];
+  assign \$185  = \$183  | \$184 ;
+  assign \$186  = ~ bus__w_strb[0];
+  assign \$187  = ch0_irq_enable_error & \$186 ;
+  assign \$188  = ch0__ca_wbuf_data[1] & bus__w_strb[0];
+  assign \$189  = \$187  | \$188 ;
+  assign \$190  = ~ bus__w_strb[0];
+  assign \$191  = ch0_irq_enable_access_done & \$190 ;
+  assign \$192  = ch0__ca_wbuf_data[2] & bus__w_strb[0];
+  assign \$193  = \$191  | \$192 ;
+  assign \$194  = ~ { bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
+  assign \$195  = ch0__cfg_ma_half_period & \$194 ;
+  assign \$196  = ch0__ca_wbuf_data[15:0] & { bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
+  assign \$197  = \$195  | \$196 ;
+  assign \$198  = ~ { bus__w_strb[3], bus__w_strb[3], bus__w_strb[3], bus__w_strb[3:2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2] };
+  assign \$199  = ch0__cfg_delay_limit & \$198 ;
+  assign \$200  = ch0__ca_wbuf_data[27:16] & { bus__w_strb[3], bus__w_strb[3], bus__w_strb[3], bus__w_strb[3:2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2] };
+  assign \$201  = \$199  | \$200 ;
+  assign \$202  = ~ { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
+  assign \$203  = ch0__cfg_request_period & \$202 ;
+  assign \$204  = ch0__ca_wbuf_data[23:0] & { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
+  assign \$205  = \$203  | \$204 ;
+  assign \$206  = ~ { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
+  assign \$207  = ch0__cfg_break_time & \$206 ;
+  assign \$208  = ch0__ca_wbuf_data[23:0] & { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
+  assign \$209  = \$207  | \$208 ;
+  assign \$210  = ~ { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
+  assign \$211  = ch0__cfg_ack_limit & \$210 ;
+  assign \$212  = ch0__ca_wbuf_data[23:0] & { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
+  assign \$213  = \$211  | \$212 ;
+  assign \$214  = ~ { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
+  assign \$215  = ch0__cfg_timeout_limit & \$214 ;
+  assign \$216  = ch0__ca_wbuf_data[23:0] & { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
+  assign \$217  = \$215  | \$216 ;
+  assign \$218  = ~ { bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
+  assign \$219  = ch0__cfg_w0_data_bits & \$218 ;
+  assign \$220  = ch0__ca_wbuf_data[5:0] & { bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
+  assign \$221  = \$219  | \$220 ;
+  assign \$222  = ~ bus__w_strb[0];
+  assign \$223  = ch0__cfg_w0_nenw & \$222 ;
+  assign \$224  = ch0__ca_wbuf_data[6] & bus__w_strb[0];
+  assign \$225  = \$223  | \$224 ;
+  assign \$226  = ~ bus__w_strb[0];
+  assign \$227  = ch0__cfg_w0_lc & \$226 ;
+  assign \$228  = ch0__ca_wbuf_data[7] & bus__w_strb[0];
+  assign \$229  = \$227  | \$228 ;
+  assign \$230  = ~ { bus__w_strb[1], bus__w_strb[1] };
+  assign \$231  = ch0__cfg_w0_crc & \$230 ;
+  assign \$232  = ch0__ca_wbuf_data[9:8] & { bus__w_strb[1], bus__w_strb[1] };
+  assign \$233  = \$231  | \$232 ;
+  assign \$234  = ~ { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2] };
+  assign \$235  = ch0__cfg_w1_data_bits & \$234 ;
+  assign \$236  = ch0__ca_wbuf_data[21:16] & { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2] };
+  assign \$237  = \$235  | \$236 ;
+  assign \$238  = ~ bus__w_strb[2];
+  assign \$239  = ch0__cfg_w1_nenw & \$238 ;
+  assign \$240  = ch0__ca_wbuf_data[22] & bus__w_strb[2];
+  assign \$241  = \$239  | \$240 ;
+  assign \$242  = ~ bus__w_strb[2];
+  assign \$243  = ch0__cfg_w1_lc & \$242 ;
+  assign \$244  = ch0__ca_wbuf_data[23] & bus__w_strb[2];
+  assign \$245  = \$243  | \$244 ;
+  assign \$246  = ~ { bus__w_strb[3], bus__w_strb[3] };
+  assign \$247  = ch0__cfg_w1_crc & \$246 ;
+  assign \$248  = ch0__ca_wbuf_data[25:24] & { bus__w_strb[3], bus__w_strb[3] };
+  assign \$249  = \$247  | \$248 ;
+  assign \$250  = ~ bus__w_strb[3];
+  assign \$251  = ch0__cfg_w1_enable & \$250 ;
+  assign \$252  = ch0__ca_wbuf_data[31] & bus__w_strb[3];
+  assign \$253  = \$251  | \$252 ;
+  assign \$254  = ~ bus__w_strb[0];
+  assign \$255  = ch0__cfg_end_check & \$254 ;
+  assign \$256  = ch0__ca_wbuf_data[0] & bus__w_strb[0];
+  assign \$257  = \$255  | \$256 ;
+  assign \$258  = ~ bus__w_strb[0];
+  assign \$259  = ch0__cfg_spw_check & \$258 ;
+  assign \$260  = ch0__ca_wbuf_data[1] & bus__w_strb[0];
+  assign \$261  = \$259  | \$260 ;
+  assign \$262  = ~ { bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1] };
+  assign \$263  = ch0__cfg_spw_tolerance & \$262 ;
+  assign \$264  = ch0__ca_wbuf_data[15:8] & { bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1] };
+  assign \$265  = \$263  | \$264 ;
+  assign \$266  = ~ { bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
+  assign \$267  = ch0__ca_slave_id & \$266 ;
+  assign \$268  = ch0__ca_wbuf_data[2:0] & { bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
+  assign \$269  = \$267  | \$268 ;
+  assign \$270  = ~ { bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1] };
+  assign \$271  = ch0__ca_address & \$270 ;
+  assign \$272  = ch0__ca_wbuf_data[14:8] & { bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1] };
+  assign \$273  = \$271  | \$272 ;
+  assign \$274  = ~ { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2] };
+  assign \$275  = ch0__ca_count & \$274 ;
+  assign \$276  = ch0__ca_wbuf_data[22:16] & { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2] };
+  assign \$277  = \$275  | \$276 ;
+  assign \$278  = ~ bus__w_strb[3];
+  assign \$279  = ch0__ca_write & \$278 ;
+  assign \$280  = ch0__ca_wbuf_data[24] & bus__w_strb[3];
+  assign \$281  = \$279  | \$280 ;
+  assign \$282  = ch0__ca_wbuf_data[0] & bus__w_strb[0];
+  assign \$283  = ch0_ca_ctrl_write ? \$282  : 1'h0;
+  assign \$284  = ch0__ca_wbuf_data[1] & bus__w_strb[0];
+  assign \$285  = ch0_ca_ctrl_write ? \$284  : 1'h0;
+  assign \$286  = ch0__ca_wbuf_data[0] & bus__w_strb[0];
+  assign \$287  = ch1_ctrl_write ? \$286  : 1'h0;
+  assign \$288  = ch0__ca_wbuf_data[1] & bus__w_strb[0];
+  assign \$289  = ch1_ctrl_write ? \$288  : 1'h0;
+  assign \$290  = ch0__ca_wbuf_data[2] & bus__w_strb[0];
+  assign \$291  = ch1_ctrl_write ? \$290  : 1'h0;
+  assign \$292  = ~ bus__w_strb[1];
+  assign \$293  = ch1__periodic & \$292 ;
+  assign \$294  = ch0__ca_wbuf_data[8] & bus__w_strb[1];
+  assign \$295  = \$293  | \$294 ;
+  assign \$296  = ~ bus__w_strb[1];
+  assign \$297  = ch1__trigger_enable & \$296 ;
+  assign \$298  = ch0__ca_wbuf_data[9] & bus__w_strb[1];
+  assign \$299  = \$297  | \$298 ;
+  assign \$300  = ch0__ca_wbuf_data[0] & bus__w_strb[0];
+  assign \$301  = ch1_irq_status_write ? \$300  : 1'h0;
+  assign \$302  = ch0__ca_wbuf_data[1] & bus__w_strb[0];
+  assign \$303  = ch1_irq_status_write ? \$302  : 1'h0;
+  assign \$304  = ch0__ca_wbuf_data[2] & bus__w_strb[0];
+  assign \$305  = ch1_irq_status_write ? \$304  : 1'h0;
+  assign \$306  = ~ bus__w_strb[0];
+  assign \$307  = ch1_irq_enable_done & \$306 ;
+  assign \$308  = ch0__ca_wbuf_data[0] & bus__w_strb[0];
+  assign \$309  = \$307  | \$308 ;
+  assign \$310  = ~ bus__w_strb[0];
+  assign \$311  = ch1_irq_enable_error & \$310 ;
+  assign \$312  = ch0__ca_wbuf_data[1] & bus__w_strb[0];
+  assign \$313  = \$311  | \$312 ;
+  assign \$314  = ~ bus__w_strb[0];
+  assign \$315  = ch1_irq_enable_access_done & \$314 ;
+  assign \$316  = ch0__ca_wbuf_data[2] & bus__w_strb[0];
+  assign \$317  = \$315  | \$316 ;
+  assign \$318  = ~ { bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
+  assign \$319  = ch1__cfg_ma_half_period & \$318 ;
+  assign \$320  = ch0__ca_wbuf_data[15:0] & { bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
+  assign \$321  = \$319  | \$320 ;
+  assign \$322  = ~ { bus__w_strb[3], bus__w_strb[3], bus__w_strb[3], bus__w_strb[3:2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2] };
+  assign \$323  = ch1__cfg_delay_limit & \$322 ;
+  assign \$324  = ch0__ca_wbuf_data[27:16] & { bus__w_strb[3], bus__w_strb[3], bus__w_strb[3], bus__w_strb[3:2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2] };
+  assign \$325  = \$323  | \$324 ;
+  assign \$326  = ~ { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$392  = ch1_irq_status_done;
-    if (ch1__done) begin
-      \$392  = 1'h1;
-    end else if (\$248 ) begin
-      \$392  = 1'h0;
-    end
-    if (rst) begin
-      \$392  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$393  = ch1_irq_status_error;
-    if (ch1__frame_error) begin
-      \$393  = 1'h1;
-    end else if (\$250 ) begin
-      \$393  = 1'h0;
-    end
-    if (rst) begin
-      \$393  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$394  = ch1_irq_status_access_done;
-    casez ({ \$252 , 1'h0 })
-      2'b1?:
-          \$394  = 1'h0;
-    endcase
-    if (rst) begin
-      \$394  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$395  = ch1_irq_enable_done;
-    if (ch1_irq_enable_write) begin
-      \$395  = \$256 ;
-    end
-    if (rst) begin
-      \$395  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$396  = ch1_irq_enable_error;
-    if (ch1_irq_enable_write) begin
-      \$396  = \$260 ;
-    end
-    if (rst) begin
-      \$396  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$397  = ch1_irq_enable_access_done;
-    if (ch1_irq_enable_write) begin
-      \$397  = \$264 ;
-    end
-    if (rst) begin
-      \$397  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$398  = ch1__cfg_ma_half_period;
-    if (ch1_cfg_ma_write) begin
-      \$398  = \$268 ;
-    end
-    if (rst) begin
-      \$398  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$399  = ch1__cfg_delay_limit;
-    if (ch1_cfg_ma_write) begin
-      \$399  = \$272 ;
-    end
-    if (rst) begin
-      \$399  = 12'h000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$400  = ch1__cfg_request_period;
-    if (ch1_cfg_period_write) begin
-      \$400  = \$276 ;
-    end
-    if (rst) begin
-      \$400  = 24'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$401  = ch1__cfg_break_time;
-    if (ch1_cfg_break_write) begin
-      \$401  = \$280 ;
-    end
-    if (rst) begin
-      \$401  = 24'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$402  = ch1__cfg_ack_limit;
-    if (ch1_cfg_ack_write) begin
-      \$402  = \$284 ;
-    end
-    if (rst) begin
-      \$402  = 24'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$403  = ch1__cfg_timeout_limit;
-    if (ch1_cfg_timeout_write) begin
-      \$403  = \$288 ;
-    end
-    if (rst) begin
-      \$403  = 24'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$404  = ch1__cfg_w0_data_bits;
-    if (ch1_cfg_words_write) begin
-      \$404  = \$292 ;
-    end
-    if (rst) begin
-      \$404  = 6'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$405  = ch1__cfg_w0_nenw;
-    if (ch1_cfg_words_write) begin
-      \$405  = \$296 ;
-    end
-    if (rst) begin
-      \$405  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$406  = ch1__cfg_w0_lc;
-    if (ch1_cfg_words_write) begin
-      \$406  = \$300 ;
-    end
-    if (rst) begin
-      \$406  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$407  = ch1__cfg_w0_crc;
-    if (ch1_cfg_words_write) begin
-      \$407  = \$304 ;
-    end
-    if (rst) begin
-      \$407  = 2'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$408  = ch1__cfg_w1_data_bits;
-    if (ch1_cfg_words_write) begin
-      \$408  = \$308 ;
-    end
-    if (rst) begin
-      \$408  = 6'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$409  = ch1__cfg_w1_nenw;
-    if (ch1_cfg_words_write) begin
-      \$409  = \$312 ;
-    end
-    if (rst) begin
-      \$409  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$410  = ch1__cfg_w1_lc;
-    if (ch1_cfg_words_write) begin
-      \$410  = \$316 ;
-    end
-    if (rst) begin
-      \$410  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$411  = ch1__cfg_w1_crc;
-    if (ch1_cfg_words_write) begin
-      \$411  = \$320 ;
-    end
-    if (rst) begin
-      \$411  = 2'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$412  = ch1__cfg_w1_enable;
-    if (ch1_cfg_words_write) begin
-      \$412  = \$324 ;
-    end
-    if (rst) begin
-      \$412  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$413  = ch1__cfg_end_check;
-    if (ch1_cfg_checks_write) begin
-      \$413  = \$328 ;
-    end
-    if (rst) begin
-      \$413  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$414  = ch1__cfg_spw_check;
-    if (ch1_cfg_checks_write) begin
-      \$414  = \$332 ;
-    end
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$414  = \$161 ;
     if (rst) begin
       \$414  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$415  = ch1__cfg_spw_tolerance;
-    if (ch1_cfg_checks_write) begin
-      \$415  = \$336 ;
-    end
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$415  = \$163 ;
     if (rst) begin
-      \$415  = 8'h00;
+      \$415  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$416  = ch1_result_status_status_snapshot;
-    if (ch1_result_status_read) begin
-      \$416  = \port$3348$0 [3:0];
-    end
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$416  = \$165 ;
     if (rst) begin
-      \$416  = 4'h0;
+      \$416  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$417  = ch1_result_status_cds_snapshot;
-    if (ch1_result_status_read) begin
-      \$417  = \port$3348$0 [49];
-    end
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$417  = \$167 ;
     if (rst) begin
       \$417  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$418  = ch1_result_status_w0_ne_snapshot;
-    if (ch1_result_status_read) begin
-      \$418  = \port$3348$0 [105];
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$418  = ch0__periodic;
+    if (ch0_ctrl_write) begin
+      \$418  = \$171 ;
     end
     if (rst) begin
       \$418  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$419  = ch1_result_status_w0_nw_snapshot;
-    if (ch1_result_status_read) begin
-      \$419  = \port$3348$0 [106];
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$419  = ch0__trigger_enable;
+    if (ch0_ctrl_write) begin
+      \$419  = \$175 ;
     end
     if (rst) begin
       \$419  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$420  = ch1_result_status_w0_crc_ok_snapshot;
-    if (ch1_result_status_read) begin
-      \$420  = \port$3348$0 [107];
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$420  = ch0_irq_status_done;
+    if (ch0__done) begin
+      \$420  = 1'h1;
+    end else if (\$177 ) begin
+      \$420  = 1'h0;
     end
     if (rst) begin
       \$420  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$421  = ch1_result_status_w1_ne_snapshot;
-    if (ch1_result_status_read) begin
-      \$421  = \port$3348$0 [148];
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$421  = ch0_irq_status_error;
+    if (ch0__frame_error) begin
+      \$421  = 1'h1;
+    end else if (\$179 ) begin
+      \$421  = 1'h0;
     end
     if (rst) begin
       \$421  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$422  = ch1_result_status_w1_nw_snapshot;
-    if (ch1_result_status_read) begin
-      \$422  = \port$3348$0 [149];
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$422  = ch0_irq_status_access_done;
+    if (ch0__ca_done) begin
+      \$422  = 1'h1;
+    end else if (\$181 ) begin
+      \$422  = 1'h0;
     end
     if (rst) begin
       \$422  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$423  = ch1_result_status_w1_crc_ok_snapshot;
-    if (ch1_result_status_read) begin
-      \$423  = \port$3348$0 [150];
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$423  = ch0_irq_enable_done;
+    if (ch0_irq_enable_write) begin
+      \$423  = \$185 ;
     end
     if (rst) begin
       \$423  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$424  = ch1_result_status_lc_repeat_snapshot;
-    if (ch1_result_status_read) begin
-      \$424  = \port$3348$0 [157];
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$424  = ch0_irq_enable_error;
+    if (ch0_irq_enable_write) begin
+      \$424  = \$189 ;
     end
     if (rst) begin
       \$424  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$425  = ch1_result_status_lc_skip_snapshot;
-    if (ch1_result_status_read) begin
-      \$425  = \port$3348$0 [158];
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$425  = ch0_irq_enable_access_done;
+    if (ch0_irq_enable_write) begin
+      \$425  = \$193 ;
     end
     if (rst) begin
       \$425  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$426  = ch1_result_status_lc_zero_snapshot;
-    if (ch1_result_status_read) begin
-      \$426  = \port$3348$0 [159];
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$426  = ch0__cfg_ma_half_period;
+    if (ch0_cfg_ma_write) begin
+      \$426  = \$197 ;
     end
     if (rst) begin
-      \$426  = 1'h0;
+      \$426  = 16'h0000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$427  = ch1_result_status_spw_mismatch_snapshot;
-    if (ch1_result_status_read) begin
-      \$427  = \port$3348$0 [160];
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$427  = ch0__cfg_delay_limit;
+    if (ch0_cfg_ma_write) begin
+      \$427  = \$201 ;
     end
     if (rst) begin
-      \$427  = 1'h0;
+      \$427  = 12'h000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$428  = ch1_result_status_lc_snapshot;
-    if (ch1_result_status_read) begin
-      \$428  = \port$3348$0 [156:151];
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$428  = ch0__cfg_request_period;
+    if (ch0_cfg_period_write) begin
+      \$428  = \$205 ;
     end
     if (rst) begin
-      \$428  = 6'h00;
+      \$428  = 24'h000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$429  = ch1_result_seq_seq_snapshot;
-    if (ch1_result_status_read) begin
-      \$429  = ch1__done_count;
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$429  = ch0__cfg_break_time;
+    if (ch0_cfg_break_write) begin
+      \$429  = \$209 ;
     end
     if (rst) begin
-      \$429  = 16'h0000;
+      \$429  = 24'h000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$430  = ch1_result_seq_line_delay_snapshot;
-    if (ch1_result_status_read) begin
-      \$430  = \port$3348$0 [48:36];
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$430  = ch0__cfg_ack_limit;
+    if (ch0_cfg_ack_write) begin
+      \$430  = \$213 ;
     end
     if (rst) begin
-      \$430  = 13'h0000;
+      \$430  = 24'h000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$431  = ch1_result_w0_lo_data_snapshot;
-    if (ch1_result_status_read) begin
-      \$431  = \port$3348$0 [81:50];
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$431  = ch0__cfg_timeout_limit;
+    if (ch0_cfg_timeout_write) begin
+      \$431  = \$217 ;
     end
     if (rst) begin
-      \$431  = 32'd0;
+      \$431  = 24'h000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$432  = ch1_result_w0_hi_data_snapshot;
-    if (ch1_result_status_read) begin
-      \$432  = \port$3348$0 [104:82];
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$432  = ch0__cfg_w0_data_bits;
+    if (ch0_cfg_words_write) begin
+      \$432  = \$221 ;
     end
     if (rst) begin
-      \$432  = 23'h000000;
+      \$432  = 6'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$433  = ch1_result_w1_lo_data_snapshot;
-    if (ch1_result_status_read) begin
-      \$433  = \port$3348$0 [139:108];
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$433  = ch0__cfg_w0_nenw;
+    if (ch0_cfg_words_write) begin
+      \$433  = \$225 ;
     end
     if (rst) begin
-      \$433  = 32'd0;
+      \$433  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$434  = ch1_result_w1_hi_data_snapshot;
-    if (ch1_result_status_read) begin
-      \$434  = \port$3348$0 [147:140];
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$434  = ch0__cfg_w0_lc;
+    if (ch0_cfg_words_write) begin
+      \$434  = \$229 ;
     end
     if (rst) begin
-      \$434  = 8'h00;
+      \$434  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$435  = ch1_result_timestamp_time_snapshot;
-    if (ch1_result_status_read) begin
-      \$435  = \port$3348$0 [35:4];
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$435  = ch0__cfg_w0_crc;
+    if (ch0_cfg_words_write) begin
+      \$435  = \$233 ;
     end
     if (rst) begin
-      \$435  = 32'd0;
+      \$435  = 2'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$436  = bus__r_data;
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$436  = ch0__cfg_w1_data_bits;
+    if (ch0_cfg_words_write) begin
+      \$436  = \$237 ;
+    end
+    if (rst) begin
+      \$436  = 6'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$437  = ch0__cfg_w1_nenw;
+    if (ch0_cfg_words_write) begin
+      \$437  = \$241 ;
+    end
+    if (rst) begin
+      \$437  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$438  = ch0__cfg_w1_lc;
+    if (ch0_cfg_words_write) begin
+      \$438  = \$245 ;
+    end
+    if (rst) begin
+      \$438  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$439  = ch0__cfg_w1_crc;
+    if (ch0_cfg_words_write) begin
+      \$439  = \$249 ;
+    end
+    if (rst) begin
+      \$439  = 2'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$440  = ch0__cfg_w1_enable;
+    if (ch0_cfg_words_write) begin
+      \$440  = \$253 ;
+    end
+    if (rst) begin
+      \$440  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$441  = ch0__cfg_end_check;
+    if (ch0_cfg_checks_write) begin
+      \$441  = \$257 ;
+    end
+    if (rst) begin
+      \$441  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$442  = ch0__cfg_spw_check;
+    if (ch0_cfg_checks_write) begin
+      \$442  = \$261 ;
+    end
+    if (rst) begin
+      \$442  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$443  = ch0__cfg_spw_tolerance;
+    if (ch0_cfg_checks_write) begin
+      \$443  = \$265 ;
+    end
+    if (rst) begin
+      \$443  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$444  = ch0__ca_slave_id;
+    if (ch0_ca_request_write) begin
+      \$444  = \$269 ;
+    end
+    if (rst) begin
+      \$444  = 3'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$445  = ch0__ca_address;
+    if (ch0_ca_request_write) begin
+      \$445  = \$273 ;
+    end
+    if (rst) begin
+      \$445  = 7'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$446  = ch0__ca_count;
+    if (ch0_ca_request_write) begin
+      \$446  = \$277 ;
+    end
+    if (rst) begin
+      \$446  = 7'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$447  = ch0__ca_write;
+    if (ch0_ca_request_write) begin
+      \$447  = \$281 ;
+    end
+    if (rst) begin
+      \$447  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$448  = \$283 ;
+    if (rst) begin
+      \$448  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$449  = \$285 ;
+    if (rst) begin
+      \$449  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$450  = ch0_result_status_status_snapshot;
+    if (ch0_result_status_read) begin
+      \$450  = \port$3907$0 [3:0];
+    end
+    if (rst) begin
+      \$450  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$451  = ch0_result_status_cds_snapshot;
+    if (ch0_result_status_read) begin
+      \$451  = \port$3907$0 [49];
+    end
+    if (rst) begin
+      \$451  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$452  = ch0_result_status_w0_ne_snapshot;
+    if (ch0_result_status_read) begin
+      \$452  = \port$3907$0 [105];
+    end
+    if (rst) begin
+      \$452  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$453  = ch0_result_status_w0_nw_snapshot;
+    if (ch0_result_status_read) begin
+      \$453  = \port$3907$0 [106];
+    end
+    if (rst) begin
+      \$453  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$454  = ch0_result_status_w0_crc_ok_snapshot;
+    if (ch0_result_status_read) begin
+      \$454  = \port$3907$0 [107];
+    end
+    if (rst) begin
+      \$454  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$455  = ch0_result_status_w1_ne_snapshot;
+    if (ch0_result_status_read) begin
+      \$455  = \port$3907$0 [148];
+    end
+    if (rst) begin
+      \$455  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$456  = ch0_result_status_w1_nw_snapshot;
+    if (ch0_result_status_read) begin
+      \$456  = \port$3907$0 [149];
+    end
+    if (rst) begin
+      \$456  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$457  = ch0_result_status_w1_crc_ok_snapshot;
+    if (ch0_result_status_read) begin
+      \$457  = \port$3907$0 [150];
+    end
+    if (rst) begin
+      \$457  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$458  = ch0_result_status_lc_repeat_snapshot;
+    if (ch0_result_status_read) begin
+      \$458  = \port$3907$0 [157];
+    end
+    if (rst) begin
+      \$458  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$459  = ch0_result_status_lc_skip_snapshot;
+    if (ch0_result_status_read) begin
+      \$459  = \port$3907$0 [158];
+    end
+    if (rst) begin
+      \$459  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$460  = ch0_result_status_lc_zero_snapshot;
+    if (ch0_result_status_read) begin
+      \$460  = \port$3907$0 [159];
+    end
+    if (rst) begin
+      \$460  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$461  = ch0_result_status_spw_mismatch_snapshot;
+    if (ch0_result_status_read) begin
+      \$461  = \port$3907$0 [160];
+    end
+    if (rst) begin
+      \$461  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$462  = ch0_result_status_lc_snapshot;
+    if (ch0_result_status_read) begin
+      \$462  = \port$3907$0 [156:151];
+    end
+    if (rst) begin
+      \$462  = 6'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$463  = ch0_result_seq_seq_snapshot;
+    if (ch0_result_status_read) begin
+      \$463  = ch0__done_count;
+    end
+    if (rst) begin
+      \$463  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$464  = ch0_result_seq_line_delay_snapshot;
+    if (ch0_result_status_read) begin
+      \$464  = \port$3907$0 [48:36];
+    end
+    if (rst) begin
+      \$464  = 13'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$465  = ch0_result_w0_lo_data_snapshot;
+    if (ch0_result_status_read) begin
+      \$465  = \port$3907$0 [81:50];
+    end
+    if (rst) begin
+      \$465  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$466  = ch0_result_w0_hi_data_snapshot;
+    if (ch0_result_status_read) begin
+      \$466  = \port$3907$0 [104:82];
+    end
+    if (rst) begin
+      \$466  = 23'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$467  = ch0_result_w1_lo_data_snapshot;
+    if (ch0_result_status_read) begin
+      \$467  = \port$3907$0 [139:108];
+    end
+    if (rst) begin
+      \$467  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$468  = ch0_result_w1_hi_data_snapshot;
+    if (ch0_result_status_read) begin
+      \$468  = \port$3907$0 [147:140];
+    end
+    if (rst) begin
+      \$468  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$469  = ch0_result_timestamp_time_snapshot;
+    if (ch0_result_status_read) begin
+      \$469  = \port$3907$0 [35:4];
+    end
+    if (rst) begin
+      \$469  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$470  = \$287 ;
+    if (rst) begin
+      \$470  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$471  = \$289 ;
+    if (rst) begin
+      \$471  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$472  = \$291 ;
+    if (rst) begin
+      \$472  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$473  = ch1__periodic;
+    if (ch1_ctrl_write) begin
+      \$473  = \$295 ;
+    end
+    if (rst) begin
+      \$473  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$474  = ch1__trigger_enable;
+    if (ch1_ctrl_write) begin
+      \$474  = \$299 ;
+    end
+    if (rst) begin
+      \$474  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$475  = ch1_irq_status_done;
+    if (ch1__done) begin
+      \$475  = 1'h1;
+    end else if (\$301 ) begin
+      \$475  = 1'h0;
+    end
+    if (rst) begin
+      \$475  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$476  = ch1_irq_status_error;
+    if (ch1__frame_error) begin
+      \$476  = 1'h1;
+    end else if (\$303 ) begin
+      \$476  = 1'h0;
+    end
+    if (rst) begin
+      \$476  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$477  = ch1_irq_status_access_done;
+    if (ch1__ca_done) begin
+      \$477  = 1'h1;
+    end else if (\$305 ) begin
+      \$477  = 1'h0;
+    end
+    if (rst) begin
+      \$477  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$478  = ch1_irq_enable_done;
+    if (ch1_irq_enable_write) begin
+      \$478  = \$309 ;
+    end
+    if (rst) begin
+      \$478  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$479  = ch1_irq_enable_error;
+    if (ch1_irq_enable_write) begin
+      \$479  = \$313 ;
+    end
+    if (rst) begin
+      \$479  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$480  = ch1_irq_enable_access_done;
+    if (ch1_irq_enable_write) begin
+      \$480  = \$317 ;
+    end
+    if (rst) begin
+      \$480  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$481  = ch1__cfg_ma_half_period;
+    if (ch1_cfg_ma_write) begin
+      \$481  = \$321 ;
+    end
+    if (rst) begin
+      \$481  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$482  = ch1__cfg_delay_limit;
+    if (ch1_cfg_ma_write) begin
+      \$482  = \$325 ;
+    end
+    if (rst) begin
+      \$482  = 12'h000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$483  = ch1__cfg_request_period;
+    if (ch1_cfg_period_write) begin
+      \$483  = \$329 ;
+    end
+    if (rst) begin
+      \$483  = 24'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$484  = ch1__cfg_break_time;
+    if (ch1_cfg_break_write) begin
+      \$484  = \$333 ;
+    end
+    if (rst) begin
+      \$484  = 24'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$485  = ch1__cfg_ack_limit;
+    if (ch1_cfg_ack_write) begin
+      \$485  = \$337 ;
+    end
+    if (rst) begin
+      \$485  = 24'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$486  = ch1__cfg_timeout_limit;
+    if (ch1_cfg_timeout_write) begin
+      \$486  = \$341 ;
+    end
+    if (rst) begin
+      \$486  = 24'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$487  = ch1__cfg_w0_data_bits;
+    if (ch1_cfg_words_write) begin
+      \$487  = \$345 ;
+    end
+    if (rst) begin
+      \$487  = 6'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$488  = ch1__cfg_w0_nenw;
+    if (ch1_cfg_words_write) begin
+      \$488  = \$349 ;
+    end
+    if (rst) begin
+      \$488  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$489  = ch1__cfg_w0_lc;
+    if (ch1_cfg_words_write) begin
+      \$489  = \$353 ;
+    end
+    if (rst) begin
+      \$489  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$490  = ch1__cfg_w0_crc;
+    if (ch1_cfg_words_write) begin
+      \$490  = \$357 ;
+    end
+    if (rst) begin
+      \$490  = 2'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$491  = ch1__cfg_w1_data_bits;
+    if (ch1_cfg_words_write) begin
+      \$491  = \$361 ;
+    end
+    if (rst) begin
+      \$491  = 6'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$492  = ch1__cfg_w1_nenw;
+    if (ch1_cfg_words_write) begin
+      \$492  = \$365 ;
+    end
+    if (rst) begin
+      \$492  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$493  = ch1__cfg_w1_lc;
+    if (ch1_cfg_words_write) begin
+      \$493  = \$369 ;
+    end
+    if (rst) begin
+      \$493  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$494  = ch1__cfg_w1_crc;
+    if (ch1_cfg_words_write) begin
+      \$494  = \$373 ;
+    end
+    if (rst) begin
+      \$494  = 2'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$495  = ch1__cfg_w1_enable;
+    if (ch1_cfg_words_write) begin
+      \$495  = \$377 ;
+    end
+    if (rst) begin
+      \$495  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$496  = ch1__cfg_end_check;
+    if (ch1_cfg_checks_write) begin
+      \$496  = \$381 ;
+    end
+    if (rst) begin
+      \$496  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$497  = ch1__cfg_spw_check;
+    if (ch1_cfg_checks_write) begin
+      \$497  = \$385 ;
+    end
+    if (rst) begin
+      \$497  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$498  = ch1__cfg_spw_tolerance;
+    if (ch1_cfg_checks_write) begin
+      \$498  = \$389 ;
+    end
+    if (rst) begin
+      \$498  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$499  = ch1__ca_slave_id;
+    if (ch1_ca_request_write) begin
+      \$499  = \$393 ;
+    end
+    if (rst) begin
+      \$499  = 3'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$500  = ch1__ca_address;
+    if (ch1_ca_request_write) begin
+      \$500  = \$397 ;
+    end
+    if (rst) begin
+      \$500  = 7'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$501  = ch1__ca_count;
+    if (ch1_ca_request_write) begin
+      \$501  = \$401 ;
+    end
+    if (rst) begin
+      \$501  = 7'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$502  = ch1__ca_write;
+    if (ch1_ca_request_write) begin
+      \$502  = \$405 ;
+    end
+    if (rst) begin
+      \$502  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$503  = \$407 ;
+    if (rst) begin
+      \$503  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$504  = \$409 ;
+    if (rst) begin
+      \$504  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$505  = ch1_result_status_status_snapshot;
+    if (ch1_result_status_read) begin
+      \$505  = \port$4342$0 [3:0];
+    end
+    if (rst) begin
+      \$505  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$506  = ch1_result_status_cds_snapshot;
+    if (ch1_result_status_read) begin
+      \$506  = \port$4342$0 [49];
+    end
+    if (rst) begin
+      \$506  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$507  = ch1_result_status_w0_ne_snapshot;
+    if (ch1_result_status_read) begin
+      \$507  = \port$4342$0 [105];
+    end
+    if (rst) begin
+      \$507  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$508  = ch1_result_status_w0_nw_snapshot;
+    if (ch1_result_status_read) begin
+      \$508  = \port$4342$0 [106];
+    end
+    if (rst) begin
+      \$508  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$509  = ch1_result_status_w0_crc_ok_snapshot;
+    if (ch1_result_status_read) begin
+      \$509  = \port$4342$0 [107];
+    end
+    if (rst) begin
+      \$509  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$510  = ch1_result_status_w1_ne_snapshot;
+    if (ch1_result_status_read) begin
+      \$510  = \port$4342$0 [148];
+    end
+    if (rst) begin
+      \$510  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$511  = ch1_result_status_w1_nw_snapshot;
+    if (ch1_result_status_read) begin
+      \$511  = \port$4342$0 [149];
+    end
+    if (rst) begin
+      \$511  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$512  = ch1_result_status_w1_crc_ok_snapshot;
+    if (ch1_result_status_read) begin
+      \$512  = \port$4342$0 [150];
+    end
+    if (rst) begin
+      \$512  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$513  = ch1_result_status_lc_repeat_snapshot;
+    if (ch1_result_status_read) begin
+      \$513  = \port$4342$0 [157];
+    end
+    if (rst) begin
+      \$513  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$514  = ch1_result_status_lc_skip_snapshot;
+    if (ch1_result_status_read) begin
+      \$514  = \port$4342$0 [158];
+    end
+    if (rst) begin
+      \$514  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$515  = ch1_result_status_lc_zero_snapshot;
+    if (ch1_result_status_read) begin
+      \$515  = \port$4342$0 [159];
+    end
+    if (rst) begin
+      \$515  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$516  = ch1_result_status_spw_mismatch_snapshot;
+    if (ch1_result_status_read) begin
+      \$516  = \port$4342$0 [160];
+    end
+    if (rst) begin
+      \$516  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$517  = ch1_result_status_lc_snapshot;
+    if (ch1_result_status_read) begin
+      \$517  = \port$4342$0 [156:151];
+    end
+    if (rst) begin
+      \$517  = 6'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$518  = ch1_result_seq_seq_snapshot;
+    if (ch1_result_status_read) begin
+      \$518  = ch1__done_count;
+    end
+    if (rst) begin
+      \$518  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$519  = ch1_result_seq_line_delay_snapshot;
+    if (ch1_result_status_read) begin
+      \$519  = \port$4342$0 [48:36];
+    end
+    if (rst) begin
+      \$519  = 13'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$520  = ch1_result_w0_lo_data_snapshot;
+    if (ch1_result_status_read) begin
+      \$520  = \port$4342$0 [81:50];
+    end
+    if (rst) begin
+      \$520  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$521  = ch1_result_w0_hi_data_snapshot;
+    if (ch1_result_status_read) begin
+      \$521  = \port$4342$0 [104:82];
+    end
+    if (rst) begin
+      \$521  = 23'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$522  = ch1_result_w1_lo_data_snapshot;
+    if (ch1_result_status_read) begin
+      \$522  = \port$4342$0 [139:108];
+    end
+    if (rst) begin
+      \$522  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$523  = ch1_result_w1_hi_data_snapshot;
+    if (ch1_result_status_read) begin
+      \$523  = \port$4342$0 [147:140];
+    end
+    if (rst) begin
+      \$523  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$524  = ch1_result_timestamp_time_snapshot;
+    if (ch1_result_status_read) begin
+      \$524  = \port$4342$0 [35:4];
+    end
+    if (rst) begin
+      \$524  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$525  = word;
     if (bus__r_en) begin
       (* full_case = 32'd1 *)
       casez (bus__w_addr)
         11'h000:
-            \$436  = 32'd1114198867;
+            \$525  = 32'd1114198867;
         11'h001:
-            \$436  = 32'd65536;
+            \$525  = 32'd65537;
         11'h002:
-            \$436  = 32'd2;
+            \$525  = 32'd2;
         11'h003:
-            \$436  = 32'd0;
+            \$525  = 32'd0;
         11'h004:
-            \$436  = { 30'h00000000, ch1_irq, ch0_irq };
+            \$525  = { 30'h00000000, ch1_irq, ch0_irq };
         11'h080:
-            \$436  = { 22'h000000, ch0__trigger_enable, ch0__periodic, 8'h00 };
+            \$525  = { 22'h000000, ch0__trigger_enable, ch0__periodic, 8'h00 };
         11'h081:
-            \$436  = { 30'h00000000, ch0__config_error, ch0__busy };
+            \$525  = { 30'h00000000, ch0__config_error, ch0__busy };
         11'h082:
-            \$436  = 32'd51914807;
+            \$525  = 32'd119023671;
         11'h084:
-            \$436  = { 29'h00000000, ch0_irq_status_access_done, ch0_irq_status_error, ch0_irq_status_done };
+            \$525  = { 29'h00000000, ch0_irq_status_access_done, ch0_irq_status_error, ch0_irq_status_done };
         11'h085:
-            \$436  = { 29'h00000000, ch0_irq_enable_access_done, ch0_irq_enable_error, ch0_irq_enable_done };
+            \$525  = { 29'h00000000, ch0_irq_enable_access_done, ch0_irq_enable_error, ch0_irq_enable_done };
         11'h088:
-            \$436  = { 4'h0, ch0__cfg_delay_limit, ch0__cfg_ma_half_period };
+            \$525  = { 4'h0, ch0__cfg_delay_limit, ch0__cfg_ma_half_period };
         11'h089:
-            \$436  = { 8'h00, ch0__cfg_request_period };
+            \$525  = { 8'h00, ch0__cfg_request_period };
         11'h08a:
-            \$436  = { 8'h00, ch0__cfg_break_time };
+            \$525  = { 8'h00, ch0__cfg_break_time };
         11'h08b:
-            \$436  = { 8'h00, ch0__cfg_ack_limit };
+            \$525  = { 8'h00, ch0__cfg_ack_limit };
         11'h08c:
-            \$436  = { 8'h00, ch0__cfg_timeout_limit };
+            \$525  = { 8'h00, ch0__cfg_timeout_limit };
         11'h08d:
-            \$436  = { ch0__cfg_w1_enable, 5'h00, ch0__cfg_w1_crc, ch0__cfg_w1_lc, ch0__cfg_w1_nenw, ch0__cfg_w1_data_bits, 6'h00, ch0__cfg_w0_crc, ch0__cfg_w0_lc, ch0__cfg_w0_nenw, ch0__cfg_w0_data_bits };
+            \$525  = { ch0__cfg_w1_enable, 5'h00, ch0__cfg_w1_crc, ch0__cfg_w1_lc, ch0__cfg_w1_nenw, ch0__cfg_w1_data_bits, 6'h00, ch0__cfg_w0_crc, ch0__cfg_w0_lc, ch0__cfg_w0_nenw, ch0__cfg_w0_data_bits };
         11'h08e:
-            \$436  = { 16'h0000, ch0__cfg_spw_tolerance, 6'h00, ch0__cfg_spw_check, ch0__cfg_end_check };
+            \$525  = { 16'h0000, ch0__cfg_spw_tolerance, 6'h00, ch0__cfg_spw_check, ch0__cfg_end_check };
         11'h090:
-            \$436  = { 2'h0, \port$3001$0 [156:151], 4'h0, \port$3001$0 [160:157], 1'h0, \port$3001$0 [150:148], 1'h0, \port$3001$0 [107:105], 3'h0, \port$3001$0 [49], \port$3001$0 [3:0] };
+            \$525  = { 2'h0, \port$3907$0 [156:151], 4'h0, \port$3907$0 [160:157], 1'h0, \port$3907$0 [150:148], 1'h0, \port$3907$0 [107:105], 3'h0, \port$3907$0 [49], \port$3907$0 [3:0] };
         11'h091:
-            \$436  = { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot };
+            \$525  = { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot };
         11'h092:
-            \$436  = ch0_result_w0_lo_data_snapshot;
+            \$525  = ch0_result_w0_lo_data_snapshot;
         11'h093:
-            \$436  = { 9'h000, ch0_result_w0_hi_data_snapshot };
+            \$525  = { 9'h000, ch0_result_w0_hi_data_snapshot };
         11'h094:
-            \$436  = ch0_result_w1_lo_data_snapshot;
+            \$525  = ch0_result_w1_lo_data_snapshot;
         11'h095:
-            \$436  = { 24'h000000, ch0_result_w1_hi_data_snapshot };
+            \$525  = { 24'h000000, ch0_result_w1_hi_data_snapshot };
         11'h096:
-            \$436  = ch0_result_timestamp_time_snapshot;
+            \$525  = ch0_result_timestamp_time_snapshot;
         11'h098:
-            \$436  = \port$3008$0 [31:0];
+            \$525  = \port$3914$0 [31:0];
         11'h099:
-            \$436  = \port$3008$0 [63:32];
+            \$525  = \port$3914$0 [63:32];
         11'h09a:
-            \$436  = \port$3008$0 [95:64];
+            \$525  = \port$3914$0 [95:64];
         11'h09b:
-            \$436  = \port$3008$0 [127:96];
+            \$525  = \port$3914$0 [127:96];
         11'h09c:
-            \$436  = \port$3008$0 [159:128];
+            \$525  = \port$3914$0 [159:128];
         11'h09d:
-            \$436  = \port$3008$0 [191:160];
+            \$525  = \port$3914$0 [191:160];
         11'h09e:
-            \$436  = { 16'h0000, \port$3008$0 [207:192] };
+            \$525  = { 16'h0000, \port$3914$0 [207:192] };
+        11'h0c0:
+            \$525  = { 7'h00, ch0__ca_write, 1'h0, ch0__ca_count, 1'h0, ch0__ca_address, 5'h00, ch0__ca_slave_id };
+        11'h0c1:
+            \$525  = 32'd0;
+        11'h0c2:
+            \$525  = { 17'h00000, \port$4042$0 [9:3], 1'h0, \port$4042$0 [2:0], 3'h0, ch0__ca_busy };
+        11'h0c3:
+            \$525  = \port$3914$0 [239:208];
+        11'h0c4:
+            \$525  = \port$3914$0 [271:240];
+        11'h0c5:
+            \$525  = { 16'h0000, \port$3914$0 [287:272] };
         11'h100:
-            \$436  = { 22'h000000, ch1__trigger_enable, ch1__periodic, 8'h00 };
+            \$525  = { 22'h000000, ch1__trigger_enable, ch1__periodic, 8'h00 };
         11'h101:
-            \$436  = { 30'h00000000, ch1__config_error, ch1__busy };
+            \$525  = { 30'h00000000, ch1__config_error, ch1__busy };
         11'h102:
-            \$436  = 32'd51914807;
+            \$525  = 32'd119023671;
         11'h104:
-            \$436  = { 29'h00000000, ch1_irq_status_access_done, ch1_irq_status_error, ch1_irq_status_done };
+            \$525  = { 29'h00000000, ch1_irq_status_access_done, ch1_irq_status_error, ch1_irq_status_done };
         11'h105:
-            \$436  = { 29'h00000000, ch1_irq_enable_access_done, ch1_irq_enable_error, ch1_irq_enable_done };
+            \$525  = { 29'h00000000, ch1_irq_enable_access_done, ch1_irq_enable_error, ch1_irq_enable_done };
         11'h108:
-            \$436  = { 4'h0, ch1__cfg_delay_limit, ch1__cfg_ma_half_period };
+            \$525  = { 4'h0, ch1__cfg_delay_limit, ch1__cfg_ma_half_period };
         11'h109:
-            \$436  = { 8'h00, ch1__cfg_request_period };
+            \$525  = { 8'h00, ch1__cfg_request_period };
         11'h10a:
-            \$436  = { 8'h00, ch1__cfg_break_time };
+            \$525  = { 8'h00, ch1__cfg_break_time };
         11'h10b:
-            \$436  = { 8'h00, ch1__cfg_ack_limit };
+            \$525  = { 8'h00, ch1__cfg_ack_limit };
         11'h10c:
-            \$436  = { 8'h00, ch1__cfg_timeout_limit };
+            \$525  = { 8'h00, ch1__cfg_timeout_limit };
         11'h10d:
-            \$436  = { ch1__cfg_w1_enable, 5'h00, ch1__cfg_w1_crc, ch1__cfg_w1_lc, ch1__cfg_w1_nenw, ch1__cfg_w1_data_bits, 6'h00, ch1__cfg_w0_crc, ch1__cfg_w0_lc, ch1__cfg_w0_nenw, ch1__cfg_w0_data_bits };
+            \$525  = { ch1__cfg_w1_enable, 5'h00, ch1__cfg_w1_crc, ch1__cfg_w1_lc, ch1__cfg_w1_nenw, ch1__cfg_w1_data_bits, 6'h00, ch1__cfg_w0_crc, ch1__cfg_w0_lc, ch1__cfg_w0_nenw, ch1__cfg_w0_data_bits };
         11'h10e:
-            \$436  = { 16'h0000, ch1__cfg_spw_tolerance, 6'h00, ch1__cfg_spw_check, ch1__cfg_end_check };
+            \$525  = { 16'h0000, ch1__cfg_spw_tolerance, 6'h00, ch1__cfg_spw_check, ch1__cfg_end_check };
         11'h110:
-            \$436  = { 2'h0, \port$3348$0 [156:151], 4'h0, \port$3348$0 [160:157], 1'h0, \port$3348$0 [150:148], 1'h0, \port$3348$0 [107:105], 3'h0, \port$3348$0 [49], \port$3348$0 [3:0] };
+            \$525  = { 2'h0, \port$4342$0 [156:151], 4'h0, \port$4342$0 [160:157], 1'h0, \port$4342$0 [150:148], 1'h0, \port$4342$0 [107:105], 3'h0, \port$4342$0 [49], \port$4342$0 [3:0] };
         11'h111:
-            \$436  = { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot };
+            \$525  = { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot };
         11'h112:
-            \$436  = ch1_result_w0_lo_data_snapshot;
+            \$525  = ch1_result_w0_lo_data_snapshot;
         11'h113:
-            \$436  = { 9'h000, ch1_result_w0_hi_data_snapshot };
+            \$525  = { 9'h000, ch1_result_w0_hi_data_snapshot };
         11'h114:
-            \$436  = ch1_result_w1_lo_data_snapshot;
+            \$525  = ch1_result_w1_lo_data_snapshot;
         11'h115:
-            \$436  = { 24'h000000, ch1_result_w1_hi_data_snapshot };
+            \$525  = { 24'h000000, ch1_result_w1_hi_data_snapshot };
         11'h116:
-            \$436  = ch1_result_timestamp_time_snapshot;
+            \$525  = ch1_result_timestamp_time_snapshot;
         11'h118:
-            \$436  = \port$3355$0 [31:0];
+            \$525  = \port$4349$0 [31:0];
         11'h119:
-            \$436  = \port$3355$0 [63:32];
+            \$525  = \port$4349$0 [63:32];
         11'h11a:
-            \$436  = \port$3355$0 [95:64];
+            \$525  = \port$4349$0 [95:64];
         11'h11b:
-            \$436  = \port$3355$0 [127:96];
+            \$525  = \port$4349$0 [127:96];
         11'h11c:
-            \$436  = \port$3355$0 [159:128];
+            \$525  = \port$4349$0 [159:128];
         11'h11d:
-            \$436  = \port$3355$0 [191:160];
+            \$525  = \port$4349$0 [191:160];
         11'h11e:
-            \$436  = { 16'h0000, \port$3355$0 [207:192] };
+            \$525  = { 16'h0000, \port$4349$0 [207:192] };
+        11'h140:
+            \$525  = { 7'h00, ch1__ca_write, 1'h0, ch1__ca_count, 1'h0, ch1__ca_address, 5'h00, ch1__ca_slave_id };
+        11'h141:
+            \$525  = 32'd0;
+        11'h142:
+            \$525  = { 17'h00000, \port$4477$0 [9:3], 1'h0, \port$4477$0 [2:0], 3'h0, ch1__ca_busy };
+        11'h143:
+            \$525  = \port$4349$0 [239:208];
+        11'h144:
+            \$525  = \port$4349$0 [271:240];
+        11'h145:
+            \$525  = { 16'h0000, \port$4349$0 [287:272] };
         default:
-            \$436  = 32'd0;
+            \$525  = 32'd0;
       endcase
     end
     if (rst) begin
-      \$436  = 32'd0;
+      \$525  = 32'd0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$337  = \$128 ;
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$526  = window0_read;
+    if (bus__r_en) begin
+      \$526  = \$411 ;
+    end
     if (rst) begin
-      \$337  = 1'h0;
+      \$526  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$338  = \$130 ;
-    if (rst) begin
-      \$338  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$339  = \$132 ;
-    if (rst) begin
-      \$339  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$340  = \$134 ;
-    if (rst) begin
-      \$340  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$341  = ch0__periodic;
-    if (ch0_ctrl_write) begin
-      \$341  = \$138 ;
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$527  = window1_read;
+    if (bus__r_en) begin
+      \$527  = \$413 ;
     end
     if (rst) begin
-      \$341  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$342  = ch0__trigger_enable;
-    if (ch0_ctrl_write) begin
-      \$342  = \$142 ;
-    end
-    if (rst) begin
-      \$342  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$343  = ch0_irq_status_done;
-    if (ch0__done) begin
-      \$343  = 1'h1;
-    end else if (\$144 ) begin
-      \$343  = 1'h0;
-    end
-    if (rst) begin
-      \$343  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$344  = ch0_irq_status_error;
-    if (ch0__frame_error) begin
-      \$344  = 1'h1;
-    end else if (\$146 ) begin
-      \$344  = 1'h0;
-    end
-    if (rst) begin
-      \$344  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$345  = ch0_irq_status_access_done;
-    casez ({ \$148 , 1'h0 })
-      2'b1?:
-          \$345  = 1'h0;
-    endcase
-    if (rst) begin
-      \$345  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$346  = ch0_irq_enable_done;
-    if (ch0_irq_enable_write) begin
-      \$346  = \$152 ;
-    end
-    if (rst) begin
-      \$346  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$347  = ch0_irq_enable_error;
-    if (ch0_irq_enable_write) begin
-      \$347  = \$156 ;
-    end
-    if (rst) begin
-      \$347  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$348  = ch0_irq_enable_access_done;
-    if (ch0_irq_enable_write) begin
-      \$348  = \$160 ;
-    end
-    if (rst) begin
-      \$348  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$349  = ch0__cfg_ma_half_period;
-    if (ch0_cfg_ma_write) begin
-      \$349  = \$164 ;
-    end
-    if (rst) begin
-      \$349  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$350  = ch0__cfg_delay_limit;
-    if (ch0_cfg_ma_write) begin
-      \$350  = \$168 ;
-    end
-    if (rst) begin
-      \$350  = 12'h000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$351  = ch0__cfg_request_period;
-    if (ch0_cfg_period_write) begin
-      \$351  = \$172 ;
-    end
-    if (rst) begin
-      \$351  = 24'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$352  = ch0__cfg_break_time;
-    if (ch0_cfg_break_write) begin
-      \$352  = \$176 ;
-    end
-    if (rst) begin
-      \$352  = 24'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$353  = ch0__cfg_ack_limit;
-    if (ch0_cfg_ack_write) begin
-      \$353  = \$180 ;
-    end
-    if (rst) begin
-      \$353  = 24'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$354  = ch0__cfg_timeout_limit;
-    if (ch0_cfg_timeout_write) begin
-      \$354  = \$184 ;
-    end
-    if (rst) begin
-      \$354  = 24'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$355  = ch0__cfg_w0_data_bits;
-    if (ch0_cfg_words_write) begin
-      \$355  = \$188 ;
-    end
-    if (rst) begin
-      \$355  = 6'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$356  = ch0__cfg_w0_nenw;
-    if (ch0_cfg_words_write) begin
-      \$356  = \$192 ;
-    end
-    if (rst) begin
-      \$356  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$357  = ch0__cfg_w0_lc;
-    if (ch0_cfg_words_write) begin
-      \$357  = \$196 ;
-    end
-    if (rst) begin
-      \$357  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$358  = ch0__cfg_w0_crc;
-    if (ch0_cfg_words_write) begin
-      \$358  = \$200 ;
-    end
-    if (rst) begin
-      \$358  = 2'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$359  = ch0__cfg_w1_data_bits;
-    if (ch0_cfg_words_write) begin
-      \$359  = \$204 ;
-    end
-    if (rst) begin
-      \$359  = 6'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$360  = ch0__cfg_w1_nenw;
-    if (ch0_cfg_words_write) begin
-      \$360  = \$208 ;
-    end
-    if (rst) begin
-      \$360  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$361  = ch0__cfg_w1_lc;
-    if (ch0_cfg_words_write) begin
-      \$361  = \$212 ;
-    end
-    if (rst) begin
-      \$361  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$362  = ch0__cfg_w1_crc;
-    if (ch0_cfg_words_write) begin
-      \$362  = \$216 ;
-    end
-    if (rst) begin
-      \$362  = 2'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$363  = ch0__cfg_w1_enable;
-    if (ch0_cfg_words_write) begin
-      \$363  = \$220 ;
-    end
-    if (rst) begin
-      \$363  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$364  = ch0__cfg_end_check;
-    if (ch0_cfg_checks_write) begin
-      \$364  = \$224 ;
-    end
-    if (rst) begin
-      \$364  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$365  = ch0__cfg_spw_check;
-    if (ch0_cfg_checks_write) begin
-      \$365  = \$228 ;
-    end
-    if (rst) begin
-      \$365  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$366  = ch0__cfg_spw_tolerance;
-    if (ch0_cfg_checks_write) begin
-      \$366  = \$232 ;
-    end
-    if (rst) begin
-      \$366  = 8'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$367  = ch0_result_status_status_snapshot;
-    if (ch0_result_status_read) begin
-      \$367  = \port$3001$0 [3:0];
-    end
-    if (rst) begin
-      \$367  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$368  = ch0_result_status_cds_snapshot;
-    if (ch0_result_status_read) begin
-      \$368  = \port$3001$0 [49];
-    end
-    if (rst) begin
-      \$368  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$369  = ch0_result_status_w0_ne_snapshot;
-    if (ch0_result_status_read) begin
-      \$369  = \port$3001$0 [105];
-    end
-    if (rst) begin
-      \$369  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$370  = ch0_result_status_w0_nw_snapshot;
-    if (ch0_result_status_read) begin
-      \$370  = \port$3001$0 [106];
-    end
-    if (rst) begin
-      \$370  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$371  = ch0_result_status_w0_crc_ok_snapshot;
-    if (ch0_result_status_read) begin
-      \$371  = \port$3001$0 [107];
-    end
-    if (rst) begin
-      \$371  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$372  = ch0_result_status_w1_ne_snapshot;
-    if (ch0_result_status_read) begin
-      \$372  = \port$3001$0 [148];
-    end
-    if (rst) begin
-      \$372  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$373  = ch0_result_status_w1_nw_snapshot;
-    if (ch0_result_status_read) begin
-      \$373  = \port$3001$0 [149];
-    end
-    if (rst) begin
-      \$373  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$374  = ch0_result_status_w1_crc_ok_snapshot;
-    if (ch0_result_status_read) begin
-      \$374  = \port$3001$0 [150];
-    end
-    if (rst) begin
-      \$374  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$375  = ch0_result_status_lc_repeat_snapshot;
-    if (ch0_result_status_read) begin
-      \$375  = \port$3001$0 [157];
-    end
-    if (rst) begin
-      \$375  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$376  = ch0_result_status_lc_skip_snapshot;
-    if (ch0_result_status_read) begin
-      \$376  = \port$3001$0 [158];
-    end
-    if (rst) begin
-      \$376  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$377  = ch0_result_status_lc_zero_snapshot;
-    if (ch0_result_status_read) begin
-      \$377  = \port$3001$0 [159];
-    end
-    if (rst) begin
-      \$377  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$378  = ch0_result_status_spw_mismatch_snapshot;
-    if (ch0_result_status_read) begin
-      \$378  = \port$3001$0 [160];
-    end
-    if (rst) begin
-      \$378  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$379  = ch0_result_status_lc_snapshot;
-    if (ch0_result_status_read) begin
-      \$379  = \port$3001$0 [156:151];
-    end
-    if (rst) begin
-      \$379  = 6'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$380  = ch0_result_seq_seq_snapshot;
-    if (ch0_result_status_read) begin
-      \$380  = ch0__done_count;
-    end
-    if (rst) begin
-      \$380  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$381  = ch0_result_seq_line_delay_snapshot;
-    if (ch0_result_status_read) begin
-      \$381  = \port$3001$0 [48:36];
-    end
-    if (rst) begin
-      \$381  = 13'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$382  = ch0_result_w0_lo_data_snapshot;
-    if (ch0_result_status_read) begin
-      \$382  = \port$3001$0 [81:50];
-    end
-    if (rst) begin
-      \$382  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$383  = ch0_result_w0_hi_data_snapshot;
-    if (ch0_result_status_read) begin
-      \$383  = \port$3001$0 [104:82];
-    end
-    if (rst) begin
-      \$383  = 23'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$384  = ch0_result_w1_lo_data_snapshot;
-    if (ch0_result_status_read) begin
-      \$384  = \port$3001$0 [139:108];
-    end
-    if (rst) begin
-      \$384  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$385  = ch0_result_w1_hi_data_snapshot;
-    if (ch0_result_status_read) begin
-      \$385  = \port$3001$0 [147:140];
-    end
-    if (rst) begin
-      \$385  = 8'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$386  = ch0_result_timestamp_time_snapshot;
-    if (ch0_result_status_read) begin
-      \$386  = \port$3001$0 [35:4];
-    end
-    if (rst) begin
-      \$386  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$387  = \$234 ;
-    if (rst) begin
-      \$387  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$388  = \$236 ;
-    if (rst) begin
-      \$388  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$389  = \$238 ;
-    if (rst) begin
-      \$389  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$390  = ch1__periodic;
-    if (ch1_ctrl_write) begin
-      \$390  = \$242 ;
-    end
-    if (rst) begin
-      \$390  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$391  = ch1__trigger_enable;
-    if (ch1_ctrl_write) begin
-      \$391  = \$246 ;
-    end
-    if (rst) begin
-      \$391  = 1'h0;
+      \$527  = 1'h0;
     end
   end
   assign bus__r_addr = bus__w_addr;
@@ -3461,6 +4170,15 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign ch0_cfg_checks_end_check = ch0__cfg_end_check;
   assign ch0_cfg_checks_spw_check = ch0__cfg_spw_check;
   assign ch0_cfg_checks_spw_tolerance = ch0__cfg_spw_tolerance;
+  assign ch0_ca_request_slave_id = ch0__ca_slave_id;
+  assign ch0_ca_request_address = ch0__ca_address;
+  assign ch0_ca_request_count = ch0__ca_count;
+  assign \ch0_ca_request_write$124  = ch0__ca_write;
+  assign ch0_ca_ctrl_start = ch0__ca_start;
+  assign ch0_ca_ctrl_abort = ch0__ca_abort;
+  assign ch0__ca_wbuf_addr = bus__w_addr[3:0];
+  assign bus__w_data = ch0__ca_wbuf_data;
+  assign ch0__ca_rbuf_addr = bus__w_addr[3:0];
   assign ch1_ctrl_start = ch1__start;
   assign ch1_ctrl_abort = ch1__abort_cycle;
   assign ch1_ctrl_clear_counters = ch1__clear_counters;
@@ -3484,41 +4202,50 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign ch1_cfg_checks_end_check = ch1__cfg_end_check;
   assign ch1_cfg_checks_spw_check = ch1__cfg_spw_check;
   assign ch1_cfg_checks_spw_tolerance = ch1__cfg_spw_tolerance;
+  assign ch1_ca_request_slave_id = ch1__ca_slave_id;
+  assign ch1_ca_request_address = ch1__ca_address;
+  assign ch1_ca_request_count = ch1__ca_count;
+  assign \ch1_ca_request_write$260  = ch1__ca_write;
+  assign ch1_ca_ctrl_start = ch1__ca_start;
+  assign ch1_ca_ctrl_abort = ch1__ca_abort;
+  assign ch1__ca_wbuf_addr = bus__w_addr[3:0];
+  assign ch1__ca_wbuf_data = ch0__ca_wbuf_data;
+  assign ch1__ca_rbuf_addr = bus__w_addr[3:0];
   assign irq = { ch1_irq, ch0_irq };
-  assign ch0__status = \port$3001$0 [3:0];
-  assign ch0__cds = \port$3001$0 [49];
-  assign ch0__word0_ne = \port$3001$0 [105];
-  assign ch0__word0_nw = \port$3001$0 [106];
-  assign ch0__word0_crc_ok = \port$3001$0 [107];
-  assign ch0__word1_ne = \port$3001$0 [148];
-  assign ch0__word1_nw = \port$3001$0 [149];
-  assign ch0__word1_crc_ok = \port$3001$0 [150];
-  assign ch0__lc_repeat = \port$3001$0 [157];
-  assign ch0__lc_skip = \port$3001$0 [158];
-  assign ch0__lc_zero = \port$3001$0 [159];
-  assign ch0__spw_mismatch = \port$3001$0 [160];
-  assign ch0__lc = \port$3001$0 [156:151];
-  assign ch0__line_delay = \port$3001$0 [48:36];
-  assign ch0__word0_position = \port$3001$0 [104:50];
-  assign ch0__word1_position = \port$3001$0 [147:108];
-  assign ch0__timestamp = \port$3001$0 [35:4];
-  assign ch1__status = \port$3348$0 [3:0];
-  assign ch1__cds = \port$3348$0 [49];
-  assign ch1__word0_ne = \port$3348$0 [105];
-  assign ch1__word0_nw = \port$3348$0 [106];
-  assign ch1__word0_crc_ok = \port$3348$0 [107];
-  assign ch1__word1_ne = \port$3348$0 [148];
-  assign ch1__word1_nw = \port$3348$0 [149];
-  assign ch1__word1_crc_ok = \port$3348$0 [150];
-  assign ch1__lc_repeat = \port$3348$0 [157];
-  assign ch1__lc_skip = \port$3348$0 [158];
-  assign ch1__lc_zero = \port$3348$0 [159];
-  assign ch1__spw_mismatch = \port$3348$0 [160];
-  assign ch1__lc = \port$3348$0 [156:151];
-  assign ch1__line_delay = \port$3348$0 [48:36];
-  assign ch1__word0_position = \port$3348$0 [104:50];
-  assign ch1__word1_position = \port$3348$0 [147:108];
-  assign ch1__timestamp = \port$3348$0 [35:4];
+  assign ch0__status = \port$3907$0 [3:0];
+  assign ch0__cds = \port$3907$0 [49];
+  assign ch0__word0_ne = \port$3907$0 [105];
+  assign ch0__word0_nw = \port$3907$0 [106];
+  assign ch0__word0_crc_ok = \port$3907$0 [107];
+  assign ch0__word1_ne = \port$3907$0 [148];
+  assign ch0__word1_nw = \port$3907$0 [149];
+  assign ch0__word1_crc_ok = \port$3907$0 [150];
+  assign ch0__lc_repeat = \port$3907$0 [157];
+  assign ch0__lc_skip = \port$3907$0 [158];
+  assign ch0__lc_zero = \port$3907$0 [159];
+  assign ch0__spw_mismatch = \port$3907$0 [160];
+  assign ch0__lc = \port$3907$0 [156:151];
+  assign ch0__line_delay = \port$3907$0 [48:36];
+  assign ch0__word0_position = \port$3907$0 [104:50];
+  assign ch0__word1_position = \port$3907$0 [147:108];
+  assign ch0__timestamp = \port$3907$0 [35:4];
+  assign ch1__status = \port$4342$0 [3:0];
+  assign ch1__cds = \port$4342$0 [49];
+  assign ch1__word0_ne = \port$4342$0 [105];
+  assign ch1__word0_nw = \port$4342$0 [106];
+  assign ch1__word0_crc_ok = \port$4342$0 [107];
+  assign ch1__word1_ne = \port$4342$0 [148];
+  assign ch1__word1_nw = \port$4342$0 [149];
+  assign ch1__word1_crc_ok = \port$4342$0 [150];
+  assign ch1__lc_repeat = \port$4342$0 [157];
+  assign ch1__lc_skip = \port$4342$0 [158];
+  assign ch1__lc_zero = \port$4342$0 [159];
+  assign ch1__spw_mismatch = \port$4342$0 [160];
+  assign ch1__lc = \port$4342$0 [156:151];
+  assign ch1__line_delay = \port$4342$0 [48:36];
+  assign ch1__word0_position = \port$4342$0 [104:50];
+  assign ch1__word1_position = \port$4342$0 [147:108];
+  assign ch1__timestamp = \port$4342$0 [35:4];
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, ch1_irq, ch0_irq };
   assign ch0__cap_data_bits_w0 = 6'h37;
@@ -3526,49 +4253,65 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign ch0__cap_timer_width = 6'h18;
   assign ch0__cap_counters = 1'h1;
   assign ch0__cap_timestamp = 1'h1;
-  assign ch0__count_crc_word0 = \port$3008$0 [15:0];
-  assign ch0__count_crc_word1 = \port$3008$0 [31:16];
-  assign ch0__count_no_ack = \port$3008$0 [47:32];
-  assign ch0__count_no_start = \port$3008$0 [63:48];
-  assign ch0__count_delay_range = \port$3008$0 [79:64];
-  assign ch0__count_slo_stuck_low = \port$3008$0 [95:80];
-  assign ch0__count_lc_repeat = \port$3008$0 [111:96];
-  assign ch0__count_lc_skip = \port$3008$0 [127:112];
-  assign ch0__count_lc_zero = \port$3008$0 [143:128];
-  assign ch0__count_spw_mismatch = \port$3008$0 [159:144];
-  assign ch0__count_overrun = \port$3008$0 [175:160];
-  assign ch0__count_aborted = \port$3008$0 [191:176];
-  assign ch0__count_no_stop = \port$3008$0 [207:192];
+  assign ch0__cap_register_access = 1'h1;
+  assign ch0__count_crc_word0 = \port$3914$0 [15:0];
+  assign ch0__count_crc_word1 = \port$3914$0 [31:16];
+  assign ch0__count_no_ack = \port$3914$0 [47:32];
+  assign ch0__count_no_start = \port$3914$0 [63:48];
+  assign ch0__count_delay_range = \port$3914$0 [79:64];
+  assign ch0__count_slo_stuck_low = \port$3914$0 [95:80];
+  assign ch0__count_lc_repeat = \port$3914$0 [111:96];
+  assign ch0__count_lc_skip = \port$3914$0 [127:112];
+  assign ch0__count_lc_zero = \port$3914$0 [143:128];
+  assign ch0__count_spw_mismatch = \port$3914$0 [159:144];
+  assign ch0__count_overrun = \port$3914$0 [175:160];
+  assign ch0__count_aborted = \port$3914$0 [191:176];
+  assign ch0__count_no_stop = \port$3914$0 [207:192];
+  assign ch0__ca_status = \port$4042$0 [2:0];
+  assign ch0__ca_bytes_done = \port$4042$0 [9:3];
+  assign ch0__count_ca_crc4_error = \port$3914$0 [223:208];
+  assign ch0__count_ca_no_answer = \port$3914$0 [239:224];
+  assign ch0__count_ca_refused = \port$3914$0 [255:240];
+  assign ch0__count_ca_aborted = \port$3914$0 [271:256];
+  assign ch0__count_ca_data_fault = \port$3914$0 [287:272];
   assign ch1__cap_data_bits_w0 = 6'h37;
   assign ch1__cap_data_bits_w1 = 6'h28;
   assign ch1__cap_timer_width = 6'h18;
   assign ch1__cap_counters = 1'h1;
   assign ch1__cap_timestamp = 1'h1;
-  assign ch1__count_crc_word0 = \port$3355$0 [15:0];
-  assign ch1__count_crc_word1 = \port$3355$0 [31:16];
-  assign ch1__count_no_ack = \port$3355$0 [47:32];
-  assign ch1__count_no_start = \port$3355$0 [63:48];
-  assign ch1__count_delay_range = \port$3355$0 [79:64];
-  assign ch1__count_slo_stuck_low = \port$3355$0 [95:80];
-  assign ch1__count_lc_repeat = \port$3355$0 [111:96];
-  assign ch1__count_lc_skip = \port$3355$0 [127:112];
-  assign ch1__count_lc_zero = \port$3355$0 [143:128];
-  assign ch1__count_spw_mismatch = \port$3355$0 [159:144];
-  assign ch1__count_overrun = \port$3355$0 [175:160];
-  assign ch1__count_aborted = \port$3355$0 [191:176];
-  assign ch1__count_no_stop = \port$3355$0 [207:192];
+  assign ch1__cap_register_access = 1'h1;
+  assign ch1__count_crc_word0 = \port$4349$0 [15:0];
+  assign ch1__count_crc_word1 = \port$4349$0 [31:16];
+  assign ch1__count_no_ack = \port$4349$0 [47:32];
+  assign ch1__count_no_start = \port$4349$0 [63:48];
+  assign ch1__count_delay_range = \port$4349$0 [79:64];
+  assign ch1__count_slo_stuck_low = \port$4349$0 [95:80];
+  assign ch1__count_lc_repeat = \port$4349$0 [111:96];
+  assign ch1__count_lc_skip = \port$4349$0 [127:112];
+  assign ch1__count_lc_zero = \port$4349$0 [143:128];
+  assign ch1__count_spw_mismatch = \port$4349$0 [159:144];
+  assign ch1__count_overrun = \port$4349$0 [175:160];
+  assign ch1__count_aborted = \port$4349$0 [191:176];
+  assign ch1__count_no_stop = \port$4349$0 [207:192];
+  assign ch1__ca_status = \port$4477$0 [2:0];
+  assign ch1__ca_bytes_done = \port$4477$0 [9:3];
+  assign ch1__count_ca_crc4_error = \port$4349$0 [223:208];
+  assign ch1__count_ca_no_answer = \port$4349$0 [239:224];
+  assign ch1__count_ca_refused = \port$4349$0 [255:240];
+  assign ch1__count_ca_aborted = \port$4349$0 [271:256];
+  assign ch1__count_ca_data_fault = \port$4349$0 [287:272];
   assign g_irq = 1'h0;
-  assign \$64  = \$63 ;
-  assign \$66  = \$65 ;
-  assign \$68  = \$67 ;
-  assign \$122  = \$121 ;
-  assign \$124  = \$123 ;
-  assign \$126  = \$125 ;
+  assign \$79  = \$78 ;
+  assign \$81  = \$80 ;
+  assign \$83  = \$82 ;
+  assign \$152  = \$151 ;
+  assign \$154  = \$153 ;
+  assign \$156  = \$155 ;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.bus (wb__stb, wb__we, regs__r_addr, regs__w_data, regs__w_strb, clk, rst, regs__r_en, regs__w_en, ack, wb__dat_r, wb__cyc);
-  reg \$auto$verilog_backend.cc:2355:dump_module$19  = 0;
+module \biss_master_wb.bus (wb__stb, wb__we, regs__r_addr, regs__w_data, regs__w_strb, clk, rst, regs__r_en, regs__w_en, wb__dat_r, ack, wb__cyc);
+  reg \$auto$verilog_backend.cc:2355:dump_module$27  = 0;
   wire \$1 ;
   wire \$10 ;
   reg \$11 ;
@@ -3628,7 +4371,7 @@ module \biss_master_wb.bus (wb__stb, wb__we, regs__r_addr, regs__w_data, regs__w
   always @(posedge clk)
     ack <= \$11 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     \$11  = \$3 ;
     if (rst) begin
       \$11  = 1'h0;
@@ -3644,17 +4387,53 @@ module \biss_master_wb.bus (wb__stb, wb__we, regs__r_addr, regs__w_data, regs__w
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0 (clk, rst, \trigger$118 , regs__frame_error, regs__busy, regs__config_error, start, abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc
-, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, regs__done_count, ma, regs__done, \port$3001$0 , \port$3008$0 , slo);
-  reg \$auto$verilog_backend.cc:2355:dump_module$20  = 0;
+module \biss_master_wb.ch0 (ca_wbuf_data, slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__ca_busy, regs__ca_rbuf_data, start, abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time
+, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, regs__done_count
+, ma, regs__done, \port$3907$0 , \port$3914$0 , regs__ca_done, \port$4042$0 , ca_wbuf_addr);
+  reg \$auto$verilog_backend.cc:2355:dump_module$28  = 0;
   wire \$1 ;
   wire [16:0] \$2 ;
   reg [15:0] \$3 ;
   wire [160:0] \$4 ;
-  wire [207:0] \$5 ;
+  wire [287:0] \$5 ;
+  wire [9:0] \$6 ;
   input abort_cycle;
   wire abort_cycle;
   wire busy;
+  input ca_abort;
+  wire ca_abort;
+  input [6:0] ca_address;
+  wire [6:0] ca_address;
+  wire ca_busy;
+  wire [6:0] ca_bytes_done;
+  input [6:0] ca_count;
+  wire [6:0] ca_count;
+  wire ca_done;
+  wire [3:0] ca_rbuf_addr;
+  wire [31:0] ca_rbuf_data;
+  input ca_rbuf_en;
+  wire ca_rbuf_en;
+  input [2:0] ca_slave_id;
+  wire [2:0] ca_slave_id;
+  input ca_start;
+  wire ca_start;
+  (* enum_base_type = "AccessStatus" *)
+  (* enum_value_000 = "OK" *)
+  (* enum_value_001 = "CRC4_ERROR" *)
+  (* enum_value_010 = "NO_ANSWER" *)
+  (* enum_value_011 = "REFUSED" *)
+  (* enum_value_100 = "ABORTED" *)
+  (* enum_value_101 = "DATA_FAULT" *)
+  (* enum_value_110 = "BAD_REQUEST" *)
+  wire [2:0] ca_status;
+  input [3:0] ca_wbuf_addr;
+  wire [3:0] ca_wbuf_addr;
+  input [31:0] ca_wbuf_data;
+  wire [31:0] ca_wbuf_data;
+  input [3:0] ca_wbuf_en;
+  wire [3:0] ca_wbuf_en;
+  input ca_write;
+  wire ca_write;
   wire cds;
   input [23:0] cfg_ack_limit;
   wire [23:0] cfg_ack_limit;
@@ -3706,6 +4485,11 @@ module \biss_master_wb.ch0 (clk, rst, \trigger$118 , regs__frame_error, regs__bu
   wire clk;
   wire config_error;
   wire [15:0] count_aborted;
+  wire [15:0] count_ca_aborted;
+  wire [15:0] count_ca_crc4_error;
+  wire [15:0] count_ca_data_fault;
+  wire [15:0] count_ca_no_answer;
+  wire [15:0] count_ca_refused;
   wire [15:0] count_crc_word0;
   wire [15:0] count_crc_word1;
   wire [15:0] count_delay_range;
@@ -3726,19 +4510,41 @@ module \biss_master_wb.ch0 (clk, rst, \trigger$118 , regs__frame_error, regs__bu
   wire [12:0] line_delay;
   output ma;
   wire ma;
-  wire \ma$121 ;
+  wire \ma$164 ;
   input periodic;
   wire periodic;
-  output [160:0] \port$3001$0 ;
-  wire [160:0] \port$3001$0 ;
-  output [207:0] \port$3008$0 ;
-  wire [207:0] \port$3008$0 ;
+  output [160:0] \port$3907$0 ;
+  wire [160:0] \port$3907$0 ;
+  output [287:0] \port$3914$0 ;
+  wire [287:0] \port$3914$0 ;
+  output [9:0] \port$4042$0 ;
+  wire [9:0] \port$4042$0 ;
   wire regs__abort_cycle;
   output regs__busy;
   wire regs__busy;
+  wire regs__ca_abort;
+  wire [6:0] regs__ca_address;
+  output regs__ca_busy;
+  wire regs__ca_busy;
+  wire [6:0] regs__ca_bytes_done;
+  wire [6:0] regs__ca_count;
+  output regs__ca_done;
+  wire regs__ca_done;
+  wire [3:0] regs__ca_rbuf_addr;
+  output [31:0] regs__ca_rbuf_data;
+  wire [31:0] regs__ca_rbuf_data;
+  wire regs__ca_rbuf_en;
+  wire [2:0] regs__ca_slave_id;
+  wire regs__ca_start;
+  wire [2:0] regs__ca_status;
+  wire [3:0] regs__ca_wbuf_addr;
+  wire [31:0] regs__ca_wbuf_data;
+  wire [3:0] regs__ca_wbuf_en;
+  wire regs__ca_write;
   wire regs__cap_counters;
   wire [5:0] regs__cap_data_bits_w0;
   wire [5:0] regs__cap_data_bits_w1;
+  wire regs__cap_register_access;
   wire [5:0] regs__cap_timer_width;
   wire regs__cap_timestamp;
   wire regs__cds;
@@ -3772,6 +4578,11 @@ module \biss_master_wb.ch0 (clk, rst, \trigger$118 , regs__frame_error, regs__bu
   output regs__config_error;
   wire regs__config_error;
   wire [15:0] regs__count_aborted;
+  wire [15:0] regs__count_ca_aborted;
+  wire [15:0] regs__count_ca_crc4_error;
+  wire [15:0] regs__count_ca_data_fault;
+  wire [15:0] regs__count_ca_no_answer;
+  wire [15:0] regs__count_ca_refused;
   wire [15:0] regs__count_crc_word0;
   wire [15:0] regs__count_crc_word1;
   wire [15:0] regs__count_delay_range;
@@ -3814,7 +4625,7 @@ module \biss_master_wb.ch0 (clk, rst, \trigger$118 , regs__frame_error, regs__bu
   wire rst;
   input slo;
   wire slo;
-  wire \slo$123 ;
+  wire \slo$166 ;
   wire spw_mismatch;
   input start;
   wire start;
@@ -3835,8 +4646,8 @@ module \biss_master_wb.ch0 (clk, rst, \trigger$118 , regs__frame_error, regs__bu
   wire [3:0] status;
   wire [31:0] timestamp;
   wire trigger;
-  input \trigger$118 ;
-  wire \trigger$118 ;
+  input \trigger$161 ;
+  wire \trigger$161 ;
   wire valid;
   wire word0_crc_ok;
   wire word0_ne;
@@ -3846,15 +4657,25 @@ module \biss_master_wb.ch0 (clk, rst, \trigger$118 , regs__frame_error, regs__bu
   wire word1_ne;
   wire word1_nw;
   wire [39:0] word1_position;
+  assign \$2  = regs__done_count + 1'h1;
   always @(posedge clk)
     regs__done_count <= \$3 ;
   assign \$1  = ~ valid;
   assign regs__frame_error = regs__done & \$1 ;
-  assign trigger = \trigger$118  & regs__trigger_enable;
-  assign \$2  = regs__done_count + 1'h1;
+  assign trigger = \trigger$161  & regs__trigger_enable;
   \biss_master_wb.ch0.core  core (
     .abort(abort_cycle),
-    .\busy$193 (regs__busy),
+    .\abort$187 (ca_abort),
+    .\busy$237 (regs__busy),
+    .ca_address(ca_address),
+    .ca_count(ca_count),
+    .ca_done(regs__ca_done),
+    .ca_rbuf_data(regs__ca_rbuf_data),
+    .ca_slave_id(ca_slave_id),
+    .ca_wbuf_addr(ca_wbuf_addr),
+    .ca_wbuf_data(ca_wbuf_data),
+    .ca_wbuf_en(ca_wbuf_en),
+    .ca_write(ca_write),
     .cfg_ack_limit(cfg_ack_limit),
     .cfg_break_time(cfg_break_time),
     .cfg_delay_limit(cfg_delay_limit),
@@ -3873,22 +4694,26 @@ module \biss_master_wb.ch0 (clk, rst, \trigger$118 , regs__frame_error, regs__bu
     .cfg_w1_enable(cfg_w1_enable),
     .cfg_w1_lc(cfg_w1_lc),
     .cfg_w1_nenw(cfg_w1_nenw),
-    .\clear$175 (clear_counters),
+    .\clear$214 (clear_counters),
     .clk(clk),
     .config_error(regs__config_error),
     .counts(\$5 ),
-    .\done$196 (regs__done),
+    .\done$240 (regs__done),
+    .frames(regs__ca_busy),
     .ma(ma),
-    .periodic(periodic),
-    .result(\$4 ),
+    .\periodic$24 (periodic),
+    .rbuf_en(ca_rbuf_en),
+    .result(\$6 ),
+    .\result$245 (\$4 ),
     .rst(rst),
     .slo(slo),
     .start(start),
+    .\start$185 (ca_start),
     .trigger(trigger),
-    .\valid$198 (valid)
+    .\valid$242 (valid)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$20 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
     \$3  = regs__done_count;
     if (regs__done) begin
       \$3  = \$2 [15:0];
@@ -3908,7 +4733,9 @@ module \biss_master_wb.ch0 (clk, rst, \trigger$118 , regs__frame_error, regs__bu
   assign regs__cap_timer_width = 6'h18;
   assign regs__cap_counters = 1'h1;
   assign regs__cap_timestamp = 1'h1;
+  assign regs__cap_register_access = 1'h1;
   assign done = regs__done;
+  assign ca_done = regs__ca_done;
   assign regs__cfg_ma_half_period = cfg_ma_half_period;
   assign regs__cfg_delay_limit = cfg_delay_limit;
   assign regs__cfg_request_period = cfg_request_period;
@@ -3987,37 +4814,116 @@ module \biss_master_wb.ch0 (clk, rst, \trigger$118 , regs__frame_error, regs__bu
   assign count_aborted = \$5 [191:176];
   assign regs__count_no_stop = \$5 [207:192];
   assign count_no_stop = \$5 [207:192];
-  assign \ma$121  = ma;
-  assign \slo$123  = slo;
-  assign \port$3001$0  = \$4 ;
-  assign \port$3008$0  = \$5 ;
+  assign regs__ca_slave_id = ca_slave_id;
+  assign regs__ca_address = ca_address;
+  assign regs__ca_count = ca_count;
+  assign regs__ca_write = ca_write;
+  assign regs__ca_start = ca_start;
+  assign regs__ca_abort = ca_abort;
+  assign ca_busy = regs__ca_busy;
+  assign regs__ca_status = \$6 [2:0];
+  assign ca_status = \$6 [2:0];
+  assign regs__ca_bytes_done = \$6 [9:3];
+  assign ca_bytes_done = \$6 [9:3];
+  assign regs__count_ca_crc4_error = \$5 [223:208];
+  assign count_ca_crc4_error = \$5 [223:208];
+  assign regs__count_ca_no_answer = \$5 [239:224];
+  assign count_ca_no_answer = \$5 [239:224];
+  assign regs__count_ca_refused = \$5 [255:240];
+  assign count_ca_refused = \$5 [255:240];
+  assign regs__count_ca_aborted = \$5 [271:256];
+  assign count_ca_aborted = \$5 [271:256];
+  assign regs__count_ca_data_fault = \$5 [287:272];
+  assign count_ca_data_fault = \$5 [287:272];
+  assign regs__ca_wbuf_addr = ca_wbuf_addr;
+  assign regs__ca_wbuf_data = ca_wbuf_data;
+  assign regs__ca_wbuf_en = ca_wbuf_en;
+  assign ca_rbuf_addr = ca_wbuf_addr;
+  assign regs__ca_rbuf_addr = ca_wbuf_addr;
+  assign ca_rbuf_data = regs__ca_rbuf_data;
+  assign regs__ca_rbuf_en = ca_rbuf_en;
+  assign \ma$164  = ma;
+  assign \slo$166  = slo;
+  assign \port$3907$0  = \$4 ;
+  assign \port$3914$0  = \$5 ;
+  assign \port$4042$0  = \$6 ;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core (clk, rst, trigger, \busy$193 , config_error, start, abort, \clear$175 , periodic, cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw
-, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, ma, \done$196 , \valid$198 , result, counts, slo);
+module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy$237 , config_error, frames, ca_rbuf_data, start, abort, \clear$214 , \periodic$24 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit
+, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, \start$185 , \abort$187 , ma, \done$240 , \valid$242 
+, \result$245 , counts, ca_done, result, ca_wbuf_addr);
   wire \$1 ;
+  wire \$10 ;
+  wire \$11 ;
+  wire \$12 ;
   wire \$2 ;
+  wire \$3 ;
+  wire \$4 ;
+  wire \$5 ;
+  wire \$6 ;
+  wire \$7 ;
+  wire \$8 ;
+  wire \$9 ;
   input abort;
   wire abort;
-  wire \abort$35 ;
+  input \abort$187 ;
+  wire \abort$187 ;
+  wire \abort$36 ;
   wire abort_cycle;
   wire ack_expired;
-  wire \ack_expired$67 ;
+  wire \ack_expired$68 ;
   wire [23:0] ack_limit;
-  wire [23:0] \ack_limit$87 ;
+  wire [23:0] \ack_limit$89 ;
   wire arm;
   wire \bit ;
-  wire \bit$111 ;
+  wire \bit$113 ;
   wire [5:0] bits;
   wire break_over;
-  wire \break_over$65 ;
+  wire \break_over$66 ;
   wire [23:0] break_time;
   wire busy;
-  output \busy$193 ;
-  wire \busy$193 ;
+  wire \busy$196 ;
+  output \busy$237 ;
+  wire \busy$237 ;
+  wire ca_abort;
+  input [6:0] ca_address;
+  wire [6:0] ca_address;
+  wire ca_busy;
+  wire [6:0] ca_bytes_done;
+  input [6:0] ca_count;
+  wire [6:0] ca_count;
+  output ca_done;
+  wire ca_done;
+  wire [3:0] ca_rbuf_addr;
+  output [31:0] ca_rbuf_data;
+  wire [31:0] ca_rbuf_data;
+  wire ca_rbuf_en;
+  input [2:0] ca_slave_id;
+  wire [2:0] ca_slave_id;
+  wire ca_start;
+  (* enum_base_type = "AccessStatus" *)
+  (* enum_value_000 = "OK" *)
+  (* enum_value_001 = "CRC4_ERROR" *)
+  (* enum_value_010 = "NO_ANSWER" *)
+  (* enum_value_011 = "REFUSED" *)
+  (* enum_value_100 = "ABORTED" *)
+  (* enum_value_101 = "DATA_FAULT" *)
+  (* enum_value_110 = "BAD_REQUEST" *)
+  wire [2:0] ca_status;
+  input [3:0] ca_wbuf_addr;
+  wire [3:0] ca_wbuf_addr;
+  input [31:0] ca_wbuf_data;
+  wire [31:0] ca_wbuf_data;
+  input [3:0] ca_wbuf_en;
+  wire [3:0] ca_wbuf_en;
+  input ca_write;
+  wire ca_write;
+  wire cdm;
+  wire \cdm$200 ;
+  wire cdm_cycle;
   wire cds;
-  wire \cds$204 ;
+  wire \cds$248 ;
   wire [154:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
@@ -4093,16 +4999,22 @@ module \biss_master_wb.ch0.core (clk, rst, trigger, \busy$193 , config_error, st
   wire cfg_w1_nenw;
   wire check;
   wire clear;
-  wire \clear$104 ;
-  input \clear$175 ;
-  wire \clear$175 ;
+  wire \clear$106 ;
+  input \clear$214 ;
+  wire \clear$214 ;
   wire clear_counters;
   input clk;
   wire clk;
+  wire \clocking ;
   output config_error;
   wire config_error;
   wire config_ok;
   wire [15:0] count_aborted;
+  wire [15:0] count_ca_aborted;
+  wire [15:0] count_ca_crc4_error;
+  wire [15:0] count_ca_data_fault;
+  wire [15:0] count_ca_no_answer;
+  wire [15:0] count_ca_refused;
   wire [15:0] count_crc_word0;
   wire [15:0] count_crc_word1;
   wire [15:0] count_delay_range;
@@ -4115,9 +5027,14 @@ module \biss_master_wb.ch0.core (clk, rst, trigger, \busy$193 , config_error, st
   wire [15:0] count_overrun;
   wire [15:0] count_slo_stuck_low;
   wire [15:0] count_spw_mismatch;
-  output [207:0] counts;
-  wire [207:0] counts;
+  output [287:0] counts;
+  wire [287:0] counts;
   wire [15:0] \counts.aborted ;
+  wire [15:0] \counts.ca_aborted ;
+  wire [15:0] \counts.ca_crc4_error ;
+  wire [15:0] \counts.ca_data_fault ;
+  wire [15:0] \counts.ca_no_answer ;
+  wire [15:0] \counts.ca_refused ;
   wire [15:0] \counts.crc_word0 ;
   wire [15:0] \counts.crc_word1 ;
   wire [15:0] \counts.delay_range ;
@@ -4131,10 +5048,10 @@ module \biss_master_wb.ch0.core (clk, rst, trigger, \busy$193 , config_error, st
   wire [15:0] \counts.slo_stuck_low ;
   wire [15:0] \counts.spw_mismatch ;
   wire [39:0] cpw_top;
-  wire [39:0] \cpw_top$128 ;
+  wire [39:0] \cpw_top$130 ;
   wire [1:0] crc_error;
   wire [1:0] crc_ok;
-  wire [1:0] \crc_ok$143 ;
+  wire [1:0] \crc_ok$145 ;
   wire [154:0] cycle;
   wire [23:0] \cycle.ack_limit ;
   wire [23:0] \cycle.break_time ;
@@ -4167,22 +5084,28 @@ module \biss_master_wb.ch0.core (clk, rst, trigger, \busy$193 , config_error, st
   wire [54:0] data0;
   wire [39:0] data1;
   wire [12:0] delay;
-  wire [12:0] \delay$93 ;
+  wire [12:0] \delay$95 ;
   wire [11:0] delay_limit;
-  wire [11:0] \delay_limit$95 ;
+  wire [11:0] \delay_limit$97 ;
   wire delay_over;
-  wire \delay_over$75 ;
+  wire \delay_over$76 ;
   wire done;
-  output \done$196 ;
-  wire \done$196 ;
-  wire \done$197 ;
+  wire \done$198 ;
+  output \done$240 ;
+  wire \done$240 ;
+  wire \done$241 ;
   wire doubtful;
   wire early;
-  wire \early$51 ;
+  wire \early$52 ;
   wire end_check;
   wire enough;
-  wire [12:0] events;
+  wire [17:0] events;
   wire \events.aborted ;
+  wire \events.ca_aborted ;
+  wire \events.ca_crc4_error ;
+  wire \events.ca_data_fault ;
+  wire \events.ca_no_answer ;
+  wire \events.ca_refused ;
   wire \events.crc_word0 ;
   wire \events.crc_word1 ;
   wire \events.delay_range ;
@@ -4196,7 +5119,7 @@ module \biss_master_wb.ch0.core (clk, rst, trigger, \busy$193 , config_error, st
   wire \events.slo_stuck_low ;
   wire \events.spw_mismatch ;
   wire fault;
-  wire \fault$139 ;
+  wire \fault$141 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -4226,7 +5149,7 @@ module \biss_master_wb.ch0.core (clk, rst, trigger, \busy$193 , config_error, st
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
-  wire [3:0] \fault_status$141 ;
+  wire [3:0] \fault_status$143 ;
   wire [6:0] faults;
   wire \faults.aborted ;
   wire \faults.bad_config ;
@@ -4236,7 +5159,7 @@ module \biss_master_wb.ch0.core (clk, rst, trigger, \busy$193 , config_error, st
   wire \faults.no_stop ;
   wire \faults.slo_stuck_low ;
   wire first_rise;
-  wire \first_rise$169 ;
+  wire \first_rise$171 ;
   wire [31:0] first_rise_time;
   wire [160:0] frame;
   wire \frame.cds ;
@@ -4272,30 +5195,38 @@ module \biss_master_wb.ch0.core (clk, rst, trigger, \busy$193 , config_error, st
   wire \frame.word1.ne ;
   wire \frame.word1.nw ;
   wire [39:0] \frame.word1.position ;
+  wire frame_cdm;
+  wire frame_cds;
   wire frame_done;
   wire frame_doubtful;
+  wire frame_end;
+  wire frame_ok;
+  output frames;
+  wire frames;
   wire [15:0] half_period;
-  wire [15:0] \half_period$106 ;
+  wire [15:0] \half_period$108 ;
+  wire held;
+  wire hold;
   wire idle;
   wire \idle$20 ;
-  wire \idle$28 ;
+  wire \idle$29 ;
   wire in_clock;
-  wire \in_clock$81 ;
+  wire \in_clock$83 ;
   wire [5:0] lc;
-  wire [5:0] \lc$115 ;
-  wire [5:0] \lc$213 ;
+  wire [5:0] \lc$117 ;
+  wire [5:0] \lc$257 ;
   wire lc_check;
   wire lc_load;
   wire [5:0] lc_next;
-  wire [5:0] \lc_next$117 ;
+  wire [5:0] \lc_next$119 ;
   wire lc_repeat;
-  wire \lc_repeat$214 ;
+  wire \lc_repeat$258 ;
   wire lc_repeat_seen;
   wire lc_skip;
-  wire \lc_skip$215 ;
+  wire \lc_skip$259 ;
   wire lc_skip_seen;
   wire lc_zero;
-  wire \lc_zero$216 ;
+  wire \lc_zero$260 ;
   wire lc_zero_seen;
   wire level;
   wire [12:0] line_delay;
@@ -4330,51 +5261,64 @@ module \biss_master_wb.ch0.core (clk, rst, trigger, \busy$193 , config_error, st
   wire \live.w1_enable ;
   wire load;
   wire locked;
-  wire \locked$49 ;
+  wire \locked$50 ;
   output ma;
   wire ma;
-  wire \ma$192 ;
+  wire \ma$236 ;
   wire ma_arm;
   wire ma_busy;
-  wire \ma_busy$77 ;
+  wire \ma_busy$78 ;
   wire ma_enough;
+  wire ma_held;
+  wire ma_hold;
   wire ma_run;
   wire match;
   wire [1:0] ne;
   wire no_start_expired;
-  wire \no_start_expired$69 ;
+  wire \no_start_expired$70 ;
   wire [24:0] no_start_limit;
-  wire [24:0] \no_start_limit$91 ;
+  wire [24:0] \no_start_limit$93 ;
   wire [1:0] nw;
   wire ok;
   wire overrun;
-  wire \overrun$195 ;
+  wire \overrun$239 ;
   wire [23:0] period;
-  input periodic;
   wire periodic;
+  input \periodic$24 ;
   wire \periodic$24 ;
+  wire [3:0] rbuf_addr;
+  wire [31:0] rbuf_data;
+  input rbuf_en;
+  wire rbuf_en;
   wire receiver_clear;
   wire \repeat ;
   wire report;
-  wire \report$151 ;
+  wire \report$153 ;
   wire report_delay;
-  wire \report_delay$154 ;
+  wire \report_delay$156 ;
   wire report_frame;
-  wire \report_frame$137 ;
-  wire \report_frame$152 ;
+  wire \report_frame$139 ;
+  wire \report_frame$154 ;
   wire request;
-  wire \request$34 ;
+  wire [17:0] \request$173 ;
+  wire [6:0] \request$173.address ;
+  wire [6:0] \request$173.count ;
+  wire [2:0] \request$173.slave_id ;
+  wire \request$173.write ;
+  wire \request$35 ;
   wire restart;
   wire restart_timer;
-  output [160:0] result;
-  wire [160:0] result;
-  wire \result.cds ;
-  wire [5:0] \result.lc ;
-  wire \result.lc_repeat ;
-  wire \result.lc_skip ;
-  wire \result.lc_zero ;
-  wire [12:0] \result.line_delay ;
-  wire \result.spw_mismatch ;
+  output [9:0] result;
+  wire [9:0] result;
+  output [160:0] \result$245 ;
+  wire [160:0] \result$245 ;
+  wire \result$245.cds ;
+  wire [5:0] \result$245.lc ;
+  wire \result$245.lc_repeat ;
+  wire \result$245.lc_skip ;
+  wire \result$245.lc_zero ;
+  wire [12:0] \result$245.line_delay ;
+  wire \result$245.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -4389,52 +5333,64 @@ module \biss_master_wb.ch0.core (clk, rst, trigger, \busy$193 , config_error, st
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
-  wire [3:0] \result.status ;
-  wire [31:0] \result.timestamp ;
-  wire [57:0] \result.word0 ;
-  wire \result.word0.crc_ok ;
-  wire \result.word0.ne ;
-  wire \result.word0.nw ;
-  wire [54:0] \result.word0.position ;
-  wire [42:0] \result.word1 ;
-  wire \result.word1.crc_ok ;
-  wire \result.word1.ne ;
-  wire \result.word1.nw ;
-  wire [39:0] \result.word1.position ;
+  wire [3:0] \result$245.status ;
+  wire [31:0] \result$245.timestamp ;
+  wire [57:0] \result$245.word0 ;
+  wire \result$245.word0.crc_ok ;
+  wire \result$245.word0.ne ;
+  wire \result$245.word0.nw ;
+  wire [54:0] \result$245.word0.position ;
+  wire [42:0] \result$245.word1 ;
+  wire \result$245.word1.crc_ok ;
+  wire \result$245.word1.ne ;
+  wire \result$245.word1.nw ;
+  wire [39:0] \result$245.word1.position ;
+  wire [6:0] \result.bytes_done ;
+  (* enum_base_type = "AccessStatus" *)
+  (* enum_value_000 = "OK" *)
+  (* enum_value_001 = "CRC4_ERROR" *)
+  (* enum_value_010 = "NO_ANSWER" *)
+  (* enum_value_011 = "REFUSED" *)
+  (* enum_value_100 = "ABORTED" *)
+  (* enum_value_101 = "DATA_FAULT" *)
+  (* enum_value_110 = "BAD_REQUEST" *)
+  wire [2:0] \result.status ;
   wire resync;
-  wire \resync$123 ;
+  wire \resync$125 ;
   wire [15:0] rises;
-  wire [15:0] \rises$103 ;
+  wire [15:0] \rises$105 ;
   input rst;
   wire rst;
   wire run;
   wire sample;
-  wire \sample$109 ;
+  wire \sample$111 ;
   wire second_rise;
   wire skip;
   input slo;
   wire slo;
-  wire \slo$30 ;
-  wire \slo$40 ;
-  wire \slo$76 ;
+  wire \slo$31 ;
+  wire \slo$41 ;
+  wire \slo$77 ;
   wire slo_stuck;
-  wire \slo_stuck$71 ;
+  wire \slo_stuck$72 ;
   wire slo_stuck_live;
-  wire \slo_stuck_live$73 ;
+  wire \slo_stuck_live$74 ;
   wire slots_full;
-  wire \slots_full$57 ;
+  wire \slots_full$58 ;
   wire [39:0] spw;
   wire spw_match;
   wire spw_mismatch;
-  wire \spw_mismatch$217 ;
+  wire \spw_mismatch$261 ;
   input start;
   wire start;
+  input \start$185 ;
+  wire \start$185 ;
   wire \start$22 ;
   wire [15:0] start_slot;
-  wire [15:0] \start_slot$101 ;
+  wire [15:0] \start_slot$103 ;
   wire started;
-  wire \started$55 ;
-  wire \started$99 ;
+  wire \started$101 ;
+  wire \started$56 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -4464,26 +5420,30 @@ module \biss_master_wb.ch0.core (clk, rst, trigger, \busy$193 , config_error, st
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
-  wire [3:0] \status$200 ;
+  wire [3:0] \status$244 ;
   wire stop_bit;
-  wire \stop_bit$61 ;
+  wire \stop_bit$62 ;
   wire stopped;
-  wire \stopped$59 ;
+  wire \stopped$60 ;
   wire [23:0] timeout_limit;
-  wire [23:0] \timeout_limit$89 ;
+  wire [23:0] \timeout_limit$91 ;
   wire [23:0] timeout_live;
   wire timer_clear;
   wire [31:0] timestamp;
   wire [7:0] tolerance;
   input trigger;
   wire trigger;
-  wire \trigger$32 ;
+  wire \trigger$33 ;
   wire valid;
-  wire \valid$156 ;
-  output \valid$198 ;
-  wire \valid$198 ;
+  wire \valid$158 ;
+  output \valid$242 ;
+  wire \valid$242 ;
   wire valid_out;
   wire w1_enable;
+  wire [39:0] wbuf;
+  wire [3:0] \wbuf.addr ;
+  wire [31:0] \wbuf.data ;
+  wire [3:0] \wbuf.en ;
   wire word0_crc_ok;
   wire word0_ne;
   wire word0_nw;
@@ -4493,28 +5453,28 @@ module \biss_master_wb.ch0.core (clk, rst, trigger, \busy$193 , config_error, st
   wire word1_nw;
   wire [39:0] word1_position;
   wire [1:0] word_count;
-  wire [1:0] \word_count$113 ;
+  wire [1:0] \word_count$115 ;
   wire [1:0] word_crc_ok;
   wire [19:0] words;
-  wire [19:0] \words$125 ;
-  wire [9:0] \words$125[0] ;
+  wire [19:0] \words$127 ;
+  wire [9:0] \words$127[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
-  wire [1:0] \words$125[0].crc ;
-  wire [5:0] \words$125[0].data_bits ;
-  wire \words$125[0].lc ;
-  wire \words$125[0].nenw ;
-  wire [9:0] \words$125[1] ;
+  wire [1:0] \words$127[0].crc ;
+  wire [5:0] \words$127[0].data_bits ;
+  wire \words$127[0].lc ;
+  wire \words$127[0].nenw ;
+  wire [9:0] \words$127[1] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
-  wire [1:0] \words$125[1].crc ;
-  wire [5:0] \words$125[1].data_bits ;
-  wire \words$125[1].lc ;
-  wire \words$125[1].nenw ;
+  wire [1:0] \words$127[1].crc ;
+  wire [5:0] \words$127[1].data_bits ;
+  wire \words$127[1].lc ;
+  wire \words$127[1].nenw ;
   wire [9:0] \words[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
@@ -4534,8 +5494,19 @@ module \biss_master_wb.ch0.core (clk, rst, trigger, \busy$193 , config_error, st
   wire \words[1].lc ;
   wire \words[1].nenw ;
   wire zero;
+  assign periodic = \periodic$24  | frames;
   assign \$1  = report_frame & spw_mismatch;
-  assign \busy$193  = ~ idle;
+  assign \$2  = result[2:0] == 1'h1;
+  assign \$3  = ca_done & \$2 ;
+  assign \$4  = result[2:0] == 2'h2;
+  assign \$5  = ca_done & \$4 ;
+  assign \$6  = result[2:0] == 2'h3;
+  assign \$7  = ca_done & \$6 ;
+  assign \$8  = result[2:0] == 3'h4;
+  assign \$9  = ca_done & \$8 ;
+  assign \$10  = result[2:0] == 3'h5;
+  assign \$11  = ca_done & \$10 ;
+  assign \busy$237  = ~ idle;
   assign config_error = ~ config_ok;
   \biss_master_wb.ch0.core.config  \config  (
     .ack_limit(ack_limit),
@@ -4554,6 +5525,8 @@ module \biss_master_wb.ch0.core (clk, rst, trigger, \busy$193 , config_error, st
     .abort(abort),
     .ack_expired(ack_expired),
     .break_over(break_over),
+    .cdm(cdm),
+    .cdm_cycle(frame_cdm),
     .clk(clk),
     .config_ok(config_ok),
     .delay_over(delay_over),
@@ -4570,16 +5543,18 @@ module \biss_master_wb.ch0.core (clk, rst, trigger, \busy$193 , config_error, st
     .ma_arm(ma_arm),
     .ma_busy(ma_busy),
     .ma_enough(ma_enough),
+    .ma_held(ma_held),
+    .ma_hold(hold),
     .ma_run(run),
     .no_start_expired(no_start_expired),
-    .receiver_clear(\clear$104 ),
+    .receiver_clear(\clear$106 ),
     .report_delay(report_delay),
     .report_frame(report_frame),
     .request(request),
     .restart_timer(restart),
     .resync(resync),
     .rst(rst),
-    .slo(\slo$40 ),
+    .slo(\slo$41 ),
     .slo_stuck(slo_stuck),
     .slo_stuck_live(slo_stuck_live),
     .slots_full(slots_full),
@@ -4589,7 +5564,7 @@ module \biss_master_wb.ch0.core (clk, rst, trigger, \busy$193 , config_error, st
     .timer_clear(clear)
   );
   \biss_master_wb.ch0.core.counters  counters (
-    .clear(\clear$175 ),
+    .clear(\clear$214 ),
     .clk(clk),
     .counts(counts),
     .events(events),
@@ -4608,7 +5583,7 @@ module \biss_master_wb.ch0.core (clk, rst, trigger, \busy$193 , config_error, st
     .lc_load(load),
     .ne(ne),
     .nw(nw),
-    .receiver_clear(\clear$104 ),
+    .receiver_clear(\clear$106 ),
     .rst(rst),
     .sample(sample),
     .slots_full(slots_full),
@@ -4622,8 +5597,11 @@ module \biss_master_wb.ch0.core (clk, rst, trigger, \busy$193 , config_error, st
   \biss_master_wb.ch0.core.ma_clock  ma_clock (
     .busy(ma_busy),
     .clk(clk),
+    .\clocking (\ma_busy$78 ),
     .first_rise(first_rise),
     .half_period(cycle[15:0]),
+    .held(ma_held),
+    .hold(hold),
     .ma(ma),
     .rises(rises),
     .rst(rst),
@@ -4631,7 +5609,7 @@ module \biss_master_wb.ch0.core (clk, rst, trigger, \busy$193 , config_error, st
     .second_rise(ma_arm)
   );
   \biss_master_wb.ch0.core.ma_stop  ma_stop (
-    .clear(\clear$104 ),
+    .clear(\clear$106 ),
     .clk(clk),
     .enough(ma_enough),
     .rises(rises),
@@ -4639,19 +5617,38 @@ module \biss_master_wb.ch0.core (clk, rst, trigger, \busy$193 , config_error, st
     .start_slot(start_slot),
     .\started$10 (started),
     .w1_enable(cycle[135]),
-    .words(\words$125 )
+    .words(\words$127 )
+  );
+  \biss_master_wb.ch0.core.register_access  register_access (
+    .abort(\abort$187 ),
+    .busy(frames),
+    .cdm(cdm),
+    .clk(clk),
+    .done(ca_done),
+    .frame_cdm(frame_cdm),
+    .frame_cds(cds),
+    .frame_end(report),
+    .frame_ok(valid),
+    .host_read__addr(ca_wbuf_addr),
+    .host_read__en(rbuf_en),
+    .rbuf_data(ca_rbuf_data),
+    .request(\request$173 ),
+    .result(result),
+    .rst(rst),
+    .\start$44 (\start$185 ),
+    .wbuf(wbuf)
   );
   \biss_master_wb.ch0.core.results  results (
     .clk(clk),
-    .done(\done$196 ),
+    .done(\done$240 ),
     .frame(frame),
     .report(report),
     .report_delay(report_delay),
     .report_frame(report_frame),
-    .result(result),
+    .result(\result$245 ),
     .rst(rst),
     .valid(valid),
-    .valid_out(\valid$198 )
+    .valid_out(\valid$242 )
   );
   \biss_master_wb.ch0.core.sampler  sampler (
     .arm(ma_arm),
@@ -4660,9 +5657,9 @@ module \biss_master_wb.ch0.core (clk, rst, trigger, \busy$193 , config_error, st
     .delay(delay),
     .early(early),
     .half_period(cycle[15:0]),
-    .level(\slo$40 ),
+    .level(\slo$41 ),
     .locked(locked),
-    .receiver_clear(\clear$104 ),
+    .receiver_clear(\clear$106 ),
     .rst(rst),
     .sample(sample),
     .slo(slo)
@@ -4685,7 +5682,7 @@ module \biss_master_wb.ch0.core (clk, rst, trigger, \busy$193 , config_error, st
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$1014$0 (\bit ),
+    .\port$1199$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -4717,12 +5714,12 @@ module \biss_master_wb.ch0.core (clk, rst, trigger, \busy$193 , config_error, st
     .delay_limit(delay_limit),
     .delay_over(delay_over),
     .in_clock(in_clock),
-    .ma_busy(ma_busy),
+    .ma_busy(\ma_busy$78 ),
     .no_start_expired(no_start_expired),
     .no_start_limit(no_start_limit),
     .restart(restart),
     .rst(rst),
-    .slo(\slo$40 ),
+    .slo(\slo$41 ),
     .slo_stuck(slo_stuck),
     .slo_stuck_live(slo_stuck_live),
     .timeout_limit(timeout_limit),
@@ -4742,7 +5739,7 @@ module \biss_master_wb.ch0.core (clk, rst, trigger, \busy$193 , config_error, st
     .lc_skip_seen(lc_skip_seen),
     .lc_zero(lc_zero),
     .lc_zero_seen(lc_zero_seen),
-    .\port$1414$0 (\$2 ),
+    .\port$1599$0 (\$12 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -4752,84 +5749,101 @@ module \biss_master_wb.ch0.core (clk, rst, trigger, \busy$193 , config_error, st
   );
   assign \idle$20  = idle;
   assign \start$22  = start;
-  assign \periodic$24  = periodic;
   assign period = cfg_request_period;
   assign abort_cycle = abort;
-  assign \idle$28  = idle;
-  assign \slo$30  = slo;
-  assign \trigger$32  = trigger;
-  assign \request$34  = request;
-  assign \abort$35  = abort;
+  assign \idle$29  = idle;
+  assign \slo$31  = slo;
+  assign \trigger$33  = trigger;
+  assign \request$35  = request;
+  assign \abort$36  = abort;
   assign ok = config_ok;
   assign end_check = cycle[124];
-  assign level = \slo$40 ;
+  assign level = \slo$41 ;
   assign busy = ma_busy;
   assign second_rise = ma_arm;
   assign enough = ma_enough;
-  assign \locked$49  = locked;
-  assign \early$51  = early;
+  assign \locked$50  = locked;
+  assign \early$52  = early;
   assign done = frame_done;
-  assign \started$55  = started;
-  assign \slots_full$57  = slots_full;
-  assign \stopped$59  = stopped;
-  assign \stop_bit$61  = stop_bit;
+  assign \started$56  = started;
+  assign \slots_full$58  = slots_full;
+  assign \stopped$60  = stopped;
+  assign \stop_bit$62  = stop_bit;
   assign doubtful = frame_doubtful;
-  assign \break_over$65  = break_over;
-  assign \ack_expired$67  = ack_expired;
-  assign \no_start_expired$69  = no_start_expired;
-  assign \slo_stuck$71  = slo_stuck;
-  assign \slo_stuck_live$73  = slo_stuck_live;
-  assign \delay_over$75  = delay_over;
-  assign \slo$76  = \slo$40 ;
-  assign \ma_busy$77  = ma_busy;
+  assign \break_over$66  = break_over;
+  assign \ack_expired$68  = ack_expired;
+  assign \no_start_expired$70  = no_start_expired;
+  assign \slo_stuck$72  = slo_stuck;
+  assign \slo_stuck_live$74  = slo_stuck_live;
+  assign \delay_over$76  = delay_over;
+  assign \slo$77  = \slo$41 ;
+  assign \clocking  = \ma_busy$78 ;
   assign timer_clear = clear;
-  assign \in_clock$81  = in_clock;
+  assign \in_clock$83  = in_clock;
   assign restart_timer = restart;
   assign break_time = cfg_break_time;
   assign timeout_live = cfg_timeout_limit;
-  assign \ack_limit$87  = ack_limit;
-  assign \timeout_limit$89  = timeout_limit;
-  assign \no_start_limit$91  = no_start_limit;
-  assign \delay$93  = delay;
-  assign \delay_limit$95  = delay_limit;
+  assign \ack_limit$89  = ack_limit;
+  assign \timeout_limit$91  = timeout_limit;
+  assign \no_start_limit$93  = no_start_limit;
+  assign \delay$95  = delay;
+  assign \delay_limit$97  = delay_limit;
   assign ma_run = run;
   assign half_period = cycle[15:0];
-  assign \started$99  = started;
-  assign \start_slot$101  = start_slot;
-  assign \rises$103  = rises;
-  assign receiver_clear = \clear$104 ;
-  assign \half_period$106  = cycle[15:0];
+  assign \started$101  = started;
+  assign \start_slot$103  = start_slot;
+  assign \rises$105  = rises;
+  assign receiver_clear = \clear$106 ;
+  assign \half_period$108  = cycle[15:0];
   assign arm = ma_arm;
-  assign \sample$109  = sample;
-  assign \bit$111  = \bit ;
-  assign \word_count$113  = word_count;
-  assign \lc$115  = lc;
+  assign \sample$111  = sample;
+  assign \bit$113  = \bit ;
+  assign \word_count$115  = word_count;
+  assign \lc$117  = lc;
   assign lc_next = { lc[4:0], \bit  };
-  assign \lc_next$117  = { lc[4:0], \bit  };
+  assign \lc_next$119  = { lc[4:0], \bit  };
   assign lc_load = load;
   assign lc_check = check;
-  assign \resync$123  = resync;
+  assign \resync$125  = resync;
   assign w1_enable = cycle[135];
-  assign \cpw_top$128  = cpw_top;
+  assign \cpw_top$130  = cpw_top;
   assign data1 = spw;
   assign bits = cycle[141:136];
   assign tolerance = cycle[154:147];
   assign match = spw_match;
   assign cfg = cycle;
-  assign \report_frame$137  = report_frame;
-  assign \fault$139  = fault;
-  assign \fault_status$141  = fault_status;
-  assign \crc_ok$143  = crc_ok;
+  assign \report_frame$139  = report_frame;
+  assign \fault$141  = fault;
+  assign \fault_status$143  = fault_status;
+  assign \crc_ok$145  = crc_ok;
   assign \repeat  = lc_repeat_seen;
   assign skip = lc_skip_seen;
   assign zero = lc_zero_seen;
-  assign \report$151  = report;
-  assign \report_frame$152  = report_frame;
-  assign \report_delay$154  = report_delay;
-  assign \valid$156  = valid;
-  assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \first_rise$169  = first_rise;
-  assign clear_counters = \clear$175 ;
+  assign \report$153  = report;
+  assign \report_frame$154  = report_frame;
+  assign \report_delay$156  = report_delay;
+  assign \valid$158  = valid;
+  assign word_crc_ok = { \$12 , crc_ok[0] };
+  assign \first_rise$171  = first_rise;
+  assign ca_status = result[2:0];
+  assign ca_bytes_done = result[9:3];
+  assign ca_start = \start$185 ;
+  assign ca_abort = \abort$187 ;
+  assign rbuf_addr = ca_wbuf_addr;
+  assign ca_rbuf_addr = ca_wbuf_addr;
+  assign ca_rbuf_en = rbuf_en;
+  assign rbuf_data = ca_rbuf_data;
+  assign ca_busy = frames;
+  assign \busy$196  = frames;
+  assign \done$198  = ca_done;
+  assign \cdm$200  = cdm;
+  assign held = ma_held;
+  assign ma_hold = hold;
+  assign frame_end = report;
+  assign frame_ok = valid;
+  assign frame_cds = cds;
+  assign cdm_cycle = frame_cdm;
+  assign clear_counters = \clear$214 ;
   assign count_crc_word0 = counts[15:0];
   assign count_crc_word1 = counts[31:16];
   assign count_no_ack = counts[47:32];
@@ -4843,27 +5857,32 @@ module \biss_master_wb.ch0.core (clk, rst, trigger, \busy$193 , config_error, st
   assign count_overrun = counts[175:160];
   assign count_aborted = counts[191:176];
   assign count_no_stop = counts[207:192];
-  assign \ma$192  = ma;
-  assign \overrun$195  = overrun;
-  assign \done$197  = \done$196 ;
-  assign valid_out = \valid$198 ;
-  assign \status$200  = result[3:0];
-  assign timestamp = result[35:4];
-  assign line_delay = result[48:36];
-  assign \cds$204  = result[49];
-  assign word0_position = result[104:50];
-  assign word0_ne = result[105];
-  assign word0_nw = result[106];
-  assign word0_crc_ok = result[107];
-  assign word1_position = result[147:108];
-  assign word1_ne = result[148];
-  assign word1_nw = result[149];
-  assign word1_crc_ok = result[150];
-  assign \lc$213  = result[156:151];
-  assign \lc_repeat$214  = result[157];
-  assign \lc_skip$215  = result[158];
-  assign \lc_zero$216  = result[159];
-  assign \spw_mismatch$217  = result[160];
+  assign count_ca_crc4_error = counts[223:208];
+  assign count_ca_no_answer = counts[239:224];
+  assign count_ca_refused = counts[255:240];
+  assign count_ca_aborted = counts[271:256];
+  assign count_ca_data_fault = counts[287:272];
+  assign \ma$236  = ma;
+  assign \overrun$239  = overrun;
+  assign \done$241  = \done$240 ;
+  assign valid_out = \valid$242 ;
+  assign \status$244  = \result$245 [3:0];
+  assign timestamp = \result$245 [35:4];
+  assign line_delay = \result$245 [48:36];
+  assign \cds$248  = \result$245 [49];
+  assign word0_position = \result$245 [104:50];
+  assign word0_ne = \result$245 [105];
+  assign word0_nw = \result$245 [106];
+  assign word0_crc_ok = \result$245 [107];
+  assign word1_position = \result$245 [147:108];
+  assign word1_ne = \result$245 [148];
+  assign word1_nw = \result$245 [149];
+  assign word1_crc_ok = \result$245 [150];
+  assign \lc$257  = \result$245 [156:151];
+  assign \lc_repeat$258  = \result$245 [157];
+  assign \lc_skip$259  = \result$245 [158];
+  assign \lc_zero$260  = \result$245 [159];
+  assign \spw_mismatch$261  = \result$245 [160];
   assign \live.ma_half_period  = live[15:0];
   assign \live.request_period  = live[39:16];
   assign \live.break_time  = live[63:40];
@@ -4914,16 +5933,16 @@ module \biss_master_wb.ch0.core (clk, rst, trigger, \busy$193 , config_error, st
   assign \words[1].nenw  = words[16];
   assign \words[1].lc  = words[17];
   assign \words[1].crc  = words[19:18];
-  assign \words$125[0]  = \words$125 [9:0];
-  assign \words$125[0].data_bits  = \words$125 [5:0];
-  assign \words$125[0].nenw  = \words$125 [6];
-  assign \words$125[0].lc  = \words$125 [7];
-  assign \words$125[0].crc  = \words$125 [9:8];
-  assign \words$125[1]  = \words$125 [19:10];
-  assign \words$125[1].data_bits  = \words$125 [15:10];
-  assign \words$125[1].nenw  = \words$125 [16];
-  assign \words$125[1].lc  = \words$125 [17];
-  assign \words$125[1].crc  = \words$125 [19:18];
+  assign \words$127[0]  = \words$127 [9:0];
+  assign \words$127[0].data_bits  = \words$127 [5:0];
+  assign \words$127[0].nenw  = \words$127 [6];
+  assign \words$127[0].lc  = \words$127 [7];
+  assign \words$127[0].crc  = \words$127 [9:8];
+  assign \words$127[1]  = \words$127 [19:10];
+  assign \words$127[1].data_bits  = \words$127 [15:10];
+  assign \words$127[1].nenw  = \words$127 [16];
+  assign \words$127[1].lc  = \words$127 [17];
+  assign \words$127[1].crc  = \words$127 [19:18];
   assign \cfg.ma_half_period  = cycle[15:0];
   assign \cfg.request_period  = cycle[39:16];
   assign \cfg.break_time  = cycle[63:40];
@@ -4963,6 +5982,15 @@ module \biss_master_wb.ch0.core (clk, rst, trigger, \busy$193 , config_error, st
   assign \frame.lc_skip  = frame[158];
   assign \frame.lc_zero  = frame[159];
   assign \frame.spw_mismatch  = frame[160];
+  assign \request$173.slave_id  = \request$173 [2:0];
+  assign \request$173.address  = \request$173 [9:3];
+  assign \request$173.count  = \request$173 [16:10];
+  assign \request$173.write  = \request$173 [17];
+  assign \wbuf.addr  = wbuf[3:0];
+  assign \wbuf.data  = wbuf[35:4];
+  assign \wbuf.en  = wbuf[39:36];
+  assign \result.status  = result[2:0];
+  assign \result.bytes_done  = result[9:3];
   assign \events.crc_word0  = events[0];
   assign \events.crc_word1  = events[1];
   assign \events.no_ack  = events[2];
@@ -4976,6 +6004,11 @@ module \biss_master_wb.ch0.core (clk, rst, trigger, \busy$193 , config_error, st
   assign \events.overrun  = events[10];
   assign \events.aborted  = events[11];
   assign \events.no_stop  = events[12];
+  assign \events.ca_crc4_error  = events[13];
+  assign \events.ca_no_answer  = events[14];
+  assign \events.ca_refused  = events[15];
+  assign \events.ca_aborted  = events[16];
+  assign \events.ca_data_fault  = events[17];
   assign \faults.no_ack  = faults[0];
   assign \faults.no_start  = faults[1];
   assign \faults.delay_range  = faults[2];
@@ -4996,25 +6029,35 @@ module \biss_master_wb.ch0.core (clk, rst, trigger, \busy$193 , config_error, st
   assign \counts.overrun  = counts[175:160];
   assign \counts.aborted  = counts[191:176];
   assign \counts.no_stop  = counts[207:192];
-  assign \result.status  = result[3:0];
-  assign \result.timestamp  = result[35:4];
-  assign \result.line_delay  = result[48:36];
-  assign \result.cds  = result[49];
-  assign \result.word0  = result[107:50];
-  assign \result.word0.position  = result[104:50];
-  assign \result.word0.ne  = result[105];
-  assign \result.word0.nw  = result[106];
-  assign \result.word0.crc_ok  = result[107];
-  assign \result.word1  = result[150:108];
-  assign \result.word1.position  = result[147:108];
-  assign \result.word1.ne  = result[148];
-  assign \result.word1.nw  = result[149];
-  assign \result.word1.crc_ok  = result[150];
-  assign \result.lc  = result[156:151];
-  assign \result.lc_repeat  = result[157];
-  assign \result.lc_skip  = result[158];
-  assign \result.lc_zero  = result[159];
-  assign \result.spw_mismatch  = result[160];
+  assign \counts.ca_crc4_error  = counts[223:208];
+  assign \counts.ca_no_answer  = counts[239:224];
+  assign \counts.ca_refused  = counts[255:240];
+  assign \counts.ca_aborted  = counts[271:256];
+  assign \counts.ca_data_fault  = counts[287:272];
+  assign \result$245.status  = \result$245 [3:0];
+  assign \result$245.timestamp  = \result$245 [35:4];
+  assign \result$245.line_delay  = \result$245 [48:36];
+  assign \result$245.cds  = \result$245 [49];
+  assign \result$245.word0  = \result$245 [107:50];
+  assign \result$245.word0.position  = \result$245 [104:50];
+  assign \result$245.word0.ne  = \result$245 [105];
+  assign \result$245.word0.nw  = \result$245 [106];
+  assign \result$245.word0.crc_ok  = \result$245 [107];
+  assign \result$245.word1  = \result$245 [150:108];
+  assign \result$245.word1.position  = \result$245 [147:108];
+  assign \result$245.word1.ne  = \result$245 [148];
+  assign \result$245.word1.nw  = \result$245 [149];
+  assign \result$245.word1.crc_ok  = \result$245 [150];
+  assign \result$245.lc  = \result$245 [156:151];
+  assign \result$245.lc_repeat  = \result$245 [157];
+  assign \result$245.lc_skip  = \result$245 [158];
+  assign \result$245.lc_zero  = \result$245 [159];
+  assign \result$245.spw_mismatch  = \result$245 [160];
+  assign events[17] = \$11 ;
+  assign events[16] = \$9 ;
+  assign events[15] = \$7 ;
+  assign events[14] = \$5 ;
+  assign events[13] = \$3 ;
   assign events[12] = faults[6];
   assign events[11] = faults[4];
   assign events[10] = overrun;
@@ -5028,9 +6071,16 @@ module \biss_master_wb.ch0.core (clk, rst, trigger, \busy$193 , config_error, st
   assign events[2] = faults[0];
   assign events[1] = crc_error[1];
   assign events[0] = crc_error[0];
+  assign wbuf[39:36] = ca_wbuf_en;
+  assign wbuf[35:4] = ca_wbuf_data;
+  assign wbuf[3:0] = ca_wbuf_addr;
+  assign \request$173 [17] = ca_write;
+  assign \request$173 [16:10] = ca_count;
+  assign \request$173 [9:3] = ca_address;
+  assign \request$173 [2:0] = ca_slave_id;
   assign frame[35:4] = first_rise_time;
   assign frame[160] = spw_mismatch;
-  assign frame[150] = \$2 ;
+  assign frame[150] = \$12 ;
   assign frame[149] = nw[1];
   assign frame[148] = ne[1];
   assign frame[147:108] = spw;
@@ -5045,8 +6095,8 @@ module \biss_master_wb.ch0.core (clk, rst, trigger, \busy$193 , config_error, st
   assign frame[49] = cds;
   assign frame[48:36] = delay;
   assign frame[3:0] = status;
-  assign \words$125 [19:10] = cycle[145:136];
-  assign \words$125 [9:0] = cycle[134:125];
+  assign \words$127 [19:10] = cycle[145:136];
+  assign \words$127 [9:0] = cycle[134:125];
   assign words[19:10] = cycle[145:136];
   assign words[9:0] = cycle[134:125];
   assign live[154:147] = cfg_spw_tolerance;
@@ -5071,7 +6121,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch0.core.config (rst, word_count, live, ok, cycle, ack_limit, timeout_limit, delay_limit, no_start_limit, idle, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$21  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$29  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -5252,21 +6302,21 @@ module \biss_master_wb.ch0.core.config (rst, word_count, live, ok, cycle, ack_li
   always @(posedge clk)
     delay_limit <= \$46 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$21 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
     \$47  = \$41 ;
     if (rst) begin
       \$47  = 25'h0000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$21 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
     \$42  = \$34 ;
     if (rst) begin
       \$42  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$21 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
     \$43  = cycle;
     if (idle) begin
       \$43  = live;
@@ -5276,7 +6326,7 @@ module \biss_master_wb.ch0.core.config (rst, word_count, live, ok, cycle, ack_li
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$21 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
     \$44  = ack_limit;
     if (idle) begin
       \$44  = \$36 ;
@@ -5286,7 +6336,7 @@ module \biss_master_wb.ch0.core.config (rst, word_count, live, ok, cycle, ack_li
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$21 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
     \$45  = timeout_limit;
     if (idle) begin
       \$45  = \$38 ;
@@ -5296,7 +6346,7 @@ module \biss_master_wb.ch0.core.config (rst, word_count, live, ok, cycle, ack_li
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$21 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
     \$46  = delay_limit;
     if (idle) begin
       \$46  = \$40 ;
@@ -5348,9 +6398,9 @@ module \biss_master_wb.ch0.core.config (rst, word_count, live, ok, cycle, ack_li
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.controller (rst, request, restart_timer, frame_doubtful, abort, config_ok, end_check, resync, timer_clear, fault, fault_status, faults, ma_run, in_clock, report_frame, report_delay, idle, receiver_clear, slo_stuck, slo_stuck_live, break_over
-, ack_expired, no_start_expired, delay_over, ma_arm, ma_busy, ma_enough, early, locked, slo, frame_done, stopped, slots_full, started, stop_bit, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$22  = 0;
+module \biss_master_wb.ch0.core.controller (rst, request, restart_timer, frame_doubtful, abort, config_ok, end_check, cdm_cycle, idle, receiver_clear, resync, timer_clear, fault, fault_status, faults, ma_run, in_clock, ma_hold, report_frame, report_delay, slo_stuck
+, slo_stuck_live, break_over, ack_expired, no_start_expired, delay_over, ma_arm, ma_busy, ma_held, ma_enough, early, locked, slo, frame_done, stopped, slots_full, started, stop_bit, cdm, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$30  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -5407,15 +6457,35 @@ module \biss_master_wb.ch0.core.controller (rst, request, restart_timer, frame_d
   wire \$58 ;
   wire \$59 ;
   wire \$6 ;
-  reg \$60 ;
-  reg [2:0] \$61 ;
-  reg \$62 ;
-  reg \$63 ;
-  reg \$64 ;
-  reg \$65 ;
-  reg \$66 ;
+  wire \$60 ;
+  wire \$61 ;
+  wire \$62 ;
+  wire \$63 ;
+  wire \$64 ;
+  wire \$65 ;
+  wire \$66 ;
+  wire \$67 ;
+  wire \$68 ;
+  wire \$69 ;
   wire \$7 ;
+  wire \$70 ;
+  wire \$71 ;
+  wire \$72 ;
+  wire \$73 ;
+  wire \$74 ;
+  wire \$75 ;
+  wire \$76 ;
+  wire \$77 ;
+  wire \$78 ;
+  reg \$79 ;
   wire \$8 ;
+  reg \$80 ;
+  reg [2:0] \$81 ;
+  reg \$82 ;
+  reg \$83 ;
+  reg \$84 ;
+  reg \$85 ;
+  reg \$86 ;
   wire \$9 ;
   input abort;
   wire abort;
@@ -5424,6 +6494,10 @@ module \biss_master_wb.ch0.core.controller (rst, request, restart_timer, frame_d
   reg armed = 1'h0;
   input break_over;
   wire break_over;
+  input cdm;
+  wire cdm;
+  output cdm_cycle;
+  reg cdm_cycle = 1'h0;
   input clk;
   wire clk;
   input config_ok;
@@ -5480,6 +6554,10 @@ module \biss_master_wb.ch0.core.controller (rst, request, restart_timer, frame_d
   wire ma_busy;
   input ma_enough;
   wire ma_enough;
+  input ma_held;
+  wire ma_held;
+  output ma_hold;
+  reg ma_hold;
   output ma_run;
   reg ma_run;
   input no_start_expired;
@@ -5515,82 +6593,469 @@ module \biss_master_wb.ch0.core.controller (rst, request, restart_timer, frame_d
   wire stopped;
   output timer_clear;
   reg timer_clear;
-  assign \$33  = cycle_fsm_state == 3'h5;
-  assign \$34  = cycle_fsm_state == 3'h6;
-  assign \$35  = cycle_fsm_state == 3'h7;
-  assign \$36  = ma_busy | abort;
-  assign \$37  = ~ config_ok;
-  assign \$38  = first_clock & \$37 ;
-  assign \$39  = first_clock ? slo_stuck_live : slo_stuck;
-  assign \$40  = ~ locked_seen;
-  assign \$41  = locked & \$40 ;
-  assign \$42  = armed & early;
+  assign \$14  = locked & \$13 ;
+  assign \$15  = \$14  & delay_over;
+  assign \$16  = ~ started;
+  assign \$17  = locked_seen & \$16 ;
+  assign \$18  = no_start_expired | slots_full;
+  assign \$19  = \$17  & \$18 ;
+  assign \$20  = ~ end_check;
+  assign \$21  = ma_busy | abort;
+  assign \$22  = cdm_cycle & abort;
+  assign \$23  = ~ ma_busy;
+  assign \$24  = ~ ma_busy;
+  assign \$25  = \$24  | ma_held;
+  assign \$26  = \$25  & slo;
+  assign \$27  = ~ locked_seen;
+  assign \$28  = locked & \$27 ;
+  assign restart_timer = ma_arm | \$28 ;
+  assign \$29  = ma_busy | abort;
+  assign \$30  = ~ config_ok;
+  assign \$31  = first_clock & \$30 ;
+  assign \$32  = first_clock ? slo_stuck_live : slo_stuck;
+  assign \$33  = ~ ma_enough;
+  assign \$34  = ~ abort;
+  assign \$35  = cdm_cycle & \$34 ;
+  assign \$36  = restart_timer | abort;
+  assign \$37  = armed & early;
+  assign \$38  = ~ locked_seen;
+  assign \$39  = armed & \$38 ;
+  assign \$40  = ~ locked;
+  assign \$41  = \$39  & \$40 ;
+  assign \$42  = \$41  & ack_expired;
   assign \$43  = ~ locked_seen;
-  assign \$44  = armed & \$43 ;
-  assign \$45  = ~ locked;
-  assign \$46  = \$44  & \$45 ;
-  assign \$47  = \$46  & ack_expired;
-  assign \$48  = ~ locked_seen;
-  assign \$49  = locked & \$48 ;
-  assign \$50  = \$49  & delay_over;
-  assign \$51  = ~ started;
-  assign \$52  = locked_seen & \$51 ;
-  assign \$53  = no_start_expired | slots_full;
-  assign \$54  = \$52  & \$53 ;
-  assign \$55  = ~ end_check;
-  assign \$56  = ma_busy | abort;
-  assign \$57  = ~ ma_busy;
-  assign \$58  = ~ ma_busy;
-  assign \$59  = \$58  & slo;
+  assign \$44  = locked & \$43 ;
+  assign \$45  = \$44  & delay_over;
+  assign \$46  = ~ started;
+  assign \$47  = locked_seen & \$46 ;
+  assign \$48  = no_start_expired | slots_full;
+  assign \$49  = \$47  & \$48 ;
+  assign \$50  = ~ end_check;
+  assign \$51  = ~ ma_enough;
+  assign \$52  = ~ abort;
+  assign \$53  = cdm_cycle & \$52 ;
+  assign \$54  = ~ end_check;
+  assign \$55  = slo | slo_stuck;
+  assign \$56  = \$55  | abort;
+  assign \$57  = ~ \$56 ;
+  assign \$58  = cdm_cycle & \$57 ;
+  assign \$59  = ma_busy | abort;
+  assign \$60  = slo | slo_stuck;
+  assign \$61  = \$60  | abort;
+  assign \$62  = ~ \$61 ;
+  assign \$63  = cdm_cycle & \$62 ;
+  assign \$64  = slo | slo_stuck;
+  assign \$65  = \$64  | abort;
+  assign \$66  = ~ \$65 ;
+  assign \$67  = cdm_cycle & \$66 ;
+  assign \$68  = ~ ma_busy;
+  assign \$69  = \$68  | ma_held;
+  assign \$70  = \$69  & slo;
+  assign \$71  = ! cycle_fsm_state;
+  assign \$72  = cycle_fsm_state == 1'h1;
+  assign \$73  = cycle_fsm_state == 2'h2;
+  assign \$74  = cycle_fsm_state == 2'h3;
+  assign \$75  = cycle_fsm_state == 3'h4;
+  assign \$76  = cycle_fsm_state == 3'h5;
+  assign \$77  = cycle_fsm_state == 3'h6;
+  assign \$78  = cycle_fsm_state == 3'h7;
   always @(posedge clk)
-    first_clock <= \$60 ;
+    cdm_cycle <= \$79 ;
   always @(posedge clk)
-    cycle_fsm_state <= \$61 ;
+    first_clock <= \$80 ;
   always @(posedge clk)
-    idle <= \$62 ;
+    cycle_fsm_state <= \$81 ;
   always @(posedge clk)
-    receiver_clear <= \$63 ;
+    idle <= \$82 ;
   always @(posedge clk)
-    armed <= \$64 ;
+    receiver_clear <= \$83 ;
   always @(posedge clk)
-    locked_seen <= \$65 ;
+    armed <= \$84 ;
   always @(posedge clk)
-    pause <= \$66 ;
-  assign \$1  = ~ locked_seen;
-  assign \$2  = locked & \$1 ;
-  assign restart_timer = ma_arm | \$2 ;
-  assign \$3  = ma_busy | abort;
-  assign \$4  = ~ config_ok;
-  assign \$5  = first_clock & \$4 ;
-  assign \$6  = first_clock ? slo_stuck_live : slo_stuck;
-  assign \$7  = ~ ma_enough;
-  assign \$8  = restart_timer | abort;
-  assign \$9  = armed & early;
-  assign \$10  = ~ locked_seen;
-  assign \$11  = armed & \$10 ;
-  assign \$12  = ~ locked;
-  assign \$13  = \$11  & \$12 ;
-  assign \$14  = \$13  & ack_expired;
-  assign \$15  = ~ locked_seen;
-  assign \$16  = locked & \$15 ;
-  assign \$17  = \$16  & delay_over;
-  assign \$18  = ~ started;
-  assign \$19  = locked_seen & \$18 ;
-  assign \$20  = no_start_expired | slots_full;
-  assign \$21  = \$19  & \$20 ;
-  assign \$22  = ~ end_check;
-  assign \$23  = ~ ma_enough;
-  assign \$24  = ~ end_check;
-  assign \$25  = ma_busy | abort;
-  assign \$26  = ~ ma_busy;
-  assign \$27  = \$26  & slo;
-  assign \$28  = ! cycle_fsm_state;
-  assign \$29  = cycle_fsm_state == 1'h1;
-  assign \$30  = cycle_fsm_state == 2'h2;
-  assign \$31  = cycle_fsm_state == 2'h3;
-  assign \$32  = cycle_fsm_state == 3'h4;
+    locked_seen <= \$85 ;
+  always @(posedge clk)
+    pause <= \$86 ;
+  assign \$1  = ma_busy | abort;
+  assign \$2  = ~ config_ok;
+  assign \$3  = first_clock & \$2 ;
+  assign \$4  = first_clock ? slo_stuck_live : slo_stuck;
+  assign \$5  = ~ locked_seen;
+  assign \$6  = locked & \$5 ;
+  assign \$7  = armed & early;
+  assign \$8  = ~ locked_seen;
+  assign \$9  = armed & \$8 ;
+  assign \$10  = ~ locked;
+  assign \$11  = \$9  & \$10 ;
+  assign \$12  = \$11  & ack_expired;
+  assign \$13  = ~ locked_seen;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    \$79  = cdm_cycle;
+    if (idle) begin
+      \$79  = cdm;
+    end
+    if (rst) begin
+      \$79  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    \$80  = idle;
+    if (rst) begin
+      \$80  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    \$81  = cycle_fsm_state;
+    (* full_case = 32'd1 *)
+    casez (cycle_fsm_state)
+      3'h0:
+          if (\$1 ) begin
+          end else if (break_over) begin
+            \$81  = 3'h1;
+          end
+      3'h1:
+          if (abort) begin
+            \$81  = 3'h0;
+          end else if (request) begin
+            \$81  = 3'h2;
+          end
+      3'h2:
+          if (\$3 ) begin
+            \$81  = 3'h1;
+            if (abort) begin
+              \$81  = 3'h0;
+            end
+          end else if (abort) begin
+            \$81  = 3'h0;
+          end else if (slo) begin
+            \$81  = 3'h3;
+          end else if (\$4 ) begin
+            \$81  = 3'h0;
+          end
+      3'h3:
+          if (abort) begin
+            \$81  = 3'h0;
+          end else if (frame_done) begin
+            \$81  = 3'h4;
+          end else if (\$7 ) begin
+            \$81  = 3'h0;
+          end else if (\$12 ) begin
+            \$81  = 3'h0;
+          end else if (\$15 ) begin
+            \$81  = 3'h0;
+          end else if (\$19 ) begin
+            \$81  = 3'h0;
+          end
+      3'h4:
+          if (abort) begin
+            (* full_case = 32'd1 *)
+            if (end_check) begin
+              \$81  = 3'h0;
+            end else begin
+              \$81  = 3'h0;
+            end
+          end else if (stopped) begin
+            (* full_case = 32'd1 *)
+            if (\$20 ) begin
+              (* full_case = 32'd1 *)
+              if (pause) begin
+                \$81  = 3'h5;
+              end else begin
+                \$81  = 3'h6;
+              end
+            end else if (stop_bit) begin
+              \$81  = 3'h0;
+            end else begin
+              \$81  = 3'h7;
+            end
+          end
+      3'h5:
+          if (\$21 ) begin
+          end else if (break_over) begin
+            \$81  = 3'h1;
+          end
+      3'h6:
+          if (\$22 ) begin
+            \$81  = 3'h0;
+          end else if (\$23 ) begin
+            \$81  = 3'h1;
+          end
+      3'h7:
+          if (abort) begin
+            \$81  = 3'h0;
+          end else if (\$26 ) begin
+            (* full_case = 32'd1 *)
+            if (pause) begin
+              \$81  = 3'h5;
+            end else if (cdm_cycle) begin
+              \$81  = 3'h6;
+            end else begin
+              \$81  = 3'h1;
+            end
+          end else if (slo_stuck) begin
+            \$81  = 3'h0;
+          end
+    endcase
+    if (rst) begin
+      \$81  = 3'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    \$82  = idle;
+    (* full_case = 32'd1 *)
+    casez (cycle_fsm_state)
+      3'h0:
+          if (\$1 ) begin
+          end else if (break_over) begin
+            \$82  = 1'h1;
+          end
+      3'h1:
+          if (abort) begin
+            \$82  = 1'h0;
+          end else if (request) begin
+            \$82  = 1'h0;
+          end
+      3'h2:
+          if (\$3 ) begin
+            \$82  = 1'h1;
+            if (abort) begin
+              \$82  = 1'h0;
+            end
+          end else if (abort) begin
+            \$82  = 1'h0;
+          end else if (slo) begin
+            \$82  = 1'h0;
+          end else if (\$4 ) begin
+            \$82  = 1'h0;
+          end
+      3'h3:
+          if (abort) begin
+            \$82  = 1'h0;
+          end else if (frame_done) begin
+            \$82  = 1'h0;
+          end else if (\$7 ) begin
+            \$82  = 1'h0;
+          end else if (\$12 ) begin
+            \$82  = 1'h0;
+          end else if (\$15 ) begin
+            \$82  = 1'h0;
+          end else if (\$19 ) begin
+            \$82  = 1'h0;
+          end
+      3'h4:
+          if (abort) begin
+            (* full_case = 32'd1 *)
+            if (end_check) begin
+              \$82  = 1'h0;
+            end else begin
+              \$82  = 1'h0;
+            end
+          end else if (stopped) begin
+            (* full_case = 32'd1 *)
+            if (\$20 ) begin
+              (* full_case = 32'd1 *)
+              if (pause) begin
+                \$82  = 1'h0;
+              end else begin
+                \$82  = 1'h0;
+              end
+            end else if (stop_bit) begin
+              \$82  = 1'h0;
+            end else begin
+              \$82  = 1'h0;
+            end
+          end
+      3'h5:
+          if (\$21 ) begin
+          end else if (break_over) begin
+            \$82  = 1'h1;
+          end
+      3'h6:
+          if (\$22 ) begin
+            \$82  = 1'h0;
+          end else if (\$23 ) begin
+            \$82  = 1'h1;
+          end
+      3'h7:
+          if (abort) begin
+            \$82  = 1'h0;
+          end else if (\$26 ) begin
+            (* full_case = 32'd1 *)
+            if (pause) begin
+              \$82  = 1'h0;
+            end else if (cdm_cycle) begin
+              \$82  = 1'h0;
+            end else begin
+              \$82  = 1'h1;
+            end
+          end else if (slo_stuck) begin
+            \$82  = 1'h0;
+          end
+    endcase
+    if (rst) begin
+      \$82  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    \$83  = receiver_clear;
+    (* full_case = 32'd1 *)
+    casez (cycle_fsm_state)
+      3'h0:
+          if (\$1 ) begin
+          end else if (break_over) begin
+            \$83  = 1'h1;
+          end
+      3'h1:
+          if (abort) begin
+            \$83  = 1'h1;
+          end else if (request) begin
+            \$83  = 1'h1;
+          end
+      3'h2:
+          if (\$3 ) begin
+            \$83  = 1'h1;
+            if (abort) begin
+              \$83  = 1'h1;
+            end
+          end else if (abort) begin
+            \$83  = 1'h1;
+          end else if (slo) begin
+            \$83  = 1'h0;
+          end else if (\$4 ) begin
+            \$83  = 1'h1;
+          end
+      3'h3:
+          if (abort) begin
+            \$83  = 1'h1;
+          end else if (frame_done) begin
+            \$83  = 1'h0;
+          end else if (\$7 ) begin
+            \$83  = 1'h1;
+          end else if (\$12 ) begin
+            \$83  = 1'h1;
+          end else if (\$15 ) begin
+            \$83  = 1'h1;
+          end else if (\$19 ) begin
+            \$83  = 1'h1;
+          end
+      3'h4:
+          if (abort) begin
+            (* full_case = 32'd1 *)
+            if (end_check) begin
+              \$83  = 1'h1;
+            end else begin
+              \$83  = 1'h1;
+            end
+          end else if (stopped) begin
+            (* full_case = 32'd1 *)
+            if (\$20 ) begin
+              (* full_case = 32'd1 *)
+              if (pause) begin
+                \$83  = 1'h1;
+              end else begin
+                \$83  = 1'h0;
+              end
+            end else if (stop_bit) begin
+              \$83  = 1'h1;
+            end else begin
+              \$83  = 1'h0;
+            end
+          end
+      3'h5:
+          if (\$21 ) begin
+          end else if (break_over) begin
+            \$83  = 1'h1;
+          end
+      3'h6:
+          if (\$22 ) begin
+            \$83  = 1'h1;
+          end else if (\$23 ) begin
+            \$83  = 1'h1;
+          end
+      3'h7:
+          if (abort) begin
+            \$83  = 1'h1;
+          end else if (\$26 ) begin
+            (* full_case = 32'd1 *)
+            if (pause) begin
+              \$83  = 1'h1;
+            end else if (cdm_cycle) begin
+              \$83  = 1'h0;
+            end else begin
+              \$83  = 1'h1;
+            end
+          end else if (slo_stuck) begin
+            \$83  = 1'h1;
+          end
+    endcase
+    if (rst) begin
+      \$83  = 1'h1;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    \$84  = armed;
+    casez (cycle_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          \$84  = 1'h0;
+      3'h3:
+          if (ma_arm) begin
+            \$84  = 1'h1;
+          end
+    endcase
+    if (rst) begin
+      \$84  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    \$85  = locked_seen;
+    casez (cycle_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          \$85  = 1'h0;
+      3'h3:
+          if (\$6 ) begin
+            \$85  = 1'h1;
+          end
+    endcase
+    if (rst) begin
+      \$85  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    \$86  = pause;
+    casez (cycle_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h3:
+          if (abort) begin
+          end else if (frame_done) begin
+            \$86  = frame_doubtful;
+          end
+    endcase
+    if (rst) begin
+      \$86  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     resync = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -5598,12 +7063,12 @@ module \biss_master_wb.ch0.core.controller (rst, request, restart_timer, frame_d
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     timer_clear = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
       3'h0:
-          if (\$3 ) begin
+          if (\$29 ) begin
             timer_clear = 1'h1;
           end
       3'h1:
@@ -5611,14 +7076,14 @@ module \biss_master_wb.ch0.core.controller (rst, request, restart_timer, frame_d
       3'h2:
           timer_clear = 1'h1;
       3'h3:
-          if (\$8 ) begin
+          if (\$36 ) begin
             timer_clear = 1'h1;
           end
       3'h4:
           if (abort) begin
             timer_clear = 1'h1;
           end else if (stopped) begin
-            if (\$24 ) begin
+            if (\$54 ) begin
               if (pause) begin
                 timer_clear = 1'h1;
               end
@@ -5627,7 +7092,7 @@ module \biss_master_wb.ch0.core.controller (rst, request, restart_timer, frame_d
             end
           end
       3'h5:
-          if (\$25 ) begin
+          if (\$59 ) begin
             timer_clear = 1'h1;
           end
       3'h6:
@@ -5635,7 +7100,7 @@ module \biss_master_wb.ch0.core.controller (rst, request, restart_timer, frame_d
       3'h7:
           if (abort) begin
             timer_clear = 1'h1;
-          end else if (\$27 ) begin
+          end else if (\$70 ) begin
             if (pause) begin
               timer_clear = 1'h1;
             end
@@ -5645,7 +7110,7 @@ module \biss_master_wb.ch0.core.controller (rst, request, restart_timer, frame_d
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     fault = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -5654,25 +7119,25 @@ module \biss_master_wb.ch0.core.controller (rst, request, restart_timer, frame_d
       3'h1:
           /* empty */;
       3'h2:
-          if (\$5 ) begin
+          if (\$31 ) begin
             fault = 1'h1;
           end else if (abort) begin
             fault = 1'h1;
           end else if (slo) begin
-          end else if (\$6 ) begin
+          end else if (\$32 ) begin
             fault = 1'h1;
           end
       3'h3:
           if (abort) begin
             fault = 1'h1;
           end else if (frame_done) begin
-          end else if (\$9 ) begin
+          end else if (\$37 ) begin
             fault = 1'h1;
-          end else if (\$14 ) begin
+          end else if (\$42 ) begin
             fault = 1'h1;
-          end else if (\$17 ) begin
+          end else if (\$45 ) begin
             fault = 1'h1;
-          end else if (\$21 ) begin
+          end else if (\$49 ) begin
             fault = 1'h1;
           end
       3'h4:
@@ -5681,7 +7146,7 @@ module \biss_master_wb.ch0.core.controller (rst, request, restart_timer, frame_d
               fault = 1'h1;
             end
           end else if (stopped) begin
-            if (\$24 ) begin
+            if (\$54 ) begin
             end else if (stop_bit) begin
               fault = 1'h1;
             end
@@ -5693,14 +7158,14 @@ module \biss_master_wb.ch0.core.controller (rst, request, restart_timer, frame_d
       3'h7:
           if (abort) begin
             fault = 1'h1;
-          end else if (\$27 ) begin
+          end else if (\$70 ) begin
           end else if (slo_stuck) begin
             fault = 1'h1;
           end
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     fault_status = 4'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -5709,25 +7174,25 @@ module \biss_master_wb.ch0.core.controller (rst, request, restart_timer, frame_d
       3'h1:
           /* empty */;
       3'h2:
-          if (\$5 ) begin
+          if (\$31 ) begin
             fault_status = 4'hb;
           end else if (abort) begin
             fault_status = 4'ha;
           end else if (slo) begin
-          end else if (\$6 ) begin
+          end else if (\$32 ) begin
             fault_status = 4'h9;
           end
       3'h3:
           if (abort) begin
             fault_status = 4'ha;
           end else if (frame_done) begin
-          end else if (\$9 ) begin
+          end else if (\$37 ) begin
             fault_status = 4'h8;
-          end else if (\$14 ) begin
+          end else if (\$42 ) begin
             fault_status = 4'h6;
-          end else if (\$17 ) begin
+          end else if (\$45 ) begin
             fault_status = 4'h8;
-          end else if (\$21 ) begin
+          end else if (\$49 ) begin
             fault_status = 4'h7;
           end
       3'h4:
@@ -5736,7 +7201,7 @@ module \biss_master_wb.ch0.core.controller (rst, request, restart_timer, frame_d
               fault_status = 4'ha;
             end
           end else if (stopped) begin
-            if (\$24 ) begin
+            if (\$54 ) begin
             end else if (stop_bit) begin
               fault_status = 4'hc;
             end
@@ -5748,14 +7213,14 @@ module \biss_master_wb.ch0.core.controller (rst, request, restart_timer, frame_d
       3'h7:
           if (abort) begin
             fault_status = 4'ha;
-          end else if (\$27 ) begin
+          end else if (\$70 ) begin
           end else if (slo_stuck) begin
             fault_status = 4'h9;
           end
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     faults = 7'h00;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -5764,25 +7229,25 @@ module \biss_master_wb.ch0.core.controller (rst, request, restart_timer, frame_d
       3'h1:
           /* empty */;
       3'h2:
-          if (\$5 ) begin
+          if (\$31 ) begin
             faults[5] = 1'h1;
           end else if (abort) begin
             faults[4] = 1'h1;
           end else if (slo) begin
-          end else if (\$6 ) begin
+          end else if (\$32 ) begin
             faults[3] = 1'h1;
           end
       3'h3:
           if (abort) begin
             faults[4] = 1'h1;
           end else if (frame_done) begin
-          end else if (\$9 ) begin
+          end else if (\$37 ) begin
             faults[2] = 1'h1;
-          end else if (\$14 ) begin
+          end else if (\$42 ) begin
             faults[0] = 1'h1;
-          end else if (\$17 ) begin
+          end else if (\$45 ) begin
             faults[2] = 1'h1;
-          end else if (\$21 ) begin
+          end else if (\$49 ) begin
             faults[1] = 1'h1;
           end
       3'h4:
@@ -5791,7 +7256,7 @@ module \biss_master_wb.ch0.core.controller (rst, request, restart_timer, frame_d
               faults[4] = 1'h1;
             end
           end else if (stopped) begin
-            if (\$24 ) begin
+            if (\$54 ) begin
             end else if (stop_bit) begin
               faults[6] = 1'h1;
             end
@@ -5803,14 +7268,14 @@ module \biss_master_wb.ch0.core.controller (rst, request, restart_timer, frame_d
       3'h7:
           if (abort) begin
             faults[4] = 1'h1;
-          end else if (\$27 ) begin
+          end else if (\$70 ) begin
           end else if (slo_stuck) begin
             faults[3] = 1'h1;
           end
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     ma_run = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -5820,13 +7285,13 @@ module \biss_master_wb.ch0.core.controller (rst, request, restart_timer, frame_d
       3'h2:
           /* empty */;
       3'h3:
-          ma_run = \$7 ;
+          ma_run = \$33 ;
       3'h4:
-          ma_run = \$23 ;
+          ma_run = \$51 ;
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     in_clock = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -5840,7 +7305,30 @@ module \biss_master_wb.ch0.core.controller (rst, request, restart_timer, frame_d
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    ma_hold = 1'h0;
+    (* full_case = 32'd1 *)
+    casez (cycle_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h3:
+          ma_hold = \$35 ;
+      3'h4:
+          ma_hold = \$53 ;
+      3'h5:
+          ma_hold = \$58 ;
+      3'h6:
+          ma_hold = \$63 ;
+      3'h7:
+          ma_hold = \$67 ;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     report_frame = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -5853,7 +7341,7 @@ module \biss_master_wb.ch0.core.controller (rst, request, restart_timer, frame_d
       3'h3:
           if (abort) begin
           end else if (frame_done) begin
-            if (\$22 ) begin
+            if (\$50 ) begin
               report_frame = 1'h1;
             end
           end
@@ -5865,13 +7353,13 @@ module \biss_master_wb.ch0.core.controller (rst, request, restart_timer, frame_d
           /* empty */;
       3'h7:
           if (abort) begin
-          end else if (\$27 ) begin
+          end else if (\$70 ) begin
             report_frame = 1'h1;
           end
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     report_delay = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -5884,12 +7372,12 @@ module \biss_master_wb.ch0.core.controller (rst, request, restart_timer, frame_d
       3'h3:
           if (abort) begin
           end else if (frame_done) begin
-            if (\$22 ) begin
+            if (\$50 ) begin
               report_delay = 1'h1;
             end
-          end else if (\$9 ) begin
-          end else if (\$14 ) begin
-          end else if (\$17 ) begin
+          end else if (\$37 ) begin
+          end else if (\$42 ) begin
+          end else if (\$45 ) begin
             report_delay = 1'h1;
           end
       3'h4:
@@ -5900,354 +7388,10 @@ module \biss_master_wb.ch0.core.controller (rst, request, restart_timer, frame_d
           /* empty */;
       3'h7:
           if (abort) begin
-          end else if (\$27 ) begin
+          end else if (\$70 ) begin
             report_delay = 1'h1;
           end
     endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
-    \$60  = idle;
-    if (rst) begin
-      \$60  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
-    \$61  = cycle_fsm_state;
-    (* full_case = 32'd1 *)
-    casez (cycle_fsm_state)
-      3'h0:
-          if (\$36 ) begin
-          end else if (break_over) begin
-            \$61  = 3'h1;
-          end
-      3'h1:
-          if (abort) begin
-            \$61  = 3'h0;
-          end else if (request) begin
-            \$61  = 3'h2;
-          end
-      3'h2:
-          if (\$38 ) begin
-            \$61  = 3'h1;
-            if (abort) begin
-              \$61  = 3'h0;
-            end
-          end else if (abort) begin
-            \$61  = 3'h0;
-          end else if (slo) begin
-            \$61  = 3'h3;
-          end else if (\$39 ) begin
-            \$61  = 3'h0;
-          end
-      3'h3:
-          if (abort) begin
-            \$61  = 3'h0;
-          end else if (frame_done) begin
-            \$61  = 3'h4;
-          end else if (\$42 ) begin
-            \$61  = 3'h0;
-          end else if (\$47 ) begin
-            \$61  = 3'h0;
-          end else if (\$50 ) begin
-            \$61  = 3'h0;
-          end else if (\$54 ) begin
-            \$61  = 3'h0;
-          end
-      3'h4:
-          if (abort) begin
-            (* full_case = 32'd1 *)
-            if (end_check) begin
-              \$61  = 3'h0;
-            end else begin
-              \$61  = 3'h0;
-            end
-          end else if (stopped) begin
-            (* full_case = 32'd1 *)
-            if (\$55 ) begin
-              (* full_case = 32'd1 *)
-              if (pause) begin
-                \$61  = 3'h5;
-              end else begin
-                \$61  = 3'h6;
-              end
-            end else if (stop_bit) begin
-              \$61  = 3'h0;
-            end else begin
-              \$61  = 3'h7;
-            end
-          end
-      3'h5:
-          if (\$56 ) begin
-          end else if (break_over) begin
-            \$61  = 3'h1;
-          end
-      3'h6:
-          if (\$57 ) begin
-            \$61  = 3'h1;
-          end
-      3'h7:
-          if (abort) begin
-            \$61  = 3'h0;
-          end else if (\$59 ) begin
-            (* full_case = 32'd1 *)
-            if (pause) begin
-              \$61  = 3'h5;
-            end else begin
-              \$61  = 3'h1;
-            end
-          end else if (slo_stuck) begin
-            \$61  = 3'h0;
-          end
-    endcase
-    if (rst) begin
-      \$61  = 3'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
-    \$62  = idle;
-    (* full_case = 32'd1 *)
-    casez (cycle_fsm_state)
-      3'h0:
-          if (\$36 ) begin
-          end else if (break_over) begin
-            \$62  = 1'h1;
-          end
-      3'h1:
-          if (abort) begin
-            \$62  = 1'h0;
-          end else if (request) begin
-            \$62  = 1'h0;
-          end
-      3'h2:
-          if (\$38 ) begin
-            \$62  = 1'h1;
-            if (abort) begin
-              \$62  = 1'h0;
-            end
-          end else if (abort) begin
-            \$62  = 1'h0;
-          end else if (slo) begin
-            \$62  = 1'h0;
-          end else if (\$39 ) begin
-            \$62  = 1'h0;
-          end
-      3'h3:
-          if (abort) begin
-            \$62  = 1'h0;
-          end else if (frame_done) begin
-            \$62  = 1'h0;
-          end else if (\$42 ) begin
-            \$62  = 1'h0;
-          end else if (\$47 ) begin
-            \$62  = 1'h0;
-          end else if (\$50 ) begin
-            \$62  = 1'h0;
-          end else if (\$54 ) begin
-            \$62  = 1'h0;
-          end
-      3'h4:
-          if (abort) begin
-            (* full_case = 32'd1 *)
-            if (end_check) begin
-              \$62  = 1'h0;
-            end else begin
-              \$62  = 1'h0;
-            end
-          end else if (stopped) begin
-            (* full_case = 32'd1 *)
-            if (\$55 ) begin
-              (* full_case = 32'd1 *)
-              if (pause) begin
-                \$62  = 1'h0;
-              end else begin
-                \$62  = 1'h0;
-              end
-            end else if (stop_bit) begin
-              \$62  = 1'h0;
-            end else begin
-              \$62  = 1'h0;
-            end
-          end
-      3'h5:
-          if (\$56 ) begin
-          end else if (break_over) begin
-            \$62  = 1'h1;
-          end
-      3'h6:
-          if (\$57 ) begin
-            \$62  = 1'h1;
-          end
-      3'h7:
-          if (abort) begin
-            \$62  = 1'h0;
-          end else if (\$59 ) begin
-            (* full_case = 32'd1 *)
-            if (pause) begin
-              \$62  = 1'h0;
-            end else begin
-              \$62  = 1'h1;
-            end
-          end else if (slo_stuck) begin
-            \$62  = 1'h0;
-          end
-    endcase
-    if (rst) begin
-      \$62  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
-    \$63  = receiver_clear;
-    (* full_case = 32'd1 *)
-    casez (cycle_fsm_state)
-      3'h0:
-          if (\$36 ) begin
-          end else if (break_over) begin
-            \$63  = 1'h1;
-          end
-      3'h1:
-          if (abort) begin
-            \$63  = 1'h1;
-          end else if (request) begin
-            \$63  = 1'h1;
-          end
-      3'h2:
-          if (\$38 ) begin
-            \$63  = 1'h1;
-            if (abort) begin
-              \$63  = 1'h1;
-            end
-          end else if (abort) begin
-            \$63  = 1'h1;
-          end else if (slo) begin
-            \$63  = 1'h0;
-          end else if (\$39 ) begin
-            \$63  = 1'h1;
-          end
-      3'h3:
-          if (abort) begin
-            \$63  = 1'h1;
-          end else if (frame_done) begin
-            \$63  = 1'h0;
-          end else if (\$42 ) begin
-            \$63  = 1'h1;
-          end else if (\$47 ) begin
-            \$63  = 1'h1;
-          end else if (\$50 ) begin
-            \$63  = 1'h1;
-          end else if (\$54 ) begin
-            \$63  = 1'h1;
-          end
-      3'h4:
-          if (abort) begin
-            (* full_case = 32'd1 *)
-            if (end_check) begin
-              \$63  = 1'h1;
-            end else begin
-              \$63  = 1'h1;
-            end
-          end else if (stopped) begin
-            (* full_case = 32'd1 *)
-            if (\$55 ) begin
-              (* full_case = 32'd1 *)
-              if (pause) begin
-                \$63  = 1'h1;
-              end else begin
-                \$63  = 1'h0;
-              end
-            end else if (stop_bit) begin
-              \$63  = 1'h1;
-            end else begin
-              \$63  = 1'h0;
-            end
-          end
-      3'h5:
-          if (\$56 ) begin
-          end else if (break_over) begin
-            \$63  = 1'h1;
-          end
-      3'h6:
-          if (\$57 ) begin
-            \$63  = 1'h1;
-          end
-      3'h7:
-          if (abort) begin
-            \$63  = 1'h1;
-          end else if (\$59 ) begin
-            (* full_case = 32'd1 *)
-            if (pause) begin
-              \$63  = 1'h1;
-            end else begin
-              \$63  = 1'h1;
-            end
-          end else if (slo_stuck) begin
-            \$63  = 1'h1;
-          end
-    endcase
-    if (rst) begin
-      \$63  = 1'h1;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
-    \$64  = armed;
-    casez (cycle_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          \$64  = 1'h0;
-      3'h3:
-          if (ma_arm) begin
-            \$64  = 1'h1;
-          end
-    endcase
-    if (rst) begin
-      \$64  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
-    \$65  = locked_seen;
-    casez (cycle_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          \$65  = 1'h0;
-      3'h3:
-          if (\$41 ) begin
-            \$65  = 1'h1;
-          end
-    endcase
-    if (rst) begin
-      \$65  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
-    \$66  = pause;
-    casez (cycle_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h3:
-          if (abort) begin
-          end else if (frame_done) begin
-            \$66  = frame_doubtful;
-          end
-    endcase
-    if (rst) begin
-      \$66  = 1'h0;
-    end
   end
   assign \faults.no_ack  = faults[0];
   assign \faults.no_start  = faults[1];
@@ -6274,6 +7418,11 @@ module \biss_master_wb.ch0.core.counters (rst, clear, events, counts, clk);
   wire \clear$34 ;
   wire \clear$37 ;
   wire \clear$40 ;
+  wire \clear$43 ;
+  wire \clear$46 ;
+  wire \clear$49 ;
+  wire \clear$52 ;
+  wire \clear$55 ;
   wire \clear$7 ;
   input clk;
   wire clk;
@@ -6289,10 +7438,20 @@ module \biss_master_wb.ch0.core.counters (rst, clear, events, counts, clk);
   wire [15:0] \count$35 ;
   wire [15:0] \count$38 ;
   wire [15:0] \count$41 ;
+  wire [15:0] \count$44 ;
+  wire [15:0] \count$47 ;
+  wire [15:0] \count$50 ;
+  wire [15:0] \count$53 ;
+  wire [15:0] \count$56 ;
   wire [15:0] \count$8 ;
-  output [207:0] counts;
-  wire [207:0] counts;
+  output [287:0] counts;
+  wire [287:0] counts;
   wire [15:0] \counts.aborted ;
+  wire [15:0] \counts.ca_aborted ;
+  wire [15:0] \counts.ca_crc4_error ;
+  wire [15:0] \counts.ca_data_fault ;
+  wire [15:0] \counts.ca_no_answer ;
+  wire [15:0] \counts.ca_refused ;
   wire [15:0] \counts.crc_word0 ;
   wire [15:0] \counts.crc_word1 ;
   wire [15:0] \counts.delay_range ;
@@ -6305,9 +7464,14 @@ module \biss_master_wb.ch0.core.counters (rst, clear, events, counts, clk);
   wire [15:0] \counts.overrun ;
   wire [15:0] \counts.slo_stuck_low ;
   wire [15:0] \counts.spw_mismatch ;
-  input [12:0] events;
-  wire [12:0] events;
+  input [17:0] events;
+  wire [17:0] events;
   wire \events.aborted ;
+  wire \events.ca_aborted ;
+  wire \events.ca_crc4_error ;
+  wire \events.ca_data_fault ;
+  wire \events.ca_no_answer ;
+  wire \events.ca_refused ;
   wire \events.crc_word0 ;
   wire \events.crc_word1 ;
   wire \events.delay_range ;
@@ -6331,6 +7495,11 @@ module \biss_master_wb.ch0.core.counters (rst, clear, events, counts, clk);
   wire \inc$33 ;
   wire \inc$36 ;
   wire \inc$39 ;
+  wire \inc$42 ;
+  wire \inc$45 ;
+  wire \inc$48 ;
+  wire \inc$51 ;
+  wire \inc$54 ;
   wire \inc$6 ;
   wire \inc$9 ;
   input rst;
@@ -6340,6 +7509,41 @@ module \biss_master_wb.ch0.core.counters (rst, clear, events, counts, clk);
     .clk(clk),
     .count(\count$38 ),
     .inc(events[11]),
+    .rst(rst)
+  );
+  \biss_master_wb.ch0.core.counters.count_ca_aborted  count_ca_aborted (
+    .clear(clear),
+    .clk(clk),
+    .count(\count$53 ),
+    .inc(events[16]),
+    .rst(rst)
+  );
+  \biss_master_wb.ch0.core.counters.count_ca_crc4_error  count_ca_crc4_error (
+    .clear(clear),
+    .clk(clk),
+    .count(\count$44 ),
+    .inc(events[13]),
+    .rst(rst)
+  );
+  \biss_master_wb.ch0.core.counters.count_ca_data_fault  count_ca_data_fault (
+    .clear(clear),
+    .clk(clk),
+    .count(\count$56 ),
+    .inc(events[17]),
+    .rst(rst)
+  );
+  \biss_master_wb.ch0.core.counters.count_ca_no_answer  count_ca_no_answer (
+    .clear(clear),
+    .clk(clk),
+    .count(\count$47 ),
+    .inc(events[14]),
+    .rst(rst)
+  );
+  \biss_master_wb.ch0.core.counters.count_ca_refused  count_ca_refused (
+    .clear(clear),
+    .clk(clk),
+    .count(\count$50 ),
+    .inc(events[15]),
     .rst(rst)
   );
   \biss_master_wb.ch0.core.counters.count_crc_word0  count_crc_word0 (
@@ -6452,6 +7656,16 @@ module \biss_master_wb.ch0.core.counters (rst, clear, events, counts, clk);
   assign \clear$37  = clear;
   assign \inc$39  = events[12];
   assign \clear$40  = clear;
+  assign \inc$42  = events[13];
+  assign \clear$43  = clear;
+  assign \inc$45  = events[14];
+  assign \clear$46  = clear;
+  assign \inc$48  = events[15];
+  assign \clear$49  = clear;
+  assign \inc$51  = events[16];
+  assign \clear$52  = clear;
+  assign \inc$54  = events[17];
+  assign \clear$55  = clear;
   assign \events.crc_word0  = events[0];
   assign \events.crc_word1  = events[1];
   assign \events.no_ack  = events[2];
@@ -6465,6 +7679,11 @@ module \biss_master_wb.ch0.core.counters (rst, clear, events, counts, clk);
   assign \events.overrun  = events[10];
   assign \events.aborted  = events[11];
   assign \events.no_stop  = events[12];
+  assign \events.ca_crc4_error  = events[13];
+  assign \events.ca_no_answer  = events[14];
+  assign \events.ca_refused  = events[15];
+  assign \events.ca_aborted  = events[16];
+  assign \events.ca_data_fault  = events[17];
   assign \counts.crc_word0  = counts[15:0];
   assign \counts.crc_word1  = counts[31:16];
   assign \counts.no_ack  = counts[47:32];
@@ -6478,6 +7697,16 @@ module \biss_master_wb.ch0.core.counters (rst, clear, events, counts, clk);
   assign \counts.overrun  = counts[175:160];
   assign \counts.aborted  = counts[191:176];
   assign \counts.no_stop  = counts[207:192];
+  assign \counts.ca_crc4_error  = counts[223:208];
+  assign \counts.ca_no_answer  = counts[239:224];
+  assign \counts.ca_refused  = counts[255:240];
+  assign \counts.ca_aborted  = counts[271:256];
+  assign \counts.ca_data_fault  = counts[287:272];
+  assign counts[287:272] = \count$56 ;
+  assign counts[271:256] = \count$53 ;
+  assign counts[255:240] = \count$50 ;
+  assign counts[239:224] = \count$47 ;
+  assign counts[223:208] = \count$44 ;
   assign counts[207:192] = \count$41 ;
   assign counts[191:176] = \count$38 ;
   assign counts[175:160] = \count$35 ;
@@ -6495,438 +7724,6 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch0.core.counters.count_aborted (rst, clear, inc, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$23  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.counters.count_crc_word0 (rst, clear, inc, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$24  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.counters.count_crc_word1 (rst, clear, inc, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$25  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$25 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$25 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.counters.count_delay_range (rst, clear, inc, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$26  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.counters.count_lc_repeat (rst, clear, inc, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$27  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.counters.count_lc_skip (rst, clear, inc, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$28  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.counters.count_lc_zero (rst, clear, inc, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$29  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.counters.count_no_ack (rst, clear, inc, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$30  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.counters.count_no_start (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$31  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -6980,7 +7777,7 @@ module \biss_master_wb.ch0.core.counters.count_no_start (rst, clear, inc, count,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.counters.count_no_stop (rst, clear, inc, count, clk);
+module \biss_master_wb.ch0.core.counters.count_ca_aborted (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$32  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -7034,7 +7831,7 @@ module \biss_master_wb.ch0.core.counters.count_no_stop (rst, clear, inc, count, 
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.counters.count_overrun (rst, clear, inc, count, clk);
+module \biss_master_wb.ch0.core.counters.count_ca_crc4_error (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$33  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -7088,7 +7885,7 @@ module \biss_master_wb.ch0.core.counters.count_overrun (rst, clear, inc, count, 
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.counters.count_slo_stuck_low (rst, clear, inc, count, clk);
+module \biss_master_wb.ch0.core.counters.count_ca_data_fault (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$34  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -7142,7 +7939,7 @@ module \biss_master_wb.ch0.core.counters.count_slo_stuck_low (rst, clear, inc, c
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.counters.count_spw_mismatch (rst, clear, inc, count, clk);
+module \biss_master_wb.ch0.core.counters.count_ca_no_answer (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$35  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -7196,9 +7993,711 @@ module \biss_master_wb.ch0.core.counters.count_spw_mismatch (rst, clear, inc, co
 endmodule
 
 (* generator = "Amaranth" *)
+module \biss_master_wb.ch0.core.counters.count_ca_refused (rst, clear, inc, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$36  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_wb.ch0.core.counters.count_crc_word0 (rst, clear, inc, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$37  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_wb.ch0.core.counters.count_crc_word1 (rst, clear, inc, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$38  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_wb.ch0.core.counters.count_delay_range (rst, clear, inc, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$39  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_wb.ch0.core.counters.count_lc_repeat (rst, clear, inc, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$40  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_wb.ch0.core.counters.count_lc_skip (rst, clear, inc, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$41  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_wb.ch0.core.counters.count_lc_zero (rst, clear, inc, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$42  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_wb.ch0.core.counters.count_no_ack (rst, clear, inc, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$43  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_wb.ch0.core.counters.count_no_start (rst, clear, inc, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$44  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_wb.ch0.core.counters.count_no_stop (rst, clear, inc, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$45  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_wb.ch0.core.counters.count_overrun (rst, clear, inc, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$46  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_wb.ch0.core.counters.count_slo_stuck_low (rst, clear, inc, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$47  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_wb.ch0.core.counters.count_spw_mismatch (rst, clear, inc, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$48  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
 module \biss_master_wb.ch0.core.decoder (rst, word_count, \bit , lc_load, words, receiver_clear, sample, done, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1, lc, cpw_top, crc_ok
 , clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$36  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$49  = 0;
   wire [6:0] \$1 ;
   wire [1:0] \$10 ;
   reg [2:0] \$100 ;
@@ -7581,7 +9080,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, \bit , lc_load, words,
     .valid(\valid$52 )
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     (* full_case = 32'd1 *)
     casez (words[6])
       1'h0:
@@ -7591,7 +9090,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, \bit , lc_load, words,
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -7605,7 +9104,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, \bit , lc_load, words,
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     (* full_case = 32'd1 *)
     casez (words[9:6])
       4'h0:
@@ -7643,7 +9142,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, \bit , lc_load, words,
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -7657,7 +9156,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, \bit , lc_load, words,
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     (* full_case = 32'd1 *)
     casez (words[16])
       1'h0:
@@ -7667,7 +9166,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, \bit , lc_load, words,
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     (* full_case = 32'd1 *)
     casez (words[17:16])
       2'h0:
@@ -7681,7 +9180,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, \bit , lc_load, words,
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:16])
       4'h0:
@@ -7719,7 +9218,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, \bit , lc_load, words,
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     (* full_case = 32'd1 *)
     casez (words[17:16])
       2'h0:
@@ -7733,7 +9232,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, \bit , lc_load, words,
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$94  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -7757,7 +9256,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$95  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -7779,7 +9278,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$96  = slots;
     if (\$34 ) begin
       \$96  = \$35 [15:0];
@@ -7792,7 +9291,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$97  = slots_full;
     if (\$34 ) begin
       \$97  = \$36 ;
@@ -7805,7 +9304,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$98  = started;
     casez (decoder_fsm_state)
       3'h0:
@@ -7821,7 +9320,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$99  = start_slot;
     casez (decoder_fsm_state)
       3'h0:
@@ -7837,7 +9336,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$100  = decoder_fsm_state;
     casez (decoder_fsm_state)
       3'h0:
@@ -7869,7 +9368,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$101  = cds;
     casez (decoder_fsm_state)
       3'h0:
@@ -7887,7 +9386,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$102  = idx;
     casez (decoder_fsm_state)
       3'h0:
@@ -7912,7 +9411,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$103  = in_data;
     casez (decoder_fsm_state)
       3'h0:
@@ -7937,7 +9436,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$104  = in_lc;
     casez (decoder_fsm_state)
       3'h0:
@@ -7962,7 +9461,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$105  = in_top;
     casez (decoder_fsm_state)
       3'h0:
@@ -7987,7 +9486,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$106  = word;
     casez (decoder_fsm_state)
       3'h0:
@@ -8015,7 +9514,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$107  = stop_bit;
     casez (decoder_fsm_state)
       3'h0:
@@ -8037,7 +9536,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$108  = data0;
     if (\$58 ) begin
       \$108  = { data0[53:0], \bit  };
@@ -8050,7 +9549,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$109  = ne;
     if (\$59 ) begin
       \$109 [0] = 1'h1;
@@ -8070,7 +9569,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$110  = nw;
     if (\$59 ) begin
       \$110 [0] = 1'h1;
@@ -8092,7 +9591,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$111  = data1;
     if (\$70 ) begin
       \$111  = { data1[38:0], \bit  };
@@ -8105,7 +9604,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$112  = lc;
     if (lc_load) begin
       \$112  = { lc[4:0], \bit  };
@@ -8118,7 +9617,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$113  = cpw_top;
     if (\$80 ) begin
       \$113  = { cpw_top[38:0], \bit  };
@@ -8131,7 +9630,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     in_word = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -8168,7 +9667,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch0.core.decoder.crc0 (rst, \bit , start, valid, kind, receiver_clear, ok, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$37  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$50  = 0;
   wire [5:0] \$1 ;
   wire \$10 ;
   wire [5:0] \$11 ;
@@ -8203,8 +9702,8 @@ module \biss_master_wb.ch0.core.decoder.crc0 (rst, \bit , start, valid, kind, re
   wire \$7 ;
   wire \$8 ;
   wire [5:0] \$9 ;
-  wire [1:0] \$auto$rtlil.cc:2739:Not$14 ;
-  wire [6:0] \$auto$rtlil.cc:2739:Not$16 ;
+  wire [1:0] \$auto$rtlil.cc:2739:Not$22 ;
+  wire [6:0] \$auto$rtlil.cc:2739:Not$24 ;
   input \bit ;
   wire \bit ;
   input clk;
@@ -8259,10 +9758,10 @@ module \biss_master_wb.ch0.core.decoder.crc0 (rst, \bit , start, valid, kind, re
     crc16_reg <= \$33 ;
   always @(posedge clk)
     crc16_match <= \$34 ;
-  assign \$auto$rtlil.cc:2739:Not$14  = ~ { crc6_reg[0], 1'h0 };
-  assign \$auto$rtlil.cc:2739:Not$16  = ~ { crc16_reg[14], crc16_reg[11], crc16_reg[6:5], crc16_reg[3:2], 1'h0 };
+  assign \$auto$rtlil.cc:2739:Not$22  = ~ { crc6_reg[0], 1'h0 };
+  assign \$auto$rtlil.cc:2739:Not$24  = ~ { crc16_reg[14], crc16_reg[11], crc16_reg[6:5], crc16_reg[3:2], 1'h0 };
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$31  = crc6_reg;
     if (valid) begin
       \$31  = \$5 ;
@@ -8277,7 +9776,7 @@ module \biss_master_wb.ch0.core.decoder.crc0 (rst, \bit , start, valid, kind, re
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$32  = crc6_match;
     if (valid) begin
       \$32  = \$15 ;
@@ -8292,7 +9791,7 @@ module \biss_master_wb.ch0.core.decoder.crc0 (rst, \bit , start, valid, kind, re
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$33  = crc16_reg;
     if (valid) begin
       \$33  = \$20 ;
@@ -8307,7 +9806,7 @@ module \biss_master_wb.ch0.core.decoder.crc0 (rst, \bit , start, valid, kind, re
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$34  = crc16_match;
     if (valid) begin
       \$34  = \$30 ;
@@ -8322,7 +9821,7 @@ module \biss_master_wb.ch0.core.decoder.crc0 (rst, \bit , start, valid, kind, re
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     ok = 1'h0;
     casez (kind)
       2'h0:
@@ -8335,15 +9834,15 @@ module \biss_master_wb.ch0.core.decoder.crc0 (rst, \bit , start, valid, kind, re
   end
   assign \$8  = 1'h0;
   assign \$11 [5:2] = crc6_reg[4:1];
-  assign \$11 [1:0] = \$auto$rtlil.cc:2739:Not$14 ;
+  assign \$11 [1:0] = \$auto$rtlil.cc:2739:Not$22 ;
   assign \$23  = 1'h0;
   assign { \$26 [14:13], \$26 [11:8], \$26 [5], \$26 [2:1] } = { crc16_reg[13:12], crc16_reg[10:7], crc16_reg[4], crc16_reg[1:0] };
-  assign { \$26 [15], \$26 [12], \$26 [7:6], \$26 [4:3], \$26 [0] } = \$auto$rtlil.cc:2739:Not$16 ;
+  assign { \$26 [15], \$26 [12], \$26 [7:6], \$26 [4:3], \$26 [0] } = \$auto$rtlil.cc:2739:Not$24 ;
 endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch0.core.decoder.crc1 (rst, \bit , start, valid, kind, receiver_clear, ok, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$38  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
   wire [5:0] \$1 ;
   wire \$10 ;
   wire [5:0] \$11 ;
@@ -8378,8 +9877,8 @@ module \biss_master_wb.ch0.core.decoder.crc1 (rst, \bit , start, valid, kind, re
   wire \$7 ;
   wire \$8 ;
   wire [5:0] \$9 ;
-  wire [1:0] \$auto$rtlil.cc:2739:Not$10 ;
-  wire [6:0] \$auto$rtlil.cc:2739:Not$12 ;
+  wire [1:0] \$auto$rtlil.cc:2739:Not$18 ;
+  wire [6:0] \$auto$rtlil.cc:2739:Not$20 ;
   input \bit ;
   wire \bit ;
   input clk;
@@ -8434,10 +9933,10 @@ module \biss_master_wb.ch0.core.decoder.crc1 (rst, \bit , start, valid, kind, re
     crc16_reg <= \$33 ;
   always @(posedge clk)
     crc16_match <= \$34 ;
-  assign \$auto$rtlil.cc:2739:Not$12  = ~ { crc16_reg[14], crc16_reg[11], crc16_reg[6:5], crc16_reg[3:2], 1'h0 };
-  assign \$auto$rtlil.cc:2739:Not$10  = ~ { crc6_reg[0], 1'h0 };
+  assign \$auto$rtlil.cc:2739:Not$18  = ~ { crc6_reg[0], 1'h0 };
+  assign \$auto$rtlil.cc:2739:Not$20  = ~ { crc16_reg[14], crc16_reg[11], crc16_reg[6:5], crc16_reg[3:2], 1'h0 };
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$31  = crc6_reg;
     if (valid) begin
       \$31  = \$5 ;
@@ -8452,7 +9951,7 @@ module \biss_master_wb.ch0.core.decoder.crc1 (rst, \bit , start, valid, kind, re
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$32  = crc6_match;
     if (valid) begin
       \$32  = \$15 ;
@@ -8467,7 +9966,7 @@ module \biss_master_wb.ch0.core.decoder.crc1 (rst, \bit , start, valid, kind, re
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$33  = crc16_reg;
     if (valid) begin
       \$33  = \$20 ;
@@ -8482,7 +9981,7 @@ module \biss_master_wb.ch0.core.decoder.crc1 (rst, \bit , start, valid, kind, re
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$34  = crc16_match;
     if (valid) begin
       \$34  = \$30 ;
@@ -8497,7 +9996,7 @@ module \biss_master_wb.ch0.core.decoder.crc1 (rst, \bit , start, valid, kind, re
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     ok = 1'h0;
     casez (kind)
       2'h0:
@@ -8510,15 +10009,15 @@ module \biss_master_wb.ch0.core.decoder.crc1 (rst, \bit , start, valid, kind, re
   end
   assign \$8  = 1'h0;
   assign \$11 [5:2] = crc6_reg[4:1];
-  assign \$11 [1:0] = \$auto$rtlil.cc:2739:Not$10 ;
+  assign \$11 [1:0] = \$auto$rtlil.cc:2739:Not$18 ;
   assign \$23  = 1'h0;
   assign { \$26 [14:13], \$26 [11:8], \$26 [5], \$26 [2:1] } = { crc16_reg[13:12], crc16_reg[10:7], crc16_reg[4], crc16_reg[1:0] };
-  assign { \$26 [15], \$26 [12], \$26 [7:6], \$26 [4:3], \$26 [0] } = \$auto$rtlil.cc:2739:Not$12 ;
+  assign { \$26 [15], \$26 [12], \$26 [7:6], \$26 [4:3], \$26 [0] } = \$auto$rtlil.cc:2739:Not$20 ;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.ma_clock (rst, half_period, run, first_rise, second_rise, ma, rises, busy, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$39  = 0;
+module \biss_master_wb.ch0.core.ma_clock (rst, \clocking , half_period, run, hold, first_rise, second_rise, ma, rises, busy, held, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$52  = 0;
   wire [16:0] \$1 ;
   wire \$10 ;
   wire [16:0] \$11 ;
@@ -8526,20 +10025,36 @@ module \biss_master_wb.ch0.core.ma_clock (rst, half_period, run, first_rise, sec
   wire \$13 ;
   wire [16:0] \$14 ;
   wire \$15 ;
-  wire \$16 ;
+  wire [16:0] \$16 ;
   wire \$17 ;
   wire \$18 ;
-  reg \$19 ;
+  wire [16:0] \$19 ;
   wire \$2 ;
-  reg \$20 ;
-  reg \$21 ;
-  reg \$22 ;
-  reg [15:0] \$23 ;
-  reg \$24 ;
-  reg [15:0] \$25 ;
-  reg [1:0] \$26 ;
+  wire \$20 ;
+  wire \$21 ;
+  wire \$22 ;
+  wire \$23 ;
+  wire \$24 ;
+  wire [16:0] \$25 ;
+  wire \$26 ;
+  wire [16:0] \$27 ;
+  wire \$28 ;
+  wire \$29 ;
   wire [16:0] \$3 ;
+  wire \$30 ;
+  wire \$31 ;
+  wire \$32 ;
+  wire \$33 ;
+  reg \$34 ;
+  reg \$35 ;
+  reg \$36 ;
+  reg \$37 ;
+  reg [15:0] \$38 ;
+  reg \$39 ;
   wire \$4 ;
+  reg [15:0] \$40 ;
+  reg [2:0] \$41 ;
+  reg \$42 ;
   wire \$5 ;
   wire \$6 ;
   wire [16:0] \$7 ;
@@ -8549,15 +10064,22 @@ module \biss_master_wb.ch0.core.ma_clock (rst, half_period, run, first_rise, sec
   reg busy;
   input clk;
   wire clk;
+  output \clocking ;
+  wire \clocking ;
   output first_rise;
   reg first_rise = 1'h0;
   input [15:0] half_period;
   wire [15:0] half_period;
+  output held;
+  reg held;
+  input hold;
+  wire hold;
   reg last_clock = 1'h1;
   output ma;
   reg ma = 1'h1;
-  reg [1:0] ma_fsm_state = 2'h0;
+  reg [2:0] ma_fsm_state = 3'h0;
   reg [15:0] phase_left = 16'h0000;
+  reg released = 1'h0;
   reg rise = 1'h0;
   output [15:0] rises;
   reg [15:0] rises = 16'h0000;
@@ -8582,213 +10104,315 @@ module \biss_master_wb.ch0.core.ma_clock (rst, half_period, run, first_rise, sec
   assign \$13  = phase_left == 1'h1;
   assign \$14  = half_period - 1'h1;
   assign \$15  = half_period == 1'h1;
-  assign \$16  = ! ma_fsm_state;
-  assign \$17  = ma_fsm_state == 1'h1;
-  assign \$18  = ma_fsm_state == 2'h2;
+  assign \$16  = half_period - 1'h1;
+  assign \$17  = half_period == 1'h1;
+  assign \$18  = ~ last_clock;
+  assign \$19  = phase_left - 1'h1;
+  assign \$20  = phase_left == 1'h1;
+  assign \$21  = ~ hold;
+  assign \$22  = ~ hold;
+  assign \$23  = released | \$22 ;
+  assign \$24  = last_clock & \$23 ;
+  assign \$25  = half_period - 1'h1;
+  assign \$26  = half_period == 1'h1;
+  assign \$27  = phase_left - 1'h1;
+  assign \$28  = phase_left == 1'h1;
+  assign \clocking  = \$30  | \$31 ;
+  assign \$29  = ! ma_fsm_state;
+  assign \$30  = ma_fsm_state == 1'h1;
+  assign \$31  = ma_fsm_state == 2'h2;
+  assign \$32  = ma_fsm_state == 2'h3;
+  assign \$33  = ma_fsm_state == 3'h4;
   always @(posedge clk)
-    rise <= \$19 ;
+    rise <= \$34 ;
   always @(posedge clk)
-    first_rise <= \$20 ;
+    first_rise <= \$35 ;
   always @(posedge clk)
-    second_rise <= \$21 ;
+    second_rise <= \$36 ;
   always @(posedge clk)
-    ma <= \$22 ;
+    ma <= \$37 ;
   always @(posedge clk)
-    phase_left <= \$23 ;
+    phase_left <= \$38 ;
   always @(posedge clk)
-    last_clock <= \$24 ;
+    last_clock <= \$39 ;
   always @(posedge clk)
-    rises <= \$25 ;
+    rises <= \$40 ;
   always @(posedge clk)
-    ma_fsm_state <= \$26 ;
+    ma_fsm_state <= \$41 ;
+  always @(posedge clk)
+    released <= \$42 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
-    \$19  = 1'h0;
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    \$34  = 1'h0;
     casez (ma_fsm_state)
-      2'h0:
+      3'h0:
           /* empty */;
-      2'h1:
+      3'h1:
           if (last_clock) begin
-            \$19  = 1'h1;
+            \$34  = 1'h1;
           end
     endcase
     if (rst) begin
-      \$19  = 1'h0;
+      \$34  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
-    \$20  = 1'h0;
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    \$35  = 1'h0;
     casez (ma_fsm_state)
-      2'h0:
+      3'h0:
           /* empty */;
-      2'h1:
+      3'h1:
           if (last_clock) begin
-            \$20  = \$5 ;
+            \$35  = \$5 ;
           end
     endcase
     if (rst) begin
-      \$20  = 1'h0;
+      \$35  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
-    \$21  = 1'h0;
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    \$36  = 1'h0;
     casez (ma_fsm_state)
-      2'h0:
+      3'h0:
           /* empty */;
-      2'h1:
+      3'h1:
           if (last_clock) begin
-            \$21  = \$6 ;
+            \$36  = \$6 ;
           end
     endcase
     if (rst) begin
-      \$21  = 1'h0;
+      \$36  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
-    \$22  = ma;
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    \$37  = ma;
     casez (ma_fsm_state)
-      2'h0:
+      3'h0:
           if (run) begin
-            \$22  = 1'h0;
+            \$37  = 1'h0;
           end
-      2'h1:
+      3'h1:
           if (last_clock) begin
-            \$22  = 1'h1;
+            \$37  = 1'h1;
           end
-      2'h2:
+      3'h2:
           if (last_clock) begin
             if (run) begin
-              \$22  = 1'h0;
+              \$37  = 1'h0;
+            end else if (hold) begin
+              \$37  = 1'h0;
             end
           end
+      3'h3:
+          if (\$24 ) begin
+            \$37  = 1'h1;
+          end
     endcase
     if (rst) begin
-      \$22  = 1'h1;
+      \$37  = 1'h1;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
-    \$23  = phase_left;
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    \$38  = phase_left;
     casez (ma_fsm_state)
-      2'h0:
+      3'h0:
           if (run) begin
-            \$23  = \$1 [15:0];
+            \$38  = \$1 [15:0];
           end
-      2'h1:
+      3'h1:
         begin
-          \$23  = \$3 [15:0];
+          \$38  = \$3 [15:0];
           if (last_clock) begin
-            \$23  = \$7 [15:0];
+            \$38  = \$7 [15:0];
           end
         end
-      2'h2:
+      3'h2:
         begin
-          \$23  = \$12 [15:0];
+          \$38  = \$12 [15:0];
           if (last_clock) begin
             if (run) begin
-              \$23  = \$14 [15:0];
-            end
-          end
-        end
-    endcase
-    if (rst) begin
-      \$23  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
-    \$24  = last_clock;
-    casez (ma_fsm_state)
-      2'h0:
-          if (run) begin
-            \$24  = \$2 ;
-          end
-      2'h1:
-        begin
-          \$24  = \$4 ;
-          if (last_clock) begin
-            \$24  = \$8 ;
-          end
-        end
-      2'h2:
-        begin
-          \$24  = \$13 ;
-          if (last_clock) begin
-            if (run) begin
-              \$24  = \$15 ;
+              \$38  = \$14 [15:0];
+            end else if (hold) begin
+              \$38  = \$16 [15:0];
             end
           end
         end
+      3'h3:
+        begin
+          if (\$18 ) begin
+            \$38  = \$19 [15:0];
+          end
+          if (\$24 ) begin
+            \$38  = \$25 [15:0];
+          end
+        end
+      3'h4:
+          \$38  = \$27 [15:0];
     endcase
     if (rst) begin
-      \$24  = 1'h1;
+      \$38  = 16'h0000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
-    \$25  = rises;
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    \$39  = last_clock;
     casez (ma_fsm_state)
-      2'h0:
+      3'h0:
           if (run) begin
-            \$25  = 16'h0000;
+            \$39  = \$2 ;
           end
-      2'h1:
+      3'h1:
+        begin
+          \$39  = \$4 ;
+          if (last_clock) begin
+            \$39  = \$8 ;
+          end
+        end
+      3'h2:
+        begin
+          \$39  = \$13 ;
+          if (last_clock) begin
+            if (run) begin
+              \$39  = \$15 ;
+            end else if (hold) begin
+              \$39  = \$17 ;
+            end
+          end
+        end
+      3'h3:
+        begin
+          if (\$18 ) begin
+            \$39  = \$20 ;
+          end
+          if (\$24 ) begin
+            \$39  = \$26 ;
+          end
+        end
+      3'h4:
+          \$39  = \$28 ;
+    endcase
+    if (rst) begin
+      \$39  = 1'h1;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    \$40  = rises;
+    casez (ma_fsm_state)
+      3'h0:
+          if (run) begin
+            \$40  = 16'h0000;
+          end
+      3'h1:
           if (last_clock) begin
             if (\$10 ) begin
-              \$25  = \$11 [15:0];
+              \$40  = \$11 [15:0];
             end
           end
     endcase
     if (rst) begin
-      \$25  = 16'h0000;
+      \$40  = 16'h0000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
-    \$26  = ma_fsm_state;
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    \$41  = ma_fsm_state;
     casez (ma_fsm_state)
-      2'h0:
+      3'h0:
           if (run) begin
-            \$26  = 2'h1;
+            \$41  = 3'h1;
           end
-      2'h1:
+      3'h1:
           if (last_clock) begin
-            \$26  = 2'h2;
+            \$41  = 3'h2;
           end
-      2'h2:
+      3'h2:
           if (last_clock) begin
             (* full_case = 32'd1 *)
             if (run) begin
-              \$26  = 2'h1;
+              \$41  = 3'h1;
+            end else if (hold) begin
+              \$41  = 3'h3;
             end else begin
-              \$26  = 2'h0;
+              \$41  = 3'h0;
             end
+          end
+      3'h3:
+          if (\$24 ) begin
+            \$41  = 3'h4;
+          end
+      3'h4:
+          if (last_clock) begin
+            \$41  = 3'h0;
           end
     endcase
     if (rst) begin
-      \$26  = 2'h0;
+      \$41  = 3'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    \$42  = released;
+    casez (ma_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          if (last_clock) begin
+            if (run) begin
+            end else if (hold) begin
+              \$42  = 1'h0;
+            end
+          end
+      3'h3:
+          if (\$21 ) begin
+            \$42  = 1'h1;
+          end
+    endcase
+    if (rst) begin
+      \$42  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
     busy = 1'h0;
     casez (ma_fsm_state)
-      2'h0:
+      3'h0:
           /* empty */;
-      2'h1:
+      3'h1:
           busy = 1'h1;
-      2'h2:
+      3'h2:
           busy = 1'h1;
+      3'h3:
+          busy = 1'h1;
+      3'h4:
+          busy = 1'h1;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    held = 1'h0;
+    casez (ma_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h3:
+          held = 1'h1;
     endcase
   end
 endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch0.core.ma_stop (rst, words, w1_enable, clear, rises, enough, \started$10 , start_slot, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$40  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$53  = 0;
   reg [7:0] \$1 ;
   reg [7:0] \$10 ;
   wire [8:0] \$11 ;
@@ -8869,7 +10493,7 @@ module \biss_master_wb.ch0.core.ma_stop (rst, words, w1_enable, clear, rises, en
   always @(posedge clk)
     word1_len <= \$17 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     (* full_case = 32'd1 *)
     casez (words[9:6])
       4'h0:
@@ -8907,7 +10531,7 @@ module \biss_master_wb.ch0.core.ma_stop (rst, words, w1_enable, clear, rises, en
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:16])
       4'h0:
@@ -8945,42 +10569,42 @@ module \biss_master_wb.ch0.core.ma_stop (rst, words, w1_enable, clear, rises, en
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$12  = \$2 [7:0];
     if (rst) begin
       \$12  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$13  = \$4 ;
     if (rst) begin
       \$13  = 9'h000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$14  = \$5 ;
     if (rst) begin
       \$14  = 17'h00000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$15  = \started$10 ;
     if (rst) begin
       \$15  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$16  = \$9 ;
     if (rst) begin
       \$16  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$17  = \$11 [7:0];
     if (rst) begin
       \$17  = 8'h00;
@@ -8999,8 +10623,1495 @@ module \biss_master_wb.ch0.core.ma_stop (rst, words, w1_enable, clear, rises, en
 endmodule
 
 (* generator = "Amaranth" *)
+module \biss_master_wb.ch0.core.register_access (clk, rst, host_read__en, frame_end, frame_ok, busy, rbuf_data, \start$44 , abort, request, wbuf, frame_cdm, frame_cds, cdm, done, result, host_read__addr);
+  reg \$auto$verilog_backend.cc:2355:dump_module$54  = 0;
+  wire \$1 ;
+  wire \$10 ;
+  wire \$100 ;
+  wire \$101 ;
+  wire \$102 ;
+  wire \$103 ;
+  wire \$104 ;
+  wire \$105 ;
+  wire \$106 ;
+  wire \$107 ;
+  wire \$108 ;
+  wire \$109 ;
+  wire \$11 ;
+  wire [18:0] \$110 ;
+  wire [5:0] \$111 ;
+  wire \$112 ;
+  wire \$113 ;
+  wire \$114 ;
+  wire \$115 ;
+  wire \$116 ;
+  wire \$117 ;
+  wire \$118 ;
+  wire \$119 ;
+  wire \$12 ;
+  wire \$120 ;
+  wire \$121 ;
+  wire \$122 ;
+  wire \$123 ;
+  wire [7:0] \$124 ;
+  wire [7:0] \$125 ;
+  wire [8:0] \$126 ;
+  wire \$127 ;
+  wire [8:0] \$128 ;
+  wire [5:0] \$129 ;
+  wire \$13 ;
+  wire \$130 ;
+  wire \$131 ;
+  wire \$132 ;
+  wire \$133 ;
+  wire [6:0] \$134 ;
+  wire [6:0] \$135 ;
+  wire \$136 ;
+  wire [6:0] \$137 ;
+  wire \$138 ;
+  wire \$139 ;
+  wire \$14 ;
+  wire \$140 ;
+  wire [5:0] \$141 ;
+  wire \$142 ;
+  wire \$143 ;
+  wire \$144 ;
+  wire \$145 ;
+  wire \$146 ;
+  wire [4:0] \$147 ;
+  wire [4:0] \$148 ;
+  wire [4:0] \$149 ;
+  wire \$15 ;
+  wire [4:0] \$150 ;
+  wire \$151 ;
+  reg [3:0] \$152 ;
+  reg [3:0] \$153 ;
+  reg \$154 ;
+  reg [9:0] \$155 ;
+  reg [2:0] \$156 ;
+  reg [17:0] \$157 ;
+  reg [5:0] \$158 ;
+  reg [17:0] \$159 ;
+  wire \$16 ;
+  reg [4:0] \$160 ;
+  reg [2:0] \$161 ;
+  reg [7:0] \$162 ;
+  reg [7:0] \$163 ;
+  reg [4:0] \$164 ;
+  reg [7:0] \$165 ;
+  reg [2:0] \$166 ;
+  wire \$17 ;
+  wire \$18 ;
+  wire \$19 ;
+  wire \$2 ;
+  wire \$20 ;
+  wire \$21 ;
+  wire \$22 ;
+  wire \$23 ;
+  wire \$24 ;
+  wire \$25 ;
+  wire \$26 ;
+  wire \$27 ;
+  wire \$28 ;
+  wire \$29 ;
+  wire [5:0] \$291 ;
+  wire [5:0] \$294 ;
+  wire \$3 ;
+  wire \$30 ;
+  wire \$31 ;
+  wire \$32 ;
+  wire [5:0] \$33 ;
+  wire [1:0] \$34 ;
+  wire \$35 ;
+  wire \$36 ;
+  wire \$37 ;
+  wire \$38 ;
+  wire \$39 ;
+  wire [1:0] \$4 ;
+  wire \$40 ;
+  wire \$41 ;
+  wire \$42 ;
+  wire \$43 ;
+  wire \$44 ;
+  wire \$45 ;
+  wire \$46 ;
+  wire \$47 ;
+  wire \$48 ;
+  wire \$49 ;
+  wire \$5 ;
+  wire \$50 ;
+  wire \$51 ;
+  wire \$52 ;
+  wire \$53 ;
+  wire \$54 ;
+  wire \$55 ;
+  wire \$56 ;
+  wire \$57 ;
+  wire \$58 ;
+  wire \$59 ;
+  wire \$6 ;
+  wire \$60 ;
+  wire [3:0] \$61 ;
+  wire \$62 ;
+  wire \$63 ;
+  wire \$64 ;
+  wire \$65 ;
+  wire \$66 ;
+  wire \$67 ;
+  wire \$68 ;
+  wire \$69 ;
+  wire \$7 ;
+  wire [4:0] \$70 ;
+  wire [4:0] \$71 ;
+  wire [4:0] \$72 ;
+  wire \$73 ;
+  wire \$74 ;
+  wire \$75 ;
+  wire [4:0] \$76 ;
+  wire [4:0] \$77 ;
+  wire [4:0] \$78 ;
+  wire \$79 ;
+  wire \$8 ;
+  wire \$80 ;
+  wire \$81 ;
+  wire [7:0] \$82 ;
+  wire \$83 ;
+  wire \$84 ;
+  wire \$85 ;
+  wire \$86 ;
+  wire \$87 ;
+  wire \$88 ;
+  wire \$89 ;
+  wire \$9 ;
+  wire \$90 ;
+  wire [4:0] \$91 ;
+  wire [4:0] \$92 ;
+  wire [4:0] \$93 ;
+  wire [4:0] \$94 ;
+  wire \$95 ;
+  wire \$96 ;
+  wire \$97 ;
+  wire \$98 ;
+  wire \$99 ;
+  input abort;
+  wire abort;
+  reg [2:0] access_fsm_state = 3'h0;
+  output busy;
+  wire busy;
+  reg [3:0] byte_received__addr;
+  reg [31:0] byte_received__data;
+  reg [3:0] byte_received__en;
+  output cdm;
+  reg cdm;
+  input clk;
+  wire clk;
+  wire [3:0] crc;
+  wire [3:0] \crc$31 ;
+  reg data;
+  reg \data$29 ;
+  output done;
+  reg done = 1'h0;
+  (* enum_base_type = "AccessStatus" *)
+  (* enum_value_000 = "OK" *)
+  (* enum_value_001 = "CRC4_ERROR" *)
+  (* enum_value_010 = "NO_ANSWER" *)
+  (* enum_value_011 = "REFUSED" *)
+  (* enum_value_100 = "ABORTED" *)
+  (* enum_value_101 = "DATA_FAULT" *)
+  (* enum_value_110 = "BAD_REQUEST" *)
+  reg [2:0] ending = 3'h0;
+  input frame_cdm;
+  wire frame_cdm;
+  input frame_cds;
+  wire frame_cds;
+  input frame_end;
+  wire frame_end;
+  input frame_ok;
+  wire frame_ok;
+  wire frames;
+  reg [7:0] got = 8'h00;
+  reg [2:0] got_crc = 3'h0;
+  reg [17:0] header = 18'h00000;
+  input [3:0] host_read__addr;
+  wire [3:0] host_read__addr;
+  wire [31:0] host_read__data;
+  input host_read__en;
+  wire host_read__en;
+  wire [3:0] host_write__addr;
+  wire [31:0] host_write__data;
+  wire [3:0] host_write__en;
+  reg [3:0] idle_run = 4'h0;
+  reg [3:0] idle_seen = 4'h0;
+  reg [5:0] index = 6'h00;
+  wire [3:0] rbuf_addr;
+  output [31:0] rbuf_data;
+  wire [31:0] rbuf_data;
+  wire rbuf_en;
+  reg [17:0] req = 18'h00000;
+  wire [6:0] \req.address ;
+  wire [6:0] \req.count ;
+  wire [2:0] \req.slave_id ;
+  wire \req.write ;
+  input [17:0] request;
+  wire [17:0] request;
+  wire [6:0] \request.address ;
+  wire [6:0] \request.count ;
+  wire [2:0] \request.slave_id ;
+  wire \request.write ;
+  output [9:0] result;
+  reg [9:0] result = 10'h000;
+  wire [6:0] \result.bytes_done ;
+  (* enum_base_type = "AccessStatus" *)
+  (* enum_value_000 = "OK" *)
+  (* enum_value_001 = "CRC4_ERROR" *)
+  (* enum_value_010 = "NO_ANSWER" *)
+  (* enum_value_011 = "REFUSED" *)
+  (* enum_value_100 = "ABORTED" *)
+  (* enum_value_101 = "DATA_FAULT" *)
+  (* enum_value_110 = "BAD_REQUEST" *)
+  wire [2:0] \result.status ;
+  input rst;
+  wire rst;
+  reg [7:0] sent = 8'h00;
+  reg start;
+  reg \start$27 ;
+  input \start$44 ;
+  wire \start$44 ;
+  reg [4:0] step = 5'h00;
+  reg [7:0] to_send = 8'h00;
+  reg valid;
+  reg \valid$28 ;
+  reg [4:0] waited = 5'h00;
+  input [39:0] wbuf;
+  wire [39:0] wbuf;
+  wire [3:0] \wbuf.addr ;
+  wire [31:0] \wbuf.data ;
+  wire [3:0] \wbuf.en ;
+  wire [3:0] word_to_send__addr;
+  wire [31:0] word_to_send__data;
+  reg [31:0] rbuf [15:0];
+  initial begin
+    rbuf[0] = 32'd0;
+    rbuf[1] = 32'd0;
+    rbuf[2] = 32'd0;
+    rbuf[3] = 32'd0;
+    rbuf[4] = 32'd0;
+    rbuf[5] = 32'd0;
+    rbuf[6] = 32'd0;
+    rbuf[7] = 32'd0;
+    rbuf[8] = 32'd0;
+    rbuf[9] = 32'd0;
+    rbuf[10] = 32'd0;
+    rbuf[11] = 32'd0;
+    rbuf[12] = 32'd0;
+    rbuf[13] = 32'd0;
+    rbuf[14] = 32'd0;
+    rbuf[15] = 32'd0;
+  end
+  always @(posedge clk) begin
+    if (byte_received__en[0])
+      rbuf[byte_received__addr][7:0] <= byte_received__data[7:0];
+    if (byte_received__en[1])
+      rbuf[byte_received__addr][15:8] <= byte_received__data[15:8];
+    if (byte_received__en[2])
+      rbuf[byte_received__addr][23:16] <= byte_received__data[23:16];
+    if (byte_received__en[3])
+      rbuf[byte_received__addr][31:24] <= byte_received__data[31:24];
+  end
+  reg [31:0] _0_;
+  always @(posedge clk) begin
+    if (host_read__en) begin
+      _0_ <= rbuf[host_read__addr];
+    end
+  end
+  assign rbuf_data = _0_;
+  reg [31:0] \wbuf$50  [15:0];
+  initial begin
+    \wbuf$50 [0] = 32'd0;
+    \wbuf$50 [1] = 32'd0;
+    \wbuf$50 [2] = 32'd0;
+    \wbuf$50 [3] = 32'd0;
+    \wbuf$50 [4] = 32'd0;
+    \wbuf$50 [5] = 32'd0;
+    \wbuf$50 [6] = 32'd0;
+    \wbuf$50 [7] = 32'd0;
+    \wbuf$50 [8] = 32'd0;
+    \wbuf$50 [9] = 32'd0;
+    \wbuf$50 [10] = 32'd0;
+    \wbuf$50 [11] = 32'd0;
+    \wbuf$50 [12] = 32'd0;
+    \wbuf$50 [13] = 32'd0;
+    \wbuf$50 [14] = 32'd0;
+    \wbuf$50 [15] = 32'd0;
+  end
+  always @(posedge clk) begin
+    if (wbuf[36])
+      \wbuf$50 [wbuf[3:0]][7:0] <= wbuf[11:4];
+    if (wbuf[37])
+      \wbuf$50 [wbuf[3:0]][15:8] <= wbuf[19:12];
+    if (wbuf[38])
+      \wbuf$50 [wbuf[3:0]][23:16] <= wbuf[27:20];
+    if (wbuf[39])
+      \wbuf$50 [wbuf[3:0]][31:24] <= wbuf[35:28];
+  end
+  reg [31:0] _1_;
+  always @(posedge clk) begin
+    _1_ <= \wbuf$50 [index[5:2]];
+  end
+  assign word_to_send__data = _1_;
+  assign \$1  = step >= 4'hc;
+  assign \$2  = step < 5'h10;
+  assign \$3  = \$1  & \$2 ;
+  assign \$4  = ~ step[1:0];
+  assign \$5  = crc >> \$4 ;
+  assign \$6  = \$3  ? \$5  : header[17];
+  assign \$7  = ! step;
+  assign \$8  = frame_end & \$7 ;
+  assign \$9  = ~ frame_cdm;
+  assign \$10  = \$8  & \$9 ;
+  assign \$11  = ~ frame_ok;
+  assign \$12  = frame_end & \$11 ;
+  assign \$13  = step == 1'h1;
+  assign \$14  = frame_end & \$13 ;
+  assign \$15  = ~ frame_cds;
+  assign \$16  = \$14  & \$15 ;
+  assign \$17  = step == 5'h11;
+  assign \$18  = frame_end & \$17 ;
+  assign \$19  = frame_cds == req[17];
+  assign \$20  = \$18  & \$19 ;
+  assign \$21  = ! step;
+  assign \$22  = step >= 1'h1;
+  assign \$23  = step <= 4'hb;
+  assign \$24  = \$22  & \$23 ;
+  assign \$25  = ! step;
+  assign \$26  = step >= 1'h1;
+  assign \$27  = step <= 4'h8;
+  assign \$28  = \$26  & \$27 ;
+  assign \$29  = step >= 4'h9;
+  assign \$30  = step <= 4'hc;
+  assign \$31  = \$29  & \$30 ;
+  assign \$32  = req[17] & to_send[7];
+  assign \$33  = step - 4'h9;
+  assign \$34  = ~ \$33 [1:0];
+  assign \$35  = crc >> \$34 ;
+  assign \$36  = req[17] & \$35 ;
+  assign \$37  = step >= 1'h1;
+  assign \$38  = frame_end & \$37 ;
+  assign \$39  = step <= 4'h8;
+  assign \$40  = \$38  & \$39 ;
+  assign \$41  = ~ frame_ok;
+  assign \$42  = frame_end & \$41 ;
+  assign \$43  = ! step;
+  assign \$44  = frame_end & \$43 ;
+  assign \$45  = step == 1'h1;
+  assign \$46  = frame_end & \$45 ;
+  assign \$47  = step < 4'hd;
+  assign \$48  = frame_end & \$47 ;
+  assign \$49  = ! index;
+  assign \$50  = \$49  ? req[17] : 1'h0;
+  assign \$51  = frame_cds != \$50 ;
+  assign \$52  = step <= 4'h9;
+  assign \$53  = step == 2'h2;
+  assign \$54  = { got_crc, frame_cds } != \crc$31 ;
+  assign \$55  = got != sent;
+  assign \$56  = req[17] & \$55 ;
+  assign \$57  = ! index[1:0];
+  assign \$58  = index[1:0] == 1'h1;
+  assign \$59  = index[1:0] == 2'h2;
+  assign \$60  = index[1:0] == 2'h3;
+  assign \$61  = req[17] ? 4'h0 : { \$60 , \$59 , \$58 , \$57  };
+  assign busy = ~ \$62 ;
+  assign \$62  = ! access_fsm_state;
+  assign \$63  = access_fsm_state == 1'h1;
+  assign \$64  = access_fsm_state == 2'h2;
+  assign \$65  = access_fsm_state == 2'h3;
+  assign \$66  = access_fsm_state == 3'h4;
+  assign \$67  = access_fsm_state == 3'h5;
+  assign \$68  = access_fsm_state == 3'h6;
+  assign \$69  = idle_run == 4'he;
+  assign \$70  = idle_run + 1'h1;
+  assign \$71  = \$69  ? 5'h0e : \$70 ;
+  assign \$72  = frame_cdm ? 5'h00 : \$71 ;
+  assign \$73  = ~ frame_ok;
+  assign \$74  = frame_cdm | \$73 ;
+  assign \$75  = idle_seen == 4'he;
+  assign \$76  = idle_seen + 1'h1;
+  assign \$77  = \$75  ? 5'h0e : \$76 ;
+  assign \$78  = \$74  ? 5'h00 : \$77 ;
+  assign \$79  = ! request[16:10];
+  assign \$80  = request[16:10] > 7'h40;
+  assign \$81  = \$79  | \$80 ;
+  assign \$82  = request[9:3] + request[16:10];
+  assign \$83  = \$82  > 8'h80;
+  assign \$84  = \$81  | \$83 ;
+  assign \$85  = ~ request[17];
+  assign \$86  = ~ frame_ok;
+  assign \$87  = frame_end & \$86 ;
+  assign \$88  = ~ frame_ok;
+  assign \$89  = frame_cdm | \$88 ;
+  assign \$90  = idle_seen == 4'he;
+  assign \$91  = idle_seen + 1'h1;
+  assign \$92  = \$90  ? 5'h0e : \$91 ;
+  assign \$93  = \$89  ? 5'h00 : \$92 ;
+  assign \$94  = frame_end ? \$93  : { 1'h0, idle_seen };
+  assign \$95  = \$94  == 4'he;
+  assign \$96  = ! step;
+  assign \$97  = frame_end & \$96 ;
+  assign \$98  = ~ frame_cdm;
+  assign \$99  = \$97  & \$98 ;
+  assign \$100  = ~ frame_ok;
+  assign \$101  = frame_end & \$100 ;
+  assign \$102  = step == 1'h1;
+  assign \$103  = frame_end & \$102 ;
+  assign \$104  = ~ frame_cds;
+  assign \$105  = \$103  & \$104 ;
+  assign \$106  = step == 5'h11;
+  assign \$107  = frame_end & \$106 ;
+  assign \$108  = frame_cds == req[17];
+  assign \$109  = \$107  & \$108 ;
+  assign \$111  = step + 1'h1;
+  assign \$112  = step == 5'h11;
+  assign \$113  = ~ frame_ok;
+  assign \$114  = frame_end & \$113 ;
+  assign \$115  = ! step;
+  assign \$116  = frame_end & \$115 ;
+  assign \$117  = step == 1'h1;
+  assign \$118  = frame_end & \$117 ;
+  assign \$119  = step < 4'hd;
+  assign \$120  = frame_end & \$119 ;
+  assign \$121  = ! index;
+  assign \$122  = \$121  ? req[17] : 1'h0;
+  assign \$123  = frame_cds != \$122 ;
+  assign \$291  = index[1:0] * 4'h8;
+  assign \$124  = word_to_send__data >> \$291 ;
+  assign \$294  = index[1:0] * 4'h8;
+  assign \$125  = word_to_send__data >> \$294 ;
+  assign \$127  = ~ req[17];
+  assign \$129  = step + 1'h1;
+  assign \$130  = step <= 4'h9;
+  assign \$131  = { got_crc, frame_cds } != \crc$31 ;
+  assign \$132  = got != sent;
+  assign \$133  = req[17] & \$132 ;
+  assign \$134  = index + 1'h1;
+  assign \$135  = index + 1'h1;
+  assign \$136  = \$135  == req[16:10];
+  assign \$137  = index + 1'h1;
+  assign \$138  = ~ frame_ok;
+  assign \$139  = frame_end & \$138 ;
+  assign \$140  = frame_end & frame_cds;
+  assign \$141  = waited + 1'h1;
+  assign \$142  = waited == 4'hf;
+  assign \$143  = ~ frame_ok;
+  assign \$144  = frame_end & \$143 ;
+  assign \$145  = frame_end & frame_cds;
+  assign \$146  = idle_run == 4'he;
+  assign \$147  = idle_run + 1'h1;
+  assign \$148  = \$146  ? 5'h0e : \$147 ;
+  assign \$149  = frame_cdm ? 5'h00 : \$148 ;
+  assign \$150  = frame_end ? \$149  : { 1'h0, idle_run };
+  assign \$151  = \$150  == 4'he;
+  always @(posedge clk)
+    idle_run <= \$152 ;
+  always @(posedge clk)
+    idle_seen <= \$153 ;
+  always @(posedge clk)
+    done <= \$154 ;
+  always @(posedge clk)
+    result <= \$155 ;
+  always @(posedge clk)
+    access_fsm_state <= \$156 ;
+  always @(posedge clk)
+    req <= \$157 ;
+  always @(posedge clk)
+    index <= \$158 ;
+  always @(posedge clk)
+    header <= \$159 ;
+  always @(posedge clk)
+    step <= \$160 ;
+  always @(posedge clk)
+    ending <= \$161 ;
+  always @(posedge clk)
+    to_send <= \$162 ;
+  always @(posedge clk)
+    sent <= \$163 ;
+  always @(posedge clk)
+    waited <= \$164 ;
+  always @(posedge clk)
+    got <= \$165 ;
+  always @(posedge clk)
+    got_crc <= \$166 ;
+  \biss_master_wb.ch0.core.register_access.rx_crc  rx_crc (
+    .clk(clk),
+    .crc(\crc$31 ),
+    .data_in(\data$29 ),
+    .rst(rst),
+    .start(\start$27 ),
+    .valid(\valid$28 )
+  );
+  \biss_master_wb.ch0.core.register_access.tx_crc  tx_crc (
+    .clk(clk),
+    .crc(crc),
+    .data_in(data),
+    .rst(rst),
+    .start(start),
+    .valid(valid)
+  );
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    cdm = 1'h0;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          cdm = \$6 ;
+      3'h4:
+          if (\$25 ) begin
+            cdm = 1'h1;
+          end else if (\$28 ) begin
+            cdm = \$32 ;
+          end else if (\$31 ) begin
+            cdm = \$36 ;
+          end
+      3'h5:
+          cdm = 1'h1;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    start = 1'h0;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          if (abort) begin
+          end else if (\$10 ) begin
+          end else if (\$12 ) begin
+          end else if (\$16 ) begin
+          end else if (\$20 ) begin
+          end else if (frame_end) begin
+            start = \$21 ;
+          end
+      3'h4:
+          if (abort) begin
+          end else if (\$42 ) begin
+          end else if (\$44 ) begin
+            (* full_case = 32'd1 *)
+            if (\$51 ) begin
+            end else begin
+              start = 1'h1;
+            end
+          end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    valid = 1'h0;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          if (abort) begin
+          end else if (\$10 ) begin
+          end else if (\$12 ) begin
+          end else if (\$16 ) begin
+          end else if (\$20 ) begin
+          end else if (frame_end) begin
+            valid = \$24 ;
+          end
+      3'h4:
+          valid = \$40 ;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    data = 1'h0;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          if (abort) begin
+          end else if (\$10 ) begin
+          end else if (\$12 ) begin
+          end else if (\$16 ) begin
+          end else if (\$20 ) begin
+          end else if (frame_end) begin
+            data = header[17];
+          end
+      3'h4:
+          data = to_send[7];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    \start$27  = 1'h0;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h4:
+          if (abort) begin
+          end else if (\$42 ) begin
+          end else if (\$44 ) begin
+          end else if (\$46 ) begin
+          end else if (\$48 ) begin
+            if (\$52 ) begin
+              \start$27  = \$53 ;
+            end
+          end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    \valid$28  = 1'h0;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h4:
+          if (abort) begin
+          end else if (\$42 ) begin
+          end else if (\$44 ) begin
+          end else if (\$46 ) begin
+          end else if (\$48 ) begin
+            if (\$52 ) begin
+              \valid$28  = 1'h1;
+            end
+          end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    \data$29  = 1'h0;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h4:
+          if (abort) begin
+          end else if (\$42 ) begin
+          end else if (\$44 ) begin
+          end else if (\$46 ) begin
+          end else if (\$48 ) begin
+            if (\$52 ) begin
+              \data$29  = frame_cds;
+            end
+          end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    byte_received__addr = 4'h0;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h4:
+          if (abort) begin
+          end else if (\$42 ) begin
+          end else if (\$44 ) begin
+          end else if (\$46 ) begin
+          end else if (\$48 ) begin
+          end else if (frame_end) begin
+            (* full_case = 32'd1 *)
+            if (\$54 ) begin
+            end else if (\$56 ) begin
+            end else begin
+              byte_received__addr = index[5:2];
+            end
+          end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    byte_received__data = 32'd0;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h4:
+          if (abort) begin
+          end else if (\$42 ) begin
+          end else if (\$44 ) begin
+          end else if (\$46 ) begin
+          end else if (\$48 ) begin
+          end else if (frame_end) begin
+            (* full_case = 32'd1 *)
+            if (\$54 ) begin
+            end else if (\$56 ) begin
+            end else begin
+              byte_received__data = { got, got, got, got };
+            end
+          end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    byte_received__en = 4'h0;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h4:
+          if (abort) begin
+          end else if (\$42 ) begin
+          end else if (\$44 ) begin
+          end else if (\$46 ) begin
+          end else if (\$48 ) begin
+          end else if (frame_end) begin
+            (* full_case = 32'd1 *)
+            if (\$54 ) begin
+            end else if (\$56 ) begin
+            end else begin
+              byte_received__en = \$61 ;
+            end
+          end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    \$152  = idle_run;
+    if (frame_end) begin
+      \$152  = \$72 [3:0];
+    end
+    if (rst) begin
+      \$152  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    \$153  = idle_seen;
+    if (frame_end) begin
+      \$153  = \$78 [3:0];
+    end
+    if (rst) begin
+      \$153  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    \$154  = 1'h0;
+    casez (access_fsm_state)
+      3'h0:
+          if (\start$44 ) begin
+            if (\$84 ) begin
+              \$154  = 1'h1;
+            end
+          end
+      3'h1:
+          if (abort) begin
+            \$154  = 1'h1;
+          end else if (\$87 ) begin
+            \$154  = 1'h1;
+          end
+      3'h2:
+          /* empty */;
+      3'h4:
+          /* empty */;
+      3'h5:
+          /* empty */;
+      3'h6:
+          if (abort) begin
+          end else if (\$144 ) begin
+          end else if (\$145 ) begin
+          end else if (frame_end) begin
+            \$154  = 1'h1;
+          end
+      3'h3:
+          if (\$151 ) begin
+            \$154  = 1'h1;
+          end
+    endcase
+    if (rst) begin
+      \$154  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    \$155  = result;
+    casez (access_fsm_state)
+      3'h0:
+          if (\start$44 ) begin
+            (* full_case = 32'd1 *)
+            if (\$84 ) begin
+              \$155 [2:0] = 3'h6;
+              \$155 [9:3] = 7'h00;
+            end else begin
+              \$155 [9:3] = 7'h00;
+            end
+          end
+      3'h1:
+          if (abort) begin
+            \$155 [2:0] = 3'h4;
+          end else if (\$87 ) begin
+            \$155 [2:0] = 3'h5;
+          end
+      3'h2:
+          /* empty */;
+      3'h4:
+          if (abort) begin
+          end else if (\$114 ) begin
+          end else if (\$116 ) begin
+          end else if (\$118 ) begin
+          end else if (\$120 ) begin
+          end else if (frame_end) begin
+            (* full_case = 32'd1 *)
+            if (\$131 ) begin
+            end else if (\$133 ) begin
+            end else begin
+              \$155 [9:3] = \$134 ;
+            end
+          end
+      3'h5:
+          /* empty */;
+      3'h6:
+          if (abort) begin
+          end else if (\$144 ) begin
+          end else if (\$145 ) begin
+          end else if (frame_end) begin
+            \$155 [2:0] = 3'h0;
+          end
+      3'h3:
+          if (\$151 ) begin
+            \$155 [2:0] = ending;
+          end
+    endcase
+    if (rst) begin
+      \$155  = 10'h000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    \$156  = access_fsm_state;
+    casez (access_fsm_state)
+      3'h0:
+          if (\start$44 ) begin
+            (* full_case = 32'd1 *)
+            if (\$84 ) begin
+              \$156  = 3'h0;
+            end else begin
+              \$156  = 3'h1;
+            end
+          end
+      3'h1:
+          if (abort) begin
+            \$156  = 3'h0;
+          end else if (\$87 ) begin
+            \$156  = 3'h0;
+          end else if (\$95 ) begin
+            \$156  = 3'h2;
+          end
+      3'h2:
+          if (abort) begin
+            \$156  = 3'h3;
+          end else if (\$99 ) begin
+          end else if (\$101 ) begin
+            \$156  = 3'h3;
+          end else if (\$105 ) begin
+            \$156  = 3'h3;
+          end else if (\$109 ) begin
+            \$156  = 3'h3;
+          end else if (frame_end) begin
+            if (\$112 ) begin
+              \$156  = 3'h4;
+            end
+          end
+      3'h4:
+          if (abort) begin
+            \$156  = 3'h3;
+          end else if (\$114 ) begin
+            \$156  = 3'h3;
+          end else if (\$116 ) begin
+            if (\$123 ) begin
+              \$156  = 3'h3;
+            end
+          end else if (\$118 ) begin
+            (* full_case = 32'd1 *)
+            if (frame_cds) begin
+            end else if (\$127 ) begin
+              \$156  = 3'h5;
+            end else begin
+              \$156  = 3'h3;
+            end
+          end else if (\$120 ) begin
+          end else if (frame_end) begin
+            (* full_case = 32'd1 *)
+            if (\$131 ) begin
+              \$156  = 3'h3;
+            end else if (\$133 ) begin
+              \$156  = 3'h3;
+            end else begin
+              if (\$136 ) begin
+                \$156  = 3'h6;
+              end
+            end
+          end
+      3'h5:
+          if (abort) begin
+            \$156  = 3'h3;
+          end else if (\$139 ) begin
+            \$156  = 3'h3;
+          end else if (\$140 ) begin
+            \$156  = 3'h4;
+          end else if (frame_end) begin
+            if (\$142 ) begin
+              \$156  = 3'h3;
+            end
+          end
+      3'h6:
+          if (abort) begin
+            \$156  = 3'h3;
+          end else if (\$144 ) begin
+            \$156  = 3'h3;
+          end else if (\$145 ) begin
+            \$156  = 3'h3;
+          end else if (frame_end) begin
+            \$156  = 3'h0;
+          end
+      3'h3:
+          if (\$151 ) begin
+            \$156  = 3'h0;
+          end
+    endcase
+    if (rst) begin
+      \$156  = 3'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    \$157  = req;
+    casez (access_fsm_state)
+      3'h0:
+          if (\start$44 ) begin
+            (* full_case = 32'd1 *)
+            if (\$84 ) begin
+            end else begin
+              \$157  = request;
+            end
+          end
+    endcase
+    if (rst) begin
+      \$157  = 18'h00000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    \$158  = index;
+    casez (access_fsm_state)
+      3'h0:
+          if (\start$44 ) begin
+            (* full_case = 32'd1 *)
+            if (\$84 ) begin
+            end else begin
+              \$158  = 6'h00;
+            end
+          end
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h4:
+          if (abort) begin
+          end else if (\$114 ) begin
+          end else if (\$116 ) begin
+          end else if (\$118 ) begin
+          end else if (\$120 ) begin
+          end else if (frame_end) begin
+            (* full_case = 32'd1 *)
+            if (\$131 ) begin
+            end else if (\$133 ) begin
+            end else begin
+              (* full_case = 32'd1 *)
+              if (\$136 ) begin
+              end else begin
+                \$158  = \$137 [5:0];
+              end
+            end
+          end
+    endcase
+    if (rst) begin
+      \$158  = 6'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    \$159  = header;
+    casez (access_fsm_state)
+      3'h0:
+          if (\start$44 ) begin
+            (* full_case = 32'd1 *)
+            if (\$84 ) begin
+            end else begin
+              \$159  = { 2'h3, request[2:0], request[9:3], 4'h0, \$85 , request[17] };
+            end
+          end
+      3'h1:
+          /* empty */;
+      3'h2:
+          if (abort) begin
+          end else if (\$99 ) begin
+          end else if (\$101 ) begin
+          end else if (\$105 ) begin
+          end else if (\$109 ) begin
+          end else if (frame_end) begin
+            \$159  = \$110 [17:0];
+          end
+    endcase
+    if (rst) begin
+      \$159  = 18'h00000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    \$160  = step;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (abort) begin
+          end else if (\$87 ) begin
+          end else if (\$95 ) begin
+            \$160  = 5'h00;
+          end
+      3'h2:
+          if (abort) begin
+          end else if (\$99 ) begin
+          end else if (\$101 ) begin
+          end else if (\$105 ) begin
+          end else if (\$109 ) begin
+          end else if (frame_end) begin
+            \$160  = \$111 [4:0];
+            if (\$112 ) begin
+              \$160  = 5'h00;
+            end
+          end
+      3'h4:
+          if (abort) begin
+          end else if (\$114 ) begin
+          end else if (\$116 ) begin
+            (* full_case = 32'd1 *)
+            if (\$123 ) begin
+            end else begin
+              \$160  = 5'h01;
+            end
+          end else if (\$118 ) begin
+            if (frame_cds) begin
+              \$160  = 5'h02;
+            end
+          end else if (\$120 ) begin
+            \$160  = \$129 [4:0];
+          end else if (frame_end) begin
+            (* full_case = 32'd1 *)
+            if (\$131 ) begin
+            end else if (\$133 ) begin
+            end else begin
+              \$160  = 5'h00;
+            end
+          end
+      3'h5:
+          if (abort) begin
+          end else if (\$139 ) begin
+          end else if (\$140 ) begin
+            \$160  = 5'h02;
+          end
+    endcase
+    if (rst) begin
+      \$160  = 5'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    \$161  = ending;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          if (abort) begin
+            \$161  = 3'h4;
+          end else if (\$99 ) begin
+          end else if (\$101 ) begin
+            \$161  = 3'h5;
+          end else if (\$105 ) begin
+            \$161  = 3'h2;
+          end else if (\$109 ) begin
+            \$161  = 3'h3;
+          end
+      3'h4:
+          if (abort) begin
+            \$161  = 3'h4;
+          end else if (\$114 ) begin
+            \$161  = 3'h5;
+          end else if (\$116 ) begin
+            if (\$123 ) begin
+              \$161  = 3'h3;
+            end
+          end else if (\$118 ) begin
+            (* full_case = 32'd1 *)
+            if (frame_cds) begin
+            end else if (\$127 ) begin
+            end else begin
+              \$161  = 3'h3;
+            end
+          end else if (\$120 ) begin
+          end else if (frame_end) begin
+            if (\$131 ) begin
+              \$161  = 3'h1;
+            end else if (\$133 ) begin
+              \$161  = 3'h3;
+            end
+          end
+      3'h5:
+          if (abort) begin
+            \$161  = 3'h4;
+          end else if (\$139 ) begin
+            \$161  = 3'h5;
+          end else if (\$140 ) begin
+          end else if (frame_end) begin
+            if (\$142 ) begin
+              \$161  = 3'h3;
+            end
+          end
+      3'h6:
+          if (abort) begin
+            \$161  = 3'h4;
+          end else if (\$144 ) begin
+            \$161  = 3'h5;
+          end else if (\$145 ) begin
+            \$161  = 3'h3;
+          end
+    endcase
+    if (rst) begin
+      \$161  = 3'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    \$162  = to_send;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h4:
+          if (abort) begin
+          end else if (\$114 ) begin
+          end else if (\$116 ) begin
+            (* full_case = 32'd1 *)
+            if (\$123 ) begin
+            end else begin
+              \$162  = \$124 ;
+            end
+          end else if (\$118 ) begin
+            \$162  = \$126 [7:0];
+          end else if (\$120 ) begin
+            \$162  = \$128 [7:0];
+          end
+    endcase
+    if (rst) begin
+      \$162  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    \$163  = sent;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h4:
+          if (abort) begin
+          end else if (\$114 ) begin
+          end else if (\$116 ) begin
+            (* full_case = 32'd1 *)
+            if (\$123 ) begin
+            end else begin
+              \$163  = \$125 ;
+            end
+          end
+    endcase
+    if (rst) begin
+      \$163  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    \$164  = waited;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h4:
+          if (abort) begin
+          end else if (\$114 ) begin
+          end else if (\$116 ) begin
+          end else if (\$118 ) begin
+            if (frame_cds) begin
+            end else if (\$127 ) begin
+              \$164  = 5'h00;
+            end
+          end
+      3'h5:
+          if (abort) begin
+          end else if (\$139 ) begin
+          end else if (\$140 ) begin
+          end else if (frame_end) begin
+            \$164  = \$141 [4:0];
+          end
+    endcase
+    if (rst) begin
+      \$164  = 5'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    \$165  = got;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h4:
+          if (abort) begin
+          end else if (\$114 ) begin
+          end else if (\$116 ) begin
+          end else if (\$118 ) begin
+          end else if (\$120 ) begin
+            if (\$130 ) begin
+              \$165  = { got[6:0], frame_cds };
+            end
+          end
+    endcase
+    if (rst) begin
+      \$165  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    \$166  = got_crc;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h4:
+          if (abort) begin
+          end else if (\$114 ) begin
+          end else if (\$116 ) begin
+          end else if (\$118 ) begin
+          end else if (\$120 ) begin
+            (* full_case = 32'd1 *)
+            if (\$130 ) begin
+            end else begin
+              \$166  = { got_crc[1:0], frame_cds };
+            end
+          end
+    endcase
+    if (rst) begin
+      \$166  = 3'h0;
+    end
+  end
+  assign host_write__addr = wbuf[3:0];
+  assign host_write__data = wbuf[35:4];
+  assign host_write__en = wbuf[39:36];
+  assign rbuf_addr = host_read__addr;
+  assign rbuf_en = host_read__en;
+  assign host_read__data = rbuf_data;
+  assign word_to_send__addr = index[5:2];
+  assign frames = busy;
+  assign \wbuf.addr  = wbuf[3:0];
+  assign \wbuf.data  = wbuf[35:4];
+  assign \wbuf.en  = wbuf[39:36];
+  assign \req.slave_id  = req[2:0];
+  assign \req.address  = req[9:3];
+  assign \req.count  = req[16:10];
+  assign \req.write  = req[17];
+  assign \request.slave_id  = request[2:0];
+  assign \request.address  = request[9:3];
+  assign \request.count  = request[16:10];
+  assign \request.write  = request[17];
+  assign \result.status  = result[2:0];
+  assign \result.bytes_done  = result[9:3];
+  assign \$110  = { header, 1'h0 };
+  assign \$126  = { to_send, 1'h0 };
+  assign \$128  = { to_send, 1'h0 };
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_wb.ch0.core.register_access.rx_crc (rst, crc, start, valid, data_in, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$55  = 0;
+  wire [3:0] \$1 ;
+  wire \$10 ;
+  wire [3:0] \$11 ;
+  wire \$12 ;
+  reg [3:0] \$13 ;
+  wire \$2 ;
+  wire \$3 ;
+  wire [3:0] \$4 ;
+  wire \$5 ;
+  wire [3:0] \$6 ;
+  wire \$7 ;
+  wire \$8 ;
+  wire [3:0] \$9 ;
+  wire [3:0] \$auto$rtlil.cc:2739:Not$14 ;
+  input clk;
+  wire clk;
+  output [3:0] crc;
+  wire [3:0] crc;
+  reg [3:0] crc_reg = 4'h0;
+  wire data;
+  input data_in;
+  wire data_in;
+  wire match_detected;
+  input rst;
+  wire rst;
+  input start;
+  wire start;
+  input valid;
+  wire valid;
+  assign match_detected = crc_reg == 2'h2;
+  assign \$1  = start ? 4'h0 : crc_reg;
+  assign \$3  = \$2  ^ data_in;
+  assign \$4  = start ? 4'h0 : crc_reg;
+  assign \$6  = start ? 4'h0 : crc_reg;
+  assign \$7  = \$5  ^ \$6 [3];
+  assign \$8  = \$7  ^ data_in;
+  assign \$9  = start ? 4'h0 : crc_reg;
+  assign \$11  = start ? 4'h0 : crc_reg;
+  always @(posedge clk)
+    crc_reg <= \$13 ;
+  assign \$auto$rtlil.cc:2739:Not$14  = ~ crc_reg;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    \$13  = crc_reg;
+    if (valid) begin
+      \$13 [0] = \$3 ;
+      \$13 [1] = \$8 ;
+      \$13 [2] = \$10 ;
+      \$13 [3] = \$12 ;
+    end else if (start) begin
+      \$13  = 4'h0;
+    end
+    if (rst) begin
+      \$13  = 4'h0;
+    end
+  end
+  assign data = data_in;
+  assign crc = \$auto$rtlil.cc:2739:Not$14 ;
+  assign \$2  = \$1 [3];
+  assign \$5  = \$4 [0];
+  assign \$10  = \$9 [1];
+  assign \$12  = \$11 [2];
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_wb.ch0.core.register_access.tx_crc (rst, crc, start, valid, data_in, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$56  = 0;
+  wire [3:0] \$1 ;
+  wire \$10 ;
+  wire [3:0] \$11 ;
+  wire \$12 ;
+  reg [3:0] \$13 ;
+  wire \$2 ;
+  wire \$3 ;
+  wire [3:0] \$4 ;
+  wire \$5 ;
+  wire [3:0] \$6 ;
+  wire \$7 ;
+  wire \$8 ;
+  wire [3:0] \$9 ;
+  wire [3:0] \$auto$rtlil.cc:2739:Not$16 ;
+  input clk;
+  wire clk;
+  output [3:0] crc;
+  wire [3:0] crc;
+  reg [3:0] crc_reg = 4'h0;
+  wire data;
+  input data_in;
+  wire data_in;
+  wire match_detected;
+  input rst;
+  wire rst;
+  input start;
+  wire start;
+  input valid;
+  wire valid;
+  assign match_detected = crc_reg == 2'h2;
+  assign \$1  = start ? 4'h0 : crc_reg;
+  assign \$3  = \$2  ^ data_in;
+  assign \$4  = start ? 4'h0 : crc_reg;
+  assign \$6  = start ? 4'h0 : crc_reg;
+  assign \$7  = \$5  ^ \$6 [3];
+  assign \$8  = \$7  ^ data_in;
+  assign \$9  = start ? 4'h0 : crc_reg;
+  assign \$11  = start ? 4'h0 : crc_reg;
+  always @(posedge clk)
+    crc_reg <= \$13 ;
+  assign \$auto$rtlil.cc:2739:Not$16  = ~ crc_reg;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    \$13  = crc_reg;
+    if (valid) begin
+      \$13 [0] = \$3 ;
+      \$13 [1] = \$8 ;
+      \$13 [2] = \$10 ;
+      \$13 [3] = \$12 ;
+    end else if (start) begin
+      \$13  = 4'h0;
+    end
+    if (rst) begin
+      \$13  = 4'h0;
+    end
+  end
+  assign data = data_in;
+  assign crc = \$auto$rtlil.cc:2739:Not$16 ;
+  assign \$2  = \$1 [3];
+  assign \$5  = \$4 [0];
+  assign \$10  = \$9 [1];
+  assign \$12  = \$11 [2];
+endmodule
+
+(* generator = "Amaranth" *)
 module \biss_master_wb.ch0.core.results (rst, report, valid, frame, report_frame, report_delay, done, valid_out, result, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$41  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$57  = 0;
   reg \$1 ;
   reg \$2 ;
   reg [160:0] \$3 ;
@@ -9097,21 +12208,21 @@ module \biss_master_wb.ch0.core.results (rst, report, valid, frame, report_frame
   always @(posedge clk)
     result <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$1  = report;
     if (rst) begin
       \$1  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$2  = valid;
     if (rst) begin
       \$2  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$3  = result;
     if (report) begin
       \$3 [3:0] = frame[3:0];
@@ -9176,7 +12287,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_clear, arm, early, locked, delay, sample, level, slo);
-  reg \$auto$verilog_backend.cc:2355:dump_module$42  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$58  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -9414,7 +12525,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_
     .stage1(level)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     \$63  = level;
     if (receiver_clear) begin
       \$63  = 1'h1;
@@ -9424,7 +12535,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     \$64  = mid_delay;
     if (odd) begin
       \$64  = \$8 [12:0];
@@ -9449,7 +12560,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     \$65  = mid_slot;
     (* full_case = 32'd1 *)
     if (odd) begin
@@ -9476,7 +12587,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     \$66  = \$10 ;
     casez (sampler_fsm_state)
       2'h0:
@@ -9498,7 +12609,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     \$67  = elapsed;
     casez (sampler_fsm_state)
       2'h0:
@@ -9522,7 +12633,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     \$68  = early;
     casez (sampler_fsm_state)
       2'h0:
@@ -9538,7 +12649,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     \$69  = locked;
     casez (sampler_fsm_state)
       2'h0:
@@ -9564,7 +12675,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     \$70  = gap;
     casez (sampler_fsm_state)
       2'h0:
@@ -9595,7 +12706,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     \$71  = sampler_fsm_state;
     casez (sampler_fsm_state)
       2'h0:
@@ -9626,7 +12737,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     \$72  = slot_left;
     casez (sampler_fsm_state)
       2'h0:
@@ -9676,7 +12787,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     \$73  = slot_zero;
     casez (sampler_fsm_state)
       2'h0:
@@ -9726,7 +12837,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     \$74  = vote1;
     casez (sampler_fsm_state)
       2'h0:
@@ -9756,7 +12867,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     \$75  = vote2;
     casez (sampler_fsm_state)
       2'h0:
@@ -9784,7 +12895,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     \$76  = first_slot;
     casez (sampler_fsm_state)
       2'h0:
@@ -9810,7 +12921,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     \$77  = delay;
     casez (sampler_fsm_state)
       2'h0:
@@ -9833,7 +12944,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     \$78  = phase;
     casez (sampler_fsm_state)
       2'h0:
@@ -9873,7 +12984,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     sample = \$44 ;
     casez (sampler_fsm_state)
       2'h0:
@@ -9891,7 +13002,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     decided = 1'h0;
     casez (sampler_fsm_state)
       2'h0:
@@ -9940,8 +13051,8 @@ module \biss_master_wb.ch0.core.sampler.sync (clk, rst, receiver_clear, stage1, 
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.scheduler (rst, trigger, request, overrun, start, abort, periodic, period, idle, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$43  = 0;
+module \biss_master_wb.ch0.core.scheduler (rst, trigger, periodic, request, overrun, start, abort, period, idle, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$59  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -10025,7 +13136,7 @@ module \biss_master_wb.ch0.core.scheduler (rst, trigger, request, overrun, start
   always @(posedge clk)
     period_start <= \$28 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$27  = 24'h000001;
@@ -10037,7 +13148,7 @@ module \biss_master_wb.ch0.core.scheduler (rst, trigger, request, overrun, start
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$28  = 1'h1;
@@ -10051,8 +13162,8 @@ module \biss_master_wb.ch0.core.scheduler (rst, trigger, request, overrun, start
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.sign_of_life (rst, \port$1014$0 , load, \repeat , skip, check, resync, lc, is_zero, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$44  = 0;
+module \biss_master_wb.ch0.core.sign_of_life (rst, \port$1199$0 , load, \repeat , skip, check, resync, lc, is_zero, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$60  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -10089,8 +13200,8 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, \port$1014$0 , load, \repeat 
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$1014$0 ;
-  wire \port$1014$0 ;
+  input \port$1199$0 ;
+  wire \port$1199$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -10102,9 +13213,9 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, \port$1014$0 , load, \repeat 
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$1014$0  };
-  assign \$2  = { lc[4:0], \port$1014$0  } == last;
-  assign \$3  = { lc[4:0], \port$1014$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$1199$0  };
+  assign \$2  = { lc[4:0], \port$1199$0  } == last;
+  assign \$3  = { lc[4:0], \port$1199$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = lc == 6'h3f;
@@ -10132,7 +13243,7 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, \port$1014$0 , load, \repeat 
   always @(posedge clk)
     synced <= \$21 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
     \$16  = is_zero;
     if (load) begin
       \$16  = \$1 ;
@@ -10142,7 +13253,7 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, \port$1014$0 , load, \repeat 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
     \$17  = is_last;
     if (load) begin
       \$17  = \$2 ;
@@ -10152,7 +13263,7 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, \port$1014$0 , load, \repeat 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
     \$18  = is_expected;
     if (load) begin
       \$18  = \$3 ;
@@ -10162,7 +13273,7 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, \port$1014$0 , load, \repeat 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
     \$19  = last;
     if (\$5 ) begin
       \$19  = lc;
@@ -10172,7 +13283,7 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, \port$1014$0 , load, \repeat 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
     \$20  = expected;
     if (\$5 ) begin
       \$20  = \$8 [5:0];
@@ -10182,7 +13293,7 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, \port$1014$0 , load, \repeat 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
     \$21  = synced;
     if (\$5 ) begin
       \$21  = 1'h1;
@@ -10194,13 +13305,13 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, \port$1014$0 , load, \repeat 
       \$21  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$1014$0  };
+  assign lc_next = { lc[4:0], \port$1199$0  };
   assign zero = is_zero;
 endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch0.core.spw_check (rst, bits, \tolerance$8 , spw, cpw_top, match, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$45  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$61  = 0;
   wire [40:0] \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -10405,28 +13516,28 @@ module \biss_master_wb.ch0.core.spw_check (rst, bits, \tolerance$8 , spw, cpw_to
   assign \$7  = bits > 3'h5;
   assign \$8  = bits > 3'h6;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
     \$88  = \$42 ;
     if (rst) begin
       \$88  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
     \$89  = \$84 ;
     if (rst) begin
       \$89  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
     \$90  = \tolerance$8 ;
     if (rst) begin
       \$90  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
     \$91  = \$87 ;
     if (rst) begin
       \$91  = 1'h0;
@@ -10436,7 +13547,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch0.core.time_base (rst, first_rise, first_rise_time, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$46  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$62  = 0;
   wire [32:0] \$1 ;
   reg [31:0] \$2 ;
   reg [31:0] \$3 ;
@@ -10455,14 +13566,14 @@ module \biss_master_wb.ch0.core.time_base (rst, first_rise, first_rise_time, clk
   always @(posedge clk)
     first_rise_time <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
     \$2  = \$1 [31:0];
     if (rst) begin
       \$2  = 32'd0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
     \$3  = first_rise_time;
     if (first_rise) begin
       \$3  = now;
@@ -10474,8 +13585,8 @@ module \biss_master_wb.ch0.core.time_base (rst, first_rise, first_rise_time, clk
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.timers (rst, restart, break_time, timeout_live, ack_limit, timeout_limit, delay_limit, no_start_limit, clear, in_clock, slo_stuck, slo_stuck_live, break_over, ack_expired, no_start_expired, delay_over, ma_busy, delay, slo, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$47  = 0;
+module \biss_master_wb.ch0.core.timers (rst, restart, ma_busy, break_time, timeout_live, ack_limit, timeout_limit, delay_limit, no_start_limit, clear, in_clock, slo_stuck, slo_stuck_live, break_over, ack_expired, no_start_expired, delay_over, delay, slo, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$63  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -10613,7 +13724,7 @@ module \biss_master_wb.ch0.core.timers (rst, restart, break_time, timeout_live, 
   always @(posedge clk)
     delay_over <= \$43 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
     \$36  = slo_low_time_p1;
     if (\$1 ) begin
       \$36  = 25'h0000001;
@@ -10625,49 +13736,49 @@ module \biss_master_wb.ch0.core.timers (rst, restart, break_time, timeout_live, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
     \$37  = \$8 ;
     if (rst) begin
       \$37  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
     \$38  = \$16 ;
     if (rst) begin
       \$38  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
     \$39  = \$20 [24:0];
     if (rst) begin
       \$39  = 25'h0000001;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
     \$40  = \$26 ;
     if (rst) begin
       \$40  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
     \$41  = \$30 ;
     if (rst) begin
       \$41  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
     \$42  = \$34 ;
     if (rst) begin
       \$42  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
     \$43  = \$35 ;
     if (rst) begin
       \$43  = 1'h0;
@@ -10676,8 +13787,8 @@ module \biss_master_wb.ch0.core.timers (rst, restart, break_time, timeout_live, 
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.verdict (lc_skip_seen, \port$1414$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
-  reg \$auto$verilog_backend.cc:2355:dump_module$48  = 0;
+module \biss_master_wb.ch0.core.verdict (lc_skip_seen, \port$1599$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
+  reg \$auto$verilog_backend.cc:2355:dump_module$64  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -10790,8 +13901,8 @@ module \biss_master_wb.ch0.core.verdict (lc_skip_seen, \port$1414$0 , lc_check, 
   wire lc_zero;
   input lc_zero_seen;
   wire lc_zero_seen;
-  output \port$1414$0 ;
-  wire \port$1414$0 ;
+  output \port$1599$0 ;
+  wire \port$1599$0 ;
   output report;
   wire report;
   input report_frame;
@@ -10859,7 +13970,7 @@ module \biss_master_wb.ch0.core.verdict (lc_skip_seen, \port$1414$0 , lc_check, 
   assign \$29  = ~ { \$2 , crc_ok[0] };
   assign crc_error = report_frame ? \$29  : 2'h0;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     (* full_case = 32'd1 *)
     if (\$13 ) begin
       frame_status = 4'h3;
@@ -10876,7 +13987,7 @@ module \biss_master_wb.ch0.core.verdict (lc_skip_seen, \port$1414$0 , lc_check, 
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$1414$0  = \$2 ;
+  assign \port$1599$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -10900,17 +14011,53 @@ module \biss_master_wb.ch0.core.verdict (lc_skip_seen, \port$1414$0 , lc_check, 
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1 (clk, rst, \trigger$118 , regs__frame_error, regs__busy, regs__config_error, start, abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc
-, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, regs__done_count, ma, regs__done, \port$3348$0 , \port$3355$0 , slo);
-  reg \$auto$verilog_backend.cc:2355:dump_module$49  = 0;
+module \biss_master_wb.ch1 (ca_wbuf_data, slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__ca_busy, regs__ca_rbuf_data, start, abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time
+, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, regs__done_count
+, ma, regs__done, \port$4342$0 , \port$4349$0 , regs__ca_done, \port$4477$0 , ca_wbuf_addr);
+  reg \$auto$verilog_backend.cc:2355:dump_module$65  = 0;
   wire \$1 ;
   wire [16:0] \$2 ;
   reg [15:0] \$3 ;
   wire [160:0] \$4 ;
-  wire [207:0] \$5 ;
+  wire [287:0] \$5 ;
+  wire [9:0] \$6 ;
   input abort_cycle;
   wire abort_cycle;
   wire busy;
+  input ca_abort;
+  wire ca_abort;
+  input [6:0] ca_address;
+  wire [6:0] ca_address;
+  wire ca_busy;
+  wire [6:0] ca_bytes_done;
+  input [6:0] ca_count;
+  wire [6:0] ca_count;
+  wire ca_done;
+  wire [3:0] ca_rbuf_addr;
+  wire [31:0] ca_rbuf_data;
+  input ca_rbuf_en;
+  wire ca_rbuf_en;
+  input [2:0] ca_slave_id;
+  wire [2:0] ca_slave_id;
+  input ca_start;
+  wire ca_start;
+  (* enum_base_type = "AccessStatus" *)
+  (* enum_value_000 = "OK" *)
+  (* enum_value_001 = "CRC4_ERROR" *)
+  (* enum_value_010 = "NO_ANSWER" *)
+  (* enum_value_011 = "REFUSED" *)
+  (* enum_value_100 = "ABORTED" *)
+  (* enum_value_101 = "DATA_FAULT" *)
+  (* enum_value_110 = "BAD_REQUEST" *)
+  wire [2:0] ca_status;
+  input [3:0] ca_wbuf_addr;
+  wire [3:0] ca_wbuf_addr;
+  input [31:0] ca_wbuf_data;
+  wire [31:0] ca_wbuf_data;
+  input [3:0] ca_wbuf_en;
+  wire [3:0] ca_wbuf_en;
+  input ca_write;
+  wire ca_write;
   wire cds;
   input [23:0] cfg_ack_limit;
   wire [23:0] cfg_ack_limit;
@@ -10962,6 +14109,11 @@ module \biss_master_wb.ch1 (clk, rst, \trigger$118 , regs__frame_error, regs__bu
   wire clk;
   wire config_error;
   wire [15:0] count_aborted;
+  wire [15:0] count_ca_aborted;
+  wire [15:0] count_ca_crc4_error;
+  wire [15:0] count_ca_data_fault;
+  wire [15:0] count_ca_no_answer;
+  wire [15:0] count_ca_refused;
   wire [15:0] count_crc_word0;
   wire [15:0] count_crc_word1;
   wire [15:0] count_delay_range;
@@ -10982,19 +14134,41 @@ module \biss_master_wb.ch1 (clk, rst, \trigger$118 , regs__frame_error, regs__bu
   wire [12:0] line_delay;
   output ma;
   wire ma;
-  wire \ma$121 ;
+  wire \ma$164 ;
   input periodic;
   wire periodic;
-  output [160:0] \port$3348$0 ;
-  wire [160:0] \port$3348$0 ;
-  output [207:0] \port$3355$0 ;
-  wire [207:0] \port$3355$0 ;
+  output [160:0] \port$4342$0 ;
+  wire [160:0] \port$4342$0 ;
+  output [287:0] \port$4349$0 ;
+  wire [287:0] \port$4349$0 ;
+  output [9:0] \port$4477$0 ;
+  wire [9:0] \port$4477$0 ;
   wire regs__abort_cycle;
   output regs__busy;
   wire regs__busy;
+  wire regs__ca_abort;
+  wire [6:0] regs__ca_address;
+  output regs__ca_busy;
+  wire regs__ca_busy;
+  wire [6:0] regs__ca_bytes_done;
+  wire [6:0] regs__ca_count;
+  output regs__ca_done;
+  wire regs__ca_done;
+  wire [3:0] regs__ca_rbuf_addr;
+  output [31:0] regs__ca_rbuf_data;
+  wire [31:0] regs__ca_rbuf_data;
+  wire regs__ca_rbuf_en;
+  wire [2:0] regs__ca_slave_id;
+  wire regs__ca_start;
+  wire [2:0] regs__ca_status;
+  wire [3:0] regs__ca_wbuf_addr;
+  wire [31:0] regs__ca_wbuf_data;
+  wire [3:0] regs__ca_wbuf_en;
+  wire regs__ca_write;
   wire regs__cap_counters;
   wire [5:0] regs__cap_data_bits_w0;
   wire [5:0] regs__cap_data_bits_w1;
+  wire regs__cap_register_access;
   wire [5:0] regs__cap_timer_width;
   wire regs__cap_timestamp;
   wire regs__cds;
@@ -11028,6 +14202,11 @@ module \biss_master_wb.ch1 (clk, rst, \trigger$118 , regs__frame_error, regs__bu
   output regs__config_error;
   wire regs__config_error;
   wire [15:0] regs__count_aborted;
+  wire [15:0] regs__count_ca_aborted;
+  wire [15:0] regs__count_ca_crc4_error;
+  wire [15:0] regs__count_ca_data_fault;
+  wire [15:0] regs__count_ca_no_answer;
+  wire [15:0] regs__count_ca_refused;
   wire [15:0] regs__count_crc_word0;
   wire [15:0] regs__count_crc_word1;
   wire [15:0] regs__count_delay_range;
@@ -11070,7 +14249,7 @@ module \biss_master_wb.ch1 (clk, rst, \trigger$118 , regs__frame_error, regs__bu
   wire rst;
   input slo;
   wire slo;
-  wire \slo$123 ;
+  wire \slo$166 ;
   wire spw_mismatch;
   input start;
   wire start;
@@ -11091,8 +14270,8 @@ module \biss_master_wb.ch1 (clk, rst, \trigger$118 , regs__frame_error, regs__bu
   wire [3:0] status;
   wire [31:0] timestamp;
   wire trigger;
-  input \trigger$118 ;
-  wire \trigger$118 ;
+  input \trigger$161 ;
+  wire \trigger$161 ;
   wire valid;
   wire word0_crc_ok;
   wire word0_ne;
@@ -11102,15 +14281,25 @@ module \biss_master_wb.ch1 (clk, rst, \trigger$118 , regs__frame_error, regs__bu
   wire word1_ne;
   wire word1_nw;
   wire [39:0] word1_position;
+  assign \$2  = regs__done_count + 1'h1;
   always @(posedge clk)
     regs__done_count <= \$3 ;
   assign \$1  = ~ valid;
   assign regs__frame_error = regs__done & \$1 ;
-  assign trigger = \trigger$118  & regs__trigger_enable;
-  assign \$2  = regs__done_count + 1'h1;
+  assign trigger = \trigger$161  & regs__trigger_enable;
   \biss_master_wb.ch1.core  core (
     .abort(abort_cycle),
-    .\busy$193 (regs__busy),
+    .\abort$187 (ca_abort),
+    .\busy$237 (regs__busy),
+    .ca_address(ca_address),
+    .ca_count(ca_count),
+    .ca_done(regs__ca_done),
+    .ca_rbuf_data(regs__ca_rbuf_data),
+    .ca_slave_id(ca_slave_id),
+    .ca_wbuf_addr(ca_wbuf_addr),
+    .ca_wbuf_data(ca_wbuf_data),
+    .ca_wbuf_en(ca_wbuf_en),
+    .ca_write(ca_write),
     .cfg_ack_limit(cfg_ack_limit),
     .cfg_break_time(cfg_break_time),
     .cfg_delay_limit(cfg_delay_limit),
@@ -11129,22 +14318,26 @@ module \biss_master_wb.ch1 (clk, rst, \trigger$118 , regs__frame_error, regs__bu
     .cfg_w1_enable(cfg_w1_enable),
     .cfg_w1_lc(cfg_w1_lc),
     .cfg_w1_nenw(cfg_w1_nenw),
-    .\clear$175 (clear_counters),
+    .\clear$214 (clear_counters),
     .clk(clk),
     .config_error(regs__config_error),
     .counts(\$5 ),
-    .\done$196 (regs__done),
+    .\done$240 (regs__done),
+    .frames(regs__ca_busy),
     .ma(ma),
-    .periodic(periodic),
-    .result(\$4 ),
+    .\periodic$24 (periodic),
+    .rbuf_en(ca_rbuf_en),
+    .result(\$6 ),
+    .\result$245 (\$4 ),
     .rst(rst),
     .slo(slo),
     .start(start),
+    .\start$185 (ca_start),
     .trigger(trigger),
-    .\valid$198 (valid)
+    .\valid$242 (valid)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     \$3  = regs__done_count;
     if (regs__done) begin
       \$3  = \$2 [15:0];
@@ -11164,7 +14357,9 @@ module \biss_master_wb.ch1 (clk, rst, \trigger$118 , regs__frame_error, regs__bu
   assign regs__cap_timer_width = 6'h18;
   assign regs__cap_counters = 1'h1;
   assign regs__cap_timestamp = 1'h1;
+  assign regs__cap_register_access = 1'h1;
   assign done = regs__done;
+  assign ca_done = regs__ca_done;
   assign regs__cfg_ma_half_period = cfg_ma_half_period;
   assign regs__cfg_delay_limit = cfg_delay_limit;
   assign regs__cfg_request_period = cfg_request_period;
@@ -11243,37 +14438,116 @@ module \biss_master_wb.ch1 (clk, rst, \trigger$118 , regs__frame_error, regs__bu
   assign count_aborted = \$5 [191:176];
   assign regs__count_no_stop = \$5 [207:192];
   assign count_no_stop = \$5 [207:192];
-  assign \ma$121  = ma;
-  assign \slo$123  = slo;
-  assign \port$3348$0  = \$4 ;
-  assign \port$3355$0  = \$5 ;
+  assign regs__ca_slave_id = ca_slave_id;
+  assign regs__ca_address = ca_address;
+  assign regs__ca_count = ca_count;
+  assign regs__ca_write = ca_write;
+  assign regs__ca_start = ca_start;
+  assign regs__ca_abort = ca_abort;
+  assign ca_busy = regs__ca_busy;
+  assign regs__ca_status = \$6 [2:0];
+  assign ca_status = \$6 [2:0];
+  assign regs__ca_bytes_done = \$6 [9:3];
+  assign ca_bytes_done = \$6 [9:3];
+  assign regs__count_ca_crc4_error = \$5 [223:208];
+  assign count_ca_crc4_error = \$5 [223:208];
+  assign regs__count_ca_no_answer = \$5 [239:224];
+  assign count_ca_no_answer = \$5 [239:224];
+  assign regs__count_ca_refused = \$5 [255:240];
+  assign count_ca_refused = \$5 [255:240];
+  assign regs__count_ca_aborted = \$5 [271:256];
+  assign count_ca_aborted = \$5 [271:256];
+  assign regs__count_ca_data_fault = \$5 [287:272];
+  assign count_ca_data_fault = \$5 [287:272];
+  assign regs__ca_wbuf_addr = ca_wbuf_addr;
+  assign regs__ca_wbuf_data = ca_wbuf_data;
+  assign regs__ca_wbuf_en = ca_wbuf_en;
+  assign ca_rbuf_addr = ca_wbuf_addr;
+  assign regs__ca_rbuf_addr = ca_wbuf_addr;
+  assign ca_rbuf_data = regs__ca_rbuf_data;
+  assign regs__ca_rbuf_en = ca_rbuf_en;
+  assign \ma$164  = ma;
+  assign \slo$166  = slo;
+  assign \port$4342$0  = \$4 ;
+  assign \port$4349$0  = \$5 ;
+  assign \port$4477$0  = \$6 ;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core (clk, rst, trigger, \busy$193 , config_error, start, abort, \clear$175 , periodic, cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw
-, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, ma, \done$196 , \valid$198 , result, counts, slo);
+module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy$237 , config_error, frames, ca_rbuf_data, start, abort, \clear$214 , \periodic$24 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit
+, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, \start$185 , \abort$187 , ma, \done$240 , \valid$242 
+, \result$245 , counts, ca_done, result, ca_wbuf_addr);
   wire \$1 ;
+  wire \$10 ;
+  wire \$11 ;
+  wire \$12 ;
   wire \$2 ;
+  wire \$3 ;
+  wire \$4 ;
+  wire \$5 ;
+  wire \$6 ;
+  wire \$7 ;
+  wire \$8 ;
+  wire \$9 ;
   input abort;
   wire abort;
-  wire \abort$35 ;
+  input \abort$187 ;
+  wire \abort$187 ;
+  wire \abort$36 ;
   wire abort_cycle;
   wire ack_expired;
-  wire \ack_expired$67 ;
+  wire \ack_expired$68 ;
   wire [23:0] ack_limit;
-  wire [23:0] \ack_limit$87 ;
+  wire [23:0] \ack_limit$89 ;
   wire arm;
   wire \bit ;
-  wire \bit$111 ;
+  wire \bit$113 ;
   wire [5:0] bits;
   wire break_over;
-  wire \break_over$65 ;
+  wire \break_over$66 ;
   wire [23:0] break_time;
   wire busy;
-  output \busy$193 ;
-  wire \busy$193 ;
+  wire \busy$196 ;
+  output \busy$237 ;
+  wire \busy$237 ;
+  wire ca_abort;
+  input [6:0] ca_address;
+  wire [6:0] ca_address;
+  wire ca_busy;
+  wire [6:0] ca_bytes_done;
+  input [6:0] ca_count;
+  wire [6:0] ca_count;
+  output ca_done;
+  wire ca_done;
+  wire [3:0] ca_rbuf_addr;
+  output [31:0] ca_rbuf_data;
+  wire [31:0] ca_rbuf_data;
+  wire ca_rbuf_en;
+  input [2:0] ca_slave_id;
+  wire [2:0] ca_slave_id;
+  wire ca_start;
+  (* enum_base_type = "AccessStatus" *)
+  (* enum_value_000 = "OK" *)
+  (* enum_value_001 = "CRC4_ERROR" *)
+  (* enum_value_010 = "NO_ANSWER" *)
+  (* enum_value_011 = "REFUSED" *)
+  (* enum_value_100 = "ABORTED" *)
+  (* enum_value_101 = "DATA_FAULT" *)
+  (* enum_value_110 = "BAD_REQUEST" *)
+  wire [2:0] ca_status;
+  input [3:0] ca_wbuf_addr;
+  wire [3:0] ca_wbuf_addr;
+  input [31:0] ca_wbuf_data;
+  wire [31:0] ca_wbuf_data;
+  input [3:0] ca_wbuf_en;
+  wire [3:0] ca_wbuf_en;
+  input ca_write;
+  wire ca_write;
+  wire cdm;
+  wire \cdm$200 ;
+  wire cdm_cycle;
   wire cds;
-  wire \cds$204 ;
+  wire \cds$248 ;
   wire [154:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
@@ -11349,16 +14623,22 @@ module \biss_master_wb.ch1.core (clk, rst, trigger, \busy$193 , config_error, st
   wire cfg_w1_nenw;
   wire check;
   wire clear;
-  wire \clear$104 ;
-  input \clear$175 ;
-  wire \clear$175 ;
+  wire \clear$106 ;
+  input \clear$214 ;
+  wire \clear$214 ;
   wire clear_counters;
   input clk;
   wire clk;
+  wire \clocking ;
   output config_error;
   wire config_error;
   wire config_ok;
   wire [15:0] count_aborted;
+  wire [15:0] count_ca_aborted;
+  wire [15:0] count_ca_crc4_error;
+  wire [15:0] count_ca_data_fault;
+  wire [15:0] count_ca_no_answer;
+  wire [15:0] count_ca_refused;
   wire [15:0] count_crc_word0;
   wire [15:0] count_crc_word1;
   wire [15:0] count_delay_range;
@@ -11371,9 +14651,14 @@ module \biss_master_wb.ch1.core (clk, rst, trigger, \busy$193 , config_error, st
   wire [15:0] count_overrun;
   wire [15:0] count_slo_stuck_low;
   wire [15:0] count_spw_mismatch;
-  output [207:0] counts;
-  wire [207:0] counts;
+  output [287:0] counts;
+  wire [287:0] counts;
   wire [15:0] \counts.aborted ;
+  wire [15:0] \counts.ca_aborted ;
+  wire [15:0] \counts.ca_crc4_error ;
+  wire [15:0] \counts.ca_data_fault ;
+  wire [15:0] \counts.ca_no_answer ;
+  wire [15:0] \counts.ca_refused ;
   wire [15:0] \counts.crc_word0 ;
   wire [15:0] \counts.crc_word1 ;
   wire [15:0] \counts.delay_range ;
@@ -11387,10 +14672,10 @@ module \biss_master_wb.ch1.core (clk, rst, trigger, \busy$193 , config_error, st
   wire [15:0] \counts.slo_stuck_low ;
   wire [15:0] \counts.spw_mismatch ;
   wire [39:0] cpw_top;
-  wire [39:0] \cpw_top$128 ;
+  wire [39:0] \cpw_top$130 ;
   wire [1:0] crc_error;
   wire [1:0] crc_ok;
-  wire [1:0] \crc_ok$143 ;
+  wire [1:0] \crc_ok$145 ;
   wire [154:0] cycle;
   wire [23:0] \cycle.ack_limit ;
   wire [23:0] \cycle.break_time ;
@@ -11423,22 +14708,28 @@ module \biss_master_wb.ch1.core (clk, rst, trigger, \busy$193 , config_error, st
   wire [54:0] data0;
   wire [39:0] data1;
   wire [12:0] delay;
-  wire [12:0] \delay$93 ;
+  wire [12:0] \delay$95 ;
   wire [11:0] delay_limit;
-  wire [11:0] \delay_limit$95 ;
+  wire [11:0] \delay_limit$97 ;
   wire delay_over;
-  wire \delay_over$75 ;
+  wire \delay_over$76 ;
   wire done;
-  output \done$196 ;
-  wire \done$196 ;
-  wire \done$197 ;
+  wire \done$198 ;
+  output \done$240 ;
+  wire \done$240 ;
+  wire \done$241 ;
   wire doubtful;
   wire early;
-  wire \early$51 ;
+  wire \early$52 ;
   wire end_check;
   wire enough;
-  wire [12:0] events;
+  wire [17:0] events;
   wire \events.aborted ;
+  wire \events.ca_aborted ;
+  wire \events.ca_crc4_error ;
+  wire \events.ca_data_fault ;
+  wire \events.ca_no_answer ;
+  wire \events.ca_refused ;
   wire \events.crc_word0 ;
   wire \events.crc_word1 ;
   wire \events.delay_range ;
@@ -11452,7 +14743,7 @@ module \biss_master_wb.ch1.core (clk, rst, trigger, \busy$193 , config_error, st
   wire \events.slo_stuck_low ;
   wire \events.spw_mismatch ;
   wire fault;
-  wire \fault$139 ;
+  wire \fault$141 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -11482,7 +14773,7 @@ module \biss_master_wb.ch1.core (clk, rst, trigger, \busy$193 , config_error, st
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
-  wire [3:0] \fault_status$141 ;
+  wire [3:0] \fault_status$143 ;
   wire [6:0] faults;
   wire \faults.aborted ;
   wire \faults.bad_config ;
@@ -11492,7 +14783,7 @@ module \biss_master_wb.ch1.core (clk, rst, trigger, \busy$193 , config_error, st
   wire \faults.no_stop ;
   wire \faults.slo_stuck_low ;
   wire first_rise;
-  wire \first_rise$169 ;
+  wire \first_rise$171 ;
   wire [31:0] first_rise_time;
   wire [160:0] frame;
   wire \frame.cds ;
@@ -11528,30 +14819,38 @@ module \biss_master_wb.ch1.core (clk, rst, trigger, \busy$193 , config_error, st
   wire \frame.word1.ne ;
   wire \frame.word1.nw ;
   wire [39:0] \frame.word1.position ;
+  wire frame_cdm;
+  wire frame_cds;
   wire frame_done;
   wire frame_doubtful;
+  wire frame_end;
+  wire frame_ok;
+  output frames;
+  wire frames;
   wire [15:0] half_period;
-  wire [15:0] \half_period$106 ;
+  wire [15:0] \half_period$108 ;
+  wire held;
+  wire hold;
   wire idle;
   wire \idle$20 ;
-  wire \idle$28 ;
+  wire \idle$29 ;
   wire in_clock;
-  wire \in_clock$81 ;
+  wire \in_clock$83 ;
   wire [5:0] lc;
-  wire [5:0] \lc$115 ;
-  wire [5:0] \lc$213 ;
+  wire [5:0] \lc$117 ;
+  wire [5:0] \lc$257 ;
   wire lc_check;
   wire lc_load;
   wire [5:0] lc_next;
-  wire [5:0] \lc_next$117 ;
+  wire [5:0] \lc_next$119 ;
   wire lc_repeat;
-  wire \lc_repeat$214 ;
+  wire \lc_repeat$258 ;
   wire lc_repeat_seen;
   wire lc_skip;
-  wire \lc_skip$215 ;
+  wire \lc_skip$259 ;
   wire lc_skip_seen;
   wire lc_zero;
-  wire \lc_zero$216 ;
+  wire \lc_zero$260 ;
   wire lc_zero_seen;
   wire level;
   wire [12:0] line_delay;
@@ -11586,51 +14885,64 @@ module \biss_master_wb.ch1.core (clk, rst, trigger, \busy$193 , config_error, st
   wire \live.w1_enable ;
   wire load;
   wire locked;
-  wire \locked$49 ;
+  wire \locked$50 ;
   output ma;
   wire ma;
-  wire \ma$192 ;
+  wire \ma$236 ;
   wire ma_arm;
   wire ma_busy;
-  wire \ma_busy$77 ;
+  wire \ma_busy$78 ;
   wire ma_enough;
+  wire ma_held;
+  wire ma_hold;
   wire ma_run;
   wire match;
   wire [1:0] ne;
   wire no_start_expired;
-  wire \no_start_expired$69 ;
+  wire \no_start_expired$70 ;
   wire [24:0] no_start_limit;
-  wire [24:0] \no_start_limit$91 ;
+  wire [24:0] \no_start_limit$93 ;
   wire [1:0] nw;
   wire ok;
   wire overrun;
-  wire \overrun$195 ;
+  wire \overrun$239 ;
   wire [23:0] period;
-  input periodic;
   wire periodic;
+  input \periodic$24 ;
   wire \periodic$24 ;
+  wire [3:0] rbuf_addr;
+  wire [31:0] rbuf_data;
+  input rbuf_en;
+  wire rbuf_en;
   wire receiver_clear;
   wire \repeat ;
   wire report;
-  wire \report$151 ;
+  wire \report$153 ;
   wire report_delay;
-  wire \report_delay$154 ;
+  wire \report_delay$156 ;
   wire report_frame;
-  wire \report_frame$137 ;
-  wire \report_frame$152 ;
+  wire \report_frame$139 ;
+  wire \report_frame$154 ;
   wire request;
-  wire \request$34 ;
+  wire [17:0] \request$173 ;
+  wire [6:0] \request$173.address ;
+  wire [6:0] \request$173.count ;
+  wire [2:0] \request$173.slave_id ;
+  wire \request$173.write ;
+  wire \request$35 ;
   wire restart;
   wire restart_timer;
-  output [160:0] result;
-  wire [160:0] result;
-  wire \result.cds ;
-  wire [5:0] \result.lc ;
-  wire \result.lc_repeat ;
-  wire \result.lc_skip ;
-  wire \result.lc_zero ;
-  wire [12:0] \result.line_delay ;
-  wire \result.spw_mismatch ;
+  output [9:0] result;
+  wire [9:0] result;
+  output [160:0] \result$245 ;
+  wire [160:0] \result$245 ;
+  wire \result$245.cds ;
+  wire [5:0] \result$245.lc ;
+  wire \result$245.lc_repeat ;
+  wire \result$245.lc_skip ;
+  wire \result$245.lc_zero ;
+  wire [12:0] \result$245.line_delay ;
+  wire \result$245.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -11645,52 +14957,64 @@ module \biss_master_wb.ch1.core (clk, rst, trigger, \busy$193 , config_error, st
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
-  wire [3:0] \result.status ;
-  wire [31:0] \result.timestamp ;
-  wire [57:0] \result.word0 ;
-  wire \result.word0.crc_ok ;
-  wire \result.word0.ne ;
-  wire \result.word0.nw ;
-  wire [54:0] \result.word0.position ;
-  wire [42:0] \result.word1 ;
-  wire \result.word1.crc_ok ;
-  wire \result.word1.ne ;
-  wire \result.word1.nw ;
-  wire [39:0] \result.word1.position ;
+  wire [3:0] \result$245.status ;
+  wire [31:0] \result$245.timestamp ;
+  wire [57:0] \result$245.word0 ;
+  wire \result$245.word0.crc_ok ;
+  wire \result$245.word0.ne ;
+  wire \result$245.word0.nw ;
+  wire [54:0] \result$245.word0.position ;
+  wire [42:0] \result$245.word1 ;
+  wire \result$245.word1.crc_ok ;
+  wire \result$245.word1.ne ;
+  wire \result$245.word1.nw ;
+  wire [39:0] \result$245.word1.position ;
+  wire [6:0] \result.bytes_done ;
+  (* enum_base_type = "AccessStatus" *)
+  (* enum_value_000 = "OK" *)
+  (* enum_value_001 = "CRC4_ERROR" *)
+  (* enum_value_010 = "NO_ANSWER" *)
+  (* enum_value_011 = "REFUSED" *)
+  (* enum_value_100 = "ABORTED" *)
+  (* enum_value_101 = "DATA_FAULT" *)
+  (* enum_value_110 = "BAD_REQUEST" *)
+  wire [2:0] \result.status ;
   wire resync;
-  wire \resync$123 ;
+  wire \resync$125 ;
   wire [15:0] rises;
-  wire [15:0] \rises$103 ;
+  wire [15:0] \rises$105 ;
   input rst;
   wire rst;
   wire run;
   wire sample;
-  wire \sample$109 ;
+  wire \sample$111 ;
   wire second_rise;
   wire skip;
   input slo;
   wire slo;
-  wire \slo$30 ;
-  wire \slo$40 ;
-  wire \slo$76 ;
+  wire \slo$31 ;
+  wire \slo$41 ;
+  wire \slo$77 ;
   wire slo_stuck;
-  wire \slo_stuck$71 ;
+  wire \slo_stuck$72 ;
   wire slo_stuck_live;
-  wire \slo_stuck_live$73 ;
+  wire \slo_stuck_live$74 ;
   wire slots_full;
-  wire \slots_full$57 ;
+  wire \slots_full$58 ;
   wire [39:0] spw;
   wire spw_match;
   wire spw_mismatch;
-  wire \spw_mismatch$217 ;
+  wire \spw_mismatch$261 ;
   input start;
   wire start;
+  input \start$185 ;
+  wire \start$185 ;
   wire \start$22 ;
   wire [15:0] start_slot;
-  wire [15:0] \start_slot$101 ;
+  wire [15:0] \start_slot$103 ;
   wire started;
-  wire \started$55 ;
-  wire \started$99 ;
+  wire \started$101 ;
+  wire \started$56 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -11720,26 +15044,30 @@ module \biss_master_wb.ch1.core (clk, rst, trigger, \busy$193 , config_error, st
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
-  wire [3:0] \status$200 ;
+  wire [3:0] \status$244 ;
   wire stop_bit;
-  wire \stop_bit$61 ;
+  wire \stop_bit$62 ;
   wire stopped;
-  wire \stopped$59 ;
+  wire \stopped$60 ;
   wire [23:0] timeout_limit;
-  wire [23:0] \timeout_limit$89 ;
+  wire [23:0] \timeout_limit$91 ;
   wire [23:0] timeout_live;
   wire timer_clear;
   wire [31:0] timestamp;
   wire [7:0] tolerance;
   input trigger;
   wire trigger;
-  wire \trigger$32 ;
+  wire \trigger$33 ;
   wire valid;
-  wire \valid$156 ;
-  output \valid$198 ;
-  wire \valid$198 ;
+  wire \valid$158 ;
+  output \valid$242 ;
+  wire \valid$242 ;
   wire valid_out;
   wire w1_enable;
+  wire [39:0] wbuf;
+  wire [3:0] \wbuf.addr ;
+  wire [31:0] \wbuf.data ;
+  wire [3:0] \wbuf.en ;
   wire word0_crc_ok;
   wire word0_ne;
   wire word0_nw;
@@ -11749,28 +15077,28 @@ module \biss_master_wb.ch1.core (clk, rst, trigger, \busy$193 , config_error, st
   wire word1_nw;
   wire [39:0] word1_position;
   wire [1:0] word_count;
-  wire [1:0] \word_count$113 ;
+  wire [1:0] \word_count$115 ;
   wire [1:0] word_crc_ok;
   wire [19:0] words;
-  wire [19:0] \words$125 ;
-  wire [9:0] \words$125[0] ;
+  wire [19:0] \words$127 ;
+  wire [9:0] \words$127[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
-  wire [1:0] \words$125[0].crc ;
-  wire [5:0] \words$125[0].data_bits ;
-  wire \words$125[0].lc ;
-  wire \words$125[0].nenw ;
-  wire [9:0] \words$125[1] ;
+  wire [1:0] \words$127[0].crc ;
+  wire [5:0] \words$127[0].data_bits ;
+  wire \words$127[0].lc ;
+  wire \words$127[0].nenw ;
+  wire [9:0] \words$127[1] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
-  wire [1:0] \words$125[1].crc ;
-  wire [5:0] \words$125[1].data_bits ;
-  wire \words$125[1].lc ;
-  wire \words$125[1].nenw ;
+  wire [1:0] \words$127[1].crc ;
+  wire [5:0] \words$127[1].data_bits ;
+  wire \words$127[1].lc ;
+  wire \words$127[1].nenw ;
   wire [9:0] \words[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
@@ -11790,8 +15118,19 @@ module \biss_master_wb.ch1.core (clk, rst, trigger, \busy$193 , config_error, st
   wire \words[1].lc ;
   wire \words[1].nenw ;
   wire zero;
+  assign periodic = \periodic$24  | frames;
   assign \$1  = report_frame & spw_mismatch;
-  assign \busy$193  = ~ idle;
+  assign \$2  = result[2:0] == 1'h1;
+  assign \$3  = ca_done & \$2 ;
+  assign \$4  = result[2:0] == 2'h2;
+  assign \$5  = ca_done & \$4 ;
+  assign \$6  = result[2:0] == 2'h3;
+  assign \$7  = ca_done & \$6 ;
+  assign \$8  = result[2:0] == 3'h4;
+  assign \$9  = ca_done & \$8 ;
+  assign \$10  = result[2:0] == 3'h5;
+  assign \$11  = ca_done & \$10 ;
+  assign \busy$237  = ~ idle;
   assign config_error = ~ config_ok;
   \biss_master_wb.ch1.core.config  \config  (
     .ack_limit(ack_limit),
@@ -11810,6 +15149,8 @@ module \biss_master_wb.ch1.core (clk, rst, trigger, \busy$193 , config_error, st
     .abort(abort),
     .ack_expired(ack_expired),
     .break_over(break_over),
+    .cdm(cdm),
+    .cdm_cycle(frame_cdm),
     .clk(clk),
     .config_ok(config_ok),
     .delay_over(delay_over),
@@ -11826,16 +15167,18 @@ module \biss_master_wb.ch1.core (clk, rst, trigger, \busy$193 , config_error, st
     .ma_arm(ma_arm),
     .ma_busy(ma_busy),
     .ma_enough(ma_enough),
+    .ma_held(ma_held),
+    .ma_hold(hold),
     .ma_run(run),
     .no_start_expired(no_start_expired),
-    .receiver_clear(\clear$104 ),
+    .receiver_clear(\clear$106 ),
     .report_delay(report_delay),
     .report_frame(report_frame),
     .request(request),
     .restart_timer(restart),
     .resync(resync),
     .rst(rst),
-    .slo(\slo$40 ),
+    .slo(\slo$41 ),
     .slo_stuck(slo_stuck),
     .slo_stuck_live(slo_stuck_live),
     .slots_full(slots_full),
@@ -11845,7 +15188,7 @@ module \biss_master_wb.ch1.core (clk, rst, trigger, \busy$193 , config_error, st
     .timer_clear(clear)
   );
   \biss_master_wb.ch1.core.counters  counters (
-    .clear(\clear$175 ),
+    .clear(\clear$214 ),
     .clk(clk),
     .counts(counts),
     .events(events),
@@ -11864,7 +15207,7 @@ module \biss_master_wb.ch1.core (clk, rst, trigger, \busy$193 , config_error, st
     .lc_load(load),
     .ne(ne),
     .nw(nw),
-    .receiver_clear(\clear$104 ),
+    .receiver_clear(\clear$106 ),
     .rst(rst),
     .sample(sample),
     .slots_full(slots_full),
@@ -11878,8 +15221,11 @@ module \biss_master_wb.ch1.core (clk, rst, trigger, \busy$193 , config_error, st
   \biss_master_wb.ch1.core.ma_clock  ma_clock (
     .busy(ma_busy),
     .clk(clk),
+    .\clocking (\ma_busy$78 ),
     .first_rise(first_rise),
     .half_period(cycle[15:0]),
+    .held(ma_held),
+    .hold(hold),
     .ma(ma),
     .rises(rises),
     .rst(rst),
@@ -11887,7 +15233,7 @@ module \biss_master_wb.ch1.core (clk, rst, trigger, \busy$193 , config_error, st
     .second_rise(ma_arm)
   );
   \biss_master_wb.ch1.core.ma_stop  ma_stop (
-    .clear(\clear$104 ),
+    .clear(\clear$106 ),
     .clk(clk),
     .enough(ma_enough),
     .rises(rises),
@@ -11895,19 +15241,38 @@ module \biss_master_wb.ch1.core (clk, rst, trigger, \busy$193 , config_error, st
     .start_slot(start_slot),
     .\started$10 (started),
     .w1_enable(cycle[135]),
-    .words(\words$125 )
+    .words(\words$127 )
+  );
+  \biss_master_wb.ch1.core.register_access  register_access (
+    .abort(\abort$187 ),
+    .busy(frames),
+    .cdm(cdm),
+    .clk(clk),
+    .done(ca_done),
+    .frame_cdm(frame_cdm),
+    .frame_cds(cds),
+    .frame_end(report),
+    .frame_ok(valid),
+    .host_read__addr(ca_wbuf_addr),
+    .host_read__en(rbuf_en),
+    .rbuf_data(ca_rbuf_data),
+    .request(\request$173 ),
+    .result(result),
+    .rst(rst),
+    .\start$44 (\start$185 ),
+    .wbuf(wbuf)
   );
   \biss_master_wb.ch1.core.results  results (
     .clk(clk),
-    .done(\done$196 ),
+    .done(\done$240 ),
     .frame(frame),
     .report(report),
     .report_delay(report_delay),
     .report_frame(report_frame),
-    .result(result),
+    .result(\result$245 ),
     .rst(rst),
     .valid(valid),
-    .valid_out(\valid$198 )
+    .valid_out(\valid$242 )
   );
   \biss_master_wb.ch1.core.sampler  sampler (
     .arm(ma_arm),
@@ -11916,9 +15281,9 @@ module \biss_master_wb.ch1.core (clk, rst, trigger, \busy$193 , config_error, st
     .delay(delay),
     .early(early),
     .half_period(cycle[15:0]),
-    .level(\slo$40 ),
+    .level(\slo$41 ),
     .locked(locked),
-    .receiver_clear(\clear$104 ),
+    .receiver_clear(\clear$106 ),
     .rst(rst),
     .sample(sample),
     .slo(slo)
@@ -11941,7 +15306,7 @@ module \biss_master_wb.ch1.core (clk, rst, trigger, \busy$193 , config_error, st
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$1984$0 (\bit ),
+    .\port$2542$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -11973,12 +15338,12 @@ module \biss_master_wb.ch1.core (clk, rst, trigger, \busy$193 , config_error, st
     .delay_limit(delay_limit),
     .delay_over(delay_over),
     .in_clock(in_clock),
-    .ma_busy(ma_busy),
+    .ma_busy(\ma_busy$78 ),
     .no_start_expired(no_start_expired),
     .no_start_limit(no_start_limit),
     .restart(restart),
     .rst(rst),
-    .slo(\slo$40 ),
+    .slo(\slo$41 ),
     .slo_stuck(slo_stuck),
     .slo_stuck_live(slo_stuck_live),
     .timeout_limit(timeout_limit),
@@ -11998,7 +15363,7 @@ module \biss_master_wb.ch1.core (clk, rst, trigger, \busy$193 , config_error, st
     .lc_skip_seen(lc_skip_seen),
     .lc_zero(lc_zero),
     .lc_zero_seen(lc_zero_seen),
-    .\port$2384$0 (\$2 ),
+    .\port$2942$0 (\$12 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -12008,84 +15373,101 @@ module \biss_master_wb.ch1.core (clk, rst, trigger, \busy$193 , config_error, st
   );
   assign \idle$20  = idle;
   assign \start$22  = start;
-  assign \periodic$24  = periodic;
   assign period = cfg_request_period;
   assign abort_cycle = abort;
-  assign \idle$28  = idle;
-  assign \slo$30  = slo;
-  assign \trigger$32  = trigger;
-  assign \request$34  = request;
-  assign \abort$35  = abort;
+  assign \idle$29  = idle;
+  assign \slo$31  = slo;
+  assign \trigger$33  = trigger;
+  assign \request$35  = request;
+  assign \abort$36  = abort;
   assign ok = config_ok;
   assign end_check = cycle[124];
-  assign level = \slo$40 ;
+  assign level = \slo$41 ;
   assign busy = ma_busy;
   assign second_rise = ma_arm;
   assign enough = ma_enough;
-  assign \locked$49  = locked;
-  assign \early$51  = early;
+  assign \locked$50  = locked;
+  assign \early$52  = early;
   assign done = frame_done;
-  assign \started$55  = started;
-  assign \slots_full$57  = slots_full;
-  assign \stopped$59  = stopped;
-  assign \stop_bit$61  = stop_bit;
+  assign \started$56  = started;
+  assign \slots_full$58  = slots_full;
+  assign \stopped$60  = stopped;
+  assign \stop_bit$62  = stop_bit;
   assign doubtful = frame_doubtful;
-  assign \break_over$65  = break_over;
-  assign \ack_expired$67  = ack_expired;
-  assign \no_start_expired$69  = no_start_expired;
-  assign \slo_stuck$71  = slo_stuck;
-  assign \slo_stuck_live$73  = slo_stuck_live;
-  assign \delay_over$75  = delay_over;
-  assign \slo$76  = \slo$40 ;
-  assign \ma_busy$77  = ma_busy;
+  assign \break_over$66  = break_over;
+  assign \ack_expired$68  = ack_expired;
+  assign \no_start_expired$70  = no_start_expired;
+  assign \slo_stuck$72  = slo_stuck;
+  assign \slo_stuck_live$74  = slo_stuck_live;
+  assign \delay_over$76  = delay_over;
+  assign \slo$77  = \slo$41 ;
+  assign \clocking  = \ma_busy$78 ;
   assign timer_clear = clear;
-  assign \in_clock$81  = in_clock;
+  assign \in_clock$83  = in_clock;
   assign restart_timer = restart;
   assign break_time = cfg_break_time;
   assign timeout_live = cfg_timeout_limit;
-  assign \ack_limit$87  = ack_limit;
-  assign \timeout_limit$89  = timeout_limit;
-  assign \no_start_limit$91  = no_start_limit;
-  assign \delay$93  = delay;
-  assign \delay_limit$95  = delay_limit;
+  assign \ack_limit$89  = ack_limit;
+  assign \timeout_limit$91  = timeout_limit;
+  assign \no_start_limit$93  = no_start_limit;
+  assign \delay$95  = delay;
+  assign \delay_limit$97  = delay_limit;
   assign ma_run = run;
   assign half_period = cycle[15:0];
-  assign \started$99  = started;
-  assign \start_slot$101  = start_slot;
-  assign \rises$103  = rises;
-  assign receiver_clear = \clear$104 ;
-  assign \half_period$106  = cycle[15:0];
+  assign \started$101  = started;
+  assign \start_slot$103  = start_slot;
+  assign \rises$105  = rises;
+  assign receiver_clear = \clear$106 ;
+  assign \half_period$108  = cycle[15:0];
   assign arm = ma_arm;
-  assign \sample$109  = sample;
-  assign \bit$111  = \bit ;
-  assign \word_count$113  = word_count;
-  assign \lc$115  = lc;
+  assign \sample$111  = sample;
+  assign \bit$113  = \bit ;
+  assign \word_count$115  = word_count;
+  assign \lc$117  = lc;
   assign lc_next = { lc[4:0], \bit  };
-  assign \lc_next$117  = { lc[4:0], \bit  };
+  assign \lc_next$119  = { lc[4:0], \bit  };
   assign lc_load = load;
   assign lc_check = check;
-  assign \resync$123  = resync;
+  assign \resync$125  = resync;
   assign w1_enable = cycle[135];
-  assign \cpw_top$128  = cpw_top;
+  assign \cpw_top$130  = cpw_top;
   assign data1 = spw;
   assign bits = cycle[141:136];
   assign tolerance = cycle[154:147];
   assign match = spw_match;
   assign cfg = cycle;
-  assign \report_frame$137  = report_frame;
-  assign \fault$139  = fault;
-  assign \fault_status$141  = fault_status;
-  assign \crc_ok$143  = crc_ok;
+  assign \report_frame$139  = report_frame;
+  assign \fault$141  = fault;
+  assign \fault_status$143  = fault_status;
+  assign \crc_ok$145  = crc_ok;
   assign \repeat  = lc_repeat_seen;
   assign skip = lc_skip_seen;
   assign zero = lc_zero_seen;
-  assign \report$151  = report;
-  assign \report_frame$152  = report_frame;
-  assign \report_delay$154  = report_delay;
-  assign \valid$156  = valid;
-  assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \first_rise$169  = first_rise;
-  assign clear_counters = \clear$175 ;
+  assign \report$153  = report;
+  assign \report_frame$154  = report_frame;
+  assign \report_delay$156  = report_delay;
+  assign \valid$158  = valid;
+  assign word_crc_ok = { \$12 , crc_ok[0] };
+  assign \first_rise$171  = first_rise;
+  assign ca_status = result[2:0];
+  assign ca_bytes_done = result[9:3];
+  assign ca_start = \start$185 ;
+  assign ca_abort = \abort$187 ;
+  assign rbuf_addr = ca_wbuf_addr;
+  assign ca_rbuf_addr = ca_wbuf_addr;
+  assign ca_rbuf_en = rbuf_en;
+  assign rbuf_data = ca_rbuf_data;
+  assign ca_busy = frames;
+  assign \busy$196  = frames;
+  assign \done$198  = ca_done;
+  assign \cdm$200  = cdm;
+  assign held = ma_held;
+  assign ma_hold = hold;
+  assign frame_end = report;
+  assign frame_ok = valid;
+  assign frame_cds = cds;
+  assign cdm_cycle = frame_cdm;
+  assign clear_counters = \clear$214 ;
   assign count_crc_word0 = counts[15:0];
   assign count_crc_word1 = counts[31:16];
   assign count_no_ack = counts[47:32];
@@ -12099,27 +15481,32 @@ module \biss_master_wb.ch1.core (clk, rst, trigger, \busy$193 , config_error, st
   assign count_overrun = counts[175:160];
   assign count_aborted = counts[191:176];
   assign count_no_stop = counts[207:192];
-  assign \ma$192  = ma;
-  assign \overrun$195  = overrun;
-  assign \done$197  = \done$196 ;
-  assign valid_out = \valid$198 ;
-  assign \status$200  = result[3:0];
-  assign timestamp = result[35:4];
-  assign line_delay = result[48:36];
-  assign \cds$204  = result[49];
-  assign word0_position = result[104:50];
-  assign word0_ne = result[105];
-  assign word0_nw = result[106];
-  assign word0_crc_ok = result[107];
-  assign word1_position = result[147:108];
-  assign word1_ne = result[148];
-  assign word1_nw = result[149];
-  assign word1_crc_ok = result[150];
-  assign \lc$213  = result[156:151];
-  assign \lc_repeat$214  = result[157];
-  assign \lc_skip$215  = result[158];
-  assign \lc_zero$216  = result[159];
-  assign \spw_mismatch$217  = result[160];
+  assign count_ca_crc4_error = counts[223:208];
+  assign count_ca_no_answer = counts[239:224];
+  assign count_ca_refused = counts[255:240];
+  assign count_ca_aborted = counts[271:256];
+  assign count_ca_data_fault = counts[287:272];
+  assign \ma$236  = ma;
+  assign \overrun$239  = overrun;
+  assign \done$241  = \done$240 ;
+  assign valid_out = \valid$242 ;
+  assign \status$244  = \result$245 [3:0];
+  assign timestamp = \result$245 [35:4];
+  assign line_delay = \result$245 [48:36];
+  assign \cds$248  = \result$245 [49];
+  assign word0_position = \result$245 [104:50];
+  assign word0_ne = \result$245 [105];
+  assign word0_nw = \result$245 [106];
+  assign word0_crc_ok = \result$245 [107];
+  assign word1_position = \result$245 [147:108];
+  assign word1_ne = \result$245 [148];
+  assign word1_nw = \result$245 [149];
+  assign word1_crc_ok = \result$245 [150];
+  assign \lc$257  = \result$245 [156:151];
+  assign \lc_repeat$258  = \result$245 [157];
+  assign \lc_skip$259  = \result$245 [158];
+  assign \lc_zero$260  = \result$245 [159];
+  assign \spw_mismatch$261  = \result$245 [160];
   assign \live.ma_half_period  = live[15:0];
   assign \live.request_period  = live[39:16];
   assign \live.break_time  = live[63:40];
@@ -12170,16 +15557,16 @@ module \biss_master_wb.ch1.core (clk, rst, trigger, \busy$193 , config_error, st
   assign \words[1].nenw  = words[16];
   assign \words[1].lc  = words[17];
   assign \words[1].crc  = words[19:18];
-  assign \words$125[0]  = \words$125 [9:0];
-  assign \words$125[0].data_bits  = \words$125 [5:0];
-  assign \words$125[0].nenw  = \words$125 [6];
-  assign \words$125[0].lc  = \words$125 [7];
-  assign \words$125[0].crc  = \words$125 [9:8];
-  assign \words$125[1]  = \words$125 [19:10];
-  assign \words$125[1].data_bits  = \words$125 [15:10];
-  assign \words$125[1].nenw  = \words$125 [16];
-  assign \words$125[1].lc  = \words$125 [17];
-  assign \words$125[1].crc  = \words$125 [19:18];
+  assign \words$127[0]  = \words$127 [9:0];
+  assign \words$127[0].data_bits  = \words$127 [5:0];
+  assign \words$127[0].nenw  = \words$127 [6];
+  assign \words$127[0].lc  = \words$127 [7];
+  assign \words$127[0].crc  = \words$127 [9:8];
+  assign \words$127[1]  = \words$127 [19:10];
+  assign \words$127[1].data_bits  = \words$127 [15:10];
+  assign \words$127[1].nenw  = \words$127 [16];
+  assign \words$127[1].lc  = \words$127 [17];
+  assign \words$127[1].crc  = \words$127 [19:18];
   assign \cfg.ma_half_period  = cycle[15:0];
   assign \cfg.request_period  = cycle[39:16];
   assign \cfg.break_time  = cycle[63:40];
@@ -12219,6 +15606,15 @@ module \biss_master_wb.ch1.core (clk, rst, trigger, \busy$193 , config_error, st
   assign \frame.lc_skip  = frame[158];
   assign \frame.lc_zero  = frame[159];
   assign \frame.spw_mismatch  = frame[160];
+  assign \request$173.slave_id  = \request$173 [2:0];
+  assign \request$173.address  = \request$173 [9:3];
+  assign \request$173.count  = \request$173 [16:10];
+  assign \request$173.write  = \request$173 [17];
+  assign \wbuf.addr  = wbuf[3:0];
+  assign \wbuf.data  = wbuf[35:4];
+  assign \wbuf.en  = wbuf[39:36];
+  assign \result.status  = result[2:0];
+  assign \result.bytes_done  = result[9:3];
   assign \events.crc_word0  = events[0];
   assign \events.crc_word1  = events[1];
   assign \events.no_ack  = events[2];
@@ -12232,6 +15628,11 @@ module \biss_master_wb.ch1.core (clk, rst, trigger, \busy$193 , config_error, st
   assign \events.overrun  = events[10];
   assign \events.aborted  = events[11];
   assign \events.no_stop  = events[12];
+  assign \events.ca_crc4_error  = events[13];
+  assign \events.ca_no_answer  = events[14];
+  assign \events.ca_refused  = events[15];
+  assign \events.ca_aborted  = events[16];
+  assign \events.ca_data_fault  = events[17];
   assign \faults.no_ack  = faults[0];
   assign \faults.no_start  = faults[1];
   assign \faults.delay_range  = faults[2];
@@ -12252,25 +15653,35 @@ module \biss_master_wb.ch1.core (clk, rst, trigger, \busy$193 , config_error, st
   assign \counts.overrun  = counts[175:160];
   assign \counts.aborted  = counts[191:176];
   assign \counts.no_stop  = counts[207:192];
-  assign \result.status  = result[3:0];
-  assign \result.timestamp  = result[35:4];
-  assign \result.line_delay  = result[48:36];
-  assign \result.cds  = result[49];
-  assign \result.word0  = result[107:50];
-  assign \result.word0.position  = result[104:50];
-  assign \result.word0.ne  = result[105];
-  assign \result.word0.nw  = result[106];
-  assign \result.word0.crc_ok  = result[107];
-  assign \result.word1  = result[150:108];
-  assign \result.word1.position  = result[147:108];
-  assign \result.word1.ne  = result[148];
-  assign \result.word1.nw  = result[149];
-  assign \result.word1.crc_ok  = result[150];
-  assign \result.lc  = result[156:151];
-  assign \result.lc_repeat  = result[157];
-  assign \result.lc_skip  = result[158];
-  assign \result.lc_zero  = result[159];
-  assign \result.spw_mismatch  = result[160];
+  assign \counts.ca_crc4_error  = counts[223:208];
+  assign \counts.ca_no_answer  = counts[239:224];
+  assign \counts.ca_refused  = counts[255:240];
+  assign \counts.ca_aborted  = counts[271:256];
+  assign \counts.ca_data_fault  = counts[287:272];
+  assign \result$245.status  = \result$245 [3:0];
+  assign \result$245.timestamp  = \result$245 [35:4];
+  assign \result$245.line_delay  = \result$245 [48:36];
+  assign \result$245.cds  = \result$245 [49];
+  assign \result$245.word0  = \result$245 [107:50];
+  assign \result$245.word0.position  = \result$245 [104:50];
+  assign \result$245.word0.ne  = \result$245 [105];
+  assign \result$245.word0.nw  = \result$245 [106];
+  assign \result$245.word0.crc_ok  = \result$245 [107];
+  assign \result$245.word1  = \result$245 [150:108];
+  assign \result$245.word1.position  = \result$245 [147:108];
+  assign \result$245.word1.ne  = \result$245 [148];
+  assign \result$245.word1.nw  = \result$245 [149];
+  assign \result$245.word1.crc_ok  = \result$245 [150];
+  assign \result$245.lc  = \result$245 [156:151];
+  assign \result$245.lc_repeat  = \result$245 [157];
+  assign \result$245.lc_skip  = \result$245 [158];
+  assign \result$245.lc_zero  = \result$245 [159];
+  assign \result$245.spw_mismatch  = \result$245 [160];
+  assign events[17] = \$11 ;
+  assign events[16] = \$9 ;
+  assign events[15] = \$7 ;
+  assign events[14] = \$5 ;
+  assign events[13] = \$3 ;
   assign events[12] = faults[6];
   assign events[11] = faults[4];
   assign events[10] = overrun;
@@ -12284,9 +15695,16 @@ module \biss_master_wb.ch1.core (clk, rst, trigger, \busy$193 , config_error, st
   assign events[2] = faults[0];
   assign events[1] = crc_error[1];
   assign events[0] = crc_error[0];
+  assign wbuf[39:36] = ca_wbuf_en;
+  assign wbuf[35:4] = ca_wbuf_data;
+  assign wbuf[3:0] = ca_wbuf_addr;
+  assign \request$173 [17] = ca_write;
+  assign \request$173 [16:10] = ca_count;
+  assign \request$173 [9:3] = ca_address;
+  assign \request$173 [2:0] = ca_slave_id;
   assign frame[35:4] = first_rise_time;
   assign frame[160] = spw_mismatch;
-  assign frame[150] = \$2 ;
+  assign frame[150] = \$12 ;
   assign frame[149] = nw[1];
   assign frame[148] = ne[1];
   assign frame[147:108] = spw;
@@ -12301,8 +15719,8 @@ module \biss_master_wb.ch1.core (clk, rst, trigger, \busy$193 , config_error, st
   assign frame[49] = cds;
   assign frame[48:36] = delay;
   assign frame[3:0] = status;
-  assign \words$125 [19:10] = cycle[145:136];
-  assign \words$125 [9:0] = cycle[134:125];
+  assign \words$127 [19:10] = cycle[145:136];
+  assign \words$127 [9:0] = cycle[134:125];
   assign words[19:10] = cycle[145:136];
   assign words[9:0] = cycle[134:125];
   assign live[154:147] = cfg_spw_tolerance;
@@ -12327,7 +15745,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1.core.config (rst, word_count, live, ok, cycle, ack_limit, timeout_limit, delay_limit, no_start_limit, idle, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$50  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$66  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -12508,21 +15926,21 @@ module \biss_master_wb.ch1.core.config (rst, word_count, live, ok, cycle, ack_li
   always @(posedge clk)
     delay_limit <= \$46 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$47  = \$41 ;
     if (rst) begin
       \$47  = 25'h0000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$42  = \$34 ;
     if (rst) begin
       \$42  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$43  = cycle;
     if (idle) begin
       \$43  = live;
@@ -12532,7 +15950,7 @@ module \biss_master_wb.ch1.core.config (rst, word_count, live, ok, cycle, ack_li
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$44  = ack_limit;
     if (idle) begin
       \$44  = \$36 ;
@@ -12542,7 +15960,7 @@ module \biss_master_wb.ch1.core.config (rst, word_count, live, ok, cycle, ack_li
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$45  = timeout_limit;
     if (idle) begin
       \$45  = \$38 ;
@@ -12552,7 +15970,7 @@ module \biss_master_wb.ch1.core.config (rst, word_count, live, ok, cycle, ack_li
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$46  = delay_limit;
     if (idle) begin
       \$46  = \$40 ;
@@ -12604,9 +16022,9 @@ module \biss_master_wb.ch1.core.config (rst, word_count, live, ok, cycle, ack_li
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_doubtful, abort, config_ok, end_check, resync, timer_clear, fault, fault_status, faults, ma_run, in_clock, report_frame, report_delay, idle, receiver_clear, slo_stuck, slo_stuck_live, break_over
-, ack_expired, no_start_expired, delay_over, ma_arm, ma_busy, ma_enough, early, locked, slo, frame_done, stopped, slots_full, started, stop_bit, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
+module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_doubtful, abort, config_ok, end_check, cdm_cycle, idle, receiver_clear, resync, timer_clear, fault, fault_status, faults, ma_run, in_clock, ma_hold, report_frame, report_delay, slo_stuck
+, slo_stuck_live, break_over, ack_expired, no_start_expired, delay_over, ma_arm, ma_busy, ma_held, ma_enough, early, locked, slo, frame_done, stopped, slots_full, started, stop_bit, cdm, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$67  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -12663,15 +16081,35 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
   wire \$58 ;
   wire \$59 ;
   wire \$6 ;
-  reg \$60 ;
-  reg [2:0] \$61 ;
-  reg \$62 ;
-  reg \$63 ;
-  reg \$64 ;
-  reg \$65 ;
-  reg \$66 ;
+  wire \$60 ;
+  wire \$61 ;
+  wire \$62 ;
+  wire \$63 ;
+  wire \$64 ;
+  wire \$65 ;
+  wire \$66 ;
+  wire \$67 ;
+  wire \$68 ;
+  wire \$69 ;
   wire \$7 ;
+  wire \$70 ;
+  wire \$71 ;
+  wire \$72 ;
+  wire \$73 ;
+  wire \$74 ;
+  wire \$75 ;
+  wire \$76 ;
+  wire \$77 ;
+  wire \$78 ;
+  reg \$79 ;
   wire \$8 ;
+  reg \$80 ;
+  reg [2:0] \$81 ;
+  reg \$82 ;
+  reg \$83 ;
+  reg \$84 ;
+  reg \$85 ;
+  reg \$86 ;
   wire \$9 ;
   input abort;
   wire abort;
@@ -12680,6 +16118,10 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
   reg armed = 1'h0;
   input break_over;
   wire break_over;
+  input cdm;
+  wire cdm;
+  output cdm_cycle;
+  reg cdm_cycle = 1'h0;
   input clk;
   wire clk;
   input config_ok;
@@ -12736,6 +16178,10 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
   wire ma_busy;
   input ma_enough;
   wire ma_enough;
+  input ma_held;
+  wire ma_held;
+  output ma_hold;
+  reg ma_hold;
   output ma_run;
   reg ma_run;
   input no_start_expired;
@@ -12771,82 +16217,469 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
   wire stopped;
   output timer_clear;
   reg timer_clear;
-  assign \$33  = cycle_fsm_state == 3'h5;
-  assign \$34  = cycle_fsm_state == 3'h6;
-  assign \$35  = cycle_fsm_state == 3'h7;
-  assign \$36  = ma_busy | abort;
-  assign \$37  = ~ config_ok;
-  assign \$38  = first_clock & \$37 ;
-  assign \$39  = first_clock ? slo_stuck_live : slo_stuck;
-  assign \$40  = ~ locked_seen;
-  assign \$41  = locked & \$40 ;
-  assign \$42  = armed & early;
+  assign \$14  = locked & \$13 ;
+  assign \$15  = \$14  & delay_over;
+  assign \$16  = ~ started;
+  assign \$17  = locked_seen & \$16 ;
+  assign \$18  = no_start_expired | slots_full;
+  assign \$19  = \$17  & \$18 ;
+  assign \$20  = ~ end_check;
+  assign \$21  = ma_busy | abort;
+  assign \$22  = cdm_cycle & abort;
+  assign \$23  = ~ ma_busy;
+  assign \$24  = ~ ma_busy;
+  assign \$25  = \$24  | ma_held;
+  assign \$26  = \$25  & slo;
+  assign \$27  = ~ locked_seen;
+  assign \$28  = locked & \$27 ;
+  assign restart_timer = ma_arm | \$28 ;
+  assign \$29  = ma_busy | abort;
+  assign \$30  = ~ config_ok;
+  assign \$31  = first_clock & \$30 ;
+  assign \$32  = first_clock ? slo_stuck_live : slo_stuck;
+  assign \$33  = ~ ma_enough;
+  assign \$34  = ~ abort;
+  assign \$35  = cdm_cycle & \$34 ;
+  assign \$36  = restart_timer | abort;
+  assign \$37  = armed & early;
+  assign \$38  = ~ locked_seen;
+  assign \$39  = armed & \$38 ;
+  assign \$40  = ~ locked;
+  assign \$41  = \$39  & \$40 ;
+  assign \$42  = \$41  & ack_expired;
   assign \$43  = ~ locked_seen;
-  assign \$44  = armed & \$43 ;
-  assign \$45  = ~ locked;
-  assign \$46  = \$44  & \$45 ;
-  assign \$47  = \$46  & ack_expired;
-  assign \$48  = ~ locked_seen;
-  assign \$49  = locked & \$48 ;
-  assign \$50  = \$49  & delay_over;
-  assign \$51  = ~ started;
-  assign \$52  = locked_seen & \$51 ;
-  assign \$53  = no_start_expired | slots_full;
-  assign \$54  = \$52  & \$53 ;
-  assign \$55  = ~ end_check;
-  assign \$56  = ma_busy | abort;
-  assign \$57  = ~ ma_busy;
-  assign \$58  = ~ ma_busy;
-  assign \$59  = \$58  & slo;
+  assign \$44  = locked & \$43 ;
+  assign \$45  = \$44  & delay_over;
+  assign \$46  = ~ started;
+  assign \$47  = locked_seen & \$46 ;
+  assign \$48  = no_start_expired | slots_full;
+  assign \$49  = \$47  & \$48 ;
+  assign \$50  = ~ end_check;
+  assign \$51  = ~ ma_enough;
+  assign \$52  = ~ abort;
+  assign \$53  = cdm_cycle & \$52 ;
+  assign \$54  = ~ end_check;
+  assign \$55  = slo | slo_stuck;
+  assign \$56  = \$55  | abort;
+  assign \$57  = ~ \$56 ;
+  assign \$58  = cdm_cycle & \$57 ;
+  assign \$59  = ma_busy | abort;
+  assign \$60  = slo | slo_stuck;
+  assign \$61  = \$60  | abort;
+  assign \$62  = ~ \$61 ;
+  assign \$63  = cdm_cycle & \$62 ;
+  assign \$64  = slo | slo_stuck;
+  assign \$65  = \$64  | abort;
+  assign \$66  = ~ \$65 ;
+  assign \$67  = cdm_cycle & \$66 ;
+  assign \$68  = ~ ma_busy;
+  assign \$69  = \$68  | ma_held;
+  assign \$70  = \$69  & slo;
+  assign \$71  = ! cycle_fsm_state;
+  assign \$72  = cycle_fsm_state == 1'h1;
+  assign \$73  = cycle_fsm_state == 2'h2;
+  assign \$74  = cycle_fsm_state == 2'h3;
+  assign \$75  = cycle_fsm_state == 3'h4;
+  assign \$76  = cycle_fsm_state == 3'h5;
+  assign \$77  = cycle_fsm_state == 3'h6;
+  assign \$78  = cycle_fsm_state == 3'h7;
   always @(posedge clk)
-    first_clock <= \$60 ;
+    cdm_cycle <= \$79 ;
   always @(posedge clk)
-    cycle_fsm_state <= \$61 ;
+    first_clock <= \$80 ;
   always @(posedge clk)
-    idle <= \$62 ;
+    cycle_fsm_state <= \$81 ;
   always @(posedge clk)
-    receiver_clear <= \$63 ;
+    idle <= \$82 ;
   always @(posedge clk)
-    armed <= \$64 ;
+    receiver_clear <= \$83 ;
   always @(posedge clk)
-    locked_seen <= \$65 ;
+    armed <= \$84 ;
   always @(posedge clk)
-    pause <= \$66 ;
-  assign \$1  = ~ locked_seen;
-  assign \$2  = locked & \$1 ;
-  assign restart_timer = ma_arm | \$2 ;
-  assign \$3  = ma_busy | abort;
-  assign \$4  = ~ config_ok;
-  assign \$5  = first_clock & \$4 ;
-  assign \$6  = first_clock ? slo_stuck_live : slo_stuck;
-  assign \$7  = ~ ma_enough;
-  assign \$8  = restart_timer | abort;
-  assign \$9  = armed & early;
-  assign \$10  = ~ locked_seen;
-  assign \$11  = armed & \$10 ;
-  assign \$12  = ~ locked;
-  assign \$13  = \$11  & \$12 ;
-  assign \$14  = \$13  & ack_expired;
-  assign \$15  = ~ locked_seen;
-  assign \$16  = locked & \$15 ;
-  assign \$17  = \$16  & delay_over;
-  assign \$18  = ~ started;
-  assign \$19  = locked_seen & \$18 ;
-  assign \$20  = no_start_expired | slots_full;
-  assign \$21  = \$19  & \$20 ;
-  assign \$22  = ~ end_check;
-  assign \$23  = ~ ma_enough;
-  assign \$24  = ~ end_check;
-  assign \$25  = ma_busy | abort;
-  assign \$26  = ~ ma_busy;
-  assign \$27  = \$26  & slo;
-  assign \$28  = ! cycle_fsm_state;
-  assign \$29  = cycle_fsm_state == 1'h1;
-  assign \$30  = cycle_fsm_state == 2'h2;
-  assign \$31  = cycle_fsm_state == 2'h3;
-  assign \$32  = cycle_fsm_state == 3'h4;
+    locked_seen <= \$85 ;
+  always @(posedge clk)
+    pause <= \$86 ;
+  assign \$1  = ma_busy | abort;
+  assign \$2  = ~ config_ok;
+  assign \$3  = first_clock & \$2 ;
+  assign \$4  = first_clock ? slo_stuck_live : slo_stuck;
+  assign \$5  = ~ locked_seen;
+  assign \$6  = locked & \$5 ;
+  assign \$7  = armed & early;
+  assign \$8  = ~ locked_seen;
+  assign \$9  = armed & \$8 ;
+  assign \$10  = ~ locked;
+  assign \$11  = \$9  & \$10 ;
+  assign \$12  = \$11  & ack_expired;
+  assign \$13  = ~ locked_seen;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    \$79  = cdm_cycle;
+    if (idle) begin
+      \$79  = cdm;
+    end
+    if (rst) begin
+      \$79  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    \$80  = idle;
+    if (rst) begin
+      \$80  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    \$81  = cycle_fsm_state;
+    (* full_case = 32'd1 *)
+    casez (cycle_fsm_state)
+      3'h0:
+          if (\$1 ) begin
+          end else if (break_over) begin
+            \$81  = 3'h1;
+          end
+      3'h1:
+          if (abort) begin
+            \$81  = 3'h0;
+          end else if (request) begin
+            \$81  = 3'h2;
+          end
+      3'h2:
+          if (\$3 ) begin
+            \$81  = 3'h1;
+            if (abort) begin
+              \$81  = 3'h0;
+            end
+          end else if (abort) begin
+            \$81  = 3'h0;
+          end else if (slo) begin
+            \$81  = 3'h3;
+          end else if (\$4 ) begin
+            \$81  = 3'h0;
+          end
+      3'h3:
+          if (abort) begin
+            \$81  = 3'h0;
+          end else if (frame_done) begin
+            \$81  = 3'h4;
+          end else if (\$7 ) begin
+            \$81  = 3'h0;
+          end else if (\$12 ) begin
+            \$81  = 3'h0;
+          end else if (\$15 ) begin
+            \$81  = 3'h0;
+          end else if (\$19 ) begin
+            \$81  = 3'h0;
+          end
+      3'h4:
+          if (abort) begin
+            (* full_case = 32'd1 *)
+            if (end_check) begin
+              \$81  = 3'h0;
+            end else begin
+              \$81  = 3'h0;
+            end
+          end else if (stopped) begin
+            (* full_case = 32'd1 *)
+            if (\$20 ) begin
+              (* full_case = 32'd1 *)
+              if (pause) begin
+                \$81  = 3'h5;
+              end else begin
+                \$81  = 3'h6;
+              end
+            end else if (stop_bit) begin
+              \$81  = 3'h0;
+            end else begin
+              \$81  = 3'h7;
+            end
+          end
+      3'h5:
+          if (\$21 ) begin
+          end else if (break_over) begin
+            \$81  = 3'h1;
+          end
+      3'h6:
+          if (\$22 ) begin
+            \$81  = 3'h0;
+          end else if (\$23 ) begin
+            \$81  = 3'h1;
+          end
+      3'h7:
+          if (abort) begin
+            \$81  = 3'h0;
+          end else if (\$26 ) begin
+            (* full_case = 32'd1 *)
+            if (pause) begin
+              \$81  = 3'h5;
+            end else if (cdm_cycle) begin
+              \$81  = 3'h6;
+            end else begin
+              \$81  = 3'h1;
+            end
+          end else if (slo_stuck) begin
+            \$81  = 3'h0;
+          end
+    endcase
+    if (rst) begin
+      \$81  = 3'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    \$82  = idle;
+    (* full_case = 32'd1 *)
+    casez (cycle_fsm_state)
+      3'h0:
+          if (\$1 ) begin
+          end else if (break_over) begin
+            \$82  = 1'h1;
+          end
+      3'h1:
+          if (abort) begin
+            \$82  = 1'h0;
+          end else if (request) begin
+            \$82  = 1'h0;
+          end
+      3'h2:
+          if (\$3 ) begin
+            \$82  = 1'h1;
+            if (abort) begin
+              \$82  = 1'h0;
+            end
+          end else if (abort) begin
+            \$82  = 1'h0;
+          end else if (slo) begin
+            \$82  = 1'h0;
+          end else if (\$4 ) begin
+            \$82  = 1'h0;
+          end
+      3'h3:
+          if (abort) begin
+            \$82  = 1'h0;
+          end else if (frame_done) begin
+            \$82  = 1'h0;
+          end else if (\$7 ) begin
+            \$82  = 1'h0;
+          end else if (\$12 ) begin
+            \$82  = 1'h0;
+          end else if (\$15 ) begin
+            \$82  = 1'h0;
+          end else if (\$19 ) begin
+            \$82  = 1'h0;
+          end
+      3'h4:
+          if (abort) begin
+            (* full_case = 32'd1 *)
+            if (end_check) begin
+              \$82  = 1'h0;
+            end else begin
+              \$82  = 1'h0;
+            end
+          end else if (stopped) begin
+            (* full_case = 32'd1 *)
+            if (\$20 ) begin
+              (* full_case = 32'd1 *)
+              if (pause) begin
+                \$82  = 1'h0;
+              end else begin
+                \$82  = 1'h0;
+              end
+            end else if (stop_bit) begin
+              \$82  = 1'h0;
+            end else begin
+              \$82  = 1'h0;
+            end
+          end
+      3'h5:
+          if (\$21 ) begin
+          end else if (break_over) begin
+            \$82  = 1'h1;
+          end
+      3'h6:
+          if (\$22 ) begin
+            \$82  = 1'h0;
+          end else if (\$23 ) begin
+            \$82  = 1'h1;
+          end
+      3'h7:
+          if (abort) begin
+            \$82  = 1'h0;
+          end else if (\$26 ) begin
+            (* full_case = 32'd1 *)
+            if (pause) begin
+              \$82  = 1'h0;
+            end else if (cdm_cycle) begin
+              \$82  = 1'h0;
+            end else begin
+              \$82  = 1'h1;
+            end
+          end else if (slo_stuck) begin
+            \$82  = 1'h0;
+          end
+    endcase
+    if (rst) begin
+      \$82  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    \$83  = receiver_clear;
+    (* full_case = 32'd1 *)
+    casez (cycle_fsm_state)
+      3'h0:
+          if (\$1 ) begin
+          end else if (break_over) begin
+            \$83  = 1'h1;
+          end
+      3'h1:
+          if (abort) begin
+            \$83  = 1'h1;
+          end else if (request) begin
+            \$83  = 1'h1;
+          end
+      3'h2:
+          if (\$3 ) begin
+            \$83  = 1'h1;
+            if (abort) begin
+              \$83  = 1'h1;
+            end
+          end else if (abort) begin
+            \$83  = 1'h1;
+          end else if (slo) begin
+            \$83  = 1'h0;
+          end else if (\$4 ) begin
+            \$83  = 1'h1;
+          end
+      3'h3:
+          if (abort) begin
+            \$83  = 1'h1;
+          end else if (frame_done) begin
+            \$83  = 1'h0;
+          end else if (\$7 ) begin
+            \$83  = 1'h1;
+          end else if (\$12 ) begin
+            \$83  = 1'h1;
+          end else if (\$15 ) begin
+            \$83  = 1'h1;
+          end else if (\$19 ) begin
+            \$83  = 1'h1;
+          end
+      3'h4:
+          if (abort) begin
+            (* full_case = 32'd1 *)
+            if (end_check) begin
+              \$83  = 1'h1;
+            end else begin
+              \$83  = 1'h1;
+            end
+          end else if (stopped) begin
+            (* full_case = 32'd1 *)
+            if (\$20 ) begin
+              (* full_case = 32'd1 *)
+              if (pause) begin
+                \$83  = 1'h1;
+              end else begin
+                \$83  = 1'h0;
+              end
+            end else if (stop_bit) begin
+              \$83  = 1'h1;
+            end else begin
+              \$83  = 1'h0;
+            end
+          end
+      3'h5:
+          if (\$21 ) begin
+          end else if (break_over) begin
+            \$83  = 1'h1;
+          end
+      3'h6:
+          if (\$22 ) begin
+            \$83  = 1'h1;
+          end else if (\$23 ) begin
+            \$83  = 1'h1;
+          end
+      3'h7:
+          if (abort) begin
+            \$83  = 1'h1;
+          end else if (\$26 ) begin
+            (* full_case = 32'd1 *)
+            if (pause) begin
+              \$83  = 1'h1;
+            end else if (cdm_cycle) begin
+              \$83  = 1'h0;
+            end else begin
+              \$83  = 1'h1;
+            end
+          end else if (slo_stuck) begin
+            \$83  = 1'h1;
+          end
+    endcase
+    if (rst) begin
+      \$83  = 1'h1;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    \$84  = armed;
+    casez (cycle_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          \$84  = 1'h0;
+      3'h3:
+          if (ma_arm) begin
+            \$84  = 1'h1;
+          end
+    endcase
+    if (rst) begin
+      \$84  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    \$85  = locked_seen;
+    casez (cycle_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          \$85  = 1'h0;
+      3'h3:
+          if (\$6 ) begin
+            \$85  = 1'h1;
+          end
+    endcase
+    if (rst) begin
+      \$85  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    \$86  = pause;
+    casez (cycle_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h3:
+          if (abort) begin
+          end else if (frame_done) begin
+            \$86  = frame_doubtful;
+          end
+    endcase
+    if (rst) begin
+      \$86  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
     resync = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -12854,12 +16687,12 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
     timer_clear = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
       3'h0:
-          if (\$3 ) begin
+          if (\$29 ) begin
             timer_clear = 1'h1;
           end
       3'h1:
@@ -12867,14 +16700,14 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
       3'h2:
           timer_clear = 1'h1;
       3'h3:
-          if (\$8 ) begin
+          if (\$36 ) begin
             timer_clear = 1'h1;
           end
       3'h4:
           if (abort) begin
             timer_clear = 1'h1;
           end else if (stopped) begin
-            if (\$24 ) begin
+            if (\$54 ) begin
               if (pause) begin
                 timer_clear = 1'h1;
               end
@@ -12883,7 +16716,7 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
             end
           end
       3'h5:
-          if (\$25 ) begin
+          if (\$59 ) begin
             timer_clear = 1'h1;
           end
       3'h6:
@@ -12891,7 +16724,7 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
       3'h7:
           if (abort) begin
             timer_clear = 1'h1;
-          end else if (\$27 ) begin
+          end else if (\$70 ) begin
             if (pause) begin
               timer_clear = 1'h1;
             end
@@ -12901,7 +16734,7 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
     fault = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -12910,25 +16743,25 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
       3'h1:
           /* empty */;
       3'h2:
-          if (\$5 ) begin
+          if (\$31 ) begin
             fault = 1'h1;
           end else if (abort) begin
             fault = 1'h1;
           end else if (slo) begin
-          end else if (\$6 ) begin
+          end else if (\$32 ) begin
             fault = 1'h1;
           end
       3'h3:
           if (abort) begin
             fault = 1'h1;
           end else if (frame_done) begin
-          end else if (\$9 ) begin
+          end else if (\$37 ) begin
             fault = 1'h1;
-          end else if (\$14 ) begin
+          end else if (\$42 ) begin
             fault = 1'h1;
-          end else if (\$17 ) begin
+          end else if (\$45 ) begin
             fault = 1'h1;
-          end else if (\$21 ) begin
+          end else if (\$49 ) begin
             fault = 1'h1;
           end
       3'h4:
@@ -12937,7 +16770,7 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
               fault = 1'h1;
             end
           end else if (stopped) begin
-            if (\$24 ) begin
+            if (\$54 ) begin
             end else if (stop_bit) begin
               fault = 1'h1;
             end
@@ -12949,14 +16782,14 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
       3'h7:
           if (abort) begin
             fault = 1'h1;
-          end else if (\$27 ) begin
+          end else if (\$70 ) begin
           end else if (slo_stuck) begin
             fault = 1'h1;
           end
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
     fault_status = 4'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -12965,25 +16798,25 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
       3'h1:
           /* empty */;
       3'h2:
-          if (\$5 ) begin
+          if (\$31 ) begin
             fault_status = 4'hb;
           end else if (abort) begin
             fault_status = 4'ha;
           end else if (slo) begin
-          end else if (\$6 ) begin
+          end else if (\$32 ) begin
             fault_status = 4'h9;
           end
       3'h3:
           if (abort) begin
             fault_status = 4'ha;
           end else if (frame_done) begin
-          end else if (\$9 ) begin
+          end else if (\$37 ) begin
             fault_status = 4'h8;
-          end else if (\$14 ) begin
+          end else if (\$42 ) begin
             fault_status = 4'h6;
-          end else if (\$17 ) begin
+          end else if (\$45 ) begin
             fault_status = 4'h8;
-          end else if (\$21 ) begin
+          end else if (\$49 ) begin
             fault_status = 4'h7;
           end
       3'h4:
@@ -12992,7 +16825,7 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
               fault_status = 4'ha;
             end
           end else if (stopped) begin
-            if (\$24 ) begin
+            if (\$54 ) begin
             end else if (stop_bit) begin
               fault_status = 4'hc;
             end
@@ -13004,14 +16837,14 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
       3'h7:
           if (abort) begin
             fault_status = 4'ha;
-          end else if (\$27 ) begin
+          end else if (\$70 ) begin
           end else if (slo_stuck) begin
             fault_status = 4'h9;
           end
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
     faults = 7'h00;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -13020,25 +16853,25 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
       3'h1:
           /* empty */;
       3'h2:
-          if (\$5 ) begin
+          if (\$31 ) begin
             faults[5] = 1'h1;
           end else if (abort) begin
             faults[4] = 1'h1;
           end else if (slo) begin
-          end else if (\$6 ) begin
+          end else if (\$32 ) begin
             faults[3] = 1'h1;
           end
       3'h3:
           if (abort) begin
             faults[4] = 1'h1;
           end else if (frame_done) begin
-          end else if (\$9 ) begin
+          end else if (\$37 ) begin
             faults[2] = 1'h1;
-          end else if (\$14 ) begin
+          end else if (\$42 ) begin
             faults[0] = 1'h1;
-          end else if (\$17 ) begin
+          end else if (\$45 ) begin
             faults[2] = 1'h1;
-          end else if (\$21 ) begin
+          end else if (\$49 ) begin
             faults[1] = 1'h1;
           end
       3'h4:
@@ -13047,7 +16880,7 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
               faults[4] = 1'h1;
             end
           end else if (stopped) begin
-            if (\$24 ) begin
+            if (\$54 ) begin
             end else if (stop_bit) begin
               faults[6] = 1'h1;
             end
@@ -13059,14 +16892,14 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
       3'h7:
           if (abort) begin
             faults[4] = 1'h1;
-          end else if (\$27 ) begin
+          end else if (\$70 ) begin
           end else if (slo_stuck) begin
             faults[3] = 1'h1;
           end
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
     ma_run = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -13076,13 +16909,13 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
       3'h2:
           /* empty */;
       3'h3:
-          ma_run = \$7 ;
+          ma_run = \$33 ;
       3'h4:
-          ma_run = \$23 ;
+          ma_run = \$51 ;
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
     in_clock = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -13096,7 +16929,30 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    ma_hold = 1'h0;
+    (* full_case = 32'd1 *)
+    casez (cycle_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h3:
+          ma_hold = \$35 ;
+      3'h4:
+          ma_hold = \$53 ;
+      3'h5:
+          ma_hold = \$58 ;
+      3'h6:
+          ma_hold = \$63 ;
+      3'h7:
+          ma_hold = \$67 ;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
     report_frame = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -13109,7 +16965,7 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
       3'h3:
           if (abort) begin
           end else if (frame_done) begin
-            if (\$22 ) begin
+            if (\$50 ) begin
               report_frame = 1'h1;
             end
           end
@@ -13121,13 +16977,13 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
           /* empty */;
       3'h7:
           if (abort) begin
-          end else if (\$27 ) begin
+          end else if (\$70 ) begin
             report_frame = 1'h1;
           end
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
     report_delay = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -13140,12 +16996,12 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
       3'h3:
           if (abort) begin
           end else if (frame_done) begin
-            if (\$22 ) begin
+            if (\$50 ) begin
               report_delay = 1'h1;
             end
-          end else if (\$9 ) begin
-          end else if (\$14 ) begin
-          end else if (\$17 ) begin
+          end else if (\$37 ) begin
+          end else if (\$42 ) begin
+          end else if (\$45 ) begin
             report_delay = 1'h1;
           end
       3'h4:
@@ -13156,354 +17012,10 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
           /* empty */;
       3'h7:
           if (abort) begin
-          end else if (\$27 ) begin
+          end else if (\$70 ) begin
             report_delay = 1'h1;
           end
     endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
-    \$60  = idle;
-    if (rst) begin
-      \$60  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
-    \$61  = cycle_fsm_state;
-    (* full_case = 32'd1 *)
-    casez (cycle_fsm_state)
-      3'h0:
-          if (\$36 ) begin
-          end else if (break_over) begin
-            \$61  = 3'h1;
-          end
-      3'h1:
-          if (abort) begin
-            \$61  = 3'h0;
-          end else if (request) begin
-            \$61  = 3'h2;
-          end
-      3'h2:
-          if (\$38 ) begin
-            \$61  = 3'h1;
-            if (abort) begin
-              \$61  = 3'h0;
-            end
-          end else if (abort) begin
-            \$61  = 3'h0;
-          end else if (slo) begin
-            \$61  = 3'h3;
-          end else if (\$39 ) begin
-            \$61  = 3'h0;
-          end
-      3'h3:
-          if (abort) begin
-            \$61  = 3'h0;
-          end else if (frame_done) begin
-            \$61  = 3'h4;
-          end else if (\$42 ) begin
-            \$61  = 3'h0;
-          end else if (\$47 ) begin
-            \$61  = 3'h0;
-          end else if (\$50 ) begin
-            \$61  = 3'h0;
-          end else if (\$54 ) begin
-            \$61  = 3'h0;
-          end
-      3'h4:
-          if (abort) begin
-            (* full_case = 32'd1 *)
-            if (end_check) begin
-              \$61  = 3'h0;
-            end else begin
-              \$61  = 3'h0;
-            end
-          end else if (stopped) begin
-            (* full_case = 32'd1 *)
-            if (\$55 ) begin
-              (* full_case = 32'd1 *)
-              if (pause) begin
-                \$61  = 3'h5;
-              end else begin
-                \$61  = 3'h6;
-              end
-            end else if (stop_bit) begin
-              \$61  = 3'h0;
-            end else begin
-              \$61  = 3'h7;
-            end
-          end
-      3'h5:
-          if (\$56 ) begin
-          end else if (break_over) begin
-            \$61  = 3'h1;
-          end
-      3'h6:
-          if (\$57 ) begin
-            \$61  = 3'h1;
-          end
-      3'h7:
-          if (abort) begin
-            \$61  = 3'h0;
-          end else if (\$59 ) begin
-            (* full_case = 32'd1 *)
-            if (pause) begin
-              \$61  = 3'h5;
-            end else begin
-              \$61  = 3'h1;
-            end
-          end else if (slo_stuck) begin
-            \$61  = 3'h0;
-          end
-    endcase
-    if (rst) begin
-      \$61  = 3'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
-    \$62  = idle;
-    (* full_case = 32'd1 *)
-    casez (cycle_fsm_state)
-      3'h0:
-          if (\$36 ) begin
-          end else if (break_over) begin
-            \$62  = 1'h1;
-          end
-      3'h1:
-          if (abort) begin
-            \$62  = 1'h0;
-          end else if (request) begin
-            \$62  = 1'h0;
-          end
-      3'h2:
-          if (\$38 ) begin
-            \$62  = 1'h1;
-            if (abort) begin
-              \$62  = 1'h0;
-            end
-          end else if (abort) begin
-            \$62  = 1'h0;
-          end else if (slo) begin
-            \$62  = 1'h0;
-          end else if (\$39 ) begin
-            \$62  = 1'h0;
-          end
-      3'h3:
-          if (abort) begin
-            \$62  = 1'h0;
-          end else if (frame_done) begin
-            \$62  = 1'h0;
-          end else if (\$42 ) begin
-            \$62  = 1'h0;
-          end else if (\$47 ) begin
-            \$62  = 1'h0;
-          end else if (\$50 ) begin
-            \$62  = 1'h0;
-          end else if (\$54 ) begin
-            \$62  = 1'h0;
-          end
-      3'h4:
-          if (abort) begin
-            (* full_case = 32'd1 *)
-            if (end_check) begin
-              \$62  = 1'h0;
-            end else begin
-              \$62  = 1'h0;
-            end
-          end else if (stopped) begin
-            (* full_case = 32'd1 *)
-            if (\$55 ) begin
-              (* full_case = 32'd1 *)
-              if (pause) begin
-                \$62  = 1'h0;
-              end else begin
-                \$62  = 1'h0;
-              end
-            end else if (stop_bit) begin
-              \$62  = 1'h0;
-            end else begin
-              \$62  = 1'h0;
-            end
-          end
-      3'h5:
-          if (\$56 ) begin
-          end else if (break_over) begin
-            \$62  = 1'h1;
-          end
-      3'h6:
-          if (\$57 ) begin
-            \$62  = 1'h1;
-          end
-      3'h7:
-          if (abort) begin
-            \$62  = 1'h0;
-          end else if (\$59 ) begin
-            (* full_case = 32'd1 *)
-            if (pause) begin
-              \$62  = 1'h0;
-            end else begin
-              \$62  = 1'h1;
-            end
-          end else if (slo_stuck) begin
-            \$62  = 1'h0;
-          end
-    endcase
-    if (rst) begin
-      \$62  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
-    \$63  = receiver_clear;
-    (* full_case = 32'd1 *)
-    casez (cycle_fsm_state)
-      3'h0:
-          if (\$36 ) begin
-          end else if (break_over) begin
-            \$63  = 1'h1;
-          end
-      3'h1:
-          if (abort) begin
-            \$63  = 1'h1;
-          end else if (request) begin
-            \$63  = 1'h1;
-          end
-      3'h2:
-          if (\$38 ) begin
-            \$63  = 1'h1;
-            if (abort) begin
-              \$63  = 1'h1;
-            end
-          end else if (abort) begin
-            \$63  = 1'h1;
-          end else if (slo) begin
-            \$63  = 1'h0;
-          end else if (\$39 ) begin
-            \$63  = 1'h1;
-          end
-      3'h3:
-          if (abort) begin
-            \$63  = 1'h1;
-          end else if (frame_done) begin
-            \$63  = 1'h0;
-          end else if (\$42 ) begin
-            \$63  = 1'h1;
-          end else if (\$47 ) begin
-            \$63  = 1'h1;
-          end else if (\$50 ) begin
-            \$63  = 1'h1;
-          end else if (\$54 ) begin
-            \$63  = 1'h1;
-          end
-      3'h4:
-          if (abort) begin
-            (* full_case = 32'd1 *)
-            if (end_check) begin
-              \$63  = 1'h1;
-            end else begin
-              \$63  = 1'h1;
-            end
-          end else if (stopped) begin
-            (* full_case = 32'd1 *)
-            if (\$55 ) begin
-              (* full_case = 32'd1 *)
-              if (pause) begin
-                \$63  = 1'h1;
-              end else begin
-                \$63  = 1'h0;
-              end
-            end else if (stop_bit) begin
-              \$63  = 1'h1;
-            end else begin
-              \$63  = 1'h0;
-            end
-          end
-      3'h5:
-          if (\$56 ) begin
-          end else if (break_over) begin
-            \$63  = 1'h1;
-          end
-      3'h6:
-          if (\$57 ) begin
-            \$63  = 1'h1;
-          end
-      3'h7:
-          if (abort) begin
-            \$63  = 1'h1;
-          end else if (\$59 ) begin
-            (* full_case = 32'd1 *)
-            if (pause) begin
-              \$63  = 1'h1;
-            end else begin
-              \$63  = 1'h1;
-            end
-          end else if (slo_stuck) begin
-            \$63  = 1'h1;
-          end
-    endcase
-    if (rst) begin
-      \$63  = 1'h1;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
-    \$64  = armed;
-    casez (cycle_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          \$64  = 1'h0;
-      3'h3:
-          if (ma_arm) begin
-            \$64  = 1'h1;
-          end
-    endcase
-    if (rst) begin
-      \$64  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
-    \$65  = locked_seen;
-    casez (cycle_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          \$65  = 1'h0;
-      3'h3:
-          if (\$41 ) begin
-            \$65  = 1'h1;
-          end
-    endcase
-    if (rst) begin
-      \$65  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
-    \$66  = pause;
-    casez (cycle_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h3:
-          if (abort) begin
-          end else if (frame_done) begin
-            \$66  = frame_doubtful;
-          end
-    endcase
-    if (rst) begin
-      \$66  = 1'h0;
-    end
   end
   assign \faults.no_ack  = faults[0];
   assign \faults.no_start  = faults[1];
@@ -13530,6 +17042,11 @@ module \biss_master_wb.ch1.core.counters (rst, clear, events, counts, clk);
   wire \clear$34 ;
   wire \clear$37 ;
   wire \clear$40 ;
+  wire \clear$43 ;
+  wire \clear$46 ;
+  wire \clear$49 ;
+  wire \clear$52 ;
+  wire \clear$55 ;
   wire \clear$7 ;
   input clk;
   wire clk;
@@ -13545,10 +17062,20 @@ module \biss_master_wb.ch1.core.counters (rst, clear, events, counts, clk);
   wire [15:0] \count$35 ;
   wire [15:0] \count$38 ;
   wire [15:0] \count$41 ;
+  wire [15:0] \count$44 ;
+  wire [15:0] \count$47 ;
+  wire [15:0] \count$50 ;
+  wire [15:0] \count$53 ;
+  wire [15:0] \count$56 ;
   wire [15:0] \count$8 ;
-  output [207:0] counts;
-  wire [207:0] counts;
+  output [287:0] counts;
+  wire [287:0] counts;
   wire [15:0] \counts.aborted ;
+  wire [15:0] \counts.ca_aborted ;
+  wire [15:0] \counts.ca_crc4_error ;
+  wire [15:0] \counts.ca_data_fault ;
+  wire [15:0] \counts.ca_no_answer ;
+  wire [15:0] \counts.ca_refused ;
   wire [15:0] \counts.crc_word0 ;
   wire [15:0] \counts.crc_word1 ;
   wire [15:0] \counts.delay_range ;
@@ -13561,9 +17088,14 @@ module \biss_master_wb.ch1.core.counters (rst, clear, events, counts, clk);
   wire [15:0] \counts.overrun ;
   wire [15:0] \counts.slo_stuck_low ;
   wire [15:0] \counts.spw_mismatch ;
-  input [12:0] events;
-  wire [12:0] events;
+  input [17:0] events;
+  wire [17:0] events;
   wire \events.aborted ;
+  wire \events.ca_aborted ;
+  wire \events.ca_crc4_error ;
+  wire \events.ca_data_fault ;
+  wire \events.ca_no_answer ;
+  wire \events.ca_refused ;
   wire \events.crc_word0 ;
   wire \events.crc_word1 ;
   wire \events.delay_range ;
@@ -13587,6 +17119,11 @@ module \biss_master_wb.ch1.core.counters (rst, clear, events, counts, clk);
   wire \inc$33 ;
   wire \inc$36 ;
   wire \inc$39 ;
+  wire \inc$42 ;
+  wire \inc$45 ;
+  wire \inc$48 ;
+  wire \inc$51 ;
+  wire \inc$54 ;
   wire \inc$6 ;
   wire \inc$9 ;
   input rst;
@@ -13596,6 +17133,41 @@ module \biss_master_wb.ch1.core.counters (rst, clear, events, counts, clk);
     .clk(clk),
     .count(\count$38 ),
     .inc(events[11]),
+    .rst(rst)
+  );
+  \biss_master_wb.ch1.core.counters.count_ca_aborted  count_ca_aborted (
+    .clear(clear),
+    .clk(clk),
+    .count(\count$53 ),
+    .inc(events[16]),
+    .rst(rst)
+  );
+  \biss_master_wb.ch1.core.counters.count_ca_crc4_error  count_ca_crc4_error (
+    .clear(clear),
+    .clk(clk),
+    .count(\count$44 ),
+    .inc(events[13]),
+    .rst(rst)
+  );
+  \biss_master_wb.ch1.core.counters.count_ca_data_fault  count_ca_data_fault (
+    .clear(clear),
+    .clk(clk),
+    .count(\count$56 ),
+    .inc(events[17]),
+    .rst(rst)
+  );
+  \biss_master_wb.ch1.core.counters.count_ca_no_answer  count_ca_no_answer (
+    .clear(clear),
+    .clk(clk),
+    .count(\count$47 ),
+    .inc(events[14]),
+    .rst(rst)
+  );
+  \biss_master_wb.ch1.core.counters.count_ca_refused  count_ca_refused (
+    .clear(clear),
+    .clk(clk),
+    .count(\count$50 ),
+    .inc(events[15]),
     .rst(rst)
   );
   \biss_master_wb.ch1.core.counters.count_crc_word0  count_crc_word0 (
@@ -13708,6 +17280,16 @@ module \biss_master_wb.ch1.core.counters (rst, clear, events, counts, clk);
   assign \clear$37  = clear;
   assign \inc$39  = events[12];
   assign \clear$40  = clear;
+  assign \inc$42  = events[13];
+  assign \clear$43  = clear;
+  assign \inc$45  = events[14];
+  assign \clear$46  = clear;
+  assign \inc$48  = events[15];
+  assign \clear$49  = clear;
+  assign \inc$51  = events[16];
+  assign \clear$52  = clear;
+  assign \inc$54  = events[17];
+  assign \clear$55  = clear;
   assign \events.crc_word0  = events[0];
   assign \events.crc_word1  = events[1];
   assign \events.no_ack  = events[2];
@@ -13721,6 +17303,11 @@ module \biss_master_wb.ch1.core.counters (rst, clear, events, counts, clk);
   assign \events.overrun  = events[10];
   assign \events.aborted  = events[11];
   assign \events.no_stop  = events[12];
+  assign \events.ca_crc4_error  = events[13];
+  assign \events.ca_no_answer  = events[14];
+  assign \events.ca_refused  = events[15];
+  assign \events.ca_aborted  = events[16];
+  assign \events.ca_data_fault  = events[17];
   assign \counts.crc_word0  = counts[15:0];
   assign \counts.crc_word1  = counts[31:16];
   assign \counts.no_ack  = counts[47:32];
@@ -13734,6 +17321,16 @@ module \biss_master_wb.ch1.core.counters (rst, clear, events, counts, clk);
   assign \counts.overrun  = counts[175:160];
   assign \counts.aborted  = counts[191:176];
   assign \counts.no_stop  = counts[207:192];
+  assign \counts.ca_crc4_error  = counts[223:208];
+  assign \counts.ca_no_answer  = counts[239:224];
+  assign \counts.ca_refused  = counts[255:240];
+  assign \counts.ca_aborted  = counts[271:256];
+  assign \counts.ca_data_fault  = counts[287:272];
+  assign counts[287:272] = \count$56 ;
+  assign counts[271:256] = \count$53 ;
+  assign counts[255:240] = \count$50 ;
+  assign counts[239:224] = \count$47 ;
+  assign counts[223:208] = \count$44 ;
   assign counts[207:192] = \count$41 ;
   assign counts[191:176] = \count$38 ;
   assign counts[175:160] = \count$35 ;
@@ -13751,7 +17348,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1.core.counters.count_aborted (rst, clear, inc, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$52  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$68  = 0;
   wire \$1 ;
   wire \$2 ;
   wire [16:0] \$3 ;
@@ -13778,7 +17375,7 @@ module \biss_master_wb.ch1.core.counters.count_aborted (rst, clear, inc, count, 
   assign \$2  = inc & \$1 ;
   assign \$3  = count + 1'h1;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     \$5  = count;
     if (clear) begin
       \$5  = 16'h0000;
@@ -13790,7 +17387,277 @@ module \biss_master_wb.ch1.core.counters.count_aborted (rst, clear, inc, count, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_wb.ch1.core.counters.count_ca_aborted (rst, clear, inc, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$69  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_wb.ch1.core.counters.count_ca_crc4_error (rst, clear, inc, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$70  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_wb.ch1.core.counters.count_ca_data_fault (rst, clear, inc, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$71  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_wb.ch1.core.counters.count_ca_no_answer (rst, clear, inc, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$72  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_wb.ch1.core.counters.count_ca_refused (rst, clear, inc, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$73  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
     \$6  = full;
     if (clear) begin
       \$6  = 1'h0;
@@ -13805,7 +17672,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1.core.counters.count_crc_word0 (rst, clear, inc, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$53  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$74  = 0;
   wire \$1 ;
   wire \$2 ;
   wire [16:0] \$3 ;
@@ -13832,7 +17699,7 @@ module \biss_master_wb.ch1.core.counters.count_crc_word0 (rst, clear, inc, count
   assign \$2  = inc & \$1 ;
   assign \$3  = count + 1'h1;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
     \$5  = count;
     if (clear) begin
       \$5  = 16'h0000;
@@ -13844,7 +17711,7 @@ module \biss_master_wb.ch1.core.counters.count_crc_word0 (rst, clear, inc, count
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
     \$6  = full;
     if (clear) begin
       \$6  = 1'h0;
@@ -13859,7 +17726,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1.core.counters.count_crc_word1 (rst, clear, inc, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$54  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$75  = 0;
   wire \$1 ;
   wire \$2 ;
   wire [16:0] \$3 ;
@@ -13886,7 +17753,7 @@ module \biss_master_wb.ch1.core.counters.count_crc_word1 (rst, clear, inc, count
   assign \$2  = inc & \$1 ;
   assign \$3  = count + 1'h1;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
     \$5  = count;
     if (clear) begin
       \$5  = 16'h0000;
@@ -13898,7 +17765,7 @@ module \biss_master_wb.ch1.core.counters.count_crc_word1 (rst, clear, inc, count
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
     \$6  = full;
     if (clear) begin
       \$6  = 1'h0;
@@ -13913,7 +17780,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1.core.counters.count_delay_range (rst, clear, inc, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$55  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$76  = 0;
   wire \$1 ;
   wire \$2 ;
   wire [16:0] \$3 ;
@@ -13940,7 +17807,7 @@ module \biss_master_wb.ch1.core.counters.count_delay_range (rst, clear, inc, cou
   assign \$2  = inc & \$1 ;
   assign \$3  = count + 1'h1;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
     \$5  = count;
     if (clear) begin
       \$5  = 16'h0000;
@@ -13952,7 +17819,7 @@ module \biss_master_wb.ch1.core.counters.count_delay_range (rst, clear, inc, cou
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
     \$6  = full;
     if (clear) begin
       \$6  = 1'h0;
@@ -13967,7 +17834,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1.core.counters.count_lc_repeat (rst, clear, inc, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$56  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$77  = 0;
   wire \$1 ;
   wire \$2 ;
   wire [16:0] \$3 ;
@@ -13994,7 +17861,7 @@ module \biss_master_wb.ch1.core.counters.count_lc_repeat (rst, clear, inc, count
   assign \$2  = inc & \$1 ;
   assign \$3  = count + 1'h1;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
     \$5  = count;
     if (clear) begin
       \$5  = 16'h0000;
@@ -14006,7 +17873,7 @@ module \biss_master_wb.ch1.core.counters.count_lc_repeat (rst, clear, inc, count
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
     \$6  = full;
     if (clear) begin
       \$6  = 1'h0;
@@ -14021,7 +17888,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1.core.counters.count_lc_skip (rst, clear, inc, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$57  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$78  = 0;
   wire \$1 ;
   wire \$2 ;
   wire [16:0] \$3 ;
@@ -14048,7 +17915,7 @@ module \biss_master_wb.ch1.core.counters.count_lc_skip (rst, clear, inc, count, 
   assign \$2  = inc & \$1 ;
   assign \$3  = count + 1'h1;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
     \$5  = count;
     if (clear) begin
       \$5  = 16'h0000;
@@ -14060,7 +17927,7 @@ module \biss_master_wb.ch1.core.counters.count_lc_skip (rst, clear, inc, count, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
     \$6  = full;
     if (clear) begin
       \$6  = 1'h0;
@@ -14075,7 +17942,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1.core.counters.count_lc_zero (rst, clear, inc, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$58  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$79  = 0;
   wire \$1 ;
   wire \$2 ;
   wire [16:0] \$3 ;
@@ -14102,7 +17969,7 @@ module \biss_master_wb.ch1.core.counters.count_lc_zero (rst, clear, inc, count, 
   assign \$2  = inc & \$1 ;
   assign \$3  = count + 1'h1;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$79 ) begin end
     \$5  = count;
     if (clear) begin
       \$5  = 16'h0000;
@@ -14114,7 +17981,7 @@ module \biss_master_wb.ch1.core.counters.count_lc_zero (rst, clear, inc, count, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$79 ) begin end
     \$6  = full;
     if (clear) begin
       \$6  = 1'h0;
@@ -14129,7 +17996,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1.core.counters.count_no_ack (rst, clear, inc, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$59  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$80  = 0;
   wire \$1 ;
   wire \$2 ;
   wire [16:0] \$3 ;
@@ -14156,7 +18023,7 @@ module \biss_master_wb.ch1.core.counters.count_no_ack (rst, clear, inc, count, c
   assign \$2  = inc & \$1 ;
   assign \$3  = count + 1'h1;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$80 ) begin end
     \$5  = count;
     if (clear) begin
       \$5  = 16'h0000;
@@ -14168,7 +18035,7 @@ module \biss_master_wb.ch1.core.counters.count_no_ack (rst, clear, inc, count, c
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$80 ) begin end
     \$6  = full;
     if (clear) begin
       \$6  = 1'h0;
@@ -14183,7 +18050,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1.core.counters.count_no_start (rst, clear, inc, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$60  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$81  = 0;
   wire \$1 ;
   wire \$2 ;
   wire [16:0] \$3 ;
@@ -14210,7 +18077,7 @@ module \biss_master_wb.ch1.core.counters.count_no_start (rst, clear, inc, count,
   assign \$2  = inc & \$1 ;
   assign \$3  = count + 1'h1;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$81 ) begin end
     \$5  = count;
     if (clear) begin
       \$5  = 16'h0000;
@@ -14222,7 +18089,7 @@ module \biss_master_wb.ch1.core.counters.count_no_start (rst, clear, inc, count,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$81 ) begin end
     \$6  = full;
     if (clear) begin
       \$6  = 1'h0;
@@ -14237,7 +18104,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1.core.counters.count_no_stop (rst, clear, inc, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$61  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$82  = 0;
   wire \$1 ;
   wire \$2 ;
   wire [16:0] \$3 ;
@@ -14264,7 +18131,7 @@ module \biss_master_wb.ch1.core.counters.count_no_stop (rst, clear, inc, count, 
   assign \$2  = inc & \$1 ;
   assign \$3  = count + 1'h1;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
     \$5  = count;
     if (clear) begin
       \$5  = 16'h0000;
@@ -14276,7 +18143,7 @@ module \biss_master_wb.ch1.core.counters.count_no_stop (rst, clear, inc, count, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
     \$6  = full;
     if (clear) begin
       \$6  = 1'h0;
@@ -14291,7 +18158,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1.core.counters.count_overrun (rst, clear, inc, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$62  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$83  = 0;
   wire \$1 ;
   wire \$2 ;
   wire [16:0] \$3 ;
@@ -14318,7 +18185,7 @@ module \biss_master_wb.ch1.core.counters.count_overrun (rst, clear, inc, count, 
   assign \$2  = inc & \$1 ;
   assign \$3  = count + 1'h1;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$83 ) begin end
     \$5  = count;
     if (clear) begin
       \$5  = 16'h0000;
@@ -14330,7 +18197,7 @@ module \biss_master_wb.ch1.core.counters.count_overrun (rst, clear, inc, count, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$83 ) begin end
     \$6  = full;
     if (clear) begin
       \$6  = 1'h0;
@@ -14345,7 +18212,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1.core.counters.count_slo_stuck_low (rst, clear, inc, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$63  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$84  = 0;
   wire \$1 ;
   wire \$2 ;
   wire [16:0] \$3 ;
@@ -14372,7 +18239,7 @@ module \biss_master_wb.ch1.core.counters.count_slo_stuck_low (rst, clear, inc, c
   assign \$2  = inc & \$1 ;
   assign \$3  = count + 1'h1;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
     \$5  = count;
     if (clear) begin
       \$5  = 16'h0000;
@@ -14384,7 +18251,7 @@ module \biss_master_wb.ch1.core.counters.count_slo_stuck_low (rst, clear, inc, c
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
     \$6  = full;
     if (clear) begin
       \$6  = 1'h0;
@@ -14399,7 +18266,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1.core.counters.count_spw_mismatch (rst, clear, inc, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$64  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$85  = 0;
   wire \$1 ;
   wire \$2 ;
   wire [16:0] \$3 ;
@@ -14426,7 +18293,7 @@ module \biss_master_wb.ch1.core.counters.count_spw_mismatch (rst, clear, inc, co
   assign \$2  = inc & \$1 ;
   assign \$3  = count + 1'h1;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$85 ) begin end
     \$5  = count;
     if (clear) begin
       \$5  = 16'h0000;
@@ -14438,7 +18305,7 @@ module \biss_master_wb.ch1.core.counters.count_spw_mismatch (rst, clear, inc, co
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$85 ) begin end
     \$6  = full;
     if (clear) begin
       \$6  = 1'h0;
@@ -14454,7 +18321,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words, receiver_clear, sample, done, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1, lc, cpw_top, crc_ok
 , clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$65  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$86  = 0;
   wire [6:0] \$1 ;
   wire [1:0] \$10 ;
   reg [2:0] \$100 ;
@@ -14837,7 +18704,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     .valid(\valid$52 )
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
     (* full_case = 32'd1 *)
     casez (words[6])
       1'h0:
@@ -14847,7 +18714,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -14861,7 +18728,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
     (* full_case = 32'd1 *)
     casez (words[9:6])
       4'h0:
@@ -14899,7 +18766,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -14913,7 +18780,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
     (* full_case = 32'd1 *)
     casez (words[16])
       1'h0:
@@ -14923,7 +18790,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
     (* full_case = 32'd1 *)
     casez (words[17:16])
       2'h0:
@@ -14937,7 +18804,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:16])
       4'h0:
@@ -14975,7 +18842,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
     (* full_case = 32'd1 *)
     casez (words[17:16])
       2'h0:
@@ -14989,7 +18856,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
     \$94  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -15013,7 +18880,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
     \$95  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -15035,7 +18902,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
     \$96  = slots;
     if (\$34 ) begin
       \$96  = \$35 [15:0];
@@ -15048,7 +18915,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
     \$97  = slots_full;
     if (\$34 ) begin
       \$97  = \$36 ;
@@ -15061,7 +18928,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
     \$98  = started;
     casez (decoder_fsm_state)
       3'h0:
@@ -15077,7 +18944,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
     \$99  = start_slot;
     casez (decoder_fsm_state)
       3'h0:
@@ -15093,7 +18960,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
     \$100  = decoder_fsm_state;
     casez (decoder_fsm_state)
       3'h0:
@@ -15125,7 +18992,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
     \$101  = cds;
     casez (decoder_fsm_state)
       3'h0:
@@ -15143,7 +19010,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
     \$102  = idx;
     casez (decoder_fsm_state)
       3'h0:
@@ -15168,7 +19035,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
     \$103  = in_data;
     casez (decoder_fsm_state)
       3'h0:
@@ -15193,7 +19060,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
     \$104  = in_lc;
     casez (decoder_fsm_state)
       3'h0:
@@ -15218,7 +19085,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
     \$105  = in_top;
     casez (decoder_fsm_state)
       3'h0:
@@ -15243,7 +19110,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
     \$106  = word;
     casez (decoder_fsm_state)
       3'h0:
@@ -15271,7 +19138,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
     \$107  = stop_bit;
     casez (decoder_fsm_state)
       3'h0:
@@ -15293,7 +19160,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
     \$108  = data0;
     if (\$58 ) begin
       \$108  = { data0[53:0], \bit  };
@@ -15306,7 +19173,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
     \$109  = ne;
     if (\$59 ) begin
       \$109 [0] = 1'h1;
@@ -15326,7 +19193,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
     \$110  = nw;
     if (\$59 ) begin
       \$110 [0] = 1'h1;
@@ -15348,7 +19215,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
     \$111  = data1;
     if (\$70 ) begin
       \$111  = { data1[38:0], \bit  };
@@ -15361,7 +19228,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
     \$112  = lc;
     if (lc_load) begin
       \$112  = { lc[4:0], \bit  };
@@ -15374,7 +19241,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
     \$113  = cpw_top;
     if (\$80 ) begin
       \$113  = { cpw_top[38:0], \bit  };
@@ -15387,7 +19254,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
     in_word = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -15424,7 +19291,182 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1.core.decoder.crc0 (rst, \bit , start, valid, kind, receiver_clear, ok, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$66  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$87  = 0;
+  wire [5:0] \$1 ;
+  wire \$10 ;
+  wire [5:0] \$11 ;
+  wire \$12 ;
+  wire \$13 ;
+  wire \$14 ;
+  wire \$15 ;
+  wire [15:0] \$16 ;
+  wire [15:0] \$17 ;
+  wire \$18 ;
+  wire [15:0] \$19 ;
+  wire [5:0] \$2 ;
+  wire [15:0] \$20 ;
+  wire [15:0] \$21 ;
+  wire \$22 ;
+  wire \$23 ;
+  wire [15:0] \$24 ;
+  wire \$25 ;
+  wire [15:0] \$26 ;
+  wire \$27 ;
+  wire \$28 ;
+  wire \$29 ;
+  wire \$3 ;
+  wire \$30 ;
+  reg [5:0] \$31 ;
+  reg \$32 ;
+  reg [15:0] \$33 ;
+  reg \$34 ;
+  wire [1:0] \$4 ;
+  wire [5:0] \$5 ;
+  wire [5:0] \$6 ;
+  wire \$7 ;
+  wire \$8 ;
+  wire [5:0] \$9 ;
+  wire [1:0] \$auto$rtlil.cc:2739:Not$10 ;
+  wire [6:0] \$auto$rtlil.cc:2739:Not$12 ;
+  input \bit ;
+  wire \bit ;
+  input clk;
+  wire clk;
+  reg crc16_match = 1'h0;
+  reg [15:0] crc16_reg = 16'h0000;
+  reg crc6_match = 1'h0;
+  reg [5:0] crc6_reg = 6'h00;
+  input [1:0] kind;
+  wire [1:0] kind;
+  output ok;
+  reg ok;
+  input receiver_clear;
+  wire receiver_clear;
+  input rst;
+  wire rst;
+  input start;
+  wire start;
+  input valid;
+  wire valid;
+  assign \$1  = start ? 6'h00 : crc6_reg;
+  assign \$2  = start ? 6'h00 : crc6_reg;
+  assign \$3  = \$2 [5] ^ \bit ;
+  assign \$4  = \$3  ? 2'h3 : 2'h0;
+  assign \$5  = { \$1 [4:0], 1'h0 } ^ { 4'h0, \$4  };
+  assign \$6  = start ? 6'h00 : crc6_reg;
+  assign \$7  = \$6 [5] ^ \bit ;
+  assign \$9  = start ? 6'h00 : crc6_reg;
+  assign \$10  = \$9 [5] ^ \bit ;
+  assign \$12  = \$11  == 2'h2;
+  assign \$13  = crc6_reg[4:0] == 5'h01;
+  assign \$14  = \$10  ? \$12  : \$13 ;
+  assign \$15  = start ? 1'h0 : \$14 ;
+  assign \$16  = start ? 16'h0000 : crc16_reg;
+  assign \$17  = start ? 16'h0000 : crc16_reg;
+  assign \$18  = \$17 [15] ^ \bit ;
+  assign \$19  = \$18  ? 16'h90d9 : 16'h0000;
+  assign \$20  = { \$16 [14:0], 1'h0 } ^ \$19 ;
+  assign \$21  = start ? 16'h0000 : crc16_reg;
+  assign \$22  = \$21 [15] ^ \bit ;
+  assign \$24  = start ? 16'h0000 : crc16_reg;
+  assign \$25  = \$24 [15] ^ \bit ;
+  assign \$27  = \$26  == 16'he82e;
+  assign \$28  = crc16_reg[14:0] == 15'h7417;
+  assign \$29  = \$25  ? \$27  : \$28 ;
+  assign \$30  = start ? 1'h0 : \$29 ;
+  always @(posedge clk)
+    crc6_reg <= \$31 ;
+  always @(posedge clk)
+    crc6_match <= \$32 ;
+  always @(posedge clk)
+    crc16_reg <= \$33 ;
+  always @(posedge clk)
+    crc16_match <= \$34 ;
+  assign \$auto$rtlil.cc:2739:Not$12  = ~ { crc16_reg[14], crc16_reg[11], crc16_reg[6:5], crc16_reg[3:2], 1'h0 };
+  assign \$auto$rtlil.cc:2739:Not$10  = ~ { crc6_reg[0], 1'h0 };
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$87 ) begin end
+    \$31  = crc6_reg;
+    if (valid) begin
+      \$31  = \$5 ;
+    end else if (start) begin
+      \$31  = 6'h00;
+    end
+    if (receiver_clear) begin
+      \$31  = 6'h00;
+    end
+    if (rst) begin
+      \$31  = 6'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$87 ) begin end
+    \$32  = crc6_match;
+    if (valid) begin
+      \$32  = \$15 ;
+    end else if (start) begin
+      \$32  = 1'h0;
+    end
+    if (receiver_clear) begin
+      \$32  = 1'h0;
+    end
+    if (rst) begin
+      \$32  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$87 ) begin end
+    \$33  = crc16_reg;
+    if (valid) begin
+      \$33  = \$20 ;
+    end else if (start) begin
+      \$33  = 16'h0000;
+    end
+    if (receiver_clear) begin
+      \$33  = 16'h0000;
+    end
+    if (rst) begin
+      \$33  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$87 ) begin end
+    \$34  = crc16_match;
+    if (valid) begin
+      \$34  = \$30 ;
+    end else if (start) begin
+      \$34  = 1'h0;
+    end
+    if (receiver_clear) begin
+      \$34  = 1'h0;
+    end
+    if (rst) begin
+      \$34  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$87 ) begin end
+    ok = 1'h0;
+    casez (kind)
+      2'h0:
+          ok = 1'h1;
+      2'h1:
+          ok = crc6_match;
+      2'h2:
+          ok = crc16_match;
+    endcase
+  end
+  assign \$8  = 1'h0;
+  assign \$11 [5:2] = crc6_reg[4:1];
+  assign \$11 [1:0] = \$auto$rtlil.cc:2739:Not$10 ;
+  assign \$23  = 1'h0;
+  assign { \$26 [14:13], \$26 [11:8], \$26 [5], \$26 [2:1] } = { crc16_reg[13:12], crc16_reg[10:7], crc16_reg[4], crc16_reg[1:0] };
+  assign { \$26 [15], \$26 [12], \$26 [7:6], \$26 [4:3], \$26 [0] } = \$auto$rtlil.cc:2739:Not$12 ;
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_wb.ch1.core.decoder.crc1 (rst, \bit , start, valid, kind, receiver_clear, ok, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$88  = 0;
   wire [5:0] \$1 ;
   wire \$10 ;
   wire [5:0] \$11 ;
@@ -15518,7 +19560,7 @@ module \biss_master_wb.ch1.core.decoder.crc0 (rst, \bit , start, valid, kind, re
   assign \$auto$rtlil.cc:2739:Not$6  = ~ { crc6_reg[0], 1'h0 };
   assign \$auto$rtlil.cc:2739:Not$8  = ~ { crc16_reg[14], crc16_reg[11], crc16_reg[6:5], crc16_reg[3:2], 1'h0 };
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     \$31  = crc6_reg;
     if (valid) begin
       \$31  = \$5 ;
@@ -15533,7 +19575,7 @@ module \biss_master_wb.ch1.core.decoder.crc0 (rst, \bit , start, valid, kind, re
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     \$32  = crc6_match;
     if (valid) begin
       \$32  = \$15 ;
@@ -15548,7 +19590,7 @@ module \biss_master_wb.ch1.core.decoder.crc0 (rst, \bit , start, valid, kind, re
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     \$33  = crc16_reg;
     if (valid) begin
       \$33  = \$20 ;
@@ -15563,7 +19605,7 @@ module \biss_master_wb.ch1.core.decoder.crc0 (rst, \bit , start, valid, kind, re
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     \$34  = crc16_match;
     if (valid) begin
       \$34  = \$30 ;
@@ -15578,7 +19620,7 @@ module \biss_master_wb.ch1.core.decoder.crc0 (rst, \bit , start, valid, kind, re
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     ok = 1'h0;
     casez (kind)
       2'h0:
@@ -15598,183 +19640,8 @@ module \biss_master_wb.ch1.core.decoder.crc0 (rst, \bit , start, valid, kind, re
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.decoder.crc1 (rst, \bit , start, valid, kind, receiver_clear, ok, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$67  = 0;
-  wire [5:0] \$1 ;
-  wire \$10 ;
-  wire [5:0] \$11 ;
-  wire \$12 ;
-  wire \$13 ;
-  wire \$14 ;
-  wire \$15 ;
-  wire [15:0] \$16 ;
-  wire [15:0] \$17 ;
-  wire \$18 ;
-  wire [15:0] \$19 ;
-  wire [5:0] \$2 ;
-  wire [15:0] \$20 ;
-  wire [15:0] \$21 ;
-  wire \$22 ;
-  wire \$23 ;
-  wire [15:0] \$24 ;
-  wire \$25 ;
-  wire [15:0] \$26 ;
-  wire \$27 ;
-  wire \$28 ;
-  wire \$29 ;
-  wire \$3 ;
-  wire \$30 ;
-  reg [5:0] \$31 ;
-  reg \$32 ;
-  reg [15:0] \$33 ;
-  reg \$34 ;
-  wire [1:0] \$4 ;
-  wire [5:0] \$5 ;
-  wire [5:0] \$6 ;
-  wire \$7 ;
-  wire \$8 ;
-  wire [5:0] \$9 ;
-  wire [1:0] \$auto$rtlil.cc:2739:Not$2 ;
-  wire [6:0] \$auto$rtlil.cc:2739:Not$4 ;
-  input \bit ;
-  wire \bit ;
-  input clk;
-  wire clk;
-  reg crc16_match = 1'h0;
-  reg [15:0] crc16_reg = 16'h0000;
-  reg crc6_match = 1'h0;
-  reg [5:0] crc6_reg = 6'h00;
-  input [1:0] kind;
-  wire [1:0] kind;
-  output ok;
-  reg ok;
-  input receiver_clear;
-  wire receiver_clear;
-  input rst;
-  wire rst;
-  input start;
-  wire start;
-  input valid;
-  wire valid;
-  assign \$1  = start ? 6'h00 : crc6_reg;
-  assign \$2  = start ? 6'h00 : crc6_reg;
-  assign \$3  = \$2 [5] ^ \bit ;
-  assign \$4  = \$3  ? 2'h3 : 2'h0;
-  assign \$5  = { \$1 [4:0], 1'h0 } ^ { 4'h0, \$4  };
-  assign \$6  = start ? 6'h00 : crc6_reg;
-  assign \$7  = \$6 [5] ^ \bit ;
-  assign \$9  = start ? 6'h00 : crc6_reg;
-  assign \$10  = \$9 [5] ^ \bit ;
-  assign \$12  = \$11  == 2'h2;
-  assign \$13  = crc6_reg[4:0] == 5'h01;
-  assign \$14  = \$10  ? \$12  : \$13 ;
-  assign \$15  = start ? 1'h0 : \$14 ;
-  assign \$16  = start ? 16'h0000 : crc16_reg;
-  assign \$17  = start ? 16'h0000 : crc16_reg;
-  assign \$18  = \$17 [15] ^ \bit ;
-  assign \$19  = \$18  ? 16'h90d9 : 16'h0000;
-  assign \$20  = { \$16 [14:0], 1'h0 } ^ \$19 ;
-  assign \$21  = start ? 16'h0000 : crc16_reg;
-  assign \$22  = \$21 [15] ^ \bit ;
-  assign \$24  = start ? 16'h0000 : crc16_reg;
-  assign \$25  = \$24 [15] ^ \bit ;
-  assign \$27  = \$26  == 16'he82e;
-  assign \$28  = crc16_reg[14:0] == 15'h7417;
-  assign \$29  = \$25  ? \$27  : \$28 ;
-  assign \$30  = start ? 1'h0 : \$29 ;
-  always @(posedge clk)
-    crc6_reg <= \$31 ;
-  always @(posedge clk)
-    crc6_match <= \$32 ;
-  always @(posedge clk)
-    crc16_reg <= \$33 ;
-  always @(posedge clk)
-    crc16_match <= \$34 ;
-  assign \$auto$rtlil.cc:2739:Not$2  = ~ { crc6_reg[0], 1'h0 };
-  assign \$auto$rtlil.cc:2739:Not$4  = ~ { crc16_reg[14], crc16_reg[11], crc16_reg[6:5], crc16_reg[3:2], 1'h0 };
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
-    \$31  = crc6_reg;
-    if (valid) begin
-      \$31  = \$5 ;
-    end else if (start) begin
-      \$31  = 6'h00;
-    end
-    if (receiver_clear) begin
-      \$31  = 6'h00;
-    end
-    if (rst) begin
-      \$31  = 6'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
-    \$32  = crc6_match;
-    if (valid) begin
-      \$32  = \$15 ;
-    end else if (start) begin
-      \$32  = 1'h0;
-    end
-    if (receiver_clear) begin
-      \$32  = 1'h0;
-    end
-    if (rst) begin
-      \$32  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
-    \$33  = crc16_reg;
-    if (valid) begin
-      \$33  = \$20 ;
-    end else if (start) begin
-      \$33  = 16'h0000;
-    end
-    if (receiver_clear) begin
-      \$33  = 16'h0000;
-    end
-    if (rst) begin
-      \$33  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
-    \$34  = crc16_match;
-    if (valid) begin
-      \$34  = \$30 ;
-    end else if (start) begin
-      \$34  = 1'h0;
-    end
-    if (receiver_clear) begin
-      \$34  = 1'h0;
-    end
-    if (rst) begin
-      \$34  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
-    ok = 1'h0;
-    casez (kind)
-      2'h0:
-          ok = 1'h1;
-      2'h1:
-          ok = crc6_match;
-      2'h2:
-          ok = crc16_match;
-    endcase
-  end
-  assign \$8  = 1'h0;
-  assign \$11 [5:2] = crc6_reg[4:1];
-  assign \$11 [1:0] = \$auto$rtlil.cc:2739:Not$2 ;
-  assign \$23  = 1'h0;
-  assign { \$26 [14:13], \$26 [11:8], \$26 [5], \$26 [2:1] } = { crc16_reg[13:12], crc16_reg[10:7], crc16_reg[4], crc16_reg[1:0] };
-  assign { \$26 [15], \$26 [12], \$26 [7:6], \$26 [4:3], \$26 [0] } = \$auto$rtlil.cc:2739:Not$4 ;
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.ma_clock (rst, half_period, run, first_rise, second_rise, ma, rises, busy, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$68  = 0;
+module \biss_master_wb.ch1.core.ma_clock (rst, \clocking , half_period, run, hold, first_rise, second_rise, ma, rises, busy, held, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$89  = 0;
   wire [16:0] \$1 ;
   wire \$10 ;
   wire [16:0] \$11 ;
@@ -15782,20 +19649,36 @@ module \biss_master_wb.ch1.core.ma_clock (rst, half_period, run, first_rise, sec
   wire \$13 ;
   wire [16:0] \$14 ;
   wire \$15 ;
-  wire \$16 ;
+  wire [16:0] \$16 ;
   wire \$17 ;
   wire \$18 ;
-  reg \$19 ;
+  wire [16:0] \$19 ;
   wire \$2 ;
-  reg \$20 ;
-  reg \$21 ;
-  reg \$22 ;
-  reg [15:0] \$23 ;
-  reg \$24 ;
-  reg [15:0] \$25 ;
-  reg [1:0] \$26 ;
+  wire \$20 ;
+  wire \$21 ;
+  wire \$22 ;
+  wire \$23 ;
+  wire \$24 ;
+  wire [16:0] \$25 ;
+  wire \$26 ;
+  wire [16:0] \$27 ;
+  wire \$28 ;
+  wire \$29 ;
   wire [16:0] \$3 ;
+  wire \$30 ;
+  wire \$31 ;
+  wire \$32 ;
+  wire \$33 ;
+  reg \$34 ;
+  reg \$35 ;
+  reg \$36 ;
+  reg \$37 ;
+  reg [15:0] \$38 ;
+  reg \$39 ;
   wire \$4 ;
+  reg [15:0] \$40 ;
+  reg [2:0] \$41 ;
+  reg \$42 ;
   wire \$5 ;
   wire \$6 ;
   wire [16:0] \$7 ;
@@ -15805,15 +19688,22 @@ module \biss_master_wb.ch1.core.ma_clock (rst, half_period, run, first_rise, sec
   reg busy;
   input clk;
   wire clk;
+  output \clocking ;
+  wire \clocking ;
   output first_rise;
   reg first_rise = 1'h0;
   input [15:0] half_period;
   wire [15:0] half_period;
+  output held;
+  reg held;
+  input hold;
+  wire hold;
   reg last_clock = 1'h1;
   output ma;
   reg ma = 1'h1;
-  reg [1:0] ma_fsm_state = 2'h0;
+  reg [2:0] ma_fsm_state = 3'h0;
   reg [15:0] phase_left = 16'h0000;
+  reg released = 1'h0;
   reg rise = 1'h0;
   output [15:0] rises;
   reg [15:0] rises = 16'h0000;
@@ -15838,213 +19728,315 @@ module \biss_master_wb.ch1.core.ma_clock (rst, half_period, run, first_rise, sec
   assign \$13  = phase_left == 1'h1;
   assign \$14  = half_period - 1'h1;
   assign \$15  = half_period == 1'h1;
-  assign \$16  = ! ma_fsm_state;
-  assign \$17  = ma_fsm_state == 1'h1;
-  assign \$18  = ma_fsm_state == 2'h2;
+  assign \$16  = half_period - 1'h1;
+  assign \$17  = half_period == 1'h1;
+  assign \$18  = ~ last_clock;
+  assign \$19  = phase_left - 1'h1;
+  assign \$20  = phase_left == 1'h1;
+  assign \$21  = ~ hold;
+  assign \$22  = ~ hold;
+  assign \$23  = released | \$22 ;
+  assign \$24  = last_clock & \$23 ;
+  assign \$25  = half_period - 1'h1;
+  assign \$26  = half_period == 1'h1;
+  assign \$27  = phase_left - 1'h1;
+  assign \$28  = phase_left == 1'h1;
+  assign \clocking  = \$30  | \$31 ;
+  assign \$29  = ! ma_fsm_state;
+  assign \$30  = ma_fsm_state == 1'h1;
+  assign \$31  = ma_fsm_state == 2'h2;
+  assign \$32  = ma_fsm_state == 2'h3;
+  assign \$33  = ma_fsm_state == 3'h4;
   always @(posedge clk)
-    rise <= \$19 ;
+    rise <= \$34 ;
   always @(posedge clk)
-    first_rise <= \$20 ;
+    first_rise <= \$35 ;
   always @(posedge clk)
-    second_rise <= \$21 ;
+    second_rise <= \$36 ;
   always @(posedge clk)
-    ma <= \$22 ;
+    ma <= \$37 ;
   always @(posedge clk)
-    phase_left <= \$23 ;
+    phase_left <= \$38 ;
   always @(posedge clk)
-    last_clock <= \$24 ;
+    last_clock <= \$39 ;
   always @(posedge clk)
-    rises <= \$25 ;
+    rises <= \$40 ;
   always @(posedge clk)
-    ma_fsm_state <= \$26 ;
+    ma_fsm_state <= \$41 ;
+  always @(posedge clk)
+    released <= \$42 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
-    \$19  = 1'h0;
+    if (\$auto$verilog_backend.cc:2355:dump_module$89 ) begin end
+    \$34  = 1'h0;
     casez (ma_fsm_state)
-      2'h0:
+      3'h0:
           /* empty */;
-      2'h1:
+      3'h1:
           if (last_clock) begin
-            \$19  = 1'h1;
+            \$34  = 1'h1;
           end
     endcase
     if (rst) begin
-      \$19  = 1'h0;
+      \$34  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
-    \$20  = 1'h0;
+    if (\$auto$verilog_backend.cc:2355:dump_module$89 ) begin end
+    \$35  = 1'h0;
     casez (ma_fsm_state)
-      2'h0:
+      3'h0:
           /* empty */;
-      2'h1:
+      3'h1:
           if (last_clock) begin
-            \$20  = \$5 ;
+            \$35  = \$5 ;
           end
     endcase
     if (rst) begin
-      \$20  = 1'h0;
+      \$35  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
-    \$21  = 1'h0;
+    if (\$auto$verilog_backend.cc:2355:dump_module$89 ) begin end
+    \$36  = 1'h0;
     casez (ma_fsm_state)
-      2'h0:
+      3'h0:
           /* empty */;
-      2'h1:
+      3'h1:
           if (last_clock) begin
-            \$21  = \$6 ;
+            \$36  = \$6 ;
           end
     endcase
     if (rst) begin
-      \$21  = 1'h0;
+      \$36  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
-    \$22  = ma;
+    if (\$auto$verilog_backend.cc:2355:dump_module$89 ) begin end
+    \$37  = ma;
     casez (ma_fsm_state)
-      2'h0:
+      3'h0:
           if (run) begin
-            \$22  = 1'h0;
+            \$37  = 1'h0;
           end
-      2'h1:
+      3'h1:
           if (last_clock) begin
-            \$22  = 1'h1;
+            \$37  = 1'h1;
           end
-      2'h2:
+      3'h2:
           if (last_clock) begin
             if (run) begin
-              \$22  = 1'h0;
+              \$37  = 1'h0;
+            end else if (hold) begin
+              \$37  = 1'h0;
             end
           end
+      3'h3:
+          if (\$24 ) begin
+            \$37  = 1'h1;
+          end
     endcase
     if (rst) begin
-      \$22  = 1'h1;
+      \$37  = 1'h1;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
-    \$23  = phase_left;
+    if (\$auto$verilog_backend.cc:2355:dump_module$89 ) begin end
+    \$38  = phase_left;
     casez (ma_fsm_state)
-      2'h0:
+      3'h0:
           if (run) begin
-            \$23  = \$1 [15:0];
+            \$38  = \$1 [15:0];
           end
-      2'h1:
+      3'h1:
         begin
-          \$23  = \$3 [15:0];
+          \$38  = \$3 [15:0];
           if (last_clock) begin
-            \$23  = \$7 [15:0];
+            \$38  = \$7 [15:0];
           end
         end
-      2'h2:
+      3'h2:
         begin
-          \$23  = \$12 [15:0];
+          \$38  = \$12 [15:0];
           if (last_clock) begin
             if (run) begin
-              \$23  = \$14 [15:0];
-            end
-          end
-        end
-    endcase
-    if (rst) begin
-      \$23  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
-    \$24  = last_clock;
-    casez (ma_fsm_state)
-      2'h0:
-          if (run) begin
-            \$24  = \$2 ;
-          end
-      2'h1:
-        begin
-          \$24  = \$4 ;
-          if (last_clock) begin
-            \$24  = \$8 ;
-          end
-        end
-      2'h2:
-        begin
-          \$24  = \$13 ;
-          if (last_clock) begin
-            if (run) begin
-              \$24  = \$15 ;
+              \$38  = \$14 [15:0];
+            end else if (hold) begin
+              \$38  = \$16 [15:0];
             end
           end
         end
+      3'h3:
+        begin
+          if (\$18 ) begin
+            \$38  = \$19 [15:0];
+          end
+          if (\$24 ) begin
+            \$38  = \$25 [15:0];
+          end
+        end
+      3'h4:
+          \$38  = \$27 [15:0];
     endcase
     if (rst) begin
-      \$24  = 1'h1;
+      \$38  = 16'h0000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
-    \$25  = rises;
+    if (\$auto$verilog_backend.cc:2355:dump_module$89 ) begin end
+    \$39  = last_clock;
     casez (ma_fsm_state)
-      2'h0:
+      3'h0:
           if (run) begin
-            \$25  = 16'h0000;
+            \$39  = \$2 ;
           end
-      2'h1:
+      3'h1:
+        begin
+          \$39  = \$4 ;
+          if (last_clock) begin
+            \$39  = \$8 ;
+          end
+        end
+      3'h2:
+        begin
+          \$39  = \$13 ;
+          if (last_clock) begin
+            if (run) begin
+              \$39  = \$15 ;
+            end else if (hold) begin
+              \$39  = \$17 ;
+            end
+          end
+        end
+      3'h3:
+        begin
+          if (\$18 ) begin
+            \$39  = \$20 ;
+          end
+          if (\$24 ) begin
+            \$39  = \$26 ;
+          end
+        end
+      3'h4:
+          \$39  = \$28 ;
+    endcase
+    if (rst) begin
+      \$39  = 1'h1;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$89 ) begin end
+    \$40  = rises;
+    casez (ma_fsm_state)
+      3'h0:
+          if (run) begin
+            \$40  = 16'h0000;
+          end
+      3'h1:
           if (last_clock) begin
             if (\$10 ) begin
-              \$25  = \$11 [15:0];
+              \$40  = \$11 [15:0];
             end
           end
     endcase
     if (rst) begin
-      \$25  = 16'h0000;
+      \$40  = 16'h0000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
-    \$26  = ma_fsm_state;
+    if (\$auto$verilog_backend.cc:2355:dump_module$89 ) begin end
+    \$41  = ma_fsm_state;
     casez (ma_fsm_state)
-      2'h0:
+      3'h0:
           if (run) begin
-            \$26  = 2'h1;
+            \$41  = 3'h1;
           end
-      2'h1:
+      3'h1:
           if (last_clock) begin
-            \$26  = 2'h2;
+            \$41  = 3'h2;
           end
-      2'h2:
+      3'h2:
           if (last_clock) begin
             (* full_case = 32'd1 *)
             if (run) begin
-              \$26  = 2'h1;
+              \$41  = 3'h1;
+            end else if (hold) begin
+              \$41  = 3'h3;
             end else begin
-              \$26  = 2'h0;
+              \$41  = 3'h0;
             end
+          end
+      3'h3:
+          if (\$24 ) begin
+            \$41  = 3'h4;
+          end
+      3'h4:
+          if (last_clock) begin
+            \$41  = 3'h0;
           end
     endcase
     if (rst) begin
-      \$26  = 2'h0;
+      \$41  = 3'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$89 ) begin end
+    \$42  = released;
+    casez (ma_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          if (last_clock) begin
+            if (run) begin
+            end else if (hold) begin
+              \$42  = 1'h0;
+            end
+          end
+      3'h3:
+          if (\$21 ) begin
+            \$42  = 1'h1;
+          end
+    endcase
+    if (rst) begin
+      \$42  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$89 ) begin end
     busy = 1'h0;
     casez (ma_fsm_state)
-      2'h0:
+      3'h0:
           /* empty */;
-      2'h1:
+      3'h1:
           busy = 1'h1;
-      2'h2:
+      3'h2:
           busy = 1'h1;
+      3'h3:
+          busy = 1'h1;
+      3'h4:
+          busy = 1'h1;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$89 ) begin end
+    held = 1'h0;
+    casez (ma_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h3:
+          held = 1'h1;
     endcase
   end
 endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1.core.ma_stop (rst, words, w1_enable, clear, rises, enough, \started$10 , start_slot, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$69  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$90  = 0;
   reg [7:0] \$1 ;
   reg [7:0] \$10 ;
   wire [8:0] \$11 ;
@@ -16125,7 +20117,7 @@ module \biss_master_wb.ch1.core.ma_stop (rst, words, w1_enable, clear, rises, en
   always @(posedge clk)
     word1_len <= \$17 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
     (* full_case = 32'd1 *)
     casez (words[9:6])
       4'h0:
@@ -16163,7 +20155,7 @@ module \biss_master_wb.ch1.core.ma_stop (rst, words, w1_enable, clear, rises, en
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:16])
       4'h0:
@@ -16201,42 +20193,42 @@ module \biss_master_wb.ch1.core.ma_stop (rst, words, w1_enable, clear, rises, en
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
     \$12  = \$2 [7:0];
     if (rst) begin
       \$12  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
     \$13  = \$4 ;
     if (rst) begin
       \$13  = 9'h000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
     \$14  = \$5 ;
     if (rst) begin
       \$14  = 17'h00000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
     \$15  = \started$10 ;
     if (rst) begin
       \$15  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
     \$16  = \$9 ;
     if (rst) begin
       \$16  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
     \$17  = \$11 [7:0];
     if (rst) begin
       \$17  = 8'h00;
@@ -16255,8 +20247,1495 @@ module \biss_master_wb.ch1.core.ma_stop (rst, words, w1_enable, clear, rises, en
 endmodule
 
 (* generator = "Amaranth" *)
+module \biss_master_wb.ch1.core.register_access (clk, rst, host_read__en, frame_end, frame_ok, busy, rbuf_data, \start$44 , abort, request, wbuf, frame_cdm, frame_cds, cdm, done, result, host_read__addr);
+  reg \$auto$verilog_backend.cc:2355:dump_module$91  = 0;
+  wire \$1 ;
+  wire \$10 ;
+  wire \$100 ;
+  wire \$101 ;
+  wire \$102 ;
+  wire \$103 ;
+  wire \$104 ;
+  wire \$105 ;
+  wire \$106 ;
+  wire \$107 ;
+  wire \$108 ;
+  wire \$109 ;
+  wire \$11 ;
+  wire [18:0] \$110 ;
+  wire [5:0] \$111 ;
+  wire \$112 ;
+  wire \$113 ;
+  wire \$114 ;
+  wire \$115 ;
+  wire \$116 ;
+  wire \$117 ;
+  wire \$118 ;
+  wire \$119 ;
+  wire \$12 ;
+  wire \$120 ;
+  wire \$121 ;
+  wire \$122 ;
+  wire \$123 ;
+  wire [7:0] \$124 ;
+  wire [7:0] \$125 ;
+  wire [8:0] \$126 ;
+  wire \$127 ;
+  wire [8:0] \$128 ;
+  wire [5:0] \$129 ;
+  wire \$13 ;
+  wire \$130 ;
+  wire \$131 ;
+  wire \$132 ;
+  wire \$133 ;
+  wire [6:0] \$134 ;
+  wire [6:0] \$135 ;
+  wire \$136 ;
+  wire [6:0] \$137 ;
+  wire \$138 ;
+  wire \$139 ;
+  wire \$14 ;
+  wire \$140 ;
+  wire [5:0] \$141 ;
+  wire \$142 ;
+  wire \$143 ;
+  wire \$144 ;
+  wire \$145 ;
+  wire \$146 ;
+  wire [4:0] \$147 ;
+  wire [4:0] \$148 ;
+  wire [4:0] \$149 ;
+  wire \$15 ;
+  wire [4:0] \$150 ;
+  wire \$151 ;
+  reg [3:0] \$152 ;
+  reg [3:0] \$153 ;
+  reg \$154 ;
+  reg [9:0] \$155 ;
+  reg [2:0] \$156 ;
+  reg [17:0] \$157 ;
+  reg [5:0] \$158 ;
+  reg [17:0] \$159 ;
+  wire \$16 ;
+  reg [4:0] \$160 ;
+  reg [2:0] \$161 ;
+  reg [7:0] \$162 ;
+  reg [7:0] \$163 ;
+  reg [4:0] \$164 ;
+  reg [7:0] \$165 ;
+  reg [2:0] \$166 ;
+  wire \$17 ;
+  wire \$18 ;
+  wire \$19 ;
+  wire \$2 ;
+  wire \$20 ;
+  wire \$21 ;
+  wire \$22 ;
+  wire \$23 ;
+  wire \$24 ;
+  wire \$25 ;
+  wire \$26 ;
+  wire \$27 ;
+  wire \$28 ;
+  wire \$29 ;
+  wire [5:0] \$291 ;
+  wire [5:0] \$294 ;
+  wire \$3 ;
+  wire \$30 ;
+  wire \$31 ;
+  wire \$32 ;
+  wire [5:0] \$33 ;
+  wire [1:0] \$34 ;
+  wire \$35 ;
+  wire \$36 ;
+  wire \$37 ;
+  wire \$38 ;
+  wire \$39 ;
+  wire [1:0] \$4 ;
+  wire \$40 ;
+  wire \$41 ;
+  wire \$42 ;
+  wire \$43 ;
+  wire \$44 ;
+  wire \$45 ;
+  wire \$46 ;
+  wire \$47 ;
+  wire \$48 ;
+  wire \$49 ;
+  wire \$5 ;
+  wire \$50 ;
+  wire \$51 ;
+  wire \$52 ;
+  wire \$53 ;
+  wire \$54 ;
+  wire \$55 ;
+  wire \$56 ;
+  wire \$57 ;
+  wire \$58 ;
+  wire \$59 ;
+  wire \$6 ;
+  wire \$60 ;
+  wire [3:0] \$61 ;
+  wire \$62 ;
+  wire \$63 ;
+  wire \$64 ;
+  wire \$65 ;
+  wire \$66 ;
+  wire \$67 ;
+  wire \$68 ;
+  wire \$69 ;
+  wire \$7 ;
+  wire [4:0] \$70 ;
+  wire [4:0] \$71 ;
+  wire [4:0] \$72 ;
+  wire \$73 ;
+  wire \$74 ;
+  wire \$75 ;
+  wire [4:0] \$76 ;
+  wire [4:0] \$77 ;
+  wire [4:0] \$78 ;
+  wire \$79 ;
+  wire \$8 ;
+  wire \$80 ;
+  wire \$81 ;
+  wire [7:0] \$82 ;
+  wire \$83 ;
+  wire \$84 ;
+  wire \$85 ;
+  wire \$86 ;
+  wire \$87 ;
+  wire \$88 ;
+  wire \$89 ;
+  wire \$9 ;
+  wire \$90 ;
+  wire [4:0] \$91 ;
+  wire [4:0] \$92 ;
+  wire [4:0] \$93 ;
+  wire [4:0] \$94 ;
+  wire \$95 ;
+  wire \$96 ;
+  wire \$97 ;
+  wire \$98 ;
+  wire \$99 ;
+  input abort;
+  wire abort;
+  reg [2:0] access_fsm_state = 3'h0;
+  output busy;
+  wire busy;
+  reg [3:0] byte_received__addr;
+  reg [31:0] byte_received__data;
+  reg [3:0] byte_received__en;
+  output cdm;
+  reg cdm;
+  input clk;
+  wire clk;
+  wire [3:0] crc;
+  wire [3:0] \crc$31 ;
+  reg data;
+  reg \data$29 ;
+  output done;
+  reg done = 1'h0;
+  (* enum_base_type = "AccessStatus" *)
+  (* enum_value_000 = "OK" *)
+  (* enum_value_001 = "CRC4_ERROR" *)
+  (* enum_value_010 = "NO_ANSWER" *)
+  (* enum_value_011 = "REFUSED" *)
+  (* enum_value_100 = "ABORTED" *)
+  (* enum_value_101 = "DATA_FAULT" *)
+  (* enum_value_110 = "BAD_REQUEST" *)
+  reg [2:0] ending = 3'h0;
+  input frame_cdm;
+  wire frame_cdm;
+  input frame_cds;
+  wire frame_cds;
+  input frame_end;
+  wire frame_end;
+  input frame_ok;
+  wire frame_ok;
+  wire frames;
+  reg [7:0] got = 8'h00;
+  reg [2:0] got_crc = 3'h0;
+  reg [17:0] header = 18'h00000;
+  input [3:0] host_read__addr;
+  wire [3:0] host_read__addr;
+  wire [31:0] host_read__data;
+  input host_read__en;
+  wire host_read__en;
+  wire [3:0] host_write__addr;
+  wire [31:0] host_write__data;
+  wire [3:0] host_write__en;
+  reg [3:0] idle_run = 4'h0;
+  reg [3:0] idle_seen = 4'h0;
+  reg [5:0] index = 6'h00;
+  wire [3:0] rbuf_addr;
+  output [31:0] rbuf_data;
+  wire [31:0] rbuf_data;
+  wire rbuf_en;
+  reg [17:0] req = 18'h00000;
+  wire [6:0] \req.address ;
+  wire [6:0] \req.count ;
+  wire [2:0] \req.slave_id ;
+  wire \req.write ;
+  input [17:0] request;
+  wire [17:0] request;
+  wire [6:0] \request.address ;
+  wire [6:0] \request.count ;
+  wire [2:0] \request.slave_id ;
+  wire \request.write ;
+  output [9:0] result;
+  reg [9:0] result = 10'h000;
+  wire [6:0] \result.bytes_done ;
+  (* enum_base_type = "AccessStatus" *)
+  (* enum_value_000 = "OK" *)
+  (* enum_value_001 = "CRC4_ERROR" *)
+  (* enum_value_010 = "NO_ANSWER" *)
+  (* enum_value_011 = "REFUSED" *)
+  (* enum_value_100 = "ABORTED" *)
+  (* enum_value_101 = "DATA_FAULT" *)
+  (* enum_value_110 = "BAD_REQUEST" *)
+  wire [2:0] \result.status ;
+  input rst;
+  wire rst;
+  reg [7:0] sent = 8'h00;
+  reg start;
+  reg \start$27 ;
+  input \start$44 ;
+  wire \start$44 ;
+  reg [4:0] step = 5'h00;
+  reg [7:0] to_send = 8'h00;
+  reg valid;
+  reg \valid$28 ;
+  reg [4:0] waited = 5'h00;
+  input [39:0] wbuf;
+  wire [39:0] wbuf;
+  wire [3:0] \wbuf.addr ;
+  wire [31:0] \wbuf.data ;
+  wire [3:0] \wbuf.en ;
+  wire [3:0] word_to_send__addr;
+  wire [31:0] word_to_send__data;
+  reg [31:0] rbuf [15:0];
+  initial begin
+    rbuf[0] = 32'd0;
+    rbuf[1] = 32'd0;
+    rbuf[2] = 32'd0;
+    rbuf[3] = 32'd0;
+    rbuf[4] = 32'd0;
+    rbuf[5] = 32'd0;
+    rbuf[6] = 32'd0;
+    rbuf[7] = 32'd0;
+    rbuf[8] = 32'd0;
+    rbuf[9] = 32'd0;
+    rbuf[10] = 32'd0;
+    rbuf[11] = 32'd0;
+    rbuf[12] = 32'd0;
+    rbuf[13] = 32'd0;
+    rbuf[14] = 32'd0;
+    rbuf[15] = 32'd0;
+  end
+  always @(posedge clk) begin
+    if (byte_received__en[0])
+      rbuf[byte_received__addr][7:0] <= byte_received__data[7:0];
+    if (byte_received__en[1])
+      rbuf[byte_received__addr][15:8] <= byte_received__data[15:8];
+    if (byte_received__en[2])
+      rbuf[byte_received__addr][23:16] <= byte_received__data[23:16];
+    if (byte_received__en[3])
+      rbuf[byte_received__addr][31:24] <= byte_received__data[31:24];
+  end
+  reg [31:0] _0_;
+  always @(posedge clk) begin
+    if (host_read__en) begin
+      _0_ <= rbuf[host_read__addr];
+    end
+  end
+  assign rbuf_data = _0_;
+  reg [31:0] \wbuf$50  [15:0];
+  initial begin
+    \wbuf$50 [0] = 32'd0;
+    \wbuf$50 [1] = 32'd0;
+    \wbuf$50 [2] = 32'd0;
+    \wbuf$50 [3] = 32'd0;
+    \wbuf$50 [4] = 32'd0;
+    \wbuf$50 [5] = 32'd0;
+    \wbuf$50 [6] = 32'd0;
+    \wbuf$50 [7] = 32'd0;
+    \wbuf$50 [8] = 32'd0;
+    \wbuf$50 [9] = 32'd0;
+    \wbuf$50 [10] = 32'd0;
+    \wbuf$50 [11] = 32'd0;
+    \wbuf$50 [12] = 32'd0;
+    \wbuf$50 [13] = 32'd0;
+    \wbuf$50 [14] = 32'd0;
+    \wbuf$50 [15] = 32'd0;
+  end
+  always @(posedge clk) begin
+    if (wbuf[36])
+      \wbuf$50 [wbuf[3:0]][7:0] <= wbuf[11:4];
+    if (wbuf[37])
+      \wbuf$50 [wbuf[3:0]][15:8] <= wbuf[19:12];
+    if (wbuf[38])
+      \wbuf$50 [wbuf[3:0]][23:16] <= wbuf[27:20];
+    if (wbuf[39])
+      \wbuf$50 [wbuf[3:0]][31:24] <= wbuf[35:28];
+  end
+  reg [31:0] _1_;
+  always @(posedge clk) begin
+    _1_ <= \wbuf$50 [index[5:2]];
+  end
+  assign word_to_send__data = _1_;
+  assign \$1  = step >= 4'hc;
+  assign \$2  = step < 5'h10;
+  assign \$3  = \$1  & \$2 ;
+  assign \$4  = ~ step[1:0];
+  assign \$5  = crc >> \$4 ;
+  assign \$6  = \$3  ? \$5  : header[17];
+  assign \$7  = ! step;
+  assign \$8  = frame_end & \$7 ;
+  assign \$9  = ~ frame_cdm;
+  assign \$10  = \$8  & \$9 ;
+  assign \$11  = ~ frame_ok;
+  assign \$12  = frame_end & \$11 ;
+  assign \$13  = step == 1'h1;
+  assign \$14  = frame_end & \$13 ;
+  assign \$15  = ~ frame_cds;
+  assign \$16  = \$14  & \$15 ;
+  assign \$17  = step == 5'h11;
+  assign \$18  = frame_end & \$17 ;
+  assign \$19  = frame_cds == req[17];
+  assign \$20  = \$18  & \$19 ;
+  assign \$21  = ! step;
+  assign \$22  = step >= 1'h1;
+  assign \$23  = step <= 4'hb;
+  assign \$24  = \$22  & \$23 ;
+  assign \$25  = ! step;
+  assign \$26  = step >= 1'h1;
+  assign \$27  = step <= 4'h8;
+  assign \$28  = \$26  & \$27 ;
+  assign \$29  = step >= 4'h9;
+  assign \$30  = step <= 4'hc;
+  assign \$31  = \$29  & \$30 ;
+  assign \$32  = req[17] & to_send[7];
+  assign \$33  = step - 4'h9;
+  assign \$34  = ~ \$33 [1:0];
+  assign \$35  = crc >> \$34 ;
+  assign \$36  = req[17] & \$35 ;
+  assign \$37  = step >= 1'h1;
+  assign \$38  = frame_end & \$37 ;
+  assign \$39  = step <= 4'h8;
+  assign \$40  = \$38  & \$39 ;
+  assign \$41  = ~ frame_ok;
+  assign \$42  = frame_end & \$41 ;
+  assign \$43  = ! step;
+  assign \$44  = frame_end & \$43 ;
+  assign \$45  = step == 1'h1;
+  assign \$46  = frame_end & \$45 ;
+  assign \$47  = step < 4'hd;
+  assign \$48  = frame_end & \$47 ;
+  assign \$49  = ! index;
+  assign \$50  = \$49  ? req[17] : 1'h0;
+  assign \$51  = frame_cds != \$50 ;
+  assign \$52  = step <= 4'h9;
+  assign \$53  = step == 2'h2;
+  assign \$54  = { got_crc, frame_cds } != \crc$31 ;
+  assign \$55  = got != sent;
+  assign \$56  = req[17] & \$55 ;
+  assign \$57  = ! index[1:0];
+  assign \$58  = index[1:0] == 1'h1;
+  assign \$59  = index[1:0] == 2'h2;
+  assign \$60  = index[1:0] == 2'h3;
+  assign \$61  = req[17] ? 4'h0 : { \$60 , \$59 , \$58 , \$57  };
+  assign busy = ~ \$62 ;
+  assign \$62  = ! access_fsm_state;
+  assign \$63  = access_fsm_state == 1'h1;
+  assign \$64  = access_fsm_state == 2'h2;
+  assign \$65  = access_fsm_state == 2'h3;
+  assign \$66  = access_fsm_state == 3'h4;
+  assign \$67  = access_fsm_state == 3'h5;
+  assign \$68  = access_fsm_state == 3'h6;
+  assign \$69  = idle_run == 4'he;
+  assign \$70  = idle_run + 1'h1;
+  assign \$71  = \$69  ? 5'h0e : \$70 ;
+  assign \$72  = frame_cdm ? 5'h00 : \$71 ;
+  assign \$73  = ~ frame_ok;
+  assign \$74  = frame_cdm | \$73 ;
+  assign \$75  = idle_seen == 4'he;
+  assign \$76  = idle_seen + 1'h1;
+  assign \$77  = \$75  ? 5'h0e : \$76 ;
+  assign \$78  = \$74  ? 5'h00 : \$77 ;
+  assign \$79  = ! request[16:10];
+  assign \$80  = request[16:10] > 7'h40;
+  assign \$81  = \$79  | \$80 ;
+  assign \$82  = request[9:3] + request[16:10];
+  assign \$83  = \$82  > 8'h80;
+  assign \$84  = \$81  | \$83 ;
+  assign \$85  = ~ request[17];
+  assign \$86  = ~ frame_ok;
+  assign \$87  = frame_end & \$86 ;
+  assign \$88  = ~ frame_ok;
+  assign \$89  = frame_cdm | \$88 ;
+  assign \$90  = idle_seen == 4'he;
+  assign \$91  = idle_seen + 1'h1;
+  assign \$92  = \$90  ? 5'h0e : \$91 ;
+  assign \$93  = \$89  ? 5'h00 : \$92 ;
+  assign \$94  = frame_end ? \$93  : { 1'h0, idle_seen };
+  assign \$95  = \$94  == 4'he;
+  assign \$96  = ! step;
+  assign \$97  = frame_end & \$96 ;
+  assign \$98  = ~ frame_cdm;
+  assign \$99  = \$97  & \$98 ;
+  assign \$100  = ~ frame_ok;
+  assign \$101  = frame_end & \$100 ;
+  assign \$102  = step == 1'h1;
+  assign \$103  = frame_end & \$102 ;
+  assign \$104  = ~ frame_cds;
+  assign \$105  = \$103  & \$104 ;
+  assign \$106  = step == 5'h11;
+  assign \$107  = frame_end & \$106 ;
+  assign \$108  = frame_cds == req[17];
+  assign \$109  = \$107  & \$108 ;
+  assign \$111  = step + 1'h1;
+  assign \$112  = step == 5'h11;
+  assign \$113  = ~ frame_ok;
+  assign \$114  = frame_end & \$113 ;
+  assign \$115  = ! step;
+  assign \$116  = frame_end & \$115 ;
+  assign \$117  = step == 1'h1;
+  assign \$118  = frame_end & \$117 ;
+  assign \$119  = step < 4'hd;
+  assign \$120  = frame_end & \$119 ;
+  assign \$121  = ! index;
+  assign \$122  = \$121  ? req[17] : 1'h0;
+  assign \$123  = frame_cds != \$122 ;
+  assign \$291  = index[1:0] * 4'h8;
+  assign \$124  = word_to_send__data >> \$291 ;
+  assign \$294  = index[1:0] * 4'h8;
+  assign \$125  = word_to_send__data >> \$294 ;
+  assign \$127  = ~ req[17];
+  assign \$129  = step + 1'h1;
+  assign \$130  = step <= 4'h9;
+  assign \$131  = { got_crc, frame_cds } != \crc$31 ;
+  assign \$132  = got != sent;
+  assign \$133  = req[17] & \$132 ;
+  assign \$134  = index + 1'h1;
+  assign \$135  = index + 1'h1;
+  assign \$136  = \$135  == req[16:10];
+  assign \$137  = index + 1'h1;
+  assign \$138  = ~ frame_ok;
+  assign \$139  = frame_end & \$138 ;
+  assign \$140  = frame_end & frame_cds;
+  assign \$141  = waited + 1'h1;
+  assign \$142  = waited == 4'hf;
+  assign \$143  = ~ frame_ok;
+  assign \$144  = frame_end & \$143 ;
+  assign \$145  = frame_end & frame_cds;
+  assign \$146  = idle_run == 4'he;
+  assign \$147  = idle_run + 1'h1;
+  assign \$148  = \$146  ? 5'h0e : \$147 ;
+  assign \$149  = frame_cdm ? 5'h00 : \$148 ;
+  assign \$150  = frame_end ? \$149  : { 1'h0, idle_run };
+  assign \$151  = \$150  == 4'he;
+  always @(posedge clk)
+    idle_run <= \$152 ;
+  always @(posedge clk)
+    idle_seen <= \$153 ;
+  always @(posedge clk)
+    done <= \$154 ;
+  always @(posedge clk)
+    result <= \$155 ;
+  always @(posedge clk)
+    access_fsm_state <= \$156 ;
+  always @(posedge clk)
+    req <= \$157 ;
+  always @(posedge clk)
+    index <= \$158 ;
+  always @(posedge clk)
+    header <= \$159 ;
+  always @(posedge clk)
+    step <= \$160 ;
+  always @(posedge clk)
+    ending <= \$161 ;
+  always @(posedge clk)
+    to_send <= \$162 ;
+  always @(posedge clk)
+    sent <= \$163 ;
+  always @(posedge clk)
+    waited <= \$164 ;
+  always @(posedge clk)
+    got <= \$165 ;
+  always @(posedge clk)
+    got_crc <= \$166 ;
+  \biss_master_wb.ch1.core.register_access.rx_crc  rx_crc (
+    .clk(clk),
+    .crc(\crc$31 ),
+    .data_in(\data$29 ),
+    .rst(rst),
+    .start(\start$27 ),
+    .valid(\valid$28 )
+  );
+  \biss_master_wb.ch1.core.register_access.tx_crc  tx_crc (
+    .clk(clk),
+    .crc(crc),
+    .data_in(data),
+    .rst(rst),
+    .start(start),
+    .valid(valid)
+  );
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    cdm = 1'h0;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          cdm = \$6 ;
+      3'h4:
+          if (\$25 ) begin
+            cdm = 1'h1;
+          end else if (\$28 ) begin
+            cdm = \$32 ;
+          end else if (\$31 ) begin
+            cdm = \$36 ;
+          end
+      3'h5:
+          cdm = 1'h1;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    start = 1'h0;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          if (abort) begin
+          end else if (\$10 ) begin
+          end else if (\$12 ) begin
+          end else if (\$16 ) begin
+          end else if (\$20 ) begin
+          end else if (frame_end) begin
+            start = \$21 ;
+          end
+      3'h4:
+          if (abort) begin
+          end else if (\$42 ) begin
+          end else if (\$44 ) begin
+            (* full_case = 32'd1 *)
+            if (\$51 ) begin
+            end else begin
+              start = 1'h1;
+            end
+          end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    valid = 1'h0;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          if (abort) begin
+          end else if (\$10 ) begin
+          end else if (\$12 ) begin
+          end else if (\$16 ) begin
+          end else if (\$20 ) begin
+          end else if (frame_end) begin
+            valid = \$24 ;
+          end
+      3'h4:
+          valid = \$40 ;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    data = 1'h0;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          if (abort) begin
+          end else if (\$10 ) begin
+          end else if (\$12 ) begin
+          end else if (\$16 ) begin
+          end else if (\$20 ) begin
+          end else if (frame_end) begin
+            data = header[17];
+          end
+      3'h4:
+          data = to_send[7];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \start$27  = 1'h0;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h4:
+          if (abort) begin
+          end else if (\$42 ) begin
+          end else if (\$44 ) begin
+          end else if (\$46 ) begin
+          end else if (\$48 ) begin
+            if (\$52 ) begin
+              \start$27  = \$53 ;
+            end
+          end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \valid$28  = 1'h0;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h4:
+          if (abort) begin
+          end else if (\$42 ) begin
+          end else if (\$44 ) begin
+          end else if (\$46 ) begin
+          end else if (\$48 ) begin
+            if (\$52 ) begin
+              \valid$28  = 1'h1;
+            end
+          end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \data$29  = 1'h0;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h4:
+          if (abort) begin
+          end else if (\$42 ) begin
+          end else if (\$44 ) begin
+          end else if (\$46 ) begin
+          end else if (\$48 ) begin
+            if (\$52 ) begin
+              \data$29  = frame_cds;
+            end
+          end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    byte_received__addr = 4'h0;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h4:
+          if (abort) begin
+          end else if (\$42 ) begin
+          end else if (\$44 ) begin
+          end else if (\$46 ) begin
+          end else if (\$48 ) begin
+          end else if (frame_end) begin
+            (* full_case = 32'd1 *)
+            if (\$54 ) begin
+            end else if (\$56 ) begin
+            end else begin
+              byte_received__addr = index[5:2];
+            end
+          end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    byte_received__data = 32'd0;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h4:
+          if (abort) begin
+          end else if (\$42 ) begin
+          end else if (\$44 ) begin
+          end else if (\$46 ) begin
+          end else if (\$48 ) begin
+          end else if (frame_end) begin
+            (* full_case = 32'd1 *)
+            if (\$54 ) begin
+            end else if (\$56 ) begin
+            end else begin
+              byte_received__data = { got, got, got, got };
+            end
+          end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    byte_received__en = 4'h0;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h4:
+          if (abort) begin
+          end else if (\$42 ) begin
+          end else if (\$44 ) begin
+          end else if (\$46 ) begin
+          end else if (\$48 ) begin
+          end else if (frame_end) begin
+            (* full_case = 32'd1 *)
+            if (\$54 ) begin
+            end else if (\$56 ) begin
+            end else begin
+              byte_received__en = \$61 ;
+            end
+          end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$152  = idle_run;
+    if (frame_end) begin
+      \$152  = \$72 [3:0];
+    end
+    if (rst) begin
+      \$152  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$153  = idle_seen;
+    if (frame_end) begin
+      \$153  = \$78 [3:0];
+    end
+    if (rst) begin
+      \$153  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$154  = 1'h0;
+    casez (access_fsm_state)
+      3'h0:
+          if (\start$44 ) begin
+            if (\$84 ) begin
+              \$154  = 1'h1;
+            end
+          end
+      3'h1:
+          if (abort) begin
+            \$154  = 1'h1;
+          end else if (\$87 ) begin
+            \$154  = 1'h1;
+          end
+      3'h2:
+          /* empty */;
+      3'h4:
+          /* empty */;
+      3'h5:
+          /* empty */;
+      3'h6:
+          if (abort) begin
+          end else if (\$144 ) begin
+          end else if (\$145 ) begin
+          end else if (frame_end) begin
+            \$154  = 1'h1;
+          end
+      3'h3:
+          if (\$151 ) begin
+            \$154  = 1'h1;
+          end
+    endcase
+    if (rst) begin
+      \$154  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$155  = result;
+    casez (access_fsm_state)
+      3'h0:
+          if (\start$44 ) begin
+            (* full_case = 32'd1 *)
+            if (\$84 ) begin
+              \$155 [2:0] = 3'h6;
+              \$155 [9:3] = 7'h00;
+            end else begin
+              \$155 [9:3] = 7'h00;
+            end
+          end
+      3'h1:
+          if (abort) begin
+            \$155 [2:0] = 3'h4;
+          end else if (\$87 ) begin
+            \$155 [2:0] = 3'h5;
+          end
+      3'h2:
+          /* empty */;
+      3'h4:
+          if (abort) begin
+          end else if (\$114 ) begin
+          end else if (\$116 ) begin
+          end else if (\$118 ) begin
+          end else if (\$120 ) begin
+          end else if (frame_end) begin
+            (* full_case = 32'd1 *)
+            if (\$131 ) begin
+            end else if (\$133 ) begin
+            end else begin
+              \$155 [9:3] = \$134 ;
+            end
+          end
+      3'h5:
+          /* empty */;
+      3'h6:
+          if (abort) begin
+          end else if (\$144 ) begin
+          end else if (\$145 ) begin
+          end else if (frame_end) begin
+            \$155 [2:0] = 3'h0;
+          end
+      3'h3:
+          if (\$151 ) begin
+            \$155 [2:0] = ending;
+          end
+    endcase
+    if (rst) begin
+      \$155  = 10'h000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$156  = access_fsm_state;
+    casez (access_fsm_state)
+      3'h0:
+          if (\start$44 ) begin
+            (* full_case = 32'd1 *)
+            if (\$84 ) begin
+              \$156  = 3'h0;
+            end else begin
+              \$156  = 3'h1;
+            end
+          end
+      3'h1:
+          if (abort) begin
+            \$156  = 3'h0;
+          end else if (\$87 ) begin
+            \$156  = 3'h0;
+          end else if (\$95 ) begin
+            \$156  = 3'h2;
+          end
+      3'h2:
+          if (abort) begin
+            \$156  = 3'h3;
+          end else if (\$99 ) begin
+          end else if (\$101 ) begin
+            \$156  = 3'h3;
+          end else if (\$105 ) begin
+            \$156  = 3'h3;
+          end else if (\$109 ) begin
+            \$156  = 3'h3;
+          end else if (frame_end) begin
+            if (\$112 ) begin
+              \$156  = 3'h4;
+            end
+          end
+      3'h4:
+          if (abort) begin
+            \$156  = 3'h3;
+          end else if (\$114 ) begin
+            \$156  = 3'h3;
+          end else if (\$116 ) begin
+            if (\$123 ) begin
+              \$156  = 3'h3;
+            end
+          end else if (\$118 ) begin
+            (* full_case = 32'd1 *)
+            if (frame_cds) begin
+            end else if (\$127 ) begin
+              \$156  = 3'h5;
+            end else begin
+              \$156  = 3'h3;
+            end
+          end else if (\$120 ) begin
+          end else if (frame_end) begin
+            (* full_case = 32'd1 *)
+            if (\$131 ) begin
+              \$156  = 3'h3;
+            end else if (\$133 ) begin
+              \$156  = 3'h3;
+            end else begin
+              if (\$136 ) begin
+                \$156  = 3'h6;
+              end
+            end
+          end
+      3'h5:
+          if (abort) begin
+            \$156  = 3'h3;
+          end else if (\$139 ) begin
+            \$156  = 3'h3;
+          end else if (\$140 ) begin
+            \$156  = 3'h4;
+          end else if (frame_end) begin
+            if (\$142 ) begin
+              \$156  = 3'h3;
+            end
+          end
+      3'h6:
+          if (abort) begin
+            \$156  = 3'h3;
+          end else if (\$144 ) begin
+            \$156  = 3'h3;
+          end else if (\$145 ) begin
+            \$156  = 3'h3;
+          end else if (frame_end) begin
+            \$156  = 3'h0;
+          end
+      3'h3:
+          if (\$151 ) begin
+            \$156  = 3'h0;
+          end
+    endcase
+    if (rst) begin
+      \$156  = 3'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$157  = req;
+    casez (access_fsm_state)
+      3'h0:
+          if (\start$44 ) begin
+            (* full_case = 32'd1 *)
+            if (\$84 ) begin
+            end else begin
+              \$157  = request;
+            end
+          end
+    endcase
+    if (rst) begin
+      \$157  = 18'h00000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$158  = index;
+    casez (access_fsm_state)
+      3'h0:
+          if (\start$44 ) begin
+            (* full_case = 32'd1 *)
+            if (\$84 ) begin
+            end else begin
+              \$158  = 6'h00;
+            end
+          end
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h4:
+          if (abort) begin
+          end else if (\$114 ) begin
+          end else if (\$116 ) begin
+          end else if (\$118 ) begin
+          end else if (\$120 ) begin
+          end else if (frame_end) begin
+            (* full_case = 32'd1 *)
+            if (\$131 ) begin
+            end else if (\$133 ) begin
+            end else begin
+              (* full_case = 32'd1 *)
+              if (\$136 ) begin
+              end else begin
+                \$158  = \$137 [5:0];
+              end
+            end
+          end
+    endcase
+    if (rst) begin
+      \$158  = 6'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$159  = header;
+    casez (access_fsm_state)
+      3'h0:
+          if (\start$44 ) begin
+            (* full_case = 32'd1 *)
+            if (\$84 ) begin
+            end else begin
+              \$159  = { 2'h3, request[2:0], request[9:3], 4'h0, \$85 , request[17] };
+            end
+          end
+      3'h1:
+          /* empty */;
+      3'h2:
+          if (abort) begin
+          end else if (\$99 ) begin
+          end else if (\$101 ) begin
+          end else if (\$105 ) begin
+          end else if (\$109 ) begin
+          end else if (frame_end) begin
+            \$159  = \$110 [17:0];
+          end
+    endcase
+    if (rst) begin
+      \$159  = 18'h00000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$160  = step;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (abort) begin
+          end else if (\$87 ) begin
+          end else if (\$95 ) begin
+            \$160  = 5'h00;
+          end
+      3'h2:
+          if (abort) begin
+          end else if (\$99 ) begin
+          end else if (\$101 ) begin
+          end else if (\$105 ) begin
+          end else if (\$109 ) begin
+          end else if (frame_end) begin
+            \$160  = \$111 [4:0];
+            if (\$112 ) begin
+              \$160  = 5'h00;
+            end
+          end
+      3'h4:
+          if (abort) begin
+          end else if (\$114 ) begin
+          end else if (\$116 ) begin
+            (* full_case = 32'd1 *)
+            if (\$123 ) begin
+            end else begin
+              \$160  = 5'h01;
+            end
+          end else if (\$118 ) begin
+            if (frame_cds) begin
+              \$160  = 5'h02;
+            end
+          end else if (\$120 ) begin
+            \$160  = \$129 [4:0];
+          end else if (frame_end) begin
+            (* full_case = 32'd1 *)
+            if (\$131 ) begin
+            end else if (\$133 ) begin
+            end else begin
+              \$160  = 5'h00;
+            end
+          end
+      3'h5:
+          if (abort) begin
+          end else if (\$139 ) begin
+          end else if (\$140 ) begin
+            \$160  = 5'h02;
+          end
+    endcase
+    if (rst) begin
+      \$160  = 5'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$161  = ending;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          if (abort) begin
+            \$161  = 3'h4;
+          end else if (\$99 ) begin
+          end else if (\$101 ) begin
+            \$161  = 3'h5;
+          end else if (\$105 ) begin
+            \$161  = 3'h2;
+          end else if (\$109 ) begin
+            \$161  = 3'h3;
+          end
+      3'h4:
+          if (abort) begin
+            \$161  = 3'h4;
+          end else if (\$114 ) begin
+            \$161  = 3'h5;
+          end else if (\$116 ) begin
+            if (\$123 ) begin
+              \$161  = 3'h3;
+            end
+          end else if (\$118 ) begin
+            (* full_case = 32'd1 *)
+            if (frame_cds) begin
+            end else if (\$127 ) begin
+            end else begin
+              \$161  = 3'h3;
+            end
+          end else if (\$120 ) begin
+          end else if (frame_end) begin
+            if (\$131 ) begin
+              \$161  = 3'h1;
+            end else if (\$133 ) begin
+              \$161  = 3'h3;
+            end
+          end
+      3'h5:
+          if (abort) begin
+            \$161  = 3'h4;
+          end else if (\$139 ) begin
+            \$161  = 3'h5;
+          end else if (\$140 ) begin
+          end else if (frame_end) begin
+            if (\$142 ) begin
+              \$161  = 3'h3;
+            end
+          end
+      3'h6:
+          if (abort) begin
+            \$161  = 3'h4;
+          end else if (\$144 ) begin
+            \$161  = 3'h5;
+          end else if (\$145 ) begin
+            \$161  = 3'h3;
+          end
+    endcase
+    if (rst) begin
+      \$161  = 3'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$162  = to_send;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h4:
+          if (abort) begin
+          end else if (\$114 ) begin
+          end else if (\$116 ) begin
+            (* full_case = 32'd1 *)
+            if (\$123 ) begin
+            end else begin
+              \$162  = \$124 ;
+            end
+          end else if (\$118 ) begin
+            \$162  = \$126 [7:0];
+          end else if (\$120 ) begin
+            \$162  = \$128 [7:0];
+          end
+    endcase
+    if (rst) begin
+      \$162  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$163  = sent;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h4:
+          if (abort) begin
+          end else if (\$114 ) begin
+          end else if (\$116 ) begin
+            (* full_case = 32'd1 *)
+            if (\$123 ) begin
+            end else begin
+              \$163  = \$125 ;
+            end
+          end
+    endcase
+    if (rst) begin
+      \$163  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$164  = waited;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h4:
+          if (abort) begin
+          end else if (\$114 ) begin
+          end else if (\$116 ) begin
+          end else if (\$118 ) begin
+            if (frame_cds) begin
+            end else if (\$127 ) begin
+              \$164  = 5'h00;
+            end
+          end
+      3'h5:
+          if (abort) begin
+          end else if (\$139 ) begin
+          end else if (\$140 ) begin
+          end else if (frame_end) begin
+            \$164  = \$141 [4:0];
+          end
+    endcase
+    if (rst) begin
+      \$164  = 5'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$165  = got;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h4:
+          if (abort) begin
+          end else if (\$114 ) begin
+          end else if (\$116 ) begin
+          end else if (\$118 ) begin
+          end else if (\$120 ) begin
+            if (\$130 ) begin
+              \$165  = { got[6:0], frame_cds };
+            end
+          end
+    endcase
+    if (rst) begin
+      \$165  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$166  = got_crc;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h4:
+          if (abort) begin
+          end else if (\$114 ) begin
+          end else if (\$116 ) begin
+          end else if (\$118 ) begin
+          end else if (\$120 ) begin
+            (* full_case = 32'd1 *)
+            if (\$130 ) begin
+            end else begin
+              \$166  = { got_crc[1:0], frame_cds };
+            end
+          end
+    endcase
+    if (rst) begin
+      \$166  = 3'h0;
+    end
+  end
+  assign host_write__addr = wbuf[3:0];
+  assign host_write__data = wbuf[35:4];
+  assign host_write__en = wbuf[39:36];
+  assign rbuf_addr = host_read__addr;
+  assign rbuf_en = host_read__en;
+  assign host_read__data = rbuf_data;
+  assign word_to_send__addr = index[5:2];
+  assign frames = busy;
+  assign \wbuf.addr  = wbuf[3:0];
+  assign \wbuf.data  = wbuf[35:4];
+  assign \wbuf.en  = wbuf[39:36];
+  assign \req.slave_id  = req[2:0];
+  assign \req.address  = req[9:3];
+  assign \req.count  = req[16:10];
+  assign \req.write  = req[17];
+  assign \request.slave_id  = request[2:0];
+  assign \request.address  = request[9:3];
+  assign \request.count  = request[16:10];
+  assign \request.write  = request[17];
+  assign \result.status  = result[2:0];
+  assign \result.bytes_done  = result[9:3];
+  assign \$110  = { header, 1'h0 };
+  assign \$126  = { to_send, 1'h0 };
+  assign \$128  = { to_send, 1'h0 };
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_wb.ch1.core.register_access.rx_crc (rst, crc, start, valid, data_in, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$92  = 0;
+  wire [3:0] \$1 ;
+  wire \$10 ;
+  wire [3:0] \$11 ;
+  wire \$12 ;
+  reg [3:0] \$13 ;
+  wire \$2 ;
+  wire \$3 ;
+  wire [3:0] \$4 ;
+  wire \$5 ;
+  wire [3:0] \$6 ;
+  wire \$7 ;
+  wire \$8 ;
+  wire [3:0] \$9 ;
+  wire [3:0] \$auto$rtlil.cc:2739:Not$2 ;
+  input clk;
+  wire clk;
+  output [3:0] crc;
+  wire [3:0] crc;
+  reg [3:0] crc_reg = 4'h0;
+  wire data;
+  input data_in;
+  wire data_in;
+  wire match_detected;
+  input rst;
+  wire rst;
+  input start;
+  wire start;
+  input valid;
+  wire valid;
+  assign match_detected = crc_reg == 2'h2;
+  assign \$1  = start ? 4'h0 : crc_reg;
+  assign \$3  = \$2  ^ data_in;
+  assign \$4  = start ? 4'h0 : crc_reg;
+  assign \$6  = start ? 4'h0 : crc_reg;
+  assign \$7  = \$5  ^ \$6 [3];
+  assign \$8  = \$7  ^ data_in;
+  assign \$9  = start ? 4'h0 : crc_reg;
+  assign \$11  = start ? 4'h0 : crc_reg;
+  always @(posedge clk)
+    crc_reg <= \$13 ;
+  assign \$auto$rtlil.cc:2739:Not$2  = ~ crc_reg;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    \$13  = crc_reg;
+    if (valid) begin
+      \$13 [0] = \$3 ;
+      \$13 [1] = \$8 ;
+      \$13 [2] = \$10 ;
+      \$13 [3] = \$12 ;
+    end else if (start) begin
+      \$13  = 4'h0;
+    end
+    if (rst) begin
+      \$13  = 4'h0;
+    end
+  end
+  assign data = data_in;
+  assign crc = \$auto$rtlil.cc:2739:Not$2 ;
+  assign \$2  = \$1 [3];
+  assign \$5  = \$4 [0];
+  assign \$10  = \$9 [1];
+  assign \$12  = \$11 [2];
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_wb.ch1.core.register_access.tx_crc (rst, crc, start, valid, data_in, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$93  = 0;
+  wire [3:0] \$1 ;
+  wire \$10 ;
+  wire [3:0] \$11 ;
+  wire \$12 ;
+  reg [3:0] \$13 ;
+  wire \$2 ;
+  wire \$3 ;
+  wire [3:0] \$4 ;
+  wire \$5 ;
+  wire [3:0] \$6 ;
+  wire \$7 ;
+  wire \$8 ;
+  wire [3:0] \$9 ;
+  wire [3:0] \$auto$rtlil.cc:2739:Not$4 ;
+  input clk;
+  wire clk;
+  output [3:0] crc;
+  wire [3:0] crc;
+  reg [3:0] crc_reg = 4'h0;
+  wire data;
+  input data_in;
+  wire data_in;
+  wire match_detected;
+  input rst;
+  wire rst;
+  input start;
+  wire start;
+  input valid;
+  wire valid;
+  assign match_detected = crc_reg == 2'h2;
+  assign \$1  = start ? 4'h0 : crc_reg;
+  assign \$3  = \$2  ^ data_in;
+  assign \$4  = start ? 4'h0 : crc_reg;
+  assign \$6  = start ? 4'h0 : crc_reg;
+  assign \$7  = \$5  ^ \$6 [3];
+  assign \$8  = \$7  ^ data_in;
+  assign \$9  = start ? 4'h0 : crc_reg;
+  assign \$11  = start ? 4'h0 : crc_reg;
+  always @(posedge clk)
+    crc_reg <= \$13 ;
+  assign \$auto$rtlil.cc:2739:Not$4  = ~ crc_reg;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
+    \$13  = crc_reg;
+    if (valid) begin
+      \$13 [0] = \$3 ;
+      \$13 [1] = \$8 ;
+      \$13 [2] = \$10 ;
+      \$13 [3] = \$12 ;
+    end else if (start) begin
+      \$13  = 4'h0;
+    end
+    if (rst) begin
+      \$13  = 4'h0;
+    end
+  end
+  assign data = data_in;
+  assign crc = \$auto$rtlil.cc:2739:Not$4 ;
+  assign \$2  = \$1 [3];
+  assign \$5  = \$4 [0];
+  assign \$10  = \$9 [1];
+  assign \$12  = \$11 [2];
+endmodule
+
+(* generator = "Amaranth" *)
 module \biss_master_wb.ch1.core.results (rst, report, valid, frame, report_frame, report_delay, done, valid_out, result, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$70  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$94  = 0;
   reg \$1 ;
   reg \$2 ;
   reg [160:0] \$3 ;
@@ -16353,21 +21832,21 @@ module \biss_master_wb.ch1.core.results (rst, report, valid, frame, report_frame
   always @(posedge clk)
     result <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$94 ) begin end
     \$1  = report;
     if (rst) begin
       \$1  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$94 ) begin end
     \$2  = valid;
     if (rst) begin
       \$2  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$94 ) begin end
     \$3  = result;
     if (report) begin
       \$3 [3:0] = frame[3:0];
@@ -16432,7 +21911,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_clear, arm, early, locked, delay, sample, level, slo);
-  reg \$auto$verilog_backend.cc:2355:dump_module$71  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$95  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -16670,7 +22149,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_
     .stage1(level)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
     \$63  = level;
     if (receiver_clear) begin
       \$63  = 1'h1;
@@ -16680,7 +22159,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
     \$64  = mid_delay;
     if (odd) begin
       \$64  = \$8 [12:0];
@@ -16705,7 +22184,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
     \$65  = mid_slot;
     (* full_case = 32'd1 *)
     if (odd) begin
@@ -16732,7 +22211,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
     \$66  = \$10 ;
     casez (sampler_fsm_state)
       2'h0:
@@ -16754,7 +22233,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
     \$67  = elapsed;
     casez (sampler_fsm_state)
       2'h0:
@@ -16778,7 +22257,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
     \$68  = early;
     casez (sampler_fsm_state)
       2'h0:
@@ -16794,7 +22273,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
     \$69  = locked;
     casez (sampler_fsm_state)
       2'h0:
@@ -16820,7 +22299,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
     \$70  = gap;
     casez (sampler_fsm_state)
       2'h0:
@@ -16851,7 +22330,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
     \$71  = sampler_fsm_state;
     casez (sampler_fsm_state)
       2'h0:
@@ -16882,7 +22361,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
     \$72  = slot_left;
     casez (sampler_fsm_state)
       2'h0:
@@ -16932,7 +22411,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
     \$73  = slot_zero;
     casez (sampler_fsm_state)
       2'h0:
@@ -16982,7 +22461,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
     \$74  = vote1;
     casez (sampler_fsm_state)
       2'h0:
@@ -17012,7 +22491,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
     \$75  = vote2;
     casez (sampler_fsm_state)
       2'h0:
@@ -17040,7 +22519,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
     \$76  = first_slot;
     casez (sampler_fsm_state)
       2'h0:
@@ -17066,7 +22545,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
     \$77  = delay;
     casez (sampler_fsm_state)
       2'h0:
@@ -17089,7 +22568,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
     \$78  = phase;
     casez (sampler_fsm_state)
       2'h0:
@@ -17129,7 +22608,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
     sample = \$44 ;
     casez (sampler_fsm_state)
       2'h0:
@@ -17147,7 +22626,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
     decided = 1'h0;
     casez (sampler_fsm_state)
       2'h0:
@@ -17196,8 +22675,8 @@ module \biss_master_wb.ch1.core.sampler.sync (clk, rst, receiver_clear, stage1, 
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.scheduler (rst, trigger, request, overrun, start, abort, periodic, period, idle, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$72  = 0;
+module \biss_master_wb.ch1.core.scheduler (rst, trigger, periodic, request, overrun, start, abort, period, idle, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$96  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -17281,7 +22760,7 @@ module \biss_master_wb.ch1.core.scheduler (rst, trigger, request, overrun, start
   always @(posedge clk)
     period_start <= \$28 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$96 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$27  = 24'h000001;
@@ -17293,7 +22772,7 @@ module \biss_master_wb.ch1.core.scheduler (rst, trigger, request, overrun, start
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$96 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$28  = 1'h1;
@@ -17307,8 +22786,8 @@ module \biss_master_wb.ch1.core.scheduler (rst, trigger, request, overrun, start
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.sign_of_life (rst, \port$1984$0 , load, \repeat , skip, check, resync, lc, is_zero, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$73  = 0;
+module \biss_master_wb.ch1.core.sign_of_life (rst, \port$2542$0 , load, \repeat , skip, check, resync, lc, is_zero, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$97  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -17345,8 +22824,8 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, \port$1984$0 , load, \repeat 
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$1984$0 ;
-  wire \port$1984$0 ;
+  input \port$2542$0 ;
+  wire \port$2542$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -17358,9 +22837,9 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, \port$1984$0 , load, \repeat 
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$1984$0  };
-  assign \$2  = { lc[4:0], \port$1984$0  } == last;
-  assign \$3  = { lc[4:0], \port$1984$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$2542$0  };
+  assign \$2  = { lc[4:0], \port$2542$0  } == last;
+  assign \$3  = { lc[4:0], \port$2542$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = lc == 6'h3f;
@@ -17388,7 +22867,7 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, \port$1984$0 , load, \repeat 
   always @(posedge clk)
     synced <= \$21 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
     \$16  = is_zero;
     if (load) begin
       \$16  = \$1 ;
@@ -17398,7 +22877,7 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, \port$1984$0 , load, \repeat 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
     \$17  = is_last;
     if (load) begin
       \$17  = \$2 ;
@@ -17408,7 +22887,7 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, \port$1984$0 , load, \repeat 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
     \$18  = is_expected;
     if (load) begin
       \$18  = \$3 ;
@@ -17418,7 +22897,7 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, \port$1984$0 , load, \repeat 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
     \$19  = last;
     if (\$5 ) begin
       \$19  = lc;
@@ -17428,7 +22907,7 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, \port$1984$0 , load, \repeat 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
     \$20  = expected;
     if (\$5 ) begin
       \$20  = \$8 [5:0];
@@ -17438,7 +22917,7 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, \port$1984$0 , load, \repeat 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
     \$21  = synced;
     if (\$5 ) begin
       \$21  = 1'h1;
@@ -17450,13 +22929,13 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, \port$1984$0 , load, \repeat 
       \$21  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$1984$0  };
+  assign lc_next = { lc[4:0], \port$2542$0  };
   assign zero = is_zero;
 endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1.core.spw_check (rst, bits, \tolerance$8 , spw, cpw_top, match, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$74  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$98  = 0;
   wire [40:0] \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -17661,28 +23140,28 @@ module \biss_master_wb.ch1.core.spw_check (rst, bits, \tolerance$8 , spw, cpw_to
   assign \$7  = bits > 3'h5;
   assign \$8  = bits > 3'h6;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
     \$88  = \$42 ;
     if (rst) begin
       \$88  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
     \$89  = \$84 ;
     if (rst) begin
       \$89  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
     \$90  = \tolerance$8 ;
     if (rst) begin
       \$90  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
     \$91  = \$87 ;
     if (rst) begin
       \$91  = 1'h0;
@@ -17692,7 +23171,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1.core.time_base (rst, first_rise, first_rise_time, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$75  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$99  = 0;
   wire [32:0] \$1 ;
   reg [31:0] \$2 ;
   reg [31:0] \$3 ;
@@ -17711,14 +23190,14 @@ module \biss_master_wb.ch1.core.time_base (rst, first_rise, first_rise_time, clk
   always @(posedge clk)
     first_rise_time <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
     \$2  = \$1 [31:0];
     if (rst) begin
       \$2  = 32'd0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
     \$3  = first_rise_time;
     if (first_rise) begin
       \$3  = now;
@@ -17730,8 +23209,8 @@ module \biss_master_wb.ch1.core.time_base (rst, first_rise, first_rise_time, clk
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.timers (rst, restart, break_time, timeout_live, ack_limit, timeout_limit, delay_limit, no_start_limit, clear, in_clock, slo_stuck, slo_stuck_live, break_over, ack_expired, no_start_expired, delay_over, ma_busy, delay, slo, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$76  = 0;
+module \biss_master_wb.ch1.core.timers (rst, restart, ma_busy, break_time, timeout_live, ack_limit, timeout_limit, delay_limit, no_start_limit, clear, in_clock, slo_stuck, slo_stuck_live, break_over, ack_expired, no_start_expired, delay_over, delay, slo, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$100  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -17869,7 +23348,7 @@ module \biss_master_wb.ch1.core.timers (rst, restart, break_time, timeout_live, 
   always @(posedge clk)
     delay_over <= \$43 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     \$36  = slo_low_time_p1;
     if (\$1 ) begin
       \$36  = 25'h0000001;
@@ -17881,49 +23360,49 @@ module \biss_master_wb.ch1.core.timers (rst, restart, break_time, timeout_live, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     \$37  = \$8 ;
     if (rst) begin
       \$37  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     \$38  = \$16 ;
     if (rst) begin
       \$38  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     \$39  = \$20 [24:0];
     if (rst) begin
       \$39  = 25'h0000001;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     \$40  = \$26 ;
     if (rst) begin
       \$40  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     \$41  = \$30 ;
     if (rst) begin
       \$41  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     \$42  = \$34 ;
     if (rst) begin
       \$42  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     \$43  = \$35 ;
     if (rst) begin
       \$43  = 1'h0;
@@ -17932,8 +23411,8 @@ module \biss_master_wb.ch1.core.timers (rst, restart, break_time, timeout_live, 
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.verdict (lc_skip_seen, \port$2384$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
-  reg \$auto$verilog_backend.cc:2355:dump_module$77  = 0;
+module \biss_master_wb.ch1.core.verdict (lc_skip_seen, \port$2942$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
+  reg \$auto$verilog_backend.cc:2355:dump_module$101  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -18046,8 +23525,8 @@ module \biss_master_wb.ch1.core.verdict (lc_skip_seen, \port$2384$0 , lc_check, 
   wire lc_zero;
   input lc_zero_seen;
   wire lc_zero_seen;
-  output \port$2384$0 ;
-  wire \port$2384$0 ;
+  output \port$2942$0 ;
+  wire \port$2942$0 ;
   output report;
   wire report;
   input report_frame;
@@ -18115,7 +23594,7 @@ module \biss_master_wb.ch1.core.verdict (lc_skip_seen, \port$2384$0 , lc_check, 
   assign \$29  = ~ { \$2 , crc_ok[0] };
   assign crc_error = report_frame ? \$29  : 2'h0;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
     (* full_case = 32'd1 *)
     if (\$13 ) begin
       frame_status = 4'h3;
@@ -18132,7 +23611,7 @@ module \biss_master_wb.ch1.core.verdict (lc_skip_seen, \port$2384$0 , lc_check, 
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$2384$0  = \$2 ;
+  assign \port$2942$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

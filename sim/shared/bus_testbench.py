@@ -10,11 +10,12 @@ result's timestamp (the clock count of the frame's first MA rise), never from th
 import logging
 import os
 import random
+from dataclasses import dataclass, field
 
 import cocotb
 from cocotb.clock import Clock
 from cocotb.simtime import get_sim_time
-from cocotb.triggers import ClockCycles, Lock, RisingEdge, Timer
+from cocotb.triggers import ClockCycles, Lock, RisingEdge, Timer, with_timeout
 
 from encoder_model import frames
 from encoder_model.cocotb_encoder import BissEncoder, Cable, Response
@@ -93,25 +94,43 @@ class WishboneBus:
         await self.ops([(addr, value, lanes)])
 
 
-class Channel:
-    """One channel's encoder model and what it sent, by timestamp."""
+@dataclass(frozen=True)
+class Encoder:
+    """One channel's encoder model: its frames, cable, position function of time (default:
+    random), control side (an ``encoder_model.control.ControlSlave``, None: CDS 0, CDM
+    ignored), timing (timeout, processing time; ``min_cycle_s`` None: the 31.25 us rule)."""
+    fmt: object
+    cable: Cable = field(default_factory=Cable)
+    position: object = None
+    control: object = None
+    timeout_s: float = 12.5e-6
+    processing_s: tuple = (2e-6, 8e-6)
+    min_cycle_s: float | None = None
 
-    def __init__(self, tb, n, fmt, cable=Cable(), position=None):
-        self.tb, self.n, self.fmt = tb, n, fmt
+
+class Channel:
+    """One channel's encoder model and what it sent, by timestamp (``bits`` with the CDS the
+    control slave put in, if any)."""
+
+    def __init__(self, tb, n, spec):
+        fmt = spec.fmt
+        self.tb, self.n, self.fmt, self.spec = tb, n, fmt, spec
         self.sign_of_life = frames.SignOfLife()
-        self.position = position or (lambda t: tb.rng.getrandbits(fmt.words[0].data_bits))
+        self.position = spec.position or (lambda t: tb.rng.getrandbits(fmt.words[0].data_bits))
         self.source = frames.EncoderFrameSource(fmt, lambda t: self.position(t),
                                                 sign_of_life=self.sign_of_life)
         self.sent = {}          # expected timestamp -> frame bits
+        extra = {} if spec.min_cycle_s is None else {"min_cycle_s": spec.min_cycle_s}
         self.encoder = BissEncoder(getattr(tb.dut, f"ch{n}_ma"), getattr(tb.dut, f"ch{n}_slo"),
-                                   cable=cable, respond=self._respond, rng=tb.rng)
+                                   cable=spec.cable, respond=self._respond, rng=tb.rng,
+                                   timeout_s=spec.timeout_s, control=spec.control, **extra)
 
     def _respond(self, t_latch):
         values = self.source.values_at(t_latch)
         bits = frames.build_frame(self.fmt, values)
         record = self.encoder.records[-1]
         self.sent[self.tb.timestamp_of(record.t_first_rise_s)] = bits
-        return Response(bits=bits, processing_time_s=self.tb.rng.uniform(2e-6, 8e-6))
+        return Response(bits=bits, processing_time_s=self.tb.rng.uniform(*self.spec.processing_s))
 
 
 class BusTestbench:
@@ -125,16 +144,18 @@ class BusTestbench:
 
     # -- Setup ----------------------------------------------------------------------------
     async def start(self, formats=(), cables=(), positions=()):
-        """Clock, reset, and one encoder per entry of ``formats`` (channel 0, 1, ...);
-        ``positions``: per channel, a position function of time (default: random)."""
+        """Clock, reset, and one encoder per entry of ``formats`` (channel 0, 1, ...): a frame
+        format, or an :class:`Encoder`; ``cables``, ``positions``: per channel, for the entries
+        given as formats (default: a 0 m cable, random positions)."""
         dut = self.dut
         Clock(dut.clk, CLK_NS, unit="ns").start()
         dut.trigger.value = 0
         dut.rst.value = 1
-        for n, fmt in enumerate(formats):
-            cable = cables[n] if n < len(cables) else Cable()
-            position = positions[n] if n < len(positions) else None
-            self.channels[n] = Channel(self, n, fmt, cable, position)
+        for n, spec in enumerate(formats):
+            if not isinstance(spec, Encoder):
+                spec = Encoder(spec, cables[n] if n < len(cables) else Cable(),
+                               positions[n] if n < len(positions) else None)
+            self.channels[n] = Channel(self, n, spec)
             self.channels[n].encoder.start()
         await ClockCycles(dut.clk, 4)
         dut.rst.value = 0
@@ -152,8 +173,8 @@ class BusTestbench:
         return (edges + 1) % 2**32
 
     # -- Registers --------------------------------------------------------------------------
-    def addr(self, path, ch=None):
-        return self.map.address(path, ch)
+    def addr(self, path, ch=None, index=0):
+        return self.map.address(path, ch, index)
 
     def fields(self, path, word, ch=None):
         return {name: f.get(word) for name, f in self.map.reg(path, ch).fields.items()}
@@ -275,3 +296,47 @@ class BusTestbench:
         while (await self.read_fields("state", ch))["busy"]:
             assert get_sim_time("step") < t_end, f"ch{ch} never idle"
             await Timer(1, "us")
+
+    # -- Register access (the control channel, registers ca.*) --------------------------------
+    async def register_access(self, ch, address, *, count=None, data=None, slave_id=0,
+                              limit_s=20e-3):
+        """One register access through the bus as a driver makes it: for a write (``data``)
+        the bytes into ``ca.wbuf`` (byte i in lane i % 4 of word i // 4, docs/bus.md; whole
+        words, a partial last word with its byte strobes), ``ca.request``, ``ca.ctrl.start``,
+        then the ``irq`` pin (:meth:`wait_access_done`). Returns ``(ca.state fields, bytes)``:
+        for a read the ``count`` bytes of ``ca.rbuf``."""
+        write = data is not None
+        count = len(data) if write else count
+        if write:
+            for w in range(0, len(data), 4):
+                chunk = bytes(data[w:w + 4])
+                await self.bus.write(self.addr("ca.wbuf", ch, w // 4),
+                                     int.from_bytes(chunk.ljust(4, b"\0"), "little"),
+                                     (1 << len(chunk)) - 1)
+        await self.write_fields("ca.request", ch, slave_id=slave_id, address=address,
+                                count=count, write=int(write))
+        await self.write_fields("ca.ctrl", ch, start=1)
+        await self.wait_access_done(ch, limit_s)
+        state = await self.read_fields("ca.state", ch)
+        assert state["busy"] == 0, "access_done while ca.state.busy"
+        out = bytearray()
+        if not write:
+            for w in range(-(-count // 4)):
+                out += (await self.bus.read(self.addr("ca.rbuf", ch, w))).to_bytes(4, "little")
+        return state, bytes(out[:count])
+
+    async def wait_access_done(self, ch, limit_s):
+        """The interrupt of an ended access: ``irq`` rises (irq_enable.access_done must be set,
+        nothing else enabled), ``irq_pending`` names the channel, ``irq_status.access_done`` is
+        set; writing 1 clears it and ``irq`` falls."""
+        dut = self.dut
+        assert (await self.read_fields("irq_enable", ch))["access_done"] == 1
+        if not int(dut.irq.value):
+            await with_timeout(RisingEdge(dut.irq), round(limit_s * 1e9), "ns")
+        assert await self.read("irq_pending") == 1 << ch
+        status = await self.read_fields("irq_status", ch)
+        assert status["access_done"] == 1, status
+        await self.write("irq_status", self.map.channel["irq_status"].fields["access_done"].mask,
+                         ch)
+        await ClockCycles(dut.clk, 2)                   # irq is registered
+        assert int(dut.irq.value) == 0, "irq stays high after access_done was cleared"

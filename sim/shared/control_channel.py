@@ -184,24 +184,30 @@ class ControlChannel:
         getattr(self.dut, name).value = 0
 
     async def fill_write_buffer(self, data):
+        """One byte per clock, its own byte lane enabled (byte i is lane i % 4 of word i // 4,
+        docs/ports.md); the other lanes carry ones, which must not be written."""
         dut = self.dut
         for i, byte in enumerate(bytes(data)):
             await FallingEdge(dut.clk)
-            dut.ca_wbuf_addr.value = i
-            dut.ca_wbuf_data.value = byte
-            dut.ca_wbuf_en.value = 1
+            lane = i % 4
+            dut.ca_wbuf_addr.value = i // 4
+            dut.ca_wbuf_data.value = (0xFFFFFFFF & ~(0xFF << 8 * lane)) | byte << 8 * lane
+            dut.ca_wbuf_en.value = 1 << lane
         await FallingEdge(dut.clk)
         dut.ca_wbuf_en.value = 0
 
     async def read_buffer(self, n):
-        """Bytes 0 .. n - 1 of the read buffer (the data port is registered: one clock)."""
+        """Bytes 0 .. n - 1 of the read buffer: words of 4 bytes, little endian (the data port
+        is registered: one clock after the read enable)."""
         dut, out = self.dut, bytearray()
-        for i in range(n):
+        for w in range(-(-n // 4)):
             await FallingEdge(dut.clk)
-            dut.ca_rbuf_addr.value = i
+            dut.ca_rbuf_addr.value = w
+            dut.ca_rbuf_en.value = 1
             await FallingEdge(dut.clk)
-            out.append(int(dut.ca_rbuf_data.value))
-        return bytes(out)
+            dut.ca_rbuf_en.value = 0
+            out += int(dut.ca_rbuf_data.value).to_bytes(4, "little")
+        return bytes(out[:n])
 
     async def abort(self):
         """One-clock ``ca_abort``."""

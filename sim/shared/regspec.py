@@ -2,7 +2,9 @@
 with systemrdl-compiler, never from the register bank's Python (rtl/bissmaster/regmap.py).
 
 Every register is named by its path: a global one as ``"id"``, a channel's as
-``"ctrl"``, ``"result.status"``; :meth:`RegSpec.address` places it.
+``"ctrl"``, ``"result.status"``; :meth:`RegSpec.address` places it. A register array (the
+register-access buffers ``ca.wbuf``, ``ca.rbuf``) is one entry: its first element's offset,
+``count`` elements 4 bytes apart.
 """
 
 from dataclasses import dataclass
@@ -44,6 +46,7 @@ class RegSpec:
     offset: int             # byte offset: absolute for a global, inside the block for a channel
     channel: bool
     fields: dict            # name -> FieldSpec
+    count: int = 1          # elements of an array, 4 bytes apart
 
 
 @dataclass(frozen=True)
@@ -55,10 +58,12 @@ class MapSpec:
     channel_slots: int
     size: int
 
-    def address(self, path, ch=None):
-        if ch is None:
-            return self.globals[path].offset
-        return self.channel_base + ch * self.channel_stride + self.channel[path].offset
+    def address(self, path, ch=None, index=0):
+        """The byte address of register ``path`` (element ``index`` of an array)."""
+        spec = self.reg(path, ch)
+        assert 0 <= index < spec.count, f"{path}[{index}]: the array has {spec.count}"
+        base = 0 if ch is None else self.channel_base + ch * self.channel_stride
+        return base + spec.offset + 4 * index
 
     def reg(self, path, ch=None):
         return (self.globals if ch is None else self.channel)[path]
@@ -72,7 +77,7 @@ def _field(node):
 
 
 def _path(node, block):
-    return node.get_path()[len(block.get_path()) + 1:]
+    return node.get_path(empty_array_suffix="")[len(block.get_path()) + 1:]
 
 
 @lru_cache(maxsize=1)
@@ -89,7 +94,9 @@ def load():
     for reg in ch0.descendants():
         if isinstance(reg, RegNode):
             path = _path(reg, ch0)
-            chan[path] = RegSpec(path, reg.absolute_address - ch0.absolute_address, True,
-                                 {f.inst_name: _field(f) for f in reg.fields()})
+            count = reg.array_dimensions[0] if reg.is_array else 1
+            assert not reg.is_array or reg.array_stride == 4, path
+            chan[path] = RegSpec(path, reg.raw_absolute_address - ch0.absolute_address, True,
+                                 {f.inst_name: _field(f) for f in reg.fields()}, count)
     return MapSpec(glob, chan, ch0.absolute_address,
                    channels[1].absolute_address - ch0.absolute_address, len(channels), top.size)

@@ -113,7 +113,7 @@ class Testbench:
             getattr(dut, name).value = 0
         # The register-access engine's inputs (builds with it): no access unless a test asks.
         for name in ("ca_slave_id", "ca_address", "ca_count", "ca_write", "ca_start", "ca_abort",
-                     "ca_wbuf_addr", "ca_wbuf_data", "ca_wbuf_en", "ca_rbuf_addr"):
+                     "ca_wbuf_addr", "ca_wbuf_data", "ca_wbuf_en", "ca_rbuf_addr", "ca_rbuf_en"):
             if hasattr(dut, name):
                 getattr(dut, name).value = 0
         dut.slo.value = 1

@@ -161,10 +161,11 @@ def run_access(slave, requests, *, frames=160, faults=(), aborts=(), wbuf=None,
     out = {"done": [], "cdm": [], "busy": [], "frames_out": [], "rbuf": []}
 
     async def tb(ctx):
+        # One byte per write, its own lane enabled: the other lanes of the word keep theirs.
         for i, byte in enumerate(wbuf or []):
-            ctx.set(dut.wbuf.addr, i)
-            ctx.set(dut.wbuf.data, byte)
-            ctx.set(dut.wbuf.en, 1)
+            ctx.set(dut.wbuf.addr, i // 4)
+            ctx.set(dut.wbuf.data, (0xFFFFFFFF & ~(0xFF << 8 * (i % 4))) | byte << 8 * (i % 4))
+            ctx.set(dut.wbuf.en, 1 << i % 4)
             await ctx.tick()
         ctx.set(dut.wbuf.en, 0)
         for n in range(frames):
@@ -197,10 +198,13 @@ def run_access(slave, requests, *, frames=160, faults=(), aborts=(), wbuf=None,
             else:
                 slave.take(0)           # a failed frame: MA high, the slave sees CDM = 0
         ctx.set(dut.frame_end, 0)
-        for i in range(read_back):
-            ctx.set(dut.rbuf_addr, i)
+        # Words of 4 bytes, little endian (byte i in lane i % 4 of word i // 4).
+        ctx.set(dut.rbuf_en, 1)
+        for w in range(-(-read_back // 4)):
+            ctx.set(dut.rbuf_addr, w)
             await ctx.tick()
-            out["rbuf"].append(ctx.get(dut.rbuf_data))
+            word = ctx.get(dut.rbuf_data)
+            out["rbuf"] += [(word >> 8 * k) & 0xFF for k in range(4)][:read_back - 4 * w]
 
     simulate(dut, tb)
     return out

@@ -3,11 +3,14 @@ the fast tier under the cocotb bus scenarios (sim/scenarios/bus.py).
 
 Expected values are written here from docs/bus.md and the SystemRDL source's field kinds:
 storage per byte lane, write-1 pulses one clock after the write, sticky interrupts (a set wins
-over a clear in the same clock), the snapshot taken by reading result.status, unmapped reads 0.
+over a clear in the same clock), the snapshot taken by reading result.status, unmapped reads 0,
+the register-access windows (ca.wbuf, ca.rbuf) as ports of a 16 x 32 memory with byte lanes
+(a memory of the test's own, lib.memory), read with the registers' latency.
 """
 
 from amaranth.sim import Simulator
 from amaranth.hdl import ClockDomain, Module
+from amaranth.lib.memory import Memory
 
 from bissmaster import regmap
 from bissmaster.bus_adapters import AxiLiteAdapter
@@ -21,10 +24,19 @@ def offset(path):
     return CH0 + next(r for r in MAP.channel if r.path == path).offset
 
 
-def run(bench, channels=1):
+def run(bench, channels=1, buffers=False):
+    """``buffers``: channel 0's windows on one memory of the test (16 words, byte lanes): the
+    write window writes it, the read window reads it through a registered port."""
     top = Module()
     top.domains.sync = ClockDomain()
     top.submodules.bank = bank = RegisterBank(MAP, channels)
+    if buffers:
+        top.submodules.mem = mem = Memory(shape=32, depth=16, init=[])
+        wr, rd = mem.write_port(granularity=8), mem.read_port()
+        ch = bank.ch0
+        top.d.comb += [wr.addr.eq(ch.ca_wbuf_addr), wr.data.eq(ch.ca_wbuf_data),
+                       wr.en.eq(ch.ca_wbuf_en), rd.addr.eq(ch.ca_rbuf_addr),
+                       rd.en.eq(ch.ca_rbuf_en), ch.ca_rbuf_data.eq(rd.data)]
     sim = Simulator(top)
     sim.add_clock(1e-8)
     async def testbench(ctx):
@@ -59,7 +71,7 @@ def test_storage_lanes_and_unmapped():
         assert await read(ctx, bank, period) == 0xAB11EF
         await write(ctx, bank, period, 0xFFFFFFFF)
         assert await read(ctx, bank, period) == 0xFFFFFF        # 24-bit field only
-        for addr in (0x14, CH0 + 0x100, CH0 + MAP.channel_stride, MAP.size - 4):
+        for addr in (0x14, CH0 + 0x118, CH0 + 0x1C0, CH0 + MAP.channel_stride, MAP.size - 4):
             await write(ctx, bank, addr, 0xFFFFFFFF)
             assert await read(ctx, bank, addr) == 0
         assert await read(ctx, bank, 0) == 0x42695353           # id
@@ -158,9 +170,73 @@ def test_axil_reads_back_to_back_and_write_with_address_after_data():
             await ctx.tick()
             if ctx.get(bus.rvalid):
                 got.append(ctx.get(bus.rdata))
-        assert got == [0x42695353, 0x1234, 0x00010000]
+        assert got == [0x42695353, 0x1234, 0x00010001]         # version 1.1
 
     sim = Simulator(top)
     sim.add_clock(1e-8)
     sim.add_testbench(bench)
     sim.run()
+
+
+def test_windows_byte_lanes_and_read_latency():
+    """ca.wbuf word n with byte strobes reaches the memory's word n, only the strobed lanes;
+    ca.rbuf word n reads it with the latency of a register (data the clock after r_en) and
+    keeps it until the next read, even when the memory changes meanwhile."""
+    wbuf, rbuf = offset("ca.wbuf"), offset("ca.rbuf")
+
+    async def bench(ctx, bank):
+        for n in range(16):
+            await write(ctx, bank, wbuf + 4 * n, 0x03020100 + 0x04040404 * n)
+        await write(ctx, bank, wbuf + 4 * 5, 0xEEDDCCBB, strb=0b0101)   # bytes 20 and 22
+        await write(ctx, bank, wbuf + 4 * 15, 0xFF000000, strb=0b1000)  # byte 63
+        expect = bytearray(range(64))
+        expect[20], expect[22], expect[63] = 0xBB, 0xDD, 0xFF
+        for n in range(16):
+            assert await read(ctx, bank, rbuf + 4 * n) == int.from_bytes(expect[4 * n:4 * n + 4],
+                                                                      "little"), n
+        # A write never reads back through the write window; a write to the read window is
+        # ignored (no strobe reaches the memory).
+        assert await read(ctx, bank, wbuf) == 0
+        await write(ctx, bank, rbuf + 4, 0xFFFFFFFF)
+        assert await read(ctx, bank, rbuf + 4) == int.from_bytes(expect[4:8], "little")
+        # The read data holds until the next read: the word changes, the data does not.
+        word2 = int.from_bytes(expect[8:12], "little")
+        assert await read(ctx, bank, rbuf + 8) == word2
+        await write(ctx, bank, wbuf + 8, 0x12345678)
+        await ctx.tick()
+        assert ctx.get(bank.bus.r_data) == word2
+        # Back to back: a register, the window, a register.
+        assert await read(ctx, bank, 0) == 0x42695353
+        assert await read(ctx, bank, rbuf + 8) == 0x12345678
+        assert await read(ctx, bank, 0) == 0x42695353
+    run(bench, buffers=True)
+
+
+def test_access_registers_and_done_interrupt():
+    """ca.request drives the request ports, ca.ctrl.start and abort are pulses, ca.state reads
+    the engine's busy, status and bytes done live, and ca_done sets irq_status.access_done."""
+    async def bench(ctx, bank):
+        ch = bank.ch0
+        await write(ctx, bank, offset("ca.request"), 5 | 0x41 << 8 | 3 << 16 | 1 << 24)
+        assert (ctx.get(ch.ca_slave_id), ctx.get(ch.ca_address), ctx.get(ch.ca_count),
+                ctx.get(ch.ca_write)) == (5, 0x41, 3, 1)
+        ctx.set(bank.bus.w_en, 1)
+        ctx.set(bank.bus.w_addr, offset("ca.ctrl") // 4)
+        ctx.set(bank.bus.w_data, 0b11)
+        ctx.set(bank.bus.w_strb, 0xF)
+        await ctx.tick()
+        ctx.set(bank.bus.w_en, 0)
+        assert (ctx.get(ch.ca_start), ctx.get(ch.ca_abort)) == (1, 1)
+        await ctx.tick()
+        assert (ctx.get(ch.ca_start), ctx.get(ch.ca_abort)) == (0, 0)
+        ctx.set(ch.ca_busy, 1)
+        ctx.set(ch.ca_status, 3)
+        ctx.set(ch.ca_bytes_done, 64)
+        assert await read(ctx, bank, offset("ca.state")) == 1 | 3 << 4 | 64 << 8
+        ctx.set(ch.ca_done, 1)
+        await ctx.tick()
+        ctx.set(ch.ca_done, 0)
+        assert await read(ctx, bank, offset("irq_status")) == 0b100
+        await write(ctx, bank, offset("irq_enable"), 0b100)
+        assert ctx.get(bank.irq) == 1
+    run(bench)

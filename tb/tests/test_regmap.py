@@ -13,7 +13,8 @@ import pytest
 from bissmaster import regmap
 from bissmaster.bus_top import BusTop
 from bissmaster.generate import generate_bus
-from bissmaster.layouts import config_ports, counter_names, flat_fields, result_layout
+from bissmaster.layouts import (access_request_layout, access_result_layout, config_ports,
+                                counter_names, flat_fields, result_layout)
 from bissmaster.params import Crc, MasterParams
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -52,12 +53,15 @@ def _fields_by_signal(registers):
 def test_map_covers_every_setting_result_and_counter_once():
     rm = regmap.load()
     signals = _fields_by_signal(rm.channel)
-    p = MasterParams(register_access=False)     # the bus tops' cores (the engine's window is reserved)
+    p = MasterParams()                          # the bus tops' cores: the engine included
     wanted = {name: shape for name, _, shape in config_ports(p)}
     wanted.update({name: shape for name, _, shape in flat_fields(result_layout(p))})
     wanted.update({f"count_{n}": p.counter_width for n in counter_names(p)})
     wanted.update({n: 1 for n in ("start", "periodic", "abort_cycle", "clear_counters",
                                   "busy", "config_error", "done")})
+    wanted.update({name: shape for name, _, shape in flat_fields(access_request_layout(), "ca_")})
+    wanted.update({name: shape for name, _, shape in flat_fields(access_result_layout(), "ca_")})
+    wanted.update({n: 1 for n in ("ca_start", "ca_abort", "ca_busy", "ca_done")})
     for name in wanted:
         assert name in signals, f"the register map has no field for {name}"
         bits = sum(f.width for f in signals[name])
@@ -78,7 +82,12 @@ def test_config_fields_match_port_widths():
 def test_map_layout():
     rm = regmap.load()
     assert (rm.channel_base, rm.channel_stride, rm.channel_slots) == (0x200, 0x200, 8)
-    assert max(r.offset for r in rm.channel) < 0x100, "0x100.. is the access engine's window"
+    core = [r for r in rm.channel if not r.path.startswith("ca.")]
+    assert max(r.offset for r in core) < 0x100, "0x100.. is the access engine's block"
+    access = {r.path: r for r in rm.channel if r.path.startswith("ca.")}
+    assert max(r.offset for r in access.values() if not r.window) < 0x140
+    windows = {(r.window, r.offset, r.count, r.writable) for r in access.values() if r.window}
+    assert windows == {("ca_wbuf", 0x140, 16, True), ("ca_rbuf", 0x180, 16, False)}
     snap = [r for r in rm.channel if r.snapshot]
     assert [r.path for r in snap if r.takes_snapshot] == ["result.status"]
     assert min(r.offset for r in snap) == rm.channel[[r.path for r in rm.channel]
@@ -100,6 +109,25 @@ def test_bad_bus_parameters_are_refused(kwargs, message):
 def test_one_word_build_connects(tmp_path):
     text = generate_bus("axil", 1, MasterParams(max_data_bits=(36,), word_crcs=((Crc.CRC6,),)))
     assert "module biss_master_axil(" in text and "ch0_ma" in text and "ch1_ma" not in text
+
+
+def test_build_without_register_access_connects():
+    text = generate_bus("wb", 1, MasterParams(register_access=False))
+    assert "module biss_master_wb(" in text and "access_fsm" not in text      # no engine
+
+
+@pytest.mark.parametrize("old, new, message", [
+    ('hdl_path = "ca_rbuf";', "", "an hdl_path"),
+    ("rbuf[16] @ 0x80 += 4;", "rbuf[16] @ 0x80 += 8;", "adjacent words"),
+    ("rbuf_f #(.DESC(\"Byte 4 n + 3.\")) byte3[31:24];", "", "byte lanes"),
+])
+def test_bad_window_is_refused(tmp_path, old, new, message):
+    src = regmap.RDL.read_text()
+    assert old in src
+    bad = tmp_path / "bad.rdl"
+    bad.write_text(src.replace(old, new))
+    with pytest.raises(ValueError, match=message):
+        regmap.load(bad)
 
 
 def test_unknown_signal_in_map_is_refused(tmp_path):
