@@ -8,8 +8,9 @@ point (preset, MA rate, cable, trigger source) one frame is started by the input
 idle and SLO high at its pin (the previous cycle over), and the moment the result is readable
 on the bus is measured, split into parts that add up exactly:
 
-* **start**: the trigger's clock edge (the input taken by the top, or the AXI write issued:
-  AWVALID first high) -> the master's first MA fall (the model's pin time);
+* **start**: the trigger's clock edge (the edge at which the top takes the input, or the first
+  edge that samples the trigger write's AWVALID high) -> the master's first MA fall (the
+  model's pin time);
 * **frame**: first MA fall -> the clock edge at which the core decides the last CRC bit,
   predicted on the test side from the model's edge times and the protocol (latch rise, the
   round trip, Ack slots, Start, CDS, the data and CRC bits, the sampling point of a slot and
@@ -158,7 +159,7 @@ async def bus_trigger_latency(dut):
                         dut.trigger.value = 0
                     else:
                         await tb.write_fields("trigger", start=1)
-                        t_trig = aw[marks[0]]               # AWVALID first high
+                        t_trig = aw[marks[0]]               # AWVALID first sampled high
                     while len(irqs) == marks[3]:
                         await RisingEdge(dut.clk)
                     # The CPU's reads on irq: status (takes the snapshot), the position.
