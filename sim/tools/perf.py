@@ -15,6 +15,9 @@
    encoder allows, against the protocol's floor (the 14 idle frames + the control frame's CDM
    bits, each at the protocol's minimum cycle time); goal: at most one frame more (the frame
    that brings the echo of P), plus a cycle already running at ``ca_start``.
+6. Bus tops (issue 14): the CPU-visible latency from the trigger (the input ``trigger`` and the
+   trigger register) to the result read over AXI4-Lite, on the committed ``biss_master_axil``
+   (Verilator; sim/scenarios/bus_perf.py), split into start, frame, verdict, irq and read.
 
 The measurements are cocotb tests in sim/scenarios/perf.py; they write JSON, this script judges
 them. Output: the tables on stdout, sim_build/bench/report.md and report.json, simulator logs in
@@ -401,6 +404,91 @@ def access_section(d, goals):
         f"frame at the minimum cycle time of spec section 9, {floor_cycle * 1e6:.4f} us. "
         f"Start-to-start measured: CDM = 0 cycles {span(c0)} ({len(c0)}), CDM = 1 cycles "
         f"{span(c1)} ({len(c1)}).")
+# -- 6. Bus tops: trigger -> result readable over AXI4-Lite --------------------------------------
+BUS_LATENCY_MODULE = "sim.scenarios.bus_perf"
+BUS_LATENCY_TEST = "bus_trigger_latency"
+
+
+def run_bus_latency(env, keep_build, status, sim="verilator"):
+    """Build the committed biss_master_axil (sim_build/<sim>-bench-axil) and run
+    sim/scenarios/bus_perf.py's latency test; results keyed "<sim>-axil"."""
+    key = f"{sim}-axil"
+    verilog, toplevel = runner.bus_top("axil")
+    build_dir = runner.BUILD / f"{sim}{TAG}-axil"
+    fresh = not keep_build or not build_dir.exists()
+    if not keep_build:
+        shutil.rmtree(build_dir, ignore_errors=True)
+    print(f"[{key}] building{' from scratch' if fresh else ' (incremental)'} ...", flush=True)
+    t0 = time.perf_counter()
+    try:
+        with output_to(LOGS / f"{key}-build.log"):
+            r, b = runner.build(sim, verilog=verilog, tag=build_dir.name[len(sim):],
+                                toplevel=toplevel)
+    except BaseException as e:
+        status["errors"].append(f"{key} build failed ({e!r}); see {LOGS / f'{key}-build.log'}")
+        return
+    status["build_s"][key] = time.perf_counter() - t0
+    status["fresh_build"][key] = fresh
+    print(f"[{key}] {BUS_LATENCY_TEST} ...", flush=True)
+    log = LOGS / f"{key}-{BUS_LATENCY_TEST}.log"
+    t0 = time.perf_counter()
+    try:
+        with output_to(log):
+            xml = runner.run(r, b, BUS_LATENCY_MODULE, testcase=BUS_LATENCY_TEST,
+                             toplevel=toplevel, extra_env={**env, "BISS_BUS": "axil"})
+        cases = ET.parse(xml).getroot().findall(".//testcase")
+        if not cases or any(c.findall("failure") or c.findall("error") for c in cases):
+            status["errors"].append(f"{key} {BUS_LATENCY_TEST}: the cocotb test failed; see {log}")
+    except BaseException as e:
+        status["errors"].append(f"{key} {BUS_LATENCY_TEST}: {e!r}; see {log}")
+    status["run_s"][key] = {BUS_LATENCY_TEST: time.perf_counter() - t0}
+
+
+def bus_latency_section(d, goals):
+    out = ["### 6. Bus top: trigger -> result readable over AXI4-Lite (CPU-visible latency)", ""]
+    what = "CPU-visible latency trigger -> result read over AXI4-Lite measured, frames checked"
+    if d is None:
+        goals.append((what, False, "no results"))
+        return out + ["(no results)"]
+    rows = []
+    us = lambda c: f"{c * CLK_NS / 1e3:.3f}"
+    for r in d["rows"]:
+        parts = (r["start_clk"], r["frame_clk"], r["verdict_clk"], r["irq_clk"],
+                 r["read_position_clk"])
+        rows.append([r["preset"], f"{r['ma_hz'] / 1e6:g}", r["cable_m"], r["trigger"],
+                     f"{r['start_clk']:g}", f"{r['frame_clk']:g}",
+                     "-" if r["verdict_clk"] is None else f"{r['verdict_clk']:g}",
+                     "-" if r["irq_clk"] is None else f"{r['irq_clk']:g}",
+                     f"{r['reaction_clk']:g} + {r['slave_read_clk']:g}",
+                     f"{r['read_status_clk']:g}", f"{r['read_position_clk']:g}",
+                     f"{r['total_position_clk']:g}", us(r["total_position_clk"]),
+                     "ok" if None in parts or abs(sum(parts) - r["total_position_clk"]) < 1e-6
+                     else "SUM MISMATCH"])
+    ok = (not d["failures"] and d["rows"] and all(row[-1] == "ok" for row in rows)
+          and all(r["status"] == 0 for r in d["rows"]))
+    bus = sorted({(r["irq_clk"], r["slave_read_clk"], r["read_position_clk"] - r["reaction_clk"])
+                  for r in d["rows"]})
+    goals.append((what, ok, "bus share (done -> irq, AR -> R of result.status, irq -> position "
+                  "read without the master's reaction): " + "; ".join(
+                      f"{a:g}, {b:g}, {c:g} clocks" for a, b, c in bus)))
+    out += [md_table(["preset", "MA/MHz", "cable/m", "trigger", "start/clk", "frame/clk",
+                      "verdict/clk", "done->irq/clk", "irq->status: reaction + slave/clk",
+                      "irq->status/clk", "irq->position/clk", "total/clk", "total/us", "sum"],
+                     rows, ["l", "r", "r", "l"] + ["r"] * 10), ""]
+    out.append(
+        f"{d['checked']} frames checked against what the encoder sent, {len(d['failures'])} "
+        "failures. Clocks of 10 ns (100 MHz). Encoder: the protocol's fastest slave (Start on "
+        "the third MA rise). start: the trigger's clock edge (input: the edge that takes it; "
+        "register: AWVALID first high) -> first MA fall. frame: first MA fall -> the clock edge "
+        "that decides the last CRC bit, predicted from the model's edge times and the protocol. "
+        "verdict: that edge -> the edge that sets the core's output done (ch0.regs__done inside "
+        "the top). done->irq: the register bank's sticky irq_status and the registered irq pin "
+        "(to the edge that sets irq). irq->status: the R "
+        "handshake of the first read (result.status, which takes the snapshot), split into the "
+        "bus master's reaction (cocotbext-axi AxiLiteMaster: irq -> AR handshake) and the "
+        "slave's read latency (AR handshake -> R handshake); irq->position: the R handshake of "
+        "the third read (result.w0_hi; the reads result.status, w0_lo, w0_hi back to back). "
+        "total = start + frame + verdict + done->irq + irq->position (column sum: every row).")
     return out
 
 
@@ -428,6 +516,8 @@ def main():
     if not args.no_internal_clock:
         for sim in sims:
             run_sim(sim, ["sim_speed"], env, args.keep_build, status, internal_clock=True)
+    if "verilator" in sims:
+        run_bus_latency(env, args.keep_build, status)
     # Running the overhead, latency and line-delay tests on Icarus too is possible
     # (--sims icarus alone runs just sim_speed); Verilator's figures are the reference.
 
@@ -438,6 +528,7 @@ def main():
     lines += delay_section(load("line_delay_error"), goals) + [""]
     lines += speed_section(status, goals) + [""]
     lines += access_section(load("register_access_cost"), goals) + [""]
+    lines += bus_latency_section(load(BUS_LATENCY_TEST), goals) + [""]
     lines += ["### Goals", ""]
     lines.append(md_table(["goal", "result", "measured"],
                           [[g, verdict(ok), m] for g, ok, m in goals], ["l", "l", "l"]))
@@ -453,7 +544,8 @@ def main():
     text = "\n".join(lines) + "\n"
     (OUT / "report.md").write_text("# make bench\n\n" + text)
     keys = [*runner.SIMULATORS, *(f"{s}-{ICLK}" for s in runner.SIMULATORS)]
-    raw = {t: {k: load(t, k) for k in keys if load(t, k)} for t in TESTS_VERILATOR}
+    raw = {t: {k: load(t, k) for k in keys if load(t, k)}
+           for t in TESTS_VERILATOR + [BUS_LATENCY_TEST]}
     (OUT / "report.json").write_text(json.dumps(
         {"versions": versions, "status": status, "total_s": total,
          "goals": [{"goal": g, "ok": ok, "measured": m} for g, ok, m in goals], "raw": raw},
