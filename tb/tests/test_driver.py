@@ -45,7 +45,7 @@ def test_builds_strict_with_every_installed_compiler(tmp_path):
                            capture_output=True, text=True)
         assert r.returncode == 0, f"{cc}:\n{r.stdout}\n{r.stderr}"
         assert "warning" not in r.stderr, r.stderr
-        for name in ("libbissmaster.so", "libbissmaster.a", "two_axes.o"):
+        for name in ("libbissmaster.so", "libbissmaster.a", "two_axes.o", "bp3_identify.o"):
             assert (out / name).is_file(), f"{cc}: no {name}"
 
 
@@ -109,9 +109,11 @@ def test_preset_refuses_rates_it_cannot_make(lib, name, clk, ma, err):
     assert got == err
 
 
-def test_docs_example_is_the_compiled_example():
-    """docs/driver.md shows sw/examples/two_axes.c (which `make driver` compiles) verbatim."""
-    example = (ROOT / "sw" / "examples" / "two_axes.c").read_text()
+@pytest.mark.parametrize("name", ["two_axes.c", "bp3_identify.c"])
+def test_docs_example_is_the_compiled_example(name):
+    """docs/driver.md shows the examples of sw/examples/ (which `make driver` compiles)
+    verbatim."""
+    example = (ROOT / "sw" / "examples" / name).read_text()
     body = example.split("\n", 1)[1]                      # without its first comment line
     assert body.strip() in (ROOT / "docs" / "driver.md").read_text()
 
