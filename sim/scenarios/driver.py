@@ -281,6 +281,7 @@ POLL_S = 1e-6
 
 
 def icarus():
+    """Icarus runs the BP3 cases without their 64-byte reads (see their docstrings)."""
     return "icarus" in cocotb.SIM_NAME.lower()
 
 
@@ -343,8 +344,9 @@ async def driver_register_write_and_read_back(dut):
 
 @cocotb.test()
 async def driver_bp3_identify_eds_and_configure(dut):
-    """biss_bp3_identify: VER, C, DL, DL_POS of the model. On Verilator only (a 64-byte read
-    costs about 1,000 control frames, minutes on Icarus): biss_bp3_read_eds (bank select
+    """biss_bp3_identify: VER, C, DL, DL_POS of the model. On Verilator only (the 64-byte read,
+    about 1,000 control frames, 3.1 ms simulated: 15 s on Verilator, 80 to 180 s on Icarus,
+    which passed it once with the Icarus branch removed): biss_bp3_read_eds (bank select
     switched to the EDS bank and restored), every field checked against the model's EDS
     parameters; then the data channel set to another frame length, biss_bp3_config on a preset's
     MA and time settings, biss_configure: cfg_words as the EDS says (DL_POS, nE/nW, CRC-6),
@@ -404,8 +406,9 @@ async def driver_register_read_without_control_side(dut):
 @cocotb.test()
 async def driver_bp3_eds_bad_checksum(dut):
     """The model's EDS bank with CHKSUM off by one: biss_bp3_read_eds gives
-    BISS_ERR_EDS_CHECKSUM and restores the bank select. Verilator only (a 64-byte read; on
-    Icarus the scenario ends after the setup)."""
+    BISS_ERR_EDS_CHECKSUM and restores the bank select. Verilator only (a 64-byte read: 15 s
+    there, 81 s on Icarus, which passed it once with the Icarus branch removed); on Icarus the
+    scenario ends after the setup."""
     bank = bytearray(Bp3Eds(BP3_DL_POS, **BP3_EDS).to_bytes())
     bank[63] = (bank[63] + 1) & 0xFF
     tb, drv, ch, _, registers = await bp3_setup(dut, seed=24, bank=bytes(bank))
