@@ -1,7 +1,8 @@
 """BP3 Standard Encoder Profile on the host: identification, EDS, the core's data-channel settings.
 
 Nothing here talks to hardware. :func:`identify` runs its register accesses through two
-callables the caller supplies (cocotb against the simulated core now, the C driver later);
+callables the caller supplies (cocotb against the simulated core; the C driver's
+biss_bp3_read_eds makes the same accesses in C, docs/driver.md);
 :func:`decode_profile_id` and :func:`decode_eds` turn register bytes into typed records;
 :func:`derive_config` turns a record into the values of the core's ``cfg_*`` ports. Each check
 that fails raises a :class:`Bp3Error` that names the register, byte or field: no setting is ever

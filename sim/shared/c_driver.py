@@ -28,7 +28,8 @@ class Bus(Structure):
 class Channel(Structure):
     _fields_ = [("bus", Bus), ("base", c_size_t), ("index", c_uint8),
                 ("max_data_bits", c_uint8 * 2), ("timer_width", c_uint8),
-                ("has_counters", c_bool), ("has_timestamp", c_bool)]
+                ("has_counters", c_bool), ("has_timestamp", c_bool),
+                ("has_register_access", c_bool), ("max_polls", c_uint32)]
 
 
 class WordFormat(Structure):
@@ -78,6 +79,28 @@ class Counters(Structure):
     _fields_ = [(n, c_uint16) for n in COUNTER_FIELDS]
 
 
+class Bp3Id(Structure):
+    _fields_ = [(n, c_uint8) for n in ("version", "crc_mode", "data_length", "position_bits")]
+
+
+#: biss_bp3_eds_t, in its field order, with each field's C type.
+BP3_EDS_FIELDS = (
+    [(n, c_uint8) for n in ("bp_ver", "bp_len", "bp_id", "dl", "fb1", "fb2", "pon_pdl",
+                            "en_typ", "pos_num", "mt_len", "mt_fmt", "co_len", "co_fmt",
+                            "fi_len", "fi_fmt")]
+    + [(n, c_uint32) for n in ("mt_cnt", "sip_cnt", "sip_res", "cpoly", "cstart")]
+    + [(n, c_uint16) for n in ("abs_acu", "rel_acu", "spd_acu", "hyst", "spd_max", "acc_max",
+                               "tmp_min", "tmp_max", "vlt_min", "vlt_max", "cur_max")]
+    + [(n, c_uint8) for n in ("chksum", "eds_bank", "profile_bank")])
+
+
+class Bp3Eds(Structure):
+    _fields_ = BP3_EDS_FIELDS
+
+    def as_dict(self):
+        return {name: int(getattr(self, name)) for name, _ in self._fields_}
+
+
 _P = POINTER
 #: Every function of biss_master.h: (restype, argtypes).
 PROTOTYPES = {
@@ -106,6 +129,14 @@ PROTOTYPES = {
     "biss_irq_enable": (c_int, [_P(Channel), c_uint32]),
     "biss_irq_status": (c_uint32, [_P(Channel)]),
     "biss_irq_clear": (c_int, [_P(Channel), c_uint32]),
+    "biss_reg_read": (c_int, [_P(Channel), c_uint, c_uint, _P(c_uint8), c_uint, _P(c_uint)]),
+    "biss_reg_write": (c_int, [_P(Channel), c_uint, c_uint, _P(c_uint8), c_uint, _P(c_uint)]),
+    "biss_reg_abort": (c_int, [_P(Channel)]),
+    "biss_bp3_decode_id": (c_int, [c_uint8, c_uint8, _P(Bp3Id)]),
+    "biss_bp3_identify": (c_int, [_P(Channel), c_uint, _P(Bp3Id)]),
+    "biss_bp3_decode_eds": (c_int, [_P(c_uint8), _P(Bp3Eds)]),
+    "biss_bp3_read_eds": (c_int, [_P(Channel), c_uint, c_uint, _P(Bp3Eds)]),
+    "biss_bp3_config": (c_int, [_P(Bp3Eds), _P(Config)]),
 }
 
 
@@ -180,6 +211,20 @@ class CDriver:
         res = Result()
         await self.check("biss_read_result", byref(ch), byref(res))
         return res.as_dict()
+
+    async def reg_read(self, ch, address, count, slave_id=0):
+        """biss_reg_read: (error name, the bytes done)."""
+        buf, done = (c_uint8 * count)(), c_uint()
+        ret = await self.call("biss_reg_read", byref(ch), slave_id, address, buf, count,
+                              byref(done))
+        return self.error_name(ret), bytes(buf[:done.value])
+
+    async def reg_write(self, ch, address, data, slave_id=0):
+        """biss_reg_write: (error name, bytes done)."""
+        buf, done = (c_uint8 * len(data)).from_buffer_copy(bytes(data)), c_uint()
+        ret = await self.call("biss_reg_write", byref(ch), slave_id, address, buf, len(data),
+                              byref(done))
+        return self.error_name(ret), done.value
 
     async def counters(self, ch):
         cnt = Counters()

@@ -15,9 +15,9 @@
  * state beyond the handles the caller owns, so handles of different channels may be used from
  * different contexts (an ISR and the main loop) as long as one channel is not.
  *
- * Not here yet: register access over the control channel (BiSS C CDM/CDS). The bus tops
- * reserve its window (channel + 0x100 .. + 0x1FF, docs/bus.md) but do not implement it; the
- * functions for it come with the register map that has the engine's registers.
+ * Register access over the control channel (BiSS C CDM/CDS, the `ca` block at channel + 0x100,
+ * docs/bus.md) and BP3 identification with its EDS (docs/control-channel.md, Host side) are
+ * blocking, polled calls: each waits for its access with a poll limit and never hangs.
  *
  * Documentation with an example: docs/driver.md.
  */
@@ -55,7 +55,29 @@ typedef enum {
     BISS_ERR_DELAY_LIMIT = -14,     /* delay limit wider than its field */
     BISS_ERR_RUNNING = -15,         /* configure while periodic requests run: stop first */
     BISS_ERR_REFUSED = -16,         /* written, but the core reports state.config_error */
-    BISS_ERR_TIMEOUT = -17          /* the polls ran out before the event */
+    BISS_ERR_TIMEOUT = -17,         /* the polls ran out before the event (a register access
+                                       still running is then aborted) */
+    /* Register access (biss_reg_read / biss_reg_write), checked before anything is sent */
+    BISS_ERR_NO_REGISTER_ACCESS = -18, /* caps.register_access is 0: the build has no engine */
+    BISS_ERR_SLAVE_ID = -19,        /* slave ID above 7 */
+    BISS_ERR_ADDRESS = -20,         /* address above 0x7F, or the last register above 0x7F */
+    BISS_ERR_COUNT = -21,           /* count 0 or above 64 */
+    BISS_ERR_BUSY = -22,            /* an access is still running (ca.state.busy) */
+    /* ... and the engine's status of an access that ran (ca.state.status) */
+    BISS_ERR_CA_CRC4 = -23,         /* CRC4_ERROR: a byte (or a write's echo) failed the CRC-4 */
+    BISS_ERR_CA_NO_ANSWER = -24,    /* NO_ANSWER: no IDL0, no control side (unidirectional) */
+    BISS_ERR_CA_REFUSED = -25,      /* REFUSED: no echo / no start bit (read only, wrong ID) */
+    BISS_ERR_CA_ABORTED = -26,      /* ABORTED: biss_reg_abort (or the poll limit) */
+    BISS_ERR_CA_DATA_FAULT = -27,   /* DATA_FAULT: a data-channel cycle did not end OK */
+    BISS_ERR_CA_BAD_REQUEST = -28,  /* BAD_REQUEST: the engine refused the request */
+    /* BP3 (biss_bp3_*) */
+    BISS_ERR_NOT_BP3 = -29,         /* profile ID (0x42 / BP_ID bits 7:4) is not 0b0110 */
+    BISS_ERR_BP3_FIELD = -30,       /* a field outside what the profile allows (VER, DL, ...) */
+    BISS_ERR_NO_EDS = -31,          /* EDS pointer (0x41) is 0x00 or 0xFF */
+    BISS_ERR_EDS_CHECKSUM = -32,    /* CHKSUM is not the sum of bytes 0x00..0x3E mod 256 */
+    BISS_ERR_EDS_MISMATCH = -33,    /* BP_ID / DL differ from registers 0x42 / 0x43 */
+    BISS_ERR_BANK_SELECT = -34,     /* the bank select reads back another bank */
+    BISS_ERR_UNSUPPORTED = -35      /* a valid BP3 encoder the core cannot read from its EDS */
 } biss_err_t;
 
 /* The name of an error code ("BISS_ERR_CRC"), "?" for an unknown one. */
@@ -106,7 +128,16 @@ typedef struct {
     uint8_t timer_width;            /* caps: bits of the time settings */
     bool has_counters;              /* caps: error counters built */
     bool has_timestamp;             /* caps: timestamp built */
+    bool has_register_access;       /* caps: the control channel's register-access engine */
+    uint32_t max_polls;             /* polls of irq_status per register access before
+                                       BISS_ERR_TIMEOUT; biss_channel_init sets
+                                       BISS_REG_MAX_POLLS, the caller may change it */
 } biss_channel_t;
+
+/* The default poll limit of a register access: the longest access (64 registers) takes at
+ * most 1,969 request cycles (docs/control-channel.md, Bound); this allows 1,000 polls per
+ * cycle. Set ch->max_polls for the bus speed and MA rate at hand. */
+#define BISS_REG_MAX_POLLS 2000000u
 
 /* Probe the bus (biss_probe), check the index, read the channel's capabilities. */
 biss_err_t biss_channel_init(biss_channel_t *ch, const biss_bus_t *bus, unsigned index);
@@ -245,14 +276,134 @@ biss_err_t biss_read_counters(biss_channel_t *ch, biss_counters_t *cnt);
 
 /* -- Interrupts ------------------------------------------------------------------------- */
 
-/* Causes (irq_status / irq_enable bits): a cycle ended; it ended with a status other than OK.
- * (access_done is reserved for the register-access engine.) */
+/* Causes (irq_status / irq_enable bits): a cycle ended; it ended with a status other than OK;
+ * a register access ended (whatever its status). biss_reg_read / biss_reg_write poll and clear
+ * BISS_IRQ_ACCESS_DONE themselves: an ISR must leave it alone while they run. */
 #define BISS_IRQ_DONE BISS_MASTER_REGS__CHANNELX__IRQ_STATUS__DONE_bm
 #define BISS_IRQ_ERROR BISS_MASTER_REGS__CHANNELX__IRQ_STATUS__ERROR_bm
+#define BISS_IRQ_ACCESS_DONE BISS_MASTER_REGS__CHANNELX__IRQ_STATUS__ACCESS_DONE_bm
 
 biss_err_t biss_irq_enable(biss_channel_t *ch, uint32_t causes);    /* exactly these causes */
 uint32_t biss_irq_status(biss_channel_t *ch);                       /* sticky causes set */
 biss_err_t biss_irq_clear(biss_channel_t *ch, uint32_t causes);     /* write 1 to clear */
+
+/* -- Register access over the control channel (BiSS C CDM / CDS) ------------------------ */
+
+/* The engine's ca.state.status codes (docs/control-channel.md, Statuses). */
+typedef enum {
+    BISS_CA_OK = 0,
+    BISS_CA_CRC4_ERROR = 1,
+    BISS_CA_NO_ANSWER = 2,
+    BISS_CA_REFUSED = 3,
+    BISS_CA_ABORTED = 4,
+    BISS_CA_DATA_FAULT = 5,
+    BISS_CA_BAD_REQUEST = 6
+} biss_ca_status_t;
+
+/* Read `count` consecutive registers (1..64) of slave `slave_id` (0..7) from `address`
+ * (0..0x7F, the last one at most 0x7F) into buf, one sequential access. The arguments and
+ * caps.register_access are checked first (BISS_ERR_NO_REGISTER_ACCESS, _SLAVE_ID, _ADDRESS,
+ * _COUNT; BISS_ERR_BUSY if an access runs). Then: request, start, poll irq_status.access_done
+ * up to ch->max_polls times (clearing it), and the engine's status as BISS_OK or
+ * BISS_ERR_CA_*. On the limit the access is aborted and BISS_ERR_TIMEOUT returned. On an error
+ * the first *done (may be NULL) bytes of buf hold the registers checked before the fault; on
+ * BISS_OK *done = count. The data channel keeps reading positions meanwhile, and every cycle
+ * must end OK (docs/control-channel.md, The data channel before identification). */
+biss_err_t biss_reg_read(biss_channel_t *ch, unsigned slave_id, unsigned address, uint8_t *buf,
+                         unsigned count, unsigned *done);
+
+/* Write `count` bytes of data to consecutive registers from `address`; as biss_reg_read. */
+biss_err_t biss_reg_write(biss_channel_t *ch, unsigned slave_id, unsigned address,
+                          const uint8_t *data, unsigned count, unsigned *done);
+
+/* Abort the running register access (ca.ctrl.abort); it ends with BISS_CA_ABORTED after the
+ * cancel (docs/control-channel.md). */
+biss_err_t biss_reg_abort(biss_channel_t *ch);
+
+/* -- BP3 Standard Encoder Profile: identification and EDS --------------------------------- */
+
+/* BP3's registers (spec digest, sections 7 and 10). */
+#define BISS_BP3_REG_BANK_SELECT 0x40u  /* R/W: the bank 0x00..0x3F shows */
+#define BISS_BP3_REG_EDS_BANK 0x41u     /* read only: the bank where the EDS starts */
+#define BISS_BP3_REG_PROFILE_ID 0x42u   /* ID 7:4 = 0b0110, VER 3:1 = 1, C 0 */
+#define BISS_BP3_REG_DATA_LENGTH 0x43u  /* bit 7 = 0, DL 6:0 */
+#define BISS_BP3_EDS_BYTES 64u
+
+/* Registers 0x42 / 0x43, decoded and checked. */
+typedef struct {
+    uint8_t version;                /* VER: 1 */
+    uint8_t crc_mode;               /* C: 0 CRC separate (Standard Encoder), 1 BiSS Safety */
+    uint8_t data_length;            /* DL: data bits without CRC (2..0x39 C = 0, 2..0x3F C = 1) */
+    uint8_t position_bits;          /* DL_POS = DL - 2 with C = 0; 0 with C = 1 */
+} biss_bp3_id_t;
+
+/* Check and decode 0x42 / 0x43: BISS_ERR_NOT_BP3 (ID not 0b0110), BISS_ERR_BP3_FIELD (VER
+ * not 1, DL outside the range C allows, 0x43 bit 7 set). */
+biss_err_t biss_bp3_decode_id(uint8_t reg_0x42, uint8_t reg_0x43, biss_bp3_id_t *id);
+
+/* Read registers 0x42 / 0x43 of slave `slave_id` (one access) and decode them. */
+biss_err_t biss_bp3_identify(biss_channel_t *ch, unsigned slave_id, biss_bp3_id_t *id);
+
+/* The BP3 EDS bank, every field of the profile's table (digest section 7); U16 / U32 are big
+ * endian in the bank. */
+typedef struct {
+    uint8_t bp_ver;                 /* 0x00 profile version (1) */
+    uint8_t bp_len;                 /* 0x01 length of the profile in banks (1) */
+    uint8_t bp_id;                  /* 0x02 profile ID, as register 0x42 */
+    uint8_t dl;                     /* 0x03 DL, as register 0x43 */
+    uint8_t fb1;                    /* 0x04 feedback bit 1: 1 nE, 2 nW */
+    uint8_t fb2;                    /* 0x05 feedback bit 2 */
+    uint8_t pon_pdl;                /* 0x06 power-on delay, ms (1..254) */
+    uint8_t en_typ;                 /* 0x08 0 rotary, 1 linear */
+    uint8_t pos_num;                /* 0x09 position values: 0 undefined, 1, 2 */
+    uint8_t mt_len;                 /* 0x0A multiturn bits */
+    uint8_t mt_fmt;                 /* 0x0B 0 right-, 1 left-aligned */
+    uint8_t co_len;                 /* 0x0C coarse length */
+    uint8_t co_fmt;                 /* 0x0D coarse format (raw) */
+    uint8_t fi_len;                 /* 0x0E fine length */
+    uint8_t fi_fmt;                 /* 0x0F fine format (raw) */
+    uint32_t mt_cnt;                /* 0x10 distinguishable revolutions / periods */
+    uint32_t sip_cnt;               /* 0x14 signal periods per revolution, or period in nm */
+    uint32_t sip_res;               /* 0x18 resolution per signal period */
+    uint32_t cpoly;                 /* 0x1C CRC polynomial bits 32:1 (0x43 stored as 0x21) */
+    uint32_t cstart;                /* 0x20 CRC start value */
+    uint16_t abs_acu;               /* 0x24 absolute accuracy */
+    uint16_t rel_acu;               /* 0x26 repeat accuracy */
+    uint16_t spd_acu;               /* 0x28 speed-dependent accuracy */
+    uint16_t hyst;                  /* 0x2A hysteresis */
+    uint16_t spd_max;               /* 0x2C max speed, 1/min or m/min */
+    uint16_t acc_max;               /* 0x2E max acceleration */
+    uint16_t tmp_min, tmp_max;      /* 0x30 / 0x32 operating temperature, K */
+    uint16_t vlt_min, vlt_max;      /* 0x34 / 0x36 operating voltage, mV */
+    uint16_t cur_max;               /* 0x38 max current, mA */
+    uint8_t chksum;                 /* 0x3F sum of bytes 0x00..0x3E mod 256 (checked) */
+    uint8_t eds_bank;               /* register 0x41 as read (biss_bp3_read_eds only) */
+    uint8_t profile_bank;           /* the bank read (biss_bp3_read_eds only) */
+} biss_bp3_eds_t;
+
+/* Check and decode a 64-byte BP3 EDS bank: BISS_ERR_EDS_CHECKSUM (first), BISS_ERR_NOT_BP3,
+ * BISS_ERR_BP3_FIELD (BP_VER, BP_LEN, BP_ID's VER, DL, FB1, FB2, PON_PDL, EN_TYP, POS_NUM,
+ * MT_FMT). eds_bank and profile_bank are set to 0. */
+biss_err_t biss_bp3_decode_eds(const uint8_t bank[BISS_BP3_EDS_BYTES], biss_bp3_eds_t *eds);
+
+/* Read and decode slave `slave_id`'s BP3 EDS bank. The accesses (as the Python host side,
+ * bissmaster.bp3.identify): read 0x40..0x43 (bank select, EDS pointer, profile ID; checked as
+ * biss_bp3_decode_id); BISS_ERR_NO_EDS if the pointer is 0x00 or 0xFF; the profile bank is
+ * the pointer + profile_bank_offset (1: a common EDS part of one bank in front, 0: the pointer
+ * names the BP3 bank; BISS_ERR_BP3_FIELD beyond 0xFF); unless selected already, write it to
+ * 0x40 and read it back (BISS_ERR_BANK_SELECT); read 0x00..0x3F; restore 0x40 whenever it was
+ * written, also after a failure (the first error is returned). Then biss_bp3_decode_eds and
+ * BP_ID / DL against 0x42 / 0x43 (BISS_ERR_EDS_MISMATCH). */
+biss_err_t biss_bp3_read_eds(biss_channel_t *ch, unsigned slave_id, unsigned profile_bank_offset,
+                             biss_bp3_eds_t *eds);
+
+/* The data-channel settings of a BP3 Standard Encoder (C = 0) from its EDS: word 0 with
+ * DL - 2 position bits, nE / nW, no LC and the CRC that CPOLY / CSTART name (CRC-6 0x43 or
+ * CRC-16 0x190D9, start 0); word 1 and the SPW check off. Only those fields of cfg change: the
+ * MA rate and times stay as the caller set them (e.g. biss_config_from_preset). Refused with
+ * BISS_ERR_UNSUPPORTED: C = 1, feedback bits other than nE then nW, DL_POS 0, no CRC, another
+ * polynomial or a start value other than 0. biss_configure checks DL_POS against the channel. */
+biss_err_t biss_bp3_config(const biss_bp3_eds_t *eds, biss_config_t *cfg);
 
 #ifdef __cplusplus
 }

@@ -75,6 +75,11 @@ const char *biss_error_name(int err)
         "BISS_ERR_MA_HALF_PERIOD", "BISS_ERR_DATA_BITS", "BISS_ERR_CRC", "BISS_ERR_LC",
         "BISS_ERR_WORD1", "BISS_ERR_SPW_CHECK", "BISS_ERR_TIME_RANGE", "BISS_ERR_DELAY_LIMIT",
         "BISS_ERR_RUNNING", "BISS_ERR_REFUSED", "BISS_ERR_TIMEOUT",
+        "BISS_ERR_NO_REGISTER_ACCESS", "BISS_ERR_SLAVE_ID", "BISS_ERR_ADDRESS", "BISS_ERR_COUNT",
+        "BISS_ERR_BUSY", "BISS_ERR_CA_CRC4", "BISS_ERR_CA_NO_ANSWER", "BISS_ERR_CA_REFUSED",
+        "BISS_ERR_CA_ABORTED", "BISS_ERR_CA_DATA_FAULT", "BISS_ERR_CA_BAD_REQUEST",
+        "BISS_ERR_NOT_BP3", "BISS_ERR_BP3_FIELD", "BISS_ERR_NO_EDS", "BISS_ERR_EDS_CHECKSUM",
+        "BISS_ERR_EDS_MISMATCH", "BISS_ERR_BANK_SELECT", "BISS_ERR_UNSUPPORTED",
     };
     if (err > 0 || (unsigned)-err >= sizeof names / sizeof names[0])
         return "?";
@@ -144,6 +149,8 @@ biss_err_t biss_channel_init(biss_channel_t *ch, const biss_bus_t *bus, unsigned
     ch->timer_width = (uint8_t)GET(caps, CH(CAPS__TIMER_WIDTH));
     ch->has_counters = GET(caps, CH(CAPS__COUNTERS)) != 0;
     ch->has_timestamp = GET(caps, CH(CAPS__TIMESTAMP)) != 0;
+    ch->has_register_access = GET(caps, CH(CAPS__REGISTER_ACCESS)) != 0;
+    ch->max_polls = BISS_REG_MAX_POLLS;
     return BISS_OK;
 }
 
@@ -476,13 +483,16 @@ biss_err_t biss_read_counters(biss_channel_t *ch, biss_counters_t *cnt)
 
 /* -- Interrupts ---------------------------------------------------------------------------- */
 
+#define IRQ_ALL ((uint32_t)(BISS_IRQ_DONE | BISS_IRQ_ERROR | BISS_IRQ_ACCESS_DONE))
+
 biss_err_t biss_irq_enable(biss_channel_t *ch, uint32_t causes)
 {
     if (!channel_ok(ch))
         return BISS_ERR_ARG;
     ch_wr(ch, CHANNEL_OFF(irq_enable),
           PUT(GET(causes, CH(IRQ_STATUS__DONE)), CH(IRQ_ENABLE__DONE)) |
-          PUT(GET(causes, CH(IRQ_STATUS__ERROR)), CH(IRQ_ENABLE__ERROR)));
+          PUT(GET(causes, CH(IRQ_STATUS__ERROR)), CH(IRQ_ENABLE__ERROR)) |
+          PUT(GET(causes, CH(IRQ_STATUS__ACCESS_DONE)), CH(IRQ_ENABLE__ACCESS_DONE)));
     return BISS_OK;
 }
 
@@ -490,13 +500,330 @@ uint32_t biss_irq_status(biss_channel_t *ch)
 {
     if (!channel_ok(ch))
         return 0;
-    return ch_rd(ch, CHANNEL_OFF(irq_status)) & (BISS_IRQ_DONE | BISS_IRQ_ERROR);
+    return ch_rd(ch, CHANNEL_OFF(irq_status)) & IRQ_ALL;
 }
 
 biss_err_t biss_irq_clear(biss_channel_t *ch, uint32_t causes)
 {
     if (!channel_ok(ch))
         return BISS_ERR_ARG;
-    ch_wr(ch, CHANNEL_OFF(irq_status), causes & (BISS_IRQ_DONE | BISS_IRQ_ERROR));
+    ch_wr(ch, CHANNEL_OFF(irq_status), causes & IRQ_ALL);
+    return BISS_OK;
+}
+
+
+/* -- Register access over the control channel ------------------------------------------- */
+
+#define CA_BUF_WORDS \
+    (sizeof(((biss_master_regs_t *)0)->channel[0].ca.wbuf) / \
+     sizeof(((biss_master_regs_t *)0)->channel[0].ca.wbuf[0]))
+#define CA_WORD_OFF(buf, i) (CHANNEL_OFF(ca.buf) + (uintptr_t)(i) * sizeof(uint32_t))
+#define CA_MAX_BYTES (CA_BUF_WORDS * sizeof(uint32_t))
+/* The byte lane of buffer byte i (docs/bus.md, Byte order): the field width of a lane. */
+#define CA_LANE_BITS CH(CA__WBUFX__BYTE0_bw)
+
+static biss_err_t ca_error(uint32_t status)
+{
+    switch (status) {
+    case BISS_CA_OK: return BISS_OK;
+    case BISS_CA_CRC4_ERROR: return BISS_ERR_CA_CRC4;
+    case BISS_CA_NO_ANSWER: return BISS_ERR_CA_NO_ANSWER;
+    case BISS_CA_REFUSED: return BISS_ERR_CA_REFUSED;
+    case BISS_CA_ABORTED: return BISS_ERR_CA_ABORTED;
+    case BISS_CA_DATA_FAULT: return BISS_ERR_CA_DATA_FAULT;
+    default: return BISS_ERR_CA_BAD_REQUEST;
+    }
+}
+
+static biss_err_t ca_check(const biss_channel_t *ch, unsigned slave_id, unsigned address,
+                           const void *buf, unsigned count)
+{
+    if (!channel_ok(ch) || buf == NULL)
+        return BISS_ERR_ARG;
+    if (!ch->has_register_access)
+        return BISS_ERR_NO_REGISTER_ACCESS;
+    if (!fits(slave_id, MAX(CH(CA__REQUEST__SLAVE_ID))))
+        return BISS_ERR_SLAVE_ID;
+    if (count == 0 || count > CA_MAX_BYTES)
+        return BISS_ERR_COUNT;
+    if (!fits(address, MAX(CH(CA__REQUEST__ADDRESS))) ||
+        !fits(address + count - 1u, MAX(CH(CA__REQUEST__ADDRESS))))
+        return BISS_ERR_ADDRESS;
+    if (GET(ch_rd(ch, CHANNEL_OFF(ca.state)), CH(CA__STATE__BUSY)))
+        return BISS_ERR_BUSY;
+    return BISS_OK;
+}
+
+/* Request, start, poll access_done; the status as an error code, *done_bytes the bytes done. */
+static biss_err_t ca_run(biss_channel_t *ch, unsigned slave_id, unsigned address, unsigned count,
+                         bool write, unsigned *done_bytes)
+{
+    uint32_t i, state;
+    *done_bytes = 0;
+    ch_wr(ch, CHANNEL_OFF(irq_status), BISS_IRQ_ACCESS_DONE);       /* a stale one: cleared */
+    ch_wr(ch, CHANNEL_OFF(ca.request), PUT(slave_id, CH(CA__REQUEST__SLAVE_ID)) |
+                                       PUT(address, CH(CA__REQUEST__ADDRESS)) |
+                                       PUT(count, CH(CA__REQUEST__COUNT)) |
+                                       PUT(write, CH(CA__REQUEST__WRITE)));
+    ch_wr(ch, CHANNEL_OFF(ca.ctrl), PUT(1, CH(CA__CTRL__START)));
+    for (i = 0; i < ch->max_polls; i++) {
+        if (ch_rd(ch, CHANNEL_OFF(irq_status)) & BISS_IRQ_ACCESS_DONE) {
+            ch_wr(ch, CHANNEL_OFF(irq_status), BISS_IRQ_ACCESS_DONE);
+            state = ch_rd(ch, CHANNEL_OFF(ca.state));
+            *done_bytes = GET(state, CH(CA__STATE__BYTES_DONE));
+            return ca_error(GET(state, CH(CA__STATE__STATUS)));
+        }
+    }
+    ch_wr(ch, CHANNEL_OFF(ca.ctrl), PUT(1, CH(CA__CTRL__ABORT)));
+    return BISS_ERR_TIMEOUT;
+}
+
+biss_err_t biss_reg_read(biss_channel_t *ch, unsigned slave_id, unsigned address, uint8_t *buf,
+                         unsigned count, unsigned *done)
+{
+    unsigned got, i;
+    uint32_t word = 0;
+    biss_err_t err = ca_check(ch, slave_id, address, buf, count);
+    if (done != NULL)
+        *done = 0;
+    if (err != BISS_OK)
+        return err;
+    err = ca_run(ch, slave_id, address, count, false, &got);
+    if (got > count)
+        got = count;
+    for (i = 0; i < got; i++) {
+        if (i % sizeof(uint32_t) == 0)
+            word = ch_rd(ch, CA_WORD_OFF(rbuf, i / sizeof(uint32_t)));
+        buf[i] = (uint8_t)(word >> (CA_LANE_BITS * (i % sizeof(uint32_t))));
+    }
+    if (done != NULL)
+        *done = got;
+    return err;
+}
+
+biss_err_t biss_reg_write(biss_channel_t *ch, unsigned slave_id, unsigned address,
+                          const uint8_t *data, unsigned count, unsigned *done)
+{
+    unsigned got, i;
+    uint32_t word = 0;
+    biss_err_t err = ca_check(ch, slave_id, address, data, count);
+    if (done != NULL)
+        *done = 0;
+    if (err != BISS_OK)
+        return err;
+    for (i = 0; i < count; i++) {
+        word |= (uint32_t)data[i] << (CA_LANE_BITS * (i % sizeof(uint32_t)));
+        if (i % sizeof(uint32_t) == sizeof(uint32_t) - 1u || i == count - 1u) {
+            ch_wr(ch, CA_WORD_OFF(wbuf, i / sizeof(uint32_t)), word);
+            word = 0;
+        }
+    }
+    err = ca_run(ch, slave_id, address, count, true, &got);
+    if (done != NULL)
+        *done = got > count ? count : got;
+    return err;
+}
+
+biss_err_t biss_reg_abort(biss_channel_t *ch)
+{
+    if (!channel_ok(ch))
+        return BISS_ERR_ARG;
+    if (!ch->has_register_access)
+        return BISS_ERR_NO_REGISTER_ACCESS;
+    ch_wr(ch, CHANNEL_OFF(ca.ctrl), PUT(1, CH(CA__CTRL__ABORT)));
+    return BISS_OK;
+}
+
+/* -- BP3: identification and EDS (spec digest, section 7) ------------------------------ */
+
+#define BP3_ID 0x6u                 /* register 0x42 bits 7:4 */
+#define BP3_VERSION 1u              /* bits 3:1: 1 (0 not allowed, 2..7 reserved) */
+#define BP3_DL_MIN 0x02u
+#define BP3_DL_MAX_C0 0x39u         /* C = 0: CRC separate */
+#define BP3_DL_MAX_C1 0x3Fu         /* C = 1: BiSS Safety */
+#define BP3_FEEDBACK_BITS 2u        /* nE, nW */
+#define BP3_FB_NE 1u
+#define BP3_FB_NW 2u
+#define BP3_EDS_NONE_LO 0x00u       /* EDS pointer: no EDS */
+#define BP3_EDS_NONE_HI 0xFFu
+#define BP3_CHKSUM_AT 0x3Fu
+/* The core's CRCs with their top and x^0 terms (digest, section 6), both starting at 0. */
+#define POLY_CRC6 0x43u
+#define POLY_CRC16 0x190D9u
+
+biss_err_t biss_bp3_decode_id(uint8_t reg_0x42, uint8_t reg_0x43, biss_bp3_id_t *id)
+{
+    unsigned c, dl;
+    if (id == NULL)
+        return BISS_ERR_ARG;
+    if ((unsigned)(reg_0x42 >> 4) != BP3_ID)
+        return BISS_ERR_NOT_BP3;
+    if (((unsigned)(reg_0x42 >> 1) & 0x7u) != BP3_VERSION)
+        return BISS_ERR_BP3_FIELD;
+    c = reg_0x42 & 1u;
+    dl = reg_0x43;          /* bit 7 must be 0: a set bit 7 is above either DL maximum */
+    if (dl < BP3_DL_MIN || dl > (c ? BP3_DL_MAX_C1 : BP3_DL_MAX_C0))
+        return BISS_ERR_BP3_FIELD;
+    id->version = BP3_VERSION;
+    id->crc_mode = (uint8_t)c;
+    id->data_length = (uint8_t)dl;
+    id->position_bits = (uint8_t)(c ? 0u : dl - BP3_FEEDBACK_BITS);
+    return BISS_OK;
+}
+
+biss_err_t biss_bp3_identify(biss_channel_t *ch, unsigned slave_id, biss_bp3_id_t *id)
+{
+    uint8_t r[2];
+    biss_err_t err;
+    if (id == NULL)
+        return BISS_ERR_ARG;
+    err = biss_reg_read(ch, slave_id, BISS_BP3_REG_PROFILE_ID, r, 2, NULL);
+    return err != BISS_OK ? err : biss_bp3_decode_id(r[0], r[1], id);
+}
+
+static uint16_t be16(const uint8_t *p)
+{
+    return (uint16_t)((unsigned)p[0] << 8 | p[1]);
+}
+
+static uint32_t be32(const uint8_t *p)
+{
+    return (uint32_t)p[0] << 24 | (uint32_t)p[1] << 16 | (uint32_t)p[2] << 8 | p[3];
+}
+
+biss_err_t biss_bp3_decode_eds(const uint8_t bank[BISS_BP3_EDS_BYTES], biss_bp3_eds_t *eds)
+{
+    unsigned i, sum = 0;
+    biss_bp3_id_t id;
+    biss_err_t err;
+    if (bank == NULL || eds == NULL)
+        return BISS_ERR_ARG;
+    for (i = 0; i < BP3_CHKSUM_AT; i++)
+        sum += bank[i];
+    if ((sum & 0xFFu) != bank[BP3_CHKSUM_AT])
+        return BISS_ERR_EDS_CHECKSUM;
+    err = biss_bp3_decode_id(bank[0x02], bank[0x03], &id);
+    if (err != BISS_OK)
+        return err;
+    eds->bp_ver = bank[0x00];
+    eds->bp_len = bank[0x01];
+    eds->bp_id = bank[0x02];
+    eds->dl = bank[0x03];
+    eds->fb1 = bank[0x04];
+    eds->fb2 = bank[0x05];
+    eds->pon_pdl = bank[0x06];
+    eds->en_typ = bank[0x08];
+    eds->pos_num = bank[0x09];
+    eds->mt_len = bank[0x0A];
+    eds->mt_fmt = bank[0x0B];
+    eds->co_len = bank[0x0C];
+    eds->co_fmt = bank[0x0D];
+    eds->fi_len = bank[0x0E];
+    eds->fi_fmt = bank[0x0F];
+    eds->mt_cnt = be32(&bank[0x10]);
+    eds->sip_cnt = be32(&bank[0x14]);
+    eds->sip_res = be32(&bank[0x18]);
+    eds->cpoly = be32(&bank[0x1C]);
+    eds->cstart = be32(&bank[0x20]);
+    eds->abs_acu = be16(&bank[0x24]);
+    eds->rel_acu = be16(&bank[0x26]);
+    eds->spd_acu = be16(&bank[0x28]);
+    eds->hyst = be16(&bank[0x2A]);
+    eds->spd_max = be16(&bank[0x2C]);
+    eds->acc_max = be16(&bank[0x2E]);
+    eds->tmp_min = be16(&bank[0x30]);
+    eds->tmp_max = be16(&bank[0x32]);
+    eds->vlt_min = be16(&bank[0x34]);
+    eds->vlt_max = be16(&bank[0x36]);
+    eds->cur_max = be16(&bank[0x38]);
+    eds->chksum = bank[BP3_CHKSUM_AT];
+    eds->eds_bank = 0;
+    eds->profile_bank = 0;
+    if (eds->bp_ver != 1u || eds->bp_len != 1u || eds->pon_pdl < 1u || eds->pon_pdl > 254u ||
+        eds->pos_num > 2u || eds->en_typ > 1u || eds->mt_fmt > 1u ||
+        (eds->fb1 != BP3_FB_NE && eds->fb1 != BP3_FB_NW) ||
+        (eds->fb2 != BP3_FB_NE && eds->fb2 != BP3_FB_NW))
+        return BISS_ERR_BP3_FIELD;
+    return BISS_OK;
+}
+
+biss_err_t biss_bp3_read_eds(biss_channel_t *ch, unsigned slave_id, unsigned profile_bank_offset,
+                             biss_bp3_eds_t *eds)
+{
+    uint8_t regs[4], bank[BISS_BP3_EDS_BYTES], sel;
+    unsigned profile;
+    biss_bp3_id_t id;
+    biss_err_t err, restore;
+    if (eds == NULL)
+        return BISS_ERR_ARG;
+    /* 0x40 bank select, 0x41 EDS pointer, 0x42 / 0x43 profile ID: one access. */
+    err = biss_reg_read(ch, slave_id, BISS_BP3_REG_BANK_SELECT, regs, 4, NULL);
+    if (err == BISS_OK)
+        err = biss_bp3_decode_id(regs[2], regs[3], &id);
+    if (err != BISS_OK)
+        return err;
+    if (regs[1] == BP3_EDS_NONE_LO || regs[1] == BP3_EDS_NONE_HI)
+        return BISS_ERR_NO_EDS;
+    profile = regs[1] + profile_bank_offset;
+    if (profile_bank_offset > 0xFFu || profile > 0xFFu)
+        return BISS_ERR_BP3_FIELD;
+    if (profile == regs[0]) {
+        err = biss_reg_read(ch, slave_id, 0x00, bank, BISS_BP3_EDS_BYTES, NULL);
+    } else {
+        sel = (uint8_t)profile;
+        err = biss_reg_write(ch, slave_id, BISS_BP3_REG_BANK_SELECT, &sel, 1, NULL);
+        if (err == BISS_OK)
+            err = biss_reg_read(ch, slave_id, BISS_BP3_REG_BANK_SELECT, &sel, 1, NULL);
+        if (err == BISS_OK && sel != profile)
+            err = BISS_ERR_BANK_SELECT;
+        if (err == BISS_OK)
+            err = biss_reg_read(ch, slave_id, 0x00, bank, BISS_BP3_EDS_BYTES, NULL);
+        /* Restore the previous bank whenever 0x40 may have been written. */
+        restore = biss_reg_write(ch, slave_id, BISS_BP3_REG_BANK_SELECT, &regs[0], 1, NULL);
+        if (err == BISS_OK)
+            err = restore;
+    }
+    if (err != BISS_OK)
+        return err;
+    err = biss_bp3_decode_eds(bank, eds);
+    if (err != BISS_OK)
+        return err;
+    if (eds->bp_id != regs[2] || eds->dl != regs[3])
+        return BISS_ERR_EDS_MISMATCH;
+    eds->eds_bank = regs[1];
+    eds->profile_bank = (uint8_t)profile;
+    return BISS_OK;
+}
+
+biss_err_t biss_bp3_config(const biss_bp3_eds_t *eds, biss_config_t *cfg)
+{
+    static const biss_word_format_t no_word;
+    biss_bp3_id_t id;
+    uint32_t poly;
+    uint8_t crc;
+    biss_err_t err;
+    if (eds == NULL || cfg == NULL)
+        return BISS_ERR_ARG;
+    err = biss_bp3_decode_id(eds->bp_id, eds->dl, &id);
+    if (err != BISS_OK)
+        return err;
+    if (id.crc_mode != 0 || eds->fb1 != BP3_FB_NE || eds->fb2 != BP3_FB_NW ||
+        id.position_bits == 0 || eds->cpoly == 0 || eds->cstart != 0)
+        return BISS_ERR_UNSUPPORTED;
+    poly = eds->cpoly > 0x7FFFFFFFu ? 0 : (eds->cpoly << 1 | 1u);
+    if (poly == POLY_CRC6)
+        crc = BISS_CRC6;
+    else if (poly == POLY_CRC16)
+        crc = BISS_CRC16;
+    else
+        return BISS_ERR_UNSUPPORTED;
+    cfg->word[0].data_bits = id.position_bits;
+    cfg->word[0].crc = crc;
+    cfg->word[0].nenw = true;
+    cfg->word[0].lc = false;
+    cfg->word[1] = no_word;
+    cfg->word1_enable = false;
+    cfg->spw_check = false;
+    cfg->spw_tolerance = 0;
     return BISS_OK;
 }
