@@ -35,6 +35,7 @@ from bissmaster.frame_decoder import FrameDecoder
 from bissmaster.ma_clock import MaClock
 from bissmaster.master import BissMaster
 from bissmaster.params import Crc
+from bissmaster.register_access import RegisterAccess
 from bissmaster.slo_sampler import SloSampler
 from master_contract import FRAME_STATUSES, MA_HALF_PERIOD_MIN, STATUS
 
@@ -93,6 +94,14 @@ INTERNALS = {
     "master.receiver_clear": ("signal", "controller", "receiver_clear"),  # sampler/decoder reset
     "master.request": ("port", "scheduler", "request"),         # the controller's request input
     "master.cdm_cycle": ("port", "controller", "cdm_cycle"),    # the cycle's CDM bit
+    # RegisterAccess
+    "access.fsm": ("fsm", "", "access_fsm"),                    # IDLE, LEAD, HEADER, ...
+    "access.step": ("signal", "", "step"),                      # frame in header / register
+    "access.index": ("signal", "", "index"),                    # the register in progress
+    "access.waited": ("signal", "", "waited"),                  # frames waited for a start bit
+    "access.idle_run": ("signal", "", "idle_run"),              # consecutive CDM = 0 frames
+    "access.header": ("signal", "", "header"),                  # the header's CDM bits, MSB 1st
+    "access.request": ("signal", "", "req"),                    # the request latched at start
 }
 
 
@@ -1172,3 +1181,210 @@ class MasterCrcHarness(Harness):
         ]
         return m
 
+
+
+# =============================================================================================
+# (e) Every accepted register access ends within its frame bound (issue 13)
+# =============================================================================================
+
+#: The control channel's frame counts, the harness's own reading of docs/control-channel.md
+#: (spec section 10), never the RTL's: CDM = 0 frames before S, as many in a row cancel a
+#: control frame; the header's frames (S .. W); one register's frames (S .. P).
+CONTROL_IDLE_FRAMES = 14
+CONTROL_HEADER_FRAMES = 18
+CONTROL_REGISTER_FRAMES = 14
+#: ``ca_status`` OK (docs/control-channel.md, "Statuses"); the most bytes of one access.
+ACCESS_OK = 0
+ACCESS_COUNT_MAX = 64
+
+
+def access_frame_bound(count, start_wait_frames):
+    """docs/control-channel.md, "Bound: every access ends": 14 (idle) + 1 (a cycle in flight at
+    ``ca_start``) + 18 (header) + count x (14 + start_wait_frames) + 1 (final) + 15 (a cancel:
+    the cycle in flight and 14 zeros) ended request cycles. ``count`` may be a Value."""
+    return (CONTROL_IDLE_FRAMES + 1 + CONTROL_HEADER_FRAMES
+            + count * (CONTROL_REGISTER_FRAMES + start_wait_frames) + 1
+            + 1 + CONTROL_IDLE_FRAMES)
+
+
+class RegisterAccessEndsHarness(Harness):
+    """RegisterAccess alone: every accepted register access ends within its frame bound.
+
+    Inputs free at every clock: the request fields (slave ID, address, count 0..127, read or
+    write), ``start``, ``abort``, the write-buffer port, the read-buffer address, and, for every
+    ended frame, ``frame_ok`` and ``frame_cds``.
+
+    The frames come from a model of the cycle controller, as the engine's docstring states its
+    contract ("the controller copies [cdm] while idle, so a cycle carries the bit it was
+    accepted with"; ``frame_cdm`` is "the CDM bit that cycle carried"): a free ``cycle_accept``
+    starts a request cycle when none is in flight and takes the engine's ``cdm`` of that clock;
+    ``frame_end`` is free while a cycle is in flight and ends it, with ``frame_cdm`` = the bit
+    taken. One cycle at a time, and a new one is accepted at the earliest in the clock after
+    the previous one ended (the controller reports a frame from a busy state and copies ``cdm``
+    only in IDLE, from the clock after): so a frame can end every second clock. With
+    ``frame_cdm`` free instead (mutation ``"free_cdm"``) the bound does not hold, and the solver
+    shows it: LEAD and CANCEL wait for 14 consecutive frames that carried CDM = 0, the header's
+    first frame for one that carried S, and frames that report a CDM bit the engine did not
+    send can keep any of them waiting forever.
+
+    The harness counts the ended frames after each accepted ``start`` (``start`` while not
+    busy) and computes the bound itself (:func:`access_frame_bound` of the count it latched).
+    Properties: ``done`` strobes before more than the bound frames have ended; ``busy`` is low
+    when ``done`` strobes and falls only with ``done``; no ``done`` without an accepted start.
+
+    Lemmas (``lemmas=True``, for induction; proven, never assumed), on the engine's FSM, step,
+    index, wait and idle counters (:data:`INTERNALS` ``access.*``): frames counted + the most
+    frames the engine's state can still take <= the bound, with the most frames per state
+    written from the docs (the idle run to 14, the header's and the registers' remaining steps,
+    the read's start-bit wait, a cancel: the cycle in flight if it carries CDM = 1, and the
+    zeros still missing); the counters within their ranges; the latched request is the
+    harness's; the header's first bit (S) is 1 until S is sent.
+
+    ``count_max`` assumes at most that many bytes, ``write`` only reads (False) or writes
+    (True), ``wbuf=False`` leaves the write buffer unwritten (all zero: Yosys drops it): smaller
+    searches for the cover and the mutations; the proof has all of them free. ``slack`` is added
+    to the bound (negative: a tighter bound than documented). Mutations: ``"free_cdm"`` (above).
+    """
+
+    def __init__(self, start_wait=2, lemmas=True, count_max=None, write=None, wbuf=True,
+                 slack=0, mutation=None):
+        super().__init__(start_wait=start_wait, lemmas=lemmas, count_max=count_max,
+                         write=write, wbuf=wbuf, slack=slack, mutation=mutation)
+
+    def elaborate(self, platform):
+        m = self._module()
+        w_frames = self.start_wait
+        dut = RegisterAccess(w_frames)
+        inside = Inside(dut)
+        m.submodules.dut = inside.fragment
+
+        self.drive_free(m, dut, exclude=("request", "wbuf", "frame_end", "frame_cdm"))
+        for port in ("request", "wbuf"):        # structures: one free input per field
+            view = getattr(dut, port)
+            for name, _ in view.shape():
+                field = getattr(view, name)
+                if port == "wbuf" and not self.wbuf:
+                    continue                    # never written: Yosys drops the memory
+                m.d.comb += field.eq(self.any_seq(len(field), f"{port}_{name}"))
+        if self.count_max is not None:
+            m.d.comb += Assume(dut.request.count <= self.count_max)
+        if self.write is not None:
+            m.d.comb += Assume(dut.request.write == int(self.write))
+
+        # The controller model: one request cycle in flight at a time, carrying the engine's
+        # cdm of the clock it was accepted in.
+        frame_end = self.any_seq(1, "frame_end")
+        accept = self.any_seq(1, "cycle_accept")
+        in_flight = Signal()
+        cycle_cdm = Signal()
+        m.d.comb += dut.frame_end.eq(frame_end)
+        if self.mutation == "free_cdm":
+            m.d.comb += dut.frame_cdm.eq(self.any_seq(1, "frame_cdm"))
+        else:
+            m.d.comb += [Assume(~frame_end | in_flight), dut.frame_cdm.eq(cycle_cdm)]
+            with m.If(frame_end):
+                m.d.sync += in_flight.eq(0)
+            with m.Elif(accept):
+                m.d.sync += [in_flight.eq(1), cycle_cdm.eq(dut.cdm)]
+
+        # The harness's own count of the frames of each accepted access, and its bound.
+        started = dut.start & ~dut.busy
+        pending = Signal()                      # an access accepted, its done not yet seen
+        # Wide enough for the bound of any count the request port can carry (0 .. 127).
+        width = (access_frame_bound(2**len(dut.request.count) - 1, w_frames)
+                 + max(self.slack, 0)).bit_length() + 1
+        frames = Signal(width)                  # frames ended since the start (saturating)
+        request = Signal(dut.request.shape(), name="started_request")  # taken at that start
+        count, write = request.count, request.write
+        with m.If(started):
+            m.d.sync += [pending.eq(1), frames.eq(0), request.eq(dut.request)]
+        with m.Else():
+            with m.If(dut.done):
+                m.d.sync += pending.eq(0)
+            with m.If(frame_end & (frames != 2**len(frames) - 1)):
+                m.d.sync += frames.eq(frames + 1)
+        bound = Signal(width)
+        m.d.comb += bound.eq(access_frame_bound(count, w_frames) + self.slack)
+
+        busy_prev = Signal()
+        m.d.sync += busy_prev.eq(dut.busy)
+        m.d.comb += [
+            Assert(~pending | (frames <= bound), "done before more than the bound frames"),
+            Assert(~dut.done | ~dut.busy, "busy is low with done"),
+            Assert(~(busy_prev & ~dut.busy) | dut.done, "busy falls only with done"),
+            Assert(~dut.done | pending, "no done without an accepted start"),
+        ]
+
+        if self.lemmas:
+            state = {s: inside.in_state("access.fsm", s)
+                     for s in ("IDLE", "LEAD", "HEADER", "REGISTER", "WAIT", "FINAL", "CANCEL")}
+            step = inside("access.step")
+            index = inside("access.index")
+            waited = inside("access.waited")
+            idle_run = inside("access.idle_run")
+            header = inside("access.header")
+            req = inside("access.request")
+            idle = CONTROL_IDLE_FRAMES
+            per_register = CONTROL_REGISTER_FRAMES + w_frames
+            f, c, r = in_flight, cycle_cdm, idle_run
+            # The most frames a cancel still takes: the cycle in flight if it carries a 1
+            # (it breaks the run of zeros), then the zeros still missing; none once the run is
+            # complete (the cycle in flight may still end in the clock that finishes).
+            cancel_left = Mux(f & c, 1 + idle, Mux(r == idle, f, idle - r))
+            # After the last register: FINAL's frame, then a cancel of at most 14 frames (that
+            # frame carried 0 and has ended), or an abort first: a cancel of at most 15. (The
+            # docs count 1 + 15: the bound is one frame loose, check access_ends_slack-1.)
+            cancel_tail = 1 + idle
+            # LEAD: as a cancel, then possibly one cycle accepted with CDM = 0 ends at the
+            # header's first frame (LEAD leaves at once when the run is complete and no frame
+            # ends). A cycle carrying 1 in flight at the start: the previous access was
+            # aborted in the clock its S cycle was accepted, and ended at once.
+            lead_left = Mux(f & c, 1 + idle, Mux(r == idle, 1, idle - r))
+            registers = count * per_register
+            after_index = (count - index - 1) * per_register + cancel_tail
+            left = Signal(width)
+            with m.If(state["LEAD"]):
+                m.d.comb += left.eq(lead_left + CONTROL_HEADER_FRAMES + registers + cancel_tail)
+            with m.Elif(state["HEADER"]):
+                m.d.comb += left.eq(CONTROL_HEADER_FRAMES - step
+                                    + Mux((step == 0) & f & ~c, 1, 0)
+                                    + registers + cancel_tail)
+            with m.Elif(state["REGISTER"]):
+                m.d.comb += left.eq(CONTROL_REGISTER_FRAMES - step + Mux(step <= 1, w_frames, 0)
+                                    + after_index)
+            with m.Elif(state["WAIT"]):
+                m.d.comb += left.eq(w_frames - waited + CONTROL_REGISTER_FRAMES - 2
+                                    + after_index)
+            with m.Elif(state["FINAL"]):
+                m.d.comb += left.eq(cancel_tail)
+            with m.Elif(state["CANCEL"]):
+                m.d.comb += left.eq(cancel_left)
+            busy_states = 0
+            for s in ("LEAD", "HEADER", "REGISTER", "WAIT", "FINAL", "CANCEL"):
+                busy_states = busy_states | state[s]
+            m.d.comb += [
+                Assert(dut.busy == ~state["IDLE"], "lemma: busy is not IDLE"),
+                Assert(~dut.busy | busy_states, "lemma: the engine is in a state"),
+                Assert(~dut.busy | pending, "lemma: busy only after an accepted start"),
+                Assert(dut.busy | ~pending | dut.done, "lemma: pending ends with done"),
+                Assert(~dut.busy | (req == request.as_value()), "lemma: the request latched"),
+                Assert(~dut.busy | (count >= 1) & (count <= ACCESS_COUNT_MAX),
+                       "lemma: count 1 .. 64"),
+                Assert(r <= idle, "lemma: idle run at most 14"),
+                Assert(~(state["LEAD"] | state["HEADER"]) | (index == 0), "lemma: index 0"),
+                Assert(~(state["REGISTER"] | state["WAIT"]) | (index < count),
+                       "lemma: index below the count"),
+                Assert(~state["HEADER"] | (step < CONTROL_HEADER_FRAMES), "lemma: header step"),
+                Assert(~state["REGISTER"] | (step < CONTROL_REGISTER_FRAMES),
+                       "lemma: register step"),
+                Assert(~state["WAIT"] | (waited < w_frames), "lemma: wait count"),
+                Assert(~(state["LEAD"] | state["HEADER"] & (step == 0))
+                       | header[CONTROL_HEADER_FRAMES - 1], "lemma: S first in the header"),
+                Assert(~(dut.busy & pending) | (frames + left <= bound),
+                       "lemma: frames so far + frames left <= the bound"),
+            ]
+
+        # Non-vacuity: a read of one byte ends OK.
+        m.d.comb += Cover(dut.done & (dut.result.status == ACCESS_OK) & pending
+                          & ~write & (count == 1))
+        return m
