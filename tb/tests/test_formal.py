@@ -26,7 +26,10 @@ def test_access_frame_bound_is_the_documented_one():
     from bissmaster.register_access import frame_bound
     from formal.harnesses import access_frame_bound
 
-    assert access_frame_bound(1, 16) == 79 and access_frame_bound(64, 16) == 1969  # the docs
+    # The docs' table: one and 64 registers, default wait.
+    assert [access_frame_bound(n, 16, w) for n in (1, 64) for w in (True, False)] == \
+        [60, 65, 942, 1955]
     for wait in (1, 2, 16, 255):
         for count in range(1, 65):
-            assert access_frame_bound(count, wait) == frame_bound(count, wait)
+            for write in (False, True):
+                assert access_frame_bound(count, wait, write) == frame_bound(count, wait, write)
