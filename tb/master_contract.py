@@ -66,12 +66,17 @@ CA_ADDRESS_MAX = 0x7F
 CA_START_WAIT_FRAMES = 16
 
 
-def ca_frame_bound(count, start_wait_frames=CA_START_WAIT_FRAMES):
+def ca_frame_bound(count, write, start_wait_frames=CA_START_WAIT_FRAMES):
     """The most request cycles one accepted access of ``count`` registers takes, ``ca_done``
-    included (docs/control-channel.md, "Bound: every access ends"): 14 idle, 1 in flight at
-    ``ca_start``, 18 header, ``count`` x (14 + start_wait_frames), 1 final, 15 for a cancel.
-    1,969 for 64 registers, 79 for one, with the default wait."""
-    return 14 + 1 + 18 + count * (14 + start_wait_frames) + 1 + 15
+    included (docs/control-channel.md, "Bound: every access ends"): the cycles up to the last
+    one that can carry CDM = 1, then a cancel's 14 zeros. 14 idle, 1 in flight at
+    ``ca_start``, 18 header, the registers before the last (14 each for a write, 14 +
+    start_wait_frames for a read), the last one up to its last CDM = 1 (13 for a write, 2 +
+    start_wait_frames for a read), 14. With the default wait: a read 65 for one register,
+    1,955 for 64; a write 60 and 942."""
+    per_register = 14 if write else 14 + start_wait_frames
+    last = 13 if write else 2 + start_wait_frames
+    return 14 + 1 + 18 + (count - 1) * per_register + last + 14
 
 
 #: The defaults of the time limits that 0 selects (docs/ports.md, "Configuration"): the break,

@@ -19,15 +19,21 @@ REGISTER_FRAMES = 14
 _IDLE = protocol.CDM_IDLE_FRAMES
 
 
-def frame_bound(count, start_wait_frames):
-    """The most frames (ended request cycles) one accepted access takes, ``done`` included.
+def frame_bound(count, start_wait_frames, write):
+    """The most frames (request cycles that end after the clock ``start`` was accepted in, up
+    to ``done``) one accepted access of ``count`` registers takes.
 
-    Idle frames before S (14), one frame in flight when the access starts, the header (18),
-    per register its 14 frames and the start-bit wait of a read, the frame that carries the
-    echo of the last P, and a cancel (the frame in flight plus 14 CDM = 0 frames).
+    The frames up to the last one that can carry CDM = 1, then the 14 CDM = 0 frames of a
+    cancel (an access that ends OK ends before that): 14 idle frames before S, plus one in
+    flight when the access starts (an S still under way from an access aborted meanwhile), the
+    header (18), the registers before the last one (14 each; a read's 14 plus its start-bit
+    wait), the last register up to its last possible CDM = 1 (a write's last CRC bit: 13
+    frames; a read's last wait frame: 2 + the wait), and 14. Exact: an access can take that
+    many frames (tb/formal, ``access_ends_bound``).
     """
-    return _IDLE + 1 + HEADER_FRAMES + count * (REGISTER_FRAMES + start_wait_frames) + 1 \
-        + 1 + _IDLE
+    last = REGISTER_FRAMES - 1 if write else 2 + start_wait_frames
+    per_register = REGISTER_FRAMES + (0 if write else start_wait_frames)
+    return _IDLE + 1 + HEADER_FRAMES + (count - 1) * per_register + last + _IDLE
 
 
 class RegisterAccess(wiring.Component):
@@ -76,13 +82,22 @@ class RegisterAccess(wiring.Component):
     **write** sends its DATA without waiting, as in the standard layout: a late start bit is
     REFUSED.
 
-    **Ends**: OK after the final frame; every other outcome first cancels the control frame:
-    CDM = 0 until 14 consecutive CDM = 0 frames have ended (or at once, when no CDM = 1 was sent
-    yet: ABORTED before S). ``abort`` cancels (ABORTED). A frame that carries a control bit and
-    does not end OK (a frame status != OK, or a cycle fault) is DATA_FAULT: its CDS and its CDM
-    are not trusted. A request with a byte count of 0 or above 64, or whose last address is
-    beyond 0x7F (address wrap is unconfirmed), ends at once with BAD_REQUEST. An access takes at
-    most :func:`frame_bound` frames. Commands (CTS = 0) are not supported.
+    **Ends**: OK after the final frame; every other outcome after S first cancels the control
+    frame: CDM = 0 until 14 consecutive CDM = 0 frames have ended (those that ended before
+    count). Before S (nothing sent yet) ``abort`` and a failed frame end at once. ``abort``
+    cancels (ABORTED). A frame that carries a control bit and does not end OK (a frame status
+    != OK, or a cycle fault) is DATA_FAULT: its CDS and its CDM are not trusted. A request with
+    a byte count of 0 or above 64, or whose last address is beyond 0x7F (address wrap is
+    unconfirmed), ends at once with BAD_REQUEST. An access takes at most
+    :func:`frame_bound` frames. Commands (CTS = 0) are not supported.
+
+    When ``done`` comes, the frames that carried this access's CDM = 1 bits have ended, with
+    one exception: an ``abort`` while the frame carrying S is still under way (accepted, not
+    yet ended) ends the access at once, since the 14 frames before S carried 0, and ``done``
+    (ABORTED) comes before that frame ends. The slave then receives S after ``done``; the next
+    access either takes it as its own S (when it is at its header's first frame by then) or,
+    as that frame's CDM = 1 restarts the idle count, sends 14 CDM = 0 frames first. (Every
+    later CDM = 1 of a frame follows another within 14 frames, so S is the only such case.)
 
     While ``busy`` (``frames``), the master starts request cycles itself if the host does not.
 

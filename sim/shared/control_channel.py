@@ -234,7 +234,7 @@ class ControlChannel:
         """One access with any request (also an invalid one); returns the :class:`Access`.
 
         A write sends ``data`` (``count`` bytes). Waits for ``ca_done`` at most
-        ``ca_frame_bound(count)`` cycles of :meth:`cycle_time_bound_s` (a hang fails here),
+        ``ca_frame_bound(count, write)`` cycles of :meth:`cycle_time_bound_s` (a hang fails here),
         then checks the reported cycles against that bound and, when the status is OK, the
         encoder's CDM against the reference layout.
         """
@@ -250,7 +250,7 @@ class ControlChannel:
         dut.ca_count.value = count
         dut.ca_write.value = int(write)
         frames_before, records_before = self.monitor.count, len(tb.encoder.records)
-        bound = ca_frame_bound(max(1, min(count, 64)))
+        bound = ca_frame_bound(max(1, min(count, 64)), write)
         limit_s = bound * self.cycle_time_bound_s() + 1e-3
         t_start = get_sim_time("step") * 1e-12
         done = cocotb.start_soon(with_timeout(RisingEdge(dut.ca_done), round(limit_s * 1e9),

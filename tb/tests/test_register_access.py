@@ -154,7 +154,7 @@ FRAME_CLOCKS = 5        # one request cycle of the bench: accept, 3 clocks, repo
 def run_access(slave, requests, *, frames=160, faults=(), aborts=(), wbuf=None,
                start_wait=START_WAIT, read_back=64):
     """Frames one after the other; ``requests``: {frame index: request dict} (start strobed in
-    the frame's first clock); ``faults``: frame indices reported not OK; ``aborts``: frame
+    the frame's first clock, or in its clock ``"clock"``); ``faults``: frame indices reported not OK; ``aborts``: frame
     indices whose second clock strobes ``abort``. Returns the done events (frame, status,
     bytes done), the CDM bit of every frame, the ``busy`` per frame, and the read buffer."""
     dut = RegisterAccess(start_wait)
@@ -172,12 +172,13 @@ def run_access(slave, requests, *, frames=160, faults=(), aborts=(), wbuf=None,
             req = requests.get(n)
             cdm = None
             for c in range(FRAME_CLOCKS):
-                if c == 0 and req is not None:
+                start = req is not None and c == req.get("clock", 0)
+                if start:
                     ctx.set(dut.request.slave_id, req.get("slave_id", 0))
                     ctx.set(dut.request.address, req["address"])
                     ctx.set(dut.request.count, req["count"])
                     ctx.set(dut.request.write, int(req.get("write", False)))
-                ctx.set(dut.start, int(c == 0 and req is not None))
+                ctx.set(dut.start, int(start))
                 ctx.set(dut.abort, int(c == 1 and n in aborts))
                 if c == 1:
                     cdm = ctx.get(dut.cdm)              # the controller's copy: accepted here
@@ -360,13 +361,35 @@ def test_read_with_a_late_start_bit(delay):
 
 
 def test_frame_bound_start_bit_never_comes():
-    """The start bit later than the bound: REFUSED, cancelled; the whole access ends within
-    the documented bound."""
+    """The start bit later than the wait: REFUSED, cancelled; the access takes the documented
+    bound of a one-register read (docs/control-channel.md: 14 idle, 1 in flight at the start,
+    18 header, S, the expected start bit's frame and the wait, 14 zeros) but for the cycle in
+    flight at the start, which this access has not: frames 0 .. n have ended."""
     slave = Slave({0x43: 0x2A}, delay=START_WAIT + 5)
     out = run_access(slave, {0: {"address": 0x43, "count": 1}}, frames=90)
     n = _cancelled(out, REFUSED)
-    bound = IDLE_FRAMES + 1 + 18 + (14 + START_WAIT) + 1 + 1 + IDLE_FRAMES
-    assert n < bound
+    bound = IDLE_FRAMES + 1 + 18 + 2 + START_WAIT + IDLE_FRAMES
+    assert n + 1 == bound - 1
+
+
+def test_frame_bound_of_a_write_is_reached():
+    """The write bound of docs/control-channel.md, reached: 14 idle, 1 in flight at the start,
+    18 header, 13 frames to the last CRC bit (a 1: the CRC-4 of byte 0 is sent as 1111), 14
+    zeros. An access is aborted in the clock its S cycle is accepted: it ends at once (the 14
+    frames before S carried 0) while S is on its way; a one-byte write starts in that ``done``
+    clock, sees S end (its idle count starts again), sends 14 zeros and its frame, and its P
+    frame fails: DATA_FAULT after 14 zeros from the last 1."""
+    s0 = IDLE_FRAMES
+    at = s0 + 1 + IDLE_FRAMES + 18 + 13   # the write's P frame
+    out = run_access(Slave({0x40: 0}), {0: {"address": 0x42, "count": 1},
+                                         s0: {"address": 0x40, "count": 1, "write": True,
+                                              "clock": 3}},
+                     aborts={s0}, faults={at}, frames=at + 20, wbuf=[0])
+    assert out["cdm"][s0] == 1                                  # S of the first access
+    assert [d[:2] for d in out["done"]] == [(s0, ABORTED), (at + IDLE_FRAMES - 1, DATA_FAULT)]
+    assert out["cdm"][at - 1] == 1 and not any(out["cdm"][at:at + IDLE_FRAMES])
+    ended = out["done"][1][0] - s0 + 1          # frames s0 (the S, ended after the start) ..
+    assert ended == IDLE_FRAMES + 1 + 18 + 13 + IDLE_FRAMES == 60
 
 
 def test_write_does_not_wait_for_a_late_start_bit():
