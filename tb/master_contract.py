@@ -45,7 +45,7 @@ MA_HALF_PERIOD_MIN = 2
 
 # -- Register access (control channel), builds with the engine (the default build) ------------
 
-#: ``ca_status`` codes (docs/ports.md, "Register access"; docs/control-channel.md, "Statuses").
+#: ``ca_status`` codes (docs/ports.md, "Register access"; docs/control.md, "Statuses").
 CA_STATUS = {
     "OK": 0, "CRC4_ERROR": 1, "NO_ANSWER": 2, "REFUSED": 3, "ABORTED": 4, "DATA_FAULT": 5,
     "BAD_REQUEST": 6,
@@ -62,13 +62,13 @@ CA_COUNT_MAX = 64
 CA_ADDRESS_MAX = 0x7F
 
 #: ``start_wait_frames``: the longest wait for a read's late start bit, in frames (a generation
-#: parameter; docs/control-channel.md, "A late start bit": 16 by default).
+#: parameter; docs/control.md, "A late start bit": 16 by default).
 CA_START_WAIT_FRAMES = 16
 
 
 def ca_frame_bound(count, write, start_wait_frames=CA_START_WAIT_FRAMES):
     """The most request cycles one accepted access of ``count`` registers takes, ``ca_done``
-    included (docs/control-channel.md, "Bound: every access ends"): the cycles up to the last
+    included (docs/control.md, "Bound: every access ends"): the cycles up to the last
     one that can carry CDM = 1, then a cancel's 14 zeros. 14 idle, 1 in flight at
     ``ca_start``, 18 header, the registers before the last (14 each for a write, 14 +
     start_wait_frames for a read), the last one up to its last CDM = 1 (13 for a write, 2 +

@@ -25,7 +25,7 @@ Interfaces: ``layouts`` (configuration, result, faults, counters as data layouts
 port names made from them), ``params`` (``MasterParams``, the ``Status`` and ``Crc`` enums).
 
 Host side, no hardware: ``control_crc`` (the CRC-4 of register access) and ``bp3`` (BP3
-identification, EDS decoding, the settings derived from them; docs/control-channel.md).
+identification, EDS decoding, the settings derived from them; docs/control.md).
 
 ``bissmaster.protocol`` holds the protocol facts and imports nothing, so the encoder model can
 use it without pulling in Amaranth.

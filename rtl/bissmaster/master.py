@@ -44,7 +44,7 @@ class BissMaster(wiring.Component):
     :class:`SignOfLife`, :class:`SpwCheck` -> :class:`FrameVerdict` -> :class:`ResultRegisters`,
     :class:`CounterBank`. With ``register_access``, :class:`RegisterAccess` supplies each
     cycle's CDM bit to the controller (which holds MA low through the encoder's timeout for
-    CDM = 1) and takes each frame's CDS (``ca_*`` ports, docs/control-channel.md).
+    CDM = 1) and takes each frame's CDS (``ca_*`` ports, docs/control.md).
 
     Parameters
     ----------

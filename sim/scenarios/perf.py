@@ -386,7 +386,7 @@ def shortest_cycle_s(fmt, ma_hz, cable_m, timeout_s):
 
 async def power_up_again(tb):
     """Reset the core as ``Testbench.start`` does (its count of CDM = 0 frames before S starts
-    again at 0, docs/control-channel.md) and wait out the power-up break."""
+    again at 0, docs/control.md) and wait out the power-up break."""
     dut = tb.dut
     await tb.wait_idle()
     await tb.encoder_ready()

@@ -13,7 +13,7 @@ checks every frame the core reports while the control channel rides on the data 
   encoder model received against the reference master's layout
   (``encoder_model.control_master.control_frame_cdm``) after 14 idle cycles.
   ``read_registers`` / ``write_register`` raise :class:`AccessError` unless the status is OK:
-  the transport ``bissmaster.bp3.identify`` expects (docs/control-channel.md, "The
+  the transport ``bissmaster.bp3.identify`` expects (docs/control.md, "The
   transport"); :meth:`ControlChannel.run_host` runs such blocking host code against them.
 
 Status codes and counters come from ``tb/master_contract.py``, written from docs/ports.md;

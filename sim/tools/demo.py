@@ -25,7 +25,7 @@ DEMOS = {
            ["bissmaster.bp3.identify() ran against the simulated core through its ca_* ports; "
             "every frame during and after it",
             "was checked against the encoder model, the positions with the derived settings "
-            "only (docs/control-channel.md)."]),
+            "only (docs/control.md)."]),
 }
 
 

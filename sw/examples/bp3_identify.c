@@ -5,7 +5,7 @@
 
 /* A BP3 encoder (slave 0) on channel ch at 10 MHz MA: identify it, read its EDS, set the data
  * channel from the EDS. Before: the data channel set for a frame at least as long as the
- * encoder's (docs/control-channel.md, The data channel before identification). */
+ * encoder's (docs/control.md, The data channel before identification). */
 int bp3_setup(biss_channel_t *ch, biss_bp3_eds_t *eds)
 {
     biss_config_t cfg;

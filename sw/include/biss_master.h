@@ -16,7 +16,7 @@
  * different contexts (an ISR and the main loop) as long as one channel is not.
  *
  * Register access over the control channel (BiSS C CDM/CDS, the `ca` block at channel + 0x100,
- * docs/bus.md) and BP3 identification with its EDS (docs/control-channel.md, Host side) are
+ * docs/bus.md) and BP3 identification with its EDS (docs/control.md, Host side) are
  * blocking, polled calls: each waits for its access with a poll limit and never hangs.
  *
  * Documentation with an example: docs/driver.md.
@@ -135,7 +135,7 @@ typedef struct {
 } biss_channel_t;
 
 /* The default poll limit of a register access: the longest access (64 registers) takes at
- * most 1,969 request cycles (docs/control-channel.md, Bound); this allows 1,000 polls per
+ * most 1,969 request cycles (docs/control.md, Bound); this allows 1,000 polls per
  * cycle. Set ch->max_polls for the bus speed and MA rate at hand. */
 #define BISS_REG_MAX_POLLS 2000000u
 
@@ -289,7 +289,7 @@ biss_err_t biss_irq_clear(biss_channel_t *ch, uint32_t causes);     /* write 1 t
 
 /* -- Register access over the control channel (BiSS C CDM / CDS) ------------------------ */
 
-/* The engine's ca.state.status codes (docs/control-channel.md, Statuses). */
+/* The engine's ca.state.status codes (docs/control.md, Statuses). */
 typedef enum {
     BISS_CA_OK = 0,
     BISS_CA_CRC4_ERROR = 1,
@@ -308,7 +308,7 @@ typedef enum {
  * BISS_ERR_CA_*. On the limit the access is aborted and BISS_ERR_TIMEOUT returned. On an error
  * the first *done (may be NULL) bytes of buf hold the registers checked before the fault; on
  * BISS_OK *done = count. The data channel keeps reading positions meanwhile, and every cycle
- * must end OK (docs/control-channel.md, The data channel before identification). */
+ * must end OK (docs/control.md, The data channel before identification). */
 biss_err_t biss_reg_read(biss_channel_t *ch, unsigned slave_id, unsigned address, uint8_t *buf,
                          unsigned count, unsigned *done);
 
@@ -317,7 +317,7 @@ biss_err_t biss_reg_write(biss_channel_t *ch, unsigned slave_id, unsigned addres
                           const uint8_t *data, unsigned count, unsigned *done);
 
 /* Abort the running register access (ca.ctrl.abort); it ends with BISS_CA_ABORTED after the
- * cancel (docs/control-channel.md). */
+ * cancel (docs/control.md). */
 biss_err_t biss_reg_abort(biss_channel_t *ch);
 
 /* -- BP3 Standard Encoder Profile: identification and EDS --------------------------------- */

@@ -1189,13 +1189,13 @@ class MasterCrcHarness(Harness):
 # (e) Every accepted register access ends within its frame bound (issue 13)
 # =============================================================================================
 
-#: The control channel's frame counts, the harness's own reading of docs/control-channel.md
+#: The control channel's frame counts, the harness's own reading of docs/control.md
 #: (spec section 10), never the RTL's: CDM = 0 frames before S, as many in a row cancel a
 #: control frame; the header's frames (S .. W); one register's frames (S .. P).
 CONTROL_IDLE_FRAMES = 14
 CONTROL_HEADER_FRAMES = 18
 CONTROL_REGISTER_FRAMES = 14
-#: ``ca_status`` codes (docs/control-channel.md, "Statuses"); the most bytes of one access.
+#: ``ca_status`` codes (docs/control.md, "Statuses"); the most bytes of one access.
 ACCESS_OK = CA_STATUS["OK"]
 ACCESS_ABORTED = CA_STATUS["ABORTED"]
 ACCESS_BAD_REQUEST = CA_STATUS["BAD_REQUEST"]
@@ -1203,7 +1203,7 @@ ACCESS_COUNT_MAX = 64
 
 
 def access_frame_bound(count, start_wait_frames, write):
-    """docs/control-channel.md, "Bound: every access ends": the frames up to the last one that
+    """docs/control.md, "Bound: every access ends": the frames up to the last one that
     can carry CDM = 1, then the 14 CDM = 0 frames of a cancel (an access that ends OK ends
     earlier: its final frame comes 2 or 14 frames after that last 1). 14 idle frames, plus one
     in flight at ``ca_start`` (an S still under way from an access aborted before), the

@@ -21,7 +21,7 @@ def test_formal(check):
 
 
 def test_access_frame_bound_is_the_documented_one():
-    """The harness's bound (written from docs/control-channel.md) and the engine's own
+    """The harness's bound (written from docs/control.md) and the engine's own
     ``frame_bound`` give the same numbers: the proof is of the contract the RTL states."""
     from bissmaster.register_access import frame_bound
     from formal.harnesses import access_frame_bound

@@ -5,7 +5,7 @@ Cycle conventions: ``block_sim.py``. The bench plays the master's side of the fr
 a request cycle every few clocks, which takes the engine's ``cdm`` while "idle" (like the
 controller's copy) and reports the frame a few clocks later (``frame_end`` with the frame's
 CDS, its status OK or not, and the CDM bit it carried). The slave answers the CDM of frame n in
-the CDS of frame n + 1. Status codes are the test side's own table (docs/control-channel.md);
+the CDS of frame n + 1. Status codes are the test side's own table (docs/control.md);
 nothing is imported from the RTL but the block under test.
 """
 
@@ -15,7 +15,7 @@ from bissmaster.register_access import RegisterAccess
 
 from block_sim import simulate
 
-#: ``ca_status`` codes (docs/control-channel.md).
+#: ``ca_status`` codes (docs/control.md).
 OK, CRC4_ERROR, NO_ANSWER, REFUSED, ABORTED, DATA_FAULT, BAD_REQUEST = range(7)
 IDLE_FRAMES = 14        # spec: CDM = 0 frames before a control frame; as many cancel one
 START_WAIT = 4          # the engine's wait for a late start bit, in these tests
@@ -362,7 +362,7 @@ def test_read_with_a_late_start_bit(delay):
 
 def test_frame_bound_start_bit_never_comes():
     """The start bit later than the wait: REFUSED, cancelled; the access takes the documented
-    bound of a one-register read (docs/control-channel.md: 14 idle, 1 in flight at the start,
+    bound of a one-register read (docs/control.md: 14 idle, 1 in flight at the start,
     18 header, S, the expected start bit's frame and the wait, 14 zeros) but for the cycle in
     flight at the start, which this access has not: frames 0 .. n have ended."""
     slave = Slave({0x43: 0x2A}, delay=START_WAIT + 5)
@@ -373,7 +373,7 @@ def test_frame_bound_start_bit_never_comes():
 
 
 def test_frame_bound_of_a_write_is_reached():
-    """The write bound of docs/control-channel.md, reached: 14 idle, 1 in flight at the start,
+    """The write bound of docs/control.md, reached: 14 idle, 1 in flight at the start,
     18 header, 13 frames to the last CRC bit (a 1: the CRC-4 of byte 0 is sent as 1111), 14
     zeros. An access is aborted in the clock its S cycle is accepted: it ends at once (the 14
     frames before S carried 0) while S is on its way; a one-byte write starts in that ``done``
