@@ -10,7 +10,7 @@ BUS_TOPS := axil wb
 JOBS ?= 2
 # Every tool imports the sim package, tb/ and rtl/ through the venv (setup.sh writes its .pth).
 
-.PHONY: help setup rtl lint unit sim sim-all campaigns soak test demo demo-bp3 waves clean
+.PHONY: help setup rtl lint unit sim sim-all sim-long campaigns soak test demo demo-bp3 waves clean
 
 help:  ## list the targets
 	@grep -E '^[a-z0-9-]+:.*## ' $(MAKEFILE_LIST) | awk -F':.*## ' '{printf "  make %-9s %s\n", $$1, $$2}'
@@ -49,8 +49,11 @@ unit: setup  ## fast tests: encoder model, RTL blocks (Amaranth simulator), gene
 sim: setup  ## cocotb regression of the generated Verilog, the bus tops and the C driver on one simulator (SIM=...)
 	SIM=$(SIM) $(PY) -m pytest sim/test_regression.py sim/test_bus.py sim/test_driver.py -q
 
-sim-all: setup  ## cocotb regression, bus-top and C-driver scenarios on Verilator and Icarus, $(JOBS) workers
-	$(PY) -m pytest sim/test_regression.py sim/test_bus.py sim/test_driver.py -q -n $(JOBS)
+sim-all: setup  ## cocotb regression, bus-top and C-driver scenarios on Verilator and Icarus, $(JOBS) workers (not the long Icarus runs)
+	$(PY) -m pytest sim/test_regression.py sim/test_bus.py sim/test_driver.py -q -n $(JOBS) -m "not long"
+
+sim-long: setup  ## the Icarus runs of the scenarios marked long_on_icarus (minutes each; Verilator runs them in make test)
+	$(PY) -m pytest sim/test_regression.py -q -n $(JOBS) -m long
 
 campaigns: setup  ## reliability campaigns, fast slice (CRC, line faults, LC, config fuzz, random mix) + report
 	rm -rf sim_build/campaign/slice

@@ -17,11 +17,15 @@ SCENARIOS = [s for module in runner.REGRESSION_SCENARIOS for s in discovery.scen
 assert len({s.name for s in SCENARIOS}) == len(SCENARIOS), "scenario names must be unique"
 
 
-def marks(s):
+def marks(s, sim="verilator"):
     """A scenario marked ``expected_to_fail`` is a strict xfail: passing fails the run. The
     control-channel scenarios carry the mark ``control_channel`` (``-k control_channel`` runs
-    them, ``-k 'not control_channel'`` leaves them out)."""
+    them, ``-k 'not control_channel'`` leaves them out); the Icarus run of a scenario marked
+    ``long_on_icarus`` carries the mark ``long`` (make test: ``-m 'not long'``, make sim-long:
+    ``-m long``)."""
     out = [pytest.mark.xfail(strict=True, reason=s.xfail)] if s.xfail else []
+    if s.long_on_icarus and sim == "icarus":
+        out.append(pytest.mark.long)
     if s.module == runner.CONTROL_SCENARIOS:
         out.append(pytest.mark.control_channel)
     return out
@@ -29,7 +33,7 @@ def marks(s):
 
 CASES = [pytest.param(sim, build, s, runner.CLK_HZ, id="-".join(
              [sim] + ([] if build == discovery.DEFAULT_BUILD else [build]) + [s.name]),
-             marks=marks(s))
+             marks=marks(s, sim))
          for sim in SIMS for s in SCENARIOS for build in s.builds]
 CASES += [pytest.param("verilator", discovery.DEFAULT_BUILD, s, discovery.FAST_CLK_HZ,
                        id=f"verilator-200MHz-{s.name}", marks=marks(s))

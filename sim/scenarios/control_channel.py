@@ -26,6 +26,7 @@ from encoder_model.cocotb_encoder import Cable
 from encoder_model.control import Bp3Eds, ControlFaults, ControlSlave, RegisterFile
 from master_contract import CA_STATUS, CRC_CODE, MAX_DATA_BITS, STATUS, ca_frame_bound
 from sim.shared.control_channel import IDLE_FRAMES, ControlChannel
+from sim.shared.discovery import long_on_icarus
 from sim.shared.testbench import CLK_HZ, Testbench, preset
 
 #: A BP3 encoder's processing time (Ack to Start) here: short, so that a 1,000-frame
@@ -176,6 +177,7 @@ async def identify_point(tb, ctl, eds, fmt, ma_hz, cable_m, timeout_s, bank_sele
 
 
 @cocotb.test()
+@long_on_icarus
 async def bp3_identify_and_configure(dut):
     """bp3.identify() through the ports against BP3 encoder models, then the data channel set
     from derive_config() alone and positions read with it, every frame checked.
@@ -207,6 +209,7 @@ async def bp3_identify_and_configure(dut):
 
 
 @cocotb.test()
+@long_on_icarus
 async def bp3_registers_every_rate(dut):
     """Register reads at every MA rate over 0 m and 100 m, each with its own BP3 encoder:
     250 kHz DL_POS 1, 1 MHz DL_POS 36, 5 MHz DL_POS 55, 10 MHz DL_POS 24 (the data channel set
@@ -487,6 +490,7 @@ async def resolute_gives_no_answer(dut):
 # -- With the data channel running periodically --------------------------------------------------
 
 @cocotb.test()
+@long_on_icarus
 async def access_while_periodic(dut):
     """Register accesses while ``periodic`` reads positions: with a 40 us request period the
     cycles keep their exact start-to-start period through the accesses (a CDM hold included),

@@ -18,7 +18,7 @@ from encoder_model import frames
 from encoder_model.cocotb_encoder import Cable
 from master_contract import ENCODER_PRESETS, STATUS, STATUS_NAME
 from sim.shared import glitch
-from sim.shared.discovery import also_at_fast_clock, only_on_builds
+from sim.shared.discovery import also_at_fast_clock, long_on_icarus, only_on_builds
 from sim.shared.testbench import CABLES_M, CLK_HZ, MA_RATES_HZ, Testbench, half_period_for, preset
 
 #: Every preset of the issue: BiSS Safety, EVOLUTE, RESOLUTE BiSS C (master_contract) and BP3.
@@ -50,11 +50,13 @@ async def matrix(dut, names):
 
 @cocotb.test()
 @also_at_fast_clock
+@long_on_icarus
 async def safety_and_biss_c_presets(dut):
     await matrix(dut, ENCODER_PRESETS)
 
 
 @cocotb.test()
+@long_on_icarus
 async def bp3_lengths(dut):
     await matrix(dut, [f"bp3_{n}" for n in BP3_LENGTHS])
 

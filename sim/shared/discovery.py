@@ -15,6 +15,10 @@ at the default clock says so with a marker right under ``@cocotb.test()``:
     async def edge_jitter(dut): ...
 
     @cocotb.test()
+    @long_on_icarus                              # on Icarus only in make sim-long, not make test
+    async def bp3_lengths(dut): ...
+
+    @cocotb.test()
     @expected_to_fail("issue 12: ...")           # fails on today's core; pytest xfail, strict
     async def glitch_in_the_ack(dut): ...
 
@@ -53,6 +57,13 @@ def also_at_fast_clock(func):
     return func
 
 
+def long_on_icarus(func):
+    """Marker: on Icarus this scenario takes minutes and repeats what its Verilator run checks;
+    its Icarus run carries the pytest mark ``long`` and runs in ``make sim-long``, not in
+    ``make test``, which keeps within its time budget. Verilator runs it in both."""
+    return func
+
+
 def expected_to_fail(reason):
     """Marker: the scenario fails on today's core for ``reason`` (an open issue): pytest runs it
     as a strict xfail, so it fails loudly once it passes (remove the marker with the fix)."""
@@ -69,6 +80,7 @@ class Scenario:
     fast_clock: bool = False
     xfail: str | None = None            # expected_to_fail's reason
     buses: tuple = ("axil", "wb")       # bus scenarios: the bus tops to run on
+    long_on_icarus: bool = False        # Icarus run only in make sim-long
 
 
 def _dotted(node):
@@ -101,7 +113,7 @@ def scenarios(module):
         if "only_on_buses" in marks:
             buses = tuple(ast.literal_eval(a) for a in marks["only_on_buses"].args)
         found.append(Scenario(module, node.name, builds, "also_at_fast_clock" in marks, xfail,
-                              buses))
+                              buses, "long_on_icarus" in marks))
     if not found:
         raise ValueError(f"{module} has no @cocotb.test function")
     return found
