@@ -91,24 +91,34 @@ def tool_versions():
     return v
 
 
-def run_sim(sim, tests, env, keep_build, status, internal_clock=False):
+def run_sim(sim, tests, env, keep_build, status, internal_clock=False, bus=None):
     """Build (timed) and run each test in its own simulator process (timed).
 
     ``internal_clock``: the core wrapped by sim/shared/fastclk.py, its clock made in Verilog
-    instead of by cocotb (what the campaigns use); results are keyed "<sim>-iclk"."""
-    key = f"{sim}-{ICLK}" if internal_clock else sim
-    build_dir = runner.BUILD / f"{sim}{TAG}{'-' + ICLK if internal_clock else ''}"
+    instead of by cocotb (what the campaigns use); results are keyed "<sim>-iclk".
+    ``bus``: the committed bus top of that bus ("axil") instead of the core, running
+    sim/scenarios/bus_perf.py's tests; results keyed "<sim>-<bus>"."""
+    suffix = ICLK if internal_clock else bus
+    key = f"{sim}-{suffix}" if suffix else sim
+    build_dir = runner.BUILD / f"{sim}{TAG}{'-' + suffix if suffix else ''}"
     fresh = not keep_build or not build_dir.exists()
     if not keep_build:
         shutil.rmtree(build_dir, ignore_errors=True)
+    module, build_opts, run_opts = "sim.scenarios.perf", {}, {}
     if internal_clock:
         env = {**env, "BISS_PERF_VARIANT": ICLK}
+        build_opts = run_opts = {"internal_clock": True}
+    if bus:
+        env = {**env, "BISS_BUS": bus}
+        verilog, toplevel = runner.bus_top(bus)
+        module, build_opts, run_opts = BUS_LATENCY_MODULE, {"verilog": verilog,
+                                                            "toplevel": toplevel}, \
+            {"toplevel": toplevel}
     print(f"[{key}] building{' from scratch' if fresh else ' (incremental)'} ...", flush=True)
     t0 = time.perf_counter()
     try:
         with output_to(LOGS / f"{key}-build.log"):
-            r, b = runner.build(sim, tag=build_dir.name[len(sim):],
-                                **({"internal_clock": True} if internal_clock else {}))
+            r, b = runner.build(sim, tag=build_dir.name[len(sim):], **build_opts)
     except BaseException as e:              # the runner raises SystemExit on failures
         status["errors"].append(f"{key} build failed ({e!r}); see {LOGS / f'{key}-build.log'}")
         return
@@ -121,14 +131,13 @@ def run_sim(sim, tests, env, keep_build, status, internal_clock=False):
         t0 = time.perf_counter()
         try:
             with output_to(log):
-                xml = runner.run(r, b, "sim.scenarios.perf", testcase=test, extra_env=env,
-                                 **({"internal_clock": True} if internal_clock else {}))
+                xml = runner.run(r, b, module, testcase=test, extra_env=env, **run_opts)
             cases = ET.parse(xml).getroot().findall(".//testcase")
             bad = [c for c in cases if c.findall("failure") or c.findall("error")]
             if not cases or bad:
-                status["errors"].append(f"{sim} {test}: the cocotb test failed; see {log}")
+                status["errors"].append(f"{key} {test}: the cocotb test failed; see {log}")
         except BaseException as e:
-            status["errors"].append(f"{sim} {test}: {e!r}; see {log}")
+            status["errors"].append(f"{key} {test}: {e!r}; see {log}")
         status["run_s"][key][test] = time.perf_counter() - t0
 
 
@@ -404,44 +413,12 @@ def access_section(d, goals):
         f"frame at the minimum cycle time of spec section 9, {floor_cycle * 1e6:.4f} us. "
         f"Start-to-start measured: CDM = 0 cycles {span(c0)} ({len(c0)}), CDM = 1 cycles "
         f"{span(c1)} ({len(c1)}).")
+    return out
+
+
 # -- 6. Bus tops: trigger -> result readable over AXI4-Lite --------------------------------------
 BUS_LATENCY_MODULE = "sim.scenarios.bus_perf"
 BUS_LATENCY_TEST = "bus_trigger_latency"
-
-
-def run_bus_latency(env, keep_build, status, sim="verilator"):
-    """Build the committed biss_master_axil (sim_build/<sim>-bench-axil) and run
-    sim/scenarios/bus_perf.py's latency test; results keyed "<sim>-axil"."""
-    key = f"{sim}-axil"
-    verilog, toplevel = runner.bus_top("axil")
-    build_dir = runner.BUILD / f"{sim}{TAG}-axil"
-    fresh = not keep_build or not build_dir.exists()
-    if not keep_build:
-        shutil.rmtree(build_dir, ignore_errors=True)
-    print(f"[{key}] building{' from scratch' if fresh else ' (incremental)'} ...", flush=True)
-    t0 = time.perf_counter()
-    try:
-        with output_to(LOGS / f"{key}-build.log"):
-            r, b = runner.build(sim, verilog=verilog, tag=build_dir.name[len(sim):],
-                                toplevel=toplevel)
-    except BaseException as e:
-        status["errors"].append(f"{key} build failed ({e!r}); see {LOGS / f'{key}-build.log'}")
-        return
-    status["build_s"][key] = time.perf_counter() - t0
-    status["fresh_build"][key] = fresh
-    print(f"[{key}] {BUS_LATENCY_TEST} ...", flush=True)
-    log = LOGS / f"{key}-{BUS_LATENCY_TEST}.log"
-    t0 = time.perf_counter()
-    try:
-        with output_to(log):
-            xml = runner.run(r, b, BUS_LATENCY_MODULE, testcase=BUS_LATENCY_TEST,
-                             toplevel=toplevel, extra_env={**env, "BISS_BUS": "axil"})
-        cases = ET.parse(xml).getroot().findall(".//testcase")
-        if not cases or any(c.findall("failure") or c.findall("error") for c in cases):
-            status["errors"].append(f"{key} {BUS_LATENCY_TEST}: the cocotb test failed; see {log}")
-    except BaseException as e:
-        status["errors"].append(f"{key} {BUS_LATENCY_TEST}: {e!r}; see {log}")
-    status["run_s"][key] = {BUS_LATENCY_TEST: time.perf_counter() - t0}
 
 
 def bus_latency_section(d, goals):
@@ -517,7 +494,7 @@ def main():
         for sim in sims:
             run_sim(sim, ["sim_speed"], env, args.keep_build, status, internal_clock=True)
     if "verilator" in sims:
-        run_bus_latency(env, args.keep_build, status)
+        run_sim("verilator", [BUS_LATENCY_TEST], env, args.keep_build, status, bus="axil")
     # Running the overhead, latency and line-delay tests on Icarus too is possible
     # (--sims icarus alone runs just sim_speed); Verilator's figures are the reference.
 
