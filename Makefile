@@ -8,6 +8,10 @@ SIM ?= verilator
 VERILOG := rtl/generated/biss_master.v
 BUS_TOPS := axil wb
 JOBS ?= 2
+# make test runs the three in one pytest session (conftest.py orders it: long items first).
+UNIT_TESTS := tb/tests
+SIM_TESTS := sim/test_regression.py sim/test_bus.py sim/test_driver.py
+CAMPAIGN_TESTS := sim/test_reference.py sim/test_campaigns.py
 # Every tool imports the sim package, tb/ and rtl/ through the venv (setup.sh writes its .pth).
 
 .PHONY: help setup rtl lint unit sim sim-all sim-long campaigns soak test demo demo-bp3 waves clean
@@ -44,26 +48,31 @@ lint: setup  ## verilator --lint-only -Wall on the default Verilog, a BiSS-C-onl
 	@echo "lint: clean (default build, BiSS C 36-bit build, lean BiSS C build, AXI4-Lite and Wishbone bus tops)"
 
 unit: setup  ## fast tests: encoder model, RTL blocks (Amaranth simulator), generated Verilog up to date
-	$(PY) -m pytest tb/tests -q -n $(JOBS)
+	$(PY) -m pytest $(UNIT_TESTS) -q -n $(JOBS) --dist worksteal
 
 sim: setup  ## cocotb regression of the generated Verilog, the bus tops and the C driver on one simulator (SIM=...)
-	SIM=$(SIM) $(PY) -m pytest sim/test_regression.py sim/test_bus.py sim/test_driver.py -q
+	SIM=$(SIM) $(PY) -m pytest $(SIM_TESTS) -q
 
 sim-all: setup  ## cocotb regression, bus-top and C-driver scenarios on Verilator and Icarus, $(JOBS) workers (not the long Icarus runs)
-	$(PY) -m pytest sim/test_regression.py sim/test_bus.py sim/test_driver.py -q -n $(JOBS) -m "not long"
+	$(PY) -m sim.tools.prebuild
+	$(PY) -m pytest $(SIM_TESTS) -q -n $(JOBS) --dist worksteal -m "not long"
 
 sim-long: setup  ## the Icarus runs of the scenarios marked long_on_icarus (minutes each; Verilator runs them in make test)
 	$(PY) -m pytest sim/test_regression.py -q -n $(JOBS) -m long
 
 campaigns: setup  ## reliability campaigns, fast slice (CRC, line faults, LC, config fuzz, random mix) + report
 	rm -rf sim_build/campaign/slice
-	$(PY) -m pytest sim/test_reference.py sim/test_campaigns.py -q -n $(JOBS)
+	$(PY) -m pytest $(CAMPAIGN_TESTS) -q -n $(JOBS) --dist worksteal
 	$(PY) -m sim.tools.campaign_report sim_build/campaign/slice
 
 soak: setup  ## long soak: >= 100k random frames with random faults (Verilator) + every campaign x10
 	$(PY) -m sim.tools.soak --frames $(or $(FRAMES),100000) --scale $(or $(SCALE),10) --jobs $(JOBS)
 
-test: lint unit sim-all campaigns  ## everything CI runs: lint, unit tests, both simulators, campaign slice
+test: lint  ## everything CI runs: lint, then in one session unit tests, both simulators (not the long Icarus runs), campaign slice
+	rm -rf sim_build/campaign/slice
+	$(PY) -m sim.tools.prebuild
+	$(PY) -m pytest $(UNIT_TESTS) $(SIM_TESTS) $(CAMPAIGN_TESTS) -q -n $(JOBS) --dist worksteal -m "not long"
+	$(PY) -m sim.tools.campaign_report sim_build/campaign/slice
 
 demo: setup  ## RESOLUTE FS RSH at 10 MHz / 50 m and 5 MHz / 100 m: a table of frames and a waveform
 	$(PY) -m sim.tools.demo --sim $(SIM)

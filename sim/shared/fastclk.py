@@ -44,7 +44,9 @@ endmodule
 
 
 def write(verilog_path, out_path, clk_hz):
-    text = Path(verilog_path).read_text()
-    Path(out_path).parent.mkdir(parents=True, exist_ok=True)
-    Path(out_path).write_text(wrapper(text, clk_hz))
+    text = wrapper(Path(verilog_path).read_text(), clk_hz)
+    out = Path(out_path)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    if not out.exists() or out.read_text() != text:    # unchanged: keep its date, no rebuild
+        out.write_text(text)
     return out_path

@@ -5,6 +5,7 @@ Shared by the pytest entries (sim/test_regression.py, sim/test_campaigns.py) and
 """
 
 import contextlib
+import fcntl
 import os
 import subprocess
 import sys
@@ -137,25 +138,51 @@ def check(xml):
 _built = {}
 
 
+@contextlib.contextmanager
+def _exclusive(build_dir):
+    """Hold ``build_dir``'s lock: pytest-xdist workers share one build directory per
+    configuration. The first worker builds while the others wait; they then find it up to date
+    and change no file (Verilator skips identical runs and make has nothing to do, Icarus
+    rebuilds only when a source is newer), so a worker already simulating from it is safe.
+    Writing a source whose content has not changed must not touch it (``_write_if_changed``):
+    a newer date would rebuild under a running simulation."""
+    build_dir.parent.mkdir(parents=True, exist_ok=True)
+    with open(build_dir.parent / f"{build_dir.name}.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        yield
+
+
+def _write_if_changed(path, text):
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    if not path.exists() or path.read_text() != text:
+        path.write_text(text)
+    return path
+
+
 def build_once(sim, preset="default", *, internal_clock=False):
     """Build once per process and configuration; returns (runner, build_dir).
 
-    One build directory per pytest-xdist worker (``PYTEST_XDIST_WORKER``, else "main"): workers
-    never share a build in progress. A ``preset`` other than the default (the committed
-    Verilog) is generated here (bissmaster.generate's presets). ``internal_clock``: the
-    campaigns' build, the core with an in-simulator clock (sim/shared/fastclk.py).
+    The pytest-xdist workers share the build directory (``_exclusive``). A ``preset`` other
+    than the default (the committed Verilog) is generated here (bissmaster.generate's presets).
+    ``internal_clock``: the campaigns' build, the core with an in-simulator clock
+    (sim/shared/fastclk.py).
     """
     key = (sim, preset, internal_clock)
     if key not in _built:
-        worker = os.environ.get("PYTEST_XDIST_WORKER", "main")
-        verilog, tag = VERILOG, f"-{worker}"
+        verilog, tag = VERILOG, ""
         if preset != "default":
-            verilog, tag = BUILD / f"biss_master_{preset}-{worker}.v", f"-{preset}-{worker}"
-            verilog.parent.mkdir(parents=True, exist_ok=True)
-            generate.main(["--preset", preset, "-o", str(verilog)])
+            verilog, tag = BUILD / f"biss_master_{preset}.v", f"-{preset}"
         if internal_clock:
             tag = f"-campaign{tag}"
-        _built[key] = build(sim, verilog=verilog, tag=tag, internal_clock=internal_clock)
+        build_dir = BUILD / f"{sim}{tag}"
+        with _exclusive(build_dir):
+            if preset != "default":
+                scratch = BUILD / f"{verilog.stem}.{os.getpid()}.v"
+                generate.main(["--preset", preset, "-o", str(scratch)])
+                _write_if_changed(verilog, scratch.read_text())
+                scratch.unlink()
+            _built[key] = build(sim, verilog=verilog, tag=tag, internal_clock=internal_clock)
     return _built[key]
 
 
@@ -165,21 +192,22 @@ def bus_top(bus):
 
 
 def build_bus_once(sim, bus):
-    """Build the committed bus top once per process; returns (runner, build_dir)."""
+    """Build the committed bus top once per process (the workers share it, ``_exclusive``);
+    returns (runner, build_dir)."""
     key = (sim, "bus", bus)
     if key not in _built:
-        worker = os.environ.get("PYTEST_XDIST_WORKER", "main")
         verilog, toplevel = bus_top(bus)
-        _built[key] = build(sim, verilog=verilog, tag=f"-{bus}-{worker}", toplevel=toplevel)
+        with _exclusive(BUILD / f"{sim}-{bus}"):
+            _built[key] = build(sim, verilog=verilog, tag=f"-{bus}", toplevel=toplevel)
     return _built[key]
 
 
 def build_driver():
-    """Build the C driver (sw/Makefile: strict C99, ``make driver`` does the same) into this
-    worker's own folder; returns the path of ``libbissmaster.so``."""
-    worker = os.environ.get("PYTEST_XDIST_WORKER", "main")
-    out = BUILD / f"driver-{worker}"
-    subprocess.run(["make", "-s", "-C", str(ROOT / "sw"), f"BUILD={out}"], check=True)
+    """Build the C driver (sw/Makefile: strict C99, ``make driver`` does the same) into one
+    folder the workers share (``_exclusive``); returns the path of ``libbissmaster.so``."""
+    out = BUILD / "driver"
+    with _exclusive(out):
+        subprocess.run(["make", "-s", "-C", str(ROOT / "sw"), f"BUILD={out}"], check=True)
     return out / "libbissmaster.so"
 
 

@@ -9,7 +9,6 @@ and the frames per second of wall time.
 """
 
 import argparse
-import os
 import shutil
 import subprocess
 import sys
@@ -18,8 +17,6 @@ from concurrent.futures import ThreadPoolExecutor
 
 from sim.shared import discovery, runner
 from sim.tools import campaign_report
-
-os.environ.setdefault("PYTEST_XDIST_WORKER", "soak")     # one build directory for the soak
 
 RESULTS = runner.BUILD / "campaign" / "soak"
 MIX_CYCLES_AT_SCALE_1 = 600          # random_mix runs this many cycles at scale 1
