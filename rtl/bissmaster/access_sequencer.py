@@ -35,18 +35,14 @@ class AccessSequencer(wiring.Component):
     Parameters
     ----------
     start_wait_frames : int
-        The longest wait for a read's delayed slave start bit, in frames.
+        As :class:`~bissmaster.register_access.RegisterAccess` (checked there).
 
     Attributes
     ----------
-    request : In(access_request_layout)
-    start, abort : In(1)
-    frame_end, frame_ok, frame_cds, frame_cdm : In(1)
-        As :class:`~bissmaster.register_access.RegisterAccess`.
+    request, start, abort, frame_end, frame_ok, frame_cds, frame_cdm, busy, done, result
+        The ports of the same names of :class:`~bissmaster.register_access.RegisterAccess`.
     run_enough, seen_enough : In(1)
     crc_ok, echo_ok : In(1)
-    busy, done : Out(1)
-    result : Out(access_result_layout)
     send : Out(SEND_CONTROL)
     check : Out(CHECK_CONTROL)
     index : Out(6)
