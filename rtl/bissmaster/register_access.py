@@ -2,20 +2,19 @@
 
 from amaranth.hdl import *
 from amaranth.lib import wiring
-from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
 from . import protocol
-from .control_crc import CRC4
-from .layouts import (BUFFER_ADDRESS_BITS, BUFFER_LANES, BUFFER_WORD_BITS, BUFFER_WORDS,
-                      access_request_layout, access_result_layout, buffer_write_layout)
-from .params import AccessStatus
+from .access_buffers import AccessBuffers
+from .access_sequencer import HEADER_FRAMES, REGISTER_FRAMES, AccessSequencer
+from .cdm_sender import CdmSender
+from .cds_checker import CdsChecker
+from .idle_count import IdleCount
+from .layouts import (BUFFER_LANES, BUFFER_WORD_BITS, access_request_layout,
+                      access_result_layout, buffer_write_layout)
 
-#: The header's CDM bits after S: CTS, ID[2:0], ADR[6:0], CRC4[3:0], R, W (then S of register 0).
-HEADER_FRAMES = 18
-#: Frames of one register, from its S to its P: S, 8 data, 4 CRC, P (the slave start bit comes in
-#: the CDS of the frame after S; a read may delay it).
-REGISTER_FRAMES = 14
+__all__ = ["HEADER_FRAMES", "REGISTER_FRAMES", "RegisterAccess", "frame_bound"]
+
 _IDLE = protocol.CDM_IDLE_FRAMES
 
 
@@ -101,6 +100,13 @@ class RegisterAccess(wiring.Component):
 
     While ``busy`` (``frames``), the master starts request cycles itself if the host does not.
 
+    **Inside**: :class:`~bissmaster.access_sequencer.AccessSequencer` leads the access frame by
+    frame and decides how it ends; :class:`~bissmaster.cdm_sender.CdmSender` holds the bits
+    sent (header, write byte, their CRC-4) and puts the one due on ``cdm``;
+    :class:`~bissmaster.cds_checker.CdsChecker` collects a register's CDS bits and checks their
+    CRC-4 and a write's echo; :class:`~bissmaster.idle_count.IdleCount` counts the CDM = 0
+    frames; :class:`~bissmaster.access_buffers.AccessBuffers` holds the bytes.
+
     Parameters
     ----------
     start_wait_frames : int
@@ -164,220 +170,43 @@ class RegisterAccess(wiring.Component):
 
     def elaborate(self, platform):
         m = Module()
-        depth = protocol.BANK_BYTES
+        m.submodules.sequencer = sequencer = AccessSequencer(self._start_wait)
+        m.submodules.sender = sender = CdmSender()
+        m.submodules.checker = checker = CdsChecker()
+        m.submodules.idle = idle = IdleCount()
+        m.submodules.buffers = buffers = AccessBuffers()
 
-        # The buffers: the host writes bytes to send and reads bytes received, a word (4 byte
-        # lanes) at a time; the engine takes and stores one byte (one lane) at a time.
-        width = BUFFER_LANES * 8
-        m.submodules.wbuf = wbuf = Memory(shape=width, depth=BUFFER_WORDS, init=[])
-        host_write = wbuf.write_port(granularity=8)
-        word_to_send = wbuf.read_port()
-        m.submodules.rbuf = rbuf = Memory(shape=width, depth=BUFFER_WORDS, init=[])
-        byte_received = rbuf.write_port(granularity=8)
-        host_read = rbuf.read_port()
+        # The host: the request and its strobes in, the result out; the buffers' word ports.
         m.d.comb += [
-            host_write.addr.eq(self.wbuf.addr), host_write.data.eq(self.wbuf.data),
-            host_write.en.eq(self.wbuf.en),
-            host_read.addr.eq(self.rbuf_addr), host_read.en.eq(self.rbuf_en),
-            self.rbuf_data.eq(host_read.data),
+            sequencer.request.eq(self.request), sequencer.start.eq(self.start),
+            sequencer.abort.eq(self.abort),
+            self.busy.eq(sequencer.busy), self.frames.eq(sequencer.busy),
+            self.done.eq(sequencer.done), self.result.eq(sequencer.result),
+            sender.request.eq(self.request),
+            buffers.wbuf.eq(self.wbuf), buffers.rbuf_addr.eq(self.rbuf_addr),
+            buffers.rbuf_en.eq(self.rbuf_en), self.rbuf_data.eq(buffers.rbuf_data),
         ]
 
-        # CRC-4 of the bits sent (header, write data) and of the bits received (data, echo).
-        # The control channel's CRC-4 (control_crc.CRC4), bit-serial, one per direction.
-        m.submodules.tx_crc = tx_crc = CRC4(data_width=1).create()
-        m.submodules.rx_crc = rx_crc = CRC4(data_width=1).create()
+        # The frames: each ended one reported to the sequencer and the idle count.
+        for block in (sequencer, idle):
+            m.d.comb += [block.frame_end.eq(self.frame_end), block.frame_ok.eq(self.frame_ok),
+                         block.frame_cdm.eq(self.frame_cdm)]
+        m.d.comb += [sequencer.frame_cds.eq(self.frame_cds),
+                     sequencer.run_enough.eq(idle.run_enough),
+                     sequencer.seen_enough.eq(idle.seen_enough)]
 
-        req = Signal(access_request_layout())
-        index = Signal(BUFFER_ADDRESS_BITS)         # the register (byte) in progress
-        step = Signal(range(HEADER_FRAMES))         # frame within the header or the register
-        header = Signal(HEADER_FRAMES)              # the header's CDM bits, MSB first
-        to_send = Signal(8)                         # the write byte, shifted out MSB first
-        sent = Signal(8)                            # the write byte, kept for the echo
-        got = Signal(8)                             # DATA bits received, MSB first
-        got_crc = Signal(protocol.CRC4_WIDTH - 1)   # the first three CRC bits received
-        waited = Signal(range(self._start_wait + 1))
-        ending = Signal(AccessStatus)               # the status a cancel ends with
-        lane = index[:2]                            # the byte's lane in its buffer word
-        lane_enable = Cat(lane == k for k in range(BUFFER_LANES))
-        m.d.comb += word_to_send.addr.eq(index[2:])
-        byte_to_send = word_to_send.data.word_select(lane, 8)
+        # CDM out: the sequencer says which bit, the sender holds it (a write byte from the
+        # write buffer).
+        wiring.connect(m, sequencer.send, sender.control)
+        m.d.comb += [sender.byte.eq(buffers.byte_to_send), self.cdm.eq(sender.cdm)]
 
-        # Consecutive ended cycles with CDM = 0, up to 14: always counted. ``idle_run`` counts
-        # every reported cycle (a cancel's 14 zeros: best effort, bounded even when the encoder
-        # stopped answering); ``idle_seen`` only cycles that delivered a good frame, so the
-        # encoder certainly saw their CDM = 0 (a NO_ACK cycle or a BAD_CONFIG report restarts
-        # it): S is sent only after 14 of those.
-        def run_after(run, reset):
-            return Mux(reset, 0, Mux(run == _IDLE, _IDLE, run + 1))
-
-        idle_run = Signal(range(_IDLE + 1))
-        idle_seen = Signal(range(_IDLE + 1))
-        idle_after = run_after(idle_run, self.frame_cdm)
-        seen_after = run_after(idle_seen, self.frame_cdm | ~self.frame_ok)
-        with m.If(self.frame_end):
-            m.d.sync += [idle_run.eq(idle_after), idle_seen.eq(seen_after)]
-        idle_enough = Mux(self.frame_end, idle_after, idle_run) == _IDLE
-        seen_enough = Mux(self.frame_end, seen_after, idle_seen) == _IDLE
-
-        frame = self.frame_end
-        cds = self.frame_cds
-        write = req.write
-        # The CRC bit ``k`` (0 = first sent, the MSB) of the bits sent so far.
-        def tx_crc_bit(k):
-            return tx_crc.crc.bit_select(~k[:2], 1)
-
-        m.d.sync += self.done.eq(0)
-
-        def finish(status):
-            m.d.sync += [self.done.eq(1), self.result.status.eq(status)]
-            m.next = "IDLE"
-
-        def cancel(status):
-            m.d.sync += ending.eq(status)
-            m.next = "CANCEL"
-
-        # The request's bounds: 1 .. 64 bytes, the last address at most 0x7F.
-        count = self.request.count
-        last = self.request.address + count
-        bad = (count == 0) | (count > depth) | (last > 2**protocol.CONTROL_ADDRESS_BITS)
-
-        with m.FSM(name="access_fsm") as fsm:
-            with m.State("IDLE"):
-                with m.If(self.start):
-                    with m.If(bad):
-                        finish(AccessStatus.BAD_REQUEST)
-                        m.d.sync += self.result.bytes_done.eq(0)
-                    with m.Else():
-                        m.d.sync += [
-                            req.eq(self.request), index.eq(0), self.result.bytes_done.eq(0),
-                            header.eq(Cat(self.request.write, ~self.request.write,
-                                          C(0, protocol.CRC4_WIDTH), self.request.address,
-                                          self.request.slave_id, C(1, 1), C(1, 1))),
-                        ]
-                        m.next = "LEAD"
-
-            with m.State("LEAD"):
-                # Idle frames before S; nothing sent yet, so an abort ends at once, and so does
-                # a frame that failed (the data channel is not fit to carry the access).
-                with m.If(self.abort):
-                    finish(AccessStatus.ABORTED)
-                with m.Elif(self.frame_end & ~self.frame_ok):
-                    finish(AccessStatus.DATA_FAULT)
-                with m.Elif(seen_enough):
-                    m.d.sync += step.eq(0)
-                    m.next = "HEADER"
-
-            with m.State("HEADER"):
-                m.d.comb += self.cdm.eq(Mux((step >= 12) & (step < 16), tx_crc_bit(step[:2]),
-                                            header[-1]))
-                with m.If(self.abort):
-                    cancel(AccessStatus.ABORTED)
-                with m.Elif(frame & (step == 0) & ~self.frame_cdm):
-                    pass        # a cycle accepted before S was due: one more idle frame
-                with m.Elif(frame & ~self.frame_ok):
-                    cancel(AccessStatus.DATA_FAULT)
-                with m.Elif(frame & (step == 1) & ~cds):
-                    cancel(AccessStatus.NO_ANSWER)                  # no IDL0
-                with m.Elif(frame & (step == HEADER_FRAMES - 1) & (cds == write)):
-                    cancel(AccessStatus.REFUSED)                    # no echo of R
-                with m.Elif(frame):
-                    m.d.sync += [header.eq(header << 1), step.eq(step + 1)]
-                    # The CRC-4 covers CTS, ID and ADR (frames 1 .. 11), not S.
-                    m.d.comb += [tx_crc.start.eq(step == 0),
-                                 tx_crc.valid.eq((step >= 1) & (step <= 11)),
-                                 tx_crc.data.eq(header[-1])]
-                    with m.If(step == HEADER_FRAMES - 1):
-                        m.d.sync += step.eq(0)
-                        m.next = "REGISTER"
-
-            with m.State("REGISTER"):
-                # step: 0 S, 1 .. 8 DATA, 9 .. 12 CRC4, 13 P. The CDS of step k + 1 answers
-                # the CDM of step k: start bit in 1, DATA in 2 .. 9, CRC4 in 10 .. 13.
-                with m.If(step == 0):
-                    m.d.comb += self.cdm.eq(1)
-                with m.Elif((step >= 1) & (step <= 8)):
-                    m.d.comb += self.cdm.eq(write & to_send[-1])
-                with m.Elif((step >= 9) & (step <= 12)):
-                    m.d.comb += self.cdm.eq(write & tx_crc_bit(step - 9))
-                # The write data's CRC-4, over DATA as sent (steps 1 .. 8).
-                m.d.comb += [tx_crc.data.eq(to_send[-1]),
-                             tx_crc.valid.eq(frame & (step >= 1) & (step <= 8))]
-                crc_received = Cat(cds, got_crc)
-                with m.If(self.abort):
-                    cancel(AccessStatus.ABORTED)
-                with m.Elif(frame & ~self.frame_ok):
-                    cancel(AccessStatus.DATA_FAULT)
-                with m.Elif(frame & (step == 0)):
-                    # The echo of W (register 0) or of the previous register's P.
-                    with m.If(cds != Mux(index == 0, write, 0)):
-                        cancel(AccessStatus.REFUSED)
-                    with m.Else():
-                        m.d.sync += [to_send.eq(byte_to_send), sent.eq(byte_to_send),
-                                     step.eq(1)]
-                        m.d.comb += tx_crc.start.eq(1)
-                with m.Elif(frame & (step == 1)):
-                    m.d.sync += to_send.eq(to_send << 1)
-                    with m.If(cds):
-                        m.d.sync += step.eq(2)
-                    with m.Elif(~write):
-                        m.d.sync += waited.eq(0)
-                        m.next = "WAIT"
-                    with m.Else():
-                        cancel(AccessStatus.REFUSED)                # no slave start bit
-                with m.Elif(frame & (step < REGISTER_FRAMES - 1)):
-                    m.d.sync += [to_send.eq(to_send << 1), step.eq(step + 1)]
-                    with m.If(step <= 9):
-                        m.d.sync += got.eq(Cat(cds, got))
-                        m.d.comb += [rx_crc.start.eq(step == 2), rx_crc.valid.eq(1),
-                                     rx_crc.data.eq(cds)]
-                    with m.Else():
-                        m.d.sync += got_crc.eq(Cat(cds, got_crc))
-                with m.Elif(frame):
-                    # The last CRC bit: check the byte (the P goes out with this frame).
-                    with m.If(crc_received != rx_crc.crc):
-                        cancel(AccessStatus.CRC4_ERROR)
-                    with m.Elif(write & (got != sent)):
-                        cancel(AccessStatus.REFUSED)                # the slave kept another byte
-                    with m.Else():
-                        m.d.comb += [byte_received.addr.eq(index[2:]),
-                                     byte_received.data.eq(got.replicate(BUFFER_LANES)),
-                                     byte_received.en.eq(Mux(write, 0, lane_enable))]
-                        m.d.sync += [self.result.bytes_done.eq(index + 1), step.eq(0)]
-                        with m.If(index + 1 == req.count):
-                            m.next = "FINAL"
-                        with m.Else():
-                            m.d.sync += index.eq(index + 1)
-
-            with m.State("WAIT"):
-                # A read's slave start bit, late: CDM = 1 until it comes.
-                m.d.comb += self.cdm.eq(1)
-                with m.If(self.abort):
-                    cancel(AccessStatus.ABORTED)
-                with m.Elif(frame & ~self.frame_ok):
-                    cancel(AccessStatus.DATA_FAULT)
-                with m.Elif(frame & cds):
-                    m.d.sync += step.eq(2)
-                    m.next = "REGISTER"
-                with m.Elif(frame):
-                    m.d.sync += waited.eq(waited + 1)
-                    with m.If(waited == self._start_wait - 1):
-                        cancel(AccessStatus.REFUSED)
-
-            with m.State("FINAL"):
-                # CDM = 0; the CDS is the echo of the last P.
-                with m.If(self.abort):
-                    cancel(AccessStatus.ABORTED)
-                with m.Elif(frame & ~self.frame_ok):
-                    cancel(AccessStatus.DATA_FAULT)
-                with m.Elif(frame & cds):
-                    cancel(AccessStatus.REFUSED)
-                with m.Elif(frame):
-                    finish(AccessStatus.OK)
-
-            with m.State("CANCEL"):
-                # CDM = 0 until 14 consecutive CDM = 0 frames have ended.
-                with m.If(idle_enough):
-                    finish(ending)
-
-        m.d.comb += [self.busy.eq(~fsm.ongoing("IDLE")), self.frames.eq(self.busy)]
+        # CDS in: the checker takes the bits the sequencer names; a read's byte goes to the
+        # read buffer.
+        wiring.connect(m, sequencer.check, checker.control)
+        m.d.comb += [
+            checker.cds.eq(self.frame_cds), checker.sent.eq(sender.sent),
+            sequencer.crc_ok.eq(checker.crc_ok), sequencer.echo_ok.eq(checker.echo_ok),
+            buffers.index.eq(sequencer.index), buffers.store.eq(sequencer.store),
+            buffers.byte_received.eq(checker.byte),
+        ]
         return m

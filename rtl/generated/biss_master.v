@@ -828,13 +828,13 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .frame_cds(\cds$219 ),
     .frame_end(report),
     .frame_ok(\valid$215 ),
-    .host_read__addr(ca_rbuf_addr),
-    .host_read__en(ca_rbuf_en),
+    .rbuf_addr(ca_rbuf_addr),
     .rbuf_data(ca_rbuf_data),
+    .rbuf_en(ca_rbuf_en),
     .request(\request$231 ),
     .result(result),
     .rst(rst),
-    .\start$44 (ca_start),
+    .start(ca_start),
     .wbuf(wbuf)
   );
   \biss_master.results  results (
@@ -5819,194 +5819,97 @@ module \biss_master.ma_stop (rst, words, w1_enable, clear, rises, enough, \start
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.register_access (abort, host_read__addr, host_read__en, clk, rst, frame_end, frame_ok, busy, rbuf_data, request, wbuf, frame_cdm, frame_cds, cdm, done, result, \start$44 );
-  reg \$auto$verilog_backend.cc:2355:dump_module$38  = 0;
-  wire \$1 ;
-  wire \$10 ;
-  wire \$100 ;
-  wire \$101 ;
-  wire \$102 ;
-  wire \$103 ;
-  wire \$104 ;
-  wire \$105 ;
-  wire \$106 ;
-  wire \$107 ;
-  wire \$108 ;
-  wire \$109 ;
-  wire \$11 ;
-  wire [18:0] \$110 ;
-  wire [5:0] \$111 ;
-  wire \$112 ;
-  wire \$113 ;
-  wire \$114 ;
-  wire \$115 ;
-  wire \$116 ;
-  wire \$117 ;
-  wire \$118 ;
-  wire \$119 ;
-  wire \$12 ;
-  wire \$120 ;
-  wire \$121 ;
-  wire \$122 ;
-  wire \$123 ;
-  wire [7:0] \$124 ;
-  wire [7:0] \$125 ;
-  wire [8:0] \$126 ;
-  wire \$127 ;
-  wire [8:0] \$128 ;
-  wire [5:0] \$129 ;
-  wire \$13 ;
-  wire \$130 ;
-  wire \$131 ;
-  wire \$132 ;
-  wire \$133 ;
-  wire [6:0] \$134 ;
-  wire [6:0] \$135 ;
-  wire \$136 ;
-  wire [6:0] \$137 ;
-  wire \$138 ;
-  wire \$139 ;
-  wire \$14 ;
-  wire \$140 ;
-  wire [5:0] \$141 ;
-  wire \$142 ;
-  wire \$143 ;
-  wire \$144 ;
-  wire \$145 ;
-  wire \$146 ;
-  wire [4:0] \$147 ;
-  wire [4:0] \$148 ;
-  wire [4:0] \$149 ;
-  wire \$15 ;
-  wire [4:0] \$150 ;
-  wire \$151 ;
-  reg [3:0] \$152 ;
-  reg [3:0] \$153 ;
-  reg \$154 ;
-  reg [9:0] \$155 ;
-  reg [2:0] \$156 ;
-  reg [17:0] \$157 ;
-  reg [5:0] \$158 ;
-  reg [17:0] \$159 ;
-  wire \$16 ;
-  reg [4:0] \$160 ;
-  reg [2:0] \$161 ;
-  reg [7:0] \$162 ;
-  reg [7:0] \$163 ;
-  reg [4:0] \$164 ;
-  reg [7:0] \$165 ;
-  reg [2:0] \$166 ;
-  wire \$17 ;
-  wire \$18 ;
-  wire \$19 ;
-  wire \$2 ;
-  wire \$20 ;
-  wire \$21 ;
-  wire \$22 ;
-  wire \$23 ;
-  wire \$24 ;
-  wire \$25 ;
-  wire \$26 ;
-  wire \$27 ;
-  wire \$28 ;
-  wire \$29 ;
-  wire [5:0] \$291 ;
-  wire [5:0] \$294 ;
-  wire \$3 ;
-  wire \$30 ;
-  wire \$31 ;
-  wire \$32 ;
-  wire [5:0] \$33 ;
-  wire [1:0] \$34 ;
-  wire \$35 ;
-  wire \$36 ;
-  wire \$37 ;
-  wire \$38 ;
-  wire \$39 ;
-  wire [1:0] \$4 ;
-  wire \$40 ;
-  wire \$41 ;
-  wire \$42 ;
-  wire \$43 ;
-  wire \$44 ;
-  wire \$45 ;
-  wire \$46 ;
-  wire \$47 ;
-  wire \$48 ;
-  wire \$49 ;
-  wire \$5 ;
-  wire \$50 ;
-  wire \$51 ;
-  wire \$52 ;
-  wire \$53 ;
-  wire \$54 ;
-  wire \$55 ;
-  wire \$56 ;
-  wire \$57 ;
-  wire \$58 ;
-  wire \$59 ;
-  wire \$6 ;
-  wire \$60 ;
-  wire [3:0] \$61 ;
-  wire \$62 ;
-  wire \$63 ;
-  wire \$64 ;
-  wire \$65 ;
-  wire \$66 ;
-  wire \$67 ;
-  wire \$68 ;
-  wire \$69 ;
-  wire \$7 ;
-  wire [4:0] \$70 ;
-  wire [4:0] \$71 ;
-  wire [4:0] \$72 ;
-  wire \$73 ;
-  wire \$74 ;
-  wire \$75 ;
-  wire [4:0] \$76 ;
-  wire [4:0] \$77 ;
-  wire [4:0] \$78 ;
-  wire \$79 ;
-  wire \$8 ;
-  wire \$80 ;
-  wire \$81 ;
-  wire [7:0] \$82 ;
-  wire \$83 ;
-  wire \$84 ;
-  wire \$85 ;
-  wire \$86 ;
-  wire \$87 ;
-  wire \$88 ;
-  wire \$89 ;
-  wire \$9 ;
-  wire \$90 ;
-  wire [4:0] \$91 ;
-  wire [4:0] \$92 ;
-  wire [4:0] \$93 ;
-  wire [4:0] \$94 ;
-  wire \$95 ;
-  wire \$96 ;
-  wire \$97 ;
-  wire \$98 ;
-  wire \$99 ;
+module \biss_master.register_access (abort, rbuf_addr, rbuf_en, clk, rst, frame_end, frame_ok, busy, rbuf_data, request, wbuf, frame_cdm, frame_cds, done, result, cdm, start);
   input abort;
   wire abort;
-  reg [2:0] access_fsm_state = 3'h0;
+  wire \abort$5 ;
   output busy;
   wire busy;
-  reg [3:0] byte_received__addr;
-  reg [31:0] byte_received__data;
-  reg [3:0] byte_received__en;
+  wire \busy$7 ;
+  wire [7:0] \byte ;
+  wire [7:0] \byte$75 ;
+  wire [7:0] byte_received;
+  wire [7:0] byte_to_send;
   output cdm;
-  reg cdm;
+  wire cdm;
+  wire \cdm$56 ;
+  wire cds;
+  wire check__first;
+  wire check__take_crc;
+  wire check__take_data;
   input clk;
   wire clk;
-  wire [3:0] crc;
-  wire [3:0] \crc$31 ;
-  reg data;
-  reg \data$29 ;
+  wire [1:0] control__crc_bit;
+  wire control__crc_start;
+  wire control__crc_valid;
+  wire control__first;
+  wire control__load_byte;
+  wire control__load_header;
+  wire control__shift_byte;
+  wire control__shift_header;
+  (* enum_base_type = "CdmSource" *)
+  (* enum_value_000 = "ZERO" *)
+  (* enum_value_001 = "ONE" *)
+  (* enum_value_010 = "HEADER" *)
+  (* enum_value_011 = "DATA" *)
+  (* enum_value_100 = "CRC" *)
+  wire [2:0] control__source;
+  wire control__take_crc;
+  wire control__take_data;
+  wire crc_ok;
+  wire \crc_ok$67 ;
   output done;
-  reg done = 1'h0;
+  wire done;
+  wire \done$10 ;
+  wire echo_ok;
+  wire \echo_ok$69 ;
+  input frame_cdm;
+  wire frame_cdm;
+  wire \frame_cdm$27 ;
+  wire \frame_cdm$30 ;
+  input frame_cds;
+  wire frame_cds;
+  wire \frame_cds$32 ;
+  input frame_end;
+  wire frame_end;
+  wire \frame_end$23 ;
+  wire \frame_end$28 ;
+  input frame_ok;
+  wire frame_ok;
+  wire \frame_ok$25 ;
+  wire \frame_ok$29 ;
+  wire frames;
+  wire [5:0] index;
+  wire [5:0] \index$71 ;
+  input [3:0] rbuf_addr;
+  wire [3:0] rbuf_addr;
+  wire [3:0] \rbuf_addr$17 ;
+  output [31:0] rbuf_data;
+  wire [31:0] rbuf_data;
+  wire [31:0] \rbuf_data$21 ;
+  input rbuf_en;
+  wire rbuf_en;
+  wire \rbuf_en$19 ;
+  input [17:0] request;
+  wire [17:0] request;
+  wire [17:0] \request$1 ;
+  wire [6:0] \request$1.address ;
+  wire [6:0] \request$1.count ;
+  wire [2:0] \request$1.slave_id ;
+  wire \request$1.write ;
+  wire [17:0] \request$13 ;
+  wire [6:0] \request$13.address ;
+  wire [6:0] \request$13.count ;
+  wire [2:0] \request$13.slave_id ;
+  wire \request$13.write ;
+  wire [6:0] \request.address ;
+  wire [6:0] \request.count ;
+  wire [2:0] \request.slave_id ;
+  wire \request.write ;
+  output [9:0] result;
+  wire [9:0] result;
+  wire [9:0] \result$12 ;
+  wire [6:0] \result$12.bytes_done ;
   (* enum_base_type = "AccessStatus" *)
   (* enum_value_000 = "OK" *)
   (* enum_value_001 = "CRC4_ERROR" *)
@@ -6015,47 +5918,7 @@ module \biss_master.register_access (abort, host_read__addr, host_read__en, clk,
   (* enum_value_100 = "ABORTED" *)
   (* enum_value_101 = "DATA_FAULT" *)
   (* enum_value_110 = "BAD_REQUEST" *)
-  reg [2:0] ending = 3'h0;
-  input frame_cdm;
-  wire frame_cdm;
-  input frame_cds;
-  wire frame_cds;
-  input frame_end;
-  wire frame_end;
-  input frame_ok;
-  wire frame_ok;
-  wire frames;
-  reg [7:0] got = 8'h00;
-  reg [2:0] got_crc = 3'h0;
-  reg [17:0] header = 18'h00000;
-  input [3:0] host_read__addr;
-  wire [3:0] host_read__addr;
-  wire [31:0] host_read__data;
-  input host_read__en;
-  wire host_read__en;
-  wire [3:0] host_write__addr;
-  wire [31:0] host_write__data;
-  wire [3:0] host_write__en;
-  reg [3:0] idle_run = 4'h0;
-  reg [3:0] idle_seen = 4'h0;
-  reg [5:0] index = 6'h00;
-  wire [3:0] rbuf_addr;
-  output [31:0] rbuf_data;
-  wire [31:0] rbuf_data;
-  wire rbuf_en;
-  reg [17:0] req = 18'h00000;
-  wire [6:0] \req.address ;
-  wire [6:0] \req.count ;
-  wire [2:0] \req.slave_id ;
-  wire \req.write ;
-  input [17:0] request;
-  wire [17:0] request;
-  wire [6:0] \request.address ;
-  wire [6:0] \request.count ;
-  wire [2:0] \request.slave_id ;
-  wire \request.write ;
-  output [9:0] result;
-  reg [9:0] result = 10'h000;
+  wire [2:0] \result$12.status ;
   wire [6:0] \result.bytes_done ;
   (* enum_base_type = "AccessStatus" *)
   (* enum_value_000 = "OK" *)
@@ -6068,16 +5931,220 @@ module \biss_master.register_access (abort, host_read__addr, host_read__en, clk,
   wire [2:0] \result.status ;
   input rst;
   wire rst;
-  reg [7:0] sent = 8'h00;
-  reg start;
-  reg \start$27 ;
-  input \start$44 ;
-  wire \start$44 ;
-  reg [4:0] step = 5'h00;
-  reg [7:0] to_send = 8'h00;
-  reg valid;
-  reg \valid$28 ;
-  reg [4:0] waited = 5'h00;
+  wire run_enough;
+  wire \run_enough$34 ;
+  wire seen_enough;
+  wire \seen_enough$36 ;
+  wire [1:0] send__crc_bit;
+  wire send__crc_start;
+  wire send__crc_valid;
+  wire send__load_byte;
+  wire send__load_header;
+  wire send__shift_byte;
+  wire send__shift_header;
+  (* enum_base_type = "CdmSource" *)
+  (* enum_value_000 = "ZERO" *)
+  (* enum_value_001 = "ONE" *)
+  (* enum_value_010 = "HEADER" *)
+  (* enum_value_011 = "DATA" *)
+  (* enum_value_100 = "CRC" *)
+  wire [2:0] send__source;
+  wire [7:0] sent;
+  wire [7:0] \sent$65 ;
+  input start;
+  wire start;
+  wire \start$3 ;
+  wire store;
+  wire \store$73 ;
+  input [39:0] wbuf;
+  wire [39:0] wbuf;
+  wire [39:0] \wbuf$15 ;
+  wire [3:0] \wbuf$15.addr ;
+  wire [31:0] \wbuf$15.data ;
+  wire [3:0] \wbuf$15.en ;
+  wire [3:0] \wbuf.addr ;
+  wire [31:0] \wbuf.data ;
+  wire [3:0] \wbuf.en ;
+  \biss_master.register_access.buffers  buffers (
+    .byte_received(byte_received),
+    .byte_to_send(\byte ),
+    .clk(clk),
+    .host_read__addr(rbuf_addr),
+    .host_read__en(rbuf_en),
+    .index(index),
+    .rbuf_data(rbuf_data),
+    .rst(rst),
+    .store(store),
+    .wbuf(wbuf)
+  );
+  \biss_master.register_access.checker  \checker  (
+    .\byte (byte_received),
+    .cds(frame_cds),
+    .clk(clk),
+    .control__take_crc(control__take_crc),
+    .control__take_data(control__take_data),
+    .crc_ok(crc_ok),
+    .echo_ok(echo_ok),
+    .rst(rst),
+    .sent(sent),
+    .start(control__first)
+  );
+  \biss_master.register_access.idle  idle (
+    .clk(clk),
+    .frame_cdm(frame_cdm),
+    .frame_end(frame_end),
+    .frame_ok(frame_ok),
+    .rst(rst),
+    .run_enough(run_enough),
+    .seen_enough(seen_enough)
+  );
+  \biss_master.register_access.sender  sender (
+    .\byte (\byte ),
+    .cdm(cdm),
+    .clk(clk),
+    .control__crc_bit(control__crc_bit),
+    .control__load_byte(control__load_byte),
+    .control__load_header(control__load_header),
+    .control__shift_byte(control__shift_byte),
+    .control__shift_header(control__shift_header),
+    .control__source(control__source),
+    .request(request),
+    .rst(rst),
+    .sent(sent),
+    .start(control__crc_start),
+    .valid(control__crc_valid)
+  );
+  \biss_master.register_access.sequencer  sequencer (
+    .abort(abort),
+    .busy(busy),
+    .check__first(control__first),
+    .check__take_crc(control__take_crc),
+    .check__take_data(control__take_data),
+    .clk(clk),
+    .crc_ok(crc_ok),
+    .done(done),
+    .echo_ok(echo_ok),
+    .frame_cdm(frame_cdm),
+    .frame_cds(frame_cds),
+    .frame_end(frame_end),
+    .frame_ok(frame_ok),
+    .index(index),
+    .request(request),
+    .result(result),
+    .rst(rst),
+    .run_enough(run_enough),
+    .seen_enough(seen_enough),
+    .send__crc_bit(control__crc_bit),
+    .send__crc_start(control__crc_start),
+    .send__crc_valid(control__crc_valid),
+    .send__load_byte(control__load_byte),
+    .send__load_header(control__load_header),
+    .send__shift_byte(control__shift_byte),
+    .send__shift_header(control__shift_header),
+    .send__source(control__source),
+    .start(start),
+    .store(store)
+  );
+  assign \request$1  = request;
+  assign \start$3  = start;
+  assign \abort$5  = abort;
+  assign \busy$7  = busy;
+  assign frames = busy;
+  assign \done$10  = done;
+  assign \result$12  = result;
+  assign \request$13  = request;
+  assign \wbuf$15  = wbuf;
+  assign \rbuf_addr$17  = rbuf_addr;
+  assign \rbuf_en$19  = rbuf_en;
+  assign \rbuf_data$21  = rbuf_data;
+  assign \frame_end$23  = frame_end;
+  assign \frame_ok$25  = frame_ok;
+  assign \frame_cdm$27  = frame_cdm;
+  assign \frame_end$28  = frame_end;
+  assign \frame_ok$29  = frame_ok;
+  assign \frame_cdm$30  = frame_cdm;
+  assign \frame_cds$32  = frame_cds;
+  assign \run_enough$34  = run_enough;
+  assign \seen_enough$36  = seen_enough;
+  assign send__crc_bit = control__crc_bit;
+  assign send__crc_start = control__crc_start;
+  assign send__crc_valid = control__crc_valid;
+  assign send__load_byte = control__load_byte;
+  assign send__load_header = control__load_header;
+  assign send__shift_byte = control__shift_byte;
+  assign send__shift_header = control__shift_header;
+  assign send__source = control__source;
+  assign byte_to_send = \byte ;
+  assign \cdm$56  = cdm;
+  assign check__first = control__first;
+  assign check__take_crc = control__take_crc;
+  assign check__take_data = control__take_data;
+  assign cds = frame_cds;
+  assign \sent$65  = sent;
+  assign \crc_ok$67  = crc_ok;
+  assign \echo_ok$69  = echo_ok;
+  assign \index$71  = index;
+  assign \store$73  = store;
+  assign \byte$75  = byte_received;
+  assign \request.slave_id  = request[2:0];
+  assign \request.address  = request[9:3];
+  assign \request.count  = request[16:10];
+  assign \request.write  = request[17];
+  assign \request$1.slave_id  = request[2:0];
+  assign \request$1.address  = request[9:3];
+  assign \request$1.count  = request[16:10];
+  assign \request$1.write  = request[17];
+  assign \result.status  = result[2:0];
+  assign \result.bytes_done  = result[9:3];
+  assign \result$12.status  = result[2:0];
+  assign \result$12.bytes_done  = result[9:3];
+  assign \request$13.slave_id  = request[2:0];
+  assign \request$13.address  = request[9:3];
+  assign \request$13.count  = request[16:10];
+  assign \request$13.write  = request[17];
+  assign \wbuf.addr  = wbuf[3:0];
+  assign \wbuf.data  = wbuf[35:4];
+  assign \wbuf.en  = wbuf[39:36];
+  assign \wbuf$15.addr  = wbuf[3:0];
+  assign \wbuf$15.data  = wbuf[35:4];
+  assign \wbuf$15.en  = wbuf[39:36];
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master.register_access.buffers (host_read__en, clk, rst, byte_to_send, rbuf_data, wbuf, index, store, byte_received, host_read__addr);
+  reg \$auto$verilog_backend.cc:2355:dump_module$38  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire \$3 ;
+  wire \$4 ;
+  wire [5:0] \$5 ;
+  input [7:0] byte_received;
+  wire [7:0] byte_received;
+  reg [3:0] byte_received__addr;
+  reg [31:0] byte_received__data;
+  reg [3:0] byte_received__en;
+  output [7:0] byte_to_send;
+  wire [7:0] byte_to_send;
+  input clk;
+  wire clk;
+  input [3:0] host_read__addr;
+  wire [3:0] host_read__addr;
+  wire [31:0] host_read__data;
+  input host_read__en;
+  wire host_read__en;
+  wire [3:0] host_write__addr;
+  wire [31:0] host_write__data;
+  wire [3:0] host_write__en;
+  input [5:0] index;
+  wire [5:0] index;
+  wire [3:0] rbuf_addr;
+  output [31:0] rbuf_data;
+  wire [31:0] rbuf_data;
+  wire rbuf_en;
+  input rst;
+  wire rst;
+  input store;
+  wire store;
   input [39:0] wbuf;
   wire [39:0] wbuf;
   wire [3:0] \wbuf.addr ;
@@ -6121,1059 +6188,151 @@ module \biss_master.register_access (abort, host_read__addr, host_read__en, clk,
     end
   end
   assign rbuf_data = _0_;
-  reg [31:0] \wbuf$50  [15:0];
+  reg [31:0] \wbuf$21  [15:0];
   initial begin
-    \wbuf$50 [0] = 32'd0;
-    \wbuf$50 [1] = 32'd0;
-    \wbuf$50 [2] = 32'd0;
-    \wbuf$50 [3] = 32'd0;
-    \wbuf$50 [4] = 32'd0;
-    \wbuf$50 [5] = 32'd0;
-    \wbuf$50 [6] = 32'd0;
-    \wbuf$50 [7] = 32'd0;
-    \wbuf$50 [8] = 32'd0;
-    \wbuf$50 [9] = 32'd0;
-    \wbuf$50 [10] = 32'd0;
-    \wbuf$50 [11] = 32'd0;
-    \wbuf$50 [12] = 32'd0;
-    \wbuf$50 [13] = 32'd0;
-    \wbuf$50 [14] = 32'd0;
-    \wbuf$50 [15] = 32'd0;
+    \wbuf$21 [0] = 32'd0;
+    \wbuf$21 [1] = 32'd0;
+    \wbuf$21 [2] = 32'd0;
+    \wbuf$21 [3] = 32'd0;
+    \wbuf$21 [4] = 32'd0;
+    \wbuf$21 [5] = 32'd0;
+    \wbuf$21 [6] = 32'd0;
+    \wbuf$21 [7] = 32'd0;
+    \wbuf$21 [8] = 32'd0;
+    \wbuf$21 [9] = 32'd0;
+    \wbuf$21 [10] = 32'd0;
+    \wbuf$21 [11] = 32'd0;
+    \wbuf$21 [12] = 32'd0;
+    \wbuf$21 [13] = 32'd0;
+    \wbuf$21 [14] = 32'd0;
+    \wbuf$21 [15] = 32'd0;
   end
   always @(posedge clk) begin
     if (wbuf[36])
-      \wbuf$50 [wbuf[3:0]][7:0] <= wbuf[11:4];
+      \wbuf$21 [wbuf[3:0]][7:0] <= wbuf[11:4];
     if (wbuf[37])
-      \wbuf$50 [wbuf[3:0]][15:8] <= wbuf[19:12];
+      \wbuf$21 [wbuf[3:0]][15:8] <= wbuf[19:12];
     if (wbuf[38])
-      \wbuf$50 [wbuf[3:0]][23:16] <= wbuf[27:20];
+      \wbuf$21 [wbuf[3:0]][23:16] <= wbuf[27:20];
     if (wbuf[39])
-      \wbuf$50 [wbuf[3:0]][31:24] <= wbuf[35:28];
+      \wbuf$21 [wbuf[3:0]][31:24] <= wbuf[35:28];
   end
   reg [31:0] _1_;
   always @(posedge clk) begin
-    _1_ <= \wbuf$50 [index[5:2]];
+    _1_ <= \wbuf$21 [index[5:2]];
   end
   assign word_to_send__data = _1_;
-  assign \$1  = step >= 4'hc;
-  assign \$2  = step < 5'h10;
-  assign \$3  = \$1  & \$2 ;
-  assign \$4  = ~ step[1:0];
-  assign \$5  = crc >> \$4 ;
-  assign \$6  = \$3  ? \$5  : header[17];
-  assign \$7  = ! step;
-  assign \$8  = frame_end & \$7 ;
-  assign \$9  = ~ frame_cdm;
-  assign \$10  = \$8  & \$9 ;
-  assign \$11  = ~ frame_ok;
-  assign \$12  = frame_end & \$11 ;
-  assign \$13  = step == 1'h1;
-  assign \$14  = frame_end & \$13 ;
-  assign \$15  = ~ frame_cds;
-  assign \$16  = \$14  & \$15 ;
-  assign \$17  = step == 5'h11;
-  assign \$18  = frame_end & \$17 ;
-  assign \$19  = frame_cds == req[17];
-  assign \$20  = \$18  & \$19 ;
-  assign \$21  = ! step;
-  assign \$22  = step >= 1'h1;
-  assign \$23  = step <= 4'hb;
-  assign \$24  = \$22  & \$23 ;
-  assign \$25  = ! step;
-  assign \$26  = step >= 1'h1;
-  assign \$27  = step <= 4'h8;
-  assign \$28  = \$26  & \$27 ;
-  assign \$29  = step >= 4'h9;
-  assign \$30  = step <= 4'hc;
-  assign \$31  = \$29  & \$30 ;
-  assign \$32  = req[17] & to_send[7];
-  assign \$33  = step - 4'h9;
-  assign \$34  = ~ \$33 [1:0];
-  assign \$35  = crc >> \$34 ;
-  assign \$36  = req[17] & \$35 ;
-  assign \$37  = step >= 1'h1;
-  assign \$38  = frame_end & \$37 ;
-  assign \$39  = step <= 4'h8;
-  assign \$40  = \$38  & \$39 ;
-  assign \$41  = ~ frame_ok;
-  assign \$42  = frame_end & \$41 ;
-  assign \$43  = ! step;
-  assign \$44  = frame_end & \$43 ;
-  assign \$45  = step == 1'h1;
-  assign \$46  = frame_end & \$45 ;
-  assign \$47  = step < 4'hd;
-  assign \$48  = frame_end & \$47 ;
-  assign \$49  = ! index;
-  assign \$50  = \$49  ? req[17] : 1'h0;
-  assign \$51  = frame_cds != \$50 ;
-  assign \$52  = step <= 4'h9;
-  assign \$53  = step == 2'h2;
-  assign \$54  = { got_crc, frame_cds } != \crc$31 ;
-  assign \$55  = got != sent;
-  assign \$56  = req[17] & \$55 ;
-  assign \$57  = ! index[1:0];
-  assign \$58  = index[1:0] == 1'h1;
-  assign \$59  = index[1:0] == 2'h2;
-  assign \$60  = index[1:0] == 2'h3;
-  assign \$61  = req[17] ? 4'h0 : { \$60 , \$59 , \$58 , \$57  };
-  assign busy = ~ \$62 ;
-  assign \$62  = ! access_fsm_state;
-  assign \$63  = access_fsm_state == 1'h1;
-  assign \$64  = access_fsm_state == 2'h2;
-  assign \$65  = access_fsm_state == 2'h3;
-  assign \$66  = access_fsm_state == 3'h4;
-  assign \$67  = access_fsm_state == 3'h5;
-  assign \$68  = access_fsm_state == 3'h6;
-  assign \$69  = idle_run == 4'he;
-  assign \$70  = idle_run + 1'h1;
-  assign \$71  = \$69  ? 5'h0e : \$70 ;
-  assign \$72  = frame_cdm ? 5'h00 : \$71 ;
-  assign \$73  = ~ frame_ok;
-  assign \$74  = frame_cdm | \$73 ;
-  assign \$75  = idle_seen == 4'he;
-  assign \$76  = idle_seen + 1'h1;
-  assign \$77  = \$75  ? 5'h0e : \$76 ;
-  assign \$78  = \$74  ? 5'h00 : \$77 ;
-  assign \$79  = ! request[16:10];
-  assign \$80  = request[16:10] > 7'h40;
-  assign \$81  = \$79  | \$80 ;
-  assign \$82  = request[9:3] + request[16:10];
-  assign \$83  = \$82  > 8'h80;
-  assign \$84  = \$81  | \$83 ;
-  assign \$85  = ~ request[17];
-  assign \$86  = ~ frame_ok;
-  assign \$87  = frame_end & \$86 ;
-  assign \$88  = ~ frame_ok;
-  assign \$89  = frame_cdm | \$88 ;
-  assign \$90  = idle_seen == 4'he;
-  assign \$91  = idle_seen + 1'h1;
-  assign \$92  = \$90  ? 5'h0e : \$91 ;
-  assign \$93  = \$89  ? 5'h00 : \$92 ;
-  assign \$94  = frame_end ? \$93  : { 1'h0, idle_seen };
-  assign \$95  = \$94  == 4'he;
-  assign \$96  = ! step;
-  assign \$97  = frame_end & \$96 ;
-  assign \$98  = ~ frame_cdm;
-  assign \$99  = \$97  & \$98 ;
-  assign \$100  = ~ frame_ok;
-  assign \$101  = frame_end & \$100 ;
-  assign \$102  = step == 1'h1;
-  assign \$103  = frame_end & \$102 ;
-  assign \$104  = ~ frame_cds;
-  assign \$105  = \$103  & \$104 ;
-  assign \$106  = step == 5'h11;
-  assign \$107  = frame_end & \$106 ;
-  assign \$108  = frame_cds == req[17];
-  assign \$109  = \$107  & \$108 ;
-  assign \$111  = step + 1'h1;
-  assign \$112  = step == 5'h11;
-  assign \$113  = ~ frame_ok;
-  assign \$114  = frame_end & \$113 ;
-  assign \$115  = ! step;
-  assign \$116  = frame_end & \$115 ;
-  assign \$117  = step == 1'h1;
-  assign \$118  = frame_end & \$117 ;
-  assign \$119  = step < 4'hd;
-  assign \$120  = frame_end & \$119 ;
-  assign \$121  = ! index;
-  assign \$122  = \$121  ? req[17] : 1'h0;
-  assign \$123  = frame_cds != \$122 ;
-  assign \$291  = index[1:0] * 4'h8;
-  assign \$124  = word_to_send__data >> \$291 ;
-  assign \$294  = index[1:0] * 4'h8;
-  assign \$125  = word_to_send__data >> \$294 ;
-  assign \$127  = ~ req[17];
-  assign \$129  = step + 1'h1;
-  assign \$130  = step <= 4'h9;
-  assign \$131  = { got_crc, frame_cds } != \crc$31 ;
-  assign \$132  = got != sent;
-  assign \$133  = req[17] & \$132 ;
-  assign \$134  = index + 1'h1;
-  assign \$135  = index + 1'h1;
-  assign \$136  = \$135  == req[16:10];
-  assign \$137  = index + 1'h1;
-  assign \$138  = ~ frame_ok;
-  assign \$139  = frame_end & \$138 ;
-  assign \$140  = frame_end & frame_cds;
-  assign \$141  = waited + 1'h1;
-  assign \$142  = waited == 4'hf;
-  assign \$143  = ~ frame_ok;
-  assign \$144  = frame_end & \$143 ;
-  assign \$145  = frame_end & frame_cds;
-  assign \$146  = idle_run == 4'he;
-  assign \$147  = idle_run + 1'h1;
-  assign \$148  = \$146  ? 5'h0e : \$147 ;
-  assign \$149  = frame_cdm ? 5'h00 : \$148 ;
-  assign \$150  = frame_end ? \$149  : { 1'h0, idle_run };
-  assign \$151  = \$150  == 4'he;
-  always @(posedge clk)
-    idle_run <= \$152 ;
-  always @(posedge clk)
-    idle_seen <= \$153 ;
-  always @(posedge clk)
-    done <= \$154 ;
-  always @(posedge clk)
-    result <= \$155 ;
-  always @(posedge clk)
-    access_fsm_state <= \$156 ;
-  always @(posedge clk)
-    req <= \$157 ;
-  always @(posedge clk)
-    index <= \$158 ;
-  always @(posedge clk)
-    header <= \$159 ;
-  always @(posedge clk)
-    step <= \$160 ;
-  always @(posedge clk)
-    ending <= \$161 ;
-  always @(posedge clk)
-    to_send <= \$162 ;
-  always @(posedge clk)
-    sent <= \$163 ;
-  always @(posedge clk)
-    waited <= \$164 ;
-  always @(posedge clk)
-    got <= \$165 ;
-  always @(posedge clk)
-    got_crc <= \$166 ;
-  \biss_master.register_access.rx_crc  rx_crc (
-    .clk(clk),
-    .crc(\crc$31 ),
-    .data_in(\data$29 ),
-    .rst(rst),
-    .start(\start$27 ),
-    .valid(\valid$28 )
-  );
-  \biss_master.register_access.tx_crc  tx_crc (
-    .clk(clk),
-    .crc(crc),
-    .data_in(data),
-    .rst(rst),
-    .start(start),
-    .valid(valid)
-  );
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
-    cdm = 1'h0;
-    casez (access_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          cdm = \$6 ;
-      3'h4:
-          if (\$25 ) begin
-            cdm = 1'h1;
-          end else if (\$28 ) begin
-            cdm = \$32 ;
-          end else if (\$31 ) begin
-            cdm = \$36 ;
-          end
-      3'h5:
-          cdm = 1'h1;
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
-    start = 1'h0;
-    casez (access_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          if (abort) begin
-          end else if (\$10 ) begin
-          end else if (\$12 ) begin
-          end else if (\$16 ) begin
-          end else if (\$20 ) begin
-          end else if (frame_end) begin
-            start = \$21 ;
-          end
-      3'h4:
-          if (abort) begin
-          end else if (\$42 ) begin
-          end else if (\$44 ) begin
-            (* full_case = 32'd1 *)
-            if (\$51 ) begin
-            end else begin
-              start = 1'h1;
-            end
-          end
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
-    valid = 1'h0;
-    casez (access_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          if (abort) begin
-          end else if (\$10 ) begin
-          end else if (\$12 ) begin
-          end else if (\$16 ) begin
-          end else if (\$20 ) begin
-          end else if (frame_end) begin
-            valid = \$24 ;
-          end
-      3'h4:
-          valid = \$40 ;
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
-    data = 1'h0;
-    casez (access_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          if (abort) begin
-          end else if (\$10 ) begin
-          end else if (\$12 ) begin
-          end else if (\$16 ) begin
-          end else if (\$20 ) begin
-          end else if (frame_end) begin
-            data = header[17];
-          end
-      3'h4:
-          data = to_send[7];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
-    \start$27  = 1'h0;
-    casez (access_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h4:
-          if (abort) begin
-          end else if (\$42 ) begin
-          end else if (\$44 ) begin
-          end else if (\$46 ) begin
-          end else if (\$48 ) begin
-            if (\$52 ) begin
-              \start$27  = \$53 ;
-            end
-          end
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
-    \valid$28  = 1'h0;
-    casez (access_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h4:
-          if (abort) begin
-          end else if (\$42 ) begin
-          end else if (\$44 ) begin
-          end else if (\$46 ) begin
-          end else if (\$48 ) begin
-            if (\$52 ) begin
-              \valid$28  = 1'h1;
-            end
-          end
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
-    \data$29  = 1'h0;
-    casez (access_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h4:
-          if (abort) begin
-          end else if (\$42 ) begin
-          end else if (\$44 ) begin
-          end else if (\$46 ) begin
-          end else if (\$48 ) begin
-            if (\$52 ) begin
-              \data$29  = frame_cds;
-            end
-          end
-    endcase
-  end
+  assign \$3  = index[1:0] == 2'h2;
+  assign \$4  = index[1:0] == 2'h3;
+  assign \$5  = index[1:0] * 4'h8;
+  assign byte_to_send = word_to_send__data >> \$5 ;
+  assign \$1  = ! index[1:0];
+  assign \$2  = index[1:0] == 1'h1;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     byte_received__addr = 4'h0;
-    casez (access_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h4:
-          if (abort) begin
-          end else if (\$42 ) begin
-          end else if (\$44 ) begin
-          end else if (\$46 ) begin
-          end else if (\$48 ) begin
-          end else if (frame_end) begin
-            (* full_case = 32'd1 *)
-            if (\$54 ) begin
-            end else if (\$56 ) begin
-            end else begin
-              byte_received__addr = index[5:2];
-            end
-          end
-    endcase
+    if (store) begin
+      byte_received__addr = index[5:2];
+    end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     byte_received__data = 32'd0;
-    casez (access_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h4:
-          if (abort) begin
-          end else if (\$42 ) begin
-          end else if (\$44 ) begin
-          end else if (\$46 ) begin
-          end else if (\$48 ) begin
-          end else if (frame_end) begin
-            (* full_case = 32'd1 *)
-            if (\$54 ) begin
-            end else if (\$56 ) begin
-            end else begin
-              byte_received__data = { got, got, got, got };
-            end
-          end
-    endcase
+    if (store) begin
+      byte_received__data = { byte_received, byte_received, byte_received, byte_received };
+    end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     byte_received__en = 4'h0;
-    casez (access_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h4:
-          if (abort) begin
-          end else if (\$42 ) begin
-          end else if (\$44 ) begin
-          end else if (\$46 ) begin
-          end else if (\$48 ) begin
-          end else if (frame_end) begin
-            (* full_case = 32'd1 *)
-            if (\$54 ) begin
-            end else if (\$56 ) begin
-            end else begin
-              byte_received__en = \$61 ;
-            end
-          end
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
-    \$152  = idle_run;
-    if (frame_end) begin
-      \$152  = \$72 [3:0];
-    end
-    if (rst) begin
-      \$152  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
-    \$153  = idle_seen;
-    if (frame_end) begin
-      \$153  = \$78 [3:0];
-    end
-    if (rst) begin
-      \$153  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
-    \$154  = 1'h0;
-    casez (access_fsm_state)
-      3'h0:
-          if (\start$44 ) begin
-            if (\$84 ) begin
-              \$154  = 1'h1;
-            end
-          end
-      3'h1:
-          if (abort) begin
-            \$154  = 1'h1;
-          end else if (\$87 ) begin
-            \$154  = 1'h1;
-          end
-      3'h2:
-          /* empty */;
-      3'h4:
-          /* empty */;
-      3'h5:
-          /* empty */;
-      3'h6:
-          if (abort) begin
-          end else if (\$144 ) begin
-          end else if (\$145 ) begin
-          end else if (frame_end) begin
-            \$154  = 1'h1;
-          end
-      3'h3:
-          if (\$151 ) begin
-            \$154  = 1'h1;
-          end
-    endcase
-    if (rst) begin
-      \$154  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
-    \$155  = result;
-    casez (access_fsm_state)
-      3'h0:
-          if (\start$44 ) begin
-            (* full_case = 32'd1 *)
-            if (\$84 ) begin
-              \$155 [2:0] = 3'h6;
-              \$155 [9:3] = 7'h00;
-            end else begin
-              \$155 [9:3] = 7'h00;
-            end
-          end
-      3'h1:
-          if (abort) begin
-            \$155 [2:0] = 3'h4;
-          end else if (\$87 ) begin
-            \$155 [2:0] = 3'h5;
-          end
-      3'h2:
-          /* empty */;
-      3'h4:
-          if (abort) begin
-          end else if (\$114 ) begin
-          end else if (\$116 ) begin
-          end else if (\$118 ) begin
-          end else if (\$120 ) begin
-          end else if (frame_end) begin
-            (* full_case = 32'd1 *)
-            if (\$131 ) begin
-            end else if (\$133 ) begin
-            end else begin
-              \$155 [9:3] = \$134 ;
-            end
-          end
-      3'h5:
-          /* empty */;
-      3'h6:
-          if (abort) begin
-          end else if (\$144 ) begin
-          end else if (\$145 ) begin
-          end else if (frame_end) begin
-            \$155 [2:0] = 3'h0;
-          end
-      3'h3:
-          if (\$151 ) begin
-            \$155 [2:0] = ending;
-          end
-    endcase
-    if (rst) begin
-      \$155  = 10'h000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
-    \$156  = access_fsm_state;
-    casez (access_fsm_state)
-      3'h0:
-          if (\start$44 ) begin
-            (* full_case = 32'd1 *)
-            if (\$84 ) begin
-              \$156  = 3'h0;
-            end else begin
-              \$156  = 3'h1;
-            end
-          end
-      3'h1:
-          if (abort) begin
-            \$156  = 3'h0;
-          end else if (\$87 ) begin
-            \$156  = 3'h0;
-          end else if (\$95 ) begin
-            \$156  = 3'h2;
-          end
-      3'h2:
-          if (abort) begin
-            \$156  = 3'h3;
-          end else if (\$99 ) begin
-          end else if (\$101 ) begin
-            \$156  = 3'h3;
-          end else if (\$105 ) begin
-            \$156  = 3'h3;
-          end else if (\$109 ) begin
-            \$156  = 3'h3;
-          end else if (frame_end) begin
-            if (\$112 ) begin
-              \$156  = 3'h4;
-            end
-          end
-      3'h4:
-          if (abort) begin
-            \$156  = 3'h3;
-          end else if (\$114 ) begin
-            \$156  = 3'h3;
-          end else if (\$116 ) begin
-            if (\$123 ) begin
-              \$156  = 3'h3;
-            end
-          end else if (\$118 ) begin
-            (* full_case = 32'd1 *)
-            if (frame_cds) begin
-            end else if (\$127 ) begin
-              \$156  = 3'h5;
-            end else begin
-              \$156  = 3'h3;
-            end
-          end else if (\$120 ) begin
-          end else if (frame_end) begin
-            (* full_case = 32'd1 *)
-            if (\$131 ) begin
-              \$156  = 3'h3;
-            end else if (\$133 ) begin
-              \$156  = 3'h3;
-            end else begin
-              if (\$136 ) begin
-                \$156  = 3'h6;
-              end
-            end
-          end
-      3'h5:
-          if (abort) begin
-            \$156  = 3'h3;
-          end else if (\$139 ) begin
-            \$156  = 3'h3;
-          end else if (\$140 ) begin
-            \$156  = 3'h4;
-          end else if (frame_end) begin
-            if (\$142 ) begin
-              \$156  = 3'h3;
-            end
-          end
-      3'h6:
-          if (abort) begin
-            \$156  = 3'h3;
-          end else if (\$144 ) begin
-            \$156  = 3'h3;
-          end else if (\$145 ) begin
-            \$156  = 3'h3;
-          end else if (frame_end) begin
-            \$156  = 3'h0;
-          end
-      3'h3:
-          if (\$151 ) begin
-            \$156  = 3'h0;
-          end
-    endcase
-    if (rst) begin
-      \$156  = 3'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
-    \$157  = req;
-    casez (access_fsm_state)
-      3'h0:
-          if (\start$44 ) begin
-            (* full_case = 32'd1 *)
-            if (\$84 ) begin
-            end else begin
-              \$157  = request;
-            end
-          end
-    endcase
-    if (rst) begin
-      \$157  = 18'h00000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
-    \$158  = index;
-    casez (access_fsm_state)
-      3'h0:
-          if (\start$44 ) begin
-            (* full_case = 32'd1 *)
-            if (\$84 ) begin
-            end else begin
-              \$158  = 6'h00;
-            end
-          end
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h4:
-          if (abort) begin
-          end else if (\$114 ) begin
-          end else if (\$116 ) begin
-          end else if (\$118 ) begin
-          end else if (\$120 ) begin
-          end else if (frame_end) begin
-            (* full_case = 32'd1 *)
-            if (\$131 ) begin
-            end else if (\$133 ) begin
-            end else begin
-              (* full_case = 32'd1 *)
-              if (\$136 ) begin
-              end else begin
-                \$158  = \$137 [5:0];
-              end
-            end
-          end
-    endcase
-    if (rst) begin
-      \$158  = 6'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
-    \$159  = header;
-    casez (access_fsm_state)
-      3'h0:
-          if (\start$44 ) begin
-            (* full_case = 32'd1 *)
-            if (\$84 ) begin
-            end else begin
-              \$159  = { 2'h3, request[2:0], request[9:3], 4'h0, \$85 , request[17] };
-            end
-          end
-      3'h1:
-          /* empty */;
-      3'h2:
-          if (abort) begin
-          end else if (\$99 ) begin
-          end else if (\$101 ) begin
-          end else if (\$105 ) begin
-          end else if (\$109 ) begin
-          end else if (frame_end) begin
-            \$159  = \$110 [17:0];
-          end
-    endcase
-    if (rst) begin
-      \$159  = 18'h00000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
-    \$160  = step;
-    casez (access_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (abort) begin
-          end else if (\$87 ) begin
-          end else if (\$95 ) begin
-            \$160  = 5'h00;
-          end
-      3'h2:
-          if (abort) begin
-          end else if (\$99 ) begin
-          end else if (\$101 ) begin
-          end else if (\$105 ) begin
-          end else if (\$109 ) begin
-          end else if (frame_end) begin
-            \$160  = \$111 [4:0];
-            if (\$112 ) begin
-              \$160  = 5'h00;
-            end
-          end
-      3'h4:
-          if (abort) begin
-          end else if (\$114 ) begin
-          end else if (\$116 ) begin
-            (* full_case = 32'd1 *)
-            if (\$123 ) begin
-            end else begin
-              \$160  = 5'h01;
-            end
-          end else if (\$118 ) begin
-            if (frame_cds) begin
-              \$160  = 5'h02;
-            end
-          end else if (\$120 ) begin
-            \$160  = \$129 [4:0];
-          end else if (frame_end) begin
-            (* full_case = 32'd1 *)
-            if (\$131 ) begin
-            end else if (\$133 ) begin
-            end else begin
-              \$160  = 5'h00;
-            end
-          end
-      3'h5:
-          if (abort) begin
-          end else if (\$139 ) begin
-          end else if (\$140 ) begin
-            \$160  = 5'h02;
-          end
-    endcase
-    if (rst) begin
-      \$160  = 5'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
-    \$161  = ending;
-    casez (access_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          if (abort) begin
-            \$161  = 3'h4;
-          end else if (\$99 ) begin
-          end else if (\$101 ) begin
-            \$161  = 3'h5;
-          end else if (\$105 ) begin
-            \$161  = 3'h2;
-          end else if (\$109 ) begin
-            \$161  = 3'h3;
-          end
-      3'h4:
-          if (abort) begin
-            \$161  = 3'h4;
-          end else if (\$114 ) begin
-            \$161  = 3'h5;
-          end else if (\$116 ) begin
-            if (\$123 ) begin
-              \$161  = 3'h3;
-            end
-          end else if (\$118 ) begin
-            (* full_case = 32'd1 *)
-            if (frame_cds) begin
-            end else if (\$127 ) begin
-            end else begin
-              \$161  = 3'h3;
-            end
-          end else if (\$120 ) begin
-          end else if (frame_end) begin
-            if (\$131 ) begin
-              \$161  = 3'h1;
-            end else if (\$133 ) begin
-              \$161  = 3'h3;
-            end
-          end
-      3'h5:
-          if (abort) begin
-            \$161  = 3'h4;
-          end else if (\$139 ) begin
-            \$161  = 3'h5;
-          end else if (\$140 ) begin
-          end else if (frame_end) begin
-            if (\$142 ) begin
-              \$161  = 3'h3;
-            end
-          end
-      3'h6:
-          if (abort) begin
-            \$161  = 3'h4;
-          end else if (\$144 ) begin
-            \$161  = 3'h5;
-          end else if (\$145 ) begin
-            \$161  = 3'h3;
-          end
-    endcase
-    if (rst) begin
-      \$161  = 3'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
-    \$162  = to_send;
-    casez (access_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h4:
-          if (abort) begin
-          end else if (\$114 ) begin
-          end else if (\$116 ) begin
-            (* full_case = 32'd1 *)
-            if (\$123 ) begin
-            end else begin
-              \$162  = \$124 ;
-            end
-          end else if (\$118 ) begin
-            \$162  = \$126 [7:0];
-          end else if (\$120 ) begin
-            \$162  = \$128 [7:0];
-          end
-    endcase
-    if (rst) begin
-      \$162  = 8'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
-    \$163  = sent;
-    casez (access_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h4:
-          if (abort) begin
-          end else if (\$114 ) begin
-          end else if (\$116 ) begin
-            (* full_case = 32'd1 *)
-            if (\$123 ) begin
-            end else begin
-              \$163  = \$125 ;
-            end
-          end
-    endcase
-    if (rst) begin
-      \$163  = 8'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
-    \$164  = waited;
-    casez (access_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h4:
-          if (abort) begin
-          end else if (\$114 ) begin
-          end else if (\$116 ) begin
-          end else if (\$118 ) begin
-            if (frame_cds) begin
-            end else if (\$127 ) begin
-              \$164  = 5'h00;
-            end
-          end
-      3'h5:
-          if (abort) begin
-          end else if (\$139 ) begin
-          end else if (\$140 ) begin
-          end else if (frame_end) begin
-            \$164  = \$141 [4:0];
-          end
-    endcase
-    if (rst) begin
-      \$164  = 5'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
-    \$165  = got;
-    casez (access_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h4:
-          if (abort) begin
-          end else if (\$114 ) begin
-          end else if (\$116 ) begin
-          end else if (\$118 ) begin
-          end else if (\$120 ) begin
-            if (\$130 ) begin
-              \$165  = { got[6:0], frame_cds };
-            end
-          end
-    endcase
-    if (rst) begin
-      \$165  = 8'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
-    \$166  = got_crc;
-    casez (access_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h4:
-          if (abort) begin
-          end else if (\$114 ) begin
-          end else if (\$116 ) begin
-          end else if (\$118 ) begin
-          end else if (\$120 ) begin
-            (* full_case = 32'd1 *)
-            if (\$130 ) begin
-            end else begin
-              \$166  = { got_crc[1:0], frame_cds };
-            end
-          end
-    endcase
-    if (rst) begin
-      \$166  = 3'h0;
+    if (store) begin
+      byte_received__en = { \$4 , \$3 , \$2 , \$1  };
     end
   end
   assign host_write__addr = wbuf[3:0];
   assign host_write__data = wbuf[35:4];
   assign host_write__en = wbuf[39:36];
+  assign word_to_send__addr = index[5:2];
   assign rbuf_addr = host_read__addr;
   assign rbuf_en = host_read__en;
   assign host_read__data = rbuf_data;
-  assign word_to_send__addr = index[5:2];
-  assign frames = busy;
   assign \wbuf.addr  = wbuf[3:0];
   assign \wbuf.data  = wbuf[35:4];
   assign \wbuf.en  = wbuf[39:36];
-  assign \req.slave_id  = req[2:0];
-  assign \req.address  = req[9:3];
-  assign \req.count  = req[16:10];
-  assign \req.write  = req[17];
-  assign \request.slave_id  = request[2:0];
-  assign \request.address  = request[9:3];
-  assign \request.count  = request[16:10];
-  assign \request.write  = request[17];
-  assign \result.status  = result[2:0];
-  assign \result.bytes_done  = result[9:3];
-  assign \$110  = { header, 1'h0 };
-  assign \$126  = { to_send, 1'h0 };
-  assign \$128  = { to_send, 1'h0 };
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.register_access.rx_crc (rst, crc, start, valid, data_in, clk);
+module \biss_master.register_access.checker (rst, crc_ok, echo_ok, cds, control__take_data, start, control__take_crc, sent, \byte , clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$39  = 0;
+  reg [7:0] \$1 ;
+  reg [2:0] \$2 ;
+  output [7:0] \byte ;
+  reg [7:0] \byte  = 8'h00;
+  input cds;
+  wire cds;
+  input clk;
+  wire clk;
+  wire control__first;
+  input control__take_crc;
+  wire control__take_crc;
+  input control__take_data;
+  wire control__take_data;
+  wire [3:0] crc;
+  output crc_ok;
+  wire crc_ok;
+  wire data;
+  output echo_ok;
+  wire echo_ok;
+  reg [2:0] got_crc = 3'h0;
+  input rst;
+  wire rst;
+  input [7:0] sent;
+  wire [7:0] sent;
+  input start;
+  wire start;
+  wire valid;
+  assign crc_ok = { got_crc, cds } == crc;
+  assign echo_ok = \byte  == sent;
+  always @(posedge clk)
+    \byte  <= \$1 ;
+  always @(posedge clk)
+    got_crc <= \$2 ;
+  \biss_master.register_access.checker.rx_crc  rx_crc (
+    .clk(clk),
+    .crc(crc),
+    .data_in(cds),
+    .rst(rst),
+    .start(start),
+    .valid(control__take_data)
+  );
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
+    \$1  = \byte ;
+    if (control__take_data) begin
+      \$1  = { \byte [6:0], cds };
+    end
+    if (rst) begin
+      \$1  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
+    \$2  = got_crc;
+    if (control__take_crc) begin
+      \$2  = { got_crc[1:0], cds };
+    end
+    if (rst) begin
+      \$2  = 3'h0;
+    end
+  end
+  assign control__first = start;
+  assign valid = control__take_data;
+  assign data = cds;
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master.register_access.checker.rx_crc (rst, crc, data_in, valid, start, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$40  = 0;
   wire [3:0] \$1 ;
   wire \$10 ;
   wire [3:0] \$11 ;
@@ -7216,7 +6375,7 @@ module \biss_master.register_access.rx_crc (rst, crc, start, valid, data_in, clk
     crc_reg <= \$13 ;
   assign \$auto$rtlil.cc:2739:Not$2  = ~ crc_reg;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
     \$13  = crc_reg;
     if (valid) begin
       \$13 [0] = \$3 ;
@@ -7239,8 +6398,234 @@ module \biss_master.register_access.rx_crc (rst, crc, start, valid, data_in, clk
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.register_access.tx_crc (rst, crc, start, valid, data_in, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$40  = 0;
+module \biss_master.register_access.idle (rst, frame_end, frame_ok, run_enough, seen_enough, frame_cdm, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$41  = 0;
+  wire \$1 ;
+  wire [4:0] \$10 ;
+  wire \$11 ;
+  wire [4:0] \$12 ;
+  wire [4:0] \$13 ;
+  wire [4:0] \$14 ;
+  wire [4:0] \$15 ;
+  wire \$16 ;
+  wire \$17 ;
+  wire \$18 ;
+  wire [4:0] \$19 ;
+  wire [4:0] \$2 ;
+  wire [4:0] \$20 ;
+  wire [4:0] \$21 ;
+  wire [4:0] \$22 ;
+  reg [3:0] \$23 ;
+  reg [3:0] \$24 ;
+  wire [4:0] \$3 ;
+  wire [4:0] \$4 ;
+  wire \$5 ;
+  wire \$6 ;
+  wire \$7 ;
+  wire [4:0] \$8 ;
+  wire [4:0] \$9 ;
+  input clk;
+  wire clk;
+  input frame_cdm;
+  wire frame_cdm;
+  input frame_end;
+  wire frame_end;
+  input frame_ok;
+  wire frame_ok;
+  reg [3:0] idle_run = 4'h0;
+  reg [3:0] idle_seen = 4'h0;
+  input rst;
+  wire rst;
+  output run_enough;
+  wire run_enough;
+  output seen_enough;
+  wire seen_enough;
+  assign \$1  = idle_run == 4'he;
+  assign \$2  = idle_run + 1'h1;
+  assign \$3  = \$1  ? 5'h0e : \$2 ;
+  assign \$4  = frame_cdm ? 5'h00 : \$3 ;
+  assign \$5  = ~ frame_ok;
+  assign \$6  = frame_cdm | \$5 ;
+  assign \$7  = idle_seen == 4'he;
+  assign \$8  = idle_seen + 1'h1;
+  assign \$9  = \$7  ? 5'h0e : \$8 ;
+  assign \$10  = \$6  ? 5'h00 : \$9 ;
+  assign \$11  = idle_run == 4'he;
+  assign \$12  = idle_run + 1'h1;
+  assign \$13  = \$11  ? 5'h0e : \$12 ;
+  assign \$14  = frame_cdm ? 5'h00 : \$13 ;
+  assign \$15  = frame_end ? \$14  : { 1'h0, idle_run };
+  assign run_enough = \$15  == 4'he;
+  assign \$16  = ~ frame_ok;
+  assign \$17  = frame_cdm | \$16 ;
+  assign \$18  = idle_seen == 4'he;
+  assign \$19  = idle_seen + 1'h1;
+  assign \$20  = \$18  ? 5'h0e : \$19 ;
+  assign \$21  = \$17  ? 5'h00 : \$20 ;
+  assign \$22  = frame_end ? \$21  : { 1'h0, idle_seen };
+  assign seen_enough = \$22  == 4'he;
+  always @(posedge clk)
+    idle_run <= \$23 ;
+  always @(posedge clk)
+    idle_seen <= \$24 ;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    \$23  = idle_run;
+    if (frame_end) begin
+      \$23  = \$4 [3:0];
+    end
+    if (rst) begin
+      \$23  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    \$24  = idle_seen;
+    if (frame_end) begin
+      \$24  = \$10 [3:0];
+    end
+    if (rst) begin
+      \$24  = 4'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master.register_access.sender (rst, \byte , request, control__load_header, control__source, control__crc_bit, control__shift_header, start, valid, control__load_byte, control__shift_byte, sent, cdm, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$42  = 0;
+  wire \$1 ;
+  wire [18:0] \$2 ;
+  wire [8:0] \$3 ;
+  wire [1:0] \$4 ;
+  wire \$5 ;
+  reg [17:0] \$6 ;
+  reg [7:0] \$7 ;
+  reg [7:0] \$8 ;
+  input [7:0] \byte ;
+  wire [7:0] \byte ;
+  output cdm;
+  reg cdm;
+  input clk;
+  wire clk;
+  input [1:0] control__crc_bit;
+  wire [1:0] control__crc_bit;
+  wire control__crc_start;
+  wire control__crc_valid;
+  input control__load_byte;
+  wire control__load_byte;
+  input control__load_header;
+  wire control__load_header;
+  input control__shift_byte;
+  wire control__shift_byte;
+  input control__shift_header;
+  wire control__shift_header;
+  (* enum_base_type = "CdmSource" *)
+  (* enum_value_000 = "ZERO" *)
+  (* enum_value_001 = "ONE" *)
+  (* enum_value_010 = "HEADER" *)
+  (* enum_value_011 = "DATA" *)
+  (* enum_value_100 = "CRC" *)
+  input [2:0] control__source;
+  wire [2:0] control__source;
+  wire [3:0] crc;
+  wire data;
+  reg [17:0] header = 18'h00000;
+  input [17:0] request;
+  wire [17:0] request;
+  wire [6:0] \request.address ;
+  wire [6:0] \request.count ;
+  wire [2:0] \request.slave_id ;
+  wire \request.write ;
+  input rst;
+  wire rst;
+  output [7:0] sent;
+  reg [7:0] sent = 8'h00;
+  input start;
+  wire start;
+  reg [7:0] to_send = 8'h00;
+  input valid;
+  wire valid;
+  assign data = control__shift_header ? header[17] : to_send[7];
+  assign \$4  = ~ control__crc_bit;
+  assign \$5  = crc >> \$4 ;
+  always @(posedge clk)
+    header <= \$6 ;
+  always @(posedge clk)
+    to_send <= \$7 ;
+  always @(posedge clk)
+    sent <= \$8 ;
+  assign \$1  = ~ request[17];
+  \biss_master.register_access.sender.tx_crc  tx_crc (
+    .clk(clk),
+    .crc(crc),
+    .data_in(data),
+    .rst(rst),
+    .start(start),
+    .valid(valid)
+  );
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    \$6  = header;
+    if (control__load_header) begin
+      \$6  = { 2'h3, request[2:0], request[9:3], 4'h0, \$1 , request[17] };
+    end
+    if (control__shift_header) begin
+      \$6  = \$2 [17:0];
+    end
+    if (rst) begin
+      \$6  = 18'h00000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    \$7  = to_send;
+    if (control__load_byte) begin
+      \$7  = \byte ;
+    end
+    if (control__shift_byte) begin
+      \$7  = \$3 [7:0];
+    end
+    if (rst) begin
+      \$7  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    \$8  = sent;
+    if (control__load_byte) begin
+      \$8  = \byte ;
+    end
+    if (rst) begin
+      \$8  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    cdm = 1'h0;
+    casez (control__source)
+      3'h1:
+          cdm = 1'h1;
+      3'h2:
+          cdm = header[17];
+      3'h3:
+          cdm = to_send[7];
+      3'h4:
+          cdm = \$5 ;
+    endcase
+  end
+  assign control__crc_start = start;
+  assign control__crc_valid = valid;
+  assign \request.slave_id  = request[2:0];
+  assign \request.address  = request[9:3];
+  assign \request.count  = request[16:10];
+  assign \request.write  = request[17];
+  assign \$2  = { header, 1'h0 };
+  assign \$3  = { to_send, 1'h0 };
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master.register_access.sender.tx_crc (rst, data_in, crc, start, valid, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$43  = 0;
   wire [3:0] \$1 ;
   wire \$10 ;
   wire [3:0] \$11 ;
@@ -7283,7 +6668,7 @@ module \biss_master.register_access.tx_crc (rst, crc, start, valid, data_in, clk
     crc_reg <= \$13 ;
   assign \$auto$rtlil.cc:2739:Not$4  = ~ crc_reg;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     \$13  = crc_reg;
     if (valid) begin
       \$13 [0] = \$3 ;
@@ -7306,8 +6691,1047 @@ module \biss_master.register_access.tx_crc (rst, crc, start, valid, data_in, clk
 endmodule
 
 (* generator = "Amaranth" *)
+module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame_ok, busy, crc_ok, echo_ok, run_enough, seen_enough, request, frame_cdm, frame_cds, done, result, index, send__load_header, send__source, send__crc_bit, send__shift_header, send__crc_start
+, send__crc_valid, send__load_byte, send__shift_byte, check__take_data, check__first, check__take_crc, store, start);
+  reg \$auto$verilog_backend.cc:2355:dump_module$44  = 0;
+  wire \$1 ;
+  wire \$10 ;
+  wire \$100 ;
+  wire \$101 ;
+  wire \$102 ;
+  wire \$103 ;
+  wire \$104 ;
+  wire \$105 ;
+  wire \$106 ;
+  wire \$107 ;
+  wire \$108 ;
+  wire \$109 ;
+  wire \$11 ;
+  wire \$110 ;
+  wire \$111 ;
+  wire \$112 ;
+  wire \$113 ;
+  wire \$114 ;
+  wire \$115 ;
+  wire \$116 ;
+  wire \$117 ;
+  reg \$118 ;
+  reg [9:0] \$119 ;
+  wire \$12 ;
+  reg [2:0] \$120 ;
+  reg [17:0] \$121 ;
+  reg [5:0] \$122 ;
+  reg [4:0] \$123 ;
+  reg [2:0] \$124 ;
+  reg [4:0] \$125 ;
+  wire \$13 ;
+  wire \$14 ;
+  wire \$15 ;
+  wire \$16 ;
+  wire \$17 ;
+  wire \$18 ;
+  wire \$19 ;
+  wire \$2 ;
+  wire \$20 ;
+  wire \$21 ;
+  wire \$22 ;
+  wire [5:0] \$23 ;
+  wire \$24 ;
+  wire \$25 ;
+  wire \$26 ;
+  wire \$27 ;
+  wire \$28 ;
+  wire \$29 ;
+  wire \$3 ;
+  wire \$30 ;
+  wire \$31 ;
+  wire \$32 ;
+  wire \$33 ;
+  wire \$34 ;
+  wire \$35 ;
+  wire \$36 ;
+  wire [5:0] \$37 ;
+  wire \$38 ;
+  wire \$39 ;
+  wire [7:0] \$4 ;
+  wire \$40 ;
+  wire [6:0] \$41 ;
+  wire [6:0] \$42 ;
+  wire \$43 ;
+  wire [6:0] \$44 ;
+  wire \$45 ;
+  wire \$46 ;
+  wire \$47 ;
+  wire [5:0] \$48 ;
+  wire \$49 ;
+  wire \$5 ;
+  wire \$50 ;
+  wire \$51 ;
+  wire \$52 ;
+  wire \$53 ;
+  wire \$54 ;
+  wire \$55 ;
+  wire [7:0] \$56 ;
+  wire \$57 ;
+  wire \$58 ;
+  wire \$59 ;
+  wire \$6 ;
+  wire \$60 ;
+  wire \$61 ;
+  wire \$62 ;
+  wire \$63 ;
+  wire \$64 ;
+  wire \$65 ;
+  wire \$66 ;
+  wire \$67 ;
+  wire \$68 ;
+  wire \$69 ;
+  wire \$7 ;
+  wire \$70 ;
+  wire \$71 ;
+  wire \$72 ;
+  wire \$73 ;
+  wire \$74 ;
+  wire \$75 ;
+  wire \$76 ;
+  wire \$77 ;
+  wire \$78 ;
+  wire \$79 ;
+  wire \$8 ;
+  wire \$80 ;
+  wire \$81 ;
+  wire \$82 ;
+  wire \$83 ;
+  wire \$84 ;
+  wire \$85 ;
+  wire \$86 ;
+  wire \$87 ;
+  wire \$88 ;
+  wire [5:0] \$89 ;
+  wire \$9 ;
+  wire \$90 ;
+  wire \$91 ;
+  wire \$92 ;
+  wire \$93 ;
+  wire \$94 ;
+  wire \$95 ;
+  wire \$96 ;
+  wire \$97 ;
+  wire \$98 ;
+  wire \$99 ;
+  input abort;
+  wire abort;
+  reg [2:0] access_fsm_state = 3'h0;
+  output busy;
+  wire busy;
+  output check__first;
+  reg check__first;
+  output check__take_crc;
+  reg check__take_crc;
+  output check__take_data;
+  reg check__take_data;
+  input clk;
+  wire clk;
+  input crc_ok;
+  wire crc_ok;
+  output done;
+  reg done = 1'h0;
+  input echo_ok;
+  wire echo_ok;
+  (* enum_base_type = "AccessStatus" *)
+  (* enum_value_000 = "OK" *)
+  (* enum_value_001 = "CRC4_ERROR" *)
+  (* enum_value_010 = "NO_ANSWER" *)
+  (* enum_value_011 = "REFUSED" *)
+  (* enum_value_100 = "ABORTED" *)
+  (* enum_value_101 = "DATA_FAULT" *)
+  (* enum_value_110 = "BAD_REQUEST" *)
+  reg [2:0] ending = 3'h0;
+  input frame_cdm;
+  wire frame_cdm;
+  input frame_cds;
+  wire frame_cds;
+  input frame_end;
+  wire frame_end;
+  input frame_ok;
+  wire frame_ok;
+  output [5:0] index;
+  reg [5:0] index = 6'h00;
+  reg [17:0] req = 18'h00000;
+  wire [6:0] \req.address ;
+  wire [6:0] \req.count ;
+  wire [2:0] \req.slave_id ;
+  wire \req.write ;
+  input [17:0] request;
+  wire [17:0] request;
+  wire [6:0] \request.address ;
+  wire [6:0] \request.count ;
+  wire [2:0] \request.slave_id ;
+  wire \request.write ;
+  output [9:0] result;
+  reg [9:0] result = 10'h000;
+  wire [6:0] \result.bytes_done ;
+  (* enum_base_type = "AccessStatus" *)
+  (* enum_value_000 = "OK" *)
+  (* enum_value_001 = "CRC4_ERROR" *)
+  (* enum_value_010 = "NO_ANSWER" *)
+  (* enum_value_011 = "REFUSED" *)
+  (* enum_value_100 = "ABORTED" *)
+  (* enum_value_101 = "DATA_FAULT" *)
+  (* enum_value_110 = "BAD_REQUEST" *)
+  wire [2:0] \result.status ;
+  input rst;
+  wire rst;
+  input run_enough;
+  wire run_enough;
+  input seen_enough;
+  wire seen_enough;
+  output [1:0] send__crc_bit;
+  reg [1:0] send__crc_bit;
+  output send__crc_start;
+  reg send__crc_start;
+  output send__crc_valid;
+  reg send__crc_valid;
+  output send__load_byte;
+  reg send__load_byte;
+  output send__load_header;
+  reg send__load_header;
+  output send__shift_byte;
+  reg send__shift_byte;
+  output send__shift_header;
+  reg send__shift_header;
+  (* enum_base_type = "CdmSource" *)
+  (* enum_value_000 = "ZERO" *)
+  (* enum_value_001 = "ONE" *)
+  (* enum_value_010 = "HEADER" *)
+  (* enum_value_011 = "DATA" *)
+  (* enum_value_100 = "CRC" *)
+  output [2:0] send__source;
+  reg [2:0] send__source;
+  input start;
+  wire start;
+  reg [4:0] step = 5'h00;
+  output store;
+  reg store;
+  reg [4:0] waited = 5'h00;
+  assign \$1  = ! request[16:10];
+  assign \$2  = request[16:10] > 7'h40;
+  assign \$3  = \$1  | \$2 ;
+  assign \$4  = request[9:3] + request[16:10];
+  assign \$5  = \$4  > 8'h80;
+  assign \$6  = \$3  | \$5 ;
+  assign \$7  = ~ frame_ok;
+  assign \$8  = frame_end & \$7 ;
+  assign \$9  = ! step;
+  assign \$10  = frame_end & \$9 ;
+  assign \$11  = ~ frame_cdm;
+  assign \$12  = \$10  & \$11 ;
+  assign \$13  = ~ frame_ok;
+  assign \$14  = frame_end & \$13 ;
+  assign \$15  = step == 1'h1;
+  assign \$16  = frame_end & \$15 ;
+  assign \$17  = ~ frame_cds;
+  assign \$18  = \$16  & \$17 ;
+  assign \$19  = step == 5'h11;
+  assign \$20  = frame_end & \$19 ;
+  assign \$21  = frame_cds == req[17];
+  assign \$22  = \$20  & \$21 ;
+  assign \$23  = step + 1'h1;
+  assign \$24  = step == 5'h11;
+  assign \$25  = ~ frame_ok;
+  assign \$26  = frame_end & \$25 ;
+  assign \$27  = ! step;
+  assign \$28  = frame_end & \$27 ;
+  assign \$29  = step == 1'h1;
+  assign \$30  = frame_end & \$29 ;
+  assign \$31  = step < 4'hd;
+  assign \$32  = frame_end & \$31 ;
+  assign \$33  = ! index;
+  assign \$34  = \$33  ? req[17] : 1'h0;
+  assign \$35  = frame_cds != \$34 ;
+  assign \$36  = ~ req[17];
+  assign \$37  = step + 1'h1;
+  assign \$38  = ~ crc_ok;
+  assign \$39  = ~ echo_ok;
+  assign \$40  = req[17] & \$39 ;
+  assign \$41  = index + 1'h1;
+  assign \$42  = index + 1'h1;
+  assign \$43  = \$42  == req[16:10];
+  assign \$44  = index + 1'h1;
+  assign \$45  = ~ frame_ok;
+  assign \$46  = frame_end & \$45 ;
+  assign \$47  = frame_end & frame_cds;
+  assign \$48  = waited + 1'h1;
+  assign \$49  = waited == 4'hf;
+  assign \$50  = ~ frame_ok;
+  assign \$51  = frame_end & \$50 ;
+  assign \$52  = frame_end & frame_cds;
+  assign \$53  = ! request[16:10];
+  assign \$54  = request[16:10] > 7'h40;
+  assign \$55  = \$53  | \$54 ;
+  assign \$56  = request[9:3] + request[16:10];
+  assign \$57  = \$56  > 8'h80;
+  assign \$58  = \$55  | \$57 ;
+  assign \$59  = step >= 4'hc;
+  assign \$60  = step < 5'h10;
+  assign \$61  = \$59  & \$60 ;
+  assign \$62  = ! step;
+  assign \$63  = frame_end & \$62 ;
+  assign \$64  = ~ frame_cdm;
+  assign \$65  = \$63  & \$64 ;
+  assign \$66  = ~ frame_ok;
+  assign \$67  = frame_end & \$66 ;
+  assign \$68  = step == 1'h1;
+  assign \$69  = frame_end & \$68 ;
+  assign \$70  = ~ frame_cds;
+  assign \$71  = \$69  & \$70 ;
+  assign \$72  = step == 5'h11;
+  assign \$73  = frame_end & \$72 ;
+  assign \$74  = frame_cds == req[17];
+  assign \$75  = \$73  & \$74 ;
+  assign \$76  = ! step;
+  assign \$77  = step >= 1'h1;
+  assign \$78  = step <= 4'hb;
+  assign \$79  = \$77  & \$78 ;
+  assign \$80  = ! step;
+  assign \$81  = step >= 1'h1;
+  assign \$82  = step <= 4'h8;
+  assign \$83  = \$81  & \$82 ;
+  assign \$84  = \$83  & req[17];
+  assign \$85  = step >= 4'h9;
+  assign \$86  = step <= 4'hc;
+  assign \$87  = \$85  & \$86 ;
+  assign \$88  = \$87  & req[17];
+  assign \$89  = step - 4'h9;
+  assign \$90  = step >= 1'h1;
+  assign \$91  = frame_end & \$90 ;
+  assign \$92  = step <= 4'h8;
+  assign \$93  = \$91  & \$92 ;
+  assign \$94  = ~ frame_ok;
+  assign \$95  = frame_end & \$94 ;
+  assign \$96  = ! step;
+  assign \$97  = frame_end & \$96 ;
+  assign \$98  = step == 1'h1;
+  assign \$99  = frame_end & \$98 ;
+  assign \$100  = step < 4'hd;
+  assign \$101  = frame_end & \$100 ;
+  assign \$102  = ! index;
+  assign \$103  = \$102  ? req[17] : 1'h0;
+  assign \$104  = frame_cds != \$103 ;
+  assign \$105  = step <= 4'h9;
+  assign \$106  = step == 2'h2;
+  assign \$107  = ~ crc_ok;
+  assign \$108  = ~ echo_ok;
+  assign \$109  = req[17] & \$108 ;
+  assign \$110  = ~ req[17];
+  assign busy = ~ \$111 ;
+  assign \$111  = ! access_fsm_state;
+  assign \$112  = access_fsm_state == 1'h1;
+  assign \$113  = access_fsm_state == 2'h2;
+  assign \$114  = access_fsm_state == 2'h3;
+  assign \$115  = access_fsm_state == 3'h4;
+  assign \$116  = access_fsm_state == 3'h5;
+  assign \$117  = access_fsm_state == 3'h6;
+  always @(posedge clk)
+    done <= \$118 ;
+  always @(posedge clk)
+    result <= \$119 ;
+  always @(posedge clk)
+    access_fsm_state <= \$120 ;
+  always @(posedge clk)
+    req <= \$121 ;
+  always @(posedge clk)
+    index <= \$122 ;
+  always @(posedge clk)
+    step <= \$123 ;
+  always @(posedge clk)
+    ending <= \$124 ;
+  always @(posedge clk)
+    waited <= \$125 ;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    \$118  = 1'h0;
+    casez (access_fsm_state)
+      3'h0:
+          if (start) begin
+            if (\$6 ) begin
+              \$118  = 1'h1;
+            end
+          end
+      3'h1:
+          if (abort) begin
+            \$118  = 1'h1;
+          end else if (\$8 ) begin
+            \$118  = 1'h1;
+          end
+      3'h2:
+          /* empty */;
+      3'h4:
+          /* empty */;
+      3'h5:
+          /* empty */;
+      3'h6:
+          if (abort) begin
+          end else if (\$51 ) begin
+          end else if (\$52 ) begin
+          end else if (frame_end) begin
+            \$118  = 1'h1;
+          end
+      3'h3:
+          if (run_enough) begin
+            \$118  = 1'h1;
+          end
+    endcase
+    if (rst) begin
+      \$118  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    \$119  = result;
+    casez (access_fsm_state)
+      3'h0:
+          if (start) begin
+            (* full_case = 32'd1 *)
+            if (\$6 ) begin
+              \$119 [2:0] = 3'h6;
+              \$119 [9:3] = 7'h00;
+            end else begin
+              \$119 [9:3] = 7'h00;
+            end
+          end
+      3'h1:
+          if (abort) begin
+            \$119 [2:0] = 3'h4;
+          end else if (\$8 ) begin
+            \$119 [2:0] = 3'h5;
+          end
+      3'h2:
+          /* empty */;
+      3'h4:
+          if (abort) begin
+          end else if (\$26 ) begin
+          end else if (\$28 ) begin
+          end else if (\$30 ) begin
+          end else if (\$32 ) begin
+          end else if (frame_end) begin
+            (* full_case = 32'd1 *)
+            if (\$38 ) begin
+            end else if (\$40 ) begin
+            end else begin
+              \$119 [9:3] = \$41 ;
+            end
+          end
+      3'h5:
+          /* empty */;
+      3'h6:
+          if (abort) begin
+          end else if (\$51 ) begin
+          end else if (\$52 ) begin
+          end else if (frame_end) begin
+            \$119 [2:0] = 3'h0;
+          end
+      3'h3:
+          if (run_enough) begin
+            \$119 [2:0] = ending;
+          end
+    endcase
+    if (rst) begin
+      \$119  = 10'h000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    \$120  = access_fsm_state;
+    casez (access_fsm_state)
+      3'h0:
+          if (start) begin
+            (* full_case = 32'd1 *)
+            if (\$6 ) begin
+              \$120  = 3'h0;
+            end else begin
+              \$120  = 3'h1;
+            end
+          end
+      3'h1:
+          if (abort) begin
+            \$120  = 3'h0;
+          end else if (\$8 ) begin
+            \$120  = 3'h0;
+          end else if (seen_enough) begin
+            \$120  = 3'h2;
+          end
+      3'h2:
+          if (abort) begin
+            \$120  = 3'h3;
+          end else if (\$12 ) begin
+          end else if (\$14 ) begin
+            \$120  = 3'h3;
+          end else if (\$18 ) begin
+            \$120  = 3'h3;
+          end else if (\$22 ) begin
+            \$120  = 3'h3;
+          end else if (frame_end) begin
+            if (\$24 ) begin
+              \$120  = 3'h4;
+            end
+          end
+      3'h4:
+          if (abort) begin
+            \$120  = 3'h3;
+          end else if (\$26 ) begin
+            \$120  = 3'h3;
+          end else if (\$28 ) begin
+            if (\$35 ) begin
+              \$120  = 3'h3;
+            end
+          end else if (\$30 ) begin
+            (* full_case = 32'd1 *)
+            if (frame_cds) begin
+            end else if (\$36 ) begin
+              \$120  = 3'h5;
+            end else begin
+              \$120  = 3'h3;
+            end
+          end else if (\$32 ) begin
+          end else if (frame_end) begin
+            (* full_case = 32'd1 *)
+            if (\$38 ) begin
+              \$120  = 3'h3;
+            end else if (\$40 ) begin
+              \$120  = 3'h3;
+            end else begin
+              if (\$43 ) begin
+                \$120  = 3'h6;
+              end
+            end
+          end
+      3'h5:
+          if (abort) begin
+            \$120  = 3'h3;
+          end else if (\$46 ) begin
+            \$120  = 3'h3;
+          end else if (\$47 ) begin
+            \$120  = 3'h4;
+          end else if (frame_end) begin
+            if (\$49 ) begin
+              \$120  = 3'h3;
+            end
+          end
+      3'h6:
+          if (abort) begin
+            \$120  = 3'h3;
+          end else if (\$51 ) begin
+            \$120  = 3'h3;
+          end else if (\$52 ) begin
+            \$120  = 3'h3;
+          end else if (frame_end) begin
+            \$120  = 3'h0;
+          end
+      3'h3:
+          if (run_enough) begin
+            \$120  = 3'h0;
+          end
+    endcase
+    if (rst) begin
+      \$120  = 3'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    \$121  = req;
+    casez (access_fsm_state)
+      3'h0:
+          if (start) begin
+            (* full_case = 32'd1 *)
+            if (\$6 ) begin
+            end else begin
+              \$121  = request;
+            end
+          end
+    endcase
+    if (rst) begin
+      \$121  = 18'h00000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    \$122  = index;
+    casez (access_fsm_state)
+      3'h0:
+          if (start) begin
+            (* full_case = 32'd1 *)
+            if (\$6 ) begin
+            end else begin
+              \$122  = 6'h00;
+            end
+          end
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h4:
+          if (abort) begin
+          end else if (\$26 ) begin
+          end else if (\$28 ) begin
+          end else if (\$30 ) begin
+          end else if (\$32 ) begin
+          end else if (frame_end) begin
+            (* full_case = 32'd1 *)
+            if (\$38 ) begin
+            end else if (\$40 ) begin
+            end else begin
+              (* full_case = 32'd1 *)
+              if (\$43 ) begin
+              end else begin
+                \$122  = \$44 [5:0];
+              end
+            end
+          end
+    endcase
+    if (rst) begin
+      \$122  = 6'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    \$123  = step;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (abort) begin
+          end else if (\$8 ) begin
+          end else if (seen_enough) begin
+            \$123  = 5'h00;
+          end
+      3'h2:
+          if (abort) begin
+          end else if (\$12 ) begin
+          end else if (\$14 ) begin
+          end else if (\$18 ) begin
+          end else if (\$22 ) begin
+          end else if (frame_end) begin
+            \$123  = \$23 [4:0];
+            if (\$24 ) begin
+              \$123  = 5'h00;
+            end
+          end
+      3'h4:
+          if (abort) begin
+          end else if (\$26 ) begin
+          end else if (\$28 ) begin
+            (* full_case = 32'd1 *)
+            if (\$35 ) begin
+            end else begin
+              \$123  = 5'h01;
+            end
+          end else if (\$30 ) begin
+            if (frame_cds) begin
+              \$123  = 5'h02;
+            end
+          end else if (\$32 ) begin
+            \$123  = \$37 [4:0];
+          end else if (frame_end) begin
+            (* full_case = 32'd1 *)
+            if (\$38 ) begin
+            end else if (\$40 ) begin
+            end else begin
+              \$123  = 5'h00;
+            end
+          end
+      3'h5:
+          if (abort) begin
+          end else if (\$46 ) begin
+          end else if (\$47 ) begin
+            \$123  = 5'h02;
+          end
+    endcase
+    if (rst) begin
+      \$123  = 5'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    \$124  = ending;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          if (abort) begin
+            \$124  = 3'h4;
+          end else if (\$12 ) begin
+          end else if (\$14 ) begin
+            \$124  = 3'h5;
+          end else if (\$18 ) begin
+            \$124  = 3'h2;
+          end else if (\$22 ) begin
+            \$124  = 3'h3;
+          end
+      3'h4:
+          if (abort) begin
+            \$124  = 3'h4;
+          end else if (\$26 ) begin
+            \$124  = 3'h5;
+          end else if (\$28 ) begin
+            if (\$35 ) begin
+              \$124  = 3'h3;
+            end
+          end else if (\$30 ) begin
+            (* full_case = 32'd1 *)
+            if (frame_cds) begin
+            end else if (\$36 ) begin
+            end else begin
+              \$124  = 3'h3;
+            end
+          end else if (\$32 ) begin
+          end else if (frame_end) begin
+            if (\$38 ) begin
+              \$124  = 3'h1;
+            end else if (\$40 ) begin
+              \$124  = 3'h3;
+            end
+          end
+      3'h5:
+          if (abort) begin
+            \$124  = 3'h4;
+          end else if (\$46 ) begin
+            \$124  = 3'h5;
+          end else if (\$47 ) begin
+          end else if (frame_end) begin
+            if (\$49 ) begin
+              \$124  = 3'h3;
+            end
+          end
+      3'h6:
+          if (abort) begin
+            \$124  = 3'h4;
+          end else if (\$51 ) begin
+            \$124  = 3'h5;
+          end else if (\$52 ) begin
+            \$124  = 3'h3;
+          end
+    endcase
+    if (rst) begin
+      \$124  = 3'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    \$125  = waited;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h4:
+          if (abort) begin
+          end else if (\$26 ) begin
+          end else if (\$28 ) begin
+          end else if (\$30 ) begin
+            if (frame_cds) begin
+            end else if (\$36 ) begin
+              \$125  = 5'h00;
+            end
+          end
+      3'h5:
+          if (abort) begin
+          end else if (\$46 ) begin
+          end else if (\$47 ) begin
+          end else if (frame_end) begin
+            \$125  = \$48 [4:0];
+          end
+    endcase
+    if (rst) begin
+      \$125  = 5'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    send__load_header = 1'h0;
+    casez (access_fsm_state)
+      3'h0:
+          if (start) begin
+            (* full_case = 32'd1 *)
+            if (\$58 ) begin
+            end else begin
+              send__load_header = 1'h1;
+            end
+          end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    send__source = 3'h0;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          (* full_case = 32'd1 *)
+          if (\$61 ) begin
+            send__source = 3'h4;
+          end else begin
+            send__source = 3'h2;
+          end
+      3'h4:
+          if (\$80 ) begin
+            send__source = 3'h1;
+          end else if (\$84 ) begin
+            send__source = 3'h3;
+          end else if (\$88 ) begin
+            send__source = 3'h4;
+          end
+      3'h5:
+          send__source = 3'h1;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    send__crc_bit = 2'h0;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          if (\$61 ) begin
+            send__crc_bit = step[1:0];
+          end
+      3'h4:
+          if (\$80 ) begin
+          end else if (\$84 ) begin
+          end else if (\$88 ) begin
+            send__crc_bit = \$89 [1:0];
+          end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    send__shift_header = 1'h0;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          if (abort) begin
+          end else if (\$65 ) begin
+          end else if (\$67 ) begin
+          end else if (\$71 ) begin
+          end else if (\$75 ) begin
+          end else if (frame_end) begin
+            send__shift_header = 1'h1;
+          end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    send__crc_start = 1'h0;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          if (abort) begin
+          end else if (\$65 ) begin
+          end else if (\$67 ) begin
+          end else if (\$71 ) begin
+          end else if (\$75 ) begin
+          end else if (frame_end) begin
+            send__crc_start = \$76 ;
+          end
+      3'h4:
+          if (abort) begin
+          end else if (\$95 ) begin
+          end else if (\$97 ) begin
+            (* full_case = 32'd1 *)
+            if (\$104 ) begin
+            end else begin
+              send__crc_start = 1'h1;
+            end
+          end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    send__crc_valid = 1'h0;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          if (abort) begin
+          end else if (\$65 ) begin
+          end else if (\$67 ) begin
+          end else if (\$71 ) begin
+          end else if (\$75 ) begin
+          end else if (frame_end) begin
+            send__crc_valid = \$79 ;
+          end
+      3'h4:
+          send__crc_valid = \$93 ;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    send__load_byte = 1'h0;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h4:
+          if (abort) begin
+          end else if (\$95 ) begin
+          end else if (\$97 ) begin
+            (* full_case = 32'd1 *)
+            if (\$104 ) begin
+            end else begin
+              send__load_byte = 1'h1;
+            end
+          end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    send__shift_byte = 1'h0;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h4:
+          if (abort) begin
+          end else if (\$95 ) begin
+          end else if (\$97 ) begin
+          end else if (\$99 ) begin
+            send__shift_byte = 1'h1;
+          end else if (\$101 ) begin
+            send__shift_byte = 1'h1;
+          end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    check__take_data = 1'h0;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h4:
+          if (abort) begin
+          end else if (\$95 ) begin
+          end else if (\$97 ) begin
+          end else if (\$99 ) begin
+          end else if (\$101 ) begin
+            if (\$105 ) begin
+              check__take_data = 1'h1;
+            end
+          end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    check__first = 1'h0;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h4:
+          if (abort) begin
+          end else if (\$95 ) begin
+          end else if (\$97 ) begin
+          end else if (\$99 ) begin
+          end else if (\$101 ) begin
+            if (\$105 ) begin
+              check__first = \$106 ;
+            end
+          end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    check__take_crc = 1'h0;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h4:
+          if (abort) begin
+          end else if (\$95 ) begin
+          end else if (\$97 ) begin
+          end else if (\$99 ) begin
+          end else if (\$101 ) begin
+            (* full_case = 32'd1 *)
+            if (\$105 ) begin
+            end else begin
+              check__take_crc = 1'h1;
+            end
+          end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    store = 1'h0;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h4:
+          if (abort) begin
+          end else if (\$95 ) begin
+          end else if (\$97 ) begin
+          end else if (\$99 ) begin
+          end else if (\$101 ) begin
+          end else if (frame_end) begin
+            (* full_case = 32'd1 *)
+            if (\$107 ) begin
+            end else if (\$109 ) begin
+            end else begin
+              store = \$110 ;
+            end
+          end
+    endcase
+  end
+  assign \request.slave_id  = request[2:0];
+  assign \request.address  = request[9:3];
+  assign \request.count  = request[16:10];
+  assign \request.write  = request[17];
+  assign \result.status  = result[2:0];
+  assign \result.bytes_done  = result[9:3];
+  assign \req.slave_id  = req[2:0];
+  assign \req.address  = req[9:3];
+  assign \req.count  = req[16:10];
+  assign \req.write  = req[17];
+endmodule
+
+(* generator = "Amaranth" *)
 module \biss_master.results (rst, report, valid, frame, report_frame, report_delay, done, valid_out, result, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$41  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$45  = 0;
   reg \$1 ;
   reg \$2 ;
   reg [160:0] \$3 ;
@@ -7404,21 +7828,21 @@ module \biss_master.results (rst, report, valid, frame, report_frame, report_del
   always @(posedge clk)
     result <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
     \$1  = report;
     if (rst) begin
       \$1  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
     \$2  = valid;
     if (rst) begin
       \$2  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
     \$3  = result;
     if (report) begin
       \$3 [3:0] = frame[3:0];
@@ -7483,7 +7907,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, early, locked, delay, sample, level, slo);
-  reg \$auto$verilog_backend.cc:2355:dump_module$42  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$46  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -7721,7 +8145,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     .stage1(level)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     \$63  = level;
     if (receiver_clear) begin
       \$63  = 1'h1;
@@ -7731,7 +8155,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     \$64  = mid_delay;
     if (odd) begin
       \$64  = \$8 [12:0];
@@ -7756,7 +8180,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     \$65  = mid_slot;
     (* full_case = 32'd1 *)
     if (odd) begin
@@ -7783,7 +8207,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     \$66  = \$10 ;
     casez (sampler_fsm_state)
       2'h0:
@@ -7805,7 +8229,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     \$67  = elapsed;
     casez (sampler_fsm_state)
       2'h0:
@@ -7829,7 +8253,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     \$68  = early;
     casez (sampler_fsm_state)
       2'h0:
@@ -7845,7 +8269,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     \$69  = locked;
     casez (sampler_fsm_state)
       2'h0:
@@ -7871,7 +8295,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     \$70  = gap;
     casez (sampler_fsm_state)
       2'h0:
@@ -7902,7 +8326,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     \$71  = sampler_fsm_state;
     casez (sampler_fsm_state)
       2'h0:
@@ -7933,7 +8357,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     \$72  = slot_left;
     casez (sampler_fsm_state)
       2'h0:
@@ -7983,7 +8407,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     \$73  = slot_zero;
     casez (sampler_fsm_state)
       2'h0:
@@ -8033,7 +8457,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     \$74  = vote1;
     casez (sampler_fsm_state)
       2'h0:
@@ -8063,7 +8487,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     \$75  = vote2;
     casez (sampler_fsm_state)
       2'h0:
@@ -8091,7 +8515,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     \$76  = first_slot;
     casez (sampler_fsm_state)
       2'h0:
@@ -8117,7 +8541,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     \$77  = delay;
     casez (sampler_fsm_state)
       2'h0:
@@ -8140,7 +8564,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     \$78  = phase;
     casez (sampler_fsm_state)
       2'h0:
@@ -8180,7 +8604,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     sample = \$44 ;
     casez (sampler_fsm_state)
       2'h0:
@@ -8198,7 +8622,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     decided = 1'h0;
     casez (sampler_fsm_state)
       2'h0:
@@ -8248,7 +8672,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.scheduler (abort, period, clk, rst, periodic, request, overrun, idle, start);
-  reg \$auto$verilog_backend.cc:2355:dump_module$43  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$47  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -8329,7 +8753,7 @@ module \biss_master.scheduler (abort, period, clk, rst, periodic, request, overr
   always @(posedge clk)
     period_start <= \$28 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$27  = 24'h000001;
@@ -8341,7 +8765,7 @@ module \biss_master.scheduler (abort, period, clk, rst, periodic, request, overr
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$28  = 1'h1;
@@ -8359,7 +8783,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.sign_of_life (rst, \port$482$0 , load, \repeat , skip, check, resync, lc, is_zero, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$44  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$48  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -8439,7 +8863,7 @@ module \biss_master.sign_of_life (rst, \port$482$0 , load, \repeat , skip, check
   always @(posedge clk)
     synced <= \$21 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     \$16  = is_zero;
     if (load) begin
       \$16  = \$1 ;
@@ -8449,7 +8873,7 @@ module \biss_master.sign_of_life (rst, \port$482$0 , load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     \$17  = is_last;
     if (load) begin
       \$17  = \$2 ;
@@ -8459,7 +8883,7 @@ module \biss_master.sign_of_life (rst, \port$482$0 , load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     \$18  = is_expected;
     if (load) begin
       \$18  = \$3 ;
@@ -8469,7 +8893,7 @@ module \biss_master.sign_of_life (rst, \port$482$0 , load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     \$19  = last;
     if (\$5 ) begin
       \$19  = lc;
@@ -8479,7 +8903,7 @@ module \biss_master.sign_of_life (rst, \port$482$0 , load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     \$20  = expected;
     if (\$5 ) begin
       \$20  = \$8 [5:0];
@@ -8489,7 +8913,7 @@ module \biss_master.sign_of_life (rst, \port$482$0 , load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     \$21  = synced;
     if (\$5 ) begin
       \$21  = 1'h1;
@@ -8507,7 +8931,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.spw_check (rst, bits, \tolerance$8 , spw, cpw_top, match, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$45  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$49  = 0;
   wire [40:0] \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -8712,28 +9136,28 @@ module \biss_master.spw_check (rst, bits, \tolerance$8 , spw, cpw_top, match, cl
   assign \$7  = bits > 3'h5;
   assign \$8  = bits > 3'h6;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$88  = \$42 ;
     if (rst) begin
       \$88  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$89  = \$84 ;
     if (rst) begin
       \$89  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$90  = \tolerance$8 ;
     if (rst) begin
       \$90  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$91  = \$87 ;
     if (rst) begin
       \$91  = 1'h0;
@@ -8743,7 +9167,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.time_base (rst, first_rise, first_rise_time, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$46  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$50  = 0;
   wire [32:0] \$1 ;
   reg [31:0] \$2 ;
   reg [31:0] \$3 ;
@@ -8762,14 +9186,14 @@ module \biss_master.time_base (rst, first_rise, first_rise_time, clk);
   always @(posedge clk)
     first_rise_time <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$2  = \$1 [31:0];
     if (rst) begin
       \$2  = 32'd0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$3  = first_rise_time;
     if (first_rise) begin
       \$3  = now;
@@ -8782,7 +9206,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.timers (timeout_live, clk, rst, restart, ma_busy, ack_limit, timeout_limit, delay_limit, no_start_limit, clear, in_clock, slo_stuck, slo_stuck_live, break_over, ack_expired, no_start_expired, delay_over, delay, slo, break_time);
-  reg \$auto$verilog_backend.cc:2355:dump_module$47  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -8920,7 +9344,7 @@ module \biss_master.timers (timeout_live, clk, rst, restart, ma_busy, ack_limit,
   always @(posedge clk)
     delay_over <= \$43 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$36  = slo_low_time_p1;
     if (\$1 ) begin
       \$36  = 25'h0000001;
@@ -8932,49 +9356,49 @@ module \biss_master.timers (timeout_live, clk, rst, restart, ma_busy, ack_limit,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$37  = \$8 ;
     if (rst) begin
       \$37  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$38  = \$16 ;
     if (rst) begin
       \$38  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$39  = \$20 [24:0];
     if (rst) begin
       \$39  = 25'h0000001;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$40  = \$26 ;
     if (rst) begin
       \$40  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$41  = \$30 ;
     if (rst) begin
       \$41  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$42  = \$34 ;
     if (rst) begin
       \$42  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$43  = \$35 ;
     if (rst) begin
       \$43  = 1'h0;
@@ -8984,7 +9408,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.verdict (lc_skip_seen, \port$882$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
-  reg \$auto$verilog_backend.cc:2355:dump_module$48  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$52  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -9166,7 +9590,7 @@ module \biss_master.verdict (lc_skip_seen, \port$882$0 , lc_check, lc_repeat, lc
   assign \$29  = ~ { \$2 , crc_ok[0] };
   assign crc_error = report_frame ? \$29  : 2'h0;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
     (* full_case = 32'd1 *)
     if (\$13 ) begin
       frame_status = 4'h3;

@@ -539,12 +539,12 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .ch1_irq(\$7 ),
     .clk(clk),
     .glob__trigger(glob__trigger),
-    .\port$3907$0 (\$8 ),
-    .\port$3914$0 (\$9 ),
-    .\port$4042$0 (\$10 ),
-    .\port$4342$0 (\$11 ),
-    .\port$4349$0 (\$12 ),
-    .\port$4477$0 (\$13 ),
+    .\port$3955$0 (\$8 ),
+    .\port$3962$0 (\$9 ),
+    .\port$4076$0 (\$10 ),
+    .\port$4402$0 (\$11 ),
+    .\port$4409$0 (\$12 ),
+    .\port$4523$0 (\$13 ),
     .rst(rst)
   );
   \biss_master_wb.bus  bus (
@@ -595,9 +595,9 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .clk(clk),
     .ma(ch0_ma),
     .periodic(regs__periodic),
-    .\port$3907$0 (\$8 ),
-    .\port$3914$0 (\$9 ),
-    .\port$4042$0 (\$10 ),
+    .\port$3955$0 (\$8 ),
+    .\port$3962$0 (\$9 ),
+    .\port$4076$0 (\$10 ),
     .regs__busy(ch0__busy),
     .regs__ca_busy(ch0__ca_busy),
     .regs__ca_done(ch0__ca_done),
@@ -646,9 +646,9 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .clk(clk),
     .ma(ch1_ma),
     .periodic(\regs__periodic$358 ),
-    .\port$4342$0 (\$11 ),
-    .\port$4349$0 (\$12 ),
-    .\port$4477$0 (\$13 ),
+    .\port$4402$0 (\$11 ),
+    .\port$4409$0 (\$12 ),
+    .\port$4523$0 (\$13 ),
     .regs__busy(ch1__busy),
     .regs__ca_busy(ch1__ca_busy),
     .regs__ca_done(ch1__ca_done),
@@ -977,7 +977,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
 , ch1__ca_busy, ch1__ca_rbuf_data, glob__trigger, ch0__start, ch0__abort_cycle, ch0__clear_counters, ch0__periodic, ch0__trigger_enable, ch0__cfg_ma_half_period, ch0__cfg_delay_limit, ch0__cfg_request_period, ch0__cfg_break_time, ch0__cfg_ack_limit, ch0__cfg_timeout_limit, ch0__cfg_w0_data_bits, ch0__cfg_w0_nenw, ch0__cfg_w0_lc, ch0__cfg_w0_crc, ch0__cfg_w1_data_bits, ch0__cfg_w1_nenw, ch0__cfg_w1_lc
 , ch0__cfg_w1_crc, ch0__cfg_w1_enable, ch0__cfg_end_check, ch0__cfg_spw_check, ch0__cfg_spw_tolerance, ch0__ca_slave_id, ch0__ca_address, ch0__ca_count, ch0__ca_write, ch0__ca_start, ch0__ca_abort, ch1__start, ch1__abort_cycle, ch1__clear_counters, ch1__periodic, ch1__trigger_enable, ch1__cfg_ma_half_period, ch1__cfg_delay_limit, ch1__cfg_request_period, ch1__cfg_break_time, ch1__cfg_ack_limit
 , ch1__cfg_timeout_limit, ch1__cfg_w0_data_bits, ch1__cfg_w0_nenw, ch1__cfg_w0_lc, ch1__cfg_w0_crc, ch1__cfg_w1_data_bits, ch1__cfg_w1_nenw, ch1__cfg_w1_lc, ch1__cfg_w1_crc, ch1__cfg_w1_enable, ch1__cfg_end_check, ch1__cfg_spw_check, ch1__cfg_spw_tolerance, ch1__ca_slave_id, ch1__ca_address, ch1__ca_count, ch1__ca_write, ch1__ca_start, ch1__ca_abort, ch0__done_count, ch0__done
-, \port$3907$0 , \port$3914$0 , ch0__ca_done, \port$4042$0 , ch1__done_count, ch1__done, \port$4342$0 , \port$4349$0 , ch1__ca_done, \port$4477$0 , bus__w_addr);
+, \port$3955$0 , \port$3962$0 , ch0__ca_done, \port$4076$0 , ch1__done_count, ch1__done, \port$4402$0 , \port$4409$0 , ch1__ca_done, \port$4523$0 , bus__w_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$26  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -2087,18 +2087,18 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
   output glob__trigger;
   reg glob__trigger = 1'h0;
   wire [1:0] irq;
-  input [160:0] \port$3907$0 ;
-  wire [160:0] \port$3907$0 ;
-  input [287:0] \port$3914$0 ;
-  wire [287:0] \port$3914$0 ;
-  input [9:0] \port$4042$0 ;
-  wire [9:0] \port$4042$0 ;
-  input [160:0] \port$4342$0 ;
-  wire [160:0] \port$4342$0 ;
-  input [287:0] \port$4349$0 ;
-  wire [287:0] \port$4349$0 ;
-  input [9:0] \port$4477$0 ;
-  wire [9:0] \port$4477$0 ;
+  input [160:0] \port$3955$0 ;
+  wire [160:0] \port$3955$0 ;
+  input [287:0] \port$3962$0 ;
+  wire [287:0] \port$3962$0 ;
+  input [9:0] \port$4076$0 ;
+  wire [9:0] \port$4076$0 ;
+  input [160:0] \port$4402$0 ;
+  wire [160:0] \port$4402$0 ;
+  input [287:0] \port$4409$0 ;
+  wire [287:0] \port$4409$0 ;
+  input [9:0] \port$4523$0 ;
+  wire [9:0] \port$4523$0 ;
   input rst;
   wire rst;
   reg window0_read = 1'h0;
@@ -3236,7 +3236,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$450  = ch0_result_status_status_snapshot;
     if (ch0_result_status_read) begin
-      \$450  = \port$3907$0 [3:0];
+      \$450  = \port$3955$0 [3:0];
     end
     if (rst) begin
       \$450  = 4'h0;
@@ -3246,7 +3246,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$451  = ch0_result_status_cds_snapshot;
     if (ch0_result_status_read) begin
-      \$451  = \port$3907$0 [49];
+      \$451  = \port$3955$0 [49];
     end
     if (rst) begin
       \$451  = 1'h0;
@@ -3256,7 +3256,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$452  = ch0_result_status_w0_ne_snapshot;
     if (ch0_result_status_read) begin
-      \$452  = \port$3907$0 [105];
+      \$452  = \port$3955$0 [105];
     end
     if (rst) begin
       \$452  = 1'h0;
@@ -3266,7 +3266,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$453  = ch0_result_status_w0_nw_snapshot;
     if (ch0_result_status_read) begin
-      \$453  = \port$3907$0 [106];
+      \$453  = \port$3955$0 [106];
     end
     if (rst) begin
       \$453  = 1'h0;
@@ -3276,7 +3276,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$454  = ch0_result_status_w0_crc_ok_snapshot;
     if (ch0_result_status_read) begin
-      \$454  = \port$3907$0 [107];
+      \$454  = \port$3955$0 [107];
     end
     if (rst) begin
       \$454  = 1'h0;
@@ -3286,7 +3286,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$455  = ch0_result_status_w1_ne_snapshot;
     if (ch0_result_status_read) begin
-      \$455  = \port$3907$0 [148];
+      \$455  = \port$3955$0 [148];
     end
     if (rst) begin
       \$455  = 1'h0;
@@ -3296,7 +3296,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$456  = ch0_result_status_w1_nw_snapshot;
     if (ch0_result_status_read) begin
-      \$456  = \port$3907$0 [149];
+      \$456  = \port$3955$0 [149];
     end
     if (rst) begin
       \$456  = 1'h0;
@@ -3306,7 +3306,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$457  = ch0_result_status_w1_crc_ok_snapshot;
     if (ch0_result_status_read) begin
-      \$457  = \port$3907$0 [150];
+      \$457  = \port$3955$0 [150];
     end
     if (rst) begin
       \$457  = 1'h0;
@@ -3316,7 +3316,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$458  = ch0_result_status_lc_repeat_snapshot;
     if (ch0_result_status_read) begin
-      \$458  = \port$3907$0 [157];
+      \$458  = \port$3955$0 [157];
     end
     if (rst) begin
       \$458  = 1'h0;
@@ -3326,7 +3326,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$459  = ch0_result_status_lc_skip_snapshot;
     if (ch0_result_status_read) begin
-      \$459  = \port$3907$0 [158];
+      \$459  = \port$3955$0 [158];
     end
     if (rst) begin
       \$459  = 1'h0;
@@ -3336,7 +3336,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$460  = ch0_result_status_lc_zero_snapshot;
     if (ch0_result_status_read) begin
-      \$460  = \port$3907$0 [159];
+      \$460  = \port$3955$0 [159];
     end
     if (rst) begin
       \$460  = 1'h0;
@@ -3346,7 +3346,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$461  = ch0_result_status_spw_mismatch_snapshot;
     if (ch0_result_status_read) begin
-      \$461  = \port$3907$0 [160];
+      \$461  = \port$3955$0 [160];
     end
     if (rst) begin
       \$461  = 1'h0;
@@ -3356,7 +3356,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$462  = ch0_result_status_lc_snapshot;
     if (ch0_result_status_read) begin
-      \$462  = \port$3907$0 [156:151];
+      \$462  = \port$3955$0 [156:151];
     end
     if (rst) begin
       \$462  = 6'h00;
@@ -3376,7 +3376,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$464  = ch0_result_seq_line_delay_snapshot;
     if (ch0_result_status_read) begin
-      \$464  = \port$3907$0 [48:36];
+      \$464  = \port$3955$0 [48:36];
     end
     if (rst) begin
       \$464  = 13'h0000;
@@ -3386,7 +3386,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$465  = ch0_result_w0_lo_data_snapshot;
     if (ch0_result_status_read) begin
-      \$465  = \port$3907$0 [81:50];
+      \$465  = \port$3955$0 [81:50];
     end
     if (rst) begin
       \$465  = 32'd0;
@@ -3396,7 +3396,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$466  = ch0_result_w0_hi_data_snapshot;
     if (ch0_result_status_read) begin
-      \$466  = \port$3907$0 [104:82];
+      \$466  = \port$3955$0 [104:82];
     end
     if (rst) begin
       \$466  = 23'h000000;
@@ -3406,7 +3406,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$467  = ch0_result_w1_lo_data_snapshot;
     if (ch0_result_status_read) begin
-      \$467  = \port$3907$0 [139:108];
+      \$467  = \port$3955$0 [139:108];
     end
     if (rst) begin
       \$467  = 32'd0;
@@ -3416,7 +3416,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$468  = ch0_result_w1_hi_data_snapshot;
     if (ch0_result_status_read) begin
-      \$468  = \port$3907$0 [147:140];
+      \$468  = \port$3955$0 [147:140];
     end
     if (rst) begin
       \$468  = 8'h00;
@@ -3426,7 +3426,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$469  = ch0_result_timestamp_time_snapshot;
     if (ch0_result_status_read) begin
-      \$469  = \port$3907$0 [35:4];
+      \$469  = \port$3955$0 [35:4];
     end
     if (rst) begin
       \$469  = 32'd0;
@@ -3777,7 +3777,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$505  = ch1_result_status_status_snapshot;
     if (ch1_result_status_read) begin
-      \$505  = \port$4342$0 [3:0];
+      \$505  = \port$4402$0 [3:0];
     end
     if (rst) begin
       \$505  = 4'h0;
@@ -3787,7 +3787,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$506  = ch1_result_status_cds_snapshot;
     if (ch1_result_status_read) begin
-      \$506  = \port$4342$0 [49];
+      \$506  = \port$4402$0 [49];
     end
     if (rst) begin
       \$506  = 1'h0;
@@ -3797,7 +3797,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$507  = ch1_result_status_w0_ne_snapshot;
     if (ch1_result_status_read) begin
-      \$507  = \port$4342$0 [105];
+      \$507  = \port$4402$0 [105];
     end
     if (rst) begin
       \$507  = 1'h0;
@@ -3807,7 +3807,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$508  = ch1_result_status_w0_nw_snapshot;
     if (ch1_result_status_read) begin
-      \$508  = \port$4342$0 [106];
+      \$508  = \port$4402$0 [106];
     end
     if (rst) begin
       \$508  = 1'h0;
@@ -3817,7 +3817,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$509  = ch1_result_status_w0_crc_ok_snapshot;
     if (ch1_result_status_read) begin
-      \$509  = \port$4342$0 [107];
+      \$509  = \port$4402$0 [107];
     end
     if (rst) begin
       \$509  = 1'h0;
@@ -3827,7 +3827,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$510  = ch1_result_status_w1_ne_snapshot;
     if (ch1_result_status_read) begin
-      \$510  = \port$4342$0 [148];
+      \$510  = \port$4402$0 [148];
     end
     if (rst) begin
       \$510  = 1'h0;
@@ -3837,7 +3837,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$511  = ch1_result_status_w1_nw_snapshot;
     if (ch1_result_status_read) begin
-      \$511  = \port$4342$0 [149];
+      \$511  = \port$4402$0 [149];
     end
     if (rst) begin
       \$511  = 1'h0;
@@ -3847,7 +3847,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$512  = ch1_result_status_w1_crc_ok_snapshot;
     if (ch1_result_status_read) begin
-      \$512  = \port$4342$0 [150];
+      \$512  = \port$4402$0 [150];
     end
     if (rst) begin
       \$512  = 1'h0;
@@ -3857,7 +3857,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$513  = ch1_result_status_lc_repeat_snapshot;
     if (ch1_result_status_read) begin
-      \$513  = \port$4342$0 [157];
+      \$513  = \port$4402$0 [157];
     end
     if (rst) begin
       \$513  = 1'h0;
@@ -3867,7 +3867,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$514  = ch1_result_status_lc_skip_snapshot;
     if (ch1_result_status_read) begin
-      \$514  = \port$4342$0 [158];
+      \$514  = \port$4402$0 [158];
     end
     if (rst) begin
       \$514  = 1'h0;
@@ -3877,7 +3877,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$515  = ch1_result_status_lc_zero_snapshot;
     if (ch1_result_status_read) begin
-      \$515  = \port$4342$0 [159];
+      \$515  = \port$4402$0 [159];
     end
     if (rst) begin
       \$515  = 1'h0;
@@ -3887,7 +3887,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$516  = ch1_result_status_spw_mismatch_snapshot;
     if (ch1_result_status_read) begin
-      \$516  = \port$4342$0 [160];
+      \$516  = \port$4402$0 [160];
     end
     if (rst) begin
       \$516  = 1'h0;
@@ -3897,7 +3897,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$517  = ch1_result_status_lc_snapshot;
     if (ch1_result_status_read) begin
-      \$517  = \port$4342$0 [156:151];
+      \$517  = \port$4402$0 [156:151];
     end
     if (rst) begin
       \$517  = 6'h00;
@@ -3917,7 +3917,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$519  = ch1_result_seq_line_delay_snapshot;
     if (ch1_result_status_read) begin
-      \$519  = \port$4342$0 [48:36];
+      \$519  = \port$4402$0 [48:36];
     end
     if (rst) begin
       \$519  = 13'h0000;
@@ -3927,7 +3927,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$520  = ch1_result_w0_lo_data_snapshot;
     if (ch1_result_status_read) begin
-      \$520  = \port$4342$0 [81:50];
+      \$520  = \port$4402$0 [81:50];
     end
     if (rst) begin
       \$520  = 32'd0;
@@ -3937,7 +3937,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$521  = ch1_result_w0_hi_data_snapshot;
     if (ch1_result_status_read) begin
-      \$521  = \port$4342$0 [104:82];
+      \$521  = \port$4402$0 [104:82];
     end
     if (rst) begin
       \$521  = 23'h000000;
@@ -3947,7 +3947,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$522  = ch1_result_w1_lo_data_snapshot;
     if (ch1_result_status_read) begin
-      \$522  = \port$4342$0 [139:108];
+      \$522  = \port$4402$0 [139:108];
     end
     if (rst) begin
       \$522  = 32'd0;
@@ -3957,7 +3957,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$523  = ch1_result_w1_hi_data_snapshot;
     if (ch1_result_status_read) begin
-      \$523  = \port$4342$0 [147:140];
+      \$523  = \port$4402$0 [147:140];
     end
     if (rst) begin
       \$523  = 8'h00;
@@ -3967,7 +3967,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$524  = ch1_result_timestamp_time_snapshot;
     if (ch1_result_status_read) begin
-      \$524  = \port$4342$0 [35:4];
+      \$524  = \port$4402$0 [35:4];
     end
     if (rst) begin
       \$524  = 32'd0;
@@ -4014,7 +4014,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
         11'h08e:
             \$525  = { 16'h0000, ch0__cfg_spw_tolerance, 6'h00, ch0__cfg_spw_check, ch0__cfg_end_check };
         11'h090:
-            \$525  = { 2'h0, \port$3907$0 [156:151], 4'h0, \port$3907$0 [160:157], 1'h0, \port$3907$0 [150:148], 1'h0, \port$3907$0 [107:105], 3'h0, \port$3907$0 [49], \port$3907$0 [3:0] };
+            \$525  = { 2'h0, \port$3955$0 [156:151], 4'h0, \port$3955$0 [160:157], 1'h0, \port$3955$0 [150:148], 1'h0, \port$3955$0 [107:105], 3'h0, \port$3955$0 [49], \port$3955$0 [3:0] };
         11'h091:
             \$525  = { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot };
         11'h092:
@@ -4028,31 +4028,31 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
         11'h096:
             \$525  = ch0_result_timestamp_time_snapshot;
         11'h098:
-            \$525  = \port$3914$0 [31:0];
+            \$525  = \port$3962$0 [31:0];
         11'h099:
-            \$525  = \port$3914$0 [63:32];
+            \$525  = \port$3962$0 [63:32];
         11'h09a:
-            \$525  = \port$3914$0 [95:64];
+            \$525  = \port$3962$0 [95:64];
         11'h09b:
-            \$525  = \port$3914$0 [127:96];
+            \$525  = \port$3962$0 [127:96];
         11'h09c:
-            \$525  = \port$3914$0 [159:128];
+            \$525  = \port$3962$0 [159:128];
         11'h09d:
-            \$525  = \port$3914$0 [191:160];
+            \$525  = \port$3962$0 [191:160];
         11'h09e:
-            \$525  = { 16'h0000, \port$3914$0 [207:192] };
+            \$525  = { 16'h0000, \port$3962$0 [207:192] };
         11'h0c0:
             \$525  = { 7'h00, ch0__ca_write, 1'h0, ch0__ca_count, 1'h0, ch0__ca_address, 5'h00, ch0__ca_slave_id };
         11'h0c1:
             \$525  = 32'd0;
         11'h0c2:
-            \$525  = { 17'h00000, \port$4042$0 [9:3], 1'h0, \port$4042$0 [2:0], 3'h0, ch0__ca_busy };
+            \$525  = { 17'h00000, \port$4076$0 [9:3], 1'h0, \port$4076$0 [2:0], 3'h0, ch0__ca_busy };
         11'h0c3:
-            \$525  = \port$3914$0 [239:208];
+            \$525  = \port$3962$0 [239:208];
         11'h0c4:
-            \$525  = \port$3914$0 [271:240];
+            \$525  = \port$3962$0 [271:240];
         11'h0c5:
-            \$525  = { 16'h0000, \port$3914$0 [287:272] };
+            \$525  = { 16'h0000, \port$3962$0 [287:272] };
         11'h100:
             \$525  = { 22'h000000, ch1__trigger_enable, ch1__periodic, 8'h00 };
         11'h101:
@@ -4078,7 +4078,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
         11'h10e:
             \$525  = { 16'h0000, ch1__cfg_spw_tolerance, 6'h00, ch1__cfg_spw_check, ch1__cfg_end_check };
         11'h110:
-            \$525  = { 2'h0, \port$4342$0 [156:151], 4'h0, \port$4342$0 [160:157], 1'h0, \port$4342$0 [150:148], 1'h0, \port$4342$0 [107:105], 3'h0, \port$4342$0 [49], \port$4342$0 [3:0] };
+            \$525  = { 2'h0, \port$4402$0 [156:151], 4'h0, \port$4402$0 [160:157], 1'h0, \port$4402$0 [150:148], 1'h0, \port$4402$0 [107:105], 3'h0, \port$4402$0 [49], \port$4402$0 [3:0] };
         11'h111:
             \$525  = { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot };
         11'h112:
@@ -4092,31 +4092,31 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
         11'h116:
             \$525  = ch1_result_timestamp_time_snapshot;
         11'h118:
-            \$525  = \port$4349$0 [31:0];
+            \$525  = \port$4409$0 [31:0];
         11'h119:
-            \$525  = \port$4349$0 [63:32];
+            \$525  = \port$4409$0 [63:32];
         11'h11a:
-            \$525  = \port$4349$0 [95:64];
+            \$525  = \port$4409$0 [95:64];
         11'h11b:
-            \$525  = \port$4349$0 [127:96];
+            \$525  = \port$4409$0 [127:96];
         11'h11c:
-            \$525  = \port$4349$0 [159:128];
+            \$525  = \port$4409$0 [159:128];
         11'h11d:
-            \$525  = \port$4349$0 [191:160];
+            \$525  = \port$4409$0 [191:160];
         11'h11e:
-            \$525  = { 16'h0000, \port$4349$0 [207:192] };
+            \$525  = { 16'h0000, \port$4409$0 [207:192] };
         11'h140:
             \$525  = { 7'h00, ch1__ca_write, 1'h0, ch1__ca_count, 1'h0, ch1__ca_address, 5'h00, ch1__ca_slave_id };
         11'h141:
             \$525  = 32'd0;
         11'h142:
-            \$525  = { 17'h00000, \port$4477$0 [9:3], 1'h0, \port$4477$0 [2:0], 3'h0, ch1__ca_busy };
+            \$525  = { 17'h00000, \port$4523$0 [9:3], 1'h0, \port$4523$0 [2:0], 3'h0, ch1__ca_busy };
         11'h143:
-            \$525  = \port$4349$0 [239:208];
+            \$525  = \port$4409$0 [239:208];
         11'h144:
-            \$525  = \port$4349$0 [271:240];
+            \$525  = \port$4409$0 [271:240];
         11'h145:
-            \$525  = { 16'h0000, \port$4349$0 [287:272] };
+            \$525  = { 16'h0000, \port$4409$0 [287:272] };
         default:
             \$525  = 32'd0;
       endcase
@@ -4212,40 +4212,40 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
   assign ch1__ca_wbuf_data = ch0__ca_wbuf_data;
   assign ch1__ca_rbuf_addr = bus__w_addr[3:0];
   assign irq = { ch1_irq, ch0_irq };
-  assign ch0__status = \port$3907$0 [3:0];
-  assign ch0__cds = \port$3907$0 [49];
-  assign ch0__word0_ne = \port$3907$0 [105];
-  assign ch0__word0_nw = \port$3907$0 [106];
-  assign ch0__word0_crc_ok = \port$3907$0 [107];
-  assign ch0__word1_ne = \port$3907$0 [148];
-  assign ch0__word1_nw = \port$3907$0 [149];
-  assign ch0__word1_crc_ok = \port$3907$0 [150];
-  assign ch0__lc_repeat = \port$3907$0 [157];
-  assign ch0__lc_skip = \port$3907$0 [158];
-  assign ch0__lc_zero = \port$3907$0 [159];
-  assign ch0__spw_mismatch = \port$3907$0 [160];
-  assign ch0__lc = \port$3907$0 [156:151];
-  assign ch0__line_delay = \port$3907$0 [48:36];
-  assign ch0__word0_position = \port$3907$0 [104:50];
-  assign ch0__word1_position = \port$3907$0 [147:108];
-  assign ch0__timestamp = \port$3907$0 [35:4];
-  assign ch1__status = \port$4342$0 [3:0];
-  assign ch1__cds = \port$4342$0 [49];
-  assign ch1__word0_ne = \port$4342$0 [105];
-  assign ch1__word0_nw = \port$4342$0 [106];
-  assign ch1__word0_crc_ok = \port$4342$0 [107];
-  assign ch1__word1_ne = \port$4342$0 [148];
-  assign ch1__word1_nw = \port$4342$0 [149];
-  assign ch1__word1_crc_ok = \port$4342$0 [150];
-  assign ch1__lc_repeat = \port$4342$0 [157];
-  assign ch1__lc_skip = \port$4342$0 [158];
-  assign ch1__lc_zero = \port$4342$0 [159];
-  assign ch1__spw_mismatch = \port$4342$0 [160];
-  assign ch1__lc = \port$4342$0 [156:151];
-  assign ch1__line_delay = \port$4342$0 [48:36];
-  assign ch1__word0_position = \port$4342$0 [104:50];
-  assign ch1__word1_position = \port$4342$0 [147:108];
-  assign ch1__timestamp = \port$4342$0 [35:4];
+  assign ch0__status = \port$3955$0 [3:0];
+  assign ch0__cds = \port$3955$0 [49];
+  assign ch0__word0_ne = \port$3955$0 [105];
+  assign ch0__word0_nw = \port$3955$0 [106];
+  assign ch0__word0_crc_ok = \port$3955$0 [107];
+  assign ch0__word1_ne = \port$3955$0 [148];
+  assign ch0__word1_nw = \port$3955$0 [149];
+  assign ch0__word1_crc_ok = \port$3955$0 [150];
+  assign ch0__lc_repeat = \port$3955$0 [157];
+  assign ch0__lc_skip = \port$3955$0 [158];
+  assign ch0__lc_zero = \port$3955$0 [159];
+  assign ch0__spw_mismatch = \port$3955$0 [160];
+  assign ch0__lc = \port$3955$0 [156:151];
+  assign ch0__line_delay = \port$3955$0 [48:36];
+  assign ch0__word0_position = \port$3955$0 [104:50];
+  assign ch0__word1_position = \port$3955$0 [147:108];
+  assign ch0__timestamp = \port$3955$0 [35:4];
+  assign ch1__status = \port$4402$0 [3:0];
+  assign ch1__cds = \port$4402$0 [49];
+  assign ch1__word0_ne = \port$4402$0 [105];
+  assign ch1__word0_nw = \port$4402$0 [106];
+  assign ch1__word0_crc_ok = \port$4402$0 [107];
+  assign ch1__word1_ne = \port$4402$0 [148];
+  assign ch1__word1_nw = \port$4402$0 [149];
+  assign ch1__word1_crc_ok = \port$4402$0 [150];
+  assign ch1__lc_repeat = \port$4402$0 [157];
+  assign ch1__lc_skip = \port$4402$0 [158];
+  assign ch1__lc_zero = \port$4402$0 [159];
+  assign ch1__spw_mismatch = \port$4402$0 [160];
+  assign ch1__lc = \port$4402$0 [156:151];
+  assign ch1__line_delay = \port$4402$0 [48:36];
+  assign ch1__word0_position = \port$4402$0 [104:50];
+  assign ch1__word1_position = \port$4402$0 [147:108];
+  assign ch1__timestamp = \port$4402$0 [35:4];
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, ch1_irq, ch0_irq };
   assign ch0__cap_data_bits_w0 = 6'h37;
@@ -4254,52 +4254,52 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
   assign ch0__cap_counters = 1'h1;
   assign ch0__cap_timestamp = 1'h1;
   assign ch0__cap_register_access = 1'h1;
-  assign ch0__count_crc_word0 = \port$3914$0 [15:0];
-  assign ch0__count_crc_word1 = \port$3914$0 [31:16];
-  assign ch0__count_no_ack = \port$3914$0 [47:32];
-  assign ch0__count_no_start = \port$3914$0 [63:48];
-  assign ch0__count_delay_range = \port$3914$0 [79:64];
-  assign ch0__count_slo_stuck_low = \port$3914$0 [95:80];
-  assign ch0__count_lc_repeat = \port$3914$0 [111:96];
-  assign ch0__count_lc_skip = \port$3914$0 [127:112];
-  assign ch0__count_lc_zero = \port$3914$0 [143:128];
-  assign ch0__count_spw_mismatch = \port$3914$0 [159:144];
-  assign ch0__count_overrun = \port$3914$0 [175:160];
-  assign ch0__count_aborted = \port$3914$0 [191:176];
-  assign ch0__count_no_stop = \port$3914$0 [207:192];
-  assign ch0__ca_status = \port$4042$0 [2:0];
-  assign ch0__ca_bytes_done = \port$4042$0 [9:3];
-  assign ch0__count_ca_crc4_error = \port$3914$0 [223:208];
-  assign ch0__count_ca_no_answer = \port$3914$0 [239:224];
-  assign ch0__count_ca_refused = \port$3914$0 [255:240];
-  assign ch0__count_ca_aborted = \port$3914$0 [271:256];
-  assign ch0__count_ca_data_fault = \port$3914$0 [287:272];
+  assign ch0__count_crc_word0 = \port$3962$0 [15:0];
+  assign ch0__count_crc_word1 = \port$3962$0 [31:16];
+  assign ch0__count_no_ack = \port$3962$0 [47:32];
+  assign ch0__count_no_start = \port$3962$0 [63:48];
+  assign ch0__count_delay_range = \port$3962$0 [79:64];
+  assign ch0__count_slo_stuck_low = \port$3962$0 [95:80];
+  assign ch0__count_lc_repeat = \port$3962$0 [111:96];
+  assign ch0__count_lc_skip = \port$3962$0 [127:112];
+  assign ch0__count_lc_zero = \port$3962$0 [143:128];
+  assign ch0__count_spw_mismatch = \port$3962$0 [159:144];
+  assign ch0__count_overrun = \port$3962$0 [175:160];
+  assign ch0__count_aborted = \port$3962$0 [191:176];
+  assign ch0__count_no_stop = \port$3962$0 [207:192];
+  assign ch0__ca_status = \port$4076$0 [2:0];
+  assign ch0__ca_bytes_done = \port$4076$0 [9:3];
+  assign ch0__count_ca_crc4_error = \port$3962$0 [223:208];
+  assign ch0__count_ca_no_answer = \port$3962$0 [239:224];
+  assign ch0__count_ca_refused = \port$3962$0 [255:240];
+  assign ch0__count_ca_aborted = \port$3962$0 [271:256];
+  assign ch0__count_ca_data_fault = \port$3962$0 [287:272];
   assign ch1__cap_data_bits_w0 = 6'h37;
   assign ch1__cap_data_bits_w1 = 6'h28;
   assign ch1__cap_timer_width = 6'h18;
   assign ch1__cap_counters = 1'h1;
   assign ch1__cap_timestamp = 1'h1;
   assign ch1__cap_register_access = 1'h1;
-  assign ch1__count_crc_word0 = \port$4349$0 [15:0];
-  assign ch1__count_crc_word1 = \port$4349$0 [31:16];
-  assign ch1__count_no_ack = \port$4349$0 [47:32];
-  assign ch1__count_no_start = \port$4349$0 [63:48];
-  assign ch1__count_delay_range = \port$4349$0 [79:64];
-  assign ch1__count_slo_stuck_low = \port$4349$0 [95:80];
-  assign ch1__count_lc_repeat = \port$4349$0 [111:96];
-  assign ch1__count_lc_skip = \port$4349$0 [127:112];
-  assign ch1__count_lc_zero = \port$4349$0 [143:128];
-  assign ch1__count_spw_mismatch = \port$4349$0 [159:144];
-  assign ch1__count_overrun = \port$4349$0 [175:160];
-  assign ch1__count_aborted = \port$4349$0 [191:176];
-  assign ch1__count_no_stop = \port$4349$0 [207:192];
-  assign ch1__ca_status = \port$4477$0 [2:0];
-  assign ch1__ca_bytes_done = \port$4477$0 [9:3];
-  assign ch1__count_ca_crc4_error = \port$4349$0 [223:208];
-  assign ch1__count_ca_no_answer = \port$4349$0 [239:224];
-  assign ch1__count_ca_refused = \port$4349$0 [255:240];
-  assign ch1__count_ca_aborted = \port$4349$0 [271:256];
-  assign ch1__count_ca_data_fault = \port$4349$0 [287:272];
+  assign ch1__count_crc_word0 = \port$4409$0 [15:0];
+  assign ch1__count_crc_word1 = \port$4409$0 [31:16];
+  assign ch1__count_no_ack = \port$4409$0 [47:32];
+  assign ch1__count_no_start = \port$4409$0 [63:48];
+  assign ch1__count_delay_range = \port$4409$0 [79:64];
+  assign ch1__count_slo_stuck_low = \port$4409$0 [95:80];
+  assign ch1__count_lc_repeat = \port$4409$0 [111:96];
+  assign ch1__count_lc_skip = \port$4409$0 [127:112];
+  assign ch1__count_lc_zero = \port$4409$0 [143:128];
+  assign ch1__count_spw_mismatch = \port$4409$0 [159:144];
+  assign ch1__count_overrun = \port$4409$0 [175:160];
+  assign ch1__count_aborted = \port$4409$0 [191:176];
+  assign ch1__count_no_stop = \port$4409$0 [207:192];
+  assign ch1__ca_status = \port$4523$0 [2:0];
+  assign ch1__ca_bytes_done = \port$4523$0 [9:3];
+  assign ch1__count_ca_crc4_error = \port$4409$0 [223:208];
+  assign ch1__count_ca_no_answer = \port$4409$0 [239:224];
+  assign ch1__count_ca_refused = \port$4409$0 [255:240];
+  assign ch1__count_ca_aborted = \port$4409$0 [271:256];
+  assign ch1__count_ca_data_fault = \port$4409$0 [287:272];
   assign g_irq = 1'h0;
   assign \$79  = \$78 ;
   assign \$81  = \$80 ;
@@ -4389,7 +4389,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch0 (ca_wbuf_data, slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__ca_busy, regs__ca_rbuf_data, start, abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time
 , cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, regs__done_count
-, ma, regs__done, \port$3907$0 , \port$3914$0 , regs__ca_done, \port$4042$0 , ca_wbuf_addr);
+, ma, regs__done, \port$3955$0 , \port$3962$0 , regs__ca_done, \port$4076$0 , ca_wbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$28  = 0;
   wire \$1 ;
   wire [16:0] \$2 ;
@@ -4513,12 +4513,12 @@ module \biss_master_wb.ch0 (ca_wbuf_data, slo, clk, rst, \trigger$161 , ca_wbuf_
   wire \ma$164 ;
   input periodic;
   wire periodic;
-  output [160:0] \port$3907$0 ;
-  wire [160:0] \port$3907$0 ;
-  output [287:0] \port$3914$0 ;
-  wire [287:0] \port$3914$0 ;
-  output [9:0] \port$4042$0 ;
-  wire [9:0] \port$4042$0 ;
+  output [160:0] \port$3955$0 ;
+  wire [160:0] \port$3955$0 ;
+  output [287:0] \port$3962$0 ;
+  wire [287:0] \port$3962$0 ;
+  output [9:0] \port$4076$0 ;
+  wire [9:0] \port$4076$0 ;
   wire regs__abort_cycle;
   output regs__busy;
   wire regs__busy;
@@ -4844,9 +4844,9 @@ module \biss_master_wb.ch0 (ca_wbuf_data, slo, clk, rst, \trigger$161 , ca_wbuf_
   assign regs__ca_rbuf_en = ca_rbuf_en;
   assign \ma$164  = ma;
   assign \slo$166  = slo;
-  assign \port$3907$0  = \$4 ;
-  assign \port$3914$0  = \$5 ;
-  assign \port$4042$0  = \$6 ;
+  assign \port$3955$0  = \$4 ;
+  assign \port$3962$0  = \$5 ;
+  assign \port$4076$0  = \$6 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -5629,13 +5629,13 @@ module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
     .frame_cds(cds),
     .frame_end(report),
     .frame_ok(valid),
-    .host_read__addr(ca_wbuf_addr),
-    .host_read__en(rbuf_en),
+    .rbuf_addr(ca_wbuf_addr),
     .rbuf_data(ca_rbuf_data),
+    .rbuf_en(rbuf_en),
     .request(\request$173 ),
     .result(result),
     .rst(rst),
-    .\start$44 (\start$185 ),
+    .start(\start$185 ),
     .wbuf(wbuf)
   );
   \biss_master_wb.ch0.core.results  results (
@@ -10623,194 +10623,97 @@ module \biss_master_wb.ch0.core.ma_stop (rst, words, w1_enable, clear, rises, en
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.register_access (clk, rst, host_read__en, frame_end, frame_ok, busy, rbuf_data, \start$44 , abort, request, wbuf, frame_cdm, frame_cds, cdm, done, result, host_read__addr);
-  reg \$auto$verilog_backend.cc:2355:dump_module$54  = 0;
-  wire \$1 ;
-  wire \$10 ;
-  wire \$100 ;
-  wire \$101 ;
-  wire \$102 ;
-  wire \$103 ;
-  wire \$104 ;
-  wire \$105 ;
-  wire \$106 ;
-  wire \$107 ;
-  wire \$108 ;
-  wire \$109 ;
-  wire \$11 ;
-  wire [18:0] \$110 ;
-  wire [5:0] \$111 ;
-  wire \$112 ;
-  wire \$113 ;
-  wire \$114 ;
-  wire \$115 ;
-  wire \$116 ;
-  wire \$117 ;
-  wire \$118 ;
-  wire \$119 ;
-  wire \$12 ;
-  wire \$120 ;
-  wire \$121 ;
-  wire \$122 ;
-  wire \$123 ;
-  wire [7:0] \$124 ;
-  wire [7:0] \$125 ;
-  wire [8:0] \$126 ;
-  wire \$127 ;
-  wire [8:0] \$128 ;
-  wire [5:0] \$129 ;
-  wire \$13 ;
-  wire \$130 ;
-  wire \$131 ;
-  wire \$132 ;
-  wire \$133 ;
-  wire [6:0] \$134 ;
-  wire [6:0] \$135 ;
-  wire \$136 ;
-  wire [6:0] \$137 ;
-  wire \$138 ;
-  wire \$139 ;
-  wire \$14 ;
-  wire \$140 ;
-  wire [5:0] \$141 ;
-  wire \$142 ;
-  wire \$143 ;
-  wire \$144 ;
-  wire \$145 ;
-  wire \$146 ;
-  wire [4:0] \$147 ;
-  wire [4:0] \$148 ;
-  wire [4:0] \$149 ;
-  wire \$15 ;
-  wire [4:0] \$150 ;
-  wire \$151 ;
-  reg [3:0] \$152 ;
-  reg [3:0] \$153 ;
-  reg \$154 ;
-  reg [9:0] \$155 ;
-  reg [2:0] \$156 ;
-  reg [17:0] \$157 ;
-  reg [5:0] \$158 ;
-  reg [17:0] \$159 ;
-  wire \$16 ;
-  reg [4:0] \$160 ;
-  reg [2:0] \$161 ;
-  reg [7:0] \$162 ;
-  reg [7:0] \$163 ;
-  reg [4:0] \$164 ;
-  reg [7:0] \$165 ;
-  reg [2:0] \$166 ;
-  wire \$17 ;
-  wire \$18 ;
-  wire \$19 ;
-  wire \$2 ;
-  wire \$20 ;
-  wire \$21 ;
-  wire \$22 ;
-  wire \$23 ;
-  wire \$24 ;
-  wire \$25 ;
-  wire \$26 ;
-  wire \$27 ;
-  wire \$28 ;
-  wire \$29 ;
-  wire [5:0] \$291 ;
-  wire [5:0] \$294 ;
-  wire \$3 ;
-  wire \$30 ;
-  wire \$31 ;
-  wire \$32 ;
-  wire [5:0] \$33 ;
-  wire [1:0] \$34 ;
-  wire \$35 ;
-  wire \$36 ;
-  wire \$37 ;
-  wire \$38 ;
-  wire \$39 ;
-  wire [1:0] \$4 ;
-  wire \$40 ;
-  wire \$41 ;
-  wire \$42 ;
-  wire \$43 ;
-  wire \$44 ;
-  wire \$45 ;
-  wire \$46 ;
-  wire \$47 ;
-  wire \$48 ;
-  wire \$49 ;
-  wire \$5 ;
-  wire \$50 ;
-  wire \$51 ;
-  wire \$52 ;
-  wire \$53 ;
-  wire \$54 ;
-  wire \$55 ;
-  wire \$56 ;
-  wire \$57 ;
-  wire \$58 ;
-  wire \$59 ;
-  wire \$6 ;
-  wire \$60 ;
-  wire [3:0] \$61 ;
-  wire \$62 ;
-  wire \$63 ;
-  wire \$64 ;
-  wire \$65 ;
-  wire \$66 ;
-  wire \$67 ;
-  wire \$68 ;
-  wire \$69 ;
-  wire \$7 ;
-  wire [4:0] \$70 ;
-  wire [4:0] \$71 ;
-  wire [4:0] \$72 ;
-  wire \$73 ;
-  wire \$74 ;
-  wire \$75 ;
-  wire [4:0] \$76 ;
-  wire [4:0] \$77 ;
-  wire [4:0] \$78 ;
-  wire \$79 ;
-  wire \$8 ;
-  wire \$80 ;
-  wire \$81 ;
-  wire [7:0] \$82 ;
-  wire \$83 ;
-  wire \$84 ;
-  wire \$85 ;
-  wire \$86 ;
-  wire \$87 ;
-  wire \$88 ;
-  wire \$89 ;
-  wire \$9 ;
-  wire \$90 ;
-  wire [4:0] \$91 ;
-  wire [4:0] \$92 ;
-  wire [4:0] \$93 ;
-  wire [4:0] \$94 ;
-  wire \$95 ;
-  wire \$96 ;
-  wire \$97 ;
-  wire \$98 ;
-  wire \$99 ;
+module \biss_master_wb.ch0.core.register_access (clk, rst, rbuf_en, frame_end, frame_ok, busy, rbuf_data, start, abort, request, wbuf, frame_cdm, frame_cds, done, result, cdm, rbuf_addr);
   input abort;
   wire abort;
-  reg [2:0] access_fsm_state = 3'h0;
+  wire \abort$5 ;
   output busy;
   wire busy;
-  reg [3:0] byte_received__addr;
-  reg [31:0] byte_received__data;
-  reg [3:0] byte_received__en;
+  wire \busy$7 ;
+  wire [7:0] \byte ;
+  wire [7:0] \byte$75 ;
+  wire [7:0] byte_received;
+  wire [7:0] byte_to_send;
   output cdm;
-  reg cdm;
+  wire cdm;
+  wire \cdm$56 ;
+  wire cds;
+  wire check__first;
+  wire check__take_crc;
+  wire check__take_data;
   input clk;
   wire clk;
-  wire [3:0] crc;
-  wire [3:0] \crc$31 ;
-  reg data;
-  reg \data$29 ;
+  wire [1:0] control__crc_bit;
+  wire control__crc_start;
+  wire control__crc_valid;
+  wire control__first;
+  wire control__load_byte;
+  wire control__load_header;
+  wire control__shift_byte;
+  wire control__shift_header;
+  (* enum_base_type = "CdmSource" *)
+  (* enum_value_000 = "ZERO" *)
+  (* enum_value_001 = "ONE" *)
+  (* enum_value_010 = "HEADER" *)
+  (* enum_value_011 = "DATA" *)
+  (* enum_value_100 = "CRC" *)
+  wire [2:0] control__source;
+  wire control__take_crc;
+  wire control__take_data;
+  wire crc_ok;
+  wire \crc_ok$67 ;
   output done;
-  reg done = 1'h0;
+  wire done;
+  wire \done$10 ;
+  wire echo_ok;
+  wire \echo_ok$69 ;
+  input frame_cdm;
+  wire frame_cdm;
+  wire \frame_cdm$27 ;
+  wire \frame_cdm$30 ;
+  input frame_cds;
+  wire frame_cds;
+  wire \frame_cds$32 ;
+  input frame_end;
+  wire frame_end;
+  wire \frame_end$23 ;
+  wire \frame_end$28 ;
+  input frame_ok;
+  wire frame_ok;
+  wire \frame_ok$25 ;
+  wire \frame_ok$29 ;
+  wire frames;
+  wire [5:0] index;
+  wire [5:0] \index$71 ;
+  input [3:0] rbuf_addr;
+  wire [3:0] rbuf_addr;
+  wire [3:0] \rbuf_addr$17 ;
+  output [31:0] rbuf_data;
+  wire [31:0] rbuf_data;
+  wire [31:0] \rbuf_data$21 ;
+  input rbuf_en;
+  wire rbuf_en;
+  wire \rbuf_en$19 ;
+  input [17:0] request;
+  wire [17:0] request;
+  wire [17:0] \request$1 ;
+  wire [6:0] \request$1.address ;
+  wire [6:0] \request$1.count ;
+  wire [2:0] \request$1.slave_id ;
+  wire \request$1.write ;
+  wire [17:0] \request$13 ;
+  wire [6:0] \request$13.address ;
+  wire [6:0] \request$13.count ;
+  wire [2:0] \request$13.slave_id ;
+  wire \request$13.write ;
+  wire [6:0] \request.address ;
+  wire [6:0] \request.count ;
+  wire [2:0] \request.slave_id ;
+  wire \request.write ;
+  output [9:0] result;
+  wire [9:0] result;
+  wire [9:0] \result$12 ;
+  wire [6:0] \result$12.bytes_done ;
   (* enum_base_type = "AccessStatus" *)
   (* enum_value_000 = "OK" *)
   (* enum_value_001 = "CRC4_ERROR" *)
@@ -10819,47 +10722,7 @@ module \biss_master_wb.ch0.core.register_access (clk, rst, host_read__en, frame_
   (* enum_value_100 = "ABORTED" *)
   (* enum_value_101 = "DATA_FAULT" *)
   (* enum_value_110 = "BAD_REQUEST" *)
-  reg [2:0] ending = 3'h0;
-  input frame_cdm;
-  wire frame_cdm;
-  input frame_cds;
-  wire frame_cds;
-  input frame_end;
-  wire frame_end;
-  input frame_ok;
-  wire frame_ok;
-  wire frames;
-  reg [7:0] got = 8'h00;
-  reg [2:0] got_crc = 3'h0;
-  reg [17:0] header = 18'h00000;
-  input [3:0] host_read__addr;
-  wire [3:0] host_read__addr;
-  wire [31:0] host_read__data;
-  input host_read__en;
-  wire host_read__en;
-  wire [3:0] host_write__addr;
-  wire [31:0] host_write__data;
-  wire [3:0] host_write__en;
-  reg [3:0] idle_run = 4'h0;
-  reg [3:0] idle_seen = 4'h0;
-  reg [5:0] index = 6'h00;
-  wire [3:0] rbuf_addr;
-  output [31:0] rbuf_data;
-  wire [31:0] rbuf_data;
-  wire rbuf_en;
-  reg [17:0] req = 18'h00000;
-  wire [6:0] \req.address ;
-  wire [6:0] \req.count ;
-  wire [2:0] \req.slave_id ;
-  wire \req.write ;
-  input [17:0] request;
-  wire [17:0] request;
-  wire [6:0] \request.address ;
-  wire [6:0] \request.count ;
-  wire [2:0] \request.slave_id ;
-  wire \request.write ;
-  output [9:0] result;
-  reg [9:0] result = 10'h000;
+  wire [2:0] \result$12.status ;
   wire [6:0] \result.bytes_done ;
   (* enum_base_type = "AccessStatus" *)
   (* enum_value_000 = "OK" *)
@@ -10872,16 +10735,220 @@ module \biss_master_wb.ch0.core.register_access (clk, rst, host_read__en, frame_
   wire [2:0] \result.status ;
   input rst;
   wire rst;
-  reg [7:0] sent = 8'h00;
-  reg start;
-  reg \start$27 ;
-  input \start$44 ;
-  wire \start$44 ;
-  reg [4:0] step = 5'h00;
-  reg [7:0] to_send = 8'h00;
-  reg valid;
-  reg \valid$28 ;
-  reg [4:0] waited = 5'h00;
+  wire run_enough;
+  wire \run_enough$34 ;
+  wire seen_enough;
+  wire \seen_enough$36 ;
+  wire [1:0] send__crc_bit;
+  wire send__crc_start;
+  wire send__crc_valid;
+  wire send__load_byte;
+  wire send__load_header;
+  wire send__shift_byte;
+  wire send__shift_header;
+  (* enum_base_type = "CdmSource" *)
+  (* enum_value_000 = "ZERO" *)
+  (* enum_value_001 = "ONE" *)
+  (* enum_value_010 = "HEADER" *)
+  (* enum_value_011 = "DATA" *)
+  (* enum_value_100 = "CRC" *)
+  wire [2:0] send__source;
+  wire [7:0] sent;
+  wire [7:0] \sent$65 ;
+  input start;
+  wire start;
+  wire \start$3 ;
+  wire store;
+  wire \store$73 ;
+  input [39:0] wbuf;
+  wire [39:0] wbuf;
+  wire [39:0] \wbuf$15 ;
+  wire [3:0] \wbuf$15.addr ;
+  wire [31:0] \wbuf$15.data ;
+  wire [3:0] \wbuf$15.en ;
+  wire [3:0] \wbuf.addr ;
+  wire [31:0] \wbuf.data ;
+  wire [3:0] \wbuf.en ;
+  \biss_master_wb.ch0.core.register_access.buffers  buffers (
+    .byte_received(byte_received),
+    .byte_to_send(\byte ),
+    .clk(clk),
+    .host_read__addr(rbuf_addr),
+    .host_read__en(rbuf_en),
+    .index(index),
+    .rbuf_data(rbuf_data),
+    .rst(rst),
+    .store(store),
+    .wbuf(wbuf)
+  );
+  \biss_master_wb.ch0.core.register_access.checker  \checker  (
+    .\byte (byte_received),
+    .cds(frame_cds),
+    .clk(clk),
+    .control__take_crc(control__take_crc),
+    .control__take_data(control__take_data),
+    .crc_ok(crc_ok),
+    .echo_ok(echo_ok),
+    .rst(rst),
+    .sent(sent),
+    .start(control__first)
+  );
+  \biss_master_wb.ch0.core.register_access.idle  idle (
+    .clk(clk),
+    .frame_cdm(frame_cdm),
+    .frame_end(frame_end),
+    .frame_ok(frame_ok),
+    .rst(rst),
+    .run_enough(run_enough),
+    .seen_enough(seen_enough)
+  );
+  \biss_master_wb.ch0.core.register_access.sender  sender (
+    .\byte (\byte ),
+    .cdm(cdm),
+    .clk(clk),
+    .control__crc_bit(control__crc_bit),
+    .control__load_byte(control__load_byte),
+    .control__load_header(control__load_header),
+    .control__shift_byte(control__shift_byte),
+    .control__shift_header(control__shift_header),
+    .control__source(control__source),
+    .request(request),
+    .rst(rst),
+    .sent(sent),
+    .start(control__crc_start),
+    .valid(control__crc_valid)
+  );
+  \biss_master_wb.ch0.core.register_access.sequencer  sequencer (
+    .abort(abort),
+    .busy(busy),
+    .check__first(control__first),
+    .check__take_crc(control__take_crc),
+    .check__take_data(control__take_data),
+    .clk(clk),
+    .crc_ok(crc_ok),
+    .done(done),
+    .echo_ok(echo_ok),
+    .frame_cdm(frame_cdm),
+    .frame_cds(frame_cds),
+    .frame_end(frame_end),
+    .frame_ok(frame_ok),
+    .index(index),
+    .request(request),
+    .result(result),
+    .rst(rst),
+    .run_enough(run_enough),
+    .seen_enough(seen_enough),
+    .send__crc_bit(control__crc_bit),
+    .send__crc_start(control__crc_start),
+    .send__crc_valid(control__crc_valid),
+    .send__load_byte(control__load_byte),
+    .send__load_header(control__load_header),
+    .send__shift_byte(control__shift_byte),
+    .send__shift_header(control__shift_header),
+    .send__source(control__source),
+    .start(start),
+    .store(store)
+  );
+  assign \request$1  = request;
+  assign \start$3  = start;
+  assign \abort$5  = abort;
+  assign \busy$7  = busy;
+  assign frames = busy;
+  assign \done$10  = done;
+  assign \result$12  = result;
+  assign \request$13  = request;
+  assign \wbuf$15  = wbuf;
+  assign \rbuf_addr$17  = rbuf_addr;
+  assign \rbuf_en$19  = rbuf_en;
+  assign \rbuf_data$21  = rbuf_data;
+  assign \frame_end$23  = frame_end;
+  assign \frame_ok$25  = frame_ok;
+  assign \frame_cdm$27  = frame_cdm;
+  assign \frame_end$28  = frame_end;
+  assign \frame_ok$29  = frame_ok;
+  assign \frame_cdm$30  = frame_cdm;
+  assign \frame_cds$32  = frame_cds;
+  assign \run_enough$34  = run_enough;
+  assign \seen_enough$36  = seen_enough;
+  assign send__crc_bit = control__crc_bit;
+  assign send__crc_start = control__crc_start;
+  assign send__crc_valid = control__crc_valid;
+  assign send__load_byte = control__load_byte;
+  assign send__load_header = control__load_header;
+  assign send__shift_byte = control__shift_byte;
+  assign send__shift_header = control__shift_header;
+  assign send__source = control__source;
+  assign byte_to_send = \byte ;
+  assign \cdm$56  = cdm;
+  assign check__first = control__first;
+  assign check__take_crc = control__take_crc;
+  assign check__take_data = control__take_data;
+  assign cds = frame_cds;
+  assign \sent$65  = sent;
+  assign \crc_ok$67  = crc_ok;
+  assign \echo_ok$69  = echo_ok;
+  assign \index$71  = index;
+  assign \store$73  = store;
+  assign \byte$75  = byte_received;
+  assign \request.slave_id  = request[2:0];
+  assign \request.address  = request[9:3];
+  assign \request.count  = request[16:10];
+  assign \request.write  = request[17];
+  assign \request$1.slave_id  = request[2:0];
+  assign \request$1.address  = request[9:3];
+  assign \request$1.count  = request[16:10];
+  assign \request$1.write  = request[17];
+  assign \result.status  = result[2:0];
+  assign \result.bytes_done  = result[9:3];
+  assign \result$12.status  = result[2:0];
+  assign \result$12.bytes_done  = result[9:3];
+  assign \request$13.slave_id  = request[2:0];
+  assign \request$13.address  = request[9:3];
+  assign \request$13.count  = request[16:10];
+  assign \request$13.write  = request[17];
+  assign \wbuf.addr  = wbuf[3:0];
+  assign \wbuf.data  = wbuf[35:4];
+  assign \wbuf.en  = wbuf[39:36];
+  assign \wbuf$15.addr  = wbuf[3:0];
+  assign \wbuf$15.data  = wbuf[35:4];
+  assign \wbuf$15.en  = wbuf[39:36];
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_wb.ch0.core.register_access.buffers (clk, rst, host_read__en, byte_to_send, rbuf_data, wbuf, index, store, byte_received, host_read__addr);
+  reg \$auto$verilog_backend.cc:2355:dump_module$54  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire \$3 ;
+  wire \$4 ;
+  wire [5:0] \$5 ;
+  input [7:0] byte_received;
+  wire [7:0] byte_received;
+  reg [3:0] byte_received__addr;
+  reg [31:0] byte_received__data;
+  reg [3:0] byte_received__en;
+  output [7:0] byte_to_send;
+  wire [7:0] byte_to_send;
+  input clk;
+  wire clk;
+  input [3:0] host_read__addr;
+  wire [3:0] host_read__addr;
+  wire [31:0] host_read__data;
+  input host_read__en;
+  wire host_read__en;
+  wire [3:0] host_write__addr;
+  wire [31:0] host_write__data;
+  wire [3:0] host_write__en;
+  input [5:0] index;
+  wire [5:0] index;
+  wire [3:0] rbuf_addr;
+  output [31:0] rbuf_data;
+  wire [31:0] rbuf_data;
+  wire rbuf_en;
+  input rst;
+  wire rst;
+  input store;
+  wire store;
   input [39:0] wbuf;
   wire [39:0] wbuf;
   wire [3:0] \wbuf.addr ;
@@ -10925,1059 +10992,151 @@ module \biss_master_wb.ch0.core.register_access (clk, rst, host_read__en, frame_
     end
   end
   assign rbuf_data = _0_;
-  reg [31:0] \wbuf$50  [15:0];
+  reg [31:0] \wbuf$21  [15:0];
   initial begin
-    \wbuf$50 [0] = 32'd0;
-    \wbuf$50 [1] = 32'd0;
-    \wbuf$50 [2] = 32'd0;
-    \wbuf$50 [3] = 32'd0;
-    \wbuf$50 [4] = 32'd0;
-    \wbuf$50 [5] = 32'd0;
-    \wbuf$50 [6] = 32'd0;
-    \wbuf$50 [7] = 32'd0;
-    \wbuf$50 [8] = 32'd0;
-    \wbuf$50 [9] = 32'd0;
-    \wbuf$50 [10] = 32'd0;
-    \wbuf$50 [11] = 32'd0;
-    \wbuf$50 [12] = 32'd0;
-    \wbuf$50 [13] = 32'd0;
-    \wbuf$50 [14] = 32'd0;
-    \wbuf$50 [15] = 32'd0;
+    \wbuf$21 [0] = 32'd0;
+    \wbuf$21 [1] = 32'd0;
+    \wbuf$21 [2] = 32'd0;
+    \wbuf$21 [3] = 32'd0;
+    \wbuf$21 [4] = 32'd0;
+    \wbuf$21 [5] = 32'd0;
+    \wbuf$21 [6] = 32'd0;
+    \wbuf$21 [7] = 32'd0;
+    \wbuf$21 [8] = 32'd0;
+    \wbuf$21 [9] = 32'd0;
+    \wbuf$21 [10] = 32'd0;
+    \wbuf$21 [11] = 32'd0;
+    \wbuf$21 [12] = 32'd0;
+    \wbuf$21 [13] = 32'd0;
+    \wbuf$21 [14] = 32'd0;
+    \wbuf$21 [15] = 32'd0;
   end
   always @(posedge clk) begin
     if (wbuf[36])
-      \wbuf$50 [wbuf[3:0]][7:0] <= wbuf[11:4];
+      \wbuf$21 [wbuf[3:0]][7:0] <= wbuf[11:4];
     if (wbuf[37])
-      \wbuf$50 [wbuf[3:0]][15:8] <= wbuf[19:12];
+      \wbuf$21 [wbuf[3:0]][15:8] <= wbuf[19:12];
     if (wbuf[38])
-      \wbuf$50 [wbuf[3:0]][23:16] <= wbuf[27:20];
+      \wbuf$21 [wbuf[3:0]][23:16] <= wbuf[27:20];
     if (wbuf[39])
-      \wbuf$50 [wbuf[3:0]][31:24] <= wbuf[35:28];
+      \wbuf$21 [wbuf[3:0]][31:24] <= wbuf[35:28];
   end
   reg [31:0] _1_;
   always @(posedge clk) begin
-    _1_ <= \wbuf$50 [index[5:2]];
+    _1_ <= \wbuf$21 [index[5:2]];
   end
   assign word_to_send__data = _1_;
-  assign \$1  = step >= 4'hc;
-  assign \$2  = step < 5'h10;
-  assign \$3  = \$1  & \$2 ;
-  assign \$4  = ~ step[1:0];
-  assign \$5  = crc >> \$4 ;
-  assign \$6  = \$3  ? \$5  : header[17];
-  assign \$7  = ! step;
-  assign \$8  = frame_end & \$7 ;
-  assign \$9  = ~ frame_cdm;
-  assign \$10  = \$8  & \$9 ;
-  assign \$11  = ~ frame_ok;
-  assign \$12  = frame_end & \$11 ;
-  assign \$13  = step == 1'h1;
-  assign \$14  = frame_end & \$13 ;
-  assign \$15  = ~ frame_cds;
-  assign \$16  = \$14  & \$15 ;
-  assign \$17  = step == 5'h11;
-  assign \$18  = frame_end & \$17 ;
-  assign \$19  = frame_cds == req[17];
-  assign \$20  = \$18  & \$19 ;
-  assign \$21  = ! step;
-  assign \$22  = step >= 1'h1;
-  assign \$23  = step <= 4'hb;
-  assign \$24  = \$22  & \$23 ;
-  assign \$25  = ! step;
-  assign \$26  = step >= 1'h1;
-  assign \$27  = step <= 4'h8;
-  assign \$28  = \$26  & \$27 ;
-  assign \$29  = step >= 4'h9;
-  assign \$30  = step <= 4'hc;
-  assign \$31  = \$29  & \$30 ;
-  assign \$32  = req[17] & to_send[7];
-  assign \$33  = step - 4'h9;
-  assign \$34  = ~ \$33 [1:0];
-  assign \$35  = crc >> \$34 ;
-  assign \$36  = req[17] & \$35 ;
-  assign \$37  = step >= 1'h1;
-  assign \$38  = frame_end & \$37 ;
-  assign \$39  = step <= 4'h8;
-  assign \$40  = \$38  & \$39 ;
-  assign \$41  = ~ frame_ok;
-  assign \$42  = frame_end & \$41 ;
-  assign \$43  = ! step;
-  assign \$44  = frame_end & \$43 ;
-  assign \$45  = step == 1'h1;
-  assign \$46  = frame_end & \$45 ;
-  assign \$47  = step < 4'hd;
-  assign \$48  = frame_end & \$47 ;
-  assign \$49  = ! index;
-  assign \$50  = \$49  ? req[17] : 1'h0;
-  assign \$51  = frame_cds != \$50 ;
-  assign \$52  = step <= 4'h9;
-  assign \$53  = step == 2'h2;
-  assign \$54  = { got_crc, frame_cds } != \crc$31 ;
-  assign \$55  = got != sent;
-  assign \$56  = req[17] & \$55 ;
-  assign \$57  = ! index[1:0];
-  assign \$58  = index[1:0] == 1'h1;
-  assign \$59  = index[1:0] == 2'h2;
-  assign \$60  = index[1:0] == 2'h3;
-  assign \$61  = req[17] ? 4'h0 : { \$60 , \$59 , \$58 , \$57  };
-  assign busy = ~ \$62 ;
-  assign \$62  = ! access_fsm_state;
-  assign \$63  = access_fsm_state == 1'h1;
-  assign \$64  = access_fsm_state == 2'h2;
-  assign \$65  = access_fsm_state == 2'h3;
-  assign \$66  = access_fsm_state == 3'h4;
-  assign \$67  = access_fsm_state == 3'h5;
-  assign \$68  = access_fsm_state == 3'h6;
-  assign \$69  = idle_run == 4'he;
-  assign \$70  = idle_run + 1'h1;
-  assign \$71  = \$69  ? 5'h0e : \$70 ;
-  assign \$72  = frame_cdm ? 5'h00 : \$71 ;
-  assign \$73  = ~ frame_ok;
-  assign \$74  = frame_cdm | \$73 ;
-  assign \$75  = idle_seen == 4'he;
-  assign \$76  = idle_seen + 1'h1;
-  assign \$77  = \$75  ? 5'h0e : \$76 ;
-  assign \$78  = \$74  ? 5'h00 : \$77 ;
-  assign \$79  = ! request[16:10];
-  assign \$80  = request[16:10] > 7'h40;
-  assign \$81  = \$79  | \$80 ;
-  assign \$82  = request[9:3] + request[16:10];
-  assign \$83  = \$82  > 8'h80;
-  assign \$84  = \$81  | \$83 ;
-  assign \$85  = ~ request[17];
-  assign \$86  = ~ frame_ok;
-  assign \$87  = frame_end & \$86 ;
-  assign \$88  = ~ frame_ok;
-  assign \$89  = frame_cdm | \$88 ;
-  assign \$90  = idle_seen == 4'he;
-  assign \$91  = idle_seen + 1'h1;
-  assign \$92  = \$90  ? 5'h0e : \$91 ;
-  assign \$93  = \$89  ? 5'h00 : \$92 ;
-  assign \$94  = frame_end ? \$93  : { 1'h0, idle_seen };
-  assign \$95  = \$94  == 4'he;
-  assign \$96  = ! step;
-  assign \$97  = frame_end & \$96 ;
-  assign \$98  = ~ frame_cdm;
-  assign \$99  = \$97  & \$98 ;
-  assign \$100  = ~ frame_ok;
-  assign \$101  = frame_end & \$100 ;
-  assign \$102  = step == 1'h1;
-  assign \$103  = frame_end & \$102 ;
-  assign \$104  = ~ frame_cds;
-  assign \$105  = \$103  & \$104 ;
-  assign \$106  = step == 5'h11;
-  assign \$107  = frame_end & \$106 ;
-  assign \$108  = frame_cds == req[17];
-  assign \$109  = \$107  & \$108 ;
-  assign \$111  = step + 1'h1;
-  assign \$112  = step == 5'h11;
-  assign \$113  = ~ frame_ok;
-  assign \$114  = frame_end & \$113 ;
-  assign \$115  = ! step;
-  assign \$116  = frame_end & \$115 ;
-  assign \$117  = step == 1'h1;
-  assign \$118  = frame_end & \$117 ;
-  assign \$119  = step < 4'hd;
-  assign \$120  = frame_end & \$119 ;
-  assign \$121  = ! index;
-  assign \$122  = \$121  ? req[17] : 1'h0;
-  assign \$123  = frame_cds != \$122 ;
-  assign \$291  = index[1:0] * 4'h8;
-  assign \$124  = word_to_send__data >> \$291 ;
-  assign \$294  = index[1:0] * 4'h8;
-  assign \$125  = word_to_send__data >> \$294 ;
-  assign \$127  = ~ req[17];
-  assign \$129  = step + 1'h1;
-  assign \$130  = step <= 4'h9;
-  assign \$131  = { got_crc, frame_cds } != \crc$31 ;
-  assign \$132  = got != sent;
-  assign \$133  = req[17] & \$132 ;
-  assign \$134  = index + 1'h1;
-  assign \$135  = index + 1'h1;
-  assign \$136  = \$135  == req[16:10];
-  assign \$137  = index + 1'h1;
-  assign \$138  = ~ frame_ok;
-  assign \$139  = frame_end & \$138 ;
-  assign \$140  = frame_end & frame_cds;
-  assign \$141  = waited + 1'h1;
-  assign \$142  = waited == 4'hf;
-  assign \$143  = ~ frame_ok;
-  assign \$144  = frame_end & \$143 ;
-  assign \$145  = frame_end & frame_cds;
-  assign \$146  = idle_run == 4'he;
-  assign \$147  = idle_run + 1'h1;
-  assign \$148  = \$146  ? 5'h0e : \$147 ;
-  assign \$149  = frame_cdm ? 5'h00 : \$148 ;
-  assign \$150  = frame_end ? \$149  : { 1'h0, idle_run };
-  assign \$151  = \$150  == 4'he;
-  always @(posedge clk)
-    idle_run <= \$152 ;
-  always @(posedge clk)
-    idle_seen <= \$153 ;
-  always @(posedge clk)
-    done <= \$154 ;
-  always @(posedge clk)
-    result <= \$155 ;
-  always @(posedge clk)
-    access_fsm_state <= \$156 ;
-  always @(posedge clk)
-    req <= \$157 ;
-  always @(posedge clk)
-    index <= \$158 ;
-  always @(posedge clk)
-    header <= \$159 ;
-  always @(posedge clk)
-    step <= \$160 ;
-  always @(posedge clk)
-    ending <= \$161 ;
-  always @(posedge clk)
-    to_send <= \$162 ;
-  always @(posedge clk)
-    sent <= \$163 ;
-  always @(posedge clk)
-    waited <= \$164 ;
-  always @(posedge clk)
-    got <= \$165 ;
-  always @(posedge clk)
-    got_crc <= \$166 ;
-  \biss_master_wb.ch0.core.register_access.rx_crc  rx_crc (
-    .clk(clk),
-    .crc(\crc$31 ),
-    .data_in(\data$29 ),
-    .rst(rst),
-    .start(\start$27 ),
-    .valid(\valid$28 )
-  );
-  \biss_master_wb.ch0.core.register_access.tx_crc  tx_crc (
-    .clk(clk),
-    .crc(crc),
-    .data_in(data),
-    .rst(rst),
-    .start(start),
-    .valid(valid)
-  );
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
-    cdm = 1'h0;
-    casez (access_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          cdm = \$6 ;
-      3'h4:
-          if (\$25 ) begin
-            cdm = 1'h1;
-          end else if (\$28 ) begin
-            cdm = \$32 ;
-          end else if (\$31 ) begin
-            cdm = \$36 ;
-          end
-      3'h5:
-          cdm = 1'h1;
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
-    start = 1'h0;
-    casez (access_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          if (abort) begin
-          end else if (\$10 ) begin
-          end else if (\$12 ) begin
-          end else if (\$16 ) begin
-          end else if (\$20 ) begin
-          end else if (frame_end) begin
-            start = \$21 ;
-          end
-      3'h4:
-          if (abort) begin
-          end else if (\$42 ) begin
-          end else if (\$44 ) begin
-            (* full_case = 32'd1 *)
-            if (\$51 ) begin
-            end else begin
-              start = 1'h1;
-            end
-          end
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
-    valid = 1'h0;
-    casez (access_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          if (abort) begin
-          end else if (\$10 ) begin
-          end else if (\$12 ) begin
-          end else if (\$16 ) begin
-          end else if (\$20 ) begin
-          end else if (frame_end) begin
-            valid = \$24 ;
-          end
-      3'h4:
-          valid = \$40 ;
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
-    data = 1'h0;
-    casez (access_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          if (abort) begin
-          end else if (\$10 ) begin
-          end else if (\$12 ) begin
-          end else if (\$16 ) begin
-          end else if (\$20 ) begin
-          end else if (frame_end) begin
-            data = header[17];
-          end
-      3'h4:
-          data = to_send[7];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
-    \start$27  = 1'h0;
-    casez (access_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h4:
-          if (abort) begin
-          end else if (\$42 ) begin
-          end else if (\$44 ) begin
-          end else if (\$46 ) begin
-          end else if (\$48 ) begin
-            if (\$52 ) begin
-              \start$27  = \$53 ;
-            end
-          end
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
-    \valid$28  = 1'h0;
-    casez (access_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h4:
-          if (abort) begin
-          end else if (\$42 ) begin
-          end else if (\$44 ) begin
-          end else if (\$46 ) begin
-          end else if (\$48 ) begin
-            if (\$52 ) begin
-              \valid$28  = 1'h1;
-            end
-          end
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
-    \data$29  = 1'h0;
-    casez (access_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h4:
-          if (abort) begin
-          end else if (\$42 ) begin
-          end else if (\$44 ) begin
-          end else if (\$46 ) begin
-          end else if (\$48 ) begin
-            if (\$52 ) begin
-              \data$29  = frame_cds;
-            end
-          end
-    endcase
-  end
+  assign \$3  = index[1:0] == 2'h2;
+  assign \$4  = index[1:0] == 2'h3;
+  assign \$5  = index[1:0] * 4'h8;
+  assign byte_to_send = word_to_send__data >> \$5 ;
+  assign \$1  = ! index[1:0];
+  assign \$2  = index[1:0] == 1'h1;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     byte_received__addr = 4'h0;
-    casez (access_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h4:
-          if (abort) begin
-          end else if (\$42 ) begin
-          end else if (\$44 ) begin
-          end else if (\$46 ) begin
-          end else if (\$48 ) begin
-          end else if (frame_end) begin
-            (* full_case = 32'd1 *)
-            if (\$54 ) begin
-            end else if (\$56 ) begin
-            end else begin
-              byte_received__addr = index[5:2];
-            end
-          end
-    endcase
+    if (store) begin
+      byte_received__addr = index[5:2];
+    end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     byte_received__data = 32'd0;
-    casez (access_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h4:
-          if (abort) begin
-          end else if (\$42 ) begin
-          end else if (\$44 ) begin
-          end else if (\$46 ) begin
-          end else if (\$48 ) begin
-          end else if (frame_end) begin
-            (* full_case = 32'd1 *)
-            if (\$54 ) begin
-            end else if (\$56 ) begin
-            end else begin
-              byte_received__data = { got, got, got, got };
-            end
-          end
-    endcase
+    if (store) begin
+      byte_received__data = { byte_received, byte_received, byte_received, byte_received };
+    end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     byte_received__en = 4'h0;
-    casez (access_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h4:
-          if (abort) begin
-          end else if (\$42 ) begin
-          end else if (\$44 ) begin
-          end else if (\$46 ) begin
-          end else if (\$48 ) begin
-          end else if (frame_end) begin
-            (* full_case = 32'd1 *)
-            if (\$54 ) begin
-            end else if (\$56 ) begin
-            end else begin
-              byte_received__en = \$61 ;
-            end
-          end
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
-    \$152  = idle_run;
-    if (frame_end) begin
-      \$152  = \$72 [3:0];
-    end
-    if (rst) begin
-      \$152  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
-    \$153  = idle_seen;
-    if (frame_end) begin
-      \$153  = \$78 [3:0];
-    end
-    if (rst) begin
-      \$153  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
-    \$154  = 1'h0;
-    casez (access_fsm_state)
-      3'h0:
-          if (\start$44 ) begin
-            if (\$84 ) begin
-              \$154  = 1'h1;
-            end
-          end
-      3'h1:
-          if (abort) begin
-            \$154  = 1'h1;
-          end else if (\$87 ) begin
-            \$154  = 1'h1;
-          end
-      3'h2:
-          /* empty */;
-      3'h4:
-          /* empty */;
-      3'h5:
-          /* empty */;
-      3'h6:
-          if (abort) begin
-          end else if (\$144 ) begin
-          end else if (\$145 ) begin
-          end else if (frame_end) begin
-            \$154  = 1'h1;
-          end
-      3'h3:
-          if (\$151 ) begin
-            \$154  = 1'h1;
-          end
-    endcase
-    if (rst) begin
-      \$154  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
-    \$155  = result;
-    casez (access_fsm_state)
-      3'h0:
-          if (\start$44 ) begin
-            (* full_case = 32'd1 *)
-            if (\$84 ) begin
-              \$155 [2:0] = 3'h6;
-              \$155 [9:3] = 7'h00;
-            end else begin
-              \$155 [9:3] = 7'h00;
-            end
-          end
-      3'h1:
-          if (abort) begin
-            \$155 [2:0] = 3'h4;
-          end else if (\$87 ) begin
-            \$155 [2:0] = 3'h5;
-          end
-      3'h2:
-          /* empty */;
-      3'h4:
-          if (abort) begin
-          end else if (\$114 ) begin
-          end else if (\$116 ) begin
-          end else if (\$118 ) begin
-          end else if (\$120 ) begin
-          end else if (frame_end) begin
-            (* full_case = 32'd1 *)
-            if (\$131 ) begin
-            end else if (\$133 ) begin
-            end else begin
-              \$155 [9:3] = \$134 ;
-            end
-          end
-      3'h5:
-          /* empty */;
-      3'h6:
-          if (abort) begin
-          end else if (\$144 ) begin
-          end else if (\$145 ) begin
-          end else if (frame_end) begin
-            \$155 [2:0] = 3'h0;
-          end
-      3'h3:
-          if (\$151 ) begin
-            \$155 [2:0] = ending;
-          end
-    endcase
-    if (rst) begin
-      \$155  = 10'h000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
-    \$156  = access_fsm_state;
-    casez (access_fsm_state)
-      3'h0:
-          if (\start$44 ) begin
-            (* full_case = 32'd1 *)
-            if (\$84 ) begin
-              \$156  = 3'h0;
-            end else begin
-              \$156  = 3'h1;
-            end
-          end
-      3'h1:
-          if (abort) begin
-            \$156  = 3'h0;
-          end else if (\$87 ) begin
-            \$156  = 3'h0;
-          end else if (\$95 ) begin
-            \$156  = 3'h2;
-          end
-      3'h2:
-          if (abort) begin
-            \$156  = 3'h3;
-          end else if (\$99 ) begin
-          end else if (\$101 ) begin
-            \$156  = 3'h3;
-          end else if (\$105 ) begin
-            \$156  = 3'h3;
-          end else if (\$109 ) begin
-            \$156  = 3'h3;
-          end else if (frame_end) begin
-            if (\$112 ) begin
-              \$156  = 3'h4;
-            end
-          end
-      3'h4:
-          if (abort) begin
-            \$156  = 3'h3;
-          end else if (\$114 ) begin
-            \$156  = 3'h3;
-          end else if (\$116 ) begin
-            if (\$123 ) begin
-              \$156  = 3'h3;
-            end
-          end else if (\$118 ) begin
-            (* full_case = 32'd1 *)
-            if (frame_cds) begin
-            end else if (\$127 ) begin
-              \$156  = 3'h5;
-            end else begin
-              \$156  = 3'h3;
-            end
-          end else if (\$120 ) begin
-          end else if (frame_end) begin
-            (* full_case = 32'd1 *)
-            if (\$131 ) begin
-              \$156  = 3'h3;
-            end else if (\$133 ) begin
-              \$156  = 3'h3;
-            end else begin
-              if (\$136 ) begin
-                \$156  = 3'h6;
-              end
-            end
-          end
-      3'h5:
-          if (abort) begin
-            \$156  = 3'h3;
-          end else if (\$139 ) begin
-            \$156  = 3'h3;
-          end else if (\$140 ) begin
-            \$156  = 3'h4;
-          end else if (frame_end) begin
-            if (\$142 ) begin
-              \$156  = 3'h3;
-            end
-          end
-      3'h6:
-          if (abort) begin
-            \$156  = 3'h3;
-          end else if (\$144 ) begin
-            \$156  = 3'h3;
-          end else if (\$145 ) begin
-            \$156  = 3'h3;
-          end else if (frame_end) begin
-            \$156  = 3'h0;
-          end
-      3'h3:
-          if (\$151 ) begin
-            \$156  = 3'h0;
-          end
-    endcase
-    if (rst) begin
-      \$156  = 3'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
-    \$157  = req;
-    casez (access_fsm_state)
-      3'h0:
-          if (\start$44 ) begin
-            (* full_case = 32'd1 *)
-            if (\$84 ) begin
-            end else begin
-              \$157  = request;
-            end
-          end
-    endcase
-    if (rst) begin
-      \$157  = 18'h00000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
-    \$158  = index;
-    casez (access_fsm_state)
-      3'h0:
-          if (\start$44 ) begin
-            (* full_case = 32'd1 *)
-            if (\$84 ) begin
-            end else begin
-              \$158  = 6'h00;
-            end
-          end
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h4:
-          if (abort) begin
-          end else if (\$114 ) begin
-          end else if (\$116 ) begin
-          end else if (\$118 ) begin
-          end else if (\$120 ) begin
-          end else if (frame_end) begin
-            (* full_case = 32'd1 *)
-            if (\$131 ) begin
-            end else if (\$133 ) begin
-            end else begin
-              (* full_case = 32'd1 *)
-              if (\$136 ) begin
-              end else begin
-                \$158  = \$137 [5:0];
-              end
-            end
-          end
-    endcase
-    if (rst) begin
-      \$158  = 6'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
-    \$159  = header;
-    casez (access_fsm_state)
-      3'h0:
-          if (\start$44 ) begin
-            (* full_case = 32'd1 *)
-            if (\$84 ) begin
-            end else begin
-              \$159  = { 2'h3, request[2:0], request[9:3], 4'h0, \$85 , request[17] };
-            end
-          end
-      3'h1:
-          /* empty */;
-      3'h2:
-          if (abort) begin
-          end else if (\$99 ) begin
-          end else if (\$101 ) begin
-          end else if (\$105 ) begin
-          end else if (\$109 ) begin
-          end else if (frame_end) begin
-            \$159  = \$110 [17:0];
-          end
-    endcase
-    if (rst) begin
-      \$159  = 18'h00000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
-    \$160  = step;
-    casez (access_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (abort) begin
-          end else if (\$87 ) begin
-          end else if (\$95 ) begin
-            \$160  = 5'h00;
-          end
-      3'h2:
-          if (abort) begin
-          end else if (\$99 ) begin
-          end else if (\$101 ) begin
-          end else if (\$105 ) begin
-          end else if (\$109 ) begin
-          end else if (frame_end) begin
-            \$160  = \$111 [4:0];
-            if (\$112 ) begin
-              \$160  = 5'h00;
-            end
-          end
-      3'h4:
-          if (abort) begin
-          end else if (\$114 ) begin
-          end else if (\$116 ) begin
-            (* full_case = 32'd1 *)
-            if (\$123 ) begin
-            end else begin
-              \$160  = 5'h01;
-            end
-          end else if (\$118 ) begin
-            if (frame_cds) begin
-              \$160  = 5'h02;
-            end
-          end else if (\$120 ) begin
-            \$160  = \$129 [4:0];
-          end else if (frame_end) begin
-            (* full_case = 32'd1 *)
-            if (\$131 ) begin
-            end else if (\$133 ) begin
-            end else begin
-              \$160  = 5'h00;
-            end
-          end
-      3'h5:
-          if (abort) begin
-          end else if (\$139 ) begin
-          end else if (\$140 ) begin
-            \$160  = 5'h02;
-          end
-    endcase
-    if (rst) begin
-      \$160  = 5'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
-    \$161  = ending;
-    casez (access_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          if (abort) begin
-            \$161  = 3'h4;
-          end else if (\$99 ) begin
-          end else if (\$101 ) begin
-            \$161  = 3'h5;
-          end else if (\$105 ) begin
-            \$161  = 3'h2;
-          end else if (\$109 ) begin
-            \$161  = 3'h3;
-          end
-      3'h4:
-          if (abort) begin
-            \$161  = 3'h4;
-          end else if (\$114 ) begin
-            \$161  = 3'h5;
-          end else if (\$116 ) begin
-            if (\$123 ) begin
-              \$161  = 3'h3;
-            end
-          end else if (\$118 ) begin
-            (* full_case = 32'd1 *)
-            if (frame_cds) begin
-            end else if (\$127 ) begin
-            end else begin
-              \$161  = 3'h3;
-            end
-          end else if (\$120 ) begin
-          end else if (frame_end) begin
-            if (\$131 ) begin
-              \$161  = 3'h1;
-            end else if (\$133 ) begin
-              \$161  = 3'h3;
-            end
-          end
-      3'h5:
-          if (abort) begin
-            \$161  = 3'h4;
-          end else if (\$139 ) begin
-            \$161  = 3'h5;
-          end else if (\$140 ) begin
-          end else if (frame_end) begin
-            if (\$142 ) begin
-              \$161  = 3'h3;
-            end
-          end
-      3'h6:
-          if (abort) begin
-            \$161  = 3'h4;
-          end else if (\$144 ) begin
-            \$161  = 3'h5;
-          end else if (\$145 ) begin
-            \$161  = 3'h3;
-          end
-    endcase
-    if (rst) begin
-      \$161  = 3'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
-    \$162  = to_send;
-    casez (access_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h4:
-          if (abort) begin
-          end else if (\$114 ) begin
-          end else if (\$116 ) begin
-            (* full_case = 32'd1 *)
-            if (\$123 ) begin
-            end else begin
-              \$162  = \$124 ;
-            end
-          end else if (\$118 ) begin
-            \$162  = \$126 [7:0];
-          end else if (\$120 ) begin
-            \$162  = \$128 [7:0];
-          end
-    endcase
-    if (rst) begin
-      \$162  = 8'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
-    \$163  = sent;
-    casez (access_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h4:
-          if (abort) begin
-          end else if (\$114 ) begin
-          end else if (\$116 ) begin
-            (* full_case = 32'd1 *)
-            if (\$123 ) begin
-            end else begin
-              \$163  = \$125 ;
-            end
-          end
-    endcase
-    if (rst) begin
-      \$163  = 8'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
-    \$164  = waited;
-    casez (access_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h4:
-          if (abort) begin
-          end else if (\$114 ) begin
-          end else if (\$116 ) begin
-          end else if (\$118 ) begin
-            if (frame_cds) begin
-            end else if (\$127 ) begin
-              \$164  = 5'h00;
-            end
-          end
-      3'h5:
-          if (abort) begin
-          end else if (\$139 ) begin
-          end else if (\$140 ) begin
-          end else if (frame_end) begin
-            \$164  = \$141 [4:0];
-          end
-    endcase
-    if (rst) begin
-      \$164  = 5'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
-    \$165  = got;
-    casez (access_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h4:
-          if (abort) begin
-          end else if (\$114 ) begin
-          end else if (\$116 ) begin
-          end else if (\$118 ) begin
-          end else if (\$120 ) begin
-            if (\$130 ) begin
-              \$165  = { got[6:0], frame_cds };
-            end
-          end
-    endcase
-    if (rst) begin
-      \$165  = 8'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
-    \$166  = got_crc;
-    casez (access_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h4:
-          if (abort) begin
-          end else if (\$114 ) begin
-          end else if (\$116 ) begin
-          end else if (\$118 ) begin
-          end else if (\$120 ) begin
-            (* full_case = 32'd1 *)
-            if (\$130 ) begin
-            end else begin
-              \$166  = { got_crc[1:0], frame_cds };
-            end
-          end
-    endcase
-    if (rst) begin
-      \$166  = 3'h0;
+    if (store) begin
+      byte_received__en = { \$4 , \$3 , \$2 , \$1  };
     end
   end
   assign host_write__addr = wbuf[3:0];
   assign host_write__data = wbuf[35:4];
   assign host_write__en = wbuf[39:36];
+  assign word_to_send__addr = index[5:2];
   assign rbuf_addr = host_read__addr;
   assign rbuf_en = host_read__en;
   assign host_read__data = rbuf_data;
-  assign word_to_send__addr = index[5:2];
-  assign frames = busy;
   assign \wbuf.addr  = wbuf[3:0];
   assign \wbuf.data  = wbuf[35:4];
   assign \wbuf.en  = wbuf[39:36];
-  assign \req.slave_id  = req[2:0];
-  assign \req.address  = req[9:3];
-  assign \req.count  = req[16:10];
-  assign \req.write  = req[17];
-  assign \request.slave_id  = request[2:0];
-  assign \request.address  = request[9:3];
-  assign \request.count  = request[16:10];
-  assign \request.write  = request[17];
-  assign \result.status  = result[2:0];
-  assign \result.bytes_done  = result[9:3];
-  assign \$110  = { header, 1'h0 };
-  assign \$126  = { to_send, 1'h0 };
-  assign \$128  = { to_send, 1'h0 };
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.register_access.rx_crc (rst, crc, start, valid, data_in, clk);
+module \biss_master_wb.ch0.core.register_access.checker (rst, crc_ok, echo_ok, cds, control__take_data, start, control__take_crc, sent, \byte , clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$55  = 0;
+  reg [7:0] \$1 ;
+  reg [2:0] \$2 ;
+  output [7:0] \byte ;
+  reg [7:0] \byte  = 8'h00;
+  input cds;
+  wire cds;
+  input clk;
+  wire clk;
+  wire control__first;
+  input control__take_crc;
+  wire control__take_crc;
+  input control__take_data;
+  wire control__take_data;
+  wire [3:0] crc;
+  output crc_ok;
+  wire crc_ok;
+  wire data;
+  output echo_ok;
+  wire echo_ok;
+  reg [2:0] got_crc = 3'h0;
+  input rst;
+  wire rst;
+  input [7:0] sent;
+  wire [7:0] sent;
+  input start;
+  wire start;
+  wire valid;
+  assign crc_ok = { got_crc, cds } == crc;
+  assign echo_ok = \byte  == sent;
+  always @(posedge clk)
+    \byte  <= \$1 ;
+  always @(posedge clk)
+    got_crc <= \$2 ;
+  \biss_master_wb.ch0.core.register_access.checker.rx_crc  rx_crc (
+    .clk(clk),
+    .crc(crc),
+    .data_in(cds),
+    .rst(rst),
+    .start(start),
+    .valid(control__take_data)
+  );
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    \$1  = \byte ;
+    if (control__take_data) begin
+      \$1  = { \byte [6:0], cds };
+    end
+    if (rst) begin
+      \$1  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    \$2  = got_crc;
+    if (control__take_crc) begin
+      \$2  = { got_crc[1:0], cds };
+    end
+    if (rst) begin
+      \$2  = 3'h0;
+    end
+  end
+  assign control__first = start;
+  assign valid = control__take_data;
+  assign data = cds;
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_wb.ch0.core.register_access.checker.rx_crc (rst, crc, data_in, valid, start, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$56  = 0;
   wire [3:0] \$1 ;
   wire \$10 ;
   wire [3:0] \$11 ;
@@ -12020,7 +11179,7 @@ module \biss_master_wb.ch0.core.register_access.rx_crc (rst, crc, start, valid, 
     crc_reg <= \$13 ;
   assign \$auto$rtlil.cc:2739:Not$14  = ~ crc_reg;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
     \$13  = crc_reg;
     if (valid) begin
       \$13 [0] = \$3 ;
@@ -12043,8 +11202,234 @@ module \biss_master_wb.ch0.core.register_access.rx_crc (rst, crc, start, valid, 
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.register_access.tx_crc (rst, crc, start, valid, data_in, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$56  = 0;
+module \biss_master_wb.ch0.core.register_access.idle (rst, frame_end, frame_ok, run_enough, seen_enough, frame_cdm, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$57  = 0;
+  wire \$1 ;
+  wire [4:0] \$10 ;
+  wire \$11 ;
+  wire [4:0] \$12 ;
+  wire [4:0] \$13 ;
+  wire [4:0] \$14 ;
+  wire [4:0] \$15 ;
+  wire \$16 ;
+  wire \$17 ;
+  wire \$18 ;
+  wire [4:0] \$19 ;
+  wire [4:0] \$2 ;
+  wire [4:0] \$20 ;
+  wire [4:0] \$21 ;
+  wire [4:0] \$22 ;
+  reg [3:0] \$23 ;
+  reg [3:0] \$24 ;
+  wire [4:0] \$3 ;
+  wire [4:0] \$4 ;
+  wire \$5 ;
+  wire \$6 ;
+  wire \$7 ;
+  wire [4:0] \$8 ;
+  wire [4:0] \$9 ;
+  input clk;
+  wire clk;
+  input frame_cdm;
+  wire frame_cdm;
+  input frame_end;
+  wire frame_end;
+  input frame_ok;
+  wire frame_ok;
+  reg [3:0] idle_run = 4'h0;
+  reg [3:0] idle_seen = 4'h0;
+  input rst;
+  wire rst;
+  output run_enough;
+  wire run_enough;
+  output seen_enough;
+  wire seen_enough;
+  assign \$1  = idle_run == 4'he;
+  assign \$2  = idle_run + 1'h1;
+  assign \$3  = \$1  ? 5'h0e : \$2 ;
+  assign \$4  = frame_cdm ? 5'h00 : \$3 ;
+  assign \$5  = ~ frame_ok;
+  assign \$6  = frame_cdm | \$5 ;
+  assign \$7  = idle_seen == 4'he;
+  assign \$8  = idle_seen + 1'h1;
+  assign \$9  = \$7  ? 5'h0e : \$8 ;
+  assign \$10  = \$6  ? 5'h00 : \$9 ;
+  assign \$11  = idle_run == 4'he;
+  assign \$12  = idle_run + 1'h1;
+  assign \$13  = \$11  ? 5'h0e : \$12 ;
+  assign \$14  = frame_cdm ? 5'h00 : \$13 ;
+  assign \$15  = frame_end ? \$14  : { 1'h0, idle_run };
+  assign run_enough = \$15  == 4'he;
+  assign \$16  = ~ frame_ok;
+  assign \$17  = frame_cdm | \$16 ;
+  assign \$18  = idle_seen == 4'he;
+  assign \$19  = idle_seen + 1'h1;
+  assign \$20  = \$18  ? 5'h0e : \$19 ;
+  assign \$21  = \$17  ? 5'h00 : \$20 ;
+  assign \$22  = frame_end ? \$21  : { 1'h0, idle_seen };
+  assign seen_enough = \$22  == 4'he;
+  always @(posedge clk)
+    idle_run <= \$23 ;
+  always @(posedge clk)
+    idle_seen <= \$24 ;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
+    \$23  = idle_run;
+    if (frame_end) begin
+      \$23  = \$4 [3:0];
+    end
+    if (rst) begin
+      \$23  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
+    \$24  = idle_seen;
+    if (frame_end) begin
+      \$24  = \$10 [3:0];
+    end
+    if (rst) begin
+      \$24  = 4'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_wb.ch0.core.register_access.sender (rst, \byte , request, control__load_header, control__source, control__crc_bit, control__shift_header, start, valid, control__load_byte, control__shift_byte, sent, cdm, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$58  = 0;
+  wire \$1 ;
+  wire [18:0] \$2 ;
+  wire [8:0] \$3 ;
+  wire [1:0] \$4 ;
+  wire \$5 ;
+  reg [17:0] \$6 ;
+  reg [7:0] \$7 ;
+  reg [7:0] \$8 ;
+  input [7:0] \byte ;
+  wire [7:0] \byte ;
+  output cdm;
+  reg cdm;
+  input clk;
+  wire clk;
+  input [1:0] control__crc_bit;
+  wire [1:0] control__crc_bit;
+  wire control__crc_start;
+  wire control__crc_valid;
+  input control__load_byte;
+  wire control__load_byte;
+  input control__load_header;
+  wire control__load_header;
+  input control__shift_byte;
+  wire control__shift_byte;
+  input control__shift_header;
+  wire control__shift_header;
+  (* enum_base_type = "CdmSource" *)
+  (* enum_value_000 = "ZERO" *)
+  (* enum_value_001 = "ONE" *)
+  (* enum_value_010 = "HEADER" *)
+  (* enum_value_011 = "DATA" *)
+  (* enum_value_100 = "CRC" *)
+  input [2:0] control__source;
+  wire [2:0] control__source;
+  wire [3:0] crc;
+  wire data;
+  reg [17:0] header = 18'h00000;
+  input [17:0] request;
+  wire [17:0] request;
+  wire [6:0] \request.address ;
+  wire [6:0] \request.count ;
+  wire [2:0] \request.slave_id ;
+  wire \request.write ;
+  input rst;
+  wire rst;
+  output [7:0] sent;
+  reg [7:0] sent = 8'h00;
+  input start;
+  wire start;
+  reg [7:0] to_send = 8'h00;
+  input valid;
+  wire valid;
+  assign data = control__shift_header ? header[17] : to_send[7];
+  assign \$4  = ~ control__crc_bit;
+  assign \$5  = crc >> \$4 ;
+  always @(posedge clk)
+    header <= \$6 ;
+  always @(posedge clk)
+    to_send <= \$7 ;
+  always @(posedge clk)
+    sent <= \$8 ;
+  assign \$1  = ~ request[17];
+  \biss_master_wb.ch0.core.register_access.sender.tx_crc  tx_crc (
+    .clk(clk),
+    .crc(crc),
+    .data_in(data),
+    .rst(rst),
+    .start(start),
+    .valid(valid)
+  );
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    \$6  = header;
+    if (control__load_header) begin
+      \$6  = { 2'h3, request[2:0], request[9:3], 4'h0, \$1 , request[17] };
+    end
+    if (control__shift_header) begin
+      \$6  = \$2 [17:0];
+    end
+    if (rst) begin
+      \$6  = 18'h00000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    \$7  = to_send;
+    if (control__load_byte) begin
+      \$7  = \byte ;
+    end
+    if (control__shift_byte) begin
+      \$7  = \$3 [7:0];
+    end
+    if (rst) begin
+      \$7  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    \$8  = sent;
+    if (control__load_byte) begin
+      \$8  = \byte ;
+    end
+    if (rst) begin
+      \$8  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    cdm = 1'h0;
+    casez (control__source)
+      3'h1:
+          cdm = 1'h1;
+      3'h2:
+          cdm = header[17];
+      3'h3:
+          cdm = to_send[7];
+      3'h4:
+          cdm = \$5 ;
+    endcase
+  end
+  assign control__crc_start = start;
+  assign control__crc_valid = valid;
+  assign \request.slave_id  = request[2:0];
+  assign \request.address  = request[9:3];
+  assign \request.count  = request[16:10];
+  assign \request.write  = request[17];
+  assign \$2  = { header, 1'h0 };
+  assign \$3  = { to_send, 1'h0 };
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_wb.ch0.core.register_access.sender.tx_crc (rst, data_in, crc, start, valid, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$59  = 0;
   wire [3:0] \$1 ;
   wire \$10 ;
   wire [3:0] \$11 ;
@@ -12087,7 +11472,7 @@ module \biss_master_wb.ch0.core.register_access.tx_crc (rst, crc, start, valid, 
     crc_reg <= \$13 ;
   assign \$auto$rtlil.cc:2739:Not$16  = ~ crc_reg;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     \$13  = crc_reg;
     if (valid) begin
       \$13 [0] = \$3 ;
@@ -12110,8 +11495,1047 @@ module \biss_master_wb.ch0.core.register_access.tx_crc (rst, crc, start, valid, 
 endmodule
 
 (* generator = "Amaranth" *)
+module \biss_master_wb.ch0.core.register_access.sequencer (rst, frame_end, frame_ok, busy, crc_ok, echo_ok, run_enough, seen_enough, start, abort, request, frame_cdm, frame_cds, done, result, index, send__load_header, send__source, send__crc_bit, send__shift_header, send__crc_start
+, send__crc_valid, send__load_byte, send__shift_byte, check__take_data, check__first, check__take_crc, store, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$60  = 0;
+  wire \$1 ;
+  wire \$10 ;
+  wire \$100 ;
+  wire \$101 ;
+  wire \$102 ;
+  wire \$103 ;
+  wire \$104 ;
+  wire \$105 ;
+  wire \$106 ;
+  wire \$107 ;
+  wire \$108 ;
+  wire \$109 ;
+  wire \$11 ;
+  wire \$110 ;
+  wire \$111 ;
+  wire \$112 ;
+  wire \$113 ;
+  wire \$114 ;
+  wire \$115 ;
+  wire \$116 ;
+  wire \$117 ;
+  reg \$118 ;
+  reg [9:0] \$119 ;
+  wire \$12 ;
+  reg [2:0] \$120 ;
+  reg [17:0] \$121 ;
+  reg [5:0] \$122 ;
+  reg [4:0] \$123 ;
+  reg [2:0] \$124 ;
+  reg [4:0] \$125 ;
+  wire \$13 ;
+  wire \$14 ;
+  wire \$15 ;
+  wire \$16 ;
+  wire \$17 ;
+  wire \$18 ;
+  wire \$19 ;
+  wire \$2 ;
+  wire \$20 ;
+  wire \$21 ;
+  wire \$22 ;
+  wire [5:0] \$23 ;
+  wire \$24 ;
+  wire \$25 ;
+  wire \$26 ;
+  wire \$27 ;
+  wire \$28 ;
+  wire \$29 ;
+  wire \$3 ;
+  wire \$30 ;
+  wire \$31 ;
+  wire \$32 ;
+  wire \$33 ;
+  wire \$34 ;
+  wire \$35 ;
+  wire \$36 ;
+  wire [5:0] \$37 ;
+  wire \$38 ;
+  wire \$39 ;
+  wire [7:0] \$4 ;
+  wire \$40 ;
+  wire [6:0] \$41 ;
+  wire [6:0] \$42 ;
+  wire \$43 ;
+  wire [6:0] \$44 ;
+  wire \$45 ;
+  wire \$46 ;
+  wire \$47 ;
+  wire [5:0] \$48 ;
+  wire \$49 ;
+  wire \$5 ;
+  wire \$50 ;
+  wire \$51 ;
+  wire \$52 ;
+  wire \$53 ;
+  wire \$54 ;
+  wire \$55 ;
+  wire [7:0] \$56 ;
+  wire \$57 ;
+  wire \$58 ;
+  wire \$59 ;
+  wire \$6 ;
+  wire \$60 ;
+  wire \$61 ;
+  wire \$62 ;
+  wire \$63 ;
+  wire \$64 ;
+  wire \$65 ;
+  wire \$66 ;
+  wire \$67 ;
+  wire \$68 ;
+  wire \$69 ;
+  wire \$7 ;
+  wire \$70 ;
+  wire \$71 ;
+  wire \$72 ;
+  wire \$73 ;
+  wire \$74 ;
+  wire \$75 ;
+  wire \$76 ;
+  wire \$77 ;
+  wire \$78 ;
+  wire \$79 ;
+  wire \$8 ;
+  wire \$80 ;
+  wire \$81 ;
+  wire \$82 ;
+  wire \$83 ;
+  wire \$84 ;
+  wire \$85 ;
+  wire \$86 ;
+  wire \$87 ;
+  wire \$88 ;
+  wire [5:0] \$89 ;
+  wire \$9 ;
+  wire \$90 ;
+  wire \$91 ;
+  wire \$92 ;
+  wire \$93 ;
+  wire \$94 ;
+  wire \$95 ;
+  wire \$96 ;
+  wire \$97 ;
+  wire \$98 ;
+  wire \$99 ;
+  input abort;
+  wire abort;
+  reg [2:0] access_fsm_state = 3'h0;
+  output busy;
+  wire busy;
+  output check__first;
+  reg check__first;
+  output check__take_crc;
+  reg check__take_crc;
+  output check__take_data;
+  reg check__take_data;
+  input clk;
+  wire clk;
+  input crc_ok;
+  wire crc_ok;
+  output done;
+  reg done = 1'h0;
+  input echo_ok;
+  wire echo_ok;
+  (* enum_base_type = "AccessStatus" *)
+  (* enum_value_000 = "OK" *)
+  (* enum_value_001 = "CRC4_ERROR" *)
+  (* enum_value_010 = "NO_ANSWER" *)
+  (* enum_value_011 = "REFUSED" *)
+  (* enum_value_100 = "ABORTED" *)
+  (* enum_value_101 = "DATA_FAULT" *)
+  (* enum_value_110 = "BAD_REQUEST" *)
+  reg [2:0] ending = 3'h0;
+  input frame_cdm;
+  wire frame_cdm;
+  input frame_cds;
+  wire frame_cds;
+  input frame_end;
+  wire frame_end;
+  input frame_ok;
+  wire frame_ok;
+  output [5:0] index;
+  reg [5:0] index = 6'h00;
+  reg [17:0] req = 18'h00000;
+  wire [6:0] \req.address ;
+  wire [6:0] \req.count ;
+  wire [2:0] \req.slave_id ;
+  wire \req.write ;
+  input [17:0] request;
+  wire [17:0] request;
+  wire [6:0] \request.address ;
+  wire [6:0] \request.count ;
+  wire [2:0] \request.slave_id ;
+  wire \request.write ;
+  output [9:0] result;
+  reg [9:0] result = 10'h000;
+  wire [6:0] \result.bytes_done ;
+  (* enum_base_type = "AccessStatus" *)
+  (* enum_value_000 = "OK" *)
+  (* enum_value_001 = "CRC4_ERROR" *)
+  (* enum_value_010 = "NO_ANSWER" *)
+  (* enum_value_011 = "REFUSED" *)
+  (* enum_value_100 = "ABORTED" *)
+  (* enum_value_101 = "DATA_FAULT" *)
+  (* enum_value_110 = "BAD_REQUEST" *)
+  wire [2:0] \result.status ;
+  input rst;
+  wire rst;
+  input run_enough;
+  wire run_enough;
+  input seen_enough;
+  wire seen_enough;
+  output [1:0] send__crc_bit;
+  reg [1:0] send__crc_bit;
+  output send__crc_start;
+  reg send__crc_start;
+  output send__crc_valid;
+  reg send__crc_valid;
+  output send__load_byte;
+  reg send__load_byte;
+  output send__load_header;
+  reg send__load_header;
+  output send__shift_byte;
+  reg send__shift_byte;
+  output send__shift_header;
+  reg send__shift_header;
+  (* enum_base_type = "CdmSource" *)
+  (* enum_value_000 = "ZERO" *)
+  (* enum_value_001 = "ONE" *)
+  (* enum_value_010 = "HEADER" *)
+  (* enum_value_011 = "DATA" *)
+  (* enum_value_100 = "CRC" *)
+  output [2:0] send__source;
+  reg [2:0] send__source;
+  input start;
+  wire start;
+  reg [4:0] step = 5'h00;
+  output store;
+  reg store;
+  reg [4:0] waited = 5'h00;
+  assign \$1  = ! request[16:10];
+  assign \$2  = request[16:10] > 7'h40;
+  assign \$3  = \$1  | \$2 ;
+  assign \$4  = request[9:3] + request[16:10];
+  assign \$5  = \$4  > 8'h80;
+  assign \$6  = \$3  | \$5 ;
+  assign \$7  = ~ frame_ok;
+  assign \$8  = frame_end & \$7 ;
+  assign \$9  = ! step;
+  assign \$10  = frame_end & \$9 ;
+  assign \$11  = ~ frame_cdm;
+  assign \$12  = \$10  & \$11 ;
+  assign \$13  = ~ frame_ok;
+  assign \$14  = frame_end & \$13 ;
+  assign \$15  = step == 1'h1;
+  assign \$16  = frame_end & \$15 ;
+  assign \$17  = ~ frame_cds;
+  assign \$18  = \$16  & \$17 ;
+  assign \$19  = step == 5'h11;
+  assign \$20  = frame_end & \$19 ;
+  assign \$21  = frame_cds == req[17];
+  assign \$22  = \$20  & \$21 ;
+  assign \$23  = step + 1'h1;
+  assign \$24  = step == 5'h11;
+  assign \$25  = ~ frame_ok;
+  assign \$26  = frame_end & \$25 ;
+  assign \$27  = ! step;
+  assign \$28  = frame_end & \$27 ;
+  assign \$29  = step == 1'h1;
+  assign \$30  = frame_end & \$29 ;
+  assign \$31  = step < 4'hd;
+  assign \$32  = frame_end & \$31 ;
+  assign \$33  = ! index;
+  assign \$34  = \$33  ? req[17] : 1'h0;
+  assign \$35  = frame_cds != \$34 ;
+  assign \$36  = ~ req[17];
+  assign \$37  = step + 1'h1;
+  assign \$38  = ~ crc_ok;
+  assign \$39  = ~ echo_ok;
+  assign \$40  = req[17] & \$39 ;
+  assign \$41  = index + 1'h1;
+  assign \$42  = index + 1'h1;
+  assign \$43  = \$42  == req[16:10];
+  assign \$44  = index + 1'h1;
+  assign \$45  = ~ frame_ok;
+  assign \$46  = frame_end & \$45 ;
+  assign \$47  = frame_end & frame_cds;
+  assign \$48  = waited + 1'h1;
+  assign \$49  = waited == 4'hf;
+  assign \$50  = ~ frame_ok;
+  assign \$51  = frame_end & \$50 ;
+  assign \$52  = frame_end & frame_cds;
+  assign \$53  = ! request[16:10];
+  assign \$54  = request[16:10] > 7'h40;
+  assign \$55  = \$53  | \$54 ;
+  assign \$56  = request[9:3] + request[16:10];
+  assign \$57  = \$56  > 8'h80;
+  assign \$58  = \$55  | \$57 ;
+  assign \$59  = step >= 4'hc;
+  assign \$60  = step < 5'h10;
+  assign \$61  = \$59  & \$60 ;
+  assign \$62  = ! step;
+  assign \$63  = frame_end & \$62 ;
+  assign \$64  = ~ frame_cdm;
+  assign \$65  = \$63  & \$64 ;
+  assign \$66  = ~ frame_ok;
+  assign \$67  = frame_end & \$66 ;
+  assign \$68  = step == 1'h1;
+  assign \$69  = frame_end & \$68 ;
+  assign \$70  = ~ frame_cds;
+  assign \$71  = \$69  & \$70 ;
+  assign \$72  = step == 5'h11;
+  assign \$73  = frame_end & \$72 ;
+  assign \$74  = frame_cds == req[17];
+  assign \$75  = \$73  & \$74 ;
+  assign \$76  = ! step;
+  assign \$77  = step >= 1'h1;
+  assign \$78  = step <= 4'hb;
+  assign \$79  = \$77  & \$78 ;
+  assign \$80  = ! step;
+  assign \$81  = step >= 1'h1;
+  assign \$82  = step <= 4'h8;
+  assign \$83  = \$81  & \$82 ;
+  assign \$84  = \$83  & req[17];
+  assign \$85  = step >= 4'h9;
+  assign \$86  = step <= 4'hc;
+  assign \$87  = \$85  & \$86 ;
+  assign \$88  = \$87  & req[17];
+  assign \$89  = step - 4'h9;
+  assign \$90  = step >= 1'h1;
+  assign \$91  = frame_end & \$90 ;
+  assign \$92  = step <= 4'h8;
+  assign \$93  = \$91  & \$92 ;
+  assign \$94  = ~ frame_ok;
+  assign \$95  = frame_end & \$94 ;
+  assign \$96  = ! step;
+  assign \$97  = frame_end & \$96 ;
+  assign \$98  = step == 1'h1;
+  assign \$99  = frame_end & \$98 ;
+  assign \$100  = step < 4'hd;
+  assign \$101  = frame_end & \$100 ;
+  assign \$102  = ! index;
+  assign \$103  = \$102  ? req[17] : 1'h0;
+  assign \$104  = frame_cds != \$103 ;
+  assign \$105  = step <= 4'h9;
+  assign \$106  = step == 2'h2;
+  assign \$107  = ~ crc_ok;
+  assign \$108  = ~ echo_ok;
+  assign \$109  = req[17] & \$108 ;
+  assign \$110  = ~ req[17];
+  assign busy = ~ \$111 ;
+  assign \$111  = ! access_fsm_state;
+  assign \$112  = access_fsm_state == 1'h1;
+  assign \$113  = access_fsm_state == 2'h2;
+  assign \$114  = access_fsm_state == 2'h3;
+  assign \$115  = access_fsm_state == 3'h4;
+  assign \$116  = access_fsm_state == 3'h5;
+  assign \$117  = access_fsm_state == 3'h6;
+  always @(posedge clk)
+    done <= \$118 ;
+  always @(posedge clk)
+    result <= \$119 ;
+  always @(posedge clk)
+    access_fsm_state <= \$120 ;
+  always @(posedge clk)
+    req <= \$121 ;
+  always @(posedge clk)
+    index <= \$122 ;
+  always @(posedge clk)
+    step <= \$123 ;
+  always @(posedge clk)
+    ending <= \$124 ;
+  always @(posedge clk)
+    waited <= \$125 ;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    \$118  = 1'h0;
+    casez (access_fsm_state)
+      3'h0:
+          if (start) begin
+            if (\$6 ) begin
+              \$118  = 1'h1;
+            end
+          end
+      3'h1:
+          if (abort) begin
+            \$118  = 1'h1;
+          end else if (\$8 ) begin
+            \$118  = 1'h1;
+          end
+      3'h2:
+          /* empty */;
+      3'h4:
+          /* empty */;
+      3'h5:
+          /* empty */;
+      3'h6:
+          if (abort) begin
+          end else if (\$51 ) begin
+          end else if (\$52 ) begin
+          end else if (frame_end) begin
+            \$118  = 1'h1;
+          end
+      3'h3:
+          if (run_enough) begin
+            \$118  = 1'h1;
+          end
+    endcase
+    if (rst) begin
+      \$118  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    \$119  = result;
+    casez (access_fsm_state)
+      3'h0:
+          if (start) begin
+            (* full_case = 32'd1 *)
+            if (\$6 ) begin
+              \$119 [2:0] = 3'h6;
+              \$119 [9:3] = 7'h00;
+            end else begin
+              \$119 [9:3] = 7'h00;
+            end
+          end
+      3'h1:
+          if (abort) begin
+            \$119 [2:0] = 3'h4;
+          end else if (\$8 ) begin
+            \$119 [2:0] = 3'h5;
+          end
+      3'h2:
+          /* empty */;
+      3'h4:
+          if (abort) begin
+          end else if (\$26 ) begin
+          end else if (\$28 ) begin
+          end else if (\$30 ) begin
+          end else if (\$32 ) begin
+          end else if (frame_end) begin
+            (* full_case = 32'd1 *)
+            if (\$38 ) begin
+            end else if (\$40 ) begin
+            end else begin
+              \$119 [9:3] = \$41 ;
+            end
+          end
+      3'h5:
+          /* empty */;
+      3'h6:
+          if (abort) begin
+          end else if (\$51 ) begin
+          end else if (\$52 ) begin
+          end else if (frame_end) begin
+            \$119 [2:0] = 3'h0;
+          end
+      3'h3:
+          if (run_enough) begin
+            \$119 [2:0] = ending;
+          end
+    endcase
+    if (rst) begin
+      \$119  = 10'h000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    \$120  = access_fsm_state;
+    casez (access_fsm_state)
+      3'h0:
+          if (start) begin
+            (* full_case = 32'd1 *)
+            if (\$6 ) begin
+              \$120  = 3'h0;
+            end else begin
+              \$120  = 3'h1;
+            end
+          end
+      3'h1:
+          if (abort) begin
+            \$120  = 3'h0;
+          end else if (\$8 ) begin
+            \$120  = 3'h0;
+          end else if (seen_enough) begin
+            \$120  = 3'h2;
+          end
+      3'h2:
+          if (abort) begin
+            \$120  = 3'h3;
+          end else if (\$12 ) begin
+          end else if (\$14 ) begin
+            \$120  = 3'h3;
+          end else if (\$18 ) begin
+            \$120  = 3'h3;
+          end else if (\$22 ) begin
+            \$120  = 3'h3;
+          end else if (frame_end) begin
+            if (\$24 ) begin
+              \$120  = 3'h4;
+            end
+          end
+      3'h4:
+          if (abort) begin
+            \$120  = 3'h3;
+          end else if (\$26 ) begin
+            \$120  = 3'h3;
+          end else if (\$28 ) begin
+            if (\$35 ) begin
+              \$120  = 3'h3;
+            end
+          end else if (\$30 ) begin
+            (* full_case = 32'd1 *)
+            if (frame_cds) begin
+            end else if (\$36 ) begin
+              \$120  = 3'h5;
+            end else begin
+              \$120  = 3'h3;
+            end
+          end else if (\$32 ) begin
+          end else if (frame_end) begin
+            (* full_case = 32'd1 *)
+            if (\$38 ) begin
+              \$120  = 3'h3;
+            end else if (\$40 ) begin
+              \$120  = 3'h3;
+            end else begin
+              if (\$43 ) begin
+                \$120  = 3'h6;
+              end
+            end
+          end
+      3'h5:
+          if (abort) begin
+            \$120  = 3'h3;
+          end else if (\$46 ) begin
+            \$120  = 3'h3;
+          end else if (\$47 ) begin
+            \$120  = 3'h4;
+          end else if (frame_end) begin
+            if (\$49 ) begin
+              \$120  = 3'h3;
+            end
+          end
+      3'h6:
+          if (abort) begin
+            \$120  = 3'h3;
+          end else if (\$51 ) begin
+            \$120  = 3'h3;
+          end else if (\$52 ) begin
+            \$120  = 3'h3;
+          end else if (frame_end) begin
+            \$120  = 3'h0;
+          end
+      3'h3:
+          if (run_enough) begin
+            \$120  = 3'h0;
+          end
+    endcase
+    if (rst) begin
+      \$120  = 3'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    \$121  = req;
+    casez (access_fsm_state)
+      3'h0:
+          if (start) begin
+            (* full_case = 32'd1 *)
+            if (\$6 ) begin
+            end else begin
+              \$121  = request;
+            end
+          end
+    endcase
+    if (rst) begin
+      \$121  = 18'h00000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    \$122  = index;
+    casez (access_fsm_state)
+      3'h0:
+          if (start) begin
+            (* full_case = 32'd1 *)
+            if (\$6 ) begin
+            end else begin
+              \$122  = 6'h00;
+            end
+          end
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h4:
+          if (abort) begin
+          end else if (\$26 ) begin
+          end else if (\$28 ) begin
+          end else if (\$30 ) begin
+          end else if (\$32 ) begin
+          end else if (frame_end) begin
+            (* full_case = 32'd1 *)
+            if (\$38 ) begin
+            end else if (\$40 ) begin
+            end else begin
+              (* full_case = 32'd1 *)
+              if (\$43 ) begin
+              end else begin
+                \$122  = \$44 [5:0];
+              end
+            end
+          end
+    endcase
+    if (rst) begin
+      \$122  = 6'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    \$123  = step;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (abort) begin
+          end else if (\$8 ) begin
+          end else if (seen_enough) begin
+            \$123  = 5'h00;
+          end
+      3'h2:
+          if (abort) begin
+          end else if (\$12 ) begin
+          end else if (\$14 ) begin
+          end else if (\$18 ) begin
+          end else if (\$22 ) begin
+          end else if (frame_end) begin
+            \$123  = \$23 [4:0];
+            if (\$24 ) begin
+              \$123  = 5'h00;
+            end
+          end
+      3'h4:
+          if (abort) begin
+          end else if (\$26 ) begin
+          end else if (\$28 ) begin
+            (* full_case = 32'd1 *)
+            if (\$35 ) begin
+            end else begin
+              \$123  = 5'h01;
+            end
+          end else if (\$30 ) begin
+            if (frame_cds) begin
+              \$123  = 5'h02;
+            end
+          end else if (\$32 ) begin
+            \$123  = \$37 [4:0];
+          end else if (frame_end) begin
+            (* full_case = 32'd1 *)
+            if (\$38 ) begin
+            end else if (\$40 ) begin
+            end else begin
+              \$123  = 5'h00;
+            end
+          end
+      3'h5:
+          if (abort) begin
+          end else if (\$46 ) begin
+          end else if (\$47 ) begin
+            \$123  = 5'h02;
+          end
+    endcase
+    if (rst) begin
+      \$123  = 5'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    \$124  = ending;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          if (abort) begin
+            \$124  = 3'h4;
+          end else if (\$12 ) begin
+          end else if (\$14 ) begin
+            \$124  = 3'h5;
+          end else if (\$18 ) begin
+            \$124  = 3'h2;
+          end else if (\$22 ) begin
+            \$124  = 3'h3;
+          end
+      3'h4:
+          if (abort) begin
+            \$124  = 3'h4;
+          end else if (\$26 ) begin
+            \$124  = 3'h5;
+          end else if (\$28 ) begin
+            if (\$35 ) begin
+              \$124  = 3'h3;
+            end
+          end else if (\$30 ) begin
+            (* full_case = 32'd1 *)
+            if (frame_cds) begin
+            end else if (\$36 ) begin
+            end else begin
+              \$124  = 3'h3;
+            end
+          end else if (\$32 ) begin
+          end else if (frame_end) begin
+            if (\$38 ) begin
+              \$124  = 3'h1;
+            end else if (\$40 ) begin
+              \$124  = 3'h3;
+            end
+          end
+      3'h5:
+          if (abort) begin
+            \$124  = 3'h4;
+          end else if (\$46 ) begin
+            \$124  = 3'h5;
+          end else if (\$47 ) begin
+          end else if (frame_end) begin
+            if (\$49 ) begin
+              \$124  = 3'h3;
+            end
+          end
+      3'h6:
+          if (abort) begin
+            \$124  = 3'h4;
+          end else if (\$51 ) begin
+            \$124  = 3'h5;
+          end else if (\$52 ) begin
+            \$124  = 3'h3;
+          end
+    endcase
+    if (rst) begin
+      \$124  = 3'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    \$125  = waited;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h4:
+          if (abort) begin
+          end else if (\$26 ) begin
+          end else if (\$28 ) begin
+          end else if (\$30 ) begin
+            if (frame_cds) begin
+            end else if (\$36 ) begin
+              \$125  = 5'h00;
+            end
+          end
+      3'h5:
+          if (abort) begin
+          end else if (\$46 ) begin
+          end else if (\$47 ) begin
+          end else if (frame_end) begin
+            \$125  = \$48 [4:0];
+          end
+    endcase
+    if (rst) begin
+      \$125  = 5'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    send__load_header = 1'h0;
+    casez (access_fsm_state)
+      3'h0:
+          if (start) begin
+            (* full_case = 32'd1 *)
+            if (\$58 ) begin
+            end else begin
+              send__load_header = 1'h1;
+            end
+          end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    send__source = 3'h0;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          (* full_case = 32'd1 *)
+          if (\$61 ) begin
+            send__source = 3'h4;
+          end else begin
+            send__source = 3'h2;
+          end
+      3'h4:
+          if (\$80 ) begin
+            send__source = 3'h1;
+          end else if (\$84 ) begin
+            send__source = 3'h3;
+          end else if (\$88 ) begin
+            send__source = 3'h4;
+          end
+      3'h5:
+          send__source = 3'h1;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    send__crc_bit = 2'h0;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          if (\$61 ) begin
+            send__crc_bit = step[1:0];
+          end
+      3'h4:
+          if (\$80 ) begin
+          end else if (\$84 ) begin
+          end else if (\$88 ) begin
+            send__crc_bit = \$89 [1:0];
+          end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    send__shift_header = 1'h0;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          if (abort) begin
+          end else if (\$65 ) begin
+          end else if (\$67 ) begin
+          end else if (\$71 ) begin
+          end else if (\$75 ) begin
+          end else if (frame_end) begin
+            send__shift_header = 1'h1;
+          end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    send__crc_start = 1'h0;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          if (abort) begin
+          end else if (\$65 ) begin
+          end else if (\$67 ) begin
+          end else if (\$71 ) begin
+          end else if (\$75 ) begin
+          end else if (frame_end) begin
+            send__crc_start = \$76 ;
+          end
+      3'h4:
+          if (abort) begin
+          end else if (\$95 ) begin
+          end else if (\$97 ) begin
+            (* full_case = 32'd1 *)
+            if (\$104 ) begin
+            end else begin
+              send__crc_start = 1'h1;
+            end
+          end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    send__crc_valid = 1'h0;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          if (abort) begin
+          end else if (\$65 ) begin
+          end else if (\$67 ) begin
+          end else if (\$71 ) begin
+          end else if (\$75 ) begin
+          end else if (frame_end) begin
+            send__crc_valid = \$79 ;
+          end
+      3'h4:
+          send__crc_valid = \$93 ;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    send__load_byte = 1'h0;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h4:
+          if (abort) begin
+          end else if (\$95 ) begin
+          end else if (\$97 ) begin
+            (* full_case = 32'd1 *)
+            if (\$104 ) begin
+            end else begin
+              send__load_byte = 1'h1;
+            end
+          end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    send__shift_byte = 1'h0;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h4:
+          if (abort) begin
+          end else if (\$95 ) begin
+          end else if (\$97 ) begin
+          end else if (\$99 ) begin
+            send__shift_byte = 1'h1;
+          end else if (\$101 ) begin
+            send__shift_byte = 1'h1;
+          end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    check__take_data = 1'h0;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h4:
+          if (abort) begin
+          end else if (\$95 ) begin
+          end else if (\$97 ) begin
+          end else if (\$99 ) begin
+          end else if (\$101 ) begin
+            if (\$105 ) begin
+              check__take_data = 1'h1;
+            end
+          end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    check__first = 1'h0;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h4:
+          if (abort) begin
+          end else if (\$95 ) begin
+          end else if (\$97 ) begin
+          end else if (\$99 ) begin
+          end else if (\$101 ) begin
+            if (\$105 ) begin
+              check__first = \$106 ;
+            end
+          end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    check__take_crc = 1'h0;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h4:
+          if (abort) begin
+          end else if (\$95 ) begin
+          end else if (\$97 ) begin
+          end else if (\$99 ) begin
+          end else if (\$101 ) begin
+            (* full_case = 32'd1 *)
+            if (\$105 ) begin
+            end else begin
+              check__take_crc = 1'h1;
+            end
+          end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    store = 1'h0;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h4:
+          if (abort) begin
+          end else if (\$95 ) begin
+          end else if (\$97 ) begin
+          end else if (\$99 ) begin
+          end else if (\$101 ) begin
+          end else if (frame_end) begin
+            (* full_case = 32'd1 *)
+            if (\$107 ) begin
+            end else if (\$109 ) begin
+            end else begin
+              store = \$110 ;
+            end
+          end
+    endcase
+  end
+  assign \request.slave_id  = request[2:0];
+  assign \request.address  = request[9:3];
+  assign \request.count  = request[16:10];
+  assign \request.write  = request[17];
+  assign \result.status  = result[2:0];
+  assign \result.bytes_done  = result[9:3];
+  assign \req.slave_id  = req[2:0];
+  assign \req.address  = req[9:3];
+  assign \req.count  = req[16:10];
+  assign \req.write  = req[17];
+endmodule
+
+(* generator = "Amaranth" *)
 module \biss_master_wb.ch0.core.results (rst, report, valid, frame, report_frame, report_delay, done, valid_out, result, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$57  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$61  = 0;
   reg \$1 ;
   reg \$2 ;
   reg [160:0] \$3 ;
@@ -12208,21 +12632,21 @@ module \biss_master_wb.ch0.core.results (rst, report, valid, frame, report_frame
   always @(posedge clk)
     result <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
     \$1  = report;
     if (rst) begin
       \$1  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
     \$2  = valid;
     if (rst) begin
       \$2  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
     \$3  = result;
     if (report) begin
       \$3 [3:0] = frame[3:0];
@@ -12287,7 +12711,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_clear, arm, early, locked, delay, sample, level, slo);
-  reg \$auto$verilog_backend.cc:2355:dump_module$58  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$62  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -12525,7 +12949,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_
     .stage1(level)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
     \$63  = level;
     if (receiver_clear) begin
       \$63  = 1'h1;
@@ -12535,7 +12959,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
     \$64  = mid_delay;
     if (odd) begin
       \$64  = \$8 [12:0];
@@ -12560,7 +12984,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
     \$65  = mid_slot;
     (* full_case = 32'd1 *)
     if (odd) begin
@@ -12587,7 +13011,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
     \$66  = \$10 ;
     casez (sampler_fsm_state)
       2'h0:
@@ -12609,7 +13033,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
     \$67  = elapsed;
     casez (sampler_fsm_state)
       2'h0:
@@ -12633,7 +13057,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
     \$68  = early;
     casez (sampler_fsm_state)
       2'h0:
@@ -12649,7 +13073,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
     \$69  = locked;
     casez (sampler_fsm_state)
       2'h0:
@@ -12675,7 +13099,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
     \$70  = gap;
     casez (sampler_fsm_state)
       2'h0:
@@ -12706,7 +13130,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
     \$71  = sampler_fsm_state;
     casez (sampler_fsm_state)
       2'h0:
@@ -12737,7 +13161,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
     \$72  = slot_left;
     casez (sampler_fsm_state)
       2'h0:
@@ -12787,7 +13211,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
     \$73  = slot_zero;
     casez (sampler_fsm_state)
       2'h0:
@@ -12837,7 +13261,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
     \$74  = vote1;
     casez (sampler_fsm_state)
       2'h0:
@@ -12867,7 +13291,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
     \$75  = vote2;
     casez (sampler_fsm_state)
       2'h0:
@@ -12895,7 +13319,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
     \$76  = first_slot;
     casez (sampler_fsm_state)
       2'h0:
@@ -12921,7 +13345,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
     \$77  = delay;
     casez (sampler_fsm_state)
       2'h0:
@@ -12944,7 +13368,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
     \$78  = phase;
     casez (sampler_fsm_state)
       2'h0:
@@ -12984,7 +13408,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
     sample = \$44 ;
     casez (sampler_fsm_state)
       2'h0:
@@ -13002,7 +13426,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
     decided = 1'h0;
     casez (sampler_fsm_state)
       2'h0:
@@ -13052,7 +13476,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch0.core.scheduler (rst, trigger, periodic, request, overrun, start, abort, period, idle, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$59  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$63  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -13136,7 +13560,7 @@ module \biss_master_wb.ch0.core.scheduler (rst, trigger, periodic, request, over
   always @(posedge clk)
     period_start <= \$28 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$27  = 24'h000001;
@@ -13148,7 +13572,7 @@ module \biss_master_wb.ch0.core.scheduler (rst, trigger, periodic, request, over
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$28  = 1'h1;
@@ -13163,7 +13587,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch0.core.sign_of_life (rst, \port$1199$0 , load, \repeat , skip, check, resync, lc, is_zero, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$60  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$64  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -13243,7 +13667,7 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, \port$1199$0 , load, \repeat 
   always @(posedge clk)
     synced <= \$21 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     \$16  = is_zero;
     if (load) begin
       \$16  = \$1 ;
@@ -13253,7 +13677,7 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, \port$1199$0 , load, \repeat 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     \$17  = is_last;
     if (load) begin
       \$17  = \$2 ;
@@ -13263,7 +13687,7 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, \port$1199$0 , load, \repeat 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     \$18  = is_expected;
     if (load) begin
       \$18  = \$3 ;
@@ -13273,7 +13697,7 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, \port$1199$0 , load, \repeat 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     \$19  = last;
     if (\$5 ) begin
       \$19  = lc;
@@ -13283,7 +13707,7 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, \port$1199$0 , load, \repeat 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     \$20  = expected;
     if (\$5 ) begin
       \$20  = \$8 [5:0];
@@ -13293,7 +13717,7 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, \port$1199$0 , load, \repeat 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     \$21  = synced;
     if (\$5 ) begin
       \$21  = 1'h1;
@@ -13311,7 +13735,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch0.core.spw_check (rst, bits, \tolerance$8 , spw, cpw_top, match, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$61  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$65  = 0;
   wire [40:0] \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -13516,28 +13940,28 @@ module \biss_master_wb.ch0.core.spw_check (rst, bits, \tolerance$8 , spw, cpw_to
   assign \$7  = bits > 3'h5;
   assign \$8  = bits > 3'h6;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     \$88  = \$42 ;
     if (rst) begin
       \$88  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     \$89  = \$84 ;
     if (rst) begin
       \$89  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     \$90  = \tolerance$8 ;
     if (rst) begin
       \$90  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     \$91  = \$87 ;
     if (rst) begin
       \$91  = 1'h0;
@@ -13547,7 +13971,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch0.core.time_base (rst, first_rise, first_rise_time, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$62  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$66  = 0;
   wire [32:0] \$1 ;
   reg [31:0] \$2 ;
   reg [31:0] \$3 ;
@@ -13566,14 +13990,14 @@ module \biss_master_wb.ch0.core.time_base (rst, first_rise, first_rise_time, clk
   always @(posedge clk)
     first_rise_time <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$2  = \$1 [31:0];
     if (rst) begin
       \$2  = 32'd0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$3  = first_rise_time;
     if (first_rise) begin
       \$3  = now;
@@ -13586,7 +14010,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch0.core.timers (rst, restart, ma_busy, break_time, timeout_live, ack_limit, timeout_limit, delay_limit, no_start_limit, clear, in_clock, slo_stuck, slo_stuck_live, break_over, ack_expired, no_start_expired, delay_over, delay, slo, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$63  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$67  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -13724,7 +14148,7 @@ module \biss_master_wb.ch0.core.timers (rst, restart, ma_busy, break_time, timeo
   always @(posedge clk)
     delay_over <= \$43 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
     \$36  = slo_low_time_p1;
     if (\$1 ) begin
       \$36  = 25'h0000001;
@@ -13736,49 +14160,49 @@ module \biss_master_wb.ch0.core.timers (rst, restart, ma_busy, break_time, timeo
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
     \$37  = \$8 ;
     if (rst) begin
       \$37  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
     \$38  = \$16 ;
     if (rst) begin
       \$38  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
     \$39  = \$20 [24:0];
     if (rst) begin
       \$39  = 25'h0000001;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
     \$40  = \$26 ;
     if (rst) begin
       \$40  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
     \$41  = \$30 ;
     if (rst) begin
       \$41  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
     \$42  = \$34 ;
     if (rst) begin
       \$42  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
     \$43  = \$35 ;
     if (rst) begin
       \$43  = 1'h0;
@@ -13788,7 +14212,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch0.core.verdict (lc_skip_seen, \port$1599$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
-  reg \$auto$verilog_backend.cc:2355:dump_module$64  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$68  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -13970,7 +14394,7 @@ module \biss_master_wb.ch0.core.verdict (lc_skip_seen, \port$1599$0 , lc_check, 
   assign \$29  = ~ { \$2 , crc_ok[0] };
   assign crc_error = report_frame ? \$29  : 2'h0;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     (* full_case = 32'd1 *)
     if (\$13 ) begin
       frame_status = 4'h3;
@@ -14013,8 +14437,8 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1 (ca_wbuf_data, slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__ca_busy, regs__ca_rbuf_data, start, abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time
 , cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, regs__done_count
-, ma, regs__done, \port$4342$0 , \port$4349$0 , regs__ca_done, \port$4477$0 , ca_wbuf_addr);
-  reg \$auto$verilog_backend.cc:2355:dump_module$65  = 0;
+, ma, regs__done, \port$4402$0 , \port$4409$0 , regs__ca_done, \port$4523$0 , ca_wbuf_addr);
+  reg \$auto$verilog_backend.cc:2355:dump_module$69  = 0;
   wire \$1 ;
   wire [16:0] \$2 ;
   reg [15:0] \$3 ;
@@ -14137,12 +14561,12 @@ module \biss_master_wb.ch1 (ca_wbuf_data, slo, clk, rst, \trigger$161 , ca_wbuf_
   wire \ma$164 ;
   input periodic;
   wire periodic;
-  output [160:0] \port$4342$0 ;
-  wire [160:0] \port$4342$0 ;
-  output [287:0] \port$4349$0 ;
-  wire [287:0] \port$4349$0 ;
-  output [9:0] \port$4477$0 ;
-  wire [9:0] \port$4477$0 ;
+  output [160:0] \port$4402$0 ;
+  wire [160:0] \port$4402$0 ;
+  output [287:0] \port$4409$0 ;
+  wire [287:0] \port$4409$0 ;
+  output [9:0] \port$4523$0 ;
+  wire [9:0] \port$4523$0 ;
   wire regs__abort_cycle;
   output regs__busy;
   wire regs__busy;
@@ -14337,7 +14761,7 @@ module \biss_master_wb.ch1 (ca_wbuf_data, slo, clk, rst, \trigger$161 , ca_wbuf_
     .\valid$242 (valid)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     \$3  = regs__done_count;
     if (regs__done) begin
       \$3  = \$2 [15:0];
@@ -14468,9 +14892,9 @@ module \biss_master_wb.ch1 (ca_wbuf_data, slo, clk, rst, \trigger$161 , ca_wbuf_
   assign regs__ca_rbuf_en = ca_rbuf_en;
   assign \ma$164  = ma;
   assign \slo$166  = slo;
-  assign \port$4342$0  = \$4 ;
-  assign \port$4349$0  = \$5 ;
-  assign \port$4477$0  = \$6 ;
+  assign \port$4402$0  = \$4 ;
+  assign \port$4409$0  = \$5 ;
+  assign \port$4523$0  = \$6 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -15253,13 +15677,13 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
     .frame_cds(cds),
     .frame_end(report),
     .frame_ok(valid),
-    .host_read__addr(ca_wbuf_addr),
-    .host_read__en(rbuf_en),
+    .rbuf_addr(ca_wbuf_addr),
     .rbuf_data(ca_rbuf_data),
+    .rbuf_en(rbuf_en),
     .request(\request$173 ),
     .result(result),
     .rst(rst),
-    .\start$44 (\start$185 ),
+    .start(\start$185 ),
     .wbuf(wbuf)
   );
   \biss_master_wb.ch1.core.results  results (
@@ -15306,7 +15730,7 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$2542$0 (\bit ),
+    .\port$2566$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -15363,7 +15787,7 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
     .lc_skip_seen(lc_skip_seen),
     .lc_zero(lc_zero),
     .lc_zero_seen(lc_zero_seen),
-    .\port$2942$0 (\$12 ),
+    .\port$2966$0 (\$12 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -15745,7 +16169,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1.core.config (rst, word_count, live, ok, cycle, ack_limit, timeout_limit, delay_limit, no_start_limit, idle, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$66  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$70  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -15926,21 +16350,21 @@ module \biss_master_wb.ch1.core.config (rst, word_count, live, ok, cycle, ack_li
   always @(posedge clk)
     delay_limit <= \$46 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     \$47  = \$41 ;
     if (rst) begin
       \$47  = 25'h0000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     \$42  = \$34 ;
     if (rst) begin
       \$42  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     \$43  = cycle;
     if (idle) begin
       \$43  = live;
@@ -15950,7 +16374,7 @@ module \biss_master_wb.ch1.core.config (rst, word_count, live, ok, cycle, ack_li
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     \$44  = ack_limit;
     if (idle) begin
       \$44  = \$36 ;
@@ -15960,7 +16384,7 @@ module \biss_master_wb.ch1.core.config (rst, word_count, live, ok, cycle, ack_li
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     \$45  = timeout_limit;
     if (idle) begin
       \$45  = \$38 ;
@@ -15970,7 +16394,7 @@ module \biss_master_wb.ch1.core.config (rst, word_count, live, ok, cycle, ack_li
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     \$46  = delay_limit;
     if (idle) begin
       \$46  = \$40 ;
@@ -16024,7 +16448,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_doubtful, abort, config_ok, end_check, cdm_cycle, idle, receiver_clear, resync, timer_clear, fault, fault_status, faults, ma_run, in_clock, ma_hold, report_frame, report_delay, slo_stuck
 , slo_stuck_live, break_over, ack_expired, no_start_expired, delay_over, ma_arm, ma_busy, ma_held, ma_enough, early, locked, slo, frame_done, stopped, slots_full, started, stop_bit, cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$67  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$71  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -16313,7 +16737,7 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
   assign \$12  = \$11  & ack_expired;
   assign \$13  = ~ locked_seen;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
     \$79  = cdm_cycle;
     if (idle) begin
       \$79  = cdm;
@@ -16323,14 +16747,14 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
     \$80  = idle;
     if (rst) begin
       \$80  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
     \$81  = cycle_fsm_state;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -16427,7 +16851,7 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
     \$82  = idle;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -16524,7 +16948,7 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
     \$83  = receiver_clear;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -16621,7 +17045,7 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
     \$84  = armed;
     casez (cycle_fsm_state)
       3'h0:
@@ -16640,7 +17064,7 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
     \$85  = locked_seen;
     casez (cycle_fsm_state)
       3'h0:
@@ -16659,7 +17083,7 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
     \$86  = pause;
     casez (cycle_fsm_state)
       3'h0:
@@ -16679,7 +17103,7 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
     resync = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -16687,7 +17111,7 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
     timer_clear = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -16734,7 +17158,7 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
     fault = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -16789,7 +17213,7 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
     fault_status = 4'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -16844,7 +17268,7 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
     faults = 7'h00;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -16899,7 +17323,7 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
     ma_run = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -16915,7 +17339,7 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
     in_clock = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -16929,7 +17353,7 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
     ma_hold = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -16952,7 +17376,7 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
     report_frame = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -16983,7 +17407,7 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
     report_delay = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -17348,222 +17772,6 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1.core.counters.count_aborted (rst, clear, inc, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$68  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.counters.count_ca_aborted (rst, clear, inc, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$69  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.counters.count_ca_crc4_error (rst, clear, inc, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$70  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.counters.count_ca_data_fault (rst, clear, inc, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$71  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.counters.count_ca_no_answer (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$72  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -17617,7 +17825,7 @@ module \biss_master_wb.ch1.core.counters.count_ca_no_answer (rst, clear, inc, co
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.counters.count_ca_refused (rst, clear, inc, count, clk);
+module \biss_master_wb.ch1.core.counters.count_ca_aborted (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$73  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -17671,7 +17879,7 @@ module \biss_master_wb.ch1.core.counters.count_ca_refused (rst, clear, inc, coun
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.counters.count_crc_word0 (rst, clear, inc, count, clk);
+module \biss_master_wb.ch1.core.counters.count_ca_crc4_error (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$74  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -17725,7 +17933,7 @@ module \biss_master_wb.ch1.core.counters.count_crc_word0 (rst, clear, inc, count
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.counters.count_crc_word1 (rst, clear, inc, count, clk);
+module \biss_master_wb.ch1.core.counters.count_ca_data_fault (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$75  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -17779,7 +17987,7 @@ module \biss_master_wb.ch1.core.counters.count_crc_word1 (rst, clear, inc, count
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.counters.count_delay_range (rst, clear, inc, count, clk);
+module \biss_master_wb.ch1.core.counters.count_ca_no_answer (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$76  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -17833,7 +18041,7 @@ module \biss_master_wb.ch1.core.counters.count_delay_range (rst, clear, inc, cou
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.counters.count_lc_repeat (rst, clear, inc, count, clk);
+module \biss_master_wb.ch1.core.counters.count_ca_refused (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$77  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -17887,7 +18095,7 @@ module \biss_master_wb.ch1.core.counters.count_lc_repeat (rst, clear, inc, count
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.counters.count_lc_skip (rst, clear, inc, count, clk);
+module \biss_master_wb.ch1.core.counters.count_crc_word0 (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$78  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -17941,7 +18149,7 @@ module \biss_master_wb.ch1.core.counters.count_lc_skip (rst, clear, inc, count, 
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.counters.count_lc_zero (rst, clear, inc, count, clk);
+module \biss_master_wb.ch1.core.counters.count_crc_word1 (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$79  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -17995,7 +18203,7 @@ module \biss_master_wb.ch1.core.counters.count_lc_zero (rst, clear, inc, count, 
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.counters.count_no_ack (rst, clear, inc, count, clk);
+module \biss_master_wb.ch1.core.counters.count_delay_range (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$80  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -18049,7 +18257,7 @@ module \biss_master_wb.ch1.core.counters.count_no_ack (rst, clear, inc, count, c
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.counters.count_no_start (rst, clear, inc, count, clk);
+module \biss_master_wb.ch1.core.counters.count_lc_repeat (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$81  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -18103,7 +18311,7 @@ module \biss_master_wb.ch1.core.counters.count_no_start (rst, clear, inc, count,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.counters.count_no_stop (rst, clear, inc, count, clk);
+module \biss_master_wb.ch1.core.counters.count_lc_skip (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$82  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -18157,7 +18365,7 @@ module \biss_master_wb.ch1.core.counters.count_no_stop (rst, clear, inc, count, 
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.counters.count_overrun (rst, clear, inc, count, clk);
+module \biss_master_wb.ch1.core.counters.count_lc_zero (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$83  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -18211,7 +18419,7 @@ module \biss_master_wb.ch1.core.counters.count_overrun (rst, clear, inc, count, 
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.counters.count_slo_stuck_low (rst, clear, inc, count, clk);
+module \biss_master_wb.ch1.core.counters.count_no_ack (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$84  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -18265,7 +18473,7 @@ module \biss_master_wb.ch1.core.counters.count_slo_stuck_low (rst, clear, inc, c
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.counters.count_spw_mismatch (rst, clear, inc, count, clk);
+module \biss_master_wb.ch1.core.counters.count_no_start (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$85  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -18319,9 +18527,225 @@ module \biss_master_wb.ch1.core.counters.count_spw_mismatch (rst, clear, inc, co
 endmodule
 
 (* generator = "Amaranth" *)
+module \biss_master_wb.ch1.core.counters.count_no_stop (rst, clear, inc, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$86  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_wb.ch1.core.counters.count_overrun (rst, clear, inc, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$87  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$87 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$87 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_wb.ch1.core.counters.count_slo_stuck_low (rst, clear, inc, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$88  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_wb.ch1.core.counters.count_spw_mismatch (rst, clear, inc, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$89  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$89 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$89 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
 module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words, receiver_clear, sample, done, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1, lc, cpw_top, crc_ok
 , clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$86  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$90  = 0;
   wire [6:0] \$1 ;
   wire [1:0] \$10 ;
   reg [2:0] \$100 ;
@@ -18704,7 +19128,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     .valid(\valid$52 )
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
     (* full_case = 32'd1 *)
     casez (words[6])
       1'h0:
@@ -18714,7 +19138,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -18728,7 +19152,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
     (* full_case = 32'd1 *)
     casez (words[9:6])
       4'h0:
@@ -18766,7 +19190,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -18780,7 +19204,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
     (* full_case = 32'd1 *)
     casez (words[16])
       1'h0:
@@ -18790,7 +19214,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
     (* full_case = 32'd1 *)
     casez (words[17:16])
       2'h0:
@@ -18804,7 +19228,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:16])
       4'h0:
@@ -18842,7 +19266,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
     (* full_case = 32'd1 *)
     casez (words[17:16])
       2'h0:
@@ -18856,7 +19280,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
     \$94  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -18880,7 +19304,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
     \$95  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -18902,7 +19326,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
     \$96  = slots;
     if (\$34 ) begin
       \$96  = \$35 [15:0];
@@ -18915,7 +19339,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
     \$97  = slots_full;
     if (\$34 ) begin
       \$97  = \$36 ;
@@ -18928,7 +19352,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
     \$98  = started;
     casez (decoder_fsm_state)
       3'h0:
@@ -18944,7 +19368,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
     \$99  = start_slot;
     casez (decoder_fsm_state)
       3'h0:
@@ -18960,7 +19384,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
     \$100  = decoder_fsm_state;
     casez (decoder_fsm_state)
       3'h0:
@@ -18992,7 +19416,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
     \$101  = cds;
     casez (decoder_fsm_state)
       3'h0:
@@ -19010,7 +19434,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
     \$102  = idx;
     casez (decoder_fsm_state)
       3'h0:
@@ -19035,7 +19459,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
     \$103  = in_data;
     casez (decoder_fsm_state)
       3'h0:
@@ -19060,7 +19484,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
     \$104  = in_lc;
     casez (decoder_fsm_state)
       3'h0:
@@ -19085,7 +19509,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
     \$105  = in_top;
     casez (decoder_fsm_state)
       3'h0:
@@ -19110,7 +19534,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
     \$106  = word;
     casez (decoder_fsm_state)
       3'h0:
@@ -19138,7 +19562,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
     \$107  = stop_bit;
     casez (decoder_fsm_state)
       3'h0:
@@ -19160,7 +19584,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
     \$108  = data0;
     if (\$58 ) begin
       \$108  = { data0[53:0], \bit  };
@@ -19173,7 +19597,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
     \$109  = ne;
     if (\$59 ) begin
       \$109 [0] = 1'h1;
@@ -19193,7 +19617,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
     \$110  = nw;
     if (\$59 ) begin
       \$110 [0] = 1'h1;
@@ -19215,7 +19639,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
     \$111  = data1;
     if (\$70 ) begin
       \$111  = { data1[38:0], \bit  };
@@ -19228,7 +19652,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
     \$112  = lc;
     if (lc_load) begin
       \$112  = { lc[4:0], \bit  };
@@ -19241,7 +19665,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
     \$113  = cpw_top;
     if (\$80 ) begin
       \$113  = { cpw_top[38:0], \bit  };
@@ -19254,7 +19678,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
     in_word = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -19291,7 +19715,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1.core.decoder.crc0 (rst, \bit , start, valid, kind, receiver_clear, ok, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$87  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$91  = 0;
   wire [5:0] \$1 ;
   wire \$10 ;
   wire [5:0] \$11 ;
@@ -19385,7 +19809,7 @@ module \biss_master_wb.ch1.core.decoder.crc0 (rst, \bit , start, valid, kind, re
   assign \$auto$rtlil.cc:2739:Not$12  = ~ { crc16_reg[14], crc16_reg[11], crc16_reg[6:5], crc16_reg[3:2], 1'h0 };
   assign \$auto$rtlil.cc:2739:Not$10  = ~ { crc6_reg[0], 1'h0 };
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$87 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
     \$31  = crc6_reg;
     if (valid) begin
       \$31  = \$5 ;
@@ -19400,7 +19824,7 @@ module \biss_master_wb.ch1.core.decoder.crc0 (rst, \bit , start, valid, kind, re
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$87 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
     \$32  = crc6_match;
     if (valid) begin
       \$32  = \$15 ;
@@ -19415,7 +19839,7 @@ module \biss_master_wb.ch1.core.decoder.crc0 (rst, \bit , start, valid, kind, re
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$87 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
     \$33  = crc16_reg;
     if (valid) begin
       \$33  = \$20 ;
@@ -19430,7 +19854,7 @@ module \biss_master_wb.ch1.core.decoder.crc0 (rst, \bit , start, valid, kind, re
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$87 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
     \$34  = crc16_match;
     if (valid) begin
       \$34  = \$30 ;
@@ -19445,7 +19869,7 @@ module \biss_master_wb.ch1.core.decoder.crc0 (rst, \bit , start, valid, kind, re
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$87 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
     ok = 1'h0;
     casez (kind)
       2'h0:
@@ -19466,7 +19890,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1.core.decoder.crc1 (rst, \bit , start, valid, kind, receiver_clear, ok, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$88  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$92  = 0;
   wire [5:0] \$1 ;
   wire \$10 ;
   wire [5:0] \$11 ;
@@ -19560,7 +19984,7 @@ module \biss_master_wb.ch1.core.decoder.crc1 (rst, \bit , start, valid, kind, re
   assign \$auto$rtlil.cc:2739:Not$6  = ~ { crc6_reg[0], 1'h0 };
   assign \$auto$rtlil.cc:2739:Not$8  = ~ { crc16_reg[14], crc16_reg[11], crc16_reg[6:5], crc16_reg[3:2], 1'h0 };
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     \$31  = crc6_reg;
     if (valid) begin
       \$31  = \$5 ;
@@ -19575,7 +19999,7 @@ module \biss_master_wb.ch1.core.decoder.crc1 (rst, \bit , start, valid, kind, re
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     \$32  = crc6_match;
     if (valid) begin
       \$32  = \$15 ;
@@ -19590,7 +20014,7 @@ module \biss_master_wb.ch1.core.decoder.crc1 (rst, \bit , start, valid, kind, re
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     \$33  = crc16_reg;
     if (valid) begin
       \$33  = \$20 ;
@@ -19605,7 +20029,7 @@ module \biss_master_wb.ch1.core.decoder.crc1 (rst, \bit , start, valid, kind, re
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     \$34  = crc16_match;
     if (valid) begin
       \$34  = \$30 ;
@@ -19620,7 +20044,7 @@ module \biss_master_wb.ch1.core.decoder.crc1 (rst, \bit , start, valid, kind, re
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     ok = 1'h0;
     casez (kind)
       2'h0:
@@ -19641,7 +20065,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1.core.ma_clock (rst, \clocking , half_period, run, hold, first_rise, second_rise, ma, rises, busy, held, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$89  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$93  = 0;
   wire [16:0] \$1 ;
   wire \$10 ;
   wire [16:0] \$11 ;
@@ -19766,7 +20190,7 @@ module \biss_master_wb.ch1.core.ma_clock (rst, \clocking , half_period, run, hol
   always @(posedge clk)
     released <= \$42 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$89 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     \$34  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -19781,7 +20205,7 @@ module \biss_master_wb.ch1.core.ma_clock (rst, \clocking , half_period, run, hol
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$89 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     \$35  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -19796,7 +20220,7 @@ module \biss_master_wb.ch1.core.ma_clock (rst, \clocking , half_period, run, hol
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$89 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     \$36  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -19811,7 +20235,7 @@ module \biss_master_wb.ch1.core.ma_clock (rst, \clocking , half_period, run, hol
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$89 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     \$37  = ma;
     casez (ma_fsm_state)
       3'h0:
@@ -19840,7 +20264,7 @@ module \biss_master_wb.ch1.core.ma_clock (rst, \clocking , half_period, run, hol
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$89 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     \$38  = phase_left;
     casez (ma_fsm_state)
       3'h0:
@@ -19882,7 +20306,7 @@ module \biss_master_wb.ch1.core.ma_clock (rst, \clocking , half_period, run, hol
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$89 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     \$39  = last_clock;
     casez (ma_fsm_state)
       3'h0:
@@ -19924,7 +20348,7 @@ module \biss_master_wb.ch1.core.ma_clock (rst, \clocking , half_period, run, hol
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$89 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     \$40  = rises;
     casez (ma_fsm_state)
       3'h0:
@@ -19943,7 +20367,7 @@ module \biss_master_wb.ch1.core.ma_clock (rst, \clocking , half_period, run, hol
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$89 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     \$41  = ma_fsm_state;
     casez (ma_fsm_state)
       3'h0:
@@ -19979,7 +20403,7 @@ module \biss_master_wb.ch1.core.ma_clock (rst, \clocking , half_period, run, hol
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$89 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     \$42  = released;
     casez (ma_fsm_state)
       3'h0:
@@ -20003,7 +20427,7 @@ module \biss_master_wb.ch1.core.ma_clock (rst, \clocking , half_period, run, hol
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$89 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     busy = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -20019,7 +20443,7 @@ module \biss_master_wb.ch1.core.ma_clock (rst, \clocking , half_period, run, hol
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$89 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     held = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -20036,7 +20460,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1.core.ma_stop (rst, words, w1_enable, clear, rises, enough, \started$10 , start_slot, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$90  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$94  = 0;
   reg [7:0] \$1 ;
   reg [7:0] \$10 ;
   wire [8:0] \$11 ;
@@ -20117,7 +20541,7 @@ module \biss_master_wb.ch1.core.ma_stop (rst, words, w1_enable, clear, rises, en
   always @(posedge clk)
     word1_len <= \$17 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$94 ) begin end
     (* full_case = 32'd1 *)
     casez (words[9:6])
       4'h0:
@@ -20155,7 +20579,7 @@ module \biss_master_wb.ch1.core.ma_stop (rst, words, w1_enable, clear, rises, en
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$94 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:16])
       4'h0:
@@ -20193,42 +20617,42 @@ module \biss_master_wb.ch1.core.ma_stop (rst, words, w1_enable, clear, rises, en
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$94 ) begin end
     \$12  = \$2 [7:0];
     if (rst) begin
       \$12  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$94 ) begin end
     \$13  = \$4 ;
     if (rst) begin
       \$13  = 9'h000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$94 ) begin end
     \$14  = \$5 ;
     if (rst) begin
       \$14  = 17'h00000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$94 ) begin end
     \$15  = \started$10 ;
     if (rst) begin
       \$15  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$94 ) begin end
     \$16  = \$9 ;
     if (rst) begin
       \$16  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$94 ) begin end
     \$17  = \$11 [7:0];
     if (rst) begin
       \$17  = 8'h00;
@@ -20247,194 +20671,97 @@ module \biss_master_wb.ch1.core.ma_stop (rst, words, w1_enable, clear, rises, en
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.register_access (clk, rst, host_read__en, frame_end, frame_ok, busy, rbuf_data, \start$44 , abort, request, wbuf, frame_cdm, frame_cds, cdm, done, result, host_read__addr);
-  reg \$auto$verilog_backend.cc:2355:dump_module$91  = 0;
-  wire \$1 ;
-  wire \$10 ;
-  wire \$100 ;
-  wire \$101 ;
-  wire \$102 ;
-  wire \$103 ;
-  wire \$104 ;
-  wire \$105 ;
-  wire \$106 ;
-  wire \$107 ;
-  wire \$108 ;
-  wire \$109 ;
-  wire \$11 ;
-  wire [18:0] \$110 ;
-  wire [5:0] \$111 ;
-  wire \$112 ;
-  wire \$113 ;
-  wire \$114 ;
-  wire \$115 ;
-  wire \$116 ;
-  wire \$117 ;
-  wire \$118 ;
-  wire \$119 ;
-  wire \$12 ;
-  wire \$120 ;
-  wire \$121 ;
-  wire \$122 ;
-  wire \$123 ;
-  wire [7:0] \$124 ;
-  wire [7:0] \$125 ;
-  wire [8:0] \$126 ;
-  wire \$127 ;
-  wire [8:0] \$128 ;
-  wire [5:0] \$129 ;
-  wire \$13 ;
-  wire \$130 ;
-  wire \$131 ;
-  wire \$132 ;
-  wire \$133 ;
-  wire [6:0] \$134 ;
-  wire [6:0] \$135 ;
-  wire \$136 ;
-  wire [6:0] \$137 ;
-  wire \$138 ;
-  wire \$139 ;
-  wire \$14 ;
-  wire \$140 ;
-  wire [5:0] \$141 ;
-  wire \$142 ;
-  wire \$143 ;
-  wire \$144 ;
-  wire \$145 ;
-  wire \$146 ;
-  wire [4:0] \$147 ;
-  wire [4:0] \$148 ;
-  wire [4:0] \$149 ;
-  wire \$15 ;
-  wire [4:0] \$150 ;
-  wire \$151 ;
-  reg [3:0] \$152 ;
-  reg [3:0] \$153 ;
-  reg \$154 ;
-  reg [9:0] \$155 ;
-  reg [2:0] \$156 ;
-  reg [17:0] \$157 ;
-  reg [5:0] \$158 ;
-  reg [17:0] \$159 ;
-  wire \$16 ;
-  reg [4:0] \$160 ;
-  reg [2:0] \$161 ;
-  reg [7:0] \$162 ;
-  reg [7:0] \$163 ;
-  reg [4:0] \$164 ;
-  reg [7:0] \$165 ;
-  reg [2:0] \$166 ;
-  wire \$17 ;
-  wire \$18 ;
-  wire \$19 ;
-  wire \$2 ;
-  wire \$20 ;
-  wire \$21 ;
-  wire \$22 ;
-  wire \$23 ;
-  wire \$24 ;
-  wire \$25 ;
-  wire \$26 ;
-  wire \$27 ;
-  wire \$28 ;
-  wire \$29 ;
-  wire [5:0] \$291 ;
-  wire [5:0] \$294 ;
-  wire \$3 ;
-  wire \$30 ;
-  wire \$31 ;
-  wire \$32 ;
-  wire [5:0] \$33 ;
-  wire [1:0] \$34 ;
-  wire \$35 ;
-  wire \$36 ;
-  wire \$37 ;
-  wire \$38 ;
-  wire \$39 ;
-  wire [1:0] \$4 ;
-  wire \$40 ;
-  wire \$41 ;
-  wire \$42 ;
-  wire \$43 ;
-  wire \$44 ;
-  wire \$45 ;
-  wire \$46 ;
-  wire \$47 ;
-  wire \$48 ;
-  wire \$49 ;
-  wire \$5 ;
-  wire \$50 ;
-  wire \$51 ;
-  wire \$52 ;
-  wire \$53 ;
-  wire \$54 ;
-  wire \$55 ;
-  wire \$56 ;
-  wire \$57 ;
-  wire \$58 ;
-  wire \$59 ;
-  wire \$6 ;
-  wire \$60 ;
-  wire [3:0] \$61 ;
-  wire \$62 ;
-  wire \$63 ;
-  wire \$64 ;
-  wire \$65 ;
-  wire \$66 ;
-  wire \$67 ;
-  wire \$68 ;
-  wire \$69 ;
-  wire \$7 ;
-  wire [4:0] \$70 ;
-  wire [4:0] \$71 ;
-  wire [4:0] \$72 ;
-  wire \$73 ;
-  wire \$74 ;
-  wire \$75 ;
-  wire [4:0] \$76 ;
-  wire [4:0] \$77 ;
-  wire [4:0] \$78 ;
-  wire \$79 ;
-  wire \$8 ;
-  wire \$80 ;
-  wire \$81 ;
-  wire [7:0] \$82 ;
-  wire \$83 ;
-  wire \$84 ;
-  wire \$85 ;
-  wire \$86 ;
-  wire \$87 ;
-  wire \$88 ;
-  wire \$89 ;
-  wire \$9 ;
-  wire \$90 ;
-  wire [4:0] \$91 ;
-  wire [4:0] \$92 ;
-  wire [4:0] \$93 ;
-  wire [4:0] \$94 ;
-  wire \$95 ;
-  wire \$96 ;
-  wire \$97 ;
-  wire \$98 ;
-  wire \$99 ;
+module \biss_master_wb.ch1.core.register_access (clk, rst, rbuf_en, frame_end, frame_ok, busy, rbuf_data, start, abort, request, wbuf, frame_cdm, frame_cds, done, result, cdm, rbuf_addr);
   input abort;
   wire abort;
-  reg [2:0] access_fsm_state = 3'h0;
+  wire \abort$5 ;
   output busy;
   wire busy;
-  reg [3:0] byte_received__addr;
-  reg [31:0] byte_received__data;
-  reg [3:0] byte_received__en;
+  wire \busy$7 ;
+  wire [7:0] \byte ;
+  wire [7:0] \byte$75 ;
+  wire [7:0] byte_received;
+  wire [7:0] byte_to_send;
   output cdm;
-  reg cdm;
+  wire cdm;
+  wire \cdm$56 ;
+  wire cds;
+  wire check__first;
+  wire check__take_crc;
+  wire check__take_data;
   input clk;
   wire clk;
-  wire [3:0] crc;
-  wire [3:0] \crc$31 ;
-  reg data;
-  reg \data$29 ;
+  wire [1:0] control__crc_bit;
+  wire control__crc_start;
+  wire control__crc_valid;
+  wire control__first;
+  wire control__load_byte;
+  wire control__load_header;
+  wire control__shift_byte;
+  wire control__shift_header;
+  (* enum_base_type = "CdmSource" *)
+  (* enum_value_000 = "ZERO" *)
+  (* enum_value_001 = "ONE" *)
+  (* enum_value_010 = "HEADER" *)
+  (* enum_value_011 = "DATA" *)
+  (* enum_value_100 = "CRC" *)
+  wire [2:0] control__source;
+  wire control__take_crc;
+  wire control__take_data;
+  wire crc_ok;
+  wire \crc_ok$67 ;
   output done;
-  reg done = 1'h0;
+  wire done;
+  wire \done$10 ;
+  wire echo_ok;
+  wire \echo_ok$69 ;
+  input frame_cdm;
+  wire frame_cdm;
+  wire \frame_cdm$27 ;
+  wire \frame_cdm$30 ;
+  input frame_cds;
+  wire frame_cds;
+  wire \frame_cds$32 ;
+  input frame_end;
+  wire frame_end;
+  wire \frame_end$23 ;
+  wire \frame_end$28 ;
+  input frame_ok;
+  wire frame_ok;
+  wire \frame_ok$25 ;
+  wire \frame_ok$29 ;
+  wire frames;
+  wire [5:0] index;
+  wire [5:0] \index$71 ;
+  input [3:0] rbuf_addr;
+  wire [3:0] rbuf_addr;
+  wire [3:0] \rbuf_addr$17 ;
+  output [31:0] rbuf_data;
+  wire [31:0] rbuf_data;
+  wire [31:0] \rbuf_data$21 ;
+  input rbuf_en;
+  wire rbuf_en;
+  wire \rbuf_en$19 ;
+  input [17:0] request;
+  wire [17:0] request;
+  wire [17:0] \request$1 ;
+  wire [6:0] \request$1.address ;
+  wire [6:0] \request$1.count ;
+  wire [2:0] \request$1.slave_id ;
+  wire \request$1.write ;
+  wire [17:0] \request$13 ;
+  wire [6:0] \request$13.address ;
+  wire [6:0] \request$13.count ;
+  wire [2:0] \request$13.slave_id ;
+  wire \request$13.write ;
+  wire [6:0] \request.address ;
+  wire [6:0] \request.count ;
+  wire [2:0] \request.slave_id ;
+  wire \request.write ;
+  output [9:0] result;
+  wire [9:0] result;
+  wire [9:0] \result$12 ;
+  wire [6:0] \result$12.bytes_done ;
   (* enum_base_type = "AccessStatus" *)
   (* enum_value_000 = "OK" *)
   (* enum_value_001 = "CRC4_ERROR" *)
@@ -20443,47 +20770,7 @@ module \biss_master_wb.ch1.core.register_access (clk, rst, host_read__en, frame_
   (* enum_value_100 = "ABORTED" *)
   (* enum_value_101 = "DATA_FAULT" *)
   (* enum_value_110 = "BAD_REQUEST" *)
-  reg [2:0] ending = 3'h0;
-  input frame_cdm;
-  wire frame_cdm;
-  input frame_cds;
-  wire frame_cds;
-  input frame_end;
-  wire frame_end;
-  input frame_ok;
-  wire frame_ok;
-  wire frames;
-  reg [7:0] got = 8'h00;
-  reg [2:0] got_crc = 3'h0;
-  reg [17:0] header = 18'h00000;
-  input [3:0] host_read__addr;
-  wire [3:0] host_read__addr;
-  wire [31:0] host_read__data;
-  input host_read__en;
-  wire host_read__en;
-  wire [3:0] host_write__addr;
-  wire [31:0] host_write__data;
-  wire [3:0] host_write__en;
-  reg [3:0] idle_run = 4'h0;
-  reg [3:0] idle_seen = 4'h0;
-  reg [5:0] index = 6'h00;
-  wire [3:0] rbuf_addr;
-  output [31:0] rbuf_data;
-  wire [31:0] rbuf_data;
-  wire rbuf_en;
-  reg [17:0] req = 18'h00000;
-  wire [6:0] \req.address ;
-  wire [6:0] \req.count ;
-  wire [2:0] \req.slave_id ;
-  wire \req.write ;
-  input [17:0] request;
-  wire [17:0] request;
-  wire [6:0] \request.address ;
-  wire [6:0] \request.count ;
-  wire [2:0] \request.slave_id ;
-  wire \request.write ;
-  output [9:0] result;
-  reg [9:0] result = 10'h000;
+  wire [2:0] \result$12.status ;
   wire [6:0] \result.bytes_done ;
   (* enum_base_type = "AccessStatus" *)
   (* enum_value_000 = "OK" *)
@@ -20496,16 +20783,220 @@ module \biss_master_wb.ch1.core.register_access (clk, rst, host_read__en, frame_
   wire [2:0] \result.status ;
   input rst;
   wire rst;
-  reg [7:0] sent = 8'h00;
-  reg start;
-  reg \start$27 ;
-  input \start$44 ;
-  wire \start$44 ;
-  reg [4:0] step = 5'h00;
-  reg [7:0] to_send = 8'h00;
-  reg valid;
-  reg \valid$28 ;
-  reg [4:0] waited = 5'h00;
+  wire run_enough;
+  wire \run_enough$34 ;
+  wire seen_enough;
+  wire \seen_enough$36 ;
+  wire [1:0] send__crc_bit;
+  wire send__crc_start;
+  wire send__crc_valid;
+  wire send__load_byte;
+  wire send__load_header;
+  wire send__shift_byte;
+  wire send__shift_header;
+  (* enum_base_type = "CdmSource" *)
+  (* enum_value_000 = "ZERO" *)
+  (* enum_value_001 = "ONE" *)
+  (* enum_value_010 = "HEADER" *)
+  (* enum_value_011 = "DATA" *)
+  (* enum_value_100 = "CRC" *)
+  wire [2:0] send__source;
+  wire [7:0] sent;
+  wire [7:0] \sent$65 ;
+  input start;
+  wire start;
+  wire \start$3 ;
+  wire store;
+  wire \store$73 ;
+  input [39:0] wbuf;
+  wire [39:0] wbuf;
+  wire [39:0] \wbuf$15 ;
+  wire [3:0] \wbuf$15.addr ;
+  wire [31:0] \wbuf$15.data ;
+  wire [3:0] \wbuf$15.en ;
+  wire [3:0] \wbuf.addr ;
+  wire [31:0] \wbuf.data ;
+  wire [3:0] \wbuf.en ;
+  \biss_master_wb.ch1.core.register_access.buffers  buffers (
+    .byte_received(byte_received),
+    .byte_to_send(\byte ),
+    .clk(clk),
+    .host_read__addr(rbuf_addr),
+    .host_read__en(rbuf_en),
+    .index(index),
+    .rbuf_data(rbuf_data),
+    .rst(rst),
+    .store(store),
+    .wbuf(wbuf)
+  );
+  \biss_master_wb.ch1.core.register_access.checker  \checker  (
+    .\byte (byte_received),
+    .cds(frame_cds),
+    .clk(clk),
+    .control__take_crc(control__take_crc),
+    .control__take_data(control__take_data),
+    .crc_ok(crc_ok),
+    .echo_ok(echo_ok),
+    .rst(rst),
+    .sent(sent),
+    .start(control__first)
+  );
+  \biss_master_wb.ch1.core.register_access.idle  idle (
+    .clk(clk),
+    .frame_cdm(frame_cdm),
+    .frame_end(frame_end),
+    .frame_ok(frame_ok),
+    .rst(rst),
+    .run_enough(run_enough),
+    .seen_enough(seen_enough)
+  );
+  \biss_master_wb.ch1.core.register_access.sender  sender (
+    .\byte (\byte ),
+    .cdm(cdm),
+    .clk(clk),
+    .control__crc_bit(control__crc_bit),
+    .control__load_byte(control__load_byte),
+    .control__load_header(control__load_header),
+    .control__shift_byte(control__shift_byte),
+    .control__shift_header(control__shift_header),
+    .control__source(control__source),
+    .request(request),
+    .rst(rst),
+    .sent(sent),
+    .start(control__crc_start),
+    .valid(control__crc_valid)
+  );
+  \biss_master_wb.ch1.core.register_access.sequencer  sequencer (
+    .abort(abort),
+    .busy(busy),
+    .check__first(control__first),
+    .check__take_crc(control__take_crc),
+    .check__take_data(control__take_data),
+    .clk(clk),
+    .crc_ok(crc_ok),
+    .done(done),
+    .echo_ok(echo_ok),
+    .frame_cdm(frame_cdm),
+    .frame_cds(frame_cds),
+    .frame_end(frame_end),
+    .frame_ok(frame_ok),
+    .index(index),
+    .request(request),
+    .result(result),
+    .rst(rst),
+    .run_enough(run_enough),
+    .seen_enough(seen_enough),
+    .send__crc_bit(control__crc_bit),
+    .send__crc_start(control__crc_start),
+    .send__crc_valid(control__crc_valid),
+    .send__load_byte(control__load_byte),
+    .send__load_header(control__load_header),
+    .send__shift_byte(control__shift_byte),
+    .send__shift_header(control__shift_header),
+    .send__source(control__source),
+    .start(start),
+    .store(store)
+  );
+  assign \request$1  = request;
+  assign \start$3  = start;
+  assign \abort$5  = abort;
+  assign \busy$7  = busy;
+  assign frames = busy;
+  assign \done$10  = done;
+  assign \result$12  = result;
+  assign \request$13  = request;
+  assign \wbuf$15  = wbuf;
+  assign \rbuf_addr$17  = rbuf_addr;
+  assign \rbuf_en$19  = rbuf_en;
+  assign \rbuf_data$21  = rbuf_data;
+  assign \frame_end$23  = frame_end;
+  assign \frame_ok$25  = frame_ok;
+  assign \frame_cdm$27  = frame_cdm;
+  assign \frame_end$28  = frame_end;
+  assign \frame_ok$29  = frame_ok;
+  assign \frame_cdm$30  = frame_cdm;
+  assign \frame_cds$32  = frame_cds;
+  assign \run_enough$34  = run_enough;
+  assign \seen_enough$36  = seen_enough;
+  assign send__crc_bit = control__crc_bit;
+  assign send__crc_start = control__crc_start;
+  assign send__crc_valid = control__crc_valid;
+  assign send__load_byte = control__load_byte;
+  assign send__load_header = control__load_header;
+  assign send__shift_byte = control__shift_byte;
+  assign send__shift_header = control__shift_header;
+  assign send__source = control__source;
+  assign byte_to_send = \byte ;
+  assign \cdm$56  = cdm;
+  assign check__first = control__first;
+  assign check__take_crc = control__take_crc;
+  assign check__take_data = control__take_data;
+  assign cds = frame_cds;
+  assign \sent$65  = sent;
+  assign \crc_ok$67  = crc_ok;
+  assign \echo_ok$69  = echo_ok;
+  assign \index$71  = index;
+  assign \store$73  = store;
+  assign \byte$75  = byte_received;
+  assign \request.slave_id  = request[2:0];
+  assign \request.address  = request[9:3];
+  assign \request.count  = request[16:10];
+  assign \request.write  = request[17];
+  assign \request$1.slave_id  = request[2:0];
+  assign \request$1.address  = request[9:3];
+  assign \request$1.count  = request[16:10];
+  assign \request$1.write  = request[17];
+  assign \result.status  = result[2:0];
+  assign \result.bytes_done  = result[9:3];
+  assign \result$12.status  = result[2:0];
+  assign \result$12.bytes_done  = result[9:3];
+  assign \request$13.slave_id  = request[2:0];
+  assign \request$13.address  = request[9:3];
+  assign \request$13.count  = request[16:10];
+  assign \request$13.write  = request[17];
+  assign \wbuf.addr  = wbuf[3:0];
+  assign \wbuf.data  = wbuf[35:4];
+  assign \wbuf.en  = wbuf[39:36];
+  assign \wbuf$15.addr  = wbuf[3:0];
+  assign \wbuf$15.data  = wbuf[35:4];
+  assign \wbuf$15.en  = wbuf[39:36];
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_wb.ch1.core.register_access.buffers (clk, rst, host_read__en, byte_to_send, rbuf_data, wbuf, index, store, byte_received, host_read__addr);
+  reg \$auto$verilog_backend.cc:2355:dump_module$95  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire \$3 ;
+  wire \$4 ;
+  wire [5:0] \$5 ;
+  input [7:0] byte_received;
+  wire [7:0] byte_received;
+  reg [3:0] byte_received__addr;
+  reg [31:0] byte_received__data;
+  reg [3:0] byte_received__en;
+  output [7:0] byte_to_send;
+  wire [7:0] byte_to_send;
+  input clk;
+  wire clk;
+  input [3:0] host_read__addr;
+  wire [3:0] host_read__addr;
+  wire [31:0] host_read__data;
+  input host_read__en;
+  wire host_read__en;
+  wire [3:0] host_write__addr;
+  wire [31:0] host_write__data;
+  wire [3:0] host_write__en;
+  input [5:0] index;
+  wire [5:0] index;
+  wire [3:0] rbuf_addr;
+  output [31:0] rbuf_data;
+  wire [31:0] rbuf_data;
+  wire rbuf_en;
+  input rst;
+  wire rst;
+  input store;
+  wire store;
   input [39:0] wbuf;
   wire [39:0] wbuf;
   wire [3:0] \wbuf.addr ;
@@ -20549,1059 +21040,151 @@ module \biss_master_wb.ch1.core.register_access (clk, rst, host_read__en, frame_
     end
   end
   assign rbuf_data = _0_;
-  reg [31:0] \wbuf$50  [15:0];
+  reg [31:0] \wbuf$21  [15:0];
   initial begin
-    \wbuf$50 [0] = 32'd0;
-    \wbuf$50 [1] = 32'd0;
-    \wbuf$50 [2] = 32'd0;
-    \wbuf$50 [3] = 32'd0;
-    \wbuf$50 [4] = 32'd0;
-    \wbuf$50 [5] = 32'd0;
-    \wbuf$50 [6] = 32'd0;
-    \wbuf$50 [7] = 32'd0;
-    \wbuf$50 [8] = 32'd0;
-    \wbuf$50 [9] = 32'd0;
-    \wbuf$50 [10] = 32'd0;
-    \wbuf$50 [11] = 32'd0;
-    \wbuf$50 [12] = 32'd0;
-    \wbuf$50 [13] = 32'd0;
-    \wbuf$50 [14] = 32'd0;
-    \wbuf$50 [15] = 32'd0;
+    \wbuf$21 [0] = 32'd0;
+    \wbuf$21 [1] = 32'd0;
+    \wbuf$21 [2] = 32'd0;
+    \wbuf$21 [3] = 32'd0;
+    \wbuf$21 [4] = 32'd0;
+    \wbuf$21 [5] = 32'd0;
+    \wbuf$21 [6] = 32'd0;
+    \wbuf$21 [7] = 32'd0;
+    \wbuf$21 [8] = 32'd0;
+    \wbuf$21 [9] = 32'd0;
+    \wbuf$21 [10] = 32'd0;
+    \wbuf$21 [11] = 32'd0;
+    \wbuf$21 [12] = 32'd0;
+    \wbuf$21 [13] = 32'd0;
+    \wbuf$21 [14] = 32'd0;
+    \wbuf$21 [15] = 32'd0;
   end
   always @(posedge clk) begin
     if (wbuf[36])
-      \wbuf$50 [wbuf[3:0]][7:0] <= wbuf[11:4];
+      \wbuf$21 [wbuf[3:0]][7:0] <= wbuf[11:4];
     if (wbuf[37])
-      \wbuf$50 [wbuf[3:0]][15:8] <= wbuf[19:12];
+      \wbuf$21 [wbuf[3:0]][15:8] <= wbuf[19:12];
     if (wbuf[38])
-      \wbuf$50 [wbuf[3:0]][23:16] <= wbuf[27:20];
+      \wbuf$21 [wbuf[3:0]][23:16] <= wbuf[27:20];
     if (wbuf[39])
-      \wbuf$50 [wbuf[3:0]][31:24] <= wbuf[35:28];
+      \wbuf$21 [wbuf[3:0]][31:24] <= wbuf[35:28];
   end
   reg [31:0] _1_;
   always @(posedge clk) begin
-    _1_ <= \wbuf$50 [index[5:2]];
+    _1_ <= \wbuf$21 [index[5:2]];
   end
   assign word_to_send__data = _1_;
-  assign \$1  = step >= 4'hc;
-  assign \$2  = step < 5'h10;
-  assign \$3  = \$1  & \$2 ;
-  assign \$4  = ~ step[1:0];
-  assign \$5  = crc >> \$4 ;
-  assign \$6  = \$3  ? \$5  : header[17];
-  assign \$7  = ! step;
-  assign \$8  = frame_end & \$7 ;
-  assign \$9  = ~ frame_cdm;
-  assign \$10  = \$8  & \$9 ;
-  assign \$11  = ~ frame_ok;
-  assign \$12  = frame_end & \$11 ;
-  assign \$13  = step == 1'h1;
-  assign \$14  = frame_end & \$13 ;
-  assign \$15  = ~ frame_cds;
-  assign \$16  = \$14  & \$15 ;
-  assign \$17  = step == 5'h11;
-  assign \$18  = frame_end & \$17 ;
-  assign \$19  = frame_cds == req[17];
-  assign \$20  = \$18  & \$19 ;
-  assign \$21  = ! step;
-  assign \$22  = step >= 1'h1;
-  assign \$23  = step <= 4'hb;
-  assign \$24  = \$22  & \$23 ;
-  assign \$25  = ! step;
-  assign \$26  = step >= 1'h1;
-  assign \$27  = step <= 4'h8;
-  assign \$28  = \$26  & \$27 ;
-  assign \$29  = step >= 4'h9;
-  assign \$30  = step <= 4'hc;
-  assign \$31  = \$29  & \$30 ;
-  assign \$32  = req[17] & to_send[7];
-  assign \$33  = step - 4'h9;
-  assign \$34  = ~ \$33 [1:0];
-  assign \$35  = crc >> \$34 ;
-  assign \$36  = req[17] & \$35 ;
-  assign \$37  = step >= 1'h1;
-  assign \$38  = frame_end & \$37 ;
-  assign \$39  = step <= 4'h8;
-  assign \$40  = \$38  & \$39 ;
-  assign \$41  = ~ frame_ok;
-  assign \$42  = frame_end & \$41 ;
-  assign \$43  = ! step;
-  assign \$44  = frame_end & \$43 ;
-  assign \$45  = step == 1'h1;
-  assign \$46  = frame_end & \$45 ;
-  assign \$47  = step < 4'hd;
-  assign \$48  = frame_end & \$47 ;
-  assign \$49  = ! index;
-  assign \$50  = \$49  ? req[17] : 1'h0;
-  assign \$51  = frame_cds != \$50 ;
-  assign \$52  = step <= 4'h9;
-  assign \$53  = step == 2'h2;
-  assign \$54  = { got_crc, frame_cds } != \crc$31 ;
-  assign \$55  = got != sent;
-  assign \$56  = req[17] & \$55 ;
-  assign \$57  = ! index[1:0];
-  assign \$58  = index[1:0] == 1'h1;
-  assign \$59  = index[1:0] == 2'h2;
-  assign \$60  = index[1:0] == 2'h3;
-  assign \$61  = req[17] ? 4'h0 : { \$60 , \$59 , \$58 , \$57  };
-  assign busy = ~ \$62 ;
-  assign \$62  = ! access_fsm_state;
-  assign \$63  = access_fsm_state == 1'h1;
-  assign \$64  = access_fsm_state == 2'h2;
-  assign \$65  = access_fsm_state == 2'h3;
-  assign \$66  = access_fsm_state == 3'h4;
-  assign \$67  = access_fsm_state == 3'h5;
-  assign \$68  = access_fsm_state == 3'h6;
-  assign \$69  = idle_run == 4'he;
-  assign \$70  = idle_run + 1'h1;
-  assign \$71  = \$69  ? 5'h0e : \$70 ;
-  assign \$72  = frame_cdm ? 5'h00 : \$71 ;
-  assign \$73  = ~ frame_ok;
-  assign \$74  = frame_cdm | \$73 ;
-  assign \$75  = idle_seen == 4'he;
-  assign \$76  = idle_seen + 1'h1;
-  assign \$77  = \$75  ? 5'h0e : \$76 ;
-  assign \$78  = \$74  ? 5'h00 : \$77 ;
-  assign \$79  = ! request[16:10];
-  assign \$80  = request[16:10] > 7'h40;
-  assign \$81  = \$79  | \$80 ;
-  assign \$82  = request[9:3] + request[16:10];
-  assign \$83  = \$82  > 8'h80;
-  assign \$84  = \$81  | \$83 ;
-  assign \$85  = ~ request[17];
-  assign \$86  = ~ frame_ok;
-  assign \$87  = frame_end & \$86 ;
-  assign \$88  = ~ frame_ok;
-  assign \$89  = frame_cdm | \$88 ;
-  assign \$90  = idle_seen == 4'he;
-  assign \$91  = idle_seen + 1'h1;
-  assign \$92  = \$90  ? 5'h0e : \$91 ;
-  assign \$93  = \$89  ? 5'h00 : \$92 ;
-  assign \$94  = frame_end ? \$93  : { 1'h0, idle_seen };
-  assign \$95  = \$94  == 4'he;
-  assign \$96  = ! step;
-  assign \$97  = frame_end & \$96 ;
-  assign \$98  = ~ frame_cdm;
-  assign \$99  = \$97  & \$98 ;
-  assign \$100  = ~ frame_ok;
-  assign \$101  = frame_end & \$100 ;
-  assign \$102  = step == 1'h1;
-  assign \$103  = frame_end & \$102 ;
-  assign \$104  = ~ frame_cds;
-  assign \$105  = \$103  & \$104 ;
-  assign \$106  = step == 5'h11;
-  assign \$107  = frame_end & \$106 ;
-  assign \$108  = frame_cds == req[17];
-  assign \$109  = \$107  & \$108 ;
-  assign \$111  = step + 1'h1;
-  assign \$112  = step == 5'h11;
-  assign \$113  = ~ frame_ok;
-  assign \$114  = frame_end & \$113 ;
-  assign \$115  = ! step;
-  assign \$116  = frame_end & \$115 ;
-  assign \$117  = step == 1'h1;
-  assign \$118  = frame_end & \$117 ;
-  assign \$119  = step < 4'hd;
-  assign \$120  = frame_end & \$119 ;
-  assign \$121  = ! index;
-  assign \$122  = \$121  ? req[17] : 1'h0;
-  assign \$123  = frame_cds != \$122 ;
-  assign \$291  = index[1:0] * 4'h8;
-  assign \$124  = word_to_send__data >> \$291 ;
-  assign \$294  = index[1:0] * 4'h8;
-  assign \$125  = word_to_send__data >> \$294 ;
-  assign \$127  = ~ req[17];
-  assign \$129  = step + 1'h1;
-  assign \$130  = step <= 4'h9;
-  assign \$131  = { got_crc, frame_cds } != \crc$31 ;
-  assign \$132  = got != sent;
-  assign \$133  = req[17] & \$132 ;
-  assign \$134  = index + 1'h1;
-  assign \$135  = index + 1'h1;
-  assign \$136  = \$135  == req[16:10];
-  assign \$137  = index + 1'h1;
-  assign \$138  = ~ frame_ok;
-  assign \$139  = frame_end & \$138 ;
-  assign \$140  = frame_end & frame_cds;
-  assign \$141  = waited + 1'h1;
-  assign \$142  = waited == 4'hf;
-  assign \$143  = ~ frame_ok;
-  assign \$144  = frame_end & \$143 ;
-  assign \$145  = frame_end & frame_cds;
-  assign \$146  = idle_run == 4'he;
-  assign \$147  = idle_run + 1'h1;
-  assign \$148  = \$146  ? 5'h0e : \$147 ;
-  assign \$149  = frame_cdm ? 5'h00 : \$148 ;
-  assign \$150  = frame_end ? \$149  : { 1'h0, idle_run };
-  assign \$151  = \$150  == 4'he;
-  always @(posedge clk)
-    idle_run <= \$152 ;
-  always @(posedge clk)
-    idle_seen <= \$153 ;
-  always @(posedge clk)
-    done <= \$154 ;
-  always @(posedge clk)
-    result <= \$155 ;
-  always @(posedge clk)
-    access_fsm_state <= \$156 ;
-  always @(posedge clk)
-    req <= \$157 ;
-  always @(posedge clk)
-    index <= \$158 ;
-  always @(posedge clk)
-    header <= \$159 ;
-  always @(posedge clk)
-    step <= \$160 ;
-  always @(posedge clk)
-    ending <= \$161 ;
-  always @(posedge clk)
-    to_send <= \$162 ;
-  always @(posedge clk)
-    sent <= \$163 ;
-  always @(posedge clk)
-    waited <= \$164 ;
-  always @(posedge clk)
-    got <= \$165 ;
-  always @(posedge clk)
-    got_crc <= \$166 ;
-  \biss_master_wb.ch1.core.register_access.rx_crc  rx_crc (
-    .clk(clk),
-    .crc(\crc$31 ),
-    .data_in(\data$29 ),
-    .rst(rst),
-    .start(\start$27 ),
-    .valid(\valid$28 )
-  );
-  \biss_master_wb.ch1.core.register_access.tx_crc  tx_crc (
-    .clk(clk),
-    .crc(crc),
-    .data_in(data),
-    .rst(rst),
-    .start(start),
-    .valid(valid)
-  );
+  assign \$3  = index[1:0] == 2'h2;
+  assign \$4  = index[1:0] == 2'h3;
+  assign \$5  = index[1:0] * 4'h8;
+  assign byte_to_send = word_to_send__data >> \$5 ;
+  assign \$1  = ! index[1:0];
+  assign \$2  = index[1:0] == 1'h1;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    cdm = 1'h0;
-    casez (access_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          cdm = \$6 ;
-      3'h4:
-          if (\$25 ) begin
-            cdm = 1'h1;
-          end else if (\$28 ) begin
-            cdm = \$32 ;
-          end else if (\$31 ) begin
-            cdm = \$36 ;
-          end
-      3'h5:
-          cdm = 1'h1;
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    start = 1'h0;
-    casez (access_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          if (abort) begin
-          end else if (\$10 ) begin
-          end else if (\$12 ) begin
-          end else if (\$16 ) begin
-          end else if (\$20 ) begin
-          end else if (frame_end) begin
-            start = \$21 ;
-          end
-      3'h4:
-          if (abort) begin
-          end else if (\$42 ) begin
-          end else if (\$44 ) begin
-            (* full_case = 32'd1 *)
-            if (\$51 ) begin
-            end else begin
-              start = 1'h1;
-            end
-          end
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    valid = 1'h0;
-    casez (access_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          if (abort) begin
-          end else if (\$10 ) begin
-          end else if (\$12 ) begin
-          end else if (\$16 ) begin
-          end else if (\$20 ) begin
-          end else if (frame_end) begin
-            valid = \$24 ;
-          end
-      3'h4:
-          valid = \$40 ;
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    data = 1'h0;
-    casez (access_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          if (abort) begin
-          end else if (\$10 ) begin
-          end else if (\$12 ) begin
-          end else if (\$16 ) begin
-          end else if (\$20 ) begin
-          end else if (frame_end) begin
-            data = header[17];
-          end
-      3'h4:
-          data = to_send[7];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \start$27  = 1'h0;
-    casez (access_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h4:
-          if (abort) begin
-          end else if (\$42 ) begin
-          end else if (\$44 ) begin
-          end else if (\$46 ) begin
-          end else if (\$48 ) begin
-            if (\$52 ) begin
-              \start$27  = \$53 ;
-            end
-          end
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \valid$28  = 1'h0;
-    casez (access_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h4:
-          if (abort) begin
-          end else if (\$42 ) begin
-          end else if (\$44 ) begin
-          end else if (\$46 ) begin
-          end else if (\$48 ) begin
-            if (\$52 ) begin
-              \valid$28  = 1'h1;
-            end
-          end
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \data$29  = 1'h0;
-    casez (access_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h4:
-          if (abort) begin
-          end else if (\$42 ) begin
-          end else if (\$44 ) begin
-          end else if (\$46 ) begin
-          end else if (\$48 ) begin
-            if (\$52 ) begin
-              \data$29  = frame_cds;
-            end
-          end
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
     byte_received__addr = 4'h0;
-    casez (access_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h4:
-          if (abort) begin
-          end else if (\$42 ) begin
-          end else if (\$44 ) begin
-          end else if (\$46 ) begin
-          end else if (\$48 ) begin
-          end else if (frame_end) begin
-            (* full_case = 32'd1 *)
-            if (\$54 ) begin
-            end else if (\$56 ) begin
-            end else begin
-              byte_received__addr = index[5:2];
-            end
-          end
-    endcase
+    if (store) begin
+      byte_received__addr = index[5:2];
+    end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
     byte_received__data = 32'd0;
-    casez (access_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h4:
-          if (abort) begin
-          end else if (\$42 ) begin
-          end else if (\$44 ) begin
-          end else if (\$46 ) begin
-          end else if (\$48 ) begin
-          end else if (frame_end) begin
-            (* full_case = 32'd1 *)
-            if (\$54 ) begin
-            end else if (\$56 ) begin
-            end else begin
-              byte_received__data = { got, got, got, got };
-            end
-          end
-    endcase
+    if (store) begin
+      byte_received__data = { byte_received, byte_received, byte_received, byte_received };
+    end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
     byte_received__en = 4'h0;
-    casez (access_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h4:
-          if (abort) begin
-          end else if (\$42 ) begin
-          end else if (\$44 ) begin
-          end else if (\$46 ) begin
-          end else if (\$48 ) begin
-          end else if (frame_end) begin
-            (* full_case = 32'd1 *)
-            if (\$54 ) begin
-            end else if (\$56 ) begin
-            end else begin
-              byte_received__en = \$61 ;
-            end
-          end
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$152  = idle_run;
-    if (frame_end) begin
-      \$152  = \$72 [3:0];
-    end
-    if (rst) begin
-      \$152  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$153  = idle_seen;
-    if (frame_end) begin
-      \$153  = \$78 [3:0];
-    end
-    if (rst) begin
-      \$153  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$154  = 1'h0;
-    casez (access_fsm_state)
-      3'h0:
-          if (\start$44 ) begin
-            if (\$84 ) begin
-              \$154  = 1'h1;
-            end
-          end
-      3'h1:
-          if (abort) begin
-            \$154  = 1'h1;
-          end else if (\$87 ) begin
-            \$154  = 1'h1;
-          end
-      3'h2:
-          /* empty */;
-      3'h4:
-          /* empty */;
-      3'h5:
-          /* empty */;
-      3'h6:
-          if (abort) begin
-          end else if (\$144 ) begin
-          end else if (\$145 ) begin
-          end else if (frame_end) begin
-            \$154  = 1'h1;
-          end
-      3'h3:
-          if (\$151 ) begin
-            \$154  = 1'h1;
-          end
-    endcase
-    if (rst) begin
-      \$154  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$155  = result;
-    casez (access_fsm_state)
-      3'h0:
-          if (\start$44 ) begin
-            (* full_case = 32'd1 *)
-            if (\$84 ) begin
-              \$155 [2:0] = 3'h6;
-              \$155 [9:3] = 7'h00;
-            end else begin
-              \$155 [9:3] = 7'h00;
-            end
-          end
-      3'h1:
-          if (abort) begin
-            \$155 [2:0] = 3'h4;
-          end else if (\$87 ) begin
-            \$155 [2:0] = 3'h5;
-          end
-      3'h2:
-          /* empty */;
-      3'h4:
-          if (abort) begin
-          end else if (\$114 ) begin
-          end else if (\$116 ) begin
-          end else if (\$118 ) begin
-          end else if (\$120 ) begin
-          end else if (frame_end) begin
-            (* full_case = 32'd1 *)
-            if (\$131 ) begin
-            end else if (\$133 ) begin
-            end else begin
-              \$155 [9:3] = \$134 ;
-            end
-          end
-      3'h5:
-          /* empty */;
-      3'h6:
-          if (abort) begin
-          end else if (\$144 ) begin
-          end else if (\$145 ) begin
-          end else if (frame_end) begin
-            \$155 [2:0] = 3'h0;
-          end
-      3'h3:
-          if (\$151 ) begin
-            \$155 [2:0] = ending;
-          end
-    endcase
-    if (rst) begin
-      \$155  = 10'h000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$156  = access_fsm_state;
-    casez (access_fsm_state)
-      3'h0:
-          if (\start$44 ) begin
-            (* full_case = 32'd1 *)
-            if (\$84 ) begin
-              \$156  = 3'h0;
-            end else begin
-              \$156  = 3'h1;
-            end
-          end
-      3'h1:
-          if (abort) begin
-            \$156  = 3'h0;
-          end else if (\$87 ) begin
-            \$156  = 3'h0;
-          end else if (\$95 ) begin
-            \$156  = 3'h2;
-          end
-      3'h2:
-          if (abort) begin
-            \$156  = 3'h3;
-          end else if (\$99 ) begin
-          end else if (\$101 ) begin
-            \$156  = 3'h3;
-          end else if (\$105 ) begin
-            \$156  = 3'h3;
-          end else if (\$109 ) begin
-            \$156  = 3'h3;
-          end else if (frame_end) begin
-            if (\$112 ) begin
-              \$156  = 3'h4;
-            end
-          end
-      3'h4:
-          if (abort) begin
-            \$156  = 3'h3;
-          end else if (\$114 ) begin
-            \$156  = 3'h3;
-          end else if (\$116 ) begin
-            if (\$123 ) begin
-              \$156  = 3'h3;
-            end
-          end else if (\$118 ) begin
-            (* full_case = 32'd1 *)
-            if (frame_cds) begin
-            end else if (\$127 ) begin
-              \$156  = 3'h5;
-            end else begin
-              \$156  = 3'h3;
-            end
-          end else if (\$120 ) begin
-          end else if (frame_end) begin
-            (* full_case = 32'd1 *)
-            if (\$131 ) begin
-              \$156  = 3'h3;
-            end else if (\$133 ) begin
-              \$156  = 3'h3;
-            end else begin
-              if (\$136 ) begin
-                \$156  = 3'h6;
-              end
-            end
-          end
-      3'h5:
-          if (abort) begin
-            \$156  = 3'h3;
-          end else if (\$139 ) begin
-            \$156  = 3'h3;
-          end else if (\$140 ) begin
-            \$156  = 3'h4;
-          end else if (frame_end) begin
-            if (\$142 ) begin
-              \$156  = 3'h3;
-            end
-          end
-      3'h6:
-          if (abort) begin
-            \$156  = 3'h3;
-          end else if (\$144 ) begin
-            \$156  = 3'h3;
-          end else if (\$145 ) begin
-            \$156  = 3'h3;
-          end else if (frame_end) begin
-            \$156  = 3'h0;
-          end
-      3'h3:
-          if (\$151 ) begin
-            \$156  = 3'h0;
-          end
-    endcase
-    if (rst) begin
-      \$156  = 3'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$157  = req;
-    casez (access_fsm_state)
-      3'h0:
-          if (\start$44 ) begin
-            (* full_case = 32'd1 *)
-            if (\$84 ) begin
-            end else begin
-              \$157  = request;
-            end
-          end
-    endcase
-    if (rst) begin
-      \$157  = 18'h00000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$158  = index;
-    casez (access_fsm_state)
-      3'h0:
-          if (\start$44 ) begin
-            (* full_case = 32'd1 *)
-            if (\$84 ) begin
-            end else begin
-              \$158  = 6'h00;
-            end
-          end
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h4:
-          if (abort) begin
-          end else if (\$114 ) begin
-          end else if (\$116 ) begin
-          end else if (\$118 ) begin
-          end else if (\$120 ) begin
-          end else if (frame_end) begin
-            (* full_case = 32'd1 *)
-            if (\$131 ) begin
-            end else if (\$133 ) begin
-            end else begin
-              (* full_case = 32'd1 *)
-              if (\$136 ) begin
-              end else begin
-                \$158  = \$137 [5:0];
-              end
-            end
-          end
-    endcase
-    if (rst) begin
-      \$158  = 6'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$159  = header;
-    casez (access_fsm_state)
-      3'h0:
-          if (\start$44 ) begin
-            (* full_case = 32'd1 *)
-            if (\$84 ) begin
-            end else begin
-              \$159  = { 2'h3, request[2:0], request[9:3], 4'h0, \$85 , request[17] };
-            end
-          end
-      3'h1:
-          /* empty */;
-      3'h2:
-          if (abort) begin
-          end else if (\$99 ) begin
-          end else if (\$101 ) begin
-          end else if (\$105 ) begin
-          end else if (\$109 ) begin
-          end else if (frame_end) begin
-            \$159  = \$110 [17:0];
-          end
-    endcase
-    if (rst) begin
-      \$159  = 18'h00000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$160  = step;
-    casez (access_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (abort) begin
-          end else if (\$87 ) begin
-          end else if (\$95 ) begin
-            \$160  = 5'h00;
-          end
-      3'h2:
-          if (abort) begin
-          end else if (\$99 ) begin
-          end else if (\$101 ) begin
-          end else if (\$105 ) begin
-          end else if (\$109 ) begin
-          end else if (frame_end) begin
-            \$160  = \$111 [4:0];
-            if (\$112 ) begin
-              \$160  = 5'h00;
-            end
-          end
-      3'h4:
-          if (abort) begin
-          end else if (\$114 ) begin
-          end else if (\$116 ) begin
-            (* full_case = 32'd1 *)
-            if (\$123 ) begin
-            end else begin
-              \$160  = 5'h01;
-            end
-          end else if (\$118 ) begin
-            if (frame_cds) begin
-              \$160  = 5'h02;
-            end
-          end else if (\$120 ) begin
-            \$160  = \$129 [4:0];
-          end else if (frame_end) begin
-            (* full_case = 32'd1 *)
-            if (\$131 ) begin
-            end else if (\$133 ) begin
-            end else begin
-              \$160  = 5'h00;
-            end
-          end
-      3'h5:
-          if (abort) begin
-          end else if (\$139 ) begin
-          end else if (\$140 ) begin
-            \$160  = 5'h02;
-          end
-    endcase
-    if (rst) begin
-      \$160  = 5'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$161  = ending;
-    casez (access_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          if (abort) begin
-            \$161  = 3'h4;
-          end else if (\$99 ) begin
-          end else if (\$101 ) begin
-            \$161  = 3'h5;
-          end else if (\$105 ) begin
-            \$161  = 3'h2;
-          end else if (\$109 ) begin
-            \$161  = 3'h3;
-          end
-      3'h4:
-          if (abort) begin
-            \$161  = 3'h4;
-          end else if (\$114 ) begin
-            \$161  = 3'h5;
-          end else if (\$116 ) begin
-            if (\$123 ) begin
-              \$161  = 3'h3;
-            end
-          end else if (\$118 ) begin
-            (* full_case = 32'd1 *)
-            if (frame_cds) begin
-            end else if (\$127 ) begin
-            end else begin
-              \$161  = 3'h3;
-            end
-          end else if (\$120 ) begin
-          end else if (frame_end) begin
-            if (\$131 ) begin
-              \$161  = 3'h1;
-            end else if (\$133 ) begin
-              \$161  = 3'h3;
-            end
-          end
-      3'h5:
-          if (abort) begin
-            \$161  = 3'h4;
-          end else if (\$139 ) begin
-            \$161  = 3'h5;
-          end else if (\$140 ) begin
-          end else if (frame_end) begin
-            if (\$142 ) begin
-              \$161  = 3'h3;
-            end
-          end
-      3'h6:
-          if (abort) begin
-            \$161  = 3'h4;
-          end else if (\$144 ) begin
-            \$161  = 3'h5;
-          end else if (\$145 ) begin
-            \$161  = 3'h3;
-          end
-    endcase
-    if (rst) begin
-      \$161  = 3'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$162  = to_send;
-    casez (access_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h4:
-          if (abort) begin
-          end else if (\$114 ) begin
-          end else if (\$116 ) begin
-            (* full_case = 32'd1 *)
-            if (\$123 ) begin
-            end else begin
-              \$162  = \$124 ;
-            end
-          end else if (\$118 ) begin
-            \$162  = \$126 [7:0];
-          end else if (\$120 ) begin
-            \$162  = \$128 [7:0];
-          end
-    endcase
-    if (rst) begin
-      \$162  = 8'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$163  = sent;
-    casez (access_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h4:
-          if (abort) begin
-          end else if (\$114 ) begin
-          end else if (\$116 ) begin
-            (* full_case = 32'd1 *)
-            if (\$123 ) begin
-            end else begin
-              \$163  = \$125 ;
-            end
-          end
-    endcase
-    if (rst) begin
-      \$163  = 8'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$164  = waited;
-    casez (access_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h4:
-          if (abort) begin
-          end else if (\$114 ) begin
-          end else if (\$116 ) begin
-          end else if (\$118 ) begin
-            if (frame_cds) begin
-            end else if (\$127 ) begin
-              \$164  = 5'h00;
-            end
-          end
-      3'h5:
-          if (abort) begin
-          end else if (\$139 ) begin
-          end else if (\$140 ) begin
-          end else if (frame_end) begin
-            \$164  = \$141 [4:0];
-          end
-    endcase
-    if (rst) begin
-      \$164  = 5'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$165  = got;
-    casez (access_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h4:
-          if (abort) begin
-          end else if (\$114 ) begin
-          end else if (\$116 ) begin
-          end else if (\$118 ) begin
-          end else if (\$120 ) begin
-            if (\$130 ) begin
-              \$165  = { got[6:0], frame_cds };
-            end
-          end
-    endcase
-    if (rst) begin
-      \$165  = 8'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$166  = got_crc;
-    casez (access_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h4:
-          if (abort) begin
-          end else if (\$114 ) begin
-          end else if (\$116 ) begin
-          end else if (\$118 ) begin
-          end else if (\$120 ) begin
-            (* full_case = 32'd1 *)
-            if (\$130 ) begin
-            end else begin
-              \$166  = { got_crc[1:0], frame_cds };
-            end
-          end
-    endcase
-    if (rst) begin
-      \$166  = 3'h0;
+    if (store) begin
+      byte_received__en = { \$4 , \$3 , \$2 , \$1  };
     end
   end
   assign host_write__addr = wbuf[3:0];
   assign host_write__data = wbuf[35:4];
   assign host_write__en = wbuf[39:36];
+  assign word_to_send__addr = index[5:2];
   assign rbuf_addr = host_read__addr;
   assign rbuf_en = host_read__en;
   assign host_read__data = rbuf_data;
-  assign word_to_send__addr = index[5:2];
-  assign frames = busy;
   assign \wbuf.addr  = wbuf[3:0];
   assign \wbuf.data  = wbuf[35:4];
   assign \wbuf.en  = wbuf[39:36];
-  assign \req.slave_id  = req[2:0];
-  assign \req.address  = req[9:3];
-  assign \req.count  = req[16:10];
-  assign \req.write  = req[17];
-  assign \request.slave_id  = request[2:0];
-  assign \request.address  = request[9:3];
-  assign \request.count  = request[16:10];
-  assign \request.write  = request[17];
-  assign \result.status  = result[2:0];
-  assign \result.bytes_done  = result[9:3];
-  assign \$110  = { header, 1'h0 };
-  assign \$126  = { to_send, 1'h0 };
-  assign \$128  = { to_send, 1'h0 };
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.register_access.rx_crc (rst, crc, start, valid, data_in, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$92  = 0;
+module \biss_master_wb.ch1.core.register_access.checker (rst, crc_ok, echo_ok, cds, control__take_data, start, control__take_crc, sent, \byte , clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$96  = 0;
+  reg [7:0] \$1 ;
+  reg [2:0] \$2 ;
+  output [7:0] \byte ;
+  reg [7:0] \byte  = 8'h00;
+  input cds;
+  wire cds;
+  input clk;
+  wire clk;
+  wire control__first;
+  input control__take_crc;
+  wire control__take_crc;
+  input control__take_data;
+  wire control__take_data;
+  wire [3:0] crc;
+  output crc_ok;
+  wire crc_ok;
+  wire data;
+  output echo_ok;
+  wire echo_ok;
+  reg [2:0] got_crc = 3'h0;
+  input rst;
+  wire rst;
+  input [7:0] sent;
+  wire [7:0] sent;
+  input start;
+  wire start;
+  wire valid;
+  assign crc_ok = { got_crc, cds } == crc;
+  assign echo_ok = \byte  == sent;
+  always @(posedge clk)
+    \byte  <= \$1 ;
+  always @(posedge clk)
+    got_crc <= \$2 ;
+  \biss_master_wb.ch1.core.register_access.checker.rx_crc  rx_crc (
+    .clk(clk),
+    .crc(crc),
+    .data_in(cds),
+    .rst(rst),
+    .start(start),
+    .valid(control__take_data)
+  );
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$96 ) begin end
+    \$1  = \byte ;
+    if (control__take_data) begin
+      \$1  = { \byte [6:0], cds };
+    end
+    if (rst) begin
+      \$1  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$96 ) begin end
+    \$2  = got_crc;
+    if (control__take_crc) begin
+      \$2  = { got_crc[1:0], cds };
+    end
+    if (rst) begin
+      \$2  = 3'h0;
+    end
+  end
+  assign control__first = start;
+  assign valid = control__take_data;
+  assign data = cds;
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_wb.ch1.core.register_access.checker.rx_crc (rst, crc, data_in, valid, start, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$97  = 0;
   wire [3:0] \$1 ;
   wire \$10 ;
   wire [3:0] \$11 ;
@@ -21644,7 +21227,7 @@ module \biss_master_wb.ch1.core.register_access.rx_crc (rst, crc, start, valid, 
     crc_reg <= \$13 ;
   assign \$auto$rtlil.cc:2739:Not$2  = ~ crc_reg;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
     \$13  = crc_reg;
     if (valid) begin
       \$13 [0] = \$3 ;
@@ -21667,8 +21250,234 @@ module \biss_master_wb.ch1.core.register_access.rx_crc (rst, crc, start, valid, 
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.register_access.tx_crc (rst, crc, start, valid, data_in, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$93  = 0;
+module \biss_master_wb.ch1.core.register_access.idle (rst, frame_end, frame_ok, run_enough, seen_enough, frame_cdm, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$98  = 0;
+  wire \$1 ;
+  wire [4:0] \$10 ;
+  wire \$11 ;
+  wire [4:0] \$12 ;
+  wire [4:0] \$13 ;
+  wire [4:0] \$14 ;
+  wire [4:0] \$15 ;
+  wire \$16 ;
+  wire \$17 ;
+  wire \$18 ;
+  wire [4:0] \$19 ;
+  wire [4:0] \$2 ;
+  wire [4:0] \$20 ;
+  wire [4:0] \$21 ;
+  wire [4:0] \$22 ;
+  reg [3:0] \$23 ;
+  reg [3:0] \$24 ;
+  wire [4:0] \$3 ;
+  wire [4:0] \$4 ;
+  wire \$5 ;
+  wire \$6 ;
+  wire \$7 ;
+  wire [4:0] \$8 ;
+  wire [4:0] \$9 ;
+  input clk;
+  wire clk;
+  input frame_cdm;
+  wire frame_cdm;
+  input frame_end;
+  wire frame_end;
+  input frame_ok;
+  wire frame_ok;
+  reg [3:0] idle_run = 4'h0;
+  reg [3:0] idle_seen = 4'h0;
+  input rst;
+  wire rst;
+  output run_enough;
+  wire run_enough;
+  output seen_enough;
+  wire seen_enough;
+  assign \$1  = idle_run == 4'he;
+  assign \$2  = idle_run + 1'h1;
+  assign \$3  = \$1  ? 5'h0e : \$2 ;
+  assign \$4  = frame_cdm ? 5'h00 : \$3 ;
+  assign \$5  = ~ frame_ok;
+  assign \$6  = frame_cdm | \$5 ;
+  assign \$7  = idle_seen == 4'he;
+  assign \$8  = idle_seen + 1'h1;
+  assign \$9  = \$7  ? 5'h0e : \$8 ;
+  assign \$10  = \$6  ? 5'h00 : \$9 ;
+  assign \$11  = idle_run == 4'he;
+  assign \$12  = idle_run + 1'h1;
+  assign \$13  = \$11  ? 5'h0e : \$12 ;
+  assign \$14  = frame_cdm ? 5'h00 : \$13 ;
+  assign \$15  = frame_end ? \$14  : { 1'h0, idle_run };
+  assign run_enough = \$15  == 4'he;
+  assign \$16  = ~ frame_ok;
+  assign \$17  = frame_cdm | \$16 ;
+  assign \$18  = idle_seen == 4'he;
+  assign \$19  = idle_seen + 1'h1;
+  assign \$20  = \$18  ? 5'h0e : \$19 ;
+  assign \$21  = \$17  ? 5'h00 : \$20 ;
+  assign \$22  = frame_end ? \$21  : { 1'h0, idle_seen };
+  assign seen_enough = \$22  == 4'he;
+  always @(posedge clk)
+    idle_run <= \$23 ;
+  always @(posedge clk)
+    idle_seen <= \$24 ;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
+    \$23  = idle_run;
+    if (frame_end) begin
+      \$23  = \$4 [3:0];
+    end
+    if (rst) begin
+      \$23  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
+    \$24  = idle_seen;
+    if (frame_end) begin
+      \$24  = \$10 [3:0];
+    end
+    if (rst) begin
+      \$24  = 4'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_wb.ch1.core.register_access.sender (rst, \byte , request, control__load_header, control__source, control__crc_bit, control__shift_header, start, valid, control__load_byte, control__shift_byte, sent, cdm, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$99  = 0;
+  wire \$1 ;
+  wire [18:0] \$2 ;
+  wire [8:0] \$3 ;
+  wire [1:0] \$4 ;
+  wire \$5 ;
+  reg [17:0] \$6 ;
+  reg [7:0] \$7 ;
+  reg [7:0] \$8 ;
+  input [7:0] \byte ;
+  wire [7:0] \byte ;
+  output cdm;
+  reg cdm;
+  input clk;
+  wire clk;
+  input [1:0] control__crc_bit;
+  wire [1:0] control__crc_bit;
+  wire control__crc_start;
+  wire control__crc_valid;
+  input control__load_byte;
+  wire control__load_byte;
+  input control__load_header;
+  wire control__load_header;
+  input control__shift_byte;
+  wire control__shift_byte;
+  input control__shift_header;
+  wire control__shift_header;
+  (* enum_base_type = "CdmSource" *)
+  (* enum_value_000 = "ZERO" *)
+  (* enum_value_001 = "ONE" *)
+  (* enum_value_010 = "HEADER" *)
+  (* enum_value_011 = "DATA" *)
+  (* enum_value_100 = "CRC" *)
+  input [2:0] control__source;
+  wire [2:0] control__source;
+  wire [3:0] crc;
+  wire data;
+  reg [17:0] header = 18'h00000;
+  input [17:0] request;
+  wire [17:0] request;
+  wire [6:0] \request.address ;
+  wire [6:0] \request.count ;
+  wire [2:0] \request.slave_id ;
+  wire \request.write ;
+  input rst;
+  wire rst;
+  output [7:0] sent;
+  reg [7:0] sent = 8'h00;
+  input start;
+  wire start;
+  reg [7:0] to_send = 8'h00;
+  input valid;
+  wire valid;
+  assign data = control__shift_header ? header[17] : to_send[7];
+  assign \$4  = ~ control__crc_bit;
+  assign \$5  = crc >> \$4 ;
+  always @(posedge clk)
+    header <= \$6 ;
+  always @(posedge clk)
+    to_send <= \$7 ;
+  always @(posedge clk)
+    sent <= \$8 ;
+  assign \$1  = ~ request[17];
+  \biss_master_wb.ch1.core.register_access.sender.tx_crc  tx_crc (
+    .clk(clk),
+    .crc(crc),
+    .data_in(data),
+    .rst(rst),
+    .start(start),
+    .valid(valid)
+  );
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
+    \$6  = header;
+    if (control__load_header) begin
+      \$6  = { 2'h3, request[2:0], request[9:3], 4'h0, \$1 , request[17] };
+    end
+    if (control__shift_header) begin
+      \$6  = \$2 [17:0];
+    end
+    if (rst) begin
+      \$6  = 18'h00000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
+    \$7  = to_send;
+    if (control__load_byte) begin
+      \$7  = \byte ;
+    end
+    if (control__shift_byte) begin
+      \$7  = \$3 [7:0];
+    end
+    if (rst) begin
+      \$7  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
+    \$8  = sent;
+    if (control__load_byte) begin
+      \$8  = \byte ;
+    end
+    if (rst) begin
+      \$8  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
+    cdm = 1'h0;
+    casez (control__source)
+      3'h1:
+          cdm = 1'h1;
+      3'h2:
+          cdm = header[17];
+      3'h3:
+          cdm = to_send[7];
+      3'h4:
+          cdm = \$5 ;
+    endcase
+  end
+  assign control__crc_start = start;
+  assign control__crc_valid = valid;
+  assign \request.slave_id  = request[2:0];
+  assign \request.address  = request[9:3];
+  assign \request.count  = request[16:10];
+  assign \request.write  = request[17];
+  assign \$2  = { header, 1'h0 };
+  assign \$3  = { to_send, 1'h0 };
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_wb.ch1.core.register_access.sender.tx_crc (rst, data_in, crc, start, valid, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$100  = 0;
   wire [3:0] \$1 ;
   wire \$10 ;
   wire [3:0] \$11 ;
@@ -21711,7 +21520,7 @@ module \biss_master_wb.ch1.core.register_access.tx_crc (rst, crc, start, valid, 
     crc_reg <= \$13 ;
   assign \$auto$rtlil.cc:2739:Not$4  = ~ crc_reg;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     \$13  = crc_reg;
     if (valid) begin
       \$13 [0] = \$3 ;
@@ -21734,8 +21543,1047 @@ module \biss_master_wb.ch1.core.register_access.tx_crc (rst, crc, start, valid, 
 endmodule
 
 (* generator = "Amaranth" *)
+module \biss_master_wb.ch1.core.register_access.sequencer (rst, frame_end, frame_ok, busy, crc_ok, echo_ok, run_enough, seen_enough, start, abort, request, frame_cdm, frame_cds, done, result, index, send__load_header, send__source, send__crc_bit, send__shift_header, send__crc_start
+, send__crc_valid, send__load_byte, send__shift_byte, check__take_data, check__first, check__take_crc, store, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$101  = 0;
+  wire \$1 ;
+  wire \$10 ;
+  wire \$100 ;
+  wire \$101 ;
+  wire \$102 ;
+  wire \$103 ;
+  wire \$104 ;
+  wire \$105 ;
+  wire \$106 ;
+  wire \$107 ;
+  wire \$108 ;
+  wire \$109 ;
+  wire \$11 ;
+  wire \$110 ;
+  wire \$111 ;
+  wire \$112 ;
+  wire \$113 ;
+  wire \$114 ;
+  wire \$115 ;
+  wire \$116 ;
+  wire \$117 ;
+  reg \$118 ;
+  reg [9:0] \$119 ;
+  wire \$12 ;
+  reg [2:0] \$120 ;
+  reg [17:0] \$121 ;
+  reg [5:0] \$122 ;
+  reg [4:0] \$123 ;
+  reg [2:0] \$124 ;
+  reg [4:0] \$125 ;
+  wire \$13 ;
+  wire \$14 ;
+  wire \$15 ;
+  wire \$16 ;
+  wire \$17 ;
+  wire \$18 ;
+  wire \$19 ;
+  wire \$2 ;
+  wire \$20 ;
+  wire \$21 ;
+  wire \$22 ;
+  wire [5:0] \$23 ;
+  wire \$24 ;
+  wire \$25 ;
+  wire \$26 ;
+  wire \$27 ;
+  wire \$28 ;
+  wire \$29 ;
+  wire \$3 ;
+  wire \$30 ;
+  wire \$31 ;
+  wire \$32 ;
+  wire \$33 ;
+  wire \$34 ;
+  wire \$35 ;
+  wire \$36 ;
+  wire [5:0] \$37 ;
+  wire \$38 ;
+  wire \$39 ;
+  wire [7:0] \$4 ;
+  wire \$40 ;
+  wire [6:0] \$41 ;
+  wire [6:0] \$42 ;
+  wire \$43 ;
+  wire [6:0] \$44 ;
+  wire \$45 ;
+  wire \$46 ;
+  wire \$47 ;
+  wire [5:0] \$48 ;
+  wire \$49 ;
+  wire \$5 ;
+  wire \$50 ;
+  wire \$51 ;
+  wire \$52 ;
+  wire \$53 ;
+  wire \$54 ;
+  wire \$55 ;
+  wire [7:0] \$56 ;
+  wire \$57 ;
+  wire \$58 ;
+  wire \$59 ;
+  wire \$6 ;
+  wire \$60 ;
+  wire \$61 ;
+  wire \$62 ;
+  wire \$63 ;
+  wire \$64 ;
+  wire \$65 ;
+  wire \$66 ;
+  wire \$67 ;
+  wire \$68 ;
+  wire \$69 ;
+  wire \$7 ;
+  wire \$70 ;
+  wire \$71 ;
+  wire \$72 ;
+  wire \$73 ;
+  wire \$74 ;
+  wire \$75 ;
+  wire \$76 ;
+  wire \$77 ;
+  wire \$78 ;
+  wire \$79 ;
+  wire \$8 ;
+  wire \$80 ;
+  wire \$81 ;
+  wire \$82 ;
+  wire \$83 ;
+  wire \$84 ;
+  wire \$85 ;
+  wire \$86 ;
+  wire \$87 ;
+  wire \$88 ;
+  wire [5:0] \$89 ;
+  wire \$9 ;
+  wire \$90 ;
+  wire \$91 ;
+  wire \$92 ;
+  wire \$93 ;
+  wire \$94 ;
+  wire \$95 ;
+  wire \$96 ;
+  wire \$97 ;
+  wire \$98 ;
+  wire \$99 ;
+  input abort;
+  wire abort;
+  reg [2:0] access_fsm_state = 3'h0;
+  output busy;
+  wire busy;
+  output check__first;
+  reg check__first;
+  output check__take_crc;
+  reg check__take_crc;
+  output check__take_data;
+  reg check__take_data;
+  input clk;
+  wire clk;
+  input crc_ok;
+  wire crc_ok;
+  output done;
+  reg done = 1'h0;
+  input echo_ok;
+  wire echo_ok;
+  (* enum_base_type = "AccessStatus" *)
+  (* enum_value_000 = "OK" *)
+  (* enum_value_001 = "CRC4_ERROR" *)
+  (* enum_value_010 = "NO_ANSWER" *)
+  (* enum_value_011 = "REFUSED" *)
+  (* enum_value_100 = "ABORTED" *)
+  (* enum_value_101 = "DATA_FAULT" *)
+  (* enum_value_110 = "BAD_REQUEST" *)
+  reg [2:0] ending = 3'h0;
+  input frame_cdm;
+  wire frame_cdm;
+  input frame_cds;
+  wire frame_cds;
+  input frame_end;
+  wire frame_end;
+  input frame_ok;
+  wire frame_ok;
+  output [5:0] index;
+  reg [5:0] index = 6'h00;
+  reg [17:0] req = 18'h00000;
+  wire [6:0] \req.address ;
+  wire [6:0] \req.count ;
+  wire [2:0] \req.slave_id ;
+  wire \req.write ;
+  input [17:0] request;
+  wire [17:0] request;
+  wire [6:0] \request.address ;
+  wire [6:0] \request.count ;
+  wire [2:0] \request.slave_id ;
+  wire \request.write ;
+  output [9:0] result;
+  reg [9:0] result = 10'h000;
+  wire [6:0] \result.bytes_done ;
+  (* enum_base_type = "AccessStatus" *)
+  (* enum_value_000 = "OK" *)
+  (* enum_value_001 = "CRC4_ERROR" *)
+  (* enum_value_010 = "NO_ANSWER" *)
+  (* enum_value_011 = "REFUSED" *)
+  (* enum_value_100 = "ABORTED" *)
+  (* enum_value_101 = "DATA_FAULT" *)
+  (* enum_value_110 = "BAD_REQUEST" *)
+  wire [2:0] \result.status ;
+  input rst;
+  wire rst;
+  input run_enough;
+  wire run_enough;
+  input seen_enough;
+  wire seen_enough;
+  output [1:0] send__crc_bit;
+  reg [1:0] send__crc_bit;
+  output send__crc_start;
+  reg send__crc_start;
+  output send__crc_valid;
+  reg send__crc_valid;
+  output send__load_byte;
+  reg send__load_byte;
+  output send__load_header;
+  reg send__load_header;
+  output send__shift_byte;
+  reg send__shift_byte;
+  output send__shift_header;
+  reg send__shift_header;
+  (* enum_base_type = "CdmSource" *)
+  (* enum_value_000 = "ZERO" *)
+  (* enum_value_001 = "ONE" *)
+  (* enum_value_010 = "HEADER" *)
+  (* enum_value_011 = "DATA" *)
+  (* enum_value_100 = "CRC" *)
+  output [2:0] send__source;
+  reg [2:0] send__source;
+  input start;
+  wire start;
+  reg [4:0] step = 5'h00;
+  output store;
+  reg store;
+  reg [4:0] waited = 5'h00;
+  assign \$1  = ! request[16:10];
+  assign \$2  = request[16:10] > 7'h40;
+  assign \$3  = \$1  | \$2 ;
+  assign \$4  = request[9:3] + request[16:10];
+  assign \$5  = \$4  > 8'h80;
+  assign \$6  = \$3  | \$5 ;
+  assign \$7  = ~ frame_ok;
+  assign \$8  = frame_end & \$7 ;
+  assign \$9  = ! step;
+  assign \$10  = frame_end & \$9 ;
+  assign \$11  = ~ frame_cdm;
+  assign \$12  = \$10  & \$11 ;
+  assign \$13  = ~ frame_ok;
+  assign \$14  = frame_end & \$13 ;
+  assign \$15  = step == 1'h1;
+  assign \$16  = frame_end & \$15 ;
+  assign \$17  = ~ frame_cds;
+  assign \$18  = \$16  & \$17 ;
+  assign \$19  = step == 5'h11;
+  assign \$20  = frame_end & \$19 ;
+  assign \$21  = frame_cds == req[17];
+  assign \$22  = \$20  & \$21 ;
+  assign \$23  = step + 1'h1;
+  assign \$24  = step == 5'h11;
+  assign \$25  = ~ frame_ok;
+  assign \$26  = frame_end & \$25 ;
+  assign \$27  = ! step;
+  assign \$28  = frame_end & \$27 ;
+  assign \$29  = step == 1'h1;
+  assign \$30  = frame_end & \$29 ;
+  assign \$31  = step < 4'hd;
+  assign \$32  = frame_end & \$31 ;
+  assign \$33  = ! index;
+  assign \$34  = \$33  ? req[17] : 1'h0;
+  assign \$35  = frame_cds != \$34 ;
+  assign \$36  = ~ req[17];
+  assign \$37  = step + 1'h1;
+  assign \$38  = ~ crc_ok;
+  assign \$39  = ~ echo_ok;
+  assign \$40  = req[17] & \$39 ;
+  assign \$41  = index + 1'h1;
+  assign \$42  = index + 1'h1;
+  assign \$43  = \$42  == req[16:10];
+  assign \$44  = index + 1'h1;
+  assign \$45  = ~ frame_ok;
+  assign \$46  = frame_end & \$45 ;
+  assign \$47  = frame_end & frame_cds;
+  assign \$48  = waited + 1'h1;
+  assign \$49  = waited == 4'hf;
+  assign \$50  = ~ frame_ok;
+  assign \$51  = frame_end & \$50 ;
+  assign \$52  = frame_end & frame_cds;
+  assign \$53  = ! request[16:10];
+  assign \$54  = request[16:10] > 7'h40;
+  assign \$55  = \$53  | \$54 ;
+  assign \$56  = request[9:3] + request[16:10];
+  assign \$57  = \$56  > 8'h80;
+  assign \$58  = \$55  | \$57 ;
+  assign \$59  = step >= 4'hc;
+  assign \$60  = step < 5'h10;
+  assign \$61  = \$59  & \$60 ;
+  assign \$62  = ! step;
+  assign \$63  = frame_end & \$62 ;
+  assign \$64  = ~ frame_cdm;
+  assign \$65  = \$63  & \$64 ;
+  assign \$66  = ~ frame_ok;
+  assign \$67  = frame_end & \$66 ;
+  assign \$68  = step == 1'h1;
+  assign \$69  = frame_end & \$68 ;
+  assign \$70  = ~ frame_cds;
+  assign \$71  = \$69  & \$70 ;
+  assign \$72  = step == 5'h11;
+  assign \$73  = frame_end & \$72 ;
+  assign \$74  = frame_cds == req[17];
+  assign \$75  = \$73  & \$74 ;
+  assign \$76  = ! step;
+  assign \$77  = step >= 1'h1;
+  assign \$78  = step <= 4'hb;
+  assign \$79  = \$77  & \$78 ;
+  assign \$80  = ! step;
+  assign \$81  = step >= 1'h1;
+  assign \$82  = step <= 4'h8;
+  assign \$83  = \$81  & \$82 ;
+  assign \$84  = \$83  & req[17];
+  assign \$85  = step >= 4'h9;
+  assign \$86  = step <= 4'hc;
+  assign \$87  = \$85  & \$86 ;
+  assign \$88  = \$87  & req[17];
+  assign \$89  = step - 4'h9;
+  assign \$90  = step >= 1'h1;
+  assign \$91  = frame_end & \$90 ;
+  assign \$92  = step <= 4'h8;
+  assign \$93  = \$91  & \$92 ;
+  assign \$94  = ~ frame_ok;
+  assign \$95  = frame_end & \$94 ;
+  assign \$96  = ! step;
+  assign \$97  = frame_end & \$96 ;
+  assign \$98  = step == 1'h1;
+  assign \$99  = frame_end & \$98 ;
+  assign \$100  = step < 4'hd;
+  assign \$101  = frame_end & \$100 ;
+  assign \$102  = ! index;
+  assign \$103  = \$102  ? req[17] : 1'h0;
+  assign \$104  = frame_cds != \$103 ;
+  assign \$105  = step <= 4'h9;
+  assign \$106  = step == 2'h2;
+  assign \$107  = ~ crc_ok;
+  assign \$108  = ~ echo_ok;
+  assign \$109  = req[17] & \$108 ;
+  assign \$110  = ~ req[17];
+  assign busy = ~ \$111 ;
+  assign \$111  = ! access_fsm_state;
+  assign \$112  = access_fsm_state == 1'h1;
+  assign \$113  = access_fsm_state == 2'h2;
+  assign \$114  = access_fsm_state == 2'h3;
+  assign \$115  = access_fsm_state == 3'h4;
+  assign \$116  = access_fsm_state == 3'h5;
+  assign \$117  = access_fsm_state == 3'h6;
+  always @(posedge clk)
+    done <= \$118 ;
+  always @(posedge clk)
+    result <= \$119 ;
+  always @(posedge clk)
+    access_fsm_state <= \$120 ;
+  always @(posedge clk)
+    req <= \$121 ;
+  always @(posedge clk)
+    index <= \$122 ;
+  always @(posedge clk)
+    step <= \$123 ;
+  always @(posedge clk)
+    ending <= \$124 ;
+  always @(posedge clk)
+    waited <= \$125 ;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    \$118  = 1'h0;
+    casez (access_fsm_state)
+      3'h0:
+          if (start) begin
+            if (\$6 ) begin
+              \$118  = 1'h1;
+            end
+          end
+      3'h1:
+          if (abort) begin
+            \$118  = 1'h1;
+          end else if (\$8 ) begin
+            \$118  = 1'h1;
+          end
+      3'h2:
+          /* empty */;
+      3'h4:
+          /* empty */;
+      3'h5:
+          /* empty */;
+      3'h6:
+          if (abort) begin
+          end else if (\$51 ) begin
+          end else if (\$52 ) begin
+          end else if (frame_end) begin
+            \$118  = 1'h1;
+          end
+      3'h3:
+          if (run_enough) begin
+            \$118  = 1'h1;
+          end
+    endcase
+    if (rst) begin
+      \$118  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    \$119  = result;
+    casez (access_fsm_state)
+      3'h0:
+          if (start) begin
+            (* full_case = 32'd1 *)
+            if (\$6 ) begin
+              \$119 [2:0] = 3'h6;
+              \$119 [9:3] = 7'h00;
+            end else begin
+              \$119 [9:3] = 7'h00;
+            end
+          end
+      3'h1:
+          if (abort) begin
+            \$119 [2:0] = 3'h4;
+          end else if (\$8 ) begin
+            \$119 [2:0] = 3'h5;
+          end
+      3'h2:
+          /* empty */;
+      3'h4:
+          if (abort) begin
+          end else if (\$26 ) begin
+          end else if (\$28 ) begin
+          end else if (\$30 ) begin
+          end else if (\$32 ) begin
+          end else if (frame_end) begin
+            (* full_case = 32'd1 *)
+            if (\$38 ) begin
+            end else if (\$40 ) begin
+            end else begin
+              \$119 [9:3] = \$41 ;
+            end
+          end
+      3'h5:
+          /* empty */;
+      3'h6:
+          if (abort) begin
+          end else if (\$51 ) begin
+          end else if (\$52 ) begin
+          end else if (frame_end) begin
+            \$119 [2:0] = 3'h0;
+          end
+      3'h3:
+          if (run_enough) begin
+            \$119 [2:0] = ending;
+          end
+    endcase
+    if (rst) begin
+      \$119  = 10'h000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    \$120  = access_fsm_state;
+    casez (access_fsm_state)
+      3'h0:
+          if (start) begin
+            (* full_case = 32'd1 *)
+            if (\$6 ) begin
+              \$120  = 3'h0;
+            end else begin
+              \$120  = 3'h1;
+            end
+          end
+      3'h1:
+          if (abort) begin
+            \$120  = 3'h0;
+          end else if (\$8 ) begin
+            \$120  = 3'h0;
+          end else if (seen_enough) begin
+            \$120  = 3'h2;
+          end
+      3'h2:
+          if (abort) begin
+            \$120  = 3'h3;
+          end else if (\$12 ) begin
+          end else if (\$14 ) begin
+            \$120  = 3'h3;
+          end else if (\$18 ) begin
+            \$120  = 3'h3;
+          end else if (\$22 ) begin
+            \$120  = 3'h3;
+          end else if (frame_end) begin
+            if (\$24 ) begin
+              \$120  = 3'h4;
+            end
+          end
+      3'h4:
+          if (abort) begin
+            \$120  = 3'h3;
+          end else if (\$26 ) begin
+            \$120  = 3'h3;
+          end else if (\$28 ) begin
+            if (\$35 ) begin
+              \$120  = 3'h3;
+            end
+          end else if (\$30 ) begin
+            (* full_case = 32'd1 *)
+            if (frame_cds) begin
+            end else if (\$36 ) begin
+              \$120  = 3'h5;
+            end else begin
+              \$120  = 3'h3;
+            end
+          end else if (\$32 ) begin
+          end else if (frame_end) begin
+            (* full_case = 32'd1 *)
+            if (\$38 ) begin
+              \$120  = 3'h3;
+            end else if (\$40 ) begin
+              \$120  = 3'h3;
+            end else begin
+              if (\$43 ) begin
+                \$120  = 3'h6;
+              end
+            end
+          end
+      3'h5:
+          if (abort) begin
+            \$120  = 3'h3;
+          end else if (\$46 ) begin
+            \$120  = 3'h3;
+          end else if (\$47 ) begin
+            \$120  = 3'h4;
+          end else if (frame_end) begin
+            if (\$49 ) begin
+              \$120  = 3'h3;
+            end
+          end
+      3'h6:
+          if (abort) begin
+            \$120  = 3'h3;
+          end else if (\$51 ) begin
+            \$120  = 3'h3;
+          end else if (\$52 ) begin
+            \$120  = 3'h3;
+          end else if (frame_end) begin
+            \$120  = 3'h0;
+          end
+      3'h3:
+          if (run_enough) begin
+            \$120  = 3'h0;
+          end
+    endcase
+    if (rst) begin
+      \$120  = 3'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    \$121  = req;
+    casez (access_fsm_state)
+      3'h0:
+          if (start) begin
+            (* full_case = 32'd1 *)
+            if (\$6 ) begin
+            end else begin
+              \$121  = request;
+            end
+          end
+    endcase
+    if (rst) begin
+      \$121  = 18'h00000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    \$122  = index;
+    casez (access_fsm_state)
+      3'h0:
+          if (start) begin
+            (* full_case = 32'd1 *)
+            if (\$6 ) begin
+            end else begin
+              \$122  = 6'h00;
+            end
+          end
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h4:
+          if (abort) begin
+          end else if (\$26 ) begin
+          end else if (\$28 ) begin
+          end else if (\$30 ) begin
+          end else if (\$32 ) begin
+          end else if (frame_end) begin
+            (* full_case = 32'd1 *)
+            if (\$38 ) begin
+            end else if (\$40 ) begin
+            end else begin
+              (* full_case = 32'd1 *)
+              if (\$43 ) begin
+              end else begin
+                \$122  = \$44 [5:0];
+              end
+            end
+          end
+    endcase
+    if (rst) begin
+      \$122  = 6'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    \$123  = step;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (abort) begin
+          end else if (\$8 ) begin
+          end else if (seen_enough) begin
+            \$123  = 5'h00;
+          end
+      3'h2:
+          if (abort) begin
+          end else if (\$12 ) begin
+          end else if (\$14 ) begin
+          end else if (\$18 ) begin
+          end else if (\$22 ) begin
+          end else if (frame_end) begin
+            \$123  = \$23 [4:0];
+            if (\$24 ) begin
+              \$123  = 5'h00;
+            end
+          end
+      3'h4:
+          if (abort) begin
+          end else if (\$26 ) begin
+          end else if (\$28 ) begin
+            (* full_case = 32'd1 *)
+            if (\$35 ) begin
+            end else begin
+              \$123  = 5'h01;
+            end
+          end else if (\$30 ) begin
+            if (frame_cds) begin
+              \$123  = 5'h02;
+            end
+          end else if (\$32 ) begin
+            \$123  = \$37 [4:0];
+          end else if (frame_end) begin
+            (* full_case = 32'd1 *)
+            if (\$38 ) begin
+            end else if (\$40 ) begin
+            end else begin
+              \$123  = 5'h00;
+            end
+          end
+      3'h5:
+          if (abort) begin
+          end else if (\$46 ) begin
+          end else if (\$47 ) begin
+            \$123  = 5'h02;
+          end
+    endcase
+    if (rst) begin
+      \$123  = 5'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    \$124  = ending;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          if (abort) begin
+            \$124  = 3'h4;
+          end else if (\$12 ) begin
+          end else if (\$14 ) begin
+            \$124  = 3'h5;
+          end else if (\$18 ) begin
+            \$124  = 3'h2;
+          end else if (\$22 ) begin
+            \$124  = 3'h3;
+          end
+      3'h4:
+          if (abort) begin
+            \$124  = 3'h4;
+          end else if (\$26 ) begin
+            \$124  = 3'h5;
+          end else if (\$28 ) begin
+            if (\$35 ) begin
+              \$124  = 3'h3;
+            end
+          end else if (\$30 ) begin
+            (* full_case = 32'd1 *)
+            if (frame_cds) begin
+            end else if (\$36 ) begin
+            end else begin
+              \$124  = 3'h3;
+            end
+          end else if (\$32 ) begin
+          end else if (frame_end) begin
+            if (\$38 ) begin
+              \$124  = 3'h1;
+            end else if (\$40 ) begin
+              \$124  = 3'h3;
+            end
+          end
+      3'h5:
+          if (abort) begin
+            \$124  = 3'h4;
+          end else if (\$46 ) begin
+            \$124  = 3'h5;
+          end else if (\$47 ) begin
+          end else if (frame_end) begin
+            if (\$49 ) begin
+              \$124  = 3'h3;
+            end
+          end
+      3'h6:
+          if (abort) begin
+            \$124  = 3'h4;
+          end else if (\$51 ) begin
+            \$124  = 3'h5;
+          end else if (\$52 ) begin
+            \$124  = 3'h3;
+          end
+    endcase
+    if (rst) begin
+      \$124  = 3'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    \$125  = waited;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h4:
+          if (abort) begin
+          end else if (\$26 ) begin
+          end else if (\$28 ) begin
+          end else if (\$30 ) begin
+            if (frame_cds) begin
+            end else if (\$36 ) begin
+              \$125  = 5'h00;
+            end
+          end
+      3'h5:
+          if (abort) begin
+          end else if (\$46 ) begin
+          end else if (\$47 ) begin
+          end else if (frame_end) begin
+            \$125  = \$48 [4:0];
+          end
+    endcase
+    if (rst) begin
+      \$125  = 5'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    send__load_header = 1'h0;
+    casez (access_fsm_state)
+      3'h0:
+          if (start) begin
+            (* full_case = 32'd1 *)
+            if (\$58 ) begin
+            end else begin
+              send__load_header = 1'h1;
+            end
+          end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    send__source = 3'h0;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          (* full_case = 32'd1 *)
+          if (\$61 ) begin
+            send__source = 3'h4;
+          end else begin
+            send__source = 3'h2;
+          end
+      3'h4:
+          if (\$80 ) begin
+            send__source = 3'h1;
+          end else if (\$84 ) begin
+            send__source = 3'h3;
+          end else if (\$88 ) begin
+            send__source = 3'h4;
+          end
+      3'h5:
+          send__source = 3'h1;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    send__crc_bit = 2'h0;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          if (\$61 ) begin
+            send__crc_bit = step[1:0];
+          end
+      3'h4:
+          if (\$80 ) begin
+          end else if (\$84 ) begin
+          end else if (\$88 ) begin
+            send__crc_bit = \$89 [1:0];
+          end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    send__shift_header = 1'h0;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          if (abort) begin
+          end else if (\$65 ) begin
+          end else if (\$67 ) begin
+          end else if (\$71 ) begin
+          end else if (\$75 ) begin
+          end else if (frame_end) begin
+            send__shift_header = 1'h1;
+          end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    send__crc_start = 1'h0;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          if (abort) begin
+          end else if (\$65 ) begin
+          end else if (\$67 ) begin
+          end else if (\$71 ) begin
+          end else if (\$75 ) begin
+          end else if (frame_end) begin
+            send__crc_start = \$76 ;
+          end
+      3'h4:
+          if (abort) begin
+          end else if (\$95 ) begin
+          end else if (\$97 ) begin
+            (* full_case = 32'd1 *)
+            if (\$104 ) begin
+            end else begin
+              send__crc_start = 1'h1;
+            end
+          end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    send__crc_valid = 1'h0;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          if (abort) begin
+          end else if (\$65 ) begin
+          end else if (\$67 ) begin
+          end else if (\$71 ) begin
+          end else if (\$75 ) begin
+          end else if (frame_end) begin
+            send__crc_valid = \$79 ;
+          end
+      3'h4:
+          send__crc_valid = \$93 ;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    send__load_byte = 1'h0;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h4:
+          if (abort) begin
+          end else if (\$95 ) begin
+          end else if (\$97 ) begin
+            (* full_case = 32'd1 *)
+            if (\$104 ) begin
+            end else begin
+              send__load_byte = 1'h1;
+            end
+          end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    send__shift_byte = 1'h0;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h4:
+          if (abort) begin
+          end else if (\$95 ) begin
+          end else if (\$97 ) begin
+          end else if (\$99 ) begin
+            send__shift_byte = 1'h1;
+          end else if (\$101 ) begin
+            send__shift_byte = 1'h1;
+          end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    check__take_data = 1'h0;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h4:
+          if (abort) begin
+          end else if (\$95 ) begin
+          end else if (\$97 ) begin
+          end else if (\$99 ) begin
+          end else if (\$101 ) begin
+            if (\$105 ) begin
+              check__take_data = 1'h1;
+            end
+          end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    check__first = 1'h0;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h4:
+          if (abort) begin
+          end else if (\$95 ) begin
+          end else if (\$97 ) begin
+          end else if (\$99 ) begin
+          end else if (\$101 ) begin
+            if (\$105 ) begin
+              check__first = \$106 ;
+            end
+          end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    check__take_crc = 1'h0;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h4:
+          if (abort) begin
+          end else if (\$95 ) begin
+          end else if (\$97 ) begin
+          end else if (\$99 ) begin
+          end else if (\$101 ) begin
+            (* full_case = 32'd1 *)
+            if (\$105 ) begin
+            end else begin
+              check__take_crc = 1'h1;
+            end
+          end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    store = 1'h0;
+    casez (access_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h4:
+          if (abort) begin
+          end else if (\$95 ) begin
+          end else if (\$97 ) begin
+          end else if (\$99 ) begin
+          end else if (\$101 ) begin
+          end else if (frame_end) begin
+            (* full_case = 32'd1 *)
+            if (\$107 ) begin
+            end else if (\$109 ) begin
+            end else begin
+              store = \$110 ;
+            end
+          end
+    endcase
+  end
+  assign \request.slave_id  = request[2:0];
+  assign \request.address  = request[9:3];
+  assign \request.count  = request[16:10];
+  assign \request.write  = request[17];
+  assign \result.status  = result[2:0];
+  assign \result.bytes_done  = result[9:3];
+  assign \req.slave_id  = req[2:0];
+  assign \req.address  = req[9:3];
+  assign \req.count  = req[16:10];
+  assign \req.write  = req[17];
+endmodule
+
+(* generator = "Amaranth" *)
 module \biss_master_wb.ch1.core.results (rst, report, valid, frame, report_frame, report_delay, done, valid_out, result, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$94  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$102  = 0;
   reg \$1 ;
   reg \$2 ;
   reg [160:0] \$3 ;
@@ -21832,21 +22680,21 @@ module \biss_master_wb.ch1.core.results (rst, report, valid, frame, report_frame
   always @(posedge clk)
     result <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$94 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
     \$1  = report;
     if (rst) begin
       \$1  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$94 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
     \$2  = valid;
     if (rst) begin
       \$2  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$94 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
     \$3  = result;
     if (report) begin
       \$3 [3:0] = frame[3:0];
@@ -21911,7 +22759,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_clear, arm, early, locked, delay, sample, level, slo);
-  reg \$auto$verilog_backend.cc:2355:dump_module$95  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$103  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -22149,7 +22997,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_
     .stage1(level)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     \$63  = level;
     if (receiver_clear) begin
       \$63  = 1'h1;
@@ -22159,7 +23007,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     \$64  = mid_delay;
     if (odd) begin
       \$64  = \$8 [12:0];
@@ -22184,7 +23032,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     \$65  = mid_slot;
     (* full_case = 32'd1 *)
     if (odd) begin
@@ -22211,7 +23059,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     \$66  = \$10 ;
     casez (sampler_fsm_state)
       2'h0:
@@ -22233,7 +23081,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     \$67  = elapsed;
     casez (sampler_fsm_state)
       2'h0:
@@ -22257,7 +23105,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     \$68  = early;
     casez (sampler_fsm_state)
       2'h0:
@@ -22273,7 +23121,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     \$69  = locked;
     casez (sampler_fsm_state)
       2'h0:
@@ -22299,7 +23147,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     \$70  = gap;
     casez (sampler_fsm_state)
       2'h0:
@@ -22330,7 +23178,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     \$71  = sampler_fsm_state;
     casez (sampler_fsm_state)
       2'h0:
@@ -22361,7 +23209,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     \$72  = slot_left;
     casez (sampler_fsm_state)
       2'h0:
@@ -22411,7 +23259,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     \$73  = slot_zero;
     casez (sampler_fsm_state)
       2'h0:
@@ -22461,7 +23309,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     \$74  = vote1;
     casez (sampler_fsm_state)
       2'h0:
@@ -22491,7 +23339,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     \$75  = vote2;
     casez (sampler_fsm_state)
       2'h0:
@@ -22519,7 +23367,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     \$76  = first_slot;
     casez (sampler_fsm_state)
       2'h0:
@@ -22545,7 +23393,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     \$77  = delay;
     casez (sampler_fsm_state)
       2'h0:
@@ -22568,7 +23416,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     \$78  = phase;
     casez (sampler_fsm_state)
       2'h0:
@@ -22608,7 +23456,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     sample = \$44 ;
     casez (sampler_fsm_state)
       2'h0:
@@ -22626,7 +23474,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     decided = 1'h0;
     casez (sampler_fsm_state)
       2'h0:
@@ -22676,7 +23524,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1.core.scheduler (rst, trigger, periodic, request, overrun, start, abort, period, idle, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$96  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$104  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -22760,7 +23608,7 @@ module \biss_master_wb.ch1.core.scheduler (rst, trigger, periodic, request, over
   always @(posedge clk)
     period_start <= \$28 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$96 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$104 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$27  = 24'h000001;
@@ -22772,7 +23620,7 @@ module \biss_master_wb.ch1.core.scheduler (rst, trigger, periodic, request, over
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$96 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$104 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$28  = 1'h1;
@@ -22786,8 +23634,8 @@ module \biss_master_wb.ch1.core.scheduler (rst, trigger, periodic, request, over
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.sign_of_life (rst, \port$2542$0 , load, \repeat , skip, check, resync, lc, is_zero, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$97  = 0;
+module \biss_master_wb.ch1.core.sign_of_life (rst, \port$2566$0 , load, \repeat , skip, check, resync, lc, is_zero, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$105  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -22824,8 +23672,8 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, \port$2542$0 , load, \repeat 
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$2542$0 ;
-  wire \port$2542$0 ;
+  input \port$2566$0 ;
+  wire \port$2566$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -22837,9 +23685,9 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, \port$2542$0 , load, \repeat 
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$2542$0  };
-  assign \$2  = { lc[4:0], \port$2542$0  } == last;
-  assign \$3  = { lc[4:0], \port$2542$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$2566$0  };
+  assign \$2  = { lc[4:0], \port$2566$0  } == last;
+  assign \$3  = { lc[4:0], \port$2566$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = lc == 6'h3f;
@@ -22867,7 +23715,7 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, \port$2542$0 , load, \repeat 
   always @(posedge clk)
     synced <= \$21 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
     \$16  = is_zero;
     if (load) begin
       \$16  = \$1 ;
@@ -22877,7 +23725,7 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, \port$2542$0 , load, \repeat 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
     \$17  = is_last;
     if (load) begin
       \$17  = \$2 ;
@@ -22887,7 +23735,7 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, \port$2542$0 , load, \repeat 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
     \$18  = is_expected;
     if (load) begin
       \$18  = \$3 ;
@@ -22897,7 +23745,7 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, \port$2542$0 , load, \repeat 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
     \$19  = last;
     if (\$5 ) begin
       \$19  = lc;
@@ -22907,7 +23755,7 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, \port$2542$0 , load, \repeat 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
     \$20  = expected;
     if (\$5 ) begin
       \$20  = \$8 [5:0];
@@ -22917,7 +23765,7 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, \port$2542$0 , load, \repeat 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
     \$21  = synced;
     if (\$5 ) begin
       \$21  = 1'h1;
@@ -22929,13 +23777,13 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, \port$2542$0 , load, \repeat 
       \$21  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$2542$0  };
+  assign lc_next = { lc[4:0], \port$2566$0  };
   assign zero = is_zero;
 endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1.core.spw_check (rst, bits, \tolerance$8 , spw, cpw_top, match, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$98  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$106  = 0;
   wire [40:0] \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -23140,28 +23988,28 @@ module \biss_master_wb.ch1.core.spw_check (rst, bits, \tolerance$8 , spw, cpw_to
   assign \$7  = bits > 3'h5;
   assign \$8  = bits > 3'h6;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$106 ) begin end
     \$88  = \$42 ;
     if (rst) begin
       \$88  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$106 ) begin end
     \$89  = \$84 ;
     if (rst) begin
       \$89  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$106 ) begin end
     \$90  = \tolerance$8 ;
     if (rst) begin
       \$90  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$106 ) begin end
     \$91  = \$87 ;
     if (rst) begin
       \$91  = 1'h0;
@@ -23171,7 +24019,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1.core.time_base (rst, first_rise, first_rise_time, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$99  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$107  = 0;
   wire [32:0] \$1 ;
   reg [31:0] \$2 ;
   reg [31:0] \$3 ;
@@ -23190,14 +24038,14 @@ module \biss_master_wb.ch1.core.time_base (rst, first_rise, first_rise_time, clk
   always @(posedge clk)
     first_rise_time <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$107 ) begin end
     \$2  = \$1 [31:0];
     if (rst) begin
       \$2  = 32'd0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$107 ) begin end
     \$3  = first_rise_time;
     if (first_rise) begin
       \$3  = now;
@@ -23210,7 +24058,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1.core.timers (rst, restart, ma_busy, break_time, timeout_live, ack_limit, timeout_limit, delay_limit, no_start_limit, clear, in_clock, slo_stuck, slo_stuck_live, break_over, ack_expired, no_start_expired, delay_over, delay, slo, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$100  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$108  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -23348,7 +24196,7 @@ module \biss_master_wb.ch1.core.timers (rst, restart, ma_busy, break_time, timeo
   always @(posedge clk)
     delay_over <= \$43 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
     \$36  = slo_low_time_p1;
     if (\$1 ) begin
       \$36  = 25'h0000001;
@@ -23360,49 +24208,49 @@ module \biss_master_wb.ch1.core.timers (rst, restart, ma_busy, break_time, timeo
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
     \$37  = \$8 ;
     if (rst) begin
       \$37  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
     \$38  = \$16 ;
     if (rst) begin
       \$38  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
     \$39  = \$20 [24:0];
     if (rst) begin
       \$39  = 25'h0000001;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
     \$40  = \$26 ;
     if (rst) begin
       \$40  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
     \$41  = \$30 ;
     if (rst) begin
       \$41  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
     \$42  = \$34 ;
     if (rst) begin
       \$42  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
     \$43  = \$35 ;
     if (rst) begin
       \$43  = 1'h0;
@@ -23411,8 +24259,8 @@ module \biss_master_wb.ch1.core.timers (rst, restart, ma_busy, break_time, timeo
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.verdict (lc_skip_seen, \port$2942$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
-  reg \$auto$verilog_backend.cc:2355:dump_module$101  = 0;
+module \biss_master_wb.ch1.core.verdict (lc_skip_seen, \port$2966$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
+  reg \$auto$verilog_backend.cc:2355:dump_module$109  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -23525,8 +24373,8 @@ module \biss_master_wb.ch1.core.verdict (lc_skip_seen, \port$2942$0 , lc_check, 
   wire lc_zero;
   input lc_zero_seen;
   wire lc_zero_seen;
-  output \port$2942$0 ;
-  wire \port$2942$0 ;
+  output \port$2966$0 ;
+  wire \port$2966$0 ;
   output report;
   wire report;
   input report_frame;
@@ -23594,7 +24442,7 @@ module \biss_master_wb.ch1.core.verdict (lc_skip_seen, \port$2942$0 , lc_check, 
   assign \$29  = ~ { \$2 , crc_ok[0] };
   assign crc_error = report_frame ? \$29  : 2'h0;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
     (* full_case = 32'd1 *)
     if (\$13 ) begin
       frame_status = 4'h3;
@@ -23611,7 +24459,7 @@ module \biss_master_wb.ch1.core.verdict (lc_skip_seen, \port$2942$0 , lc_check, 
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$2942$0  = \$2 ;
+  assign \port$2966$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

@@ -422,7 +422,7 @@ async def idle_count_skips_missed_cycles(dut):
     DATA_FAULT by a cycle without an answer in its header, are each followed by a read. The
     engine once counted every reported cycle that carried CDM = 0, sent S in the read's first
     cycle, and the encoder (2 idle frames seen, 13 after the DATA_FAULT) ignored it: NO_ANSWER.
-    Now S waits for 14 cycles that delivered a good frame (register_access.py, ``idle_seen``):
+    Now S waits for 14 cycles that delivered a good frame (idle_count.py, ``idle_seen``):
     every read is OK. BP3 DL_POS 24 at
     10 MHz, 0 m."""
     regs = bp3_registers(Bp3Eds(24))

@@ -95,15 +95,15 @@ INTERNALS = {
     "master.request": ("port", "scheduler", "request"),         # the controller's request input
     "master.cdm_cycle": ("port", "controller", "cdm_cycle"),    # the cycle's CDM bit
     # RegisterAccess
-    "access.fsm": ("fsm", "", "access_fsm"),                    # IDLE, LEAD, HEADER, ...
-    "access.step": ("signal", "", "step"),                      # frame in header / register
-    "access.index": ("signal", "", "index"),                    # the register in progress
-    "access.waited": ("signal", "", "waited"),                  # frames waited for a start bit
-    "access.idle_run": ("signal", "", "idle_run"),              # consecutive CDM = 0 frames
-    "access.idle_seen": ("signal", "", "idle_seen"),            # ... that delivered a good frame
-    "access.ending": ("signal", "", "ending"),                  # the status a cancel ends with
-    "access.header": ("signal", "", "header"),                  # the header's CDM bits, MSB 1st
-    "access.request": ("signal", "", "req"),                    # the request latched at start
+    "access.fsm": ("fsm", "sequencer", "access_fsm"),           # IDLE, LEAD, HEADER, ...
+    "access.step": ("signal", "sequencer", "step"),             # frame in header / register
+    "access.index": ("port", "sequencer", "index"),             # the register in progress
+    "access.waited": ("signal", "sequencer", "waited"),         # frames waited for a start bit
+    "access.idle_run": ("signal", "idle", "idle_run"),          # consecutive CDM = 0 frames
+    "access.idle_seen": ("signal", "idle", "idle_seen"),        # ... that delivered a good frame
+    "access.ending": ("signal", "sequencer", "ending"),         # the status a cancel ends with
+    "access.header": ("signal", "sender", "header"),            # the header's CDM bits, MSB 1st
+    "access.request": ("signal", "sequencer", "req"),           # the request latched at start
 }
 
 
