@@ -51,9 +51,13 @@ class AxiLiteAdapter(wiring.Component):
     Writes: the address and the data channel are taken independently (each may come first)
     into one holding register each; the write goes to the bank in the clock both are held and
     no earlier response is waiting, and its response (OKAY) follows in the next clock. A new
-    address and data can be taken while that response waits. Reads: the address is taken
-    whenever no read data is waiting, or the waiting data is being taken in the same clock,
-    so reads run back to back, one per clock; the data follows one clock after the address.
+    address and data can be taken while that response waits. Reads: two steps, as the bank's
+    read (:class:`~bissmaster.register_bank.RegisterBus`): the address taken in a clock
+    (``arvalid & arready``, the bank's ``r_en``) is pending in the next; a pending read's
+    data is loaded (``r_load``) and ``rvalid`` rises in the following clock, unless read data
+    is still waiting (``rvalid`` without ``rready``). The address is taken whenever no read
+    is pending or the pending one is loaded in the same clock, so reads run back to back,
+    one per clock, and the data follows two clocks after the address (one wait state).
     """
 
     def __init__(self, addr_width):
@@ -87,15 +91,21 @@ class AxiLiteAdapter(wiring.Component):
         with m.Elif(axil.bready):
             m.d.sync += bvalid.eq(0)
 
-        # Reads: the bank's registered read data is the R channel's data.
-        rvalid = Signal()
+        # Reads: the address to the bank (r_en), pending one clock or more, then the data
+        # (r_load) when the R channel is free.
+        pending, rvalid = Signal(), Signal()
+        load = pending & (~rvalid | axil.rready)
         read = axil.arvalid & axil.arready
         m.d.comb += [
-            axil.arready.eq(~rvalid | axil.rready),
-            regs.r_en.eq(read), regs.r_addr.eq(axil.araddr[2:]),
+            axil.arready.eq(~pending | load),
+            regs.r_en.eq(read), regs.r_addr.eq(axil.araddr[2:]), regs.r_load.eq(load),
             axil.rvalid.eq(rvalid), axil.rdata.eq(regs.r_data), axil.rresp.eq(RESP_OKAY),
         ]
         with m.If(read):
+            m.d.sync += pending.eq(1)
+        with m.Elif(load):
+            m.d.sync += pending.eq(0)
+        with m.If(load):
             m.d.sync += rvalid.eq(1)
         with m.Elif(axil.rready):
             m.d.sync += rvalid.eq(0)
@@ -105,11 +115,14 @@ class AxiLiteAdapter(wiring.Component):
 class WishboneAdapter(wiring.Component):
     """Wishbone B4 slave (classic and pipelined) -> register bus.
 
-    A request (``cyc & stb``) is taken in a clock without ``ack`` and answered with ``ack``
-    (and the read data) in the next clock. ``stall`` is high in the ``ack`` clock: a classic
-    master, which holds ``stb`` until ``ack``, is never seen twice, and a pipelined master
-    puts its next request in the clock after. One transaction per two clocks either way;
-    never ``err`` or ``rty`` (an unmapped address reads 0).
+    A request (``cyc & stb``) is taken in a clock without ``stall``. A write is answered with
+    ``ack`` in the next clock; a read, in two steps as the bank's read
+    (:class:`~bissmaster.register_bank.RegisterBus`), two clocks after it is taken (one wait
+    state), with the read data. ``stall`` is high from the clock after a request is taken
+    up to its ``ack`` clock: a classic master, which holds ``stb`` until ``ack``, is never
+    seen twice, and a pipelined master puts its next request in the clock after the ``ack``.
+    One write per two clocks, one read per three, either way; never ``err`` or ``rty`` (an
+    unmapped address reads 0).
     """
 
     def __init__(self, addr_width):
@@ -121,13 +134,15 @@ class WishboneAdapter(wiring.Component):
     def elaborate(self, platform):
         m = Module()
         wb, regs = self.wb, self.regs
-        ack = Signal()
-        take = wb.cyc & wb.stb & ~ack
-        m.d.sync += ack.eq(take)
+        # pending: a read taken in the last clock, its data loaded now and acked next clock.
+        ack, pending = Signal(), Signal()
+        busy = ack | pending
+        take = wb.cyc & wb.stb & ~busy
+        m.d.sync += [ack.eq((take & wb.we) | pending), pending.eq(take & ~wb.we)]
         m.d.comb += [
-            regs.r_en.eq(take & ~wb.we), regs.r_addr.eq(wb.adr),
+            regs.r_en.eq(take & ~wb.we), regs.r_addr.eq(wb.adr), regs.r_load.eq(pending),
             regs.w_en.eq(take & wb.we), regs.w_addr.eq(wb.adr),
             regs.w_data.eq(wb.dat_w), regs.w_strb.eq(wb.sel),
-            wb.ack.eq(ack), wb.stall.eq(ack), wb.dat_r.eq(regs.r_data),
+            wb.ack.eq(ack), wb.stall.eq(busy), wb.dat_r.eq(regs.r_data),
         ]
         return m

@@ -246,11 +246,10 @@ class BissMaster(wiring.Component):
         """Sampler -> decoder -> checks."""
         p = self.params
         two = p.words == 2
+        m.d.sync += [b.decoder.sample.eq(b.sampler.sample), b.decoder.bit.eq(b.sampler.bit)]
         m.d.comb += [
             b.sampler.half_period.eq(b.cycle.ma_half_period),
             b.sampler.arm.eq(b.ma_clock.second_rise),
-            b.decoder.sample.eq(b.sampler.sample),
-            b.decoder.bit.eq(b.sampler.bit),
             b.decoder.word_count.eq(b.config.word_count),
             b.sol.lc.eq(b.decoder.lc),
             b.sol.lc_next.eq(b.decoder.lc_next),

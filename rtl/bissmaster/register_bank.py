@@ -20,10 +20,14 @@ class RegisterBus(wiring.Signature):
     """The bank's internal bus, as the initiator (a bus adapter) sees it.
 
     Word addresses. A write happens in the clock ``w_en`` is high, byte lanes chosen by
-    ``w_strb``. A read: ``r_en`` high in one clock, ``r_data`` holds the register's value from
-    the next clock until the next ``r_en`` (a read with side effects, the snapshot, acts in
-    the ``r_en`` clock). A read and a write may come in the same clock; the read sees the
-    value before the write.
+    ``w_strb``. A read takes two steps, so that the address decode and the word select each
+    have a clock of their own. ``r_en`` high in one clock: the register is read in that clock
+    (its value then, and a read with side effects, the snapshot, acts then). ``r_load`` high
+    in a later clock, at the latest the clock of the next ``r_en``: ``r_data`` holds the
+    word read from the next clock until the clock after the next ``r_load``. So reads run one
+    per clock (each ``r_load`` with the next ``r_en``), and the initiator can hold a word
+    while the next read waits in the first step. A read and a write may come in the same
+    clock; the read sees the value before the write.
     """
 
     def __init__(self, addr_width):
@@ -31,6 +35,7 @@ class RegisterBus(wiring.Signature):
         super().__init__({
             "r_en": Out(1),
             "r_addr": Out(addr_width),
+            "r_load": Out(1),
             "r_data": In(DATA_WIDTH),
             "w_en": Out(1),
             "w_addr": Out(addr_width),
@@ -64,8 +69,14 @@ class RegisterBank(wiring.Component):
     same clock. Unmapped addresses read 0 and ignore writes. A window (an external register
     array) is a memory's port: a write of word ``i`` writes its strobed byte lanes to word ``i``
     (``<window>_en`` = the strobes, in the clock of the write); a read of word ``i`` enables
-    the memory's registered read port in the ``r_en`` clock, and its data is ``r_data`` from
-    the next clock on, as a register's is (the port must hold it until its next read).
+    the memory's registered read port in the ``r_en`` clock, and its data goes to ``r_data``
+    at ``r_load``, as a register's word does (the port must hold it until its next read).
+
+    The read path is two register stages (:class:`RegisterBus`): at ``r_en`` each block (the
+    globals, each channel) registers the word of its register addressed, or 0 when the address
+    is not one of its registers; at ``r_load`` ``r_data`` registers the OR of the blocks'
+    words and the data of a window read. CONFIG fields are written lane by lane, each byte
+    lane's strobe the enable of its flip-flops.
 
     Attributes
     ----------
@@ -98,33 +109,33 @@ class RegisterBank(wiring.Component):
         blocks = [(self.glob, 0, rm.globals, "g")]
         blocks += [(getattr(self, f"ch{n}"), rm.channel_base + n * rm.channel_stride,
                     rm.channel, f"ch{n}") for n in range(self.channels)]
-        read_words = {}
+        block_words = []               # per block: the register stage of its read word
         windows = []                   # (read, data) of every read window
         irqs = []
         for port, base, registers, prefix in blocks:
+            read_words = {}
             irq = self._block(m, port, base, registers, prefix, read_words, windows)
             if prefix != "g":
                 irqs.append(irq)
+            block_words.append(self._read_stage(m, prefix, read_words))
         # Whole signals, never bit by bit: Icarus runs a combinational block written per bit
         # only once an input changes, and would read X until then.
         m.d.comb += self.irq.eq(Cat(irqs))
 
-        # The read port: one registered word, loaded on r_en (0 for a window's address) ...
-        word = Signal(DATA_WIDTH)
-        with m.If(self.bus.r_en):
-            with m.Switch(self.bus.r_addr):
-                for addr, value in read_words.items():
-                    with m.Case(addr):
-                        m.d.sync += word.eq(value)
-                with m.Default():
-                    m.d.sync += word.eq(0)
-        # ... or the registered data of the window that was read.
-        data = word
+        # Read stage 2: the blocks' words (all 0 but the addressed one's) and the registered
+        # data of the window that was read, loaded on r_load.
+        data = Signal(DATA_WIDTH, name="read_data")
+        chosen_data = []
         for n, (read, window_data) in enumerate(windows):
             chosen = Signal(name=f"window{n}_read")
             with m.If(self.bus.r_en):
                 m.d.sync += chosen.eq(read)
-            data = data | Mux(chosen, window_data, 0)
+            chosen_data.append(Mux(chosen, window_data, 0))
+        merged = 0
+        for value in block_words + chosen_data:
+            merged = merged | value
+        with m.If(self.bus.r_load):
+            m.d.sync += data.eq(merged)
         m.d.comb += self.bus.r_data.eq(data)
         return m
 
@@ -154,8 +165,10 @@ class RegisterBank(wiring.Component):
                 if f.kind == Kind.CONFIG:
                     reg_bits = Signal(f.width, init=f.reset, name=name)
                     storage[f"{reg.path}.{f.name}"] = reg_bits
-                    with m.If(write):
-                        m.d.sync += reg_bits.eq((reg_bits & ~lanes) | (data & lanes))
+                    # Lane by lane: each lane's strobe enables its flip-flops, no logic per bit.
+                    for lo, hi, lane in self._lanes(f):
+                        with m.If(write & bus.w_strb[lane]):
+                            m.d.sync += reg_bits[lo:hi].eq(data[lo:hi])
                     parts.append((f.lsb, reg_bits))
                     if f.signal:
                         m.d.comb += self._signal(port, f).eq(reg_bits)
@@ -199,6 +212,23 @@ class RegisterBank(wiring.Component):
                                for status, enable in irq_terms if enable).any())
         return irq
 
+    def _read_stage(self, m, prefix, read_words):
+        """Read stage 1 of one block: at ``r_en``, the word of the register addressed, or 0
+        when no register of the block is. Returns the register.
+
+        A switch on the whole address, one case per register: Yosys maps it as a one-hot
+        AND-OR; a switch on the address bits inside the block becomes a binary multiplexer
+        tree twice as large (ECP5: 1263 against 720 LUT4 for one channel's bank)."""
+        word = Signal(DATA_WIDTH, name=f"{prefix}_read_word")
+        with m.If(self.bus.r_en):
+            with m.Switch(self.bus.r_addr):
+                for addr, value in read_words.items():
+                    with m.Case(addr):
+                        m.d.sync += word.eq(value)
+                with m.Default():
+                    m.d.sync += word.eq(0)
+        return word
+
     def _window(self, m, port, word, reg, windows):
         """A window: the bus's word address inside it, its strobes or read enable, its data."""
         bus = self.bus
@@ -224,6 +254,16 @@ class RegisterBank(wiring.Component):
         if f.signal_lsb == 0 and f.width == len(signal):
             return signal
         return signal[f.signal_lsb:f.signal_lsb + f.width]
+
+    @staticmethod
+    def _lanes(f):
+        """``(lo, hi, lane)``: the bits ``lo:hi`` of field ``f`` that byte lane ``lane`` holds."""
+        at = 0
+        while at < f.width:
+            lane = (f.lsb + at) // 8
+            hi = min(f.width, (lane + 1) * 8 - f.lsb)
+            yield at, hi, lane
+            at = hi
 
     @staticmethod
     def _word(parts):

@@ -54,6 +54,7 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
   wire [10:0] bus__r_addr;
   wire [31:0] bus__r_data;
   wire bus__r_en;
+  wire bus__r_load;
   wire [10:0] bus__w_addr;
   wire [31:0] bus__w_data;
   wire bus__w_en;
@@ -243,186 +244,187 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
   wire glob__trigger;
   output irq;
   reg irq = 1'h0;
-  wire [1:0] \irq$407 ;
+  wire [1:0] \irq$409 ;
   wire ma;
-  wire \ma$403 ;
+  wire \ma$405 ;
   wire regs__abort_cycle;
-  wire \regs__abort_cycle$232 ;
+  wire \regs__abort_cycle$234 ;
   wire regs__busy;
-  wire \regs__busy$235 ;
+  wire \regs__busy$237 ;
   wire regs__ca_abort;
-  wire \regs__ca_abort$236 ;
+  wire \regs__ca_abort$238 ;
   wire [6:0] regs__ca_address;
-  wire [6:0] \regs__ca_address$238 ;
+  wire [6:0] \regs__ca_address$240 ;
   wire regs__ca_busy;
-  wire \regs__ca_busy$241 ;
+  wire \regs__ca_busy$243 ;
   wire [6:0] regs__ca_bytes_done;
-  wire [6:0] \regs__ca_bytes_done$243 ;
+  wire [6:0] \regs__ca_bytes_done$245 ;
   wire [6:0] regs__ca_count;
-  wire [6:0] \regs__ca_count$244 ;
+  wire [6:0] \regs__ca_count$246 ;
   wire regs__ca_done;
-  wire \regs__ca_done$247 ;
+  wire \regs__ca_done$249 ;
   wire [3:0] regs__ca_rbuf_addr;
-  wire [3:0] \regs__ca_rbuf_addr$248 ;
+  wire [3:0] \regs__ca_rbuf_addr$250 ;
   wire [31:0] regs__ca_rbuf_data;
-  wire [31:0] \regs__ca_rbuf_data$251 ;
+  wire [31:0] \regs__ca_rbuf_data$253 ;
   wire regs__ca_rbuf_en;
-  wire \regs__ca_rbuf_en$252 ;
+  wire \regs__ca_rbuf_en$254 ;
   wire [2:0] regs__ca_slave_id;
-  wire [2:0] \regs__ca_slave_id$254 ;
+  wire [2:0] \regs__ca_slave_id$256 ;
   wire regs__ca_start;
-  wire \regs__ca_start$256 ;
+  wire \regs__ca_start$258 ;
   wire [2:0] regs__ca_status;
-  wire [2:0] \regs__ca_status$259 ;
+  wire [2:0] \regs__ca_status$261 ;
   wire [3:0] regs__ca_wbuf_addr;
-  wire [3:0] \regs__ca_wbuf_addr$260 ;
+  wire [3:0] \regs__ca_wbuf_addr$262 ;
   wire [31:0] regs__ca_wbuf_data;
-  wire [31:0] \regs__ca_wbuf_data$262 ;
+  wire [31:0] \regs__ca_wbuf_data$264 ;
   wire [3:0] regs__ca_wbuf_en;
-  wire [3:0] \regs__ca_wbuf_en$264 ;
+  wire [3:0] \regs__ca_wbuf_en$266 ;
   wire regs__ca_write;
-  wire \regs__ca_write$266 ;
+  wire \regs__ca_write$268 ;
   wire regs__cap_counters;
-  wire \regs__cap_counters$269 ;
+  wire \regs__cap_counters$271 ;
   wire [5:0] regs__cap_data_bits_w0;
-  wire [5:0] \regs__cap_data_bits_w0$271 ;
+  wire [5:0] \regs__cap_data_bits_w0$273 ;
   wire [5:0] regs__cap_data_bits_w1;
-  wire [5:0] \regs__cap_data_bits_w1$273 ;
+  wire [5:0] \regs__cap_data_bits_w1$275 ;
   wire regs__cap_register_access;
-  wire \regs__cap_register_access$275 ;
+  wire \regs__cap_register_access$277 ;
   wire [5:0] regs__cap_timer_width;
-  wire [5:0] \regs__cap_timer_width$277 ;
+  wire [5:0] \regs__cap_timer_width$279 ;
   wire regs__cap_timestamp;
-  wire \regs__cap_timestamp$279 ;
+  wire \regs__cap_timestamp$281 ;
   wire regs__cds;
-  wire \regs__cds$281 ;
+  wire \regs__cds$283 ;
   wire [23:0] regs__cfg_ack_limit;
-  wire [23:0] \regs__cfg_ack_limit$282 ;
+  wire [23:0] \regs__cfg_ack_limit$284 ;
   wire [23:0] regs__cfg_break_time;
-  wire [23:0] \regs__cfg_break_time$284 ;
+  wire [23:0] \regs__cfg_break_time$286 ;
   wire [11:0] regs__cfg_delay_limit;
-  wire [11:0] \regs__cfg_delay_limit$286 ;
+  wire [11:0] \regs__cfg_delay_limit$288 ;
   wire regs__cfg_end_check;
-  wire \regs__cfg_end_check$288 ;
+  wire \regs__cfg_end_check$290 ;
   wire [15:0] regs__cfg_ma_half_period;
-  wire [15:0] \regs__cfg_ma_half_period$290 ;
+  wire [15:0] \regs__cfg_ma_half_period$292 ;
   wire [23:0] regs__cfg_request_period;
-  wire [23:0] \regs__cfg_request_period$292 ;
+  wire [23:0] \regs__cfg_request_period$294 ;
   wire regs__cfg_spw_check;
-  wire \regs__cfg_spw_check$294 ;
+  wire \regs__cfg_spw_check$296 ;
   wire [7:0] regs__cfg_spw_tolerance;
-  wire [7:0] \regs__cfg_spw_tolerance$296 ;
+  wire [7:0] \regs__cfg_spw_tolerance$298 ;
   wire [23:0] regs__cfg_timeout_limit;
-  wire [23:0] \regs__cfg_timeout_limit$298 ;
+  wire [23:0] \regs__cfg_timeout_limit$300 ;
   wire [1:0] regs__cfg_w0_crc;
-  wire [1:0] \regs__cfg_w0_crc$300 ;
+  wire [1:0] \regs__cfg_w0_crc$302 ;
   wire [5:0] regs__cfg_w0_data_bits;
-  wire [5:0] \regs__cfg_w0_data_bits$302 ;
+  wire [5:0] \regs__cfg_w0_data_bits$304 ;
   wire regs__cfg_w0_lc;
-  wire \regs__cfg_w0_lc$304 ;
+  wire \regs__cfg_w0_lc$306 ;
   wire regs__cfg_w0_nenw;
-  wire \regs__cfg_w0_nenw$306 ;
+  wire \regs__cfg_w0_nenw$308 ;
   wire [1:0] regs__cfg_w1_crc;
-  wire [1:0] \regs__cfg_w1_crc$308 ;
+  wire [1:0] \regs__cfg_w1_crc$310 ;
   wire [5:0] regs__cfg_w1_data_bits;
-  wire [5:0] \regs__cfg_w1_data_bits$310 ;
+  wire [5:0] \regs__cfg_w1_data_bits$312 ;
   wire regs__cfg_w1_enable;
-  wire \regs__cfg_w1_enable$312 ;
+  wire \regs__cfg_w1_enable$314 ;
   wire regs__cfg_w1_lc;
-  wire \regs__cfg_w1_lc$314 ;
+  wire \regs__cfg_w1_lc$316 ;
   wire regs__cfg_w1_nenw;
-  wire \regs__cfg_w1_nenw$316 ;
+  wire \regs__cfg_w1_nenw$318 ;
   wire regs__clear_counters;
-  wire \regs__clear_counters$318 ;
+  wire \regs__clear_counters$320 ;
   wire regs__config_error;
-  wire \regs__config_error$321 ;
+  wire \regs__config_error$323 ;
   wire [15:0] regs__count_aborted;
-  wire [15:0] \regs__count_aborted$323 ;
+  wire [15:0] \regs__count_aborted$325 ;
   wire [15:0] regs__count_ca_aborted;
-  wire [15:0] \regs__count_ca_aborted$325 ;
+  wire [15:0] \regs__count_ca_aborted$327 ;
   wire [15:0] regs__count_ca_crc4_error;
-  wire [15:0] \regs__count_ca_crc4_error$327 ;
+  wire [15:0] \regs__count_ca_crc4_error$329 ;
   wire [15:0] regs__count_ca_data_fault;
-  wire [15:0] \regs__count_ca_data_fault$329 ;
+  wire [15:0] \regs__count_ca_data_fault$331 ;
   wire [15:0] regs__count_ca_no_answer;
-  wire [15:0] \regs__count_ca_no_answer$331 ;
+  wire [15:0] \regs__count_ca_no_answer$333 ;
   wire [15:0] regs__count_ca_refused;
-  wire [15:0] \regs__count_ca_refused$333 ;
+  wire [15:0] \regs__count_ca_refused$335 ;
   wire [15:0] regs__count_crc_word0;
-  wire [15:0] \regs__count_crc_word0$335 ;
+  wire [15:0] \regs__count_crc_word0$337 ;
   wire [15:0] regs__count_crc_word1;
-  wire [15:0] \regs__count_crc_word1$337 ;
+  wire [15:0] \regs__count_crc_word1$339 ;
   wire [15:0] regs__count_delay_range;
-  wire [15:0] \regs__count_delay_range$339 ;
+  wire [15:0] \regs__count_delay_range$341 ;
   wire [15:0] regs__count_lc_repeat;
-  wire [15:0] \regs__count_lc_repeat$341 ;
+  wire [15:0] \regs__count_lc_repeat$343 ;
   wire [15:0] regs__count_lc_skip;
-  wire [15:0] \regs__count_lc_skip$343 ;
+  wire [15:0] \regs__count_lc_skip$345 ;
   wire [15:0] regs__count_lc_zero;
-  wire [15:0] \regs__count_lc_zero$345 ;
+  wire [15:0] \regs__count_lc_zero$347 ;
   wire [15:0] regs__count_no_ack;
-  wire [15:0] \regs__count_no_ack$347 ;
+  wire [15:0] \regs__count_no_ack$349 ;
   wire [15:0] regs__count_no_start;
-  wire [15:0] \regs__count_no_start$349 ;
+  wire [15:0] \regs__count_no_start$351 ;
   wire [15:0] regs__count_no_stop;
-  wire [15:0] \regs__count_no_stop$351 ;
+  wire [15:0] \regs__count_no_stop$353 ;
   wire [15:0] regs__count_overrun;
-  wire [15:0] \regs__count_overrun$353 ;
+  wire [15:0] \regs__count_overrun$355 ;
   wire [15:0] regs__count_slo_stuck_low;
-  wire [15:0] \regs__count_slo_stuck_low$355 ;
+  wire [15:0] \regs__count_slo_stuck_low$357 ;
   wire [15:0] regs__count_spw_mismatch;
-  wire [15:0] \regs__count_spw_mismatch$357 ;
+  wire [15:0] \regs__count_spw_mismatch$359 ;
   wire regs__done;
-  wire \regs__done$359 ;
+  wire \regs__done$361 ;
   wire [15:0] regs__done_count;
-  wire [15:0] \regs__done_count$361 ;
+  wire [15:0] \regs__done_count$363 ;
   wire regs__frame_error;
-  wire \regs__frame_error$363 ;
+  wire \regs__frame_error$365 ;
   wire [5:0] regs__lc;
-  wire [5:0] \regs__lc$365 ;
+  wire [5:0] \regs__lc$367 ;
   wire regs__lc_repeat;
-  wire \regs__lc_repeat$367 ;
+  wire \regs__lc_repeat$369 ;
   wire regs__lc_skip;
-  wire \regs__lc_skip$369 ;
+  wire \regs__lc_skip$371 ;
   wire regs__lc_zero;
-  wire \regs__lc_zero$371 ;
+  wire \regs__lc_zero$373 ;
   wire [12:0] regs__line_delay;
-  wire [12:0] \regs__line_delay$373 ;
+  wire [12:0] \regs__line_delay$375 ;
   wire regs__periodic;
-  wire \regs__periodic$374 ;
+  wire \regs__periodic$376 ;
   wire [10:0] regs__r_addr;
   wire [31:0] regs__r_data;
   wire regs__r_en;
+  wire regs__r_load;
   wire regs__spw_mismatch;
-  wire \regs__spw_mismatch$377 ;
+  wire \regs__spw_mismatch$379 ;
   wire regs__start;
-  wire \regs__start$378 ;
+  wire \regs__start$380 ;
   wire [3:0] regs__status;
-  wire [3:0] \regs__status$381 ;
+  wire [3:0] \regs__status$383 ;
   wire [31:0] regs__timestamp;
-  wire [31:0] \regs__timestamp$383 ;
+  wire [31:0] \regs__timestamp$385 ;
   wire regs__trigger_enable;
-  wire \regs__trigger_enable$384 ;
+  wire \regs__trigger_enable$386 ;
   wire [10:0] regs__w_addr;
   wire [31:0] regs__w_data;
   wire regs__w_en;
   wire [3:0] regs__w_strb;
   wire regs__word0_crc_ok;
-  wire \regs__word0_crc_ok$387 ;
+  wire \regs__word0_crc_ok$389 ;
   wire regs__word0_ne;
-  wire \regs__word0_ne$389 ;
+  wire \regs__word0_ne$391 ;
   wire regs__word0_nw;
-  wire \regs__word0_nw$391 ;
+  wire \regs__word0_nw$393 ;
   wire [54:0] regs__word0_position;
-  wire [54:0] \regs__word0_position$393 ;
+  wire [54:0] \regs__word0_position$395 ;
   wire regs__word1_crc_ok;
-  wire \regs__word1_crc_ok$395 ;
+  wire \regs__word1_crc_ok$397 ;
   wire regs__word1_ne;
-  wire \regs__word1_ne$397 ;
+  wire \regs__word1_ne$399 ;
   wire regs__word1_nw;
-  wire \regs__word1_nw$399 ;
+  wire \regs__word1_nw$401 ;
   wire [39:0] regs__word1_position;
-  wire [39:0] \regs__word1_position$401 ;
+  wire [39:0] \regs__word1_position$403 ;
   input rst;
   wire rst;
   input [12:0] s_axil_araddr;
@@ -460,16 +462,16 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
   input s_axil_wvalid;
   wire s_axil_wvalid;
   wire slo;
-  wire \slo$404 ;
+  wire \slo$406 ;
   input trigger;
   wire trigger;
-  wire \trigger$229 ;
-  wire \trigger$402 ;
-  wire \trigger$56 ;
+  wire \trigger$231 ;
+  wire \trigger$404 ;
+  wire \trigger$58 ;
   reg trigger_in = 1'h0;
   assign \$1  = ~ trigger_in;
   assign \$2  = trigger & \$1 ;
-  assign \trigger$56  = glob__trigger | \$2 ;
+  assign \trigger$58  = glob__trigger | \$2 ;
   assign \$3  = | { \$7 , \$6  };
   always @(posedge clk)
     trigger_in <= \$4 ;
@@ -479,6 +481,7 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .bus__r_addr(s_axil_araddr[12:2]),
     .bus__r_data(s_axil_rdata),
     .bus__r_en(bus__r_en),
+    .bus__r_load(bus__r_load),
     .bus__w_addr(bus__w_addr),
     .bus__w_en(bus__w_en),
     .bus__w_strb(bus__w_strb),
@@ -523,54 +526,54 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .ch0__start(regs__start),
     .ch0__trigger_enable(regs__trigger_enable),
     .ch0_irq(\$6 ),
-    .ch1__abort_cycle(\regs__abort_cycle$232 ),
+    .ch1__abort_cycle(\regs__abort_cycle$234 ),
     .ch1__busy(ch1__busy),
-    .ch1__ca_abort(\regs__ca_abort$236 ),
-    .ch1__ca_address(\regs__ca_address$238 ),
+    .ch1__ca_abort(\regs__ca_abort$238 ),
+    .ch1__ca_address(\regs__ca_address$240 ),
     .ch1__ca_busy(ch1__ca_busy),
-    .ch1__ca_count(\regs__ca_count$244 ),
+    .ch1__ca_count(\regs__ca_count$246 ),
     .ch1__ca_done(ch1__ca_done),
     .ch1__ca_rbuf_data(ch1__ca_rbuf_data),
-    .ch1__ca_rbuf_en(\regs__ca_rbuf_en$252 ),
-    .ch1__ca_slave_id(\regs__ca_slave_id$254 ),
-    .ch1__ca_start(\regs__ca_start$256 ),
-    .ch1__ca_wbuf_en(\regs__ca_wbuf_en$264 ),
-    .ch1__ca_write(\regs__ca_write$266 ),
-    .ch1__cfg_ack_limit(\regs__cfg_ack_limit$282 ),
-    .ch1__cfg_break_time(\regs__cfg_break_time$284 ),
-    .ch1__cfg_delay_limit(\regs__cfg_delay_limit$286 ),
-    .ch1__cfg_end_check(\regs__cfg_end_check$288 ),
-    .ch1__cfg_ma_half_period(\regs__cfg_ma_half_period$290 ),
-    .ch1__cfg_request_period(\regs__cfg_request_period$292 ),
-    .ch1__cfg_spw_check(\regs__cfg_spw_check$294 ),
-    .ch1__cfg_spw_tolerance(\regs__cfg_spw_tolerance$296 ),
-    .ch1__cfg_timeout_limit(\regs__cfg_timeout_limit$298 ),
-    .ch1__cfg_w0_crc(\regs__cfg_w0_crc$300 ),
-    .ch1__cfg_w0_data_bits(\regs__cfg_w0_data_bits$302 ),
-    .ch1__cfg_w0_lc(\regs__cfg_w0_lc$304 ),
-    .ch1__cfg_w0_nenw(\regs__cfg_w0_nenw$306 ),
-    .ch1__cfg_w1_crc(\regs__cfg_w1_crc$308 ),
-    .ch1__cfg_w1_data_bits(\regs__cfg_w1_data_bits$310 ),
-    .ch1__cfg_w1_enable(\regs__cfg_w1_enable$312 ),
-    .ch1__cfg_w1_lc(\regs__cfg_w1_lc$314 ),
-    .ch1__cfg_w1_nenw(\regs__cfg_w1_nenw$316 ),
-    .ch1__clear_counters(\regs__clear_counters$318 ),
+    .ch1__ca_rbuf_en(\regs__ca_rbuf_en$254 ),
+    .ch1__ca_slave_id(\regs__ca_slave_id$256 ),
+    .ch1__ca_start(\regs__ca_start$258 ),
+    .ch1__ca_wbuf_en(\regs__ca_wbuf_en$266 ),
+    .ch1__ca_write(\regs__ca_write$268 ),
+    .ch1__cfg_ack_limit(\regs__cfg_ack_limit$284 ),
+    .ch1__cfg_break_time(\regs__cfg_break_time$286 ),
+    .ch1__cfg_delay_limit(\regs__cfg_delay_limit$288 ),
+    .ch1__cfg_end_check(\regs__cfg_end_check$290 ),
+    .ch1__cfg_ma_half_period(\regs__cfg_ma_half_period$292 ),
+    .ch1__cfg_request_period(\regs__cfg_request_period$294 ),
+    .ch1__cfg_spw_check(\regs__cfg_spw_check$296 ),
+    .ch1__cfg_spw_tolerance(\regs__cfg_spw_tolerance$298 ),
+    .ch1__cfg_timeout_limit(\regs__cfg_timeout_limit$300 ),
+    .ch1__cfg_w0_crc(\regs__cfg_w0_crc$302 ),
+    .ch1__cfg_w0_data_bits(\regs__cfg_w0_data_bits$304 ),
+    .ch1__cfg_w0_lc(\regs__cfg_w0_lc$306 ),
+    .ch1__cfg_w0_nenw(\regs__cfg_w0_nenw$308 ),
+    .ch1__cfg_w1_crc(\regs__cfg_w1_crc$310 ),
+    .ch1__cfg_w1_data_bits(\regs__cfg_w1_data_bits$312 ),
+    .ch1__cfg_w1_enable(\regs__cfg_w1_enable$314 ),
+    .ch1__cfg_w1_lc(\regs__cfg_w1_lc$316 ),
+    .ch1__cfg_w1_nenw(\regs__cfg_w1_nenw$318 ),
+    .ch1__clear_counters(\regs__clear_counters$320 ),
     .ch1__config_error(ch1__config_error),
     .ch1__done(ch1__done),
     .ch1__done_count(ch1__done_count),
     .ch1__frame_error(ch1__frame_error),
-    .ch1__periodic(\regs__periodic$374 ),
-    .ch1__start(\regs__start$378 ),
-    .ch1__trigger_enable(\regs__trigger_enable$384 ),
+    .ch1__periodic(\regs__periodic$376 ),
+    .ch1__start(\regs__start$380 ),
+    .ch1__trigger_enable(\regs__trigger_enable$386 ),
     .ch1_irq(\$7 ),
     .clk(clk),
     .glob__trigger(glob__trigger),
-    .\port$3981$0 (\$8 ),
-    .\port$3988$0 (\$9 ),
-    .\port$4102$0 (\$10 ),
-    .\port$4428$0 (\$11 ),
-    .\port$4435$0 (\$12 ),
-    .\port$4549$0 (\$13 ),
+    .\port$3983$0 (\$8 ),
+    .\port$3990$0 (\$9 ),
+    .\port$4104$0 (\$10 ),
+    .\port$4436$0 (\$11 ),
+    .\port$4443$0 (\$12 ),
+    .\port$4557$0 (\$13 ),
     .rst(rst)
   );
   \biss_master_axil.bus  bus (
@@ -590,6 +593,7 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .axil__wvalid(s_axil_wvalid),
     .clk(clk),
     .regs__r_en(bus__r_en),
+    .regs__r_load(bus__r_load),
     .regs__w_addr(bus__w_addr),
     .regs__w_data(bus__w_data),
     .regs__w_en(bus__w_en),
@@ -632,9 +636,9 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .clk(clk),
     .ma(ch0_ma),
     .periodic(regs__periodic),
-    .\port$3981$0 (\$8 ),
-    .\port$3988$0 (\$9 ),
-    .\port$4102$0 (\$10 ),
+    .\port$3983$0 (\$8 ),
+    .\port$3990$0 (\$9 ),
+    .\port$4104$0 (\$10 ),
     .regs__busy(ch0__busy),
     .regs__ca_busy(ch0__ca_busy),
     .regs__ca_done(ch0__ca_done),
@@ -647,46 +651,46 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .rst(rst),
     .slo(ch0_slo),
     .start(regs__start),
-    .\trigger$161 (\trigger$56 )
+    .\trigger$161 (\trigger$58 )
   );
   \biss_master_axil.ch1  ch1 (
-    .abort_cycle(\regs__abort_cycle$232 ),
-    .ca_abort(\regs__ca_abort$236 ),
-    .ca_address(\regs__ca_address$238 ),
-    .ca_count(\regs__ca_count$244 ),
+    .abort_cycle(\regs__abort_cycle$234 ),
+    .ca_abort(\regs__ca_abort$238 ),
+    .ca_address(\regs__ca_address$240 ),
+    .ca_count(\regs__ca_count$246 ),
     .ca_rbuf_addr(s_axil_araddr[5:2]),
-    .ca_rbuf_en(\regs__ca_rbuf_en$252 ),
-    .ca_slave_id(\regs__ca_slave_id$254 ),
-    .ca_start(\regs__ca_start$256 ),
+    .ca_rbuf_en(\regs__ca_rbuf_en$254 ),
+    .ca_slave_id(\regs__ca_slave_id$256 ),
+    .ca_start(\regs__ca_start$258 ),
     .ca_wbuf_addr(bus__w_addr[3:0]),
     .ca_wbuf_data(bus__w_data),
-    .ca_wbuf_en(\regs__ca_wbuf_en$264 ),
-    .ca_write(\regs__ca_write$266 ),
-    .cfg_ack_limit(\regs__cfg_ack_limit$282 ),
-    .cfg_break_time(\regs__cfg_break_time$284 ),
-    .cfg_delay_limit(\regs__cfg_delay_limit$286 ),
-    .cfg_end_check(\regs__cfg_end_check$288 ),
-    .cfg_ma_half_period(\regs__cfg_ma_half_period$290 ),
-    .cfg_request_period(\regs__cfg_request_period$292 ),
-    .cfg_spw_check(\regs__cfg_spw_check$294 ),
-    .cfg_spw_tolerance(\regs__cfg_spw_tolerance$296 ),
-    .cfg_timeout_limit(\regs__cfg_timeout_limit$298 ),
-    .cfg_w0_crc(\regs__cfg_w0_crc$300 ),
-    .cfg_w0_data_bits(\regs__cfg_w0_data_bits$302 ),
-    .cfg_w0_lc(\regs__cfg_w0_lc$304 ),
-    .cfg_w0_nenw(\regs__cfg_w0_nenw$306 ),
-    .cfg_w1_crc(\regs__cfg_w1_crc$308 ),
-    .cfg_w1_data_bits(\regs__cfg_w1_data_bits$310 ),
-    .cfg_w1_enable(\regs__cfg_w1_enable$312 ),
-    .cfg_w1_lc(\regs__cfg_w1_lc$314 ),
-    .cfg_w1_nenw(\regs__cfg_w1_nenw$316 ),
-    .clear_counters(\regs__clear_counters$318 ),
+    .ca_wbuf_en(\regs__ca_wbuf_en$266 ),
+    .ca_write(\regs__ca_write$268 ),
+    .cfg_ack_limit(\regs__cfg_ack_limit$284 ),
+    .cfg_break_time(\regs__cfg_break_time$286 ),
+    .cfg_delay_limit(\regs__cfg_delay_limit$288 ),
+    .cfg_end_check(\regs__cfg_end_check$290 ),
+    .cfg_ma_half_period(\regs__cfg_ma_half_period$292 ),
+    .cfg_request_period(\regs__cfg_request_period$294 ),
+    .cfg_spw_check(\regs__cfg_spw_check$296 ),
+    .cfg_spw_tolerance(\regs__cfg_spw_tolerance$298 ),
+    .cfg_timeout_limit(\regs__cfg_timeout_limit$300 ),
+    .cfg_w0_crc(\regs__cfg_w0_crc$302 ),
+    .cfg_w0_data_bits(\regs__cfg_w0_data_bits$304 ),
+    .cfg_w0_lc(\regs__cfg_w0_lc$306 ),
+    .cfg_w0_nenw(\regs__cfg_w0_nenw$308 ),
+    .cfg_w1_crc(\regs__cfg_w1_crc$310 ),
+    .cfg_w1_data_bits(\regs__cfg_w1_data_bits$312 ),
+    .cfg_w1_enable(\regs__cfg_w1_enable$314 ),
+    .cfg_w1_lc(\regs__cfg_w1_lc$316 ),
+    .cfg_w1_nenw(\regs__cfg_w1_nenw$318 ),
+    .clear_counters(\regs__clear_counters$320 ),
     .clk(clk),
     .ma(ch1_ma),
-    .periodic(\regs__periodic$374 ),
-    .\port$4428$0 (\$11 ),
-    .\port$4435$0 (\$12 ),
-    .\port$4549$0 (\$13 ),
+    .periodic(\regs__periodic$376 ),
+    .\port$4436$0 (\$11 ),
+    .\port$4443$0 (\$12 ),
+    .\port$4557$0 (\$13 ),
     .regs__busy(ch1__busy),
     .regs__ca_busy(ch1__ca_busy),
     .regs__ca_done(ch1__ca_done),
@@ -695,11 +699,11 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .regs__done(ch1__done),
     .regs__done_count(ch1__done_count),
     .regs__frame_error(ch1__frame_error),
-    .regs__trigger_enable(\regs__trigger_enable$384 ),
+    .regs__trigger_enable(\regs__trigger_enable$386 ),
     .rst(rst),
     .slo(ch1_slo),
-    .start(\regs__start$378 ),
-    .\trigger$161 (\trigger$56 )
+    .start(\regs__start$380 ),
+    .\trigger$161 (\trigger$58 )
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$25 ) begin end
@@ -720,6 +724,7 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
   assign regs__r_data = s_axil_rdata;
   assign bus__r_data = s_axil_rdata;
   assign regs__r_en = bus__r_en;
+  assign regs__r_load = bus__r_load;
   assign regs__w_addr = bus__w_addr;
   assign regs__w_data = bus__w_data;
   assign regs__w_en = bus__w_en;
@@ -872,156 +877,156 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
   assign regs__word1_nw = \$8 [149];
   assign ch0__word1_position = \$8 [147:108];
   assign regs__word1_position = \$8 [147:108];
-  assign \trigger$229  = \trigger$56 ;
+  assign \trigger$231  = \trigger$58 ;
   assign ma = ch0_ma;
   assign slo = ch0_slo;
-  assign ch1__abort_cycle = \regs__abort_cycle$232 ;
-  assign \regs__busy$235  = ch1__busy;
-  assign ch1__ca_abort = \regs__ca_abort$236 ;
-  assign ch1__ca_address = \regs__ca_address$238 ;
-  assign \regs__ca_busy$241  = ch1__ca_busy;
+  assign ch1__abort_cycle = \regs__abort_cycle$234 ;
+  assign \regs__busy$237  = ch1__busy;
+  assign ch1__ca_abort = \regs__ca_abort$238 ;
+  assign ch1__ca_address = \regs__ca_address$240 ;
+  assign \regs__ca_busy$243  = ch1__ca_busy;
   assign ch1__ca_bytes_done = \$13 [9:3];
-  assign \regs__ca_bytes_done$243  = \$13 [9:3];
-  assign ch1__ca_count = \regs__ca_count$244 ;
-  assign \regs__ca_done$247  = ch1__ca_done;
-  assign \regs__ca_rbuf_addr$248  = s_axil_araddr[5:2];
+  assign \regs__ca_bytes_done$245  = \$13 [9:3];
+  assign ch1__ca_count = \regs__ca_count$246 ;
+  assign \regs__ca_done$249  = ch1__ca_done;
+  assign \regs__ca_rbuf_addr$250  = s_axil_araddr[5:2];
   assign ch1__ca_rbuf_addr = s_axil_araddr[5:2];
-  assign \regs__ca_rbuf_data$251  = ch1__ca_rbuf_data;
-  assign ch1__ca_rbuf_en = \regs__ca_rbuf_en$252 ;
-  assign ch1__ca_slave_id = \regs__ca_slave_id$254 ;
-  assign ch1__ca_start = \regs__ca_start$256 ;
+  assign \regs__ca_rbuf_data$253  = ch1__ca_rbuf_data;
+  assign ch1__ca_rbuf_en = \regs__ca_rbuf_en$254 ;
+  assign ch1__ca_slave_id = \regs__ca_slave_id$256 ;
+  assign ch1__ca_start = \regs__ca_start$258 ;
   assign ch1__ca_status = \$13 [2:0];
-  assign \regs__ca_status$259  = \$13 [2:0];
-  assign \regs__ca_wbuf_addr$260  = bus__w_addr[3:0];
+  assign \regs__ca_status$261  = \$13 [2:0];
+  assign \regs__ca_wbuf_addr$262  = bus__w_addr[3:0];
   assign ch1__ca_wbuf_addr = bus__w_addr[3:0];
-  assign \regs__ca_wbuf_data$262  = bus__w_data;
+  assign \regs__ca_wbuf_data$264  = bus__w_data;
   assign ch1__ca_wbuf_data = bus__w_data;
-  assign ch1__ca_wbuf_en = \regs__ca_wbuf_en$264 ;
-  assign ch1__ca_write = \regs__ca_write$266 ;
+  assign ch1__ca_wbuf_en = \regs__ca_wbuf_en$266 ;
+  assign ch1__ca_write = \regs__ca_write$268 ;
   assign ch1__cap_counters = 1'h1;
-  assign \regs__cap_counters$269  = 1'h1;
+  assign \regs__cap_counters$271  = 1'h1;
   assign ch1__cap_data_bits_w0 = 6'h37;
-  assign \regs__cap_data_bits_w0$271  = 6'h37;
+  assign \regs__cap_data_bits_w0$273  = 6'h37;
   assign ch1__cap_data_bits_w1 = 6'h28;
-  assign \regs__cap_data_bits_w1$273  = 6'h28;
+  assign \regs__cap_data_bits_w1$275  = 6'h28;
   assign ch1__cap_register_access = 1'h1;
-  assign \regs__cap_register_access$275  = 1'h1;
+  assign \regs__cap_register_access$277  = 1'h1;
   assign ch1__cap_timer_width = 6'h18;
-  assign \regs__cap_timer_width$277  = 6'h18;
+  assign \regs__cap_timer_width$279  = 6'h18;
   assign ch1__cap_timestamp = 1'h1;
-  assign \regs__cap_timestamp$279  = 1'h1;
+  assign \regs__cap_timestamp$281  = 1'h1;
   assign ch1__cds = \$11 [49];
-  assign \regs__cds$281  = \$11 [49];
-  assign ch1__cfg_ack_limit = \regs__cfg_ack_limit$282 ;
-  assign ch1__cfg_break_time = \regs__cfg_break_time$284 ;
-  assign ch1__cfg_delay_limit = \regs__cfg_delay_limit$286 ;
-  assign ch1__cfg_end_check = \regs__cfg_end_check$288 ;
-  assign ch1__cfg_ma_half_period = \regs__cfg_ma_half_period$290 ;
-  assign ch1__cfg_request_period = \regs__cfg_request_period$292 ;
-  assign ch1__cfg_spw_check = \regs__cfg_spw_check$294 ;
-  assign ch1__cfg_spw_tolerance = \regs__cfg_spw_tolerance$296 ;
-  assign ch1__cfg_timeout_limit = \regs__cfg_timeout_limit$298 ;
-  assign ch1__cfg_w0_crc = \regs__cfg_w0_crc$300 ;
-  assign ch1__cfg_w0_data_bits = \regs__cfg_w0_data_bits$302 ;
-  assign ch1__cfg_w0_lc = \regs__cfg_w0_lc$304 ;
-  assign ch1__cfg_w0_nenw = \regs__cfg_w0_nenw$306 ;
-  assign ch1__cfg_w1_crc = \regs__cfg_w1_crc$308 ;
-  assign ch1__cfg_w1_data_bits = \regs__cfg_w1_data_bits$310 ;
-  assign ch1__cfg_w1_enable = \regs__cfg_w1_enable$312 ;
-  assign ch1__cfg_w1_lc = \regs__cfg_w1_lc$314 ;
-  assign ch1__cfg_w1_nenw = \regs__cfg_w1_nenw$316 ;
-  assign ch1__clear_counters = \regs__clear_counters$318 ;
-  assign \regs__config_error$321  = ch1__config_error;
+  assign \regs__cds$283  = \$11 [49];
+  assign ch1__cfg_ack_limit = \regs__cfg_ack_limit$284 ;
+  assign ch1__cfg_break_time = \regs__cfg_break_time$286 ;
+  assign ch1__cfg_delay_limit = \regs__cfg_delay_limit$288 ;
+  assign ch1__cfg_end_check = \regs__cfg_end_check$290 ;
+  assign ch1__cfg_ma_half_period = \regs__cfg_ma_half_period$292 ;
+  assign ch1__cfg_request_period = \regs__cfg_request_period$294 ;
+  assign ch1__cfg_spw_check = \regs__cfg_spw_check$296 ;
+  assign ch1__cfg_spw_tolerance = \regs__cfg_spw_tolerance$298 ;
+  assign ch1__cfg_timeout_limit = \regs__cfg_timeout_limit$300 ;
+  assign ch1__cfg_w0_crc = \regs__cfg_w0_crc$302 ;
+  assign ch1__cfg_w0_data_bits = \regs__cfg_w0_data_bits$304 ;
+  assign ch1__cfg_w0_lc = \regs__cfg_w0_lc$306 ;
+  assign ch1__cfg_w0_nenw = \regs__cfg_w0_nenw$308 ;
+  assign ch1__cfg_w1_crc = \regs__cfg_w1_crc$310 ;
+  assign ch1__cfg_w1_data_bits = \regs__cfg_w1_data_bits$312 ;
+  assign ch1__cfg_w1_enable = \regs__cfg_w1_enable$314 ;
+  assign ch1__cfg_w1_lc = \regs__cfg_w1_lc$316 ;
+  assign ch1__cfg_w1_nenw = \regs__cfg_w1_nenw$318 ;
+  assign ch1__clear_counters = \regs__clear_counters$320 ;
+  assign \regs__config_error$323  = ch1__config_error;
   assign ch1__count_aborted = \$12 [191:176];
-  assign \regs__count_aborted$323  = \$12 [191:176];
+  assign \regs__count_aborted$325  = \$12 [191:176];
   assign ch1__count_ca_aborted = \$12 [271:256];
-  assign \regs__count_ca_aborted$325  = \$12 [271:256];
+  assign \regs__count_ca_aborted$327  = \$12 [271:256];
   assign ch1__count_ca_crc4_error = \$12 [223:208];
-  assign \regs__count_ca_crc4_error$327  = \$12 [223:208];
+  assign \regs__count_ca_crc4_error$329  = \$12 [223:208];
   assign ch1__count_ca_data_fault = \$12 [287:272];
-  assign \regs__count_ca_data_fault$329  = \$12 [287:272];
+  assign \regs__count_ca_data_fault$331  = \$12 [287:272];
   assign ch1__count_ca_no_answer = \$12 [239:224];
-  assign \regs__count_ca_no_answer$331  = \$12 [239:224];
+  assign \regs__count_ca_no_answer$333  = \$12 [239:224];
   assign ch1__count_ca_refused = \$12 [255:240];
-  assign \regs__count_ca_refused$333  = \$12 [255:240];
+  assign \regs__count_ca_refused$335  = \$12 [255:240];
   assign ch1__count_crc_word0 = \$12 [15:0];
-  assign \regs__count_crc_word0$335  = \$12 [15:0];
+  assign \regs__count_crc_word0$337  = \$12 [15:0];
   assign ch1__count_crc_word1 = \$12 [31:16];
-  assign \regs__count_crc_word1$337  = \$12 [31:16];
+  assign \regs__count_crc_word1$339  = \$12 [31:16];
   assign ch1__count_delay_range = \$12 [79:64];
-  assign \regs__count_delay_range$339  = \$12 [79:64];
+  assign \regs__count_delay_range$341  = \$12 [79:64];
   assign ch1__count_lc_repeat = \$12 [111:96];
-  assign \regs__count_lc_repeat$341  = \$12 [111:96];
+  assign \regs__count_lc_repeat$343  = \$12 [111:96];
   assign ch1__count_lc_skip = \$12 [127:112];
-  assign \regs__count_lc_skip$343  = \$12 [127:112];
+  assign \regs__count_lc_skip$345  = \$12 [127:112];
   assign ch1__count_lc_zero = \$12 [143:128];
-  assign \regs__count_lc_zero$345  = \$12 [143:128];
+  assign \regs__count_lc_zero$347  = \$12 [143:128];
   assign ch1__count_no_ack = \$12 [47:32];
-  assign \regs__count_no_ack$347  = \$12 [47:32];
+  assign \regs__count_no_ack$349  = \$12 [47:32];
   assign ch1__count_no_start = \$12 [63:48];
-  assign \regs__count_no_start$349  = \$12 [63:48];
+  assign \regs__count_no_start$351  = \$12 [63:48];
   assign ch1__count_no_stop = \$12 [207:192];
-  assign \regs__count_no_stop$351  = \$12 [207:192];
+  assign \regs__count_no_stop$353  = \$12 [207:192];
   assign ch1__count_overrun = \$12 [175:160];
-  assign \regs__count_overrun$353  = \$12 [175:160];
+  assign \regs__count_overrun$355  = \$12 [175:160];
   assign ch1__count_slo_stuck_low = \$12 [95:80];
-  assign \regs__count_slo_stuck_low$355  = \$12 [95:80];
+  assign \regs__count_slo_stuck_low$357  = \$12 [95:80];
   assign ch1__count_spw_mismatch = \$12 [159:144];
-  assign \regs__count_spw_mismatch$357  = \$12 [159:144];
-  assign \regs__done$359  = ch1__done;
-  assign \regs__done_count$361  = ch1__done_count;
-  assign \regs__frame_error$363  = ch1__frame_error;
+  assign \regs__count_spw_mismatch$359  = \$12 [159:144];
+  assign \regs__done$361  = ch1__done;
+  assign \regs__done_count$363  = ch1__done_count;
+  assign \regs__frame_error$365  = ch1__frame_error;
   assign ch1__lc = \$11 [156:151];
-  assign \regs__lc$365  = \$11 [156:151];
+  assign \regs__lc$367  = \$11 [156:151];
   assign ch1__lc_repeat = \$11 [157];
-  assign \regs__lc_repeat$367  = \$11 [157];
+  assign \regs__lc_repeat$369  = \$11 [157];
   assign ch1__lc_skip = \$11 [158];
-  assign \regs__lc_skip$369  = \$11 [158];
+  assign \regs__lc_skip$371  = \$11 [158];
   assign ch1__lc_zero = \$11 [159];
-  assign \regs__lc_zero$371  = \$11 [159];
+  assign \regs__lc_zero$373  = \$11 [159];
   assign ch1__line_delay = \$11 [48:36];
-  assign \regs__line_delay$373  = \$11 [48:36];
-  assign ch1__periodic = \regs__periodic$374 ;
+  assign \regs__line_delay$375  = \$11 [48:36];
+  assign ch1__periodic = \regs__periodic$376 ;
   assign ch1__spw_mismatch = \$11 [160];
-  assign \regs__spw_mismatch$377  = \$11 [160];
-  assign ch1__start = \regs__start$378 ;
+  assign \regs__spw_mismatch$379  = \$11 [160];
+  assign ch1__start = \regs__start$380 ;
   assign ch1__status = \$11 [3:0];
-  assign \regs__status$381  = \$11 [3:0];
+  assign \regs__status$383  = \$11 [3:0];
   assign ch1__timestamp = \$11 [35:4];
-  assign \regs__timestamp$383  = \$11 [35:4];
-  assign ch1__trigger_enable = \regs__trigger_enable$384 ;
+  assign \regs__timestamp$385  = \$11 [35:4];
+  assign ch1__trigger_enable = \regs__trigger_enable$386 ;
   assign ch1__word0_crc_ok = \$11 [107];
-  assign \regs__word0_crc_ok$387  = \$11 [107];
+  assign \regs__word0_crc_ok$389  = \$11 [107];
   assign ch1__word0_ne = \$11 [105];
-  assign \regs__word0_ne$389  = \$11 [105];
+  assign \regs__word0_ne$391  = \$11 [105];
   assign ch1__word0_nw = \$11 [106];
-  assign \regs__word0_nw$391  = \$11 [106];
+  assign \regs__word0_nw$393  = \$11 [106];
   assign ch1__word0_position = \$11 [104:50];
-  assign \regs__word0_position$393  = \$11 [104:50];
+  assign \regs__word0_position$395  = \$11 [104:50];
   assign ch1__word1_crc_ok = \$11 [150];
-  assign \regs__word1_crc_ok$395  = \$11 [150];
+  assign \regs__word1_crc_ok$397  = \$11 [150];
   assign ch1__word1_ne = \$11 [148];
-  assign \regs__word1_ne$397  = \$11 [148];
+  assign \regs__word1_ne$399  = \$11 [148];
   assign ch1__word1_nw = \$11 [149];
-  assign \regs__word1_nw$399  = \$11 [149];
+  assign \regs__word1_nw$401  = \$11 [149];
   assign ch1__word1_position = \$11 [147:108];
-  assign \regs__word1_position$401  = \$11 [147:108];
-  assign \trigger$402  = \trigger$56 ;
-  assign \ma$403  = ch1_ma;
-  assign \slo$404  = ch1_slo;
+  assign \regs__word1_position$403  = \$11 [147:108];
+  assign \trigger$404  = \trigger$58 ;
+  assign \ma$405  = ch1_ma;
+  assign \slo$406  = ch1_slo;
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, \$7 , \$6  };
-  assign \irq$407  = { \$7 , \$6  };
+  assign \irq$409  = { \$7 , \$6  };
   assign s_axil_bresp = 2'h0;
   assign s_axil_rresp = 2'h0;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, ch1__ca_wbuf_en, ch1__ca_rbuf_en, ch1_irq, bus__r_data, ch0__frame_error, ch0__busy, ch0__config_error, ch0__ca_busy, ch0__ca_rbuf_data, ch1__frame_error, ch1__busy, ch1__config_error, ch1__ca_busy, ch1__ca_rbuf_data
+module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, ch1__ca_wbuf_en, ch1__ca_rbuf_en, ch1_irq, ch0__frame_error, ch0__busy, ch0__config_error, ch0__ca_busy, ch0__ca_rbuf_data, ch1__frame_error, ch1__busy, ch1__config_error, ch1__ca_busy, ch1__ca_rbuf_data
 , bus__w_addr, ch0__ca_wbuf_data, bus__w_strb, glob__trigger, ch0__start, ch0__abort_cycle, ch0__clear_counters, ch0__periodic, ch0__trigger_enable, ch0__cfg_ma_half_period, ch0__cfg_delay_limit, ch0__cfg_request_period, ch0__cfg_break_time, ch0__cfg_ack_limit, ch0__cfg_timeout_limit, ch0__cfg_w0_data_bits, ch0__cfg_w0_nenw, ch0__cfg_w0_lc, ch0__cfg_w0_crc, ch0__cfg_w1_data_bits, ch0__cfg_w1_nenw
 , ch0__cfg_w1_lc, ch0__cfg_w1_crc, ch0__cfg_w1_enable, ch0__cfg_end_check, ch0__cfg_spw_check, ch0__cfg_spw_tolerance, ch0__ca_slave_id, ch0__ca_address, ch0__ca_count, ch0__ca_write, ch0__ca_start, ch0__ca_abort, ch1__start, ch1__abort_cycle, ch1__clear_counters, ch1__periodic, ch1__trigger_enable, ch1__cfg_ma_half_period, ch1__cfg_delay_limit, ch1__cfg_request_period, ch1__cfg_break_time
-, ch1__cfg_ack_limit, ch1__cfg_timeout_limit, ch1__cfg_w0_data_bits, ch1__cfg_w0_nenw, ch1__cfg_w0_lc, ch1__cfg_w0_crc, ch1__cfg_w1_data_bits, ch1__cfg_w1_nenw, ch1__cfg_w1_lc, ch1__cfg_w1_crc, ch1__cfg_w1_enable, ch1__cfg_end_check, ch1__cfg_spw_check, ch1__cfg_spw_tolerance, ch1__ca_slave_id, ch1__ca_address, ch1__ca_count, ch1__ca_write, ch1__ca_start, ch1__ca_abort, ch0__done_count
-, ch0__done, \port$3981$0 , \port$3988$0 , ch0__ca_done, \port$4102$0 , ch1__done_count, ch1__done, \port$4428$0 , \port$4435$0 , ch1__ca_done, \port$4549$0 , bus__r_addr);
+, ch1__cfg_ack_limit, ch1__cfg_timeout_limit, ch1__cfg_w0_data_bits, ch1__cfg_w0_nenw, ch1__cfg_w0_lc, ch1__cfg_w0_crc, ch1__cfg_w1_data_bits, ch1__cfg_w1_nenw, ch1__cfg_w1_lc, ch1__cfg_w1_crc, ch1__cfg_w1_enable, ch1__cfg_end_check, ch1__cfg_spw_check, ch1__cfg_spw_tolerance, ch1__ca_slave_id, ch1__ca_address, ch1__ca_count, ch1__ca_write, ch1__ca_start, ch1__ca_abort, bus__r_data
+, ch0__done_count, ch0__done, \port$3983$0 , \port$3990$0 , ch0__ca_done, \port$4104$0 , ch1__done_count, ch1__done, \port$4436$0 , \port$4443$0 , ch1__ca_done, \port$4557$0 , bus__r_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$26  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -1087,9 +1092,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, ch0__ca_wbuf_en, 
   wire \$154 ;
   wire \$155 ;
   wire \$156 ;
-  wire [31:0] \$157 ;
-  wire [31:0] \$158 ;
-  wire [31:0] \$159 ;
+  wire \$157 ;
+  wire \$158 ;
+  wire \$159 ;
   wire \$16 ;
   wire \$160 ;
   wire \$161 ;
@@ -1128,38 +1133,38 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, ch0__ca_wbuf_en, 
   wire \$191 ;
   wire \$192 ;
   wire \$193 ;
-  wire [15:0] \$194 ;
-  wire [15:0] \$195 ;
-  wire [15:0] \$196 ;
-  wire [15:0] \$197 ;
-  wire [11:0] \$198 ;
-  wire [11:0] \$199 ;
+  wire \$194 ;
+  wire \$195 ;
+  wire \$196 ;
+  wire \$197 ;
+  wire \$198 ;
+  wire \$199 ;
   wire \$2 ;
   wire \$20 ;
-  wire [11:0] \$200 ;
-  wire [11:0] \$201 ;
-  wire [23:0] \$202 ;
-  wire [23:0] \$203 ;
-  wire [23:0] \$204 ;
-  wire [23:0] \$205 ;
-  wire [23:0] \$206 ;
-  wire [23:0] \$207 ;
-  wire [23:0] \$208 ;
-  wire [23:0] \$209 ;
+  wire \$200 ;
+  wire \$201 ;
+  wire \$202 ;
+  wire \$203 ;
+  wire \$204 ;
+  wire \$205 ;
+  wire \$206 ;
+  wire \$207 ;
+  wire \$208 ;
+  wire \$209 ;
   wire \$21 ;
-  wire [23:0] \$210 ;
-  wire [23:0] \$211 ;
-  wire [23:0] \$212 ;
-  wire [23:0] \$213 ;
-  wire [23:0] \$214 ;
-  wire [23:0] \$215 ;
-  wire [23:0] \$216 ;
-  wire [23:0] \$217 ;
-  wire [5:0] \$218 ;
-  wire [5:0] \$219 ;
+  wire \$210 ;
+  wire \$211 ;
+  wire \$212 ;
+  wire \$213 ;
+  wire \$214 ;
+  wire \$215 ;
+  wire \$216 ;
+  wire \$217 ;
+  wire \$218 ;
+  wire \$219 ;
   wire \$22 ;
-  wire [5:0] \$220 ;
-  wire [5:0] \$221 ;
+  wire \$220 ;
+  wire \$221 ;
   wire \$222 ;
   wire \$223 ;
   wire \$224 ;
@@ -1169,14 +1174,14 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, ch0__ca_wbuf_en, 
   wire \$228 ;
   wire \$229 ;
   wire \$23 ;
-  wire [1:0] \$230 ;
-  wire [1:0] \$231 ;
-  wire [1:0] \$232 ;
-  wire [1:0] \$233 ;
-  wire [5:0] \$234 ;
-  wire [5:0] \$235 ;
-  wire [5:0] \$236 ;
-  wire [5:0] \$237 ;
+  wire \$230 ;
+  wire \$231 ;
+  wire \$232 ;
+  wire \$233 ;
+  wire \$234 ;
+  wire \$235 ;
+  wire \$236 ;
+  wire \$237 ;
   wire \$238 ;
   wire \$239 ;
   wire \$24 ;
@@ -1186,10 +1191,10 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, ch0__ca_wbuf_en, 
   wire \$243 ;
   wire \$244 ;
   wire \$245 ;
-  wire [1:0] \$246 ;
-  wire [1:0] \$247 ;
-  wire [1:0] \$248 ;
-  wire [1:0] \$249 ;
+  wire \$246 ;
+  wire \$247 ;
+  wire \$248 ;
+  wire \$249 ;
   wire \$25 ;
   wire \$250 ;
   wire \$251 ;
@@ -1204,301 +1209,166 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, ch0__ca_wbuf_en, 
   wire \$26 ;
   wire \$260 ;
   wire \$261 ;
-  wire [7:0] \$262 ;
-  wire [7:0] \$263 ;
-  wire [7:0] \$264 ;
-  wire [7:0] \$265 ;
-  wire [2:0] \$266 ;
-  wire [2:0] \$267 ;
-  wire [2:0] \$268 ;
-  wire [2:0] \$269 ;
+  wire \$262 ;
+  wire \$263 ;
+  wire \$264 ;
+  wire \$265 ;
+  wire \$266 ;
+  wire \$267 ;
+  wire \$268 ;
+  wire [31:0] \$269 ;
   wire \$27 ;
-  wire [6:0] \$270 ;
-  wire [6:0] \$271 ;
-  wire [6:0] \$272 ;
-  wire [6:0] \$273 ;
-  wire [6:0] \$274 ;
-  wire [6:0] \$275 ;
-  wire [6:0] \$276 ;
-  wire [6:0] \$277 ;
-  wire \$278 ;
-  wire \$279 ;
+  wire [31:0] \$270 ;
+  wire [31:0] \$271 ;
+  wire [31:0] \$272 ;
+  wire [31:0] \$273 ;
+  wire [31:0] \$274 ;
+  wire [31:0] \$275 ;
+  reg \$276 ;
+  reg [31:0] \$277 ;
+  reg \$278 ;
+  reg \$279 ;
   wire \$28 ;
-  wire \$280 ;
-  wire \$281 ;
-  wire \$282 ;
-  wire \$283 ;
-  wire \$284 ;
-  wire \$285 ;
-  wire \$286 ;
-  wire \$287 ;
-  wire \$288 ;
-  wire \$289 ;
+  reg \$280 ;
+  reg \$281 ;
+  reg \$282 ;
+  reg \$283 ;
+  reg \$284 ;
+  reg \$285 ;
+  reg \$286 ;
+  reg \$287 ;
+  reg \$288 ;
+  reg [15:0] \$289 ;
   wire \$29 ;
-  wire \$290 ;
-  wire \$291 ;
-  wire \$292 ;
-  wire \$293 ;
-  wire \$294 ;
-  wire \$295 ;
-  wire \$296 ;
-  wire \$297 ;
-  wire \$298 ;
-  wire \$299 ;
+  reg [11:0] \$290 ;
+  reg [23:0] \$291 ;
+  reg [23:0] \$292 ;
+  reg [23:0] \$293 ;
+  reg [23:0] \$294 ;
+  reg [5:0] \$295 ;
+  reg \$296 ;
+  reg \$297 ;
+  reg [1:0] \$298 ;
+  reg [5:0] \$299 ;
   wire \$3 ;
   wire \$30 ;
-  wire \$300 ;
-  wire \$301 ;
-  wire \$302 ;
-  wire \$303 ;
-  wire \$304 ;
-  wire \$305 ;
-  wire \$306 ;
-  wire \$307 ;
-  wire \$308 ;
-  wire \$309 ;
+  reg \$300 ;
+  reg \$301 ;
+  reg [1:0] \$302 ;
+  reg \$303 ;
+  reg \$304 ;
+  reg \$305 ;
+  reg [7:0] \$306 ;
+  reg [2:0] \$307 ;
+  reg [6:0] \$308 ;
+  reg [6:0] \$309 ;
   wire \$31 ;
-  wire \$310 ;
-  wire \$311 ;
-  wire \$312 ;
-  wire \$313 ;
-  wire \$314 ;
-  wire \$315 ;
-  wire \$316 ;
-  wire \$317 ;
-  wire [15:0] \$318 ;
-  wire [15:0] \$319 ;
+  reg \$310 ;
+  reg \$311 ;
+  reg \$312 ;
+  reg [3:0] \$313 ;
+  reg \$314 ;
+  reg \$315 ;
+  reg \$316 ;
+  reg \$317 ;
+  reg \$318 ;
+  reg \$319 ;
   wire \$32 ;
-  wire [15:0] \$320 ;
-  wire [15:0] \$321 ;
-  wire [11:0] \$322 ;
-  wire [11:0] \$323 ;
-  wire [11:0] \$324 ;
-  wire [11:0] \$325 ;
-  wire [23:0] \$326 ;
-  wire [23:0] \$327 ;
-  wire [23:0] \$328 ;
-  wire [23:0] \$329 ;
+  reg \$320 ;
+  reg \$321 ;
+  reg \$322 ;
+  reg \$323 ;
+  reg \$324 ;
+  reg [5:0] \$325 ;
+  reg [15:0] \$326 ;
+  reg [12:0] \$327 ;
+  reg [31:0] \$328 ;
+  reg [22:0] \$329 ;
   wire \$33 ;
-  wire [23:0] \$330 ;
-  wire [23:0] \$331 ;
-  wire [23:0] \$332 ;
-  wire [23:0] \$333 ;
-  wire [23:0] \$334 ;
-  wire [23:0] \$335 ;
-  wire [23:0] \$336 ;
-  wire [23:0] \$337 ;
-  wire [23:0] \$338 ;
-  wire [23:0] \$339 ;
+  reg [31:0] \$330 ;
+  reg [7:0] \$331 ;
+  reg [31:0] \$332 ;
+  reg [31:0] \$333 ;
+  reg \$334 ;
+  reg \$335 ;
+  reg \$336 ;
+  reg \$337 ;
+  reg \$338 ;
+  reg \$339 ;
   wire \$34 ;
-  wire [23:0] \$340 ;
-  wire [23:0] \$341 ;
-  wire [5:0] \$342 ;
-  wire [5:0] \$343 ;
-  wire [5:0] \$344 ;
-  wire [5:0] \$345 ;
-  wire \$346 ;
-  wire \$347 ;
-  wire \$348 ;
-  wire \$349 ;
+  reg \$340 ;
+  reg \$341 ;
+  reg \$342 ;
+  reg \$343 ;
+  reg \$344 ;
+  reg [15:0] \$345 ;
+  reg [11:0] \$346 ;
+  reg [23:0] \$347 ;
+  reg [23:0] \$348 ;
+  reg [23:0] \$349 ;
   wire \$35 ;
-  wire \$350 ;
-  wire \$351 ;
-  wire \$352 ;
-  wire \$353 ;
-  wire [1:0] \$354 ;
-  wire [1:0] \$355 ;
-  wire [1:0] \$356 ;
-  wire [1:0] \$357 ;
-  wire [5:0] \$358 ;
-  wire [5:0] \$359 ;
+  reg [23:0] \$350 ;
+  reg [5:0] \$351 ;
+  reg \$352 ;
+  reg \$353 ;
+  reg [1:0] \$354 ;
+  reg [5:0] \$355 ;
+  reg \$356 ;
+  reg \$357 ;
+  reg [1:0] \$358 ;
+  reg \$359 ;
   wire \$36 ;
-  wire [5:0] \$360 ;
-  wire [5:0] \$361 ;
-  wire \$362 ;
-  wire \$363 ;
-  wire \$364 ;
-  wire \$365 ;
-  wire \$366 ;
-  wire \$367 ;
-  wire \$368 ;
-  wire \$369 ;
+  reg \$360 ;
+  reg \$361 ;
+  reg [7:0] \$362 ;
+  reg [2:0] \$363 ;
+  reg [6:0] \$364 ;
+  reg [6:0] \$365 ;
+  reg \$366 ;
+  reg \$367 ;
+  reg \$368 ;
+  reg [3:0] \$369 ;
   wire \$37 ;
-  wire [1:0] \$370 ;
-  wire [1:0] \$371 ;
-  wire [1:0] \$372 ;
-  wire [1:0] \$373 ;
-  wire \$374 ;
-  wire \$375 ;
-  wire \$376 ;
-  wire \$377 ;
-  wire \$378 ;
-  wire \$379 ;
+  reg \$370 ;
+  reg \$371 ;
+  reg \$372 ;
+  reg \$373 ;
+  reg \$374 ;
+  reg \$375 ;
+  reg \$376 ;
+  reg \$377 ;
+  reg \$378 ;
+  reg \$379 ;
   wire \$38 ;
-  wire \$380 ;
-  wire \$381 ;
-  wire \$382 ;
-  wire \$383 ;
-  wire \$384 ;
-  wire \$385 ;
-  wire [7:0] \$386 ;
-  wire [7:0] \$387 ;
-  wire [7:0] \$388 ;
-  wire [7:0] \$389 ;
+  reg \$380 ;
+  reg [5:0] \$381 ;
+  reg [15:0] \$382 ;
+  reg [12:0] \$383 ;
+  reg [31:0] \$384 ;
+  reg [22:0] \$385 ;
+  reg [31:0] \$386 ;
+  reg [7:0] \$387 ;
+  reg [31:0] \$388 ;
+  reg [31:0] \$389 ;
   wire \$39 ;
-  wire [2:0] \$390 ;
-  wire [2:0] \$391 ;
-  wire [2:0] \$392 ;
-  wire [2:0] \$393 ;
-  wire [6:0] \$394 ;
-  wire [6:0] \$395 ;
-  wire [6:0] \$396 ;
-  wire [6:0] \$397 ;
-  wire [6:0] \$398 ;
-  wire [6:0] \$399 ;
+  reg \$390 ;
+  reg \$391 ;
+  reg [31:0] \$392 ;
   wire \$4 ;
   wire \$40 ;
-  wire [6:0] \$400 ;
-  wire [6:0] \$401 ;
-  wire \$402 ;
-  wire \$403 ;
-  wire \$404 ;
-  wire \$405 ;
-  wire \$406 ;
-  wire \$407 ;
-  wire \$408 ;
-  wire \$409 ;
   wire \$41 ;
-  wire \$410 ;
-  wire \$411 ;
-  wire \$412 ;
-  wire \$413 ;
-  reg \$414 ;
-  reg \$415 ;
-  reg \$416 ;
-  reg \$417 ;
-  reg \$418 ;
-  reg \$419 ;
   wire \$42 ;
-  reg \$420 ;
-  reg \$421 ;
-  reg \$422 ;
-  reg \$423 ;
-  reg \$424 ;
-  reg \$425 ;
-  reg [15:0] \$426 ;
-  reg [11:0] \$427 ;
-  reg [23:0] \$428 ;
-  reg [23:0] \$429 ;
   wire \$43 ;
-  reg [23:0] \$430 ;
-  reg [23:0] \$431 ;
-  reg [5:0] \$432 ;
-  reg \$433 ;
-  reg \$434 ;
-  reg [1:0] \$435 ;
-  reg [5:0] \$436 ;
-  reg \$437 ;
-  reg \$438 ;
-  reg [1:0] \$439 ;
   wire \$44 ;
-  reg \$440 ;
-  reg \$441 ;
-  reg \$442 ;
-  reg [7:0] \$443 ;
-  reg [2:0] \$444 ;
-  reg [6:0] \$445 ;
-  reg [6:0] \$446 ;
-  reg \$447 ;
-  reg \$448 ;
-  reg \$449 ;
   wire \$45 ;
-  reg [3:0] \$450 ;
-  reg \$451 ;
-  reg \$452 ;
-  reg \$453 ;
-  reg \$454 ;
-  reg \$455 ;
-  reg \$456 ;
-  reg \$457 ;
-  reg \$458 ;
-  reg \$459 ;
   wire \$46 ;
-  reg \$460 ;
-  reg \$461 ;
-  reg [5:0] \$462 ;
-  reg [15:0] \$463 ;
-  reg [12:0] \$464 ;
-  reg [31:0] \$465 ;
-  reg [22:0] \$466 ;
-  reg [31:0] \$467 ;
-  reg [7:0] \$468 ;
-  reg [31:0] \$469 ;
   wire \$47 ;
-  reg \$470 ;
-  reg \$471 ;
-  reg \$472 ;
-  reg \$473 ;
-  reg \$474 ;
-  reg \$475 ;
-  reg \$476 ;
-  reg \$477 ;
-  reg \$478 ;
-  reg \$479 ;
   wire \$48 ;
-  reg \$480 ;
-  reg [15:0] \$481 ;
-  reg [11:0] \$482 ;
-  reg [23:0] \$483 ;
-  reg [23:0] \$484 ;
-  reg [23:0] \$485 ;
-  reg [23:0] \$486 ;
-  reg [5:0] \$487 ;
-  reg \$488 ;
-  reg \$489 ;
   wire \$49 ;
-  reg [1:0] \$490 ;
-  reg [5:0] \$491 ;
-  reg \$492 ;
-  reg \$493 ;
-  reg [1:0] \$494 ;
-  reg \$495 ;
-  reg \$496 ;
-  reg \$497 ;
-  reg [7:0] \$498 ;
-  reg [2:0] \$499 ;
   wire \$5 ;
   wire \$50 ;
-  reg [6:0] \$500 ;
-  reg [6:0] \$501 ;
-  reg \$502 ;
-  reg \$503 ;
-  reg \$504 ;
-  reg [3:0] \$505 ;
-  reg \$506 ;
-  reg \$507 ;
-  reg \$508 ;
-  reg \$509 ;
   wire \$51 ;
-  reg \$510 ;
-  reg \$511 ;
-  reg \$512 ;
-  reg \$513 ;
-  reg \$514 ;
-  reg \$515 ;
-  reg \$516 ;
-  reg [5:0] \$517 ;
-  reg [15:0] \$518 ;
-  reg [12:0] \$519 ;
   wire \$52 ;
-  reg [31:0] \$520 ;
-  reg [22:0] \$521 ;
-  reg [31:0] \$522 ;
-  reg [7:0] \$523 ;
-  reg [31:0] \$524 ;
-  reg [31:0] \$525 ;
-  reg \$526 ;
-  reg \$527 ;
   wire \$53 ;
   wire \$54 ;
   wire \$55 ;
@@ -1553,9 +1423,11 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, ch0__ca_wbuf_en, 
   input [10:0] bus__r_addr;
   wire [10:0] bus__r_addr;
   output [31:0] bus__r_data;
-  wire [31:0] bus__r_data;
+  reg [31:0] bus__r_data = 32'd0;
   input bus__r_en;
   wire bus__r_en;
+  input bus__r_load;
+  wire bus__r_load;
   input [10:0] bus__w_addr;
   wire [10:0] bus__w_addr;
   wire [31:0] bus__w_data;
@@ -1802,6 +1674,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, ch0__ca_wbuf_en, 
   reg ch0_irq_status_error = 1'h0;
   wire ch0_irq_status_read;
   wire ch0_irq_status_write;
+  reg [31:0] ch0_read_word = 32'd0;
   reg [12:0] ch0_result_seq_line_delay_snapshot = 13'h0000;
   wire ch0_result_seq_read;
   reg [15:0] ch0_result_seq_seq_snapshot = 16'h0000;
@@ -2076,6 +1949,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, ch0__ca_wbuf_en, 
   reg ch1_irq_status_error = 1'h0;
   wire ch1_irq_status_read;
   wire ch1_irq_status_write;
+  reg [31:0] ch1_read_word = 32'd0;
   reg [12:0] ch1_result_seq_line_delay_snapshot = 13'h0000;
   wire ch1_result_seq_read;
   reg [15:0] ch1_result_seq_seq_snapshot = 16'h0000;
@@ -2121,6 +1995,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, ch0__ca_wbuf_en, 
   wire g_irq;
   wire g_irq_pending_read;
   wire g_irq_pending_write;
+  reg [31:0] g_read_word = 32'd0;
   wire g_trigger_read;
   (* init = 1'h0 *)
   wire g_trigger_start;
@@ -2132,338 +2007,72 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, ch0__ca_wbuf_en, 
   output glob__trigger;
   reg glob__trigger = 1'h0;
   wire [1:0] irq;
-  input [160:0] \port$3981$0 ;
-  wire [160:0] \port$3981$0 ;
-  input [287:0] \port$3988$0 ;
-  wire [287:0] \port$3988$0 ;
-  input [9:0] \port$4102$0 ;
-  wire [9:0] \port$4102$0 ;
-  input [160:0] \port$4428$0 ;
-  wire [160:0] \port$4428$0 ;
-  input [287:0] \port$4435$0 ;
-  wire [287:0] \port$4435$0 ;
-  input [9:0] \port$4549$0 ;
-  wire [9:0] \port$4549$0 ;
+  input [160:0] \port$3983$0 ;
+  wire [160:0] \port$3983$0 ;
+  input [287:0] \port$3990$0 ;
+  wire [287:0] \port$3990$0 ;
+  input [9:0] \port$4104$0 ;
+  wire [9:0] \port$4104$0 ;
+  input [160:0] \port$4436$0 ;
+  wire [160:0] \port$4436$0 ;
+  input [287:0] \port$4443$0 ;
+  wire [287:0] \port$4443$0 ;
+  input [9:0] \port$4557$0 ;
+  wire [9:0] \port$4557$0 ;
+  (* init = 32'd0 *)
+  wire [31:0] read_data;
   input rst;
   wire rst;
   reg window0_read = 1'h0;
   reg window1_read = 1'h0;
-  reg [31:0] word = 32'd0;
-  assign \$327  = ch1__cfg_request_period & \$326 ;
-  assign \$328  = ch0__ca_wbuf_data[23:0] & { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$329  = \$327  | \$328 ;
-  assign \$330  = ~ { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$331  = ch1__cfg_break_time & \$330 ;
-  assign \$332  = ch0__ca_wbuf_data[23:0] & { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$333  = \$331  | \$332 ;
-  assign \$334  = ~ { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$335  = ch1__cfg_ack_limit & \$334 ;
-  assign \$336  = ch0__ca_wbuf_data[23:0] & { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$337  = \$335  | \$336 ;
-  assign \$338  = ~ { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$339  = ch1__cfg_timeout_limit & \$338 ;
-  assign \$340  = ch0__ca_wbuf_data[23:0] & { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$341  = \$339  | \$340 ;
-  assign \$342  = ~ { bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$343  = ch1__cfg_w0_data_bits & \$342 ;
-  assign \$344  = ch0__ca_wbuf_data[5:0] & { bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$345  = \$343  | \$344 ;
-  assign \$346  = ~ bus__w_strb[0];
-  assign \$347  = ch1__cfg_w0_nenw & \$346 ;
-  assign \$348  = ch0__ca_wbuf_data[6] & bus__w_strb[0];
-  assign \$349  = \$347  | \$348 ;
-  assign \$350  = ~ bus__w_strb[0];
-  assign \$351  = ch1__cfg_w0_lc & \$350 ;
-  assign \$352  = ch0__ca_wbuf_data[7] & bus__w_strb[0];
-  assign \$353  = \$351  | \$352 ;
-  assign \$354  = ~ { bus__w_strb[1], bus__w_strb[1] };
-  assign \$355  = ch1__cfg_w0_crc & \$354 ;
-  assign \$356  = ch0__ca_wbuf_data[9:8] & { bus__w_strb[1], bus__w_strb[1] };
-  assign \$357  = \$355  | \$356 ;
-  assign \$358  = ~ { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2] };
-  assign \$359  = ch1__cfg_w1_data_bits & \$358 ;
-  assign \$360  = ch0__ca_wbuf_data[21:16] & { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2] };
-  assign \$361  = \$359  | \$360 ;
-  assign \$362  = ~ bus__w_strb[2];
-  assign \$363  = ch1__cfg_w1_nenw & \$362 ;
-  assign \$364  = ch0__ca_wbuf_data[22] & bus__w_strb[2];
-  assign \$365  = \$363  | \$364 ;
-  assign \$366  = ~ bus__w_strb[2];
-  assign \$367  = ch1__cfg_w1_lc & \$366 ;
-  assign \$368  = ch0__ca_wbuf_data[23] & bus__w_strb[2];
-  assign \$369  = \$367  | \$368 ;
-  assign \$370  = ~ { bus__w_strb[3], bus__w_strb[3] };
-  assign \$371  = ch1__cfg_w1_crc & \$370 ;
-  assign \$372  = ch0__ca_wbuf_data[25:24] & { bus__w_strb[3], bus__w_strb[3] };
-  assign \$373  = \$371  | \$372 ;
-  assign \$374  = ~ bus__w_strb[3];
-  assign \$375  = ch1__cfg_w1_enable & \$374 ;
-  assign \$376  = ch0__ca_wbuf_data[31] & bus__w_strb[3];
-  assign \$377  = \$375  | \$376 ;
-  assign \$378  = ~ bus__w_strb[0];
-  assign \$379  = ch1__cfg_end_check & \$378 ;
-  assign \$380  = ch0__ca_wbuf_data[0] & bus__w_strb[0];
-  assign \$381  = \$379  | \$380 ;
-  assign \$382  = ~ bus__w_strb[0];
-  assign \$383  = ch1__cfg_spw_check & \$382 ;
-  assign \$384  = ch0__ca_wbuf_data[1] & bus__w_strb[0];
-  assign \$385  = \$383  | \$384 ;
-  assign \$386  = ~ { bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1] };
-  assign \$387  = ch1__cfg_spw_tolerance & \$386 ;
-  assign \$388  = ch0__ca_wbuf_data[15:8] & { bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1] };
-  assign \$389  = \$387  | \$388 ;
-  assign \$390  = ~ { bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$391  = ch1__ca_slave_id & \$390 ;
-  assign \$392  = ch0__ca_wbuf_data[2:0] & { bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$393  = \$391  | \$392 ;
-  assign \$394  = ~ { bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1] };
-  assign \$395  = ch1__ca_address & \$394 ;
-  assign \$396  = ch0__ca_wbuf_data[14:8] & { bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1] };
-  assign \$397  = \$395  | \$396 ;
-  assign \$398  = ~ { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2] };
-  assign \$399  = ch1__ca_count & \$398 ;
-  assign \$400  = ch0__ca_wbuf_data[22:16] & { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2] };
-  assign \$401  = \$399  | \$400 ;
-  assign \$402  = ~ bus__w_strb[3];
-  assign \$403  = ch1__ca_write & \$402 ;
-  assign \$404  = ch0__ca_wbuf_data[24] & bus__w_strb[3];
-  assign \$405  = \$403  | \$404 ;
-  assign \$406  = ch0__ca_wbuf_data[0] & bus__w_strb[0];
-  assign \$407  = ch1_ca_ctrl_write ? \$406  : 1'h0;
-  assign \$408  = ch0__ca_wbuf_data[1] & bus__w_strb[0];
-  assign \$409  = ch1_ca_ctrl_write ? \$408  : 1'h0;
-  assign \$410  = bus__r_addr[10:4] == 4'he;
-  assign \$411  = bus__r_en & \$410 ;
-  assign \$412  = bus__r_addr[10:4] == 5'h16;
-  assign \$413  = bus__r_en & \$412 ;
   always @(posedge clk)
-    glob__trigger <= \$414 ;
+    ch1_result_status_status_snapshot <= \$369 ;
   always @(posedge clk)
-    ch0__start <= \$415 ;
+    ch1_result_status_cds_snapshot <= \$370 ;
   always @(posedge clk)
-    ch0__abort_cycle <= \$416 ;
+    ch1_result_status_w0_ne_snapshot <= \$371 ;
   always @(posedge clk)
-    ch0__clear_counters <= \$417 ;
+    ch1_result_status_w0_nw_snapshot <= \$372 ;
   always @(posedge clk)
-    ch0__periodic <= \$418 ;
+    ch1_result_status_w0_crc_ok_snapshot <= \$373 ;
   always @(posedge clk)
-    ch0__trigger_enable <= \$419 ;
+    ch1_result_status_w1_ne_snapshot <= \$374 ;
   always @(posedge clk)
-    ch0_irq_status_done <= \$420 ;
+    ch1_result_status_w1_nw_snapshot <= \$375 ;
   always @(posedge clk)
-    ch0_irq_status_error <= \$421 ;
+    ch1_result_status_w1_crc_ok_snapshot <= \$376 ;
   always @(posedge clk)
-    ch0_irq_status_access_done <= \$422 ;
+    ch1_result_status_lc_repeat_snapshot <= \$377 ;
   always @(posedge clk)
-    ch0_irq_enable_done <= \$423 ;
+    ch1_result_status_lc_skip_snapshot <= \$378 ;
   always @(posedge clk)
-    ch0_irq_enable_error <= \$424 ;
+    ch1_result_status_lc_zero_snapshot <= \$379 ;
   always @(posedge clk)
-    ch0_irq_enable_access_done <= \$425 ;
+    ch1_result_status_spw_mismatch_snapshot <= \$380 ;
   always @(posedge clk)
-    ch0__cfg_ma_half_period <= \$426 ;
+    ch1_result_status_lc_snapshot <= \$381 ;
   always @(posedge clk)
-    ch0__cfg_delay_limit <= \$427 ;
+    ch1_result_seq_seq_snapshot <= \$382 ;
   always @(posedge clk)
-    ch0__cfg_request_period <= \$428 ;
+    ch1_result_seq_line_delay_snapshot <= \$383 ;
   always @(posedge clk)
-    ch0__cfg_break_time <= \$429 ;
+    ch1_result_w0_lo_data_snapshot <= \$384 ;
   always @(posedge clk)
-    ch0__cfg_ack_limit <= \$430 ;
+    ch1_result_w0_hi_data_snapshot <= \$385 ;
   always @(posedge clk)
-    ch0__cfg_timeout_limit <= \$431 ;
+    ch1_result_w1_lo_data_snapshot <= \$386 ;
   always @(posedge clk)
-    ch0__cfg_w0_data_bits <= \$432 ;
+    ch1_result_w1_hi_data_snapshot <= \$387 ;
   always @(posedge clk)
-    ch0__cfg_w0_nenw <= \$433 ;
+    ch1_result_timestamp_time_snapshot <= \$388 ;
   always @(posedge clk)
-    ch0__cfg_w0_lc <= \$434 ;
+    ch1_read_word <= \$389 ;
   always @(posedge clk)
-    ch0__cfg_w0_crc <= \$435 ;
+    window0_read <= \$390 ;
   always @(posedge clk)
-    ch0__cfg_w1_data_bits <= \$436 ;
+    window1_read <= \$391 ;
   always @(posedge clk)
-    ch0__cfg_w1_nenw <= \$437 ;
-  always @(posedge clk)
-    ch0__cfg_w1_lc <= \$438 ;
-  always @(posedge clk)
-    ch0__cfg_w1_crc <= \$439 ;
-  always @(posedge clk)
-    ch0__cfg_w1_enable <= \$440 ;
-  always @(posedge clk)
-    ch0__cfg_end_check <= \$441 ;
-  always @(posedge clk)
-    ch0__cfg_spw_check <= \$442 ;
-  always @(posedge clk)
-    ch0__cfg_spw_tolerance <= \$443 ;
-  always @(posedge clk)
-    ch0__ca_slave_id <= \$444 ;
-  always @(posedge clk)
-    ch0__ca_address <= \$445 ;
-  always @(posedge clk)
-    ch0__ca_count <= \$446 ;
-  always @(posedge clk)
-    ch0__ca_write <= \$447 ;
-  always @(posedge clk)
-    ch0__ca_start <= \$448 ;
-  always @(posedge clk)
-    ch0__ca_abort <= \$449 ;
-  always @(posedge clk)
-    ch0_result_status_status_snapshot <= \$450 ;
-  always @(posedge clk)
-    ch0_result_status_cds_snapshot <= \$451 ;
-  always @(posedge clk)
-    ch0_result_status_w0_ne_snapshot <= \$452 ;
-  always @(posedge clk)
-    ch0_result_status_w0_nw_snapshot <= \$453 ;
-  always @(posedge clk)
-    ch0_result_status_w0_crc_ok_snapshot <= \$454 ;
-  always @(posedge clk)
-    ch0_result_status_w1_ne_snapshot <= \$455 ;
-  always @(posedge clk)
-    ch0_result_status_w1_nw_snapshot <= \$456 ;
-  always @(posedge clk)
-    ch0_result_status_w1_crc_ok_snapshot <= \$457 ;
-  always @(posedge clk)
-    ch0_result_status_lc_repeat_snapshot <= \$458 ;
-  always @(posedge clk)
-    ch0_result_status_lc_skip_snapshot <= \$459 ;
-  always @(posedge clk)
-    ch0_result_status_lc_zero_snapshot <= \$460 ;
-  always @(posedge clk)
-    ch0_result_status_spw_mismatch_snapshot <= \$461 ;
-  always @(posedge clk)
-    ch0_result_status_lc_snapshot <= \$462 ;
-  always @(posedge clk)
-    ch0_result_seq_seq_snapshot <= \$463 ;
-  always @(posedge clk)
-    ch0_result_seq_line_delay_snapshot <= \$464 ;
-  always @(posedge clk)
-    ch0_result_w0_lo_data_snapshot <= \$465 ;
-  always @(posedge clk)
-    ch0_result_w0_hi_data_snapshot <= \$466 ;
-  always @(posedge clk)
-    ch0_result_w1_lo_data_snapshot <= \$467 ;
-  always @(posedge clk)
-    ch0_result_w1_hi_data_snapshot <= \$468 ;
-  always @(posedge clk)
-    ch0_result_timestamp_time_snapshot <= \$469 ;
-  always @(posedge clk)
-    ch1__start <= \$470 ;
-  always @(posedge clk)
-    ch1__abort_cycle <= \$471 ;
-  always @(posedge clk)
-    ch1__clear_counters <= \$472 ;
-  always @(posedge clk)
-    ch1__periodic <= \$473 ;
-  always @(posedge clk)
-    ch1__trigger_enable <= \$474 ;
-  always @(posedge clk)
-    ch1_irq_status_done <= \$475 ;
-  always @(posedge clk)
-    ch1_irq_status_error <= \$476 ;
-  always @(posedge clk)
-    ch1_irq_status_access_done <= \$477 ;
-  always @(posedge clk)
-    ch1_irq_enable_done <= \$478 ;
-  always @(posedge clk)
-    ch1_irq_enable_error <= \$479 ;
-  always @(posedge clk)
-    ch1_irq_enable_access_done <= \$480 ;
-  always @(posedge clk)
-    ch1__cfg_ma_half_period <= \$481 ;
-  always @(posedge clk)
-    ch1__cfg_delay_limit <= \$482 ;
-  always @(posedge clk)
-    ch1__cfg_request_period <= \$483 ;
-  always @(posedge clk)
-    ch1__cfg_break_time <= \$484 ;
-  always @(posedge clk)
-    ch1__cfg_ack_limit <= \$485 ;
-  always @(posedge clk)
-    ch1__cfg_timeout_limit <= \$486 ;
-  always @(posedge clk)
-    ch1__cfg_w0_data_bits <= \$487 ;
-  always @(posedge clk)
-    ch1__cfg_w0_nenw <= \$488 ;
-  always @(posedge clk)
-    ch1__cfg_w0_lc <= \$489 ;
-  always @(posedge clk)
-    ch1__cfg_w0_crc <= \$490 ;
-  always @(posedge clk)
-    ch1__cfg_w1_data_bits <= \$491 ;
-  always @(posedge clk)
-    ch1__cfg_w1_nenw <= \$492 ;
-  always @(posedge clk)
-    ch1__cfg_w1_lc <= \$493 ;
-  always @(posedge clk)
-    ch1__cfg_w1_crc <= \$494 ;
-  always @(posedge clk)
-    ch1__cfg_w1_enable <= \$495 ;
-  always @(posedge clk)
-    ch1__cfg_end_check <= \$496 ;
-  always @(posedge clk)
-    ch1__cfg_spw_check <= \$497 ;
-  always @(posedge clk)
-    ch1__cfg_spw_tolerance <= \$498 ;
-  always @(posedge clk)
-    ch1__ca_slave_id <= \$499 ;
-  always @(posedge clk)
-    ch1__ca_address <= \$500 ;
-  always @(posedge clk)
-    ch1__ca_count <= \$501 ;
-  always @(posedge clk)
-    ch1__ca_write <= \$502 ;
-  always @(posedge clk)
-    ch1__ca_start <= \$503 ;
-  always @(posedge clk)
-    ch1__ca_abort <= \$504 ;
-  always @(posedge clk)
-    ch1_result_status_status_snapshot <= \$505 ;
-  always @(posedge clk)
-    ch1_result_status_cds_snapshot <= \$506 ;
-  always @(posedge clk)
-    ch1_result_status_w0_ne_snapshot <= \$507 ;
-  always @(posedge clk)
-    ch1_result_status_w0_nw_snapshot <= \$508 ;
-  always @(posedge clk)
-    ch1_result_status_w0_crc_ok_snapshot <= \$509 ;
-  always @(posedge clk)
-    ch1_result_status_w1_ne_snapshot <= \$510 ;
-  always @(posedge clk)
-    ch1_result_status_w1_nw_snapshot <= \$511 ;
-  always @(posedge clk)
-    ch1_result_status_w1_crc_ok_snapshot <= \$512 ;
-  always @(posedge clk)
-    ch1_result_status_lc_repeat_snapshot <= \$513 ;
-  always @(posedge clk)
-    ch1_result_status_lc_skip_snapshot <= \$514 ;
-  always @(posedge clk)
-    ch1_result_status_lc_zero_snapshot <= \$515 ;
-  always @(posedge clk)
-    ch1_result_status_spw_mismatch_snapshot <= \$516 ;
-  always @(posedge clk)
-    ch1_result_status_lc_snapshot <= \$517 ;
-  always @(posedge clk)
-    ch1_result_seq_seq_snapshot <= \$518 ;
-  always @(posedge clk)
-    ch1_result_seq_line_delay_snapshot <= \$519 ;
-  always @(posedge clk)
-    ch1_result_w0_lo_data_snapshot <= \$520 ;
-  always @(posedge clk)
-    ch1_result_w0_hi_data_snapshot <= \$521 ;
-  always @(posedge clk)
-    ch1_result_w1_lo_data_snapshot <= \$522 ;
-  always @(posedge clk)
-    ch1_result_w1_hi_data_snapshot <= \$523 ;
-  always @(posedge clk)
-    ch1_result_timestamp_time_snapshot <= \$524 ;
-  always @(posedge clk)
-    word <= \$525 ;
-  always @(posedge clk)
-    window0_read <= \$526 ;
-  always @(posedge clk)
-    window1_read <= \$527 ;
+    bus__r_data <= \$392 ;
   assign \$1  = ! bus__w_addr;
   assign g_id_write = bus__w_en & \$1 ;
   assign \$2  = ! bus__r_addr;
@@ -2758,1436 +2367,1667 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, ch0__ca_wbuf_en, 
   assign \$153  = ch1_irq_status_error & ch1_irq_enable_error;
   assign \$155  = ch1_irq_status_access_done & ch1_irq_enable_access_done;
   assign ch1_irq = | { \$156 , \$154 , \$152  };
-  assign \$157  = window0_read ? ch0__ca_rbuf_data : 32'd0;
-  assign \$158  = word | \$157 ;
-  assign \$159  = window1_read ? ch1__ca_rbuf_data : 32'd0;
-  assign bus__r_data = \$158  | \$159 ;
-  assign \$160  = ch0__ca_wbuf_data[0] & bus__w_strb[0];
-  assign \$161  = g_trigger_write ? \$160  : 1'h0;
-  assign \$162  = ch0__ca_wbuf_data[0] & bus__w_strb[0];
-  assign \$163  = ch0_ctrl_write ? \$162  : 1'h0;
-  assign \$164  = ch0__ca_wbuf_data[1] & bus__w_strb[0];
-  assign \$165  = ch0_ctrl_write ? \$164  : 1'h0;
-  assign \$166  = ch0__ca_wbuf_data[2] & bus__w_strb[0];
-  assign \$167  = ch0_ctrl_write ? \$166  : 1'h0;
-  assign \$168  = ~ bus__w_strb[1];
-  assign \$169  = ch0__periodic & \$168 ;
-  assign \$170  = ch0__ca_wbuf_data[8] & bus__w_strb[1];
-  assign \$171  = \$169  | \$170 ;
-  assign \$172  = ~ bus__w_strb[1];
-  assign \$173  = ch0__trigger_enable & \$172 ;
-  assign \$174  = ch0__ca_wbuf_data[9] & bus__w_strb[1];
-  assign \$175  = \$173  | \$174 ;
-  assign \$176  = ch0__ca_wbuf_data[0] & bus__w_strb[0];
-  assign \$177  = ch0_irq_status_write ? \$176  : 1'h0;
-  assign \$178  = ch0__ca_wbuf_data[1] & bus__w_strb[0];
-  assign \$179  = ch0_irq_status_write ? \$178  : 1'h0;
-  assign \$180  = ch0__ca_wbuf_data[2] & bus__w_strb[0];
-  assign \$181  = ch0_irq_status_write ? \$180  : 1'h0;
-  assign \$182  = ~ bus__w_strb[0];
-  assign \$183  = ch0_irq_enable_done & \$182 ;
-  assign \$184  = ch0__ca_wbuf_data[0] & bus__w_strb[0];
-  assign \$185  = \$183  | \$184 ;
-  assign \$186  = ~ bus__w_strb[0];
-  assign \$187  = ch0_irq_enable_error & \$186 ;
-  assign \$188  = ch0__ca_wbuf_data[1] & bus__w_strb[0];
-  assign \$189  = \$187  | \$188 ;
-  assign \$190  = ~ bus__w_strb[0];
-  assign \$191  = ch0_irq_enable_access_done & \$190 ;
-  assign \$192  = ch0__ca_wbuf_data[2] & bus__w_strb[0];
-  assign \$193  = \$191  | \$192 ;
-  assign \$194  = ~ { bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$195  = ch0__cfg_ma_half_period & \$194 ;
-  assign \$196  = ch0__ca_wbuf_data[15:0] & { bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$197  = \$195  | \$196 ;
-  assign \$198  = ~ { bus__w_strb[3], bus__w_strb[3], bus__w_strb[3], bus__w_strb[3:2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2] };
-  assign \$199  = ch0__cfg_delay_limit & \$198 ;
-  assign \$200  = ch0__ca_wbuf_data[27:16] & { bus__w_strb[3], bus__w_strb[3], bus__w_strb[3], bus__w_strb[3:2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2] };
-  assign \$201  = \$199  | \$200 ;
-  assign \$202  = ~ { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$203  = ch0__cfg_request_period & \$202 ;
-  assign \$204  = ch0__ca_wbuf_data[23:0] & { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$205  = \$203  | \$204 ;
-  assign \$206  = ~ { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$207  = ch0__cfg_break_time & \$206 ;
-  assign \$208  = ch0__ca_wbuf_data[23:0] & { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$209  = \$207  | \$208 ;
-  assign \$210  = ~ { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$211  = ch0__cfg_ack_limit & \$210 ;
-  assign \$212  = ch0__ca_wbuf_data[23:0] & { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$213  = \$211  | \$212 ;
-  assign \$214  = ~ { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$215  = ch0__cfg_timeout_limit & \$214 ;
-  assign \$216  = ch0__ca_wbuf_data[23:0] & { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$217  = \$215  | \$216 ;
-  assign \$218  = ~ { bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$219  = ch0__cfg_w0_data_bits & \$218 ;
-  assign \$220  = ch0__ca_wbuf_data[5:0] & { bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$221  = \$219  | \$220 ;
-  assign \$222  = ~ bus__w_strb[0];
-  assign \$223  = ch0__cfg_w0_nenw & \$222 ;
-  assign \$224  = ch0__ca_wbuf_data[6] & bus__w_strb[0];
-  assign \$225  = \$223  | \$224 ;
-  assign \$226  = ~ bus__w_strb[0];
-  assign \$227  = ch0__cfg_w0_lc & \$226 ;
-  assign \$228  = ch0__ca_wbuf_data[7] & bus__w_strb[0];
-  assign \$229  = \$227  | \$228 ;
-  assign \$230  = ~ { bus__w_strb[1], bus__w_strb[1] };
-  assign \$231  = ch0__cfg_w0_crc & \$230 ;
-  assign \$232  = ch0__ca_wbuf_data[9:8] & { bus__w_strb[1], bus__w_strb[1] };
-  assign \$233  = \$231  | \$232 ;
-  assign \$234  = ~ { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2] };
-  assign \$235  = ch0__cfg_w1_data_bits & \$234 ;
-  assign \$236  = ch0__ca_wbuf_data[21:16] & { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2] };
-  assign \$237  = \$235  | \$236 ;
-  assign \$238  = ~ bus__w_strb[2];
-  assign \$239  = ch0__cfg_w1_nenw & \$238 ;
-  assign \$240  = ch0__ca_wbuf_data[22] & bus__w_strb[2];
-  assign \$241  = \$239  | \$240 ;
-  assign \$242  = ~ bus__w_strb[2];
-  assign \$243  = ch0__cfg_w1_lc & \$242 ;
-  assign \$244  = ch0__ca_wbuf_data[23] & bus__w_strb[2];
-  assign \$245  = \$243  | \$244 ;
-  assign \$246  = ~ { bus__w_strb[3], bus__w_strb[3] };
-  assign \$247  = ch0__cfg_w1_crc & \$246 ;
-  assign \$248  = ch0__ca_wbuf_data[25:24] & { bus__w_strb[3], bus__w_strb[3] };
-  assign \$249  = \$247  | \$248 ;
-  assign \$250  = ~ bus__w_strb[3];
-  assign \$251  = ch0__cfg_w1_enable & \$250 ;
-  assign \$252  = ch0__ca_wbuf_data[31] & bus__w_strb[3];
-  assign \$253  = \$251  | \$252 ;
-  assign \$254  = ~ bus__w_strb[0];
-  assign \$255  = ch0__cfg_end_check & \$254 ;
-  assign \$256  = ch0__ca_wbuf_data[0] & bus__w_strb[0];
-  assign \$257  = \$255  | \$256 ;
-  assign \$258  = ~ bus__w_strb[0];
-  assign \$259  = ch0__cfg_spw_check & \$258 ;
-  assign \$260  = ch0__ca_wbuf_data[1] & bus__w_strb[0];
-  assign \$261  = \$259  | \$260 ;
-  assign \$262  = ~ { bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1] };
-  assign \$263  = ch0__cfg_spw_tolerance & \$262 ;
-  assign \$264  = ch0__ca_wbuf_data[15:8] & { bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1] };
-  assign \$265  = \$263  | \$264 ;
-  assign \$266  = ~ { bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$267  = ch0__ca_slave_id & \$266 ;
-  assign \$268  = ch0__ca_wbuf_data[2:0] & { bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$269  = \$267  | \$268 ;
-  assign \$270  = ~ { bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1] };
-  assign \$271  = ch0__ca_address & \$270 ;
-  assign \$272  = ch0__ca_wbuf_data[14:8] & { bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1] };
+  assign \$157  = ch0__ca_wbuf_data[0] & bus__w_strb[0];
+  assign \$158  = g_trigger_write ? \$157  : 1'h0;
+  assign \$159  = ch0__ca_wbuf_data[0] & bus__w_strb[0];
+  assign \$160  = ch0_ctrl_write ? \$159  : 1'h0;
+  assign \$161  = ch0__ca_wbuf_data[1] & bus__w_strb[0];
+  assign \$162  = ch0_ctrl_write ? \$161  : 1'h0;
+  assign \$163  = ch0__ca_wbuf_data[2] & bus__w_strb[0];
+  assign \$164  = ch0_ctrl_write ? \$163  : 1'h0;
+  assign \$165  = ch0_ctrl_write & bus__w_strb[1];
+  assign \$166  = ch0_ctrl_write & bus__w_strb[1];
+  assign \$167  = ch0__ca_wbuf_data[0] & bus__w_strb[0];
+  assign \$168  = ch0_irq_status_write ? \$167  : 1'h0;
+  assign \$169  = ch0__ca_wbuf_data[1] & bus__w_strb[0];
+  assign \$170  = ch0_irq_status_write ? \$169  : 1'h0;
+  assign \$171  = ch0__ca_wbuf_data[2] & bus__w_strb[0];
+  assign \$172  = ch0_irq_status_write ? \$171  : 1'h0;
+  assign \$173  = ch0_irq_enable_write & bus__w_strb[0];
+  assign \$174  = ch0_irq_enable_write & bus__w_strb[0];
+  assign \$175  = ch0_irq_enable_write & bus__w_strb[0];
+  assign \$176  = ch0_cfg_ma_write & bus__w_strb[0];
+  assign \$177  = ch0_cfg_ma_write & bus__w_strb[1];
+  assign \$178  = ch0_cfg_ma_write & bus__w_strb[2];
+  assign \$179  = ch0_cfg_ma_write & bus__w_strb[3];
+  assign \$180  = ch0_cfg_period_write & bus__w_strb[0];
+  assign \$181  = ch0_cfg_period_write & bus__w_strb[1];
+  assign \$182  = ch0_cfg_period_write & bus__w_strb[2];
+  assign \$183  = ch0_cfg_break_write & bus__w_strb[0];
+  assign \$184  = ch0_cfg_break_write & bus__w_strb[1];
+  assign \$185  = ch0_cfg_break_write & bus__w_strb[2];
+  assign \$186  = ch0_cfg_ack_write & bus__w_strb[0];
+  assign \$187  = ch0_cfg_ack_write & bus__w_strb[1];
+  assign \$188  = ch0_cfg_ack_write & bus__w_strb[2];
+  assign \$189  = ch0_cfg_timeout_write & bus__w_strb[0];
+  assign \$190  = ch0_cfg_timeout_write & bus__w_strb[1];
+  assign \$191  = ch0_cfg_timeout_write & bus__w_strb[2];
+  assign \$192  = ch0_cfg_words_write & bus__w_strb[0];
+  assign \$193  = ch0_cfg_words_write & bus__w_strb[0];
+  assign \$194  = ch0_cfg_words_write & bus__w_strb[0];
+  assign \$195  = ch0_cfg_words_write & bus__w_strb[1];
+  assign \$196  = ch0_cfg_words_write & bus__w_strb[2];
+  assign \$197  = ch0_cfg_words_write & bus__w_strb[2];
+  assign \$198  = ch0_cfg_words_write & bus__w_strb[2];
+  assign \$199  = ch0_cfg_words_write & bus__w_strb[3];
+  assign \$200  = ch0_cfg_words_write & bus__w_strb[3];
+  assign \$201  = ch0_cfg_checks_write & bus__w_strb[0];
+  assign \$202  = ch0_cfg_checks_write & bus__w_strb[0];
+  assign \$203  = ch0_cfg_checks_write & bus__w_strb[1];
+  assign \$204  = ch0_ca_request_write & bus__w_strb[0];
+  assign \$205  = ch0_ca_request_write & bus__w_strb[1];
+  assign \$206  = ch0_ca_request_write & bus__w_strb[2];
+  assign \$207  = ch0_ca_request_write & bus__w_strb[3];
+  assign \$208  = ch0__ca_wbuf_data[0] & bus__w_strb[0];
+  assign \$209  = ch0_ca_ctrl_write ? \$208  : 1'h0;
+  assign \$210  = ch0__ca_wbuf_data[1] & bus__w_strb[0];
+  assign \$211  = ch0_ca_ctrl_write ? \$210  : 1'h0;
+  assign \$212  = ch0__ca_wbuf_data[0] & bus__w_strb[0];
+  assign \$213  = ch1_ctrl_write ? \$212  : 1'h0;
+  assign \$214  = ch0__ca_wbuf_data[1] & bus__w_strb[0];
+  assign \$215  = ch1_ctrl_write ? \$214  : 1'h0;
+  assign \$216  = ch0__ca_wbuf_data[2] & bus__w_strb[0];
+  assign \$217  = ch1_ctrl_write ? \$216  : 1'h0;
+  assign \$218  = ch1_ctrl_write & bus__w_strb[1];
+  assign \$219  = ch1_ctrl_write & bus__w_strb[1];
+  assign \$220  = ch0__ca_wbuf_data[0] & bus__w_strb[0];
+  assign \$221  = ch1_irq_status_write ? \$220  : 1'h0;
+  assign \$222  = ch0__ca_wbuf_data[1] & bus__w_strb[0];
+  assign \$223  = ch1_irq_status_write ? \$222  : 1'h0;
+  assign \$224  = ch0__ca_wbuf_data[2] & bus__w_strb[0];
+  assign \$225  = ch1_irq_status_write ? \$224  : 1'h0;
+  assign \$226  = ch1_irq_enable_write & bus__w_strb[0];
+  assign \$227  = ch1_irq_enable_write & bus__w_strb[0];
+  assign \$228  = ch1_irq_enable_write & bus__w_strb[0];
+  assign \$229  = ch1_cfg_ma_write & bus__w_strb[0];
+  assign \$230  = ch1_cfg_ma_write & bus__w_strb[1];
+  assign \$231  = ch1_cfg_ma_write & bus__w_strb[2];
+  assign \$232  = ch1_cfg_ma_write & bus__w_strb[3];
+  assign \$233  = ch1_cfg_period_write & bus__w_strb[0];
+  assign \$234  = ch1_cfg_period_write & bus__w_strb[1];
+  assign \$235  = ch1_cfg_period_write & bus__w_strb[2];
+  assign \$236  = ch1_cfg_break_write & bus__w_strb[0];
+  assign \$237  = ch1_cfg_break_write & bus__w_strb[1];
+  assign \$238  = ch1_cfg_break_write & bus__w_strb[2];
+  assign \$239  = ch1_cfg_ack_write & bus__w_strb[0];
+  assign \$240  = ch1_cfg_ack_write & bus__w_strb[1];
+  assign \$241  = ch1_cfg_ack_write & bus__w_strb[2];
+  assign \$242  = ch1_cfg_timeout_write & bus__w_strb[0];
+  assign \$243  = ch1_cfg_timeout_write & bus__w_strb[1];
+  assign \$244  = ch1_cfg_timeout_write & bus__w_strb[2];
+  assign \$245  = ch1_cfg_words_write & bus__w_strb[0];
+  assign \$246  = ch1_cfg_words_write & bus__w_strb[0];
+  assign \$247  = ch1_cfg_words_write & bus__w_strb[0];
+  assign \$248  = ch1_cfg_words_write & bus__w_strb[1];
+  assign \$249  = ch1_cfg_words_write & bus__w_strb[2];
+  assign \$250  = ch1_cfg_words_write & bus__w_strb[2];
+  assign \$251  = ch1_cfg_words_write & bus__w_strb[2];
+  assign \$252  = ch1_cfg_words_write & bus__w_strb[3];
+  assign \$253  = ch1_cfg_words_write & bus__w_strb[3];
+  assign \$254  = ch1_cfg_checks_write & bus__w_strb[0];
+  assign \$255  = ch1_cfg_checks_write & bus__w_strb[0];
+  assign \$256  = ch1_cfg_checks_write & bus__w_strb[1];
+  assign \$257  = ch1_ca_request_write & bus__w_strb[0];
+  assign \$258  = ch1_ca_request_write & bus__w_strb[1];
+  assign \$259  = ch1_ca_request_write & bus__w_strb[2];
+  assign \$260  = ch1_ca_request_write & bus__w_strb[3];
+  assign \$261  = ch0__ca_wbuf_data[0] & bus__w_strb[0];
+  assign \$262  = ch1_ca_ctrl_write ? \$261  : 1'h0;
+  assign \$263  = ch0__ca_wbuf_data[1] & bus__w_strb[0];
+  assign \$264  = ch1_ca_ctrl_write ? \$263  : 1'h0;
+  assign \$265  = bus__r_addr[10:4] == 4'he;
+  assign \$266  = bus__r_en & \$265 ;
+  assign \$267  = bus__r_addr[10:4] == 5'h16;
+  assign \$268  = bus__r_en & \$267 ;
+  assign \$270  = \$269  | ch0_read_word;
+  assign \$271  = \$270  | ch1_read_word;
+  assign \$272  = window0_read ? ch0__ca_rbuf_data : 32'd0;
   assign \$273  = \$271  | \$272 ;
-  assign \$274  = ~ { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2] };
-  assign \$275  = ch0__ca_count & \$274 ;
-  assign \$276  = ch0__ca_wbuf_data[22:16] & { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2] };
-  assign \$277  = \$275  | \$276 ;
-  assign \$278  = ~ bus__w_strb[3];
-  assign \$279  = ch0__ca_write & \$278 ;
-  assign \$280  = ch0__ca_wbuf_data[24] & bus__w_strb[3];
-  assign \$281  = \$279  | \$280 ;
-  assign \$282  = ch0__ca_wbuf_data[0] & bus__w_strb[0];
-  assign \$283  = ch0_ca_ctrl_write ? \$282  : 1'h0;
-  assign \$284  = ch0__ca_wbuf_data[1] & bus__w_strb[0];
-  assign \$285  = ch0_ca_ctrl_write ? \$284  : 1'h0;
-  assign \$286  = ch0__ca_wbuf_data[0] & bus__w_strb[0];
-  assign \$287  = ch1_ctrl_write ? \$286  : 1'h0;
-  assign \$288  = ch0__ca_wbuf_data[1] & bus__w_strb[0];
-  assign \$289  = ch1_ctrl_write ? \$288  : 1'h0;
-  assign \$290  = ch0__ca_wbuf_data[2] & bus__w_strb[0];
-  assign \$291  = ch1_ctrl_write ? \$290  : 1'h0;
-  assign \$292  = ~ bus__w_strb[1];
-  assign \$293  = ch1__periodic & \$292 ;
-  assign \$294  = ch0__ca_wbuf_data[8] & bus__w_strb[1];
-  assign \$295  = \$293  | \$294 ;
-  assign \$296  = ~ bus__w_strb[1];
-  assign \$297  = ch1__trigger_enable & \$296 ;
-  assign \$298  = ch0__ca_wbuf_data[9] & bus__w_strb[1];
-  assign \$299  = \$297  | \$298 ;
-  assign \$300  = ch0__ca_wbuf_data[0] & bus__w_strb[0];
-  assign \$301  = ch1_irq_status_write ? \$300  : 1'h0;
-  assign \$302  = ch0__ca_wbuf_data[1] & bus__w_strb[0];
-  assign \$303  = ch1_irq_status_write ? \$302  : 1'h0;
-  assign \$304  = ch0__ca_wbuf_data[2] & bus__w_strb[0];
-  assign \$305  = ch1_irq_status_write ? \$304  : 1'h0;
-  assign \$306  = ~ bus__w_strb[0];
-  assign \$307  = ch1_irq_enable_done & \$306 ;
-  assign \$308  = ch0__ca_wbuf_data[0] & bus__w_strb[0];
-  assign \$309  = \$307  | \$308 ;
-  assign \$310  = ~ bus__w_strb[0];
-  assign \$311  = ch1_irq_enable_error & \$310 ;
-  assign \$312  = ch0__ca_wbuf_data[1] & bus__w_strb[0];
-  assign \$313  = \$311  | \$312 ;
-  assign \$314  = ~ bus__w_strb[0];
-  assign \$315  = ch1_irq_enable_access_done & \$314 ;
-  assign \$316  = ch0__ca_wbuf_data[2] & bus__w_strb[0];
-  assign \$317  = \$315  | \$316 ;
-  assign \$318  = ~ { bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$319  = ch1__cfg_ma_half_period & \$318 ;
-  assign \$320  = ch0__ca_wbuf_data[15:0] & { bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  assign \$321  = \$319  | \$320 ;
-  assign \$322  = ~ { bus__w_strb[3], bus__w_strb[3], bus__w_strb[3], bus__w_strb[3:2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2] };
-  assign \$323  = ch1__cfg_delay_limit & \$322 ;
-  assign \$324  = ch0__ca_wbuf_data[27:16] & { bus__w_strb[3], bus__w_strb[3], bus__w_strb[3], bus__w_strb[3:2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2] };
-  assign \$325  = \$323  | \$324 ;
-  assign \$326  = ~ { bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2], bus__w_strb[2:1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1], bus__w_strb[1:0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0], bus__w_strb[0] };
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$414  = \$161 ;
-    if (rst) begin
-      \$414  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$415  = \$163 ;
-    if (rst) begin
-      \$415  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$416  = \$165 ;
-    if (rst) begin
-      \$416  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$417  = \$167 ;
-    if (rst) begin
-      \$417  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$418  = ch0__periodic;
-    if (ch0_ctrl_write) begin
-      \$418  = \$171 ;
-    end
-    if (rst) begin
-      \$418  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$419  = ch0__trigger_enable;
-    if (ch0_ctrl_write) begin
-      \$419  = \$175 ;
-    end
-    if (rst) begin
-      \$419  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$420  = ch0_irq_status_done;
-    if (ch0__done) begin
-      \$420  = 1'h1;
-    end else if (\$177 ) begin
-      \$420  = 1'h0;
-    end
-    if (rst) begin
-      \$420  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$421  = ch0_irq_status_error;
-    if (ch0__frame_error) begin
-      \$421  = 1'h1;
-    end else if (\$179 ) begin
-      \$421  = 1'h0;
-    end
-    if (rst) begin
-      \$421  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$422  = ch0_irq_status_access_done;
-    if (ch0__ca_done) begin
-      \$422  = 1'h1;
-    end else if (\$181 ) begin
-      \$422  = 1'h0;
-    end
-    if (rst) begin
-      \$422  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$423  = ch0_irq_enable_done;
-    if (ch0_irq_enable_write) begin
-      \$423  = \$185 ;
-    end
-    if (rst) begin
-      \$423  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$424  = ch0_irq_enable_error;
-    if (ch0_irq_enable_write) begin
-      \$424  = \$189 ;
-    end
-    if (rst) begin
-      \$424  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$425  = ch0_irq_enable_access_done;
-    if (ch0_irq_enable_write) begin
-      \$425  = \$193 ;
-    end
-    if (rst) begin
-      \$425  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$426  = ch0__cfg_ma_half_period;
-    if (ch0_cfg_ma_write) begin
-      \$426  = \$197 ;
-    end
-    if (rst) begin
-      \$426  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$427  = ch0__cfg_delay_limit;
-    if (ch0_cfg_ma_write) begin
-      \$427  = \$201 ;
-    end
-    if (rst) begin
-      \$427  = 12'h000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$428  = ch0__cfg_request_period;
-    if (ch0_cfg_period_write) begin
-      \$428  = \$205 ;
-    end
-    if (rst) begin
-      \$428  = 24'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$429  = ch0__cfg_break_time;
-    if (ch0_cfg_break_write) begin
-      \$429  = \$209 ;
-    end
-    if (rst) begin
-      \$429  = 24'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$430  = ch0__cfg_ack_limit;
-    if (ch0_cfg_ack_write) begin
-      \$430  = \$213 ;
-    end
-    if (rst) begin
-      \$430  = 24'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$431  = ch0__cfg_timeout_limit;
-    if (ch0_cfg_timeout_write) begin
-      \$431  = \$217 ;
-    end
-    if (rst) begin
-      \$431  = 24'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$432  = ch0__cfg_w0_data_bits;
-    if (ch0_cfg_words_write) begin
-      \$432  = \$221 ;
-    end
-    if (rst) begin
-      \$432  = 6'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$433  = ch0__cfg_w0_nenw;
-    if (ch0_cfg_words_write) begin
-      \$433  = \$225 ;
-    end
-    if (rst) begin
-      \$433  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$434  = ch0__cfg_w0_lc;
-    if (ch0_cfg_words_write) begin
-      \$434  = \$229 ;
-    end
-    if (rst) begin
-      \$434  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$435  = ch0__cfg_w0_crc;
-    if (ch0_cfg_words_write) begin
-      \$435  = \$233 ;
-    end
-    if (rst) begin
-      \$435  = 2'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$436  = ch0__cfg_w1_data_bits;
-    if (ch0_cfg_words_write) begin
-      \$436  = \$237 ;
-    end
-    if (rst) begin
-      \$436  = 6'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$437  = ch0__cfg_w1_nenw;
-    if (ch0_cfg_words_write) begin
-      \$437  = \$241 ;
-    end
-    if (rst) begin
-      \$437  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$438  = ch0__cfg_w1_lc;
-    if (ch0_cfg_words_write) begin
-      \$438  = \$245 ;
-    end
-    if (rst) begin
-      \$438  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$439  = ch0__cfg_w1_crc;
-    if (ch0_cfg_words_write) begin
-      \$439  = \$249 ;
-    end
-    if (rst) begin
-      \$439  = 2'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$440  = ch0__cfg_w1_enable;
-    if (ch0_cfg_words_write) begin
-      \$440  = \$253 ;
-    end
-    if (rst) begin
-      \$440  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$441  = ch0__cfg_end_check;
-    if (ch0_cfg_checks_write) begin
-      \$441  = \$257 ;
-    end
-    if (rst) begin
-      \$441  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$442  = ch0__cfg_spw_check;
-    if (ch0_cfg_checks_write) begin
-      \$442  = \$261 ;
-    end
-    if (rst) begin
-      \$442  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$443  = ch0__cfg_spw_tolerance;
-    if (ch0_cfg_checks_write) begin
-      \$443  = \$265 ;
-    end
-    if (rst) begin
-      \$443  = 8'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$444  = ch0__ca_slave_id;
-    if (ch0_ca_request_write) begin
-      \$444  = \$269 ;
-    end
-    if (rst) begin
-      \$444  = 3'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$445  = ch0__ca_address;
-    if (ch0_ca_request_write) begin
-      \$445  = \$273 ;
-    end
-    if (rst) begin
-      \$445  = 7'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$446  = ch0__ca_count;
-    if (ch0_ca_request_write) begin
-      \$446  = \$277 ;
-    end
-    if (rst) begin
-      \$446  = 7'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$447  = ch0__ca_write;
-    if (ch0_ca_request_write) begin
-      \$447  = \$281 ;
-    end
-    if (rst) begin
-      \$447  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$448  = \$283 ;
-    if (rst) begin
-      \$448  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$449  = \$285 ;
-    if (rst) begin
-      \$449  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$450  = ch0_result_status_status_snapshot;
-    if (ch0_result_status_read) begin
-      \$450  = \port$3981$0 [3:0];
-    end
-    if (rst) begin
-      \$450  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$451  = ch0_result_status_cds_snapshot;
-    if (ch0_result_status_read) begin
-      \$451  = \port$3981$0 [49];
-    end
-    if (rst) begin
-      \$451  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$452  = ch0_result_status_w0_ne_snapshot;
-    if (ch0_result_status_read) begin
-      \$452  = \port$3981$0 [105];
-    end
-    if (rst) begin
-      \$452  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$453  = ch0_result_status_w0_nw_snapshot;
-    if (ch0_result_status_read) begin
-      \$453  = \port$3981$0 [106];
-    end
-    if (rst) begin
-      \$453  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$454  = ch0_result_status_w0_crc_ok_snapshot;
-    if (ch0_result_status_read) begin
-      \$454  = \port$3981$0 [107];
-    end
-    if (rst) begin
-      \$454  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$455  = ch0_result_status_w1_ne_snapshot;
-    if (ch0_result_status_read) begin
-      \$455  = \port$3981$0 [148];
-    end
-    if (rst) begin
-      \$455  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$456  = ch0_result_status_w1_nw_snapshot;
-    if (ch0_result_status_read) begin
-      \$456  = \port$3981$0 [149];
-    end
-    if (rst) begin
-      \$456  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$457  = ch0_result_status_w1_crc_ok_snapshot;
-    if (ch0_result_status_read) begin
-      \$457  = \port$3981$0 [150];
-    end
-    if (rst) begin
-      \$457  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$458  = ch0_result_status_lc_repeat_snapshot;
-    if (ch0_result_status_read) begin
-      \$458  = \port$3981$0 [157];
-    end
-    if (rst) begin
-      \$458  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$459  = ch0_result_status_lc_skip_snapshot;
-    if (ch0_result_status_read) begin
-      \$459  = \port$3981$0 [158];
-    end
-    if (rst) begin
-      \$459  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$460  = ch0_result_status_lc_zero_snapshot;
-    if (ch0_result_status_read) begin
-      \$460  = \port$3981$0 [159];
-    end
-    if (rst) begin
-      \$460  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$461  = ch0_result_status_spw_mismatch_snapshot;
-    if (ch0_result_status_read) begin
-      \$461  = \port$3981$0 [160];
-    end
-    if (rst) begin
-      \$461  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$462  = ch0_result_status_lc_snapshot;
-    if (ch0_result_status_read) begin
-      \$462  = \port$3981$0 [156:151];
-    end
-    if (rst) begin
-      \$462  = 6'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$463  = ch0_result_seq_seq_snapshot;
-    if (ch0_result_status_read) begin
-      \$463  = ch0__done_count;
-    end
-    if (rst) begin
-      \$463  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$464  = ch0_result_seq_line_delay_snapshot;
-    if (ch0_result_status_read) begin
-      \$464  = \port$3981$0 [48:36];
-    end
-    if (rst) begin
-      \$464  = 13'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$465  = ch0_result_w0_lo_data_snapshot;
-    if (ch0_result_status_read) begin
-      \$465  = \port$3981$0 [81:50];
-    end
-    if (rst) begin
-      \$465  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$466  = ch0_result_w0_hi_data_snapshot;
-    if (ch0_result_status_read) begin
-      \$466  = \port$3981$0 [104:82];
-    end
-    if (rst) begin
-      \$466  = 23'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$467  = ch0_result_w1_lo_data_snapshot;
-    if (ch0_result_status_read) begin
-      \$467  = \port$3981$0 [139:108];
-    end
-    if (rst) begin
-      \$467  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$468  = ch0_result_w1_hi_data_snapshot;
-    if (ch0_result_status_read) begin
-      \$468  = \port$3981$0 [147:140];
-    end
-    if (rst) begin
-      \$468  = 8'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$469  = ch0_result_timestamp_time_snapshot;
-    if (ch0_result_status_read) begin
-      \$469  = \port$3981$0 [35:4];
-    end
-    if (rst) begin
-      \$469  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$470  = \$287 ;
-    if (rst) begin
-      \$470  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$471  = \$289 ;
-    if (rst) begin
-      \$471  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$472  = \$291 ;
-    if (rst) begin
-      \$472  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$473  = ch1__periodic;
-    if (ch1_ctrl_write) begin
-      \$473  = \$295 ;
-    end
-    if (rst) begin
-      \$473  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$474  = ch1__trigger_enable;
-    if (ch1_ctrl_write) begin
-      \$474  = \$299 ;
-    end
-    if (rst) begin
-      \$474  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$475  = ch1_irq_status_done;
-    if (ch1__done) begin
-      \$475  = 1'h1;
-    end else if (\$301 ) begin
-      \$475  = 1'h0;
-    end
-    if (rst) begin
-      \$475  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$476  = ch1_irq_status_error;
-    if (ch1__frame_error) begin
-      \$476  = 1'h1;
-    end else if (\$303 ) begin
-      \$476  = 1'h0;
-    end
-    if (rst) begin
-      \$476  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$477  = ch1_irq_status_access_done;
-    if (ch1__ca_done) begin
-      \$477  = 1'h1;
-    end else if (\$305 ) begin
-      \$477  = 1'h0;
-    end
-    if (rst) begin
-      \$477  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$478  = ch1_irq_enable_done;
-    if (ch1_irq_enable_write) begin
-      \$478  = \$309 ;
-    end
-    if (rst) begin
-      \$478  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$479  = ch1_irq_enable_error;
-    if (ch1_irq_enable_write) begin
-      \$479  = \$313 ;
-    end
-    if (rst) begin
-      \$479  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$480  = ch1_irq_enable_access_done;
-    if (ch1_irq_enable_write) begin
-      \$480  = \$317 ;
-    end
-    if (rst) begin
-      \$480  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$481  = ch1__cfg_ma_half_period;
-    if (ch1_cfg_ma_write) begin
-      \$481  = \$321 ;
-    end
-    if (rst) begin
-      \$481  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$482  = ch1__cfg_delay_limit;
-    if (ch1_cfg_ma_write) begin
-      \$482  = \$325 ;
-    end
-    if (rst) begin
-      \$482  = 12'h000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$483  = ch1__cfg_request_period;
-    if (ch1_cfg_period_write) begin
-      \$483  = \$329 ;
-    end
-    if (rst) begin
-      \$483  = 24'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$484  = ch1__cfg_break_time;
-    if (ch1_cfg_break_write) begin
-      \$484  = \$333 ;
-    end
-    if (rst) begin
-      \$484  = 24'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$485  = ch1__cfg_ack_limit;
-    if (ch1_cfg_ack_write) begin
-      \$485  = \$337 ;
-    end
-    if (rst) begin
-      \$485  = 24'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$486  = ch1__cfg_timeout_limit;
-    if (ch1_cfg_timeout_write) begin
-      \$486  = \$341 ;
-    end
-    if (rst) begin
-      \$486  = 24'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$487  = ch1__cfg_w0_data_bits;
-    if (ch1_cfg_words_write) begin
-      \$487  = \$345 ;
-    end
-    if (rst) begin
-      \$487  = 6'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$488  = ch1__cfg_w0_nenw;
-    if (ch1_cfg_words_write) begin
-      \$488  = \$349 ;
-    end
-    if (rst) begin
-      \$488  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$489  = ch1__cfg_w0_lc;
-    if (ch1_cfg_words_write) begin
-      \$489  = \$353 ;
-    end
-    if (rst) begin
-      \$489  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$490  = ch1__cfg_w0_crc;
-    if (ch1_cfg_words_write) begin
-      \$490  = \$357 ;
-    end
-    if (rst) begin
-      \$490  = 2'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$491  = ch1__cfg_w1_data_bits;
-    if (ch1_cfg_words_write) begin
-      \$491  = \$361 ;
-    end
-    if (rst) begin
-      \$491  = 6'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$492  = ch1__cfg_w1_nenw;
-    if (ch1_cfg_words_write) begin
-      \$492  = \$365 ;
-    end
-    if (rst) begin
-      \$492  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$493  = ch1__cfg_w1_lc;
-    if (ch1_cfg_words_write) begin
-      \$493  = \$369 ;
-    end
-    if (rst) begin
-      \$493  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$494  = ch1__cfg_w1_crc;
-    if (ch1_cfg_words_write) begin
-      \$494  = \$373 ;
-    end
-    if (rst) begin
-      \$494  = 2'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$495  = ch1__cfg_w1_enable;
-    if (ch1_cfg_words_write) begin
-      \$495  = \$377 ;
-    end
-    if (rst) begin
-      \$495  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$496  = ch1__cfg_end_check;
-    if (ch1_cfg_checks_write) begin
-      \$496  = \$381 ;
-    end
-    if (rst) begin
-      \$496  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$497  = ch1__cfg_spw_check;
-    if (ch1_cfg_checks_write) begin
-      \$497  = \$385 ;
-    end
-    if (rst) begin
-      \$497  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$498  = ch1__cfg_spw_tolerance;
-    if (ch1_cfg_checks_write) begin
-      \$498  = \$389 ;
-    end
-    if (rst) begin
-      \$498  = 8'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$499  = ch1__ca_slave_id;
-    if (ch1_ca_request_write) begin
-      \$499  = \$393 ;
-    end
-    if (rst) begin
-      \$499  = 3'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$500  = ch1__ca_address;
-    if (ch1_ca_request_write) begin
-      \$500  = \$397 ;
-    end
-    if (rst) begin
-      \$500  = 7'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$501  = ch1__ca_count;
-    if (ch1_ca_request_write) begin
-      \$501  = \$401 ;
-    end
-    if (rst) begin
-      \$501  = 7'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$502  = ch1__ca_write;
-    if (ch1_ca_request_write) begin
-      \$502  = \$405 ;
-    end
-    if (rst) begin
-      \$502  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$503  = \$407 ;
-    if (rst) begin
-      \$503  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$504  = \$409 ;
-    if (rst) begin
-      \$504  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$505  = ch1_result_status_status_snapshot;
+  assign \$274  = window1_read ? ch1__ca_rbuf_data : 32'd0;
+  assign \$275  = \$273  | \$274 ;
+  always @(posedge clk)
+    glob__trigger <= \$276 ;
+  always @(posedge clk)
+    g_read_word <= \$277 ;
+  always @(posedge clk)
+    ch0__start <= \$278 ;
+  always @(posedge clk)
+    ch0__abort_cycle <= \$279 ;
+  always @(posedge clk)
+    ch0__clear_counters <= \$280 ;
+  always @(posedge clk)
+    ch0__periodic <= \$281 ;
+  always @(posedge clk)
+    ch0__trigger_enable <= \$282 ;
+  always @(posedge clk)
+    ch0_irq_status_done <= \$283 ;
+  always @(posedge clk)
+    ch0_irq_status_error <= \$284 ;
+  always @(posedge clk)
+    ch0_irq_status_access_done <= \$285 ;
+  always @(posedge clk)
+    ch0_irq_enable_done <= \$286 ;
+  always @(posedge clk)
+    ch0_irq_enable_error <= \$287 ;
+  always @(posedge clk)
+    ch0_irq_enable_access_done <= \$288 ;
+  always @(posedge clk)
+    ch0__cfg_ma_half_period <= \$289 ;
+  always @(posedge clk)
+    ch0__cfg_delay_limit <= \$290 ;
+  always @(posedge clk)
+    ch0__cfg_request_period <= \$291 ;
+  always @(posedge clk)
+    ch0__cfg_break_time <= \$292 ;
+  always @(posedge clk)
+    ch0__cfg_ack_limit <= \$293 ;
+  always @(posedge clk)
+    ch0__cfg_timeout_limit <= \$294 ;
+  always @(posedge clk)
+    ch0__cfg_w0_data_bits <= \$295 ;
+  always @(posedge clk)
+    ch0__cfg_w0_nenw <= \$296 ;
+  always @(posedge clk)
+    ch0__cfg_w0_lc <= \$297 ;
+  always @(posedge clk)
+    ch0__cfg_w0_crc <= \$298 ;
+  always @(posedge clk)
+    ch0__cfg_w1_data_bits <= \$299 ;
+  always @(posedge clk)
+    ch0__cfg_w1_nenw <= \$300 ;
+  always @(posedge clk)
+    ch0__cfg_w1_lc <= \$301 ;
+  always @(posedge clk)
+    ch0__cfg_w1_crc <= \$302 ;
+  always @(posedge clk)
+    ch0__cfg_w1_enable <= \$303 ;
+  always @(posedge clk)
+    ch0__cfg_end_check <= \$304 ;
+  always @(posedge clk)
+    ch0__cfg_spw_check <= \$305 ;
+  always @(posedge clk)
+    ch0__cfg_spw_tolerance <= \$306 ;
+  always @(posedge clk)
+    ch0__ca_slave_id <= \$307 ;
+  always @(posedge clk)
+    ch0__ca_address <= \$308 ;
+  always @(posedge clk)
+    ch0__ca_count <= \$309 ;
+  always @(posedge clk)
+    ch0__ca_write <= \$310 ;
+  always @(posedge clk)
+    ch0__ca_start <= \$311 ;
+  always @(posedge clk)
+    ch0__ca_abort <= \$312 ;
+  always @(posedge clk)
+    ch0_result_status_status_snapshot <= \$313 ;
+  always @(posedge clk)
+    ch0_result_status_cds_snapshot <= \$314 ;
+  always @(posedge clk)
+    ch0_result_status_w0_ne_snapshot <= \$315 ;
+  always @(posedge clk)
+    ch0_result_status_w0_nw_snapshot <= \$316 ;
+  always @(posedge clk)
+    ch0_result_status_w0_crc_ok_snapshot <= \$317 ;
+  always @(posedge clk)
+    ch0_result_status_w1_ne_snapshot <= \$318 ;
+  always @(posedge clk)
+    ch0_result_status_w1_nw_snapshot <= \$319 ;
+  always @(posedge clk)
+    ch0_result_status_w1_crc_ok_snapshot <= \$320 ;
+  always @(posedge clk)
+    ch0_result_status_lc_repeat_snapshot <= \$321 ;
+  always @(posedge clk)
+    ch0_result_status_lc_skip_snapshot <= \$322 ;
+  always @(posedge clk)
+    ch0_result_status_lc_zero_snapshot <= \$323 ;
+  always @(posedge clk)
+    ch0_result_status_spw_mismatch_snapshot <= \$324 ;
+  always @(posedge clk)
+    ch0_result_status_lc_snapshot <= \$325 ;
+  always @(posedge clk)
+    ch0_result_seq_seq_snapshot <= \$326 ;
+  always @(posedge clk)
+    ch0_result_seq_line_delay_snapshot <= \$327 ;
+  always @(posedge clk)
+    ch0_result_w0_lo_data_snapshot <= \$328 ;
+  always @(posedge clk)
+    ch0_result_w0_hi_data_snapshot <= \$329 ;
+  always @(posedge clk)
+    ch0_result_w1_lo_data_snapshot <= \$330 ;
+  always @(posedge clk)
+    ch0_result_w1_hi_data_snapshot <= \$331 ;
+  always @(posedge clk)
+    ch0_result_timestamp_time_snapshot <= \$332 ;
+  always @(posedge clk)
+    ch0_read_word <= \$333 ;
+  always @(posedge clk)
+    ch1__start <= \$334 ;
+  always @(posedge clk)
+    ch1__abort_cycle <= \$335 ;
+  always @(posedge clk)
+    ch1__clear_counters <= \$336 ;
+  always @(posedge clk)
+    ch1__periodic <= \$337 ;
+  always @(posedge clk)
+    ch1__trigger_enable <= \$338 ;
+  always @(posedge clk)
+    ch1_irq_status_done <= \$339 ;
+  always @(posedge clk)
+    ch1_irq_status_error <= \$340 ;
+  always @(posedge clk)
+    ch1_irq_status_access_done <= \$341 ;
+  always @(posedge clk)
+    ch1_irq_enable_done <= \$342 ;
+  always @(posedge clk)
+    ch1_irq_enable_error <= \$343 ;
+  always @(posedge clk)
+    ch1_irq_enable_access_done <= \$344 ;
+  always @(posedge clk)
+    ch1__cfg_ma_half_period <= \$345 ;
+  always @(posedge clk)
+    ch1__cfg_delay_limit <= \$346 ;
+  always @(posedge clk)
+    ch1__cfg_request_period <= \$347 ;
+  always @(posedge clk)
+    ch1__cfg_break_time <= \$348 ;
+  always @(posedge clk)
+    ch1__cfg_ack_limit <= \$349 ;
+  always @(posedge clk)
+    ch1__cfg_timeout_limit <= \$350 ;
+  always @(posedge clk)
+    ch1__cfg_w0_data_bits <= \$351 ;
+  always @(posedge clk)
+    ch1__cfg_w0_nenw <= \$352 ;
+  always @(posedge clk)
+    ch1__cfg_w0_lc <= \$353 ;
+  always @(posedge clk)
+    ch1__cfg_w0_crc <= \$354 ;
+  always @(posedge clk)
+    ch1__cfg_w1_data_bits <= \$355 ;
+  always @(posedge clk)
+    ch1__cfg_w1_nenw <= \$356 ;
+  always @(posedge clk)
+    ch1__cfg_w1_lc <= \$357 ;
+  always @(posedge clk)
+    ch1__cfg_w1_crc <= \$358 ;
+  always @(posedge clk)
+    ch1__cfg_w1_enable <= \$359 ;
+  always @(posedge clk)
+    ch1__cfg_end_check <= \$360 ;
+  always @(posedge clk)
+    ch1__cfg_spw_check <= \$361 ;
+  always @(posedge clk)
+    ch1__cfg_spw_tolerance <= \$362 ;
+  always @(posedge clk)
+    ch1__ca_slave_id <= \$363 ;
+  always @(posedge clk)
+    ch1__ca_address <= \$364 ;
+  always @(posedge clk)
+    ch1__ca_count <= \$365 ;
+  always @(posedge clk)
+    ch1__ca_write <= \$366 ;
+  always @(posedge clk)
+    ch1__ca_start <= \$367 ;
+  always @(posedge clk)
+    ch1__ca_abort <= \$368 ;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$370  = ch1_result_status_cds_snapshot;
     if (ch1_result_status_read) begin
-      \$505  = \port$4428$0 [3:0];
+      \$370  = \port$4436$0 [49];
     end
     if (rst) begin
-      \$505  = 4'h0;
+      \$370  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$506  = ch1_result_status_cds_snapshot;
+    \$371  = ch1_result_status_w0_ne_snapshot;
     if (ch1_result_status_read) begin
-      \$506  = \port$4428$0 [49];
+      \$371  = \port$4436$0 [105];
     end
     if (rst) begin
-      \$506  = 1'h0;
+      \$371  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$507  = ch1_result_status_w0_ne_snapshot;
+    \$372  = ch1_result_status_w0_nw_snapshot;
     if (ch1_result_status_read) begin
-      \$507  = \port$4428$0 [105];
+      \$372  = \port$4436$0 [106];
     end
     if (rst) begin
-      \$507  = 1'h0;
+      \$372  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$508  = ch1_result_status_w0_nw_snapshot;
+    \$373  = ch1_result_status_w0_crc_ok_snapshot;
     if (ch1_result_status_read) begin
-      \$508  = \port$4428$0 [106];
+      \$373  = \port$4436$0 [107];
     end
     if (rst) begin
-      \$508  = 1'h0;
+      \$373  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$509  = ch1_result_status_w0_crc_ok_snapshot;
+    \$374  = ch1_result_status_w1_ne_snapshot;
     if (ch1_result_status_read) begin
-      \$509  = \port$4428$0 [107];
+      \$374  = \port$4436$0 [148];
     end
     if (rst) begin
-      \$509  = 1'h0;
+      \$374  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$510  = ch1_result_status_w1_ne_snapshot;
+    \$375  = ch1_result_status_w1_nw_snapshot;
     if (ch1_result_status_read) begin
-      \$510  = \port$4428$0 [148];
+      \$375  = \port$4436$0 [149];
     end
     if (rst) begin
-      \$510  = 1'h0;
+      \$375  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$511  = ch1_result_status_w1_nw_snapshot;
+    \$376  = ch1_result_status_w1_crc_ok_snapshot;
     if (ch1_result_status_read) begin
-      \$511  = \port$4428$0 [149];
+      \$376  = \port$4436$0 [150];
     end
     if (rst) begin
-      \$511  = 1'h0;
+      \$376  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$512  = ch1_result_status_w1_crc_ok_snapshot;
+    \$377  = ch1_result_status_lc_repeat_snapshot;
     if (ch1_result_status_read) begin
-      \$512  = \port$4428$0 [150];
+      \$377  = \port$4436$0 [157];
     end
     if (rst) begin
-      \$512  = 1'h0;
+      \$377  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$513  = ch1_result_status_lc_repeat_snapshot;
+    \$378  = ch1_result_status_lc_skip_snapshot;
     if (ch1_result_status_read) begin
-      \$513  = \port$4428$0 [157];
+      \$378  = \port$4436$0 [158];
     end
     if (rst) begin
-      \$513  = 1'h0;
+      \$378  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$514  = ch1_result_status_lc_skip_snapshot;
+    \$379  = ch1_result_status_lc_zero_snapshot;
     if (ch1_result_status_read) begin
-      \$514  = \port$4428$0 [158];
+      \$379  = \port$4436$0 [159];
     end
     if (rst) begin
-      \$514  = 1'h0;
+      \$379  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$515  = ch1_result_status_lc_zero_snapshot;
+    \$380  = ch1_result_status_spw_mismatch_snapshot;
     if (ch1_result_status_read) begin
-      \$515  = \port$4428$0 [159];
+      \$380  = \port$4436$0 [160];
     end
     if (rst) begin
-      \$515  = 1'h0;
+      \$380  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$516  = ch1_result_status_spw_mismatch_snapshot;
+    \$381  = ch1_result_status_lc_snapshot;
     if (ch1_result_status_read) begin
-      \$516  = \port$4428$0 [160];
+      \$381  = \port$4436$0 [156:151];
     end
     if (rst) begin
-      \$516  = 1'h0;
+      \$381  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$517  = ch1_result_status_lc_snapshot;
+    \$382  = ch1_result_seq_seq_snapshot;
     if (ch1_result_status_read) begin
-      \$517  = \port$4428$0 [156:151];
+      \$382  = ch1__done_count;
     end
     if (rst) begin
-      \$517  = 6'h00;
+      \$382  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$518  = ch1_result_seq_seq_snapshot;
+    \$383  = ch1_result_seq_line_delay_snapshot;
     if (ch1_result_status_read) begin
-      \$518  = ch1__done_count;
+      \$383  = \port$4436$0 [48:36];
     end
     if (rst) begin
-      \$518  = 16'h0000;
+      \$383  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$519  = ch1_result_seq_line_delay_snapshot;
+    \$384  = ch1_result_w0_lo_data_snapshot;
     if (ch1_result_status_read) begin
-      \$519  = \port$4428$0 [48:36];
+      \$384  = \port$4436$0 [81:50];
     end
     if (rst) begin
-      \$519  = 13'h0000;
+      \$384  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$520  = ch1_result_w0_lo_data_snapshot;
+    \$385  = ch1_result_w0_hi_data_snapshot;
     if (ch1_result_status_read) begin
-      \$520  = \port$4428$0 [81:50];
+      \$385  = \port$4436$0 [104:82];
     end
     if (rst) begin
-      \$520  = 32'd0;
+      \$385  = 23'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$521  = ch1_result_w0_hi_data_snapshot;
+    \$386  = ch1_result_w1_lo_data_snapshot;
     if (ch1_result_status_read) begin
-      \$521  = \port$4428$0 [104:82];
+      \$386  = \port$4436$0 [139:108];
     end
     if (rst) begin
-      \$521  = 23'h000000;
+      \$386  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$522  = ch1_result_w1_lo_data_snapshot;
+    \$387  = ch1_result_w1_hi_data_snapshot;
     if (ch1_result_status_read) begin
-      \$522  = \port$4428$0 [139:108];
+      \$387  = \port$4436$0 [147:140];
     end
     if (rst) begin
-      \$522  = 32'd0;
+      \$387  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$523  = ch1_result_w1_hi_data_snapshot;
+    \$388  = ch1_result_timestamp_time_snapshot;
     if (ch1_result_status_read) begin
-      \$523  = \port$4428$0 [147:140];
+      \$388  = \port$4436$0 [35:4];
     end
     if (rst) begin
-      \$523  = 8'h00;
+      \$388  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$524  = ch1_result_timestamp_time_snapshot;
-    if (ch1_result_status_read) begin
-      \$524  = \port$4428$0 [35:4];
+    \$389  = ch1_read_word;
+    if (bus__r_en) begin
+      (* full_case = 32'd1 *)
+      casez (bus__r_addr)
+        11'h100:
+            \$389  = { 22'h000000, ch1__trigger_enable, ch1__periodic, 8'h00 };
+        11'h101:
+            \$389  = { 30'h00000000, ch1__config_error, ch1__busy };
+        11'h102:
+            \$389  = 32'd119023671;
+        11'h104:
+            \$389  = { 29'h00000000, ch1_irq_status_access_done, ch1_irq_status_error, ch1_irq_status_done };
+        11'h105:
+            \$389  = { 29'h00000000, ch1_irq_enable_access_done, ch1_irq_enable_error, ch1_irq_enable_done };
+        11'h108:
+            \$389  = { 4'h0, ch1__cfg_delay_limit, ch1__cfg_ma_half_period };
+        11'h109:
+            \$389  = { 8'h00, ch1__cfg_request_period };
+        11'h10a:
+            \$389  = { 8'h00, ch1__cfg_break_time };
+        11'h10b:
+            \$389  = { 8'h00, ch1__cfg_ack_limit };
+        11'h10c:
+            \$389  = { 8'h00, ch1__cfg_timeout_limit };
+        11'h10d:
+            \$389  = { ch1__cfg_w1_enable, 5'h00, ch1__cfg_w1_crc, ch1__cfg_w1_lc, ch1__cfg_w1_nenw, ch1__cfg_w1_data_bits, 6'h00, ch1__cfg_w0_crc, ch1__cfg_w0_lc, ch1__cfg_w0_nenw, ch1__cfg_w0_data_bits };
+        11'h10e:
+            \$389  = { 16'h0000, ch1__cfg_spw_tolerance, 6'h00, ch1__cfg_spw_check, ch1__cfg_end_check };
+        11'h110:
+            \$389  = { 2'h0, \port$4436$0 [156:151], 4'h0, \port$4436$0 [160:157], 1'h0, \port$4436$0 [150:148], 1'h0, \port$4436$0 [107:105], 3'h0, \port$4436$0 [49], \port$4436$0 [3:0] };
+        11'h111:
+            \$389  = { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot };
+        11'h112:
+            \$389  = ch1_result_w0_lo_data_snapshot;
+        11'h113:
+            \$389  = { 9'h000, ch1_result_w0_hi_data_snapshot };
+        11'h114:
+            \$389  = ch1_result_w1_lo_data_snapshot;
+        11'h115:
+            \$389  = { 24'h000000, ch1_result_w1_hi_data_snapshot };
+        11'h116:
+            \$389  = ch1_result_timestamp_time_snapshot;
+        11'h118:
+            \$389  = \port$4443$0 [31:0];
+        11'h119:
+            \$389  = \port$4443$0 [63:32];
+        11'h11a:
+            \$389  = \port$4443$0 [95:64];
+        11'h11b:
+            \$389  = \port$4443$0 [127:96];
+        11'h11c:
+            \$389  = \port$4443$0 [159:128];
+        11'h11d:
+            \$389  = \port$4443$0 [191:160];
+        11'h11e:
+            \$389  = { 16'h0000, \port$4443$0 [207:192] };
+        11'h140:
+            \$389  = { 7'h00, ch1__ca_write, 1'h0, ch1__ca_count, 1'h0, ch1__ca_address, 5'h00, ch1__ca_slave_id };
+        11'h141:
+            \$389  = 32'd0;
+        11'h142:
+            \$389  = { 17'h00000, \port$4557$0 [9:3], 1'h0, \port$4557$0 [2:0], 3'h0, ch1__ca_busy };
+        11'h143:
+            \$389  = \port$4443$0 [239:208];
+        11'h144:
+            \$389  = \port$4443$0 [271:240];
+        11'h145:
+            \$389  = { 16'h0000, \port$4443$0 [287:272] };
+        default:
+            \$389  = 32'd0;
+      endcase
     end
     if (rst) begin
-      \$524  = 32'd0;
+      \$389  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$525  = word;
+    \$390  = window0_read;
+    if (bus__r_en) begin
+      \$390  = \$266 ;
+    end
+    if (rst) begin
+      \$390  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$391  = window1_read;
+    if (bus__r_en) begin
+      \$391  = \$268 ;
+    end
+    if (rst) begin
+      \$391  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$392  = bus__r_data;
+    if (bus__r_load) begin
+      \$392  = \$275 ;
+    end
+    if (rst) begin
+      \$392  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$276  = \$158 ;
+    if (rst) begin
+      \$276  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$277  = g_read_word;
     if (bus__r_en) begin
       (* full_case = 32'd1 *)
       casez (bus__r_addr)
         11'h000:
-            \$525  = 32'd1114198867;
+            \$277  = 32'd1114198867;
         11'h001:
-            \$525  = 32'd65537;
+            \$277  = 32'd65537;
         11'h002:
-            \$525  = 32'd2;
+            \$277  = 32'd2;
         11'h003:
-            \$525  = 32'd0;
+            \$277  = 32'd0;
         11'h004:
-            \$525  = { 30'h00000000, ch1_irq, ch0_irq };
-        11'h080:
-            \$525  = { 22'h000000, ch0__trigger_enable, ch0__periodic, 8'h00 };
-        11'h081:
-            \$525  = { 30'h00000000, ch0__config_error, ch0__busy };
-        11'h082:
-            \$525  = 32'd119023671;
-        11'h084:
-            \$525  = { 29'h00000000, ch0_irq_status_access_done, ch0_irq_status_error, ch0_irq_status_done };
-        11'h085:
-            \$525  = { 29'h00000000, ch0_irq_enable_access_done, ch0_irq_enable_error, ch0_irq_enable_done };
-        11'h088:
-            \$525  = { 4'h0, ch0__cfg_delay_limit, ch0__cfg_ma_half_period };
-        11'h089:
-            \$525  = { 8'h00, ch0__cfg_request_period };
-        11'h08a:
-            \$525  = { 8'h00, ch0__cfg_break_time };
-        11'h08b:
-            \$525  = { 8'h00, ch0__cfg_ack_limit };
-        11'h08c:
-            \$525  = { 8'h00, ch0__cfg_timeout_limit };
-        11'h08d:
-            \$525  = { ch0__cfg_w1_enable, 5'h00, ch0__cfg_w1_crc, ch0__cfg_w1_lc, ch0__cfg_w1_nenw, ch0__cfg_w1_data_bits, 6'h00, ch0__cfg_w0_crc, ch0__cfg_w0_lc, ch0__cfg_w0_nenw, ch0__cfg_w0_data_bits };
-        11'h08e:
-            \$525  = { 16'h0000, ch0__cfg_spw_tolerance, 6'h00, ch0__cfg_spw_check, ch0__cfg_end_check };
-        11'h090:
-            \$525  = { 2'h0, \port$3981$0 [156:151], 4'h0, \port$3981$0 [160:157], 1'h0, \port$3981$0 [150:148], 1'h0, \port$3981$0 [107:105], 3'h0, \port$3981$0 [49], \port$3981$0 [3:0] };
-        11'h091:
-            \$525  = { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot };
-        11'h092:
-            \$525  = ch0_result_w0_lo_data_snapshot;
-        11'h093:
-            \$525  = { 9'h000, ch0_result_w0_hi_data_snapshot };
-        11'h094:
-            \$525  = ch0_result_w1_lo_data_snapshot;
-        11'h095:
-            \$525  = { 24'h000000, ch0_result_w1_hi_data_snapshot };
-        11'h096:
-            \$525  = ch0_result_timestamp_time_snapshot;
-        11'h098:
-            \$525  = \port$3988$0 [31:0];
-        11'h099:
-            \$525  = \port$3988$0 [63:32];
-        11'h09a:
-            \$525  = \port$3988$0 [95:64];
-        11'h09b:
-            \$525  = \port$3988$0 [127:96];
-        11'h09c:
-            \$525  = \port$3988$0 [159:128];
-        11'h09d:
-            \$525  = \port$3988$0 [191:160];
-        11'h09e:
-            \$525  = { 16'h0000, \port$3988$0 [207:192] };
-        11'h0c0:
-            \$525  = { 7'h00, ch0__ca_write, 1'h0, ch0__ca_count, 1'h0, ch0__ca_address, 5'h00, ch0__ca_slave_id };
-        11'h0c1:
-            \$525  = 32'd0;
-        11'h0c2:
-            \$525  = { 17'h00000, \port$4102$0 [9:3], 1'h0, \port$4102$0 [2:0], 3'h0, ch0__ca_busy };
-        11'h0c3:
-            \$525  = \port$3988$0 [239:208];
-        11'h0c4:
-            \$525  = \port$3988$0 [271:240];
-        11'h0c5:
-            \$525  = { 16'h0000, \port$3988$0 [287:272] };
-        11'h100:
-            \$525  = { 22'h000000, ch1__trigger_enable, ch1__periodic, 8'h00 };
-        11'h101:
-            \$525  = { 30'h00000000, ch1__config_error, ch1__busy };
-        11'h102:
-            \$525  = 32'd119023671;
-        11'h104:
-            \$525  = { 29'h00000000, ch1_irq_status_access_done, ch1_irq_status_error, ch1_irq_status_done };
-        11'h105:
-            \$525  = { 29'h00000000, ch1_irq_enable_access_done, ch1_irq_enable_error, ch1_irq_enable_done };
-        11'h108:
-            \$525  = { 4'h0, ch1__cfg_delay_limit, ch1__cfg_ma_half_period };
-        11'h109:
-            \$525  = { 8'h00, ch1__cfg_request_period };
-        11'h10a:
-            \$525  = { 8'h00, ch1__cfg_break_time };
-        11'h10b:
-            \$525  = { 8'h00, ch1__cfg_ack_limit };
-        11'h10c:
-            \$525  = { 8'h00, ch1__cfg_timeout_limit };
-        11'h10d:
-            \$525  = { ch1__cfg_w1_enable, 5'h00, ch1__cfg_w1_crc, ch1__cfg_w1_lc, ch1__cfg_w1_nenw, ch1__cfg_w1_data_bits, 6'h00, ch1__cfg_w0_crc, ch1__cfg_w0_lc, ch1__cfg_w0_nenw, ch1__cfg_w0_data_bits };
-        11'h10e:
-            \$525  = { 16'h0000, ch1__cfg_spw_tolerance, 6'h00, ch1__cfg_spw_check, ch1__cfg_end_check };
-        11'h110:
-            \$525  = { 2'h0, \port$4428$0 [156:151], 4'h0, \port$4428$0 [160:157], 1'h0, \port$4428$0 [150:148], 1'h0, \port$4428$0 [107:105], 3'h0, \port$4428$0 [49], \port$4428$0 [3:0] };
-        11'h111:
-            \$525  = { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot };
-        11'h112:
-            \$525  = ch1_result_w0_lo_data_snapshot;
-        11'h113:
-            \$525  = { 9'h000, ch1_result_w0_hi_data_snapshot };
-        11'h114:
-            \$525  = ch1_result_w1_lo_data_snapshot;
-        11'h115:
-            \$525  = { 24'h000000, ch1_result_w1_hi_data_snapshot };
-        11'h116:
-            \$525  = ch1_result_timestamp_time_snapshot;
-        11'h118:
-            \$525  = \port$4435$0 [31:0];
-        11'h119:
-            \$525  = \port$4435$0 [63:32];
-        11'h11a:
-            \$525  = \port$4435$0 [95:64];
-        11'h11b:
-            \$525  = \port$4435$0 [127:96];
-        11'h11c:
-            \$525  = \port$4435$0 [159:128];
-        11'h11d:
-            \$525  = \port$4435$0 [191:160];
-        11'h11e:
-            \$525  = { 16'h0000, \port$4435$0 [207:192] };
-        11'h140:
-            \$525  = { 7'h00, ch1__ca_write, 1'h0, ch1__ca_count, 1'h0, ch1__ca_address, 5'h00, ch1__ca_slave_id };
-        11'h141:
-            \$525  = 32'd0;
-        11'h142:
-            \$525  = { 17'h00000, \port$4549$0 [9:3], 1'h0, \port$4549$0 [2:0], 3'h0, ch1__ca_busy };
-        11'h143:
-            \$525  = \port$4435$0 [239:208];
-        11'h144:
-            \$525  = \port$4435$0 [271:240];
-        11'h145:
-            \$525  = { 16'h0000, \port$4435$0 [287:272] };
+            \$277  = { 30'h00000000, ch1_irq, ch0_irq };
         default:
-            \$525  = 32'd0;
+            \$277  = 32'd0;
       endcase
     end
     if (rst) begin
-      \$525  = 32'd0;
+      \$277  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$526  = window0_read;
-    if (bus__r_en) begin
-      \$526  = \$411 ;
-    end
+    \$278  = \$160 ;
     if (rst) begin
-      \$526  = 1'h0;
+      \$278  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$527  = window1_read;
-    if (bus__r_en) begin
-      \$527  = \$413 ;
+    \$279  = \$162 ;
+    if (rst) begin
+      \$279  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$280  = \$164 ;
+    if (rst) begin
+      \$280  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$281  = ch0__periodic;
+    if (\$165 ) begin
+      \$281  = ch0__ca_wbuf_data[8];
     end
     if (rst) begin
-      \$527  = 1'h0;
+      \$281  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$282  = ch0__trigger_enable;
+    if (\$166 ) begin
+      \$282  = ch0__ca_wbuf_data[9];
+    end
+    if (rst) begin
+      \$282  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$283  = ch0_irq_status_done;
+    if (ch0__done) begin
+      \$283  = 1'h1;
+    end else if (\$168 ) begin
+      \$283  = 1'h0;
+    end
+    if (rst) begin
+      \$283  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$284  = ch0_irq_status_error;
+    if (ch0__frame_error) begin
+      \$284  = 1'h1;
+    end else if (\$170 ) begin
+      \$284  = 1'h0;
+    end
+    if (rst) begin
+      \$284  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$285  = ch0_irq_status_access_done;
+    if (ch0__ca_done) begin
+      \$285  = 1'h1;
+    end else if (\$172 ) begin
+      \$285  = 1'h0;
+    end
+    if (rst) begin
+      \$285  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$286  = ch0_irq_enable_done;
+    if (\$173 ) begin
+      \$286  = ch0__ca_wbuf_data[0];
+    end
+    if (rst) begin
+      \$286  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$287  = ch0_irq_enable_error;
+    if (\$174 ) begin
+      \$287  = ch0__ca_wbuf_data[1];
+    end
+    if (rst) begin
+      \$287  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$288  = ch0_irq_enable_access_done;
+    if (\$175 ) begin
+      \$288  = ch0__ca_wbuf_data[2];
+    end
+    if (rst) begin
+      \$288  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$289  = ch0__cfg_ma_half_period;
+    if (\$176 ) begin
+      \$289 [7:0] = ch0__ca_wbuf_data[7:0];
+    end
+    if (\$177 ) begin
+      \$289 [15:8] = ch0__ca_wbuf_data[15:8];
+    end
+    if (rst) begin
+      \$289  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$290  = ch0__cfg_delay_limit;
+    if (\$178 ) begin
+      \$290 [7:0] = ch0__ca_wbuf_data[23:16];
+    end
+    if (\$179 ) begin
+      \$290 [11:8] = ch0__ca_wbuf_data[27:24];
+    end
+    if (rst) begin
+      \$290  = 12'h000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$291  = ch0__cfg_request_period;
+    if (\$180 ) begin
+      \$291 [7:0] = ch0__ca_wbuf_data[7:0];
+    end
+    if (\$181 ) begin
+      \$291 [15:8] = ch0__ca_wbuf_data[15:8];
+    end
+    if (\$182 ) begin
+      \$291 [23:16] = ch0__ca_wbuf_data[23:16];
+    end
+    if (rst) begin
+      \$291  = 24'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$292  = ch0__cfg_break_time;
+    if (\$183 ) begin
+      \$292 [7:0] = ch0__ca_wbuf_data[7:0];
+    end
+    if (\$184 ) begin
+      \$292 [15:8] = ch0__ca_wbuf_data[15:8];
+    end
+    if (\$185 ) begin
+      \$292 [23:16] = ch0__ca_wbuf_data[23:16];
+    end
+    if (rst) begin
+      \$292  = 24'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$293  = ch0__cfg_ack_limit;
+    if (\$186 ) begin
+      \$293 [7:0] = ch0__ca_wbuf_data[7:0];
+    end
+    if (\$187 ) begin
+      \$293 [15:8] = ch0__ca_wbuf_data[15:8];
+    end
+    if (\$188 ) begin
+      \$293 [23:16] = ch0__ca_wbuf_data[23:16];
+    end
+    if (rst) begin
+      \$293  = 24'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$294  = ch0__cfg_timeout_limit;
+    if (\$189 ) begin
+      \$294 [7:0] = ch0__ca_wbuf_data[7:0];
+    end
+    if (\$190 ) begin
+      \$294 [15:8] = ch0__ca_wbuf_data[15:8];
+    end
+    if (\$191 ) begin
+      \$294 [23:16] = ch0__ca_wbuf_data[23:16];
+    end
+    if (rst) begin
+      \$294  = 24'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$295  = ch0__cfg_w0_data_bits;
+    if (\$192 ) begin
+      \$295  = ch0__ca_wbuf_data[5:0];
+    end
+    if (rst) begin
+      \$295  = 6'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$296  = ch0__cfg_w0_nenw;
+    if (\$193 ) begin
+      \$296  = ch0__ca_wbuf_data[6];
+    end
+    if (rst) begin
+      \$296  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$297  = ch0__cfg_w0_lc;
+    if (\$194 ) begin
+      \$297  = ch0__ca_wbuf_data[7];
+    end
+    if (rst) begin
+      \$297  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$298  = ch0__cfg_w0_crc;
+    if (\$195 ) begin
+      \$298  = ch0__ca_wbuf_data[9:8];
+    end
+    if (rst) begin
+      \$298  = 2'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$299  = ch0__cfg_w1_data_bits;
+    if (\$196 ) begin
+      \$299  = ch0__ca_wbuf_data[21:16];
+    end
+    if (rst) begin
+      \$299  = 6'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$300  = ch0__cfg_w1_nenw;
+    if (\$197 ) begin
+      \$300  = ch0__ca_wbuf_data[22];
+    end
+    if (rst) begin
+      \$300  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$301  = ch0__cfg_w1_lc;
+    if (\$198 ) begin
+      \$301  = ch0__ca_wbuf_data[23];
+    end
+    if (rst) begin
+      \$301  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$302  = ch0__cfg_w1_crc;
+    if (\$199 ) begin
+      \$302  = ch0__ca_wbuf_data[25:24];
+    end
+    if (rst) begin
+      \$302  = 2'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$303  = ch0__cfg_w1_enable;
+    if (\$200 ) begin
+      \$303  = ch0__ca_wbuf_data[31];
+    end
+    if (rst) begin
+      \$303  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$304  = ch0__cfg_end_check;
+    if (\$201 ) begin
+      \$304  = ch0__ca_wbuf_data[0];
+    end
+    if (rst) begin
+      \$304  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$305  = ch0__cfg_spw_check;
+    if (\$202 ) begin
+      \$305  = ch0__ca_wbuf_data[1];
+    end
+    if (rst) begin
+      \$305  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$306  = ch0__cfg_spw_tolerance;
+    if (\$203 ) begin
+      \$306  = ch0__ca_wbuf_data[15:8];
+    end
+    if (rst) begin
+      \$306  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$307  = ch0__ca_slave_id;
+    if (\$204 ) begin
+      \$307  = ch0__ca_wbuf_data[2:0];
+    end
+    if (rst) begin
+      \$307  = 3'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$308  = ch0__ca_address;
+    if (\$205 ) begin
+      \$308  = ch0__ca_wbuf_data[14:8];
+    end
+    if (rst) begin
+      \$308  = 7'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$309  = ch0__ca_count;
+    if (\$206 ) begin
+      \$309  = ch0__ca_wbuf_data[22:16];
+    end
+    if (rst) begin
+      \$309  = 7'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$310  = ch0__ca_write;
+    if (\$207 ) begin
+      \$310  = ch0__ca_wbuf_data[24];
+    end
+    if (rst) begin
+      \$310  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$311  = \$209 ;
+    if (rst) begin
+      \$311  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$312  = \$211 ;
+    if (rst) begin
+      \$312  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$313  = ch0_result_status_status_snapshot;
+    if (ch0_result_status_read) begin
+      \$313  = \port$3983$0 [3:0];
+    end
+    if (rst) begin
+      \$313  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$314  = ch0_result_status_cds_snapshot;
+    if (ch0_result_status_read) begin
+      \$314  = \port$3983$0 [49];
+    end
+    if (rst) begin
+      \$314  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$315  = ch0_result_status_w0_ne_snapshot;
+    if (ch0_result_status_read) begin
+      \$315  = \port$3983$0 [105];
+    end
+    if (rst) begin
+      \$315  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$316  = ch0_result_status_w0_nw_snapshot;
+    if (ch0_result_status_read) begin
+      \$316  = \port$3983$0 [106];
+    end
+    if (rst) begin
+      \$316  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$317  = ch0_result_status_w0_crc_ok_snapshot;
+    if (ch0_result_status_read) begin
+      \$317  = \port$3983$0 [107];
+    end
+    if (rst) begin
+      \$317  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$318  = ch0_result_status_w1_ne_snapshot;
+    if (ch0_result_status_read) begin
+      \$318  = \port$3983$0 [148];
+    end
+    if (rst) begin
+      \$318  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$319  = ch0_result_status_w1_nw_snapshot;
+    if (ch0_result_status_read) begin
+      \$319  = \port$3983$0 [149];
+    end
+    if (rst) begin
+      \$319  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$320  = ch0_result_status_w1_crc_ok_snapshot;
+    if (ch0_result_status_read) begin
+      \$320  = \port$3983$0 [150];
+    end
+    if (rst) begin
+      \$320  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$321  = ch0_result_status_lc_repeat_snapshot;
+    if (ch0_result_status_read) begin
+      \$321  = \port$3983$0 [157];
+    end
+    if (rst) begin
+      \$321  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$322  = ch0_result_status_lc_skip_snapshot;
+    if (ch0_result_status_read) begin
+      \$322  = \port$3983$0 [158];
+    end
+    if (rst) begin
+      \$322  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$323  = ch0_result_status_lc_zero_snapshot;
+    if (ch0_result_status_read) begin
+      \$323  = \port$3983$0 [159];
+    end
+    if (rst) begin
+      \$323  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$324  = ch0_result_status_spw_mismatch_snapshot;
+    if (ch0_result_status_read) begin
+      \$324  = \port$3983$0 [160];
+    end
+    if (rst) begin
+      \$324  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$325  = ch0_result_status_lc_snapshot;
+    if (ch0_result_status_read) begin
+      \$325  = \port$3983$0 [156:151];
+    end
+    if (rst) begin
+      \$325  = 6'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$326  = ch0_result_seq_seq_snapshot;
+    if (ch0_result_status_read) begin
+      \$326  = ch0__done_count;
+    end
+    if (rst) begin
+      \$326  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$327  = ch0_result_seq_line_delay_snapshot;
+    if (ch0_result_status_read) begin
+      \$327  = \port$3983$0 [48:36];
+    end
+    if (rst) begin
+      \$327  = 13'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$328  = ch0_result_w0_lo_data_snapshot;
+    if (ch0_result_status_read) begin
+      \$328  = \port$3983$0 [81:50];
+    end
+    if (rst) begin
+      \$328  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$329  = ch0_result_w0_hi_data_snapshot;
+    if (ch0_result_status_read) begin
+      \$329  = \port$3983$0 [104:82];
+    end
+    if (rst) begin
+      \$329  = 23'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$330  = ch0_result_w1_lo_data_snapshot;
+    if (ch0_result_status_read) begin
+      \$330  = \port$3983$0 [139:108];
+    end
+    if (rst) begin
+      \$330  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$331  = ch0_result_w1_hi_data_snapshot;
+    if (ch0_result_status_read) begin
+      \$331  = \port$3983$0 [147:140];
+    end
+    if (rst) begin
+      \$331  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$332  = ch0_result_timestamp_time_snapshot;
+    if (ch0_result_status_read) begin
+      \$332  = \port$3983$0 [35:4];
+    end
+    if (rst) begin
+      \$332  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$333  = ch0_read_word;
+    if (bus__r_en) begin
+      (* full_case = 32'd1 *)
+      casez (bus__r_addr)
+        11'h080:
+            \$333  = { 22'h000000, ch0__trigger_enable, ch0__periodic, 8'h00 };
+        11'h081:
+            \$333  = { 30'h00000000, ch0__config_error, ch0__busy };
+        11'h082:
+            \$333  = 32'd119023671;
+        11'h084:
+            \$333  = { 29'h00000000, ch0_irq_status_access_done, ch0_irq_status_error, ch0_irq_status_done };
+        11'h085:
+            \$333  = { 29'h00000000, ch0_irq_enable_access_done, ch0_irq_enable_error, ch0_irq_enable_done };
+        11'h088:
+            \$333  = { 4'h0, ch0__cfg_delay_limit, ch0__cfg_ma_half_period };
+        11'h089:
+            \$333  = { 8'h00, ch0__cfg_request_period };
+        11'h08a:
+            \$333  = { 8'h00, ch0__cfg_break_time };
+        11'h08b:
+            \$333  = { 8'h00, ch0__cfg_ack_limit };
+        11'h08c:
+            \$333  = { 8'h00, ch0__cfg_timeout_limit };
+        11'h08d:
+            \$333  = { ch0__cfg_w1_enable, 5'h00, ch0__cfg_w1_crc, ch0__cfg_w1_lc, ch0__cfg_w1_nenw, ch0__cfg_w1_data_bits, 6'h00, ch0__cfg_w0_crc, ch0__cfg_w0_lc, ch0__cfg_w0_nenw, ch0__cfg_w0_data_bits };
+        11'h08e:
+            \$333  = { 16'h0000, ch0__cfg_spw_tolerance, 6'h00, ch0__cfg_spw_check, ch0__cfg_end_check };
+        11'h090:
+            \$333  = { 2'h0, \port$3983$0 [156:151], 4'h0, \port$3983$0 [160:157], 1'h0, \port$3983$0 [150:148], 1'h0, \port$3983$0 [107:105], 3'h0, \port$3983$0 [49], \port$3983$0 [3:0] };
+        11'h091:
+            \$333  = { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot };
+        11'h092:
+            \$333  = ch0_result_w0_lo_data_snapshot;
+        11'h093:
+            \$333  = { 9'h000, ch0_result_w0_hi_data_snapshot };
+        11'h094:
+            \$333  = ch0_result_w1_lo_data_snapshot;
+        11'h095:
+            \$333  = { 24'h000000, ch0_result_w1_hi_data_snapshot };
+        11'h096:
+            \$333  = ch0_result_timestamp_time_snapshot;
+        11'h098:
+            \$333  = \port$3990$0 [31:0];
+        11'h099:
+            \$333  = \port$3990$0 [63:32];
+        11'h09a:
+            \$333  = \port$3990$0 [95:64];
+        11'h09b:
+            \$333  = \port$3990$0 [127:96];
+        11'h09c:
+            \$333  = \port$3990$0 [159:128];
+        11'h09d:
+            \$333  = \port$3990$0 [191:160];
+        11'h09e:
+            \$333  = { 16'h0000, \port$3990$0 [207:192] };
+        11'h0c0:
+            \$333  = { 7'h00, ch0__ca_write, 1'h0, ch0__ca_count, 1'h0, ch0__ca_address, 5'h00, ch0__ca_slave_id };
+        11'h0c1:
+            \$333  = 32'd0;
+        11'h0c2:
+            \$333  = { 17'h00000, \port$4104$0 [9:3], 1'h0, \port$4104$0 [2:0], 3'h0, ch0__ca_busy };
+        11'h0c3:
+            \$333  = \port$3990$0 [239:208];
+        11'h0c4:
+            \$333  = \port$3990$0 [271:240];
+        11'h0c5:
+            \$333  = { 16'h0000, \port$3990$0 [287:272] };
+        default:
+            \$333  = 32'd0;
+      endcase
+    end
+    if (rst) begin
+      \$333  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$334  = \$213 ;
+    if (rst) begin
+      \$334  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$335  = \$215 ;
+    if (rst) begin
+      \$335  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$336  = \$217 ;
+    if (rst) begin
+      \$336  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$337  = ch1__periodic;
+    if (\$218 ) begin
+      \$337  = ch0__ca_wbuf_data[8];
+    end
+    if (rst) begin
+      \$337  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$338  = ch1__trigger_enable;
+    if (\$219 ) begin
+      \$338  = ch0__ca_wbuf_data[9];
+    end
+    if (rst) begin
+      \$338  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$339  = ch1_irq_status_done;
+    if (ch1__done) begin
+      \$339  = 1'h1;
+    end else if (\$221 ) begin
+      \$339  = 1'h0;
+    end
+    if (rst) begin
+      \$339  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$340  = ch1_irq_status_error;
+    if (ch1__frame_error) begin
+      \$340  = 1'h1;
+    end else if (\$223 ) begin
+      \$340  = 1'h0;
+    end
+    if (rst) begin
+      \$340  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$341  = ch1_irq_status_access_done;
+    if (ch1__ca_done) begin
+      \$341  = 1'h1;
+    end else if (\$225 ) begin
+      \$341  = 1'h0;
+    end
+    if (rst) begin
+      \$341  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$342  = ch1_irq_enable_done;
+    if (\$226 ) begin
+      \$342  = ch0__ca_wbuf_data[0];
+    end
+    if (rst) begin
+      \$342  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$343  = ch1_irq_enable_error;
+    if (\$227 ) begin
+      \$343  = ch0__ca_wbuf_data[1];
+    end
+    if (rst) begin
+      \$343  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$344  = ch1_irq_enable_access_done;
+    if (\$228 ) begin
+      \$344  = ch0__ca_wbuf_data[2];
+    end
+    if (rst) begin
+      \$344  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$345  = ch1__cfg_ma_half_period;
+    if (\$229 ) begin
+      \$345 [7:0] = ch0__ca_wbuf_data[7:0];
+    end
+    if (\$230 ) begin
+      \$345 [15:8] = ch0__ca_wbuf_data[15:8];
+    end
+    if (rst) begin
+      \$345  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$346  = ch1__cfg_delay_limit;
+    if (\$231 ) begin
+      \$346 [7:0] = ch0__ca_wbuf_data[23:16];
+    end
+    if (\$232 ) begin
+      \$346 [11:8] = ch0__ca_wbuf_data[27:24];
+    end
+    if (rst) begin
+      \$346  = 12'h000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$347  = ch1__cfg_request_period;
+    if (\$233 ) begin
+      \$347 [7:0] = ch0__ca_wbuf_data[7:0];
+    end
+    if (\$234 ) begin
+      \$347 [15:8] = ch0__ca_wbuf_data[15:8];
+    end
+    if (\$235 ) begin
+      \$347 [23:16] = ch0__ca_wbuf_data[23:16];
+    end
+    if (rst) begin
+      \$347  = 24'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$348  = ch1__cfg_break_time;
+    if (\$236 ) begin
+      \$348 [7:0] = ch0__ca_wbuf_data[7:0];
+    end
+    if (\$237 ) begin
+      \$348 [15:8] = ch0__ca_wbuf_data[15:8];
+    end
+    if (\$238 ) begin
+      \$348 [23:16] = ch0__ca_wbuf_data[23:16];
+    end
+    if (rst) begin
+      \$348  = 24'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$349  = ch1__cfg_ack_limit;
+    if (\$239 ) begin
+      \$349 [7:0] = ch0__ca_wbuf_data[7:0];
+    end
+    if (\$240 ) begin
+      \$349 [15:8] = ch0__ca_wbuf_data[15:8];
+    end
+    if (\$241 ) begin
+      \$349 [23:16] = ch0__ca_wbuf_data[23:16];
+    end
+    if (rst) begin
+      \$349  = 24'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$350  = ch1__cfg_timeout_limit;
+    if (\$242 ) begin
+      \$350 [7:0] = ch0__ca_wbuf_data[7:0];
+    end
+    if (\$243 ) begin
+      \$350 [15:8] = ch0__ca_wbuf_data[15:8];
+    end
+    if (\$244 ) begin
+      \$350 [23:16] = ch0__ca_wbuf_data[23:16];
+    end
+    if (rst) begin
+      \$350  = 24'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$351  = ch1__cfg_w0_data_bits;
+    if (\$245 ) begin
+      \$351  = ch0__ca_wbuf_data[5:0];
+    end
+    if (rst) begin
+      \$351  = 6'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$352  = ch1__cfg_w0_nenw;
+    if (\$246 ) begin
+      \$352  = ch0__ca_wbuf_data[6];
+    end
+    if (rst) begin
+      \$352  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$353  = ch1__cfg_w0_lc;
+    if (\$247 ) begin
+      \$353  = ch0__ca_wbuf_data[7];
+    end
+    if (rst) begin
+      \$353  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$354  = ch1__cfg_w0_crc;
+    if (\$248 ) begin
+      \$354  = ch0__ca_wbuf_data[9:8];
+    end
+    if (rst) begin
+      \$354  = 2'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$355  = ch1__cfg_w1_data_bits;
+    if (\$249 ) begin
+      \$355  = ch0__ca_wbuf_data[21:16];
+    end
+    if (rst) begin
+      \$355  = 6'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$356  = ch1__cfg_w1_nenw;
+    if (\$250 ) begin
+      \$356  = ch0__ca_wbuf_data[22];
+    end
+    if (rst) begin
+      \$356  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$357  = ch1__cfg_w1_lc;
+    if (\$251 ) begin
+      \$357  = ch0__ca_wbuf_data[23];
+    end
+    if (rst) begin
+      \$357  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$358  = ch1__cfg_w1_crc;
+    if (\$252 ) begin
+      \$358  = ch0__ca_wbuf_data[25:24];
+    end
+    if (rst) begin
+      \$358  = 2'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$359  = ch1__cfg_w1_enable;
+    if (\$253 ) begin
+      \$359  = ch0__ca_wbuf_data[31];
+    end
+    if (rst) begin
+      \$359  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$360  = ch1__cfg_end_check;
+    if (\$254 ) begin
+      \$360  = ch0__ca_wbuf_data[0];
+    end
+    if (rst) begin
+      \$360  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$361  = ch1__cfg_spw_check;
+    if (\$255 ) begin
+      \$361  = ch0__ca_wbuf_data[1];
+    end
+    if (rst) begin
+      \$361  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$362  = ch1__cfg_spw_tolerance;
+    if (\$256 ) begin
+      \$362  = ch0__ca_wbuf_data[15:8];
+    end
+    if (rst) begin
+      \$362  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$363  = ch1__ca_slave_id;
+    if (\$257 ) begin
+      \$363  = ch0__ca_wbuf_data[2:0];
+    end
+    if (rst) begin
+      \$363  = 3'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$364  = ch1__ca_address;
+    if (\$258 ) begin
+      \$364  = ch0__ca_wbuf_data[14:8];
+    end
+    if (rst) begin
+      \$364  = 7'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$365  = ch1__ca_count;
+    if (\$259 ) begin
+      \$365  = ch0__ca_wbuf_data[22:16];
+    end
+    if (rst) begin
+      \$365  = 7'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$366  = ch1__ca_write;
+    if (\$260 ) begin
+      \$366  = ch0__ca_wbuf_data[24];
+    end
+    if (rst) begin
+      \$366  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$367  = \$262 ;
+    if (rst) begin
+      \$367  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$368  = \$264 ;
+    if (rst) begin
+      \$368  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$369  = ch1_result_status_status_snapshot;
+    if (ch1_result_status_read) begin
+      \$369  = \port$4436$0 [3:0];
+    end
+    if (rst) begin
+      \$369  = 4'h0;
     end
   end
   assign g_trigger_start = glob__trigger;
@@ -4256,94 +4096,95 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, ch0__ca_wbuf_en, 
   assign ch1__ca_wbuf_data = ch0__ca_wbuf_data;
   assign ch1__ca_rbuf_addr = bus__r_addr[3:0];
   assign irq = { ch1_irq, ch0_irq };
-  assign ch0__status = \port$3981$0 [3:0];
-  assign ch0__cds = \port$3981$0 [49];
-  assign ch0__word0_ne = \port$3981$0 [105];
-  assign ch0__word0_nw = \port$3981$0 [106];
-  assign ch0__word0_crc_ok = \port$3981$0 [107];
-  assign ch0__word1_ne = \port$3981$0 [148];
-  assign ch0__word1_nw = \port$3981$0 [149];
-  assign ch0__word1_crc_ok = \port$3981$0 [150];
-  assign ch0__lc_repeat = \port$3981$0 [157];
-  assign ch0__lc_skip = \port$3981$0 [158];
-  assign ch0__lc_zero = \port$3981$0 [159];
-  assign ch0__spw_mismatch = \port$3981$0 [160];
-  assign ch0__lc = \port$3981$0 [156:151];
-  assign ch0__line_delay = \port$3981$0 [48:36];
-  assign ch0__word0_position = \port$3981$0 [104:50];
-  assign ch0__word1_position = \port$3981$0 [147:108];
-  assign ch0__timestamp = \port$3981$0 [35:4];
-  assign ch1__status = \port$4428$0 [3:0];
-  assign ch1__cds = \port$4428$0 [49];
-  assign ch1__word0_ne = \port$4428$0 [105];
-  assign ch1__word0_nw = \port$4428$0 [106];
-  assign ch1__word0_crc_ok = \port$4428$0 [107];
-  assign ch1__word1_ne = \port$4428$0 [148];
-  assign ch1__word1_nw = \port$4428$0 [149];
-  assign ch1__word1_crc_ok = \port$4428$0 [150];
-  assign ch1__lc_repeat = \port$4428$0 [157];
-  assign ch1__lc_skip = \port$4428$0 [158];
-  assign ch1__lc_zero = \port$4428$0 [159];
-  assign ch1__spw_mismatch = \port$4428$0 [160];
-  assign ch1__lc = \port$4428$0 [156:151];
-  assign ch1__line_delay = \port$4428$0 [48:36];
-  assign ch1__word0_position = \port$4428$0 [104:50];
-  assign ch1__word1_position = \port$4428$0 [147:108];
-  assign ch1__timestamp = \port$4428$0 [35:4];
+  assign read_data = bus__r_data;
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, ch1_irq, ch0_irq };
+  assign ch0__status = \port$3983$0 [3:0];
+  assign ch0__cds = \port$3983$0 [49];
+  assign ch0__word0_ne = \port$3983$0 [105];
+  assign ch0__word0_nw = \port$3983$0 [106];
+  assign ch0__word0_crc_ok = \port$3983$0 [107];
+  assign ch0__word1_ne = \port$3983$0 [148];
+  assign ch0__word1_nw = \port$3983$0 [149];
+  assign ch0__word1_crc_ok = \port$3983$0 [150];
+  assign ch0__lc_repeat = \port$3983$0 [157];
+  assign ch0__lc_skip = \port$3983$0 [158];
+  assign ch0__lc_zero = \port$3983$0 [159];
+  assign ch0__spw_mismatch = \port$3983$0 [160];
+  assign ch0__lc = \port$3983$0 [156:151];
+  assign ch0__line_delay = \port$3983$0 [48:36];
+  assign ch0__word0_position = \port$3983$0 [104:50];
+  assign ch0__word1_position = \port$3983$0 [147:108];
+  assign ch0__timestamp = \port$3983$0 [35:4];
   assign ch0__cap_data_bits_w0 = 6'h37;
   assign ch0__cap_data_bits_w1 = 6'h28;
   assign ch0__cap_timer_width = 6'h18;
   assign ch0__cap_counters = 1'h1;
   assign ch0__cap_timestamp = 1'h1;
   assign ch0__cap_register_access = 1'h1;
-  assign ch0__count_crc_word0 = \port$3988$0 [15:0];
-  assign ch0__count_crc_word1 = \port$3988$0 [31:16];
-  assign ch0__count_no_ack = \port$3988$0 [47:32];
-  assign ch0__count_no_start = \port$3988$0 [63:48];
-  assign ch0__count_delay_range = \port$3988$0 [79:64];
-  assign ch0__count_slo_stuck_low = \port$3988$0 [95:80];
-  assign ch0__count_lc_repeat = \port$3988$0 [111:96];
-  assign ch0__count_lc_skip = \port$3988$0 [127:112];
-  assign ch0__count_lc_zero = \port$3988$0 [143:128];
-  assign ch0__count_spw_mismatch = \port$3988$0 [159:144];
-  assign ch0__count_overrun = \port$3988$0 [175:160];
-  assign ch0__count_aborted = \port$3988$0 [191:176];
-  assign ch0__count_no_stop = \port$3988$0 [207:192];
-  assign ch0__ca_status = \port$4102$0 [2:0];
-  assign ch0__ca_bytes_done = \port$4102$0 [9:3];
-  assign ch0__count_ca_crc4_error = \port$3988$0 [223:208];
-  assign ch0__count_ca_no_answer = \port$3988$0 [239:224];
-  assign ch0__count_ca_refused = \port$3988$0 [255:240];
-  assign ch0__count_ca_aborted = \port$3988$0 [271:256];
-  assign ch0__count_ca_data_fault = \port$3988$0 [287:272];
+  assign ch0__count_crc_word0 = \port$3990$0 [15:0];
+  assign ch0__count_crc_word1 = \port$3990$0 [31:16];
+  assign ch0__count_no_ack = \port$3990$0 [47:32];
+  assign ch0__count_no_start = \port$3990$0 [63:48];
+  assign ch0__count_delay_range = \port$3990$0 [79:64];
+  assign ch0__count_slo_stuck_low = \port$3990$0 [95:80];
+  assign ch0__count_lc_repeat = \port$3990$0 [111:96];
+  assign ch0__count_lc_skip = \port$3990$0 [127:112];
+  assign ch0__count_lc_zero = \port$3990$0 [143:128];
+  assign ch0__count_spw_mismatch = \port$3990$0 [159:144];
+  assign ch0__count_overrun = \port$3990$0 [175:160];
+  assign ch0__count_aborted = \port$3990$0 [191:176];
+  assign ch0__count_no_stop = \port$3990$0 [207:192];
+  assign ch0__ca_status = \port$4104$0 [2:0];
+  assign ch0__ca_bytes_done = \port$4104$0 [9:3];
+  assign ch0__count_ca_crc4_error = \port$3990$0 [223:208];
+  assign ch0__count_ca_no_answer = \port$3990$0 [239:224];
+  assign ch0__count_ca_refused = \port$3990$0 [255:240];
+  assign ch0__count_ca_aborted = \port$3990$0 [271:256];
+  assign ch0__count_ca_data_fault = \port$3990$0 [287:272];
+  assign ch1__status = \port$4436$0 [3:0];
+  assign ch1__cds = \port$4436$0 [49];
+  assign ch1__word0_ne = \port$4436$0 [105];
+  assign ch1__word0_nw = \port$4436$0 [106];
+  assign ch1__word0_crc_ok = \port$4436$0 [107];
+  assign ch1__word1_ne = \port$4436$0 [148];
+  assign ch1__word1_nw = \port$4436$0 [149];
+  assign ch1__word1_crc_ok = \port$4436$0 [150];
+  assign ch1__lc_repeat = \port$4436$0 [157];
+  assign ch1__lc_skip = \port$4436$0 [158];
+  assign ch1__lc_zero = \port$4436$0 [159];
+  assign ch1__spw_mismatch = \port$4436$0 [160];
+  assign ch1__lc = \port$4436$0 [156:151];
+  assign ch1__line_delay = \port$4436$0 [48:36];
+  assign ch1__word0_position = \port$4436$0 [104:50];
+  assign ch1__word1_position = \port$4436$0 [147:108];
+  assign ch1__timestamp = \port$4436$0 [35:4];
   assign ch1__cap_data_bits_w0 = 6'h37;
   assign ch1__cap_data_bits_w1 = 6'h28;
   assign ch1__cap_timer_width = 6'h18;
   assign ch1__cap_counters = 1'h1;
   assign ch1__cap_timestamp = 1'h1;
   assign ch1__cap_register_access = 1'h1;
-  assign ch1__count_crc_word0 = \port$4435$0 [15:0];
-  assign ch1__count_crc_word1 = \port$4435$0 [31:16];
-  assign ch1__count_no_ack = \port$4435$0 [47:32];
-  assign ch1__count_no_start = \port$4435$0 [63:48];
-  assign ch1__count_delay_range = \port$4435$0 [79:64];
-  assign ch1__count_slo_stuck_low = \port$4435$0 [95:80];
-  assign ch1__count_lc_repeat = \port$4435$0 [111:96];
-  assign ch1__count_lc_skip = \port$4435$0 [127:112];
-  assign ch1__count_lc_zero = \port$4435$0 [143:128];
-  assign ch1__count_spw_mismatch = \port$4435$0 [159:144];
-  assign ch1__count_overrun = \port$4435$0 [175:160];
-  assign ch1__count_aborted = \port$4435$0 [191:176];
-  assign ch1__count_no_stop = \port$4435$0 [207:192];
-  assign ch1__ca_status = \port$4549$0 [2:0];
-  assign ch1__ca_bytes_done = \port$4549$0 [9:3];
-  assign ch1__count_ca_crc4_error = \port$4435$0 [223:208];
-  assign ch1__count_ca_no_answer = \port$4435$0 [239:224];
-  assign ch1__count_ca_refused = \port$4435$0 [255:240];
-  assign ch1__count_ca_aborted = \port$4435$0 [271:256];
-  assign ch1__count_ca_data_fault = \port$4435$0 [287:272];
+  assign ch1__count_crc_word0 = \port$4443$0 [15:0];
+  assign ch1__count_crc_word1 = \port$4443$0 [31:16];
+  assign ch1__count_no_ack = \port$4443$0 [47:32];
+  assign ch1__count_no_start = \port$4443$0 [63:48];
+  assign ch1__count_delay_range = \port$4443$0 [79:64];
+  assign ch1__count_slo_stuck_low = \port$4443$0 [95:80];
+  assign ch1__count_lc_repeat = \port$4443$0 [111:96];
+  assign ch1__count_lc_skip = \port$4443$0 [127:112];
+  assign ch1__count_lc_zero = \port$4443$0 [143:128];
+  assign ch1__count_spw_mismatch = \port$4443$0 [159:144];
+  assign ch1__count_overrun = \port$4443$0 [175:160];
+  assign ch1__count_aborted = \port$4443$0 [191:176];
+  assign ch1__count_no_stop = \port$4443$0 [207:192];
+  assign ch1__ca_status = \port$4557$0 [2:0];
+  assign ch1__ca_bytes_done = \port$4557$0 [9:3];
+  assign ch1__count_ca_crc4_error = \port$4443$0 [223:208];
+  assign ch1__count_ca_no_answer = \port$4443$0 [239:224];
+  assign ch1__count_ca_refused = \port$4443$0 [255:240];
+  assign ch1__count_ca_aborted = \port$4443$0 [271:256];
+  assign ch1__count_ca_data_fault = \port$4443$0 [287:272];
   assign g_irq = 1'h0;
   assign \$79  = \$78 ;
   assign \$81  = \$80 ;
@@ -4351,24 +4192,37 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, ch0__ca_wbuf_en, 
   assign \$152  = \$151 ;
   assign \$154  = \$153 ;
   assign \$156  = \$155 ;
+  assign \$269  = g_read_word;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.bus (axil__awvalid, axil__wdata, axil__wstrb, axil__wvalid, axil__bready, axil__araddr, axil__arvalid, axil__rready, clk, rst, axil__awready, axil__wready, regs__w_en, axil__arready, regs__r_en, axil__rdata, regs__w_addr, regs__w_data, regs__w_strb, axil__bvalid, rvalid
-, axil__awaddr);
+module \biss_master_axil.bus (axil__awvalid, axil__wdata, axil__wstrb, axil__wvalid, axil__bready, axil__araddr, axil__arvalid, axil__rready, clk, rst, axil__awready, axil__wready, regs__w_en, axil__arready, regs__r_en, regs__r_load, regs__w_addr, regs__w_data, regs__w_strb, axil__bvalid, rvalid
+, axil__rdata, axil__awaddr);
   reg \$auto$verilog_backend.cc:2355:dump_module$27  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
-  reg \$12 ;
-  reg [10:0] \$13 ;
-  reg \$14 ;
-  reg [31:0] \$15 ;
-  reg [3:0] \$16 ;
-  reg \$17 ;
-  reg \$18 ;
+  wire \$12 ;
+  wire \$13 ;
+  wire \$14 ;
+  wire \$15 ;
+  wire \$16 ;
+  wire \$17 ;
+  wire \$18 ;
+  wire \$19 ;
   wire \$2 ;
+  wire \$20 ;
+  wire \$21 ;
+  wire \$22 ;
+  reg \$23 ;
+  reg [10:0] \$24 ;
+  reg \$25 ;
+  reg [31:0] \$26 ;
+  reg [3:0] \$27 ;
+  reg \$28 ;
+  reg \$29 ;
   wire \$3 ;
+  reg \$30 ;
   wire \$4 ;
   wire \$5 ;
   wire \$6 ;
@@ -4378,6 +4232,7 @@ module \biss_master_axil.bus (axil__awvalid, axil__wdata, axil__wstrb, axil__wva
   (* init = 32'd0 *)
   wire [31:0] \$like ;
   reg \$signal  = 1'h0;
+  reg \$signal$16  = 1'h0;
   (* init = 11'h000 *)
   wire [10:0] aw_addr;
   input [12:0] axil__araddr;
@@ -4420,6 +4275,8 @@ module \biss_master_axil.bus (axil__awvalid, axil__wdata, axil__wstrb, axil__wva
   wire [31:0] regs__r_data;
   output regs__r_en;
   wire regs__r_en;
+  output regs__r_load;
+  wire regs__r_load;
   output [10:0] regs__w_addr;
   reg [10:0] regs__w_addr = 11'h000;
   output [31:0] regs__w_data;
@@ -4441,108 +4298,134 @@ module \biss_master_axil.bus (axil__awvalid, axil__wdata, axil__wstrb, axil__wva
   assign \$2  = ~ axil__bvalid;
   assign \$3  = \$2  | axil__bready;
   assign regs__w_en = \$1  & \$3 ;
-  assign \$4  = ~ rvalid;
-  assign axil__arready = \$4  | axil__rready;
+  assign \$4  = ~ \$signal$16 ;
+  assign \$5  = ~ rvalid;
+  assign \$6  = \$5  | axil__rready;
+  assign \$7  = \$signal$16  & \$6 ;
+  assign axil__arready = \$4  | \$7 ;
   assign regs__r_en = axil__arvalid & axil__arready;
-  assign \$5  = axil__awvalid & axil__awready;
-  assign \$6  = axil__wvalid & axil__wready;
-  assign \$7  = \$signal  & w_held;
-  assign \$8  = ~ axil__bvalid;
-  assign \$9  = \$8  | axil__bready;
-  assign \$10  = \$7  & \$9 ;
-  assign \$11  = axil__arvalid & axil__arready;
+  assign \$8  = ~ rvalid;
+  assign \$9  = \$8  | axil__rready;
+  assign regs__r_load = \$signal$16  & \$9 ;
+  assign \$10  = axil__awvalid & axil__awready;
+  assign \$11  = axil__wvalid & axil__wready;
+  assign \$12  = \$signal  & w_held;
+  assign \$13  = ~ axil__bvalid;
+  assign \$14  = \$13  | axil__bready;
+  assign \$15  = \$12  & \$14 ;
+  assign \$16  = axil__arvalid & axil__arready;
+  assign \$17  = ~ rvalid;
+  assign \$18  = \$17  | axil__rready;
+  assign \$19  = \$signal$16  & \$18 ;
+  assign \$20  = ~ rvalid;
+  assign \$21  = \$20  | axil__rready;
+  assign \$22  = \$signal$16  & \$21 ;
   always @(posedge clk)
-    \$signal  <= \$12 ;
+    \$signal  <= \$23 ;
   always @(posedge clk)
-    regs__w_addr <= \$13 ;
+    regs__w_addr <= \$24 ;
   always @(posedge clk)
-    w_held <= \$14 ;
+    w_held <= \$25 ;
   always @(posedge clk)
-    regs__w_data <= \$15 ;
+    regs__w_data <= \$26 ;
   always @(posedge clk)
-    regs__w_strb <= \$16 ;
+    regs__w_strb <= \$27 ;
   always @(posedge clk)
-    axil__bvalid <= \$17 ;
+    axil__bvalid <= \$28 ;
   always @(posedge clk)
-    rvalid <= \$18 ;
+    \$signal$16  <= \$29 ;
+  always @(posedge clk)
+    rvalid <= \$30 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
-    \$12  = \$signal ;
-    if (\$5 ) begin
-      \$12  = 1'h1;
-    end
+    \$23  = \$signal ;
     if (\$10 ) begin
-      \$12  = 1'h0;
+      \$23  = 1'h1;
+    end
+    if (\$15 ) begin
+      \$23  = 1'h0;
     end
     if (rst) begin
-      \$12  = 1'h0;
+      \$23  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
-    \$13  = regs__w_addr;
-    if (\$5 ) begin
-      \$13  = axil__awaddr[12:2];
-    end
-    if (rst) begin
-      \$13  = 11'h000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
-    \$14  = w_held;
-    if (\$6 ) begin
-      \$14  = 1'h1;
-    end
+    \$24  = regs__w_addr;
     if (\$10 ) begin
-      \$14  = 1'h0;
+      \$24  = axil__awaddr[12:2];
     end
     if (rst) begin
-      \$14  = 1'h0;
+      \$24  = 11'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
-    \$15  = regs__w_data;
-    if (\$6 ) begin
-      \$15  = axil__wdata;
-    end
-    if (rst) begin
-      \$15  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
-    \$16  = regs__w_strb;
-    if (\$6 ) begin
-      \$16  = axil__wstrb;
-    end
-    if (rst) begin
-      \$16  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
-    \$17  = axil__bvalid;
-    if (\$10 ) begin
-      \$17  = 1'h1;
-    end else if (axil__bready) begin
-      \$17  = 1'h0;
-    end
-    if (rst) begin
-      \$17  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
-    \$18  = rvalid;
+    \$25  = w_held;
     if (\$11 ) begin
-      \$18  = 1'h1;
-    end else if (axil__rready) begin
-      \$18  = 1'h0;
+      \$25  = 1'h1;
+    end
+    if (\$15 ) begin
+      \$25  = 1'h0;
     end
     if (rst) begin
-      \$18  = 1'h0;
+      \$25  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    \$26  = regs__w_data;
+    if (\$11 ) begin
+      \$26  = axil__wdata;
+    end
+    if (rst) begin
+      \$26  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    \$27  = regs__w_strb;
+    if (\$11 ) begin
+      \$27  = axil__wstrb;
+    end
+    if (rst) begin
+      \$27  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    \$28  = axil__bvalid;
+    if (\$15 ) begin
+      \$28  = 1'h1;
+    end else if (axil__bready) begin
+      \$28  = 1'h0;
+    end
+    if (rst) begin
+      \$28  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    \$29  = \$signal$16 ;
+    if (\$16 ) begin
+      \$29  = 1'h1;
+    end else if (\$19 ) begin
+      \$29  = 1'h0;
+    end
+    if (rst) begin
+      \$29  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    \$30  = rvalid;
+    if (\$22 ) begin
+      \$30  = 1'h1;
+    end else if (axil__rready) begin
+      \$30  = 1'h0;
+    end
+    if (rst) begin
+      \$30  = 1'h0;
     end
   end
   assign aw_addr = regs__w_addr;
@@ -4559,7 +4442,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__ca_busy, regs__ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period
 , cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort
-, regs__done_count, ma, regs__done, \port$3981$0 , \port$3988$0 , regs__ca_done, \port$4102$0 , ca_rbuf_addr);
+, regs__done_count, ma, regs__done, \port$3983$0 , \port$3990$0 , regs__ca_done, \port$4104$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$28  = 0;
   wire \$1 ;
   wire [16:0] \$2 ;
@@ -4684,12 +4567,12 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_
   wire \ma$164 ;
   input periodic;
   wire periodic;
-  output [160:0] \port$3981$0 ;
-  wire [160:0] \port$3981$0 ;
-  output [287:0] \port$3988$0 ;
-  wire [287:0] \port$3988$0 ;
-  output [9:0] \port$4102$0 ;
-  wire [9:0] \port$4102$0 ;
+  output [160:0] \port$3983$0 ;
+  wire [160:0] \port$3983$0 ;
+  output [287:0] \port$3990$0 ;
+  wire [287:0] \port$3990$0 ;
+  output [9:0] \port$4104$0 ;
+  wire [9:0] \port$4104$0 ;
   wire regs__abort_cycle;
   output regs__busy;
   wire regs__busy;
@@ -4836,8 +4719,8 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_
   assign trigger = \trigger$161  & regs__trigger_enable;
   \biss_master_axil.ch0.core  core (
     .abort(abort_cycle),
-    .\abort$187 (ca_abort),
-    .\busy$237 (regs__busy),
+    .\abort$183 (ca_abort),
+    .\busy$233 (regs__busy),
     .ca_address(ca_address),
     .ca_count(ca_count),
     .ca_done(regs__ca_done),
@@ -4865,24 +4748,24 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_
     .cfg_w1_enable(cfg_w1_enable),
     .cfg_w1_lc(cfg_w1_lc),
     .cfg_w1_nenw(cfg_w1_nenw),
-    .\clear$214 (clear_counters),
+    .\clear$210 (clear_counters),
     .clk(clk),
     .config_error(regs__config_error),
     .counts(\$5 ),
-    .\done$240 (regs__done),
+    .\done$236 (regs__done),
     .frames(regs__ca_busy),
     .ma(ma),
     .\periodic$24 (periodic),
     .rbuf_addr(ca_rbuf_addr),
     .rbuf_en(ca_rbuf_en),
     .result(\$6 ),
-    .\result$245 (\$4 ),
+    .\result$241 (\$4 ),
     .rst(rst),
     .slo(slo),
     .start(start),
-    .\start$185 (ca_start),
+    .\start$181 (ca_start),
     .trigger(trigger),
-    .\valid$242 (valid)
+    .\valid$238 (valid)
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
@@ -5015,19 +4898,22 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_
   assign regs__ca_rbuf_en = ca_rbuf_en;
   assign \ma$164  = ma;
   assign \slo$166  = slo;
-  assign \port$3981$0  = \$4 ;
-  assign \port$3988$0  = \$5 ;
-  assign \port$4102$0  = \$6 ;
+  assign \port$3983$0  = \$4 ;
+  assign \port$3990$0  = \$5 ;
+  assign \port$4104$0  = \$6 ;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy$237 , config_error, frames, ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, abort, \clear$214 , \periodic$24 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit
-, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, \start$185 , \abort$187 , ma, \done$240 
-, \valid$242 , \result$245 , counts, ca_done, result, rbuf_addr);
+module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy$233 , config_error, frames, ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, abort, \clear$210 , \periodic$24 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit
+, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, \start$181 , \abort$183 , ma, \done$236 
+, \valid$238 , \result$241 , counts, ca_done, result, rbuf_addr);
+  reg \$auto$verilog_backend.cc:2355:dump_module$29  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
-  wire \$12 ;
+  reg \$12 ;
+  reg \$13 ;
+  wire \$14 ;
   wire \$2 ;
   wire \$3 ;
   wire \$4 ;
@@ -5038,8 +4924,8 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire \$9 ;
   input abort;
   wire abort;
-  input \abort$187 ;
-  wire \abort$187 ;
+  input \abort$183 ;
+  wire \abort$183 ;
   wire \abort$36 ;
   wire abort_cycle;
   wire ack_expired;
@@ -5047,16 +4933,16 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire [23:0] ack_limit;
   wire [23:0] \ack_limit$89 ;
   wire arm;
-  wire \bit ;
-  wire \bit$113 ;
+  reg \bit  = 1'h0;
+  wire \bit$263 ;
   wire [5:0] bits;
   wire break_over;
   wire \break_over$66 ;
   wire [23:0] break_time;
   wire busy;
-  wire \busy$196 ;
-  output \busy$237 ;
-  wire \busy$237 ;
+  wire \busy$192 ;
+  output \busy$233 ;
+  wire \busy$233 ;
   wire ca_abort;
   input [6:0] ca_address;
   wire [6:0] ca_address;
@@ -5091,10 +4977,10 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   input ca_write;
   wire ca_write;
   wire cdm;
-  wire \cdm$200 ;
+  wire \cdm$196 ;
   wire cdm_cycle;
   wire cds;
-  wire \cds$248 ;
+  wire \cds$244 ;
   wire [154:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
@@ -5171,8 +5057,8 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire check;
   wire clear;
   wire \clear$106 ;
-  input \clear$214 ;
-  wire \clear$214 ;
+  input \clear$210 ;
+  wire \clear$210 ;
   wire clear_counters;
   input clk;
   wire clk;
@@ -5219,10 +5105,10 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire [15:0] \counts.slo_stuck_low ;
   wire [15:0] \counts.spw_mismatch ;
   wire [39:0] cpw_top;
-  wire [39:0] \cpw_top$130 ;
+  wire [39:0] \cpw_top$126 ;
   wire [1:0] crc_error;
   wire [1:0] crc_ok;
-  wire [1:0] \crc_ok$145 ;
+  wire [1:0] \crc_ok$141 ;
   wire [154:0] cycle;
   wire [23:0] \cycle.ack_limit ;
   wire [23:0] \cycle.break_time ;
@@ -5261,10 +5147,10 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire delay_over;
   wire \delay_over$76 ;
   wire done;
-  wire \done$198 ;
-  output \done$240 ;
-  wire \done$240 ;
-  wire \done$241 ;
+  wire \done$194 ;
+  output \done$236 ;
+  wire \done$236 ;
+  wire \done$237 ;
   wire doubtful;
   wire early;
   wire \early$52 ;
@@ -5290,7 +5176,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire \events.slo_stuck_low ;
   wire \events.spw_mismatch ;
   wire fault;
-  wire \fault$141 ;
+  wire \fault$137 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -5320,7 +5206,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
-  wire [3:0] \fault_status$143 ;
+  wire [3:0] \fault_status$139 ;
   wire [6:0] faults;
   wire \faults.aborted ;
   wire \faults.bad_config ;
@@ -5330,7 +5216,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire \faults.no_stop ;
   wire \faults.slo_stuck_low ;
   wire first_rise;
-  wire \first_rise$171 ;
+  wire \first_rise$167 ;
   wire [31:0] first_rise_time;
   wire [160:0] frame;
   wire \frame.cds ;
@@ -5384,20 +5270,20 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire in_clock;
   wire \in_clock$83 ;
   wire [5:0] lc;
-  wire [5:0] \lc$117 ;
-  wire [5:0] \lc$257 ;
+  wire [5:0] \lc$113 ;
+  wire [5:0] \lc$253 ;
   wire lc_check;
   wire lc_load;
   wire [5:0] lc_next;
-  wire [5:0] \lc_next$119 ;
+  wire [5:0] \lc_next$115 ;
   wire lc_repeat;
-  wire \lc_repeat$258 ;
+  wire \lc_repeat$254 ;
   wire lc_repeat_seen;
   wire lc_skip;
-  wire \lc_skip$259 ;
+  wire \lc_skip$255 ;
   wire lc_skip_seen;
   wire lc_zero;
-  wire \lc_zero$260 ;
+  wire \lc_zero$256 ;
   wire lc_zero_seen;
   wire level;
   wire [12:0] line_delay;
@@ -5435,7 +5321,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire \locked$50 ;
   output ma;
   wire ma;
-  wire \ma$236 ;
+  wire \ma$232 ;
   wire ma_arm;
   wire ma_busy;
   wire \ma_busy$78 ;
@@ -5452,7 +5338,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire [1:0] nw;
   wire ok;
   wire overrun;
-  wire \overrun$239 ;
+  wire \overrun$235 ;
   wire [23:0] period;
   wire periodic;
   input \periodic$24 ;
@@ -5465,32 +5351,32 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire receiver_clear;
   wire \repeat ;
   wire report;
-  wire \report$153 ;
+  wire \report$149 ;
   wire report_delay;
-  wire \report_delay$156 ;
+  wire \report_delay$152 ;
   wire report_frame;
-  wire \report_frame$139 ;
-  wire \report_frame$154 ;
+  wire \report_frame$135 ;
+  wire \report_frame$150 ;
   wire request;
-  wire [17:0] \request$173 ;
-  wire [6:0] \request$173.address ;
-  wire [6:0] \request$173.count ;
-  wire [2:0] \request$173.slave_id ;
-  wire \request$173.write ;
+  wire [17:0] \request$169 ;
+  wire [6:0] \request$169.address ;
+  wire [6:0] \request$169.count ;
+  wire [2:0] \request$169.slave_id ;
+  wire \request$169.write ;
   wire \request$35 ;
   wire restart;
   wire restart_timer;
   output [9:0] result;
   wire [9:0] result;
-  output [160:0] \result$245 ;
-  wire [160:0] \result$245 ;
-  wire \result$245.cds ;
-  wire [5:0] \result$245.lc ;
-  wire \result$245.lc_repeat ;
-  wire \result$245.lc_skip ;
-  wire \result$245.lc_zero ;
-  wire [12:0] \result$245.line_delay ;
-  wire \result$245.spw_mismatch ;
+  output [160:0] \result$241 ;
+  wire [160:0] \result$241 ;
+  wire \result$241.cds ;
+  wire [5:0] \result$241.lc ;
+  wire \result$241.lc_repeat ;
+  wire \result$241.lc_skip ;
+  wire \result$241.lc_zero ;
+  wire [12:0] \result$241.line_delay ;
+  wire \result$241.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -5505,18 +5391,18 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
-  wire [3:0] \result$245.status ;
-  wire [31:0] \result$245.timestamp ;
-  wire [57:0] \result$245.word0 ;
-  wire \result$245.word0.crc_ok ;
-  wire \result$245.word0.ne ;
-  wire \result$245.word0.nw ;
-  wire [54:0] \result$245.word0.position ;
-  wire [42:0] \result$245.word1 ;
-  wire \result$245.word1.crc_ok ;
-  wire \result$245.word1.ne ;
-  wire \result$245.word1.nw ;
-  wire [39:0] \result$245.word1.position ;
+  wire [3:0] \result$241.status ;
+  wire [31:0] \result$241.timestamp ;
+  wire [57:0] \result$241.word0 ;
+  wire \result$241.word0.crc_ok ;
+  wire \result$241.word0.ne ;
+  wire \result$241.word0.nw ;
+  wire [54:0] \result$241.word0.position ;
+  wire [42:0] \result$241.word1 ;
+  wire \result$241.word1.crc_ok ;
+  wire \result$241.word1.ne ;
+  wire \result$241.word1.nw ;
+  wire [39:0] \result$241.word1.position ;
   wire [6:0] \result.bytes_done ;
   (* enum_base_type = "AccessStatus" *)
   (* enum_value_000 = "OK" *)
@@ -5528,14 +5414,14 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* enum_value_110 = "BAD_REQUEST" *)
   wire [2:0] \result.status ;
   wire resync;
-  wire \resync$125 ;
+  wire \resync$121 ;
   wire [15:0] rises;
   wire [15:0] \rises$105 ;
   input rst;
   wire rst;
   wire run;
-  wire sample;
-  wire \sample$111 ;
+  reg sample = 1'h0;
+  wire \sample$261 ;
   wire second_rise;
   wire skip;
   input slo;
@@ -5552,11 +5438,11 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire [39:0] spw;
   wire spw_match;
   wire spw_mismatch;
-  wire \spw_mismatch$261 ;
+  wire \spw_mismatch$257 ;
   input start;
   wire start;
-  input \start$185 ;
-  wire \start$185 ;
+  input \start$181 ;
+  wire \start$181 ;
   wire \start$22 ;
   wire [15:0] start_slot;
   wire [15:0] \start_slot$103 ;
@@ -5592,7 +5478,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
-  wire [3:0] \status$244 ;
+  wire [3:0] \status$240 ;
   wire stop_bit;
   wire \stop_bit$62 ;
   wire stopped;
@@ -5607,9 +5493,9 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire trigger;
   wire \trigger$33 ;
   wire valid;
-  wire \valid$158 ;
-  output \valid$242 ;
-  wire \valid$242 ;
+  wire \valid$154 ;
+  output \valid$238 ;
+  wire \valid$238 ;
   wire valid_out;
   wire w1_enable;
   wire [39:0] wbuf;
@@ -5625,28 +5511,28 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire word1_nw;
   wire [39:0] word1_position;
   wire [1:0] word_count;
-  wire [1:0] \word_count$115 ;
+  wire [1:0] \word_count$111 ;
   wire [1:0] word_crc_ok;
   wire [19:0] words;
-  wire [19:0] \words$127 ;
-  wire [9:0] \words$127[0] ;
+  wire [19:0] \words$123 ;
+  wire [9:0] \words$123[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
-  wire [1:0] \words$127[0].crc ;
-  wire [5:0] \words$127[0].data_bits ;
-  wire \words$127[0].lc ;
-  wire \words$127[0].nenw ;
-  wire [9:0] \words$127[1] ;
+  wire [1:0] \words$123[0].crc ;
+  wire [5:0] \words$123[0].data_bits ;
+  wire \words$123[0].lc ;
+  wire \words$123[0].nenw ;
+  wire [9:0] \words$123[1] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
-  wire [1:0] \words$127[1].crc ;
-  wire [5:0] \words$127[1].data_bits ;
-  wire \words$127[1].lc ;
-  wire \words$127[1].nenw ;
+  wire [1:0] \words$123[1].crc ;
+  wire [5:0] \words$123[1].data_bits ;
+  wire \words$123[1].lc ;
+  wire \words$123[1].nenw ;
   wire [9:0] \words[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
@@ -5678,8 +5564,12 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign \$9  = ca_done & \$8 ;
   assign \$10  = result[2:0] == 3'h5;
   assign \$11  = ca_done & \$10 ;
-  assign \busy$237  = ~ idle;
+  assign \busy$233  = ~ idle;
   assign config_error = ~ config_ok;
+  always @(posedge clk)
+    sample <= \$12 ;
+  always @(posedge clk)
+    \bit  <= \$13 ;
   \biss_master_axil.ch0.core.config  \config  (
     .ack_limit(ack_limit),
     .clk(clk),
@@ -5736,7 +5626,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .timer_clear(clear)
   );
   \biss_master_axil.ch0.core.counters  counters (
-    .clear(\clear$214 ),
+    .clear(\clear$210 ),
     .clk(clk),
     .counts(counts),
     .events(events),
@@ -5789,10 +5679,10 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .start_slot(start_slot),
     .\started$10 (started),
     .w1_enable(cycle[135]),
-    .words(\words$127 )
+    .words(\words$123 )
   );
   \biss_master_axil.ch0.core.register_access  register_access (
-    .abort(\abort$187 ),
+    .abort(\abort$183 ),
     .busy(frames),
     .cdm(cdm),
     .clk(clk),
@@ -5804,27 +5694,27 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .rbuf_addr(rbuf_addr),
     .rbuf_data(ca_rbuf_data),
     .rbuf_en(rbuf_en),
-    .request(\request$173 ),
+    .request(\request$169 ),
     .result(result),
     .rst(rst),
-    .start(\start$185 ),
+    .start(\start$181 ),
     .wbuf(wbuf)
   );
   \biss_master_axil.ch0.core.results  results (
     .clk(clk),
-    .done(\done$240 ),
+    .done(\done$236 ),
     .frame(frame),
     .report(report),
     .report_delay(report_delay),
     .report_frame(report_frame),
-    .result(\result$245 ),
+    .result(\result$241 ),
     .rst(rst),
     .valid(valid),
-    .valid_out(\valid$242 )
+    .valid_out(\valid$238 )
   );
   \biss_master_axil.ch0.core.sampler  sampler (
     .arm(ma_arm),
-    .\bit (\bit ),
+    .\bit (\bit$263 ),
     .clk(clk),
     .delay(delay),
     .early(early),
@@ -5833,7 +5723,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .locked(locked),
     .receiver_clear(\clear$106 ),
     .rst(rst),
-    .sample(sample),
+    .sample(\sample$261 ),
     .slo(slo)
   );
   \biss_master_axil.ch0.core.scheduler  scheduler (
@@ -5854,7 +5744,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$1213$0 (\bit ),
+    .\port$3724$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -5911,7 +5801,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .lc_skip_seen(lc_skip_seen),
     .lc_zero(lc_zero),
     .lc_zero_seen(lc_zero_seen),
-    .\port$1613$0 (\$12 ),
+    .\port$1601$0 (\$14 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -5919,6 +5809,20 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .status(status),
     .valid(valid)
   );
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    \$12  = \sample$261 ;
+    if (rst) begin
+      \$12  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    \$13  = \bit$263 ;
+    if (rst) begin
+      \$13  = 1'h0;
+    end
+  end
   assign \idle$20  = idle;
   assign \start$22  = start;
   assign period = cfg_request_period;
@@ -5968,53 +5872,51 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign receiver_clear = \clear$106 ;
   assign \half_period$108  = cycle[15:0];
   assign arm = ma_arm;
-  assign \sample$111  = sample;
-  assign \bit$113  = \bit ;
-  assign \word_count$115  = word_count;
-  assign \lc$117  = lc;
+  assign \word_count$111  = word_count;
+  assign \lc$113  = lc;
   assign lc_next = { lc[4:0], \bit  };
-  assign \lc_next$119  = { lc[4:0], \bit  };
+  assign \lc_next$115  = { lc[4:0], \bit  };
   assign lc_load = load;
   assign lc_check = check;
-  assign \resync$125  = resync;
+  assign \resync$121  = resync;
   assign w1_enable = cycle[135];
-  assign \cpw_top$130  = cpw_top;
+  assign \cpw_top$126  = cpw_top;
   assign data1 = spw;
   assign bits = cycle[141:136];
   assign tolerance = cycle[154:147];
   assign match = spw_match;
   assign cfg = cycle;
-  assign \report_frame$139  = report_frame;
-  assign \fault$141  = fault;
-  assign \fault_status$143  = fault_status;
-  assign \crc_ok$145  = crc_ok;
+  assign \report_frame$135  = report_frame;
+  assign \fault$137  = fault;
+  assign \fault_status$139  = fault_status;
+  assign \crc_ok$141  = crc_ok;
   assign \repeat  = lc_repeat_seen;
   assign skip = lc_skip_seen;
   assign zero = lc_zero_seen;
-  assign \report$153  = report;
-  assign \report_frame$154  = report_frame;
-  assign \report_delay$156  = report_delay;
-  assign \valid$158  = valid;
-  assign word_crc_ok = { \$12 , crc_ok[0] };
-  assign \first_rise$171  = first_rise;
+  assign \report$149  = report;
+  assign \report_frame$150  = report_frame;
+  assign \report_delay$152  = report_delay;
+  assign \valid$154  = valid;
+  assign word_crc_ok = { \$14 , crc_ok[0] };
+  assign \first_rise$167  = first_rise;
   assign ca_status = result[2:0];
   assign ca_bytes_done = result[9:3];
-  assign ca_start = \start$185 ;
-  assign ca_abort = \abort$187 ;
+  assign ca_start = \start$181 ;
+  assign ca_abort = \abort$183 ;
   assign ca_rbuf_addr = rbuf_addr;
   assign ca_rbuf_en = rbuf_en;
   assign rbuf_data = ca_rbuf_data;
   assign ca_busy = frames;
-  assign \busy$196  = frames;
-  assign \done$198  = ca_done;
-  assign \cdm$200  = cdm;
+  assign \busy$192  = frames;
+  assign \done$194  = ca_done;
+  assign \cdm$196  = cdm;
   assign held = ma_held;
   assign ma_hold = hold;
   assign frame_end = report;
   assign frame_ok = valid;
   assign frame_cds = cds;
   assign cdm_cycle = frame_cdm;
-  assign clear_counters = \clear$214 ;
+  assign clear_counters = \clear$210 ;
   assign count_crc_word0 = counts[15:0];
   assign count_crc_word1 = counts[31:16];
   assign count_no_ack = counts[47:32];
@@ -6033,27 +5935,27 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign count_ca_refused = counts[255:240];
   assign count_ca_aborted = counts[271:256];
   assign count_ca_data_fault = counts[287:272];
-  assign \ma$236  = ma;
-  assign \overrun$239  = overrun;
-  assign \done$241  = \done$240 ;
-  assign valid_out = \valid$242 ;
-  assign \status$244  = \result$245 [3:0];
-  assign timestamp = \result$245 [35:4];
-  assign line_delay = \result$245 [48:36];
-  assign \cds$248  = \result$245 [49];
-  assign word0_position = \result$245 [104:50];
-  assign word0_ne = \result$245 [105];
-  assign word0_nw = \result$245 [106];
-  assign word0_crc_ok = \result$245 [107];
-  assign word1_position = \result$245 [147:108];
-  assign word1_ne = \result$245 [148];
-  assign word1_nw = \result$245 [149];
-  assign word1_crc_ok = \result$245 [150];
-  assign \lc$257  = \result$245 [156:151];
-  assign \lc_repeat$258  = \result$245 [157];
-  assign \lc_skip$259  = \result$245 [158];
-  assign \lc_zero$260  = \result$245 [159];
-  assign \spw_mismatch$261  = \result$245 [160];
+  assign \ma$232  = ma;
+  assign \overrun$235  = overrun;
+  assign \done$237  = \done$236 ;
+  assign valid_out = \valid$238 ;
+  assign \status$240  = \result$241 [3:0];
+  assign timestamp = \result$241 [35:4];
+  assign line_delay = \result$241 [48:36];
+  assign \cds$244  = \result$241 [49];
+  assign word0_position = \result$241 [104:50];
+  assign word0_ne = \result$241 [105];
+  assign word0_nw = \result$241 [106];
+  assign word0_crc_ok = \result$241 [107];
+  assign word1_position = \result$241 [147:108];
+  assign word1_ne = \result$241 [148];
+  assign word1_nw = \result$241 [149];
+  assign word1_crc_ok = \result$241 [150];
+  assign \lc$253  = \result$241 [156:151];
+  assign \lc_repeat$254  = \result$241 [157];
+  assign \lc_skip$255  = \result$241 [158];
+  assign \lc_zero$256  = \result$241 [159];
+  assign \spw_mismatch$257  = \result$241 [160];
   assign \live.ma_half_period  = live[15:0];
   assign \live.request_period  = live[39:16];
   assign \live.break_time  = live[63:40];
@@ -6104,16 +6006,16 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign \words[1].nenw  = words[16];
   assign \words[1].lc  = words[17];
   assign \words[1].crc  = words[19:18];
-  assign \words$127[0]  = \words$127 [9:0];
-  assign \words$127[0].data_bits  = \words$127 [5:0];
-  assign \words$127[0].nenw  = \words$127 [6];
-  assign \words$127[0].lc  = \words$127 [7];
-  assign \words$127[0].crc  = \words$127 [9:8];
-  assign \words$127[1]  = \words$127 [19:10];
-  assign \words$127[1].data_bits  = \words$127 [15:10];
-  assign \words$127[1].nenw  = \words$127 [16];
-  assign \words$127[1].lc  = \words$127 [17];
-  assign \words$127[1].crc  = \words$127 [19:18];
+  assign \words$123[0]  = \words$123 [9:0];
+  assign \words$123[0].data_bits  = \words$123 [5:0];
+  assign \words$123[0].nenw  = \words$123 [6];
+  assign \words$123[0].lc  = \words$123 [7];
+  assign \words$123[0].crc  = \words$123 [9:8];
+  assign \words$123[1]  = \words$123 [19:10];
+  assign \words$123[1].data_bits  = \words$123 [15:10];
+  assign \words$123[1].nenw  = \words$123 [16];
+  assign \words$123[1].lc  = \words$123 [17];
+  assign \words$123[1].crc  = \words$123 [19:18];
   assign \cfg.ma_half_period  = cycle[15:0];
   assign \cfg.request_period  = cycle[39:16];
   assign \cfg.break_time  = cycle[63:40];
@@ -6153,10 +6055,10 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign \frame.lc_skip  = frame[158];
   assign \frame.lc_zero  = frame[159];
   assign \frame.spw_mismatch  = frame[160];
-  assign \request$173.slave_id  = \request$173 [2:0];
-  assign \request$173.address  = \request$173 [9:3];
-  assign \request$173.count  = \request$173 [16:10];
-  assign \request$173.write  = \request$173 [17];
+  assign \request$169.slave_id  = \request$169 [2:0];
+  assign \request$169.address  = \request$169 [9:3];
+  assign \request$169.count  = \request$169 [16:10];
+  assign \request$169.write  = \request$169 [17];
   assign \wbuf.addr  = wbuf[3:0];
   assign \wbuf.data  = wbuf[35:4];
   assign \wbuf.en  = wbuf[39:36];
@@ -6205,25 +6107,25 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign \counts.ca_refused  = counts[255:240];
   assign \counts.ca_aborted  = counts[271:256];
   assign \counts.ca_data_fault  = counts[287:272];
-  assign \result$245.status  = \result$245 [3:0];
-  assign \result$245.timestamp  = \result$245 [35:4];
-  assign \result$245.line_delay  = \result$245 [48:36];
-  assign \result$245.cds  = \result$245 [49];
-  assign \result$245.word0  = \result$245 [107:50];
-  assign \result$245.word0.position  = \result$245 [104:50];
-  assign \result$245.word0.ne  = \result$245 [105];
-  assign \result$245.word0.nw  = \result$245 [106];
-  assign \result$245.word0.crc_ok  = \result$245 [107];
-  assign \result$245.word1  = \result$245 [150:108];
-  assign \result$245.word1.position  = \result$245 [147:108];
-  assign \result$245.word1.ne  = \result$245 [148];
-  assign \result$245.word1.nw  = \result$245 [149];
-  assign \result$245.word1.crc_ok  = \result$245 [150];
-  assign \result$245.lc  = \result$245 [156:151];
-  assign \result$245.lc_repeat  = \result$245 [157];
-  assign \result$245.lc_skip  = \result$245 [158];
-  assign \result$245.lc_zero  = \result$245 [159];
-  assign \result$245.spw_mismatch  = \result$245 [160];
+  assign \result$241.status  = \result$241 [3:0];
+  assign \result$241.timestamp  = \result$241 [35:4];
+  assign \result$241.line_delay  = \result$241 [48:36];
+  assign \result$241.cds  = \result$241 [49];
+  assign \result$241.word0  = \result$241 [107:50];
+  assign \result$241.word0.position  = \result$241 [104:50];
+  assign \result$241.word0.ne  = \result$241 [105];
+  assign \result$241.word0.nw  = \result$241 [106];
+  assign \result$241.word0.crc_ok  = \result$241 [107];
+  assign \result$241.word1  = \result$241 [150:108];
+  assign \result$241.word1.position  = \result$241 [147:108];
+  assign \result$241.word1.ne  = \result$241 [148];
+  assign \result$241.word1.nw  = \result$241 [149];
+  assign \result$241.word1.crc_ok  = \result$241 [150];
+  assign \result$241.lc  = \result$241 [156:151];
+  assign \result$241.lc_repeat  = \result$241 [157];
+  assign \result$241.lc_skip  = \result$241 [158];
+  assign \result$241.lc_zero  = \result$241 [159];
+  assign \result$241.spw_mismatch  = \result$241 [160];
   assign events[17] = \$11 ;
   assign events[16] = \$9 ;
   assign events[15] = \$7 ;
@@ -6245,13 +6147,13 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign wbuf[39:36] = ca_wbuf_en;
   assign wbuf[35:4] = ca_wbuf_data;
   assign wbuf[3:0] = ca_wbuf_addr;
-  assign \request$173 [17] = ca_write;
-  assign \request$173 [16:10] = ca_count;
-  assign \request$173 [9:3] = ca_address;
-  assign \request$173 [2:0] = ca_slave_id;
+  assign \request$169 [17] = ca_write;
+  assign \request$169 [16:10] = ca_count;
+  assign \request$169 [9:3] = ca_address;
+  assign \request$169 [2:0] = ca_slave_id;
   assign frame[35:4] = first_rise_time;
   assign frame[160] = spw_mismatch;
-  assign frame[150] = \$12 ;
+  assign frame[150] = \$14 ;
   assign frame[149] = nw[1];
   assign frame[148] = ne[1];
   assign frame[147:108] = spw;
@@ -6266,8 +6168,8 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign frame[49] = cds;
   assign frame[48:36] = delay;
   assign frame[3:0] = status;
-  assign \words$127 [19:10] = cycle[145:136];
-  assign \words$127 [9:0] = cycle[134:125];
+  assign \words$123 [19:10] = cycle[145:136];
+  assign \words$123 [9:0] = cycle[134:125];
   assign words[19:10] = cycle[145:136];
   assign words[9:0] = cycle[134:125];
   assign live[154:147] = cfg_spw_tolerance;
@@ -6292,7 +6194,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_limit, timeout_limit, delay_limit, no_start_limit, idle, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$29  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$30  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -6473,21 +6375,21 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   always @(posedge clk)
     delay_limit <= \$46 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$47  = \$41 ;
     if (rst) begin
       \$47  = 25'h0000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$42  = \$34 ;
     if (rst) begin
       \$42  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$43  = cycle;
     if (idle) begin
       \$43  = live;
@@ -6497,7 +6399,7 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$44  = ack_limit;
     if (idle) begin
       \$44  = \$36 ;
@@ -6507,7 +6409,7 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$45  = timeout_limit;
     if (idle) begin
       \$45  = \$38 ;
@@ -6517,7 +6419,7 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$46  = delay_limit;
     if (idle) begin
       \$46  = \$40 ;
@@ -6571,7 +6473,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, frame_doubtful, abort, config_ok, end_check, cdm_cycle, idle, receiver_clear, resync, timer_clear, fault, fault_status, faults, ma_run, in_clock, ma_hold, report_frame, report_delay, slo_stuck
 , slo_stuck_live, break_over, ack_expired, no_start_expired, delay_over, ma_arm, ma_busy, ma_held, ma_enough, early, locked, slo, frame_done, stopped, slots_full, started, stop_bit, cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$30  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$31  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -6860,7 +6762,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, frame
   assign \$12  = \$11  & ack_expired;
   assign \$13  = ~ locked_seen;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     \$79  = cdm_cycle;
     if (idle) begin
       \$79  = cdm;
@@ -6870,14 +6772,14 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     \$80  = idle;
     if (rst) begin
       \$80  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     \$81  = cycle_fsm_state;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -6974,7 +6876,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     \$82  = idle;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -7071,7 +6973,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     \$83  = receiver_clear;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -7168,7 +7070,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     \$84  = armed;
     casez (cycle_fsm_state)
       3'h0:
@@ -7187,7 +7089,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     \$85  = locked_seen;
     casez (cycle_fsm_state)
       3'h0:
@@ -7206,7 +7108,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     \$86  = pause;
     casez (cycle_fsm_state)
       3'h0:
@@ -7226,7 +7128,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     resync = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -7234,7 +7136,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     timer_clear = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -7281,7 +7183,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     fault = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -7336,7 +7238,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     fault_status = 4'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -7391,7 +7293,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     faults = 7'h00;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -7446,7 +7348,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     ma_run = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -7462,7 +7364,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     in_clock = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -7476,7 +7378,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     ma_hold = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -7499,7 +7401,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     report_frame = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -7530,7 +7432,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     report_delay = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -7895,60 +7797,6 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.counters.count_aborted (rst, clear, inc, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$31  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_ca_aborted (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$32  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8002,7 +7850,7 @@ module \biss_master_axil.ch0.core.counters.count_ca_aborted (rst, clear, inc, co
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_ca_crc4_error (rst, clear, inc, count, clk);
+module \biss_master_axil.ch0.core.counters.count_ca_aborted (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$33  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8056,7 +7904,7 @@ module \biss_master_axil.ch0.core.counters.count_ca_crc4_error (rst, clear, inc,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_ca_data_fault (rst, clear, inc, count, clk);
+module \biss_master_axil.ch0.core.counters.count_ca_crc4_error (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$34  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8110,7 +7958,7 @@ module \biss_master_axil.ch0.core.counters.count_ca_data_fault (rst, clear, inc,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_ca_no_answer (rst, clear, inc, count, clk);
+module \biss_master_axil.ch0.core.counters.count_ca_data_fault (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$35  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8164,7 +8012,7 @@ module \biss_master_axil.ch0.core.counters.count_ca_no_answer (rst, clear, inc, 
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_ca_refused (rst, clear, inc, count, clk);
+module \biss_master_axil.ch0.core.counters.count_ca_no_answer (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$36  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8218,7 +8066,7 @@ module \biss_master_axil.ch0.core.counters.count_ca_refused (rst, clear, inc, co
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_crc_word0 (rst, clear, inc, count, clk);
+module \biss_master_axil.ch0.core.counters.count_ca_refused (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$37  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8272,7 +8120,7 @@ module \biss_master_axil.ch0.core.counters.count_crc_word0 (rst, clear, inc, cou
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_crc_word1 (rst, clear, inc, count, clk);
+module \biss_master_axil.ch0.core.counters.count_crc_word0 (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$38  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8326,7 +8174,7 @@ module \biss_master_axil.ch0.core.counters.count_crc_word1 (rst, clear, inc, cou
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_delay_range (rst, clear, inc, count, clk);
+module \biss_master_axil.ch0.core.counters.count_crc_word1 (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$39  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8380,7 +8228,7 @@ module \biss_master_axil.ch0.core.counters.count_delay_range (rst, clear, inc, c
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_lc_repeat (rst, clear, inc, count, clk);
+module \biss_master_axil.ch0.core.counters.count_delay_range (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$40  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8434,7 +8282,7 @@ module \biss_master_axil.ch0.core.counters.count_lc_repeat (rst, clear, inc, cou
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_lc_skip (rst, clear, inc, count, clk);
+module \biss_master_axil.ch0.core.counters.count_lc_repeat (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$41  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8488,7 +8336,7 @@ module \biss_master_axil.ch0.core.counters.count_lc_skip (rst, clear, inc, count
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_lc_zero (rst, clear, inc, count, clk);
+module \biss_master_axil.ch0.core.counters.count_lc_skip (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$42  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8542,7 +8390,7 @@ module \biss_master_axil.ch0.core.counters.count_lc_zero (rst, clear, inc, count
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_no_ack (rst, clear, inc, count, clk);
+module \biss_master_axil.ch0.core.counters.count_lc_zero (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$43  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8596,7 +8444,7 @@ module \biss_master_axil.ch0.core.counters.count_no_ack (rst, clear, inc, count,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_no_start (rst, clear, inc, count, clk);
+module \biss_master_axil.ch0.core.counters.count_no_ack (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$44  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8650,7 +8498,7 @@ module \biss_master_axil.ch0.core.counters.count_no_start (rst, clear, inc, coun
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_no_stop (rst, clear, inc, count, clk);
+module \biss_master_axil.ch0.core.counters.count_no_start (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$45  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8704,7 +8552,7 @@ module \biss_master_axil.ch0.core.counters.count_no_stop (rst, clear, inc, count
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_overrun (rst, clear, inc, count, clk);
+module \biss_master_axil.ch0.core.counters.count_no_stop (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$46  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8758,7 +8606,7 @@ module \biss_master_axil.ch0.core.counters.count_overrun (rst, clear, inc, count
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_slo_stuck_low (rst, clear, inc, count, clk);
+module \biss_master_axil.ch0.core.counters.count_overrun (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$47  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8812,7 +8660,7 @@ module \biss_master_axil.ch0.core.counters.count_slo_stuck_low (rst, clear, inc,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_spw_mismatch (rst, clear, inc, count, clk);
+module \biss_master_axil.ch0.core.counters.count_slo_stuck_low (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$48  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8866,9 +8714,63 @@ module \biss_master_axil.ch0.core.counters.count_spw_mismatch (rst, clear, inc, 
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.decoder (rst, word_count, \bit , lc_load, words, receiver_clear, sample, done, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1, lc, cpw_top, crc_ok
-, clk);
+module \biss_master_axil.ch0.core.counters.count_spw_mismatch (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$49  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, sample, \bit , receiver_clear, done, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1, lc, cpw_top, crc_ok
+, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$50  = 0;
   wire [6:0] \$1 ;
   wire [1:0] \$10 ;
   reg [2:0] \$100 ;
@@ -9251,7 +9153,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, \bit , lc_load, word
     .valid(\valid$52 )
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     (* full_case = 32'd1 *)
     casez (words[6])
       1'h0:
@@ -9261,7 +9163,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, \bit , lc_load, word
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -9275,7 +9177,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, \bit , lc_load, word
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     (* full_case = 32'd1 *)
     casez (words[9:6])
       4'h0:
@@ -9313,7 +9215,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, \bit , lc_load, word
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -9327,7 +9229,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, \bit , lc_load, word
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     (* full_case = 32'd1 *)
     casez (words[16])
       1'h0:
@@ -9337,7 +9239,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, \bit , lc_load, word
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     (* full_case = 32'd1 *)
     casez (words[17:16])
       2'h0:
@@ -9351,7 +9253,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, \bit , lc_load, word
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:16])
       4'h0:
@@ -9389,7 +9291,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, \bit , lc_load, word
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     (* full_case = 32'd1 *)
     casez (words[17:16])
       2'h0:
@@ -9403,7 +9305,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, \bit , lc_load, word
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$94  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -9427,7 +9329,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$95  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -9449,7 +9351,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$96  = slots;
     if (\$34 ) begin
       \$96  = \$35 [15:0];
@@ -9462,7 +9364,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$97  = slots_full;
     if (\$34 ) begin
       \$97  = \$36 ;
@@ -9475,7 +9377,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$98  = started;
     casez (decoder_fsm_state)
       3'h0:
@@ -9491,7 +9393,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$99  = start_slot;
     casez (decoder_fsm_state)
       3'h0:
@@ -9507,7 +9409,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$100  = decoder_fsm_state;
     casez (decoder_fsm_state)
       3'h0:
@@ -9539,7 +9441,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$101  = cds;
     casez (decoder_fsm_state)
       3'h0:
@@ -9557,7 +9459,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$102  = idx;
     casez (decoder_fsm_state)
       3'h0:
@@ -9582,7 +9484,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$103  = in_data;
     casez (decoder_fsm_state)
       3'h0:
@@ -9607,7 +9509,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$104  = in_lc;
     casez (decoder_fsm_state)
       3'h0:
@@ -9632,7 +9534,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$105  = in_top;
     casez (decoder_fsm_state)
       3'h0:
@@ -9657,7 +9559,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$106  = word;
     casez (decoder_fsm_state)
       3'h0:
@@ -9685,7 +9587,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$107  = stop_bit;
     casez (decoder_fsm_state)
       3'h0:
@@ -9707,7 +9609,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$108  = data0;
     if (\$58 ) begin
       \$108  = { data0[53:0], \bit  };
@@ -9720,7 +9622,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$109  = ne;
     if (\$59 ) begin
       \$109 [0] = 1'h1;
@@ -9740,7 +9642,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$110  = nw;
     if (\$59 ) begin
       \$110 [0] = 1'h1;
@@ -9762,7 +9664,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$111  = data1;
     if (\$70 ) begin
       \$111  = { data1[38:0], \bit  };
@@ -9775,7 +9677,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$112  = lc;
     if (lc_load) begin
       \$112  = { lc[4:0], \bit  };
@@ -9788,7 +9690,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$113  = cpw_top;
     if (\$80 ) begin
       \$113  = { cpw_top[38:0], \bit  };
@@ -9801,7 +9703,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     in_word = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -9837,8 +9739,8 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, \bit , lc_load, word
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.decoder.crc0 (rst, \bit , start, valid, kind, receiver_clear, ok, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$50  = 0;
+module \biss_master_axil.ch0.core.decoder.crc0 (rst, start, valid, kind, \bit , receiver_clear, ok, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
   wire [5:0] \$1 ;
   wire \$10 ;
   wire [5:0] \$11 ;
@@ -9932,7 +9834,7 @@ module \biss_master_axil.ch0.core.decoder.crc0 (rst, \bit , start, valid, kind, 
   assign \$auto$rtlil.cc:2739:Not$22  = ~ { crc6_reg[0], 1'h0 };
   assign \$auto$rtlil.cc:2739:Not$24  = ~ { crc16_reg[14], crc16_reg[11], crc16_reg[6:5], crc16_reg[3:2], 1'h0 };
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$31  = crc6_reg;
     if (valid) begin
       \$31  = \$5 ;
@@ -9947,7 +9849,7 @@ module \biss_master_axil.ch0.core.decoder.crc0 (rst, \bit , start, valid, kind, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$32  = crc6_match;
     if (valid) begin
       \$32  = \$15 ;
@@ -9962,7 +9864,7 @@ module \biss_master_axil.ch0.core.decoder.crc0 (rst, \bit , start, valid, kind, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$33  = crc16_reg;
     if (valid) begin
       \$33  = \$20 ;
@@ -9977,7 +9879,7 @@ module \biss_master_axil.ch0.core.decoder.crc0 (rst, \bit , start, valid, kind, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$34  = crc16_match;
     if (valid) begin
       \$34  = \$30 ;
@@ -9992,7 +9894,7 @@ module \biss_master_axil.ch0.core.decoder.crc0 (rst, \bit , start, valid, kind, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     ok = 1'h0;
     casez (kind)
       2'h0:
@@ -10012,8 +9914,8 @@ module \biss_master_axil.ch0.core.decoder.crc0 (rst, \bit , start, valid, kind, 
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.decoder.crc1 (rst, \bit , start, valid, kind, receiver_clear, ok, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
+module \biss_master_axil.ch0.core.decoder.crc1 (rst, start, valid, kind, \bit , receiver_clear, ok, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$52  = 0;
   wire [5:0] \$1 ;
   wire \$10 ;
   wire [5:0] \$11 ;
@@ -10107,7 +10009,7 @@ module \biss_master_axil.ch0.core.decoder.crc1 (rst, \bit , start, valid, kind, 
   assign \$auto$rtlil.cc:2739:Not$18  = ~ { crc6_reg[0], 1'h0 };
   assign \$auto$rtlil.cc:2739:Not$20  = ~ { crc16_reg[14], crc16_reg[11], crc16_reg[6:5], crc16_reg[3:2], 1'h0 };
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
     \$31  = crc6_reg;
     if (valid) begin
       \$31  = \$5 ;
@@ -10122,7 +10024,7 @@ module \biss_master_axil.ch0.core.decoder.crc1 (rst, \bit , start, valid, kind, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
     \$32  = crc6_match;
     if (valid) begin
       \$32  = \$15 ;
@@ -10137,7 +10039,7 @@ module \biss_master_axil.ch0.core.decoder.crc1 (rst, \bit , start, valid, kind, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
     \$33  = crc16_reg;
     if (valid) begin
       \$33  = \$20 ;
@@ -10152,7 +10054,7 @@ module \biss_master_axil.ch0.core.decoder.crc1 (rst, \bit , start, valid, kind, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
     \$34  = crc16_match;
     if (valid) begin
       \$34  = \$30 ;
@@ -10167,7 +10069,7 @@ module \biss_master_axil.ch0.core.decoder.crc1 (rst, \bit , start, valid, kind, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
     ok = 1'h0;
     casez (kind)
       2'h0:
@@ -10188,7 +10090,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, hold, first_rise, second_rise, ma, rises, busy, held, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$52  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$53  = 0;
   wire [16:0] \$1 ;
   wire \$10 ;
   wire [16:0] \$11 ;
@@ -10313,7 +10215,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
   always @(posedge clk)
     released <= \$42 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$34  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -10328,7 +10230,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$35  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -10343,7 +10245,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$36  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -10358,7 +10260,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$37  = ma;
     casez (ma_fsm_state)
       3'h0:
@@ -10387,7 +10289,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$38  = phase_left;
     casez (ma_fsm_state)
       3'h0:
@@ -10429,7 +10331,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$39  = last_clock;
     casez (ma_fsm_state)
       3'h0:
@@ -10471,7 +10373,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$40  = rises;
     casez (ma_fsm_state)
       3'h0:
@@ -10490,7 +10392,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$41  = ma_fsm_state;
     casez (ma_fsm_state)
       3'h0:
@@ -10526,7 +10428,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$42  = released;
     casez (ma_fsm_state)
       3'h0:
@@ -10550,7 +10452,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     busy = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -10566,7 +10468,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     held = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -10583,7 +10485,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.ma_stop (rst, words, w1_enable, clear, rises, enough, \started$10 , start_slot, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$53  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$54  = 0;
   reg [7:0] \$1 ;
   reg [7:0] \$10 ;
   wire [8:0] \$11 ;
@@ -10664,7 +10566,7 @@ module \biss_master_axil.ch0.core.ma_stop (rst, words, w1_enable, clear, rises, 
   always @(posedge clk)
     word1_len <= \$17 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     (* full_case = 32'd1 *)
     casez (words[9:6])
       4'h0:
@@ -10702,7 +10604,7 @@ module \biss_master_axil.ch0.core.ma_stop (rst, words, w1_enable, clear, rises, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:16])
       4'h0:
@@ -10740,42 +10642,42 @@ module \biss_master_axil.ch0.core.ma_stop (rst, words, w1_enable, clear, rises, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$12  = \$2 [7:0];
     if (rst) begin
       \$12  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$13  = \$4 ;
     if (rst) begin
       \$13  = 9'h000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$14  = \$5 ;
     if (rst) begin
       \$14  = 17'h00000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$15  = \started$10 ;
     if (rst) begin
       \$15  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$16  = \$9 ;
     if (rst) begin
       \$16  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$17  = \$11 [7:0];
     if (rst) begin
       \$17  = 8'h00;
@@ -11087,7 +10989,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.register_access.buffers (clk, rst, host_read__en, byte_to_send, rbuf_data, wbuf, index, store, byte_received, host_read__addr);
-  reg \$auto$verilog_backend.cc:2355:dump_module$54  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$55  = 0;
   wire \$1 ;
   wire \$2 ;
   wire \$3 ;
@@ -11204,21 +11106,21 @@ module \biss_master_axil.ch0.core.register_access.buffers (clk, rst, host_read__
   assign \$1  = ! index[1:0];
   assign \$2  = index[1:0] == 1'h1;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     byte_received__addr = 4'h0;
     if (store) begin
       byte_received__addr = index[5:2];
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     byte_received__data = 32'd0;
     if (store) begin
       byte_received__data = { byte_received, byte_received, byte_received, byte_received };
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     byte_received__en = 4'h0;
     if (store) begin
       byte_received__en = { \$4 , \$3 , \$2 , \$1  };
@@ -11238,7 +11140,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.register_access.checker (rst, crc_ok, echo_ok, cds, control__take_data, start, control__take_crc, sent, \byte , clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$55  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$56  = 0;
   reg [7:0] \$1 ;
   reg [2:0] \$2 ;
   output [7:0] \byte ;
@@ -11281,7 +11183,7 @@ module \biss_master_axil.ch0.core.register_access.checker (rst, crc_ok, echo_ok,
     .valid(control__take_data)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
     \$1  = \byte ;
     if (control__take_data) begin
       \$1  = { \byte [6:0], cds };
@@ -11291,7 +11193,7 @@ module \biss_master_axil.ch0.core.register_access.checker (rst, crc_ok, echo_ok,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
     \$2  = got_crc;
     if (control__take_crc) begin
       \$2  = { got_crc[1:0], cds };
@@ -11307,7 +11209,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.register_access.checker.rx_crc (rst, crc, data_in, valid, start, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$56  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$57  = 0;
   wire [3:0] \$1 ;
   wire \$10 ;
   wire [3:0] \$11 ;
@@ -11350,7 +11252,7 @@ module \biss_master_axil.ch0.core.register_access.checker.rx_crc (rst, crc, data
     crc_reg <= \$13 ;
   assign \$auto$rtlil.cc:2739:Not$14  = ~ crc_reg;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$13  = crc_reg;
     if (valid) begin
       \$13 [0] = \$3 ;
@@ -11374,7 +11276,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.register_access.idle (rst, frame_end, frame_ok, run_enough, seen_enough, frame_cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$57  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$58  = 0;
   wire \$1 ;
   wire [4:0] \$10 ;
   wire \$11 ;
@@ -11444,7 +11346,7 @@ module \biss_master_axil.ch0.core.register_access.idle (rst, frame_end, frame_ok
   always @(posedge clk)
     idle_seen <= \$24 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     \$23  = idle_run;
     if (frame_end) begin
       \$23  = \$4 [3:0];
@@ -11454,7 +11356,7 @@ module \biss_master_axil.ch0.core.register_access.idle (rst, frame_end, frame_ok
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     \$24  = idle_seen;
     if (frame_end) begin
       \$24  = \$10 [3:0];
@@ -11467,7 +11369,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.register_access.sender (rst, \byte , request, control__load_header, control__source, control__crc_bit, control__shift_header, start, valid, control__load_byte, control__shift_byte, sent, cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$58  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$59  = 0;
   wire \$1 ;
   wire [18:0] \$2 ;
   wire [8:0] \$3 ;
@@ -11539,7 +11441,7 @@ module \biss_master_axil.ch0.core.register_access.sender (rst, \byte , request, 
     .valid(valid)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     \$6  = header;
     if (control__load_header) begin
       \$6  = { 2'h3, request[2:0], request[9:3], 4'h0, \$1 , request[17] };
@@ -11552,7 +11454,7 @@ module \biss_master_axil.ch0.core.register_access.sender (rst, \byte , request, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     \$7  = to_send;
     if (control__load_byte) begin
       \$7  = \byte ;
@@ -11565,7 +11467,7 @@ module \biss_master_axil.ch0.core.register_access.sender (rst, \byte , request, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     \$8  = sent;
     if (control__load_byte) begin
       \$8  = \byte ;
@@ -11575,7 +11477,7 @@ module \biss_master_axil.ch0.core.register_access.sender (rst, \byte , request, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     cdm = 1'h0;
     casez (control__source)
       3'h1:
@@ -11600,7 +11502,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.register_access.sender.tx_crc (rst, data_in, crc, start, valid, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$59  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$60  = 0;
   wire [3:0] \$1 ;
   wire \$10 ;
   wire [3:0] \$11 ;
@@ -11643,7 +11545,7 @@ module \biss_master_axil.ch0.core.register_access.sender.tx_crc (rst, data_in, c
     crc_reg <= \$13 ;
   assign \$auto$rtlil.cc:2739:Not$16  = ~ crc_reg;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
     \$13  = crc_reg;
     if (valid) begin
       \$13 [0] = \$3 ;
@@ -11668,7 +11570,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, frame_ok, busy, crc_ok, echo_ok, run_enough, seen_enough, start, abort, request, frame_cdm, frame_cds, done, result, index, send__load_header, send__source, send__crc_bit, send__shift_header, send__crc_start
 , send__crc_valid, send__load_byte, send__shift_byte, check__take_data, check__first, check__take_crc, store, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$60  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$61  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$100 ;
@@ -12024,7 +11926,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
   always @(posedge clk)
     waited <= \$125 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
     \$118  = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -12062,7 +11964,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
     \$119  = result;
     casez (access_fsm_state)
       3'h0:
@@ -12116,7 +12018,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
     \$120  = access_fsm_state;
     casez (access_fsm_state)
       3'h0:
@@ -12213,7 +12115,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
     \$121  = req;
     casez (access_fsm_state)
       3'h0:
@@ -12230,7 +12132,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
     \$122  = index;
     casez (access_fsm_state)
       3'h0:
@@ -12269,7 +12171,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
     \$123  = step;
     casez (access_fsm_state)
       3'h0:
@@ -12327,7 +12229,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
     \$124  = ending;
     casez (access_fsm_state)
       3'h0:
@@ -12394,7 +12296,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
     \$125  = waited;
     casez (access_fsm_state)
       3'h0:
@@ -12426,7 +12328,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
     send__load_header = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -12440,7 +12342,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
     send__source = 3'h0;
     casez (access_fsm_state)
       3'h0:
@@ -12467,7 +12369,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
     send__crc_bit = 2'h0;
     casez (access_fsm_state)
       3'h0:
@@ -12487,7 +12389,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
     send__shift_header = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -12506,7 +12408,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
     send__crc_start = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -12535,7 +12437,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
     send__crc_valid = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -12556,7 +12458,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
     send__load_byte = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -12578,7 +12480,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
     send__shift_byte = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -12599,7 +12501,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
     check__take_data = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -12621,7 +12523,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
     check__first = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -12643,7 +12545,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
     check__take_crc = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -12667,7 +12569,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
     store = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -12706,7 +12608,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.results (rst, report, valid, frame, report_frame, report_delay, done, valid_out, result, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$61  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$62  = 0;
   reg \$1 ;
   reg \$2 ;
   reg [160:0] \$3 ;
@@ -12803,21 +12705,21 @@ module \biss_master_axil.ch0.core.results (rst, report, valid, frame, report_fra
   always @(posedge clk)
     result <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
     \$1  = report;
     if (rst) begin
       \$1  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
     \$2  = valid;
     if (rst) begin
       \$2  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
     \$3  = result;
     if (report) begin
       \$3 [3:0] = frame[3:0];
@@ -12882,7 +12784,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receiver_clear, arm, early, locked, delay, sample, level, slo);
-  reg \$auto$verilog_backend.cc:2355:dump_module$62  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$63  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -13120,7 +13022,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     .stage1(level)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
     \$63  = level;
     if (receiver_clear) begin
       \$63  = 1'h1;
@@ -13130,7 +13032,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
     \$64  = mid_delay;
     if (odd) begin
       \$64  = \$8 [12:0];
@@ -13155,7 +13057,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
     \$65  = mid_slot;
     (* full_case = 32'd1 *)
     if (odd) begin
@@ -13182,7 +13084,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
     \$66  = \$10 ;
     casez (sampler_fsm_state)
       2'h0:
@@ -13204,7 +13106,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
     \$67  = elapsed;
     casez (sampler_fsm_state)
       2'h0:
@@ -13228,7 +13130,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
     \$68  = early;
     casez (sampler_fsm_state)
       2'h0:
@@ -13244,7 +13146,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
     \$69  = locked;
     casez (sampler_fsm_state)
       2'h0:
@@ -13270,7 +13172,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
     \$70  = gap;
     casez (sampler_fsm_state)
       2'h0:
@@ -13301,7 +13203,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
     \$71  = sampler_fsm_state;
     casez (sampler_fsm_state)
       2'h0:
@@ -13332,7 +13234,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
     \$72  = slot_left;
     casez (sampler_fsm_state)
       2'h0:
@@ -13382,7 +13284,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
     \$73  = slot_zero;
     casez (sampler_fsm_state)
       2'h0:
@@ -13432,7 +13334,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
     \$74  = vote1;
     casez (sampler_fsm_state)
       2'h0:
@@ -13462,7 +13364,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
     \$75  = vote2;
     casez (sampler_fsm_state)
       2'h0:
@@ -13490,7 +13392,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
     \$76  = first_slot;
     casez (sampler_fsm_state)
       2'h0:
@@ -13516,7 +13418,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
     \$77  = delay;
     casez (sampler_fsm_state)
       2'h0:
@@ -13539,7 +13441,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
     \$78  = phase;
     casez (sampler_fsm_state)
       2'h0:
@@ -13579,7 +13481,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
     sample = \$44 ;
     casez (sampler_fsm_state)
       2'h0:
@@ -13597,7 +13499,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
     decided = 1'h0;
     casez (sampler_fsm_state)
       2'h0:
@@ -13647,7 +13549,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.scheduler (rst, trigger, periodic, request, overrun, start, abort, period, idle, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$63  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$64  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -13731,7 +13633,7 @@ module \biss_master_axil.ch0.core.scheduler (rst, trigger, periodic, request, ov
   always @(posedge clk)
     period_start <= \$28 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$27  = 24'h000001;
@@ -13743,7 +13645,7 @@ module \biss_master_axil.ch0.core.scheduler (rst, trigger, periodic, request, ov
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$28  = 1'h1;
@@ -13757,8 +13659,8 @@ module \biss_master_axil.ch0.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.sign_of_life (rst, \port$1213$0 , load, \repeat , skip, check, resync, lc, is_zero, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$64  = 0;
+module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$3724$0 , resync, lc, is_zero, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$65  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -13795,8 +13697,8 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, \port$1213$0 , load, \repea
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$1213$0 ;
-  wire \port$1213$0 ;
+  input \port$3724$0 ;
+  wire \port$3724$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -13808,9 +13710,9 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, \port$1213$0 , load, \repea
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$1213$0  };
-  assign \$2  = { lc[4:0], \port$1213$0  } == last;
-  assign \$3  = { lc[4:0], \port$1213$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$3724$0  };
+  assign \$2  = { lc[4:0], \port$3724$0  } == last;
+  assign \$3  = { lc[4:0], \port$3724$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = lc == 6'h3f;
@@ -13838,7 +13740,7 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, \port$1213$0 , load, \repea
   always @(posedge clk)
     synced <= \$21 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     \$16  = is_zero;
     if (load) begin
       \$16  = \$1 ;
@@ -13848,7 +13750,7 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, \port$1213$0 , load, \repea
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     \$17  = is_last;
     if (load) begin
       \$17  = \$2 ;
@@ -13858,7 +13760,7 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, \port$1213$0 , load, \repea
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     \$18  = is_expected;
     if (load) begin
       \$18  = \$3 ;
@@ -13868,7 +13770,7 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, \port$1213$0 , load, \repea
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     \$19  = last;
     if (\$5 ) begin
       \$19  = lc;
@@ -13878,7 +13780,7 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, \port$1213$0 , load, \repea
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     \$20  = expected;
     if (\$5 ) begin
       \$20  = \$8 [5:0];
@@ -13888,7 +13790,7 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, \port$1213$0 , load, \repea
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     \$21  = synced;
     if (\$5 ) begin
       \$21  = 1'h1;
@@ -13900,13 +13802,13 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, \port$1213$0 , load, \repea
       \$21  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$1213$0  };
+  assign lc_next = { lc[4:0], \port$3724$0  };
   assign zero = is_zero;
 endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.spw_check (rst, bits, \tolerance$8 , spw, cpw_top, match, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$65  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$66  = 0;
   wire [40:0] \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -14111,28 +14013,28 @@ module \biss_master_axil.ch0.core.spw_check (rst, bits, \tolerance$8 , spw, cpw_
   assign \$7  = bits > 3'h5;
   assign \$8  = bits > 3'h6;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$88  = \$42 ;
     if (rst) begin
       \$88  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$89  = \$84 ;
     if (rst) begin
       \$89  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$90  = \tolerance$8 ;
     if (rst) begin
       \$90  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$91  = \$87 ;
     if (rst) begin
       \$91  = 1'h0;
@@ -14142,7 +14044,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.time_base (rst, first_rise, first_rise_time, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$66  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$67  = 0;
   wire [32:0] \$1 ;
   reg [31:0] \$2 ;
   reg [31:0] \$3 ;
@@ -14161,14 +14063,14 @@ module \biss_master_axil.ch0.core.time_base (rst, first_rise, first_rise_time, c
   always @(posedge clk)
     first_rise_time <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
     \$2  = \$1 [31:0];
     if (rst) begin
       \$2  = 32'd0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
     \$3  = first_rise_time;
     if (first_rise) begin
       \$3  = now;
@@ -14181,7 +14083,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.timers (rst, restart, ma_busy, break_time, timeout_live, ack_limit, timeout_limit, delay_limit, no_start_limit, clear, in_clock, slo_stuck, slo_stuck_live, break_over, ack_expired, no_start_expired, delay_over, delay, slo, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$67  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$68  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -14319,7 +14221,7 @@ module \biss_master_axil.ch0.core.timers (rst, restart, ma_busy, break_time, tim
   always @(posedge clk)
     delay_over <= \$43 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     \$36  = slo_low_time_p1;
     if (\$1 ) begin
       \$36  = 25'h0000001;
@@ -14331,49 +14233,49 @@ module \biss_master_axil.ch0.core.timers (rst, restart, ma_busy, break_time, tim
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     \$37  = \$8 ;
     if (rst) begin
       \$37  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     \$38  = \$16 ;
     if (rst) begin
       \$38  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     \$39  = \$20 [24:0];
     if (rst) begin
       \$39  = 25'h0000001;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     \$40  = \$26 ;
     if (rst) begin
       \$40  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     \$41  = \$30 ;
     if (rst) begin
       \$41  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     \$42  = \$34 ;
     if (rst) begin
       \$42  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     \$43  = \$35 ;
     if (rst) begin
       \$43  = 1'h0;
@@ -14382,8 +14284,8 @@ module \biss_master_axil.ch0.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.verdict (lc_skip_seen, \port$1613$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
-  reg \$auto$verilog_backend.cc:2355:dump_module$68  = 0;
+module \biss_master_axil.ch0.core.verdict (lc_skip_seen, \port$1601$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
+  reg \$auto$verilog_backend.cc:2355:dump_module$69  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -14496,8 +14398,8 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, \port$1613$0 , lc_check
   wire lc_zero;
   input lc_zero_seen;
   wire lc_zero_seen;
-  output \port$1613$0 ;
-  wire \port$1613$0 ;
+  output \port$1601$0 ;
+  wire \port$1601$0 ;
   output report;
   wire report;
   input report_frame;
@@ -14565,7 +14467,7 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, \port$1613$0 , lc_check
   assign \$29  = ~ { \$2 , crc_ok[0] };
   assign crc_error = report_frame ? \$29  : 2'h0;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     (* full_case = 32'd1 *)
     if (\$13 ) begin
       frame_status = 4'h3;
@@ -14582,7 +14484,7 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, \port$1613$0 , lc_check
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$1613$0  = \$2 ;
+  assign \port$1601$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -14608,8 +14510,8 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__ca_busy, regs__ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period
 , cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort
-, regs__done_count, ma, regs__done, \port$4428$0 , \port$4435$0 , regs__ca_done, \port$4549$0 , ca_rbuf_addr);
-  reg \$auto$verilog_backend.cc:2355:dump_module$69  = 0;
+, regs__done_count, ma, regs__done, \port$4436$0 , \port$4443$0 , regs__ca_done, \port$4557$0 , ca_rbuf_addr);
+  reg \$auto$verilog_backend.cc:2355:dump_module$70  = 0;
   wire \$1 ;
   wire [16:0] \$2 ;
   reg [15:0] \$3 ;
@@ -14733,12 +14635,12 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_
   wire \ma$164 ;
   input periodic;
   wire periodic;
-  output [160:0] \port$4428$0 ;
-  wire [160:0] \port$4428$0 ;
-  output [287:0] \port$4435$0 ;
-  wire [287:0] \port$4435$0 ;
-  output [9:0] \port$4549$0 ;
-  wire [9:0] \port$4549$0 ;
+  output [160:0] \port$4436$0 ;
+  wire [160:0] \port$4436$0 ;
+  output [287:0] \port$4443$0 ;
+  wire [287:0] \port$4443$0 ;
+  output [9:0] \port$4557$0 ;
+  wire [9:0] \port$4557$0 ;
   wire regs__abort_cycle;
   output regs__busy;
   wire regs__busy;
@@ -14885,8 +14787,8 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_
   assign trigger = \trigger$161  & regs__trigger_enable;
   \biss_master_axil.ch1.core  core (
     .abort(abort_cycle),
-    .\abort$187 (ca_abort),
-    .\busy$237 (regs__busy),
+    .\abort$183 (ca_abort),
+    .\busy$233 (regs__busy),
     .ca_address(ca_address),
     .ca_count(ca_count),
     .ca_done(regs__ca_done),
@@ -14914,27 +14816,27 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_
     .cfg_w1_enable(cfg_w1_enable),
     .cfg_w1_lc(cfg_w1_lc),
     .cfg_w1_nenw(cfg_w1_nenw),
-    .\clear$214 (clear_counters),
+    .\clear$210 (clear_counters),
     .clk(clk),
     .config_error(regs__config_error),
     .counts(\$5 ),
-    .\done$240 (regs__done),
+    .\done$236 (regs__done),
     .frames(regs__ca_busy),
     .ma(ma),
     .\periodic$24 (periodic),
     .rbuf_addr(ca_rbuf_addr),
     .rbuf_en(ca_rbuf_en),
     .result(\$6 ),
-    .\result$245 (\$4 ),
+    .\result$241 (\$4 ),
     .rst(rst),
     .slo(slo),
     .start(start),
-    .\start$185 (ca_start),
+    .\start$181 (ca_start),
     .trigger(trigger),
-    .\valid$242 (valid)
+    .\valid$238 (valid)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     \$3  = regs__done_count;
     if (regs__done) begin
       \$3  = \$2 [15:0];
@@ -15064,19 +14966,22 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_
   assign regs__ca_rbuf_en = ca_rbuf_en;
   assign \ma$164  = ma;
   assign \slo$166  = slo;
-  assign \port$4428$0  = \$4 ;
-  assign \port$4435$0  = \$5 ;
-  assign \port$4549$0  = \$6 ;
+  assign \port$4436$0  = \$4 ;
+  assign \port$4443$0  = \$5 ;
+  assign \port$4557$0  = \$6 ;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy$237 , config_error, frames, ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, abort, \clear$214 , \periodic$24 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit
-, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, \start$185 , \abort$187 , ma, \done$240 
-, \valid$242 , \result$245 , counts, ca_done, result, rbuf_addr);
+module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy$233 , config_error, frames, ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, abort, \clear$210 , \periodic$24 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit
+, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, \start$181 , \abort$183 , ma, \done$236 
+, \valid$238 , \result$241 , counts, ca_done, result, rbuf_addr);
+  reg \$auto$verilog_backend.cc:2355:dump_module$71  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
-  wire \$12 ;
+  reg \$12 ;
+  reg \$13 ;
+  wire \$14 ;
   wire \$2 ;
   wire \$3 ;
   wire \$4 ;
@@ -15087,8 +14992,8 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire \$9 ;
   input abort;
   wire abort;
-  input \abort$187 ;
-  wire \abort$187 ;
+  input \abort$183 ;
+  wire \abort$183 ;
   wire \abort$36 ;
   wire abort_cycle;
   wire ack_expired;
@@ -15096,16 +15001,16 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire [23:0] ack_limit;
   wire [23:0] \ack_limit$89 ;
   wire arm;
-  wire \bit ;
-  wire \bit$113 ;
+  reg \bit  = 1'h0;
+  wire \bit$263 ;
   wire [5:0] bits;
   wire break_over;
   wire \break_over$66 ;
   wire [23:0] break_time;
   wire busy;
-  wire \busy$196 ;
-  output \busy$237 ;
-  wire \busy$237 ;
+  wire \busy$192 ;
+  output \busy$233 ;
+  wire \busy$233 ;
   wire ca_abort;
   input [6:0] ca_address;
   wire [6:0] ca_address;
@@ -15140,10 +15045,10 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   input ca_write;
   wire ca_write;
   wire cdm;
-  wire \cdm$200 ;
+  wire \cdm$196 ;
   wire cdm_cycle;
   wire cds;
-  wire \cds$248 ;
+  wire \cds$244 ;
   wire [154:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
@@ -15220,8 +15125,8 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire check;
   wire clear;
   wire \clear$106 ;
-  input \clear$214 ;
-  wire \clear$214 ;
+  input \clear$210 ;
+  wire \clear$210 ;
   wire clear_counters;
   input clk;
   wire clk;
@@ -15268,10 +15173,10 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire [15:0] \counts.slo_stuck_low ;
   wire [15:0] \counts.spw_mismatch ;
   wire [39:0] cpw_top;
-  wire [39:0] \cpw_top$130 ;
+  wire [39:0] \cpw_top$126 ;
   wire [1:0] crc_error;
   wire [1:0] crc_ok;
-  wire [1:0] \crc_ok$145 ;
+  wire [1:0] \crc_ok$141 ;
   wire [154:0] cycle;
   wire [23:0] \cycle.ack_limit ;
   wire [23:0] \cycle.break_time ;
@@ -15310,10 +15215,10 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire delay_over;
   wire \delay_over$76 ;
   wire done;
-  wire \done$198 ;
-  output \done$240 ;
-  wire \done$240 ;
-  wire \done$241 ;
+  wire \done$194 ;
+  output \done$236 ;
+  wire \done$236 ;
+  wire \done$237 ;
   wire doubtful;
   wire early;
   wire \early$52 ;
@@ -15339,7 +15244,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire \events.slo_stuck_low ;
   wire \events.spw_mismatch ;
   wire fault;
-  wire \fault$141 ;
+  wire \fault$137 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -15369,7 +15274,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
-  wire [3:0] \fault_status$143 ;
+  wire [3:0] \fault_status$139 ;
   wire [6:0] faults;
   wire \faults.aborted ;
   wire \faults.bad_config ;
@@ -15379,7 +15284,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire \faults.no_stop ;
   wire \faults.slo_stuck_low ;
   wire first_rise;
-  wire \first_rise$171 ;
+  wire \first_rise$167 ;
   wire [31:0] first_rise_time;
   wire [160:0] frame;
   wire \frame.cds ;
@@ -15433,20 +15338,20 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire in_clock;
   wire \in_clock$83 ;
   wire [5:0] lc;
-  wire [5:0] \lc$117 ;
-  wire [5:0] \lc$257 ;
+  wire [5:0] \lc$113 ;
+  wire [5:0] \lc$253 ;
   wire lc_check;
   wire lc_load;
   wire [5:0] lc_next;
-  wire [5:0] \lc_next$119 ;
+  wire [5:0] \lc_next$115 ;
   wire lc_repeat;
-  wire \lc_repeat$258 ;
+  wire \lc_repeat$254 ;
   wire lc_repeat_seen;
   wire lc_skip;
-  wire \lc_skip$259 ;
+  wire \lc_skip$255 ;
   wire lc_skip_seen;
   wire lc_zero;
-  wire \lc_zero$260 ;
+  wire \lc_zero$256 ;
   wire lc_zero_seen;
   wire level;
   wire [12:0] line_delay;
@@ -15484,7 +15389,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire \locked$50 ;
   output ma;
   wire ma;
-  wire \ma$236 ;
+  wire \ma$232 ;
   wire ma_arm;
   wire ma_busy;
   wire \ma_busy$78 ;
@@ -15501,7 +15406,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire [1:0] nw;
   wire ok;
   wire overrun;
-  wire \overrun$239 ;
+  wire \overrun$235 ;
   wire [23:0] period;
   wire periodic;
   input \periodic$24 ;
@@ -15514,32 +15419,32 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire receiver_clear;
   wire \repeat ;
   wire report;
-  wire \report$153 ;
+  wire \report$149 ;
   wire report_delay;
-  wire \report_delay$156 ;
+  wire \report_delay$152 ;
   wire report_frame;
-  wire \report_frame$139 ;
-  wire \report_frame$154 ;
+  wire \report_frame$135 ;
+  wire \report_frame$150 ;
   wire request;
-  wire [17:0] \request$173 ;
-  wire [6:0] \request$173.address ;
-  wire [6:0] \request$173.count ;
-  wire [2:0] \request$173.slave_id ;
-  wire \request$173.write ;
+  wire [17:0] \request$169 ;
+  wire [6:0] \request$169.address ;
+  wire [6:0] \request$169.count ;
+  wire [2:0] \request$169.slave_id ;
+  wire \request$169.write ;
   wire \request$35 ;
   wire restart;
   wire restart_timer;
   output [9:0] result;
   wire [9:0] result;
-  output [160:0] \result$245 ;
-  wire [160:0] \result$245 ;
-  wire \result$245.cds ;
-  wire [5:0] \result$245.lc ;
-  wire \result$245.lc_repeat ;
-  wire \result$245.lc_skip ;
-  wire \result$245.lc_zero ;
-  wire [12:0] \result$245.line_delay ;
-  wire \result$245.spw_mismatch ;
+  output [160:0] \result$241 ;
+  wire [160:0] \result$241 ;
+  wire \result$241.cds ;
+  wire [5:0] \result$241.lc ;
+  wire \result$241.lc_repeat ;
+  wire \result$241.lc_skip ;
+  wire \result$241.lc_zero ;
+  wire [12:0] \result$241.line_delay ;
+  wire \result$241.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -15554,18 +15459,18 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
-  wire [3:0] \result$245.status ;
-  wire [31:0] \result$245.timestamp ;
-  wire [57:0] \result$245.word0 ;
-  wire \result$245.word0.crc_ok ;
-  wire \result$245.word0.ne ;
-  wire \result$245.word0.nw ;
-  wire [54:0] \result$245.word0.position ;
-  wire [42:0] \result$245.word1 ;
-  wire \result$245.word1.crc_ok ;
-  wire \result$245.word1.ne ;
-  wire \result$245.word1.nw ;
-  wire [39:0] \result$245.word1.position ;
+  wire [3:0] \result$241.status ;
+  wire [31:0] \result$241.timestamp ;
+  wire [57:0] \result$241.word0 ;
+  wire \result$241.word0.crc_ok ;
+  wire \result$241.word0.ne ;
+  wire \result$241.word0.nw ;
+  wire [54:0] \result$241.word0.position ;
+  wire [42:0] \result$241.word1 ;
+  wire \result$241.word1.crc_ok ;
+  wire \result$241.word1.ne ;
+  wire \result$241.word1.nw ;
+  wire [39:0] \result$241.word1.position ;
   wire [6:0] \result.bytes_done ;
   (* enum_base_type = "AccessStatus" *)
   (* enum_value_000 = "OK" *)
@@ -15577,14 +15482,14 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* enum_value_110 = "BAD_REQUEST" *)
   wire [2:0] \result.status ;
   wire resync;
-  wire \resync$125 ;
+  wire \resync$121 ;
   wire [15:0] rises;
   wire [15:0] \rises$105 ;
   input rst;
   wire rst;
   wire run;
-  wire sample;
-  wire \sample$111 ;
+  reg sample = 1'h0;
+  wire \sample$261 ;
   wire second_rise;
   wire skip;
   input slo;
@@ -15601,11 +15506,11 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire [39:0] spw;
   wire spw_match;
   wire spw_mismatch;
-  wire \spw_mismatch$261 ;
+  wire \spw_mismatch$257 ;
   input start;
   wire start;
-  input \start$185 ;
-  wire \start$185 ;
+  input \start$181 ;
+  wire \start$181 ;
   wire \start$22 ;
   wire [15:0] start_slot;
   wire [15:0] \start_slot$103 ;
@@ -15641,7 +15546,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
-  wire [3:0] \status$244 ;
+  wire [3:0] \status$240 ;
   wire stop_bit;
   wire \stop_bit$62 ;
   wire stopped;
@@ -15656,9 +15561,9 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire trigger;
   wire \trigger$33 ;
   wire valid;
-  wire \valid$158 ;
-  output \valid$242 ;
-  wire \valid$242 ;
+  wire \valid$154 ;
+  output \valid$238 ;
+  wire \valid$238 ;
   wire valid_out;
   wire w1_enable;
   wire [39:0] wbuf;
@@ -15674,28 +15579,28 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire word1_nw;
   wire [39:0] word1_position;
   wire [1:0] word_count;
-  wire [1:0] \word_count$115 ;
+  wire [1:0] \word_count$111 ;
   wire [1:0] word_crc_ok;
   wire [19:0] words;
-  wire [19:0] \words$127 ;
-  wire [9:0] \words$127[0] ;
+  wire [19:0] \words$123 ;
+  wire [9:0] \words$123[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
-  wire [1:0] \words$127[0].crc ;
-  wire [5:0] \words$127[0].data_bits ;
-  wire \words$127[0].lc ;
-  wire \words$127[0].nenw ;
-  wire [9:0] \words$127[1] ;
+  wire [1:0] \words$123[0].crc ;
+  wire [5:0] \words$123[0].data_bits ;
+  wire \words$123[0].lc ;
+  wire \words$123[0].nenw ;
+  wire [9:0] \words$123[1] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
-  wire [1:0] \words$127[1].crc ;
-  wire [5:0] \words$127[1].data_bits ;
-  wire \words$127[1].lc ;
-  wire \words$127[1].nenw ;
+  wire [1:0] \words$123[1].crc ;
+  wire [5:0] \words$123[1].data_bits ;
+  wire \words$123[1].lc ;
+  wire \words$123[1].nenw ;
   wire [9:0] \words[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
@@ -15727,8 +15632,12 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign \$9  = ca_done & \$8 ;
   assign \$10  = result[2:0] == 3'h5;
   assign \$11  = ca_done & \$10 ;
-  assign \busy$237  = ~ idle;
+  assign \busy$233  = ~ idle;
   assign config_error = ~ config_ok;
+  always @(posedge clk)
+    sample <= \$12 ;
+  always @(posedge clk)
+    \bit  <= \$13 ;
   \biss_master_axil.ch1.core.config  \config  (
     .ack_limit(ack_limit),
     .clk(clk),
@@ -15785,7 +15694,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .timer_clear(clear)
   );
   \biss_master_axil.ch1.core.counters  counters (
-    .clear(\clear$214 ),
+    .clear(\clear$210 ),
     .clk(clk),
     .counts(counts),
     .events(events),
@@ -15838,10 +15747,10 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .start_slot(start_slot),
     .\started$10 (started),
     .w1_enable(cycle[135]),
-    .words(\words$127 )
+    .words(\words$123 )
   );
   \biss_master_axil.ch1.core.register_access  register_access (
-    .abort(\abort$187 ),
+    .abort(\abort$183 ),
     .busy(frames),
     .cdm(cdm),
     .clk(clk),
@@ -15853,27 +15762,27 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .rbuf_addr(rbuf_addr),
     .rbuf_data(ca_rbuf_data),
     .rbuf_en(rbuf_en),
-    .request(\request$173 ),
+    .request(\request$169 ),
     .result(result),
     .rst(rst),
-    .start(\start$185 ),
+    .start(\start$181 ),
     .wbuf(wbuf)
   );
   \biss_master_axil.ch1.core.results  results (
     .clk(clk),
-    .done(\done$240 ),
+    .done(\done$236 ),
     .frame(frame),
     .report(report),
     .report_delay(report_delay),
     .report_frame(report_frame),
-    .result(\result$245 ),
+    .result(\result$241 ),
     .rst(rst),
     .valid(valid),
-    .valid_out(\valid$242 )
+    .valid_out(\valid$238 )
   );
   \biss_master_axil.ch1.core.sampler  sampler (
     .arm(ma_arm),
-    .\bit (\bit ),
+    .\bit (\bit$263 ),
     .clk(clk),
     .delay(delay),
     .early(early),
@@ -15882,7 +15791,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .locked(locked),
     .receiver_clear(\clear$106 ),
     .rst(rst),
-    .sample(sample),
+    .sample(\sample$261 ),
     .slo(slo)
   );
   \biss_master_axil.ch1.core.scheduler  scheduler (
@@ -15903,7 +15812,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$2580$0 (\bit ),
+    .\port$4177$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -15960,7 +15869,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .lc_skip_seen(lc_skip_seen),
     .lc_zero(lc_zero),
     .lc_zero_seen(lc_zero_seen),
-    .\port$2980$0 (\$12 ),
+    .\port$2968$0 (\$14 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -15968,6 +15877,20 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .status(status),
     .valid(valid)
   );
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    \$12  = \sample$261 ;
+    if (rst) begin
+      \$12  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    \$13  = \bit$263 ;
+    if (rst) begin
+      \$13  = 1'h0;
+    end
+  end
   assign \idle$20  = idle;
   assign \start$22  = start;
   assign period = cfg_request_period;
@@ -16017,53 +15940,51 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign receiver_clear = \clear$106 ;
   assign \half_period$108  = cycle[15:0];
   assign arm = ma_arm;
-  assign \sample$111  = sample;
-  assign \bit$113  = \bit ;
-  assign \word_count$115  = word_count;
-  assign \lc$117  = lc;
+  assign \word_count$111  = word_count;
+  assign \lc$113  = lc;
   assign lc_next = { lc[4:0], \bit  };
-  assign \lc_next$119  = { lc[4:0], \bit  };
+  assign \lc_next$115  = { lc[4:0], \bit  };
   assign lc_load = load;
   assign lc_check = check;
-  assign \resync$125  = resync;
+  assign \resync$121  = resync;
   assign w1_enable = cycle[135];
-  assign \cpw_top$130  = cpw_top;
+  assign \cpw_top$126  = cpw_top;
   assign data1 = spw;
   assign bits = cycle[141:136];
   assign tolerance = cycle[154:147];
   assign match = spw_match;
   assign cfg = cycle;
-  assign \report_frame$139  = report_frame;
-  assign \fault$141  = fault;
-  assign \fault_status$143  = fault_status;
-  assign \crc_ok$145  = crc_ok;
+  assign \report_frame$135  = report_frame;
+  assign \fault$137  = fault;
+  assign \fault_status$139  = fault_status;
+  assign \crc_ok$141  = crc_ok;
   assign \repeat  = lc_repeat_seen;
   assign skip = lc_skip_seen;
   assign zero = lc_zero_seen;
-  assign \report$153  = report;
-  assign \report_frame$154  = report_frame;
-  assign \report_delay$156  = report_delay;
-  assign \valid$158  = valid;
-  assign word_crc_ok = { \$12 , crc_ok[0] };
-  assign \first_rise$171  = first_rise;
+  assign \report$149  = report;
+  assign \report_frame$150  = report_frame;
+  assign \report_delay$152  = report_delay;
+  assign \valid$154  = valid;
+  assign word_crc_ok = { \$14 , crc_ok[0] };
+  assign \first_rise$167  = first_rise;
   assign ca_status = result[2:0];
   assign ca_bytes_done = result[9:3];
-  assign ca_start = \start$185 ;
-  assign ca_abort = \abort$187 ;
+  assign ca_start = \start$181 ;
+  assign ca_abort = \abort$183 ;
   assign ca_rbuf_addr = rbuf_addr;
   assign ca_rbuf_en = rbuf_en;
   assign rbuf_data = ca_rbuf_data;
   assign ca_busy = frames;
-  assign \busy$196  = frames;
-  assign \done$198  = ca_done;
-  assign \cdm$200  = cdm;
+  assign \busy$192  = frames;
+  assign \done$194  = ca_done;
+  assign \cdm$196  = cdm;
   assign held = ma_held;
   assign ma_hold = hold;
   assign frame_end = report;
   assign frame_ok = valid;
   assign frame_cds = cds;
   assign cdm_cycle = frame_cdm;
-  assign clear_counters = \clear$214 ;
+  assign clear_counters = \clear$210 ;
   assign count_crc_word0 = counts[15:0];
   assign count_crc_word1 = counts[31:16];
   assign count_no_ack = counts[47:32];
@@ -16082,27 +16003,27 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign count_ca_refused = counts[255:240];
   assign count_ca_aborted = counts[271:256];
   assign count_ca_data_fault = counts[287:272];
-  assign \ma$236  = ma;
-  assign \overrun$239  = overrun;
-  assign \done$241  = \done$240 ;
-  assign valid_out = \valid$242 ;
-  assign \status$244  = \result$245 [3:0];
-  assign timestamp = \result$245 [35:4];
-  assign line_delay = \result$245 [48:36];
-  assign \cds$248  = \result$245 [49];
-  assign word0_position = \result$245 [104:50];
-  assign word0_ne = \result$245 [105];
-  assign word0_nw = \result$245 [106];
-  assign word0_crc_ok = \result$245 [107];
-  assign word1_position = \result$245 [147:108];
-  assign word1_ne = \result$245 [148];
-  assign word1_nw = \result$245 [149];
-  assign word1_crc_ok = \result$245 [150];
-  assign \lc$257  = \result$245 [156:151];
-  assign \lc_repeat$258  = \result$245 [157];
-  assign \lc_skip$259  = \result$245 [158];
-  assign \lc_zero$260  = \result$245 [159];
-  assign \spw_mismatch$261  = \result$245 [160];
+  assign \ma$232  = ma;
+  assign \overrun$235  = overrun;
+  assign \done$237  = \done$236 ;
+  assign valid_out = \valid$238 ;
+  assign \status$240  = \result$241 [3:0];
+  assign timestamp = \result$241 [35:4];
+  assign line_delay = \result$241 [48:36];
+  assign \cds$244  = \result$241 [49];
+  assign word0_position = \result$241 [104:50];
+  assign word0_ne = \result$241 [105];
+  assign word0_nw = \result$241 [106];
+  assign word0_crc_ok = \result$241 [107];
+  assign word1_position = \result$241 [147:108];
+  assign word1_ne = \result$241 [148];
+  assign word1_nw = \result$241 [149];
+  assign word1_crc_ok = \result$241 [150];
+  assign \lc$253  = \result$241 [156:151];
+  assign \lc_repeat$254  = \result$241 [157];
+  assign \lc_skip$255  = \result$241 [158];
+  assign \lc_zero$256  = \result$241 [159];
+  assign \spw_mismatch$257  = \result$241 [160];
   assign \live.ma_half_period  = live[15:0];
   assign \live.request_period  = live[39:16];
   assign \live.break_time  = live[63:40];
@@ -16153,16 +16074,16 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign \words[1].nenw  = words[16];
   assign \words[1].lc  = words[17];
   assign \words[1].crc  = words[19:18];
-  assign \words$127[0]  = \words$127 [9:0];
-  assign \words$127[0].data_bits  = \words$127 [5:0];
-  assign \words$127[0].nenw  = \words$127 [6];
-  assign \words$127[0].lc  = \words$127 [7];
-  assign \words$127[0].crc  = \words$127 [9:8];
-  assign \words$127[1]  = \words$127 [19:10];
-  assign \words$127[1].data_bits  = \words$127 [15:10];
-  assign \words$127[1].nenw  = \words$127 [16];
-  assign \words$127[1].lc  = \words$127 [17];
-  assign \words$127[1].crc  = \words$127 [19:18];
+  assign \words$123[0]  = \words$123 [9:0];
+  assign \words$123[0].data_bits  = \words$123 [5:0];
+  assign \words$123[0].nenw  = \words$123 [6];
+  assign \words$123[0].lc  = \words$123 [7];
+  assign \words$123[0].crc  = \words$123 [9:8];
+  assign \words$123[1]  = \words$123 [19:10];
+  assign \words$123[1].data_bits  = \words$123 [15:10];
+  assign \words$123[1].nenw  = \words$123 [16];
+  assign \words$123[1].lc  = \words$123 [17];
+  assign \words$123[1].crc  = \words$123 [19:18];
   assign \cfg.ma_half_period  = cycle[15:0];
   assign \cfg.request_period  = cycle[39:16];
   assign \cfg.break_time  = cycle[63:40];
@@ -16202,10 +16123,10 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign \frame.lc_skip  = frame[158];
   assign \frame.lc_zero  = frame[159];
   assign \frame.spw_mismatch  = frame[160];
-  assign \request$173.slave_id  = \request$173 [2:0];
-  assign \request$173.address  = \request$173 [9:3];
-  assign \request$173.count  = \request$173 [16:10];
-  assign \request$173.write  = \request$173 [17];
+  assign \request$169.slave_id  = \request$169 [2:0];
+  assign \request$169.address  = \request$169 [9:3];
+  assign \request$169.count  = \request$169 [16:10];
+  assign \request$169.write  = \request$169 [17];
   assign \wbuf.addr  = wbuf[3:0];
   assign \wbuf.data  = wbuf[35:4];
   assign \wbuf.en  = wbuf[39:36];
@@ -16254,25 +16175,25 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign \counts.ca_refused  = counts[255:240];
   assign \counts.ca_aborted  = counts[271:256];
   assign \counts.ca_data_fault  = counts[287:272];
-  assign \result$245.status  = \result$245 [3:0];
-  assign \result$245.timestamp  = \result$245 [35:4];
-  assign \result$245.line_delay  = \result$245 [48:36];
-  assign \result$245.cds  = \result$245 [49];
-  assign \result$245.word0  = \result$245 [107:50];
-  assign \result$245.word0.position  = \result$245 [104:50];
-  assign \result$245.word0.ne  = \result$245 [105];
-  assign \result$245.word0.nw  = \result$245 [106];
-  assign \result$245.word0.crc_ok  = \result$245 [107];
-  assign \result$245.word1  = \result$245 [150:108];
-  assign \result$245.word1.position  = \result$245 [147:108];
-  assign \result$245.word1.ne  = \result$245 [148];
-  assign \result$245.word1.nw  = \result$245 [149];
-  assign \result$245.word1.crc_ok  = \result$245 [150];
-  assign \result$245.lc  = \result$245 [156:151];
-  assign \result$245.lc_repeat  = \result$245 [157];
-  assign \result$245.lc_skip  = \result$245 [158];
-  assign \result$245.lc_zero  = \result$245 [159];
-  assign \result$245.spw_mismatch  = \result$245 [160];
+  assign \result$241.status  = \result$241 [3:0];
+  assign \result$241.timestamp  = \result$241 [35:4];
+  assign \result$241.line_delay  = \result$241 [48:36];
+  assign \result$241.cds  = \result$241 [49];
+  assign \result$241.word0  = \result$241 [107:50];
+  assign \result$241.word0.position  = \result$241 [104:50];
+  assign \result$241.word0.ne  = \result$241 [105];
+  assign \result$241.word0.nw  = \result$241 [106];
+  assign \result$241.word0.crc_ok  = \result$241 [107];
+  assign \result$241.word1  = \result$241 [150:108];
+  assign \result$241.word1.position  = \result$241 [147:108];
+  assign \result$241.word1.ne  = \result$241 [148];
+  assign \result$241.word1.nw  = \result$241 [149];
+  assign \result$241.word1.crc_ok  = \result$241 [150];
+  assign \result$241.lc  = \result$241 [156:151];
+  assign \result$241.lc_repeat  = \result$241 [157];
+  assign \result$241.lc_skip  = \result$241 [158];
+  assign \result$241.lc_zero  = \result$241 [159];
+  assign \result$241.spw_mismatch  = \result$241 [160];
   assign events[17] = \$11 ;
   assign events[16] = \$9 ;
   assign events[15] = \$7 ;
@@ -16294,13 +16215,13 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign wbuf[39:36] = ca_wbuf_en;
   assign wbuf[35:4] = ca_wbuf_data;
   assign wbuf[3:0] = ca_wbuf_addr;
-  assign \request$173 [17] = ca_write;
-  assign \request$173 [16:10] = ca_count;
-  assign \request$173 [9:3] = ca_address;
-  assign \request$173 [2:0] = ca_slave_id;
+  assign \request$169 [17] = ca_write;
+  assign \request$169 [16:10] = ca_count;
+  assign \request$169 [9:3] = ca_address;
+  assign \request$169 [2:0] = ca_slave_id;
   assign frame[35:4] = first_rise_time;
   assign frame[160] = spw_mismatch;
-  assign frame[150] = \$12 ;
+  assign frame[150] = \$14 ;
   assign frame[149] = nw[1];
   assign frame[148] = ne[1];
   assign frame[147:108] = spw;
@@ -16315,8 +16236,8 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign frame[49] = cds;
   assign frame[48:36] = delay;
   assign frame[3:0] = status;
-  assign \words$127 [19:10] = cycle[145:136];
-  assign \words$127 [9:0] = cycle[134:125];
+  assign \words$123 [19:10] = cycle[145:136];
+  assign \words$123 [9:0] = cycle[134:125];
   assign words[19:10] = cycle[145:136];
   assign words[9:0] = cycle[134:125];
   assign live[154:147] = cfg_spw_tolerance;
@@ -16341,7 +16262,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_limit, timeout_limit, delay_limit, no_start_limit, idle, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$70  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$72  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -16522,21 +16443,21 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   always @(posedge clk)
     delay_limit <= \$46 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     \$47  = \$41 ;
     if (rst) begin
       \$47  = 25'h0000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     \$42  = \$34 ;
     if (rst) begin
       \$42  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     \$43  = cycle;
     if (idle) begin
       \$43  = live;
@@ -16546,7 +16467,7 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     \$44  = ack_limit;
     if (idle) begin
       \$44  = \$36 ;
@@ -16556,7 +16477,7 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     \$45  = timeout_limit;
     if (idle) begin
       \$45  = \$38 ;
@@ -16566,7 +16487,7 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     \$46  = delay_limit;
     if (idle) begin
       \$46  = \$40 ;
@@ -16620,7 +16541,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, frame_doubtful, abort, config_ok, end_check, cdm_cycle, idle, receiver_clear, resync, timer_clear, fault, fault_status, faults, ma_run, in_clock, ma_hold, report_frame, report_delay, slo_stuck
 , slo_stuck_live, break_over, ack_expired, no_start_expired, delay_over, ma_arm, ma_busy, ma_held, ma_enough, early, locked, slo, frame_done, stopped, slots_full, started, stop_bit, cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$71  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$73  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -16909,7 +16830,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, frame
   assign \$12  = \$11  & ack_expired;
   assign \$13  = ~ locked_seen;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
     \$79  = cdm_cycle;
     if (idle) begin
       \$79  = cdm;
@@ -16919,14 +16840,14 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
     \$80  = idle;
     if (rst) begin
       \$80  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
     \$81  = cycle_fsm_state;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -17023,7 +16944,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
     \$82  = idle;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -17120,7 +17041,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
     \$83  = receiver_clear;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -17217,7 +17138,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
     \$84  = armed;
     casez (cycle_fsm_state)
       3'h0:
@@ -17236,7 +17157,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
     \$85  = locked_seen;
     casez (cycle_fsm_state)
       3'h0:
@@ -17255,7 +17176,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
     \$86  = pause;
     casez (cycle_fsm_state)
       3'h0:
@@ -17275,7 +17196,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
     resync = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -17283,7 +17204,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
     timer_clear = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -17330,7 +17251,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
     fault = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -17385,7 +17306,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
     fault_status = 4'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -17440,7 +17361,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
     faults = 7'h00;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -17495,7 +17416,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
     ma_run = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -17511,7 +17432,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
     in_clock = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -17525,7 +17446,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
     ma_hold = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -17548,7 +17469,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
     report_frame = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -17579,7 +17500,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
     report_delay = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -17944,114 +17865,6 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.counters.count_aborted (rst, clear, inc, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$72  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_ca_aborted (rst, clear, inc, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$73  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_ca_crc4_error (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$74  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -18105,7 +17918,7 @@ module \biss_master_axil.ch1.core.counters.count_ca_crc4_error (rst, clear, inc,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_ca_data_fault (rst, clear, inc, count, clk);
+module \biss_master_axil.ch1.core.counters.count_ca_aborted (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$75  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -18159,7 +17972,7 @@ module \biss_master_axil.ch1.core.counters.count_ca_data_fault (rst, clear, inc,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_ca_no_answer (rst, clear, inc, count, clk);
+module \biss_master_axil.ch1.core.counters.count_ca_crc4_error (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$76  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -18213,7 +18026,7 @@ module \biss_master_axil.ch1.core.counters.count_ca_no_answer (rst, clear, inc, 
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_ca_refused (rst, clear, inc, count, clk);
+module \biss_master_axil.ch1.core.counters.count_ca_data_fault (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$77  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -18267,7 +18080,7 @@ module \biss_master_axil.ch1.core.counters.count_ca_refused (rst, clear, inc, co
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_crc_word0 (rst, clear, inc, count, clk);
+module \biss_master_axil.ch1.core.counters.count_ca_no_answer (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$78  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -18321,7 +18134,7 @@ module \biss_master_axil.ch1.core.counters.count_crc_word0 (rst, clear, inc, cou
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_crc_word1 (rst, clear, inc, count, clk);
+module \biss_master_axil.ch1.core.counters.count_ca_refused (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$79  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -18375,7 +18188,7 @@ module \biss_master_axil.ch1.core.counters.count_crc_word1 (rst, clear, inc, cou
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_delay_range (rst, clear, inc, count, clk);
+module \biss_master_axil.ch1.core.counters.count_crc_word0 (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$80  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -18429,7 +18242,7 @@ module \biss_master_axil.ch1.core.counters.count_delay_range (rst, clear, inc, c
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_lc_repeat (rst, clear, inc, count, clk);
+module \biss_master_axil.ch1.core.counters.count_crc_word1 (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$81  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -18483,7 +18296,7 @@ module \biss_master_axil.ch1.core.counters.count_lc_repeat (rst, clear, inc, cou
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_lc_skip (rst, clear, inc, count, clk);
+module \biss_master_axil.ch1.core.counters.count_delay_range (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$82  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -18537,7 +18350,7 @@ module \biss_master_axil.ch1.core.counters.count_lc_skip (rst, clear, inc, count
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_lc_zero (rst, clear, inc, count, clk);
+module \biss_master_axil.ch1.core.counters.count_lc_repeat (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$83  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -18591,7 +18404,7 @@ module \biss_master_axil.ch1.core.counters.count_lc_zero (rst, clear, inc, count
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_no_ack (rst, clear, inc, count, clk);
+module \biss_master_axil.ch1.core.counters.count_lc_skip (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$84  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -18645,7 +18458,7 @@ module \biss_master_axil.ch1.core.counters.count_no_ack (rst, clear, inc, count,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_no_start (rst, clear, inc, count, clk);
+module \biss_master_axil.ch1.core.counters.count_lc_zero (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$85  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -18699,7 +18512,7 @@ module \biss_master_axil.ch1.core.counters.count_no_start (rst, clear, inc, coun
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_no_stop (rst, clear, inc, count, clk);
+module \biss_master_axil.ch1.core.counters.count_no_ack (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$86  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -18753,7 +18566,7 @@ module \biss_master_axil.ch1.core.counters.count_no_stop (rst, clear, inc, count
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_overrun (rst, clear, inc, count, clk);
+module \biss_master_axil.ch1.core.counters.count_no_start (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$87  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -18807,7 +18620,7 @@ module \biss_master_axil.ch1.core.counters.count_overrun (rst, clear, inc, count
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_slo_stuck_low (rst, clear, inc, count, clk);
+module \biss_master_axil.ch1.core.counters.count_no_stop (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$88  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -18861,7 +18674,7 @@ module \biss_master_axil.ch1.core.counters.count_slo_stuck_low (rst, clear, inc,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_spw_mismatch (rst, clear, inc, count, clk);
+module \biss_master_axil.ch1.core.counters.count_overrun (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$89  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -18915,9 +18728,117 @@ module \biss_master_axil.ch1.core.counters.count_spw_mismatch (rst, clear, inc, 
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.decoder (rst, word_count, \bit , lc_load, words, receiver_clear, sample, done, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1, lc, cpw_top, crc_ok
-, clk);
+module \biss_master_axil.ch1.core.counters.count_slo_stuck_low (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$90  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_axil.ch1.core.counters.count_spw_mismatch (rst, clear, inc, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$91  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, sample, \bit , receiver_clear, done, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1, lc, cpw_top, crc_ok
+, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$92  = 0;
   wire [6:0] \$1 ;
   wire [1:0] \$10 ;
   reg [2:0] \$100 ;
@@ -19300,7 +19221,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, \bit , lc_load, word
     .valid(\valid$52 )
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     (* full_case = 32'd1 *)
     casez (words[6])
       1'h0:
@@ -19310,7 +19231,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, \bit , lc_load, word
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -19324,7 +19245,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, \bit , lc_load, word
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     (* full_case = 32'd1 *)
     casez (words[9:6])
       4'h0:
@@ -19362,7 +19283,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, \bit , lc_load, word
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -19376,7 +19297,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, \bit , lc_load, word
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     (* full_case = 32'd1 *)
     casez (words[16])
       1'h0:
@@ -19386,7 +19307,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, \bit , lc_load, word
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     (* full_case = 32'd1 *)
     casez (words[17:16])
       2'h0:
@@ -19400,7 +19321,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, \bit , lc_load, word
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:16])
       4'h0:
@@ -19438,7 +19359,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, \bit , lc_load, word
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     (* full_case = 32'd1 *)
     casez (words[17:16])
       2'h0:
@@ -19452,7 +19373,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, \bit , lc_load, word
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     \$94  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -19476,7 +19397,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     \$95  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -19498,7 +19419,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     \$96  = slots;
     if (\$34 ) begin
       \$96  = \$35 [15:0];
@@ -19511,7 +19432,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     \$97  = slots_full;
     if (\$34 ) begin
       \$97  = \$36 ;
@@ -19524,7 +19445,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     \$98  = started;
     casez (decoder_fsm_state)
       3'h0:
@@ -19540,7 +19461,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     \$99  = start_slot;
     casez (decoder_fsm_state)
       3'h0:
@@ -19556,7 +19477,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     \$100  = decoder_fsm_state;
     casez (decoder_fsm_state)
       3'h0:
@@ -19588,7 +19509,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     \$101  = cds;
     casez (decoder_fsm_state)
       3'h0:
@@ -19606,7 +19527,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     \$102  = idx;
     casez (decoder_fsm_state)
       3'h0:
@@ -19631,7 +19552,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     \$103  = in_data;
     casez (decoder_fsm_state)
       3'h0:
@@ -19656,7 +19577,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     \$104  = in_lc;
     casez (decoder_fsm_state)
       3'h0:
@@ -19681,7 +19602,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     \$105  = in_top;
     casez (decoder_fsm_state)
       3'h0:
@@ -19706,7 +19627,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     \$106  = word;
     casez (decoder_fsm_state)
       3'h0:
@@ -19734,7 +19655,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     \$107  = stop_bit;
     casez (decoder_fsm_state)
       3'h0:
@@ -19756,7 +19677,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     \$108  = data0;
     if (\$58 ) begin
       \$108  = { data0[53:0], \bit  };
@@ -19769,7 +19690,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     \$109  = ne;
     if (\$59 ) begin
       \$109 [0] = 1'h1;
@@ -19789,7 +19710,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     \$110  = nw;
     if (\$59 ) begin
       \$110 [0] = 1'h1;
@@ -19811,7 +19732,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     \$111  = data1;
     if (\$70 ) begin
       \$111  = { data1[38:0], \bit  };
@@ -19824,7 +19745,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     \$112  = lc;
     if (lc_load) begin
       \$112  = { lc[4:0], \bit  };
@@ -19837,7 +19758,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     \$113  = cpw_top;
     if (\$80 ) begin
       \$113  = { cpw_top[38:0], \bit  };
@@ -19850,7 +19771,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     in_word = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -19886,8 +19807,8 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, \bit , lc_load, word
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.decoder.crc0 (rst, \bit , start, valid, kind, receiver_clear, ok, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$91  = 0;
+module \biss_master_axil.ch1.core.decoder.crc0 (rst, start, valid, kind, \bit , receiver_clear, ok, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$93  = 0;
   wire [5:0] \$1 ;
   wire \$10 ;
   wire [5:0] \$11 ;
@@ -19981,7 +19902,7 @@ module \biss_master_axil.ch1.core.decoder.crc0 (rst, \bit , start, valid, kind, 
   assign \$auto$rtlil.cc:2739:Not$12  = ~ { crc16_reg[14], crc16_reg[11], crc16_reg[6:5], crc16_reg[3:2], 1'h0 };
   assign \$auto$rtlil.cc:2739:Not$10  = ~ { crc6_reg[0], 1'h0 };
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     \$31  = crc6_reg;
     if (valid) begin
       \$31  = \$5 ;
@@ -19996,7 +19917,7 @@ module \biss_master_axil.ch1.core.decoder.crc0 (rst, \bit , start, valid, kind, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     \$32  = crc6_match;
     if (valid) begin
       \$32  = \$15 ;
@@ -20011,7 +19932,7 @@ module \biss_master_axil.ch1.core.decoder.crc0 (rst, \bit , start, valid, kind, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     \$33  = crc16_reg;
     if (valid) begin
       \$33  = \$20 ;
@@ -20026,7 +19947,7 @@ module \biss_master_axil.ch1.core.decoder.crc0 (rst, \bit , start, valid, kind, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     \$34  = crc16_match;
     if (valid) begin
       \$34  = \$30 ;
@@ -20041,7 +19962,7 @@ module \biss_master_axil.ch1.core.decoder.crc0 (rst, \bit , start, valid, kind, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     ok = 1'h0;
     casez (kind)
       2'h0:
@@ -20061,8 +19982,8 @@ module \biss_master_axil.ch1.core.decoder.crc0 (rst, \bit , start, valid, kind, 
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.decoder.crc1 (rst, \bit , start, valid, kind, receiver_clear, ok, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$92  = 0;
+module \biss_master_axil.ch1.core.decoder.crc1 (rst, start, valid, kind, \bit , receiver_clear, ok, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$94  = 0;
   wire [5:0] \$1 ;
   wire \$10 ;
   wire [5:0] \$11 ;
@@ -20156,7 +20077,7 @@ module \biss_master_axil.ch1.core.decoder.crc1 (rst, \bit , start, valid, kind, 
   assign \$auto$rtlil.cc:2739:Not$6  = ~ { crc6_reg[0], 1'h0 };
   assign \$auto$rtlil.cc:2739:Not$8  = ~ { crc16_reg[14], crc16_reg[11], crc16_reg[6:5], crc16_reg[3:2], 1'h0 };
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$94 ) begin end
     \$31  = crc6_reg;
     if (valid) begin
       \$31  = \$5 ;
@@ -20171,7 +20092,7 @@ module \biss_master_axil.ch1.core.decoder.crc1 (rst, \bit , start, valid, kind, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$94 ) begin end
     \$32  = crc6_match;
     if (valid) begin
       \$32  = \$15 ;
@@ -20186,7 +20107,7 @@ module \biss_master_axil.ch1.core.decoder.crc1 (rst, \bit , start, valid, kind, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$94 ) begin end
     \$33  = crc16_reg;
     if (valid) begin
       \$33  = \$20 ;
@@ -20201,7 +20122,7 @@ module \biss_master_axil.ch1.core.decoder.crc1 (rst, \bit , start, valid, kind, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$94 ) begin end
     \$34  = crc16_match;
     if (valid) begin
       \$34  = \$30 ;
@@ -20216,7 +20137,7 @@ module \biss_master_axil.ch1.core.decoder.crc1 (rst, \bit , start, valid, kind, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$94 ) begin end
     ok = 1'h0;
     casez (kind)
       2'h0:
@@ -20237,7 +20158,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, hold, first_rise, second_rise, ma, rises, busy, held, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$93  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$95  = 0;
   wire [16:0] \$1 ;
   wire \$10 ;
   wire [16:0] \$11 ;
@@ -20362,7 +20283,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
   always @(posedge clk)
     released <= \$42 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
     \$34  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -20377,7 +20298,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
     \$35  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -20392,7 +20313,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
     \$36  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -20407,7 +20328,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
     \$37  = ma;
     casez (ma_fsm_state)
       3'h0:
@@ -20436,7 +20357,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
     \$38  = phase_left;
     casez (ma_fsm_state)
       3'h0:
@@ -20478,7 +20399,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
     \$39  = last_clock;
     casez (ma_fsm_state)
       3'h0:
@@ -20520,7 +20441,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
     \$40  = rises;
     casez (ma_fsm_state)
       3'h0:
@@ -20539,7 +20460,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
     \$41  = ma_fsm_state;
     casez (ma_fsm_state)
       3'h0:
@@ -20575,7 +20496,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
     \$42  = released;
     casez (ma_fsm_state)
       3'h0:
@@ -20599,7 +20520,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
     busy = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -20615,7 +20536,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
     held = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -20632,7 +20553,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.ma_stop (rst, words, w1_enable, clear, rises, enough, \started$10 , start_slot, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$94  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$96  = 0;
   reg [7:0] \$1 ;
   reg [7:0] \$10 ;
   wire [8:0] \$11 ;
@@ -20713,7 +20634,7 @@ module \biss_master_axil.ch1.core.ma_stop (rst, words, w1_enable, clear, rises, 
   always @(posedge clk)
     word1_len <= \$17 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$94 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$96 ) begin end
     (* full_case = 32'd1 *)
     casez (words[9:6])
       4'h0:
@@ -20751,7 +20672,7 @@ module \biss_master_axil.ch1.core.ma_stop (rst, words, w1_enable, clear, rises, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$94 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$96 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:16])
       4'h0:
@@ -20789,42 +20710,42 @@ module \biss_master_axil.ch1.core.ma_stop (rst, words, w1_enable, clear, rises, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$94 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$96 ) begin end
     \$12  = \$2 [7:0];
     if (rst) begin
       \$12  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$94 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$96 ) begin end
     \$13  = \$4 ;
     if (rst) begin
       \$13  = 9'h000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$94 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$96 ) begin end
     \$14  = \$5 ;
     if (rst) begin
       \$14  = 17'h00000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$94 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$96 ) begin end
     \$15  = \started$10 ;
     if (rst) begin
       \$15  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$94 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$96 ) begin end
     \$16  = \$9 ;
     if (rst) begin
       \$16  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$94 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$96 ) begin end
     \$17  = \$11 [7:0];
     if (rst) begin
       \$17  = 8'h00;
@@ -21136,7 +21057,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.register_access.buffers (clk, rst, host_read__en, byte_to_send, rbuf_data, wbuf, index, store, byte_received, host_read__addr);
-  reg \$auto$verilog_backend.cc:2355:dump_module$95  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$97  = 0;
   wire \$1 ;
   wire \$2 ;
   wire \$3 ;
@@ -21253,21 +21174,21 @@ module \biss_master_axil.ch1.core.register_access.buffers (clk, rst, host_read__
   assign \$1  = ! index[1:0];
   assign \$2  = index[1:0] == 1'h1;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
     byte_received__addr = 4'h0;
     if (store) begin
       byte_received__addr = index[5:2];
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
     byte_received__data = 32'd0;
     if (store) begin
       byte_received__data = { byte_received, byte_received, byte_received, byte_received };
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
     byte_received__en = 4'h0;
     if (store) begin
       byte_received__en = { \$4 , \$3 , \$2 , \$1  };
@@ -21287,7 +21208,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.register_access.checker (rst, crc_ok, echo_ok, cds, control__take_data, start, control__take_crc, sent, \byte , clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$96  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$98  = 0;
   reg [7:0] \$1 ;
   reg [2:0] \$2 ;
   output [7:0] \byte ;
@@ -21330,7 +21251,7 @@ module \biss_master_axil.ch1.core.register_access.checker (rst, crc_ok, echo_ok,
     .valid(control__take_data)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$96 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
     \$1  = \byte ;
     if (control__take_data) begin
       \$1  = { \byte [6:0], cds };
@@ -21340,7 +21261,7 @@ module \biss_master_axil.ch1.core.register_access.checker (rst, crc_ok, echo_ok,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$96 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
     \$2  = got_crc;
     if (control__take_crc) begin
       \$2  = { got_crc[1:0], cds };
@@ -21356,7 +21277,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.register_access.checker.rx_crc (rst, crc, data_in, valid, start, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$97  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$99  = 0;
   wire [3:0] \$1 ;
   wire \$10 ;
   wire [3:0] \$11 ;
@@ -21399,7 +21320,7 @@ module \biss_master_axil.ch1.core.register_access.checker.rx_crc (rst, crc, data
     crc_reg <= \$13 ;
   assign \$auto$rtlil.cc:2739:Not$2  = ~ crc_reg;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
     \$13  = crc_reg;
     if (valid) begin
       \$13 [0] = \$3 ;
@@ -21423,7 +21344,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.register_access.idle (rst, frame_end, frame_ok, run_enough, seen_enough, frame_cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$98  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$100  = 0;
   wire \$1 ;
   wire [4:0] \$10 ;
   wire \$11 ;
@@ -21493,7 +21414,7 @@ module \biss_master_axil.ch1.core.register_access.idle (rst, frame_end, frame_ok
   always @(posedge clk)
     idle_seen <= \$24 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     \$23  = idle_run;
     if (frame_end) begin
       \$23  = \$4 [3:0];
@@ -21503,7 +21424,7 @@ module \biss_master_axil.ch1.core.register_access.idle (rst, frame_end, frame_ok
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     \$24  = idle_seen;
     if (frame_end) begin
       \$24  = \$10 [3:0];
@@ -21516,7 +21437,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.register_access.sender (rst, \byte , request, control__load_header, control__source, control__crc_bit, control__shift_header, start, valid, control__load_byte, control__shift_byte, sent, cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$99  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$101  = 0;
   wire \$1 ;
   wire [18:0] \$2 ;
   wire [8:0] \$3 ;
@@ -21588,7 +21509,7 @@ module \biss_master_axil.ch1.core.register_access.sender (rst, \byte , request, 
     .valid(valid)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
     \$6  = header;
     if (control__load_header) begin
       \$6  = { 2'h3, request[2:0], request[9:3], 4'h0, \$1 , request[17] };
@@ -21601,7 +21522,7 @@ module \biss_master_axil.ch1.core.register_access.sender (rst, \byte , request, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
     \$7  = to_send;
     if (control__load_byte) begin
       \$7  = \byte ;
@@ -21614,7 +21535,7 @@ module \biss_master_axil.ch1.core.register_access.sender (rst, \byte , request, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
     \$8  = sent;
     if (control__load_byte) begin
       \$8  = \byte ;
@@ -21624,7 +21545,7 @@ module \biss_master_axil.ch1.core.register_access.sender (rst, \byte , request, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
     cdm = 1'h0;
     casez (control__source)
       3'h1:
@@ -21649,7 +21570,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.register_access.sender.tx_crc (rst, data_in, crc, start, valid, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$100  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$102  = 0;
   wire [3:0] \$1 ;
   wire \$10 ;
   wire [3:0] \$11 ;
@@ -21692,7 +21613,7 @@ module \biss_master_axil.ch1.core.register_access.sender.tx_crc (rst, data_in, c
     crc_reg <= \$13 ;
   assign \$auto$rtlil.cc:2739:Not$4  = ~ crc_reg;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
     \$13  = crc_reg;
     if (valid) begin
       \$13 [0] = \$3 ;
@@ -21717,7 +21638,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, frame_ok, busy, crc_ok, echo_ok, run_enough, seen_enough, start, abort, request, frame_cdm, frame_cds, done, result, index, send__load_header, send__source, send__crc_bit, send__shift_header, send__crc_start
 , send__crc_valid, send__load_byte, send__shift_byte, check__take_data, check__first, check__take_crc, store, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$101  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$103  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$100 ;
@@ -22073,7 +21994,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
   always @(posedge clk)
     waited <= \$125 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     \$118  = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -22111,7 +22032,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     \$119  = result;
     casez (access_fsm_state)
       3'h0:
@@ -22165,7 +22086,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     \$120  = access_fsm_state;
     casez (access_fsm_state)
       3'h0:
@@ -22262,7 +22183,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     \$121  = req;
     casez (access_fsm_state)
       3'h0:
@@ -22279,7 +22200,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     \$122  = index;
     casez (access_fsm_state)
       3'h0:
@@ -22318,7 +22239,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     \$123  = step;
     casez (access_fsm_state)
       3'h0:
@@ -22376,7 +22297,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     \$124  = ending;
     casez (access_fsm_state)
       3'h0:
@@ -22443,7 +22364,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     \$125  = waited;
     casez (access_fsm_state)
       3'h0:
@@ -22475,7 +22396,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     send__load_header = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -22489,7 +22410,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     send__source = 3'h0;
     casez (access_fsm_state)
       3'h0:
@@ -22516,7 +22437,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     send__crc_bit = 2'h0;
     casez (access_fsm_state)
       3'h0:
@@ -22536,7 +22457,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     send__shift_header = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -22555,7 +22476,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     send__crc_start = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -22584,7 +22505,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     send__crc_valid = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -22605,7 +22526,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     send__load_byte = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -22627,7 +22548,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     send__shift_byte = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -22648,7 +22569,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     check__take_data = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -22670,7 +22591,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     check__first = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -22692,7 +22613,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     check__take_crc = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -22716,7 +22637,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     store = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -22755,7 +22676,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.results (rst, report, valid, frame, report_frame, report_delay, done, valid_out, result, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$102  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$104  = 0;
   reg \$1 ;
   reg \$2 ;
   reg [160:0] \$3 ;
@@ -22852,21 +22773,21 @@ module \biss_master_axil.ch1.core.results (rst, report, valid, frame, report_fra
   always @(posedge clk)
     result <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$104 ) begin end
     \$1  = report;
     if (rst) begin
       \$1  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$104 ) begin end
     \$2  = valid;
     if (rst) begin
       \$2  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$104 ) begin end
     \$3  = result;
     if (report) begin
       \$3 [3:0] = frame[3:0];
@@ -22931,7 +22852,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receiver_clear, arm, early, locked, delay, sample, level, slo);
-  reg \$auto$verilog_backend.cc:2355:dump_module$103  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$105  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -23169,7 +23090,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     .stage1(level)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
     \$63  = level;
     if (receiver_clear) begin
       \$63  = 1'h1;
@@ -23179,7 +23100,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
     \$64  = mid_delay;
     if (odd) begin
       \$64  = \$8 [12:0];
@@ -23204,7 +23125,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
     \$65  = mid_slot;
     (* full_case = 32'd1 *)
     if (odd) begin
@@ -23231,7 +23152,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
     \$66  = \$10 ;
     casez (sampler_fsm_state)
       2'h0:
@@ -23253,7 +23174,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
     \$67  = elapsed;
     casez (sampler_fsm_state)
       2'h0:
@@ -23277,7 +23198,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
     \$68  = early;
     casez (sampler_fsm_state)
       2'h0:
@@ -23293,7 +23214,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
     \$69  = locked;
     casez (sampler_fsm_state)
       2'h0:
@@ -23319,7 +23240,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
     \$70  = gap;
     casez (sampler_fsm_state)
       2'h0:
@@ -23350,7 +23271,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
     \$71  = sampler_fsm_state;
     casez (sampler_fsm_state)
       2'h0:
@@ -23381,7 +23302,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
     \$72  = slot_left;
     casez (sampler_fsm_state)
       2'h0:
@@ -23431,7 +23352,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
     \$73  = slot_zero;
     casez (sampler_fsm_state)
       2'h0:
@@ -23481,7 +23402,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
     \$74  = vote1;
     casez (sampler_fsm_state)
       2'h0:
@@ -23511,7 +23432,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
     \$75  = vote2;
     casez (sampler_fsm_state)
       2'h0:
@@ -23539,7 +23460,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
     \$76  = first_slot;
     casez (sampler_fsm_state)
       2'h0:
@@ -23565,7 +23486,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
     \$77  = delay;
     casez (sampler_fsm_state)
       2'h0:
@@ -23588,7 +23509,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
     \$78  = phase;
     casez (sampler_fsm_state)
       2'h0:
@@ -23628,7 +23549,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
     sample = \$44 ;
     casez (sampler_fsm_state)
       2'h0:
@@ -23646,7 +23567,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
     decided = 1'h0;
     casez (sampler_fsm_state)
       2'h0:
@@ -23696,7 +23617,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.scheduler (rst, trigger, periodic, request, overrun, start, abort, period, idle, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$104  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$106  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -23780,7 +23701,7 @@ module \biss_master_axil.ch1.core.scheduler (rst, trigger, periodic, request, ov
   always @(posedge clk)
     period_start <= \$28 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$104 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$106 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$27  = 24'h000001;
@@ -23792,7 +23713,7 @@ module \biss_master_axil.ch1.core.scheduler (rst, trigger, periodic, request, ov
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$104 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$106 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$28  = 1'h1;
@@ -23806,8 +23727,8 @@ module \biss_master_axil.ch1.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.sign_of_life (rst, \port$2580$0 , load, \repeat , skip, check, resync, lc, is_zero, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$105  = 0;
+module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$4177$0 , resync, lc, is_zero, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$107  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -23844,8 +23765,8 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, \port$2580$0 , load, \repea
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$2580$0 ;
-  wire \port$2580$0 ;
+  input \port$4177$0 ;
+  wire \port$4177$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -23857,9 +23778,9 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, \port$2580$0 , load, \repea
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$2580$0  };
-  assign \$2  = { lc[4:0], \port$2580$0  } == last;
-  assign \$3  = { lc[4:0], \port$2580$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$4177$0  };
+  assign \$2  = { lc[4:0], \port$4177$0  } == last;
+  assign \$3  = { lc[4:0], \port$4177$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = lc == 6'h3f;
@@ -23887,7 +23808,7 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, \port$2580$0 , load, \repea
   always @(posedge clk)
     synced <= \$21 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$107 ) begin end
     \$16  = is_zero;
     if (load) begin
       \$16  = \$1 ;
@@ -23897,7 +23818,7 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, \port$2580$0 , load, \repea
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$107 ) begin end
     \$17  = is_last;
     if (load) begin
       \$17  = \$2 ;
@@ -23907,7 +23828,7 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, \port$2580$0 , load, \repea
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$107 ) begin end
     \$18  = is_expected;
     if (load) begin
       \$18  = \$3 ;
@@ -23917,7 +23838,7 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, \port$2580$0 , load, \repea
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$107 ) begin end
     \$19  = last;
     if (\$5 ) begin
       \$19  = lc;
@@ -23927,7 +23848,7 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, \port$2580$0 , load, \repea
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$107 ) begin end
     \$20  = expected;
     if (\$5 ) begin
       \$20  = \$8 [5:0];
@@ -23937,7 +23858,7 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, \port$2580$0 , load, \repea
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$107 ) begin end
     \$21  = synced;
     if (\$5 ) begin
       \$21  = 1'h1;
@@ -23949,13 +23870,13 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, \port$2580$0 , load, \repea
       \$21  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$2580$0  };
+  assign lc_next = { lc[4:0], \port$4177$0  };
   assign zero = is_zero;
 endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.spw_check (rst, bits, \tolerance$8 , spw, cpw_top, match, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$106  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$108  = 0;
   wire [40:0] \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -24160,28 +24081,28 @@ module \biss_master_axil.ch1.core.spw_check (rst, bits, \tolerance$8 , spw, cpw_
   assign \$7  = bits > 3'h5;
   assign \$8  = bits > 3'h6;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$106 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
     \$88  = \$42 ;
     if (rst) begin
       \$88  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$106 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
     \$89  = \$84 ;
     if (rst) begin
       \$89  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$106 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
     \$90  = \tolerance$8 ;
     if (rst) begin
       \$90  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$106 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
     \$91  = \$87 ;
     if (rst) begin
       \$91  = 1'h0;
@@ -24191,7 +24112,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.time_base (rst, first_rise, first_rise_time, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$107  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$109  = 0;
   wire [32:0] \$1 ;
   reg [31:0] \$2 ;
   reg [31:0] \$3 ;
@@ -24210,14 +24131,14 @@ module \biss_master_axil.ch1.core.time_base (rst, first_rise, first_rise_time, c
   always @(posedge clk)
     first_rise_time <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$107 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
     \$2  = \$1 [31:0];
     if (rst) begin
       \$2  = 32'd0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$107 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
     \$3  = first_rise_time;
     if (first_rise) begin
       \$3  = now;
@@ -24230,7 +24151,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.timers (rst, restart, ma_busy, break_time, timeout_live, ack_limit, timeout_limit, delay_limit, no_start_limit, clear, in_clock, slo_stuck, slo_stuck_live, break_over, ack_expired, no_start_expired, delay_over, delay, slo, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$108  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$110  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -24368,7 +24289,7 @@ module \biss_master_axil.ch1.core.timers (rst, restart, ma_busy, break_time, tim
   always @(posedge clk)
     delay_over <= \$43 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$110 ) begin end
     \$36  = slo_low_time_p1;
     if (\$1 ) begin
       \$36  = 25'h0000001;
@@ -24380,49 +24301,49 @@ module \biss_master_axil.ch1.core.timers (rst, restart, ma_busy, break_time, tim
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$110 ) begin end
     \$37  = \$8 ;
     if (rst) begin
       \$37  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$110 ) begin end
     \$38  = \$16 ;
     if (rst) begin
       \$38  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$110 ) begin end
     \$39  = \$20 [24:0];
     if (rst) begin
       \$39  = 25'h0000001;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$110 ) begin end
     \$40  = \$26 ;
     if (rst) begin
       \$40  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$110 ) begin end
     \$41  = \$30 ;
     if (rst) begin
       \$41  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$110 ) begin end
     \$42  = \$34 ;
     if (rst) begin
       \$42  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$110 ) begin end
     \$43  = \$35 ;
     if (rst) begin
       \$43  = 1'h0;
@@ -24431,8 +24352,8 @@ module \biss_master_axil.ch1.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.verdict (lc_skip_seen, \port$2980$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
-  reg \$auto$verilog_backend.cc:2355:dump_module$109  = 0;
+module \biss_master_axil.ch1.core.verdict (lc_skip_seen, \port$2968$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
+  reg \$auto$verilog_backend.cc:2355:dump_module$111  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -24545,8 +24466,8 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, \port$2980$0 , lc_check
   wire lc_zero;
   input lc_zero_seen;
   wire lc_zero_seen;
-  output \port$2980$0 ;
-  wire \port$2980$0 ;
+  output \port$2968$0 ;
+  wire \port$2968$0 ;
   output report;
   wire report;
   input report_frame;
@@ -24614,7 +24535,7 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, \port$2980$0 , lc_check
   assign \$29  = ~ { \$2 , crc_ok[0] };
   assign crc_error = report_frame ? \$29  : 2'h0;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
     (* full_case = 32'd1 *)
     if (\$13 ) begin
       frame_status = 4'h3;
@@ -24631,7 +24552,7 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, \port$2980$0 , lc_check
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$2980$0  = \$2 ;
+  assign \port$2968$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

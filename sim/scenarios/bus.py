@@ -346,7 +346,7 @@ async def wishbone_pipelined_back_to_back(dut):
     dut.wb_cyc.value = 1
     dut.wb_sel.value = 0xF
     for _ in range(100):
-        # This clock's request; `stall` (a register) says whether the edge ending it takes it.
+        # This clock's request; `stall` (from registers) says whether the edge ending it takes it.
         if i < len(ops):
             adr, dat = ops[i]
             dut.wb_stb.value, dut.wb_adr.value = 1, adr

@@ -13,7 +13,7 @@ from amaranth.hdl import ClockDomain, Module
 from amaranth.lib.memory import Memory
 
 from bissmaster import regmap
-from bissmaster.bus_adapters import AxiLiteAdapter
+from bissmaster.bus_adapters import AxiLiteAdapter, WishboneAdapter
 from bissmaster.register_bank import RegisterBank
 
 MAP = regmap.load()
@@ -55,10 +55,14 @@ async def write(ctx, bank, addr, value, strb=0xF):
 
 
 async def read(ctx, bank, addr):
+    """A read in the bank's two steps: r_en (the register read), then r_load (the data)."""
     ctx.set(bank.bus.r_en, 1)
     ctx.set(bank.bus.r_addr, addr // 4)
     await ctx.tick()
     ctx.set(bank.bus.r_en, 0)
+    ctx.set(bank.bus.r_load, 1)
+    await ctx.tick()
+    ctx.set(bank.bus.r_load, 0)
     return ctx.get(bank.bus.r_data)
 
 
@@ -160,17 +164,109 @@ def test_axil_reads_back_to_back_and_write_with_address_after_data():
             await ctx.tick()
         assert ctx.get(bus.bvalid) and ctx.get(bus.bresp) == 0
         await ctx.tick()
-        # Three reads in three clocks, rready held: one datum per clock.
+        # Three reads in three clocks, rready held: one datum per clock, each two clocks
+        # after its address (one wait state).
         ctx.set(bus.rready, 1)
         got = []
-        for addr in (0, offset("cfg_ma"), 4, None, None):
+        for clock, addr in enumerate((0, offset("cfg_ma"), 4, None, None)):
             ctx.set(bus.arvalid, addr is not None)
             ctx.set(bus.araddr, addr or 0)
             assert ctx.get(bus.arready)
             await ctx.tick()
             if ctx.get(bus.rvalid):
-                got.append(ctx.get(bus.rdata))
-        assert got == [0x42695353, 0x1234, 0x00010001]         # version 1.1
+                got.append((clock + 1, ctx.get(bus.rdata)))
+        assert got == [(2, 0x42695353), (3, 0x1234), (4, 0x00010001)]    # version 1.1
+
+    sim = Simulator(top)
+    sim.add_clock(1e-8)
+    sim.add_testbench(bench)
+    sim.run()
+
+
+def test_axil_read_backpressure_reads_each_register_once():
+    """Reads issued back to back while rready follows a pattern: every read's data comes once,
+    in order, held while rready is low; arready is low while a read waits behind held data.
+    The snapshot (reading result.status) is taken once, at its AR handshake: the position
+    changed afterwards is not what result.w0_lo reads."""
+    top = Module()
+    top.domains.sync = ClockDomain()
+    top.submodules.bank = bank = RegisterBank(MAP, 1)
+    top.submodules.axil = axil = AxiLiteAdapter(MAP.addr_width)
+    from amaranth.lib import wiring
+    wiring.connect(top, axil.regs, bank.bus)
+    bus = axil.axil
+    reads = [0, offset("result.status"), offset("result.w0_lo"), offset("result.w0_hi"), 4,
+             offset("result.w0_lo")]
+    ready = [0, 0, 0, 1, 0, 1, 1, 0, 0, 1, 0, 1, 1, 1, 0, 1] + [1] * 8
+
+    async def bench(ctx):
+        ctx.set(bank.ch0.word0_position, 0x12_3456_789A)
+        ctx.set(bank.ch0.status, 3)
+        issued, got, held = 0, [], None
+        for r in ready:
+            ctx.set(bus.arvalid, issued < len(reads))
+            ctx.set(bus.araddr, reads[issued] if issued < len(reads) else 0)
+            ctx.set(bus.rready, r)
+            took = issued < len(reads) and ctx.get(bus.arready)
+            if ctx.get(bus.rvalid):
+                if held is not None:
+                    assert ctx.get(bus.rdata) == held      # held while rready was low
+                if r:
+                    got.append(ctx.get(bus.rdata))
+                    held = None
+                else:
+                    held = ctx.get(bus.rdata)
+            await ctx.tick()
+            if took:
+                if reads[issued] == offset("result.status"):
+                    ctx.set(bank.ch0.word0_position, 0x7F_FFFF_FFFF)
+                issued += 1
+        assert issued == len(reads)
+        assert [g & 0xF if n == 1 else g for n, g in enumerate(got)] == [
+            0x42695353, 3, 0x3456_789A, 0x12, 0x00010001, 0x3456_789A]
+
+    sim = Simulator(top)
+    sim.add_clock(1e-8)
+    sim.add_testbench(bench)
+    sim.run()
+
+
+def test_wishbone_read_waits_one_state_and_write_does_not():
+    """Wishbone classic: a write is acked in the clock after it is taken, a read two clocks
+    after (one wait state), with its data; stall is high up to the ack, so a request held
+    through the ack is taken once."""
+    top = Module()
+    top.domains.sync = ClockDomain()
+    top.submodules.bank = bank = RegisterBank(MAP, 1)
+    top.submodules.wb = wb = WishboneAdapter(MAP.addr_width)
+    from amaranth.lib import wiring
+    wiring.connect(top, wb.regs, bank.bus)
+    bus = wb.wb
+
+    async def cycle(ctx, addr, data=None):
+        ctx.set(bus.cyc, 1)
+        ctx.set(bus.stb, 1)
+        ctx.set(bus.we, data is not None)
+        ctx.set(bus.adr, addr // 4)
+        ctx.set(bus.dat_w, data or 0)
+        ctx.set(bus.sel, 0xF)
+        stalls = []
+        for clock in range(1, 6):
+            await ctx.tick()
+            stalls.append(ctx.get(bus.stall))
+            if ctx.get(bus.ack):
+                value = ctx.get(bus.dat_r)
+                ctx.set(bus.cyc, 0)
+                ctx.set(bus.stb, 0)
+                await ctx.tick()
+                assert not ctx.get(bus.ack)             # one ack per request
+                return clock, stalls, value
+        raise AssertionError("no ack")
+
+    async def bench(ctx):
+        assert (await cycle(ctx, offset("cfg_ma"), 0x0777))[:2] == (1, [1])
+        assert await cycle(ctx, offset("cfg_ma")) == (2, [1, 1], 0x0777)
+        assert await cycle(ctx, 0) == (2, [1, 1], 0x42695353)
 
     sim = Simulator(top)
     sim.add_clock(1e-8)
@@ -180,8 +276,8 @@ def test_axil_reads_back_to_back_and_write_with_address_after_data():
 
 def test_windows_byte_lanes_and_read_latency():
     """ca.wbuf word n with byte strobes reaches the memory's word n, only the strobed lanes;
-    ca.rbuf word n reads it with the latency of a register (data the clock after r_en) and
-    keeps it until the next read, even when the memory changes meanwhile."""
+    ca.rbuf word n reads it with the latency of a register (r_en, then r_load) and keeps it
+    until the next read, even when the memory changes meanwhile."""
     wbuf, rbuf = offset("ca.wbuf"), offset("ca.rbuf")
 
     async def bench(ctx, bank):
