@@ -19,10 +19,15 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
 , cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, ca_wbuf_addr, ca_wbuf_data, ca_wbuf_en, ca_rbuf_addr, ca_rbuf_en, clk, rst, ma, busy, config_error, overrun, done, valid, status
 , timestamp, line_delay, cds, word0_position, word0_ne, word0_nw, word0_crc_ok, word1_position, word1_ne, word1_nw, word1_crc_ok, lc, lc_repeat, lc_skip, lc_zero, spw_mismatch, ca_rbuf_data, ca_busy, ca_done, ca_status, ca_bytes_done
 , count_crc_word0, count_crc_word1, count_no_ack, count_no_start, count_delay_range, count_slo_stuck_low, count_lc_repeat, count_lc_skip, count_lc_zero, count_spw_mismatch, count_overrun, count_aborted, count_no_stop, count_ca_crc4_error, count_ca_no_answer, count_ca_refused, count_ca_aborted, count_ca_data_fault, slo);
+  reg \$auto$verilog_backend.cc:2355:dump_module$13  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
   wire \$12 ;
+  wire \$13 ;
+  reg \$14 ;
+  reg \$15 ;
+  wire \$16 ;
   wire \$2 ;
   wire \$3 ;
   wire \$4 ;
@@ -32,7 +37,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \$8 ;
   wire \$9 ;
   wire abort;
-  wire \abort$235 ;
+  wire \abort$231 ;
   wire \abort$94 ;
   input abort_cycle;
   wire abort_cycle;
@@ -41,8 +46,8 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire [23:0] ack_limit;
   wire [23:0] \ack_limit$147 ;
   wire arm;
-  wire \bit ;
-  wire \bit$171 ;
+  reg \bit  = 1'h0;
+  wire \bit$261 ;
   wire [5:0] bits;
   wire break_over;
   wire \break_over$124 ;
@@ -50,7 +55,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   output busy;
   wire busy;
   wire \busy$102 ;
-  wire \busy$239 ;
+  wire \busy$235 ;
   input ca_abort;
   wire ca_abort;
   input [6:0] ca_address;
@@ -92,11 +97,11 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   input ca_write;
   wire ca_write;
   wire cdm;
-  wire \cdm$242 ;
+  wire \cdm$238 ;
   wire cdm_cycle;
   output cds;
   wire cds;
-  wire \cds$219 ;
+  wire \cds$215 ;
   wire [154:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
@@ -173,7 +178,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire check;
   wire clear;
   wire \clear$164 ;
-  wire \clear$256 ;
+  wire \clear$252 ;
   input clear_counters;
   wire clear_counters;
   input clk;
@@ -238,10 +243,10 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire [15:0] \counts.slo_stuck_low ;
   wire [15:0] \counts.spw_mismatch ;
   wire [39:0] cpw_top;
-  wire [39:0] \cpw_top$188 ;
+  wire [39:0] \cpw_top$184 ;
   wire [1:0] crc_error;
   wire [1:0] crc_ok;
-  wire [1:0] \crc_ok$203 ;
+  wire [1:0] \crc_ok$199 ;
   wire [154:0] cycle;
   wire [23:0] \cycle.ack_limit ;
   wire [23:0] \cycle.break_time ;
@@ -282,8 +287,8 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   output done;
   wire done;
   wire \done$112 ;
-  wire \done$240 ;
-  wire \done$259 ;
+  wire \done$236 ;
+  wire \done$255 ;
   wire doubtful;
   wire early;
   wire \early$110 ;
@@ -309,7 +314,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \events.slo_stuck_low ;
   wire \events.spw_mismatch ;
   wire fault;
-  wire \fault$199 ;
+  wire \fault$195 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -339,7 +344,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
-  wire [3:0] \fault_status$201 ;
+  wire [3:0] \fault_status$197 ;
   wire [6:0] faults;
   wire \faults.aborted ;
   wire \faults.bad_config ;
@@ -349,7 +354,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \faults.no_stop ;
   wire \faults.slo_stuck_low ;
   wire first_rise;
-  wire \first_rise$229 ;
+  wire \first_rise$225 ;
   wire [31:0] first_rise_time;
   wire [160:0] frame;
   wire \frame.cds ;
@@ -403,23 +408,23 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \in_clock$141 ;
   output [5:0] lc;
   wire [5:0] lc;
-  wire [5:0] \lc$174 ;
-  wire [5:0] \lc$175 ;
+  wire [5:0] \lc$170 ;
+  wire [5:0] \lc$171 ;
   wire lc_check;
   wire lc_load;
   wire [5:0] lc_next;
-  wire [5:0] \lc_next$177 ;
+  wire [5:0] \lc_next$173 ;
   output lc_repeat;
   wire lc_repeat;
-  wire \lc_repeat$220 ;
+  wire \lc_repeat$216 ;
   wire lc_repeat_seen;
   output lc_skip;
   wire lc_skip;
-  wire \lc_skip$221 ;
+  wire \lc_skip$217 ;
   wire lc_skip_seen;
   output lc_zero;
   wire lc_zero;
-  wire \lc_zero$222 ;
+  wire \lc_zero$218 ;
   wire lc_zero_seen;
   wire level;
   output [12:0] line_delay;
@@ -458,7 +463,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \locked$108 ;
   output ma;
   wire ma;
-  wire \ma$258 ;
+  wire \ma$254 ;
   wire ma_arm;
   wire ma_busy;
   wire \ma_busy$136 ;
@@ -476,7 +481,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire ok;
   output overrun;
   wire overrun;
-  wire \overrun$255 ;
+  wire \overrun$251 ;
   wire [23:0] period;
   input periodic;
   wire periodic;
@@ -487,30 +492,30 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire receiver_clear;
   wire \repeat ;
   wire report;
-  wire \report$211 ;
+  wire \report$207 ;
   wire report_delay;
-  wire \report_delay$214 ;
+  wire \report_delay$210 ;
   wire report_frame;
-  wire \report_frame$197 ;
-  wire \report_frame$212 ;
+  wire \report_frame$193 ;
+  wire \report_frame$208 ;
   wire request;
-  wire [17:0] \request$231 ;
-  wire [6:0] \request$231.address ;
-  wire [6:0] \request$231.count ;
-  wire [2:0] \request$231.slave_id ;
-  wire \request$231.write ;
+  wire [17:0] \request$227 ;
+  wire [6:0] \request$227.address ;
+  wire [6:0] \request$227.count ;
+  wire [2:0] \request$227.slave_id ;
+  wire \request$227.write ;
   wire \request$93 ;
   wire restart;
   wire restart_timer;
   wire [9:0] result;
-  wire [160:0] \result$261 ;
-  wire \result$261.cds ;
-  wire [5:0] \result$261.lc ;
-  wire \result$261.lc_repeat ;
-  wire \result$261.lc_skip ;
-  wire \result$261.lc_zero ;
-  wire [12:0] \result$261.line_delay ;
-  wire \result$261.spw_mismatch ;
+  wire [160:0] \result$257 ;
+  wire \result$257.cds ;
+  wire [5:0] \result$257.lc ;
+  wire \result$257.lc_repeat ;
+  wire \result$257.lc_skip ;
+  wire \result$257.lc_zero ;
+  wire [12:0] \result$257.line_delay ;
+  wire \result$257.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -525,18 +530,18 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
-  wire [3:0] \result$261.status ;
-  wire [31:0] \result$261.timestamp ;
-  wire [57:0] \result$261.word0 ;
-  wire \result$261.word0.crc_ok ;
-  wire \result$261.word0.ne ;
-  wire \result$261.word0.nw ;
-  wire [54:0] \result$261.word0.position ;
-  wire [42:0] \result$261.word1 ;
-  wire \result$261.word1.crc_ok ;
-  wire \result$261.word1.ne ;
-  wire \result$261.word1.nw ;
-  wire [39:0] \result$261.word1.position ;
+  wire [3:0] \result$257.status ;
+  wire [31:0] \result$257.timestamp ;
+  wire [57:0] \result$257.word0 ;
+  wire \result$257.word0.crc_ok ;
+  wire \result$257.word0.ne ;
+  wire \result$257.word0.nw ;
+  wire [54:0] \result$257.word0.position ;
+  wire [42:0] \result$257.word1 ;
+  wire \result$257.word1.crc_ok ;
+  wire \result$257.word1.ne ;
+  wire \result$257.word1.nw ;
+  wire [39:0] \result$257.word1.position ;
   wire [6:0] \result.bytes_done ;
   (* enum_base_type = "AccessStatus" *)
   (* enum_value_000 = "OK" *)
@@ -548,14 +553,14 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_110 = "BAD_REQUEST" *)
   wire [2:0] \result.status ;
   wire resync;
-  wire \resync$183 ;
+  wire \resync$179 ;
   wire [15:0] rises;
   wire [15:0] \rises$163 ;
   input rst;
   wire rst;
   wire run;
-  wire sample;
-  wire \sample$169 ;
+  reg sample = 1'h0;
+  wire \sample$259 ;
   wire second_rise;
   wire skip;
   input slo;
@@ -573,10 +578,10 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire spw_match;
   output spw_mismatch;
   wire spw_mismatch;
-  wire \spw_mismatch$227 ;
+  wire \spw_mismatch$223 ;
   input start;
   wire start;
-  wire \start$234 ;
+  wire \start$230 ;
   wire \start$85 ;
   wire [15:0] start_slot;
   wire [15:0] \start_slot$161 ;
@@ -613,7 +618,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
-  wire [3:0] \status$218 ;
+  wire [3:0] \status$214 ;
   wire stop_bit;
   wire \stop_bit$120 ;
   wire stopped;
@@ -627,8 +632,8 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire [7:0] tolerance;
   output valid;
   wire valid;
-  wire \valid$215 ;
-  wire \valid$216 ;
+  wire \valid$211 ;
+  wire \valid$212 ;
   wire valid_out;
   wire w1_enable;
   wire [39:0] wbuf;
@@ -652,28 +657,28 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   output [39:0] word1_position;
   wire [39:0] word1_position;
   wire [1:0] word_count;
-  wire [1:0] \word_count$173 ;
+  wire [1:0] \word_count$169 ;
   wire [1:0] word_crc_ok;
   wire [19:0] words;
-  wire [19:0] \words$185 ;
-  wire [9:0] \words$185[0] ;
+  wire [19:0] \words$181 ;
+  wire [9:0] \words$181[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
-  wire [1:0] \words$185[0].crc ;
-  wire [5:0] \words$185[0].data_bits ;
-  wire \words$185[0].lc ;
-  wire \words$185[0].nenw ;
-  wire [9:0] \words$185[1] ;
+  wire [1:0] \words$181[0].crc ;
+  wire [5:0] \words$181[0].data_bits ;
+  wire \words$181[0].lc ;
+  wire \words$181[0].nenw ;
+  wire [9:0] \words$181[1] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
-  wire [1:0] \words$185[1].crc ;
-  wire [5:0] \words$185[1].data_bits ;
-  wire \words$185[1].lc ;
-  wire \words$185[1].nenw ;
+  wire [1:0] \words$181[1].crc ;
+  wire [5:0] \words$181[1].data_bits ;
+  wire \words$181[1].lc ;
+  wire \words$181[1].nenw ;
   wire [9:0] \words[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
@@ -694,7 +699,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \words[1].nenw ;
   wire zero;
   assign \periodic$86  = periodic | ca_busy;
-  assign \$1  = report_frame & \spw_mismatch$227 ;
+  assign \$1  = report_frame & \spw_mismatch$223 ;
   assign \$2  = result[2:0] == 1'h1;
   assign \$3  = ca_done & \$2 ;
   assign \$4  = result[2:0] == 2'h2;
@@ -707,6 +712,12 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \$11  = ca_done & \$10 ;
   assign busy = ~ idle;
   assign config_error = ~ config_ok;
+  assign \$12  = ~ \clear$164 ;
+  assign \$13  = \sample$259  & \$12 ;
+  always @(posedge clk)
+    sample <= \$14 ;
+  always @(posedge clk)
+    \bit  <= \$15 ;
   \biss_master.config  \config  (
     .ack_limit(ack_limit),
     .clk(clk),
@@ -771,14 +782,14 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   );
   \biss_master.decoder  decoder (
     .\bit (\bit ),
-    .cds(\cds$219 ),
+    .cds(\cds$215 ),
     .clk(clk),
     .cpw_top(cpw_top),
     .crc_ok(crc_ok),
     .data0(data0),
     .data1(spw),
     .done(frame_done),
-    .lc(\lc$174 ),
+    .lc(\lc$170 ),
     .lc_load(load),
     .ne(ne),
     .nw(nw),
@@ -816,7 +827,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .start_slot(start_slot),
     .\started$10 (started),
     .w1_enable(cycle[135]),
-    .words(\words$185 )
+    .words(\words$181 )
   );
   \biss_master.register_access  register_access (
     .abort(ca_abort),
@@ -825,13 +836,13 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .clk(clk),
     .done(ca_done),
     .frame_cdm(frame_cdm),
-    .frame_cds(\cds$219 ),
+    .frame_cds(\cds$215 ),
     .frame_end(report),
-    .frame_ok(\valid$215 ),
+    .frame_ok(\valid$211 ),
     .host_read__addr(ca_rbuf_addr),
     .host_read__en(ca_rbuf_en),
     .rbuf_data(ca_rbuf_data),
-    .request(\request$231 ),
+    .request(\request$227 ),
     .result(result),
     .rst(rst),
     .\start$44 (ca_start),
@@ -844,14 +855,14 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .report(report),
     .report_delay(report_delay),
     .report_frame(report_frame),
-    .result(\result$261 ),
+    .result(\result$257 ),
     .rst(rst),
-    .valid(\valid$215 ),
+    .valid(\valid$211 ),
     .valid_out(valid)
   );
   \biss_master.sampler  sampler (
     .arm(ma_arm),
-    .\bit (\bit ),
+    .\bit (\bit$261 ),
     .clk(clk),
     .delay(delay),
     .early(early),
@@ -860,7 +871,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .locked(locked),
     .receiver_clear(\clear$164 ),
     .rst(rst),
-    .sample(sample),
+    .sample(\sample$259 ),
     .slo(slo)
   );
   \biss_master.scheduler  scheduler (
@@ -878,9 +889,9 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .check(check),
     .clk(clk),
     .is_zero(lc_zero_seen),
-    .lc(\lc$174 ),
+    .lc(\lc$170 ),
     .load(load),
-    .\port$482$0 (\bit ),
+    .\port$1352$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -931,20 +942,34 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .fault(fault),
     .fault_status(fault_status),
     .lc_check(check),
-    .lc_repeat(\lc_repeat$220 ),
+    .lc_repeat(\lc_repeat$216 ),
     .lc_repeat_seen(lc_repeat_seen),
-    .lc_skip(\lc_skip$221 ),
+    .lc_skip(\lc_skip$217 ),
     .lc_skip_seen(lc_skip_seen),
-    .lc_zero(\lc_zero$222 ),
+    .lc_zero(\lc_zero$218 ),
     .lc_zero_seen(lc_zero_seen),
-    .\port$882$0 (\$12 ),
+    .\port$884$0 (\$16 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
-    .spw_mismatch(\spw_mismatch$227 ),
-    .status(\status$218 ),
-    .valid(\valid$215 )
+    .spw_mismatch(\spw_mismatch$223 ),
+    .status(\status$214 ),
+    .valid(\valid$211 )
   );
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
+    \$14  = \$13 ;
+    if (rst) begin
+      \$14  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
+    \$15  = \bit$261 ;
+    if (rst) begin
+      \$15  = 1'h0;
+    end
+  end
   assign \idle$84  = idle;
   assign \start$85  = start;
   assign frames = ca_busy;
@@ -994,71 +1019,69 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign receiver_clear = \clear$164 ;
   assign \half_period$166  = cycle[15:0];
   assign arm = ma_arm;
-  assign \sample$169  = sample;
-  assign \bit$171  = \bit ;
-  assign \word_count$173  = word_count;
-  assign \lc$175  = \lc$174 ;
-  assign lc_next = { \lc$174 [4:0], \bit  };
-  assign \lc_next$177  = { \lc$174 [4:0], \bit  };
+  assign \word_count$169  = word_count;
+  assign \lc$171  = \lc$170 ;
+  assign lc_next = { \lc$170 [4:0], \bit  };
+  assign \lc_next$173  = { \lc$170 [4:0], \bit  };
   assign lc_load = load;
   assign lc_check = check;
-  assign \resync$183  = resync;
+  assign \resync$179  = resync;
   assign w1_enable = cycle[135];
-  assign \cpw_top$188  = cpw_top;
+  assign \cpw_top$184  = cpw_top;
   assign data1 = spw;
   assign bits = cycle[141:136];
   assign tolerance = cycle[154:147];
   assign match = spw_match;
   assign cfg = cycle;
-  assign \report_frame$197  = report_frame;
-  assign \fault$199  = fault;
-  assign \fault_status$201  = fault_status;
-  assign \crc_ok$203  = crc_ok;
+  assign \report_frame$193  = report_frame;
+  assign \fault$195  = fault;
+  assign \fault_status$197  = fault_status;
+  assign \crc_ok$199  = crc_ok;
   assign \repeat  = lc_repeat_seen;
   assign skip = lc_skip_seen;
   assign zero = lc_zero_seen;
-  assign \report$211  = report;
-  assign \report_frame$212  = report_frame;
-  assign \report_delay$214  = report_delay;
-  assign \valid$216  = \valid$215 ;
-  assign word_crc_ok = { \$12 , crc_ok[0] };
-  assign \first_rise$229  = first_rise;
-  assign \start$234  = ca_start;
-  assign \abort$235  = ca_abort;
+  assign \report$207  = report;
+  assign \report_frame$208  = report_frame;
+  assign \report_delay$210  = report_delay;
+  assign \valid$212  = \valid$211 ;
+  assign word_crc_ok = { \$16 , crc_ok[0] };
+  assign \first_rise$225  = first_rise;
+  assign \start$230  = ca_start;
+  assign \abort$231  = ca_abort;
   assign rbuf_addr = ca_rbuf_addr;
   assign rbuf_en = ca_rbuf_en;
   assign rbuf_data = ca_rbuf_data;
-  assign \busy$239  = ca_busy;
-  assign \done$240  = ca_done;
-  assign \cdm$242  = cdm;
+  assign \busy$235  = ca_busy;
+  assign \done$236  = ca_done;
+  assign \cdm$238  = cdm;
   assign held = ma_held;
   assign ma_hold = hold;
   assign frame_end = report;
-  assign frame_ok = \valid$215 ;
-  assign frame_cds = \cds$219 ;
+  assign frame_ok = \valid$211 ;
+  assign frame_cds = \cds$215 ;
   assign cdm_cycle = frame_cdm;
-  assign \overrun$255  = overrun;
-  assign \clear$256  = clear_counters;
-  assign \ma$258  = ma;
-  assign \done$259  = done;
+  assign \overrun$251  = overrun;
+  assign \clear$252  = clear_counters;
+  assign \ma$254  = ma;
+  assign \done$255  = done;
   assign valid_out = valid;
-  assign status = \result$261 [3:0];
-  assign timestamp = \result$261 [35:4];
-  assign line_delay = \result$261 [48:36];
-  assign cds = \result$261 [49];
-  assign word0_position = \result$261 [104:50];
-  assign word0_ne = \result$261 [105];
-  assign word0_nw = \result$261 [106];
-  assign word0_crc_ok = \result$261 [107];
-  assign word1_position = \result$261 [147:108];
-  assign word1_ne = \result$261 [148];
-  assign word1_nw = \result$261 [149];
-  assign word1_crc_ok = \result$261 [150];
-  assign lc = \result$261 [156:151];
-  assign lc_repeat = \result$261 [157];
-  assign lc_skip = \result$261 [158];
-  assign lc_zero = \result$261 [159];
-  assign spw_mismatch = \result$261 [160];
+  assign status = \result$257 [3:0];
+  assign timestamp = \result$257 [35:4];
+  assign line_delay = \result$257 [48:36];
+  assign cds = \result$257 [49];
+  assign word0_position = \result$257 [104:50];
+  assign word0_ne = \result$257 [105];
+  assign word0_nw = \result$257 [106];
+  assign word0_crc_ok = \result$257 [107];
+  assign word1_position = \result$257 [147:108];
+  assign word1_ne = \result$257 [148];
+  assign word1_nw = \result$257 [149];
+  assign word1_crc_ok = \result$257 [150];
+  assign lc = \result$257 [156:151];
+  assign lc_repeat = \result$257 [157];
+  assign lc_skip = \result$257 [158];
+  assign lc_zero = \result$257 [159];
+  assign spw_mismatch = \result$257 [160];
   assign ca_status = result[2:0];
   assign ca_bytes_done = result[9:3];
   assign count_crc_word0 = counts[15:0];
@@ -1129,16 +1152,16 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \words[1].nenw  = words[16];
   assign \words[1].lc  = words[17];
   assign \words[1].crc  = words[19:18];
-  assign \words$185[0]  = \words$185 [9:0];
-  assign \words$185[0].data_bits  = \words$185 [5:0];
-  assign \words$185[0].nenw  = \words$185 [6];
-  assign \words$185[0].lc  = \words$185 [7];
-  assign \words$185[0].crc  = \words$185 [9:8];
-  assign \words$185[1]  = \words$185 [19:10];
-  assign \words$185[1].data_bits  = \words$185 [15:10];
-  assign \words$185[1].nenw  = \words$185 [16];
-  assign \words$185[1].lc  = \words$185 [17];
-  assign \words$185[1].crc  = \words$185 [19:18];
+  assign \words$181[0]  = \words$181 [9:0];
+  assign \words$181[0].data_bits  = \words$181 [5:0];
+  assign \words$181[0].nenw  = \words$181 [6];
+  assign \words$181[0].lc  = \words$181 [7];
+  assign \words$181[0].crc  = \words$181 [9:8];
+  assign \words$181[1]  = \words$181 [19:10];
+  assign \words$181[1].data_bits  = \words$181 [15:10];
+  assign \words$181[1].nenw  = \words$181 [16];
+  assign \words$181[1].lc  = \words$181 [17];
+  assign \words$181[1].crc  = \words$181 [19:18];
   assign \cfg.ma_half_period  = cycle[15:0];
   assign \cfg.request_period  = cycle[39:16];
   assign \cfg.break_time  = cycle[63:40];
@@ -1178,10 +1201,10 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \frame.lc_skip  = frame[158];
   assign \frame.lc_zero  = frame[159];
   assign \frame.spw_mismatch  = frame[160];
-  assign \request$231.slave_id  = \request$231 [2:0];
-  assign \request$231.address  = \request$231 [9:3];
-  assign \request$231.count  = \request$231 [16:10];
-  assign \request$231.write  = \request$231 [17];
+  assign \request$227.slave_id  = \request$227 [2:0];
+  assign \request$227.address  = \request$227 [9:3];
+  assign \request$227.count  = \request$227 [16:10];
+  assign \request$227.write  = \request$227 [17];
   assign \wbuf.addr  = wbuf[3:0];
   assign \wbuf.data  = wbuf[35:4];
   assign \wbuf.en  = wbuf[39:36];
@@ -1230,25 +1253,25 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \counts.ca_refused  = counts[255:240];
   assign \counts.ca_aborted  = counts[271:256];
   assign \counts.ca_data_fault  = counts[287:272];
-  assign \result$261.status  = \result$261 [3:0];
-  assign \result$261.timestamp  = \result$261 [35:4];
-  assign \result$261.line_delay  = \result$261 [48:36];
-  assign \result$261.cds  = \result$261 [49];
-  assign \result$261.word0  = \result$261 [107:50];
-  assign \result$261.word0.position  = \result$261 [104:50];
-  assign \result$261.word0.ne  = \result$261 [105];
-  assign \result$261.word0.nw  = \result$261 [106];
-  assign \result$261.word0.crc_ok  = \result$261 [107];
-  assign \result$261.word1  = \result$261 [150:108];
-  assign \result$261.word1.position  = \result$261 [147:108];
-  assign \result$261.word1.ne  = \result$261 [148];
-  assign \result$261.word1.nw  = \result$261 [149];
-  assign \result$261.word1.crc_ok  = \result$261 [150];
-  assign \result$261.lc  = \result$261 [156:151];
-  assign \result$261.lc_repeat  = \result$261 [157];
-  assign \result$261.lc_skip  = \result$261 [158];
-  assign \result$261.lc_zero  = \result$261 [159];
-  assign \result$261.spw_mismatch  = \result$261 [160];
+  assign \result$257.status  = \result$257 [3:0];
+  assign \result$257.timestamp  = \result$257 [35:4];
+  assign \result$257.line_delay  = \result$257 [48:36];
+  assign \result$257.cds  = \result$257 [49];
+  assign \result$257.word0  = \result$257 [107:50];
+  assign \result$257.word0.position  = \result$257 [104:50];
+  assign \result$257.word0.ne  = \result$257 [105];
+  assign \result$257.word0.nw  = \result$257 [106];
+  assign \result$257.word0.crc_ok  = \result$257 [107];
+  assign \result$257.word1  = \result$257 [150:108];
+  assign \result$257.word1.position  = \result$257 [147:108];
+  assign \result$257.word1.ne  = \result$257 [148];
+  assign \result$257.word1.nw  = \result$257 [149];
+  assign \result$257.word1.crc_ok  = \result$257 [150];
+  assign \result$257.lc  = \result$257 [156:151];
+  assign \result$257.lc_repeat  = \result$257 [157];
+  assign \result$257.lc_skip  = \result$257 [158];
+  assign \result$257.lc_zero  = \result$257 [159];
+  assign \result$257.spw_mismatch  = \result$257 [160];
   assign events[17] = \$11 ;
   assign events[16] = \$9 ;
   assign events[15] = \$7 ;
@@ -1258,9 +1281,9 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign events[11] = faults[4];
   assign events[10] = overrun;
   assign events[9] = \$1 ;
-  assign events[8] = \lc_zero$222 ;
-  assign events[7] = \lc_skip$221 ;
-  assign events[6] = \lc_repeat$220 ;
+  assign events[8] = \lc_zero$218 ;
+  assign events[7] = \lc_skip$217 ;
+  assign events[6] = \lc_repeat$216 ;
   assign events[5] = faults[3];
   assign events[4] = faults[2];
   assign events[3] = faults[1];
@@ -1270,13 +1293,13 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign wbuf[39:36] = ca_wbuf_en;
   assign wbuf[35:4] = ca_wbuf_data;
   assign wbuf[3:0] = ca_wbuf_addr;
-  assign \request$231 [17] = ca_write;
-  assign \request$231 [16:10] = ca_count;
-  assign \request$231 [9:3] = ca_address;
-  assign \request$231 [2:0] = ca_slave_id;
+  assign \request$227 [17] = ca_write;
+  assign \request$227 [16:10] = ca_count;
+  assign \request$227 [9:3] = ca_address;
+  assign \request$227 [2:0] = ca_slave_id;
   assign frame[35:4] = first_rise_time;
-  assign frame[160] = \spw_mismatch$227 ;
-  assign frame[150] = \$12 ;
+  assign frame[160] = \spw_mismatch$223 ;
+  assign frame[150] = \$16 ;
   assign frame[149] = nw[1];
   assign frame[148] = ne[1];
   assign frame[147:108] = spw;
@@ -1284,15 +1307,15 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign frame[106] = nw[0];
   assign frame[105] = ne[0];
   assign frame[104:50] = data0;
-  assign frame[159] = \lc_zero$222 ;
-  assign frame[158] = \lc_skip$221 ;
-  assign frame[157] = \lc_repeat$220 ;
-  assign frame[156:151] = \lc$174 ;
-  assign frame[49] = \cds$219 ;
+  assign frame[159] = \lc_zero$218 ;
+  assign frame[158] = \lc_skip$217 ;
+  assign frame[157] = \lc_repeat$216 ;
+  assign frame[156:151] = \lc$170 ;
+  assign frame[49] = \cds$215 ;
   assign frame[48:36] = delay;
-  assign frame[3:0] = \status$218 ;
-  assign \words$185 [19:10] = cycle[145:136];
-  assign \words$185 [9:0] = cycle[134:125];
+  assign frame[3:0] = \status$214 ;
+  assign \words$181 [19:10] = cycle[145:136];
+  assign \words$181 [9:0] = cycle[134:125];
   assign words[19:10] = cycle[145:136];
   assign words[9:0] = cycle[134:125];
   assign live[154:147] = cfg_spw_tolerance;
@@ -1317,7 +1340,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout_limit, delay_limit, no_start_limit, idle, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$13  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$14  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -1485,7 +1508,7 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   assign \$38  = \$37  ? 24'h001f40 : live[111:88];
   assign \$39  = ! live[123:112];
   assign \$40  = \$39  ? 12'hfff : live[123:112];
-  assign \$41  = ack_limit + { cycle[15:0], 1'h0 };
+  assign \$41  = ack_limit + { cycle[15:0], 1'h1 };
   assign word_count = 1'h1 + cycle[135];
   always @(posedge clk)
     ok <= \$42 ;
@@ -1498,21 +1521,21 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   always @(posedge clk)
     delay_limit <= \$46 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$47  = \$41 ;
     if (rst) begin
       \$47  = 25'h0000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$42  = \$34 ;
     if (rst) begin
       \$42  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$43  = cycle;
     if (idle) begin
       \$43  = live;
@@ -1522,7 +1545,7 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$44  = ack_limit;
     if (idle) begin
       \$44  = \$36 ;
@@ -1532,7 +1555,7 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$45  = timeout_limit;
     if (idle) begin
       \$45  = \$38 ;
@@ -1542,7 +1565,7 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$46  = delay_limit;
     if (idle) begin
       \$46  = \$40 ;
@@ -1596,7 +1619,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master.controller (clk, rst, request, restart_timer, frame_doubtful, config_ok, end_check, cdm_cycle, idle, receiver_clear, resync, timer_clear, fault, fault_status, faults, ma_run, in_clock, ma_hold, report_frame, report_delay, slo_stuck
 , slo_stuck_live, break_over, ack_expired, no_start_expired, delay_over, ma_arm, ma_busy, ma_held, ma_enough, early, locked, slo, frame_done, stopped, slots_full, started, stop_bit, cdm, abort);
-  reg \$auto$verilog_backend.cc:2355:dump_module$14  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$15  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -1885,7 +1908,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, frame_doubtful
   assign \$12  = \$11  & ack_expired;
   assign \$13  = ~ locked_seen;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
     \$79  = cdm_cycle;
     if (idle) begin
       \$79  = cdm;
@@ -1895,14 +1918,14 @@ module \biss_master.controller (clk, rst, request, restart_timer, frame_doubtful
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
     \$80  = idle;
     if (rst) begin
       \$80  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
     \$81  = cycle_fsm_state;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -1999,7 +2022,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, frame_doubtful
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
     \$82  = idle;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -2096,7 +2119,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, frame_doubtful
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
     \$83  = receiver_clear;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -2193,7 +2216,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, frame_doubtful
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
     \$84  = armed;
     casez (cycle_fsm_state)
       3'h0:
@@ -2212,7 +2235,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, frame_doubtful
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
     \$85  = locked_seen;
     casez (cycle_fsm_state)
       3'h0:
@@ -2231,7 +2254,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, frame_doubtful
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
     \$86  = pause;
     casez (cycle_fsm_state)
       3'h0:
@@ -2251,7 +2274,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, frame_doubtful
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
     resync = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -2259,7 +2282,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, frame_doubtful
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
     timer_clear = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -2306,7 +2329,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, frame_doubtful
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
     fault = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -2361,7 +2384,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, frame_doubtful
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
     fault_status = 4'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -2416,7 +2439,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, frame_doubtful
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
     faults = 7'h00;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -2471,7 +2494,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, frame_doubtful
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
     ma_run = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -2487,7 +2510,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, frame_doubtful
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
     in_clock = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -2501,7 +2524,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, frame_doubtful
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
     ma_hold = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -2524,7 +2547,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, frame_doubtful
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
     report_frame = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -2555,7 +2578,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, frame_doubtful
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
     report_delay = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -2920,60 +2943,6 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.counters.count_aborted (clk, rst, inc, count, clear);
-  reg \$auto$verilog_backend.cc:2355:dump_module$15  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master.counters.count_ca_aborted (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$16  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -3027,7 +2996,7 @@ module \biss_master.counters.count_ca_aborted (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_ca_crc4_error (clk, rst, inc, count, clear);
+module \biss_master.counters.count_ca_aborted (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$17  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -3081,7 +3050,7 @@ module \biss_master.counters.count_ca_crc4_error (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_ca_data_fault (clk, rst, inc, count, clear);
+module \biss_master.counters.count_ca_crc4_error (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$18  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -3135,7 +3104,7 @@ module \biss_master.counters.count_ca_data_fault (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_ca_no_answer (clk, rst, inc, count, clear);
+module \biss_master.counters.count_ca_data_fault (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$19  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -3189,7 +3158,7 @@ module \biss_master.counters.count_ca_no_answer (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_ca_refused (clk, rst, inc, count, clear);
+module \biss_master.counters.count_ca_no_answer (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$20  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -3243,7 +3212,7 @@ module \biss_master.counters.count_ca_refused (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_crc_word0 (clk, rst, inc, count, clear);
+module \biss_master.counters.count_ca_refused (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$21  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -3297,7 +3266,7 @@ module \biss_master.counters.count_crc_word0 (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_crc_word1 (clk, rst, inc, count, clear);
+module \biss_master.counters.count_crc_word0 (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$22  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -3351,7 +3320,7 @@ module \biss_master.counters.count_crc_word1 (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_delay_range (clk, rst, inc, count, clear);
+module \biss_master.counters.count_crc_word1 (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$23  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -3405,7 +3374,7 @@ module \biss_master.counters.count_delay_range (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_lc_repeat (clk, rst, inc, count, clear);
+module \biss_master.counters.count_delay_range (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$24  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -3459,7 +3428,7 @@ module \biss_master.counters.count_lc_repeat (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_lc_skip (clk, rst, inc, count, clear);
+module \biss_master.counters.count_lc_repeat (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$25  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -3513,7 +3482,7 @@ module \biss_master.counters.count_lc_skip (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_lc_zero (clk, rst, inc, count, clear);
+module \biss_master.counters.count_lc_skip (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$26  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -3567,7 +3536,7 @@ module \biss_master.counters.count_lc_zero (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_no_ack (clk, rst, inc, count, clear);
+module \biss_master.counters.count_lc_zero (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$27  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -3621,7 +3590,7 @@ module \biss_master.counters.count_no_ack (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_no_start (clk, rst, inc, count, clear);
+module \biss_master.counters.count_no_ack (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$28  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -3675,7 +3644,7 @@ module \biss_master.counters.count_no_start (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_no_stop (clk, rst, inc, count, clear);
+module \biss_master.counters.count_no_start (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$29  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -3729,7 +3698,7 @@ module \biss_master.counters.count_no_stop (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_overrun (clk, rst, inc, count, clear);
+module \biss_master.counters.count_no_stop (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$30  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -3783,7 +3752,7 @@ module \biss_master.counters.count_overrun (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_slo_stuck_low (clk, rst, inc, count, clear);
+module \biss_master.counters.count_overrun (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$31  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -3837,7 +3806,7 @@ module \biss_master.counters.count_slo_stuck_low (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_spw_mismatch (clk, rst, inc, count, clear);
+module \biss_master.counters.count_slo_stuck_low (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$32  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -3891,9 +3860,63 @@ module \biss_master.counters.count_spw_mismatch (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.decoder (rst, word_count, \bit , lc_load, words, receiver_clear, sample, done, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1, lc, cpw_top, crc_ok
-, clk);
+module \biss_master.counters.count_spw_mismatch (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$33  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , receiver_clear, done, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1, lc, cpw_top, crc_ok
+, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$34  = 0;
   wire [6:0] \$1 ;
   wire [1:0] \$10 ;
   reg [2:0] \$100 ;
@@ -4276,7 +4299,7 @@ module \biss_master.decoder (rst, word_count, \bit , lc_load, words, receiver_cl
     .valid(\valid$52 )
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     (* full_case = 32'd1 *)
     casez (words[6])
       1'h0:
@@ -4286,7 +4309,7 @@ module \biss_master.decoder (rst, word_count, \bit , lc_load, words, receiver_cl
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -4300,7 +4323,7 @@ module \biss_master.decoder (rst, word_count, \bit , lc_load, words, receiver_cl
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     (* full_case = 32'd1 *)
     casez (words[9:6])
       4'h0:
@@ -4338,7 +4361,7 @@ module \biss_master.decoder (rst, word_count, \bit , lc_load, words, receiver_cl
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -4352,7 +4375,7 @@ module \biss_master.decoder (rst, word_count, \bit , lc_load, words, receiver_cl
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     (* full_case = 32'd1 *)
     casez (words[16])
       1'h0:
@@ -4362,7 +4385,7 @@ module \biss_master.decoder (rst, word_count, \bit , lc_load, words, receiver_cl
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     (* full_case = 32'd1 *)
     casez (words[17:16])
       2'h0:
@@ -4376,7 +4399,7 @@ module \biss_master.decoder (rst, word_count, \bit , lc_load, words, receiver_cl
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:16])
       4'h0:
@@ -4414,7 +4437,7 @@ module \biss_master.decoder (rst, word_count, \bit , lc_load, words, receiver_cl
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     (* full_case = 32'd1 *)
     casez (words[17:16])
       2'h0:
@@ -4428,7 +4451,7 @@ module \biss_master.decoder (rst, word_count, \bit , lc_load, words, receiver_cl
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     \$94  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -4452,7 +4475,7 @@ module \biss_master.decoder (rst, word_count, \bit , lc_load, words, receiver_cl
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     \$95  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -4474,7 +4497,7 @@ module \biss_master.decoder (rst, word_count, \bit , lc_load, words, receiver_cl
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     \$96  = slots;
     if (\$34 ) begin
       \$96  = \$35 [15:0];
@@ -4487,7 +4510,7 @@ module \biss_master.decoder (rst, word_count, \bit , lc_load, words, receiver_cl
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     \$97  = slots_full;
     if (\$34 ) begin
       \$97  = \$36 ;
@@ -4500,7 +4523,7 @@ module \biss_master.decoder (rst, word_count, \bit , lc_load, words, receiver_cl
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     \$98  = started;
     casez (decoder_fsm_state)
       3'h0:
@@ -4516,7 +4539,7 @@ module \biss_master.decoder (rst, word_count, \bit , lc_load, words, receiver_cl
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     \$99  = start_slot;
     casez (decoder_fsm_state)
       3'h0:
@@ -4532,7 +4555,7 @@ module \biss_master.decoder (rst, word_count, \bit , lc_load, words, receiver_cl
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     \$100  = decoder_fsm_state;
     casez (decoder_fsm_state)
       3'h0:
@@ -4564,7 +4587,7 @@ module \biss_master.decoder (rst, word_count, \bit , lc_load, words, receiver_cl
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     \$101  = cds;
     casez (decoder_fsm_state)
       3'h0:
@@ -4582,7 +4605,7 @@ module \biss_master.decoder (rst, word_count, \bit , lc_load, words, receiver_cl
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     \$102  = idx;
     casez (decoder_fsm_state)
       3'h0:
@@ -4607,7 +4630,7 @@ module \biss_master.decoder (rst, word_count, \bit , lc_load, words, receiver_cl
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     \$103  = in_data;
     casez (decoder_fsm_state)
       3'h0:
@@ -4632,7 +4655,7 @@ module \biss_master.decoder (rst, word_count, \bit , lc_load, words, receiver_cl
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     \$104  = in_lc;
     casez (decoder_fsm_state)
       3'h0:
@@ -4657,7 +4680,7 @@ module \biss_master.decoder (rst, word_count, \bit , lc_load, words, receiver_cl
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     \$105  = in_top;
     casez (decoder_fsm_state)
       3'h0:
@@ -4682,7 +4705,7 @@ module \biss_master.decoder (rst, word_count, \bit , lc_load, words, receiver_cl
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     \$106  = word;
     casez (decoder_fsm_state)
       3'h0:
@@ -4710,7 +4733,7 @@ module \biss_master.decoder (rst, word_count, \bit , lc_load, words, receiver_cl
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     \$107  = stop_bit;
     casez (decoder_fsm_state)
       3'h0:
@@ -4732,7 +4755,7 @@ module \biss_master.decoder (rst, word_count, \bit , lc_load, words, receiver_cl
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     \$108  = data0;
     if (\$58 ) begin
       \$108  = { data0[53:0], \bit  };
@@ -4745,7 +4768,7 @@ module \biss_master.decoder (rst, word_count, \bit , lc_load, words, receiver_cl
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     \$109  = ne;
     if (\$59 ) begin
       \$109 [0] = 1'h1;
@@ -4765,7 +4788,7 @@ module \biss_master.decoder (rst, word_count, \bit , lc_load, words, receiver_cl
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     \$110  = nw;
     if (\$59 ) begin
       \$110 [0] = 1'h1;
@@ -4787,7 +4810,7 @@ module \biss_master.decoder (rst, word_count, \bit , lc_load, words, receiver_cl
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     \$111  = data1;
     if (\$70 ) begin
       \$111  = { data1[38:0], \bit  };
@@ -4800,7 +4823,7 @@ module \biss_master.decoder (rst, word_count, \bit , lc_load, words, receiver_cl
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     \$112  = lc;
     if (lc_load) begin
       \$112  = { lc[4:0], \bit  };
@@ -4813,7 +4836,7 @@ module \biss_master.decoder (rst, word_count, \bit , lc_load, words, receiver_cl
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     \$113  = cpw_top;
     if (\$80 ) begin
       \$113  = { cpw_top[38:0], \bit  };
@@ -4826,7 +4849,7 @@ module \biss_master.decoder (rst, word_count, \bit , lc_load, words, receiver_cl
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     in_word = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -4862,8 +4885,8 @@ module \biss_master.decoder (rst, word_count, \bit , lc_load, words, receiver_cl
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.decoder.crc0 (rst, \bit , start, valid, kind, receiver_clear, ok, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$34  = 0;
+module \biss_master.decoder.crc0 (rst, start, valid, kind, \bit , receiver_clear, ok, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$35  = 0;
   wire [5:0] \$1 ;
   wire \$10 ;
   wire [5:0] \$11 ;
@@ -4957,7 +4980,7 @@ module \biss_master.decoder.crc0 (rst, \bit , start, valid, kind, receiver_clear
   assign \$auto$rtlil.cc:2739:Not$12  = ~ { crc16_reg[14], crc16_reg[11], crc16_reg[6:5], crc16_reg[3:2], 1'h0 };
   assign \$auto$rtlil.cc:2739:Not$10  = ~ { crc6_reg[0], 1'h0 };
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     \$31  = crc6_reg;
     if (valid) begin
       \$31  = \$5 ;
@@ -4972,7 +4995,7 @@ module \biss_master.decoder.crc0 (rst, \bit , start, valid, kind, receiver_clear
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     \$32  = crc6_match;
     if (valid) begin
       \$32  = \$15 ;
@@ -4987,7 +5010,7 @@ module \biss_master.decoder.crc0 (rst, \bit , start, valid, kind, receiver_clear
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     \$33  = crc16_reg;
     if (valid) begin
       \$33  = \$20 ;
@@ -5002,7 +5025,7 @@ module \biss_master.decoder.crc0 (rst, \bit , start, valid, kind, receiver_clear
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     \$34  = crc16_match;
     if (valid) begin
       \$34  = \$30 ;
@@ -5017,7 +5040,7 @@ module \biss_master.decoder.crc0 (rst, \bit , start, valid, kind, receiver_clear
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     ok = 1'h0;
     casez (kind)
       2'h0:
@@ -5028,17 +5051,17 @@ module \biss_master.decoder.crc0 (rst, \bit , start, valid, kind, receiver_clear
           ok = crc16_match;
     endcase
   end
+  assign \$8  = 1'h0;
   assign \$11 [5:2] = crc6_reg[4:1];
   assign \$11 [1:0] = \$auto$rtlil.cc:2739:Not$10 ;
-  assign \$8  = 1'h0;
   assign \$23  = 1'h0;
   assign { \$26 [14:13], \$26 [11:8], \$26 [5], \$26 [2:1] } = { crc16_reg[13:12], crc16_reg[10:7], crc16_reg[4], crc16_reg[1:0] };
   assign { \$26 [15], \$26 [12], \$26 [7:6], \$26 [4:3], \$26 [0] } = \$auto$rtlil.cc:2739:Not$12 ;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.decoder.crc1 (rst, \bit , start, valid, kind, receiver_clear, ok, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$35  = 0;
+module \biss_master.decoder.crc1 (rst, start, valid, kind, \bit , receiver_clear, ok, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$36  = 0;
   wire [5:0] \$1 ;
   wire \$10 ;
   wire [5:0] \$11 ;
@@ -5132,7 +5155,7 @@ module \biss_master.decoder.crc1 (rst, \bit , start, valid, kind, receiver_clear
   assign \$auto$rtlil.cc:2739:Not$6  = ~ { crc6_reg[0], 1'h0 };
   assign \$auto$rtlil.cc:2739:Not$8  = ~ { crc16_reg[14], crc16_reg[11], crc16_reg[6:5], crc16_reg[3:2], 1'h0 };
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
     \$31  = crc6_reg;
     if (valid) begin
       \$31  = \$5 ;
@@ -5147,7 +5170,7 @@ module \biss_master.decoder.crc1 (rst, \bit , start, valid, kind, receiver_clear
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
     \$32  = crc6_match;
     if (valid) begin
       \$32  = \$15 ;
@@ -5162,7 +5185,7 @@ module \biss_master.decoder.crc1 (rst, \bit , start, valid, kind, receiver_clear
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
     \$33  = crc16_reg;
     if (valid) begin
       \$33  = \$20 ;
@@ -5177,7 +5200,7 @@ module \biss_master.decoder.crc1 (rst, \bit , start, valid, kind, receiver_clear
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
     \$34  = crc16_match;
     if (valid) begin
       \$34  = \$30 ;
@@ -5192,7 +5215,7 @@ module \biss_master.decoder.crc1 (rst, \bit , start, valid, kind, receiver_clear
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
     ok = 1'h0;
     casez (kind)
       2'h0:
@@ -5203,9 +5226,9 @@ module \biss_master.decoder.crc1 (rst, \bit , start, valid, kind, receiver_clear
           ok = crc16_match;
     endcase
   end
+  assign \$8  = 1'h0;
   assign \$11 [5:2] = crc6_reg[4:1];
   assign \$11 [1:0] = \$auto$rtlil.cc:2739:Not$6 ;
-  assign \$8  = 1'h0;
   assign \$23  = 1'h0;
   assign { \$26 [14:13], \$26 [11:8], \$26 [5], \$26 [2:1] } = { crc16_reg[13:12], crc16_reg[10:7], crc16_reg[4], crc16_reg[1:0] };
   assign { \$26 [15], \$26 [12], \$26 [7:6], \$26 [4:3], \$26 [0] } = \$auto$rtlil.cc:2739:Not$8 ;
@@ -5213,7 +5236,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_rise, second_rise, ma, rises, busy, held, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$36  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$37  = 0;
   wire [16:0] \$1 ;
   wire \$10 ;
   wire [16:0] \$11 ;
@@ -5338,7 +5361,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
   always @(posedge clk)
     released <= \$42 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     \$34  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -5353,7 +5376,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     \$35  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -5368,7 +5391,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     \$36  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -5383,7 +5406,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     \$37  = ma;
     casez (ma_fsm_state)
       3'h0:
@@ -5412,7 +5435,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     \$38  = phase_left;
     casez (ma_fsm_state)
       3'h0:
@@ -5454,7 +5477,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     \$39  = last_clock;
     casez (ma_fsm_state)
       3'h0:
@@ -5496,7 +5519,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     \$40  = rises;
     casez (ma_fsm_state)
       3'h0:
@@ -5515,7 +5538,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     \$41  = ma_fsm_state;
     casez (ma_fsm_state)
       3'h0:
@@ -5551,7 +5574,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     \$42  = released;
     casez (ma_fsm_state)
       3'h0:
@@ -5575,7 +5598,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     busy = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -5591,7 +5614,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     held = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -5608,7 +5631,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.ma_stop (rst, words, w1_enable, clear, rises, enough, \started$10 , start_slot, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$37  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$38  = 0;
   reg [7:0] \$1 ;
   reg [7:0] \$10 ;
   wire [8:0] \$11 ;
@@ -5689,7 +5712,7 @@ module \biss_master.ma_stop (rst, words, w1_enable, clear, rises, enough, \start
   always @(posedge clk)
     word1_len <= \$17 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     (* full_case = 32'd1 *)
     casez (words[9:6])
       4'h0:
@@ -5727,7 +5750,7 @@ module \biss_master.ma_stop (rst, words, w1_enable, clear, rises, enough, \start
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:16])
       4'h0:
@@ -5765,42 +5788,42 @@ module \biss_master.ma_stop (rst, words, w1_enable, clear, rises, enough, \start
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     \$12  = \$2 [7:0];
     if (rst) begin
       \$12  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     \$13  = \$4 ;
     if (rst) begin
       \$13  = 9'h000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     \$14  = \$5 ;
     if (rst) begin
       \$14  = 17'h00000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     \$15  = \started$10 ;
     if (rst) begin
       \$15  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     \$16  = \$9 ;
     if (rst) begin
       \$16  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     \$17  = \$11 [7:0];
     if (rst) begin
       \$17  = 8'h00;
@@ -5820,7 +5843,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.register_access (abort, host_read__addr, host_read__en, clk, rst, frame_end, frame_ok, busy, rbuf_data, request, wbuf, frame_cdm, frame_cds, cdm, done, result, \start$44 );
-  reg \$auto$verilog_backend.cc:2355:dump_module$38  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$39  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$100 ;
@@ -6353,7 +6376,7 @@ module \biss_master.register_access (abort, host_read__addr, host_read__en, clk,
     .valid(valid)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     cdm = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -6375,7 +6398,7 @@ module \biss_master.register_access (abort, host_read__addr, host_read__en, clk,
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     start = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -6404,7 +6427,7 @@ module \biss_master.register_access (abort, host_read__addr, host_read__en, clk,
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     valid = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -6425,7 +6448,7 @@ module \biss_master.register_access (abort, host_read__addr, host_read__en, clk,
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     data = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -6446,7 +6469,7 @@ module \biss_master.register_access (abort, host_read__addr, host_read__en, clk,
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     \start$27  = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -6468,7 +6491,7 @@ module \biss_master.register_access (abort, host_read__addr, host_read__en, clk,
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     \valid$28  = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -6490,7 +6513,7 @@ module \biss_master.register_access (abort, host_read__addr, host_read__en, clk,
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     \data$29  = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -6512,7 +6535,7 @@ module \biss_master.register_access (abort, host_read__addr, host_read__en, clk,
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     byte_received__addr = 4'h0;
     casez (access_fsm_state)
       3'h0:
@@ -6538,7 +6561,7 @@ module \biss_master.register_access (abort, host_read__addr, host_read__en, clk,
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     byte_received__data = 32'd0;
     casez (access_fsm_state)
       3'h0:
@@ -6564,7 +6587,7 @@ module \biss_master.register_access (abort, host_read__addr, host_read__en, clk,
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     byte_received__en = 4'h0;
     casez (access_fsm_state)
       3'h0:
@@ -6590,7 +6613,7 @@ module \biss_master.register_access (abort, host_read__addr, host_read__en, clk,
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     \$152  = idle_run;
     if (frame_end) begin
       \$152  = \$72 [3:0];
@@ -6600,7 +6623,7 @@ module \biss_master.register_access (abort, host_read__addr, host_read__en, clk,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     \$153  = idle_seen;
     if (frame_end) begin
       \$153  = \$78 [3:0];
@@ -6610,7 +6633,7 @@ module \biss_master.register_access (abort, host_read__addr, host_read__en, clk,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     \$154  = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -6648,7 +6671,7 @@ module \biss_master.register_access (abort, host_read__addr, host_read__en, clk,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     \$155  = result;
     casez (access_fsm_state)
       3'h0:
@@ -6702,7 +6725,7 @@ module \biss_master.register_access (abort, host_read__addr, host_read__en, clk,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     \$156  = access_fsm_state;
     casez (access_fsm_state)
       3'h0:
@@ -6799,7 +6822,7 @@ module \biss_master.register_access (abort, host_read__addr, host_read__en, clk,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     \$157  = req;
     casez (access_fsm_state)
       3'h0:
@@ -6816,7 +6839,7 @@ module \biss_master.register_access (abort, host_read__addr, host_read__en, clk,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     \$158  = index;
     casez (access_fsm_state)
       3'h0:
@@ -6855,7 +6878,7 @@ module \biss_master.register_access (abort, host_read__addr, host_read__en, clk,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     \$159  = header;
     casez (access_fsm_state)
       3'h0:
@@ -6883,7 +6906,7 @@ module \biss_master.register_access (abort, host_read__addr, host_read__en, clk,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     \$160  = step;
     casez (access_fsm_state)
       3'h0:
@@ -6941,7 +6964,7 @@ module \biss_master.register_access (abort, host_read__addr, host_read__en, clk,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     \$161  = ending;
     casez (access_fsm_state)
       3'h0:
@@ -7008,7 +7031,7 @@ module \biss_master.register_access (abort, host_read__addr, host_read__en, clk,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     \$162  = to_send;
     casez (access_fsm_state)
       3'h0:
@@ -7037,7 +7060,7 @@ module \biss_master.register_access (abort, host_read__addr, host_read__en, clk,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     \$163  = sent;
     casez (access_fsm_state)
       3'h0:
@@ -7062,7 +7085,7 @@ module \biss_master.register_access (abort, host_read__addr, host_read__en, clk,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     \$164  = waited;
     casez (access_fsm_state)
       3'h0:
@@ -7094,7 +7117,7 @@ module \biss_master.register_access (abort, host_read__addr, host_read__en, clk,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     \$165  = got;
     casez (access_fsm_state)
       3'h0:
@@ -7119,7 +7142,7 @@ module \biss_master.register_access (abort, host_read__addr, host_read__en, clk,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     \$166  = got_crc;
     casez (access_fsm_state)
       3'h0:
@@ -7173,7 +7196,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.register_access.rx_crc (rst, crc, start, valid, data_in, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$39  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$40  = 0;
   wire [3:0] \$1 ;
   wire \$10 ;
   wire [3:0] \$11 ;
@@ -7216,7 +7239,7 @@ module \biss_master.register_access.rx_crc (rst, crc, start, valid, data_in, clk
     crc_reg <= \$13 ;
   assign \$auto$rtlil.cc:2739:Not$2  = ~ crc_reg;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
     \$13  = crc_reg;
     if (valid) begin
       \$13 [0] = \$3 ;
@@ -7240,7 +7263,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.register_access.tx_crc (rst, crc, start, valid, data_in, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$40  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$41  = 0;
   wire [3:0] \$1 ;
   wire \$10 ;
   wire [3:0] \$11 ;
@@ -7283,7 +7306,7 @@ module \biss_master.register_access.tx_crc (rst, crc, start, valid, data_in, clk
     crc_reg <= \$13 ;
   assign \$auto$rtlil.cc:2739:Not$4  = ~ crc_reg;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     \$13  = crc_reg;
     if (valid) begin
       \$13 [0] = \$3 ;
@@ -7307,7 +7330,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.results (rst, report, valid, frame, report_frame, report_delay, done, valid_out, result, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$41  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$42  = 0;
   reg \$1 ;
   reg \$2 ;
   reg [160:0] \$3 ;
@@ -7404,21 +7427,21 @@ module \biss_master.results (rst, report, valid, frame, report_frame, report_del
   always @(posedge clk)
     result <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
     \$1  = report;
     if (rst) begin
       \$1  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
     \$2  = valid;
     if (rst) begin
       \$2  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
     \$3  = result;
     if (report) begin
       \$3 [3:0] = frame[3:0];
@@ -7483,7 +7506,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, early, locked, delay, sample, level, slo);
-  reg \$auto$verilog_backend.cc:2355:dump_module$42  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$43  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -7721,7 +7744,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     .stage1(level)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     \$63  = level;
     if (receiver_clear) begin
       \$63  = 1'h1;
@@ -7731,7 +7754,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     \$64  = mid_delay;
     if (odd) begin
       \$64  = \$8 [12:0];
@@ -7756,7 +7779,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     \$65  = mid_slot;
     (* full_case = 32'd1 *)
     if (odd) begin
@@ -7783,7 +7806,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     \$66  = \$10 ;
     casez (sampler_fsm_state)
       2'h0:
@@ -7805,7 +7828,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     \$67  = elapsed;
     casez (sampler_fsm_state)
       2'h0:
@@ -7829,7 +7852,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     \$68  = early;
     casez (sampler_fsm_state)
       2'h0:
@@ -7845,7 +7868,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     \$69  = locked;
     casez (sampler_fsm_state)
       2'h0:
@@ -7871,7 +7894,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     \$70  = gap;
     casez (sampler_fsm_state)
       2'h0:
@@ -7902,7 +7925,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     \$71  = sampler_fsm_state;
     casez (sampler_fsm_state)
       2'h0:
@@ -7933,7 +7956,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     \$72  = slot_left;
     casez (sampler_fsm_state)
       2'h0:
@@ -7983,7 +8006,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     \$73  = slot_zero;
     casez (sampler_fsm_state)
       2'h0:
@@ -8033,7 +8056,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     \$74  = vote1;
     casez (sampler_fsm_state)
       2'h0:
@@ -8063,7 +8086,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     \$75  = vote2;
     casez (sampler_fsm_state)
       2'h0:
@@ -8091,7 +8114,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     \$76  = first_slot;
     casez (sampler_fsm_state)
       2'h0:
@@ -8117,7 +8140,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     \$77  = delay;
     casez (sampler_fsm_state)
       2'h0:
@@ -8140,7 +8163,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     \$78  = phase;
     casez (sampler_fsm_state)
       2'h0:
@@ -8180,7 +8203,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     sample = \$44 ;
     casez (sampler_fsm_state)
       2'h0:
@@ -8198,7 +8221,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     decided = 1'h0;
     casez (sampler_fsm_state)
       2'h0:
@@ -8248,7 +8271,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.scheduler (abort, period, clk, rst, periodic, request, overrun, idle, start);
-  reg \$auto$verilog_backend.cc:2355:dump_module$43  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$44  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -8329,7 +8352,7 @@ module \biss_master.scheduler (abort, period, clk, rst, periodic, request, overr
   always @(posedge clk)
     period_start <= \$28 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$27  = 24'h000001;
@@ -8341,7 +8364,7 @@ module \biss_master.scheduler (abort, period, clk, rst, periodic, request, overr
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$28  = 1'h1;
@@ -8358,8 +8381,8 @@ module \biss_master.scheduler (abort, period, clk, rst, periodic, request, overr
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.sign_of_life (rst, \port$482$0 , load, \repeat , skip, check, resync, lc, is_zero, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$44  = 0;
+module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1352$0 , resync, lc, is_zero, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$45  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -8396,8 +8419,8 @@ module \biss_master.sign_of_life (rst, \port$482$0 , load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$482$0 ;
-  wire \port$482$0 ;
+  input \port$1352$0 ;
+  wire \port$1352$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -8409,9 +8432,9 @@ module \biss_master.sign_of_life (rst, \port$482$0 , load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$482$0  };
-  assign \$2  = { lc[4:0], \port$482$0  } == last;
-  assign \$3  = { lc[4:0], \port$482$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$1352$0  };
+  assign \$2  = { lc[4:0], \port$1352$0  } == last;
+  assign \$3  = { lc[4:0], \port$1352$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = lc == 6'h3f;
@@ -8439,7 +8462,7 @@ module \biss_master.sign_of_life (rst, \port$482$0 , load, \repeat , skip, check
   always @(posedge clk)
     synced <= \$21 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
     \$16  = is_zero;
     if (load) begin
       \$16  = \$1 ;
@@ -8449,7 +8472,7 @@ module \biss_master.sign_of_life (rst, \port$482$0 , load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
     \$17  = is_last;
     if (load) begin
       \$17  = \$2 ;
@@ -8459,7 +8482,7 @@ module \biss_master.sign_of_life (rst, \port$482$0 , load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
     \$18  = is_expected;
     if (load) begin
       \$18  = \$3 ;
@@ -8469,7 +8492,7 @@ module \biss_master.sign_of_life (rst, \port$482$0 , load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
     \$19  = last;
     if (\$5 ) begin
       \$19  = lc;
@@ -8479,7 +8502,7 @@ module \biss_master.sign_of_life (rst, \port$482$0 , load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
     \$20  = expected;
     if (\$5 ) begin
       \$20  = \$8 [5:0];
@@ -8489,7 +8512,7 @@ module \biss_master.sign_of_life (rst, \port$482$0 , load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
     \$21  = synced;
     if (\$5 ) begin
       \$21  = 1'h1;
@@ -8501,13 +8524,13 @@ module \biss_master.sign_of_life (rst, \port$482$0 , load, \repeat , skip, check
       \$21  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$482$0  };
+  assign lc_next = { lc[4:0], \port$1352$0  };
   assign zero = is_zero;
 endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.spw_check (rst, bits, \tolerance$8 , spw, cpw_top, match, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$45  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$46  = 0;
   wire [40:0] \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -8712,28 +8735,28 @@ module \biss_master.spw_check (rst, bits, \tolerance$8 , spw, cpw_top, match, cl
   assign \$7  = bits > 3'h5;
   assign \$8  = bits > 3'h6;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     \$88  = \$42 ;
     if (rst) begin
       \$88  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     \$89  = \$84 ;
     if (rst) begin
       \$89  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     \$90  = \tolerance$8 ;
     if (rst) begin
       \$90  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     \$91  = \$87 ;
     if (rst) begin
       \$91  = 1'h0;
@@ -8743,7 +8766,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.time_base (rst, first_rise, first_rise_time, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$46  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$47  = 0;
   wire [32:0] \$1 ;
   reg [31:0] \$2 ;
   reg [31:0] \$3 ;
@@ -8762,14 +8785,14 @@ module \biss_master.time_base (rst, first_rise, first_rise_time, clk);
   always @(posedge clk)
     first_rise_time <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     \$2  = \$1 [31:0];
     if (rst) begin
       \$2  = 32'd0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     \$3  = first_rise_time;
     if (first_rise) begin
       \$3  = now;
@@ -8782,7 +8805,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.timers (timeout_live, clk, rst, restart, ma_busy, ack_limit, timeout_limit, delay_limit, no_start_limit, clear, in_clock, slo_stuck, slo_stuck_live, break_over, ack_expired, no_start_expired, delay_over, delay, slo, break_time);
-  reg \$auto$verilog_backend.cc:2355:dump_module$47  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$48  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -8920,7 +8943,7 @@ module \biss_master.timers (timeout_live, clk, rst, restart, ma_busy, ack_limit,
   always @(posedge clk)
     delay_over <= \$43 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     \$36  = slo_low_time_p1;
     if (\$1 ) begin
       \$36  = 25'h0000001;
@@ -8932,49 +8955,49 @@ module \biss_master.timers (timeout_live, clk, rst, restart, ma_busy, ack_limit,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     \$37  = \$8 ;
     if (rst) begin
       \$37  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     \$38  = \$16 ;
     if (rst) begin
       \$38  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     \$39  = \$20 [24:0];
     if (rst) begin
       \$39  = 25'h0000001;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     \$40  = \$26 ;
     if (rst) begin
       \$40  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     \$41  = \$30 ;
     if (rst) begin
       \$41  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     \$42  = \$34 ;
     if (rst) begin
       \$42  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     \$43  = \$35 ;
     if (rst) begin
       \$43  = 1'h0;
@@ -8983,8 +9006,8 @@ module \biss_master.timers (timeout_live, clk, rst, restart, ma_busy, ack_limit,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.verdict (lc_skip_seen, \port$882$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
-  reg \$auto$verilog_backend.cc:2355:dump_module$48  = 0;
+module \biss_master.verdict (lc_skip_seen, \port$884$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
+  reg \$auto$verilog_backend.cc:2355:dump_module$49  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -9097,8 +9120,8 @@ module \biss_master.verdict (lc_skip_seen, \port$882$0 , lc_check, lc_repeat, lc
   wire lc_zero;
   input lc_zero_seen;
   wire lc_zero_seen;
-  output \port$882$0 ;
-  wire \port$882$0 ;
+  output \port$884$0 ;
+  wire \port$884$0 ;
   output report;
   wire report;
   input report_frame;
@@ -9166,7 +9189,7 @@ module \biss_master.verdict (lc_skip_seen, \port$882$0 , lc_check, lc_repeat, lc
   assign \$29  = ~ { \$2 , crc_ok[0] };
   assign crc_error = report_frame ? \$29  : 2'h0;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     (* full_case = 32'd1 *)
     if (\$13 ) begin
       frame_status = 4'h3;
@@ -9183,7 +9206,7 @@ module \biss_master.verdict (lc_skip_seen, \port$882$0 , lc_check, lc_repeat, lc
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$882$0  = \$2 ;
+  assign \port$884$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

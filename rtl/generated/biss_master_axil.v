@@ -565,12 +565,12 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .ch1_irq(\$7 ),
     .clk(clk),
     .glob__trigger(glob__trigger),
-    .\port$3933$0 (\$8 ),
-    .\port$3940$0 (\$9 ),
-    .\port$4068$0 (\$10 ),
-    .\port$4368$0 (\$11 ),
-    .\port$4375$0 (\$12 ),
-    .\port$4503$0 (\$13 ),
+    .\port$3943$0 (\$8 ),
+    .\port$3950$0 (\$9 ),
+    .\port$4078$0 (\$10 ),
+    .\port$4384$0 (\$11 ),
+    .\port$4391$0 (\$12 ),
+    .\port$4519$0 (\$13 ),
     .rst(rst)
   );
   \biss_master_axil.bus  bus (
@@ -632,9 +632,9 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .clk(clk),
     .ma(ch0_ma),
     .periodic(regs__periodic),
-    .\port$3933$0 (\$8 ),
-    .\port$3940$0 (\$9 ),
-    .\port$4068$0 (\$10 ),
+    .\port$3943$0 (\$8 ),
+    .\port$3950$0 (\$9 ),
+    .\port$4078$0 (\$10 ),
     .regs__busy(ch0__busy),
     .regs__ca_busy(ch0__ca_busy),
     .regs__ca_done(ch0__ca_done),
@@ -684,9 +684,9 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .clk(clk),
     .ma(ch1_ma),
     .periodic(\regs__periodic$374 ),
-    .\port$4368$0 (\$11 ),
-    .\port$4375$0 (\$12 ),
-    .\port$4503$0 (\$13 ),
+    .\port$4384$0 (\$11 ),
+    .\port$4391$0 (\$12 ),
+    .\port$4519$0 (\$13 ),
     .regs__busy(ch1__busy),
     .regs__ca_busy(ch1__ca_busy),
     .regs__ca_done(ch1__ca_done),
@@ -1021,7 +1021,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, ch0__ca_wbuf_en, 
 , bus__w_addr, ch0__ca_wbuf_data, bus__w_strb, glob__trigger, ch0__start, ch0__abort_cycle, ch0__clear_counters, ch0__periodic, ch0__trigger_enable, ch0__cfg_ma_half_period, ch0__cfg_delay_limit, ch0__cfg_request_period, ch0__cfg_break_time, ch0__cfg_ack_limit, ch0__cfg_timeout_limit, ch0__cfg_w0_data_bits, ch0__cfg_w0_nenw, ch0__cfg_w0_lc, ch0__cfg_w0_crc, ch0__cfg_w1_data_bits, ch0__cfg_w1_nenw
 , ch0__cfg_w1_lc, ch0__cfg_w1_crc, ch0__cfg_w1_enable, ch0__cfg_end_check, ch0__cfg_spw_check, ch0__cfg_spw_tolerance, ch0__ca_slave_id, ch0__ca_address, ch0__ca_count, ch0__ca_write, ch0__ca_start, ch0__ca_abort, ch1__start, ch1__abort_cycle, ch1__clear_counters, ch1__periodic, ch1__trigger_enable, ch1__cfg_ma_half_period, ch1__cfg_delay_limit, ch1__cfg_request_period, ch1__cfg_break_time
 , ch1__cfg_ack_limit, ch1__cfg_timeout_limit, ch1__cfg_w0_data_bits, ch1__cfg_w0_nenw, ch1__cfg_w0_lc, ch1__cfg_w0_crc, ch1__cfg_w1_data_bits, ch1__cfg_w1_nenw, ch1__cfg_w1_lc, ch1__cfg_w1_crc, ch1__cfg_w1_enable, ch1__cfg_end_check, ch1__cfg_spw_check, ch1__cfg_spw_tolerance, ch1__ca_slave_id, ch1__ca_address, ch1__ca_count, ch1__ca_write, ch1__ca_start, ch1__ca_abort, ch0__done_count
-, ch0__done, \port$3933$0 , \port$3940$0 , ch0__ca_done, \port$4068$0 , ch1__done_count, ch1__done, \port$4368$0 , \port$4375$0 , ch1__ca_done, \port$4503$0 , bus__r_addr);
+, ch0__done, \port$3943$0 , \port$3950$0 , ch0__ca_done, \port$4078$0 , ch1__done_count, ch1__done, \port$4384$0 , \port$4391$0 , ch1__ca_done, \port$4519$0 , bus__r_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$26  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -2132,18 +2132,18 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, ch0__ca_wbuf_en, 
   output glob__trigger;
   reg glob__trigger = 1'h0;
   wire [1:0] irq;
-  input [160:0] \port$3933$0 ;
-  wire [160:0] \port$3933$0 ;
-  input [287:0] \port$3940$0 ;
-  wire [287:0] \port$3940$0 ;
-  input [9:0] \port$4068$0 ;
-  wire [9:0] \port$4068$0 ;
-  input [160:0] \port$4368$0 ;
-  wire [160:0] \port$4368$0 ;
-  input [287:0] \port$4375$0 ;
-  wire [287:0] \port$4375$0 ;
-  input [9:0] \port$4503$0 ;
-  wire [9:0] \port$4503$0 ;
+  input [160:0] \port$3943$0 ;
+  wire [160:0] \port$3943$0 ;
+  input [287:0] \port$3950$0 ;
+  wire [287:0] \port$3950$0 ;
+  input [9:0] \port$4078$0 ;
+  wire [9:0] \port$4078$0 ;
+  input [160:0] \port$4384$0 ;
+  wire [160:0] \port$4384$0 ;
+  input [287:0] \port$4391$0 ;
+  wire [287:0] \port$4391$0 ;
+  input [9:0] \port$4519$0 ;
+  wire [9:0] \port$4519$0 ;
   input rst;
   wire rst;
   reg window0_read = 1'h0;
@@ -3281,7 +3281,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, ch0__ca_wbuf_en, 
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$450  = ch0_result_status_status_snapshot;
     if (ch0_result_status_read) begin
-      \$450  = \port$3933$0 [3:0];
+      \$450  = \port$3943$0 [3:0];
     end
     if (rst) begin
       \$450  = 4'h0;
@@ -3291,7 +3291,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, ch0__ca_wbuf_en, 
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$451  = ch0_result_status_cds_snapshot;
     if (ch0_result_status_read) begin
-      \$451  = \port$3933$0 [49];
+      \$451  = \port$3943$0 [49];
     end
     if (rst) begin
       \$451  = 1'h0;
@@ -3301,7 +3301,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, ch0__ca_wbuf_en, 
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$452  = ch0_result_status_w0_ne_snapshot;
     if (ch0_result_status_read) begin
-      \$452  = \port$3933$0 [105];
+      \$452  = \port$3943$0 [105];
     end
     if (rst) begin
       \$452  = 1'h0;
@@ -3311,7 +3311,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, ch0__ca_wbuf_en, 
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$453  = ch0_result_status_w0_nw_snapshot;
     if (ch0_result_status_read) begin
-      \$453  = \port$3933$0 [106];
+      \$453  = \port$3943$0 [106];
     end
     if (rst) begin
       \$453  = 1'h0;
@@ -3321,7 +3321,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, ch0__ca_wbuf_en, 
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$454  = ch0_result_status_w0_crc_ok_snapshot;
     if (ch0_result_status_read) begin
-      \$454  = \port$3933$0 [107];
+      \$454  = \port$3943$0 [107];
     end
     if (rst) begin
       \$454  = 1'h0;
@@ -3331,7 +3331,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, ch0__ca_wbuf_en, 
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$455  = ch0_result_status_w1_ne_snapshot;
     if (ch0_result_status_read) begin
-      \$455  = \port$3933$0 [148];
+      \$455  = \port$3943$0 [148];
     end
     if (rst) begin
       \$455  = 1'h0;
@@ -3341,7 +3341,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, ch0__ca_wbuf_en, 
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$456  = ch0_result_status_w1_nw_snapshot;
     if (ch0_result_status_read) begin
-      \$456  = \port$3933$0 [149];
+      \$456  = \port$3943$0 [149];
     end
     if (rst) begin
       \$456  = 1'h0;
@@ -3351,7 +3351,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, ch0__ca_wbuf_en, 
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$457  = ch0_result_status_w1_crc_ok_snapshot;
     if (ch0_result_status_read) begin
-      \$457  = \port$3933$0 [150];
+      \$457  = \port$3943$0 [150];
     end
     if (rst) begin
       \$457  = 1'h0;
@@ -3361,7 +3361,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, ch0__ca_wbuf_en, 
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$458  = ch0_result_status_lc_repeat_snapshot;
     if (ch0_result_status_read) begin
-      \$458  = \port$3933$0 [157];
+      \$458  = \port$3943$0 [157];
     end
     if (rst) begin
       \$458  = 1'h0;
@@ -3371,7 +3371,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, ch0__ca_wbuf_en, 
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$459  = ch0_result_status_lc_skip_snapshot;
     if (ch0_result_status_read) begin
-      \$459  = \port$3933$0 [158];
+      \$459  = \port$3943$0 [158];
     end
     if (rst) begin
       \$459  = 1'h0;
@@ -3381,7 +3381,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, ch0__ca_wbuf_en, 
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$460  = ch0_result_status_lc_zero_snapshot;
     if (ch0_result_status_read) begin
-      \$460  = \port$3933$0 [159];
+      \$460  = \port$3943$0 [159];
     end
     if (rst) begin
       \$460  = 1'h0;
@@ -3391,7 +3391,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, ch0__ca_wbuf_en, 
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$461  = ch0_result_status_spw_mismatch_snapshot;
     if (ch0_result_status_read) begin
-      \$461  = \port$3933$0 [160];
+      \$461  = \port$3943$0 [160];
     end
     if (rst) begin
       \$461  = 1'h0;
@@ -3401,7 +3401,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, ch0__ca_wbuf_en, 
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$462  = ch0_result_status_lc_snapshot;
     if (ch0_result_status_read) begin
-      \$462  = \port$3933$0 [156:151];
+      \$462  = \port$3943$0 [156:151];
     end
     if (rst) begin
       \$462  = 6'h00;
@@ -3421,7 +3421,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, ch0__ca_wbuf_en, 
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$464  = ch0_result_seq_line_delay_snapshot;
     if (ch0_result_status_read) begin
-      \$464  = \port$3933$0 [48:36];
+      \$464  = \port$3943$0 [48:36];
     end
     if (rst) begin
       \$464  = 13'h0000;
@@ -3431,7 +3431,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, ch0__ca_wbuf_en, 
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$465  = ch0_result_w0_lo_data_snapshot;
     if (ch0_result_status_read) begin
-      \$465  = \port$3933$0 [81:50];
+      \$465  = \port$3943$0 [81:50];
     end
     if (rst) begin
       \$465  = 32'd0;
@@ -3441,7 +3441,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, ch0__ca_wbuf_en, 
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$466  = ch0_result_w0_hi_data_snapshot;
     if (ch0_result_status_read) begin
-      \$466  = \port$3933$0 [104:82];
+      \$466  = \port$3943$0 [104:82];
     end
     if (rst) begin
       \$466  = 23'h000000;
@@ -3451,7 +3451,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, ch0__ca_wbuf_en, 
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$467  = ch0_result_w1_lo_data_snapshot;
     if (ch0_result_status_read) begin
-      \$467  = \port$3933$0 [139:108];
+      \$467  = \port$3943$0 [139:108];
     end
     if (rst) begin
       \$467  = 32'd0;
@@ -3461,7 +3461,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, ch0__ca_wbuf_en, 
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$468  = ch0_result_w1_hi_data_snapshot;
     if (ch0_result_status_read) begin
-      \$468  = \port$3933$0 [147:140];
+      \$468  = \port$3943$0 [147:140];
     end
     if (rst) begin
       \$468  = 8'h00;
@@ -3471,7 +3471,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, ch0__ca_wbuf_en, 
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$469  = ch0_result_timestamp_time_snapshot;
     if (ch0_result_status_read) begin
-      \$469  = \port$3933$0 [35:4];
+      \$469  = \port$3943$0 [35:4];
     end
     if (rst) begin
       \$469  = 32'd0;
@@ -3822,7 +3822,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, ch0__ca_wbuf_en, 
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$505  = ch1_result_status_status_snapshot;
     if (ch1_result_status_read) begin
-      \$505  = \port$4368$0 [3:0];
+      \$505  = \port$4384$0 [3:0];
     end
     if (rst) begin
       \$505  = 4'h0;
@@ -3832,7 +3832,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, ch0__ca_wbuf_en, 
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$506  = ch1_result_status_cds_snapshot;
     if (ch1_result_status_read) begin
-      \$506  = \port$4368$0 [49];
+      \$506  = \port$4384$0 [49];
     end
     if (rst) begin
       \$506  = 1'h0;
@@ -3842,7 +3842,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, ch0__ca_wbuf_en, 
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$507  = ch1_result_status_w0_ne_snapshot;
     if (ch1_result_status_read) begin
-      \$507  = \port$4368$0 [105];
+      \$507  = \port$4384$0 [105];
     end
     if (rst) begin
       \$507  = 1'h0;
@@ -3852,7 +3852,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, ch0__ca_wbuf_en, 
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$508  = ch1_result_status_w0_nw_snapshot;
     if (ch1_result_status_read) begin
-      \$508  = \port$4368$0 [106];
+      \$508  = \port$4384$0 [106];
     end
     if (rst) begin
       \$508  = 1'h0;
@@ -3862,7 +3862,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, ch0__ca_wbuf_en, 
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$509  = ch1_result_status_w0_crc_ok_snapshot;
     if (ch1_result_status_read) begin
-      \$509  = \port$4368$0 [107];
+      \$509  = \port$4384$0 [107];
     end
     if (rst) begin
       \$509  = 1'h0;
@@ -3872,7 +3872,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, ch0__ca_wbuf_en, 
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$510  = ch1_result_status_w1_ne_snapshot;
     if (ch1_result_status_read) begin
-      \$510  = \port$4368$0 [148];
+      \$510  = \port$4384$0 [148];
     end
     if (rst) begin
       \$510  = 1'h0;
@@ -3882,7 +3882,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, ch0__ca_wbuf_en, 
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$511  = ch1_result_status_w1_nw_snapshot;
     if (ch1_result_status_read) begin
-      \$511  = \port$4368$0 [149];
+      \$511  = \port$4384$0 [149];
     end
     if (rst) begin
       \$511  = 1'h0;
@@ -3892,7 +3892,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, ch0__ca_wbuf_en, 
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$512  = ch1_result_status_w1_crc_ok_snapshot;
     if (ch1_result_status_read) begin
-      \$512  = \port$4368$0 [150];
+      \$512  = \port$4384$0 [150];
     end
     if (rst) begin
       \$512  = 1'h0;
@@ -3902,7 +3902,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, ch0__ca_wbuf_en, 
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$513  = ch1_result_status_lc_repeat_snapshot;
     if (ch1_result_status_read) begin
-      \$513  = \port$4368$0 [157];
+      \$513  = \port$4384$0 [157];
     end
     if (rst) begin
       \$513  = 1'h0;
@@ -3912,7 +3912,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, ch0__ca_wbuf_en, 
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$514  = ch1_result_status_lc_skip_snapshot;
     if (ch1_result_status_read) begin
-      \$514  = \port$4368$0 [158];
+      \$514  = \port$4384$0 [158];
     end
     if (rst) begin
       \$514  = 1'h0;
@@ -3922,7 +3922,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, ch0__ca_wbuf_en, 
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$515  = ch1_result_status_lc_zero_snapshot;
     if (ch1_result_status_read) begin
-      \$515  = \port$4368$0 [159];
+      \$515  = \port$4384$0 [159];
     end
     if (rst) begin
       \$515  = 1'h0;
@@ -3932,7 +3932,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, ch0__ca_wbuf_en, 
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$516  = ch1_result_status_spw_mismatch_snapshot;
     if (ch1_result_status_read) begin
-      \$516  = \port$4368$0 [160];
+      \$516  = \port$4384$0 [160];
     end
     if (rst) begin
       \$516  = 1'h0;
@@ -3942,7 +3942,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, ch0__ca_wbuf_en, 
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$517  = ch1_result_status_lc_snapshot;
     if (ch1_result_status_read) begin
-      \$517  = \port$4368$0 [156:151];
+      \$517  = \port$4384$0 [156:151];
     end
     if (rst) begin
       \$517  = 6'h00;
@@ -3962,7 +3962,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, ch0__ca_wbuf_en, 
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$519  = ch1_result_seq_line_delay_snapshot;
     if (ch1_result_status_read) begin
-      \$519  = \port$4368$0 [48:36];
+      \$519  = \port$4384$0 [48:36];
     end
     if (rst) begin
       \$519  = 13'h0000;
@@ -3972,7 +3972,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, ch0__ca_wbuf_en, 
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$520  = ch1_result_w0_lo_data_snapshot;
     if (ch1_result_status_read) begin
-      \$520  = \port$4368$0 [81:50];
+      \$520  = \port$4384$0 [81:50];
     end
     if (rst) begin
       \$520  = 32'd0;
@@ -3982,7 +3982,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, ch0__ca_wbuf_en, 
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$521  = ch1_result_w0_hi_data_snapshot;
     if (ch1_result_status_read) begin
-      \$521  = \port$4368$0 [104:82];
+      \$521  = \port$4384$0 [104:82];
     end
     if (rst) begin
       \$521  = 23'h000000;
@@ -3992,7 +3992,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, ch0__ca_wbuf_en, 
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$522  = ch1_result_w1_lo_data_snapshot;
     if (ch1_result_status_read) begin
-      \$522  = \port$4368$0 [139:108];
+      \$522  = \port$4384$0 [139:108];
     end
     if (rst) begin
       \$522  = 32'd0;
@@ -4002,7 +4002,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, ch0__ca_wbuf_en, 
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$523  = ch1_result_w1_hi_data_snapshot;
     if (ch1_result_status_read) begin
-      \$523  = \port$4368$0 [147:140];
+      \$523  = \port$4384$0 [147:140];
     end
     if (rst) begin
       \$523  = 8'h00;
@@ -4012,7 +4012,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, ch0__ca_wbuf_en, 
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$524  = ch1_result_timestamp_time_snapshot;
     if (ch1_result_status_read) begin
-      \$524  = \port$4368$0 [35:4];
+      \$524  = \port$4384$0 [35:4];
     end
     if (rst) begin
       \$524  = 32'd0;
@@ -4059,7 +4059,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, ch0__ca_wbuf_en, 
         11'h08e:
             \$525  = { 16'h0000, ch0__cfg_spw_tolerance, 6'h00, ch0__cfg_spw_check, ch0__cfg_end_check };
         11'h090:
-            \$525  = { 2'h0, \port$3933$0 [156:151], 4'h0, \port$3933$0 [160:157], 1'h0, \port$3933$0 [150:148], 1'h0, \port$3933$0 [107:105], 3'h0, \port$3933$0 [49], \port$3933$0 [3:0] };
+            \$525  = { 2'h0, \port$3943$0 [156:151], 4'h0, \port$3943$0 [160:157], 1'h0, \port$3943$0 [150:148], 1'h0, \port$3943$0 [107:105], 3'h0, \port$3943$0 [49], \port$3943$0 [3:0] };
         11'h091:
             \$525  = { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot };
         11'h092:
@@ -4073,31 +4073,31 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, ch0__ca_wbuf_en, 
         11'h096:
             \$525  = ch0_result_timestamp_time_snapshot;
         11'h098:
-            \$525  = \port$3940$0 [31:0];
+            \$525  = \port$3950$0 [31:0];
         11'h099:
-            \$525  = \port$3940$0 [63:32];
+            \$525  = \port$3950$0 [63:32];
         11'h09a:
-            \$525  = \port$3940$0 [95:64];
+            \$525  = \port$3950$0 [95:64];
         11'h09b:
-            \$525  = \port$3940$0 [127:96];
+            \$525  = \port$3950$0 [127:96];
         11'h09c:
-            \$525  = \port$3940$0 [159:128];
+            \$525  = \port$3950$0 [159:128];
         11'h09d:
-            \$525  = \port$3940$0 [191:160];
+            \$525  = \port$3950$0 [191:160];
         11'h09e:
-            \$525  = { 16'h0000, \port$3940$0 [207:192] };
+            \$525  = { 16'h0000, \port$3950$0 [207:192] };
         11'h0c0:
             \$525  = { 7'h00, ch0__ca_write, 1'h0, ch0__ca_count, 1'h0, ch0__ca_address, 5'h00, ch0__ca_slave_id };
         11'h0c1:
             \$525  = 32'd0;
         11'h0c2:
-            \$525  = { 17'h00000, \port$4068$0 [9:3], 1'h0, \port$4068$0 [2:0], 3'h0, ch0__ca_busy };
+            \$525  = { 17'h00000, \port$4078$0 [9:3], 1'h0, \port$4078$0 [2:0], 3'h0, ch0__ca_busy };
         11'h0c3:
-            \$525  = \port$3940$0 [239:208];
+            \$525  = \port$3950$0 [239:208];
         11'h0c4:
-            \$525  = \port$3940$0 [271:240];
+            \$525  = \port$3950$0 [271:240];
         11'h0c5:
-            \$525  = { 16'h0000, \port$3940$0 [287:272] };
+            \$525  = { 16'h0000, \port$3950$0 [287:272] };
         11'h100:
             \$525  = { 22'h000000, ch1__trigger_enable, ch1__periodic, 8'h00 };
         11'h101:
@@ -4123,7 +4123,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, ch0__ca_wbuf_en, 
         11'h10e:
             \$525  = { 16'h0000, ch1__cfg_spw_tolerance, 6'h00, ch1__cfg_spw_check, ch1__cfg_end_check };
         11'h110:
-            \$525  = { 2'h0, \port$4368$0 [156:151], 4'h0, \port$4368$0 [160:157], 1'h0, \port$4368$0 [150:148], 1'h0, \port$4368$0 [107:105], 3'h0, \port$4368$0 [49], \port$4368$0 [3:0] };
+            \$525  = { 2'h0, \port$4384$0 [156:151], 4'h0, \port$4384$0 [160:157], 1'h0, \port$4384$0 [150:148], 1'h0, \port$4384$0 [107:105], 3'h0, \port$4384$0 [49], \port$4384$0 [3:0] };
         11'h111:
             \$525  = { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot };
         11'h112:
@@ -4137,31 +4137,31 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, ch0__ca_wbuf_en, 
         11'h116:
             \$525  = ch1_result_timestamp_time_snapshot;
         11'h118:
-            \$525  = \port$4375$0 [31:0];
+            \$525  = \port$4391$0 [31:0];
         11'h119:
-            \$525  = \port$4375$0 [63:32];
+            \$525  = \port$4391$0 [63:32];
         11'h11a:
-            \$525  = \port$4375$0 [95:64];
+            \$525  = \port$4391$0 [95:64];
         11'h11b:
-            \$525  = \port$4375$0 [127:96];
+            \$525  = \port$4391$0 [127:96];
         11'h11c:
-            \$525  = \port$4375$0 [159:128];
+            \$525  = \port$4391$0 [159:128];
         11'h11d:
-            \$525  = \port$4375$0 [191:160];
+            \$525  = \port$4391$0 [191:160];
         11'h11e:
-            \$525  = { 16'h0000, \port$4375$0 [207:192] };
+            \$525  = { 16'h0000, \port$4391$0 [207:192] };
         11'h140:
             \$525  = { 7'h00, ch1__ca_write, 1'h0, ch1__ca_count, 1'h0, ch1__ca_address, 5'h00, ch1__ca_slave_id };
         11'h141:
             \$525  = 32'd0;
         11'h142:
-            \$525  = { 17'h00000, \port$4503$0 [9:3], 1'h0, \port$4503$0 [2:0], 3'h0, ch1__ca_busy };
+            \$525  = { 17'h00000, \port$4519$0 [9:3], 1'h0, \port$4519$0 [2:0], 3'h0, ch1__ca_busy };
         11'h143:
-            \$525  = \port$4375$0 [239:208];
+            \$525  = \port$4391$0 [239:208];
         11'h144:
-            \$525  = \port$4375$0 [271:240];
+            \$525  = \port$4391$0 [271:240];
         11'h145:
-            \$525  = { 16'h0000, \port$4375$0 [287:272] };
+            \$525  = { 16'h0000, \port$4391$0 [287:272] };
         default:
             \$525  = 32'd0;
       endcase
@@ -4256,40 +4256,40 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, ch0__ca_wbuf_en, 
   assign ch1__ca_wbuf_data = ch0__ca_wbuf_data;
   assign ch1__ca_rbuf_addr = bus__r_addr[3:0];
   assign irq = { ch1_irq, ch0_irq };
-  assign ch0__status = \port$3933$0 [3:0];
-  assign ch0__cds = \port$3933$0 [49];
-  assign ch0__word0_ne = \port$3933$0 [105];
-  assign ch0__word0_nw = \port$3933$0 [106];
-  assign ch0__word0_crc_ok = \port$3933$0 [107];
-  assign ch0__word1_ne = \port$3933$0 [148];
-  assign ch0__word1_nw = \port$3933$0 [149];
-  assign ch0__word1_crc_ok = \port$3933$0 [150];
-  assign ch0__lc_repeat = \port$3933$0 [157];
-  assign ch0__lc_skip = \port$3933$0 [158];
-  assign ch0__lc_zero = \port$3933$0 [159];
-  assign ch0__spw_mismatch = \port$3933$0 [160];
-  assign ch0__lc = \port$3933$0 [156:151];
-  assign ch0__line_delay = \port$3933$0 [48:36];
-  assign ch0__word0_position = \port$3933$0 [104:50];
-  assign ch0__word1_position = \port$3933$0 [147:108];
-  assign ch0__timestamp = \port$3933$0 [35:4];
-  assign ch1__status = \port$4368$0 [3:0];
-  assign ch1__cds = \port$4368$0 [49];
-  assign ch1__word0_ne = \port$4368$0 [105];
-  assign ch1__word0_nw = \port$4368$0 [106];
-  assign ch1__word0_crc_ok = \port$4368$0 [107];
-  assign ch1__word1_ne = \port$4368$0 [148];
-  assign ch1__word1_nw = \port$4368$0 [149];
-  assign ch1__word1_crc_ok = \port$4368$0 [150];
-  assign ch1__lc_repeat = \port$4368$0 [157];
-  assign ch1__lc_skip = \port$4368$0 [158];
-  assign ch1__lc_zero = \port$4368$0 [159];
-  assign ch1__spw_mismatch = \port$4368$0 [160];
-  assign ch1__lc = \port$4368$0 [156:151];
-  assign ch1__line_delay = \port$4368$0 [48:36];
-  assign ch1__word0_position = \port$4368$0 [104:50];
-  assign ch1__word1_position = \port$4368$0 [147:108];
-  assign ch1__timestamp = \port$4368$0 [35:4];
+  assign ch0__status = \port$3943$0 [3:0];
+  assign ch0__cds = \port$3943$0 [49];
+  assign ch0__word0_ne = \port$3943$0 [105];
+  assign ch0__word0_nw = \port$3943$0 [106];
+  assign ch0__word0_crc_ok = \port$3943$0 [107];
+  assign ch0__word1_ne = \port$3943$0 [148];
+  assign ch0__word1_nw = \port$3943$0 [149];
+  assign ch0__word1_crc_ok = \port$3943$0 [150];
+  assign ch0__lc_repeat = \port$3943$0 [157];
+  assign ch0__lc_skip = \port$3943$0 [158];
+  assign ch0__lc_zero = \port$3943$0 [159];
+  assign ch0__spw_mismatch = \port$3943$0 [160];
+  assign ch0__lc = \port$3943$0 [156:151];
+  assign ch0__line_delay = \port$3943$0 [48:36];
+  assign ch0__word0_position = \port$3943$0 [104:50];
+  assign ch0__word1_position = \port$3943$0 [147:108];
+  assign ch0__timestamp = \port$3943$0 [35:4];
+  assign ch1__status = \port$4384$0 [3:0];
+  assign ch1__cds = \port$4384$0 [49];
+  assign ch1__word0_ne = \port$4384$0 [105];
+  assign ch1__word0_nw = \port$4384$0 [106];
+  assign ch1__word0_crc_ok = \port$4384$0 [107];
+  assign ch1__word1_ne = \port$4384$0 [148];
+  assign ch1__word1_nw = \port$4384$0 [149];
+  assign ch1__word1_crc_ok = \port$4384$0 [150];
+  assign ch1__lc_repeat = \port$4384$0 [157];
+  assign ch1__lc_skip = \port$4384$0 [158];
+  assign ch1__lc_zero = \port$4384$0 [159];
+  assign ch1__spw_mismatch = \port$4384$0 [160];
+  assign ch1__lc = \port$4384$0 [156:151];
+  assign ch1__line_delay = \port$4384$0 [48:36];
+  assign ch1__word0_position = \port$4384$0 [104:50];
+  assign ch1__word1_position = \port$4384$0 [147:108];
+  assign ch1__timestamp = \port$4384$0 [35:4];
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, ch1_irq, ch0_irq };
   assign ch0__cap_data_bits_w0 = 6'h37;
@@ -4298,52 +4298,52 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, ch0__ca_wbuf_en, 
   assign ch0__cap_counters = 1'h1;
   assign ch0__cap_timestamp = 1'h1;
   assign ch0__cap_register_access = 1'h1;
-  assign ch0__count_crc_word0 = \port$3940$0 [15:0];
-  assign ch0__count_crc_word1 = \port$3940$0 [31:16];
-  assign ch0__count_no_ack = \port$3940$0 [47:32];
-  assign ch0__count_no_start = \port$3940$0 [63:48];
-  assign ch0__count_delay_range = \port$3940$0 [79:64];
-  assign ch0__count_slo_stuck_low = \port$3940$0 [95:80];
-  assign ch0__count_lc_repeat = \port$3940$0 [111:96];
-  assign ch0__count_lc_skip = \port$3940$0 [127:112];
-  assign ch0__count_lc_zero = \port$3940$0 [143:128];
-  assign ch0__count_spw_mismatch = \port$3940$0 [159:144];
-  assign ch0__count_overrun = \port$3940$0 [175:160];
-  assign ch0__count_aborted = \port$3940$0 [191:176];
-  assign ch0__count_no_stop = \port$3940$0 [207:192];
-  assign ch0__ca_status = \port$4068$0 [2:0];
-  assign ch0__ca_bytes_done = \port$4068$0 [9:3];
-  assign ch0__count_ca_crc4_error = \port$3940$0 [223:208];
-  assign ch0__count_ca_no_answer = \port$3940$0 [239:224];
-  assign ch0__count_ca_refused = \port$3940$0 [255:240];
-  assign ch0__count_ca_aborted = \port$3940$0 [271:256];
-  assign ch0__count_ca_data_fault = \port$3940$0 [287:272];
+  assign ch0__count_crc_word0 = \port$3950$0 [15:0];
+  assign ch0__count_crc_word1 = \port$3950$0 [31:16];
+  assign ch0__count_no_ack = \port$3950$0 [47:32];
+  assign ch0__count_no_start = \port$3950$0 [63:48];
+  assign ch0__count_delay_range = \port$3950$0 [79:64];
+  assign ch0__count_slo_stuck_low = \port$3950$0 [95:80];
+  assign ch0__count_lc_repeat = \port$3950$0 [111:96];
+  assign ch0__count_lc_skip = \port$3950$0 [127:112];
+  assign ch0__count_lc_zero = \port$3950$0 [143:128];
+  assign ch0__count_spw_mismatch = \port$3950$0 [159:144];
+  assign ch0__count_overrun = \port$3950$0 [175:160];
+  assign ch0__count_aborted = \port$3950$0 [191:176];
+  assign ch0__count_no_stop = \port$3950$0 [207:192];
+  assign ch0__ca_status = \port$4078$0 [2:0];
+  assign ch0__ca_bytes_done = \port$4078$0 [9:3];
+  assign ch0__count_ca_crc4_error = \port$3950$0 [223:208];
+  assign ch0__count_ca_no_answer = \port$3950$0 [239:224];
+  assign ch0__count_ca_refused = \port$3950$0 [255:240];
+  assign ch0__count_ca_aborted = \port$3950$0 [271:256];
+  assign ch0__count_ca_data_fault = \port$3950$0 [287:272];
   assign ch1__cap_data_bits_w0 = 6'h37;
   assign ch1__cap_data_bits_w1 = 6'h28;
   assign ch1__cap_timer_width = 6'h18;
   assign ch1__cap_counters = 1'h1;
   assign ch1__cap_timestamp = 1'h1;
   assign ch1__cap_register_access = 1'h1;
-  assign ch1__count_crc_word0 = \port$4375$0 [15:0];
-  assign ch1__count_crc_word1 = \port$4375$0 [31:16];
-  assign ch1__count_no_ack = \port$4375$0 [47:32];
-  assign ch1__count_no_start = \port$4375$0 [63:48];
-  assign ch1__count_delay_range = \port$4375$0 [79:64];
-  assign ch1__count_slo_stuck_low = \port$4375$0 [95:80];
-  assign ch1__count_lc_repeat = \port$4375$0 [111:96];
-  assign ch1__count_lc_skip = \port$4375$0 [127:112];
-  assign ch1__count_lc_zero = \port$4375$0 [143:128];
-  assign ch1__count_spw_mismatch = \port$4375$0 [159:144];
-  assign ch1__count_overrun = \port$4375$0 [175:160];
-  assign ch1__count_aborted = \port$4375$0 [191:176];
-  assign ch1__count_no_stop = \port$4375$0 [207:192];
-  assign ch1__ca_status = \port$4503$0 [2:0];
-  assign ch1__ca_bytes_done = \port$4503$0 [9:3];
-  assign ch1__count_ca_crc4_error = \port$4375$0 [223:208];
-  assign ch1__count_ca_no_answer = \port$4375$0 [239:224];
-  assign ch1__count_ca_refused = \port$4375$0 [255:240];
-  assign ch1__count_ca_aborted = \port$4375$0 [271:256];
-  assign ch1__count_ca_data_fault = \port$4375$0 [287:272];
+  assign ch1__count_crc_word0 = \port$4391$0 [15:0];
+  assign ch1__count_crc_word1 = \port$4391$0 [31:16];
+  assign ch1__count_no_ack = \port$4391$0 [47:32];
+  assign ch1__count_no_start = \port$4391$0 [63:48];
+  assign ch1__count_delay_range = \port$4391$0 [79:64];
+  assign ch1__count_slo_stuck_low = \port$4391$0 [95:80];
+  assign ch1__count_lc_repeat = \port$4391$0 [111:96];
+  assign ch1__count_lc_skip = \port$4391$0 [127:112];
+  assign ch1__count_lc_zero = \port$4391$0 [143:128];
+  assign ch1__count_spw_mismatch = \port$4391$0 [159:144];
+  assign ch1__count_overrun = \port$4391$0 [175:160];
+  assign ch1__count_aborted = \port$4391$0 [191:176];
+  assign ch1__count_no_stop = \port$4391$0 [207:192];
+  assign ch1__ca_status = \port$4519$0 [2:0];
+  assign ch1__ca_bytes_done = \port$4519$0 [9:3];
+  assign ch1__count_ca_crc4_error = \port$4391$0 [223:208];
+  assign ch1__count_ca_no_answer = \port$4391$0 [239:224];
+  assign ch1__count_ca_refused = \port$4391$0 [255:240];
+  assign ch1__count_ca_aborted = \port$4391$0 [271:256];
+  assign ch1__count_ca_data_fault = \port$4391$0 [287:272];
   assign g_irq = 1'h0;
   assign \$79  = \$78 ;
   assign \$81  = \$80 ;
@@ -4559,7 +4559,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__ca_busy, regs__ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period
 , cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort
-, regs__done_count, ma, regs__done, \port$3933$0 , \port$3940$0 , regs__ca_done, \port$4068$0 , ca_rbuf_addr);
+, regs__done_count, ma, regs__done, \port$3943$0 , \port$3950$0 , regs__ca_done, \port$4078$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$28  = 0;
   wire \$1 ;
   wire [16:0] \$2 ;
@@ -4684,12 +4684,12 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_
   wire \ma$164 ;
   input periodic;
   wire periodic;
-  output [160:0] \port$3933$0 ;
-  wire [160:0] \port$3933$0 ;
-  output [287:0] \port$3940$0 ;
-  wire [287:0] \port$3940$0 ;
-  output [9:0] \port$4068$0 ;
-  wire [9:0] \port$4068$0 ;
+  output [160:0] \port$3943$0 ;
+  wire [160:0] \port$3943$0 ;
+  output [287:0] \port$3950$0 ;
+  wire [287:0] \port$3950$0 ;
+  output [9:0] \port$4078$0 ;
+  wire [9:0] \port$4078$0 ;
   wire regs__abort_cycle;
   output regs__busy;
   wire regs__busy;
@@ -4836,8 +4836,8 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_
   assign trigger = \trigger$161  & regs__trigger_enable;
   \biss_master_axil.ch0.core  core (
     .abort(abort_cycle),
-    .\abort$187 (ca_abort),
-    .\busy$237 (regs__busy),
+    .\abort$183 (ca_abort),
+    .\busy$233 (regs__busy),
     .ca_address(ca_address),
     .ca_count(ca_count),
     .ca_done(regs__ca_done),
@@ -4865,24 +4865,24 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_
     .cfg_w1_enable(cfg_w1_enable),
     .cfg_w1_lc(cfg_w1_lc),
     .cfg_w1_nenw(cfg_w1_nenw),
-    .\clear$214 (clear_counters),
+    .\clear$210 (clear_counters),
     .clk(clk),
     .config_error(regs__config_error),
     .counts(\$5 ),
-    .\done$240 (regs__done),
+    .\done$236 (regs__done),
     .frames(regs__ca_busy),
     .ma(ma),
     .\periodic$24 (periodic),
     .rbuf_addr(ca_rbuf_addr),
     .rbuf_en(ca_rbuf_en),
     .result(\$6 ),
-    .\result$245 (\$4 ),
+    .\result$241 (\$4 ),
     .rst(rst),
     .slo(slo),
     .start(start),
-    .\start$185 (ca_start),
+    .\start$181 (ca_start),
     .trigger(trigger),
-    .\valid$242 (valid)
+    .\valid$238 (valid)
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
@@ -5015,19 +5015,24 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_
   assign regs__ca_rbuf_en = ca_rbuf_en;
   assign \ma$164  = ma;
   assign \slo$166  = slo;
-  assign \port$3933$0  = \$4 ;
-  assign \port$3940$0  = \$5 ;
-  assign \port$4068$0  = \$6 ;
+  assign \port$3943$0  = \$4 ;
+  assign \port$3950$0  = \$5 ;
+  assign \port$4078$0  = \$6 ;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy$237 , config_error, frames, ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, abort, \clear$214 , \periodic$24 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit
-, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, \start$185 , \abort$187 , ma, \done$240 
-, \valid$242 , \result$245 , counts, ca_done, result, rbuf_addr);
+module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy$233 , config_error, frames, ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, abort, \clear$210 , \periodic$24 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit
+, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, \start$181 , \abort$183 , ma, \done$236 
+, \valid$238 , \result$241 , counts, ca_done, result, rbuf_addr);
+  reg \$auto$verilog_backend.cc:2355:dump_module$29  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
   wire \$12 ;
+  wire \$13 ;
+  reg \$14 ;
+  reg \$15 ;
+  wire \$16 ;
   wire \$2 ;
   wire \$3 ;
   wire \$4 ;
@@ -5038,8 +5043,8 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire \$9 ;
   input abort;
   wire abort;
-  input \abort$187 ;
-  wire \abort$187 ;
+  input \abort$183 ;
+  wire \abort$183 ;
   wire \abort$36 ;
   wire abort_cycle;
   wire ack_expired;
@@ -5047,16 +5052,16 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire [23:0] ack_limit;
   wire [23:0] \ack_limit$89 ;
   wire arm;
-  wire \bit ;
-  wire \bit$113 ;
+  reg \bit  = 1'h0;
+  wire \bit$263 ;
   wire [5:0] bits;
   wire break_over;
   wire \break_over$66 ;
   wire [23:0] break_time;
   wire busy;
-  wire \busy$196 ;
-  output \busy$237 ;
-  wire \busy$237 ;
+  wire \busy$192 ;
+  output \busy$233 ;
+  wire \busy$233 ;
   wire ca_abort;
   input [6:0] ca_address;
   wire [6:0] ca_address;
@@ -5091,10 +5096,10 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   input ca_write;
   wire ca_write;
   wire cdm;
-  wire \cdm$200 ;
+  wire \cdm$196 ;
   wire cdm_cycle;
   wire cds;
-  wire \cds$248 ;
+  wire \cds$244 ;
   wire [154:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
@@ -5171,8 +5176,8 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire check;
   wire clear;
   wire \clear$106 ;
-  input \clear$214 ;
-  wire \clear$214 ;
+  input \clear$210 ;
+  wire \clear$210 ;
   wire clear_counters;
   input clk;
   wire clk;
@@ -5219,10 +5224,10 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire [15:0] \counts.slo_stuck_low ;
   wire [15:0] \counts.spw_mismatch ;
   wire [39:0] cpw_top;
-  wire [39:0] \cpw_top$130 ;
+  wire [39:0] \cpw_top$126 ;
   wire [1:0] crc_error;
   wire [1:0] crc_ok;
-  wire [1:0] \crc_ok$145 ;
+  wire [1:0] \crc_ok$141 ;
   wire [154:0] cycle;
   wire [23:0] \cycle.ack_limit ;
   wire [23:0] \cycle.break_time ;
@@ -5261,10 +5266,10 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire delay_over;
   wire \delay_over$76 ;
   wire done;
-  wire \done$198 ;
-  output \done$240 ;
-  wire \done$240 ;
-  wire \done$241 ;
+  wire \done$194 ;
+  output \done$236 ;
+  wire \done$236 ;
+  wire \done$237 ;
   wire doubtful;
   wire early;
   wire \early$52 ;
@@ -5290,7 +5295,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire \events.slo_stuck_low ;
   wire \events.spw_mismatch ;
   wire fault;
-  wire \fault$141 ;
+  wire \fault$137 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -5320,7 +5325,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
-  wire [3:0] \fault_status$143 ;
+  wire [3:0] \fault_status$139 ;
   wire [6:0] faults;
   wire \faults.aborted ;
   wire \faults.bad_config ;
@@ -5330,7 +5335,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire \faults.no_stop ;
   wire \faults.slo_stuck_low ;
   wire first_rise;
-  wire \first_rise$171 ;
+  wire \first_rise$167 ;
   wire [31:0] first_rise_time;
   wire [160:0] frame;
   wire \frame.cds ;
@@ -5384,20 +5389,20 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire in_clock;
   wire \in_clock$83 ;
   wire [5:0] lc;
-  wire [5:0] \lc$117 ;
-  wire [5:0] \lc$257 ;
+  wire [5:0] \lc$113 ;
+  wire [5:0] \lc$253 ;
   wire lc_check;
   wire lc_load;
   wire [5:0] lc_next;
-  wire [5:0] \lc_next$119 ;
+  wire [5:0] \lc_next$115 ;
   wire lc_repeat;
-  wire \lc_repeat$258 ;
+  wire \lc_repeat$254 ;
   wire lc_repeat_seen;
   wire lc_skip;
-  wire \lc_skip$259 ;
+  wire \lc_skip$255 ;
   wire lc_skip_seen;
   wire lc_zero;
-  wire \lc_zero$260 ;
+  wire \lc_zero$256 ;
   wire lc_zero_seen;
   wire level;
   wire [12:0] line_delay;
@@ -5435,7 +5440,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire \locked$50 ;
   output ma;
   wire ma;
-  wire \ma$236 ;
+  wire \ma$232 ;
   wire ma_arm;
   wire ma_busy;
   wire \ma_busy$78 ;
@@ -5452,7 +5457,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire [1:0] nw;
   wire ok;
   wire overrun;
-  wire \overrun$239 ;
+  wire \overrun$235 ;
   wire [23:0] period;
   wire periodic;
   input \periodic$24 ;
@@ -5465,32 +5470,32 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire receiver_clear;
   wire \repeat ;
   wire report;
-  wire \report$153 ;
+  wire \report$149 ;
   wire report_delay;
-  wire \report_delay$156 ;
+  wire \report_delay$152 ;
   wire report_frame;
-  wire \report_frame$139 ;
-  wire \report_frame$154 ;
+  wire \report_frame$135 ;
+  wire \report_frame$150 ;
   wire request;
-  wire [17:0] \request$173 ;
-  wire [6:0] \request$173.address ;
-  wire [6:0] \request$173.count ;
-  wire [2:0] \request$173.slave_id ;
-  wire \request$173.write ;
+  wire [17:0] \request$169 ;
+  wire [6:0] \request$169.address ;
+  wire [6:0] \request$169.count ;
+  wire [2:0] \request$169.slave_id ;
+  wire \request$169.write ;
   wire \request$35 ;
   wire restart;
   wire restart_timer;
   output [9:0] result;
   wire [9:0] result;
-  output [160:0] \result$245 ;
-  wire [160:0] \result$245 ;
-  wire \result$245.cds ;
-  wire [5:0] \result$245.lc ;
-  wire \result$245.lc_repeat ;
-  wire \result$245.lc_skip ;
-  wire \result$245.lc_zero ;
-  wire [12:0] \result$245.line_delay ;
-  wire \result$245.spw_mismatch ;
+  output [160:0] \result$241 ;
+  wire [160:0] \result$241 ;
+  wire \result$241.cds ;
+  wire [5:0] \result$241.lc ;
+  wire \result$241.lc_repeat ;
+  wire \result$241.lc_skip ;
+  wire \result$241.lc_zero ;
+  wire [12:0] \result$241.line_delay ;
+  wire \result$241.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -5505,18 +5510,18 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
-  wire [3:0] \result$245.status ;
-  wire [31:0] \result$245.timestamp ;
-  wire [57:0] \result$245.word0 ;
-  wire \result$245.word0.crc_ok ;
-  wire \result$245.word0.ne ;
-  wire \result$245.word0.nw ;
-  wire [54:0] \result$245.word0.position ;
-  wire [42:0] \result$245.word1 ;
-  wire \result$245.word1.crc_ok ;
-  wire \result$245.word1.ne ;
-  wire \result$245.word1.nw ;
-  wire [39:0] \result$245.word1.position ;
+  wire [3:0] \result$241.status ;
+  wire [31:0] \result$241.timestamp ;
+  wire [57:0] \result$241.word0 ;
+  wire \result$241.word0.crc_ok ;
+  wire \result$241.word0.ne ;
+  wire \result$241.word0.nw ;
+  wire [54:0] \result$241.word0.position ;
+  wire [42:0] \result$241.word1 ;
+  wire \result$241.word1.crc_ok ;
+  wire \result$241.word1.ne ;
+  wire \result$241.word1.nw ;
+  wire [39:0] \result$241.word1.position ;
   wire [6:0] \result.bytes_done ;
   (* enum_base_type = "AccessStatus" *)
   (* enum_value_000 = "OK" *)
@@ -5528,14 +5533,14 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* enum_value_110 = "BAD_REQUEST" *)
   wire [2:0] \result.status ;
   wire resync;
-  wire \resync$125 ;
+  wire \resync$121 ;
   wire [15:0] rises;
   wire [15:0] \rises$105 ;
   input rst;
   wire rst;
   wire run;
-  wire sample;
-  wire \sample$111 ;
+  reg sample = 1'h0;
+  wire \sample$261 ;
   wire second_rise;
   wire skip;
   input slo;
@@ -5552,11 +5557,11 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire [39:0] spw;
   wire spw_match;
   wire spw_mismatch;
-  wire \spw_mismatch$261 ;
+  wire \spw_mismatch$257 ;
   input start;
   wire start;
-  input \start$185 ;
-  wire \start$185 ;
+  input \start$181 ;
+  wire \start$181 ;
   wire \start$22 ;
   wire [15:0] start_slot;
   wire [15:0] \start_slot$103 ;
@@ -5592,7 +5597,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
-  wire [3:0] \status$244 ;
+  wire [3:0] \status$240 ;
   wire stop_bit;
   wire \stop_bit$62 ;
   wire stopped;
@@ -5607,9 +5612,9 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire trigger;
   wire \trigger$33 ;
   wire valid;
-  wire \valid$158 ;
-  output \valid$242 ;
-  wire \valid$242 ;
+  wire \valid$154 ;
+  output \valid$238 ;
+  wire \valid$238 ;
   wire valid_out;
   wire w1_enable;
   wire [39:0] wbuf;
@@ -5625,28 +5630,28 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire word1_nw;
   wire [39:0] word1_position;
   wire [1:0] word_count;
-  wire [1:0] \word_count$115 ;
+  wire [1:0] \word_count$111 ;
   wire [1:0] word_crc_ok;
   wire [19:0] words;
-  wire [19:0] \words$127 ;
-  wire [9:0] \words$127[0] ;
+  wire [19:0] \words$123 ;
+  wire [9:0] \words$123[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
-  wire [1:0] \words$127[0].crc ;
-  wire [5:0] \words$127[0].data_bits ;
-  wire \words$127[0].lc ;
-  wire \words$127[0].nenw ;
-  wire [9:0] \words$127[1] ;
+  wire [1:0] \words$123[0].crc ;
+  wire [5:0] \words$123[0].data_bits ;
+  wire \words$123[0].lc ;
+  wire \words$123[0].nenw ;
+  wire [9:0] \words$123[1] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
-  wire [1:0] \words$127[1].crc ;
-  wire [5:0] \words$127[1].data_bits ;
-  wire \words$127[1].lc ;
-  wire \words$127[1].nenw ;
+  wire [1:0] \words$123[1].crc ;
+  wire [5:0] \words$123[1].data_bits ;
+  wire \words$123[1].lc ;
+  wire \words$123[1].nenw ;
   wire [9:0] \words[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
@@ -5678,8 +5683,14 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign \$9  = ca_done & \$8 ;
   assign \$10  = result[2:0] == 3'h5;
   assign \$11  = ca_done & \$10 ;
-  assign \busy$237  = ~ idle;
+  assign \busy$233  = ~ idle;
   assign config_error = ~ config_ok;
+  assign \$12  = ~ \clear$106 ;
+  assign \$13  = \sample$261  & \$12 ;
+  always @(posedge clk)
+    sample <= \$14 ;
+  always @(posedge clk)
+    \bit  <= \$15 ;
   \biss_master_axil.ch0.core.config  \config  (
     .ack_limit(ack_limit),
     .clk(clk),
@@ -5736,7 +5747,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .timer_clear(clear)
   );
   \biss_master_axil.ch0.core.counters  counters (
-    .clear(\clear$214 ),
+    .clear(\clear$210 ),
     .clk(clk),
     .counts(counts),
     .events(events),
@@ -5789,10 +5800,10 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .start_slot(start_slot),
     .\started$10 (started),
     .w1_enable(cycle[135]),
-    .words(\words$127 )
+    .words(\words$123 )
   );
   \biss_master_axil.ch0.core.register_access  register_access (
-    .abort(\abort$187 ),
+    .abort(\abort$183 ),
     .busy(frames),
     .cdm(cdm),
     .clk(clk),
@@ -5804,27 +5815,27 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .host_read__addr(rbuf_addr),
     .host_read__en(rbuf_en),
     .rbuf_data(ca_rbuf_data),
-    .request(\request$173 ),
+    .request(\request$169 ),
     .result(result),
     .rst(rst),
-    .\start$44 (\start$185 ),
+    .\start$44 (\start$181 ),
     .wbuf(wbuf)
   );
   \biss_master_axil.ch0.core.results  results (
     .clk(clk),
-    .done(\done$240 ),
+    .done(\done$236 ),
     .frame(frame),
     .report(report),
     .report_delay(report_delay),
     .report_frame(report_frame),
-    .result(\result$245 ),
+    .result(\result$241 ),
     .rst(rst),
     .valid(valid),
-    .valid_out(\valid$242 )
+    .valid_out(\valid$238 )
   );
   \biss_master_axil.ch0.core.sampler  sampler (
     .arm(ma_arm),
-    .\bit (\bit ),
+    .\bit (\bit$263 ),
     .clk(clk),
     .delay(delay),
     .early(early),
@@ -5833,7 +5844,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .locked(locked),
     .receiver_clear(\clear$106 ),
     .rst(rst),
-    .sample(sample),
+    .sample(\sample$261 ),
     .slo(slo)
   );
   \biss_master_axil.ch0.core.scheduler  scheduler (
@@ -5854,7 +5865,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$1213$0 (\bit ),
+    .\port$3684$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -5911,7 +5922,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .lc_skip_seen(lc_skip_seen),
     .lc_zero(lc_zero),
     .lc_zero_seen(lc_zero_seen),
-    .\port$1613$0 (\$12 ),
+    .\port$1615$0 (\$16 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -5919,6 +5930,20 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .status(status),
     .valid(valid)
   );
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    \$14  = \$13 ;
+    if (rst) begin
+      \$14  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    \$15  = \bit$263 ;
+    if (rst) begin
+      \$15  = 1'h0;
+    end
+  end
   assign \idle$20  = idle;
   assign \start$22  = start;
   assign period = cfg_request_period;
@@ -5968,53 +5993,51 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign receiver_clear = \clear$106 ;
   assign \half_period$108  = cycle[15:0];
   assign arm = ma_arm;
-  assign \sample$111  = sample;
-  assign \bit$113  = \bit ;
-  assign \word_count$115  = word_count;
-  assign \lc$117  = lc;
+  assign \word_count$111  = word_count;
+  assign \lc$113  = lc;
   assign lc_next = { lc[4:0], \bit  };
-  assign \lc_next$119  = { lc[4:0], \bit  };
+  assign \lc_next$115  = { lc[4:0], \bit  };
   assign lc_load = load;
   assign lc_check = check;
-  assign \resync$125  = resync;
+  assign \resync$121  = resync;
   assign w1_enable = cycle[135];
-  assign \cpw_top$130  = cpw_top;
+  assign \cpw_top$126  = cpw_top;
   assign data1 = spw;
   assign bits = cycle[141:136];
   assign tolerance = cycle[154:147];
   assign match = spw_match;
   assign cfg = cycle;
-  assign \report_frame$139  = report_frame;
-  assign \fault$141  = fault;
-  assign \fault_status$143  = fault_status;
-  assign \crc_ok$145  = crc_ok;
+  assign \report_frame$135  = report_frame;
+  assign \fault$137  = fault;
+  assign \fault_status$139  = fault_status;
+  assign \crc_ok$141  = crc_ok;
   assign \repeat  = lc_repeat_seen;
   assign skip = lc_skip_seen;
   assign zero = lc_zero_seen;
-  assign \report$153  = report;
-  assign \report_frame$154  = report_frame;
-  assign \report_delay$156  = report_delay;
-  assign \valid$158  = valid;
-  assign word_crc_ok = { \$12 , crc_ok[0] };
-  assign \first_rise$171  = first_rise;
+  assign \report$149  = report;
+  assign \report_frame$150  = report_frame;
+  assign \report_delay$152  = report_delay;
+  assign \valid$154  = valid;
+  assign word_crc_ok = { \$16 , crc_ok[0] };
+  assign \first_rise$167  = first_rise;
   assign ca_status = result[2:0];
   assign ca_bytes_done = result[9:3];
-  assign ca_start = \start$185 ;
-  assign ca_abort = \abort$187 ;
+  assign ca_start = \start$181 ;
+  assign ca_abort = \abort$183 ;
   assign ca_rbuf_addr = rbuf_addr;
   assign ca_rbuf_en = rbuf_en;
   assign rbuf_data = ca_rbuf_data;
   assign ca_busy = frames;
-  assign \busy$196  = frames;
-  assign \done$198  = ca_done;
-  assign \cdm$200  = cdm;
+  assign \busy$192  = frames;
+  assign \done$194  = ca_done;
+  assign \cdm$196  = cdm;
   assign held = ma_held;
   assign ma_hold = hold;
   assign frame_end = report;
   assign frame_ok = valid;
   assign frame_cds = cds;
   assign cdm_cycle = frame_cdm;
-  assign clear_counters = \clear$214 ;
+  assign clear_counters = \clear$210 ;
   assign count_crc_word0 = counts[15:0];
   assign count_crc_word1 = counts[31:16];
   assign count_no_ack = counts[47:32];
@@ -6033,27 +6056,27 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign count_ca_refused = counts[255:240];
   assign count_ca_aborted = counts[271:256];
   assign count_ca_data_fault = counts[287:272];
-  assign \ma$236  = ma;
-  assign \overrun$239  = overrun;
-  assign \done$241  = \done$240 ;
-  assign valid_out = \valid$242 ;
-  assign \status$244  = \result$245 [3:0];
-  assign timestamp = \result$245 [35:4];
-  assign line_delay = \result$245 [48:36];
-  assign \cds$248  = \result$245 [49];
-  assign word0_position = \result$245 [104:50];
-  assign word0_ne = \result$245 [105];
-  assign word0_nw = \result$245 [106];
-  assign word0_crc_ok = \result$245 [107];
-  assign word1_position = \result$245 [147:108];
-  assign word1_ne = \result$245 [148];
-  assign word1_nw = \result$245 [149];
-  assign word1_crc_ok = \result$245 [150];
-  assign \lc$257  = \result$245 [156:151];
-  assign \lc_repeat$258  = \result$245 [157];
-  assign \lc_skip$259  = \result$245 [158];
-  assign \lc_zero$260  = \result$245 [159];
-  assign \spw_mismatch$261  = \result$245 [160];
+  assign \ma$232  = ma;
+  assign \overrun$235  = overrun;
+  assign \done$237  = \done$236 ;
+  assign valid_out = \valid$238 ;
+  assign \status$240  = \result$241 [3:0];
+  assign timestamp = \result$241 [35:4];
+  assign line_delay = \result$241 [48:36];
+  assign \cds$244  = \result$241 [49];
+  assign word0_position = \result$241 [104:50];
+  assign word0_ne = \result$241 [105];
+  assign word0_nw = \result$241 [106];
+  assign word0_crc_ok = \result$241 [107];
+  assign word1_position = \result$241 [147:108];
+  assign word1_ne = \result$241 [148];
+  assign word1_nw = \result$241 [149];
+  assign word1_crc_ok = \result$241 [150];
+  assign \lc$253  = \result$241 [156:151];
+  assign \lc_repeat$254  = \result$241 [157];
+  assign \lc_skip$255  = \result$241 [158];
+  assign \lc_zero$256  = \result$241 [159];
+  assign \spw_mismatch$257  = \result$241 [160];
   assign \live.ma_half_period  = live[15:0];
   assign \live.request_period  = live[39:16];
   assign \live.break_time  = live[63:40];
@@ -6104,16 +6127,16 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign \words[1].nenw  = words[16];
   assign \words[1].lc  = words[17];
   assign \words[1].crc  = words[19:18];
-  assign \words$127[0]  = \words$127 [9:0];
-  assign \words$127[0].data_bits  = \words$127 [5:0];
-  assign \words$127[0].nenw  = \words$127 [6];
-  assign \words$127[0].lc  = \words$127 [7];
-  assign \words$127[0].crc  = \words$127 [9:8];
-  assign \words$127[1]  = \words$127 [19:10];
-  assign \words$127[1].data_bits  = \words$127 [15:10];
-  assign \words$127[1].nenw  = \words$127 [16];
-  assign \words$127[1].lc  = \words$127 [17];
-  assign \words$127[1].crc  = \words$127 [19:18];
+  assign \words$123[0]  = \words$123 [9:0];
+  assign \words$123[0].data_bits  = \words$123 [5:0];
+  assign \words$123[0].nenw  = \words$123 [6];
+  assign \words$123[0].lc  = \words$123 [7];
+  assign \words$123[0].crc  = \words$123 [9:8];
+  assign \words$123[1]  = \words$123 [19:10];
+  assign \words$123[1].data_bits  = \words$123 [15:10];
+  assign \words$123[1].nenw  = \words$123 [16];
+  assign \words$123[1].lc  = \words$123 [17];
+  assign \words$123[1].crc  = \words$123 [19:18];
   assign \cfg.ma_half_period  = cycle[15:0];
   assign \cfg.request_period  = cycle[39:16];
   assign \cfg.break_time  = cycle[63:40];
@@ -6153,10 +6176,10 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign \frame.lc_skip  = frame[158];
   assign \frame.lc_zero  = frame[159];
   assign \frame.spw_mismatch  = frame[160];
-  assign \request$173.slave_id  = \request$173 [2:0];
-  assign \request$173.address  = \request$173 [9:3];
-  assign \request$173.count  = \request$173 [16:10];
-  assign \request$173.write  = \request$173 [17];
+  assign \request$169.slave_id  = \request$169 [2:0];
+  assign \request$169.address  = \request$169 [9:3];
+  assign \request$169.count  = \request$169 [16:10];
+  assign \request$169.write  = \request$169 [17];
   assign \wbuf.addr  = wbuf[3:0];
   assign \wbuf.data  = wbuf[35:4];
   assign \wbuf.en  = wbuf[39:36];
@@ -6205,25 +6228,25 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign \counts.ca_refused  = counts[255:240];
   assign \counts.ca_aborted  = counts[271:256];
   assign \counts.ca_data_fault  = counts[287:272];
-  assign \result$245.status  = \result$245 [3:0];
-  assign \result$245.timestamp  = \result$245 [35:4];
-  assign \result$245.line_delay  = \result$245 [48:36];
-  assign \result$245.cds  = \result$245 [49];
-  assign \result$245.word0  = \result$245 [107:50];
-  assign \result$245.word0.position  = \result$245 [104:50];
-  assign \result$245.word0.ne  = \result$245 [105];
-  assign \result$245.word0.nw  = \result$245 [106];
-  assign \result$245.word0.crc_ok  = \result$245 [107];
-  assign \result$245.word1  = \result$245 [150:108];
-  assign \result$245.word1.position  = \result$245 [147:108];
-  assign \result$245.word1.ne  = \result$245 [148];
-  assign \result$245.word1.nw  = \result$245 [149];
-  assign \result$245.word1.crc_ok  = \result$245 [150];
-  assign \result$245.lc  = \result$245 [156:151];
-  assign \result$245.lc_repeat  = \result$245 [157];
-  assign \result$245.lc_skip  = \result$245 [158];
-  assign \result$245.lc_zero  = \result$245 [159];
-  assign \result$245.spw_mismatch  = \result$245 [160];
+  assign \result$241.status  = \result$241 [3:0];
+  assign \result$241.timestamp  = \result$241 [35:4];
+  assign \result$241.line_delay  = \result$241 [48:36];
+  assign \result$241.cds  = \result$241 [49];
+  assign \result$241.word0  = \result$241 [107:50];
+  assign \result$241.word0.position  = \result$241 [104:50];
+  assign \result$241.word0.ne  = \result$241 [105];
+  assign \result$241.word0.nw  = \result$241 [106];
+  assign \result$241.word0.crc_ok  = \result$241 [107];
+  assign \result$241.word1  = \result$241 [150:108];
+  assign \result$241.word1.position  = \result$241 [147:108];
+  assign \result$241.word1.ne  = \result$241 [148];
+  assign \result$241.word1.nw  = \result$241 [149];
+  assign \result$241.word1.crc_ok  = \result$241 [150];
+  assign \result$241.lc  = \result$241 [156:151];
+  assign \result$241.lc_repeat  = \result$241 [157];
+  assign \result$241.lc_skip  = \result$241 [158];
+  assign \result$241.lc_zero  = \result$241 [159];
+  assign \result$241.spw_mismatch  = \result$241 [160];
   assign events[17] = \$11 ;
   assign events[16] = \$9 ;
   assign events[15] = \$7 ;
@@ -6245,13 +6268,13 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign wbuf[39:36] = ca_wbuf_en;
   assign wbuf[35:4] = ca_wbuf_data;
   assign wbuf[3:0] = ca_wbuf_addr;
-  assign \request$173 [17] = ca_write;
-  assign \request$173 [16:10] = ca_count;
-  assign \request$173 [9:3] = ca_address;
-  assign \request$173 [2:0] = ca_slave_id;
+  assign \request$169 [17] = ca_write;
+  assign \request$169 [16:10] = ca_count;
+  assign \request$169 [9:3] = ca_address;
+  assign \request$169 [2:0] = ca_slave_id;
   assign frame[35:4] = first_rise_time;
   assign frame[160] = spw_mismatch;
-  assign frame[150] = \$12 ;
+  assign frame[150] = \$16 ;
   assign frame[149] = nw[1];
   assign frame[148] = ne[1];
   assign frame[147:108] = spw;
@@ -6266,8 +6289,8 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign frame[49] = cds;
   assign frame[48:36] = delay;
   assign frame[3:0] = status;
-  assign \words$127 [19:10] = cycle[145:136];
-  assign \words$127 [9:0] = cycle[134:125];
+  assign \words$123 [19:10] = cycle[145:136];
+  assign \words$123 [9:0] = cycle[134:125];
   assign words[19:10] = cycle[145:136];
   assign words[9:0] = cycle[134:125];
   assign live[154:147] = cfg_spw_tolerance;
@@ -6292,7 +6315,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_limit, timeout_limit, delay_limit, no_start_limit, idle, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$29  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$30  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -6460,7 +6483,7 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   assign \$38  = \$37  ? 24'h001f40 : live[111:88];
   assign \$39  = ! live[123:112];
   assign \$40  = \$39  ? 12'hfff : live[123:112];
-  assign \$41  = ack_limit + { cycle[15:0], 1'h0 };
+  assign \$41  = ack_limit + { cycle[15:0], 1'h1 };
   assign word_count = 1'h1 + cycle[135];
   always @(posedge clk)
     ok <= \$42 ;
@@ -6473,21 +6496,21 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   always @(posedge clk)
     delay_limit <= \$46 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$47  = \$41 ;
     if (rst) begin
       \$47  = 25'h0000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$42  = \$34 ;
     if (rst) begin
       \$42  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$43  = cycle;
     if (idle) begin
       \$43  = live;
@@ -6497,7 +6520,7 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$44  = ack_limit;
     if (idle) begin
       \$44  = \$36 ;
@@ -6507,7 +6530,7 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$45  = timeout_limit;
     if (idle) begin
       \$45  = \$38 ;
@@ -6517,7 +6540,7 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$46  = delay_limit;
     if (idle) begin
       \$46  = \$40 ;
@@ -6571,7 +6594,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, frame_doubtful, abort, config_ok, end_check, cdm_cycle, idle, receiver_clear, resync, timer_clear, fault, fault_status, faults, ma_run, in_clock, ma_hold, report_frame, report_delay, slo_stuck
 , slo_stuck_live, break_over, ack_expired, no_start_expired, delay_over, ma_arm, ma_busy, ma_held, ma_enough, early, locked, slo, frame_done, stopped, slots_full, started, stop_bit, cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$30  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$31  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -6860,7 +6883,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, frame
   assign \$12  = \$11  & ack_expired;
   assign \$13  = ~ locked_seen;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     \$79  = cdm_cycle;
     if (idle) begin
       \$79  = cdm;
@@ -6870,14 +6893,14 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     \$80  = idle;
     if (rst) begin
       \$80  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     \$81  = cycle_fsm_state;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -6974,7 +6997,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     \$82  = idle;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -7071,7 +7094,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     \$83  = receiver_clear;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -7168,7 +7191,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     \$84  = armed;
     casez (cycle_fsm_state)
       3'h0:
@@ -7187,7 +7210,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     \$85  = locked_seen;
     casez (cycle_fsm_state)
       3'h0:
@@ -7206,7 +7229,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     \$86  = pause;
     casez (cycle_fsm_state)
       3'h0:
@@ -7226,7 +7249,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     resync = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -7234,7 +7257,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     timer_clear = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -7281,7 +7304,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     fault = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -7336,7 +7359,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     fault_status = 4'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -7391,7 +7414,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     faults = 7'h00;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -7446,7 +7469,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     ma_run = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -7462,7 +7485,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     in_clock = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -7476,7 +7499,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     ma_hold = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -7499,7 +7522,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     report_frame = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -7530,7 +7553,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     report_delay = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -7895,60 +7918,6 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.counters.count_aborted (rst, clear, inc, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$31  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_ca_aborted (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$32  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8002,7 +7971,7 @@ module \biss_master_axil.ch0.core.counters.count_ca_aborted (rst, clear, inc, co
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_ca_crc4_error (rst, clear, inc, count, clk);
+module \biss_master_axil.ch0.core.counters.count_ca_aborted (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$33  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8056,7 +8025,7 @@ module \biss_master_axil.ch0.core.counters.count_ca_crc4_error (rst, clear, inc,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_ca_data_fault (rst, clear, inc, count, clk);
+module \biss_master_axil.ch0.core.counters.count_ca_crc4_error (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$34  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8110,7 +8079,7 @@ module \biss_master_axil.ch0.core.counters.count_ca_data_fault (rst, clear, inc,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_ca_no_answer (rst, clear, inc, count, clk);
+module \biss_master_axil.ch0.core.counters.count_ca_data_fault (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$35  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8164,7 +8133,7 @@ module \biss_master_axil.ch0.core.counters.count_ca_no_answer (rst, clear, inc, 
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_ca_refused (rst, clear, inc, count, clk);
+module \biss_master_axil.ch0.core.counters.count_ca_no_answer (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$36  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8218,7 +8187,7 @@ module \biss_master_axil.ch0.core.counters.count_ca_refused (rst, clear, inc, co
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_crc_word0 (rst, clear, inc, count, clk);
+module \biss_master_axil.ch0.core.counters.count_ca_refused (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$37  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8272,7 +8241,7 @@ module \biss_master_axil.ch0.core.counters.count_crc_word0 (rst, clear, inc, cou
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_crc_word1 (rst, clear, inc, count, clk);
+module \biss_master_axil.ch0.core.counters.count_crc_word0 (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$38  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8326,7 +8295,7 @@ module \biss_master_axil.ch0.core.counters.count_crc_word1 (rst, clear, inc, cou
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_delay_range (rst, clear, inc, count, clk);
+module \biss_master_axil.ch0.core.counters.count_crc_word1 (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$39  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8380,7 +8349,7 @@ module \biss_master_axil.ch0.core.counters.count_delay_range (rst, clear, inc, c
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_lc_repeat (rst, clear, inc, count, clk);
+module \biss_master_axil.ch0.core.counters.count_delay_range (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$40  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8434,7 +8403,7 @@ module \biss_master_axil.ch0.core.counters.count_lc_repeat (rst, clear, inc, cou
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_lc_skip (rst, clear, inc, count, clk);
+module \biss_master_axil.ch0.core.counters.count_lc_repeat (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$41  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8488,7 +8457,7 @@ module \biss_master_axil.ch0.core.counters.count_lc_skip (rst, clear, inc, count
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_lc_zero (rst, clear, inc, count, clk);
+module \biss_master_axil.ch0.core.counters.count_lc_skip (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$42  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8542,7 +8511,7 @@ module \biss_master_axil.ch0.core.counters.count_lc_zero (rst, clear, inc, count
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_no_ack (rst, clear, inc, count, clk);
+module \biss_master_axil.ch0.core.counters.count_lc_zero (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$43  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8596,7 +8565,7 @@ module \biss_master_axil.ch0.core.counters.count_no_ack (rst, clear, inc, count,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_no_start (rst, clear, inc, count, clk);
+module \biss_master_axil.ch0.core.counters.count_no_ack (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$44  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8650,7 +8619,7 @@ module \biss_master_axil.ch0.core.counters.count_no_start (rst, clear, inc, coun
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_no_stop (rst, clear, inc, count, clk);
+module \biss_master_axil.ch0.core.counters.count_no_start (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$45  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8704,7 +8673,7 @@ module \biss_master_axil.ch0.core.counters.count_no_stop (rst, clear, inc, count
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_overrun (rst, clear, inc, count, clk);
+module \biss_master_axil.ch0.core.counters.count_no_stop (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$46  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8758,7 +8727,7 @@ module \biss_master_axil.ch0.core.counters.count_overrun (rst, clear, inc, count
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_slo_stuck_low (rst, clear, inc, count, clk);
+module \biss_master_axil.ch0.core.counters.count_overrun (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$47  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8812,7 +8781,7 @@ module \biss_master_axil.ch0.core.counters.count_slo_stuck_low (rst, clear, inc,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_spw_mismatch (rst, clear, inc, count, clk);
+module \biss_master_axil.ch0.core.counters.count_slo_stuck_low (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$48  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8866,9 +8835,63 @@ module \biss_master_axil.ch0.core.counters.count_spw_mismatch (rst, clear, inc, 
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.decoder (rst, word_count, \bit , lc_load, words, receiver_clear, sample, done, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1, lc, cpw_top, crc_ok
-, clk);
+module \biss_master_axil.ch0.core.counters.count_spw_mismatch (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$49  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, sample, \bit , receiver_clear, done, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1, lc, cpw_top, crc_ok
+, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$50  = 0;
   wire [6:0] \$1 ;
   wire [1:0] \$10 ;
   reg [2:0] \$100 ;
@@ -9251,7 +9274,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, \bit , lc_load, word
     .valid(\valid$52 )
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     (* full_case = 32'd1 *)
     casez (words[6])
       1'h0:
@@ -9261,7 +9284,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, \bit , lc_load, word
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -9275,7 +9298,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, \bit , lc_load, word
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     (* full_case = 32'd1 *)
     casez (words[9:6])
       4'h0:
@@ -9313,7 +9336,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, \bit , lc_load, word
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -9327,7 +9350,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, \bit , lc_load, word
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     (* full_case = 32'd1 *)
     casez (words[16])
       1'h0:
@@ -9337,7 +9360,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, \bit , lc_load, word
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     (* full_case = 32'd1 *)
     casez (words[17:16])
       2'h0:
@@ -9351,7 +9374,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, \bit , lc_load, word
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:16])
       4'h0:
@@ -9389,7 +9412,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, \bit , lc_load, word
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     (* full_case = 32'd1 *)
     casez (words[17:16])
       2'h0:
@@ -9403,7 +9426,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, \bit , lc_load, word
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$94  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -9427,7 +9450,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$95  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -9449,7 +9472,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$96  = slots;
     if (\$34 ) begin
       \$96  = \$35 [15:0];
@@ -9462,7 +9485,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$97  = slots_full;
     if (\$34 ) begin
       \$97  = \$36 ;
@@ -9475,7 +9498,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$98  = started;
     casez (decoder_fsm_state)
       3'h0:
@@ -9491,7 +9514,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$99  = start_slot;
     casez (decoder_fsm_state)
       3'h0:
@@ -9507,7 +9530,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$100  = decoder_fsm_state;
     casez (decoder_fsm_state)
       3'h0:
@@ -9539,7 +9562,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$101  = cds;
     casez (decoder_fsm_state)
       3'h0:
@@ -9557,7 +9580,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$102  = idx;
     casez (decoder_fsm_state)
       3'h0:
@@ -9582,7 +9605,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$103  = in_data;
     casez (decoder_fsm_state)
       3'h0:
@@ -9607,7 +9630,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$104  = in_lc;
     casez (decoder_fsm_state)
       3'h0:
@@ -9632,7 +9655,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$105  = in_top;
     casez (decoder_fsm_state)
       3'h0:
@@ -9657,7 +9680,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$106  = word;
     casez (decoder_fsm_state)
       3'h0:
@@ -9685,7 +9708,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$107  = stop_bit;
     casez (decoder_fsm_state)
       3'h0:
@@ -9707,7 +9730,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$108  = data0;
     if (\$58 ) begin
       \$108  = { data0[53:0], \bit  };
@@ -9720,7 +9743,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$109  = ne;
     if (\$59 ) begin
       \$109 [0] = 1'h1;
@@ -9740,7 +9763,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$110  = nw;
     if (\$59 ) begin
       \$110 [0] = 1'h1;
@@ -9762,7 +9785,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$111  = data1;
     if (\$70 ) begin
       \$111  = { data1[38:0], \bit  };
@@ -9775,7 +9798,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$112  = lc;
     if (lc_load) begin
       \$112  = { lc[4:0], \bit  };
@@ -9788,7 +9811,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$113  = cpw_top;
     if (\$80 ) begin
       \$113  = { cpw_top[38:0], \bit  };
@@ -9801,7 +9824,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     in_word = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -9837,8 +9860,8 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, \bit , lc_load, word
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.decoder.crc0 (rst, \bit , start, valid, kind, receiver_clear, ok, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$50  = 0;
+module \biss_master_axil.ch0.core.decoder.crc0 (rst, start, valid, kind, \bit , receiver_clear, ok, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
   wire [5:0] \$1 ;
   wire \$10 ;
   wire [5:0] \$11 ;
@@ -9932,7 +9955,7 @@ module \biss_master_axil.ch0.core.decoder.crc0 (rst, \bit , start, valid, kind, 
   assign \$auto$rtlil.cc:2739:Not$22  = ~ { crc6_reg[0], 1'h0 };
   assign \$auto$rtlil.cc:2739:Not$24  = ~ { crc16_reg[14], crc16_reg[11], crc16_reg[6:5], crc16_reg[3:2], 1'h0 };
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$31  = crc6_reg;
     if (valid) begin
       \$31  = \$5 ;
@@ -9947,7 +9970,7 @@ module \biss_master_axil.ch0.core.decoder.crc0 (rst, \bit , start, valid, kind, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$32  = crc6_match;
     if (valid) begin
       \$32  = \$15 ;
@@ -9962,7 +9985,7 @@ module \biss_master_axil.ch0.core.decoder.crc0 (rst, \bit , start, valid, kind, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$33  = crc16_reg;
     if (valid) begin
       \$33  = \$20 ;
@@ -9977,7 +10000,7 @@ module \biss_master_axil.ch0.core.decoder.crc0 (rst, \bit , start, valid, kind, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$34  = crc16_match;
     if (valid) begin
       \$34  = \$30 ;
@@ -9992,7 +10015,7 @@ module \biss_master_axil.ch0.core.decoder.crc0 (rst, \bit , start, valid, kind, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     ok = 1'h0;
     casez (kind)
       2'h0:
@@ -10012,8 +10035,8 @@ module \biss_master_axil.ch0.core.decoder.crc0 (rst, \bit , start, valid, kind, 
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.decoder.crc1 (rst, \bit , start, valid, kind, receiver_clear, ok, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
+module \biss_master_axil.ch0.core.decoder.crc1 (rst, start, valid, kind, \bit , receiver_clear, ok, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$52  = 0;
   wire [5:0] \$1 ;
   wire \$10 ;
   wire [5:0] \$11 ;
@@ -10107,7 +10130,7 @@ module \biss_master_axil.ch0.core.decoder.crc1 (rst, \bit , start, valid, kind, 
   assign \$auto$rtlil.cc:2739:Not$18  = ~ { crc6_reg[0], 1'h0 };
   assign \$auto$rtlil.cc:2739:Not$20  = ~ { crc16_reg[14], crc16_reg[11], crc16_reg[6:5], crc16_reg[3:2], 1'h0 };
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
     \$31  = crc6_reg;
     if (valid) begin
       \$31  = \$5 ;
@@ -10122,7 +10145,7 @@ module \biss_master_axil.ch0.core.decoder.crc1 (rst, \bit , start, valid, kind, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
     \$32  = crc6_match;
     if (valid) begin
       \$32  = \$15 ;
@@ -10137,7 +10160,7 @@ module \biss_master_axil.ch0.core.decoder.crc1 (rst, \bit , start, valid, kind, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
     \$33  = crc16_reg;
     if (valid) begin
       \$33  = \$20 ;
@@ -10152,7 +10175,7 @@ module \biss_master_axil.ch0.core.decoder.crc1 (rst, \bit , start, valid, kind, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
     \$34  = crc16_match;
     if (valid) begin
       \$34  = \$30 ;
@@ -10167,7 +10190,7 @@ module \biss_master_axil.ch0.core.decoder.crc1 (rst, \bit , start, valid, kind, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
     ok = 1'h0;
     casez (kind)
       2'h0:
@@ -10188,7 +10211,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, hold, first_rise, second_rise, ma, rises, busy, held, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$52  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$53  = 0;
   wire [16:0] \$1 ;
   wire \$10 ;
   wire [16:0] \$11 ;
@@ -10313,7 +10336,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
   always @(posedge clk)
     released <= \$42 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$34  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -10328,7 +10351,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$35  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -10343,7 +10366,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$36  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -10358,7 +10381,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$37  = ma;
     casez (ma_fsm_state)
       3'h0:
@@ -10387,7 +10410,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$38  = phase_left;
     casez (ma_fsm_state)
       3'h0:
@@ -10429,7 +10452,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$39  = last_clock;
     casez (ma_fsm_state)
       3'h0:
@@ -10471,7 +10494,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$40  = rises;
     casez (ma_fsm_state)
       3'h0:
@@ -10490,7 +10513,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$41  = ma_fsm_state;
     casez (ma_fsm_state)
       3'h0:
@@ -10526,7 +10549,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$42  = released;
     casez (ma_fsm_state)
       3'h0:
@@ -10550,7 +10573,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     busy = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -10566,7 +10589,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     held = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -10583,7 +10606,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.ma_stop (rst, words, w1_enable, clear, rises, enough, \started$10 , start_slot, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$53  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$54  = 0;
   reg [7:0] \$1 ;
   reg [7:0] \$10 ;
   wire [8:0] \$11 ;
@@ -10664,7 +10687,7 @@ module \biss_master_axil.ch0.core.ma_stop (rst, words, w1_enable, clear, rises, 
   always @(posedge clk)
     word1_len <= \$17 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     (* full_case = 32'd1 *)
     casez (words[9:6])
       4'h0:
@@ -10702,7 +10725,7 @@ module \biss_master_axil.ch0.core.ma_stop (rst, words, w1_enable, clear, rises, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:16])
       4'h0:
@@ -10740,42 +10763,42 @@ module \biss_master_axil.ch0.core.ma_stop (rst, words, w1_enable, clear, rises, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$12  = \$2 [7:0];
     if (rst) begin
       \$12  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$13  = \$4 ;
     if (rst) begin
       \$13  = 9'h000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$14  = \$5 ;
     if (rst) begin
       \$14  = 17'h00000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$15  = \started$10 ;
     if (rst) begin
       \$15  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$16  = \$9 ;
     if (rst) begin
       \$16  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$17  = \$11 [7:0];
     if (rst) begin
       \$17  = 8'h00;
@@ -10795,7 +10818,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.register_access (clk, rst, host_read__en, frame_end, frame_ok, busy, rbuf_data, \start$44 , abort, request, wbuf, frame_cdm, frame_cds, cdm, done, result, host_read__addr);
-  reg \$auto$verilog_backend.cc:2355:dump_module$54  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$55  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$100 ;
@@ -11328,7 +11351,7 @@ module \biss_master_axil.ch0.core.register_access (clk, rst, host_read__en, fram
     .valid(valid)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     cdm = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -11350,7 +11373,7 @@ module \biss_master_axil.ch0.core.register_access (clk, rst, host_read__en, fram
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     start = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -11379,7 +11402,7 @@ module \biss_master_axil.ch0.core.register_access (clk, rst, host_read__en, fram
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     valid = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -11400,7 +11423,7 @@ module \biss_master_axil.ch0.core.register_access (clk, rst, host_read__en, fram
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     data = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -11421,7 +11444,7 @@ module \biss_master_axil.ch0.core.register_access (clk, rst, host_read__en, fram
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \start$27  = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -11443,7 +11466,7 @@ module \biss_master_axil.ch0.core.register_access (clk, rst, host_read__en, fram
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \valid$28  = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -11465,7 +11488,7 @@ module \biss_master_axil.ch0.core.register_access (clk, rst, host_read__en, fram
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \data$29  = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -11487,7 +11510,7 @@ module \biss_master_axil.ch0.core.register_access (clk, rst, host_read__en, fram
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     byte_received__addr = 4'h0;
     casez (access_fsm_state)
       3'h0:
@@ -11513,7 +11536,7 @@ module \biss_master_axil.ch0.core.register_access (clk, rst, host_read__en, fram
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     byte_received__data = 32'd0;
     casez (access_fsm_state)
       3'h0:
@@ -11539,7 +11562,7 @@ module \biss_master_axil.ch0.core.register_access (clk, rst, host_read__en, fram
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     byte_received__en = 4'h0;
     casez (access_fsm_state)
       3'h0:
@@ -11565,7 +11588,7 @@ module \biss_master_axil.ch0.core.register_access (clk, rst, host_read__en, fram
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$152  = idle_run;
     if (frame_end) begin
       \$152  = \$72 [3:0];
@@ -11575,7 +11598,7 @@ module \biss_master_axil.ch0.core.register_access (clk, rst, host_read__en, fram
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$153  = idle_seen;
     if (frame_end) begin
       \$153  = \$78 [3:0];
@@ -11585,7 +11608,7 @@ module \biss_master_axil.ch0.core.register_access (clk, rst, host_read__en, fram
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$154  = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -11623,7 +11646,7 @@ module \biss_master_axil.ch0.core.register_access (clk, rst, host_read__en, fram
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$155  = result;
     casez (access_fsm_state)
       3'h0:
@@ -11677,7 +11700,7 @@ module \biss_master_axil.ch0.core.register_access (clk, rst, host_read__en, fram
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$156  = access_fsm_state;
     casez (access_fsm_state)
       3'h0:
@@ -11774,7 +11797,7 @@ module \biss_master_axil.ch0.core.register_access (clk, rst, host_read__en, fram
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$157  = req;
     casez (access_fsm_state)
       3'h0:
@@ -11791,7 +11814,7 @@ module \biss_master_axil.ch0.core.register_access (clk, rst, host_read__en, fram
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$158  = index;
     casez (access_fsm_state)
       3'h0:
@@ -11830,7 +11853,7 @@ module \biss_master_axil.ch0.core.register_access (clk, rst, host_read__en, fram
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$159  = header;
     casez (access_fsm_state)
       3'h0:
@@ -11858,7 +11881,7 @@ module \biss_master_axil.ch0.core.register_access (clk, rst, host_read__en, fram
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$160  = step;
     casez (access_fsm_state)
       3'h0:
@@ -11916,7 +11939,7 @@ module \biss_master_axil.ch0.core.register_access (clk, rst, host_read__en, fram
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$161  = ending;
     casez (access_fsm_state)
       3'h0:
@@ -11983,7 +12006,7 @@ module \biss_master_axil.ch0.core.register_access (clk, rst, host_read__en, fram
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$162  = to_send;
     casez (access_fsm_state)
       3'h0:
@@ -12012,7 +12035,7 @@ module \biss_master_axil.ch0.core.register_access (clk, rst, host_read__en, fram
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$163  = sent;
     casez (access_fsm_state)
       3'h0:
@@ -12037,7 +12060,7 @@ module \biss_master_axil.ch0.core.register_access (clk, rst, host_read__en, fram
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$164  = waited;
     casez (access_fsm_state)
       3'h0:
@@ -12069,7 +12092,7 @@ module \biss_master_axil.ch0.core.register_access (clk, rst, host_read__en, fram
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$165  = got;
     casez (access_fsm_state)
       3'h0:
@@ -12094,7 +12117,7 @@ module \biss_master_axil.ch0.core.register_access (clk, rst, host_read__en, fram
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$166  = got_crc;
     casez (access_fsm_state)
       3'h0:
@@ -12148,7 +12171,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.register_access.rx_crc (rst, crc, start, valid, data_in, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$55  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$56  = 0;
   wire [3:0] \$1 ;
   wire \$10 ;
   wire [3:0] \$11 ;
@@ -12191,7 +12214,7 @@ module \biss_master_axil.ch0.core.register_access.rx_crc (rst, crc, start, valid
     crc_reg <= \$13 ;
   assign \$auto$rtlil.cc:2739:Not$14  = ~ crc_reg;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
     \$13  = crc_reg;
     if (valid) begin
       \$13 [0] = \$3 ;
@@ -12215,7 +12238,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.register_access.tx_crc (rst, crc, start, valid, data_in, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$56  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$57  = 0;
   wire [3:0] \$1 ;
   wire \$10 ;
   wire [3:0] \$11 ;
@@ -12258,7 +12281,7 @@ module \biss_master_axil.ch0.core.register_access.tx_crc (rst, crc, start, valid
     crc_reg <= \$13 ;
   assign \$auto$rtlil.cc:2739:Not$16  = ~ crc_reg;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$13  = crc_reg;
     if (valid) begin
       \$13 [0] = \$3 ;
@@ -12282,7 +12305,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.results (rst, report, valid, frame, report_frame, report_delay, done, valid_out, result, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$57  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$58  = 0;
   reg \$1 ;
   reg \$2 ;
   reg [160:0] \$3 ;
@@ -12379,21 +12402,21 @@ module \biss_master_axil.ch0.core.results (rst, report, valid, frame, report_fra
   always @(posedge clk)
     result <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     \$1  = report;
     if (rst) begin
       \$1  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     \$2  = valid;
     if (rst) begin
       \$2  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     \$3  = result;
     if (report) begin
       \$3 [3:0] = frame[3:0];
@@ -12458,7 +12481,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receiver_clear, arm, early, locked, delay, sample, level, slo);
-  reg \$auto$verilog_backend.cc:2355:dump_module$58  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$59  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -12696,7 +12719,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     .stage1(level)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     \$63  = level;
     if (receiver_clear) begin
       \$63  = 1'h1;
@@ -12706,7 +12729,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     \$64  = mid_delay;
     if (odd) begin
       \$64  = \$8 [12:0];
@@ -12731,7 +12754,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     \$65  = mid_slot;
     (* full_case = 32'd1 *)
     if (odd) begin
@@ -12758,7 +12781,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     \$66  = \$10 ;
     casez (sampler_fsm_state)
       2'h0:
@@ -12780,7 +12803,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     \$67  = elapsed;
     casez (sampler_fsm_state)
       2'h0:
@@ -12804,7 +12827,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     \$68  = early;
     casez (sampler_fsm_state)
       2'h0:
@@ -12820,7 +12843,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     \$69  = locked;
     casez (sampler_fsm_state)
       2'h0:
@@ -12846,7 +12869,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     \$70  = gap;
     casez (sampler_fsm_state)
       2'h0:
@@ -12877,7 +12900,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     \$71  = sampler_fsm_state;
     casez (sampler_fsm_state)
       2'h0:
@@ -12908,7 +12931,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     \$72  = slot_left;
     casez (sampler_fsm_state)
       2'h0:
@@ -12958,7 +12981,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     \$73  = slot_zero;
     casez (sampler_fsm_state)
       2'h0:
@@ -13008,7 +13031,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     \$74  = vote1;
     casez (sampler_fsm_state)
       2'h0:
@@ -13038,7 +13061,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     \$75  = vote2;
     casez (sampler_fsm_state)
       2'h0:
@@ -13066,7 +13089,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     \$76  = first_slot;
     casez (sampler_fsm_state)
       2'h0:
@@ -13092,7 +13115,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     \$77  = delay;
     casez (sampler_fsm_state)
       2'h0:
@@ -13115,7 +13138,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     \$78  = phase;
     casez (sampler_fsm_state)
       2'h0:
@@ -13155,7 +13178,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     sample = \$44 ;
     casez (sampler_fsm_state)
       2'h0:
@@ -13173,7 +13196,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     decided = 1'h0;
     casez (sampler_fsm_state)
       2'h0:
@@ -13223,7 +13246,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.scheduler (rst, trigger, periodic, request, overrun, start, abort, period, idle, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$59  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$60  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -13307,7 +13330,7 @@ module \biss_master_axil.ch0.core.scheduler (rst, trigger, periodic, request, ov
   always @(posedge clk)
     period_start <= \$28 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$27  = 24'h000001;
@@ -13319,7 +13342,7 @@ module \biss_master_axil.ch0.core.scheduler (rst, trigger, periodic, request, ov
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$28  = 1'h1;
@@ -13333,8 +13356,8 @@ module \biss_master_axil.ch0.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.sign_of_life (rst, \port$1213$0 , load, \repeat , skip, check, resync, lc, is_zero, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$60  = 0;
+module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$3684$0 , resync, lc, is_zero, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$61  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -13371,8 +13394,8 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, \port$1213$0 , load, \repea
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$1213$0 ;
-  wire \port$1213$0 ;
+  input \port$3684$0 ;
+  wire \port$3684$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -13384,9 +13407,9 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, \port$1213$0 , load, \repea
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$1213$0  };
-  assign \$2  = { lc[4:0], \port$1213$0  } == last;
-  assign \$3  = { lc[4:0], \port$1213$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$3684$0  };
+  assign \$2  = { lc[4:0], \port$3684$0  } == last;
+  assign \$3  = { lc[4:0], \port$3684$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = lc == 6'h3f;
@@ -13414,7 +13437,7 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, \port$1213$0 , load, \repea
   always @(posedge clk)
     synced <= \$21 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
     \$16  = is_zero;
     if (load) begin
       \$16  = \$1 ;
@@ -13424,7 +13447,7 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, \port$1213$0 , load, \repea
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
     \$17  = is_last;
     if (load) begin
       \$17  = \$2 ;
@@ -13434,7 +13457,7 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, \port$1213$0 , load, \repea
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
     \$18  = is_expected;
     if (load) begin
       \$18  = \$3 ;
@@ -13444,7 +13467,7 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, \port$1213$0 , load, \repea
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
     \$19  = last;
     if (\$5 ) begin
       \$19  = lc;
@@ -13454,7 +13477,7 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, \port$1213$0 , load, \repea
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
     \$20  = expected;
     if (\$5 ) begin
       \$20  = \$8 [5:0];
@@ -13464,7 +13487,7 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, \port$1213$0 , load, \repea
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
     \$21  = synced;
     if (\$5 ) begin
       \$21  = 1'h1;
@@ -13476,13 +13499,13 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, \port$1213$0 , load, \repea
       \$21  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$1213$0  };
+  assign lc_next = { lc[4:0], \port$3684$0  };
   assign zero = is_zero;
 endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.spw_check (rst, bits, \tolerance$8 , spw, cpw_top, match, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$61  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$62  = 0;
   wire [40:0] \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -13687,28 +13710,28 @@ module \biss_master_axil.ch0.core.spw_check (rst, bits, \tolerance$8 , spw, cpw_
   assign \$7  = bits > 3'h5;
   assign \$8  = bits > 3'h6;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
     \$88  = \$42 ;
     if (rst) begin
       \$88  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
     \$89  = \$84 ;
     if (rst) begin
       \$89  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
     \$90  = \tolerance$8 ;
     if (rst) begin
       \$90  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
     \$91  = \$87 ;
     if (rst) begin
       \$91  = 1'h0;
@@ -13718,7 +13741,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.time_base (rst, first_rise, first_rise_time, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$62  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$63  = 0;
   wire [32:0] \$1 ;
   reg [31:0] \$2 ;
   reg [31:0] \$3 ;
@@ -13737,14 +13760,14 @@ module \biss_master_axil.ch0.core.time_base (rst, first_rise, first_rise_time, c
   always @(posedge clk)
     first_rise_time <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
     \$2  = \$1 [31:0];
     if (rst) begin
       \$2  = 32'd0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
     \$3  = first_rise_time;
     if (first_rise) begin
       \$3  = now;
@@ -13757,7 +13780,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.timers (rst, restart, ma_busy, break_time, timeout_live, ack_limit, timeout_limit, delay_limit, no_start_limit, clear, in_clock, slo_stuck, slo_stuck_live, break_over, ack_expired, no_start_expired, delay_over, delay, slo, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$63  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$64  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -13895,7 +13918,7 @@ module \biss_master_axil.ch0.core.timers (rst, restart, ma_busy, break_time, tim
   always @(posedge clk)
     delay_over <= \$43 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     \$36  = slo_low_time_p1;
     if (\$1 ) begin
       \$36  = 25'h0000001;
@@ -13907,49 +13930,49 @@ module \biss_master_axil.ch0.core.timers (rst, restart, ma_busy, break_time, tim
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     \$37  = \$8 ;
     if (rst) begin
       \$37  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     \$38  = \$16 ;
     if (rst) begin
       \$38  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     \$39  = \$20 [24:0];
     if (rst) begin
       \$39  = 25'h0000001;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     \$40  = \$26 ;
     if (rst) begin
       \$40  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     \$41  = \$30 ;
     if (rst) begin
       \$41  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     \$42  = \$34 ;
     if (rst) begin
       \$42  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     \$43  = \$35 ;
     if (rst) begin
       \$43  = 1'h0;
@@ -13958,8 +13981,8 @@ module \biss_master_axil.ch0.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.verdict (lc_skip_seen, \port$1613$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
-  reg \$auto$verilog_backend.cc:2355:dump_module$64  = 0;
+module \biss_master_axil.ch0.core.verdict (lc_skip_seen, \port$1615$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
+  reg \$auto$verilog_backend.cc:2355:dump_module$65  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -14072,8 +14095,8 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, \port$1613$0 , lc_check
   wire lc_zero;
   input lc_zero_seen;
   wire lc_zero_seen;
-  output \port$1613$0 ;
-  wire \port$1613$0 ;
+  output \port$1615$0 ;
+  wire \port$1615$0 ;
   output report;
   wire report;
   input report_frame;
@@ -14141,7 +14164,7 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, \port$1613$0 , lc_check
   assign \$29  = ~ { \$2 , crc_ok[0] };
   assign crc_error = report_frame ? \$29  : 2'h0;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     (* full_case = 32'd1 *)
     if (\$13 ) begin
       frame_status = 4'h3;
@@ -14158,7 +14181,7 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, \port$1613$0 , lc_check
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$1613$0  = \$2 ;
+  assign \port$1615$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -14184,8 +14207,8 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__ca_busy, regs__ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period
 , cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort
-, regs__done_count, ma, regs__done, \port$4368$0 , \port$4375$0 , regs__ca_done, \port$4503$0 , ca_rbuf_addr);
-  reg \$auto$verilog_backend.cc:2355:dump_module$65  = 0;
+, regs__done_count, ma, regs__done, \port$4384$0 , \port$4391$0 , regs__ca_done, \port$4519$0 , ca_rbuf_addr);
+  reg \$auto$verilog_backend.cc:2355:dump_module$66  = 0;
   wire \$1 ;
   wire [16:0] \$2 ;
   reg [15:0] \$3 ;
@@ -14309,12 +14332,12 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_
   wire \ma$164 ;
   input periodic;
   wire periodic;
-  output [160:0] \port$4368$0 ;
-  wire [160:0] \port$4368$0 ;
-  output [287:0] \port$4375$0 ;
-  wire [287:0] \port$4375$0 ;
-  output [9:0] \port$4503$0 ;
-  wire [9:0] \port$4503$0 ;
+  output [160:0] \port$4384$0 ;
+  wire [160:0] \port$4384$0 ;
+  output [287:0] \port$4391$0 ;
+  wire [287:0] \port$4391$0 ;
+  output [9:0] \port$4519$0 ;
+  wire [9:0] \port$4519$0 ;
   wire regs__abort_cycle;
   output regs__busy;
   wire regs__busy;
@@ -14461,8 +14484,8 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_
   assign trigger = \trigger$161  & regs__trigger_enable;
   \biss_master_axil.ch1.core  core (
     .abort(abort_cycle),
-    .\abort$187 (ca_abort),
-    .\busy$237 (regs__busy),
+    .\abort$183 (ca_abort),
+    .\busy$233 (regs__busy),
     .ca_address(ca_address),
     .ca_count(ca_count),
     .ca_done(regs__ca_done),
@@ -14490,27 +14513,27 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_
     .cfg_w1_enable(cfg_w1_enable),
     .cfg_w1_lc(cfg_w1_lc),
     .cfg_w1_nenw(cfg_w1_nenw),
-    .\clear$214 (clear_counters),
+    .\clear$210 (clear_counters),
     .clk(clk),
     .config_error(regs__config_error),
     .counts(\$5 ),
-    .\done$240 (regs__done),
+    .\done$236 (regs__done),
     .frames(regs__ca_busy),
     .ma(ma),
     .\periodic$24 (periodic),
     .rbuf_addr(ca_rbuf_addr),
     .rbuf_en(ca_rbuf_en),
     .result(\$6 ),
-    .\result$245 (\$4 ),
+    .\result$241 (\$4 ),
     .rst(rst),
     .slo(slo),
     .start(start),
-    .\start$185 (ca_start),
+    .\start$181 (ca_start),
     .trigger(trigger),
-    .\valid$242 (valid)
+    .\valid$238 (valid)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$3  = regs__done_count;
     if (regs__done) begin
       \$3  = \$2 [15:0];
@@ -14640,19 +14663,24 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_
   assign regs__ca_rbuf_en = ca_rbuf_en;
   assign \ma$164  = ma;
   assign \slo$166  = slo;
-  assign \port$4368$0  = \$4 ;
-  assign \port$4375$0  = \$5 ;
-  assign \port$4503$0  = \$6 ;
+  assign \port$4384$0  = \$4 ;
+  assign \port$4391$0  = \$5 ;
+  assign \port$4519$0  = \$6 ;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy$237 , config_error, frames, ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, abort, \clear$214 , \periodic$24 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit
-, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, \start$185 , \abort$187 , ma, \done$240 
-, \valid$242 , \result$245 , counts, ca_done, result, rbuf_addr);
+module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy$233 , config_error, frames, ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, abort, \clear$210 , \periodic$24 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit
+, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, \start$181 , \abort$183 , ma, \done$236 
+, \valid$238 , \result$241 , counts, ca_done, result, rbuf_addr);
+  reg \$auto$verilog_backend.cc:2355:dump_module$67  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
   wire \$12 ;
+  wire \$13 ;
+  reg \$14 ;
+  reg \$15 ;
+  wire \$16 ;
   wire \$2 ;
   wire \$3 ;
   wire \$4 ;
@@ -14663,8 +14691,8 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire \$9 ;
   input abort;
   wire abort;
-  input \abort$187 ;
-  wire \abort$187 ;
+  input \abort$183 ;
+  wire \abort$183 ;
   wire \abort$36 ;
   wire abort_cycle;
   wire ack_expired;
@@ -14672,16 +14700,16 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire [23:0] ack_limit;
   wire [23:0] \ack_limit$89 ;
   wire arm;
-  wire \bit ;
-  wire \bit$113 ;
+  reg \bit  = 1'h0;
+  wire \bit$263 ;
   wire [5:0] bits;
   wire break_over;
   wire \break_over$66 ;
   wire [23:0] break_time;
   wire busy;
-  wire \busy$196 ;
-  output \busy$237 ;
-  wire \busy$237 ;
+  wire \busy$192 ;
+  output \busy$233 ;
+  wire \busy$233 ;
   wire ca_abort;
   input [6:0] ca_address;
   wire [6:0] ca_address;
@@ -14716,10 +14744,10 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   input ca_write;
   wire ca_write;
   wire cdm;
-  wire \cdm$200 ;
+  wire \cdm$196 ;
   wire cdm_cycle;
   wire cds;
-  wire \cds$248 ;
+  wire \cds$244 ;
   wire [154:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
@@ -14796,8 +14824,8 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire check;
   wire clear;
   wire \clear$106 ;
-  input \clear$214 ;
-  wire \clear$214 ;
+  input \clear$210 ;
+  wire \clear$210 ;
   wire clear_counters;
   input clk;
   wire clk;
@@ -14844,10 +14872,10 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire [15:0] \counts.slo_stuck_low ;
   wire [15:0] \counts.spw_mismatch ;
   wire [39:0] cpw_top;
-  wire [39:0] \cpw_top$130 ;
+  wire [39:0] \cpw_top$126 ;
   wire [1:0] crc_error;
   wire [1:0] crc_ok;
-  wire [1:0] \crc_ok$145 ;
+  wire [1:0] \crc_ok$141 ;
   wire [154:0] cycle;
   wire [23:0] \cycle.ack_limit ;
   wire [23:0] \cycle.break_time ;
@@ -14886,10 +14914,10 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire delay_over;
   wire \delay_over$76 ;
   wire done;
-  wire \done$198 ;
-  output \done$240 ;
-  wire \done$240 ;
-  wire \done$241 ;
+  wire \done$194 ;
+  output \done$236 ;
+  wire \done$236 ;
+  wire \done$237 ;
   wire doubtful;
   wire early;
   wire \early$52 ;
@@ -14915,7 +14943,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire \events.slo_stuck_low ;
   wire \events.spw_mismatch ;
   wire fault;
-  wire \fault$141 ;
+  wire \fault$137 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -14945,7 +14973,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
-  wire [3:0] \fault_status$143 ;
+  wire [3:0] \fault_status$139 ;
   wire [6:0] faults;
   wire \faults.aborted ;
   wire \faults.bad_config ;
@@ -14955,7 +14983,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire \faults.no_stop ;
   wire \faults.slo_stuck_low ;
   wire first_rise;
-  wire \first_rise$171 ;
+  wire \first_rise$167 ;
   wire [31:0] first_rise_time;
   wire [160:0] frame;
   wire \frame.cds ;
@@ -15009,20 +15037,20 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire in_clock;
   wire \in_clock$83 ;
   wire [5:0] lc;
-  wire [5:0] \lc$117 ;
-  wire [5:0] \lc$257 ;
+  wire [5:0] \lc$113 ;
+  wire [5:0] \lc$253 ;
   wire lc_check;
   wire lc_load;
   wire [5:0] lc_next;
-  wire [5:0] \lc_next$119 ;
+  wire [5:0] \lc_next$115 ;
   wire lc_repeat;
-  wire \lc_repeat$258 ;
+  wire \lc_repeat$254 ;
   wire lc_repeat_seen;
   wire lc_skip;
-  wire \lc_skip$259 ;
+  wire \lc_skip$255 ;
   wire lc_skip_seen;
   wire lc_zero;
-  wire \lc_zero$260 ;
+  wire \lc_zero$256 ;
   wire lc_zero_seen;
   wire level;
   wire [12:0] line_delay;
@@ -15060,7 +15088,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire \locked$50 ;
   output ma;
   wire ma;
-  wire \ma$236 ;
+  wire \ma$232 ;
   wire ma_arm;
   wire ma_busy;
   wire \ma_busy$78 ;
@@ -15077,7 +15105,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire [1:0] nw;
   wire ok;
   wire overrun;
-  wire \overrun$239 ;
+  wire \overrun$235 ;
   wire [23:0] period;
   wire periodic;
   input \periodic$24 ;
@@ -15090,32 +15118,32 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire receiver_clear;
   wire \repeat ;
   wire report;
-  wire \report$153 ;
+  wire \report$149 ;
   wire report_delay;
-  wire \report_delay$156 ;
+  wire \report_delay$152 ;
   wire report_frame;
-  wire \report_frame$139 ;
-  wire \report_frame$154 ;
+  wire \report_frame$135 ;
+  wire \report_frame$150 ;
   wire request;
-  wire [17:0] \request$173 ;
-  wire [6:0] \request$173.address ;
-  wire [6:0] \request$173.count ;
-  wire [2:0] \request$173.slave_id ;
-  wire \request$173.write ;
+  wire [17:0] \request$169 ;
+  wire [6:0] \request$169.address ;
+  wire [6:0] \request$169.count ;
+  wire [2:0] \request$169.slave_id ;
+  wire \request$169.write ;
   wire \request$35 ;
   wire restart;
   wire restart_timer;
   output [9:0] result;
   wire [9:0] result;
-  output [160:0] \result$245 ;
-  wire [160:0] \result$245 ;
-  wire \result$245.cds ;
-  wire [5:0] \result$245.lc ;
-  wire \result$245.lc_repeat ;
-  wire \result$245.lc_skip ;
-  wire \result$245.lc_zero ;
-  wire [12:0] \result$245.line_delay ;
-  wire \result$245.spw_mismatch ;
+  output [160:0] \result$241 ;
+  wire [160:0] \result$241 ;
+  wire \result$241.cds ;
+  wire [5:0] \result$241.lc ;
+  wire \result$241.lc_repeat ;
+  wire \result$241.lc_skip ;
+  wire \result$241.lc_zero ;
+  wire [12:0] \result$241.line_delay ;
+  wire \result$241.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -15130,18 +15158,18 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
-  wire [3:0] \result$245.status ;
-  wire [31:0] \result$245.timestamp ;
-  wire [57:0] \result$245.word0 ;
-  wire \result$245.word0.crc_ok ;
-  wire \result$245.word0.ne ;
-  wire \result$245.word0.nw ;
-  wire [54:0] \result$245.word0.position ;
-  wire [42:0] \result$245.word1 ;
-  wire \result$245.word1.crc_ok ;
-  wire \result$245.word1.ne ;
-  wire \result$245.word1.nw ;
-  wire [39:0] \result$245.word1.position ;
+  wire [3:0] \result$241.status ;
+  wire [31:0] \result$241.timestamp ;
+  wire [57:0] \result$241.word0 ;
+  wire \result$241.word0.crc_ok ;
+  wire \result$241.word0.ne ;
+  wire \result$241.word0.nw ;
+  wire [54:0] \result$241.word0.position ;
+  wire [42:0] \result$241.word1 ;
+  wire \result$241.word1.crc_ok ;
+  wire \result$241.word1.ne ;
+  wire \result$241.word1.nw ;
+  wire [39:0] \result$241.word1.position ;
   wire [6:0] \result.bytes_done ;
   (* enum_base_type = "AccessStatus" *)
   (* enum_value_000 = "OK" *)
@@ -15153,14 +15181,14 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* enum_value_110 = "BAD_REQUEST" *)
   wire [2:0] \result.status ;
   wire resync;
-  wire \resync$125 ;
+  wire \resync$121 ;
   wire [15:0] rises;
   wire [15:0] \rises$105 ;
   input rst;
   wire rst;
   wire run;
-  wire sample;
-  wire \sample$111 ;
+  reg sample = 1'h0;
+  wire \sample$261 ;
   wire second_rise;
   wire skip;
   input slo;
@@ -15177,11 +15205,11 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire [39:0] spw;
   wire spw_match;
   wire spw_mismatch;
-  wire \spw_mismatch$261 ;
+  wire \spw_mismatch$257 ;
   input start;
   wire start;
-  input \start$185 ;
-  wire \start$185 ;
+  input \start$181 ;
+  wire \start$181 ;
   wire \start$22 ;
   wire [15:0] start_slot;
   wire [15:0] \start_slot$103 ;
@@ -15217,7 +15245,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
-  wire [3:0] \status$244 ;
+  wire [3:0] \status$240 ;
   wire stop_bit;
   wire \stop_bit$62 ;
   wire stopped;
@@ -15232,9 +15260,9 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire trigger;
   wire \trigger$33 ;
   wire valid;
-  wire \valid$158 ;
-  output \valid$242 ;
-  wire \valid$242 ;
+  wire \valid$154 ;
+  output \valid$238 ;
+  wire \valid$238 ;
   wire valid_out;
   wire w1_enable;
   wire [39:0] wbuf;
@@ -15250,28 +15278,28 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire word1_nw;
   wire [39:0] word1_position;
   wire [1:0] word_count;
-  wire [1:0] \word_count$115 ;
+  wire [1:0] \word_count$111 ;
   wire [1:0] word_crc_ok;
   wire [19:0] words;
-  wire [19:0] \words$127 ;
-  wire [9:0] \words$127[0] ;
+  wire [19:0] \words$123 ;
+  wire [9:0] \words$123[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
-  wire [1:0] \words$127[0].crc ;
-  wire [5:0] \words$127[0].data_bits ;
-  wire \words$127[0].lc ;
-  wire \words$127[0].nenw ;
-  wire [9:0] \words$127[1] ;
+  wire [1:0] \words$123[0].crc ;
+  wire [5:0] \words$123[0].data_bits ;
+  wire \words$123[0].lc ;
+  wire \words$123[0].nenw ;
+  wire [9:0] \words$123[1] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
-  wire [1:0] \words$127[1].crc ;
-  wire [5:0] \words$127[1].data_bits ;
-  wire \words$127[1].lc ;
-  wire \words$127[1].nenw ;
+  wire [1:0] \words$123[1].crc ;
+  wire [5:0] \words$123[1].data_bits ;
+  wire \words$123[1].lc ;
+  wire \words$123[1].nenw ;
   wire [9:0] \words[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
@@ -15303,8 +15331,14 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign \$9  = ca_done & \$8 ;
   assign \$10  = result[2:0] == 3'h5;
   assign \$11  = ca_done & \$10 ;
-  assign \busy$237  = ~ idle;
+  assign \busy$233  = ~ idle;
   assign config_error = ~ config_ok;
+  assign \$12  = ~ \clear$106 ;
+  assign \$13  = \sample$261  & \$12 ;
+  always @(posedge clk)
+    sample <= \$14 ;
+  always @(posedge clk)
+    \bit  <= \$15 ;
   \biss_master_axil.ch1.core.config  \config  (
     .ack_limit(ack_limit),
     .clk(clk),
@@ -15361,7 +15395,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .timer_clear(clear)
   );
   \biss_master_axil.ch1.core.counters  counters (
-    .clear(\clear$214 ),
+    .clear(\clear$210 ),
     .clk(clk),
     .counts(counts),
     .events(events),
@@ -15414,10 +15448,10 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .start_slot(start_slot),
     .\started$10 (started),
     .w1_enable(cycle[135]),
-    .words(\words$127 )
+    .words(\words$123 )
   );
   \biss_master_axil.ch1.core.register_access  register_access (
-    .abort(\abort$187 ),
+    .abort(\abort$183 ),
     .busy(frames),
     .cdm(cdm),
     .clk(clk),
@@ -15429,27 +15463,27 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .host_read__addr(rbuf_addr),
     .host_read__en(rbuf_en),
     .rbuf_data(ca_rbuf_data),
-    .request(\request$173 ),
+    .request(\request$169 ),
     .result(result),
     .rst(rst),
-    .\start$44 (\start$185 ),
+    .\start$44 (\start$181 ),
     .wbuf(wbuf)
   );
   \biss_master_axil.ch1.core.results  results (
     .clk(clk),
-    .done(\done$240 ),
+    .done(\done$236 ),
     .frame(frame),
     .report(report),
     .report_delay(report_delay),
     .report_frame(report_frame),
-    .result(\result$245 ),
+    .result(\result$241 ),
     .rst(rst),
     .valid(valid),
-    .valid_out(\valid$242 )
+    .valid_out(\valid$238 )
   );
   \biss_master_axil.ch1.core.sampler  sampler (
     .arm(ma_arm),
-    .\bit (\bit ),
+    .\bit (\bit$263 ),
     .clk(clk),
     .delay(delay),
     .early(early),
@@ -15458,7 +15492,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .locked(locked),
     .receiver_clear(\clear$106 ),
     .rst(rst),
-    .sample(sample),
+    .sample(\sample$261 ),
     .slo(slo)
   );
   \biss_master_axil.ch1.core.scheduler  scheduler (
@@ -15479,7 +15513,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$2556$0 (\bit ),
+    .\port$4125$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -15536,7 +15570,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .lc_skip_seen(lc_skip_seen),
     .lc_zero(lc_zero),
     .lc_zero_seen(lc_zero_seen),
-    .\port$2956$0 (\$12 ),
+    .\port$2960$0 (\$16 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -15544,6 +15578,20 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .status(status),
     .valid(valid)
   );
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    \$14  = \$13 ;
+    if (rst) begin
+      \$14  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    \$15  = \bit$263 ;
+    if (rst) begin
+      \$15  = 1'h0;
+    end
+  end
   assign \idle$20  = idle;
   assign \start$22  = start;
   assign period = cfg_request_period;
@@ -15593,53 +15641,51 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign receiver_clear = \clear$106 ;
   assign \half_period$108  = cycle[15:0];
   assign arm = ma_arm;
-  assign \sample$111  = sample;
-  assign \bit$113  = \bit ;
-  assign \word_count$115  = word_count;
-  assign \lc$117  = lc;
+  assign \word_count$111  = word_count;
+  assign \lc$113  = lc;
   assign lc_next = { lc[4:0], \bit  };
-  assign \lc_next$119  = { lc[4:0], \bit  };
+  assign \lc_next$115  = { lc[4:0], \bit  };
   assign lc_load = load;
   assign lc_check = check;
-  assign \resync$125  = resync;
+  assign \resync$121  = resync;
   assign w1_enable = cycle[135];
-  assign \cpw_top$130  = cpw_top;
+  assign \cpw_top$126  = cpw_top;
   assign data1 = spw;
   assign bits = cycle[141:136];
   assign tolerance = cycle[154:147];
   assign match = spw_match;
   assign cfg = cycle;
-  assign \report_frame$139  = report_frame;
-  assign \fault$141  = fault;
-  assign \fault_status$143  = fault_status;
-  assign \crc_ok$145  = crc_ok;
+  assign \report_frame$135  = report_frame;
+  assign \fault$137  = fault;
+  assign \fault_status$139  = fault_status;
+  assign \crc_ok$141  = crc_ok;
   assign \repeat  = lc_repeat_seen;
   assign skip = lc_skip_seen;
   assign zero = lc_zero_seen;
-  assign \report$153  = report;
-  assign \report_frame$154  = report_frame;
-  assign \report_delay$156  = report_delay;
-  assign \valid$158  = valid;
-  assign word_crc_ok = { \$12 , crc_ok[0] };
-  assign \first_rise$171  = first_rise;
+  assign \report$149  = report;
+  assign \report_frame$150  = report_frame;
+  assign \report_delay$152  = report_delay;
+  assign \valid$154  = valid;
+  assign word_crc_ok = { \$16 , crc_ok[0] };
+  assign \first_rise$167  = first_rise;
   assign ca_status = result[2:0];
   assign ca_bytes_done = result[9:3];
-  assign ca_start = \start$185 ;
-  assign ca_abort = \abort$187 ;
+  assign ca_start = \start$181 ;
+  assign ca_abort = \abort$183 ;
   assign ca_rbuf_addr = rbuf_addr;
   assign ca_rbuf_en = rbuf_en;
   assign rbuf_data = ca_rbuf_data;
   assign ca_busy = frames;
-  assign \busy$196  = frames;
-  assign \done$198  = ca_done;
-  assign \cdm$200  = cdm;
+  assign \busy$192  = frames;
+  assign \done$194  = ca_done;
+  assign \cdm$196  = cdm;
   assign held = ma_held;
   assign ma_hold = hold;
   assign frame_end = report;
   assign frame_ok = valid;
   assign frame_cds = cds;
   assign cdm_cycle = frame_cdm;
-  assign clear_counters = \clear$214 ;
+  assign clear_counters = \clear$210 ;
   assign count_crc_word0 = counts[15:0];
   assign count_crc_word1 = counts[31:16];
   assign count_no_ack = counts[47:32];
@@ -15658,27 +15704,27 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign count_ca_refused = counts[255:240];
   assign count_ca_aborted = counts[271:256];
   assign count_ca_data_fault = counts[287:272];
-  assign \ma$236  = ma;
-  assign \overrun$239  = overrun;
-  assign \done$241  = \done$240 ;
-  assign valid_out = \valid$242 ;
-  assign \status$244  = \result$245 [3:0];
-  assign timestamp = \result$245 [35:4];
-  assign line_delay = \result$245 [48:36];
-  assign \cds$248  = \result$245 [49];
-  assign word0_position = \result$245 [104:50];
-  assign word0_ne = \result$245 [105];
-  assign word0_nw = \result$245 [106];
-  assign word0_crc_ok = \result$245 [107];
-  assign word1_position = \result$245 [147:108];
-  assign word1_ne = \result$245 [148];
-  assign word1_nw = \result$245 [149];
-  assign word1_crc_ok = \result$245 [150];
-  assign \lc$257  = \result$245 [156:151];
-  assign \lc_repeat$258  = \result$245 [157];
-  assign \lc_skip$259  = \result$245 [158];
-  assign \lc_zero$260  = \result$245 [159];
-  assign \spw_mismatch$261  = \result$245 [160];
+  assign \ma$232  = ma;
+  assign \overrun$235  = overrun;
+  assign \done$237  = \done$236 ;
+  assign valid_out = \valid$238 ;
+  assign \status$240  = \result$241 [3:0];
+  assign timestamp = \result$241 [35:4];
+  assign line_delay = \result$241 [48:36];
+  assign \cds$244  = \result$241 [49];
+  assign word0_position = \result$241 [104:50];
+  assign word0_ne = \result$241 [105];
+  assign word0_nw = \result$241 [106];
+  assign word0_crc_ok = \result$241 [107];
+  assign word1_position = \result$241 [147:108];
+  assign word1_ne = \result$241 [148];
+  assign word1_nw = \result$241 [149];
+  assign word1_crc_ok = \result$241 [150];
+  assign \lc$253  = \result$241 [156:151];
+  assign \lc_repeat$254  = \result$241 [157];
+  assign \lc_skip$255  = \result$241 [158];
+  assign \lc_zero$256  = \result$241 [159];
+  assign \spw_mismatch$257  = \result$241 [160];
   assign \live.ma_half_period  = live[15:0];
   assign \live.request_period  = live[39:16];
   assign \live.break_time  = live[63:40];
@@ -15729,16 +15775,16 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign \words[1].nenw  = words[16];
   assign \words[1].lc  = words[17];
   assign \words[1].crc  = words[19:18];
-  assign \words$127[0]  = \words$127 [9:0];
-  assign \words$127[0].data_bits  = \words$127 [5:0];
-  assign \words$127[0].nenw  = \words$127 [6];
-  assign \words$127[0].lc  = \words$127 [7];
-  assign \words$127[0].crc  = \words$127 [9:8];
-  assign \words$127[1]  = \words$127 [19:10];
-  assign \words$127[1].data_bits  = \words$127 [15:10];
-  assign \words$127[1].nenw  = \words$127 [16];
-  assign \words$127[1].lc  = \words$127 [17];
-  assign \words$127[1].crc  = \words$127 [19:18];
+  assign \words$123[0]  = \words$123 [9:0];
+  assign \words$123[0].data_bits  = \words$123 [5:0];
+  assign \words$123[0].nenw  = \words$123 [6];
+  assign \words$123[0].lc  = \words$123 [7];
+  assign \words$123[0].crc  = \words$123 [9:8];
+  assign \words$123[1]  = \words$123 [19:10];
+  assign \words$123[1].data_bits  = \words$123 [15:10];
+  assign \words$123[1].nenw  = \words$123 [16];
+  assign \words$123[1].lc  = \words$123 [17];
+  assign \words$123[1].crc  = \words$123 [19:18];
   assign \cfg.ma_half_period  = cycle[15:0];
   assign \cfg.request_period  = cycle[39:16];
   assign \cfg.break_time  = cycle[63:40];
@@ -15778,10 +15824,10 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign \frame.lc_skip  = frame[158];
   assign \frame.lc_zero  = frame[159];
   assign \frame.spw_mismatch  = frame[160];
-  assign \request$173.slave_id  = \request$173 [2:0];
-  assign \request$173.address  = \request$173 [9:3];
-  assign \request$173.count  = \request$173 [16:10];
-  assign \request$173.write  = \request$173 [17];
+  assign \request$169.slave_id  = \request$169 [2:0];
+  assign \request$169.address  = \request$169 [9:3];
+  assign \request$169.count  = \request$169 [16:10];
+  assign \request$169.write  = \request$169 [17];
   assign \wbuf.addr  = wbuf[3:0];
   assign \wbuf.data  = wbuf[35:4];
   assign \wbuf.en  = wbuf[39:36];
@@ -15830,25 +15876,25 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign \counts.ca_refused  = counts[255:240];
   assign \counts.ca_aborted  = counts[271:256];
   assign \counts.ca_data_fault  = counts[287:272];
-  assign \result$245.status  = \result$245 [3:0];
-  assign \result$245.timestamp  = \result$245 [35:4];
-  assign \result$245.line_delay  = \result$245 [48:36];
-  assign \result$245.cds  = \result$245 [49];
-  assign \result$245.word0  = \result$245 [107:50];
-  assign \result$245.word0.position  = \result$245 [104:50];
-  assign \result$245.word0.ne  = \result$245 [105];
-  assign \result$245.word0.nw  = \result$245 [106];
-  assign \result$245.word0.crc_ok  = \result$245 [107];
-  assign \result$245.word1  = \result$245 [150:108];
-  assign \result$245.word1.position  = \result$245 [147:108];
-  assign \result$245.word1.ne  = \result$245 [148];
-  assign \result$245.word1.nw  = \result$245 [149];
-  assign \result$245.word1.crc_ok  = \result$245 [150];
-  assign \result$245.lc  = \result$245 [156:151];
-  assign \result$245.lc_repeat  = \result$245 [157];
-  assign \result$245.lc_skip  = \result$245 [158];
-  assign \result$245.lc_zero  = \result$245 [159];
-  assign \result$245.spw_mismatch  = \result$245 [160];
+  assign \result$241.status  = \result$241 [3:0];
+  assign \result$241.timestamp  = \result$241 [35:4];
+  assign \result$241.line_delay  = \result$241 [48:36];
+  assign \result$241.cds  = \result$241 [49];
+  assign \result$241.word0  = \result$241 [107:50];
+  assign \result$241.word0.position  = \result$241 [104:50];
+  assign \result$241.word0.ne  = \result$241 [105];
+  assign \result$241.word0.nw  = \result$241 [106];
+  assign \result$241.word0.crc_ok  = \result$241 [107];
+  assign \result$241.word1  = \result$241 [150:108];
+  assign \result$241.word1.position  = \result$241 [147:108];
+  assign \result$241.word1.ne  = \result$241 [148];
+  assign \result$241.word1.nw  = \result$241 [149];
+  assign \result$241.word1.crc_ok  = \result$241 [150];
+  assign \result$241.lc  = \result$241 [156:151];
+  assign \result$241.lc_repeat  = \result$241 [157];
+  assign \result$241.lc_skip  = \result$241 [158];
+  assign \result$241.lc_zero  = \result$241 [159];
+  assign \result$241.spw_mismatch  = \result$241 [160];
   assign events[17] = \$11 ;
   assign events[16] = \$9 ;
   assign events[15] = \$7 ;
@@ -15870,13 +15916,13 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign wbuf[39:36] = ca_wbuf_en;
   assign wbuf[35:4] = ca_wbuf_data;
   assign wbuf[3:0] = ca_wbuf_addr;
-  assign \request$173 [17] = ca_write;
-  assign \request$173 [16:10] = ca_count;
-  assign \request$173 [9:3] = ca_address;
-  assign \request$173 [2:0] = ca_slave_id;
+  assign \request$169 [17] = ca_write;
+  assign \request$169 [16:10] = ca_count;
+  assign \request$169 [9:3] = ca_address;
+  assign \request$169 [2:0] = ca_slave_id;
   assign frame[35:4] = first_rise_time;
   assign frame[160] = spw_mismatch;
-  assign frame[150] = \$12 ;
+  assign frame[150] = \$16 ;
   assign frame[149] = nw[1];
   assign frame[148] = ne[1];
   assign frame[147:108] = spw;
@@ -15891,8 +15937,8 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign frame[49] = cds;
   assign frame[48:36] = delay;
   assign frame[3:0] = status;
-  assign \words$127 [19:10] = cycle[145:136];
-  assign \words$127 [9:0] = cycle[134:125];
+  assign \words$123 [19:10] = cycle[145:136];
+  assign \words$123 [9:0] = cycle[134:125];
   assign words[19:10] = cycle[145:136];
   assign words[9:0] = cycle[134:125];
   assign live[154:147] = cfg_spw_tolerance;
@@ -15917,7 +15963,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_limit, timeout_limit, delay_limit, no_start_limit, idle, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$66  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$68  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -16085,7 +16131,7 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   assign \$38  = \$37  ? 24'h001f40 : live[111:88];
   assign \$39  = ! live[123:112];
   assign \$40  = \$39  ? 12'hfff : live[123:112];
-  assign \$41  = ack_limit + { cycle[15:0], 1'h0 };
+  assign \$41  = ack_limit + { cycle[15:0], 1'h1 };
   assign word_count = 1'h1 + cycle[135];
   always @(posedge clk)
     ok <= \$42 ;
@@ -16098,21 +16144,21 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   always @(posedge clk)
     delay_limit <= \$46 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     \$47  = \$41 ;
     if (rst) begin
       \$47  = 25'h0000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     \$42  = \$34 ;
     if (rst) begin
       \$42  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     \$43  = cycle;
     if (idle) begin
       \$43  = live;
@@ -16122,7 +16168,7 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     \$44  = ack_limit;
     if (idle) begin
       \$44  = \$36 ;
@@ -16132,7 +16178,7 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     \$45  = timeout_limit;
     if (idle) begin
       \$45  = \$38 ;
@@ -16142,7 +16188,7 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     \$46  = delay_limit;
     if (idle) begin
       \$46  = \$40 ;
@@ -16196,7 +16242,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, frame_doubtful, abort, config_ok, end_check, cdm_cycle, idle, receiver_clear, resync, timer_clear, fault, fault_status, faults, ma_run, in_clock, ma_hold, report_frame, report_delay, slo_stuck
 , slo_stuck_live, break_over, ack_expired, no_start_expired, delay_over, ma_arm, ma_busy, ma_held, ma_enough, early, locked, slo, frame_done, stopped, slots_full, started, stop_bit, cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$67  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$69  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -16485,7 +16531,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, frame
   assign \$12  = \$11  & ack_expired;
   assign \$13  = ~ locked_seen;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     \$79  = cdm_cycle;
     if (idle) begin
       \$79  = cdm;
@@ -16495,14 +16541,14 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     \$80  = idle;
     if (rst) begin
       \$80  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     \$81  = cycle_fsm_state;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -16599,7 +16645,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     \$82  = idle;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -16696,7 +16742,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     \$83  = receiver_clear;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -16793,7 +16839,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     \$84  = armed;
     casez (cycle_fsm_state)
       3'h0:
@@ -16812,7 +16858,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     \$85  = locked_seen;
     casez (cycle_fsm_state)
       3'h0:
@@ -16831,7 +16877,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     \$86  = pause;
     casez (cycle_fsm_state)
       3'h0:
@@ -16851,7 +16897,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     resync = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -16859,7 +16905,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     timer_clear = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -16906,7 +16952,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     fault = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -16961,7 +17007,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     fault_status = 4'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -17016,7 +17062,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     faults = 7'h00;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -17071,7 +17117,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     ma_run = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -17087,7 +17133,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     in_clock = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -17101,7 +17147,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     ma_hold = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -17124,7 +17170,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     report_frame = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -17155,7 +17201,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     report_delay = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -17520,114 +17566,6 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.counters.count_aborted (rst, clear, inc, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$68  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_ca_aborted (rst, clear, inc, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$69  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_ca_crc4_error (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$70  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -17681,7 +17619,7 @@ module \biss_master_axil.ch1.core.counters.count_ca_crc4_error (rst, clear, inc,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_ca_data_fault (rst, clear, inc, count, clk);
+module \biss_master_axil.ch1.core.counters.count_ca_aborted (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$71  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -17735,7 +17673,7 @@ module \biss_master_axil.ch1.core.counters.count_ca_data_fault (rst, clear, inc,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_ca_no_answer (rst, clear, inc, count, clk);
+module \biss_master_axil.ch1.core.counters.count_ca_crc4_error (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$72  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -17789,7 +17727,7 @@ module \biss_master_axil.ch1.core.counters.count_ca_no_answer (rst, clear, inc, 
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_ca_refused (rst, clear, inc, count, clk);
+module \biss_master_axil.ch1.core.counters.count_ca_data_fault (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$73  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -17843,7 +17781,7 @@ module \biss_master_axil.ch1.core.counters.count_ca_refused (rst, clear, inc, co
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_crc_word0 (rst, clear, inc, count, clk);
+module \biss_master_axil.ch1.core.counters.count_ca_no_answer (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$74  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -17897,7 +17835,7 @@ module \biss_master_axil.ch1.core.counters.count_crc_word0 (rst, clear, inc, cou
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_crc_word1 (rst, clear, inc, count, clk);
+module \biss_master_axil.ch1.core.counters.count_ca_refused (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$75  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -17951,7 +17889,7 @@ module \biss_master_axil.ch1.core.counters.count_crc_word1 (rst, clear, inc, cou
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_delay_range (rst, clear, inc, count, clk);
+module \biss_master_axil.ch1.core.counters.count_crc_word0 (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$76  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -18005,7 +17943,7 @@ module \biss_master_axil.ch1.core.counters.count_delay_range (rst, clear, inc, c
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_lc_repeat (rst, clear, inc, count, clk);
+module \biss_master_axil.ch1.core.counters.count_crc_word1 (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$77  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -18059,7 +17997,7 @@ module \biss_master_axil.ch1.core.counters.count_lc_repeat (rst, clear, inc, cou
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_lc_skip (rst, clear, inc, count, clk);
+module \biss_master_axil.ch1.core.counters.count_delay_range (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$78  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -18113,7 +18051,7 @@ module \biss_master_axil.ch1.core.counters.count_lc_skip (rst, clear, inc, count
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_lc_zero (rst, clear, inc, count, clk);
+module \biss_master_axil.ch1.core.counters.count_lc_repeat (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$79  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -18167,7 +18105,7 @@ module \biss_master_axil.ch1.core.counters.count_lc_zero (rst, clear, inc, count
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_no_ack (rst, clear, inc, count, clk);
+module \biss_master_axil.ch1.core.counters.count_lc_skip (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$80  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -18221,7 +18159,7 @@ module \biss_master_axil.ch1.core.counters.count_no_ack (rst, clear, inc, count,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_no_start (rst, clear, inc, count, clk);
+module \biss_master_axil.ch1.core.counters.count_lc_zero (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$81  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -18275,7 +18213,7 @@ module \biss_master_axil.ch1.core.counters.count_no_start (rst, clear, inc, coun
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_no_stop (rst, clear, inc, count, clk);
+module \biss_master_axil.ch1.core.counters.count_no_ack (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$82  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -18329,7 +18267,7 @@ module \biss_master_axil.ch1.core.counters.count_no_stop (rst, clear, inc, count
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_overrun (rst, clear, inc, count, clk);
+module \biss_master_axil.ch1.core.counters.count_no_start (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$83  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -18383,7 +18321,7 @@ module \biss_master_axil.ch1.core.counters.count_overrun (rst, clear, inc, count
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_slo_stuck_low (rst, clear, inc, count, clk);
+module \biss_master_axil.ch1.core.counters.count_no_stop (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$84  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -18437,7 +18375,7 @@ module \biss_master_axil.ch1.core.counters.count_slo_stuck_low (rst, clear, inc,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_spw_mismatch (rst, clear, inc, count, clk);
+module \biss_master_axil.ch1.core.counters.count_overrun (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$85  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -18491,9 +18429,117 @@ module \biss_master_axil.ch1.core.counters.count_spw_mismatch (rst, clear, inc, 
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.decoder (rst, word_count, \bit , lc_load, words, receiver_clear, sample, done, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1, lc, cpw_top, crc_ok
-, clk);
+module \biss_master_axil.ch1.core.counters.count_slo_stuck_low (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$86  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_axil.ch1.core.counters.count_spw_mismatch (rst, clear, inc, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$87  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$87 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$87 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, sample, \bit , receiver_clear, done, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1, lc, cpw_top, crc_ok
+, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$88  = 0;
   wire [6:0] \$1 ;
   wire [1:0] \$10 ;
   reg [2:0] \$100 ;
@@ -18876,7 +18922,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, \bit , lc_load, word
     .valid(\valid$52 )
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     (* full_case = 32'd1 *)
     casez (words[6])
       1'h0:
@@ -18886,7 +18932,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, \bit , lc_load, word
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -18900,7 +18946,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, \bit , lc_load, word
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     (* full_case = 32'd1 *)
     casez (words[9:6])
       4'h0:
@@ -18938,7 +18984,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, \bit , lc_load, word
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -18952,7 +18998,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, \bit , lc_load, word
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     (* full_case = 32'd1 *)
     casez (words[16])
       1'h0:
@@ -18962,7 +19008,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, \bit , lc_load, word
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     (* full_case = 32'd1 *)
     casez (words[17:16])
       2'h0:
@@ -18976,7 +19022,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, \bit , lc_load, word
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:16])
       4'h0:
@@ -19014,7 +19060,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, \bit , lc_load, word
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     (* full_case = 32'd1 *)
     casez (words[17:16])
       2'h0:
@@ -19028,7 +19074,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, \bit , lc_load, word
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     \$94  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -19052,7 +19098,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     \$95  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -19074,7 +19120,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     \$96  = slots;
     if (\$34 ) begin
       \$96  = \$35 [15:0];
@@ -19087,7 +19133,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     \$97  = slots_full;
     if (\$34 ) begin
       \$97  = \$36 ;
@@ -19100,7 +19146,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     \$98  = started;
     casez (decoder_fsm_state)
       3'h0:
@@ -19116,7 +19162,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     \$99  = start_slot;
     casez (decoder_fsm_state)
       3'h0:
@@ -19132,7 +19178,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     \$100  = decoder_fsm_state;
     casez (decoder_fsm_state)
       3'h0:
@@ -19164,7 +19210,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     \$101  = cds;
     casez (decoder_fsm_state)
       3'h0:
@@ -19182,7 +19228,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     \$102  = idx;
     casez (decoder_fsm_state)
       3'h0:
@@ -19207,7 +19253,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     \$103  = in_data;
     casez (decoder_fsm_state)
       3'h0:
@@ -19232,7 +19278,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     \$104  = in_lc;
     casez (decoder_fsm_state)
       3'h0:
@@ -19257,7 +19303,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     \$105  = in_top;
     casez (decoder_fsm_state)
       3'h0:
@@ -19282,7 +19328,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     \$106  = word;
     casez (decoder_fsm_state)
       3'h0:
@@ -19310,7 +19356,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     \$107  = stop_bit;
     casez (decoder_fsm_state)
       3'h0:
@@ -19332,7 +19378,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     \$108  = data0;
     if (\$58 ) begin
       \$108  = { data0[53:0], \bit  };
@@ -19345,7 +19391,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     \$109  = ne;
     if (\$59 ) begin
       \$109 [0] = 1'h1;
@@ -19365,7 +19411,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     \$110  = nw;
     if (\$59 ) begin
       \$110 [0] = 1'h1;
@@ -19387,7 +19433,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     \$111  = data1;
     if (\$70 ) begin
       \$111  = { data1[38:0], \bit  };
@@ -19400,7 +19446,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     \$112  = lc;
     if (lc_load) begin
       \$112  = { lc[4:0], \bit  };
@@ -19413,7 +19459,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     \$113  = cpw_top;
     if (\$80 ) begin
       \$113  = { cpw_top[38:0], \bit  };
@@ -19426,7 +19472,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, \bit , lc_load, word
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     in_word = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -19462,8 +19508,8 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, \bit , lc_load, word
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.decoder.crc0 (rst, \bit , start, valid, kind, receiver_clear, ok, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$87  = 0;
+module \biss_master_axil.ch1.core.decoder.crc0 (rst, start, valid, kind, \bit , receiver_clear, ok, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$89  = 0;
   wire [5:0] \$1 ;
   wire \$10 ;
   wire [5:0] \$11 ;
@@ -19557,7 +19603,7 @@ module \biss_master_axil.ch1.core.decoder.crc0 (rst, \bit , start, valid, kind, 
   assign \$auto$rtlil.cc:2739:Not$12  = ~ { crc16_reg[14], crc16_reg[11], crc16_reg[6:5], crc16_reg[3:2], 1'h0 };
   assign \$auto$rtlil.cc:2739:Not$10  = ~ { crc6_reg[0], 1'h0 };
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$87 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$89 ) begin end
     \$31  = crc6_reg;
     if (valid) begin
       \$31  = \$5 ;
@@ -19572,7 +19618,7 @@ module \biss_master_axil.ch1.core.decoder.crc0 (rst, \bit , start, valid, kind, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$87 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$89 ) begin end
     \$32  = crc6_match;
     if (valid) begin
       \$32  = \$15 ;
@@ -19587,7 +19633,7 @@ module \biss_master_axil.ch1.core.decoder.crc0 (rst, \bit , start, valid, kind, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$87 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$89 ) begin end
     \$33  = crc16_reg;
     if (valid) begin
       \$33  = \$20 ;
@@ -19602,7 +19648,7 @@ module \biss_master_axil.ch1.core.decoder.crc0 (rst, \bit , start, valid, kind, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$87 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$89 ) begin end
     \$34  = crc16_match;
     if (valid) begin
       \$34  = \$30 ;
@@ -19617,7 +19663,7 @@ module \biss_master_axil.ch1.core.decoder.crc0 (rst, \bit , start, valid, kind, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$87 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$89 ) begin end
     ok = 1'h0;
     casez (kind)
       2'h0:
@@ -19637,8 +19683,8 @@ module \biss_master_axil.ch1.core.decoder.crc0 (rst, \bit , start, valid, kind, 
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.decoder.crc1 (rst, \bit , start, valid, kind, receiver_clear, ok, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$88  = 0;
+module \biss_master_axil.ch1.core.decoder.crc1 (rst, start, valid, kind, \bit , receiver_clear, ok, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$90  = 0;
   wire [5:0] \$1 ;
   wire \$10 ;
   wire [5:0] \$11 ;
@@ -19732,7 +19778,7 @@ module \biss_master_axil.ch1.core.decoder.crc1 (rst, \bit , start, valid, kind, 
   assign \$auto$rtlil.cc:2739:Not$6  = ~ { crc6_reg[0], 1'h0 };
   assign \$auto$rtlil.cc:2739:Not$8  = ~ { crc16_reg[14], crc16_reg[11], crc16_reg[6:5], crc16_reg[3:2], 1'h0 };
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
     \$31  = crc6_reg;
     if (valid) begin
       \$31  = \$5 ;
@@ -19747,7 +19793,7 @@ module \biss_master_axil.ch1.core.decoder.crc1 (rst, \bit , start, valid, kind, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
     \$32  = crc6_match;
     if (valid) begin
       \$32  = \$15 ;
@@ -19762,7 +19808,7 @@ module \biss_master_axil.ch1.core.decoder.crc1 (rst, \bit , start, valid, kind, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
     \$33  = crc16_reg;
     if (valid) begin
       \$33  = \$20 ;
@@ -19777,7 +19823,7 @@ module \biss_master_axil.ch1.core.decoder.crc1 (rst, \bit , start, valid, kind, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
     \$34  = crc16_match;
     if (valid) begin
       \$34  = \$30 ;
@@ -19792,7 +19838,7 @@ module \biss_master_axil.ch1.core.decoder.crc1 (rst, \bit , start, valid, kind, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
     ok = 1'h0;
     casez (kind)
       2'h0:
@@ -19813,7 +19859,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, hold, first_rise, second_rise, ma, rises, busy, held, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$89  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$91  = 0;
   wire [16:0] \$1 ;
   wire \$10 ;
   wire [16:0] \$11 ;
@@ -19938,7 +19984,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
   always @(posedge clk)
     released <= \$42 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$89 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
     \$34  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -19953,7 +19999,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$89 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
     \$35  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -19968,7 +20014,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$89 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
     \$36  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -19983,7 +20029,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$89 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
     \$37  = ma;
     casez (ma_fsm_state)
       3'h0:
@@ -20012,7 +20058,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$89 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
     \$38  = phase_left;
     casez (ma_fsm_state)
       3'h0:
@@ -20054,7 +20100,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$89 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
     \$39  = last_clock;
     casez (ma_fsm_state)
       3'h0:
@@ -20096,7 +20142,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$89 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
     \$40  = rises;
     casez (ma_fsm_state)
       3'h0:
@@ -20115,7 +20161,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$89 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
     \$41  = ma_fsm_state;
     casez (ma_fsm_state)
       3'h0:
@@ -20151,7 +20197,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$89 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
     \$42  = released;
     casez (ma_fsm_state)
       3'h0:
@@ -20175,7 +20221,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$89 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
     busy = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -20191,7 +20237,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$89 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
     held = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -20208,7 +20254,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.ma_stop (rst, words, w1_enable, clear, rises, enough, \started$10 , start_slot, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$90  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$92  = 0;
   reg [7:0] \$1 ;
   reg [7:0] \$10 ;
   wire [8:0] \$11 ;
@@ -20289,7 +20335,7 @@ module \biss_master_axil.ch1.core.ma_stop (rst, words, w1_enable, clear, rises, 
   always @(posedge clk)
     word1_len <= \$17 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     (* full_case = 32'd1 *)
     casez (words[9:6])
       4'h0:
@@ -20327,7 +20373,7 @@ module \biss_master_axil.ch1.core.ma_stop (rst, words, w1_enable, clear, rises, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:16])
       4'h0:
@@ -20365,42 +20411,42 @@ module \biss_master_axil.ch1.core.ma_stop (rst, words, w1_enable, clear, rises, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     \$12  = \$2 [7:0];
     if (rst) begin
       \$12  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     \$13  = \$4 ;
     if (rst) begin
       \$13  = 9'h000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     \$14  = \$5 ;
     if (rst) begin
       \$14  = 17'h00000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     \$15  = \started$10 ;
     if (rst) begin
       \$15  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     \$16  = \$9 ;
     if (rst) begin
       \$16  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     \$17  = \$11 [7:0];
     if (rst) begin
       \$17  = 8'h00;
@@ -20420,7 +20466,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.register_access (clk, rst, host_read__en, frame_end, frame_ok, busy, rbuf_data, \start$44 , abort, request, wbuf, frame_cdm, frame_cds, cdm, done, result, host_read__addr);
-  reg \$auto$verilog_backend.cc:2355:dump_module$91  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$93  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$100 ;
@@ -20953,7 +20999,7 @@ module \biss_master_axil.ch1.core.register_access (clk, rst, host_read__en, fram
     .valid(valid)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     cdm = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -20975,7 +21021,7 @@ module \biss_master_axil.ch1.core.register_access (clk, rst, host_read__en, fram
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     start = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -21004,7 +21050,7 @@ module \biss_master_axil.ch1.core.register_access (clk, rst, host_read__en, fram
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     valid = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -21025,7 +21071,7 @@ module \biss_master_axil.ch1.core.register_access (clk, rst, host_read__en, fram
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     data = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -21046,7 +21092,7 @@ module \biss_master_axil.ch1.core.register_access (clk, rst, host_read__en, fram
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     \start$27  = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -21068,7 +21114,7 @@ module \biss_master_axil.ch1.core.register_access (clk, rst, host_read__en, fram
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     \valid$28  = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -21090,7 +21136,7 @@ module \biss_master_axil.ch1.core.register_access (clk, rst, host_read__en, fram
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     \data$29  = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -21112,7 +21158,7 @@ module \biss_master_axil.ch1.core.register_access (clk, rst, host_read__en, fram
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     byte_received__addr = 4'h0;
     casez (access_fsm_state)
       3'h0:
@@ -21138,7 +21184,7 @@ module \biss_master_axil.ch1.core.register_access (clk, rst, host_read__en, fram
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     byte_received__data = 32'd0;
     casez (access_fsm_state)
       3'h0:
@@ -21164,7 +21210,7 @@ module \biss_master_axil.ch1.core.register_access (clk, rst, host_read__en, fram
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     byte_received__en = 4'h0;
     casez (access_fsm_state)
       3'h0:
@@ -21190,7 +21236,7 @@ module \biss_master_axil.ch1.core.register_access (clk, rst, host_read__en, fram
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     \$152  = idle_run;
     if (frame_end) begin
       \$152  = \$72 [3:0];
@@ -21200,7 +21246,7 @@ module \biss_master_axil.ch1.core.register_access (clk, rst, host_read__en, fram
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     \$153  = idle_seen;
     if (frame_end) begin
       \$153  = \$78 [3:0];
@@ -21210,7 +21256,7 @@ module \biss_master_axil.ch1.core.register_access (clk, rst, host_read__en, fram
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     \$154  = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -21248,7 +21294,7 @@ module \biss_master_axil.ch1.core.register_access (clk, rst, host_read__en, fram
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     \$155  = result;
     casez (access_fsm_state)
       3'h0:
@@ -21302,7 +21348,7 @@ module \biss_master_axil.ch1.core.register_access (clk, rst, host_read__en, fram
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     \$156  = access_fsm_state;
     casez (access_fsm_state)
       3'h0:
@@ -21399,7 +21445,7 @@ module \biss_master_axil.ch1.core.register_access (clk, rst, host_read__en, fram
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     \$157  = req;
     casez (access_fsm_state)
       3'h0:
@@ -21416,7 +21462,7 @@ module \biss_master_axil.ch1.core.register_access (clk, rst, host_read__en, fram
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     \$158  = index;
     casez (access_fsm_state)
       3'h0:
@@ -21455,7 +21501,7 @@ module \biss_master_axil.ch1.core.register_access (clk, rst, host_read__en, fram
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     \$159  = header;
     casez (access_fsm_state)
       3'h0:
@@ -21483,7 +21529,7 @@ module \biss_master_axil.ch1.core.register_access (clk, rst, host_read__en, fram
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     \$160  = step;
     casez (access_fsm_state)
       3'h0:
@@ -21541,7 +21587,7 @@ module \biss_master_axil.ch1.core.register_access (clk, rst, host_read__en, fram
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     \$161  = ending;
     casez (access_fsm_state)
       3'h0:
@@ -21608,7 +21654,7 @@ module \biss_master_axil.ch1.core.register_access (clk, rst, host_read__en, fram
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     \$162  = to_send;
     casez (access_fsm_state)
       3'h0:
@@ -21637,7 +21683,7 @@ module \biss_master_axil.ch1.core.register_access (clk, rst, host_read__en, fram
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     \$163  = sent;
     casez (access_fsm_state)
       3'h0:
@@ -21662,7 +21708,7 @@ module \biss_master_axil.ch1.core.register_access (clk, rst, host_read__en, fram
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     \$164  = waited;
     casez (access_fsm_state)
       3'h0:
@@ -21694,7 +21740,7 @@ module \biss_master_axil.ch1.core.register_access (clk, rst, host_read__en, fram
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     \$165  = got;
     casez (access_fsm_state)
       3'h0:
@@ -21719,7 +21765,7 @@ module \biss_master_axil.ch1.core.register_access (clk, rst, host_read__en, fram
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     \$166  = got_crc;
     casez (access_fsm_state)
       3'h0:
@@ -21773,7 +21819,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.register_access.rx_crc (rst, crc, start, valid, data_in, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$92  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$94  = 0;
   wire [3:0] \$1 ;
   wire \$10 ;
   wire [3:0] \$11 ;
@@ -21816,7 +21862,7 @@ module \biss_master_axil.ch1.core.register_access.rx_crc (rst, crc, start, valid
     crc_reg <= \$13 ;
   assign \$auto$rtlil.cc:2739:Not$2  = ~ crc_reg;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$94 ) begin end
     \$13  = crc_reg;
     if (valid) begin
       \$13 [0] = \$3 ;
@@ -21840,7 +21886,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.register_access.tx_crc (rst, crc, start, valid, data_in, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$93  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$95  = 0;
   wire [3:0] \$1 ;
   wire \$10 ;
   wire [3:0] \$11 ;
@@ -21883,7 +21929,7 @@ module \biss_master_axil.ch1.core.register_access.tx_crc (rst, crc, start, valid
     crc_reg <= \$13 ;
   assign \$auto$rtlil.cc:2739:Not$4  = ~ crc_reg;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
     \$13  = crc_reg;
     if (valid) begin
       \$13 [0] = \$3 ;
@@ -21907,7 +21953,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.results (rst, report, valid, frame, report_frame, report_delay, done, valid_out, result, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$94  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$96  = 0;
   reg \$1 ;
   reg \$2 ;
   reg [160:0] \$3 ;
@@ -22004,21 +22050,21 @@ module \biss_master_axil.ch1.core.results (rst, report, valid, frame, report_fra
   always @(posedge clk)
     result <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$94 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$96 ) begin end
     \$1  = report;
     if (rst) begin
       \$1  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$94 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$96 ) begin end
     \$2  = valid;
     if (rst) begin
       \$2  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$94 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$96 ) begin end
     \$3  = result;
     if (report) begin
       \$3 [3:0] = frame[3:0];
@@ -22083,7 +22129,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receiver_clear, arm, early, locked, delay, sample, level, slo);
-  reg \$auto$verilog_backend.cc:2355:dump_module$95  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$97  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -22321,7 +22367,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     .stage1(level)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
     \$63  = level;
     if (receiver_clear) begin
       \$63  = 1'h1;
@@ -22331,7 +22377,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
     \$64  = mid_delay;
     if (odd) begin
       \$64  = \$8 [12:0];
@@ -22356,7 +22402,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
     \$65  = mid_slot;
     (* full_case = 32'd1 *)
     if (odd) begin
@@ -22383,7 +22429,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
     \$66  = \$10 ;
     casez (sampler_fsm_state)
       2'h0:
@@ -22405,7 +22451,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
     \$67  = elapsed;
     casez (sampler_fsm_state)
       2'h0:
@@ -22429,7 +22475,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
     \$68  = early;
     casez (sampler_fsm_state)
       2'h0:
@@ -22445,7 +22491,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
     \$69  = locked;
     casez (sampler_fsm_state)
       2'h0:
@@ -22471,7 +22517,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
     \$70  = gap;
     casez (sampler_fsm_state)
       2'h0:
@@ -22502,7 +22548,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
     \$71  = sampler_fsm_state;
     casez (sampler_fsm_state)
       2'h0:
@@ -22533,7 +22579,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
     \$72  = slot_left;
     casez (sampler_fsm_state)
       2'h0:
@@ -22583,7 +22629,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
     \$73  = slot_zero;
     casez (sampler_fsm_state)
       2'h0:
@@ -22633,7 +22679,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
     \$74  = vote1;
     casez (sampler_fsm_state)
       2'h0:
@@ -22663,7 +22709,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
     \$75  = vote2;
     casez (sampler_fsm_state)
       2'h0:
@@ -22691,7 +22737,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
     \$76  = first_slot;
     casez (sampler_fsm_state)
       2'h0:
@@ -22717,7 +22763,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
     \$77  = delay;
     casez (sampler_fsm_state)
       2'h0:
@@ -22740,7 +22786,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
     \$78  = phase;
     casez (sampler_fsm_state)
       2'h0:
@@ -22780,7 +22826,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
     sample = \$44 ;
     casez (sampler_fsm_state)
       2'h0:
@@ -22798,7 +22844,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
     decided = 1'h0;
     casez (sampler_fsm_state)
       2'h0:
@@ -22848,7 +22894,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.scheduler (rst, trigger, periodic, request, overrun, start, abort, period, idle, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$96  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$98  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -22932,7 +22978,7 @@ module \biss_master_axil.ch1.core.scheduler (rst, trigger, periodic, request, ov
   always @(posedge clk)
     period_start <= \$28 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$96 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$27  = 24'h000001;
@@ -22944,7 +22990,7 @@ module \biss_master_axil.ch1.core.scheduler (rst, trigger, periodic, request, ov
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$96 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$28  = 1'h1;
@@ -22958,8 +23004,8 @@ module \biss_master_axil.ch1.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.sign_of_life (rst, \port$2556$0 , load, \repeat , skip, check, resync, lc, is_zero, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$97  = 0;
+module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$4125$0 , resync, lc, is_zero, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$99  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -22996,8 +23042,8 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, \port$2556$0 , load, \repea
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$2556$0 ;
-  wire \port$2556$0 ;
+  input \port$4125$0 ;
+  wire \port$4125$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -23009,9 +23055,9 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, \port$2556$0 , load, \repea
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$2556$0  };
-  assign \$2  = { lc[4:0], \port$2556$0  } == last;
-  assign \$3  = { lc[4:0], \port$2556$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$4125$0  };
+  assign \$2  = { lc[4:0], \port$4125$0  } == last;
+  assign \$3  = { lc[4:0], \port$4125$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = lc == 6'h3f;
@@ -23039,7 +23085,7 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, \port$2556$0 , load, \repea
   always @(posedge clk)
     synced <= \$21 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
     \$16  = is_zero;
     if (load) begin
       \$16  = \$1 ;
@@ -23049,7 +23095,7 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, \port$2556$0 , load, \repea
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
     \$17  = is_last;
     if (load) begin
       \$17  = \$2 ;
@@ -23059,7 +23105,7 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, \port$2556$0 , load, \repea
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
     \$18  = is_expected;
     if (load) begin
       \$18  = \$3 ;
@@ -23069,7 +23115,7 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, \port$2556$0 , load, \repea
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
     \$19  = last;
     if (\$5 ) begin
       \$19  = lc;
@@ -23079,7 +23125,7 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, \port$2556$0 , load, \repea
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
     \$20  = expected;
     if (\$5 ) begin
       \$20  = \$8 [5:0];
@@ -23089,7 +23135,7 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, \port$2556$0 , load, \repea
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
     \$21  = synced;
     if (\$5 ) begin
       \$21  = 1'h1;
@@ -23101,13 +23147,13 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, \port$2556$0 , load, \repea
       \$21  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$2556$0  };
+  assign lc_next = { lc[4:0], \port$4125$0  };
   assign zero = is_zero;
 endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.spw_check (rst, bits, \tolerance$8 , spw, cpw_top, match, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$98  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$100  = 0;
   wire [40:0] \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -23312,28 +23358,28 @@ module \biss_master_axil.ch1.core.spw_check (rst, bits, \tolerance$8 , spw, cpw_
   assign \$7  = bits > 3'h5;
   assign \$8  = bits > 3'h6;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     \$88  = \$42 ;
     if (rst) begin
       \$88  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     \$89  = \$84 ;
     if (rst) begin
       \$89  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     \$90  = \tolerance$8 ;
     if (rst) begin
       \$90  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     \$91  = \$87 ;
     if (rst) begin
       \$91  = 1'h0;
@@ -23343,7 +23389,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.time_base (rst, first_rise, first_rise_time, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$99  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$101  = 0;
   wire [32:0] \$1 ;
   reg [31:0] \$2 ;
   reg [31:0] \$3 ;
@@ -23362,14 +23408,14 @@ module \biss_master_axil.ch1.core.time_base (rst, first_rise, first_rise_time, c
   always @(posedge clk)
     first_rise_time <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
     \$2  = \$1 [31:0];
     if (rst) begin
       \$2  = 32'd0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
     \$3  = first_rise_time;
     if (first_rise) begin
       \$3  = now;
@@ -23382,7 +23428,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.timers (rst, restart, ma_busy, break_time, timeout_live, ack_limit, timeout_limit, delay_limit, no_start_limit, clear, in_clock, slo_stuck, slo_stuck_live, break_over, ack_expired, no_start_expired, delay_over, delay, slo, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$100  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$102  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -23520,7 +23566,7 @@ module \biss_master_axil.ch1.core.timers (rst, restart, ma_busy, break_time, tim
   always @(posedge clk)
     delay_over <= \$43 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
     \$36  = slo_low_time_p1;
     if (\$1 ) begin
       \$36  = 25'h0000001;
@@ -23532,49 +23578,49 @@ module \biss_master_axil.ch1.core.timers (rst, restart, ma_busy, break_time, tim
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
     \$37  = \$8 ;
     if (rst) begin
       \$37  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
     \$38  = \$16 ;
     if (rst) begin
       \$38  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
     \$39  = \$20 [24:0];
     if (rst) begin
       \$39  = 25'h0000001;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
     \$40  = \$26 ;
     if (rst) begin
       \$40  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
     \$41  = \$30 ;
     if (rst) begin
       \$41  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
     \$42  = \$34 ;
     if (rst) begin
       \$42  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
     \$43  = \$35 ;
     if (rst) begin
       \$43  = 1'h0;
@@ -23583,8 +23629,8 @@ module \biss_master_axil.ch1.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.verdict (lc_skip_seen, \port$2956$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
-  reg \$auto$verilog_backend.cc:2355:dump_module$101  = 0;
+module \biss_master_axil.ch1.core.verdict (lc_skip_seen, \port$2960$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
+  reg \$auto$verilog_backend.cc:2355:dump_module$103  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -23697,8 +23743,8 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, \port$2956$0 , lc_check
   wire lc_zero;
   input lc_zero_seen;
   wire lc_zero_seen;
-  output \port$2956$0 ;
-  wire \port$2956$0 ;
+  output \port$2960$0 ;
+  wire \port$2960$0 ;
   output report;
   wire report;
   input report_frame;
@@ -23766,7 +23812,7 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, \port$2956$0 , lc_check
   assign \$29  = ~ { \$2 , crc_ok[0] };
   assign crc_error = report_frame ? \$29  : 2'h0;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     (* full_case = 32'd1 *)
     if (\$13 ) begin
       frame_status = 4'h3;
@@ -23783,7 +23829,7 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, \port$2956$0 , lc_check
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$2956$0  = \$2 ;
+  assign \port$2960$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

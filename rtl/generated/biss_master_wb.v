@@ -539,12 +539,12 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .ch1_irq(\$7 ),
     .clk(clk),
     .glob__trigger(glob__trigger),
-    .\port$3907$0 (\$8 ),
-    .\port$3914$0 (\$9 ),
-    .\port$4042$0 (\$10 ),
-    .\port$4342$0 (\$11 ),
-    .\port$4349$0 (\$12 ),
-    .\port$4477$0 (\$13 ),
+    .\port$3917$0 (\$8 ),
+    .\port$3924$0 (\$9 ),
+    .\port$4052$0 (\$10 ),
+    .\port$4358$0 (\$11 ),
+    .\port$4365$0 (\$12 ),
+    .\port$4493$0 (\$13 ),
     .rst(rst)
   );
   \biss_master_wb.bus  bus (
@@ -595,9 +595,9 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .clk(clk),
     .ma(ch0_ma),
     .periodic(regs__periodic),
-    .\port$3907$0 (\$8 ),
-    .\port$3914$0 (\$9 ),
-    .\port$4042$0 (\$10 ),
+    .\port$3917$0 (\$8 ),
+    .\port$3924$0 (\$9 ),
+    .\port$4052$0 (\$10 ),
     .regs__busy(ch0__busy),
     .regs__ca_busy(ch0__ca_busy),
     .regs__ca_done(ch0__ca_done),
@@ -646,9 +646,9 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .clk(clk),
     .ma(ch1_ma),
     .periodic(\regs__periodic$358 ),
-    .\port$4342$0 (\$11 ),
-    .\port$4349$0 (\$12 ),
-    .\port$4477$0 (\$13 ),
+    .\port$4358$0 (\$11 ),
+    .\port$4365$0 (\$12 ),
+    .\port$4493$0 (\$13 ),
     .regs__busy(ch1__busy),
     .regs__ca_busy(ch1__ca_busy),
     .regs__ca_done(ch1__ca_done),
@@ -977,7 +977,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
 , ch1__ca_busy, ch1__ca_rbuf_data, glob__trigger, ch0__start, ch0__abort_cycle, ch0__clear_counters, ch0__periodic, ch0__trigger_enable, ch0__cfg_ma_half_period, ch0__cfg_delay_limit, ch0__cfg_request_period, ch0__cfg_break_time, ch0__cfg_ack_limit, ch0__cfg_timeout_limit, ch0__cfg_w0_data_bits, ch0__cfg_w0_nenw, ch0__cfg_w0_lc, ch0__cfg_w0_crc, ch0__cfg_w1_data_bits, ch0__cfg_w1_nenw, ch0__cfg_w1_lc
 , ch0__cfg_w1_crc, ch0__cfg_w1_enable, ch0__cfg_end_check, ch0__cfg_spw_check, ch0__cfg_spw_tolerance, ch0__ca_slave_id, ch0__ca_address, ch0__ca_count, ch0__ca_write, ch0__ca_start, ch0__ca_abort, ch1__start, ch1__abort_cycle, ch1__clear_counters, ch1__periodic, ch1__trigger_enable, ch1__cfg_ma_half_period, ch1__cfg_delay_limit, ch1__cfg_request_period, ch1__cfg_break_time, ch1__cfg_ack_limit
 , ch1__cfg_timeout_limit, ch1__cfg_w0_data_bits, ch1__cfg_w0_nenw, ch1__cfg_w0_lc, ch1__cfg_w0_crc, ch1__cfg_w1_data_bits, ch1__cfg_w1_nenw, ch1__cfg_w1_lc, ch1__cfg_w1_crc, ch1__cfg_w1_enable, ch1__cfg_end_check, ch1__cfg_spw_check, ch1__cfg_spw_tolerance, ch1__ca_slave_id, ch1__ca_address, ch1__ca_count, ch1__ca_write, ch1__ca_start, ch1__ca_abort, ch0__done_count, ch0__done
-, \port$3907$0 , \port$3914$0 , ch0__ca_done, \port$4042$0 , ch1__done_count, ch1__done, \port$4342$0 , \port$4349$0 , ch1__ca_done, \port$4477$0 , bus__w_addr);
+, \port$3917$0 , \port$3924$0 , ch0__ca_done, \port$4052$0 , ch1__done_count, ch1__done, \port$4358$0 , \port$4365$0 , ch1__ca_done, \port$4493$0 , bus__w_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$26  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -2087,18 +2087,18 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
   output glob__trigger;
   reg glob__trigger = 1'h0;
   wire [1:0] irq;
-  input [160:0] \port$3907$0 ;
-  wire [160:0] \port$3907$0 ;
-  input [287:0] \port$3914$0 ;
-  wire [287:0] \port$3914$0 ;
-  input [9:0] \port$4042$0 ;
-  wire [9:0] \port$4042$0 ;
-  input [160:0] \port$4342$0 ;
-  wire [160:0] \port$4342$0 ;
-  input [287:0] \port$4349$0 ;
-  wire [287:0] \port$4349$0 ;
-  input [9:0] \port$4477$0 ;
-  wire [9:0] \port$4477$0 ;
+  input [160:0] \port$3917$0 ;
+  wire [160:0] \port$3917$0 ;
+  input [287:0] \port$3924$0 ;
+  wire [287:0] \port$3924$0 ;
+  input [9:0] \port$4052$0 ;
+  wire [9:0] \port$4052$0 ;
+  input [160:0] \port$4358$0 ;
+  wire [160:0] \port$4358$0 ;
+  input [287:0] \port$4365$0 ;
+  wire [287:0] \port$4365$0 ;
+  input [9:0] \port$4493$0 ;
+  wire [9:0] \port$4493$0 ;
   input rst;
   wire rst;
   reg window0_read = 1'h0;
@@ -3236,7 +3236,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$450  = ch0_result_status_status_snapshot;
     if (ch0_result_status_read) begin
-      \$450  = \port$3907$0 [3:0];
+      \$450  = \port$3917$0 [3:0];
     end
     if (rst) begin
       \$450  = 4'h0;
@@ -3246,7 +3246,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$451  = ch0_result_status_cds_snapshot;
     if (ch0_result_status_read) begin
-      \$451  = \port$3907$0 [49];
+      \$451  = \port$3917$0 [49];
     end
     if (rst) begin
       \$451  = 1'h0;
@@ -3256,7 +3256,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$452  = ch0_result_status_w0_ne_snapshot;
     if (ch0_result_status_read) begin
-      \$452  = \port$3907$0 [105];
+      \$452  = \port$3917$0 [105];
     end
     if (rst) begin
       \$452  = 1'h0;
@@ -3266,7 +3266,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$453  = ch0_result_status_w0_nw_snapshot;
     if (ch0_result_status_read) begin
-      \$453  = \port$3907$0 [106];
+      \$453  = \port$3917$0 [106];
     end
     if (rst) begin
       \$453  = 1'h0;
@@ -3276,7 +3276,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$454  = ch0_result_status_w0_crc_ok_snapshot;
     if (ch0_result_status_read) begin
-      \$454  = \port$3907$0 [107];
+      \$454  = \port$3917$0 [107];
     end
     if (rst) begin
       \$454  = 1'h0;
@@ -3286,7 +3286,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$455  = ch0_result_status_w1_ne_snapshot;
     if (ch0_result_status_read) begin
-      \$455  = \port$3907$0 [148];
+      \$455  = \port$3917$0 [148];
     end
     if (rst) begin
       \$455  = 1'h0;
@@ -3296,7 +3296,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$456  = ch0_result_status_w1_nw_snapshot;
     if (ch0_result_status_read) begin
-      \$456  = \port$3907$0 [149];
+      \$456  = \port$3917$0 [149];
     end
     if (rst) begin
       \$456  = 1'h0;
@@ -3306,7 +3306,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$457  = ch0_result_status_w1_crc_ok_snapshot;
     if (ch0_result_status_read) begin
-      \$457  = \port$3907$0 [150];
+      \$457  = \port$3917$0 [150];
     end
     if (rst) begin
       \$457  = 1'h0;
@@ -3316,7 +3316,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$458  = ch0_result_status_lc_repeat_snapshot;
     if (ch0_result_status_read) begin
-      \$458  = \port$3907$0 [157];
+      \$458  = \port$3917$0 [157];
     end
     if (rst) begin
       \$458  = 1'h0;
@@ -3326,7 +3326,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$459  = ch0_result_status_lc_skip_snapshot;
     if (ch0_result_status_read) begin
-      \$459  = \port$3907$0 [158];
+      \$459  = \port$3917$0 [158];
     end
     if (rst) begin
       \$459  = 1'h0;
@@ -3336,7 +3336,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$460  = ch0_result_status_lc_zero_snapshot;
     if (ch0_result_status_read) begin
-      \$460  = \port$3907$0 [159];
+      \$460  = \port$3917$0 [159];
     end
     if (rst) begin
       \$460  = 1'h0;
@@ -3346,7 +3346,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$461  = ch0_result_status_spw_mismatch_snapshot;
     if (ch0_result_status_read) begin
-      \$461  = \port$3907$0 [160];
+      \$461  = \port$3917$0 [160];
     end
     if (rst) begin
       \$461  = 1'h0;
@@ -3356,7 +3356,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$462  = ch0_result_status_lc_snapshot;
     if (ch0_result_status_read) begin
-      \$462  = \port$3907$0 [156:151];
+      \$462  = \port$3917$0 [156:151];
     end
     if (rst) begin
       \$462  = 6'h00;
@@ -3376,7 +3376,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$464  = ch0_result_seq_line_delay_snapshot;
     if (ch0_result_status_read) begin
-      \$464  = \port$3907$0 [48:36];
+      \$464  = \port$3917$0 [48:36];
     end
     if (rst) begin
       \$464  = 13'h0000;
@@ -3386,7 +3386,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$465  = ch0_result_w0_lo_data_snapshot;
     if (ch0_result_status_read) begin
-      \$465  = \port$3907$0 [81:50];
+      \$465  = \port$3917$0 [81:50];
     end
     if (rst) begin
       \$465  = 32'd0;
@@ -3396,7 +3396,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$466  = ch0_result_w0_hi_data_snapshot;
     if (ch0_result_status_read) begin
-      \$466  = \port$3907$0 [104:82];
+      \$466  = \port$3917$0 [104:82];
     end
     if (rst) begin
       \$466  = 23'h000000;
@@ -3406,7 +3406,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$467  = ch0_result_w1_lo_data_snapshot;
     if (ch0_result_status_read) begin
-      \$467  = \port$3907$0 [139:108];
+      \$467  = \port$3917$0 [139:108];
     end
     if (rst) begin
       \$467  = 32'd0;
@@ -3416,7 +3416,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$468  = ch0_result_w1_hi_data_snapshot;
     if (ch0_result_status_read) begin
-      \$468  = \port$3907$0 [147:140];
+      \$468  = \port$3917$0 [147:140];
     end
     if (rst) begin
       \$468  = 8'h00;
@@ -3426,7 +3426,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$469  = ch0_result_timestamp_time_snapshot;
     if (ch0_result_status_read) begin
-      \$469  = \port$3907$0 [35:4];
+      \$469  = \port$3917$0 [35:4];
     end
     if (rst) begin
       \$469  = 32'd0;
@@ -3777,7 +3777,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$505  = ch1_result_status_status_snapshot;
     if (ch1_result_status_read) begin
-      \$505  = \port$4342$0 [3:0];
+      \$505  = \port$4358$0 [3:0];
     end
     if (rst) begin
       \$505  = 4'h0;
@@ -3787,7 +3787,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$506  = ch1_result_status_cds_snapshot;
     if (ch1_result_status_read) begin
-      \$506  = \port$4342$0 [49];
+      \$506  = \port$4358$0 [49];
     end
     if (rst) begin
       \$506  = 1'h0;
@@ -3797,7 +3797,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$507  = ch1_result_status_w0_ne_snapshot;
     if (ch1_result_status_read) begin
-      \$507  = \port$4342$0 [105];
+      \$507  = \port$4358$0 [105];
     end
     if (rst) begin
       \$507  = 1'h0;
@@ -3807,7 +3807,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$508  = ch1_result_status_w0_nw_snapshot;
     if (ch1_result_status_read) begin
-      \$508  = \port$4342$0 [106];
+      \$508  = \port$4358$0 [106];
     end
     if (rst) begin
       \$508  = 1'h0;
@@ -3817,7 +3817,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$509  = ch1_result_status_w0_crc_ok_snapshot;
     if (ch1_result_status_read) begin
-      \$509  = \port$4342$0 [107];
+      \$509  = \port$4358$0 [107];
     end
     if (rst) begin
       \$509  = 1'h0;
@@ -3827,7 +3827,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$510  = ch1_result_status_w1_ne_snapshot;
     if (ch1_result_status_read) begin
-      \$510  = \port$4342$0 [148];
+      \$510  = \port$4358$0 [148];
     end
     if (rst) begin
       \$510  = 1'h0;
@@ -3837,7 +3837,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$511  = ch1_result_status_w1_nw_snapshot;
     if (ch1_result_status_read) begin
-      \$511  = \port$4342$0 [149];
+      \$511  = \port$4358$0 [149];
     end
     if (rst) begin
       \$511  = 1'h0;
@@ -3847,7 +3847,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$512  = ch1_result_status_w1_crc_ok_snapshot;
     if (ch1_result_status_read) begin
-      \$512  = \port$4342$0 [150];
+      \$512  = \port$4358$0 [150];
     end
     if (rst) begin
       \$512  = 1'h0;
@@ -3857,7 +3857,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$513  = ch1_result_status_lc_repeat_snapshot;
     if (ch1_result_status_read) begin
-      \$513  = \port$4342$0 [157];
+      \$513  = \port$4358$0 [157];
     end
     if (rst) begin
       \$513  = 1'h0;
@@ -3867,7 +3867,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$514  = ch1_result_status_lc_skip_snapshot;
     if (ch1_result_status_read) begin
-      \$514  = \port$4342$0 [158];
+      \$514  = \port$4358$0 [158];
     end
     if (rst) begin
       \$514  = 1'h0;
@@ -3877,7 +3877,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$515  = ch1_result_status_lc_zero_snapshot;
     if (ch1_result_status_read) begin
-      \$515  = \port$4342$0 [159];
+      \$515  = \port$4358$0 [159];
     end
     if (rst) begin
       \$515  = 1'h0;
@@ -3887,7 +3887,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$516  = ch1_result_status_spw_mismatch_snapshot;
     if (ch1_result_status_read) begin
-      \$516  = \port$4342$0 [160];
+      \$516  = \port$4358$0 [160];
     end
     if (rst) begin
       \$516  = 1'h0;
@@ -3897,7 +3897,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$517  = ch1_result_status_lc_snapshot;
     if (ch1_result_status_read) begin
-      \$517  = \port$4342$0 [156:151];
+      \$517  = \port$4358$0 [156:151];
     end
     if (rst) begin
       \$517  = 6'h00;
@@ -3917,7 +3917,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$519  = ch1_result_seq_line_delay_snapshot;
     if (ch1_result_status_read) begin
-      \$519  = \port$4342$0 [48:36];
+      \$519  = \port$4358$0 [48:36];
     end
     if (rst) begin
       \$519  = 13'h0000;
@@ -3927,7 +3927,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$520  = ch1_result_w0_lo_data_snapshot;
     if (ch1_result_status_read) begin
-      \$520  = \port$4342$0 [81:50];
+      \$520  = \port$4358$0 [81:50];
     end
     if (rst) begin
       \$520  = 32'd0;
@@ -3937,7 +3937,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$521  = ch1_result_w0_hi_data_snapshot;
     if (ch1_result_status_read) begin
-      \$521  = \port$4342$0 [104:82];
+      \$521  = \port$4358$0 [104:82];
     end
     if (rst) begin
       \$521  = 23'h000000;
@@ -3947,7 +3947,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$522  = ch1_result_w1_lo_data_snapshot;
     if (ch1_result_status_read) begin
-      \$522  = \port$4342$0 [139:108];
+      \$522  = \port$4358$0 [139:108];
     end
     if (rst) begin
       \$522  = 32'd0;
@@ -3957,7 +3957,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$523  = ch1_result_w1_hi_data_snapshot;
     if (ch1_result_status_read) begin
-      \$523  = \port$4342$0 [147:140];
+      \$523  = \port$4358$0 [147:140];
     end
     if (rst) begin
       \$523  = 8'h00;
@@ -3967,7 +3967,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$524  = ch1_result_timestamp_time_snapshot;
     if (ch1_result_status_read) begin
-      \$524  = \port$4342$0 [35:4];
+      \$524  = \port$4358$0 [35:4];
     end
     if (rst) begin
       \$524  = 32'd0;
@@ -4014,7 +4014,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
         11'h08e:
             \$525  = { 16'h0000, ch0__cfg_spw_tolerance, 6'h00, ch0__cfg_spw_check, ch0__cfg_end_check };
         11'h090:
-            \$525  = { 2'h0, \port$3907$0 [156:151], 4'h0, \port$3907$0 [160:157], 1'h0, \port$3907$0 [150:148], 1'h0, \port$3907$0 [107:105], 3'h0, \port$3907$0 [49], \port$3907$0 [3:0] };
+            \$525  = { 2'h0, \port$3917$0 [156:151], 4'h0, \port$3917$0 [160:157], 1'h0, \port$3917$0 [150:148], 1'h0, \port$3917$0 [107:105], 3'h0, \port$3917$0 [49], \port$3917$0 [3:0] };
         11'h091:
             \$525  = { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot };
         11'h092:
@@ -4028,31 +4028,31 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
         11'h096:
             \$525  = ch0_result_timestamp_time_snapshot;
         11'h098:
-            \$525  = \port$3914$0 [31:0];
+            \$525  = \port$3924$0 [31:0];
         11'h099:
-            \$525  = \port$3914$0 [63:32];
+            \$525  = \port$3924$0 [63:32];
         11'h09a:
-            \$525  = \port$3914$0 [95:64];
+            \$525  = \port$3924$0 [95:64];
         11'h09b:
-            \$525  = \port$3914$0 [127:96];
+            \$525  = \port$3924$0 [127:96];
         11'h09c:
-            \$525  = \port$3914$0 [159:128];
+            \$525  = \port$3924$0 [159:128];
         11'h09d:
-            \$525  = \port$3914$0 [191:160];
+            \$525  = \port$3924$0 [191:160];
         11'h09e:
-            \$525  = { 16'h0000, \port$3914$0 [207:192] };
+            \$525  = { 16'h0000, \port$3924$0 [207:192] };
         11'h0c0:
             \$525  = { 7'h00, ch0__ca_write, 1'h0, ch0__ca_count, 1'h0, ch0__ca_address, 5'h00, ch0__ca_slave_id };
         11'h0c1:
             \$525  = 32'd0;
         11'h0c2:
-            \$525  = { 17'h00000, \port$4042$0 [9:3], 1'h0, \port$4042$0 [2:0], 3'h0, ch0__ca_busy };
+            \$525  = { 17'h00000, \port$4052$0 [9:3], 1'h0, \port$4052$0 [2:0], 3'h0, ch0__ca_busy };
         11'h0c3:
-            \$525  = \port$3914$0 [239:208];
+            \$525  = \port$3924$0 [239:208];
         11'h0c4:
-            \$525  = \port$3914$0 [271:240];
+            \$525  = \port$3924$0 [271:240];
         11'h0c5:
-            \$525  = { 16'h0000, \port$3914$0 [287:272] };
+            \$525  = { 16'h0000, \port$3924$0 [287:272] };
         11'h100:
             \$525  = { 22'h000000, ch1__trigger_enable, ch1__periodic, 8'h00 };
         11'h101:
@@ -4078,7 +4078,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
         11'h10e:
             \$525  = { 16'h0000, ch1__cfg_spw_tolerance, 6'h00, ch1__cfg_spw_check, ch1__cfg_end_check };
         11'h110:
-            \$525  = { 2'h0, \port$4342$0 [156:151], 4'h0, \port$4342$0 [160:157], 1'h0, \port$4342$0 [150:148], 1'h0, \port$4342$0 [107:105], 3'h0, \port$4342$0 [49], \port$4342$0 [3:0] };
+            \$525  = { 2'h0, \port$4358$0 [156:151], 4'h0, \port$4358$0 [160:157], 1'h0, \port$4358$0 [150:148], 1'h0, \port$4358$0 [107:105], 3'h0, \port$4358$0 [49], \port$4358$0 [3:0] };
         11'h111:
             \$525  = { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot };
         11'h112:
@@ -4092,31 +4092,31 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
         11'h116:
             \$525  = ch1_result_timestamp_time_snapshot;
         11'h118:
-            \$525  = \port$4349$0 [31:0];
+            \$525  = \port$4365$0 [31:0];
         11'h119:
-            \$525  = \port$4349$0 [63:32];
+            \$525  = \port$4365$0 [63:32];
         11'h11a:
-            \$525  = \port$4349$0 [95:64];
+            \$525  = \port$4365$0 [95:64];
         11'h11b:
-            \$525  = \port$4349$0 [127:96];
+            \$525  = \port$4365$0 [127:96];
         11'h11c:
-            \$525  = \port$4349$0 [159:128];
+            \$525  = \port$4365$0 [159:128];
         11'h11d:
-            \$525  = \port$4349$0 [191:160];
+            \$525  = \port$4365$0 [191:160];
         11'h11e:
-            \$525  = { 16'h0000, \port$4349$0 [207:192] };
+            \$525  = { 16'h0000, \port$4365$0 [207:192] };
         11'h140:
             \$525  = { 7'h00, ch1__ca_write, 1'h0, ch1__ca_count, 1'h0, ch1__ca_address, 5'h00, ch1__ca_slave_id };
         11'h141:
             \$525  = 32'd0;
         11'h142:
-            \$525  = { 17'h00000, \port$4477$0 [9:3], 1'h0, \port$4477$0 [2:0], 3'h0, ch1__ca_busy };
+            \$525  = { 17'h00000, \port$4493$0 [9:3], 1'h0, \port$4493$0 [2:0], 3'h0, ch1__ca_busy };
         11'h143:
-            \$525  = \port$4349$0 [239:208];
+            \$525  = \port$4365$0 [239:208];
         11'h144:
-            \$525  = \port$4349$0 [271:240];
+            \$525  = \port$4365$0 [271:240];
         11'h145:
-            \$525  = { 16'h0000, \port$4349$0 [287:272] };
+            \$525  = { 16'h0000, \port$4365$0 [287:272] };
         default:
             \$525  = 32'd0;
       endcase
@@ -4212,40 +4212,40 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
   assign ch1__ca_wbuf_data = ch0__ca_wbuf_data;
   assign ch1__ca_rbuf_addr = bus__w_addr[3:0];
   assign irq = { ch1_irq, ch0_irq };
-  assign ch0__status = \port$3907$0 [3:0];
-  assign ch0__cds = \port$3907$0 [49];
-  assign ch0__word0_ne = \port$3907$0 [105];
-  assign ch0__word0_nw = \port$3907$0 [106];
-  assign ch0__word0_crc_ok = \port$3907$0 [107];
-  assign ch0__word1_ne = \port$3907$0 [148];
-  assign ch0__word1_nw = \port$3907$0 [149];
-  assign ch0__word1_crc_ok = \port$3907$0 [150];
-  assign ch0__lc_repeat = \port$3907$0 [157];
-  assign ch0__lc_skip = \port$3907$0 [158];
-  assign ch0__lc_zero = \port$3907$0 [159];
-  assign ch0__spw_mismatch = \port$3907$0 [160];
-  assign ch0__lc = \port$3907$0 [156:151];
-  assign ch0__line_delay = \port$3907$0 [48:36];
-  assign ch0__word0_position = \port$3907$0 [104:50];
-  assign ch0__word1_position = \port$3907$0 [147:108];
-  assign ch0__timestamp = \port$3907$0 [35:4];
-  assign ch1__status = \port$4342$0 [3:0];
-  assign ch1__cds = \port$4342$0 [49];
-  assign ch1__word0_ne = \port$4342$0 [105];
-  assign ch1__word0_nw = \port$4342$0 [106];
-  assign ch1__word0_crc_ok = \port$4342$0 [107];
-  assign ch1__word1_ne = \port$4342$0 [148];
-  assign ch1__word1_nw = \port$4342$0 [149];
-  assign ch1__word1_crc_ok = \port$4342$0 [150];
-  assign ch1__lc_repeat = \port$4342$0 [157];
-  assign ch1__lc_skip = \port$4342$0 [158];
-  assign ch1__lc_zero = \port$4342$0 [159];
-  assign ch1__spw_mismatch = \port$4342$0 [160];
-  assign ch1__lc = \port$4342$0 [156:151];
-  assign ch1__line_delay = \port$4342$0 [48:36];
-  assign ch1__word0_position = \port$4342$0 [104:50];
-  assign ch1__word1_position = \port$4342$0 [147:108];
-  assign ch1__timestamp = \port$4342$0 [35:4];
+  assign ch0__status = \port$3917$0 [3:0];
+  assign ch0__cds = \port$3917$0 [49];
+  assign ch0__word0_ne = \port$3917$0 [105];
+  assign ch0__word0_nw = \port$3917$0 [106];
+  assign ch0__word0_crc_ok = \port$3917$0 [107];
+  assign ch0__word1_ne = \port$3917$0 [148];
+  assign ch0__word1_nw = \port$3917$0 [149];
+  assign ch0__word1_crc_ok = \port$3917$0 [150];
+  assign ch0__lc_repeat = \port$3917$0 [157];
+  assign ch0__lc_skip = \port$3917$0 [158];
+  assign ch0__lc_zero = \port$3917$0 [159];
+  assign ch0__spw_mismatch = \port$3917$0 [160];
+  assign ch0__lc = \port$3917$0 [156:151];
+  assign ch0__line_delay = \port$3917$0 [48:36];
+  assign ch0__word0_position = \port$3917$0 [104:50];
+  assign ch0__word1_position = \port$3917$0 [147:108];
+  assign ch0__timestamp = \port$3917$0 [35:4];
+  assign ch1__status = \port$4358$0 [3:0];
+  assign ch1__cds = \port$4358$0 [49];
+  assign ch1__word0_ne = \port$4358$0 [105];
+  assign ch1__word0_nw = \port$4358$0 [106];
+  assign ch1__word0_crc_ok = \port$4358$0 [107];
+  assign ch1__word1_ne = \port$4358$0 [148];
+  assign ch1__word1_nw = \port$4358$0 [149];
+  assign ch1__word1_crc_ok = \port$4358$0 [150];
+  assign ch1__lc_repeat = \port$4358$0 [157];
+  assign ch1__lc_skip = \port$4358$0 [158];
+  assign ch1__lc_zero = \port$4358$0 [159];
+  assign ch1__spw_mismatch = \port$4358$0 [160];
+  assign ch1__lc = \port$4358$0 [156:151];
+  assign ch1__line_delay = \port$4358$0 [48:36];
+  assign ch1__word0_position = \port$4358$0 [104:50];
+  assign ch1__word1_position = \port$4358$0 [147:108];
+  assign ch1__timestamp = \port$4358$0 [35:4];
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, ch1_irq, ch0_irq };
   assign ch0__cap_data_bits_w0 = 6'h37;
@@ -4254,52 +4254,52 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
   assign ch0__cap_counters = 1'h1;
   assign ch0__cap_timestamp = 1'h1;
   assign ch0__cap_register_access = 1'h1;
-  assign ch0__count_crc_word0 = \port$3914$0 [15:0];
-  assign ch0__count_crc_word1 = \port$3914$0 [31:16];
-  assign ch0__count_no_ack = \port$3914$0 [47:32];
-  assign ch0__count_no_start = \port$3914$0 [63:48];
-  assign ch0__count_delay_range = \port$3914$0 [79:64];
-  assign ch0__count_slo_stuck_low = \port$3914$0 [95:80];
-  assign ch0__count_lc_repeat = \port$3914$0 [111:96];
-  assign ch0__count_lc_skip = \port$3914$0 [127:112];
-  assign ch0__count_lc_zero = \port$3914$0 [143:128];
-  assign ch0__count_spw_mismatch = \port$3914$0 [159:144];
-  assign ch0__count_overrun = \port$3914$0 [175:160];
-  assign ch0__count_aborted = \port$3914$0 [191:176];
-  assign ch0__count_no_stop = \port$3914$0 [207:192];
-  assign ch0__ca_status = \port$4042$0 [2:0];
-  assign ch0__ca_bytes_done = \port$4042$0 [9:3];
-  assign ch0__count_ca_crc4_error = \port$3914$0 [223:208];
-  assign ch0__count_ca_no_answer = \port$3914$0 [239:224];
-  assign ch0__count_ca_refused = \port$3914$0 [255:240];
-  assign ch0__count_ca_aborted = \port$3914$0 [271:256];
-  assign ch0__count_ca_data_fault = \port$3914$0 [287:272];
+  assign ch0__count_crc_word0 = \port$3924$0 [15:0];
+  assign ch0__count_crc_word1 = \port$3924$0 [31:16];
+  assign ch0__count_no_ack = \port$3924$0 [47:32];
+  assign ch0__count_no_start = \port$3924$0 [63:48];
+  assign ch0__count_delay_range = \port$3924$0 [79:64];
+  assign ch0__count_slo_stuck_low = \port$3924$0 [95:80];
+  assign ch0__count_lc_repeat = \port$3924$0 [111:96];
+  assign ch0__count_lc_skip = \port$3924$0 [127:112];
+  assign ch0__count_lc_zero = \port$3924$0 [143:128];
+  assign ch0__count_spw_mismatch = \port$3924$0 [159:144];
+  assign ch0__count_overrun = \port$3924$0 [175:160];
+  assign ch0__count_aborted = \port$3924$0 [191:176];
+  assign ch0__count_no_stop = \port$3924$0 [207:192];
+  assign ch0__ca_status = \port$4052$0 [2:0];
+  assign ch0__ca_bytes_done = \port$4052$0 [9:3];
+  assign ch0__count_ca_crc4_error = \port$3924$0 [223:208];
+  assign ch0__count_ca_no_answer = \port$3924$0 [239:224];
+  assign ch0__count_ca_refused = \port$3924$0 [255:240];
+  assign ch0__count_ca_aborted = \port$3924$0 [271:256];
+  assign ch0__count_ca_data_fault = \port$3924$0 [287:272];
   assign ch1__cap_data_bits_w0 = 6'h37;
   assign ch1__cap_data_bits_w1 = 6'h28;
   assign ch1__cap_timer_width = 6'h18;
   assign ch1__cap_counters = 1'h1;
   assign ch1__cap_timestamp = 1'h1;
   assign ch1__cap_register_access = 1'h1;
-  assign ch1__count_crc_word0 = \port$4349$0 [15:0];
-  assign ch1__count_crc_word1 = \port$4349$0 [31:16];
-  assign ch1__count_no_ack = \port$4349$0 [47:32];
-  assign ch1__count_no_start = \port$4349$0 [63:48];
-  assign ch1__count_delay_range = \port$4349$0 [79:64];
-  assign ch1__count_slo_stuck_low = \port$4349$0 [95:80];
-  assign ch1__count_lc_repeat = \port$4349$0 [111:96];
-  assign ch1__count_lc_skip = \port$4349$0 [127:112];
-  assign ch1__count_lc_zero = \port$4349$0 [143:128];
-  assign ch1__count_spw_mismatch = \port$4349$0 [159:144];
-  assign ch1__count_overrun = \port$4349$0 [175:160];
-  assign ch1__count_aborted = \port$4349$0 [191:176];
-  assign ch1__count_no_stop = \port$4349$0 [207:192];
-  assign ch1__ca_status = \port$4477$0 [2:0];
-  assign ch1__ca_bytes_done = \port$4477$0 [9:3];
-  assign ch1__count_ca_crc4_error = \port$4349$0 [223:208];
-  assign ch1__count_ca_no_answer = \port$4349$0 [239:224];
-  assign ch1__count_ca_refused = \port$4349$0 [255:240];
-  assign ch1__count_ca_aborted = \port$4349$0 [271:256];
-  assign ch1__count_ca_data_fault = \port$4349$0 [287:272];
+  assign ch1__count_crc_word0 = \port$4365$0 [15:0];
+  assign ch1__count_crc_word1 = \port$4365$0 [31:16];
+  assign ch1__count_no_ack = \port$4365$0 [47:32];
+  assign ch1__count_no_start = \port$4365$0 [63:48];
+  assign ch1__count_delay_range = \port$4365$0 [79:64];
+  assign ch1__count_slo_stuck_low = \port$4365$0 [95:80];
+  assign ch1__count_lc_repeat = \port$4365$0 [111:96];
+  assign ch1__count_lc_skip = \port$4365$0 [127:112];
+  assign ch1__count_lc_zero = \port$4365$0 [143:128];
+  assign ch1__count_spw_mismatch = \port$4365$0 [159:144];
+  assign ch1__count_overrun = \port$4365$0 [175:160];
+  assign ch1__count_aborted = \port$4365$0 [191:176];
+  assign ch1__count_no_stop = \port$4365$0 [207:192];
+  assign ch1__ca_status = \port$4493$0 [2:0];
+  assign ch1__ca_bytes_done = \port$4493$0 [9:3];
+  assign ch1__count_ca_crc4_error = \port$4365$0 [223:208];
+  assign ch1__count_ca_no_answer = \port$4365$0 [239:224];
+  assign ch1__count_ca_refused = \port$4365$0 [255:240];
+  assign ch1__count_ca_aborted = \port$4365$0 [271:256];
+  assign ch1__count_ca_data_fault = \port$4365$0 [287:272];
   assign g_irq = 1'h0;
   assign \$79  = \$78 ;
   assign \$81  = \$80 ;
@@ -4389,7 +4389,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch0 (ca_wbuf_data, slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__ca_busy, regs__ca_rbuf_data, start, abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time
 , cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, regs__done_count
-, ma, regs__done, \port$3907$0 , \port$3914$0 , regs__ca_done, \port$4042$0 , ca_wbuf_addr);
+, ma, regs__done, \port$3917$0 , \port$3924$0 , regs__ca_done, \port$4052$0 , ca_wbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$28  = 0;
   wire \$1 ;
   wire [16:0] \$2 ;
@@ -4513,12 +4513,12 @@ module \biss_master_wb.ch0 (ca_wbuf_data, slo, clk, rst, \trigger$161 , ca_wbuf_
   wire \ma$164 ;
   input periodic;
   wire periodic;
-  output [160:0] \port$3907$0 ;
-  wire [160:0] \port$3907$0 ;
-  output [287:0] \port$3914$0 ;
-  wire [287:0] \port$3914$0 ;
-  output [9:0] \port$4042$0 ;
-  wire [9:0] \port$4042$0 ;
+  output [160:0] \port$3917$0 ;
+  wire [160:0] \port$3917$0 ;
+  output [287:0] \port$3924$0 ;
+  wire [287:0] \port$3924$0 ;
+  output [9:0] \port$4052$0 ;
+  wire [9:0] \port$4052$0 ;
   wire regs__abort_cycle;
   output regs__busy;
   wire regs__busy;
@@ -4665,8 +4665,8 @@ module \biss_master_wb.ch0 (ca_wbuf_data, slo, clk, rst, \trigger$161 , ca_wbuf_
   assign trigger = \trigger$161  & regs__trigger_enable;
   \biss_master_wb.ch0.core  core (
     .abort(abort_cycle),
-    .\abort$187 (ca_abort),
-    .\busy$237 (regs__busy),
+    .\abort$183 (ca_abort),
+    .\busy$233 (regs__busy),
     .ca_address(ca_address),
     .ca_count(ca_count),
     .ca_done(regs__ca_done),
@@ -4694,23 +4694,23 @@ module \biss_master_wb.ch0 (ca_wbuf_data, slo, clk, rst, \trigger$161 , ca_wbuf_
     .cfg_w1_enable(cfg_w1_enable),
     .cfg_w1_lc(cfg_w1_lc),
     .cfg_w1_nenw(cfg_w1_nenw),
-    .\clear$214 (clear_counters),
+    .\clear$210 (clear_counters),
     .clk(clk),
     .config_error(regs__config_error),
     .counts(\$5 ),
-    .\done$240 (regs__done),
+    .\done$236 (regs__done),
     .frames(regs__ca_busy),
     .ma(ma),
     .\periodic$24 (periodic),
     .rbuf_en(ca_rbuf_en),
     .result(\$6 ),
-    .\result$245 (\$4 ),
+    .\result$241 (\$4 ),
     .rst(rst),
     .slo(slo),
     .start(start),
-    .\start$185 (ca_start),
+    .\start$181 (ca_start),
     .trigger(trigger),
-    .\valid$242 (valid)
+    .\valid$238 (valid)
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
@@ -4844,19 +4844,24 @@ module \biss_master_wb.ch0 (ca_wbuf_data, slo, clk, rst, \trigger$161 , ca_wbuf_
   assign regs__ca_rbuf_en = ca_rbuf_en;
   assign \ma$164  = ma;
   assign \slo$166  = slo;
-  assign \port$3907$0  = \$4 ;
-  assign \port$3914$0  = \$5 ;
-  assign \port$4042$0  = \$6 ;
+  assign \port$3917$0  = \$4 ;
+  assign \port$3924$0  = \$5 ;
+  assign \port$4052$0  = \$6 ;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy$237 , config_error, frames, ca_rbuf_data, start, abort, \clear$214 , \periodic$24 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit
-, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, \start$185 , \abort$187 , ma, \done$240 , \valid$242 
-, \result$245 , counts, ca_done, result, ca_wbuf_addr);
+module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy$233 , config_error, frames, ca_rbuf_data, start, abort, \clear$210 , \periodic$24 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit
+, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, \start$181 , \abort$183 , ma, \done$236 , \valid$238 
+, \result$241 , counts, ca_done, result, ca_wbuf_addr);
+  reg \$auto$verilog_backend.cc:2355:dump_module$29  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
   wire \$12 ;
+  wire \$13 ;
+  reg \$14 ;
+  reg \$15 ;
+  wire \$16 ;
   wire \$2 ;
   wire \$3 ;
   wire \$4 ;
@@ -4867,8 +4872,8 @@ module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   wire \$9 ;
   input abort;
   wire abort;
-  input \abort$187 ;
-  wire \abort$187 ;
+  input \abort$183 ;
+  wire \abort$183 ;
   wire \abort$36 ;
   wire abort_cycle;
   wire ack_expired;
@@ -4876,16 +4881,16 @@ module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   wire [23:0] ack_limit;
   wire [23:0] \ack_limit$89 ;
   wire arm;
-  wire \bit ;
-  wire \bit$113 ;
+  reg \bit  = 1'h0;
+  wire \bit$263 ;
   wire [5:0] bits;
   wire break_over;
   wire \break_over$66 ;
   wire [23:0] break_time;
   wire busy;
-  wire \busy$196 ;
-  output \busy$237 ;
-  wire \busy$237 ;
+  wire \busy$192 ;
+  output \busy$233 ;
+  wire \busy$233 ;
   wire ca_abort;
   input [6:0] ca_address;
   wire [6:0] ca_address;
@@ -4920,10 +4925,10 @@ module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   input ca_write;
   wire ca_write;
   wire cdm;
-  wire \cdm$200 ;
+  wire \cdm$196 ;
   wire cdm_cycle;
   wire cds;
-  wire \cds$248 ;
+  wire \cds$244 ;
   wire [154:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
@@ -5000,8 +5005,8 @@ module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   wire check;
   wire clear;
   wire \clear$106 ;
-  input \clear$214 ;
-  wire \clear$214 ;
+  input \clear$210 ;
+  wire \clear$210 ;
   wire clear_counters;
   input clk;
   wire clk;
@@ -5048,10 +5053,10 @@ module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   wire [15:0] \counts.slo_stuck_low ;
   wire [15:0] \counts.spw_mismatch ;
   wire [39:0] cpw_top;
-  wire [39:0] \cpw_top$130 ;
+  wire [39:0] \cpw_top$126 ;
   wire [1:0] crc_error;
   wire [1:0] crc_ok;
-  wire [1:0] \crc_ok$145 ;
+  wire [1:0] \crc_ok$141 ;
   wire [154:0] cycle;
   wire [23:0] \cycle.ack_limit ;
   wire [23:0] \cycle.break_time ;
@@ -5090,10 +5095,10 @@ module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   wire delay_over;
   wire \delay_over$76 ;
   wire done;
-  wire \done$198 ;
-  output \done$240 ;
-  wire \done$240 ;
-  wire \done$241 ;
+  wire \done$194 ;
+  output \done$236 ;
+  wire \done$236 ;
+  wire \done$237 ;
   wire doubtful;
   wire early;
   wire \early$52 ;
@@ -5119,7 +5124,7 @@ module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   wire \events.slo_stuck_low ;
   wire \events.spw_mismatch ;
   wire fault;
-  wire \fault$141 ;
+  wire \fault$137 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -5149,7 +5154,7 @@ module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
-  wire [3:0] \fault_status$143 ;
+  wire [3:0] \fault_status$139 ;
   wire [6:0] faults;
   wire \faults.aborted ;
   wire \faults.bad_config ;
@@ -5159,7 +5164,7 @@ module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   wire \faults.no_stop ;
   wire \faults.slo_stuck_low ;
   wire first_rise;
-  wire \first_rise$171 ;
+  wire \first_rise$167 ;
   wire [31:0] first_rise_time;
   wire [160:0] frame;
   wire \frame.cds ;
@@ -5213,20 +5218,20 @@ module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   wire in_clock;
   wire \in_clock$83 ;
   wire [5:0] lc;
-  wire [5:0] \lc$117 ;
-  wire [5:0] \lc$257 ;
+  wire [5:0] \lc$113 ;
+  wire [5:0] \lc$253 ;
   wire lc_check;
   wire lc_load;
   wire [5:0] lc_next;
-  wire [5:0] \lc_next$119 ;
+  wire [5:0] \lc_next$115 ;
   wire lc_repeat;
-  wire \lc_repeat$258 ;
+  wire \lc_repeat$254 ;
   wire lc_repeat_seen;
   wire lc_skip;
-  wire \lc_skip$259 ;
+  wire \lc_skip$255 ;
   wire lc_skip_seen;
   wire lc_zero;
-  wire \lc_zero$260 ;
+  wire \lc_zero$256 ;
   wire lc_zero_seen;
   wire level;
   wire [12:0] line_delay;
@@ -5264,7 +5269,7 @@ module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   wire \locked$50 ;
   output ma;
   wire ma;
-  wire \ma$236 ;
+  wire \ma$232 ;
   wire ma_arm;
   wire ma_busy;
   wire \ma_busy$78 ;
@@ -5281,7 +5286,7 @@ module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   wire [1:0] nw;
   wire ok;
   wire overrun;
-  wire \overrun$239 ;
+  wire \overrun$235 ;
   wire [23:0] period;
   wire periodic;
   input \periodic$24 ;
@@ -5293,32 +5298,32 @@ module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   wire receiver_clear;
   wire \repeat ;
   wire report;
-  wire \report$153 ;
+  wire \report$149 ;
   wire report_delay;
-  wire \report_delay$156 ;
+  wire \report_delay$152 ;
   wire report_frame;
-  wire \report_frame$139 ;
-  wire \report_frame$154 ;
+  wire \report_frame$135 ;
+  wire \report_frame$150 ;
   wire request;
-  wire [17:0] \request$173 ;
-  wire [6:0] \request$173.address ;
-  wire [6:0] \request$173.count ;
-  wire [2:0] \request$173.slave_id ;
-  wire \request$173.write ;
+  wire [17:0] \request$169 ;
+  wire [6:0] \request$169.address ;
+  wire [6:0] \request$169.count ;
+  wire [2:0] \request$169.slave_id ;
+  wire \request$169.write ;
   wire \request$35 ;
   wire restart;
   wire restart_timer;
   output [9:0] result;
   wire [9:0] result;
-  output [160:0] \result$245 ;
-  wire [160:0] \result$245 ;
-  wire \result$245.cds ;
-  wire [5:0] \result$245.lc ;
-  wire \result$245.lc_repeat ;
-  wire \result$245.lc_skip ;
-  wire \result$245.lc_zero ;
-  wire [12:0] \result$245.line_delay ;
-  wire \result$245.spw_mismatch ;
+  output [160:0] \result$241 ;
+  wire [160:0] \result$241 ;
+  wire \result$241.cds ;
+  wire [5:0] \result$241.lc ;
+  wire \result$241.lc_repeat ;
+  wire \result$241.lc_skip ;
+  wire \result$241.lc_zero ;
+  wire [12:0] \result$241.line_delay ;
+  wire \result$241.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -5333,18 +5338,18 @@ module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
-  wire [3:0] \result$245.status ;
-  wire [31:0] \result$245.timestamp ;
-  wire [57:0] \result$245.word0 ;
-  wire \result$245.word0.crc_ok ;
-  wire \result$245.word0.ne ;
-  wire \result$245.word0.nw ;
-  wire [54:0] \result$245.word0.position ;
-  wire [42:0] \result$245.word1 ;
-  wire \result$245.word1.crc_ok ;
-  wire \result$245.word1.ne ;
-  wire \result$245.word1.nw ;
-  wire [39:0] \result$245.word1.position ;
+  wire [3:0] \result$241.status ;
+  wire [31:0] \result$241.timestamp ;
+  wire [57:0] \result$241.word0 ;
+  wire \result$241.word0.crc_ok ;
+  wire \result$241.word0.ne ;
+  wire \result$241.word0.nw ;
+  wire [54:0] \result$241.word0.position ;
+  wire [42:0] \result$241.word1 ;
+  wire \result$241.word1.crc_ok ;
+  wire \result$241.word1.ne ;
+  wire \result$241.word1.nw ;
+  wire [39:0] \result$241.word1.position ;
   wire [6:0] \result.bytes_done ;
   (* enum_base_type = "AccessStatus" *)
   (* enum_value_000 = "OK" *)
@@ -5356,14 +5361,14 @@ module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   (* enum_value_110 = "BAD_REQUEST" *)
   wire [2:0] \result.status ;
   wire resync;
-  wire \resync$125 ;
+  wire \resync$121 ;
   wire [15:0] rises;
   wire [15:0] \rises$105 ;
   input rst;
   wire rst;
   wire run;
-  wire sample;
-  wire \sample$111 ;
+  reg sample = 1'h0;
+  wire \sample$261 ;
   wire second_rise;
   wire skip;
   input slo;
@@ -5380,11 +5385,11 @@ module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   wire [39:0] spw;
   wire spw_match;
   wire spw_mismatch;
-  wire \spw_mismatch$261 ;
+  wire \spw_mismatch$257 ;
   input start;
   wire start;
-  input \start$185 ;
-  wire \start$185 ;
+  input \start$181 ;
+  wire \start$181 ;
   wire \start$22 ;
   wire [15:0] start_slot;
   wire [15:0] \start_slot$103 ;
@@ -5420,7 +5425,7 @@ module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
-  wire [3:0] \status$244 ;
+  wire [3:0] \status$240 ;
   wire stop_bit;
   wire \stop_bit$62 ;
   wire stopped;
@@ -5435,9 +5440,9 @@ module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   wire trigger;
   wire \trigger$33 ;
   wire valid;
-  wire \valid$158 ;
-  output \valid$242 ;
-  wire \valid$242 ;
+  wire \valid$154 ;
+  output \valid$238 ;
+  wire \valid$238 ;
   wire valid_out;
   wire w1_enable;
   wire [39:0] wbuf;
@@ -5453,28 +5458,28 @@ module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   wire word1_nw;
   wire [39:0] word1_position;
   wire [1:0] word_count;
-  wire [1:0] \word_count$115 ;
+  wire [1:0] \word_count$111 ;
   wire [1:0] word_crc_ok;
   wire [19:0] words;
-  wire [19:0] \words$127 ;
-  wire [9:0] \words$127[0] ;
+  wire [19:0] \words$123 ;
+  wire [9:0] \words$123[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
-  wire [1:0] \words$127[0].crc ;
-  wire [5:0] \words$127[0].data_bits ;
-  wire \words$127[0].lc ;
-  wire \words$127[0].nenw ;
-  wire [9:0] \words$127[1] ;
+  wire [1:0] \words$123[0].crc ;
+  wire [5:0] \words$123[0].data_bits ;
+  wire \words$123[0].lc ;
+  wire \words$123[0].nenw ;
+  wire [9:0] \words$123[1] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
-  wire [1:0] \words$127[1].crc ;
-  wire [5:0] \words$127[1].data_bits ;
-  wire \words$127[1].lc ;
-  wire \words$127[1].nenw ;
+  wire [1:0] \words$123[1].crc ;
+  wire [5:0] \words$123[1].data_bits ;
+  wire \words$123[1].lc ;
+  wire \words$123[1].nenw ;
   wire [9:0] \words[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
@@ -5506,8 +5511,14 @@ module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   assign \$9  = ca_done & \$8 ;
   assign \$10  = result[2:0] == 3'h5;
   assign \$11  = ca_done & \$10 ;
-  assign \busy$237  = ~ idle;
+  assign \busy$233  = ~ idle;
   assign config_error = ~ config_ok;
+  assign \$12  = ~ \clear$106 ;
+  assign \$13  = \sample$261  & \$12 ;
+  always @(posedge clk)
+    sample <= \$14 ;
+  always @(posedge clk)
+    \bit  <= \$15 ;
   \biss_master_wb.ch0.core.config  \config  (
     .ack_limit(ack_limit),
     .clk(clk),
@@ -5564,7 +5575,7 @@ module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
     .timer_clear(clear)
   );
   \biss_master_wb.ch0.core.counters  counters (
-    .clear(\clear$214 ),
+    .clear(\clear$210 ),
     .clk(clk),
     .counts(counts),
     .events(events),
@@ -5617,10 +5628,10 @@ module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
     .start_slot(start_slot),
     .\started$10 (started),
     .w1_enable(cycle[135]),
-    .words(\words$127 )
+    .words(\words$123 )
   );
   \biss_master_wb.ch0.core.register_access  register_access (
-    .abort(\abort$187 ),
+    .abort(\abort$183 ),
     .busy(frames),
     .cdm(cdm),
     .clk(clk),
@@ -5632,27 +5643,27 @@ module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
     .host_read__addr(ca_wbuf_addr),
     .host_read__en(rbuf_en),
     .rbuf_data(ca_rbuf_data),
-    .request(\request$173 ),
+    .request(\request$169 ),
     .result(result),
     .rst(rst),
-    .\start$44 (\start$185 ),
+    .\start$44 (\start$181 ),
     .wbuf(wbuf)
   );
   \biss_master_wb.ch0.core.results  results (
     .clk(clk),
-    .done(\done$240 ),
+    .done(\done$236 ),
     .frame(frame),
     .report(report),
     .report_delay(report_delay),
     .report_frame(report_frame),
-    .result(\result$245 ),
+    .result(\result$241 ),
     .rst(rst),
     .valid(valid),
-    .valid_out(\valid$242 )
+    .valid_out(\valid$238 )
   );
   \biss_master_wb.ch0.core.sampler  sampler (
     .arm(ma_arm),
-    .\bit (\bit ),
+    .\bit (\bit$263 ),
     .clk(clk),
     .delay(delay),
     .early(early),
@@ -5661,7 +5672,7 @@ module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
     .locked(locked),
     .receiver_clear(\clear$106 ),
     .rst(rst),
-    .sample(sample),
+    .sample(\sample$261 ),
     .slo(slo)
   );
   \biss_master_wb.ch0.core.scheduler  scheduler (
@@ -5682,7 +5693,7 @@ module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$1199$0 (\bit ),
+    .\port$3658$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -5739,7 +5750,7 @@ module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
     .lc_skip_seen(lc_skip_seen),
     .lc_zero(lc_zero),
     .lc_zero_seen(lc_zero_seen),
-    .\port$1599$0 (\$12 ),
+    .\port$1601$0 (\$16 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -5747,6 +5758,20 @@ module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
     .status(status),
     .valid(valid)
   );
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    \$14  = \$13 ;
+    if (rst) begin
+      \$14  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    \$15  = \bit$263 ;
+    if (rst) begin
+      \$15  = 1'h0;
+    end
+  end
   assign \idle$20  = idle;
   assign \start$22  = start;
   assign period = cfg_request_period;
@@ -5796,54 +5821,52 @@ module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   assign receiver_clear = \clear$106 ;
   assign \half_period$108  = cycle[15:0];
   assign arm = ma_arm;
-  assign \sample$111  = sample;
-  assign \bit$113  = \bit ;
-  assign \word_count$115  = word_count;
-  assign \lc$117  = lc;
+  assign \word_count$111  = word_count;
+  assign \lc$113  = lc;
   assign lc_next = { lc[4:0], \bit  };
-  assign \lc_next$119  = { lc[4:0], \bit  };
+  assign \lc_next$115  = { lc[4:0], \bit  };
   assign lc_load = load;
   assign lc_check = check;
-  assign \resync$125  = resync;
+  assign \resync$121  = resync;
   assign w1_enable = cycle[135];
-  assign \cpw_top$130  = cpw_top;
+  assign \cpw_top$126  = cpw_top;
   assign data1 = spw;
   assign bits = cycle[141:136];
   assign tolerance = cycle[154:147];
   assign match = spw_match;
   assign cfg = cycle;
-  assign \report_frame$139  = report_frame;
-  assign \fault$141  = fault;
-  assign \fault_status$143  = fault_status;
-  assign \crc_ok$145  = crc_ok;
+  assign \report_frame$135  = report_frame;
+  assign \fault$137  = fault;
+  assign \fault_status$139  = fault_status;
+  assign \crc_ok$141  = crc_ok;
   assign \repeat  = lc_repeat_seen;
   assign skip = lc_skip_seen;
   assign zero = lc_zero_seen;
-  assign \report$153  = report;
-  assign \report_frame$154  = report_frame;
-  assign \report_delay$156  = report_delay;
-  assign \valid$158  = valid;
-  assign word_crc_ok = { \$12 , crc_ok[0] };
-  assign \first_rise$171  = first_rise;
+  assign \report$149  = report;
+  assign \report_frame$150  = report_frame;
+  assign \report_delay$152  = report_delay;
+  assign \valid$154  = valid;
+  assign word_crc_ok = { \$16 , crc_ok[0] };
+  assign \first_rise$167  = first_rise;
   assign ca_status = result[2:0];
   assign ca_bytes_done = result[9:3];
-  assign ca_start = \start$185 ;
-  assign ca_abort = \abort$187 ;
+  assign ca_start = \start$181 ;
+  assign ca_abort = \abort$183 ;
   assign rbuf_addr = ca_wbuf_addr;
   assign ca_rbuf_addr = ca_wbuf_addr;
   assign ca_rbuf_en = rbuf_en;
   assign rbuf_data = ca_rbuf_data;
   assign ca_busy = frames;
-  assign \busy$196  = frames;
-  assign \done$198  = ca_done;
-  assign \cdm$200  = cdm;
+  assign \busy$192  = frames;
+  assign \done$194  = ca_done;
+  assign \cdm$196  = cdm;
   assign held = ma_held;
   assign ma_hold = hold;
   assign frame_end = report;
   assign frame_ok = valid;
   assign frame_cds = cds;
   assign cdm_cycle = frame_cdm;
-  assign clear_counters = \clear$214 ;
+  assign clear_counters = \clear$210 ;
   assign count_crc_word0 = counts[15:0];
   assign count_crc_word1 = counts[31:16];
   assign count_no_ack = counts[47:32];
@@ -5862,27 +5885,27 @@ module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   assign count_ca_refused = counts[255:240];
   assign count_ca_aborted = counts[271:256];
   assign count_ca_data_fault = counts[287:272];
-  assign \ma$236  = ma;
-  assign \overrun$239  = overrun;
-  assign \done$241  = \done$240 ;
-  assign valid_out = \valid$242 ;
-  assign \status$244  = \result$245 [3:0];
-  assign timestamp = \result$245 [35:4];
-  assign line_delay = \result$245 [48:36];
-  assign \cds$248  = \result$245 [49];
-  assign word0_position = \result$245 [104:50];
-  assign word0_ne = \result$245 [105];
-  assign word0_nw = \result$245 [106];
-  assign word0_crc_ok = \result$245 [107];
-  assign word1_position = \result$245 [147:108];
-  assign word1_ne = \result$245 [148];
-  assign word1_nw = \result$245 [149];
-  assign word1_crc_ok = \result$245 [150];
-  assign \lc$257  = \result$245 [156:151];
-  assign \lc_repeat$258  = \result$245 [157];
-  assign \lc_skip$259  = \result$245 [158];
-  assign \lc_zero$260  = \result$245 [159];
-  assign \spw_mismatch$261  = \result$245 [160];
+  assign \ma$232  = ma;
+  assign \overrun$235  = overrun;
+  assign \done$237  = \done$236 ;
+  assign valid_out = \valid$238 ;
+  assign \status$240  = \result$241 [3:0];
+  assign timestamp = \result$241 [35:4];
+  assign line_delay = \result$241 [48:36];
+  assign \cds$244  = \result$241 [49];
+  assign word0_position = \result$241 [104:50];
+  assign word0_ne = \result$241 [105];
+  assign word0_nw = \result$241 [106];
+  assign word0_crc_ok = \result$241 [107];
+  assign word1_position = \result$241 [147:108];
+  assign word1_ne = \result$241 [148];
+  assign word1_nw = \result$241 [149];
+  assign word1_crc_ok = \result$241 [150];
+  assign \lc$253  = \result$241 [156:151];
+  assign \lc_repeat$254  = \result$241 [157];
+  assign \lc_skip$255  = \result$241 [158];
+  assign \lc_zero$256  = \result$241 [159];
+  assign \spw_mismatch$257  = \result$241 [160];
   assign \live.ma_half_period  = live[15:0];
   assign \live.request_period  = live[39:16];
   assign \live.break_time  = live[63:40];
@@ -5933,16 +5956,16 @@ module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   assign \words[1].nenw  = words[16];
   assign \words[1].lc  = words[17];
   assign \words[1].crc  = words[19:18];
-  assign \words$127[0]  = \words$127 [9:0];
-  assign \words$127[0].data_bits  = \words$127 [5:0];
-  assign \words$127[0].nenw  = \words$127 [6];
-  assign \words$127[0].lc  = \words$127 [7];
-  assign \words$127[0].crc  = \words$127 [9:8];
-  assign \words$127[1]  = \words$127 [19:10];
-  assign \words$127[1].data_bits  = \words$127 [15:10];
-  assign \words$127[1].nenw  = \words$127 [16];
-  assign \words$127[1].lc  = \words$127 [17];
-  assign \words$127[1].crc  = \words$127 [19:18];
+  assign \words$123[0]  = \words$123 [9:0];
+  assign \words$123[0].data_bits  = \words$123 [5:0];
+  assign \words$123[0].nenw  = \words$123 [6];
+  assign \words$123[0].lc  = \words$123 [7];
+  assign \words$123[0].crc  = \words$123 [9:8];
+  assign \words$123[1]  = \words$123 [19:10];
+  assign \words$123[1].data_bits  = \words$123 [15:10];
+  assign \words$123[1].nenw  = \words$123 [16];
+  assign \words$123[1].lc  = \words$123 [17];
+  assign \words$123[1].crc  = \words$123 [19:18];
   assign \cfg.ma_half_period  = cycle[15:0];
   assign \cfg.request_period  = cycle[39:16];
   assign \cfg.break_time  = cycle[63:40];
@@ -5982,10 +6005,10 @@ module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   assign \frame.lc_skip  = frame[158];
   assign \frame.lc_zero  = frame[159];
   assign \frame.spw_mismatch  = frame[160];
-  assign \request$173.slave_id  = \request$173 [2:0];
-  assign \request$173.address  = \request$173 [9:3];
-  assign \request$173.count  = \request$173 [16:10];
-  assign \request$173.write  = \request$173 [17];
+  assign \request$169.slave_id  = \request$169 [2:0];
+  assign \request$169.address  = \request$169 [9:3];
+  assign \request$169.count  = \request$169 [16:10];
+  assign \request$169.write  = \request$169 [17];
   assign \wbuf.addr  = wbuf[3:0];
   assign \wbuf.data  = wbuf[35:4];
   assign \wbuf.en  = wbuf[39:36];
@@ -6034,25 +6057,25 @@ module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   assign \counts.ca_refused  = counts[255:240];
   assign \counts.ca_aborted  = counts[271:256];
   assign \counts.ca_data_fault  = counts[287:272];
-  assign \result$245.status  = \result$245 [3:0];
-  assign \result$245.timestamp  = \result$245 [35:4];
-  assign \result$245.line_delay  = \result$245 [48:36];
-  assign \result$245.cds  = \result$245 [49];
-  assign \result$245.word0  = \result$245 [107:50];
-  assign \result$245.word0.position  = \result$245 [104:50];
-  assign \result$245.word0.ne  = \result$245 [105];
-  assign \result$245.word0.nw  = \result$245 [106];
-  assign \result$245.word0.crc_ok  = \result$245 [107];
-  assign \result$245.word1  = \result$245 [150:108];
-  assign \result$245.word1.position  = \result$245 [147:108];
-  assign \result$245.word1.ne  = \result$245 [148];
-  assign \result$245.word1.nw  = \result$245 [149];
-  assign \result$245.word1.crc_ok  = \result$245 [150];
-  assign \result$245.lc  = \result$245 [156:151];
-  assign \result$245.lc_repeat  = \result$245 [157];
-  assign \result$245.lc_skip  = \result$245 [158];
-  assign \result$245.lc_zero  = \result$245 [159];
-  assign \result$245.spw_mismatch  = \result$245 [160];
+  assign \result$241.status  = \result$241 [3:0];
+  assign \result$241.timestamp  = \result$241 [35:4];
+  assign \result$241.line_delay  = \result$241 [48:36];
+  assign \result$241.cds  = \result$241 [49];
+  assign \result$241.word0  = \result$241 [107:50];
+  assign \result$241.word0.position  = \result$241 [104:50];
+  assign \result$241.word0.ne  = \result$241 [105];
+  assign \result$241.word0.nw  = \result$241 [106];
+  assign \result$241.word0.crc_ok  = \result$241 [107];
+  assign \result$241.word1  = \result$241 [150:108];
+  assign \result$241.word1.position  = \result$241 [147:108];
+  assign \result$241.word1.ne  = \result$241 [148];
+  assign \result$241.word1.nw  = \result$241 [149];
+  assign \result$241.word1.crc_ok  = \result$241 [150];
+  assign \result$241.lc  = \result$241 [156:151];
+  assign \result$241.lc_repeat  = \result$241 [157];
+  assign \result$241.lc_skip  = \result$241 [158];
+  assign \result$241.lc_zero  = \result$241 [159];
+  assign \result$241.spw_mismatch  = \result$241 [160];
   assign events[17] = \$11 ;
   assign events[16] = \$9 ;
   assign events[15] = \$7 ;
@@ -6074,13 +6097,13 @@ module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   assign wbuf[39:36] = ca_wbuf_en;
   assign wbuf[35:4] = ca_wbuf_data;
   assign wbuf[3:0] = ca_wbuf_addr;
-  assign \request$173 [17] = ca_write;
-  assign \request$173 [16:10] = ca_count;
-  assign \request$173 [9:3] = ca_address;
-  assign \request$173 [2:0] = ca_slave_id;
+  assign \request$169 [17] = ca_write;
+  assign \request$169 [16:10] = ca_count;
+  assign \request$169 [9:3] = ca_address;
+  assign \request$169 [2:0] = ca_slave_id;
   assign frame[35:4] = first_rise_time;
   assign frame[160] = spw_mismatch;
-  assign frame[150] = \$12 ;
+  assign frame[150] = \$16 ;
   assign frame[149] = nw[1];
   assign frame[148] = ne[1];
   assign frame[147:108] = spw;
@@ -6095,8 +6118,8 @@ module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   assign frame[49] = cds;
   assign frame[48:36] = delay;
   assign frame[3:0] = status;
-  assign \words$127 [19:10] = cycle[145:136];
-  assign \words$127 [9:0] = cycle[134:125];
+  assign \words$123 [19:10] = cycle[145:136];
+  assign \words$123 [9:0] = cycle[134:125];
   assign words[19:10] = cycle[145:136];
   assign words[9:0] = cycle[134:125];
   assign live[154:147] = cfg_spw_tolerance;
@@ -6121,7 +6144,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch0.core.config (rst, word_count, live, ok, cycle, ack_limit, timeout_limit, delay_limit, no_start_limit, idle, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$29  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$30  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -6289,7 +6312,7 @@ module \biss_master_wb.ch0.core.config (rst, word_count, live, ok, cycle, ack_li
   assign \$38  = \$37  ? 24'h001f40 : live[111:88];
   assign \$39  = ! live[123:112];
   assign \$40  = \$39  ? 12'hfff : live[123:112];
-  assign \$41  = ack_limit + { cycle[15:0], 1'h0 };
+  assign \$41  = ack_limit + { cycle[15:0], 1'h1 };
   assign word_count = 1'h1 + cycle[135];
   always @(posedge clk)
     ok <= \$42 ;
@@ -6302,21 +6325,21 @@ module \biss_master_wb.ch0.core.config (rst, word_count, live, ok, cycle, ack_li
   always @(posedge clk)
     delay_limit <= \$46 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$47  = \$41 ;
     if (rst) begin
       \$47  = 25'h0000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$42  = \$34 ;
     if (rst) begin
       \$42  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$43  = cycle;
     if (idle) begin
       \$43  = live;
@@ -6326,7 +6349,7 @@ module \biss_master_wb.ch0.core.config (rst, word_count, live, ok, cycle, ack_li
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$44  = ack_limit;
     if (idle) begin
       \$44  = \$36 ;
@@ -6336,7 +6359,7 @@ module \biss_master_wb.ch0.core.config (rst, word_count, live, ok, cycle, ack_li
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$45  = timeout_limit;
     if (idle) begin
       \$45  = \$38 ;
@@ -6346,7 +6369,7 @@ module \biss_master_wb.ch0.core.config (rst, word_count, live, ok, cycle, ack_li
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$46  = delay_limit;
     if (idle) begin
       \$46  = \$40 ;
@@ -6400,7 +6423,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch0.core.controller (rst, request, restart_timer, frame_doubtful, abort, config_ok, end_check, cdm_cycle, idle, receiver_clear, resync, timer_clear, fault, fault_status, faults, ma_run, in_clock, ma_hold, report_frame, report_delay, slo_stuck
 , slo_stuck_live, break_over, ack_expired, no_start_expired, delay_over, ma_arm, ma_busy, ma_held, ma_enough, early, locked, slo, frame_done, stopped, slots_full, started, stop_bit, cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$30  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$31  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -6689,7 +6712,7 @@ module \biss_master_wb.ch0.core.controller (rst, request, restart_timer, frame_d
   assign \$12  = \$11  & ack_expired;
   assign \$13  = ~ locked_seen;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     \$79  = cdm_cycle;
     if (idle) begin
       \$79  = cdm;
@@ -6699,14 +6722,14 @@ module \biss_master_wb.ch0.core.controller (rst, request, restart_timer, frame_d
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     \$80  = idle;
     if (rst) begin
       \$80  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     \$81  = cycle_fsm_state;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -6803,7 +6826,7 @@ module \biss_master_wb.ch0.core.controller (rst, request, restart_timer, frame_d
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     \$82  = idle;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -6900,7 +6923,7 @@ module \biss_master_wb.ch0.core.controller (rst, request, restart_timer, frame_d
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     \$83  = receiver_clear;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -6997,7 +7020,7 @@ module \biss_master_wb.ch0.core.controller (rst, request, restart_timer, frame_d
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     \$84  = armed;
     casez (cycle_fsm_state)
       3'h0:
@@ -7016,7 +7039,7 @@ module \biss_master_wb.ch0.core.controller (rst, request, restart_timer, frame_d
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     \$85  = locked_seen;
     casez (cycle_fsm_state)
       3'h0:
@@ -7035,7 +7058,7 @@ module \biss_master_wb.ch0.core.controller (rst, request, restart_timer, frame_d
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     \$86  = pause;
     casez (cycle_fsm_state)
       3'h0:
@@ -7055,7 +7078,7 @@ module \biss_master_wb.ch0.core.controller (rst, request, restart_timer, frame_d
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     resync = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -7063,7 +7086,7 @@ module \biss_master_wb.ch0.core.controller (rst, request, restart_timer, frame_d
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     timer_clear = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -7110,7 +7133,7 @@ module \biss_master_wb.ch0.core.controller (rst, request, restart_timer, frame_d
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     fault = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -7165,7 +7188,7 @@ module \biss_master_wb.ch0.core.controller (rst, request, restart_timer, frame_d
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     fault_status = 4'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -7220,7 +7243,7 @@ module \biss_master_wb.ch0.core.controller (rst, request, restart_timer, frame_d
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     faults = 7'h00;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -7275,7 +7298,7 @@ module \biss_master_wb.ch0.core.controller (rst, request, restart_timer, frame_d
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     ma_run = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -7291,7 +7314,7 @@ module \biss_master_wb.ch0.core.controller (rst, request, restart_timer, frame_d
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     in_clock = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -7305,7 +7328,7 @@ module \biss_master_wb.ch0.core.controller (rst, request, restart_timer, frame_d
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     ma_hold = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -7328,7 +7351,7 @@ module \biss_master_wb.ch0.core.controller (rst, request, restart_timer, frame_d
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     report_frame = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -7359,7 +7382,7 @@ module \biss_master_wb.ch0.core.controller (rst, request, restart_timer, frame_d
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     report_delay = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -7724,60 +7747,6 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch0.core.counters.count_aborted (rst, clear, inc, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$31  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.counters.count_ca_aborted (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$32  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -7831,7 +7800,7 @@ module \biss_master_wb.ch0.core.counters.count_ca_aborted (rst, clear, inc, coun
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.counters.count_ca_crc4_error (rst, clear, inc, count, clk);
+module \biss_master_wb.ch0.core.counters.count_ca_aborted (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$33  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -7885,7 +7854,7 @@ module \biss_master_wb.ch0.core.counters.count_ca_crc4_error (rst, clear, inc, c
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.counters.count_ca_data_fault (rst, clear, inc, count, clk);
+module \biss_master_wb.ch0.core.counters.count_ca_crc4_error (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$34  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -7939,7 +7908,7 @@ module \biss_master_wb.ch0.core.counters.count_ca_data_fault (rst, clear, inc, c
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.counters.count_ca_no_answer (rst, clear, inc, count, clk);
+module \biss_master_wb.ch0.core.counters.count_ca_data_fault (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$35  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -7993,7 +7962,7 @@ module \biss_master_wb.ch0.core.counters.count_ca_no_answer (rst, clear, inc, co
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.counters.count_ca_refused (rst, clear, inc, count, clk);
+module \biss_master_wb.ch0.core.counters.count_ca_no_answer (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$36  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8047,7 +8016,7 @@ module \biss_master_wb.ch0.core.counters.count_ca_refused (rst, clear, inc, coun
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.counters.count_crc_word0 (rst, clear, inc, count, clk);
+module \biss_master_wb.ch0.core.counters.count_ca_refused (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$37  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8101,7 +8070,7 @@ module \biss_master_wb.ch0.core.counters.count_crc_word0 (rst, clear, inc, count
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.counters.count_crc_word1 (rst, clear, inc, count, clk);
+module \biss_master_wb.ch0.core.counters.count_crc_word0 (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$38  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8155,7 +8124,7 @@ module \biss_master_wb.ch0.core.counters.count_crc_word1 (rst, clear, inc, count
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.counters.count_delay_range (rst, clear, inc, count, clk);
+module \biss_master_wb.ch0.core.counters.count_crc_word1 (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$39  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8209,7 +8178,7 @@ module \biss_master_wb.ch0.core.counters.count_delay_range (rst, clear, inc, cou
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.counters.count_lc_repeat (rst, clear, inc, count, clk);
+module \biss_master_wb.ch0.core.counters.count_delay_range (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$40  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8263,7 +8232,7 @@ module \biss_master_wb.ch0.core.counters.count_lc_repeat (rst, clear, inc, count
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.counters.count_lc_skip (rst, clear, inc, count, clk);
+module \biss_master_wb.ch0.core.counters.count_lc_repeat (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$41  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8317,7 +8286,7 @@ module \biss_master_wb.ch0.core.counters.count_lc_skip (rst, clear, inc, count, 
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.counters.count_lc_zero (rst, clear, inc, count, clk);
+module \biss_master_wb.ch0.core.counters.count_lc_skip (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$42  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8371,7 +8340,7 @@ module \biss_master_wb.ch0.core.counters.count_lc_zero (rst, clear, inc, count, 
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.counters.count_no_ack (rst, clear, inc, count, clk);
+module \biss_master_wb.ch0.core.counters.count_lc_zero (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$43  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8425,7 +8394,7 @@ module \biss_master_wb.ch0.core.counters.count_no_ack (rst, clear, inc, count, c
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.counters.count_no_start (rst, clear, inc, count, clk);
+module \biss_master_wb.ch0.core.counters.count_no_ack (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$44  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8479,7 +8448,7 @@ module \biss_master_wb.ch0.core.counters.count_no_start (rst, clear, inc, count,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.counters.count_no_stop (rst, clear, inc, count, clk);
+module \biss_master_wb.ch0.core.counters.count_no_start (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$45  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8533,7 +8502,7 @@ module \biss_master_wb.ch0.core.counters.count_no_stop (rst, clear, inc, count, 
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.counters.count_overrun (rst, clear, inc, count, clk);
+module \biss_master_wb.ch0.core.counters.count_no_stop (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$46  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8587,7 +8556,7 @@ module \biss_master_wb.ch0.core.counters.count_overrun (rst, clear, inc, count, 
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.counters.count_slo_stuck_low (rst, clear, inc, count, clk);
+module \biss_master_wb.ch0.core.counters.count_overrun (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$47  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8641,7 +8610,7 @@ module \biss_master_wb.ch0.core.counters.count_slo_stuck_low (rst, clear, inc, c
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.counters.count_spw_mismatch (rst, clear, inc, count, clk);
+module \biss_master_wb.ch0.core.counters.count_slo_stuck_low (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$48  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8695,9 +8664,63 @@ module \biss_master_wb.ch0.core.counters.count_spw_mismatch (rst, clear, inc, co
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.decoder (rst, word_count, \bit , lc_load, words, receiver_clear, sample, done, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1, lc, cpw_top, crc_ok
-, clk);
+module \biss_master_wb.ch0.core.counters.count_spw_mismatch (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$49  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample, \bit , receiver_clear, done, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1, lc, cpw_top, crc_ok
+, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$50  = 0;
   wire [6:0] \$1 ;
   wire [1:0] \$10 ;
   reg [2:0] \$100 ;
@@ -9080,7 +9103,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, \bit , lc_load, words,
     .valid(\valid$52 )
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     (* full_case = 32'd1 *)
     casez (words[6])
       1'h0:
@@ -9090,7 +9113,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, \bit , lc_load, words,
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -9104,7 +9127,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, \bit , lc_load, words,
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     (* full_case = 32'd1 *)
     casez (words[9:6])
       4'h0:
@@ -9142,7 +9165,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, \bit , lc_load, words,
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -9156,7 +9179,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, \bit , lc_load, words,
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     (* full_case = 32'd1 *)
     casez (words[16])
       1'h0:
@@ -9166,7 +9189,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, \bit , lc_load, words,
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     (* full_case = 32'd1 *)
     casez (words[17:16])
       2'h0:
@@ -9180,7 +9203,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, \bit , lc_load, words,
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:16])
       4'h0:
@@ -9218,7 +9241,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, \bit , lc_load, words,
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     (* full_case = 32'd1 *)
     casez (words[17:16])
       2'h0:
@@ -9232,7 +9255,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, \bit , lc_load, words,
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$94  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -9256,7 +9279,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$95  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -9278,7 +9301,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$96  = slots;
     if (\$34 ) begin
       \$96  = \$35 [15:0];
@@ -9291,7 +9314,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$97  = slots_full;
     if (\$34 ) begin
       \$97  = \$36 ;
@@ -9304,7 +9327,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$98  = started;
     casez (decoder_fsm_state)
       3'h0:
@@ -9320,7 +9343,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$99  = start_slot;
     casez (decoder_fsm_state)
       3'h0:
@@ -9336,7 +9359,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$100  = decoder_fsm_state;
     casez (decoder_fsm_state)
       3'h0:
@@ -9368,7 +9391,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$101  = cds;
     casez (decoder_fsm_state)
       3'h0:
@@ -9386,7 +9409,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$102  = idx;
     casez (decoder_fsm_state)
       3'h0:
@@ -9411,7 +9434,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$103  = in_data;
     casez (decoder_fsm_state)
       3'h0:
@@ -9436,7 +9459,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$104  = in_lc;
     casez (decoder_fsm_state)
       3'h0:
@@ -9461,7 +9484,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$105  = in_top;
     casez (decoder_fsm_state)
       3'h0:
@@ -9486,7 +9509,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$106  = word;
     casez (decoder_fsm_state)
       3'h0:
@@ -9514,7 +9537,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$107  = stop_bit;
     casez (decoder_fsm_state)
       3'h0:
@@ -9536,7 +9559,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$108  = data0;
     if (\$58 ) begin
       \$108  = { data0[53:0], \bit  };
@@ -9549,7 +9572,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$109  = ne;
     if (\$59 ) begin
       \$109 [0] = 1'h1;
@@ -9569,7 +9592,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$110  = nw;
     if (\$59 ) begin
       \$110 [0] = 1'h1;
@@ -9591,7 +9614,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$111  = data1;
     if (\$70 ) begin
       \$111  = { data1[38:0], \bit  };
@@ -9604,7 +9627,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$112  = lc;
     if (lc_load) begin
       \$112  = { lc[4:0], \bit  };
@@ -9617,7 +9640,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$113  = cpw_top;
     if (\$80 ) begin
       \$113  = { cpw_top[38:0], \bit  };
@@ -9630,7 +9653,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     in_word = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -9666,8 +9689,8 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, \bit , lc_load, words,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.decoder.crc0 (rst, \bit , start, valid, kind, receiver_clear, ok, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$50  = 0;
+module \biss_master_wb.ch0.core.decoder.crc0 (rst, start, valid, kind, \bit , receiver_clear, ok, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
   wire [5:0] \$1 ;
   wire \$10 ;
   wire [5:0] \$11 ;
@@ -9761,7 +9784,7 @@ module \biss_master_wb.ch0.core.decoder.crc0 (rst, \bit , start, valid, kind, re
   assign \$auto$rtlil.cc:2739:Not$22  = ~ { crc6_reg[0], 1'h0 };
   assign \$auto$rtlil.cc:2739:Not$24  = ~ { crc16_reg[14], crc16_reg[11], crc16_reg[6:5], crc16_reg[3:2], 1'h0 };
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$31  = crc6_reg;
     if (valid) begin
       \$31  = \$5 ;
@@ -9776,7 +9799,7 @@ module \biss_master_wb.ch0.core.decoder.crc0 (rst, \bit , start, valid, kind, re
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$32  = crc6_match;
     if (valid) begin
       \$32  = \$15 ;
@@ -9791,7 +9814,7 @@ module \biss_master_wb.ch0.core.decoder.crc0 (rst, \bit , start, valid, kind, re
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$33  = crc16_reg;
     if (valid) begin
       \$33  = \$20 ;
@@ -9806,7 +9829,7 @@ module \biss_master_wb.ch0.core.decoder.crc0 (rst, \bit , start, valid, kind, re
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$34  = crc16_match;
     if (valid) begin
       \$34  = \$30 ;
@@ -9821,7 +9844,7 @@ module \biss_master_wb.ch0.core.decoder.crc0 (rst, \bit , start, valid, kind, re
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     ok = 1'h0;
     casez (kind)
       2'h0:
@@ -9841,8 +9864,8 @@ module \biss_master_wb.ch0.core.decoder.crc0 (rst, \bit , start, valid, kind, re
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.decoder.crc1 (rst, \bit , start, valid, kind, receiver_clear, ok, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
+module \biss_master_wb.ch0.core.decoder.crc1 (rst, start, valid, kind, \bit , receiver_clear, ok, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$52  = 0;
   wire [5:0] \$1 ;
   wire \$10 ;
   wire [5:0] \$11 ;
@@ -9936,7 +9959,7 @@ module \biss_master_wb.ch0.core.decoder.crc1 (rst, \bit , start, valid, kind, re
   assign \$auto$rtlil.cc:2739:Not$18  = ~ { crc6_reg[0], 1'h0 };
   assign \$auto$rtlil.cc:2739:Not$20  = ~ { crc16_reg[14], crc16_reg[11], crc16_reg[6:5], crc16_reg[3:2], 1'h0 };
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
     \$31  = crc6_reg;
     if (valid) begin
       \$31  = \$5 ;
@@ -9951,7 +9974,7 @@ module \biss_master_wb.ch0.core.decoder.crc1 (rst, \bit , start, valid, kind, re
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
     \$32  = crc6_match;
     if (valid) begin
       \$32  = \$15 ;
@@ -9966,7 +9989,7 @@ module \biss_master_wb.ch0.core.decoder.crc1 (rst, \bit , start, valid, kind, re
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
     \$33  = crc16_reg;
     if (valid) begin
       \$33  = \$20 ;
@@ -9981,7 +10004,7 @@ module \biss_master_wb.ch0.core.decoder.crc1 (rst, \bit , start, valid, kind, re
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
     \$34  = crc16_match;
     if (valid) begin
       \$34  = \$30 ;
@@ -9996,7 +10019,7 @@ module \biss_master_wb.ch0.core.decoder.crc1 (rst, \bit , start, valid, kind, re
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
     ok = 1'h0;
     casez (kind)
       2'h0:
@@ -10017,7 +10040,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch0.core.ma_clock (rst, \clocking , half_period, run, hold, first_rise, second_rise, ma, rises, busy, held, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$52  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$53  = 0;
   wire [16:0] \$1 ;
   wire \$10 ;
   wire [16:0] \$11 ;
@@ -10142,7 +10165,7 @@ module \biss_master_wb.ch0.core.ma_clock (rst, \clocking , half_period, run, hol
   always @(posedge clk)
     released <= \$42 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$34  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -10157,7 +10180,7 @@ module \biss_master_wb.ch0.core.ma_clock (rst, \clocking , half_period, run, hol
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$35  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -10172,7 +10195,7 @@ module \biss_master_wb.ch0.core.ma_clock (rst, \clocking , half_period, run, hol
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$36  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -10187,7 +10210,7 @@ module \biss_master_wb.ch0.core.ma_clock (rst, \clocking , half_period, run, hol
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$37  = ma;
     casez (ma_fsm_state)
       3'h0:
@@ -10216,7 +10239,7 @@ module \biss_master_wb.ch0.core.ma_clock (rst, \clocking , half_period, run, hol
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$38  = phase_left;
     casez (ma_fsm_state)
       3'h0:
@@ -10258,7 +10281,7 @@ module \biss_master_wb.ch0.core.ma_clock (rst, \clocking , half_period, run, hol
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$39  = last_clock;
     casez (ma_fsm_state)
       3'h0:
@@ -10300,7 +10323,7 @@ module \biss_master_wb.ch0.core.ma_clock (rst, \clocking , half_period, run, hol
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$40  = rises;
     casez (ma_fsm_state)
       3'h0:
@@ -10319,7 +10342,7 @@ module \biss_master_wb.ch0.core.ma_clock (rst, \clocking , half_period, run, hol
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$41  = ma_fsm_state;
     casez (ma_fsm_state)
       3'h0:
@@ -10355,7 +10378,7 @@ module \biss_master_wb.ch0.core.ma_clock (rst, \clocking , half_period, run, hol
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$42  = released;
     casez (ma_fsm_state)
       3'h0:
@@ -10379,7 +10402,7 @@ module \biss_master_wb.ch0.core.ma_clock (rst, \clocking , half_period, run, hol
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     busy = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -10395,7 +10418,7 @@ module \biss_master_wb.ch0.core.ma_clock (rst, \clocking , half_period, run, hol
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     held = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -10412,7 +10435,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch0.core.ma_stop (rst, words, w1_enable, clear, rises, enough, \started$10 , start_slot, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$53  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$54  = 0;
   reg [7:0] \$1 ;
   reg [7:0] \$10 ;
   wire [8:0] \$11 ;
@@ -10493,7 +10516,7 @@ module \biss_master_wb.ch0.core.ma_stop (rst, words, w1_enable, clear, rises, en
   always @(posedge clk)
     word1_len <= \$17 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     (* full_case = 32'd1 *)
     casez (words[9:6])
       4'h0:
@@ -10531,7 +10554,7 @@ module \biss_master_wb.ch0.core.ma_stop (rst, words, w1_enable, clear, rises, en
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:16])
       4'h0:
@@ -10569,42 +10592,42 @@ module \biss_master_wb.ch0.core.ma_stop (rst, words, w1_enable, clear, rises, en
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$12  = \$2 [7:0];
     if (rst) begin
       \$12  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$13  = \$4 ;
     if (rst) begin
       \$13  = 9'h000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$14  = \$5 ;
     if (rst) begin
       \$14  = 17'h00000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$15  = \started$10 ;
     if (rst) begin
       \$15  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$16  = \$9 ;
     if (rst) begin
       \$16  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$17  = \$11 [7:0];
     if (rst) begin
       \$17  = 8'h00;
@@ -10624,7 +10647,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch0.core.register_access (clk, rst, host_read__en, frame_end, frame_ok, busy, rbuf_data, \start$44 , abort, request, wbuf, frame_cdm, frame_cds, cdm, done, result, host_read__addr);
-  reg \$auto$verilog_backend.cc:2355:dump_module$54  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$55  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$100 ;
@@ -11157,7 +11180,7 @@ module \biss_master_wb.ch0.core.register_access (clk, rst, host_read__en, frame_
     .valid(valid)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     cdm = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -11179,7 +11202,7 @@ module \biss_master_wb.ch0.core.register_access (clk, rst, host_read__en, frame_
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     start = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -11208,7 +11231,7 @@ module \biss_master_wb.ch0.core.register_access (clk, rst, host_read__en, frame_
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     valid = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -11229,7 +11252,7 @@ module \biss_master_wb.ch0.core.register_access (clk, rst, host_read__en, frame_
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     data = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -11250,7 +11273,7 @@ module \biss_master_wb.ch0.core.register_access (clk, rst, host_read__en, frame_
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \start$27  = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -11272,7 +11295,7 @@ module \biss_master_wb.ch0.core.register_access (clk, rst, host_read__en, frame_
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \valid$28  = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -11294,7 +11317,7 @@ module \biss_master_wb.ch0.core.register_access (clk, rst, host_read__en, frame_
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \data$29  = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -11316,7 +11339,7 @@ module \biss_master_wb.ch0.core.register_access (clk, rst, host_read__en, frame_
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     byte_received__addr = 4'h0;
     casez (access_fsm_state)
       3'h0:
@@ -11342,7 +11365,7 @@ module \biss_master_wb.ch0.core.register_access (clk, rst, host_read__en, frame_
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     byte_received__data = 32'd0;
     casez (access_fsm_state)
       3'h0:
@@ -11368,7 +11391,7 @@ module \biss_master_wb.ch0.core.register_access (clk, rst, host_read__en, frame_
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     byte_received__en = 4'h0;
     casez (access_fsm_state)
       3'h0:
@@ -11394,7 +11417,7 @@ module \biss_master_wb.ch0.core.register_access (clk, rst, host_read__en, frame_
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$152  = idle_run;
     if (frame_end) begin
       \$152  = \$72 [3:0];
@@ -11404,7 +11427,7 @@ module \biss_master_wb.ch0.core.register_access (clk, rst, host_read__en, frame_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$153  = idle_seen;
     if (frame_end) begin
       \$153  = \$78 [3:0];
@@ -11414,7 +11437,7 @@ module \biss_master_wb.ch0.core.register_access (clk, rst, host_read__en, frame_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$154  = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -11452,7 +11475,7 @@ module \biss_master_wb.ch0.core.register_access (clk, rst, host_read__en, frame_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$155  = result;
     casez (access_fsm_state)
       3'h0:
@@ -11506,7 +11529,7 @@ module \biss_master_wb.ch0.core.register_access (clk, rst, host_read__en, frame_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$156  = access_fsm_state;
     casez (access_fsm_state)
       3'h0:
@@ -11603,7 +11626,7 @@ module \biss_master_wb.ch0.core.register_access (clk, rst, host_read__en, frame_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$157  = req;
     casez (access_fsm_state)
       3'h0:
@@ -11620,7 +11643,7 @@ module \biss_master_wb.ch0.core.register_access (clk, rst, host_read__en, frame_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$158  = index;
     casez (access_fsm_state)
       3'h0:
@@ -11659,7 +11682,7 @@ module \biss_master_wb.ch0.core.register_access (clk, rst, host_read__en, frame_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$159  = header;
     casez (access_fsm_state)
       3'h0:
@@ -11687,7 +11710,7 @@ module \biss_master_wb.ch0.core.register_access (clk, rst, host_read__en, frame_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$160  = step;
     casez (access_fsm_state)
       3'h0:
@@ -11745,7 +11768,7 @@ module \biss_master_wb.ch0.core.register_access (clk, rst, host_read__en, frame_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$161  = ending;
     casez (access_fsm_state)
       3'h0:
@@ -11812,7 +11835,7 @@ module \biss_master_wb.ch0.core.register_access (clk, rst, host_read__en, frame_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$162  = to_send;
     casez (access_fsm_state)
       3'h0:
@@ -11841,7 +11864,7 @@ module \biss_master_wb.ch0.core.register_access (clk, rst, host_read__en, frame_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$163  = sent;
     casez (access_fsm_state)
       3'h0:
@@ -11866,7 +11889,7 @@ module \biss_master_wb.ch0.core.register_access (clk, rst, host_read__en, frame_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$164  = waited;
     casez (access_fsm_state)
       3'h0:
@@ -11898,7 +11921,7 @@ module \biss_master_wb.ch0.core.register_access (clk, rst, host_read__en, frame_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$165  = got;
     casez (access_fsm_state)
       3'h0:
@@ -11923,7 +11946,7 @@ module \biss_master_wb.ch0.core.register_access (clk, rst, host_read__en, frame_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$166  = got_crc;
     casez (access_fsm_state)
       3'h0:
@@ -11977,7 +12000,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch0.core.register_access.rx_crc (rst, crc, start, valid, data_in, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$55  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$56  = 0;
   wire [3:0] \$1 ;
   wire \$10 ;
   wire [3:0] \$11 ;
@@ -12020,7 +12043,7 @@ module \biss_master_wb.ch0.core.register_access.rx_crc (rst, crc, start, valid, 
     crc_reg <= \$13 ;
   assign \$auto$rtlil.cc:2739:Not$14  = ~ crc_reg;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
     \$13  = crc_reg;
     if (valid) begin
       \$13 [0] = \$3 ;
@@ -12044,7 +12067,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch0.core.register_access.tx_crc (rst, crc, start, valid, data_in, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$56  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$57  = 0;
   wire [3:0] \$1 ;
   wire \$10 ;
   wire [3:0] \$11 ;
@@ -12087,7 +12110,7 @@ module \biss_master_wb.ch0.core.register_access.tx_crc (rst, crc, start, valid, 
     crc_reg <= \$13 ;
   assign \$auto$rtlil.cc:2739:Not$16  = ~ crc_reg;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$13  = crc_reg;
     if (valid) begin
       \$13 [0] = \$3 ;
@@ -12111,7 +12134,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch0.core.results (rst, report, valid, frame, report_frame, report_delay, done, valid_out, result, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$57  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$58  = 0;
   reg \$1 ;
   reg \$2 ;
   reg [160:0] \$3 ;
@@ -12208,21 +12231,21 @@ module \biss_master_wb.ch0.core.results (rst, report, valid, frame, report_frame
   always @(posedge clk)
     result <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     \$1  = report;
     if (rst) begin
       \$1  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     \$2  = valid;
     if (rst) begin
       \$2  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     \$3  = result;
     if (report) begin
       \$3 [3:0] = frame[3:0];
@@ -12287,7 +12310,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_clear, arm, early, locked, delay, sample, level, slo);
-  reg \$auto$verilog_backend.cc:2355:dump_module$58  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$59  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -12525,7 +12548,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_
     .stage1(level)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     \$63  = level;
     if (receiver_clear) begin
       \$63  = 1'h1;
@@ -12535,7 +12558,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     \$64  = mid_delay;
     if (odd) begin
       \$64  = \$8 [12:0];
@@ -12560,7 +12583,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     \$65  = mid_slot;
     (* full_case = 32'd1 *)
     if (odd) begin
@@ -12587,7 +12610,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     \$66  = \$10 ;
     casez (sampler_fsm_state)
       2'h0:
@@ -12609,7 +12632,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     \$67  = elapsed;
     casez (sampler_fsm_state)
       2'h0:
@@ -12633,7 +12656,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     \$68  = early;
     casez (sampler_fsm_state)
       2'h0:
@@ -12649,7 +12672,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     \$69  = locked;
     casez (sampler_fsm_state)
       2'h0:
@@ -12675,7 +12698,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     \$70  = gap;
     casez (sampler_fsm_state)
       2'h0:
@@ -12706,7 +12729,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     \$71  = sampler_fsm_state;
     casez (sampler_fsm_state)
       2'h0:
@@ -12737,7 +12760,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     \$72  = slot_left;
     casez (sampler_fsm_state)
       2'h0:
@@ -12787,7 +12810,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     \$73  = slot_zero;
     casez (sampler_fsm_state)
       2'h0:
@@ -12837,7 +12860,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     \$74  = vote1;
     casez (sampler_fsm_state)
       2'h0:
@@ -12867,7 +12890,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     \$75  = vote2;
     casez (sampler_fsm_state)
       2'h0:
@@ -12895,7 +12918,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     \$76  = first_slot;
     casez (sampler_fsm_state)
       2'h0:
@@ -12921,7 +12944,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     \$77  = delay;
     casez (sampler_fsm_state)
       2'h0:
@@ -12944,7 +12967,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     \$78  = phase;
     casez (sampler_fsm_state)
       2'h0:
@@ -12984,7 +13007,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     sample = \$44 ;
     casez (sampler_fsm_state)
       2'h0:
@@ -13002,7 +13025,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     decided = 1'h0;
     casez (sampler_fsm_state)
       2'h0:
@@ -13052,7 +13075,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch0.core.scheduler (rst, trigger, periodic, request, overrun, start, abort, period, idle, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$59  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$60  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -13136,7 +13159,7 @@ module \biss_master_wb.ch0.core.scheduler (rst, trigger, periodic, request, over
   always @(posedge clk)
     period_start <= \$28 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$27  = 24'h000001;
@@ -13148,7 +13171,7 @@ module \biss_master_wb.ch0.core.scheduler (rst, trigger, periodic, request, over
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$28  = 1'h1;
@@ -13162,8 +13185,8 @@ module \biss_master_wb.ch0.core.scheduler (rst, trigger, periodic, request, over
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.sign_of_life (rst, \port$1199$0 , load, \repeat , skip, check, resync, lc, is_zero, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$60  = 0;
+module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$3658$0 , resync, lc, is_zero, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$61  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -13200,8 +13223,8 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, \port$1199$0 , load, \repeat 
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$1199$0 ;
-  wire \port$1199$0 ;
+  input \port$3658$0 ;
+  wire \port$3658$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -13213,9 +13236,9 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, \port$1199$0 , load, \repeat 
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$1199$0  };
-  assign \$2  = { lc[4:0], \port$1199$0  } == last;
-  assign \$3  = { lc[4:0], \port$1199$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$3658$0  };
+  assign \$2  = { lc[4:0], \port$3658$0  } == last;
+  assign \$3  = { lc[4:0], \port$3658$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = lc == 6'h3f;
@@ -13243,7 +13266,7 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, \port$1199$0 , load, \repeat 
   always @(posedge clk)
     synced <= \$21 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
     \$16  = is_zero;
     if (load) begin
       \$16  = \$1 ;
@@ -13253,7 +13276,7 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, \port$1199$0 , load, \repeat 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
     \$17  = is_last;
     if (load) begin
       \$17  = \$2 ;
@@ -13263,7 +13286,7 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, \port$1199$0 , load, \repeat 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
     \$18  = is_expected;
     if (load) begin
       \$18  = \$3 ;
@@ -13273,7 +13296,7 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, \port$1199$0 , load, \repeat 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
     \$19  = last;
     if (\$5 ) begin
       \$19  = lc;
@@ -13283,7 +13306,7 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, \port$1199$0 , load, \repeat 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
     \$20  = expected;
     if (\$5 ) begin
       \$20  = \$8 [5:0];
@@ -13293,7 +13316,7 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, \port$1199$0 , load, \repeat 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
     \$21  = synced;
     if (\$5 ) begin
       \$21  = 1'h1;
@@ -13305,13 +13328,13 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, \port$1199$0 , load, \repeat 
       \$21  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$1199$0  };
+  assign lc_next = { lc[4:0], \port$3658$0  };
   assign zero = is_zero;
 endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch0.core.spw_check (rst, bits, \tolerance$8 , spw, cpw_top, match, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$61  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$62  = 0;
   wire [40:0] \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -13516,28 +13539,28 @@ module \biss_master_wb.ch0.core.spw_check (rst, bits, \tolerance$8 , spw, cpw_to
   assign \$7  = bits > 3'h5;
   assign \$8  = bits > 3'h6;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
     \$88  = \$42 ;
     if (rst) begin
       \$88  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
     \$89  = \$84 ;
     if (rst) begin
       \$89  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
     \$90  = \tolerance$8 ;
     if (rst) begin
       \$90  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
     \$91  = \$87 ;
     if (rst) begin
       \$91  = 1'h0;
@@ -13547,7 +13570,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch0.core.time_base (rst, first_rise, first_rise_time, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$62  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$63  = 0;
   wire [32:0] \$1 ;
   reg [31:0] \$2 ;
   reg [31:0] \$3 ;
@@ -13566,14 +13589,14 @@ module \biss_master_wb.ch0.core.time_base (rst, first_rise, first_rise_time, clk
   always @(posedge clk)
     first_rise_time <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
     \$2  = \$1 [31:0];
     if (rst) begin
       \$2  = 32'd0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
     \$3  = first_rise_time;
     if (first_rise) begin
       \$3  = now;
@@ -13586,7 +13609,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch0.core.timers (rst, restart, ma_busy, break_time, timeout_live, ack_limit, timeout_limit, delay_limit, no_start_limit, clear, in_clock, slo_stuck, slo_stuck_live, break_over, ack_expired, no_start_expired, delay_over, delay, slo, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$63  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$64  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -13724,7 +13747,7 @@ module \biss_master_wb.ch0.core.timers (rst, restart, ma_busy, break_time, timeo
   always @(posedge clk)
     delay_over <= \$43 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     \$36  = slo_low_time_p1;
     if (\$1 ) begin
       \$36  = 25'h0000001;
@@ -13736,49 +13759,49 @@ module \biss_master_wb.ch0.core.timers (rst, restart, ma_busy, break_time, timeo
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     \$37  = \$8 ;
     if (rst) begin
       \$37  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     \$38  = \$16 ;
     if (rst) begin
       \$38  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     \$39  = \$20 [24:0];
     if (rst) begin
       \$39  = 25'h0000001;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     \$40  = \$26 ;
     if (rst) begin
       \$40  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     \$41  = \$30 ;
     if (rst) begin
       \$41  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     \$42  = \$34 ;
     if (rst) begin
       \$42  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     \$43  = \$35 ;
     if (rst) begin
       \$43  = 1'h0;
@@ -13787,8 +13810,8 @@ module \biss_master_wb.ch0.core.timers (rst, restart, ma_busy, break_time, timeo
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.verdict (lc_skip_seen, \port$1599$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
-  reg \$auto$verilog_backend.cc:2355:dump_module$64  = 0;
+module \biss_master_wb.ch0.core.verdict (lc_skip_seen, \port$1601$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
+  reg \$auto$verilog_backend.cc:2355:dump_module$65  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -13901,8 +13924,8 @@ module \biss_master_wb.ch0.core.verdict (lc_skip_seen, \port$1599$0 , lc_check, 
   wire lc_zero;
   input lc_zero_seen;
   wire lc_zero_seen;
-  output \port$1599$0 ;
-  wire \port$1599$0 ;
+  output \port$1601$0 ;
+  wire \port$1601$0 ;
   output report;
   wire report;
   input report_frame;
@@ -13970,7 +13993,7 @@ module \biss_master_wb.ch0.core.verdict (lc_skip_seen, \port$1599$0 , lc_check, 
   assign \$29  = ~ { \$2 , crc_ok[0] };
   assign crc_error = report_frame ? \$29  : 2'h0;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     (* full_case = 32'd1 *)
     if (\$13 ) begin
       frame_status = 4'h3;
@@ -13987,7 +14010,7 @@ module \biss_master_wb.ch0.core.verdict (lc_skip_seen, \port$1599$0 , lc_check, 
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$1599$0  = \$2 ;
+  assign \port$1601$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -14013,8 +14036,8 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1 (ca_wbuf_data, slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__ca_busy, regs__ca_rbuf_data, start, abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time
 , cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, regs__done_count
-, ma, regs__done, \port$4342$0 , \port$4349$0 , regs__ca_done, \port$4477$0 , ca_wbuf_addr);
-  reg \$auto$verilog_backend.cc:2355:dump_module$65  = 0;
+, ma, regs__done, \port$4358$0 , \port$4365$0 , regs__ca_done, \port$4493$0 , ca_wbuf_addr);
+  reg \$auto$verilog_backend.cc:2355:dump_module$66  = 0;
   wire \$1 ;
   wire [16:0] \$2 ;
   reg [15:0] \$3 ;
@@ -14137,12 +14160,12 @@ module \biss_master_wb.ch1 (ca_wbuf_data, slo, clk, rst, \trigger$161 , ca_wbuf_
   wire \ma$164 ;
   input periodic;
   wire periodic;
-  output [160:0] \port$4342$0 ;
-  wire [160:0] \port$4342$0 ;
-  output [287:0] \port$4349$0 ;
-  wire [287:0] \port$4349$0 ;
-  output [9:0] \port$4477$0 ;
-  wire [9:0] \port$4477$0 ;
+  output [160:0] \port$4358$0 ;
+  wire [160:0] \port$4358$0 ;
+  output [287:0] \port$4365$0 ;
+  wire [287:0] \port$4365$0 ;
+  output [9:0] \port$4493$0 ;
+  wire [9:0] \port$4493$0 ;
   wire regs__abort_cycle;
   output regs__busy;
   wire regs__busy;
@@ -14289,8 +14312,8 @@ module \biss_master_wb.ch1 (ca_wbuf_data, slo, clk, rst, \trigger$161 , ca_wbuf_
   assign trigger = \trigger$161  & regs__trigger_enable;
   \biss_master_wb.ch1.core  core (
     .abort(abort_cycle),
-    .\abort$187 (ca_abort),
-    .\busy$237 (regs__busy),
+    .\abort$183 (ca_abort),
+    .\busy$233 (regs__busy),
     .ca_address(ca_address),
     .ca_count(ca_count),
     .ca_done(regs__ca_done),
@@ -14318,26 +14341,26 @@ module \biss_master_wb.ch1 (ca_wbuf_data, slo, clk, rst, \trigger$161 , ca_wbuf_
     .cfg_w1_enable(cfg_w1_enable),
     .cfg_w1_lc(cfg_w1_lc),
     .cfg_w1_nenw(cfg_w1_nenw),
-    .\clear$214 (clear_counters),
+    .\clear$210 (clear_counters),
     .clk(clk),
     .config_error(regs__config_error),
     .counts(\$5 ),
-    .\done$240 (regs__done),
+    .\done$236 (regs__done),
     .frames(regs__ca_busy),
     .ma(ma),
     .\periodic$24 (periodic),
     .rbuf_en(ca_rbuf_en),
     .result(\$6 ),
-    .\result$245 (\$4 ),
+    .\result$241 (\$4 ),
     .rst(rst),
     .slo(slo),
     .start(start),
-    .\start$185 (ca_start),
+    .\start$181 (ca_start),
     .trigger(trigger),
-    .\valid$242 (valid)
+    .\valid$238 (valid)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$3  = regs__done_count;
     if (regs__done) begin
       \$3  = \$2 [15:0];
@@ -14468,19 +14491,24 @@ module \biss_master_wb.ch1 (ca_wbuf_data, slo, clk, rst, \trigger$161 , ca_wbuf_
   assign regs__ca_rbuf_en = ca_rbuf_en;
   assign \ma$164  = ma;
   assign \slo$166  = slo;
-  assign \port$4342$0  = \$4 ;
-  assign \port$4349$0  = \$5 ;
-  assign \port$4477$0  = \$6 ;
+  assign \port$4358$0  = \$4 ;
+  assign \port$4365$0  = \$5 ;
+  assign \port$4493$0  = \$6 ;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy$237 , config_error, frames, ca_rbuf_data, start, abort, \clear$214 , \periodic$24 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit
-, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, \start$185 , \abort$187 , ma, \done$240 , \valid$242 
-, \result$245 , counts, ca_done, result, ca_wbuf_addr);
+module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy$233 , config_error, frames, ca_rbuf_data, start, abort, \clear$210 , \periodic$24 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit
+, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, \start$181 , \abort$183 , ma, \done$236 , \valid$238 
+, \result$241 , counts, ca_done, result, ca_wbuf_addr);
+  reg \$auto$verilog_backend.cc:2355:dump_module$67  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
   wire \$12 ;
+  wire \$13 ;
+  reg \$14 ;
+  reg \$15 ;
+  wire \$16 ;
   wire \$2 ;
   wire \$3 ;
   wire \$4 ;
@@ -14491,8 +14519,8 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   wire \$9 ;
   input abort;
   wire abort;
-  input \abort$187 ;
-  wire \abort$187 ;
+  input \abort$183 ;
+  wire \abort$183 ;
   wire \abort$36 ;
   wire abort_cycle;
   wire ack_expired;
@@ -14500,16 +14528,16 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   wire [23:0] ack_limit;
   wire [23:0] \ack_limit$89 ;
   wire arm;
-  wire \bit ;
-  wire \bit$113 ;
+  reg \bit  = 1'h0;
+  wire \bit$263 ;
   wire [5:0] bits;
   wire break_over;
   wire \break_over$66 ;
   wire [23:0] break_time;
   wire busy;
-  wire \busy$196 ;
-  output \busy$237 ;
-  wire \busy$237 ;
+  wire \busy$192 ;
+  output \busy$233 ;
+  wire \busy$233 ;
   wire ca_abort;
   input [6:0] ca_address;
   wire [6:0] ca_address;
@@ -14544,10 +14572,10 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   input ca_write;
   wire ca_write;
   wire cdm;
-  wire \cdm$200 ;
+  wire \cdm$196 ;
   wire cdm_cycle;
   wire cds;
-  wire \cds$248 ;
+  wire \cds$244 ;
   wire [154:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
@@ -14624,8 +14652,8 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   wire check;
   wire clear;
   wire \clear$106 ;
-  input \clear$214 ;
-  wire \clear$214 ;
+  input \clear$210 ;
+  wire \clear$210 ;
   wire clear_counters;
   input clk;
   wire clk;
@@ -14672,10 +14700,10 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   wire [15:0] \counts.slo_stuck_low ;
   wire [15:0] \counts.spw_mismatch ;
   wire [39:0] cpw_top;
-  wire [39:0] \cpw_top$130 ;
+  wire [39:0] \cpw_top$126 ;
   wire [1:0] crc_error;
   wire [1:0] crc_ok;
-  wire [1:0] \crc_ok$145 ;
+  wire [1:0] \crc_ok$141 ;
   wire [154:0] cycle;
   wire [23:0] \cycle.ack_limit ;
   wire [23:0] \cycle.break_time ;
@@ -14714,10 +14742,10 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   wire delay_over;
   wire \delay_over$76 ;
   wire done;
-  wire \done$198 ;
-  output \done$240 ;
-  wire \done$240 ;
-  wire \done$241 ;
+  wire \done$194 ;
+  output \done$236 ;
+  wire \done$236 ;
+  wire \done$237 ;
   wire doubtful;
   wire early;
   wire \early$52 ;
@@ -14743,7 +14771,7 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   wire \events.slo_stuck_low ;
   wire \events.spw_mismatch ;
   wire fault;
-  wire \fault$141 ;
+  wire \fault$137 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -14773,7 +14801,7 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
-  wire [3:0] \fault_status$143 ;
+  wire [3:0] \fault_status$139 ;
   wire [6:0] faults;
   wire \faults.aborted ;
   wire \faults.bad_config ;
@@ -14783,7 +14811,7 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   wire \faults.no_stop ;
   wire \faults.slo_stuck_low ;
   wire first_rise;
-  wire \first_rise$171 ;
+  wire \first_rise$167 ;
   wire [31:0] first_rise_time;
   wire [160:0] frame;
   wire \frame.cds ;
@@ -14837,20 +14865,20 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   wire in_clock;
   wire \in_clock$83 ;
   wire [5:0] lc;
-  wire [5:0] \lc$117 ;
-  wire [5:0] \lc$257 ;
+  wire [5:0] \lc$113 ;
+  wire [5:0] \lc$253 ;
   wire lc_check;
   wire lc_load;
   wire [5:0] lc_next;
-  wire [5:0] \lc_next$119 ;
+  wire [5:0] \lc_next$115 ;
   wire lc_repeat;
-  wire \lc_repeat$258 ;
+  wire \lc_repeat$254 ;
   wire lc_repeat_seen;
   wire lc_skip;
-  wire \lc_skip$259 ;
+  wire \lc_skip$255 ;
   wire lc_skip_seen;
   wire lc_zero;
-  wire \lc_zero$260 ;
+  wire \lc_zero$256 ;
   wire lc_zero_seen;
   wire level;
   wire [12:0] line_delay;
@@ -14888,7 +14916,7 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   wire \locked$50 ;
   output ma;
   wire ma;
-  wire \ma$236 ;
+  wire \ma$232 ;
   wire ma_arm;
   wire ma_busy;
   wire \ma_busy$78 ;
@@ -14905,7 +14933,7 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   wire [1:0] nw;
   wire ok;
   wire overrun;
-  wire \overrun$239 ;
+  wire \overrun$235 ;
   wire [23:0] period;
   wire periodic;
   input \periodic$24 ;
@@ -14917,32 +14945,32 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   wire receiver_clear;
   wire \repeat ;
   wire report;
-  wire \report$153 ;
+  wire \report$149 ;
   wire report_delay;
-  wire \report_delay$156 ;
+  wire \report_delay$152 ;
   wire report_frame;
-  wire \report_frame$139 ;
-  wire \report_frame$154 ;
+  wire \report_frame$135 ;
+  wire \report_frame$150 ;
   wire request;
-  wire [17:0] \request$173 ;
-  wire [6:0] \request$173.address ;
-  wire [6:0] \request$173.count ;
-  wire [2:0] \request$173.slave_id ;
-  wire \request$173.write ;
+  wire [17:0] \request$169 ;
+  wire [6:0] \request$169.address ;
+  wire [6:0] \request$169.count ;
+  wire [2:0] \request$169.slave_id ;
+  wire \request$169.write ;
   wire \request$35 ;
   wire restart;
   wire restart_timer;
   output [9:0] result;
   wire [9:0] result;
-  output [160:0] \result$245 ;
-  wire [160:0] \result$245 ;
-  wire \result$245.cds ;
-  wire [5:0] \result$245.lc ;
-  wire \result$245.lc_repeat ;
-  wire \result$245.lc_skip ;
-  wire \result$245.lc_zero ;
-  wire [12:0] \result$245.line_delay ;
-  wire \result$245.spw_mismatch ;
+  output [160:0] \result$241 ;
+  wire [160:0] \result$241 ;
+  wire \result$241.cds ;
+  wire [5:0] \result$241.lc ;
+  wire \result$241.lc_repeat ;
+  wire \result$241.lc_skip ;
+  wire \result$241.lc_zero ;
+  wire [12:0] \result$241.line_delay ;
+  wire \result$241.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -14957,18 +14985,18 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
-  wire [3:0] \result$245.status ;
-  wire [31:0] \result$245.timestamp ;
-  wire [57:0] \result$245.word0 ;
-  wire \result$245.word0.crc_ok ;
-  wire \result$245.word0.ne ;
-  wire \result$245.word0.nw ;
-  wire [54:0] \result$245.word0.position ;
-  wire [42:0] \result$245.word1 ;
-  wire \result$245.word1.crc_ok ;
-  wire \result$245.word1.ne ;
-  wire \result$245.word1.nw ;
-  wire [39:0] \result$245.word1.position ;
+  wire [3:0] \result$241.status ;
+  wire [31:0] \result$241.timestamp ;
+  wire [57:0] \result$241.word0 ;
+  wire \result$241.word0.crc_ok ;
+  wire \result$241.word0.ne ;
+  wire \result$241.word0.nw ;
+  wire [54:0] \result$241.word0.position ;
+  wire [42:0] \result$241.word1 ;
+  wire \result$241.word1.crc_ok ;
+  wire \result$241.word1.ne ;
+  wire \result$241.word1.nw ;
+  wire [39:0] \result$241.word1.position ;
   wire [6:0] \result.bytes_done ;
   (* enum_base_type = "AccessStatus" *)
   (* enum_value_000 = "OK" *)
@@ -14980,14 +15008,14 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   (* enum_value_110 = "BAD_REQUEST" *)
   wire [2:0] \result.status ;
   wire resync;
-  wire \resync$125 ;
+  wire \resync$121 ;
   wire [15:0] rises;
   wire [15:0] \rises$105 ;
   input rst;
   wire rst;
   wire run;
-  wire sample;
-  wire \sample$111 ;
+  reg sample = 1'h0;
+  wire \sample$261 ;
   wire second_rise;
   wire skip;
   input slo;
@@ -15004,11 +15032,11 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   wire [39:0] spw;
   wire spw_match;
   wire spw_mismatch;
-  wire \spw_mismatch$261 ;
+  wire \spw_mismatch$257 ;
   input start;
   wire start;
-  input \start$185 ;
-  wire \start$185 ;
+  input \start$181 ;
+  wire \start$181 ;
   wire \start$22 ;
   wire [15:0] start_slot;
   wire [15:0] \start_slot$103 ;
@@ -15044,7 +15072,7 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
-  wire [3:0] \status$244 ;
+  wire [3:0] \status$240 ;
   wire stop_bit;
   wire \stop_bit$62 ;
   wire stopped;
@@ -15059,9 +15087,9 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   wire trigger;
   wire \trigger$33 ;
   wire valid;
-  wire \valid$158 ;
-  output \valid$242 ;
-  wire \valid$242 ;
+  wire \valid$154 ;
+  output \valid$238 ;
+  wire \valid$238 ;
   wire valid_out;
   wire w1_enable;
   wire [39:0] wbuf;
@@ -15077,28 +15105,28 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   wire word1_nw;
   wire [39:0] word1_position;
   wire [1:0] word_count;
-  wire [1:0] \word_count$115 ;
+  wire [1:0] \word_count$111 ;
   wire [1:0] word_crc_ok;
   wire [19:0] words;
-  wire [19:0] \words$127 ;
-  wire [9:0] \words$127[0] ;
+  wire [19:0] \words$123 ;
+  wire [9:0] \words$123[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
-  wire [1:0] \words$127[0].crc ;
-  wire [5:0] \words$127[0].data_bits ;
-  wire \words$127[0].lc ;
-  wire \words$127[0].nenw ;
-  wire [9:0] \words$127[1] ;
+  wire [1:0] \words$123[0].crc ;
+  wire [5:0] \words$123[0].data_bits ;
+  wire \words$123[0].lc ;
+  wire \words$123[0].nenw ;
+  wire [9:0] \words$123[1] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
-  wire [1:0] \words$127[1].crc ;
-  wire [5:0] \words$127[1].data_bits ;
-  wire \words$127[1].lc ;
-  wire \words$127[1].nenw ;
+  wire [1:0] \words$123[1].crc ;
+  wire [5:0] \words$123[1].data_bits ;
+  wire \words$123[1].lc ;
+  wire \words$123[1].nenw ;
   wire [9:0] \words[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
@@ -15130,8 +15158,14 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   assign \$9  = ca_done & \$8 ;
   assign \$10  = result[2:0] == 3'h5;
   assign \$11  = ca_done & \$10 ;
-  assign \busy$237  = ~ idle;
+  assign \busy$233  = ~ idle;
   assign config_error = ~ config_ok;
+  assign \$12  = ~ \clear$106 ;
+  assign \$13  = \sample$261  & \$12 ;
+  always @(posedge clk)
+    sample <= \$14 ;
+  always @(posedge clk)
+    \bit  <= \$15 ;
   \biss_master_wb.ch1.core.config  \config  (
     .ack_limit(ack_limit),
     .clk(clk),
@@ -15188,7 +15222,7 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
     .timer_clear(clear)
   );
   \biss_master_wb.ch1.core.counters  counters (
-    .clear(\clear$214 ),
+    .clear(\clear$210 ),
     .clk(clk),
     .counts(counts),
     .events(events),
@@ -15241,10 +15275,10 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
     .start_slot(start_slot),
     .\started$10 (started),
     .w1_enable(cycle[135]),
-    .words(\words$127 )
+    .words(\words$123 )
   );
   \biss_master_wb.ch1.core.register_access  register_access (
-    .abort(\abort$187 ),
+    .abort(\abort$183 ),
     .busy(frames),
     .cdm(cdm),
     .clk(clk),
@@ -15256,27 +15290,27 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
     .host_read__addr(ca_wbuf_addr),
     .host_read__en(rbuf_en),
     .rbuf_data(ca_rbuf_data),
-    .request(\request$173 ),
+    .request(\request$169 ),
     .result(result),
     .rst(rst),
-    .\start$44 (\start$185 ),
+    .\start$44 (\start$181 ),
     .wbuf(wbuf)
   );
   \biss_master_wb.ch1.core.results  results (
     .clk(clk),
-    .done(\done$240 ),
+    .done(\done$236 ),
     .frame(frame),
     .report(report),
     .report_delay(report_delay),
     .report_frame(report_frame),
-    .result(\result$245 ),
+    .result(\result$241 ),
     .rst(rst),
     .valid(valid),
-    .valid_out(\valid$242 )
+    .valid_out(\valid$238 )
   );
   \biss_master_wb.ch1.core.sampler  sampler (
     .arm(ma_arm),
-    .\bit (\bit ),
+    .\bit (\bit$263 ),
     .clk(clk),
     .delay(delay),
     .early(early),
@@ -15285,7 +15319,7 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
     .locked(locked),
     .receiver_clear(\clear$106 ),
     .rst(rst),
-    .sample(sample),
+    .sample(\sample$261 ),
     .slo(slo)
   );
   \biss_master_wb.ch1.core.scheduler  scheduler (
@@ -15306,7 +15340,7 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$2542$0 (\bit ),
+    .\port$4099$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -15363,7 +15397,7 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
     .lc_skip_seen(lc_skip_seen),
     .lc_zero(lc_zero),
     .lc_zero_seen(lc_zero_seen),
-    .\port$2942$0 (\$12 ),
+    .\port$2946$0 (\$16 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -15371,6 +15405,20 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
     .status(status),
     .valid(valid)
   );
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    \$14  = \$13 ;
+    if (rst) begin
+      \$14  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    \$15  = \bit$263 ;
+    if (rst) begin
+      \$15  = 1'h0;
+    end
+  end
   assign \idle$20  = idle;
   assign \start$22  = start;
   assign period = cfg_request_period;
@@ -15420,54 +15468,52 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   assign receiver_clear = \clear$106 ;
   assign \half_period$108  = cycle[15:0];
   assign arm = ma_arm;
-  assign \sample$111  = sample;
-  assign \bit$113  = \bit ;
-  assign \word_count$115  = word_count;
-  assign \lc$117  = lc;
+  assign \word_count$111  = word_count;
+  assign \lc$113  = lc;
   assign lc_next = { lc[4:0], \bit  };
-  assign \lc_next$119  = { lc[4:0], \bit  };
+  assign \lc_next$115  = { lc[4:0], \bit  };
   assign lc_load = load;
   assign lc_check = check;
-  assign \resync$125  = resync;
+  assign \resync$121  = resync;
   assign w1_enable = cycle[135];
-  assign \cpw_top$130  = cpw_top;
+  assign \cpw_top$126  = cpw_top;
   assign data1 = spw;
   assign bits = cycle[141:136];
   assign tolerance = cycle[154:147];
   assign match = spw_match;
   assign cfg = cycle;
-  assign \report_frame$139  = report_frame;
-  assign \fault$141  = fault;
-  assign \fault_status$143  = fault_status;
-  assign \crc_ok$145  = crc_ok;
+  assign \report_frame$135  = report_frame;
+  assign \fault$137  = fault;
+  assign \fault_status$139  = fault_status;
+  assign \crc_ok$141  = crc_ok;
   assign \repeat  = lc_repeat_seen;
   assign skip = lc_skip_seen;
   assign zero = lc_zero_seen;
-  assign \report$153  = report;
-  assign \report_frame$154  = report_frame;
-  assign \report_delay$156  = report_delay;
-  assign \valid$158  = valid;
-  assign word_crc_ok = { \$12 , crc_ok[0] };
-  assign \first_rise$171  = first_rise;
+  assign \report$149  = report;
+  assign \report_frame$150  = report_frame;
+  assign \report_delay$152  = report_delay;
+  assign \valid$154  = valid;
+  assign word_crc_ok = { \$16 , crc_ok[0] };
+  assign \first_rise$167  = first_rise;
   assign ca_status = result[2:0];
   assign ca_bytes_done = result[9:3];
-  assign ca_start = \start$185 ;
-  assign ca_abort = \abort$187 ;
+  assign ca_start = \start$181 ;
+  assign ca_abort = \abort$183 ;
   assign rbuf_addr = ca_wbuf_addr;
   assign ca_rbuf_addr = ca_wbuf_addr;
   assign ca_rbuf_en = rbuf_en;
   assign rbuf_data = ca_rbuf_data;
   assign ca_busy = frames;
-  assign \busy$196  = frames;
-  assign \done$198  = ca_done;
-  assign \cdm$200  = cdm;
+  assign \busy$192  = frames;
+  assign \done$194  = ca_done;
+  assign \cdm$196  = cdm;
   assign held = ma_held;
   assign ma_hold = hold;
   assign frame_end = report;
   assign frame_ok = valid;
   assign frame_cds = cds;
   assign cdm_cycle = frame_cdm;
-  assign clear_counters = \clear$214 ;
+  assign clear_counters = \clear$210 ;
   assign count_crc_word0 = counts[15:0];
   assign count_crc_word1 = counts[31:16];
   assign count_no_ack = counts[47:32];
@@ -15486,27 +15532,27 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   assign count_ca_refused = counts[255:240];
   assign count_ca_aborted = counts[271:256];
   assign count_ca_data_fault = counts[287:272];
-  assign \ma$236  = ma;
-  assign \overrun$239  = overrun;
-  assign \done$241  = \done$240 ;
-  assign valid_out = \valid$242 ;
-  assign \status$244  = \result$245 [3:0];
-  assign timestamp = \result$245 [35:4];
-  assign line_delay = \result$245 [48:36];
-  assign \cds$248  = \result$245 [49];
-  assign word0_position = \result$245 [104:50];
-  assign word0_ne = \result$245 [105];
-  assign word0_nw = \result$245 [106];
-  assign word0_crc_ok = \result$245 [107];
-  assign word1_position = \result$245 [147:108];
-  assign word1_ne = \result$245 [148];
-  assign word1_nw = \result$245 [149];
-  assign word1_crc_ok = \result$245 [150];
-  assign \lc$257  = \result$245 [156:151];
-  assign \lc_repeat$258  = \result$245 [157];
-  assign \lc_skip$259  = \result$245 [158];
-  assign \lc_zero$260  = \result$245 [159];
-  assign \spw_mismatch$261  = \result$245 [160];
+  assign \ma$232  = ma;
+  assign \overrun$235  = overrun;
+  assign \done$237  = \done$236 ;
+  assign valid_out = \valid$238 ;
+  assign \status$240  = \result$241 [3:0];
+  assign timestamp = \result$241 [35:4];
+  assign line_delay = \result$241 [48:36];
+  assign \cds$244  = \result$241 [49];
+  assign word0_position = \result$241 [104:50];
+  assign word0_ne = \result$241 [105];
+  assign word0_nw = \result$241 [106];
+  assign word0_crc_ok = \result$241 [107];
+  assign word1_position = \result$241 [147:108];
+  assign word1_ne = \result$241 [148];
+  assign word1_nw = \result$241 [149];
+  assign word1_crc_ok = \result$241 [150];
+  assign \lc$253  = \result$241 [156:151];
+  assign \lc_repeat$254  = \result$241 [157];
+  assign \lc_skip$255  = \result$241 [158];
+  assign \lc_zero$256  = \result$241 [159];
+  assign \spw_mismatch$257  = \result$241 [160];
   assign \live.ma_half_period  = live[15:0];
   assign \live.request_period  = live[39:16];
   assign \live.break_time  = live[63:40];
@@ -15557,16 +15603,16 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   assign \words[1].nenw  = words[16];
   assign \words[1].lc  = words[17];
   assign \words[1].crc  = words[19:18];
-  assign \words$127[0]  = \words$127 [9:0];
-  assign \words$127[0].data_bits  = \words$127 [5:0];
-  assign \words$127[0].nenw  = \words$127 [6];
-  assign \words$127[0].lc  = \words$127 [7];
-  assign \words$127[0].crc  = \words$127 [9:8];
-  assign \words$127[1]  = \words$127 [19:10];
-  assign \words$127[1].data_bits  = \words$127 [15:10];
-  assign \words$127[1].nenw  = \words$127 [16];
-  assign \words$127[1].lc  = \words$127 [17];
-  assign \words$127[1].crc  = \words$127 [19:18];
+  assign \words$123[0]  = \words$123 [9:0];
+  assign \words$123[0].data_bits  = \words$123 [5:0];
+  assign \words$123[0].nenw  = \words$123 [6];
+  assign \words$123[0].lc  = \words$123 [7];
+  assign \words$123[0].crc  = \words$123 [9:8];
+  assign \words$123[1]  = \words$123 [19:10];
+  assign \words$123[1].data_bits  = \words$123 [15:10];
+  assign \words$123[1].nenw  = \words$123 [16];
+  assign \words$123[1].lc  = \words$123 [17];
+  assign \words$123[1].crc  = \words$123 [19:18];
   assign \cfg.ma_half_period  = cycle[15:0];
   assign \cfg.request_period  = cycle[39:16];
   assign \cfg.break_time  = cycle[63:40];
@@ -15606,10 +15652,10 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   assign \frame.lc_skip  = frame[158];
   assign \frame.lc_zero  = frame[159];
   assign \frame.spw_mismatch  = frame[160];
-  assign \request$173.slave_id  = \request$173 [2:0];
-  assign \request$173.address  = \request$173 [9:3];
-  assign \request$173.count  = \request$173 [16:10];
-  assign \request$173.write  = \request$173 [17];
+  assign \request$169.slave_id  = \request$169 [2:0];
+  assign \request$169.address  = \request$169 [9:3];
+  assign \request$169.count  = \request$169 [16:10];
+  assign \request$169.write  = \request$169 [17];
   assign \wbuf.addr  = wbuf[3:0];
   assign \wbuf.data  = wbuf[35:4];
   assign \wbuf.en  = wbuf[39:36];
@@ -15658,25 +15704,25 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   assign \counts.ca_refused  = counts[255:240];
   assign \counts.ca_aborted  = counts[271:256];
   assign \counts.ca_data_fault  = counts[287:272];
-  assign \result$245.status  = \result$245 [3:0];
-  assign \result$245.timestamp  = \result$245 [35:4];
-  assign \result$245.line_delay  = \result$245 [48:36];
-  assign \result$245.cds  = \result$245 [49];
-  assign \result$245.word0  = \result$245 [107:50];
-  assign \result$245.word0.position  = \result$245 [104:50];
-  assign \result$245.word0.ne  = \result$245 [105];
-  assign \result$245.word0.nw  = \result$245 [106];
-  assign \result$245.word0.crc_ok  = \result$245 [107];
-  assign \result$245.word1  = \result$245 [150:108];
-  assign \result$245.word1.position  = \result$245 [147:108];
-  assign \result$245.word1.ne  = \result$245 [148];
-  assign \result$245.word1.nw  = \result$245 [149];
-  assign \result$245.word1.crc_ok  = \result$245 [150];
-  assign \result$245.lc  = \result$245 [156:151];
-  assign \result$245.lc_repeat  = \result$245 [157];
-  assign \result$245.lc_skip  = \result$245 [158];
-  assign \result$245.lc_zero  = \result$245 [159];
-  assign \result$245.spw_mismatch  = \result$245 [160];
+  assign \result$241.status  = \result$241 [3:0];
+  assign \result$241.timestamp  = \result$241 [35:4];
+  assign \result$241.line_delay  = \result$241 [48:36];
+  assign \result$241.cds  = \result$241 [49];
+  assign \result$241.word0  = \result$241 [107:50];
+  assign \result$241.word0.position  = \result$241 [104:50];
+  assign \result$241.word0.ne  = \result$241 [105];
+  assign \result$241.word0.nw  = \result$241 [106];
+  assign \result$241.word0.crc_ok  = \result$241 [107];
+  assign \result$241.word1  = \result$241 [150:108];
+  assign \result$241.word1.position  = \result$241 [147:108];
+  assign \result$241.word1.ne  = \result$241 [148];
+  assign \result$241.word1.nw  = \result$241 [149];
+  assign \result$241.word1.crc_ok  = \result$241 [150];
+  assign \result$241.lc  = \result$241 [156:151];
+  assign \result$241.lc_repeat  = \result$241 [157];
+  assign \result$241.lc_skip  = \result$241 [158];
+  assign \result$241.lc_zero  = \result$241 [159];
+  assign \result$241.spw_mismatch  = \result$241 [160];
   assign events[17] = \$11 ;
   assign events[16] = \$9 ;
   assign events[15] = \$7 ;
@@ -15698,13 +15744,13 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   assign wbuf[39:36] = ca_wbuf_en;
   assign wbuf[35:4] = ca_wbuf_data;
   assign wbuf[3:0] = ca_wbuf_addr;
-  assign \request$173 [17] = ca_write;
-  assign \request$173 [16:10] = ca_count;
-  assign \request$173 [9:3] = ca_address;
-  assign \request$173 [2:0] = ca_slave_id;
+  assign \request$169 [17] = ca_write;
+  assign \request$169 [16:10] = ca_count;
+  assign \request$169 [9:3] = ca_address;
+  assign \request$169 [2:0] = ca_slave_id;
   assign frame[35:4] = first_rise_time;
   assign frame[160] = spw_mismatch;
-  assign frame[150] = \$12 ;
+  assign frame[150] = \$16 ;
   assign frame[149] = nw[1];
   assign frame[148] = ne[1];
   assign frame[147:108] = spw;
@@ -15719,8 +15765,8 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   assign frame[49] = cds;
   assign frame[48:36] = delay;
   assign frame[3:0] = status;
-  assign \words$127 [19:10] = cycle[145:136];
-  assign \words$127 [9:0] = cycle[134:125];
+  assign \words$123 [19:10] = cycle[145:136];
+  assign \words$123 [9:0] = cycle[134:125];
   assign words[19:10] = cycle[145:136];
   assign words[9:0] = cycle[134:125];
   assign live[154:147] = cfg_spw_tolerance;
@@ -15745,7 +15791,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1.core.config (rst, word_count, live, ok, cycle, ack_limit, timeout_limit, delay_limit, no_start_limit, idle, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$66  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$68  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -15913,7 +15959,7 @@ module \biss_master_wb.ch1.core.config (rst, word_count, live, ok, cycle, ack_li
   assign \$38  = \$37  ? 24'h001f40 : live[111:88];
   assign \$39  = ! live[123:112];
   assign \$40  = \$39  ? 12'hfff : live[123:112];
-  assign \$41  = ack_limit + { cycle[15:0], 1'h0 };
+  assign \$41  = ack_limit + { cycle[15:0], 1'h1 };
   assign word_count = 1'h1 + cycle[135];
   always @(posedge clk)
     ok <= \$42 ;
@@ -15926,21 +15972,21 @@ module \biss_master_wb.ch1.core.config (rst, word_count, live, ok, cycle, ack_li
   always @(posedge clk)
     delay_limit <= \$46 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     \$47  = \$41 ;
     if (rst) begin
       \$47  = 25'h0000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     \$42  = \$34 ;
     if (rst) begin
       \$42  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     \$43  = cycle;
     if (idle) begin
       \$43  = live;
@@ -15950,7 +15996,7 @@ module \biss_master_wb.ch1.core.config (rst, word_count, live, ok, cycle, ack_li
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     \$44  = ack_limit;
     if (idle) begin
       \$44  = \$36 ;
@@ -15960,7 +16006,7 @@ module \biss_master_wb.ch1.core.config (rst, word_count, live, ok, cycle, ack_li
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     \$45  = timeout_limit;
     if (idle) begin
       \$45  = \$38 ;
@@ -15970,7 +16016,7 @@ module \biss_master_wb.ch1.core.config (rst, word_count, live, ok, cycle, ack_li
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     \$46  = delay_limit;
     if (idle) begin
       \$46  = \$40 ;
@@ -16024,7 +16070,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_doubtful, abort, config_ok, end_check, cdm_cycle, idle, receiver_clear, resync, timer_clear, fault, fault_status, faults, ma_run, in_clock, ma_hold, report_frame, report_delay, slo_stuck
 , slo_stuck_live, break_over, ack_expired, no_start_expired, delay_over, ma_arm, ma_busy, ma_held, ma_enough, early, locked, slo, frame_done, stopped, slots_full, started, stop_bit, cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$67  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$69  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -16313,7 +16359,7 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
   assign \$12  = \$11  & ack_expired;
   assign \$13  = ~ locked_seen;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     \$79  = cdm_cycle;
     if (idle) begin
       \$79  = cdm;
@@ -16323,14 +16369,14 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     \$80  = idle;
     if (rst) begin
       \$80  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     \$81  = cycle_fsm_state;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -16427,7 +16473,7 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     \$82  = idle;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -16524,7 +16570,7 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     \$83  = receiver_clear;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -16621,7 +16667,7 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     \$84  = armed;
     casez (cycle_fsm_state)
       3'h0:
@@ -16640,7 +16686,7 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     \$85  = locked_seen;
     casez (cycle_fsm_state)
       3'h0:
@@ -16659,7 +16705,7 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     \$86  = pause;
     casez (cycle_fsm_state)
       3'h0:
@@ -16679,7 +16725,7 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     resync = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -16687,7 +16733,7 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     timer_clear = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -16734,7 +16780,7 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     fault = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -16789,7 +16835,7 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     fault_status = 4'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -16844,7 +16890,7 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     faults = 7'h00;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -16899,7 +16945,7 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     ma_run = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -16915,7 +16961,7 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     in_clock = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -16929,7 +16975,7 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     ma_hold = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -16952,7 +16998,7 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     report_frame = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -16983,7 +17029,7 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     report_delay = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -17348,114 +17394,6 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1.core.counters.count_aborted (rst, clear, inc, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$68  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.counters.count_ca_aborted (rst, clear, inc, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$69  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.counters.count_ca_crc4_error (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$70  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -17509,7 +17447,7 @@ module \biss_master_wb.ch1.core.counters.count_ca_crc4_error (rst, clear, inc, c
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.counters.count_ca_data_fault (rst, clear, inc, count, clk);
+module \biss_master_wb.ch1.core.counters.count_ca_aborted (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$71  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -17563,7 +17501,7 @@ module \biss_master_wb.ch1.core.counters.count_ca_data_fault (rst, clear, inc, c
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.counters.count_ca_no_answer (rst, clear, inc, count, clk);
+module \biss_master_wb.ch1.core.counters.count_ca_crc4_error (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$72  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -17617,7 +17555,7 @@ module \biss_master_wb.ch1.core.counters.count_ca_no_answer (rst, clear, inc, co
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.counters.count_ca_refused (rst, clear, inc, count, clk);
+module \biss_master_wb.ch1.core.counters.count_ca_data_fault (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$73  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -17671,7 +17609,7 @@ module \biss_master_wb.ch1.core.counters.count_ca_refused (rst, clear, inc, coun
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.counters.count_crc_word0 (rst, clear, inc, count, clk);
+module \biss_master_wb.ch1.core.counters.count_ca_no_answer (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$74  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -17725,7 +17663,7 @@ module \biss_master_wb.ch1.core.counters.count_crc_word0 (rst, clear, inc, count
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.counters.count_crc_word1 (rst, clear, inc, count, clk);
+module \biss_master_wb.ch1.core.counters.count_ca_refused (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$75  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -17779,7 +17717,7 @@ module \biss_master_wb.ch1.core.counters.count_crc_word1 (rst, clear, inc, count
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.counters.count_delay_range (rst, clear, inc, count, clk);
+module \biss_master_wb.ch1.core.counters.count_crc_word0 (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$76  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -17833,7 +17771,7 @@ module \biss_master_wb.ch1.core.counters.count_delay_range (rst, clear, inc, cou
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.counters.count_lc_repeat (rst, clear, inc, count, clk);
+module \biss_master_wb.ch1.core.counters.count_crc_word1 (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$77  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -17887,7 +17825,7 @@ module \biss_master_wb.ch1.core.counters.count_lc_repeat (rst, clear, inc, count
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.counters.count_lc_skip (rst, clear, inc, count, clk);
+module \biss_master_wb.ch1.core.counters.count_delay_range (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$78  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -17941,7 +17879,7 @@ module \biss_master_wb.ch1.core.counters.count_lc_skip (rst, clear, inc, count, 
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.counters.count_lc_zero (rst, clear, inc, count, clk);
+module \biss_master_wb.ch1.core.counters.count_lc_repeat (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$79  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -17995,7 +17933,7 @@ module \biss_master_wb.ch1.core.counters.count_lc_zero (rst, clear, inc, count, 
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.counters.count_no_ack (rst, clear, inc, count, clk);
+module \biss_master_wb.ch1.core.counters.count_lc_skip (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$80  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -18049,7 +17987,7 @@ module \biss_master_wb.ch1.core.counters.count_no_ack (rst, clear, inc, count, c
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.counters.count_no_start (rst, clear, inc, count, clk);
+module \biss_master_wb.ch1.core.counters.count_lc_zero (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$81  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -18103,7 +18041,7 @@ module \biss_master_wb.ch1.core.counters.count_no_start (rst, clear, inc, count,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.counters.count_no_stop (rst, clear, inc, count, clk);
+module \biss_master_wb.ch1.core.counters.count_no_ack (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$82  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -18157,7 +18095,7 @@ module \biss_master_wb.ch1.core.counters.count_no_stop (rst, clear, inc, count, 
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.counters.count_overrun (rst, clear, inc, count, clk);
+module \biss_master_wb.ch1.core.counters.count_no_start (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$83  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -18211,7 +18149,7 @@ module \biss_master_wb.ch1.core.counters.count_overrun (rst, clear, inc, count, 
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.counters.count_slo_stuck_low (rst, clear, inc, count, clk);
+module \biss_master_wb.ch1.core.counters.count_no_stop (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$84  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -18265,7 +18203,7 @@ module \biss_master_wb.ch1.core.counters.count_slo_stuck_low (rst, clear, inc, c
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.counters.count_spw_mismatch (rst, clear, inc, count, clk);
+module \biss_master_wb.ch1.core.counters.count_overrun (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$85  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -18319,9 +18257,117 @@ module \biss_master_wb.ch1.core.counters.count_spw_mismatch (rst, clear, inc, co
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words, receiver_clear, sample, done, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1, lc, cpw_top, crc_ok
-, clk);
+module \biss_master_wb.ch1.core.counters.count_slo_stuck_low (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$86  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_wb.ch1.core.counters.count_spw_mismatch (rst, clear, inc, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$87  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$87 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$87 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample, \bit , receiver_clear, done, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1, lc, cpw_top, crc_ok
+, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$88  = 0;
   wire [6:0] \$1 ;
   wire [1:0] \$10 ;
   reg [2:0] \$100 ;
@@ -18704,7 +18750,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     .valid(\valid$52 )
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     (* full_case = 32'd1 *)
     casez (words[6])
       1'h0:
@@ -18714,7 +18760,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -18728,7 +18774,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     (* full_case = 32'd1 *)
     casez (words[9:6])
       4'h0:
@@ -18766,7 +18812,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -18780,7 +18826,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     (* full_case = 32'd1 *)
     casez (words[16])
       1'h0:
@@ -18790,7 +18836,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     (* full_case = 32'd1 *)
     casez (words[17:16])
       2'h0:
@@ -18804,7 +18850,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:16])
       4'h0:
@@ -18842,7 +18888,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     (* full_case = 32'd1 *)
     casez (words[17:16])
       2'h0:
@@ -18856,7 +18902,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     \$94  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -18880,7 +18926,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     \$95  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -18902,7 +18948,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     \$96  = slots;
     if (\$34 ) begin
       \$96  = \$35 [15:0];
@@ -18915,7 +18961,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     \$97  = slots_full;
     if (\$34 ) begin
       \$97  = \$36 ;
@@ -18928,7 +18974,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     \$98  = started;
     casez (decoder_fsm_state)
       3'h0:
@@ -18944,7 +18990,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     \$99  = start_slot;
     casez (decoder_fsm_state)
       3'h0:
@@ -18960,7 +19006,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     \$100  = decoder_fsm_state;
     casez (decoder_fsm_state)
       3'h0:
@@ -18992,7 +19038,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     \$101  = cds;
     casez (decoder_fsm_state)
       3'h0:
@@ -19010,7 +19056,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     \$102  = idx;
     casez (decoder_fsm_state)
       3'h0:
@@ -19035,7 +19081,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     \$103  = in_data;
     casez (decoder_fsm_state)
       3'h0:
@@ -19060,7 +19106,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     \$104  = in_lc;
     casez (decoder_fsm_state)
       3'h0:
@@ -19085,7 +19131,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     \$105  = in_top;
     casez (decoder_fsm_state)
       3'h0:
@@ -19110,7 +19156,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     \$106  = word;
     casez (decoder_fsm_state)
       3'h0:
@@ -19138,7 +19184,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     \$107  = stop_bit;
     casez (decoder_fsm_state)
       3'h0:
@@ -19160,7 +19206,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     \$108  = data0;
     if (\$58 ) begin
       \$108  = { data0[53:0], \bit  };
@@ -19173,7 +19219,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     \$109  = ne;
     if (\$59 ) begin
       \$109 [0] = 1'h1;
@@ -19193,7 +19239,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     \$110  = nw;
     if (\$59 ) begin
       \$110 [0] = 1'h1;
@@ -19215,7 +19261,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     \$111  = data1;
     if (\$70 ) begin
       \$111  = { data1[38:0], \bit  };
@@ -19228,7 +19274,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     \$112  = lc;
     if (lc_load) begin
       \$112  = { lc[4:0], \bit  };
@@ -19241,7 +19287,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     \$113  = cpw_top;
     if (\$80 ) begin
       \$113  = { cpw_top[38:0], \bit  };
@@ -19254,7 +19300,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     in_word = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -19290,8 +19336,8 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, \bit , lc_load, words,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.decoder.crc0 (rst, \bit , start, valid, kind, receiver_clear, ok, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$87  = 0;
+module \biss_master_wb.ch1.core.decoder.crc0 (rst, start, valid, kind, \bit , receiver_clear, ok, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$89  = 0;
   wire [5:0] \$1 ;
   wire \$10 ;
   wire [5:0] \$11 ;
@@ -19385,7 +19431,7 @@ module \biss_master_wb.ch1.core.decoder.crc0 (rst, \bit , start, valid, kind, re
   assign \$auto$rtlil.cc:2739:Not$12  = ~ { crc16_reg[14], crc16_reg[11], crc16_reg[6:5], crc16_reg[3:2], 1'h0 };
   assign \$auto$rtlil.cc:2739:Not$10  = ~ { crc6_reg[0], 1'h0 };
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$87 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$89 ) begin end
     \$31  = crc6_reg;
     if (valid) begin
       \$31  = \$5 ;
@@ -19400,7 +19446,7 @@ module \biss_master_wb.ch1.core.decoder.crc0 (rst, \bit , start, valid, kind, re
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$87 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$89 ) begin end
     \$32  = crc6_match;
     if (valid) begin
       \$32  = \$15 ;
@@ -19415,7 +19461,7 @@ module \biss_master_wb.ch1.core.decoder.crc0 (rst, \bit , start, valid, kind, re
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$87 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$89 ) begin end
     \$33  = crc16_reg;
     if (valid) begin
       \$33  = \$20 ;
@@ -19430,7 +19476,7 @@ module \biss_master_wb.ch1.core.decoder.crc0 (rst, \bit , start, valid, kind, re
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$87 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$89 ) begin end
     \$34  = crc16_match;
     if (valid) begin
       \$34  = \$30 ;
@@ -19445,7 +19491,7 @@ module \biss_master_wb.ch1.core.decoder.crc0 (rst, \bit , start, valid, kind, re
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$87 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$89 ) begin end
     ok = 1'h0;
     casez (kind)
       2'h0:
@@ -19465,8 +19511,8 @@ module \biss_master_wb.ch1.core.decoder.crc0 (rst, \bit , start, valid, kind, re
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.decoder.crc1 (rst, \bit , start, valid, kind, receiver_clear, ok, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$88  = 0;
+module \biss_master_wb.ch1.core.decoder.crc1 (rst, start, valid, kind, \bit , receiver_clear, ok, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$90  = 0;
   wire [5:0] \$1 ;
   wire \$10 ;
   wire [5:0] \$11 ;
@@ -19560,7 +19606,7 @@ module \biss_master_wb.ch1.core.decoder.crc1 (rst, \bit , start, valid, kind, re
   assign \$auto$rtlil.cc:2739:Not$6  = ~ { crc6_reg[0], 1'h0 };
   assign \$auto$rtlil.cc:2739:Not$8  = ~ { crc16_reg[14], crc16_reg[11], crc16_reg[6:5], crc16_reg[3:2], 1'h0 };
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
     \$31  = crc6_reg;
     if (valid) begin
       \$31  = \$5 ;
@@ -19575,7 +19621,7 @@ module \biss_master_wb.ch1.core.decoder.crc1 (rst, \bit , start, valid, kind, re
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
     \$32  = crc6_match;
     if (valid) begin
       \$32  = \$15 ;
@@ -19590,7 +19636,7 @@ module \biss_master_wb.ch1.core.decoder.crc1 (rst, \bit , start, valid, kind, re
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
     \$33  = crc16_reg;
     if (valid) begin
       \$33  = \$20 ;
@@ -19605,7 +19651,7 @@ module \biss_master_wb.ch1.core.decoder.crc1 (rst, \bit , start, valid, kind, re
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
     \$34  = crc16_match;
     if (valid) begin
       \$34  = \$30 ;
@@ -19620,7 +19666,7 @@ module \biss_master_wb.ch1.core.decoder.crc1 (rst, \bit , start, valid, kind, re
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
     ok = 1'h0;
     casez (kind)
       2'h0:
@@ -19641,7 +19687,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1.core.ma_clock (rst, \clocking , half_period, run, hold, first_rise, second_rise, ma, rises, busy, held, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$89  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$91  = 0;
   wire [16:0] \$1 ;
   wire \$10 ;
   wire [16:0] \$11 ;
@@ -19766,7 +19812,7 @@ module \biss_master_wb.ch1.core.ma_clock (rst, \clocking , half_period, run, hol
   always @(posedge clk)
     released <= \$42 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$89 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
     \$34  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -19781,7 +19827,7 @@ module \biss_master_wb.ch1.core.ma_clock (rst, \clocking , half_period, run, hol
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$89 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
     \$35  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -19796,7 +19842,7 @@ module \biss_master_wb.ch1.core.ma_clock (rst, \clocking , half_period, run, hol
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$89 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
     \$36  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -19811,7 +19857,7 @@ module \biss_master_wb.ch1.core.ma_clock (rst, \clocking , half_period, run, hol
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$89 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
     \$37  = ma;
     casez (ma_fsm_state)
       3'h0:
@@ -19840,7 +19886,7 @@ module \biss_master_wb.ch1.core.ma_clock (rst, \clocking , half_period, run, hol
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$89 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
     \$38  = phase_left;
     casez (ma_fsm_state)
       3'h0:
@@ -19882,7 +19928,7 @@ module \biss_master_wb.ch1.core.ma_clock (rst, \clocking , half_period, run, hol
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$89 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
     \$39  = last_clock;
     casez (ma_fsm_state)
       3'h0:
@@ -19924,7 +19970,7 @@ module \biss_master_wb.ch1.core.ma_clock (rst, \clocking , half_period, run, hol
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$89 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
     \$40  = rises;
     casez (ma_fsm_state)
       3'h0:
@@ -19943,7 +19989,7 @@ module \biss_master_wb.ch1.core.ma_clock (rst, \clocking , half_period, run, hol
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$89 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
     \$41  = ma_fsm_state;
     casez (ma_fsm_state)
       3'h0:
@@ -19979,7 +20025,7 @@ module \biss_master_wb.ch1.core.ma_clock (rst, \clocking , half_period, run, hol
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$89 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
     \$42  = released;
     casez (ma_fsm_state)
       3'h0:
@@ -20003,7 +20049,7 @@ module \biss_master_wb.ch1.core.ma_clock (rst, \clocking , half_period, run, hol
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$89 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
     busy = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -20019,7 +20065,7 @@ module \biss_master_wb.ch1.core.ma_clock (rst, \clocking , half_period, run, hol
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$89 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
     held = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -20036,7 +20082,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1.core.ma_stop (rst, words, w1_enable, clear, rises, enough, \started$10 , start_slot, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$90  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$92  = 0;
   reg [7:0] \$1 ;
   reg [7:0] \$10 ;
   wire [8:0] \$11 ;
@@ -20117,7 +20163,7 @@ module \biss_master_wb.ch1.core.ma_stop (rst, words, w1_enable, clear, rises, en
   always @(posedge clk)
     word1_len <= \$17 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     (* full_case = 32'd1 *)
     casez (words[9:6])
       4'h0:
@@ -20155,7 +20201,7 @@ module \biss_master_wb.ch1.core.ma_stop (rst, words, w1_enable, clear, rises, en
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:16])
       4'h0:
@@ -20193,42 +20239,42 @@ module \biss_master_wb.ch1.core.ma_stop (rst, words, w1_enable, clear, rises, en
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     \$12  = \$2 [7:0];
     if (rst) begin
       \$12  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     \$13  = \$4 ;
     if (rst) begin
       \$13  = 9'h000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     \$14  = \$5 ;
     if (rst) begin
       \$14  = 17'h00000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     \$15  = \started$10 ;
     if (rst) begin
       \$15  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     \$16  = \$9 ;
     if (rst) begin
       \$16  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     \$17  = \$11 [7:0];
     if (rst) begin
       \$17  = 8'h00;
@@ -20248,7 +20294,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1.core.register_access (clk, rst, host_read__en, frame_end, frame_ok, busy, rbuf_data, \start$44 , abort, request, wbuf, frame_cdm, frame_cds, cdm, done, result, host_read__addr);
-  reg \$auto$verilog_backend.cc:2355:dump_module$91  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$93  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$100 ;
@@ -20781,7 +20827,7 @@ module \biss_master_wb.ch1.core.register_access (clk, rst, host_read__en, frame_
     .valid(valid)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     cdm = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -20803,7 +20849,7 @@ module \biss_master_wb.ch1.core.register_access (clk, rst, host_read__en, frame_
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     start = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -20832,7 +20878,7 @@ module \biss_master_wb.ch1.core.register_access (clk, rst, host_read__en, frame_
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     valid = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -20853,7 +20899,7 @@ module \biss_master_wb.ch1.core.register_access (clk, rst, host_read__en, frame_
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     data = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -20874,7 +20920,7 @@ module \biss_master_wb.ch1.core.register_access (clk, rst, host_read__en, frame_
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     \start$27  = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -20896,7 +20942,7 @@ module \biss_master_wb.ch1.core.register_access (clk, rst, host_read__en, frame_
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     \valid$28  = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -20918,7 +20964,7 @@ module \biss_master_wb.ch1.core.register_access (clk, rst, host_read__en, frame_
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     \data$29  = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -20940,7 +20986,7 @@ module \biss_master_wb.ch1.core.register_access (clk, rst, host_read__en, frame_
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     byte_received__addr = 4'h0;
     casez (access_fsm_state)
       3'h0:
@@ -20966,7 +21012,7 @@ module \biss_master_wb.ch1.core.register_access (clk, rst, host_read__en, frame_
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     byte_received__data = 32'd0;
     casez (access_fsm_state)
       3'h0:
@@ -20992,7 +21038,7 @@ module \biss_master_wb.ch1.core.register_access (clk, rst, host_read__en, frame_
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     byte_received__en = 4'h0;
     casez (access_fsm_state)
       3'h0:
@@ -21018,7 +21064,7 @@ module \biss_master_wb.ch1.core.register_access (clk, rst, host_read__en, frame_
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     \$152  = idle_run;
     if (frame_end) begin
       \$152  = \$72 [3:0];
@@ -21028,7 +21074,7 @@ module \biss_master_wb.ch1.core.register_access (clk, rst, host_read__en, frame_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     \$153  = idle_seen;
     if (frame_end) begin
       \$153  = \$78 [3:0];
@@ -21038,7 +21084,7 @@ module \biss_master_wb.ch1.core.register_access (clk, rst, host_read__en, frame_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     \$154  = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -21076,7 +21122,7 @@ module \biss_master_wb.ch1.core.register_access (clk, rst, host_read__en, frame_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     \$155  = result;
     casez (access_fsm_state)
       3'h0:
@@ -21130,7 +21176,7 @@ module \biss_master_wb.ch1.core.register_access (clk, rst, host_read__en, frame_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     \$156  = access_fsm_state;
     casez (access_fsm_state)
       3'h0:
@@ -21227,7 +21273,7 @@ module \biss_master_wb.ch1.core.register_access (clk, rst, host_read__en, frame_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     \$157  = req;
     casez (access_fsm_state)
       3'h0:
@@ -21244,7 +21290,7 @@ module \biss_master_wb.ch1.core.register_access (clk, rst, host_read__en, frame_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     \$158  = index;
     casez (access_fsm_state)
       3'h0:
@@ -21283,7 +21329,7 @@ module \biss_master_wb.ch1.core.register_access (clk, rst, host_read__en, frame_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     \$159  = header;
     casez (access_fsm_state)
       3'h0:
@@ -21311,7 +21357,7 @@ module \biss_master_wb.ch1.core.register_access (clk, rst, host_read__en, frame_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     \$160  = step;
     casez (access_fsm_state)
       3'h0:
@@ -21369,7 +21415,7 @@ module \biss_master_wb.ch1.core.register_access (clk, rst, host_read__en, frame_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     \$161  = ending;
     casez (access_fsm_state)
       3'h0:
@@ -21436,7 +21482,7 @@ module \biss_master_wb.ch1.core.register_access (clk, rst, host_read__en, frame_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     \$162  = to_send;
     casez (access_fsm_state)
       3'h0:
@@ -21465,7 +21511,7 @@ module \biss_master_wb.ch1.core.register_access (clk, rst, host_read__en, frame_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     \$163  = sent;
     casez (access_fsm_state)
       3'h0:
@@ -21490,7 +21536,7 @@ module \biss_master_wb.ch1.core.register_access (clk, rst, host_read__en, frame_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     \$164  = waited;
     casez (access_fsm_state)
       3'h0:
@@ -21522,7 +21568,7 @@ module \biss_master_wb.ch1.core.register_access (clk, rst, host_read__en, frame_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     \$165  = got;
     casez (access_fsm_state)
       3'h0:
@@ -21547,7 +21593,7 @@ module \biss_master_wb.ch1.core.register_access (clk, rst, host_read__en, frame_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     \$166  = got_crc;
     casez (access_fsm_state)
       3'h0:
@@ -21601,7 +21647,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1.core.register_access.rx_crc (rst, crc, start, valid, data_in, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$92  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$94  = 0;
   wire [3:0] \$1 ;
   wire \$10 ;
   wire [3:0] \$11 ;
@@ -21644,7 +21690,7 @@ module \biss_master_wb.ch1.core.register_access.rx_crc (rst, crc, start, valid, 
     crc_reg <= \$13 ;
   assign \$auto$rtlil.cc:2739:Not$2  = ~ crc_reg;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$94 ) begin end
     \$13  = crc_reg;
     if (valid) begin
       \$13 [0] = \$3 ;
@@ -21668,7 +21714,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1.core.register_access.tx_crc (rst, crc, start, valid, data_in, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$93  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$95  = 0;
   wire [3:0] \$1 ;
   wire \$10 ;
   wire [3:0] \$11 ;
@@ -21711,7 +21757,7 @@ module \biss_master_wb.ch1.core.register_access.tx_crc (rst, crc, start, valid, 
     crc_reg <= \$13 ;
   assign \$auto$rtlil.cc:2739:Not$4  = ~ crc_reg;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
     \$13  = crc_reg;
     if (valid) begin
       \$13 [0] = \$3 ;
@@ -21735,7 +21781,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1.core.results (rst, report, valid, frame, report_frame, report_delay, done, valid_out, result, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$94  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$96  = 0;
   reg \$1 ;
   reg \$2 ;
   reg [160:0] \$3 ;
@@ -21832,21 +21878,21 @@ module \biss_master_wb.ch1.core.results (rst, report, valid, frame, report_frame
   always @(posedge clk)
     result <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$94 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$96 ) begin end
     \$1  = report;
     if (rst) begin
       \$1  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$94 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$96 ) begin end
     \$2  = valid;
     if (rst) begin
       \$2  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$94 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$96 ) begin end
     \$3  = result;
     if (report) begin
       \$3 [3:0] = frame[3:0];
@@ -21911,7 +21957,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_clear, arm, early, locked, delay, sample, level, slo);
-  reg \$auto$verilog_backend.cc:2355:dump_module$95  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$97  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -22149,7 +22195,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_
     .stage1(level)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
     \$63  = level;
     if (receiver_clear) begin
       \$63  = 1'h1;
@@ -22159,7 +22205,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
     \$64  = mid_delay;
     if (odd) begin
       \$64  = \$8 [12:0];
@@ -22184,7 +22230,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
     \$65  = mid_slot;
     (* full_case = 32'd1 *)
     if (odd) begin
@@ -22211,7 +22257,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
     \$66  = \$10 ;
     casez (sampler_fsm_state)
       2'h0:
@@ -22233,7 +22279,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
     \$67  = elapsed;
     casez (sampler_fsm_state)
       2'h0:
@@ -22257,7 +22303,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
     \$68  = early;
     casez (sampler_fsm_state)
       2'h0:
@@ -22273,7 +22319,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
     \$69  = locked;
     casez (sampler_fsm_state)
       2'h0:
@@ -22299,7 +22345,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
     \$70  = gap;
     casez (sampler_fsm_state)
       2'h0:
@@ -22330,7 +22376,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
     \$71  = sampler_fsm_state;
     casez (sampler_fsm_state)
       2'h0:
@@ -22361,7 +22407,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
     \$72  = slot_left;
     casez (sampler_fsm_state)
       2'h0:
@@ -22411,7 +22457,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
     \$73  = slot_zero;
     casez (sampler_fsm_state)
       2'h0:
@@ -22461,7 +22507,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
     \$74  = vote1;
     casez (sampler_fsm_state)
       2'h0:
@@ -22491,7 +22537,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
     \$75  = vote2;
     casez (sampler_fsm_state)
       2'h0:
@@ -22519,7 +22565,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
     \$76  = first_slot;
     casez (sampler_fsm_state)
       2'h0:
@@ -22545,7 +22591,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
     \$77  = delay;
     casez (sampler_fsm_state)
       2'h0:
@@ -22568,7 +22614,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
     \$78  = phase;
     casez (sampler_fsm_state)
       2'h0:
@@ -22608,7 +22654,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
     sample = \$44 ;
     casez (sampler_fsm_state)
       2'h0:
@@ -22626,7 +22672,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
     decided = 1'h0;
     casez (sampler_fsm_state)
       2'h0:
@@ -22676,7 +22722,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1.core.scheduler (rst, trigger, periodic, request, overrun, start, abort, period, idle, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$96  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$98  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -22760,7 +22806,7 @@ module \biss_master_wb.ch1.core.scheduler (rst, trigger, periodic, request, over
   always @(posedge clk)
     period_start <= \$28 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$96 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$27  = 24'h000001;
@@ -22772,7 +22818,7 @@ module \biss_master_wb.ch1.core.scheduler (rst, trigger, periodic, request, over
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$96 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$28  = 1'h1;
@@ -22786,8 +22832,8 @@ module \biss_master_wb.ch1.core.scheduler (rst, trigger, periodic, request, over
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.sign_of_life (rst, \port$2542$0 , load, \repeat , skip, check, resync, lc, is_zero, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$97  = 0;
+module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$4099$0 , resync, lc, is_zero, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$99  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -22824,8 +22870,8 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, \port$2542$0 , load, \repeat 
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$2542$0 ;
-  wire \port$2542$0 ;
+  input \port$4099$0 ;
+  wire \port$4099$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -22837,9 +22883,9 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, \port$2542$0 , load, \repeat 
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$2542$0  };
-  assign \$2  = { lc[4:0], \port$2542$0  } == last;
-  assign \$3  = { lc[4:0], \port$2542$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$4099$0  };
+  assign \$2  = { lc[4:0], \port$4099$0  } == last;
+  assign \$3  = { lc[4:0], \port$4099$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = lc == 6'h3f;
@@ -22867,7 +22913,7 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, \port$2542$0 , load, \repeat 
   always @(posedge clk)
     synced <= \$21 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
     \$16  = is_zero;
     if (load) begin
       \$16  = \$1 ;
@@ -22877,7 +22923,7 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, \port$2542$0 , load, \repeat 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
     \$17  = is_last;
     if (load) begin
       \$17  = \$2 ;
@@ -22887,7 +22933,7 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, \port$2542$0 , load, \repeat 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
     \$18  = is_expected;
     if (load) begin
       \$18  = \$3 ;
@@ -22897,7 +22943,7 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, \port$2542$0 , load, \repeat 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
     \$19  = last;
     if (\$5 ) begin
       \$19  = lc;
@@ -22907,7 +22953,7 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, \port$2542$0 , load, \repeat 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
     \$20  = expected;
     if (\$5 ) begin
       \$20  = \$8 [5:0];
@@ -22917,7 +22963,7 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, \port$2542$0 , load, \repeat 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
     \$21  = synced;
     if (\$5 ) begin
       \$21  = 1'h1;
@@ -22929,13 +22975,13 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, \port$2542$0 , load, \repeat 
       \$21  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$2542$0  };
+  assign lc_next = { lc[4:0], \port$4099$0  };
   assign zero = is_zero;
 endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1.core.spw_check (rst, bits, \tolerance$8 , spw, cpw_top, match, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$98  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$100  = 0;
   wire [40:0] \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -23140,28 +23186,28 @@ module \biss_master_wb.ch1.core.spw_check (rst, bits, \tolerance$8 , spw, cpw_to
   assign \$7  = bits > 3'h5;
   assign \$8  = bits > 3'h6;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     \$88  = \$42 ;
     if (rst) begin
       \$88  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     \$89  = \$84 ;
     if (rst) begin
       \$89  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     \$90  = \tolerance$8 ;
     if (rst) begin
       \$90  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     \$91  = \$87 ;
     if (rst) begin
       \$91  = 1'h0;
@@ -23171,7 +23217,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1.core.time_base (rst, first_rise, first_rise_time, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$99  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$101  = 0;
   wire [32:0] \$1 ;
   reg [31:0] \$2 ;
   reg [31:0] \$3 ;
@@ -23190,14 +23236,14 @@ module \biss_master_wb.ch1.core.time_base (rst, first_rise, first_rise_time, clk
   always @(posedge clk)
     first_rise_time <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
     \$2  = \$1 [31:0];
     if (rst) begin
       \$2  = 32'd0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
     \$3  = first_rise_time;
     if (first_rise) begin
       \$3  = now;
@@ -23210,7 +23256,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1.core.timers (rst, restart, ma_busy, break_time, timeout_live, ack_limit, timeout_limit, delay_limit, no_start_limit, clear, in_clock, slo_stuck, slo_stuck_live, break_over, ack_expired, no_start_expired, delay_over, delay, slo, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$100  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$102  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -23348,7 +23394,7 @@ module \biss_master_wb.ch1.core.timers (rst, restart, ma_busy, break_time, timeo
   always @(posedge clk)
     delay_over <= \$43 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
     \$36  = slo_low_time_p1;
     if (\$1 ) begin
       \$36  = 25'h0000001;
@@ -23360,49 +23406,49 @@ module \biss_master_wb.ch1.core.timers (rst, restart, ma_busy, break_time, timeo
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
     \$37  = \$8 ;
     if (rst) begin
       \$37  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
     \$38  = \$16 ;
     if (rst) begin
       \$38  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
     \$39  = \$20 [24:0];
     if (rst) begin
       \$39  = 25'h0000001;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
     \$40  = \$26 ;
     if (rst) begin
       \$40  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
     \$41  = \$30 ;
     if (rst) begin
       \$41  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
     \$42  = \$34 ;
     if (rst) begin
       \$42  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
     \$43  = \$35 ;
     if (rst) begin
       \$43  = 1'h0;
@@ -23411,8 +23457,8 @@ module \biss_master_wb.ch1.core.timers (rst, restart, ma_busy, break_time, timeo
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.verdict (lc_skip_seen, \port$2942$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
-  reg \$auto$verilog_backend.cc:2355:dump_module$101  = 0;
+module \biss_master_wb.ch1.core.verdict (lc_skip_seen, \port$2946$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
+  reg \$auto$verilog_backend.cc:2355:dump_module$103  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -23525,8 +23571,8 @@ module \biss_master_wb.ch1.core.verdict (lc_skip_seen, \port$2942$0 , lc_check, 
   wire lc_zero;
   input lc_zero_seen;
   wire lc_zero_seen;
-  output \port$2942$0 ;
-  wire \port$2942$0 ;
+  output \port$2946$0 ;
+  wire \port$2946$0 ;
   output report;
   wire report;
   input report_frame;
@@ -23594,7 +23640,7 @@ module \biss_master_wb.ch1.core.verdict (lc_skip_seen, \port$2942$0 , lc_check, 
   assign \$29  = ~ { \$2 , crc_ok[0] };
   assign crc_error = report_frame ? \$29  : 2'h0;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     (* full_case = 32'd1 *)
     if (\$13 ) begin
       frame_status = 4'h3;
@@ -23611,7 +23657,7 @@ module \biss_master_wb.ch1.core.verdict (lc_skip_seen, \port$2942$0 , lc_check, 
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$2942$0  = \$2 ;
+  assign \port$2946$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
