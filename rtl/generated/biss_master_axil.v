@@ -4836,8 +4836,8 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_
   assign trigger = \trigger$161  & regs__trigger_enable;
   \biss_master_axil.ch0.core  core (
     .abort(abort_cycle),
-    .\abort$183 (ca_abort),
-    .\busy$233 (regs__busy),
+    .\abort$187 (ca_abort),
+    .\busy$237 (regs__busy),
     .ca_address(ca_address),
     .ca_count(ca_count),
     .ca_done(regs__ca_done),
@@ -4865,24 +4865,24 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_
     .cfg_w1_enable(cfg_w1_enable),
     .cfg_w1_lc(cfg_w1_lc),
     .cfg_w1_nenw(cfg_w1_nenw),
-    .\clear$210 (clear_counters),
+    .\clear$214 (clear_counters),
     .clk(clk),
     .config_error(regs__config_error),
     .counts(\$5 ),
-    .\done$236 (regs__done),
+    .\done$240 (regs__done),
     .frames(regs__ca_busy),
     .ma(ma),
     .\periodic$24 (periodic),
     .rbuf_addr(ca_rbuf_addr),
     .rbuf_en(ca_rbuf_en),
     .result(\$6 ),
-    .\result$241 (\$4 ),
+    .\result$245 (\$4 ),
     .rst(rst),
     .slo(slo),
     .start(start),
-    .\start$181 (ca_start),
+    .\start$185 (ca_start),
     .trigger(trigger),
-    .\valid$238 (valid)
+    .\valid$242 (valid)
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
@@ -5021,9 +5021,9 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy$233 , config_error, frames, ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, abort, \clear$210 , \periodic$24 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit
-, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, \start$181 , \abort$183 , ma, \done$236 
-, \valid$238 , \result$241 , counts, ca_done, result, rbuf_addr);
+module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy$237 , config_error, frames, ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, abort, \clear$214 , \periodic$24 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit
+, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, \start$185 , \abort$187 , ma, \done$240 
+, \valid$242 , \result$245 , counts, ca_done, result, rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$29  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -5043,8 +5043,8 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire \$9 ;
   input abort;
   wire abort;
-  input \abort$183 ;
-  wire \abort$183 ;
+  input \abort$187 ;
+  wire \abort$187 ;
   wire \abort$36 ;
   wire abort_cycle;
   wire ack_expired;
@@ -5053,15 +5053,15 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire [23:0] \ack_limit$89 ;
   wire arm;
   reg \bit  = 1'h0;
-  wire \bit$263 ;
+  wire \bit$265 ;
   wire [5:0] bits;
   wire break_over;
   wire \break_over$66 ;
   wire [23:0] break_time;
   wire busy;
-  wire \busy$192 ;
-  output \busy$233 ;
-  wire \busy$233 ;
+  wire \busy$196 ;
+  output \busy$237 ;
+  wire \busy$237 ;
   wire ca_abort;
   input [6:0] ca_address;
   wire [6:0] ca_address;
@@ -5096,10 +5096,10 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   input ca_write;
   wire ca_write;
   wire cdm;
-  wire \cdm$196 ;
+  wire \cdm$200 ;
   wire cdm_cycle;
   wire cds;
-  wire \cds$244 ;
+  wire \cds$248 ;
   wire [154:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
@@ -5176,8 +5176,8 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire check;
   wire clear;
   wire \clear$106 ;
-  input \clear$210 ;
-  wire \clear$210 ;
+  input \clear$214 ;
+  wire \clear$214 ;
   wire clear_counters;
   input clk;
   wire clk;
@@ -5224,10 +5224,10 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire [15:0] \counts.slo_stuck_low ;
   wire [15:0] \counts.spw_mismatch ;
   wire [39:0] cpw_top;
-  wire [39:0] \cpw_top$126 ;
+  wire [39:0] \cpw_top$130 ;
   wire [1:0] crc_error;
   wire [1:0] crc_ok;
-  wire [1:0] \crc_ok$141 ;
+  wire [1:0] \crc_ok$145 ;
   wire [154:0] cycle;
   wire [23:0] \cycle.ack_limit ;
   wire [23:0] \cycle.break_time ;
@@ -5259,6 +5259,10 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire \cycle.w1_enable ;
   wire [54:0] data0;
   wire [39:0] data1;
+  (* init = 1'h0 *)
+  wire decoder_bit;
+  (* init = 1'h0 *)
+  wire decoder_sample;
   wire [12:0] delay;
   wire [12:0] \delay$95 ;
   wire [11:0] delay_limit;
@@ -5266,10 +5270,10 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire delay_over;
   wire \delay_over$76 ;
   wire done;
-  wire \done$194 ;
-  output \done$236 ;
-  wire \done$236 ;
-  wire \done$237 ;
+  wire \done$198 ;
+  output \done$240 ;
+  wire \done$240 ;
+  wire \done$241 ;
   wire doubtful;
   wire early;
   wire \early$52 ;
@@ -5295,7 +5299,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire \events.slo_stuck_low ;
   wire \events.spw_mismatch ;
   wire fault;
-  wire \fault$137 ;
+  wire \fault$141 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -5325,7 +5329,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
-  wire [3:0] \fault_status$139 ;
+  wire [3:0] \fault_status$143 ;
   wire [6:0] faults;
   wire \faults.aborted ;
   wire \faults.bad_config ;
@@ -5335,7 +5339,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire \faults.no_stop ;
   wire \faults.slo_stuck_low ;
   wire first_rise;
-  wire \first_rise$167 ;
+  wire \first_rise$171 ;
   wire [31:0] first_rise_time;
   wire [160:0] frame;
   wire \frame.cds ;
@@ -5380,7 +5384,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   output frames;
   wire frames;
   wire [15:0] half_period;
-  wire [15:0] \half_period$108 ;
+  wire [15:0] \half_period$112 ;
   wire held;
   wire hold;
   wire idle;
@@ -5389,20 +5393,20 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire in_clock;
   wire \in_clock$83 ;
   wire [5:0] lc;
-  wire [5:0] \lc$113 ;
-  wire [5:0] \lc$253 ;
+  wire [5:0] \lc$117 ;
+  wire [5:0] \lc$257 ;
   wire lc_check;
   wire lc_load;
   wire [5:0] lc_next;
-  wire [5:0] \lc_next$115 ;
+  wire [5:0] \lc_next$119 ;
   wire lc_repeat;
-  wire \lc_repeat$254 ;
+  wire \lc_repeat$258 ;
   wire lc_repeat_seen;
   wire lc_skip;
-  wire \lc_skip$255 ;
+  wire \lc_skip$259 ;
   wire lc_skip_seen;
   wire lc_zero;
-  wire \lc_zero$256 ;
+  wire \lc_zero$260 ;
   wire lc_zero_seen;
   wire level;
   wire [12:0] line_delay;
@@ -5440,7 +5444,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire \locked$50 ;
   output ma;
   wire ma;
-  wire \ma$232 ;
+  wire \ma$236 ;
   wire ma_arm;
   wire ma_busy;
   wire \ma_busy$78 ;
@@ -5457,7 +5461,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire [1:0] nw;
   wire ok;
   wire overrun;
-  wire \overrun$235 ;
+  wire \overrun$239 ;
   wire [23:0] period;
   wire periodic;
   input \periodic$24 ;
@@ -5470,32 +5474,32 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire receiver_clear;
   wire \repeat ;
   wire report;
-  wire \report$149 ;
+  wire \report$153 ;
   wire report_delay;
-  wire \report_delay$152 ;
+  wire \report_delay$156 ;
   wire report_frame;
-  wire \report_frame$135 ;
-  wire \report_frame$150 ;
+  wire \report_frame$139 ;
+  wire \report_frame$154 ;
   wire request;
-  wire [17:0] \request$169 ;
-  wire [6:0] \request$169.address ;
-  wire [6:0] \request$169.count ;
-  wire [2:0] \request$169.slave_id ;
-  wire \request$169.write ;
+  wire [17:0] \request$173 ;
+  wire [6:0] \request$173.address ;
+  wire [6:0] \request$173.count ;
+  wire [2:0] \request$173.slave_id ;
+  wire \request$173.write ;
   wire \request$35 ;
   wire restart;
   wire restart_timer;
   output [9:0] result;
   wire [9:0] result;
-  output [160:0] \result$241 ;
-  wire [160:0] \result$241 ;
-  wire \result$241.cds ;
-  wire [5:0] \result$241.lc ;
-  wire \result$241.lc_repeat ;
-  wire \result$241.lc_skip ;
-  wire \result$241.lc_zero ;
-  wire [12:0] \result$241.line_delay ;
-  wire \result$241.spw_mismatch ;
+  output [160:0] \result$245 ;
+  wire [160:0] \result$245 ;
+  wire \result$245.cds ;
+  wire [5:0] \result$245.lc ;
+  wire \result$245.lc_repeat ;
+  wire \result$245.lc_skip ;
+  wire \result$245.lc_zero ;
+  wire [12:0] \result$245.line_delay ;
+  wire \result$245.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -5510,18 +5514,18 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
-  wire [3:0] \result$241.status ;
-  wire [31:0] \result$241.timestamp ;
-  wire [57:0] \result$241.word0 ;
-  wire \result$241.word0.crc_ok ;
-  wire \result$241.word0.ne ;
-  wire \result$241.word0.nw ;
-  wire [54:0] \result$241.word0.position ;
-  wire [42:0] \result$241.word1 ;
-  wire \result$241.word1.crc_ok ;
-  wire \result$241.word1.ne ;
-  wire \result$241.word1.nw ;
-  wire [39:0] \result$241.word1.position ;
+  wire [3:0] \result$245.status ;
+  wire [31:0] \result$245.timestamp ;
+  wire [57:0] \result$245.word0 ;
+  wire \result$245.word0.crc_ok ;
+  wire \result$245.word0.ne ;
+  wire \result$245.word0.nw ;
+  wire [54:0] \result$245.word0.position ;
+  wire [42:0] \result$245.word1 ;
+  wire \result$245.word1.crc_ok ;
+  wire \result$245.word1.ne ;
+  wire \result$245.word1.nw ;
+  wire [39:0] \result$245.word1.position ;
   wire [6:0] \result.bytes_done ;
   (* enum_base_type = "AccessStatus" *)
   (* enum_value_000 = "OK" *)
@@ -5533,14 +5537,14 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* enum_value_110 = "BAD_REQUEST" *)
   wire [2:0] \result.status ;
   wire resync;
-  wire \resync$121 ;
+  wire \resync$125 ;
   wire [15:0] rises;
   wire [15:0] \rises$105 ;
   input rst;
   wire rst;
   wire run;
   reg sample = 1'h0;
-  wire \sample$261 ;
+  wire \sample$264 ;
   wire second_rise;
   wire skip;
   input slo;
@@ -5557,11 +5561,11 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire [39:0] spw;
   wire spw_match;
   wire spw_mismatch;
-  wire \spw_mismatch$257 ;
+  wire \spw_mismatch$261 ;
   input start;
   wire start;
-  input \start$181 ;
-  wire \start$181 ;
+  input \start$185 ;
+  wire \start$185 ;
   wire \start$22 ;
   wire [15:0] start_slot;
   wire [15:0] \start_slot$103 ;
@@ -5597,7 +5601,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
-  wire [3:0] \status$240 ;
+  wire [3:0] \status$244 ;
   wire stop_bit;
   wire \stop_bit$62 ;
   wire stopped;
@@ -5612,9 +5616,9 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire trigger;
   wire \trigger$33 ;
   wire valid;
-  wire \valid$154 ;
-  output \valid$238 ;
-  wire \valid$238 ;
+  wire \valid$158 ;
+  output \valid$242 ;
+  wire \valid$242 ;
   wire valid_out;
   wire w1_enable;
   wire [39:0] wbuf;
@@ -5630,28 +5634,28 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire word1_nw;
   wire [39:0] word1_position;
   wire [1:0] word_count;
-  wire [1:0] \word_count$111 ;
+  wire [1:0] \word_count$115 ;
   wire [1:0] word_crc_ok;
   wire [19:0] words;
-  wire [19:0] \words$123 ;
-  wire [9:0] \words$123[0] ;
+  wire [19:0] \words$127 ;
+  wire [9:0] \words$127[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
-  wire [1:0] \words$123[0].crc ;
-  wire [5:0] \words$123[0].data_bits ;
-  wire \words$123[0].lc ;
-  wire \words$123[0].nenw ;
-  wire [9:0] \words$123[1] ;
+  wire [1:0] \words$127[0].crc ;
+  wire [5:0] \words$127[0].data_bits ;
+  wire \words$127[0].lc ;
+  wire \words$127[0].nenw ;
+  wire [9:0] \words$127[1] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
-  wire [1:0] \words$123[1].crc ;
-  wire [5:0] \words$123[1].data_bits ;
-  wire \words$123[1].lc ;
-  wire \words$123[1].nenw ;
+  wire [1:0] \words$127[1].crc ;
+  wire [5:0] \words$127[1].data_bits ;
+  wire \words$127[1].lc ;
+  wire \words$127[1].nenw ;
   wire [9:0] \words[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
@@ -5683,10 +5687,10 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign \$9  = ca_done & \$8 ;
   assign \$10  = result[2:0] == 3'h5;
   assign \$11  = ca_done & \$10 ;
-  assign \busy$233  = ~ idle;
+  assign \busy$237  = ~ idle;
   assign config_error = ~ config_ok;
   assign \$12  = ~ \clear$106 ;
-  assign \$13  = \sample$261  & \$12 ;
+  assign \$13  = \sample$264  & \$12 ;
   always @(posedge clk)
     sample <= \$14 ;
   always @(posedge clk)
@@ -5747,7 +5751,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .timer_clear(clear)
   );
   \biss_master_axil.ch0.core.counters  counters (
-    .clear(\clear$210 ),
+    .clear(\clear$214 ),
     .clk(clk),
     .counts(counts),
     .events(events),
@@ -5800,10 +5804,10 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .start_slot(start_slot),
     .\started$10 (started),
     .w1_enable(cycle[135]),
-    .words(\words$123 )
+    .words(\words$127 )
   );
   \biss_master_axil.ch0.core.register_access  register_access (
-    .abort(\abort$183 ),
+    .abort(\abort$187 ),
     .busy(frames),
     .cdm(cdm),
     .clk(clk),
@@ -5815,27 +5819,27 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .host_read__addr(rbuf_addr),
     .host_read__en(rbuf_en),
     .rbuf_data(ca_rbuf_data),
-    .request(\request$169 ),
+    .request(\request$173 ),
     .result(result),
     .rst(rst),
-    .\start$44 (\start$181 ),
+    .\start$44 (\start$185 ),
     .wbuf(wbuf)
   );
   \biss_master_axil.ch0.core.results  results (
     .clk(clk),
-    .done(\done$236 ),
+    .done(\done$240 ),
     .frame(frame),
     .report(report),
     .report_delay(report_delay),
     .report_frame(report_frame),
-    .result(\result$241 ),
+    .result(\result$245 ),
     .rst(rst),
     .valid(valid),
-    .valid_out(\valid$238 )
+    .valid_out(\valid$242 )
   );
   \biss_master_axil.ch0.core.sampler  sampler (
     .arm(ma_arm),
-    .\bit (\bit$263 ),
+    .\bit (\bit$265 ),
     .clk(clk),
     .delay(delay),
     .early(early),
@@ -5844,7 +5848,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .locked(locked),
     .receiver_clear(\clear$106 ),
     .rst(rst),
-    .sample(\sample$261 ),
+    .sample(\sample$264 ),
     .slo(slo)
   );
   \biss_master_axil.ch0.core.scheduler  scheduler (
@@ -5939,7 +5943,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
-    \$15  = \bit$263 ;
+    \$15  = \bit$265 ;
     if (rst) begin
       \$15  = 1'h0;
     end
@@ -5991,53 +5995,55 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign \start_slot$103  = start_slot;
   assign \rises$105  = rises;
   assign receiver_clear = \clear$106 ;
-  assign \half_period$108  = cycle[15:0];
+  assign decoder_sample = sample;
+  assign decoder_bit = \bit ;
+  assign \half_period$112  = cycle[15:0];
   assign arm = ma_arm;
-  assign \word_count$111  = word_count;
-  assign \lc$113  = lc;
+  assign \word_count$115  = word_count;
+  assign \lc$117  = lc;
   assign lc_next = { lc[4:0], \bit  };
-  assign \lc_next$115  = { lc[4:0], \bit  };
+  assign \lc_next$119  = { lc[4:0], \bit  };
   assign lc_load = load;
   assign lc_check = check;
-  assign \resync$121  = resync;
+  assign \resync$125  = resync;
   assign w1_enable = cycle[135];
-  assign \cpw_top$126  = cpw_top;
+  assign \cpw_top$130  = cpw_top;
   assign data1 = spw;
   assign bits = cycle[141:136];
   assign tolerance = cycle[154:147];
   assign match = spw_match;
   assign cfg = cycle;
-  assign \report_frame$135  = report_frame;
-  assign \fault$137  = fault;
-  assign \fault_status$139  = fault_status;
-  assign \crc_ok$141  = crc_ok;
+  assign \report_frame$139  = report_frame;
+  assign \fault$141  = fault;
+  assign \fault_status$143  = fault_status;
+  assign \crc_ok$145  = crc_ok;
   assign \repeat  = lc_repeat_seen;
   assign skip = lc_skip_seen;
   assign zero = lc_zero_seen;
-  assign \report$149  = report;
-  assign \report_frame$150  = report_frame;
-  assign \report_delay$152  = report_delay;
-  assign \valid$154  = valid;
+  assign \report$153  = report;
+  assign \report_frame$154  = report_frame;
+  assign \report_delay$156  = report_delay;
+  assign \valid$158  = valid;
   assign word_crc_ok = { \$16 , crc_ok[0] };
-  assign \first_rise$167  = first_rise;
+  assign \first_rise$171  = first_rise;
   assign ca_status = result[2:0];
   assign ca_bytes_done = result[9:3];
-  assign ca_start = \start$181 ;
-  assign ca_abort = \abort$183 ;
+  assign ca_start = \start$185 ;
+  assign ca_abort = \abort$187 ;
   assign ca_rbuf_addr = rbuf_addr;
   assign ca_rbuf_en = rbuf_en;
   assign rbuf_data = ca_rbuf_data;
   assign ca_busy = frames;
-  assign \busy$192  = frames;
-  assign \done$194  = ca_done;
-  assign \cdm$196  = cdm;
+  assign \busy$196  = frames;
+  assign \done$198  = ca_done;
+  assign \cdm$200  = cdm;
   assign held = ma_held;
   assign ma_hold = hold;
   assign frame_end = report;
   assign frame_ok = valid;
   assign frame_cds = cds;
   assign cdm_cycle = frame_cdm;
-  assign clear_counters = \clear$210 ;
+  assign clear_counters = \clear$214 ;
   assign count_crc_word0 = counts[15:0];
   assign count_crc_word1 = counts[31:16];
   assign count_no_ack = counts[47:32];
@@ -6056,27 +6062,27 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign count_ca_refused = counts[255:240];
   assign count_ca_aborted = counts[271:256];
   assign count_ca_data_fault = counts[287:272];
-  assign \ma$232  = ma;
-  assign \overrun$235  = overrun;
-  assign \done$237  = \done$236 ;
-  assign valid_out = \valid$238 ;
-  assign \status$240  = \result$241 [3:0];
-  assign timestamp = \result$241 [35:4];
-  assign line_delay = \result$241 [48:36];
-  assign \cds$244  = \result$241 [49];
-  assign word0_position = \result$241 [104:50];
-  assign word0_ne = \result$241 [105];
-  assign word0_nw = \result$241 [106];
-  assign word0_crc_ok = \result$241 [107];
-  assign word1_position = \result$241 [147:108];
-  assign word1_ne = \result$241 [148];
-  assign word1_nw = \result$241 [149];
-  assign word1_crc_ok = \result$241 [150];
-  assign \lc$253  = \result$241 [156:151];
-  assign \lc_repeat$254  = \result$241 [157];
-  assign \lc_skip$255  = \result$241 [158];
-  assign \lc_zero$256  = \result$241 [159];
-  assign \spw_mismatch$257  = \result$241 [160];
+  assign \ma$236  = ma;
+  assign \overrun$239  = overrun;
+  assign \done$241  = \done$240 ;
+  assign valid_out = \valid$242 ;
+  assign \status$244  = \result$245 [3:0];
+  assign timestamp = \result$245 [35:4];
+  assign line_delay = \result$245 [48:36];
+  assign \cds$248  = \result$245 [49];
+  assign word0_position = \result$245 [104:50];
+  assign word0_ne = \result$245 [105];
+  assign word0_nw = \result$245 [106];
+  assign word0_crc_ok = \result$245 [107];
+  assign word1_position = \result$245 [147:108];
+  assign word1_ne = \result$245 [148];
+  assign word1_nw = \result$245 [149];
+  assign word1_crc_ok = \result$245 [150];
+  assign \lc$257  = \result$245 [156:151];
+  assign \lc_repeat$258  = \result$245 [157];
+  assign \lc_skip$259  = \result$245 [158];
+  assign \lc_zero$260  = \result$245 [159];
+  assign \spw_mismatch$261  = \result$245 [160];
   assign \live.ma_half_period  = live[15:0];
   assign \live.request_period  = live[39:16];
   assign \live.break_time  = live[63:40];
@@ -6127,16 +6133,16 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign \words[1].nenw  = words[16];
   assign \words[1].lc  = words[17];
   assign \words[1].crc  = words[19:18];
-  assign \words$123[0]  = \words$123 [9:0];
-  assign \words$123[0].data_bits  = \words$123 [5:0];
-  assign \words$123[0].nenw  = \words$123 [6];
-  assign \words$123[0].lc  = \words$123 [7];
-  assign \words$123[0].crc  = \words$123 [9:8];
-  assign \words$123[1]  = \words$123 [19:10];
-  assign \words$123[1].data_bits  = \words$123 [15:10];
-  assign \words$123[1].nenw  = \words$123 [16];
-  assign \words$123[1].lc  = \words$123 [17];
-  assign \words$123[1].crc  = \words$123 [19:18];
+  assign \words$127[0]  = \words$127 [9:0];
+  assign \words$127[0].data_bits  = \words$127 [5:0];
+  assign \words$127[0].nenw  = \words$127 [6];
+  assign \words$127[0].lc  = \words$127 [7];
+  assign \words$127[0].crc  = \words$127 [9:8];
+  assign \words$127[1]  = \words$127 [19:10];
+  assign \words$127[1].data_bits  = \words$127 [15:10];
+  assign \words$127[1].nenw  = \words$127 [16];
+  assign \words$127[1].lc  = \words$127 [17];
+  assign \words$127[1].crc  = \words$127 [19:18];
   assign \cfg.ma_half_period  = cycle[15:0];
   assign \cfg.request_period  = cycle[39:16];
   assign \cfg.break_time  = cycle[63:40];
@@ -6176,10 +6182,10 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign \frame.lc_skip  = frame[158];
   assign \frame.lc_zero  = frame[159];
   assign \frame.spw_mismatch  = frame[160];
-  assign \request$169.slave_id  = \request$169 [2:0];
-  assign \request$169.address  = \request$169 [9:3];
-  assign \request$169.count  = \request$169 [16:10];
-  assign \request$169.write  = \request$169 [17];
+  assign \request$173.slave_id  = \request$173 [2:0];
+  assign \request$173.address  = \request$173 [9:3];
+  assign \request$173.count  = \request$173 [16:10];
+  assign \request$173.write  = \request$173 [17];
   assign \wbuf.addr  = wbuf[3:0];
   assign \wbuf.data  = wbuf[35:4];
   assign \wbuf.en  = wbuf[39:36];
@@ -6228,25 +6234,25 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign \counts.ca_refused  = counts[255:240];
   assign \counts.ca_aborted  = counts[271:256];
   assign \counts.ca_data_fault  = counts[287:272];
-  assign \result$241.status  = \result$241 [3:0];
-  assign \result$241.timestamp  = \result$241 [35:4];
-  assign \result$241.line_delay  = \result$241 [48:36];
-  assign \result$241.cds  = \result$241 [49];
-  assign \result$241.word0  = \result$241 [107:50];
-  assign \result$241.word0.position  = \result$241 [104:50];
-  assign \result$241.word0.ne  = \result$241 [105];
-  assign \result$241.word0.nw  = \result$241 [106];
-  assign \result$241.word0.crc_ok  = \result$241 [107];
-  assign \result$241.word1  = \result$241 [150:108];
-  assign \result$241.word1.position  = \result$241 [147:108];
-  assign \result$241.word1.ne  = \result$241 [148];
-  assign \result$241.word1.nw  = \result$241 [149];
-  assign \result$241.word1.crc_ok  = \result$241 [150];
-  assign \result$241.lc  = \result$241 [156:151];
-  assign \result$241.lc_repeat  = \result$241 [157];
-  assign \result$241.lc_skip  = \result$241 [158];
-  assign \result$241.lc_zero  = \result$241 [159];
-  assign \result$241.spw_mismatch  = \result$241 [160];
+  assign \result$245.status  = \result$245 [3:0];
+  assign \result$245.timestamp  = \result$245 [35:4];
+  assign \result$245.line_delay  = \result$245 [48:36];
+  assign \result$245.cds  = \result$245 [49];
+  assign \result$245.word0  = \result$245 [107:50];
+  assign \result$245.word0.position  = \result$245 [104:50];
+  assign \result$245.word0.ne  = \result$245 [105];
+  assign \result$245.word0.nw  = \result$245 [106];
+  assign \result$245.word0.crc_ok  = \result$245 [107];
+  assign \result$245.word1  = \result$245 [150:108];
+  assign \result$245.word1.position  = \result$245 [147:108];
+  assign \result$245.word1.ne  = \result$245 [148];
+  assign \result$245.word1.nw  = \result$245 [149];
+  assign \result$245.word1.crc_ok  = \result$245 [150];
+  assign \result$245.lc  = \result$245 [156:151];
+  assign \result$245.lc_repeat  = \result$245 [157];
+  assign \result$245.lc_skip  = \result$245 [158];
+  assign \result$245.lc_zero  = \result$245 [159];
+  assign \result$245.spw_mismatch  = \result$245 [160];
   assign events[17] = \$11 ;
   assign events[16] = \$9 ;
   assign events[15] = \$7 ;
@@ -6268,10 +6274,10 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign wbuf[39:36] = ca_wbuf_en;
   assign wbuf[35:4] = ca_wbuf_data;
   assign wbuf[3:0] = ca_wbuf_addr;
-  assign \request$169 [17] = ca_write;
-  assign \request$169 [16:10] = ca_count;
-  assign \request$169 [9:3] = ca_address;
-  assign \request$169 [2:0] = ca_slave_id;
+  assign \request$173 [17] = ca_write;
+  assign \request$173 [16:10] = ca_count;
+  assign \request$173 [9:3] = ca_address;
+  assign \request$173 [2:0] = ca_slave_id;
   assign frame[35:4] = first_rise_time;
   assign frame[160] = spw_mismatch;
   assign frame[150] = \$16 ;
@@ -6289,8 +6295,8 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign frame[49] = cds;
   assign frame[48:36] = delay;
   assign frame[3:0] = status;
-  assign \words$123 [19:10] = cycle[145:136];
-  assign \words$123 [9:0] = cycle[134:125];
+  assign \words$127 [19:10] = cycle[145:136];
+  assign \words$127 [9:0] = cycle[134:125];
   assign words[19:10] = cycle[145:136];
   assign words[9:0] = cycle[134:125];
   assign live[154:147] = cfg_spw_tolerance;
@@ -14484,8 +14490,8 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_
   assign trigger = \trigger$161  & regs__trigger_enable;
   \biss_master_axil.ch1.core  core (
     .abort(abort_cycle),
-    .\abort$183 (ca_abort),
-    .\busy$233 (regs__busy),
+    .\abort$187 (ca_abort),
+    .\busy$237 (regs__busy),
     .ca_address(ca_address),
     .ca_count(ca_count),
     .ca_done(regs__ca_done),
@@ -14513,24 +14519,24 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_
     .cfg_w1_enable(cfg_w1_enable),
     .cfg_w1_lc(cfg_w1_lc),
     .cfg_w1_nenw(cfg_w1_nenw),
-    .\clear$210 (clear_counters),
+    .\clear$214 (clear_counters),
     .clk(clk),
     .config_error(regs__config_error),
     .counts(\$5 ),
-    .\done$236 (regs__done),
+    .\done$240 (regs__done),
     .frames(regs__ca_busy),
     .ma(ma),
     .\periodic$24 (periodic),
     .rbuf_addr(ca_rbuf_addr),
     .rbuf_en(ca_rbuf_en),
     .result(\$6 ),
-    .\result$241 (\$4 ),
+    .\result$245 (\$4 ),
     .rst(rst),
     .slo(slo),
     .start(start),
-    .\start$181 (ca_start),
+    .\start$185 (ca_start),
     .trigger(trigger),
-    .\valid$238 (valid)
+    .\valid$242 (valid)
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
@@ -14669,9 +14675,9 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy$233 , config_error, frames, ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, abort, \clear$210 , \periodic$24 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit
-, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, \start$181 , \abort$183 , ma, \done$236 
-, \valid$238 , \result$241 , counts, ca_done, result, rbuf_addr);
+module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy$237 , config_error, frames, ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, abort, \clear$214 , \periodic$24 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit
+, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, \start$185 , \abort$187 , ma, \done$240 
+, \valid$242 , \result$245 , counts, ca_done, result, rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$67  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -14691,8 +14697,8 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire \$9 ;
   input abort;
   wire abort;
-  input \abort$183 ;
-  wire \abort$183 ;
+  input \abort$187 ;
+  wire \abort$187 ;
   wire \abort$36 ;
   wire abort_cycle;
   wire ack_expired;
@@ -14701,15 +14707,15 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire [23:0] \ack_limit$89 ;
   wire arm;
   reg \bit  = 1'h0;
-  wire \bit$263 ;
+  wire \bit$265 ;
   wire [5:0] bits;
   wire break_over;
   wire \break_over$66 ;
   wire [23:0] break_time;
   wire busy;
-  wire \busy$192 ;
-  output \busy$233 ;
-  wire \busy$233 ;
+  wire \busy$196 ;
+  output \busy$237 ;
+  wire \busy$237 ;
   wire ca_abort;
   input [6:0] ca_address;
   wire [6:0] ca_address;
@@ -14744,10 +14750,10 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   input ca_write;
   wire ca_write;
   wire cdm;
-  wire \cdm$196 ;
+  wire \cdm$200 ;
   wire cdm_cycle;
   wire cds;
-  wire \cds$244 ;
+  wire \cds$248 ;
   wire [154:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
@@ -14824,8 +14830,8 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire check;
   wire clear;
   wire \clear$106 ;
-  input \clear$210 ;
-  wire \clear$210 ;
+  input \clear$214 ;
+  wire \clear$214 ;
   wire clear_counters;
   input clk;
   wire clk;
@@ -14872,10 +14878,10 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire [15:0] \counts.slo_stuck_low ;
   wire [15:0] \counts.spw_mismatch ;
   wire [39:0] cpw_top;
-  wire [39:0] \cpw_top$126 ;
+  wire [39:0] \cpw_top$130 ;
   wire [1:0] crc_error;
   wire [1:0] crc_ok;
-  wire [1:0] \crc_ok$141 ;
+  wire [1:0] \crc_ok$145 ;
   wire [154:0] cycle;
   wire [23:0] \cycle.ack_limit ;
   wire [23:0] \cycle.break_time ;
@@ -14907,6 +14913,10 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire \cycle.w1_enable ;
   wire [54:0] data0;
   wire [39:0] data1;
+  (* init = 1'h0 *)
+  wire decoder_bit;
+  (* init = 1'h0 *)
+  wire decoder_sample;
   wire [12:0] delay;
   wire [12:0] \delay$95 ;
   wire [11:0] delay_limit;
@@ -14914,10 +14924,10 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire delay_over;
   wire \delay_over$76 ;
   wire done;
-  wire \done$194 ;
-  output \done$236 ;
-  wire \done$236 ;
-  wire \done$237 ;
+  wire \done$198 ;
+  output \done$240 ;
+  wire \done$240 ;
+  wire \done$241 ;
   wire doubtful;
   wire early;
   wire \early$52 ;
@@ -14943,7 +14953,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire \events.slo_stuck_low ;
   wire \events.spw_mismatch ;
   wire fault;
-  wire \fault$137 ;
+  wire \fault$141 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -14973,7 +14983,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
-  wire [3:0] \fault_status$139 ;
+  wire [3:0] \fault_status$143 ;
   wire [6:0] faults;
   wire \faults.aborted ;
   wire \faults.bad_config ;
@@ -14983,7 +14993,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire \faults.no_stop ;
   wire \faults.slo_stuck_low ;
   wire first_rise;
-  wire \first_rise$167 ;
+  wire \first_rise$171 ;
   wire [31:0] first_rise_time;
   wire [160:0] frame;
   wire \frame.cds ;
@@ -15028,7 +15038,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   output frames;
   wire frames;
   wire [15:0] half_period;
-  wire [15:0] \half_period$108 ;
+  wire [15:0] \half_period$112 ;
   wire held;
   wire hold;
   wire idle;
@@ -15037,20 +15047,20 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire in_clock;
   wire \in_clock$83 ;
   wire [5:0] lc;
-  wire [5:0] \lc$113 ;
-  wire [5:0] \lc$253 ;
+  wire [5:0] \lc$117 ;
+  wire [5:0] \lc$257 ;
   wire lc_check;
   wire lc_load;
   wire [5:0] lc_next;
-  wire [5:0] \lc_next$115 ;
+  wire [5:0] \lc_next$119 ;
   wire lc_repeat;
-  wire \lc_repeat$254 ;
+  wire \lc_repeat$258 ;
   wire lc_repeat_seen;
   wire lc_skip;
-  wire \lc_skip$255 ;
+  wire \lc_skip$259 ;
   wire lc_skip_seen;
   wire lc_zero;
-  wire \lc_zero$256 ;
+  wire \lc_zero$260 ;
   wire lc_zero_seen;
   wire level;
   wire [12:0] line_delay;
@@ -15088,7 +15098,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire \locked$50 ;
   output ma;
   wire ma;
-  wire \ma$232 ;
+  wire \ma$236 ;
   wire ma_arm;
   wire ma_busy;
   wire \ma_busy$78 ;
@@ -15105,7 +15115,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire [1:0] nw;
   wire ok;
   wire overrun;
-  wire \overrun$235 ;
+  wire \overrun$239 ;
   wire [23:0] period;
   wire periodic;
   input \periodic$24 ;
@@ -15118,32 +15128,32 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire receiver_clear;
   wire \repeat ;
   wire report;
-  wire \report$149 ;
+  wire \report$153 ;
   wire report_delay;
-  wire \report_delay$152 ;
+  wire \report_delay$156 ;
   wire report_frame;
-  wire \report_frame$135 ;
-  wire \report_frame$150 ;
+  wire \report_frame$139 ;
+  wire \report_frame$154 ;
   wire request;
-  wire [17:0] \request$169 ;
-  wire [6:0] \request$169.address ;
-  wire [6:0] \request$169.count ;
-  wire [2:0] \request$169.slave_id ;
-  wire \request$169.write ;
+  wire [17:0] \request$173 ;
+  wire [6:0] \request$173.address ;
+  wire [6:0] \request$173.count ;
+  wire [2:0] \request$173.slave_id ;
+  wire \request$173.write ;
   wire \request$35 ;
   wire restart;
   wire restart_timer;
   output [9:0] result;
   wire [9:0] result;
-  output [160:0] \result$241 ;
-  wire [160:0] \result$241 ;
-  wire \result$241.cds ;
-  wire [5:0] \result$241.lc ;
-  wire \result$241.lc_repeat ;
-  wire \result$241.lc_skip ;
-  wire \result$241.lc_zero ;
-  wire [12:0] \result$241.line_delay ;
-  wire \result$241.spw_mismatch ;
+  output [160:0] \result$245 ;
+  wire [160:0] \result$245 ;
+  wire \result$245.cds ;
+  wire [5:0] \result$245.lc ;
+  wire \result$245.lc_repeat ;
+  wire \result$245.lc_skip ;
+  wire \result$245.lc_zero ;
+  wire [12:0] \result$245.line_delay ;
+  wire \result$245.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -15158,18 +15168,18 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
-  wire [3:0] \result$241.status ;
-  wire [31:0] \result$241.timestamp ;
-  wire [57:0] \result$241.word0 ;
-  wire \result$241.word0.crc_ok ;
-  wire \result$241.word0.ne ;
-  wire \result$241.word0.nw ;
-  wire [54:0] \result$241.word0.position ;
-  wire [42:0] \result$241.word1 ;
-  wire \result$241.word1.crc_ok ;
-  wire \result$241.word1.ne ;
-  wire \result$241.word1.nw ;
-  wire [39:0] \result$241.word1.position ;
+  wire [3:0] \result$245.status ;
+  wire [31:0] \result$245.timestamp ;
+  wire [57:0] \result$245.word0 ;
+  wire \result$245.word0.crc_ok ;
+  wire \result$245.word0.ne ;
+  wire \result$245.word0.nw ;
+  wire [54:0] \result$245.word0.position ;
+  wire [42:0] \result$245.word1 ;
+  wire \result$245.word1.crc_ok ;
+  wire \result$245.word1.ne ;
+  wire \result$245.word1.nw ;
+  wire [39:0] \result$245.word1.position ;
   wire [6:0] \result.bytes_done ;
   (* enum_base_type = "AccessStatus" *)
   (* enum_value_000 = "OK" *)
@@ -15181,14 +15191,14 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* enum_value_110 = "BAD_REQUEST" *)
   wire [2:0] \result.status ;
   wire resync;
-  wire \resync$121 ;
+  wire \resync$125 ;
   wire [15:0] rises;
   wire [15:0] \rises$105 ;
   input rst;
   wire rst;
   wire run;
   reg sample = 1'h0;
-  wire \sample$261 ;
+  wire \sample$264 ;
   wire second_rise;
   wire skip;
   input slo;
@@ -15205,11 +15215,11 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire [39:0] spw;
   wire spw_match;
   wire spw_mismatch;
-  wire \spw_mismatch$257 ;
+  wire \spw_mismatch$261 ;
   input start;
   wire start;
-  input \start$181 ;
-  wire \start$181 ;
+  input \start$185 ;
+  wire \start$185 ;
   wire \start$22 ;
   wire [15:0] start_slot;
   wire [15:0] \start_slot$103 ;
@@ -15245,7 +15255,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
-  wire [3:0] \status$240 ;
+  wire [3:0] \status$244 ;
   wire stop_bit;
   wire \stop_bit$62 ;
   wire stopped;
@@ -15260,9 +15270,9 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire trigger;
   wire \trigger$33 ;
   wire valid;
-  wire \valid$154 ;
-  output \valid$238 ;
-  wire \valid$238 ;
+  wire \valid$158 ;
+  output \valid$242 ;
+  wire \valid$242 ;
   wire valid_out;
   wire w1_enable;
   wire [39:0] wbuf;
@@ -15278,28 +15288,28 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire word1_nw;
   wire [39:0] word1_position;
   wire [1:0] word_count;
-  wire [1:0] \word_count$111 ;
+  wire [1:0] \word_count$115 ;
   wire [1:0] word_crc_ok;
   wire [19:0] words;
-  wire [19:0] \words$123 ;
-  wire [9:0] \words$123[0] ;
+  wire [19:0] \words$127 ;
+  wire [9:0] \words$127[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
-  wire [1:0] \words$123[0].crc ;
-  wire [5:0] \words$123[0].data_bits ;
-  wire \words$123[0].lc ;
-  wire \words$123[0].nenw ;
-  wire [9:0] \words$123[1] ;
+  wire [1:0] \words$127[0].crc ;
+  wire [5:0] \words$127[0].data_bits ;
+  wire \words$127[0].lc ;
+  wire \words$127[0].nenw ;
+  wire [9:0] \words$127[1] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
-  wire [1:0] \words$123[1].crc ;
-  wire [5:0] \words$123[1].data_bits ;
-  wire \words$123[1].lc ;
-  wire \words$123[1].nenw ;
+  wire [1:0] \words$127[1].crc ;
+  wire [5:0] \words$127[1].data_bits ;
+  wire \words$127[1].lc ;
+  wire \words$127[1].nenw ;
   wire [9:0] \words[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
@@ -15331,10 +15341,10 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign \$9  = ca_done & \$8 ;
   assign \$10  = result[2:0] == 3'h5;
   assign \$11  = ca_done & \$10 ;
-  assign \busy$233  = ~ idle;
+  assign \busy$237  = ~ idle;
   assign config_error = ~ config_ok;
   assign \$12  = ~ \clear$106 ;
-  assign \$13  = \sample$261  & \$12 ;
+  assign \$13  = \sample$264  & \$12 ;
   always @(posedge clk)
     sample <= \$14 ;
   always @(posedge clk)
@@ -15395,7 +15405,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .timer_clear(clear)
   );
   \biss_master_axil.ch1.core.counters  counters (
-    .clear(\clear$210 ),
+    .clear(\clear$214 ),
     .clk(clk),
     .counts(counts),
     .events(events),
@@ -15448,10 +15458,10 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .start_slot(start_slot),
     .\started$10 (started),
     .w1_enable(cycle[135]),
-    .words(\words$123 )
+    .words(\words$127 )
   );
   \biss_master_axil.ch1.core.register_access  register_access (
-    .abort(\abort$183 ),
+    .abort(\abort$187 ),
     .busy(frames),
     .cdm(cdm),
     .clk(clk),
@@ -15463,27 +15473,27 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .host_read__addr(rbuf_addr),
     .host_read__en(rbuf_en),
     .rbuf_data(ca_rbuf_data),
-    .request(\request$169 ),
+    .request(\request$173 ),
     .result(result),
     .rst(rst),
-    .\start$44 (\start$181 ),
+    .\start$44 (\start$185 ),
     .wbuf(wbuf)
   );
   \biss_master_axil.ch1.core.results  results (
     .clk(clk),
-    .done(\done$236 ),
+    .done(\done$240 ),
     .frame(frame),
     .report(report),
     .report_delay(report_delay),
     .report_frame(report_frame),
-    .result(\result$241 ),
+    .result(\result$245 ),
     .rst(rst),
     .valid(valid),
-    .valid_out(\valid$238 )
+    .valid_out(\valid$242 )
   );
   \biss_master_axil.ch1.core.sampler  sampler (
     .arm(ma_arm),
-    .\bit (\bit$263 ),
+    .\bit (\bit$265 ),
     .clk(clk),
     .delay(delay),
     .early(early),
@@ -15492,7 +15502,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .locked(locked),
     .receiver_clear(\clear$106 ),
     .rst(rst),
-    .sample(\sample$261 ),
+    .sample(\sample$264 ),
     .slo(slo)
   );
   \biss_master_axil.ch1.core.scheduler  scheduler (
@@ -15587,7 +15597,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
-    \$15  = \bit$263 ;
+    \$15  = \bit$265 ;
     if (rst) begin
       \$15  = 1'h0;
     end
@@ -15639,53 +15649,55 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign \start_slot$103  = start_slot;
   assign \rises$105  = rises;
   assign receiver_clear = \clear$106 ;
-  assign \half_period$108  = cycle[15:0];
+  assign decoder_sample = sample;
+  assign decoder_bit = \bit ;
+  assign \half_period$112  = cycle[15:0];
   assign arm = ma_arm;
-  assign \word_count$111  = word_count;
-  assign \lc$113  = lc;
+  assign \word_count$115  = word_count;
+  assign \lc$117  = lc;
   assign lc_next = { lc[4:0], \bit  };
-  assign \lc_next$115  = { lc[4:0], \bit  };
+  assign \lc_next$119  = { lc[4:0], \bit  };
   assign lc_load = load;
   assign lc_check = check;
-  assign \resync$121  = resync;
+  assign \resync$125  = resync;
   assign w1_enable = cycle[135];
-  assign \cpw_top$126  = cpw_top;
+  assign \cpw_top$130  = cpw_top;
   assign data1 = spw;
   assign bits = cycle[141:136];
   assign tolerance = cycle[154:147];
   assign match = spw_match;
   assign cfg = cycle;
-  assign \report_frame$135  = report_frame;
-  assign \fault$137  = fault;
-  assign \fault_status$139  = fault_status;
-  assign \crc_ok$141  = crc_ok;
+  assign \report_frame$139  = report_frame;
+  assign \fault$141  = fault;
+  assign \fault_status$143  = fault_status;
+  assign \crc_ok$145  = crc_ok;
   assign \repeat  = lc_repeat_seen;
   assign skip = lc_skip_seen;
   assign zero = lc_zero_seen;
-  assign \report$149  = report;
-  assign \report_frame$150  = report_frame;
-  assign \report_delay$152  = report_delay;
-  assign \valid$154  = valid;
+  assign \report$153  = report;
+  assign \report_frame$154  = report_frame;
+  assign \report_delay$156  = report_delay;
+  assign \valid$158  = valid;
   assign word_crc_ok = { \$16 , crc_ok[0] };
-  assign \first_rise$167  = first_rise;
+  assign \first_rise$171  = first_rise;
   assign ca_status = result[2:0];
   assign ca_bytes_done = result[9:3];
-  assign ca_start = \start$181 ;
-  assign ca_abort = \abort$183 ;
+  assign ca_start = \start$185 ;
+  assign ca_abort = \abort$187 ;
   assign ca_rbuf_addr = rbuf_addr;
   assign ca_rbuf_en = rbuf_en;
   assign rbuf_data = ca_rbuf_data;
   assign ca_busy = frames;
-  assign \busy$192  = frames;
-  assign \done$194  = ca_done;
-  assign \cdm$196  = cdm;
+  assign \busy$196  = frames;
+  assign \done$198  = ca_done;
+  assign \cdm$200  = cdm;
   assign held = ma_held;
   assign ma_hold = hold;
   assign frame_end = report;
   assign frame_ok = valid;
   assign frame_cds = cds;
   assign cdm_cycle = frame_cdm;
-  assign clear_counters = \clear$210 ;
+  assign clear_counters = \clear$214 ;
   assign count_crc_word0 = counts[15:0];
   assign count_crc_word1 = counts[31:16];
   assign count_no_ack = counts[47:32];
@@ -15704,27 +15716,27 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign count_ca_refused = counts[255:240];
   assign count_ca_aborted = counts[271:256];
   assign count_ca_data_fault = counts[287:272];
-  assign \ma$232  = ma;
-  assign \overrun$235  = overrun;
-  assign \done$237  = \done$236 ;
-  assign valid_out = \valid$238 ;
-  assign \status$240  = \result$241 [3:0];
-  assign timestamp = \result$241 [35:4];
-  assign line_delay = \result$241 [48:36];
-  assign \cds$244  = \result$241 [49];
-  assign word0_position = \result$241 [104:50];
-  assign word0_ne = \result$241 [105];
-  assign word0_nw = \result$241 [106];
-  assign word0_crc_ok = \result$241 [107];
-  assign word1_position = \result$241 [147:108];
-  assign word1_ne = \result$241 [148];
-  assign word1_nw = \result$241 [149];
-  assign word1_crc_ok = \result$241 [150];
-  assign \lc$253  = \result$241 [156:151];
-  assign \lc_repeat$254  = \result$241 [157];
-  assign \lc_skip$255  = \result$241 [158];
-  assign \lc_zero$256  = \result$241 [159];
-  assign \spw_mismatch$257  = \result$241 [160];
+  assign \ma$236  = ma;
+  assign \overrun$239  = overrun;
+  assign \done$241  = \done$240 ;
+  assign valid_out = \valid$242 ;
+  assign \status$244  = \result$245 [3:0];
+  assign timestamp = \result$245 [35:4];
+  assign line_delay = \result$245 [48:36];
+  assign \cds$248  = \result$245 [49];
+  assign word0_position = \result$245 [104:50];
+  assign word0_ne = \result$245 [105];
+  assign word0_nw = \result$245 [106];
+  assign word0_crc_ok = \result$245 [107];
+  assign word1_position = \result$245 [147:108];
+  assign word1_ne = \result$245 [148];
+  assign word1_nw = \result$245 [149];
+  assign word1_crc_ok = \result$245 [150];
+  assign \lc$257  = \result$245 [156:151];
+  assign \lc_repeat$258  = \result$245 [157];
+  assign \lc_skip$259  = \result$245 [158];
+  assign \lc_zero$260  = \result$245 [159];
+  assign \spw_mismatch$261  = \result$245 [160];
   assign \live.ma_half_period  = live[15:0];
   assign \live.request_period  = live[39:16];
   assign \live.break_time  = live[63:40];
@@ -15775,16 +15787,16 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign \words[1].nenw  = words[16];
   assign \words[1].lc  = words[17];
   assign \words[1].crc  = words[19:18];
-  assign \words$123[0]  = \words$123 [9:0];
-  assign \words$123[0].data_bits  = \words$123 [5:0];
-  assign \words$123[0].nenw  = \words$123 [6];
-  assign \words$123[0].lc  = \words$123 [7];
-  assign \words$123[0].crc  = \words$123 [9:8];
-  assign \words$123[1]  = \words$123 [19:10];
-  assign \words$123[1].data_bits  = \words$123 [15:10];
-  assign \words$123[1].nenw  = \words$123 [16];
-  assign \words$123[1].lc  = \words$123 [17];
-  assign \words$123[1].crc  = \words$123 [19:18];
+  assign \words$127[0]  = \words$127 [9:0];
+  assign \words$127[0].data_bits  = \words$127 [5:0];
+  assign \words$127[0].nenw  = \words$127 [6];
+  assign \words$127[0].lc  = \words$127 [7];
+  assign \words$127[0].crc  = \words$127 [9:8];
+  assign \words$127[1]  = \words$127 [19:10];
+  assign \words$127[1].data_bits  = \words$127 [15:10];
+  assign \words$127[1].nenw  = \words$127 [16];
+  assign \words$127[1].lc  = \words$127 [17];
+  assign \words$127[1].crc  = \words$127 [19:18];
   assign \cfg.ma_half_period  = cycle[15:0];
   assign \cfg.request_period  = cycle[39:16];
   assign \cfg.break_time  = cycle[63:40];
@@ -15824,10 +15836,10 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign \frame.lc_skip  = frame[158];
   assign \frame.lc_zero  = frame[159];
   assign \frame.spw_mismatch  = frame[160];
-  assign \request$169.slave_id  = \request$169 [2:0];
-  assign \request$169.address  = \request$169 [9:3];
-  assign \request$169.count  = \request$169 [16:10];
-  assign \request$169.write  = \request$169 [17];
+  assign \request$173.slave_id  = \request$173 [2:0];
+  assign \request$173.address  = \request$173 [9:3];
+  assign \request$173.count  = \request$173 [16:10];
+  assign \request$173.write  = \request$173 [17];
   assign \wbuf.addr  = wbuf[3:0];
   assign \wbuf.data  = wbuf[35:4];
   assign \wbuf.en  = wbuf[39:36];
@@ -15876,25 +15888,25 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign \counts.ca_refused  = counts[255:240];
   assign \counts.ca_aborted  = counts[271:256];
   assign \counts.ca_data_fault  = counts[287:272];
-  assign \result$241.status  = \result$241 [3:0];
-  assign \result$241.timestamp  = \result$241 [35:4];
-  assign \result$241.line_delay  = \result$241 [48:36];
-  assign \result$241.cds  = \result$241 [49];
-  assign \result$241.word0  = \result$241 [107:50];
-  assign \result$241.word0.position  = \result$241 [104:50];
-  assign \result$241.word0.ne  = \result$241 [105];
-  assign \result$241.word0.nw  = \result$241 [106];
-  assign \result$241.word0.crc_ok  = \result$241 [107];
-  assign \result$241.word1  = \result$241 [150:108];
-  assign \result$241.word1.position  = \result$241 [147:108];
-  assign \result$241.word1.ne  = \result$241 [148];
-  assign \result$241.word1.nw  = \result$241 [149];
-  assign \result$241.word1.crc_ok  = \result$241 [150];
-  assign \result$241.lc  = \result$241 [156:151];
-  assign \result$241.lc_repeat  = \result$241 [157];
-  assign \result$241.lc_skip  = \result$241 [158];
-  assign \result$241.lc_zero  = \result$241 [159];
-  assign \result$241.spw_mismatch  = \result$241 [160];
+  assign \result$245.status  = \result$245 [3:0];
+  assign \result$245.timestamp  = \result$245 [35:4];
+  assign \result$245.line_delay  = \result$245 [48:36];
+  assign \result$245.cds  = \result$245 [49];
+  assign \result$245.word0  = \result$245 [107:50];
+  assign \result$245.word0.position  = \result$245 [104:50];
+  assign \result$245.word0.ne  = \result$245 [105];
+  assign \result$245.word0.nw  = \result$245 [106];
+  assign \result$245.word0.crc_ok  = \result$245 [107];
+  assign \result$245.word1  = \result$245 [150:108];
+  assign \result$245.word1.position  = \result$245 [147:108];
+  assign \result$245.word1.ne  = \result$245 [148];
+  assign \result$245.word1.nw  = \result$245 [149];
+  assign \result$245.word1.crc_ok  = \result$245 [150];
+  assign \result$245.lc  = \result$245 [156:151];
+  assign \result$245.lc_repeat  = \result$245 [157];
+  assign \result$245.lc_skip  = \result$245 [158];
+  assign \result$245.lc_zero  = \result$245 [159];
+  assign \result$245.spw_mismatch  = \result$245 [160];
   assign events[17] = \$11 ;
   assign events[16] = \$9 ;
   assign events[15] = \$7 ;
@@ -15916,10 +15928,10 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign wbuf[39:36] = ca_wbuf_en;
   assign wbuf[35:4] = ca_wbuf_data;
   assign wbuf[3:0] = ca_wbuf_addr;
-  assign \request$169 [17] = ca_write;
-  assign \request$169 [16:10] = ca_count;
-  assign \request$169 [9:3] = ca_address;
-  assign \request$169 [2:0] = ca_slave_id;
+  assign \request$173 [17] = ca_write;
+  assign \request$173 [16:10] = ca_count;
+  assign \request$173 [9:3] = ca_address;
+  assign \request$173 [2:0] = ca_slave_id;
   assign frame[35:4] = first_rise_time;
   assign frame[160] = spw_mismatch;
   assign frame[150] = \$16 ;
@@ -15937,8 +15949,8 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign frame[49] = cds;
   assign frame[48:36] = delay;
   assign frame[3:0] = status;
-  assign \words$123 [19:10] = cycle[145:136];
-  assign \words$123 [9:0] = cycle[134:125];
+  assign \words$127 [19:10] = cycle[145:136];
+  assign \words$127 [9:0] = cycle[134:125];
   assign words[19:10] = cycle[145:136];
   assign words[9:0] = cycle[134:125];
   assign live[154:147] = cfg_spw_tolerance;

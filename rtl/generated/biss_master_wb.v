@@ -4665,8 +4665,8 @@ module \biss_master_wb.ch0 (ca_wbuf_data, slo, clk, rst, \trigger$161 , ca_wbuf_
   assign trigger = \trigger$161  & regs__trigger_enable;
   \biss_master_wb.ch0.core  core (
     .abort(abort_cycle),
-    .\abort$183 (ca_abort),
-    .\busy$233 (regs__busy),
+    .\abort$187 (ca_abort),
+    .\busy$237 (regs__busy),
     .ca_address(ca_address),
     .ca_count(ca_count),
     .ca_done(regs__ca_done),
@@ -4694,23 +4694,23 @@ module \biss_master_wb.ch0 (ca_wbuf_data, slo, clk, rst, \trigger$161 , ca_wbuf_
     .cfg_w1_enable(cfg_w1_enable),
     .cfg_w1_lc(cfg_w1_lc),
     .cfg_w1_nenw(cfg_w1_nenw),
-    .\clear$210 (clear_counters),
+    .\clear$214 (clear_counters),
     .clk(clk),
     .config_error(regs__config_error),
     .counts(\$5 ),
-    .\done$236 (regs__done),
+    .\done$240 (regs__done),
     .frames(regs__ca_busy),
     .ma(ma),
     .\periodic$24 (periodic),
     .rbuf_en(ca_rbuf_en),
     .result(\$6 ),
-    .\result$241 (\$4 ),
+    .\result$245 (\$4 ),
     .rst(rst),
     .slo(slo),
     .start(start),
-    .\start$181 (ca_start),
+    .\start$185 (ca_start),
     .trigger(trigger),
-    .\valid$238 (valid)
+    .\valid$242 (valid)
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
@@ -4850,9 +4850,9 @@ module \biss_master_wb.ch0 (ca_wbuf_data, slo, clk, rst, \trigger$161 , ca_wbuf_
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy$233 , config_error, frames, ca_rbuf_data, start, abort, \clear$210 , \periodic$24 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit
-, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, \start$181 , \abort$183 , ma, \done$236 , \valid$238 
-, \result$241 , counts, ca_done, result, ca_wbuf_addr);
+module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy$237 , config_error, frames, ca_rbuf_data, start, abort, \clear$214 , \periodic$24 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit
+, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, \start$185 , \abort$187 , ma, \done$240 , \valid$242 
+, \result$245 , counts, ca_done, result, ca_wbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$29  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -4872,8 +4872,8 @@ module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   wire \$9 ;
   input abort;
   wire abort;
-  input \abort$183 ;
-  wire \abort$183 ;
+  input \abort$187 ;
+  wire \abort$187 ;
   wire \abort$36 ;
   wire abort_cycle;
   wire ack_expired;
@@ -4882,15 +4882,15 @@ module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   wire [23:0] \ack_limit$89 ;
   wire arm;
   reg \bit  = 1'h0;
-  wire \bit$263 ;
+  wire \bit$265 ;
   wire [5:0] bits;
   wire break_over;
   wire \break_over$66 ;
   wire [23:0] break_time;
   wire busy;
-  wire \busy$192 ;
-  output \busy$233 ;
-  wire \busy$233 ;
+  wire \busy$196 ;
+  output \busy$237 ;
+  wire \busy$237 ;
   wire ca_abort;
   input [6:0] ca_address;
   wire [6:0] ca_address;
@@ -4925,10 +4925,10 @@ module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   input ca_write;
   wire ca_write;
   wire cdm;
-  wire \cdm$196 ;
+  wire \cdm$200 ;
   wire cdm_cycle;
   wire cds;
-  wire \cds$244 ;
+  wire \cds$248 ;
   wire [154:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
@@ -5005,8 +5005,8 @@ module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   wire check;
   wire clear;
   wire \clear$106 ;
-  input \clear$210 ;
-  wire \clear$210 ;
+  input \clear$214 ;
+  wire \clear$214 ;
   wire clear_counters;
   input clk;
   wire clk;
@@ -5053,10 +5053,10 @@ module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   wire [15:0] \counts.slo_stuck_low ;
   wire [15:0] \counts.spw_mismatch ;
   wire [39:0] cpw_top;
-  wire [39:0] \cpw_top$126 ;
+  wire [39:0] \cpw_top$130 ;
   wire [1:0] crc_error;
   wire [1:0] crc_ok;
-  wire [1:0] \crc_ok$141 ;
+  wire [1:0] \crc_ok$145 ;
   wire [154:0] cycle;
   wire [23:0] \cycle.ack_limit ;
   wire [23:0] \cycle.break_time ;
@@ -5088,6 +5088,10 @@ module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   wire \cycle.w1_enable ;
   wire [54:0] data0;
   wire [39:0] data1;
+  (* init = 1'h0 *)
+  wire decoder_bit;
+  (* init = 1'h0 *)
+  wire decoder_sample;
   wire [12:0] delay;
   wire [12:0] \delay$95 ;
   wire [11:0] delay_limit;
@@ -5095,10 +5099,10 @@ module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   wire delay_over;
   wire \delay_over$76 ;
   wire done;
-  wire \done$194 ;
-  output \done$236 ;
-  wire \done$236 ;
-  wire \done$237 ;
+  wire \done$198 ;
+  output \done$240 ;
+  wire \done$240 ;
+  wire \done$241 ;
   wire doubtful;
   wire early;
   wire \early$52 ;
@@ -5124,7 +5128,7 @@ module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   wire \events.slo_stuck_low ;
   wire \events.spw_mismatch ;
   wire fault;
-  wire \fault$137 ;
+  wire \fault$141 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -5154,7 +5158,7 @@ module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
-  wire [3:0] \fault_status$139 ;
+  wire [3:0] \fault_status$143 ;
   wire [6:0] faults;
   wire \faults.aborted ;
   wire \faults.bad_config ;
@@ -5164,7 +5168,7 @@ module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   wire \faults.no_stop ;
   wire \faults.slo_stuck_low ;
   wire first_rise;
-  wire \first_rise$167 ;
+  wire \first_rise$171 ;
   wire [31:0] first_rise_time;
   wire [160:0] frame;
   wire \frame.cds ;
@@ -5209,7 +5213,7 @@ module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   output frames;
   wire frames;
   wire [15:0] half_period;
-  wire [15:0] \half_period$108 ;
+  wire [15:0] \half_period$112 ;
   wire held;
   wire hold;
   wire idle;
@@ -5218,20 +5222,20 @@ module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   wire in_clock;
   wire \in_clock$83 ;
   wire [5:0] lc;
-  wire [5:0] \lc$113 ;
-  wire [5:0] \lc$253 ;
+  wire [5:0] \lc$117 ;
+  wire [5:0] \lc$257 ;
   wire lc_check;
   wire lc_load;
   wire [5:0] lc_next;
-  wire [5:0] \lc_next$115 ;
+  wire [5:0] \lc_next$119 ;
   wire lc_repeat;
-  wire \lc_repeat$254 ;
+  wire \lc_repeat$258 ;
   wire lc_repeat_seen;
   wire lc_skip;
-  wire \lc_skip$255 ;
+  wire \lc_skip$259 ;
   wire lc_skip_seen;
   wire lc_zero;
-  wire \lc_zero$256 ;
+  wire \lc_zero$260 ;
   wire lc_zero_seen;
   wire level;
   wire [12:0] line_delay;
@@ -5269,7 +5273,7 @@ module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   wire \locked$50 ;
   output ma;
   wire ma;
-  wire \ma$232 ;
+  wire \ma$236 ;
   wire ma_arm;
   wire ma_busy;
   wire \ma_busy$78 ;
@@ -5286,7 +5290,7 @@ module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   wire [1:0] nw;
   wire ok;
   wire overrun;
-  wire \overrun$235 ;
+  wire \overrun$239 ;
   wire [23:0] period;
   wire periodic;
   input \periodic$24 ;
@@ -5298,32 +5302,32 @@ module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   wire receiver_clear;
   wire \repeat ;
   wire report;
-  wire \report$149 ;
+  wire \report$153 ;
   wire report_delay;
-  wire \report_delay$152 ;
+  wire \report_delay$156 ;
   wire report_frame;
-  wire \report_frame$135 ;
-  wire \report_frame$150 ;
+  wire \report_frame$139 ;
+  wire \report_frame$154 ;
   wire request;
-  wire [17:0] \request$169 ;
-  wire [6:0] \request$169.address ;
-  wire [6:0] \request$169.count ;
-  wire [2:0] \request$169.slave_id ;
-  wire \request$169.write ;
+  wire [17:0] \request$173 ;
+  wire [6:0] \request$173.address ;
+  wire [6:0] \request$173.count ;
+  wire [2:0] \request$173.slave_id ;
+  wire \request$173.write ;
   wire \request$35 ;
   wire restart;
   wire restart_timer;
   output [9:0] result;
   wire [9:0] result;
-  output [160:0] \result$241 ;
-  wire [160:0] \result$241 ;
-  wire \result$241.cds ;
-  wire [5:0] \result$241.lc ;
-  wire \result$241.lc_repeat ;
-  wire \result$241.lc_skip ;
-  wire \result$241.lc_zero ;
-  wire [12:0] \result$241.line_delay ;
-  wire \result$241.spw_mismatch ;
+  output [160:0] \result$245 ;
+  wire [160:0] \result$245 ;
+  wire \result$245.cds ;
+  wire [5:0] \result$245.lc ;
+  wire \result$245.lc_repeat ;
+  wire \result$245.lc_skip ;
+  wire \result$245.lc_zero ;
+  wire [12:0] \result$245.line_delay ;
+  wire \result$245.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -5338,18 +5342,18 @@ module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
-  wire [3:0] \result$241.status ;
-  wire [31:0] \result$241.timestamp ;
-  wire [57:0] \result$241.word0 ;
-  wire \result$241.word0.crc_ok ;
-  wire \result$241.word0.ne ;
-  wire \result$241.word0.nw ;
-  wire [54:0] \result$241.word0.position ;
-  wire [42:0] \result$241.word1 ;
-  wire \result$241.word1.crc_ok ;
-  wire \result$241.word1.ne ;
-  wire \result$241.word1.nw ;
-  wire [39:0] \result$241.word1.position ;
+  wire [3:0] \result$245.status ;
+  wire [31:0] \result$245.timestamp ;
+  wire [57:0] \result$245.word0 ;
+  wire \result$245.word0.crc_ok ;
+  wire \result$245.word0.ne ;
+  wire \result$245.word0.nw ;
+  wire [54:0] \result$245.word0.position ;
+  wire [42:0] \result$245.word1 ;
+  wire \result$245.word1.crc_ok ;
+  wire \result$245.word1.ne ;
+  wire \result$245.word1.nw ;
+  wire [39:0] \result$245.word1.position ;
   wire [6:0] \result.bytes_done ;
   (* enum_base_type = "AccessStatus" *)
   (* enum_value_000 = "OK" *)
@@ -5361,14 +5365,14 @@ module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   (* enum_value_110 = "BAD_REQUEST" *)
   wire [2:0] \result.status ;
   wire resync;
-  wire \resync$121 ;
+  wire \resync$125 ;
   wire [15:0] rises;
   wire [15:0] \rises$105 ;
   input rst;
   wire rst;
   wire run;
   reg sample = 1'h0;
-  wire \sample$261 ;
+  wire \sample$264 ;
   wire second_rise;
   wire skip;
   input slo;
@@ -5385,11 +5389,11 @@ module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   wire [39:0] spw;
   wire spw_match;
   wire spw_mismatch;
-  wire \spw_mismatch$257 ;
+  wire \spw_mismatch$261 ;
   input start;
   wire start;
-  input \start$181 ;
-  wire \start$181 ;
+  input \start$185 ;
+  wire \start$185 ;
   wire \start$22 ;
   wire [15:0] start_slot;
   wire [15:0] \start_slot$103 ;
@@ -5425,7 +5429,7 @@ module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
-  wire [3:0] \status$240 ;
+  wire [3:0] \status$244 ;
   wire stop_bit;
   wire \stop_bit$62 ;
   wire stopped;
@@ -5440,9 +5444,9 @@ module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   wire trigger;
   wire \trigger$33 ;
   wire valid;
-  wire \valid$154 ;
-  output \valid$238 ;
-  wire \valid$238 ;
+  wire \valid$158 ;
+  output \valid$242 ;
+  wire \valid$242 ;
   wire valid_out;
   wire w1_enable;
   wire [39:0] wbuf;
@@ -5458,28 +5462,28 @@ module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   wire word1_nw;
   wire [39:0] word1_position;
   wire [1:0] word_count;
-  wire [1:0] \word_count$111 ;
+  wire [1:0] \word_count$115 ;
   wire [1:0] word_crc_ok;
   wire [19:0] words;
-  wire [19:0] \words$123 ;
-  wire [9:0] \words$123[0] ;
+  wire [19:0] \words$127 ;
+  wire [9:0] \words$127[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
-  wire [1:0] \words$123[0].crc ;
-  wire [5:0] \words$123[0].data_bits ;
-  wire \words$123[0].lc ;
-  wire \words$123[0].nenw ;
-  wire [9:0] \words$123[1] ;
+  wire [1:0] \words$127[0].crc ;
+  wire [5:0] \words$127[0].data_bits ;
+  wire \words$127[0].lc ;
+  wire \words$127[0].nenw ;
+  wire [9:0] \words$127[1] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
-  wire [1:0] \words$123[1].crc ;
-  wire [5:0] \words$123[1].data_bits ;
-  wire \words$123[1].lc ;
-  wire \words$123[1].nenw ;
+  wire [1:0] \words$127[1].crc ;
+  wire [5:0] \words$127[1].data_bits ;
+  wire \words$127[1].lc ;
+  wire \words$127[1].nenw ;
   wire [9:0] \words[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
@@ -5511,10 +5515,10 @@ module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   assign \$9  = ca_done & \$8 ;
   assign \$10  = result[2:0] == 3'h5;
   assign \$11  = ca_done & \$10 ;
-  assign \busy$233  = ~ idle;
+  assign \busy$237  = ~ idle;
   assign config_error = ~ config_ok;
   assign \$12  = ~ \clear$106 ;
-  assign \$13  = \sample$261  & \$12 ;
+  assign \$13  = \sample$264  & \$12 ;
   always @(posedge clk)
     sample <= \$14 ;
   always @(posedge clk)
@@ -5575,7 +5579,7 @@ module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
     .timer_clear(clear)
   );
   \biss_master_wb.ch0.core.counters  counters (
-    .clear(\clear$210 ),
+    .clear(\clear$214 ),
     .clk(clk),
     .counts(counts),
     .events(events),
@@ -5628,10 +5632,10 @@ module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
     .start_slot(start_slot),
     .\started$10 (started),
     .w1_enable(cycle[135]),
-    .words(\words$123 )
+    .words(\words$127 )
   );
   \biss_master_wb.ch0.core.register_access  register_access (
-    .abort(\abort$183 ),
+    .abort(\abort$187 ),
     .busy(frames),
     .cdm(cdm),
     .clk(clk),
@@ -5643,27 +5647,27 @@ module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
     .host_read__addr(ca_wbuf_addr),
     .host_read__en(rbuf_en),
     .rbuf_data(ca_rbuf_data),
-    .request(\request$169 ),
+    .request(\request$173 ),
     .result(result),
     .rst(rst),
-    .\start$44 (\start$181 ),
+    .\start$44 (\start$185 ),
     .wbuf(wbuf)
   );
   \biss_master_wb.ch0.core.results  results (
     .clk(clk),
-    .done(\done$236 ),
+    .done(\done$240 ),
     .frame(frame),
     .report(report),
     .report_delay(report_delay),
     .report_frame(report_frame),
-    .result(\result$241 ),
+    .result(\result$245 ),
     .rst(rst),
     .valid(valid),
-    .valid_out(\valid$238 )
+    .valid_out(\valid$242 )
   );
   \biss_master_wb.ch0.core.sampler  sampler (
     .arm(ma_arm),
-    .\bit (\bit$263 ),
+    .\bit (\bit$265 ),
     .clk(clk),
     .delay(delay),
     .early(early),
@@ -5672,7 +5676,7 @@ module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
     .locked(locked),
     .receiver_clear(\clear$106 ),
     .rst(rst),
-    .sample(\sample$261 ),
+    .sample(\sample$264 ),
     .slo(slo)
   );
   \biss_master_wb.ch0.core.scheduler  scheduler (
@@ -5767,7 +5771,7 @@ module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
-    \$15  = \bit$263 ;
+    \$15  = \bit$265 ;
     if (rst) begin
       \$15  = 1'h0;
     end
@@ -5819,54 +5823,56 @@ module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   assign \start_slot$103  = start_slot;
   assign \rises$105  = rises;
   assign receiver_clear = \clear$106 ;
-  assign \half_period$108  = cycle[15:0];
+  assign decoder_sample = sample;
+  assign decoder_bit = \bit ;
+  assign \half_period$112  = cycle[15:0];
   assign arm = ma_arm;
-  assign \word_count$111  = word_count;
-  assign \lc$113  = lc;
+  assign \word_count$115  = word_count;
+  assign \lc$117  = lc;
   assign lc_next = { lc[4:0], \bit  };
-  assign \lc_next$115  = { lc[4:0], \bit  };
+  assign \lc_next$119  = { lc[4:0], \bit  };
   assign lc_load = load;
   assign lc_check = check;
-  assign \resync$121  = resync;
+  assign \resync$125  = resync;
   assign w1_enable = cycle[135];
-  assign \cpw_top$126  = cpw_top;
+  assign \cpw_top$130  = cpw_top;
   assign data1 = spw;
   assign bits = cycle[141:136];
   assign tolerance = cycle[154:147];
   assign match = spw_match;
   assign cfg = cycle;
-  assign \report_frame$135  = report_frame;
-  assign \fault$137  = fault;
-  assign \fault_status$139  = fault_status;
-  assign \crc_ok$141  = crc_ok;
+  assign \report_frame$139  = report_frame;
+  assign \fault$141  = fault;
+  assign \fault_status$143  = fault_status;
+  assign \crc_ok$145  = crc_ok;
   assign \repeat  = lc_repeat_seen;
   assign skip = lc_skip_seen;
   assign zero = lc_zero_seen;
-  assign \report$149  = report;
-  assign \report_frame$150  = report_frame;
-  assign \report_delay$152  = report_delay;
-  assign \valid$154  = valid;
+  assign \report$153  = report;
+  assign \report_frame$154  = report_frame;
+  assign \report_delay$156  = report_delay;
+  assign \valid$158  = valid;
   assign word_crc_ok = { \$16 , crc_ok[0] };
-  assign \first_rise$167  = first_rise;
+  assign \first_rise$171  = first_rise;
   assign ca_status = result[2:0];
   assign ca_bytes_done = result[9:3];
-  assign ca_start = \start$181 ;
-  assign ca_abort = \abort$183 ;
+  assign ca_start = \start$185 ;
+  assign ca_abort = \abort$187 ;
   assign rbuf_addr = ca_wbuf_addr;
   assign ca_rbuf_addr = ca_wbuf_addr;
   assign ca_rbuf_en = rbuf_en;
   assign rbuf_data = ca_rbuf_data;
   assign ca_busy = frames;
-  assign \busy$192  = frames;
-  assign \done$194  = ca_done;
-  assign \cdm$196  = cdm;
+  assign \busy$196  = frames;
+  assign \done$198  = ca_done;
+  assign \cdm$200  = cdm;
   assign held = ma_held;
   assign ma_hold = hold;
   assign frame_end = report;
   assign frame_ok = valid;
   assign frame_cds = cds;
   assign cdm_cycle = frame_cdm;
-  assign clear_counters = \clear$210 ;
+  assign clear_counters = \clear$214 ;
   assign count_crc_word0 = counts[15:0];
   assign count_crc_word1 = counts[31:16];
   assign count_no_ack = counts[47:32];
@@ -5885,27 +5891,27 @@ module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   assign count_ca_refused = counts[255:240];
   assign count_ca_aborted = counts[271:256];
   assign count_ca_data_fault = counts[287:272];
-  assign \ma$232  = ma;
-  assign \overrun$235  = overrun;
-  assign \done$237  = \done$236 ;
-  assign valid_out = \valid$238 ;
-  assign \status$240  = \result$241 [3:0];
-  assign timestamp = \result$241 [35:4];
-  assign line_delay = \result$241 [48:36];
-  assign \cds$244  = \result$241 [49];
-  assign word0_position = \result$241 [104:50];
-  assign word0_ne = \result$241 [105];
-  assign word0_nw = \result$241 [106];
-  assign word0_crc_ok = \result$241 [107];
-  assign word1_position = \result$241 [147:108];
-  assign word1_ne = \result$241 [148];
-  assign word1_nw = \result$241 [149];
-  assign word1_crc_ok = \result$241 [150];
-  assign \lc$253  = \result$241 [156:151];
-  assign \lc_repeat$254  = \result$241 [157];
-  assign \lc_skip$255  = \result$241 [158];
-  assign \lc_zero$256  = \result$241 [159];
-  assign \spw_mismatch$257  = \result$241 [160];
+  assign \ma$236  = ma;
+  assign \overrun$239  = overrun;
+  assign \done$241  = \done$240 ;
+  assign valid_out = \valid$242 ;
+  assign \status$244  = \result$245 [3:0];
+  assign timestamp = \result$245 [35:4];
+  assign line_delay = \result$245 [48:36];
+  assign \cds$248  = \result$245 [49];
+  assign word0_position = \result$245 [104:50];
+  assign word0_ne = \result$245 [105];
+  assign word0_nw = \result$245 [106];
+  assign word0_crc_ok = \result$245 [107];
+  assign word1_position = \result$245 [147:108];
+  assign word1_ne = \result$245 [148];
+  assign word1_nw = \result$245 [149];
+  assign word1_crc_ok = \result$245 [150];
+  assign \lc$257  = \result$245 [156:151];
+  assign \lc_repeat$258  = \result$245 [157];
+  assign \lc_skip$259  = \result$245 [158];
+  assign \lc_zero$260  = \result$245 [159];
+  assign \spw_mismatch$261  = \result$245 [160];
   assign \live.ma_half_period  = live[15:0];
   assign \live.request_period  = live[39:16];
   assign \live.break_time  = live[63:40];
@@ -5956,16 +5962,16 @@ module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   assign \words[1].nenw  = words[16];
   assign \words[1].lc  = words[17];
   assign \words[1].crc  = words[19:18];
-  assign \words$123[0]  = \words$123 [9:0];
-  assign \words$123[0].data_bits  = \words$123 [5:0];
-  assign \words$123[0].nenw  = \words$123 [6];
-  assign \words$123[0].lc  = \words$123 [7];
-  assign \words$123[0].crc  = \words$123 [9:8];
-  assign \words$123[1]  = \words$123 [19:10];
-  assign \words$123[1].data_bits  = \words$123 [15:10];
-  assign \words$123[1].nenw  = \words$123 [16];
-  assign \words$123[1].lc  = \words$123 [17];
-  assign \words$123[1].crc  = \words$123 [19:18];
+  assign \words$127[0]  = \words$127 [9:0];
+  assign \words$127[0].data_bits  = \words$127 [5:0];
+  assign \words$127[0].nenw  = \words$127 [6];
+  assign \words$127[0].lc  = \words$127 [7];
+  assign \words$127[0].crc  = \words$127 [9:8];
+  assign \words$127[1]  = \words$127 [19:10];
+  assign \words$127[1].data_bits  = \words$127 [15:10];
+  assign \words$127[1].nenw  = \words$127 [16];
+  assign \words$127[1].lc  = \words$127 [17];
+  assign \words$127[1].crc  = \words$127 [19:18];
   assign \cfg.ma_half_period  = cycle[15:0];
   assign \cfg.request_period  = cycle[39:16];
   assign \cfg.break_time  = cycle[63:40];
@@ -6005,10 +6011,10 @@ module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   assign \frame.lc_skip  = frame[158];
   assign \frame.lc_zero  = frame[159];
   assign \frame.spw_mismatch  = frame[160];
-  assign \request$169.slave_id  = \request$169 [2:0];
-  assign \request$169.address  = \request$169 [9:3];
-  assign \request$169.count  = \request$169 [16:10];
-  assign \request$169.write  = \request$169 [17];
+  assign \request$173.slave_id  = \request$173 [2:0];
+  assign \request$173.address  = \request$173 [9:3];
+  assign \request$173.count  = \request$173 [16:10];
+  assign \request$173.write  = \request$173 [17];
   assign \wbuf.addr  = wbuf[3:0];
   assign \wbuf.data  = wbuf[35:4];
   assign \wbuf.en  = wbuf[39:36];
@@ -6057,25 +6063,25 @@ module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   assign \counts.ca_refused  = counts[255:240];
   assign \counts.ca_aborted  = counts[271:256];
   assign \counts.ca_data_fault  = counts[287:272];
-  assign \result$241.status  = \result$241 [3:0];
-  assign \result$241.timestamp  = \result$241 [35:4];
-  assign \result$241.line_delay  = \result$241 [48:36];
-  assign \result$241.cds  = \result$241 [49];
-  assign \result$241.word0  = \result$241 [107:50];
-  assign \result$241.word0.position  = \result$241 [104:50];
-  assign \result$241.word0.ne  = \result$241 [105];
-  assign \result$241.word0.nw  = \result$241 [106];
-  assign \result$241.word0.crc_ok  = \result$241 [107];
-  assign \result$241.word1  = \result$241 [150:108];
-  assign \result$241.word1.position  = \result$241 [147:108];
-  assign \result$241.word1.ne  = \result$241 [148];
-  assign \result$241.word1.nw  = \result$241 [149];
-  assign \result$241.word1.crc_ok  = \result$241 [150];
-  assign \result$241.lc  = \result$241 [156:151];
-  assign \result$241.lc_repeat  = \result$241 [157];
-  assign \result$241.lc_skip  = \result$241 [158];
-  assign \result$241.lc_zero  = \result$241 [159];
-  assign \result$241.spw_mismatch  = \result$241 [160];
+  assign \result$245.status  = \result$245 [3:0];
+  assign \result$245.timestamp  = \result$245 [35:4];
+  assign \result$245.line_delay  = \result$245 [48:36];
+  assign \result$245.cds  = \result$245 [49];
+  assign \result$245.word0  = \result$245 [107:50];
+  assign \result$245.word0.position  = \result$245 [104:50];
+  assign \result$245.word0.ne  = \result$245 [105];
+  assign \result$245.word0.nw  = \result$245 [106];
+  assign \result$245.word0.crc_ok  = \result$245 [107];
+  assign \result$245.word1  = \result$245 [150:108];
+  assign \result$245.word1.position  = \result$245 [147:108];
+  assign \result$245.word1.ne  = \result$245 [148];
+  assign \result$245.word1.nw  = \result$245 [149];
+  assign \result$245.word1.crc_ok  = \result$245 [150];
+  assign \result$245.lc  = \result$245 [156:151];
+  assign \result$245.lc_repeat  = \result$245 [157];
+  assign \result$245.lc_skip  = \result$245 [158];
+  assign \result$245.lc_zero  = \result$245 [159];
+  assign \result$245.spw_mismatch  = \result$245 [160];
   assign events[17] = \$11 ;
   assign events[16] = \$9 ;
   assign events[15] = \$7 ;
@@ -6097,10 +6103,10 @@ module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   assign wbuf[39:36] = ca_wbuf_en;
   assign wbuf[35:4] = ca_wbuf_data;
   assign wbuf[3:0] = ca_wbuf_addr;
-  assign \request$169 [17] = ca_write;
-  assign \request$169 [16:10] = ca_count;
-  assign \request$169 [9:3] = ca_address;
-  assign \request$169 [2:0] = ca_slave_id;
+  assign \request$173 [17] = ca_write;
+  assign \request$173 [16:10] = ca_count;
+  assign \request$173 [9:3] = ca_address;
+  assign \request$173 [2:0] = ca_slave_id;
   assign frame[35:4] = first_rise_time;
   assign frame[160] = spw_mismatch;
   assign frame[150] = \$16 ;
@@ -6118,8 +6124,8 @@ module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   assign frame[49] = cds;
   assign frame[48:36] = delay;
   assign frame[3:0] = status;
-  assign \words$123 [19:10] = cycle[145:136];
-  assign \words$123 [9:0] = cycle[134:125];
+  assign \words$127 [19:10] = cycle[145:136];
+  assign \words$127 [9:0] = cycle[134:125];
   assign words[19:10] = cycle[145:136];
   assign words[9:0] = cycle[134:125];
   assign live[154:147] = cfg_spw_tolerance;
@@ -14312,8 +14318,8 @@ module \biss_master_wb.ch1 (ca_wbuf_data, slo, clk, rst, \trigger$161 , ca_wbuf_
   assign trigger = \trigger$161  & regs__trigger_enable;
   \biss_master_wb.ch1.core  core (
     .abort(abort_cycle),
-    .\abort$183 (ca_abort),
-    .\busy$233 (regs__busy),
+    .\abort$187 (ca_abort),
+    .\busy$237 (regs__busy),
     .ca_address(ca_address),
     .ca_count(ca_count),
     .ca_done(regs__ca_done),
@@ -14341,23 +14347,23 @@ module \biss_master_wb.ch1 (ca_wbuf_data, slo, clk, rst, \trigger$161 , ca_wbuf_
     .cfg_w1_enable(cfg_w1_enable),
     .cfg_w1_lc(cfg_w1_lc),
     .cfg_w1_nenw(cfg_w1_nenw),
-    .\clear$210 (clear_counters),
+    .\clear$214 (clear_counters),
     .clk(clk),
     .config_error(regs__config_error),
     .counts(\$5 ),
-    .\done$236 (regs__done),
+    .\done$240 (regs__done),
     .frames(regs__ca_busy),
     .ma(ma),
     .\periodic$24 (periodic),
     .rbuf_en(ca_rbuf_en),
     .result(\$6 ),
-    .\result$241 (\$4 ),
+    .\result$245 (\$4 ),
     .rst(rst),
     .slo(slo),
     .start(start),
-    .\start$181 (ca_start),
+    .\start$185 (ca_start),
     .trigger(trigger),
-    .\valid$238 (valid)
+    .\valid$242 (valid)
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
@@ -14497,9 +14503,9 @@ module \biss_master_wb.ch1 (ca_wbuf_data, slo, clk, rst, \trigger$161 , ca_wbuf_
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy$233 , config_error, frames, ca_rbuf_data, start, abort, \clear$210 , \periodic$24 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit
-, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, \start$181 , \abort$183 , ma, \done$236 , \valid$238 
-, \result$241 , counts, ca_done, result, ca_wbuf_addr);
+module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy$237 , config_error, frames, ca_rbuf_data, start, abort, \clear$214 , \periodic$24 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit
+, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, \start$185 , \abort$187 , ma, \done$240 , \valid$242 
+, \result$245 , counts, ca_done, result, ca_wbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$67  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -14519,8 +14525,8 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   wire \$9 ;
   input abort;
   wire abort;
-  input \abort$183 ;
-  wire \abort$183 ;
+  input \abort$187 ;
+  wire \abort$187 ;
   wire \abort$36 ;
   wire abort_cycle;
   wire ack_expired;
@@ -14529,15 +14535,15 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   wire [23:0] \ack_limit$89 ;
   wire arm;
   reg \bit  = 1'h0;
-  wire \bit$263 ;
+  wire \bit$265 ;
   wire [5:0] bits;
   wire break_over;
   wire \break_over$66 ;
   wire [23:0] break_time;
   wire busy;
-  wire \busy$192 ;
-  output \busy$233 ;
-  wire \busy$233 ;
+  wire \busy$196 ;
+  output \busy$237 ;
+  wire \busy$237 ;
   wire ca_abort;
   input [6:0] ca_address;
   wire [6:0] ca_address;
@@ -14572,10 +14578,10 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   input ca_write;
   wire ca_write;
   wire cdm;
-  wire \cdm$196 ;
+  wire \cdm$200 ;
   wire cdm_cycle;
   wire cds;
-  wire \cds$244 ;
+  wire \cds$248 ;
   wire [154:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
@@ -14652,8 +14658,8 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   wire check;
   wire clear;
   wire \clear$106 ;
-  input \clear$210 ;
-  wire \clear$210 ;
+  input \clear$214 ;
+  wire \clear$214 ;
   wire clear_counters;
   input clk;
   wire clk;
@@ -14700,10 +14706,10 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   wire [15:0] \counts.slo_stuck_low ;
   wire [15:0] \counts.spw_mismatch ;
   wire [39:0] cpw_top;
-  wire [39:0] \cpw_top$126 ;
+  wire [39:0] \cpw_top$130 ;
   wire [1:0] crc_error;
   wire [1:0] crc_ok;
-  wire [1:0] \crc_ok$141 ;
+  wire [1:0] \crc_ok$145 ;
   wire [154:0] cycle;
   wire [23:0] \cycle.ack_limit ;
   wire [23:0] \cycle.break_time ;
@@ -14735,6 +14741,10 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   wire \cycle.w1_enable ;
   wire [54:0] data0;
   wire [39:0] data1;
+  (* init = 1'h0 *)
+  wire decoder_bit;
+  (* init = 1'h0 *)
+  wire decoder_sample;
   wire [12:0] delay;
   wire [12:0] \delay$95 ;
   wire [11:0] delay_limit;
@@ -14742,10 +14752,10 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   wire delay_over;
   wire \delay_over$76 ;
   wire done;
-  wire \done$194 ;
-  output \done$236 ;
-  wire \done$236 ;
-  wire \done$237 ;
+  wire \done$198 ;
+  output \done$240 ;
+  wire \done$240 ;
+  wire \done$241 ;
   wire doubtful;
   wire early;
   wire \early$52 ;
@@ -14771,7 +14781,7 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   wire \events.slo_stuck_low ;
   wire \events.spw_mismatch ;
   wire fault;
-  wire \fault$137 ;
+  wire \fault$141 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -14801,7 +14811,7 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
-  wire [3:0] \fault_status$139 ;
+  wire [3:0] \fault_status$143 ;
   wire [6:0] faults;
   wire \faults.aborted ;
   wire \faults.bad_config ;
@@ -14811,7 +14821,7 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   wire \faults.no_stop ;
   wire \faults.slo_stuck_low ;
   wire first_rise;
-  wire \first_rise$167 ;
+  wire \first_rise$171 ;
   wire [31:0] first_rise_time;
   wire [160:0] frame;
   wire \frame.cds ;
@@ -14856,7 +14866,7 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   output frames;
   wire frames;
   wire [15:0] half_period;
-  wire [15:0] \half_period$108 ;
+  wire [15:0] \half_period$112 ;
   wire held;
   wire hold;
   wire idle;
@@ -14865,20 +14875,20 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   wire in_clock;
   wire \in_clock$83 ;
   wire [5:0] lc;
-  wire [5:0] \lc$113 ;
-  wire [5:0] \lc$253 ;
+  wire [5:0] \lc$117 ;
+  wire [5:0] \lc$257 ;
   wire lc_check;
   wire lc_load;
   wire [5:0] lc_next;
-  wire [5:0] \lc_next$115 ;
+  wire [5:0] \lc_next$119 ;
   wire lc_repeat;
-  wire \lc_repeat$254 ;
+  wire \lc_repeat$258 ;
   wire lc_repeat_seen;
   wire lc_skip;
-  wire \lc_skip$255 ;
+  wire \lc_skip$259 ;
   wire lc_skip_seen;
   wire lc_zero;
-  wire \lc_zero$256 ;
+  wire \lc_zero$260 ;
   wire lc_zero_seen;
   wire level;
   wire [12:0] line_delay;
@@ -14916,7 +14926,7 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   wire \locked$50 ;
   output ma;
   wire ma;
-  wire \ma$232 ;
+  wire \ma$236 ;
   wire ma_arm;
   wire ma_busy;
   wire \ma_busy$78 ;
@@ -14933,7 +14943,7 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   wire [1:0] nw;
   wire ok;
   wire overrun;
-  wire \overrun$235 ;
+  wire \overrun$239 ;
   wire [23:0] period;
   wire periodic;
   input \periodic$24 ;
@@ -14945,32 +14955,32 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   wire receiver_clear;
   wire \repeat ;
   wire report;
-  wire \report$149 ;
+  wire \report$153 ;
   wire report_delay;
-  wire \report_delay$152 ;
+  wire \report_delay$156 ;
   wire report_frame;
-  wire \report_frame$135 ;
-  wire \report_frame$150 ;
+  wire \report_frame$139 ;
+  wire \report_frame$154 ;
   wire request;
-  wire [17:0] \request$169 ;
-  wire [6:0] \request$169.address ;
-  wire [6:0] \request$169.count ;
-  wire [2:0] \request$169.slave_id ;
-  wire \request$169.write ;
+  wire [17:0] \request$173 ;
+  wire [6:0] \request$173.address ;
+  wire [6:0] \request$173.count ;
+  wire [2:0] \request$173.slave_id ;
+  wire \request$173.write ;
   wire \request$35 ;
   wire restart;
   wire restart_timer;
   output [9:0] result;
   wire [9:0] result;
-  output [160:0] \result$241 ;
-  wire [160:0] \result$241 ;
-  wire \result$241.cds ;
-  wire [5:0] \result$241.lc ;
-  wire \result$241.lc_repeat ;
-  wire \result$241.lc_skip ;
-  wire \result$241.lc_zero ;
-  wire [12:0] \result$241.line_delay ;
-  wire \result$241.spw_mismatch ;
+  output [160:0] \result$245 ;
+  wire [160:0] \result$245 ;
+  wire \result$245.cds ;
+  wire [5:0] \result$245.lc ;
+  wire \result$245.lc_repeat ;
+  wire \result$245.lc_skip ;
+  wire \result$245.lc_zero ;
+  wire [12:0] \result$245.line_delay ;
+  wire \result$245.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -14985,18 +14995,18 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
-  wire [3:0] \result$241.status ;
-  wire [31:0] \result$241.timestamp ;
-  wire [57:0] \result$241.word0 ;
-  wire \result$241.word0.crc_ok ;
-  wire \result$241.word0.ne ;
-  wire \result$241.word0.nw ;
-  wire [54:0] \result$241.word0.position ;
-  wire [42:0] \result$241.word1 ;
-  wire \result$241.word1.crc_ok ;
-  wire \result$241.word1.ne ;
-  wire \result$241.word1.nw ;
-  wire [39:0] \result$241.word1.position ;
+  wire [3:0] \result$245.status ;
+  wire [31:0] \result$245.timestamp ;
+  wire [57:0] \result$245.word0 ;
+  wire \result$245.word0.crc_ok ;
+  wire \result$245.word0.ne ;
+  wire \result$245.word0.nw ;
+  wire [54:0] \result$245.word0.position ;
+  wire [42:0] \result$245.word1 ;
+  wire \result$245.word1.crc_ok ;
+  wire \result$245.word1.ne ;
+  wire \result$245.word1.nw ;
+  wire [39:0] \result$245.word1.position ;
   wire [6:0] \result.bytes_done ;
   (* enum_base_type = "AccessStatus" *)
   (* enum_value_000 = "OK" *)
@@ -15008,14 +15018,14 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   (* enum_value_110 = "BAD_REQUEST" *)
   wire [2:0] \result.status ;
   wire resync;
-  wire \resync$121 ;
+  wire \resync$125 ;
   wire [15:0] rises;
   wire [15:0] \rises$105 ;
   input rst;
   wire rst;
   wire run;
   reg sample = 1'h0;
-  wire \sample$261 ;
+  wire \sample$264 ;
   wire second_rise;
   wire skip;
   input slo;
@@ -15032,11 +15042,11 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   wire [39:0] spw;
   wire spw_match;
   wire spw_mismatch;
-  wire \spw_mismatch$257 ;
+  wire \spw_mismatch$261 ;
   input start;
   wire start;
-  input \start$181 ;
-  wire \start$181 ;
+  input \start$185 ;
+  wire \start$185 ;
   wire \start$22 ;
   wire [15:0] start_slot;
   wire [15:0] \start_slot$103 ;
@@ -15072,7 +15082,7 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
-  wire [3:0] \status$240 ;
+  wire [3:0] \status$244 ;
   wire stop_bit;
   wire \stop_bit$62 ;
   wire stopped;
@@ -15087,9 +15097,9 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   wire trigger;
   wire \trigger$33 ;
   wire valid;
-  wire \valid$154 ;
-  output \valid$238 ;
-  wire \valid$238 ;
+  wire \valid$158 ;
+  output \valid$242 ;
+  wire \valid$242 ;
   wire valid_out;
   wire w1_enable;
   wire [39:0] wbuf;
@@ -15105,28 +15115,28 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   wire word1_nw;
   wire [39:0] word1_position;
   wire [1:0] word_count;
-  wire [1:0] \word_count$111 ;
+  wire [1:0] \word_count$115 ;
   wire [1:0] word_crc_ok;
   wire [19:0] words;
-  wire [19:0] \words$123 ;
-  wire [9:0] \words$123[0] ;
+  wire [19:0] \words$127 ;
+  wire [9:0] \words$127[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
-  wire [1:0] \words$123[0].crc ;
-  wire [5:0] \words$123[0].data_bits ;
-  wire \words$123[0].lc ;
-  wire \words$123[0].nenw ;
-  wire [9:0] \words$123[1] ;
+  wire [1:0] \words$127[0].crc ;
+  wire [5:0] \words$127[0].data_bits ;
+  wire \words$127[0].lc ;
+  wire \words$127[0].nenw ;
+  wire [9:0] \words$127[1] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
-  wire [1:0] \words$123[1].crc ;
-  wire [5:0] \words$123[1].data_bits ;
-  wire \words$123[1].lc ;
-  wire \words$123[1].nenw ;
+  wire [1:0] \words$127[1].crc ;
+  wire [5:0] \words$127[1].data_bits ;
+  wire \words$127[1].lc ;
+  wire \words$127[1].nenw ;
   wire [9:0] \words[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
@@ -15158,10 +15168,10 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   assign \$9  = ca_done & \$8 ;
   assign \$10  = result[2:0] == 3'h5;
   assign \$11  = ca_done & \$10 ;
-  assign \busy$233  = ~ idle;
+  assign \busy$237  = ~ idle;
   assign config_error = ~ config_ok;
   assign \$12  = ~ \clear$106 ;
-  assign \$13  = \sample$261  & \$12 ;
+  assign \$13  = \sample$264  & \$12 ;
   always @(posedge clk)
     sample <= \$14 ;
   always @(posedge clk)
@@ -15222,7 +15232,7 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
     .timer_clear(clear)
   );
   \biss_master_wb.ch1.core.counters  counters (
-    .clear(\clear$210 ),
+    .clear(\clear$214 ),
     .clk(clk),
     .counts(counts),
     .events(events),
@@ -15275,10 +15285,10 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
     .start_slot(start_slot),
     .\started$10 (started),
     .w1_enable(cycle[135]),
-    .words(\words$123 )
+    .words(\words$127 )
   );
   \biss_master_wb.ch1.core.register_access  register_access (
-    .abort(\abort$183 ),
+    .abort(\abort$187 ),
     .busy(frames),
     .cdm(cdm),
     .clk(clk),
@@ -15290,27 +15300,27 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
     .host_read__addr(ca_wbuf_addr),
     .host_read__en(rbuf_en),
     .rbuf_data(ca_rbuf_data),
-    .request(\request$169 ),
+    .request(\request$173 ),
     .result(result),
     .rst(rst),
-    .\start$44 (\start$181 ),
+    .\start$44 (\start$185 ),
     .wbuf(wbuf)
   );
   \biss_master_wb.ch1.core.results  results (
     .clk(clk),
-    .done(\done$236 ),
+    .done(\done$240 ),
     .frame(frame),
     .report(report),
     .report_delay(report_delay),
     .report_frame(report_frame),
-    .result(\result$241 ),
+    .result(\result$245 ),
     .rst(rst),
     .valid(valid),
-    .valid_out(\valid$238 )
+    .valid_out(\valid$242 )
   );
   \biss_master_wb.ch1.core.sampler  sampler (
     .arm(ma_arm),
-    .\bit (\bit$263 ),
+    .\bit (\bit$265 ),
     .clk(clk),
     .delay(delay),
     .early(early),
@@ -15319,7 +15329,7 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
     .locked(locked),
     .receiver_clear(\clear$106 ),
     .rst(rst),
-    .sample(\sample$261 ),
+    .sample(\sample$264 ),
     .slo(slo)
   );
   \biss_master_wb.ch1.core.scheduler  scheduler (
@@ -15414,7 +15424,7 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
-    \$15  = \bit$263 ;
+    \$15  = \bit$265 ;
     if (rst) begin
       \$15  = 1'h0;
     end
@@ -15466,54 +15476,56 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   assign \start_slot$103  = start_slot;
   assign \rises$105  = rises;
   assign receiver_clear = \clear$106 ;
-  assign \half_period$108  = cycle[15:0];
+  assign decoder_sample = sample;
+  assign decoder_bit = \bit ;
+  assign \half_period$112  = cycle[15:0];
   assign arm = ma_arm;
-  assign \word_count$111  = word_count;
-  assign \lc$113  = lc;
+  assign \word_count$115  = word_count;
+  assign \lc$117  = lc;
   assign lc_next = { lc[4:0], \bit  };
-  assign \lc_next$115  = { lc[4:0], \bit  };
+  assign \lc_next$119  = { lc[4:0], \bit  };
   assign lc_load = load;
   assign lc_check = check;
-  assign \resync$121  = resync;
+  assign \resync$125  = resync;
   assign w1_enable = cycle[135];
-  assign \cpw_top$126  = cpw_top;
+  assign \cpw_top$130  = cpw_top;
   assign data1 = spw;
   assign bits = cycle[141:136];
   assign tolerance = cycle[154:147];
   assign match = spw_match;
   assign cfg = cycle;
-  assign \report_frame$135  = report_frame;
-  assign \fault$137  = fault;
-  assign \fault_status$139  = fault_status;
-  assign \crc_ok$141  = crc_ok;
+  assign \report_frame$139  = report_frame;
+  assign \fault$141  = fault;
+  assign \fault_status$143  = fault_status;
+  assign \crc_ok$145  = crc_ok;
   assign \repeat  = lc_repeat_seen;
   assign skip = lc_skip_seen;
   assign zero = lc_zero_seen;
-  assign \report$149  = report;
-  assign \report_frame$150  = report_frame;
-  assign \report_delay$152  = report_delay;
-  assign \valid$154  = valid;
+  assign \report$153  = report;
+  assign \report_frame$154  = report_frame;
+  assign \report_delay$156  = report_delay;
+  assign \valid$158  = valid;
   assign word_crc_ok = { \$16 , crc_ok[0] };
-  assign \first_rise$167  = first_rise;
+  assign \first_rise$171  = first_rise;
   assign ca_status = result[2:0];
   assign ca_bytes_done = result[9:3];
-  assign ca_start = \start$181 ;
-  assign ca_abort = \abort$183 ;
+  assign ca_start = \start$185 ;
+  assign ca_abort = \abort$187 ;
   assign rbuf_addr = ca_wbuf_addr;
   assign ca_rbuf_addr = ca_wbuf_addr;
   assign ca_rbuf_en = rbuf_en;
   assign rbuf_data = ca_rbuf_data;
   assign ca_busy = frames;
-  assign \busy$192  = frames;
-  assign \done$194  = ca_done;
-  assign \cdm$196  = cdm;
+  assign \busy$196  = frames;
+  assign \done$198  = ca_done;
+  assign \cdm$200  = cdm;
   assign held = ma_held;
   assign ma_hold = hold;
   assign frame_end = report;
   assign frame_ok = valid;
   assign frame_cds = cds;
   assign cdm_cycle = frame_cdm;
-  assign clear_counters = \clear$210 ;
+  assign clear_counters = \clear$214 ;
   assign count_crc_word0 = counts[15:0];
   assign count_crc_word1 = counts[31:16];
   assign count_no_ack = counts[47:32];
@@ -15532,27 +15544,27 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   assign count_ca_refused = counts[255:240];
   assign count_ca_aborted = counts[271:256];
   assign count_ca_data_fault = counts[287:272];
-  assign \ma$232  = ma;
-  assign \overrun$235  = overrun;
-  assign \done$237  = \done$236 ;
-  assign valid_out = \valid$238 ;
-  assign \status$240  = \result$241 [3:0];
-  assign timestamp = \result$241 [35:4];
-  assign line_delay = \result$241 [48:36];
-  assign \cds$244  = \result$241 [49];
-  assign word0_position = \result$241 [104:50];
-  assign word0_ne = \result$241 [105];
-  assign word0_nw = \result$241 [106];
-  assign word0_crc_ok = \result$241 [107];
-  assign word1_position = \result$241 [147:108];
-  assign word1_ne = \result$241 [148];
-  assign word1_nw = \result$241 [149];
-  assign word1_crc_ok = \result$241 [150];
-  assign \lc$253  = \result$241 [156:151];
-  assign \lc_repeat$254  = \result$241 [157];
-  assign \lc_skip$255  = \result$241 [158];
-  assign \lc_zero$256  = \result$241 [159];
-  assign \spw_mismatch$257  = \result$241 [160];
+  assign \ma$236  = ma;
+  assign \overrun$239  = overrun;
+  assign \done$241  = \done$240 ;
+  assign valid_out = \valid$242 ;
+  assign \status$244  = \result$245 [3:0];
+  assign timestamp = \result$245 [35:4];
+  assign line_delay = \result$245 [48:36];
+  assign \cds$248  = \result$245 [49];
+  assign word0_position = \result$245 [104:50];
+  assign word0_ne = \result$245 [105];
+  assign word0_nw = \result$245 [106];
+  assign word0_crc_ok = \result$245 [107];
+  assign word1_position = \result$245 [147:108];
+  assign word1_ne = \result$245 [148];
+  assign word1_nw = \result$245 [149];
+  assign word1_crc_ok = \result$245 [150];
+  assign \lc$257  = \result$245 [156:151];
+  assign \lc_repeat$258  = \result$245 [157];
+  assign \lc_skip$259  = \result$245 [158];
+  assign \lc_zero$260  = \result$245 [159];
+  assign \spw_mismatch$261  = \result$245 [160];
   assign \live.ma_half_period  = live[15:0];
   assign \live.request_period  = live[39:16];
   assign \live.break_time  = live[63:40];
@@ -15603,16 +15615,16 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   assign \words[1].nenw  = words[16];
   assign \words[1].lc  = words[17];
   assign \words[1].crc  = words[19:18];
-  assign \words$123[0]  = \words$123 [9:0];
-  assign \words$123[0].data_bits  = \words$123 [5:0];
-  assign \words$123[0].nenw  = \words$123 [6];
-  assign \words$123[0].lc  = \words$123 [7];
-  assign \words$123[0].crc  = \words$123 [9:8];
-  assign \words$123[1]  = \words$123 [19:10];
-  assign \words$123[1].data_bits  = \words$123 [15:10];
-  assign \words$123[1].nenw  = \words$123 [16];
-  assign \words$123[1].lc  = \words$123 [17];
-  assign \words$123[1].crc  = \words$123 [19:18];
+  assign \words$127[0]  = \words$127 [9:0];
+  assign \words$127[0].data_bits  = \words$127 [5:0];
+  assign \words$127[0].nenw  = \words$127 [6];
+  assign \words$127[0].lc  = \words$127 [7];
+  assign \words$127[0].crc  = \words$127 [9:8];
+  assign \words$127[1]  = \words$127 [19:10];
+  assign \words$127[1].data_bits  = \words$127 [15:10];
+  assign \words$127[1].nenw  = \words$127 [16];
+  assign \words$127[1].lc  = \words$127 [17];
+  assign \words$127[1].crc  = \words$127 [19:18];
   assign \cfg.ma_half_period  = cycle[15:0];
   assign \cfg.request_period  = cycle[39:16];
   assign \cfg.break_time  = cycle[63:40];
@@ -15652,10 +15664,10 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   assign \frame.lc_skip  = frame[158];
   assign \frame.lc_zero  = frame[159];
   assign \frame.spw_mismatch  = frame[160];
-  assign \request$169.slave_id  = \request$169 [2:0];
-  assign \request$169.address  = \request$169 [9:3];
-  assign \request$169.count  = \request$169 [16:10];
-  assign \request$169.write  = \request$169 [17];
+  assign \request$173.slave_id  = \request$173 [2:0];
+  assign \request$173.address  = \request$173 [9:3];
+  assign \request$173.count  = \request$173 [16:10];
+  assign \request$173.write  = \request$173 [17];
   assign \wbuf.addr  = wbuf[3:0];
   assign \wbuf.data  = wbuf[35:4];
   assign \wbuf.en  = wbuf[39:36];
@@ -15704,25 +15716,25 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   assign \counts.ca_refused  = counts[255:240];
   assign \counts.ca_aborted  = counts[271:256];
   assign \counts.ca_data_fault  = counts[287:272];
-  assign \result$241.status  = \result$241 [3:0];
-  assign \result$241.timestamp  = \result$241 [35:4];
-  assign \result$241.line_delay  = \result$241 [48:36];
-  assign \result$241.cds  = \result$241 [49];
-  assign \result$241.word0  = \result$241 [107:50];
-  assign \result$241.word0.position  = \result$241 [104:50];
-  assign \result$241.word0.ne  = \result$241 [105];
-  assign \result$241.word0.nw  = \result$241 [106];
-  assign \result$241.word0.crc_ok  = \result$241 [107];
-  assign \result$241.word1  = \result$241 [150:108];
-  assign \result$241.word1.position  = \result$241 [147:108];
-  assign \result$241.word1.ne  = \result$241 [148];
-  assign \result$241.word1.nw  = \result$241 [149];
-  assign \result$241.word1.crc_ok  = \result$241 [150];
-  assign \result$241.lc  = \result$241 [156:151];
-  assign \result$241.lc_repeat  = \result$241 [157];
-  assign \result$241.lc_skip  = \result$241 [158];
-  assign \result$241.lc_zero  = \result$241 [159];
-  assign \result$241.spw_mismatch  = \result$241 [160];
+  assign \result$245.status  = \result$245 [3:0];
+  assign \result$245.timestamp  = \result$245 [35:4];
+  assign \result$245.line_delay  = \result$245 [48:36];
+  assign \result$245.cds  = \result$245 [49];
+  assign \result$245.word0  = \result$245 [107:50];
+  assign \result$245.word0.position  = \result$245 [104:50];
+  assign \result$245.word0.ne  = \result$245 [105];
+  assign \result$245.word0.nw  = \result$245 [106];
+  assign \result$245.word0.crc_ok  = \result$245 [107];
+  assign \result$245.word1  = \result$245 [150:108];
+  assign \result$245.word1.position  = \result$245 [147:108];
+  assign \result$245.word1.ne  = \result$245 [148];
+  assign \result$245.word1.nw  = \result$245 [149];
+  assign \result$245.word1.crc_ok  = \result$245 [150];
+  assign \result$245.lc  = \result$245 [156:151];
+  assign \result$245.lc_repeat  = \result$245 [157];
+  assign \result$245.lc_skip  = \result$245 [158];
+  assign \result$245.lc_zero  = \result$245 [159];
+  assign \result$245.spw_mismatch  = \result$245 [160];
   assign events[17] = \$11 ;
   assign events[16] = \$9 ;
   assign events[15] = \$7 ;
@@ -15744,10 +15756,10 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   assign wbuf[39:36] = ca_wbuf_en;
   assign wbuf[35:4] = ca_wbuf_data;
   assign wbuf[3:0] = ca_wbuf_addr;
-  assign \request$169 [17] = ca_write;
-  assign \request$169 [16:10] = ca_count;
-  assign \request$169 [9:3] = ca_address;
-  assign \request$169 [2:0] = ca_slave_id;
+  assign \request$173 [17] = ca_write;
+  assign \request$173 [16:10] = ca_count;
+  assign \request$173 [9:3] = ca_address;
+  assign \request$173 [2:0] = ca_slave_id;
   assign frame[35:4] = first_rise_time;
   assign frame[160] = spw_mismatch;
   assign frame[150] = \$16 ;
@@ -15765,8 +15777,8 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
   assign frame[49] = cds;
   assign frame[48:36] = delay;
   assign frame[3:0] = status;
-  assign \words$123 [19:10] = cycle[145:136];
-  assign \words$123 [9:0] = cycle[134:125];
+  assign \words$127 [19:10] = cycle[145:136];
+  assign \words$127 [9:0] = cycle[134:125];
   assign words[19:10] = cycle[145:136];
   assign words[9:0] = cycle[134:125];
   assign live[154:147] = cfg_spw_tolerance;
