@@ -46,7 +46,7 @@ VIEW = (
     ("Cycle controller", (Show("start"), Show("busy"), Show("rises", "dec"))),
     ("State machines (state names from the design)", FSMS),
     ("Receiver: line delay and mid-eye sampling",
-     (Show("locked"), Show("sample"), Show("delay", "dec"), Show("slots", "dec"),
+     (Show("locked"), Show("sampler.sample"), Show("delay", "dec"), Show("slots", "dec"),
       Show("start_slot", "dec"))),
     ("Results", (Show("done"), Show("valid"), Show("status"), Show("word0_position"),
                  Show("word1_position"), Show("word0_crc_ok"), Show("word1_crc_ok"),

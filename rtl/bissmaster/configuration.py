@@ -42,7 +42,8 @@ class Configuration(wiring.Component):
     delay_limit : Out(delay_limit_width)
         ``cfg_delay_limit`` of the cycle, 0 replaced by ``max_line_delay``.
     no_start_limit : Out(cycle_timer_width)
-        The Ack limit plus one MA period (NO_START), registered from the latched values: valid
+        The Ack limit plus one MA period plus one clock (NO_START; the clock is the register
+        between sampler and decoder), registered from the latched values: valid
         one clock after the latch (the controller reads it in CLOCK, after at least one clock in
         WAIT_READY).
     word_count : Out(range(1, words + 1))
@@ -106,7 +107,9 @@ class Configuration(wiring.Component):
                 self.timeout_limit.eq(or_default(live.timeout_limit, p.timeout_limit_default)),
                 self.delay_limit.eq(or_default(live.delay_limit, p.max_line_delay)),
             ]
-        # NO_START: the Ack limit plus one MA period (two half periods).
-        m.d.sync += self.no_start_limit.eq(self.ack_limit + Cat(C(0, 1), cycle.ma_half_period))
+        # NO_START: the Ack limit plus one MA period (two half periods) plus one clock: the
+        # controller sees Start one clock later after its decision than the Ack's (the register
+        # between sampler and decoder), so the same decisions pass as with the Ack limit alone.
+        m.d.sync += self.no_start_limit.eq(self.ack_limit + Cat(C(1, 1), cycle.ma_half_period))
         m.d.comb += self.word_count.eq((1 + cycle.w1_enable) if p.words == 2 else 1)
         return m

@@ -246,7 +246,16 @@ class BissMaster(wiring.Component):
         """Sampler -> decoder -> checks."""
         p = self.params
         two = p.words == 2
-        m.d.sync += [b.decoder.sample.eq(b.sampler.sample), b.decoder.bit.eq(b.sampler.bit)]
+        # One register stage between the sampler's decision and the decoder: the vote decode and
+        # the decoder's shift enables are too much for one clock at 100 MHz (ECP5). The verdict
+        # comes one clock later. The strobe is cleared with the receiver, so a decision made in
+        # a clock of the clear never reaches the decoder after it.
+        # Named apart from the sampler's ``sample``, which stays the decision in the Verilog.
+        sample = Signal(name="decoder_sample")
+        bit = Signal(name="decoder_bit")
+        m.d.sync += [sample.eq(b.sampler.sample & ~b.controller.receiver_clear),
+                     bit.eq(b.sampler.bit)]
+        m.d.comb += [b.decoder.sample.eq(sample), b.decoder.bit.eq(bit)]
         m.d.comb += [
             b.sampler.half_period.eq(b.cycle.ma_half_period),
             b.sampler.arm.eq(b.ma_clock.second_rise),

@@ -188,7 +188,8 @@ class MasterParams:
     @property
     def cycle_timer_width(self):
         """Width of the cycle timer and the NO_START limit: the longest limit it compares with
-        is the Ack limit plus one MA period (two half periods), and one bit more for it."""
+        is the Ack limit plus one MA period (two half periods) plus one clock, and one bit more for
+        it."""
         return max(self.timer_width, HALF_PERIOD_WIDTH + 1) + 1
 
     @property

@@ -23,9 +23,11 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
-  reg \$12 ;
-  reg \$13 ;
-  wire \$14 ;
+  wire \$12 ;
+  wire \$13 ;
+  reg \$14 ;
+  reg \$15 ;
+  wire \$16 ;
   wire \$2 ;
   wire \$3 ;
   wire \$4 ;
@@ -35,7 +37,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \$8 ;
   wire \$9 ;
   wire abort;
-  wire \abort$231 ;
+  wire \abort$235 ;
   wire \abort$94 ;
   input abort_cycle;
   wire abort_cycle;
@@ -45,7 +47,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire [23:0] \ack_limit$147 ;
   wire arm;
   reg \bit  = 1'h0;
-  wire \bit$261 ;
+  wire \bit$263 ;
   wire [5:0] bits;
   wire break_over;
   wire \break_over$124 ;
@@ -53,7 +55,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   output busy;
   wire busy;
   wire \busy$102 ;
-  wire \busy$235 ;
+  wire \busy$239 ;
   input ca_abort;
   wire ca_abort;
   input [6:0] ca_address;
@@ -95,11 +97,11 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   input ca_write;
   wire ca_write;
   wire cdm;
-  wire \cdm$238 ;
+  wire \cdm$242 ;
   wire cdm_cycle;
   output cds;
   wire cds;
-  wire \cds$215 ;
+  wire \cds$219 ;
   wire [154:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
@@ -176,7 +178,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire check;
   wire clear;
   wire \clear$164 ;
-  wire \clear$252 ;
+  wire \clear$256 ;
   input clear_counters;
   wire clear_counters;
   input clk;
@@ -241,10 +243,10 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire [15:0] \counts.slo_stuck_low ;
   wire [15:0] \counts.spw_mismatch ;
   wire [39:0] cpw_top;
-  wire [39:0] \cpw_top$184 ;
+  wire [39:0] \cpw_top$188 ;
   wire [1:0] crc_error;
   wire [1:0] crc_ok;
-  wire [1:0] \crc_ok$199 ;
+  wire [1:0] \crc_ok$203 ;
   wire [154:0] cycle;
   wire [23:0] \cycle.ack_limit ;
   wire [23:0] \cycle.break_time ;
@@ -276,6 +278,10 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \cycle.w1_enable ;
   wire [54:0] data0;
   wire [39:0] data1;
+  (* init = 1'h0 *)
+  wire decoder_bit;
+  (* init = 1'h0 *)
+  wire decoder_sample;
   wire [12:0] delay;
   wire [12:0] \delay$153 ;
   wire [11:0] delay_limit;
@@ -285,8 +291,8 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   output done;
   wire done;
   wire \done$112 ;
-  wire \done$236 ;
-  wire \done$255 ;
+  wire \done$240 ;
+  wire \done$259 ;
   wire doubtful;
   wire early;
   wire \early$110 ;
@@ -312,7 +318,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \events.slo_stuck_low ;
   wire \events.spw_mismatch ;
   wire fault;
-  wire \fault$195 ;
+  wire \fault$199 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -342,7 +348,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
-  wire [3:0] \fault_status$197 ;
+  wire [3:0] \fault_status$201 ;
   wire [6:0] faults;
   wire \faults.aborted ;
   wire \faults.bad_config ;
@@ -352,7 +358,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \faults.no_stop ;
   wire \faults.slo_stuck_low ;
   wire first_rise;
-  wire \first_rise$225 ;
+  wire \first_rise$229 ;
   wire [31:0] first_rise_time;
   wire [160:0] frame;
   wire \frame.cds ;
@@ -396,7 +402,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire frame_ok;
   wire frames;
   wire [15:0] half_period;
-  wire [15:0] \half_period$166 ;
+  wire [15:0] \half_period$170 ;
   wire held;
   wire hold;
   wire idle;
@@ -406,23 +412,23 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \in_clock$141 ;
   output [5:0] lc;
   wire [5:0] lc;
-  wire [5:0] \lc$170 ;
-  wire [5:0] \lc$171 ;
+  wire [5:0] \lc$174 ;
+  wire [5:0] \lc$175 ;
   wire lc_check;
   wire lc_load;
   wire [5:0] lc_next;
-  wire [5:0] \lc_next$173 ;
+  wire [5:0] \lc_next$177 ;
   output lc_repeat;
   wire lc_repeat;
-  wire \lc_repeat$216 ;
+  wire \lc_repeat$220 ;
   wire lc_repeat_seen;
   output lc_skip;
   wire lc_skip;
-  wire \lc_skip$217 ;
+  wire \lc_skip$221 ;
   wire lc_skip_seen;
   output lc_zero;
   wire lc_zero;
-  wire \lc_zero$218 ;
+  wire \lc_zero$222 ;
   wire lc_zero_seen;
   wire level;
   output [12:0] line_delay;
@@ -461,7 +467,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \locked$108 ;
   output ma;
   wire ma;
-  wire \ma$254 ;
+  wire \ma$258 ;
   wire ma_arm;
   wire ma_busy;
   wire \ma_busy$136 ;
@@ -479,7 +485,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire ok;
   output overrun;
   wire overrun;
-  wire \overrun$251 ;
+  wire \overrun$255 ;
   wire [23:0] period;
   input periodic;
   wire periodic;
@@ -490,30 +496,30 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire receiver_clear;
   wire \repeat ;
   wire report;
-  wire \report$207 ;
+  wire \report$211 ;
   wire report_delay;
-  wire \report_delay$210 ;
+  wire \report_delay$214 ;
   wire report_frame;
-  wire \report_frame$193 ;
-  wire \report_frame$208 ;
+  wire \report_frame$197 ;
+  wire \report_frame$212 ;
   wire request;
-  wire [17:0] \request$227 ;
-  wire [6:0] \request$227.address ;
-  wire [6:0] \request$227.count ;
-  wire [2:0] \request$227.slave_id ;
-  wire \request$227.write ;
+  wire [17:0] \request$231 ;
+  wire [6:0] \request$231.address ;
+  wire [6:0] \request$231.count ;
+  wire [2:0] \request$231.slave_id ;
+  wire \request$231.write ;
   wire \request$93 ;
   wire restart;
   wire restart_timer;
   wire [9:0] result;
-  wire [160:0] \result$257 ;
-  wire \result$257.cds ;
-  wire [5:0] \result$257.lc ;
-  wire \result$257.lc_repeat ;
-  wire \result$257.lc_skip ;
-  wire \result$257.lc_zero ;
-  wire [12:0] \result$257.line_delay ;
-  wire \result$257.spw_mismatch ;
+  wire [160:0] \result$261 ;
+  wire \result$261.cds ;
+  wire [5:0] \result$261.lc ;
+  wire \result$261.lc_repeat ;
+  wire \result$261.lc_skip ;
+  wire \result$261.lc_zero ;
+  wire [12:0] \result$261.line_delay ;
+  wire \result$261.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -528,18 +534,18 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
-  wire [3:0] \result$257.status ;
-  wire [31:0] \result$257.timestamp ;
-  wire [57:0] \result$257.word0 ;
-  wire \result$257.word0.crc_ok ;
-  wire \result$257.word0.ne ;
-  wire \result$257.word0.nw ;
-  wire [54:0] \result$257.word0.position ;
-  wire [42:0] \result$257.word1 ;
-  wire \result$257.word1.crc_ok ;
-  wire \result$257.word1.ne ;
-  wire \result$257.word1.nw ;
-  wire [39:0] \result$257.word1.position ;
+  wire [3:0] \result$261.status ;
+  wire [31:0] \result$261.timestamp ;
+  wire [57:0] \result$261.word0 ;
+  wire \result$261.word0.crc_ok ;
+  wire \result$261.word0.ne ;
+  wire \result$261.word0.nw ;
+  wire [54:0] \result$261.word0.position ;
+  wire [42:0] \result$261.word1 ;
+  wire \result$261.word1.crc_ok ;
+  wire \result$261.word1.ne ;
+  wire \result$261.word1.nw ;
+  wire [39:0] \result$261.word1.position ;
   wire [6:0] \result.bytes_done ;
   (* enum_base_type = "AccessStatus" *)
   (* enum_value_000 = "OK" *)
@@ -551,14 +557,14 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_110 = "BAD_REQUEST" *)
   wire [2:0] \result.status ;
   wire resync;
-  wire \resync$179 ;
+  wire \resync$183 ;
   wire [15:0] rises;
   wire [15:0] \rises$163 ;
   input rst;
   wire rst;
   wire run;
   reg sample = 1'h0;
-  wire \sample$259 ;
+  wire \sample$262 ;
   wire second_rise;
   wire skip;
   input slo;
@@ -576,10 +582,10 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire spw_match;
   output spw_mismatch;
   wire spw_mismatch;
-  wire \spw_mismatch$223 ;
+  wire \spw_mismatch$227 ;
   input start;
   wire start;
-  wire \start$230 ;
+  wire \start$234 ;
   wire \start$85 ;
   wire [15:0] start_slot;
   wire [15:0] \start_slot$161 ;
@@ -616,7 +622,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
-  wire [3:0] \status$214 ;
+  wire [3:0] \status$218 ;
   wire stop_bit;
   wire \stop_bit$120 ;
   wire stopped;
@@ -630,8 +636,8 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire [7:0] tolerance;
   output valid;
   wire valid;
-  wire \valid$211 ;
-  wire \valid$212 ;
+  wire \valid$215 ;
+  wire \valid$216 ;
   wire valid_out;
   wire w1_enable;
   wire [39:0] wbuf;
@@ -655,28 +661,28 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   output [39:0] word1_position;
   wire [39:0] word1_position;
   wire [1:0] word_count;
-  wire [1:0] \word_count$169 ;
+  wire [1:0] \word_count$173 ;
   wire [1:0] word_crc_ok;
   wire [19:0] words;
-  wire [19:0] \words$181 ;
-  wire [9:0] \words$181[0] ;
+  wire [19:0] \words$185 ;
+  wire [9:0] \words$185[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
-  wire [1:0] \words$181[0].crc ;
-  wire [5:0] \words$181[0].data_bits ;
-  wire \words$181[0].lc ;
-  wire \words$181[0].nenw ;
-  wire [9:0] \words$181[1] ;
+  wire [1:0] \words$185[0].crc ;
+  wire [5:0] \words$185[0].data_bits ;
+  wire \words$185[0].lc ;
+  wire \words$185[0].nenw ;
+  wire [9:0] \words$185[1] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
-  wire [1:0] \words$181[1].crc ;
-  wire [5:0] \words$181[1].data_bits ;
-  wire \words$181[1].lc ;
-  wire \words$181[1].nenw ;
+  wire [1:0] \words$185[1].crc ;
+  wire [5:0] \words$185[1].data_bits ;
+  wire \words$185[1].lc ;
+  wire \words$185[1].nenw ;
   wire [9:0] \words[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
@@ -697,7 +703,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \words[1].nenw ;
   wire zero;
   assign \periodic$86  = periodic | ca_busy;
-  assign \$1  = report_frame & \spw_mismatch$223 ;
+  assign \$1  = report_frame & \spw_mismatch$227 ;
   assign \$2  = result[2:0] == 1'h1;
   assign \$3  = ca_done & \$2 ;
   assign \$4  = result[2:0] == 2'h2;
@@ -710,10 +716,12 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \$11  = ca_done & \$10 ;
   assign busy = ~ idle;
   assign config_error = ~ config_ok;
+  assign \$12  = ~ \clear$164 ;
+  assign \$13  = \sample$262  & \$12 ;
   always @(posedge clk)
-    sample <= \$12 ;
+    sample <= \$14 ;
   always @(posedge clk)
-    \bit  <= \$13 ;
+    \bit  <= \$15 ;
   \biss_master.config  \config  (
     .ack_limit(ack_limit),
     .clk(clk),
@@ -778,14 +786,14 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   );
   \biss_master.decoder  decoder (
     .\bit (\bit ),
-    .cds(\cds$215 ),
+    .cds(\cds$219 ),
     .clk(clk),
     .cpw_top(cpw_top),
     .crc_ok(crc_ok),
     .data0(data0),
     .data1(spw),
     .done(frame_done),
-    .lc(\lc$170 ),
+    .lc(\lc$174 ),
     .lc_load(load),
     .ne(ne),
     .nw(nw),
@@ -823,7 +831,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .start_slot(start_slot),
     .\started$10 (started),
     .w1_enable(cycle[135]),
-    .words(\words$181 )
+    .words(\words$185 )
   );
   \biss_master.register_access  register_access (
     .abort(ca_abort),
@@ -832,13 +840,13 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .clk(clk),
     .done(ca_done),
     .frame_cdm(frame_cdm),
-    .frame_cds(\cds$215 ),
+    .frame_cds(\cds$219 ),
     .frame_end(report),
-    .frame_ok(\valid$211 ),
+    .frame_ok(\valid$215 ),
     .rbuf_addr(ca_rbuf_addr),
     .rbuf_data(ca_rbuf_data),
     .rbuf_en(ca_rbuf_en),
-    .request(\request$227 ),
+    .request(\request$231 ),
     .result(result),
     .rst(rst),
     .start(ca_start),
@@ -851,14 +859,14 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .report(report),
     .report_delay(report_delay),
     .report_frame(report_frame),
-    .result(\result$257 ),
+    .result(\result$261 ),
     .rst(rst),
-    .valid(\valid$211 ),
+    .valid(\valid$215 ),
     .valid_out(valid)
   );
   \biss_master.sampler  sampler (
     .arm(ma_arm),
-    .\bit (\bit$261 ),
+    .\bit (\bit$263 ),
     .clk(clk),
     .delay(delay),
     .early(early),
@@ -867,7 +875,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .locked(locked),
     .receiver_clear(\clear$164 ),
     .rst(rst),
-    .sample(\sample$259 ),
+    .sample(\sample$262 ),
     .slo(slo)
   );
   \biss_master.scheduler  scheduler (
@@ -885,9 +893,9 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .check(check),
     .clk(clk),
     .is_zero(lc_zero_seen),
-    .lc(\lc$170 ),
+    .lc(\lc$174 ),
     .load(load),
-    .\port$1374$0 (\bit ),
+    .\port$1376$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -938,32 +946,32 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .fault(fault),
     .fault_status(fault_status),
     .lc_check(check),
-    .lc_repeat(\lc_repeat$216 ),
+    .lc_repeat(\lc_repeat$220 ),
     .lc_repeat_seen(lc_repeat_seen),
-    .lc_skip(\lc_skip$217 ),
+    .lc_skip(\lc_skip$221 ),
     .lc_skip_seen(lc_skip_seen),
-    .lc_zero(\lc_zero$218 ),
+    .lc_zero(\lc_zero$222 ),
     .lc_zero_seen(lc_zero_seen),
-    .\port$882$0 (\$14 ),
+    .\port$884$0 (\$16 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
-    .spw_mismatch(\spw_mismatch$223 ),
-    .status(\status$214 ),
-    .valid(\valid$211 )
+    .spw_mismatch(\spw_mismatch$227 ),
+    .status(\status$218 ),
+    .valid(\valid$215 )
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
-    \$12  = \sample$259 ;
+    \$14  = \$13 ;
     if (rst) begin
-      \$12  = 1'h0;
+      \$14  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
-    \$13  = \bit$261 ;
+    \$15  = \bit$263 ;
     if (rst) begin
-      \$13  = 1'h0;
+      \$15  = 1'h0;
     end
   end
   assign \idle$84  = idle;
@@ -1013,71 +1021,73 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \start_slot$161  = start_slot;
   assign \rises$163  = rises;
   assign receiver_clear = \clear$164 ;
-  assign \half_period$166  = cycle[15:0];
+  assign decoder_sample = sample;
+  assign decoder_bit = \bit ;
+  assign \half_period$170  = cycle[15:0];
   assign arm = ma_arm;
-  assign \word_count$169  = word_count;
-  assign \lc$171  = \lc$170 ;
-  assign lc_next = { \lc$170 [4:0], \bit  };
-  assign \lc_next$173  = { \lc$170 [4:0], \bit  };
+  assign \word_count$173  = word_count;
+  assign \lc$175  = \lc$174 ;
+  assign lc_next = { \lc$174 [4:0], \bit  };
+  assign \lc_next$177  = { \lc$174 [4:0], \bit  };
   assign lc_load = load;
   assign lc_check = check;
-  assign \resync$179  = resync;
+  assign \resync$183  = resync;
   assign w1_enable = cycle[135];
-  assign \cpw_top$184  = cpw_top;
+  assign \cpw_top$188  = cpw_top;
   assign data1 = spw;
   assign bits = cycle[141:136];
   assign tolerance = cycle[154:147];
   assign match = spw_match;
   assign cfg = cycle;
-  assign \report_frame$193  = report_frame;
-  assign \fault$195  = fault;
-  assign \fault_status$197  = fault_status;
-  assign \crc_ok$199  = crc_ok;
+  assign \report_frame$197  = report_frame;
+  assign \fault$199  = fault;
+  assign \fault_status$201  = fault_status;
+  assign \crc_ok$203  = crc_ok;
   assign \repeat  = lc_repeat_seen;
   assign skip = lc_skip_seen;
   assign zero = lc_zero_seen;
-  assign \report$207  = report;
-  assign \report_frame$208  = report_frame;
-  assign \report_delay$210  = report_delay;
-  assign \valid$212  = \valid$211 ;
-  assign word_crc_ok = { \$14 , crc_ok[0] };
-  assign \first_rise$225  = first_rise;
-  assign \start$230  = ca_start;
-  assign \abort$231  = ca_abort;
+  assign \report$211  = report;
+  assign \report_frame$212  = report_frame;
+  assign \report_delay$214  = report_delay;
+  assign \valid$216  = \valid$215 ;
+  assign word_crc_ok = { \$16 , crc_ok[0] };
+  assign \first_rise$229  = first_rise;
+  assign \start$234  = ca_start;
+  assign \abort$235  = ca_abort;
   assign rbuf_addr = ca_rbuf_addr;
   assign rbuf_en = ca_rbuf_en;
   assign rbuf_data = ca_rbuf_data;
-  assign \busy$235  = ca_busy;
-  assign \done$236  = ca_done;
-  assign \cdm$238  = cdm;
+  assign \busy$239  = ca_busy;
+  assign \done$240  = ca_done;
+  assign \cdm$242  = cdm;
   assign held = ma_held;
   assign ma_hold = hold;
   assign frame_end = report;
-  assign frame_ok = \valid$211 ;
-  assign frame_cds = \cds$215 ;
+  assign frame_ok = \valid$215 ;
+  assign frame_cds = \cds$219 ;
   assign cdm_cycle = frame_cdm;
-  assign \overrun$251  = overrun;
-  assign \clear$252  = clear_counters;
-  assign \ma$254  = ma;
-  assign \done$255  = done;
+  assign \overrun$255  = overrun;
+  assign \clear$256  = clear_counters;
+  assign \ma$258  = ma;
+  assign \done$259  = done;
   assign valid_out = valid;
-  assign status = \result$257 [3:0];
-  assign timestamp = \result$257 [35:4];
-  assign line_delay = \result$257 [48:36];
-  assign cds = \result$257 [49];
-  assign word0_position = \result$257 [104:50];
-  assign word0_ne = \result$257 [105];
-  assign word0_nw = \result$257 [106];
-  assign word0_crc_ok = \result$257 [107];
-  assign word1_position = \result$257 [147:108];
-  assign word1_ne = \result$257 [148];
-  assign word1_nw = \result$257 [149];
-  assign word1_crc_ok = \result$257 [150];
-  assign lc = \result$257 [156:151];
-  assign lc_repeat = \result$257 [157];
-  assign lc_skip = \result$257 [158];
-  assign lc_zero = \result$257 [159];
-  assign spw_mismatch = \result$257 [160];
+  assign status = \result$261 [3:0];
+  assign timestamp = \result$261 [35:4];
+  assign line_delay = \result$261 [48:36];
+  assign cds = \result$261 [49];
+  assign word0_position = \result$261 [104:50];
+  assign word0_ne = \result$261 [105];
+  assign word0_nw = \result$261 [106];
+  assign word0_crc_ok = \result$261 [107];
+  assign word1_position = \result$261 [147:108];
+  assign word1_ne = \result$261 [148];
+  assign word1_nw = \result$261 [149];
+  assign word1_crc_ok = \result$261 [150];
+  assign lc = \result$261 [156:151];
+  assign lc_repeat = \result$261 [157];
+  assign lc_skip = \result$261 [158];
+  assign lc_zero = \result$261 [159];
+  assign spw_mismatch = \result$261 [160];
   assign ca_status = result[2:0];
   assign ca_bytes_done = result[9:3];
   assign count_crc_word0 = counts[15:0];
@@ -1148,16 +1158,16 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \words[1].nenw  = words[16];
   assign \words[1].lc  = words[17];
   assign \words[1].crc  = words[19:18];
-  assign \words$181[0]  = \words$181 [9:0];
-  assign \words$181[0].data_bits  = \words$181 [5:0];
-  assign \words$181[0].nenw  = \words$181 [6];
-  assign \words$181[0].lc  = \words$181 [7];
-  assign \words$181[0].crc  = \words$181 [9:8];
-  assign \words$181[1]  = \words$181 [19:10];
-  assign \words$181[1].data_bits  = \words$181 [15:10];
-  assign \words$181[1].nenw  = \words$181 [16];
-  assign \words$181[1].lc  = \words$181 [17];
-  assign \words$181[1].crc  = \words$181 [19:18];
+  assign \words$185[0]  = \words$185 [9:0];
+  assign \words$185[0].data_bits  = \words$185 [5:0];
+  assign \words$185[0].nenw  = \words$185 [6];
+  assign \words$185[0].lc  = \words$185 [7];
+  assign \words$185[0].crc  = \words$185 [9:8];
+  assign \words$185[1]  = \words$185 [19:10];
+  assign \words$185[1].data_bits  = \words$185 [15:10];
+  assign \words$185[1].nenw  = \words$185 [16];
+  assign \words$185[1].lc  = \words$185 [17];
+  assign \words$185[1].crc  = \words$185 [19:18];
   assign \cfg.ma_half_period  = cycle[15:0];
   assign \cfg.request_period  = cycle[39:16];
   assign \cfg.break_time  = cycle[63:40];
@@ -1197,10 +1207,10 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \frame.lc_skip  = frame[158];
   assign \frame.lc_zero  = frame[159];
   assign \frame.spw_mismatch  = frame[160];
-  assign \request$227.slave_id  = \request$227 [2:0];
-  assign \request$227.address  = \request$227 [9:3];
-  assign \request$227.count  = \request$227 [16:10];
-  assign \request$227.write  = \request$227 [17];
+  assign \request$231.slave_id  = \request$231 [2:0];
+  assign \request$231.address  = \request$231 [9:3];
+  assign \request$231.count  = \request$231 [16:10];
+  assign \request$231.write  = \request$231 [17];
   assign \wbuf.addr  = wbuf[3:0];
   assign \wbuf.data  = wbuf[35:4];
   assign \wbuf.en  = wbuf[39:36];
@@ -1249,25 +1259,25 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \counts.ca_refused  = counts[255:240];
   assign \counts.ca_aborted  = counts[271:256];
   assign \counts.ca_data_fault  = counts[287:272];
-  assign \result$257.status  = \result$257 [3:0];
-  assign \result$257.timestamp  = \result$257 [35:4];
-  assign \result$257.line_delay  = \result$257 [48:36];
-  assign \result$257.cds  = \result$257 [49];
-  assign \result$257.word0  = \result$257 [107:50];
-  assign \result$257.word0.position  = \result$257 [104:50];
-  assign \result$257.word0.ne  = \result$257 [105];
-  assign \result$257.word0.nw  = \result$257 [106];
-  assign \result$257.word0.crc_ok  = \result$257 [107];
-  assign \result$257.word1  = \result$257 [150:108];
-  assign \result$257.word1.position  = \result$257 [147:108];
-  assign \result$257.word1.ne  = \result$257 [148];
-  assign \result$257.word1.nw  = \result$257 [149];
-  assign \result$257.word1.crc_ok  = \result$257 [150];
-  assign \result$257.lc  = \result$257 [156:151];
-  assign \result$257.lc_repeat  = \result$257 [157];
-  assign \result$257.lc_skip  = \result$257 [158];
-  assign \result$257.lc_zero  = \result$257 [159];
-  assign \result$257.spw_mismatch  = \result$257 [160];
+  assign \result$261.status  = \result$261 [3:0];
+  assign \result$261.timestamp  = \result$261 [35:4];
+  assign \result$261.line_delay  = \result$261 [48:36];
+  assign \result$261.cds  = \result$261 [49];
+  assign \result$261.word0  = \result$261 [107:50];
+  assign \result$261.word0.position  = \result$261 [104:50];
+  assign \result$261.word0.ne  = \result$261 [105];
+  assign \result$261.word0.nw  = \result$261 [106];
+  assign \result$261.word0.crc_ok  = \result$261 [107];
+  assign \result$261.word1  = \result$261 [150:108];
+  assign \result$261.word1.position  = \result$261 [147:108];
+  assign \result$261.word1.ne  = \result$261 [148];
+  assign \result$261.word1.nw  = \result$261 [149];
+  assign \result$261.word1.crc_ok  = \result$261 [150];
+  assign \result$261.lc  = \result$261 [156:151];
+  assign \result$261.lc_repeat  = \result$261 [157];
+  assign \result$261.lc_skip  = \result$261 [158];
+  assign \result$261.lc_zero  = \result$261 [159];
+  assign \result$261.spw_mismatch  = \result$261 [160];
   assign events[17] = \$11 ;
   assign events[16] = \$9 ;
   assign events[15] = \$7 ;
@@ -1277,9 +1287,9 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign events[11] = faults[4];
   assign events[10] = overrun;
   assign events[9] = \$1 ;
-  assign events[8] = \lc_zero$218 ;
-  assign events[7] = \lc_skip$217 ;
-  assign events[6] = \lc_repeat$216 ;
+  assign events[8] = \lc_zero$222 ;
+  assign events[7] = \lc_skip$221 ;
+  assign events[6] = \lc_repeat$220 ;
   assign events[5] = faults[3];
   assign events[4] = faults[2];
   assign events[3] = faults[1];
@@ -1289,13 +1299,13 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign wbuf[39:36] = ca_wbuf_en;
   assign wbuf[35:4] = ca_wbuf_data;
   assign wbuf[3:0] = ca_wbuf_addr;
-  assign \request$227 [17] = ca_write;
-  assign \request$227 [16:10] = ca_count;
-  assign \request$227 [9:3] = ca_address;
-  assign \request$227 [2:0] = ca_slave_id;
+  assign \request$231 [17] = ca_write;
+  assign \request$231 [16:10] = ca_count;
+  assign \request$231 [9:3] = ca_address;
+  assign \request$231 [2:0] = ca_slave_id;
   assign frame[35:4] = first_rise_time;
-  assign frame[160] = \spw_mismatch$223 ;
-  assign frame[150] = \$14 ;
+  assign frame[160] = \spw_mismatch$227 ;
+  assign frame[150] = \$16 ;
   assign frame[149] = nw[1];
   assign frame[148] = ne[1];
   assign frame[147:108] = spw;
@@ -1303,15 +1313,15 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign frame[106] = nw[0];
   assign frame[105] = ne[0];
   assign frame[104:50] = data0;
-  assign frame[159] = \lc_zero$218 ;
-  assign frame[158] = \lc_skip$217 ;
-  assign frame[157] = \lc_repeat$216 ;
-  assign frame[156:151] = \lc$170 ;
-  assign frame[49] = \cds$215 ;
+  assign frame[159] = \lc_zero$222 ;
+  assign frame[158] = \lc_skip$221 ;
+  assign frame[157] = \lc_repeat$220 ;
+  assign frame[156:151] = \lc$174 ;
+  assign frame[49] = \cds$219 ;
   assign frame[48:36] = delay;
-  assign frame[3:0] = \status$214 ;
-  assign \words$181 [19:10] = cycle[145:136];
-  assign \words$181 [9:0] = cycle[134:125];
+  assign frame[3:0] = \status$218 ;
+  assign \words$185 [19:10] = cycle[145:136];
+  assign \words$185 [9:0] = cycle[134:125];
   assign words[19:10] = cycle[145:136];
   assign words[9:0] = cycle[134:125];
   assign live[154:147] = cfg_spw_tolerance;
@@ -1504,7 +1514,7 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   assign \$38  = \$37  ? 24'h001f40 : live[111:88];
   assign \$39  = ! live[123:112];
   assign \$40  = \$39  ? 12'hfff : live[123:112];
-  assign \$41  = ack_limit + { cycle[15:0], 1'h0 };
+  assign \$41  = ack_limit + { cycle[15:0], 1'h1 };
   assign word_count = 1'h1 + cycle[135];
   always @(posedge clk)
     ok <= \$42 ;
@@ -5047,9 +5057,9 @@ module \biss_master.decoder.crc0 (rst, start, valid, kind, \bit , receiver_clear
           ok = crc16_match;
     endcase
   end
+  assign \$8  = 1'h0;
   assign \$11 [5:2] = crc6_reg[4:1];
   assign \$11 [1:0] = \$auto$rtlil.cc:2739:Not$10 ;
-  assign \$8  = 1'h0;
   assign \$23  = 1'h0;
   assign { \$26 [14:13], \$26 [11:8], \$26 [5], \$26 [2:1] } = { crc16_reg[13:12], crc16_reg[10:7], crc16_reg[4], crc16_reg[1:0] };
   assign { \$26 [15], \$26 [12], \$26 [7:6], \$26 [4:3], \$26 [0] } = \$auto$rtlil.cc:2739:Not$12 ;
@@ -5222,9 +5232,9 @@ module \biss_master.decoder.crc1 (rst, start, valid, kind, \bit , receiver_clear
           ok = crc16_match;
     endcase
   end
+  assign \$8  = 1'h0;
   assign \$11 [5:2] = crc6_reg[4:1];
   assign \$11 [1:0] = \$auto$rtlil.cc:2739:Not$6 ;
-  assign \$8  = 1'h0;
   assign \$23  = 1'h0;
   assign { \$26 [14:13], \$26 [11:8], \$26 [5], \$26 [2:1] } = { crc16_reg[13:12], crc16_reg[10:7], crc16_reg[4], crc16_reg[1:0] };
   assign { \$26 [15], \$26 [12], \$26 [7:6], \$26 [4:3], \$26 [0] } = \$auto$rtlil.cc:2739:Not$8 ;
@@ -8801,7 +8811,7 @@ module \biss_master.scheduler (abort, period, clk, rst, periodic, request, overr
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1374$0 , resync, lc, is_zero, clk);
+module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1376$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$49  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -8839,8 +8849,8 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1374$0
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$1374$0 ;
-  wire \port$1374$0 ;
+  input \port$1376$0 ;
+  wire \port$1376$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -8852,9 +8862,9 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1374$0
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$1374$0  };
-  assign \$2  = { lc[4:0], \port$1374$0  } == last;
-  assign \$3  = { lc[4:0], \port$1374$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$1376$0  };
+  assign \$2  = { lc[4:0], \port$1376$0  } == last;
+  assign \$3  = { lc[4:0], \port$1376$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = lc == 6'h3f;
@@ -8944,7 +8954,7 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1374$0
       \$21  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$1374$0  };
+  assign lc_next = { lc[4:0], \port$1376$0  };
   assign zero = is_zero;
 endmodule
 
@@ -9426,7 +9436,7 @@ module \biss_master.timers (timeout_live, clk, rst, restart, ma_busy, ack_limit,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.verdict (lc_skip_seen, \port$882$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
+module \biss_master.verdict (lc_skip_seen, \port$884$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$53  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -9540,8 +9550,8 @@ module \biss_master.verdict (lc_skip_seen, \port$882$0 , lc_check, lc_repeat, lc
   wire lc_zero;
   input lc_zero_seen;
   wire lc_zero_seen;
-  output \port$882$0 ;
-  wire \port$882$0 ;
+  output \port$884$0 ;
+  wire \port$884$0 ;
   output report;
   wire report;
   input report_frame;
@@ -9626,7 +9636,7 @@ module \biss_master.verdict (lc_skip_seen, \port$882$0 , lc_check, lc_repeat, lc
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$882$0  = \$2 ;
+  assign \port$884$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

@@ -568,12 +568,12 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .ch1_irq(\$7 ),
     .clk(clk),
     .glob__trigger(glob__trigger),
-    .\port$3983$0 (\$8 ),
-    .\port$3990$0 (\$9 ),
-    .\port$4104$0 (\$10 ),
-    .\port$4436$0 (\$11 ),
-    .\port$4443$0 (\$12 ),
-    .\port$4557$0 (\$13 ),
+    .\port$3987$0 (\$8 ),
+    .\port$3994$0 (\$9 ),
+    .\port$4108$0 (\$10 ),
+    .\port$4440$0 (\$11 ),
+    .\port$4447$0 (\$12 ),
+    .\port$4561$0 (\$13 ),
     .rst(rst)
   );
   \biss_master_axil.bus  bus (
@@ -636,9 +636,9 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .clk(clk),
     .ma(ch0_ma),
     .periodic(regs__periodic),
-    .\port$3983$0 (\$8 ),
-    .\port$3990$0 (\$9 ),
-    .\port$4104$0 (\$10 ),
+    .\port$3987$0 (\$8 ),
+    .\port$3994$0 (\$9 ),
+    .\port$4108$0 (\$10 ),
     .regs__busy(ch0__busy),
     .regs__ca_busy(ch0__ca_busy),
     .regs__ca_done(ch0__ca_done),
@@ -688,9 +688,9 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .clk(clk),
     .ma(ch1_ma),
     .periodic(\regs__periodic$376 ),
-    .\port$4436$0 (\$11 ),
-    .\port$4443$0 (\$12 ),
-    .\port$4557$0 (\$13 ),
+    .\port$4440$0 (\$11 ),
+    .\port$4447$0 (\$12 ),
+    .\port$4561$0 (\$13 ),
     .regs__busy(ch1__busy),
     .regs__ca_busy(ch1__ca_busy),
     .regs__ca_done(ch1__ca_done),
@@ -1026,7 +1026,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
 , bus__w_addr, ch0__ca_wbuf_data, bus__w_strb, glob__trigger, ch0__start, ch0__abort_cycle, ch0__clear_counters, ch0__periodic, ch0__trigger_enable, ch0__cfg_ma_half_period, ch0__cfg_delay_limit, ch0__cfg_request_period, ch0__cfg_break_time, ch0__cfg_ack_limit, ch0__cfg_timeout_limit, ch0__cfg_w0_data_bits, ch0__cfg_w0_nenw, ch0__cfg_w0_lc, ch0__cfg_w0_crc, ch0__cfg_w1_data_bits, ch0__cfg_w1_nenw
 , ch0__cfg_w1_lc, ch0__cfg_w1_crc, ch0__cfg_w1_enable, ch0__cfg_end_check, ch0__cfg_spw_check, ch0__cfg_spw_tolerance, ch0__ca_slave_id, ch0__ca_address, ch0__ca_count, ch0__ca_write, ch0__ca_start, ch0__ca_abort, ch1__start, ch1__abort_cycle, ch1__clear_counters, ch1__periodic, ch1__trigger_enable, ch1__cfg_ma_half_period, ch1__cfg_delay_limit, ch1__cfg_request_period, ch1__cfg_break_time
 , ch1__cfg_ack_limit, ch1__cfg_timeout_limit, ch1__cfg_w0_data_bits, ch1__cfg_w0_nenw, ch1__cfg_w0_lc, ch1__cfg_w0_crc, ch1__cfg_w1_data_bits, ch1__cfg_w1_nenw, ch1__cfg_w1_lc, ch1__cfg_w1_crc, ch1__cfg_w1_enable, ch1__cfg_end_check, ch1__cfg_spw_check, ch1__cfg_spw_tolerance, ch1__ca_slave_id, ch1__ca_address, ch1__ca_count, ch1__ca_write, ch1__ca_start, ch1__ca_abort, bus__r_data
-, ch0__done_count, ch0__done, \port$3983$0 , \port$3990$0 , ch0__ca_done, \port$4104$0 , ch1__done_count, ch1__done, \port$4436$0 , \port$4443$0 , ch1__ca_done, \port$4557$0 , bus__r_addr);
+, ch0__done_count, ch0__done, \port$3987$0 , \port$3994$0 , ch0__ca_done, \port$4108$0 , ch1__done_count, ch1__done, \port$4440$0 , \port$4447$0 , ch1__ca_done, \port$4561$0 , bus__r_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$26  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -2007,18 +2007,18 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   output glob__trigger;
   reg glob__trigger = 1'h0;
   wire [1:0] irq;
-  input [160:0] \port$3983$0 ;
-  wire [160:0] \port$3983$0 ;
-  input [287:0] \port$3990$0 ;
-  wire [287:0] \port$3990$0 ;
-  input [9:0] \port$4104$0 ;
-  wire [9:0] \port$4104$0 ;
-  input [160:0] \port$4436$0 ;
-  wire [160:0] \port$4436$0 ;
-  input [287:0] \port$4443$0 ;
-  wire [287:0] \port$4443$0 ;
-  input [9:0] \port$4557$0 ;
-  wire [9:0] \port$4557$0 ;
+  input [160:0] \port$3987$0 ;
+  wire [160:0] \port$3987$0 ;
+  input [287:0] \port$3994$0 ;
+  wire [287:0] \port$3994$0 ;
+  input [9:0] \port$4108$0 ;
+  wire [9:0] \port$4108$0 ;
+  input [160:0] \port$4440$0 ;
+  wire [160:0] \port$4440$0 ;
+  input [287:0] \port$4447$0 ;
+  wire [287:0] \port$4447$0 ;
+  input [9:0] \port$4561$0 ;
+  wire [9:0] \port$4561$0 ;
   (* init = 32'd0 *)
   wire [31:0] read_data;
   input rst;
@@ -2675,7 +2675,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$370  = ch1_result_status_cds_snapshot;
     if (ch1_result_status_read) begin
-      \$370  = \port$4436$0 [49];
+      \$370  = \port$4440$0 [49];
     end
     if (rst) begin
       \$370  = 1'h0;
@@ -2685,7 +2685,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$371  = ch1_result_status_w0_ne_snapshot;
     if (ch1_result_status_read) begin
-      \$371  = \port$4436$0 [105];
+      \$371  = \port$4440$0 [105];
     end
     if (rst) begin
       \$371  = 1'h0;
@@ -2695,7 +2695,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$372  = ch1_result_status_w0_nw_snapshot;
     if (ch1_result_status_read) begin
-      \$372  = \port$4436$0 [106];
+      \$372  = \port$4440$0 [106];
     end
     if (rst) begin
       \$372  = 1'h0;
@@ -2705,7 +2705,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$373  = ch1_result_status_w0_crc_ok_snapshot;
     if (ch1_result_status_read) begin
-      \$373  = \port$4436$0 [107];
+      \$373  = \port$4440$0 [107];
     end
     if (rst) begin
       \$373  = 1'h0;
@@ -2715,7 +2715,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$374  = ch1_result_status_w1_ne_snapshot;
     if (ch1_result_status_read) begin
-      \$374  = \port$4436$0 [148];
+      \$374  = \port$4440$0 [148];
     end
     if (rst) begin
       \$374  = 1'h0;
@@ -2725,7 +2725,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$375  = ch1_result_status_w1_nw_snapshot;
     if (ch1_result_status_read) begin
-      \$375  = \port$4436$0 [149];
+      \$375  = \port$4440$0 [149];
     end
     if (rst) begin
       \$375  = 1'h0;
@@ -2735,7 +2735,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$376  = ch1_result_status_w1_crc_ok_snapshot;
     if (ch1_result_status_read) begin
-      \$376  = \port$4436$0 [150];
+      \$376  = \port$4440$0 [150];
     end
     if (rst) begin
       \$376  = 1'h0;
@@ -2745,7 +2745,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$377  = ch1_result_status_lc_repeat_snapshot;
     if (ch1_result_status_read) begin
-      \$377  = \port$4436$0 [157];
+      \$377  = \port$4440$0 [157];
     end
     if (rst) begin
       \$377  = 1'h0;
@@ -2755,7 +2755,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$378  = ch1_result_status_lc_skip_snapshot;
     if (ch1_result_status_read) begin
-      \$378  = \port$4436$0 [158];
+      \$378  = \port$4440$0 [158];
     end
     if (rst) begin
       \$378  = 1'h0;
@@ -2765,7 +2765,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$379  = ch1_result_status_lc_zero_snapshot;
     if (ch1_result_status_read) begin
-      \$379  = \port$4436$0 [159];
+      \$379  = \port$4440$0 [159];
     end
     if (rst) begin
       \$379  = 1'h0;
@@ -2775,7 +2775,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$380  = ch1_result_status_spw_mismatch_snapshot;
     if (ch1_result_status_read) begin
-      \$380  = \port$4436$0 [160];
+      \$380  = \port$4440$0 [160];
     end
     if (rst) begin
       \$380  = 1'h0;
@@ -2785,7 +2785,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$381  = ch1_result_status_lc_snapshot;
     if (ch1_result_status_read) begin
-      \$381  = \port$4436$0 [156:151];
+      \$381  = \port$4440$0 [156:151];
     end
     if (rst) begin
       \$381  = 6'h00;
@@ -2805,7 +2805,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$383  = ch1_result_seq_line_delay_snapshot;
     if (ch1_result_status_read) begin
-      \$383  = \port$4436$0 [48:36];
+      \$383  = \port$4440$0 [48:36];
     end
     if (rst) begin
       \$383  = 13'h0000;
@@ -2815,7 +2815,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$384  = ch1_result_w0_lo_data_snapshot;
     if (ch1_result_status_read) begin
-      \$384  = \port$4436$0 [81:50];
+      \$384  = \port$4440$0 [81:50];
     end
     if (rst) begin
       \$384  = 32'd0;
@@ -2825,7 +2825,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$385  = ch1_result_w0_hi_data_snapshot;
     if (ch1_result_status_read) begin
-      \$385  = \port$4436$0 [104:82];
+      \$385  = \port$4440$0 [104:82];
     end
     if (rst) begin
       \$385  = 23'h000000;
@@ -2835,7 +2835,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$386  = ch1_result_w1_lo_data_snapshot;
     if (ch1_result_status_read) begin
-      \$386  = \port$4436$0 [139:108];
+      \$386  = \port$4440$0 [139:108];
     end
     if (rst) begin
       \$386  = 32'd0;
@@ -2845,7 +2845,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$387  = ch1_result_w1_hi_data_snapshot;
     if (ch1_result_status_read) begin
-      \$387  = \port$4436$0 [147:140];
+      \$387  = \port$4440$0 [147:140];
     end
     if (rst) begin
       \$387  = 8'h00;
@@ -2855,7 +2855,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$388  = ch1_result_timestamp_time_snapshot;
     if (ch1_result_status_read) begin
-      \$388  = \port$4436$0 [35:4];
+      \$388  = \port$4440$0 [35:4];
     end
     if (rst) begin
       \$388  = 32'd0;
@@ -2892,7 +2892,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
         11'h10e:
             \$389  = { 16'h0000, ch1__cfg_spw_tolerance, 6'h00, ch1__cfg_spw_check, ch1__cfg_end_check };
         11'h110:
-            \$389  = { 2'h0, \port$4436$0 [156:151], 4'h0, \port$4436$0 [160:157], 1'h0, \port$4436$0 [150:148], 1'h0, \port$4436$0 [107:105], 3'h0, \port$4436$0 [49], \port$4436$0 [3:0] };
+            \$389  = { 2'h0, \port$4440$0 [156:151], 4'h0, \port$4440$0 [160:157], 1'h0, \port$4440$0 [150:148], 1'h0, \port$4440$0 [107:105], 3'h0, \port$4440$0 [49], \port$4440$0 [3:0] };
         11'h111:
             \$389  = { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot };
         11'h112:
@@ -2906,31 +2906,31 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
         11'h116:
             \$389  = ch1_result_timestamp_time_snapshot;
         11'h118:
-            \$389  = \port$4443$0 [31:0];
+            \$389  = \port$4447$0 [31:0];
         11'h119:
-            \$389  = \port$4443$0 [63:32];
+            \$389  = \port$4447$0 [63:32];
         11'h11a:
-            \$389  = \port$4443$0 [95:64];
+            \$389  = \port$4447$0 [95:64];
         11'h11b:
-            \$389  = \port$4443$0 [127:96];
+            \$389  = \port$4447$0 [127:96];
         11'h11c:
-            \$389  = \port$4443$0 [159:128];
+            \$389  = \port$4447$0 [159:128];
         11'h11d:
-            \$389  = \port$4443$0 [191:160];
+            \$389  = \port$4447$0 [191:160];
         11'h11e:
-            \$389  = { 16'h0000, \port$4443$0 [207:192] };
+            \$389  = { 16'h0000, \port$4447$0 [207:192] };
         11'h140:
             \$389  = { 7'h00, ch1__ca_write, 1'h0, ch1__ca_count, 1'h0, ch1__ca_address, 5'h00, ch1__ca_slave_id };
         11'h141:
             \$389  = 32'd0;
         11'h142:
-            \$389  = { 17'h00000, \port$4557$0 [9:3], 1'h0, \port$4557$0 [2:0], 3'h0, ch1__ca_busy };
+            \$389  = { 17'h00000, \port$4561$0 [9:3], 1'h0, \port$4561$0 [2:0], 3'h0, ch1__ca_busy };
         11'h143:
-            \$389  = \port$4443$0 [239:208];
+            \$389  = \port$4447$0 [239:208];
         11'h144:
-            \$389  = \port$4443$0 [271:240];
+            \$389  = \port$4447$0 [271:240];
         11'h145:
-            \$389  = { 16'h0000, \port$4443$0 [287:272] };
+            \$389  = { 16'h0000, \port$4447$0 [287:272] };
         default:
             \$389  = 32'd0;
       endcase
@@ -3375,7 +3375,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$313  = ch0_result_status_status_snapshot;
     if (ch0_result_status_read) begin
-      \$313  = \port$3983$0 [3:0];
+      \$313  = \port$3987$0 [3:0];
     end
     if (rst) begin
       \$313  = 4'h0;
@@ -3385,7 +3385,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$314  = ch0_result_status_cds_snapshot;
     if (ch0_result_status_read) begin
-      \$314  = \port$3983$0 [49];
+      \$314  = \port$3987$0 [49];
     end
     if (rst) begin
       \$314  = 1'h0;
@@ -3395,7 +3395,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$315  = ch0_result_status_w0_ne_snapshot;
     if (ch0_result_status_read) begin
-      \$315  = \port$3983$0 [105];
+      \$315  = \port$3987$0 [105];
     end
     if (rst) begin
       \$315  = 1'h0;
@@ -3405,7 +3405,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$316  = ch0_result_status_w0_nw_snapshot;
     if (ch0_result_status_read) begin
-      \$316  = \port$3983$0 [106];
+      \$316  = \port$3987$0 [106];
     end
     if (rst) begin
       \$316  = 1'h0;
@@ -3415,7 +3415,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$317  = ch0_result_status_w0_crc_ok_snapshot;
     if (ch0_result_status_read) begin
-      \$317  = \port$3983$0 [107];
+      \$317  = \port$3987$0 [107];
     end
     if (rst) begin
       \$317  = 1'h0;
@@ -3425,7 +3425,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$318  = ch0_result_status_w1_ne_snapshot;
     if (ch0_result_status_read) begin
-      \$318  = \port$3983$0 [148];
+      \$318  = \port$3987$0 [148];
     end
     if (rst) begin
       \$318  = 1'h0;
@@ -3435,7 +3435,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$319  = ch0_result_status_w1_nw_snapshot;
     if (ch0_result_status_read) begin
-      \$319  = \port$3983$0 [149];
+      \$319  = \port$3987$0 [149];
     end
     if (rst) begin
       \$319  = 1'h0;
@@ -3445,7 +3445,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$320  = ch0_result_status_w1_crc_ok_snapshot;
     if (ch0_result_status_read) begin
-      \$320  = \port$3983$0 [150];
+      \$320  = \port$3987$0 [150];
     end
     if (rst) begin
       \$320  = 1'h0;
@@ -3455,7 +3455,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$321  = ch0_result_status_lc_repeat_snapshot;
     if (ch0_result_status_read) begin
-      \$321  = \port$3983$0 [157];
+      \$321  = \port$3987$0 [157];
     end
     if (rst) begin
       \$321  = 1'h0;
@@ -3465,7 +3465,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$322  = ch0_result_status_lc_skip_snapshot;
     if (ch0_result_status_read) begin
-      \$322  = \port$3983$0 [158];
+      \$322  = \port$3987$0 [158];
     end
     if (rst) begin
       \$322  = 1'h0;
@@ -3475,7 +3475,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$323  = ch0_result_status_lc_zero_snapshot;
     if (ch0_result_status_read) begin
-      \$323  = \port$3983$0 [159];
+      \$323  = \port$3987$0 [159];
     end
     if (rst) begin
       \$323  = 1'h0;
@@ -3485,7 +3485,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$324  = ch0_result_status_spw_mismatch_snapshot;
     if (ch0_result_status_read) begin
-      \$324  = \port$3983$0 [160];
+      \$324  = \port$3987$0 [160];
     end
     if (rst) begin
       \$324  = 1'h0;
@@ -3495,7 +3495,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$325  = ch0_result_status_lc_snapshot;
     if (ch0_result_status_read) begin
-      \$325  = \port$3983$0 [156:151];
+      \$325  = \port$3987$0 [156:151];
     end
     if (rst) begin
       \$325  = 6'h00;
@@ -3515,7 +3515,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$327  = ch0_result_seq_line_delay_snapshot;
     if (ch0_result_status_read) begin
-      \$327  = \port$3983$0 [48:36];
+      \$327  = \port$3987$0 [48:36];
     end
     if (rst) begin
       \$327  = 13'h0000;
@@ -3525,7 +3525,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$328  = ch0_result_w0_lo_data_snapshot;
     if (ch0_result_status_read) begin
-      \$328  = \port$3983$0 [81:50];
+      \$328  = \port$3987$0 [81:50];
     end
     if (rst) begin
       \$328  = 32'd0;
@@ -3535,7 +3535,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$329  = ch0_result_w0_hi_data_snapshot;
     if (ch0_result_status_read) begin
-      \$329  = \port$3983$0 [104:82];
+      \$329  = \port$3987$0 [104:82];
     end
     if (rst) begin
       \$329  = 23'h000000;
@@ -3545,7 +3545,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$330  = ch0_result_w1_lo_data_snapshot;
     if (ch0_result_status_read) begin
-      \$330  = \port$3983$0 [139:108];
+      \$330  = \port$3987$0 [139:108];
     end
     if (rst) begin
       \$330  = 32'd0;
@@ -3555,7 +3555,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$331  = ch0_result_w1_hi_data_snapshot;
     if (ch0_result_status_read) begin
-      \$331  = \port$3983$0 [147:140];
+      \$331  = \port$3987$0 [147:140];
     end
     if (rst) begin
       \$331  = 8'h00;
@@ -3565,7 +3565,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$332  = ch0_result_timestamp_time_snapshot;
     if (ch0_result_status_read) begin
-      \$332  = \port$3983$0 [35:4];
+      \$332  = \port$3987$0 [35:4];
     end
     if (rst) begin
       \$332  = 32'd0;
@@ -3602,7 +3602,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
         11'h08e:
             \$333  = { 16'h0000, ch0__cfg_spw_tolerance, 6'h00, ch0__cfg_spw_check, ch0__cfg_end_check };
         11'h090:
-            \$333  = { 2'h0, \port$3983$0 [156:151], 4'h0, \port$3983$0 [160:157], 1'h0, \port$3983$0 [150:148], 1'h0, \port$3983$0 [107:105], 3'h0, \port$3983$0 [49], \port$3983$0 [3:0] };
+            \$333  = { 2'h0, \port$3987$0 [156:151], 4'h0, \port$3987$0 [160:157], 1'h0, \port$3987$0 [150:148], 1'h0, \port$3987$0 [107:105], 3'h0, \port$3987$0 [49], \port$3987$0 [3:0] };
         11'h091:
             \$333  = { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot };
         11'h092:
@@ -3616,31 +3616,31 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
         11'h096:
             \$333  = ch0_result_timestamp_time_snapshot;
         11'h098:
-            \$333  = \port$3990$0 [31:0];
+            \$333  = \port$3994$0 [31:0];
         11'h099:
-            \$333  = \port$3990$0 [63:32];
+            \$333  = \port$3994$0 [63:32];
         11'h09a:
-            \$333  = \port$3990$0 [95:64];
+            \$333  = \port$3994$0 [95:64];
         11'h09b:
-            \$333  = \port$3990$0 [127:96];
+            \$333  = \port$3994$0 [127:96];
         11'h09c:
-            \$333  = \port$3990$0 [159:128];
+            \$333  = \port$3994$0 [159:128];
         11'h09d:
-            \$333  = \port$3990$0 [191:160];
+            \$333  = \port$3994$0 [191:160];
         11'h09e:
-            \$333  = { 16'h0000, \port$3990$0 [207:192] };
+            \$333  = { 16'h0000, \port$3994$0 [207:192] };
         11'h0c0:
             \$333  = { 7'h00, ch0__ca_write, 1'h0, ch0__ca_count, 1'h0, ch0__ca_address, 5'h00, ch0__ca_slave_id };
         11'h0c1:
             \$333  = 32'd0;
         11'h0c2:
-            \$333  = { 17'h00000, \port$4104$0 [9:3], 1'h0, \port$4104$0 [2:0], 3'h0, ch0__ca_busy };
+            \$333  = { 17'h00000, \port$4108$0 [9:3], 1'h0, \port$4108$0 [2:0], 3'h0, ch0__ca_busy };
         11'h0c3:
-            \$333  = \port$3990$0 [239:208];
+            \$333  = \port$3994$0 [239:208];
         11'h0c4:
-            \$333  = \port$3990$0 [271:240];
+            \$333  = \port$3994$0 [271:240];
         11'h0c5:
-            \$333  = { 16'h0000, \port$3990$0 [287:272] };
+            \$333  = { 16'h0000, \port$3994$0 [287:272] };
         default:
             \$333  = 32'd0;
       endcase
@@ -4024,7 +4024,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$369  = ch1_result_status_status_snapshot;
     if (ch1_result_status_read) begin
-      \$369  = \port$4436$0 [3:0];
+      \$369  = \port$4440$0 [3:0];
     end
     if (rst) begin
       \$369  = 4'h0;
@@ -4099,92 +4099,92 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign read_data = bus__r_data;
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, ch1_irq, ch0_irq };
-  assign ch0__status = \port$3983$0 [3:0];
-  assign ch0__cds = \port$3983$0 [49];
-  assign ch0__word0_ne = \port$3983$0 [105];
-  assign ch0__word0_nw = \port$3983$0 [106];
-  assign ch0__word0_crc_ok = \port$3983$0 [107];
-  assign ch0__word1_ne = \port$3983$0 [148];
-  assign ch0__word1_nw = \port$3983$0 [149];
-  assign ch0__word1_crc_ok = \port$3983$0 [150];
-  assign ch0__lc_repeat = \port$3983$0 [157];
-  assign ch0__lc_skip = \port$3983$0 [158];
-  assign ch0__lc_zero = \port$3983$0 [159];
-  assign ch0__spw_mismatch = \port$3983$0 [160];
-  assign ch0__lc = \port$3983$0 [156:151];
-  assign ch0__line_delay = \port$3983$0 [48:36];
-  assign ch0__word0_position = \port$3983$0 [104:50];
-  assign ch0__word1_position = \port$3983$0 [147:108];
-  assign ch0__timestamp = \port$3983$0 [35:4];
+  assign ch0__status = \port$3987$0 [3:0];
+  assign ch0__cds = \port$3987$0 [49];
+  assign ch0__word0_ne = \port$3987$0 [105];
+  assign ch0__word0_nw = \port$3987$0 [106];
+  assign ch0__word0_crc_ok = \port$3987$0 [107];
+  assign ch0__word1_ne = \port$3987$0 [148];
+  assign ch0__word1_nw = \port$3987$0 [149];
+  assign ch0__word1_crc_ok = \port$3987$0 [150];
+  assign ch0__lc_repeat = \port$3987$0 [157];
+  assign ch0__lc_skip = \port$3987$0 [158];
+  assign ch0__lc_zero = \port$3987$0 [159];
+  assign ch0__spw_mismatch = \port$3987$0 [160];
+  assign ch0__lc = \port$3987$0 [156:151];
+  assign ch0__line_delay = \port$3987$0 [48:36];
+  assign ch0__word0_position = \port$3987$0 [104:50];
+  assign ch0__word1_position = \port$3987$0 [147:108];
+  assign ch0__timestamp = \port$3987$0 [35:4];
   assign ch0__cap_data_bits_w0 = 6'h37;
   assign ch0__cap_data_bits_w1 = 6'h28;
   assign ch0__cap_timer_width = 6'h18;
   assign ch0__cap_counters = 1'h1;
   assign ch0__cap_timestamp = 1'h1;
   assign ch0__cap_register_access = 1'h1;
-  assign ch0__count_crc_word0 = \port$3990$0 [15:0];
-  assign ch0__count_crc_word1 = \port$3990$0 [31:16];
-  assign ch0__count_no_ack = \port$3990$0 [47:32];
-  assign ch0__count_no_start = \port$3990$0 [63:48];
-  assign ch0__count_delay_range = \port$3990$0 [79:64];
-  assign ch0__count_slo_stuck_low = \port$3990$0 [95:80];
-  assign ch0__count_lc_repeat = \port$3990$0 [111:96];
-  assign ch0__count_lc_skip = \port$3990$0 [127:112];
-  assign ch0__count_lc_zero = \port$3990$0 [143:128];
-  assign ch0__count_spw_mismatch = \port$3990$0 [159:144];
-  assign ch0__count_overrun = \port$3990$0 [175:160];
-  assign ch0__count_aborted = \port$3990$0 [191:176];
-  assign ch0__count_no_stop = \port$3990$0 [207:192];
-  assign ch0__ca_status = \port$4104$0 [2:0];
-  assign ch0__ca_bytes_done = \port$4104$0 [9:3];
-  assign ch0__count_ca_crc4_error = \port$3990$0 [223:208];
-  assign ch0__count_ca_no_answer = \port$3990$0 [239:224];
-  assign ch0__count_ca_refused = \port$3990$0 [255:240];
-  assign ch0__count_ca_aborted = \port$3990$0 [271:256];
-  assign ch0__count_ca_data_fault = \port$3990$0 [287:272];
-  assign ch1__status = \port$4436$0 [3:0];
-  assign ch1__cds = \port$4436$0 [49];
-  assign ch1__word0_ne = \port$4436$0 [105];
-  assign ch1__word0_nw = \port$4436$0 [106];
-  assign ch1__word0_crc_ok = \port$4436$0 [107];
-  assign ch1__word1_ne = \port$4436$0 [148];
-  assign ch1__word1_nw = \port$4436$0 [149];
-  assign ch1__word1_crc_ok = \port$4436$0 [150];
-  assign ch1__lc_repeat = \port$4436$0 [157];
-  assign ch1__lc_skip = \port$4436$0 [158];
-  assign ch1__lc_zero = \port$4436$0 [159];
-  assign ch1__spw_mismatch = \port$4436$0 [160];
-  assign ch1__lc = \port$4436$0 [156:151];
-  assign ch1__line_delay = \port$4436$0 [48:36];
-  assign ch1__word0_position = \port$4436$0 [104:50];
-  assign ch1__word1_position = \port$4436$0 [147:108];
-  assign ch1__timestamp = \port$4436$0 [35:4];
+  assign ch0__count_crc_word0 = \port$3994$0 [15:0];
+  assign ch0__count_crc_word1 = \port$3994$0 [31:16];
+  assign ch0__count_no_ack = \port$3994$0 [47:32];
+  assign ch0__count_no_start = \port$3994$0 [63:48];
+  assign ch0__count_delay_range = \port$3994$0 [79:64];
+  assign ch0__count_slo_stuck_low = \port$3994$0 [95:80];
+  assign ch0__count_lc_repeat = \port$3994$0 [111:96];
+  assign ch0__count_lc_skip = \port$3994$0 [127:112];
+  assign ch0__count_lc_zero = \port$3994$0 [143:128];
+  assign ch0__count_spw_mismatch = \port$3994$0 [159:144];
+  assign ch0__count_overrun = \port$3994$0 [175:160];
+  assign ch0__count_aborted = \port$3994$0 [191:176];
+  assign ch0__count_no_stop = \port$3994$0 [207:192];
+  assign ch0__ca_status = \port$4108$0 [2:0];
+  assign ch0__ca_bytes_done = \port$4108$0 [9:3];
+  assign ch0__count_ca_crc4_error = \port$3994$0 [223:208];
+  assign ch0__count_ca_no_answer = \port$3994$0 [239:224];
+  assign ch0__count_ca_refused = \port$3994$0 [255:240];
+  assign ch0__count_ca_aborted = \port$3994$0 [271:256];
+  assign ch0__count_ca_data_fault = \port$3994$0 [287:272];
+  assign ch1__status = \port$4440$0 [3:0];
+  assign ch1__cds = \port$4440$0 [49];
+  assign ch1__word0_ne = \port$4440$0 [105];
+  assign ch1__word0_nw = \port$4440$0 [106];
+  assign ch1__word0_crc_ok = \port$4440$0 [107];
+  assign ch1__word1_ne = \port$4440$0 [148];
+  assign ch1__word1_nw = \port$4440$0 [149];
+  assign ch1__word1_crc_ok = \port$4440$0 [150];
+  assign ch1__lc_repeat = \port$4440$0 [157];
+  assign ch1__lc_skip = \port$4440$0 [158];
+  assign ch1__lc_zero = \port$4440$0 [159];
+  assign ch1__spw_mismatch = \port$4440$0 [160];
+  assign ch1__lc = \port$4440$0 [156:151];
+  assign ch1__line_delay = \port$4440$0 [48:36];
+  assign ch1__word0_position = \port$4440$0 [104:50];
+  assign ch1__word1_position = \port$4440$0 [147:108];
+  assign ch1__timestamp = \port$4440$0 [35:4];
   assign ch1__cap_data_bits_w0 = 6'h37;
   assign ch1__cap_data_bits_w1 = 6'h28;
   assign ch1__cap_timer_width = 6'h18;
   assign ch1__cap_counters = 1'h1;
   assign ch1__cap_timestamp = 1'h1;
   assign ch1__cap_register_access = 1'h1;
-  assign ch1__count_crc_word0 = \port$4443$0 [15:0];
-  assign ch1__count_crc_word1 = \port$4443$0 [31:16];
-  assign ch1__count_no_ack = \port$4443$0 [47:32];
-  assign ch1__count_no_start = \port$4443$0 [63:48];
-  assign ch1__count_delay_range = \port$4443$0 [79:64];
-  assign ch1__count_slo_stuck_low = \port$4443$0 [95:80];
-  assign ch1__count_lc_repeat = \port$4443$0 [111:96];
-  assign ch1__count_lc_skip = \port$4443$0 [127:112];
-  assign ch1__count_lc_zero = \port$4443$0 [143:128];
-  assign ch1__count_spw_mismatch = \port$4443$0 [159:144];
-  assign ch1__count_overrun = \port$4443$0 [175:160];
-  assign ch1__count_aborted = \port$4443$0 [191:176];
-  assign ch1__count_no_stop = \port$4443$0 [207:192];
-  assign ch1__ca_status = \port$4557$0 [2:0];
-  assign ch1__ca_bytes_done = \port$4557$0 [9:3];
-  assign ch1__count_ca_crc4_error = \port$4443$0 [223:208];
-  assign ch1__count_ca_no_answer = \port$4443$0 [239:224];
-  assign ch1__count_ca_refused = \port$4443$0 [255:240];
-  assign ch1__count_ca_aborted = \port$4443$0 [271:256];
-  assign ch1__count_ca_data_fault = \port$4443$0 [287:272];
+  assign ch1__count_crc_word0 = \port$4447$0 [15:0];
+  assign ch1__count_crc_word1 = \port$4447$0 [31:16];
+  assign ch1__count_no_ack = \port$4447$0 [47:32];
+  assign ch1__count_no_start = \port$4447$0 [63:48];
+  assign ch1__count_delay_range = \port$4447$0 [79:64];
+  assign ch1__count_slo_stuck_low = \port$4447$0 [95:80];
+  assign ch1__count_lc_repeat = \port$4447$0 [111:96];
+  assign ch1__count_lc_skip = \port$4447$0 [127:112];
+  assign ch1__count_lc_zero = \port$4447$0 [143:128];
+  assign ch1__count_spw_mismatch = \port$4447$0 [159:144];
+  assign ch1__count_overrun = \port$4447$0 [175:160];
+  assign ch1__count_aborted = \port$4447$0 [191:176];
+  assign ch1__count_no_stop = \port$4447$0 [207:192];
+  assign ch1__ca_status = \port$4561$0 [2:0];
+  assign ch1__ca_bytes_done = \port$4561$0 [9:3];
+  assign ch1__count_ca_crc4_error = \port$4447$0 [223:208];
+  assign ch1__count_ca_no_answer = \port$4447$0 [239:224];
+  assign ch1__count_ca_refused = \port$4447$0 [255:240];
+  assign ch1__count_ca_aborted = \port$4447$0 [271:256];
+  assign ch1__count_ca_data_fault = \port$4447$0 [287:272];
   assign g_irq = 1'h0;
   assign \$79  = \$78 ;
   assign \$81  = \$80 ;
@@ -4442,7 +4442,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__ca_busy, regs__ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period
 , cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort
-, regs__done_count, ma, regs__done, \port$3983$0 , \port$3990$0 , regs__ca_done, \port$4104$0 , ca_rbuf_addr);
+, regs__done_count, ma, regs__done, \port$3987$0 , \port$3994$0 , regs__ca_done, \port$4108$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$28  = 0;
   wire \$1 ;
   wire [16:0] \$2 ;
@@ -4567,12 +4567,12 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_
   wire \ma$164 ;
   input periodic;
   wire periodic;
-  output [160:0] \port$3983$0 ;
-  wire [160:0] \port$3983$0 ;
-  output [287:0] \port$3990$0 ;
-  wire [287:0] \port$3990$0 ;
-  output [9:0] \port$4104$0 ;
-  wire [9:0] \port$4104$0 ;
+  output [160:0] \port$3987$0 ;
+  wire [160:0] \port$3987$0 ;
+  output [287:0] \port$3994$0 ;
+  wire [287:0] \port$3994$0 ;
+  output [9:0] \port$4108$0 ;
+  wire [9:0] \port$4108$0 ;
   wire regs__abort_cycle;
   output regs__busy;
   wire regs__busy;
@@ -4719,8 +4719,8 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_
   assign trigger = \trigger$161  & regs__trigger_enable;
   \biss_master_axil.ch0.core  core (
     .abort(abort_cycle),
-    .\abort$183 (ca_abort),
-    .\busy$233 (regs__busy),
+    .\abort$187 (ca_abort),
+    .\busy$237 (regs__busy),
     .ca_address(ca_address),
     .ca_count(ca_count),
     .ca_done(regs__ca_done),
@@ -4748,24 +4748,24 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_
     .cfg_w1_enable(cfg_w1_enable),
     .cfg_w1_lc(cfg_w1_lc),
     .cfg_w1_nenw(cfg_w1_nenw),
-    .\clear$210 (clear_counters),
+    .\clear$214 (clear_counters),
     .clk(clk),
     .config_error(regs__config_error),
     .counts(\$5 ),
-    .\done$236 (regs__done),
+    .\done$240 (regs__done),
     .frames(regs__ca_busy),
     .ma(ma),
     .\periodic$24 (periodic),
     .rbuf_addr(ca_rbuf_addr),
     .rbuf_en(ca_rbuf_en),
     .result(\$6 ),
-    .\result$241 (\$4 ),
+    .\result$245 (\$4 ),
     .rst(rst),
     .slo(slo),
     .start(start),
-    .\start$181 (ca_start),
+    .\start$185 (ca_start),
     .trigger(trigger),
-    .\valid$238 (valid)
+    .\valid$242 (valid)
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
@@ -4898,22 +4898,24 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_
   assign regs__ca_rbuf_en = ca_rbuf_en;
   assign \ma$164  = ma;
   assign \slo$166  = slo;
-  assign \port$3983$0  = \$4 ;
-  assign \port$3990$0  = \$5 ;
-  assign \port$4104$0  = \$6 ;
+  assign \port$3987$0  = \$4 ;
+  assign \port$3994$0  = \$5 ;
+  assign \port$4108$0  = \$6 ;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy$233 , config_error, frames, ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, abort, \clear$210 , \periodic$24 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit
-, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, \start$181 , \abort$183 , ma, \done$236 
-, \valid$238 , \result$241 , counts, ca_done, result, rbuf_addr);
+module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy$237 , config_error, frames, ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, abort, \clear$214 , \periodic$24 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit
+, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, \start$185 , \abort$187 , ma, \done$240 
+, \valid$242 , \result$245 , counts, ca_done, result, rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$29  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
-  reg \$12 ;
-  reg \$13 ;
-  wire \$14 ;
+  wire \$12 ;
+  wire \$13 ;
+  reg \$14 ;
+  reg \$15 ;
+  wire \$16 ;
   wire \$2 ;
   wire \$3 ;
   wire \$4 ;
@@ -4924,8 +4926,8 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire \$9 ;
   input abort;
   wire abort;
-  input \abort$183 ;
-  wire \abort$183 ;
+  input \abort$187 ;
+  wire \abort$187 ;
   wire \abort$36 ;
   wire abort_cycle;
   wire ack_expired;
@@ -4934,15 +4936,15 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire [23:0] \ack_limit$89 ;
   wire arm;
   reg \bit  = 1'h0;
-  wire \bit$263 ;
+  wire \bit$265 ;
   wire [5:0] bits;
   wire break_over;
   wire \break_over$66 ;
   wire [23:0] break_time;
   wire busy;
-  wire \busy$192 ;
-  output \busy$233 ;
-  wire \busy$233 ;
+  wire \busy$196 ;
+  output \busy$237 ;
+  wire \busy$237 ;
   wire ca_abort;
   input [6:0] ca_address;
   wire [6:0] ca_address;
@@ -4977,10 +4979,10 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   input ca_write;
   wire ca_write;
   wire cdm;
-  wire \cdm$196 ;
+  wire \cdm$200 ;
   wire cdm_cycle;
   wire cds;
-  wire \cds$244 ;
+  wire \cds$248 ;
   wire [154:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
@@ -5057,8 +5059,8 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire check;
   wire clear;
   wire \clear$106 ;
-  input \clear$210 ;
-  wire \clear$210 ;
+  input \clear$214 ;
+  wire \clear$214 ;
   wire clear_counters;
   input clk;
   wire clk;
@@ -5105,10 +5107,10 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire [15:0] \counts.slo_stuck_low ;
   wire [15:0] \counts.spw_mismatch ;
   wire [39:0] cpw_top;
-  wire [39:0] \cpw_top$126 ;
+  wire [39:0] \cpw_top$130 ;
   wire [1:0] crc_error;
   wire [1:0] crc_ok;
-  wire [1:0] \crc_ok$141 ;
+  wire [1:0] \crc_ok$145 ;
   wire [154:0] cycle;
   wire [23:0] \cycle.ack_limit ;
   wire [23:0] \cycle.break_time ;
@@ -5140,6 +5142,10 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire \cycle.w1_enable ;
   wire [54:0] data0;
   wire [39:0] data1;
+  (* init = 1'h0 *)
+  wire decoder_bit;
+  (* init = 1'h0 *)
+  wire decoder_sample;
   wire [12:0] delay;
   wire [12:0] \delay$95 ;
   wire [11:0] delay_limit;
@@ -5147,10 +5153,10 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire delay_over;
   wire \delay_over$76 ;
   wire done;
-  wire \done$194 ;
-  output \done$236 ;
-  wire \done$236 ;
-  wire \done$237 ;
+  wire \done$198 ;
+  output \done$240 ;
+  wire \done$240 ;
+  wire \done$241 ;
   wire doubtful;
   wire early;
   wire \early$52 ;
@@ -5176,7 +5182,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire \events.slo_stuck_low ;
   wire \events.spw_mismatch ;
   wire fault;
-  wire \fault$137 ;
+  wire \fault$141 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -5206,7 +5212,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
-  wire [3:0] \fault_status$139 ;
+  wire [3:0] \fault_status$143 ;
   wire [6:0] faults;
   wire \faults.aborted ;
   wire \faults.bad_config ;
@@ -5216,7 +5222,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire \faults.no_stop ;
   wire \faults.slo_stuck_low ;
   wire first_rise;
-  wire \first_rise$167 ;
+  wire \first_rise$171 ;
   wire [31:0] first_rise_time;
   wire [160:0] frame;
   wire \frame.cds ;
@@ -5261,7 +5267,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   output frames;
   wire frames;
   wire [15:0] half_period;
-  wire [15:0] \half_period$108 ;
+  wire [15:0] \half_period$112 ;
   wire held;
   wire hold;
   wire idle;
@@ -5270,20 +5276,20 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire in_clock;
   wire \in_clock$83 ;
   wire [5:0] lc;
-  wire [5:0] \lc$113 ;
-  wire [5:0] \lc$253 ;
+  wire [5:0] \lc$117 ;
+  wire [5:0] \lc$257 ;
   wire lc_check;
   wire lc_load;
   wire [5:0] lc_next;
-  wire [5:0] \lc_next$115 ;
+  wire [5:0] \lc_next$119 ;
   wire lc_repeat;
-  wire \lc_repeat$254 ;
+  wire \lc_repeat$258 ;
   wire lc_repeat_seen;
   wire lc_skip;
-  wire \lc_skip$255 ;
+  wire \lc_skip$259 ;
   wire lc_skip_seen;
   wire lc_zero;
-  wire \lc_zero$256 ;
+  wire \lc_zero$260 ;
   wire lc_zero_seen;
   wire level;
   wire [12:0] line_delay;
@@ -5321,7 +5327,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire \locked$50 ;
   output ma;
   wire ma;
-  wire \ma$232 ;
+  wire \ma$236 ;
   wire ma_arm;
   wire ma_busy;
   wire \ma_busy$78 ;
@@ -5338,7 +5344,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire [1:0] nw;
   wire ok;
   wire overrun;
-  wire \overrun$235 ;
+  wire \overrun$239 ;
   wire [23:0] period;
   wire periodic;
   input \periodic$24 ;
@@ -5351,32 +5357,32 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire receiver_clear;
   wire \repeat ;
   wire report;
-  wire \report$149 ;
+  wire \report$153 ;
   wire report_delay;
-  wire \report_delay$152 ;
+  wire \report_delay$156 ;
   wire report_frame;
-  wire \report_frame$135 ;
-  wire \report_frame$150 ;
+  wire \report_frame$139 ;
+  wire \report_frame$154 ;
   wire request;
-  wire [17:0] \request$169 ;
-  wire [6:0] \request$169.address ;
-  wire [6:0] \request$169.count ;
-  wire [2:0] \request$169.slave_id ;
-  wire \request$169.write ;
+  wire [17:0] \request$173 ;
+  wire [6:0] \request$173.address ;
+  wire [6:0] \request$173.count ;
+  wire [2:0] \request$173.slave_id ;
+  wire \request$173.write ;
   wire \request$35 ;
   wire restart;
   wire restart_timer;
   output [9:0] result;
   wire [9:0] result;
-  output [160:0] \result$241 ;
-  wire [160:0] \result$241 ;
-  wire \result$241.cds ;
-  wire [5:0] \result$241.lc ;
-  wire \result$241.lc_repeat ;
-  wire \result$241.lc_skip ;
-  wire \result$241.lc_zero ;
-  wire [12:0] \result$241.line_delay ;
-  wire \result$241.spw_mismatch ;
+  output [160:0] \result$245 ;
+  wire [160:0] \result$245 ;
+  wire \result$245.cds ;
+  wire [5:0] \result$245.lc ;
+  wire \result$245.lc_repeat ;
+  wire \result$245.lc_skip ;
+  wire \result$245.lc_zero ;
+  wire [12:0] \result$245.line_delay ;
+  wire \result$245.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -5391,18 +5397,18 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
-  wire [3:0] \result$241.status ;
-  wire [31:0] \result$241.timestamp ;
-  wire [57:0] \result$241.word0 ;
-  wire \result$241.word0.crc_ok ;
-  wire \result$241.word0.ne ;
-  wire \result$241.word0.nw ;
-  wire [54:0] \result$241.word0.position ;
-  wire [42:0] \result$241.word1 ;
-  wire \result$241.word1.crc_ok ;
-  wire \result$241.word1.ne ;
-  wire \result$241.word1.nw ;
-  wire [39:0] \result$241.word1.position ;
+  wire [3:0] \result$245.status ;
+  wire [31:0] \result$245.timestamp ;
+  wire [57:0] \result$245.word0 ;
+  wire \result$245.word0.crc_ok ;
+  wire \result$245.word0.ne ;
+  wire \result$245.word0.nw ;
+  wire [54:0] \result$245.word0.position ;
+  wire [42:0] \result$245.word1 ;
+  wire \result$245.word1.crc_ok ;
+  wire \result$245.word1.ne ;
+  wire \result$245.word1.nw ;
+  wire [39:0] \result$245.word1.position ;
   wire [6:0] \result.bytes_done ;
   (* enum_base_type = "AccessStatus" *)
   (* enum_value_000 = "OK" *)
@@ -5414,14 +5420,14 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* enum_value_110 = "BAD_REQUEST" *)
   wire [2:0] \result.status ;
   wire resync;
-  wire \resync$121 ;
+  wire \resync$125 ;
   wire [15:0] rises;
   wire [15:0] \rises$105 ;
   input rst;
   wire rst;
   wire run;
   reg sample = 1'h0;
-  wire \sample$261 ;
+  wire \sample$264 ;
   wire second_rise;
   wire skip;
   input slo;
@@ -5438,11 +5444,11 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire [39:0] spw;
   wire spw_match;
   wire spw_mismatch;
-  wire \spw_mismatch$257 ;
+  wire \spw_mismatch$261 ;
   input start;
   wire start;
-  input \start$181 ;
-  wire \start$181 ;
+  input \start$185 ;
+  wire \start$185 ;
   wire \start$22 ;
   wire [15:0] start_slot;
   wire [15:0] \start_slot$103 ;
@@ -5478,7 +5484,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
-  wire [3:0] \status$240 ;
+  wire [3:0] \status$244 ;
   wire stop_bit;
   wire \stop_bit$62 ;
   wire stopped;
@@ -5493,9 +5499,9 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire trigger;
   wire \trigger$33 ;
   wire valid;
-  wire \valid$154 ;
-  output \valid$238 ;
-  wire \valid$238 ;
+  wire \valid$158 ;
+  output \valid$242 ;
+  wire \valid$242 ;
   wire valid_out;
   wire w1_enable;
   wire [39:0] wbuf;
@@ -5511,28 +5517,28 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire word1_nw;
   wire [39:0] word1_position;
   wire [1:0] word_count;
-  wire [1:0] \word_count$111 ;
+  wire [1:0] \word_count$115 ;
   wire [1:0] word_crc_ok;
   wire [19:0] words;
-  wire [19:0] \words$123 ;
-  wire [9:0] \words$123[0] ;
+  wire [19:0] \words$127 ;
+  wire [9:0] \words$127[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
-  wire [1:0] \words$123[0].crc ;
-  wire [5:0] \words$123[0].data_bits ;
-  wire \words$123[0].lc ;
-  wire \words$123[0].nenw ;
-  wire [9:0] \words$123[1] ;
+  wire [1:0] \words$127[0].crc ;
+  wire [5:0] \words$127[0].data_bits ;
+  wire \words$127[0].lc ;
+  wire \words$127[0].nenw ;
+  wire [9:0] \words$127[1] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
-  wire [1:0] \words$123[1].crc ;
-  wire [5:0] \words$123[1].data_bits ;
-  wire \words$123[1].lc ;
-  wire \words$123[1].nenw ;
+  wire [1:0] \words$127[1].crc ;
+  wire [5:0] \words$127[1].data_bits ;
+  wire \words$127[1].lc ;
+  wire \words$127[1].nenw ;
   wire [9:0] \words[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
@@ -5564,12 +5570,14 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign \$9  = ca_done & \$8 ;
   assign \$10  = result[2:0] == 3'h5;
   assign \$11  = ca_done & \$10 ;
-  assign \busy$233  = ~ idle;
+  assign \busy$237  = ~ idle;
   assign config_error = ~ config_ok;
+  assign \$12  = ~ \clear$106 ;
+  assign \$13  = \sample$264  & \$12 ;
   always @(posedge clk)
-    sample <= \$12 ;
+    sample <= \$14 ;
   always @(posedge clk)
-    \bit  <= \$13 ;
+    \bit  <= \$15 ;
   \biss_master_axil.ch0.core.config  \config  (
     .ack_limit(ack_limit),
     .clk(clk),
@@ -5626,7 +5634,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .timer_clear(clear)
   );
   \biss_master_axil.ch0.core.counters  counters (
-    .clear(\clear$210 ),
+    .clear(\clear$214 ),
     .clk(clk),
     .counts(counts),
     .events(events),
@@ -5679,10 +5687,10 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .start_slot(start_slot),
     .\started$10 (started),
     .w1_enable(cycle[135]),
-    .words(\words$123 )
+    .words(\words$127 )
   );
   \biss_master_axil.ch0.core.register_access  register_access (
-    .abort(\abort$183 ),
+    .abort(\abort$187 ),
     .busy(frames),
     .cdm(cdm),
     .clk(clk),
@@ -5694,27 +5702,27 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .rbuf_addr(rbuf_addr),
     .rbuf_data(ca_rbuf_data),
     .rbuf_en(rbuf_en),
-    .request(\request$169 ),
+    .request(\request$173 ),
     .result(result),
     .rst(rst),
-    .start(\start$181 ),
+    .start(\start$185 ),
     .wbuf(wbuf)
   );
   \biss_master_axil.ch0.core.results  results (
     .clk(clk),
-    .done(\done$236 ),
+    .done(\done$240 ),
     .frame(frame),
     .report(report),
     .report_delay(report_delay),
     .report_frame(report_frame),
-    .result(\result$241 ),
+    .result(\result$245 ),
     .rst(rst),
     .valid(valid),
-    .valid_out(\valid$238 )
+    .valid_out(\valid$242 )
   );
   \biss_master_axil.ch0.core.sampler  sampler (
     .arm(ma_arm),
-    .\bit (\bit$263 ),
+    .\bit (\bit$265 ),
     .clk(clk),
     .delay(delay),
     .early(early),
@@ -5723,7 +5731,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .locked(locked),
     .receiver_clear(\clear$106 ),
     .rst(rst),
-    .sample(\sample$261 ),
+    .sample(\sample$264 ),
     .slo(slo)
   );
   \biss_master_axil.ch0.core.scheduler  scheduler (
@@ -5744,7 +5752,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$3724$0 (\bit ),
+    .\port$3728$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -5801,7 +5809,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .lc_skip_seen(lc_skip_seen),
     .lc_zero(lc_zero),
     .lc_zero_seen(lc_zero_seen),
-    .\port$1601$0 (\$14 ),
+    .\port$1603$0 (\$16 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -5811,16 +5819,16 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
-    \$12  = \sample$261 ;
+    \$14  = \$13 ;
     if (rst) begin
-      \$12  = 1'h0;
+      \$14  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
-    \$13  = \bit$263 ;
+    \$15  = \bit$265 ;
     if (rst) begin
-      \$13  = 1'h0;
+      \$15  = 1'h0;
     end
   end
   assign \idle$20  = idle;
@@ -5870,53 +5878,55 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign \start_slot$103  = start_slot;
   assign \rises$105  = rises;
   assign receiver_clear = \clear$106 ;
-  assign \half_period$108  = cycle[15:0];
+  assign decoder_sample = sample;
+  assign decoder_bit = \bit ;
+  assign \half_period$112  = cycle[15:0];
   assign arm = ma_arm;
-  assign \word_count$111  = word_count;
-  assign \lc$113  = lc;
+  assign \word_count$115  = word_count;
+  assign \lc$117  = lc;
   assign lc_next = { lc[4:0], \bit  };
-  assign \lc_next$115  = { lc[4:0], \bit  };
+  assign \lc_next$119  = { lc[4:0], \bit  };
   assign lc_load = load;
   assign lc_check = check;
-  assign \resync$121  = resync;
+  assign \resync$125  = resync;
   assign w1_enable = cycle[135];
-  assign \cpw_top$126  = cpw_top;
+  assign \cpw_top$130  = cpw_top;
   assign data1 = spw;
   assign bits = cycle[141:136];
   assign tolerance = cycle[154:147];
   assign match = spw_match;
   assign cfg = cycle;
-  assign \report_frame$135  = report_frame;
-  assign \fault$137  = fault;
-  assign \fault_status$139  = fault_status;
-  assign \crc_ok$141  = crc_ok;
+  assign \report_frame$139  = report_frame;
+  assign \fault$141  = fault;
+  assign \fault_status$143  = fault_status;
+  assign \crc_ok$145  = crc_ok;
   assign \repeat  = lc_repeat_seen;
   assign skip = lc_skip_seen;
   assign zero = lc_zero_seen;
-  assign \report$149  = report;
-  assign \report_frame$150  = report_frame;
-  assign \report_delay$152  = report_delay;
-  assign \valid$154  = valid;
-  assign word_crc_ok = { \$14 , crc_ok[0] };
-  assign \first_rise$167  = first_rise;
+  assign \report$153  = report;
+  assign \report_frame$154  = report_frame;
+  assign \report_delay$156  = report_delay;
+  assign \valid$158  = valid;
+  assign word_crc_ok = { \$16 , crc_ok[0] };
+  assign \first_rise$171  = first_rise;
   assign ca_status = result[2:0];
   assign ca_bytes_done = result[9:3];
-  assign ca_start = \start$181 ;
-  assign ca_abort = \abort$183 ;
+  assign ca_start = \start$185 ;
+  assign ca_abort = \abort$187 ;
   assign ca_rbuf_addr = rbuf_addr;
   assign ca_rbuf_en = rbuf_en;
   assign rbuf_data = ca_rbuf_data;
   assign ca_busy = frames;
-  assign \busy$192  = frames;
-  assign \done$194  = ca_done;
-  assign \cdm$196  = cdm;
+  assign \busy$196  = frames;
+  assign \done$198  = ca_done;
+  assign \cdm$200  = cdm;
   assign held = ma_held;
   assign ma_hold = hold;
   assign frame_end = report;
   assign frame_ok = valid;
   assign frame_cds = cds;
   assign cdm_cycle = frame_cdm;
-  assign clear_counters = \clear$210 ;
+  assign clear_counters = \clear$214 ;
   assign count_crc_word0 = counts[15:0];
   assign count_crc_word1 = counts[31:16];
   assign count_no_ack = counts[47:32];
@@ -5935,27 +5945,27 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign count_ca_refused = counts[255:240];
   assign count_ca_aborted = counts[271:256];
   assign count_ca_data_fault = counts[287:272];
-  assign \ma$232  = ma;
-  assign \overrun$235  = overrun;
-  assign \done$237  = \done$236 ;
-  assign valid_out = \valid$238 ;
-  assign \status$240  = \result$241 [3:0];
-  assign timestamp = \result$241 [35:4];
-  assign line_delay = \result$241 [48:36];
-  assign \cds$244  = \result$241 [49];
-  assign word0_position = \result$241 [104:50];
-  assign word0_ne = \result$241 [105];
-  assign word0_nw = \result$241 [106];
-  assign word0_crc_ok = \result$241 [107];
-  assign word1_position = \result$241 [147:108];
-  assign word1_ne = \result$241 [148];
-  assign word1_nw = \result$241 [149];
-  assign word1_crc_ok = \result$241 [150];
-  assign \lc$253  = \result$241 [156:151];
-  assign \lc_repeat$254  = \result$241 [157];
-  assign \lc_skip$255  = \result$241 [158];
-  assign \lc_zero$256  = \result$241 [159];
-  assign \spw_mismatch$257  = \result$241 [160];
+  assign \ma$236  = ma;
+  assign \overrun$239  = overrun;
+  assign \done$241  = \done$240 ;
+  assign valid_out = \valid$242 ;
+  assign \status$244  = \result$245 [3:0];
+  assign timestamp = \result$245 [35:4];
+  assign line_delay = \result$245 [48:36];
+  assign \cds$248  = \result$245 [49];
+  assign word0_position = \result$245 [104:50];
+  assign word0_ne = \result$245 [105];
+  assign word0_nw = \result$245 [106];
+  assign word0_crc_ok = \result$245 [107];
+  assign word1_position = \result$245 [147:108];
+  assign word1_ne = \result$245 [148];
+  assign word1_nw = \result$245 [149];
+  assign word1_crc_ok = \result$245 [150];
+  assign \lc$257  = \result$245 [156:151];
+  assign \lc_repeat$258  = \result$245 [157];
+  assign \lc_skip$259  = \result$245 [158];
+  assign \lc_zero$260  = \result$245 [159];
+  assign \spw_mismatch$261  = \result$245 [160];
   assign \live.ma_half_period  = live[15:0];
   assign \live.request_period  = live[39:16];
   assign \live.break_time  = live[63:40];
@@ -6006,16 +6016,16 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign \words[1].nenw  = words[16];
   assign \words[1].lc  = words[17];
   assign \words[1].crc  = words[19:18];
-  assign \words$123[0]  = \words$123 [9:0];
-  assign \words$123[0].data_bits  = \words$123 [5:0];
-  assign \words$123[0].nenw  = \words$123 [6];
-  assign \words$123[0].lc  = \words$123 [7];
-  assign \words$123[0].crc  = \words$123 [9:8];
-  assign \words$123[1]  = \words$123 [19:10];
-  assign \words$123[1].data_bits  = \words$123 [15:10];
-  assign \words$123[1].nenw  = \words$123 [16];
-  assign \words$123[1].lc  = \words$123 [17];
-  assign \words$123[1].crc  = \words$123 [19:18];
+  assign \words$127[0]  = \words$127 [9:0];
+  assign \words$127[0].data_bits  = \words$127 [5:0];
+  assign \words$127[0].nenw  = \words$127 [6];
+  assign \words$127[0].lc  = \words$127 [7];
+  assign \words$127[0].crc  = \words$127 [9:8];
+  assign \words$127[1]  = \words$127 [19:10];
+  assign \words$127[1].data_bits  = \words$127 [15:10];
+  assign \words$127[1].nenw  = \words$127 [16];
+  assign \words$127[1].lc  = \words$127 [17];
+  assign \words$127[1].crc  = \words$127 [19:18];
   assign \cfg.ma_half_period  = cycle[15:0];
   assign \cfg.request_period  = cycle[39:16];
   assign \cfg.break_time  = cycle[63:40];
@@ -6055,10 +6065,10 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign \frame.lc_skip  = frame[158];
   assign \frame.lc_zero  = frame[159];
   assign \frame.spw_mismatch  = frame[160];
-  assign \request$169.slave_id  = \request$169 [2:0];
-  assign \request$169.address  = \request$169 [9:3];
-  assign \request$169.count  = \request$169 [16:10];
-  assign \request$169.write  = \request$169 [17];
+  assign \request$173.slave_id  = \request$173 [2:0];
+  assign \request$173.address  = \request$173 [9:3];
+  assign \request$173.count  = \request$173 [16:10];
+  assign \request$173.write  = \request$173 [17];
   assign \wbuf.addr  = wbuf[3:0];
   assign \wbuf.data  = wbuf[35:4];
   assign \wbuf.en  = wbuf[39:36];
@@ -6107,25 +6117,25 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign \counts.ca_refused  = counts[255:240];
   assign \counts.ca_aborted  = counts[271:256];
   assign \counts.ca_data_fault  = counts[287:272];
-  assign \result$241.status  = \result$241 [3:0];
-  assign \result$241.timestamp  = \result$241 [35:4];
-  assign \result$241.line_delay  = \result$241 [48:36];
-  assign \result$241.cds  = \result$241 [49];
-  assign \result$241.word0  = \result$241 [107:50];
-  assign \result$241.word0.position  = \result$241 [104:50];
-  assign \result$241.word0.ne  = \result$241 [105];
-  assign \result$241.word0.nw  = \result$241 [106];
-  assign \result$241.word0.crc_ok  = \result$241 [107];
-  assign \result$241.word1  = \result$241 [150:108];
-  assign \result$241.word1.position  = \result$241 [147:108];
-  assign \result$241.word1.ne  = \result$241 [148];
-  assign \result$241.word1.nw  = \result$241 [149];
-  assign \result$241.word1.crc_ok  = \result$241 [150];
-  assign \result$241.lc  = \result$241 [156:151];
-  assign \result$241.lc_repeat  = \result$241 [157];
-  assign \result$241.lc_skip  = \result$241 [158];
-  assign \result$241.lc_zero  = \result$241 [159];
-  assign \result$241.spw_mismatch  = \result$241 [160];
+  assign \result$245.status  = \result$245 [3:0];
+  assign \result$245.timestamp  = \result$245 [35:4];
+  assign \result$245.line_delay  = \result$245 [48:36];
+  assign \result$245.cds  = \result$245 [49];
+  assign \result$245.word0  = \result$245 [107:50];
+  assign \result$245.word0.position  = \result$245 [104:50];
+  assign \result$245.word0.ne  = \result$245 [105];
+  assign \result$245.word0.nw  = \result$245 [106];
+  assign \result$245.word0.crc_ok  = \result$245 [107];
+  assign \result$245.word1  = \result$245 [150:108];
+  assign \result$245.word1.position  = \result$245 [147:108];
+  assign \result$245.word1.ne  = \result$245 [148];
+  assign \result$245.word1.nw  = \result$245 [149];
+  assign \result$245.word1.crc_ok  = \result$245 [150];
+  assign \result$245.lc  = \result$245 [156:151];
+  assign \result$245.lc_repeat  = \result$245 [157];
+  assign \result$245.lc_skip  = \result$245 [158];
+  assign \result$245.lc_zero  = \result$245 [159];
+  assign \result$245.spw_mismatch  = \result$245 [160];
   assign events[17] = \$11 ;
   assign events[16] = \$9 ;
   assign events[15] = \$7 ;
@@ -6147,13 +6157,13 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign wbuf[39:36] = ca_wbuf_en;
   assign wbuf[35:4] = ca_wbuf_data;
   assign wbuf[3:0] = ca_wbuf_addr;
-  assign \request$169 [17] = ca_write;
-  assign \request$169 [16:10] = ca_count;
-  assign \request$169 [9:3] = ca_address;
-  assign \request$169 [2:0] = ca_slave_id;
+  assign \request$173 [17] = ca_write;
+  assign \request$173 [16:10] = ca_count;
+  assign \request$173 [9:3] = ca_address;
+  assign \request$173 [2:0] = ca_slave_id;
   assign frame[35:4] = first_rise_time;
   assign frame[160] = spw_mismatch;
-  assign frame[150] = \$14 ;
+  assign frame[150] = \$16 ;
   assign frame[149] = nw[1];
   assign frame[148] = ne[1];
   assign frame[147:108] = spw;
@@ -6168,8 +6178,8 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign frame[49] = cds;
   assign frame[48:36] = delay;
   assign frame[3:0] = status;
-  assign \words$123 [19:10] = cycle[145:136];
-  assign \words$123 [9:0] = cycle[134:125];
+  assign \words$127 [19:10] = cycle[145:136];
+  assign \words$127 [9:0] = cycle[134:125];
   assign words[19:10] = cycle[145:136];
   assign words[9:0] = cycle[134:125];
   assign live[154:147] = cfg_spw_tolerance;
@@ -6362,7 +6372,7 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   assign \$38  = \$37  ? 24'h001f40 : live[111:88];
   assign \$39  = ! live[123:112];
   assign \$40  = \$39  ? 12'hfff : live[123:112];
-  assign \$41  = ack_limit + { cycle[15:0], 1'h0 };
+  assign \$41  = ack_limit + { cycle[15:0], 1'h1 };
   assign word_count = 1'h1 + cycle[135];
   always @(posedge clk)
     ok <= \$42 ;
@@ -13659,7 +13669,7 @@ module \biss_master_axil.ch0.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$3724$0 , resync, lc, is_zero, clk);
+module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$3728$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$65  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -13697,8 +13707,8 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$3724$0 ;
-  wire \port$3724$0 ;
+  input \port$3728$0 ;
+  wire \port$3728$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -13710,9 +13720,9 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$3724$0  };
-  assign \$2  = { lc[4:0], \port$3724$0  } == last;
-  assign \$3  = { lc[4:0], \port$3724$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$3728$0  };
+  assign \$2  = { lc[4:0], \port$3728$0  } == last;
+  assign \$3  = { lc[4:0], \port$3728$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = lc == 6'h3f;
@@ -13802,7 +13812,7 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
       \$21  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$3724$0  };
+  assign lc_next = { lc[4:0], \port$3728$0  };
   assign zero = is_zero;
 endmodule
 
@@ -14284,7 +14294,7 @@ module \biss_master_axil.ch0.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.verdict (lc_skip_seen, \port$1601$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
+module \biss_master_axil.ch0.core.verdict (lc_skip_seen, \port$1603$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$69  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -14398,8 +14408,8 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, \port$1601$0 , lc_check
   wire lc_zero;
   input lc_zero_seen;
   wire lc_zero_seen;
-  output \port$1601$0 ;
-  wire \port$1601$0 ;
+  output \port$1603$0 ;
+  wire \port$1603$0 ;
   output report;
   wire report;
   input report_frame;
@@ -14484,7 +14494,7 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, \port$1601$0 , lc_check
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$1601$0  = \$2 ;
+  assign \port$1603$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -14510,7 +14520,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__ca_busy, regs__ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period
 , cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort
-, regs__done_count, ma, regs__done, \port$4436$0 , \port$4443$0 , regs__ca_done, \port$4557$0 , ca_rbuf_addr);
+, regs__done_count, ma, regs__done, \port$4440$0 , \port$4447$0 , regs__ca_done, \port$4561$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$70  = 0;
   wire \$1 ;
   wire [16:0] \$2 ;
@@ -14635,12 +14645,12 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_
   wire \ma$164 ;
   input periodic;
   wire periodic;
-  output [160:0] \port$4436$0 ;
-  wire [160:0] \port$4436$0 ;
-  output [287:0] \port$4443$0 ;
-  wire [287:0] \port$4443$0 ;
-  output [9:0] \port$4557$0 ;
-  wire [9:0] \port$4557$0 ;
+  output [160:0] \port$4440$0 ;
+  wire [160:0] \port$4440$0 ;
+  output [287:0] \port$4447$0 ;
+  wire [287:0] \port$4447$0 ;
+  output [9:0] \port$4561$0 ;
+  wire [9:0] \port$4561$0 ;
   wire regs__abort_cycle;
   output regs__busy;
   wire regs__busy;
@@ -14787,8 +14797,8 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_
   assign trigger = \trigger$161  & regs__trigger_enable;
   \biss_master_axil.ch1.core  core (
     .abort(abort_cycle),
-    .\abort$183 (ca_abort),
-    .\busy$233 (regs__busy),
+    .\abort$187 (ca_abort),
+    .\busy$237 (regs__busy),
     .ca_address(ca_address),
     .ca_count(ca_count),
     .ca_done(regs__ca_done),
@@ -14816,24 +14826,24 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_
     .cfg_w1_enable(cfg_w1_enable),
     .cfg_w1_lc(cfg_w1_lc),
     .cfg_w1_nenw(cfg_w1_nenw),
-    .\clear$210 (clear_counters),
+    .\clear$214 (clear_counters),
     .clk(clk),
     .config_error(regs__config_error),
     .counts(\$5 ),
-    .\done$236 (regs__done),
+    .\done$240 (regs__done),
     .frames(regs__ca_busy),
     .ma(ma),
     .\periodic$24 (periodic),
     .rbuf_addr(ca_rbuf_addr),
     .rbuf_en(ca_rbuf_en),
     .result(\$6 ),
-    .\result$241 (\$4 ),
+    .\result$245 (\$4 ),
     .rst(rst),
     .slo(slo),
     .start(start),
-    .\start$181 (ca_start),
+    .\start$185 (ca_start),
     .trigger(trigger),
-    .\valid$238 (valid)
+    .\valid$242 (valid)
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
@@ -14966,22 +14976,24 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_
   assign regs__ca_rbuf_en = ca_rbuf_en;
   assign \ma$164  = ma;
   assign \slo$166  = slo;
-  assign \port$4436$0  = \$4 ;
-  assign \port$4443$0  = \$5 ;
-  assign \port$4557$0  = \$6 ;
+  assign \port$4440$0  = \$4 ;
+  assign \port$4447$0  = \$5 ;
+  assign \port$4561$0  = \$6 ;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy$233 , config_error, frames, ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, abort, \clear$210 , \periodic$24 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit
-, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, \start$181 , \abort$183 , ma, \done$236 
-, \valid$238 , \result$241 , counts, ca_done, result, rbuf_addr);
+module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy$237 , config_error, frames, ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, abort, \clear$214 , \periodic$24 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit
+, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, \start$185 , \abort$187 , ma, \done$240 
+, \valid$242 , \result$245 , counts, ca_done, result, rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$71  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
-  reg \$12 ;
-  reg \$13 ;
-  wire \$14 ;
+  wire \$12 ;
+  wire \$13 ;
+  reg \$14 ;
+  reg \$15 ;
+  wire \$16 ;
   wire \$2 ;
   wire \$3 ;
   wire \$4 ;
@@ -14992,8 +15004,8 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire \$9 ;
   input abort;
   wire abort;
-  input \abort$183 ;
-  wire \abort$183 ;
+  input \abort$187 ;
+  wire \abort$187 ;
   wire \abort$36 ;
   wire abort_cycle;
   wire ack_expired;
@@ -15002,15 +15014,15 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire [23:0] \ack_limit$89 ;
   wire arm;
   reg \bit  = 1'h0;
-  wire \bit$263 ;
+  wire \bit$265 ;
   wire [5:0] bits;
   wire break_over;
   wire \break_over$66 ;
   wire [23:0] break_time;
   wire busy;
-  wire \busy$192 ;
-  output \busy$233 ;
-  wire \busy$233 ;
+  wire \busy$196 ;
+  output \busy$237 ;
+  wire \busy$237 ;
   wire ca_abort;
   input [6:0] ca_address;
   wire [6:0] ca_address;
@@ -15045,10 +15057,10 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   input ca_write;
   wire ca_write;
   wire cdm;
-  wire \cdm$196 ;
+  wire \cdm$200 ;
   wire cdm_cycle;
   wire cds;
-  wire \cds$244 ;
+  wire \cds$248 ;
   wire [154:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
@@ -15125,8 +15137,8 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire check;
   wire clear;
   wire \clear$106 ;
-  input \clear$210 ;
-  wire \clear$210 ;
+  input \clear$214 ;
+  wire \clear$214 ;
   wire clear_counters;
   input clk;
   wire clk;
@@ -15173,10 +15185,10 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire [15:0] \counts.slo_stuck_low ;
   wire [15:0] \counts.spw_mismatch ;
   wire [39:0] cpw_top;
-  wire [39:0] \cpw_top$126 ;
+  wire [39:0] \cpw_top$130 ;
   wire [1:0] crc_error;
   wire [1:0] crc_ok;
-  wire [1:0] \crc_ok$141 ;
+  wire [1:0] \crc_ok$145 ;
   wire [154:0] cycle;
   wire [23:0] \cycle.ack_limit ;
   wire [23:0] \cycle.break_time ;
@@ -15208,6 +15220,10 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire \cycle.w1_enable ;
   wire [54:0] data0;
   wire [39:0] data1;
+  (* init = 1'h0 *)
+  wire decoder_bit;
+  (* init = 1'h0 *)
+  wire decoder_sample;
   wire [12:0] delay;
   wire [12:0] \delay$95 ;
   wire [11:0] delay_limit;
@@ -15215,10 +15231,10 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire delay_over;
   wire \delay_over$76 ;
   wire done;
-  wire \done$194 ;
-  output \done$236 ;
-  wire \done$236 ;
-  wire \done$237 ;
+  wire \done$198 ;
+  output \done$240 ;
+  wire \done$240 ;
+  wire \done$241 ;
   wire doubtful;
   wire early;
   wire \early$52 ;
@@ -15244,7 +15260,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire \events.slo_stuck_low ;
   wire \events.spw_mismatch ;
   wire fault;
-  wire \fault$137 ;
+  wire \fault$141 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -15274,7 +15290,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
-  wire [3:0] \fault_status$139 ;
+  wire [3:0] \fault_status$143 ;
   wire [6:0] faults;
   wire \faults.aborted ;
   wire \faults.bad_config ;
@@ -15284,7 +15300,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire \faults.no_stop ;
   wire \faults.slo_stuck_low ;
   wire first_rise;
-  wire \first_rise$167 ;
+  wire \first_rise$171 ;
   wire [31:0] first_rise_time;
   wire [160:0] frame;
   wire \frame.cds ;
@@ -15329,7 +15345,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   output frames;
   wire frames;
   wire [15:0] half_period;
-  wire [15:0] \half_period$108 ;
+  wire [15:0] \half_period$112 ;
   wire held;
   wire hold;
   wire idle;
@@ -15338,20 +15354,20 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire in_clock;
   wire \in_clock$83 ;
   wire [5:0] lc;
-  wire [5:0] \lc$113 ;
-  wire [5:0] \lc$253 ;
+  wire [5:0] \lc$117 ;
+  wire [5:0] \lc$257 ;
   wire lc_check;
   wire lc_load;
   wire [5:0] lc_next;
-  wire [5:0] \lc_next$115 ;
+  wire [5:0] \lc_next$119 ;
   wire lc_repeat;
-  wire \lc_repeat$254 ;
+  wire \lc_repeat$258 ;
   wire lc_repeat_seen;
   wire lc_skip;
-  wire \lc_skip$255 ;
+  wire \lc_skip$259 ;
   wire lc_skip_seen;
   wire lc_zero;
-  wire \lc_zero$256 ;
+  wire \lc_zero$260 ;
   wire lc_zero_seen;
   wire level;
   wire [12:0] line_delay;
@@ -15389,7 +15405,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire \locked$50 ;
   output ma;
   wire ma;
-  wire \ma$232 ;
+  wire \ma$236 ;
   wire ma_arm;
   wire ma_busy;
   wire \ma_busy$78 ;
@@ -15406,7 +15422,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire [1:0] nw;
   wire ok;
   wire overrun;
-  wire \overrun$235 ;
+  wire \overrun$239 ;
   wire [23:0] period;
   wire periodic;
   input \periodic$24 ;
@@ -15419,32 +15435,32 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire receiver_clear;
   wire \repeat ;
   wire report;
-  wire \report$149 ;
+  wire \report$153 ;
   wire report_delay;
-  wire \report_delay$152 ;
+  wire \report_delay$156 ;
   wire report_frame;
-  wire \report_frame$135 ;
-  wire \report_frame$150 ;
+  wire \report_frame$139 ;
+  wire \report_frame$154 ;
   wire request;
-  wire [17:0] \request$169 ;
-  wire [6:0] \request$169.address ;
-  wire [6:0] \request$169.count ;
-  wire [2:0] \request$169.slave_id ;
-  wire \request$169.write ;
+  wire [17:0] \request$173 ;
+  wire [6:0] \request$173.address ;
+  wire [6:0] \request$173.count ;
+  wire [2:0] \request$173.slave_id ;
+  wire \request$173.write ;
   wire \request$35 ;
   wire restart;
   wire restart_timer;
   output [9:0] result;
   wire [9:0] result;
-  output [160:0] \result$241 ;
-  wire [160:0] \result$241 ;
-  wire \result$241.cds ;
-  wire [5:0] \result$241.lc ;
-  wire \result$241.lc_repeat ;
-  wire \result$241.lc_skip ;
-  wire \result$241.lc_zero ;
-  wire [12:0] \result$241.line_delay ;
-  wire \result$241.spw_mismatch ;
+  output [160:0] \result$245 ;
+  wire [160:0] \result$245 ;
+  wire \result$245.cds ;
+  wire [5:0] \result$245.lc ;
+  wire \result$245.lc_repeat ;
+  wire \result$245.lc_skip ;
+  wire \result$245.lc_zero ;
+  wire [12:0] \result$245.line_delay ;
+  wire \result$245.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -15459,18 +15475,18 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
-  wire [3:0] \result$241.status ;
-  wire [31:0] \result$241.timestamp ;
-  wire [57:0] \result$241.word0 ;
-  wire \result$241.word0.crc_ok ;
-  wire \result$241.word0.ne ;
-  wire \result$241.word0.nw ;
-  wire [54:0] \result$241.word0.position ;
-  wire [42:0] \result$241.word1 ;
-  wire \result$241.word1.crc_ok ;
-  wire \result$241.word1.ne ;
-  wire \result$241.word1.nw ;
-  wire [39:0] \result$241.word1.position ;
+  wire [3:0] \result$245.status ;
+  wire [31:0] \result$245.timestamp ;
+  wire [57:0] \result$245.word0 ;
+  wire \result$245.word0.crc_ok ;
+  wire \result$245.word0.ne ;
+  wire \result$245.word0.nw ;
+  wire [54:0] \result$245.word0.position ;
+  wire [42:0] \result$245.word1 ;
+  wire \result$245.word1.crc_ok ;
+  wire \result$245.word1.ne ;
+  wire \result$245.word1.nw ;
+  wire [39:0] \result$245.word1.position ;
   wire [6:0] \result.bytes_done ;
   (* enum_base_type = "AccessStatus" *)
   (* enum_value_000 = "OK" *)
@@ -15482,14 +15498,14 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* enum_value_110 = "BAD_REQUEST" *)
   wire [2:0] \result.status ;
   wire resync;
-  wire \resync$121 ;
+  wire \resync$125 ;
   wire [15:0] rises;
   wire [15:0] \rises$105 ;
   input rst;
   wire rst;
   wire run;
   reg sample = 1'h0;
-  wire \sample$261 ;
+  wire \sample$264 ;
   wire second_rise;
   wire skip;
   input slo;
@@ -15506,11 +15522,11 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire [39:0] spw;
   wire spw_match;
   wire spw_mismatch;
-  wire \spw_mismatch$257 ;
+  wire \spw_mismatch$261 ;
   input start;
   wire start;
-  input \start$181 ;
-  wire \start$181 ;
+  input \start$185 ;
+  wire \start$185 ;
   wire \start$22 ;
   wire [15:0] start_slot;
   wire [15:0] \start_slot$103 ;
@@ -15546,7 +15562,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
-  wire [3:0] \status$240 ;
+  wire [3:0] \status$244 ;
   wire stop_bit;
   wire \stop_bit$62 ;
   wire stopped;
@@ -15561,9 +15577,9 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire trigger;
   wire \trigger$33 ;
   wire valid;
-  wire \valid$154 ;
-  output \valid$238 ;
-  wire \valid$238 ;
+  wire \valid$158 ;
+  output \valid$242 ;
+  wire \valid$242 ;
   wire valid_out;
   wire w1_enable;
   wire [39:0] wbuf;
@@ -15579,28 +15595,28 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire word1_nw;
   wire [39:0] word1_position;
   wire [1:0] word_count;
-  wire [1:0] \word_count$111 ;
+  wire [1:0] \word_count$115 ;
   wire [1:0] word_crc_ok;
   wire [19:0] words;
-  wire [19:0] \words$123 ;
-  wire [9:0] \words$123[0] ;
+  wire [19:0] \words$127 ;
+  wire [9:0] \words$127[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
-  wire [1:0] \words$123[0].crc ;
-  wire [5:0] \words$123[0].data_bits ;
-  wire \words$123[0].lc ;
-  wire \words$123[0].nenw ;
-  wire [9:0] \words$123[1] ;
+  wire [1:0] \words$127[0].crc ;
+  wire [5:0] \words$127[0].data_bits ;
+  wire \words$127[0].lc ;
+  wire \words$127[0].nenw ;
+  wire [9:0] \words$127[1] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
-  wire [1:0] \words$123[1].crc ;
-  wire [5:0] \words$123[1].data_bits ;
-  wire \words$123[1].lc ;
-  wire \words$123[1].nenw ;
+  wire [1:0] \words$127[1].crc ;
+  wire [5:0] \words$127[1].data_bits ;
+  wire \words$127[1].lc ;
+  wire \words$127[1].nenw ;
   wire [9:0] \words[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
@@ -15632,12 +15648,14 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign \$9  = ca_done & \$8 ;
   assign \$10  = result[2:0] == 3'h5;
   assign \$11  = ca_done & \$10 ;
-  assign \busy$233  = ~ idle;
+  assign \busy$237  = ~ idle;
   assign config_error = ~ config_ok;
+  assign \$12  = ~ \clear$106 ;
+  assign \$13  = \sample$264  & \$12 ;
   always @(posedge clk)
-    sample <= \$12 ;
+    sample <= \$14 ;
   always @(posedge clk)
-    \bit  <= \$13 ;
+    \bit  <= \$15 ;
   \biss_master_axil.ch1.core.config  \config  (
     .ack_limit(ack_limit),
     .clk(clk),
@@ -15694,7 +15712,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .timer_clear(clear)
   );
   \biss_master_axil.ch1.core.counters  counters (
-    .clear(\clear$210 ),
+    .clear(\clear$214 ),
     .clk(clk),
     .counts(counts),
     .events(events),
@@ -15747,10 +15765,10 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .start_slot(start_slot),
     .\started$10 (started),
     .w1_enable(cycle[135]),
-    .words(\words$123 )
+    .words(\words$127 )
   );
   \biss_master_axil.ch1.core.register_access  register_access (
-    .abort(\abort$183 ),
+    .abort(\abort$187 ),
     .busy(frames),
     .cdm(cdm),
     .clk(clk),
@@ -15762,27 +15780,27 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .rbuf_addr(rbuf_addr),
     .rbuf_data(ca_rbuf_data),
     .rbuf_en(rbuf_en),
-    .request(\request$169 ),
+    .request(\request$173 ),
     .result(result),
     .rst(rst),
-    .start(\start$181 ),
+    .start(\start$185 ),
     .wbuf(wbuf)
   );
   \biss_master_axil.ch1.core.results  results (
     .clk(clk),
-    .done(\done$236 ),
+    .done(\done$240 ),
     .frame(frame),
     .report(report),
     .report_delay(report_delay),
     .report_frame(report_frame),
-    .result(\result$241 ),
+    .result(\result$245 ),
     .rst(rst),
     .valid(valid),
-    .valid_out(\valid$238 )
+    .valid_out(\valid$242 )
   );
   \biss_master_axil.ch1.core.sampler  sampler (
     .arm(ma_arm),
-    .\bit (\bit$263 ),
+    .\bit (\bit$265 ),
     .clk(clk),
     .delay(delay),
     .early(early),
@@ -15791,7 +15809,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .locked(locked),
     .receiver_clear(\clear$106 ),
     .rst(rst),
-    .sample(\sample$261 ),
+    .sample(\sample$264 ),
     .slo(slo)
   );
   \biss_master_axil.ch1.core.scheduler  scheduler (
@@ -15812,7 +15830,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$4177$0 (\bit ),
+    .\port$4181$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -15869,7 +15887,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .lc_skip_seen(lc_skip_seen),
     .lc_zero(lc_zero),
     .lc_zero_seen(lc_zero_seen),
-    .\port$2968$0 (\$14 ),
+    .\port$2972$0 (\$16 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -15879,16 +15897,16 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
-    \$12  = \sample$261 ;
+    \$14  = \$13 ;
     if (rst) begin
-      \$12  = 1'h0;
+      \$14  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
-    \$13  = \bit$263 ;
+    \$15  = \bit$265 ;
     if (rst) begin
-      \$13  = 1'h0;
+      \$15  = 1'h0;
     end
   end
   assign \idle$20  = idle;
@@ -15938,53 +15956,55 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign \start_slot$103  = start_slot;
   assign \rises$105  = rises;
   assign receiver_clear = \clear$106 ;
-  assign \half_period$108  = cycle[15:0];
+  assign decoder_sample = sample;
+  assign decoder_bit = \bit ;
+  assign \half_period$112  = cycle[15:0];
   assign arm = ma_arm;
-  assign \word_count$111  = word_count;
-  assign \lc$113  = lc;
+  assign \word_count$115  = word_count;
+  assign \lc$117  = lc;
   assign lc_next = { lc[4:0], \bit  };
-  assign \lc_next$115  = { lc[4:0], \bit  };
+  assign \lc_next$119  = { lc[4:0], \bit  };
   assign lc_load = load;
   assign lc_check = check;
-  assign \resync$121  = resync;
+  assign \resync$125  = resync;
   assign w1_enable = cycle[135];
-  assign \cpw_top$126  = cpw_top;
+  assign \cpw_top$130  = cpw_top;
   assign data1 = spw;
   assign bits = cycle[141:136];
   assign tolerance = cycle[154:147];
   assign match = spw_match;
   assign cfg = cycle;
-  assign \report_frame$135  = report_frame;
-  assign \fault$137  = fault;
-  assign \fault_status$139  = fault_status;
-  assign \crc_ok$141  = crc_ok;
+  assign \report_frame$139  = report_frame;
+  assign \fault$141  = fault;
+  assign \fault_status$143  = fault_status;
+  assign \crc_ok$145  = crc_ok;
   assign \repeat  = lc_repeat_seen;
   assign skip = lc_skip_seen;
   assign zero = lc_zero_seen;
-  assign \report$149  = report;
-  assign \report_frame$150  = report_frame;
-  assign \report_delay$152  = report_delay;
-  assign \valid$154  = valid;
-  assign word_crc_ok = { \$14 , crc_ok[0] };
-  assign \first_rise$167  = first_rise;
+  assign \report$153  = report;
+  assign \report_frame$154  = report_frame;
+  assign \report_delay$156  = report_delay;
+  assign \valid$158  = valid;
+  assign word_crc_ok = { \$16 , crc_ok[0] };
+  assign \first_rise$171  = first_rise;
   assign ca_status = result[2:0];
   assign ca_bytes_done = result[9:3];
-  assign ca_start = \start$181 ;
-  assign ca_abort = \abort$183 ;
+  assign ca_start = \start$185 ;
+  assign ca_abort = \abort$187 ;
   assign ca_rbuf_addr = rbuf_addr;
   assign ca_rbuf_en = rbuf_en;
   assign rbuf_data = ca_rbuf_data;
   assign ca_busy = frames;
-  assign \busy$192  = frames;
-  assign \done$194  = ca_done;
-  assign \cdm$196  = cdm;
+  assign \busy$196  = frames;
+  assign \done$198  = ca_done;
+  assign \cdm$200  = cdm;
   assign held = ma_held;
   assign ma_hold = hold;
   assign frame_end = report;
   assign frame_ok = valid;
   assign frame_cds = cds;
   assign cdm_cycle = frame_cdm;
-  assign clear_counters = \clear$210 ;
+  assign clear_counters = \clear$214 ;
   assign count_crc_word0 = counts[15:0];
   assign count_crc_word1 = counts[31:16];
   assign count_no_ack = counts[47:32];
@@ -16003,27 +16023,27 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign count_ca_refused = counts[255:240];
   assign count_ca_aborted = counts[271:256];
   assign count_ca_data_fault = counts[287:272];
-  assign \ma$232  = ma;
-  assign \overrun$235  = overrun;
-  assign \done$237  = \done$236 ;
-  assign valid_out = \valid$238 ;
-  assign \status$240  = \result$241 [3:0];
-  assign timestamp = \result$241 [35:4];
-  assign line_delay = \result$241 [48:36];
-  assign \cds$244  = \result$241 [49];
-  assign word0_position = \result$241 [104:50];
-  assign word0_ne = \result$241 [105];
-  assign word0_nw = \result$241 [106];
-  assign word0_crc_ok = \result$241 [107];
-  assign word1_position = \result$241 [147:108];
-  assign word1_ne = \result$241 [148];
-  assign word1_nw = \result$241 [149];
-  assign word1_crc_ok = \result$241 [150];
-  assign \lc$253  = \result$241 [156:151];
-  assign \lc_repeat$254  = \result$241 [157];
-  assign \lc_skip$255  = \result$241 [158];
-  assign \lc_zero$256  = \result$241 [159];
-  assign \spw_mismatch$257  = \result$241 [160];
+  assign \ma$236  = ma;
+  assign \overrun$239  = overrun;
+  assign \done$241  = \done$240 ;
+  assign valid_out = \valid$242 ;
+  assign \status$244  = \result$245 [3:0];
+  assign timestamp = \result$245 [35:4];
+  assign line_delay = \result$245 [48:36];
+  assign \cds$248  = \result$245 [49];
+  assign word0_position = \result$245 [104:50];
+  assign word0_ne = \result$245 [105];
+  assign word0_nw = \result$245 [106];
+  assign word0_crc_ok = \result$245 [107];
+  assign word1_position = \result$245 [147:108];
+  assign word1_ne = \result$245 [148];
+  assign word1_nw = \result$245 [149];
+  assign word1_crc_ok = \result$245 [150];
+  assign \lc$257  = \result$245 [156:151];
+  assign \lc_repeat$258  = \result$245 [157];
+  assign \lc_skip$259  = \result$245 [158];
+  assign \lc_zero$260  = \result$245 [159];
+  assign \spw_mismatch$261  = \result$245 [160];
   assign \live.ma_half_period  = live[15:0];
   assign \live.request_period  = live[39:16];
   assign \live.break_time  = live[63:40];
@@ -16074,16 +16094,16 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign \words[1].nenw  = words[16];
   assign \words[1].lc  = words[17];
   assign \words[1].crc  = words[19:18];
-  assign \words$123[0]  = \words$123 [9:0];
-  assign \words$123[0].data_bits  = \words$123 [5:0];
-  assign \words$123[0].nenw  = \words$123 [6];
-  assign \words$123[0].lc  = \words$123 [7];
-  assign \words$123[0].crc  = \words$123 [9:8];
-  assign \words$123[1]  = \words$123 [19:10];
-  assign \words$123[1].data_bits  = \words$123 [15:10];
-  assign \words$123[1].nenw  = \words$123 [16];
-  assign \words$123[1].lc  = \words$123 [17];
-  assign \words$123[1].crc  = \words$123 [19:18];
+  assign \words$127[0]  = \words$127 [9:0];
+  assign \words$127[0].data_bits  = \words$127 [5:0];
+  assign \words$127[0].nenw  = \words$127 [6];
+  assign \words$127[0].lc  = \words$127 [7];
+  assign \words$127[0].crc  = \words$127 [9:8];
+  assign \words$127[1]  = \words$127 [19:10];
+  assign \words$127[1].data_bits  = \words$127 [15:10];
+  assign \words$127[1].nenw  = \words$127 [16];
+  assign \words$127[1].lc  = \words$127 [17];
+  assign \words$127[1].crc  = \words$127 [19:18];
   assign \cfg.ma_half_period  = cycle[15:0];
   assign \cfg.request_period  = cycle[39:16];
   assign \cfg.break_time  = cycle[63:40];
@@ -16123,10 +16143,10 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign \frame.lc_skip  = frame[158];
   assign \frame.lc_zero  = frame[159];
   assign \frame.spw_mismatch  = frame[160];
-  assign \request$169.slave_id  = \request$169 [2:0];
-  assign \request$169.address  = \request$169 [9:3];
-  assign \request$169.count  = \request$169 [16:10];
-  assign \request$169.write  = \request$169 [17];
+  assign \request$173.slave_id  = \request$173 [2:0];
+  assign \request$173.address  = \request$173 [9:3];
+  assign \request$173.count  = \request$173 [16:10];
+  assign \request$173.write  = \request$173 [17];
   assign \wbuf.addr  = wbuf[3:0];
   assign \wbuf.data  = wbuf[35:4];
   assign \wbuf.en  = wbuf[39:36];
@@ -16175,25 +16195,25 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign \counts.ca_refused  = counts[255:240];
   assign \counts.ca_aborted  = counts[271:256];
   assign \counts.ca_data_fault  = counts[287:272];
-  assign \result$241.status  = \result$241 [3:0];
-  assign \result$241.timestamp  = \result$241 [35:4];
-  assign \result$241.line_delay  = \result$241 [48:36];
-  assign \result$241.cds  = \result$241 [49];
-  assign \result$241.word0  = \result$241 [107:50];
-  assign \result$241.word0.position  = \result$241 [104:50];
-  assign \result$241.word0.ne  = \result$241 [105];
-  assign \result$241.word0.nw  = \result$241 [106];
-  assign \result$241.word0.crc_ok  = \result$241 [107];
-  assign \result$241.word1  = \result$241 [150:108];
-  assign \result$241.word1.position  = \result$241 [147:108];
-  assign \result$241.word1.ne  = \result$241 [148];
-  assign \result$241.word1.nw  = \result$241 [149];
-  assign \result$241.word1.crc_ok  = \result$241 [150];
-  assign \result$241.lc  = \result$241 [156:151];
-  assign \result$241.lc_repeat  = \result$241 [157];
-  assign \result$241.lc_skip  = \result$241 [158];
-  assign \result$241.lc_zero  = \result$241 [159];
-  assign \result$241.spw_mismatch  = \result$241 [160];
+  assign \result$245.status  = \result$245 [3:0];
+  assign \result$245.timestamp  = \result$245 [35:4];
+  assign \result$245.line_delay  = \result$245 [48:36];
+  assign \result$245.cds  = \result$245 [49];
+  assign \result$245.word0  = \result$245 [107:50];
+  assign \result$245.word0.position  = \result$245 [104:50];
+  assign \result$245.word0.ne  = \result$245 [105];
+  assign \result$245.word0.nw  = \result$245 [106];
+  assign \result$245.word0.crc_ok  = \result$245 [107];
+  assign \result$245.word1  = \result$245 [150:108];
+  assign \result$245.word1.position  = \result$245 [147:108];
+  assign \result$245.word1.ne  = \result$245 [148];
+  assign \result$245.word1.nw  = \result$245 [149];
+  assign \result$245.word1.crc_ok  = \result$245 [150];
+  assign \result$245.lc  = \result$245 [156:151];
+  assign \result$245.lc_repeat  = \result$245 [157];
+  assign \result$245.lc_skip  = \result$245 [158];
+  assign \result$245.lc_zero  = \result$245 [159];
+  assign \result$245.spw_mismatch  = \result$245 [160];
   assign events[17] = \$11 ;
   assign events[16] = \$9 ;
   assign events[15] = \$7 ;
@@ -16215,13 +16235,13 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign wbuf[39:36] = ca_wbuf_en;
   assign wbuf[35:4] = ca_wbuf_data;
   assign wbuf[3:0] = ca_wbuf_addr;
-  assign \request$169 [17] = ca_write;
-  assign \request$169 [16:10] = ca_count;
-  assign \request$169 [9:3] = ca_address;
-  assign \request$169 [2:0] = ca_slave_id;
+  assign \request$173 [17] = ca_write;
+  assign \request$173 [16:10] = ca_count;
+  assign \request$173 [9:3] = ca_address;
+  assign \request$173 [2:0] = ca_slave_id;
   assign frame[35:4] = first_rise_time;
   assign frame[160] = spw_mismatch;
-  assign frame[150] = \$14 ;
+  assign frame[150] = \$16 ;
   assign frame[149] = nw[1];
   assign frame[148] = ne[1];
   assign frame[147:108] = spw;
@@ -16236,8 +16256,8 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign frame[49] = cds;
   assign frame[48:36] = delay;
   assign frame[3:0] = status;
-  assign \words$123 [19:10] = cycle[145:136];
-  assign \words$123 [9:0] = cycle[134:125];
+  assign \words$127 [19:10] = cycle[145:136];
+  assign \words$127 [9:0] = cycle[134:125];
   assign words[19:10] = cycle[145:136];
   assign words[9:0] = cycle[134:125];
   assign live[154:147] = cfg_spw_tolerance;
@@ -16430,7 +16450,7 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   assign \$38  = \$37  ? 24'h001f40 : live[111:88];
   assign \$39  = ! live[123:112];
   assign \$40  = \$39  ? 12'hfff : live[123:112];
-  assign \$41  = ack_limit + { cycle[15:0], 1'h0 };
+  assign \$41  = ack_limit + { cycle[15:0], 1'h1 };
   assign word_count = 1'h1 + cycle[135];
   always @(posedge clk)
     ok <= \$42 ;
@@ -23727,7 +23747,7 @@ module \biss_master_axil.ch1.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$4177$0 , resync, lc, is_zero, clk);
+module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$4181$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$107  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -23765,8 +23785,8 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$4177$0 ;
-  wire \port$4177$0 ;
+  input \port$4181$0 ;
+  wire \port$4181$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -23778,9 +23798,9 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$4177$0  };
-  assign \$2  = { lc[4:0], \port$4177$0  } == last;
-  assign \$3  = { lc[4:0], \port$4177$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$4181$0  };
+  assign \$2  = { lc[4:0], \port$4181$0  } == last;
+  assign \$3  = { lc[4:0], \port$4181$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = lc == 6'h3f;
@@ -23870,7 +23890,7 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
       \$21  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$4177$0  };
+  assign lc_next = { lc[4:0], \port$4181$0  };
   assign zero = is_zero;
 endmodule
 
@@ -24352,7 +24372,7 @@ module \biss_master_axil.ch1.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.verdict (lc_skip_seen, \port$2968$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
+module \biss_master_axil.ch1.core.verdict (lc_skip_seen, \port$2972$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$111  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -24466,8 +24486,8 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, \port$2968$0 , lc_check
   wire lc_zero;
   input lc_zero_seen;
   wire lc_zero_seen;
-  output \port$2968$0 ;
-  wire \port$2968$0 ;
+  output \port$2972$0 ;
+  wire \port$2972$0 ;
   output report;
   wire report;
   input report_frame;
@@ -24552,7 +24572,7 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, \port$2968$0 , lc_check
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$2968$0  = \$2 ;
+  assign \port$2972$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

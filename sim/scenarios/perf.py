@@ -239,7 +239,7 @@ async def verdict_latency(dut):
     await tb.start()
     tb.encoder.min_cycle_s = 0.0
     strobes, dones, valids = [], [], []
-    for sig, times in ((dut.sample, strobes), (dut.done, dones), (dut.valid, valids)):
+    for sig, times in ((dut.sampler.sample, strobes), (dut.done, dones), (dut.valid, valids)):
         cocotb.start_soon(log_edges(sig, RisingEdge, times))
     rows = []
     for cable_m in LATENCY_CABLES_M:

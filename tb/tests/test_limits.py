@@ -60,9 +60,10 @@ def start_at(*clocks_):
 
 
 def assert_frame(run, s, ld, ack_slots, *, end_check_done=None, hp=HP):
-    """One frame, reported OK, at the documented clock (2 clocks after the last CRC bit's
-    sample); MA made exactly the frame's rises."""
-    done = end_check_done or sample_clock(s, ld, ack_slots + FRAME_BITS + 1, hp) + 2
+    """One frame, reported OK, at the documented clock (3 clocks after the last CRC bit's
+    decision: the decoder reads it one clock after the decision); MA made exactly the frame's
+    rises."""
+    done = end_check_done or sample_clock(s, ld, ack_slots + FRAME_BITS + 1, hp) + 3
     assert run.dones == [(done, STATUS["OK"])]
     assert run.trace[-1]["word0_position"] == POSITION
     assert run.cycles("valid") == [run.dones[0][0]]
@@ -125,7 +126,7 @@ def test_no_start_limit(hp, ack_slots, offset):
     if offset <= 0:
         assert_frame(run, s, ld, ack_slots, hp=hp)
     else:
-        assert_fault(run, "NO_START", sample_clock(s, ld, 0, hp) + a + 2 * hp + 3, "no_start", hp)
+        assert_fault(run, "NO_START", sample_clock(s, ld, 0, hp) + a + 2 * hp + 4, "no_start", hp)
         assert len(run.rises) < target_rises(ack_slots)
 
 
@@ -175,8 +176,8 @@ def test_timeout_limit_before_cycle(limit, offset):
     again = run.counts.pop("again")
     first_rises = run.rises[:target_rises(1)]
     m = first_rises[-1] + HP
-    # Idle again in m + ld + 4 (ld = 1); the bench sees that one clock late.
-    assert again == m + 1 + 4 + 1
+    # Idle again in m + ld + 5 (ld = 1); the bench sees that one clock late.
+    assert again == m + 1 + 5 + 1
     assert run.dones[0][1] == STATUS["OK"]
     if offset <= 0:
         # SLO seen high in clock m + low: CLOCK next, MA falls one clock later.
@@ -214,16 +215,16 @@ def test_timeout_limit_end_check(offset):
 def test_end_check_stop_bit(round_trip, offset):
     """The stop bit is sampled in clock m + ld + 1 (the pin at m + ld - 1): SLO must still be
     low there. The encoder's timeout ending at the pin in clock m + ld - 1 + offset: 0 or
-    earlier is NO_STOP (done at m + ld + 3), 1 is a frame reported at m + ld + 4 (the earliest
-    the confirm wait allows)."""
+    earlier is NO_STOP (done at m + ld + 4: the decoder reads the decision one clock later), 1
+    is a frame reported at m + ld + 5 (the earliest the confirm wait allows)."""
     cfg = base_config(HP, cfg_break_time=BREAK, cfg_timeout_limit=20, cfg_end_check=1)
     run = simulate(cfg, Encoder(HP, FRAME, round_trip=round_trip, release=offset), 120,
                    start_at(5))
     m, ld = run.rises[-1] + HP, round_trip + 1
     if offset <= 0:
-        assert_fault(run, "NO_STOP", m + ld + 3, "no_stop")
+        assert_fault(run, "NO_STOP", m + ld + 4, "no_stop")
     else:
-        assert_frame(run, run.rises[1], ld, 1, end_check_done=m + ld + 4)
+        assert_frame(run, run.rises[1], ld, 1, end_check_done=m + ld + 5)
 
 
 # -- Break time: cfg_break_time -----------------------------------------------------------------
@@ -271,8 +272,8 @@ def test_break_time_after_abort(offset):
 def cycle_length(ld=1, ack_slots=1):
     """Clocks from an accepted request to the first idle clock after its frame (no end check):
     MA falls 3 clocks after the request, makes the frame's rises, and the controller is idle
-    again in m + ld + 4."""
-    return 3 + 2 * HP * target_rises(ack_slots) + ld + 4
+    again in m + ld + 5."""
+    return 3 + 2 * HP * target_rises(ack_slots) + ld + 5
 
 
 @pytest.mark.parametrize("offset", (-1, 0, 1), ids=("C-1_overrun", "C_spacing_P", "C+1_spacing_P"))
@@ -326,7 +327,7 @@ def test_timeout_limit_late_request_reports_at_once():
     the request's next clock, done 2 clocks after the request."""
     t_lim = 12
     cfg = base_config(HP, cfg_break_time=BREAK, cfg_timeout_limit=t_lim)
-    m = 5 + cycle_length() - 1 - 4            # first request at 5, ld = 1: idle in m + 5
+    m = 5 + cycle_length() - 1 - 5            # first request at 5, ld = 1: idle in m + 6
     q = m + t_lim + 4
     run = simulate(cfg, Encoder(HP, FRAME, release=40), q + 10, start_at(5, q))
     assert run.rises[-1] + HP == m
@@ -345,8 +346,8 @@ BAD_CRC_FRAME = build_frame(FrameFormat("limits", (WORD,)), [WordValue(POSITION)
 def test_pause_after_a_crc_error(end_check, offset):
     """A frame with a CRC error is reported (done, CRC_ERROR_WORD0, counted), then the master
     pauses for cfg_break_time clocks with MA high before it is idle again, so that the encoder's
-    timeout ends before the next cycle: idle (I) in m + ld + 4 + B without the end check (a good
-    frame: m + ld + 4), in done + B + 1 with it (a good frame: done). A start before I is an
+    timeout ends before the next cycle: idle (I) in m + ld + 5 + B without the end check (a good
+    frame: m + ld + 5), in done + B + 1 with it (a good frame: done). A start before I is an
     overrun; the first one accepted starts a clean cycle."""
     ld = 1
     encoder = Encoder(HP, BAD_CRC_FRAME, release=1)
@@ -355,7 +356,7 @@ def test_pause_after_a_crc_error(end_check, offset):
     def idle_clock(run):
         first_done = run.dones[0][0]
         m = run.rises[target_rises(1) - 1] + HP
-        return first_done + BREAK + 1 if end_check else m + ld + 4 + BREAK
+        return first_done + BREAK + 1 if end_check else m + ld + 5 + BREAK
 
     def drive(t, run):
         if run.dones and "q" not in probe:
