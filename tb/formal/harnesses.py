@@ -514,7 +514,7 @@ class LivenessLimits:
     def max_bound(self, words, slack):
         h = self.hp_max
         return (1 + (self.timeout_max + 1) + (3 * h + 1) + (self.ack_max + 1)
-                + (self.ack_max + 2 * h + 1) + (self.max_frame_bits(words) + 1) * 2 * h + 3 + slack
+                + (self.ack_max + 2 * h) + (self.max_frame_bits(words) + 1) * 2 * h + 3 + slack
                 + 3 * h + (self.timeout_max + 1) + 2)        # the end check
 
     def depth(self, words, slack):
@@ -579,15 +579,16 @@ class MasterLivenessHarness(Harness):
         # The bound, clock by clock: 1 to leave IDLE; WAIT_READY up to the timeout limit + 1;
         # MA to its second rise (3 half periods + 1: the sampler is armed); the Ack edge and the
         # slot-0 sample up to the Ack limit + 1; the Start sample up to the Ack limit + one MA
-        # period + 1 after that (the NO_START limit); CDS and the frame bits, one MA period (2
-        # half periods) each; ``done`` 3 clocks after the last sample (the register to the
-        # decoder, decoder and output registers). With the end check, ``done`` waits for the stop bit's sample and MA's
+        # period after that (the NO_START limit on the sampler's decisions); CDS and the frame
+        # bits, one MA period (2 half periods) each; ``done`` 3 clocks after the last sample
+        # (the register to the decoder, decoder and output registers). With the end check,
+        # ``done`` waits for the stop bit's sample and MA's
         # stop (at most 3 half periods), then SLO high up to the timeout limit + 1, then the
         # verdict (2 clocks). The half period takes few values: one formula with constant
         # factors per value (a product of two variables would slow the solver down a lot).
         def formula(h):
             per_bit = 0 if self.mutation == "tight" else 2 * h
-            return (1 + (timeout + 1) + (3 * h + 1) + (ack + 1) + (ack + 2 * h + 1)
+            return (1 + (timeout + 1) + (3 * h + 1) + (ack + 1) + (ack + 2 * h)
                     + (bits + 1) * per_bit + 3 + self.slack
                     + Mux(end_check, 3 * h + (timeout + 1) + 2, 0))
         bound = formula(lim.hp_max)

@@ -50,7 +50,7 @@ TINY_DECODER = MasterParams(max_data_bits=(4,), word_crcs=((Crc.CRC6,),))
 #: depth 72: more than 10 minutes).
 LIVE_FAST = LivenessLimits()
 LIVE_FULL = LivenessLimits(data_bits_max=2, nenw=True)
-LIVE_SLACK = 0       # exact to within one clock before the sampler -> decoder register; now >= 2 loose (README)
+LIVE_SLACK = 0       # the bound is exact to within one clock (README: liveness_small_slack-2)
 #: CRC end to end through the master: CRC-6 or none, up to 2 data bits (frames of at most 8
 #: bits: the longest first cycle ends by clock 56).
 CRC_LIMITS = LivenessLimits(data_bits_max=2, crcs=(Crc.NONE, Crc.CRC6))
