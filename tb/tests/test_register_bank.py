@@ -10,6 +10,7 @@ the register-access windows (ca.wbuf, ca.rbuf) as ports of a 16 x 32 memory with
 
 from amaranth.sim import Simulator
 from amaranth.hdl import ClockDomain, Module
+from amaranth.lib import wiring
 from amaranth.lib.memory import Memory
 
 from bissmaster import regmap
@@ -41,6 +42,23 @@ def run(bench, channels=1, buffers=False):
     sim.add_clock(1e-8)
     async def testbench(ctx):
         await bench(ctx, bank)
+    sim.add_testbench(testbench)
+    sim.run()
+
+
+def run_adapter(adapter, bench):
+    """One channel's bank behind a bus adapter (AxiLiteAdapter or WishboneAdapter); ``bench``
+    gets (ctx, the adapter's bus side, the bank)."""
+    top = Module()
+    top.domains.sync = ClockDomain()
+    top.submodules.bank = bank = RegisterBank(MAP, 1)
+    top.submodules.adapter = dut = adapter(MAP.addr_width)
+    wiring.connect(top, dut.regs, bank.bus)
+    bus = dut.axil if adapter is AxiLiteAdapter else dut.wb
+    sim = Simulator(top)
+    sim.add_clock(1e-8)
+    async def testbench(ctx):
+        await bench(ctx, bus, bank)
     sim.add_testbench(testbench)
     sim.run()
 
@@ -137,15 +155,7 @@ def test_snapshot_taken_by_reading_result_status():
 
 
 def test_axil_reads_back_to_back_and_write_with_address_after_data():
-    top = Module()
-    top.domains.sync = ClockDomain()
-    top.submodules.bank = bank = RegisterBank(MAP, 1)
-    top.submodules.axil = axil = AxiLiteAdapter(MAP.addr_width)
-    from amaranth.lib import wiring
-    wiring.connect(top, axil.regs, bank.bus)
-    bus = axil.axil
-
-    async def bench(ctx):
+    async def bench(ctx, bus, bank):
         # W first, AW two clocks later; then the response.
         ctx.set(bus.wvalid, 1)
         ctx.set(bus.wdata, 0x1234)
@@ -177,10 +187,7 @@ def test_axil_reads_back_to_back_and_write_with_address_after_data():
                 got.append((clock + 1, ctx.get(bus.rdata)))
         assert got == [(2, 0x42695353), (3, 0x1234), (4, 0x00010001)]    # version 1.1
 
-    sim = Simulator(top)
-    sim.add_clock(1e-8)
-    sim.add_testbench(bench)
-    sim.run()
+    run_adapter(AxiLiteAdapter, bench)
 
 
 def test_axil_read_backpressure_reads_each_register_once():
@@ -188,18 +195,11 @@ def test_axil_read_backpressure_reads_each_register_once():
     in order, held while rready is low; arready is low while a read waits behind held data.
     The snapshot (reading result.status) is taken once, at its AR handshake: the position
     changed afterwards is not what result.w0_lo reads."""
-    top = Module()
-    top.domains.sync = ClockDomain()
-    top.submodules.bank = bank = RegisterBank(MAP, 1)
-    top.submodules.axil = axil = AxiLiteAdapter(MAP.addr_width)
-    from amaranth.lib import wiring
-    wiring.connect(top, axil.regs, bank.bus)
-    bus = axil.axil
     reads = [0, offset("result.status"), offset("result.w0_lo"), offset("result.w0_hi"), 4,
              offset("result.w0_lo")]
     ready = [0, 0, 0, 1, 0, 1, 1, 0, 0, 1, 0, 1, 1, 1, 0, 1] + [1] * 8
 
-    async def bench(ctx):
+    async def bench(ctx, bus, bank):
         ctx.set(bank.ch0.word0_position, 0x12_3456_789A)
         ctx.set(bank.ch0.status, 3)
         issued, got, held = 0, [], None
@@ -225,25 +225,14 @@ def test_axil_read_backpressure_reads_each_register_once():
         assert [g & 0xF if n == 1 else g for n, g in enumerate(got)] == [
             0x42695353, 3, 0x3456_789A, 0x12, 0x00010001, 0x3456_789A]
 
-    sim = Simulator(top)
-    sim.add_clock(1e-8)
-    sim.add_testbench(bench)
-    sim.run()
+    run_adapter(AxiLiteAdapter, bench)
 
 
 def test_wishbone_read_waits_one_state_and_write_does_not():
     """Wishbone classic: a write is acked in the clock after it is taken, a read two clocks
     after (one wait state), with its data; stall is high up to the ack, so a request held
     through the ack is taken once."""
-    top = Module()
-    top.domains.sync = ClockDomain()
-    top.submodules.bank = bank = RegisterBank(MAP, 1)
-    top.submodules.wb = wb = WishboneAdapter(MAP.addr_width)
-    from amaranth.lib import wiring
-    wiring.connect(top, wb.regs, bank.bus)
-    bus = wb.wb
-
-    async def cycle(ctx, addr, data=None):
+    async def cycle(ctx, bus, addr, data=None):
         ctx.set(bus.cyc, 1)
         ctx.set(bus.stb, 1)
         ctx.set(bus.we, data is not None)
@@ -263,15 +252,12 @@ def test_wishbone_read_waits_one_state_and_write_does_not():
                 return clock, stalls, value
         raise AssertionError("no ack")
 
-    async def bench(ctx):
-        assert (await cycle(ctx, offset("cfg_ma"), 0x0777))[:2] == (1, [1])
-        assert await cycle(ctx, offset("cfg_ma")) == (2, [1, 1], 0x0777)
-        assert await cycle(ctx, 0) == (2, [1, 1], 0x42695353)
+    async def bench(ctx, bus, bank):
+        assert (await cycle(ctx, bus, offset("cfg_ma"), 0x0777))[:2] == (1, [1])
+        assert await cycle(ctx, bus, offset("cfg_ma")) == (2, [1, 1], 0x0777)
+        assert await cycle(ctx, bus, 0) == (2, [1, 1], 0x42695353)
 
-    sim = Simulator(top)
-    sim.add_clock(1e-8)
-    sim.add_testbench(bench)
-    sim.run()
+    run_adapter(WishboneAdapter, bench)
 
 
 def test_windows_byte_lanes_and_read_latency():
