@@ -246,6 +246,7 @@ async def bp3_registers_every_rate(dut):
 # -- Write, read back, a whole bank --------------------------------------------------------------
 
 @cocotb.test()
+@long_on_icarus
 async def write_read_back_and_bank_read(dut):
     """A user register written and read back; four written in one sequential access and read
     back in one; the bank select written, then the 64-byte BP3 EDS bank read in one access
@@ -296,6 +297,7 @@ async def during(ctl, frames_in, action, access):
 
 
 @cocotb.test()
+@long_on_icarus
 async def every_fault_status(dut):
     """Every ca_status other than OK, each followed by a good access (recovery), the
     count_ca_* counters against the statuses seen, every frame checked. BP3 DL_POS 24 at 10 MHz
@@ -414,6 +416,7 @@ def _queue(tb, **kwargs):
 
 
 @cocotb.test()
+@long_on_icarus
 async def idle_count_skips_missed_cycles(dut):
     """The 14 idle frames before S must be frames the encoder saw (spec section 10: the slave
     counts them). After a write (its P and final cycle are 2 of them), 12 request cycles that

@@ -426,6 +426,7 @@ async def verdict_latency(dut):
 
 @cocotb.test()
 @only_on_builds("biss-c", "biss-c-lean")
+@long_on_icarus
 async def biss_c_only_build(dut):
     """The BiSS-C-only builds (one 36-bit word, CRC-6; the lean one without counters and
     timestamp): single-word presets up to 36 bits at every MA rate over 0 and 100 m, a CRC
