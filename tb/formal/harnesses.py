@@ -80,6 +80,8 @@ INTERNALS = {
     "sampler.bit": ("port", "", "bit"),
     # FrameDecoder
     "decoder.fsm": ("fsm", "", "decoder_fsm"),                  # states ACK, CDS, WORD, ...
+    "decoder.sample": ("port", "", "sample"),                   # the decision it consumes ...
+    "decoder.bit": ("port", "", "bit"),                         # ... (the sampler's, a clock late)
     "decoder.idx": ("signal", "", "idx"),                       # bit index in the word
     "decoder.word": ("signal", "", "word"),                     # word index (two-word builds)
     "decoder.crc_reg": ("signal", "crc{w}", "{crc}_reg"),       # a WordCrc's shift register
@@ -1154,10 +1156,10 @@ class MasterCrcHarness(Harness):
 
         # The bits the decoder consumes, and the core's own "new cycle" reset of the receiver
         # (the parse restarts with it; the configuration is the harness's copy).
-        sampler = inside.block("master.sampler")     # the master wires these to the decoder
-        sample, bit = sampler("sampler.sample"), sampler("sampler.bit")
-        clear = inside("master.receiver_clear")
+        # (The decoder's own inputs: the master registers the sampler's decisions on their way.)
         decoder = inside.block("master.decoder")
+        sample, bit = decoder("decoder.sample"), decoder("decoder.bit")
+        clear = inside("master.receiver_clear")
         rtl = [{k: _crc_state(decoder, w, k) for k in p.word_crcs[w]} for w in range(p.words)]
         parse = _FrameParser(m, sample, bit, cfg, count, clear=clear, lemmas=self.lemmas,
                              rtl=rtl if self.lemmas else None, mutation=self.mutation)
