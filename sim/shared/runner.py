@@ -69,7 +69,8 @@ def build(sim, waves=False, verilog=VERILOG, tag="", internal_clock=False, tople
     runner = get_runner(sim)
     sources = [str(verilog)]
     if internal_clock:
-        sources.append(str(fastclk.write(verilog, build_dir / "biss_master_tb.v", CLK_HZ)))
+        wrapped = fastclk.wrapper(Path(verilog).read_text(), CLK_HZ)
+        sources.append(str(_write_if_changed(build_dir / "biss_master_tb.v", wrapped)))
     kwargs = dict(
         sources=sources,
         hdl_toplevel=fastclk.TOPLEVEL if internal_clock else toplevel,
