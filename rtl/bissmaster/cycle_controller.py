@@ -4,8 +4,12 @@ from amaranth.hdl import *
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
+from .cdm_hold import CdmHold
+from .cycle_report import CycleReport
 from .layouts import fault_layout
+from .line_faults import LineFaults
 from .params import Status
+from .ready_check import ReadyCheck
 
 
 class CycleController(wiring.Component):
@@ -17,6 +21,14 @@ class CycleController(wiring.Component):
     :class:`~bissmaster.limit_timers.LimitTimers`, the frame from the sampler and decoder, the
     frame's verdict is made by :class:`~bissmaster.frame_verdict.FrameVerdict` when the
     controller says ``report_frame``.
+
+    The controller keeps the state machine (with ``idle``, ``first_clock``, ``receiver_clear``
+    and the doubtful frame's ``pause``) and connects four blocks that own the rest:
+    :class:`~bissmaster.ready_check.ReadyCheck` (how WAIT_READY ends),
+    :class:`~bissmaster.line_faults.LineFaults` (the frame's Ack and Start: the timer restart
+    and the line faults of CLOCK), :class:`~bissmaster.cdm_hold.CdmHold` (``cdm`` builds: the
+    cycle's CDM bit and the hold of MA) and :class:`~bissmaster.cycle_report.CycleReport` (the
+    report: ``report_frame``, ``report_delay``, ``fault``, ``fault_status``, ``faults``).
 
     States:
 
@@ -159,23 +171,29 @@ class CycleController(wiring.Component):
     def elaborate(self, platform):
         m = Module()
         cdm = self._cdm
+        m.submodules.ready_check = ready = ReadyCheck()
+        m.submodules.line_faults = line = LineFaults()
+        m.submodules.report = report = CycleReport()
         if cdm:
-            # The cycle's CDM bit, copied while idle like the configuration.
-            with m.If(self.idle):
-                m.d.sync += self.cdm_cycle.eq(self.cdm)
-            # Release the hold: the encoder's timeout ended (SLO high), it never ends (the
-            # timeout limit), or an abort.
-            release = self.slo | self.slo_stuck | self.abort
-            holding = self.cdm_cycle & ~release
+            m.submodules.cdm_hold = hold = CdmHold()
 
-        armed = Signal()            # the second MA rise has been made (the sampler is armed)
-        locked_seen = Signal()      # ``locked`` was already high in an earlier clock
-        newly_locked = self.locked & ~locked_seen
-        m.d.comb += self.restart_timer.eq(self.ma_arm | newly_locked)
+        # The blocks' inputs from the ports of the same name, and their outputs to the ports.
+        def inputs(block, *names):
+            return [getattr(block, name).eq(getattr(self, name)) for name in names]
+
+        m.d.comb += inputs(ready, "first_clock", "config_ok", "abort", "slo", "slo_stuck",
+                           "slo_stuck_live")
+        m.d.comb += inputs(line, "ma_arm", "locked", "early", "started", "slots_full",
+                           "ack_expired", "no_start_expired", "delay_over")
+        m.d.comb += [self.restart_timer.eq(line.restart_timer),
+                     self.report_frame.eq(report.report_frame),
+                     self.report_delay.eq(report.report_delay),
+                     self.fault.eq(report.fault), self.fault_status.eq(report.fault_status),
+                     self.faults.eq(report.faults)]
+        if cdm:
+            m.d.comb += inputs(hold, "idle", "cdm", "slo", "slo_stuck", "abort")
+            m.d.comb += [self.cdm_cycle.eq(hold.cdm_cycle), self.ma_hold.eq(hold.ma_hold)]
         m.d.sync += self.first_clock.eq(self.idle)
-        # In WAIT_READY's first clock the latched timeout limit is not valid yet: use the flag
-        # computed from the live setting.
-        slo_stuck = Mux(self.first_clock, self.slo_stuck_live, self.slo_stuck)
 
         # ``idle`` and ``receiver_clear`` are decodes of the state, kept as registers: written
         # with every transition from the state it goes to (no decode in front of the resets of
@@ -188,15 +206,11 @@ class CycleController(wiring.Component):
                          self.receiver_clear.eq(state in cleared_states)]
 
         def fault(status, next_state="BREAK"):
-            m.d.comb += [self.fault.eq(1), self.fault_status.eq(status),
-                         self.faults[status.name.lower()].eq(1)]
+            m.d.comb += [report.fail.eq(1), report.status.eq(status)]
             goto(next_state)
 
         # The frame is doubtful (taken when it ends): after it, PAUSE instead of END / IDLE.
         pause = Signal()
-
-        def report_verdict():
-            m.d.comb += [self.report_frame.eq(1), self.report_delay.eq(1)]
 
         with m.FSM(init="BREAK", name="cycle_fsm"):
             with m.State("BREAK"):
@@ -216,31 +230,26 @@ class CycleController(wiring.Component):
                     goto("WAIT_READY")
 
             with m.State("WAIT_READY"):
-                m.d.comb += self.timer_clear.eq(1)
-                m.d.sync += [armed.eq(0), locked_seen.eq(0)]
-                with m.If(self.first_clock & ~self.config_ok):
-                    # The configuration latched at the request is invalid: no cycle. Nothing
-                    # has reached the line. An abort now is handled as IDLE would have.
+                m.d.comb += [self.timer_clear.eq(1), line.clear.eq(1)]
+                with m.If(ready.bad_config):
+                    # Nothing has reached the line. An abort now is handled as IDLE would have.
                     fault(Status.BAD_CONFIG, "IDLE")
                     with m.If(self.abort):
                         goto("BREAK")
-                with m.Elif(self.abort):
+                with m.Elif(ready.aborted):
                     fault(Status.ABORTED)
-                with m.Elif(self.slo):
+                with m.Elif(ready.ready):
                     goto("CLOCK")
-                with m.Elif(slo_stuck):
+                with m.Elif(ready.stuck_low):
                     fault(Status.SLO_STUCK_LOW)
 
             with m.State("CLOCK"):
-                m.d.comb += [self.ma_run.eq(~self.ma_enough), self.in_clock.eq(1)]
+                m.d.comb += [self.ma_run.eq(~self.ma_enough), self.in_clock.eq(1),
+                             line.watch.eq(1)]
                 if cdm:
-                    m.d.comb += self.ma_hold.eq(self.cdm_cycle & ~self.abort)
+                    m.d.comb += hold.framing.eq(1)
                 with m.If(self.restart_timer | self.abort):
                     m.d.comb += self.timer_clear.eq(1)
-                with m.If(self.ma_arm):
-                    m.d.sync += armed.eq(1)
-                with m.If(newly_locked):
-                    m.d.sync += locked_seen.eq(1)
                 # The end of the frame comes right after the abort: it excludes every line
                 # fault below (those all come before the first sample, or before Start), so
                 # this order reports the same as theirs, with fewer gates in front of the
@@ -251,23 +260,16 @@ class CycleController(wiring.Component):
                     m.d.sync += pause.eq(self.frame_doubtful)
                     # With the end check the verdict waits for the end of the frame (CONFIRM).
                     with m.If(~self.end_check):
-                        report_verdict()
+                        m.d.comb += report.frame.eq(1)
                     goto("TAIL")
-                with m.Elif(armed & self.early):
-                    fault(Status.DELAY_RANGE)
-                with m.Elif(armed & ~locked_seen & ~self.locked & self.ack_expired):
-                    fault(Status.NO_ACK)
-                with m.Elif(newly_locked & self.delay_over):
-                    m.d.comb += self.report_delay.eq(1)
-                    fault(Status.DELAY_RANGE)
-                with m.Elif(locked_seen & ~self.started
-                            & (self.no_start_expired | self.slots_full)):
-                    fault(Status.NO_START)
+                with m.Elif(line.fault):
+                    m.d.comb += report.delay.eq(line.delay)
+                    fault(line.status)
 
             with m.State("TAIL"):
                 m.d.comb += self.ma_run.eq(~self.ma_enough)
                 if cdm:
-                    m.d.comb += self.ma_hold.eq(self.cdm_cycle & ~self.abort)
+                    m.d.comb += hold.framing.eq(1)
                 with m.If(self.abort):
                     m.d.comb += self.timer_clear.eq(1)
                     with m.If(self.end_check):
@@ -294,7 +296,7 @@ class CycleController(wiring.Component):
 
             with m.State("PAUSE"):
                 if cdm:
-                    m.d.comb += self.ma_hold.eq(holding)
+                    m.d.comb += hold.holding.eq(1)
                 with m.If(self.ma_busy | self.abort):
                     m.d.comb += self.timer_clear.eq(1)
                 with m.Elif(self.break_over):
@@ -302,7 +304,7 @@ class CycleController(wiring.Component):
 
             with m.State("END"):
                 if cdm:
-                    m.d.comb += self.ma_hold.eq(holding)
+                    m.d.comb += hold.holding.eq(1)
                     # An abort releases a CDM hold at once, and pauses as after any abort.
                     with m.If(self.cdm_cycle & self.abort):
                         goto("BREAK")
@@ -314,7 +316,7 @@ class CycleController(wiring.Component):
 
             with m.State("CONFIRM"):
                 if cdm:
-                    m.d.comb += self.ma_hold.eq(holding)
+                    m.d.comb += hold.holding.eq(1)
                     ma_stopped = ~self.ma_busy | self.ma_held
                 else:
                     ma_stopped = ~self.ma_busy
@@ -322,7 +324,7 @@ class CycleController(wiring.Component):
                     m.d.comb += self.timer_clear.eq(1)
                     fault(Status.ABORTED)
                 with m.Elif(ma_stopped & self.slo):
-                    report_verdict()
+                    m.d.comb += report.frame.eq(1)
                     with m.If(pause):
                         m.d.comb += self.timer_clear.eq(1)
                         goto("PAUSE")

@@ -895,7 +895,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .is_zero(lc_zero_seen),
     .lc(\lc$174 ),
     .load(load),
-    .\port$1376$0 (\bit ),
+    .\port$1367$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -952,7 +952,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .lc_skip_seen(lc_skip_seen),
     .lc_zero(\lc_zero$222 ),
     .lc_zero_seen(lc_zero_seen),
-    .\port$884$0 (\$16 ),
+    .\port$875$0 (\$16 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -1623,7 +1623,7 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.controller (clk, rst, request, restart_timer, frame_doubtful, config_ok, end_check, cdm_cycle, idle, receiver_clear, resync, timer_clear, fault, fault_status, faults, ma_run, in_clock, ma_hold, report_frame, report_delay, slo_stuck
+module \biss_master.controller (clk, rst, request, restart_timer, report_delay, frame_doubtful, config_ok, end_check, resync, timer_clear, fault, fault_status, ma_run, in_clock, report_frame, idle, receiver_clear, faults, cdm_cycle, ma_hold, slo_stuck
 , slo_stuck_live, break_over, ack_expired, no_start_expired, delay_over, ma_arm, ma_busy, ma_held, ma_enough, early, locked, slo, frame_done, stopped, slots_full, started, stop_bit, cdm, abort);
   reg \$auto$verilog_backend.cc:2355:dump_module$15  = 0;
   wire \$1 ;
@@ -1645,97 +1645,57 @@ module \biss_master.controller (clk, rst, request, restart_timer, frame_doubtful
   wire \$24 ;
   wire \$25 ;
   wire \$26 ;
-  wire \$27 ;
-  wire \$28 ;
-  wire \$29 ;
+  reg \$27 ;
+  reg [2:0] \$28 ;
+  reg \$29 ;
   wire \$3 ;
-  wire \$30 ;
-  wire \$31 ;
-  wire \$32 ;
-  wire \$33 ;
-  wire \$34 ;
-  wire \$35 ;
-  wire \$36 ;
-  wire \$37 ;
-  wire \$38 ;
-  wire \$39 ;
+  reg \$30 ;
+  reg \$31 ;
   wire \$4 ;
-  wire \$40 ;
-  wire \$41 ;
-  wire \$42 ;
-  wire \$43 ;
-  wire \$44 ;
-  wire \$45 ;
-  wire \$46 ;
-  wire \$47 ;
-  wire \$48 ;
-  wire \$49 ;
   wire \$5 ;
-  wire \$50 ;
-  wire \$51 ;
-  wire \$52 ;
-  wire \$53 ;
-  wire \$54 ;
-  wire \$55 ;
-  wire \$56 ;
-  wire \$57 ;
-  wire \$58 ;
-  wire \$59 ;
   wire \$6 ;
-  wire \$60 ;
-  wire \$61 ;
-  wire \$62 ;
-  wire \$63 ;
-  wire \$64 ;
-  wire \$65 ;
-  wire \$66 ;
-  wire \$67 ;
-  wire \$68 ;
-  wire \$69 ;
   wire \$7 ;
-  wire \$70 ;
-  wire \$71 ;
-  wire \$72 ;
-  wire \$73 ;
-  wire \$74 ;
-  wire \$75 ;
-  wire \$76 ;
-  wire \$77 ;
-  wire \$78 ;
-  reg \$79 ;
   wire \$8 ;
-  reg \$80 ;
-  reg [2:0] \$81 ;
-  reg \$82 ;
-  reg \$83 ;
-  reg \$84 ;
-  reg \$85 ;
-  reg \$86 ;
   wire \$9 ;
   input abort;
   wire abort;
+  wire \abort$46 ;
+  wire \abort$5 ;
+  wire aborted;
   input ack_expired;
   wire ack_expired;
-  reg armed = 1'h0;
+  wire \ack_expired$23 ;
+  wire bad_config;
   input break_over;
   wire break_over;
   input cdm;
   wire cdm;
+  wire \cdm$43 ;
   output cdm_cycle;
-  reg cdm_cycle = 1'h0;
+  wire cdm_cycle;
+  wire \cdm_cycle$48 ;
+  reg clear;
   input clk;
   wire clk;
   input config_ok;
   wire config_ok;
+  wire \config_ok$3 ;
   reg [2:0] cycle_fsm_state = 3'h0;
+  reg delay;
+  wire \delay$73 ;
   input delay_over;
   wire delay_over;
+  wire \delay_over$27 ;
   input early;
   wire early;
+  wire \early$17 ;
   input end_check;
   wire end_check;
+  wire fail;
   output fault;
   reg fault;
+  wire \fault$35 ;
+  wire \fault$69 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -1752,8 +1712,31 @@ module \biss_master.controller (clk, rst, request, restart_timer, frame_doubtful
   (* enum_value_1100 = "NO_STOP" *)
   output [3:0] fault_status;
   reg [3:0] fault_status;
+  (* enum_base_type = "Status" *)
+  (* enum_value_0000 = "OK" *)
+  (* enum_value_0001 = "CRC_ERROR_WORD0" *)
+  (* enum_value_0010 = "CRC_ERROR_WORD1" *)
+  (* enum_value_0011 = "CRC_ERROR_BOTH" *)
+  (* enum_value_0100 = "SIGN_OF_LIFE" *)
+  (* enum_value_0101 = "SPW_MISMATCH" *)
+  (* enum_value_0110 = "NO_ACK" *)
+  (* enum_value_0111 = "NO_START" *)
+  (* enum_value_1000 = "DELAY_RANGE" *)
+  (* enum_value_1001 = "SLO_STUCK_LOW" *)
+  (* enum_value_1010 = "ABORTED" *)
+  (* enum_value_1011 = "BAD_CONFIG" *)
+  (* enum_value_1100 = "NO_STOP" *)
+  wire [3:0] \fault_status$37 ;
   output [6:0] faults;
-  reg [6:0] faults;
+  wire [6:0] faults;
+  wire [6:0] \faults$39 ;
+  wire \faults$39.aborted ;
+  wire \faults$39.bad_config ;
+  wire \faults$39.delay_range ;
+  wire \faults$39.no_ack ;
+  wire \faults$39.no_start ;
+  wire \faults$39.no_stop ;
+  wire \faults$39.slo_stuck_low ;
   wire \faults.aborted ;
   wire \faults.bad_config ;
   wire \faults.delay_range ;
@@ -1762,19 +1745,27 @@ module \biss_master.controller (clk, rst, request, restart_timer, frame_doubtful
   wire \faults.no_stop ;
   wire \faults.slo_stuck_low ;
   reg first_clock = 1'h0;
+  (* init = 1'h0 *)
+  wire \first_clock$1 ;
+  wire frame;
   input frame_done;
   wire frame_done;
   input frame_doubtful;
   wire frame_doubtful;
+  reg framing;
+  reg holding;
   output idle;
   reg idle = 1'h0;
+  (* init = 1'h0 *)
+  wire \idle$41 ;
   output in_clock;
   reg in_clock;
   input locked;
   wire locked;
-  reg locked_seen = 1'h0;
+  wire \locked$15 ;
   input ma_arm;
   wire ma_arm;
+  wire \ma_arm$13 ;
   input ma_busy;
   wire ma_busy;
   input ma_enough;
@@ -1782,48 +1773,106 @@ module \biss_master.controller (clk, rst, request, restart_timer, frame_doubtful
   input ma_held;
   wire ma_held;
   output ma_hold;
-  reg ma_hold;
+  wire ma_hold;
+  wire \ma_hold$50 ;
   output ma_run;
   reg ma_run;
   input no_start_expired;
   wire no_start_expired;
+  wire \no_start_expired$25 ;
   reg pause = 1'h0;
+  wire ready;
   output receiver_clear;
   reg receiver_clear = 1'h1;
   output report_delay;
-  reg report_delay;
+  wire report_delay;
+  wire \report_delay$33 ;
   output report_frame;
   reg report_frame;
+  wire \report_frame$31 ;
   input request;
   wire request;
   output restart_timer;
   wire restart_timer;
+  wire \restart_timer$29 ;
   output resync;
   reg resync;
   input rst;
   wire rst;
   input slo;
   wire slo;
+  wire \slo$44 ;
+  wire \slo$7 ;
   input slo_stuck;
   wire slo_stuck;
+  wire \slo_stuck$45 ;
+  wire \slo_stuck$9 ;
   input slo_stuck_live;
   wire slo_stuck_live;
+  wire \slo_stuck_live$11 ;
   input slots_full;
   wire slots_full;
+  wire \slots_full$21 ;
   input started;
   wire started;
+  wire \started$19 ;
+  (* enum_base_type = "Status" *)
+  (* enum_value_0000 = "OK" *)
+  (* enum_value_0001 = "CRC_ERROR_WORD0" *)
+  (* enum_value_0010 = "CRC_ERROR_WORD1" *)
+  (* enum_value_0011 = "CRC_ERROR_BOTH" *)
+  (* enum_value_0100 = "SIGN_OF_LIFE" *)
+  (* enum_value_0101 = "SPW_MISMATCH" *)
+  (* enum_value_0110 = "NO_ACK" *)
+  (* enum_value_0111 = "NO_START" *)
+  (* enum_value_1000 = "DELAY_RANGE" *)
+  (* enum_value_1001 = "SLO_STUCK_LOW" *)
+  (* enum_value_1010 = "ABORTED" *)
+  (* enum_value_1011 = "BAD_CONFIG" *)
+  (* enum_value_1100 = "NO_STOP" *)
+  wire [3:0] status;
+  (* enum_base_type = "Status" *)
+  (* enum_value_0000 = "OK" *)
+  (* enum_value_0001 = "CRC_ERROR_WORD0" *)
+  (* enum_value_0010 = "CRC_ERROR_WORD1" *)
+  (* enum_value_0011 = "CRC_ERROR_BOTH" *)
+  (* enum_value_0100 = "SIGN_OF_LIFE" *)
+  (* enum_value_0101 = "SPW_MISMATCH" *)
+  (* enum_value_0110 = "NO_ACK" *)
+  (* enum_value_0111 = "NO_START" *)
+  (* enum_value_1000 = "DELAY_RANGE" *)
+  (* enum_value_1001 = "SLO_STUCK_LOW" *)
+  (* enum_value_1010 = "ABORTED" *)
+  (* enum_value_1011 = "BAD_CONFIG" *)
+  (* enum_value_1100 = "NO_STOP" *)
+  wire [3:0] \status$74 ;
   input stop_bit;
   wire stop_bit;
   input stopped;
   wire stopped;
+  wire stuck_low;
   output timer_clear;
   reg timer_clear;
-  assign \$14  = locked & \$13 ;
-  assign \$15  = \$14  & delay_over;
-  assign \$16  = ~ started;
-  assign \$17  = locked_seen & \$16 ;
-  assign \$18  = no_start_expired | slots_full;
-  assign \$19  = \$17  & \$18 ;
+  reg watch;
+  assign \$1  = ma_busy | abort;
+  assign \$2  = ~ ma_enough;
+  assign \$3  = restart_timer | abort;
+  assign \$4  = ~ end_check;
+  assign \$5  = ~ ma_enough;
+  assign \$6  = ~ end_check;
+  assign \$7  = ma_busy | abort;
+  assign \$8  = ~ ma_busy;
+  assign \$9  = \$8  | ma_held;
+  assign \$10  = \$9  & slo;
+  assign \$11  = ! cycle_fsm_state;
+  assign \$12  = cycle_fsm_state == 1'h1;
+  assign \$13  = cycle_fsm_state == 2'h2;
+  assign \$14  = cycle_fsm_state == 2'h3;
+  assign \$15  = cycle_fsm_state == 3'h4;
+  assign \$16  = cycle_fsm_state == 3'h5;
+  assign \$17  = cycle_fsm_state == 3'h6;
+  assign \$18  = cycle_fsm_state == 3'h7;
+  assign \$19  = ma_busy | abort;
   assign \$20  = ~ end_check;
   assign \$21  = ma_busy | abort;
   assign \$22  = cdm_cycle & abort;
@@ -1831,454 +1880,67 @@ module \biss_master.controller (clk, rst, request, restart_timer, frame_doubtful
   assign \$24  = ~ ma_busy;
   assign \$25  = \$24  | ma_held;
   assign \$26  = \$25  & slo;
-  assign \$27  = ~ locked_seen;
-  assign \$28  = locked & \$27 ;
-  assign restart_timer = ma_arm | \$28 ;
-  assign \$29  = ma_busy | abort;
-  assign \$30  = ~ config_ok;
-  assign \$31  = first_clock & \$30 ;
-  assign \$32  = first_clock ? slo_stuck_live : slo_stuck;
-  assign \$33  = ~ ma_enough;
-  assign \$34  = ~ abort;
-  assign \$35  = cdm_cycle & \$34 ;
-  assign \$36  = restart_timer | abort;
-  assign \$37  = armed & early;
-  assign \$38  = ~ locked_seen;
-  assign \$39  = armed & \$38 ;
-  assign \$40  = ~ locked;
-  assign \$41  = \$39  & \$40 ;
-  assign \$42  = \$41  & ack_expired;
-  assign \$43  = ~ locked_seen;
-  assign \$44  = locked & \$43 ;
-  assign \$45  = \$44  & delay_over;
-  assign \$46  = ~ started;
-  assign \$47  = locked_seen & \$46 ;
-  assign \$48  = no_start_expired | slots_full;
-  assign \$49  = \$47  & \$48 ;
-  assign \$50  = ~ end_check;
-  assign \$51  = ~ ma_enough;
-  assign \$52  = ~ abort;
-  assign \$53  = cdm_cycle & \$52 ;
-  assign \$54  = ~ end_check;
-  assign \$55  = slo | slo_stuck;
-  assign \$56  = \$55  | abort;
-  assign \$57  = ~ \$56 ;
-  assign \$58  = cdm_cycle & \$57 ;
-  assign \$59  = ma_busy | abort;
-  assign \$60  = slo | slo_stuck;
-  assign \$61  = \$60  | abort;
-  assign \$62  = ~ \$61 ;
-  assign \$63  = cdm_cycle & \$62 ;
-  assign \$64  = slo | slo_stuck;
-  assign \$65  = \$64  | abort;
-  assign \$66  = ~ \$65 ;
-  assign \$67  = cdm_cycle & \$66 ;
-  assign \$68  = ~ ma_busy;
-  assign \$69  = \$68  | ma_held;
-  assign \$70  = \$69  & slo;
-  assign \$71  = ! cycle_fsm_state;
-  assign \$72  = cycle_fsm_state == 1'h1;
-  assign \$73  = cycle_fsm_state == 2'h2;
-  assign \$74  = cycle_fsm_state == 2'h3;
-  assign \$75  = cycle_fsm_state == 3'h4;
-  assign \$76  = cycle_fsm_state == 3'h5;
-  assign \$77  = cycle_fsm_state == 3'h6;
-  assign \$78  = cycle_fsm_state == 3'h7;
   always @(posedge clk)
-    cdm_cycle <= \$79 ;
+    first_clock <= \$27 ;
   always @(posedge clk)
-    first_clock <= \$80 ;
+    cycle_fsm_state <= \$28 ;
   always @(posedge clk)
-    cycle_fsm_state <= \$81 ;
+    idle <= \$29 ;
   always @(posedge clk)
-    idle <= \$82 ;
+    receiver_clear <= \$30 ;
   always @(posedge clk)
-    receiver_clear <= \$83 ;
-  always @(posedge clk)
-    armed <= \$84 ;
-  always @(posedge clk)
-    locked_seen <= \$85 ;
-  always @(posedge clk)
-    pause <= \$86 ;
-  assign \$1  = ma_busy | abort;
-  assign \$2  = ~ config_ok;
-  assign \$3  = first_clock & \$2 ;
-  assign \$4  = first_clock ? slo_stuck_live : slo_stuck;
-  assign \$5  = ~ locked_seen;
-  assign \$6  = locked & \$5 ;
-  assign \$7  = armed & early;
-  assign \$8  = ~ locked_seen;
-  assign \$9  = armed & \$8 ;
-  assign \$10  = ~ locked;
-  assign \$11  = \$9  & \$10 ;
-  assign \$12  = \$11  & ack_expired;
-  assign \$13  = ~ locked_seen;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
-    \$79  = cdm_cycle;
-    if (idle) begin
-      \$79  = cdm;
-    end
-    if (rst) begin
-      \$79  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
-    \$80  = idle;
-    if (rst) begin
-      \$80  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
-    \$81  = cycle_fsm_state;
-    (* full_case = 32'd1 *)
-    casez (cycle_fsm_state)
-      3'h0:
-          if (\$1 ) begin
-          end else if (break_over) begin
-            \$81  = 3'h1;
-          end
-      3'h1:
-          if (abort) begin
-            \$81  = 3'h0;
-          end else if (request) begin
-            \$81  = 3'h2;
-          end
-      3'h2:
-          if (\$3 ) begin
-            \$81  = 3'h1;
-            if (abort) begin
-              \$81  = 3'h0;
-            end
-          end else if (abort) begin
-            \$81  = 3'h0;
-          end else if (slo) begin
-            \$81  = 3'h3;
-          end else if (\$4 ) begin
-            \$81  = 3'h0;
-          end
-      3'h3:
-          if (abort) begin
-            \$81  = 3'h0;
-          end else if (frame_done) begin
-            \$81  = 3'h4;
-          end else if (\$7 ) begin
-            \$81  = 3'h0;
-          end else if (\$12 ) begin
-            \$81  = 3'h0;
-          end else if (\$15 ) begin
-            \$81  = 3'h0;
-          end else if (\$19 ) begin
-            \$81  = 3'h0;
-          end
-      3'h4:
-          if (abort) begin
-            (* full_case = 32'd1 *)
-            if (end_check) begin
-              \$81  = 3'h0;
-            end else begin
-              \$81  = 3'h0;
-            end
-          end else if (stopped) begin
-            (* full_case = 32'd1 *)
-            if (\$20 ) begin
-              (* full_case = 32'd1 *)
-              if (pause) begin
-                \$81  = 3'h5;
-              end else begin
-                \$81  = 3'h6;
-              end
-            end else if (stop_bit) begin
-              \$81  = 3'h0;
-            end else begin
-              \$81  = 3'h7;
-            end
-          end
-      3'h5:
-          if (\$21 ) begin
-          end else if (break_over) begin
-            \$81  = 3'h1;
-          end
-      3'h6:
-          if (\$22 ) begin
-            \$81  = 3'h0;
-          end else if (\$23 ) begin
-            \$81  = 3'h1;
-          end
-      3'h7:
-          if (abort) begin
-            \$81  = 3'h0;
-          end else if (\$26 ) begin
-            (* full_case = 32'd1 *)
-            if (pause) begin
-              \$81  = 3'h5;
-            end else if (cdm_cycle) begin
-              \$81  = 3'h6;
-            end else begin
-              \$81  = 3'h1;
-            end
-          end else if (slo_stuck) begin
-            \$81  = 3'h0;
-          end
-    endcase
-    if (rst) begin
-      \$81  = 3'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
-    \$82  = idle;
-    (* full_case = 32'd1 *)
-    casez (cycle_fsm_state)
-      3'h0:
-          if (\$1 ) begin
-          end else if (break_over) begin
-            \$82  = 1'h1;
-          end
-      3'h1:
-          if (abort) begin
-            \$82  = 1'h0;
-          end else if (request) begin
-            \$82  = 1'h0;
-          end
-      3'h2:
-          if (\$3 ) begin
-            \$82  = 1'h1;
-            if (abort) begin
-              \$82  = 1'h0;
-            end
-          end else if (abort) begin
-            \$82  = 1'h0;
-          end else if (slo) begin
-            \$82  = 1'h0;
-          end else if (\$4 ) begin
-            \$82  = 1'h0;
-          end
-      3'h3:
-          if (abort) begin
-            \$82  = 1'h0;
-          end else if (frame_done) begin
-            \$82  = 1'h0;
-          end else if (\$7 ) begin
-            \$82  = 1'h0;
-          end else if (\$12 ) begin
-            \$82  = 1'h0;
-          end else if (\$15 ) begin
-            \$82  = 1'h0;
-          end else if (\$19 ) begin
-            \$82  = 1'h0;
-          end
-      3'h4:
-          if (abort) begin
-            (* full_case = 32'd1 *)
-            if (end_check) begin
-              \$82  = 1'h0;
-            end else begin
-              \$82  = 1'h0;
-            end
-          end else if (stopped) begin
-            (* full_case = 32'd1 *)
-            if (\$20 ) begin
-              (* full_case = 32'd1 *)
-              if (pause) begin
-                \$82  = 1'h0;
-              end else begin
-                \$82  = 1'h0;
-              end
-            end else if (stop_bit) begin
-              \$82  = 1'h0;
-            end else begin
-              \$82  = 1'h0;
-            end
-          end
-      3'h5:
-          if (\$21 ) begin
-          end else if (break_over) begin
-            \$82  = 1'h1;
-          end
-      3'h6:
-          if (\$22 ) begin
-            \$82  = 1'h0;
-          end else if (\$23 ) begin
-            \$82  = 1'h1;
-          end
-      3'h7:
-          if (abort) begin
-            \$82  = 1'h0;
-          end else if (\$26 ) begin
-            (* full_case = 32'd1 *)
-            if (pause) begin
-              \$82  = 1'h0;
-            end else if (cdm_cycle) begin
-              \$82  = 1'h0;
-            end else begin
-              \$82  = 1'h1;
-            end
-          end else if (slo_stuck) begin
-            \$82  = 1'h0;
-          end
-    endcase
-    if (rst) begin
-      \$82  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
-    \$83  = receiver_clear;
-    (* full_case = 32'd1 *)
-    casez (cycle_fsm_state)
-      3'h0:
-          if (\$1 ) begin
-          end else if (break_over) begin
-            \$83  = 1'h1;
-          end
-      3'h1:
-          if (abort) begin
-            \$83  = 1'h1;
-          end else if (request) begin
-            \$83  = 1'h1;
-          end
-      3'h2:
-          if (\$3 ) begin
-            \$83  = 1'h1;
-            if (abort) begin
-              \$83  = 1'h1;
-            end
-          end else if (abort) begin
-            \$83  = 1'h1;
-          end else if (slo) begin
-            \$83  = 1'h0;
-          end else if (\$4 ) begin
-            \$83  = 1'h1;
-          end
-      3'h3:
-          if (abort) begin
-            \$83  = 1'h1;
-          end else if (frame_done) begin
-            \$83  = 1'h0;
-          end else if (\$7 ) begin
-            \$83  = 1'h1;
-          end else if (\$12 ) begin
-            \$83  = 1'h1;
-          end else if (\$15 ) begin
-            \$83  = 1'h1;
-          end else if (\$19 ) begin
-            \$83  = 1'h1;
-          end
-      3'h4:
-          if (abort) begin
-            (* full_case = 32'd1 *)
-            if (end_check) begin
-              \$83  = 1'h1;
-            end else begin
-              \$83  = 1'h1;
-            end
-          end else if (stopped) begin
-            (* full_case = 32'd1 *)
-            if (\$20 ) begin
-              (* full_case = 32'd1 *)
-              if (pause) begin
-                \$83  = 1'h1;
-              end else begin
-                \$83  = 1'h0;
-              end
-            end else if (stop_bit) begin
-              \$83  = 1'h1;
-            end else begin
-              \$83  = 1'h0;
-            end
-          end
-      3'h5:
-          if (\$21 ) begin
-          end else if (break_over) begin
-            \$83  = 1'h1;
-          end
-      3'h6:
-          if (\$22 ) begin
-            \$83  = 1'h1;
-          end else if (\$23 ) begin
-            \$83  = 1'h1;
-          end
-      3'h7:
-          if (abort) begin
-            \$83  = 1'h1;
-          end else if (\$26 ) begin
-            (* full_case = 32'd1 *)
-            if (pause) begin
-              \$83  = 1'h1;
-            end else if (cdm_cycle) begin
-              \$83  = 1'h0;
-            end else begin
-              \$83  = 1'h1;
-            end
-          end else if (slo_stuck) begin
-            \$83  = 1'h1;
-          end
-    endcase
-    if (rst) begin
-      \$83  = 1'h1;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
-    \$84  = armed;
-    casez (cycle_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          \$84  = 1'h0;
-      3'h3:
-          if (ma_arm) begin
-            \$84  = 1'h1;
-          end
-    endcase
-    if (rst) begin
-      \$84  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
-    \$85  = locked_seen;
-    casez (cycle_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          \$85  = 1'h0;
-      3'h3:
-          if (\$6 ) begin
-            \$85  = 1'h1;
-          end
-    endcase
-    if (rst) begin
-      \$85  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
-    \$86  = pause;
-    casez (cycle_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h3:
-          if (abort) begin
-          end else if (frame_done) begin
-            \$86  = frame_doubtful;
-          end
-    endcase
-    if (rst) begin
-      \$86  = 1'h0;
-    end
-  end
+    pause <= \$31 ;
+  \biss_master.controller.cdm_hold  cdm_hold (
+    .abort(abort),
+    .cdm(cdm),
+    .cdm_cycle(cdm_cycle),
+    .clk(clk),
+    .framing(framing),
+    .holding(holding),
+    .idle(idle),
+    .ma_hold(ma_hold),
+    .rst(rst),
+    .slo(slo),
+    .slo_stuck(slo_stuck)
+  );
+  \biss_master.controller.line_faults  line_faults (
+    .ack_expired(ack_expired),
+    .clear(clear),
+    .clk(clk),
+    .delay(\delay$73 ),
+    .delay_over(delay_over),
+    .early(early),
+    .fault(\fault$69 ),
+    .locked(locked),
+    .ma_arm(ma_arm),
+    .no_start_expired(no_start_expired),
+    .restart_timer(restart_timer),
+    .rst(rst),
+    .slots_full(slots_full),
+    .started(started),
+    .status(\status$74 ),
+    .watch(watch)
+  );
+  \biss_master.controller.ready_check  ready_check (
+    .abort(abort),
+    .aborted(aborted),
+    .bad_config(bad_config),
+    .config_ok(config_ok),
+    .first_clock(first_clock),
+    .ready(ready),
+    .slo(slo),
+    .slo_stuck(slo_stuck),
+    .slo_stuck_live(slo_stuck_live),
+    .stuck_low(stuck_low)
+  );
+  \biss_master.controller.report  report (
+    .delay(delay),
+    .fault(fault),
+    .fault_status(fault_status),
+    .faults(faults),
+    .report_delay(report_delay),
+    .report_frame(report_frame)
+  );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
     resync = 1'h0;
@@ -2293,7 +1955,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, frame_doubtful
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
       3'h0:
-          if (\$29 ) begin
+          if (\$1 ) begin
             timer_clear = 1'h1;
           end
       3'h1:
@@ -2301,14 +1963,14 @@ module \biss_master.controller (clk, rst, request, restart_timer, frame_doubtful
       3'h2:
           timer_clear = 1'h1;
       3'h3:
-          if (\$36 ) begin
+          if (\$3 ) begin
             timer_clear = 1'h1;
           end
       3'h4:
           if (abort) begin
             timer_clear = 1'h1;
           end else if (stopped) begin
-            if (\$54 ) begin
+            if (\$6 ) begin
               if (pause) begin
                 timer_clear = 1'h1;
               end
@@ -2317,7 +1979,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, frame_doubtful
             end
           end
       3'h5:
-          if (\$59 ) begin
+          if (\$7 ) begin
             timer_clear = 1'h1;
           end
       3'h6:
@@ -2325,13 +1987,25 @@ module \biss_master.controller (clk, rst, request, restart_timer, frame_doubtful
       3'h7:
           if (abort) begin
             timer_clear = 1'h1;
-          end else if (\$70 ) begin
+          end else if (\$10 ) begin
             if (pause) begin
               timer_clear = 1'h1;
             end
           end else if (slo_stuck) begin
             timer_clear = 1'h1;
           end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
+    clear = 1'h0;
+    casez (cycle_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          clear = 1'h1;
     endcase
   end
   always @* begin
@@ -2344,25 +2018,19 @@ module \biss_master.controller (clk, rst, request, restart_timer, frame_doubtful
       3'h1:
           /* empty */;
       3'h2:
-          if (\$31 ) begin
+          if (bad_config) begin
             fault = 1'h1;
-          end else if (abort) begin
+          end else if (aborted) begin
             fault = 1'h1;
-          end else if (slo) begin
-          end else if (\$32 ) begin
+          end else if (ready) begin
+          end else if (stuck_low) begin
             fault = 1'h1;
           end
       3'h3:
           if (abort) begin
             fault = 1'h1;
           end else if (frame_done) begin
-          end else if (\$37 ) begin
-            fault = 1'h1;
-          end else if (\$42 ) begin
-            fault = 1'h1;
-          end else if (\$45 ) begin
-            fault = 1'h1;
-          end else if (\$49 ) begin
+          end else if (\fault$69 ) begin
             fault = 1'h1;
           end
       3'h4:
@@ -2371,7 +2039,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, frame_doubtful
               fault = 1'h1;
             end
           end else if (stopped) begin
-            if (\$54 ) begin
+            if (\$6 ) begin
             end else if (stop_bit) begin
               fault = 1'h1;
             end
@@ -2383,7 +2051,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, frame_doubtful
       3'h7:
           if (abort) begin
             fault = 1'h1;
-          end else if (\$70 ) begin
+          end else if (\$10 ) begin
           end else if (slo_stuck) begin
             fault = 1'h1;
           end
@@ -2399,26 +2067,20 @@ module \biss_master.controller (clk, rst, request, restart_timer, frame_doubtful
       3'h1:
           /* empty */;
       3'h2:
-          if (\$31 ) begin
+          if (bad_config) begin
             fault_status = 4'hb;
-          end else if (abort) begin
+          end else if (aborted) begin
             fault_status = 4'ha;
-          end else if (slo) begin
-          end else if (\$32 ) begin
+          end else if (ready) begin
+          end else if (stuck_low) begin
             fault_status = 4'h9;
           end
       3'h3:
           if (abort) begin
             fault_status = 4'ha;
           end else if (frame_done) begin
-          end else if (\$37 ) begin
-            fault_status = 4'h8;
-          end else if (\$42 ) begin
-            fault_status = 4'h6;
-          end else if (\$45 ) begin
-            fault_status = 4'h8;
-          end else if (\$49 ) begin
-            fault_status = 4'h7;
+          end else if (\fault$69 ) begin
+            fault_status = \status$74 ;
           end
       3'h4:
           if (abort) begin
@@ -2426,7 +2088,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, frame_doubtful
               fault_status = 4'ha;
             end
           end else if (stopped) begin
-            if (\$54 ) begin
+            if (\$6 ) begin
             end else if (stop_bit) begin
               fault_status = 4'hc;
             end
@@ -2438,64 +2100,9 @@ module \biss_master.controller (clk, rst, request, restart_timer, frame_doubtful
       3'h7:
           if (abort) begin
             fault_status = 4'ha;
-          end else if (\$70 ) begin
+          end else if (\$10 ) begin
           end else if (slo_stuck) begin
             fault_status = 4'h9;
-          end
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
-    faults = 7'h00;
-    (* full_case = 32'd1 *)
-    casez (cycle_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          if (\$31 ) begin
-            faults[5] = 1'h1;
-          end else if (abort) begin
-            faults[4] = 1'h1;
-          end else if (slo) begin
-          end else if (\$32 ) begin
-            faults[3] = 1'h1;
-          end
-      3'h3:
-          if (abort) begin
-            faults[4] = 1'h1;
-          end else if (frame_done) begin
-          end else if (\$37 ) begin
-            faults[2] = 1'h1;
-          end else if (\$42 ) begin
-            faults[0] = 1'h1;
-          end else if (\$45 ) begin
-            faults[2] = 1'h1;
-          end else if (\$49 ) begin
-            faults[1] = 1'h1;
-          end
-      3'h4:
-          if (abort) begin
-            if (end_check) begin
-              faults[4] = 1'h1;
-            end
-          end else if (stopped) begin
-            if (\$54 ) begin
-            end else if (stop_bit) begin
-              faults[6] = 1'h1;
-            end
-          end
-      3'h5:
-          /* empty */;
-      3'h6:
-          /* empty */;
-      3'h7:
-          if (abort) begin
-            faults[4] = 1'h1;
-          end else if (\$70 ) begin
-          end else if (slo_stuck) begin
-            faults[3] = 1'h1;
           end
     endcase
   end
@@ -2510,9 +2117,9 @@ module \biss_master.controller (clk, rst, request, restart_timer, frame_doubtful
       3'h2:
           /* empty */;
       3'h3:
-          ma_run = \$33 ;
+          ma_run = \$2 ;
       3'h4:
-          ma_run = \$51 ;
+          ma_run = \$5 ;
     endcase
   end
   always @* begin
@@ -2531,8 +2138,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, frame_doubtful
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
-    ma_hold = 1'h0;
-    (* full_case = 32'd1 *)
+    watch = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
           /* empty */;
@@ -2541,15 +2147,23 @@ module \biss_master.controller (clk, rst, request, restart_timer, frame_doubtful
       3'h2:
           /* empty */;
       3'h3:
-          ma_hold = \$35 ;
+          watch = 1'h1;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
+    framing = 1'h0;
+    casez (cycle_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h3:
+          framing = 1'h1;
       3'h4:
-          ma_hold = \$53 ;
-      3'h5:
-          ma_hold = \$58 ;
-      3'h6:
-          ma_hold = \$63 ;
-      3'h7:
-          ma_hold = \$67 ;
+          framing = 1'h1;
     endcase
   end
   always @* begin
@@ -2566,7 +2180,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, frame_doubtful
       3'h3:
           if (abort) begin
           end else if (frame_done) begin
-            if (\$50 ) begin
+            if (\$4 ) begin
               report_frame = 1'h1;
             end
           end
@@ -2578,15 +2192,14 @@ module \biss_master.controller (clk, rst, request, restart_timer, frame_doubtful
           /* empty */;
       3'h7:
           if (abort) begin
-          end else if (\$70 ) begin
+          end else if (\$10 ) begin
             report_frame = 1'h1;
           end
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
-    report_delay = 1'h0;
-    (* full_case = 32'd1 *)
+    delay = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
           /* empty */;
@@ -2597,27 +2210,364 @@ module \biss_master.controller (clk, rst, request, restart_timer, frame_doubtful
       3'h3:
           if (abort) begin
           end else if (frame_done) begin
-            if (\$50 ) begin
-              report_delay = 1'h1;
-            end
-          end else if (\$37 ) begin
-          end else if (\$42 ) begin
-          end else if (\$45 ) begin
-            report_delay = 1'h1;
-          end
-      3'h4:
-          /* empty */;
-      3'h5:
-          /* empty */;
-      3'h6:
-          /* empty */;
-      3'h7:
-          if (abort) begin
-          end else if (\$70 ) begin
-            report_delay = 1'h1;
+          end else if (\fault$69 ) begin
+            delay = \delay$73 ;
           end
     endcase
   end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
+    holding = 1'h0;
+    (* full_case = 32'd1 *)
+    casez (cycle_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h3:
+          /* empty */;
+      3'h4:
+          /* empty */;
+      3'h5:
+          holding = 1'h1;
+      3'h6:
+          holding = 1'h1;
+      3'h7:
+          holding = 1'h1;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
+    \$27  = idle;
+    if (rst) begin
+      \$27  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
+    \$28  = cycle_fsm_state;
+    (* full_case = 32'd1 *)
+    casez (cycle_fsm_state)
+      3'h0:
+          if (\$19 ) begin
+          end else if (break_over) begin
+            \$28  = 3'h1;
+          end
+      3'h1:
+          if (abort) begin
+            \$28  = 3'h0;
+          end else if (request) begin
+            \$28  = 3'h2;
+          end
+      3'h2:
+          if (bad_config) begin
+            \$28  = 3'h1;
+            if (abort) begin
+              \$28  = 3'h0;
+            end
+          end else if (aborted) begin
+            \$28  = 3'h0;
+          end else if (ready) begin
+            \$28  = 3'h3;
+          end else if (stuck_low) begin
+            \$28  = 3'h0;
+          end
+      3'h3:
+          if (abort) begin
+            \$28  = 3'h0;
+          end else if (frame_done) begin
+            \$28  = 3'h4;
+          end else if (\fault$69 ) begin
+            \$28  = 3'h0;
+          end
+      3'h4:
+          if (abort) begin
+            (* full_case = 32'd1 *)
+            if (end_check) begin
+              \$28  = 3'h0;
+            end else begin
+              \$28  = 3'h0;
+            end
+          end else if (stopped) begin
+            (* full_case = 32'd1 *)
+            if (\$20 ) begin
+              (* full_case = 32'd1 *)
+              if (pause) begin
+                \$28  = 3'h5;
+              end else begin
+                \$28  = 3'h6;
+              end
+            end else if (stop_bit) begin
+              \$28  = 3'h0;
+            end else begin
+              \$28  = 3'h7;
+            end
+          end
+      3'h5:
+          if (\$21 ) begin
+          end else if (break_over) begin
+            \$28  = 3'h1;
+          end
+      3'h6:
+          if (\$22 ) begin
+            \$28  = 3'h0;
+          end else if (\$23 ) begin
+            \$28  = 3'h1;
+          end
+      3'h7:
+          if (abort) begin
+            \$28  = 3'h0;
+          end else if (\$26 ) begin
+            (* full_case = 32'd1 *)
+            if (pause) begin
+              \$28  = 3'h5;
+            end else if (cdm_cycle) begin
+              \$28  = 3'h6;
+            end else begin
+              \$28  = 3'h1;
+            end
+          end else if (slo_stuck) begin
+            \$28  = 3'h0;
+          end
+    endcase
+    if (rst) begin
+      \$28  = 3'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
+    \$29  = idle;
+    (* full_case = 32'd1 *)
+    casez (cycle_fsm_state)
+      3'h0:
+          if (\$19 ) begin
+          end else if (break_over) begin
+            \$29  = 1'h1;
+          end
+      3'h1:
+          if (abort) begin
+            \$29  = 1'h0;
+          end else if (request) begin
+            \$29  = 1'h0;
+          end
+      3'h2:
+          if (bad_config) begin
+            \$29  = 1'h1;
+            if (abort) begin
+              \$29  = 1'h0;
+            end
+          end else if (aborted) begin
+            \$29  = 1'h0;
+          end else if (ready) begin
+            \$29  = 1'h0;
+          end else if (stuck_low) begin
+            \$29  = 1'h0;
+          end
+      3'h3:
+          if (abort) begin
+            \$29  = 1'h0;
+          end else if (frame_done) begin
+            \$29  = 1'h0;
+          end else if (\fault$69 ) begin
+            \$29  = 1'h0;
+          end
+      3'h4:
+          if (abort) begin
+            (* full_case = 32'd1 *)
+            if (end_check) begin
+              \$29  = 1'h0;
+            end else begin
+              \$29  = 1'h0;
+            end
+          end else if (stopped) begin
+            (* full_case = 32'd1 *)
+            if (\$20 ) begin
+              (* full_case = 32'd1 *)
+              if (pause) begin
+                \$29  = 1'h0;
+              end else begin
+                \$29  = 1'h0;
+              end
+            end else if (stop_bit) begin
+              \$29  = 1'h0;
+            end else begin
+              \$29  = 1'h0;
+            end
+          end
+      3'h5:
+          if (\$21 ) begin
+          end else if (break_over) begin
+            \$29  = 1'h1;
+          end
+      3'h6:
+          if (\$22 ) begin
+            \$29  = 1'h0;
+          end else if (\$23 ) begin
+            \$29  = 1'h1;
+          end
+      3'h7:
+          if (abort) begin
+            \$29  = 1'h0;
+          end else if (\$26 ) begin
+            (* full_case = 32'd1 *)
+            if (pause) begin
+              \$29  = 1'h0;
+            end else if (cdm_cycle) begin
+              \$29  = 1'h0;
+            end else begin
+              \$29  = 1'h1;
+            end
+          end else if (slo_stuck) begin
+            \$29  = 1'h0;
+          end
+    endcase
+    if (rst) begin
+      \$29  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
+    \$30  = receiver_clear;
+    (* full_case = 32'd1 *)
+    casez (cycle_fsm_state)
+      3'h0:
+          if (\$19 ) begin
+          end else if (break_over) begin
+            \$30  = 1'h1;
+          end
+      3'h1:
+          if (abort) begin
+            \$30  = 1'h1;
+          end else if (request) begin
+            \$30  = 1'h1;
+          end
+      3'h2:
+          if (bad_config) begin
+            \$30  = 1'h1;
+            if (abort) begin
+              \$30  = 1'h1;
+            end
+          end else if (aborted) begin
+            \$30  = 1'h1;
+          end else if (ready) begin
+            \$30  = 1'h0;
+          end else if (stuck_low) begin
+            \$30  = 1'h1;
+          end
+      3'h3:
+          if (abort) begin
+            \$30  = 1'h1;
+          end else if (frame_done) begin
+            \$30  = 1'h0;
+          end else if (\fault$69 ) begin
+            \$30  = 1'h1;
+          end
+      3'h4:
+          if (abort) begin
+            (* full_case = 32'd1 *)
+            if (end_check) begin
+              \$30  = 1'h1;
+            end else begin
+              \$30  = 1'h1;
+            end
+          end else if (stopped) begin
+            (* full_case = 32'd1 *)
+            if (\$20 ) begin
+              (* full_case = 32'd1 *)
+              if (pause) begin
+                \$30  = 1'h1;
+              end else begin
+                \$30  = 1'h0;
+              end
+            end else if (stop_bit) begin
+              \$30  = 1'h1;
+            end else begin
+              \$30  = 1'h0;
+            end
+          end
+      3'h5:
+          if (\$21 ) begin
+          end else if (break_over) begin
+            \$30  = 1'h1;
+          end
+      3'h6:
+          if (\$22 ) begin
+            \$30  = 1'h1;
+          end else if (\$23 ) begin
+            \$30  = 1'h1;
+          end
+      3'h7:
+          if (abort) begin
+            \$30  = 1'h1;
+          end else if (\$26 ) begin
+            (* full_case = 32'd1 *)
+            if (pause) begin
+              \$30  = 1'h1;
+            end else if (cdm_cycle) begin
+              \$30  = 1'h0;
+            end else begin
+              \$30  = 1'h1;
+            end
+          end else if (slo_stuck) begin
+            \$30  = 1'h1;
+          end
+    endcase
+    if (rst) begin
+      \$30  = 1'h1;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
+    \$31  = pause;
+    casez (cycle_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h3:
+          if (abort) begin
+          end else if (frame_done) begin
+            \$31  = frame_doubtful;
+          end
+    endcase
+    if (rst) begin
+      \$31  = 1'h0;
+    end
+  end
+  assign \first_clock$1  = first_clock;
+  assign \config_ok$3  = config_ok;
+  assign \abort$5  = abort;
+  assign \slo$7  = slo;
+  assign \slo_stuck$9  = slo_stuck;
+  assign \slo_stuck_live$11  = slo_stuck_live;
+  assign \ma_arm$13  = ma_arm;
+  assign \locked$15  = locked;
+  assign \early$17  = early;
+  assign \started$19  = started;
+  assign \slots_full$21  = slots_full;
+  assign \ack_expired$23  = ack_expired;
+  assign \no_start_expired$25  = no_start_expired;
+  assign \delay_over$27  = delay_over;
+  assign \restart_timer$29  = restart_timer;
+  assign \report_frame$31  = report_frame;
+  assign \report_delay$33  = report_delay;
+  assign \fault$35  = fault;
+  assign \fault_status$37  = fault_status;
+  assign \faults$39  = faults;
+  assign \idle$41  = idle;
+  assign \cdm$43  = cdm;
+  assign \slo$44  = slo;
+  assign \slo_stuck$45  = slo_stuck;
+  assign \abort$46  = abort;
+  assign \cdm_cycle$48  = cdm_cycle;
+  assign \ma_hold$50  = ma_hold;
+  assign fail = fault;
+  assign status = fault_status;
+  assign frame = report_frame;
   assign \faults.no_ack  = faults[0];
   assign \faults.no_start  = faults[1];
   assign \faults.delay_range  = faults[2];
@@ -2625,6 +2575,398 @@ module \biss_master.controller (clk, rst, request, restart_timer, frame_doubtful
   assign \faults.aborted  = faults[4];
   assign \faults.bad_config  = faults[5];
   assign \faults.no_stop  = faults[6];
+  assign \faults$39.no_ack  = faults[0];
+  assign \faults$39.no_start  = faults[1];
+  assign \faults$39.delay_range  = faults[2];
+  assign \faults$39.slo_stuck_low  = faults[3];
+  assign \faults$39.aborted  = faults[4];
+  assign \faults$39.bad_config  = faults[5];
+  assign \faults$39.no_stop  = faults[6];
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master.controller.cdm_hold (clk, rst, framing, holding, idle, cdm_cycle, ma_hold, slo_stuck, slo, cdm, abort);
+  reg \$auto$verilog_backend.cc:2355:dump_module$16  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire \$3 ;
+  wire \$4 ;
+  wire \$5 ;
+  wire \$6 ;
+  reg \$7 ;
+  input abort;
+  wire abort;
+  input cdm;
+  wire cdm;
+  output cdm_cycle;
+  reg cdm_cycle = 1'h0;
+  input clk;
+  wire clk;
+  input framing;
+  wire framing;
+  input holding;
+  wire holding;
+  input idle;
+  wire idle;
+  output ma_hold;
+  reg ma_hold;
+  input rst;
+  wire rst;
+  input slo;
+  wire slo;
+  input slo_stuck;
+  wire slo_stuck;
+  assign \$3  = slo | slo_stuck;
+  assign \$4  = \$3  | abort;
+  assign \$5  = ~ \$4 ;
+  assign \$6  = cdm_cycle & \$5 ;
+  always @(posedge clk)
+    cdm_cycle <= \$7 ;
+  assign \$1  = ~ abort;
+  assign \$2  = cdm_cycle & \$1 ;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
+    \$7  = cdm_cycle;
+    if (idle) begin
+      \$7  = cdm;
+    end
+    if (rst) begin
+      \$7  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
+    ma_hold = 1'h0;
+    if (framing) begin
+      ma_hold = \$2 ;
+    end else if (holding) begin
+      ma_hold = \$6 ;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master.controller.line_faults (rst, restart_timer, clear, watch, fault, status, delay, ack_expired, no_start_expired, delay_over, ma_arm, early, locked, slots_full, started, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$17  = 0;
+  wire \$1 ;
+  wire \$10 ;
+  wire \$11 ;
+  wire \$12 ;
+  wire \$13 ;
+  wire \$14 ;
+  wire \$15 ;
+  wire \$16 ;
+  wire \$17 ;
+  wire \$18 ;
+  wire \$19 ;
+  wire \$2 ;
+  reg \$20 ;
+  reg \$21 ;
+  wire \$3 ;
+  wire \$4 ;
+  wire \$5 ;
+  wire \$6 ;
+  wire \$7 ;
+  wire \$8 ;
+  wire \$9 ;
+  input ack_expired;
+  wire ack_expired;
+  reg armed = 1'h0;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output delay;
+  reg delay;
+  input delay_over;
+  wire delay_over;
+  input early;
+  wire early;
+  output fault;
+  reg fault;
+  input locked;
+  wire locked;
+  reg locked_seen = 1'h0;
+  input ma_arm;
+  wire ma_arm;
+  input no_start_expired;
+  wire no_start_expired;
+  output restart_timer;
+  wire restart_timer;
+  input rst;
+  wire rst;
+  input slots_full;
+  wire slots_full;
+  input started;
+  wire started;
+  (* enum_base_type = "Status" *)
+  (* enum_value_0000 = "OK" *)
+  (* enum_value_0001 = "CRC_ERROR_WORD0" *)
+  (* enum_value_0010 = "CRC_ERROR_WORD1" *)
+  (* enum_value_0011 = "CRC_ERROR_BOTH" *)
+  (* enum_value_0100 = "SIGN_OF_LIFE" *)
+  (* enum_value_0101 = "SPW_MISMATCH" *)
+  (* enum_value_0110 = "NO_ACK" *)
+  (* enum_value_0111 = "NO_START" *)
+  (* enum_value_1000 = "DELAY_RANGE" *)
+  (* enum_value_1001 = "SLO_STUCK_LOW" *)
+  (* enum_value_1010 = "ABORTED" *)
+  (* enum_value_1011 = "BAD_CONFIG" *)
+  (* enum_value_1100 = "NO_STOP" *)
+  output [3:0] status;
+  reg [3:0] status;
+  input watch;
+  wire watch;
+  assign \$1  = watch & ma_arm;
+  assign \$2  = ~ locked_seen;
+  assign \$3  = locked & \$2 ;
+  assign \$4  = watch & \$3 ;
+  assign \$5  = ~ locked_seen;
+  assign \$6  = locked & \$5 ;
+  assign restart_timer = ma_arm | \$6 ;
+  assign \$7  = armed & early;
+  assign \$8  = ~ locked_seen;
+  assign \$9  = armed & \$8 ;
+  assign \$10  = ~ locked;
+  assign \$11  = \$9  & \$10 ;
+  assign \$12  = \$11  & ack_expired;
+  assign \$13  = ~ locked_seen;
+  assign \$14  = locked & \$13 ;
+  assign \$15  = \$14  & delay_over;
+  assign \$16  = ~ started;
+  assign \$17  = locked_seen & \$16 ;
+  assign \$18  = no_start_expired | slots_full;
+  assign \$19  = \$17  & \$18 ;
+  always @(posedge clk)
+    armed <= \$20 ;
+  always @(posedge clk)
+    locked_seen <= \$21 ;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$17 ) begin end
+    \$20  = armed;
+    if (clear) begin
+      \$20  = 1'h0;
+    end
+    if (\$1 ) begin
+      \$20  = 1'h1;
+    end
+    if (rst) begin
+      \$20  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$17 ) begin end
+    \$21  = locked_seen;
+    if (clear) begin
+      \$21  = 1'h0;
+    end
+    if (\$4 ) begin
+      \$21  = 1'h1;
+    end
+    if (rst) begin
+      \$21  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$17 ) begin end
+    fault = 1'h0;
+    if (\$7 ) begin
+      fault = 1'h1;
+    end else if (\$12 ) begin
+      fault = 1'h1;
+    end else if (\$15 ) begin
+      fault = 1'h1;
+    end else if (\$19 ) begin
+      fault = 1'h1;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$17 ) begin end
+    status = 4'h0;
+    if (\$7 ) begin
+      status = 4'h8;
+    end else if (\$12 ) begin
+      status = 4'h6;
+    end else if (\$15 ) begin
+      status = 4'h8;
+    end else if (\$19 ) begin
+      status = 4'h7;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$17 ) begin end
+    delay = 1'h0;
+    if (\$7 ) begin
+    end else if (\$12 ) begin
+    end else if (\$15 ) begin
+      delay = 1'h1;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master.controller.ready_check (config_ok, first_clock, bad_config, aborted, ready, stuck_low, slo_stuck, slo_stuck_live, slo, abort);
+  reg \$auto$verilog_backend.cc:2355:dump_module$18  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire \$3 ;
+  input abort;
+  wire abort;
+  output aborted;
+  reg aborted;
+  output bad_config;
+  reg bad_config;
+  input config_ok;
+  wire config_ok;
+  input first_clock;
+  wire first_clock;
+  output ready;
+  reg ready;
+  input slo;
+  wire slo;
+  input slo_stuck;
+  wire slo_stuck;
+  input slo_stuck_live;
+  wire slo_stuck_live;
+  output stuck_low;
+  reg stuck_low;
+  assign \$1  = ~ config_ok;
+  assign \$2  = first_clock & \$1 ;
+  assign \$3  = first_clock ? slo_stuck_live : slo_stuck;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    stuck_low = 1'h0;
+    if (\$2 ) begin
+    end else if (abort) begin
+    end else if (slo) begin
+    end else if (\$3 ) begin
+      stuck_low = 1'h1;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    bad_config = 1'h0;
+    if (\$2 ) begin
+      bad_config = 1'h1;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    aborted = 1'h0;
+    if (\$2 ) begin
+    end else if (abort) begin
+      aborted = 1'h1;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    ready = 1'h0;
+    if (\$2 ) begin
+    end else if (abort) begin
+    end else if (slo) begin
+      ready = 1'h1;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master.controller.report (fault, fault_status, report_frame, delay, faults, report_delay);
+  wire \$1 ;
+  wire \$10 ;
+  wire \$11 ;
+  wire \$12 ;
+  wire \$13 ;
+  wire \$14 ;
+  wire \$2 ;
+  wire \$3 ;
+  wire \$4 ;
+  wire \$5 ;
+  wire \$6 ;
+  wire \$7 ;
+  wire \$8 ;
+  wire \$9 ;
+  input delay;
+  wire delay;
+  wire fail;
+  input fault;
+  wire fault;
+  (* enum_base_type = "Status" *)
+  (* enum_value_0000 = "OK" *)
+  (* enum_value_0001 = "CRC_ERROR_WORD0" *)
+  (* enum_value_0010 = "CRC_ERROR_WORD1" *)
+  (* enum_value_0011 = "CRC_ERROR_BOTH" *)
+  (* enum_value_0100 = "SIGN_OF_LIFE" *)
+  (* enum_value_0101 = "SPW_MISMATCH" *)
+  (* enum_value_0110 = "NO_ACK" *)
+  (* enum_value_0111 = "NO_START" *)
+  (* enum_value_1000 = "DELAY_RANGE" *)
+  (* enum_value_1001 = "SLO_STUCK_LOW" *)
+  (* enum_value_1010 = "ABORTED" *)
+  (* enum_value_1011 = "BAD_CONFIG" *)
+  (* enum_value_1100 = "NO_STOP" *)
+  input [3:0] fault_status;
+  wire [3:0] fault_status;
+  output [6:0] faults;
+  wire [6:0] faults;
+  wire \faults.aborted ;
+  wire \faults.bad_config ;
+  wire \faults.delay_range ;
+  wire \faults.no_ack ;
+  wire \faults.no_start ;
+  wire \faults.no_stop ;
+  wire \faults.slo_stuck_low ;
+  wire frame;
+  output report_delay;
+  wire report_delay;
+  input report_frame;
+  wire report_frame;
+  (* enum_base_type = "Status" *)
+  (* enum_value_0000 = "OK" *)
+  (* enum_value_0001 = "CRC_ERROR_WORD0" *)
+  (* enum_value_0010 = "CRC_ERROR_WORD1" *)
+  (* enum_value_0011 = "CRC_ERROR_BOTH" *)
+  (* enum_value_0100 = "SIGN_OF_LIFE" *)
+  (* enum_value_0101 = "SPW_MISMATCH" *)
+  (* enum_value_0110 = "NO_ACK" *)
+  (* enum_value_0111 = "NO_START" *)
+  (* enum_value_1000 = "DELAY_RANGE" *)
+  (* enum_value_1001 = "SLO_STUCK_LOW" *)
+  (* enum_value_1010 = "ABORTED" *)
+  (* enum_value_1011 = "BAD_CONFIG" *)
+  (* enum_value_1100 = "NO_STOP" *)
+  wire [3:0] status;
+  assign report_delay = report_frame | delay;
+  assign \$1  = fault_status == 3'h6;
+  assign \$2  = fault & \$1 ;
+  assign \$3  = fault_status == 3'h7;
+  assign \$4  = fault & \$3 ;
+  assign \$5  = fault_status == 4'h8;
+  assign \$6  = fault & \$5 ;
+  assign \$7  = fault_status == 4'h9;
+  assign \$8  = fault & \$7 ;
+  assign \$9  = fault_status == 4'ha;
+  assign \$10  = fault & \$9 ;
+  assign \$11  = fault_status == 4'hb;
+  assign \$12  = fault & \$11 ;
+  assign \$13  = fault_status == 4'hc;
+  assign \$14  = fault & \$13 ;
+  assign frame = report_frame;
+  assign fail = fault;
+  assign status = fault_status;
+  assign \faults.no_ack  = faults[0];
+  assign \faults.no_start  = faults[1];
+  assign \faults.delay_range  = faults[2];
+  assign \faults.slo_stuck_low  = faults[3];
+  assign \faults.aborted  = faults[4];
+  assign \faults.bad_config  = faults[5];
+  assign \faults.no_stop  = faults[6];
+  assign faults[6] = \$14 ;
+  assign faults[5] = \$12 ;
+  assign faults[4] = \$10 ;
+  assign faults[3] = \$8 ;
+  assign faults[2] = \$6 ;
+  assign faults[1] = \$4 ;
+  assign faults[0] = \$2 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -2949,168 +3291,6 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.counters.count_aborted (clk, rst, inc, count, clear);
-  reg \$auto$verilog_backend.cc:2355:dump_module$16  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master.counters.count_ca_aborted (clk, rst, inc, count, clear);
-  reg \$auto$verilog_backend.cc:2355:dump_module$17  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$17 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$17 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master.counters.count_ca_crc4_error (clk, rst, inc, count, clear);
-  reg \$auto$verilog_backend.cc:2355:dump_module$18  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master.counters.count_ca_data_fault (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$19  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -3164,7 +3344,7 @@ module \biss_master.counters.count_ca_data_fault (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_ca_no_answer (clk, rst, inc, count, clear);
+module \biss_master.counters.count_ca_aborted (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$20  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -3218,7 +3398,7 @@ module \biss_master.counters.count_ca_no_answer (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_ca_refused (clk, rst, inc, count, clear);
+module \biss_master.counters.count_ca_crc4_error (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$21  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -3272,7 +3452,7 @@ module \biss_master.counters.count_ca_refused (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_crc_word0 (clk, rst, inc, count, clear);
+module \biss_master.counters.count_ca_data_fault (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$22  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -3326,7 +3506,7 @@ module \biss_master.counters.count_crc_word0 (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_crc_word1 (clk, rst, inc, count, clear);
+module \biss_master.counters.count_ca_no_answer (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$23  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -3380,7 +3560,7 @@ module \biss_master.counters.count_crc_word1 (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_delay_range (clk, rst, inc, count, clear);
+module \biss_master.counters.count_ca_refused (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$24  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -3434,7 +3614,7 @@ module \biss_master.counters.count_delay_range (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_lc_repeat (clk, rst, inc, count, clear);
+module \biss_master.counters.count_crc_word0 (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$25  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -3488,7 +3668,7 @@ module \biss_master.counters.count_lc_repeat (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_lc_skip (clk, rst, inc, count, clear);
+module \biss_master.counters.count_crc_word1 (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$26  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -3542,7 +3722,7 @@ module \biss_master.counters.count_lc_skip (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_lc_zero (clk, rst, inc, count, clear);
+module \biss_master.counters.count_delay_range (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$27  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -3596,7 +3776,7 @@ module \biss_master.counters.count_lc_zero (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_no_ack (clk, rst, inc, count, clear);
+module \biss_master.counters.count_lc_repeat (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$28  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -3650,7 +3830,7 @@ module \biss_master.counters.count_no_ack (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_no_start (clk, rst, inc, count, clear);
+module \biss_master.counters.count_lc_skip (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$29  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -3704,7 +3884,7 @@ module \biss_master.counters.count_no_start (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_no_stop (clk, rst, inc, count, clear);
+module \biss_master.counters.count_lc_zero (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$30  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -3758,7 +3938,7 @@ module \biss_master.counters.count_no_stop (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_overrun (clk, rst, inc, count, clear);
+module \biss_master.counters.count_no_ack (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$31  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -3812,7 +3992,7 @@ module \biss_master.counters.count_overrun (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_slo_stuck_low (clk, rst, inc, count, clear);
+module \biss_master.counters.count_no_start (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$32  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -3866,7 +4046,7 @@ module \biss_master.counters.count_slo_stuck_low (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_spw_mismatch (clk, rst, inc, count, clear);
+module \biss_master.counters.count_no_stop (clk, rst, inc, count, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$33  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -3920,9 +4100,171 @@ module \biss_master.counters.count_spw_mismatch (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
+module \biss_master.counters.count_overrun (clk, rst, inc, count, clear);
+  reg \$auto$verilog_backend.cc:2355:dump_module$34  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master.counters.count_slo_stuck_low (clk, rst, inc, count, clear);
+  reg \$auto$verilog_backend.cc:2355:dump_module$35  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master.counters.count_spw_mismatch (clk, rst, inc, count, clear);
+  reg \$auto$verilog_backend.cc:2355:dump_module$36  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
 module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , receiver_clear, done, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1, lc, cpw_top, crc_ok
 , clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$34  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$37  = 0;
   wire [6:0] \$1 ;
   wire [1:0] \$10 ;
   reg [2:0] \$100 ;
@@ -4305,7 +4647,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     .valid(\valid$52 )
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     (* full_case = 32'd1 *)
     casez (words[6])
       1'h0:
@@ -4315,7 +4657,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -4329,7 +4671,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     (* full_case = 32'd1 *)
     casez (words[9:6])
       4'h0:
@@ -4367,7 +4709,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -4381,7 +4723,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     (* full_case = 32'd1 *)
     casez (words[16])
       1'h0:
@@ -4391,7 +4733,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     (* full_case = 32'd1 *)
     casez (words[17:16])
       2'h0:
@@ -4405,7 +4747,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:16])
       4'h0:
@@ -4443,7 +4785,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     (* full_case = 32'd1 *)
     casez (words[17:16])
       2'h0:
@@ -4457,7 +4799,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     \$94  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -4481,7 +4823,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     \$95  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -4503,7 +4845,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     \$96  = slots;
     if (\$34 ) begin
       \$96  = \$35 [15:0];
@@ -4516,7 +4858,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     \$97  = slots_full;
     if (\$34 ) begin
       \$97  = \$36 ;
@@ -4529,7 +4871,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     \$98  = started;
     casez (decoder_fsm_state)
       3'h0:
@@ -4545,7 +4887,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     \$99  = start_slot;
     casez (decoder_fsm_state)
       3'h0:
@@ -4561,7 +4903,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     \$100  = decoder_fsm_state;
     casez (decoder_fsm_state)
       3'h0:
@@ -4593,7 +4935,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     \$101  = cds;
     casez (decoder_fsm_state)
       3'h0:
@@ -4611,7 +4953,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     \$102  = idx;
     casez (decoder_fsm_state)
       3'h0:
@@ -4636,7 +4978,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     \$103  = in_data;
     casez (decoder_fsm_state)
       3'h0:
@@ -4661,7 +5003,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     \$104  = in_lc;
     casez (decoder_fsm_state)
       3'h0:
@@ -4686,7 +5028,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     \$105  = in_top;
     casez (decoder_fsm_state)
       3'h0:
@@ -4711,7 +5053,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     \$106  = word;
     casez (decoder_fsm_state)
       3'h0:
@@ -4739,7 +5081,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     \$107  = stop_bit;
     casez (decoder_fsm_state)
       3'h0:
@@ -4761,7 +5103,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     \$108  = data0;
     if (\$58 ) begin
       \$108  = { data0[53:0], \bit  };
@@ -4774,7 +5116,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     \$109  = ne;
     if (\$59 ) begin
       \$109 [0] = 1'h1;
@@ -4794,7 +5136,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     \$110  = nw;
     if (\$59 ) begin
       \$110 [0] = 1'h1;
@@ -4816,7 +5158,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     \$111  = data1;
     if (\$70 ) begin
       \$111  = { data1[38:0], \bit  };
@@ -4829,7 +5171,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     \$112  = lc;
     if (lc_load) begin
       \$112  = { lc[4:0], \bit  };
@@ -4842,7 +5184,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     \$113  = cpw_top;
     if (\$80 ) begin
       \$113  = { cpw_top[38:0], \bit  };
@@ -4855,7 +5197,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     in_word = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -4892,7 +5234,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.decoder.crc0 (rst, start, valid, kind, \bit , receiver_clear, ok, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$35  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$38  = 0;
   wire [5:0] \$1 ;
   wire \$10 ;
   wire [5:0] \$11 ;
@@ -4986,7 +5328,7 @@ module \biss_master.decoder.crc0 (rst, start, valid, kind, \bit , receiver_clear
   assign \$auto$rtlil.cc:2739:Not$12  = ~ { crc16_reg[14], crc16_reg[11], crc16_reg[6:5], crc16_reg[3:2], 1'h0 };
   assign \$auto$rtlil.cc:2739:Not$10  = ~ { crc6_reg[0], 1'h0 };
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     \$31  = crc6_reg;
     if (valid) begin
       \$31  = \$5 ;
@@ -5001,7 +5343,7 @@ module \biss_master.decoder.crc0 (rst, start, valid, kind, \bit , receiver_clear
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     \$32  = crc6_match;
     if (valid) begin
       \$32  = \$15 ;
@@ -5016,7 +5358,7 @@ module \biss_master.decoder.crc0 (rst, start, valid, kind, \bit , receiver_clear
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     \$33  = crc16_reg;
     if (valid) begin
       \$33  = \$20 ;
@@ -5031,7 +5373,7 @@ module \biss_master.decoder.crc0 (rst, start, valid, kind, \bit , receiver_clear
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     \$34  = crc16_match;
     if (valid) begin
       \$34  = \$30 ;
@@ -5046,7 +5388,7 @@ module \biss_master.decoder.crc0 (rst, start, valid, kind, \bit , receiver_clear
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     ok = 1'h0;
     casez (kind)
       2'h0:
@@ -5067,7 +5409,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.decoder.crc1 (rst, start, valid, kind, \bit , receiver_clear, ok, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$36  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$39  = 0;
   wire [5:0] \$1 ;
   wire \$10 ;
   wire [5:0] \$11 ;
@@ -5161,7 +5503,7 @@ module \biss_master.decoder.crc1 (rst, start, valid, kind, \bit , receiver_clear
   assign \$auto$rtlil.cc:2739:Not$6  = ~ { crc6_reg[0], 1'h0 };
   assign \$auto$rtlil.cc:2739:Not$8  = ~ { crc16_reg[14], crc16_reg[11], crc16_reg[6:5], crc16_reg[3:2], 1'h0 };
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     \$31  = crc6_reg;
     if (valid) begin
       \$31  = \$5 ;
@@ -5176,7 +5518,7 @@ module \biss_master.decoder.crc1 (rst, start, valid, kind, \bit , receiver_clear
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     \$32  = crc6_match;
     if (valid) begin
       \$32  = \$15 ;
@@ -5191,7 +5533,7 @@ module \biss_master.decoder.crc1 (rst, start, valid, kind, \bit , receiver_clear
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     \$33  = crc16_reg;
     if (valid) begin
       \$33  = \$20 ;
@@ -5206,7 +5548,7 @@ module \biss_master.decoder.crc1 (rst, start, valid, kind, \bit , receiver_clear
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     \$34  = crc16_match;
     if (valid) begin
       \$34  = \$30 ;
@@ -5221,7 +5563,7 @@ module \biss_master.decoder.crc1 (rst, start, valid, kind, \bit , receiver_clear
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     ok = 1'h0;
     casez (kind)
       2'h0:
@@ -5242,7 +5584,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_rise, second_rise, ma, rises, busy, held, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$37  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$40  = 0;
   wire [16:0] \$1 ;
   wire \$10 ;
   wire [16:0] \$11 ;
@@ -5367,7 +5709,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
   always @(posedge clk)
     released <= \$42 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
     \$34  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -5382,7 +5724,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
     \$35  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -5397,7 +5739,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
     \$36  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -5412,7 +5754,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
     \$37  = ma;
     casez (ma_fsm_state)
       3'h0:
@@ -5441,7 +5783,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
     \$38  = phase_left;
     casez (ma_fsm_state)
       3'h0:
@@ -5483,7 +5825,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
     \$39  = last_clock;
     casez (ma_fsm_state)
       3'h0:
@@ -5525,7 +5867,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
     \$40  = rises;
     casez (ma_fsm_state)
       3'h0:
@@ -5544,7 +5886,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
     \$41  = ma_fsm_state;
     casez (ma_fsm_state)
       3'h0:
@@ -5580,7 +5922,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
     \$42  = released;
     casez (ma_fsm_state)
       3'h0:
@@ -5604,7 +5946,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
     busy = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -5620,7 +5962,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
     held = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -5637,7 +5979,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.ma_stop (rst, words, w1_enable, clear, rises, enough, \started$10 , start_slot, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$38  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$41  = 0;
   reg [7:0] \$1 ;
   reg [7:0] \$10 ;
   wire [8:0] \$11 ;
@@ -5718,7 +6060,7 @@ module \biss_master.ma_stop (rst, words, w1_enable, clear, rises, enough, \start
   always @(posedge clk)
     word1_len <= \$17 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     (* full_case = 32'd1 *)
     casez (words[9:6])
       4'h0:
@@ -5756,7 +6098,7 @@ module \biss_master.ma_stop (rst, words, w1_enable, clear, rises, enough, \start
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:16])
       4'h0:
@@ -5794,42 +6136,42 @@ module \biss_master.ma_stop (rst, words, w1_enable, clear, rises, enough, \start
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     \$12  = \$2 [7:0];
     if (rst) begin
       \$12  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     \$13  = \$4 ;
     if (rst) begin
       \$13  = 9'h000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     \$14  = \$5 ;
     if (rst) begin
       \$14  = 17'h00000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     \$15  = \started$10 ;
     if (rst) begin
       \$15  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     \$16  = \$9 ;
     if (rst) begin
       \$16  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     \$17  = \$11 [7:0];
     if (rst) begin
       \$17  = 8'h00;
@@ -6141,7 +6483,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.register_access.buffers (host_read__en, clk, rst, byte_to_send, rbuf_data, wbuf, index, store, byte_received, host_read__addr);
-  reg \$auto$verilog_backend.cc:2355:dump_module$39  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$42  = 0;
   wire \$1 ;
   wire \$2 ;
   wire \$3 ;
@@ -6258,21 +6600,21 @@ module \biss_master.register_access.buffers (host_read__en, clk, rst, byte_to_se
   assign \$1  = ! index[1:0];
   assign \$2  = index[1:0] == 1'h1;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
     byte_received__addr = 4'h0;
     if (store) begin
       byte_received__addr = index[5:2];
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
     byte_received__data = 32'd0;
     if (store) begin
       byte_received__data = { byte_received, byte_received, byte_received, byte_received };
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
     byte_received__en = 4'h0;
     if (store) begin
       byte_received__en = { \$4 , \$3 , \$2 , \$1  };
@@ -6292,7 +6634,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.register_access.checker (rst, crc_ok, echo_ok, cds, control__take_data, start, control__take_crc, sent, \byte , clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$40  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$43  = 0;
   reg [7:0] \$1 ;
   reg [2:0] \$2 ;
   output [7:0] \byte ;
@@ -6335,7 +6677,7 @@ module \biss_master.register_access.checker (rst, crc_ok, echo_ok, cds, control_
     .valid(control__take_data)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     \$1  = \byte ;
     if (control__take_data) begin
       \$1  = { \byte [6:0], cds };
@@ -6345,7 +6687,7 @@ module \biss_master.register_access.checker (rst, crc_ok, echo_ok, cds, control_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     \$2  = got_crc;
     if (control__take_crc) begin
       \$2  = { got_crc[1:0], cds };
@@ -6361,7 +6703,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.register_access.checker.rx_crc (rst, crc, data_in, valid, start, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$41  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$44  = 0;
   wire [3:0] \$1 ;
   wire \$10 ;
   wire [3:0] \$11 ;
@@ -6404,7 +6746,7 @@ module \biss_master.register_access.checker.rx_crc (rst, crc, data_in, valid, st
     crc_reg <= \$13 ;
   assign \$auto$rtlil.cc:2739:Not$2  = ~ crc_reg;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
     \$13  = crc_reg;
     if (valid) begin
       \$13 [0] = \$3 ;
@@ -6428,7 +6770,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.register_access.idle (rst, frame_end, frame_ok, run_enough, seen_enough, frame_cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$42  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$45  = 0;
   wire \$1 ;
   wire [4:0] \$10 ;
   wire \$11 ;
@@ -6498,7 +6840,7 @@ module \biss_master.register_access.idle (rst, frame_end, frame_ok, run_enough, 
   always @(posedge clk)
     idle_seen <= \$24 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
     \$23  = idle_run;
     if (frame_end) begin
       \$23  = \$4 [3:0];
@@ -6508,7 +6850,7 @@ module \biss_master.register_access.idle (rst, frame_end, frame_ok, run_enough, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
     \$24  = idle_seen;
     if (frame_end) begin
       \$24  = \$10 [3:0];
@@ -6521,7 +6863,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.register_access.sender (rst, \byte , request, control__load_header, control__source, control__crc_bit, control__shift_header, start, valid, control__load_byte, control__shift_byte, sent, cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$43  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$46  = 0;
   wire \$1 ;
   wire [18:0] \$2 ;
   wire [8:0] \$3 ;
@@ -6593,7 +6935,7 @@ module \biss_master.register_access.sender (rst, \byte , request, control__load_
     .valid(valid)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     \$6  = header;
     if (control__load_header) begin
       \$6  = { 2'h3, request[2:0], request[9:3], 4'h0, \$1 , request[17] };
@@ -6606,7 +6948,7 @@ module \biss_master.register_access.sender (rst, \byte , request, control__load_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     \$7  = to_send;
     if (control__load_byte) begin
       \$7  = \byte ;
@@ -6619,7 +6961,7 @@ module \biss_master.register_access.sender (rst, \byte , request, control__load_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     \$8  = sent;
     if (control__load_byte) begin
       \$8  = \byte ;
@@ -6629,7 +6971,7 @@ module \biss_master.register_access.sender (rst, \byte , request, control__load_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     cdm = 1'h0;
     casez (control__source)
       3'h1:
@@ -6654,7 +6996,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.register_access.sender.tx_crc (rst, data_in, crc, start, valid, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$44  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$47  = 0;
   wire [3:0] \$1 ;
   wire \$10 ;
   wire [3:0] \$11 ;
@@ -6697,7 +7039,7 @@ module \biss_master.register_access.sender.tx_crc (rst, data_in, crc, start, val
     crc_reg <= \$13 ;
   assign \$auto$rtlil.cc:2739:Not$4  = ~ crc_reg;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     \$13  = crc_reg;
     if (valid) begin
       \$13 [0] = \$3 ;
@@ -6722,7 +7064,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame_ok, busy, crc_ok, echo_ok, run_enough, seen_enough, request, frame_cdm, frame_cds, done, result, index, send__load_header, send__source, send__crc_bit, send__shift_header, send__crc_start
 , send__crc_valid, send__load_byte, send__shift_byte, check__take_data, check__first, check__take_crc, store, start);
-  reg \$auto$verilog_backend.cc:2355:dump_module$45  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$48  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$100 ;
@@ -7078,7 +7420,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
   always @(posedge clk)
     waited <= \$125 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     \$118  = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -7116,7 +7458,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     \$119  = result;
     casez (access_fsm_state)
       3'h0:
@@ -7170,7 +7512,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     \$120  = access_fsm_state;
     casez (access_fsm_state)
       3'h0:
@@ -7267,7 +7609,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     \$121  = req;
     casez (access_fsm_state)
       3'h0:
@@ -7284,7 +7626,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     \$122  = index;
     casez (access_fsm_state)
       3'h0:
@@ -7323,7 +7665,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     \$123  = step;
     casez (access_fsm_state)
       3'h0:
@@ -7381,7 +7723,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     \$124  = ending;
     casez (access_fsm_state)
       3'h0:
@@ -7448,7 +7790,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     \$125  = waited;
     casez (access_fsm_state)
       3'h0:
@@ -7480,7 +7822,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     send__load_header = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -7494,7 +7836,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     send__source = 3'h0;
     casez (access_fsm_state)
       3'h0:
@@ -7521,7 +7863,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     send__crc_bit = 2'h0;
     casez (access_fsm_state)
       3'h0:
@@ -7541,7 +7883,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     send__shift_header = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -7560,7 +7902,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     send__crc_start = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -7589,7 +7931,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     send__crc_valid = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -7610,7 +7952,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     send__load_byte = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -7632,7 +7974,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     send__shift_byte = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -7653,7 +7995,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     check__take_data = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -7675,7 +8017,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     check__first = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -7697,7 +8039,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     check__take_crc = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -7721,7 +8063,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     store = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -7759,8 +8101,8 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.results (rst, report, valid, frame, report_frame, report_delay, done, valid_out, result, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$46  = 0;
+module \biss_master.results (rst, report_delay, report, valid, frame, report_frame, done, valid_out, result, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$49  = 0;
   reg \$1 ;
   reg \$2 ;
   reg [160:0] \$3 ;
@@ -7857,21 +8199,21 @@ module \biss_master.results (rst, report, valid, frame, report_frame, report_del
   always @(posedge clk)
     result <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$1  = report;
     if (rst) begin
       \$1  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$2  = valid;
     if (rst) begin
       \$2  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$3  = result;
     if (report) begin
       \$3 [3:0] = frame[3:0];
@@ -7936,7 +8278,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, early, locked, delay, sample, level, slo);
-  reg \$auto$verilog_backend.cc:2355:dump_module$47  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$50  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -8174,7 +8516,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     .stage1(level)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$63  = level;
     if (receiver_clear) begin
       \$63  = 1'h1;
@@ -8184,7 +8526,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$64  = mid_delay;
     if (odd) begin
       \$64  = \$8 [12:0];
@@ -8209,7 +8551,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$65  = mid_slot;
     (* full_case = 32'd1 *)
     if (odd) begin
@@ -8236,7 +8578,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$66  = \$10 ;
     casez (sampler_fsm_state)
       2'h0:
@@ -8258,7 +8600,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$67  = elapsed;
     casez (sampler_fsm_state)
       2'h0:
@@ -8282,7 +8624,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$68  = early;
     casez (sampler_fsm_state)
       2'h0:
@@ -8298,7 +8640,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$69  = locked;
     casez (sampler_fsm_state)
       2'h0:
@@ -8324,7 +8666,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$70  = gap;
     casez (sampler_fsm_state)
       2'h0:
@@ -8355,7 +8697,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$71  = sampler_fsm_state;
     casez (sampler_fsm_state)
       2'h0:
@@ -8386,7 +8728,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$72  = slot_left;
     casez (sampler_fsm_state)
       2'h0:
@@ -8436,7 +8778,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$73  = slot_zero;
     casez (sampler_fsm_state)
       2'h0:
@@ -8486,7 +8828,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$74  = vote1;
     casez (sampler_fsm_state)
       2'h0:
@@ -8516,7 +8858,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$75  = vote2;
     casez (sampler_fsm_state)
       2'h0:
@@ -8544,7 +8886,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$76  = first_slot;
     casez (sampler_fsm_state)
       2'h0:
@@ -8570,7 +8912,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$77  = delay;
     casez (sampler_fsm_state)
       2'h0:
@@ -8593,7 +8935,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$78  = phase;
     casez (sampler_fsm_state)
       2'h0:
@@ -8633,7 +8975,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     sample = \$44 ;
     casez (sampler_fsm_state)
       2'h0:
@@ -8651,7 +8993,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     decided = 1'h0;
     casez (sampler_fsm_state)
       2'h0:
@@ -8701,7 +9043,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.scheduler (abort, period, clk, rst, periodic, request, overrun, idle, start);
-  reg \$auto$verilog_backend.cc:2355:dump_module$48  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -8782,7 +9124,7 @@ module \biss_master.scheduler (abort, period, clk, rst, periodic, request, overr
   always @(posedge clk)
     period_start <= \$28 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$27  = 24'h000001;
@@ -8794,7 +9136,7 @@ module \biss_master.scheduler (abort, period, clk, rst, periodic, request, overr
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$28  = 1'h1;
@@ -8811,8 +9153,8 @@ module \biss_master.scheduler (abort, period, clk, rst, periodic, request, overr
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1376$0 , resync, lc, is_zero, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$49  = 0;
+module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1367$0 , resync, lc, is_zero, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$52  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -8849,8 +9191,8 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1376$0
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$1376$0 ;
-  wire \port$1376$0 ;
+  input \port$1367$0 ;
+  wire \port$1367$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -8862,9 +9204,9 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1376$0
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$1376$0  };
-  assign \$2  = { lc[4:0], \port$1376$0  } == last;
-  assign \$3  = { lc[4:0], \port$1376$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$1367$0  };
+  assign \$2  = { lc[4:0], \port$1367$0  } == last;
+  assign \$3  = { lc[4:0], \port$1367$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = lc == 6'h3f;
@@ -8892,7 +9234,7 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1376$0
   always @(posedge clk)
     synced <= \$21 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
     \$16  = is_zero;
     if (load) begin
       \$16  = \$1 ;
@@ -8902,7 +9244,7 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1376$0
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
     \$17  = is_last;
     if (load) begin
       \$17  = \$2 ;
@@ -8912,7 +9254,7 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1376$0
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
     \$18  = is_expected;
     if (load) begin
       \$18  = \$3 ;
@@ -8922,7 +9264,7 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1376$0
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
     \$19  = last;
     if (\$5 ) begin
       \$19  = lc;
@@ -8932,7 +9274,7 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1376$0
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
     \$20  = expected;
     if (\$5 ) begin
       \$20  = \$8 [5:0];
@@ -8942,7 +9284,7 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1376$0
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
     \$21  = synced;
     if (\$5 ) begin
       \$21  = 1'h1;
@@ -8954,13 +9296,13 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1376$0
       \$21  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$1376$0  };
+  assign lc_next = { lc[4:0], \port$1367$0  };
   assign zero = is_zero;
 endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.spw_check (rst, bits, \tolerance$8 , spw, cpw_top, match, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$50  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$53  = 0;
   wire [40:0] \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -9165,28 +9507,28 @@ module \biss_master.spw_check (rst, bits, \tolerance$8 , spw, cpw_top, match, cl
   assign \$7  = bits > 3'h5;
   assign \$8  = bits > 3'h6;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$88  = \$42 ;
     if (rst) begin
       \$88  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$89  = \$84 ;
     if (rst) begin
       \$89  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$90  = \tolerance$8 ;
     if (rst) begin
       \$90  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$91  = \$87 ;
     if (rst) begin
       \$91  = 1'h0;
@@ -9196,7 +9538,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.time_base (rst, first_rise, first_rise_time, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$54  = 0;
   wire [32:0] \$1 ;
   reg [31:0] \$2 ;
   reg [31:0] \$3 ;
@@ -9215,14 +9557,14 @@ module \biss_master.time_base (rst, first_rise, first_rise_time, clk);
   always @(posedge clk)
     first_rise_time <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$2  = \$1 [31:0];
     if (rst) begin
       \$2  = 32'd0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$3  = first_rise_time;
     if (first_rise) begin
       \$3  = now;
@@ -9235,7 +9577,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.timers (timeout_live, clk, rst, restart, ma_busy, ack_limit, timeout_limit, delay_limit, no_start_limit, clear, in_clock, slo_stuck, slo_stuck_live, break_over, ack_expired, no_start_expired, delay_over, delay, slo, break_time);
-  reg \$auto$verilog_backend.cc:2355:dump_module$52  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$55  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -9373,7 +9715,7 @@ module \biss_master.timers (timeout_live, clk, rst, restart, ma_busy, ack_limit,
   always @(posedge clk)
     delay_over <= \$43 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$36  = slo_low_time_p1;
     if (\$1 ) begin
       \$36  = 25'h0000001;
@@ -9385,49 +9727,49 @@ module \biss_master.timers (timeout_live, clk, rst, restart, ma_busy, ack_limit,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$37  = \$8 ;
     if (rst) begin
       \$37  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$38  = \$16 ;
     if (rst) begin
       \$38  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$39  = \$20 [24:0];
     if (rst) begin
       \$39  = 25'h0000001;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$40  = \$26 ;
     if (rst) begin
       \$40  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$41  = \$30 ;
     if (rst) begin
       \$41  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$42  = \$34 ;
     if (rst) begin
       \$42  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$43  = \$35 ;
     if (rst) begin
       \$43  = 1'h0;
@@ -9436,8 +9778,8 @@ module \biss_master.timers (timeout_live, clk, rst, restart, ma_busy, ack_limit,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.verdict (lc_skip_seen, \port$884$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
-  reg \$auto$verilog_backend.cc:2355:dump_module$53  = 0;
+module \biss_master.verdict (lc_skip_seen, \port$875$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
+  reg \$auto$verilog_backend.cc:2355:dump_module$56  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -9550,8 +9892,8 @@ module \biss_master.verdict (lc_skip_seen, \port$884$0 , lc_check, lc_repeat, lc
   wire lc_zero;
   input lc_zero_seen;
   wire lc_zero_seen;
-  output \port$884$0 ;
-  wire \port$884$0 ;
+  output \port$875$0 ;
+  wire \port$875$0 ;
   output report;
   wire report;
   input report_frame;
@@ -9619,7 +9961,7 @@ module \biss_master.verdict (lc_skip_seen, \port$884$0 , lc_check, lc_repeat, lc
   assign \$29  = ~ { \$2 , crc_ok[0] };
   assign crc_error = report_frame ? \$29  : 2'h0;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
     (* full_case = 32'd1 *)
     if (\$13 ) begin
       frame_status = 4'h3;
@@ -9636,7 +9978,7 @@ module \biss_master.verdict (lc_skip_seen, \port$884$0 , lc_check, lc_repeat, lc
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$884$0  = \$2 ;
+  assign \port$875$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

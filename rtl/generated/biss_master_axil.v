@@ -568,12 +568,12 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .ch1_irq(\$7 ),
     .clk(clk),
     .glob__trigger(glob__trigger),
-    .\port$3987$0 (\$8 ),
-    .\port$3994$0 (\$9 ),
-    .\port$4108$0 (\$10 ),
-    .\port$4440$0 (\$11 ),
-    .\port$4447$0 (\$12 ),
-    .\port$4561$0 (\$13 ),
+    .\port$3984$0 (\$8 ),
+    .\port$3991$0 (\$9 ),
+    .\port$4105$0 (\$10 ),
+    .\port$4452$0 (\$11 ),
+    .\port$4459$0 (\$12 ),
+    .\port$4573$0 (\$13 ),
     .rst(rst)
   );
   \biss_master_axil.bus  bus (
@@ -636,9 +636,9 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .clk(clk),
     .ma(ch0_ma),
     .periodic(regs__periodic),
-    .\port$3987$0 (\$8 ),
-    .\port$3994$0 (\$9 ),
-    .\port$4108$0 (\$10 ),
+    .\port$3984$0 (\$8 ),
+    .\port$3991$0 (\$9 ),
+    .\port$4105$0 (\$10 ),
     .regs__busy(ch0__busy),
     .regs__ca_busy(ch0__ca_busy),
     .regs__ca_done(ch0__ca_done),
@@ -688,9 +688,9 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .clk(clk),
     .ma(ch1_ma),
     .periodic(\regs__periodic$376 ),
-    .\port$4440$0 (\$11 ),
-    .\port$4447$0 (\$12 ),
-    .\port$4561$0 (\$13 ),
+    .\port$4452$0 (\$11 ),
+    .\port$4459$0 (\$12 ),
+    .\port$4573$0 (\$13 ),
     .regs__busy(ch1__busy),
     .regs__ca_busy(ch1__ca_busy),
     .regs__ca_done(ch1__ca_done),
@@ -1026,7 +1026,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
 , bus__w_addr, ch0__ca_wbuf_data, bus__w_strb, glob__trigger, ch0__start, ch0__abort_cycle, ch0__clear_counters, ch0__periodic, ch0__trigger_enable, ch0__cfg_ma_half_period, ch0__cfg_delay_limit, ch0__cfg_request_period, ch0__cfg_break_time, ch0__cfg_ack_limit, ch0__cfg_timeout_limit, ch0__cfg_w0_data_bits, ch0__cfg_w0_nenw, ch0__cfg_w0_lc, ch0__cfg_w0_crc, ch0__cfg_w1_data_bits, ch0__cfg_w1_nenw
 , ch0__cfg_w1_lc, ch0__cfg_w1_crc, ch0__cfg_w1_enable, ch0__cfg_end_check, ch0__cfg_spw_check, ch0__cfg_spw_tolerance, ch0__ca_slave_id, ch0__ca_address, ch0__ca_count, ch0__ca_write, ch0__ca_start, ch0__ca_abort, ch1__start, ch1__abort_cycle, ch1__clear_counters, ch1__periodic, ch1__trigger_enable, ch1__cfg_ma_half_period, ch1__cfg_delay_limit, ch1__cfg_request_period, ch1__cfg_break_time
 , ch1__cfg_ack_limit, ch1__cfg_timeout_limit, ch1__cfg_w0_data_bits, ch1__cfg_w0_nenw, ch1__cfg_w0_lc, ch1__cfg_w0_crc, ch1__cfg_w1_data_bits, ch1__cfg_w1_nenw, ch1__cfg_w1_lc, ch1__cfg_w1_crc, ch1__cfg_w1_enable, ch1__cfg_end_check, ch1__cfg_spw_check, ch1__cfg_spw_tolerance, ch1__ca_slave_id, ch1__ca_address, ch1__ca_count, ch1__ca_write, ch1__ca_start, ch1__ca_abort, bus__r_data
-, ch0__done_count, ch0__done, \port$3987$0 , \port$3994$0 , ch0__ca_done, \port$4108$0 , ch1__done_count, ch1__done, \port$4440$0 , \port$4447$0 , ch1__ca_done, \port$4561$0 , bus__r_addr);
+, ch0__done_count, ch0__done, \port$3984$0 , \port$3991$0 , ch0__ca_done, \port$4105$0 , ch1__done_count, ch1__done, \port$4452$0 , \port$4459$0 , ch1__ca_done, \port$4573$0 , bus__r_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$26  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -2007,18 +2007,18 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   output glob__trigger;
   reg glob__trigger = 1'h0;
   wire [1:0] irq;
-  input [160:0] \port$3987$0 ;
-  wire [160:0] \port$3987$0 ;
-  input [287:0] \port$3994$0 ;
-  wire [287:0] \port$3994$0 ;
-  input [9:0] \port$4108$0 ;
-  wire [9:0] \port$4108$0 ;
-  input [160:0] \port$4440$0 ;
-  wire [160:0] \port$4440$0 ;
-  input [287:0] \port$4447$0 ;
-  wire [287:0] \port$4447$0 ;
-  input [9:0] \port$4561$0 ;
-  wire [9:0] \port$4561$0 ;
+  input [160:0] \port$3984$0 ;
+  wire [160:0] \port$3984$0 ;
+  input [287:0] \port$3991$0 ;
+  wire [287:0] \port$3991$0 ;
+  input [9:0] \port$4105$0 ;
+  wire [9:0] \port$4105$0 ;
+  input [160:0] \port$4452$0 ;
+  wire [160:0] \port$4452$0 ;
+  input [287:0] \port$4459$0 ;
+  wire [287:0] \port$4459$0 ;
+  input [9:0] \port$4573$0 ;
+  wire [9:0] \port$4573$0 ;
   (* init = 32'd0 *)
   wire [31:0] read_data;
   input rst;
@@ -2675,7 +2675,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$370  = ch1_result_status_cds_snapshot;
     if (ch1_result_status_read) begin
-      \$370  = \port$4440$0 [49];
+      \$370  = \port$4452$0 [49];
     end
     if (rst) begin
       \$370  = 1'h0;
@@ -2685,7 +2685,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$371  = ch1_result_status_w0_ne_snapshot;
     if (ch1_result_status_read) begin
-      \$371  = \port$4440$0 [105];
+      \$371  = \port$4452$0 [105];
     end
     if (rst) begin
       \$371  = 1'h0;
@@ -2695,7 +2695,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$372  = ch1_result_status_w0_nw_snapshot;
     if (ch1_result_status_read) begin
-      \$372  = \port$4440$0 [106];
+      \$372  = \port$4452$0 [106];
     end
     if (rst) begin
       \$372  = 1'h0;
@@ -2705,7 +2705,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$373  = ch1_result_status_w0_crc_ok_snapshot;
     if (ch1_result_status_read) begin
-      \$373  = \port$4440$0 [107];
+      \$373  = \port$4452$0 [107];
     end
     if (rst) begin
       \$373  = 1'h0;
@@ -2715,7 +2715,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$374  = ch1_result_status_w1_ne_snapshot;
     if (ch1_result_status_read) begin
-      \$374  = \port$4440$0 [148];
+      \$374  = \port$4452$0 [148];
     end
     if (rst) begin
       \$374  = 1'h0;
@@ -2725,7 +2725,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$375  = ch1_result_status_w1_nw_snapshot;
     if (ch1_result_status_read) begin
-      \$375  = \port$4440$0 [149];
+      \$375  = \port$4452$0 [149];
     end
     if (rst) begin
       \$375  = 1'h0;
@@ -2735,7 +2735,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$376  = ch1_result_status_w1_crc_ok_snapshot;
     if (ch1_result_status_read) begin
-      \$376  = \port$4440$0 [150];
+      \$376  = \port$4452$0 [150];
     end
     if (rst) begin
       \$376  = 1'h0;
@@ -2745,7 +2745,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$377  = ch1_result_status_lc_repeat_snapshot;
     if (ch1_result_status_read) begin
-      \$377  = \port$4440$0 [157];
+      \$377  = \port$4452$0 [157];
     end
     if (rst) begin
       \$377  = 1'h0;
@@ -2755,7 +2755,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$378  = ch1_result_status_lc_skip_snapshot;
     if (ch1_result_status_read) begin
-      \$378  = \port$4440$0 [158];
+      \$378  = \port$4452$0 [158];
     end
     if (rst) begin
       \$378  = 1'h0;
@@ -2765,7 +2765,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$379  = ch1_result_status_lc_zero_snapshot;
     if (ch1_result_status_read) begin
-      \$379  = \port$4440$0 [159];
+      \$379  = \port$4452$0 [159];
     end
     if (rst) begin
       \$379  = 1'h0;
@@ -2775,7 +2775,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$380  = ch1_result_status_spw_mismatch_snapshot;
     if (ch1_result_status_read) begin
-      \$380  = \port$4440$0 [160];
+      \$380  = \port$4452$0 [160];
     end
     if (rst) begin
       \$380  = 1'h0;
@@ -2785,7 +2785,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$381  = ch1_result_status_lc_snapshot;
     if (ch1_result_status_read) begin
-      \$381  = \port$4440$0 [156:151];
+      \$381  = \port$4452$0 [156:151];
     end
     if (rst) begin
       \$381  = 6'h00;
@@ -2805,7 +2805,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$383  = ch1_result_seq_line_delay_snapshot;
     if (ch1_result_status_read) begin
-      \$383  = \port$4440$0 [48:36];
+      \$383  = \port$4452$0 [48:36];
     end
     if (rst) begin
       \$383  = 13'h0000;
@@ -2815,7 +2815,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$384  = ch1_result_w0_lo_data_snapshot;
     if (ch1_result_status_read) begin
-      \$384  = \port$4440$0 [81:50];
+      \$384  = \port$4452$0 [81:50];
     end
     if (rst) begin
       \$384  = 32'd0;
@@ -2825,7 +2825,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$385  = ch1_result_w0_hi_data_snapshot;
     if (ch1_result_status_read) begin
-      \$385  = \port$4440$0 [104:82];
+      \$385  = \port$4452$0 [104:82];
     end
     if (rst) begin
       \$385  = 23'h000000;
@@ -2835,7 +2835,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$386  = ch1_result_w1_lo_data_snapshot;
     if (ch1_result_status_read) begin
-      \$386  = \port$4440$0 [139:108];
+      \$386  = \port$4452$0 [139:108];
     end
     if (rst) begin
       \$386  = 32'd0;
@@ -2845,7 +2845,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$387  = ch1_result_w1_hi_data_snapshot;
     if (ch1_result_status_read) begin
-      \$387  = \port$4440$0 [147:140];
+      \$387  = \port$4452$0 [147:140];
     end
     if (rst) begin
       \$387  = 8'h00;
@@ -2855,7 +2855,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$388  = ch1_result_timestamp_time_snapshot;
     if (ch1_result_status_read) begin
-      \$388  = \port$4440$0 [35:4];
+      \$388  = \port$4452$0 [35:4];
     end
     if (rst) begin
       \$388  = 32'd0;
@@ -2892,7 +2892,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
         11'h10e:
             \$389  = { 16'h0000, ch1__cfg_spw_tolerance, 6'h00, ch1__cfg_spw_check, ch1__cfg_end_check };
         11'h110:
-            \$389  = { 2'h0, \port$4440$0 [156:151], 4'h0, \port$4440$0 [160:157], 1'h0, \port$4440$0 [150:148], 1'h0, \port$4440$0 [107:105], 3'h0, \port$4440$0 [49], \port$4440$0 [3:0] };
+            \$389  = { 2'h0, \port$4452$0 [156:151], 4'h0, \port$4452$0 [160:157], 1'h0, \port$4452$0 [150:148], 1'h0, \port$4452$0 [107:105], 3'h0, \port$4452$0 [49], \port$4452$0 [3:0] };
         11'h111:
             \$389  = { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot };
         11'h112:
@@ -2906,31 +2906,31 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
         11'h116:
             \$389  = ch1_result_timestamp_time_snapshot;
         11'h118:
-            \$389  = \port$4447$0 [31:0];
+            \$389  = \port$4459$0 [31:0];
         11'h119:
-            \$389  = \port$4447$0 [63:32];
+            \$389  = \port$4459$0 [63:32];
         11'h11a:
-            \$389  = \port$4447$0 [95:64];
+            \$389  = \port$4459$0 [95:64];
         11'h11b:
-            \$389  = \port$4447$0 [127:96];
+            \$389  = \port$4459$0 [127:96];
         11'h11c:
-            \$389  = \port$4447$0 [159:128];
+            \$389  = \port$4459$0 [159:128];
         11'h11d:
-            \$389  = \port$4447$0 [191:160];
+            \$389  = \port$4459$0 [191:160];
         11'h11e:
-            \$389  = { 16'h0000, \port$4447$0 [207:192] };
+            \$389  = { 16'h0000, \port$4459$0 [207:192] };
         11'h140:
             \$389  = { 7'h00, ch1__ca_write, 1'h0, ch1__ca_count, 1'h0, ch1__ca_address, 5'h00, ch1__ca_slave_id };
         11'h141:
             \$389  = 32'd0;
         11'h142:
-            \$389  = { 17'h00000, \port$4561$0 [9:3], 1'h0, \port$4561$0 [2:0], 3'h0, ch1__ca_busy };
+            \$389  = { 17'h00000, \port$4573$0 [9:3], 1'h0, \port$4573$0 [2:0], 3'h0, ch1__ca_busy };
         11'h143:
-            \$389  = \port$4447$0 [239:208];
+            \$389  = \port$4459$0 [239:208];
         11'h144:
-            \$389  = \port$4447$0 [271:240];
+            \$389  = \port$4459$0 [271:240];
         11'h145:
-            \$389  = { 16'h0000, \port$4447$0 [287:272] };
+            \$389  = { 16'h0000, \port$4459$0 [287:272] };
         default:
             \$389  = 32'd0;
       endcase
@@ -3375,7 +3375,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$313  = ch0_result_status_status_snapshot;
     if (ch0_result_status_read) begin
-      \$313  = \port$3987$0 [3:0];
+      \$313  = \port$3984$0 [3:0];
     end
     if (rst) begin
       \$313  = 4'h0;
@@ -3385,7 +3385,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$314  = ch0_result_status_cds_snapshot;
     if (ch0_result_status_read) begin
-      \$314  = \port$3987$0 [49];
+      \$314  = \port$3984$0 [49];
     end
     if (rst) begin
       \$314  = 1'h0;
@@ -3395,7 +3395,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$315  = ch0_result_status_w0_ne_snapshot;
     if (ch0_result_status_read) begin
-      \$315  = \port$3987$0 [105];
+      \$315  = \port$3984$0 [105];
     end
     if (rst) begin
       \$315  = 1'h0;
@@ -3405,7 +3405,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$316  = ch0_result_status_w0_nw_snapshot;
     if (ch0_result_status_read) begin
-      \$316  = \port$3987$0 [106];
+      \$316  = \port$3984$0 [106];
     end
     if (rst) begin
       \$316  = 1'h0;
@@ -3415,7 +3415,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$317  = ch0_result_status_w0_crc_ok_snapshot;
     if (ch0_result_status_read) begin
-      \$317  = \port$3987$0 [107];
+      \$317  = \port$3984$0 [107];
     end
     if (rst) begin
       \$317  = 1'h0;
@@ -3425,7 +3425,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$318  = ch0_result_status_w1_ne_snapshot;
     if (ch0_result_status_read) begin
-      \$318  = \port$3987$0 [148];
+      \$318  = \port$3984$0 [148];
     end
     if (rst) begin
       \$318  = 1'h0;
@@ -3435,7 +3435,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$319  = ch0_result_status_w1_nw_snapshot;
     if (ch0_result_status_read) begin
-      \$319  = \port$3987$0 [149];
+      \$319  = \port$3984$0 [149];
     end
     if (rst) begin
       \$319  = 1'h0;
@@ -3445,7 +3445,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$320  = ch0_result_status_w1_crc_ok_snapshot;
     if (ch0_result_status_read) begin
-      \$320  = \port$3987$0 [150];
+      \$320  = \port$3984$0 [150];
     end
     if (rst) begin
       \$320  = 1'h0;
@@ -3455,7 +3455,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$321  = ch0_result_status_lc_repeat_snapshot;
     if (ch0_result_status_read) begin
-      \$321  = \port$3987$0 [157];
+      \$321  = \port$3984$0 [157];
     end
     if (rst) begin
       \$321  = 1'h0;
@@ -3465,7 +3465,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$322  = ch0_result_status_lc_skip_snapshot;
     if (ch0_result_status_read) begin
-      \$322  = \port$3987$0 [158];
+      \$322  = \port$3984$0 [158];
     end
     if (rst) begin
       \$322  = 1'h0;
@@ -3475,7 +3475,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$323  = ch0_result_status_lc_zero_snapshot;
     if (ch0_result_status_read) begin
-      \$323  = \port$3987$0 [159];
+      \$323  = \port$3984$0 [159];
     end
     if (rst) begin
       \$323  = 1'h0;
@@ -3485,7 +3485,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$324  = ch0_result_status_spw_mismatch_snapshot;
     if (ch0_result_status_read) begin
-      \$324  = \port$3987$0 [160];
+      \$324  = \port$3984$0 [160];
     end
     if (rst) begin
       \$324  = 1'h0;
@@ -3495,7 +3495,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$325  = ch0_result_status_lc_snapshot;
     if (ch0_result_status_read) begin
-      \$325  = \port$3987$0 [156:151];
+      \$325  = \port$3984$0 [156:151];
     end
     if (rst) begin
       \$325  = 6'h00;
@@ -3515,7 +3515,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$327  = ch0_result_seq_line_delay_snapshot;
     if (ch0_result_status_read) begin
-      \$327  = \port$3987$0 [48:36];
+      \$327  = \port$3984$0 [48:36];
     end
     if (rst) begin
       \$327  = 13'h0000;
@@ -3525,7 +3525,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$328  = ch0_result_w0_lo_data_snapshot;
     if (ch0_result_status_read) begin
-      \$328  = \port$3987$0 [81:50];
+      \$328  = \port$3984$0 [81:50];
     end
     if (rst) begin
       \$328  = 32'd0;
@@ -3535,7 +3535,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$329  = ch0_result_w0_hi_data_snapshot;
     if (ch0_result_status_read) begin
-      \$329  = \port$3987$0 [104:82];
+      \$329  = \port$3984$0 [104:82];
     end
     if (rst) begin
       \$329  = 23'h000000;
@@ -3545,7 +3545,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$330  = ch0_result_w1_lo_data_snapshot;
     if (ch0_result_status_read) begin
-      \$330  = \port$3987$0 [139:108];
+      \$330  = \port$3984$0 [139:108];
     end
     if (rst) begin
       \$330  = 32'd0;
@@ -3555,7 +3555,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$331  = ch0_result_w1_hi_data_snapshot;
     if (ch0_result_status_read) begin
-      \$331  = \port$3987$0 [147:140];
+      \$331  = \port$3984$0 [147:140];
     end
     if (rst) begin
       \$331  = 8'h00;
@@ -3565,7 +3565,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$332  = ch0_result_timestamp_time_snapshot;
     if (ch0_result_status_read) begin
-      \$332  = \port$3987$0 [35:4];
+      \$332  = \port$3984$0 [35:4];
     end
     if (rst) begin
       \$332  = 32'd0;
@@ -3602,7 +3602,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
         11'h08e:
             \$333  = { 16'h0000, ch0__cfg_spw_tolerance, 6'h00, ch0__cfg_spw_check, ch0__cfg_end_check };
         11'h090:
-            \$333  = { 2'h0, \port$3987$0 [156:151], 4'h0, \port$3987$0 [160:157], 1'h0, \port$3987$0 [150:148], 1'h0, \port$3987$0 [107:105], 3'h0, \port$3987$0 [49], \port$3987$0 [3:0] };
+            \$333  = { 2'h0, \port$3984$0 [156:151], 4'h0, \port$3984$0 [160:157], 1'h0, \port$3984$0 [150:148], 1'h0, \port$3984$0 [107:105], 3'h0, \port$3984$0 [49], \port$3984$0 [3:0] };
         11'h091:
             \$333  = { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot };
         11'h092:
@@ -3616,31 +3616,31 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
         11'h096:
             \$333  = ch0_result_timestamp_time_snapshot;
         11'h098:
-            \$333  = \port$3994$0 [31:0];
+            \$333  = \port$3991$0 [31:0];
         11'h099:
-            \$333  = \port$3994$0 [63:32];
+            \$333  = \port$3991$0 [63:32];
         11'h09a:
-            \$333  = \port$3994$0 [95:64];
+            \$333  = \port$3991$0 [95:64];
         11'h09b:
-            \$333  = \port$3994$0 [127:96];
+            \$333  = \port$3991$0 [127:96];
         11'h09c:
-            \$333  = \port$3994$0 [159:128];
+            \$333  = \port$3991$0 [159:128];
         11'h09d:
-            \$333  = \port$3994$0 [191:160];
+            \$333  = \port$3991$0 [191:160];
         11'h09e:
-            \$333  = { 16'h0000, \port$3994$0 [207:192] };
+            \$333  = { 16'h0000, \port$3991$0 [207:192] };
         11'h0c0:
             \$333  = { 7'h00, ch0__ca_write, 1'h0, ch0__ca_count, 1'h0, ch0__ca_address, 5'h00, ch0__ca_slave_id };
         11'h0c1:
             \$333  = 32'd0;
         11'h0c2:
-            \$333  = { 17'h00000, \port$4108$0 [9:3], 1'h0, \port$4108$0 [2:0], 3'h0, ch0__ca_busy };
+            \$333  = { 17'h00000, \port$4105$0 [9:3], 1'h0, \port$4105$0 [2:0], 3'h0, ch0__ca_busy };
         11'h0c3:
-            \$333  = \port$3994$0 [239:208];
+            \$333  = \port$3991$0 [239:208];
         11'h0c4:
-            \$333  = \port$3994$0 [271:240];
+            \$333  = \port$3991$0 [271:240];
         11'h0c5:
-            \$333  = { 16'h0000, \port$3994$0 [287:272] };
+            \$333  = { 16'h0000, \port$3991$0 [287:272] };
         default:
             \$333  = 32'd0;
       endcase
@@ -4024,7 +4024,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$369  = ch1_result_status_status_snapshot;
     if (ch1_result_status_read) begin
-      \$369  = \port$4440$0 [3:0];
+      \$369  = \port$4452$0 [3:0];
     end
     if (rst) begin
       \$369  = 4'h0;
@@ -4099,92 +4099,92 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign read_data = bus__r_data;
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, ch1_irq, ch0_irq };
-  assign ch0__status = \port$3987$0 [3:0];
-  assign ch0__cds = \port$3987$0 [49];
-  assign ch0__word0_ne = \port$3987$0 [105];
-  assign ch0__word0_nw = \port$3987$0 [106];
-  assign ch0__word0_crc_ok = \port$3987$0 [107];
-  assign ch0__word1_ne = \port$3987$0 [148];
-  assign ch0__word1_nw = \port$3987$0 [149];
-  assign ch0__word1_crc_ok = \port$3987$0 [150];
-  assign ch0__lc_repeat = \port$3987$0 [157];
-  assign ch0__lc_skip = \port$3987$0 [158];
-  assign ch0__lc_zero = \port$3987$0 [159];
-  assign ch0__spw_mismatch = \port$3987$0 [160];
-  assign ch0__lc = \port$3987$0 [156:151];
-  assign ch0__line_delay = \port$3987$0 [48:36];
-  assign ch0__word0_position = \port$3987$0 [104:50];
-  assign ch0__word1_position = \port$3987$0 [147:108];
-  assign ch0__timestamp = \port$3987$0 [35:4];
+  assign ch0__status = \port$3984$0 [3:0];
+  assign ch0__cds = \port$3984$0 [49];
+  assign ch0__word0_ne = \port$3984$0 [105];
+  assign ch0__word0_nw = \port$3984$0 [106];
+  assign ch0__word0_crc_ok = \port$3984$0 [107];
+  assign ch0__word1_ne = \port$3984$0 [148];
+  assign ch0__word1_nw = \port$3984$0 [149];
+  assign ch0__word1_crc_ok = \port$3984$0 [150];
+  assign ch0__lc_repeat = \port$3984$0 [157];
+  assign ch0__lc_skip = \port$3984$0 [158];
+  assign ch0__lc_zero = \port$3984$0 [159];
+  assign ch0__spw_mismatch = \port$3984$0 [160];
+  assign ch0__lc = \port$3984$0 [156:151];
+  assign ch0__line_delay = \port$3984$0 [48:36];
+  assign ch0__word0_position = \port$3984$0 [104:50];
+  assign ch0__word1_position = \port$3984$0 [147:108];
+  assign ch0__timestamp = \port$3984$0 [35:4];
   assign ch0__cap_data_bits_w0 = 6'h37;
   assign ch0__cap_data_bits_w1 = 6'h28;
   assign ch0__cap_timer_width = 6'h18;
   assign ch0__cap_counters = 1'h1;
   assign ch0__cap_timestamp = 1'h1;
   assign ch0__cap_register_access = 1'h1;
-  assign ch0__count_crc_word0 = \port$3994$0 [15:0];
-  assign ch0__count_crc_word1 = \port$3994$0 [31:16];
-  assign ch0__count_no_ack = \port$3994$0 [47:32];
-  assign ch0__count_no_start = \port$3994$0 [63:48];
-  assign ch0__count_delay_range = \port$3994$0 [79:64];
-  assign ch0__count_slo_stuck_low = \port$3994$0 [95:80];
-  assign ch0__count_lc_repeat = \port$3994$0 [111:96];
-  assign ch0__count_lc_skip = \port$3994$0 [127:112];
-  assign ch0__count_lc_zero = \port$3994$0 [143:128];
-  assign ch0__count_spw_mismatch = \port$3994$0 [159:144];
-  assign ch0__count_overrun = \port$3994$0 [175:160];
-  assign ch0__count_aborted = \port$3994$0 [191:176];
-  assign ch0__count_no_stop = \port$3994$0 [207:192];
-  assign ch0__ca_status = \port$4108$0 [2:0];
-  assign ch0__ca_bytes_done = \port$4108$0 [9:3];
-  assign ch0__count_ca_crc4_error = \port$3994$0 [223:208];
-  assign ch0__count_ca_no_answer = \port$3994$0 [239:224];
-  assign ch0__count_ca_refused = \port$3994$0 [255:240];
-  assign ch0__count_ca_aborted = \port$3994$0 [271:256];
-  assign ch0__count_ca_data_fault = \port$3994$0 [287:272];
-  assign ch1__status = \port$4440$0 [3:0];
-  assign ch1__cds = \port$4440$0 [49];
-  assign ch1__word0_ne = \port$4440$0 [105];
-  assign ch1__word0_nw = \port$4440$0 [106];
-  assign ch1__word0_crc_ok = \port$4440$0 [107];
-  assign ch1__word1_ne = \port$4440$0 [148];
-  assign ch1__word1_nw = \port$4440$0 [149];
-  assign ch1__word1_crc_ok = \port$4440$0 [150];
-  assign ch1__lc_repeat = \port$4440$0 [157];
-  assign ch1__lc_skip = \port$4440$0 [158];
-  assign ch1__lc_zero = \port$4440$0 [159];
-  assign ch1__spw_mismatch = \port$4440$0 [160];
-  assign ch1__lc = \port$4440$0 [156:151];
-  assign ch1__line_delay = \port$4440$0 [48:36];
-  assign ch1__word0_position = \port$4440$0 [104:50];
-  assign ch1__word1_position = \port$4440$0 [147:108];
-  assign ch1__timestamp = \port$4440$0 [35:4];
+  assign ch0__count_crc_word0 = \port$3991$0 [15:0];
+  assign ch0__count_crc_word1 = \port$3991$0 [31:16];
+  assign ch0__count_no_ack = \port$3991$0 [47:32];
+  assign ch0__count_no_start = \port$3991$0 [63:48];
+  assign ch0__count_delay_range = \port$3991$0 [79:64];
+  assign ch0__count_slo_stuck_low = \port$3991$0 [95:80];
+  assign ch0__count_lc_repeat = \port$3991$0 [111:96];
+  assign ch0__count_lc_skip = \port$3991$0 [127:112];
+  assign ch0__count_lc_zero = \port$3991$0 [143:128];
+  assign ch0__count_spw_mismatch = \port$3991$0 [159:144];
+  assign ch0__count_overrun = \port$3991$0 [175:160];
+  assign ch0__count_aborted = \port$3991$0 [191:176];
+  assign ch0__count_no_stop = \port$3991$0 [207:192];
+  assign ch0__ca_status = \port$4105$0 [2:0];
+  assign ch0__ca_bytes_done = \port$4105$0 [9:3];
+  assign ch0__count_ca_crc4_error = \port$3991$0 [223:208];
+  assign ch0__count_ca_no_answer = \port$3991$0 [239:224];
+  assign ch0__count_ca_refused = \port$3991$0 [255:240];
+  assign ch0__count_ca_aborted = \port$3991$0 [271:256];
+  assign ch0__count_ca_data_fault = \port$3991$0 [287:272];
+  assign ch1__status = \port$4452$0 [3:0];
+  assign ch1__cds = \port$4452$0 [49];
+  assign ch1__word0_ne = \port$4452$0 [105];
+  assign ch1__word0_nw = \port$4452$0 [106];
+  assign ch1__word0_crc_ok = \port$4452$0 [107];
+  assign ch1__word1_ne = \port$4452$0 [148];
+  assign ch1__word1_nw = \port$4452$0 [149];
+  assign ch1__word1_crc_ok = \port$4452$0 [150];
+  assign ch1__lc_repeat = \port$4452$0 [157];
+  assign ch1__lc_skip = \port$4452$0 [158];
+  assign ch1__lc_zero = \port$4452$0 [159];
+  assign ch1__spw_mismatch = \port$4452$0 [160];
+  assign ch1__lc = \port$4452$0 [156:151];
+  assign ch1__line_delay = \port$4452$0 [48:36];
+  assign ch1__word0_position = \port$4452$0 [104:50];
+  assign ch1__word1_position = \port$4452$0 [147:108];
+  assign ch1__timestamp = \port$4452$0 [35:4];
   assign ch1__cap_data_bits_w0 = 6'h37;
   assign ch1__cap_data_bits_w1 = 6'h28;
   assign ch1__cap_timer_width = 6'h18;
   assign ch1__cap_counters = 1'h1;
   assign ch1__cap_timestamp = 1'h1;
   assign ch1__cap_register_access = 1'h1;
-  assign ch1__count_crc_word0 = \port$4447$0 [15:0];
-  assign ch1__count_crc_word1 = \port$4447$0 [31:16];
-  assign ch1__count_no_ack = \port$4447$0 [47:32];
-  assign ch1__count_no_start = \port$4447$0 [63:48];
-  assign ch1__count_delay_range = \port$4447$0 [79:64];
-  assign ch1__count_slo_stuck_low = \port$4447$0 [95:80];
-  assign ch1__count_lc_repeat = \port$4447$0 [111:96];
-  assign ch1__count_lc_skip = \port$4447$0 [127:112];
-  assign ch1__count_lc_zero = \port$4447$0 [143:128];
-  assign ch1__count_spw_mismatch = \port$4447$0 [159:144];
-  assign ch1__count_overrun = \port$4447$0 [175:160];
-  assign ch1__count_aborted = \port$4447$0 [191:176];
-  assign ch1__count_no_stop = \port$4447$0 [207:192];
-  assign ch1__ca_status = \port$4561$0 [2:0];
-  assign ch1__ca_bytes_done = \port$4561$0 [9:3];
-  assign ch1__count_ca_crc4_error = \port$4447$0 [223:208];
-  assign ch1__count_ca_no_answer = \port$4447$0 [239:224];
-  assign ch1__count_ca_refused = \port$4447$0 [255:240];
-  assign ch1__count_ca_aborted = \port$4447$0 [271:256];
-  assign ch1__count_ca_data_fault = \port$4447$0 [287:272];
+  assign ch1__count_crc_word0 = \port$4459$0 [15:0];
+  assign ch1__count_crc_word1 = \port$4459$0 [31:16];
+  assign ch1__count_no_ack = \port$4459$0 [47:32];
+  assign ch1__count_no_start = \port$4459$0 [63:48];
+  assign ch1__count_delay_range = \port$4459$0 [79:64];
+  assign ch1__count_slo_stuck_low = \port$4459$0 [95:80];
+  assign ch1__count_lc_repeat = \port$4459$0 [111:96];
+  assign ch1__count_lc_skip = \port$4459$0 [127:112];
+  assign ch1__count_lc_zero = \port$4459$0 [143:128];
+  assign ch1__count_spw_mismatch = \port$4459$0 [159:144];
+  assign ch1__count_overrun = \port$4459$0 [175:160];
+  assign ch1__count_aborted = \port$4459$0 [191:176];
+  assign ch1__count_no_stop = \port$4459$0 [207:192];
+  assign ch1__ca_status = \port$4573$0 [2:0];
+  assign ch1__ca_bytes_done = \port$4573$0 [9:3];
+  assign ch1__count_ca_crc4_error = \port$4459$0 [223:208];
+  assign ch1__count_ca_no_answer = \port$4459$0 [239:224];
+  assign ch1__count_ca_refused = \port$4459$0 [255:240];
+  assign ch1__count_ca_aborted = \port$4459$0 [271:256];
+  assign ch1__count_ca_data_fault = \port$4459$0 [287:272];
   assign g_irq = 1'h0;
   assign \$79  = \$78 ;
   assign \$81  = \$80 ;
@@ -4442,7 +4442,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__ca_busy, regs__ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period
 , cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort
-, regs__done_count, ma, regs__done, \port$3987$0 , \port$3994$0 , regs__ca_done, \port$4108$0 , ca_rbuf_addr);
+, regs__done_count, ma, regs__done, \port$3984$0 , \port$3991$0 , regs__ca_done, \port$4105$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$28  = 0;
   wire \$1 ;
   wire [16:0] \$2 ;
@@ -4567,12 +4567,12 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_
   wire \ma$164 ;
   input periodic;
   wire periodic;
-  output [160:0] \port$3987$0 ;
-  wire [160:0] \port$3987$0 ;
-  output [287:0] \port$3994$0 ;
-  wire [287:0] \port$3994$0 ;
-  output [9:0] \port$4108$0 ;
-  wire [9:0] \port$4108$0 ;
+  output [160:0] \port$3984$0 ;
+  wire [160:0] \port$3984$0 ;
+  output [287:0] \port$3991$0 ;
+  wire [287:0] \port$3991$0 ;
+  output [9:0] \port$4105$0 ;
+  wire [9:0] \port$4105$0 ;
   wire regs__abort_cycle;
   output regs__busy;
   wire regs__busy;
@@ -4898,9 +4898,9 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_
   assign regs__ca_rbuf_en = ca_rbuf_en;
   assign \ma$164  = ma;
   assign \slo$166  = slo;
-  assign \port$3987$0  = \$4 ;
-  assign \port$3994$0  = \$5 ;
-  assign \port$4108$0  = \$6 ;
+  assign \port$3984$0  = \$4 ;
+  assign \port$3991$0  = \$5 ;
+  assign \port$4105$0  = \$6 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -5752,7 +5752,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$3728$0 (\bit ),
+    .\port$3710$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -5809,7 +5809,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .lc_skip_seen(lc_skip_seen),
     .lc_zero(lc_zero),
     .lc_zero_seen(lc_zero_seen),
-    .\port$1603$0 (\$16 ),
+    .\port$1594$0 (\$16 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -6481,7 +6481,7 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, frame_doubtful, abort, config_ok, end_check, cdm_cycle, idle, receiver_clear, resync, timer_clear, fault, fault_status, faults, ma_run, in_clock, ma_hold, report_frame, report_delay, slo_stuck
+module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, report_delay, frame_doubtful, abort, config_ok, end_check, resync, timer_clear, fault, fault_status, ma_run, in_clock, report_frame, idle, receiver_clear, faults, cdm_cycle, ma_hold, slo_stuck
 , slo_stuck_live, break_over, ack_expired, no_start_expired, delay_over, ma_arm, ma_busy, ma_held, ma_enough, early, locked, slo, frame_done, stopped, slots_full, started, stop_bit, cdm, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$31  = 0;
   wire \$1 ;
@@ -6503,97 +6503,57 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, frame
   wire \$24 ;
   wire \$25 ;
   wire \$26 ;
-  wire \$27 ;
-  wire \$28 ;
-  wire \$29 ;
+  reg \$27 ;
+  reg [2:0] \$28 ;
+  reg \$29 ;
   wire \$3 ;
-  wire \$30 ;
-  wire \$31 ;
-  wire \$32 ;
-  wire \$33 ;
-  wire \$34 ;
-  wire \$35 ;
-  wire \$36 ;
-  wire \$37 ;
-  wire \$38 ;
-  wire \$39 ;
+  reg \$30 ;
+  reg \$31 ;
   wire \$4 ;
-  wire \$40 ;
-  wire \$41 ;
-  wire \$42 ;
-  wire \$43 ;
-  wire \$44 ;
-  wire \$45 ;
-  wire \$46 ;
-  wire \$47 ;
-  wire \$48 ;
-  wire \$49 ;
   wire \$5 ;
-  wire \$50 ;
-  wire \$51 ;
-  wire \$52 ;
-  wire \$53 ;
-  wire \$54 ;
-  wire \$55 ;
-  wire \$56 ;
-  wire \$57 ;
-  wire \$58 ;
-  wire \$59 ;
   wire \$6 ;
-  wire \$60 ;
-  wire \$61 ;
-  wire \$62 ;
-  wire \$63 ;
-  wire \$64 ;
-  wire \$65 ;
-  wire \$66 ;
-  wire \$67 ;
-  wire \$68 ;
-  wire \$69 ;
   wire \$7 ;
-  wire \$70 ;
-  wire \$71 ;
-  wire \$72 ;
-  wire \$73 ;
-  wire \$74 ;
-  wire \$75 ;
-  wire \$76 ;
-  wire \$77 ;
-  wire \$78 ;
-  reg \$79 ;
   wire \$8 ;
-  reg \$80 ;
-  reg [2:0] \$81 ;
-  reg \$82 ;
-  reg \$83 ;
-  reg \$84 ;
-  reg \$85 ;
-  reg \$86 ;
   wire \$9 ;
   input abort;
   wire abort;
+  wire \abort$46 ;
+  wire \abort$5 ;
+  wire aborted;
   input ack_expired;
   wire ack_expired;
-  reg armed = 1'h0;
+  wire \ack_expired$23 ;
+  wire bad_config;
   input break_over;
   wire break_over;
   input cdm;
   wire cdm;
+  wire \cdm$43 ;
   output cdm_cycle;
-  reg cdm_cycle = 1'h0;
+  wire cdm_cycle;
+  wire \cdm_cycle$48 ;
+  reg clear;
   input clk;
   wire clk;
   input config_ok;
   wire config_ok;
+  wire \config_ok$3 ;
   reg [2:0] cycle_fsm_state = 3'h0;
+  reg delay;
+  wire \delay$73 ;
   input delay_over;
   wire delay_over;
+  wire \delay_over$27 ;
   input early;
   wire early;
+  wire \early$17 ;
   input end_check;
   wire end_check;
+  wire fail;
   output fault;
   reg fault;
+  wire \fault$35 ;
+  wire \fault$69 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -6610,8 +6570,31 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, frame
   (* enum_value_1100 = "NO_STOP" *)
   output [3:0] fault_status;
   reg [3:0] fault_status;
+  (* enum_base_type = "Status" *)
+  (* enum_value_0000 = "OK" *)
+  (* enum_value_0001 = "CRC_ERROR_WORD0" *)
+  (* enum_value_0010 = "CRC_ERROR_WORD1" *)
+  (* enum_value_0011 = "CRC_ERROR_BOTH" *)
+  (* enum_value_0100 = "SIGN_OF_LIFE" *)
+  (* enum_value_0101 = "SPW_MISMATCH" *)
+  (* enum_value_0110 = "NO_ACK" *)
+  (* enum_value_0111 = "NO_START" *)
+  (* enum_value_1000 = "DELAY_RANGE" *)
+  (* enum_value_1001 = "SLO_STUCK_LOW" *)
+  (* enum_value_1010 = "ABORTED" *)
+  (* enum_value_1011 = "BAD_CONFIG" *)
+  (* enum_value_1100 = "NO_STOP" *)
+  wire [3:0] \fault_status$37 ;
   output [6:0] faults;
-  reg [6:0] faults;
+  wire [6:0] faults;
+  wire [6:0] \faults$39 ;
+  wire \faults$39.aborted ;
+  wire \faults$39.bad_config ;
+  wire \faults$39.delay_range ;
+  wire \faults$39.no_ack ;
+  wire \faults$39.no_start ;
+  wire \faults$39.no_stop ;
+  wire \faults$39.slo_stuck_low ;
   wire \faults.aborted ;
   wire \faults.bad_config ;
   wire \faults.delay_range ;
@@ -6620,19 +6603,27 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, frame
   wire \faults.no_stop ;
   wire \faults.slo_stuck_low ;
   reg first_clock = 1'h0;
+  (* init = 1'h0 *)
+  wire \first_clock$1 ;
+  wire frame;
   input frame_done;
   wire frame_done;
   input frame_doubtful;
   wire frame_doubtful;
+  reg framing;
+  reg holding;
   output idle;
   reg idle = 1'h0;
+  (* init = 1'h0 *)
+  wire \idle$41 ;
   output in_clock;
   reg in_clock;
   input locked;
   wire locked;
-  reg locked_seen = 1'h0;
+  wire \locked$15 ;
   input ma_arm;
   wire ma_arm;
+  wire \ma_arm$13 ;
   input ma_busy;
   wire ma_busy;
   input ma_enough;
@@ -6640,48 +6631,106 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, frame
   input ma_held;
   wire ma_held;
   output ma_hold;
-  reg ma_hold;
+  wire ma_hold;
+  wire \ma_hold$50 ;
   output ma_run;
   reg ma_run;
   input no_start_expired;
   wire no_start_expired;
+  wire \no_start_expired$25 ;
   reg pause = 1'h0;
+  wire ready;
   output receiver_clear;
   reg receiver_clear = 1'h1;
   output report_delay;
-  reg report_delay;
+  wire report_delay;
+  wire \report_delay$33 ;
   output report_frame;
   reg report_frame;
+  wire \report_frame$31 ;
   input request;
   wire request;
   output restart_timer;
   wire restart_timer;
+  wire \restart_timer$29 ;
   output resync;
   reg resync;
   input rst;
   wire rst;
   input slo;
   wire slo;
+  wire \slo$44 ;
+  wire \slo$7 ;
   input slo_stuck;
   wire slo_stuck;
+  wire \slo_stuck$45 ;
+  wire \slo_stuck$9 ;
   input slo_stuck_live;
   wire slo_stuck_live;
+  wire \slo_stuck_live$11 ;
   input slots_full;
   wire slots_full;
+  wire \slots_full$21 ;
   input started;
   wire started;
+  wire \started$19 ;
+  (* enum_base_type = "Status" *)
+  (* enum_value_0000 = "OK" *)
+  (* enum_value_0001 = "CRC_ERROR_WORD0" *)
+  (* enum_value_0010 = "CRC_ERROR_WORD1" *)
+  (* enum_value_0011 = "CRC_ERROR_BOTH" *)
+  (* enum_value_0100 = "SIGN_OF_LIFE" *)
+  (* enum_value_0101 = "SPW_MISMATCH" *)
+  (* enum_value_0110 = "NO_ACK" *)
+  (* enum_value_0111 = "NO_START" *)
+  (* enum_value_1000 = "DELAY_RANGE" *)
+  (* enum_value_1001 = "SLO_STUCK_LOW" *)
+  (* enum_value_1010 = "ABORTED" *)
+  (* enum_value_1011 = "BAD_CONFIG" *)
+  (* enum_value_1100 = "NO_STOP" *)
+  wire [3:0] status;
+  (* enum_base_type = "Status" *)
+  (* enum_value_0000 = "OK" *)
+  (* enum_value_0001 = "CRC_ERROR_WORD0" *)
+  (* enum_value_0010 = "CRC_ERROR_WORD1" *)
+  (* enum_value_0011 = "CRC_ERROR_BOTH" *)
+  (* enum_value_0100 = "SIGN_OF_LIFE" *)
+  (* enum_value_0101 = "SPW_MISMATCH" *)
+  (* enum_value_0110 = "NO_ACK" *)
+  (* enum_value_0111 = "NO_START" *)
+  (* enum_value_1000 = "DELAY_RANGE" *)
+  (* enum_value_1001 = "SLO_STUCK_LOW" *)
+  (* enum_value_1010 = "ABORTED" *)
+  (* enum_value_1011 = "BAD_CONFIG" *)
+  (* enum_value_1100 = "NO_STOP" *)
+  wire [3:0] \status$74 ;
   input stop_bit;
   wire stop_bit;
   input stopped;
   wire stopped;
+  wire stuck_low;
   output timer_clear;
   reg timer_clear;
-  assign \$14  = locked & \$13 ;
-  assign \$15  = \$14  & delay_over;
-  assign \$16  = ~ started;
-  assign \$17  = locked_seen & \$16 ;
-  assign \$18  = no_start_expired | slots_full;
-  assign \$19  = \$17  & \$18 ;
+  reg watch;
+  assign \$1  = ma_busy | abort;
+  assign \$2  = ~ ma_enough;
+  assign \$3  = restart_timer | abort;
+  assign \$4  = ~ end_check;
+  assign \$5  = ~ ma_enough;
+  assign \$6  = ~ end_check;
+  assign \$7  = ma_busy | abort;
+  assign \$8  = ~ ma_busy;
+  assign \$9  = \$8  | ma_held;
+  assign \$10  = \$9  & slo;
+  assign \$11  = ! cycle_fsm_state;
+  assign \$12  = cycle_fsm_state == 1'h1;
+  assign \$13  = cycle_fsm_state == 2'h2;
+  assign \$14  = cycle_fsm_state == 2'h3;
+  assign \$15  = cycle_fsm_state == 3'h4;
+  assign \$16  = cycle_fsm_state == 3'h5;
+  assign \$17  = cycle_fsm_state == 3'h6;
+  assign \$18  = cycle_fsm_state == 3'h7;
+  assign \$19  = ma_busy | abort;
   assign \$20  = ~ end_check;
   assign \$21  = ma_busy | abort;
   assign \$22  = cdm_cycle & abort;
@@ -6689,454 +6738,67 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, frame
   assign \$24  = ~ ma_busy;
   assign \$25  = \$24  | ma_held;
   assign \$26  = \$25  & slo;
-  assign \$27  = ~ locked_seen;
-  assign \$28  = locked & \$27 ;
-  assign restart_timer = ma_arm | \$28 ;
-  assign \$29  = ma_busy | abort;
-  assign \$30  = ~ config_ok;
-  assign \$31  = first_clock & \$30 ;
-  assign \$32  = first_clock ? slo_stuck_live : slo_stuck;
-  assign \$33  = ~ ma_enough;
-  assign \$34  = ~ abort;
-  assign \$35  = cdm_cycle & \$34 ;
-  assign \$36  = restart_timer | abort;
-  assign \$37  = armed & early;
-  assign \$38  = ~ locked_seen;
-  assign \$39  = armed & \$38 ;
-  assign \$40  = ~ locked;
-  assign \$41  = \$39  & \$40 ;
-  assign \$42  = \$41  & ack_expired;
-  assign \$43  = ~ locked_seen;
-  assign \$44  = locked & \$43 ;
-  assign \$45  = \$44  & delay_over;
-  assign \$46  = ~ started;
-  assign \$47  = locked_seen & \$46 ;
-  assign \$48  = no_start_expired | slots_full;
-  assign \$49  = \$47  & \$48 ;
-  assign \$50  = ~ end_check;
-  assign \$51  = ~ ma_enough;
-  assign \$52  = ~ abort;
-  assign \$53  = cdm_cycle & \$52 ;
-  assign \$54  = ~ end_check;
-  assign \$55  = slo | slo_stuck;
-  assign \$56  = \$55  | abort;
-  assign \$57  = ~ \$56 ;
-  assign \$58  = cdm_cycle & \$57 ;
-  assign \$59  = ma_busy | abort;
-  assign \$60  = slo | slo_stuck;
-  assign \$61  = \$60  | abort;
-  assign \$62  = ~ \$61 ;
-  assign \$63  = cdm_cycle & \$62 ;
-  assign \$64  = slo | slo_stuck;
-  assign \$65  = \$64  | abort;
-  assign \$66  = ~ \$65 ;
-  assign \$67  = cdm_cycle & \$66 ;
-  assign \$68  = ~ ma_busy;
-  assign \$69  = \$68  | ma_held;
-  assign \$70  = \$69  & slo;
-  assign \$71  = ! cycle_fsm_state;
-  assign \$72  = cycle_fsm_state == 1'h1;
-  assign \$73  = cycle_fsm_state == 2'h2;
-  assign \$74  = cycle_fsm_state == 2'h3;
-  assign \$75  = cycle_fsm_state == 3'h4;
-  assign \$76  = cycle_fsm_state == 3'h5;
-  assign \$77  = cycle_fsm_state == 3'h6;
-  assign \$78  = cycle_fsm_state == 3'h7;
   always @(posedge clk)
-    cdm_cycle <= \$79 ;
+    first_clock <= \$27 ;
   always @(posedge clk)
-    first_clock <= \$80 ;
+    cycle_fsm_state <= \$28 ;
   always @(posedge clk)
-    cycle_fsm_state <= \$81 ;
+    idle <= \$29 ;
   always @(posedge clk)
-    idle <= \$82 ;
+    receiver_clear <= \$30 ;
   always @(posedge clk)
-    receiver_clear <= \$83 ;
-  always @(posedge clk)
-    armed <= \$84 ;
-  always @(posedge clk)
-    locked_seen <= \$85 ;
-  always @(posedge clk)
-    pause <= \$86 ;
-  assign \$1  = ma_busy | abort;
-  assign \$2  = ~ config_ok;
-  assign \$3  = first_clock & \$2 ;
-  assign \$4  = first_clock ? slo_stuck_live : slo_stuck;
-  assign \$5  = ~ locked_seen;
-  assign \$6  = locked & \$5 ;
-  assign \$7  = armed & early;
-  assign \$8  = ~ locked_seen;
-  assign \$9  = armed & \$8 ;
-  assign \$10  = ~ locked;
-  assign \$11  = \$9  & \$10 ;
-  assign \$12  = \$11  & ack_expired;
-  assign \$13  = ~ locked_seen;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
-    \$79  = cdm_cycle;
-    if (idle) begin
-      \$79  = cdm;
-    end
-    if (rst) begin
-      \$79  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
-    \$80  = idle;
-    if (rst) begin
-      \$80  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
-    \$81  = cycle_fsm_state;
-    (* full_case = 32'd1 *)
-    casez (cycle_fsm_state)
-      3'h0:
-          if (\$1 ) begin
-          end else if (break_over) begin
-            \$81  = 3'h1;
-          end
-      3'h1:
-          if (abort) begin
-            \$81  = 3'h0;
-          end else if (request) begin
-            \$81  = 3'h2;
-          end
-      3'h2:
-          if (\$3 ) begin
-            \$81  = 3'h1;
-            if (abort) begin
-              \$81  = 3'h0;
-            end
-          end else if (abort) begin
-            \$81  = 3'h0;
-          end else if (slo) begin
-            \$81  = 3'h3;
-          end else if (\$4 ) begin
-            \$81  = 3'h0;
-          end
-      3'h3:
-          if (abort) begin
-            \$81  = 3'h0;
-          end else if (frame_done) begin
-            \$81  = 3'h4;
-          end else if (\$7 ) begin
-            \$81  = 3'h0;
-          end else if (\$12 ) begin
-            \$81  = 3'h0;
-          end else if (\$15 ) begin
-            \$81  = 3'h0;
-          end else if (\$19 ) begin
-            \$81  = 3'h0;
-          end
-      3'h4:
-          if (abort) begin
-            (* full_case = 32'd1 *)
-            if (end_check) begin
-              \$81  = 3'h0;
-            end else begin
-              \$81  = 3'h0;
-            end
-          end else if (stopped) begin
-            (* full_case = 32'd1 *)
-            if (\$20 ) begin
-              (* full_case = 32'd1 *)
-              if (pause) begin
-                \$81  = 3'h5;
-              end else begin
-                \$81  = 3'h6;
-              end
-            end else if (stop_bit) begin
-              \$81  = 3'h0;
-            end else begin
-              \$81  = 3'h7;
-            end
-          end
-      3'h5:
-          if (\$21 ) begin
-          end else if (break_over) begin
-            \$81  = 3'h1;
-          end
-      3'h6:
-          if (\$22 ) begin
-            \$81  = 3'h0;
-          end else if (\$23 ) begin
-            \$81  = 3'h1;
-          end
-      3'h7:
-          if (abort) begin
-            \$81  = 3'h0;
-          end else if (\$26 ) begin
-            (* full_case = 32'd1 *)
-            if (pause) begin
-              \$81  = 3'h5;
-            end else if (cdm_cycle) begin
-              \$81  = 3'h6;
-            end else begin
-              \$81  = 3'h1;
-            end
-          end else if (slo_stuck) begin
-            \$81  = 3'h0;
-          end
-    endcase
-    if (rst) begin
-      \$81  = 3'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
-    \$82  = idle;
-    (* full_case = 32'd1 *)
-    casez (cycle_fsm_state)
-      3'h0:
-          if (\$1 ) begin
-          end else if (break_over) begin
-            \$82  = 1'h1;
-          end
-      3'h1:
-          if (abort) begin
-            \$82  = 1'h0;
-          end else if (request) begin
-            \$82  = 1'h0;
-          end
-      3'h2:
-          if (\$3 ) begin
-            \$82  = 1'h1;
-            if (abort) begin
-              \$82  = 1'h0;
-            end
-          end else if (abort) begin
-            \$82  = 1'h0;
-          end else if (slo) begin
-            \$82  = 1'h0;
-          end else if (\$4 ) begin
-            \$82  = 1'h0;
-          end
-      3'h3:
-          if (abort) begin
-            \$82  = 1'h0;
-          end else if (frame_done) begin
-            \$82  = 1'h0;
-          end else if (\$7 ) begin
-            \$82  = 1'h0;
-          end else if (\$12 ) begin
-            \$82  = 1'h0;
-          end else if (\$15 ) begin
-            \$82  = 1'h0;
-          end else if (\$19 ) begin
-            \$82  = 1'h0;
-          end
-      3'h4:
-          if (abort) begin
-            (* full_case = 32'd1 *)
-            if (end_check) begin
-              \$82  = 1'h0;
-            end else begin
-              \$82  = 1'h0;
-            end
-          end else if (stopped) begin
-            (* full_case = 32'd1 *)
-            if (\$20 ) begin
-              (* full_case = 32'd1 *)
-              if (pause) begin
-                \$82  = 1'h0;
-              end else begin
-                \$82  = 1'h0;
-              end
-            end else if (stop_bit) begin
-              \$82  = 1'h0;
-            end else begin
-              \$82  = 1'h0;
-            end
-          end
-      3'h5:
-          if (\$21 ) begin
-          end else if (break_over) begin
-            \$82  = 1'h1;
-          end
-      3'h6:
-          if (\$22 ) begin
-            \$82  = 1'h0;
-          end else if (\$23 ) begin
-            \$82  = 1'h1;
-          end
-      3'h7:
-          if (abort) begin
-            \$82  = 1'h0;
-          end else if (\$26 ) begin
-            (* full_case = 32'd1 *)
-            if (pause) begin
-              \$82  = 1'h0;
-            end else if (cdm_cycle) begin
-              \$82  = 1'h0;
-            end else begin
-              \$82  = 1'h1;
-            end
-          end else if (slo_stuck) begin
-            \$82  = 1'h0;
-          end
-    endcase
-    if (rst) begin
-      \$82  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
-    \$83  = receiver_clear;
-    (* full_case = 32'd1 *)
-    casez (cycle_fsm_state)
-      3'h0:
-          if (\$1 ) begin
-          end else if (break_over) begin
-            \$83  = 1'h1;
-          end
-      3'h1:
-          if (abort) begin
-            \$83  = 1'h1;
-          end else if (request) begin
-            \$83  = 1'h1;
-          end
-      3'h2:
-          if (\$3 ) begin
-            \$83  = 1'h1;
-            if (abort) begin
-              \$83  = 1'h1;
-            end
-          end else if (abort) begin
-            \$83  = 1'h1;
-          end else if (slo) begin
-            \$83  = 1'h0;
-          end else if (\$4 ) begin
-            \$83  = 1'h1;
-          end
-      3'h3:
-          if (abort) begin
-            \$83  = 1'h1;
-          end else if (frame_done) begin
-            \$83  = 1'h0;
-          end else if (\$7 ) begin
-            \$83  = 1'h1;
-          end else if (\$12 ) begin
-            \$83  = 1'h1;
-          end else if (\$15 ) begin
-            \$83  = 1'h1;
-          end else if (\$19 ) begin
-            \$83  = 1'h1;
-          end
-      3'h4:
-          if (abort) begin
-            (* full_case = 32'd1 *)
-            if (end_check) begin
-              \$83  = 1'h1;
-            end else begin
-              \$83  = 1'h1;
-            end
-          end else if (stopped) begin
-            (* full_case = 32'd1 *)
-            if (\$20 ) begin
-              (* full_case = 32'd1 *)
-              if (pause) begin
-                \$83  = 1'h1;
-              end else begin
-                \$83  = 1'h0;
-              end
-            end else if (stop_bit) begin
-              \$83  = 1'h1;
-            end else begin
-              \$83  = 1'h0;
-            end
-          end
-      3'h5:
-          if (\$21 ) begin
-          end else if (break_over) begin
-            \$83  = 1'h1;
-          end
-      3'h6:
-          if (\$22 ) begin
-            \$83  = 1'h1;
-          end else if (\$23 ) begin
-            \$83  = 1'h1;
-          end
-      3'h7:
-          if (abort) begin
-            \$83  = 1'h1;
-          end else if (\$26 ) begin
-            (* full_case = 32'd1 *)
-            if (pause) begin
-              \$83  = 1'h1;
-            end else if (cdm_cycle) begin
-              \$83  = 1'h0;
-            end else begin
-              \$83  = 1'h1;
-            end
-          end else if (slo_stuck) begin
-            \$83  = 1'h1;
-          end
-    endcase
-    if (rst) begin
-      \$83  = 1'h1;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
-    \$84  = armed;
-    casez (cycle_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          \$84  = 1'h0;
-      3'h3:
-          if (ma_arm) begin
-            \$84  = 1'h1;
-          end
-    endcase
-    if (rst) begin
-      \$84  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
-    \$85  = locked_seen;
-    casez (cycle_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          \$85  = 1'h0;
-      3'h3:
-          if (\$6 ) begin
-            \$85  = 1'h1;
-          end
-    endcase
-    if (rst) begin
-      \$85  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
-    \$86  = pause;
-    casez (cycle_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h3:
-          if (abort) begin
-          end else if (frame_done) begin
-            \$86  = frame_doubtful;
-          end
-    endcase
-    if (rst) begin
-      \$86  = 1'h0;
-    end
-  end
+    pause <= \$31 ;
+  \biss_master_axil.ch0.core.controller.cdm_hold  cdm_hold (
+    .abort(abort),
+    .cdm(cdm),
+    .cdm_cycle(cdm_cycle),
+    .clk(clk),
+    .framing(framing),
+    .holding(holding),
+    .idle(idle),
+    .ma_hold(ma_hold),
+    .rst(rst),
+    .slo(slo),
+    .slo_stuck(slo_stuck)
+  );
+  \biss_master_axil.ch0.core.controller.line_faults  line_faults (
+    .ack_expired(ack_expired),
+    .clear(clear),
+    .clk(clk),
+    .delay(\delay$73 ),
+    .delay_over(delay_over),
+    .early(early),
+    .fault(\fault$69 ),
+    .locked(locked),
+    .ma_arm(ma_arm),
+    .no_start_expired(no_start_expired),
+    .restart_timer(restart_timer),
+    .rst(rst),
+    .slots_full(slots_full),
+    .started(started),
+    .status(\status$74 ),
+    .watch(watch)
+  );
+  \biss_master_axil.ch0.core.controller.ready_check  ready_check (
+    .abort(abort),
+    .aborted(aborted),
+    .bad_config(bad_config),
+    .config_ok(config_ok),
+    .first_clock(first_clock),
+    .ready(ready),
+    .slo(slo),
+    .slo_stuck(slo_stuck),
+    .slo_stuck_live(slo_stuck_live),
+    .stuck_low(stuck_low)
+  );
+  \biss_master_axil.ch0.core.controller.report  report (
+    .delay(delay),
+    .fault(fault),
+    .fault_status(fault_status),
+    .faults(faults),
+    .report_delay(report_delay),
+    .report_frame(report_frame)
+  );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     resync = 1'h0;
@@ -7151,7 +6813,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, frame
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
       3'h0:
-          if (\$29 ) begin
+          if (\$1 ) begin
             timer_clear = 1'h1;
           end
       3'h1:
@@ -7159,14 +6821,14 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, frame
       3'h2:
           timer_clear = 1'h1;
       3'h3:
-          if (\$36 ) begin
+          if (\$3 ) begin
             timer_clear = 1'h1;
           end
       3'h4:
           if (abort) begin
             timer_clear = 1'h1;
           end else if (stopped) begin
-            if (\$54 ) begin
+            if (\$6 ) begin
               if (pause) begin
                 timer_clear = 1'h1;
               end
@@ -7175,7 +6837,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, frame
             end
           end
       3'h5:
-          if (\$59 ) begin
+          if (\$7 ) begin
             timer_clear = 1'h1;
           end
       3'h6:
@@ -7183,13 +6845,25 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, frame
       3'h7:
           if (abort) begin
             timer_clear = 1'h1;
-          end else if (\$70 ) begin
+          end else if (\$10 ) begin
             if (pause) begin
               timer_clear = 1'h1;
             end
           end else if (slo_stuck) begin
             timer_clear = 1'h1;
           end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
+    clear = 1'h0;
+    casez (cycle_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          clear = 1'h1;
     endcase
   end
   always @* begin
@@ -7202,25 +6876,19 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, frame
       3'h1:
           /* empty */;
       3'h2:
-          if (\$31 ) begin
+          if (bad_config) begin
             fault = 1'h1;
-          end else if (abort) begin
+          end else if (aborted) begin
             fault = 1'h1;
-          end else if (slo) begin
-          end else if (\$32 ) begin
+          end else if (ready) begin
+          end else if (stuck_low) begin
             fault = 1'h1;
           end
       3'h3:
           if (abort) begin
             fault = 1'h1;
           end else if (frame_done) begin
-          end else if (\$37 ) begin
-            fault = 1'h1;
-          end else if (\$42 ) begin
-            fault = 1'h1;
-          end else if (\$45 ) begin
-            fault = 1'h1;
-          end else if (\$49 ) begin
+          end else if (\fault$69 ) begin
             fault = 1'h1;
           end
       3'h4:
@@ -7229,7 +6897,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, frame
               fault = 1'h1;
             end
           end else if (stopped) begin
-            if (\$54 ) begin
+            if (\$6 ) begin
             end else if (stop_bit) begin
               fault = 1'h1;
             end
@@ -7241,7 +6909,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, frame
       3'h7:
           if (abort) begin
             fault = 1'h1;
-          end else if (\$70 ) begin
+          end else if (\$10 ) begin
           end else if (slo_stuck) begin
             fault = 1'h1;
           end
@@ -7257,26 +6925,20 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, frame
       3'h1:
           /* empty */;
       3'h2:
-          if (\$31 ) begin
+          if (bad_config) begin
             fault_status = 4'hb;
-          end else if (abort) begin
+          end else if (aborted) begin
             fault_status = 4'ha;
-          end else if (slo) begin
-          end else if (\$32 ) begin
+          end else if (ready) begin
+          end else if (stuck_low) begin
             fault_status = 4'h9;
           end
       3'h3:
           if (abort) begin
             fault_status = 4'ha;
           end else if (frame_done) begin
-          end else if (\$37 ) begin
-            fault_status = 4'h8;
-          end else if (\$42 ) begin
-            fault_status = 4'h6;
-          end else if (\$45 ) begin
-            fault_status = 4'h8;
-          end else if (\$49 ) begin
-            fault_status = 4'h7;
+          end else if (\fault$69 ) begin
+            fault_status = \status$74 ;
           end
       3'h4:
           if (abort) begin
@@ -7284,7 +6946,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, frame
               fault_status = 4'ha;
             end
           end else if (stopped) begin
-            if (\$54 ) begin
+            if (\$6 ) begin
             end else if (stop_bit) begin
               fault_status = 4'hc;
             end
@@ -7296,64 +6958,9 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, frame
       3'h7:
           if (abort) begin
             fault_status = 4'ha;
-          end else if (\$70 ) begin
+          end else if (\$10 ) begin
           end else if (slo_stuck) begin
             fault_status = 4'h9;
-          end
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
-    faults = 7'h00;
-    (* full_case = 32'd1 *)
-    casez (cycle_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          if (\$31 ) begin
-            faults[5] = 1'h1;
-          end else if (abort) begin
-            faults[4] = 1'h1;
-          end else if (slo) begin
-          end else if (\$32 ) begin
-            faults[3] = 1'h1;
-          end
-      3'h3:
-          if (abort) begin
-            faults[4] = 1'h1;
-          end else if (frame_done) begin
-          end else if (\$37 ) begin
-            faults[2] = 1'h1;
-          end else if (\$42 ) begin
-            faults[0] = 1'h1;
-          end else if (\$45 ) begin
-            faults[2] = 1'h1;
-          end else if (\$49 ) begin
-            faults[1] = 1'h1;
-          end
-      3'h4:
-          if (abort) begin
-            if (end_check) begin
-              faults[4] = 1'h1;
-            end
-          end else if (stopped) begin
-            if (\$54 ) begin
-            end else if (stop_bit) begin
-              faults[6] = 1'h1;
-            end
-          end
-      3'h5:
-          /* empty */;
-      3'h6:
-          /* empty */;
-      3'h7:
-          if (abort) begin
-            faults[4] = 1'h1;
-          end else if (\$70 ) begin
-          end else if (slo_stuck) begin
-            faults[3] = 1'h1;
           end
     endcase
   end
@@ -7368,9 +6975,9 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, frame
       3'h2:
           /* empty */;
       3'h3:
-          ma_run = \$33 ;
+          ma_run = \$2 ;
       3'h4:
-          ma_run = \$51 ;
+          ma_run = \$5 ;
     endcase
   end
   always @* begin
@@ -7389,8 +6996,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, frame
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
-    ma_hold = 1'h0;
-    (* full_case = 32'd1 *)
+    watch = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
           /* empty */;
@@ -7399,15 +7005,23 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, frame
       3'h2:
           /* empty */;
       3'h3:
-          ma_hold = \$35 ;
+          watch = 1'h1;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
+    framing = 1'h0;
+    casez (cycle_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h3:
+          framing = 1'h1;
       3'h4:
-          ma_hold = \$53 ;
-      3'h5:
-          ma_hold = \$58 ;
-      3'h6:
-          ma_hold = \$63 ;
-      3'h7:
-          ma_hold = \$67 ;
+          framing = 1'h1;
     endcase
   end
   always @* begin
@@ -7424,7 +7038,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, frame
       3'h3:
           if (abort) begin
           end else if (frame_done) begin
-            if (\$50 ) begin
+            if (\$4 ) begin
               report_frame = 1'h1;
             end
           end
@@ -7436,15 +7050,14 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, frame
           /* empty */;
       3'h7:
           if (abort) begin
-          end else if (\$70 ) begin
+          end else if (\$10 ) begin
             report_frame = 1'h1;
           end
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
-    report_delay = 1'h0;
-    (* full_case = 32'd1 *)
+    delay = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
           /* empty */;
@@ -7455,27 +7068,364 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, frame
       3'h3:
           if (abort) begin
           end else if (frame_done) begin
-            if (\$50 ) begin
-              report_delay = 1'h1;
-            end
-          end else if (\$37 ) begin
-          end else if (\$42 ) begin
-          end else if (\$45 ) begin
-            report_delay = 1'h1;
-          end
-      3'h4:
-          /* empty */;
-      3'h5:
-          /* empty */;
-      3'h6:
-          /* empty */;
-      3'h7:
-          if (abort) begin
-          end else if (\$70 ) begin
-            report_delay = 1'h1;
+          end else if (\fault$69 ) begin
+            delay = \delay$73 ;
           end
     endcase
   end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
+    holding = 1'h0;
+    (* full_case = 32'd1 *)
+    casez (cycle_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h3:
+          /* empty */;
+      3'h4:
+          /* empty */;
+      3'h5:
+          holding = 1'h1;
+      3'h6:
+          holding = 1'h1;
+      3'h7:
+          holding = 1'h1;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
+    \$27  = idle;
+    if (rst) begin
+      \$27  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
+    \$28  = cycle_fsm_state;
+    (* full_case = 32'd1 *)
+    casez (cycle_fsm_state)
+      3'h0:
+          if (\$19 ) begin
+          end else if (break_over) begin
+            \$28  = 3'h1;
+          end
+      3'h1:
+          if (abort) begin
+            \$28  = 3'h0;
+          end else if (request) begin
+            \$28  = 3'h2;
+          end
+      3'h2:
+          if (bad_config) begin
+            \$28  = 3'h1;
+            if (abort) begin
+              \$28  = 3'h0;
+            end
+          end else if (aborted) begin
+            \$28  = 3'h0;
+          end else if (ready) begin
+            \$28  = 3'h3;
+          end else if (stuck_low) begin
+            \$28  = 3'h0;
+          end
+      3'h3:
+          if (abort) begin
+            \$28  = 3'h0;
+          end else if (frame_done) begin
+            \$28  = 3'h4;
+          end else if (\fault$69 ) begin
+            \$28  = 3'h0;
+          end
+      3'h4:
+          if (abort) begin
+            (* full_case = 32'd1 *)
+            if (end_check) begin
+              \$28  = 3'h0;
+            end else begin
+              \$28  = 3'h0;
+            end
+          end else if (stopped) begin
+            (* full_case = 32'd1 *)
+            if (\$20 ) begin
+              (* full_case = 32'd1 *)
+              if (pause) begin
+                \$28  = 3'h5;
+              end else begin
+                \$28  = 3'h6;
+              end
+            end else if (stop_bit) begin
+              \$28  = 3'h0;
+            end else begin
+              \$28  = 3'h7;
+            end
+          end
+      3'h5:
+          if (\$21 ) begin
+          end else if (break_over) begin
+            \$28  = 3'h1;
+          end
+      3'h6:
+          if (\$22 ) begin
+            \$28  = 3'h0;
+          end else if (\$23 ) begin
+            \$28  = 3'h1;
+          end
+      3'h7:
+          if (abort) begin
+            \$28  = 3'h0;
+          end else if (\$26 ) begin
+            (* full_case = 32'd1 *)
+            if (pause) begin
+              \$28  = 3'h5;
+            end else if (cdm_cycle) begin
+              \$28  = 3'h6;
+            end else begin
+              \$28  = 3'h1;
+            end
+          end else if (slo_stuck) begin
+            \$28  = 3'h0;
+          end
+    endcase
+    if (rst) begin
+      \$28  = 3'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
+    \$29  = idle;
+    (* full_case = 32'd1 *)
+    casez (cycle_fsm_state)
+      3'h0:
+          if (\$19 ) begin
+          end else if (break_over) begin
+            \$29  = 1'h1;
+          end
+      3'h1:
+          if (abort) begin
+            \$29  = 1'h0;
+          end else if (request) begin
+            \$29  = 1'h0;
+          end
+      3'h2:
+          if (bad_config) begin
+            \$29  = 1'h1;
+            if (abort) begin
+              \$29  = 1'h0;
+            end
+          end else if (aborted) begin
+            \$29  = 1'h0;
+          end else if (ready) begin
+            \$29  = 1'h0;
+          end else if (stuck_low) begin
+            \$29  = 1'h0;
+          end
+      3'h3:
+          if (abort) begin
+            \$29  = 1'h0;
+          end else if (frame_done) begin
+            \$29  = 1'h0;
+          end else if (\fault$69 ) begin
+            \$29  = 1'h0;
+          end
+      3'h4:
+          if (abort) begin
+            (* full_case = 32'd1 *)
+            if (end_check) begin
+              \$29  = 1'h0;
+            end else begin
+              \$29  = 1'h0;
+            end
+          end else if (stopped) begin
+            (* full_case = 32'd1 *)
+            if (\$20 ) begin
+              (* full_case = 32'd1 *)
+              if (pause) begin
+                \$29  = 1'h0;
+              end else begin
+                \$29  = 1'h0;
+              end
+            end else if (stop_bit) begin
+              \$29  = 1'h0;
+            end else begin
+              \$29  = 1'h0;
+            end
+          end
+      3'h5:
+          if (\$21 ) begin
+          end else if (break_over) begin
+            \$29  = 1'h1;
+          end
+      3'h6:
+          if (\$22 ) begin
+            \$29  = 1'h0;
+          end else if (\$23 ) begin
+            \$29  = 1'h1;
+          end
+      3'h7:
+          if (abort) begin
+            \$29  = 1'h0;
+          end else if (\$26 ) begin
+            (* full_case = 32'd1 *)
+            if (pause) begin
+              \$29  = 1'h0;
+            end else if (cdm_cycle) begin
+              \$29  = 1'h0;
+            end else begin
+              \$29  = 1'h1;
+            end
+          end else if (slo_stuck) begin
+            \$29  = 1'h0;
+          end
+    endcase
+    if (rst) begin
+      \$29  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
+    \$30  = receiver_clear;
+    (* full_case = 32'd1 *)
+    casez (cycle_fsm_state)
+      3'h0:
+          if (\$19 ) begin
+          end else if (break_over) begin
+            \$30  = 1'h1;
+          end
+      3'h1:
+          if (abort) begin
+            \$30  = 1'h1;
+          end else if (request) begin
+            \$30  = 1'h1;
+          end
+      3'h2:
+          if (bad_config) begin
+            \$30  = 1'h1;
+            if (abort) begin
+              \$30  = 1'h1;
+            end
+          end else if (aborted) begin
+            \$30  = 1'h1;
+          end else if (ready) begin
+            \$30  = 1'h0;
+          end else if (stuck_low) begin
+            \$30  = 1'h1;
+          end
+      3'h3:
+          if (abort) begin
+            \$30  = 1'h1;
+          end else if (frame_done) begin
+            \$30  = 1'h0;
+          end else if (\fault$69 ) begin
+            \$30  = 1'h1;
+          end
+      3'h4:
+          if (abort) begin
+            (* full_case = 32'd1 *)
+            if (end_check) begin
+              \$30  = 1'h1;
+            end else begin
+              \$30  = 1'h1;
+            end
+          end else if (stopped) begin
+            (* full_case = 32'd1 *)
+            if (\$20 ) begin
+              (* full_case = 32'd1 *)
+              if (pause) begin
+                \$30  = 1'h1;
+              end else begin
+                \$30  = 1'h0;
+              end
+            end else if (stop_bit) begin
+              \$30  = 1'h1;
+            end else begin
+              \$30  = 1'h0;
+            end
+          end
+      3'h5:
+          if (\$21 ) begin
+          end else if (break_over) begin
+            \$30  = 1'h1;
+          end
+      3'h6:
+          if (\$22 ) begin
+            \$30  = 1'h1;
+          end else if (\$23 ) begin
+            \$30  = 1'h1;
+          end
+      3'h7:
+          if (abort) begin
+            \$30  = 1'h1;
+          end else if (\$26 ) begin
+            (* full_case = 32'd1 *)
+            if (pause) begin
+              \$30  = 1'h1;
+            end else if (cdm_cycle) begin
+              \$30  = 1'h0;
+            end else begin
+              \$30  = 1'h1;
+            end
+          end else if (slo_stuck) begin
+            \$30  = 1'h1;
+          end
+    endcase
+    if (rst) begin
+      \$30  = 1'h1;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
+    \$31  = pause;
+    casez (cycle_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h3:
+          if (abort) begin
+          end else if (frame_done) begin
+            \$31  = frame_doubtful;
+          end
+    endcase
+    if (rst) begin
+      \$31  = 1'h0;
+    end
+  end
+  assign \first_clock$1  = first_clock;
+  assign \config_ok$3  = config_ok;
+  assign \abort$5  = abort;
+  assign \slo$7  = slo;
+  assign \slo_stuck$9  = slo_stuck;
+  assign \slo_stuck_live$11  = slo_stuck_live;
+  assign \ma_arm$13  = ma_arm;
+  assign \locked$15  = locked;
+  assign \early$17  = early;
+  assign \started$19  = started;
+  assign \slots_full$21  = slots_full;
+  assign \ack_expired$23  = ack_expired;
+  assign \no_start_expired$25  = no_start_expired;
+  assign \delay_over$27  = delay_over;
+  assign \restart_timer$29  = restart_timer;
+  assign \report_frame$31  = report_frame;
+  assign \report_delay$33  = report_delay;
+  assign \fault$35  = fault;
+  assign \fault_status$37  = fault_status;
+  assign \faults$39  = faults;
+  assign \idle$41  = idle;
+  assign \cdm$43  = cdm;
+  assign \slo$44  = slo;
+  assign \slo_stuck$45  = slo_stuck;
+  assign \abort$46  = abort;
+  assign \cdm_cycle$48  = cdm_cycle;
+  assign \ma_hold$50  = ma_hold;
+  assign fail = fault;
+  assign status = fault_status;
+  assign frame = report_frame;
   assign \faults.no_ack  = faults[0];
   assign \faults.no_start  = faults[1];
   assign \faults.delay_range  = faults[2];
@@ -7483,6 +7433,398 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, frame
   assign \faults.aborted  = faults[4];
   assign \faults.bad_config  = faults[5];
   assign \faults.no_stop  = faults[6];
+  assign \faults$39.no_ack  = faults[0];
+  assign \faults$39.no_start  = faults[1];
+  assign \faults$39.delay_range  = faults[2];
+  assign \faults$39.slo_stuck_low  = faults[3];
+  assign \faults$39.aborted  = faults[4];
+  assign \faults$39.bad_config  = faults[5];
+  assign \faults$39.no_stop  = faults[6];
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_axil.ch0.core.controller.cdm_hold (rst, abort, framing, holding, idle, cdm_cycle, ma_hold, slo_stuck, slo, cdm, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$32  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire \$3 ;
+  wire \$4 ;
+  wire \$5 ;
+  wire \$6 ;
+  reg \$7 ;
+  input abort;
+  wire abort;
+  input cdm;
+  wire cdm;
+  output cdm_cycle;
+  reg cdm_cycle = 1'h0;
+  input clk;
+  wire clk;
+  input framing;
+  wire framing;
+  input holding;
+  wire holding;
+  input idle;
+  wire idle;
+  output ma_hold;
+  reg ma_hold;
+  input rst;
+  wire rst;
+  input slo;
+  wire slo;
+  input slo_stuck;
+  wire slo_stuck;
+  assign \$3  = slo | slo_stuck;
+  assign \$4  = \$3  | abort;
+  assign \$5  = ~ \$4 ;
+  assign \$6  = cdm_cycle & \$5 ;
+  always @(posedge clk)
+    cdm_cycle <= \$7 ;
+  assign \$1  = ~ abort;
+  assign \$2  = cdm_cycle & \$1 ;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$32 ) begin end
+    \$7  = cdm_cycle;
+    if (idle) begin
+      \$7  = cdm;
+    end
+    if (rst) begin
+      \$7  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$32 ) begin end
+    ma_hold = 1'h0;
+    if (framing) begin
+      ma_hold = \$2 ;
+    end else if (holding) begin
+      ma_hold = \$6 ;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_axil.ch0.core.controller.line_faults (rst, restart_timer, clear, watch, fault, status, delay, ack_expired, no_start_expired, delay_over, ma_arm, early, locked, slots_full, started, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$33  = 0;
+  wire \$1 ;
+  wire \$10 ;
+  wire \$11 ;
+  wire \$12 ;
+  wire \$13 ;
+  wire \$14 ;
+  wire \$15 ;
+  wire \$16 ;
+  wire \$17 ;
+  wire \$18 ;
+  wire \$19 ;
+  wire \$2 ;
+  reg \$20 ;
+  reg \$21 ;
+  wire \$3 ;
+  wire \$4 ;
+  wire \$5 ;
+  wire \$6 ;
+  wire \$7 ;
+  wire \$8 ;
+  wire \$9 ;
+  input ack_expired;
+  wire ack_expired;
+  reg armed = 1'h0;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output delay;
+  reg delay;
+  input delay_over;
+  wire delay_over;
+  input early;
+  wire early;
+  output fault;
+  reg fault;
+  input locked;
+  wire locked;
+  reg locked_seen = 1'h0;
+  input ma_arm;
+  wire ma_arm;
+  input no_start_expired;
+  wire no_start_expired;
+  output restart_timer;
+  wire restart_timer;
+  input rst;
+  wire rst;
+  input slots_full;
+  wire slots_full;
+  input started;
+  wire started;
+  (* enum_base_type = "Status" *)
+  (* enum_value_0000 = "OK" *)
+  (* enum_value_0001 = "CRC_ERROR_WORD0" *)
+  (* enum_value_0010 = "CRC_ERROR_WORD1" *)
+  (* enum_value_0011 = "CRC_ERROR_BOTH" *)
+  (* enum_value_0100 = "SIGN_OF_LIFE" *)
+  (* enum_value_0101 = "SPW_MISMATCH" *)
+  (* enum_value_0110 = "NO_ACK" *)
+  (* enum_value_0111 = "NO_START" *)
+  (* enum_value_1000 = "DELAY_RANGE" *)
+  (* enum_value_1001 = "SLO_STUCK_LOW" *)
+  (* enum_value_1010 = "ABORTED" *)
+  (* enum_value_1011 = "BAD_CONFIG" *)
+  (* enum_value_1100 = "NO_STOP" *)
+  output [3:0] status;
+  reg [3:0] status;
+  input watch;
+  wire watch;
+  assign \$1  = watch & ma_arm;
+  assign \$2  = ~ locked_seen;
+  assign \$3  = locked & \$2 ;
+  assign \$4  = watch & \$3 ;
+  assign \$5  = ~ locked_seen;
+  assign \$6  = locked & \$5 ;
+  assign restart_timer = ma_arm | \$6 ;
+  assign \$7  = armed & early;
+  assign \$8  = ~ locked_seen;
+  assign \$9  = armed & \$8 ;
+  assign \$10  = ~ locked;
+  assign \$11  = \$9  & \$10 ;
+  assign \$12  = \$11  & ack_expired;
+  assign \$13  = ~ locked_seen;
+  assign \$14  = locked & \$13 ;
+  assign \$15  = \$14  & delay_over;
+  assign \$16  = ~ started;
+  assign \$17  = locked_seen & \$16 ;
+  assign \$18  = no_start_expired | slots_full;
+  assign \$19  = \$17  & \$18 ;
+  always @(posedge clk)
+    armed <= \$20 ;
+  always @(posedge clk)
+    locked_seen <= \$21 ;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    \$20  = armed;
+    if (clear) begin
+      \$20  = 1'h0;
+    end
+    if (\$1 ) begin
+      \$20  = 1'h1;
+    end
+    if (rst) begin
+      \$20  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    \$21  = locked_seen;
+    if (clear) begin
+      \$21  = 1'h0;
+    end
+    if (\$4 ) begin
+      \$21  = 1'h1;
+    end
+    if (rst) begin
+      \$21  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    fault = 1'h0;
+    if (\$7 ) begin
+      fault = 1'h1;
+    end else if (\$12 ) begin
+      fault = 1'h1;
+    end else if (\$15 ) begin
+      fault = 1'h1;
+    end else if (\$19 ) begin
+      fault = 1'h1;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    status = 4'h0;
+    if (\$7 ) begin
+      status = 4'h8;
+    end else if (\$12 ) begin
+      status = 4'h6;
+    end else if (\$15 ) begin
+      status = 4'h8;
+    end else if (\$19 ) begin
+      status = 4'h7;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    delay = 1'h0;
+    if (\$7 ) begin
+    end else if (\$12 ) begin
+    end else if (\$15 ) begin
+      delay = 1'h1;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_axil.ch0.core.controller.ready_check (config_ok, first_clock, bad_config, aborted, ready, stuck_low, slo_stuck, slo_stuck_live, slo, abort);
+  reg \$auto$verilog_backend.cc:2355:dump_module$34  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire \$3 ;
+  input abort;
+  wire abort;
+  output aborted;
+  reg aborted;
+  output bad_config;
+  reg bad_config;
+  input config_ok;
+  wire config_ok;
+  input first_clock;
+  wire first_clock;
+  output ready;
+  reg ready;
+  input slo;
+  wire slo;
+  input slo_stuck;
+  wire slo_stuck;
+  input slo_stuck_live;
+  wire slo_stuck_live;
+  output stuck_low;
+  reg stuck_low;
+  assign \$1  = ~ config_ok;
+  assign \$2  = first_clock & \$1 ;
+  assign \$3  = first_clock ? slo_stuck_live : slo_stuck;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    stuck_low = 1'h0;
+    if (\$2 ) begin
+    end else if (abort) begin
+    end else if (slo) begin
+    end else if (\$3 ) begin
+      stuck_low = 1'h1;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    bad_config = 1'h0;
+    if (\$2 ) begin
+      bad_config = 1'h1;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    aborted = 1'h0;
+    if (\$2 ) begin
+    end else if (abort) begin
+      aborted = 1'h1;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    ready = 1'h0;
+    if (\$2 ) begin
+    end else if (abort) begin
+    end else if (slo) begin
+      ready = 1'h1;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_axil.ch0.core.controller.report (fault, fault_status, report_frame, delay, faults, report_delay);
+  wire \$1 ;
+  wire \$10 ;
+  wire \$11 ;
+  wire \$12 ;
+  wire \$13 ;
+  wire \$14 ;
+  wire \$2 ;
+  wire \$3 ;
+  wire \$4 ;
+  wire \$5 ;
+  wire \$6 ;
+  wire \$7 ;
+  wire \$8 ;
+  wire \$9 ;
+  input delay;
+  wire delay;
+  wire fail;
+  input fault;
+  wire fault;
+  (* enum_base_type = "Status" *)
+  (* enum_value_0000 = "OK" *)
+  (* enum_value_0001 = "CRC_ERROR_WORD0" *)
+  (* enum_value_0010 = "CRC_ERROR_WORD1" *)
+  (* enum_value_0011 = "CRC_ERROR_BOTH" *)
+  (* enum_value_0100 = "SIGN_OF_LIFE" *)
+  (* enum_value_0101 = "SPW_MISMATCH" *)
+  (* enum_value_0110 = "NO_ACK" *)
+  (* enum_value_0111 = "NO_START" *)
+  (* enum_value_1000 = "DELAY_RANGE" *)
+  (* enum_value_1001 = "SLO_STUCK_LOW" *)
+  (* enum_value_1010 = "ABORTED" *)
+  (* enum_value_1011 = "BAD_CONFIG" *)
+  (* enum_value_1100 = "NO_STOP" *)
+  input [3:0] fault_status;
+  wire [3:0] fault_status;
+  output [6:0] faults;
+  wire [6:0] faults;
+  wire \faults.aborted ;
+  wire \faults.bad_config ;
+  wire \faults.delay_range ;
+  wire \faults.no_ack ;
+  wire \faults.no_start ;
+  wire \faults.no_stop ;
+  wire \faults.slo_stuck_low ;
+  wire frame;
+  output report_delay;
+  wire report_delay;
+  input report_frame;
+  wire report_frame;
+  (* enum_base_type = "Status" *)
+  (* enum_value_0000 = "OK" *)
+  (* enum_value_0001 = "CRC_ERROR_WORD0" *)
+  (* enum_value_0010 = "CRC_ERROR_WORD1" *)
+  (* enum_value_0011 = "CRC_ERROR_BOTH" *)
+  (* enum_value_0100 = "SIGN_OF_LIFE" *)
+  (* enum_value_0101 = "SPW_MISMATCH" *)
+  (* enum_value_0110 = "NO_ACK" *)
+  (* enum_value_0111 = "NO_START" *)
+  (* enum_value_1000 = "DELAY_RANGE" *)
+  (* enum_value_1001 = "SLO_STUCK_LOW" *)
+  (* enum_value_1010 = "ABORTED" *)
+  (* enum_value_1011 = "BAD_CONFIG" *)
+  (* enum_value_1100 = "NO_STOP" *)
+  wire [3:0] status;
+  assign report_delay = report_frame | delay;
+  assign \$1  = fault_status == 3'h6;
+  assign \$2  = fault & \$1 ;
+  assign \$3  = fault_status == 3'h7;
+  assign \$4  = fault & \$3 ;
+  assign \$5  = fault_status == 4'h8;
+  assign \$6  = fault & \$5 ;
+  assign \$7  = fault_status == 4'h9;
+  assign \$8  = fault & \$7 ;
+  assign \$9  = fault_status == 4'ha;
+  assign \$10  = fault & \$9 ;
+  assign \$11  = fault_status == 4'hb;
+  assign \$12  = fault & \$11 ;
+  assign \$13  = fault_status == 4'hc;
+  assign \$14  = fault & \$13 ;
+  assign frame = report_frame;
+  assign fail = fault;
+  assign status = fault_status;
+  assign \faults.no_ack  = faults[0];
+  assign \faults.no_start  = faults[1];
+  assign \faults.delay_range  = faults[2];
+  assign \faults.slo_stuck_low  = faults[3];
+  assign \faults.aborted  = faults[4];
+  assign \faults.bad_config  = faults[5];
+  assign \faults.no_stop  = faults[6];
+  assign faults[6] = \$14 ;
+  assign faults[5] = \$12 ;
+  assign faults[4] = \$10 ;
+  assign faults[3] = \$8 ;
+  assign faults[2] = \$6 ;
+  assign faults[1] = \$4 ;
+  assign faults[0] = \$2 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -7807,168 +8149,6 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.counters.count_aborted (rst, clear, inc, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$32  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$32 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$32 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_ca_aborted (rst, clear, inc, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$33  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_ca_crc4_error (rst, clear, inc, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$34  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_ca_data_fault (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$35  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8022,7 +8202,7 @@ module \biss_master_axil.ch0.core.counters.count_ca_data_fault (rst, clear, inc,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_ca_no_answer (rst, clear, inc, count, clk);
+module \biss_master_axil.ch0.core.counters.count_ca_aborted (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$36  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8076,7 +8256,7 @@ module \biss_master_axil.ch0.core.counters.count_ca_no_answer (rst, clear, inc, 
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_ca_refused (rst, clear, inc, count, clk);
+module \biss_master_axil.ch0.core.counters.count_ca_crc4_error (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$37  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8130,7 +8310,7 @@ module \biss_master_axil.ch0.core.counters.count_ca_refused (rst, clear, inc, co
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_crc_word0 (rst, clear, inc, count, clk);
+module \biss_master_axil.ch0.core.counters.count_ca_data_fault (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$38  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8184,7 +8364,7 @@ module \biss_master_axil.ch0.core.counters.count_crc_word0 (rst, clear, inc, cou
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_crc_word1 (rst, clear, inc, count, clk);
+module \biss_master_axil.ch0.core.counters.count_ca_no_answer (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$39  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8238,7 +8418,7 @@ module \biss_master_axil.ch0.core.counters.count_crc_word1 (rst, clear, inc, cou
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_delay_range (rst, clear, inc, count, clk);
+module \biss_master_axil.ch0.core.counters.count_ca_refused (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$40  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8292,7 +8472,7 @@ module \biss_master_axil.ch0.core.counters.count_delay_range (rst, clear, inc, c
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_lc_repeat (rst, clear, inc, count, clk);
+module \biss_master_axil.ch0.core.counters.count_crc_word0 (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$41  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8346,7 +8526,7 @@ module \biss_master_axil.ch0.core.counters.count_lc_repeat (rst, clear, inc, cou
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_lc_skip (rst, clear, inc, count, clk);
+module \biss_master_axil.ch0.core.counters.count_crc_word1 (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$42  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8400,7 +8580,7 @@ module \biss_master_axil.ch0.core.counters.count_lc_skip (rst, clear, inc, count
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_lc_zero (rst, clear, inc, count, clk);
+module \biss_master_axil.ch0.core.counters.count_delay_range (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$43  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8454,7 +8634,7 @@ module \biss_master_axil.ch0.core.counters.count_lc_zero (rst, clear, inc, count
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_no_ack (rst, clear, inc, count, clk);
+module \biss_master_axil.ch0.core.counters.count_lc_repeat (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$44  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8508,7 +8688,7 @@ module \biss_master_axil.ch0.core.counters.count_no_ack (rst, clear, inc, count,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_no_start (rst, clear, inc, count, clk);
+module \biss_master_axil.ch0.core.counters.count_lc_skip (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$45  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8562,7 +8742,7 @@ module \biss_master_axil.ch0.core.counters.count_no_start (rst, clear, inc, coun
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_no_stop (rst, clear, inc, count, clk);
+module \biss_master_axil.ch0.core.counters.count_lc_zero (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$46  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8616,7 +8796,7 @@ module \biss_master_axil.ch0.core.counters.count_no_stop (rst, clear, inc, count
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_overrun (rst, clear, inc, count, clk);
+module \biss_master_axil.ch0.core.counters.count_no_ack (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$47  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8670,7 +8850,7 @@ module \biss_master_axil.ch0.core.counters.count_overrun (rst, clear, inc, count
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_slo_stuck_low (rst, clear, inc, count, clk);
+module \biss_master_axil.ch0.core.counters.count_no_start (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$48  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8724,7 +8904,7 @@ module \biss_master_axil.ch0.core.counters.count_slo_stuck_low (rst, clear, inc,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_spw_mismatch (rst, clear, inc, count, clk);
+module \biss_master_axil.ch0.core.counters.count_no_stop (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$49  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8778,9 +8958,171 @@ module \biss_master_axil.ch0.core.counters.count_spw_mismatch (rst, clear, inc, 
 endmodule
 
 (* generator = "Amaranth" *)
+module \biss_master_axil.ch0.core.counters.count_overrun (rst, clear, inc, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$50  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_axil.ch0.core.counters.count_slo_stuck_low (rst, clear, inc, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_axil.ch0.core.counters.count_spw_mismatch (rst, clear, inc, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$52  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, sample, \bit , receiver_clear, done, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1, lc, cpw_top, crc_ok
 , clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$50  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$53  = 0;
   wire [6:0] \$1 ;
   wire [1:0] \$10 ;
   reg [2:0] \$100 ;
@@ -9163,7 +9505,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     .valid(\valid$52 )
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     (* full_case = 32'd1 *)
     casez (words[6])
       1'h0:
@@ -9173,7 +9515,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -9187,7 +9529,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     (* full_case = 32'd1 *)
     casez (words[9:6])
       4'h0:
@@ -9225,7 +9567,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -9239,7 +9581,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     (* full_case = 32'd1 *)
     casez (words[16])
       1'h0:
@@ -9249,7 +9591,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     (* full_case = 32'd1 *)
     casez (words[17:16])
       2'h0:
@@ -9263,7 +9605,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:16])
       4'h0:
@@ -9301,7 +9643,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     (* full_case = 32'd1 *)
     casez (words[17:16])
       2'h0:
@@ -9315,7 +9657,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$94  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -9339,7 +9681,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$95  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -9361,7 +9703,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$96  = slots;
     if (\$34 ) begin
       \$96  = \$35 [15:0];
@@ -9374,7 +9716,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$97  = slots_full;
     if (\$34 ) begin
       \$97  = \$36 ;
@@ -9387,7 +9729,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$98  = started;
     casez (decoder_fsm_state)
       3'h0:
@@ -9403,7 +9745,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$99  = start_slot;
     casez (decoder_fsm_state)
       3'h0:
@@ -9419,7 +9761,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$100  = decoder_fsm_state;
     casez (decoder_fsm_state)
       3'h0:
@@ -9451,7 +9793,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$101  = cds;
     casez (decoder_fsm_state)
       3'h0:
@@ -9469,7 +9811,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$102  = idx;
     casez (decoder_fsm_state)
       3'h0:
@@ -9494,7 +9836,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$103  = in_data;
     casez (decoder_fsm_state)
       3'h0:
@@ -9519,7 +9861,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$104  = in_lc;
     casez (decoder_fsm_state)
       3'h0:
@@ -9544,7 +9886,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$105  = in_top;
     casez (decoder_fsm_state)
       3'h0:
@@ -9569,7 +9911,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$106  = word;
     casez (decoder_fsm_state)
       3'h0:
@@ -9597,7 +9939,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$107  = stop_bit;
     casez (decoder_fsm_state)
       3'h0:
@@ -9619,7 +9961,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$108  = data0;
     if (\$58 ) begin
       \$108  = { data0[53:0], \bit  };
@@ -9632,7 +9974,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$109  = ne;
     if (\$59 ) begin
       \$109 [0] = 1'h1;
@@ -9652,7 +9994,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$110  = nw;
     if (\$59 ) begin
       \$110 [0] = 1'h1;
@@ -9674,7 +10016,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$111  = data1;
     if (\$70 ) begin
       \$111  = { data1[38:0], \bit  };
@@ -9687,7 +10029,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$112  = lc;
     if (lc_load) begin
       \$112  = { lc[4:0], \bit  };
@@ -9700,7 +10042,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$113  = cpw_top;
     if (\$80 ) begin
       \$113  = { cpw_top[38:0], \bit  };
@@ -9713,7 +10055,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     in_word = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -9750,7 +10092,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.decoder.crc0 (rst, start, valid, kind, \bit , receiver_clear, ok, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$54  = 0;
   wire [5:0] \$1 ;
   wire \$10 ;
   wire [5:0] \$11 ;
@@ -9844,7 +10186,7 @@ module \biss_master_axil.ch0.core.decoder.crc0 (rst, start, valid, kind, \bit , 
   assign \$auto$rtlil.cc:2739:Not$22  = ~ { crc6_reg[0], 1'h0 };
   assign \$auto$rtlil.cc:2739:Not$24  = ~ { crc16_reg[14], crc16_reg[11], crc16_reg[6:5], crc16_reg[3:2], 1'h0 };
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$31  = crc6_reg;
     if (valid) begin
       \$31  = \$5 ;
@@ -9859,7 +10201,7 @@ module \biss_master_axil.ch0.core.decoder.crc0 (rst, start, valid, kind, \bit , 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$32  = crc6_match;
     if (valid) begin
       \$32  = \$15 ;
@@ -9874,7 +10216,7 @@ module \biss_master_axil.ch0.core.decoder.crc0 (rst, start, valid, kind, \bit , 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$33  = crc16_reg;
     if (valid) begin
       \$33  = \$20 ;
@@ -9889,7 +10231,7 @@ module \biss_master_axil.ch0.core.decoder.crc0 (rst, start, valid, kind, \bit , 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$34  = crc16_match;
     if (valid) begin
       \$34  = \$30 ;
@@ -9904,7 +10246,7 @@ module \biss_master_axil.ch0.core.decoder.crc0 (rst, start, valid, kind, \bit , 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     ok = 1'h0;
     casez (kind)
       2'h0:
@@ -9925,7 +10267,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.decoder.crc1 (rst, start, valid, kind, \bit , receiver_clear, ok, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$52  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$55  = 0;
   wire [5:0] \$1 ;
   wire \$10 ;
   wire [5:0] \$11 ;
@@ -10019,7 +10361,7 @@ module \biss_master_axil.ch0.core.decoder.crc1 (rst, start, valid, kind, \bit , 
   assign \$auto$rtlil.cc:2739:Not$18  = ~ { crc6_reg[0], 1'h0 };
   assign \$auto$rtlil.cc:2739:Not$20  = ~ { crc16_reg[14], crc16_reg[11], crc16_reg[6:5], crc16_reg[3:2], 1'h0 };
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$31  = crc6_reg;
     if (valid) begin
       \$31  = \$5 ;
@@ -10034,7 +10376,7 @@ module \biss_master_axil.ch0.core.decoder.crc1 (rst, start, valid, kind, \bit , 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$32  = crc6_match;
     if (valid) begin
       \$32  = \$15 ;
@@ -10049,7 +10391,7 @@ module \biss_master_axil.ch0.core.decoder.crc1 (rst, start, valid, kind, \bit , 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$33  = crc16_reg;
     if (valid) begin
       \$33  = \$20 ;
@@ -10064,7 +10406,7 @@ module \biss_master_axil.ch0.core.decoder.crc1 (rst, start, valid, kind, \bit , 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$34  = crc16_match;
     if (valid) begin
       \$34  = \$30 ;
@@ -10079,7 +10421,7 @@ module \biss_master_axil.ch0.core.decoder.crc1 (rst, start, valid, kind, \bit , 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     ok = 1'h0;
     casez (kind)
       2'h0:
@@ -10100,7 +10442,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, hold, first_rise, second_rise, ma, rises, busy, held, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$53  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$56  = 0;
   wire [16:0] \$1 ;
   wire \$10 ;
   wire [16:0] \$11 ;
@@ -10225,7 +10567,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
   always @(posedge clk)
     released <= \$42 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
     \$34  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -10240,7 +10582,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
     \$35  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -10255,7 +10597,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
     \$36  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -10270,7 +10612,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
     \$37  = ma;
     casez (ma_fsm_state)
       3'h0:
@@ -10299,7 +10641,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
     \$38  = phase_left;
     casez (ma_fsm_state)
       3'h0:
@@ -10341,7 +10683,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
     \$39  = last_clock;
     casez (ma_fsm_state)
       3'h0:
@@ -10383,7 +10725,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
     \$40  = rises;
     casez (ma_fsm_state)
       3'h0:
@@ -10402,7 +10744,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
     \$41  = ma_fsm_state;
     casez (ma_fsm_state)
       3'h0:
@@ -10438,7 +10780,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
     \$42  = released;
     casez (ma_fsm_state)
       3'h0:
@@ -10462,7 +10804,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
     busy = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -10478,7 +10820,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
     held = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -10495,7 +10837,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.ma_stop (rst, words, w1_enable, clear, rises, enough, \started$10 , start_slot, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$54  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$57  = 0;
   reg [7:0] \$1 ;
   reg [7:0] \$10 ;
   wire [8:0] \$11 ;
@@ -10576,7 +10918,7 @@ module \biss_master_axil.ch0.core.ma_stop (rst, words, w1_enable, clear, rises, 
   always @(posedge clk)
     word1_len <= \$17 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     (* full_case = 32'd1 *)
     casez (words[9:6])
       4'h0:
@@ -10614,7 +10956,7 @@ module \biss_master_axil.ch0.core.ma_stop (rst, words, w1_enable, clear, rises, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:16])
       4'h0:
@@ -10652,42 +10994,42 @@ module \biss_master_axil.ch0.core.ma_stop (rst, words, w1_enable, clear, rises, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$12  = \$2 [7:0];
     if (rst) begin
       \$12  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$13  = \$4 ;
     if (rst) begin
       \$13  = 9'h000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$14  = \$5 ;
     if (rst) begin
       \$14  = 17'h00000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$15  = \started$10 ;
     if (rst) begin
       \$15  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$16  = \$9 ;
     if (rst) begin
       \$16  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$17  = \$11 [7:0];
     if (rst) begin
       \$17  = 8'h00;
@@ -10999,7 +11341,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.register_access.buffers (clk, rst, host_read__en, byte_to_send, rbuf_data, wbuf, index, store, byte_received, host_read__addr);
-  reg \$auto$verilog_backend.cc:2355:dump_module$55  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$58  = 0;
   wire \$1 ;
   wire \$2 ;
   wire \$3 ;
@@ -11116,21 +11458,21 @@ module \biss_master_axil.ch0.core.register_access.buffers (clk, rst, host_read__
   assign \$1  = ! index[1:0];
   assign \$2  = index[1:0] == 1'h1;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     byte_received__addr = 4'h0;
     if (store) begin
       byte_received__addr = index[5:2];
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     byte_received__data = 32'd0;
     if (store) begin
       byte_received__data = { byte_received, byte_received, byte_received, byte_received };
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     byte_received__en = 4'h0;
     if (store) begin
       byte_received__en = { \$4 , \$3 , \$2 , \$1  };
@@ -11150,7 +11492,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.register_access.checker (rst, crc_ok, echo_ok, cds, control__take_data, start, control__take_crc, sent, \byte , clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$56  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$59  = 0;
   reg [7:0] \$1 ;
   reg [2:0] \$2 ;
   output [7:0] \byte ;
@@ -11193,7 +11535,7 @@ module \biss_master_axil.ch0.core.register_access.checker (rst, crc_ok, echo_ok,
     .valid(control__take_data)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     \$1  = \byte ;
     if (control__take_data) begin
       \$1  = { \byte [6:0], cds };
@@ -11203,7 +11545,7 @@ module \biss_master_axil.ch0.core.register_access.checker (rst, crc_ok, echo_ok,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     \$2  = got_crc;
     if (control__take_crc) begin
       \$2  = { got_crc[1:0], cds };
@@ -11219,7 +11561,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.register_access.checker.rx_crc (rst, crc, data_in, valid, start, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$57  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$60  = 0;
   wire [3:0] \$1 ;
   wire \$10 ;
   wire [3:0] \$11 ;
@@ -11262,7 +11604,7 @@ module \biss_master_axil.ch0.core.register_access.checker.rx_crc (rst, crc, data
     crc_reg <= \$13 ;
   assign \$auto$rtlil.cc:2739:Not$14  = ~ crc_reg;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
     \$13  = crc_reg;
     if (valid) begin
       \$13 [0] = \$3 ;
@@ -11286,7 +11628,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.register_access.idle (rst, frame_end, frame_ok, run_enough, seen_enough, frame_cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$58  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$61  = 0;
   wire \$1 ;
   wire [4:0] \$10 ;
   wire \$11 ;
@@ -11356,7 +11698,7 @@ module \biss_master_axil.ch0.core.register_access.idle (rst, frame_end, frame_ok
   always @(posedge clk)
     idle_seen <= \$24 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
     \$23  = idle_run;
     if (frame_end) begin
       \$23  = \$4 [3:0];
@@ -11366,7 +11708,7 @@ module \biss_master_axil.ch0.core.register_access.idle (rst, frame_end, frame_ok
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
     \$24  = idle_seen;
     if (frame_end) begin
       \$24  = \$10 [3:0];
@@ -11379,7 +11721,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.register_access.sender (rst, \byte , request, control__load_header, control__source, control__crc_bit, control__shift_header, start, valid, control__load_byte, control__shift_byte, sent, cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$59  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$62  = 0;
   wire \$1 ;
   wire [18:0] \$2 ;
   wire [8:0] \$3 ;
@@ -11451,7 +11793,7 @@ module \biss_master_axil.ch0.core.register_access.sender (rst, \byte , request, 
     .valid(valid)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
     \$6  = header;
     if (control__load_header) begin
       \$6  = { 2'h3, request[2:0], request[9:3], 4'h0, \$1 , request[17] };
@@ -11464,7 +11806,7 @@ module \biss_master_axil.ch0.core.register_access.sender (rst, \byte , request, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
     \$7  = to_send;
     if (control__load_byte) begin
       \$7  = \byte ;
@@ -11477,7 +11819,7 @@ module \biss_master_axil.ch0.core.register_access.sender (rst, \byte , request, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
     \$8  = sent;
     if (control__load_byte) begin
       \$8  = \byte ;
@@ -11487,7 +11829,7 @@ module \biss_master_axil.ch0.core.register_access.sender (rst, \byte , request, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
     cdm = 1'h0;
     casez (control__source)
       3'h1:
@@ -11512,7 +11854,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.register_access.sender.tx_crc (rst, data_in, crc, start, valid, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$60  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$63  = 0;
   wire [3:0] \$1 ;
   wire \$10 ;
   wire [3:0] \$11 ;
@@ -11555,7 +11897,7 @@ module \biss_master_axil.ch0.core.register_access.sender.tx_crc (rst, data_in, c
     crc_reg <= \$13 ;
   assign \$auto$rtlil.cc:2739:Not$16  = ~ crc_reg;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
     \$13  = crc_reg;
     if (valid) begin
       \$13 [0] = \$3 ;
@@ -11580,7 +11922,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, frame_ok, busy, crc_ok, echo_ok, run_enough, seen_enough, start, abort, request, frame_cdm, frame_cds, done, result, index, send__load_header, send__source, send__crc_bit, send__shift_header, send__crc_start
 , send__crc_valid, send__load_byte, send__shift_byte, check__take_data, check__first, check__take_crc, store, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$61  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$64  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$100 ;
@@ -11936,7 +12278,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
   always @(posedge clk)
     waited <= \$125 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     \$118  = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -11974,7 +12316,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     \$119  = result;
     casez (access_fsm_state)
       3'h0:
@@ -12028,7 +12370,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     \$120  = access_fsm_state;
     casez (access_fsm_state)
       3'h0:
@@ -12125,7 +12467,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     \$121  = req;
     casez (access_fsm_state)
       3'h0:
@@ -12142,7 +12484,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     \$122  = index;
     casez (access_fsm_state)
       3'h0:
@@ -12181,7 +12523,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     \$123  = step;
     casez (access_fsm_state)
       3'h0:
@@ -12239,7 +12581,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     \$124  = ending;
     casez (access_fsm_state)
       3'h0:
@@ -12306,7 +12648,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     \$125  = waited;
     casez (access_fsm_state)
       3'h0:
@@ -12338,7 +12680,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     send__load_header = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -12352,7 +12694,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     send__source = 3'h0;
     casez (access_fsm_state)
       3'h0:
@@ -12379,7 +12721,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     send__crc_bit = 2'h0;
     casez (access_fsm_state)
       3'h0:
@@ -12399,7 +12741,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     send__shift_header = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -12418,7 +12760,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     send__crc_start = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -12447,7 +12789,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     send__crc_valid = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -12468,7 +12810,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     send__load_byte = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -12490,7 +12832,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     send__shift_byte = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -12511,7 +12853,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     check__take_data = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -12533,7 +12875,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     check__first = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -12555,7 +12897,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     check__take_crc = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -12579,7 +12921,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     store = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -12617,8 +12959,8 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.results (rst, report, valid, frame, report_frame, report_delay, done, valid_out, result, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$62  = 0;
+module \biss_master_axil.ch0.core.results (rst, report_delay, report, valid, frame, report_frame, done, valid_out, result, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$65  = 0;
   reg \$1 ;
   reg \$2 ;
   reg [160:0] \$3 ;
@@ -12715,21 +13057,21 @@ module \biss_master_axil.ch0.core.results (rst, report, valid, frame, report_fra
   always @(posedge clk)
     result <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     \$1  = report;
     if (rst) begin
       \$1  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     \$2  = valid;
     if (rst) begin
       \$2  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     \$3  = result;
     if (report) begin
       \$3 [3:0] = frame[3:0];
@@ -12794,7 +13136,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receiver_clear, arm, early, locked, delay, sample, level, slo);
-  reg \$auto$verilog_backend.cc:2355:dump_module$63  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$66  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -13032,7 +13374,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     .stage1(level)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$63  = level;
     if (receiver_clear) begin
       \$63  = 1'h1;
@@ -13042,7 +13384,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$64  = mid_delay;
     if (odd) begin
       \$64  = \$8 [12:0];
@@ -13067,7 +13409,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$65  = mid_slot;
     (* full_case = 32'd1 *)
     if (odd) begin
@@ -13094,7 +13436,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$66  = \$10 ;
     casez (sampler_fsm_state)
       2'h0:
@@ -13116,7 +13458,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$67  = elapsed;
     casez (sampler_fsm_state)
       2'h0:
@@ -13140,7 +13482,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$68  = early;
     casez (sampler_fsm_state)
       2'h0:
@@ -13156,7 +13498,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$69  = locked;
     casez (sampler_fsm_state)
       2'h0:
@@ -13182,7 +13524,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$70  = gap;
     casez (sampler_fsm_state)
       2'h0:
@@ -13213,7 +13555,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$71  = sampler_fsm_state;
     casez (sampler_fsm_state)
       2'h0:
@@ -13244,7 +13586,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$72  = slot_left;
     casez (sampler_fsm_state)
       2'h0:
@@ -13294,7 +13636,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$73  = slot_zero;
     casez (sampler_fsm_state)
       2'h0:
@@ -13344,7 +13686,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$74  = vote1;
     casez (sampler_fsm_state)
       2'h0:
@@ -13374,7 +13716,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$75  = vote2;
     casez (sampler_fsm_state)
       2'h0:
@@ -13402,7 +13744,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$76  = first_slot;
     casez (sampler_fsm_state)
       2'h0:
@@ -13428,7 +13770,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$77  = delay;
     casez (sampler_fsm_state)
       2'h0:
@@ -13451,7 +13793,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$78  = phase;
     casez (sampler_fsm_state)
       2'h0:
@@ -13491,7 +13833,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     sample = \$44 ;
     casez (sampler_fsm_state)
       2'h0:
@@ -13509,7 +13851,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     decided = 1'h0;
     casez (sampler_fsm_state)
       2'h0:
@@ -13559,7 +13901,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.scheduler (rst, trigger, periodic, request, overrun, start, abort, period, idle, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$64  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$67  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -13643,7 +13985,7 @@ module \biss_master_axil.ch0.core.scheduler (rst, trigger, periodic, request, ov
   always @(posedge clk)
     period_start <= \$28 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$27  = 24'h000001;
@@ -13655,7 +13997,7 @@ module \biss_master_axil.ch0.core.scheduler (rst, trigger, periodic, request, ov
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$28  = 1'h1;
@@ -13669,8 +14011,8 @@ module \biss_master_axil.ch0.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$3728$0 , resync, lc, is_zero, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$65  = 0;
+module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$3710$0 , resync, lc, is_zero, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$68  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -13707,8 +14049,8 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$3728$0 ;
-  wire \port$3728$0 ;
+  input \port$3710$0 ;
+  wire \port$3710$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -13720,9 +14062,9 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$3728$0  };
-  assign \$2  = { lc[4:0], \port$3728$0  } == last;
-  assign \$3  = { lc[4:0], \port$3728$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$3710$0  };
+  assign \$2  = { lc[4:0], \port$3710$0  } == last;
+  assign \$3  = { lc[4:0], \port$3710$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = lc == 6'h3f;
@@ -13750,7 +14092,7 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   always @(posedge clk)
     synced <= \$21 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     \$16  = is_zero;
     if (load) begin
       \$16  = \$1 ;
@@ -13760,7 +14102,7 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     \$17  = is_last;
     if (load) begin
       \$17  = \$2 ;
@@ -13770,7 +14112,7 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     \$18  = is_expected;
     if (load) begin
       \$18  = \$3 ;
@@ -13780,7 +14122,7 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     \$19  = last;
     if (\$5 ) begin
       \$19  = lc;
@@ -13790,7 +14132,7 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     \$20  = expected;
     if (\$5 ) begin
       \$20  = \$8 [5:0];
@@ -13800,7 +14142,7 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     \$21  = synced;
     if (\$5 ) begin
       \$21  = 1'h1;
@@ -13812,13 +14154,13 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
       \$21  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$3728$0  };
+  assign lc_next = { lc[4:0], \port$3710$0  };
   assign zero = is_zero;
 endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.spw_check (rst, bits, \tolerance$8 , spw, cpw_top, match, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$66  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$69  = 0;
   wire [40:0] \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -14023,28 +14365,28 @@ module \biss_master_axil.ch0.core.spw_check (rst, bits, \tolerance$8 , spw, cpw_
   assign \$7  = bits > 3'h5;
   assign \$8  = bits > 3'h6;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     \$88  = \$42 ;
     if (rst) begin
       \$88  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     \$89  = \$84 ;
     if (rst) begin
       \$89  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     \$90  = \tolerance$8 ;
     if (rst) begin
       \$90  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     \$91  = \$87 ;
     if (rst) begin
       \$91  = 1'h0;
@@ -14054,7 +14396,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.time_base (rst, first_rise, first_rise_time, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$67  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$70  = 0;
   wire [32:0] \$1 ;
   reg [31:0] \$2 ;
   reg [31:0] \$3 ;
@@ -14073,14 +14415,14 @@ module \biss_master_axil.ch0.core.time_base (rst, first_rise, first_rise_time, c
   always @(posedge clk)
     first_rise_time <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     \$2  = \$1 [31:0];
     if (rst) begin
       \$2  = 32'd0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     \$3  = first_rise_time;
     if (first_rise) begin
       \$3  = now;
@@ -14093,7 +14435,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.timers (rst, restart, ma_busy, break_time, timeout_live, ack_limit, timeout_limit, delay_limit, no_start_limit, clear, in_clock, slo_stuck, slo_stuck_live, break_over, ack_expired, no_start_expired, delay_over, delay, slo, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$68  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$71  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -14231,7 +14573,7 @@ module \biss_master_axil.ch0.core.timers (rst, restart, ma_busy, break_time, tim
   always @(posedge clk)
     delay_over <= \$43 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
     \$36  = slo_low_time_p1;
     if (\$1 ) begin
       \$36  = 25'h0000001;
@@ -14243,49 +14585,49 @@ module \biss_master_axil.ch0.core.timers (rst, restart, ma_busy, break_time, tim
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
     \$37  = \$8 ;
     if (rst) begin
       \$37  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
     \$38  = \$16 ;
     if (rst) begin
       \$38  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
     \$39  = \$20 [24:0];
     if (rst) begin
       \$39  = 25'h0000001;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
     \$40  = \$26 ;
     if (rst) begin
       \$40  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
     \$41  = \$30 ;
     if (rst) begin
       \$41  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
     \$42  = \$34 ;
     if (rst) begin
       \$42  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
     \$43  = \$35 ;
     if (rst) begin
       \$43  = 1'h0;
@@ -14294,8 +14636,8 @@ module \biss_master_axil.ch0.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.verdict (lc_skip_seen, \port$1603$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
-  reg \$auto$verilog_backend.cc:2355:dump_module$69  = 0;
+module \biss_master_axil.ch0.core.verdict (lc_skip_seen, \port$1594$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
+  reg \$auto$verilog_backend.cc:2355:dump_module$72  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -14408,8 +14750,8 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, \port$1603$0 , lc_check
   wire lc_zero;
   input lc_zero_seen;
   wire lc_zero_seen;
-  output \port$1603$0 ;
-  wire \port$1603$0 ;
+  output \port$1594$0 ;
+  wire \port$1594$0 ;
   output report;
   wire report;
   input report_frame;
@@ -14477,7 +14819,7 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, \port$1603$0 , lc_check
   assign \$29  = ~ { \$2 , crc_ok[0] };
   assign crc_error = report_frame ? \$29  : 2'h0;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     (* full_case = 32'd1 *)
     if (\$13 ) begin
       frame_status = 4'h3;
@@ -14494,7 +14836,7 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, \port$1603$0 , lc_check
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$1603$0  = \$2 ;
+  assign \port$1594$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -14520,8 +14862,8 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__ca_busy, regs__ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period
 , cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort
-, regs__done_count, ma, regs__done, \port$4440$0 , \port$4447$0 , regs__ca_done, \port$4561$0 , ca_rbuf_addr);
-  reg \$auto$verilog_backend.cc:2355:dump_module$70  = 0;
+, regs__done_count, ma, regs__done, \port$4452$0 , \port$4459$0 , regs__ca_done, \port$4573$0 , ca_rbuf_addr);
+  reg \$auto$verilog_backend.cc:2355:dump_module$73  = 0;
   wire \$1 ;
   wire [16:0] \$2 ;
   reg [15:0] \$3 ;
@@ -14645,12 +14987,12 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_
   wire \ma$164 ;
   input periodic;
   wire periodic;
-  output [160:0] \port$4440$0 ;
-  wire [160:0] \port$4440$0 ;
-  output [287:0] \port$4447$0 ;
-  wire [287:0] \port$4447$0 ;
-  output [9:0] \port$4561$0 ;
-  wire [9:0] \port$4561$0 ;
+  output [160:0] \port$4452$0 ;
+  wire [160:0] \port$4452$0 ;
+  output [287:0] \port$4459$0 ;
+  wire [287:0] \port$4459$0 ;
+  output [9:0] \port$4573$0 ;
+  wire [9:0] \port$4573$0 ;
   wire regs__abort_cycle;
   output regs__busy;
   wire regs__busy;
@@ -14846,7 +15188,7 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_
     .\valid$242 (valid)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
     \$3  = regs__done_count;
     if (regs__done) begin
       \$3  = \$2 [15:0];
@@ -14976,16 +15318,16 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_
   assign regs__ca_rbuf_en = ca_rbuf_en;
   assign \ma$164  = ma;
   assign \slo$166  = slo;
-  assign \port$4440$0  = \$4 ;
-  assign \port$4447$0  = \$5 ;
-  assign \port$4561$0  = \$6 ;
+  assign \port$4452$0  = \$4 ;
+  assign \port$4459$0  = \$5 ;
+  assign \port$4573$0  = \$6 ;
 endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy$237 , config_error, frames, ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, abort, \clear$214 , \periodic$24 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit
 , cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, \start$185 , \abort$187 , ma, \done$240 
 , \valid$242 , \result$245 , counts, ca_done, result, rbuf_addr);
-  reg \$auto$verilog_backend.cc:2355:dump_module$71  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$74  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -15830,7 +16172,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$4181$0 (\bit ),
+    .\port$4178$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -15887,7 +16229,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .lc_skip_seen(lc_skip_seen),
     .lc_zero(lc_zero),
     .lc_zero_seen(lc_zero_seen),
-    .\port$2972$0 (\$16 ),
+    .\port$2954$0 (\$16 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -15896,14 +16238,14 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .valid(valid)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
     \$14  = \$13 ;
     if (rst) begin
       \$14  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
     \$15  = \bit$265 ;
     if (rst) begin
       \$15  = 1'h0;
@@ -16282,7 +16624,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_limit, timeout_limit, delay_limit, no_start_limit, idle, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$72  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$75  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -16463,21 +16805,21 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   always @(posedge clk)
     delay_limit <= \$46 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
     \$47  = \$41 ;
     if (rst) begin
       \$47  = 25'h0000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
     \$42  = \$34 ;
     if (rst) begin
       \$42  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
     \$43  = cycle;
     if (idle) begin
       \$43  = live;
@@ -16487,7 +16829,7 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
     \$44  = ack_limit;
     if (idle) begin
       \$44  = \$36 ;
@@ -16497,7 +16839,7 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
     \$45  = timeout_limit;
     if (idle) begin
       \$45  = \$38 ;
@@ -16507,7 +16849,7 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
     \$46  = delay_limit;
     if (idle) begin
       \$46  = \$40 ;
@@ -16559,9 +16901,9 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, frame_doubtful, abort, config_ok, end_check, cdm_cycle, idle, receiver_clear, resync, timer_clear, fault, fault_status, faults, ma_run, in_clock, ma_hold, report_frame, report_delay, slo_stuck
+module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, report_delay, frame_doubtful, abort, config_ok, end_check, resync, timer_clear, fault, fault_status, ma_run, in_clock, report_frame, idle, receiver_clear, faults, cdm_cycle, ma_hold, slo_stuck
 , slo_stuck_live, break_over, ack_expired, no_start_expired, delay_over, ma_arm, ma_busy, ma_held, ma_enough, early, locked, slo, frame_done, stopped, slots_full, started, stop_bit, cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$73  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$76  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -16581,97 +16923,57 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, frame
   wire \$24 ;
   wire \$25 ;
   wire \$26 ;
-  wire \$27 ;
-  wire \$28 ;
-  wire \$29 ;
+  reg \$27 ;
+  reg [2:0] \$28 ;
+  reg \$29 ;
   wire \$3 ;
-  wire \$30 ;
-  wire \$31 ;
-  wire \$32 ;
-  wire \$33 ;
-  wire \$34 ;
-  wire \$35 ;
-  wire \$36 ;
-  wire \$37 ;
-  wire \$38 ;
-  wire \$39 ;
+  reg \$30 ;
+  reg \$31 ;
   wire \$4 ;
-  wire \$40 ;
-  wire \$41 ;
-  wire \$42 ;
-  wire \$43 ;
-  wire \$44 ;
-  wire \$45 ;
-  wire \$46 ;
-  wire \$47 ;
-  wire \$48 ;
-  wire \$49 ;
   wire \$5 ;
-  wire \$50 ;
-  wire \$51 ;
-  wire \$52 ;
-  wire \$53 ;
-  wire \$54 ;
-  wire \$55 ;
-  wire \$56 ;
-  wire \$57 ;
-  wire \$58 ;
-  wire \$59 ;
   wire \$6 ;
-  wire \$60 ;
-  wire \$61 ;
-  wire \$62 ;
-  wire \$63 ;
-  wire \$64 ;
-  wire \$65 ;
-  wire \$66 ;
-  wire \$67 ;
-  wire \$68 ;
-  wire \$69 ;
   wire \$7 ;
-  wire \$70 ;
-  wire \$71 ;
-  wire \$72 ;
-  wire \$73 ;
-  wire \$74 ;
-  wire \$75 ;
-  wire \$76 ;
-  wire \$77 ;
-  wire \$78 ;
-  reg \$79 ;
   wire \$8 ;
-  reg \$80 ;
-  reg [2:0] \$81 ;
-  reg \$82 ;
-  reg \$83 ;
-  reg \$84 ;
-  reg \$85 ;
-  reg \$86 ;
   wire \$9 ;
   input abort;
   wire abort;
+  wire \abort$46 ;
+  wire \abort$5 ;
+  wire aborted;
   input ack_expired;
   wire ack_expired;
-  reg armed = 1'h0;
+  wire \ack_expired$23 ;
+  wire bad_config;
   input break_over;
   wire break_over;
   input cdm;
   wire cdm;
+  wire \cdm$43 ;
   output cdm_cycle;
-  reg cdm_cycle = 1'h0;
+  wire cdm_cycle;
+  wire \cdm_cycle$48 ;
+  reg clear;
   input clk;
   wire clk;
   input config_ok;
   wire config_ok;
+  wire \config_ok$3 ;
   reg [2:0] cycle_fsm_state = 3'h0;
+  reg delay;
+  wire \delay$73 ;
   input delay_over;
   wire delay_over;
+  wire \delay_over$27 ;
   input early;
   wire early;
+  wire \early$17 ;
   input end_check;
   wire end_check;
+  wire fail;
   output fault;
   reg fault;
+  wire \fault$35 ;
+  wire \fault$69 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -16688,8 +16990,31 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, frame
   (* enum_value_1100 = "NO_STOP" *)
   output [3:0] fault_status;
   reg [3:0] fault_status;
+  (* enum_base_type = "Status" *)
+  (* enum_value_0000 = "OK" *)
+  (* enum_value_0001 = "CRC_ERROR_WORD0" *)
+  (* enum_value_0010 = "CRC_ERROR_WORD1" *)
+  (* enum_value_0011 = "CRC_ERROR_BOTH" *)
+  (* enum_value_0100 = "SIGN_OF_LIFE" *)
+  (* enum_value_0101 = "SPW_MISMATCH" *)
+  (* enum_value_0110 = "NO_ACK" *)
+  (* enum_value_0111 = "NO_START" *)
+  (* enum_value_1000 = "DELAY_RANGE" *)
+  (* enum_value_1001 = "SLO_STUCK_LOW" *)
+  (* enum_value_1010 = "ABORTED" *)
+  (* enum_value_1011 = "BAD_CONFIG" *)
+  (* enum_value_1100 = "NO_STOP" *)
+  wire [3:0] \fault_status$37 ;
   output [6:0] faults;
-  reg [6:0] faults;
+  wire [6:0] faults;
+  wire [6:0] \faults$39 ;
+  wire \faults$39.aborted ;
+  wire \faults$39.bad_config ;
+  wire \faults$39.delay_range ;
+  wire \faults$39.no_ack ;
+  wire \faults$39.no_start ;
+  wire \faults$39.no_stop ;
+  wire \faults$39.slo_stuck_low ;
   wire \faults.aborted ;
   wire \faults.bad_config ;
   wire \faults.delay_range ;
@@ -16698,19 +17023,27 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, frame
   wire \faults.no_stop ;
   wire \faults.slo_stuck_low ;
   reg first_clock = 1'h0;
+  (* init = 1'h0 *)
+  wire \first_clock$1 ;
+  wire frame;
   input frame_done;
   wire frame_done;
   input frame_doubtful;
   wire frame_doubtful;
+  reg framing;
+  reg holding;
   output idle;
   reg idle = 1'h0;
+  (* init = 1'h0 *)
+  wire \idle$41 ;
   output in_clock;
   reg in_clock;
   input locked;
   wire locked;
-  reg locked_seen = 1'h0;
+  wire \locked$15 ;
   input ma_arm;
   wire ma_arm;
+  wire \ma_arm$13 ;
   input ma_busy;
   wire ma_busy;
   input ma_enough;
@@ -16718,48 +17051,106 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, frame
   input ma_held;
   wire ma_held;
   output ma_hold;
-  reg ma_hold;
+  wire ma_hold;
+  wire \ma_hold$50 ;
   output ma_run;
   reg ma_run;
   input no_start_expired;
   wire no_start_expired;
+  wire \no_start_expired$25 ;
   reg pause = 1'h0;
+  wire ready;
   output receiver_clear;
   reg receiver_clear = 1'h1;
   output report_delay;
-  reg report_delay;
+  wire report_delay;
+  wire \report_delay$33 ;
   output report_frame;
   reg report_frame;
+  wire \report_frame$31 ;
   input request;
   wire request;
   output restart_timer;
   wire restart_timer;
+  wire \restart_timer$29 ;
   output resync;
   reg resync;
   input rst;
   wire rst;
   input slo;
   wire slo;
+  wire \slo$44 ;
+  wire \slo$7 ;
   input slo_stuck;
   wire slo_stuck;
+  wire \slo_stuck$45 ;
+  wire \slo_stuck$9 ;
   input slo_stuck_live;
   wire slo_stuck_live;
+  wire \slo_stuck_live$11 ;
   input slots_full;
   wire slots_full;
+  wire \slots_full$21 ;
   input started;
   wire started;
+  wire \started$19 ;
+  (* enum_base_type = "Status" *)
+  (* enum_value_0000 = "OK" *)
+  (* enum_value_0001 = "CRC_ERROR_WORD0" *)
+  (* enum_value_0010 = "CRC_ERROR_WORD1" *)
+  (* enum_value_0011 = "CRC_ERROR_BOTH" *)
+  (* enum_value_0100 = "SIGN_OF_LIFE" *)
+  (* enum_value_0101 = "SPW_MISMATCH" *)
+  (* enum_value_0110 = "NO_ACK" *)
+  (* enum_value_0111 = "NO_START" *)
+  (* enum_value_1000 = "DELAY_RANGE" *)
+  (* enum_value_1001 = "SLO_STUCK_LOW" *)
+  (* enum_value_1010 = "ABORTED" *)
+  (* enum_value_1011 = "BAD_CONFIG" *)
+  (* enum_value_1100 = "NO_STOP" *)
+  wire [3:0] status;
+  (* enum_base_type = "Status" *)
+  (* enum_value_0000 = "OK" *)
+  (* enum_value_0001 = "CRC_ERROR_WORD0" *)
+  (* enum_value_0010 = "CRC_ERROR_WORD1" *)
+  (* enum_value_0011 = "CRC_ERROR_BOTH" *)
+  (* enum_value_0100 = "SIGN_OF_LIFE" *)
+  (* enum_value_0101 = "SPW_MISMATCH" *)
+  (* enum_value_0110 = "NO_ACK" *)
+  (* enum_value_0111 = "NO_START" *)
+  (* enum_value_1000 = "DELAY_RANGE" *)
+  (* enum_value_1001 = "SLO_STUCK_LOW" *)
+  (* enum_value_1010 = "ABORTED" *)
+  (* enum_value_1011 = "BAD_CONFIG" *)
+  (* enum_value_1100 = "NO_STOP" *)
+  wire [3:0] \status$74 ;
   input stop_bit;
   wire stop_bit;
   input stopped;
   wire stopped;
+  wire stuck_low;
   output timer_clear;
   reg timer_clear;
-  assign \$14  = locked & \$13 ;
-  assign \$15  = \$14  & delay_over;
-  assign \$16  = ~ started;
-  assign \$17  = locked_seen & \$16 ;
-  assign \$18  = no_start_expired | slots_full;
-  assign \$19  = \$17  & \$18 ;
+  reg watch;
+  assign \$1  = ma_busy | abort;
+  assign \$2  = ~ ma_enough;
+  assign \$3  = restart_timer | abort;
+  assign \$4  = ~ end_check;
+  assign \$5  = ~ ma_enough;
+  assign \$6  = ~ end_check;
+  assign \$7  = ma_busy | abort;
+  assign \$8  = ~ ma_busy;
+  assign \$9  = \$8  | ma_held;
+  assign \$10  = \$9  & slo;
+  assign \$11  = ! cycle_fsm_state;
+  assign \$12  = cycle_fsm_state == 1'h1;
+  assign \$13  = cycle_fsm_state == 2'h2;
+  assign \$14  = cycle_fsm_state == 2'h3;
+  assign \$15  = cycle_fsm_state == 3'h4;
+  assign \$16  = cycle_fsm_state == 3'h5;
+  assign \$17  = cycle_fsm_state == 3'h6;
+  assign \$18  = cycle_fsm_state == 3'h7;
+  assign \$19  = ma_busy | abort;
   assign \$20  = ~ end_check;
   assign \$21  = ma_busy | abort;
   assign \$22  = cdm_cycle & abort;
@@ -16767,456 +17158,69 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, frame
   assign \$24  = ~ ma_busy;
   assign \$25  = \$24  | ma_held;
   assign \$26  = \$25  & slo;
-  assign \$27  = ~ locked_seen;
-  assign \$28  = locked & \$27 ;
-  assign restart_timer = ma_arm | \$28 ;
-  assign \$29  = ma_busy | abort;
-  assign \$30  = ~ config_ok;
-  assign \$31  = first_clock & \$30 ;
-  assign \$32  = first_clock ? slo_stuck_live : slo_stuck;
-  assign \$33  = ~ ma_enough;
-  assign \$34  = ~ abort;
-  assign \$35  = cdm_cycle & \$34 ;
-  assign \$36  = restart_timer | abort;
-  assign \$37  = armed & early;
-  assign \$38  = ~ locked_seen;
-  assign \$39  = armed & \$38 ;
-  assign \$40  = ~ locked;
-  assign \$41  = \$39  & \$40 ;
-  assign \$42  = \$41  & ack_expired;
-  assign \$43  = ~ locked_seen;
-  assign \$44  = locked & \$43 ;
-  assign \$45  = \$44  & delay_over;
-  assign \$46  = ~ started;
-  assign \$47  = locked_seen & \$46 ;
-  assign \$48  = no_start_expired | slots_full;
-  assign \$49  = \$47  & \$48 ;
-  assign \$50  = ~ end_check;
-  assign \$51  = ~ ma_enough;
-  assign \$52  = ~ abort;
-  assign \$53  = cdm_cycle & \$52 ;
-  assign \$54  = ~ end_check;
-  assign \$55  = slo | slo_stuck;
-  assign \$56  = \$55  | abort;
-  assign \$57  = ~ \$56 ;
-  assign \$58  = cdm_cycle & \$57 ;
-  assign \$59  = ma_busy | abort;
-  assign \$60  = slo | slo_stuck;
-  assign \$61  = \$60  | abort;
-  assign \$62  = ~ \$61 ;
-  assign \$63  = cdm_cycle & \$62 ;
-  assign \$64  = slo | slo_stuck;
-  assign \$65  = \$64  | abort;
-  assign \$66  = ~ \$65 ;
-  assign \$67  = cdm_cycle & \$66 ;
-  assign \$68  = ~ ma_busy;
-  assign \$69  = \$68  | ma_held;
-  assign \$70  = \$69  & slo;
-  assign \$71  = ! cycle_fsm_state;
-  assign \$72  = cycle_fsm_state == 1'h1;
-  assign \$73  = cycle_fsm_state == 2'h2;
-  assign \$74  = cycle_fsm_state == 2'h3;
-  assign \$75  = cycle_fsm_state == 3'h4;
-  assign \$76  = cycle_fsm_state == 3'h5;
-  assign \$77  = cycle_fsm_state == 3'h6;
-  assign \$78  = cycle_fsm_state == 3'h7;
   always @(posedge clk)
-    cdm_cycle <= \$79 ;
+    first_clock <= \$27 ;
   always @(posedge clk)
-    first_clock <= \$80 ;
+    cycle_fsm_state <= \$28 ;
   always @(posedge clk)
-    cycle_fsm_state <= \$81 ;
+    idle <= \$29 ;
   always @(posedge clk)
-    idle <= \$82 ;
+    receiver_clear <= \$30 ;
   always @(posedge clk)
-    receiver_clear <= \$83 ;
-  always @(posedge clk)
-    armed <= \$84 ;
-  always @(posedge clk)
-    locked_seen <= \$85 ;
-  always @(posedge clk)
-    pause <= \$86 ;
-  assign \$1  = ma_busy | abort;
-  assign \$2  = ~ config_ok;
-  assign \$3  = first_clock & \$2 ;
-  assign \$4  = first_clock ? slo_stuck_live : slo_stuck;
-  assign \$5  = ~ locked_seen;
-  assign \$6  = locked & \$5 ;
-  assign \$7  = armed & early;
-  assign \$8  = ~ locked_seen;
-  assign \$9  = armed & \$8 ;
-  assign \$10  = ~ locked;
-  assign \$11  = \$9  & \$10 ;
-  assign \$12  = \$11  & ack_expired;
-  assign \$13  = ~ locked_seen;
+    pause <= \$31 ;
+  \biss_master_axil.ch1.core.controller.cdm_hold  cdm_hold (
+    .abort(abort),
+    .cdm(cdm),
+    .cdm_cycle(cdm_cycle),
+    .clk(clk),
+    .framing(framing),
+    .holding(holding),
+    .idle(idle),
+    .ma_hold(ma_hold),
+    .rst(rst),
+    .slo(slo),
+    .slo_stuck(slo_stuck)
+  );
+  \biss_master_axil.ch1.core.controller.line_faults  line_faults (
+    .ack_expired(ack_expired),
+    .clear(clear),
+    .clk(clk),
+    .delay(\delay$73 ),
+    .delay_over(delay_over),
+    .early(early),
+    .fault(\fault$69 ),
+    .locked(locked),
+    .ma_arm(ma_arm),
+    .no_start_expired(no_start_expired),
+    .restart_timer(restart_timer),
+    .rst(rst),
+    .slots_full(slots_full),
+    .started(started),
+    .status(\status$74 ),
+    .watch(watch)
+  );
+  \biss_master_axil.ch1.core.controller.ready_check  ready_check (
+    .abort(abort),
+    .aborted(aborted),
+    .bad_config(bad_config),
+    .config_ok(config_ok),
+    .first_clock(first_clock),
+    .ready(ready),
+    .slo(slo),
+    .slo_stuck(slo_stuck),
+    .slo_stuck_live(slo_stuck_live),
+    .stuck_low(stuck_low)
+  );
+  \biss_master_axil.ch1.core.controller.report  report (
+    .delay(delay),
+    .fault(fault),
+    .fault_status(fault_status),
+    .faults(faults),
+    .report_delay(report_delay),
+    .report_frame(report_frame)
+  );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
-    \$79  = cdm_cycle;
-    if (idle) begin
-      \$79  = cdm;
-    end
-    if (rst) begin
-      \$79  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
-    \$80  = idle;
-    if (rst) begin
-      \$80  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
-    \$81  = cycle_fsm_state;
-    (* full_case = 32'd1 *)
-    casez (cycle_fsm_state)
-      3'h0:
-          if (\$1 ) begin
-          end else if (break_over) begin
-            \$81  = 3'h1;
-          end
-      3'h1:
-          if (abort) begin
-            \$81  = 3'h0;
-          end else if (request) begin
-            \$81  = 3'h2;
-          end
-      3'h2:
-          if (\$3 ) begin
-            \$81  = 3'h1;
-            if (abort) begin
-              \$81  = 3'h0;
-            end
-          end else if (abort) begin
-            \$81  = 3'h0;
-          end else if (slo) begin
-            \$81  = 3'h3;
-          end else if (\$4 ) begin
-            \$81  = 3'h0;
-          end
-      3'h3:
-          if (abort) begin
-            \$81  = 3'h0;
-          end else if (frame_done) begin
-            \$81  = 3'h4;
-          end else if (\$7 ) begin
-            \$81  = 3'h0;
-          end else if (\$12 ) begin
-            \$81  = 3'h0;
-          end else if (\$15 ) begin
-            \$81  = 3'h0;
-          end else if (\$19 ) begin
-            \$81  = 3'h0;
-          end
-      3'h4:
-          if (abort) begin
-            (* full_case = 32'd1 *)
-            if (end_check) begin
-              \$81  = 3'h0;
-            end else begin
-              \$81  = 3'h0;
-            end
-          end else if (stopped) begin
-            (* full_case = 32'd1 *)
-            if (\$20 ) begin
-              (* full_case = 32'd1 *)
-              if (pause) begin
-                \$81  = 3'h5;
-              end else begin
-                \$81  = 3'h6;
-              end
-            end else if (stop_bit) begin
-              \$81  = 3'h0;
-            end else begin
-              \$81  = 3'h7;
-            end
-          end
-      3'h5:
-          if (\$21 ) begin
-          end else if (break_over) begin
-            \$81  = 3'h1;
-          end
-      3'h6:
-          if (\$22 ) begin
-            \$81  = 3'h0;
-          end else if (\$23 ) begin
-            \$81  = 3'h1;
-          end
-      3'h7:
-          if (abort) begin
-            \$81  = 3'h0;
-          end else if (\$26 ) begin
-            (* full_case = 32'd1 *)
-            if (pause) begin
-              \$81  = 3'h5;
-            end else if (cdm_cycle) begin
-              \$81  = 3'h6;
-            end else begin
-              \$81  = 3'h1;
-            end
-          end else if (slo_stuck) begin
-            \$81  = 3'h0;
-          end
-    endcase
-    if (rst) begin
-      \$81  = 3'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
-    \$82  = idle;
-    (* full_case = 32'd1 *)
-    casez (cycle_fsm_state)
-      3'h0:
-          if (\$1 ) begin
-          end else if (break_over) begin
-            \$82  = 1'h1;
-          end
-      3'h1:
-          if (abort) begin
-            \$82  = 1'h0;
-          end else if (request) begin
-            \$82  = 1'h0;
-          end
-      3'h2:
-          if (\$3 ) begin
-            \$82  = 1'h1;
-            if (abort) begin
-              \$82  = 1'h0;
-            end
-          end else if (abort) begin
-            \$82  = 1'h0;
-          end else if (slo) begin
-            \$82  = 1'h0;
-          end else if (\$4 ) begin
-            \$82  = 1'h0;
-          end
-      3'h3:
-          if (abort) begin
-            \$82  = 1'h0;
-          end else if (frame_done) begin
-            \$82  = 1'h0;
-          end else if (\$7 ) begin
-            \$82  = 1'h0;
-          end else if (\$12 ) begin
-            \$82  = 1'h0;
-          end else if (\$15 ) begin
-            \$82  = 1'h0;
-          end else if (\$19 ) begin
-            \$82  = 1'h0;
-          end
-      3'h4:
-          if (abort) begin
-            (* full_case = 32'd1 *)
-            if (end_check) begin
-              \$82  = 1'h0;
-            end else begin
-              \$82  = 1'h0;
-            end
-          end else if (stopped) begin
-            (* full_case = 32'd1 *)
-            if (\$20 ) begin
-              (* full_case = 32'd1 *)
-              if (pause) begin
-                \$82  = 1'h0;
-              end else begin
-                \$82  = 1'h0;
-              end
-            end else if (stop_bit) begin
-              \$82  = 1'h0;
-            end else begin
-              \$82  = 1'h0;
-            end
-          end
-      3'h5:
-          if (\$21 ) begin
-          end else if (break_over) begin
-            \$82  = 1'h1;
-          end
-      3'h6:
-          if (\$22 ) begin
-            \$82  = 1'h0;
-          end else if (\$23 ) begin
-            \$82  = 1'h1;
-          end
-      3'h7:
-          if (abort) begin
-            \$82  = 1'h0;
-          end else if (\$26 ) begin
-            (* full_case = 32'd1 *)
-            if (pause) begin
-              \$82  = 1'h0;
-            end else if (cdm_cycle) begin
-              \$82  = 1'h0;
-            end else begin
-              \$82  = 1'h1;
-            end
-          end else if (slo_stuck) begin
-            \$82  = 1'h0;
-          end
-    endcase
-    if (rst) begin
-      \$82  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
-    \$83  = receiver_clear;
-    (* full_case = 32'd1 *)
-    casez (cycle_fsm_state)
-      3'h0:
-          if (\$1 ) begin
-          end else if (break_over) begin
-            \$83  = 1'h1;
-          end
-      3'h1:
-          if (abort) begin
-            \$83  = 1'h1;
-          end else if (request) begin
-            \$83  = 1'h1;
-          end
-      3'h2:
-          if (\$3 ) begin
-            \$83  = 1'h1;
-            if (abort) begin
-              \$83  = 1'h1;
-            end
-          end else if (abort) begin
-            \$83  = 1'h1;
-          end else if (slo) begin
-            \$83  = 1'h0;
-          end else if (\$4 ) begin
-            \$83  = 1'h1;
-          end
-      3'h3:
-          if (abort) begin
-            \$83  = 1'h1;
-          end else if (frame_done) begin
-            \$83  = 1'h0;
-          end else if (\$7 ) begin
-            \$83  = 1'h1;
-          end else if (\$12 ) begin
-            \$83  = 1'h1;
-          end else if (\$15 ) begin
-            \$83  = 1'h1;
-          end else if (\$19 ) begin
-            \$83  = 1'h1;
-          end
-      3'h4:
-          if (abort) begin
-            (* full_case = 32'd1 *)
-            if (end_check) begin
-              \$83  = 1'h1;
-            end else begin
-              \$83  = 1'h1;
-            end
-          end else if (stopped) begin
-            (* full_case = 32'd1 *)
-            if (\$20 ) begin
-              (* full_case = 32'd1 *)
-              if (pause) begin
-                \$83  = 1'h1;
-              end else begin
-                \$83  = 1'h0;
-              end
-            end else if (stop_bit) begin
-              \$83  = 1'h1;
-            end else begin
-              \$83  = 1'h0;
-            end
-          end
-      3'h5:
-          if (\$21 ) begin
-          end else if (break_over) begin
-            \$83  = 1'h1;
-          end
-      3'h6:
-          if (\$22 ) begin
-            \$83  = 1'h1;
-          end else if (\$23 ) begin
-            \$83  = 1'h1;
-          end
-      3'h7:
-          if (abort) begin
-            \$83  = 1'h1;
-          end else if (\$26 ) begin
-            (* full_case = 32'd1 *)
-            if (pause) begin
-              \$83  = 1'h1;
-            end else if (cdm_cycle) begin
-              \$83  = 1'h0;
-            end else begin
-              \$83  = 1'h1;
-            end
-          end else if (slo_stuck) begin
-            \$83  = 1'h1;
-          end
-    endcase
-    if (rst) begin
-      \$83  = 1'h1;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
-    \$84  = armed;
-    casez (cycle_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          \$84  = 1'h0;
-      3'h3:
-          if (ma_arm) begin
-            \$84  = 1'h1;
-          end
-    endcase
-    if (rst) begin
-      \$84  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
-    \$85  = locked_seen;
-    casez (cycle_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          \$85  = 1'h0;
-      3'h3:
-          if (\$6 ) begin
-            \$85  = 1'h1;
-          end
-    endcase
-    if (rst) begin
-      \$85  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
-    \$86  = pause;
-    casez (cycle_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h3:
-          if (abort) begin
-          end else if (frame_done) begin
-            \$86  = frame_doubtful;
-          end
-    endcase
-    if (rst) begin
-      \$86  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
     resync = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -17224,12 +17228,12 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
     timer_clear = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
       3'h0:
-          if (\$29 ) begin
+          if (\$1 ) begin
             timer_clear = 1'h1;
           end
       3'h1:
@@ -17237,14 +17241,14 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, frame
       3'h2:
           timer_clear = 1'h1;
       3'h3:
-          if (\$36 ) begin
+          if (\$3 ) begin
             timer_clear = 1'h1;
           end
       3'h4:
           if (abort) begin
             timer_clear = 1'h1;
           end else if (stopped) begin
-            if (\$54 ) begin
+            if (\$6 ) begin
               if (pause) begin
                 timer_clear = 1'h1;
               end
@@ -17253,7 +17257,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, frame
             end
           end
       3'h5:
-          if (\$59 ) begin
+          if (\$7 ) begin
             timer_clear = 1'h1;
           end
       3'h6:
@@ -17261,7 +17265,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, frame
       3'h7:
           if (abort) begin
             timer_clear = 1'h1;
-          end else if (\$70 ) begin
+          end else if (\$10 ) begin
             if (pause) begin
               timer_clear = 1'h1;
             end
@@ -17271,7 +17275,19 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    clear = 1'h0;
+    casez (cycle_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          clear = 1'h1;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
     fault = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -17280,25 +17296,19 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, frame
       3'h1:
           /* empty */;
       3'h2:
-          if (\$31 ) begin
+          if (bad_config) begin
             fault = 1'h1;
-          end else if (abort) begin
+          end else if (aborted) begin
             fault = 1'h1;
-          end else if (slo) begin
-          end else if (\$32 ) begin
+          end else if (ready) begin
+          end else if (stuck_low) begin
             fault = 1'h1;
           end
       3'h3:
           if (abort) begin
             fault = 1'h1;
           end else if (frame_done) begin
-          end else if (\$37 ) begin
-            fault = 1'h1;
-          end else if (\$42 ) begin
-            fault = 1'h1;
-          end else if (\$45 ) begin
-            fault = 1'h1;
-          end else if (\$49 ) begin
+          end else if (\fault$69 ) begin
             fault = 1'h1;
           end
       3'h4:
@@ -17307,7 +17317,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, frame
               fault = 1'h1;
             end
           end else if (stopped) begin
-            if (\$54 ) begin
+            if (\$6 ) begin
             end else if (stop_bit) begin
               fault = 1'h1;
             end
@@ -17319,14 +17329,14 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, frame
       3'h7:
           if (abort) begin
             fault = 1'h1;
-          end else if (\$70 ) begin
+          end else if (\$10 ) begin
           end else if (slo_stuck) begin
             fault = 1'h1;
           end
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
     fault_status = 4'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -17335,26 +17345,20 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, frame
       3'h1:
           /* empty */;
       3'h2:
-          if (\$31 ) begin
+          if (bad_config) begin
             fault_status = 4'hb;
-          end else if (abort) begin
+          end else if (aborted) begin
             fault_status = 4'ha;
-          end else if (slo) begin
-          end else if (\$32 ) begin
+          end else if (ready) begin
+          end else if (stuck_low) begin
             fault_status = 4'h9;
           end
       3'h3:
           if (abort) begin
             fault_status = 4'ha;
           end else if (frame_done) begin
-          end else if (\$37 ) begin
-            fault_status = 4'h8;
-          end else if (\$42 ) begin
-            fault_status = 4'h6;
-          end else if (\$45 ) begin
-            fault_status = 4'h8;
-          end else if (\$49 ) begin
-            fault_status = 4'h7;
+          end else if (\fault$69 ) begin
+            fault_status = \status$74 ;
           end
       3'h4:
           if (abort) begin
@@ -17362,7 +17366,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, frame
               fault_status = 4'ha;
             end
           end else if (stopped) begin
-            if (\$54 ) begin
+            if (\$6 ) begin
             end else if (stop_bit) begin
               fault_status = 4'hc;
             end
@@ -17374,69 +17378,14 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, frame
       3'h7:
           if (abort) begin
             fault_status = 4'ha;
-          end else if (\$70 ) begin
+          end else if (\$10 ) begin
           end else if (slo_stuck) begin
             fault_status = 4'h9;
           end
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
-    faults = 7'h00;
-    (* full_case = 32'd1 *)
-    casez (cycle_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          if (\$31 ) begin
-            faults[5] = 1'h1;
-          end else if (abort) begin
-            faults[4] = 1'h1;
-          end else if (slo) begin
-          end else if (\$32 ) begin
-            faults[3] = 1'h1;
-          end
-      3'h3:
-          if (abort) begin
-            faults[4] = 1'h1;
-          end else if (frame_done) begin
-          end else if (\$37 ) begin
-            faults[2] = 1'h1;
-          end else if (\$42 ) begin
-            faults[0] = 1'h1;
-          end else if (\$45 ) begin
-            faults[2] = 1'h1;
-          end else if (\$49 ) begin
-            faults[1] = 1'h1;
-          end
-      3'h4:
-          if (abort) begin
-            if (end_check) begin
-              faults[4] = 1'h1;
-            end
-          end else if (stopped) begin
-            if (\$54 ) begin
-            end else if (stop_bit) begin
-              faults[6] = 1'h1;
-            end
-          end
-      3'h5:
-          /* empty */;
-      3'h6:
-          /* empty */;
-      3'h7:
-          if (abort) begin
-            faults[4] = 1'h1;
-          end else if (\$70 ) begin
-          end else if (slo_stuck) begin
-            faults[3] = 1'h1;
-          end
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
     ma_run = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -17446,13 +17395,13 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, frame
       3'h2:
           /* empty */;
       3'h3:
-          ma_run = \$33 ;
+          ma_run = \$2 ;
       3'h4:
-          ma_run = \$51 ;
+          ma_run = \$5 ;
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
     in_clock = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -17466,9 +17415,8 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
-    ma_hold = 1'h0;
-    (* full_case = 32'd1 *)
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    watch = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
           /* empty */;
@@ -17477,19 +17425,27 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, frame
       3'h2:
           /* empty */;
       3'h3:
-          ma_hold = \$35 ;
-      3'h4:
-          ma_hold = \$53 ;
-      3'h5:
-          ma_hold = \$58 ;
-      3'h6:
-          ma_hold = \$63 ;
-      3'h7:
-          ma_hold = \$67 ;
+          watch = 1'h1;
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    framing = 1'h0;
+    casez (cycle_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h3:
+          framing = 1'h1;
+      3'h4:
+          framing = 1'h1;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
     report_frame = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -17502,7 +17458,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, frame
       3'h3:
           if (abort) begin
           end else if (frame_done) begin
-            if (\$50 ) begin
+            if (\$4 ) begin
               report_frame = 1'h1;
             end
           end
@@ -17514,15 +17470,14 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, frame
           /* empty */;
       3'h7:
           if (abort) begin
-          end else if (\$70 ) begin
+          end else if (\$10 ) begin
             report_frame = 1'h1;
           end
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
-    report_delay = 1'h0;
-    (* full_case = 32'd1 *)
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    delay = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
           /* empty */;
@@ -17533,27 +17488,364 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, frame
       3'h3:
           if (abort) begin
           end else if (frame_done) begin
-            if (\$50 ) begin
-              report_delay = 1'h1;
-            end
-          end else if (\$37 ) begin
-          end else if (\$42 ) begin
-          end else if (\$45 ) begin
-            report_delay = 1'h1;
-          end
-      3'h4:
-          /* empty */;
-      3'h5:
-          /* empty */;
-      3'h6:
-          /* empty */;
-      3'h7:
-          if (abort) begin
-          end else if (\$70 ) begin
-            report_delay = 1'h1;
+          end else if (\fault$69 ) begin
+            delay = \delay$73 ;
           end
     endcase
   end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    holding = 1'h0;
+    (* full_case = 32'd1 *)
+    casez (cycle_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h3:
+          /* empty */;
+      3'h4:
+          /* empty */;
+      3'h5:
+          holding = 1'h1;
+      3'h6:
+          holding = 1'h1;
+      3'h7:
+          holding = 1'h1;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    \$27  = idle;
+    if (rst) begin
+      \$27  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    \$28  = cycle_fsm_state;
+    (* full_case = 32'd1 *)
+    casez (cycle_fsm_state)
+      3'h0:
+          if (\$19 ) begin
+          end else if (break_over) begin
+            \$28  = 3'h1;
+          end
+      3'h1:
+          if (abort) begin
+            \$28  = 3'h0;
+          end else if (request) begin
+            \$28  = 3'h2;
+          end
+      3'h2:
+          if (bad_config) begin
+            \$28  = 3'h1;
+            if (abort) begin
+              \$28  = 3'h0;
+            end
+          end else if (aborted) begin
+            \$28  = 3'h0;
+          end else if (ready) begin
+            \$28  = 3'h3;
+          end else if (stuck_low) begin
+            \$28  = 3'h0;
+          end
+      3'h3:
+          if (abort) begin
+            \$28  = 3'h0;
+          end else if (frame_done) begin
+            \$28  = 3'h4;
+          end else if (\fault$69 ) begin
+            \$28  = 3'h0;
+          end
+      3'h4:
+          if (abort) begin
+            (* full_case = 32'd1 *)
+            if (end_check) begin
+              \$28  = 3'h0;
+            end else begin
+              \$28  = 3'h0;
+            end
+          end else if (stopped) begin
+            (* full_case = 32'd1 *)
+            if (\$20 ) begin
+              (* full_case = 32'd1 *)
+              if (pause) begin
+                \$28  = 3'h5;
+              end else begin
+                \$28  = 3'h6;
+              end
+            end else if (stop_bit) begin
+              \$28  = 3'h0;
+            end else begin
+              \$28  = 3'h7;
+            end
+          end
+      3'h5:
+          if (\$21 ) begin
+          end else if (break_over) begin
+            \$28  = 3'h1;
+          end
+      3'h6:
+          if (\$22 ) begin
+            \$28  = 3'h0;
+          end else if (\$23 ) begin
+            \$28  = 3'h1;
+          end
+      3'h7:
+          if (abort) begin
+            \$28  = 3'h0;
+          end else if (\$26 ) begin
+            (* full_case = 32'd1 *)
+            if (pause) begin
+              \$28  = 3'h5;
+            end else if (cdm_cycle) begin
+              \$28  = 3'h6;
+            end else begin
+              \$28  = 3'h1;
+            end
+          end else if (slo_stuck) begin
+            \$28  = 3'h0;
+          end
+    endcase
+    if (rst) begin
+      \$28  = 3'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    \$29  = idle;
+    (* full_case = 32'd1 *)
+    casez (cycle_fsm_state)
+      3'h0:
+          if (\$19 ) begin
+          end else if (break_over) begin
+            \$29  = 1'h1;
+          end
+      3'h1:
+          if (abort) begin
+            \$29  = 1'h0;
+          end else if (request) begin
+            \$29  = 1'h0;
+          end
+      3'h2:
+          if (bad_config) begin
+            \$29  = 1'h1;
+            if (abort) begin
+              \$29  = 1'h0;
+            end
+          end else if (aborted) begin
+            \$29  = 1'h0;
+          end else if (ready) begin
+            \$29  = 1'h0;
+          end else if (stuck_low) begin
+            \$29  = 1'h0;
+          end
+      3'h3:
+          if (abort) begin
+            \$29  = 1'h0;
+          end else if (frame_done) begin
+            \$29  = 1'h0;
+          end else if (\fault$69 ) begin
+            \$29  = 1'h0;
+          end
+      3'h4:
+          if (abort) begin
+            (* full_case = 32'd1 *)
+            if (end_check) begin
+              \$29  = 1'h0;
+            end else begin
+              \$29  = 1'h0;
+            end
+          end else if (stopped) begin
+            (* full_case = 32'd1 *)
+            if (\$20 ) begin
+              (* full_case = 32'd1 *)
+              if (pause) begin
+                \$29  = 1'h0;
+              end else begin
+                \$29  = 1'h0;
+              end
+            end else if (stop_bit) begin
+              \$29  = 1'h0;
+            end else begin
+              \$29  = 1'h0;
+            end
+          end
+      3'h5:
+          if (\$21 ) begin
+          end else if (break_over) begin
+            \$29  = 1'h1;
+          end
+      3'h6:
+          if (\$22 ) begin
+            \$29  = 1'h0;
+          end else if (\$23 ) begin
+            \$29  = 1'h1;
+          end
+      3'h7:
+          if (abort) begin
+            \$29  = 1'h0;
+          end else if (\$26 ) begin
+            (* full_case = 32'd1 *)
+            if (pause) begin
+              \$29  = 1'h0;
+            end else if (cdm_cycle) begin
+              \$29  = 1'h0;
+            end else begin
+              \$29  = 1'h1;
+            end
+          end else if (slo_stuck) begin
+            \$29  = 1'h0;
+          end
+    endcase
+    if (rst) begin
+      \$29  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    \$30  = receiver_clear;
+    (* full_case = 32'd1 *)
+    casez (cycle_fsm_state)
+      3'h0:
+          if (\$19 ) begin
+          end else if (break_over) begin
+            \$30  = 1'h1;
+          end
+      3'h1:
+          if (abort) begin
+            \$30  = 1'h1;
+          end else if (request) begin
+            \$30  = 1'h1;
+          end
+      3'h2:
+          if (bad_config) begin
+            \$30  = 1'h1;
+            if (abort) begin
+              \$30  = 1'h1;
+            end
+          end else if (aborted) begin
+            \$30  = 1'h1;
+          end else if (ready) begin
+            \$30  = 1'h0;
+          end else if (stuck_low) begin
+            \$30  = 1'h1;
+          end
+      3'h3:
+          if (abort) begin
+            \$30  = 1'h1;
+          end else if (frame_done) begin
+            \$30  = 1'h0;
+          end else if (\fault$69 ) begin
+            \$30  = 1'h1;
+          end
+      3'h4:
+          if (abort) begin
+            (* full_case = 32'd1 *)
+            if (end_check) begin
+              \$30  = 1'h1;
+            end else begin
+              \$30  = 1'h1;
+            end
+          end else if (stopped) begin
+            (* full_case = 32'd1 *)
+            if (\$20 ) begin
+              (* full_case = 32'd1 *)
+              if (pause) begin
+                \$30  = 1'h1;
+              end else begin
+                \$30  = 1'h0;
+              end
+            end else if (stop_bit) begin
+              \$30  = 1'h1;
+            end else begin
+              \$30  = 1'h0;
+            end
+          end
+      3'h5:
+          if (\$21 ) begin
+          end else if (break_over) begin
+            \$30  = 1'h1;
+          end
+      3'h6:
+          if (\$22 ) begin
+            \$30  = 1'h1;
+          end else if (\$23 ) begin
+            \$30  = 1'h1;
+          end
+      3'h7:
+          if (abort) begin
+            \$30  = 1'h1;
+          end else if (\$26 ) begin
+            (* full_case = 32'd1 *)
+            if (pause) begin
+              \$30  = 1'h1;
+            end else if (cdm_cycle) begin
+              \$30  = 1'h0;
+            end else begin
+              \$30  = 1'h1;
+            end
+          end else if (slo_stuck) begin
+            \$30  = 1'h1;
+          end
+    endcase
+    if (rst) begin
+      \$30  = 1'h1;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    \$31  = pause;
+    casez (cycle_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h3:
+          if (abort) begin
+          end else if (frame_done) begin
+            \$31  = frame_doubtful;
+          end
+    endcase
+    if (rst) begin
+      \$31  = 1'h0;
+    end
+  end
+  assign \first_clock$1  = first_clock;
+  assign \config_ok$3  = config_ok;
+  assign \abort$5  = abort;
+  assign \slo$7  = slo;
+  assign \slo_stuck$9  = slo_stuck;
+  assign \slo_stuck_live$11  = slo_stuck_live;
+  assign \ma_arm$13  = ma_arm;
+  assign \locked$15  = locked;
+  assign \early$17  = early;
+  assign \started$19  = started;
+  assign \slots_full$21  = slots_full;
+  assign \ack_expired$23  = ack_expired;
+  assign \no_start_expired$25  = no_start_expired;
+  assign \delay_over$27  = delay_over;
+  assign \restart_timer$29  = restart_timer;
+  assign \report_frame$31  = report_frame;
+  assign \report_delay$33  = report_delay;
+  assign \fault$35  = fault;
+  assign \fault_status$37  = fault_status;
+  assign \faults$39  = faults;
+  assign \idle$41  = idle;
+  assign \cdm$43  = cdm;
+  assign \slo$44  = slo;
+  assign \slo_stuck$45  = slo_stuck;
+  assign \abort$46  = abort;
+  assign \cdm_cycle$48  = cdm_cycle;
+  assign \ma_hold$50  = ma_hold;
+  assign fail = fault;
+  assign status = fault_status;
+  assign frame = report_frame;
   assign \faults.no_ack  = faults[0];
   assign \faults.no_start  = faults[1];
   assign \faults.delay_range  = faults[2];
@@ -17561,6 +17853,398 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, frame
   assign \faults.aborted  = faults[4];
   assign \faults.bad_config  = faults[5];
   assign \faults.no_stop  = faults[6];
+  assign \faults$39.no_ack  = faults[0];
+  assign \faults$39.no_start  = faults[1];
+  assign \faults$39.delay_range  = faults[2];
+  assign \faults$39.slo_stuck_low  = faults[3];
+  assign \faults$39.aborted  = faults[4];
+  assign \faults$39.bad_config  = faults[5];
+  assign \faults$39.no_stop  = faults[6];
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_axil.ch1.core.controller.cdm_hold (rst, abort, framing, holding, idle, cdm_cycle, ma_hold, slo_stuck, slo, cdm, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$77  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire \$3 ;
+  wire \$4 ;
+  wire \$5 ;
+  wire \$6 ;
+  reg \$7 ;
+  input abort;
+  wire abort;
+  input cdm;
+  wire cdm;
+  output cdm_cycle;
+  reg cdm_cycle = 1'h0;
+  input clk;
+  wire clk;
+  input framing;
+  wire framing;
+  input holding;
+  wire holding;
+  input idle;
+  wire idle;
+  output ma_hold;
+  reg ma_hold;
+  input rst;
+  wire rst;
+  input slo;
+  wire slo;
+  input slo_stuck;
+  wire slo_stuck;
+  assign \$3  = slo | slo_stuck;
+  assign \$4  = \$3  | abort;
+  assign \$5  = ~ \$4 ;
+  assign \$6  = cdm_cycle & \$5 ;
+  always @(posedge clk)
+    cdm_cycle <= \$7 ;
+  assign \$1  = ~ abort;
+  assign \$2  = cdm_cycle & \$1 ;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
+    \$7  = cdm_cycle;
+    if (idle) begin
+      \$7  = cdm;
+    end
+    if (rst) begin
+      \$7  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
+    ma_hold = 1'h0;
+    if (framing) begin
+      ma_hold = \$2 ;
+    end else if (holding) begin
+      ma_hold = \$6 ;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_axil.ch1.core.controller.line_faults (rst, restart_timer, clear, watch, fault, status, delay, ack_expired, no_start_expired, delay_over, ma_arm, early, locked, slots_full, started, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$78  = 0;
+  wire \$1 ;
+  wire \$10 ;
+  wire \$11 ;
+  wire \$12 ;
+  wire \$13 ;
+  wire \$14 ;
+  wire \$15 ;
+  wire \$16 ;
+  wire \$17 ;
+  wire \$18 ;
+  wire \$19 ;
+  wire \$2 ;
+  reg \$20 ;
+  reg \$21 ;
+  wire \$3 ;
+  wire \$4 ;
+  wire \$5 ;
+  wire \$6 ;
+  wire \$7 ;
+  wire \$8 ;
+  wire \$9 ;
+  input ack_expired;
+  wire ack_expired;
+  reg armed = 1'h0;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output delay;
+  reg delay;
+  input delay_over;
+  wire delay_over;
+  input early;
+  wire early;
+  output fault;
+  reg fault;
+  input locked;
+  wire locked;
+  reg locked_seen = 1'h0;
+  input ma_arm;
+  wire ma_arm;
+  input no_start_expired;
+  wire no_start_expired;
+  output restart_timer;
+  wire restart_timer;
+  input rst;
+  wire rst;
+  input slots_full;
+  wire slots_full;
+  input started;
+  wire started;
+  (* enum_base_type = "Status" *)
+  (* enum_value_0000 = "OK" *)
+  (* enum_value_0001 = "CRC_ERROR_WORD0" *)
+  (* enum_value_0010 = "CRC_ERROR_WORD1" *)
+  (* enum_value_0011 = "CRC_ERROR_BOTH" *)
+  (* enum_value_0100 = "SIGN_OF_LIFE" *)
+  (* enum_value_0101 = "SPW_MISMATCH" *)
+  (* enum_value_0110 = "NO_ACK" *)
+  (* enum_value_0111 = "NO_START" *)
+  (* enum_value_1000 = "DELAY_RANGE" *)
+  (* enum_value_1001 = "SLO_STUCK_LOW" *)
+  (* enum_value_1010 = "ABORTED" *)
+  (* enum_value_1011 = "BAD_CONFIG" *)
+  (* enum_value_1100 = "NO_STOP" *)
+  output [3:0] status;
+  reg [3:0] status;
+  input watch;
+  wire watch;
+  assign \$1  = watch & ma_arm;
+  assign \$2  = ~ locked_seen;
+  assign \$3  = locked & \$2 ;
+  assign \$4  = watch & \$3 ;
+  assign \$5  = ~ locked_seen;
+  assign \$6  = locked & \$5 ;
+  assign restart_timer = ma_arm | \$6 ;
+  assign \$7  = armed & early;
+  assign \$8  = ~ locked_seen;
+  assign \$9  = armed & \$8 ;
+  assign \$10  = ~ locked;
+  assign \$11  = \$9  & \$10 ;
+  assign \$12  = \$11  & ack_expired;
+  assign \$13  = ~ locked_seen;
+  assign \$14  = locked & \$13 ;
+  assign \$15  = \$14  & delay_over;
+  assign \$16  = ~ started;
+  assign \$17  = locked_seen & \$16 ;
+  assign \$18  = no_start_expired | slots_full;
+  assign \$19  = \$17  & \$18 ;
+  always @(posedge clk)
+    armed <= \$20 ;
+  always @(posedge clk)
+    locked_seen <= \$21 ;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
+    \$20  = armed;
+    if (clear) begin
+      \$20  = 1'h0;
+    end
+    if (\$1 ) begin
+      \$20  = 1'h1;
+    end
+    if (rst) begin
+      \$20  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
+    \$21  = locked_seen;
+    if (clear) begin
+      \$21  = 1'h0;
+    end
+    if (\$4 ) begin
+      \$21  = 1'h1;
+    end
+    if (rst) begin
+      \$21  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
+    fault = 1'h0;
+    if (\$7 ) begin
+      fault = 1'h1;
+    end else if (\$12 ) begin
+      fault = 1'h1;
+    end else if (\$15 ) begin
+      fault = 1'h1;
+    end else if (\$19 ) begin
+      fault = 1'h1;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
+    status = 4'h0;
+    if (\$7 ) begin
+      status = 4'h8;
+    end else if (\$12 ) begin
+      status = 4'h6;
+    end else if (\$15 ) begin
+      status = 4'h8;
+    end else if (\$19 ) begin
+      status = 4'h7;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
+    delay = 1'h0;
+    if (\$7 ) begin
+    end else if (\$12 ) begin
+    end else if (\$15 ) begin
+      delay = 1'h1;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_axil.ch1.core.controller.ready_check (config_ok, first_clock, bad_config, aborted, ready, stuck_low, slo_stuck, slo_stuck_live, slo, abort);
+  reg \$auto$verilog_backend.cc:2355:dump_module$79  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire \$3 ;
+  input abort;
+  wire abort;
+  output aborted;
+  reg aborted;
+  output bad_config;
+  reg bad_config;
+  input config_ok;
+  wire config_ok;
+  input first_clock;
+  wire first_clock;
+  output ready;
+  reg ready;
+  input slo;
+  wire slo;
+  input slo_stuck;
+  wire slo_stuck;
+  input slo_stuck_live;
+  wire slo_stuck_live;
+  output stuck_low;
+  reg stuck_low;
+  assign \$1  = ~ config_ok;
+  assign \$2  = first_clock & \$1 ;
+  assign \$3  = first_clock ? slo_stuck_live : slo_stuck;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$79 ) begin end
+    stuck_low = 1'h0;
+    if (\$2 ) begin
+    end else if (abort) begin
+    end else if (slo) begin
+    end else if (\$3 ) begin
+      stuck_low = 1'h1;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$79 ) begin end
+    bad_config = 1'h0;
+    if (\$2 ) begin
+      bad_config = 1'h1;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$79 ) begin end
+    aborted = 1'h0;
+    if (\$2 ) begin
+    end else if (abort) begin
+      aborted = 1'h1;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$79 ) begin end
+    ready = 1'h0;
+    if (\$2 ) begin
+    end else if (abort) begin
+    end else if (slo) begin
+      ready = 1'h1;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_axil.ch1.core.controller.report (fault, fault_status, report_frame, delay, faults, report_delay);
+  wire \$1 ;
+  wire \$10 ;
+  wire \$11 ;
+  wire \$12 ;
+  wire \$13 ;
+  wire \$14 ;
+  wire \$2 ;
+  wire \$3 ;
+  wire \$4 ;
+  wire \$5 ;
+  wire \$6 ;
+  wire \$7 ;
+  wire \$8 ;
+  wire \$9 ;
+  input delay;
+  wire delay;
+  wire fail;
+  input fault;
+  wire fault;
+  (* enum_base_type = "Status" *)
+  (* enum_value_0000 = "OK" *)
+  (* enum_value_0001 = "CRC_ERROR_WORD0" *)
+  (* enum_value_0010 = "CRC_ERROR_WORD1" *)
+  (* enum_value_0011 = "CRC_ERROR_BOTH" *)
+  (* enum_value_0100 = "SIGN_OF_LIFE" *)
+  (* enum_value_0101 = "SPW_MISMATCH" *)
+  (* enum_value_0110 = "NO_ACK" *)
+  (* enum_value_0111 = "NO_START" *)
+  (* enum_value_1000 = "DELAY_RANGE" *)
+  (* enum_value_1001 = "SLO_STUCK_LOW" *)
+  (* enum_value_1010 = "ABORTED" *)
+  (* enum_value_1011 = "BAD_CONFIG" *)
+  (* enum_value_1100 = "NO_STOP" *)
+  input [3:0] fault_status;
+  wire [3:0] fault_status;
+  output [6:0] faults;
+  wire [6:0] faults;
+  wire \faults.aborted ;
+  wire \faults.bad_config ;
+  wire \faults.delay_range ;
+  wire \faults.no_ack ;
+  wire \faults.no_start ;
+  wire \faults.no_stop ;
+  wire \faults.slo_stuck_low ;
+  wire frame;
+  output report_delay;
+  wire report_delay;
+  input report_frame;
+  wire report_frame;
+  (* enum_base_type = "Status" *)
+  (* enum_value_0000 = "OK" *)
+  (* enum_value_0001 = "CRC_ERROR_WORD0" *)
+  (* enum_value_0010 = "CRC_ERROR_WORD1" *)
+  (* enum_value_0011 = "CRC_ERROR_BOTH" *)
+  (* enum_value_0100 = "SIGN_OF_LIFE" *)
+  (* enum_value_0101 = "SPW_MISMATCH" *)
+  (* enum_value_0110 = "NO_ACK" *)
+  (* enum_value_0111 = "NO_START" *)
+  (* enum_value_1000 = "DELAY_RANGE" *)
+  (* enum_value_1001 = "SLO_STUCK_LOW" *)
+  (* enum_value_1010 = "ABORTED" *)
+  (* enum_value_1011 = "BAD_CONFIG" *)
+  (* enum_value_1100 = "NO_STOP" *)
+  wire [3:0] status;
+  assign report_delay = report_frame | delay;
+  assign \$1  = fault_status == 3'h6;
+  assign \$2  = fault & \$1 ;
+  assign \$3  = fault_status == 3'h7;
+  assign \$4  = fault & \$3 ;
+  assign \$5  = fault_status == 4'h8;
+  assign \$6  = fault & \$5 ;
+  assign \$7  = fault_status == 4'h9;
+  assign \$8  = fault & \$7 ;
+  assign \$9  = fault_status == 4'ha;
+  assign \$10  = fault & \$9 ;
+  assign \$11  = fault_status == 4'hb;
+  assign \$12  = fault & \$11 ;
+  assign \$13  = fault_status == 4'hc;
+  assign \$14  = fault & \$13 ;
+  assign frame = report_frame;
+  assign fail = fault;
+  assign status = fault_status;
+  assign \faults.no_ack  = faults[0];
+  assign \faults.no_start  = faults[1];
+  assign \faults.delay_range  = faults[2];
+  assign \faults.slo_stuck_low  = faults[3];
+  assign \faults.aborted  = faults[4];
+  assign \faults.bad_config  = faults[5];
+  assign \faults.no_stop  = faults[6];
+  assign faults[6] = \$14 ;
+  assign faults[5] = \$12 ;
+  assign faults[4] = \$10 ;
+  assign faults[3] = \$8 ;
+  assign faults[2] = \$6 ;
+  assign faults[1] = \$4 ;
+  assign faults[0] = \$2 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -17885,330 +18569,6 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.counters.count_aborted (rst, clear, inc, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$74  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_ca_aborted (rst, clear, inc, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$75  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_ca_crc4_error (rst, clear, inc, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$76  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_ca_data_fault (rst, clear, inc, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$77  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_ca_no_answer (rst, clear, inc, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$78  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_ca_refused (rst, clear, inc, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$79  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$79 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$79 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_crc_word0 (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$80  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -18262,7 +18622,7 @@ module \biss_master_axil.ch1.core.counters.count_crc_word0 (rst, clear, inc, cou
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_crc_word1 (rst, clear, inc, count, clk);
+module \biss_master_axil.ch1.core.counters.count_ca_aborted (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$81  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -18316,7 +18676,7 @@ module \biss_master_axil.ch1.core.counters.count_crc_word1 (rst, clear, inc, cou
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_delay_range (rst, clear, inc, count, clk);
+module \biss_master_axil.ch1.core.counters.count_ca_crc4_error (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$82  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -18370,7 +18730,7 @@ module \biss_master_axil.ch1.core.counters.count_delay_range (rst, clear, inc, c
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_lc_repeat (rst, clear, inc, count, clk);
+module \biss_master_axil.ch1.core.counters.count_ca_data_fault (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$83  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -18424,7 +18784,7 @@ module \biss_master_axil.ch1.core.counters.count_lc_repeat (rst, clear, inc, cou
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_lc_skip (rst, clear, inc, count, clk);
+module \biss_master_axil.ch1.core.counters.count_ca_no_answer (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$84  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -18478,7 +18838,7 @@ module \biss_master_axil.ch1.core.counters.count_lc_skip (rst, clear, inc, count
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_lc_zero (rst, clear, inc, count, clk);
+module \biss_master_axil.ch1.core.counters.count_ca_refused (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$85  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -18532,7 +18892,7 @@ module \biss_master_axil.ch1.core.counters.count_lc_zero (rst, clear, inc, count
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_no_ack (rst, clear, inc, count, clk);
+module \biss_master_axil.ch1.core.counters.count_crc_word0 (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$86  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -18586,7 +18946,7 @@ module \biss_master_axil.ch1.core.counters.count_no_ack (rst, clear, inc, count,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_no_start (rst, clear, inc, count, clk);
+module \biss_master_axil.ch1.core.counters.count_crc_word1 (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$87  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -18640,7 +19000,7 @@ module \biss_master_axil.ch1.core.counters.count_no_start (rst, clear, inc, coun
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_no_stop (rst, clear, inc, count, clk);
+module \biss_master_axil.ch1.core.counters.count_delay_range (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$88  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -18694,7 +19054,7 @@ module \biss_master_axil.ch1.core.counters.count_no_stop (rst, clear, inc, count
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_overrun (rst, clear, inc, count, clk);
+module \biss_master_axil.ch1.core.counters.count_lc_repeat (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$89  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -18748,7 +19108,7 @@ module \biss_master_axil.ch1.core.counters.count_overrun (rst, clear, inc, count
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_slo_stuck_low (rst, clear, inc, count, clk);
+module \biss_master_axil.ch1.core.counters.count_lc_skip (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$90  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -18802,7 +19162,7 @@ module \biss_master_axil.ch1.core.counters.count_slo_stuck_low (rst, clear, inc,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_spw_mismatch (rst, clear, inc, count, clk);
+module \biss_master_axil.ch1.core.counters.count_lc_zero (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$91  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -18856,9 +19216,333 @@ module \biss_master_axil.ch1.core.counters.count_spw_mismatch (rst, clear, inc, 
 endmodule
 
 (* generator = "Amaranth" *)
+module \biss_master_axil.ch1.core.counters.count_no_ack (rst, clear, inc, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$92  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_axil.ch1.core.counters.count_no_start (rst, clear, inc, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$93  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_axil.ch1.core.counters.count_no_stop (rst, clear, inc, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$94  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$94 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$94 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_axil.ch1.core.counters.count_overrun (rst, clear, inc, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$95  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_axil.ch1.core.counters.count_slo_stuck_low (rst, clear, inc, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$96  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$96 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$96 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_axil.ch1.core.counters.count_spw_mismatch (rst, clear, inc, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$97  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, sample, \bit , receiver_clear, done, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1, lc, cpw_top, crc_ok
 , clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$92  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$98  = 0;
   wire [6:0] \$1 ;
   wire [1:0] \$10 ;
   reg [2:0] \$100 ;
@@ -19241,7 +19925,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     .valid(\valid$52 )
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
     (* full_case = 32'd1 *)
     casez (words[6])
       1'h0:
@@ -19251,7 +19935,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -19265,7 +19949,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
     (* full_case = 32'd1 *)
     casez (words[9:6])
       4'h0:
@@ -19303,7 +19987,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -19317,7 +20001,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
     (* full_case = 32'd1 *)
     casez (words[16])
       1'h0:
@@ -19327,7 +20011,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
     (* full_case = 32'd1 *)
     casez (words[17:16])
       2'h0:
@@ -19341,7 +20025,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:16])
       4'h0:
@@ -19379,7 +20063,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
     (* full_case = 32'd1 *)
     casez (words[17:16])
       2'h0:
@@ -19393,7 +20077,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
     \$94  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -19417,7 +20101,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
     \$95  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -19439,7 +20123,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
     \$96  = slots;
     if (\$34 ) begin
       \$96  = \$35 [15:0];
@@ -19452,7 +20136,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
     \$97  = slots_full;
     if (\$34 ) begin
       \$97  = \$36 ;
@@ -19465,7 +20149,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
     \$98  = started;
     casez (decoder_fsm_state)
       3'h0:
@@ -19481,7 +20165,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
     \$99  = start_slot;
     casez (decoder_fsm_state)
       3'h0:
@@ -19497,7 +20181,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
     \$100  = decoder_fsm_state;
     casez (decoder_fsm_state)
       3'h0:
@@ -19529,7 +20213,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
     \$101  = cds;
     casez (decoder_fsm_state)
       3'h0:
@@ -19547,7 +20231,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
     \$102  = idx;
     casez (decoder_fsm_state)
       3'h0:
@@ -19572,7 +20256,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
     \$103  = in_data;
     casez (decoder_fsm_state)
       3'h0:
@@ -19597,7 +20281,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
     \$104  = in_lc;
     casez (decoder_fsm_state)
       3'h0:
@@ -19622,7 +20306,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
     \$105  = in_top;
     casez (decoder_fsm_state)
       3'h0:
@@ -19647,7 +20331,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
     \$106  = word;
     casez (decoder_fsm_state)
       3'h0:
@@ -19675,7 +20359,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
     \$107  = stop_bit;
     casez (decoder_fsm_state)
       3'h0:
@@ -19697,7 +20381,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
     \$108  = data0;
     if (\$58 ) begin
       \$108  = { data0[53:0], \bit  };
@@ -19710,7 +20394,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
     \$109  = ne;
     if (\$59 ) begin
       \$109 [0] = 1'h1;
@@ -19730,7 +20414,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
     \$110  = nw;
     if (\$59 ) begin
       \$110 [0] = 1'h1;
@@ -19752,7 +20436,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
     \$111  = data1;
     if (\$70 ) begin
       \$111  = { data1[38:0], \bit  };
@@ -19765,7 +20449,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
     \$112  = lc;
     if (lc_load) begin
       \$112  = { lc[4:0], \bit  };
@@ -19778,7 +20462,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
     \$113  = cpw_top;
     if (\$80 ) begin
       \$113  = { cpw_top[38:0], \bit  };
@@ -19791,7 +20475,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
     in_word = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -19828,7 +20512,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.decoder.crc0 (rst, start, valid, kind, \bit , receiver_clear, ok, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$93  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$99  = 0;
   wire [5:0] \$1 ;
   wire \$10 ;
   wire [5:0] \$11 ;
@@ -19922,7 +20606,7 @@ module \biss_master_axil.ch1.core.decoder.crc0 (rst, start, valid, kind, \bit , 
   assign \$auto$rtlil.cc:2739:Not$12  = ~ { crc16_reg[14], crc16_reg[11], crc16_reg[6:5], crc16_reg[3:2], 1'h0 };
   assign \$auto$rtlil.cc:2739:Not$10  = ~ { crc6_reg[0], 1'h0 };
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
     \$31  = crc6_reg;
     if (valid) begin
       \$31  = \$5 ;
@@ -19937,7 +20621,7 @@ module \biss_master_axil.ch1.core.decoder.crc0 (rst, start, valid, kind, \bit , 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
     \$32  = crc6_match;
     if (valid) begin
       \$32  = \$15 ;
@@ -19952,7 +20636,7 @@ module \biss_master_axil.ch1.core.decoder.crc0 (rst, start, valid, kind, \bit , 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
     \$33  = crc16_reg;
     if (valid) begin
       \$33  = \$20 ;
@@ -19967,7 +20651,7 @@ module \biss_master_axil.ch1.core.decoder.crc0 (rst, start, valid, kind, \bit , 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
     \$34  = crc16_match;
     if (valid) begin
       \$34  = \$30 ;
@@ -19982,7 +20666,7 @@ module \biss_master_axil.ch1.core.decoder.crc0 (rst, start, valid, kind, \bit , 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
     ok = 1'h0;
     casez (kind)
       2'h0:
@@ -20003,7 +20687,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.decoder.crc1 (rst, start, valid, kind, \bit , receiver_clear, ok, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$94  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$100  = 0;
   wire [5:0] \$1 ;
   wire \$10 ;
   wire [5:0] \$11 ;
@@ -20097,7 +20781,7 @@ module \biss_master_axil.ch1.core.decoder.crc1 (rst, start, valid, kind, \bit , 
   assign \$auto$rtlil.cc:2739:Not$6  = ~ { crc6_reg[0], 1'h0 };
   assign \$auto$rtlil.cc:2739:Not$8  = ~ { crc16_reg[14], crc16_reg[11], crc16_reg[6:5], crc16_reg[3:2], 1'h0 };
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$94 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     \$31  = crc6_reg;
     if (valid) begin
       \$31  = \$5 ;
@@ -20112,7 +20796,7 @@ module \biss_master_axil.ch1.core.decoder.crc1 (rst, start, valid, kind, \bit , 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$94 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     \$32  = crc6_match;
     if (valid) begin
       \$32  = \$15 ;
@@ -20127,7 +20811,7 @@ module \biss_master_axil.ch1.core.decoder.crc1 (rst, start, valid, kind, \bit , 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$94 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     \$33  = crc16_reg;
     if (valid) begin
       \$33  = \$20 ;
@@ -20142,7 +20826,7 @@ module \biss_master_axil.ch1.core.decoder.crc1 (rst, start, valid, kind, \bit , 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$94 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     \$34  = crc16_match;
     if (valid) begin
       \$34  = \$30 ;
@@ -20157,7 +20841,7 @@ module \biss_master_axil.ch1.core.decoder.crc1 (rst, start, valid, kind, \bit , 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$94 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     ok = 1'h0;
     casez (kind)
       2'h0:
@@ -20178,7 +20862,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, hold, first_rise, second_rise, ma, rises, busy, held, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$95  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$101  = 0;
   wire [16:0] \$1 ;
   wire \$10 ;
   wire [16:0] \$11 ;
@@ -20303,7 +20987,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
   always @(posedge clk)
     released <= \$42 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
     \$34  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -20318,7 +21002,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
     \$35  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -20333,7 +21017,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
     \$36  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -20348,7 +21032,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
     \$37  = ma;
     casez (ma_fsm_state)
       3'h0:
@@ -20377,7 +21061,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
     \$38  = phase_left;
     casez (ma_fsm_state)
       3'h0:
@@ -20419,7 +21103,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
     \$39  = last_clock;
     casez (ma_fsm_state)
       3'h0:
@@ -20461,7 +21145,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
     \$40  = rises;
     casez (ma_fsm_state)
       3'h0:
@@ -20480,7 +21164,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
     \$41  = ma_fsm_state;
     casez (ma_fsm_state)
       3'h0:
@@ -20516,7 +21200,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
     \$42  = released;
     casez (ma_fsm_state)
       3'h0:
@@ -20540,7 +21224,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
     busy = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -20556,7 +21240,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
     held = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -20573,7 +21257,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.ma_stop (rst, words, w1_enable, clear, rises, enough, \started$10 , start_slot, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$96  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$102  = 0;
   reg [7:0] \$1 ;
   reg [7:0] \$10 ;
   wire [8:0] \$11 ;
@@ -20654,7 +21338,7 @@ module \biss_master_axil.ch1.core.ma_stop (rst, words, w1_enable, clear, rises, 
   always @(posedge clk)
     word1_len <= \$17 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$96 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
     (* full_case = 32'd1 *)
     casez (words[9:6])
       4'h0:
@@ -20692,7 +21376,7 @@ module \biss_master_axil.ch1.core.ma_stop (rst, words, w1_enable, clear, rises, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$96 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:16])
       4'h0:
@@ -20730,42 +21414,42 @@ module \biss_master_axil.ch1.core.ma_stop (rst, words, w1_enable, clear, rises, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$96 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
     \$12  = \$2 [7:0];
     if (rst) begin
       \$12  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$96 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
     \$13  = \$4 ;
     if (rst) begin
       \$13  = 9'h000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$96 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
     \$14  = \$5 ;
     if (rst) begin
       \$14  = 17'h00000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$96 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
     \$15  = \started$10 ;
     if (rst) begin
       \$15  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$96 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
     \$16  = \$9 ;
     if (rst) begin
       \$16  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$96 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
     \$17  = \$11 [7:0];
     if (rst) begin
       \$17  = 8'h00;
@@ -21077,7 +21761,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.register_access.buffers (clk, rst, host_read__en, byte_to_send, rbuf_data, wbuf, index, store, byte_received, host_read__addr);
-  reg \$auto$verilog_backend.cc:2355:dump_module$97  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$103  = 0;
   wire \$1 ;
   wire \$2 ;
   wire \$3 ;
@@ -21194,21 +21878,21 @@ module \biss_master_axil.ch1.core.register_access.buffers (clk, rst, host_read__
   assign \$1  = ! index[1:0];
   assign \$2  = index[1:0] == 1'h1;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     byte_received__addr = 4'h0;
     if (store) begin
       byte_received__addr = index[5:2];
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     byte_received__data = 32'd0;
     if (store) begin
       byte_received__data = { byte_received, byte_received, byte_received, byte_received };
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     byte_received__en = 4'h0;
     if (store) begin
       byte_received__en = { \$4 , \$3 , \$2 , \$1  };
@@ -21228,7 +21912,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.register_access.checker (rst, crc_ok, echo_ok, cds, control__take_data, start, control__take_crc, sent, \byte , clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$98  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$104  = 0;
   reg [7:0] \$1 ;
   reg [2:0] \$2 ;
   output [7:0] \byte ;
@@ -21271,7 +21955,7 @@ module \biss_master_axil.ch1.core.register_access.checker (rst, crc_ok, echo_ok,
     .valid(control__take_data)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$104 ) begin end
     \$1  = \byte ;
     if (control__take_data) begin
       \$1  = { \byte [6:0], cds };
@@ -21281,7 +21965,7 @@ module \biss_master_axil.ch1.core.register_access.checker (rst, crc_ok, echo_ok,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$104 ) begin end
     \$2  = got_crc;
     if (control__take_crc) begin
       \$2  = { got_crc[1:0], cds };
@@ -21297,7 +21981,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.register_access.checker.rx_crc (rst, crc, data_in, valid, start, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$99  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$105  = 0;
   wire [3:0] \$1 ;
   wire \$10 ;
   wire [3:0] \$11 ;
@@ -21340,7 +22024,7 @@ module \biss_master_axil.ch1.core.register_access.checker.rx_crc (rst, crc, data
     crc_reg <= \$13 ;
   assign \$auto$rtlil.cc:2739:Not$2  = ~ crc_reg;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
     \$13  = crc_reg;
     if (valid) begin
       \$13 [0] = \$3 ;
@@ -21364,7 +22048,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.register_access.idle (rst, frame_end, frame_ok, run_enough, seen_enough, frame_cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$100  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$106  = 0;
   wire \$1 ;
   wire [4:0] \$10 ;
   wire \$11 ;
@@ -21434,7 +22118,7 @@ module \biss_master_axil.ch1.core.register_access.idle (rst, frame_end, frame_ok
   always @(posedge clk)
     idle_seen <= \$24 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$106 ) begin end
     \$23  = idle_run;
     if (frame_end) begin
       \$23  = \$4 [3:0];
@@ -21444,7 +22128,7 @@ module \biss_master_axil.ch1.core.register_access.idle (rst, frame_end, frame_ok
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$106 ) begin end
     \$24  = idle_seen;
     if (frame_end) begin
       \$24  = \$10 [3:0];
@@ -21457,7 +22141,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.register_access.sender (rst, \byte , request, control__load_header, control__source, control__crc_bit, control__shift_header, start, valid, control__load_byte, control__shift_byte, sent, cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$101  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$107  = 0;
   wire \$1 ;
   wire [18:0] \$2 ;
   wire [8:0] \$3 ;
@@ -21529,7 +22213,7 @@ module \biss_master_axil.ch1.core.register_access.sender (rst, \byte , request, 
     .valid(valid)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$107 ) begin end
     \$6  = header;
     if (control__load_header) begin
       \$6  = { 2'h3, request[2:0], request[9:3], 4'h0, \$1 , request[17] };
@@ -21542,7 +22226,7 @@ module \biss_master_axil.ch1.core.register_access.sender (rst, \byte , request, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$107 ) begin end
     \$7  = to_send;
     if (control__load_byte) begin
       \$7  = \byte ;
@@ -21555,7 +22239,7 @@ module \biss_master_axil.ch1.core.register_access.sender (rst, \byte , request, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$107 ) begin end
     \$8  = sent;
     if (control__load_byte) begin
       \$8  = \byte ;
@@ -21565,7 +22249,7 @@ module \biss_master_axil.ch1.core.register_access.sender (rst, \byte , request, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$107 ) begin end
     cdm = 1'h0;
     casez (control__source)
       3'h1:
@@ -21590,7 +22274,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.register_access.sender.tx_crc (rst, data_in, crc, start, valid, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$102  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$108  = 0;
   wire [3:0] \$1 ;
   wire \$10 ;
   wire [3:0] \$11 ;
@@ -21633,7 +22317,7 @@ module \biss_master_axil.ch1.core.register_access.sender.tx_crc (rst, data_in, c
     crc_reg <= \$13 ;
   assign \$auto$rtlil.cc:2739:Not$4  = ~ crc_reg;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
     \$13  = crc_reg;
     if (valid) begin
       \$13 [0] = \$3 ;
@@ -21658,7 +22342,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, frame_ok, busy, crc_ok, echo_ok, run_enough, seen_enough, start, abort, request, frame_cdm, frame_cds, done, result, index, send__load_header, send__source, send__crc_bit, send__shift_header, send__crc_start
 , send__crc_valid, send__load_byte, send__shift_byte, check__take_data, check__first, check__take_crc, store, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$103  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$109  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$100 ;
@@ -22014,7 +22698,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
   always @(posedge clk)
     waited <= \$125 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
     \$118  = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -22052,7 +22736,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
     \$119  = result;
     casez (access_fsm_state)
       3'h0:
@@ -22106,7 +22790,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
     \$120  = access_fsm_state;
     casez (access_fsm_state)
       3'h0:
@@ -22203,7 +22887,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
     \$121  = req;
     casez (access_fsm_state)
       3'h0:
@@ -22220,7 +22904,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
     \$122  = index;
     casez (access_fsm_state)
       3'h0:
@@ -22259,7 +22943,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
     \$123  = step;
     casez (access_fsm_state)
       3'h0:
@@ -22317,7 +23001,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
     \$124  = ending;
     casez (access_fsm_state)
       3'h0:
@@ -22384,7 +23068,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
     \$125  = waited;
     casez (access_fsm_state)
       3'h0:
@@ -22416,7 +23100,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
     send__load_header = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -22430,7 +23114,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
     send__source = 3'h0;
     casez (access_fsm_state)
       3'h0:
@@ -22457,7 +23141,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
     send__crc_bit = 2'h0;
     casez (access_fsm_state)
       3'h0:
@@ -22477,7 +23161,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
     send__shift_header = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -22496,7 +23180,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
     send__crc_start = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -22525,7 +23209,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
     send__crc_valid = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -22546,7 +23230,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
     send__load_byte = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -22568,7 +23252,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
     send__shift_byte = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -22589,7 +23273,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
     check__take_data = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -22611,7 +23295,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
     check__first = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -22633,7 +23317,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
     check__take_crc = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -22657,7 +23341,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
     store = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -22695,8 +23379,8 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.results (rst, report, valid, frame, report_frame, report_delay, done, valid_out, result, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$104  = 0;
+module \biss_master_axil.ch1.core.results (rst, report_delay, report, valid, frame, report_frame, done, valid_out, result, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$110  = 0;
   reg \$1 ;
   reg \$2 ;
   reg [160:0] \$3 ;
@@ -22793,21 +23477,21 @@ module \biss_master_axil.ch1.core.results (rst, report, valid, frame, report_fra
   always @(posedge clk)
     result <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$104 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$110 ) begin end
     \$1  = report;
     if (rst) begin
       \$1  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$104 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$110 ) begin end
     \$2  = valid;
     if (rst) begin
       \$2  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$104 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$110 ) begin end
     \$3  = result;
     if (report) begin
       \$3 [3:0] = frame[3:0];
@@ -22872,7 +23556,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receiver_clear, arm, early, locked, delay, sample, level, slo);
-  reg \$auto$verilog_backend.cc:2355:dump_module$105  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$111  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -23110,7 +23794,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     .stage1(level)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
     \$63  = level;
     if (receiver_clear) begin
       \$63  = 1'h1;
@@ -23120,7 +23804,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
     \$64  = mid_delay;
     if (odd) begin
       \$64  = \$8 [12:0];
@@ -23145,7 +23829,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
     \$65  = mid_slot;
     (* full_case = 32'd1 *)
     if (odd) begin
@@ -23172,7 +23856,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
     \$66  = \$10 ;
     casez (sampler_fsm_state)
       2'h0:
@@ -23194,7 +23878,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
     \$67  = elapsed;
     casez (sampler_fsm_state)
       2'h0:
@@ -23218,7 +23902,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
     \$68  = early;
     casez (sampler_fsm_state)
       2'h0:
@@ -23234,7 +23918,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
     \$69  = locked;
     casez (sampler_fsm_state)
       2'h0:
@@ -23260,7 +23944,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
     \$70  = gap;
     casez (sampler_fsm_state)
       2'h0:
@@ -23291,7 +23975,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
     \$71  = sampler_fsm_state;
     casez (sampler_fsm_state)
       2'h0:
@@ -23322,7 +24006,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
     \$72  = slot_left;
     casez (sampler_fsm_state)
       2'h0:
@@ -23372,7 +24056,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
     \$73  = slot_zero;
     casez (sampler_fsm_state)
       2'h0:
@@ -23422,7 +24106,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
     \$74  = vote1;
     casez (sampler_fsm_state)
       2'h0:
@@ -23452,7 +24136,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
     \$75  = vote2;
     casez (sampler_fsm_state)
       2'h0:
@@ -23480,7 +24164,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
     \$76  = first_slot;
     casez (sampler_fsm_state)
       2'h0:
@@ -23506,7 +24190,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
     \$77  = delay;
     casez (sampler_fsm_state)
       2'h0:
@@ -23529,7 +24213,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
     \$78  = phase;
     casez (sampler_fsm_state)
       2'h0:
@@ -23569,7 +24253,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
     sample = \$44 ;
     casez (sampler_fsm_state)
       2'h0:
@@ -23587,7 +24271,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
     decided = 1'h0;
     casez (sampler_fsm_state)
       2'h0:
@@ -23637,7 +24321,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.scheduler (rst, trigger, periodic, request, overrun, start, abort, period, idle, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$106  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$112  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -23721,7 +24405,7 @@ module \biss_master_axil.ch1.core.scheduler (rst, trigger, periodic, request, ov
   always @(posedge clk)
     period_start <= \$28 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$106 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$112 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$27  = 24'h000001;
@@ -23733,7 +24417,7 @@ module \biss_master_axil.ch1.core.scheduler (rst, trigger, periodic, request, ov
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$106 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$112 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$28  = 1'h1;
@@ -23747,8 +24431,8 @@ module \biss_master_axil.ch1.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$4181$0 , resync, lc, is_zero, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$107  = 0;
+module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$4178$0 , resync, lc, is_zero, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$113  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -23785,8 +24469,8 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$4181$0 ;
-  wire \port$4181$0 ;
+  input \port$4178$0 ;
+  wire \port$4178$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -23798,9 +24482,9 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$4181$0  };
-  assign \$2  = { lc[4:0], \port$4181$0  } == last;
-  assign \$3  = { lc[4:0], \port$4181$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$4178$0  };
+  assign \$2  = { lc[4:0], \port$4178$0  } == last;
+  assign \$3  = { lc[4:0], \port$4178$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = lc == 6'h3f;
@@ -23828,7 +24512,7 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   always @(posedge clk)
     synced <= \$21 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$107 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
     \$16  = is_zero;
     if (load) begin
       \$16  = \$1 ;
@@ -23838,7 +24522,7 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$107 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
     \$17  = is_last;
     if (load) begin
       \$17  = \$2 ;
@@ -23848,7 +24532,7 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$107 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
     \$18  = is_expected;
     if (load) begin
       \$18  = \$3 ;
@@ -23858,7 +24542,7 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$107 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
     \$19  = last;
     if (\$5 ) begin
       \$19  = lc;
@@ -23868,7 +24552,7 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$107 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
     \$20  = expected;
     if (\$5 ) begin
       \$20  = \$8 [5:0];
@@ -23878,7 +24562,7 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$107 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
     \$21  = synced;
     if (\$5 ) begin
       \$21  = 1'h1;
@@ -23890,13 +24574,13 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
       \$21  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$4181$0  };
+  assign lc_next = { lc[4:0], \port$4178$0  };
   assign zero = is_zero;
 endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.spw_check (rst, bits, \tolerance$8 , spw, cpw_top, match, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$108  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$114  = 0;
   wire [40:0] \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -24101,28 +24785,28 @@ module \biss_master_axil.ch1.core.spw_check (rst, bits, \tolerance$8 , spw, cpw_
   assign \$7  = bits > 3'h5;
   assign \$8  = bits > 3'h6;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
     \$88  = \$42 ;
     if (rst) begin
       \$88  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
     \$89  = \$84 ;
     if (rst) begin
       \$89  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
     \$90  = \tolerance$8 ;
     if (rst) begin
       \$90  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
     \$91  = \$87 ;
     if (rst) begin
       \$91  = 1'h0;
@@ -24132,7 +24816,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.time_base (rst, first_rise, first_rise_time, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$109  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$115  = 0;
   wire [32:0] \$1 ;
   reg [31:0] \$2 ;
   reg [31:0] \$3 ;
@@ -24151,14 +24835,14 @@ module \biss_master_axil.ch1.core.time_base (rst, first_rise, first_rise_time, c
   always @(posedge clk)
     first_rise_time <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$115 ) begin end
     \$2  = \$1 [31:0];
     if (rst) begin
       \$2  = 32'd0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$115 ) begin end
     \$3  = first_rise_time;
     if (first_rise) begin
       \$3  = now;
@@ -24171,7 +24855,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.timers (rst, restart, ma_busy, break_time, timeout_live, ack_limit, timeout_limit, delay_limit, no_start_limit, clear, in_clock, slo_stuck, slo_stuck_live, break_over, ack_expired, no_start_expired, delay_over, delay, slo, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$110  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$116  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -24309,7 +24993,7 @@ module \biss_master_axil.ch1.core.timers (rst, restart, ma_busy, break_time, tim
   always @(posedge clk)
     delay_over <= \$43 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$110 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$116 ) begin end
     \$36  = slo_low_time_p1;
     if (\$1 ) begin
       \$36  = 25'h0000001;
@@ -24321,49 +25005,49 @@ module \biss_master_axil.ch1.core.timers (rst, restart, ma_busy, break_time, tim
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$110 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$116 ) begin end
     \$37  = \$8 ;
     if (rst) begin
       \$37  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$110 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$116 ) begin end
     \$38  = \$16 ;
     if (rst) begin
       \$38  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$110 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$116 ) begin end
     \$39  = \$20 [24:0];
     if (rst) begin
       \$39  = 25'h0000001;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$110 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$116 ) begin end
     \$40  = \$26 ;
     if (rst) begin
       \$40  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$110 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$116 ) begin end
     \$41  = \$30 ;
     if (rst) begin
       \$41  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$110 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$116 ) begin end
     \$42  = \$34 ;
     if (rst) begin
       \$42  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$110 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$116 ) begin end
     \$43  = \$35 ;
     if (rst) begin
       \$43  = 1'h0;
@@ -24372,8 +25056,8 @@ module \biss_master_axil.ch1.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.verdict (lc_skip_seen, \port$2972$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
-  reg \$auto$verilog_backend.cc:2355:dump_module$111  = 0;
+module \biss_master_axil.ch1.core.verdict (lc_skip_seen, \port$2954$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
+  reg \$auto$verilog_backend.cc:2355:dump_module$117  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -24486,8 +25170,8 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, \port$2972$0 , lc_check
   wire lc_zero;
   input lc_zero_seen;
   wire lc_zero_seen;
-  output \port$2972$0 ;
-  wire \port$2972$0 ;
+  output \port$2954$0 ;
+  wire \port$2954$0 ;
   output report;
   wire report;
   input report_frame;
@@ -24555,7 +25239,7 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, \port$2972$0 , lc_check
   assign \$29  = ~ { \$2 , crc_ok[0] };
   assign crc_error = report_frame ? \$29  : 2'h0;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$117 ) begin end
     (* full_case = 32'd1 *)
     if (\$13 ) begin
       frame_status = 4'h3;
@@ -24572,7 +25256,7 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, \port$2972$0 , lc_check
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$2972$0  = \$2 ;
+  assign \port$2954$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

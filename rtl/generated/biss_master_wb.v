@@ -542,12 +542,12 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .ch1_irq(\$7 ),
     .clk(clk),
     .glob__trigger(glob__trigger),
-    .\port$3958$0 (\$8 ),
-    .\port$3965$0 (\$9 ),
-    .\port$4079$0 (\$10 ),
-    .\port$4411$0 (\$11 ),
-    .\port$4418$0 (\$12 ),
-    .\port$4532$0 (\$13 ),
+    .\port$3955$0 (\$8 ),
+    .\port$3962$0 (\$9 ),
+    .\port$4076$0 (\$10 ),
+    .\port$4423$0 (\$11 ),
+    .\port$4430$0 (\$12 ),
+    .\port$4544$0 (\$13 ),
     .rst(rst)
   );
   \biss_master_wb.bus  bus (
@@ -600,9 +600,9 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .clk(clk),
     .ma(ch0_ma),
     .periodic(regs__periodic),
-    .\port$3958$0 (\$8 ),
-    .\port$3965$0 (\$9 ),
-    .\port$4079$0 (\$10 ),
+    .\port$3955$0 (\$8 ),
+    .\port$3962$0 (\$9 ),
+    .\port$4076$0 (\$10 ),
     .regs__busy(ch0__busy),
     .regs__ca_busy(ch0__ca_busy),
     .regs__ca_done(ch0__ca_done),
@@ -651,9 +651,9 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .clk(clk),
     .ma(ch1_ma),
     .periodic(\regs__periodic$360 ),
-    .\port$4411$0 (\$11 ),
-    .\port$4418$0 (\$12 ),
-    .\port$4532$0 (\$13 ),
+    .\port$4423$0 (\$11 ),
+    .\port$4430$0 (\$12 ),
+    .\port$4544$0 (\$13 ),
     .regs__busy(ch1__busy),
     .regs__ca_busy(ch1__ca_busy),
     .regs__ca_done(ch1__ca_done),
@@ -982,7 +982,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
 , ch1__ca_rbuf_data, bus__r_load, glob__trigger, ch0__start, ch0__abort_cycle, ch0__clear_counters, ch0__periodic, ch0__trigger_enable, ch0__cfg_ma_half_period, ch0__cfg_delay_limit, ch0__cfg_request_period, ch0__cfg_break_time, ch0__cfg_ack_limit, ch0__cfg_timeout_limit, ch0__cfg_w0_data_bits, ch0__cfg_w0_nenw, ch0__cfg_w0_lc, ch0__cfg_w0_crc, ch0__cfg_w1_data_bits, ch0__cfg_w1_nenw, ch0__cfg_w1_lc
 , ch0__cfg_w1_crc, ch0__cfg_w1_enable, ch0__cfg_end_check, ch0__cfg_spw_check, ch0__cfg_spw_tolerance, ch0__ca_slave_id, ch0__ca_address, ch0__ca_count, ch0__ca_write, ch0__ca_start, ch0__ca_abort, ch1__start, ch1__abort_cycle, ch1__clear_counters, ch1__periodic, ch1__trigger_enable, ch1__cfg_ma_half_period, ch1__cfg_delay_limit, ch1__cfg_request_period, ch1__cfg_break_time, ch1__cfg_ack_limit
 , ch1__cfg_timeout_limit, ch1__cfg_w0_data_bits, ch1__cfg_w0_nenw, ch1__cfg_w0_lc, ch1__cfg_w0_crc, ch1__cfg_w1_data_bits, ch1__cfg_w1_nenw, ch1__cfg_w1_lc, ch1__cfg_w1_crc, ch1__cfg_w1_enable, ch1__cfg_end_check, ch1__cfg_spw_check, ch1__cfg_spw_tolerance, ch1__ca_slave_id, ch1__ca_address, ch1__ca_count, ch1__ca_write, ch1__ca_start, ch1__ca_abort, bus__r_data, ch0__done_count
-, ch0__done, \port$3958$0 , \port$3965$0 , ch0__ca_done, \port$4079$0 , ch1__done_count, ch1__done, \port$4411$0 , \port$4418$0 , ch1__ca_done, \port$4532$0 , bus__w_addr);
+, ch0__done, \port$3955$0 , \port$3962$0 , ch0__ca_done, \port$4076$0 , ch1__done_count, ch1__done, \port$4423$0 , \port$4430$0 , ch1__ca_done, \port$4544$0 , bus__w_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$26  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -1962,18 +1962,18 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
   output glob__trigger;
   reg glob__trigger = 1'h0;
   wire [1:0] irq;
-  input [160:0] \port$3958$0 ;
-  wire [160:0] \port$3958$0 ;
-  input [287:0] \port$3965$0 ;
-  wire [287:0] \port$3965$0 ;
-  input [9:0] \port$4079$0 ;
-  wire [9:0] \port$4079$0 ;
-  input [160:0] \port$4411$0 ;
-  wire [160:0] \port$4411$0 ;
-  input [287:0] \port$4418$0 ;
-  wire [287:0] \port$4418$0 ;
-  input [9:0] \port$4532$0 ;
-  wire [9:0] \port$4532$0 ;
+  input [160:0] \port$3955$0 ;
+  wire [160:0] \port$3955$0 ;
+  input [287:0] \port$3962$0 ;
+  wire [287:0] \port$3962$0 ;
+  input [9:0] \port$4076$0 ;
+  wire [9:0] \port$4076$0 ;
+  input [160:0] \port$4423$0 ;
+  wire [160:0] \port$4423$0 ;
+  input [287:0] \port$4430$0 ;
+  wire [287:0] \port$4430$0 ;
+  input [9:0] \port$4544$0 ;
+  wire [9:0] \port$4544$0 ;
   (* init = 32'd0 *)
   wire [31:0] read_data;
   input rst;
@@ -2630,7 +2630,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$370  = ch1_result_status_cds_snapshot;
     if (ch1_result_status_read) begin
-      \$370  = \port$4411$0 [49];
+      \$370  = \port$4423$0 [49];
     end
     if (rst) begin
       \$370  = 1'h0;
@@ -2640,7 +2640,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$371  = ch1_result_status_w0_ne_snapshot;
     if (ch1_result_status_read) begin
-      \$371  = \port$4411$0 [105];
+      \$371  = \port$4423$0 [105];
     end
     if (rst) begin
       \$371  = 1'h0;
@@ -2650,7 +2650,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$372  = ch1_result_status_w0_nw_snapshot;
     if (ch1_result_status_read) begin
-      \$372  = \port$4411$0 [106];
+      \$372  = \port$4423$0 [106];
     end
     if (rst) begin
       \$372  = 1'h0;
@@ -2660,7 +2660,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$373  = ch1_result_status_w0_crc_ok_snapshot;
     if (ch1_result_status_read) begin
-      \$373  = \port$4411$0 [107];
+      \$373  = \port$4423$0 [107];
     end
     if (rst) begin
       \$373  = 1'h0;
@@ -2670,7 +2670,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$374  = ch1_result_status_w1_ne_snapshot;
     if (ch1_result_status_read) begin
-      \$374  = \port$4411$0 [148];
+      \$374  = \port$4423$0 [148];
     end
     if (rst) begin
       \$374  = 1'h0;
@@ -2680,7 +2680,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$375  = ch1_result_status_w1_nw_snapshot;
     if (ch1_result_status_read) begin
-      \$375  = \port$4411$0 [149];
+      \$375  = \port$4423$0 [149];
     end
     if (rst) begin
       \$375  = 1'h0;
@@ -2690,7 +2690,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$376  = ch1_result_status_w1_crc_ok_snapshot;
     if (ch1_result_status_read) begin
-      \$376  = \port$4411$0 [150];
+      \$376  = \port$4423$0 [150];
     end
     if (rst) begin
       \$376  = 1'h0;
@@ -2700,7 +2700,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$377  = ch1_result_status_lc_repeat_snapshot;
     if (ch1_result_status_read) begin
-      \$377  = \port$4411$0 [157];
+      \$377  = \port$4423$0 [157];
     end
     if (rst) begin
       \$377  = 1'h0;
@@ -2710,7 +2710,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$378  = ch1_result_status_lc_skip_snapshot;
     if (ch1_result_status_read) begin
-      \$378  = \port$4411$0 [158];
+      \$378  = \port$4423$0 [158];
     end
     if (rst) begin
       \$378  = 1'h0;
@@ -2720,7 +2720,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$379  = ch1_result_status_lc_zero_snapshot;
     if (ch1_result_status_read) begin
-      \$379  = \port$4411$0 [159];
+      \$379  = \port$4423$0 [159];
     end
     if (rst) begin
       \$379  = 1'h0;
@@ -2730,7 +2730,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$380  = ch1_result_status_spw_mismatch_snapshot;
     if (ch1_result_status_read) begin
-      \$380  = \port$4411$0 [160];
+      \$380  = \port$4423$0 [160];
     end
     if (rst) begin
       \$380  = 1'h0;
@@ -2740,7 +2740,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$381  = ch1_result_status_lc_snapshot;
     if (ch1_result_status_read) begin
-      \$381  = \port$4411$0 [156:151];
+      \$381  = \port$4423$0 [156:151];
     end
     if (rst) begin
       \$381  = 6'h00;
@@ -2760,7 +2760,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$383  = ch1_result_seq_line_delay_snapshot;
     if (ch1_result_status_read) begin
-      \$383  = \port$4411$0 [48:36];
+      \$383  = \port$4423$0 [48:36];
     end
     if (rst) begin
       \$383  = 13'h0000;
@@ -2770,7 +2770,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$384  = ch1_result_w0_lo_data_snapshot;
     if (ch1_result_status_read) begin
-      \$384  = \port$4411$0 [81:50];
+      \$384  = \port$4423$0 [81:50];
     end
     if (rst) begin
       \$384  = 32'd0;
@@ -2780,7 +2780,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$385  = ch1_result_w0_hi_data_snapshot;
     if (ch1_result_status_read) begin
-      \$385  = \port$4411$0 [104:82];
+      \$385  = \port$4423$0 [104:82];
     end
     if (rst) begin
       \$385  = 23'h000000;
@@ -2790,7 +2790,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$386  = ch1_result_w1_lo_data_snapshot;
     if (ch1_result_status_read) begin
-      \$386  = \port$4411$0 [139:108];
+      \$386  = \port$4423$0 [139:108];
     end
     if (rst) begin
       \$386  = 32'd0;
@@ -2800,7 +2800,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$387  = ch1_result_w1_hi_data_snapshot;
     if (ch1_result_status_read) begin
-      \$387  = \port$4411$0 [147:140];
+      \$387  = \port$4423$0 [147:140];
     end
     if (rst) begin
       \$387  = 8'h00;
@@ -2810,7 +2810,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$388  = ch1_result_timestamp_time_snapshot;
     if (ch1_result_status_read) begin
-      \$388  = \port$4411$0 [35:4];
+      \$388  = \port$4423$0 [35:4];
     end
     if (rst) begin
       \$388  = 32'd0;
@@ -2847,7 +2847,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
         11'h10e:
             \$389  = { 16'h0000, ch1__cfg_spw_tolerance, 6'h00, ch1__cfg_spw_check, ch1__cfg_end_check };
         11'h110:
-            \$389  = { 2'h0, \port$4411$0 [156:151], 4'h0, \port$4411$0 [160:157], 1'h0, \port$4411$0 [150:148], 1'h0, \port$4411$0 [107:105], 3'h0, \port$4411$0 [49], \port$4411$0 [3:0] };
+            \$389  = { 2'h0, \port$4423$0 [156:151], 4'h0, \port$4423$0 [160:157], 1'h0, \port$4423$0 [150:148], 1'h0, \port$4423$0 [107:105], 3'h0, \port$4423$0 [49], \port$4423$0 [3:0] };
         11'h111:
             \$389  = { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot };
         11'h112:
@@ -2861,31 +2861,31 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
         11'h116:
             \$389  = ch1_result_timestamp_time_snapshot;
         11'h118:
-            \$389  = \port$4418$0 [31:0];
+            \$389  = \port$4430$0 [31:0];
         11'h119:
-            \$389  = \port$4418$0 [63:32];
+            \$389  = \port$4430$0 [63:32];
         11'h11a:
-            \$389  = \port$4418$0 [95:64];
+            \$389  = \port$4430$0 [95:64];
         11'h11b:
-            \$389  = \port$4418$0 [127:96];
+            \$389  = \port$4430$0 [127:96];
         11'h11c:
-            \$389  = \port$4418$0 [159:128];
+            \$389  = \port$4430$0 [159:128];
         11'h11d:
-            \$389  = \port$4418$0 [191:160];
+            \$389  = \port$4430$0 [191:160];
         11'h11e:
-            \$389  = { 16'h0000, \port$4418$0 [207:192] };
+            \$389  = { 16'h0000, \port$4430$0 [207:192] };
         11'h140:
             \$389  = { 7'h00, ch1__ca_write, 1'h0, ch1__ca_count, 1'h0, ch1__ca_address, 5'h00, ch1__ca_slave_id };
         11'h141:
             \$389  = 32'd0;
         11'h142:
-            \$389  = { 17'h00000, \port$4532$0 [9:3], 1'h0, \port$4532$0 [2:0], 3'h0, ch1__ca_busy };
+            \$389  = { 17'h00000, \port$4544$0 [9:3], 1'h0, \port$4544$0 [2:0], 3'h0, ch1__ca_busy };
         11'h143:
-            \$389  = \port$4418$0 [239:208];
+            \$389  = \port$4430$0 [239:208];
         11'h144:
-            \$389  = \port$4418$0 [271:240];
+            \$389  = \port$4430$0 [271:240];
         11'h145:
-            \$389  = { 16'h0000, \port$4418$0 [287:272] };
+            \$389  = { 16'h0000, \port$4430$0 [287:272] };
         default:
             \$389  = 32'd0;
       endcase
@@ -3330,7 +3330,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$313  = ch0_result_status_status_snapshot;
     if (ch0_result_status_read) begin
-      \$313  = \port$3958$0 [3:0];
+      \$313  = \port$3955$0 [3:0];
     end
     if (rst) begin
       \$313  = 4'h0;
@@ -3340,7 +3340,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$314  = ch0_result_status_cds_snapshot;
     if (ch0_result_status_read) begin
-      \$314  = \port$3958$0 [49];
+      \$314  = \port$3955$0 [49];
     end
     if (rst) begin
       \$314  = 1'h0;
@@ -3350,7 +3350,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$315  = ch0_result_status_w0_ne_snapshot;
     if (ch0_result_status_read) begin
-      \$315  = \port$3958$0 [105];
+      \$315  = \port$3955$0 [105];
     end
     if (rst) begin
       \$315  = 1'h0;
@@ -3360,7 +3360,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$316  = ch0_result_status_w0_nw_snapshot;
     if (ch0_result_status_read) begin
-      \$316  = \port$3958$0 [106];
+      \$316  = \port$3955$0 [106];
     end
     if (rst) begin
       \$316  = 1'h0;
@@ -3370,7 +3370,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$317  = ch0_result_status_w0_crc_ok_snapshot;
     if (ch0_result_status_read) begin
-      \$317  = \port$3958$0 [107];
+      \$317  = \port$3955$0 [107];
     end
     if (rst) begin
       \$317  = 1'h0;
@@ -3380,7 +3380,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$318  = ch0_result_status_w1_ne_snapshot;
     if (ch0_result_status_read) begin
-      \$318  = \port$3958$0 [148];
+      \$318  = \port$3955$0 [148];
     end
     if (rst) begin
       \$318  = 1'h0;
@@ -3390,7 +3390,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$319  = ch0_result_status_w1_nw_snapshot;
     if (ch0_result_status_read) begin
-      \$319  = \port$3958$0 [149];
+      \$319  = \port$3955$0 [149];
     end
     if (rst) begin
       \$319  = 1'h0;
@@ -3400,7 +3400,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$320  = ch0_result_status_w1_crc_ok_snapshot;
     if (ch0_result_status_read) begin
-      \$320  = \port$3958$0 [150];
+      \$320  = \port$3955$0 [150];
     end
     if (rst) begin
       \$320  = 1'h0;
@@ -3410,7 +3410,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$321  = ch0_result_status_lc_repeat_snapshot;
     if (ch0_result_status_read) begin
-      \$321  = \port$3958$0 [157];
+      \$321  = \port$3955$0 [157];
     end
     if (rst) begin
       \$321  = 1'h0;
@@ -3420,7 +3420,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$322  = ch0_result_status_lc_skip_snapshot;
     if (ch0_result_status_read) begin
-      \$322  = \port$3958$0 [158];
+      \$322  = \port$3955$0 [158];
     end
     if (rst) begin
       \$322  = 1'h0;
@@ -3430,7 +3430,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$323  = ch0_result_status_lc_zero_snapshot;
     if (ch0_result_status_read) begin
-      \$323  = \port$3958$0 [159];
+      \$323  = \port$3955$0 [159];
     end
     if (rst) begin
       \$323  = 1'h0;
@@ -3440,7 +3440,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$324  = ch0_result_status_spw_mismatch_snapshot;
     if (ch0_result_status_read) begin
-      \$324  = \port$3958$0 [160];
+      \$324  = \port$3955$0 [160];
     end
     if (rst) begin
       \$324  = 1'h0;
@@ -3450,7 +3450,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$325  = ch0_result_status_lc_snapshot;
     if (ch0_result_status_read) begin
-      \$325  = \port$3958$0 [156:151];
+      \$325  = \port$3955$0 [156:151];
     end
     if (rst) begin
       \$325  = 6'h00;
@@ -3470,7 +3470,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$327  = ch0_result_seq_line_delay_snapshot;
     if (ch0_result_status_read) begin
-      \$327  = \port$3958$0 [48:36];
+      \$327  = \port$3955$0 [48:36];
     end
     if (rst) begin
       \$327  = 13'h0000;
@@ -3480,7 +3480,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$328  = ch0_result_w0_lo_data_snapshot;
     if (ch0_result_status_read) begin
-      \$328  = \port$3958$0 [81:50];
+      \$328  = \port$3955$0 [81:50];
     end
     if (rst) begin
       \$328  = 32'd0;
@@ -3490,7 +3490,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$329  = ch0_result_w0_hi_data_snapshot;
     if (ch0_result_status_read) begin
-      \$329  = \port$3958$0 [104:82];
+      \$329  = \port$3955$0 [104:82];
     end
     if (rst) begin
       \$329  = 23'h000000;
@@ -3500,7 +3500,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$330  = ch0_result_w1_lo_data_snapshot;
     if (ch0_result_status_read) begin
-      \$330  = \port$3958$0 [139:108];
+      \$330  = \port$3955$0 [139:108];
     end
     if (rst) begin
       \$330  = 32'd0;
@@ -3510,7 +3510,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$331  = ch0_result_w1_hi_data_snapshot;
     if (ch0_result_status_read) begin
-      \$331  = \port$3958$0 [147:140];
+      \$331  = \port$3955$0 [147:140];
     end
     if (rst) begin
       \$331  = 8'h00;
@@ -3520,7 +3520,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$332  = ch0_result_timestamp_time_snapshot;
     if (ch0_result_status_read) begin
-      \$332  = \port$3958$0 [35:4];
+      \$332  = \port$3955$0 [35:4];
     end
     if (rst) begin
       \$332  = 32'd0;
@@ -3557,7 +3557,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
         11'h08e:
             \$333  = { 16'h0000, ch0__cfg_spw_tolerance, 6'h00, ch0__cfg_spw_check, ch0__cfg_end_check };
         11'h090:
-            \$333  = { 2'h0, \port$3958$0 [156:151], 4'h0, \port$3958$0 [160:157], 1'h0, \port$3958$0 [150:148], 1'h0, \port$3958$0 [107:105], 3'h0, \port$3958$0 [49], \port$3958$0 [3:0] };
+            \$333  = { 2'h0, \port$3955$0 [156:151], 4'h0, \port$3955$0 [160:157], 1'h0, \port$3955$0 [150:148], 1'h0, \port$3955$0 [107:105], 3'h0, \port$3955$0 [49], \port$3955$0 [3:0] };
         11'h091:
             \$333  = { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot };
         11'h092:
@@ -3571,31 +3571,31 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
         11'h096:
             \$333  = ch0_result_timestamp_time_snapshot;
         11'h098:
-            \$333  = \port$3965$0 [31:0];
+            \$333  = \port$3962$0 [31:0];
         11'h099:
-            \$333  = \port$3965$0 [63:32];
+            \$333  = \port$3962$0 [63:32];
         11'h09a:
-            \$333  = \port$3965$0 [95:64];
+            \$333  = \port$3962$0 [95:64];
         11'h09b:
-            \$333  = \port$3965$0 [127:96];
+            \$333  = \port$3962$0 [127:96];
         11'h09c:
-            \$333  = \port$3965$0 [159:128];
+            \$333  = \port$3962$0 [159:128];
         11'h09d:
-            \$333  = \port$3965$0 [191:160];
+            \$333  = \port$3962$0 [191:160];
         11'h09e:
-            \$333  = { 16'h0000, \port$3965$0 [207:192] };
+            \$333  = { 16'h0000, \port$3962$0 [207:192] };
         11'h0c0:
             \$333  = { 7'h00, ch0__ca_write, 1'h0, ch0__ca_count, 1'h0, ch0__ca_address, 5'h00, ch0__ca_slave_id };
         11'h0c1:
             \$333  = 32'd0;
         11'h0c2:
-            \$333  = { 17'h00000, \port$4079$0 [9:3], 1'h0, \port$4079$0 [2:0], 3'h0, ch0__ca_busy };
+            \$333  = { 17'h00000, \port$4076$0 [9:3], 1'h0, \port$4076$0 [2:0], 3'h0, ch0__ca_busy };
         11'h0c3:
-            \$333  = \port$3965$0 [239:208];
+            \$333  = \port$3962$0 [239:208];
         11'h0c4:
-            \$333  = \port$3965$0 [271:240];
+            \$333  = \port$3962$0 [271:240];
         11'h0c5:
-            \$333  = { 16'h0000, \port$3965$0 [287:272] };
+            \$333  = { 16'h0000, \port$3962$0 [287:272] };
         default:
             \$333  = 32'd0;
       endcase
@@ -3979,7 +3979,7 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$369  = ch1_result_status_status_snapshot;
     if (ch1_result_status_read) begin
-      \$369  = \port$4411$0 [3:0];
+      \$369  = \port$4423$0 [3:0];
     end
     if (rst) begin
       \$369  = 4'h0;
@@ -4055,92 +4055,92 @@ module \biss_master_wb.bank (ch0__ca_wbuf_data, bus__w_strb, clk, rst, bus__r_en
   assign read_data = bus__r_data;
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, ch1_irq, ch0_irq };
-  assign ch0__status = \port$3958$0 [3:0];
-  assign ch0__cds = \port$3958$0 [49];
-  assign ch0__word0_ne = \port$3958$0 [105];
-  assign ch0__word0_nw = \port$3958$0 [106];
-  assign ch0__word0_crc_ok = \port$3958$0 [107];
-  assign ch0__word1_ne = \port$3958$0 [148];
-  assign ch0__word1_nw = \port$3958$0 [149];
-  assign ch0__word1_crc_ok = \port$3958$0 [150];
-  assign ch0__lc_repeat = \port$3958$0 [157];
-  assign ch0__lc_skip = \port$3958$0 [158];
-  assign ch0__lc_zero = \port$3958$0 [159];
-  assign ch0__spw_mismatch = \port$3958$0 [160];
-  assign ch0__lc = \port$3958$0 [156:151];
-  assign ch0__line_delay = \port$3958$0 [48:36];
-  assign ch0__word0_position = \port$3958$0 [104:50];
-  assign ch0__word1_position = \port$3958$0 [147:108];
-  assign ch0__timestamp = \port$3958$0 [35:4];
+  assign ch0__status = \port$3955$0 [3:0];
+  assign ch0__cds = \port$3955$0 [49];
+  assign ch0__word0_ne = \port$3955$0 [105];
+  assign ch0__word0_nw = \port$3955$0 [106];
+  assign ch0__word0_crc_ok = \port$3955$0 [107];
+  assign ch0__word1_ne = \port$3955$0 [148];
+  assign ch0__word1_nw = \port$3955$0 [149];
+  assign ch0__word1_crc_ok = \port$3955$0 [150];
+  assign ch0__lc_repeat = \port$3955$0 [157];
+  assign ch0__lc_skip = \port$3955$0 [158];
+  assign ch0__lc_zero = \port$3955$0 [159];
+  assign ch0__spw_mismatch = \port$3955$0 [160];
+  assign ch0__lc = \port$3955$0 [156:151];
+  assign ch0__line_delay = \port$3955$0 [48:36];
+  assign ch0__word0_position = \port$3955$0 [104:50];
+  assign ch0__word1_position = \port$3955$0 [147:108];
+  assign ch0__timestamp = \port$3955$0 [35:4];
   assign ch0__cap_data_bits_w0 = 6'h37;
   assign ch0__cap_data_bits_w1 = 6'h28;
   assign ch0__cap_timer_width = 6'h18;
   assign ch0__cap_counters = 1'h1;
   assign ch0__cap_timestamp = 1'h1;
   assign ch0__cap_register_access = 1'h1;
-  assign ch0__count_crc_word0 = \port$3965$0 [15:0];
-  assign ch0__count_crc_word1 = \port$3965$0 [31:16];
-  assign ch0__count_no_ack = \port$3965$0 [47:32];
-  assign ch0__count_no_start = \port$3965$0 [63:48];
-  assign ch0__count_delay_range = \port$3965$0 [79:64];
-  assign ch0__count_slo_stuck_low = \port$3965$0 [95:80];
-  assign ch0__count_lc_repeat = \port$3965$0 [111:96];
-  assign ch0__count_lc_skip = \port$3965$0 [127:112];
-  assign ch0__count_lc_zero = \port$3965$0 [143:128];
-  assign ch0__count_spw_mismatch = \port$3965$0 [159:144];
-  assign ch0__count_overrun = \port$3965$0 [175:160];
-  assign ch0__count_aborted = \port$3965$0 [191:176];
-  assign ch0__count_no_stop = \port$3965$0 [207:192];
-  assign ch0__ca_status = \port$4079$0 [2:0];
-  assign ch0__ca_bytes_done = \port$4079$0 [9:3];
-  assign ch0__count_ca_crc4_error = \port$3965$0 [223:208];
-  assign ch0__count_ca_no_answer = \port$3965$0 [239:224];
-  assign ch0__count_ca_refused = \port$3965$0 [255:240];
-  assign ch0__count_ca_aborted = \port$3965$0 [271:256];
-  assign ch0__count_ca_data_fault = \port$3965$0 [287:272];
-  assign ch1__status = \port$4411$0 [3:0];
-  assign ch1__cds = \port$4411$0 [49];
-  assign ch1__word0_ne = \port$4411$0 [105];
-  assign ch1__word0_nw = \port$4411$0 [106];
-  assign ch1__word0_crc_ok = \port$4411$0 [107];
-  assign ch1__word1_ne = \port$4411$0 [148];
-  assign ch1__word1_nw = \port$4411$0 [149];
-  assign ch1__word1_crc_ok = \port$4411$0 [150];
-  assign ch1__lc_repeat = \port$4411$0 [157];
-  assign ch1__lc_skip = \port$4411$0 [158];
-  assign ch1__lc_zero = \port$4411$0 [159];
-  assign ch1__spw_mismatch = \port$4411$0 [160];
-  assign ch1__lc = \port$4411$0 [156:151];
-  assign ch1__line_delay = \port$4411$0 [48:36];
-  assign ch1__word0_position = \port$4411$0 [104:50];
-  assign ch1__word1_position = \port$4411$0 [147:108];
-  assign ch1__timestamp = \port$4411$0 [35:4];
+  assign ch0__count_crc_word0 = \port$3962$0 [15:0];
+  assign ch0__count_crc_word1 = \port$3962$0 [31:16];
+  assign ch0__count_no_ack = \port$3962$0 [47:32];
+  assign ch0__count_no_start = \port$3962$0 [63:48];
+  assign ch0__count_delay_range = \port$3962$0 [79:64];
+  assign ch0__count_slo_stuck_low = \port$3962$0 [95:80];
+  assign ch0__count_lc_repeat = \port$3962$0 [111:96];
+  assign ch0__count_lc_skip = \port$3962$0 [127:112];
+  assign ch0__count_lc_zero = \port$3962$0 [143:128];
+  assign ch0__count_spw_mismatch = \port$3962$0 [159:144];
+  assign ch0__count_overrun = \port$3962$0 [175:160];
+  assign ch0__count_aborted = \port$3962$0 [191:176];
+  assign ch0__count_no_stop = \port$3962$0 [207:192];
+  assign ch0__ca_status = \port$4076$0 [2:0];
+  assign ch0__ca_bytes_done = \port$4076$0 [9:3];
+  assign ch0__count_ca_crc4_error = \port$3962$0 [223:208];
+  assign ch0__count_ca_no_answer = \port$3962$0 [239:224];
+  assign ch0__count_ca_refused = \port$3962$0 [255:240];
+  assign ch0__count_ca_aborted = \port$3962$0 [271:256];
+  assign ch0__count_ca_data_fault = \port$3962$0 [287:272];
+  assign ch1__status = \port$4423$0 [3:0];
+  assign ch1__cds = \port$4423$0 [49];
+  assign ch1__word0_ne = \port$4423$0 [105];
+  assign ch1__word0_nw = \port$4423$0 [106];
+  assign ch1__word0_crc_ok = \port$4423$0 [107];
+  assign ch1__word1_ne = \port$4423$0 [148];
+  assign ch1__word1_nw = \port$4423$0 [149];
+  assign ch1__word1_crc_ok = \port$4423$0 [150];
+  assign ch1__lc_repeat = \port$4423$0 [157];
+  assign ch1__lc_skip = \port$4423$0 [158];
+  assign ch1__lc_zero = \port$4423$0 [159];
+  assign ch1__spw_mismatch = \port$4423$0 [160];
+  assign ch1__lc = \port$4423$0 [156:151];
+  assign ch1__line_delay = \port$4423$0 [48:36];
+  assign ch1__word0_position = \port$4423$0 [104:50];
+  assign ch1__word1_position = \port$4423$0 [147:108];
+  assign ch1__timestamp = \port$4423$0 [35:4];
   assign ch1__cap_data_bits_w0 = 6'h37;
   assign ch1__cap_data_bits_w1 = 6'h28;
   assign ch1__cap_timer_width = 6'h18;
   assign ch1__cap_counters = 1'h1;
   assign ch1__cap_timestamp = 1'h1;
   assign ch1__cap_register_access = 1'h1;
-  assign ch1__count_crc_word0 = \port$4418$0 [15:0];
-  assign ch1__count_crc_word1 = \port$4418$0 [31:16];
-  assign ch1__count_no_ack = \port$4418$0 [47:32];
-  assign ch1__count_no_start = \port$4418$0 [63:48];
-  assign ch1__count_delay_range = \port$4418$0 [79:64];
-  assign ch1__count_slo_stuck_low = \port$4418$0 [95:80];
-  assign ch1__count_lc_repeat = \port$4418$0 [111:96];
-  assign ch1__count_lc_skip = \port$4418$0 [127:112];
-  assign ch1__count_lc_zero = \port$4418$0 [143:128];
-  assign ch1__count_spw_mismatch = \port$4418$0 [159:144];
-  assign ch1__count_overrun = \port$4418$0 [175:160];
-  assign ch1__count_aborted = \port$4418$0 [191:176];
-  assign ch1__count_no_stop = \port$4418$0 [207:192];
-  assign ch1__ca_status = \port$4532$0 [2:0];
-  assign ch1__ca_bytes_done = \port$4532$0 [9:3];
-  assign ch1__count_ca_crc4_error = \port$4418$0 [223:208];
-  assign ch1__count_ca_no_answer = \port$4418$0 [239:224];
-  assign ch1__count_ca_refused = \port$4418$0 [255:240];
-  assign ch1__count_ca_aborted = \port$4418$0 [271:256];
-  assign ch1__count_ca_data_fault = \port$4418$0 [287:272];
+  assign ch1__count_crc_word0 = \port$4430$0 [15:0];
+  assign ch1__count_crc_word1 = \port$4430$0 [31:16];
+  assign ch1__count_no_ack = \port$4430$0 [47:32];
+  assign ch1__count_no_start = \port$4430$0 [63:48];
+  assign ch1__count_delay_range = \port$4430$0 [79:64];
+  assign ch1__count_slo_stuck_low = \port$4430$0 [95:80];
+  assign ch1__count_lc_repeat = \port$4430$0 [111:96];
+  assign ch1__count_lc_skip = \port$4430$0 [127:112];
+  assign ch1__count_lc_zero = \port$4430$0 [143:128];
+  assign ch1__count_spw_mismatch = \port$4430$0 [159:144];
+  assign ch1__count_overrun = \port$4430$0 [175:160];
+  assign ch1__count_aborted = \port$4430$0 [191:176];
+  assign ch1__count_no_stop = \port$4430$0 [207:192];
+  assign ch1__ca_status = \port$4544$0 [2:0];
+  assign ch1__ca_bytes_done = \port$4544$0 [9:3];
+  assign ch1__count_ca_crc4_error = \port$4430$0 [223:208];
+  assign ch1__count_ca_no_answer = \port$4430$0 [239:224];
+  assign ch1__count_ca_refused = \port$4430$0 [255:240];
+  assign ch1__count_ca_aborted = \port$4430$0 [271:256];
+  assign ch1__count_ca_data_fault = \port$4430$0 [287:272];
   assign g_irq = 1'h0;
   assign \$79  = \$78 ;
   assign \$81  = \$80 ;
@@ -4268,7 +4268,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch0 (ca_wbuf_data, slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__ca_busy, regs__ca_rbuf_data, start, abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time
 , cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, regs__done_count
-, ma, regs__done, \port$3958$0 , \port$3965$0 , regs__ca_done, \port$4079$0 , ca_wbuf_addr);
+, ma, regs__done, \port$3955$0 , \port$3962$0 , regs__ca_done, \port$4076$0 , ca_wbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$28  = 0;
   wire \$1 ;
   wire [16:0] \$2 ;
@@ -4392,12 +4392,12 @@ module \biss_master_wb.ch0 (ca_wbuf_data, slo, clk, rst, \trigger$161 , ca_wbuf_
   wire \ma$164 ;
   input periodic;
   wire periodic;
-  output [160:0] \port$3958$0 ;
-  wire [160:0] \port$3958$0 ;
-  output [287:0] \port$3965$0 ;
-  wire [287:0] \port$3965$0 ;
-  output [9:0] \port$4079$0 ;
-  wire [9:0] \port$4079$0 ;
+  output [160:0] \port$3955$0 ;
+  wire [160:0] \port$3955$0 ;
+  output [287:0] \port$3962$0 ;
+  wire [287:0] \port$3962$0 ;
+  output [9:0] \port$4076$0 ;
+  wire [9:0] \port$4076$0 ;
   wire regs__abort_cycle;
   output regs__busy;
   wire regs__busy;
@@ -4723,9 +4723,9 @@ module \biss_master_wb.ch0 (ca_wbuf_data, slo, clk, rst, \trigger$161 , ca_wbuf_
   assign regs__ca_rbuf_en = ca_rbuf_en;
   assign \ma$164  = ma;
   assign \slo$166  = slo;
-  assign \port$3958$0  = \$4 ;
-  assign \port$3965$0  = \$5 ;
-  assign \port$4079$0  = \$6 ;
+  assign \port$3955$0  = \$4 ;
+  assign \port$3962$0  = \$5 ;
+  assign \port$4076$0  = \$6 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -5576,7 +5576,7 @@ module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$3699$0 (\bit ),
+    .\port$3681$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -5633,7 +5633,7 @@ module \biss_master_wb.ch0.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
     .lc_skip_seen(lc_skip_seen),
     .lc_zero(lc_zero),
     .lc_zero_seen(lc_zero_seen),
-    .\port$1586$0 (\$16 ),
+    .\port$1577$0 (\$16 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -6306,7 +6306,7 @@ module \biss_master_wb.ch0.core.config (rst, word_count, live, ok, cycle, ack_li
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.controller (rst, request, restart_timer, frame_doubtful, abort, config_ok, end_check, cdm_cycle, idle, receiver_clear, resync, timer_clear, fault, fault_status, faults, ma_run, in_clock, ma_hold, report_frame, report_delay, slo_stuck
+module \biss_master_wb.ch0.core.controller (rst, request, restart_timer, report_delay, frame_doubtful, abort, config_ok, end_check, resync, timer_clear, fault, fault_status, ma_run, in_clock, report_frame, idle, receiver_clear, faults, cdm_cycle, ma_hold, slo_stuck
 , slo_stuck_live, break_over, ack_expired, no_start_expired, delay_over, ma_arm, ma_busy, ma_held, ma_enough, early, locked, slo, frame_done, stopped, slots_full, started, stop_bit, cdm, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$31  = 0;
   wire \$1 ;
@@ -6328,97 +6328,57 @@ module \biss_master_wb.ch0.core.controller (rst, request, restart_timer, frame_d
   wire \$24 ;
   wire \$25 ;
   wire \$26 ;
-  wire \$27 ;
-  wire \$28 ;
-  wire \$29 ;
+  reg \$27 ;
+  reg [2:0] \$28 ;
+  reg \$29 ;
   wire \$3 ;
-  wire \$30 ;
-  wire \$31 ;
-  wire \$32 ;
-  wire \$33 ;
-  wire \$34 ;
-  wire \$35 ;
-  wire \$36 ;
-  wire \$37 ;
-  wire \$38 ;
-  wire \$39 ;
+  reg \$30 ;
+  reg \$31 ;
   wire \$4 ;
-  wire \$40 ;
-  wire \$41 ;
-  wire \$42 ;
-  wire \$43 ;
-  wire \$44 ;
-  wire \$45 ;
-  wire \$46 ;
-  wire \$47 ;
-  wire \$48 ;
-  wire \$49 ;
   wire \$5 ;
-  wire \$50 ;
-  wire \$51 ;
-  wire \$52 ;
-  wire \$53 ;
-  wire \$54 ;
-  wire \$55 ;
-  wire \$56 ;
-  wire \$57 ;
-  wire \$58 ;
-  wire \$59 ;
   wire \$6 ;
-  wire \$60 ;
-  wire \$61 ;
-  wire \$62 ;
-  wire \$63 ;
-  wire \$64 ;
-  wire \$65 ;
-  wire \$66 ;
-  wire \$67 ;
-  wire \$68 ;
-  wire \$69 ;
   wire \$7 ;
-  wire \$70 ;
-  wire \$71 ;
-  wire \$72 ;
-  wire \$73 ;
-  wire \$74 ;
-  wire \$75 ;
-  wire \$76 ;
-  wire \$77 ;
-  wire \$78 ;
-  reg \$79 ;
   wire \$8 ;
-  reg \$80 ;
-  reg [2:0] \$81 ;
-  reg \$82 ;
-  reg \$83 ;
-  reg \$84 ;
-  reg \$85 ;
-  reg \$86 ;
   wire \$9 ;
   input abort;
   wire abort;
+  wire \abort$46 ;
+  wire \abort$5 ;
+  wire aborted;
   input ack_expired;
   wire ack_expired;
-  reg armed = 1'h0;
+  wire \ack_expired$23 ;
+  wire bad_config;
   input break_over;
   wire break_over;
   input cdm;
   wire cdm;
+  wire \cdm$43 ;
   output cdm_cycle;
-  reg cdm_cycle = 1'h0;
+  wire cdm_cycle;
+  wire \cdm_cycle$48 ;
+  reg clear;
   input clk;
   wire clk;
   input config_ok;
   wire config_ok;
+  wire \config_ok$3 ;
   reg [2:0] cycle_fsm_state = 3'h0;
+  reg delay;
+  wire \delay$73 ;
   input delay_over;
   wire delay_over;
+  wire \delay_over$27 ;
   input early;
   wire early;
+  wire \early$17 ;
   input end_check;
   wire end_check;
+  wire fail;
   output fault;
   reg fault;
+  wire \fault$35 ;
+  wire \fault$69 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -6435,8 +6395,31 @@ module \biss_master_wb.ch0.core.controller (rst, request, restart_timer, frame_d
   (* enum_value_1100 = "NO_STOP" *)
   output [3:0] fault_status;
   reg [3:0] fault_status;
+  (* enum_base_type = "Status" *)
+  (* enum_value_0000 = "OK" *)
+  (* enum_value_0001 = "CRC_ERROR_WORD0" *)
+  (* enum_value_0010 = "CRC_ERROR_WORD1" *)
+  (* enum_value_0011 = "CRC_ERROR_BOTH" *)
+  (* enum_value_0100 = "SIGN_OF_LIFE" *)
+  (* enum_value_0101 = "SPW_MISMATCH" *)
+  (* enum_value_0110 = "NO_ACK" *)
+  (* enum_value_0111 = "NO_START" *)
+  (* enum_value_1000 = "DELAY_RANGE" *)
+  (* enum_value_1001 = "SLO_STUCK_LOW" *)
+  (* enum_value_1010 = "ABORTED" *)
+  (* enum_value_1011 = "BAD_CONFIG" *)
+  (* enum_value_1100 = "NO_STOP" *)
+  wire [3:0] \fault_status$37 ;
   output [6:0] faults;
-  reg [6:0] faults;
+  wire [6:0] faults;
+  wire [6:0] \faults$39 ;
+  wire \faults$39.aborted ;
+  wire \faults$39.bad_config ;
+  wire \faults$39.delay_range ;
+  wire \faults$39.no_ack ;
+  wire \faults$39.no_start ;
+  wire \faults$39.no_stop ;
+  wire \faults$39.slo_stuck_low ;
   wire \faults.aborted ;
   wire \faults.bad_config ;
   wire \faults.delay_range ;
@@ -6445,19 +6428,27 @@ module \biss_master_wb.ch0.core.controller (rst, request, restart_timer, frame_d
   wire \faults.no_stop ;
   wire \faults.slo_stuck_low ;
   reg first_clock = 1'h0;
+  (* init = 1'h0 *)
+  wire \first_clock$1 ;
+  wire frame;
   input frame_done;
   wire frame_done;
   input frame_doubtful;
   wire frame_doubtful;
+  reg framing;
+  reg holding;
   output idle;
   reg idle = 1'h0;
+  (* init = 1'h0 *)
+  wire \idle$41 ;
   output in_clock;
   reg in_clock;
   input locked;
   wire locked;
-  reg locked_seen = 1'h0;
+  wire \locked$15 ;
   input ma_arm;
   wire ma_arm;
+  wire \ma_arm$13 ;
   input ma_busy;
   wire ma_busy;
   input ma_enough;
@@ -6465,48 +6456,106 @@ module \biss_master_wb.ch0.core.controller (rst, request, restart_timer, frame_d
   input ma_held;
   wire ma_held;
   output ma_hold;
-  reg ma_hold;
+  wire ma_hold;
+  wire \ma_hold$50 ;
   output ma_run;
   reg ma_run;
   input no_start_expired;
   wire no_start_expired;
+  wire \no_start_expired$25 ;
   reg pause = 1'h0;
+  wire ready;
   output receiver_clear;
   reg receiver_clear = 1'h1;
   output report_delay;
-  reg report_delay;
+  wire report_delay;
+  wire \report_delay$33 ;
   output report_frame;
   reg report_frame;
+  wire \report_frame$31 ;
   input request;
   wire request;
   output restart_timer;
   wire restart_timer;
+  wire \restart_timer$29 ;
   output resync;
   reg resync;
   input rst;
   wire rst;
   input slo;
   wire slo;
+  wire \slo$44 ;
+  wire \slo$7 ;
   input slo_stuck;
   wire slo_stuck;
+  wire \slo_stuck$45 ;
+  wire \slo_stuck$9 ;
   input slo_stuck_live;
   wire slo_stuck_live;
+  wire \slo_stuck_live$11 ;
   input slots_full;
   wire slots_full;
+  wire \slots_full$21 ;
   input started;
   wire started;
+  wire \started$19 ;
+  (* enum_base_type = "Status" *)
+  (* enum_value_0000 = "OK" *)
+  (* enum_value_0001 = "CRC_ERROR_WORD0" *)
+  (* enum_value_0010 = "CRC_ERROR_WORD1" *)
+  (* enum_value_0011 = "CRC_ERROR_BOTH" *)
+  (* enum_value_0100 = "SIGN_OF_LIFE" *)
+  (* enum_value_0101 = "SPW_MISMATCH" *)
+  (* enum_value_0110 = "NO_ACK" *)
+  (* enum_value_0111 = "NO_START" *)
+  (* enum_value_1000 = "DELAY_RANGE" *)
+  (* enum_value_1001 = "SLO_STUCK_LOW" *)
+  (* enum_value_1010 = "ABORTED" *)
+  (* enum_value_1011 = "BAD_CONFIG" *)
+  (* enum_value_1100 = "NO_STOP" *)
+  wire [3:0] status;
+  (* enum_base_type = "Status" *)
+  (* enum_value_0000 = "OK" *)
+  (* enum_value_0001 = "CRC_ERROR_WORD0" *)
+  (* enum_value_0010 = "CRC_ERROR_WORD1" *)
+  (* enum_value_0011 = "CRC_ERROR_BOTH" *)
+  (* enum_value_0100 = "SIGN_OF_LIFE" *)
+  (* enum_value_0101 = "SPW_MISMATCH" *)
+  (* enum_value_0110 = "NO_ACK" *)
+  (* enum_value_0111 = "NO_START" *)
+  (* enum_value_1000 = "DELAY_RANGE" *)
+  (* enum_value_1001 = "SLO_STUCK_LOW" *)
+  (* enum_value_1010 = "ABORTED" *)
+  (* enum_value_1011 = "BAD_CONFIG" *)
+  (* enum_value_1100 = "NO_STOP" *)
+  wire [3:0] \status$74 ;
   input stop_bit;
   wire stop_bit;
   input stopped;
   wire stopped;
+  wire stuck_low;
   output timer_clear;
   reg timer_clear;
-  assign \$14  = locked & \$13 ;
-  assign \$15  = \$14  & delay_over;
-  assign \$16  = ~ started;
-  assign \$17  = locked_seen & \$16 ;
-  assign \$18  = no_start_expired | slots_full;
-  assign \$19  = \$17  & \$18 ;
+  reg watch;
+  assign \$1  = ma_busy | abort;
+  assign \$2  = ~ ma_enough;
+  assign \$3  = restart_timer | abort;
+  assign \$4  = ~ end_check;
+  assign \$5  = ~ ma_enough;
+  assign \$6  = ~ end_check;
+  assign \$7  = ma_busy | abort;
+  assign \$8  = ~ ma_busy;
+  assign \$9  = \$8  | ma_held;
+  assign \$10  = \$9  & slo;
+  assign \$11  = ! cycle_fsm_state;
+  assign \$12  = cycle_fsm_state == 1'h1;
+  assign \$13  = cycle_fsm_state == 2'h2;
+  assign \$14  = cycle_fsm_state == 2'h3;
+  assign \$15  = cycle_fsm_state == 3'h4;
+  assign \$16  = cycle_fsm_state == 3'h5;
+  assign \$17  = cycle_fsm_state == 3'h6;
+  assign \$18  = cycle_fsm_state == 3'h7;
+  assign \$19  = ma_busy | abort;
   assign \$20  = ~ end_check;
   assign \$21  = ma_busy | abort;
   assign \$22  = cdm_cycle & abort;
@@ -6514,454 +6563,67 @@ module \biss_master_wb.ch0.core.controller (rst, request, restart_timer, frame_d
   assign \$24  = ~ ma_busy;
   assign \$25  = \$24  | ma_held;
   assign \$26  = \$25  & slo;
-  assign \$27  = ~ locked_seen;
-  assign \$28  = locked & \$27 ;
-  assign restart_timer = ma_arm | \$28 ;
-  assign \$29  = ma_busy | abort;
-  assign \$30  = ~ config_ok;
-  assign \$31  = first_clock & \$30 ;
-  assign \$32  = first_clock ? slo_stuck_live : slo_stuck;
-  assign \$33  = ~ ma_enough;
-  assign \$34  = ~ abort;
-  assign \$35  = cdm_cycle & \$34 ;
-  assign \$36  = restart_timer | abort;
-  assign \$37  = armed & early;
-  assign \$38  = ~ locked_seen;
-  assign \$39  = armed & \$38 ;
-  assign \$40  = ~ locked;
-  assign \$41  = \$39  & \$40 ;
-  assign \$42  = \$41  & ack_expired;
-  assign \$43  = ~ locked_seen;
-  assign \$44  = locked & \$43 ;
-  assign \$45  = \$44  & delay_over;
-  assign \$46  = ~ started;
-  assign \$47  = locked_seen & \$46 ;
-  assign \$48  = no_start_expired | slots_full;
-  assign \$49  = \$47  & \$48 ;
-  assign \$50  = ~ end_check;
-  assign \$51  = ~ ma_enough;
-  assign \$52  = ~ abort;
-  assign \$53  = cdm_cycle & \$52 ;
-  assign \$54  = ~ end_check;
-  assign \$55  = slo | slo_stuck;
-  assign \$56  = \$55  | abort;
-  assign \$57  = ~ \$56 ;
-  assign \$58  = cdm_cycle & \$57 ;
-  assign \$59  = ma_busy | abort;
-  assign \$60  = slo | slo_stuck;
-  assign \$61  = \$60  | abort;
-  assign \$62  = ~ \$61 ;
-  assign \$63  = cdm_cycle & \$62 ;
-  assign \$64  = slo | slo_stuck;
-  assign \$65  = \$64  | abort;
-  assign \$66  = ~ \$65 ;
-  assign \$67  = cdm_cycle & \$66 ;
-  assign \$68  = ~ ma_busy;
-  assign \$69  = \$68  | ma_held;
-  assign \$70  = \$69  & slo;
-  assign \$71  = ! cycle_fsm_state;
-  assign \$72  = cycle_fsm_state == 1'h1;
-  assign \$73  = cycle_fsm_state == 2'h2;
-  assign \$74  = cycle_fsm_state == 2'h3;
-  assign \$75  = cycle_fsm_state == 3'h4;
-  assign \$76  = cycle_fsm_state == 3'h5;
-  assign \$77  = cycle_fsm_state == 3'h6;
-  assign \$78  = cycle_fsm_state == 3'h7;
   always @(posedge clk)
-    cdm_cycle <= \$79 ;
+    first_clock <= \$27 ;
   always @(posedge clk)
-    first_clock <= \$80 ;
+    cycle_fsm_state <= \$28 ;
   always @(posedge clk)
-    cycle_fsm_state <= \$81 ;
+    idle <= \$29 ;
   always @(posedge clk)
-    idle <= \$82 ;
+    receiver_clear <= \$30 ;
   always @(posedge clk)
-    receiver_clear <= \$83 ;
-  always @(posedge clk)
-    armed <= \$84 ;
-  always @(posedge clk)
-    locked_seen <= \$85 ;
-  always @(posedge clk)
-    pause <= \$86 ;
-  assign \$1  = ma_busy | abort;
-  assign \$2  = ~ config_ok;
-  assign \$3  = first_clock & \$2 ;
-  assign \$4  = first_clock ? slo_stuck_live : slo_stuck;
-  assign \$5  = ~ locked_seen;
-  assign \$6  = locked & \$5 ;
-  assign \$7  = armed & early;
-  assign \$8  = ~ locked_seen;
-  assign \$9  = armed & \$8 ;
-  assign \$10  = ~ locked;
-  assign \$11  = \$9  & \$10 ;
-  assign \$12  = \$11  & ack_expired;
-  assign \$13  = ~ locked_seen;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
-    \$79  = cdm_cycle;
-    if (idle) begin
-      \$79  = cdm;
-    end
-    if (rst) begin
-      \$79  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
-    \$80  = idle;
-    if (rst) begin
-      \$80  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
-    \$81  = cycle_fsm_state;
-    (* full_case = 32'd1 *)
-    casez (cycle_fsm_state)
-      3'h0:
-          if (\$1 ) begin
-          end else if (break_over) begin
-            \$81  = 3'h1;
-          end
-      3'h1:
-          if (abort) begin
-            \$81  = 3'h0;
-          end else if (request) begin
-            \$81  = 3'h2;
-          end
-      3'h2:
-          if (\$3 ) begin
-            \$81  = 3'h1;
-            if (abort) begin
-              \$81  = 3'h0;
-            end
-          end else if (abort) begin
-            \$81  = 3'h0;
-          end else if (slo) begin
-            \$81  = 3'h3;
-          end else if (\$4 ) begin
-            \$81  = 3'h0;
-          end
-      3'h3:
-          if (abort) begin
-            \$81  = 3'h0;
-          end else if (frame_done) begin
-            \$81  = 3'h4;
-          end else if (\$7 ) begin
-            \$81  = 3'h0;
-          end else if (\$12 ) begin
-            \$81  = 3'h0;
-          end else if (\$15 ) begin
-            \$81  = 3'h0;
-          end else if (\$19 ) begin
-            \$81  = 3'h0;
-          end
-      3'h4:
-          if (abort) begin
-            (* full_case = 32'd1 *)
-            if (end_check) begin
-              \$81  = 3'h0;
-            end else begin
-              \$81  = 3'h0;
-            end
-          end else if (stopped) begin
-            (* full_case = 32'd1 *)
-            if (\$20 ) begin
-              (* full_case = 32'd1 *)
-              if (pause) begin
-                \$81  = 3'h5;
-              end else begin
-                \$81  = 3'h6;
-              end
-            end else if (stop_bit) begin
-              \$81  = 3'h0;
-            end else begin
-              \$81  = 3'h7;
-            end
-          end
-      3'h5:
-          if (\$21 ) begin
-          end else if (break_over) begin
-            \$81  = 3'h1;
-          end
-      3'h6:
-          if (\$22 ) begin
-            \$81  = 3'h0;
-          end else if (\$23 ) begin
-            \$81  = 3'h1;
-          end
-      3'h7:
-          if (abort) begin
-            \$81  = 3'h0;
-          end else if (\$26 ) begin
-            (* full_case = 32'd1 *)
-            if (pause) begin
-              \$81  = 3'h5;
-            end else if (cdm_cycle) begin
-              \$81  = 3'h6;
-            end else begin
-              \$81  = 3'h1;
-            end
-          end else if (slo_stuck) begin
-            \$81  = 3'h0;
-          end
-    endcase
-    if (rst) begin
-      \$81  = 3'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
-    \$82  = idle;
-    (* full_case = 32'd1 *)
-    casez (cycle_fsm_state)
-      3'h0:
-          if (\$1 ) begin
-          end else if (break_over) begin
-            \$82  = 1'h1;
-          end
-      3'h1:
-          if (abort) begin
-            \$82  = 1'h0;
-          end else if (request) begin
-            \$82  = 1'h0;
-          end
-      3'h2:
-          if (\$3 ) begin
-            \$82  = 1'h1;
-            if (abort) begin
-              \$82  = 1'h0;
-            end
-          end else if (abort) begin
-            \$82  = 1'h0;
-          end else if (slo) begin
-            \$82  = 1'h0;
-          end else if (\$4 ) begin
-            \$82  = 1'h0;
-          end
-      3'h3:
-          if (abort) begin
-            \$82  = 1'h0;
-          end else if (frame_done) begin
-            \$82  = 1'h0;
-          end else if (\$7 ) begin
-            \$82  = 1'h0;
-          end else if (\$12 ) begin
-            \$82  = 1'h0;
-          end else if (\$15 ) begin
-            \$82  = 1'h0;
-          end else if (\$19 ) begin
-            \$82  = 1'h0;
-          end
-      3'h4:
-          if (abort) begin
-            (* full_case = 32'd1 *)
-            if (end_check) begin
-              \$82  = 1'h0;
-            end else begin
-              \$82  = 1'h0;
-            end
-          end else if (stopped) begin
-            (* full_case = 32'd1 *)
-            if (\$20 ) begin
-              (* full_case = 32'd1 *)
-              if (pause) begin
-                \$82  = 1'h0;
-              end else begin
-                \$82  = 1'h0;
-              end
-            end else if (stop_bit) begin
-              \$82  = 1'h0;
-            end else begin
-              \$82  = 1'h0;
-            end
-          end
-      3'h5:
-          if (\$21 ) begin
-          end else if (break_over) begin
-            \$82  = 1'h1;
-          end
-      3'h6:
-          if (\$22 ) begin
-            \$82  = 1'h0;
-          end else if (\$23 ) begin
-            \$82  = 1'h1;
-          end
-      3'h7:
-          if (abort) begin
-            \$82  = 1'h0;
-          end else if (\$26 ) begin
-            (* full_case = 32'd1 *)
-            if (pause) begin
-              \$82  = 1'h0;
-            end else if (cdm_cycle) begin
-              \$82  = 1'h0;
-            end else begin
-              \$82  = 1'h1;
-            end
-          end else if (slo_stuck) begin
-            \$82  = 1'h0;
-          end
-    endcase
-    if (rst) begin
-      \$82  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
-    \$83  = receiver_clear;
-    (* full_case = 32'd1 *)
-    casez (cycle_fsm_state)
-      3'h0:
-          if (\$1 ) begin
-          end else if (break_over) begin
-            \$83  = 1'h1;
-          end
-      3'h1:
-          if (abort) begin
-            \$83  = 1'h1;
-          end else if (request) begin
-            \$83  = 1'h1;
-          end
-      3'h2:
-          if (\$3 ) begin
-            \$83  = 1'h1;
-            if (abort) begin
-              \$83  = 1'h1;
-            end
-          end else if (abort) begin
-            \$83  = 1'h1;
-          end else if (slo) begin
-            \$83  = 1'h0;
-          end else if (\$4 ) begin
-            \$83  = 1'h1;
-          end
-      3'h3:
-          if (abort) begin
-            \$83  = 1'h1;
-          end else if (frame_done) begin
-            \$83  = 1'h0;
-          end else if (\$7 ) begin
-            \$83  = 1'h1;
-          end else if (\$12 ) begin
-            \$83  = 1'h1;
-          end else if (\$15 ) begin
-            \$83  = 1'h1;
-          end else if (\$19 ) begin
-            \$83  = 1'h1;
-          end
-      3'h4:
-          if (abort) begin
-            (* full_case = 32'd1 *)
-            if (end_check) begin
-              \$83  = 1'h1;
-            end else begin
-              \$83  = 1'h1;
-            end
-          end else if (stopped) begin
-            (* full_case = 32'd1 *)
-            if (\$20 ) begin
-              (* full_case = 32'd1 *)
-              if (pause) begin
-                \$83  = 1'h1;
-              end else begin
-                \$83  = 1'h0;
-              end
-            end else if (stop_bit) begin
-              \$83  = 1'h1;
-            end else begin
-              \$83  = 1'h0;
-            end
-          end
-      3'h5:
-          if (\$21 ) begin
-          end else if (break_over) begin
-            \$83  = 1'h1;
-          end
-      3'h6:
-          if (\$22 ) begin
-            \$83  = 1'h1;
-          end else if (\$23 ) begin
-            \$83  = 1'h1;
-          end
-      3'h7:
-          if (abort) begin
-            \$83  = 1'h1;
-          end else if (\$26 ) begin
-            (* full_case = 32'd1 *)
-            if (pause) begin
-              \$83  = 1'h1;
-            end else if (cdm_cycle) begin
-              \$83  = 1'h0;
-            end else begin
-              \$83  = 1'h1;
-            end
-          end else if (slo_stuck) begin
-            \$83  = 1'h1;
-          end
-    endcase
-    if (rst) begin
-      \$83  = 1'h1;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
-    \$84  = armed;
-    casez (cycle_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          \$84  = 1'h0;
-      3'h3:
-          if (ma_arm) begin
-            \$84  = 1'h1;
-          end
-    endcase
-    if (rst) begin
-      \$84  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
-    \$85  = locked_seen;
-    casez (cycle_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          \$85  = 1'h0;
-      3'h3:
-          if (\$6 ) begin
-            \$85  = 1'h1;
-          end
-    endcase
-    if (rst) begin
-      \$85  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
-    \$86  = pause;
-    casez (cycle_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h3:
-          if (abort) begin
-          end else if (frame_done) begin
-            \$86  = frame_doubtful;
-          end
-    endcase
-    if (rst) begin
-      \$86  = 1'h0;
-    end
-  end
+    pause <= \$31 ;
+  \biss_master_wb.ch0.core.controller.cdm_hold  cdm_hold (
+    .abort(abort),
+    .cdm(cdm),
+    .cdm_cycle(cdm_cycle),
+    .clk(clk),
+    .framing(framing),
+    .holding(holding),
+    .idle(idle),
+    .ma_hold(ma_hold),
+    .rst(rst),
+    .slo(slo),
+    .slo_stuck(slo_stuck)
+  );
+  \biss_master_wb.ch0.core.controller.line_faults  line_faults (
+    .ack_expired(ack_expired),
+    .clear(clear),
+    .clk(clk),
+    .delay(\delay$73 ),
+    .delay_over(delay_over),
+    .early(early),
+    .fault(\fault$69 ),
+    .locked(locked),
+    .ma_arm(ma_arm),
+    .no_start_expired(no_start_expired),
+    .restart_timer(restart_timer),
+    .rst(rst),
+    .slots_full(slots_full),
+    .started(started),
+    .status(\status$74 ),
+    .watch(watch)
+  );
+  \biss_master_wb.ch0.core.controller.ready_check  ready_check (
+    .abort(abort),
+    .aborted(aborted),
+    .bad_config(bad_config),
+    .config_ok(config_ok),
+    .first_clock(first_clock),
+    .ready(ready),
+    .slo(slo),
+    .slo_stuck(slo_stuck),
+    .slo_stuck_live(slo_stuck_live),
+    .stuck_low(stuck_low)
+  );
+  \biss_master_wb.ch0.core.controller.report  report (
+    .delay(delay),
+    .fault(fault),
+    .fault_status(fault_status),
+    .faults(faults),
+    .report_delay(report_delay),
+    .report_frame(report_frame)
+  );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     resync = 1'h0;
@@ -6976,7 +6638,7 @@ module \biss_master_wb.ch0.core.controller (rst, request, restart_timer, frame_d
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
       3'h0:
-          if (\$29 ) begin
+          if (\$1 ) begin
             timer_clear = 1'h1;
           end
       3'h1:
@@ -6984,14 +6646,14 @@ module \biss_master_wb.ch0.core.controller (rst, request, restart_timer, frame_d
       3'h2:
           timer_clear = 1'h1;
       3'h3:
-          if (\$36 ) begin
+          if (\$3 ) begin
             timer_clear = 1'h1;
           end
       3'h4:
           if (abort) begin
             timer_clear = 1'h1;
           end else if (stopped) begin
-            if (\$54 ) begin
+            if (\$6 ) begin
               if (pause) begin
                 timer_clear = 1'h1;
               end
@@ -7000,7 +6662,7 @@ module \biss_master_wb.ch0.core.controller (rst, request, restart_timer, frame_d
             end
           end
       3'h5:
-          if (\$59 ) begin
+          if (\$7 ) begin
             timer_clear = 1'h1;
           end
       3'h6:
@@ -7008,13 +6670,25 @@ module \biss_master_wb.ch0.core.controller (rst, request, restart_timer, frame_d
       3'h7:
           if (abort) begin
             timer_clear = 1'h1;
-          end else if (\$70 ) begin
+          end else if (\$10 ) begin
             if (pause) begin
               timer_clear = 1'h1;
             end
           end else if (slo_stuck) begin
             timer_clear = 1'h1;
           end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
+    clear = 1'h0;
+    casez (cycle_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          clear = 1'h1;
     endcase
   end
   always @* begin
@@ -7027,25 +6701,19 @@ module \biss_master_wb.ch0.core.controller (rst, request, restart_timer, frame_d
       3'h1:
           /* empty */;
       3'h2:
-          if (\$31 ) begin
+          if (bad_config) begin
             fault = 1'h1;
-          end else if (abort) begin
+          end else if (aborted) begin
             fault = 1'h1;
-          end else if (slo) begin
-          end else if (\$32 ) begin
+          end else if (ready) begin
+          end else if (stuck_low) begin
             fault = 1'h1;
           end
       3'h3:
           if (abort) begin
             fault = 1'h1;
           end else if (frame_done) begin
-          end else if (\$37 ) begin
-            fault = 1'h1;
-          end else if (\$42 ) begin
-            fault = 1'h1;
-          end else if (\$45 ) begin
-            fault = 1'h1;
-          end else if (\$49 ) begin
+          end else if (\fault$69 ) begin
             fault = 1'h1;
           end
       3'h4:
@@ -7054,7 +6722,7 @@ module \biss_master_wb.ch0.core.controller (rst, request, restart_timer, frame_d
               fault = 1'h1;
             end
           end else if (stopped) begin
-            if (\$54 ) begin
+            if (\$6 ) begin
             end else if (stop_bit) begin
               fault = 1'h1;
             end
@@ -7066,7 +6734,7 @@ module \biss_master_wb.ch0.core.controller (rst, request, restart_timer, frame_d
       3'h7:
           if (abort) begin
             fault = 1'h1;
-          end else if (\$70 ) begin
+          end else if (\$10 ) begin
           end else if (slo_stuck) begin
             fault = 1'h1;
           end
@@ -7082,26 +6750,20 @@ module \biss_master_wb.ch0.core.controller (rst, request, restart_timer, frame_d
       3'h1:
           /* empty */;
       3'h2:
-          if (\$31 ) begin
+          if (bad_config) begin
             fault_status = 4'hb;
-          end else if (abort) begin
+          end else if (aborted) begin
             fault_status = 4'ha;
-          end else if (slo) begin
-          end else if (\$32 ) begin
+          end else if (ready) begin
+          end else if (stuck_low) begin
             fault_status = 4'h9;
           end
       3'h3:
           if (abort) begin
             fault_status = 4'ha;
           end else if (frame_done) begin
-          end else if (\$37 ) begin
-            fault_status = 4'h8;
-          end else if (\$42 ) begin
-            fault_status = 4'h6;
-          end else if (\$45 ) begin
-            fault_status = 4'h8;
-          end else if (\$49 ) begin
-            fault_status = 4'h7;
+          end else if (\fault$69 ) begin
+            fault_status = \status$74 ;
           end
       3'h4:
           if (abort) begin
@@ -7109,7 +6771,7 @@ module \biss_master_wb.ch0.core.controller (rst, request, restart_timer, frame_d
               fault_status = 4'ha;
             end
           end else if (stopped) begin
-            if (\$54 ) begin
+            if (\$6 ) begin
             end else if (stop_bit) begin
               fault_status = 4'hc;
             end
@@ -7121,64 +6783,9 @@ module \biss_master_wb.ch0.core.controller (rst, request, restart_timer, frame_d
       3'h7:
           if (abort) begin
             fault_status = 4'ha;
-          end else if (\$70 ) begin
+          end else if (\$10 ) begin
           end else if (slo_stuck) begin
             fault_status = 4'h9;
-          end
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
-    faults = 7'h00;
-    (* full_case = 32'd1 *)
-    casez (cycle_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          if (\$31 ) begin
-            faults[5] = 1'h1;
-          end else if (abort) begin
-            faults[4] = 1'h1;
-          end else if (slo) begin
-          end else if (\$32 ) begin
-            faults[3] = 1'h1;
-          end
-      3'h3:
-          if (abort) begin
-            faults[4] = 1'h1;
-          end else if (frame_done) begin
-          end else if (\$37 ) begin
-            faults[2] = 1'h1;
-          end else if (\$42 ) begin
-            faults[0] = 1'h1;
-          end else if (\$45 ) begin
-            faults[2] = 1'h1;
-          end else if (\$49 ) begin
-            faults[1] = 1'h1;
-          end
-      3'h4:
-          if (abort) begin
-            if (end_check) begin
-              faults[4] = 1'h1;
-            end
-          end else if (stopped) begin
-            if (\$54 ) begin
-            end else if (stop_bit) begin
-              faults[6] = 1'h1;
-            end
-          end
-      3'h5:
-          /* empty */;
-      3'h6:
-          /* empty */;
-      3'h7:
-          if (abort) begin
-            faults[4] = 1'h1;
-          end else if (\$70 ) begin
-          end else if (slo_stuck) begin
-            faults[3] = 1'h1;
           end
     endcase
   end
@@ -7193,9 +6800,9 @@ module \biss_master_wb.ch0.core.controller (rst, request, restart_timer, frame_d
       3'h2:
           /* empty */;
       3'h3:
-          ma_run = \$33 ;
+          ma_run = \$2 ;
       3'h4:
-          ma_run = \$51 ;
+          ma_run = \$5 ;
     endcase
   end
   always @* begin
@@ -7214,8 +6821,7 @@ module \biss_master_wb.ch0.core.controller (rst, request, restart_timer, frame_d
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
-    ma_hold = 1'h0;
-    (* full_case = 32'd1 *)
+    watch = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
           /* empty */;
@@ -7224,15 +6830,23 @@ module \biss_master_wb.ch0.core.controller (rst, request, restart_timer, frame_d
       3'h2:
           /* empty */;
       3'h3:
-          ma_hold = \$35 ;
+          watch = 1'h1;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
+    framing = 1'h0;
+    casez (cycle_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h3:
+          framing = 1'h1;
       3'h4:
-          ma_hold = \$53 ;
-      3'h5:
-          ma_hold = \$58 ;
-      3'h6:
-          ma_hold = \$63 ;
-      3'h7:
-          ma_hold = \$67 ;
+          framing = 1'h1;
     endcase
   end
   always @* begin
@@ -7249,7 +6863,7 @@ module \biss_master_wb.ch0.core.controller (rst, request, restart_timer, frame_d
       3'h3:
           if (abort) begin
           end else if (frame_done) begin
-            if (\$50 ) begin
+            if (\$4 ) begin
               report_frame = 1'h1;
             end
           end
@@ -7261,15 +6875,14 @@ module \biss_master_wb.ch0.core.controller (rst, request, restart_timer, frame_d
           /* empty */;
       3'h7:
           if (abort) begin
-          end else if (\$70 ) begin
+          end else if (\$10 ) begin
             report_frame = 1'h1;
           end
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
-    report_delay = 1'h0;
-    (* full_case = 32'd1 *)
+    delay = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
           /* empty */;
@@ -7280,27 +6893,364 @@ module \biss_master_wb.ch0.core.controller (rst, request, restart_timer, frame_d
       3'h3:
           if (abort) begin
           end else if (frame_done) begin
-            if (\$50 ) begin
-              report_delay = 1'h1;
-            end
-          end else if (\$37 ) begin
-          end else if (\$42 ) begin
-          end else if (\$45 ) begin
-            report_delay = 1'h1;
-          end
-      3'h4:
-          /* empty */;
-      3'h5:
-          /* empty */;
-      3'h6:
-          /* empty */;
-      3'h7:
-          if (abort) begin
-          end else if (\$70 ) begin
-            report_delay = 1'h1;
+          end else if (\fault$69 ) begin
+            delay = \delay$73 ;
           end
     endcase
   end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
+    holding = 1'h0;
+    (* full_case = 32'd1 *)
+    casez (cycle_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h3:
+          /* empty */;
+      3'h4:
+          /* empty */;
+      3'h5:
+          holding = 1'h1;
+      3'h6:
+          holding = 1'h1;
+      3'h7:
+          holding = 1'h1;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
+    \$27  = idle;
+    if (rst) begin
+      \$27  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
+    \$28  = cycle_fsm_state;
+    (* full_case = 32'd1 *)
+    casez (cycle_fsm_state)
+      3'h0:
+          if (\$19 ) begin
+          end else if (break_over) begin
+            \$28  = 3'h1;
+          end
+      3'h1:
+          if (abort) begin
+            \$28  = 3'h0;
+          end else if (request) begin
+            \$28  = 3'h2;
+          end
+      3'h2:
+          if (bad_config) begin
+            \$28  = 3'h1;
+            if (abort) begin
+              \$28  = 3'h0;
+            end
+          end else if (aborted) begin
+            \$28  = 3'h0;
+          end else if (ready) begin
+            \$28  = 3'h3;
+          end else if (stuck_low) begin
+            \$28  = 3'h0;
+          end
+      3'h3:
+          if (abort) begin
+            \$28  = 3'h0;
+          end else if (frame_done) begin
+            \$28  = 3'h4;
+          end else if (\fault$69 ) begin
+            \$28  = 3'h0;
+          end
+      3'h4:
+          if (abort) begin
+            (* full_case = 32'd1 *)
+            if (end_check) begin
+              \$28  = 3'h0;
+            end else begin
+              \$28  = 3'h0;
+            end
+          end else if (stopped) begin
+            (* full_case = 32'd1 *)
+            if (\$20 ) begin
+              (* full_case = 32'd1 *)
+              if (pause) begin
+                \$28  = 3'h5;
+              end else begin
+                \$28  = 3'h6;
+              end
+            end else if (stop_bit) begin
+              \$28  = 3'h0;
+            end else begin
+              \$28  = 3'h7;
+            end
+          end
+      3'h5:
+          if (\$21 ) begin
+          end else if (break_over) begin
+            \$28  = 3'h1;
+          end
+      3'h6:
+          if (\$22 ) begin
+            \$28  = 3'h0;
+          end else if (\$23 ) begin
+            \$28  = 3'h1;
+          end
+      3'h7:
+          if (abort) begin
+            \$28  = 3'h0;
+          end else if (\$26 ) begin
+            (* full_case = 32'd1 *)
+            if (pause) begin
+              \$28  = 3'h5;
+            end else if (cdm_cycle) begin
+              \$28  = 3'h6;
+            end else begin
+              \$28  = 3'h1;
+            end
+          end else if (slo_stuck) begin
+            \$28  = 3'h0;
+          end
+    endcase
+    if (rst) begin
+      \$28  = 3'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
+    \$29  = idle;
+    (* full_case = 32'd1 *)
+    casez (cycle_fsm_state)
+      3'h0:
+          if (\$19 ) begin
+          end else if (break_over) begin
+            \$29  = 1'h1;
+          end
+      3'h1:
+          if (abort) begin
+            \$29  = 1'h0;
+          end else if (request) begin
+            \$29  = 1'h0;
+          end
+      3'h2:
+          if (bad_config) begin
+            \$29  = 1'h1;
+            if (abort) begin
+              \$29  = 1'h0;
+            end
+          end else if (aborted) begin
+            \$29  = 1'h0;
+          end else if (ready) begin
+            \$29  = 1'h0;
+          end else if (stuck_low) begin
+            \$29  = 1'h0;
+          end
+      3'h3:
+          if (abort) begin
+            \$29  = 1'h0;
+          end else if (frame_done) begin
+            \$29  = 1'h0;
+          end else if (\fault$69 ) begin
+            \$29  = 1'h0;
+          end
+      3'h4:
+          if (abort) begin
+            (* full_case = 32'd1 *)
+            if (end_check) begin
+              \$29  = 1'h0;
+            end else begin
+              \$29  = 1'h0;
+            end
+          end else if (stopped) begin
+            (* full_case = 32'd1 *)
+            if (\$20 ) begin
+              (* full_case = 32'd1 *)
+              if (pause) begin
+                \$29  = 1'h0;
+              end else begin
+                \$29  = 1'h0;
+              end
+            end else if (stop_bit) begin
+              \$29  = 1'h0;
+            end else begin
+              \$29  = 1'h0;
+            end
+          end
+      3'h5:
+          if (\$21 ) begin
+          end else if (break_over) begin
+            \$29  = 1'h1;
+          end
+      3'h6:
+          if (\$22 ) begin
+            \$29  = 1'h0;
+          end else if (\$23 ) begin
+            \$29  = 1'h1;
+          end
+      3'h7:
+          if (abort) begin
+            \$29  = 1'h0;
+          end else if (\$26 ) begin
+            (* full_case = 32'd1 *)
+            if (pause) begin
+              \$29  = 1'h0;
+            end else if (cdm_cycle) begin
+              \$29  = 1'h0;
+            end else begin
+              \$29  = 1'h1;
+            end
+          end else if (slo_stuck) begin
+            \$29  = 1'h0;
+          end
+    endcase
+    if (rst) begin
+      \$29  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
+    \$30  = receiver_clear;
+    (* full_case = 32'd1 *)
+    casez (cycle_fsm_state)
+      3'h0:
+          if (\$19 ) begin
+          end else if (break_over) begin
+            \$30  = 1'h1;
+          end
+      3'h1:
+          if (abort) begin
+            \$30  = 1'h1;
+          end else if (request) begin
+            \$30  = 1'h1;
+          end
+      3'h2:
+          if (bad_config) begin
+            \$30  = 1'h1;
+            if (abort) begin
+              \$30  = 1'h1;
+            end
+          end else if (aborted) begin
+            \$30  = 1'h1;
+          end else if (ready) begin
+            \$30  = 1'h0;
+          end else if (stuck_low) begin
+            \$30  = 1'h1;
+          end
+      3'h3:
+          if (abort) begin
+            \$30  = 1'h1;
+          end else if (frame_done) begin
+            \$30  = 1'h0;
+          end else if (\fault$69 ) begin
+            \$30  = 1'h1;
+          end
+      3'h4:
+          if (abort) begin
+            (* full_case = 32'd1 *)
+            if (end_check) begin
+              \$30  = 1'h1;
+            end else begin
+              \$30  = 1'h1;
+            end
+          end else if (stopped) begin
+            (* full_case = 32'd1 *)
+            if (\$20 ) begin
+              (* full_case = 32'd1 *)
+              if (pause) begin
+                \$30  = 1'h1;
+              end else begin
+                \$30  = 1'h0;
+              end
+            end else if (stop_bit) begin
+              \$30  = 1'h1;
+            end else begin
+              \$30  = 1'h0;
+            end
+          end
+      3'h5:
+          if (\$21 ) begin
+          end else if (break_over) begin
+            \$30  = 1'h1;
+          end
+      3'h6:
+          if (\$22 ) begin
+            \$30  = 1'h1;
+          end else if (\$23 ) begin
+            \$30  = 1'h1;
+          end
+      3'h7:
+          if (abort) begin
+            \$30  = 1'h1;
+          end else if (\$26 ) begin
+            (* full_case = 32'd1 *)
+            if (pause) begin
+              \$30  = 1'h1;
+            end else if (cdm_cycle) begin
+              \$30  = 1'h0;
+            end else begin
+              \$30  = 1'h1;
+            end
+          end else if (slo_stuck) begin
+            \$30  = 1'h1;
+          end
+    endcase
+    if (rst) begin
+      \$30  = 1'h1;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
+    \$31  = pause;
+    casez (cycle_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h3:
+          if (abort) begin
+          end else if (frame_done) begin
+            \$31  = frame_doubtful;
+          end
+    endcase
+    if (rst) begin
+      \$31  = 1'h0;
+    end
+  end
+  assign \first_clock$1  = first_clock;
+  assign \config_ok$3  = config_ok;
+  assign \abort$5  = abort;
+  assign \slo$7  = slo;
+  assign \slo_stuck$9  = slo_stuck;
+  assign \slo_stuck_live$11  = slo_stuck_live;
+  assign \ma_arm$13  = ma_arm;
+  assign \locked$15  = locked;
+  assign \early$17  = early;
+  assign \started$19  = started;
+  assign \slots_full$21  = slots_full;
+  assign \ack_expired$23  = ack_expired;
+  assign \no_start_expired$25  = no_start_expired;
+  assign \delay_over$27  = delay_over;
+  assign \restart_timer$29  = restart_timer;
+  assign \report_frame$31  = report_frame;
+  assign \report_delay$33  = report_delay;
+  assign \fault$35  = fault;
+  assign \fault_status$37  = fault_status;
+  assign \faults$39  = faults;
+  assign \idle$41  = idle;
+  assign \cdm$43  = cdm;
+  assign \slo$44  = slo;
+  assign \slo_stuck$45  = slo_stuck;
+  assign \abort$46  = abort;
+  assign \cdm_cycle$48  = cdm_cycle;
+  assign \ma_hold$50  = ma_hold;
+  assign fail = fault;
+  assign status = fault_status;
+  assign frame = report_frame;
   assign \faults.no_ack  = faults[0];
   assign \faults.no_start  = faults[1];
   assign \faults.delay_range  = faults[2];
@@ -7308,6 +7258,398 @@ module \biss_master_wb.ch0.core.controller (rst, request, restart_timer, frame_d
   assign \faults.aborted  = faults[4];
   assign \faults.bad_config  = faults[5];
   assign \faults.no_stop  = faults[6];
+  assign \faults$39.no_ack  = faults[0];
+  assign \faults$39.no_start  = faults[1];
+  assign \faults$39.delay_range  = faults[2];
+  assign \faults$39.slo_stuck_low  = faults[3];
+  assign \faults$39.aborted  = faults[4];
+  assign \faults$39.bad_config  = faults[5];
+  assign \faults$39.no_stop  = faults[6];
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_wb.ch0.core.controller.cdm_hold (rst, abort, framing, holding, idle, cdm_cycle, ma_hold, slo_stuck, slo, cdm, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$32  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire \$3 ;
+  wire \$4 ;
+  wire \$5 ;
+  wire \$6 ;
+  reg \$7 ;
+  input abort;
+  wire abort;
+  input cdm;
+  wire cdm;
+  output cdm_cycle;
+  reg cdm_cycle = 1'h0;
+  input clk;
+  wire clk;
+  input framing;
+  wire framing;
+  input holding;
+  wire holding;
+  input idle;
+  wire idle;
+  output ma_hold;
+  reg ma_hold;
+  input rst;
+  wire rst;
+  input slo;
+  wire slo;
+  input slo_stuck;
+  wire slo_stuck;
+  assign \$3  = slo | slo_stuck;
+  assign \$4  = \$3  | abort;
+  assign \$5  = ~ \$4 ;
+  assign \$6  = cdm_cycle & \$5 ;
+  always @(posedge clk)
+    cdm_cycle <= \$7 ;
+  assign \$1  = ~ abort;
+  assign \$2  = cdm_cycle & \$1 ;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$32 ) begin end
+    \$7  = cdm_cycle;
+    if (idle) begin
+      \$7  = cdm;
+    end
+    if (rst) begin
+      \$7  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$32 ) begin end
+    ma_hold = 1'h0;
+    if (framing) begin
+      ma_hold = \$2 ;
+    end else if (holding) begin
+      ma_hold = \$6 ;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_wb.ch0.core.controller.line_faults (rst, restart_timer, clear, watch, fault, status, delay, ack_expired, no_start_expired, delay_over, ma_arm, early, locked, slots_full, started, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$33  = 0;
+  wire \$1 ;
+  wire \$10 ;
+  wire \$11 ;
+  wire \$12 ;
+  wire \$13 ;
+  wire \$14 ;
+  wire \$15 ;
+  wire \$16 ;
+  wire \$17 ;
+  wire \$18 ;
+  wire \$19 ;
+  wire \$2 ;
+  reg \$20 ;
+  reg \$21 ;
+  wire \$3 ;
+  wire \$4 ;
+  wire \$5 ;
+  wire \$6 ;
+  wire \$7 ;
+  wire \$8 ;
+  wire \$9 ;
+  input ack_expired;
+  wire ack_expired;
+  reg armed = 1'h0;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output delay;
+  reg delay;
+  input delay_over;
+  wire delay_over;
+  input early;
+  wire early;
+  output fault;
+  reg fault;
+  input locked;
+  wire locked;
+  reg locked_seen = 1'h0;
+  input ma_arm;
+  wire ma_arm;
+  input no_start_expired;
+  wire no_start_expired;
+  output restart_timer;
+  wire restart_timer;
+  input rst;
+  wire rst;
+  input slots_full;
+  wire slots_full;
+  input started;
+  wire started;
+  (* enum_base_type = "Status" *)
+  (* enum_value_0000 = "OK" *)
+  (* enum_value_0001 = "CRC_ERROR_WORD0" *)
+  (* enum_value_0010 = "CRC_ERROR_WORD1" *)
+  (* enum_value_0011 = "CRC_ERROR_BOTH" *)
+  (* enum_value_0100 = "SIGN_OF_LIFE" *)
+  (* enum_value_0101 = "SPW_MISMATCH" *)
+  (* enum_value_0110 = "NO_ACK" *)
+  (* enum_value_0111 = "NO_START" *)
+  (* enum_value_1000 = "DELAY_RANGE" *)
+  (* enum_value_1001 = "SLO_STUCK_LOW" *)
+  (* enum_value_1010 = "ABORTED" *)
+  (* enum_value_1011 = "BAD_CONFIG" *)
+  (* enum_value_1100 = "NO_STOP" *)
+  output [3:0] status;
+  reg [3:0] status;
+  input watch;
+  wire watch;
+  assign \$1  = watch & ma_arm;
+  assign \$2  = ~ locked_seen;
+  assign \$3  = locked & \$2 ;
+  assign \$4  = watch & \$3 ;
+  assign \$5  = ~ locked_seen;
+  assign \$6  = locked & \$5 ;
+  assign restart_timer = ma_arm | \$6 ;
+  assign \$7  = armed & early;
+  assign \$8  = ~ locked_seen;
+  assign \$9  = armed & \$8 ;
+  assign \$10  = ~ locked;
+  assign \$11  = \$9  & \$10 ;
+  assign \$12  = \$11  & ack_expired;
+  assign \$13  = ~ locked_seen;
+  assign \$14  = locked & \$13 ;
+  assign \$15  = \$14  & delay_over;
+  assign \$16  = ~ started;
+  assign \$17  = locked_seen & \$16 ;
+  assign \$18  = no_start_expired | slots_full;
+  assign \$19  = \$17  & \$18 ;
+  always @(posedge clk)
+    armed <= \$20 ;
+  always @(posedge clk)
+    locked_seen <= \$21 ;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    \$20  = armed;
+    if (clear) begin
+      \$20  = 1'h0;
+    end
+    if (\$1 ) begin
+      \$20  = 1'h1;
+    end
+    if (rst) begin
+      \$20  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    \$21  = locked_seen;
+    if (clear) begin
+      \$21  = 1'h0;
+    end
+    if (\$4 ) begin
+      \$21  = 1'h1;
+    end
+    if (rst) begin
+      \$21  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    fault = 1'h0;
+    if (\$7 ) begin
+      fault = 1'h1;
+    end else if (\$12 ) begin
+      fault = 1'h1;
+    end else if (\$15 ) begin
+      fault = 1'h1;
+    end else if (\$19 ) begin
+      fault = 1'h1;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    status = 4'h0;
+    if (\$7 ) begin
+      status = 4'h8;
+    end else if (\$12 ) begin
+      status = 4'h6;
+    end else if (\$15 ) begin
+      status = 4'h8;
+    end else if (\$19 ) begin
+      status = 4'h7;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    delay = 1'h0;
+    if (\$7 ) begin
+    end else if (\$12 ) begin
+    end else if (\$15 ) begin
+      delay = 1'h1;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_wb.ch0.core.controller.ready_check (config_ok, first_clock, bad_config, aborted, ready, stuck_low, slo_stuck, slo_stuck_live, slo, abort);
+  reg \$auto$verilog_backend.cc:2355:dump_module$34  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire \$3 ;
+  input abort;
+  wire abort;
+  output aborted;
+  reg aborted;
+  output bad_config;
+  reg bad_config;
+  input config_ok;
+  wire config_ok;
+  input first_clock;
+  wire first_clock;
+  output ready;
+  reg ready;
+  input slo;
+  wire slo;
+  input slo_stuck;
+  wire slo_stuck;
+  input slo_stuck_live;
+  wire slo_stuck_live;
+  output stuck_low;
+  reg stuck_low;
+  assign \$1  = ~ config_ok;
+  assign \$2  = first_clock & \$1 ;
+  assign \$3  = first_clock ? slo_stuck_live : slo_stuck;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    stuck_low = 1'h0;
+    if (\$2 ) begin
+    end else if (abort) begin
+    end else if (slo) begin
+    end else if (\$3 ) begin
+      stuck_low = 1'h1;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    bad_config = 1'h0;
+    if (\$2 ) begin
+      bad_config = 1'h1;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    aborted = 1'h0;
+    if (\$2 ) begin
+    end else if (abort) begin
+      aborted = 1'h1;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    ready = 1'h0;
+    if (\$2 ) begin
+    end else if (abort) begin
+    end else if (slo) begin
+      ready = 1'h1;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_wb.ch0.core.controller.report (fault, fault_status, report_frame, delay, faults, report_delay);
+  wire \$1 ;
+  wire \$10 ;
+  wire \$11 ;
+  wire \$12 ;
+  wire \$13 ;
+  wire \$14 ;
+  wire \$2 ;
+  wire \$3 ;
+  wire \$4 ;
+  wire \$5 ;
+  wire \$6 ;
+  wire \$7 ;
+  wire \$8 ;
+  wire \$9 ;
+  input delay;
+  wire delay;
+  wire fail;
+  input fault;
+  wire fault;
+  (* enum_base_type = "Status" *)
+  (* enum_value_0000 = "OK" *)
+  (* enum_value_0001 = "CRC_ERROR_WORD0" *)
+  (* enum_value_0010 = "CRC_ERROR_WORD1" *)
+  (* enum_value_0011 = "CRC_ERROR_BOTH" *)
+  (* enum_value_0100 = "SIGN_OF_LIFE" *)
+  (* enum_value_0101 = "SPW_MISMATCH" *)
+  (* enum_value_0110 = "NO_ACK" *)
+  (* enum_value_0111 = "NO_START" *)
+  (* enum_value_1000 = "DELAY_RANGE" *)
+  (* enum_value_1001 = "SLO_STUCK_LOW" *)
+  (* enum_value_1010 = "ABORTED" *)
+  (* enum_value_1011 = "BAD_CONFIG" *)
+  (* enum_value_1100 = "NO_STOP" *)
+  input [3:0] fault_status;
+  wire [3:0] fault_status;
+  output [6:0] faults;
+  wire [6:0] faults;
+  wire \faults.aborted ;
+  wire \faults.bad_config ;
+  wire \faults.delay_range ;
+  wire \faults.no_ack ;
+  wire \faults.no_start ;
+  wire \faults.no_stop ;
+  wire \faults.slo_stuck_low ;
+  wire frame;
+  output report_delay;
+  wire report_delay;
+  input report_frame;
+  wire report_frame;
+  (* enum_base_type = "Status" *)
+  (* enum_value_0000 = "OK" *)
+  (* enum_value_0001 = "CRC_ERROR_WORD0" *)
+  (* enum_value_0010 = "CRC_ERROR_WORD1" *)
+  (* enum_value_0011 = "CRC_ERROR_BOTH" *)
+  (* enum_value_0100 = "SIGN_OF_LIFE" *)
+  (* enum_value_0101 = "SPW_MISMATCH" *)
+  (* enum_value_0110 = "NO_ACK" *)
+  (* enum_value_0111 = "NO_START" *)
+  (* enum_value_1000 = "DELAY_RANGE" *)
+  (* enum_value_1001 = "SLO_STUCK_LOW" *)
+  (* enum_value_1010 = "ABORTED" *)
+  (* enum_value_1011 = "BAD_CONFIG" *)
+  (* enum_value_1100 = "NO_STOP" *)
+  wire [3:0] status;
+  assign report_delay = report_frame | delay;
+  assign \$1  = fault_status == 3'h6;
+  assign \$2  = fault & \$1 ;
+  assign \$3  = fault_status == 3'h7;
+  assign \$4  = fault & \$3 ;
+  assign \$5  = fault_status == 4'h8;
+  assign \$6  = fault & \$5 ;
+  assign \$7  = fault_status == 4'h9;
+  assign \$8  = fault & \$7 ;
+  assign \$9  = fault_status == 4'ha;
+  assign \$10  = fault & \$9 ;
+  assign \$11  = fault_status == 4'hb;
+  assign \$12  = fault & \$11 ;
+  assign \$13  = fault_status == 4'hc;
+  assign \$14  = fault & \$13 ;
+  assign frame = report_frame;
+  assign fail = fault;
+  assign status = fault_status;
+  assign \faults.no_ack  = faults[0];
+  assign \faults.no_start  = faults[1];
+  assign \faults.delay_range  = faults[2];
+  assign \faults.slo_stuck_low  = faults[3];
+  assign \faults.aborted  = faults[4];
+  assign \faults.bad_config  = faults[5];
+  assign \faults.no_stop  = faults[6];
+  assign faults[6] = \$14 ;
+  assign faults[5] = \$12 ;
+  assign faults[4] = \$10 ;
+  assign faults[3] = \$8 ;
+  assign faults[2] = \$6 ;
+  assign faults[1] = \$4 ;
+  assign faults[0] = \$2 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -7632,168 +7974,6 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch0.core.counters.count_aborted (rst, clear, inc, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$32  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$32 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$32 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.counters.count_ca_aborted (rst, clear, inc, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$33  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.counters.count_ca_crc4_error (rst, clear, inc, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$34  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.counters.count_ca_data_fault (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$35  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -7847,7 +8027,7 @@ module \biss_master_wb.ch0.core.counters.count_ca_data_fault (rst, clear, inc, c
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.counters.count_ca_no_answer (rst, clear, inc, count, clk);
+module \biss_master_wb.ch0.core.counters.count_ca_aborted (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$36  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -7901,7 +8081,7 @@ module \biss_master_wb.ch0.core.counters.count_ca_no_answer (rst, clear, inc, co
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.counters.count_ca_refused (rst, clear, inc, count, clk);
+module \biss_master_wb.ch0.core.counters.count_ca_crc4_error (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$37  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -7955,7 +8135,7 @@ module \biss_master_wb.ch0.core.counters.count_ca_refused (rst, clear, inc, coun
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.counters.count_crc_word0 (rst, clear, inc, count, clk);
+module \biss_master_wb.ch0.core.counters.count_ca_data_fault (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$38  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8009,7 +8189,7 @@ module \biss_master_wb.ch0.core.counters.count_crc_word0 (rst, clear, inc, count
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.counters.count_crc_word1 (rst, clear, inc, count, clk);
+module \biss_master_wb.ch0.core.counters.count_ca_no_answer (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$39  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8063,7 +8243,7 @@ module \biss_master_wb.ch0.core.counters.count_crc_word1 (rst, clear, inc, count
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.counters.count_delay_range (rst, clear, inc, count, clk);
+module \biss_master_wb.ch0.core.counters.count_ca_refused (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$40  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8117,7 +8297,7 @@ module \biss_master_wb.ch0.core.counters.count_delay_range (rst, clear, inc, cou
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.counters.count_lc_repeat (rst, clear, inc, count, clk);
+module \biss_master_wb.ch0.core.counters.count_crc_word0 (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$41  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8171,7 +8351,7 @@ module \biss_master_wb.ch0.core.counters.count_lc_repeat (rst, clear, inc, count
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.counters.count_lc_skip (rst, clear, inc, count, clk);
+module \biss_master_wb.ch0.core.counters.count_crc_word1 (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$42  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8225,7 +8405,7 @@ module \biss_master_wb.ch0.core.counters.count_lc_skip (rst, clear, inc, count, 
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.counters.count_lc_zero (rst, clear, inc, count, clk);
+module \biss_master_wb.ch0.core.counters.count_delay_range (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$43  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8279,7 +8459,7 @@ module \biss_master_wb.ch0.core.counters.count_lc_zero (rst, clear, inc, count, 
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.counters.count_no_ack (rst, clear, inc, count, clk);
+module \biss_master_wb.ch0.core.counters.count_lc_repeat (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$44  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8333,7 +8513,7 @@ module \biss_master_wb.ch0.core.counters.count_no_ack (rst, clear, inc, count, c
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.counters.count_no_start (rst, clear, inc, count, clk);
+module \biss_master_wb.ch0.core.counters.count_lc_skip (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$45  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8387,7 +8567,7 @@ module \biss_master_wb.ch0.core.counters.count_no_start (rst, clear, inc, count,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.counters.count_no_stop (rst, clear, inc, count, clk);
+module \biss_master_wb.ch0.core.counters.count_lc_zero (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$46  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8441,7 +8621,7 @@ module \biss_master_wb.ch0.core.counters.count_no_stop (rst, clear, inc, count, 
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.counters.count_overrun (rst, clear, inc, count, clk);
+module \biss_master_wb.ch0.core.counters.count_no_ack (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$47  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8495,7 +8675,7 @@ module \biss_master_wb.ch0.core.counters.count_overrun (rst, clear, inc, count, 
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.counters.count_slo_stuck_low (rst, clear, inc, count, clk);
+module \biss_master_wb.ch0.core.counters.count_no_start (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$48  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8549,7 +8729,7 @@ module \biss_master_wb.ch0.core.counters.count_slo_stuck_low (rst, clear, inc, c
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.counters.count_spw_mismatch (rst, clear, inc, count, clk);
+module \biss_master_wb.ch0.core.counters.count_no_stop (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$49  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -8603,9 +8783,171 @@ module \biss_master_wb.ch0.core.counters.count_spw_mismatch (rst, clear, inc, co
 endmodule
 
 (* generator = "Amaranth" *)
+module \biss_master_wb.ch0.core.counters.count_overrun (rst, clear, inc, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$50  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_wb.ch0.core.counters.count_slo_stuck_low (rst, clear, inc, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_wb.ch0.core.counters.count_spw_mismatch (rst, clear, inc, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$52  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
 module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample, \bit , receiver_clear, done, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1, lc, cpw_top, crc_ok
 , clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$50  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$53  = 0;
   wire [6:0] \$1 ;
   wire [1:0] \$10 ;
   reg [2:0] \$100 ;
@@ -8988,7 +9330,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
     .valid(\valid$52 )
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     (* full_case = 32'd1 *)
     casez (words[6])
       1'h0:
@@ -8998,7 +9340,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -9012,7 +9354,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     (* full_case = 32'd1 *)
     casez (words[9:6])
       4'h0:
@@ -9050,7 +9392,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -9064,7 +9406,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     (* full_case = 32'd1 *)
     casez (words[16])
       1'h0:
@@ -9074,7 +9416,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     (* full_case = 32'd1 *)
     casez (words[17:16])
       2'h0:
@@ -9088,7 +9430,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:16])
       4'h0:
@@ -9126,7 +9468,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     (* full_case = 32'd1 *)
     casez (words[17:16])
       2'h0:
@@ -9140,7 +9482,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$94  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -9164,7 +9506,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$95  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -9186,7 +9528,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$96  = slots;
     if (\$34 ) begin
       \$96  = \$35 [15:0];
@@ -9199,7 +9541,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$97  = slots_full;
     if (\$34 ) begin
       \$97  = \$36 ;
@@ -9212,7 +9554,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$98  = started;
     casez (decoder_fsm_state)
       3'h0:
@@ -9228,7 +9570,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$99  = start_slot;
     casez (decoder_fsm_state)
       3'h0:
@@ -9244,7 +9586,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$100  = decoder_fsm_state;
     casez (decoder_fsm_state)
       3'h0:
@@ -9276,7 +9618,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$101  = cds;
     casez (decoder_fsm_state)
       3'h0:
@@ -9294,7 +9636,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$102  = idx;
     casez (decoder_fsm_state)
       3'h0:
@@ -9319,7 +9661,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$103  = in_data;
     casez (decoder_fsm_state)
       3'h0:
@@ -9344,7 +9686,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$104  = in_lc;
     casez (decoder_fsm_state)
       3'h0:
@@ -9369,7 +9711,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$105  = in_top;
     casez (decoder_fsm_state)
       3'h0:
@@ -9394,7 +9736,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$106  = word;
     casez (decoder_fsm_state)
       3'h0:
@@ -9422,7 +9764,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$107  = stop_bit;
     casez (decoder_fsm_state)
       3'h0:
@@ -9444,7 +9786,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$108  = data0;
     if (\$58 ) begin
       \$108  = { data0[53:0], \bit  };
@@ -9457,7 +9799,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$109  = ne;
     if (\$59 ) begin
       \$109 [0] = 1'h1;
@@ -9477,7 +9819,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$110  = nw;
     if (\$59 ) begin
       \$110 [0] = 1'h1;
@@ -9499,7 +9841,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$111  = data1;
     if (\$70 ) begin
       \$111  = { data1[38:0], \bit  };
@@ -9512,7 +9854,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$112  = lc;
     if (lc_load) begin
       \$112  = { lc[4:0], \bit  };
@@ -9525,7 +9867,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$113  = cpw_top;
     if (\$80 ) begin
       \$113  = { cpw_top[38:0], \bit  };
@@ -9538,7 +9880,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     in_word = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -9575,7 +9917,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch0.core.decoder.crc0 (rst, start, valid, kind, \bit , receiver_clear, ok, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$54  = 0;
   wire [5:0] \$1 ;
   wire \$10 ;
   wire [5:0] \$11 ;
@@ -9669,7 +10011,7 @@ module \biss_master_wb.ch0.core.decoder.crc0 (rst, start, valid, kind, \bit , re
   assign \$auto$rtlil.cc:2739:Not$22  = ~ { crc6_reg[0], 1'h0 };
   assign \$auto$rtlil.cc:2739:Not$24  = ~ { crc16_reg[14], crc16_reg[11], crc16_reg[6:5], crc16_reg[3:2], 1'h0 };
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$31  = crc6_reg;
     if (valid) begin
       \$31  = \$5 ;
@@ -9684,7 +10026,7 @@ module \biss_master_wb.ch0.core.decoder.crc0 (rst, start, valid, kind, \bit , re
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$32  = crc6_match;
     if (valid) begin
       \$32  = \$15 ;
@@ -9699,7 +10041,7 @@ module \biss_master_wb.ch0.core.decoder.crc0 (rst, start, valid, kind, \bit , re
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$33  = crc16_reg;
     if (valid) begin
       \$33  = \$20 ;
@@ -9714,7 +10056,7 @@ module \biss_master_wb.ch0.core.decoder.crc0 (rst, start, valid, kind, \bit , re
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$34  = crc16_match;
     if (valid) begin
       \$34  = \$30 ;
@@ -9729,7 +10071,7 @@ module \biss_master_wb.ch0.core.decoder.crc0 (rst, start, valid, kind, \bit , re
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     ok = 1'h0;
     casez (kind)
       2'h0:
@@ -9750,7 +10092,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch0.core.decoder.crc1 (rst, start, valid, kind, \bit , receiver_clear, ok, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$52  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$55  = 0;
   wire [5:0] \$1 ;
   wire \$10 ;
   wire [5:0] \$11 ;
@@ -9844,7 +10186,7 @@ module \biss_master_wb.ch0.core.decoder.crc1 (rst, start, valid, kind, \bit , re
   assign \$auto$rtlil.cc:2739:Not$18  = ~ { crc6_reg[0], 1'h0 };
   assign \$auto$rtlil.cc:2739:Not$20  = ~ { crc16_reg[14], crc16_reg[11], crc16_reg[6:5], crc16_reg[3:2], 1'h0 };
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$31  = crc6_reg;
     if (valid) begin
       \$31  = \$5 ;
@@ -9859,7 +10201,7 @@ module \biss_master_wb.ch0.core.decoder.crc1 (rst, start, valid, kind, \bit , re
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$32  = crc6_match;
     if (valid) begin
       \$32  = \$15 ;
@@ -9874,7 +10216,7 @@ module \biss_master_wb.ch0.core.decoder.crc1 (rst, start, valid, kind, \bit , re
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$33  = crc16_reg;
     if (valid) begin
       \$33  = \$20 ;
@@ -9889,7 +10231,7 @@ module \biss_master_wb.ch0.core.decoder.crc1 (rst, start, valid, kind, \bit , re
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$34  = crc16_match;
     if (valid) begin
       \$34  = \$30 ;
@@ -9904,7 +10246,7 @@ module \biss_master_wb.ch0.core.decoder.crc1 (rst, start, valid, kind, \bit , re
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     ok = 1'h0;
     casez (kind)
       2'h0:
@@ -9925,7 +10267,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch0.core.ma_clock (rst, \clocking , half_period, run, hold, first_rise, second_rise, ma, rises, busy, held, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$53  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$56  = 0;
   wire [16:0] \$1 ;
   wire \$10 ;
   wire [16:0] \$11 ;
@@ -10050,7 +10392,7 @@ module \biss_master_wb.ch0.core.ma_clock (rst, \clocking , half_period, run, hol
   always @(posedge clk)
     released <= \$42 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
     \$34  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -10065,7 +10407,7 @@ module \biss_master_wb.ch0.core.ma_clock (rst, \clocking , half_period, run, hol
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
     \$35  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -10080,7 +10422,7 @@ module \biss_master_wb.ch0.core.ma_clock (rst, \clocking , half_period, run, hol
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
     \$36  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -10095,7 +10437,7 @@ module \biss_master_wb.ch0.core.ma_clock (rst, \clocking , half_period, run, hol
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
     \$37  = ma;
     casez (ma_fsm_state)
       3'h0:
@@ -10124,7 +10466,7 @@ module \biss_master_wb.ch0.core.ma_clock (rst, \clocking , half_period, run, hol
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
     \$38  = phase_left;
     casez (ma_fsm_state)
       3'h0:
@@ -10166,7 +10508,7 @@ module \biss_master_wb.ch0.core.ma_clock (rst, \clocking , half_period, run, hol
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
     \$39  = last_clock;
     casez (ma_fsm_state)
       3'h0:
@@ -10208,7 +10550,7 @@ module \biss_master_wb.ch0.core.ma_clock (rst, \clocking , half_period, run, hol
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
     \$40  = rises;
     casez (ma_fsm_state)
       3'h0:
@@ -10227,7 +10569,7 @@ module \biss_master_wb.ch0.core.ma_clock (rst, \clocking , half_period, run, hol
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
     \$41  = ma_fsm_state;
     casez (ma_fsm_state)
       3'h0:
@@ -10263,7 +10605,7 @@ module \biss_master_wb.ch0.core.ma_clock (rst, \clocking , half_period, run, hol
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
     \$42  = released;
     casez (ma_fsm_state)
       3'h0:
@@ -10287,7 +10629,7 @@ module \biss_master_wb.ch0.core.ma_clock (rst, \clocking , half_period, run, hol
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
     busy = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -10303,7 +10645,7 @@ module \biss_master_wb.ch0.core.ma_clock (rst, \clocking , half_period, run, hol
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
     held = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -10320,7 +10662,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch0.core.ma_stop (rst, words, w1_enable, clear, rises, enough, \started$10 , start_slot, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$54  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$57  = 0;
   reg [7:0] \$1 ;
   reg [7:0] \$10 ;
   wire [8:0] \$11 ;
@@ -10401,7 +10743,7 @@ module \biss_master_wb.ch0.core.ma_stop (rst, words, w1_enable, clear, rises, en
   always @(posedge clk)
     word1_len <= \$17 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     (* full_case = 32'd1 *)
     casez (words[9:6])
       4'h0:
@@ -10439,7 +10781,7 @@ module \biss_master_wb.ch0.core.ma_stop (rst, words, w1_enable, clear, rises, en
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:16])
       4'h0:
@@ -10477,42 +10819,42 @@ module \biss_master_wb.ch0.core.ma_stop (rst, words, w1_enable, clear, rises, en
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$12  = \$2 [7:0];
     if (rst) begin
       \$12  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$13  = \$4 ;
     if (rst) begin
       \$13  = 9'h000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$14  = \$5 ;
     if (rst) begin
       \$14  = 17'h00000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$15  = \started$10 ;
     if (rst) begin
       \$15  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$16  = \$9 ;
     if (rst) begin
       \$16  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$17  = \$11 [7:0];
     if (rst) begin
       \$17  = 8'h00;
@@ -10824,7 +11166,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch0.core.register_access.buffers (clk, rst, host_read__en, byte_to_send, rbuf_data, wbuf, index, store, byte_received, host_read__addr);
-  reg \$auto$verilog_backend.cc:2355:dump_module$55  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$58  = 0;
   wire \$1 ;
   wire \$2 ;
   wire \$3 ;
@@ -10941,21 +11283,21 @@ module \biss_master_wb.ch0.core.register_access.buffers (clk, rst, host_read__en
   assign \$1  = ! index[1:0];
   assign \$2  = index[1:0] == 1'h1;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     byte_received__addr = 4'h0;
     if (store) begin
       byte_received__addr = index[5:2];
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     byte_received__data = 32'd0;
     if (store) begin
       byte_received__data = { byte_received, byte_received, byte_received, byte_received };
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     byte_received__en = 4'h0;
     if (store) begin
       byte_received__en = { \$4 , \$3 , \$2 , \$1  };
@@ -10975,7 +11317,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch0.core.register_access.checker (rst, crc_ok, echo_ok, cds, control__take_data, start, control__take_crc, sent, \byte , clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$56  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$59  = 0;
   reg [7:0] \$1 ;
   reg [2:0] \$2 ;
   output [7:0] \byte ;
@@ -11018,7 +11360,7 @@ module \biss_master_wb.ch0.core.register_access.checker (rst, crc_ok, echo_ok, c
     .valid(control__take_data)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     \$1  = \byte ;
     if (control__take_data) begin
       \$1  = { \byte [6:0], cds };
@@ -11028,7 +11370,7 @@ module \biss_master_wb.ch0.core.register_access.checker (rst, crc_ok, echo_ok, c
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     \$2  = got_crc;
     if (control__take_crc) begin
       \$2  = { got_crc[1:0], cds };
@@ -11044,7 +11386,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch0.core.register_access.checker.rx_crc (rst, crc, data_in, valid, start, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$57  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$60  = 0;
   wire [3:0] \$1 ;
   wire \$10 ;
   wire [3:0] \$11 ;
@@ -11087,7 +11429,7 @@ module \biss_master_wb.ch0.core.register_access.checker.rx_crc (rst, crc, data_i
     crc_reg <= \$13 ;
   assign \$auto$rtlil.cc:2739:Not$14  = ~ crc_reg;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
     \$13  = crc_reg;
     if (valid) begin
       \$13 [0] = \$3 ;
@@ -11111,7 +11453,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch0.core.register_access.idle (rst, frame_end, frame_ok, run_enough, seen_enough, frame_cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$58  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$61  = 0;
   wire \$1 ;
   wire [4:0] \$10 ;
   wire \$11 ;
@@ -11181,7 +11523,7 @@ module \biss_master_wb.ch0.core.register_access.idle (rst, frame_end, frame_ok, 
   always @(posedge clk)
     idle_seen <= \$24 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
     \$23  = idle_run;
     if (frame_end) begin
       \$23  = \$4 [3:0];
@@ -11191,7 +11533,7 @@ module \biss_master_wb.ch0.core.register_access.idle (rst, frame_end, frame_ok, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
     \$24  = idle_seen;
     if (frame_end) begin
       \$24  = \$10 [3:0];
@@ -11204,7 +11546,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch0.core.register_access.sender (rst, \byte , request, control__load_header, control__source, control__crc_bit, control__shift_header, start, valid, control__load_byte, control__shift_byte, sent, cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$59  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$62  = 0;
   wire \$1 ;
   wire [18:0] \$2 ;
   wire [8:0] \$3 ;
@@ -11276,7 +11618,7 @@ module \biss_master_wb.ch0.core.register_access.sender (rst, \byte , request, co
     .valid(valid)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
     \$6  = header;
     if (control__load_header) begin
       \$6  = { 2'h3, request[2:0], request[9:3], 4'h0, \$1 , request[17] };
@@ -11289,7 +11631,7 @@ module \biss_master_wb.ch0.core.register_access.sender (rst, \byte , request, co
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
     \$7  = to_send;
     if (control__load_byte) begin
       \$7  = \byte ;
@@ -11302,7 +11644,7 @@ module \biss_master_wb.ch0.core.register_access.sender (rst, \byte , request, co
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
     \$8  = sent;
     if (control__load_byte) begin
       \$8  = \byte ;
@@ -11312,7 +11654,7 @@ module \biss_master_wb.ch0.core.register_access.sender (rst, \byte , request, co
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
     cdm = 1'h0;
     casez (control__source)
       3'h1:
@@ -11337,7 +11679,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch0.core.register_access.sender.tx_crc (rst, data_in, crc, start, valid, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$60  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$63  = 0;
   wire [3:0] \$1 ;
   wire \$10 ;
   wire [3:0] \$11 ;
@@ -11380,7 +11722,7 @@ module \biss_master_wb.ch0.core.register_access.sender.tx_crc (rst, data_in, crc
     crc_reg <= \$13 ;
   assign \$auto$rtlil.cc:2739:Not$16  = ~ crc_reg;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
     \$13  = crc_reg;
     if (valid) begin
       \$13 [0] = \$3 ;
@@ -11405,7 +11747,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch0.core.register_access.sequencer (rst, frame_end, frame_ok, busy, crc_ok, echo_ok, run_enough, seen_enough, start, abort, request, frame_cdm, frame_cds, done, result, index, send__load_header, send__source, send__crc_bit, send__shift_header, send__crc_start
 , send__crc_valid, send__load_byte, send__shift_byte, check__take_data, check__first, check__take_crc, store, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$61  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$64  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$100 ;
@@ -11761,7 +12103,7 @@ module \biss_master_wb.ch0.core.register_access.sequencer (rst, frame_end, frame
   always @(posedge clk)
     waited <= \$125 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     \$118  = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -11799,7 +12141,7 @@ module \biss_master_wb.ch0.core.register_access.sequencer (rst, frame_end, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     \$119  = result;
     casez (access_fsm_state)
       3'h0:
@@ -11853,7 +12195,7 @@ module \biss_master_wb.ch0.core.register_access.sequencer (rst, frame_end, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     \$120  = access_fsm_state;
     casez (access_fsm_state)
       3'h0:
@@ -11950,7 +12292,7 @@ module \biss_master_wb.ch0.core.register_access.sequencer (rst, frame_end, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     \$121  = req;
     casez (access_fsm_state)
       3'h0:
@@ -11967,7 +12309,7 @@ module \biss_master_wb.ch0.core.register_access.sequencer (rst, frame_end, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     \$122  = index;
     casez (access_fsm_state)
       3'h0:
@@ -12006,7 +12348,7 @@ module \biss_master_wb.ch0.core.register_access.sequencer (rst, frame_end, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     \$123  = step;
     casez (access_fsm_state)
       3'h0:
@@ -12064,7 +12406,7 @@ module \biss_master_wb.ch0.core.register_access.sequencer (rst, frame_end, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     \$124  = ending;
     casez (access_fsm_state)
       3'h0:
@@ -12131,7 +12473,7 @@ module \biss_master_wb.ch0.core.register_access.sequencer (rst, frame_end, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     \$125  = waited;
     casez (access_fsm_state)
       3'h0:
@@ -12163,7 +12505,7 @@ module \biss_master_wb.ch0.core.register_access.sequencer (rst, frame_end, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     send__load_header = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -12177,7 +12519,7 @@ module \biss_master_wb.ch0.core.register_access.sequencer (rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     send__source = 3'h0;
     casez (access_fsm_state)
       3'h0:
@@ -12204,7 +12546,7 @@ module \biss_master_wb.ch0.core.register_access.sequencer (rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     send__crc_bit = 2'h0;
     casez (access_fsm_state)
       3'h0:
@@ -12224,7 +12566,7 @@ module \biss_master_wb.ch0.core.register_access.sequencer (rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     send__shift_header = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -12243,7 +12585,7 @@ module \biss_master_wb.ch0.core.register_access.sequencer (rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     send__crc_start = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -12272,7 +12614,7 @@ module \biss_master_wb.ch0.core.register_access.sequencer (rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     send__crc_valid = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -12293,7 +12635,7 @@ module \biss_master_wb.ch0.core.register_access.sequencer (rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     send__load_byte = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -12315,7 +12657,7 @@ module \biss_master_wb.ch0.core.register_access.sequencer (rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     send__shift_byte = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -12336,7 +12678,7 @@ module \biss_master_wb.ch0.core.register_access.sequencer (rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     check__take_data = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -12358,7 +12700,7 @@ module \biss_master_wb.ch0.core.register_access.sequencer (rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     check__first = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -12380,7 +12722,7 @@ module \biss_master_wb.ch0.core.register_access.sequencer (rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     check__take_crc = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -12404,7 +12746,7 @@ module \biss_master_wb.ch0.core.register_access.sequencer (rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     store = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -12442,8 +12784,8 @@ module \biss_master_wb.ch0.core.register_access.sequencer (rst, frame_end, frame
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.results (rst, report, valid, frame, report_frame, report_delay, done, valid_out, result, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$62  = 0;
+module \biss_master_wb.ch0.core.results (rst, report_delay, report, valid, frame, report_frame, done, valid_out, result, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$65  = 0;
   reg \$1 ;
   reg \$2 ;
   reg [160:0] \$3 ;
@@ -12540,21 +12882,21 @@ module \biss_master_wb.ch0.core.results (rst, report, valid, frame, report_frame
   always @(posedge clk)
     result <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     \$1  = report;
     if (rst) begin
       \$1  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     \$2  = valid;
     if (rst) begin
       \$2  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     \$3  = result;
     if (report) begin
       \$3 [3:0] = frame[3:0];
@@ -12619,7 +12961,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_clear, arm, early, locked, delay, sample, level, slo);
-  reg \$auto$verilog_backend.cc:2355:dump_module$63  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$66  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -12857,7 +13199,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_
     .stage1(level)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$63  = level;
     if (receiver_clear) begin
       \$63  = 1'h1;
@@ -12867,7 +13209,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$64  = mid_delay;
     if (odd) begin
       \$64  = \$8 [12:0];
@@ -12892,7 +13234,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$65  = mid_slot;
     (* full_case = 32'd1 *)
     if (odd) begin
@@ -12919,7 +13261,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$66  = \$10 ;
     casez (sampler_fsm_state)
       2'h0:
@@ -12941,7 +13283,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$67  = elapsed;
     casez (sampler_fsm_state)
       2'h0:
@@ -12965,7 +13307,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$68  = early;
     casez (sampler_fsm_state)
       2'h0:
@@ -12981,7 +13323,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$69  = locked;
     casez (sampler_fsm_state)
       2'h0:
@@ -13007,7 +13349,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$70  = gap;
     casez (sampler_fsm_state)
       2'h0:
@@ -13038,7 +13380,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$71  = sampler_fsm_state;
     casez (sampler_fsm_state)
       2'h0:
@@ -13069,7 +13411,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$72  = slot_left;
     casez (sampler_fsm_state)
       2'h0:
@@ -13119,7 +13461,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$73  = slot_zero;
     casez (sampler_fsm_state)
       2'h0:
@@ -13169,7 +13511,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$74  = vote1;
     casez (sampler_fsm_state)
       2'h0:
@@ -13199,7 +13541,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$75  = vote2;
     casez (sampler_fsm_state)
       2'h0:
@@ -13227,7 +13569,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$76  = first_slot;
     casez (sampler_fsm_state)
       2'h0:
@@ -13253,7 +13595,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$77  = delay;
     casez (sampler_fsm_state)
       2'h0:
@@ -13276,7 +13618,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$78  = phase;
     casez (sampler_fsm_state)
       2'h0:
@@ -13316,7 +13658,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     sample = \$44 ;
     casez (sampler_fsm_state)
       2'h0:
@@ -13334,7 +13676,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, \bit , half_period, receiver_
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     decided = 1'h0;
     casez (sampler_fsm_state)
       2'h0:
@@ -13384,7 +13726,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch0.core.scheduler (rst, trigger, periodic, request, overrun, start, abort, period, idle, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$64  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$67  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -13468,7 +13810,7 @@ module \biss_master_wb.ch0.core.scheduler (rst, trigger, periodic, request, over
   always @(posedge clk)
     period_start <= \$28 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$27  = 24'h000001;
@@ -13480,7 +13822,7 @@ module \biss_master_wb.ch0.core.scheduler (rst, trigger, periodic, request, over
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$28  = 1'h1;
@@ -13494,8 +13836,8 @@ module \biss_master_wb.ch0.core.scheduler (rst, trigger, periodic, request, over
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$3699$0 , resync, lc, is_zero, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$65  = 0;
+module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$3681$0 , resync, lc, is_zero, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$68  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -13532,8 +13874,8 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$3699$0 ;
-  wire \port$3699$0 ;
+  input \port$3681$0 ;
+  wire \port$3681$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -13545,9 +13887,9 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$3699$0  };
-  assign \$2  = { lc[4:0], \port$3699$0  } == last;
-  assign \$3  = { lc[4:0], \port$3699$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$3681$0  };
+  assign \$2  = { lc[4:0], \port$3681$0  } == last;
+  assign \$3  = { lc[4:0], \port$3681$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = lc == 6'h3f;
@@ -13575,7 +13917,7 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
   always @(posedge clk)
     synced <= \$21 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     \$16  = is_zero;
     if (load) begin
       \$16  = \$1 ;
@@ -13585,7 +13927,7 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     \$17  = is_last;
     if (load) begin
       \$17  = \$2 ;
@@ -13595,7 +13937,7 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     \$18  = is_expected;
     if (load) begin
       \$18  = \$3 ;
@@ -13605,7 +13947,7 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     \$19  = last;
     if (\$5 ) begin
       \$19  = lc;
@@ -13615,7 +13957,7 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     \$20  = expected;
     if (\$5 ) begin
       \$20  = \$8 [5:0];
@@ -13625,7 +13967,7 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     \$21  = synced;
     if (\$5 ) begin
       \$21  = 1'h1;
@@ -13637,13 +13979,13 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
       \$21  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$3699$0  };
+  assign lc_next = { lc[4:0], \port$3681$0  };
   assign zero = is_zero;
 endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch0.core.spw_check (rst, bits, \tolerance$8 , spw, cpw_top, match, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$66  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$69  = 0;
   wire [40:0] \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -13848,28 +14190,28 @@ module \biss_master_wb.ch0.core.spw_check (rst, bits, \tolerance$8 , spw, cpw_to
   assign \$7  = bits > 3'h5;
   assign \$8  = bits > 3'h6;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     \$88  = \$42 ;
     if (rst) begin
       \$88  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     \$89  = \$84 ;
     if (rst) begin
       \$89  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     \$90  = \tolerance$8 ;
     if (rst) begin
       \$90  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     \$91  = \$87 ;
     if (rst) begin
       \$91  = 1'h0;
@@ -13879,7 +14221,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch0.core.time_base (rst, first_rise, first_rise_time, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$67  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$70  = 0;
   wire [32:0] \$1 ;
   reg [31:0] \$2 ;
   reg [31:0] \$3 ;
@@ -13898,14 +14240,14 @@ module \biss_master_wb.ch0.core.time_base (rst, first_rise, first_rise_time, clk
   always @(posedge clk)
     first_rise_time <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     \$2  = \$1 [31:0];
     if (rst) begin
       \$2  = 32'd0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     \$3  = first_rise_time;
     if (first_rise) begin
       \$3  = now;
@@ -13918,7 +14260,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch0.core.timers (rst, restart, ma_busy, break_time, timeout_live, ack_limit, timeout_limit, delay_limit, no_start_limit, clear, in_clock, slo_stuck, slo_stuck_live, break_over, ack_expired, no_start_expired, delay_over, delay, slo, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$68  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$71  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -14056,7 +14398,7 @@ module \biss_master_wb.ch0.core.timers (rst, restart, ma_busy, break_time, timeo
   always @(posedge clk)
     delay_over <= \$43 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
     \$36  = slo_low_time_p1;
     if (\$1 ) begin
       \$36  = 25'h0000001;
@@ -14068,49 +14410,49 @@ module \biss_master_wb.ch0.core.timers (rst, restart, ma_busy, break_time, timeo
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
     \$37  = \$8 ;
     if (rst) begin
       \$37  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
     \$38  = \$16 ;
     if (rst) begin
       \$38  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
     \$39  = \$20 [24:0];
     if (rst) begin
       \$39  = 25'h0000001;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
     \$40  = \$26 ;
     if (rst) begin
       \$40  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
     \$41  = \$30 ;
     if (rst) begin
       \$41  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
     \$42  = \$34 ;
     if (rst) begin
       \$42  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
     \$43  = \$35 ;
     if (rst) begin
       \$43  = 1'h0;
@@ -14119,8 +14461,8 @@ module \biss_master_wb.ch0.core.timers (rst, restart, ma_busy, break_time, timeo
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.verdict (lc_skip_seen, \port$1586$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
-  reg \$auto$verilog_backend.cc:2355:dump_module$69  = 0;
+module \biss_master_wb.ch0.core.verdict (lc_skip_seen, \port$1577$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
+  reg \$auto$verilog_backend.cc:2355:dump_module$72  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -14233,8 +14575,8 @@ module \biss_master_wb.ch0.core.verdict (lc_skip_seen, \port$1586$0 , lc_check, 
   wire lc_zero;
   input lc_zero_seen;
   wire lc_zero_seen;
-  output \port$1586$0 ;
-  wire \port$1586$0 ;
+  output \port$1577$0 ;
+  wire \port$1577$0 ;
   output report;
   wire report;
   input report_frame;
@@ -14302,7 +14644,7 @@ module \biss_master_wb.ch0.core.verdict (lc_skip_seen, \port$1586$0 , lc_check, 
   assign \$29  = ~ { \$2 , crc_ok[0] };
   assign crc_error = report_frame ? \$29  : 2'h0;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     (* full_case = 32'd1 *)
     if (\$13 ) begin
       frame_status = 4'h3;
@@ -14319,7 +14661,7 @@ module \biss_master_wb.ch0.core.verdict (lc_skip_seen, \port$1586$0 , lc_check, 
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$1586$0  = \$2 ;
+  assign \port$1577$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -14345,8 +14687,8 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1 (ca_wbuf_data, slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__ca_busy, regs__ca_rbuf_data, start, abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time
 , cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, regs__done_count
-, ma, regs__done, \port$4411$0 , \port$4418$0 , regs__ca_done, \port$4532$0 , ca_wbuf_addr);
-  reg \$auto$verilog_backend.cc:2355:dump_module$70  = 0;
+, ma, regs__done, \port$4423$0 , \port$4430$0 , regs__ca_done, \port$4544$0 , ca_wbuf_addr);
+  reg \$auto$verilog_backend.cc:2355:dump_module$73  = 0;
   wire \$1 ;
   wire [16:0] \$2 ;
   reg [15:0] \$3 ;
@@ -14469,12 +14811,12 @@ module \biss_master_wb.ch1 (ca_wbuf_data, slo, clk, rst, \trigger$161 , ca_wbuf_
   wire \ma$164 ;
   input periodic;
   wire periodic;
-  output [160:0] \port$4411$0 ;
-  wire [160:0] \port$4411$0 ;
-  output [287:0] \port$4418$0 ;
-  wire [287:0] \port$4418$0 ;
-  output [9:0] \port$4532$0 ;
-  wire [9:0] \port$4532$0 ;
+  output [160:0] \port$4423$0 ;
+  wire [160:0] \port$4423$0 ;
+  output [287:0] \port$4430$0 ;
+  wire [287:0] \port$4430$0 ;
+  output [9:0] \port$4544$0 ;
+  wire [9:0] \port$4544$0 ;
   wire regs__abort_cycle;
   output regs__busy;
   wire regs__busy;
@@ -14669,7 +15011,7 @@ module \biss_master_wb.ch1 (ca_wbuf_data, slo, clk, rst, \trigger$161 , ca_wbuf_
     .\valid$242 (valid)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
     \$3  = regs__done_count;
     if (regs__done) begin
       \$3  = \$2 [15:0];
@@ -14800,16 +15142,16 @@ module \biss_master_wb.ch1 (ca_wbuf_data, slo, clk, rst, \trigger$161 , ca_wbuf_
   assign regs__ca_rbuf_en = ca_rbuf_en;
   assign \ma$164  = ma;
   assign \slo$166  = slo;
-  assign \port$4411$0  = \$4 ;
-  assign \port$4418$0  = \$5 ;
-  assign \port$4532$0  = \$6 ;
+  assign \port$4423$0  = \$4 ;
+  assign \port$4430$0  = \$5 ;
+  assign \port$4544$0  = \$6 ;
 endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy$237 , config_error, frames, ca_rbuf_data, start, abort, \clear$214 , \periodic$24 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit
 , cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, \start$185 , \abort$187 , ma, \done$240 , \valid$242 
 , \result$245 , counts, ca_done, result, ca_wbuf_addr);
-  reg \$auto$verilog_backend.cc:2355:dump_module$71  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$74  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -15653,7 +15995,7 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$4152$0 (\bit ),
+    .\port$4149$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -15710,7 +16052,7 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
     .lc_skip_seen(lc_skip_seen),
     .lc_zero(lc_zero),
     .lc_zero_seen(lc_zero_seen),
-    .\port$2955$0 (\$16 ),
+    .\port$2937$0 (\$16 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -15719,14 +16061,14 @@ module \biss_master_wb.ch1.core (ca_wbuf_data, slo, clk, rst, ca_wbuf_en, rbuf_e
     .valid(valid)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
     \$14  = \$13 ;
     if (rst) begin
       \$14  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
     \$15  = \bit$265 ;
     if (rst) begin
       \$15  = 1'h0;
@@ -16106,7 +16448,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1.core.config (rst, word_count, live, ok, cycle, ack_limit, timeout_limit, delay_limit, no_start_limit, idle, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$72  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$75  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -16287,21 +16629,21 @@ module \biss_master_wb.ch1.core.config (rst, word_count, live, ok, cycle, ack_li
   always @(posedge clk)
     delay_limit <= \$46 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
     \$47  = \$41 ;
     if (rst) begin
       \$47  = 25'h0000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
     \$42  = \$34 ;
     if (rst) begin
       \$42  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
     \$43  = cycle;
     if (idle) begin
       \$43  = live;
@@ -16311,7 +16653,7 @@ module \biss_master_wb.ch1.core.config (rst, word_count, live, ok, cycle, ack_li
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
     \$44  = ack_limit;
     if (idle) begin
       \$44  = \$36 ;
@@ -16321,7 +16663,7 @@ module \biss_master_wb.ch1.core.config (rst, word_count, live, ok, cycle, ack_li
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
     \$45  = timeout_limit;
     if (idle) begin
       \$45  = \$38 ;
@@ -16331,7 +16673,7 @@ module \biss_master_wb.ch1.core.config (rst, word_count, live, ok, cycle, ack_li
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
     \$46  = delay_limit;
     if (idle) begin
       \$46  = \$40 ;
@@ -16383,9 +16725,9 @@ module \biss_master_wb.ch1.core.config (rst, word_count, live, ok, cycle, ack_li
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_doubtful, abort, config_ok, end_check, cdm_cycle, idle, receiver_clear, resync, timer_clear, fault, fault_status, faults, ma_run, in_clock, ma_hold, report_frame, report_delay, slo_stuck
+module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, report_delay, frame_doubtful, abort, config_ok, end_check, resync, timer_clear, fault, fault_status, ma_run, in_clock, report_frame, idle, receiver_clear, faults, cdm_cycle, ma_hold, slo_stuck
 , slo_stuck_live, break_over, ack_expired, no_start_expired, delay_over, ma_arm, ma_busy, ma_held, ma_enough, early, locked, slo, frame_done, stopped, slots_full, started, stop_bit, cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$73  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$76  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -16405,97 +16747,57 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
   wire \$24 ;
   wire \$25 ;
   wire \$26 ;
-  wire \$27 ;
-  wire \$28 ;
-  wire \$29 ;
+  reg \$27 ;
+  reg [2:0] \$28 ;
+  reg \$29 ;
   wire \$3 ;
-  wire \$30 ;
-  wire \$31 ;
-  wire \$32 ;
-  wire \$33 ;
-  wire \$34 ;
-  wire \$35 ;
-  wire \$36 ;
-  wire \$37 ;
-  wire \$38 ;
-  wire \$39 ;
+  reg \$30 ;
+  reg \$31 ;
   wire \$4 ;
-  wire \$40 ;
-  wire \$41 ;
-  wire \$42 ;
-  wire \$43 ;
-  wire \$44 ;
-  wire \$45 ;
-  wire \$46 ;
-  wire \$47 ;
-  wire \$48 ;
-  wire \$49 ;
   wire \$5 ;
-  wire \$50 ;
-  wire \$51 ;
-  wire \$52 ;
-  wire \$53 ;
-  wire \$54 ;
-  wire \$55 ;
-  wire \$56 ;
-  wire \$57 ;
-  wire \$58 ;
-  wire \$59 ;
   wire \$6 ;
-  wire \$60 ;
-  wire \$61 ;
-  wire \$62 ;
-  wire \$63 ;
-  wire \$64 ;
-  wire \$65 ;
-  wire \$66 ;
-  wire \$67 ;
-  wire \$68 ;
-  wire \$69 ;
   wire \$7 ;
-  wire \$70 ;
-  wire \$71 ;
-  wire \$72 ;
-  wire \$73 ;
-  wire \$74 ;
-  wire \$75 ;
-  wire \$76 ;
-  wire \$77 ;
-  wire \$78 ;
-  reg \$79 ;
   wire \$8 ;
-  reg \$80 ;
-  reg [2:0] \$81 ;
-  reg \$82 ;
-  reg \$83 ;
-  reg \$84 ;
-  reg \$85 ;
-  reg \$86 ;
   wire \$9 ;
   input abort;
   wire abort;
+  wire \abort$46 ;
+  wire \abort$5 ;
+  wire aborted;
   input ack_expired;
   wire ack_expired;
-  reg armed = 1'h0;
+  wire \ack_expired$23 ;
+  wire bad_config;
   input break_over;
   wire break_over;
   input cdm;
   wire cdm;
+  wire \cdm$43 ;
   output cdm_cycle;
-  reg cdm_cycle = 1'h0;
+  wire cdm_cycle;
+  wire \cdm_cycle$48 ;
+  reg clear;
   input clk;
   wire clk;
   input config_ok;
   wire config_ok;
+  wire \config_ok$3 ;
   reg [2:0] cycle_fsm_state = 3'h0;
+  reg delay;
+  wire \delay$73 ;
   input delay_over;
   wire delay_over;
+  wire \delay_over$27 ;
   input early;
   wire early;
+  wire \early$17 ;
   input end_check;
   wire end_check;
+  wire fail;
   output fault;
   reg fault;
+  wire \fault$35 ;
+  wire \fault$69 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -16512,8 +16814,31 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
   (* enum_value_1100 = "NO_STOP" *)
   output [3:0] fault_status;
   reg [3:0] fault_status;
+  (* enum_base_type = "Status" *)
+  (* enum_value_0000 = "OK" *)
+  (* enum_value_0001 = "CRC_ERROR_WORD0" *)
+  (* enum_value_0010 = "CRC_ERROR_WORD1" *)
+  (* enum_value_0011 = "CRC_ERROR_BOTH" *)
+  (* enum_value_0100 = "SIGN_OF_LIFE" *)
+  (* enum_value_0101 = "SPW_MISMATCH" *)
+  (* enum_value_0110 = "NO_ACK" *)
+  (* enum_value_0111 = "NO_START" *)
+  (* enum_value_1000 = "DELAY_RANGE" *)
+  (* enum_value_1001 = "SLO_STUCK_LOW" *)
+  (* enum_value_1010 = "ABORTED" *)
+  (* enum_value_1011 = "BAD_CONFIG" *)
+  (* enum_value_1100 = "NO_STOP" *)
+  wire [3:0] \fault_status$37 ;
   output [6:0] faults;
-  reg [6:0] faults;
+  wire [6:0] faults;
+  wire [6:0] \faults$39 ;
+  wire \faults$39.aborted ;
+  wire \faults$39.bad_config ;
+  wire \faults$39.delay_range ;
+  wire \faults$39.no_ack ;
+  wire \faults$39.no_start ;
+  wire \faults$39.no_stop ;
+  wire \faults$39.slo_stuck_low ;
   wire \faults.aborted ;
   wire \faults.bad_config ;
   wire \faults.delay_range ;
@@ -16522,19 +16847,27 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
   wire \faults.no_stop ;
   wire \faults.slo_stuck_low ;
   reg first_clock = 1'h0;
+  (* init = 1'h0 *)
+  wire \first_clock$1 ;
+  wire frame;
   input frame_done;
   wire frame_done;
   input frame_doubtful;
   wire frame_doubtful;
+  reg framing;
+  reg holding;
   output idle;
   reg idle = 1'h0;
+  (* init = 1'h0 *)
+  wire \idle$41 ;
   output in_clock;
   reg in_clock;
   input locked;
   wire locked;
-  reg locked_seen = 1'h0;
+  wire \locked$15 ;
   input ma_arm;
   wire ma_arm;
+  wire \ma_arm$13 ;
   input ma_busy;
   wire ma_busy;
   input ma_enough;
@@ -16542,48 +16875,106 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
   input ma_held;
   wire ma_held;
   output ma_hold;
-  reg ma_hold;
+  wire ma_hold;
+  wire \ma_hold$50 ;
   output ma_run;
   reg ma_run;
   input no_start_expired;
   wire no_start_expired;
+  wire \no_start_expired$25 ;
   reg pause = 1'h0;
+  wire ready;
   output receiver_clear;
   reg receiver_clear = 1'h1;
   output report_delay;
-  reg report_delay;
+  wire report_delay;
+  wire \report_delay$33 ;
   output report_frame;
   reg report_frame;
+  wire \report_frame$31 ;
   input request;
   wire request;
   output restart_timer;
   wire restart_timer;
+  wire \restart_timer$29 ;
   output resync;
   reg resync;
   input rst;
   wire rst;
   input slo;
   wire slo;
+  wire \slo$44 ;
+  wire \slo$7 ;
   input slo_stuck;
   wire slo_stuck;
+  wire \slo_stuck$45 ;
+  wire \slo_stuck$9 ;
   input slo_stuck_live;
   wire slo_stuck_live;
+  wire \slo_stuck_live$11 ;
   input slots_full;
   wire slots_full;
+  wire \slots_full$21 ;
   input started;
   wire started;
+  wire \started$19 ;
+  (* enum_base_type = "Status" *)
+  (* enum_value_0000 = "OK" *)
+  (* enum_value_0001 = "CRC_ERROR_WORD0" *)
+  (* enum_value_0010 = "CRC_ERROR_WORD1" *)
+  (* enum_value_0011 = "CRC_ERROR_BOTH" *)
+  (* enum_value_0100 = "SIGN_OF_LIFE" *)
+  (* enum_value_0101 = "SPW_MISMATCH" *)
+  (* enum_value_0110 = "NO_ACK" *)
+  (* enum_value_0111 = "NO_START" *)
+  (* enum_value_1000 = "DELAY_RANGE" *)
+  (* enum_value_1001 = "SLO_STUCK_LOW" *)
+  (* enum_value_1010 = "ABORTED" *)
+  (* enum_value_1011 = "BAD_CONFIG" *)
+  (* enum_value_1100 = "NO_STOP" *)
+  wire [3:0] status;
+  (* enum_base_type = "Status" *)
+  (* enum_value_0000 = "OK" *)
+  (* enum_value_0001 = "CRC_ERROR_WORD0" *)
+  (* enum_value_0010 = "CRC_ERROR_WORD1" *)
+  (* enum_value_0011 = "CRC_ERROR_BOTH" *)
+  (* enum_value_0100 = "SIGN_OF_LIFE" *)
+  (* enum_value_0101 = "SPW_MISMATCH" *)
+  (* enum_value_0110 = "NO_ACK" *)
+  (* enum_value_0111 = "NO_START" *)
+  (* enum_value_1000 = "DELAY_RANGE" *)
+  (* enum_value_1001 = "SLO_STUCK_LOW" *)
+  (* enum_value_1010 = "ABORTED" *)
+  (* enum_value_1011 = "BAD_CONFIG" *)
+  (* enum_value_1100 = "NO_STOP" *)
+  wire [3:0] \status$74 ;
   input stop_bit;
   wire stop_bit;
   input stopped;
   wire stopped;
+  wire stuck_low;
   output timer_clear;
   reg timer_clear;
-  assign \$14  = locked & \$13 ;
-  assign \$15  = \$14  & delay_over;
-  assign \$16  = ~ started;
-  assign \$17  = locked_seen & \$16 ;
-  assign \$18  = no_start_expired | slots_full;
-  assign \$19  = \$17  & \$18 ;
+  reg watch;
+  assign \$1  = ma_busy | abort;
+  assign \$2  = ~ ma_enough;
+  assign \$3  = restart_timer | abort;
+  assign \$4  = ~ end_check;
+  assign \$5  = ~ ma_enough;
+  assign \$6  = ~ end_check;
+  assign \$7  = ma_busy | abort;
+  assign \$8  = ~ ma_busy;
+  assign \$9  = \$8  | ma_held;
+  assign \$10  = \$9  & slo;
+  assign \$11  = ! cycle_fsm_state;
+  assign \$12  = cycle_fsm_state == 1'h1;
+  assign \$13  = cycle_fsm_state == 2'h2;
+  assign \$14  = cycle_fsm_state == 2'h3;
+  assign \$15  = cycle_fsm_state == 3'h4;
+  assign \$16  = cycle_fsm_state == 3'h5;
+  assign \$17  = cycle_fsm_state == 3'h6;
+  assign \$18  = cycle_fsm_state == 3'h7;
+  assign \$19  = ma_busy | abort;
   assign \$20  = ~ end_check;
   assign \$21  = ma_busy | abort;
   assign \$22  = cdm_cycle & abort;
@@ -16591,456 +16982,69 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
   assign \$24  = ~ ma_busy;
   assign \$25  = \$24  | ma_held;
   assign \$26  = \$25  & slo;
-  assign \$27  = ~ locked_seen;
-  assign \$28  = locked & \$27 ;
-  assign restart_timer = ma_arm | \$28 ;
-  assign \$29  = ma_busy | abort;
-  assign \$30  = ~ config_ok;
-  assign \$31  = first_clock & \$30 ;
-  assign \$32  = first_clock ? slo_stuck_live : slo_stuck;
-  assign \$33  = ~ ma_enough;
-  assign \$34  = ~ abort;
-  assign \$35  = cdm_cycle & \$34 ;
-  assign \$36  = restart_timer | abort;
-  assign \$37  = armed & early;
-  assign \$38  = ~ locked_seen;
-  assign \$39  = armed & \$38 ;
-  assign \$40  = ~ locked;
-  assign \$41  = \$39  & \$40 ;
-  assign \$42  = \$41  & ack_expired;
-  assign \$43  = ~ locked_seen;
-  assign \$44  = locked & \$43 ;
-  assign \$45  = \$44  & delay_over;
-  assign \$46  = ~ started;
-  assign \$47  = locked_seen & \$46 ;
-  assign \$48  = no_start_expired | slots_full;
-  assign \$49  = \$47  & \$48 ;
-  assign \$50  = ~ end_check;
-  assign \$51  = ~ ma_enough;
-  assign \$52  = ~ abort;
-  assign \$53  = cdm_cycle & \$52 ;
-  assign \$54  = ~ end_check;
-  assign \$55  = slo | slo_stuck;
-  assign \$56  = \$55  | abort;
-  assign \$57  = ~ \$56 ;
-  assign \$58  = cdm_cycle & \$57 ;
-  assign \$59  = ma_busy | abort;
-  assign \$60  = slo | slo_stuck;
-  assign \$61  = \$60  | abort;
-  assign \$62  = ~ \$61 ;
-  assign \$63  = cdm_cycle & \$62 ;
-  assign \$64  = slo | slo_stuck;
-  assign \$65  = \$64  | abort;
-  assign \$66  = ~ \$65 ;
-  assign \$67  = cdm_cycle & \$66 ;
-  assign \$68  = ~ ma_busy;
-  assign \$69  = \$68  | ma_held;
-  assign \$70  = \$69  & slo;
-  assign \$71  = ! cycle_fsm_state;
-  assign \$72  = cycle_fsm_state == 1'h1;
-  assign \$73  = cycle_fsm_state == 2'h2;
-  assign \$74  = cycle_fsm_state == 2'h3;
-  assign \$75  = cycle_fsm_state == 3'h4;
-  assign \$76  = cycle_fsm_state == 3'h5;
-  assign \$77  = cycle_fsm_state == 3'h6;
-  assign \$78  = cycle_fsm_state == 3'h7;
   always @(posedge clk)
-    cdm_cycle <= \$79 ;
+    first_clock <= \$27 ;
   always @(posedge clk)
-    first_clock <= \$80 ;
+    cycle_fsm_state <= \$28 ;
   always @(posedge clk)
-    cycle_fsm_state <= \$81 ;
+    idle <= \$29 ;
   always @(posedge clk)
-    idle <= \$82 ;
+    receiver_clear <= \$30 ;
   always @(posedge clk)
-    receiver_clear <= \$83 ;
-  always @(posedge clk)
-    armed <= \$84 ;
-  always @(posedge clk)
-    locked_seen <= \$85 ;
-  always @(posedge clk)
-    pause <= \$86 ;
-  assign \$1  = ma_busy | abort;
-  assign \$2  = ~ config_ok;
-  assign \$3  = first_clock & \$2 ;
-  assign \$4  = first_clock ? slo_stuck_live : slo_stuck;
-  assign \$5  = ~ locked_seen;
-  assign \$6  = locked & \$5 ;
-  assign \$7  = armed & early;
-  assign \$8  = ~ locked_seen;
-  assign \$9  = armed & \$8 ;
-  assign \$10  = ~ locked;
-  assign \$11  = \$9  & \$10 ;
-  assign \$12  = \$11  & ack_expired;
-  assign \$13  = ~ locked_seen;
+    pause <= \$31 ;
+  \biss_master_wb.ch1.core.controller.cdm_hold  cdm_hold (
+    .abort(abort),
+    .cdm(cdm),
+    .cdm_cycle(cdm_cycle),
+    .clk(clk),
+    .framing(framing),
+    .holding(holding),
+    .idle(idle),
+    .ma_hold(ma_hold),
+    .rst(rst),
+    .slo(slo),
+    .slo_stuck(slo_stuck)
+  );
+  \biss_master_wb.ch1.core.controller.line_faults  line_faults (
+    .ack_expired(ack_expired),
+    .clear(clear),
+    .clk(clk),
+    .delay(\delay$73 ),
+    .delay_over(delay_over),
+    .early(early),
+    .fault(\fault$69 ),
+    .locked(locked),
+    .ma_arm(ma_arm),
+    .no_start_expired(no_start_expired),
+    .restart_timer(restart_timer),
+    .rst(rst),
+    .slots_full(slots_full),
+    .started(started),
+    .status(\status$74 ),
+    .watch(watch)
+  );
+  \biss_master_wb.ch1.core.controller.ready_check  ready_check (
+    .abort(abort),
+    .aborted(aborted),
+    .bad_config(bad_config),
+    .config_ok(config_ok),
+    .first_clock(first_clock),
+    .ready(ready),
+    .slo(slo),
+    .slo_stuck(slo_stuck),
+    .slo_stuck_live(slo_stuck_live),
+    .stuck_low(stuck_low)
+  );
+  \biss_master_wb.ch1.core.controller.report  report (
+    .delay(delay),
+    .fault(fault),
+    .fault_status(fault_status),
+    .faults(faults),
+    .report_delay(report_delay),
+    .report_frame(report_frame)
+  );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
-    \$79  = cdm_cycle;
-    if (idle) begin
-      \$79  = cdm;
-    end
-    if (rst) begin
-      \$79  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
-    \$80  = idle;
-    if (rst) begin
-      \$80  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
-    \$81  = cycle_fsm_state;
-    (* full_case = 32'd1 *)
-    casez (cycle_fsm_state)
-      3'h0:
-          if (\$1 ) begin
-          end else if (break_over) begin
-            \$81  = 3'h1;
-          end
-      3'h1:
-          if (abort) begin
-            \$81  = 3'h0;
-          end else if (request) begin
-            \$81  = 3'h2;
-          end
-      3'h2:
-          if (\$3 ) begin
-            \$81  = 3'h1;
-            if (abort) begin
-              \$81  = 3'h0;
-            end
-          end else if (abort) begin
-            \$81  = 3'h0;
-          end else if (slo) begin
-            \$81  = 3'h3;
-          end else if (\$4 ) begin
-            \$81  = 3'h0;
-          end
-      3'h3:
-          if (abort) begin
-            \$81  = 3'h0;
-          end else if (frame_done) begin
-            \$81  = 3'h4;
-          end else if (\$7 ) begin
-            \$81  = 3'h0;
-          end else if (\$12 ) begin
-            \$81  = 3'h0;
-          end else if (\$15 ) begin
-            \$81  = 3'h0;
-          end else if (\$19 ) begin
-            \$81  = 3'h0;
-          end
-      3'h4:
-          if (abort) begin
-            (* full_case = 32'd1 *)
-            if (end_check) begin
-              \$81  = 3'h0;
-            end else begin
-              \$81  = 3'h0;
-            end
-          end else if (stopped) begin
-            (* full_case = 32'd1 *)
-            if (\$20 ) begin
-              (* full_case = 32'd1 *)
-              if (pause) begin
-                \$81  = 3'h5;
-              end else begin
-                \$81  = 3'h6;
-              end
-            end else if (stop_bit) begin
-              \$81  = 3'h0;
-            end else begin
-              \$81  = 3'h7;
-            end
-          end
-      3'h5:
-          if (\$21 ) begin
-          end else if (break_over) begin
-            \$81  = 3'h1;
-          end
-      3'h6:
-          if (\$22 ) begin
-            \$81  = 3'h0;
-          end else if (\$23 ) begin
-            \$81  = 3'h1;
-          end
-      3'h7:
-          if (abort) begin
-            \$81  = 3'h0;
-          end else if (\$26 ) begin
-            (* full_case = 32'd1 *)
-            if (pause) begin
-              \$81  = 3'h5;
-            end else if (cdm_cycle) begin
-              \$81  = 3'h6;
-            end else begin
-              \$81  = 3'h1;
-            end
-          end else if (slo_stuck) begin
-            \$81  = 3'h0;
-          end
-    endcase
-    if (rst) begin
-      \$81  = 3'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
-    \$82  = idle;
-    (* full_case = 32'd1 *)
-    casez (cycle_fsm_state)
-      3'h0:
-          if (\$1 ) begin
-          end else if (break_over) begin
-            \$82  = 1'h1;
-          end
-      3'h1:
-          if (abort) begin
-            \$82  = 1'h0;
-          end else if (request) begin
-            \$82  = 1'h0;
-          end
-      3'h2:
-          if (\$3 ) begin
-            \$82  = 1'h1;
-            if (abort) begin
-              \$82  = 1'h0;
-            end
-          end else if (abort) begin
-            \$82  = 1'h0;
-          end else if (slo) begin
-            \$82  = 1'h0;
-          end else if (\$4 ) begin
-            \$82  = 1'h0;
-          end
-      3'h3:
-          if (abort) begin
-            \$82  = 1'h0;
-          end else if (frame_done) begin
-            \$82  = 1'h0;
-          end else if (\$7 ) begin
-            \$82  = 1'h0;
-          end else if (\$12 ) begin
-            \$82  = 1'h0;
-          end else if (\$15 ) begin
-            \$82  = 1'h0;
-          end else if (\$19 ) begin
-            \$82  = 1'h0;
-          end
-      3'h4:
-          if (abort) begin
-            (* full_case = 32'd1 *)
-            if (end_check) begin
-              \$82  = 1'h0;
-            end else begin
-              \$82  = 1'h0;
-            end
-          end else if (stopped) begin
-            (* full_case = 32'd1 *)
-            if (\$20 ) begin
-              (* full_case = 32'd1 *)
-              if (pause) begin
-                \$82  = 1'h0;
-              end else begin
-                \$82  = 1'h0;
-              end
-            end else if (stop_bit) begin
-              \$82  = 1'h0;
-            end else begin
-              \$82  = 1'h0;
-            end
-          end
-      3'h5:
-          if (\$21 ) begin
-          end else if (break_over) begin
-            \$82  = 1'h1;
-          end
-      3'h6:
-          if (\$22 ) begin
-            \$82  = 1'h0;
-          end else if (\$23 ) begin
-            \$82  = 1'h1;
-          end
-      3'h7:
-          if (abort) begin
-            \$82  = 1'h0;
-          end else if (\$26 ) begin
-            (* full_case = 32'd1 *)
-            if (pause) begin
-              \$82  = 1'h0;
-            end else if (cdm_cycle) begin
-              \$82  = 1'h0;
-            end else begin
-              \$82  = 1'h1;
-            end
-          end else if (slo_stuck) begin
-            \$82  = 1'h0;
-          end
-    endcase
-    if (rst) begin
-      \$82  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
-    \$83  = receiver_clear;
-    (* full_case = 32'd1 *)
-    casez (cycle_fsm_state)
-      3'h0:
-          if (\$1 ) begin
-          end else if (break_over) begin
-            \$83  = 1'h1;
-          end
-      3'h1:
-          if (abort) begin
-            \$83  = 1'h1;
-          end else if (request) begin
-            \$83  = 1'h1;
-          end
-      3'h2:
-          if (\$3 ) begin
-            \$83  = 1'h1;
-            if (abort) begin
-              \$83  = 1'h1;
-            end
-          end else if (abort) begin
-            \$83  = 1'h1;
-          end else if (slo) begin
-            \$83  = 1'h0;
-          end else if (\$4 ) begin
-            \$83  = 1'h1;
-          end
-      3'h3:
-          if (abort) begin
-            \$83  = 1'h1;
-          end else if (frame_done) begin
-            \$83  = 1'h0;
-          end else if (\$7 ) begin
-            \$83  = 1'h1;
-          end else if (\$12 ) begin
-            \$83  = 1'h1;
-          end else if (\$15 ) begin
-            \$83  = 1'h1;
-          end else if (\$19 ) begin
-            \$83  = 1'h1;
-          end
-      3'h4:
-          if (abort) begin
-            (* full_case = 32'd1 *)
-            if (end_check) begin
-              \$83  = 1'h1;
-            end else begin
-              \$83  = 1'h1;
-            end
-          end else if (stopped) begin
-            (* full_case = 32'd1 *)
-            if (\$20 ) begin
-              (* full_case = 32'd1 *)
-              if (pause) begin
-                \$83  = 1'h1;
-              end else begin
-                \$83  = 1'h0;
-              end
-            end else if (stop_bit) begin
-              \$83  = 1'h1;
-            end else begin
-              \$83  = 1'h0;
-            end
-          end
-      3'h5:
-          if (\$21 ) begin
-          end else if (break_over) begin
-            \$83  = 1'h1;
-          end
-      3'h6:
-          if (\$22 ) begin
-            \$83  = 1'h1;
-          end else if (\$23 ) begin
-            \$83  = 1'h1;
-          end
-      3'h7:
-          if (abort) begin
-            \$83  = 1'h1;
-          end else if (\$26 ) begin
-            (* full_case = 32'd1 *)
-            if (pause) begin
-              \$83  = 1'h1;
-            end else if (cdm_cycle) begin
-              \$83  = 1'h0;
-            end else begin
-              \$83  = 1'h1;
-            end
-          end else if (slo_stuck) begin
-            \$83  = 1'h1;
-          end
-    endcase
-    if (rst) begin
-      \$83  = 1'h1;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
-    \$84  = armed;
-    casez (cycle_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          \$84  = 1'h0;
-      3'h3:
-          if (ma_arm) begin
-            \$84  = 1'h1;
-          end
-    endcase
-    if (rst) begin
-      \$84  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
-    \$85  = locked_seen;
-    casez (cycle_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          \$85  = 1'h0;
-      3'h3:
-          if (\$6 ) begin
-            \$85  = 1'h1;
-          end
-    endcase
-    if (rst) begin
-      \$85  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
-    \$86  = pause;
-    casez (cycle_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h3:
-          if (abort) begin
-          end else if (frame_done) begin
-            \$86  = frame_doubtful;
-          end
-    endcase
-    if (rst) begin
-      \$86  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
     resync = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -17048,12 +17052,12 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
     timer_clear = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
       3'h0:
-          if (\$29 ) begin
+          if (\$1 ) begin
             timer_clear = 1'h1;
           end
       3'h1:
@@ -17061,14 +17065,14 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
       3'h2:
           timer_clear = 1'h1;
       3'h3:
-          if (\$36 ) begin
+          if (\$3 ) begin
             timer_clear = 1'h1;
           end
       3'h4:
           if (abort) begin
             timer_clear = 1'h1;
           end else if (stopped) begin
-            if (\$54 ) begin
+            if (\$6 ) begin
               if (pause) begin
                 timer_clear = 1'h1;
               end
@@ -17077,7 +17081,7 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
             end
           end
       3'h5:
-          if (\$59 ) begin
+          if (\$7 ) begin
             timer_clear = 1'h1;
           end
       3'h6:
@@ -17085,7 +17089,7 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
       3'h7:
           if (abort) begin
             timer_clear = 1'h1;
-          end else if (\$70 ) begin
+          end else if (\$10 ) begin
             if (pause) begin
               timer_clear = 1'h1;
             end
@@ -17095,7 +17099,19 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    clear = 1'h0;
+    casez (cycle_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          clear = 1'h1;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
     fault = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -17104,25 +17120,19 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
       3'h1:
           /* empty */;
       3'h2:
-          if (\$31 ) begin
+          if (bad_config) begin
             fault = 1'h1;
-          end else if (abort) begin
+          end else if (aborted) begin
             fault = 1'h1;
-          end else if (slo) begin
-          end else if (\$32 ) begin
+          end else if (ready) begin
+          end else if (stuck_low) begin
             fault = 1'h1;
           end
       3'h3:
           if (abort) begin
             fault = 1'h1;
           end else if (frame_done) begin
-          end else if (\$37 ) begin
-            fault = 1'h1;
-          end else if (\$42 ) begin
-            fault = 1'h1;
-          end else if (\$45 ) begin
-            fault = 1'h1;
-          end else if (\$49 ) begin
+          end else if (\fault$69 ) begin
             fault = 1'h1;
           end
       3'h4:
@@ -17131,7 +17141,7 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
               fault = 1'h1;
             end
           end else if (stopped) begin
-            if (\$54 ) begin
+            if (\$6 ) begin
             end else if (stop_bit) begin
               fault = 1'h1;
             end
@@ -17143,14 +17153,14 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
       3'h7:
           if (abort) begin
             fault = 1'h1;
-          end else if (\$70 ) begin
+          end else if (\$10 ) begin
           end else if (slo_stuck) begin
             fault = 1'h1;
           end
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
     fault_status = 4'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -17159,26 +17169,20 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
       3'h1:
           /* empty */;
       3'h2:
-          if (\$31 ) begin
+          if (bad_config) begin
             fault_status = 4'hb;
-          end else if (abort) begin
+          end else if (aborted) begin
             fault_status = 4'ha;
-          end else if (slo) begin
-          end else if (\$32 ) begin
+          end else if (ready) begin
+          end else if (stuck_low) begin
             fault_status = 4'h9;
           end
       3'h3:
           if (abort) begin
             fault_status = 4'ha;
           end else if (frame_done) begin
-          end else if (\$37 ) begin
-            fault_status = 4'h8;
-          end else if (\$42 ) begin
-            fault_status = 4'h6;
-          end else if (\$45 ) begin
-            fault_status = 4'h8;
-          end else if (\$49 ) begin
-            fault_status = 4'h7;
+          end else if (\fault$69 ) begin
+            fault_status = \status$74 ;
           end
       3'h4:
           if (abort) begin
@@ -17186,7 +17190,7 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
               fault_status = 4'ha;
             end
           end else if (stopped) begin
-            if (\$54 ) begin
+            if (\$6 ) begin
             end else if (stop_bit) begin
               fault_status = 4'hc;
             end
@@ -17198,69 +17202,14 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
       3'h7:
           if (abort) begin
             fault_status = 4'ha;
-          end else if (\$70 ) begin
+          end else if (\$10 ) begin
           end else if (slo_stuck) begin
             fault_status = 4'h9;
           end
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
-    faults = 7'h00;
-    (* full_case = 32'd1 *)
-    casez (cycle_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          if (\$31 ) begin
-            faults[5] = 1'h1;
-          end else if (abort) begin
-            faults[4] = 1'h1;
-          end else if (slo) begin
-          end else if (\$32 ) begin
-            faults[3] = 1'h1;
-          end
-      3'h3:
-          if (abort) begin
-            faults[4] = 1'h1;
-          end else if (frame_done) begin
-          end else if (\$37 ) begin
-            faults[2] = 1'h1;
-          end else if (\$42 ) begin
-            faults[0] = 1'h1;
-          end else if (\$45 ) begin
-            faults[2] = 1'h1;
-          end else if (\$49 ) begin
-            faults[1] = 1'h1;
-          end
-      3'h4:
-          if (abort) begin
-            if (end_check) begin
-              faults[4] = 1'h1;
-            end
-          end else if (stopped) begin
-            if (\$54 ) begin
-            end else if (stop_bit) begin
-              faults[6] = 1'h1;
-            end
-          end
-      3'h5:
-          /* empty */;
-      3'h6:
-          /* empty */;
-      3'h7:
-          if (abort) begin
-            faults[4] = 1'h1;
-          end else if (\$70 ) begin
-          end else if (slo_stuck) begin
-            faults[3] = 1'h1;
-          end
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
     ma_run = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -17270,13 +17219,13 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
       3'h2:
           /* empty */;
       3'h3:
-          ma_run = \$33 ;
+          ma_run = \$2 ;
       3'h4:
-          ma_run = \$51 ;
+          ma_run = \$5 ;
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
     in_clock = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -17290,9 +17239,8 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
-    ma_hold = 1'h0;
-    (* full_case = 32'd1 *)
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    watch = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
           /* empty */;
@@ -17301,19 +17249,27 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
       3'h2:
           /* empty */;
       3'h3:
-          ma_hold = \$35 ;
-      3'h4:
-          ma_hold = \$53 ;
-      3'h5:
-          ma_hold = \$58 ;
-      3'h6:
-          ma_hold = \$63 ;
-      3'h7:
-          ma_hold = \$67 ;
+          watch = 1'h1;
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    framing = 1'h0;
+    casez (cycle_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h3:
+          framing = 1'h1;
+      3'h4:
+          framing = 1'h1;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
     report_frame = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -17326,7 +17282,7 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
       3'h3:
           if (abort) begin
           end else if (frame_done) begin
-            if (\$50 ) begin
+            if (\$4 ) begin
               report_frame = 1'h1;
             end
           end
@@ -17338,15 +17294,14 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
           /* empty */;
       3'h7:
           if (abort) begin
-          end else if (\$70 ) begin
+          end else if (\$10 ) begin
             report_frame = 1'h1;
           end
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
-    report_delay = 1'h0;
-    (* full_case = 32'd1 *)
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    delay = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
           /* empty */;
@@ -17357,27 +17312,364 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
       3'h3:
           if (abort) begin
           end else if (frame_done) begin
-            if (\$50 ) begin
-              report_delay = 1'h1;
-            end
-          end else if (\$37 ) begin
-          end else if (\$42 ) begin
-          end else if (\$45 ) begin
-            report_delay = 1'h1;
-          end
-      3'h4:
-          /* empty */;
-      3'h5:
-          /* empty */;
-      3'h6:
-          /* empty */;
-      3'h7:
-          if (abort) begin
-          end else if (\$70 ) begin
-            report_delay = 1'h1;
+          end else if (\fault$69 ) begin
+            delay = \delay$73 ;
           end
     endcase
   end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    holding = 1'h0;
+    (* full_case = 32'd1 *)
+    casez (cycle_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h3:
+          /* empty */;
+      3'h4:
+          /* empty */;
+      3'h5:
+          holding = 1'h1;
+      3'h6:
+          holding = 1'h1;
+      3'h7:
+          holding = 1'h1;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    \$27  = idle;
+    if (rst) begin
+      \$27  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    \$28  = cycle_fsm_state;
+    (* full_case = 32'd1 *)
+    casez (cycle_fsm_state)
+      3'h0:
+          if (\$19 ) begin
+          end else if (break_over) begin
+            \$28  = 3'h1;
+          end
+      3'h1:
+          if (abort) begin
+            \$28  = 3'h0;
+          end else if (request) begin
+            \$28  = 3'h2;
+          end
+      3'h2:
+          if (bad_config) begin
+            \$28  = 3'h1;
+            if (abort) begin
+              \$28  = 3'h0;
+            end
+          end else if (aborted) begin
+            \$28  = 3'h0;
+          end else if (ready) begin
+            \$28  = 3'h3;
+          end else if (stuck_low) begin
+            \$28  = 3'h0;
+          end
+      3'h3:
+          if (abort) begin
+            \$28  = 3'h0;
+          end else if (frame_done) begin
+            \$28  = 3'h4;
+          end else if (\fault$69 ) begin
+            \$28  = 3'h0;
+          end
+      3'h4:
+          if (abort) begin
+            (* full_case = 32'd1 *)
+            if (end_check) begin
+              \$28  = 3'h0;
+            end else begin
+              \$28  = 3'h0;
+            end
+          end else if (stopped) begin
+            (* full_case = 32'd1 *)
+            if (\$20 ) begin
+              (* full_case = 32'd1 *)
+              if (pause) begin
+                \$28  = 3'h5;
+              end else begin
+                \$28  = 3'h6;
+              end
+            end else if (stop_bit) begin
+              \$28  = 3'h0;
+            end else begin
+              \$28  = 3'h7;
+            end
+          end
+      3'h5:
+          if (\$21 ) begin
+          end else if (break_over) begin
+            \$28  = 3'h1;
+          end
+      3'h6:
+          if (\$22 ) begin
+            \$28  = 3'h0;
+          end else if (\$23 ) begin
+            \$28  = 3'h1;
+          end
+      3'h7:
+          if (abort) begin
+            \$28  = 3'h0;
+          end else if (\$26 ) begin
+            (* full_case = 32'd1 *)
+            if (pause) begin
+              \$28  = 3'h5;
+            end else if (cdm_cycle) begin
+              \$28  = 3'h6;
+            end else begin
+              \$28  = 3'h1;
+            end
+          end else if (slo_stuck) begin
+            \$28  = 3'h0;
+          end
+    endcase
+    if (rst) begin
+      \$28  = 3'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    \$29  = idle;
+    (* full_case = 32'd1 *)
+    casez (cycle_fsm_state)
+      3'h0:
+          if (\$19 ) begin
+          end else if (break_over) begin
+            \$29  = 1'h1;
+          end
+      3'h1:
+          if (abort) begin
+            \$29  = 1'h0;
+          end else if (request) begin
+            \$29  = 1'h0;
+          end
+      3'h2:
+          if (bad_config) begin
+            \$29  = 1'h1;
+            if (abort) begin
+              \$29  = 1'h0;
+            end
+          end else if (aborted) begin
+            \$29  = 1'h0;
+          end else if (ready) begin
+            \$29  = 1'h0;
+          end else if (stuck_low) begin
+            \$29  = 1'h0;
+          end
+      3'h3:
+          if (abort) begin
+            \$29  = 1'h0;
+          end else if (frame_done) begin
+            \$29  = 1'h0;
+          end else if (\fault$69 ) begin
+            \$29  = 1'h0;
+          end
+      3'h4:
+          if (abort) begin
+            (* full_case = 32'd1 *)
+            if (end_check) begin
+              \$29  = 1'h0;
+            end else begin
+              \$29  = 1'h0;
+            end
+          end else if (stopped) begin
+            (* full_case = 32'd1 *)
+            if (\$20 ) begin
+              (* full_case = 32'd1 *)
+              if (pause) begin
+                \$29  = 1'h0;
+              end else begin
+                \$29  = 1'h0;
+              end
+            end else if (stop_bit) begin
+              \$29  = 1'h0;
+            end else begin
+              \$29  = 1'h0;
+            end
+          end
+      3'h5:
+          if (\$21 ) begin
+          end else if (break_over) begin
+            \$29  = 1'h1;
+          end
+      3'h6:
+          if (\$22 ) begin
+            \$29  = 1'h0;
+          end else if (\$23 ) begin
+            \$29  = 1'h1;
+          end
+      3'h7:
+          if (abort) begin
+            \$29  = 1'h0;
+          end else if (\$26 ) begin
+            (* full_case = 32'd1 *)
+            if (pause) begin
+              \$29  = 1'h0;
+            end else if (cdm_cycle) begin
+              \$29  = 1'h0;
+            end else begin
+              \$29  = 1'h1;
+            end
+          end else if (slo_stuck) begin
+            \$29  = 1'h0;
+          end
+    endcase
+    if (rst) begin
+      \$29  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    \$30  = receiver_clear;
+    (* full_case = 32'd1 *)
+    casez (cycle_fsm_state)
+      3'h0:
+          if (\$19 ) begin
+          end else if (break_over) begin
+            \$30  = 1'h1;
+          end
+      3'h1:
+          if (abort) begin
+            \$30  = 1'h1;
+          end else if (request) begin
+            \$30  = 1'h1;
+          end
+      3'h2:
+          if (bad_config) begin
+            \$30  = 1'h1;
+            if (abort) begin
+              \$30  = 1'h1;
+            end
+          end else if (aborted) begin
+            \$30  = 1'h1;
+          end else if (ready) begin
+            \$30  = 1'h0;
+          end else if (stuck_low) begin
+            \$30  = 1'h1;
+          end
+      3'h3:
+          if (abort) begin
+            \$30  = 1'h1;
+          end else if (frame_done) begin
+            \$30  = 1'h0;
+          end else if (\fault$69 ) begin
+            \$30  = 1'h1;
+          end
+      3'h4:
+          if (abort) begin
+            (* full_case = 32'd1 *)
+            if (end_check) begin
+              \$30  = 1'h1;
+            end else begin
+              \$30  = 1'h1;
+            end
+          end else if (stopped) begin
+            (* full_case = 32'd1 *)
+            if (\$20 ) begin
+              (* full_case = 32'd1 *)
+              if (pause) begin
+                \$30  = 1'h1;
+              end else begin
+                \$30  = 1'h0;
+              end
+            end else if (stop_bit) begin
+              \$30  = 1'h1;
+            end else begin
+              \$30  = 1'h0;
+            end
+          end
+      3'h5:
+          if (\$21 ) begin
+          end else if (break_over) begin
+            \$30  = 1'h1;
+          end
+      3'h6:
+          if (\$22 ) begin
+            \$30  = 1'h1;
+          end else if (\$23 ) begin
+            \$30  = 1'h1;
+          end
+      3'h7:
+          if (abort) begin
+            \$30  = 1'h1;
+          end else if (\$26 ) begin
+            (* full_case = 32'd1 *)
+            if (pause) begin
+              \$30  = 1'h1;
+            end else if (cdm_cycle) begin
+              \$30  = 1'h0;
+            end else begin
+              \$30  = 1'h1;
+            end
+          end else if (slo_stuck) begin
+            \$30  = 1'h1;
+          end
+    endcase
+    if (rst) begin
+      \$30  = 1'h1;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    \$31  = pause;
+    casez (cycle_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h3:
+          if (abort) begin
+          end else if (frame_done) begin
+            \$31  = frame_doubtful;
+          end
+    endcase
+    if (rst) begin
+      \$31  = 1'h0;
+    end
+  end
+  assign \first_clock$1  = first_clock;
+  assign \config_ok$3  = config_ok;
+  assign \abort$5  = abort;
+  assign \slo$7  = slo;
+  assign \slo_stuck$9  = slo_stuck;
+  assign \slo_stuck_live$11  = slo_stuck_live;
+  assign \ma_arm$13  = ma_arm;
+  assign \locked$15  = locked;
+  assign \early$17  = early;
+  assign \started$19  = started;
+  assign \slots_full$21  = slots_full;
+  assign \ack_expired$23  = ack_expired;
+  assign \no_start_expired$25  = no_start_expired;
+  assign \delay_over$27  = delay_over;
+  assign \restart_timer$29  = restart_timer;
+  assign \report_frame$31  = report_frame;
+  assign \report_delay$33  = report_delay;
+  assign \fault$35  = fault;
+  assign \fault_status$37  = fault_status;
+  assign \faults$39  = faults;
+  assign \idle$41  = idle;
+  assign \cdm$43  = cdm;
+  assign \slo$44  = slo;
+  assign \slo_stuck$45  = slo_stuck;
+  assign \abort$46  = abort;
+  assign \cdm_cycle$48  = cdm_cycle;
+  assign \ma_hold$50  = ma_hold;
+  assign fail = fault;
+  assign status = fault_status;
+  assign frame = report_frame;
   assign \faults.no_ack  = faults[0];
   assign \faults.no_start  = faults[1];
   assign \faults.delay_range  = faults[2];
@@ -17385,6 +17677,398 @@ module \biss_master_wb.ch1.core.controller (rst, request, restart_timer, frame_d
   assign \faults.aborted  = faults[4];
   assign \faults.bad_config  = faults[5];
   assign \faults.no_stop  = faults[6];
+  assign \faults$39.no_ack  = faults[0];
+  assign \faults$39.no_start  = faults[1];
+  assign \faults$39.delay_range  = faults[2];
+  assign \faults$39.slo_stuck_low  = faults[3];
+  assign \faults$39.aborted  = faults[4];
+  assign \faults$39.bad_config  = faults[5];
+  assign \faults$39.no_stop  = faults[6];
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_wb.ch1.core.controller.cdm_hold (rst, abort, framing, holding, idle, cdm_cycle, ma_hold, slo_stuck, slo, cdm, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$77  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire \$3 ;
+  wire \$4 ;
+  wire \$5 ;
+  wire \$6 ;
+  reg \$7 ;
+  input abort;
+  wire abort;
+  input cdm;
+  wire cdm;
+  output cdm_cycle;
+  reg cdm_cycle = 1'h0;
+  input clk;
+  wire clk;
+  input framing;
+  wire framing;
+  input holding;
+  wire holding;
+  input idle;
+  wire idle;
+  output ma_hold;
+  reg ma_hold;
+  input rst;
+  wire rst;
+  input slo;
+  wire slo;
+  input slo_stuck;
+  wire slo_stuck;
+  assign \$3  = slo | slo_stuck;
+  assign \$4  = \$3  | abort;
+  assign \$5  = ~ \$4 ;
+  assign \$6  = cdm_cycle & \$5 ;
+  always @(posedge clk)
+    cdm_cycle <= \$7 ;
+  assign \$1  = ~ abort;
+  assign \$2  = cdm_cycle & \$1 ;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
+    \$7  = cdm_cycle;
+    if (idle) begin
+      \$7  = cdm;
+    end
+    if (rst) begin
+      \$7  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
+    ma_hold = 1'h0;
+    if (framing) begin
+      ma_hold = \$2 ;
+    end else if (holding) begin
+      ma_hold = \$6 ;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_wb.ch1.core.controller.line_faults (rst, restart_timer, clear, watch, fault, status, delay, ack_expired, no_start_expired, delay_over, ma_arm, early, locked, slots_full, started, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$78  = 0;
+  wire \$1 ;
+  wire \$10 ;
+  wire \$11 ;
+  wire \$12 ;
+  wire \$13 ;
+  wire \$14 ;
+  wire \$15 ;
+  wire \$16 ;
+  wire \$17 ;
+  wire \$18 ;
+  wire \$19 ;
+  wire \$2 ;
+  reg \$20 ;
+  reg \$21 ;
+  wire \$3 ;
+  wire \$4 ;
+  wire \$5 ;
+  wire \$6 ;
+  wire \$7 ;
+  wire \$8 ;
+  wire \$9 ;
+  input ack_expired;
+  wire ack_expired;
+  reg armed = 1'h0;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output delay;
+  reg delay;
+  input delay_over;
+  wire delay_over;
+  input early;
+  wire early;
+  output fault;
+  reg fault;
+  input locked;
+  wire locked;
+  reg locked_seen = 1'h0;
+  input ma_arm;
+  wire ma_arm;
+  input no_start_expired;
+  wire no_start_expired;
+  output restart_timer;
+  wire restart_timer;
+  input rst;
+  wire rst;
+  input slots_full;
+  wire slots_full;
+  input started;
+  wire started;
+  (* enum_base_type = "Status" *)
+  (* enum_value_0000 = "OK" *)
+  (* enum_value_0001 = "CRC_ERROR_WORD0" *)
+  (* enum_value_0010 = "CRC_ERROR_WORD1" *)
+  (* enum_value_0011 = "CRC_ERROR_BOTH" *)
+  (* enum_value_0100 = "SIGN_OF_LIFE" *)
+  (* enum_value_0101 = "SPW_MISMATCH" *)
+  (* enum_value_0110 = "NO_ACK" *)
+  (* enum_value_0111 = "NO_START" *)
+  (* enum_value_1000 = "DELAY_RANGE" *)
+  (* enum_value_1001 = "SLO_STUCK_LOW" *)
+  (* enum_value_1010 = "ABORTED" *)
+  (* enum_value_1011 = "BAD_CONFIG" *)
+  (* enum_value_1100 = "NO_STOP" *)
+  output [3:0] status;
+  reg [3:0] status;
+  input watch;
+  wire watch;
+  assign \$1  = watch & ma_arm;
+  assign \$2  = ~ locked_seen;
+  assign \$3  = locked & \$2 ;
+  assign \$4  = watch & \$3 ;
+  assign \$5  = ~ locked_seen;
+  assign \$6  = locked & \$5 ;
+  assign restart_timer = ma_arm | \$6 ;
+  assign \$7  = armed & early;
+  assign \$8  = ~ locked_seen;
+  assign \$9  = armed & \$8 ;
+  assign \$10  = ~ locked;
+  assign \$11  = \$9  & \$10 ;
+  assign \$12  = \$11  & ack_expired;
+  assign \$13  = ~ locked_seen;
+  assign \$14  = locked & \$13 ;
+  assign \$15  = \$14  & delay_over;
+  assign \$16  = ~ started;
+  assign \$17  = locked_seen & \$16 ;
+  assign \$18  = no_start_expired | slots_full;
+  assign \$19  = \$17  & \$18 ;
+  always @(posedge clk)
+    armed <= \$20 ;
+  always @(posedge clk)
+    locked_seen <= \$21 ;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
+    \$20  = armed;
+    if (clear) begin
+      \$20  = 1'h0;
+    end
+    if (\$1 ) begin
+      \$20  = 1'h1;
+    end
+    if (rst) begin
+      \$20  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
+    \$21  = locked_seen;
+    if (clear) begin
+      \$21  = 1'h0;
+    end
+    if (\$4 ) begin
+      \$21  = 1'h1;
+    end
+    if (rst) begin
+      \$21  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
+    fault = 1'h0;
+    if (\$7 ) begin
+      fault = 1'h1;
+    end else if (\$12 ) begin
+      fault = 1'h1;
+    end else if (\$15 ) begin
+      fault = 1'h1;
+    end else if (\$19 ) begin
+      fault = 1'h1;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
+    status = 4'h0;
+    if (\$7 ) begin
+      status = 4'h8;
+    end else if (\$12 ) begin
+      status = 4'h6;
+    end else if (\$15 ) begin
+      status = 4'h8;
+    end else if (\$19 ) begin
+      status = 4'h7;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
+    delay = 1'h0;
+    if (\$7 ) begin
+    end else if (\$12 ) begin
+    end else if (\$15 ) begin
+      delay = 1'h1;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_wb.ch1.core.controller.ready_check (config_ok, first_clock, bad_config, aborted, ready, stuck_low, slo_stuck, slo_stuck_live, slo, abort);
+  reg \$auto$verilog_backend.cc:2355:dump_module$79  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire \$3 ;
+  input abort;
+  wire abort;
+  output aborted;
+  reg aborted;
+  output bad_config;
+  reg bad_config;
+  input config_ok;
+  wire config_ok;
+  input first_clock;
+  wire first_clock;
+  output ready;
+  reg ready;
+  input slo;
+  wire slo;
+  input slo_stuck;
+  wire slo_stuck;
+  input slo_stuck_live;
+  wire slo_stuck_live;
+  output stuck_low;
+  reg stuck_low;
+  assign \$1  = ~ config_ok;
+  assign \$2  = first_clock & \$1 ;
+  assign \$3  = first_clock ? slo_stuck_live : slo_stuck;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$79 ) begin end
+    stuck_low = 1'h0;
+    if (\$2 ) begin
+    end else if (abort) begin
+    end else if (slo) begin
+    end else if (\$3 ) begin
+      stuck_low = 1'h1;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$79 ) begin end
+    bad_config = 1'h0;
+    if (\$2 ) begin
+      bad_config = 1'h1;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$79 ) begin end
+    aborted = 1'h0;
+    if (\$2 ) begin
+    end else if (abort) begin
+      aborted = 1'h1;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$79 ) begin end
+    ready = 1'h0;
+    if (\$2 ) begin
+    end else if (abort) begin
+    end else if (slo) begin
+      ready = 1'h1;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_wb.ch1.core.controller.report (fault, fault_status, report_frame, delay, faults, report_delay);
+  wire \$1 ;
+  wire \$10 ;
+  wire \$11 ;
+  wire \$12 ;
+  wire \$13 ;
+  wire \$14 ;
+  wire \$2 ;
+  wire \$3 ;
+  wire \$4 ;
+  wire \$5 ;
+  wire \$6 ;
+  wire \$7 ;
+  wire \$8 ;
+  wire \$9 ;
+  input delay;
+  wire delay;
+  wire fail;
+  input fault;
+  wire fault;
+  (* enum_base_type = "Status" *)
+  (* enum_value_0000 = "OK" *)
+  (* enum_value_0001 = "CRC_ERROR_WORD0" *)
+  (* enum_value_0010 = "CRC_ERROR_WORD1" *)
+  (* enum_value_0011 = "CRC_ERROR_BOTH" *)
+  (* enum_value_0100 = "SIGN_OF_LIFE" *)
+  (* enum_value_0101 = "SPW_MISMATCH" *)
+  (* enum_value_0110 = "NO_ACK" *)
+  (* enum_value_0111 = "NO_START" *)
+  (* enum_value_1000 = "DELAY_RANGE" *)
+  (* enum_value_1001 = "SLO_STUCK_LOW" *)
+  (* enum_value_1010 = "ABORTED" *)
+  (* enum_value_1011 = "BAD_CONFIG" *)
+  (* enum_value_1100 = "NO_STOP" *)
+  input [3:0] fault_status;
+  wire [3:0] fault_status;
+  output [6:0] faults;
+  wire [6:0] faults;
+  wire \faults.aborted ;
+  wire \faults.bad_config ;
+  wire \faults.delay_range ;
+  wire \faults.no_ack ;
+  wire \faults.no_start ;
+  wire \faults.no_stop ;
+  wire \faults.slo_stuck_low ;
+  wire frame;
+  output report_delay;
+  wire report_delay;
+  input report_frame;
+  wire report_frame;
+  (* enum_base_type = "Status" *)
+  (* enum_value_0000 = "OK" *)
+  (* enum_value_0001 = "CRC_ERROR_WORD0" *)
+  (* enum_value_0010 = "CRC_ERROR_WORD1" *)
+  (* enum_value_0011 = "CRC_ERROR_BOTH" *)
+  (* enum_value_0100 = "SIGN_OF_LIFE" *)
+  (* enum_value_0101 = "SPW_MISMATCH" *)
+  (* enum_value_0110 = "NO_ACK" *)
+  (* enum_value_0111 = "NO_START" *)
+  (* enum_value_1000 = "DELAY_RANGE" *)
+  (* enum_value_1001 = "SLO_STUCK_LOW" *)
+  (* enum_value_1010 = "ABORTED" *)
+  (* enum_value_1011 = "BAD_CONFIG" *)
+  (* enum_value_1100 = "NO_STOP" *)
+  wire [3:0] status;
+  assign report_delay = report_frame | delay;
+  assign \$1  = fault_status == 3'h6;
+  assign \$2  = fault & \$1 ;
+  assign \$3  = fault_status == 3'h7;
+  assign \$4  = fault & \$3 ;
+  assign \$5  = fault_status == 4'h8;
+  assign \$6  = fault & \$5 ;
+  assign \$7  = fault_status == 4'h9;
+  assign \$8  = fault & \$7 ;
+  assign \$9  = fault_status == 4'ha;
+  assign \$10  = fault & \$9 ;
+  assign \$11  = fault_status == 4'hb;
+  assign \$12  = fault & \$11 ;
+  assign \$13  = fault_status == 4'hc;
+  assign \$14  = fault & \$13 ;
+  assign frame = report_frame;
+  assign fail = fault;
+  assign status = fault_status;
+  assign \faults.no_ack  = faults[0];
+  assign \faults.no_start  = faults[1];
+  assign \faults.delay_range  = faults[2];
+  assign \faults.slo_stuck_low  = faults[3];
+  assign \faults.aborted  = faults[4];
+  assign \faults.bad_config  = faults[5];
+  assign \faults.no_stop  = faults[6];
+  assign faults[6] = \$14 ;
+  assign faults[5] = \$12 ;
+  assign faults[4] = \$10 ;
+  assign faults[3] = \$8 ;
+  assign faults[2] = \$6 ;
+  assign faults[1] = \$4 ;
+  assign faults[0] = \$2 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -17709,330 +18393,6 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1.core.counters.count_aborted (rst, clear, inc, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$74  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.counters.count_ca_aborted (rst, clear, inc, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$75  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.counters.count_ca_crc4_error (rst, clear, inc, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$76  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.counters.count_ca_data_fault (rst, clear, inc, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$77  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.counters.count_ca_no_answer (rst, clear, inc, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$78  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.counters.count_ca_refused (rst, clear, inc, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$79  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$79 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$79 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.counters.count_crc_word0 (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$80  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -18086,7 +18446,7 @@ module \biss_master_wb.ch1.core.counters.count_crc_word0 (rst, clear, inc, count
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.counters.count_crc_word1 (rst, clear, inc, count, clk);
+module \biss_master_wb.ch1.core.counters.count_ca_aborted (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$81  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -18140,7 +18500,7 @@ module \biss_master_wb.ch1.core.counters.count_crc_word1 (rst, clear, inc, count
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.counters.count_delay_range (rst, clear, inc, count, clk);
+module \biss_master_wb.ch1.core.counters.count_ca_crc4_error (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$82  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -18194,7 +18554,7 @@ module \biss_master_wb.ch1.core.counters.count_delay_range (rst, clear, inc, cou
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.counters.count_lc_repeat (rst, clear, inc, count, clk);
+module \biss_master_wb.ch1.core.counters.count_ca_data_fault (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$83  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -18248,7 +18608,7 @@ module \biss_master_wb.ch1.core.counters.count_lc_repeat (rst, clear, inc, count
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.counters.count_lc_skip (rst, clear, inc, count, clk);
+module \biss_master_wb.ch1.core.counters.count_ca_no_answer (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$84  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -18302,7 +18662,7 @@ module \biss_master_wb.ch1.core.counters.count_lc_skip (rst, clear, inc, count, 
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.counters.count_lc_zero (rst, clear, inc, count, clk);
+module \biss_master_wb.ch1.core.counters.count_ca_refused (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$85  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -18356,7 +18716,7 @@ module \biss_master_wb.ch1.core.counters.count_lc_zero (rst, clear, inc, count, 
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.counters.count_no_ack (rst, clear, inc, count, clk);
+module \biss_master_wb.ch1.core.counters.count_crc_word0 (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$86  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -18410,7 +18770,7 @@ module \biss_master_wb.ch1.core.counters.count_no_ack (rst, clear, inc, count, c
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.counters.count_no_start (rst, clear, inc, count, clk);
+module \biss_master_wb.ch1.core.counters.count_crc_word1 (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$87  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -18464,7 +18824,7 @@ module \biss_master_wb.ch1.core.counters.count_no_start (rst, clear, inc, count,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.counters.count_no_stop (rst, clear, inc, count, clk);
+module \biss_master_wb.ch1.core.counters.count_delay_range (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$88  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -18518,7 +18878,7 @@ module \biss_master_wb.ch1.core.counters.count_no_stop (rst, clear, inc, count, 
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.counters.count_overrun (rst, clear, inc, count, clk);
+module \biss_master_wb.ch1.core.counters.count_lc_repeat (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$89  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -18572,7 +18932,7 @@ module \biss_master_wb.ch1.core.counters.count_overrun (rst, clear, inc, count, 
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.counters.count_slo_stuck_low (rst, clear, inc, count, clk);
+module \biss_master_wb.ch1.core.counters.count_lc_skip (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$90  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -18626,7 +18986,7 @@ module \biss_master_wb.ch1.core.counters.count_slo_stuck_low (rst, clear, inc, c
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.counters.count_spw_mismatch (rst, clear, inc, count, clk);
+module \biss_master_wb.ch1.core.counters.count_lc_zero (rst, clear, inc, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$91  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -18680,9 +19040,333 @@ module \biss_master_wb.ch1.core.counters.count_spw_mismatch (rst, clear, inc, co
 endmodule
 
 (* generator = "Amaranth" *)
+module \biss_master_wb.ch1.core.counters.count_no_ack (rst, clear, inc, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$92  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_wb.ch1.core.counters.count_no_start (rst, clear, inc, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$93  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_wb.ch1.core.counters.count_no_stop (rst, clear, inc, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$94  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$94 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$94 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_wb.ch1.core.counters.count_overrun (rst, clear, inc, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$95  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_wb.ch1.core.counters.count_slo_stuck_low (rst, clear, inc, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$96  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$96 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$96 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_wb.ch1.core.counters.count_spw_mismatch (rst, clear, inc, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$97  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
 module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample, \bit , receiver_clear, done, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1, lc, cpw_top, crc_ok
 , clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$92  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$98  = 0;
   wire [6:0] \$1 ;
   wire [1:0] \$10 ;
   reg [2:0] \$100 ;
@@ -19065,7 +19749,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
     .valid(\valid$52 )
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
     (* full_case = 32'd1 *)
     casez (words[6])
       1'h0:
@@ -19075,7 +19759,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -19089,7 +19773,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
     (* full_case = 32'd1 *)
     casez (words[9:6])
       4'h0:
@@ -19127,7 +19811,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -19141,7 +19825,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
     (* full_case = 32'd1 *)
     casez (words[16])
       1'h0:
@@ -19151,7 +19835,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
     (* full_case = 32'd1 *)
     casez (words[17:16])
       2'h0:
@@ -19165,7 +19849,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:16])
       4'h0:
@@ -19203,7 +19887,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
     (* full_case = 32'd1 *)
     casez (words[17:16])
       2'h0:
@@ -19217,7 +19901,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
     \$94  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -19241,7 +19925,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
     \$95  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -19263,7 +19947,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
     \$96  = slots;
     if (\$34 ) begin
       \$96  = \$35 [15:0];
@@ -19276,7 +19960,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
     \$97  = slots_full;
     if (\$34 ) begin
       \$97  = \$36 ;
@@ -19289,7 +19973,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
     \$98  = started;
     casez (decoder_fsm_state)
       3'h0:
@@ -19305,7 +19989,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
     \$99  = start_slot;
     casez (decoder_fsm_state)
       3'h0:
@@ -19321,7 +20005,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
     \$100  = decoder_fsm_state;
     casez (decoder_fsm_state)
       3'h0:
@@ -19353,7 +20037,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
     \$101  = cds;
     casez (decoder_fsm_state)
       3'h0:
@@ -19371,7 +20055,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
     \$102  = idx;
     casez (decoder_fsm_state)
       3'h0:
@@ -19396,7 +20080,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
     \$103  = in_data;
     casez (decoder_fsm_state)
       3'h0:
@@ -19421,7 +20105,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
     \$104  = in_lc;
     casez (decoder_fsm_state)
       3'h0:
@@ -19446,7 +20130,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
     \$105  = in_top;
     casez (decoder_fsm_state)
       3'h0:
@@ -19471,7 +20155,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
     \$106  = word;
     casez (decoder_fsm_state)
       3'h0:
@@ -19499,7 +20183,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
     \$107  = stop_bit;
     casez (decoder_fsm_state)
       3'h0:
@@ -19521,7 +20205,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
     \$108  = data0;
     if (\$58 ) begin
       \$108  = { data0[53:0], \bit  };
@@ -19534,7 +20218,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
     \$109  = ne;
     if (\$59 ) begin
       \$109 [0] = 1'h1;
@@ -19554,7 +20238,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
     \$110  = nw;
     if (\$59 ) begin
       \$110 [0] = 1'h1;
@@ -19576,7 +20260,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
     \$111  = data1;
     if (\$70 ) begin
       \$111  = { data1[38:0], \bit  };
@@ -19589,7 +20273,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
     \$112  = lc;
     if (lc_load) begin
       \$112  = { lc[4:0], \bit  };
@@ -19602,7 +20286,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
     \$113  = cpw_top;
     if (\$80 ) begin
       \$113  = { cpw_top[38:0], \bit  };
@@ -19615,7 +20299,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
     in_word = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -19652,7 +20336,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1.core.decoder.crc0 (rst, start, valid, kind, \bit , receiver_clear, ok, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$93  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$99  = 0;
   wire [5:0] \$1 ;
   wire \$10 ;
   wire [5:0] \$11 ;
@@ -19746,7 +20430,7 @@ module \biss_master_wb.ch1.core.decoder.crc0 (rst, start, valid, kind, \bit , re
   assign \$auto$rtlil.cc:2739:Not$12  = ~ { crc16_reg[14], crc16_reg[11], crc16_reg[6:5], crc16_reg[3:2], 1'h0 };
   assign \$auto$rtlil.cc:2739:Not$10  = ~ { crc6_reg[0], 1'h0 };
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
     \$31  = crc6_reg;
     if (valid) begin
       \$31  = \$5 ;
@@ -19761,7 +20445,7 @@ module \biss_master_wb.ch1.core.decoder.crc0 (rst, start, valid, kind, \bit , re
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
     \$32  = crc6_match;
     if (valid) begin
       \$32  = \$15 ;
@@ -19776,7 +20460,7 @@ module \biss_master_wb.ch1.core.decoder.crc0 (rst, start, valid, kind, \bit , re
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
     \$33  = crc16_reg;
     if (valid) begin
       \$33  = \$20 ;
@@ -19791,7 +20475,7 @@ module \biss_master_wb.ch1.core.decoder.crc0 (rst, start, valid, kind, \bit , re
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
     \$34  = crc16_match;
     if (valid) begin
       \$34  = \$30 ;
@@ -19806,7 +20490,7 @@ module \biss_master_wb.ch1.core.decoder.crc0 (rst, start, valid, kind, \bit , re
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
     ok = 1'h0;
     casez (kind)
       2'h0:
@@ -19827,7 +20511,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1.core.decoder.crc1 (rst, start, valid, kind, \bit , receiver_clear, ok, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$94  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$100  = 0;
   wire [5:0] \$1 ;
   wire \$10 ;
   wire [5:0] \$11 ;
@@ -19921,7 +20605,7 @@ module \biss_master_wb.ch1.core.decoder.crc1 (rst, start, valid, kind, \bit , re
   assign \$auto$rtlil.cc:2739:Not$6  = ~ { crc6_reg[0], 1'h0 };
   assign \$auto$rtlil.cc:2739:Not$8  = ~ { crc16_reg[14], crc16_reg[11], crc16_reg[6:5], crc16_reg[3:2], 1'h0 };
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$94 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     \$31  = crc6_reg;
     if (valid) begin
       \$31  = \$5 ;
@@ -19936,7 +20620,7 @@ module \biss_master_wb.ch1.core.decoder.crc1 (rst, start, valid, kind, \bit , re
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$94 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     \$32  = crc6_match;
     if (valid) begin
       \$32  = \$15 ;
@@ -19951,7 +20635,7 @@ module \biss_master_wb.ch1.core.decoder.crc1 (rst, start, valid, kind, \bit , re
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$94 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     \$33  = crc16_reg;
     if (valid) begin
       \$33  = \$20 ;
@@ -19966,7 +20650,7 @@ module \biss_master_wb.ch1.core.decoder.crc1 (rst, start, valid, kind, \bit , re
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$94 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     \$34  = crc16_match;
     if (valid) begin
       \$34  = \$30 ;
@@ -19981,7 +20665,7 @@ module \biss_master_wb.ch1.core.decoder.crc1 (rst, start, valid, kind, \bit , re
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$94 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     ok = 1'h0;
     casez (kind)
       2'h0:
@@ -20002,7 +20686,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1.core.ma_clock (rst, \clocking , half_period, run, hold, first_rise, second_rise, ma, rises, busy, held, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$95  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$101  = 0;
   wire [16:0] \$1 ;
   wire \$10 ;
   wire [16:0] \$11 ;
@@ -20127,7 +20811,7 @@ module \biss_master_wb.ch1.core.ma_clock (rst, \clocking , half_period, run, hol
   always @(posedge clk)
     released <= \$42 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
     \$34  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -20142,7 +20826,7 @@ module \biss_master_wb.ch1.core.ma_clock (rst, \clocking , half_period, run, hol
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
     \$35  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -20157,7 +20841,7 @@ module \biss_master_wb.ch1.core.ma_clock (rst, \clocking , half_period, run, hol
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
     \$36  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -20172,7 +20856,7 @@ module \biss_master_wb.ch1.core.ma_clock (rst, \clocking , half_period, run, hol
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
     \$37  = ma;
     casez (ma_fsm_state)
       3'h0:
@@ -20201,7 +20885,7 @@ module \biss_master_wb.ch1.core.ma_clock (rst, \clocking , half_period, run, hol
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
     \$38  = phase_left;
     casez (ma_fsm_state)
       3'h0:
@@ -20243,7 +20927,7 @@ module \biss_master_wb.ch1.core.ma_clock (rst, \clocking , half_period, run, hol
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
     \$39  = last_clock;
     casez (ma_fsm_state)
       3'h0:
@@ -20285,7 +20969,7 @@ module \biss_master_wb.ch1.core.ma_clock (rst, \clocking , half_period, run, hol
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
     \$40  = rises;
     casez (ma_fsm_state)
       3'h0:
@@ -20304,7 +20988,7 @@ module \biss_master_wb.ch1.core.ma_clock (rst, \clocking , half_period, run, hol
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
     \$41  = ma_fsm_state;
     casez (ma_fsm_state)
       3'h0:
@@ -20340,7 +21024,7 @@ module \biss_master_wb.ch1.core.ma_clock (rst, \clocking , half_period, run, hol
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
     \$42  = released;
     casez (ma_fsm_state)
       3'h0:
@@ -20364,7 +21048,7 @@ module \biss_master_wb.ch1.core.ma_clock (rst, \clocking , half_period, run, hol
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
     busy = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -20380,7 +21064,7 @@ module \biss_master_wb.ch1.core.ma_clock (rst, \clocking , half_period, run, hol
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
     held = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -20397,7 +21081,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1.core.ma_stop (rst, words, w1_enable, clear, rises, enough, \started$10 , start_slot, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$96  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$102  = 0;
   reg [7:0] \$1 ;
   reg [7:0] \$10 ;
   wire [8:0] \$11 ;
@@ -20478,7 +21162,7 @@ module \biss_master_wb.ch1.core.ma_stop (rst, words, w1_enable, clear, rises, en
   always @(posedge clk)
     word1_len <= \$17 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$96 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
     (* full_case = 32'd1 *)
     casez (words[9:6])
       4'h0:
@@ -20516,7 +21200,7 @@ module \biss_master_wb.ch1.core.ma_stop (rst, words, w1_enable, clear, rises, en
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$96 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:16])
       4'h0:
@@ -20554,42 +21238,42 @@ module \biss_master_wb.ch1.core.ma_stop (rst, words, w1_enable, clear, rises, en
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$96 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
     \$12  = \$2 [7:0];
     if (rst) begin
       \$12  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$96 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
     \$13  = \$4 ;
     if (rst) begin
       \$13  = 9'h000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$96 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
     \$14  = \$5 ;
     if (rst) begin
       \$14  = 17'h00000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$96 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
     \$15  = \started$10 ;
     if (rst) begin
       \$15  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$96 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
     \$16  = \$9 ;
     if (rst) begin
       \$16  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$96 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
     \$17  = \$11 [7:0];
     if (rst) begin
       \$17  = 8'h00;
@@ -20901,7 +21585,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1.core.register_access.buffers (clk, rst, host_read__en, byte_to_send, rbuf_data, wbuf, index, store, byte_received, host_read__addr);
-  reg \$auto$verilog_backend.cc:2355:dump_module$97  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$103  = 0;
   wire \$1 ;
   wire \$2 ;
   wire \$3 ;
@@ -21018,21 +21702,21 @@ module \biss_master_wb.ch1.core.register_access.buffers (clk, rst, host_read__en
   assign \$1  = ! index[1:0];
   assign \$2  = index[1:0] == 1'h1;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     byte_received__addr = 4'h0;
     if (store) begin
       byte_received__addr = index[5:2];
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     byte_received__data = 32'd0;
     if (store) begin
       byte_received__data = { byte_received, byte_received, byte_received, byte_received };
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     byte_received__en = 4'h0;
     if (store) begin
       byte_received__en = { \$4 , \$3 , \$2 , \$1  };
@@ -21052,7 +21736,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1.core.register_access.checker (rst, crc_ok, echo_ok, cds, control__take_data, start, control__take_crc, sent, \byte , clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$98  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$104  = 0;
   reg [7:0] \$1 ;
   reg [2:0] \$2 ;
   output [7:0] \byte ;
@@ -21095,7 +21779,7 @@ module \biss_master_wb.ch1.core.register_access.checker (rst, crc_ok, echo_ok, c
     .valid(control__take_data)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$104 ) begin end
     \$1  = \byte ;
     if (control__take_data) begin
       \$1  = { \byte [6:0], cds };
@@ -21105,7 +21789,7 @@ module \biss_master_wb.ch1.core.register_access.checker (rst, crc_ok, echo_ok, c
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$104 ) begin end
     \$2  = got_crc;
     if (control__take_crc) begin
       \$2  = { got_crc[1:0], cds };
@@ -21121,7 +21805,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1.core.register_access.checker.rx_crc (rst, crc, data_in, valid, start, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$99  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$105  = 0;
   wire [3:0] \$1 ;
   wire \$10 ;
   wire [3:0] \$11 ;
@@ -21164,7 +21848,7 @@ module \biss_master_wb.ch1.core.register_access.checker.rx_crc (rst, crc, data_i
     crc_reg <= \$13 ;
   assign \$auto$rtlil.cc:2739:Not$2  = ~ crc_reg;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
     \$13  = crc_reg;
     if (valid) begin
       \$13 [0] = \$3 ;
@@ -21188,7 +21872,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1.core.register_access.idle (rst, frame_end, frame_ok, run_enough, seen_enough, frame_cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$100  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$106  = 0;
   wire \$1 ;
   wire [4:0] \$10 ;
   wire \$11 ;
@@ -21258,7 +21942,7 @@ module \biss_master_wb.ch1.core.register_access.idle (rst, frame_end, frame_ok, 
   always @(posedge clk)
     idle_seen <= \$24 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$106 ) begin end
     \$23  = idle_run;
     if (frame_end) begin
       \$23  = \$4 [3:0];
@@ -21268,7 +21952,7 @@ module \biss_master_wb.ch1.core.register_access.idle (rst, frame_end, frame_ok, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$106 ) begin end
     \$24  = idle_seen;
     if (frame_end) begin
       \$24  = \$10 [3:0];
@@ -21281,7 +21965,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1.core.register_access.sender (rst, \byte , request, control__load_header, control__source, control__crc_bit, control__shift_header, start, valid, control__load_byte, control__shift_byte, sent, cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$101  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$107  = 0;
   wire \$1 ;
   wire [18:0] \$2 ;
   wire [8:0] \$3 ;
@@ -21353,7 +22037,7 @@ module \biss_master_wb.ch1.core.register_access.sender (rst, \byte , request, co
     .valid(valid)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$107 ) begin end
     \$6  = header;
     if (control__load_header) begin
       \$6  = { 2'h3, request[2:0], request[9:3], 4'h0, \$1 , request[17] };
@@ -21366,7 +22050,7 @@ module \biss_master_wb.ch1.core.register_access.sender (rst, \byte , request, co
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$107 ) begin end
     \$7  = to_send;
     if (control__load_byte) begin
       \$7  = \byte ;
@@ -21379,7 +22063,7 @@ module \biss_master_wb.ch1.core.register_access.sender (rst, \byte , request, co
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$107 ) begin end
     \$8  = sent;
     if (control__load_byte) begin
       \$8  = \byte ;
@@ -21389,7 +22073,7 @@ module \biss_master_wb.ch1.core.register_access.sender (rst, \byte , request, co
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$107 ) begin end
     cdm = 1'h0;
     casez (control__source)
       3'h1:
@@ -21414,7 +22098,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1.core.register_access.sender.tx_crc (rst, data_in, crc, start, valid, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$102  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$108  = 0;
   wire [3:0] \$1 ;
   wire \$10 ;
   wire [3:0] \$11 ;
@@ -21457,7 +22141,7 @@ module \biss_master_wb.ch1.core.register_access.sender.tx_crc (rst, data_in, crc
     crc_reg <= \$13 ;
   assign \$auto$rtlil.cc:2739:Not$4  = ~ crc_reg;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
     \$13  = crc_reg;
     if (valid) begin
       \$13 [0] = \$3 ;
@@ -21482,7 +22166,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1.core.register_access.sequencer (rst, frame_end, frame_ok, busy, crc_ok, echo_ok, run_enough, seen_enough, start, abort, request, frame_cdm, frame_cds, done, result, index, send__load_header, send__source, send__crc_bit, send__shift_header, send__crc_start
 , send__crc_valid, send__load_byte, send__shift_byte, check__take_data, check__first, check__take_crc, store, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$103  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$109  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$100 ;
@@ -21838,7 +22522,7 @@ module \biss_master_wb.ch1.core.register_access.sequencer (rst, frame_end, frame
   always @(posedge clk)
     waited <= \$125 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
     \$118  = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -21876,7 +22560,7 @@ module \biss_master_wb.ch1.core.register_access.sequencer (rst, frame_end, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
     \$119  = result;
     casez (access_fsm_state)
       3'h0:
@@ -21930,7 +22614,7 @@ module \biss_master_wb.ch1.core.register_access.sequencer (rst, frame_end, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
     \$120  = access_fsm_state;
     casez (access_fsm_state)
       3'h0:
@@ -22027,7 +22711,7 @@ module \biss_master_wb.ch1.core.register_access.sequencer (rst, frame_end, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
     \$121  = req;
     casez (access_fsm_state)
       3'h0:
@@ -22044,7 +22728,7 @@ module \biss_master_wb.ch1.core.register_access.sequencer (rst, frame_end, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
     \$122  = index;
     casez (access_fsm_state)
       3'h0:
@@ -22083,7 +22767,7 @@ module \biss_master_wb.ch1.core.register_access.sequencer (rst, frame_end, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
     \$123  = step;
     casez (access_fsm_state)
       3'h0:
@@ -22141,7 +22825,7 @@ module \biss_master_wb.ch1.core.register_access.sequencer (rst, frame_end, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
     \$124  = ending;
     casez (access_fsm_state)
       3'h0:
@@ -22208,7 +22892,7 @@ module \biss_master_wb.ch1.core.register_access.sequencer (rst, frame_end, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
     \$125  = waited;
     casez (access_fsm_state)
       3'h0:
@@ -22240,7 +22924,7 @@ module \biss_master_wb.ch1.core.register_access.sequencer (rst, frame_end, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
     send__load_header = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -22254,7 +22938,7 @@ module \biss_master_wb.ch1.core.register_access.sequencer (rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
     send__source = 3'h0;
     casez (access_fsm_state)
       3'h0:
@@ -22281,7 +22965,7 @@ module \biss_master_wb.ch1.core.register_access.sequencer (rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
     send__crc_bit = 2'h0;
     casez (access_fsm_state)
       3'h0:
@@ -22301,7 +22985,7 @@ module \biss_master_wb.ch1.core.register_access.sequencer (rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
     send__shift_header = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -22320,7 +23004,7 @@ module \biss_master_wb.ch1.core.register_access.sequencer (rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
     send__crc_start = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -22349,7 +23033,7 @@ module \biss_master_wb.ch1.core.register_access.sequencer (rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
     send__crc_valid = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -22370,7 +23054,7 @@ module \biss_master_wb.ch1.core.register_access.sequencer (rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
     send__load_byte = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -22392,7 +23076,7 @@ module \biss_master_wb.ch1.core.register_access.sequencer (rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
     send__shift_byte = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -22413,7 +23097,7 @@ module \biss_master_wb.ch1.core.register_access.sequencer (rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
     check__take_data = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -22435,7 +23119,7 @@ module \biss_master_wb.ch1.core.register_access.sequencer (rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
     check__first = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -22457,7 +23141,7 @@ module \biss_master_wb.ch1.core.register_access.sequencer (rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
     check__take_crc = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -22481,7 +23165,7 @@ module \biss_master_wb.ch1.core.register_access.sequencer (rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
     store = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -22519,8 +23203,8 @@ module \biss_master_wb.ch1.core.register_access.sequencer (rst, frame_end, frame
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.results (rst, report, valid, frame, report_frame, report_delay, done, valid_out, result, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$104  = 0;
+module \biss_master_wb.ch1.core.results (rst, report_delay, report, valid, frame, report_frame, done, valid_out, result, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$110  = 0;
   reg \$1 ;
   reg \$2 ;
   reg [160:0] \$3 ;
@@ -22617,21 +23301,21 @@ module \biss_master_wb.ch1.core.results (rst, report, valid, frame, report_frame
   always @(posedge clk)
     result <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$104 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$110 ) begin end
     \$1  = report;
     if (rst) begin
       \$1  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$104 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$110 ) begin end
     \$2  = valid;
     if (rst) begin
       \$2  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$104 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$110 ) begin end
     \$3  = result;
     if (report) begin
       \$3 [3:0] = frame[3:0];
@@ -22696,7 +23380,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_clear, arm, early, locked, delay, sample, level, slo);
-  reg \$auto$verilog_backend.cc:2355:dump_module$105  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$111  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -22934,7 +23618,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_
     .stage1(level)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
     \$63  = level;
     if (receiver_clear) begin
       \$63  = 1'h1;
@@ -22944,7 +23628,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
     \$64  = mid_delay;
     if (odd) begin
       \$64  = \$8 [12:0];
@@ -22969,7 +23653,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
     \$65  = mid_slot;
     (* full_case = 32'd1 *)
     if (odd) begin
@@ -22996,7 +23680,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
     \$66  = \$10 ;
     casez (sampler_fsm_state)
       2'h0:
@@ -23018,7 +23702,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
     \$67  = elapsed;
     casez (sampler_fsm_state)
       2'h0:
@@ -23042,7 +23726,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
     \$68  = early;
     casez (sampler_fsm_state)
       2'h0:
@@ -23058,7 +23742,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
     \$69  = locked;
     casez (sampler_fsm_state)
       2'h0:
@@ -23084,7 +23768,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
     \$70  = gap;
     casez (sampler_fsm_state)
       2'h0:
@@ -23115,7 +23799,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
     \$71  = sampler_fsm_state;
     casez (sampler_fsm_state)
       2'h0:
@@ -23146,7 +23830,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
     \$72  = slot_left;
     casez (sampler_fsm_state)
       2'h0:
@@ -23196,7 +23880,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
     \$73  = slot_zero;
     casez (sampler_fsm_state)
       2'h0:
@@ -23246,7 +23930,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
     \$74  = vote1;
     casez (sampler_fsm_state)
       2'h0:
@@ -23276,7 +23960,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
     \$75  = vote2;
     casez (sampler_fsm_state)
       2'h0:
@@ -23304,7 +23988,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
     \$76  = first_slot;
     casez (sampler_fsm_state)
       2'h0:
@@ -23330,7 +24014,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
     \$77  = delay;
     casez (sampler_fsm_state)
       2'h0:
@@ -23353,7 +24037,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
     \$78  = phase;
     casez (sampler_fsm_state)
       2'h0:
@@ -23393,7 +24077,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
     sample = \$44 ;
     casez (sampler_fsm_state)
       2'h0:
@@ -23411,7 +24095,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, \bit , half_period, receiver_
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
     decided = 1'h0;
     casez (sampler_fsm_state)
       2'h0:
@@ -23461,7 +24145,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1.core.scheduler (rst, trigger, periodic, request, overrun, start, abort, period, idle, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$106  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$112  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -23545,7 +24229,7 @@ module \biss_master_wb.ch1.core.scheduler (rst, trigger, periodic, request, over
   always @(posedge clk)
     period_start <= \$28 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$106 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$112 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$27  = 24'h000001;
@@ -23557,7 +24241,7 @@ module \biss_master_wb.ch1.core.scheduler (rst, trigger, periodic, request, over
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$106 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$112 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$28  = 1'h1;
@@ -23571,8 +24255,8 @@ module \biss_master_wb.ch1.core.scheduler (rst, trigger, periodic, request, over
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$4152$0 , resync, lc, is_zero, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$107  = 0;
+module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$4149$0 , resync, lc, is_zero, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$113  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -23609,8 +24293,8 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, 
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$4152$0 ;
-  wire \port$4152$0 ;
+  input \port$4149$0 ;
+  wire \port$4149$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -23622,9 +24306,9 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, 
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$4152$0  };
-  assign \$2  = { lc[4:0], \port$4152$0  } == last;
-  assign \$3  = { lc[4:0], \port$4152$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$4149$0  };
+  assign \$2  = { lc[4:0], \port$4149$0  } == last;
+  assign \$3  = { lc[4:0], \port$4149$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = lc == 6'h3f;
@@ -23652,7 +24336,7 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, 
   always @(posedge clk)
     synced <= \$21 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$107 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
     \$16  = is_zero;
     if (load) begin
       \$16  = \$1 ;
@@ -23662,7 +24346,7 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$107 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
     \$17  = is_last;
     if (load) begin
       \$17  = \$2 ;
@@ -23672,7 +24356,7 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$107 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
     \$18  = is_expected;
     if (load) begin
       \$18  = \$3 ;
@@ -23682,7 +24366,7 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$107 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
     \$19  = last;
     if (\$5 ) begin
       \$19  = lc;
@@ -23692,7 +24376,7 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$107 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
     \$20  = expected;
     if (\$5 ) begin
       \$20  = \$8 [5:0];
@@ -23702,7 +24386,7 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$107 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
     \$21  = synced;
     if (\$5 ) begin
       \$21  = 1'h1;
@@ -23714,13 +24398,13 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, 
       \$21  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$4152$0  };
+  assign lc_next = { lc[4:0], \port$4149$0  };
   assign zero = is_zero;
 endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1.core.spw_check (rst, bits, \tolerance$8 , spw, cpw_top, match, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$108  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$114  = 0;
   wire [40:0] \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -23925,28 +24609,28 @@ module \biss_master_wb.ch1.core.spw_check (rst, bits, \tolerance$8 , spw, cpw_to
   assign \$7  = bits > 3'h5;
   assign \$8  = bits > 3'h6;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
     \$88  = \$42 ;
     if (rst) begin
       \$88  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
     \$89  = \$84 ;
     if (rst) begin
       \$89  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
     \$90  = \tolerance$8 ;
     if (rst) begin
       \$90  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
     \$91  = \$87 ;
     if (rst) begin
       \$91  = 1'h0;
@@ -23956,7 +24640,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1.core.time_base (rst, first_rise, first_rise_time, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$109  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$115  = 0;
   wire [32:0] \$1 ;
   reg [31:0] \$2 ;
   reg [31:0] \$3 ;
@@ -23975,14 +24659,14 @@ module \biss_master_wb.ch1.core.time_base (rst, first_rise, first_rise_time, clk
   always @(posedge clk)
     first_rise_time <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$115 ) begin end
     \$2  = \$1 [31:0];
     if (rst) begin
       \$2  = 32'd0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$115 ) begin end
     \$3  = first_rise_time;
     if (first_rise) begin
       \$3  = now;
@@ -23995,7 +24679,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1.core.timers (rst, restart, ma_busy, break_time, timeout_live, ack_limit, timeout_limit, delay_limit, no_start_limit, clear, in_clock, slo_stuck, slo_stuck_live, break_over, ack_expired, no_start_expired, delay_over, delay, slo, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$110  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$116  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -24133,7 +24817,7 @@ module \biss_master_wb.ch1.core.timers (rst, restart, ma_busy, break_time, timeo
   always @(posedge clk)
     delay_over <= \$43 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$110 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$116 ) begin end
     \$36  = slo_low_time_p1;
     if (\$1 ) begin
       \$36  = 25'h0000001;
@@ -24145,49 +24829,49 @@ module \biss_master_wb.ch1.core.timers (rst, restart, ma_busy, break_time, timeo
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$110 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$116 ) begin end
     \$37  = \$8 ;
     if (rst) begin
       \$37  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$110 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$116 ) begin end
     \$38  = \$16 ;
     if (rst) begin
       \$38  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$110 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$116 ) begin end
     \$39  = \$20 [24:0];
     if (rst) begin
       \$39  = 25'h0000001;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$110 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$116 ) begin end
     \$40  = \$26 ;
     if (rst) begin
       \$40  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$110 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$116 ) begin end
     \$41  = \$30 ;
     if (rst) begin
       \$41  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$110 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$116 ) begin end
     \$42  = \$34 ;
     if (rst) begin
       \$42  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$110 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$116 ) begin end
     \$43  = \$35 ;
     if (rst) begin
       \$43  = 1'h0;
@@ -24196,8 +24880,8 @@ module \biss_master_wb.ch1.core.timers (rst, restart, ma_busy, break_time, timeo
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.verdict (lc_skip_seen, \port$2955$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
-  reg \$auto$verilog_backend.cc:2355:dump_module$111  = 0;
+module \biss_master_wb.ch1.core.verdict (lc_skip_seen, \port$2937$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
+  reg \$auto$verilog_backend.cc:2355:dump_module$117  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -24310,8 +24994,8 @@ module \biss_master_wb.ch1.core.verdict (lc_skip_seen, \port$2955$0 , lc_check, 
   wire lc_zero;
   input lc_zero_seen;
   wire lc_zero_seen;
-  output \port$2955$0 ;
-  wire \port$2955$0 ;
+  output \port$2937$0 ;
+  wire \port$2937$0 ;
   output report;
   wire report;
   input report_frame;
@@ -24379,7 +25063,7 @@ module \biss_master_wb.ch1.core.verdict (lc_skip_seen, \port$2955$0 , lc_check, 
   assign \$29  = ~ { \$2 , crc_ok[0] };
   assign crc_error = report_frame ? \$29  : 2'h0;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$117 ) begin end
     (* full_case = 32'd1 *)
     if (\$13 ) begin
       frame_status = 4'h3;
@@ -24396,7 +25080,7 @@ module \biss_master_wb.ch1.core.verdict (lc_skip_seen, \port$2955$0 , lc_check, 
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$2955$0  = \$2 ;
+  assign \port$2937$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

@@ -91,7 +91,7 @@ INTERNALS = {
     "master.sampler": ("block", "sampler", None),
     "master.decoder": ("block", "decoder", None),
     "master.cycle_fsm": ("fsm", "controller", "cycle_fsm"),     # WAIT_READY, CLOCK, TAIL, END
-    "master.latched": ("signal", "controller", "first_clock"),  # WAIT_READY's first clock
+    "master.latched": ("port", "controller", "first_clock"),    # WAIT_READY's first clock
     "master.cfg_ok": ("signal", "config", "ok"),                # registered configuration check
     "master.receiver_clear": ("signal", "controller", "receiver_clear"),  # sampler/decoder reset
     "master.request": ("port", "scheduler", "request"),         # the controller's request input
