@@ -19,15 +19,18 @@ STROBES = DATA_WIDTH // 8
 class RegisterBus(wiring.Signature):
     """The bank's internal bus, as the initiator (a bus adapter) sees it.
 
-    Word addresses. A write happens in the clock ``w_en`` is high, byte lanes chosen by
-    ``w_strb``. A read takes two steps, so that the address decode and the word select each
-    have a clock of their own. ``r_en`` high in one clock: the register is read in that clock
-    (its value then, and a read with side effects, the snapshot, acts then). ``r_load`` high
-    in a later clock, at the latest the clock of the next ``r_en``: ``r_data`` holds the
-    word read from the next clock until the clock after the next ``r_load``. So reads run one
-    per clock (each ``r_load`` with the next ``r_en``), and the initiator can hold a word
-    while the next read waits in the first step. A read and a write may come in the same
-    clock; the read sees the value before the write.
+    Word addresses. A write is issued by ``w_en`` high for one clock, byte lanes chosen by
+    ``w_strb``; the bank registers it and it acts in the next clock (its registers hold the
+    new value from the second clock after ``w_en``). A read takes two steps, so that the
+    address decode and the word select each have a clock of their own. ``r_en`` high in one
+    clock: the address is decoded into a one-hot select, and a read with side effects (the
+    snapshot, a window's read enable) acts then. ``r_load`` high in a later clock, at the
+    latest the clock of the next ``r_en``: the selected register's value in that clock goes
+    to ``r_data``, which holds it from the next clock until the clock after the next
+    ``r_load``. So reads run one per clock (each ``r_load`` with the next ``r_en``), and the
+    initiator can hold a word while the next read waits in the first step. A read and a write
+    may come in the same clock; they are not ordered: the read returns the value of its
+    ``r_load`` clock, the one before the write when ``r_load`` follows ``r_en`` at once.
     """
 
     def __init__(self, addr_width):
@@ -72,11 +75,14 @@ class RegisterBank(wiring.Component):
     the memory's registered read port in the ``r_en`` clock, and its data goes to ``r_data``
     at ``r_load``, as a register's word does (the port must hold it until its next read).
 
-    The read path is two register stages (:class:`RegisterBus`): at ``r_en`` each block (the
-    globals, each channel) registers the word of its register addressed, or 0 when the address
-    is not one of its registers; at ``r_load`` ``r_data`` registers the OR of the blocks'
-    words and the data of a window read. CONFIG fields are written lane by lane, each byte
-    lane's strobe the enable of its flip-flops.
+    Writes: the request (``w_en``, address, data, strobes) is registered, and every write
+    decodes from those flip-flops in the next clock. CONFIG fields are written lane by lane,
+    each byte lane's strobe the enable of its flip-flops. The read path is two register
+    stages (:class:`RegisterBus`): at ``r_en`` one select flip-flop per register (and per
+    read window) registers whether the address is the register's; at ``r_load`` ``r_data``
+    registers the AND-OR of the registers' words with their selects and the data of a window
+    read. A snapshot group's registers all read the copy taken at ``r_en``, so the word read
+    at ``r_load`` is the one of the snapshot.
 
     Attributes
     ----------

@@ -2,7 +2,8 @@
 the fast tier under the cocotb bus scenarios (sim/scenarios/bus.py).
 
 Expected values are written here from docs/bus.md and the SystemRDL source's field kinds:
-storage per byte lane, write-1 pulses one clock after the write, sticky interrupts (a set wins
+storage per byte lane, the write acting in the clock after w_en (the registered request),
+write-1 pulses one clock after that, sticky interrupts (a set wins
 over a clear in the same clock), the snapshot taken by reading result.status, unmapped reads 0,
 the register-access windows (ca.wbuf, ca.rbuf) as ports of a 16 x 32 memory with byte lanes
 (a memory of the test's own, lib.memory), read with the registers' latency.
