@@ -75,9 +75,8 @@ class RegisterBank(wiring.Component):
     the memory's registered read port in the ``r_en`` clock, and its data goes to ``r_data``
     at ``r_load``, as a register's word does (the port must hold it until its next read).
 
-    Writes: the request is registered (one select flip-flop per register and per write
-    window, set when ``w_en`` addresses it, and the data, strobes and address), and the write
-    acts from those flip-flops in the next clock. CONFIG fields are written lane by lane,
+    Writes: the request (``w_en``, address, data, strobes) is registered, and every write
+    decodes from those flip-flops in the next clock. CONFIG fields are written lane by lane,
     each byte lane's strobe the enable of its flip-flops. The read path is two register
     stages (:class:`RegisterBus`): at ``r_en`` one select flip-flop per register (and per
     read window) registers whether the address is the register's; at ``r_load`` ``r_data``
@@ -116,14 +115,14 @@ class RegisterBank(wiring.Component):
         blocks = [(self.glob, 0, rm.globals, "g")]
         blocks += [(getattr(self, f"ch{n}"), rm.channel_base + n * rm.channel_stride,
                     rm.channel, f"ch{n}") for n in range(self.channels)]
-        # The write request, registered: the address decoded into one select flip-flop per
-        # register (and per write window), the data, strobes and address kept; the write acts
-        # in the clock after w_en from these flip-flops alone, so that no path runs from the
-        # bus through the decode into the enables.
+        # The write request, registered: every write decodes from these flip-flops, in the
+        # clock after w_en, so that no path runs from the bus through the decode.
         bus = self.bus
+        self._w_en = Signal(name="write_en")
         self._w_addr = Signal.like(bus.w_addr, name="write_addr")
         self._w_data = Signal.like(bus.w_data, name="write_data")
         self._w_strb = Signal.like(bus.w_strb, name="write_strb")
+        m.d.sync += self._w_en.eq(bus.w_en)
         with m.If(bus.w_en):
             m.d.sync += [self._w_addr.eq(bus.w_addr), self._w_data.eq(bus.w_data),
                          self._w_strb.eq(bus.w_strb)]
@@ -161,7 +160,7 @@ class RegisterBank(wiring.Component):
         """One block (the globals or a channel): storage, pulses, interrupts, snapshots,
         windows and its read words. Returns the block's interrupt request."""
         bus = self.bus
-        w_data, w_strb = self._w_data, self._w_strb
+        w_en, w_addr, w_data, w_strb = self._w_en, self._w_addr, self._w_data, self._w_strb
         storage = {}                   # "register.field" -> the Signal that holds it
         irq_terms = []
         snapshots = {}                 # group -> [(field, live value, copy)]
@@ -173,8 +172,8 @@ class RegisterBank(wiring.Component):
                 continue
             write = Signal(name=f"{prefix}_{reg.path.replace('.', '_')}_write")
             read = Signal(name=f"{prefix}_{reg.path.replace('.', '_')}_read")
-            m.d.sync += write.eq(bus.w_en & (bus.w_addr == word))
-            m.d.comb += read.eq(bus.r_en & (bus.r_addr == word))
+            m.d.comb += [write.eq(w_en & (w_addr == word)),
+                         read.eq(bus.r_en & (bus.r_addr == word))]
             parts = []                 # (lsb, the field's read value)
             for f in reg.fields:
                 name = f"{prefix}_{reg.path.replace('.', '_')}_{f.name}"
@@ -257,8 +256,7 @@ class RegisterBank(wiring.Component):
                              f"aligned to its size")
         ports = {name[len(reg.window) + 1:]: getattr(port, name) for name in reg.window_ports}
         if reg.writable:
-            hit = Signal(name=f"{reg.window}_write")
-            m.d.sync += hit.eq(bus.w_en & (bus.w_addr[bits:] == word >> bits))
+            hit = self._w_en & (self._w_addr[bits:] == word >> bits)
             m.d.comb += [ports["addr"].eq(self._w_addr[:bits]), ports["data"].eq(self._w_data),
                          ports["en"].eq(Mux(hit, self._w_strb, 0))]
         else:

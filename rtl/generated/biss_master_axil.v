@@ -501,7 +501,7 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .ch0_ca_request_address(regs__ca_address),
     .ch0_ca_request_count(regs__ca_count),
     .ch0_ca_request_slave_id(regs__ca_slave_id),
-    .\ch0_ca_request_write$84 (regs__ca_write),
+    .\ch0_ca_request_write$65 (regs__ca_write),
     .ch0_cfg_ack_ack_limit(regs__cfg_ack_limit),
     .ch0_cfg_break_break_time(regs__cfg_break_time),
     .ch0_cfg_checks_end_check(regs__cfg_end_check),
@@ -541,7 +541,7 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .ch1_ca_request_address(\regs__ca_address$240 ),
     .ch1_ca_request_count(\regs__ca_count$246 ),
     .ch1_ca_request_slave_id(\regs__ca_slave_id$256 ),
-    .\ch1_ca_request_write$226 (\regs__ca_write$268 ),
+    .\ch1_ca_request_write$186 (\regs__ca_write$268 ),
     .ch1_cfg_ack_ack_limit(\regs__cfg_ack_limit$284 ),
     .ch1_cfg_break_break_time(\regs__cfg_break_time$286 ),
     .ch1_cfg_checks_end_check(\regs__cfg_end_check$290 ),
@@ -568,12 +568,12 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .ch1_irq(\$7 ),
     .clk(clk),
     .g_trigger_start(glob__trigger),
-    .\port$4447$0 (\$8 ),
-    .\port$4454$0 (\$9 ),
-    .\port$4568$0 (\$10 ),
-    .\port$4946$0 (\$11 ),
-    .\port$4953$0 (\$12 ),
-    .\port$5067$0 (\$13 ),
+    .\port$4307$0 (\$8 ),
+    .\port$4314$0 (\$9 ),
+    .\port$4428$0 (\$10 ),
+    .\port$4806$0 (\$11 ),
+    .\port$4813$0 (\$12 ),
+    .\port$4927$0 (\$13 ),
     .read_data(s_axil_rdata),
     .rst(rst),
     .write_data(regs__ca_wbuf_data)
@@ -615,9 +615,9 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .clear_counters(regs__clear_counters),
     .clk(clk),
     .ma(ch0_ma),
-    .\port$4447$0 (\$8 ),
-    .\port$4454$0 (\$9 ),
-    .\port$4568$0 (\$10 ),
+    .\port$4307$0 (\$8 ),
+    .\port$4314$0 (\$9 ),
+    .\port$4428$0 (\$10 ),
     .regs__busy(ch0__busy),
     .regs__ca_address(regs__ca_address),
     .regs__ca_busy(ch0__ca_busy),
@@ -667,9 +667,9 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .clear_counters(\regs__clear_counters$320 ),
     .clk(clk),
     .ma(ch1_ma),
-    .\port$4946$0 (\$11 ),
-    .\port$4953$0 (\$12 ),
-    .\port$5067$0 (\$13 ),
+    .\port$4806$0 (\$11 ),
+    .\port$4813$0 (\$12 ),
+    .\port$4927$0 (\$13 ),
     .regs__busy(ch1__busy),
     .regs__ca_address(\regs__ca_address$240 ),
     .regs__ca_busy(ch1__ca_busy),
@@ -1024,9 +1024,9 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, ch1__ca_wbuf_en, ch1__ca_rbuf_en, ch1_irq, ch0__frame_error, ch0__busy, ch0__config_error, ch0__ca_busy, ch0__ca_rbuf_data, ch1__frame_error, ch1__busy, ch1__config_error, ch1__ca_busy, ch1__ca_rbuf_data
 , bus__w_addr, bus__w_data, bus__w_strb, ch0__ca_wbuf_addr, write_data, g_trigger_start, ch0_ctrl_start, ch0_ctrl_abort, ch0_ctrl_clear_counters, ch0_ctrl_periodic, ch0_ctrl_trigger_enable, ch0_cfg_ma_ma_half_period, ch0_cfg_ma_delay_limit, ch0_cfg_period_request_period, ch0_cfg_break_break_time, ch0_cfg_ack_ack_limit, ch0_cfg_timeout_timeout_limit, ch0_cfg_words_w0_data_bits, ch0_cfg_words_w0_nenw, ch0_cfg_words_w0_lc, ch0_cfg_words_w0_crc
-, ch0_cfg_words_w1_data_bits, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_enable, ch0_cfg_checks_end_check, ch0_cfg_checks_spw_check, ch0_cfg_checks_spw_tolerance, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$84 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort, ch1_ctrl_start, ch1_ctrl_abort, ch1_ctrl_clear_counters, ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit
-, ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_enable, ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$226 , ch1_ca_ctrl_start
-, ch1_ca_ctrl_abort, read_data, ch0__done_count, ch0__done, \port$4447$0 , \port$4454$0 , ch0__ca_done, \port$4568$0 , ch1__done_count, ch1__done, \port$4946$0 , \port$4953$0 , ch1__ca_done, \port$5067$0 , bus__r_addr);
+, ch0_cfg_words_w1_data_bits, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_enable, ch0_cfg_checks_end_check, ch0_cfg_checks_spw_check, ch0_cfg_checks_spw_tolerance, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$65 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort, ch1_ctrl_start, ch1_ctrl_abort, ch1_ctrl_clear_counters, ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit
+, ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_enable, ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$186 , ch1_ca_ctrl_start
+, ch1_ca_ctrl_abort, read_data, ch0__done_count, ch0__done, \port$4307$0 , \port$4314$0 , ch0__ca_done, \port$4428$0 , ch1__done_count, ch1__done, \port$4806$0 , \port$4813$0 , ch1__ca_done, \port$4927$0 , bus__r_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$26  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -1120,321 +1120,321 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire \$18 ;
   wire \$180 ;
   wire \$181 ;
-  wire \$182 ;
-  wire \$183 ;
-  wire \$184 ;
-  wire \$185 ;
-  wire \$186 ;
-  wire \$187 ;
-  wire \$188 ;
-  wire \$189 ;
+  wire [31:0] \$182 ;
+  wire [31:0] \$183 ;
+  wire [31:0] \$184 ;
+  wire [31:0] \$185 ;
+  wire [31:0] \$186 ;
+  wire [31:0] \$187 ;
+  wire [31:0] \$188 ;
+  wire [31:0] \$189 ;
   wire \$19 ;
-  wire \$190 ;
-  wire \$191 ;
-  wire \$192 ;
-  wire \$193 ;
-  wire \$194 ;
-  wire \$195 ;
-  wire \$196 ;
-  wire \$197 ;
-  wire \$198 ;
-  wire \$199 ;
+  wire [31:0] \$190 ;
+  wire [31:0] \$191 ;
+  wire [31:0] \$192 ;
+  wire [31:0] \$193 ;
+  wire [31:0] \$194 ;
+  wire [31:0] \$195 ;
+  wire [31:0] \$196 ;
+  wire [31:0] \$197 ;
+  wire [31:0] \$198 ;
+  wire [31:0] \$199 ;
   wire \$2 ;
   wire \$20 ;
-  wire \$200 ;
-  wire \$201 ;
-  wire \$202 ;
-  wire \$203 ;
-  wire \$204 ;
-  wire \$205 ;
-  wire \$206 ;
-  wire \$207 ;
-  wire \$208 ;
-  wire \$209 ;
+  wire [31:0] \$200 ;
+  wire [31:0] \$201 ;
+  wire [31:0] \$202 ;
+  wire [31:0] \$203 ;
+  wire [31:0] \$204 ;
+  wire [31:0] \$205 ;
+  wire [31:0] \$206 ;
+  wire [31:0] \$207 ;
+  wire [31:0] \$208 ;
+  wire [31:0] \$209 ;
   wire \$21 ;
-  wire \$210 ;
-  wire \$211 ;
-  wire \$212 ;
-  wire \$213 ;
-  wire \$214 ;
-  wire \$215 ;
-  wire \$216 ;
-  wire \$217 ;
-  wire \$218 ;
-  wire \$219 ;
+  wire [31:0] \$210 ;
+  wire [31:0] \$211 ;
+  wire [31:0] \$212 ;
+  wire [31:0] \$213 ;
+  wire [31:0] \$214 ;
+  wire [31:0] \$215 ;
+  wire [31:0] \$216 ;
+  wire [31:0] \$217 ;
+  wire [31:0] \$218 ;
+  wire [31:0] \$219 ;
   wire \$22 ;
-  wire \$220 ;
-  wire \$221 ;
-  wire \$222 ;
-  wire \$223 ;
-  wire \$224 ;
-  wire \$225 ;
-  wire \$226 ;
-  wire \$227 ;
-  wire \$228 ;
-  wire \$229 ;
+  wire [31:0] \$220 ;
+  wire [31:0] \$221 ;
+  wire [31:0] \$222 ;
+  wire [31:0] \$223 ;
+  wire [31:0] \$224 ;
+  wire [31:0] \$225 ;
+  wire [31:0] \$226 ;
+  wire [31:0] \$227 ;
+  wire [31:0] \$228 ;
+  wire [31:0] \$229 ;
   wire \$23 ;
-  wire \$230 ;
-  wire \$231 ;
-  wire \$232 ;
-  wire \$233 ;
-  wire \$234 ;
-  wire \$235 ;
-  wire \$236 ;
-  wire \$237 ;
-  wire \$238 ;
-  wire \$239 ;
+  wire [31:0] \$230 ;
+  wire [31:0] \$231 ;
+  wire [31:0] \$232 ;
+  wire [31:0] \$233 ;
+  wire [31:0] \$234 ;
+  wire [31:0] \$235 ;
+  wire [31:0] \$236 ;
+  wire [31:0] \$237 ;
+  wire [31:0] \$238 ;
+  wire [31:0] \$239 ;
   wire \$24 ;
-  wire \$240 ;
-  wire \$241 ;
-  wire \$242 ;
-  wire \$243 ;
-  wire \$244 ;
-  wire \$245 ;
-  wire \$246 ;
-  wire \$247 ;
-  wire \$248 ;
-  wire \$249 ;
+  wire [31:0] \$240 ;
+  wire [31:0] \$241 ;
+  wire [31:0] \$242 ;
+  wire [31:0] \$243 ;
+  wire [31:0] \$244 ;
+  wire [31:0] \$245 ;
+  wire [31:0] \$246 ;
+  wire [31:0] \$247 ;
+  wire [31:0] \$248 ;
+  wire [31:0] \$249 ;
   wire \$25 ;
-  wire \$250 ;
-  wire \$251 ;
-  wire \$252 ;
-  wire \$253 ;
-  wire \$254 ;
-  wire \$255 ;
-  wire \$256 ;
-  wire \$257 ;
-  wire \$258 ;
-  wire \$259 ;
+  wire [31:0] \$250 ;
+  wire [31:0] \$251 ;
+  wire [31:0] \$252 ;
+  wire [31:0] \$253 ;
+  wire [31:0] \$254 ;
+  wire [31:0] \$255 ;
+  wire [31:0] \$256 ;
+  wire [31:0] \$257 ;
+  wire [31:0] \$258 ;
+  wire [31:0] \$259 ;
   wire \$26 ;
-  wire \$260 ;
-  wire \$261 ;
-  wire \$262 ;
-  wire \$263 ;
-  wire \$264 ;
-  wire \$265 ;
-  wire \$266 ;
-  wire \$267 ;
-  wire \$268 ;
-  wire \$269 ;
+  wire [31:0] \$260 ;
+  wire [31:0] \$261 ;
+  wire [31:0] \$262 ;
+  wire [31:0] \$263 ;
+  wire [31:0] \$264 ;
+  wire [31:0] \$265 ;
+  wire [31:0] \$266 ;
+  wire [31:0] \$267 ;
+  wire [31:0] \$268 ;
+  wire [31:0] \$269 ;
   wire \$27 ;
-  wire \$270 ;
-  wire \$271 ;
-  wire \$272 ;
-  wire \$273 ;
-  wire \$274 ;
-  wire \$275 ;
-  wire \$276 ;
-  wire \$277 ;
-  wire \$278 ;
-  wire \$279 ;
+  wire [31:0] \$270 ;
+  wire [31:0] \$271 ;
+  wire [31:0] \$272 ;
+  wire [31:0] \$273 ;
+  wire [31:0] \$274 ;
+  wire [31:0] \$275 ;
+  wire [31:0] \$276 ;
+  wire [31:0] \$277 ;
+  wire [31:0] \$278 ;
+  wire [31:0] \$279 ;
   wire \$28 ;
-  wire \$280 ;
-  wire \$281 ;
-  wire \$282 ;
-  wire \$283 ;
-  wire \$284 ;
-  wire \$285 ;
-  wire \$286 ;
-  wire \$287 ;
-  wire \$288 ;
-  wire \$289 ;
+  wire [31:0] \$280 ;
+  wire [31:0] \$281 ;
+  wire [31:0] \$282 ;
+  wire [31:0] \$283 ;
+  wire [31:0] \$284 ;
+  wire [31:0] \$285 ;
+  wire [31:0] \$286 ;
+  wire [31:0] \$287 ;
+  wire [31:0] \$288 ;
+  wire [31:0] \$289 ;
   wire \$29 ;
-  wire \$290 ;
-  wire \$291 ;
-  wire \$292 ;
-  wire \$293 ;
-  wire \$294 ;
-  wire \$295 ;
-  wire \$296 ;
-  wire \$297 ;
-  wire \$298 ;
-  wire \$299 ;
+  wire [31:0] \$290 ;
+  wire [31:0] \$291 ;
+  wire [31:0] \$292 ;
+  wire [31:0] \$293 ;
+  wire [31:0] \$294 ;
+  wire [31:0] \$295 ;
+  wire [31:0] \$296 ;
+  wire [31:0] \$297 ;
+  wire [31:0] \$298 ;
+  wire [31:0] \$299 ;
   wire \$3 ;
   wire \$30 ;
-  wire \$300 ;
-  wire \$301 ;
-  wire \$302 ;
-  wire \$303 ;
-  wire \$304 ;
-  wire \$305 ;
-  wire \$306 ;
-  wire \$307 ;
-  wire \$308 ;
-  wire \$309 ;
+  wire [31:0] \$300 ;
+  wire [31:0] \$301 ;
+  wire [31:0] \$302 ;
+  wire [31:0] \$303 ;
+  wire [31:0] \$304 ;
+  wire [31:0] \$305 ;
+  wire [31:0] \$306 ;
+  wire [31:0] \$307 ;
+  wire [31:0] \$308 ;
+  wire [31:0] \$309 ;
   wire \$31 ;
-  wire \$310 ;
-  wire \$311 ;
-  wire \$312 ;
-  wire \$313 ;
-  wire \$314 ;
-  wire \$315 ;
-  wire \$316 ;
-  wire \$317 ;
-  wire \$318 ;
-  wire \$319 ;
+  wire [31:0] \$310 ;
+  wire [31:0] \$311 ;
+  wire [31:0] \$312 ;
+  wire [31:0] \$313 ;
+  wire [31:0] \$314 ;
+  wire [31:0] \$315 ;
+  wire [31:0] \$316 ;
+  wire [31:0] \$317 ;
+  wire [31:0] \$318 ;
+  wire [31:0] \$319 ;
   wire \$32 ;
-  wire \$320 ;
-  wire \$321 ;
-  wire \$322 ;
-  wire \$323 ;
-  wire [31:0] \$324 ;
-  wire [31:0] \$325 ;
-  wire [31:0] \$326 ;
-  wire [31:0] \$327 ;
-  wire [31:0] \$328 ;
-  wire [31:0] \$329 ;
+  wire [31:0] \$320 ;
+  wire [31:0] \$321 ;
+  wire [31:0] \$322 ;
+  wire [31:0] \$323 ;
+  wire \$324 ;
+  wire \$325 ;
+  wire \$326 ;
+  wire \$327 ;
+  wire \$328 ;
+  wire \$329 ;
   wire \$33 ;
-  wire [31:0] \$330 ;
-  wire [31:0] \$331 ;
-  wire [31:0] \$332 ;
-  wire [31:0] \$333 ;
-  wire [31:0] \$334 ;
-  wire [31:0] \$335 ;
-  wire [31:0] \$336 ;
-  wire [31:0] \$337 ;
-  wire [31:0] \$338 ;
-  wire [31:0] \$339 ;
+  wire \$330 ;
+  wire \$331 ;
+  wire \$332 ;
+  wire \$333 ;
+  wire \$334 ;
+  wire \$335 ;
+  wire \$336 ;
+  wire \$337 ;
+  wire \$338 ;
+  wire \$339 ;
   wire \$34 ;
-  wire [31:0] \$340 ;
-  wire [31:0] \$341 ;
-  wire [31:0] \$342 ;
-  wire [31:0] \$343 ;
-  wire [31:0] \$344 ;
-  wire [31:0] \$345 ;
-  wire [31:0] \$346 ;
-  wire [31:0] \$347 ;
-  wire [31:0] \$348 ;
-  wire [31:0] \$349 ;
+  wire \$340 ;
+  wire \$341 ;
+  wire \$342 ;
+  wire \$343 ;
+  wire \$344 ;
+  wire \$345 ;
+  wire \$346 ;
+  wire \$347 ;
+  wire \$348 ;
+  wire \$349 ;
   wire \$35 ;
-  wire [31:0] \$350 ;
-  wire [31:0] \$351 ;
-  wire [31:0] \$352 ;
-  wire [31:0] \$353 ;
-  wire [31:0] \$354 ;
-  wire [31:0] \$355 ;
-  wire [31:0] \$356 ;
-  wire [31:0] \$357 ;
-  wire [31:0] \$358 ;
-  wire [31:0] \$359 ;
+  wire \$350 ;
+  wire \$351 ;
+  wire \$352 ;
+  wire \$353 ;
+  wire \$354 ;
+  wire \$355 ;
+  wire \$356 ;
+  wire \$357 ;
+  wire \$358 ;
+  wire \$359 ;
   wire \$36 ;
-  wire [31:0] \$360 ;
-  wire [31:0] \$361 ;
-  wire [31:0] \$362 ;
-  wire [31:0] \$363 ;
-  wire [31:0] \$364 ;
-  wire [31:0] \$365 ;
-  wire [31:0] \$366 ;
-  wire [31:0] \$367 ;
-  wire [31:0] \$368 ;
-  wire [31:0] \$369 ;
+  wire \$360 ;
+  wire \$361 ;
+  wire \$362 ;
+  wire \$363 ;
+  wire \$364 ;
+  wire \$365 ;
+  wire \$366 ;
+  wire \$367 ;
+  wire \$368 ;
+  wire \$369 ;
   wire \$37 ;
-  wire [31:0] \$370 ;
-  wire [31:0] \$371 ;
-  wire [31:0] \$372 ;
-  wire [31:0] \$373 ;
-  wire [31:0] \$374 ;
-  wire [31:0] \$375 ;
-  wire [31:0] \$376 ;
-  wire [31:0] \$377 ;
-  wire [31:0] \$378 ;
-  wire [31:0] \$379 ;
+  wire \$370 ;
+  wire \$371 ;
+  wire \$372 ;
+  wire \$373 ;
+  wire \$374 ;
+  wire \$375 ;
+  wire \$376 ;
+  wire \$377 ;
+  wire \$378 ;
+  wire \$379 ;
   wire \$38 ;
-  wire [31:0] \$380 ;
-  wire [31:0] \$381 ;
-  wire [31:0] \$382 ;
-  wire [31:0] \$383 ;
-  wire [31:0] \$384 ;
-  wire [31:0] \$385 ;
-  wire [31:0] \$386 ;
-  wire [31:0] \$387 ;
-  wire [31:0] \$388 ;
-  wire [31:0] \$389 ;
+  wire \$380 ;
+  wire \$381 ;
+  wire \$382 ;
+  wire \$383 ;
+  wire \$384 ;
+  wire \$385 ;
+  wire \$386 ;
+  wire \$387 ;
+  wire \$388 ;
+  wire \$389 ;
   wire \$39 ;
-  wire [31:0] \$390 ;
-  wire [31:0] \$391 ;
-  wire [31:0] \$392 ;
-  wire [31:0] \$393 ;
-  wire [31:0] \$394 ;
-  wire [31:0] \$395 ;
-  wire [31:0] \$396 ;
-  wire [31:0] \$397 ;
-  wire [31:0] \$398 ;
-  wire [31:0] \$399 ;
+  wire \$390 ;
+  wire \$391 ;
+  wire \$392 ;
+  wire \$393 ;
+  wire \$394 ;
+  wire \$395 ;
+  wire \$396 ;
+  wire \$397 ;
+  wire \$398 ;
+  wire \$399 ;
   wire \$4 ;
   wire \$40 ;
-  wire [31:0] \$400 ;
-  wire [31:0] \$401 ;
-  wire [31:0] \$402 ;
-  wire [31:0] \$403 ;
-  wire [31:0] \$404 ;
-  wire [31:0] \$405 ;
-  wire [31:0] \$406 ;
-  wire [31:0] \$407 ;
-  wire [31:0] \$408 ;
-  wire [31:0] \$409 ;
+  wire \$400 ;
+  wire \$401 ;
+  wire \$402 ;
+  wire \$403 ;
+  wire \$404 ;
+  wire \$405 ;
+  wire \$406 ;
+  wire \$407 ;
+  wire \$408 ;
+  wire \$409 ;
   wire \$41 ;
-  wire [31:0] \$410 ;
-  wire [31:0] \$411 ;
-  wire [31:0] \$412 ;
-  wire [31:0] \$413 ;
-  wire [31:0] \$414 ;
-  wire [31:0] \$415 ;
-  wire [31:0] \$416 ;
-  wire [31:0] \$417 ;
-  wire [31:0] \$418 ;
-  wire [31:0] \$419 ;
+  wire \$410 ;
+  wire \$411 ;
+  wire \$412 ;
+  wire \$413 ;
+  wire \$414 ;
+  wire \$415 ;
+  wire \$416 ;
+  wire \$417 ;
+  wire \$418 ;
+  wire \$419 ;
   wire \$42 ;
-  wire [31:0] \$420 ;
-  wire [31:0] \$421 ;
-  wire [31:0] \$422 ;
-  wire [31:0] \$423 ;
-  wire [31:0] \$424 ;
-  wire [31:0] \$425 ;
-  wire [31:0] \$426 ;
-  wire [31:0] \$427 ;
-  wire [31:0] \$428 ;
-  wire [31:0] \$429 ;
+  wire \$420 ;
+  wire \$421 ;
+  wire \$422 ;
+  wire \$423 ;
+  wire \$424 ;
+  wire \$425 ;
+  wire \$426 ;
+  wire \$427 ;
+  wire \$428 ;
+  wire \$429 ;
   wire \$43 ;
-  wire [31:0] \$430 ;
-  wire [31:0] \$431 ;
-  wire [31:0] \$432 ;
-  wire [31:0] \$433 ;
-  wire [31:0] \$434 ;
-  wire [31:0] \$435 ;
-  wire [31:0] \$436 ;
-  wire [31:0] \$437 ;
-  wire [31:0] \$438 ;
-  wire [31:0] \$439 ;
+  wire \$430 ;
+  wire \$431 ;
+  wire \$432 ;
+  wire \$433 ;
+  wire \$434 ;
+  wire \$435 ;
+  wire \$436 ;
+  wire \$437 ;
+  wire \$438 ;
+  wire \$439 ;
   wire \$44 ;
-  wire [31:0] \$440 ;
-  wire [31:0] \$441 ;
-  wire [31:0] \$442 ;
-  wire [31:0] \$443 ;
-  wire [31:0] \$444 ;
-  wire [31:0] \$445 ;
-  wire [31:0] \$446 ;
-  wire [31:0] \$447 ;
-  wire [31:0] \$448 ;
-  wire [31:0] \$449 ;
+  wire \$440 ;
+  wire \$441 ;
+  wire \$442 ;
+  wire \$443 ;
+  wire \$444 ;
+  wire \$445 ;
+  wire \$446 ;
+  wire \$447 ;
+  wire \$448 ;
+  wire \$449 ;
   wire \$45 ;
-  wire [31:0] \$450 ;
-  wire [31:0] \$451 ;
-  wire [31:0] \$452 ;
-  wire [31:0] \$453 ;
-  wire [31:0] \$454 ;
-  wire [31:0] \$455 ;
-  wire [31:0] \$456 ;
-  wire [31:0] \$457 ;
-  wire [31:0] \$458 ;
-  wire [31:0] \$459 ;
+  wire \$450 ;
+  wire \$451 ;
+  wire \$452 ;
+  wire \$453 ;
+  wire \$454 ;
+  wire \$455 ;
+  wire \$456 ;
+  wire \$457 ;
+  wire \$458 ;
+  wire \$459 ;
   wire \$46 ;
-  wire [31:0] \$460 ;
-  wire [31:0] \$461 ;
-  wire [31:0] \$462 ;
-  wire [31:0] \$463 ;
-  wire [31:0] \$464 ;
-  wire [31:0] \$465 ;
+  wire \$460 ;
+  wire \$461 ;
+  wire \$462 ;
+  wire \$463 ;
+  wire \$464 ;
+  wire \$465 ;
   wire \$466 ;
   wire \$467 ;
   wire \$468 ;
@@ -1451,86 +1451,86 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire \$478 ;
   wire \$479 ;
   wire \$48 ;
-  wire \$480 ;
-  wire \$481 ;
-  wire \$482 ;
-  wire \$483 ;
-  wire \$484 ;
-  wire \$485 ;
-  wire \$486 ;
-  wire \$487 ;
-  wire \$488 ;
-  wire \$489 ;
+  reg \$480 ;
+  reg [10:0] \$481 ;
+  reg [31:0] \$482 ;
+  reg [3:0] \$483 ;
+  reg \$484 ;
+  reg \$485 ;
+  reg \$486 ;
+  reg \$487 ;
+  reg \$488 ;
+  reg \$489 ;
   wire \$49 ;
-  wire \$490 ;
-  wire \$491 ;
-  wire \$492 ;
-  wire \$493 ;
-  wire \$494 ;
-  wire \$495 ;
-  wire \$496 ;
-  wire \$497 ;
-  wire \$498 ;
-  wire \$499 ;
+  reg \$490 ;
+  reg \$491 ;
+  reg \$492 ;
+  reg \$493 ;
+  reg \$494 ;
+  reg \$495 ;
+  reg \$496 ;
+  reg \$497 ;
+  reg \$498 ;
+  reg \$499 ;
   wire \$5 ;
   wire \$50 ;
-  wire \$500 ;
-  wire \$501 ;
-  wire \$502 ;
-  wire \$503 ;
-  wire \$504 ;
-  wire \$505 ;
-  wire \$506 ;
-  wire \$507 ;
-  wire \$508 ;
-  wire \$509 ;
+  reg \$500 ;
+  reg [15:0] \$501 ;
+  reg [11:0] \$502 ;
+  reg [23:0] \$503 ;
+  reg [23:0] \$504 ;
+  reg [23:0] \$505 ;
+  reg [23:0] \$506 ;
+  reg [5:0] \$507 ;
+  reg \$508 ;
+  reg \$509 ;
   wire \$51 ;
-  wire \$510 ;
-  wire \$511 ;
-  wire \$512 ;
-  wire \$513 ;
-  wire \$514 ;
-  wire \$515 ;
-  wire \$516 ;
-  wire \$517 ;
-  wire \$518 ;
-  wire \$519 ;
+  reg [1:0] \$510 ;
+  reg [5:0] \$511 ;
+  reg \$512 ;
+  reg \$513 ;
+  reg [1:0] \$514 ;
+  reg \$515 ;
+  reg \$516 ;
+  reg \$517 ;
+  reg [7:0] \$518 ;
+  reg [2:0] \$519 ;
   wire \$52 ;
-  wire \$520 ;
-  wire \$521 ;
-  wire \$522 ;
-  wire \$523 ;
-  wire \$524 ;
-  wire \$525 ;
-  wire \$526 ;
-  wire \$527 ;
-  wire \$528 ;
-  wire \$529 ;
+  reg [6:0] \$520 ;
+  reg [6:0] \$521 ;
+  reg \$522 ;
+  reg \$523 ;
+  reg \$524 ;
+  reg [3:0] \$525 ;
+  reg \$526 ;
+  reg \$527 ;
+  reg \$528 ;
+  reg \$529 ;
   wire \$53 ;
-  wire \$530 ;
-  wire \$531 ;
-  wire \$532 ;
-  wire \$533 ;
-  wire \$534 ;
-  wire \$535 ;
-  wire \$536 ;
-  wire \$537 ;
-  wire \$538 ;
-  wire \$539 ;
+  reg \$530 ;
+  reg \$531 ;
+  reg \$532 ;
+  reg \$533 ;
+  reg \$534 ;
+  reg \$535 ;
+  reg \$536 ;
+  reg [5:0] \$537 ;
+  reg [15:0] \$538 ;
+  reg [12:0] \$539 ;
   wire \$54 ;
-  wire \$540 ;
-  wire \$541 ;
-  wire \$542 ;
-  wire \$543 ;
-  wire \$544 ;
-  wire \$545 ;
-  wire \$546 ;
-  wire \$547 ;
-  wire \$548 ;
-  reg [10:0] \$549 ;
+  reg [31:0] \$540 ;
+  reg [22:0] \$541 ;
+  reg [31:0] \$542 ;
+  reg [7:0] \$543 ;
+  reg [31:0] \$544 ;
+  reg \$545 ;
+  reg \$546 ;
+  reg \$547 ;
+  reg \$548 ;
+  reg \$549 ;
   wire \$55 ;
-  reg [31:0] \$550 ;
-  reg [3:0] \$551 ;
+  reg \$550 ;
+  reg \$551 ;
   reg \$552 ;
   reg \$553 ;
   reg \$554 ;
@@ -1562,64 +1562,64 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg \$578 ;
   reg \$579 ;
   wire \$58 ;
-  reg [15:0] \$580 ;
-  reg [11:0] \$581 ;
+  reg \$580 ;
+  reg \$581 ;
   reg \$582 ;
-  reg [23:0] \$583 ;
+  reg \$583 ;
   reg \$584 ;
-  reg [23:0] \$585 ;
+  reg \$585 ;
   reg \$586 ;
-  reg [23:0] \$587 ;
-  reg \$588 ;
-  reg [23:0] \$589 ;
+  reg \$587 ;
+  reg [15:0] \$588 ;
+  reg [11:0] \$589 ;
   wire \$59 ;
-  reg \$590 ;
-  reg [5:0] \$591 ;
-  reg \$592 ;
-  reg \$593 ;
-  reg [1:0] \$594 ;
-  reg [5:0] \$595 ;
+  reg [23:0] \$590 ;
+  reg [23:0] \$591 ;
+  reg [23:0] \$592 ;
+  reg [23:0] \$593 ;
+  reg [5:0] \$594 ;
+  reg \$595 ;
   reg \$596 ;
-  reg \$597 ;
-  reg [1:0] \$598 ;
+  reg [1:0] \$597 ;
+  reg [5:0] \$598 ;
   reg \$599 ;
   wire \$6 ;
   wire \$60 ;
   reg \$600 ;
-  reg \$601 ;
+  reg [1:0] \$601 ;
   reg \$602 ;
-  reg [7:0] \$603 ;
+  reg \$603 ;
   reg \$604 ;
-  reg \$605 ;
-  reg \$606 ;
-  reg \$607 ;
-  reg \$608 ;
+  reg [7:0] \$605 ;
+  reg [2:0] \$606 ;
+  reg [6:0] \$607 ;
+  reg [6:0] \$608 ;
   reg \$609 ;
   wire \$61 ;
   reg \$610 ;
   reg \$611 ;
-  reg \$612 ;
+  reg [3:0] \$612 ;
   reg \$613 ;
   reg \$614 ;
   reg \$615 ;
   reg \$616 ;
   reg \$617 ;
   reg \$618 ;
-  reg [2:0] \$619 ;
+  reg \$619 ;
   wire \$62 ;
-  reg [6:0] \$620 ;
-  reg [6:0] \$621 ;
+  reg \$620 ;
+  reg \$621 ;
   reg \$622 ;
   reg \$623 ;
-  reg \$624 ;
-  reg \$625 ;
-  reg \$626 ;
-  reg \$627 ;
-  reg \$628 ;
-  reg \$629 ;
+  reg [5:0] \$624 ;
+  reg [15:0] \$625 ;
+  reg [12:0] \$626 ;
+  reg [31:0] \$627 ;
+  reg [22:0] \$628 ;
+  reg [31:0] \$629 ;
   wire \$63 ;
-  reg \$630 ;
-  reg [3:0] \$631 ;
+  reg [7:0] \$630 ;
+  reg [31:0] \$631 ;
   reg \$632 ;
   reg \$633 ;
   reg \$634 ;
@@ -1632,15 +1632,15 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg \$640 ;
   reg \$641 ;
   reg \$642 ;
-  reg [5:0] \$643 ;
-  reg [15:0] \$644 ;
-  reg [12:0] \$645 ;
-  reg [31:0] \$646 ;
-  reg [22:0] \$647 ;
-  reg [31:0] \$648 ;
-  reg [7:0] \$649 ;
+  reg \$643 ;
+  reg \$644 ;
+  reg \$645 ;
+  reg \$646 ;
+  reg \$647 ;
+  reg \$648 ;
+  reg \$649 ;
   wire \$65 ;
-  reg [31:0] \$650 ;
+  reg \$650 ;
   reg \$651 ;
   reg \$652 ;
   reg \$653 ;
@@ -1657,162 +1657,23 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg \$663 ;
   reg \$664 ;
   reg \$665 ;
-  reg \$666 ;
-  reg \$667 ;
-  reg \$668 ;
-  reg \$669 ;
+  reg [31:0] \$666 ;
   wire \$67 ;
-  reg \$670 ;
-  reg \$671 ;
-  reg \$672 ;
-  reg \$673 ;
-  reg \$674 ;
-  reg \$675 ;
-  reg \$676 ;
-  reg \$677 ;
-  reg \$678 ;
-  reg \$679 ;
   wire \$68 ;
-  reg \$680 ;
-  reg \$681 ;
-  reg \$682 ;
-  reg \$683 ;
-  reg \$684 ;
-  reg \$685 ;
-  reg \$686 ;
-  reg \$687 ;
-  reg \$688 ;
-  reg \$689 ;
   wire \$69 ;
-  reg \$690 ;
-  reg \$691 ;
-  reg \$692 ;
-  reg \$693 ;
-  reg \$694 ;
-  reg \$695 ;
-  reg \$696 ;
-  reg \$697 ;
-  reg \$698 ;
-  reg \$699 ;
   wire \$7 ;
   wire \$70 ;
-  reg [15:0] \$700 ;
-  reg [11:0] \$701 ;
-  reg \$702 ;
-  reg [23:0] \$703 ;
-  reg \$704 ;
-  reg [23:0] \$705 ;
-  reg \$706 ;
-  reg [23:0] \$707 ;
-  reg \$708 ;
-  reg [23:0] \$709 ;
   wire \$71 ;
-  reg \$710 ;
-  reg [5:0] \$711 ;
-  reg \$712 ;
-  reg \$713 ;
-  reg [1:0] \$714 ;
-  reg [5:0] \$715 ;
-  reg \$716 ;
-  reg \$717 ;
-  reg [1:0] \$718 ;
-  reg \$719 ;
   wire \$72 ;
-  reg \$720 ;
-  reg \$721 ;
-  reg \$722 ;
-  reg [7:0] \$723 ;
-  reg \$724 ;
-  reg \$725 ;
-  reg \$726 ;
-  reg \$727 ;
-  reg \$728 ;
-  reg \$729 ;
   wire \$73 ;
-  reg \$730 ;
-  reg \$731 ;
-  reg \$732 ;
-  reg \$733 ;
-  reg \$734 ;
-  reg \$735 ;
-  reg \$736 ;
-  reg \$737 ;
-  reg \$738 ;
-  reg [2:0] \$739 ;
   wire \$74 ;
-  reg [6:0] \$740 ;
-  reg [6:0] \$741 ;
-  reg \$742 ;
-  reg \$743 ;
-  reg \$744 ;
-  reg \$745 ;
-  reg \$746 ;
-  reg \$747 ;
-  reg \$748 ;
-  reg \$749 ;
   wire \$75 ;
-  reg \$750 ;
-  reg [3:0] \$751 ;
-  reg \$752 ;
-  reg \$753 ;
-  reg \$754 ;
-  reg \$755 ;
-  reg \$756 ;
-  reg \$757 ;
-  reg \$758 ;
-  reg \$759 ;
   wire \$76 ;
-  reg \$760 ;
-  reg \$761 ;
-  reg \$762 ;
-  reg [5:0] \$763 ;
-  reg [15:0] \$764 ;
-  reg [12:0] \$765 ;
-  reg [31:0] \$766 ;
-  reg [22:0] \$767 ;
-  reg [31:0] \$768 ;
-  reg [7:0] \$769 ;
   wire \$77 ;
-  reg [31:0] \$770 ;
-  reg \$771 ;
-  reg \$772 ;
-  reg \$773 ;
-  reg \$774 ;
-  reg \$775 ;
-  reg \$776 ;
-  reg \$777 ;
-  reg \$778 ;
-  reg \$779 ;
   wire \$78 ;
-  reg \$780 ;
-  reg \$781 ;
-  reg \$782 ;
-  reg \$783 ;
-  reg \$784 ;
-  reg \$785 ;
-  reg \$786 ;
-  reg \$787 ;
-  reg \$788 ;
-  reg \$789 ;
   wire \$79 ;
-  reg \$790 ;
-  reg \$791 ;
-  reg \$792 ;
-  reg \$793 ;
-  reg \$794 ;
-  reg \$795 ;
-  reg \$796 ;
-  reg \$797 ;
-  reg \$798 ;
-  reg \$799 ;
   wire \$8 ;
   wire \$80 ;
-  reg \$800 ;
-  reg \$801 ;
-  reg \$802 ;
-  reg \$803 ;
-  reg \$804 ;
-  reg [31:0] \$805 ;
   wire \$81 ;
   wire \$82 ;
   wire \$83 ;
@@ -1849,8 +1710,6 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire bus__w_en;
   input [3:0] bus__w_strb;
   wire [3:0] bus__w_strb;
-  reg ca_wbuf_write = 1'h0;
-  reg \ca_wbuf_write$234  = 1'h0;
   (* init = 1'h0 *)
   wire ch0__abort_cycle;
   input ch0__busy;
@@ -1978,17 +1837,17 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire ch0__word1_nw;
   wire [39:0] ch0__word1_position;
   wire ch0_ca_count_crc4_answer_read;
-  reg ch0_ca_count_crc4_answer_write = 1'h0;
+  wire ch0_ca_count_crc4_answer_write;
   wire ch0_ca_count_data_fault_read;
-  reg ch0_ca_count_data_fault_write = 1'h0;
+  wire ch0_ca_count_data_fault_write;
   wire ch0_ca_count_refused_aborted_read;
-  reg ch0_ca_count_refused_aborted_write = 1'h0;
+  wire ch0_ca_count_refused_aborted_write;
   output ch0_ca_ctrl_abort;
   reg ch0_ca_ctrl_abort = 1'h0;
   wire ch0_ca_ctrl_read;
   output ch0_ca_ctrl_start;
   reg ch0_ca_ctrl_start = 1'h0;
-  reg ch0_ca_ctrl_write = 1'h0;
+  wire ch0_ca_ctrl_write;
   output [6:0] ch0_ca_request_address;
   reg [6:0] ch0_ca_request_address = 7'h00;
   output [6:0] ch0_ca_request_count;
@@ -1996,21 +1855,21 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire ch0_ca_request_read;
   output [2:0] ch0_ca_request_slave_id;
   reg [2:0] ch0_ca_request_slave_id = 3'h0;
-  reg ch0_ca_request_write = 1'h0;
-  output \ch0_ca_request_write$84 ;
-  reg \ch0_ca_request_write$84  = 1'h0;
+  wire ch0_ca_request_write;
+  output \ch0_ca_request_write$65 ;
+  reg \ch0_ca_request_write$65  = 1'h0;
   wire ch0_ca_state_read;
-  reg ch0_ca_state_write = 1'h0;
+  wire ch0_ca_state_write;
   wire ch0_caps_read;
-  reg ch0_caps_write = 1'h0;
+  wire ch0_caps_write;
   output [23:0] ch0_cfg_ack_ack_limit;
   reg [23:0] ch0_cfg_ack_ack_limit = 24'h000000;
   wire ch0_cfg_ack_read;
-  reg ch0_cfg_ack_write = 1'h0;
+  wire ch0_cfg_ack_write;
   output [23:0] ch0_cfg_break_break_time;
   reg [23:0] ch0_cfg_break_break_time = 24'h000000;
   wire ch0_cfg_break_read;
-  reg ch0_cfg_break_write = 1'h0;
+  wire ch0_cfg_break_write;
   output ch0_cfg_checks_end_check;
   reg ch0_cfg_checks_end_check = 1'h0;
   wire ch0_cfg_checks_read;
@@ -2018,21 +1877,21 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg ch0_cfg_checks_spw_check = 1'h0;
   output [7:0] ch0_cfg_checks_spw_tolerance;
   reg [7:0] ch0_cfg_checks_spw_tolerance = 8'h00;
-  reg ch0_cfg_checks_write = 1'h0;
+  wire ch0_cfg_checks_write;
   output [11:0] ch0_cfg_ma_delay_limit;
   reg [11:0] ch0_cfg_ma_delay_limit = 12'h000;
   output [15:0] ch0_cfg_ma_ma_half_period;
   reg [15:0] ch0_cfg_ma_ma_half_period = 16'h0000;
   wire ch0_cfg_ma_read;
-  reg ch0_cfg_ma_write = 1'h0;
+  wire ch0_cfg_ma_write;
   wire ch0_cfg_period_read;
   output [23:0] ch0_cfg_period_request_period;
   reg [23:0] ch0_cfg_period_request_period = 24'h000000;
-  reg ch0_cfg_period_write = 1'h0;
+  wire ch0_cfg_period_write;
   wire ch0_cfg_timeout_read;
   output [23:0] ch0_cfg_timeout_timeout_limit;
   reg [23:0] ch0_cfg_timeout_timeout_limit = 24'h000000;
-  reg ch0_cfg_timeout_write = 1'h0;
+  wire ch0_cfg_timeout_write;
   wire ch0_cfg_words_read;
   output [1:0] ch0_cfg_words_w0_crc;
   reg [1:0] ch0_cfg_words_w0_crc = 2'h0;
@@ -2052,21 +1911,21 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg ch0_cfg_words_w1_lc = 1'h0;
   output ch0_cfg_words_w1_nenw;
   reg ch0_cfg_words_w1_nenw = 1'h0;
-  reg ch0_cfg_words_write = 1'h0;
+  wire ch0_cfg_words_write;
   wire ch0_count_ack_read;
-  reg ch0_count_ack_write = 1'h0;
+  wire ch0_count_ack_write;
   wire ch0_count_check_read;
-  reg ch0_count_check_write = 1'h0;
+  wire ch0_count_check_write;
   wire ch0_count_crc_read;
-  reg ch0_count_crc_write = 1'h0;
+  wire ch0_count_crc_write;
   wire ch0_count_cycle_read;
-  reg ch0_count_cycle_write = 1'h0;
+  wire ch0_count_cycle_write;
   wire ch0_count_lc_read;
-  reg ch0_count_lc_write = 1'h0;
+  wire ch0_count_lc_write;
   wire ch0_count_line_read;
-  reg ch0_count_line_write = 1'h0;
+  wire ch0_count_line_write;
   wire ch0_count_stop_read;
-  reg ch0_count_stop_write = 1'h0;
+  wire ch0_count_stop_write;
   output ch0_ctrl_abort;
   reg ch0_ctrl_abort = 1'h0;
   output ch0_ctrl_clear_counters;
@@ -2078,19 +1937,19 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg ch0_ctrl_start = 1'h0;
   output ch0_ctrl_trigger_enable;
   reg ch0_ctrl_trigger_enable = 1'h0;
-  reg ch0_ctrl_write = 1'h0;
+  wire ch0_ctrl_write;
   output ch0_irq;
   wire ch0_irq;
   reg ch0_irq_enable_access_done = 1'h0;
   reg ch0_irq_enable_done = 1'h0;
   reg ch0_irq_enable_error = 1'h0;
   wire ch0_irq_enable_read;
-  reg ch0_irq_enable_write = 1'h0;
+  wire ch0_irq_enable_write;
   reg ch0_irq_status_access_done = 1'h0;
   reg ch0_irq_status_done = 1'h0;
   reg ch0_irq_status_error = 1'h0;
   wire ch0_irq_status_read;
-  reg ch0_irq_status_write = 1'h0;
+  wire ch0_irq_status_write;
   reg ch0_read_select_80 = 1'h0;
   reg ch0_read_select_81 = 1'h0;
   reg ch0_read_select_82 = 1'h0;
@@ -2126,7 +1985,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg [12:0] ch0_result_seq_line_delay_snapshot = 13'h0000;
   wire ch0_result_seq_read;
   reg [15:0] ch0_result_seq_seq_snapshot = 16'h0000;
-  reg ch0_result_seq_write = 1'h0;
+  wire ch0_result_seq_write;
   reg ch0_result_status_cds_snapshot = 1'h0;
   reg ch0_result_status_lc_repeat_snapshot = 1'h0;
   reg ch0_result_status_lc_skip_snapshot = 1'h0;
@@ -2141,24 +2000,24 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg ch0_result_status_w1_crc_ok_snapshot = 1'h0;
   reg ch0_result_status_w1_ne_snapshot = 1'h0;
   reg ch0_result_status_w1_nw_snapshot = 1'h0;
-  reg ch0_result_status_write = 1'h0;
+  wire ch0_result_status_write;
   wire ch0_result_timestamp_read;
   reg [31:0] ch0_result_timestamp_time_snapshot = 32'd0;
-  reg ch0_result_timestamp_write = 1'h0;
+  wire ch0_result_timestamp_write;
   reg [22:0] ch0_result_w0_hi_data_snapshot = 23'h000000;
   wire ch0_result_w0_hi_read;
-  reg ch0_result_w0_hi_write = 1'h0;
+  wire ch0_result_w0_hi_write;
   reg [31:0] ch0_result_w0_lo_data_snapshot = 32'd0;
   wire ch0_result_w0_lo_read;
-  reg ch0_result_w0_lo_write = 1'h0;
+  wire ch0_result_w0_lo_write;
   reg [7:0] ch0_result_w1_hi_data_snapshot = 8'h00;
   wire ch0_result_w1_hi_read;
-  reg ch0_result_w1_hi_write = 1'h0;
+  wire ch0_result_w1_hi_write;
   reg [31:0] ch0_result_w1_lo_data_snapshot = 32'd0;
   wire ch0_result_w1_lo_read;
-  reg ch0_result_w1_lo_write = 1'h0;
+  wire ch0_result_w1_lo_write;
   wire ch0_state_read;
-  reg ch0_state_write = 1'h0;
+  wire ch0_state_write;
   (* init = 1'h0 *)
   wire ch1__abort_cycle;
   input ch1__busy;
@@ -2285,17 +2144,17 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire ch1__word1_nw;
   wire [39:0] ch1__word1_position;
   wire ch1_ca_count_crc4_answer_read;
-  reg ch1_ca_count_crc4_answer_write = 1'h0;
+  wire ch1_ca_count_crc4_answer_write;
   wire ch1_ca_count_data_fault_read;
-  reg ch1_ca_count_data_fault_write = 1'h0;
+  wire ch1_ca_count_data_fault_write;
   wire ch1_ca_count_refused_aborted_read;
-  reg ch1_ca_count_refused_aborted_write = 1'h0;
+  wire ch1_ca_count_refused_aborted_write;
   output ch1_ca_ctrl_abort;
   reg ch1_ca_ctrl_abort = 1'h0;
   wire ch1_ca_ctrl_read;
   output ch1_ca_ctrl_start;
   reg ch1_ca_ctrl_start = 1'h0;
-  reg ch1_ca_ctrl_write = 1'h0;
+  wire ch1_ca_ctrl_write;
   output [6:0] ch1_ca_request_address;
   reg [6:0] ch1_ca_request_address = 7'h00;
   output [6:0] ch1_ca_request_count;
@@ -2303,21 +2162,21 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire ch1_ca_request_read;
   output [2:0] ch1_ca_request_slave_id;
   reg [2:0] ch1_ca_request_slave_id = 3'h0;
-  reg ch1_ca_request_write = 1'h0;
-  output \ch1_ca_request_write$226 ;
-  reg \ch1_ca_request_write$226  = 1'h0;
+  wire ch1_ca_request_write;
+  output \ch1_ca_request_write$186 ;
+  reg \ch1_ca_request_write$186  = 1'h0;
   wire ch1_ca_state_read;
-  reg ch1_ca_state_write = 1'h0;
+  wire ch1_ca_state_write;
   wire ch1_caps_read;
-  reg ch1_caps_write = 1'h0;
+  wire ch1_caps_write;
   output [23:0] ch1_cfg_ack_ack_limit;
   reg [23:0] ch1_cfg_ack_ack_limit = 24'h000000;
   wire ch1_cfg_ack_read;
-  reg ch1_cfg_ack_write = 1'h0;
+  wire ch1_cfg_ack_write;
   output [23:0] ch1_cfg_break_break_time;
   reg [23:0] ch1_cfg_break_break_time = 24'h000000;
   wire ch1_cfg_break_read;
-  reg ch1_cfg_break_write = 1'h0;
+  wire ch1_cfg_break_write;
   output ch1_cfg_checks_end_check;
   reg ch1_cfg_checks_end_check = 1'h0;
   wire ch1_cfg_checks_read;
@@ -2325,21 +2184,21 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg ch1_cfg_checks_spw_check = 1'h0;
   output [7:0] ch1_cfg_checks_spw_tolerance;
   reg [7:0] ch1_cfg_checks_spw_tolerance = 8'h00;
-  reg ch1_cfg_checks_write = 1'h0;
+  wire ch1_cfg_checks_write;
   output [11:0] ch1_cfg_ma_delay_limit;
   reg [11:0] ch1_cfg_ma_delay_limit = 12'h000;
   output [15:0] ch1_cfg_ma_ma_half_period;
   reg [15:0] ch1_cfg_ma_ma_half_period = 16'h0000;
   wire ch1_cfg_ma_read;
-  reg ch1_cfg_ma_write = 1'h0;
+  wire ch1_cfg_ma_write;
   wire ch1_cfg_period_read;
   output [23:0] ch1_cfg_period_request_period;
   reg [23:0] ch1_cfg_period_request_period = 24'h000000;
-  reg ch1_cfg_period_write = 1'h0;
+  wire ch1_cfg_period_write;
   wire ch1_cfg_timeout_read;
   output [23:0] ch1_cfg_timeout_timeout_limit;
   reg [23:0] ch1_cfg_timeout_timeout_limit = 24'h000000;
-  reg ch1_cfg_timeout_write = 1'h0;
+  wire ch1_cfg_timeout_write;
   wire ch1_cfg_words_read;
   output [1:0] ch1_cfg_words_w0_crc;
   reg [1:0] ch1_cfg_words_w0_crc = 2'h0;
@@ -2359,21 +2218,21 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg ch1_cfg_words_w1_lc = 1'h0;
   output ch1_cfg_words_w1_nenw;
   reg ch1_cfg_words_w1_nenw = 1'h0;
-  reg ch1_cfg_words_write = 1'h0;
+  wire ch1_cfg_words_write;
   wire ch1_count_ack_read;
-  reg ch1_count_ack_write = 1'h0;
+  wire ch1_count_ack_write;
   wire ch1_count_check_read;
-  reg ch1_count_check_write = 1'h0;
+  wire ch1_count_check_write;
   wire ch1_count_crc_read;
-  reg ch1_count_crc_write = 1'h0;
+  wire ch1_count_crc_write;
   wire ch1_count_cycle_read;
-  reg ch1_count_cycle_write = 1'h0;
+  wire ch1_count_cycle_write;
   wire ch1_count_lc_read;
-  reg ch1_count_lc_write = 1'h0;
+  wire ch1_count_lc_write;
   wire ch1_count_line_read;
-  reg ch1_count_line_write = 1'h0;
+  wire ch1_count_line_write;
   wire ch1_count_stop_read;
-  reg ch1_count_stop_write = 1'h0;
+  wire ch1_count_stop_write;
   output ch1_ctrl_abort;
   reg ch1_ctrl_abort = 1'h0;
   output ch1_ctrl_clear_counters;
@@ -2385,19 +2244,19 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg ch1_ctrl_start = 1'h0;
   output ch1_ctrl_trigger_enable;
   reg ch1_ctrl_trigger_enable = 1'h0;
-  reg ch1_ctrl_write = 1'h0;
+  wire ch1_ctrl_write;
   output ch1_irq;
   wire ch1_irq;
   reg ch1_irq_enable_access_done = 1'h0;
   reg ch1_irq_enable_done = 1'h0;
   reg ch1_irq_enable_error = 1'h0;
   wire ch1_irq_enable_read;
-  reg ch1_irq_enable_write = 1'h0;
+  wire ch1_irq_enable_write;
   reg ch1_irq_status_access_done = 1'h0;
   reg ch1_irq_status_done = 1'h0;
   reg ch1_irq_status_error = 1'h0;
   wire ch1_irq_status_read;
-  reg ch1_irq_status_write = 1'h0;
+  wire ch1_irq_status_write;
   reg ch1_read_select_100 = 1'h0;
   reg ch1_read_select_101 = 1'h0;
   reg ch1_read_select_102 = 1'h0;
@@ -2433,7 +2292,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg [12:0] ch1_result_seq_line_delay_snapshot = 13'h0000;
   wire ch1_result_seq_read;
   reg [15:0] ch1_result_seq_seq_snapshot = 16'h0000;
-  reg ch1_result_seq_write = 1'h0;
+  wire ch1_result_seq_write;
   reg ch1_result_status_cds_snapshot = 1'h0;
   reg ch1_result_status_lc_repeat_snapshot = 1'h0;
   reg ch1_result_status_lc_skip_snapshot = 1'h0;
@@ -2448,33 +2307,33 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg ch1_result_status_w1_crc_ok_snapshot = 1'h0;
   reg ch1_result_status_w1_ne_snapshot = 1'h0;
   reg ch1_result_status_w1_nw_snapshot = 1'h0;
-  reg ch1_result_status_write = 1'h0;
+  wire ch1_result_status_write;
   wire ch1_result_timestamp_read;
   reg [31:0] ch1_result_timestamp_time_snapshot = 32'd0;
-  reg ch1_result_timestamp_write = 1'h0;
+  wire ch1_result_timestamp_write;
   reg [22:0] ch1_result_w0_hi_data_snapshot = 23'h000000;
   wire ch1_result_w0_hi_read;
-  reg ch1_result_w0_hi_write = 1'h0;
+  wire ch1_result_w0_hi_write;
   reg [31:0] ch1_result_w0_lo_data_snapshot = 32'd0;
   wire ch1_result_w0_lo_read;
-  reg ch1_result_w0_lo_write = 1'h0;
+  wire ch1_result_w0_lo_write;
   reg [7:0] ch1_result_w1_hi_data_snapshot = 8'h00;
   wire ch1_result_w1_hi_read;
-  reg ch1_result_w1_hi_write = 1'h0;
+  wire ch1_result_w1_hi_write;
   reg [31:0] ch1_result_w1_lo_data_snapshot = 32'd0;
   wire ch1_result_w1_lo_read;
-  reg ch1_result_w1_lo_write = 1'h0;
+  wire ch1_result_w1_lo_write;
   wire ch1_state_read;
-  reg ch1_state_write = 1'h0;
+  wire ch1_state_write;
   input clk;
   wire clk;
   wire g_channels_read;
-  reg g_channels_write = 1'h0;
+  wire g_channels_write;
   wire g_id_read;
-  reg g_id_write = 1'h0;
+  wire g_id_write;
   wire g_irq;
   wire g_irq_pending_read;
-  reg g_irq_pending_write = 1'h0;
+  wire g_irq_pending_write;
   reg g_read_select_0 = 1'h0;
   reg g_read_select_1 = 1'h0;
   reg g_read_select_2 = 1'h0;
@@ -2483,26 +2342,26 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire g_trigger_read;
   output g_trigger_start;
   reg g_trigger_start = 1'h0;
-  reg g_trigger_write = 1'h0;
+  wire g_trigger_write;
   wire g_version_read;
-  reg g_version_write = 1'h0;
+  wire g_version_write;
   wire [3:0] glob__channels;
   wire [7:0] glob__irq_pending;
   (* init = 1'h0 *)
   wire glob__trigger;
   wire [1:0] irq;
-  input [160:0] \port$4447$0 ;
-  wire [160:0] \port$4447$0 ;
-  input [287:0] \port$4454$0 ;
-  wire [287:0] \port$4454$0 ;
-  input [9:0] \port$4568$0 ;
-  wire [9:0] \port$4568$0 ;
-  input [160:0] \port$4946$0 ;
-  wire [160:0] \port$4946$0 ;
-  input [287:0] \port$4953$0 ;
-  wire [287:0] \port$4953$0 ;
-  input [9:0] \port$5067$0 ;
-  wire [9:0] \port$5067$0 ;
+  input [160:0] \port$4307$0 ;
+  wire [160:0] \port$4307$0 ;
+  input [287:0] \port$4314$0 ;
+  wire [287:0] \port$4314$0 ;
+  input [9:0] \port$4428$0 ;
+  wire [9:0] \port$4428$0 ;
+  input [160:0] \port$4806$0 ;
+  wire [160:0] \port$4806$0 ;
+  input [287:0] \port$4813$0 ;
+  wire [287:0] \port$4813$0 ;
+  input [9:0] \port$4927$0 ;
+  wire [9:0] \port$4927$0 ;
   output [31:0] read_data;
   reg [31:0] read_data = 32'd0;
   input rst;
@@ -2512,1208 +2371,1792 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg [10:0] write_addr = 11'h000;
   output [31:0] write_data;
   reg [31:0] write_data = 32'd0;
+  reg write_en = 1'h0;
   reg [3:0] write_strb = 4'h0;
-  assign \$195  = ch1_irq_enable_write & write_strb[0];
-  assign \$196  = bus__w_addr == 9'h108;
-  assign \$197  = bus__w_en & \$196 ;
-  assign \$198  = ch1_cfg_ma_write & write_strb[0];
-  assign \$199  = ch1_cfg_ma_write & write_strb[1];
-  assign \$200  = ch1_cfg_ma_write & write_strb[2];
-  assign \$201  = ch1_cfg_ma_write & write_strb[3];
-  assign \$202  = bus__w_addr == 9'h109;
-  assign \$203  = bus__w_en & \$202 ;
-  assign \$204  = ch1_cfg_period_write & write_strb[0];
-  assign \$205  = ch1_cfg_period_write & write_strb[1];
-  assign \$206  = ch1_cfg_period_write & write_strb[2];
-  assign \$207  = bus__w_addr == 9'h10a;
-  assign \$208  = bus__w_en & \$207 ;
-  assign \$209  = ch1_cfg_break_write & write_strb[0];
-  assign \$210  = ch1_cfg_break_write & write_strb[1];
-  assign \$211  = ch1_cfg_break_write & write_strb[2];
-  assign \$212  = bus__w_addr == 9'h10b;
-  assign \$213  = bus__w_en & \$212 ;
-  assign \$214  = ch1_cfg_ack_write & write_strb[0];
-  assign \$215  = ch1_cfg_ack_write & write_strb[1];
-  assign \$216  = ch1_cfg_ack_write & write_strb[2];
-  assign \$217  = bus__w_addr == 9'h10c;
-  assign \$218  = bus__w_en & \$217 ;
-  assign \$219  = ch1_cfg_timeout_write & write_strb[0];
-  assign \$220  = ch1_cfg_timeout_write & write_strb[1];
-  assign \$221  = ch1_cfg_timeout_write & write_strb[2];
-  assign \$222  = bus__w_addr == 9'h10d;
-  assign \$223  = bus__w_en & \$222 ;
-  assign \$224  = ch1_cfg_words_write & write_strb[0];
-  assign \$225  = ch1_cfg_words_write & write_strb[0];
-  assign \$226  = ch1_cfg_words_write & write_strb[0];
-  assign \$227  = ch1_cfg_words_write & write_strb[1];
-  assign \$228  = ch1_cfg_words_write & write_strb[2];
-  assign \$229  = ch1_cfg_words_write & write_strb[2];
-  assign \$230  = ch1_cfg_words_write & write_strb[2];
-  assign \$231  = ch1_cfg_words_write & write_strb[3];
-  assign \$232  = ch1_cfg_words_write & write_strb[3];
-  assign \$233  = bus__w_addr == 9'h10e;
-  assign \$234  = bus__w_en & \$233 ;
-  assign \$235  = ch1_cfg_checks_write & write_strb[0];
-  assign \$236  = ch1_cfg_checks_write & write_strb[0];
-  assign \$237  = ch1_cfg_checks_write & write_strb[1];
-  assign \$238  = bus__w_addr == 9'h110;
-  assign \$239  = bus__w_en & \$238 ;
-  assign \$240  = bus__w_addr == 9'h111;
-  assign \$241  = bus__w_en & \$240 ;
-  assign \$242  = bus__w_addr == 9'h112;
-  assign \$243  = bus__w_en & \$242 ;
-  assign \$244  = bus__w_addr == 9'h113;
-  assign \$245  = bus__w_en & \$244 ;
-  assign \$246  = bus__w_addr == 9'h114;
-  assign \$247  = bus__w_en & \$246 ;
-  assign \$248  = bus__w_addr == 9'h115;
-  assign \$249  = bus__w_en & \$248 ;
-  assign \$250  = bus__w_addr == 9'h116;
-  assign \$251  = bus__w_en & \$250 ;
-  assign \$252  = bus__w_addr == 9'h118;
-  assign \$253  = bus__w_en & \$252 ;
-  assign \$254  = bus__w_addr == 9'h119;
-  assign \$255  = bus__w_en & \$254 ;
-  assign \$256  = bus__w_addr == 9'h11a;
-  assign \$257  = bus__w_en & \$256 ;
-  assign \$258  = bus__w_addr == 9'h11b;
-  assign \$259  = bus__w_en & \$258 ;
-  assign \$260  = bus__w_addr == 9'h11c;
-  assign \$261  = bus__w_en & \$260 ;
-  assign \$262  = bus__w_addr == 9'h11d;
-  assign \$263  = bus__w_en & \$262 ;
-  assign \$264  = bus__w_addr == 9'h11e;
-  assign \$265  = bus__w_en & \$264 ;
-  assign \$266  = bus__w_addr == 9'h140;
-  assign \$267  = bus__w_en & \$266 ;
-  assign \$268  = ch1_ca_request_write & write_strb[0];
-  assign \$269  = ch1_ca_request_write & write_strb[1];
-  assign \$270  = ch1_ca_request_write & write_strb[2];
-  assign \$271  = ch1_ca_request_write & write_strb[3];
-  assign \$272  = bus__w_addr == 9'h141;
-  assign \$273  = bus__w_en & \$272 ;
-  assign \$274  = write_data[0] & write_strb[0];
-  assign \$275  = ch1_ca_ctrl_write ? \$274  : 1'h0;
-  assign \$276  = write_data[1] & write_strb[0];
-  assign \$277  = ch1_ca_ctrl_write ? \$276  : 1'h0;
-  assign \$278  = bus__w_addr == 9'h142;
-  assign \$279  = bus__w_en & \$278 ;
-  assign \$280  = bus__w_addr == 9'h143;
-  assign \$281  = bus__w_en & \$280 ;
-  assign \$282  = bus__w_addr == 9'h144;
-  assign \$283  = bus__w_en & \$282 ;
-  assign \$284  = bus__w_addr == 9'h145;
-  assign \$285  = bus__w_en & \$284 ;
-  assign \$286  = bus__w_addr[10:4] == 5'h15;
-  assign \$287  = bus__w_en & \$286 ;
-  assign \$288  = bus__r_addr == 9'h100;
-  assign \$289  = bus__r_addr == 9'h101;
-  assign \$290  = bus__r_addr == 9'h102;
-  assign \$291  = bus__r_addr == 9'h104;
-  assign \$292  = bus__r_addr == 9'h105;
-  assign \$293  = bus__r_addr == 9'h108;
-  assign \$294  = bus__r_addr == 9'h109;
-  assign \$295  = bus__r_addr == 9'h10a;
-  assign \$296  = bus__r_addr == 9'h10b;
-  assign \$297  = bus__r_addr == 9'h10c;
-  assign \$298  = bus__r_addr == 9'h10d;
-  assign \$299  = bus__r_addr == 9'h10e;
-  assign \$300  = bus__r_addr == 9'h110;
-  assign \$301  = bus__r_addr == 9'h111;
-  assign \$302  = bus__r_addr == 9'h112;
-  assign \$303  = bus__r_addr == 9'h113;
-  assign \$304  = bus__r_addr == 9'h114;
-  assign \$305  = bus__r_addr == 9'h115;
-  assign \$306  = bus__r_addr == 9'h116;
-  assign \$307  = bus__r_addr == 9'h118;
-  assign \$308  = bus__r_addr == 9'h119;
-  assign \$309  = bus__r_addr == 9'h11a;
-  assign \$310  = bus__r_addr == 9'h11b;
-  assign \$311  = bus__r_addr == 9'h11c;
-  assign \$312  = bus__r_addr == 9'h11d;
-  assign \$313  = bus__r_addr == 9'h11e;
-  assign \$314  = bus__r_addr == 9'h140;
-  assign \$315  = bus__r_addr == 9'h141;
-  assign \$316  = bus__r_addr == 9'h142;
-  assign \$317  = bus__r_addr == 9'h143;
-  assign \$318  = bus__r_addr == 9'h144;
-  assign \$319  = bus__r_addr == 9'h145;
-  assign \$320  = bus__r_addr[10:4] == 4'he;
-  assign \$321  = bus__r_en & \$320 ;
-  assign \$322  = bus__r_addr[10:4] == 5'h16;
-  assign \$323  = bus__r_en & \$322 ;
-  assign \$324  = g_read_select_0 ? 32'd1114198867 : 32'd0;
-  assign \$326  = g_read_select_1 ? 32'd65537 : 32'd0;
-  assign \$327  = \$325  | \$326 ;
-  assign \$328  = g_read_select_2 ? 32'd2 : 32'd0;
-  assign \$329  = \$327  | \$328 ;
-  assign \$332  = g_read_select_4 ? { 30'h00000000, ch1_irq, ch0_irq } : 32'd0;
-  assign \$333  = \$331  | \$332 ;
-  assign \$334  = ch0_read_select_80 ? { 22'h000000, ch0_ctrl_trigger_enable, ch0_ctrl_periodic, 8'h00 } : 32'd0;
-  assign \$335  = \$333  | \$334 ;
-  assign \$336  = ch0_read_select_81 ? { 30'h00000000, ch0__config_error, ch0__busy } : 32'd0;
-  assign \$337  = \$335  | \$336 ;
-  assign \$338  = ch0_read_select_82 ? 32'd119023671 : 32'd0;
-  assign \$339  = \$337  | \$338 ;
-  assign \$340  = ch0_read_select_84 ? { 29'h00000000, ch0_irq_status_access_done, ch0_irq_status_error, ch0_irq_status_done } : 32'd0;
-  assign \$341  = \$339  | \$340 ;
-  assign \$342  = ch0_read_select_85 ? { 29'h00000000, ch0_irq_enable_access_done, ch0_irq_enable_error, ch0_irq_enable_done } : 32'd0;
-  assign \$343  = \$341  | \$342 ;
-  assign \$344  = ch0_read_select_88 ? { 4'h0, ch0_cfg_ma_delay_limit, ch0_cfg_ma_ma_half_period } : 32'd0;
-  assign \$345  = \$343  | \$344 ;
-  assign \$346  = ch0_read_select_89 ? { 8'h00, ch0_cfg_period_request_period } : 32'd0;
-  assign \$347  = \$345  | \$346 ;
-  assign \$348  = ch0_read_select_8a ? { 8'h00, ch0_cfg_break_break_time } : 32'd0;
-  assign \$349  = \$347  | \$348 ;
-  assign \$350  = ch0_read_select_8b ? { 8'h00, ch0_cfg_ack_ack_limit } : 32'd0;
-  assign \$351  = \$349  | \$350 ;
-  assign \$352  = ch0_read_select_8c ? { 8'h00, ch0_cfg_timeout_timeout_limit } : 32'd0;
-  assign \$353  = \$351  | \$352 ;
-  assign \$354  = ch0_read_select_8d ? { ch0_cfg_words_w1_enable, 5'h00, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_data_bits, 6'h00, ch0_cfg_words_w0_crc, ch0_cfg_words_w0_lc, ch0_cfg_words_w0_nenw, ch0_cfg_words_w0_data_bits } : 32'd0;
-  assign \$355  = \$353  | \$354 ;
-  assign \$356  = ch0_read_select_8e ? { 16'h0000, ch0_cfg_checks_spw_tolerance, 6'h00, ch0_cfg_checks_spw_check, ch0_cfg_checks_end_check } : 32'd0;
-  assign \$357  = \$355  | \$356 ;
-  assign \$358  = ch0_read_select_90 ? { 2'h0, ch0_result_status_lc_snapshot, 4'h0, ch0_result_status_spw_mismatch_snapshot, ch0_result_status_lc_zero_snapshot, ch0_result_status_lc_skip_snapshot, ch0_result_status_lc_repeat_snapshot, 1'h0, ch0_result_status_w1_crc_ok_snapshot, ch0_result_status_w1_nw_snapshot, ch0_result_status_w1_ne_snapshot, 1'h0, ch0_result_status_w0_crc_ok_snapshot, ch0_result_status_w0_nw_snapshot, ch0_result_status_w0_ne_snapshot, 3'h0, ch0_result_status_cds_snapshot, ch0_result_status_status_snapshot } : 32'd0;
-  assign \$359  = \$357  | \$358 ;
-  assign \$360  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
-  assign \$361  = \$359  | \$360 ;
-  assign \$362  = ch0_read_select_92 ? ch0_result_w0_lo_data_snapshot : 32'd0;
-  assign \$363  = \$361  | \$362 ;
-  assign \$364  = ch0_read_select_93 ? { 9'h000, ch0_result_w0_hi_data_snapshot } : 32'd0;
-  assign \$365  = \$363  | \$364 ;
-  assign \$366  = ch0_read_select_94 ? ch0_result_w1_lo_data_snapshot : 32'd0;
-  assign \$367  = \$365  | \$366 ;
-  assign \$368  = ch0_read_select_95 ? { 24'h000000, ch0_result_w1_hi_data_snapshot } : 32'd0;
-  assign \$369  = \$367  | \$368 ;
-  assign \$370  = ch0_read_select_96 ? ch0_result_timestamp_time_snapshot : 32'd0;
-  assign \$371  = \$369  | \$370 ;
-  assign \$372  = ch0_read_select_98 ? \port$4454$0 [31:0] : 32'd0;
-  assign \$373  = \$371  | \$372 ;
-  assign \$374  = ch0_read_select_99 ? \port$4454$0 [63:32] : 32'd0;
-  assign \$375  = \$373  | \$374 ;
-  assign \$376  = ch0_read_select_9a ? \port$4454$0 [95:64] : 32'd0;
-  assign \$377  = \$375  | \$376 ;
-  assign \$378  = ch0_read_select_9b ? \port$4454$0 [127:96] : 32'd0;
-  assign \$379  = \$377  | \$378 ;
-  assign \$380  = ch0_read_select_9c ? \port$4454$0 [159:128] : 32'd0;
-  assign \$381  = \$379  | \$380 ;
-  assign \$382  = ch0_read_select_9d ? \port$4454$0 [191:160] : 32'd0;
-  assign \$383  = \$381  | \$382 ;
-  assign \$384  = ch0_read_select_9e ? { 16'h0000, \port$4454$0 [207:192] } : 32'd0;
-  assign \$385  = \$383  | \$384 ;
-  assign \$386  = ch0_read_select_c0 ? { 7'h00, \ch0_ca_request_write$84 , 1'h0, ch0_ca_request_count, 1'h0, ch0_ca_request_address, 5'h00, ch0_ca_request_slave_id } : 32'd0;
-  assign \$387  = \$385  | \$386 ;
-  assign \$390  = ch0_read_select_c2 ? { 17'h00000, \port$4568$0 [9:3], 1'h0, \port$4568$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
-  assign \$391  = \$389  | \$390 ;
-  assign \$392  = ch0_read_select_c3 ? \port$4454$0 [239:208] : 32'd0;
-  assign \$393  = \$391  | \$392 ;
-  assign \$394  = ch0_read_select_c4 ? \port$4454$0 [271:240] : 32'd0;
-  assign \$395  = \$393  | \$394 ;
-  assign \$396  = ch0_read_select_c5 ? { 16'h0000, \port$4454$0 [287:272] } : 32'd0;
-  assign \$397  = \$395  | \$396 ;
-  assign \$398  = ch1_read_select_100 ? { 22'h000000, ch1_ctrl_trigger_enable, ch1_ctrl_periodic, 8'h00 } : 32'd0;
-  assign \$399  = \$397  | \$398 ;
-  assign \$400  = ch1_read_select_101 ? { 30'h00000000, ch1__config_error, ch1__busy } : 32'd0;
-  assign \$401  = \$399  | \$400 ;
-  assign \$402  = ch1_read_select_102 ? 32'd119023671 : 32'd0;
-  assign \$403  = \$401  | \$402 ;
-  assign \$404  = ch1_read_select_104 ? { 29'h00000000, ch1_irq_status_access_done, ch1_irq_status_error, ch1_irq_status_done } : 32'd0;
-  assign \$405  = \$403  | \$404 ;
-  assign \$406  = ch1_read_select_105 ? { 29'h00000000, ch1_irq_enable_access_done, ch1_irq_enable_error, ch1_irq_enable_done } : 32'd0;
-  assign \$407  = \$405  | \$406 ;
-  assign \$408  = ch1_read_select_108 ? { 4'h0, ch1_cfg_ma_delay_limit, ch1_cfg_ma_ma_half_period } : 32'd0;
-  assign \$409  = \$407  | \$408 ;
-  assign \$410  = ch1_read_select_109 ? { 8'h00, ch1_cfg_period_request_period } : 32'd0;
-  assign \$411  = \$409  | \$410 ;
-  assign \$412  = ch1_read_select_10a ? { 8'h00, ch1_cfg_break_break_time } : 32'd0;
-  assign \$413  = \$411  | \$412 ;
-  assign \$414  = ch1_read_select_10b ? { 8'h00, ch1_cfg_ack_ack_limit } : 32'd0;
-  assign \$415  = \$413  | \$414 ;
-  assign \$416  = ch1_read_select_10c ? { 8'h00, ch1_cfg_timeout_timeout_limit } : 32'd0;
-  assign \$417  = \$415  | \$416 ;
-  assign \$418  = ch1_read_select_10d ? { ch1_cfg_words_w1_enable, 5'h00, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_data_bits, 6'h00, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_data_bits } : 32'd0;
-  assign \$419  = \$417  | \$418 ;
-  assign \$420  = ch1_read_select_10e ? { 16'h0000, ch1_cfg_checks_spw_tolerance, 6'h00, ch1_cfg_checks_spw_check, ch1_cfg_checks_end_check } : 32'd0;
-  assign \$421  = \$419  | \$420 ;
-  assign \$422  = ch1_read_select_110 ? { 2'h0, ch1_result_status_lc_snapshot, 4'h0, ch1_result_status_spw_mismatch_snapshot, ch1_result_status_lc_zero_snapshot, ch1_result_status_lc_skip_snapshot, ch1_result_status_lc_repeat_snapshot, 1'h0, ch1_result_status_w1_crc_ok_snapshot, ch1_result_status_w1_nw_snapshot, ch1_result_status_w1_ne_snapshot, 1'h0, ch1_result_status_w0_crc_ok_snapshot, ch1_result_status_w0_nw_snapshot, ch1_result_status_w0_ne_snapshot, 3'h0, ch1_result_status_cds_snapshot, ch1_result_status_status_snapshot } : 32'd0;
-  assign \$423  = \$421  | \$422 ;
-  assign \$424  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
-  assign \$425  = \$423  | \$424 ;
-  assign \$426  = ch1_read_select_112 ? ch1_result_w0_lo_data_snapshot : 32'd0;
-  assign \$427  = \$425  | \$426 ;
-  assign \$428  = ch1_read_select_113 ? { 9'h000, ch1_result_w0_hi_data_snapshot } : 32'd0;
-  assign \$429  = \$427  | \$428 ;
-  assign \$430  = ch1_read_select_114 ? ch1_result_w1_lo_data_snapshot : 32'd0;
-  assign \$431  = \$429  | \$430 ;
-  assign \$432  = ch1_read_select_115 ? { 24'h000000, ch1_result_w1_hi_data_snapshot } : 32'd0;
-  assign \$433  = \$431  | \$432 ;
-  assign \$434  = ch1_read_select_116 ? ch1_result_timestamp_time_snapshot : 32'd0;
-  assign \$435  = \$433  | \$434 ;
-  assign \$436  = ch1_read_select_118 ? \port$4953$0 [31:0] : 32'd0;
-  assign \$437  = \$435  | \$436 ;
-  assign \$438  = ch1_read_select_119 ? \port$4953$0 [63:32] : 32'd0;
-  assign \$439  = \$437  | \$438 ;
-  assign \$440  = ch1_read_select_11a ? \port$4953$0 [95:64] : 32'd0;
-  assign \$441  = \$439  | \$440 ;
-  assign \$442  = ch1_read_select_11b ? \port$4953$0 [127:96] : 32'd0;
-  assign \$443  = \$441  | \$442 ;
-  assign \$444  = ch1_read_select_11c ? \port$4953$0 [159:128] : 32'd0;
-  assign \$445  = \$443  | \$444 ;
-  assign \$446  = ch1_read_select_11d ? \port$4953$0 [191:160] : 32'd0;
-  assign \$447  = \$445  | \$446 ;
-  assign \$448  = ch1_read_select_11e ? { 16'h0000, \port$4953$0 [207:192] } : 32'd0;
-  assign \$449  = \$447  | \$448 ;
-  assign \$450  = ch1_read_select_140 ? { 7'h00, \ch1_ca_request_write$226 , 1'h0, ch1_ca_request_count, 1'h0, ch1_ca_request_address, 5'h00, ch1_ca_request_slave_id } : 32'd0;
-  assign \$451  = \$449  | \$450 ;
-  assign \$454  = ch1_read_select_142 ? { 17'h00000, \port$5067$0 [9:3], 1'h0, \port$5067$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
-  assign \$455  = \$453  | \$454 ;
-  assign \$456  = ch1_read_select_143 ? \port$4953$0 [239:208] : 32'd0;
-  assign \$457  = \$455  | \$456 ;
-  assign \$458  = ch1_read_select_144 ? \port$4953$0 [271:240] : 32'd0;
-  assign \$459  = \$457  | \$458 ;
-  assign \$460  = ch1_read_select_145 ? { 16'h0000, \port$4953$0 [287:272] } : 32'd0;
-  assign \$461  = \$459  | \$460 ;
-  assign \$462  = window0_read ? ch0__ca_rbuf_data : 32'd0;
-  assign \$463  = \$461  | \$462 ;
-  assign \$464  = window1_read ? ch1__ca_rbuf_data : 32'd0;
-  assign \$465  = \$463  | \$464 ;
-  assign \$466  = ! bus__r_addr;
-  assign g_id_read = bus__r_en & \$466 ;
-  assign \$467  = bus__r_addr == 1'h1;
-  assign g_version_read = bus__r_en & \$467 ;
-  assign \$468  = bus__r_addr == 2'h2;
-  assign g_channels_read = bus__r_en & \$468 ;
-  assign \$469  = bus__r_addr == 2'h3;
-  assign g_trigger_read = bus__r_en & \$469 ;
-  assign \$470  = bus__r_addr == 3'h4;
-  assign g_irq_pending_read = bus__r_en & \$470 ;
-  assign \$471  = bus__r_addr == 8'h80;
-  assign ch0_ctrl_read = bus__r_en & \$471 ;
-  assign \$472  = bus__r_addr == 8'h81;
-  assign ch0_state_read = bus__r_en & \$472 ;
-  assign \$473  = bus__r_addr == 8'h82;
-  assign ch0_caps_read = bus__r_en & \$473 ;
-  assign \$474  = bus__r_addr == 8'h84;
-  assign ch0_irq_status_read = bus__r_en & \$474 ;
-  assign \$475  = bus__r_addr == 8'h85;
-  assign ch0_irq_enable_read = bus__r_en & \$475 ;
-  assign \$476  = bus__r_addr == 8'h88;
-  assign ch0_cfg_ma_read = bus__r_en & \$476 ;
-  assign \$477  = bus__r_addr == 8'h89;
-  assign ch0_cfg_period_read = bus__r_en & \$477 ;
-  assign \$478  = bus__r_addr == 8'h8a;
-  assign ch0_cfg_break_read = bus__r_en & \$478 ;
-  assign \$479  = bus__r_addr == 8'h8b;
-  assign ch0_cfg_ack_read = bus__r_en & \$479 ;
-  assign \$480  = bus__r_addr == 8'h8c;
-  assign ch0_cfg_timeout_read = bus__r_en & \$480 ;
-  assign \$481  = bus__r_addr == 8'h8d;
-  assign ch0_cfg_words_read = bus__r_en & \$481 ;
-  assign \$482  = bus__r_addr == 8'h8e;
-  assign ch0_cfg_checks_read = bus__r_en & \$482 ;
-  assign \$483  = bus__r_addr == 8'h90;
-  assign ch0_result_status_read = bus__r_en & \$483 ;
-  assign \$484  = bus__r_addr == 8'h91;
-  assign ch0_result_seq_read = bus__r_en & \$484 ;
-  assign \$485  = bus__r_addr == 8'h92;
-  assign ch0_result_w0_lo_read = bus__r_en & \$485 ;
-  assign \$486  = bus__r_addr == 8'h93;
-  assign ch0_result_w0_hi_read = bus__r_en & \$486 ;
-  assign \$487  = bus__r_addr == 8'h94;
-  assign ch0_result_w1_lo_read = bus__r_en & \$487 ;
-  assign \$488  = bus__r_addr == 8'h95;
-  assign ch0_result_w1_hi_read = bus__r_en & \$488 ;
-  assign \$489  = bus__r_addr == 8'h96;
-  assign ch0_result_timestamp_read = bus__r_en & \$489 ;
-  assign \$490  = bus__r_addr == 8'h98;
-  assign ch0_count_crc_read = bus__r_en & \$490 ;
-  assign \$491  = bus__r_addr == 8'h99;
-  assign ch0_count_ack_read = bus__r_en & \$491 ;
-  assign \$492  = bus__r_addr == 8'h9a;
-  assign ch0_count_line_read = bus__r_en & \$492 ;
-  assign \$493  = bus__r_addr == 8'h9b;
-  assign ch0_count_lc_read = bus__r_en & \$493 ;
-  assign \$494  = bus__r_addr == 8'h9c;
-  assign ch0_count_check_read = bus__r_en & \$494 ;
-  assign \$495  = bus__r_addr == 8'h9d;
-  assign ch0_count_cycle_read = bus__r_en & \$495 ;
-  assign \$496  = bus__r_addr == 8'h9e;
-  assign ch0_count_stop_read = bus__r_en & \$496 ;
-  assign \$497  = bus__r_addr == 8'hc0;
-  assign ch0_ca_request_read = bus__r_en & \$497 ;
-  assign \$498  = bus__r_addr == 8'hc1;
-  assign ch0_ca_ctrl_read = bus__r_en & \$498 ;
-  assign \$499  = bus__r_addr == 8'hc2;
-  assign ch0_ca_state_read = bus__r_en & \$499 ;
-  assign \$500  = bus__r_addr == 8'hc3;
-  assign ch0_ca_count_crc4_answer_read = bus__r_en & \$500 ;
-  assign \$501  = bus__r_addr == 8'hc4;
-  assign ch0_ca_count_refused_aborted_read = bus__r_en & \$501 ;
-  assign \$502  = bus__r_addr == 8'hc5;
-  assign ch0_ca_count_data_fault_read = bus__r_en & \$502 ;
-  assign ch0__ca_wbuf_en = ca_wbuf_write ? write_strb : 4'h0;
-  assign \$503  = bus__r_addr[10:4] == 4'he;
-  assign ch0__ca_rbuf_en = bus__r_en & \$503 ;
-  assign \$504  = ch0_irq_status_done & ch0_irq_enable_done;
-  assign \$506  = ch0_irq_status_error & ch0_irq_enable_error;
-  assign \$508  = ch0_irq_status_access_done & ch0_irq_enable_access_done;
-  assign ch0_irq = | { \$509 , \$507 , \$505  };
-  assign \$510  = bus__r_addr == 9'h100;
-  assign ch1_ctrl_read = bus__r_en & \$510 ;
-  assign \$511  = bus__r_addr == 9'h101;
-  assign ch1_state_read = bus__r_en & \$511 ;
-  assign \$512  = bus__r_addr == 9'h102;
-  assign ch1_caps_read = bus__r_en & \$512 ;
-  assign \$513  = bus__r_addr == 9'h104;
-  assign ch1_irq_status_read = bus__r_en & \$513 ;
-  assign \$514  = bus__r_addr == 9'h105;
-  assign ch1_irq_enable_read = bus__r_en & \$514 ;
-  assign \$515  = bus__r_addr == 9'h108;
-  assign ch1_cfg_ma_read = bus__r_en & \$515 ;
-  assign \$516  = bus__r_addr == 9'h109;
-  assign ch1_cfg_period_read = bus__r_en & \$516 ;
-  assign \$517  = bus__r_addr == 9'h10a;
-  assign ch1_cfg_break_read = bus__r_en & \$517 ;
-  assign \$518  = bus__r_addr == 9'h10b;
-  assign ch1_cfg_ack_read = bus__r_en & \$518 ;
-  assign \$519  = bus__r_addr == 9'h10c;
-  assign ch1_cfg_timeout_read = bus__r_en & \$519 ;
-  assign \$520  = bus__r_addr == 9'h10d;
-  assign ch1_cfg_words_read = bus__r_en & \$520 ;
-  assign \$521  = bus__r_addr == 9'h10e;
-  assign ch1_cfg_checks_read = bus__r_en & \$521 ;
-  assign \$522  = bus__r_addr == 9'h110;
-  assign ch1_result_status_read = bus__r_en & \$522 ;
-  assign \$523  = bus__r_addr == 9'h111;
-  assign ch1_result_seq_read = bus__r_en & \$523 ;
-  assign \$524  = bus__r_addr == 9'h112;
-  assign ch1_result_w0_lo_read = bus__r_en & \$524 ;
-  assign \$525  = bus__r_addr == 9'h113;
-  assign ch1_result_w0_hi_read = bus__r_en & \$525 ;
-  assign \$526  = bus__r_addr == 9'h114;
-  assign ch1_result_w1_lo_read = bus__r_en & \$526 ;
-  assign \$527  = bus__r_addr == 9'h115;
-  assign ch1_result_w1_hi_read = bus__r_en & \$527 ;
-  assign \$528  = bus__r_addr == 9'h116;
-  assign ch1_result_timestamp_read = bus__r_en & \$528 ;
-  assign \$529  = bus__r_addr == 9'h118;
-  assign ch1_count_crc_read = bus__r_en & \$529 ;
-  assign \$530  = bus__r_addr == 9'h119;
-  assign ch1_count_ack_read = bus__r_en & \$530 ;
-  assign \$531  = bus__r_addr == 9'h11a;
-  assign ch1_count_line_read = bus__r_en & \$531 ;
-  assign \$532  = bus__r_addr == 9'h11b;
-  assign ch1_count_lc_read = bus__r_en & \$532 ;
-  assign \$533  = bus__r_addr == 9'h11c;
-  assign ch1_count_check_read = bus__r_en & \$533 ;
-  assign \$534  = bus__r_addr == 9'h11d;
-  assign ch1_count_cycle_read = bus__r_en & \$534 ;
-  assign \$535  = bus__r_addr == 9'h11e;
-  assign ch1_count_stop_read = bus__r_en & \$535 ;
-  assign \$536  = bus__r_addr == 9'h140;
-  assign ch1_ca_request_read = bus__r_en & \$536 ;
-  assign \$537  = bus__r_addr == 9'h141;
-  assign ch1_ca_ctrl_read = bus__r_en & \$537 ;
-  assign \$538  = bus__r_addr == 9'h142;
-  assign ch1_ca_state_read = bus__r_en & \$538 ;
-  assign \$539  = bus__r_addr == 9'h143;
-  assign ch1_ca_count_crc4_answer_read = bus__r_en & \$539 ;
-  assign \$540  = bus__r_addr == 9'h144;
-  assign ch1_ca_count_refused_aborted_read = bus__r_en & \$540 ;
-  assign \$541  = bus__r_addr == 9'h145;
-  assign ch1_ca_count_data_fault_read = bus__r_en & \$541 ;
-  assign ch1__ca_wbuf_en = \ca_wbuf_write$234  ? write_strb : 4'h0;
-  assign \$542  = bus__r_addr[10:4] == 5'h16;
-  assign ch1__ca_rbuf_en = bus__r_en & \$542 ;
-  assign \$543  = ch1_irq_status_done & ch1_irq_enable_done;
-  assign \$545  = ch1_irq_status_error & ch1_irq_enable_error;
-  assign \$547  = ch1_irq_status_access_done & ch1_irq_enable_access_done;
-  assign ch1_irq = | { \$548 , \$546 , \$544  };
-  always @(posedge clk)
-    write_addr <= \$549 ;
-  always @(posedge clk)
-    write_data <= \$550 ;
-  always @(posedge clk)
-    write_strb <= \$551 ;
-  always @(posedge clk)
-    g_id_write <= \$552 ;
-  always @(posedge clk)
-    g_version_write <= \$553 ;
-  always @(posedge clk)
-    g_channels_write <= \$554 ;
-  always @(posedge clk)
-    g_trigger_write <= \$555 ;
-  always @(posedge clk)
-    g_trigger_start <= \$556 ;
-  always @(posedge clk)
-    g_irq_pending_write <= \$557 ;
-  always @(posedge clk)
-    g_read_select_0 <= \$558 ;
-  always @(posedge clk)
-    g_read_select_1 <= \$559 ;
-  always @(posedge clk)
-    g_read_select_2 <= \$560 ;
-  always @(posedge clk)
-    g_read_select_3 <= \$561 ;
-  always @(posedge clk)
-    g_read_select_4 <= \$562 ;
-  always @(posedge clk)
-    ch0_ctrl_write <= \$563 ;
-  always @(posedge clk)
-    ch0_ctrl_start <= \$564 ;
-  always @(posedge clk)
-    ch0_ctrl_abort <= \$565 ;
-  always @(posedge clk)
-    ch0_ctrl_clear_counters <= \$566 ;
-  always @(posedge clk)
-    ch0_ctrl_periodic <= \$567 ;
-  always @(posedge clk)
-    ch0_ctrl_trigger_enable <= \$568 ;
-  always @(posedge clk)
-    ch0_state_write <= \$569 ;
-  always @(posedge clk)
-    ch0_caps_write <= \$570 ;
-  always @(posedge clk)
-    ch0_irq_status_write <= \$571 ;
-  always @(posedge clk)
-    ch0_irq_status_done <= \$572 ;
-  always @(posedge clk)
-    ch0_irq_status_error <= \$573 ;
-  always @(posedge clk)
-    ch0_irq_status_access_done <= \$574 ;
-  always @(posedge clk)
-    ch0_irq_enable_write <= \$575 ;
-  always @(posedge clk)
-    ch0_irq_enable_done <= \$576 ;
-  always @(posedge clk)
-    ch0_irq_enable_error <= \$577 ;
-  always @(posedge clk)
-    ch0_irq_enable_access_done <= \$578 ;
-  always @(posedge clk)
-    ch0_cfg_ma_write <= \$579 ;
-  always @(posedge clk)
-    ch0_cfg_ma_ma_half_period <= \$580 ;
-  always @(posedge clk)
-    ch0_cfg_ma_delay_limit <= \$581 ;
-  always @(posedge clk)
-    ch0_cfg_period_write <= \$582 ;
-  always @(posedge clk)
-    ch0_cfg_period_request_period <= \$583 ;
-  always @(posedge clk)
-    ch0_cfg_break_write <= \$584 ;
-  always @(posedge clk)
-    ch0_cfg_break_break_time <= \$585 ;
-  always @(posedge clk)
-    ch0_cfg_ack_write <= \$586 ;
-  always @(posedge clk)
-    ch0_cfg_ack_ack_limit <= \$587 ;
-  always @(posedge clk)
-    ch0_cfg_timeout_write <= \$588 ;
-  always @(posedge clk)
-    ch0_cfg_timeout_timeout_limit <= \$589 ;
-  always @(posedge clk)
-    ch0_cfg_words_write <= \$590 ;
-  always @(posedge clk)
-    ch0_cfg_words_w0_data_bits <= \$591 ;
-  always @(posedge clk)
-    ch0_cfg_words_w0_nenw <= \$592 ;
-  always @(posedge clk)
-    ch0_cfg_words_w0_lc <= \$593 ;
-  always @(posedge clk)
-    ch0_cfg_words_w0_crc <= \$594 ;
-  always @(posedge clk)
-    ch0_cfg_words_w1_data_bits <= \$595 ;
-  always @(posedge clk)
-    ch0_cfg_words_w1_nenw <= \$596 ;
-  always @(posedge clk)
-    ch0_cfg_words_w1_lc <= \$597 ;
-  always @(posedge clk)
-    ch0_cfg_words_w1_crc <= \$598 ;
-  always @(posedge clk)
-    ch0_cfg_words_w1_enable <= \$599 ;
-  always @(posedge clk)
-    ch0_cfg_checks_write <= \$600 ;
-  always @(posedge clk)
-    ch0_cfg_checks_end_check <= \$601 ;
-  always @(posedge clk)
-    ch0_cfg_checks_spw_check <= \$602 ;
-  always @(posedge clk)
-    ch0_cfg_checks_spw_tolerance <= \$603 ;
-  always @(posedge clk)
-    ch0_result_status_write <= \$604 ;
-  always @(posedge clk)
-    ch0_result_seq_write <= \$605 ;
-  always @(posedge clk)
-    ch0_result_w0_lo_write <= \$606 ;
-  always @(posedge clk)
-    ch0_result_w0_hi_write <= \$607 ;
-  always @(posedge clk)
-    ch0_result_w1_lo_write <= \$608 ;
-  always @(posedge clk)
-    ch0_result_w1_hi_write <= \$609 ;
-  always @(posedge clk)
-    ch0_result_timestamp_write <= \$610 ;
-  always @(posedge clk)
-    ch0_count_crc_write <= \$611 ;
-  always @(posedge clk)
-    ch0_count_ack_write <= \$612 ;
-  always @(posedge clk)
-    ch0_count_line_write <= \$613 ;
-  always @(posedge clk)
-    ch0_count_lc_write <= \$614 ;
-  always @(posedge clk)
-    ch0_count_check_write <= \$615 ;
-  always @(posedge clk)
-    ch0_count_cycle_write <= \$616 ;
-  always @(posedge clk)
-    ch0_count_stop_write <= \$617 ;
-  always @(posedge clk)
-    ch0_ca_request_write <= \$618 ;
-  always @(posedge clk)
-    ch0_ca_request_slave_id <= \$619 ;
-  always @(posedge clk)
-    ch0_ca_request_address <= \$620 ;
-  always @(posedge clk)
-    ch0_ca_request_count <= \$621 ;
-  always @(posedge clk)
-    \ch0_ca_request_write$84  <= \$622 ;
-  always @(posedge clk)
-    ch0_ca_ctrl_write <= \$623 ;
-  always @(posedge clk)
-    ch0_ca_ctrl_start <= \$624 ;
-  always @(posedge clk)
-    ch0_ca_ctrl_abort <= \$625 ;
-  always @(posedge clk)
-    ch0_ca_state_write <= \$626 ;
-  always @(posedge clk)
-    ch0_ca_count_crc4_answer_write <= \$627 ;
-  always @(posedge clk)
-    ch0_ca_count_refused_aborted_write <= \$628 ;
-  always @(posedge clk)
-    ch0_ca_count_data_fault_write <= \$629 ;
-  always @(posedge clk)
-    ca_wbuf_write <= \$630 ;
-  always @(posedge clk)
-    ch0_result_status_status_snapshot <= \$631 ;
-  always @(posedge clk)
-    ch0_result_status_cds_snapshot <= \$632 ;
-  always @(posedge clk)
-    ch0_result_status_w0_ne_snapshot <= \$633 ;
-  always @(posedge clk)
-    ch0_result_status_w0_nw_snapshot <= \$634 ;
-  always @(posedge clk)
-    ch0_result_status_w0_crc_ok_snapshot <= \$635 ;
-  always @(posedge clk)
-    ch0_result_status_w1_ne_snapshot <= \$636 ;
-  always @(posedge clk)
-    ch0_result_status_w1_nw_snapshot <= \$637 ;
-  always @(posedge clk)
-    ch0_result_status_w1_crc_ok_snapshot <= \$638 ;
-  always @(posedge clk)
-    ch0_result_status_lc_repeat_snapshot <= \$639 ;
-  always @(posedge clk)
-    ch0_result_status_lc_skip_snapshot <= \$640 ;
-  always @(posedge clk)
-    ch0_result_status_lc_zero_snapshot <= \$641 ;
-  always @(posedge clk)
-    ch0_result_status_spw_mismatch_snapshot <= \$642 ;
-  always @(posedge clk)
-    ch0_result_status_lc_snapshot <= \$643 ;
-  always @(posedge clk)
-    ch0_result_seq_seq_snapshot <= \$644 ;
-  always @(posedge clk)
-    ch0_result_seq_line_delay_snapshot <= \$645 ;
-  always @(posedge clk)
-    ch0_result_w0_lo_data_snapshot <= \$646 ;
-  always @(posedge clk)
-    ch0_result_w0_hi_data_snapshot <= \$647 ;
-  always @(posedge clk)
-    ch0_result_w1_lo_data_snapshot <= \$648 ;
-  always @(posedge clk)
-    ch0_result_w1_hi_data_snapshot <= \$649 ;
-  always @(posedge clk)
-    ch0_result_timestamp_time_snapshot <= \$650 ;
-  always @(posedge clk)
-    ch0_read_select_80 <= \$651 ;
-  always @(posedge clk)
-    ch0_read_select_81 <= \$652 ;
-  always @(posedge clk)
-    ch0_read_select_82 <= \$653 ;
-  always @(posedge clk)
-    ch0_read_select_84 <= \$654 ;
-  always @(posedge clk)
-    ch0_read_select_85 <= \$655 ;
-  always @(posedge clk)
-    ch0_read_select_88 <= \$656 ;
+  assign \$329  = bus__r_addr == 2'h2;
+  assign g_channels_read = bus__r_en & \$329 ;
+  assign \$330  = write_addr == 2'h3;
+  assign g_trigger_write = write_en & \$330 ;
+  assign \$331  = bus__r_addr == 2'h3;
+  assign g_trigger_read = bus__r_en & \$331 ;
+  assign \$332  = write_addr == 3'h4;
+  assign g_irq_pending_write = write_en & \$332 ;
+  assign \$333  = bus__r_addr == 3'h4;
+  assign g_irq_pending_read = bus__r_en & \$333 ;
+  assign \$334  = write_addr == 8'h80;
+  assign ch0_ctrl_write = write_en & \$334 ;
+  assign \$335  = bus__r_addr == 8'h80;
+  assign ch0_ctrl_read = bus__r_en & \$335 ;
+  assign \$336  = write_addr == 8'h81;
+  assign ch0_state_write = write_en & \$336 ;
+  assign \$337  = bus__r_addr == 8'h81;
+  assign ch0_state_read = bus__r_en & \$337 ;
+  assign \$338  = write_addr == 8'h82;
+  assign ch0_caps_write = write_en & \$338 ;
+  assign \$339  = bus__r_addr == 8'h82;
+  assign ch0_caps_read = bus__r_en & \$339 ;
+  assign \$340  = write_addr == 8'h84;
+  assign ch0_irq_status_write = write_en & \$340 ;
+  assign \$341  = bus__r_addr == 8'h84;
+  assign ch0_irq_status_read = bus__r_en & \$341 ;
+  assign \$342  = write_addr == 8'h85;
+  assign ch0_irq_enable_write = write_en & \$342 ;
+  assign \$343  = bus__r_addr == 8'h85;
+  assign ch0_irq_enable_read = bus__r_en & \$343 ;
+  assign \$344  = write_addr == 8'h88;
+  assign ch0_cfg_ma_write = write_en & \$344 ;
+  assign \$345  = bus__r_addr == 8'h88;
+  assign ch0_cfg_ma_read = bus__r_en & \$345 ;
+  assign \$346  = write_addr == 8'h89;
+  assign ch0_cfg_period_write = write_en & \$346 ;
+  assign \$347  = bus__r_addr == 8'h89;
+  assign ch0_cfg_period_read = bus__r_en & \$347 ;
+  assign \$348  = write_addr == 8'h8a;
+  assign ch0_cfg_break_write = write_en & \$348 ;
+  assign \$349  = bus__r_addr == 8'h8a;
+  assign ch0_cfg_break_read = bus__r_en & \$349 ;
+  assign \$350  = write_addr == 8'h8b;
+  assign ch0_cfg_ack_write = write_en & \$350 ;
+  assign \$351  = bus__r_addr == 8'h8b;
+  assign ch0_cfg_ack_read = bus__r_en & \$351 ;
+  assign \$352  = write_addr == 8'h8c;
+  assign ch0_cfg_timeout_write = write_en & \$352 ;
+  assign \$353  = bus__r_addr == 8'h8c;
+  assign ch0_cfg_timeout_read = bus__r_en & \$353 ;
+  assign \$354  = write_addr == 8'h8d;
+  assign ch0_cfg_words_write = write_en & \$354 ;
+  assign \$355  = bus__r_addr == 8'h8d;
+  assign ch0_cfg_words_read = bus__r_en & \$355 ;
+  assign \$356  = write_addr == 8'h8e;
+  assign ch0_cfg_checks_write = write_en & \$356 ;
+  assign \$357  = bus__r_addr == 8'h8e;
+  assign ch0_cfg_checks_read = bus__r_en & \$357 ;
+  assign \$358  = write_addr == 8'h90;
+  assign ch0_result_status_write = write_en & \$358 ;
+  assign \$359  = bus__r_addr == 8'h90;
+  assign ch0_result_status_read = bus__r_en & \$359 ;
+  assign \$360  = write_addr == 8'h91;
+  assign ch0_result_seq_write = write_en & \$360 ;
+  assign \$361  = bus__r_addr == 8'h91;
+  assign ch0_result_seq_read = bus__r_en & \$361 ;
+  assign \$362  = write_addr == 8'h92;
+  assign ch0_result_w0_lo_write = write_en & \$362 ;
+  assign \$363  = bus__r_addr == 8'h92;
+  assign ch0_result_w0_lo_read = bus__r_en & \$363 ;
+  assign \$364  = write_addr == 8'h93;
+  assign ch0_result_w0_hi_write = write_en & \$364 ;
+  assign \$365  = bus__r_addr == 8'h93;
+  assign ch0_result_w0_hi_read = bus__r_en & \$365 ;
+  assign \$366  = write_addr == 8'h94;
+  assign ch0_result_w1_lo_write = write_en & \$366 ;
+  assign \$367  = bus__r_addr == 8'h94;
+  assign ch0_result_w1_lo_read = bus__r_en & \$367 ;
+  assign \$368  = write_addr == 8'h95;
+  assign ch0_result_w1_hi_write = write_en & \$368 ;
+  assign \$369  = bus__r_addr == 8'h95;
+  assign ch0_result_w1_hi_read = bus__r_en & \$369 ;
+  assign \$370  = write_addr == 8'h96;
+  assign ch0_result_timestamp_write = write_en & \$370 ;
+  assign \$371  = bus__r_addr == 8'h96;
+  assign ch0_result_timestamp_read = bus__r_en & \$371 ;
+  assign \$372  = write_addr == 8'h98;
+  assign ch0_count_crc_write = write_en & \$372 ;
+  assign \$373  = bus__r_addr == 8'h98;
+  assign ch0_count_crc_read = bus__r_en & \$373 ;
+  assign \$374  = write_addr == 8'h99;
+  assign ch0_count_ack_write = write_en & \$374 ;
+  assign \$375  = bus__r_addr == 8'h99;
+  assign ch0_count_ack_read = bus__r_en & \$375 ;
+  assign \$376  = write_addr == 8'h9a;
+  assign ch0_count_line_write = write_en & \$376 ;
+  assign \$377  = bus__r_addr == 8'h9a;
+  assign ch0_count_line_read = bus__r_en & \$377 ;
+  assign \$378  = write_addr == 8'h9b;
+  assign ch0_count_lc_write = write_en & \$378 ;
+  assign \$379  = bus__r_addr == 8'h9b;
+  assign ch0_count_lc_read = bus__r_en & \$379 ;
+  assign \$380  = write_addr == 8'h9c;
+  assign ch0_count_check_write = write_en & \$380 ;
+  assign \$381  = bus__r_addr == 8'h9c;
+  assign ch0_count_check_read = bus__r_en & \$381 ;
+  assign \$382  = write_addr == 8'h9d;
+  assign ch0_count_cycle_write = write_en & \$382 ;
+  assign \$383  = bus__r_addr == 8'h9d;
+  assign ch0_count_cycle_read = bus__r_en & \$383 ;
+  assign \$384  = write_addr == 8'h9e;
+  assign ch0_count_stop_write = write_en & \$384 ;
+  assign \$385  = bus__r_addr == 8'h9e;
+  assign ch0_count_stop_read = bus__r_en & \$385 ;
+  assign \$386  = write_addr == 8'hc0;
+  assign ch0_ca_request_write = write_en & \$386 ;
+  assign \$387  = bus__r_addr == 8'hc0;
+  assign ch0_ca_request_read = bus__r_en & \$387 ;
+  assign \$388  = write_addr == 8'hc1;
+  assign ch0_ca_ctrl_write = write_en & \$388 ;
+  assign \$389  = bus__r_addr == 8'hc1;
+  assign ch0_ca_ctrl_read = bus__r_en & \$389 ;
+  assign \$390  = write_addr == 8'hc2;
+  assign ch0_ca_state_write = write_en & \$390 ;
+  assign \$391  = bus__r_addr == 8'hc2;
+  assign ch0_ca_state_read = bus__r_en & \$391 ;
+  assign \$392  = write_addr == 8'hc3;
+  assign ch0_ca_count_crc4_answer_write = write_en & \$392 ;
+  assign \$393  = bus__r_addr == 8'hc3;
+  assign ch0_ca_count_crc4_answer_read = bus__r_en & \$393 ;
+  assign \$394  = write_addr == 8'hc4;
+  assign ch0_ca_count_refused_aborted_write = write_en & \$394 ;
+  assign \$395  = bus__r_addr == 8'hc4;
+  assign ch0_ca_count_refused_aborted_read = bus__r_en & \$395 ;
+  assign \$396  = write_addr == 8'hc5;
+  assign ch0_ca_count_data_fault_write = write_en & \$396 ;
+  assign \$397  = bus__r_addr == 8'hc5;
+  assign ch0_ca_count_data_fault_read = bus__r_en & \$397 ;
+  assign \$398  = write_addr[10:4] == 4'hd;
+  assign \$399  = write_en & \$398 ;
+  assign ch0__ca_wbuf_en = \$399  ? write_strb : 4'h0;
+  assign \$400  = bus__r_addr[10:4] == 4'he;
+  assign ch0__ca_rbuf_en = bus__r_en & \$400 ;
+  assign \$401  = ch0_irq_status_done & ch0_irq_enable_done;
+  assign \$403  = ch0_irq_status_error & ch0_irq_enable_error;
+  assign \$405  = ch0_irq_status_access_done & ch0_irq_enable_access_done;
+  assign ch0_irq = | { \$406 , \$404 , \$402  };
+  assign \$407  = write_addr == 9'h100;
+  assign ch1_ctrl_write = write_en & \$407 ;
+  assign \$408  = bus__r_addr == 9'h100;
+  assign ch1_ctrl_read = bus__r_en & \$408 ;
+  assign \$409  = write_addr == 9'h101;
+  assign ch1_state_write = write_en & \$409 ;
+  assign \$410  = bus__r_addr == 9'h101;
+  assign ch1_state_read = bus__r_en & \$410 ;
+  assign \$411  = write_addr == 9'h102;
+  assign ch1_caps_write = write_en & \$411 ;
+  assign \$412  = bus__r_addr == 9'h102;
+  assign ch1_caps_read = bus__r_en & \$412 ;
+  assign \$413  = write_addr == 9'h104;
+  assign ch1_irq_status_write = write_en & \$413 ;
+  assign \$414  = bus__r_addr == 9'h104;
+  assign ch1_irq_status_read = bus__r_en & \$414 ;
+  assign \$415  = write_addr == 9'h105;
+  assign ch1_irq_enable_write = write_en & \$415 ;
+  assign \$416  = bus__r_addr == 9'h105;
+  assign ch1_irq_enable_read = bus__r_en & \$416 ;
+  assign \$417  = write_addr == 9'h108;
+  assign ch1_cfg_ma_write = write_en & \$417 ;
+  assign \$418  = bus__r_addr == 9'h108;
+  assign ch1_cfg_ma_read = bus__r_en & \$418 ;
+  assign \$419  = write_addr == 9'h109;
+  assign ch1_cfg_period_write = write_en & \$419 ;
+  assign \$420  = bus__r_addr == 9'h109;
+  assign ch1_cfg_period_read = bus__r_en & \$420 ;
+  assign \$421  = write_addr == 9'h10a;
+  assign ch1_cfg_break_write = write_en & \$421 ;
+  assign \$422  = bus__r_addr == 9'h10a;
+  assign ch1_cfg_break_read = bus__r_en & \$422 ;
+  assign \$423  = write_addr == 9'h10b;
+  assign ch1_cfg_ack_write = write_en & \$423 ;
+  assign \$424  = bus__r_addr == 9'h10b;
+  assign ch1_cfg_ack_read = bus__r_en & \$424 ;
+  assign \$425  = write_addr == 9'h10c;
+  assign ch1_cfg_timeout_write = write_en & \$425 ;
+  assign \$426  = bus__r_addr == 9'h10c;
+  assign ch1_cfg_timeout_read = bus__r_en & \$426 ;
+  assign \$427  = write_addr == 9'h10d;
+  assign ch1_cfg_words_write = write_en & \$427 ;
+  assign \$428  = bus__r_addr == 9'h10d;
+  assign ch1_cfg_words_read = bus__r_en & \$428 ;
+  assign \$429  = write_addr == 9'h10e;
+  assign ch1_cfg_checks_write = write_en & \$429 ;
+  assign \$430  = bus__r_addr == 9'h10e;
+  assign ch1_cfg_checks_read = bus__r_en & \$430 ;
+  assign \$431  = write_addr == 9'h110;
+  assign ch1_result_status_write = write_en & \$431 ;
+  assign \$432  = bus__r_addr == 9'h110;
+  assign ch1_result_status_read = bus__r_en & \$432 ;
+  assign \$433  = write_addr == 9'h111;
+  assign ch1_result_seq_write = write_en & \$433 ;
+  assign \$434  = bus__r_addr == 9'h111;
+  assign ch1_result_seq_read = bus__r_en & \$434 ;
+  assign \$435  = write_addr == 9'h112;
+  assign ch1_result_w0_lo_write = write_en & \$435 ;
+  assign \$436  = bus__r_addr == 9'h112;
+  assign ch1_result_w0_lo_read = bus__r_en & \$436 ;
+  assign \$437  = write_addr == 9'h113;
+  assign ch1_result_w0_hi_write = write_en & \$437 ;
+  assign \$438  = bus__r_addr == 9'h113;
+  assign ch1_result_w0_hi_read = bus__r_en & \$438 ;
+  assign \$439  = write_addr == 9'h114;
+  assign ch1_result_w1_lo_write = write_en & \$439 ;
+  assign \$440  = bus__r_addr == 9'h114;
+  assign ch1_result_w1_lo_read = bus__r_en & \$440 ;
+  assign \$441  = write_addr == 9'h115;
+  assign ch1_result_w1_hi_write = write_en & \$441 ;
+  assign \$442  = bus__r_addr == 9'h115;
+  assign ch1_result_w1_hi_read = bus__r_en & \$442 ;
+  assign \$443  = write_addr == 9'h116;
+  assign ch1_result_timestamp_write = write_en & \$443 ;
+  assign \$444  = bus__r_addr == 9'h116;
+  assign ch1_result_timestamp_read = bus__r_en & \$444 ;
+  assign \$445  = write_addr == 9'h118;
+  assign ch1_count_crc_write = write_en & \$445 ;
+  assign \$446  = bus__r_addr == 9'h118;
+  assign ch1_count_crc_read = bus__r_en & \$446 ;
+  assign \$447  = write_addr == 9'h119;
+  assign ch1_count_ack_write = write_en & \$447 ;
+  assign \$448  = bus__r_addr == 9'h119;
+  assign ch1_count_ack_read = bus__r_en & \$448 ;
+  assign \$449  = write_addr == 9'h11a;
+  assign ch1_count_line_write = write_en & \$449 ;
+  assign \$450  = bus__r_addr == 9'h11a;
+  assign ch1_count_line_read = bus__r_en & \$450 ;
+  assign \$451  = write_addr == 9'h11b;
+  assign ch1_count_lc_write = write_en & \$451 ;
+  assign \$452  = bus__r_addr == 9'h11b;
+  assign ch1_count_lc_read = bus__r_en & \$452 ;
+  assign \$453  = write_addr == 9'h11c;
+  assign ch1_count_check_write = write_en & \$453 ;
+  assign \$454  = bus__r_addr == 9'h11c;
+  assign ch1_count_check_read = bus__r_en & \$454 ;
+  assign \$455  = write_addr == 9'h11d;
+  assign ch1_count_cycle_write = write_en & \$455 ;
+  assign \$456  = bus__r_addr == 9'h11d;
+  assign ch1_count_cycle_read = bus__r_en & \$456 ;
+  assign \$457  = write_addr == 9'h11e;
+  assign ch1_count_stop_write = write_en & \$457 ;
+  assign \$458  = bus__r_addr == 9'h11e;
+  assign ch1_count_stop_read = bus__r_en & \$458 ;
+  assign \$459  = write_addr == 9'h140;
+  assign ch1_ca_request_write = write_en & \$459 ;
+  assign \$460  = bus__r_addr == 9'h140;
+  assign ch1_ca_request_read = bus__r_en & \$460 ;
+  assign \$461  = write_addr == 9'h141;
+  assign ch1_ca_ctrl_write = write_en & \$461 ;
+  assign \$462  = bus__r_addr == 9'h141;
+  assign ch1_ca_ctrl_read = bus__r_en & \$462 ;
+  assign \$463  = write_addr == 9'h142;
+  assign ch1_ca_state_write = write_en & \$463 ;
+  assign \$464  = bus__r_addr == 9'h142;
+  assign ch1_ca_state_read = bus__r_en & \$464 ;
+  assign \$465  = write_addr == 9'h143;
+  assign ch1_ca_count_crc4_answer_write = write_en & \$465 ;
+  assign \$466  = bus__r_addr == 9'h143;
+  assign ch1_ca_count_crc4_answer_read = bus__r_en & \$466 ;
+  assign \$467  = write_addr == 9'h144;
+  assign ch1_ca_count_refused_aborted_write = write_en & \$467 ;
+  assign \$468  = bus__r_addr == 9'h144;
+  assign ch1_ca_count_refused_aborted_read = bus__r_en & \$468 ;
+  assign \$469  = write_addr == 9'h145;
+  assign ch1_ca_count_data_fault_write = write_en & \$469 ;
+  assign \$470  = bus__r_addr == 9'h145;
+  assign ch1_ca_count_data_fault_read = bus__r_en & \$470 ;
+  assign \$471  = write_addr[10:4] == 5'h15;
+  assign \$472  = write_en & \$471 ;
+  assign ch1__ca_wbuf_en = \$472  ? write_strb : 4'h0;
+  assign \$473  = bus__r_addr[10:4] == 5'h16;
+  assign ch1__ca_rbuf_en = bus__r_en & \$473 ;
+  assign \$474  = ch1_irq_status_done & ch1_irq_enable_done;
+  assign \$476  = ch1_irq_status_error & ch1_irq_enable_error;
+  assign \$478  = ch1_irq_status_access_done & ch1_irq_enable_access_done;
+  assign ch1_irq = | { \$479 , \$477 , \$475  };
+  always @(posedge clk)
+    write_en <= \$480 ;
+  always @(posedge clk)
+    write_addr <= \$481 ;
+  always @(posedge clk)
+    write_data <= \$482 ;
+  always @(posedge clk)
+    write_strb <= \$483 ;
+  always @(posedge clk)
+    g_trigger_start <= \$484 ;
+  always @(posedge clk)
+    g_read_select_0 <= \$485 ;
+  always @(posedge clk)
+    g_read_select_1 <= \$486 ;
+  always @(posedge clk)
+    g_read_select_2 <= \$487 ;
+  always @(posedge clk)
+    g_read_select_3 <= \$488 ;
+  always @(posedge clk)
+    g_read_select_4 <= \$489 ;
+  always @(posedge clk)
+    ch0_ctrl_start <= \$490 ;
+  always @(posedge clk)
+    ch0_ctrl_abort <= \$491 ;
+  always @(posedge clk)
+    ch0_ctrl_clear_counters <= \$492 ;
+  always @(posedge clk)
+    ch0_ctrl_periodic <= \$493 ;
+  always @(posedge clk)
+    ch0_ctrl_trigger_enable <= \$494 ;
+  always @(posedge clk)
+    ch0_irq_status_done <= \$495 ;
+  always @(posedge clk)
+    ch0_irq_status_error <= \$496 ;
+  always @(posedge clk)
+    ch0_irq_status_access_done <= \$497 ;
+  always @(posedge clk)
+    ch0_irq_enable_done <= \$498 ;
+  always @(posedge clk)
+    ch0_irq_enable_error <= \$499 ;
+  always @(posedge clk)
+    ch0_irq_enable_access_done <= \$500 ;
+  always @(posedge clk)
+    ch0_cfg_ma_ma_half_period <= \$501 ;
+  always @(posedge clk)
+    ch0_cfg_ma_delay_limit <= \$502 ;
+  always @(posedge clk)
+    ch0_cfg_period_request_period <= \$503 ;
+  always @(posedge clk)
+    ch0_cfg_break_break_time <= \$504 ;
+  always @(posedge clk)
+    ch0_cfg_ack_ack_limit <= \$505 ;
+  always @(posedge clk)
+    ch0_cfg_timeout_timeout_limit <= \$506 ;
+  always @(posedge clk)
+    ch0_cfg_words_w0_data_bits <= \$507 ;
+  always @(posedge clk)
+    ch0_cfg_words_w0_nenw <= \$508 ;
+  always @(posedge clk)
+    ch0_cfg_words_w0_lc <= \$509 ;
+  always @(posedge clk)
+    ch0_cfg_words_w0_crc <= \$510 ;
+  always @(posedge clk)
+    ch0_cfg_words_w1_data_bits <= \$511 ;
+  always @(posedge clk)
+    ch0_cfg_words_w1_nenw <= \$512 ;
+  always @(posedge clk)
+    ch0_cfg_words_w1_lc <= \$513 ;
+  always @(posedge clk)
+    ch0_cfg_words_w1_crc <= \$514 ;
+  always @(posedge clk)
+    ch0_cfg_words_w1_enable <= \$515 ;
+  always @(posedge clk)
+    ch0_cfg_checks_end_check <= \$516 ;
+  always @(posedge clk)
+    ch0_cfg_checks_spw_check <= \$517 ;
+  always @(posedge clk)
+    ch0_cfg_checks_spw_tolerance <= \$518 ;
+  always @(posedge clk)
+    ch0_ca_request_slave_id <= \$519 ;
+  always @(posedge clk)
+    ch0_ca_request_address <= \$520 ;
+  always @(posedge clk)
+    ch0_ca_request_count <= \$521 ;
   always @(posedge clk)
-    ch0_read_select_89 <= \$657 ;
+    \ch0_ca_request_write$65  <= \$522 ;
   always @(posedge clk)
-    ch0_read_select_8a <= \$658 ;
+    ch0_ca_ctrl_start <= \$523 ;
   always @(posedge clk)
-    ch0_read_select_8b <= \$659 ;
+    ch0_ca_ctrl_abort <= \$524 ;
   always @(posedge clk)
-    ch0_read_select_8c <= \$660 ;
+    ch0_result_status_status_snapshot <= \$525 ;
   always @(posedge clk)
-    ch0_read_select_8d <= \$661 ;
+    ch0_result_status_cds_snapshot <= \$526 ;
   always @(posedge clk)
-    ch0_read_select_8e <= \$662 ;
+    ch0_result_status_w0_ne_snapshot <= \$527 ;
   always @(posedge clk)
-    ch0_read_select_90 <= \$663 ;
+    ch0_result_status_w0_nw_snapshot <= \$528 ;
   always @(posedge clk)
-    ch0_read_select_91 <= \$664 ;
+    ch0_result_status_w0_crc_ok_snapshot <= \$529 ;
   always @(posedge clk)
-    ch0_read_select_92 <= \$665 ;
+    ch0_result_status_w1_ne_snapshot <= \$530 ;
   always @(posedge clk)
-    ch0_read_select_93 <= \$666 ;
+    ch0_result_status_w1_nw_snapshot <= \$531 ;
   always @(posedge clk)
-    ch0_read_select_94 <= \$667 ;
+    ch0_result_status_w1_crc_ok_snapshot <= \$532 ;
   always @(posedge clk)
-    ch0_read_select_95 <= \$668 ;
+    ch0_result_status_lc_repeat_snapshot <= \$533 ;
   always @(posedge clk)
-    ch0_read_select_96 <= \$669 ;
+    ch0_result_status_lc_skip_snapshot <= \$534 ;
   always @(posedge clk)
-    ch0_read_select_98 <= \$670 ;
+    ch0_result_status_lc_zero_snapshot <= \$535 ;
   always @(posedge clk)
-    ch0_read_select_99 <= \$671 ;
+    ch0_result_status_spw_mismatch_snapshot <= \$536 ;
   always @(posedge clk)
-    ch0_read_select_9a <= \$672 ;
+    ch0_result_status_lc_snapshot <= \$537 ;
   always @(posedge clk)
-    ch0_read_select_9b <= \$673 ;
+    ch0_result_seq_seq_snapshot <= \$538 ;
   always @(posedge clk)
-    ch0_read_select_9c <= \$674 ;
+    ch0_result_seq_line_delay_snapshot <= \$539 ;
   always @(posedge clk)
-    ch0_read_select_9d <= \$675 ;
+    ch0_result_w0_lo_data_snapshot <= \$540 ;
   always @(posedge clk)
-    ch0_read_select_9e <= \$676 ;
+    ch0_result_w0_hi_data_snapshot <= \$541 ;
   always @(posedge clk)
-    ch0_read_select_c0 <= \$677 ;
+    ch0_result_w1_lo_data_snapshot <= \$542 ;
   always @(posedge clk)
-    ch0_read_select_c1 <= \$678 ;
+    ch0_result_w1_hi_data_snapshot <= \$543 ;
   always @(posedge clk)
-    ch0_read_select_c2 <= \$679 ;
+    ch0_result_timestamp_time_snapshot <= \$544 ;
   always @(posedge clk)
-    ch0_read_select_c3 <= \$680 ;
+    ch0_read_select_80 <= \$545 ;
   always @(posedge clk)
-    ch0_read_select_c4 <= \$681 ;
+    ch0_read_select_81 <= \$546 ;
   always @(posedge clk)
-    ch0_read_select_c5 <= \$682 ;
+    ch0_read_select_82 <= \$547 ;
   always @(posedge clk)
-    ch1_ctrl_write <= \$683 ;
+    ch0_read_select_84 <= \$548 ;
   always @(posedge clk)
-    ch1_ctrl_start <= \$684 ;
+    ch0_read_select_85 <= \$549 ;
   always @(posedge clk)
-    ch1_ctrl_abort <= \$685 ;
+    ch0_read_select_88 <= \$550 ;
   always @(posedge clk)
-    ch1_ctrl_clear_counters <= \$686 ;
+    ch0_read_select_89 <= \$551 ;
   always @(posedge clk)
-    ch1_ctrl_periodic <= \$687 ;
+    ch0_read_select_8a <= \$552 ;
   always @(posedge clk)
-    ch1_ctrl_trigger_enable <= \$688 ;
+    ch0_read_select_8b <= \$553 ;
   always @(posedge clk)
-    ch1_state_write <= \$689 ;
+    ch0_read_select_8c <= \$554 ;
   always @(posedge clk)
-    ch1_caps_write <= \$690 ;
+    ch0_read_select_8d <= \$555 ;
   always @(posedge clk)
-    ch1_irq_status_write <= \$691 ;
+    ch0_read_select_8e <= \$556 ;
   always @(posedge clk)
-    ch1_irq_status_done <= \$692 ;
+    ch0_read_select_90 <= \$557 ;
   always @(posedge clk)
-    ch1_irq_status_error <= \$693 ;
+    ch0_read_select_91 <= \$558 ;
   always @(posedge clk)
-    ch1_irq_status_access_done <= \$694 ;
+    ch0_read_select_92 <= \$559 ;
   always @(posedge clk)
-    ch1_irq_enable_write <= \$695 ;
+    ch0_read_select_93 <= \$560 ;
   always @(posedge clk)
-    ch1_irq_enable_done <= \$696 ;
+    ch0_read_select_94 <= \$561 ;
   always @(posedge clk)
-    ch1_irq_enable_error <= \$697 ;
+    ch0_read_select_95 <= \$562 ;
   always @(posedge clk)
-    ch1_irq_enable_access_done <= \$698 ;
+    ch0_read_select_96 <= \$563 ;
   always @(posedge clk)
-    ch1_cfg_ma_write <= \$699 ;
+    ch0_read_select_98 <= \$564 ;
   always @(posedge clk)
-    ch1_cfg_ma_ma_half_period <= \$700 ;
+    ch0_read_select_99 <= \$565 ;
   always @(posedge clk)
-    ch1_cfg_ma_delay_limit <= \$701 ;
+    ch0_read_select_9a <= \$566 ;
   always @(posedge clk)
-    ch1_cfg_period_write <= \$702 ;
+    ch0_read_select_9b <= \$567 ;
   always @(posedge clk)
-    ch1_cfg_period_request_period <= \$703 ;
+    ch0_read_select_9c <= \$568 ;
   always @(posedge clk)
-    ch1_cfg_break_write <= \$704 ;
+    ch0_read_select_9d <= \$569 ;
   always @(posedge clk)
-    ch1_cfg_break_break_time <= \$705 ;
+    ch0_read_select_9e <= \$570 ;
   always @(posedge clk)
-    ch1_cfg_ack_write <= \$706 ;
+    ch0_read_select_c0 <= \$571 ;
   always @(posedge clk)
-    ch1_cfg_ack_ack_limit <= \$707 ;
+    ch0_read_select_c1 <= \$572 ;
   always @(posedge clk)
-    ch1_cfg_timeout_write <= \$708 ;
+    ch0_read_select_c2 <= \$573 ;
   always @(posedge clk)
-    ch1_cfg_timeout_timeout_limit <= \$709 ;
+    ch0_read_select_c3 <= \$574 ;
   always @(posedge clk)
-    ch1_cfg_words_write <= \$710 ;
+    ch0_read_select_c4 <= \$575 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_data_bits <= \$711 ;
+    ch0_read_select_c5 <= \$576 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_nenw <= \$712 ;
+    ch1_ctrl_start <= \$577 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_lc <= \$713 ;
+    ch1_ctrl_abort <= \$578 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_crc <= \$714 ;
+    ch1_ctrl_clear_counters <= \$579 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_data_bits <= \$715 ;
+    ch1_ctrl_periodic <= \$580 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_nenw <= \$716 ;
+    ch1_ctrl_trigger_enable <= \$581 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_lc <= \$717 ;
+    ch1_irq_status_done <= \$582 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_crc <= \$718 ;
+    ch1_irq_status_error <= \$583 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_enable <= \$719 ;
+    ch1_irq_status_access_done <= \$584 ;
   always @(posedge clk)
-    ch1_cfg_checks_write <= \$720 ;
+    ch1_irq_enable_done <= \$585 ;
   always @(posedge clk)
-    ch1_cfg_checks_end_check <= \$721 ;
+    ch1_irq_enable_error <= \$586 ;
   always @(posedge clk)
-    ch1_cfg_checks_spw_check <= \$722 ;
+    ch1_irq_enable_access_done <= \$587 ;
   always @(posedge clk)
-    ch1_cfg_checks_spw_tolerance <= \$723 ;
+    ch1_cfg_ma_ma_half_period <= \$588 ;
   always @(posedge clk)
-    ch1_result_status_write <= \$724 ;
+    ch1_cfg_ma_delay_limit <= \$589 ;
   always @(posedge clk)
-    ch1_result_seq_write <= \$725 ;
+    ch1_cfg_period_request_period <= \$590 ;
   always @(posedge clk)
-    ch1_result_w0_lo_write <= \$726 ;
+    ch1_cfg_break_break_time <= \$591 ;
   always @(posedge clk)
-    ch1_result_w0_hi_write <= \$727 ;
+    ch1_cfg_ack_ack_limit <= \$592 ;
   always @(posedge clk)
-    ch1_result_w1_lo_write <= \$728 ;
+    ch1_cfg_timeout_timeout_limit <= \$593 ;
   always @(posedge clk)
-    ch1_result_w1_hi_write <= \$729 ;
+    ch1_cfg_words_w0_data_bits <= \$594 ;
   always @(posedge clk)
-    ch1_result_timestamp_write <= \$730 ;
+    ch1_cfg_words_w0_nenw <= \$595 ;
   always @(posedge clk)
-    ch1_count_crc_write <= \$731 ;
+    ch1_cfg_words_w0_lc <= \$596 ;
   always @(posedge clk)
-    ch1_count_ack_write <= \$732 ;
+    ch1_cfg_words_w0_crc <= \$597 ;
   always @(posedge clk)
-    ch1_count_line_write <= \$733 ;
+    ch1_cfg_words_w1_data_bits <= \$598 ;
   always @(posedge clk)
-    ch1_count_lc_write <= \$734 ;
+    ch1_cfg_words_w1_nenw <= \$599 ;
   always @(posedge clk)
-    ch1_count_check_write <= \$735 ;
+    ch1_cfg_words_w1_lc <= \$600 ;
   always @(posedge clk)
-    ch1_count_cycle_write <= \$736 ;
+    ch1_cfg_words_w1_crc <= \$601 ;
   always @(posedge clk)
-    ch1_count_stop_write <= \$737 ;
+    ch1_cfg_words_w1_enable <= \$602 ;
   always @(posedge clk)
-    ch1_ca_request_write <= \$738 ;
+    ch1_cfg_checks_end_check <= \$603 ;
   always @(posedge clk)
-    ch1_ca_request_slave_id <= \$739 ;
+    ch1_cfg_checks_spw_check <= \$604 ;
   always @(posedge clk)
-    ch1_ca_request_address <= \$740 ;
+    ch1_cfg_checks_spw_tolerance <= \$605 ;
   always @(posedge clk)
-    ch1_ca_request_count <= \$741 ;
+    ch1_ca_request_slave_id <= \$606 ;
   always @(posedge clk)
-    \ch1_ca_request_write$226  <= \$742 ;
+    ch1_ca_request_address <= \$607 ;
   always @(posedge clk)
-    ch1_ca_ctrl_write <= \$743 ;
+    ch1_ca_request_count <= \$608 ;
   always @(posedge clk)
-    ch1_ca_ctrl_start <= \$744 ;
+    \ch1_ca_request_write$186  <= \$609 ;
   always @(posedge clk)
-    ch1_ca_ctrl_abort <= \$745 ;
+    ch1_ca_ctrl_start <= \$610 ;
   always @(posedge clk)
-    ch1_ca_state_write <= \$746 ;
+    ch1_ca_ctrl_abort <= \$611 ;
   always @(posedge clk)
-    ch1_ca_count_crc4_answer_write <= \$747 ;
+    ch1_result_status_status_snapshot <= \$612 ;
   always @(posedge clk)
-    ch1_ca_count_refused_aborted_write <= \$748 ;
+    ch1_result_status_cds_snapshot <= \$613 ;
   always @(posedge clk)
-    ch1_ca_count_data_fault_write <= \$749 ;
+    ch1_result_status_w0_ne_snapshot <= \$614 ;
   always @(posedge clk)
-    \ca_wbuf_write$234  <= \$750 ;
+    ch1_result_status_w0_nw_snapshot <= \$615 ;
   always @(posedge clk)
-    ch1_result_status_status_snapshot <= \$751 ;
+    ch1_result_status_w0_crc_ok_snapshot <= \$616 ;
   always @(posedge clk)
-    ch1_result_status_cds_snapshot <= \$752 ;
+    ch1_result_status_w1_ne_snapshot <= \$617 ;
   always @(posedge clk)
-    ch1_result_status_w0_ne_snapshot <= \$753 ;
+    ch1_result_status_w1_nw_snapshot <= \$618 ;
   always @(posedge clk)
-    ch1_result_status_w0_nw_snapshot <= \$754 ;
+    ch1_result_status_w1_crc_ok_snapshot <= \$619 ;
   always @(posedge clk)
-    ch1_result_status_w0_crc_ok_snapshot <= \$755 ;
+    ch1_result_status_lc_repeat_snapshot <= \$620 ;
   always @(posedge clk)
-    ch1_result_status_w1_ne_snapshot <= \$756 ;
+    ch1_result_status_lc_skip_snapshot <= \$621 ;
   always @(posedge clk)
-    ch1_result_status_w1_nw_snapshot <= \$757 ;
+    ch1_result_status_lc_zero_snapshot <= \$622 ;
   always @(posedge clk)
-    ch1_result_status_w1_crc_ok_snapshot <= \$758 ;
+    ch1_result_status_spw_mismatch_snapshot <= \$623 ;
   always @(posedge clk)
-    ch1_result_status_lc_repeat_snapshot <= \$759 ;
+    ch1_result_status_lc_snapshot <= \$624 ;
   always @(posedge clk)
-    ch1_result_status_lc_skip_snapshot <= \$760 ;
+    ch1_result_seq_seq_snapshot <= \$625 ;
   always @(posedge clk)
-    ch1_result_status_lc_zero_snapshot <= \$761 ;
+    ch1_result_seq_line_delay_snapshot <= \$626 ;
   always @(posedge clk)
-    ch1_result_status_spw_mismatch_snapshot <= \$762 ;
+    ch1_result_w0_lo_data_snapshot <= \$627 ;
   always @(posedge clk)
-    ch1_result_status_lc_snapshot <= \$763 ;
+    ch1_result_w0_hi_data_snapshot <= \$628 ;
   always @(posedge clk)
-    ch1_result_seq_seq_snapshot <= \$764 ;
+    ch1_result_w1_lo_data_snapshot <= \$629 ;
   always @(posedge clk)
-    ch1_result_seq_line_delay_snapshot <= \$765 ;
+    ch1_result_w1_hi_data_snapshot <= \$630 ;
   always @(posedge clk)
-    ch1_result_w0_lo_data_snapshot <= \$766 ;
+    ch1_result_timestamp_time_snapshot <= \$631 ;
   always @(posedge clk)
-    ch1_result_w0_hi_data_snapshot <= \$767 ;
+    ch1_read_select_100 <= \$632 ;
   always @(posedge clk)
-    ch1_result_w1_lo_data_snapshot <= \$768 ;
+    ch1_read_select_101 <= \$633 ;
   always @(posedge clk)
-    ch1_result_w1_hi_data_snapshot <= \$769 ;
+    ch1_read_select_102 <= \$634 ;
   always @(posedge clk)
-    ch1_result_timestamp_time_snapshot <= \$770 ;
+    ch1_read_select_104 <= \$635 ;
   always @(posedge clk)
-    ch1_read_select_100 <= \$771 ;
+    ch1_read_select_105 <= \$636 ;
   always @(posedge clk)
-    ch1_read_select_101 <= \$772 ;
+    ch1_read_select_108 <= \$637 ;
   always @(posedge clk)
-    ch1_read_select_102 <= \$773 ;
+    ch1_read_select_109 <= \$638 ;
   always @(posedge clk)
-    ch1_read_select_104 <= \$774 ;
+    ch1_read_select_10a <= \$639 ;
   always @(posedge clk)
-    ch1_read_select_105 <= \$775 ;
+    ch1_read_select_10b <= \$640 ;
   always @(posedge clk)
-    ch1_read_select_108 <= \$776 ;
+    ch1_read_select_10c <= \$641 ;
   always @(posedge clk)
-    ch1_read_select_109 <= \$777 ;
+    ch1_read_select_10d <= \$642 ;
   always @(posedge clk)
-    ch1_read_select_10a <= \$778 ;
+    ch1_read_select_10e <= \$643 ;
   always @(posedge clk)
-    ch1_read_select_10b <= \$779 ;
+    ch1_read_select_110 <= \$644 ;
   always @(posedge clk)
-    ch1_read_select_10c <= \$780 ;
+    ch1_read_select_111 <= \$645 ;
   always @(posedge clk)
-    ch1_read_select_10d <= \$781 ;
+    ch1_read_select_112 <= \$646 ;
   always @(posedge clk)
-    ch1_read_select_10e <= \$782 ;
+    ch1_read_select_113 <= \$647 ;
   always @(posedge clk)
-    ch1_read_select_110 <= \$783 ;
+    ch1_read_select_114 <= \$648 ;
   always @(posedge clk)
-    ch1_read_select_111 <= \$784 ;
+    ch1_read_select_115 <= \$649 ;
   always @(posedge clk)
-    ch1_read_select_112 <= \$785 ;
+    ch1_read_select_116 <= \$650 ;
   always @(posedge clk)
-    ch1_read_select_113 <= \$786 ;
+    ch1_read_select_118 <= \$651 ;
   always @(posedge clk)
-    ch1_read_select_114 <= \$787 ;
+    ch1_read_select_119 <= \$652 ;
   always @(posedge clk)
-    ch1_read_select_115 <= \$788 ;
+    ch1_read_select_11a <= \$653 ;
   always @(posedge clk)
-    ch1_read_select_116 <= \$789 ;
+    ch1_read_select_11b <= \$654 ;
   always @(posedge clk)
-    ch1_read_select_118 <= \$790 ;
+    ch1_read_select_11c <= \$655 ;
   always @(posedge clk)
-    ch1_read_select_119 <= \$791 ;
+    ch1_read_select_11d <= \$656 ;
   always @(posedge clk)
-    ch1_read_select_11a <= \$792 ;
+    ch1_read_select_11e <= \$657 ;
   always @(posedge clk)
-    ch1_read_select_11b <= \$793 ;
+    ch1_read_select_140 <= \$658 ;
   always @(posedge clk)
-    ch1_read_select_11c <= \$794 ;
+    ch1_read_select_141 <= \$659 ;
   always @(posedge clk)
-    ch1_read_select_11d <= \$795 ;
+    ch1_read_select_142 <= \$660 ;
   always @(posedge clk)
-    ch1_read_select_11e <= \$796 ;
+    ch1_read_select_143 <= \$661 ;
   always @(posedge clk)
-    ch1_read_select_140 <= \$797 ;
+    ch1_read_select_144 <= \$662 ;
   always @(posedge clk)
-    ch1_read_select_141 <= \$798 ;
+    ch1_read_select_145 <= \$663 ;
   always @(posedge clk)
-    ch1_read_select_142 <= \$799 ;
+    window0_read <= \$664 ;
   always @(posedge clk)
-    ch1_read_select_143 <= \$800 ;
+    window1_read <= \$665 ;
   always @(posedge clk)
-    ch1_read_select_144 <= \$801 ;
-  always @(posedge clk)
-    ch1_read_select_145 <= \$802 ;
-  always @(posedge clk)
-    window0_read <= \$803 ;
-  always @(posedge clk)
-    window1_read <= \$804 ;
-  always @(posedge clk)
-    read_data <= \$805 ;
-  assign \$1  = ! bus__w_addr;
-  assign \$2  = bus__w_en & \$1 ;
-  assign \$3  = bus__w_addr == 1'h1;
-  assign \$4  = bus__w_en & \$3 ;
-  assign \$5  = bus__w_addr == 2'h2;
-  assign \$6  = bus__w_en & \$5 ;
-  assign \$7  = bus__w_addr == 2'h3;
-  assign \$8  = bus__w_en & \$7 ;
-  assign \$9  = write_data[0] & write_strb[0];
-  assign \$10  = g_trigger_write ? \$9  : 1'h0;
-  assign \$11  = bus__w_addr == 3'h4;
-  assign \$12  = bus__w_en & \$11 ;
-  assign \$13  = ! bus__r_addr;
-  assign \$14  = bus__r_addr == 1'h1;
-  assign \$15  = bus__r_addr == 2'h2;
-  assign \$16  = bus__r_addr == 2'h3;
-  assign \$17  = bus__r_addr == 3'h4;
-  assign \$18  = bus__w_addr == 8'h80;
-  assign \$19  = bus__w_en & \$18 ;
-  assign \$20  = write_data[0] & write_strb[0];
-  assign \$21  = ch0_ctrl_write ? \$20  : 1'h0;
-  assign \$22  = write_data[1] & write_strb[0];
-  assign \$23  = ch0_ctrl_write ? \$22  : 1'h0;
-  assign \$24  = write_data[2] & write_strb[0];
-  assign \$25  = ch0_ctrl_write ? \$24  : 1'h0;
-  assign \$26  = ch0_ctrl_write & write_strb[1];
-  assign \$27  = ch0_ctrl_write & write_strb[1];
-  assign \$28  = bus__w_addr == 8'h81;
-  assign \$29  = bus__w_en & \$28 ;
-  assign \$30  = bus__w_addr == 8'h82;
-  assign \$31  = bus__w_en & \$30 ;
-  assign \$32  = bus__w_addr == 8'h84;
-  assign \$33  = bus__w_en & \$32 ;
-  assign \$34  = write_data[0] & write_strb[0];
-  assign \$35  = ch0_irq_status_write ? \$34  : 1'h0;
-  assign \$36  = write_data[1] & write_strb[0];
-  assign \$37  = ch0_irq_status_write ? \$36  : 1'h0;
-  assign \$38  = write_data[2] & write_strb[0];
-  assign \$39  = ch0_irq_status_write ? \$38  : 1'h0;
-  assign \$40  = bus__w_addr == 8'h85;
-  assign \$41  = bus__w_en & \$40 ;
-  assign \$42  = ch0_irq_enable_write & write_strb[0];
-  assign \$43  = ch0_irq_enable_write & write_strb[0];
-  assign \$44  = ch0_irq_enable_write & write_strb[0];
-  assign \$45  = bus__w_addr == 8'h88;
-  assign \$46  = bus__w_en & \$45 ;
-  assign \$47  = ch0_cfg_ma_write & write_strb[0];
-  assign \$48  = ch0_cfg_ma_write & write_strb[1];
-  assign \$49  = ch0_cfg_ma_write & write_strb[2];
-  assign \$50  = ch0_cfg_ma_write & write_strb[3];
-  assign \$51  = bus__w_addr == 8'h89;
-  assign \$52  = bus__w_en & \$51 ;
-  assign \$53  = ch0_cfg_period_write & write_strb[0];
-  assign \$54  = ch0_cfg_period_write & write_strb[1];
-  assign \$55  = ch0_cfg_period_write & write_strb[2];
-  assign \$56  = bus__w_addr == 8'h8a;
-  assign \$57  = bus__w_en & \$56 ;
-  assign \$58  = ch0_cfg_break_write & write_strb[0];
-  assign \$59  = ch0_cfg_break_write & write_strb[1];
-  assign \$60  = ch0_cfg_break_write & write_strb[2];
-  assign \$61  = bus__w_addr == 8'h8b;
-  assign \$62  = bus__w_en & \$61 ;
-  assign \$63  = ch0_cfg_ack_write & write_strb[0];
-  assign \$64  = ch0_cfg_ack_write & write_strb[1];
-  assign \$65  = ch0_cfg_ack_write & write_strb[2];
-  assign \$66  = bus__w_addr == 8'h8c;
-  assign \$67  = bus__w_en & \$66 ;
-  assign \$68  = ch0_cfg_timeout_write & write_strb[0];
-  assign \$69  = ch0_cfg_timeout_write & write_strb[1];
-  assign \$70  = ch0_cfg_timeout_write & write_strb[2];
-  assign \$71  = bus__w_addr == 8'h8d;
-  assign \$72  = bus__w_en & \$71 ;
-  assign \$73  = ch0_cfg_words_write & write_strb[0];
-  assign \$74  = ch0_cfg_words_write & write_strb[0];
-  assign \$75  = ch0_cfg_words_write & write_strb[0];
-  assign \$76  = ch0_cfg_words_write & write_strb[1];
-  assign \$77  = ch0_cfg_words_write & write_strb[2];
-  assign \$78  = ch0_cfg_words_write & write_strb[2];
-  assign \$79  = ch0_cfg_words_write & write_strb[2];
-  assign \$80  = ch0_cfg_words_write & write_strb[3];
-  assign \$81  = ch0_cfg_words_write & write_strb[3];
-  assign \$82  = bus__w_addr == 8'h8e;
-  assign \$83  = bus__w_en & \$82 ;
-  assign \$84  = ch0_cfg_checks_write & write_strb[0];
-  assign \$85  = ch0_cfg_checks_write & write_strb[0];
-  assign \$86  = ch0_cfg_checks_write & write_strb[1];
-  assign \$87  = bus__w_addr == 8'h90;
-  assign \$88  = bus__w_en & \$87 ;
-  assign \$89  = bus__w_addr == 8'h91;
-  assign \$90  = bus__w_en & \$89 ;
-  assign \$91  = bus__w_addr == 8'h92;
-  assign \$92  = bus__w_en & \$91 ;
-  assign \$93  = bus__w_addr == 8'h93;
-  assign \$94  = bus__w_en & \$93 ;
-  assign \$95  = bus__w_addr == 8'h94;
-  assign \$96  = bus__w_en & \$95 ;
-  assign \$97  = bus__w_addr == 8'h95;
-  assign \$98  = bus__w_en & \$97 ;
-  assign \$99  = bus__w_addr == 8'h96;
-  assign \$100  = bus__w_en & \$99 ;
-  assign \$101  = bus__w_addr == 8'h98;
-  assign \$102  = bus__w_en & \$101 ;
-  assign \$103  = bus__w_addr == 8'h99;
-  assign \$104  = bus__w_en & \$103 ;
-  assign \$105  = bus__w_addr == 8'h9a;
-  assign \$106  = bus__w_en & \$105 ;
-  assign \$107  = bus__w_addr == 8'h9b;
-  assign \$108  = bus__w_en & \$107 ;
-  assign \$109  = bus__w_addr == 8'h9c;
-  assign \$110  = bus__w_en & \$109 ;
-  assign \$111  = bus__w_addr == 8'h9d;
-  assign \$112  = bus__w_en & \$111 ;
-  assign \$113  = bus__w_addr == 8'h9e;
-  assign \$114  = bus__w_en & \$113 ;
-  assign \$115  = bus__w_addr == 8'hc0;
-  assign \$116  = bus__w_en & \$115 ;
-  assign \$117  = ch0_ca_request_write & write_strb[0];
-  assign \$118  = ch0_ca_request_write & write_strb[1];
-  assign \$119  = ch0_ca_request_write & write_strb[2];
-  assign \$120  = ch0_ca_request_write & write_strb[3];
-  assign \$121  = bus__w_addr == 8'hc1;
-  assign \$122  = bus__w_en & \$121 ;
-  assign \$123  = write_data[0] & write_strb[0];
-  assign \$124  = ch0_ca_ctrl_write ? \$123  : 1'h0;
-  assign \$125  = write_data[1] & write_strb[0];
-  assign \$126  = ch0_ca_ctrl_write ? \$125  : 1'h0;
-  assign \$127  = bus__w_addr == 8'hc2;
-  assign \$128  = bus__w_en & \$127 ;
-  assign \$129  = bus__w_addr == 8'hc3;
-  assign \$130  = bus__w_en & \$129 ;
-  assign \$131  = bus__w_addr == 8'hc4;
-  assign \$132  = bus__w_en & \$131 ;
-  assign \$133  = bus__w_addr == 8'hc5;
-  assign \$134  = bus__w_en & \$133 ;
-  assign \$135  = bus__w_addr[10:4] == 4'hd;
-  assign \$136  = bus__w_en & \$135 ;
-  assign \$137  = bus__r_addr == 8'h80;
-  assign \$138  = bus__r_addr == 8'h81;
-  assign \$139  = bus__r_addr == 8'h82;
-  assign \$140  = bus__r_addr == 8'h84;
-  assign \$141  = bus__r_addr == 8'h85;
-  assign \$142  = bus__r_addr == 8'h88;
-  assign \$143  = bus__r_addr == 8'h89;
-  assign \$144  = bus__r_addr == 8'h8a;
-  assign \$145  = bus__r_addr == 8'h8b;
-  assign \$146  = bus__r_addr == 8'h8c;
-  assign \$147  = bus__r_addr == 8'h8d;
-  assign \$148  = bus__r_addr == 8'h8e;
-  assign \$149  = bus__r_addr == 8'h90;
-  assign \$150  = bus__r_addr == 8'h91;
-  assign \$151  = bus__r_addr == 8'h92;
-  assign \$152  = bus__r_addr == 8'h93;
-  assign \$153  = bus__r_addr == 8'h94;
-  assign \$154  = bus__r_addr == 8'h95;
-  assign \$155  = bus__r_addr == 8'h96;
-  assign \$156  = bus__r_addr == 8'h98;
-  assign \$157  = bus__r_addr == 8'h99;
-  assign \$158  = bus__r_addr == 8'h9a;
-  assign \$159  = bus__r_addr == 8'h9b;
-  assign \$160  = bus__r_addr == 8'h9c;
-  assign \$161  = bus__r_addr == 8'h9d;
-  assign \$162  = bus__r_addr == 8'h9e;
-  assign \$163  = bus__r_addr == 8'hc0;
-  assign \$164  = bus__r_addr == 8'hc1;
-  assign \$165  = bus__r_addr == 8'hc2;
-  assign \$166  = bus__r_addr == 8'hc3;
-  assign \$167  = bus__r_addr == 8'hc4;
-  assign \$168  = bus__r_addr == 8'hc5;
-  assign \$169  = bus__w_addr == 9'h100;
-  assign \$170  = bus__w_en & \$169 ;
-  assign \$171  = write_data[0] & write_strb[0];
-  assign \$172  = ch1_ctrl_write ? \$171  : 1'h0;
-  assign \$173  = write_data[1] & write_strb[0];
-  assign \$174  = ch1_ctrl_write ? \$173  : 1'h0;
-  assign \$175  = write_data[2] & write_strb[0];
-  assign \$176  = ch1_ctrl_write ? \$175  : 1'h0;
-  assign \$177  = ch1_ctrl_write & write_strb[1];
-  assign \$178  = ch1_ctrl_write & write_strb[1];
-  assign \$179  = bus__w_addr == 9'h101;
-  assign \$180  = bus__w_en & \$179 ;
-  assign \$181  = bus__w_addr == 9'h102;
-  assign \$182  = bus__w_en & \$181 ;
-  assign \$183  = bus__w_addr == 9'h104;
-  assign \$184  = bus__w_en & \$183 ;
-  assign \$185  = write_data[0] & write_strb[0];
-  assign \$186  = ch1_irq_status_write ? \$185  : 1'h0;
-  assign \$187  = write_data[1] & write_strb[0];
-  assign \$188  = ch1_irq_status_write ? \$187  : 1'h0;
-  assign \$189  = write_data[2] & write_strb[0];
-  assign \$190  = ch1_irq_status_write ? \$189  : 1'h0;
-  assign \$191  = bus__w_addr == 9'h105;
-  assign \$192  = bus__w_en & \$191 ;
-  assign \$193  = ch1_irq_enable_write & write_strb[0];
-  assign \$194  = ch1_irq_enable_write & write_strb[0];
+    read_data <= \$666 ;
+  assign \$1  = write_data[0] & write_strb[0];
+  assign \$2  = g_trigger_write ? \$1  : 1'h0;
+  assign \$3  = ! bus__r_addr;
+  assign \$4  = bus__r_addr == 1'h1;
+  assign \$5  = bus__r_addr == 2'h2;
+  assign \$6  = bus__r_addr == 2'h3;
+  assign \$7  = bus__r_addr == 3'h4;
+  assign \$8  = write_data[0] & write_strb[0];
+  assign \$9  = ch0_ctrl_write ? \$8  : 1'h0;
+  assign \$10  = write_data[1] & write_strb[0];
+  assign \$11  = ch0_ctrl_write ? \$10  : 1'h0;
+  assign \$12  = write_data[2] & write_strb[0];
+  assign \$13  = ch0_ctrl_write ? \$12  : 1'h0;
+  assign \$14  = ch0_ctrl_write & write_strb[1];
+  assign \$15  = ch0_ctrl_write & write_strb[1];
+  assign \$16  = write_data[0] & write_strb[0];
+  assign \$17  = ch0_irq_status_write ? \$16  : 1'h0;
+  assign \$18  = write_data[1] & write_strb[0];
+  assign \$19  = ch0_irq_status_write ? \$18  : 1'h0;
+  assign \$20  = write_data[2] & write_strb[0];
+  assign \$21  = ch0_irq_status_write ? \$20  : 1'h0;
+  assign \$22  = ch0_irq_enable_write & write_strb[0];
+  assign \$23  = ch0_irq_enable_write & write_strb[0];
+  assign \$24  = ch0_irq_enable_write & write_strb[0];
+  assign \$25  = ch0_cfg_ma_write & write_strb[0];
+  assign \$26  = ch0_cfg_ma_write & write_strb[1];
+  assign \$27  = ch0_cfg_ma_write & write_strb[2];
+  assign \$28  = ch0_cfg_ma_write & write_strb[3];
+  assign \$29  = ch0_cfg_period_write & write_strb[0];
+  assign \$30  = ch0_cfg_period_write & write_strb[1];
+  assign \$31  = ch0_cfg_period_write & write_strb[2];
+  assign \$32  = ch0_cfg_break_write & write_strb[0];
+  assign \$33  = ch0_cfg_break_write & write_strb[1];
+  assign \$34  = ch0_cfg_break_write & write_strb[2];
+  assign \$35  = ch0_cfg_ack_write & write_strb[0];
+  assign \$36  = ch0_cfg_ack_write & write_strb[1];
+  assign \$37  = ch0_cfg_ack_write & write_strb[2];
+  assign \$38  = ch0_cfg_timeout_write & write_strb[0];
+  assign \$39  = ch0_cfg_timeout_write & write_strb[1];
+  assign \$40  = ch0_cfg_timeout_write & write_strb[2];
+  assign \$41  = ch0_cfg_words_write & write_strb[0];
+  assign \$42  = ch0_cfg_words_write & write_strb[0];
+  assign \$43  = ch0_cfg_words_write & write_strb[0];
+  assign \$44  = ch0_cfg_words_write & write_strb[1];
+  assign \$45  = ch0_cfg_words_write & write_strb[2];
+  assign \$46  = ch0_cfg_words_write & write_strb[2];
+  assign \$47  = ch0_cfg_words_write & write_strb[2];
+  assign \$48  = ch0_cfg_words_write & write_strb[3];
+  assign \$49  = ch0_cfg_words_write & write_strb[3];
+  assign \$50  = ch0_cfg_checks_write & write_strb[0];
+  assign \$51  = ch0_cfg_checks_write & write_strb[0];
+  assign \$52  = ch0_cfg_checks_write & write_strb[1];
+  assign \$53  = ch0_ca_request_write & write_strb[0];
+  assign \$54  = ch0_ca_request_write & write_strb[1];
+  assign \$55  = ch0_ca_request_write & write_strb[2];
+  assign \$56  = ch0_ca_request_write & write_strb[3];
+  assign \$57  = write_data[0] & write_strb[0];
+  assign \$58  = ch0_ca_ctrl_write ? \$57  : 1'h0;
+  assign \$59  = write_data[1] & write_strb[0];
+  assign \$60  = ch0_ca_ctrl_write ? \$59  : 1'h0;
+  assign \$61  = bus__r_addr == 8'h80;
+  assign \$62  = bus__r_addr == 8'h81;
+  assign \$63  = bus__r_addr == 8'h82;
+  assign \$64  = bus__r_addr == 8'h84;
+  assign \$65  = bus__r_addr == 8'h85;
+  assign \$66  = bus__r_addr == 8'h88;
+  assign \$67  = bus__r_addr == 8'h89;
+  assign \$68  = bus__r_addr == 8'h8a;
+  assign \$69  = bus__r_addr == 8'h8b;
+  assign \$70  = bus__r_addr == 8'h8c;
+  assign \$71  = bus__r_addr == 8'h8d;
+  assign \$72  = bus__r_addr == 8'h8e;
+  assign \$73  = bus__r_addr == 8'h90;
+  assign \$74  = bus__r_addr == 8'h91;
+  assign \$75  = bus__r_addr == 8'h92;
+  assign \$76  = bus__r_addr == 8'h93;
+  assign \$77  = bus__r_addr == 8'h94;
+  assign \$78  = bus__r_addr == 8'h95;
+  assign \$79  = bus__r_addr == 8'h96;
+  assign \$80  = bus__r_addr == 8'h98;
+  assign \$81  = bus__r_addr == 8'h99;
+  assign \$82  = bus__r_addr == 8'h9a;
+  assign \$83  = bus__r_addr == 8'h9b;
+  assign \$84  = bus__r_addr == 8'h9c;
+  assign \$85  = bus__r_addr == 8'h9d;
+  assign \$86  = bus__r_addr == 8'h9e;
+  assign \$87  = bus__r_addr == 8'hc0;
+  assign \$88  = bus__r_addr == 8'hc1;
+  assign \$89  = bus__r_addr == 8'hc2;
+  assign \$90  = bus__r_addr == 8'hc3;
+  assign \$91  = bus__r_addr == 8'hc4;
+  assign \$92  = bus__r_addr == 8'hc5;
+  assign \$93  = write_data[0] & write_strb[0];
+  assign \$94  = ch1_ctrl_write ? \$93  : 1'h0;
+  assign \$95  = write_data[1] & write_strb[0];
+  assign \$96  = ch1_ctrl_write ? \$95  : 1'h0;
+  assign \$97  = write_data[2] & write_strb[0];
+  assign \$98  = ch1_ctrl_write ? \$97  : 1'h0;
+  assign \$99  = ch1_ctrl_write & write_strb[1];
+  assign \$100  = ch1_ctrl_write & write_strb[1];
+  assign \$101  = write_data[0] & write_strb[0];
+  assign \$102  = ch1_irq_status_write ? \$101  : 1'h0;
+  assign \$103  = write_data[1] & write_strb[0];
+  assign \$104  = ch1_irq_status_write ? \$103  : 1'h0;
+  assign \$105  = write_data[2] & write_strb[0];
+  assign \$106  = ch1_irq_status_write ? \$105  : 1'h0;
+  assign \$107  = ch1_irq_enable_write & write_strb[0];
+  assign \$108  = ch1_irq_enable_write & write_strb[0];
+  assign \$109  = ch1_irq_enable_write & write_strb[0];
+  assign \$110  = ch1_cfg_ma_write & write_strb[0];
+  assign \$111  = ch1_cfg_ma_write & write_strb[1];
+  assign \$112  = ch1_cfg_ma_write & write_strb[2];
+  assign \$113  = ch1_cfg_ma_write & write_strb[3];
+  assign \$114  = ch1_cfg_period_write & write_strb[0];
+  assign \$115  = ch1_cfg_period_write & write_strb[1];
+  assign \$116  = ch1_cfg_period_write & write_strb[2];
+  assign \$117  = ch1_cfg_break_write & write_strb[0];
+  assign \$118  = ch1_cfg_break_write & write_strb[1];
+  assign \$119  = ch1_cfg_break_write & write_strb[2];
+  assign \$120  = ch1_cfg_ack_write & write_strb[0];
+  assign \$121  = ch1_cfg_ack_write & write_strb[1];
+  assign \$122  = ch1_cfg_ack_write & write_strb[2];
+  assign \$123  = ch1_cfg_timeout_write & write_strb[0];
+  assign \$124  = ch1_cfg_timeout_write & write_strb[1];
+  assign \$125  = ch1_cfg_timeout_write & write_strb[2];
+  assign \$126  = ch1_cfg_words_write & write_strb[0];
+  assign \$127  = ch1_cfg_words_write & write_strb[0];
+  assign \$128  = ch1_cfg_words_write & write_strb[0];
+  assign \$129  = ch1_cfg_words_write & write_strb[1];
+  assign \$130  = ch1_cfg_words_write & write_strb[2];
+  assign \$131  = ch1_cfg_words_write & write_strb[2];
+  assign \$132  = ch1_cfg_words_write & write_strb[2];
+  assign \$133  = ch1_cfg_words_write & write_strb[3];
+  assign \$134  = ch1_cfg_words_write & write_strb[3];
+  assign \$135  = ch1_cfg_checks_write & write_strb[0];
+  assign \$136  = ch1_cfg_checks_write & write_strb[0];
+  assign \$137  = ch1_cfg_checks_write & write_strb[1];
+  assign \$138  = ch1_ca_request_write & write_strb[0];
+  assign \$139  = ch1_ca_request_write & write_strb[1];
+  assign \$140  = ch1_ca_request_write & write_strb[2];
+  assign \$141  = ch1_ca_request_write & write_strb[3];
+  assign \$142  = write_data[0] & write_strb[0];
+  assign \$143  = ch1_ca_ctrl_write ? \$142  : 1'h0;
+  assign \$144  = write_data[1] & write_strb[0];
+  assign \$145  = ch1_ca_ctrl_write ? \$144  : 1'h0;
+  assign \$146  = bus__r_addr == 9'h100;
+  assign \$147  = bus__r_addr == 9'h101;
+  assign \$148  = bus__r_addr == 9'h102;
+  assign \$149  = bus__r_addr == 9'h104;
+  assign \$150  = bus__r_addr == 9'h105;
+  assign \$151  = bus__r_addr == 9'h108;
+  assign \$152  = bus__r_addr == 9'h109;
+  assign \$153  = bus__r_addr == 9'h10a;
+  assign \$154  = bus__r_addr == 9'h10b;
+  assign \$155  = bus__r_addr == 9'h10c;
+  assign \$156  = bus__r_addr == 9'h10d;
+  assign \$157  = bus__r_addr == 9'h10e;
+  assign \$158  = bus__r_addr == 9'h110;
+  assign \$159  = bus__r_addr == 9'h111;
+  assign \$160  = bus__r_addr == 9'h112;
+  assign \$161  = bus__r_addr == 9'h113;
+  assign \$162  = bus__r_addr == 9'h114;
+  assign \$163  = bus__r_addr == 9'h115;
+  assign \$164  = bus__r_addr == 9'h116;
+  assign \$165  = bus__r_addr == 9'h118;
+  assign \$166  = bus__r_addr == 9'h119;
+  assign \$167  = bus__r_addr == 9'h11a;
+  assign \$168  = bus__r_addr == 9'h11b;
+  assign \$169  = bus__r_addr == 9'h11c;
+  assign \$170  = bus__r_addr == 9'h11d;
+  assign \$171  = bus__r_addr == 9'h11e;
+  assign \$172  = bus__r_addr == 9'h140;
+  assign \$173  = bus__r_addr == 9'h141;
+  assign \$174  = bus__r_addr == 9'h142;
+  assign \$175  = bus__r_addr == 9'h143;
+  assign \$176  = bus__r_addr == 9'h144;
+  assign \$177  = bus__r_addr == 9'h145;
+  assign \$178  = bus__r_addr[10:4] == 4'he;
+  assign \$179  = bus__r_en & \$178 ;
+  assign \$180  = bus__r_addr[10:4] == 5'h16;
+  assign \$181  = bus__r_en & \$180 ;
+  assign \$182  = g_read_select_0 ? 32'd1114198867 : 32'd0;
+  assign \$184  = g_read_select_1 ? 32'd65537 : 32'd0;
+  assign \$185  = \$183  | \$184 ;
+  assign \$186  = g_read_select_2 ? 32'd2 : 32'd0;
+  assign \$187  = \$185  | \$186 ;
+  assign \$190  = g_read_select_4 ? { 30'h00000000, ch1_irq, ch0_irq } : 32'd0;
+  assign \$191  = \$189  | \$190 ;
+  assign \$192  = ch0_read_select_80 ? { 22'h000000, ch0_ctrl_trigger_enable, ch0_ctrl_periodic, 8'h00 } : 32'd0;
+  assign \$193  = \$191  | \$192 ;
+  assign \$194  = ch0_read_select_81 ? { 30'h00000000, ch0__config_error, ch0__busy } : 32'd0;
+  assign \$195  = \$193  | \$194 ;
+  assign \$196  = ch0_read_select_82 ? 32'd119023671 : 32'd0;
+  assign \$197  = \$195  | \$196 ;
+  assign \$198  = ch0_read_select_84 ? { 29'h00000000, ch0_irq_status_access_done, ch0_irq_status_error, ch0_irq_status_done } : 32'd0;
+  assign \$199  = \$197  | \$198 ;
+  assign \$200  = ch0_read_select_85 ? { 29'h00000000, ch0_irq_enable_access_done, ch0_irq_enable_error, ch0_irq_enable_done } : 32'd0;
+  assign \$201  = \$199  | \$200 ;
+  assign \$202  = ch0_read_select_88 ? { 4'h0, ch0_cfg_ma_delay_limit, ch0_cfg_ma_ma_half_period } : 32'd0;
+  assign \$203  = \$201  | \$202 ;
+  assign \$204  = ch0_read_select_89 ? { 8'h00, ch0_cfg_period_request_period } : 32'd0;
+  assign \$205  = \$203  | \$204 ;
+  assign \$206  = ch0_read_select_8a ? { 8'h00, ch0_cfg_break_break_time } : 32'd0;
+  assign \$207  = \$205  | \$206 ;
+  assign \$208  = ch0_read_select_8b ? { 8'h00, ch0_cfg_ack_ack_limit } : 32'd0;
+  assign \$209  = \$207  | \$208 ;
+  assign \$210  = ch0_read_select_8c ? { 8'h00, ch0_cfg_timeout_timeout_limit } : 32'd0;
+  assign \$211  = \$209  | \$210 ;
+  assign \$212  = ch0_read_select_8d ? { ch0_cfg_words_w1_enable, 5'h00, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_data_bits, 6'h00, ch0_cfg_words_w0_crc, ch0_cfg_words_w0_lc, ch0_cfg_words_w0_nenw, ch0_cfg_words_w0_data_bits } : 32'd0;
+  assign \$213  = \$211  | \$212 ;
+  assign \$214  = ch0_read_select_8e ? { 16'h0000, ch0_cfg_checks_spw_tolerance, 6'h00, ch0_cfg_checks_spw_check, ch0_cfg_checks_end_check } : 32'd0;
+  assign \$215  = \$213  | \$214 ;
+  assign \$216  = ch0_read_select_90 ? { 2'h0, ch0_result_status_lc_snapshot, 4'h0, ch0_result_status_spw_mismatch_snapshot, ch0_result_status_lc_zero_snapshot, ch0_result_status_lc_skip_snapshot, ch0_result_status_lc_repeat_snapshot, 1'h0, ch0_result_status_w1_crc_ok_snapshot, ch0_result_status_w1_nw_snapshot, ch0_result_status_w1_ne_snapshot, 1'h0, ch0_result_status_w0_crc_ok_snapshot, ch0_result_status_w0_nw_snapshot, ch0_result_status_w0_ne_snapshot, 3'h0, ch0_result_status_cds_snapshot, ch0_result_status_status_snapshot } : 32'd0;
+  assign \$217  = \$215  | \$216 ;
+  assign \$218  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
+  assign \$219  = \$217  | \$218 ;
+  assign \$220  = ch0_read_select_92 ? ch0_result_w0_lo_data_snapshot : 32'd0;
+  assign \$221  = \$219  | \$220 ;
+  assign \$222  = ch0_read_select_93 ? { 9'h000, ch0_result_w0_hi_data_snapshot } : 32'd0;
+  assign \$223  = \$221  | \$222 ;
+  assign \$224  = ch0_read_select_94 ? ch0_result_w1_lo_data_snapshot : 32'd0;
+  assign \$225  = \$223  | \$224 ;
+  assign \$226  = ch0_read_select_95 ? { 24'h000000, ch0_result_w1_hi_data_snapshot } : 32'd0;
+  assign \$227  = \$225  | \$226 ;
+  assign \$228  = ch0_read_select_96 ? ch0_result_timestamp_time_snapshot : 32'd0;
+  assign \$229  = \$227  | \$228 ;
+  assign \$230  = ch0_read_select_98 ? \port$4314$0 [31:0] : 32'd0;
+  assign \$231  = \$229  | \$230 ;
+  assign \$232  = ch0_read_select_99 ? \port$4314$0 [63:32] : 32'd0;
+  assign \$233  = \$231  | \$232 ;
+  assign \$234  = ch0_read_select_9a ? \port$4314$0 [95:64] : 32'd0;
+  assign \$235  = \$233  | \$234 ;
+  assign \$236  = ch0_read_select_9b ? \port$4314$0 [127:96] : 32'd0;
+  assign \$237  = \$235  | \$236 ;
+  assign \$238  = ch0_read_select_9c ? \port$4314$0 [159:128] : 32'd0;
+  assign \$239  = \$237  | \$238 ;
+  assign \$240  = ch0_read_select_9d ? \port$4314$0 [191:160] : 32'd0;
+  assign \$241  = \$239  | \$240 ;
+  assign \$242  = ch0_read_select_9e ? { 16'h0000, \port$4314$0 [207:192] } : 32'd0;
+  assign \$243  = \$241  | \$242 ;
+  assign \$244  = ch0_read_select_c0 ? { 7'h00, \ch0_ca_request_write$65 , 1'h0, ch0_ca_request_count, 1'h0, ch0_ca_request_address, 5'h00, ch0_ca_request_slave_id } : 32'd0;
+  assign \$245  = \$243  | \$244 ;
+  assign \$248  = ch0_read_select_c2 ? { 17'h00000, \port$4428$0 [9:3], 1'h0, \port$4428$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
+  assign \$249  = \$247  | \$248 ;
+  assign \$250  = ch0_read_select_c3 ? \port$4314$0 [239:208] : 32'd0;
+  assign \$251  = \$249  | \$250 ;
+  assign \$252  = ch0_read_select_c4 ? \port$4314$0 [271:240] : 32'd0;
+  assign \$253  = \$251  | \$252 ;
+  assign \$254  = ch0_read_select_c5 ? { 16'h0000, \port$4314$0 [287:272] } : 32'd0;
+  assign \$255  = \$253  | \$254 ;
+  assign \$256  = ch1_read_select_100 ? { 22'h000000, ch1_ctrl_trigger_enable, ch1_ctrl_periodic, 8'h00 } : 32'd0;
+  assign \$257  = \$255  | \$256 ;
+  assign \$258  = ch1_read_select_101 ? { 30'h00000000, ch1__config_error, ch1__busy } : 32'd0;
+  assign \$259  = \$257  | \$258 ;
+  assign \$260  = ch1_read_select_102 ? 32'd119023671 : 32'd0;
+  assign \$261  = \$259  | \$260 ;
+  assign \$262  = ch1_read_select_104 ? { 29'h00000000, ch1_irq_status_access_done, ch1_irq_status_error, ch1_irq_status_done } : 32'd0;
+  assign \$263  = \$261  | \$262 ;
+  assign \$264  = ch1_read_select_105 ? { 29'h00000000, ch1_irq_enable_access_done, ch1_irq_enable_error, ch1_irq_enable_done } : 32'd0;
+  assign \$265  = \$263  | \$264 ;
+  assign \$266  = ch1_read_select_108 ? { 4'h0, ch1_cfg_ma_delay_limit, ch1_cfg_ma_ma_half_period } : 32'd0;
+  assign \$267  = \$265  | \$266 ;
+  assign \$268  = ch1_read_select_109 ? { 8'h00, ch1_cfg_period_request_period } : 32'd0;
+  assign \$269  = \$267  | \$268 ;
+  assign \$270  = ch1_read_select_10a ? { 8'h00, ch1_cfg_break_break_time } : 32'd0;
+  assign \$271  = \$269  | \$270 ;
+  assign \$272  = ch1_read_select_10b ? { 8'h00, ch1_cfg_ack_ack_limit } : 32'd0;
+  assign \$273  = \$271  | \$272 ;
+  assign \$274  = ch1_read_select_10c ? { 8'h00, ch1_cfg_timeout_timeout_limit } : 32'd0;
+  assign \$275  = \$273  | \$274 ;
+  assign \$276  = ch1_read_select_10d ? { ch1_cfg_words_w1_enable, 5'h00, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_data_bits, 6'h00, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_data_bits } : 32'd0;
+  assign \$277  = \$275  | \$276 ;
+  assign \$278  = ch1_read_select_10e ? { 16'h0000, ch1_cfg_checks_spw_tolerance, 6'h00, ch1_cfg_checks_spw_check, ch1_cfg_checks_end_check } : 32'd0;
+  assign \$279  = \$277  | \$278 ;
+  assign \$280  = ch1_read_select_110 ? { 2'h0, ch1_result_status_lc_snapshot, 4'h0, ch1_result_status_spw_mismatch_snapshot, ch1_result_status_lc_zero_snapshot, ch1_result_status_lc_skip_snapshot, ch1_result_status_lc_repeat_snapshot, 1'h0, ch1_result_status_w1_crc_ok_snapshot, ch1_result_status_w1_nw_snapshot, ch1_result_status_w1_ne_snapshot, 1'h0, ch1_result_status_w0_crc_ok_snapshot, ch1_result_status_w0_nw_snapshot, ch1_result_status_w0_ne_snapshot, 3'h0, ch1_result_status_cds_snapshot, ch1_result_status_status_snapshot } : 32'd0;
+  assign \$281  = \$279  | \$280 ;
+  assign \$282  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
+  assign \$283  = \$281  | \$282 ;
+  assign \$284  = ch1_read_select_112 ? ch1_result_w0_lo_data_snapshot : 32'd0;
+  assign \$285  = \$283  | \$284 ;
+  assign \$286  = ch1_read_select_113 ? { 9'h000, ch1_result_w0_hi_data_snapshot } : 32'd0;
+  assign \$287  = \$285  | \$286 ;
+  assign \$288  = ch1_read_select_114 ? ch1_result_w1_lo_data_snapshot : 32'd0;
+  assign \$289  = \$287  | \$288 ;
+  assign \$290  = ch1_read_select_115 ? { 24'h000000, ch1_result_w1_hi_data_snapshot } : 32'd0;
+  assign \$291  = \$289  | \$290 ;
+  assign \$292  = ch1_read_select_116 ? ch1_result_timestamp_time_snapshot : 32'd0;
+  assign \$293  = \$291  | \$292 ;
+  assign \$294  = ch1_read_select_118 ? \port$4813$0 [31:0] : 32'd0;
+  assign \$295  = \$293  | \$294 ;
+  assign \$296  = ch1_read_select_119 ? \port$4813$0 [63:32] : 32'd0;
+  assign \$297  = \$295  | \$296 ;
+  assign \$298  = ch1_read_select_11a ? \port$4813$0 [95:64] : 32'd0;
+  assign \$299  = \$297  | \$298 ;
+  assign \$300  = ch1_read_select_11b ? \port$4813$0 [127:96] : 32'd0;
+  assign \$301  = \$299  | \$300 ;
+  assign \$302  = ch1_read_select_11c ? \port$4813$0 [159:128] : 32'd0;
+  assign \$303  = \$301  | \$302 ;
+  assign \$304  = ch1_read_select_11d ? \port$4813$0 [191:160] : 32'd0;
+  assign \$305  = \$303  | \$304 ;
+  assign \$306  = ch1_read_select_11e ? { 16'h0000, \port$4813$0 [207:192] } : 32'd0;
+  assign \$307  = \$305  | \$306 ;
+  assign \$308  = ch1_read_select_140 ? { 7'h00, \ch1_ca_request_write$186 , 1'h0, ch1_ca_request_count, 1'h0, ch1_ca_request_address, 5'h00, ch1_ca_request_slave_id } : 32'd0;
+  assign \$309  = \$307  | \$308 ;
+  assign \$312  = ch1_read_select_142 ? { 17'h00000, \port$4927$0 [9:3], 1'h0, \port$4927$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
+  assign \$313  = \$311  | \$312 ;
+  assign \$314  = ch1_read_select_143 ? \port$4813$0 [239:208] : 32'd0;
+  assign \$315  = \$313  | \$314 ;
+  assign \$316  = ch1_read_select_144 ? \port$4813$0 [271:240] : 32'd0;
+  assign \$317  = \$315  | \$316 ;
+  assign \$318  = ch1_read_select_145 ? { 16'h0000, \port$4813$0 [287:272] } : 32'd0;
+  assign \$319  = \$317  | \$318 ;
+  assign \$320  = window0_read ? ch0__ca_rbuf_data : 32'd0;
+  assign \$321  = \$319  | \$320 ;
+  assign \$322  = window1_read ? ch1__ca_rbuf_data : 32'd0;
+  assign \$323  = \$321  | \$322 ;
+  assign \$324  = ! write_addr;
+  assign g_id_write = write_en & \$324 ;
+  assign \$325  = ! bus__r_addr;
+  assign g_id_read = bus__r_en & \$325 ;
+  assign \$326  = write_addr == 1'h1;
+  assign g_version_write = write_en & \$326 ;
+  assign \$327  = bus__r_addr == 1'h1;
+  assign g_version_read = bus__r_en & \$327 ;
+  assign \$328  = write_addr == 2'h2;
+  assign g_channels_write = write_en & \$328 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$549  = write_addr;
-    if (bus__w_en) begin
-      \$549  = bus__w_addr;
-    end
+    \$480  = bus__w_en;
     if (rst) begin
-      \$549  = 11'h000;
+      \$480  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$550  = write_data;
+    \$481  = write_addr;
     if (bus__w_en) begin
-      \$550  = bus__w_data;
+      \$481  = bus__w_addr;
     end
     if (rst) begin
-      \$550  = 32'd0;
+      \$481  = 11'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$551  = write_strb;
+    \$482  = write_data;
     if (bus__w_en) begin
-      \$551  = bus__w_strb;
+      \$482  = bus__w_data;
     end
     if (rst) begin
-      \$551  = 4'h0;
+      \$482  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$552  = \$2 ;
+    \$483  = write_strb;
+    if (bus__w_en) begin
+      \$483  = bus__w_strb;
+    end
+    if (rst) begin
+      \$483  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$484  = \$2 ;
+    if (rst) begin
+      \$484  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$485  = g_read_select_0;
+    if (bus__r_en) begin
+      \$485  = \$3 ;
+    end
+    if (rst) begin
+      \$485  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$486  = g_read_select_1;
+    if (bus__r_en) begin
+      \$486  = \$4 ;
+    end
+    if (rst) begin
+      \$486  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$487  = g_read_select_2;
+    if (bus__r_en) begin
+      \$487  = \$5 ;
+    end
+    if (rst) begin
+      \$487  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$488  = g_read_select_3;
+    if (bus__r_en) begin
+      \$488  = \$6 ;
+    end
+    if (rst) begin
+      \$488  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$489  = g_read_select_4;
+    if (bus__r_en) begin
+      \$489  = \$7 ;
+    end
+    if (rst) begin
+      \$489  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$490  = \$9 ;
+    if (rst) begin
+      \$490  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$491  = \$11 ;
+    if (rst) begin
+      \$491  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$492  = \$13 ;
+    if (rst) begin
+      \$492  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$493  = ch0_ctrl_periodic;
+    if (\$14 ) begin
+      \$493  = write_data[8];
+    end
+    if (rst) begin
+      \$493  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$494  = ch0_ctrl_trigger_enable;
+    if (\$15 ) begin
+      \$494  = write_data[9];
+    end
+    if (rst) begin
+      \$494  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$495  = ch0_irq_status_done;
+    if (ch0__done) begin
+      \$495  = 1'h1;
+    end else if (\$17 ) begin
+      \$495  = 1'h0;
+    end
+    if (rst) begin
+      \$495  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$496  = ch0_irq_status_error;
+    if (ch0__frame_error) begin
+      \$496  = 1'h1;
+    end else if (\$19 ) begin
+      \$496  = 1'h0;
+    end
+    if (rst) begin
+      \$496  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$497  = ch0_irq_status_access_done;
+    if (ch0__ca_done) begin
+      \$497  = 1'h1;
+    end else if (\$21 ) begin
+      \$497  = 1'h0;
+    end
+    if (rst) begin
+      \$497  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$498  = ch0_irq_enable_done;
+    if (\$22 ) begin
+      \$498  = write_data[0];
+    end
+    if (rst) begin
+      \$498  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$499  = ch0_irq_enable_error;
+    if (\$23 ) begin
+      \$499  = write_data[1];
+    end
+    if (rst) begin
+      \$499  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$500  = ch0_irq_enable_access_done;
+    if (\$24 ) begin
+      \$500  = write_data[2];
+    end
+    if (rst) begin
+      \$500  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$501  = ch0_cfg_ma_ma_half_period;
+    if (\$25 ) begin
+      \$501 [7:0] = write_data[7:0];
+    end
+    if (\$26 ) begin
+      \$501 [15:8] = write_data[15:8];
+    end
+    if (rst) begin
+      \$501  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$502  = ch0_cfg_ma_delay_limit;
+    if (\$27 ) begin
+      \$502 [7:0] = write_data[23:16];
+    end
+    if (\$28 ) begin
+      \$502 [11:8] = write_data[27:24];
+    end
+    if (rst) begin
+      \$502  = 12'h000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$503  = ch0_cfg_period_request_period;
+    if (\$29 ) begin
+      \$503 [7:0] = write_data[7:0];
+    end
+    if (\$30 ) begin
+      \$503 [15:8] = write_data[15:8];
+    end
+    if (\$31 ) begin
+      \$503 [23:16] = write_data[23:16];
+    end
+    if (rst) begin
+      \$503  = 24'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$504  = ch0_cfg_break_break_time;
+    if (\$32 ) begin
+      \$504 [7:0] = write_data[7:0];
+    end
+    if (\$33 ) begin
+      \$504 [15:8] = write_data[15:8];
+    end
+    if (\$34 ) begin
+      \$504 [23:16] = write_data[23:16];
+    end
+    if (rst) begin
+      \$504  = 24'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$505  = ch0_cfg_ack_ack_limit;
+    if (\$35 ) begin
+      \$505 [7:0] = write_data[7:0];
+    end
+    if (\$36 ) begin
+      \$505 [15:8] = write_data[15:8];
+    end
+    if (\$37 ) begin
+      \$505 [23:16] = write_data[23:16];
+    end
+    if (rst) begin
+      \$505  = 24'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$506  = ch0_cfg_timeout_timeout_limit;
+    if (\$38 ) begin
+      \$506 [7:0] = write_data[7:0];
+    end
+    if (\$39 ) begin
+      \$506 [15:8] = write_data[15:8];
+    end
+    if (\$40 ) begin
+      \$506 [23:16] = write_data[23:16];
+    end
+    if (rst) begin
+      \$506  = 24'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$507  = ch0_cfg_words_w0_data_bits;
+    if (\$41 ) begin
+      \$507  = write_data[5:0];
+    end
+    if (rst) begin
+      \$507  = 6'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$508  = ch0_cfg_words_w0_nenw;
+    if (\$42 ) begin
+      \$508  = write_data[6];
+    end
+    if (rst) begin
+      \$508  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$509  = ch0_cfg_words_w0_lc;
+    if (\$43 ) begin
+      \$509  = write_data[7];
+    end
+    if (rst) begin
+      \$509  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$510  = ch0_cfg_words_w0_crc;
+    if (\$44 ) begin
+      \$510  = write_data[9:8];
+    end
+    if (rst) begin
+      \$510  = 2'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$511  = ch0_cfg_words_w1_data_bits;
+    if (\$45 ) begin
+      \$511  = write_data[21:16];
+    end
+    if (rst) begin
+      \$511  = 6'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$512  = ch0_cfg_words_w1_nenw;
+    if (\$46 ) begin
+      \$512  = write_data[22];
+    end
+    if (rst) begin
+      \$512  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$513  = ch0_cfg_words_w1_lc;
+    if (\$47 ) begin
+      \$513  = write_data[23];
+    end
+    if (rst) begin
+      \$513  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$514  = ch0_cfg_words_w1_crc;
+    if (\$48 ) begin
+      \$514  = write_data[25:24];
+    end
+    if (rst) begin
+      \$514  = 2'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$515  = ch0_cfg_words_w1_enable;
+    if (\$49 ) begin
+      \$515  = write_data[31];
+    end
+    if (rst) begin
+      \$515  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$516  = ch0_cfg_checks_end_check;
+    if (\$50 ) begin
+      \$516  = write_data[0];
+    end
+    if (rst) begin
+      \$516  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$517  = ch0_cfg_checks_spw_check;
+    if (\$51 ) begin
+      \$517  = write_data[1];
+    end
+    if (rst) begin
+      \$517  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$518  = ch0_cfg_checks_spw_tolerance;
+    if (\$52 ) begin
+      \$518  = write_data[15:8];
+    end
+    if (rst) begin
+      \$518  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$519  = ch0_ca_request_slave_id;
+    if (\$53 ) begin
+      \$519  = write_data[2:0];
+    end
+    if (rst) begin
+      \$519  = 3'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$520  = ch0_ca_request_address;
+    if (\$54 ) begin
+      \$520  = write_data[14:8];
+    end
+    if (rst) begin
+      \$520  = 7'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$521  = ch0_ca_request_count;
+    if (\$55 ) begin
+      \$521  = write_data[22:16];
+    end
+    if (rst) begin
+      \$521  = 7'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$522  = \ch0_ca_request_write$65 ;
+    if (\$56 ) begin
+      \$522  = write_data[24];
+    end
+    if (rst) begin
+      \$522  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$523  = \$58 ;
+    if (rst) begin
+      \$523  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$524  = \$60 ;
+    if (rst) begin
+      \$524  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$525  = ch0_result_status_status_snapshot;
+    if (ch0_result_status_read) begin
+      \$525  = \port$4307$0 [3:0];
+    end
+    if (rst) begin
+      \$525  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$526  = ch0_result_status_cds_snapshot;
+    if (ch0_result_status_read) begin
+      \$526  = \port$4307$0 [49];
+    end
+    if (rst) begin
+      \$526  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$527  = ch0_result_status_w0_ne_snapshot;
+    if (ch0_result_status_read) begin
+      \$527  = \port$4307$0 [105];
+    end
+    if (rst) begin
+      \$527  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$528  = ch0_result_status_w0_nw_snapshot;
+    if (ch0_result_status_read) begin
+      \$528  = \port$4307$0 [106];
+    end
+    if (rst) begin
+      \$528  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$529  = ch0_result_status_w0_crc_ok_snapshot;
+    if (ch0_result_status_read) begin
+      \$529  = \port$4307$0 [107];
+    end
+    if (rst) begin
+      \$529  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$530  = ch0_result_status_w1_ne_snapshot;
+    if (ch0_result_status_read) begin
+      \$530  = \port$4307$0 [148];
+    end
+    if (rst) begin
+      \$530  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$531  = ch0_result_status_w1_nw_snapshot;
+    if (ch0_result_status_read) begin
+      \$531  = \port$4307$0 [149];
+    end
+    if (rst) begin
+      \$531  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$532  = ch0_result_status_w1_crc_ok_snapshot;
+    if (ch0_result_status_read) begin
+      \$532  = \port$4307$0 [150];
+    end
+    if (rst) begin
+      \$532  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$533  = ch0_result_status_lc_repeat_snapshot;
+    if (ch0_result_status_read) begin
+      \$533  = \port$4307$0 [157];
+    end
+    if (rst) begin
+      \$533  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$534  = ch0_result_status_lc_skip_snapshot;
+    if (ch0_result_status_read) begin
+      \$534  = \port$4307$0 [158];
+    end
+    if (rst) begin
+      \$534  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$535  = ch0_result_status_lc_zero_snapshot;
+    if (ch0_result_status_read) begin
+      \$535  = \port$4307$0 [159];
+    end
+    if (rst) begin
+      \$535  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$536  = ch0_result_status_spw_mismatch_snapshot;
+    if (ch0_result_status_read) begin
+      \$536  = \port$4307$0 [160];
+    end
+    if (rst) begin
+      \$536  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$537  = ch0_result_status_lc_snapshot;
+    if (ch0_result_status_read) begin
+      \$537  = \port$4307$0 [156:151];
+    end
+    if (rst) begin
+      \$537  = 6'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$538  = ch0_result_seq_seq_snapshot;
+    if (ch0_result_status_read) begin
+      \$538  = ch0__done_count;
+    end
+    if (rst) begin
+      \$538  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$539  = ch0_result_seq_line_delay_snapshot;
+    if (ch0_result_status_read) begin
+      \$539  = \port$4307$0 [48:36];
+    end
+    if (rst) begin
+      \$539  = 13'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$540  = ch0_result_w0_lo_data_snapshot;
+    if (ch0_result_status_read) begin
+      \$540  = \port$4307$0 [81:50];
+    end
+    if (rst) begin
+      \$540  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$541  = ch0_result_w0_hi_data_snapshot;
+    if (ch0_result_status_read) begin
+      \$541  = \port$4307$0 [104:82];
+    end
+    if (rst) begin
+      \$541  = 23'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$542  = ch0_result_w1_lo_data_snapshot;
+    if (ch0_result_status_read) begin
+      \$542  = \port$4307$0 [139:108];
+    end
+    if (rst) begin
+      \$542  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$543  = ch0_result_w1_hi_data_snapshot;
+    if (ch0_result_status_read) begin
+      \$543  = \port$4307$0 [147:140];
+    end
+    if (rst) begin
+      \$543  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$544  = ch0_result_timestamp_time_snapshot;
+    if (ch0_result_status_read) begin
+      \$544  = \port$4307$0 [35:4];
+    end
+    if (rst) begin
+      \$544  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$545  = ch0_read_select_80;
+    if (bus__r_en) begin
+      \$545  = \$61 ;
+    end
+    if (rst) begin
+      \$545  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$546  = ch0_read_select_81;
+    if (bus__r_en) begin
+      \$546  = \$62 ;
+    end
+    if (rst) begin
+      \$546  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$547  = ch0_read_select_82;
+    if (bus__r_en) begin
+      \$547  = \$63 ;
+    end
+    if (rst) begin
+      \$547  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$548  = ch0_read_select_84;
+    if (bus__r_en) begin
+      \$548  = \$64 ;
+    end
+    if (rst) begin
+      \$548  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$549  = ch0_read_select_85;
+    if (bus__r_en) begin
+      \$549  = \$65 ;
+    end
+    if (rst) begin
+      \$549  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$550  = ch0_read_select_88;
+    if (bus__r_en) begin
+      \$550  = \$66 ;
+    end
+    if (rst) begin
+      \$550  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$551  = ch0_read_select_89;
+    if (bus__r_en) begin
+      \$551  = \$67 ;
+    end
+    if (rst) begin
+      \$551  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$552  = ch0_read_select_8a;
+    if (bus__r_en) begin
+      \$552  = \$68 ;
+    end
     if (rst) begin
       \$552  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$553  = \$4 ;
+    \$553  = ch0_read_select_8b;
+    if (bus__r_en) begin
+      \$553  = \$69 ;
+    end
     if (rst) begin
       \$553  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$554  = \$6 ;
+    \$554  = ch0_read_select_8c;
+    if (bus__r_en) begin
+      \$554  = \$70 ;
+    end
     if (rst) begin
       \$554  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$555  = \$8 ;
+    \$555  = ch0_read_select_8d;
+    if (bus__r_en) begin
+      \$555  = \$71 ;
+    end
     if (rst) begin
       \$555  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$556  = \$10 ;
+    \$556  = ch0_read_select_8e;
+    if (bus__r_en) begin
+      \$556  = \$72 ;
+    end
     if (rst) begin
       \$556  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$557  = \$12 ;
+    \$557  = ch0_read_select_90;
+    if (bus__r_en) begin
+      \$557  = \$73 ;
+    end
     if (rst) begin
       \$557  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$558  = g_read_select_0;
+    \$558  = ch0_read_select_91;
     if (bus__r_en) begin
-      \$558  = \$13 ;
+      \$558  = \$74 ;
     end
     if (rst) begin
       \$558  = 1'h0;
@@ -3721,9 +4164,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$559  = g_read_select_1;
+    \$559  = ch0_read_select_92;
     if (bus__r_en) begin
-      \$559  = \$14 ;
+      \$559  = \$75 ;
     end
     if (rst) begin
       \$559  = 1'h0;
@@ -3731,9 +4174,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$560  = g_read_select_2;
+    \$560  = ch0_read_select_93;
     if (bus__r_en) begin
-      \$560  = \$15 ;
+      \$560  = \$76 ;
     end
     if (rst) begin
       \$560  = 1'h0;
@@ -3741,9 +4184,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$561  = g_read_select_3;
+    \$561  = ch0_read_select_94;
     if (bus__r_en) begin
-      \$561  = \$16 ;
+      \$561  = \$77 ;
     end
     if (rst) begin
       \$561  = 1'h0;
@@ -3751,9 +4194,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$562  = g_read_select_4;
+    \$562  = ch0_read_select_95;
     if (bus__r_en) begin
-      \$562  = \$17 ;
+      \$562  = \$78 ;
     end
     if (rst) begin
       \$562  = 1'h0;
@@ -3761,37 +4204,49 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$563  = \$19 ;
+    \$563  = ch0_read_select_96;
+    if (bus__r_en) begin
+      \$563  = \$79 ;
+    end
     if (rst) begin
       \$563  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$564  = \$21 ;
+    \$564  = ch0_read_select_98;
+    if (bus__r_en) begin
+      \$564  = \$80 ;
+    end
     if (rst) begin
       \$564  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$565  = \$23 ;
+    \$565  = ch0_read_select_99;
+    if (bus__r_en) begin
+      \$565  = \$81 ;
+    end
     if (rst) begin
       \$565  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$566  = \$25 ;
+    \$566  = ch0_read_select_9a;
+    if (bus__r_en) begin
+      \$566  = \$82 ;
+    end
     if (rst) begin
       \$566  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$567  = ch0_ctrl_periodic;
-    if (\$26 ) begin
-      \$567  = write_data[8];
+    \$567  = ch0_read_select_9b;
+    if (bus__r_en) begin
+      \$567  = \$83 ;
     end
     if (rst) begin
       \$567  = 1'h0;
@@ -3799,9 +4254,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$568  = ch0_ctrl_trigger_enable;
-    if (\$27 ) begin
-      \$568  = write_data[9];
+    \$568  = ch0_read_select_9c;
+    if (bus__r_en) begin
+      \$568  = \$84 ;
     end
     if (rst) begin
       \$568  = 1'h0;
@@ -3809,32 +4264,39 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$569  = \$29 ;
+    \$569  = ch0_read_select_9d;
+    if (bus__r_en) begin
+      \$569  = \$85 ;
+    end
     if (rst) begin
       \$569  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$570  = \$31 ;
+    \$570  = ch0_read_select_9e;
+    if (bus__r_en) begin
+      \$570  = \$86 ;
+    end
     if (rst) begin
       \$570  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$571  = \$33 ;
+    \$571  = ch0_read_select_c0;
+    if (bus__r_en) begin
+      \$571  = \$87 ;
+    end
     if (rst) begin
       \$571  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$572  = ch0_irq_status_done;
-    if (ch0__done) begin
-      \$572  = 1'h1;
-    end else if (\$35 ) begin
-      \$572  = 1'h0;
+    \$572  = ch0_read_select_c1;
+    if (bus__r_en) begin
+      \$572  = \$88 ;
     end
     if (rst) begin
       \$572  = 1'h0;
@@ -3842,11 +4304,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$573  = ch0_irq_status_error;
-    if (ch0__frame_error) begin
-      \$573  = 1'h1;
-    end else if (\$37 ) begin
-      \$573  = 1'h0;
+    \$573  = ch0_read_select_c2;
+    if (bus__r_en) begin
+      \$573  = \$89 ;
     end
     if (rst) begin
       \$573  = 1'h0;
@@ -3854,11 +4314,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$574  = ch0_irq_status_access_done;
-    if (ch0__ca_done) begin
-      \$574  = 1'h1;
-    end else if (\$39 ) begin
-      \$574  = 1'h0;
+    \$574  = ch0_read_select_c3;
+    if (bus__r_en) begin
+      \$574  = \$90 ;
     end
     if (rst) begin
       \$574  = 1'h0;
@@ -3866,16 +4324,19 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$575  = \$41 ;
+    \$575  = ch0_read_select_c4;
+    if (bus__r_en) begin
+      \$575  = \$91 ;
+    end
     if (rst) begin
       \$575  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$576  = ch0_irq_enable_done;
-    if (\$42 ) begin
-      \$576  = write_data[0];
+    \$576  = ch0_read_select_c5;
+    if (bus__r_en) begin
+      \$576  = \$92 ;
     end
     if (rst) begin
       \$576  = 1'h0;
@@ -3883,211 +4344,226 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$577  = ch0_irq_enable_error;
-    if (\$43 ) begin
-      \$577  = write_data[1];
-    end
+    \$577  = \$94 ;
     if (rst) begin
       \$577  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$578  = ch0_irq_enable_access_done;
-    if (\$44 ) begin
-      \$578  = write_data[2];
-    end
+    \$578  = \$96 ;
     if (rst) begin
       \$578  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$579  = \$46 ;
+    \$579  = \$98 ;
     if (rst) begin
       \$579  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$580  = ch0_cfg_ma_ma_half_period;
-    if (\$47 ) begin
-      \$580 [7:0] = write_data[7:0];
-    end
-    if (\$48 ) begin
-      \$580 [15:8] = write_data[15:8];
+    \$580  = ch1_ctrl_periodic;
+    if (\$99 ) begin
+      \$580  = write_data[8];
     end
     if (rst) begin
-      \$580  = 16'h0000;
+      \$580  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$581  = ch0_cfg_ma_delay_limit;
-    if (\$49 ) begin
-      \$581 [7:0] = write_data[23:16];
-    end
-    if (\$50 ) begin
-      \$581 [11:8] = write_data[27:24];
+    \$581  = ch1_ctrl_trigger_enable;
+    if (\$100 ) begin
+      \$581  = write_data[9];
     end
     if (rst) begin
-      \$581  = 12'h000;
+      \$581  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$582  = \$52 ;
+    \$582  = ch1_irq_status_done;
+    if (ch1__done) begin
+      \$582  = 1'h1;
+    end else if (\$102 ) begin
+      \$582  = 1'h0;
+    end
     if (rst) begin
       \$582  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$583  = ch0_cfg_period_request_period;
-    if (\$53 ) begin
-      \$583 [7:0] = write_data[7:0];
-    end
-    if (\$54 ) begin
-      \$583 [15:8] = write_data[15:8];
-    end
-    if (\$55 ) begin
-      \$583 [23:16] = write_data[23:16];
+    \$583  = ch1_irq_status_error;
+    if (ch1__frame_error) begin
+      \$583  = 1'h1;
+    end else if (\$104 ) begin
+      \$583  = 1'h0;
     end
     if (rst) begin
-      \$583  = 24'h000000;
+      \$583  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$584  = \$57 ;
+    \$584  = ch1_irq_status_access_done;
+    if (ch1__ca_done) begin
+      \$584  = 1'h1;
+    end else if (\$106 ) begin
+      \$584  = 1'h0;
+    end
     if (rst) begin
       \$584  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$585  = ch0_cfg_break_break_time;
-    if (\$58 ) begin
-      \$585 [7:0] = write_data[7:0];
-    end
-    if (\$59 ) begin
-      \$585 [15:8] = write_data[15:8];
-    end
-    if (\$60 ) begin
-      \$585 [23:16] = write_data[23:16];
+    \$585  = ch1_irq_enable_done;
+    if (\$107 ) begin
+      \$585  = write_data[0];
     end
     if (rst) begin
-      \$585  = 24'h000000;
+      \$585  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$586  = \$62 ;
+    \$586  = ch1_irq_enable_error;
+    if (\$108 ) begin
+      \$586  = write_data[1];
+    end
     if (rst) begin
       \$586  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$587  = ch0_cfg_ack_ack_limit;
-    if (\$63 ) begin
-      \$587 [7:0] = write_data[7:0];
-    end
-    if (\$64 ) begin
-      \$587 [15:8] = write_data[15:8];
-    end
-    if (\$65 ) begin
-      \$587 [23:16] = write_data[23:16];
+    \$587  = ch1_irq_enable_access_done;
+    if (\$109 ) begin
+      \$587  = write_data[2];
     end
     if (rst) begin
-      \$587  = 24'h000000;
+      \$587  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$588  = \$67 ;
+    \$588  = ch1_cfg_ma_ma_half_period;
+    if (\$110 ) begin
+      \$588 [7:0] = write_data[7:0];
+    end
+    if (\$111 ) begin
+      \$588 [15:8] = write_data[15:8];
+    end
     if (rst) begin
-      \$588  = 1'h0;
+      \$588  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$589  = ch0_cfg_timeout_timeout_limit;
-    if (\$68 ) begin
-      \$589 [7:0] = write_data[7:0];
+    \$589  = ch1_cfg_ma_delay_limit;
+    if (\$112 ) begin
+      \$589 [7:0] = write_data[23:16];
     end
-    if (\$69 ) begin
-      \$589 [15:8] = write_data[15:8];
-    end
-    if (\$70 ) begin
-      \$589 [23:16] = write_data[23:16];
+    if (\$113 ) begin
+      \$589 [11:8] = write_data[27:24];
     end
     if (rst) begin
-      \$589  = 24'h000000;
+      \$589  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$590  = \$72 ;
+    \$590  = ch1_cfg_period_request_period;
+    if (\$114 ) begin
+      \$590 [7:0] = write_data[7:0];
+    end
+    if (\$115 ) begin
+      \$590 [15:8] = write_data[15:8];
+    end
+    if (\$116 ) begin
+      \$590 [23:16] = write_data[23:16];
+    end
     if (rst) begin
-      \$590  = 1'h0;
+      \$590  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$591  = ch0_cfg_words_w0_data_bits;
-    if (\$73 ) begin
-      \$591  = write_data[5:0];
+    \$591  = ch1_cfg_break_break_time;
+    if (\$117 ) begin
+      \$591 [7:0] = write_data[7:0];
+    end
+    if (\$118 ) begin
+      \$591 [15:8] = write_data[15:8];
+    end
+    if (\$119 ) begin
+      \$591 [23:16] = write_data[23:16];
     end
     if (rst) begin
-      \$591  = 6'h00;
+      \$591  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$592  = ch0_cfg_words_w0_nenw;
-    if (\$74 ) begin
-      \$592  = write_data[6];
+    \$592  = ch1_cfg_ack_ack_limit;
+    if (\$120 ) begin
+      \$592 [7:0] = write_data[7:0];
+    end
+    if (\$121 ) begin
+      \$592 [15:8] = write_data[15:8];
+    end
+    if (\$122 ) begin
+      \$592 [23:16] = write_data[23:16];
     end
     if (rst) begin
-      \$592  = 1'h0;
+      \$592  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$593  = ch0_cfg_words_w0_lc;
-    if (\$75 ) begin
-      \$593  = write_data[7];
+    \$593  = ch1_cfg_timeout_timeout_limit;
+    if (\$123 ) begin
+      \$593 [7:0] = write_data[7:0];
+    end
+    if (\$124 ) begin
+      \$593 [15:8] = write_data[15:8];
+    end
+    if (\$125 ) begin
+      \$593 [23:16] = write_data[23:16];
     end
     if (rst) begin
-      \$593  = 1'h0;
+      \$593  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$594  = ch0_cfg_words_w0_crc;
-    if (\$76 ) begin
-      \$594  = write_data[9:8];
+    \$594  = ch1_cfg_words_w0_data_bits;
+    if (\$126 ) begin
+      \$594  = write_data[5:0];
     end
     if (rst) begin
-      \$594  = 2'h0;
+      \$594  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$595  = ch0_cfg_words_w1_data_bits;
-    if (\$77 ) begin
-      \$595  = write_data[21:16];
+    \$595  = ch1_cfg_words_w0_nenw;
+    if (\$127 ) begin
+      \$595  = write_data[6];
     end
     if (rst) begin
-      \$595  = 6'h00;
+      \$595  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$596  = ch0_cfg_words_w1_nenw;
-    if (\$78 ) begin
-      \$596  = write_data[22];
+    \$596  = ch1_cfg_words_w0_lc;
+    if (\$128 ) begin
+      \$596  = write_data[7];
     end
     if (rst) begin
       \$596  = 1'h0;
@@ -4095,29 +4571,29 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$597  = ch0_cfg_words_w1_lc;
-    if (\$79 ) begin
-      \$597  = write_data[23];
+    \$597  = ch1_cfg_words_w0_crc;
+    if (\$129 ) begin
+      \$597  = write_data[9:8];
     end
     if (rst) begin
-      \$597  = 1'h0;
+      \$597  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$598  = ch0_cfg_words_w1_crc;
-    if (\$80 ) begin
-      \$598  = write_data[25:24];
+    \$598  = ch1_cfg_words_w1_data_bits;
+    if (\$130 ) begin
+      \$598  = write_data[21:16];
     end
     if (rst) begin
-      \$598  = 2'h0;
+      \$598  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$599  = ch0_cfg_words_w1_enable;
-    if (\$81 ) begin
-      \$599  = write_data[31];
+    \$599  = ch1_cfg_words_w1_nenw;
+    if (\$131 ) begin
+      \$599  = write_data[22];
     end
     if (rst) begin
       \$599  = 1'h0;
@@ -4125,26 +4601,29 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$600  = \$83 ;
+    \$600  = ch1_cfg_words_w1_lc;
+    if (\$132 ) begin
+      \$600  = write_data[23];
+    end
     if (rst) begin
       \$600  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$601  = ch0_cfg_checks_end_check;
-    if (\$84 ) begin
-      \$601  = write_data[0];
+    \$601  = ch1_cfg_words_w1_crc;
+    if (\$133 ) begin
+      \$601  = write_data[25:24];
     end
     if (rst) begin
-      \$601  = 1'h0;
+      \$601  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$602  = ch0_cfg_checks_spw_check;
-    if (\$85 ) begin
-      \$602  = write_data[1];
+    \$602  = ch1_cfg_words_w1_enable;
+    if (\$134 ) begin
+      \$602  = write_data[31];
     end
     if (rst) begin
       \$602  = 1'h0;
@@ -4152,154 +4631,193 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$603  = ch0_cfg_checks_spw_tolerance;
-    if (\$86 ) begin
-      \$603  = write_data[15:8];
+    \$603  = ch1_cfg_checks_end_check;
+    if (\$135 ) begin
+      \$603  = write_data[0];
     end
     if (rst) begin
-      \$603  = 8'h00;
+      \$603  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$604  = \$88 ;
+    \$604  = ch1_cfg_checks_spw_check;
+    if (\$136 ) begin
+      \$604  = write_data[1];
+    end
     if (rst) begin
       \$604  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$605  = \$90 ;
+    \$605  = ch1_cfg_checks_spw_tolerance;
+    if (\$137 ) begin
+      \$605  = write_data[15:8];
+    end
     if (rst) begin
-      \$605  = 1'h0;
+      \$605  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$606  = \$92 ;
+    \$606  = ch1_ca_request_slave_id;
+    if (\$138 ) begin
+      \$606  = write_data[2:0];
+    end
     if (rst) begin
-      \$606  = 1'h0;
+      \$606  = 3'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$607  = \$94 ;
+    \$607  = ch1_ca_request_address;
+    if (\$139 ) begin
+      \$607  = write_data[14:8];
+    end
     if (rst) begin
-      \$607  = 1'h0;
+      \$607  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$608  = \$96 ;
+    \$608  = ch1_ca_request_count;
+    if (\$140 ) begin
+      \$608  = write_data[22:16];
+    end
     if (rst) begin
-      \$608  = 1'h0;
+      \$608  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$609  = \$98 ;
+    \$609  = \ch1_ca_request_write$186 ;
+    if (\$141 ) begin
+      \$609  = write_data[24];
+    end
     if (rst) begin
       \$609  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$610  = \$100 ;
+    \$610  = \$143 ;
     if (rst) begin
       \$610  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$611  = \$102 ;
+    \$611  = \$145 ;
     if (rst) begin
       \$611  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$612  = \$104 ;
+    \$612  = ch1_result_status_status_snapshot;
+    if (ch1_result_status_read) begin
+      \$612  = \port$4806$0 [3:0];
+    end
     if (rst) begin
-      \$612  = 1'h0;
+      \$612  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$613  = \$106 ;
+    \$613  = ch1_result_status_cds_snapshot;
+    if (ch1_result_status_read) begin
+      \$613  = \port$4806$0 [49];
+    end
     if (rst) begin
       \$613  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$614  = \$108 ;
+    \$614  = ch1_result_status_w0_ne_snapshot;
+    if (ch1_result_status_read) begin
+      \$614  = \port$4806$0 [105];
+    end
     if (rst) begin
       \$614  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$615  = \$110 ;
+    \$615  = ch1_result_status_w0_nw_snapshot;
+    if (ch1_result_status_read) begin
+      \$615  = \port$4806$0 [106];
+    end
     if (rst) begin
       \$615  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$616  = \$112 ;
+    \$616  = ch1_result_status_w0_crc_ok_snapshot;
+    if (ch1_result_status_read) begin
+      \$616  = \port$4806$0 [107];
+    end
     if (rst) begin
       \$616  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$617  = \$114 ;
+    \$617  = ch1_result_status_w1_ne_snapshot;
+    if (ch1_result_status_read) begin
+      \$617  = \port$4806$0 [148];
+    end
     if (rst) begin
       \$617  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$618  = \$116 ;
+    \$618  = ch1_result_status_w1_nw_snapshot;
+    if (ch1_result_status_read) begin
+      \$618  = \port$4806$0 [149];
+    end
     if (rst) begin
       \$618  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$619  = ch0_ca_request_slave_id;
-    if (\$117 ) begin
-      \$619  = write_data[2:0];
+    \$619  = ch1_result_status_w1_crc_ok_snapshot;
+    if (ch1_result_status_read) begin
+      \$619  = \port$4806$0 [150];
     end
     if (rst) begin
-      \$619  = 3'h0;
+      \$619  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$620  = ch0_ca_request_address;
-    if (\$118 ) begin
-      \$620  = write_data[14:8];
+    \$620  = ch1_result_status_lc_repeat_snapshot;
+    if (ch1_result_status_read) begin
+      \$620  = \port$4806$0 [157];
     end
     if (rst) begin
-      \$620  = 7'h00;
+      \$620  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$621  = ch0_ca_request_count;
-    if (\$119 ) begin
-      \$621  = write_data[22:16];
+    \$621  = ch1_result_status_lc_skip_snapshot;
+    if (ch1_result_status_read) begin
+      \$621  = \port$4806$0 [158];
     end
     if (rst) begin
-      \$621  = 7'h00;
+      \$621  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$622  = \ch0_ca_request_write$84 ;
-    if (\$120 ) begin
-      \$622  = write_data[24];
+    \$622  = ch1_result_status_lc_zero_snapshot;
+    if (ch1_result_status_read) begin
+      \$622  = \port$4806$0 [159];
     end
     if (rst) begin
       \$622  = 1'h0;
@@ -4307,75 +4825,99 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$623  = \$122 ;
+    \$623  = ch1_result_status_spw_mismatch_snapshot;
+    if (ch1_result_status_read) begin
+      \$623  = \port$4806$0 [160];
+    end
     if (rst) begin
       \$623  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$624  = \$124 ;
+    \$624  = ch1_result_status_lc_snapshot;
+    if (ch1_result_status_read) begin
+      \$624  = \port$4806$0 [156:151];
+    end
     if (rst) begin
-      \$624  = 1'h0;
+      \$624  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$625  = \$126 ;
+    \$625  = ch1_result_seq_seq_snapshot;
+    if (ch1_result_status_read) begin
+      \$625  = ch1__done_count;
+    end
     if (rst) begin
-      \$625  = 1'h0;
+      \$625  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$626  = \$128 ;
+    \$626  = ch1_result_seq_line_delay_snapshot;
+    if (ch1_result_status_read) begin
+      \$626  = \port$4806$0 [48:36];
+    end
     if (rst) begin
-      \$626  = 1'h0;
+      \$626  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$627  = \$130 ;
+    \$627  = ch1_result_w0_lo_data_snapshot;
+    if (ch1_result_status_read) begin
+      \$627  = \port$4806$0 [81:50];
+    end
     if (rst) begin
-      \$627  = 1'h0;
+      \$627  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$628  = \$132 ;
+    \$628  = ch1_result_w0_hi_data_snapshot;
+    if (ch1_result_status_read) begin
+      \$628  = \port$4806$0 [104:82];
+    end
     if (rst) begin
-      \$628  = 1'h0;
+      \$628  = 23'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$629  = \$134 ;
+    \$629  = ch1_result_w1_lo_data_snapshot;
+    if (ch1_result_status_read) begin
+      \$629  = \port$4806$0 [139:108];
+    end
     if (rst) begin
-      \$629  = 1'h0;
+      \$629  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$630  = \$136 ;
+    \$630  = ch1_result_w1_hi_data_snapshot;
+    if (ch1_result_status_read) begin
+      \$630  = \port$4806$0 [147:140];
+    end
     if (rst) begin
-      \$630  = 1'h0;
+      \$630  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$631  = ch0_result_status_status_snapshot;
-    if (ch0_result_status_read) begin
-      \$631  = \port$4447$0 [3:0];
+    \$631  = ch1_result_timestamp_time_snapshot;
+    if (ch1_result_status_read) begin
+      \$631  = \port$4806$0 [35:4];
     end
     if (rst) begin
-      \$631  = 4'h0;
+      \$631  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$632  = ch0_result_status_cds_snapshot;
-    if (ch0_result_status_read) begin
-      \$632  = \port$4447$0 [49];
+    \$632  = ch1_read_select_100;
+    if (bus__r_en) begin
+      \$632  = \$146 ;
     end
     if (rst) begin
       \$632  = 1'h0;
@@ -4383,9 +4925,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$633  = ch0_result_status_w0_ne_snapshot;
-    if (ch0_result_status_read) begin
-      \$633  = \port$4447$0 [105];
+    \$633  = ch1_read_select_101;
+    if (bus__r_en) begin
+      \$633  = \$147 ;
     end
     if (rst) begin
       \$633  = 1'h0;
@@ -4393,9 +4935,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$634  = ch0_result_status_w0_nw_snapshot;
-    if (ch0_result_status_read) begin
-      \$634  = \port$4447$0 [106];
+    \$634  = ch1_read_select_102;
+    if (bus__r_en) begin
+      \$634  = \$148 ;
     end
     if (rst) begin
       \$634  = 1'h0;
@@ -4403,9 +4945,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$635  = ch0_result_status_w0_crc_ok_snapshot;
-    if (ch0_result_status_read) begin
-      \$635  = \port$4447$0 [107];
+    \$635  = ch1_read_select_104;
+    if (bus__r_en) begin
+      \$635  = \$149 ;
     end
     if (rst) begin
       \$635  = 1'h0;
@@ -4413,9 +4955,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$636  = ch0_result_status_w1_ne_snapshot;
-    if (ch0_result_status_read) begin
-      \$636  = \port$4447$0 [148];
+    \$636  = ch1_read_select_105;
+    if (bus__r_en) begin
+      \$636  = \$150 ;
     end
     if (rst) begin
       \$636  = 1'h0;
@@ -4423,9 +4965,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$637  = ch0_result_status_w1_nw_snapshot;
-    if (ch0_result_status_read) begin
-      \$637  = \port$4447$0 [149];
+    \$637  = ch1_read_select_108;
+    if (bus__r_en) begin
+      \$637  = \$151 ;
     end
     if (rst) begin
       \$637  = 1'h0;
@@ -4433,9 +4975,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$638  = ch0_result_status_w1_crc_ok_snapshot;
-    if (ch0_result_status_read) begin
-      \$638  = \port$4447$0 [150];
+    \$638  = ch1_read_select_109;
+    if (bus__r_en) begin
+      \$638  = \$152 ;
     end
     if (rst) begin
       \$638  = 1'h0;
@@ -4443,9 +4985,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$639  = ch0_result_status_lc_repeat_snapshot;
-    if (ch0_result_status_read) begin
-      \$639  = \port$4447$0 [157];
+    \$639  = ch1_read_select_10a;
+    if (bus__r_en) begin
+      \$639  = \$153 ;
     end
     if (rst) begin
       \$639  = 1'h0;
@@ -4453,9 +4995,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$640  = ch0_result_status_lc_skip_snapshot;
-    if (ch0_result_status_read) begin
-      \$640  = \port$4447$0 [158];
+    \$640  = ch1_read_select_10b;
+    if (bus__r_en) begin
+      \$640  = \$154 ;
     end
     if (rst) begin
       \$640  = 1'h0;
@@ -4463,9 +5005,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$641  = ch0_result_status_lc_zero_snapshot;
-    if (ch0_result_status_read) begin
-      \$641  = \port$4447$0 [159];
+    \$641  = ch1_read_select_10c;
+    if (bus__r_en) begin
+      \$641  = \$155 ;
     end
     if (rst) begin
       \$641  = 1'h0;
@@ -4473,9 +5015,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$642  = ch0_result_status_spw_mismatch_snapshot;
-    if (ch0_result_status_read) begin
-      \$642  = \port$4447$0 [160];
+    \$642  = ch1_read_select_10d;
+    if (bus__r_en) begin
+      \$642  = \$156 ;
     end
     if (rst) begin
       \$642  = 1'h0;
@@ -4483,89 +5025,89 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$643  = ch0_result_status_lc_snapshot;
-    if (ch0_result_status_read) begin
-      \$643  = \port$4447$0 [156:151];
-    end
-    if (rst) begin
-      \$643  = 6'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$644  = ch0_result_seq_seq_snapshot;
-    if (ch0_result_status_read) begin
-      \$644  = ch0__done_count;
-    end
-    if (rst) begin
-      \$644  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$645  = ch0_result_seq_line_delay_snapshot;
-    if (ch0_result_status_read) begin
-      \$645  = \port$4447$0 [48:36];
-    end
-    if (rst) begin
-      \$645  = 13'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$646  = ch0_result_w0_lo_data_snapshot;
-    if (ch0_result_status_read) begin
-      \$646  = \port$4447$0 [81:50];
-    end
-    if (rst) begin
-      \$646  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$647  = ch0_result_w0_hi_data_snapshot;
-    if (ch0_result_status_read) begin
-      \$647  = \port$4447$0 [104:82];
-    end
-    if (rst) begin
-      \$647  = 23'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$648  = ch0_result_w1_lo_data_snapshot;
-    if (ch0_result_status_read) begin
-      \$648  = \port$4447$0 [139:108];
-    end
-    if (rst) begin
-      \$648  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$649  = ch0_result_w1_hi_data_snapshot;
-    if (ch0_result_status_read) begin
-      \$649  = \port$4447$0 [147:140];
-    end
-    if (rst) begin
-      \$649  = 8'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$650  = ch0_result_timestamp_time_snapshot;
-    if (ch0_result_status_read) begin
-      \$650  = \port$4447$0 [35:4];
-    end
-    if (rst) begin
-      \$650  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$651  = ch0_read_select_80;
+    \$643  = ch1_read_select_10e;
     if (bus__r_en) begin
-      \$651  = \$137 ;
+      \$643  = \$157 ;
+    end
+    if (rst) begin
+      \$643  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$644  = ch1_read_select_110;
+    if (bus__r_en) begin
+      \$644  = \$158 ;
+    end
+    if (rst) begin
+      \$644  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$645  = ch1_read_select_111;
+    if (bus__r_en) begin
+      \$645  = \$159 ;
+    end
+    if (rst) begin
+      \$645  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$646  = ch1_read_select_112;
+    if (bus__r_en) begin
+      \$646  = \$160 ;
+    end
+    if (rst) begin
+      \$646  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$647  = ch1_read_select_113;
+    if (bus__r_en) begin
+      \$647  = \$161 ;
+    end
+    if (rst) begin
+      \$647  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$648  = ch1_read_select_114;
+    if (bus__r_en) begin
+      \$648  = \$162 ;
+    end
+    if (rst) begin
+      \$648  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$649  = ch1_read_select_115;
+    if (bus__r_en) begin
+      \$649  = \$163 ;
+    end
+    if (rst) begin
+      \$649  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$650  = ch1_read_select_116;
+    if (bus__r_en) begin
+      \$650  = \$164 ;
+    end
+    if (rst) begin
+      \$650  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$651  = ch1_read_select_118;
+    if (bus__r_en) begin
+      \$651  = \$165 ;
     end
     if (rst) begin
       \$651  = 1'h0;
@@ -4573,9 +5115,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$652  = ch0_read_select_81;
+    \$652  = ch1_read_select_119;
     if (bus__r_en) begin
-      \$652  = \$138 ;
+      \$652  = \$166 ;
     end
     if (rst) begin
       \$652  = 1'h0;
@@ -4583,9 +5125,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$653  = ch0_read_select_82;
+    \$653  = ch1_read_select_11a;
     if (bus__r_en) begin
-      \$653  = \$139 ;
+      \$653  = \$167 ;
     end
     if (rst) begin
       \$653  = 1'h0;
@@ -4593,9 +5135,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$654  = ch0_read_select_84;
+    \$654  = ch1_read_select_11b;
     if (bus__r_en) begin
-      \$654  = \$140 ;
+      \$654  = \$168 ;
     end
     if (rst) begin
       \$654  = 1'h0;
@@ -4603,9 +5145,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$655  = ch0_read_select_85;
+    \$655  = ch1_read_select_11c;
     if (bus__r_en) begin
-      \$655  = \$141 ;
+      \$655  = \$169 ;
     end
     if (rst) begin
       \$655  = 1'h0;
@@ -4613,9 +5155,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$656  = ch0_read_select_88;
+    \$656  = ch1_read_select_11d;
     if (bus__r_en) begin
-      \$656  = \$142 ;
+      \$656  = \$170 ;
     end
     if (rst) begin
       \$656  = 1'h0;
@@ -4623,9 +5165,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$657  = ch0_read_select_89;
+    \$657  = ch1_read_select_11e;
     if (bus__r_en) begin
-      \$657  = \$143 ;
+      \$657  = \$171 ;
     end
     if (rst) begin
       \$657  = 1'h0;
@@ -4633,9 +5175,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$658  = ch0_read_select_8a;
+    \$658  = ch1_read_select_140;
     if (bus__r_en) begin
-      \$658  = \$144 ;
+      \$658  = \$172 ;
     end
     if (rst) begin
       \$658  = 1'h0;
@@ -4643,9 +5185,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$659  = ch0_read_select_8b;
+    \$659  = ch1_read_select_141;
     if (bus__r_en) begin
-      \$659  = \$145 ;
+      \$659  = \$173 ;
     end
     if (rst) begin
       \$659  = 1'h0;
@@ -4653,9 +5195,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$660  = ch0_read_select_8c;
+    \$660  = ch1_read_select_142;
     if (bus__r_en) begin
-      \$660  = \$146 ;
+      \$660  = \$174 ;
     end
     if (rst) begin
       \$660  = 1'h0;
@@ -4663,9 +5205,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$661  = ch0_read_select_8d;
+    \$661  = ch1_read_select_143;
     if (bus__r_en) begin
-      \$661  = \$147 ;
+      \$661  = \$175 ;
     end
     if (rst) begin
       \$661  = 1'h0;
@@ -4673,9 +5215,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$662  = ch0_read_select_8e;
+    \$662  = ch1_read_select_144;
     if (bus__r_en) begin
-      \$662  = \$148 ;
+      \$662  = \$176 ;
     end
     if (rst) begin
       \$662  = 1'h0;
@@ -4683,9 +5225,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$663  = ch0_read_select_90;
+    \$663  = ch1_read_select_145;
     if (bus__r_en) begin
-      \$663  = \$149 ;
+      \$663  = \$177 ;
     end
     if (rst) begin
       \$663  = 1'h0;
@@ -4693,9 +5235,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$664  = ch0_read_select_91;
+    \$664  = window0_read;
     if (bus__r_en) begin
-      \$664  = \$150 ;
+      \$664  = \$179 ;
     end
     if (rst) begin
       \$664  = 1'h0;
@@ -4703,9 +5245,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$665  = ch0_read_select_92;
+    \$665  = window1_read;
     if (bus__r_en) begin
-      \$665  = \$151 ;
+      \$665  = \$181 ;
     end
     if (rst) begin
       \$665  = 1'h0;
@@ -4713,1360 +5255,48 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$666  = ch0_read_select_93;
-    if (bus__r_en) begin
-      \$666  = \$152 ;
-    end
-    if (rst) begin
-      \$666  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$667  = ch0_read_select_94;
-    if (bus__r_en) begin
-      \$667  = \$153 ;
-    end
-    if (rst) begin
-      \$667  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$668  = ch0_read_select_95;
-    if (bus__r_en) begin
-      \$668  = \$154 ;
-    end
-    if (rst) begin
-      \$668  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$669  = ch0_read_select_96;
-    if (bus__r_en) begin
-      \$669  = \$155 ;
-    end
-    if (rst) begin
-      \$669  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$670  = ch0_read_select_98;
-    if (bus__r_en) begin
-      \$670  = \$156 ;
-    end
-    if (rst) begin
-      \$670  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$671  = ch0_read_select_99;
-    if (bus__r_en) begin
-      \$671  = \$157 ;
-    end
-    if (rst) begin
-      \$671  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$672  = ch0_read_select_9a;
-    if (bus__r_en) begin
-      \$672  = \$158 ;
-    end
-    if (rst) begin
-      \$672  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$673  = ch0_read_select_9b;
-    if (bus__r_en) begin
-      \$673  = \$159 ;
-    end
-    if (rst) begin
-      \$673  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$674  = ch0_read_select_9c;
-    if (bus__r_en) begin
-      \$674  = \$160 ;
-    end
-    if (rst) begin
-      \$674  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$675  = ch0_read_select_9d;
-    if (bus__r_en) begin
-      \$675  = \$161 ;
-    end
-    if (rst) begin
-      \$675  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$676  = ch0_read_select_9e;
-    if (bus__r_en) begin
-      \$676  = \$162 ;
-    end
-    if (rst) begin
-      \$676  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$677  = ch0_read_select_c0;
-    if (bus__r_en) begin
-      \$677  = \$163 ;
-    end
-    if (rst) begin
-      \$677  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$678  = ch0_read_select_c1;
-    if (bus__r_en) begin
-      \$678  = \$164 ;
-    end
-    if (rst) begin
-      \$678  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$679  = ch0_read_select_c2;
-    if (bus__r_en) begin
-      \$679  = \$165 ;
-    end
-    if (rst) begin
-      \$679  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$680  = ch0_read_select_c3;
-    if (bus__r_en) begin
-      \$680  = \$166 ;
-    end
-    if (rst) begin
-      \$680  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$681  = ch0_read_select_c4;
-    if (bus__r_en) begin
-      \$681  = \$167 ;
-    end
-    if (rst) begin
-      \$681  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$682  = ch0_read_select_c5;
-    if (bus__r_en) begin
-      \$682  = \$168 ;
-    end
-    if (rst) begin
-      \$682  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$683  = \$170 ;
-    if (rst) begin
-      \$683  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$684  = \$172 ;
-    if (rst) begin
-      \$684  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$685  = \$174 ;
-    if (rst) begin
-      \$685  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$686  = \$176 ;
-    if (rst) begin
-      \$686  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$687  = ch1_ctrl_periodic;
-    if (\$177 ) begin
-      \$687  = write_data[8];
-    end
-    if (rst) begin
-      \$687  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$688  = ch1_ctrl_trigger_enable;
-    if (\$178 ) begin
-      \$688  = write_data[9];
-    end
-    if (rst) begin
-      \$688  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$689  = \$180 ;
-    if (rst) begin
-      \$689  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$690  = \$182 ;
-    if (rst) begin
-      \$690  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$691  = \$184 ;
-    if (rst) begin
-      \$691  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$692  = ch1_irq_status_done;
-    if (ch1__done) begin
-      \$692  = 1'h1;
-    end else if (\$186 ) begin
-      \$692  = 1'h0;
-    end
-    if (rst) begin
-      \$692  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$693  = ch1_irq_status_error;
-    if (ch1__frame_error) begin
-      \$693  = 1'h1;
-    end else if (\$188 ) begin
-      \$693  = 1'h0;
-    end
-    if (rst) begin
-      \$693  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$694  = ch1_irq_status_access_done;
-    if (ch1__ca_done) begin
-      \$694  = 1'h1;
-    end else if (\$190 ) begin
-      \$694  = 1'h0;
-    end
-    if (rst) begin
-      \$694  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$695  = \$192 ;
-    if (rst) begin
-      \$695  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$696  = ch1_irq_enable_done;
-    if (\$193 ) begin
-      \$696  = write_data[0];
-    end
-    if (rst) begin
-      \$696  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$697  = ch1_irq_enable_error;
-    if (\$194 ) begin
-      \$697  = write_data[1];
-    end
-    if (rst) begin
-      \$697  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$698  = ch1_irq_enable_access_done;
-    if (\$195 ) begin
-      \$698  = write_data[2];
-    end
-    if (rst) begin
-      \$698  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$699  = \$197 ;
-    if (rst) begin
-      \$699  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$700  = ch1_cfg_ma_ma_half_period;
-    if (\$198 ) begin
-      \$700 [7:0] = write_data[7:0];
-    end
-    if (\$199 ) begin
-      \$700 [15:8] = write_data[15:8];
-    end
-    if (rst) begin
-      \$700  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$701  = ch1_cfg_ma_delay_limit;
-    if (\$200 ) begin
-      \$701 [7:0] = write_data[23:16];
-    end
-    if (\$201 ) begin
-      \$701 [11:8] = write_data[27:24];
-    end
-    if (rst) begin
-      \$701  = 12'h000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$702  = \$203 ;
-    if (rst) begin
-      \$702  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$703  = ch1_cfg_period_request_period;
-    if (\$204 ) begin
-      \$703 [7:0] = write_data[7:0];
-    end
-    if (\$205 ) begin
-      \$703 [15:8] = write_data[15:8];
-    end
-    if (\$206 ) begin
-      \$703 [23:16] = write_data[23:16];
-    end
-    if (rst) begin
-      \$703  = 24'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$704  = \$208 ;
-    if (rst) begin
-      \$704  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$705  = ch1_cfg_break_break_time;
-    if (\$209 ) begin
-      \$705 [7:0] = write_data[7:0];
-    end
-    if (\$210 ) begin
-      \$705 [15:8] = write_data[15:8];
-    end
-    if (\$211 ) begin
-      \$705 [23:16] = write_data[23:16];
-    end
-    if (rst) begin
-      \$705  = 24'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$706  = \$213 ;
-    if (rst) begin
-      \$706  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$707  = ch1_cfg_ack_ack_limit;
-    if (\$214 ) begin
-      \$707 [7:0] = write_data[7:0];
-    end
-    if (\$215 ) begin
-      \$707 [15:8] = write_data[15:8];
-    end
-    if (\$216 ) begin
-      \$707 [23:16] = write_data[23:16];
-    end
-    if (rst) begin
-      \$707  = 24'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$708  = \$218 ;
-    if (rst) begin
-      \$708  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$709  = ch1_cfg_timeout_timeout_limit;
-    if (\$219 ) begin
-      \$709 [7:0] = write_data[7:0];
-    end
-    if (\$220 ) begin
-      \$709 [15:8] = write_data[15:8];
-    end
-    if (\$221 ) begin
-      \$709 [23:16] = write_data[23:16];
-    end
-    if (rst) begin
-      \$709  = 24'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$710  = \$223 ;
-    if (rst) begin
-      \$710  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$711  = ch1_cfg_words_w0_data_bits;
-    if (\$224 ) begin
-      \$711  = write_data[5:0];
-    end
-    if (rst) begin
-      \$711  = 6'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$712  = ch1_cfg_words_w0_nenw;
-    if (\$225 ) begin
-      \$712  = write_data[6];
-    end
-    if (rst) begin
-      \$712  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$713  = ch1_cfg_words_w0_lc;
-    if (\$226 ) begin
-      \$713  = write_data[7];
-    end
-    if (rst) begin
-      \$713  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$714  = ch1_cfg_words_w0_crc;
-    if (\$227 ) begin
-      \$714  = write_data[9:8];
-    end
-    if (rst) begin
-      \$714  = 2'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$715  = ch1_cfg_words_w1_data_bits;
-    if (\$228 ) begin
-      \$715  = write_data[21:16];
-    end
-    if (rst) begin
-      \$715  = 6'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$716  = ch1_cfg_words_w1_nenw;
-    if (\$229 ) begin
-      \$716  = write_data[22];
-    end
-    if (rst) begin
-      \$716  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$717  = ch1_cfg_words_w1_lc;
-    if (\$230 ) begin
-      \$717  = write_data[23];
-    end
-    if (rst) begin
-      \$717  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$718  = ch1_cfg_words_w1_crc;
-    if (\$231 ) begin
-      \$718  = write_data[25:24];
-    end
-    if (rst) begin
-      \$718  = 2'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$719  = ch1_cfg_words_w1_enable;
-    if (\$232 ) begin
-      \$719  = write_data[31];
-    end
-    if (rst) begin
-      \$719  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$720  = \$234 ;
-    if (rst) begin
-      \$720  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$721  = ch1_cfg_checks_end_check;
-    if (\$235 ) begin
-      \$721  = write_data[0];
-    end
-    if (rst) begin
-      \$721  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$722  = ch1_cfg_checks_spw_check;
-    if (\$236 ) begin
-      \$722  = write_data[1];
-    end
-    if (rst) begin
-      \$722  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$723  = ch1_cfg_checks_spw_tolerance;
-    if (\$237 ) begin
-      \$723  = write_data[15:8];
-    end
-    if (rst) begin
-      \$723  = 8'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$724  = \$239 ;
-    if (rst) begin
-      \$724  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$725  = \$241 ;
-    if (rst) begin
-      \$725  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$726  = \$243 ;
-    if (rst) begin
-      \$726  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$727  = \$245 ;
-    if (rst) begin
-      \$727  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$728  = \$247 ;
-    if (rst) begin
-      \$728  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$729  = \$249 ;
-    if (rst) begin
-      \$729  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$730  = \$251 ;
-    if (rst) begin
-      \$730  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$731  = \$253 ;
-    if (rst) begin
-      \$731  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$732  = \$255 ;
-    if (rst) begin
-      \$732  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$733  = \$257 ;
-    if (rst) begin
-      \$733  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$734  = \$259 ;
-    if (rst) begin
-      \$734  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$735  = \$261 ;
-    if (rst) begin
-      \$735  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$736  = \$263 ;
-    if (rst) begin
-      \$736  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$737  = \$265 ;
-    if (rst) begin
-      \$737  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$738  = \$267 ;
-    if (rst) begin
-      \$738  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$739  = ch1_ca_request_slave_id;
-    if (\$268 ) begin
-      \$739  = write_data[2:0];
-    end
-    if (rst) begin
-      \$739  = 3'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$740  = ch1_ca_request_address;
-    if (\$269 ) begin
-      \$740  = write_data[14:8];
-    end
-    if (rst) begin
-      \$740  = 7'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$741  = ch1_ca_request_count;
-    if (\$270 ) begin
-      \$741  = write_data[22:16];
-    end
-    if (rst) begin
-      \$741  = 7'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$742  = \ch1_ca_request_write$226 ;
-    if (\$271 ) begin
-      \$742  = write_data[24];
-    end
-    if (rst) begin
-      \$742  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$743  = \$273 ;
-    if (rst) begin
-      \$743  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$744  = \$275 ;
-    if (rst) begin
-      \$744  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$745  = \$277 ;
-    if (rst) begin
-      \$745  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$746  = \$279 ;
-    if (rst) begin
-      \$746  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$747  = \$281 ;
-    if (rst) begin
-      \$747  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$748  = \$283 ;
-    if (rst) begin
-      \$748  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$749  = \$285 ;
-    if (rst) begin
-      \$749  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$750  = \$287 ;
-    if (rst) begin
-      \$750  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$751  = ch1_result_status_status_snapshot;
-    if (ch1_result_status_read) begin
-      \$751  = \port$4946$0 [3:0];
-    end
-    if (rst) begin
-      \$751  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$752  = ch1_result_status_cds_snapshot;
-    if (ch1_result_status_read) begin
-      \$752  = \port$4946$0 [49];
-    end
-    if (rst) begin
-      \$752  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$753  = ch1_result_status_w0_ne_snapshot;
-    if (ch1_result_status_read) begin
-      \$753  = \port$4946$0 [105];
-    end
-    if (rst) begin
-      \$753  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$754  = ch1_result_status_w0_nw_snapshot;
-    if (ch1_result_status_read) begin
-      \$754  = \port$4946$0 [106];
-    end
-    if (rst) begin
-      \$754  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$755  = ch1_result_status_w0_crc_ok_snapshot;
-    if (ch1_result_status_read) begin
-      \$755  = \port$4946$0 [107];
-    end
-    if (rst) begin
-      \$755  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$756  = ch1_result_status_w1_ne_snapshot;
-    if (ch1_result_status_read) begin
-      \$756  = \port$4946$0 [148];
-    end
-    if (rst) begin
-      \$756  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$757  = ch1_result_status_w1_nw_snapshot;
-    if (ch1_result_status_read) begin
-      \$757  = \port$4946$0 [149];
-    end
-    if (rst) begin
-      \$757  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$758  = ch1_result_status_w1_crc_ok_snapshot;
-    if (ch1_result_status_read) begin
-      \$758  = \port$4946$0 [150];
-    end
-    if (rst) begin
-      \$758  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$759  = ch1_result_status_lc_repeat_snapshot;
-    if (ch1_result_status_read) begin
-      \$759  = \port$4946$0 [157];
-    end
-    if (rst) begin
-      \$759  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$760  = ch1_result_status_lc_skip_snapshot;
-    if (ch1_result_status_read) begin
-      \$760  = \port$4946$0 [158];
-    end
-    if (rst) begin
-      \$760  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$761  = ch1_result_status_lc_zero_snapshot;
-    if (ch1_result_status_read) begin
-      \$761  = \port$4946$0 [159];
-    end
-    if (rst) begin
-      \$761  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$762  = ch1_result_status_spw_mismatch_snapshot;
-    if (ch1_result_status_read) begin
-      \$762  = \port$4946$0 [160];
-    end
-    if (rst) begin
-      \$762  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$763  = ch1_result_status_lc_snapshot;
-    if (ch1_result_status_read) begin
-      \$763  = \port$4946$0 [156:151];
-    end
-    if (rst) begin
-      \$763  = 6'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$764  = ch1_result_seq_seq_snapshot;
-    if (ch1_result_status_read) begin
-      \$764  = ch1__done_count;
-    end
-    if (rst) begin
-      \$764  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$765  = ch1_result_seq_line_delay_snapshot;
-    if (ch1_result_status_read) begin
-      \$765  = \port$4946$0 [48:36];
-    end
-    if (rst) begin
-      \$765  = 13'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$766  = ch1_result_w0_lo_data_snapshot;
-    if (ch1_result_status_read) begin
-      \$766  = \port$4946$0 [81:50];
-    end
-    if (rst) begin
-      \$766  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$767  = ch1_result_w0_hi_data_snapshot;
-    if (ch1_result_status_read) begin
-      \$767  = \port$4946$0 [104:82];
-    end
-    if (rst) begin
-      \$767  = 23'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$768  = ch1_result_w1_lo_data_snapshot;
-    if (ch1_result_status_read) begin
-      \$768  = \port$4946$0 [139:108];
-    end
-    if (rst) begin
-      \$768  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$769  = ch1_result_w1_hi_data_snapshot;
-    if (ch1_result_status_read) begin
-      \$769  = \port$4946$0 [147:140];
-    end
-    if (rst) begin
-      \$769  = 8'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$770  = ch1_result_timestamp_time_snapshot;
-    if (ch1_result_status_read) begin
-      \$770  = \port$4946$0 [35:4];
-    end
-    if (rst) begin
-      \$770  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$771  = ch1_read_select_100;
-    if (bus__r_en) begin
-      \$771  = \$288 ;
-    end
-    if (rst) begin
-      \$771  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$772  = ch1_read_select_101;
-    if (bus__r_en) begin
-      \$772  = \$289 ;
-    end
-    if (rst) begin
-      \$772  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$773  = ch1_read_select_102;
-    if (bus__r_en) begin
-      \$773  = \$290 ;
-    end
-    if (rst) begin
-      \$773  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$774  = ch1_read_select_104;
-    if (bus__r_en) begin
-      \$774  = \$291 ;
-    end
-    if (rst) begin
-      \$774  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$775  = ch1_read_select_105;
-    if (bus__r_en) begin
-      \$775  = \$292 ;
-    end
-    if (rst) begin
-      \$775  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$776  = ch1_read_select_108;
-    if (bus__r_en) begin
-      \$776  = \$293 ;
-    end
-    if (rst) begin
-      \$776  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$777  = ch1_read_select_109;
-    if (bus__r_en) begin
-      \$777  = \$294 ;
-    end
-    if (rst) begin
-      \$777  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$778  = ch1_read_select_10a;
-    if (bus__r_en) begin
-      \$778  = \$295 ;
-    end
-    if (rst) begin
-      \$778  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$779  = ch1_read_select_10b;
-    if (bus__r_en) begin
-      \$779  = \$296 ;
-    end
-    if (rst) begin
-      \$779  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$780  = ch1_read_select_10c;
-    if (bus__r_en) begin
-      \$780  = \$297 ;
-    end
-    if (rst) begin
-      \$780  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$781  = ch1_read_select_10d;
-    if (bus__r_en) begin
-      \$781  = \$298 ;
-    end
-    if (rst) begin
-      \$781  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$782  = ch1_read_select_10e;
-    if (bus__r_en) begin
-      \$782  = \$299 ;
-    end
-    if (rst) begin
-      \$782  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$783  = ch1_read_select_110;
-    if (bus__r_en) begin
-      \$783  = \$300 ;
-    end
-    if (rst) begin
-      \$783  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$784  = ch1_read_select_111;
-    if (bus__r_en) begin
-      \$784  = \$301 ;
-    end
-    if (rst) begin
-      \$784  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$785  = ch1_read_select_112;
-    if (bus__r_en) begin
-      \$785  = \$302 ;
-    end
-    if (rst) begin
-      \$785  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$786  = ch1_read_select_113;
-    if (bus__r_en) begin
-      \$786  = \$303 ;
-    end
-    if (rst) begin
-      \$786  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$787  = ch1_read_select_114;
-    if (bus__r_en) begin
-      \$787  = \$304 ;
-    end
-    if (rst) begin
-      \$787  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$788  = ch1_read_select_115;
-    if (bus__r_en) begin
-      \$788  = \$305 ;
-    end
-    if (rst) begin
-      \$788  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$789  = ch1_read_select_116;
-    if (bus__r_en) begin
-      \$789  = \$306 ;
-    end
-    if (rst) begin
-      \$789  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$790  = ch1_read_select_118;
-    if (bus__r_en) begin
-      \$790  = \$307 ;
-    end
-    if (rst) begin
-      \$790  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$791  = ch1_read_select_119;
-    if (bus__r_en) begin
-      \$791  = \$308 ;
-    end
-    if (rst) begin
-      \$791  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$792  = ch1_read_select_11a;
-    if (bus__r_en) begin
-      \$792  = \$309 ;
-    end
-    if (rst) begin
-      \$792  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$793  = ch1_read_select_11b;
-    if (bus__r_en) begin
-      \$793  = \$310 ;
-    end
-    if (rst) begin
-      \$793  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$794  = ch1_read_select_11c;
-    if (bus__r_en) begin
-      \$794  = \$311 ;
-    end
-    if (rst) begin
-      \$794  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$795  = ch1_read_select_11d;
-    if (bus__r_en) begin
-      \$795  = \$312 ;
-    end
-    if (rst) begin
-      \$795  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$796  = ch1_read_select_11e;
-    if (bus__r_en) begin
-      \$796  = \$313 ;
-    end
-    if (rst) begin
-      \$796  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$797  = ch1_read_select_140;
-    if (bus__r_en) begin
-      \$797  = \$314 ;
-    end
-    if (rst) begin
-      \$797  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$798  = ch1_read_select_141;
-    if (bus__r_en) begin
-      \$798  = \$315 ;
-    end
-    if (rst) begin
-      \$798  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$799  = ch1_read_select_142;
-    if (bus__r_en) begin
-      \$799  = \$316 ;
-    end
-    if (rst) begin
-      \$799  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$800  = ch1_read_select_143;
-    if (bus__r_en) begin
-      \$800  = \$317 ;
-    end
-    if (rst) begin
-      \$800  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$801  = ch1_read_select_144;
-    if (bus__r_en) begin
-      \$801  = \$318 ;
-    end
-    if (rst) begin
-      \$801  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$802  = ch1_read_select_145;
-    if (bus__r_en) begin
-      \$802  = \$319 ;
-    end
-    if (rst) begin
-      \$802  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$803  = window0_read;
-    if (bus__r_en) begin
-      \$803  = \$321 ;
-    end
-    if (rst) begin
-      \$803  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$804  = window1_read;
-    if (bus__r_en) begin
-      \$804  = \$323 ;
-    end
-    if (rst) begin
-      \$804  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$805  = read_data;
+    \$666  = read_data;
     if (bus__r_load) begin
-      \$805  = \$465 ;
+      \$666  = \$323 ;
     end
     if (rst) begin
-      \$805  = 32'd0;
+      \$666  = 32'd0;
     end
   end
-  assign ch0__status = \port$4447$0 [3:0];
-  assign ch0__cds = \port$4447$0 [49];
-  assign ch0__word0_ne = \port$4447$0 [105];
-  assign ch0__word0_nw = \port$4447$0 [106];
-  assign ch0__word0_crc_ok = \port$4447$0 [107];
-  assign ch0__word1_ne = \port$4447$0 [148];
-  assign ch0__word1_nw = \port$4447$0 [149];
-  assign ch0__word1_crc_ok = \port$4447$0 [150];
-  assign ch0__lc_repeat = \port$4447$0 [157];
-  assign ch0__lc_skip = \port$4447$0 [158];
-  assign ch0__lc_zero = \port$4447$0 [159];
-  assign ch0__spw_mismatch = \port$4447$0 [160];
-  assign ch0__lc = \port$4447$0 [156:151];
-  assign ch0__line_delay = \port$4447$0 [48:36];
-  assign ch0__word0_position = \port$4447$0 [104:50];
-  assign ch0__word1_position = \port$4447$0 [147:108];
-  assign ch0__timestamp = \port$4447$0 [35:4];
-  assign ch1__status = \port$4946$0 [3:0];
-  assign ch1__cds = \port$4946$0 [49];
-  assign ch1__word0_ne = \port$4946$0 [105];
-  assign ch1__word0_nw = \port$4946$0 [106];
-  assign ch1__word0_crc_ok = \port$4946$0 [107];
-  assign ch1__word1_ne = \port$4946$0 [148];
-  assign ch1__word1_nw = \port$4946$0 [149];
-  assign ch1__word1_crc_ok = \port$4946$0 [150];
-  assign ch1__lc_repeat = \port$4946$0 [157];
-  assign ch1__lc_skip = \port$4946$0 [158];
-  assign ch1__lc_zero = \port$4946$0 [159];
-  assign ch1__spw_mismatch = \port$4946$0 [160];
-  assign ch1__lc = \port$4946$0 [156:151];
-  assign ch1__line_delay = \port$4946$0 [48:36];
-  assign ch1__word0_position = \port$4946$0 [104:50];
-  assign ch1__word1_position = \port$4946$0 [147:108];
-  assign ch1__timestamp = \port$4946$0 [35:4];
+  assign ch0__status = \port$4307$0 [3:0];
+  assign ch0__cds = \port$4307$0 [49];
+  assign ch0__word0_ne = \port$4307$0 [105];
+  assign ch0__word0_nw = \port$4307$0 [106];
+  assign ch0__word0_crc_ok = \port$4307$0 [107];
+  assign ch0__word1_ne = \port$4307$0 [148];
+  assign ch0__word1_nw = \port$4307$0 [149];
+  assign ch0__word1_crc_ok = \port$4307$0 [150];
+  assign ch0__lc_repeat = \port$4307$0 [157];
+  assign ch0__lc_skip = \port$4307$0 [158];
+  assign ch0__lc_zero = \port$4307$0 [159];
+  assign ch0__spw_mismatch = \port$4307$0 [160];
+  assign ch0__lc = \port$4307$0 [156:151];
+  assign ch0__line_delay = \port$4307$0 [48:36];
+  assign ch0__word0_position = \port$4307$0 [104:50];
+  assign ch0__word1_position = \port$4307$0 [147:108];
+  assign ch0__timestamp = \port$4307$0 [35:4];
+  assign ch1__status = \port$4806$0 [3:0];
+  assign ch1__cds = \port$4806$0 [49];
+  assign ch1__word0_ne = \port$4806$0 [105];
+  assign ch1__word0_nw = \port$4806$0 [106];
+  assign ch1__word0_crc_ok = \port$4806$0 [107];
+  assign ch1__word1_ne = \port$4806$0 [148];
+  assign ch1__word1_nw = \port$4806$0 [149];
+  assign ch1__word1_crc_ok = \port$4806$0 [150];
+  assign ch1__lc_repeat = \port$4806$0 [157];
+  assign ch1__lc_skip = \port$4806$0 [158];
+  assign ch1__lc_zero = \port$4806$0 [159];
+  assign ch1__spw_mismatch = \port$4806$0 [160];
+  assign ch1__lc = \port$4806$0 [156:151];
+  assign ch1__line_delay = \port$4806$0 [48:36];
+  assign ch1__word0_position = \port$4806$0 [104:50];
+  assign ch1__word1_position = \port$4806$0 [147:108];
+  assign ch1__timestamp = \port$4806$0 [35:4];
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, ch1_irq, ch0_irq };
   assign ch0__cap_data_bits_w0 = 6'h37;
@@ -6075,52 +5305,52 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign ch0__cap_counters = 1'h1;
   assign ch0__cap_timestamp = 1'h1;
   assign ch0__cap_register_access = 1'h1;
-  assign ch0__count_crc_word0 = \port$4454$0 [15:0];
-  assign ch0__count_crc_word1 = \port$4454$0 [31:16];
-  assign ch0__count_no_ack = \port$4454$0 [47:32];
-  assign ch0__count_no_start = \port$4454$0 [63:48];
-  assign ch0__count_delay_range = \port$4454$0 [79:64];
-  assign ch0__count_slo_stuck_low = \port$4454$0 [95:80];
-  assign ch0__count_lc_repeat = \port$4454$0 [111:96];
-  assign ch0__count_lc_skip = \port$4454$0 [127:112];
-  assign ch0__count_lc_zero = \port$4454$0 [143:128];
-  assign ch0__count_spw_mismatch = \port$4454$0 [159:144];
-  assign ch0__count_overrun = \port$4454$0 [175:160];
-  assign ch0__count_aborted = \port$4454$0 [191:176];
-  assign ch0__count_no_stop = \port$4454$0 [207:192];
-  assign ch0__ca_status = \port$4568$0 [2:0];
-  assign ch0__ca_bytes_done = \port$4568$0 [9:3];
-  assign ch0__count_ca_crc4_error = \port$4454$0 [223:208];
-  assign ch0__count_ca_no_answer = \port$4454$0 [239:224];
-  assign ch0__count_ca_refused = \port$4454$0 [255:240];
-  assign ch0__count_ca_aborted = \port$4454$0 [271:256];
-  assign ch0__count_ca_data_fault = \port$4454$0 [287:272];
+  assign ch0__count_crc_word0 = \port$4314$0 [15:0];
+  assign ch0__count_crc_word1 = \port$4314$0 [31:16];
+  assign ch0__count_no_ack = \port$4314$0 [47:32];
+  assign ch0__count_no_start = \port$4314$0 [63:48];
+  assign ch0__count_delay_range = \port$4314$0 [79:64];
+  assign ch0__count_slo_stuck_low = \port$4314$0 [95:80];
+  assign ch0__count_lc_repeat = \port$4314$0 [111:96];
+  assign ch0__count_lc_skip = \port$4314$0 [127:112];
+  assign ch0__count_lc_zero = \port$4314$0 [143:128];
+  assign ch0__count_spw_mismatch = \port$4314$0 [159:144];
+  assign ch0__count_overrun = \port$4314$0 [175:160];
+  assign ch0__count_aborted = \port$4314$0 [191:176];
+  assign ch0__count_no_stop = \port$4314$0 [207:192];
+  assign ch0__ca_status = \port$4428$0 [2:0];
+  assign ch0__ca_bytes_done = \port$4428$0 [9:3];
+  assign ch0__count_ca_crc4_error = \port$4314$0 [223:208];
+  assign ch0__count_ca_no_answer = \port$4314$0 [239:224];
+  assign ch0__count_ca_refused = \port$4314$0 [255:240];
+  assign ch0__count_ca_aborted = \port$4314$0 [271:256];
+  assign ch0__count_ca_data_fault = \port$4314$0 [287:272];
   assign ch1__cap_data_bits_w0 = 6'h37;
   assign ch1__cap_data_bits_w1 = 6'h28;
   assign ch1__cap_timer_width = 6'h18;
   assign ch1__cap_counters = 1'h1;
   assign ch1__cap_timestamp = 1'h1;
   assign ch1__cap_register_access = 1'h1;
-  assign ch1__count_crc_word0 = \port$4953$0 [15:0];
-  assign ch1__count_crc_word1 = \port$4953$0 [31:16];
-  assign ch1__count_no_ack = \port$4953$0 [47:32];
-  assign ch1__count_no_start = \port$4953$0 [63:48];
-  assign ch1__count_delay_range = \port$4953$0 [79:64];
-  assign ch1__count_slo_stuck_low = \port$4953$0 [95:80];
-  assign ch1__count_lc_repeat = \port$4953$0 [111:96];
-  assign ch1__count_lc_skip = \port$4953$0 [127:112];
-  assign ch1__count_lc_zero = \port$4953$0 [143:128];
-  assign ch1__count_spw_mismatch = \port$4953$0 [159:144];
-  assign ch1__count_overrun = \port$4953$0 [175:160];
-  assign ch1__count_aborted = \port$4953$0 [191:176];
-  assign ch1__count_no_stop = \port$4953$0 [207:192];
-  assign ch1__ca_status = \port$5067$0 [2:0];
-  assign ch1__ca_bytes_done = \port$5067$0 [9:3];
-  assign ch1__count_ca_crc4_error = \port$4953$0 [223:208];
-  assign ch1__count_ca_no_answer = \port$4953$0 [239:224];
-  assign ch1__count_ca_refused = \port$4953$0 [255:240];
-  assign ch1__count_ca_aborted = \port$4953$0 [271:256];
-  assign ch1__count_ca_data_fault = \port$4953$0 [287:272];
+  assign ch1__count_crc_word0 = \port$4813$0 [15:0];
+  assign ch1__count_crc_word1 = \port$4813$0 [31:16];
+  assign ch1__count_no_ack = \port$4813$0 [47:32];
+  assign ch1__count_no_start = \port$4813$0 [63:48];
+  assign ch1__count_delay_range = \port$4813$0 [79:64];
+  assign ch1__count_slo_stuck_low = \port$4813$0 [95:80];
+  assign ch1__count_lc_repeat = \port$4813$0 [111:96];
+  assign ch1__count_lc_skip = \port$4813$0 [127:112];
+  assign ch1__count_lc_zero = \port$4813$0 [143:128];
+  assign ch1__count_spw_mismatch = \port$4813$0 [159:144];
+  assign ch1__count_overrun = \port$4813$0 [175:160];
+  assign ch1__count_aborted = \port$4813$0 [191:176];
+  assign ch1__count_no_stop = \port$4813$0 [207:192];
+  assign ch1__ca_status = \port$4927$0 [2:0];
+  assign ch1__ca_bytes_done = \port$4927$0 [9:3];
+  assign ch1__count_ca_crc4_error = \port$4813$0 [223:208];
+  assign ch1__count_ca_no_answer = \port$4813$0 [239:224];
+  assign ch1__count_ca_refused = \port$4813$0 [255:240];
+  assign ch1__count_ca_aborted = \port$4813$0 [271:256];
+  assign ch1__count_ca_data_fault = \port$4813$0 [287:272];
   assign glob__trigger = g_trigger_start;
   assign ch0__start = ch0_ctrl_start;
   assign ch0__abort_cycle = ch0_ctrl_abort;
@@ -6148,7 +5378,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign ch0__ca_slave_id = ch0_ca_request_slave_id;
   assign ch0__ca_address = ch0_ca_request_address;
   assign ch0__ca_count = ch0_ca_request_count;
-  assign ch0__ca_write = \ch0_ca_request_write$84 ;
+  assign ch0__ca_write = \ch0_ca_request_write$65 ;
   assign ch0__ca_start = ch0_ca_ctrl_start;
   assign ch0__ca_abort = ch0_ca_ctrl_abort;
   assign ch0__ca_wbuf_data = write_data;
@@ -6179,7 +5409,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign ch1__ca_slave_id = ch1_ca_request_slave_id;
   assign ch1__ca_address = ch1_ca_request_address;
   assign ch1__ca_count = ch1_ca_request_count;
-  assign ch1__ca_write = \ch1_ca_request_write$226 ;
+  assign ch1__ca_write = \ch1_ca_request_write$186 ;
   assign ch1__ca_start = ch1_ca_ctrl_start;
   assign ch1__ca_abort = ch1_ca_ctrl_abort;
   assign ch1__ca_wbuf_addr = write_addr[3:0];
@@ -6188,19 +5418,19 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign irq = { ch1_irq, ch0_irq };
   assign bus__r_data = read_data;
   assign ch0__ca_wbuf_addr = write_addr[3:0];
-  assign \$325  = \$324 ;
-  assign \$330  = 32'd0;
-  assign \$331  = \$329 ;
-  assign \$505  = \$504 ;
-  assign \$507  = \$506 ;
-  assign \$509  = \$508 ;
-  assign \$544  = \$543 ;
-  assign \$546  = \$545 ;
-  assign \$548  = \$547 ;
-  assign \$388  = 32'd0;
-  assign \$389  = \$387 ;
-  assign \$452  = 32'd0;
-  assign \$453  = \$451 ;
+  assign \$183  = \$182 ;
+  assign \$188  = 32'd0;
+  assign \$189  = \$187 ;
+  assign \$402  = \$401 ;
+  assign \$404  = \$403 ;
+  assign \$406  = \$405 ;
+  assign \$475  = \$474 ;
+  assign \$477  = \$476 ;
+  assign \$479  = \$478 ;
+  assign \$246  = 32'd0;
+  assign \$247  = \$245 ;
+  assign \$310  = 32'd0;
+  assign \$311  = \$309 ;
   assign g_irq = 1'h0;
 endmodule
 
@@ -6451,7 +5681,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__ca_busy, regs__ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, abort_cycle, clear_counters, regs__periodic, regs__trigger_enable, regs__cfg_ma_half_period, regs__cfg_delay_limit, regs__cfg_request_period
 , regs__cfg_break_time, regs__cfg_ack_limit, regs__cfg_timeout_limit, regs__cfg_w0_data_bits, regs__cfg_w0_nenw, regs__cfg_w0_lc, regs__cfg_w0_crc, regs__cfg_w1_data_bits, regs__cfg_w1_nenw, regs__cfg_w1_lc, regs__cfg_w1_crc, regs__cfg_w1_enable, regs__cfg_end_check, regs__cfg_spw_check, regs__cfg_spw_tolerance, regs__ca_slave_id, regs__ca_address, regs__ca_count, regs__ca_write, ca_start, ca_abort
-, regs__done_count, ma, regs__done, \port$4447$0 , \port$4454$0 , regs__ca_done, \port$4568$0 , ca_rbuf_addr);
+, regs__done_count, ma, regs__done, \port$4307$0 , \port$4314$0 , regs__ca_done, \port$4428$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$28  = 0;
   wire \$1 ;
   reg [5:0] \$10 ;
@@ -6630,12 +5860,12 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_
   reg periodic = 1'h0;
   (* init = 1'h0 *)
   wire periodic_local;
-  output [160:0] \port$4447$0 ;
-  wire [160:0] \port$4447$0 ;
-  output [287:0] \port$4454$0 ;
-  wire [287:0] \port$4454$0 ;
-  output [9:0] \port$4568$0 ;
-  wire [9:0] \port$4568$0 ;
+  output [160:0] \port$4307$0 ;
+  wire [160:0] \port$4307$0 ;
+  output [287:0] \port$4314$0 ;
+  wire [287:0] \port$4314$0 ;
+  output [9:0] \port$4428$0 ;
+  wire [9:0] \port$4428$0 ;
   wire regs__abort_cycle;
   output regs__busy;
   wire regs__busy;
@@ -7183,9 +6413,9 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_
   assign regs__ca_rbuf_en = ca_rbuf_en;
   assign \ma$164  = ma;
   assign \slo$166  = slo;
-  assign \port$4447$0  = \$27 ;
-  assign \port$4454$0  = \$28 ;
-  assign \port$4568$0  = \$29 ;
+  assign \port$4307$0  = \$27 ;
+  assign \port$4314$0  = \$28 ;
+  assign \port$4428$0  = \$29 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -8037,7 +7267,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$4188$0 (\bit ),
+    .\port$4048$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -15954,7 +15184,7 @@ module \biss_master_axil.ch0.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$4188$0 , resync, lc, is_zero, clk);
+module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$4048$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$65  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -15992,8 +15222,8 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$4188$0 ;
-  wire \port$4188$0 ;
+  input \port$4048$0 ;
+  wire \port$4048$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -16005,9 +15235,9 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$4188$0  };
-  assign \$2  = { lc[4:0], \port$4188$0  } == last;
-  assign \$3  = { lc[4:0], \port$4188$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$4048$0  };
+  assign \$2  = { lc[4:0], \port$4048$0  } == last;
+  assign \$3  = { lc[4:0], \port$4048$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = lc == 6'h3f;
@@ -16097,7 +15327,7 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
       \$21  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$4188$0  };
+  assign lc_next = { lc[4:0], \port$4048$0  };
   assign zero = is_zero;
 endmodule
 
@@ -16805,7 +16035,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__ca_busy, regs__ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, abort_cycle, clear_counters, regs__periodic, regs__trigger_enable, regs__cfg_ma_half_period, regs__cfg_delay_limit, regs__cfg_request_period
 , regs__cfg_break_time, regs__cfg_ack_limit, regs__cfg_timeout_limit, regs__cfg_w0_data_bits, regs__cfg_w0_nenw, regs__cfg_w0_lc, regs__cfg_w0_crc, regs__cfg_w1_data_bits, regs__cfg_w1_nenw, regs__cfg_w1_lc, regs__cfg_w1_crc, regs__cfg_w1_enable, regs__cfg_end_check, regs__cfg_spw_check, regs__cfg_spw_tolerance, regs__ca_slave_id, regs__ca_address, regs__ca_count, regs__ca_write, ca_start, ca_abort
-, regs__done_count, ma, regs__done, \port$4946$0 , \port$4953$0 , regs__ca_done, \port$5067$0 , ca_rbuf_addr);
+, regs__done_count, ma, regs__done, \port$4806$0 , \port$4813$0 , regs__ca_done, \port$4927$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$70  = 0;
   wire \$1 ;
   reg [5:0] \$10 ;
@@ -16984,12 +16214,12 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_
   reg periodic = 1'h0;
   (* init = 1'h0 *)
   wire periodic_local;
-  output [160:0] \port$4946$0 ;
-  wire [160:0] \port$4946$0 ;
-  output [287:0] \port$4953$0 ;
-  wire [287:0] \port$4953$0 ;
-  output [9:0] \port$5067$0 ;
-  wire [9:0] \port$5067$0 ;
+  output [160:0] \port$4806$0 ;
+  wire [160:0] \port$4806$0 ;
+  output [287:0] \port$4813$0 ;
+  wire [287:0] \port$4813$0 ;
+  output [9:0] \port$4927$0 ;
+  wire [9:0] \port$4927$0 ;
   wire regs__abort_cycle;
   output regs__busy;
   wire regs__busy;
@@ -17537,9 +16767,9 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_
   assign regs__ca_rbuf_en = ca_rbuf_en;
   assign \ma$164  = ma;
   assign \slo$166  = slo;
-  assign \port$4946$0  = \$27 ;
-  assign \port$4953$0  = \$28 ;
-  assign \port$5067$0  = \$29 ;
+  assign \port$4806$0  = \$27 ;
+  assign \port$4813$0  = \$28 ;
+  assign \port$4927$0  = \$29 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -18391,7 +17621,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$4687$0 (\bit ),
+    .\port$4547$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -26308,7 +25538,7 @@ module \biss_master_axil.ch1.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$4687$0 , resync, lc, is_zero, clk);
+module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$4547$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$107  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -26346,8 +25576,8 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$4687$0 ;
-  wire \port$4687$0 ;
+  input \port$4547$0 ;
+  wire \port$4547$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -26359,9 +25589,9 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$4687$0  };
-  assign \$2  = { lc[4:0], \port$4687$0  } == last;
-  assign \$3  = { lc[4:0], \port$4687$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$4547$0  };
+  assign \$2  = { lc[4:0], \port$4547$0  } == last;
+  assign \$3  = { lc[4:0], \port$4547$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = lc == 6'h3f;
@@ -26451,7 +25681,7 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
       \$21  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$4687$0  };
+  assign lc_next = { lc[4:0], \port$4547$0  };
   assign zero = is_zero;
 endmodule
 
