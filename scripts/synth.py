@@ -210,8 +210,7 @@ def _bus_block(parts):
         return "bus adapter"
     if parts[1] == "bank":
         return "register bank"
-    return ("channel glue (trigger gate, done count, configuration stage)" if len(parts) == 2
-            else "cores")
+    return "channel glue (trigger gate, done count)" if len(parts) == 2 else "cores"
 
 
 def area_by_block(cfg_dir, arch, top="biss_master"):

@@ -15,7 +15,6 @@ from .bus_adapters import AxiLiteAdapter, AxiLiteSignature, WishboneAdapter, Wis
 from .master import BissMaster
 from .params import MasterParams
 from .register_bank import RegisterBank, block_signature
-from .regmap import Kind
 
 #: The buses: adapter class, its bus member, the Verilog port prefix.
 BUSES = {
@@ -29,17 +28,6 @@ CHANNEL_GLUE = ("trigger_enable", "frame_error", "done_count", "cap_data_bits_w0
                 "cap_register_access")
 #: Global signals of the register map, made by the top.
 GLOBAL_SIGNALS = ("channels", "trigger", "irq_pending")
-
-
-def config_resets(regmap):
-    """``{signal: reset value}`` of the channel block's configuration signals (CONFIG fields),
-    a signal made of several fields assembled from their reset values."""
-    resets = {}
-    for reg in regmap.channel:
-        for f in reg.fields:
-            if f.kind == Kind.CONFIG and f.signal:
-                resets[f.signal] = resets.get(f.signal, 0) | f.reset << f.signal_lsb
-    return resets
 
 
 class BusChannel(wiring.Component):
@@ -69,9 +57,8 @@ class BusChannel(wiring.Component):
     slo : In(1)
     """
 
-    def __init__(self, params, regs, configs=None):
+    def __init__(self, params, regs):
         self.params = params
-        self.configs = dict(configs or {})
         full = BissMaster.ports(MasterParams())
         core = BissMaster.ports(params)
         for name, member in regs.members.items():
@@ -114,15 +101,7 @@ class BusChannel(wiring.Component):
                     m.d.comb += signal.eq(glue[name])
             elif hasattr(core, name):
                 port = getattr(core, name)
-                if name in self.configs:
-                    # The core reads a local copy of its configuration, one clock behind the
-                    # bank: no path from the bank's flip-flops (placed by the bus) into the
-                    # core's logic.
-                    local = Signal(len(signal), init=self.configs[name], name=f"{name}_local")
-                    m.d.sync += local.eq(signal)
-                    m.d.comb += port.eq(local)
-                else:
-                    m.d.comb += port.eq(signal) if member.flow == In else signal.eq(port)
+                m.d.comb += port.eq(signal) if member.flow == In else signal.eq(port)
 
         # Every ended cycle counted, so a host sees a lost result.
         with m.If(core.done):
@@ -181,7 +160,7 @@ class BusTop(wiring.Component):
                              f"made by the bus top")
         regs = block_signature(self.regmap, self.regmap.channel)
         # Built here, so that a register map the cores cannot follow is refused at once.
-        self._channels = [BusChannel(p, regs, config_resets(self.regmap)) for p in params]
+        self._channels = [BusChannel(p, regs) for p in params]
         _, sig, _, prefix = BUSES[bus]
         self._bus_members = list(sig(self.regmap.addr_width if bus == "axil"
                                      else self.regmap.addr_width - 2).flip().members.flatten())

@@ -568,12 +568,12 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .ch1_irq(\$7 ),
     .clk(clk),
     .g_trigger_start(glob__trigger),
-    .\port$4307$0 (\$8 ),
-    .\port$4314$0 (\$9 ),
-    .\port$4428$0 (\$10 ),
-    .\port$4806$0 (\$11 ),
-    .\port$4813$0 (\$12 ),
-    .\port$4927$0 (\$13 ),
+    .\port$4261$0 (\$8 ),
+    .\port$4268$0 (\$9 ),
+    .\port$4382$0 (\$10 ),
+    .\port$4714$0 (\$11 ),
+    .\port$4721$0 (\$12 ),
+    .\port$4835$0 (\$13 ),
     .read_data(s_axil_rdata),
     .rst(rst),
     .write_data(regs__ca_wbuf_data)
@@ -606,49 +606,49 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
   \biss_master_axil.ch0  ch0 (
     .abort_cycle(regs__abort_cycle),
     .ca_abort(regs__ca_abort),
+    .ca_address(regs__ca_address),
+    .ca_count(regs__ca_count),
     .ca_rbuf_addr(s_axil_araddr[5:2]),
     .ca_rbuf_en(regs__ca_rbuf_en),
+    .ca_slave_id(regs__ca_slave_id),
     .ca_start(regs__ca_start),
     .ca_wbuf_addr(regs__ca_wbuf_addr),
     .ca_wbuf_data(regs__ca_wbuf_data),
     .ca_wbuf_en(regs__ca_wbuf_en),
+    .ca_write(regs__ca_write),
+    .cfg_ack_limit(regs__cfg_ack_limit),
+    .cfg_break_time(regs__cfg_break_time),
+    .cfg_delay_limit(regs__cfg_delay_limit),
+    .cfg_end_check(regs__cfg_end_check),
+    .cfg_ma_half_period(regs__cfg_ma_half_period),
+    .cfg_request_period(regs__cfg_request_period),
+    .cfg_spw_check(regs__cfg_spw_check),
+    .cfg_spw_tolerance(regs__cfg_spw_tolerance),
+    .cfg_timeout_limit(regs__cfg_timeout_limit),
+    .cfg_w0_crc(regs__cfg_w0_crc),
+    .cfg_w0_data_bits(regs__cfg_w0_data_bits),
+    .cfg_w0_lc(regs__cfg_w0_lc),
+    .cfg_w0_nenw(regs__cfg_w0_nenw),
+    .cfg_w1_crc(regs__cfg_w1_crc),
+    .cfg_w1_data_bits(regs__cfg_w1_data_bits),
+    .cfg_w1_enable(regs__cfg_w1_enable),
+    .cfg_w1_lc(regs__cfg_w1_lc),
+    .cfg_w1_nenw(regs__cfg_w1_nenw),
     .clear_counters(regs__clear_counters),
     .clk(clk),
     .ma(ch0_ma),
-    .\port$4307$0 (\$8 ),
-    .\port$4314$0 (\$9 ),
-    .\port$4428$0 (\$10 ),
+    .periodic(regs__periodic),
+    .\port$4261$0 (\$8 ),
+    .\port$4268$0 (\$9 ),
+    .\port$4382$0 (\$10 ),
     .regs__busy(ch0__busy),
-    .regs__ca_address(regs__ca_address),
     .regs__ca_busy(ch0__ca_busy),
-    .regs__ca_count(regs__ca_count),
     .regs__ca_done(ch0__ca_done),
     .regs__ca_rbuf_data(ch0__ca_rbuf_data),
-    .regs__ca_slave_id(regs__ca_slave_id),
-    .regs__ca_write(regs__ca_write),
-    .regs__cfg_ack_limit(regs__cfg_ack_limit),
-    .regs__cfg_break_time(regs__cfg_break_time),
-    .regs__cfg_delay_limit(regs__cfg_delay_limit),
-    .regs__cfg_end_check(regs__cfg_end_check),
-    .regs__cfg_ma_half_period(regs__cfg_ma_half_period),
-    .regs__cfg_request_period(regs__cfg_request_period),
-    .regs__cfg_spw_check(regs__cfg_spw_check),
-    .regs__cfg_spw_tolerance(regs__cfg_spw_tolerance),
-    .regs__cfg_timeout_limit(regs__cfg_timeout_limit),
-    .regs__cfg_w0_crc(regs__cfg_w0_crc),
-    .regs__cfg_w0_data_bits(regs__cfg_w0_data_bits),
-    .regs__cfg_w0_lc(regs__cfg_w0_lc),
-    .regs__cfg_w0_nenw(regs__cfg_w0_nenw),
-    .regs__cfg_w1_crc(regs__cfg_w1_crc),
-    .regs__cfg_w1_data_bits(regs__cfg_w1_data_bits),
-    .regs__cfg_w1_enable(regs__cfg_w1_enable),
-    .regs__cfg_w1_lc(regs__cfg_w1_lc),
-    .regs__cfg_w1_nenw(regs__cfg_w1_nenw),
     .regs__config_error(ch0__config_error),
     .regs__done(ch0__done),
     .regs__done_count(ch0__done_count),
     .regs__frame_error(ch0__frame_error),
-    .regs__periodic(regs__periodic),
     .regs__trigger_enable(regs__trigger_enable),
     .rst(rst),
     .slo(ch0_slo),
@@ -658,49 +658,49 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
   \biss_master_axil.ch1  ch1 (
     .abort_cycle(\regs__abort_cycle$234 ),
     .ca_abort(\regs__ca_abort$238 ),
+    .ca_address(\regs__ca_address$240 ),
+    .ca_count(\regs__ca_count$246 ),
     .ca_rbuf_addr(s_axil_araddr[5:2]),
     .ca_rbuf_en(\regs__ca_rbuf_en$254 ),
+    .ca_slave_id(\regs__ca_slave_id$256 ),
     .ca_start(\regs__ca_start$258 ),
     .ca_wbuf_addr(regs__ca_wbuf_addr),
     .ca_wbuf_data(regs__ca_wbuf_data),
     .ca_wbuf_en(\regs__ca_wbuf_en$266 ),
+    .ca_write(\regs__ca_write$268 ),
+    .cfg_ack_limit(\regs__cfg_ack_limit$284 ),
+    .cfg_break_time(\regs__cfg_break_time$286 ),
+    .cfg_delay_limit(\regs__cfg_delay_limit$288 ),
+    .cfg_end_check(\regs__cfg_end_check$290 ),
+    .cfg_ma_half_period(\regs__cfg_ma_half_period$292 ),
+    .cfg_request_period(\regs__cfg_request_period$294 ),
+    .cfg_spw_check(\regs__cfg_spw_check$296 ),
+    .cfg_spw_tolerance(\regs__cfg_spw_tolerance$298 ),
+    .cfg_timeout_limit(\regs__cfg_timeout_limit$300 ),
+    .cfg_w0_crc(\regs__cfg_w0_crc$302 ),
+    .cfg_w0_data_bits(\regs__cfg_w0_data_bits$304 ),
+    .cfg_w0_lc(\regs__cfg_w0_lc$306 ),
+    .cfg_w0_nenw(\regs__cfg_w0_nenw$308 ),
+    .cfg_w1_crc(\regs__cfg_w1_crc$310 ),
+    .cfg_w1_data_bits(\regs__cfg_w1_data_bits$312 ),
+    .cfg_w1_enable(\regs__cfg_w1_enable$314 ),
+    .cfg_w1_lc(\regs__cfg_w1_lc$316 ),
+    .cfg_w1_nenw(\regs__cfg_w1_nenw$318 ),
     .clear_counters(\regs__clear_counters$320 ),
     .clk(clk),
     .ma(ch1_ma),
-    .\port$4806$0 (\$11 ),
-    .\port$4813$0 (\$12 ),
-    .\port$4927$0 (\$13 ),
+    .periodic(\regs__periodic$376 ),
+    .\port$4714$0 (\$11 ),
+    .\port$4721$0 (\$12 ),
+    .\port$4835$0 (\$13 ),
     .regs__busy(ch1__busy),
-    .regs__ca_address(\regs__ca_address$240 ),
     .regs__ca_busy(ch1__ca_busy),
-    .regs__ca_count(\regs__ca_count$246 ),
     .regs__ca_done(ch1__ca_done),
     .regs__ca_rbuf_data(ch1__ca_rbuf_data),
-    .regs__ca_slave_id(\regs__ca_slave_id$256 ),
-    .regs__ca_write(\regs__ca_write$268 ),
-    .regs__cfg_ack_limit(\regs__cfg_ack_limit$284 ),
-    .regs__cfg_break_time(\regs__cfg_break_time$286 ),
-    .regs__cfg_delay_limit(\regs__cfg_delay_limit$288 ),
-    .regs__cfg_end_check(\regs__cfg_end_check$290 ),
-    .regs__cfg_ma_half_period(\regs__cfg_ma_half_period$292 ),
-    .regs__cfg_request_period(\regs__cfg_request_period$294 ),
-    .regs__cfg_spw_check(\regs__cfg_spw_check$296 ),
-    .regs__cfg_spw_tolerance(\regs__cfg_spw_tolerance$298 ),
-    .regs__cfg_timeout_limit(\regs__cfg_timeout_limit$300 ),
-    .regs__cfg_w0_crc(\regs__cfg_w0_crc$302 ),
-    .regs__cfg_w0_data_bits(\regs__cfg_w0_data_bits$304 ),
-    .regs__cfg_w0_lc(\regs__cfg_w0_lc$306 ),
-    .regs__cfg_w0_nenw(\regs__cfg_w0_nenw$308 ),
-    .regs__cfg_w1_crc(\regs__cfg_w1_crc$310 ),
-    .regs__cfg_w1_data_bits(\regs__cfg_w1_data_bits$312 ),
-    .regs__cfg_w1_enable(\regs__cfg_w1_enable$314 ),
-    .regs__cfg_w1_lc(\regs__cfg_w1_lc$316 ),
-    .regs__cfg_w1_nenw(\regs__cfg_w1_nenw$318 ),
     .regs__config_error(ch1__config_error),
     .regs__done(ch1__done),
     .regs__done_count(ch1__done_count),
     .regs__frame_error(ch1__frame_error),
-    .regs__periodic(\regs__periodic$376 ),
     .regs__trigger_enable(\regs__trigger_enable$386 ),
     .rst(rst),
     .slo(ch1_slo),
@@ -1026,7 +1026,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
 , bus__w_addr, bus__w_data, bus__w_strb, ch0__ca_wbuf_addr, write_data, g_trigger_start, ch0_ctrl_start, ch0_ctrl_abort, ch0_ctrl_clear_counters, ch0_ctrl_periodic, ch0_ctrl_trigger_enable, ch0_cfg_ma_ma_half_period, ch0_cfg_ma_delay_limit, ch0_cfg_period_request_period, ch0_cfg_break_break_time, ch0_cfg_ack_ack_limit, ch0_cfg_timeout_timeout_limit, ch0_cfg_words_w0_data_bits, ch0_cfg_words_w0_nenw, ch0_cfg_words_w0_lc, ch0_cfg_words_w0_crc
 , ch0_cfg_words_w1_data_bits, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_enable, ch0_cfg_checks_end_check, ch0_cfg_checks_spw_check, ch0_cfg_checks_spw_tolerance, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$65 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort, ch1_ctrl_start, ch1_ctrl_abort, ch1_ctrl_clear_counters, ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit
 , ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_enable, ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$186 , ch1_ca_ctrl_start
-, ch1_ca_ctrl_abort, read_data, ch0__done_count, ch0__done, \port$4307$0 , \port$4314$0 , ch0__ca_done, \port$4428$0 , ch1__done_count, ch1__done, \port$4806$0 , \port$4813$0 , ch1__ca_done, \port$4927$0 , bus__r_addr);
+, ch1_ca_ctrl_abort, read_data, ch0__done_count, ch0__done, \port$4261$0 , \port$4268$0 , ch0__ca_done, \port$4382$0 , ch1__done_count, ch1__done, \port$4714$0 , \port$4721$0 , ch1__ca_done, \port$4835$0 , bus__r_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$26  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -2350,18 +2350,18 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   (* init = 1'h0 *)
   wire glob__trigger;
   wire [1:0] irq;
-  input [160:0] \port$4307$0 ;
-  wire [160:0] \port$4307$0 ;
-  input [287:0] \port$4314$0 ;
-  wire [287:0] \port$4314$0 ;
-  input [9:0] \port$4428$0 ;
-  wire [9:0] \port$4428$0 ;
-  input [160:0] \port$4806$0 ;
-  wire [160:0] \port$4806$0 ;
-  input [287:0] \port$4813$0 ;
-  wire [287:0] \port$4813$0 ;
-  input [9:0] \port$4927$0 ;
-  wire [9:0] \port$4927$0 ;
+  input [160:0] \port$4261$0 ;
+  wire [160:0] \port$4261$0 ;
+  input [287:0] \port$4268$0 ;
+  wire [287:0] \port$4268$0 ;
+  input [9:0] \port$4382$0 ;
+  wire [9:0] \port$4382$0 ;
+  input [160:0] \port$4714$0 ;
+  wire [160:0] \port$4714$0 ;
+  input [287:0] \port$4721$0 ;
+  wire [287:0] \port$4721$0 ;
+  input [9:0] \port$4835$0 ;
+  wire [9:0] \port$4835$0 ;
   output [31:0] read_data;
   reg [31:0] read_data = 32'd0;
   input rst;
@@ -3257,29 +3257,29 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign \$227  = \$225  | \$226 ;
   assign \$228  = ch0_read_select_96 ? ch0_result_timestamp_time_snapshot : 32'd0;
   assign \$229  = \$227  | \$228 ;
-  assign \$230  = ch0_read_select_98 ? \port$4314$0 [31:0] : 32'd0;
+  assign \$230  = ch0_read_select_98 ? \port$4268$0 [31:0] : 32'd0;
   assign \$231  = \$229  | \$230 ;
-  assign \$232  = ch0_read_select_99 ? \port$4314$0 [63:32] : 32'd0;
+  assign \$232  = ch0_read_select_99 ? \port$4268$0 [63:32] : 32'd0;
   assign \$233  = \$231  | \$232 ;
-  assign \$234  = ch0_read_select_9a ? \port$4314$0 [95:64] : 32'd0;
+  assign \$234  = ch0_read_select_9a ? \port$4268$0 [95:64] : 32'd0;
   assign \$235  = \$233  | \$234 ;
-  assign \$236  = ch0_read_select_9b ? \port$4314$0 [127:96] : 32'd0;
+  assign \$236  = ch0_read_select_9b ? \port$4268$0 [127:96] : 32'd0;
   assign \$237  = \$235  | \$236 ;
-  assign \$238  = ch0_read_select_9c ? \port$4314$0 [159:128] : 32'd0;
+  assign \$238  = ch0_read_select_9c ? \port$4268$0 [159:128] : 32'd0;
   assign \$239  = \$237  | \$238 ;
-  assign \$240  = ch0_read_select_9d ? \port$4314$0 [191:160] : 32'd0;
+  assign \$240  = ch0_read_select_9d ? \port$4268$0 [191:160] : 32'd0;
   assign \$241  = \$239  | \$240 ;
-  assign \$242  = ch0_read_select_9e ? { 16'h0000, \port$4314$0 [207:192] } : 32'd0;
+  assign \$242  = ch0_read_select_9e ? { 16'h0000, \port$4268$0 [207:192] } : 32'd0;
   assign \$243  = \$241  | \$242 ;
   assign \$244  = ch0_read_select_c0 ? { 7'h00, \ch0_ca_request_write$65 , 1'h0, ch0_ca_request_count, 1'h0, ch0_ca_request_address, 5'h00, ch0_ca_request_slave_id } : 32'd0;
   assign \$245  = \$243  | \$244 ;
-  assign \$248  = ch0_read_select_c2 ? { 17'h00000, \port$4428$0 [9:3], 1'h0, \port$4428$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
+  assign \$248  = ch0_read_select_c2 ? { 17'h00000, \port$4382$0 [9:3], 1'h0, \port$4382$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
   assign \$249  = \$247  | \$248 ;
-  assign \$250  = ch0_read_select_c3 ? \port$4314$0 [239:208] : 32'd0;
+  assign \$250  = ch0_read_select_c3 ? \port$4268$0 [239:208] : 32'd0;
   assign \$251  = \$249  | \$250 ;
-  assign \$252  = ch0_read_select_c4 ? \port$4314$0 [271:240] : 32'd0;
+  assign \$252  = ch0_read_select_c4 ? \port$4268$0 [271:240] : 32'd0;
   assign \$253  = \$251  | \$252 ;
-  assign \$254  = ch0_read_select_c5 ? { 16'h0000, \port$4314$0 [287:272] } : 32'd0;
+  assign \$254  = ch0_read_select_c5 ? { 16'h0000, \port$4268$0 [287:272] } : 32'd0;
   assign \$255  = \$253  | \$254 ;
   assign \$256  = ch1_read_select_100 ? { 22'h000000, ch1_ctrl_trigger_enable, ch1_ctrl_periodic, 8'h00 } : 32'd0;
   assign \$257  = \$255  | \$256 ;
@@ -3319,29 +3319,29 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign \$291  = \$289  | \$290 ;
   assign \$292  = ch1_read_select_116 ? ch1_result_timestamp_time_snapshot : 32'd0;
   assign \$293  = \$291  | \$292 ;
-  assign \$294  = ch1_read_select_118 ? \port$4813$0 [31:0] : 32'd0;
+  assign \$294  = ch1_read_select_118 ? \port$4721$0 [31:0] : 32'd0;
   assign \$295  = \$293  | \$294 ;
-  assign \$296  = ch1_read_select_119 ? \port$4813$0 [63:32] : 32'd0;
+  assign \$296  = ch1_read_select_119 ? \port$4721$0 [63:32] : 32'd0;
   assign \$297  = \$295  | \$296 ;
-  assign \$298  = ch1_read_select_11a ? \port$4813$0 [95:64] : 32'd0;
+  assign \$298  = ch1_read_select_11a ? \port$4721$0 [95:64] : 32'd0;
   assign \$299  = \$297  | \$298 ;
-  assign \$300  = ch1_read_select_11b ? \port$4813$0 [127:96] : 32'd0;
+  assign \$300  = ch1_read_select_11b ? \port$4721$0 [127:96] : 32'd0;
   assign \$301  = \$299  | \$300 ;
-  assign \$302  = ch1_read_select_11c ? \port$4813$0 [159:128] : 32'd0;
+  assign \$302  = ch1_read_select_11c ? \port$4721$0 [159:128] : 32'd0;
   assign \$303  = \$301  | \$302 ;
-  assign \$304  = ch1_read_select_11d ? \port$4813$0 [191:160] : 32'd0;
+  assign \$304  = ch1_read_select_11d ? \port$4721$0 [191:160] : 32'd0;
   assign \$305  = \$303  | \$304 ;
-  assign \$306  = ch1_read_select_11e ? { 16'h0000, \port$4813$0 [207:192] } : 32'd0;
+  assign \$306  = ch1_read_select_11e ? { 16'h0000, \port$4721$0 [207:192] } : 32'd0;
   assign \$307  = \$305  | \$306 ;
   assign \$308  = ch1_read_select_140 ? { 7'h00, \ch1_ca_request_write$186 , 1'h0, ch1_ca_request_count, 1'h0, ch1_ca_request_address, 5'h00, ch1_ca_request_slave_id } : 32'd0;
   assign \$309  = \$307  | \$308 ;
-  assign \$312  = ch1_read_select_142 ? { 17'h00000, \port$4927$0 [9:3], 1'h0, \port$4927$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
+  assign \$312  = ch1_read_select_142 ? { 17'h00000, \port$4835$0 [9:3], 1'h0, \port$4835$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
   assign \$313  = \$311  | \$312 ;
-  assign \$314  = ch1_read_select_143 ? \port$4813$0 [239:208] : 32'd0;
+  assign \$314  = ch1_read_select_143 ? \port$4721$0 [239:208] : 32'd0;
   assign \$315  = \$313  | \$314 ;
-  assign \$316  = ch1_read_select_144 ? \port$4813$0 [271:240] : 32'd0;
+  assign \$316  = ch1_read_select_144 ? \port$4721$0 [271:240] : 32'd0;
   assign \$317  = \$315  | \$316 ;
-  assign \$318  = ch1_read_select_145 ? { 16'h0000, \port$4813$0 [287:272] } : 32'd0;
+  assign \$318  = ch1_read_select_145 ? { 16'h0000, \port$4721$0 [287:272] } : 32'd0;
   assign \$319  = \$317  | \$318 ;
   assign \$320  = window0_read ? ch0__ca_rbuf_data : 32'd0;
   assign \$321  = \$319  | \$320 ;
@@ -3826,7 +3826,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$525  = ch0_result_status_status_snapshot;
     if (ch0_result_status_read) begin
-      \$525  = \port$4307$0 [3:0];
+      \$525  = \port$4261$0 [3:0];
     end
     if (rst) begin
       \$525  = 4'h0;
@@ -3836,7 +3836,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$526  = ch0_result_status_cds_snapshot;
     if (ch0_result_status_read) begin
-      \$526  = \port$4307$0 [49];
+      \$526  = \port$4261$0 [49];
     end
     if (rst) begin
       \$526  = 1'h0;
@@ -3846,7 +3846,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$527  = ch0_result_status_w0_ne_snapshot;
     if (ch0_result_status_read) begin
-      \$527  = \port$4307$0 [105];
+      \$527  = \port$4261$0 [105];
     end
     if (rst) begin
       \$527  = 1'h0;
@@ -3856,7 +3856,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$528  = ch0_result_status_w0_nw_snapshot;
     if (ch0_result_status_read) begin
-      \$528  = \port$4307$0 [106];
+      \$528  = \port$4261$0 [106];
     end
     if (rst) begin
       \$528  = 1'h0;
@@ -3866,7 +3866,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$529  = ch0_result_status_w0_crc_ok_snapshot;
     if (ch0_result_status_read) begin
-      \$529  = \port$4307$0 [107];
+      \$529  = \port$4261$0 [107];
     end
     if (rst) begin
       \$529  = 1'h0;
@@ -3876,7 +3876,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$530  = ch0_result_status_w1_ne_snapshot;
     if (ch0_result_status_read) begin
-      \$530  = \port$4307$0 [148];
+      \$530  = \port$4261$0 [148];
     end
     if (rst) begin
       \$530  = 1'h0;
@@ -3886,7 +3886,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$531  = ch0_result_status_w1_nw_snapshot;
     if (ch0_result_status_read) begin
-      \$531  = \port$4307$0 [149];
+      \$531  = \port$4261$0 [149];
     end
     if (rst) begin
       \$531  = 1'h0;
@@ -3896,7 +3896,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$532  = ch0_result_status_w1_crc_ok_snapshot;
     if (ch0_result_status_read) begin
-      \$532  = \port$4307$0 [150];
+      \$532  = \port$4261$0 [150];
     end
     if (rst) begin
       \$532  = 1'h0;
@@ -3906,7 +3906,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$533  = ch0_result_status_lc_repeat_snapshot;
     if (ch0_result_status_read) begin
-      \$533  = \port$4307$0 [157];
+      \$533  = \port$4261$0 [157];
     end
     if (rst) begin
       \$533  = 1'h0;
@@ -3916,7 +3916,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$534  = ch0_result_status_lc_skip_snapshot;
     if (ch0_result_status_read) begin
-      \$534  = \port$4307$0 [158];
+      \$534  = \port$4261$0 [158];
     end
     if (rst) begin
       \$534  = 1'h0;
@@ -3926,7 +3926,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$535  = ch0_result_status_lc_zero_snapshot;
     if (ch0_result_status_read) begin
-      \$535  = \port$4307$0 [159];
+      \$535  = \port$4261$0 [159];
     end
     if (rst) begin
       \$535  = 1'h0;
@@ -3936,7 +3936,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$536  = ch0_result_status_spw_mismatch_snapshot;
     if (ch0_result_status_read) begin
-      \$536  = \port$4307$0 [160];
+      \$536  = \port$4261$0 [160];
     end
     if (rst) begin
       \$536  = 1'h0;
@@ -3946,7 +3946,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$537  = ch0_result_status_lc_snapshot;
     if (ch0_result_status_read) begin
-      \$537  = \port$4307$0 [156:151];
+      \$537  = \port$4261$0 [156:151];
     end
     if (rst) begin
       \$537  = 6'h00;
@@ -3966,7 +3966,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$539  = ch0_result_seq_line_delay_snapshot;
     if (ch0_result_status_read) begin
-      \$539  = \port$4307$0 [48:36];
+      \$539  = \port$4261$0 [48:36];
     end
     if (rst) begin
       \$539  = 13'h0000;
@@ -3976,7 +3976,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$540  = ch0_result_w0_lo_data_snapshot;
     if (ch0_result_status_read) begin
-      \$540  = \port$4307$0 [81:50];
+      \$540  = \port$4261$0 [81:50];
     end
     if (rst) begin
       \$540  = 32'd0;
@@ -3986,7 +3986,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$541  = ch0_result_w0_hi_data_snapshot;
     if (ch0_result_status_read) begin
-      \$541  = \port$4307$0 [104:82];
+      \$541  = \port$4261$0 [104:82];
     end
     if (rst) begin
       \$541  = 23'h000000;
@@ -3996,7 +3996,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$542  = ch0_result_w1_lo_data_snapshot;
     if (ch0_result_status_read) begin
-      \$542  = \port$4307$0 [139:108];
+      \$542  = \port$4261$0 [139:108];
     end
     if (rst) begin
       \$542  = 32'd0;
@@ -4006,7 +4006,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$543  = ch0_result_w1_hi_data_snapshot;
     if (ch0_result_status_read) begin
-      \$543  = \port$4307$0 [147:140];
+      \$543  = \port$4261$0 [147:140];
     end
     if (rst) begin
       \$543  = 8'h00;
@@ -4016,7 +4016,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$544  = ch0_result_timestamp_time_snapshot;
     if (ch0_result_status_read) begin
-      \$544  = \port$4307$0 [35:4];
+      \$544  = \port$4261$0 [35:4];
     end
     if (rst) begin
       \$544  = 32'd0;
@@ -4717,7 +4717,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$612  = ch1_result_status_status_snapshot;
     if (ch1_result_status_read) begin
-      \$612  = \port$4806$0 [3:0];
+      \$612  = \port$4714$0 [3:0];
     end
     if (rst) begin
       \$612  = 4'h0;
@@ -4727,7 +4727,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$613  = ch1_result_status_cds_snapshot;
     if (ch1_result_status_read) begin
-      \$613  = \port$4806$0 [49];
+      \$613  = \port$4714$0 [49];
     end
     if (rst) begin
       \$613  = 1'h0;
@@ -4737,7 +4737,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$614  = ch1_result_status_w0_ne_snapshot;
     if (ch1_result_status_read) begin
-      \$614  = \port$4806$0 [105];
+      \$614  = \port$4714$0 [105];
     end
     if (rst) begin
       \$614  = 1'h0;
@@ -4747,7 +4747,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$615  = ch1_result_status_w0_nw_snapshot;
     if (ch1_result_status_read) begin
-      \$615  = \port$4806$0 [106];
+      \$615  = \port$4714$0 [106];
     end
     if (rst) begin
       \$615  = 1'h0;
@@ -4757,7 +4757,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$616  = ch1_result_status_w0_crc_ok_snapshot;
     if (ch1_result_status_read) begin
-      \$616  = \port$4806$0 [107];
+      \$616  = \port$4714$0 [107];
     end
     if (rst) begin
       \$616  = 1'h0;
@@ -4767,7 +4767,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$617  = ch1_result_status_w1_ne_snapshot;
     if (ch1_result_status_read) begin
-      \$617  = \port$4806$0 [148];
+      \$617  = \port$4714$0 [148];
     end
     if (rst) begin
       \$617  = 1'h0;
@@ -4777,7 +4777,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$618  = ch1_result_status_w1_nw_snapshot;
     if (ch1_result_status_read) begin
-      \$618  = \port$4806$0 [149];
+      \$618  = \port$4714$0 [149];
     end
     if (rst) begin
       \$618  = 1'h0;
@@ -4787,7 +4787,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$619  = ch1_result_status_w1_crc_ok_snapshot;
     if (ch1_result_status_read) begin
-      \$619  = \port$4806$0 [150];
+      \$619  = \port$4714$0 [150];
     end
     if (rst) begin
       \$619  = 1'h0;
@@ -4797,7 +4797,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$620  = ch1_result_status_lc_repeat_snapshot;
     if (ch1_result_status_read) begin
-      \$620  = \port$4806$0 [157];
+      \$620  = \port$4714$0 [157];
     end
     if (rst) begin
       \$620  = 1'h0;
@@ -4807,7 +4807,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$621  = ch1_result_status_lc_skip_snapshot;
     if (ch1_result_status_read) begin
-      \$621  = \port$4806$0 [158];
+      \$621  = \port$4714$0 [158];
     end
     if (rst) begin
       \$621  = 1'h0;
@@ -4817,7 +4817,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$622  = ch1_result_status_lc_zero_snapshot;
     if (ch1_result_status_read) begin
-      \$622  = \port$4806$0 [159];
+      \$622  = \port$4714$0 [159];
     end
     if (rst) begin
       \$622  = 1'h0;
@@ -4827,7 +4827,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$623  = ch1_result_status_spw_mismatch_snapshot;
     if (ch1_result_status_read) begin
-      \$623  = \port$4806$0 [160];
+      \$623  = \port$4714$0 [160];
     end
     if (rst) begin
       \$623  = 1'h0;
@@ -4837,7 +4837,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$624  = ch1_result_status_lc_snapshot;
     if (ch1_result_status_read) begin
-      \$624  = \port$4806$0 [156:151];
+      \$624  = \port$4714$0 [156:151];
     end
     if (rst) begin
       \$624  = 6'h00;
@@ -4857,7 +4857,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$626  = ch1_result_seq_line_delay_snapshot;
     if (ch1_result_status_read) begin
-      \$626  = \port$4806$0 [48:36];
+      \$626  = \port$4714$0 [48:36];
     end
     if (rst) begin
       \$626  = 13'h0000;
@@ -4867,7 +4867,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$627  = ch1_result_w0_lo_data_snapshot;
     if (ch1_result_status_read) begin
-      \$627  = \port$4806$0 [81:50];
+      \$627  = \port$4714$0 [81:50];
     end
     if (rst) begin
       \$627  = 32'd0;
@@ -4877,7 +4877,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$628  = ch1_result_w0_hi_data_snapshot;
     if (ch1_result_status_read) begin
-      \$628  = \port$4806$0 [104:82];
+      \$628  = \port$4714$0 [104:82];
     end
     if (rst) begin
       \$628  = 23'h000000;
@@ -4887,7 +4887,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$629  = ch1_result_w1_lo_data_snapshot;
     if (ch1_result_status_read) begin
-      \$629  = \port$4806$0 [139:108];
+      \$629  = \port$4714$0 [139:108];
     end
     if (rst) begin
       \$629  = 32'd0;
@@ -4897,7 +4897,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$630  = ch1_result_w1_hi_data_snapshot;
     if (ch1_result_status_read) begin
-      \$630  = \port$4806$0 [147:140];
+      \$630  = \port$4714$0 [147:140];
     end
     if (rst) begin
       \$630  = 8'h00;
@@ -4907,7 +4907,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$631  = ch1_result_timestamp_time_snapshot;
     if (ch1_result_status_read) begin
-      \$631  = \port$4806$0 [35:4];
+      \$631  = \port$4714$0 [35:4];
     end
     if (rst) begin
       \$631  = 32'd0;
@@ -5263,40 +5263,40 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
       \$666  = 32'd0;
     end
   end
-  assign ch0__status = \port$4307$0 [3:0];
-  assign ch0__cds = \port$4307$0 [49];
-  assign ch0__word0_ne = \port$4307$0 [105];
-  assign ch0__word0_nw = \port$4307$0 [106];
-  assign ch0__word0_crc_ok = \port$4307$0 [107];
-  assign ch0__word1_ne = \port$4307$0 [148];
-  assign ch0__word1_nw = \port$4307$0 [149];
-  assign ch0__word1_crc_ok = \port$4307$0 [150];
-  assign ch0__lc_repeat = \port$4307$0 [157];
-  assign ch0__lc_skip = \port$4307$0 [158];
-  assign ch0__lc_zero = \port$4307$0 [159];
-  assign ch0__spw_mismatch = \port$4307$0 [160];
-  assign ch0__lc = \port$4307$0 [156:151];
-  assign ch0__line_delay = \port$4307$0 [48:36];
-  assign ch0__word0_position = \port$4307$0 [104:50];
-  assign ch0__word1_position = \port$4307$0 [147:108];
-  assign ch0__timestamp = \port$4307$0 [35:4];
-  assign ch1__status = \port$4806$0 [3:0];
-  assign ch1__cds = \port$4806$0 [49];
-  assign ch1__word0_ne = \port$4806$0 [105];
-  assign ch1__word0_nw = \port$4806$0 [106];
-  assign ch1__word0_crc_ok = \port$4806$0 [107];
-  assign ch1__word1_ne = \port$4806$0 [148];
-  assign ch1__word1_nw = \port$4806$0 [149];
-  assign ch1__word1_crc_ok = \port$4806$0 [150];
-  assign ch1__lc_repeat = \port$4806$0 [157];
-  assign ch1__lc_skip = \port$4806$0 [158];
-  assign ch1__lc_zero = \port$4806$0 [159];
-  assign ch1__spw_mismatch = \port$4806$0 [160];
-  assign ch1__lc = \port$4806$0 [156:151];
-  assign ch1__line_delay = \port$4806$0 [48:36];
-  assign ch1__word0_position = \port$4806$0 [104:50];
-  assign ch1__word1_position = \port$4806$0 [147:108];
-  assign ch1__timestamp = \port$4806$0 [35:4];
+  assign ch0__status = \port$4261$0 [3:0];
+  assign ch0__cds = \port$4261$0 [49];
+  assign ch0__word0_ne = \port$4261$0 [105];
+  assign ch0__word0_nw = \port$4261$0 [106];
+  assign ch0__word0_crc_ok = \port$4261$0 [107];
+  assign ch0__word1_ne = \port$4261$0 [148];
+  assign ch0__word1_nw = \port$4261$0 [149];
+  assign ch0__word1_crc_ok = \port$4261$0 [150];
+  assign ch0__lc_repeat = \port$4261$0 [157];
+  assign ch0__lc_skip = \port$4261$0 [158];
+  assign ch0__lc_zero = \port$4261$0 [159];
+  assign ch0__spw_mismatch = \port$4261$0 [160];
+  assign ch0__lc = \port$4261$0 [156:151];
+  assign ch0__line_delay = \port$4261$0 [48:36];
+  assign ch0__word0_position = \port$4261$0 [104:50];
+  assign ch0__word1_position = \port$4261$0 [147:108];
+  assign ch0__timestamp = \port$4261$0 [35:4];
+  assign ch1__status = \port$4714$0 [3:0];
+  assign ch1__cds = \port$4714$0 [49];
+  assign ch1__word0_ne = \port$4714$0 [105];
+  assign ch1__word0_nw = \port$4714$0 [106];
+  assign ch1__word0_crc_ok = \port$4714$0 [107];
+  assign ch1__word1_ne = \port$4714$0 [148];
+  assign ch1__word1_nw = \port$4714$0 [149];
+  assign ch1__word1_crc_ok = \port$4714$0 [150];
+  assign ch1__lc_repeat = \port$4714$0 [157];
+  assign ch1__lc_skip = \port$4714$0 [158];
+  assign ch1__lc_zero = \port$4714$0 [159];
+  assign ch1__spw_mismatch = \port$4714$0 [160];
+  assign ch1__lc = \port$4714$0 [156:151];
+  assign ch1__line_delay = \port$4714$0 [48:36];
+  assign ch1__word0_position = \port$4714$0 [104:50];
+  assign ch1__word1_position = \port$4714$0 [147:108];
+  assign ch1__timestamp = \port$4714$0 [35:4];
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, ch1_irq, ch0_irq };
   assign ch0__cap_data_bits_w0 = 6'h37;
@@ -5305,52 +5305,52 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign ch0__cap_counters = 1'h1;
   assign ch0__cap_timestamp = 1'h1;
   assign ch0__cap_register_access = 1'h1;
-  assign ch0__count_crc_word0 = \port$4314$0 [15:0];
-  assign ch0__count_crc_word1 = \port$4314$0 [31:16];
-  assign ch0__count_no_ack = \port$4314$0 [47:32];
-  assign ch0__count_no_start = \port$4314$0 [63:48];
-  assign ch0__count_delay_range = \port$4314$0 [79:64];
-  assign ch0__count_slo_stuck_low = \port$4314$0 [95:80];
-  assign ch0__count_lc_repeat = \port$4314$0 [111:96];
-  assign ch0__count_lc_skip = \port$4314$0 [127:112];
-  assign ch0__count_lc_zero = \port$4314$0 [143:128];
-  assign ch0__count_spw_mismatch = \port$4314$0 [159:144];
-  assign ch0__count_overrun = \port$4314$0 [175:160];
-  assign ch0__count_aborted = \port$4314$0 [191:176];
-  assign ch0__count_no_stop = \port$4314$0 [207:192];
-  assign ch0__ca_status = \port$4428$0 [2:0];
-  assign ch0__ca_bytes_done = \port$4428$0 [9:3];
-  assign ch0__count_ca_crc4_error = \port$4314$0 [223:208];
-  assign ch0__count_ca_no_answer = \port$4314$0 [239:224];
-  assign ch0__count_ca_refused = \port$4314$0 [255:240];
-  assign ch0__count_ca_aborted = \port$4314$0 [271:256];
-  assign ch0__count_ca_data_fault = \port$4314$0 [287:272];
+  assign ch0__count_crc_word0 = \port$4268$0 [15:0];
+  assign ch0__count_crc_word1 = \port$4268$0 [31:16];
+  assign ch0__count_no_ack = \port$4268$0 [47:32];
+  assign ch0__count_no_start = \port$4268$0 [63:48];
+  assign ch0__count_delay_range = \port$4268$0 [79:64];
+  assign ch0__count_slo_stuck_low = \port$4268$0 [95:80];
+  assign ch0__count_lc_repeat = \port$4268$0 [111:96];
+  assign ch0__count_lc_skip = \port$4268$0 [127:112];
+  assign ch0__count_lc_zero = \port$4268$0 [143:128];
+  assign ch0__count_spw_mismatch = \port$4268$0 [159:144];
+  assign ch0__count_overrun = \port$4268$0 [175:160];
+  assign ch0__count_aborted = \port$4268$0 [191:176];
+  assign ch0__count_no_stop = \port$4268$0 [207:192];
+  assign ch0__ca_status = \port$4382$0 [2:0];
+  assign ch0__ca_bytes_done = \port$4382$0 [9:3];
+  assign ch0__count_ca_crc4_error = \port$4268$0 [223:208];
+  assign ch0__count_ca_no_answer = \port$4268$0 [239:224];
+  assign ch0__count_ca_refused = \port$4268$0 [255:240];
+  assign ch0__count_ca_aborted = \port$4268$0 [271:256];
+  assign ch0__count_ca_data_fault = \port$4268$0 [287:272];
   assign ch1__cap_data_bits_w0 = 6'h37;
   assign ch1__cap_data_bits_w1 = 6'h28;
   assign ch1__cap_timer_width = 6'h18;
   assign ch1__cap_counters = 1'h1;
   assign ch1__cap_timestamp = 1'h1;
   assign ch1__cap_register_access = 1'h1;
-  assign ch1__count_crc_word0 = \port$4813$0 [15:0];
-  assign ch1__count_crc_word1 = \port$4813$0 [31:16];
-  assign ch1__count_no_ack = \port$4813$0 [47:32];
-  assign ch1__count_no_start = \port$4813$0 [63:48];
-  assign ch1__count_delay_range = \port$4813$0 [79:64];
-  assign ch1__count_slo_stuck_low = \port$4813$0 [95:80];
-  assign ch1__count_lc_repeat = \port$4813$0 [111:96];
-  assign ch1__count_lc_skip = \port$4813$0 [127:112];
-  assign ch1__count_lc_zero = \port$4813$0 [143:128];
-  assign ch1__count_spw_mismatch = \port$4813$0 [159:144];
-  assign ch1__count_overrun = \port$4813$0 [175:160];
-  assign ch1__count_aborted = \port$4813$0 [191:176];
-  assign ch1__count_no_stop = \port$4813$0 [207:192];
-  assign ch1__ca_status = \port$4927$0 [2:0];
-  assign ch1__ca_bytes_done = \port$4927$0 [9:3];
-  assign ch1__count_ca_crc4_error = \port$4813$0 [223:208];
-  assign ch1__count_ca_no_answer = \port$4813$0 [239:224];
-  assign ch1__count_ca_refused = \port$4813$0 [255:240];
-  assign ch1__count_ca_aborted = \port$4813$0 [271:256];
-  assign ch1__count_ca_data_fault = \port$4813$0 [287:272];
+  assign ch1__count_crc_word0 = \port$4721$0 [15:0];
+  assign ch1__count_crc_word1 = \port$4721$0 [31:16];
+  assign ch1__count_no_ack = \port$4721$0 [47:32];
+  assign ch1__count_no_start = \port$4721$0 [63:48];
+  assign ch1__count_delay_range = \port$4721$0 [79:64];
+  assign ch1__count_slo_stuck_low = \port$4721$0 [95:80];
+  assign ch1__count_lc_repeat = \port$4721$0 [111:96];
+  assign ch1__count_lc_skip = \port$4721$0 [127:112];
+  assign ch1__count_lc_zero = \port$4721$0 [143:128];
+  assign ch1__count_spw_mismatch = \port$4721$0 [159:144];
+  assign ch1__count_overrun = \port$4721$0 [175:160];
+  assign ch1__count_aborted = \port$4721$0 [191:176];
+  assign ch1__count_no_stop = \port$4721$0 [207:192];
+  assign ch1__ca_status = \port$4835$0 [2:0];
+  assign ch1__ca_bytes_done = \port$4835$0 [9:3];
+  assign ch1__count_ca_crc4_error = \port$4721$0 [223:208];
+  assign ch1__count_ca_no_answer = \port$4721$0 [239:224];
+  assign ch1__count_ca_refused = \port$4721$0 [255:240];
+  assign ch1__count_ca_aborted = \port$4721$0 [271:256];
+  assign ch1__count_ca_data_fault = \port$4721$0 [287:272];
   assign glob__trigger = g_trigger_start;
   assign ch0__start = ch0_ctrl_start;
   assign ch0__abort_cycle = ch0_ctrl_abort;
@@ -5679,61 +5679,35 @@ module \biss_master_axil.bus (axil__awvalid, axil__wdata, axil__wstrb, axil__wva
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__ca_busy, regs__ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, abort_cycle, clear_counters, regs__periodic, regs__trigger_enable, regs__cfg_ma_half_period, regs__cfg_delay_limit, regs__cfg_request_period
-, regs__cfg_break_time, regs__cfg_ack_limit, regs__cfg_timeout_limit, regs__cfg_w0_data_bits, regs__cfg_w0_nenw, regs__cfg_w0_lc, regs__cfg_w0_crc, regs__cfg_w1_data_bits, regs__cfg_w1_nenw, regs__cfg_w1_lc, regs__cfg_w1_crc, regs__cfg_w1_enable, regs__cfg_end_check, regs__cfg_spw_check, regs__cfg_spw_tolerance, regs__ca_slave_id, regs__ca_address, regs__ca_count, regs__ca_write, ca_start, ca_abort
-, regs__done_count, ma, regs__done, \port$4307$0 , \port$4314$0 , regs__ca_done, \port$4428$0 , ca_rbuf_addr);
+module \biss_master_axil.ch0 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__ca_busy, regs__ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period
+, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort
+, regs__done_count, ma, regs__done, \port$4261$0 , \port$4268$0 , regs__ca_done, \port$4382$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$28  = 0;
   wire \$1 ;
-  reg [5:0] \$10 ;
-  reg \$11 ;
-  reg \$12 ;
-  reg [1:0] \$13 ;
-  reg [5:0] \$14 ;
-  reg \$15 ;
-  reg \$16 ;
-  reg [1:0] \$17 ;
-  reg \$18 ;
-  reg \$19 ;
   wire [16:0] \$2 ;
-  reg \$20 ;
-  reg [7:0] \$21 ;
-  reg [2:0] \$22 ;
-  reg [6:0] \$23 ;
-  reg [6:0] \$24 ;
-  reg \$25 ;
-  reg [15:0] \$26 ;
-  wire [160:0] \$27 ;
-  wire [287:0] \$28 ;
-  wire [9:0] \$29 ;
-  reg \$3 ;
-  reg [15:0] \$4 ;
-  reg [11:0] \$5 ;
-  reg [23:0] \$6 ;
-  reg [23:0] \$7 ;
-  reg [23:0] \$8 ;
-  reg [23:0] \$9 ;
+  reg [15:0] \$3 ;
+  wire [160:0] \$4 ;
+  wire [287:0] \$5 ;
+  wire [9:0] \$6 ;
   input abort_cycle;
   wire abort_cycle;
   wire busy;
   input ca_abort;
   wire ca_abort;
-  reg [6:0] ca_address = 7'h00;
-  (* init = 7'h00 *)
-  wire [6:0] ca_address_local;
+  input [6:0] ca_address;
+  wire [6:0] ca_address;
   wire ca_busy;
   wire [6:0] ca_bytes_done;
-  reg [6:0] ca_count = 7'h00;
-  (* init = 7'h00 *)
-  wire [6:0] ca_count_local;
+  input [6:0] ca_count;
+  wire [6:0] ca_count;
   wire ca_done;
   input [3:0] ca_rbuf_addr;
   wire [3:0] ca_rbuf_addr;
   wire [31:0] ca_rbuf_data;
   input ca_rbuf_en;
   wire ca_rbuf_en;
-  reg [2:0] ca_slave_id = 3'h0;
-  (* init = 3'h0 *)
-  wire [2:0] ca_slave_id_local;
+  input [2:0] ca_slave_id;
+  wire [2:0] ca_slave_id;
   input ca_start;
   wire ca_start;
   (* enum_base_type = "AccessStatus" *)
@@ -5751,80 +5725,53 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_
   wire [31:0] ca_wbuf_data;
   input [3:0] ca_wbuf_en;
   wire [3:0] ca_wbuf_en;
-  reg ca_write = 1'h0;
-  (* init = 1'h0 *)
-  wire ca_write_local;
+  input ca_write;
+  wire ca_write;
   wire cds;
-  reg [23:0] cfg_ack_limit = 24'h000000;
-  (* init = 24'h000000 *)
-  wire [23:0] cfg_ack_limit_local;
-  reg [23:0] cfg_break_time = 24'h000000;
-  (* init = 24'h000000 *)
-  wire [23:0] cfg_break_time_local;
-  reg [11:0] cfg_delay_limit = 12'h000;
-  (* init = 12'h000 *)
-  wire [11:0] cfg_delay_limit_local;
-  reg cfg_end_check = 1'h0;
-  (* init = 1'h0 *)
-  wire cfg_end_check_local;
-  reg [15:0] cfg_ma_half_period = 16'h0000;
-  (* init = 16'h0000 *)
-  wire [15:0] cfg_ma_half_period_local;
-  reg [23:0] cfg_request_period = 24'h000000;
-  (* init = 24'h000000 *)
-  wire [23:0] cfg_request_period_local;
-  reg cfg_spw_check = 1'h0;
-  (* init = 1'h0 *)
-  wire cfg_spw_check_local;
-  reg [7:0] cfg_spw_tolerance = 8'h00;
-  (* init = 8'h00 *)
-  wire [7:0] cfg_spw_tolerance_local;
-  reg [23:0] cfg_timeout_limit = 24'h000000;
-  (* init = 24'h000000 *)
-  wire [23:0] cfg_timeout_limit_local;
+  input [23:0] cfg_ack_limit;
+  wire [23:0] cfg_ack_limit;
+  input [23:0] cfg_break_time;
+  wire [23:0] cfg_break_time;
+  input [11:0] cfg_delay_limit;
+  wire [11:0] cfg_delay_limit;
+  input cfg_end_check;
+  wire cfg_end_check;
+  input [15:0] cfg_ma_half_period;
+  wire [15:0] cfg_ma_half_period;
+  input [23:0] cfg_request_period;
+  wire [23:0] cfg_request_period;
+  input cfg_spw_check;
+  wire cfg_spw_check;
+  input [7:0] cfg_spw_tolerance;
+  wire [7:0] cfg_spw_tolerance;
+  input [23:0] cfg_timeout_limit;
+  wire [23:0] cfg_timeout_limit;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
-  reg [1:0] cfg_w0_crc = 2'h0;
+  input [1:0] cfg_w0_crc;
+  wire [1:0] cfg_w0_crc;
+  input [5:0] cfg_w0_data_bits;
+  wire [5:0] cfg_w0_data_bits;
+  input cfg_w0_lc;
+  wire cfg_w0_lc;
+  input cfg_w0_nenw;
+  wire cfg_w0_nenw;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
-  (* init = 2'h0 *)
-  wire [1:0] cfg_w0_crc_local;
-  reg [5:0] cfg_w0_data_bits = 6'h00;
-  (* init = 6'h00 *)
-  wire [5:0] cfg_w0_data_bits_local;
-  reg cfg_w0_lc = 1'h0;
-  (* init = 1'h0 *)
-  wire cfg_w0_lc_local;
-  reg cfg_w0_nenw = 1'h0;
-  (* init = 1'h0 *)
-  wire cfg_w0_nenw_local;
-  (* enum_base_type = "Crc" *)
-  (* enum_value_00 = "NONE" *)
-  (* enum_value_01 = "CRC6" *)
-  (* enum_value_10 = "CRC16" *)
-  reg [1:0] cfg_w1_crc = 2'h0;
-  (* enum_base_type = "Crc" *)
-  (* enum_value_00 = "NONE" *)
-  (* enum_value_01 = "CRC6" *)
-  (* enum_value_10 = "CRC16" *)
-  (* init = 2'h0 *)
-  wire [1:0] cfg_w1_crc_local;
-  reg [5:0] cfg_w1_data_bits = 6'h00;
-  (* init = 6'h00 *)
-  wire [5:0] cfg_w1_data_bits_local;
-  reg cfg_w1_enable = 1'h0;
-  (* init = 1'h0 *)
-  wire cfg_w1_enable_local;
-  reg cfg_w1_lc = 1'h0;
-  (* init = 1'h0 *)
-  wire cfg_w1_lc_local;
-  reg cfg_w1_nenw = 1'h0;
-  (* init = 1'h0 *)
-  wire cfg_w1_nenw_local;
+  input [1:0] cfg_w1_crc;
+  wire [1:0] cfg_w1_crc;
+  input [5:0] cfg_w1_data_bits;
+  wire [5:0] cfg_w1_data_bits;
+  input cfg_w1_enable;
+  wire cfg_w1_enable;
+  input cfg_w1_lc;
+  wire cfg_w1_lc;
+  input cfg_w1_nenw;
+  wire cfg_w1_nenw;
   input clear_counters;
   wire clear_counters;
   input clk;
@@ -5857,25 +5804,22 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_
   output ma;
   wire ma;
   wire \ma$164 ;
-  reg periodic = 1'h0;
-  (* init = 1'h0 *)
-  wire periodic_local;
-  output [160:0] \port$4307$0 ;
-  wire [160:0] \port$4307$0 ;
-  output [287:0] \port$4314$0 ;
-  wire [287:0] \port$4314$0 ;
-  output [9:0] \port$4428$0 ;
-  wire [9:0] \port$4428$0 ;
+  input periodic;
+  wire periodic;
+  output [160:0] \port$4261$0 ;
+  wire [160:0] \port$4261$0 ;
+  output [287:0] \port$4268$0 ;
+  wire [287:0] \port$4268$0 ;
+  output [9:0] \port$4382$0 ;
+  wire [9:0] \port$4382$0 ;
   wire regs__abort_cycle;
   output regs__busy;
   wire regs__busy;
   wire regs__ca_abort;
-  input [6:0] regs__ca_address;
   wire [6:0] regs__ca_address;
   output regs__ca_busy;
   wire regs__ca_busy;
   wire [6:0] regs__ca_bytes_done;
-  input [6:0] regs__ca_count;
   wire [6:0] regs__ca_count;
   output regs__ca_done;
   wire regs__ca_done;
@@ -5883,14 +5827,12 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_
   output [31:0] regs__ca_rbuf_data;
   wire [31:0] regs__ca_rbuf_data;
   wire regs__ca_rbuf_en;
-  input [2:0] regs__ca_slave_id;
   wire [2:0] regs__ca_slave_id;
   wire regs__ca_start;
   wire [2:0] regs__ca_status;
   wire [3:0] regs__ca_wbuf_addr;
   wire [31:0] regs__ca_wbuf_data;
   wire [3:0] regs__ca_wbuf_en;
-  input regs__ca_write;
   wire regs__ca_write;
   wire regs__cap_counters;
   wire [5:0] regs__cap_data_bits_w0;
@@ -5899,41 +5841,31 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_
   wire [5:0] regs__cap_timer_width;
   wire regs__cap_timestamp;
   wire regs__cds;
-  input [23:0] regs__cfg_ack_limit;
   wire [23:0] regs__cfg_ack_limit;
-  input [23:0] regs__cfg_break_time;
   wire [23:0] regs__cfg_break_time;
-  input [11:0] regs__cfg_delay_limit;
   wire [11:0] regs__cfg_delay_limit;
-  input regs__cfg_end_check;
   wire regs__cfg_end_check;
-  input [15:0] regs__cfg_ma_half_period;
   wire [15:0] regs__cfg_ma_half_period;
-  input [23:0] regs__cfg_request_period;
   wire [23:0] regs__cfg_request_period;
-  input regs__cfg_spw_check;
   wire regs__cfg_spw_check;
-  input [7:0] regs__cfg_spw_tolerance;
   wire [7:0] regs__cfg_spw_tolerance;
-  input [23:0] regs__cfg_timeout_limit;
   wire [23:0] regs__cfg_timeout_limit;
-  input [1:0] regs__cfg_w0_crc;
+  (* enum_base_type = "Crc" *)
+  (* enum_value_00 = "NONE" *)
+  (* enum_value_01 = "CRC6" *)
+  (* enum_value_10 = "CRC16" *)
   wire [1:0] regs__cfg_w0_crc;
-  input [5:0] regs__cfg_w0_data_bits;
   wire [5:0] regs__cfg_w0_data_bits;
-  input regs__cfg_w0_lc;
   wire regs__cfg_w0_lc;
-  input regs__cfg_w0_nenw;
   wire regs__cfg_w0_nenw;
-  input [1:0] regs__cfg_w1_crc;
+  (* enum_base_type = "Crc" *)
+  (* enum_value_00 = "NONE" *)
+  (* enum_value_01 = "CRC6" *)
+  (* enum_value_10 = "CRC16" *)
   wire [1:0] regs__cfg_w1_crc;
-  input [5:0] regs__cfg_w1_data_bits;
   wire [5:0] regs__cfg_w1_data_bits;
-  input regs__cfg_w1_enable;
   wire regs__cfg_w1_enable;
-  input regs__cfg_w1_lc;
   wire regs__cfg_w1_lc;
-  input regs__cfg_w1_nenw;
   wire regs__cfg_w1_nenw;
   wire regs__clear_counters;
   output regs__config_error;
@@ -5967,7 +5899,6 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_
   wire regs__lc_skip;
   wire regs__lc_zero;
   wire [12:0] regs__line_delay;
-  input regs__periodic;
   wire regs__periodic;
   wire regs__spw_mismatch;
   wire regs__start;
@@ -6019,58 +5950,12 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_
   wire word1_ne;
   wire word1_nw;
   wire [39:0] word1_position;
+  assign \$2  = regs__done_count + 1'h1;
+  always @(posedge clk)
+    regs__done_count <= \$3 ;
   assign \$1  = ~ valid;
   assign regs__frame_error = regs__done & \$1 ;
   assign trigger = \trigger$161  & regs__trigger_enable;
-  assign \$2  = regs__done_count + 1'h1;
-  always @(posedge clk)
-    periodic <= \$3 ;
-  always @(posedge clk)
-    cfg_ma_half_period <= \$4 ;
-  always @(posedge clk)
-    cfg_delay_limit <= \$5 ;
-  always @(posedge clk)
-    cfg_request_period <= \$6 ;
-  always @(posedge clk)
-    cfg_break_time <= \$7 ;
-  always @(posedge clk)
-    cfg_ack_limit <= \$8 ;
-  always @(posedge clk)
-    cfg_timeout_limit <= \$9 ;
-  always @(posedge clk)
-    cfg_w0_data_bits <= \$10 ;
-  always @(posedge clk)
-    cfg_w0_nenw <= \$11 ;
-  always @(posedge clk)
-    cfg_w0_lc <= \$12 ;
-  always @(posedge clk)
-    cfg_w0_crc <= \$13 ;
-  always @(posedge clk)
-    cfg_w1_data_bits <= \$14 ;
-  always @(posedge clk)
-    cfg_w1_nenw <= \$15 ;
-  always @(posedge clk)
-    cfg_w1_lc <= \$16 ;
-  always @(posedge clk)
-    cfg_w1_crc <= \$17 ;
-  always @(posedge clk)
-    cfg_w1_enable <= \$18 ;
-  always @(posedge clk)
-    cfg_end_check <= \$19 ;
-  always @(posedge clk)
-    cfg_spw_check <= \$20 ;
-  always @(posedge clk)
-    cfg_spw_tolerance <= \$21 ;
-  always @(posedge clk)
-    ca_slave_id <= \$22 ;
-  always @(posedge clk)
-    ca_address <= \$23 ;
-  always @(posedge clk)
-    ca_count <= \$24 ;
-  always @(posedge clk)
-    ca_write <= \$25 ;
-  always @(posedge clk)
-    regs__done_count <= \$26 ;
   \biss_master_axil.ch0.core  core (
     .abort(abort_cycle),
     .\abort$187 (ca_abort),
@@ -6105,15 +5990,15 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_
     .\clear$214 (clear_counters),
     .clk(clk),
     .config_error(regs__config_error),
-    .counts(\$28 ),
+    .counts(\$5 ),
     .\done$240 (regs__done),
     .frames(regs__ca_busy),
     .ma(ma),
     .\periodic$24 (periodic),
     .rbuf_addr(ca_rbuf_addr),
     .rbuf_en(ca_rbuf_en),
-    .result(\$29 ),
-    .\result$245 (\$27 ),
+    .result(\$6 ),
+    .\result$245 (\$4 ),
     .rst(rst),
     .slo(slo),
     .start(start),
@@ -6123,179 +6008,18 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
-    \$3  = regs__periodic;
-    if (rst) begin
-      \$3  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
-    \$4  = regs__cfg_ma_half_period;
-    if (rst) begin
-      \$4  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
-    \$5  = regs__cfg_delay_limit;
-    if (rst) begin
-      \$5  = 12'h000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
-    \$6  = regs__cfg_request_period;
-    if (rst) begin
-      \$6  = 24'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
-    \$7  = regs__cfg_break_time;
-    if (rst) begin
-      \$7  = 24'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
-    \$8  = regs__cfg_ack_limit;
-    if (rst) begin
-      \$8  = 24'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
-    \$9  = regs__cfg_timeout_limit;
-    if (rst) begin
-      \$9  = 24'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
-    \$10  = regs__cfg_w0_data_bits;
-    if (rst) begin
-      \$10  = 6'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
-    \$11  = regs__cfg_w0_nenw;
-    if (rst) begin
-      \$11  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
-    \$12  = regs__cfg_w0_lc;
-    if (rst) begin
-      \$12  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
-    \$13  = regs__cfg_w0_crc;
-    if (rst) begin
-      \$13  = 2'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
-    \$14  = regs__cfg_w1_data_bits;
-    if (rst) begin
-      \$14  = 6'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
-    \$15  = regs__cfg_w1_nenw;
-    if (rst) begin
-      \$15  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
-    \$16  = regs__cfg_w1_lc;
-    if (rst) begin
-      \$16  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
-    \$17  = regs__cfg_w1_crc;
-    if (rst) begin
-      \$17  = 2'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
-    \$18  = regs__cfg_w1_enable;
-    if (rst) begin
-      \$18  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
-    \$19  = regs__cfg_end_check;
-    if (rst) begin
-      \$19  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
-    \$20  = regs__cfg_spw_check;
-    if (rst) begin
-      \$20  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
-    \$21  = regs__cfg_spw_tolerance;
-    if (rst) begin
-      \$21  = 8'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
-    \$22  = regs__ca_slave_id;
-    if (rst) begin
-      \$22  = 3'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
-    \$23  = regs__ca_address;
-    if (rst) begin
-      \$23  = 7'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
-    \$24  = regs__ca_count;
-    if (rst) begin
-      \$24  = 7'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
-    \$25  = regs__ca_write;
-    if (rst) begin
-      \$25  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
-    \$26  = regs__done_count;
+    \$3  = regs__done_count;
     if (regs__done) begin
-      \$26  = \$2 [15:0];
+      \$3  = \$2 [15:0];
     end
     if (rst) begin
-      \$26  = 16'h0000;
+      \$3  = 16'h0000;
     end
   end
   assign regs__start = start;
   assign regs__abort_cycle = abort_cycle;
   assign regs__clear_counters = clear_counters;
-  assign periodic_local = periodic;
+  assign regs__periodic = periodic;
   assign busy = regs__busy;
   assign config_error = regs__config_error;
   assign regs__cap_data_bits_w0 = 6'h37;
@@ -6306,105 +6030,105 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_
   assign regs__cap_register_access = 1'h1;
   assign done = regs__done;
   assign ca_done = regs__ca_done;
-  assign cfg_ma_half_period_local = cfg_ma_half_period;
-  assign cfg_delay_limit_local = cfg_delay_limit;
-  assign cfg_request_period_local = cfg_request_period;
-  assign cfg_break_time_local = cfg_break_time;
-  assign cfg_ack_limit_local = cfg_ack_limit;
-  assign cfg_timeout_limit_local = cfg_timeout_limit;
-  assign cfg_w0_data_bits_local = cfg_w0_data_bits;
-  assign cfg_w0_nenw_local = cfg_w0_nenw;
-  assign cfg_w0_lc_local = cfg_w0_lc;
-  assign cfg_w0_crc_local = cfg_w0_crc;
-  assign cfg_w1_data_bits_local = cfg_w1_data_bits;
-  assign cfg_w1_nenw_local = cfg_w1_nenw;
-  assign cfg_w1_lc_local = cfg_w1_lc;
-  assign cfg_w1_crc_local = cfg_w1_crc;
-  assign cfg_w1_enable_local = cfg_w1_enable;
-  assign cfg_end_check_local = cfg_end_check;
-  assign cfg_spw_check_local = cfg_spw_check;
-  assign cfg_spw_tolerance_local = cfg_spw_tolerance;
-  assign regs__status = \$27 [3:0];
-  assign status = \$27 [3:0];
-  assign regs__cds = \$27 [49];
-  assign cds = \$27 [49];
-  assign regs__word0_ne = \$27 [105];
-  assign word0_ne = \$27 [105];
-  assign regs__word0_nw = \$27 [106];
-  assign word0_nw = \$27 [106];
-  assign regs__word0_crc_ok = \$27 [107];
-  assign word0_crc_ok = \$27 [107];
-  assign regs__word1_ne = \$27 [148];
-  assign word1_ne = \$27 [148];
-  assign regs__word1_nw = \$27 [149];
-  assign word1_nw = \$27 [149];
-  assign regs__word1_crc_ok = \$27 [150];
-  assign word1_crc_ok = \$27 [150];
-  assign regs__lc_repeat = \$27 [157];
-  assign lc_repeat = \$27 [157];
-  assign regs__lc_skip = \$27 [158];
-  assign lc_skip = \$27 [158];
-  assign regs__lc_zero = \$27 [159];
-  assign lc_zero = \$27 [159];
-  assign regs__spw_mismatch = \$27 [160];
-  assign spw_mismatch = \$27 [160];
-  assign regs__lc = \$27 [156:151];
-  assign lc = \$27 [156:151];
-  assign regs__line_delay = \$27 [48:36];
-  assign line_delay = \$27 [48:36];
-  assign regs__word0_position = \$27 [104:50];
-  assign word0_position = \$27 [104:50];
-  assign regs__word1_position = \$27 [147:108];
-  assign word1_position = \$27 [147:108];
-  assign regs__timestamp = \$27 [35:4];
-  assign timestamp = \$27 [35:4];
-  assign regs__count_crc_word0 = \$28 [15:0];
-  assign count_crc_word0 = \$28 [15:0];
-  assign regs__count_crc_word1 = \$28 [31:16];
-  assign count_crc_word1 = \$28 [31:16];
-  assign regs__count_no_ack = \$28 [47:32];
-  assign count_no_ack = \$28 [47:32];
-  assign regs__count_no_start = \$28 [63:48];
-  assign count_no_start = \$28 [63:48];
-  assign regs__count_delay_range = \$28 [79:64];
-  assign count_delay_range = \$28 [79:64];
-  assign regs__count_slo_stuck_low = \$28 [95:80];
-  assign count_slo_stuck_low = \$28 [95:80];
-  assign regs__count_lc_repeat = \$28 [111:96];
-  assign count_lc_repeat = \$28 [111:96];
-  assign regs__count_lc_skip = \$28 [127:112];
-  assign count_lc_skip = \$28 [127:112];
-  assign regs__count_lc_zero = \$28 [143:128];
-  assign count_lc_zero = \$28 [143:128];
-  assign regs__count_spw_mismatch = \$28 [159:144];
-  assign count_spw_mismatch = \$28 [159:144];
-  assign regs__count_overrun = \$28 [175:160];
-  assign count_overrun = \$28 [175:160];
-  assign regs__count_aborted = \$28 [191:176];
-  assign count_aborted = \$28 [191:176];
-  assign regs__count_no_stop = \$28 [207:192];
-  assign count_no_stop = \$28 [207:192];
-  assign ca_slave_id_local = ca_slave_id;
-  assign ca_address_local = ca_address;
-  assign ca_count_local = ca_count;
-  assign ca_write_local = ca_write;
+  assign regs__cfg_ma_half_period = cfg_ma_half_period;
+  assign regs__cfg_delay_limit = cfg_delay_limit;
+  assign regs__cfg_request_period = cfg_request_period;
+  assign regs__cfg_break_time = cfg_break_time;
+  assign regs__cfg_ack_limit = cfg_ack_limit;
+  assign regs__cfg_timeout_limit = cfg_timeout_limit;
+  assign regs__cfg_w0_data_bits = cfg_w0_data_bits;
+  assign regs__cfg_w0_nenw = cfg_w0_nenw;
+  assign regs__cfg_w0_lc = cfg_w0_lc;
+  assign regs__cfg_w0_crc = cfg_w0_crc;
+  assign regs__cfg_w1_data_bits = cfg_w1_data_bits;
+  assign regs__cfg_w1_nenw = cfg_w1_nenw;
+  assign regs__cfg_w1_lc = cfg_w1_lc;
+  assign regs__cfg_w1_crc = cfg_w1_crc;
+  assign regs__cfg_w1_enable = cfg_w1_enable;
+  assign regs__cfg_end_check = cfg_end_check;
+  assign regs__cfg_spw_check = cfg_spw_check;
+  assign regs__cfg_spw_tolerance = cfg_spw_tolerance;
+  assign regs__status = \$4 [3:0];
+  assign status = \$4 [3:0];
+  assign regs__cds = \$4 [49];
+  assign cds = \$4 [49];
+  assign regs__word0_ne = \$4 [105];
+  assign word0_ne = \$4 [105];
+  assign regs__word0_nw = \$4 [106];
+  assign word0_nw = \$4 [106];
+  assign regs__word0_crc_ok = \$4 [107];
+  assign word0_crc_ok = \$4 [107];
+  assign regs__word1_ne = \$4 [148];
+  assign word1_ne = \$4 [148];
+  assign regs__word1_nw = \$4 [149];
+  assign word1_nw = \$4 [149];
+  assign regs__word1_crc_ok = \$4 [150];
+  assign word1_crc_ok = \$4 [150];
+  assign regs__lc_repeat = \$4 [157];
+  assign lc_repeat = \$4 [157];
+  assign regs__lc_skip = \$4 [158];
+  assign lc_skip = \$4 [158];
+  assign regs__lc_zero = \$4 [159];
+  assign lc_zero = \$4 [159];
+  assign regs__spw_mismatch = \$4 [160];
+  assign spw_mismatch = \$4 [160];
+  assign regs__lc = \$4 [156:151];
+  assign lc = \$4 [156:151];
+  assign regs__line_delay = \$4 [48:36];
+  assign line_delay = \$4 [48:36];
+  assign regs__word0_position = \$4 [104:50];
+  assign word0_position = \$4 [104:50];
+  assign regs__word1_position = \$4 [147:108];
+  assign word1_position = \$4 [147:108];
+  assign regs__timestamp = \$4 [35:4];
+  assign timestamp = \$4 [35:4];
+  assign regs__count_crc_word0 = \$5 [15:0];
+  assign count_crc_word0 = \$5 [15:0];
+  assign regs__count_crc_word1 = \$5 [31:16];
+  assign count_crc_word1 = \$5 [31:16];
+  assign regs__count_no_ack = \$5 [47:32];
+  assign count_no_ack = \$5 [47:32];
+  assign regs__count_no_start = \$5 [63:48];
+  assign count_no_start = \$5 [63:48];
+  assign regs__count_delay_range = \$5 [79:64];
+  assign count_delay_range = \$5 [79:64];
+  assign regs__count_slo_stuck_low = \$5 [95:80];
+  assign count_slo_stuck_low = \$5 [95:80];
+  assign regs__count_lc_repeat = \$5 [111:96];
+  assign count_lc_repeat = \$5 [111:96];
+  assign regs__count_lc_skip = \$5 [127:112];
+  assign count_lc_skip = \$5 [127:112];
+  assign regs__count_lc_zero = \$5 [143:128];
+  assign count_lc_zero = \$5 [143:128];
+  assign regs__count_spw_mismatch = \$5 [159:144];
+  assign count_spw_mismatch = \$5 [159:144];
+  assign regs__count_overrun = \$5 [175:160];
+  assign count_overrun = \$5 [175:160];
+  assign regs__count_aborted = \$5 [191:176];
+  assign count_aborted = \$5 [191:176];
+  assign regs__count_no_stop = \$5 [207:192];
+  assign count_no_stop = \$5 [207:192];
+  assign regs__ca_slave_id = ca_slave_id;
+  assign regs__ca_address = ca_address;
+  assign regs__ca_count = ca_count;
+  assign regs__ca_write = ca_write;
   assign regs__ca_start = ca_start;
   assign regs__ca_abort = ca_abort;
   assign ca_busy = regs__ca_busy;
-  assign regs__ca_status = \$29 [2:0];
-  assign ca_status = \$29 [2:0];
-  assign regs__ca_bytes_done = \$29 [9:3];
-  assign ca_bytes_done = \$29 [9:3];
-  assign regs__count_ca_crc4_error = \$28 [223:208];
-  assign count_ca_crc4_error = \$28 [223:208];
-  assign regs__count_ca_no_answer = \$28 [239:224];
-  assign count_ca_no_answer = \$28 [239:224];
-  assign regs__count_ca_refused = \$28 [255:240];
-  assign count_ca_refused = \$28 [255:240];
-  assign regs__count_ca_aborted = \$28 [271:256];
-  assign count_ca_aborted = \$28 [271:256];
-  assign regs__count_ca_data_fault = \$28 [287:272];
-  assign count_ca_data_fault = \$28 [287:272];
+  assign regs__ca_status = \$6 [2:0];
+  assign ca_status = \$6 [2:0];
+  assign regs__ca_bytes_done = \$6 [9:3];
+  assign ca_bytes_done = \$6 [9:3];
+  assign regs__count_ca_crc4_error = \$5 [223:208];
+  assign count_ca_crc4_error = \$5 [223:208];
+  assign regs__count_ca_no_answer = \$5 [239:224];
+  assign count_ca_no_answer = \$5 [239:224];
+  assign regs__count_ca_refused = \$5 [255:240];
+  assign count_ca_refused = \$5 [255:240];
+  assign regs__count_ca_aborted = \$5 [271:256];
+  assign count_ca_aborted = \$5 [271:256];
+  assign regs__count_ca_data_fault = \$5 [287:272];
+  assign count_ca_data_fault = \$5 [287:272];
   assign regs__ca_wbuf_addr = ca_wbuf_addr;
   assign regs__ca_wbuf_data = ca_wbuf_data;
   assign regs__ca_wbuf_en = ca_wbuf_en;
@@ -6413,14 +6137,14 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_
   assign regs__ca_rbuf_en = ca_rbuf_en;
   assign \ma$164  = ma;
   assign \slo$166  = slo;
-  assign \port$4307$0  = \$27 ;
-  assign \port$4314$0  = \$28 ;
-  assign \port$4428$0  = \$29 ;
+  assign \port$4261$0  = \$4 ;
+  assign \port$4268$0  = \$5 ;
+  assign \port$4382$0  = \$6 ;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy$237 , config_error, frames, ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, abort, \clear$214 , \start$185 , \abort$187 , \periodic$24 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period
-, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, ma, \done$240 
+module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy$237 , config_error, frames, ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, abort, \clear$214 , \periodic$24 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit
+, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, \start$185 , \abort$187 , ma, \done$240 
 , \valid$242 , \result$245 , counts, ca_done, result, rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$29  = 0;
   wire \$1 ;
@@ -7267,7 +6991,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$4048$0 (\bit ),
+    .\port$4002$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -15184,7 +14908,7 @@ module \biss_master_axil.ch0.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$4048$0 , resync, lc, is_zero, clk);
+module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$4002$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$65  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -15222,8 +14946,8 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$4048$0 ;
-  wire \port$4048$0 ;
+  input \port$4002$0 ;
+  wire \port$4002$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -15235,9 +14959,9 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$4048$0  };
-  assign \$2  = { lc[4:0], \port$4048$0  } == last;
-  assign \$3  = { lc[4:0], \port$4048$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$4002$0  };
+  assign \$2  = { lc[4:0], \port$4002$0  } == last;
+  assign \$3  = { lc[4:0], \port$4002$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = lc == 6'h3f;
@@ -15327,7 +15051,7 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
       \$21  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$4048$0  };
+  assign lc_next = { lc[4:0], \port$4002$0  };
   assign zero = is_zero;
 endmodule
 
@@ -16033,61 +15757,35 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, \port$1737$0 , lc_check
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__ca_busy, regs__ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, abort_cycle, clear_counters, regs__periodic, regs__trigger_enable, regs__cfg_ma_half_period, regs__cfg_delay_limit, regs__cfg_request_period
-, regs__cfg_break_time, regs__cfg_ack_limit, regs__cfg_timeout_limit, regs__cfg_w0_data_bits, regs__cfg_w0_nenw, regs__cfg_w0_lc, regs__cfg_w0_crc, regs__cfg_w1_data_bits, regs__cfg_w1_nenw, regs__cfg_w1_lc, regs__cfg_w1_crc, regs__cfg_w1_enable, regs__cfg_end_check, regs__cfg_spw_check, regs__cfg_spw_tolerance, regs__ca_slave_id, regs__ca_address, regs__ca_count, regs__ca_write, ca_start, ca_abort
-, regs__done_count, ma, regs__done, \port$4806$0 , \port$4813$0 , regs__ca_done, \port$4927$0 , ca_rbuf_addr);
+module \biss_master_axil.ch1 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__ca_busy, regs__ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period
+, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort
+, regs__done_count, ma, regs__done, \port$4714$0 , \port$4721$0 , regs__ca_done, \port$4835$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$70  = 0;
   wire \$1 ;
-  reg [5:0] \$10 ;
-  reg \$11 ;
-  reg \$12 ;
-  reg [1:0] \$13 ;
-  reg [5:0] \$14 ;
-  reg \$15 ;
-  reg \$16 ;
-  reg [1:0] \$17 ;
-  reg \$18 ;
-  reg \$19 ;
   wire [16:0] \$2 ;
-  reg \$20 ;
-  reg [7:0] \$21 ;
-  reg [2:0] \$22 ;
-  reg [6:0] \$23 ;
-  reg [6:0] \$24 ;
-  reg \$25 ;
-  reg [15:0] \$26 ;
-  wire [160:0] \$27 ;
-  wire [287:0] \$28 ;
-  wire [9:0] \$29 ;
-  reg \$3 ;
-  reg [15:0] \$4 ;
-  reg [11:0] \$5 ;
-  reg [23:0] \$6 ;
-  reg [23:0] \$7 ;
-  reg [23:0] \$8 ;
-  reg [23:0] \$9 ;
+  reg [15:0] \$3 ;
+  wire [160:0] \$4 ;
+  wire [287:0] \$5 ;
+  wire [9:0] \$6 ;
   input abort_cycle;
   wire abort_cycle;
   wire busy;
   input ca_abort;
   wire ca_abort;
-  reg [6:0] ca_address = 7'h00;
-  (* init = 7'h00 *)
-  wire [6:0] ca_address_local;
+  input [6:0] ca_address;
+  wire [6:0] ca_address;
   wire ca_busy;
   wire [6:0] ca_bytes_done;
-  reg [6:0] ca_count = 7'h00;
-  (* init = 7'h00 *)
-  wire [6:0] ca_count_local;
+  input [6:0] ca_count;
+  wire [6:0] ca_count;
   wire ca_done;
   input [3:0] ca_rbuf_addr;
   wire [3:0] ca_rbuf_addr;
   wire [31:0] ca_rbuf_data;
   input ca_rbuf_en;
   wire ca_rbuf_en;
-  reg [2:0] ca_slave_id = 3'h0;
-  (* init = 3'h0 *)
-  wire [2:0] ca_slave_id_local;
+  input [2:0] ca_slave_id;
+  wire [2:0] ca_slave_id;
   input ca_start;
   wire ca_start;
   (* enum_base_type = "AccessStatus" *)
@@ -16105,80 +15803,53 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_
   wire [31:0] ca_wbuf_data;
   input [3:0] ca_wbuf_en;
   wire [3:0] ca_wbuf_en;
-  reg ca_write = 1'h0;
-  (* init = 1'h0 *)
-  wire ca_write_local;
+  input ca_write;
+  wire ca_write;
   wire cds;
-  reg [23:0] cfg_ack_limit = 24'h000000;
-  (* init = 24'h000000 *)
-  wire [23:0] cfg_ack_limit_local;
-  reg [23:0] cfg_break_time = 24'h000000;
-  (* init = 24'h000000 *)
-  wire [23:0] cfg_break_time_local;
-  reg [11:0] cfg_delay_limit = 12'h000;
-  (* init = 12'h000 *)
-  wire [11:0] cfg_delay_limit_local;
-  reg cfg_end_check = 1'h0;
-  (* init = 1'h0 *)
-  wire cfg_end_check_local;
-  reg [15:0] cfg_ma_half_period = 16'h0000;
-  (* init = 16'h0000 *)
-  wire [15:0] cfg_ma_half_period_local;
-  reg [23:0] cfg_request_period = 24'h000000;
-  (* init = 24'h000000 *)
-  wire [23:0] cfg_request_period_local;
-  reg cfg_spw_check = 1'h0;
-  (* init = 1'h0 *)
-  wire cfg_spw_check_local;
-  reg [7:0] cfg_spw_tolerance = 8'h00;
-  (* init = 8'h00 *)
-  wire [7:0] cfg_spw_tolerance_local;
-  reg [23:0] cfg_timeout_limit = 24'h000000;
-  (* init = 24'h000000 *)
-  wire [23:0] cfg_timeout_limit_local;
+  input [23:0] cfg_ack_limit;
+  wire [23:0] cfg_ack_limit;
+  input [23:0] cfg_break_time;
+  wire [23:0] cfg_break_time;
+  input [11:0] cfg_delay_limit;
+  wire [11:0] cfg_delay_limit;
+  input cfg_end_check;
+  wire cfg_end_check;
+  input [15:0] cfg_ma_half_period;
+  wire [15:0] cfg_ma_half_period;
+  input [23:0] cfg_request_period;
+  wire [23:0] cfg_request_period;
+  input cfg_spw_check;
+  wire cfg_spw_check;
+  input [7:0] cfg_spw_tolerance;
+  wire [7:0] cfg_spw_tolerance;
+  input [23:0] cfg_timeout_limit;
+  wire [23:0] cfg_timeout_limit;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
-  reg [1:0] cfg_w0_crc = 2'h0;
+  input [1:0] cfg_w0_crc;
+  wire [1:0] cfg_w0_crc;
+  input [5:0] cfg_w0_data_bits;
+  wire [5:0] cfg_w0_data_bits;
+  input cfg_w0_lc;
+  wire cfg_w0_lc;
+  input cfg_w0_nenw;
+  wire cfg_w0_nenw;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
-  (* init = 2'h0 *)
-  wire [1:0] cfg_w0_crc_local;
-  reg [5:0] cfg_w0_data_bits = 6'h00;
-  (* init = 6'h00 *)
-  wire [5:0] cfg_w0_data_bits_local;
-  reg cfg_w0_lc = 1'h0;
-  (* init = 1'h0 *)
-  wire cfg_w0_lc_local;
-  reg cfg_w0_nenw = 1'h0;
-  (* init = 1'h0 *)
-  wire cfg_w0_nenw_local;
-  (* enum_base_type = "Crc" *)
-  (* enum_value_00 = "NONE" *)
-  (* enum_value_01 = "CRC6" *)
-  (* enum_value_10 = "CRC16" *)
-  reg [1:0] cfg_w1_crc = 2'h0;
-  (* enum_base_type = "Crc" *)
-  (* enum_value_00 = "NONE" *)
-  (* enum_value_01 = "CRC6" *)
-  (* enum_value_10 = "CRC16" *)
-  (* init = 2'h0 *)
-  wire [1:0] cfg_w1_crc_local;
-  reg [5:0] cfg_w1_data_bits = 6'h00;
-  (* init = 6'h00 *)
-  wire [5:0] cfg_w1_data_bits_local;
-  reg cfg_w1_enable = 1'h0;
-  (* init = 1'h0 *)
-  wire cfg_w1_enable_local;
-  reg cfg_w1_lc = 1'h0;
-  (* init = 1'h0 *)
-  wire cfg_w1_lc_local;
-  reg cfg_w1_nenw = 1'h0;
-  (* init = 1'h0 *)
-  wire cfg_w1_nenw_local;
+  input [1:0] cfg_w1_crc;
+  wire [1:0] cfg_w1_crc;
+  input [5:0] cfg_w1_data_bits;
+  wire [5:0] cfg_w1_data_bits;
+  input cfg_w1_enable;
+  wire cfg_w1_enable;
+  input cfg_w1_lc;
+  wire cfg_w1_lc;
+  input cfg_w1_nenw;
+  wire cfg_w1_nenw;
   input clear_counters;
   wire clear_counters;
   input clk;
@@ -16211,25 +15882,22 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_
   output ma;
   wire ma;
   wire \ma$164 ;
-  reg periodic = 1'h0;
-  (* init = 1'h0 *)
-  wire periodic_local;
-  output [160:0] \port$4806$0 ;
-  wire [160:0] \port$4806$0 ;
-  output [287:0] \port$4813$0 ;
-  wire [287:0] \port$4813$0 ;
-  output [9:0] \port$4927$0 ;
-  wire [9:0] \port$4927$0 ;
+  input periodic;
+  wire periodic;
+  output [160:0] \port$4714$0 ;
+  wire [160:0] \port$4714$0 ;
+  output [287:0] \port$4721$0 ;
+  wire [287:0] \port$4721$0 ;
+  output [9:0] \port$4835$0 ;
+  wire [9:0] \port$4835$0 ;
   wire regs__abort_cycle;
   output regs__busy;
   wire regs__busy;
   wire regs__ca_abort;
-  input [6:0] regs__ca_address;
   wire [6:0] regs__ca_address;
   output regs__ca_busy;
   wire regs__ca_busy;
   wire [6:0] regs__ca_bytes_done;
-  input [6:0] regs__ca_count;
   wire [6:0] regs__ca_count;
   output regs__ca_done;
   wire regs__ca_done;
@@ -16237,14 +15905,12 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_
   output [31:0] regs__ca_rbuf_data;
   wire [31:0] regs__ca_rbuf_data;
   wire regs__ca_rbuf_en;
-  input [2:0] regs__ca_slave_id;
   wire [2:0] regs__ca_slave_id;
   wire regs__ca_start;
   wire [2:0] regs__ca_status;
   wire [3:0] regs__ca_wbuf_addr;
   wire [31:0] regs__ca_wbuf_data;
   wire [3:0] regs__ca_wbuf_en;
-  input regs__ca_write;
   wire regs__ca_write;
   wire regs__cap_counters;
   wire [5:0] regs__cap_data_bits_w0;
@@ -16253,41 +15919,31 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_
   wire [5:0] regs__cap_timer_width;
   wire regs__cap_timestamp;
   wire regs__cds;
-  input [23:0] regs__cfg_ack_limit;
   wire [23:0] regs__cfg_ack_limit;
-  input [23:0] regs__cfg_break_time;
   wire [23:0] regs__cfg_break_time;
-  input [11:0] regs__cfg_delay_limit;
   wire [11:0] regs__cfg_delay_limit;
-  input regs__cfg_end_check;
   wire regs__cfg_end_check;
-  input [15:0] regs__cfg_ma_half_period;
   wire [15:0] regs__cfg_ma_half_period;
-  input [23:0] regs__cfg_request_period;
   wire [23:0] regs__cfg_request_period;
-  input regs__cfg_spw_check;
   wire regs__cfg_spw_check;
-  input [7:0] regs__cfg_spw_tolerance;
   wire [7:0] regs__cfg_spw_tolerance;
-  input [23:0] regs__cfg_timeout_limit;
   wire [23:0] regs__cfg_timeout_limit;
-  input [1:0] regs__cfg_w0_crc;
+  (* enum_base_type = "Crc" *)
+  (* enum_value_00 = "NONE" *)
+  (* enum_value_01 = "CRC6" *)
+  (* enum_value_10 = "CRC16" *)
   wire [1:0] regs__cfg_w0_crc;
-  input [5:0] regs__cfg_w0_data_bits;
   wire [5:0] regs__cfg_w0_data_bits;
-  input regs__cfg_w0_lc;
   wire regs__cfg_w0_lc;
-  input regs__cfg_w0_nenw;
   wire regs__cfg_w0_nenw;
-  input [1:0] regs__cfg_w1_crc;
+  (* enum_base_type = "Crc" *)
+  (* enum_value_00 = "NONE" *)
+  (* enum_value_01 = "CRC6" *)
+  (* enum_value_10 = "CRC16" *)
   wire [1:0] regs__cfg_w1_crc;
-  input [5:0] regs__cfg_w1_data_bits;
   wire [5:0] regs__cfg_w1_data_bits;
-  input regs__cfg_w1_enable;
   wire regs__cfg_w1_enable;
-  input regs__cfg_w1_lc;
   wire regs__cfg_w1_lc;
-  input regs__cfg_w1_nenw;
   wire regs__cfg_w1_nenw;
   wire regs__clear_counters;
   output regs__config_error;
@@ -16321,7 +15977,6 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_
   wire regs__lc_skip;
   wire regs__lc_zero;
   wire [12:0] regs__line_delay;
-  input regs__periodic;
   wire regs__periodic;
   wire regs__spw_mismatch;
   wire regs__start;
@@ -16373,58 +16028,12 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_
   wire word1_ne;
   wire word1_nw;
   wire [39:0] word1_position;
+  assign \$2  = regs__done_count + 1'h1;
+  always @(posedge clk)
+    regs__done_count <= \$3 ;
   assign \$1  = ~ valid;
   assign regs__frame_error = regs__done & \$1 ;
   assign trigger = \trigger$161  & regs__trigger_enable;
-  assign \$2  = regs__done_count + 1'h1;
-  always @(posedge clk)
-    periodic <= \$3 ;
-  always @(posedge clk)
-    cfg_ma_half_period <= \$4 ;
-  always @(posedge clk)
-    cfg_delay_limit <= \$5 ;
-  always @(posedge clk)
-    cfg_request_period <= \$6 ;
-  always @(posedge clk)
-    cfg_break_time <= \$7 ;
-  always @(posedge clk)
-    cfg_ack_limit <= \$8 ;
-  always @(posedge clk)
-    cfg_timeout_limit <= \$9 ;
-  always @(posedge clk)
-    cfg_w0_data_bits <= \$10 ;
-  always @(posedge clk)
-    cfg_w0_nenw <= \$11 ;
-  always @(posedge clk)
-    cfg_w0_lc <= \$12 ;
-  always @(posedge clk)
-    cfg_w0_crc <= \$13 ;
-  always @(posedge clk)
-    cfg_w1_data_bits <= \$14 ;
-  always @(posedge clk)
-    cfg_w1_nenw <= \$15 ;
-  always @(posedge clk)
-    cfg_w1_lc <= \$16 ;
-  always @(posedge clk)
-    cfg_w1_crc <= \$17 ;
-  always @(posedge clk)
-    cfg_w1_enable <= \$18 ;
-  always @(posedge clk)
-    cfg_end_check <= \$19 ;
-  always @(posedge clk)
-    cfg_spw_check <= \$20 ;
-  always @(posedge clk)
-    cfg_spw_tolerance <= \$21 ;
-  always @(posedge clk)
-    ca_slave_id <= \$22 ;
-  always @(posedge clk)
-    ca_address <= \$23 ;
-  always @(posedge clk)
-    ca_count <= \$24 ;
-  always @(posedge clk)
-    ca_write <= \$25 ;
-  always @(posedge clk)
-    regs__done_count <= \$26 ;
   \biss_master_axil.ch1.core  core (
     .abort(abort_cycle),
     .\abort$187 (ca_abort),
@@ -16459,15 +16068,15 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_
     .\clear$214 (clear_counters),
     .clk(clk),
     .config_error(regs__config_error),
-    .counts(\$28 ),
+    .counts(\$5 ),
     .\done$240 (regs__done),
     .frames(regs__ca_busy),
     .ma(ma),
     .\periodic$24 (periodic),
     .rbuf_addr(ca_rbuf_addr),
     .rbuf_en(ca_rbuf_en),
-    .result(\$29 ),
-    .\result$245 (\$27 ),
+    .result(\$6 ),
+    .\result$245 (\$4 ),
     .rst(rst),
     .slo(slo),
     .start(start),
@@ -16477,179 +16086,18 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
-    \$3  = regs__periodic;
-    if (rst) begin
-      \$3  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
-    \$4  = regs__cfg_ma_half_period;
-    if (rst) begin
-      \$4  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
-    \$5  = regs__cfg_delay_limit;
-    if (rst) begin
-      \$5  = 12'h000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
-    \$6  = regs__cfg_request_period;
-    if (rst) begin
-      \$6  = 24'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
-    \$7  = regs__cfg_break_time;
-    if (rst) begin
-      \$7  = 24'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
-    \$8  = regs__cfg_ack_limit;
-    if (rst) begin
-      \$8  = 24'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
-    \$9  = regs__cfg_timeout_limit;
-    if (rst) begin
-      \$9  = 24'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
-    \$10  = regs__cfg_w0_data_bits;
-    if (rst) begin
-      \$10  = 6'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
-    \$11  = regs__cfg_w0_nenw;
-    if (rst) begin
-      \$11  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
-    \$12  = regs__cfg_w0_lc;
-    if (rst) begin
-      \$12  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
-    \$13  = regs__cfg_w0_crc;
-    if (rst) begin
-      \$13  = 2'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
-    \$14  = regs__cfg_w1_data_bits;
-    if (rst) begin
-      \$14  = 6'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
-    \$15  = regs__cfg_w1_nenw;
-    if (rst) begin
-      \$15  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
-    \$16  = regs__cfg_w1_lc;
-    if (rst) begin
-      \$16  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
-    \$17  = regs__cfg_w1_crc;
-    if (rst) begin
-      \$17  = 2'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
-    \$18  = regs__cfg_w1_enable;
-    if (rst) begin
-      \$18  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
-    \$19  = regs__cfg_end_check;
-    if (rst) begin
-      \$19  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
-    \$20  = regs__cfg_spw_check;
-    if (rst) begin
-      \$20  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
-    \$21  = regs__cfg_spw_tolerance;
-    if (rst) begin
-      \$21  = 8'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
-    \$22  = regs__ca_slave_id;
-    if (rst) begin
-      \$22  = 3'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
-    \$23  = regs__ca_address;
-    if (rst) begin
-      \$23  = 7'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
-    \$24  = regs__ca_count;
-    if (rst) begin
-      \$24  = 7'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
-    \$25  = regs__ca_write;
-    if (rst) begin
-      \$25  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
-    \$26  = regs__done_count;
+    \$3  = regs__done_count;
     if (regs__done) begin
-      \$26  = \$2 [15:0];
+      \$3  = \$2 [15:0];
     end
     if (rst) begin
-      \$26  = 16'h0000;
+      \$3  = 16'h0000;
     end
   end
   assign regs__start = start;
   assign regs__abort_cycle = abort_cycle;
   assign regs__clear_counters = clear_counters;
-  assign periodic_local = periodic;
+  assign regs__periodic = periodic;
   assign busy = regs__busy;
   assign config_error = regs__config_error;
   assign regs__cap_data_bits_w0 = 6'h37;
@@ -16660,105 +16108,105 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_
   assign regs__cap_register_access = 1'h1;
   assign done = regs__done;
   assign ca_done = regs__ca_done;
-  assign cfg_ma_half_period_local = cfg_ma_half_period;
-  assign cfg_delay_limit_local = cfg_delay_limit;
-  assign cfg_request_period_local = cfg_request_period;
-  assign cfg_break_time_local = cfg_break_time;
-  assign cfg_ack_limit_local = cfg_ack_limit;
-  assign cfg_timeout_limit_local = cfg_timeout_limit;
-  assign cfg_w0_data_bits_local = cfg_w0_data_bits;
-  assign cfg_w0_nenw_local = cfg_w0_nenw;
-  assign cfg_w0_lc_local = cfg_w0_lc;
-  assign cfg_w0_crc_local = cfg_w0_crc;
-  assign cfg_w1_data_bits_local = cfg_w1_data_bits;
-  assign cfg_w1_nenw_local = cfg_w1_nenw;
-  assign cfg_w1_lc_local = cfg_w1_lc;
-  assign cfg_w1_crc_local = cfg_w1_crc;
-  assign cfg_w1_enable_local = cfg_w1_enable;
-  assign cfg_end_check_local = cfg_end_check;
-  assign cfg_spw_check_local = cfg_spw_check;
-  assign cfg_spw_tolerance_local = cfg_spw_tolerance;
-  assign regs__status = \$27 [3:0];
-  assign status = \$27 [3:0];
-  assign regs__cds = \$27 [49];
-  assign cds = \$27 [49];
-  assign regs__word0_ne = \$27 [105];
-  assign word0_ne = \$27 [105];
-  assign regs__word0_nw = \$27 [106];
-  assign word0_nw = \$27 [106];
-  assign regs__word0_crc_ok = \$27 [107];
-  assign word0_crc_ok = \$27 [107];
-  assign regs__word1_ne = \$27 [148];
-  assign word1_ne = \$27 [148];
-  assign regs__word1_nw = \$27 [149];
-  assign word1_nw = \$27 [149];
-  assign regs__word1_crc_ok = \$27 [150];
-  assign word1_crc_ok = \$27 [150];
-  assign regs__lc_repeat = \$27 [157];
-  assign lc_repeat = \$27 [157];
-  assign regs__lc_skip = \$27 [158];
-  assign lc_skip = \$27 [158];
-  assign regs__lc_zero = \$27 [159];
-  assign lc_zero = \$27 [159];
-  assign regs__spw_mismatch = \$27 [160];
-  assign spw_mismatch = \$27 [160];
-  assign regs__lc = \$27 [156:151];
-  assign lc = \$27 [156:151];
-  assign regs__line_delay = \$27 [48:36];
-  assign line_delay = \$27 [48:36];
-  assign regs__word0_position = \$27 [104:50];
-  assign word0_position = \$27 [104:50];
-  assign regs__word1_position = \$27 [147:108];
-  assign word1_position = \$27 [147:108];
-  assign regs__timestamp = \$27 [35:4];
-  assign timestamp = \$27 [35:4];
-  assign regs__count_crc_word0 = \$28 [15:0];
-  assign count_crc_word0 = \$28 [15:0];
-  assign regs__count_crc_word1 = \$28 [31:16];
-  assign count_crc_word1 = \$28 [31:16];
-  assign regs__count_no_ack = \$28 [47:32];
-  assign count_no_ack = \$28 [47:32];
-  assign regs__count_no_start = \$28 [63:48];
-  assign count_no_start = \$28 [63:48];
-  assign regs__count_delay_range = \$28 [79:64];
-  assign count_delay_range = \$28 [79:64];
-  assign regs__count_slo_stuck_low = \$28 [95:80];
-  assign count_slo_stuck_low = \$28 [95:80];
-  assign regs__count_lc_repeat = \$28 [111:96];
-  assign count_lc_repeat = \$28 [111:96];
-  assign regs__count_lc_skip = \$28 [127:112];
-  assign count_lc_skip = \$28 [127:112];
-  assign regs__count_lc_zero = \$28 [143:128];
-  assign count_lc_zero = \$28 [143:128];
-  assign regs__count_spw_mismatch = \$28 [159:144];
-  assign count_spw_mismatch = \$28 [159:144];
-  assign regs__count_overrun = \$28 [175:160];
-  assign count_overrun = \$28 [175:160];
-  assign regs__count_aborted = \$28 [191:176];
-  assign count_aborted = \$28 [191:176];
-  assign regs__count_no_stop = \$28 [207:192];
-  assign count_no_stop = \$28 [207:192];
-  assign ca_slave_id_local = ca_slave_id;
-  assign ca_address_local = ca_address;
-  assign ca_count_local = ca_count;
-  assign ca_write_local = ca_write;
+  assign regs__cfg_ma_half_period = cfg_ma_half_period;
+  assign regs__cfg_delay_limit = cfg_delay_limit;
+  assign regs__cfg_request_period = cfg_request_period;
+  assign regs__cfg_break_time = cfg_break_time;
+  assign regs__cfg_ack_limit = cfg_ack_limit;
+  assign regs__cfg_timeout_limit = cfg_timeout_limit;
+  assign regs__cfg_w0_data_bits = cfg_w0_data_bits;
+  assign regs__cfg_w0_nenw = cfg_w0_nenw;
+  assign regs__cfg_w0_lc = cfg_w0_lc;
+  assign regs__cfg_w0_crc = cfg_w0_crc;
+  assign regs__cfg_w1_data_bits = cfg_w1_data_bits;
+  assign regs__cfg_w1_nenw = cfg_w1_nenw;
+  assign regs__cfg_w1_lc = cfg_w1_lc;
+  assign regs__cfg_w1_crc = cfg_w1_crc;
+  assign regs__cfg_w1_enable = cfg_w1_enable;
+  assign regs__cfg_end_check = cfg_end_check;
+  assign regs__cfg_spw_check = cfg_spw_check;
+  assign regs__cfg_spw_tolerance = cfg_spw_tolerance;
+  assign regs__status = \$4 [3:0];
+  assign status = \$4 [3:0];
+  assign regs__cds = \$4 [49];
+  assign cds = \$4 [49];
+  assign regs__word0_ne = \$4 [105];
+  assign word0_ne = \$4 [105];
+  assign regs__word0_nw = \$4 [106];
+  assign word0_nw = \$4 [106];
+  assign regs__word0_crc_ok = \$4 [107];
+  assign word0_crc_ok = \$4 [107];
+  assign regs__word1_ne = \$4 [148];
+  assign word1_ne = \$4 [148];
+  assign regs__word1_nw = \$4 [149];
+  assign word1_nw = \$4 [149];
+  assign regs__word1_crc_ok = \$4 [150];
+  assign word1_crc_ok = \$4 [150];
+  assign regs__lc_repeat = \$4 [157];
+  assign lc_repeat = \$4 [157];
+  assign regs__lc_skip = \$4 [158];
+  assign lc_skip = \$4 [158];
+  assign regs__lc_zero = \$4 [159];
+  assign lc_zero = \$4 [159];
+  assign regs__spw_mismatch = \$4 [160];
+  assign spw_mismatch = \$4 [160];
+  assign regs__lc = \$4 [156:151];
+  assign lc = \$4 [156:151];
+  assign regs__line_delay = \$4 [48:36];
+  assign line_delay = \$4 [48:36];
+  assign regs__word0_position = \$4 [104:50];
+  assign word0_position = \$4 [104:50];
+  assign regs__word1_position = \$4 [147:108];
+  assign word1_position = \$4 [147:108];
+  assign regs__timestamp = \$4 [35:4];
+  assign timestamp = \$4 [35:4];
+  assign regs__count_crc_word0 = \$5 [15:0];
+  assign count_crc_word0 = \$5 [15:0];
+  assign regs__count_crc_word1 = \$5 [31:16];
+  assign count_crc_word1 = \$5 [31:16];
+  assign regs__count_no_ack = \$5 [47:32];
+  assign count_no_ack = \$5 [47:32];
+  assign regs__count_no_start = \$5 [63:48];
+  assign count_no_start = \$5 [63:48];
+  assign regs__count_delay_range = \$5 [79:64];
+  assign count_delay_range = \$5 [79:64];
+  assign regs__count_slo_stuck_low = \$5 [95:80];
+  assign count_slo_stuck_low = \$5 [95:80];
+  assign regs__count_lc_repeat = \$5 [111:96];
+  assign count_lc_repeat = \$5 [111:96];
+  assign regs__count_lc_skip = \$5 [127:112];
+  assign count_lc_skip = \$5 [127:112];
+  assign regs__count_lc_zero = \$5 [143:128];
+  assign count_lc_zero = \$5 [143:128];
+  assign regs__count_spw_mismatch = \$5 [159:144];
+  assign count_spw_mismatch = \$5 [159:144];
+  assign regs__count_overrun = \$5 [175:160];
+  assign count_overrun = \$5 [175:160];
+  assign regs__count_aborted = \$5 [191:176];
+  assign count_aborted = \$5 [191:176];
+  assign regs__count_no_stop = \$5 [207:192];
+  assign count_no_stop = \$5 [207:192];
+  assign regs__ca_slave_id = ca_slave_id;
+  assign regs__ca_address = ca_address;
+  assign regs__ca_count = ca_count;
+  assign regs__ca_write = ca_write;
   assign regs__ca_start = ca_start;
   assign regs__ca_abort = ca_abort;
   assign ca_busy = regs__ca_busy;
-  assign regs__ca_status = \$29 [2:0];
-  assign ca_status = \$29 [2:0];
-  assign regs__ca_bytes_done = \$29 [9:3];
-  assign ca_bytes_done = \$29 [9:3];
-  assign regs__count_ca_crc4_error = \$28 [223:208];
-  assign count_ca_crc4_error = \$28 [223:208];
-  assign regs__count_ca_no_answer = \$28 [239:224];
-  assign count_ca_no_answer = \$28 [239:224];
-  assign regs__count_ca_refused = \$28 [255:240];
-  assign count_ca_refused = \$28 [255:240];
-  assign regs__count_ca_aborted = \$28 [271:256];
-  assign count_ca_aborted = \$28 [271:256];
-  assign regs__count_ca_data_fault = \$28 [287:272];
-  assign count_ca_data_fault = \$28 [287:272];
+  assign regs__ca_status = \$6 [2:0];
+  assign ca_status = \$6 [2:0];
+  assign regs__ca_bytes_done = \$6 [9:3];
+  assign ca_bytes_done = \$6 [9:3];
+  assign regs__count_ca_crc4_error = \$5 [223:208];
+  assign count_ca_crc4_error = \$5 [223:208];
+  assign regs__count_ca_no_answer = \$5 [239:224];
+  assign count_ca_no_answer = \$5 [239:224];
+  assign regs__count_ca_refused = \$5 [255:240];
+  assign count_ca_refused = \$5 [255:240];
+  assign regs__count_ca_aborted = \$5 [271:256];
+  assign count_ca_aborted = \$5 [271:256];
+  assign regs__count_ca_data_fault = \$5 [287:272];
+  assign count_ca_data_fault = \$5 [287:272];
   assign regs__ca_wbuf_addr = ca_wbuf_addr;
   assign regs__ca_wbuf_data = ca_wbuf_data;
   assign regs__ca_wbuf_en = ca_wbuf_en;
@@ -16767,14 +16215,14 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_
   assign regs__ca_rbuf_en = ca_rbuf_en;
   assign \ma$164  = ma;
   assign \slo$166  = slo;
-  assign \port$4806$0  = \$27 ;
-  assign \port$4813$0  = \$28 ;
-  assign \port$4927$0  = \$29 ;
+  assign \port$4714$0  = \$4 ;
+  assign \port$4721$0  = \$5 ;
+  assign \port$4835$0  = \$6 ;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy$237 , config_error, frames, ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, abort, \clear$214 , \start$185 , \abort$187 , \periodic$24 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period
-, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, ma, \done$240 
+module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy$237 , config_error, frames, ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, abort, \clear$214 , \periodic$24 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit
+, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, \start$185 , \abort$187 , ma, \done$240 
 , \valid$242 , \result$245 , counts, ca_done, result, rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$71  = 0;
   wire \$1 ;
@@ -17621,7 +17069,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$4547$0 (\bit ),
+    .\port$4455$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -25538,7 +24986,7 @@ module \biss_master_axil.ch1.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$4547$0 , resync, lc, is_zero, clk);
+module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$4455$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$107  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -25576,8 +25024,8 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$4547$0 ;
-  wire \port$4547$0 ;
+  input \port$4455$0 ;
+  wire \port$4455$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -25589,9 +25037,9 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$4547$0  };
-  assign \$2  = { lc[4:0], \port$4547$0  } == last;
-  assign \$3  = { lc[4:0], \port$4547$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$4455$0  };
+  assign \$2  = { lc[4:0], \port$4455$0  } == last;
+  assign \$3  = { lc[4:0], \port$4455$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = lc == 6'h3f;
@@ -25681,7 +25129,7 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
       \$21  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$4547$0  };
+  assign lc_next = { lc[4:0], \port$4455$0  };
   assign zero = is_zero;
 endmodule
 
