@@ -50,7 +50,9 @@ class AxiLiteAdapter(wiring.Component):
 
     Writes: the address and the data channel are taken independently (each may come first)
     into one holding register each; the write goes to the bank in the clock both are held and
-    no earlier response is waiting, and its response (OKAY) follows in the next clock. A new
+    no earlier response is waiting, and its response (OKAY) follows in the next clock, the
+    clock in which the bank's registered write acts: a read whose address comes after the
+    response sees the write. A new
     address and data can be taken while that response waits. Reads: two steps, as the bank's
     read (:class:`~bissmaster.register_bank.RegisterBus`): the address taken in a clock
     (``arvalid & arready``, the bank's ``r_en``) is pending in the next; a pending read's
@@ -116,7 +118,8 @@ class WishboneAdapter(wiring.Component):
     """Wishbone B4 slave (classic and pipelined) -> register bus.
 
     A request (``cyc & stb``) is taken in a clock without ``stall``. A write is answered with
-    ``ack`` in the next clock; a read, in two steps as the bank's read
+    ``ack`` in the next clock (the clock in which the bank's registered write acts, so the
+    next request, taken after the ``ack``, sees it); a read, in two steps as the bank's read
     (:class:`~bissmaster.register_bank.RegisterBus`), two clocks after it is taken (one wait
     state), with the read data. ``stall`` is high from the clock after a request is taken
     up to its ``ack`` clock: a classic master, which holds ``stb`` until ``ack``, is never

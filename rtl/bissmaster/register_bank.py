@@ -19,15 +19,18 @@ STROBES = DATA_WIDTH // 8
 class RegisterBus(wiring.Signature):
     """The bank's internal bus, as the initiator (a bus adapter) sees it.
 
-    Word addresses. A write happens in the clock ``w_en`` is high, byte lanes chosen by
-    ``w_strb``. A read takes two steps, so that the address decode and the word select each
-    have a clock of their own. ``r_en`` high in one clock: the register is read in that clock
-    (its value then, and a read with side effects, the snapshot, acts then). ``r_load`` high
-    in a later clock, at the latest the clock of the next ``r_en``: ``r_data`` holds the
-    word read from the next clock until the clock after the next ``r_load``. So reads run one
-    per clock (each ``r_load`` with the next ``r_en``), and the initiator can hold a word
-    while the next read waits in the first step. A read and a write may come in the same
-    clock; the read sees the value before the write.
+    Word addresses. A write is issued by ``w_en`` high for one clock, byte lanes chosen by
+    ``w_strb``; the bank registers it and it acts in the next clock (its registers hold the
+    new value from the second clock after ``w_en``). A read takes two steps, so that the
+    address decode and the word select each have a clock of their own. ``r_en`` high in one
+    clock: the address is decoded into a one-hot select, and a read with side effects (the
+    snapshot, a window's read enable) acts then. ``r_load`` high in a later clock, at the
+    latest the clock of the next ``r_en``: the selected register's value in that clock goes
+    to ``r_data``, which holds it from the next clock until the clock after the next
+    ``r_load``. So reads run one per clock (each ``r_load`` with the next ``r_en``), and the
+    initiator can hold a word while the next read waits in the first step. A read and a write
+    may come in the same clock; they are not ordered: the read returns the value of its
+    ``r_load`` clock, the one before the write when ``r_load`` follows ``r_en`` at once.
     """
 
     def __init__(self, addr_width):
@@ -72,11 +75,14 @@ class RegisterBank(wiring.Component):
     the memory's registered read port in the ``r_en`` clock, and its data goes to ``r_data``
     at ``r_load``, as a register's word does (the port must hold it until its next read).
 
-    The read path is two register stages (:class:`RegisterBus`): at ``r_en`` each block (the
-    globals, each channel) registers the word of its register addressed, or 0 when the address
-    is not one of its registers; at ``r_load`` ``r_data`` registers the OR of the blocks'
-    words and the data of a window read. CONFIG fields are written lane by lane, each byte
-    lane's strobe the enable of its flip-flops.
+    Writes: the request (``w_en``, address, data, strobes) is registered, and every write
+    decodes from those flip-flops in the next clock. CONFIG fields are written lane by lane,
+    each byte lane's strobe the enable of its flip-flops. The read path is two register
+    stages (:class:`RegisterBus`): at ``r_en`` one select flip-flop per register (and per
+    read window) registers whether the address is the register's; at ``r_load`` ``r_data``
+    registers the AND-OR of the registers' words with their selects and the data of a window
+    read. A snapshot group's registers all read the copy taken at ``r_en``, so the word read
+    at ``r_load`` is the one of the snapshot.
 
     Attributes
     ----------
@@ -109,7 +115,18 @@ class RegisterBank(wiring.Component):
         blocks = [(self.glob, 0, rm.globals, "g")]
         blocks += [(getattr(self, f"ch{n}"), rm.channel_base + n * rm.channel_stride,
                     rm.channel, f"ch{n}") for n in range(self.channels)]
-        block_words = []               # per block: the register stage of its read word
+        # The write request, registered: every write decodes from these flip-flops, in the
+        # clock after w_en, so that no path runs from the bus through the decode.
+        bus = self.bus
+        self._w_en = Signal(name="write_en")
+        self._w_addr = Signal.like(bus.w_addr, name="write_addr")
+        self._w_data = Signal.like(bus.w_data, name="write_data")
+        self._w_strb = Signal.like(bus.w_strb, name="write_strb")
+        m.d.sync += self._w_en.eq(bus.w_en)
+        with m.If(bus.w_en):
+            m.d.sync += [self._w_addr.eq(bus.w_addr), self._w_data.eq(bus.w_data),
+                         self._w_strb.eq(bus.w_strb)]
+        selected = []                  # (select flip-flop, read value) of every register
         windows = []                   # (read, data) of every read window
         irqs = []
         for port, base, registers, prefix in blocks:
@@ -117,23 +134,23 @@ class RegisterBank(wiring.Component):
             irq = self._block(m, port, base, registers, prefix, read_words, windows)
             if prefix != "g":
                 irqs.append(irq)
-            block_words.append(self._read_stage(m, prefix, read_words))
+            selected += self._read_select(m, prefix, read_words)
         # Whole signals, never bit by bit: Icarus runs a combinational block written per bit
         # only once an input changes, and would read X until then.
         m.d.comb += self.irq.eq(Cat(irqs))
 
-        # Read stage 2: the blocks' words (all 0 but the addressed one's) and the registered
-        # data of the window that was read, loaded on r_load.
+        # Read stage 2: the word of the register selected (a one-hot AND-OR over the whole
+        # bank; 0 when none is) or the registered data of the window that was read, loaded
+        # on r_load.
         data = Signal(DATA_WIDTH, name="read_data")
-        chosen_data = []
         for n, (read, window_data) in enumerate(windows):
             chosen = Signal(name=f"window{n}_read")
             with m.If(self.bus.r_en):
                 m.d.sync += chosen.eq(read)
-            chosen_data.append(Mux(chosen, window_data, 0))
+            selected.append((chosen, window_data))
         merged = 0
-        for value in block_words + chosen_data:
-            merged = merged | value
+        for chosen, value in selected:
+            merged = merged | Mux(chosen, value, 0)
         with m.If(self.bus.r_load):
             m.d.sync += data.eq(merged)
         m.d.comb += self.bus.r_data.eq(data)
@@ -143,6 +160,7 @@ class RegisterBank(wiring.Component):
         """One block (the globals or a channel): storage, pulses, interrupts, snapshots,
         windows and its read words. Returns the block's interrupt request."""
         bus = self.bus
+        w_en, w_addr, w_data, w_strb = self._w_en, self._w_addr, self._w_data, self._w_strb
         storage = {}                   # "register.field" -> the Signal that holds it
         irq_terms = []
         snapshots = {}                 # group -> [(field, live value, copy)]
@@ -154,20 +172,20 @@ class RegisterBank(wiring.Component):
                 continue
             write = Signal(name=f"{prefix}_{reg.path.replace('.', '_')}_write")
             read = Signal(name=f"{prefix}_{reg.path.replace('.', '_')}_read")
-            m.d.comb += [write.eq(bus.w_en & (bus.w_addr == word)),
+            m.d.comb += [write.eq(w_en & (w_addr == word)),
                          read.eq(bus.r_en & (bus.r_addr == word))]
             parts = []                 # (lsb, the field's read value)
             for f in reg.fields:
                 name = f"{prefix}_{reg.path.replace('.', '_')}_{f.name}"
-                data = bus.w_data[f.lsb:f.lsb + f.width]
+                data = w_data[f.lsb:f.lsb + f.width]
                 # Bit i of the field is written only if its byte lane's strobe is set.
-                lanes = Cat(bus.w_strb[(f.lsb + i) // 8] for i in range(f.width))
+                lanes = Cat(w_strb[(f.lsb + i) // 8] for i in range(f.width))
                 if f.kind == Kind.CONFIG:
                     reg_bits = Signal(f.width, init=f.reset, name=name)
                     storage[f"{reg.path}.{f.name}"] = reg_bits
                     # Lane by lane: each lane's strobe enables its flip-flops, no logic per bit.
                     for lo, hi, lane in self._lanes(f):
-                        with m.If(write & bus.w_strb[lane]):
+                        with m.If(write & w_strb[lane]):
                             m.d.sync += reg_bits[lo:hi].eq(data[lo:hi])
                     parts.append((f.lsb, reg_bits))
                     if f.signal:
@@ -198,8 +216,9 @@ class RegisterBank(wiring.Component):
                     else:
                         copy = Signal(f.width, init=f.reset, name=f"{name}_snapshot")
                         snapshots.setdefault(reg.snapshot, []).append(copy.eq(live))
-                        # The register that takes the snapshot reads the live value itself.
-                        parts.append((f.lsb, live if reg.takes_snapshot else copy))
+                        # Every register of the group reads the copy, the one that takes
+                        # the snapshot too: the copy is taken at r_en, the word read later.
+                        parts.append((f.lsb, copy))
             if reg.takes_snapshot:
                 take[reg.snapshot] = read
             read_words[word] = self._word(parts)
@@ -212,22 +231,21 @@ class RegisterBank(wiring.Component):
                                for status, enable in irq_terms if enable).any())
         return irq
 
-    def _read_stage(self, m, prefix, read_words):
-        """Read stage 1 of one block: at ``r_en``, the word of the register addressed, or 0
-        when no register of the block is. Returns the register.
+    def _read_select(self, m, prefix, read_words):
+        """Read stage 1 of one block: at ``r_en``, one flip-flop per register, set when the
+        address is the register's (all clear when no register is addressed). Returns
+        ``[(select, read value)]``: stage 2 reads the value of the register selected.
 
-        A switch on the whole address, one case per register: Yosys maps it as a one-hot
-        AND-OR; a switch on the address bits inside the block becomes a binary multiplexer
-        tree twice as large (ECP5: 1263 against 720 LUT4 for one channel's bank)."""
-        word = Signal(DATA_WIDTH, name=f"{prefix}_read_word")
-        with m.If(self.bus.r_en):
-            with m.Switch(self.bus.r_addr):
-                for addr, value in read_words.items():
-                    with m.Case(addr):
-                        m.d.sync += word.eq(value)
-                with m.Default():
-                    m.d.sync += word.eq(0)
-        return word
+        One-hot selects and an AND-OR, not a switch on the address: Yosys maps a switch on the
+        address bits inside the block as a binary multiplexer tree twice as large, and the
+        decode then sits in the same clock as the AND-OR."""
+        pairs = []
+        for addr, value in read_words.items():
+            select = Signal(name=f"{prefix}_read_select_{addr:x}")
+            with m.If(self.bus.r_en):
+                m.d.sync += select.eq(self.bus.r_addr == addr)
+            pairs.append((select, value))
+        return pairs
 
     def _window(self, m, port, word, reg, windows):
         """A window: the bus's word address inside it, its strobes or read enable, its data."""
@@ -238,9 +256,9 @@ class RegisterBank(wiring.Component):
                              f"aligned to its size")
         ports = {name[len(reg.window) + 1:]: getattr(port, name) for name in reg.window_ports}
         if reg.writable:
-            hit = bus.w_en & (bus.w_addr[bits:] == word >> bits)
-            m.d.comb += [ports["addr"].eq(bus.w_addr[:bits]), ports["data"].eq(bus.w_data),
-                         ports["en"].eq(Mux(hit, bus.w_strb, 0))]
+            hit = self._w_en & (self._w_addr[bits:] == word >> bits)
+            m.d.comb += [ports["addr"].eq(self._w_addr[:bits]), ports["data"].eq(self._w_data),
+                         ports["en"].eq(Mux(hit, self._w_strb, 0))]
         else:
             hit = bus.r_en & (bus.r_addr[bits:] == word >> bits)
             m.d.comb += [ports["addr"].eq(bus.r_addr[:bits]), ports["en"].eq(hit)]

@@ -479,102 +479,104 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     irq <= \$5 ;
   \biss_master_axil.bank  bank (
     .bus__r_addr(s_axil_araddr[12:2]),
-    .bus__r_data(s_axil_rdata),
     .bus__r_en(bus__r_en),
     .bus__r_load(bus__r_load),
     .bus__w_addr(bus__w_addr),
+    .bus__w_data(bus__w_data),
     .bus__w_en(bus__w_en),
     .bus__w_strb(bus__w_strb),
-    .ch0__abort_cycle(regs__abort_cycle),
     .ch0__busy(ch0__busy),
-    .ch0__ca_abort(regs__ca_abort),
-    .ch0__ca_address(regs__ca_address),
     .ch0__ca_busy(ch0__ca_busy),
-    .ch0__ca_count(regs__ca_count),
     .ch0__ca_done(ch0__ca_done),
     .ch0__ca_rbuf_data(ch0__ca_rbuf_data),
     .ch0__ca_rbuf_en(regs__ca_rbuf_en),
-    .ch0__ca_slave_id(regs__ca_slave_id),
-    .ch0__ca_start(regs__ca_start),
-    .ch0__ca_wbuf_data(bus__w_data),
+    .ch0__ca_wbuf_addr(regs__ca_wbuf_addr),
     .ch0__ca_wbuf_en(regs__ca_wbuf_en),
-    .ch0__ca_write(regs__ca_write),
-    .ch0__cfg_ack_limit(regs__cfg_ack_limit),
-    .ch0__cfg_break_time(regs__cfg_break_time),
-    .ch0__cfg_delay_limit(regs__cfg_delay_limit),
-    .ch0__cfg_end_check(regs__cfg_end_check),
-    .ch0__cfg_ma_half_period(regs__cfg_ma_half_period),
-    .ch0__cfg_request_period(regs__cfg_request_period),
-    .ch0__cfg_spw_check(regs__cfg_spw_check),
-    .ch0__cfg_spw_tolerance(regs__cfg_spw_tolerance),
-    .ch0__cfg_timeout_limit(regs__cfg_timeout_limit),
-    .ch0__cfg_w0_crc(regs__cfg_w0_crc),
-    .ch0__cfg_w0_data_bits(regs__cfg_w0_data_bits),
-    .ch0__cfg_w0_lc(regs__cfg_w0_lc),
-    .ch0__cfg_w0_nenw(regs__cfg_w0_nenw),
-    .ch0__cfg_w1_crc(regs__cfg_w1_crc),
-    .ch0__cfg_w1_data_bits(regs__cfg_w1_data_bits),
-    .ch0__cfg_w1_enable(regs__cfg_w1_enable),
-    .ch0__cfg_w1_lc(regs__cfg_w1_lc),
-    .ch0__cfg_w1_nenw(regs__cfg_w1_nenw),
-    .ch0__clear_counters(regs__clear_counters),
     .ch0__config_error(ch0__config_error),
     .ch0__done(ch0__done),
     .ch0__done_count(ch0__done_count),
     .ch0__frame_error(ch0__frame_error),
-    .ch0__periodic(regs__periodic),
-    .ch0__start(regs__start),
-    .ch0__trigger_enable(regs__trigger_enable),
+    .ch0_ca_ctrl_abort(regs__ca_abort),
+    .ch0_ca_ctrl_start(regs__ca_start),
+    .ch0_ca_request_address(regs__ca_address),
+    .ch0_ca_request_count(regs__ca_count),
+    .ch0_ca_request_slave_id(regs__ca_slave_id),
+    .\ch0_ca_request_write$65 (regs__ca_write),
+    .ch0_cfg_ack_ack_limit(regs__cfg_ack_limit),
+    .ch0_cfg_break_break_time(regs__cfg_break_time),
+    .ch0_cfg_checks_end_check(regs__cfg_end_check),
+    .ch0_cfg_checks_spw_check(regs__cfg_spw_check),
+    .ch0_cfg_checks_spw_tolerance(regs__cfg_spw_tolerance),
+    .ch0_cfg_ma_delay_limit(regs__cfg_delay_limit),
+    .ch0_cfg_ma_ma_half_period(regs__cfg_ma_half_period),
+    .ch0_cfg_period_request_period(regs__cfg_request_period),
+    .ch0_cfg_timeout_timeout_limit(regs__cfg_timeout_limit),
+    .ch0_cfg_words_w0_crc(regs__cfg_w0_crc),
+    .ch0_cfg_words_w0_data_bits(regs__cfg_w0_data_bits),
+    .ch0_cfg_words_w0_lc(regs__cfg_w0_lc),
+    .ch0_cfg_words_w0_nenw(regs__cfg_w0_nenw),
+    .ch0_cfg_words_w1_crc(regs__cfg_w1_crc),
+    .ch0_cfg_words_w1_data_bits(regs__cfg_w1_data_bits),
+    .ch0_cfg_words_w1_enable(regs__cfg_w1_enable),
+    .ch0_cfg_words_w1_lc(regs__cfg_w1_lc),
+    .ch0_cfg_words_w1_nenw(regs__cfg_w1_nenw),
+    .ch0_ctrl_abort(regs__abort_cycle),
+    .ch0_ctrl_clear_counters(regs__clear_counters),
+    .ch0_ctrl_periodic(regs__periodic),
+    .ch0_ctrl_start(regs__start),
+    .ch0_ctrl_trigger_enable(regs__trigger_enable),
     .ch0_irq(\$6 ),
-    .ch1__abort_cycle(\regs__abort_cycle$234 ),
     .ch1__busy(ch1__busy),
-    .ch1__ca_abort(\regs__ca_abort$238 ),
-    .ch1__ca_address(\regs__ca_address$240 ),
     .ch1__ca_busy(ch1__ca_busy),
-    .ch1__ca_count(\regs__ca_count$246 ),
     .ch1__ca_done(ch1__ca_done),
     .ch1__ca_rbuf_data(ch1__ca_rbuf_data),
     .ch1__ca_rbuf_en(\regs__ca_rbuf_en$254 ),
-    .ch1__ca_slave_id(\regs__ca_slave_id$256 ),
-    .ch1__ca_start(\regs__ca_start$258 ),
     .ch1__ca_wbuf_en(\regs__ca_wbuf_en$266 ),
-    .ch1__ca_write(\regs__ca_write$268 ),
-    .ch1__cfg_ack_limit(\regs__cfg_ack_limit$284 ),
-    .ch1__cfg_break_time(\regs__cfg_break_time$286 ),
-    .ch1__cfg_delay_limit(\regs__cfg_delay_limit$288 ),
-    .ch1__cfg_end_check(\regs__cfg_end_check$290 ),
-    .ch1__cfg_ma_half_period(\regs__cfg_ma_half_period$292 ),
-    .ch1__cfg_request_period(\regs__cfg_request_period$294 ),
-    .ch1__cfg_spw_check(\regs__cfg_spw_check$296 ),
-    .ch1__cfg_spw_tolerance(\regs__cfg_spw_tolerance$298 ),
-    .ch1__cfg_timeout_limit(\regs__cfg_timeout_limit$300 ),
-    .ch1__cfg_w0_crc(\regs__cfg_w0_crc$302 ),
-    .ch1__cfg_w0_data_bits(\regs__cfg_w0_data_bits$304 ),
-    .ch1__cfg_w0_lc(\regs__cfg_w0_lc$306 ),
-    .ch1__cfg_w0_nenw(\regs__cfg_w0_nenw$308 ),
-    .ch1__cfg_w1_crc(\regs__cfg_w1_crc$310 ),
-    .ch1__cfg_w1_data_bits(\regs__cfg_w1_data_bits$312 ),
-    .ch1__cfg_w1_enable(\regs__cfg_w1_enable$314 ),
-    .ch1__cfg_w1_lc(\regs__cfg_w1_lc$316 ),
-    .ch1__cfg_w1_nenw(\regs__cfg_w1_nenw$318 ),
-    .ch1__clear_counters(\regs__clear_counters$320 ),
     .ch1__config_error(ch1__config_error),
     .ch1__done(ch1__done),
     .ch1__done_count(ch1__done_count),
     .ch1__frame_error(ch1__frame_error),
-    .ch1__periodic(\regs__periodic$376 ),
-    .ch1__start(\regs__start$380 ),
-    .ch1__trigger_enable(\regs__trigger_enable$386 ),
+    .ch1_ca_ctrl_abort(\regs__ca_abort$238 ),
+    .ch1_ca_ctrl_start(\regs__ca_start$258 ),
+    .ch1_ca_request_address(\regs__ca_address$240 ),
+    .ch1_ca_request_count(\regs__ca_count$246 ),
+    .ch1_ca_request_slave_id(\regs__ca_slave_id$256 ),
+    .\ch1_ca_request_write$186 (\regs__ca_write$268 ),
+    .ch1_cfg_ack_ack_limit(\regs__cfg_ack_limit$284 ),
+    .ch1_cfg_break_break_time(\regs__cfg_break_time$286 ),
+    .ch1_cfg_checks_end_check(\regs__cfg_end_check$290 ),
+    .ch1_cfg_checks_spw_check(\regs__cfg_spw_check$296 ),
+    .ch1_cfg_checks_spw_tolerance(\regs__cfg_spw_tolerance$298 ),
+    .ch1_cfg_ma_delay_limit(\regs__cfg_delay_limit$288 ),
+    .ch1_cfg_ma_ma_half_period(\regs__cfg_ma_half_period$292 ),
+    .ch1_cfg_period_request_period(\regs__cfg_request_period$294 ),
+    .ch1_cfg_timeout_timeout_limit(\regs__cfg_timeout_limit$300 ),
+    .ch1_cfg_words_w0_crc(\regs__cfg_w0_crc$302 ),
+    .ch1_cfg_words_w0_data_bits(\regs__cfg_w0_data_bits$304 ),
+    .ch1_cfg_words_w0_lc(\regs__cfg_w0_lc$306 ),
+    .ch1_cfg_words_w0_nenw(\regs__cfg_w0_nenw$308 ),
+    .ch1_cfg_words_w1_crc(\regs__cfg_w1_crc$310 ),
+    .ch1_cfg_words_w1_data_bits(\regs__cfg_w1_data_bits$312 ),
+    .ch1_cfg_words_w1_enable(\regs__cfg_w1_enable$314 ),
+    .ch1_cfg_words_w1_lc(\regs__cfg_w1_lc$316 ),
+    .ch1_cfg_words_w1_nenw(\regs__cfg_w1_nenw$318 ),
+    .ch1_ctrl_abort(\regs__abort_cycle$234 ),
+    .ch1_ctrl_clear_counters(\regs__clear_counters$320 ),
+    .ch1_ctrl_periodic(\regs__periodic$376 ),
+    .ch1_ctrl_start(\regs__start$380 ),
+    .ch1_ctrl_trigger_enable(\regs__trigger_enable$386 ),
     .ch1_irq(\$7 ),
     .clk(clk),
-    .glob__trigger(glob__trigger),
-    .\port$3984$0 (\$8 ),
-    .\port$3991$0 (\$9 ),
-    .\port$4105$0 (\$10 ),
-    .\port$4452$0 (\$11 ),
-    .\port$4459$0 (\$12 ),
-    .\port$4573$0 (\$13 ),
-    .rst(rst)
+    .g_trigger_start(glob__trigger),
+    .\port$4258$0 (\$8 ),
+    .\port$4265$0 (\$9 ),
+    .\port$4379$0 (\$10 ),
+    .\port$4726$0 (\$11 ),
+    .\port$4733$0 (\$12 ),
+    .\port$4847$0 (\$13 ),
+    .read_data(s_axil_rdata),
+    .rst(rst),
+    .write_data(regs__ca_wbuf_data)
   );
   \biss_master_axil.bus  bus (
     .axil__araddr(s_axil_araddr),
@@ -610,8 +612,8 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .ca_rbuf_en(regs__ca_rbuf_en),
     .ca_slave_id(regs__ca_slave_id),
     .ca_start(regs__ca_start),
-    .ca_wbuf_addr(bus__w_addr[3:0]),
-    .ca_wbuf_data(bus__w_data),
+    .ca_wbuf_addr(regs__ca_wbuf_addr),
+    .ca_wbuf_data(regs__ca_wbuf_data),
     .ca_wbuf_en(regs__ca_wbuf_en),
     .ca_write(regs__ca_write),
     .cfg_ack_limit(regs__cfg_ack_limit),
@@ -636,9 +638,9 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .clk(clk),
     .ma(ch0_ma),
     .periodic(regs__periodic),
-    .\port$3984$0 (\$8 ),
-    .\port$3991$0 (\$9 ),
-    .\port$4105$0 (\$10 ),
+    .\port$4258$0 (\$8 ),
+    .\port$4265$0 (\$9 ),
+    .\port$4379$0 (\$10 ),
     .regs__busy(ch0__busy),
     .regs__ca_busy(ch0__ca_busy),
     .regs__ca_done(ch0__ca_done),
@@ -662,8 +664,8 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .ca_rbuf_en(\regs__ca_rbuf_en$254 ),
     .ca_slave_id(\regs__ca_slave_id$256 ),
     .ca_start(\regs__ca_start$258 ),
-    .ca_wbuf_addr(bus__w_addr[3:0]),
-    .ca_wbuf_data(bus__w_data),
+    .ca_wbuf_addr(regs__ca_wbuf_addr),
+    .ca_wbuf_data(regs__ca_wbuf_data),
     .ca_wbuf_en(\regs__ca_wbuf_en$266 ),
     .ca_write(\regs__ca_write$268 ),
     .cfg_ack_limit(\regs__cfg_ack_limit$284 ),
@@ -688,9 +690,9 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .clk(clk),
     .ma(ch1_ma),
     .periodic(\regs__periodic$376 ),
-    .\port$4452$0 (\$11 ),
-    .\port$4459$0 (\$12 ),
-    .\port$4573$0 (\$13 ),
+    .\port$4726$0 (\$11 ),
+    .\port$4733$0 (\$12 ),
+    .\port$4847$0 (\$13 ),
     .regs__busy(ch1__busy),
     .regs__ca_busy(ch1__ca_busy),
     .regs__ca_done(ch1__ca_done),
@@ -763,10 +765,8 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
   assign ch0__ca_start = regs__ca_start;
   assign ch0__ca_status = \$10 [2:0];
   assign regs__ca_status = \$10 [2:0];
-  assign regs__ca_wbuf_addr = bus__w_addr[3:0];
-  assign ch0__ca_wbuf_addr = bus__w_addr[3:0];
-  assign regs__ca_wbuf_data = bus__w_data;
-  assign ch0__ca_wbuf_data = bus__w_data;
+  assign ch0__ca_wbuf_addr = regs__ca_wbuf_addr;
+  assign ch0__ca_wbuf_data = regs__ca_wbuf_data;
   assign ch0__ca_wbuf_en = regs__ca_wbuf_en;
   assign ch0__ca_write = regs__ca_write;
   assign ch0__cap_counters = 1'h1;
@@ -897,10 +897,10 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
   assign ch1__ca_start = \regs__ca_start$258 ;
   assign ch1__ca_status = \$13 [2:0];
   assign \regs__ca_status$261  = \$13 [2:0];
-  assign \regs__ca_wbuf_addr$262  = bus__w_addr[3:0];
-  assign ch1__ca_wbuf_addr = bus__w_addr[3:0];
-  assign \regs__ca_wbuf_data$264  = bus__w_data;
-  assign ch1__ca_wbuf_data = bus__w_data;
+  assign \regs__ca_wbuf_addr$262  = regs__ca_wbuf_addr;
+  assign ch1__ca_wbuf_addr = regs__ca_wbuf_addr;
+  assign \regs__ca_wbuf_data$264  = regs__ca_wbuf_data;
+  assign ch1__ca_wbuf_data = regs__ca_wbuf_data;
   assign ch1__ca_wbuf_en = \regs__ca_wbuf_en$266 ;
   assign ch1__ca_write = \regs__ca_write$268 ;
   assign ch1__cap_counters = 1'h1;
@@ -1023,10 +1023,10 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, ch1__ca_wbuf_en, ch1__ca_rbuf_en, ch1_irq, ch0__frame_error, ch0__busy, ch0__config_error, ch0__ca_busy, ch0__ca_rbuf_data, ch1__frame_error, ch1__busy, ch1__config_error, ch1__ca_busy, ch1__ca_rbuf_data
-, bus__w_addr, ch0__ca_wbuf_data, bus__w_strb, glob__trigger, ch0__start, ch0__abort_cycle, ch0__clear_counters, ch0__periodic, ch0__trigger_enable, ch0__cfg_ma_half_period, ch0__cfg_delay_limit, ch0__cfg_request_period, ch0__cfg_break_time, ch0__cfg_ack_limit, ch0__cfg_timeout_limit, ch0__cfg_w0_data_bits, ch0__cfg_w0_nenw, ch0__cfg_w0_lc, ch0__cfg_w0_crc, ch0__cfg_w1_data_bits, ch0__cfg_w1_nenw
-, ch0__cfg_w1_lc, ch0__cfg_w1_crc, ch0__cfg_w1_enable, ch0__cfg_end_check, ch0__cfg_spw_check, ch0__cfg_spw_tolerance, ch0__ca_slave_id, ch0__ca_address, ch0__ca_count, ch0__ca_write, ch0__ca_start, ch0__ca_abort, ch1__start, ch1__abort_cycle, ch1__clear_counters, ch1__periodic, ch1__trigger_enable, ch1__cfg_ma_half_period, ch1__cfg_delay_limit, ch1__cfg_request_period, ch1__cfg_break_time
-, ch1__cfg_ack_limit, ch1__cfg_timeout_limit, ch1__cfg_w0_data_bits, ch1__cfg_w0_nenw, ch1__cfg_w0_lc, ch1__cfg_w0_crc, ch1__cfg_w1_data_bits, ch1__cfg_w1_nenw, ch1__cfg_w1_lc, ch1__cfg_w1_crc, ch1__cfg_w1_enable, ch1__cfg_end_check, ch1__cfg_spw_check, ch1__cfg_spw_tolerance, ch1__ca_slave_id, ch1__ca_address, ch1__ca_count, ch1__ca_write, ch1__ca_start, ch1__ca_abort, bus__r_data
-, ch0__done_count, ch0__done, \port$3984$0 , \port$3991$0 , ch0__ca_done, \port$4105$0 , ch1__done_count, ch1__done, \port$4452$0 , \port$4459$0 , ch1__ca_done, \port$4573$0 , bus__r_addr);
+, bus__w_addr, bus__w_data, bus__w_strb, ch0__ca_wbuf_addr, write_data, g_trigger_start, ch0_ctrl_start, ch0_ctrl_abort, ch0_ctrl_clear_counters, ch0_ctrl_periodic, ch0_ctrl_trigger_enable, ch0_cfg_ma_ma_half_period, ch0_cfg_ma_delay_limit, ch0_cfg_period_request_period, ch0_cfg_break_break_time, ch0_cfg_ack_ack_limit, ch0_cfg_timeout_timeout_limit, ch0_cfg_words_w0_data_bits, ch0_cfg_words_w0_nenw, ch0_cfg_words_w0_lc, ch0_cfg_words_w0_crc
+, ch0_cfg_words_w1_data_bits, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_enable, ch0_cfg_checks_end_check, ch0_cfg_checks_spw_check, ch0_cfg_checks_spw_tolerance, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$65 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort, ch1_ctrl_start, ch1_ctrl_abort, ch1_ctrl_clear_counters, ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit
+, ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_enable, ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$186 , ch1_ca_ctrl_start
+, ch1_ca_ctrl_abort, read_data, ch0__done_count, ch0__done, \port$4258$0 , \port$4265$0 , ch0__ca_done, \port$4379$0 , ch1__done_count, ch1__done, \port$4726$0 , \port$4733$0 , ch1__ca_done, \port$4847$0 , bus__r_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$26  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -1120,102 +1120,102 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire \$18 ;
   wire \$180 ;
   wire \$181 ;
-  wire \$182 ;
-  wire \$183 ;
-  wire \$184 ;
-  wire \$185 ;
-  wire \$186 ;
-  wire \$187 ;
-  wire \$188 ;
-  wire \$189 ;
+  wire [31:0] \$182 ;
+  wire [31:0] \$183 ;
+  wire [31:0] \$184 ;
+  wire [31:0] \$185 ;
+  wire [31:0] \$186 ;
+  wire [31:0] \$187 ;
+  wire [31:0] \$188 ;
+  wire [31:0] \$189 ;
   wire \$19 ;
-  wire \$190 ;
-  wire \$191 ;
-  wire \$192 ;
-  wire \$193 ;
-  wire \$194 ;
-  wire \$195 ;
-  wire \$196 ;
-  wire \$197 ;
-  wire \$198 ;
-  wire \$199 ;
+  wire [31:0] \$190 ;
+  wire [31:0] \$191 ;
+  wire [31:0] \$192 ;
+  wire [31:0] \$193 ;
+  wire [31:0] \$194 ;
+  wire [31:0] \$195 ;
+  wire [31:0] \$196 ;
+  wire [31:0] \$197 ;
+  wire [31:0] \$198 ;
+  wire [31:0] \$199 ;
   wire \$2 ;
   wire \$20 ;
-  wire \$200 ;
-  wire \$201 ;
-  wire \$202 ;
-  wire \$203 ;
-  wire \$204 ;
-  wire \$205 ;
-  wire \$206 ;
-  wire \$207 ;
-  wire \$208 ;
-  wire \$209 ;
+  wire [31:0] \$200 ;
+  wire [31:0] \$201 ;
+  wire [31:0] \$202 ;
+  wire [31:0] \$203 ;
+  wire [31:0] \$204 ;
+  wire [31:0] \$205 ;
+  wire [31:0] \$206 ;
+  wire [31:0] \$207 ;
+  wire [31:0] \$208 ;
+  wire [31:0] \$209 ;
   wire \$21 ;
-  wire \$210 ;
-  wire \$211 ;
-  wire \$212 ;
-  wire \$213 ;
-  wire \$214 ;
-  wire \$215 ;
-  wire \$216 ;
-  wire \$217 ;
-  wire \$218 ;
-  wire \$219 ;
+  wire [31:0] \$210 ;
+  wire [31:0] \$211 ;
+  wire [31:0] \$212 ;
+  wire [31:0] \$213 ;
+  wire [31:0] \$214 ;
+  wire [31:0] \$215 ;
+  wire [31:0] \$216 ;
+  wire [31:0] \$217 ;
+  wire [31:0] \$218 ;
+  wire [31:0] \$219 ;
   wire \$22 ;
-  wire \$220 ;
-  wire \$221 ;
-  wire \$222 ;
-  wire \$223 ;
-  wire \$224 ;
-  wire \$225 ;
-  wire \$226 ;
-  wire \$227 ;
-  wire \$228 ;
-  wire \$229 ;
+  wire [31:0] \$220 ;
+  wire [31:0] \$221 ;
+  wire [31:0] \$222 ;
+  wire [31:0] \$223 ;
+  wire [31:0] \$224 ;
+  wire [31:0] \$225 ;
+  wire [31:0] \$226 ;
+  wire [31:0] \$227 ;
+  wire [31:0] \$228 ;
+  wire [31:0] \$229 ;
   wire \$23 ;
-  wire \$230 ;
-  wire \$231 ;
-  wire \$232 ;
-  wire \$233 ;
-  wire \$234 ;
-  wire \$235 ;
-  wire \$236 ;
-  wire \$237 ;
-  wire \$238 ;
-  wire \$239 ;
+  wire [31:0] \$230 ;
+  wire [31:0] \$231 ;
+  wire [31:0] \$232 ;
+  wire [31:0] \$233 ;
+  wire [31:0] \$234 ;
+  wire [31:0] \$235 ;
+  wire [31:0] \$236 ;
+  wire [31:0] \$237 ;
+  wire [31:0] \$238 ;
+  wire [31:0] \$239 ;
   wire \$24 ;
-  wire \$240 ;
-  wire \$241 ;
-  wire \$242 ;
-  wire \$243 ;
-  wire \$244 ;
-  wire \$245 ;
-  wire \$246 ;
-  wire \$247 ;
-  wire \$248 ;
-  wire \$249 ;
+  wire [31:0] \$240 ;
+  wire [31:0] \$241 ;
+  wire [31:0] \$242 ;
+  wire [31:0] \$243 ;
+  wire [31:0] \$244 ;
+  wire [31:0] \$245 ;
+  wire [31:0] \$246 ;
+  wire [31:0] \$247 ;
+  wire [31:0] \$248 ;
+  wire [31:0] \$249 ;
   wire \$25 ;
-  wire \$250 ;
-  wire \$251 ;
-  wire \$252 ;
-  wire \$253 ;
-  wire \$254 ;
-  wire \$255 ;
-  wire \$256 ;
-  wire \$257 ;
-  wire \$258 ;
-  wire \$259 ;
+  wire [31:0] \$250 ;
+  wire [31:0] \$251 ;
+  wire [31:0] \$252 ;
+  wire [31:0] \$253 ;
+  wire [31:0] \$254 ;
+  wire [31:0] \$255 ;
+  wire [31:0] \$256 ;
+  wire [31:0] \$257 ;
+  wire [31:0] \$258 ;
+  wire [31:0] \$259 ;
   wire \$26 ;
-  wire \$260 ;
-  wire \$261 ;
-  wire \$262 ;
-  wire \$263 ;
-  wire \$264 ;
-  wire \$265 ;
-  wire \$266 ;
-  wire \$267 ;
-  wire \$268 ;
+  wire [31:0] \$260 ;
+  wire [31:0] \$261 ;
+  wire [31:0] \$262 ;
+  wire [31:0] \$263 ;
+  wire [31:0] \$264 ;
+  wire [31:0] \$265 ;
+  wire [31:0] \$266 ;
+  wire [31:0] \$267 ;
+  wire [31:0] \$268 ;
   wire [31:0] \$269 ;
   wire \$27 ;
   wire [31:0] \$270 ;
@@ -1224,166 +1224,440 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire [31:0] \$273 ;
   wire [31:0] \$274 ;
   wire [31:0] \$275 ;
-  reg \$276 ;
-  reg [31:0] \$277 ;
-  reg \$278 ;
-  reg \$279 ;
+  wire [31:0] \$276 ;
+  wire [31:0] \$277 ;
+  wire [31:0] \$278 ;
+  wire [31:0] \$279 ;
   wire \$28 ;
-  reg \$280 ;
-  reg \$281 ;
-  reg \$282 ;
-  reg \$283 ;
-  reg \$284 ;
-  reg \$285 ;
-  reg \$286 ;
-  reg \$287 ;
-  reg \$288 ;
-  reg [15:0] \$289 ;
+  wire [31:0] \$280 ;
+  wire [31:0] \$281 ;
+  wire [31:0] \$282 ;
+  wire [31:0] \$283 ;
+  wire [31:0] \$284 ;
+  wire [31:0] \$285 ;
+  wire [31:0] \$286 ;
+  wire [31:0] \$287 ;
+  wire [31:0] \$288 ;
+  wire [31:0] \$289 ;
   wire \$29 ;
-  reg [11:0] \$290 ;
-  reg [23:0] \$291 ;
-  reg [23:0] \$292 ;
-  reg [23:0] \$293 ;
-  reg [23:0] \$294 ;
-  reg [5:0] \$295 ;
-  reg \$296 ;
-  reg \$297 ;
-  reg [1:0] \$298 ;
-  reg [5:0] \$299 ;
+  wire [31:0] \$290 ;
+  wire [31:0] \$291 ;
+  wire [31:0] \$292 ;
+  wire [31:0] \$293 ;
+  wire [31:0] \$294 ;
+  wire [31:0] \$295 ;
+  wire [31:0] \$296 ;
+  wire [31:0] \$297 ;
+  wire [31:0] \$298 ;
+  wire [31:0] \$299 ;
   wire \$3 ;
   wire \$30 ;
-  reg \$300 ;
-  reg \$301 ;
-  reg [1:0] \$302 ;
-  reg \$303 ;
-  reg \$304 ;
-  reg \$305 ;
-  reg [7:0] \$306 ;
-  reg [2:0] \$307 ;
-  reg [6:0] \$308 ;
-  reg [6:0] \$309 ;
+  wire [31:0] \$300 ;
+  wire [31:0] \$301 ;
+  wire [31:0] \$302 ;
+  wire [31:0] \$303 ;
+  wire [31:0] \$304 ;
+  wire [31:0] \$305 ;
+  wire [31:0] \$306 ;
+  wire [31:0] \$307 ;
+  wire [31:0] \$308 ;
+  wire [31:0] \$309 ;
   wire \$31 ;
-  reg \$310 ;
-  reg \$311 ;
-  reg \$312 ;
-  reg [3:0] \$313 ;
-  reg \$314 ;
-  reg \$315 ;
-  reg \$316 ;
-  reg \$317 ;
-  reg \$318 ;
-  reg \$319 ;
+  wire [31:0] \$310 ;
+  wire [31:0] \$311 ;
+  wire [31:0] \$312 ;
+  wire [31:0] \$313 ;
+  wire [31:0] \$314 ;
+  wire [31:0] \$315 ;
+  wire [31:0] \$316 ;
+  wire [31:0] \$317 ;
+  wire [31:0] \$318 ;
+  wire [31:0] \$319 ;
   wire \$32 ;
-  reg \$320 ;
-  reg \$321 ;
-  reg \$322 ;
-  reg \$323 ;
-  reg \$324 ;
-  reg [5:0] \$325 ;
-  reg [15:0] \$326 ;
-  reg [12:0] \$327 ;
-  reg [31:0] \$328 ;
-  reg [22:0] \$329 ;
+  wire [31:0] \$320 ;
+  wire [31:0] \$321 ;
+  wire [31:0] \$322 ;
+  wire [31:0] \$323 ;
+  wire \$324 ;
+  wire \$325 ;
+  wire \$326 ;
+  wire \$327 ;
+  wire \$328 ;
+  wire \$329 ;
   wire \$33 ;
-  reg [31:0] \$330 ;
-  reg [7:0] \$331 ;
-  reg [31:0] \$332 ;
-  reg [31:0] \$333 ;
-  reg \$334 ;
-  reg \$335 ;
-  reg \$336 ;
-  reg \$337 ;
-  reg \$338 ;
-  reg \$339 ;
+  wire \$330 ;
+  wire \$331 ;
+  wire \$332 ;
+  wire \$333 ;
+  wire \$334 ;
+  wire \$335 ;
+  wire \$336 ;
+  wire \$337 ;
+  wire \$338 ;
+  wire \$339 ;
   wire \$34 ;
-  reg \$340 ;
-  reg \$341 ;
-  reg \$342 ;
-  reg \$343 ;
-  reg \$344 ;
-  reg [15:0] \$345 ;
-  reg [11:0] \$346 ;
-  reg [23:0] \$347 ;
-  reg [23:0] \$348 ;
-  reg [23:0] \$349 ;
+  wire \$340 ;
+  wire \$341 ;
+  wire \$342 ;
+  wire \$343 ;
+  wire \$344 ;
+  wire \$345 ;
+  wire \$346 ;
+  wire \$347 ;
+  wire \$348 ;
+  wire \$349 ;
   wire \$35 ;
-  reg [23:0] \$350 ;
-  reg [5:0] \$351 ;
-  reg \$352 ;
-  reg \$353 ;
-  reg [1:0] \$354 ;
-  reg [5:0] \$355 ;
-  reg \$356 ;
-  reg \$357 ;
-  reg [1:0] \$358 ;
-  reg \$359 ;
+  wire \$350 ;
+  wire \$351 ;
+  wire \$352 ;
+  wire \$353 ;
+  wire \$354 ;
+  wire \$355 ;
+  wire \$356 ;
+  wire \$357 ;
+  wire \$358 ;
+  wire \$359 ;
   wire \$36 ;
-  reg \$360 ;
-  reg \$361 ;
-  reg [7:0] \$362 ;
-  reg [2:0] \$363 ;
-  reg [6:0] \$364 ;
-  reg [6:0] \$365 ;
-  reg \$366 ;
-  reg \$367 ;
-  reg \$368 ;
-  reg [3:0] \$369 ;
+  wire \$360 ;
+  wire \$361 ;
+  wire \$362 ;
+  wire \$363 ;
+  wire \$364 ;
+  wire \$365 ;
+  wire \$366 ;
+  wire \$367 ;
+  wire \$368 ;
+  wire \$369 ;
   wire \$37 ;
-  reg \$370 ;
-  reg \$371 ;
-  reg \$372 ;
-  reg \$373 ;
-  reg \$374 ;
-  reg \$375 ;
-  reg \$376 ;
-  reg \$377 ;
-  reg \$378 ;
-  reg \$379 ;
+  wire \$370 ;
+  wire \$371 ;
+  wire \$372 ;
+  wire \$373 ;
+  wire \$374 ;
+  wire \$375 ;
+  wire \$376 ;
+  wire \$377 ;
+  wire \$378 ;
+  wire \$379 ;
   wire \$38 ;
-  reg \$380 ;
-  reg [5:0] \$381 ;
-  reg [15:0] \$382 ;
-  reg [12:0] \$383 ;
-  reg [31:0] \$384 ;
-  reg [22:0] \$385 ;
-  reg [31:0] \$386 ;
-  reg [7:0] \$387 ;
-  reg [31:0] \$388 ;
-  reg [31:0] \$389 ;
+  wire \$380 ;
+  wire \$381 ;
+  wire \$382 ;
+  wire \$383 ;
+  wire \$384 ;
+  wire \$385 ;
+  wire \$386 ;
+  wire \$387 ;
+  wire \$388 ;
+  wire \$389 ;
   wire \$39 ;
-  reg \$390 ;
-  reg \$391 ;
-  reg [31:0] \$392 ;
+  wire \$390 ;
+  wire \$391 ;
+  wire \$392 ;
+  wire \$393 ;
+  wire \$394 ;
+  wire \$395 ;
+  wire \$396 ;
+  wire \$397 ;
+  wire \$398 ;
+  wire \$399 ;
   wire \$4 ;
   wire \$40 ;
+  wire \$400 ;
+  wire \$401 ;
+  wire \$402 ;
+  wire \$403 ;
+  wire \$404 ;
+  wire \$405 ;
+  wire \$406 ;
+  wire \$407 ;
+  wire \$408 ;
+  wire \$409 ;
   wire \$41 ;
+  wire \$410 ;
+  wire \$411 ;
+  wire \$412 ;
+  wire \$413 ;
+  wire \$414 ;
+  wire \$415 ;
+  wire \$416 ;
+  wire \$417 ;
+  wire \$418 ;
+  wire \$419 ;
   wire \$42 ;
+  wire \$420 ;
+  wire \$421 ;
+  wire \$422 ;
+  wire \$423 ;
+  wire \$424 ;
+  wire \$425 ;
+  wire \$426 ;
+  wire \$427 ;
+  wire \$428 ;
+  wire \$429 ;
   wire \$43 ;
+  wire \$430 ;
+  wire \$431 ;
+  wire \$432 ;
+  wire \$433 ;
+  wire \$434 ;
+  wire \$435 ;
+  wire \$436 ;
+  wire \$437 ;
+  wire \$438 ;
+  wire \$439 ;
   wire \$44 ;
+  wire \$440 ;
+  wire \$441 ;
+  wire \$442 ;
+  wire \$443 ;
+  wire \$444 ;
+  wire \$445 ;
+  wire \$446 ;
+  wire \$447 ;
+  wire \$448 ;
+  wire \$449 ;
   wire \$45 ;
+  wire \$450 ;
+  wire \$451 ;
+  wire \$452 ;
+  wire \$453 ;
+  wire \$454 ;
+  wire \$455 ;
+  wire \$456 ;
+  wire \$457 ;
+  wire \$458 ;
+  wire \$459 ;
   wire \$46 ;
+  wire \$460 ;
+  wire \$461 ;
+  wire \$462 ;
+  wire \$463 ;
+  wire \$464 ;
+  wire \$465 ;
+  wire \$466 ;
+  wire \$467 ;
+  wire \$468 ;
+  wire \$469 ;
   wire \$47 ;
+  wire \$470 ;
+  wire \$471 ;
+  wire \$472 ;
+  wire \$473 ;
+  wire \$474 ;
+  wire \$475 ;
+  wire \$476 ;
+  wire \$477 ;
+  wire \$478 ;
+  wire \$479 ;
   wire \$48 ;
+  reg \$480 ;
+  reg [10:0] \$481 ;
+  reg [31:0] \$482 ;
+  reg [3:0] \$483 ;
+  reg \$484 ;
+  reg \$485 ;
+  reg \$486 ;
+  reg \$487 ;
+  reg \$488 ;
+  reg \$489 ;
   wire \$49 ;
+  reg \$490 ;
+  reg \$491 ;
+  reg \$492 ;
+  reg \$493 ;
+  reg \$494 ;
+  reg \$495 ;
+  reg \$496 ;
+  reg \$497 ;
+  reg \$498 ;
+  reg \$499 ;
   wire \$5 ;
   wire \$50 ;
+  reg \$500 ;
+  reg [15:0] \$501 ;
+  reg [11:0] \$502 ;
+  reg [23:0] \$503 ;
+  reg [23:0] \$504 ;
+  reg [23:0] \$505 ;
+  reg [23:0] \$506 ;
+  reg [5:0] \$507 ;
+  reg \$508 ;
+  reg \$509 ;
   wire \$51 ;
+  reg [1:0] \$510 ;
+  reg [5:0] \$511 ;
+  reg \$512 ;
+  reg \$513 ;
+  reg [1:0] \$514 ;
+  reg \$515 ;
+  reg \$516 ;
+  reg \$517 ;
+  reg [7:0] \$518 ;
+  reg [2:0] \$519 ;
   wire \$52 ;
+  reg [6:0] \$520 ;
+  reg [6:0] \$521 ;
+  reg \$522 ;
+  reg \$523 ;
+  reg \$524 ;
+  reg [3:0] \$525 ;
+  reg \$526 ;
+  reg \$527 ;
+  reg \$528 ;
+  reg \$529 ;
   wire \$53 ;
+  reg \$530 ;
+  reg \$531 ;
+  reg \$532 ;
+  reg \$533 ;
+  reg \$534 ;
+  reg \$535 ;
+  reg \$536 ;
+  reg [5:0] \$537 ;
+  reg [15:0] \$538 ;
+  reg [12:0] \$539 ;
   wire \$54 ;
+  reg [31:0] \$540 ;
+  reg [22:0] \$541 ;
+  reg [31:0] \$542 ;
+  reg [7:0] \$543 ;
+  reg [31:0] \$544 ;
+  reg \$545 ;
+  reg \$546 ;
+  reg \$547 ;
+  reg \$548 ;
+  reg \$549 ;
   wire \$55 ;
+  reg \$550 ;
+  reg \$551 ;
+  reg \$552 ;
+  reg \$553 ;
+  reg \$554 ;
+  reg \$555 ;
+  reg \$556 ;
+  reg \$557 ;
+  reg \$558 ;
+  reg \$559 ;
   wire \$56 ;
+  reg \$560 ;
+  reg \$561 ;
+  reg \$562 ;
+  reg \$563 ;
+  reg \$564 ;
+  reg \$565 ;
+  reg \$566 ;
+  reg \$567 ;
+  reg \$568 ;
+  reg \$569 ;
   wire \$57 ;
+  reg \$570 ;
+  reg \$571 ;
+  reg \$572 ;
+  reg \$573 ;
+  reg \$574 ;
+  reg \$575 ;
+  reg \$576 ;
+  reg \$577 ;
+  reg \$578 ;
+  reg \$579 ;
   wire \$58 ;
+  reg \$580 ;
+  reg \$581 ;
+  reg \$582 ;
+  reg \$583 ;
+  reg \$584 ;
+  reg \$585 ;
+  reg \$586 ;
+  reg \$587 ;
+  reg [15:0] \$588 ;
+  reg [11:0] \$589 ;
   wire \$59 ;
+  reg [23:0] \$590 ;
+  reg [23:0] \$591 ;
+  reg [23:0] \$592 ;
+  reg [23:0] \$593 ;
+  reg [5:0] \$594 ;
+  reg \$595 ;
+  reg \$596 ;
+  reg [1:0] \$597 ;
+  reg [5:0] \$598 ;
+  reg \$599 ;
   wire \$6 ;
   wire \$60 ;
+  reg \$600 ;
+  reg [1:0] \$601 ;
+  reg \$602 ;
+  reg \$603 ;
+  reg \$604 ;
+  reg [7:0] \$605 ;
+  reg [2:0] \$606 ;
+  reg [6:0] \$607 ;
+  reg [6:0] \$608 ;
+  reg \$609 ;
   wire \$61 ;
+  reg \$610 ;
+  reg \$611 ;
+  reg [3:0] \$612 ;
+  reg \$613 ;
+  reg \$614 ;
+  reg \$615 ;
+  reg \$616 ;
+  reg \$617 ;
+  reg \$618 ;
+  reg \$619 ;
   wire \$62 ;
+  reg \$620 ;
+  reg \$621 ;
+  reg \$622 ;
+  reg \$623 ;
+  reg [5:0] \$624 ;
+  reg [15:0] \$625 ;
+  reg [12:0] \$626 ;
+  reg [31:0] \$627 ;
+  reg [22:0] \$628 ;
+  reg [31:0] \$629 ;
   wire \$63 ;
+  reg [7:0] \$630 ;
+  reg [31:0] \$631 ;
+  reg \$632 ;
+  reg \$633 ;
+  reg \$634 ;
+  reg \$635 ;
+  reg \$636 ;
+  reg \$637 ;
+  reg \$638 ;
+  reg \$639 ;
   wire \$64 ;
+  reg \$640 ;
+  reg \$641 ;
+  reg \$642 ;
+  reg \$643 ;
+  reg \$644 ;
+  reg \$645 ;
+  reg \$646 ;
+  reg \$647 ;
+  reg \$648 ;
+  reg \$649 ;
   wire \$65 ;
+  reg \$650 ;
+  reg \$651 ;
+  reg \$652 ;
+  reg \$653 ;
+  reg \$654 ;
+  reg \$655 ;
+  reg \$656 ;
+  reg \$657 ;
+  reg \$658 ;
+  reg \$659 ;
   wire \$66 ;
+  reg \$660 ;
+  reg \$661 ;
+  reg \$662 ;
+  reg \$663 ;
+  reg \$664 ;
+  reg \$665 ;
+  reg [31:0] \$666 ;
   wire \$67 ;
   wire \$68 ;
   wire \$69 ;
@@ -1422,32 +1696,33 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire \$99 ;
   input [10:0] bus__r_addr;
   wire [10:0] bus__r_addr;
-  output [31:0] bus__r_data;
-  reg [31:0] bus__r_data = 32'd0;
+  (* init = 32'd0 *)
+  wire [31:0] bus__r_data;
   input bus__r_en;
   wire bus__r_en;
   input bus__r_load;
   wire bus__r_load;
   input [10:0] bus__w_addr;
   wire [10:0] bus__w_addr;
+  input [31:0] bus__w_data;
   wire [31:0] bus__w_data;
   input bus__w_en;
   wire bus__w_en;
   input [3:0] bus__w_strb;
   wire [3:0] bus__w_strb;
-  output ch0__abort_cycle;
-  reg ch0__abort_cycle = 1'h0;
+  (* init = 1'h0 *)
+  wire ch0__abort_cycle;
   input ch0__busy;
   wire ch0__busy;
-  output ch0__ca_abort;
-  reg ch0__ca_abort = 1'h0;
-  output [6:0] ch0__ca_address;
-  reg [6:0] ch0__ca_address = 7'h00;
+  (* init = 1'h0 *)
+  wire ch0__ca_abort;
+  (* init = 7'h00 *)
+  wire [6:0] ch0__ca_address;
   input ch0__ca_busy;
   wire ch0__ca_busy;
   wire [6:0] ch0__ca_bytes_done;
-  output [6:0] ch0__ca_count;
-  reg [6:0] ch0__ca_count = 7'h00;
+  (* init = 7'h00 *)
+  wire [6:0] ch0__ca_count;
   input ch0__ca_done;
   wire ch0__ca_done;
   wire [3:0] ch0__ca_rbuf_addr;
@@ -1455,18 +1730,19 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire [31:0] ch0__ca_rbuf_data;
   output ch0__ca_rbuf_en;
   wire ch0__ca_rbuf_en;
-  output [2:0] ch0__ca_slave_id;
-  reg [2:0] ch0__ca_slave_id = 3'h0;
-  output ch0__ca_start;
-  reg ch0__ca_start = 1'h0;
+  (* init = 3'h0 *)
+  wire [2:0] ch0__ca_slave_id;
+  (* init = 1'h0 *)
+  wire ch0__ca_start;
   wire [2:0] ch0__ca_status;
+  output [3:0] ch0__ca_wbuf_addr;
   wire [3:0] ch0__ca_wbuf_addr;
-  input [31:0] ch0__ca_wbuf_data;
+  (* init = 32'd0 *)
   wire [31:0] ch0__ca_wbuf_data;
   output [3:0] ch0__ca_wbuf_en;
   wire [3:0] ch0__ca_wbuf_en;
-  output ch0__ca_write;
-  reg ch0__ca_write = 1'h0;
+  (* init = 1'h0 *)
+  wire ch0__ca_write;
   wire ch0__cap_counters;
   wire [5:0] ch0__cap_data_bits_w0;
   wire [5:0] ch0__cap_data_bits_w1;
@@ -1474,44 +1750,44 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire [5:0] ch0__cap_timer_width;
   wire ch0__cap_timestamp;
   wire ch0__cds;
-  output [23:0] ch0__cfg_ack_limit;
-  reg [23:0] ch0__cfg_ack_limit = 24'h000000;
-  output [23:0] ch0__cfg_break_time;
-  reg [23:0] ch0__cfg_break_time = 24'h000000;
-  output [11:0] ch0__cfg_delay_limit;
-  reg [11:0] ch0__cfg_delay_limit = 12'h000;
-  output ch0__cfg_end_check;
-  reg ch0__cfg_end_check = 1'h0;
-  output [15:0] ch0__cfg_ma_half_period;
-  reg [15:0] ch0__cfg_ma_half_period = 16'h0000;
-  output [23:0] ch0__cfg_request_period;
-  reg [23:0] ch0__cfg_request_period = 24'h000000;
-  output ch0__cfg_spw_check;
-  reg ch0__cfg_spw_check = 1'h0;
-  output [7:0] ch0__cfg_spw_tolerance;
-  reg [7:0] ch0__cfg_spw_tolerance = 8'h00;
-  output [23:0] ch0__cfg_timeout_limit;
-  reg [23:0] ch0__cfg_timeout_limit = 24'h000000;
-  output [1:0] ch0__cfg_w0_crc;
-  reg [1:0] ch0__cfg_w0_crc = 2'h0;
-  output [5:0] ch0__cfg_w0_data_bits;
-  reg [5:0] ch0__cfg_w0_data_bits = 6'h00;
-  output ch0__cfg_w0_lc;
-  reg ch0__cfg_w0_lc = 1'h0;
-  output ch0__cfg_w0_nenw;
-  reg ch0__cfg_w0_nenw = 1'h0;
-  output [1:0] ch0__cfg_w1_crc;
-  reg [1:0] ch0__cfg_w1_crc = 2'h0;
-  output [5:0] ch0__cfg_w1_data_bits;
-  reg [5:0] ch0__cfg_w1_data_bits = 6'h00;
-  output ch0__cfg_w1_enable;
-  reg ch0__cfg_w1_enable = 1'h0;
-  output ch0__cfg_w1_lc;
-  reg ch0__cfg_w1_lc = 1'h0;
-  output ch0__cfg_w1_nenw;
-  reg ch0__cfg_w1_nenw = 1'h0;
-  output ch0__clear_counters;
-  reg ch0__clear_counters = 1'h0;
+  (* init = 24'h000000 *)
+  wire [23:0] ch0__cfg_ack_limit;
+  (* init = 24'h000000 *)
+  wire [23:0] ch0__cfg_break_time;
+  (* init = 12'h000 *)
+  wire [11:0] ch0__cfg_delay_limit;
+  (* init = 1'h0 *)
+  wire ch0__cfg_end_check;
+  (* init = 16'h0000 *)
+  wire [15:0] ch0__cfg_ma_half_period;
+  (* init = 24'h000000 *)
+  wire [23:0] ch0__cfg_request_period;
+  (* init = 1'h0 *)
+  wire ch0__cfg_spw_check;
+  (* init = 8'h00 *)
+  wire [7:0] ch0__cfg_spw_tolerance;
+  (* init = 24'h000000 *)
+  wire [23:0] ch0__cfg_timeout_limit;
+  (* init = 2'h0 *)
+  wire [1:0] ch0__cfg_w0_crc;
+  (* init = 6'h00 *)
+  wire [5:0] ch0__cfg_w0_data_bits;
+  (* init = 1'h0 *)
+  wire ch0__cfg_w0_lc;
+  (* init = 1'h0 *)
+  wire ch0__cfg_w0_nenw;
+  (* init = 2'h0 *)
+  wire [1:0] ch0__cfg_w1_crc;
+  (* init = 6'h00 *)
+  wire [5:0] ch0__cfg_w1_data_bits;
+  (* init = 1'h0 *)
+  wire ch0__cfg_w1_enable;
+  (* init = 1'h0 *)
+  wire ch0__cfg_w1_lc;
+  (* init = 1'h0 *)
+  wire ch0__cfg_w1_nenw;
+  (* init = 1'h0 *)
+  wire ch0__clear_counters;
   input ch0__config_error;
   wire ch0__config_error;
   wire [15:0] ch0__count_aborted;
@@ -1543,15 +1819,15 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire ch0__lc_skip;
   wire ch0__lc_zero;
   wire [12:0] ch0__line_delay;
-  output ch0__periodic;
-  reg ch0__periodic = 1'h0;
+  (* init = 1'h0 *)
+  wire ch0__periodic;
   wire ch0__spw_mismatch;
-  output ch0__start;
-  reg ch0__start = 1'h0;
+  (* init = 1'h0 *)
+  wire ch0__start;
   wire [3:0] ch0__status;
   wire [31:0] ch0__timestamp;
-  output ch0__trigger_enable;
-  reg ch0__trigger_enable = 1'h0;
+  (* init = 1'h0 *)
+  wire ch0__trigger_enable;
   wire ch0__word0_crc_ok;
   wire ch0__word0_ne;
   wire ch0__word0_nw;
@@ -1566,75 +1842,75 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire ch0_ca_count_data_fault_write;
   wire ch0_ca_count_refused_aborted_read;
   wire ch0_ca_count_refused_aborted_write;
-  (* init = 1'h0 *)
-  wire ch0_ca_ctrl_abort;
+  output ch0_ca_ctrl_abort;
+  reg ch0_ca_ctrl_abort = 1'h0;
   wire ch0_ca_ctrl_read;
-  (* init = 1'h0 *)
-  wire ch0_ca_ctrl_start;
+  output ch0_ca_ctrl_start;
+  reg ch0_ca_ctrl_start = 1'h0;
   wire ch0_ca_ctrl_write;
-  (* init = 7'h00 *)
-  wire [6:0] ch0_ca_request_address;
-  (* init = 7'h00 *)
-  wire [6:0] ch0_ca_request_count;
+  output [6:0] ch0_ca_request_address;
+  reg [6:0] ch0_ca_request_address = 7'h00;
+  output [6:0] ch0_ca_request_count;
+  reg [6:0] ch0_ca_request_count = 7'h00;
   wire ch0_ca_request_read;
-  (* init = 3'h0 *)
-  wire [2:0] ch0_ca_request_slave_id;
+  output [2:0] ch0_ca_request_slave_id;
+  reg [2:0] ch0_ca_request_slave_id = 3'h0;
   wire ch0_ca_request_write;
-  (* init = 1'h0 *)
-  wire \ch0_ca_request_write$124 ;
+  output \ch0_ca_request_write$65 ;
+  reg \ch0_ca_request_write$65  = 1'h0;
   wire ch0_ca_state_read;
   wire ch0_ca_state_write;
   wire ch0_caps_read;
   wire ch0_caps_write;
-  (* init = 24'h000000 *)
-  wire [23:0] ch0_cfg_ack_ack_limit;
+  output [23:0] ch0_cfg_ack_ack_limit;
+  reg [23:0] ch0_cfg_ack_ack_limit = 24'h000000;
   wire ch0_cfg_ack_read;
   wire ch0_cfg_ack_write;
-  (* init = 24'h000000 *)
-  wire [23:0] ch0_cfg_break_break_time;
+  output [23:0] ch0_cfg_break_break_time;
+  reg [23:0] ch0_cfg_break_break_time = 24'h000000;
   wire ch0_cfg_break_read;
   wire ch0_cfg_break_write;
-  (* init = 1'h0 *)
-  wire ch0_cfg_checks_end_check;
+  output ch0_cfg_checks_end_check;
+  reg ch0_cfg_checks_end_check = 1'h0;
   wire ch0_cfg_checks_read;
-  (* init = 1'h0 *)
-  wire ch0_cfg_checks_spw_check;
-  (* init = 8'h00 *)
-  wire [7:0] ch0_cfg_checks_spw_tolerance;
+  output ch0_cfg_checks_spw_check;
+  reg ch0_cfg_checks_spw_check = 1'h0;
+  output [7:0] ch0_cfg_checks_spw_tolerance;
+  reg [7:0] ch0_cfg_checks_spw_tolerance = 8'h00;
   wire ch0_cfg_checks_write;
-  (* init = 12'h000 *)
-  wire [11:0] ch0_cfg_ma_delay_limit;
-  (* init = 16'h0000 *)
-  wire [15:0] ch0_cfg_ma_ma_half_period;
+  output [11:0] ch0_cfg_ma_delay_limit;
+  reg [11:0] ch0_cfg_ma_delay_limit = 12'h000;
+  output [15:0] ch0_cfg_ma_ma_half_period;
+  reg [15:0] ch0_cfg_ma_ma_half_period = 16'h0000;
   wire ch0_cfg_ma_read;
   wire ch0_cfg_ma_write;
   wire ch0_cfg_period_read;
-  (* init = 24'h000000 *)
-  wire [23:0] ch0_cfg_period_request_period;
+  output [23:0] ch0_cfg_period_request_period;
+  reg [23:0] ch0_cfg_period_request_period = 24'h000000;
   wire ch0_cfg_period_write;
   wire ch0_cfg_timeout_read;
-  (* init = 24'h000000 *)
-  wire [23:0] ch0_cfg_timeout_timeout_limit;
+  output [23:0] ch0_cfg_timeout_timeout_limit;
+  reg [23:0] ch0_cfg_timeout_timeout_limit = 24'h000000;
   wire ch0_cfg_timeout_write;
   wire ch0_cfg_words_read;
-  (* init = 2'h0 *)
-  wire [1:0] ch0_cfg_words_w0_crc;
-  (* init = 6'h00 *)
-  wire [5:0] ch0_cfg_words_w0_data_bits;
-  (* init = 1'h0 *)
-  wire ch0_cfg_words_w0_lc;
-  (* init = 1'h0 *)
-  wire ch0_cfg_words_w0_nenw;
-  (* init = 2'h0 *)
-  wire [1:0] ch0_cfg_words_w1_crc;
-  (* init = 6'h00 *)
-  wire [5:0] ch0_cfg_words_w1_data_bits;
-  (* init = 1'h0 *)
-  wire ch0_cfg_words_w1_enable;
-  (* init = 1'h0 *)
-  wire ch0_cfg_words_w1_lc;
-  (* init = 1'h0 *)
-  wire ch0_cfg_words_w1_nenw;
+  output [1:0] ch0_cfg_words_w0_crc;
+  reg [1:0] ch0_cfg_words_w0_crc = 2'h0;
+  output [5:0] ch0_cfg_words_w0_data_bits;
+  reg [5:0] ch0_cfg_words_w0_data_bits = 6'h00;
+  output ch0_cfg_words_w0_lc;
+  reg ch0_cfg_words_w0_lc = 1'h0;
+  output ch0_cfg_words_w0_nenw;
+  reg ch0_cfg_words_w0_nenw = 1'h0;
+  output [1:0] ch0_cfg_words_w1_crc;
+  reg [1:0] ch0_cfg_words_w1_crc = 2'h0;
+  output [5:0] ch0_cfg_words_w1_data_bits;
+  reg [5:0] ch0_cfg_words_w1_data_bits = 6'h00;
+  output ch0_cfg_words_w1_enable;
+  reg ch0_cfg_words_w1_enable = 1'h0;
+  output ch0_cfg_words_w1_lc;
+  reg ch0_cfg_words_w1_lc = 1'h0;
+  output ch0_cfg_words_w1_nenw;
+  reg ch0_cfg_words_w1_nenw = 1'h0;
   wire ch0_cfg_words_write;
   wire ch0_count_ack_read;
   wire ch0_count_ack_write;
@@ -1650,17 +1926,17 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire ch0_count_line_write;
   wire ch0_count_stop_read;
   wire ch0_count_stop_write;
-  (* init = 1'h0 *)
-  wire ch0_ctrl_abort;
-  (* init = 1'h0 *)
-  wire ch0_ctrl_clear_counters;
-  (* init = 1'h0 *)
-  wire ch0_ctrl_periodic;
+  output ch0_ctrl_abort;
+  reg ch0_ctrl_abort = 1'h0;
+  output ch0_ctrl_clear_counters;
+  reg ch0_ctrl_clear_counters = 1'h0;
+  output ch0_ctrl_periodic;
+  reg ch0_ctrl_periodic = 1'h0;
   wire ch0_ctrl_read;
-  (* init = 1'h0 *)
-  wire ch0_ctrl_start;
-  (* init = 1'h0 *)
-  wire ch0_ctrl_trigger_enable;
+  output ch0_ctrl_start;
+  reg ch0_ctrl_start = 1'h0;
+  output ch0_ctrl_trigger_enable;
+  reg ch0_ctrl_trigger_enable = 1'h0;
   wire ch0_ctrl_write;
   output ch0_irq;
   wire ch0_irq;
@@ -1674,7 +1950,38 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg ch0_irq_status_error = 1'h0;
   wire ch0_irq_status_read;
   wire ch0_irq_status_write;
-  reg [31:0] ch0_read_word = 32'd0;
+  reg ch0_read_select_80 = 1'h0;
+  reg ch0_read_select_81 = 1'h0;
+  reg ch0_read_select_82 = 1'h0;
+  reg ch0_read_select_84 = 1'h0;
+  reg ch0_read_select_85 = 1'h0;
+  reg ch0_read_select_88 = 1'h0;
+  reg ch0_read_select_89 = 1'h0;
+  reg ch0_read_select_8a = 1'h0;
+  reg ch0_read_select_8b = 1'h0;
+  reg ch0_read_select_8c = 1'h0;
+  reg ch0_read_select_8d = 1'h0;
+  reg ch0_read_select_8e = 1'h0;
+  reg ch0_read_select_90 = 1'h0;
+  reg ch0_read_select_91 = 1'h0;
+  reg ch0_read_select_92 = 1'h0;
+  reg ch0_read_select_93 = 1'h0;
+  reg ch0_read_select_94 = 1'h0;
+  reg ch0_read_select_95 = 1'h0;
+  reg ch0_read_select_96 = 1'h0;
+  reg ch0_read_select_98 = 1'h0;
+  reg ch0_read_select_99 = 1'h0;
+  reg ch0_read_select_9a = 1'h0;
+  reg ch0_read_select_9b = 1'h0;
+  reg ch0_read_select_9c = 1'h0;
+  reg ch0_read_select_9d = 1'h0;
+  reg ch0_read_select_9e = 1'h0;
+  reg ch0_read_select_c0 = 1'h0;
+  reg ch0_read_select_c1 = 1'h0;
+  reg ch0_read_select_c2 = 1'h0;
+  reg ch0_read_select_c3 = 1'h0;
+  reg ch0_read_select_c4 = 1'h0;
+  reg ch0_read_select_c5 = 1'h0;
   reg [12:0] ch0_result_seq_line_delay_snapshot = 13'h0000;
   wire ch0_result_seq_read;
   reg [15:0] ch0_result_seq_seq_snapshot = 16'h0000;
@@ -1711,19 +2018,19 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire ch0_result_w1_lo_write;
   wire ch0_state_read;
   wire ch0_state_write;
-  output ch1__abort_cycle;
-  reg ch1__abort_cycle = 1'h0;
+  (* init = 1'h0 *)
+  wire ch1__abort_cycle;
   input ch1__busy;
   wire ch1__busy;
-  output ch1__ca_abort;
-  reg ch1__ca_abort = 1'h0;
-  output [6:0] ch1__ca_address;
-  reg [6:0] ch1__ca_address = 7'h00;
+  (* init = 1'h0 *)
+  wire ch1__ca_abort;
+  (* init = 7'h00 *)
+  wire [6:0] ch1__ca_address;
   input ch1__ca_busy;
   wire ch1__ca_busy;
   wire [6:0] ch1__ca_bytes_done;
-  output [6:0] ch1__ca_count;
-  reg [6:0] ch1__ca_count = 7'h00;
+  (* init = 7'h00 *)
+  wire [6:0] ch1__ca_count;
   input ch1__ca_done;
   wire ch1__ca_done;
   wire [3:0] ch1__ca_rbuf_addr;
@@ -1731,17 +2038,18 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire [31:0] ch1__ca_rbuf_data;
   output ch1__ca_rbuf_en;
   wire ch1__ca_rbuf_en;
-  output [2:0] ch1__ca_slave_id;
-  reg [2:0] ch1__ca_slave_id = 3'h0;
-  output ch1__ca_start;
-  reg ch1__ca_start = 1'h0;
+  (* init = 3'h0 *)
+  wire [2:0] ch1__ca_slave_id;
+  (* init = 1'h0 *)
+  wire ch1__ca_start;
   wire [2:0] ch1__ca_status;
   wire [3:0] ch1__ca_wbuf_addr;
+  (* init = 32'd0 *)
   wire [31:0] ch1__ca_wbuf_data;
   output [3:0] ch1__ca_wbuf_en;
   wire [3:0] ch1__ca_wbuf_en;
-  output ch1__ca_write;
-  reg ch1__ca_write = 1'h0;
+  (* init = 1'h0 *)
+  wire ch1__ca_write;
   wire ch1__cap_counters;
   wire [5:0] ch1__cap_data_bits_w0;
   wire [5:0] ch1__cap_data_bits_w1;
@@ -1749,44 +2057,44 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire [5:0] ch1__cap_timer_width;
   wire ch1__cap_timestamp;
   wire ch1__cds;
-  output [23:0] ch1__cfg_ack_limit;
-  reg [23:0] ch1__cfg_ack_limit = 24'h000000;
-  output [23:0] ch1__cfg_break_time;
-  reg [23:0] ch1__cfg_break_time = 24'h000000;
-  output [11:0] ch1__cfg_delay_limit;
-  reg [11:0] ch1__cfg_delay_limit = 12'h000;
-  output ch1__cfg_end_check;
-  reg ch1__cfg_end_check = 1'h0;
-  output [15:0] ch1__cfg_ma_half_period;
-  reg [15:0] ch1__cfg_ma_half_period = 16'h0000;
-  output [23:0] ch1__cfg_request_period;
-  reg [23:0] ch1__cfg_request_period = 24'h000000;
-  output ch1__cfg_spw_check;
-  reg ch1__cfg_spw_check = 1'h0;
-  output [7:0] ch1__cfg_spw_tolerance;
-  reg [7:0] ch1__cfg_spw_tolerance = 8'h00;
-  output [23:0] ch1__cfg_timeout_limit;
-  reg [23:0] ch1__cfg_timeout_limit = 24'h000000;
-  output [1:0] ch1__cfg_w0_crc;
-  reg [1:0] ch1__cfg_w0_crc = 2'h0;
-  output [5:0] ch1__cfg_w0_data_bits;
-  reg [5:0] ch1__cfg_w0_data_bits = 6'h00;
-  output ch1__cfg_w0_lc;
-  reg ch1__cfg_w0_lc = 1'h0;
-  output ch1__cfg_w0_nenw;
-  reg ch1__cfg_w0_nenw = 1'h0;
-  output [1:0] ch1__cfg_w1_crc;
-  reg [1:0] ch1__cfg_w1_crc = 2'h0;
-  output [5:0] ch1__cfg_w1_data_bits;
-  reg [5:0] ch1__cfg_w1_data_bits = 6'h00;
-  output ch1__cfg_w1_enable;
-  reg ch1__cfg_w1_enable = 1'h0;
-  output ch1__cfg_w1_lc;
-  reg ch1__cfg_w1_lc = 1'h0;
-  output ch1__cfg_w1_nenw;
-  reg ch1__cfg_w1_nenw = 1'h0;
-  output ch1__clear_counters;
-  reg ch1__clear_counters = 1'h0;
+  (* init = 24'h000000 *)
+  wire [23:0] ch1__cfg_ack_limit;
+  (* init = 24'h000000 *)
+  wire [23:0] ch1__cfg_break_time;
+  (* init = 12'h000 *)
+  wire [11:0] ch1__cfg_delay_limit;
+  (* init = 1'h0 *)
+  wire ch1__cfg_end_check;
+  (* init = 16'h0000 *)
+  wire [15:0] ch1__cfg_ma_half_period;
+  (* init = 24'h000000 *)
+  wire [23:0] ch1__cfg_request_period;
+  (* init = 1'h0 *)
+  wire ch1__cfg_spw_check;
+  (* init = 8'h00 *)
+  wire [7:0] ch1__cfg_spw_tolerance;
+  (* init = 24'h000000 *)
+  wire [23:0] ch1__cfg_timeout_limit;
+  (* init = 2'h0 *)
+  wire [1:0] ch1__cfg_w0_crc;
+  (* init = 6'h00 *)
+  wire [5:0] ch1__cfg_w0_data_bits;
+  (* init = 1'h0 *)
+  wire ch1__cfg_w0_lc;
+  (* init = 1'h0 *)
+  wire ch1__cfg_w0_nenw;
+  (* init = 2'h0 *)
+  wire [1:0] ch1__cfg_w1_crc;
+  (* init = 6'h00 *)
+  wire [5:0] ch1__cfg_w1_data_bits;
+  (* init = 1'h0 *)
+  wire ch1__cfg_w1_enable;
+  (* init = 1'h0 *)
+  wire ch1__cfg_w1_lc;
+  (* init = 1'h0 *)
+  wire ch1__cfg_w1_nenw;
+  (* init = 1'h0 *)
+  wire ch1__clear_counters;
   input ch1__config_error;
   wire ch1__config_error;
   wire [15:0] ch1__count_aborted;
@@ -1818,15 +2126,15 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire ch1__lc_skip;
   wire ch1__lc_zero;
   wire [12:0] ch1__line_delay;
-  output ch1__periodic;
-  reg ch1__periodic = 1'h0;
+  (* init = 1'h0 *)
+  wire ch1__periodic;
   wire ch1__spw_mismatch;
-  output ch1__start;
-  reg ch1__start = 1'h0;
+  (* init = 1'h0 *)
+  wire ch1__start;
   wire [3:0] ch1__status;
   wire [31:0] ch1__timestamp;
-  output ch1__trigger_enable;
-  reg ch1__trigger_enable = 1'h0;
+  (* init = 1'h0 *)
+  wire ch1__trigger_enable;
   wire ch1__word0_crc_ok;
   wire ch1__word0_ne;
   wire ch1__word0_nw;
@@ -1841,75 +2149,75 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire ch1_ca_count_data_fault_write;
   wire ch1_ca_count_refused_aborted_read;
   wire ch1_ca_count_refused_aborted_write;
-  (* init = 1'h0 *)
-  wire ch1_ca_ctrl_abort;
+  output ch1_ca_ctrl_abort;
+  reg ch1_ca_ctrl_abort = 1'h0;
   wire ch1_ca_ctrl_read;
-  (* init = 1'h0 *)
-  wire ch1_ca_ctrl_start;
+  output ch1_ca_ctrl_start;
+  reg ch1_ca_ctrl_start = 1'h0;
   wire ch1_ca_ctrl_write;
-  (* init = 7'h00 *)
-  wire [6:0] ch1_ca_request_address;
-  (* init = 7'h00 *)
-  wire [6:0] ch1_ca_request_count;
+  output [6:0] ch1_ca_request_address;
+  reg [6:0] ch1_ca_request_address = 7'h00;
+  output [6:0] ch1_ca_request_count;
+  reg [6:0] ch1_ca_request_count = 7'h00;
   wire ch1_ca_request_read;
-  (* init = 3'h0 *)
-  wire [2:0] ch1_ca_request_slave_id;
+  output [2:0] ch1_ca_request_slave_id;
+  reg [2:0] ch1_ca_request_slave_id = 3'h0;
   wire ch1_ca_request_write;
-  (* init = 1'h0 *)
-  wire \ch1_ca_request_write$260 ;
+  output \ch1_ca_request_write$186 ;
+  reg \ch1_ca_request_write$186  = 1'h0;
   wire ch1_ca_state_read;
   wire ch1_ca_state_write;
   wire ch1_caps_read;
   wire ch1_caps_write;
-  (* init = 24'h000000 *)
-  wire [23:0] ch1_cfg_ack_ack_limit;
+  output [23:0] ch1_cfg_ack_ack_limit;
+  reg [23:0] ch1_cfg_ack_ack_limit = 24'h000000;
   wire ch1_cfg_ack_read;
   wire ch1_cfg_ack_write;
-  (* init = 24'h000000 *)
-  wire [23:0] ch1_cfg_break_break_time;
+  output [23:0] ch1_cfg_break_break_time;
+  reg [23:0] ch1_cfg_break_break_time = 24'h000000;
   wire ch1_cfg_break_read;
   wire ch1_cfg_break_write;
-  (* init = 1'h0 *)
-  wire ch1_cfg_checks_end_check;
+  output ch1_cfg_checks_end_check;
+  reg ch1_cfg_checks_end_check = 1'h0;
   wire ch1_cfg_checks_read;
-  (* init = 1'h0 *)
-  wire ch1_cfg_checks_spw_check;
-  (* init = 8'h00 *)
-  wire [7:0] ch1_cfg_checks_spw_tolerance;
+  output ch1_cfg_checks_spw_check;
+  reg ch1_cfg_checks_spw_check = 1'h0;
+  output [7:0] ch1_cfg_checks_spw_tolerance;
+  reg [7:0] ch1_cfg_checks_spw_tolerance = 8'h00;
   wire ch1_cfg_checks_write;
-  (* init = 12'h000 *)
-  wire [11:0] ch1_cfg_ma_delay_limit;
-  (* init = 16'h0000 *)
-  wire [15:0] ch1_cfg_ma_ma_half_period;
+  output [11:0] ch1_cfg_ma_delay_limit;
+  reg [11:0] ch1_cfg_ma_delay_limit = 12'h000;
+  output [15:0] ch1_cfg_ma_ma_half_period;
+  reg [15:0] ch1_cfg_ma_ma_half_period = 16'h0000;
   wire ch1_cfg_ma_read;
   wire ch1_cfg_ma_write;
   wire ch1_cfg_period_read;
-  (* init = 24'h000000 *)
-  wire [23:0] ch1_cfg_period_request_period;
+  output [23:0] ch1_cfg_period_request_period;
+  reg [23:0] ch1_cfg_period_request_period = 24'h000000;
   wire ch1_cfg_period_write;
   wire ch1_cfg_timeout_read;
-  (* init = 24'h000000 *)
-  wire [23:0] ch1_cfg_timeout_timeout_limit;
+  output [23:0] ch1_cfg_timeout_timeout_limit;
+  reg [23:0] ch1_cfg_timeout_timeout_limit = 24'h000000;
   wire ch1_cfg_timeout_write;
   wire ch1_cfg_words_read;
-  (* init = 2'h0 *)
-  wire [1:0] ch1_cfg_words_w0_crc;
-  (* init = 6'h00 *)
-  wire [5:0] ch1_cfg_words_w0_data_bits;
-  (* init = 1'h0 *)
-  wire ch1_cfg_words_w0_lc;
-  (* init = 1'h0 *)
-  wire ch1_cfg_words_w0_nenw;
-  (* init = 2'h0 *)
-  wire [1:0] ch1_cfg_words_w1_crc;
-  (* init = 6'h00 *)
-  wire [5:0] ch1_cfg_words_w1_data_bits;
-  (* init = 1'h0 *)
-  wire ch1_cfg_words_w1_enable;
-  (* init = 1'h0 *)
-  wire ch1_cfg_words_w1_lc;
-  (* init = 1'h0 *)
-  wire ch1_cfg_words_w1_nenw;
+  output [1:0] ch1_cfg_words_w0_crc;
+  reg [1:0] ch1_cfg_words_w0_crc = 2'h0;
+  output [5:0] ch1_cfg_words_w0_data_bits;
+  reg [5:0] ch1_cfg_words_w0_data_bits = 6'h00;
+  output ch1_cfg_words_w0_lc;
+  reg ch1_cfg_words_w0_lc = 1'h0;
+  output ch1_cfg_words_w0_nenw;
+  reg ch1_cfg_words_w0_nenw = 1'h0;
+  output [1:0] ch1_cfg_words_w1_crc;
+  reg [1:0] ch1_cfg_words_w1_crc = 2'h0;
+  output [5:0] ch1_cfg_words_w1_data_bits;
+  reg [5:0] ch1_cfg_words_w1_data_bits = 6'h00;
+  output ch1_cfg_words_w1_enable;
+  reg ch1_cfg_words_w1_enable = 1'h0;
+  output ch1_cfg_words_w1_lc;
+  reg ch1_cfg_words_w1_lc = 1'h0;
+  output ch1_cfg_words_w1_nenw;
+  reg ch1_cfg_words_w1_nenw = 1'h0;
   wire ch1_cfg_words_write;
   wire ch1_count_ack_read;
   wire ch1_count_ack_write;
@@ -1925,17 +2233,17 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire ch1_count_line_write;
   wire ch1_count_stop_read;
   wire ch1_count_stop_write;
-  (* init = 1'h0 *)
-  wire ch1_ctrl_abort;
-  (* init = 1'h0 *)
-  wire ch1_ctrl_clear_counters;
-  (* init = 1'h0 *)
-  wire ch1_ctrl_periodic;
+  output ch1_ctrl_abort;
+  reg ch1_ctrl_abort = 1'h0;
+  output ch1_ctrl_clear_counters;
+  reg ch1_ctrl_clear_counters = 1'h0;
+  output ch1_ctrl_periodic;
+  reg ch1_ctrl_periodic = 1'h0;
   wire ch1_ctrl_read;
-  (* init = 1'h0 *)
-  wire ch1_ctrl_start;
-  (* init = 1'h0 *)
-  wire ch1_ctrl_trigger_enable;
+  output ch1_ctrl_start;
+  reg ch1_ctrl_start = 1'h0;
+  output ch1_ctrl_trigger_enable;
+  reg ch1_ctrl_trigger_enable = 1'h0;
   wire ch1_ctrl_write;
   output ch1_irq;
   wire ch1_irq;
@@ -1949,7 +2257,38 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg ch1_irq_status_error = 1'h0;
   wire ch1_irq_status_read;
   wire ch1_irq_status_write;
-  reg [31:0] ch1_read_word = 32'd0;
+  reg ch1_read_select_100 = 1'h0;
+  reg ch1_read_select_101 = 1'h0;
+  reg ch1_read_select_102 = 1'h0;
+  reg ch1_read_select_104 = 1'h0;
+  reg ch1_read_select_105 = 1'h0;
+  reg ch1_read_select_108 = 1'h0;
+  reg ch1_read_select_109 = 1'h0;
+  reg ch1_read_select_10a = 1'h0;
+  reg ch1_read_select_10b = 1'h0;
+  reg ch1_read_select_10c = 1'h0;
+  reg ch1_read_select_10d = 1'h0;
+  reg ch1_read_select_10e = 1'h0;
+  reg ch1_read_select_110 = 1'h0;
+  reg ch1_read_select_111 = 1'h0;
+  reg ch1_read_select_112 = 1'h0;
+  reg ch1_read_select_113 = 1'h0;
+  reg ch1_read_select_114 = 1'h0;
+  reg ch1_read_select_115 = 1'h0;
+  reg ch1_read_select_116 = 1'h0;
+  reg ch1_read_select_118 = 1'h0;
+  reg ch1_read_select_119 = 1'h0;
+  reg ch1_read_select_11a = 1'h0;
+  reg ch1_read_select_11b = 1'h0;
+  reg ch1_read_select_11c = 1'h0;
+  reg ch1_read_select_11d = 1'h0;
+  reg ch1_read_select_11e = 1'h0;
+  reg ch1_read_select_140 = 1'h0;
+  reg ch1_read_select_141 = 1'h0;
+  reg ch1_read_select_142 = 1'h0;
+  reg ch1_read_select_143 = 1'h0;
+  reg ch1_read_select_144 = 1'h0;
+  reg ch1_read_select_145 = 1'h0;
   reg [12:0] ch1_result_seq_line_delay_snapshot = 13'h0000;
   wire ch1_result_seq_read;
   reg [15:0] ch1_result_seq_seq_snapshot = 16'h0000;
@@ -1995,2204 +2334,3104 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire g_irq;
   wire g_irq_pending_read;
   wire g_irq_pending_write;
-  reg [31:0] g_read_word = 32'd0;
+  reg g_read_select_0 = 1'h0;
+  reg g_read_select_1 = 1'h0;
+  reg g_read_select_2 = 1'h0;
+  reg g_read_select_3 = 1'h0;
+  reg g_read_select_4 = 1'h0;
   wire g_trigger_read;
-  (* init = 1'h0 *)
-  wire g_trigger_start;
+  output g_trigger_start;
+  reg g_trigger_start = 1'h0;
   wire g_trigger_write;
   wire g_version_read;
   wire g_version_write;
   wire [3:0] glob__channels;
   wire [7:0] glob__irq_pending;
-  output glob__trigger;
-  reg glob__trigger = 1'h0;
+  (* init = 1'h0 *)
+  wire glob__trigger;
   wire [1:0] irq;
-  input [160:0] \port$3984$0 ;
-  wire [160:0] \port$3984$0 ;
-  input [287:0] \port$3991$0 ;
-  wire [287:0] \port$3991$0 ;
-  input [9:0] \port$4105$0 ;
-  wire [9:0] \port$4105$0 ;
-  input [160:0] \port$4452$0 ;
-  wire [160:0] \port$4452$0 ;
-  input [287:0] \port$4459$0 ;
-  wire [287:0] \port$4459$0 ;
-  input [9:0] \port$4573$0 ;
-  wire [9:0] \port$4573$0 ;
-  (* init = 32'd0 *)
-  wire [31:0] read_data;
+  input [160:0] \port$4258$0 ;
+  wire [160:0] \port$4258$0 ;
+  input [287:0] \port$4265$0 ;
+  wire [287:0] \port$4265$0 ;
+  input [9:0] \port$4379$0 ;
+  wire [9:0] \port$4379$0 ;
+  input [160:0] \port$4726$0 ;
+  wire [160:0] \port$4726$0 ;
+  input [287:0] \port$4733$0 ;
+  wire [287:0] \port$4733$0 ;
+  input [9:0] \port$4847$0 ;
+  wire [9:0] \port$4847$0 ;
+  output [31:0] read_data;
+  reg [31:0] read_data = 32'd0;
   input rst;
   wire rst;
   reg window0_read = 1'h0;
   reg window1_read = 1'h0;
+  reg [10:0] write_addr = 11'h000;
+  output [31:0] write_data;
+  reg [31:0] write_data = 32'd0;
+  reg write_en = 1'h0;
+  reg [3:0] write_strb = 4'h0;
+  assign \$329  = bus__r_addr == 2'h2;
+  assign g_channels_read = bus__r_en & \$329 ;
+  assign \$330  = write_addr == 2'h3;
+  assign g_trigger_write = write_en & \$330 ;
+  assign \$331  = bus__r_addr == 2'h3;
+  assign g_trigger_read = bus__r_en & \$331 ;
+  assign \$332  = write_addr == 3'h4;
+  assign g_irq_pending_write = write_en & \$332 ;
+  assign \$333  = bus__r_addr == 3'h4;
+  assign g_irq_pending_read = bus__r_en & \$333 ;
+  assign \$334  = write_addr == 8'h80;
+  assign ch0_ctrl_write = write_en & \$334 ;
+  assign \$335  = bus__r_addr == 8'h80;
+  assign ch0_ctrl_read = bus__r_en & \$335 ;
+  assign \$336  = write_addr == 8'h81;
+  assign ch0_state_write = write_en & \$336 ;
+  assign \$337  = bus__r_addr == 8'h81;
+  assign ch0_state_read = bus__r_en & \$337 ;
+  assign \$338  = write_addr == 8'h82;
+  assign ch0_caps_write = write_en & \$338 ;
+  assign \$339  = bus__r_addr == 8'h82;
+  assign ch0_caps_read = bus__r_en & \$339 ;
+  assign \$340  = write_addr == 8'h84;
+  assign ch0_irq_status_write = write_en & \$340 ;
+  assign \$341  = bus__r_addr == 8'h84;
+  assign ch0_irq_status_read = bus__r_en & \$341 ;
+  assign \$342  = write_addr == 8'h85;
+  assign ch0_irq_enable_write = write_en & \$342 ;
+  assign \$343  = bus__r_addr == 8'h85;
+  assign ch0_irq_enable_read = bus__r_en & \$343 ;
+  assign \$344  = write_addr == 8'h88;
+  assign ch0_cfg_ma_write = write_en & \$344 ;
+  assign \$345  = bus__r_addr == 8'h88;
+  assign ch0_cfg_ma_read = bus__r_en & \$345 ;
+  assign \$346  = write_addr == 8'h89;
+  assign ch0_cfg_period_write = write_en & \$346 ;
+  assign \$347  = bus__r_addr == 8'h89;
+  assign ch0_cfg_period_read = bus__r_en & \$347 ;
+  assign \$348  = write_addr == 8'h8a;
+  assign ch0_cfg_break_write = write_en & \$348 ;
+  assign \$349  = bus__r_addr == 8'h8a;
+  assign ch0_cfg_break_read = bus__r_en & \$349 ;
+  assign \$350  = write_addr == 8'h8b;
+  assign ch0_cfg_ack_write = write_en & \$350 ;
+  assign \$351  = bus__r_addr == 8'h8b;
+  assign ch0_cfg_ack_read = bus__r_en & \$351 ;
+  assign \$352  = write_addr == 8'h8c;
+  assign ch0_cfg_timeout_write = write_en & \$352 ;
+  assign \$353  = bus__r_addr == 8'h8c;
+  assign ch0_cfg_timeout_read = bus__r_en & \$353 ;
+  assign \$354  = write_addr == 8'h8d;
+  assign ch0_cfg_words_write = write_en & \$354 ;
+  assign \$355  = bus__r_addr == 8'h8d;
+  assign ch0_cfg_words_read = bus__r_en & \$355 ;
+  assign \$356  = write_addr == 8'h8e;
+  assign ch0_cfg_checks_write = write_en & \$356 ;
+  assign \$357  = bus__r_addr == 8'h8e;
+  assign ch0_cfg_checks_read = bus__r_en & \$357 ;
+  assign \$358  = write_addr == 8'h90;
+  assign ch0_result_status_write = write_en & \$358 ;
+  assign \$359  = bus__r_addr == 8'h90;
+  assign ch0_result_status_read = bus__r_en & \$359 ;
+  assign \$360  = write_addr == 8'h91;
+  assign ch0_result_seq_write = write_en & \$360 ;
+  assign \$361  = bus__r_addr == 8'h91;
+  assign ch0_result_seq_read = bus__r_en & \$361 ;
+  assign \$362  = write_addr == 8'h92;
+  assign ch0_result_w0_lo_write = write_en & \$362 ;
+  assign \$363  = bus__r_addr == 8'h92;
+  assign ch0_result_w0_lo_read = bus__r_en & \$363 ;
+  assign \$364  = write_addr == 8'h93;
+  assign ch0_result_w0_hi_write = write_en & \$364 ;
+  assign \$365  = bus__r_addr == 8'h93;
+  assign ch0_result_w0_hi_read = bus__r_en & \$365 ;
+  assign \$366  = write_addr == 8'h94;
+  assign ch0_result_w1_lo_write = write_en & \$366 ;
+  assign \$367  = bus__r_addr == 8'h94;
+  assign ch0_result_w1_lo_read = bus__r_en & \$367 ;
+  assign \$368  = write_addr == 8'h95;
+  assign ch0_result_w1_hi_write = write_en & \$368 ;
+  assign \$369  = bus__r_addr == 8'h95;
+  assign ch0_result_w1_hi_read = bus__r_en & \$369 ;
+  assign \$370  = write_addr == 8'h96;
+  assign ch0_result_timestamp_write = write_en & \$370 ;
+  assign \$371  = bus__r_addr == 8'h96;
+  assign ch0_result_timestamp_read = bus__r_en & \$371 ;
+  assign \$372  = write_addr == 8'h98;
+  assign ch0_count_crc_write = write_en & \$372 ;
+  assign \$373  = bus__r_addr == 8'h98;
+  assign ch0_count_crc_read = bus__r_en & \$373 ;
+  assign \$374  = write_addr == 8'h99;
+  assign ch0_count_ack_write = write_en & \$374 ;
+  assign \$375  = bus__r_addr == 8'h99;
+  assign ch0_count_ack_read = bus__r_en & \$375 ;
+  assign \$376  = write_addr == 8'h9a;
+  assign ch0_count_line_write = write_en & \$376 ;
+  assign \$377  = bus__r_addr == 8'h9a;
+  assign ch0_count_line_read = bus__r_en & \$377 ;
+  assign \$378  = write_addr == 8'h9b;
+  assign ch0_count_lc_write = write_en & \$378 ;
+  assign \$379  = bus__r_addr == 8'h9b;
+  assign ch0_count_lc_read = bus__r_en & \$379 ;
+  assign \$380  = write_addr == 8'h9c;
+  assign ch0_count_check_write = write_en & \$380 ;
+  assign \$381  = bus__r_addr == 8'h9c;
+  assign ch0_count_check_read = bus__r_en & \$381 ;
+  assign \$382  = write_addr == 8'h9d;
+  assign ch0_count_cycle_write = write_en & \$382 ;
+  assign \$383  = bus__r_addr == 8'h9d;
+  assign ch0_count_cycle_read = bus__r_en & \$383 ;
+  assign \$384  = write_addr == 8'h9e;
+  assign ch0_count_stop_write = write_en & \$384 ;
+  assign \$385  = bus__r_addr == 8'h9e;
+  assign ch0_count_stop_read = bus__r_en & \$385 ;
+  assign \$386  = write_addr == 8'hc0;
+  assign ch0_ca_request_write = write_en & \$386 ;
+  assign \$387  = bus__r_addr == 8'hc0;
+  assign ch0_ca_request_read = bus__r_en & \$387 ;
+  assign \$388  = write_addr == 8'hc1;
+  assign ch0_ca_ctrl_write = write_en & \$388 ;
+  assign \$389  = bus__r_addr == 8'hc1;
+  assign ch0_ca_ctrl_read = bus__r_en & \$389 ;
+  assign \$390  = write_addr == 8'hc2;
+  assign ch0_ca_state_write = write_en & \$390 ;
+  assign \$391  = bus__r_addr == 8'hc2;
+  assign ch0_ca_state_read = bus__r_en & \$391 ;
+  assign \$392  = write_addr == 8'hc3;
+  assign ch0_ca_count_crc4_answer_write = write_en & \$392 ;
+  assign \$393  = bus__r_addr == 8'hc3;
+  assign ch0_ca_count_crc4_answer_read = bus__r_en & \$393 ;
+  assign \$394  = write_addr == 8'hc4;
+  assign ch0_ca_count_refused_aborted_write = write_en & \$394 ;
+  assign \$395  = bus__r_addr == 8'hc4;
+  assign ch0_ca_count_refused_aborted_read = bus__r_en & \$395 ;
+  assign \$396  = write_addr == 8'hc5;
+  assign ch0_ca_count_data_fault_write = write_en & \$396 ;
+  assign \$397  = bus__r_addr == 8'hc5;
+  assign ch0_ca_count_data_fault_read = bus__r_en & \$397 ;
+  assign \$398  = write_addr[10:4] == 4'hd;
+  assign \$399  = write_en & \$398 ;
+  assign ch0__ca_wbuf_en = \$399  ? write_strb : 4'h0;
+  assign \$400  = bus__r_addr[10:4] == 4'he;
+  assign ch0__ca_rbuf_en = bus__r_en & \$400 ;
+  assign \$401  = ch0_irq_status_done & ch0_irq_enable_done;
+  assign \$403  = ch0_irq_status_error & ch0_irq_enable_error;
+  assign \$405  = ch0_irq_status_access_done & ch0_irq_enable_access_done;
+  assign ch0_irq = | { \$406 , \$404 , \$402  };
+  assign \$407  = write_addr == 9'h100;
+  assign ch1_ctrl_write = write_en & \$407 ;
+  assign \$408  = bus__r_addr == 9'h100;
+  assign ch1_ctrl_read = bus__r_en & \$408 ;
+  assign \$409  = write_addr == 9'h101;
+  assign ch1_state_write = write_en & \$409 ;
+  assign \$410  = bus__r_addr == 9'h101;
+  assign ch1_state_read = bus__r_en & \$410 ;
+  assign \$411  = write_addr == 9'h102;
+  assign ch1_caps_write = write_en & \$411 ;
+  assign \$412  = bus__r_addr == 9'h102;
+  assign ch1_caps_read = bus__r_en & \$412 ;
+  assign \$413  = write_addr == 9'h104;
+  assign ch1_irq_status_write = write_en & \$413 ;
+  assign \$414  = bus__r_addr == 9'h104;
+  assign ch1_irq_status_read = bus__r_en & \$414 ;
+  assign \$415  = write_addr == 9'h105;
+  assign ch1_irq_enable_write = write_en & \$415 ;
+  assign \$416  = bus__r_addr == 9'h105;
+  assign ch1_irq_enable_read = bus__r_en & \$416 ;
+  assign \$417  = write_addr == 9'h108;
+  assign ch1_cfg_ma_write = write_en & \$417 ;
+  assign \$418  = bus__r_addr == 9'h108;
+  assign ch1_cfg_ma_read = bus__r_en & \$418 ;
+  assign \$419  = write_addr == 9'h109;
+  assign ch1_cfg_period_write = write_en & \$419 ;
+  assign \$420  = bus__r_addr == 9'h109;
+  assign ch1_cfg_period_read = bus__r_en & \$420 ;
+  assign \$421  = write_addr == 9'h10a;
+  assign ch1_cfg_break_write = write_en & \$421 ;
+  assign \$422  = bus__r_addr == 9'h10a;
+  assign ch1_cfg_break_read = bus__r_en & \$422 ;
+  assign \$423  = write_addr == 9'h10b;
+  assign ch1_cfg_ack_write = write_en & \$423 ;
+  assign \$424  = bus__r_addr == 9'h10b;
+  assign ch1_cfg_ack_read = bus__r_en & \$424 ;
+  assign \$425  = write_addr == 9'h10c;
+  assign ch1_cfg_timeout_write = write_en & \$425 ;
+  assign \$426  = bus__r_addr == 9'h10c;
+  assign ch1_cfg_timeout_read = bus__r_en & \$426 ;
+  assign \$427  = write_addr == 9'h10d;
+  assign ch1_cfg_words_write = write_en & \$427 ;
+  assign \$428  = bus__r_addr == 9'h10d;
+  assign ch1_cfg_words_read = bus__r_en & \$428 ;
+  assign \$429  = write_addr == 9'h10e;
+  assign ch1_cfg_checks_write = write_en & \$429 ;
+  assign \$430  = bus__r_addr == 9'h10e;
+  assign ch1_cfg_checks_read = bus__r_en & \$430 ;
+  assign \$431  = write_addr == 9'h110;
+  assign ch1_result_status_write = write_en & \$431 ;
+  assign \$432  = bus__r_addr == 9'h110;
+  assign ch1_result_status_read = bus__r_en & \$432 ;
+  assign \$433  = write_addr == 9'h111;
+  assign ch1_result_seq_write = write_en & \$433 ;
+  assign \$434  = bus__r_addr == 9'h111;
+  assign ch1_result_seq_read = bus__r_en & \$434 ;
+  assign \$435  = write_addr == 9'h112;
+  assign ch1_result_w0_lo_write = write_en & \$435 ;
+  assign \$436  = bus__r_addr == 9'h112;
+  assign ch1_result_w0_lo_read = bus__r_en & \$436 ;
+  assign \$437  = write_addr == 9'h113;
+  assign ch1_result_w0_hi_write = write_en & \$437 ;
+  assign \$438  = bus__r_addr == 9'h113;
+  assign ch1_result_w0_hi_read = bus__r_en & \$438 ;
+  assign \$439  = write_addr == 9'h114;
+  assign ch1_result_w1_lo_write = write_en & \$439 ;
+  assign \$440  = bus__r_addr == 9'h114;
+  assign ch1_result_w1_lo_read = bus__r_en & \$440 ;
+  assign \$441  = write_addr == 9'h115;
+  assign ch1_result_w1_hi_write = write_en & \$441 ;
+  assign \$442  = bus__r_addr == 9'h115;
+  assign ch1_result_w1_hi_read = bus__r_en & \$442 ;
+  assign \$443  = write_addr == 9'h116;
+  assign ch1_result_timestamp_write = write_en & \$443 ;
+  assign \$444  = bus__r_addr == 9'h116;
+  assign ch1_result_timestamp_read = bus__r_en & \$444 ;
+  assign \$445  = write_addr == 9'h118;
+  assign ch1_count_crc_write = write_en & \$445 ;
+  assign \$446  = bus__r_addr == 9'h118;
+  assign ch1_count_crc_read = bus__r_en & \$446 ;
+  assign \$447  = write_addr == 9'h119;
+  assign ch1_count_ack_write = write_en & \$447 ;
+  assign \$448  = bus__r_addr == 9'h119;
+  assign ch1_count_ack_read = bus__r_en & \$448 ;
+  assign \$449  = write_addr == 9'h11a;
+  assign ch1_count_line_write = write_en & \$449 ;
+  assign \$450  = bus__r_addr == 9'h11a;
+  assign ch1_count_line_read = bus__r_en & \$450 ;
+  assign \$451  = write_addr == 9'h11b;
+  assign ch1_count_lc_write = write_en & \$451 ;
+  assign \$452  = bus__r_addr == 9'h11b;
+  assign ch1_count_lc_read = bus__r_en & \$452 ;
+  assign \$453  = write_addr == 9'h11c;
+  assign ch1_count_check_write = write_en & \$453 ;
+  assign \$454  = bus__r_addr == 9'h11c;
+  assign ch1_count_check_read = bus__r_en & \$454 ;
+  assign \$455  = write_addr == 9'h11d;
+  assign ch1_count_cycle_write = write_en & \$455 ;
+  assign \$456  = bus__r_addr == 9'h11d;
+  assign ch1_count_cycle_read = bus__r_en & \$456 ;
+  assign \$457  = write_addr == 9'h11e;
+  assign ch1_count_stop_write = write_en & \$457 ;
+  assign \$458  = bus__r_addr == 9'h11e;
+  assign ch1_count_stop_read = bus__r_en & \$458 ;
+  assign \$459  = write_addr == 9'h140;
+  assign ch1_ca_request_write = write_en & \$459 ;
+  assign \$460  = bus__r_addr == 9'h140;
+  assign ch1_ca_request_read = bus__r_en & \$460 ;
+  assign \$461  = write_addr == 9'h141;
+  assign ch1_ca_ctrl_write = write_en & \$461 ;
+  assign \$462  = bus__r_addr == 9'h141;
+  assign ch1_ca_ctrl_read = bus__r_en & \$462 ;
+  assign \$463  = write_addr == 9'h142;
+  assign ch1_ca_state_write = write_en & \$463 ;
+  assign \$464  = bus__r_addr == 9'h142;
+  assign ch1_ca_state_read = bus__r_en & \$464 ;
+  assign \$465  = write_addr == 9'h143;
+  assign ch1_ca_count_crc4_answer_write = write_en & \$465 ;
+  assign \$466  = bus__r_addr == 9'h143;
+  assign ch1_ca_count_crc4_answer_read = bus__r_en & \$466 ;
+  assign \$467  = write_addr == 9'h144;
+  assign ch1_ca_count_refused_aborted_write = write_en & \$467 ;
+  assign \$468  = bus__r_addr == 9'h144;
+  assign ch1_ca_count_refused_aborted_read = bus__r_en & \$468 ;
+  assign \$469  = write_addr == 9'h145;
+  assign ch1_ca_count_data_fault_write = write_en & \$469 ;
+  assign \$470  = bus__r_addr == 9'h145;
+  assign ch1_ca_count_data_fault_read = bus__r_en & \$470 ;
+  assign \$471  = write_addr[10:4] == 5'h15;
+  assign \$472  = write_en & \$471 ;
+  assign ch1__ca_wbuf_en = \$472  ? write_strb : 4'h0;
+  assign \$473  = bus__r_addr[10:4] == 5'h16;
+  assign ch1__ca_rbuf_en = bus__r_en & \$473 ;
+  assign \$474  = ch1_irq_status_done & ch1_irq_enable_done;
+  assign \$476  = ch1_irq_status_error & ch1_irq_enable_error;
+  assign \$478  = ch1_irq_status_access_done & ch1_irq_enable_access_done;
+  assign ch1_irq = | { \$479 , \$477 , \$475  };
   always @(posedge clk)
-    ch1_result_status_status_snapshot <= \$369 ;
+    write_en <= \$480 ;
   always @(posedge clk)
-    ch1_result_status_cds_snapshot <= \$370 ;
+    write_addr <= \$481 ;
   always @(posedge clk)
-    ch1_result_status_w0_ne_snapshot <= \$371 ;
+    write_data <= \$482 ;
   always @(posedge clk)
-    ch1_result_status_w0_nw_snapshot <= \$372 ;
+    write_strb <= \$483 ;
   always @(posedge clk)
-    ch1_result_status_w0_crc_ok_snapshot <= \$373 ;
+    g_trigger_start <= \$484 ;
   always @(posedge clk)
-    ch1_result_status_w1_ne_snapshot <= \$374 ;
+    g_read_select_0 <= \$485 ;
   always @(posedge clk)
-    ch1_result_status_w1_nw_snapshot <= \$375 ;
+    g_read_select_1 <= \$486 ;
   always @(posedge clk)
-    ch1_result_status_w1_crc_ok_snapshot <= \$376 ;
+    g_read_select_2 <= \$487 ;
   always @(posedge clk)
-    ch1_result_status_lc_repeat_snapshot <= \$377 ;
+    g_read_select_3 <= \$488 ;
   always @(posedge clk)
-    ch1_result_status_lc_skip_snapshot <= \$378 ;
+    g_read_select_4 <= \$489 ;
   always @(posedge clk)
-    ch1_result_status_lc_zero_snapshot <= \$379 ;
+    ch0_ctrl_start <= \$490 ;
   always @(posedge clk)
-    ch1_result_status_spw_mismatch_snapshot <= \$380 ;
+    ch0_ctrl_abort <= \$491 ;
   always @(posedge clk)
-    ch1_result_status_lc_snapshot <= \$381 ;
+    ch0_ctrl_clear_counters <= \$492 ;
   always @(posedge clk)
-    ch1_result_seq_seq_snapshot <= \$382 ;
+    ch0_ctrl_periodic <= \$493 ;
   always @(posedge clk)
-    ch1_result_seq_line_delay_snapshot <= \$383 ;
+    ch0_ctrl_trigger_enable <= \$494 ;
   always @(posedge clk)
-    ch1_result_w0_lo_data_snapshot <= \$384 ;
+    ch0_irq_status_done <= \$495 ;
   always @(posedge clk)
-    ch1_result_w0_hi_data_snapshot <= \$385 ;
+    ch0_irq_status_error <= \$496 ;
   always @(posedge clk)
-    ch1_result_w1_lo_data_snapshot <= \$386 ;
+    ch0_irq_status_access_done <= \$497 ;
   always @(posedge clk)
-    ch1_result_w1_hi_data_snapshot <= \$387 ;
+    ch0_irq_enable_done <= \$498 ;
   always @(posedge clk)
-    ch1_result_timestamp_time_snapshot <= \$388 ;
+    ch0_irq_enable_error <= \$499 ;
   always @(posedge clk)
-    ch1_read_word <= \$389 ;
+    ch0_irq_enable_access_done <= \$500 ;
   always @(posedge clk)
-    window0_read <= \$390 ;
+    ch0_cfg_ma_ma_half_period <= \$501 ;
   always @(posedge clk)
-    window1_read <= \$391 ;
+    ch0_cfg_ma_delay_limit <= \$502 ;
   always @(posedge clk)
-    bus__r_data <= \$392 ;
-  assign \$1  = ! bus__w_addr;
-  assign g_id_write = bus__w_en & \$1 ;
-  assign \$2  = ! bus__r_addr;
-  assign g_id_read = bus__r_en & \$2 ;
-  assign \$3  = bus__w_addr == 1'h1;
-  assign g_version_write = bus__w_en & \$3 ;
+    ch0_cfg_period_request_period <= \$503 ;
+  always @(posedge clk)
+    ch0_cfg_break_break_time <= \$504 ;
+  always @(posedge clk)
+    ch0_cfg_ack_ack_limit <= \$505 ;
+  always @(posedge clk)
+    ch0_cfg_timeout_timeout_limit <= \$506 ;
+  always @(posedge clk)
+    ch0_cfg_words_w0_data_bits <= \$507 ;
+  always @(posedge clk)
+    ch0_cfg_words_w0_nenw <= \$508 ;
+  always @(posedge clk)
+    ch0_cfg_words_w0_lc <= \$509 ;
+  always @(posedge clk)
+    ch0_cfg_words_w0_crc <= \$510 ;
+  always @(posedge clk)
+    ch0_cfg_words_w1_data_bits <= \$511 ;
+  always @(posedge clk)
+    ch0_cfg_words_w1_nenw <= \$512 ;
+  always @(posedge clk)
+    ch0_cfg_words_w1_lc <= \$513 ;
+  always @(posedge clk)
+    ch0_cfg_words_w1_crc <= \$514 ;
+  always @(posedge clk)
+    ch0_cfg_words_w1_enable <= \$515 ;
+  always @(posedge clk)
+    ch0_cfg_checks_end_check <= \$516 ;
+  always @(posedge clk)
+    ch0_cfg_checks_spw_check <= \$517 ;
+  always @(posedge clk)
+    ch0_cfg_checks_spw_tolerance <= \$518 ;
+  always @(posedge clk)
+    ch0_ca_request_slave_id <= \$519 ;
+  always @(posedge clk)
+    ch0_ca_request_address <= \$520 ;
+  always @(posedge clk)
+    ch0_ca_request_count <= \$521 ;
+  always @(posedge clk)
+    \ch0_ca_request_write$65  <= \$522 ;
+  always @(posedge clk)
+    ch0_ca_ctrl_start <= \$523 ;
+  always @(posedge clk)
+    ch0_ca_ctrl_abort <= \$524 ;
+  always @(posedge clk)
+    ch0_result_status_status_snapshot <= \$525 ;
+  always @(posedge clk)
+    ch0_result_status_cds_snapshot <= \$526 ;
+  always @(posedge clk)
+    ch0_result_status_w0_ne_snapshot <= \$527 ;
+  always @(posedge clk)
+    ch0_result_status_w0_nw_snapshot <= \$528 ;
+  always @(posedge clk)
+    ch0_result_status_w0_crc_ok_snapshot <= \$529 ;
+  always @(posedge clk)
+    ch0_result_status_w1_ne_snapshot <= \$530 ;
+  always @(posedge clk)
+    ch0_result_status_w1_nw_snapshot <= \$531 ;
+  always @(posedge clk)
+    ch0_result_status_w1_crc_ok_snapshot <= \$532 ;
+  always @(posedge clk)
+    ch0_result_status_lc_repeat_snapshot <= \$533 ;
+  always @(posedge clk)
+    ch0_result_status_lc_skip_snapshot <= \$534 ;
+  always @(posedge clk)
+    ch0_result_status_lc_zero_snapshot <= \$535 ;
+  always @(posedge clk)
+    ch0_result_status_spw_mismatch_snapshot <= \$536 ;
+  always @(posedge clk)
+    ch0_result_status_lc_snapshot <= \$537 ;
+  always @(posedge clk)
+    ch0_result_seq_seq_snapshot <= \$538 ;
+  always @(posedge clk)
+    ch0_result_seq_line_delay_snapshot <= \$539 ;
+  always @(posedge clk)
+    ch0_result_w0_lo_data_snapshot <= \$540 ;
+  always @(posedge clk)
+    ch0_result_w0_hi_data_snapshot <= \$541 ;
+  always @(posedge clk)
+    ch0_result_w1_lo_data_snapshot <= \$542 ;
+  always @(posedge clk)
+    ch0_result_w1_hi_data_snapshot <= \$543 ;
+  always @(posedge clk)
+    ch0_result_timestamp_time_snapshot <= \$544 ;
+  always @(posedge clk)
+    ch0_read_select_80 <= \$545 ;
+  always @(posedge clk)
+    ch0_read_select_81 <= \$546 ;
+  always @(posedge clk)
+    ch0_read_select_82 <= \$547 ;
+  always @(posedge clk)
+    ch0_read_select_84 <= \$548 ;
+  always @(posedge clk)
+    ch0_read_select_85 <= \$549 ;
+  always @(posedge clk)
+    ch0_read_select_88 <= \$550 ;
+  always @(posedge clk)
+    ch0_read_select_89 <= \$551 ;
+  always @(posedge clk)
+    ch0_read_select_8a <= \$552 ;
+  always @(posedge clk)
+    ch0_read_select_8b <= \$553 ;
+  always @(posedge clk)
+    ch0_read_select_8c <= \$554 ;
+  always @(posedge clk)
+    ch0_read_select_8d <= \$555 ;
+  always @(posedge clk)
+    ch0_read_select_8e <= \$556 ;
+  always @(posedge clk)
+    ch0_read_select_90 <= \$557 ;
+  always @(posedge clk)
+    ch0_read_select_91 <= \$558 ;
+  always @(posedge clk)
+    ch0_read_select_92 <= \$559 ;
+  always @(posedge clk)
+    ch0_read_select_93 <= \$560 ;
+  always @(posedge clk)
+    ch0_read_select_94 <= \$561 ;
+  always @(posedge clk)
+    ch0_read_select_95 <= \$562 ;
+  always @(posedge clk)
+    ch0_read_select_96 <= \$563 ;
+  always @(posedge clk)
+    ch0_read_select_98 <= \$564 ;
+  always @(posedge clk)
+    ch0_read_select_99 <= \$565 ;
+  always @(posedge clk)
+    ch0_read_select_9a <= \$566 ;
+  always @(posedge clk)
+    ch0_read_select_9b <= \$567 ;
+  always @(posedge clk)
+    ch0_read_select_9c <= \$568 ;
+  always @(posedge clk)
+    ch0_read_select_9d <= \$569 ;
+  always @(posedge clk)
+    ch0_read_select_9e <= \$570 ;
+  always @(posedge clk)
+    ch0_read_select_c0 <= \$571 ;
+  always @(posedge clk)
+    ch0_read_select_c1 <= \$572 ;
+  always @(posedge clk)
+    ch0_read_select_c2 <= \$573 ;
+  always @(posedge clk)
+    ch0_read_select_c3 <= \$574 ;
+  always @(posedge clk)
+    ch0_read_select_c4 <= \$575 ;
+  always @(posedge clk)
+    ch0_read_select_c5 <= \$576 ;
+  always @(posedge clk)
+    ch1_ctrl_start <= \$577 ;
+  always @(posedge clk)
+    ch1_ctrl_abort <= \$578 ;
+  always @(posedge clk)
+    ch1_ctrl_clear_counters <= \$579 ;
+  always @(posedge clk)
+    ch1_ctrl_periodic <= \$580 ;
+  always @(posedge clk)
+    ch1_ctrl_trigger_enable <= \$581 ;
+  always @(posedge clk)
+    ch1_irq_status_done <= \$582 ;
+  always @(posedge clk)
+    ch1_irq_status_error <= \$583 ;
+  always @(posedge clk)
+    ch1_irq_status_access_done <= \$584 ;
+  always @(posedge clk)
+    ch1_irq_enable_done <= \$585 ;
+  always @(posedge clk)
+    ch1_irq_enable_error <= \$586 ;
+  always @(posedge clk)
+    ch1_irq_enable_access_done <= \$587 ;
+  always @(posedge clk)
+    ch1_cfg_ma_ma_half_period <= \$588 ;
+  always @(posedge clk)
+    ch1_cfg_ma_delay_limit <= \$589 ;
+  always @(posedge clk)
+    ch1_cfg_period_request_period <= \$590 ;
+  always @(posedge clk)
+    ch1_cfg_break_break_time <= \$591 ;
+  always @(posedge clk)
+    ch1_cfg_ack_ack_limit <= \$592 ;
+  always @(posedge clk)
+    ch1_cfg_timeout_timeout_limit <= \$593 ;
+  always @(posedge clk)
+    ch1_cfg_words_w0_data_bits <= \$594 ;
+  always @(posedge clk)
+    ch1_cfg_words_w0_nenw <= \$595 ;
+  always @(posedge clk)
+    ch1_cfg_words_w0_lc <= \$596 ;
+  always @(posedge clk)
+    ch1_cfg_words_w0_crc <= \$597 ;
+  always @(posedge clk)
+    ch1_cfg_words_w1_data_bits <= \$598 ;
+  always @(posedge clk)
+    ch1_cfg_words_w1_nenw <= \$599 ;
+  always @(posedge clk)
+    ch1_cfg_words_w1_lc <= \$600 ;
+  always @(posedge clk)
+    ch1_cfg_words_w1_crc <= \$601 ;
+  always @(posedge clk)
+    ch1_cfg_words_w1_enable <= \$602 ;
+  always @(posedge clk)
+    ch1_cfg_checks_end_check <= \$603 ;
+  always @(posedge clk)
+    ch1_cfg_checks_spw_check <= \$604 ;
+  always @(posedge clk)
+    ch1_cfg_checks_spw_tolerance <= \$605 ;
+  always @(posedge clk)
+    ch1_ca_request_slave_id <= \$606 ;
+  always @(posedge clk)
+    ch1_ca_request_address <= \$607 ;
+  always @(posedge clk)
+    ch1_ca_request_count <= \$608 ;
+  always @(posedge clk)
+    \ch1_ca_request_write$186  <= \$609 ;
+  always @(posedge clk)
+    ch1_ca_ctrl_start <= \$610 ;
+  always @(posedge clk)
+    ch1_ca_ctrl_abort <= \$611 ;
+  always @(posedge clk)
+    ch1_result_status_status_snapshot <= \$612 ;
+  always @(posedge clk)
+    ch1_result_status_cds_snapshot <= \$613 ;
+  always @(posedge clk)
+    ch1_result_status_w0_ne_snapshot <= \$614 ;
+  always @(posedge clk)
+    ch1_result_status_w0_nw_snapshot <= \$615 ;
+  always @(posedge clk)
+    ch1_result_status_w0_crc_ok_snapshot <= \$616 ;
+  always @(posedge clk)
+    ch1_result_status_w1_ne_snapshot <= \$617 ;
+  always @(posedge clk)
+    ch1_result_status_w1_nw_snapshot <= \$618 ;
+  always @(posedge clk)
+    ch1_result_status_w1_crc_ok_snapshot <= \$619 ;
+  always @(posedge clk)
+    ch1_result_status_lc_repeat_snapshot <= \$620 ;
+  always @(posedge clk)
+    ch1_result_status_lc_skip_snapshot <= \$621 ;
+  always @(posedge clk)
+    ch1_result_status_lc_zero_snapshot <= \$622 ;
+  always @(posedge clk)
+    ch1_result_status_spw_mismatch_snapshot <= \$623 ;
+  always @(posedge clk)
+    ch1_result_status_lc_snapshot <= \$624 ;
+  always @(posedge clk)
+    ch1_result_seq_seq_snapshot <= \$625 ;
+  always @(posedge clk)
+    ch1_result_seq_line_delay_snapshot <= \$626 ;
+  always @(posedge clk)
+    ch1_result_w0_lo_data_snapshot <= \$627 ;
+  always @(posedge clk)
+    ch1_result_w0_hi_data_snapshot <= \$628 ;
+  always @(posedge clk)
+    ch1_result_w1_lo_data_snapshot <= \$629 ;
+  always @(posedge clk)
+    ch1_result_w1_hi_data_snapshot <= \$630 ;
+  always @(posedge clk)
+    ch1_result_timestamp_time_snapshot <= \$631 ;
+  always @(posedge clk)
+    ch1_read_select_100 <= \$632 ;
+  always @(posedge clk)
+    ch1_read_select_101 <= \$633 ;
+  always @(posedge clk)
+    ch1_read_select_102 <= \$634 ;
+  always @(posedge clk)
+    ch1_read_select_104 <= \$635 ;
+  always @(posedge clk)
+    ch1_read_select_105 <= \$636 ;
+  always @(posedge clk)
+    ch1_read_select_108 <= \$637 ;
+  always @(posedge clk)
+    ch1_read_select_109 <= \$638 ;
+  always @(posedge clk)
+    ch1_read_select_10a <= \$639 ;
+  always @(posedge clk)
+    ch1_read_select_10b <= \$640 ;
+  always @(posedge clk)
+    ch1_read_select_10c <= \$641 ;
+  always @(posedge clk)
+    ch1_read_select_10d <= \$642 ;
+  always @(posedge clk)
+    ch1_read_select_10e <= \$643 ;
+  always @(posedge clk)
+    ch1_read_select_110 <= \$644 ;
+  always @(posedge clk)
+    ch1_read_select_111 <= \$645 ;
+  always @(posedge clk)
+    ch1_read_select_112 <= \$646 ;
+  always @(posedge clk)
+    ch1_read_select_113 <= \$647 ;
+  always @(posedge clk)
+    ch1_read_select_114 <= \$648 ;
+  always @(posedge clk)
+    ch1_read_select_115 <= \$649 ;
+  always @(posedge clk)
+    ch1_read_select_116 <= \$650 ;
+  always @(posedge clk)
+    ch1_read_select_118 <= \$651 ;
+  always @(posedge clk)
+    ch1_read_select_119 <= \$652 ;
+  always @(posedge clk)
+    ch1_read_select_11a <= \$653 ;
+  always @(posedge clk)
+    ch1_read_select_11b <= \$654 ;
+  always @(posedge clk)
+    ch1_read_select_11c <= \$655 ;
+  always @(posedge clk)
+    ch1_read_select_11d <= \$656 ;
+  always @(posedge clk)
+    ch1_read_select_11e <= \$657 ;
+  always @(posedge clk)
+    ch1_read_select_140 <= \$658 ;
+  always @(posedge clk)
+    ch1_read_select_141 <= \$659 ;
+  always @(posedge clk)
+    ch1_read_select_142 <= \$660 ;
+  always @(posedge clk)
+    ch1_read_select_143 <= \$661 ;
+  always @(posedge clk)
+    ch1_read_select_144 <= \$662 ;
+  always @(posedge clk)
+    ch1_read_select_145 <= \$663 ;
+  always @(posedge clk)
+    window0_read <= \$664 ;
+  always @(posedge clk)
+    window1_read <= \$665 ;
+  always @(posedge clk)
+    read_data <= \$666 ;
+  assign \$1  = write_data[0] & write_strb[0];
+  assign \$2  = g_trigger_write ? \$1  : 1'h0;
+  assign \$3  = ! bus__r_addr;
   assign \$4  = bus__r_addr == 1'h1;
-  assign g_version_read = bus__r_en & \$4 ;
-  assign \$5  = bus__w_addr == 2'h2;
-  assign g_channels_write = bus__w_en & \$5 ;
-  assign \$6  = bus__r_addr == 2'h2;
-  assign g_channels_read = bus__r_en & \$6 ;
-  assign \$7  = bus__w_addr == 2'h3;
-  assign g_trigger_write = bus__w_en & \$7 ;
-  assign \$8  = bus__r_addr == 2'h3;
-  assign g_trigger_read = bus__r_en & \$8 ;
-  assign \$9  = bus__w_addr == 3'h4;
-  assign g_irq_pending_write = bus__w_en & \$9 ;
-  assign \$10  = bus__r_addr == 3'h4;
-  assign g_irq_pending_read = bus__r_en & \$10 ;
-  assign \$11  = bus__w_addr == 8'h80;
-  assign ch0_ctrl_write = bus__w_en & \$11 ;
-  assign \$12  = bus__r_addr == 8'h80;
-  assign ch0_ctrl_read = bus__r_en & \$12 ;
-  assign \$13  = bus__w_addr == 8'h81;
-  assign ch0_state_write = bus__w_en & \$13 ;
-  assign \$14  = bus__r_addr == 8'h81;
-  assign ch0_state_read = bus__r_en & \$14 ;
-  assign \$15  = bus__w_addr == 8'h82;
-  assign ch0_caps_write = bus__w_en & \$15 ;
-  assign \$16  = bus__r_addr == 8'h82;
-  assign ch0_caps_read = bus__r_en & \$16 ;
-  assign \$17  = bus__w_addr == 8'h84;
-  assign ch0_irq_status_write = bus__w_en & \$17 ;
-  assign \$18  = bus__r_addr == 8'h84;
-  assign ch0_irq_status_read = bus__r_en & \$18 ;
-  assign \$19  = bus__w_addr == 8'h85;
-  assign ch0_irq_enable_write = bus__w_en & \$19 ;
-  assign \$20  = bus__r_addr == 8'h85;
-  assign ch0_irq_enable_read = bus__r_en & \$20 ;
-  assign \$21  = bus__w_addr == 8'h88;
-  assign ch0_cfg_ma_write = bus__w_en & \$21 ;
-  assign \$22  = bus__r_addr == 8'h88;
-  assign ch0_cfg_ma_read = bus__r_en & \$22 ;
-  assign \$23  = bus__w_addr == 8'h89;
-  assign ch0_cfg_period_write = bus__w_en & \$23 ;
-  assign \$24  = bus__r_addr == 8'h89;
-  assign ch0_cfg_period_read = bus__r_en & \$24 ;
-  assign \$25  = bus__w_addr == 8'h8a;
-  assign ch0_cfg_break_write = bus__w_en & \$25 ;
-  assign \$26  = bus__r_addr == 8'h8a;
-  assign ch0_cfg_break_read = bus__r_en & \$26 ;
-  assign \$27  = bus__w_addr == 8'h8b;
-  assign ch0_cfg_ack_write = bus__w_en & \$27 ;
-  assign \$28  = bus__r_addr == 8'h8b;
-  assign ch0_cfg_ack_read = bus__r_en & \$28 ;
-  assign \$29  = bus__w_addr == 8'h8c;
-  assign ch0_cfg_timeout_write = bus__w_en & \$29 ;
-  assign \$30  = bus__r_addr == 8'h8c;
-  assign ch0_cfg_timeout_read = bus__r_en & \$30 ;
-  assign \$31  = bus__w_addr == 8'h8d;
-  assign ch0_cfg_words_write = bus__w_en & \$31 ;
-  assign \$32  = bus__r_addr == 8'h8d;
-  assign ch0_cfg_words_read = bus__r_en & \$32 ;
-  assign \$33  = bus__w_addr == 8'h8e;
-  assign ch0_cfg_checks_write = bus__w_en & \$33 ;
-  assign \$34  = bus__r_addr == 8'h8e;
-  assign ch0_cfg_checks_read = bus__r_en & \$34 ;
-  assign \$35  = bus__w_addr == 8'h90;
-  assign ch0_result_status_write = bus__w_en & \$35 ;
-  assign \$36  = bus__r_addr == 8'h90;
-  assign ch0_result_status_read = bus__r_en & \$36 ;
-  assign \$37  = bus__w_addr == 8'h91;
-  assign ch0_result_seq_write = bus__w_en & \$37 ;
-  assign \$38  = bus__r_addr == 8'h91;
-  assign ch0_result_seq_read = bus__r_en & \$38 ;
-  assign \$39  = bus__w_addr == 8'h92;
-  assign ch0_result_w0_lo_write = bus__w_en & \$39 ;
-  assign \$40  = bus__r_addr == 8'h92;
-  assign ch0_result_w0_lo_read = bus__r_en & \$40 ;
-  assign \$41  = bus__w_addr == 8'h93;
-  assign ch0_result_w0_hi_write = bus__w_en & \$41 ;
-  assign \$42  = bus__r_addr == 8'h93;
-  assign ch0_result_w0_hi_read = bus__r_en & \$42 ;
-  assign \$43  = bus__w_addr == 8'h94;
-  assign ch0_result_w1_lo_write = bus__w_en & \$43 ;
-  assign \$44  = bus__r_addr == 8'h94;
-  assign ch0_result_w1_lo_read = bus__r_en & \$44 ;
-  assign \$45  = bus__w_addr == 8'h95;
-  assign ch0_result_w1_hi_write = bus__w_en & \$45 ;
-  assign \$46  = bus__r_addr == 8'h95;
-  assign ch0_result_w1_hi_read = bus__r_en & \$46 ;
-  assign \$47  = bus__w_addr == 8'h96;
-  assign ch0_result_timestamp_write = bus__w_en & \$47 ;
-  assign \$48  = bus__r_addr == 8'h96;
-  assign ch0_result_timestamp_read = bus__r_en & \$48 ;
-  assign \$49  = bus__w_addr == 8'h98;
-  assign ch0_count_crc_write = bus__w_en & \$49 ;
-  assign \$50  = bus__r_addr == 8'h98;
-  assign ch0_count_crc_read = bus__r_en & \$50 ;
-  assign \$51  = bus__w_addr == 8'h99;
-  assign ch0_count_ack_write = bus__w_en & \$51 ;
-  assign \$52  = bus__r_addr == 8'h99;
-  assign ch0_count_ack_read = bus__r_en & \$52 ;
-  assign \$53  = bus__w_addr == 8'h9a;
-  assign ch0_count_line_write = bus__w_en & \$53 ;
-  assign \$54  = bus__r_addr == 8'h9a;
-  assign ch0_count_line_read = bus__r_en & \$54 ;
-  assign \$55  = bus__w_addr == 8'h9b;
-  assign ch0_count_lc_write = bus__w_en & \$55 ;
-  assign \$56  = bus__r_addr == 8'h9b;
-  assign ch0_count_lc_read = bus__r_en & \$56 ;
-  assign \$57  = bus__w_addr == 8'h9c;
-  assign ch0_count_check_write = bus__w_en & \$57 ;
-  assign \$58  = bus__r_addr == 8'h9c;
-  assign ch0_count_check_read = bus__r_en & \$58 ;
-  assign \$59  = bus__w_addr == 8'h9d;
-  assign ch0_count_cycle_write = bus__w_en & \$59 ;
-  assign \$60  = bus__r_addr == 8'h9d;
-  assign ch0_count_cycle_read = bus__r_en & \$60 ;
-  assign \$61  = bus__w_addr == 8'h9e;
-  assign ch0_count_stop_write = bus__w_en & \$61 ;
-  assign \$62  = bus__r_addr == 8'h9e;
-  assign ch0_count_stop_read = bus__r_en & \$62 ;
-  assign \$63  = bus__w_addr == 8'hc0;
-  assign ch0_ca_request_write = bus__w_en & \$63 ;
-  assign \$64  = bus__r_addr == 8'hc0;
-  assign ch0_ca_request_read = bus__r_en & \$64 ;
-  assign \$65  = bus__w_addr == 8'hc1;
-  assign ch0_ca_ctrl_write = bus__w_en & \$65 ;
-  assign \$66  = bus__r_addr == 8'hc1;
-  assign ch0_ca_ctrl_read = bus__r_en & \$66 ;
-  assign \$67  = bus__w_addr == 8'hc2;
-  assign ch0_ca_state_write = bus__w_en & \$67 ;
-  assign \$68  = bus__r_addr == 8'hc2;
-  assign ch0_ca_state_read = bus__r_en & \$68 ;
-  assign \$69  = bus__w_addr == 8'hc3;
-  assign ch0_ca_count_crc4_answer_write = bus__w_en & \$69 ;
-  assign \$70  = bus__r_addr == 8'hc3;
-  assign ch0_ca_count_crc4_answer_read = bus__r_en & \$70 ;
-  assign \$71  = bus__w_addr == 8'hc4;
-  assign ch0_ca_count_refused_aborted_write = bus__w_en & \$71 ;
-  assign \$72  = bus__r_addr == 8'hc4;
-  assign ch0_ca_count_refused_aborted_read = bus__r_en & \$72 ;
-  assign \$73  = bus__w_addr == 8'hc5;
-  assign ch0_ca_count_data_fault_write = bus__w_en & \$73 ;
-  assign \$74  = bus__r_addr == 8'hc5;
-  assign ch0_ca_count_data_fault_read = bus__r_en & \$74 ;
-  assign \$75  = bus__w_addr[10:4] == 4'hd;
-  assign \$76  = bus__w_en & \$75 ;
-  assign ch0__ca_wbuf_en = \$76  ? bus__w_strb : 4'h0;
-  assign \$77  = bus__r_addr[10:4] == 4'he;
-  assign ch0__ca_rbuf_en = bus__r_en & \$77 ;
-  assign \$78  = ch0_irq_status_done & ch0_irq_enable_done;
-  assign \$80  = ch0_irq_status_error & ch0_irq_enable_error;
-  assign \$82  = ch0_irq_status_access_done & ch0_irq_enable_access_done;
-  assign ch0_irq = | { \$83 , \$81 , \$79  };
-  assign \$84  = bus__w_addr == 9'h100;
-  assign ch1_ctrl_write = bus__w_en & \$84 ;
-  assign \$85  = bus__r_addr == 9'h100;
-  assign ch1_ctrl_read = bus__r_en & \$85 ;
-  assign \$86  = bus__w_addr == 9'h101;
-  assign ch1_state_write = bus__w_en & \$86 ;
-  assign \$87  = bus__r_addr == 9'h101;
-  assign ch1_state_read = bus__r_en & \$87 ;
-  assign \$88  = bus__w_addr == 9'h102;
-  assign ch1_caps_write = bus__w_en & \$88 ;
-  assign \$89  = bus__r_addr == 9'h102;
-  assign ch1_caps_read = bus__r_en & \$89 ;
-  assign \$90  = bus__w_addr == 9'h104;
-  assign ch1_irq_status_write = bus__w_en & \$90 ;
-  assign \$91  = bus__r_addr == 9'h104;
-  assign ch1_irq_status_read = bus__r_en & \$91 ;
-  assign \$92  = bus__w_addr == 9'h105;
-  assign ch1_irq_enable_write = bus__w_en & \$92 ;
-  assign \$93  = bus__r_addr == 9'h105;
-  assign ch1_irq_enable_read = bus__r_en & \$93 ;
-  assign \$94  = bus__w_addr == 9'h108;
-  assign ch1_cfg_ma_write = bus__w_en & \$94 ;
-  assign \$95  = bus__r_addr == 9'h108;
-  assign ch1_cfg_ma_read = bus__r_en & \$95 ;
-  assign \$96  = bus__w_addr == 9'h109;
-  assign ch1_cfg_period_write = bus__w_en & \$96 ;
-  assign \$97  = bus__r_addr == 9'h109;
-  assign ch1_cfg_period_read = bus__r_en & \$97 ;
-  assign \$98  = bus__w_addr == 9'h10a;
-  assign ch1_cfg_break_write = bus__w_en & \$98 ;
-  assign \$99  = bus__r_addr == 9'h10a;
-  assign ch1_cfg_break_read = bus__r_en & \$99 ;
-  assign \$100  = bus__w_addr == 9'h10b;
-  assign ch1_cfg_ack_write = bus__w_en & \$100 ;
-  assign \$101  = bus__r_addr == 9'h10b;
-  assign ch1_cfg_ack_read = bus__r_en & \$101 ;
-  assign \$102  = bus__w_addr == 9'h10c;
-  assign ch1_cfg_timeout_write = bus__w_en & \$102 ;
-  assign \$103  = bus__r_addr == 9'h10c;
-  assign ch1_cfg_timeout_read = bus__r_en & \$103 ;
-  assign \$104  = bus__w_addr == 9'h10d;
-  assign ch1_cfg_words_write = bus__w_en & \$104 ;
-  assign \$105  = bus__r_addr == 9'h10d;
-  assign ch1_cfg_words_read = bus__r_en & \$105 ;
-  assign \$106  = bus__w_addr == 9'h10e;
-  assign ch1_cfg_checks_write = bus__w_en & \$106 ;
-  assign \$107  = bus__r_addr == 9'h10e;
-  assign ch1_cfg_checks_read = bus__r_en & \$107 ;
-  assign \$108  = bus__w_addr == 9'h110;
-  assign ch1_result_status_write = bus__w_en & \$108 ;
-  assign \$109  = bus__r_addr == 9'h110;
-  assign ch1_result_status_read = bus__r_en & \$109 ;
-  assign \$110  = bus__w_addr == 9'h111;
-  assign ch1_result_seq_write = bus__w_en & \$110 ;
-  assign \$111  = bus__r_addr == 9'h111;
-  assign ch1_result_seq_read = bus__r_en & \$111 ;
-  assign \$112  = bus__w_addr == 9'h112;
-  assign ch1_result_w0_lo_write = bus__w_en & \$112 ;
-  assign \$113  = bus__r_addr == 9'h112;
-  assign ch1_result_w0_lo_read = bus__r_en & \$113 ;
-  assign \$114  = bus__w_addr == 9'h113;
-  assign ch1_result_w0_hi_write = bus__w_en & \$114 ;
-  assign \$115  = bus__r_addr == 9'h113;
-  assign ch1_result_w0_hi_read = bus__r_en & \$115 ;
-  assign \$116  = bus__w_addr == 9'h114;
-  assign ch1_result_w1_lo_write = bus__w_en & \$116 ;
-  assign \$117  = bus__r_addr == 9'h114;
-  assign ch1_result_w1_lo_read = bus__r_en & \$117 ;
-  assign \$118  = bus__w_addr == 9'h115;
-  assign ch1_result_w1_hi_write = bus__w_en & \$118 ;
-  assign \$119  = bus__r_addr == 9'h115;
-  assign ch1_result_w1_hi_read = bus__r_en & \$119 ;
-  assign \$120  = bus__w_addr == 9'h116;
-  assign ch1_result_timestamp_write = bus__w_en & \$120 ;
-  assign \$121  = bus__r_addr == 9'h116;
-  assign ch1_result_timestamp_read = bus__r_en & \$121 ;
-  assign \$122  = bus__w_addr == 9'h118;
-  assign ch1_count_crc_write = bus__w_en & \$122 ;
-  assign \$123  = bus__r_addr == 9'h118;
-  assign ch1_count_crc_read = bus__r_en & \$123 ;
-  assign \$124  = bus__w_addr == 9'h119;
-  assign ch1_count_ack_write = bus__w_en & \$124 ;
-  assign \$125  = bus__r_addr == 9'h119;
-  assign ch1_count_ack_read = bus__r_en & \$125 ;
-  assign \$126  = bus__w_addr == 9'h11a;
-  assign ch1_count_line_write = bus__w_en & \$126 ;
-  assign \$127  = bus__r_addr == 9'h11a;
-  assign ch1_count_line_read = bus__r_en & \$127 ;
-  assign \$128  = bus__w_addr == 9'h11b;
-  assign ch1_count_lc_write = bus__w_en & \$128 ;
-  assign \$129  = bus__r_addr == 9'h11b;
-  assign ch1_count_lc_read = bus__r_en & \$129 ;
-  assign \$130  = bus__w_addr == 9'h11c;
-  assign ch1_count_check_write = bus__w_en & \$130 ;
-  assign \$131  = bus__r_addr == 9'h11c;
-  assign ch1_count_check_read = bus__r_en & \$131 ;
-  assign \$132  = bus__w_addr == 9'h11d;
-  assign ch1_count_cycle_write = bus__w_en & \$132 ;
-  assign \$133  = bus__r_addr == 9'h11d;
-  assign ch1_count_cycle_read = bus__r_en & \$133 ;
-  assign \$134  = bus__w_addr == 9'h11e;
-  assign ch1_count_stop_write = bus__w_en & \$134 ;
-  assign \$135  = bus__r_addr == 9'h11e;
-  assign ch1_count_stop_read = bus__r_en & \$135 ;
-  assign \$136  = bus__w_addr == 9'h140;
-  assign ch1_ca_request_write = bus__w_en & \$136 ;
-  assign \$137  = bus__r_addr == 9'h140;
-  assign ch1_ca_request_read = bus__r_en & \$137 ;
-  assign \$138  = bus__w_addr == 9'h141;
-  assign ch1_ca_ctrl_write = bus__w_en & \$138 ;
-  assign \$139  = bus__r_addr == 9'h141;
-  assign ch1_ca_ctrl_read = bus__r_en & \$139 ;
-  assign \$140  = bus__w_addr == 9'h142;
-  assign ch1_ca_state_write = bus__w_en & \$140 ;
-  assign \$141  = bus__r_addr == 9'h142;
-  assign ch1_ca_state_read = bus__r_en & \$141 ;
-  assign \$142  = bus__w_addr == 9'h143;
-  assign ch1_ca_count_crc4_answer_write = bus__w_en & \$142 ;
-  assign \$143  = bus__r_addr == 9'h143;
-  assign ch1_ca_count_crc4_answer_read = bus__r_en & \$143 ;
-  assign \$144  = bus__w_addr == 9'h144;
-  assign ch1_ca_count_refused_aborted_write = bus__w_en & \$144 ;
-  assign \$145  = bus__r_addr == 9'h144;
-  assign ch1_ca_count_refused_aborted_read = bus__r_en & \$145 ;
-  assign \$146  = bus__w_addr == 9'h145;
-  assign ch1_ca_count_data_fault_write = bus__w_en & \$146 ;
-  assign \$147  = bus__r_addr == 9'h145;
-  assign ch1_ca_count_data_fault_read = bus__r_en & \$147 ;
-  assign \$148  = bus__w_addr[10:4] == 5'h15;
-  assign \$149  = bus__w_en & \$148 ;
-  assign ch1__ca_wbuf_en = \$149  ? bus__w_strb : 4'h0;
-  assign \$150  = bus__r_addr[10:4] == 5'h16;
-  assign ch1__ca_rbuf_en = bus__r_en & \$150 ;
-  assign \$151  = ch1_irq_status_done & ch1_irq_enable_done;
-  assign \$153  = ch1_irq_status_error & ch1_irq_enable_error;
-  assign \$155  = ch1_irq_status_access_done & ch1_irq_enable_access_done;
-  assign ch1_irq = | { \$156 , \$154 , \$152  };
-  assign \$157  = ch0__ca_wbuf_data[0] & bus__w_strb[0];
-  assign \$158  = g_trigger_write ? \$157  : 1'h0;
-  assign \$159  = ch0__ca_wbuf_data[0] & bus__w_strb[0];
-  assign \$160  = ch0_ctrl_write ? \$159  : 1'h0;
-  assign \$161  = ch0__ca_wbuf_data[1] & bus__w_strb[0];
-  assign \$162  = ch0_ctrl_write ? \$161  : 1'h0;
-  assign \$163  = ch0__ca_wbuf_data[2] & bus__w_strb[0];
-  assign \$164  = ch0_ctrl_write ? \$163  : 1'h0;
-  assign \$165  = ch0_ctrl_write & bus__w_strb[1];
-  assign \$166  = ch0_ctrl_write & bus__w_strb[1];
-  assign \$167  = ch0__ca_wbuf_data[0] & bus__w_strb[0];
-  assign \$168  = ch0_irq_status_write ? \$167  : 1'h0;
-  assign \$169  = ch0__ca_wbuf_data[1] & bus__w_strb[0];
-  assign \$170  = ch0_irq_status_write ? \$169  : 1'h0;
-  assign \$171  = ch0__ca_wbuf_data[2] & bus__w_strb[0];
-  assign \$172  = ch0_irq_status_write ? \$171  : 1'h0;
-  assign \$173  = ch0_irq_enable_write & bus__w_strb[0];
-  assign \$174  = ch0_irq_enable_write & bus__w_strb[0];
-  assign \$175  = ch0_irq_enable_write & bus__w_strb[0];
-  assign \$176  = ch0_cfg_ma_write & bus__w_strb[0];
-  assign \$177  = ch0_cfg_ma_write & bus__w_strb[1];
-  assign \$178  = ch0_cfg_ma_write & bus__w_strb[2];
-  assign \$179  = ch0_cfg_ma_write & bus__w_strb[3];
-  assign \$180  = ch0_cfg_period_write & bus__w_strb[0];
-  assign \$181  = ch0_cfg_period_write & bus__w_strb[1];
-  assign \$182  = ch0_cfg_period_write & bus__w_strb[2];
-  assign \$183  = ch0_cfg_break_write & bus__w_strb[0];
-  assign \$184  = ch0_cfg_break_write & bus__w_strb[1];
-  assign \$185  = ch0_cfg_break_write & bus__w_strb[2];
-  assign \$186  = ch0_cfg_ack_write & bus__w_strb[0];
-  assign \$187  = ch0_cfg_ack_write & bus__w_strb[1];
-  assign \$188  = ch0_cfg_ack_write & bus__w_strb[2];
-  assign \$189  = ch0_cfg_timeout_write & bus__w_strb[0];
-  assign \$190  = ch0_cfg_timeout_write & bus__w_strb[1];
-  assign \$191  = ch0_cfg_timeout_write & bus__w_strb[2];
-  assign \$192  = ch0_cfg_words_write & bus__w_strb[0];
-  assign \$193  = ch0_cfg_words_write & bus__w_strb[0];
-  assign \$194  = ch0_cfg_words_write & bus__w_strb[0];
-  assign \$195  = ch0_cfg_words_write & bus__w_strb[1];
-  assign \$196  = ch0_cfg_words_write & bus__w_strb[2];
-  assign \$197  = ch0_cfg_words_write & bus__w_strb[2];
-  assign \$198  = ch0_cfg_words_write & bus__w_strb[2];
-  assign \$199  = ch0_cfg_words_write & bus__w_strb[3];
-  assign \$200  = ch0_cfg_words_write & bus__w_strb[3];
-  assign \$201  = ch0_cfg_checks_write & bus__w_strb[0];
-  assign \$202  = ch0_cfg_checks_write & bus__w_strb[0];
-  assign \$203  = ch0_cfg_checks_write & bus__w_strb[1];
-  assign \$204  = ch0_ca_request_write & bus__w_strb[0];
-  assign \$205  = ch0_ca_request_write & bus__w_strb[1];
-  assign \$206  = ch0_ca_request_write & bus__w_strb[2];
-  assign \$207  = ch0_ca_request_write & bus__w_strb[3];
-  assign \$208  = ch0__ca_wbuf_data[0] & bus__w_strb[0];
-  assign \$209  = ch0_ca_ctrl_write ? \$208  : 1'h0;
-  assign \$210  = ch0__ca_wbuf_data[1] & bus__w_strb[0];
-  assign \$211  = ch0_ca_ctrl_write ? \$210  : 1'h0;
-  assign \$212  = ch0__ca_wbuf_data[0] & bus__w_strb[0];
-  assign \$213  = ch1_ctrl_write ? \$212  : 1'h0;
-  assign \$214  = ch0__ca_wbuf_data[1] & bus__w_strb[0];
-  assign \$215  = ch1_ctrl_write ? \$214  : 1'h0;
-  assign \$216  = ch0__ca_wbuf_data[2] & bus__w_strb[0];
-  assign \$217  = ch1_ctrl_write ? \$216  : 1'h0;
-  assign \$218  = ch1_ctrl_write & bus__w_strb[1];
-  assign \$219  = ch1_ctrl_write & bus__w_strb[1];
-  assign \$220  = ch0__ca_wbuf_data[0] & bus__w_strb[0];
-  assign \$221  = ch1_irq_status_write ? \$220  : 1'h0;
-  assign \$222  = ch0__ca_wbuf_data[1] & bus__w_strb[0];
-  assign \$223  = ch1_irq_status_write ? \$222  : 1'h0;
-  assign \$224  = ch0__ca_wbuf_data[2] & bus__w_strb[0];
-  assign \$225  = ch1_irq_status_write ? \$224  : 1'h0;
-  assign \$226  = ch1_irq_enable_write & bus__w_strb[0];
-  assign \$227  = ch1_irq_enable_write & bus__w_strb[0];
-  assign \$228  = ch1_irq_enable_write & bus__w_strb[0];
-  assign \$229  = ch1_cfg_ma_write & bus__w_strb[0];
-  assign \$230  = ch1_cfg_ma_write & bus__w_strb[1];
-  assign \$231  = ch1_cfg_ma_write & bus__w_strb[2];
-  assign \$232  = ch1_cfg_ma_write & bus__w_strb[3];
-  assign \$233  = ch1_cfg_period_write & bus__w_strb[0];
-  assign \$234  = ch1_cfg_period_write & bus__w_strb[1];
-  assign \$235  = ch1_cfg_period_write & bus__w_strb[2];
-  assign \$236  = ch1_cfg_break_write & bus__w_strb[0];
-  assign \$237  = ch1_cfg_break_write & bus__w_strb[1];
-  assign \$238  = ch1_cfg_break_write & bus__w_strb[2];
-  assign \$239  = ch1_cfg_ack_write & bus__w_strb[0];
-  assign \$240  = ch1_cfg_ack_write & bus__w_strb[1];
-  assign \$241  = ch1_cfg_ack_write & bus__w_strb[2];
-  assign \$242  = ch1_cfg_timeout_write & bus__w_strb[0];
-  assign \$243  = ch1_cfg_timeout_write & bus__w_strb[1];
-  assign \$244  = ch1_cfg_timeout_write & bus__w_strb[2];
-  assign \$245  = ch1_cfg_words_write & bus__w_strb[0];
-  assign \$246  = ch1_cfg_words_write & bus__w_strb[0];
-  assign \$247  = ch1_cfg_words_write & bus__w_strb[0];
-  assign \$248  = ch1_cfg_words_write & bus__w_strb[1];
-  assign \$249  = ch1_cfg_words_write & bus__w_strb[2];
-  assign \$250  = ch1_cfg_words_write & bus__w_strb[2];
-  assign \$251  = ch1_cfg_words_write & bus__w_strb[2];
-  assign \$252  = ch1_cfg_words_write & bus__w_strb[3];
-  assign \$253  = ch1_cfg_words_write & bus__w_strb[3];
-  assign \$254  = ch1_cfg_checks_write & bus__w_strb[0];
-  assign \$255  = ch1_cfg_checks_write & bus__w_strb[0];
-  assign \$256  = ch1_cfg_checks_write & bus__w_strb[1];
-  assign \$257  = ch1_ca_request_write & bus__w_strb[0];
-  assign \$258  = ch1_ca_request_write & bus__w_strb[1];
-  assign \$259  = ch1_ca_request_write & bus__w_strb[2];
-  assign \$260  = ch1_ca_request_write & bus__w_strb[3];
-  assign \$261  = ch0__ca_wbuf_data[0] & bus__w_strb[0];
-  assign \$262  = ch1_ca_ctrl_write ? \$261  : 1'h0;
-  assign \$263  = ch0__ca_wbuf_data[1] & bus__w_strb[0];
-  assign \$264  = ch1_ca_ctrl_write ? \$263  : 1'h0;
-  assign \$265  = bus__r_addr[10:4] == 4'he;
-  assign \$266  = bus__r_en & \$265 ;
-  assign \$267  = bus__r_addr[10:4] == 5'h16;
-  assign \$268  = bus__r_en & \$267 ;
-  assign \$270  = \$269  | ch0_read_word;
-  assign \$271  = \$270  | ch1_read_word;
-  assign \$272  = window0_read ? ch0__ca_rbuf_data : 32'd0;
+  assign \$5  = bus__r_addr == 2'h2;
+  assign \$6  = bus__r_addr == 2'h3;
+  assign \$7  = bus__r_addr == 3'h4;
+  assign \$8  = write_data[0] & write_strb[0];
+  assign \$9  = ch0_ctrl_write ? \$8  : 1'h0;
+  assign \$10  = write_data[1] & write_strb[0];
+  assign \$11  = ch0_ctrl_write ? \$10  : 1'h0;
+  assign \$12  = write_data[2] & write_strb[0];
+  assign \$13  = ch0_ctrl_write ? \$12  : 1'h0;
+  assign \$14  = ch0_ctrl_write & write_strb[1];
+  assign \$15  = ch0_ctrl_write & write_strb[1];
+  assign \$16  = write_data[0] & write_strb[0];
+  assign \$17  = ch0_irq_status_write ? \$16  : 1'h0;
+  assign \$18  = write_data[1] & write_strb[0];
+  assign \$19  = ch0_irq_status_write ? \$18  : 1'h0;
+  assign \$20  = write_data[2] & write_strb[0];
+  assign \$21  = ch0_irq_status_write ? \$20  : 1'h0;
+  assign \$22  = ch0_irq_enable_write & write_strb[0];
+  assign \$23  = ch0_irq_enable_write & write_strb[0];
+  assign \$24  = ch0_irq_enable_write & write_strb[0];
+  assign \$25  = ch0_cfg_ma_write & write_strb[0];
+  assign \$26  = ch0_cfg_ma_write & write_strb[1];
+  assign \$27  = ch0_cfg_ma_write & write_strb[2];
+  assign \$28  = ch0_cfg_ma_write & write_strb[3];
+  assign \$29  = ch0_cfg_period_write & write_strb[0];
+  assign \$30  = ch0_cfg_period_write & write_strb[1];
+  assign \$31  = ch0_cfg_period_write & write_strb[2];
+  assign \$32  = ch0_cfg_break_write & write_strb[0];
+  assign \$33  = ch0_cfg_break_write & write_strb[1];
+  assign \$34  = ch0_cfg_break_write & write_strb[2];
+  assign \$35  = ch0_cfg_ack_write & write_strb[0];
+  assign \$36  = ch0_cfg_ack_write & write_strb[1];
+  assign \$37  = ch0_cfg_ack_write & write_strb[2];
+  assign \$38  = ch0_cfg_timeout_write & write_strb[0];
+  assign \$39  = ch0_cfg_timeout_write & write_strb[1];
+  assign \$40  = ch0_cfg_timeout_write & write_strb[2];
+  assign \$41  = ch0_cfg_words_write & write_strb[0];
+  assign \$42  = ch0_cfg_words_write & write_strb[0];
+  assign \$43  = ch0_cfg_words_write & write_strb[0];
+  assign \$44  = ch0_cfg_words_write & write_strb[1];
+  assign \$45  = ch0_cfg_words_write & write_strb[2];
+  assign \$46  = ch0_cfg_words_write & write_strb[2];
+  assign \$47  = ch0_cfg_words_write & write_strb[2];
+  assign \$48  = ch0_cfg_words_write & write_strb[3];
+  assign \$49  = ch0_cfg_words_write & write_strb[3];
+  assign \$50  = ch0_cfg_checks_write & write_strb[0];
+  assign \$51  = ch0_cfg_checks_write & write_strb[0];
+  assign \$52  = ch0_cfg_checks_write & write_strb[1];
+  assign \$53  = ch0_ca_request_write & write_strb[0];
+  assign \$54  = ch0_ca_request_write & write_strb[1];
+  assign \$55  = ch0_ca_request_write & write_strb[2];
+  assign \$56  = ch0_ca_request_write & write_strb[3];
+  assign \$57  = write_data[0] & write_strb[0];
+  assign \$58  = ch0_ca_ctrl_write ? \$57  : 1'h0;
+  assign \$59  = write_data[1] & write_strb[0];
+  assign \$60  = ch0_ca_ctrl_write ? \$59  : 1'h0;
+  assign \$61  = bus__r_addr == 8'h80;
+  assign \$62  = bus__r_addr == 8'h81;
+  assign \$63  = bus__r_addr == 8'h82;
+  assign \$64  = bus__r_addr == 8'h84;
+  assign \$65  = bus__r_addr == 8'h85;
+  assign \$66  = bus__r_addr == 8'h88;
+  assign \$67  = bus__r_addr == 8'h89;
+  assign \$68  = bus__r_addr == 8'h8a;
+  assign \$69  = bus__r_addr == 8'h8b;
+  assign \$70  = bus__r_addr == 8'h8c;
+  assign \$71  = bus__r_addr == 8'h8d;
+  assign \$72  = bus__r_addr == 8'h8e;
+  assign \$73  = bus__r_addr == 8'h90;
+  assign \$74  = bus__r_addr == 8'h91;
+  assign \$75  = bus__r_addr == 8'h92;
+  assign \$76  = bus__r_addr == 8'h93;
+  assign \$77  = bus__r_addr == 8'h94;
+  assign \$78  = bus__r_addr == 8'h95;
+  assign \$79  = bus__r_addr == 8'h96;
+  assign \$80  = bus__r_addr == 8'h98;
+  assign \$81  = bus__r_addr == 8'h99;
+  assign \$82  = bus__r_addr == 8'h9a;
+  assign \$83  = bus__r_addr == 8'h9b;
+  assign \$84  = bus__r_addr == 8'h9c;
+  assign \$85  = bus__r_addr == 8'h9d;
+  assign \$86  = bus__r_addr == 8'h9e;
+  assign \$87  = bus__r_addr == 8'hc0;
+  assign \$88  = bus__r_addr == 8'hc1;
+  assign \$89  = bus__r_addr == 8'hc2;
+  assign \$90  = bus__r_addr == 8'hc3;
+  assign \$91  = bus__r_addr == 8'hc4;
+  assign \$92  = bus__r_addr == 8'hc5;
+  assign \$93  = write_data[0] & write_strb[0];
+  assign \$94  = ch1_ctrl_write ? \$93  : 1'h0;
+  assign \$95  = write_data[1] & write_strb[0];
+  assign \$96  = ch1_ctrl_write ? \$95  : 1'h0;
+  assign \$97  = write_data[2] & write_strb[0];
+  assign \$98  = ch1_ctrl_write ? \$97  : 1'h0;
+  assign \$99  = ch1_ctrl_write & write_strb[1];
+  assign \$100  = ch1_ctrl_write & write_strb[1];
+  assign \$101  = write_data[0] & write_strb[0];
+  assign \$102  = ch1_irq_status_write ? \$101  : 1'h0;
+  assign \$103  = write_data[1] & write_strb[0];
+  assign \$104  = ch1_irq_status_write ? \$103  : 1'h0;
+  assign \$105  = write_data[2] & write_strb[0];
+  assign \$106  = ch1_irq_status_write ? \$105  : 1'h0;
+  assign \$107  = ch1_irq_enable_write & write_strb[0];
+  assign \$108  = ch1_irq_enable_write & write_strb[0];
+  assign \$109  = ch1_irq_enable_write & write_strb[0];
+  assign \$110  = ch1_cfg_ma_write & write_strb[0];
+  assign \$111  = ch1_cfg_ma_write & write_strb[1];
+  assign \$112  = ch1_cfg_ma_write & write_strb[2];
+  assign \$113  = ch1_cfg_ma_write & write_strb[3];
+  assign \$114  = ch1_cfg_period_write & write_strb[0];
+  assign \$115  = ch1_cfg_period_write & write_strb[1];
+  assign \$116  = ch1_cfg_period_write & write_strb[2];
+  assign \$117  = ch1_cfg_break_write & write_strb[0];
+  assign \$118  = ch1_cfg_break_write & write_strb[1];
+  assign \$119  = ch1_cfg_break_write & write_strb[2];
+  assign \$120  = ch1_cfg_ack_write & write_strb[0];
+  assign \$121  = ch1_cfg_ack_write & write_strb[1];
+  assign \$122  = ch1_cfg_ack_write & write_strb[2];
+  assign \$123  = ch1_cfg_timeout_write & write_strb[0];
+  assign \$124  = ch1_cfg_timeout_write & write_strb[1];
+  assign \$125  = ch1_cfg_timeout_write & write_strb[2];
+  assign \$126  = ch1_cfg_words_write & write_strb[0];
+  assign \$127  = ch1_cfg_words_write & write_strb[0];
+  assign \$128  = ch1_cfg_words_write & write_strb[0];
+  assign \$129  = ch1_cfg_words_write & write_strb[1];
+  assign \$130  = ch1_cfg_words_write & write_strb[2];
+  assign \$131  = ch1_cfg_words_write & write_strb[2];
+  assign \$132  = ch1_cfg_words_write & write_strb[2];
+  assign \$133  = ch1_cfg_words_write & write_strb[3];
+  assign \$134  = ch1_cfg_words_write & write_strb[3];
+  assign \$135  = ch1_cfg_checks_write & write_strb[0];
+  assign \$136  = ch1_cfg_checks_write & write_strb[0];
+  assign \$137  = ch1_cfg_checks_write & write_strb[1];
+  assign \$138  = ch1_ca_request_write & write_strb[0];
+  assign \$139  = ch1_ca_request_write & write_strb[1];
+  assign \$140  = ch1_ca_request_write & write_strb[2];
+  assign \$141  = ch1_ca_request_write & write_strb[3];
+  assign \$142  = write_data[0] & write_strb[0];
+  assign \$143  = ch1_ca_ctrl_write ? \$142  : 1'h0;
+  assign \$144  = write_data[1] & write_strb[0];
+  assign \$145  = ch1_ca_ctrl_write ? \$144  : 1'h0;
+  assign \$146  = bus__r_addr == 9'h100;
+  assign \$147  = bus__r_addr == 9'h101;
+  assign \$148  = bus__r_addr == 9'h102;
+  assign \$149  = bus__r_addr == 9'h104;
+  assign \$150  = bus__r_addr == 9'h105;
+  assign \$151  = bus__r_addr == 9'h108;
+  assign \$152  = bus__r_addr == 9'h109;
+  assign \$153  = bus__r_addr == 9'h10a;
+  assign \$154  = bus__r_addr == 9'h10b;
+  assign \$155  = bus__r_addr == 9'h10c;
+  assign \$156  = bus__r_addr == 9'h10d;
+  assign \$157  = bus__r_addr == 9'h10e;
+  assign \$158  = bus__r_addr == 9'h110;
+  assign \$159  = bus__r_addr == 9'h111;
+  assign \$160  = bus__r_addr == 9'h112;
+  assign \$161  = bus__r_addr == 9'h113;
+  assign \$162  = bus__r_addr == 9'h114;
+  assign \$163  = bus__r_addr == 9'h115;
+  assign \$164  = bus__r_addr == 9'h116;
+  assign \$165  = bus__r_addr == 9'h118;
+  assign \$166  = bus__r_addr == 9'h119;
+  assign \$167  = bus__r_addr == 9'h11a;
+  assign \$168  = bus__r_addr == 9'h11b;
+  assign \$169  = bus__r_addr == 9'h11c;
+  assign \$170  = bus__r_addr == 9'h11d;
+  assign \$171  = bus__r_addr == 9'h11e;
+  assign \$172  = bus__r_addr == 9'h140;
+  assign \$173  = bus__r_addr == 9'h141;
+  assign \$174  = bus__r_addr == 9'h142;
+  assign \$175  = bus__r_addr == 9'h143;
+  assign \$176  = bus__r_addr == 9'h144;
+  assign \$177  = bus__r_addr == 9'h145;
+  assign \$178  = bus__r_addr[10:4] == 4'he;
+  assign \$179  = bus__r_en & \$178 ;
+  assign \$180  = bus__r_addr[10:4] == 5'h16;
+  assign \$181  = bus__r_en & \$180 ;
+  assign \$182  = g_read_select_0 ? 32'd1114198867 : 32'd0;
+  assign \$184  = g_read_select_1 ? 32'd65537 : 32'd0;
+  assign \$185  = \$183  | \$184 ;
+  assign \$186  = g_read_select_2 ? 32'd2 : 32'd0;
+  assign \$187  = \$185  | \$186 ;
+  assign \$190  = g_read_select_4 ? { 30'h00000000, ch1_irq, ch0_irq } : 32'd0;
+  assign \$191  = \$189  | \$190 ;
+  assign \$192  = ch0_read_select_80 ? { 22'h000000, ch0_ctrl_trigger_enable, ch0_ctrl_periodic, 8'h00 } : 32'd0;
+  assign \$193  = \$191  | \$192 ;
+  assign \$194  = ch0_read_select_81 ? { 30'h00000000, ch0__config_error, ch0__busy } : 32'd0;
+  assign \$195  = \$193  | \$194 ;
+  assign \$196  = ch0_read_select_82 ? 32'd119023671 : 32'd0;
+  assign \$197  = \$195  | \$196 ;
+  assign \$198  = ch0_read_select_84 ? { 29'h00000000, ch0_irq_status_access_done, ch0_irq_status_error, ch0_irq_status_done } : 32'd0;
+  assign \$199  = \$197  | \$198 ;
+  assign \$200  = ch0_read_select_85 ? { 29'h00000000, ch0_irq_enable_access_done, ch0_irq_enable_error, ch0_irq_enable_done } : 32'd0;
+  assign \$201  = \$199  | \$200 ;
+  assign \$202  = ch0_read_select_88 ? { 4'h0, ch0_cfg_ma_delay_limit, ch0_cfg_ma_ma_half_period } : 32'd0;
+  assign \$203  = \$201  | \$202 ;
+  assign \$204  = ch0_read_select_89 ? { 8'h00, ch0_cfg_period_request_period } : 32'd0;
+  assign \$205  = \$203  | \$204 ;
+  assign \$206  = ch0_read_select_8a ? { 8'h00, ch0_cfg_break_break_time } : 32'd0;
+  assign \$207  = \$205  | \$206 ;
+  assign \$208  = ch0_read_select_8b ? { 8'h00, ch0_cfg_ack_ack_limit } : 32'd0;
+  assign \$209  = \$207  | \$208 ;
+  assign \$210  = ch0_read_select_8c ? { 8'h00, ch0_cfg_timeout_timeout_limit } : 32'd0;
+  assign \$211  = \$209  | \$210 ;
+  assign \$212  = ch0_read_select_8d ? { ch0_cfg_words_w1_enable, 5'h00, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_data_bits, 6'h00, ch0_cfg_words_w0_crc, ch0_cfg_words_w0_lc, ch0_cfg_words_w0_nenw, ch0_cfg_words_w0_data_bits } : 32'd0;
+  assign \$213  = \$211  | \$212 ;
+  assign \$214  = ch0_read_select_8e ? { 16'h0000, ch0_cfg_checks_spw_tolerance, 6'h00, ch0_cfg_checks_spw_check, ch0_cfg_checks_end_check } : 32'd0;
+  assign \$215  = \$213  | \$214 ;
+  assign \$216  = ch0_read_select_90 ? { 2'h0, ch0_result_status_lc_snapshot, 4'h0, ch0_result_status_spw_mismatch_snapshot, ch0_result_status_lc_zero_snapshot, ch0_result_status_lc_skip_snapshot, ch0_result_status_lc_repeat_snapshot, 1'h0, ch0_result_status_w1_crc_ok_snapshot, ch0_result_status_w1_nw_snapshot, ch0_result_status_w1_ne_snapshot, 1'h0, ch0_result_status_w0_crc_ok_snapshot, ch0_result_status_w0_nw_snapshot, ch0_result_status_w0_ne_snapshot, 3'h0, ch0_result_status_cds_snapshot, ch0_result_status_status_snapshot } : 32'd0;
+  assign \$217  = \$215  | \$216 ;
+  assign \$218  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
+  assign \$219  = \$217  | \$218 ;
+  assign \$220  = ch0_read_select_92 ? ch0_result_w0_lo_data_snapshot : 32'd0;
+  assign \$221  = \$219  | \$220 ;
+  assign \$222  = ch0_read_select_93 ? { 9'h000, ch0_result_w0_hi_data_snapshot } : 32'd0;
+  assign \$223  = \$221  | \$222 ;
+  assign \$224  = ch0_read_select_94 ? ch0_result_w1_lo_data_snapshot : 32'd0;
+  assign \$225  = \$223  | \$224 ;
+  assign \$226  = ch0_read_select_95 ? { 24'h000000, ch0_result_w1_hi_data_snapshot } : 32'd0;
+  assign \$227  = \$225  | \$226 ;
+  assign \$228  = ch0_read_select_96 ? ch0_result_timestamp_time_snapshot : 32'd0;
+  assign \$229  = \$227  | \$228 ;
+  assign \$230  = ch0_read_select_98 ? \port$4265$0 [31:0] : 32'd0;
+  assign \$231  = \$229  | \$230 ;
+  assign \$232  = ch0_read_select_99 ? \port$4265$0 [63:32] : 32'd0;
+  assign \$233  = \$231  | \$232 ;
+  assign \$234  = ch0_read_select_9a ? \port$4265$0 [95:64] : 32'd0;
+  assign \$235  = \$233  | \$234 ;
+  assign \$236  = ch0_read_select_9b ? \port$4265$0 [127:96] : 32'd0;
+  assign \$237  = \$235  | \$236 ;
+  assign \$238  = ch0_read_select_9c ? \port$4265$0 [159:128] : 32'd0;
+  assign \$239  = \$237  | \$238 ;
+  assign \$240  = ch0_read_select_9d ? \port$4265$0 [191:160] : 32'd0;
+  assign \$241  = \$239  | \$240 ;
+  assign \$242  = ch0_read_select_9e ? { 16'h0000, \port$4265$0 [207:192] } : 32'd0;
+  assign \$243  = \$241  | \$242 ;
+  assign \$244  = ch0_read_select_c0 ? { 7'h00, \ch0_ca_request_write$65 , 1'h0, ch0_ca_request_count, 1'h0, ch0_ca_request_address, 5'h00, ch0_ca_request_slave_id } : 32'd0;
+  assign \$245  = \$243  | \$244 ;
+  assign \$248  = ch0_read_select_c2 ? { 17'h00000, \port$4379$0 [9:3], 1'h0, \port$4379$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
+  assign \$249  = \$247  | \$248 ;
+  assign \$250  = ch0_read_select_c3 ? \port$4265$0 [239:208] : 32'd0;
+  assign \$251  = \$249  | \$250 ;
+  assign \$252  = ch0_read_select_c4 ? \port$4265$0 [271:240] : 32'd0;
+  assign \$253  = \$251  | \$252 ;
+  assign \$254  = ch0_read_select_c5 ? { 16'h0000, \port$4265$0 [287:272] } : 32'd0;
+  assign \$255  = \$253  | \$254 ;
+  assign \$256  = ch1_read_select_100 ? { 22'h000000, ch1_ctrl_trigger_enable, ch1_ctrl_periodic, 8'h00 } : 32'd0;
+  assign \$257  = \$255  | \$256 ;
+  assign \$258  = ch1_read_select_101 ? { 30'h00000000, ch1__config_error, ch1__busy } : 32'd0;
+  assign \$259  = \$257  | \$258 ;
+  assign \$260  = ch1_read_select_102 ? 32'd119023671 : 32'd0;
+  assign \$261  = \$259  | \$260 ;
+  assign \$262  = ch1_read_select_104 ? { 29'h00000000, ch1_irq_status_access_done, ch1_irq_status_error, ch1_irq_status_done } : 32'd0;
+  assign \$263  = \$261  | \$262 ;
+  assign \$264  = ch1_read_select_105 ? { 29'h00000000, ch1_irq_enable_access_done, ch1_irq_enable_error, ch1_irq_enable_done } : 32'd0;
+  assign \$265  = \$263  | \$264 ;
+  assign \$266  = ch1_read_select_108 ? { 4'h0, ch1_cfg_ma_delay_limit, ch1_cfg_ma_ma_half_period } : 32'd0;
+  assign \$267  = \$265  | \$266 ;
+  assign \$268  = ch1_read_select_109 ? { 8'h00, ch1_cfg_period_request_period } : 32'd0;
+  assign \$269  = \$267  | \$268 ;
+  assign \$270  = ch1_read_select_10a ? { 8'h00, ch1_cfg_break_break_time } : 32'd0;
+  assign \$271  = \$269  | \$270 ;
+  assign \$272  = ch1_read_select_10b ? { 8'h00, ch1_cfg_ack_ack_limit } : 32'd0;
   assign \$273  = \$271  | \$272 ;
-  assign \$274  = window1_read ? ch1__ca_rbuf_data : 32'd0;
+  assign \$274  = ch1_read_select_10c ? { 8'h00, ch1_cfg_timeout_timeout_limit } : 32'd0;
   assign \$275  = \$273  | \$274 ;
-  always @(posedge clk)
-    glob__trigger <= \$276 ;
-  always @(posedge clk)
-    g_read_word <= \$277 ;
-  always @(posedge clk)
-    ch0__start <= \$278 ;
-  always @(posedge clk)
-    ch0__abort_cycle <= \$279 ;
-  always @(posedge clk)
-    ch0__clear_counters <= \$280 ;
-  always @(posedge clk)
-    ch0__periodic <= \$281 ;
-  always @(posedge clk)
-    ch0__trigger_enable <= \$282 ;
-  always @(posedge clk)
-    ch0_irq_status_done <= \$283 ;
-  always @(posedge clk)
-    ch0_irq_status_error <= \$284 ;
-  always @(posedge clk)
-    ch0_irq_status_access_done <= \$285 ;
-  always @(posedge clk)
-    ch0_irq_enable_done <= \$286 ;
-  always @(posedge clk)
-    ch0_irq_enable_error <= \$287 ;
-  always @(posedge clk)
-    ch0_irq_enable_access_done <= \$288 ;
-  always @(posedge clk)
-    ch0__cfg_ma_half_period <= \$289 ;
-  always @(posedge clk)
-    ch0__cfg_delay_limit <= \$290 ;
-  always @(posedge clk)
-    ch0__cfg_request_period <= \$291 ;
-  always @(posedge clk)
-    ch0__cfg_break_time <= \$292 ;
-  always @(posedge clk)
-    ch0__cfg_ack_limit <= \$293 ;
-  always @(posedge clk)
-    ch0__cfg_timeout_limit <= \$294 ;
-  always @(posedge clk)
-    ch0__cfg_w0_data_bits <= \$295 ;
-  always @(posedge clk)
-    ch0__cfg_w0_nenw <= \$296 ;
-  always @(posedge clk)
-    ch0__cfg_w0_lc <= \$297 ;
-  always @(posedge clk)
-    ch0__cfg_w0_crc <= \$298 ;
-  always @(posedge clk)
-    ch0__cfg_w1_data_bits <= \$299 ;
-  always @(posedge clk)
-    ch0__cfg_w1_nenw <= \$300 ;
-  always @(posedge clk)
-    ch0__cfg_w1_lc <= \$301 ;
-  always @(posedge clk)
-    ch0__cfg_w1_crc <= \$302 ;
-  always @(posedge clk)
-    ch0__cfg_w1_enable <= \$303 ;
-  always @(posedge clk)
-    ch0__cfg_end_check <= \$304 ;
-  always @(posedge clk)
-    ch0__cfg_spw_check <= \$305 ;
-  always @(posedge clk)
-    ch0__cfg_spw_tolerance <= \$306 ;
-  always @(posedge clk)
-    ch0__ca_slave_id <= \$307 ;
-  always @(posedge clk)
-    ch0__ca_address <= \$308 ;
-  always @(posedge clk)
-    ch0__ca_count <= \$309 ;
-  always @(posedge clk)
-    ch0__ca_write <= \$310 ;
-  always @(posedge clk)
-    ch0__ca_start <= \$311 ;
-  always @(posedge clk)
-    ch0__ca_abort <= \$312 ;
-  always @(posedge clk)
-    ch0_result_status_status_snapshot <= \$313 ;
-  always @(posedge clk)
-    ch0_result_status_cds_snapshot <= \$314 ;
-  always @(posedge clk)
-    ch0_result_status_w0_ne_snapshot <= \$315 ;
-  always @(posedge clk)
-    ch0_result_status_w0_nw_snapshot <= \$316 ;
-  always @(posedge clk)
-    ch0_result_status_w0_crc_ok_snapshot <= \$317 ;
-  always @(posedge clk)
-    ch0_result_status_w1_ne_snapshot <= \$318 ;
-  always @(posedge clk)
-    ch0_result_status_w1_nw_snapshot <= \$319 ;
-  always @(posedge clk)
-    ch0_result_status_w1_crc_ok_snapshot <= \$320 ;
-  always @(posedge clk)
-    ch0_result_status_lc_repeat_snapshot <= \$321 ;
-  always @(posedge clk)
-    ch0_result_status_lc_skip_snapshot <= \$322 ;
-  always @(posedge clk)
-    ch0_result_status_lc_zero_snapshot <= \$323 ;
-  always @(posedge clk)
-    ch0_result_status_spw_mismatch_snapshot <= \$324 ;
-  always @(posedge clk)
-    ch0_result_status_lc_snapshot <= \$325 ;
-  always @(posedge clk)
-    ch0_result_seq_seq_snapshot <= \$326 ;
-  always @(posedge clk)
-    ch0_result_seq_line_delay_snapshot <= \$327 ;
-  always @(posedge clk)
-    ch0_result_w0_lo_data_snapshot <= \$328 ;
-  always @(posedge clk)
-    ch0_result_w0_hi_data_snapshot <= \$329 ;
-  always @(posedge clk)
-    ch0_result_w1_lo_data_snapshot <= \$330 ;
-  always @(posedge clk)
-    ch0_result_w1_hi_data_snapshot <= \$331 ;
-  always @(posedge clk)
-    ch0_result_timestamp_time_snapshot <= \$332 ;
-  always @(posedge clk)
-    ch0_read_word <= \$333 ;
-  always @(posedge clk)
-    ch1__start <= \$334 ;
-  always @(posedge clk)
-    ch1__abort_cycle <= \$335 ;
-  always @(posedge clk)
-    ch1__clear_counters <= \$336 ;
-  always @(posedge clk)
-    ch1__periodic <= \$337 ;
-  always @(posedge clk)
-    ch1__trigger_enable <= \$338 ;
-  always @(posedge clk)
-    ch1_irq_status_done <= \$339 ;
-  always @(posedge clk)
-    ch1_irq_status_error <= \$340 ;
-  always @(posedge clk)
-    ch1_irq_status_access_done <= \$341 ;
-  always @(posedge clk)
-    ch1_irq_enable_done <= \$342 ;
-  always @(posedge clk)
-    ch1_irq_enable_error <= \$343 ;
-  always @(posedge clk)
-    ch1_irq_enable_access_done <= \$344 ;
-  always @(posedge clk)
-    ch1__cfg_ma_half_period <= \$345 ;
-  always @(posedge clk)
-    ch1__cfg_delay_limit <= \$346 ;
-  always @(posedge clk)
-    ch1__cfg_request_period <= \$347 ;
-  always @(posedge clk)
-    ch1__cfg_break_time <= \$348 ;
-  always @(posedge clk)
-    ch1__cfg_ack_limit <= \$349 ;
-  always @(posedge clk)
-    ch1__cfg_timeout_limit <= \$350 ;
-  always @(posedge clk)
-    ch1__cfg_w0_data_bits <= \$351 ;
-  always @(posedge clk)
-    ch1__cfg_w0_nenw <= \$352 ;
-  always @(posedge clk)
-    ch1__cfg_w0_lc <= \$353 ;
-  always @(posedge clk)
-    ch1__cfg_w0_crc <= \$354 ;
-  always @(posedge clk)
-    ch1__cfg_w1_data_bits <= \$355 ;
-  always @(posedge clk)
-    ch1__cfg_w1_nenw <= \$356 ;
-  always @(posedge clk)
-    ch1__cfg_w1_lc <= \$357 ;
-  always @(posedge clk)
-    ch1__cfg_w1_crc <= \$358 ;
-  always @(posedge clk)
-    ch1__cfg_w1_enable <= \$359 ;
-  always @(posedge clk)
-    ch1__cfg_end_check <= \$360 ;
-  always @(posedge clk)
-    ch1__cfg_spw_check <= \$361 ;
-  always @(posedge clk)
-    ch1__cfg_spw_tolerance <= \$362 ;
-  always @(posedge clk)
-    ch1__ca_slave_id <= \$363 ;
-  always @(posedge clk)
-    ch1__ca_address <= \$364 ;
-  always @(posedge clk)
-    ch1__ca_count <= \$365 ;
-  always @(posedge clk)
-    ch1__ca_write <= \$366 ;
-  always @(posedge clk)
-    ch1__ca_start <= \$367 ;
-  always @(posedge clk)
-    ch1__ca_abort <= \$368 ;
+  assign \$276  = ch1_read_select_10d ? { ch1_cfg_words_w1_enable, 5'h00, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_data_bits, 6'h00, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_data_bits } : 32'd0;
+  assign \$277  = \$275  | \$276 ;
+  assign \$278  = ch1_read_select_10e ? { 16'h0000, ch1_cfg_checks_spw_tolerance, 6'h00, ch1_cfg_checks_spw_check, ch1_cfg_checks_end_check } : 32'd0;
+  assign \$279  = \$277  | \$278 ;
+  assign \$280  = ch1_read_select_110 ? { 2'h0, ch1_result_status_lc_snapshot, 4'h0, ch1_result_status_spw_mismatch_snapshot, ch1_result_status_lc_zero_snapshot, ch1_result_status_lc_skip_snapshot, ch1_result_status_lc_repeat_snapshot, 1'h0, ch1_result_status_w1_crc_ok_snapshot, ch1_result_status_w1_nw_snapshot, ch1_result_status_w1_ne_snapshot, 1'h0, ch1_result_status_w0_crc_ok_snapshot, ch1_result_status_w0_nw_snapshot, ch1_result_status_w0_ne_snapshot, 3'h0, ch1_result_status_cds_snapshot, ch1_result_status_status_snapshot } : 32'd0;
+  assign \$281  = \$279  | \$280 ;
+  assign \$282  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
+  assign \$283  = \$281  | \$282 ;
+  assign \$284  = ch1_read_select_112 ? ch1_result_w0_lo_data_snapshot : 32'd0;
+  assign \$285  = \$283  | \$284 ;
+  assign \$286  = ch1_read_select_113 ? { 9'h000, ch1_result_w0_hi_data_snapshot } : 32'd0;
+  assign \$287  = \$285  | \$286 ;
+  assign \$288  = ch1_read_select_114 ? ch1_result_w1_lo_data_snapshot : 32'd0;
+  assign \$289  = \$287  | \$288 ;
+  assign \$290  = ch1_read_select_115 ? { 24'h000000, ch1_result_w1_hi_data_snapshot } : 32'd0;
+  assign \$291  = \$289  | \$290 ;
+  assign \$292  = ch1_read_select_116 ? ch1_result_timestamp_time_snapshot : 32'd0;
+  assign \$293  = \$291  | \$292 ;
+  assign \$294  = ch1_read_select_118 ? \port$4733$0 [31:0] : 32'd0;
+  assign \$295  = \$293  | \$294 ;
+  assign \$296  = ch1_read_select_119 ? \port$4733$0 [63:32] : 32'd0;
+  assign \$297  = \$295  | \$296 ;
+  assign \$298  = ch1_read_select_11a ? \port$4733$0 [95:64] : 32'd0;
+  assign \$299  = \$297  | \$298 ;
+  assign \$300  = ch1_read_select_11b ? \port$4733$0 [127:96] : 32'd0;
+  assign \$301  = \$299  | \$300 ;
+  assign \$302  = ch1_read_select_11c ? \port$4733$0 [159:128] : 32'd0;
+  assign \$303  = \$301  | \$302 ;
+  assign \$304  = ch1_read_select_11d ? \port$4733$0 [191:160] : 32'd0;
+  assign \$305  = \$303  | \$304 ;
+  assign \$306  = ch1_read_select_11e ? { 16'h0000, \port$4733$0 [207:192] } : 32'd0;
+  assign \$307  = \$305  | \$306 ;
+  assign \$308  = ch1_read_select_140 ? { 7'h00, \ch1_ca_request_write$186 , 1'h0, ch1_ca_request_count, 1'h0, ch1_ca_request_address, 5'h00, ch1_ca_request_slave_id } : 32'd0;
+  assign \$309  = \$307  | \$308 ;
+  assign \$312  = ch1_read_select_142 ? { 17'h00000, \port$4847$0 [9:3], 1'h0, \port$4847$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
+  assign \$313  = \$311  | \$312 ;
+  assign \$314  = ch1_read_select_143 ? \port$4733$0 [239:208] : 32'd0;
+  assign \$315  = \$313  | \$314 ;
+  assign \$316  = ch1_read_select_144 ? \port$4733$0 [271:240] : 32'd0;
+  assign \$317  = \$315  | \$316 ;
+  assign \$318  = ch1_read_select_145 ? { 16'h0000, \port$4733$0 [287:272] } : 32'd0;
+  assign \$319  = \$317  | \$318 ;
+  assign \$320  = window0_read ? ch0__ca_rbuf_data : 32'd0;
+  assign \$321  = \$319  | \$320 ;
+  assign \$322  = window1_read ? ch1__ca_rbuf_data : 32'd0;
+  assign \$323  = \$321  | \$322 ;
+  assign \$324  = ! write_addr;
+  assign g_id_write = write_en & \$324 ;
+  assign \$325  = ! bus__r_addr;
+  assign g_id_read = bus__r_en & \$325 ;
+  assign \$326  = write_addr == 1'h1;
+  assign g_version_write = write_en & \$326 ;
+  assign \$327  = bus__r_addr == 1'h1;
+  assign g_version_read = bus__r_en & \$327 ;
+  assign \$328  = write_addr == 2'h2;
+  assign g_channels_write = write_en & \$328 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$370  = ch1_result_status_cds_snapshot;
-    if (ch1_result_status_read) begin
-      \$370  = \port$4452$0 [49];
-    end
+    \$480  = bus__w_en;
     if (rst) begin
-      \$370  = 1'h0;
+      \$480  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$371  = ch1_result_status_w0_ne_snapshot;
-    if (ch1_result_status_read) begin
-      \$371  = \port$4452$0 [105];
+    \$481  = write_addr;
+    if (bus__w_en) begin
+      \$481  = bus__w_addr;
     end
     if (rst) begin
-      \$371  = 1'h0;
+      \$481  = 11'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$372  = ch1_result_status_w0_nw_snapshot;
-    if (ch1_result_status_read) begin
-      \$372  = \port$4452$0 [106];
+    \$482  = write_data;
+    if (bus__w_en) begin
+      \$482  = bus__w_data;
     end
     if (rst) begin
-      \$372  = 1'h0;
+      \$482  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$373  = ch1_result_status_w0_crc_ok_snapshot;
-    if (ch1_result_status_read) begin
-      \$373  = \port$4452$0 [107];
+    \$483  = write_strb;
+    if (bus__w_en) begin
+      \$483  = bus__w_strb;
     end
     if (rst) begin
-      \$373  = 1'h0;
+      \$483  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$374  = ch1_result_status_w1_ne_snapshot;
-    if (ch1_result_status_read) begin
-      \$374  = \port$4452$0 [148];
-    end
+    \$484  = \$2 ;
     if (rst) begin
-      \$374  = 1'h0;
+      \$484  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$375  = ch1_result_status_w1_nw_snapshot;
-    if (ch1_result_status_read) begin
-      \$375  = \port$4452$0 [149];
-    end
-    if (rst) begin
-      \$375  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$376  = ch1_result_status_w1_crc_ok_snapshot;
-    if (ch1_result_status_read) begin
-      \$376  = \port$4452$0 [150];
-    end
-    if (rst) begin
-      \$376  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$377  = ch1_result_status_lc_repeat_snapshot;
-    if (ch1_result_status_read) begin
-      \$377  = \port$4452$0 [157];
-    end
-    if (rst) begin
-      \$377  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$378  = ch1_result_status_lc_skip_snapshot;
-    if (ch1_result_status_read) begin
-      \$378  = \port$4452$0 [158];
-    end
-    if (rst) begin
-      \$378  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$379  = ch1_result_status_lc_zero_snapshot;
-    if (ch1_result_status_read) begin
-      \$379  = \port$4452$0 [159];
-    end
-    if (rst) begin
-      \$379  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$380  = ch1_result_status_spw_mismatch_snapshot;
-    if (ch1_result_status_read) begin
-      \$380  = \port$4452$0 [160];
-    end
-    if (rst) begin
-      \$380  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$381  = ch1_result_status_lc_snapshot;
-    if (ch1_result_status_read) begin
-      \$381  = \port$4452$0 [156:151];
-    end
-    if (rst) begin
-      \$381  = 6'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$382  = ch1_result_seq_seq_snapshot;
-    if (ch1_result_status_read) begin
-      \$382  = ch1__done_count;
-    end
-    if (rst) begin
-      \$382  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$383  = ch1_result_seq_line_delay_snapshot;
-    if (ch1_result_status_read) begin
-      \$383  = \port$4452$0 [48:36];
-    end
-    if (rst) begin
-      \$383  = 13'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$384  = ch1_result_w0_lo_data_snapshot;
-    if (ch1_result_status_read) begin
-      \$384  = \port$4452$0 [81:50];
-    end
-    if (rst) begin
-      \$384  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$385  = ch1_result_w0_hi_data_snapshot;
-    if (ch1_result_status_read) begin
-      \$385  = \port$4452$0 [104:82];
-    end
-    if (rst) begin
-      \$385  = 23'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$386  = ch1_result_w1_lo_data_snapshot;
-    if (ch1_result_status_read) begin
-      \$386  = \port$4452$0 [139:108];
-    end
-    if (rst) begin
-      \$386  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$387  = ch1_result_w1_hi_data_snapshot;
-    if (ch1_result_status_read) begin
-      \$387  = \port$4452$0 [147:140];
-    end
-    if (rst) begin
-      \$387  = 8'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$388  = ch1_result_timestamp_time_snapshot;
-    if (ch1_result_status_read) begin
-      \$388  = \port$4452$0 [35:4];
-    end
-    if (rst) begin
-      \$388  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$389  = ch1_read_word;
+    \$485  = g_read_select_0;
     if (bus__r_en) begin
-      (* full_case = 32'd1 *)
-      casez (bus__r_addr)
-        11'h100:
-            \$389  = { 22'h000000, ch1__trigger_enable, ch1__periodic, 8'h00 };
-        11'h101:
-            \$389  = { 30'h00000000, ch1__config_error, ch1__busy };
-        11'h102:
-            \$389  = 32'd119023671;
-        11'h104:
-            \$389  = { 29'h00000000, ch1_irq_status_access_done, ch1_irq_status_error, ch1_irq_status_done };
-        11'h105:
-            \$389  = { 29'h00000000, ch1_irq_enable_access_done, ch1_irq_enable_error, ch1_irq_enable_done };
-        11'h108:
-            \$389  = { 4'h0, ch1__cfg_delay_limit, ch1__cfg_ma_half_period };
-        11'h109:
-            \$389  = { 8'h00, ch1__cfg_request_period };
-        11'h10a:
-            \$389  = { 8'h00, ch1__cfg_break_time };
-        11'h10b:
-            \$389  = { 8'h00, ch1__cfg_ack_limit };
-        11'h10c:
-            \$389  = { 8'h00, ch1__cfg_timeout_limit };
-        11'h10d:
-            \$389  = { ch1__cfg_w1_enable, 5'h00, ch1__cfg_w1_crc, ch1__cfg_w1_lc, ch1__cfg_w1_nenw, ch1__cfg_w1_data_bits, 6'h00, ch1__cfg_w0_crc, ch1__cfg_w0_lc, ch1__cfg_w0_nenw, ch1__cfg_w0_data_bits };
-        11'h10e:
-            \$389  = { 16'h0000, ch1__cfg_spw_tolerance, 6'h00, ch1__cfg_spw_check, ch1__cfg_end_check };
-        11'h110:
-            \$389  = { 2'h0, \port$4452$0 [156:151], 4'h0, \port$4452$0 [160:157], 1'h0, \port$4452$0 [150:148], 1'h0, \port$4452$0 [107:105], 3'h0, \port$4452$0 [49], \port$4452$0 [3:0] };
-        11'h111:
-            \$389  = { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot };
-        11'h112:
-            \$389  = ch1_result_w0_lo_data_snapshot;
-        11'h113:
-            \$389  = { 9'h000, ch1_result_w0_hi_data_snapshot };
-        11'h114:
-            \$389  = ch1_result_w1_lo_data_snapshot;
-        11'h115:
-            \$389  = { 24'h000000, ch1_result_w1_hi_data_snapshot };
-        11'h116:
-            \$389  = ch1_result_timestamp_time_snapshot;
-        11'h118:
-            \$389  = \port$4459$0 [31:0];
-        11'h119:
-            \$389  = \port$4459$0 [63:32];
-        11'h11a:
-            \$389  = \port$4459$0 [95:64];
-        11'h11b:
-            \$389  = \port$4459$0 [127:96];
-        11'h11c:
-            \$389  = \port$4459$0 [159:128];
-        11'h11d:
-            \$389  = \port$4459$0 [191:160];
-        11'h11e:
-            \$389  = { 16'h0000, \port$4459$0 [207:192] };
-        11'h140:
-            \$389  = { 7'h00, ch1__ca_write, 1'h0, ch1__ca_count, 1'h0, ch1__ca_address, 5'h00, ch1__ca_slave_id };
-        11'h141:
-            \$389  = 32'd0;
-        11'h142:
-            \$389  = { 17'h00000, \port$4573$0 [9:3], 1'h0, \port$4573$0 [2:0], 3'h0, ch1__ca_busy };
-        11'h143:
-            \$389  = \port$4459$0 [239:208];
-        11'h144:
-            \$389  = \port$4459$0 [271:240];
-        11'h145:
-            \$389  = { 16'h0000, \port$4459$0 [287:272] };
-        default:
-            \$389  = 32'd0;
-      endcase
+      \$485  = \$3 ;
     end
     if (rst) begin
-      \$389  = 32'd0;
+      \$485  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$390  = window0_read;
+    \$486  = g_read_select_1;
     if (bus__r_en) begin
-      \$390  = \$266 ;
+      \$486  = \$4 ;
     end
     if (rst) begin
-      \$390  = 1'h0;
+      \$486  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$391  = window1_read;
+    \$487  = g_read_select_2;
     if (bus__r_en) begin
-      \$391  = \$268 ;
+      \$487  = \$5 ;
     end
     if (rst) begin
-      \$391  = 1'h0;
+      \$487  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$392  = bus__r_data;
-    if (bus__r_load) begin
-      \$392  = \$275 ;
-    end
-    if (rst) begin
-      \$392  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$276  = \$158 ;
-    if (rst) begin
-      \$276  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$277  = g_read_word;
+    \$488  = g_read_select_3;
     if (bus__r_en) begin
-      (* full_case = 32'd1 *)
-      casez (bus__r_addr)
-        11'h000:
-            \$277  = 32'd1114198867;
-        11'h001:
-            \$277  = 32'd65537;
-        11'h002:
-            \$277  = 32'd2;
-        11'h003:
-            \$277  = 32'd0;
-        11'h004:
-            \$277  = { 30'h00000000, ch1_irq, ch0_irq };
-        default:
-            \$277  = 32'd0;
-      endcase
+      \$488  = \$6 ;
     end
     if (rst) begin
-      \$277  = 32'd0;
+      \$488  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$278  = \$160 ;
+    \$489  = g_read_select_4;
+    if (bus__r_en) begin
+      \$489  = \$7 ;
+    end
     if (rst) begin
-      \$278  = 1'h0;
+      \$489  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$279  = \$162 ;
+    \$490  = \$9 ;
     if (rst) begin
-      \$279  = 1'h0;
+      \$490  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$280  = \$164 ;
+    \$491  = \$11 ;
     if (rst) begin
-      \$280  = 1'h0;
+      \$491  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$281  = ch0__periodic;
-    if (\$165 ) begin
-      \$281  = ch0__ca_wbuf_data[8];
-    end
+    \$492  = \$13 ;
     if (rst) begin
-      \$281  = 1'h0;
+      \$492  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$282  = ch0__trigger_enable;
-    if (\$166 ) begin
-      \$282  = ch0__ca_wbuf_data[9];
+    \$493  = ch0_ctrl_periodic;
+    if (\$14 ) begin
+      \$493  = write_data[8];
     end
     if (rst) begin
-      \$282  = 1'h0;
+      \$493  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$283  = ch0_irq_status_done;
+    \$494  = ch0_ctrl_trigger_enable;
+    if (\$15 ) begin
+      \$494  = write_data[9];
+    end
+    if (rst) begin
+      \$494  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$495  = ch0_irq_status_done;
     if (ch0__done) begin
-      \$283  = 1'h1;
-    end else if (\$168 ) begin
-      \$283  = 1'h0;
+      \$495  = 1'h1;
+    end else if (\$17 ) begin
+      \$495  = 1'h0;
     end
     if (rst) begin
-      \$283  = 1'h0;
+      \$495  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$284  = ch0_irq_status_error;
+    \$496  = ch0_irq_status_error;
     if (ch0__frame_error) begin
-      \$284  = 1'h1;
-    end else if (\$170 ) begin
-      \$284  = 1'h0;
+      \$496  = 1'h1;
+    end else if (\$19 ) begin
+      \$496  = 1'h0;
     end
     if (rst) begin
-      \$284  = 1'h0;
+      \$496  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$285  = ch0_irq_status_access_done;
+    \$497  = ch0_irq_status_access_done;
     if (ch0__ca_done) begin
-      \$285  = 1'h1;
-    end else if (\$172 ) begin
-      \$285  = 1'h0;
+      \$497  = 1'h1;
+    end else if (\$21 ) begin
+      \$497  = 1'h0;
     end
     if (rst) begin
-      \$285  = 1'h0;
+      \$497  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$286  = ch0_irq_enable_done;
-    if (\$173 ) begin
-      \$286  = ch0__ca_wbuf_data[0];
+    \$498  = ch0_irq_enable_done;
+    if (\$22 ) begin
+      \$498  = write_data[0];
     end
     if (rst) begin
-      \$286  = 1'h0;
+      \$498  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$287  = ch0_irq_enable_error;
-    if (\$174 ) begin
-      \$287  = ch0__ca_wbuf_data[1];
+    \$499  = ch0_irq_enable_error;
+    if (\$23 ) begin
+      \$499  = write_data[1];
     end
     if (rst) begin
-      \$287  = 1'h0;
+      \$499  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$288  = ch0_irq_enable_access_done;
-    if (\$175 ) begin
-      \$288  = ch0__ca_wbuf_data[2];
+    \$500  = ch0_irq_enable_access_done;
+    if (\$24 ) begin
+      \$500  = write_data[2];
     end
     if (rst) begin
-      \$288  = 1'h0;
+      \$500  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$289  = ch0__cfg_ma_half_period;
-    if (\$176 ) begin
-      \$289 [7:0] = ch0__ca_wbuf_data[7:0];
+    \$501  = ch0_cfg_ma_ma_half_period;
+    if (\$25 ) begin
+      \$501 [7:0] = write_data[7:0];
     end
-    if (\$177 ) begin
-      \$289 [15:8] = ch0__ca_wbuf_data[15:8];
+    if (\$26 ) begin
+      \$501 [15:8] = write_data[15:8];
     end
     if (rst) begin
-      \$289  = 16'h0000;
+      \$501  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$290  = ch0__cfg_delay_limit;
-    if (\$178 ) begin
-      \$290 [7:0] = ch0__ca_wbuf_data[23:16];
+    \$502  = ch0_cfg_ma_delay_limit;
+    if (\$27 ) begin
+      \$502 [7:0] = write_data[23:16];
     end
-    if (\$179 ) begin
-      \$290 [11:8] = ch0__ca_wbuf_data[27:24];
+    if (\$28 ) begin
+      \$502 [11:8] = write_data[27:24];
     end
     if (rst) begin
-      \$290  = 12'h000;
+      \$502  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$291  = ch0__cfg_request_period;
-    if (\$180 ) begin
-      \$291 [7:0] = ch0__ca_wbuf_data[7:0];
+    \$503  = ch0_cfg_period_request_period;
+    if (\$29 ) begin
+      \$503 [7:0] = write_data[7:0];
     end
-    if (\$181 ) begin
-      \$291 [15:8] = ch0__ca_wbuf_data[15:8];
+    if (\$30 ) begin
+      \$503 [15:8] = write_data[15:8];
     end
-    if (\$182 ) begin
-      \$291 [23:16] = ch0__ca_wbuf_data[23:16];
+    if (\$31 ) begin
+      \$503 [23:16] = write_data[23:16];
     end
     if (rst) begin
-      \$291  = 24'h000000;
+      \$503  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$292  = ch0__cfg_break_time;
-    if (\$183 ) begin
-      \$292 [7:0] = ch0__ca_wbuf_data[7:0];
+    \$504  = ch0_cfg_break_break_time;
+    if (\$32 ) begin
+      \$504 [7:0] = write_data[7:0];
     end
-    if (\$184 ) begin
-      \$292 [15:8] = ch0__ca_wbuf_data[15:8];
+    if (\$33 ) begin
+      \$504 [15:8] = write_data[15:8];
     end
-    if (\$185 ) begin
-      \$292 [23:16] = ch0__ca_wbuf_data[23:16];
+    if (\$34 ) begin
+      \$504 [23:16] = write_data[23:16];
     end
     if (rst) begin
-      \$292  = 24'h000000;
+      \$504  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$293  = ch0__cfg_ack_limit;
-    if (\$186 ) begin
-      \$293 [7:0] = ch0__ca_wbuf_data[7:0];
+    \$505  = ch0_cfg_ack_ack_limit;
+    if (\$35 ) begin
+      \$505 [7:0] = write_data[7:0];
     end
-    if (\$187 ) begin
-      \$293 [15:8] = ch0__ca_wbuf_data[15:8];
+    if (\$36 ) begin
+      \$505 [15:8] = write_data[15:8];
     end
-    if (\$188 ) begin
-      \$293 [23:16] = ch0__ca_wbuf_data[23:16];
+    if (\$37 ) begin
+      \$505 [23:16] = write_data[23:16];
     end
     if (rst) begin
-      \$293  = 24'h000000;
+      \$505  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$294  = ch0__cfg_timeout_limit;
-    if (\$189 ) begin
-      \$294 [7:0] = ch0__ca_wbuf_data[7:0];
+    \$506  = ch0_cfg_timeout_timeout_limit;
+    if (\$38 ) begin
+      \$506 [7:0] = write_data[7:0];
     end
-    if (\$190 ) begin
-      \$294 [15:8] = ch0__ca_wbuf_data[15:8];
+    if (\$39 ) begin
+      \$506 [15:8] = write_data[15:8];
     end
-    if (\$191 ) begin
-      \$294 [23:16] = ch0__ca_wbuf_data[23:16];
+    if (\$40 ) begin
+      \$506 [23:16] = write_data[23:16];
     end
     if (rst) begin
-      \$294  = 24'h000000;
+      \$506  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$295  = ch0__cfg_w0_data_bits;
-    if (\$192 ) begin
-      \$295  = ch0__ca_wbuf_data[5:0];
+    \$507  = ch0_cfg_words_w0_data_bits;
+    if (\$41 ) begin
+      \$507  = write_data[5:0];
     end
     if (rst) begin
-      \$295  = 6'h00;
+      \$507  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$296  = ch0__cfg_w0_nenw;
-    if (\$193 ) begin
-      \$296  = ch0__ca_wbuf_data[6];
+    \$508  = ch0_cfg_words_w0_nenw;
+    if (\$42 ) begin
+      \$508  = write_data[6];
     end
     if (rst) begin
-      \$296  = 1'h0;
+      \$508  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$297  = ch0__cfg_w0_lc;
-    if (\$194 ) begin
-      \$297  = ch0__ca_wbuf_data[7];
+    \$509  = ch0_cfg_words_w0_lc;
+    if (\$43 ) begin
+      \$509  = write_data[7];
     end
     if (rst) begin
-      \$297  = 1'h0;
+      \$509  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$298  = ch0__cfg_w0_crc;
-    if (\$195 ) begin
-      \$298  = ch0__ca_wbuf_data[9:8];
+    \$510  = ch0_cfg_words_w0_crc;
+    if (\$44 ) begin
+      \$510  = write_data[9:8];
     end
     if (rst) begin
-      \$298  = 2'h0;
+      \$510  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$299  = ch0__cfg_w1_data_bits;
-    if (\$196 ) begin
-      \$299  = ch0__ca_wbuf_data[21:16];
+    \$511  = ch0_cfg_words_w1_data_bits;
+    if (\$45 ) begin
+      \$511  = write_data[21:16];
     end
     if (rst) begin
-      \$299  = 6'h00;
+      \$511  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$300  = ch0__cfg_w1_nenw;
-    if (\$197 ) begin
-      \$300  = ch0__ca_wbuf_data[22];
+    \$512  = ch0_cfg_words_w1_nenw;
+    if (\$46 ) begin
+      \$512  = write_data[22];
     end
     if (rst) begin
-      \$300  = 1'h0;
+      \$512  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$301  = ch0__cfg_w1_lc;
-    if (\$198 ) begin
-      \$301  = ch0__ca_wbuf_data[23];
+    \$513  = ch0_cfg_words_w1_lc;
+    if (\$47 ) begin
+      \$513  = write_data[23];
     end
     if (rst) begin
-      \$301  = 1'h0;
+      \$513  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$302  = ch0__cfg_w1_crc;
-    if (\$199 ) begin
-      \$302  = ch0__ca_wbuf_data[25:24];
+    \$514  = ch0_cfg_words_w1_crc;
+    if (\$48 ) begin
+      \$514  = write_data[25:24];
     end
     if (rst) begin
-      \$302  = 2'h0;
+      \$514  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$303  = ch0__cfg_w1_enable;
-    if (\$200 ) begin
-      \$303  = ch0__ca_wbuf_data[31];
+    \$515  = ch0_cfg_words_w1_enable;
+    if (\$49 ) begin
+      \$515  = write_data[31];
     end
     if (rst) begin
-      \$303  = 1'h0;
+      \$515  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$304  = ch0__cfg_end_check;
-    if (\$201 ) begin
-      \$304  = ch0__ca_wbuf_data[0];
+    \$516  = ch0_cfg_checks_end_check;
+    if (\$50 ) begin
+      \$516  = write_data[0];
     end
     if (rst) begin
-      \$304  = 1'h0;
+      \$516  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$305  = ch0__cfg_spw_check;
-    if (\$202 ) begin
-      \$305  = ch0__ca_wbuf_data[1];
+    \$517  = ch0_cfg_checks_spw_check;
+    if (\$51 ) begin
+      \$517  = write_data[1];
     end
     if (rst) begin
-      \$305  = 1'h0;
+      \$517  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$306  = ch0__cfg_spw_tolerance;
-    if (\$203 ) begin
-      \$306  = ch0__ca_wbuf_data[15:8];
+    \$518  = ch0_cfg_checks_spw_tolerance;
+    if (\$52 ) begin
+      \$518  = write_data[15:8];
     end
     if (rst) begin
-      \$306  = 8'h00;
+      \$518  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$307  = ch0__ca_slave_id;
-    if (\$204 ) begin
-      \$307  = ch0__ca_wbuf_data[2:0];
+    \$519  = ch0_ca_request_slave_id;
+    if (\$53 ) begin
+      \$519  = write_data[2:0];
     end
     if (rst) begin
-      \$307  = 3'h0;
+      \$519  = 3'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$308  = ch0__ca_address;
-    if (\$205 ) begin
-      \$308  = ch0__ca_wbuf_data[14:8];
+    \$520  = ch0_ca_request_address;
+    if (\$54 ) begin
+      \$520  = write_data[14:8];
     end
     if (rst) begin
-      \$308  = 7'h00;
+      \$520  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$309  = ch0__ca_count;
-    if (\$206 ) begin
-      \$309  = ch0__ca_wbuf_data[22:16];
+    \$521  = ch0_ca_request_count;
+    if (\$55 ) begin
+      \$521  = write_data[22:16];
     end
     if (rst) begin
-      \$309  = 7'h00;
+      \$521  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$310  = ch0__ca_write;
-    if (\$207 ) begin
-      \$310  = ch0__ca_wbuf_data[24];
+    \$522  = \ch0_ca_request_write$65 ;
+    if (\$56 ) begin
+      \$522  = write_data[24];
     end
     if (rst) begin
-      \$310  = 1'h0;
+      \$522  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$311  = \$209 ;
+    \$523  = \$58 ;
     if (rst) begin
-      \$311  = 1'h0;
+      \$523  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$312  = \$211 ;
+    \$524  = \$60 ;
     if (rst) begin
-      \$312  = 1'h0;
+      \$524  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$313  = ch0_result_status_status_snapshot;
+    \$525  = ch0_result_status_status_snapshot;
     if (ch0_result_status_read) begin
-      \$313  = \port$3984$0 [3:0];
+      \$525  = \port$4258$0 [3:0];
     end
     if (rst) begin
-      \$313  = 4'h0;
+      \$525  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$314  = ch0_result_status_cds_snapshot;
+    \$526  = ch0_result_status_cds_snapshot;
     if (ch0_result_status_read) begin
-      \$314  = \port$3984$0 [49];
+      \$526  = \port$4258$0 [49];
     end
     if (rst) begin
-      \$314  = 1'h0;
+      \$526  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$315  = ch0_result_status_w0_ne_snapshot;
+    \$527  = ch0_result_status_w0_ne_snapshot;
     if (ch0_result_status_read) begin
-      \$315  = \port$3984$0 [105];
+      \$527  = \port$4258$0 [105];
     end
     if (rst) begin
-      \$315  = 1'h0;
+      \$527  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$316  = ch0_result_status_w0_nw_snapshot;
+    \$528  = ch0_result_status_w0_nw_snapshot;
     if (ch0_result_status_read) begin
-      \$316  = \port$3984$0 [106];
+      \$528  = \port$4258$0 [106];
     end
     if (rst) begin
-      \$316  = 1'h0;
+      \$528  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$317  = ch0_result_status_w0_crc_ok_snapshot;
+    \$529  = ch0_result_status_w0_crc_ok_snapshot;
     if (ch0_result_status_read) begin
-      \$317  = \port$3984$0 [107];
+      \$529  = \port$4258$0 [107];
     end
     if (rst) begin
-      \$317  = 1'h0;
+      \$529  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$318  = ch0_result_status_w1_ne_snapshot;
+    \$530  = ch0_result_status_w1_ne_snapshot;
     if (ch0_result_status_read) begin
-      \$318  = \port$3984$0 [148];
+      \$530  = \port$4258$0 [148];
     end
     if (rst) begin
-      \$318  = 1'h0;
+      \$530  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$319  = ch0_result_status_w1_nw_snapshot;
+    \$531  = ch0_result_status_w1_nw_snapshot;
     if (ch0_result_status_read) begin
-      \$319  = \port$3984$0 [149];
+      \$531  = \port$4258$0 [149];
     end
     if (rst) begin
-      \$319  = 1'h0;
+      \$531  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$320  = ch0_result_status_w1_crc_ok_snapshot;
+    \$532  = ch0_result_status_w1_crc_ok_snapshot;
     if (ch0_result_status_read) begin
-      \$320  = \port$3984$0 [150];
+      \$532  = \port$4258$0 [150];
     end
     if (rst) begin
-      \$320  = 1'h0;
+      \$532  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$321  = ch0_result_status_lc_repeat_snapshot;
+    \$533  = ch0_result_status_lc_repeat_snapshot;
     if (ch0_result_status_read) begin
-      \$321  = \port$3984$0 [157];
+      \$533  = \port$4258$0 [157];
     end
     if (rst) begin
-      \$321  = 1'h0;
+      \$533  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$322  = ch0_result_status_lc_skip_snapshot;
+    \$534  = ch0_result_status_lc_skip_snapshot;
     if (ch0_result_status_read) begin
-      \$322  = \port$3984$0 [158];
+      \$534  = \port$4258$0 [158];
     end
     if (rst) begin
-      \$322  = 1'h0;
+      \$534  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$323  = ch0_result_status_lc_zero_snapshot;
+    \$535  = ch0_result_status_lc_zero_snapshot;
     if (ch0_result_status_read) begin
-      \$323  = \port$3984$0 [159];
+      \$535  = \port$4258$0 [159];
     end
     if (rst) begin
-      \$323  = 1'h0;
+      \$535  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$324  = ch0_result_status_spw_mismatch_snapshot;
+    \$536  = ch0_result_status_spw_mismatch_snapshot;
     if (ch0_result_status_read) begin
-      \$324  = \port$3984$0 [160];
+      \$536  = \port$4258$0 [160];
     end
     if (rst) begin
-      \$324  = 1'h0;
+      \$536  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$325  = ch0_result_status_lc_snapshot;
+    \$537  = ch0_result_status_lc_snapshot;
     if (ch0_result_status_read) begin
-      \$325  = \port$3984$0 [156:151];
+      \$537  = \port$4258$0 [156:151];
     end
     if (rst) begin
-      \$325  = 6'h00;
+      \$537  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$326  = ch0_result_seq_seq_snapshot;
+    \$538  = ch0_result_seq_seq_snapshot;
     if (ch0_result_status_read) begin
-      \$326  = ch0__done_count;
+      \$538  = ch0__done_count;
     end
     if (rst) begin
-      \$326  = 16'h0000;
+      \$538  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$327  = ch0_result_seq_line_delay_snapshot;
+    \$539  = ch0_result_seq_line_delay_snapshot;
     if (ch0_result_status_read) begin
-      \$327  = \port$3984$0 [48:36];
+      \$539  = \port$4258$0 [48:36];
     end
     if (rst) begin
-      \$327  = 13'h0000;
+      \$539  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$328  = ch0_result_w0_lo_data_snapshot;
+    \$540  = ch0_result_w0_lo_data_snapshot;
     if (ch0_result_status_read) begin
-      \$328  = \port$3984$0 [81:50];
+      \$540  = \port$4258$0 [81:50];
     end
     if (rst) begin
-      \$328  = 32'd0;
+      \$540  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$329  = ch0_result_w0_hi_data_snapshot;
+    \$541  = ch0_result_w0_hi_data_snapshot;
     if (ch0_result_status_read) begin
-      \$329  = \port$3984$0 [104:82];
+      \$541  = \port$4258$0 [104:82];
     end
     if (rst) begin
-      \$329  = 23'h000000;
+      \$541  = 23'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$330  = ch0_result_w1_lo_data_snapshot;
+    \$542  = ch0_result_w1_lo_data_snapshot;
     if (ch0_result_status_read) begin
-      \$330  = \port$3984$0 [139:108];
+      \$542  = \port$4258$0 [139:108];
     end
     if (rst) begin
-      \$330  = 32'd0;
+      \$542  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$331  = ch0_result_w1_hi_data_snapshot;
+    \$543  = ch0_result_w1_hi_data_snapshot;
     if (ch0_result_status_read) begin
-      \$331  = \port$3984$0 [147:140];
+      \$543  = \port$4258$0 [147:140];
     end
     if (rst) begin
-      \$331  = 8'h00;
+      \$543  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$332  = ch0_result_timestamp_time_snapshot;
+    \$544  = ch0_result_timestamp_time_snapshot;
     if (ch0_result_status_read) begin
-      \$332  = \port$3984$0 [35:4];
+      \$544  = \port$4258$0 [35:4];
     end
     if (rst) begin
-      \$332  = 32'd0;
+      \$544  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$333  = ch0_read_word;
+    \$545  = ch0_read_select_80;
     if (bus__r_en) begin
-      (* full_case = 32'd1 *)
-      casez (bus__r_addr)
-        11'h080:
-            \$333  = { 22'h000000, ch0__trigger_enable, ch0__periodic, 8'h00 };
-        11'h081:
-            \$333  = { 30'h00000000, ch0__config_error, ch0__busy };
-        11'h082:
-            \$333  = 32'd119023671;
-        11'h084:
-            \$333  = { 29'h00000000, ch0_irq_status_access_done, ch0_irq_status_error, ch0_irq_status_done };
-        11'h085:
-            \$333  = { 29'h00000000, ch0_irq_enable_access_done, ch0_irq_enable_error, ch0_irq_enable_done };
-        11'h088:
-            \$333  = { 4'h0, ch0__cfg_delay_limit, ch0__cfg_ma_half_period };
-        11'h089:
-            \$333  = { 8'h00, ch0__cfg_request_period };
-        11'h08a:
-            \$333  = { 8'h00, ch0__cfg_break_time };
-        11'h08b:
-            \$333  = { 8'h00, ch0__cfg_ack_limit };
-        11'h08c:
-            \$333  = { 8'h00, ch0__cfg_timeout_limit };
-        11'h08d:
-            \$333  = { ch0__cfg_w1_enable, 5'h00, ch0__cfg_w1_crc, ch0__cfg_w1_lc, ch0__cfg_w1_nenw, ch0__cfg_w1_data_bits, 6'h00, ch0__cfg_w0_crc, ch0__cfg_w0_lc, ch0__cfg_w0_nenw, ch0__cfg_w0_data_bits };
-        11'h08e:
-            \$333  = { 16'h0000, ch0__cfg_spw_tolerance, 6'h00, ch0__cfg_spw_check, ch0__cfg_end_check };
-        11'h090:
-            \$333  = { 2'h0, \port$3984$0 [156:151], 4'h0, \port$3984$0 [160:157], 1'h0, \port$3984$0 [150:148], 1'h0, \port$3984$0 [107:105], 3'h0, \port$3984$0 [49], \port$3984$0 [3:0] };
-        11'h091:
-            \$333  = { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot };
-        11'h092:
-            \$333  = ch0_result_w0_lo_data_snapshot;
-        11'h093:
-            \$333  = { 9'h000, ch0_result_w0_hi_data_snapshot };
-        11'h094:
-            \$333  = ch0_result_w1_lo_data_snapshot;
-        11'h095:
-            \$333  = { 24'h000000, ch0_result_w1_hi_data_snapshot };
-        11'h096:
-            \$333  = ch0_result_timestamp_time_snapshot;
-        11'h098:
-            \$333  = \port$3991$0 [31:0];
-        11'h099:
-            \$333  = \port$3991$0 [63:32];
-        11'h09a:
-            \$333  = \port$3991$0 [95:64];
-        11'h09b:
-            \$333  = \port$3991$0 [127:96];
-        11'h09c:
-            \$333  = \port$3991$0 [159:128];
-        11'h09d:
-            \$333  = \port$3991$0 [191:160];
-        11'h09e:
-            \$333  = { 16'h0000, \port$3991$0 [207:192] };
-        11'h0c0:
-            \$333  = { 7'h00, ch0__ca_write, 1'h0, ch0__ca_count, 1'h0, ch0__ca_address, 5'h00, ch0__ca_slave_id };
-        11'h0c1:
-            \$333  = 32'd0;
-        11'h0c2:
-            \$333  = { 17'h00000, \port$4105$0 [9:3], 1'h0, \port$4105$0 [2:0], 3'h0, ch0__ca_busy };
-        11'h0c3:
-            \$333  = \port$3991$0 [239:208];
-        11'h0c4:
-            \$333  = \port$3991$0 [271:240];
-        11'h0c5:
-            \$333  = { 16'h0000, \port$3991$0 [287:272] };
-        default:
-            \$333  = 32'd0;
-      endcase
+      \$545  = \$61 ;
     end
     if (rst) begin
-      \$333  = 32'd0;
+      \$545  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$334  = \$213 ;
+    \$546  = ch0_read_select_81;
+    if (bus__r_en) begin
+      \$546  = \$62 ;
+    end
     if (rst) begin
-      \$334  = 1'h0;
+      \$546  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$335  = \$215 ;
+    \$547  = ch0_read_select_82;
+    if (bus__r_en) begin
+      \$547  = \$63 ;
+    end
     if (rst) begin
-      \$335  = 1'h0;
+      \$547  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$336  = \$217 ;
+    \$548  = ch0_read_select_84;
+    if (bus__r_en) begin
+      \$548  = \$64 ;
+    end
     if (rst) begin
-      \$336  = 1'h0;
+      \$548  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$337  = ch1__periodic;
-    if (\$218 ) begin
-      \$337  = ch0__ca_wbuf_data[8];
+    \$549  = ch0_read_select_85;
+    if (bus__r_en) begin
+      \$549  = \$65 ;
     end
     if (rst) begin
-      \$337  = 1'h0;
+      \$549  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$338  = ch1__trigger_enable;
-    if (\$219 ) begin
-      \$338  = ch0__ca_wbuf_data[9];
+    \$550  = ch0_read_select_88;
+    if (bus__r_en) begin
+      \$550  = \$66 ;
     end
     if (rst) begin
-      \$338  = 1'h0;
+      \$550  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$339  = ch1_irq_status_done;
+    \$551  = ch0_read_select_89;
+    if (bus__r_en) begin
+      \$551  = \$67 ;
+    end
+    if (rst) begin
+      \$551  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$552  = ch0_read_select_8a;
+    if (bus__r_en) begin
+      \$552  = \$68 ;
+    end
+    if (rst) begin
+      \$552  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$553  = ch0_read_select_8b;
+    if (bus__r_en) begin
+      \$553  = \$69 ;
+    end
+    if (rst) begin
+      \$553  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$554  = ch0_read_select_8c;
+    if (bus__r_en) begin
+      \$554  = \$70 ;
+    end
+    if (rst) begin
+      \$554  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$555  = ch0_read_select_8d;
+    if (bus__r_en) begin
+      \$555  = \$71 ;
+    end
+    if (rst) begin
+      \$555  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$556  = ch0_read_select_8e;
+    if (bus__r_en) begin
+      \$556  = \$72 ;
+    end
+    if (rst) begin
+      \$556  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$557  = ch0_read_select_90;
+    if (bus__r_en) begin
+      \$557  = \$73 ;
+    end
+    if (rst) begin
+      \$557  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$558  = ch0_read_select_91;
+    if (bus__r_en) begin
+      \$558  = \$74 ;
+    end
+    if (rst) begin
+      \$558  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$559  = ch0_read_select_92;
+    if (bus__r_en) begin
+      \$559  = \$75 ;
+    end
+    if (rst) begin
+      \$559  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$560  = ch0_read_select_93;
+    if (bus__r_en) begin
+      \$560  = \$76 ;
+    end
+    if (rst) begin
+      \$560  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$561  = ch0_read_select_94;
+    if (bus__r_en) begin
+      \$561  = \$77 ;
+    end
+    if (rst) begin
+      \$561  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$562  = ch0_read_select_95;
+    if (bus__r_en) begin
+      \$562  = \$78 ;
+    end
+    if (rst) begin
+      \$562  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$563  = ch0_read_select_96;
+    if (bus__r_en) begin
+      \$563  = \$79 ;
+    end
+    if (rst) begin
+      \$563  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$564  = ch0_read_select_98;
+    if (bus__r_en) begin
+      \$564  = \$80 ;
+    end
+    if (rst) begin
+      \$564  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$565  = ch0_read_select_99;
+    if (bus__r_en) begin
+      \$565  = \$81 ;
+    end
+    if (rst) begin
+      \$565  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$566  = ch0_read_select_9a;
+    if (bus__r_en) begin
+      \$566  = \$82 ;
+    end
+    if (rst) begin
+      \$566  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$567  = ch0_read_select_9b;
+    if (bus__r_en) begin
+      \$567  = \$83 ;
+    end
+    if (rst) begin
+      \$567  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$568  = ch0_read_select_9c;
+    if (bus__r_en) begin
+      \$568  = \$84 ;
+    end
+    if (rst) begin
+      \$568  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$569  = ch0_read_select_9d;
+    if (bus__r_en) begin
+      \$569  = \$85 ;
+    end
+    if (rst) begin
+      \$569  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$570  = ch0_read_select_9e;
+    if (bus__r_en) begin
+      \$570  = \$86 ;
+    end
+    if (rst) begin
+      \$570  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$571  = ch0_read_select_c0;
+    if (bus__r_en) begin
+      \$571  = \$87 ;
+    end
+    if (rst) begin
+      \$571  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$572  = ch0_read_select_c1;
+    if (bus__r_en) begin
+      \$572  = \$88 ;
+    end
+    if (rst) begin
+      \$572  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$573  = ch0_read_select_c2;
+    if (bus__r_en) begin
+      \$573  = \$89 ;
+    end
+    if (rst) begin
+      \$573  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$574  = ch0_read_select_c3;
+    if (bus__r_en) begin
+      \$574  = \$90 ;
+    end
+    if (rst) begin
+      \$574  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$575  = ch0_read_select_c4;
+    if (bus__r_en) begin
+      \$575  = \$91 ;
+    end
+    if (rst) begin
+      \$575  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$576  = ch0_read_select_c5;
+    if (bus__r_en) begin
+      \$576  = \$92 ;
+    end
+    if (rst) begin
+      \$576  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$577  = \$94 ;
+    if (rst) begin
+      \$577  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$578  = \$96 ;
+    if (rst) begin
+      \$578  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$579  = \$98 ;
+    if (rst) begin
+      \$579  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$580  = ch1_ctrl_periodic;
+    if (\$99 ) begin
+      \$580  = write_data[8];
+    end
+    if (rst) begin
+      \$580  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$581  = ch1_ctrl_trigger_enable;
+    if (\$100 ) begin
+      \$581  = write_data[9];
+    end
+    if (rst) begin
+      \$581  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$582  = ch1_irq_status_done;
     if (ch1__done) begin
-      \$339  = 1'h1;
-    end else if (\$221 ) begin
-      \$339  = 1'h0;
+      \$582  = 1'h1;
+    end else if (\$102 ) begin
+      \$582  = 1'h0;
     end
     if (rst) begin
-      \$339  = 1'h0;
+      \$582  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$340  = ch1_irq_status_error;
+    \$583  = ch1_irq_status_error;
     if (ch1__frame_error) begin
-      \$340  = 1'h1;
-    end else if (\$223 ) begin
-      \$340  = 1'h0;
+      \$583  = 1'h1;
+    end else if (\$104 ) begin
+      \$583  = 1'h0;
     end
     if (rst) begin
-      \$340  = 1'h0;
+      \$583  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$341  = ch1_irq_status_access_done;
+    \$584  = ch1_irq_status_access_done;
     if (ch1__ca_done) begin
-      \$341  = 1'h1;
-    end else if (\$225 ) begin
-      \$341  = 1'h0;
+      \$584  = 1'h1;
+    end else if (\$106 ) begin
+      \$584  = 1'h0;
     end
     if (rst) begin
-      \$341  = 1'h0;
+      \$584  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$342  = ch1_irq_enable_done;
-    if (\$226 ) begin
-      \$342  = ch0__ca_wbuf_data[0];
+    \$585  = ch1_irq_enable_done;
+    if (\$107 ) begin
+      \$585  = write_data[0];
     end
     if (rst) begin
-      \$342  = 1'h0;
+      \$585  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$343  = ch1_irq_enable_error;
-    if (\$227 ) begin
-      \$343  = ch0__ca_wbuf_data[1];
+    \$586  = ch1_irq_enable_error;
+    if (\$108 ) begin
+      \$586  = write_data[1];
     end
     if (rst) begin
-      \$343  = 1'h0;
+      \$586  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$344  = ch1_irq_enable_access_done;
-    if (\$228 ) begin
-      \$344  = ch0__ca_wbuf_data[2];
+    \$587  = ch1_irq_enable_access_done;
+    if (\$109 ) begin
+      \$587  = write_data[2];
     end
     if (rst) begin
-      \$344  = 1'h0;
+      \$587  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$345  = ch1__cfg_ma_half_period;
-    if (\$229 ) begin
-      \$345 [7:0] = ch0__ca_wbuf_data[7:0];
+    \$588  = ch1_cfg_ma_ma_half_period;
+    if (\$110 ) begin
+      \$588 [7:0] = write_data[7:0];
     end
-    if (\$230 ) begin
-      \$345 [15:8] = ch0__ca_wbuf_data[15:8];
+    if (\$111 ) begin
+      \$588 [15:8] = write_data[15:8];
     end
     if (rst) begin
-      \$345  = 16'h0000;
+      \$588  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$346  = ch1__cfg_delay_limit;
-    if (\$231 ) begin
-      \$346 [7:0] = ch0__ca_wbuf_data[23:16];
+    \$589  = ch1_cfg_ma_delay_limit;
+    if (\$112 ) begin
+      \$589 [7:0] = write_data[23:16];
     end
-    if (\$232 ) begin
-      \$346 [11:8] = ch0__ca_wbuf_data[27:24];
+    if (\$113 ) begin
+      \$589 [11:8] = write_data[27:24];
     end
     if (rst) begin
-      \$346  = 12'h000;
+      \$589  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$347  = ch1__cfg_request_period;
-    if (\$233 ) begin
-      \$347 [7:0] = ch0__ca_wbuf_data[7:0];
+    \$590  = ch1_cfg_period_request_period;
+    if (\$114 ) begin
+      \$590 [7:0] = write_data[7:0];
     end
-    if (\$234 ) begin
-      \$347 [15:8] = ch0__ca_wbuf_data[15:8];
+    if (\$115 ) begin
+      \$590 [15:8] = write_data[15:8];
     end
-    if (\$235 ) begin
-      \$347 [23:16] = ch0__ca_wbuf_data[23:16];
+    if (\$116 ) begin
+      \$590 [23:16] = write_data[23:16];
     end
     if (rst) begin
-      \$347  = 24'h000000;
+      \$590  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$348  = ch1__cfg_break_time;
-    if (\$236 ) begin
-      \$348 [7:0] = ch0__ca_wbuf_data[7:0];
+    \$591  = ch1_cfg_break_break_time;
+    if (\$117 ) begin
+      \$591 [7:0] = write_data[7:0];
     end
-    if (\$237 ) begin
-      \$348 [15:8] = ch0__ca_wbuf_data[15:8];
+    if (\$118 ) begin
+      \$591 [15:8] = write_data[15:8];
     end
-    if (\$238 ) begin
-      \$348 [23:16] = ch0__ca_wbuf_data[23:16];
+    if (\$119 ) begin
+      \$591 [23:16] = write_data[23:16];
     end
     if (rst) begin
-      \$348  = 24'h000000;
+      \$591  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$349  = ch1__cfg_ack_limit;
-    if (\$239 ) begin
-      \$349 [7:0] = ch0__ca_wbuf_data[7:0];
+    \$592  = ch1_cfg_ack_ack_limit;
+    if (\$120 ) begin
+      \$592 [7:0] = write_data[7:0];
     end
-    if (\$240 ) begin
-      \$349 [15:8] = ch0__ca_wbuf_data[15:8];
+    if (\$121 ) begin
+      \$592 [15:8] = write_data[15:8];
     end
-    if (\$241 ) begin
-      \$349 [23:16] = ch0__ca_wbuf_data[23:16];
+    if (\$122 ) begin
+      \$592 [23:16] = write_data[23:16];
     end
     if (rst) begin
-      \$349  = 24'h000000;
+      \$592  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$350  = ch1__cfg_timeout_limit;
-    if (\$242 ) begin
-      \$350 [7:0] = ch0__ca_wbuf_data[7:0];
+    \$593  = ch1_cfg_timeout_timeout_limit;
+    if (\$123 ) begin
+      \$593 [7:0] = write_data[7:0];
     end
-    if (\$243 ) begin
-      \$350 [15:8] = ch0__ca_wbuf_data[15:8];
+    if (\$124 ) begin
+      \$593 [15:8] = write_data[15:8];
     end
-    if (\$244 ) begin
-      \$350 [23:16] = ch0__ca_wbuf_data[23:16];
+    if (\$125 ) begin
+      \$593 [23:16] = write_data[23:16];
     end
     if (rst) begin
-      \$350  = 24'h000000;
+      \$593  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$351  = ch1__cfg_w0_data_bits;
-    if (\$245 ) begin
-      \$351  = ch0__ca_wbuf_data[5:0];
+    \$594  = ch1_cfg_words_w0_data_bits;
+    if (\$126 ) begin
+      \$594  = write_data[5:0];
     end
     if (rst) begin
-      \$351  = 6'h00;
+      \$594  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$352  = ch1__cfg_w0_nenw;
-    if (\$246 ) begin
-      \$352  = ch0__ca_wbuf_data[6];
+    \$595  = ch1_cfg_words_w0_nenw;
+    if (\$127 ) begin
+      \$595  = write_data[6];
     end
     if (rst) begin
-      \$352  = 1'h0;
+      \$595  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$353  = ch1__cfg_w0_lc;
-    if (\$247 ) begin
-      \$353  = ch0__ca_wbuf_data[7];
+    \$596  = ch1_cfg_words_w0_lc;
+    if (\$128 ) begin
+      \$596  = write_data[7];
     end
     if (rst) begin
-      \$353  = 1'h0;
+      \$596  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$354  = ch1__cfg_w0_crc;
-    if (\$248 ) begin
-      \$354  = ch0__ca_wbuf_data[9:8];
+    \$597  = ch1_cfg_words_w0_crc;
+    if (\$129 ) begin
+      \$597  = write_data[9:8];
     end
     if (rst) begin
-      \$354  = 2'h0;
+      \$597  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$355  = ch1__cfg_w1_data_bits;
-    if (\$249 ) begin
-      \$355  = ch0__ca_wbuf_data[21:16];
+    \$598  = ch1_cfg_words_w1_data_bits;
+    if (\$130 ) begin
+      \$598  = write_data[21:16];
     end
     if (rst) begin
-      \$355  = 6'h00;
+      \$598  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$356  = ch1__cfg_w1_nenw;
-    if (\$250 ) begin
-      \$356  = ch0__ca_wbuf_data[22];
+    \$599  = ch1_cfg_words_w1_nenw;
+    if (\$131 ) begin
+      \$599  = write_data[22];
     end
     if (rst) begin
-      \$356  = 1'h0;
+      \$599  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$357  = ch1__cfg_w1_lc;
-    if (\$251 ) begin
-      \$357  = ch0__ca_wbuf_data[23];
+    \$600  = ch1_cfg_words_w1_lc;
+    if (\$132 ) begin
+      \$600  = write_data[23];
     end
     if (rst) begin
-      \$357  = 1'h0;
+      \$600  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$358  = ch1__cfg_w1_crc;
-    if (\$252 ) begin
-      \$358  = ch0__ca_wbuf_data[25:24];
+    \$601  = ch1_cfg_words_w1_crc;
+    if (\$133 ) begin
+      \$601  = write_data[25:24];
     end
     if (rst) begin
-      \$358  = 2'h0;
+      \$601  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$359  = ch1__cfg_w1_enable;
-    if (\$253 ) begin
-      \$359  = ch0__ca_wbuf_data[31];
+    \$602  = ch1_cfg_words_w1_enable;
+    if (\$134 ) begin
+      \$602  = write_data[31];
     end
     if (rst) begin
-      \$359  = 1'h0;
+      \$602  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$360  = ch1__cfg_end_check;
-    if (\$254 ) begin
-      \$360  = ch0__ca_wbuf_data[0];
+    \$603  = ch1_cfg_checks_end_check;
+    if (\$135 ) begin
+      \$603  = write_data[0];
     end
     if (rst) begin
-      \$360  = 1'h0;
+      \$603  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$361  = ch1__cfg_spw_check;
-    if (\$255 ) begin
-      \$361  = ch0__ca_wbuf_data[1];
+    \$604  = ch1_cfg_checks_spw_check;
+    if (\$136 ) begin
+      \$604  = write_data[1];
     end
     if (rst) begin
-      \$361  = 1'h0;
+      \$604  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$362  = ch1__cfg_spw_tolerance;
-    if (\$256 ) begin
-      \$362  = ch0__ca_wbuf_data[15:8];
+    \$605  = ch1_cfg_checks_spw_tolerance;
+    if (\$137 ) begin
+      \$605  = write_data[15:8];
     end
     if (rst) begin
-      \$362  = 8'h00;
+      \$605  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$363  = ch1__ca_slave_id;
-    if (\$257 ) begin
-      \$363  = ch0__ca_wbuf_data[2:0];
+    \$606  = ch1_ca_request_slave_id;
+    if (\$138 ) begin
+      \$606  = write_data[2:0];
     end
     if (rst) begin
-      \$363  = 3'h0;
+      \$606  = 3'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$364  = ch1__ca_address;
-    if (\$258 ) begin
-      \$364  = ch0__ca_wbuf_data[14:8];
+    \$607  = ch1_ca_request_address;
+    if (\$139 ) begin
+      \$607  = write_data[14:8];
     end
     if (rst) begin
-      \$364  = 7'h00;
+      \$607  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$365  = ch1__ca_count;
-    if (\$259 ) begin
-      \$365  = ch0__ca_wbuf_data[22:16];
+    \$608  = ch1_ca_request_count;
+    if (\$140 ) begin
+      \$608  = write_data[22:16];
     end
     if (rst) begin
-      \$365  = 7'h00;
+      \$608  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$366  = ch1__ca_write;
-    if (\$260 ) begin
-      \$366  = ch0__ca_wbuf_data[24];
+    \$609  = \ch1_ca_request_write$186 ;
+    if (\$141 ) begin
+      \$609  = write_data[24];
     end
     if (rst) begin
-      \$366  = 1'h0;
+      \$609  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$367  = \$262 ;
+    \$610  = \$143 ;
     if (rst) begin
-      \$367  = 1'h0;
+      \$610  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$368  = \$264 ;
+    \$611  = \$145 ;
     if (rst) begin
-      \$368  = 1'h0;
+      \$611  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$369  = ch1_result_status_status_snapshot;
+    \$612  = ch1_result_status_status_snapshot;
     if (ch1_result_status_read) begin
-      \$369  = \port$4452$0 [3:0];
+      \$612  = \port$4726$0 [3:0];
     end
     if (rst) begin
-      \$369  = 4'h0;
+      \$612  = 4'h0;
     end
   end
-  assign g_trigger_start = glob__trigger;
-  assign ch0_ctrl_start = ch0__start;
-  assign ch0_ctrl_abort = ch0__abort_cycle;
-  assign ch0_ctrl_clear_counters = ch0__clear_counters;
-  assign ch0_ctrl_periodic = ch0__periodic;
-  assign ch0_ctrl_trigger_enable = ch0__trigger_enable;
-  assign ch0_cfg_ma_ma_half_period = ch0__cfg_ma_half_period;
-  assign ch0_cfg_ma_delay_limit = ch0__cfg_delay_limit;
-  assign ch0_cfg_period_request_period = ch0__cfg_request_period;
-  assign ch0_cfg_break_break_time = ch0__cfg_break_time;
-  assign ch0_cfg_ack_ack_limit = ch0__cfg_ack_limit;
-  assign ch0_cfg_timeout_timeout_limit = ch0__cfg_timeout_limit;
-  assign ch0_cfg_words_w0_data_bits = ch0__cfg_w0_data_bits;
-  assign ch0_cfg_words_w0_nenw = ch0__cfg_w0_nenw;
-  assign ch0_cfg_words_w0_lc = ch0__cfg_w0_lc;
-  assign ch0_cfg_words_w0_crc = ch0__cfg_w0_crc;
-  assign ch0_cfg_words_w1_data_bits = ch0__cfg_w1_data_bits;
-  assign ch0_cfg_words_w1_nenw = ch0__cfg_w1_nenw;
-  assign ch0_cfg_words_w1_lc = ch0__cfg_w1_lc;
-  assign ch0_cfg_words_w1_crc = ch0__cfg_w1_crc;
-  assign ch0_cfg_words_w1_enable = ch0__cfg_w1_enable;
-  assign ch0_cfg_checks_end_check = ch0__cfg_end_check;
-  assign ch0_cfg_checks_spw_check = ch0__cfg_spw_check;
-  assign ch0_cfg_checks_spw_tolerance = ch0__cfg_spw_tolerance;
-  assign ch0_ca_request_slave_id = ch0__ca_slave_id;
-  assign ch0_ca_request_address = ch0__ca_address;
-  assign ch0_ca_request_count = ch0__ca_count;
-  assign \ch0_ca_request_write$124  = ch0__ca_write;
-  assign ch0_ca_ctrl_start = ch0__ca_start;
-  assign ch0_ca_ctrl_abort = ch0__ca_abort;
-  assign ch0__ca_wbuf_addr = bus__w_addr[3:0];
-  assign bus__w_data = ch0__ca_wbuf_data;
-  assign ch0__ca_rbuf_addr = bus__r_addr[3:0];
-  assign ch1_ctrl_start = ch1__start;
-  assign ch1_ctrl_abort = ch1__abort_cycle;
-  assign ch1_ctrl_clear_counters = ch1__clear_counters;
-  assign ch1_ctrl_periodic = ch1__periodic;
-  assign ch1_ctrl_trigger_enable = ch1__trigger_enable;
-  assign ch1_cfg_ma_ma_half_period = ch1__cfg_ma_half_period;
-  assign ch1_cfg_ma_delay_limit = ch1__cfg_delay_limit;
-  assign ch1_cfg_period_request_period = ch1__cfg_request_period;
-  assign ch1_cfg_break_break_time = ch1__cfg_break_time;
-  assign ch1_cfg_ack_ack_limit = ch1__cfg_ack_limit;
-  assign ch1_cfg_timeout_timeout_limit = ch1__cfg_timeout_limit;
-  assign ch1_cfg_words_w0_data_bits = ch1__cfg_w0_data_bits;
-  assign ch1_cfg_words_w0_nenw = ch1__cfg_w0_nenw;
-  assign ch1_cfg_words_w0_lc = ch1__cfg_w0_lc;
-  assign ch1_cfg_words_w0_crc = ch1__cfg_w0_crc;
-  assign ch1_cfg_words_w1_data_bits = ch1__cfg_w1_data_bits;
-  assign ch1_cfg_words_w1_nenw = ch1__cfg_w1_nenw;
-  assign ch1_cfg_words_w1_lc = ch1__cfg_w1_lc;
-  assign ch1_cfg_words_w1_crc = ch1__cfg_w1_crc;
-  assign ch1_cfg_words_w1_enable = ch1__cfg_w1_enable;
-  assign ch1_cfg_checks_end_check = ch1__cfg_end_check;
-  assign ch1_cfg_checks_spw_check = ch1__cfg_spw_check;
-  assign ch1_cfg_checks_spw_tolerance = ch1__cfg_spw_tolerance;
-  assign ch1_ca_request_slave_id = ch1__ca_slave_id;
-  assign ch1_ca_request_address = ch1__ca_address;
-  assign ch1_ca_request_count = ch1__ca_count;
-  assign \ch1_ca_request_write$260  = ch1__ca_write;
-  assign ch1_ca_ctrl_start = ch1__ca_start;
-  assign ch1_ca_ctrl_abort = ch1__ca_abort;
-  assign ch1__ca_wbuf_addr = bus__w_addr[3:0];
-  assign ch1__ca_wbuf_data = ch0__ca_wbuf_data;
-  assign ch1__ca_rbuf_addr = bus__r_addr[3:0];
-  assign irq = { ch1_irq, ch0_irq };
-  assign read_data = bus__r_data;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$613  = ch1_result_status_cds_snapshot;
+    if (ch1_result_status_read) begin
+      \$613  = \port$4726$0 [49];
+    end
+    if (rst) begin
+      \$613  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$614  = ch1_result_status_w0_ne_snapshot;
+    if (ch1_result_status_read) begin
+      \$614  = \port$4726$0 [105];
+    end
+    if (rst) begin
+      \$614  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$615  = ch1_result_status_w0_nw_snapshot;
+    if (ch1_result_status_read) begin
+      \$615  = \port$4726$0 [106];
+    end
+    if (rst) begin
+      \$615  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$616  = ch1_result_status_w0_crc_ok_snapshot;
+    if (ch1_result_status_read) begin
+      \$616  = \port$4726$0 [107];
+    end
+    if (rst) begin
+      \$616  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$617  = ch1_result_status_w1_ne_snapshot;
+    if (ch1_result_status_read) begin
+      \$617  = \port$4726$0 [148];
+    end
+    if (rst) begin
+      \$617  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$618  = ch1_result_status_w1_nw_snapshot;
+    if (ch1_result_status_read) begin
+      \$618  = \port$4726$0 [149];
+    end
+    if (rst) begin
+      \$618  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$619  = ch1_result_status_w1_crc_ok_snapshot;
+    if (ch1_result_status_read) begin
+      \$619  = \port$4726$0 [150];
+    end
+    if (rst) begin
+      \$619  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$620  = ch1_result_status_lc_repeat_snapshot;
+    if (ch1_result_status_read) begin
+      \$620  = \port$4726$0 [157];
+    end
+    if (rst) begin
+      \$620  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$621  = ch1_result_status_lc_skip_snapshot;
+    if (ch1_result_status_read) begin
+      \$621  = \port$4726$0 [158];
+    end
+    if (rst) begin
+      \$621  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$622  = ch1_result_status_lc_zero_snapshot;
+    if (ch1_result_status_read) begin
+      \$622  = \port$4726$0 [159];
+    end
+    if (rst) begin
+      \$622  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$623  = ch1_result_status_spw_mismatch_snapshot;
+    if (ch1_result_status_read) begin
+      \$623  = \port$4726$0 [160];
+    end
+    if (rst) begin
+      \$623  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$624  = ch1_result_status_lc_snapshot;
+    if (ch1_result_status_read) begin
+      \$624  = \port$4726$0 [156:151];
+    end
+    if (rst) begin
+      \$624  = 6'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$625  = ch1_result_seq_seq_snapshot;
+    if (ch1_result_status_read) begin
+      \$625  = ch1__done_count;
+    end
+    if (rst) begin
+      \$625  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$626  = ch1_result_seq_line_delay_snapshot;
+    if (ch1_result_status_read) begin
+      \$626  = \port$4726$0 [48:36];
+    end
+    if (rst) begin
+      \$626  = 13'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$627  = ch1_result_w0_lo_data_snapshot;
+    if (ch1_result_status_read) begin
+      \$627  = \port$4726$0 [81:50];
+    end
+    if (rst) begin
+      \$627  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$628  = ch1_result_w0_hi_data_snapshot;
+    if (ch1_result_status_read) begin
+      \$628  = \port$4726$0 [104:82];
+    end
+    if (rst) begin
+      \$628  = 23'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$629  = ch1_result_w1_lo_data_snapshot;
+    if (ch1_result_status_read) begin
+      \$629  = \port$4726$0 [139:108];
+    end
+    if (rst) begin
+      \$629  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$630  = ch1_result_w1_hi_data_snapshot;
+    if (ch1_result_status_read) begin
+      \$630  = \port$4726$0 [147:140];
+    end
+    if (rst) begin
+      \$630  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$631  = ch1_result_timestamp_time_snapshot;
+    if (ch1_result_status_read) begin
+      \$631  = \port$4726$0 [35:4];
+    end
+    if (rst) begin
+      \$631  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$632  = ch1_read_select_100;
+    if (bus__r_en) begin
+      \$632  = \$146 ;
+    end
+    if (rst) begin
+      \$632  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$633  = ch1_read_select_101;
+    if (bus__r_en) begin
+      \$633  = \$147 ;
+    end
+    if (rst) begin
+      \$633  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$634  = ch1_read_select_102;
+    if (bus__r_en) begin
+      \$634  = \$148 ;
+    end
+    if (rst) begin
+      \$634  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$635  = ch1_read_select_104;
+    if (bus__r_en) begin
+      \$635  = \$149 ;
+    end
+    if (rst) begin
+      \$635  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$636  = ch1_read_select_105;
+    if (bus__r_en) begin
+      \$636  = \$150 ;
+    end
+    if (rst) begin
+      \$636  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$637  = ch1_read_select_108;
+    if (bus__r_en) begin
+      \$637  = \$151 ;
+    end
+    if (rst) begin
+      \$637  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$638  = ch1_read_select_109;
+    if (bus__r_en) begin
+      \$638  = \$152 ;
+    end
+    if (rst) begin
+      \$638  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$639  = ch1_read_select_10a;
+    if (bus__r_en) begin
+      \$639  = \$153 ;
+    end
+    if (rst) begin
+      \$639  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$640  = ch1_read_select_10b;
+    if (bus__r_en) begin
+      \$640  = \$154 ;
+    end
+    if (rst) begin
+      \$640  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$641  = ch1_read_select_10c;
+    if (bus__r_en) begin
+      \$641  = \$155 ;
+    end
+    if (rst) begin
+      \$641  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$642  = ch1_read_select_10d;
+    if (bus__r_en) begin
+      \$642  = \$156 ;
+    end
+    if (rst) begin
+      \$642  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$643  = ch1_read_select_10e;
+    if (bus__r_en) begin
+      \$643  = \$157 ;
+    end
+    if (rst) begin
+      \$643  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$644  = ch1_read_select_110;
+    if (bus__r_en) begin
+      \$644  = \$158 ;
+    end
+    if (rst) begin
+      \$644  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$645  = ch1_read_select_111;
+    if (bus__r_en) begin
+      \$645  = \$159 ;
+    end
+    if (rst) begin
+      \$645  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$646  = ch1_read_select_112;
+    if (bus__r_en) begin
+      \$646  = \$160 ;
+    end
+    if (rst) begin
+      \$646  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$647  = ch1_read_select_113;
+    if (bus__r_en) begin
+      \$647  = \$161 ;
+    end
+    if (rst) begin
+      \$647  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$648  = ch1_read_select_114;
+    if (bus__r_en) begin
+      \$648  = \$162 ;
+    end
+    if (rst) begin
+      \$648  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$649  = ch1_read_select_115;
+    if (bus__r_en) begin
+      \$649  = \$163 ;
+    end
+    if (rst) begin
+      \$649  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$650  = ch1_read_select_116;
+    if (bus__r_en) begin
+      \$650  = \$164 ;
+    end
+    if (rst) begin
+      \$650  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$651  = ch1_read_select_118;
+    if (bus__r_en) begin
+      \$651  = \$165 ;
+    end
+    if (rst) begin
+      \$651  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$652  = ch1_read_select_119;
+    if (bus__r_en) begin
+      \$652  = \$166 ;
+    end
+    if (rst) begin
+      \$652  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$653  = ch1_read_select_11a;
+    if (bus__r_en) begin
+      \$653  = \$167 ;
+    end
+    if (rst) begin
+      \$653  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$654  = ch1_read_select_11b;
+    if (bus__r_en) begin
+      \$654  = \$168 ;
+    end
+    if (rst) begin
+      \$654  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$655  = ch1_read_select_11c;
+    if (bus__r_en) begin
+      \$655  = \$169 ;
+    end
+    if (rst) begin
+      \$655  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$656  = ch1_read_select_11d;
+    if (bus__r_en) begin
+      \$656  = \$170 ;
+    end
+    if (rst) begin
+      \$656  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$657  = ch1_read_select_11e;
+    if (bus__r_en) begin
+      \$657  = \$171 ;
+    end
+    if (rst) begin
+      \$657  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$658  = ch1_read_select_140;
+    if (bus__r_en) begin
+      \$658  = \$172 ;
+    end
+    if (rst) begin
+      \$658  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$659  = ch1_read_select_141;
+    if (bus__r_en) begin
+      \$659  = \$173 ;
+    end
+    if (rst) begin
+      \$659  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$660  = ch1_read_select_142;
+    if (bus__r_en) begin
+      \$660  = \$174 ;
+    end
+    if (rst) begin
+      \$660  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$661  = ch1_read_select_143;
+    if (bus__r_en) begin
+      \$661  = \$175 ;
+    end
+    if (rst) begin
+      \$661  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$662  = ch1_read_select_144;
+    if (bus__r_en) begin
+      \$662  = \$176 ;
+    end
+    if (rst) begin
+      \$662  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$663  = ch1_read_select_145;
+    if (bus__r_en) begin
+      \$663  = \$177 ;
+    end
+    if (rst) begin
+      \$663  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$664  = window0_read;
+    if (bus__r_en) begin
+      \$664  = \$179 ;
+    end
+    if (rst) begin
+      \$664  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$665  = window1_read;
+    if (bus__r_en) begin
+      \$665  = \$181 ;
+    end
+    if (rst) begin
+      \$665  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$666  = read_data;
+    if (bus__r_load) begin
+      \$666  = \$323 ;
+    end
+    if (rst) begin
+      \$666  = 32'd0;
+    end
+  end
+  assign ch0__status = \port$4258$0 [3:0];
+  assign ch0__cds = \port$4258$0 [49];
+  assign ch0__word0_ne = \port$4258$0 [105];
+  assign ch0__word0_nw = \port$4258$0 [106];
+  assign ch0__word0_crc_ok = \port$4258$0 [107];
+  assign ch0__word1_ne = \port$4258$0 [148];
+  assign ch0__word1_nw = \port$4258$0 [149];
+  assign ch0__word1_crc_ok = \port$4258$0 [150];
+  assign ch0__lc_repeat = \port$4258$0 [157];
+  assign ch0__lc_skip = \port$4258$0 [158];
+  assign ch0__lc_zero = \port$4258$0 [159];
+  assign ch0__spw_mismatch = \port$4258$0 [160];
+  assign ch0__lc = \port$4258$0 [156:151];
+  assign ch0__line_delay = \port$4258$0 [48:36];
+  assign ch0__word0_position = \port$4258$0 [104:50];
+  assign ch0__word1_position = \port$4258$0 [147:108];
+  assign ch0__timestamp = \port$4258$0 [35:4];
+  assign ch1__status = \port$4726$0 [3:0];
+  assign ch1__cds = \port$4726$0 [49];
+  assign ch1__word0_ne = \port$4726$0 [105];
+  assign ch1__word0_nw = \port$4726$0 [106];
+  assign ch1__word0_crc_ok = \port$4726$0 [107];
+  assign ch1__word1_ne = \port$4726$0 [148];
+  assign ch1__word1_nw = \port$4726$0 [149];
+  assign ch1__word1_crc_ok = \port$4726$0 [150];
+  assign ch1__lc_repeat = \port$4726$0 [157];
+  assign ch1__lc_skip = \port$4726$0 [158];
+  assign ch1__lc_zero = \port$4726$0 [159];
+  assign ch1__spw_mismatch = \port$4726$0 [160];
+  assign ch1__lc = \port$4726$0 [156:151];
+  assign ch1__line_delay = \port$4726$0 [48:36];
+  assign ch1__word0_position = \port$4726$0 [104:50];
+  assign ch1__word1_position = \port$4726$0 [147:108];
+  assign ch1__timestamp = \port$4726$0 [35:4];
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, ch1_irq, ch0_irq };
-  assign ch0__status = \port$3984$0 [3:0];
-  assign ch0__cds = \port$3984$0 [49];
-  assign ch0__word0_ne = \port$3984$0 [105];
-  assign ch0__word0_nw = \port$3984$0 [106];
-  assign ch0__word0_crc_ok = \port$3984$0 [107];
-  assign ch0__word1_ne = \port$3984$0 [148];
-  assign ch0__word1_nw = \port$3984$0 [149];
-  assign ch0__word1_crc_ok = \port$3984$0 [150];
-  assign ch0__lc_repeat = \port$3984$0 [157];
-  assign ch0__lc_skip = \port$3984$0 [158];
-  assign ch0__lc_zero = \port$3984$0 [159];
-  assign ch0__spw_mismatch = \port$3984$0 [160];
-  assign ch0__lc = \port$3984$0 [156:151];
-  assign ch0__line_delay = \port$3984$0 [48:36];
-  assign ch0__word0_position = \port$3984$0 [104:50];
-  assign ch0__word1_position = \port$3984$0 [147:108];
-  assign ch0__timestamp = \port$3984$0 [35:4];
   assign ch0__cap_data_bits_w0 = 6'h37;
   assign ch0__cap_data_bits_w1 = 6'h28;
   assign ch0__cap_timer_width = 6'h18;
   assign ch0__cap_counters = 1'h1;
   assign ch0__cap_timestamp = 1'h1;
   assign ch0__cap_register_access = 1'h1;
-  assign ch0__count_crc_word0 = \port$3991$0 [15:0];
-  assign ch0__count_crc_word1 = \port$3991$0 [31:16];
-  assign ch0__count_no_ack = \port$3991$0 [47:32];
-  assign ch0__count_no_start = \port$3991$0 [63:48];
-  assign ch0__count_delay_range = \port$3991$0 [79:64];
-  assign ch0__count_slo_stuck_low = \port$3991$0 [95:80];
-  assign ch0__count_lc_repeat = \port$3991$0 [111:96];
-  assign ch0__count_lc_skip = \port$3991$0 [127:112];
-  assign ch0__count_lc_zero = \port$3991$0 [143:128];
-  assign ch0__count_spw_mismatch = \port$3991$0 [159:144];
-  assign ch0__count_overrun = \port$3991$0 [175:160];
-  assign ch0__count_aborted = \port$3991$0 [191:176];
-  assign ch0__count_no_stop = \port$3991$0 [207:192];
-  assign ch0__ca_status = \port$4105$0 [2:0];
-  assign ch0__ca_bytes_done = \port$4105$0 [9:3];
-  assign ch0__count_ca_crc4_error = \port$3991$0 [223:208];
-  assign ch0__count_ca_no_answer = \port$3991$0 [239:224];
-  assign ch0__count_ca_refused = \port$3991$0 [255:240];
-  assign ch0__count_ca_aborted = \port$3991$0 [271:256];
-  assign ch0__count_ca_data_fault = \port$3991$0 [287:272];
-  assign ch1__status = \port$4452$0 [3:0];
-  assign ch1__cds = \port$4452$0 [49];
-  assign ch1__word0_ne = \port$4452$0 [105];
-  assign ch1__word0_nw = \port$4452$0 [106];
-  assign ch1__word0_crc_ok = \port$4452$0 [107];
-  assign ch1__word1_ne = \port$4452$0 [148];
-  assign ch1__word1_nw = \port$4452$0 [149];
-  assign ch1__word1_crc_ok = \port$4452$0 [150];
-  assign ch1__lc_repeat = \port$4452$0 [157];
-  assign ch1__lc_skip = \port$4452$0 [158];
-  assign ch1__lc_zero = \port$4452$0 [159];
-  assign ch1__spw_mismatch = \port$4452$0 [160];
-  assign ch1__lc = \port$4452$0 [156:151];
-  assign ch1__line_delay = \port$4452$0 [48:36];
-  assign ch1__word0_position = \port$4452$0 [104:50];
-  assign ch1__word1_position = \port$4452$0 [147:108];
-  assign ch1__timestamp = \port$4452$0 [35:4];
+  assign ch0__count_crc_word0 = \port$4265$0 [15:0];
+  assign ch0__count_crc_word1 = \port$4265$0 [31:16];
+  assign ch0__count_no_ack = \port$4265$0 [47:32];
+  assign ch0__count_no_start = \port$4265$0 [63:48];
+  assign ch0__count_delay_range = \port$4265$0 [79:64];
+  assign ch0__count_slo_stuck_low = \port$4265$0 [95:80];
+  assign ch0__count_lc_repeat = \port$4265$0 [111:96];
+  assign ch0__count_lc_skip = \port$4265$0 [127:112];
+  assign ch0__count_lc_zero = \port$4265$0 [143:128];
+  assign ch0__count_spw_mismatch = \port$4265$0 [159:144];
+  assign ch0__count_overrun = \port$4265$0 [175:160];
+  assign ch0__count_aborted = \port$4265$0 [191:176];
+  assign ch0__count_no_stop = \port$4265$0 [207:192];
+  assign ch0__ca_status = \port$4379$0 [2:0];
+  assign ch0__ca_bytes_done = \port$4379$0 [9:3];
+  assign ch0__count_ca_crc4_error = \port$4265$0 [223:208];
+  assign ch0__count_ca_no_answer = \port$4265$0 [239:224];
+  assign ch0__count_ca_refused = \port$4265$0 [255:240];
+  assign ch0__count_ca_aborted = \port$4265$0 [271:256];
+  assign ch0__count_ca_data_fault = \port$4265$0 [287:272];
   assign ch1__cap_data_bits_w0 = 6'h37;
   assign ch1__cap_data_bits_w1 = 6'h28;
   assign ch1__cap_timer_width = 6'h18;
   assign ch1__cap_counters = 1'h1;
   assign ch1__cap_timestamp = 1'h1;
   assign ch1__cap_register_access = 1'h1;
-  assign ch1__count_crc_word0 = \port$4459$0 [15:0];
-  assign ch1__count_crc_word1 = \port$4459$0 [31:16];
-  assign ch1__count_no_ack = \port$4459$0 [47:32];
-  assign ch1__count_no_start = \port$4459$0 [63:48];
-  assign ch1__count_delay_range = \port$4459$0 [79:64];
-  assign ch1__count_slo_stuck_low = \port$4459$0 [95:80];
-  assign ch1__count_lc_repeat = \port$4459$0 [111:96];
-  assign ch1__count_lc_skip = \port$4459$0 [127:112];
-  assign ch1__count_lc_zero = \port$4459$0 [143:128];
-  assign ch1__count_spw_mismatch = \port$4459$0 [159:144];
-  assign ch1__count_overrun = \port$4459$0 [175:160];
-  assign ch1__count_aborted = \port$4459$0 [191:176];
-  assign ch1__count_no_stop = \port$4459$0 [207:192];
-  assign ch1__ca_status = \port$4573$0 [2:0];
-  assign ch1__ca_bytes_done = \port$4573$0 [9:3];
-  assign ch1__count_ca_crc4_error = \port$4459$0 [223:208];
-  assign ch1__count_ca_no_answer = \port$4459$0 [239:224];
-  assign ch1__count_ca_refused = \port$4459$0 [255:240];
-  assign ch1__count_ca_aborted = \port$4459$0 [271:256];
-  assign ch1__count_ca_data_fault = \port$4459$0 [287:272];
+  assign ch1__count_crc_word0 = \port$4733$0 [15:0];
+  assign ch1__count_crc_word1 = \port$4733$0 [31:16];
+  assign ch1__count_no_ack = \port$4733$0 [47:32];
+  assign ch1__count_no_start = \port$4733$0 [63:48];
+  assign ch1__count_delay_range = \port$4733$0 [79:64];
+  assign ch1__count_slo_stuck_low = \port$4733$0 [95:80];
+  assign ch1__count_lc_repeat = \port$4733$0 [111:96];
+  assign ch1__count_lc_skip = \port$4733$0 [127:112];
+  assign ch1__count_lc_zero = \port$4733$0 [143:128];
+  assign ch1__count_spw_mismatch = \port$4733$0 [159:144];
+  assign ch1__count_overrun = \port$4733$0 [175:160];
+  assign ch1__count_aborted = \port$4733$0 [191:176];
+  assign ch1__count_no_stop = \port$4733$0 [207:192];
+  assign ch1__ca_status = \port$4847$0 [2:0];
+  assign ch1__ca_bytes_done = \port$4847$0 [9:3];
+  assign ch1__count_ca_crc4_error = \port$4733$0 [223:208];
+  assign ch1__count_ca_no_answer = \port$4733$0 [239:224];
+  assign ch1__count_ca_refused = \port$4733$0 [255:240];
+  assign ch1__count_ca_aborted = \port$4733$0 [271:256];
+  assign ch1__count_ca_data_fault = \port$4733$0 [287:272];
+  assign glob__trigger = g_trigger_start;
+  assign ch0__start = ch0_ctrl_start;
+  assign ch0__abort_cycle = ch0_ctrl_abort;
+  assign ch0__clear_counters = ch0_ctrl_clear_counters;
+  assign ch0__periodic = ch0_ctrl_periodic;
+  assign ch0__trigger_enable = ch0_ctrl_trigger_enable;
+  assign ch0__cfg_ma_half_period = ch0_cfg_ma_ma_half_period;
+  assign ch0__cfg_delay_limit = ch0_cfg_ma_delay_limit;
+  assign ch0__cfg_request_period = ch0_cfg_period_request_period;
+  assign ch0__cfg_break_time = ch0_cfg_break_break_time;
+  assign ch0__cfg_ack_limit = ch0_cfg_ack_ack_limit;
+  assign ch0__cfg_timeout_limit = ch0_cfg_timeout_timeout_limit;
+  assign ch0__cfg_w0_data_bits = ch0_cfg_words_w0_data_bits;
+  assign ch0__cfg_w0_nenw = ch0_cfg_words_w0_nenw;
+  assign ch0__cfg_w0_lc = ch0_cfg_words_w0_lc;
+  assign ch0__cfg_w0_crc = ch0_cfg_words_w0_crc;
+  assign ch0__cfg_w1_data_bits = ch0_cfg_words_w1_data_bits;
+  assign ch0__cfg_w1_nenw = ch0_cfg_words_w1_nenw;
+  assign ch0__cfg_w1_lc = ch0_cfg_words_w1_lc;
+  assign ch0__cfg_w1_crc = ch0_cfg_words_w1_crc;
+  assign ch0__cfg_w1_enable = ch0_cfg_words_w1_enable;
+  assign ch0__cfg_end_check = ch0_cfg_checks_end_check;
+  assign ch0__cfg_spw_check = ch0_cfg_checks_spw_check;
+  assign ch0__cfg_spw_tolerance = ch0_cfg_checks_spw_tolerance;
+  assign ch0__ca_slave_id = ch0_ca_request_slave_id;
+  assign ch0__ca_address = ch0_ca_request_address;
+  assign ch0__ca_count = ch0_ca_request_count;
+  assign ch0__ca_write = \ch0_ca_request_write$65 ;
+  assign ch0__ca_start = ch0_ca_ctrl_start;
+  assign ch0__ca_abort = ch0_ca_ctrl_abort;
+  assign ch0__ca_wbuf_data = write_data;
+  assign ch0__ca_rbuf_addr = bus__r_addr[3:0];
+  assign ch1__start = ch1_ctrl_start;
+  assign ch1__abort_cycle = ch1_ctrl_abort;
+  assign ch1__clear_counters = ch1_ctrl_clear_counters;
+  assign ch1__periodic = ch1_ctrl_periodic;
+  assign ch1__trigger_enable = ch1_ctrl_trigger_enable;
+  assign ch1__cfg_ma_half_period = ch1_cfg_ma_ma_half_period;
+  assign ch1__cfg_delay_limit = ch1_cfg_ma_delay_limit;
+  assign ch1__cfg_request_period = ch1_cfg_period_request_period;
+  assign ch1__cfg_break_time = ch1_cfg_break_break_time;
+  assign ch1__cfg_ack_limit = ch1_cfg_ack_ack_limit;
+  assign ch1__cfg_timeout_limit = ch1_cfg_timeout_timeout_limit;
+  assign ch1__cfg_w0_data_bits = ch1_cfg_words_w0_data_bits;
+  assign ch1__cfg_w0_nenw = ch1_cfg_words_w0_nenw;
+  assign ch1__cfg_w0_lc = ch1_cfg_words_w0_lc;
+  assign ch1__cfg_w0_crc = ch1_cfg_words_w0_crc;
+  assign ch1__cfg_w1_data_bits = ch1_cfg_words_w1_data_bits;
+  assign ch1__cfg_w1_nenw = ch1_cfg_words_w1_nenw;
+  assign ch1__cfg_w1_lc = ch1_cfg_words_w1_lc;
+  assign ch1__cfg_w1_crc = ch1_cfg_words_w1_crc;
+  assign ch1__cfg_w1_enable = ch1_cfg_words_w1_enable;
+  assign ch1__cfg_end_check = ch1_cfg_checks_end_check;
+  assign ch1__cfg_spw_check = ch1_cfg_checks_spw_check;
+  assign ch1__cfg_spw_tolerance = ch1_cfg_checks_spw_tolerance;
+  assign ch1__ca_slave_id = ch1_ca_request_slave_id;
+  assign ch1__ca_address = ch1_ca_request_address;
+  assign ch1__ca_count = ch1_ca_request_count;
+  assign ch1__ca_write = \ch1_ca_request_write$186 ;
+  assign ch1__ca_start = ch1_ca_ctrl_start;
+  assign ch1__ca_abort = ch1_ca_ctrl_abort;
+  assign ch1__ca_wbuf_addr = write_addr[3:0];
+  assign ch1__ca_wbuf_data = write_data;
+  assign ch1__ca_rbuf_addr = bus__r_addr[3:0];
+  assign irq = { ch1_irq, ch0_irq };
+  assign bus__r_data = read_data;
+  assign ch0__ca_wbuf_addr = write_addr[3:0];
+  assign \$183  = \$182 ;
+  assign \$188  = 32'd0;
+  assign \$189  = \$187 ;
+  assign \$402  = \$401 ;
+  assign \$404  = \$403 ;
+  assign \$406  = \$405 ;
+  assign \$475  = \$474 ;
+  assign \$477  = \$476 ;
+  assign \$479  = \$478 ;
+  assign \$246  = 32'd0;
+  assign \$247  = \$245 ;
+  assign \$310  = 32'd0;
+  assign \$311  = \$309 ;
   assign g_irq = 1'h0;
-  assign \$79  = \$78 ;
-  assign \$81  = \$80 ;
-  assign \$83  = \$82 ;
-  assign \$152  = \$151 ;
-  assign \$154  = \$153 ;
-  assign \$156  = \$155 ;
-  assign \$269  = g_read_word;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -4442,7 +5681,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__ca_busy, regs__ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period
 , cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort
-, regs__done_count, ma, regs__done, \port$3984$0 , \port$3991$0 , regs__ca_done, \port$4105$0 , ca_rbuf_addr);
+, regs__done_count, ma, regs__done, \port$4258$0 , \port$4265$0 , regs__ca_done, \port$4379$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$28  = 0;
   wire \$1 ;
   wire [16:0] \$2 ;
@@ -4567,12 +5806,12 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_
   wire \ma$164 ;
   input periodic;
   wire periodic;
-  output [160:0] \port$3984$0 ;
-  wire [160:0] \port$3984$0 ;
-  output [287:0] \port$3991$0 ;
-  wire [287:0] \port$3991$0 ;
-  output [9:0] \port$4105$0 ;
-  wire [9:0] \port$4105$0 ;
+  output [160:0] \port$4258$0 ;
+  wire [160:0] \port$4258$0 ;
+  output [287:0] \port$4265$0 ;
+  wire [287:0] \port$4265$0 ;
+  output [9:0] \port$4379$0 ;
+  wire [9:0] \port$4379$0 ;
   wire regs__abort_cycle;
   output regs__busy;
   wire regs__busy;
@@ -4898,9 +6137,9 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_
   assign regs__ca_rbuf_en = ca_rbuf_en;
   assign \ma$164  = ma;
   assign \slo$166  = slo;
-  assign \port$3984$0  = \$4 ;
-  assign \port$3991$0  = \$5 ;
-  assign \port$4105$0  = \$6 ;
+  assign \port$4258$0  = \$4 ;
+  assign \port$4265$0  = \$5 ;
+  assign \port$4379$0  = \$6 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -5752,7 +6991,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$3710$0 (\bit ),
+    .\port$3984$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -5809,7 +7048,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .lc_skip_seen(lc_skip_seen),
     .lc_zero(lc_zero),
     .lc_zero_seen(lc_zero_seen),
-    .\port$1594$0 (\$16 ),
+    .\port$1728$0 (\$16 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -14011,7 +15250,7 @@ module \biss_master_axil.ch0.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$3710$0 , resync, lc, is_zero, clk);
+module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$3984$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$68  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -14049,8 +15288,8 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$3710$0 ;
-  wire \port$3710$0 ;
+  input \port$3984$0 ;
+  wire \port$3984$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -14062,9 +15301,9 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$3710$0  };
-  assign \$2  = { lc[4:0], \port$3710$0  } == last;
-  assign \$3  = { lc[4:0], \port$3710$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$3984$0  };
+  assign \$2  = { lc[4:0], \port$3984$0  } == last;
+  assign \$3  = { lc[4:0], \port$3984$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = lc == 6'h3f;
@@ -14154,7 +15393,7 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
       \$21  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$3710$0  };
+  assign lc_next = { lc[4:0], \port$3984$0  };
   assign zero = is_zero;
 endmodule
 
@@ -14636,7 +15875,7 @@ module \biss_master_axil.ch0.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.verdict (lc_skip_seen, \port$1594$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
+module \biss_master_axil.ch0.core.verdict (lc_skip_seen, \port$1728$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$72  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -14750,8 +15989,8 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, \port$1594$0 , lc_check
   wire lc_zero;
   input lc_zero_seen;
   wire lc_zero_seen;
-  output \port$1594$0 ;
-  wire \port$1594$0 ;
+  output \port$1728$0 ;
+  wire \port$1728$0 ;
   output report;
   wire report;
   input report_frame;
@@ -14836,7 +16075,7 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, \port$1594$0 , lc_check
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$1594$0  = \$2 ;
+  assign \port$1728$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -14862,7 +16101,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__ca_busy, regs__ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period
 , cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort
-, regs__done_count, ma, regs__done, \port$4452$0 , \port$4459$0 , regs__ca_done, \port$4573$0 , ca_rbuf_addr);
+, regs__done_count, ma, regs__done, \port$4726$0 , \port$4733$0 , regs__ca_done, \port$4847$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$73  = 0;
   wire \$1 ;
   wire [16:0] \$2 ;
@@ -14987,12 +16226,12 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_
   wire \ma$164 ;
   input periodic;
   wire periodic;
-  output [160:0] \port$4452$0 ;
-  wire [160:0] \port$4452$0 ;
-  output [287:0] \port$4459$0 ;
-  wire [287:0] \port$4459$0 ;
-  output [9:0] \port$4573$0 ;
-  wire [9:0] \port$4573$0 ;
+  output [160:0] \port$4726$0 ;
+  wire [160:0] \port$4726$0 ;
+  output [287:0] \port$4733$0 ;
+  wire [287:0] \port$4733$0 ;
+  output [9:0] \port$4847$0 ;
+  wire [9:0] \port$4847$0 ;
   wire regs__abort_cycle;
   output regs__busy;
   wire regs__busy;
@@ -15318,9 +16557,9 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_
   assign regs__ca_rbuf_en = ca_rbuf_en;
   assign \ma$164  = ma;
   assign \slo$166  = slo;
-  assign \port$4452$0  = \$4 ;
-  assign \port$4459$0  = \$5 ;
-  assign \port$4573$0  = \$6 ;
+  assign \port$4726$0  = \$4 ;
+  assign \port$4733$0  = \$5 ;
+  assign \port$4847$0  = \$6 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -16172,7 +17411,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$4178$0 (\bit ),
+    .\port$4452$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -16229,7 +17468,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .lc_skip_seen(lc_skip_seen),
     .lc_zero(lc_zero),
     .lc_zero_seen(lc_zero_seen),
-    .\port$2954$0 (\$16 ),
+    .\port$3088$0 (\$16 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -24431,7 +25670,7 @@ module \biss_master_axil.ch1.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$4178$0 , resync, lc, is_zero, clk);
+module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$4452$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$113  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -24469,8 +25708,8 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$4178$0 ;
-  wire \port$4178$0 ;
+  input \port$4452$0 ;
+  wire \port$4452$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -24482,9 +25721,9 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$4178$0  };
-  assign \$2  = { lc[4:0], \port$4178$0  } == last;
-  assign \$3  = { lc[4:0], \port$4178$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$4452$0  };
+  assign \$2  = { lc[4:0], \port$4452$0  } == last;
+  assign \$3  = { lc[4:0], \port$4452$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = lc == 6'h3f;
@@ -24574,7 +25813,7 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
       \$21  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$4178$0  };
+  assign lc_next = { lc[4:0], \port$4452$0  };
   assign zero = is_zero;
 endmodule
 
@@ -25056,7 +26295,7 @@ module \biss_master_axil.ch1.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.verdict (lc_skip_seen, \port$2954$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
+module \biss_master_axil.ch1.core.verdict (lc_skip_seen, \port$3088$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$117  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -25170,8 +26409,8 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, \port$2954$0 , lc_check
   wire lc_zero;
   input lc_zero_seen;
   wire lc_zero_seen;
-  output \port$2954$0 ;
-  wire \port$2954$0 ;
+  output \port$3088$0 ;
+  wire \port$3088$0 ;
   output report;
   wire report;
   input report_frame;
@@ -25256,7 +26495,7 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, \port$2954$0 , lc_check
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$2954$0  = \$2 ;
+  assign \port$3088$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

@@ -446,9 +446,12 @@ def bus_latency_section(d, goals):
           and all(r["status"] == 0 for r in d["rows"]))
     bus = sorted({(r["irq_clk"], r["slave_read_clk"], r["read_position_clk"] - r["reaction_clk"])
                   for r in d["rows"]})
+    starts = sorted({(r["trigger"], r["start_clk"]) for r in d["rows"]})
     goals.append((what, ok, "bus share (done -> irq, AR -> R of result.status, irq -> position "
                   "read without the master's reaction): " + "; ".join(
-                      f"{a:g}, {b:g}, {c:g} clocks" for a, b, c in bus)))
+                      f"{a:g}, {b:g}, {c:g} clocks" for a, b, c in bus)
+                  + "; trigger -> first MA fall: " + ", ".join(
+                      f"{t} {c:g}" for t, c in starts) + " clocks"))
     out += [md_table(["preset", "MA/MHz", "cable/m", "trigger", "start/clk", "frame/clk",
                       "verdict/clk", "done->irq/clk", "irq->status: reaction + slave/clk",
                       "irq->status/clk", "irq->position/clk", "total/clk", "total/us", "sum"],

@@ -2,7 +2,8 @@
 the fast tier under the cocotb bus scenarios (sim/scenarios/bus.py).
 
 Expected values are written here from docs/bus.md and the SystemRDL source's field kinds:
-storage per byte lane, write-1 pulses one clock after the write, sticky interrupts (a set wins
+storage per byte lane, the write acting in the clock after w_en (the registered request),
+write-1 pulses one clock after that, sticky interrupts (a set wins
 over a clear in the same clock), the snapshot taken by reading result.status, unmapped reads 0,
 the register-access windows (ca.wbuf, ca.rbuf) as ports of a 16 x 32 memory with byte lanes
 (a memory of the test's own, lib.memory), read with the registers' latency.
@@ -64,12 +65,15 @@ def run_adapter(adapter, bench):
 
 
 async def write(ctx, bank, addr, value, strb=0xF):
+    """A write: w_en for one clock; the bank registers the request and the write acts in the
+    next clock, so its result is there after two clock edges."""
     ctx.set(bank.bus.w_en, 1)
     ctx.set(bank.bus.w_addr, addr // 4)
     ctx.set(bank.bus.w_data, value)
     ctx.set(bank.bus.w_strb, strb)
     await ctx.tick()
     ctx.set(bank.bus.w_en, 0)
+    await ctx.tick()
 
 
 async def read(ctx, bank, addr):
@@ -100,19 +104,21 @@ def test_storage_lanes_and_unmapped():
     run(bench)
 
 
-def test_pulse_is_one_clock_after_the_write():
+def test_pulse_is_one_clock_after_the_registered_write():
+    """The write acts in the clock after w_en (the registered request); its pulses are
+    registered too: high in the second clock after w_en, for one clock."""
     async def bench(ctx, bank):
         ctx.set(bank.bus.w_en, 1)
         ctx.set(bank.bus.w_addr, offset("ctrl") // 4)
         ctx.set(bank.bus.w_data, 0b101)                 # start, clear_counters
         ctx.set(bank.bus.w_strb, 0xF)
         seen = []
-        for _ in range(3):
+        for _ in range(4):
             await ctx.tick()
             ctx.set(bank.bus.w_en, 0)
             seen.append((ctx.get(bank.ch0.start), ctx.get(bank.ch0.clear_counters),
                          ctx.get(bank.ch0.abort_cycle)))
-        assert seen == [(1, 1, 0), (0, 0, 0), (0, 0, 0)]
+        assert seen == [(0, 0, 0), (1, 1, 0), (0, 0, 0), (0, 0, 0)]
         assert await read(ctx, bank, offset("ctrl")) == 0
     run(bench)
 
@@ -175,17 +181,18 @@ def test_axil_reads_back_to_back_and_write_with_address_after_data():
         assert ctx.get(bus.bvalid) and ctx.get(bus.bresp) == 0
         await ctx.tick()
         # Three reads in three clocks, rready held: one datum per clock, each two clocks
-        # after its address (one wait state).
+        # after its address (one wait state). The first, in the clock after the B
+        # handshake, already reads what was written.
         ctx.set(bus.rready, 1)
         got = []
-        for clock, addr in enumerate((0, offset("cfg_ma"), 4, None, None)):
+        for clock, addr in enumerate((offset("cfg_ma"), 0, 4, None, None)):
             ctx.set(bus.arvalid, addr is not None)
             ctx.set(bus.araddr, addr or 0)
             assert ctx.get(bus.arready)
             await ctx.tick()
             if ctx.get(bus.rvalid):
                 got.append((clock + 1, ctx.get(bus.rdata)))
-        assert got == [(2, 0x42695353), (3, 0x1234), (4, 0x00010001)]    # version 1.1
+        assert got == [(2, 0x1234), (3, 0x42695353), (4, 0x00010001)]    # version 1.1
 
     run_adapter(AxiLiteAdapter, bench)
 
@@ -308,6 +315,8 @@ def test_access_registers_and_done_interrupt():
         ctx.set(bank.bus.w_strb, 0xF)
         await ctx.tick()
         ctx.set(bank.bus.w_en, 0)
+        assert (ctx.get(ch.ca_start), ctx.get(ch.ca_abort)) == (0, 0)     # request registered
+        await ctx.tick()
         assert (ctx.get(ch.ca_start), ctx.get(ch.ca_abort)) == (1, 1)
         await ctx.tick()
         assert (ctx.get(ch.ca_start), ctx.get(ch.ca_abort)) == (0, 0)
