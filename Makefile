@@ -57,8 +57,8 @@ sim-all: setup  ## cocotb regression, bus-top and C-driver scenarios on Verilato
 	$(PY) -m sim.tools.prebuild
 	$(PY) -m pytest $(SIM_TESTS) -q -n $(JOBS) --dist worksteal -m "not long"
 
-sim-long: setup  ## the Icarus runs of the scenarios marked long_on_icarus (minutes each; Verilator runs them in make test)
-	$(PY) -m pytest sim/test_regression.py -q -n $(JOBS) -m long
+sim-long: setup  ## the Icarus runs of the scenarios marked long_on_icarus (core, bus tops, driver; Verilator runs them in make test)
+	$(PY) -m pytest $(SIM_TESTS) -q -n $(JOBS) --dist worksteal -m long
 
 campaigns: setup  ## reliability campaigns, fast slice (CRC, line faults, LC, config fuzz, random mix) + report
 	rm -rf sim_build/campaign/slice

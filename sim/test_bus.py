@@ -15,7 +15,7 @@ SIMS = [os.environ["SIM"]] if os.environ.get("SIM") else list(runner.SIMULATORS)
 SCENARIOS = discovery.scenarios(runner.BUS_SCENARIOS)
 
 CASES = [pytest.param(sim, bus, s.name, id=f"{sim}-{bus}-{s.name}",
-                      marks=[pytest.mark.xfail(strict=True, reason=s.xfail)] if s.xfail else [])
+                      marks=discovery.pytest_marks(s, sim))
          for sim in SIMS for s in SCENARIOS for bus in s.buses]
 
 

@@ -17,7 +17,7 @@ SCENARIOS = discovery.scenarios(runner.DRIVER_SCENARIOS)
 BUS = "axil"
 
 CASES = [pytest.param(sim, s.name, id=f"{sim}-{s.name}",
-                      marks=[pytest.mark.xfail(strict=True, reason=s.xfail)] if s.xfail else [])
+                      marks=discovery.pytest_marks(s, sim))
          for sim in SIMS for s in SCENARIOS]
 
 

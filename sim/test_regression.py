@@ -18,14 +18,10 @@ assert len({s.name for s in SCENARIOS}) == len(SCENARIOS), "scenario names must 
 
 
 def marks(s, sim="verilator"):
-    """A scenario marked ``expected_to_fail`` is a strict xfail: passing fails the run. The
-    control-channel scenarios carry the mark ``control_channel`` (``-k control_channel`` runs
-    them, ``-k 'not control_channel'`` leaves them out); the Icarus run of a scenario marked
-    ``long_on_icarus`` carries the mark ``long`` (make test: ``-m 'not long'``, make sim-long:
-    ``-m long``)."""
-    out = [pytest.mark.xfail(strict=True, reason=s.xfail)] if s.xfail else []
-    if s.long_on_icarus and sim == "icarus":
-        out.append(pytest.mark.long)
+    """:func:`discovery.pytest_marks` (strict xfail, ``long`` on Icarus), and the mark
+    ``control_channel`` on the control-channel scenarios (``-k control_channel`` runs them,
+    ``-k 'not control_channel'`` leaves them out)."""
+    out = discovery.pytest_marks(s, sim)
     if s.module == runner.CONTROL_SCENARIOS:
         out.append(pytest.mark.control_channel)
     return out

@@ -15,7 +15,7 @@ from encoder_model.control import (BANK_SELECT, USER_REGISTERS, Bp3Eds, ControlS
                                    RegisterFile)
 from master_contract import CA_STATUS, STATUS
 from sim.shared.bus_testbench import BUS, CLK_HZ, BusTestbench, Encoder
-from sim.shared.discovery import only_on_buses
+from sim.shared.discovery import long_on_icarus, only_on_buses
 
 #: The default bus tops have two channels; channel 0 reads a BiSS Safety encoder, channel 1 a
 #: BiSS C one (different presets at the same time).
@@ -219,6 +219,7 @@ async def interrupts_set_mask_clear(dut):
 
 
 @cocotb.test()
+@long_on_icarus
 async def wide_result_never_tears(dut):
     """Both halves of a 36-bit position change with every frame: reading `result.status`
     takes a snapshot, a new frame arrives, and the halves read afterwards still belong to the
@@ -405,6 +406,7 @@ def check_ok(state, count):
 
 @cocotb.test()
 @only_on_buses("axil")
+@long_on_icarus
 async def register_access_write_read_and_eds_bank(dut):
     """Over AXI4-Lite, the ca.* registers of channel 0 against a BP3 encoder model's control
     slave: 5 bytes written into its user registers (a full word and a single strobed byte of
@@ -445,6 +447,7 @@ async def register_access_write_read_and_eds_bank(dut):
 
 @cocotb.test()
 @only_on_buses("wb")
+@long_on_icarus
 async def register_access_over_wishbone(dut):
     """Over Wishbone: 3 bytes written into the model's user registers (a whole word of
     ca.wbuf written with 3 byte strobes, the fourth lane's byte must not matter) and read back;

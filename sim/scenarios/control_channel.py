@@ -468,6 +468,7 @@ async def idle_count_skips_missed_cycles(dut):
 
 
 @cocotb.test()
+@long_on_icarus
 async def resolute_gives_no_answer(dut):
     """A RESOLUTE (BiSS Safety, FS RSH: unidirectional, CDS always 0, static 12.5 us timeout and
     the 31.25 us rule; no control slave at all): a single-register read and a 64-byte read

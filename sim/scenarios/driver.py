@@ -25,6 +25,7 @@ from master_contract import CRC_CODE, MA_HALF_PERIOD_MIN, MAX_DATA_BITS, STATUS
 from sim.shared.bus_testbench import CLK_HZ, BusTestbench, Encoder
 from sim.shared.c_driver import Bp3Eds as CBp3Eds
 from sim.shared.c_driver import Bp3Id, CDriver, Channel, Config, State
+from sim.shared.discovery import long_on_icarus
 
 #: Channel 0 reads a RESOLUTE FS (BiSS Safety, 36 + 28 bits), channel 1 a RESOLUTE BiSS C
 #: 26-bit: two different presets, configured by name through the driver.
@@ -77,6 +78,7 @@ async def sample(drv, ch):
 
 
 @cocotb.test()
+@long_on_icarus
 async def driver_reads_two_presets(dut):
     """Two channels configured from two presets by name; single requests, then periodic mode,
     every position checked against its encoder model; no counter moves."""
@@ -324,6 +326,7 @@ async def bp3_setup(dut, seed, bank=None):
 
 
 @cocotb.test()
+@long_on_icarus
 async def driver_register_write_and_read_back(dut):
     """biss_reg_write of 6 bytes into the model's user registers (two words of ca.wbuf, the
     second partial), then biss_reg_read of them and of one register inside: the model's
@@ -343,6 +346,7 @@ async def driver_register_write_and_read_back(dut):
 
 
 @cocotb.test()
+@long_on_icarus
 async def driver_bp3_identify_eds_and_configure(dut):
     """biss_bp3_identify: VER, C, DL, DL_POS of the model. On Verilator only (the 64-byte read,
     about 1,000 control frames, 3.1 ms simulated: 15 s on Verilator, 80 to 180 s on Icarus,
@@ -385,6 +389,7 @@ async def driver_bp3_identify_eds_and_configure(dut):
 
 
 @cocotb.test()
+@long_on_icarus
 async def driver_register_read_without_control_side(dut):
     """A RESOLUTE (BiSS C, unidirectional: no control side, CDS always 0, the 31.25 us rule)
     on channel 1: biss_reg_read of one register ends with BISS_ERR_CA_NO_ANSWER within the poll

@@ -63,6 +63,7 @@ async def bp3_lengths(dut):
 
 @cocotb.test()
 @also_at_fast_clock
+@long_on_icarus
 async def long_round_trip_many_bit_periods(dut):
     """2 us of round trip at 10 MHz (20 bit periods), on the longest and the shortest frame:
     the shortest is over long before the master learns where Start was."""
@@ -80,6 +81,7 @@ async def long_round_trip_many_bit_periods(dut):
 
 
 @cocotb.test()
+@long_on_icarus
 async def edge_jitter(dut):
     """Random jitter on every edge, both directions, 10 % of the MA period each way."""
     tb = Testbench(dut, seed=11)
@@ -93,6 +95,7 @@ async def edge_jitter(dut):
 
 
 @cocotb.test()
+@long_on_icarus
 async def crc_errors_each_word(dut):
     tb = Testbench(dut, seed=3)
     await tb.start(cable=Cable(length_m=20))
@@ -141,6 +144,7 @@ async def encoder_error_and_warning_bits(dut):
 
 
 @cocotb.test()
+@long_on_icarus
 async def sign_of_life_faults(dut):
     tb = Testbench(dut, seed=5)
     await tb.start()
@@ -192,6 +196,7 @@ async def spw_plausibility(dut):
 
 @cocotb.test()
 @also_at_fast_clock
+@long_on_icarus
 async def line_faults_and_recovery(dut):
     tb = Testbench(dut, seed=8)
     await tb.start(cable=Cable(length_m=50))
@@ -253,6 +258,7 @@ async def line_faults_and_recovery(dut):
 
 
 @cocotb.test()
+@long_on_icarus
 async def abort_and_break(dut):
     tb = Testbench(dut, seed=9)
     await tb.start(cable=Cable(length_m=20))
@@ -479,6 +485,7 @@ async def stuck_from_stop_bit(tb, level):
 
 
 @cocotb.test()
+@long_on_icarus
 async def end_check(dut):
     """cfg_end_check: a frame is reported only after the encoder's timeout has ended (SLO back
     high); SLO high at the stop bit is NO_STOP and SLO low past the timeout limit is

@@ -83,6 +83,18 @@ class Scenario:
     long_on_icarus: bool = False        # Icarus run only in make sim-long
 
 
+def pytest_marks(scenario, sim):
+    """The pytest marks of ``scenario``'s run on ``sim``, for every pytest entry (regression,
+    bus tops, driver): a strict xfail for ``expected_to_fail`` (passing fails the run), and the
+    mark ``long`` on the Icarus run of a ``long_on_icarus`` scenario (make test: ``-m 'not
+    long'``, make sim-long: ``-m long``)."""
+    import pytest       # here, not at the top: the simulator imports this module too
+    out = [pytest.mark.xfail(strict=True, reason=scenario.xfail)] if scenario.xfail else []
+    if scenario.long_on_icarus and sim == "icarus":
+        out.append(pytest.mark.long)
+    return out
+
+
 def _dotted(node):
     """``cocotb.test`` for the decorator ``@cocotb.test()`` or ``@cocotb.test``."""
     if isinstance(node, ast.Call):
