@@ -89,7 +89,7 @@ bench: setup  ## simulated performance: cycle overhead, verdict latency, line-de
 	$(PY) -m sim.tools.perf
 
 .PHONY: synth
-synth: setup  ## Yosys + nextpnr: LUT4/FF/carry and Fmax of the core presets and the AXI4-Lite bus top (1, 4 channels) on ECP5-25k and iCE40 UP5K (docs/performance.md)
+synth: setup  ## Yosys + nextpnr: LUT4/FF/carry and Fmax of the core presets, the AXI4-Lite bus top (1, 4 channels) and four cores without a bus (the control) on ECP5-25k and iCE40 UP5K (docs/performance.md)
 	$(PY) scripts/synth.py
 
 .PHONY: formal

