@@ -472,7 +472,8 @@ def main(argv=None):
                          "skipped_archs": [a for a in archs if a not in cfg_archs]}
         for arch in cfg_archs:
             a = ARCHS[arch]
-            ar = area(cfg_dir, arch, top=module)
+            # A control's blocks are the preset's (its block table is the preset's own).
+            ar = area(cfg_dir, arch, top=module, blocks=name not in MULTI_CORE_CONFIGS)
             if name in MULTI_CORE_CONFIGS:      # N times the one core of the module
                 ar = {**ar, **{k: channels * ar[k] for k in ("lut", "ff", "carry")}}
             what = f"{channels} x {module}" if name in MULTI_CORE_CONFIGS else module
