@@ -27,7 +27,13 @@ class SaturatingCounter(wiring.Component):
 
 
 class CounterBank(wiring.Component):
-    """One :class:`SaturatingCounter` per name, cleared together.
+    """One :class:`SaturatingCounter` per name, cleared together, behind one register stage.
+
+    ``events`` and ``clear`` are taken into flip-flops first, so every count changes one clock
+    after its event or clear (in the master: the clock after ``done``), and a clear still wins
+    over an event of its own clock. The stage is for timing: the events are decided at a
+    frame's end, several logic levels deep, and with several channels behind a bus the route
+    from that decision into every counter's enable was a critical path (docs/performance.md).
 
     Parameters
     ----------
@@ -41,7 +47,7 @@ class CounterBank(wiring.Component):
     events : In(StructLayout of 1-bit members)
         One strobe per counter.
     clear : In(1)
-        Overrides counting while high.
+        Overrides counting while high (one clock later, as the events).
     counts : Out(StructLayout of ``width``-bit members)
     """
 
@@ -56,11 +62,14 @@ class CounterBank(wiring.Component):
 
     def elaborate(self, platform):
         m = Module()
+        events = Signal.like(self.events, name="events_reg")
+        clear = Signal(name="clear_reg")
+        m.d.sync += [events.eq(self.events), clear.eq(self.clear)]
         for name in self._names:
             m.submodules[f"count_{name}"] = counter = SaturatingCounter(self._width)
             m.d.comb += [
-                counter.inc.eq(self.events[name]),
-                counter.clear.eq(self.clear),
+                counter.inc.eq(events[name]),
+                counter.clear.eq(clear),
                 self.counts[name].eq(counter.count),
             ]
         return m

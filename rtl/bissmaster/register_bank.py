@@ -23,11 +23,10 @@ class RegisterBus(wiring.Signature):
     ``w_strb``; the bank registers it and it acts in the next clock (its registers hold the
     new value from the second clock after ``w_en``). A read takes two steps, so that the
     address decode and the word select each have a clock of their own. ``r_en`` high in one
-    clock: the address is decoded into a one-hot select, and a read with side effects (the
-    snapshot, a window's read enable) acts then. ``r_load`` high in a later clock, at the
-    latest the clock of the next ``r_en``: the selected register's value in that clock goes
-    to ``r_data``, which holds it from the next clock until the clock after the next
-    ``r_load``. So reads run one per clock (each ``r_load`` with the next ``r_en``), and the
+    clock: the address is decoded into a one-hot select, and a window's read enable acts
+    then. ``r_load`` high in a later clock, at the latest the clock of the next ``r_en``: the
+    selected register's value in that clock goes to ``r_data``, which holds it from the next
+    clock until the clock after the next ``r_load``; a snapshot is taken then. So reads run one per clock (each ``r_load`` with the next ``r_en``), and the
     initiator can hold a word while the next read waits in the first step. A read and a write
     may come in the same clock; they are not ordered: the read returns the value of its
     ``r_load`` clock, the one before the write when ``r_load`` follows ``r_en`` at once.
@@ -79,10 +78,12 @@ class RegisterBank(wiring.Component):
     decodes from those flip-flops in the next clock. CONFIG fields are written lane by lane,
     each byte lane's strobe the enable of its flip-flops. The read path is two register
     stages (:class:`RegisterBus`): at ``r_en`` one select flip-flop per register (and per
-    read window) registers whether the address is the register's; at ``r_load`` ``r_data``
-    registers the AND-OR of the registers' words with their selects and the data of a window
-    read. A snapshot group's registers all read the copy taken at ``r_en``, so the word read
-    at ``r_load`` is the one of the snapshot.
+    read window) registers whether the address is the register's; at ``r_load`` each block
+    (the globals, each channel) registers the AND-OR of its registers' words with their
+    selects and the data of its window read, and ``r_data`` is the OR of the blocks'
+    registers. A snapshot group is copied at the ``r_load`` of its first register, which
+    reads the live values copied; the group's other registers read the copy, so every word of
+    the group read after the first belongs to the same snapshot.
 
     Attributes
     ----------
@@ -126,54 +127,47 @@ class RegisterBank(wiring.Component):
         with m.If(bus.w_en):
             m.d.sync += [self._w_addr.eq(bus.w_addr), self._w_data.eq(bus.w_data),
                          self._w_strb.eq(bus.w_strb)]
-        selected = []                  # (select flip-flop, read value) of every register
-        windows = []                   # (read, data) of every read window
+        partials = []                  # each block's registered share of the read data
         irqs = []
         for port, base, registers, prefix in blocks:
-            read_words = {}
-            irq = self._block(m, port, base, registers, prefix, read_words, windows)
+            read_words, windows, snapshots = {}, [], {}
+            irq = self._block(m, port, base, registers, prefix, read_words, windows, snapshots)
             if prefix != "g":
                 irqs.append(irq)
-            selected += self._read_select(m, prefix, read_words)
+            selects = self._read_select(m, prefix, read_words)
+            # A snapshot group is copied at the r_load of its first register (its select
+            # flip-flop and r_load, no address decode in front of the copies' enable); that
+            # register reads the live values, the very ones copied.
+            for word, copies in snapshots.items():
+                with m.If(selects[word] & self.bus.r_load):
+                    m.d.sync += copies
+            partials.append(self._read_partial(m, prefix, selects, read_words, windows))
         # Whole signals, never bit by bit: Icarus runs a combinational block written per bit
         # only once an input changes, and would read X until then.
         m.d.comb += self.irq.eq(Cat(irqs))
-
-        # Read stage 2: the word of the register selected (a one-hot AND-OR over the whole
-        # bank; 0 when none is) or the registered data of the window that was read, loaded
-        # on r_load.
-        data = Signal(DATA_WIDTH, name="read_data")
-        for n, (read, window_data) in enumerate(windows):
-            chosen = Signal(name=f"window{n}_read")
-            with m.If(self.bus.r_en):
-                m.d.sync += chosen.eq(read)
-            selected.append((chosen, window_data))
         merged = 0
-        for chosen, value in selected:
-            merged = merged | Mux(chosen, value, 0)
-        with m.If(self.bus.r_load):
-            m.d.sync += data.eq(merged)
-        m.d.comb += self.bus.r_data.eq(data)
+        for partial in partials:
+            merged = merged | partial
+        m.d.comb += self.bus.r_data.eq(merged)
         return m
 
-    def _block(self, m, port, base, registers, prefix, read_words, windows):
-        """One block (the globals or a channel): storage, pulses, interrupts, snapshots,
-        windows and its read words. Returns the block's interrupt request."""
+    def _block(self, m, port, base, registers, prefix, read_words, windows, snapshots):
+        """One block (the globals or a channel): storage, pulses, interrupts, windows and its
+        read words; ``snapshots`` gets, per snapshot group, the word address of the register
+        that takes it and the copies' assignments. Returns the block's interrupt request."""
         bus = self.bus
         w_en, w_addr, w_data, w_strb = self._w_en, self._w_addr, self._w_data, self._w_strb
         storage = {}                   # "register.field" -> the Signal that holds it
         irq_terms = []
-        snapshots = {}                 # group -> [(field, live value, copy)]
-        take = {}                      # group -> the clock its first register is read
+        groups = {}                    # group -> the copies' assignments
+        take = {}                      # group -> the word address of its first register
         for reg in registers:
             word = (base + reg.offset) // 4
             if reg.window:
                 self._window(m, port, word, reg, windows)
                 continue
             write = Signal(name=f"{prefix}_{reg.path.replace('.', '_')}_write")
-            read = Signal(name=f"{prefix}_{reg.path.replace('.', '_')}_read")
-            m.d.comb += [write.eq(w_en & (w_addr == word)),
-                         read.eq(bus.r_en & (bus.r_addr == word))]
+            m.d.comb += write.eq(w_en & (w_addr == word))
             parts = []                 # (lsb, the field's read value)
             for f in reg.fields:
                 name = f"{prefix}_{reg.path.replace('.', '_')}_{f.name}"
@@ -215,16 +209,15 @@ class RegisterBank(wiring.Component):
                         parts.append((f.lsb, live))
                     else:
                         copy = Signal(f.width, init=f.reset, name=f"{name}_snapshot")
-                        snapshots.setdefault(reg.snapshot, []).append(copy.eq(live))
-                        # Every register of the group reads the copy, the one that takes
-                        # the snapshot too: the copy is taken at r_en, the word read later.
-                        parts.append((f.lsb, copy))
+                        groups.setdefault(reg.snapshot, []).append(copy.eq(live))
+                        # The register that takes the snapshot reads the live value, copied
+                        # in the clock it is read (r_load); the group's others read the copy.
+                        parts.append((f.lsb, live if reg.takes_snapshot else copy))
             if reg.takes_snapshot:
-                take[reg.snapshot] = read
+                take[reg.snapshot] = word
             read_words[word] = self._word(parts)
-        for group, copies in snapshots.items():
-            with m.If(take[group]):
-                m.d.sync += copies
+        for group, copies in groups.items():
+            snapshots[take[group]] = copies
         # A cause requests an interrupt while set and enabled.
         irq = Signal(name=f"{prefix}_irq")
         m.d.comb += irq.eq(Cat((status & storage[enable]).any()
@@ -234,18 +227,39 @@ class RegisterBank(wiring.Component):
     def _read_select(self, m, prefix, read_words):
         """Read stage 1 of one block: at ``r_en``, one flip-flop per register, set when the
         address is the register's (all clear when no register is addressed). Returns
-        ``[(select, read value)]``: stage 2 reads the value of the register selected.
+        ``{word address: select}``.
 
         One-hot selects and an AND-OR, not a switch on the address: Yosys maps a switch on the
         address bits inside the block as a binary multiplexer tree twice as large, and the
         decode then sits in the same clock as the AND-OR."""
-        pairs = []
-        for addr, value in read_words.items():
+        selects = {}
+        for addr in read_words:
             select = Signal(name=f"{prefix}_read_select_{addr:x}")
             with m.If(self.bus.r_en):
                 m.d.sync += select.eq(self.bus.r_addr == addr)
-            pairs.append((select, value))
-        return pairs
+            selects[addr] = select
+        return selects
+
+    def _read_partial(self, m, prefix, selects, read_words, windows):
+        """Read stage 2 of one block: at ``r_load``, the word of the block's register selected
+        (a one-hot AND-OR; 0 when none is) or the registered data of the block's window that
+        was read, into the block's own flip-flops. The bank's read data is the OR of the
+        blocks' (at most one is not 0): one register per block instead of one AND-OR over
+        the whole bank in front of one register, so that with several channels no read path
+        spans every channel's registers."""
+        pairs = [(selects[addr], value) for addr, value in read_words.items()]
+        for n, (read, window_data) in enumerate(windows):
+            chosen = Signal(name=f"{prefix}_window{n}_read")
+            with m.If(self.bus.r_en):
+                m.d.sync += chosen.eq(read)
+            pairs.append((chosen, window_data))
+        merged = 0
+        for chosen, value in pairs:
+            merged = merged | Mux(chosen, value, 0)
+        partial = Signal(DATA_WIDTH, name=f"{prefix}_read_data")
+        with m.If(self.bus.r_load):
+            m.d.sync += partial.eq(merged)
+        return partial
 
     def _window(self, m, port, word, reg, windows):
         """A window: the bus's word address inside it, its strobes or read enable, its data."""

@@ -34,6 +34,15 @@ class SignOfLife(wiring.Component):
     ``zero`` come from those flip-flops: right from the clock after the LC's last bit on, for as
     long as neither the LC nor the stored value changes (the master checks once per frame, after
     the LC field). No compare then sits in front of the master's frame verdict.
+
+    In that mode the store is registered as well: ``check`` (with ``lc``) is taken into a
+    flip-flop and the new value is stored one clock later, so that the enable of the stored
+    value and of ``synced`` comes from a flip-flop and not from the master's end-of-frame
+    decision. The verdict of the checked frame is unchanged (it is read in the clock of
+    ``check``); a ``resync`` in the clock of ``check`` cancels the store, one in the clock
+    after wins over it, as it does without the register (``synced`` ends low, and the stored
+    value does not matter until the next check). The next check can come at the earliest
+    after the next LC has been shifted in (6 ``load`` clocks), long after the store.
     """
 
     def __init__(self, early=False):
@@ -81,8 +90,14 @@ class SignOfLife(wiring.Component):
             self.repeat.eq(self.synced & ~is_zero & is_last),
             self.skip.eq(self.synced & ~is_zero & ~is_last & ~is_expected),
         ]
-        with m.If(self.check & ~self.zero):
-            m.d.sync += [last.eq(self.lc), expected.eq(successor(self.lc)), self.synced.eq(1)]
+        if self._early:
+            store = Signal()
+            store_lc = Signal(protocol.LC_BITS)
+            m.d.sync += [store.eq(self.check & ~self.zero & ~self.resync), store_lc.eq(self.lc)]
+        else:
+            store, store_lc = self.check & ~self.zero, self.lc
+        with m.If(store):
+            m.d.sync += [last.eq(store_lc), expected.eq(successor(store_lc)), self.synced.eq(1)]
         with m.If(self.resync):
             m.d.sync += self.synced.eq(0)
 

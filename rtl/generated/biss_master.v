@@ -895,7 +895,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .is_zero(lc_zero_seen),
     .lc(\lc$174 ),
     .load(load),
-    .\port$1367$0 (\bit ),
+    .\port$1369$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -952,7 +952,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .lc_skip_seen(lc_skip_seen),
     .lc_zero(\lc_zero$222 ),
     .lc_zero_seen(lc_zero_seen),
-    .\port$875$0 (\$16 ),
+    .\port$877$0 (\$16 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -2971,46 +2971,68 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.counters (clk, rst, events, counts, clear);
+  reg \$auto$verilog_backend.cc:2355:dump_module$19  = 0;
+  reg [17:0] \$1 ;
+  reg \$2 ;
   input clear;
   wire clear;
-  wire \clear$10 ;
-  wire \clear$13 ;
-  wire \clear$16 ;
-  wire \clear$19 ;
-  wire \clear$22 ;
-  wire \clear$25 ;
-  wire \clear$28 ;
-  wire \clear$3 ;
-  wire \clear$31 ;
-  wire \clear$34 ;
-  wire \clear$37 ;
-  wire \clear$40 ;
-  wire \clear$43 ;
-  wire \clear$46 ;
-  wire \clear$49 ;
-  wire \clear$52 ;
-  wire \clear$55 ;
+  (* init = 1'h0 *)
+  wire \clear$11 ;
+  (* init = 1'h0 *)
+  wire \clear$14 ;
+  (* init = 1'h0 *)
+  wire \clear$17 ;
+  (* init = 1'h0 *)
+  wire \clear$20 ;
+  (* init = 1'h0 *)
+  wire \clear$23 ;
+  (* init = 1'h0 *)
+  wire \clear$26 ;
+  (* init = 1'h0 *)
+  wire \clear$29 ;
+  (* init = 1'h0 *)
+  wire \clear$32 ;
+  (* init = 1'h0 *)
+  wire \clear$35 ;
+  (* init = 1'h0 *)
+  wire \clear$38 ;
+  (* init = 1'h0 *)
+  wire \clear$41 ;
+  (* init = 1'h0 *)
+  wire \clear$44 ;
+  (* init = 1'h0 *)
+  wire \clear$47 ;
+  (* init = 1'h0 *)
+  wire \clear$50 ;
+  (* init = 1'h0 *)
+  wire \clear$53 ;
+  (* init = 1'h0 *)
+  wire \clear$56 ;
+  (* init = 1'h0 *)
+  wire \clear$59 ;
+  (* init = 1'h0 *)
   wire \clear$7 ;
+  reg clear_reg = 1'h0;
   input clk;
   wire clk;
   wire [15:0] count;
-  wire [15:0] \count$11 ;
-  wire [15:0] \count$14 ;
-  wire [15:0] \count$17 ;
-  wire [15:0] \count$20 ;
-  wire [15:0] \count$23 ;
-  wire [15:0] \count$26 ;
-  wire [15:0] \count$29 ;
-  wire [15:0] \count$32 ;
-  wire [15:0] \count$35 ;
-  wire [15:0] \count$38 ;
-  wire [15:0] \count$41 ;
-  wire [15:0] \count$44 ;
-  wire [15:0] \count$47 ;
-  wire [15:0] \count$50 ;
-  wire [15:0] \count$53 ;
-  wire [15:0] \count$56 ;
-  wire [15:0] \count$8 ;
+  wire [15:0] \count$12 ;
+  wire [15:0] \count$15 ;
+  wire [15:0] \count$18 ;
+  wire [15:0] \count$21 ;
+  wire [15:0] \count$24 ;
+  wire [15:0] \count$27 ;
+  wire [15:0] \count$30 ;
+  wire [15:0] \count$33 ;
+  wire [15:0] \count$36 ;
+  wire [15:0] \count$39 ;
+  wire [15:0] \count$42 ;
+  wire [15:0] \count$45 ;
+  wire [15:0] \count$48 ;
+  wire [15:0] \count$51 ;
+  wire [15:0] \count$54 ;
+  wire [15:0] \count$57 ;
+  wire [15:0] \count$60 ;
   output [287:0] counts;
   wire [287:0] counts;
   wire [15:0] \counts.aborted ;
@@ -3051,188 +3073,243 @@ module \biss_master.counters (clk, rst, events, counts, clear);
   wire \events.overrun ;
   wire \events.slo_stuck_low ;
   wire \events.spw_mismatch ;
+  reg [17:0] events_reg = 18'h00000;
+  wire \events_reg.aborted ;
+  wire \events_reg.ca_aborted ;
+  wire \events_reg.ca_crc4_error ;
+  wire \events_reg.ca_data_fault ;
+  wire \events_reg.ca_no_answer ;
+  wire \events_reg.ca_refused ;
+  wire \events_reg.crc_word0 ;
+  wire \events_reg.crc_word1 ;
+  wire \events_reg.delay_range ;
+  wire \events_reg.lc_repeat ;
+  wire \events_reg.lc_skip ;
+  wire \events_reg.lc_zero ;
+  wire \events_reg.no_ack ;
+  wire \events_reg.no_start ;
+  wire \events_reg.no_stop ;
+  wire \events_reg.overrun ;
+  wire \events_reg.slo_stuck_low ;
+  wire \events_reg.spw_mismatch ;
   wire inc;
-  wire \inc$12 ;
-  wire \inc$15 ;
-  wire \inc$18 ;
-  wire \inc$21 ;
-  wire \inc$24 ;
-  wire \inc$27 ;
-  wire \inc$30 ;
-  wire \inc$33 ;
-  wire \inc$36 ;
-  wire \inc$39 ;
-  wire \inc$42 ;
-  wire \inc$45 ;
-  wire \inc$48 ;
-  wire \inc$51 ;
-  wire \inc$54 ;
-  wire \inc$6 ;
-  wire \inc$9 ;
+  wire \inc$10 ;
+  wire \inc$13 ;
+  wire \inc$16 ;
+  wire \inc$19 ;
+  wire \inc$22 ;
+  wire \inc$25 ;
+  wire \inc$28 ;
+  wire \inc$31 ;
+  wire \inc$34 ;
+  wire \inc$37 ;
+  wire \inc$40 ;
+  wire \inc$43 ;
+  wire \inc$46 ;
+  wire \inc$49 ;
+  wire \inc$52 ;
+  wire \inc$55 ;
+  wire \inc$58 ;
   input rst;
   wire rst;
+  always @(posedge clk)
+    events_reg <= \$1 ;
+  always @(posedge clk)
+    clear_reg <= \$2 ;
   \biss_master.counters.count_aborted  count_aborted (
-    .clear(clear),
+    .clear(clear_reg),
     .clk(clk),
-    .count(\count$38 ),
-    .inc(events[11]),
+    .count(\count$42 ),
+    .inc(events_reg[11]),
     .rst(rst)
   );
   \biss_master.counters.count_ca_aborted  count_ca_aborted (
-    .clear(clear),
+    .clear(clear_reg),
     .clk(clk),
-    .count(\count$53 ),
-    .inc(events[16]),
+    .count(\count$57 ),
+    .inc(events_reg[16]),
     .rst(rst)
   );
   \biss_master.counters.count_ca_crc4_error  count_ca_crc4_error (
-    .clear(clear),
+    .clear(clear_reg),
     .clk(clk),
-    .count(\count$44 ),
-    .inc(events[13]),
+    .count(\count$48 ),
+    .inc(events_reg[13]),
     .rst(rst)
   );
   \biss_master.counters.count_ca_data_fault  count_ca_data_fault (
-    .clear(clear),
+    .clear(clear_reg),
     .clk(clk),
-    .count(\count$56 ),
-    .inc(events[17]),
+    .count(\count$60 ),
+    .inc(events_reg[17]),
     .rst(rst)
   );
   \biss_master.counters.count_ca_no_answer  count_ca_no_answer (
-    .clear(clear),
+    .clear(clear_reg),
     .clk(clk),
-    .count(\count$47 ),
-    .inc(events[14]),
+    .count(\count$51 ),
+    .inc(events_reg[14]),
     .rst(rst)
   );
   \biss_master.counters.count_ca_refused  count_ca_refused (
-    .clear(clear),
+    .clear(clear_reg),
     .clk(clk),
-    .count(\count$50 ),
-    .inc(events[15]),
+    .count(\count$54 ),
+    .inc(events_reg[15]),
     .rst(rst)
   );
   \biss_master.counters.count_crc_word0  count_crc_word0 (
-    .clear(clear),
+    .clear(clear_reg),
     .clk(clk),
     .count(count),
-    .inc(events[0]),
+    .inc(events_reg[0]),
     .rst(rst)
   );
   \biss_master.counters.count_crc_word1  count_crc_word1 (
-    .clear(clear),
+    .clear(clear_reg),
     .clk(clk),
-    .count(\count$8 ),
-    .inc(events[1]),
+    .count(\count$12 ),
+    .inc(events_reg[1]),
     .rst(rst)
   );
   \biss_master.counters.count_delay_range  count_delay_range (
-    .clear(clear),
+    .clear(clear_reg),
     .clk(clk),
-    .count(\count$17 ),
-    .inc(events[4]),
+    .count(\count$21 ),
+    .inc(events_reg[4]),
     .rst(rst)
   );
   \biss_master.counters.count_lc_repeat  count_lc_repeat (
-    .clear(clear),
+    .clear(clear_reg),
     .clk(clk),
-    .count(\count$23 ),
-    .inc(events[6]),
+    .count(\count$27 ),
+    .inc(events_reg[6]),
     .rst(rst)
   );
   \biss_master.counters.count_lc_skip  count_lc_skip (
-    .clear(clear),
+    .clear(clear_reg),
     .clk(clk),
-    .count(\count$26 ),
-    .inc(events[7]),
+    .count(\count$30 ),
+    .inc(events_reg[7]),
     .rst(rst)
   );
   \biss_master.counters.count_lc_zero  count_lc_zero (
-    .clear(clear),
+    .clear(clear_reg),
     .clk(clk),
-    .count(\count$29 ),
-    .inc(events[8]),
+    .count(\count$33 ),
+    .inc(events_reg[8]),
     .rst(rst)
   );
   \biss_master.counters.count_no_ack  count_no_ack (
-    .clear(clear),
+    .clear(clear_reg),
     .clk(clk),
-    .count(\count$11 ),
-    .inc(events[2]),
+    .count(\count$15 ),
+    .inc(events_reg[2]),
     .rst(rst)
   );
   \biss_master.counters.count_no_start  count_no_start (
-    .clear(clear),
+    .clear(clear_reg),
     .clk(clk),
-    .count(\count$14 ),
-    .inc(events[3]),
+    .count(\count$18 ),
+    .inc(events_reg[3]),
     .rst(rst)
   );
   \biss_master.counters.count_no_stop  count_no_stop (
-    .clear(clear),
+    .clear(clear_reg),
     .clk(clk),
-    .count(\count$41 ),
-    .inc(events[12]),
+    .count(\count$45 ),
+    .inc(events_reg[12]),
     .rst(rst)
   );
   \biss_master.counters.count_overrun  count_overrun (
-    .clear(clear),
+    .clear(clear_reg),
     .clk(clk),
-    .count(\count$35 ),
-    .inc(events[10]),
+    .count(\count$39 ),
+    .inc(events_reg[10]),
     .rst(rst)
   );
   \biss_master.counters.count_slo_stuck_low  count_slo_stuck_low (
-    .clear(clear),
+    .clear(clear_reg),
     .clk(clk),
-    .count(\count$20 ),
-    .inc(events[5]),
+    .count(\count$24 ),
+    .inc(events_reg[5]),
     .rst(rst)
   );
   \biss_master.counters.count_spw_mismatch  count_spw_mismatch (
-    .clear(clear),
+    .clear(clear_reg),
     .clk(clk),
-    .count(\count$32 ),
-    .inc(events[9]),
+    .count(\count$36 ),
+    .inc(events_reg[9]),
     .rst(rst)
   );
-  assign inc = events[0];
-  assign \clear$3  = clear;
-  assign \inc$6  = events[1];
-  assign \clear$7  = clear;
-  assign \inc$9  = events[2];
-  assign \clear$10  = clear;
-  assign \inc$12  = events[3];
-  assign \clear$13  = clear;
-  assign \inc$15  = events[4];
-  assign \clear$16  = clear;
-  assign \inc$18  = events[5];
-  assign \clear$19  = clear;
-  assign \inc$21  = events[6];
-  assign \clear$22  = clear;
-  assign \inc$24  = events[7];
-  assign \clear$25  = clear;
-  assign \inc$27  = events[8];
-  assign \clear$28  = clear;
-  assign \inc$30  = events[9];
-  assign \clear$31  = clear;
-  assign \inc$33  = events[10];
-  assign \clear$34  = clear;
-  assign \inc$36  = events[11];
-  assign \clear$37  = clear;
-  assign \inc$39  = events[12];
-  assign \clear$40  = clear;
-  assign \inc$42  = events[13];
-  assign \clear$43  = clear;
-  assign \inc$45  = events[14];
-  assign \clear$46  = clear;
-  assign \inc$48  = events[15];
-  assign \clear$49  = clear;
-  assign \inc$51  = events[16];
-  assign \clear$52  = clear;
-  assign \inc$54  = events[17];
-  assign \clear$55  = clear;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
+    \$1  = events;
+    if (rst) begin
+      \$1  = 18'h00000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
+    \$2  = clear;
+    if (rst) begin
+      \$2  = 1'h0;
+    end
+  end
+  assign inc = events_reg[0];
+  assign \clear$7  = clear_reg;
+  assign \inc$10  = events_reg[1];
+  assign \clear$11  = clear_reg;
+  assign \inc$13  = events_reg[2];
+  assign \clear$14  = clear_reg;
+  assign \inc$16  = events_reg[3];
+  assign \clear$17  = clear_reg;
+  assign \inc$19  = events_reg[4];
+  assign \clear$20  = clear_reg;
+  assign \inc$22  = events_reg[5];
+  assign \clear$23  = clear_reg;
+  assign \inc$25  = events_reg[6];
+  assign \clear$26  = clear_reg;
+  assign \inc$28  = events_reg[7];
+  assign \clear$29  = clear_reg;
+  assign \inc$31  = events_reg[8];
+  assign \clear$32  = clear_reg;
+  assign \inc$34  = events_reg[9];
+  assign \clear$35  = clear_reg;
+  assign \inc$37  = events_reg[10];
+  assign \clear$38  = clear_reg;
+  assign \inc$40  = events_reg[11];
+  assign \clear$41  = clear_reg;
+  assign \inc$43  = events_reg[12];
+  assign \clear$44  = clear_reg;
+  assign \inc$46  = events_reg[13];
+  assign \clear$47  = clear_reg;
+  assign \inc$49  = events_reg[14];
+  assign \clear$50  = clear_reg;
+  assign \inc$52  = events_reg[15];
+  assign \clear$53  = clear_reg;
+  assign \inc$55  = events_reg[16];
+  assign \clear$56  = clear_reg;
+  assign \inc$58  = events_reg[17];
+  assign \clear$59  = clear_reg;
+  assign \events_reg.crc_word0  = events_reg[0];
+  assign \events_reg.crc_word1  = events_reg[1];
+  assign \events_reg.no_ack  = events_reg[2];
+  assign \events_reg.no_start  = events_reg[3];
+  assign \events_reg.delay_range  = events_reg[4];
+  assign \events_reg.slo_stuck_low  = events_reg[5];
+  assign \events_reg.lc_repeat  = events_reg[6];
+  assign \events_reg.lc_skip  = events_reg[7];
+  assign \events_reg.lc_zero  = events_reg[8];
+  assign \events_reg.spw_mismatch  = events_reg[9];
+  assign \events_reg.overrun  = events_reg[10];
+  assign \events_reg.aborted  = events_reg[11];
+  assign \events_reg.no_stop  = events_reg[12];
+  assign \events_reg.ca_crc4_error  = events_reg[13];
+  assign \events_reg.ca_no_answer  = events_reg[14];
+  assign \events_reg.ca_refused  = events_reg[15];
+  assign \events_reg.ca_aborted  = events_reg[16];
+  assign \events_reg.ca_data_fault  = events_reg[17];
   assign \events.crc_word0  = events[0];
   assign \events.crc_word1  = events[1];
   assign \events.no_ack  = events[2];
@@ -3269,82 +3346,28 @@ module \biss_master.counters (clk, rst, events, counts, clear);
   assign \counts.ca_refused  = counts[255:240];
   assign \counts.ca_aborted  = counts[271:256];
   assign \counts.ca_data_fault  = counts[287:272];
-  assign counts[287:272] = \count$56 ;
-  assign counts[271:256] = \count$53 ;
-  assign counts[255:240] = \count$50 ;
-  assign counts[239:224] = \count$47 ;
-  assign counts[223:208] = \count$44 ;
-  assign counts[207:192] = \count$41 ;
-  assign counts[191:176] = \count$38 ;
-  assign counts[175:160] = \count$35 ;
-  assign counts[159:144] = \count$32 ;
-  assign counts[143:128] = \count$29 ;
-  assign counts[127:112] = \count$26 ;
-  assign counts[111:96] = \count$23 ;
-  assign counts[95:80] = \count$20 ;
-  assign counts[79:64] = \count$17 ;
-  assign counts[63:48] = \count$14 ;
-  assign counts[47:32] = \count$11 ;
-  assign counts[31:16] = \count$8 ;
+  assign counts[287:272] = \count$60 ;
+  assign counts[271:256] = \count$57 ;
+  assign counts[255:240] = \count$54 ;
+  assign counts[239:224] = \count$51 ;
+  assign counts[223:208] = \count$48 ;
+  assign counts[207:192] = \count$45 ;
+  assign counts[191:176] = \count$42 ;
+  assign counts[175:160] = \count$39 ;
+  assign counts[159:144] = \count$36 ;
+  assign counts[143:128] = \count$33 ;
+  assign counts[127:112] = \count$30 ;
+  assign counts[111:96] = \count$27 ;
+  assign counts[95:80] = \count$24 ;
+  assign counts[79:64] = \count$21 ;
+  assign counts[63:48] = \count$18 ;
+  assign counts[47:32] = \count$15 ;
+  assign counts[31:16] = \count$12 ;
   assign counts[15:0] = count;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_aborted (clk, rst, inc, count, clear);
-  reg \$auto$verilog_backend.cc:2355:dump_module$19  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master.counters.count_ca_aborted (clk, rst, inc, count, clear);
+module \biss_master.counters.count_aborted (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$20  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -3398,7 +3421,7 @@ module \biss_master.counters.count_ca_aborted (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_ca_crc4_error (clk, rst, inc, count, clear);
+module \biss_master.counters.count_ca_aborted (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$21  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -3452,7 +3475,7 @@ module \biss_master.counters.count_ca_crc4_error (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_ca_data_fault (clk, rst, inc, count, clear);
+module \biss_master.counters.count_ca_crc4_error (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$22  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -3506,7 +3529,7 @@ module \biss_master.counters.count_ca_data_fault (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_ca_no_answer (clk, rst, inc, count, clear);
+module \biss_master.counters.count_ca_data_fault (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$23  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -3560,7 +3583,7 @@ module \biss_master.counters.count_ca_no_answer (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_ca_refused (clk, rst, inc, count, clear);
+module \biss_master.counters.count_ca_no_answer (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$24  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -3614,7 +3637,7 @@ module \biss_master.counters.count_ca_refused (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_crc_word0 (clk, rst, inc, count, clear);
+module \biss_master.counters.count_ca_refused (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$25  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -3668,7 +3691,7 @@ module \biss_master.counters.count_crc_word0 (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_crc_word1 (clk, rst, inc, count, clear);
+module \biss_master.counters.count_crc_word0 (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$26  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -3722,7 +3745,7 @@ module \biss_master.counters.count_crc_word1 (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_delay_range (clk, rst, inc, count, clear);
+module \biss_master.counters.count_crc_word1 (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$27  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -3776,7 +3799,7 @@ module \biss_master.counters.count_delay_range (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_lc_repeat (clk, rst, inc, count, clear);
+module \biss_master.counters.count_delay_range (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$28  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -3830,7 +3853,7 @@ module \biss_master.counters.count_lc_repeat (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_lc_skip (clk, rst, inc, count, clear);
+module \biss_master.counters.count_lc_repeat (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$29  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -3884,7 +3907,7 @@ module \biss_master.counters.count_lc_skip (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_lc_zero (clk, rst, inc, count, clear);
+module \biss_master.counters.count_lc_skip (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$30  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -3938,7 +3961,7 @@ module \biss_master.counters.count_lc_zero (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_no_ack (clk, rst, inc, count, clear);
+module \biss_master.counters.count_lc_zero (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$31  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -3992,7 +4015,7 @@ module \biss_master.counters.count_no_ack (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_no_start (clk, rst, inc, count, clear);
+module \biss_master.counters.count_no_ack (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$32  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -4046,7 +4069,7 @@ module \biss_master.counters.count_no_start (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_no_stop (clk, rst, inc, count, clear);
+module \biss_master.counters.count_no_start (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$33  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -4100,7 +4123,7 @@ module \biss_master.counters.count_no_stop (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_overrun (clk, rst, inc, count, clear);
+module \biss_master.counters.count_no_stop (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$34  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -4154,7 +4177,7 @@ module \biss_master.counters.count_overrun (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_slo_stuck_low (clk, rst, inc, count, clear);
+module \biss_master.counters.count_overrun (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$35  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -4208,7 +4231,7 @@ module \biss_master.counters.count_slo_stuck_low (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_spw_mismatch (clk, rst, inc, count, clear);
+module \biss_master.counters.count_slo_stuck_low (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$36  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -4262,9 +4285,63 @@ module \biss_master.counters.count_spw_mismatch (clk, rst, inc, count, clear);
 endmodule
 
 (* generator = "Amaranth" *)
+module \biss_master.counters.count_spw_mismatch (rst, inc, clear, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$37  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
 module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , receiver_clear, done, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1, lc, cpw_top, crc_ok
 , clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$37  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$38  = 0;
   wire [6:0] \$1 ;
   wire [1:0] \$10 ;
   reg [2:0] \$100 ;
@@ -4647,7 +4724,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     .valid(\valid$52 )
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     (* full_case = 32'd1 *)
     casez (words[6])
       1'h0:
@@ -4657,7 +4734,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -4671,7 +4748,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     (* full_case = 32'd1 *)
     casez (words[9:6])
       4'h0:
@@ -4709,7 +4786,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -4723,7 +4800,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     (* full_case = 32'd1 *)
     casez (words[16])
       1'h0:
@@ -4733,7 +4810,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     (* full_case = 32'd1 *)
     casez (words[17:16])
       2'h0:
@@ -4747,7 +4824,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:16])
       4'h0:
@@ -4785,7 +4862,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     (* full_case = 32'd1 *)
     casez (words[17:16])
       2'h0:
@@ -4799,7 +4876,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     \$94  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -4823,7 +4900,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     \$95  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -4845,7 +4922,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     \$96  = slots;
     if (\$34 ) begin
       \$96  = \$35 [15:0];
@@ -4858,7 +4935,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     \$97  = slots_full;
     if (\$34 ) begin
       \$97  = \$36 ;
@@ -4871,7 +4948,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     \$98  = started;
     casez (decoder_fsm_state)
       3'h0:
@@ -4887,7 +4964,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     \$99  = start_slot;
     casez (decoder_fsm_state)
       3'h0:
@@ -4903,7 +4980,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     \$100  = decoder_fsm_state;
     casez (decoder_fsm_state)
       3'h0:
@@ -4935,7 +5012,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     \$101  = cds;
     casez (decoder_fsm_state)
       3'h0:
@@ -4953,7 +5030,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     \$102  = idx;
     casez (decoder_fsm_state)
       3'h0:
@@ -4978,7 +5055,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     \$103  = in_data;
     casez (decoder_fsm_state)
       3'h0:
@@ -5003,7 +5080,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     \$104  = in_lc;
     casez (decoder_fsm_state)
       3'h0:
@@ -5028,7 +5105,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     \$105  = in_top;
     casez (decoder_fsm_state)
       3'h0:
@@ -5053,7 +5130,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     \$106  = word;
     casez (decoder_fsm_state)
       3'h0:
@@ -5081,7 +5158,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     \$107  = stop_bit;
     casez (decoder_fsm_state)
       3'h0:
@@ -5103,7 +5180,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     \$108  = data0;
     if (\$58 ) begin
       \$108  = { data0[53:0], \bit  };
@@ -5116,7 +5193,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     \$109  = ne;
     if (\$59 ) begin
       \$109 [0] = 1'h1;
@@ -5136,7 +5213,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     \$110  = nw;
     if (\$59 ) begin
       \$110 [0] = 1'h1;
@@ -5158,7 +5235,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     \$111  = data1;
     if (\$70 ) begin
       \$111  = { data1[38:0], \bit  };
@@ -5171,7 +5248,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     \$112  = lc;
     if (lc_load) begin
       \$112  = { lc[4:0], \bit  };
@@ -5184,7 +5261,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     \$113  = cpw_top;
     if (\$80 ) begin
       \$113  = { cpw_top[38:0], \bit  };
@@ -5197,7 +5274,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     in_word = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -5234,7 +5311,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.decoder.crc0 (rst, start, valid, kind, \bit , receiver_clear, ok, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$38  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$39  = 0;
   wire [5:0] \$1 ;
   wire \$10 ;
   wire [5:0] \$11 ;
@@ -5328,7 +5405,7 @@ module \biss_master.decoder.crc0 (rst, start, valid, kind, \bit , receiver_clear
   assign \$auto$rtlil.cc:2739:Not$12  = ~ { crc16_reg[14], crc16_reg[11], crc16_reg[6:5], crc16_reg[3:2], 1'h0 };
   assign \$auto$rtlil.cc:2739:Not$10  = ~ { crc6_reg[0], 1'h0 };
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     \$31  = crc6_reg;
     if (valid) begin
       \$31  = \$5 ;
@@ -5343,7 +5420,7 @@ module \biss_master.decoder.crc0 (rst, start, valid, kind, \bit , receiver_clear
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     \$32  = crc6_match;
     if (valid) begin
       \$32  = \$15 ;
@@ -5358,7 +5435,7 @@ module \biss_master.decoder.crc0 (rst, start, valid, kind, \bit , receiver_clear
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     \$33  = crc16_reg;
     if (valid) begin
       \$33  = \$20 ;
@@ -5373,7 +5450,7 @@ module \biss_master.decoder.crc0 (rst, start, valid, kind, \bit , receiver_clear
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     \$34  = crc16_match;
     if (valid) begin
       \$34  = \$30 ;
@@ -5388,7 +5465,7 @@ module \biss_master.decoder.crc0 (rst, start, valid, kind, \bit , receiver_clear
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     ok = 1'h0;
     casez (kind)
       2'h0:
@@ -5409,7 +5486,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.decoder.crc1 (rst, start, valid, kind, \bit , receiver_clear, ok, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$39  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$40  = 0;
   wire [5:0] \$1 ;
   wire \$10 ;
   wire [5:0] \$11 ;
@@ -5503,7 +5580,7 @@ module \biss_master.decoder.crc1 (rst, start, valid, kind, \bit , receiver_clear
   assign \$auto$rtlil.cc:2739:Not$6  = ~ { crc6_reg[0], 1'h0 };
   assign \$auto$rtlil.cc:2739:Not$8  = ~ { crc16_reg[14], crc16_reg[11], crc16_reg[6:5], crc16_reg[3:2], 1'h0 };
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
     \$31  = crc6_reg;
     if (valid) begin
       \$31  = \$5 ;
@@ -5518,7 +5595,7 @@ module \biss_master.decoder.crc1 (rst, start, valid, kind, \bit , receiver_clear
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
     \$32  = crc6_match;
     if (valid) begin
       \$32  = \$15 ;
@@ -5533,7 +5610,7 @@ module \biss_master.decoder.crc1 (rst, start, valid, kind, \bit , receiver_clear
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
     \$33  = crc16_reg;
     if (valid) begin
       \$33  = \$20 ;
@@ -5548,7 +5625,7 @@ module \biss_master.decoder.crc1 (rst, start, valid, kind, \bit , receiver_clear
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
     \$34  = crc16_match;
     if (valid) begin
       \$34  = \$30 ;
@@ -5563,7 +5640,7 @@ module \biss_master.decoder.crc1 (rst, start, valid, kind, \bit , receiver_clear
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
     ok = 1'h0;
     casez (kind)
       2'h0:
@@ -5584,7 +5661,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_rise, second_rise, ma, rises, busy, held, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$40  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$41  = 0;
   wire [16:0] \$1 ;
   wire \$10 ;
   wire [16:0] \$11 ;
@@ -5709,7 +5786,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
   always @(posedge clk)
     released <= \$42 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     \$34  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -5724,7 +5801,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     \$35  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -5739,7 +5816,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     \$36  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -5754,7 +5831,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     \$37  = ma;
     casez (ma_fsm_state)
       3'h0:
@@ -5783,7 +5860,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     \$38  = phase_left;
     casez (ma_fsm_state)
       3'h0:
@@ -5825,7 +5902,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     \$39  = last_clock;
     casez (ma_fsm_state)
       3'h0:
@@ -5867,7 +5944,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     \$40  = rises;
     casez (ma_fsm_state)
       3'h0:
@@ -5886,7 +5963,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     \$41  = ma_fsm_state;
     casez (ma_fsm_state)
       3'h0:
@@ -5922,7 +5999,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     \$42  = released;
     casez (ma_fsm_state)
       3'h0:
@@ -5946,7 +6023,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     busy = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -5962,7 +6039,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     held = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -5979,7 +6056,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.ma_stop (rst, words, w1_enable, clear, rises, enough, \started$10 , start_slot, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$41  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$42  = 0;
   reg [7:0] \$1 ;
   reg [7:0] \$10 ;
   wire [8:0] \$11 ;
@@ -6060,7 +6137,7 @@ module \biss_master.ma_stop (rst, words, w1_enable, clear, rises, enough, \start
   always @(posedge clk)
     word1_len <= \$17 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
     (* full_case = 32'd1 *)
     casez (words[9:6])
       4'h0:
@@ -6098,7 +6175,7 @@ module \biss_master.ma_stop (rst, words, w1_enable, clear, rises, enough, \start
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:16])
       4'h0:
@@ -6136,42 +6213,42 @@ module \biss_master.ma_stop (rst, words, w1_enable, clear, rises, enough, \start
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
     \$12  = \$2 [7:0];
     if (rst) begin
       \$12  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
     \$13  = \$4 ;
     if (rst) begin
       \$13  = 9'h000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
     \$14  = \$5 ;
     if (rst) begin
       \$14  = 17'h00000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
     \$15  = \started$10 ;
     if (rst) begin
       \$15  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
     \$16  = \$9 ;
     if (rst) begin
       \$16  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
     \$17  = \$11 [7:0];
     if (rst) begin
       \$17  = 8'h00;
@@ -6483,7 +6560,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.register_access.buffers (host_read__en, clk, rst, byte_to_send, rbuf_data, wbuf, index, store, byte_received, host_read__addr);
-  reg \$auto$verilog_backend.cc:2355:dump_module$42  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$43  = 0;
   wire \$1 ;
   wire \$2 ;
   wire \$3 ;
@@ -6600,21 +6677,21 @@ module \biss_master.register_access.buffers (host_read__en, clk, rst, byte_to_se
   assign \$1  = ! index[1:0];
   assign \$2  = index[1:0] == 1'h1;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     byte_received__addr = 4'h0;
     if (store) begin
       byte_received__addr = index[5:2];
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     byte_received__data = 32'd0;
     if (store) begin
       byte_received__data = { byte_received, byte_received, byte_received, byte_received };
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     byte_received__en = 4'h0;
     if (store) begin
       byte_received__en = { \$4 , \$3 , \$2 , \$1  };
@@ -6634,7 +6711,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.register_access.checker (rst, crc_ok, echo_ok, cds, control__take_data, start, control__take_crc, sent, \byte , clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$43  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$44  = 0;
   reg [7:0] \$1 ;
   reg [2:0] \$2 ;
   output [7:0] \byte ;
@@ -6677,7 +6754,7 @@ module \biss_master.register_access.checker (rst, crc_ok, echo_ok, cds, control_
     .valid(control__take_data)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
     \$1  = \byte ;
     if (control__take_data) begin
       \$1  = { \byte [6:0], cds };
@@ -6687,7 +6764,7 @@ module \biss_master.register_access.checker (rst, crc_ok, echo_ok, cds, control_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
     \$2  = got_crc;
     if (control__take_crc) begin
       \$2  = { got_crc[1:0], cds };
@@ -6703,7 +6780,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.register_access.checker.rx_crc (rst, crc, data_in, valid, start, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$44  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$45  = 0;
   wire [3:0] \$1 ;
   wire \$10 ;
   wire [3:0] \$11 ;
@@ -6746,7 +6823,7 @@ module \biss_master.register_access.checker.rx_crc (rst, crc, data_in, valid, st
     crc_reg <= \$13 ;
   assign \$auto$rtlil.cc:2739:Not$2  = ~ crc_reg;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
     \$13  = crc_reg;
     if (valid) begin
       \$13 [0] = \$3 ;
@@ -6770,7 +6847,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.register_access.idle (rst, frame_end, frame_ok, run_enough, seen_enough, frame_cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$45  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$46  = 0;
   wire \$1 ;
   wire [4:0] \$10 ;
   wire \$11 ;
@@ -6840,7 +6917,7 @@ module \biss_master.register_access.idle (rst, frame_end, frame_ok, run_enough, 
   always @(posedge clk)
     idle_seen <= \$24 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     \$23  = idle_run;
     if (frame_end) begin
       \$23  = \$4 [3:0];
@@ -6850,7 +6927,7 @@ module \biss_master.register_access.idle (rst, frame_end, frame_ok, run_enough, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     \$24  = idle_seen;
     if (frame_end) begin
       \$24  = \$10 [3:0];
@@ -6863,7 +6940,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.register_access.sender (rst, \byte , request, control__load_header, control__source, control__crc_bit, control__shift_header, start, valid, control__load_byte, control__shift_byte, sent, cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$46  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$47  = 0;
   wire \$1 ;
   wire [18:0] \$2 ;
   wire [8:0] \$3 ;
@@ -6935,7 +7012,7 @@ module \biss_master.register_access.sender (rst, \byte , request, control__load_
     .valid(valid)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     \$6  = header;
     if (control__load_header) begin
       \$6  = { 2'h3, request[2:0], request[9:3], 4'h0, \$1 , request[17] };
@@ -6948,7 +7025,7 @@ module \biss_master.register_access.sender (rst, \byte , request, control__load_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     \$7  = to_send;
     if (control__load_byte) begin
       \$7  = \byte ;
@@ -6961,7 +7038,7 @@ module \biss_master.register_access.sender (rst, \byte , request, control__load_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     \$8  = sent;
     if (control__load_byte) begin
       \$8  = \byte ;
@@ -6971,7 +7048,7 @@ module \biss_master.register_access.sender (rst, \byte , request, control__load_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     cdm = 1'h0;
     casez (control__source)
       3'h1:
@@ -6996,7 +7073,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.register_access.sender.tx_crc (rst, data_in, crc, start, valid, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$47  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$48  = 0;
   wire [3:0] \$1 ;
   wire \$10 ;
   wire [3:0] \$11 ;
@@ -7039,7 +7116,7 @@ module \biss_master.register_access.sender.tx_crc (rst, data_in, crc, start, val
     crc_reg <= \$13 ;
   assign \$auto$rtlil.cc:2739:Not$4  = ~ crc_reg;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     \$13  = crc_reg;
     if (valid) begin
       \$13 [0] = \$3 ;
@@ -7064,7 +7141,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame_ok, busy, crc_ok, echo_ok, run_enough, seen_enough, request, frame_cdm, frame_cds, done, result, index, send__load_header, send__source, send__crc_bit, send__shift_header, send__crc_start
 , send__crc_valid, send__load_byte, send__shift_byte, check__take_data, check__first, check__take_crc, store, start);
-  reg \$auto$verilog_backend.cc:2355:dump_module$48  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$49  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$100 ;
@@ -7420,7 +7497,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
   always @(posedge clk)
     waited <= \$125 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$118  = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -7458,7 +7535,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$119  = result;
     casez (access_fsm_state)
       3'h0:
@@ -7512,7 +7589,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$120  = access_fsm_state;
     casez (access_fsm_state)
       3'h0:
@@ -7609,7 +7686,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$121  = req;
     casez (access_fsm_state)
       3'h0:
@@ -7626,7 +7703,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$122  = index;
     casez (access_fsm_state)
       3'h0:
@@ -7665,7 +7742,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$123  = step;
     casez (access_fsm_state)
       3'h0:
@@ -7723,7 +7800,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$124  = ending;
     casez (access_fsm_state)
       3'h0:
@@ -7790,7 +7867,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$125  = waited;
     casez (access_fsm_state)
       3'h0:
@@ -7822,7 +7899,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     send__load_header = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -7836,7 +7913,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     send__source = 3'h0;
     casez (access_fsm_state)
       3'h0:
@@ -7863,7 +7940,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     send__crc_bit = 2'h0;
     casez (access_fsm_state)
       3'h0:
@@ -7883,7 +7960,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     send__shift_header = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -7902,7 +7979,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     send__crc_start = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -7931,7 +8008,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     send__crc_valid = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -7952,7 +8029,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     send__load_byte = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -7974,7 +8051,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     send__shift_byte = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -7995,7 +8072,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     check__take_data = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -8017,7 +8094,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     check__first = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -8039,7 +8116,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     check__take_crc = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -8063,7 +8140,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     store = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -8102,7 +8179,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.results (rst, report_delay, report, valid, frame, report_frame, done, valid_out, result, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$49  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$50  = 0;
   reg \$1 ;
   reg \$2 ;
   reg [160:0] \$3 ;
@@ -8199,21 +8276,21 @@ module \biss_master.results (rst, report_delay, report, valid, frame, report_fra
   always @(posedge clk)
     result <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$1  = report;
     if (rst) begin
       \$1  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$2  = valid;
     if (rst) begin
       \$2  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$3  = result;
     if (report) begin
       \$3 [3:0] = frame[3:0];
@@ -8278,7 +8355,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, early, locked, delay, sample, level, slo);
-  reg \$auto$verilog_backend.cc:2355:dump_module$50  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -8516,7 +8593,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     .stage1(level)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$63  = level;
     if (receiver_clear) begin
       \$63  = 1'h1;
@@ -8526,7 +8603,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$64  = mid_delay;
     if (odd) begin
       \$64  = \$8 [12:0];
@@ -8551,7 +8628,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$65  = mid_slot;
     (* full_case = 32'd1 *)
     if (odd) begin
@@ -8578,7 +8655,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$66  = \$10 ;
     casez (sampler_fsm_state)
       2'h0:
@@ -8600,7 +8677,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$67  = elapsed;
     casez (sampler_fsm_state)
       2'h0:
@@ -8624,7 +8701,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$68  = early;
     casez (sampler_fsm_state)
       2'h0:
@@ -8640,7 +8717,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$69  = locked;
     casez (sampler_fsm_state)
       2'h0:
@@ -8666,7 +8743,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$70  = gap;
     casez (sampler_fsm_state)
       2'h0:
@@ -8697,7 +8774,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$71  = sampler_fsm_state;
     casez (sampler_fsm_state)
       2'h0:
@@ -8728,7 +8805,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$72  = slot_left;
     casez (sampler_fsm_state)
       2'h0:
@@ -8778,7 +8855,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$73  = slot_zero;
     casez (sampler_fsm_state)
       2'h0:
@@ -8828,7 +8905,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$74  = vote1;
     casez (sampler_fsm_state)
       2'h0:
@@ -8858,7 +8935,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$75  = vote2;
     casez (sampler_fsm_state)
       2'h0:
@@ -8886,7 +8963,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$76  = first_slot;
     casez (sampler_fsm_state)
       2'h0:
@@ -8912,7 +8989,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$77  = delay;
     casez (sampler_fsm_state)
       2'h0:
@@ -8935,7 +9012,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$78  = phase;
     casez (sampler_fsm_state)
       2'h0:
@@ -8975,7 +9052,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     sample = \$44 ;
     casez (sampler_fsm_state)
       2'h0:
@@ -8993,7 +9070,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     decided = 1'h0;
     casez (sampler_fsm_state)
       2'h0:
@@ -9043,7 +9120,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.scheduler (abort, period, clk, rst, periodic, request, overrun, idle, start);
-  reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$52  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -9124,7 +9201,7 @@ module \biss_master.scheduler (abort, period, clk, rst, periodic, request, overr
   always @(posedge clk)
     period_start <= \$28 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$27  = 24'h000001;
@@ -9136,7 +9213,7 @@ module \biss_master.scheduler (abort, period, clk, rst, periodic, request, overr
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$28  = 1'h1;
@@ -9153,29 +9230,33 @@ module \biss_master.scheduler (abort, period, clk, rst, periodic, request, overr
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1367$0 , resync, lc, is_zero, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$52  = 0;
+module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1369$0 , resync, lc, is_zero, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$53  = 0;
   wire \$1 ;
-  wire \$10 ;
+  wire [6:0] \$10 ;
   wire \$11 ;
   wire \$12 ;
   wire \$13 ;
   wire \$14 ;
   wire \$15 ;
-  reg \$16 ;
-  reg \$17 ;
+  wire \$16 ;
+  wire \$17 ;
   reg \$18 ;
-  reg [5:0] \$19 ;
+  reg \$19 ;
   wire \$2 ;
-  reg [5:0] \$20 ;
+  reg \$20 ;
   reg \$21 ;
+  reg [5:0] \$22 ;
+  reg [5:0] \$23 ;
+  reg [5:0] \$24 ;
+  reg \$25 ;
   wire \$3 ;
   wire \$4 ;
   wire \$5 ;
   wire \$6 ;
-  wire [6:0] \$7 ;
-  wire [6:0] \$8 ;
-  wire \$9 ;
+  wire \$7 ;
+  wire \$8 ;
+  wire [6:0] \$9 ;
   input check;
   wire check;
   input clk;
@@ -9191,8 +9272,8 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1367$0
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$1367$0 ;
-  wire \port$1367$0 ;
+  input \port$1369$0 ;
+  wire \port$1369$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -9201,108 +9282,130 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1367$0
   wire rst;
   output skip;
   wire skip;
+  reg store = 1'h0;
+  reg [5:0] store_lc = 6'h00;
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$1367$0  };
-  assign \$2  = { lc[4:0], \port$1367$0  } == last;
-  assign \$3  = { lc[4:0], \port$1367$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$1369$0  };
+  assign \$2  = { lc[4:0], \port$1369$0  } == last;
+  assign \$3  = { lc[4:0], \port$1369$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
-  assign \$6  = lc == 6'h3f;
-  assign \$7  = lc + 1'h1;
-  assign \$8  = \$6  ? 7'h01 : \$7 ;
-  assign \$9  = ~ is_zero;
-  assign \$10  = synced & \$9 ;
-  assign \repeat  = \$10  & is_last;
+  assign \$6  = ~ resync;
+  assign \$7  = \$5  & \$6 ;
+  assign \$8  = store_lc == 6'h3f;
+  assign \$9  = store_lc + 1'h1;
+  assign \$10  = \$8  ? 7'h01 : \$9 ;
   assign \$11  = ~ is_zero;
   assign \$12  = synced & \$11 ;
-  assign \$13  = ~ is_last;
-  assign \$14  = \$12  & \$13 ;
-  assign \$15  = ~ is_expected;
-  assign skip = \$14  & \$15 ;
+  assign \repeat  = \$12  & is_last;
+  assign \$13  = ~ is_zero;
+  assign \$14  = synced & \$13 ;
+  assign \$15  = ~ is_last;
+  assign \$16  = \$14  & \$15 ;
+  assign \$17  = ~ is_expected;
+  assign skip = \$16  & \$17 ;
   always @(posedge clk)
-    is_zero <= \$16 ;
+    is_zero <= \$18 ;
   always @(posedge clk)
-    is_last <= \$17 ;
+    is_last <= \$19 ;
   always @(posedge clk)
-    is_expected <= \$18 ;
+    is_expected <= \$20 ;
   always @(posedge clk)
-    last <= \$19 ;
+    store <= \$21 ;
   always @(posedge clk)
-    expected <= \$20 ;
+    store_lc <= \$22 ;
   always @(posedge clk)
-    synced <= \$21 ;
+    last <= \$23 ;
+  always @(posedge clk)
+    expected <= \$24 ;
+  always @(posedge clk)
+    synced <= \$25 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
-    \$16  = is_zero;
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    \$18  = is_zero;
     if (load) begin
-      \$16  = \$1 ;
-    end
-    if (rst) begin
-      \$16  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
-    \$17  = is_last;
-    if (load) begin
-      \$17  = \$2 ;
-    end
-    if (rst) begin
-      \$17  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
-    \$18  = is_expected;
-    if (load) begin
-      \$18  = \$3 ;
+      \$18  = \$1 ;
     end
     if (rst) begin
       \$18  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
-    \$19  = last;
-    if (\$5 ) begin
-      \$19  = lc;
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    \$19  = is_last;
+    if (load) begin
+      \$19  = \$2 ;
     end
     if (rst) begin
-      \$19  = 6'h00;
+      \$19  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
-    \$20  = expected;
-    if (\$5 ) begin
-      \$20  = \$8 [5:0];
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    \$20  = is_expected;
+    if (load) begin
+      \$20  = \$3 ;
     end
     if (rst) begin
-      \$20  = 6'h01;
+      \$20  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
-    \$21  = synced;
-    if (\$5 ) begin
-      \$21  = 1'h1;
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    \$21  = \$7 ;
+    if (rst) begin
+      \$21  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    \$22  = lc;
+    if (rst) begin
+      \$22  = 6'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    \$23  = last;
+    if (store) begin
+      \$23  = store_lc;
+    end
+    if (rst) begin
+      \$23  = 6'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    \$24  = expected;
+    if (store) begin
+      \$24  = \$10 [5:0];
+    end
+    if (rst) begin
+      \$24  = 6'h01;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    \$25  = synced;
+    if (store) begin
+      \$25  = 1'h1;
     end
     if (resync) begin
-      \$21  = 1'h0;
+      \$25  = 1'h0;
     end
     if (rst) begin
-      \$21  = 1'h0;
+      \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$1367$0  };
+  assign lc_next = { lc[4:0], \port$1369$0  };
   assign zero = is_zero;
 endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.spw_check (rst, bits, \tolerance$8 , spw, cpw_top, match, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$53  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$54  = 0;
   wire [40:0] \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -9507,28 +9610,28 @@ module \biss_master.spw_check (rst, bits, \tolerance$8 , spw, cpw_top, match, cl
   assign \$7  = bits > 3'h5;
   assign \$8  = bits > 3'h6;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$88  = \$42 ;
     if (rst) begin
       \$88  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$89  = \$84 ;
     if (rst) begin
       \$89  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$90  = \tolerance$8 ;
     if (rst) begin
       \$90  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$91  = \$87 ;
     if (rst) begin
       \$91  = 1'h0;
@@ -9538,7 +9641,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.time_base (rst, first_rise, first_rise_time, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$54  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$55  = 0;
   wire [32:0] \$1 ;
   reg [31:0] \$2 ;
   reg [31:0] \$3 ;
@@ -9557,14 +9660,14 @@ module \biss_master.time_base (rst, first_rise, first_rise_time, clk);
   always @(posedge clk)
     first_rise_time <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$2  = \$1 [31:0];
     if (rst) begin
       \$2  = 32'd0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$3  = first_rise_time;
     if (first_rise) begin
       \$3  = now;
@@ -9577,7 +9680,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.timers (timeout_live, clk, rst, restart, ma_busy, ack_limit, timeout_limit, delay_limit, no_start_limit, clear, in_clock, slo_stuck, slo_stuck_live, break_over, ack_expired, no_start_expired, delay_over, delay, slo, break_time);
-  reg \$auto$verilog_backend.cc:2355:dump_module$55  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$56  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -9715,7 +9818,7 @@ module \biss_master.timers (timeout_live, clk, rst, restart, ma_busy, ack_limit,
   always @(posedge clk)
     delay_over <= \$43 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
     \$36  = slo_low_time_p1;
     if (\$1 ) begin
       \$36  = 25'h0000001;
@@ -9727,49 +9830,49 @@ module \biss_master.timers (timeout_live, clk, rst, restart, ma_busy, ack_limit,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
     \$37  = \$8 ;
     if (rst) begin
       \$37  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
     \$38  = \$16 ;
     if (rst) begin
       \$38  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
     \$39  = \$20 [24:0];
     if (rst) begin
       \$39  = 25'h0000001;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
     \$40  = \$26 ;
     if (rst) begin
       \$40  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
     \$41  = \$30 ;
     if (rst) begin
       \$41  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
     \$42  = \$34 ;
     if (rst) begin
       \$42  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
     \$43  = \$35 ;
     if (rst) begin
       \$43  = 1'h0;
@@ -9778,8 +9881,8 @@ module \biss_master.timers (timeout_live, clk, rst, restart, ma_busy, ack_limit,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.verdict (lc_skip_seen, \port$875$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
-  reg \$auto$verilog_backend.cc:2355:dump_module$56  = 0;
+module \biss_master.verdict (lc_skip_seen, \port$877$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
+  reg \$auto$verilog_backend.cc:2355:dump_module$57  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -9892,8 +9995,8 @@ module \biss_master.verdict (lc_skip_seen, \port$875$0 , lc_check, lc_repeat, lc
   wire lc_zero;
   input lc_zero_seen;
   wire lc_zero_seen;
-  output \port$875$0 ;
-  wire \port$875$0 ;
+  output \port$877$0 ;
+  wire \port$877$0 ;
   output report;
   wire report;
   input report_frame;
@@ -9961,7 +10064,7 @@ module \biss_master.verdict (lc_skip_seen, \port$875$0 , lc_check, lc_repeat, lc
   assign \$29  = ~ { \$2 , crc_ok[0] };
   assign crc_error = report_frame ? \$29  : 2'h0;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     (* full_case = 32'd1 *)
     if (\$13 ) begin
       frame_status = 4'h3;
@@ -9978,7 +10081,7 @@ module \biss_master.verdict (lc_skip_seen, \port$875$0 , lc_check, lc_repeat, lc
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$875$0  = \$2 ;
+  assign \port$877$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

@@ -479,6 +479,7 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     irq <= \$5 ;
   \biss_master_axil.bank  bank (
     .bus__r_addr(s_axil_araddr[12:2]),
+    .bus__r_data(s_axil_rdata),
     .bus__r_en(bus__r_en),
     .bus__r_load(bus__r_load),
     .bus__w_addr(bus__w_addr),
@@ -501,7 +502,7 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .ch0_ca_request_address(regs__ca_address),
     .ch0_ca_request_count(regs__ca_count),
     .ch0_ca_request_slave_id(regs__ca_slave_id),
-    .\ch0_ca_request_write$65 (regs__ca_write),
+    .\ch0_ca_request_write$69 (regs__ca_write),
     .ch0_cfg_ack_ack_limit(regs__cfg_ack_limit),
     .ch0_cfg_break_break_time(regs__cfg_break_time),
     .ch0_cfg_checks_end_check(regs__cfg_end_check),
@@ -541,7 +542,7 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .ch1_ca_request_address(\regs__ca_address$240 ),
     .ch1_ca_request_count(\regs__ca_count$246 ),
     .ch1_ca_request_slave_id(\regs__ca_slave_id$256 ),
-    .\ch1_ca_request_write$186 (\regs__ca_write$268 ),
+    .\ch1_ca_request_write$221 (\regs__ca_write$268 ),
     .ch1_cfg_ack_ack_limit(\regs__cfg_ack_limit$284 ),
     .ch1_cfg_break_break_time(\regs__cfg_break_time$286 ),
     .ch1_cfg_checks_end_check(\regs__cfg_end_check$290 ),
@@ -568,13 +569,12 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .ch1_irq(\$7 ),
     .clk(clk),
     .g_trigger_start(glob__trigger),
-    .\port$4258$0 (\$8 ),
-    .\port$4265$0 (\$9 ),
-    .\port$4379$0 (\$10 ),
-    .\port$4726$0 (\$11 ),
-    .\port$4733$0 (\$12 ),
-    .\port$4847$0 (\$13 ),
-    .read_data(s_axil_rdata),
+    .\port$4137$0 (\$8 ),
+    .\port$4150$0 (\$9 ),
+    .\port$4264$0 (\$10 ),
+    .\port$4615$0 (\$11 ),
+    .\port$4628$0 (\$12 ),
+    .\port$4742$0 (\$13 ),
     .rst(rst),
     .write_data(regs__ca_wbuf_data)
   );
@@ -638,9 +638,9 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .clk(clk),
     .ma(ch0_ma),
     .periodic(regs__periodic),
-    .\port$4258$0 (\$8 ),
-    .\port$4265$0 (\$9 ),
-    .\port$4379$0 (\$10 ),
+    .\port$4137$0 (\$8 ),
+    .\port$4150$0 (\$9 ),
+    .\port$4264$0 (\$10 ),
     .regs__busy(ch0__busy),
     .regs__ca_busy(ch0__ca_busy),
     .regs__ca_done(ch0__ca_done),
@@ -690,9 +690,9 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .clk(clk),
     .ma(ch1_ma),
     .periodic(\regs__periodic$376 ),
-    .\port$4726$0 (\$11 ),
-    .\port$4733$0 (\$12 ),
-    .\port$4847$0 (\$13 ),
+    .\port$4615$0 (\$11 ),
+    .\port$4628$0 (\$12 ),
+    .\port$4742$0 (\$13 ),
     .regs__busy(ch1__busy),
     .regs__ca_busy(ch1__ca_busy),
     .regs__ca_done(ch1__ca_done),
@@ -1022,93 +1022,93 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, ch1__ca_wbuf_en, ch1__ca_rbuf_en, ch1_irq, ch0__frame_error, ch0__busy, ch0__config_error, ch0__ca_busy, ch0__ca_rbuf_data, ch1__frame_error, ch1__busy, ch1__config_error, ch1__ca_busy, ch1__ca_rbuf_data
-, bus__w_addr, bus__w_data, bus__w_strb, ch0__ca_wbuf_addr, write_data, g_trigger_start, ch0_ctrl_start, ch0_ctrl_abort, ch0_ctrl_clear_counters, ch0_ctrl_periodic, ch0_ctrl_trigger_enable, ch0_cfg_ma_ma_half_period, ch0_cfg_ma_delay_limit, ch0_cfg_period_request_period, ch0_cfg_break_break_time, ch0_cfg_ack_ack_limit, ch0_cfg_timeout_timeout_limit, ch0_cfg_words_w0_data_bits, ch0_cfg_words_w0_nenw, ch0_cfg_words_w0_lc, ch0_cfg_words_w0_crc
-, ch0_cfg_words_w1_data_bits, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_enable, ch0_cfg_checks_end_check, ch0_cfg_checks_spw_check, ch0_cfg_checks_spw_tolerance, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$65 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort, ch1_ctrl_start, ch1_ctrl_abort, ch1_ctrl_clear_counters, ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit
-, ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_enable, ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$186 , ch1_ca_ctrl_start
-, ch1_ca_ctrl_abort, read_data, ch0__done_count, ch0__done, \port$4258$0 , \port$4265$0 , ch0__ca_done, \port$4379$0 , ch1__done_count, ch1__done, \port$4726$0 , \port$4733$0 , ch1__ca_done, \port$4847$0 , bus__r_addr);
+module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, ch1__ca_wbuf_en, ch1__ca_rbuf_en, ch1_irq, bus__r_data, ch0__frame_error, ch0__busy, ch0__config_error, ch0__ca_busy, ch0__ca_rbuf_data, ch1__frame_error, ch1__busy, ch1__config_error, ch1__ca_busy
+, ch1__ca_rbuf_data, bus__w_addr, bus__w_data, bus__w_strb, ch0__ca_wbuf_addr, write_data, g_trigger_start, ch0_ctrl_start, ch0_ctrl_abort, ch0_ctrl_clear_counters, ch0_ctrl_periodic, ch0_ctrl_trigger_enable, ch0_cfg_ma_ma_half_period, ch0_cfg_ma_delay_limit, ch0_cfg_period_request_period, ch0_cfg_break_break_time, ch0_cfg_ack_ack_limit, ch0_cfg_timeout_timeout_limit, ch0_cfg_words_w0_data_bits, ch0_cfg_words_w0_nenw, ch0_cfg_words_w0_lc
+, ch0_cfg_words_w0_crc, ch0_cfg_words_w1_data_bits, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_enable, ch0_cfg_checks_end_check, ch0_cfg_checks_spw_check, ch0_cfg_checks_spw_tolerance, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$69 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort, ch1_ctrl_start, ch1_ctrl_abort, ch1_ctrl_clear_counters, ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period
+, ch1_cfg_ma_delay_limit, ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_enable, ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$221 
+, ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__done_count, ch0__done, \port$4137$0 , \port$4150$0 , ch0__ca_done, \port$4264$0 , ch1__done_count, ch1__done, \port$4615$0 , \port$4628$0 , ch1__ca_done, \port$4742$0 , bus__r_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$26  = 0;
   wire \$1 ;
-  wire \$10 ;
+  wire [31:0] \$10 ;
   wire \$100 ;
   wire \$101 ;
   wire \$102 ;
   wire \$103 ;
   wire \$104 ;
   wire \$105 ;
-  wire \$106 ;
-  wire \$107 ;
-  wire \$108 ;
-  wire \$109 ;
-  wire \$11 ;
-  wire \$110 ;
-  wire \$111 ;
-  wire \$112 ;
-  wire \$113 ;
-  wire \$114 ;
-  wire \$115 ;
-  wire \$116 ;
-  wire \$117 ;
-  wire \$118 ;
-  wire \$119 ;
-  wire \$12 ;
-  wire \$120 ;
-  wire \$121 ;
-  wire \$122 ;
-  wire \$123 ;
-  wire \$124 ;
-  wire \$125 ;
-  wire \$126 ;
-  wire \$127 ;
-  wire \$128 ;
-  wire \$129 ;
-  wire \$13 ;
-  wire \$130 ;
-  wire \$131 ;
-  wire \$132 ;
-  wire \$133 ;
-  wire \$134 ;
-  wire \$135 ;
-  wire \$136 ;
-  wire \$137 ;
-  wire \$138 ;
-  wire \$139 ;
-  wire \$14 ;
-  wire \$140 ;
-  wire \$141 ;
-  wire \$142 ;
-  wire \$143 ;
-  wire \$144 ;
-  wire \$145 ;
-  wire \$146 ;
-  wire \$147 ;
-  wire \$148 ;
-  wire \$149 ;
-  wire \$15 ;
-  wire \$150 ;
-  wire \$151 ;
-  wire \$152 ;
-  wire \$153 ;
-  wire \$154 ;
-  wire \$155 ;
-  wire \$156 ;
-  wire \$157 ;
-  wire \$158 ;
-  wire \$159 ;
-  wire \$16 ;
-  wire \$160 ;
-  wire \$161 ;
-  wire \$162 ;
-  wire \$163 ;
-  wire \$164 ;
-  wire \$165 ;
-  wire \$166 ;
-  wire \$167 ;
-  wire \$168 ;
-  wire \$169 ;
-  wire \$17 ;
-  wire \$170 ;
-  wire \$171 ;
+  wire [31:0] \$106 ;
+  wire [31:0] \$107 ;
+  wire [31:0] \$108 ;
+  wire [31:0] \$109 ;
+  wire [31:0] \$11 ;
+  wire [31:0] \$110 ;
+  wire [31:0] \$111 ;
+  wire [31:0] \$112 ;
+  wire [31:0] \$113 ;
+  wire [31:0] \$114 ;
+  wire [31:0] \$115 ;
+  wire [31:0] \$116 ;
+  wire [31:0] \$117 ;
+  wire [31:0] \$118 ;
+  wire [31:0] \$119 ;
+  wire [31:0] \$12 ;
+  wire [31:0] \$120 ;
+  wire [31:0] \$121 ;
+  wire [31:0] \$122 ;
+  wire [31:0] \$123 ;
+  wire [31:0] \$124 ;
+  wire [31:0] \$125 ;
+  wire [31:0] \$126 ;
+  wire [31:0] \$127 ;
+  wire [31:0] \$128 ;
+  wire [31:0] \$129 ;
+  wire [31:0] \$13 ;
+  wire [31:0] \$130 ;
+  wire [31:0] \$131 ;
+  wire [31:0] \$132 ;
+  wire [31:0] \$133 ;
+  wire [31:0] \$134 ;
+  wire [31:0] \$135 ;
+  wire [31:0] \$136 ;
+  wire [31:0] \$137 ;
+  wire [31:0] \$138 ;
+  wire [31:0] \$139 ;
+  wire [31:0] \$14 ;
+  wire [31:0] \$140 ;
+  wire [31:0] \$141 ;
+  wire [31:0] \$142 ;
+  wire [31:0] \$143 ;
+  wire [31:0] \$144 ;
+  wire [31:0] \$145 ;
+  wire [31:0] \$146 ;
+  wire [31:0] \$147 ;
+  wire [31:0] \$148 ;
+  wire [31:0] \$149 ;
+  wire [31:0] \$15 ;
+  wire [31:0] \$150 ;
+  wire [31:0] \$151 ;
+  wire [31:0] \$152 ;
+  wire [31:0] \$153 ;
+  wire [31:0] \$154 ;
+  wire [31:0] \$155 ;
+  wire [31:0] \$156 ;
+  wire [31:0] \$157 ;
+  wire [31:0] \$158 ;
+  wire [31:0] \$159 ;
+  wire [31:0] \$16 ;
+  wire [31:0] \$160 ;
+  wire [31:0] \$161 ;
+  wire [31:0] \$162 ;
+  wire [31:0] \$163 ;
+  wire [31:0] \$164 ;
+  wire [31:0] \$165 ;
+  wire [31:0] \$166 ;
+  wire [31:0] \$167 ;
+  wire [31:0] \$168 ;
+  wire [31:0] \$169 ;
+  wire [31:0] \$17 ;
+  wire [31:0] \$170 ;
+  wire [31:0] \$171 ;
   wire \$172 ;
   wire \$173 ;
   wire \$174 ;
@@ -1120,92 +1120,92 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire \$18 ;
   wire \$180 ;
   wire \$181 ;
-  wire [31:0] \$182 ;
-  wire [31:0] \$183 ;
-  wire [31:0] \$184 ;
-  wire [31:0] \$185 ;
-  wire [31:0] \$186 ;
-  wire [31:0] \$187 ;
-  wire [31:0] \$188 ;
-  wire [31:0] \$189 ;
+  wire \$182 ;
+  wire \$183 ;
+  wire \$184 ;
+  wire \$185 ;
+  wire \$186 ;
+  wire \$187 ;
+  wire \$188 ;
+  wire \$189 ;
   wire \$19 ;
-  wire [31:0] \$190 ;
-  wire [31:0] \$191 ;
-  wire [31:0] \$192 ;
-  wire [31:0] \$193 ;
-  wire [31:0] \$194 ;
-  wire [31:0] \$195 ;
-  wire [31:0] \$196 ;
-  wire [31:0] \$197 ;
-  wire [31:0] \$198 ;
-  wire [31:0] \$199 ;
+  wire \$190 ;
+  wire \$191 ;
+  wire \$192 ;
+  wire \$193 ;
+  wire \$194 ;
+  wire \$195 ;
+  wire \$196 ;
+  wire \$197 ;
+  wire \$198 ;
+  wire \$199 ;
   wire \$2 ;
   wire \$20 ;
-  wire [31:0] \$200 ;
-  wire [31:0] \$201 ;
-  wire [31:0] \$202 ;
-  wire [31:0] \$203 ;
-  wire [31:0] \$204 ;
-  wire [31:0] \$205 ;
-  wire [31:0] \$206 ;
-  wire [31:0] \$207 ;
-  wire [31:0] \$208 ;
-  wire [31:0] \$209 ;
+  wire \$200 ;
+  wire \$201 ;
+  wire \$202 ;
+  wire \$203 ;
+  wire \$204 ;
+  wire \$205 ;
+  wire \$206 ;
+  wire \$207 ;
+  wire \$208 ;
+  wire \$209 ;
   wire \$21 ;
-  wire [31:0] \$210 ;
-  wire [31:0] \$211 ;
-  wire [31:0] \$212 ;
-  wire [31:0] \$213 ;
-  wire [31:0] \$214 ;
-  wire [31:0] \$215 ;
-  wire [31:0] \$216 ;
-  wire [31:0] \$217 ;
-  wire [31:0] \$218 ;
-  wire [31:0] \$219 ;
+  wire \$210 ;
+  wire \$211 ;
+  wire \$212 ;
+  wire \$213 ;
+  wire \$214 ;
+  wire \$215 ;
+  wire \$216 ;
+  wire \$217 ;
+  wire \$218 ;
+  wire \$219 ;
   wire \$22 ;
-  wire [31:0] \$220 ;
-  wire [31:0] \$221 ;
-  wire [31:0] \$222 ;
-  wire [31:0] \$223 ;
-  wire [31:0] \$224 ;
-  wire [31:0] \$225 ;
-  wire [31:0] \$226 ;
-  wire [31:0] \$227 ;
-  wire [31:0] \$228 ;
-  wire [31:0] \$229 ;
+  wire \$220 ;
+  wire \$221 ;
+  wire \$222 ;
+  wire \$223 ;
+  wire \$224 ;
+  wire \$225 ;
+  wire \$226 ;
+  wire \$227 ;
+  wire \$228 ;
+  wire \$229 ;
   wire \$23 ;
-  wire [31:0] \$230 ;
-  wire [31:0] \$231 ;
-  wire [31:0] \$232 ;
-  wire [31:0] \$233 ;
-  wire [31:0] \$234 ;
-  wire [31:0] \$235 ;
-  wire [31:0] \$236 ;
-  wire [31:0] \$237 ;
-  wire [31:0] \$238 ;
-  wire [31:0] \$239 ;
+  wire \$230 ;
+  wire \$231 ;
+  wire \$232 ;
+  wire \$233 ;
+  wire \$234 ;
+  wire \$235 ;
+  wire \$236 ;
+  wire \$237 ;
+  wire \$238 ;
+  wire \$239 ;
   wire \$24 ;
-  wire [31:0] \$240 ;
-  wire [31:0] \$241 ;
-  wire [31:0] \$242 ;
-  wire [31:0] \$243 ;
-  wire [31:0] \$244 ;
-  wire [31:0] \$245 ;
-  wire [31:0] \$246 ;
-  wire [31:0] \$247 ;
-  wire [31:0] \$248 ;
-  wire [31:0] \$249 ;
+  wire \$240 ;
+  wire \$241 ;
+  wire \$242 ;
+  wire \$243 ;
+  wire \$244 ;
+  wire \$245 ;
+  wire \$246 ;
+  wire \$247 ;
+  wire \$248 ;
+  wire \$249 ;
   wire \$25 ;
-  wire [31:0] \$250 ;
-  wire [31:0] \$251 ;
-  wire [31:0] \$252 ;
-  wire [31:0] \$253 ;
-  wire [31:0] \$254 ;
-  wire [31:0] \$255 ;
-  wire [31:0] \$256 ;
-  wire [31:0] \$257 ;
-  wire [31:0] \$258 ;
-  wire [31:0] \$259 ;
+  wire \$250 ;
+  wire \$251 ;
+  wire \$252 ;
+  wire \$253 ;
+  wire \$254 ;
+  wire \$255 ;
+  wire \$256 ;
+  wire \$257 ;
+  wire \$258 ;
+  wire \$259 ;
   wire \$26 ;
   wire [31:0] \$260 ;
   wire [31:0] \$261 ;
@@ -1278,8 +1278,8 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire [31:0] \$321 ;
   wire [31:0] \$322 ;
   wire [31:0] \$323 ;
-  wire \$324 ;
-  wire \$325 ;
+  wire [31:0] \$324 ;
+  wire [31:0] \$325 ;
   wire \$326 ;
   wire \$327 ;
   wire \$328 ;
@@ -1377,84 +1377,84 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire \$410 ;
   wire \$411 ;
   wire \$412 ;
-  wire \$413 ;
-  wire \$414 ;
-  wire \$415 ;
-  wire \$416 ;
-  wire \$417 ;
-  wire \$418 ;
-  wire \$419 ;
+  wire [31:0] \$413 ;
+  wire [31:0] \$414 ;
+  reg \$415 ;
+  reg [10:0] \$416 ;
+  reg [31:0] \$417 ;
+  reg [3:0] \$418 ;
+  reg \$419 ;
   wire \$42 ;
-  wire \$420 ;
-  wire \$421 ;
-  wire \$422 ;
-  wire \$423 ;
-  wire \$424 ;
-  wire \$425 ;
-  wire \$426 ;
-  wire \$427 ;
-  wire \$428 ;
-  wire \$429 ;
+  reg \$420 ;
+  reg \$421 ;
+  reg \$422 ;
+  reg \$423 ;
+  reg \$424 ;
+  reg [31:0] \$425 ;
+  reg \$426 ;
+  reg \$427 ;
+  reg \$428 ;
+  reg \$429 ;
   wire \$43 ;
-  wire \$430 ;
-  wire \$431 ;
-  wire \$432 ;
-  wire \$433 ;
-  wire \$434 ;
-  wire \$435 ;
-  wire \$436 ;
-  wire \$437 ;
-  wire \$438 ;
-  wire \$439 ;
+  reg \$430 ;
+  reg \$431 ;
+  reg \$432 ;
+  reg \$433 ;
+  reg \$434 ;
+  reg \$435 ;
+  reg \$436 ;
+  reg [15:0] \$437 ;
+  reg [11:0] \$438 ;
+  reg [23:0] \$439 ;
   wire \$44 ;
-  wire \$440 ;
-  wire \$441 ;
-  wire \$442 ;
-  wire \$443 ;
-  wire \$444 ;
-  wire \$445 ;
-  wire \$446 ;
-  wire \$447 ;
-  wire \$448 ;
-  wire \$449 ;
+  reg [23:0] \$440 ;
+  reg [23:0] \$441 ;
+  reg [23:0] \$442 ;
+  reg [5:0] \$443 ;
+  reg \$444 ;
+  reg \$445 ;
+  reg [1:0] \$446 ;
+  reg [5:0] \$447 ;
+  reg \$448 ;
+  reg \$449 ;
   wire \$45 ;
-  wire \$450 ;
-  wire \$451 ;
-  wire \$452 ;
-  wire \$453 ;
-  wire \$454 ;
-  wire \$455 ;
-  wire \$456 ;
-  wire \$457 ;
-  wire \$458 ;
-  wire \$459 ;
+  reg [1:0] \$450 ;
+  reg \$451 ;
+  reg \$452 ;
+  reg \$453 ;
+  reg [7:0] \$454 ;
+  reg [2:0] \$455 ;
+  reg [6:0] \$456 ;
+  reg [6:0] \$457 ;
+  reg \$458 ;
+  reg \$459 ;
   wire \$46 ;
-  wire \$460 ;
-  wire \$461 ;
-  wire \$462 ;
-  wire \$463 ;
-  wire \$464 ;
-  wire \$465 ;
-  wire \$466 ;
-  wire \$467 ;
-  wire \$468 ;
-  wire \$469 ;
+  reg \$460 ;
+  reg \$461 ;
+  reg \$462 ;
+  reg \$463 ;
+  reg \$464 ;
+  reg \$465 ;
+  reg \$466 ;
+  reg \$467 ;
+  reg \$468 ;
+  reg \$469 ;
   wire \$47 ;
-  wire \$470 ;
-  wire \$471 ;
-  wire \$472 ;
-  wire \$473 ;
-  wire \$474 ;
-  wire \$475 ;
-  wire \$476 ;
-  wire \$477 ;
-  wire \$478 ;
-  wire \$479 ;
+  reg \$470 ;
+  reg \$471 ;
+  reg \$472 ;
+  reg \$473 ;
+  reg \$474 ;
+  reg \$475 ;
+  reg \$476 ;
+  reg \$477 ;
+  reg \$478 ;
+  reg \$479 ;
   wire \$48 ;
   reg \$480 ;
-  reg [10:0] \$481 ;
-  reg [31:0] \$482 ;
-  reg [3:0] \$483 ;
+  reg \$481 ;
+  reg \$482 ;
+  reg \$483 ;
   reg \$484 ;
   reg \$485 ;
   reg \$486 ;
@@ -1465,7 +1465,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg \$490 ;
   reg \$491 ;
   reg \$492 ;
-  reg \$493 ;
+  reg [3:0] \$493 ;
   reg \$494 ;
   reg \$495 ;
   reg \$496 ;
@@ -1475,56 +1475,56 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire \$5 ;
   wire \$50 ;
   reg \$500 ;
-  reg [15:0] \$501 ;
-  reg [11:0] \$502 ;
-  reg [23:0] \$503 ;
-  reg [23:0] \$504 ;
-  reg [23:0] \$505 ;
-  reg [23:0] \$506 ;
-  reg [5:0] \$507 ;
-  reg \$508 ;
-  reg \$509 ;
+  reg \$501 ;
+  reg \$502 ;
+  reg \$503 ;
+  reg \$504 ;
+  reg [5:0] \$505 ;
+  reg [15:0] \$506 ;
+  reg [12:0] \$507 ;
+  reg [31:0] \$508 ;
+  reg [22:0] \$509 ;
   wire \$51 ;
-  reg [1:0] \$510 ;
-  reg [5:0] \$511 ;
-  reg \$512 ;
+  reg [31:0] \$510 ;
+  reg [7:0] \$511 ;
+  reg [31:0] \$512 ;
   reg \$513 ;
-  reg [1:0] \$514 ;
+  reg [31:0] \$514 ;
   reg \$515 ;
   reg \$516 ;
   reg \$517 ;
-  reg [7:0] \$518 ;
-  reg [2:0] \$519 ;
+  reg \$518 ;
+  reg \$519 ;
   wire \$52 ;
-  reg [6:0] \$520 ;
-  reg [6:0] \$521 ;
+  reg \$520 ;
+  reg \$521 ;
   reg \$522 ;
   reg \$523 ;
   reg \$524 ;
-  reg [3:0] \$525 ;
-  reg \$526 ;
-  reg \$527 ;
-  reg \$528 ;
-  reg \$529 ;
+  reg \$525 ;
+  reg [15:0] \$526 ;
+  reg [11:0] \$527 ;
+  reg [23:0] \$528 ;
+  reg [23:0] \$529 ;
   wire \$53 ;
-  reg \$530 ;
-  reg \$531 ;
-  reg \$532 ;
+  reg [23:0] \$530 ;
+  reg [23:0] \$531 ;
+  reg [5:0] \$532 ;
   reg \$533 ;
   reg \$534 ;
-  reg \$535 ;
-  reg \$536 ;
-  reg [5:0] \$537 ;
-  reg [15:0] \$538 ;
-  reg [12:0] \$539 ;
+  reg [1:0] \$535 ;
+  reg [5:0] \$536 ;
+  reg \$537 ;
+  reg \$538 ;
+  reg [1:0] \$539 ;
   wire \$54 ;
-  reg [31:0] \$540 ;
-  reg [22:0] \$541 ;
-  reg [31:0] \$542 ;
+  reg \$540 ;
+  reg \$541 ;
+  reg \$542 ;
   reg [7:0] \$543 ;
-  reg [31:0] \$544 ;
-  reg \$545 ;
-  reg \$546 ;
+  reg [2:0] \$544 ;
+  reg [6:0] \$545 ;
+  reg [6:0] \$546 ;
   reg \$547 ;
   reg \$548 ;
   reg \$549 ;
@@ -1564,100 +1564,37 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire \$58 ;
   reg \$580 ;
   reg \$581 ;
-  reg \$582 ;
+  reg [3:0] \$582 ;
   reg \$583 ;
   reg \$584 ;
   reg \$585 ;
   reg \$586 ;
   reg \$587 ;
-  reg [15:0] \$588 ;
-  reg [11:0] \$589 ;
+  reg \$588 ;
+  reg \$589 ;
   wire \$59 ;
-  reg [23:0] \$590 ;
-  reg [23:0] \$591 ;
-  reg [23:0] \$592 ;
-  reg [23:0] \$593 ;
+  reg \$590 ;
+  reg \$591 ;
+  reg \$592 ;
+  reg \$593 ;
   reg [5:0] \$594 ;
-  reg \$595 ;
-  reg \$596 ;
-  reg [1:0] \$597 ;
-  reg [5:0] \$598 ;
-  reg \$599 ;
+  reg [15:0] \$595 ;
+  reg [12:0] \$596 ;
+  reg [31:0] \$597 ;
+  reg [22:0] \$598 ;
+  reg [31:0] \$599 ;
   wire \$6 ;
   wire \$60 ;
-  reg \$600 ;
-  reg [1:0] \$601 ;
+  reg [7:0] \$600 ;
+  reg [31:0] \$601 ;
   reg \$602 ;
-  reg \$603 ;
-  reg \$604 ;
-  reg [7:0] \$605 ;
-  reg [2:0] \$606 ;
-  reg [6:0] \$607 ;
-  reg [6:0] \$608 ;
-  reg \$609 ;
+  reg [31:0] \$603 ;
   wire \$61 ;
-  reg \$610 ;
-  reg \$611 ;
-  reg [3:0] \$612 ;
-  reg \$613 ;
-  reg \$614 ;
-  reg \$615 ;
-  reg \$616 ;
-  reg \$617 ;
-  reg \$618 ;
-  reg \$619 ;
   wire \$62 ;
-  reg \$620 ;
-  reg \$621 ;
-  reg \$622 ;
-  reg \$623 ;
-  reg [5:0] \$624 ;
-  reg [15:0] \$625 ;
-  reg [12:0] \$626 ;
-  reg [31:0] \$627 ;
-  reg [22:0] \$628 ;
-  reg [31:0] \$629 ;
   wire \$63 ;
-  reg [7:0] \$630 ;
-  reg [31:0] \$631 ;
-  reg \$632 ;
-  reg \$633 ;
-  reg \$634 ;
-  reg \$635 ;
-  reg \$636 ;
-  reg \$637 ;
-  reg \$638 ;
-  reg \$639 ;
   wire \$64 ;
-  reg \$640 ;
-  reg \$641 ;
-  reg \$642 ;
-  reg \$643 ;
-  reg \$644 ;
-  reg \$645 ;
-  reg \$646 ;
-  reg \$647 ;
-  reg \$648 ;
-  reg \$649 ;
   wire \$65 ;
-  reg \$650 ;
-  reg \$651 ;
-  reg \$652 ;
-  reg \$653 ;
-  reg \$654 ;
-  reg \$655 ;
-  reg \$656 ;
-  reg \$657 ;
-  reg \$658 ;
-  reg \$659 ;
   wire \$66 ;
-  reg \$660 ;
-  reg \$661 ;
-  reg \$662 ;
-  reg \$663 ;
-  reg \$664 ;
-  reg \$665 ;
-  reg [31:0] \$666 ;
   wire \$67 ;
   wire \$68 ;
   wire \$69 ;
@@ -1672,7 +1609,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire \$77 ;
   wire \$78 ;
   wire \$79 ;
-  wire \$8 ;
+  wire [31:0] \$8 ;
   wire \$80 ;
   wire \$81 ;
   wire \$82 ;
@@ -1683,7 +1620,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire \$87 ;
   wire \$88 ;
   wire \$89 ;
-  wire \$9 ;
+  wire [31:0] \$9 ;
   wire \$90 ;
   wire \$91 ;
   wire \$92 ;
@@ -1696,7 +1633,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire \$99 ;
   input [10:0] bus__r_addr;
   wire [10:0] bus__r_addr;
-  (* init = 32'd0 *)
+  output [31:0] bus__r_data;
   wire [31:0] bus__r_data;
   input bus__r_en;
   wire bus__r_en;
@@ -1836,15 +1773,11 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire ch0__word1_ne;
   wire ch0__word1_nw;
   wire [39:0] ch0__word1_position;
-  wire ch0_ca_count_crc4_answer_read;
   wire ch0_ca_count_crc4_answer_write;
-  wire ch0_ca_count_data_fault_read;
   wire ch0_ca_count_data_fault_write;
-  wire ch0_ca_count_refused_aborted_read;
   wire ch0_ca_count_refused_aborted_write;
   output ch0_ca_ctrl_abort;
   reg ch0_ca_ctrl_abort = 1'h0;
-  wire ch0_ca_ctrl_read;
   output ch0_ca_ctrl_start;
   reg ch0_ca_ctrl_start = 1'h0;
   wire ch0_ca_ctrl_write;
@@ -1852,27 +1785,21 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg [6:0] ch0_ca_request_address = 7'h00;
   output [6:0] ch0_ca_request_count;
   reg [6:0] ch0_ca_request_count = 7'h00;
-  wire ch0_ca_request_read;
   output [2:0] ch0_ca_request_slave_id;
   reg [2:0] ch0_ca_request_slave_id = 3'h0;
   wire ch0_ca_request_write;
-  output \ch0_ca_request_write$65 ;
-  reg \ch0_ca_request_write$65  = 1'h0;
-  wire ch0_ca_state_read;
+  output \ch0_ca_request_write$69 ;
+  reg \ch0_ca_request_write$69  = 1'h0;
   wire ch0_ca_state_write;
-  wire ch0_caps_read;
   wire ch0_caps_write;
   output [23:0] ch0_cfg_ack_ack_limit;
   reg [23:0] ch0_cfg_ack_ack_limit = 24'h000000;
-  wire ch0_cfg_ack_read;
   wire ch0_cfg_ack_write;
   output [23:0] ch0_cfg_break_break_time;
   reg [23:0] ch0_cfg_break_break_time = 24'h000000;
-  wire ch0_cfg_break_read;
   wire ch0_cfg_break_write;
   output ch0_cfg_checks_end_check;
   reg ch0_cfg_checks_end_check = 1'h0;
-  wire ch0_cfg_checks_read;
   output ch0_cfg_checks_spw_check;
   reg ch0_cfg_checks_spw_check = 1'h0;
   output [7:0] ch0_cfg_checks_spw_tolerance;
@@ -1882,17 +1809,13 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg [11:0] ch0_cfg_ma_delay_limit = 12'h000;
   output [15:0] ch0_cfg_ma_ma_half_period;
   reg [15:0] ch0_cfg_ma_ma_half_period = 16'h0000;
-  wire ch0_cfg_ma_read;
   wire ch0_cfg_ma_write;
-  wire ch0_cfg_period_read;
   output [23:0] ch0_cfg_period_request_period;
   reg [23:0] ch0_cfg_period_request_period = 24'h000000;
   wire ch0_cfg_period_write;
-  wire ch0_cfg_timeout_read;
   output [23:0] ch0_cfg_timeout_timeout_limit;
   reg [23:0] ch0_cfg_timeout_timeout_limit = 24'h000000;
   wire ch0_cfg_timeout_write;
-  wire ch0_cfg_words_read;
   output [1:0] ch0_cfg_words_w0_crc;
   reg [1:0] ch0_cfg_words_w0_crc = 2'h0;
   output [5:0] ch0_cfg_words_w0_data_bits;
@@ -1912,19 +1835,12 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   output ch0_cfg_words_w1_nenw;
   reg ch0_cfg_words_w1_nenw = 1'h0;
   wire ch0_cfg_words_write;
-  wire ch0_count_ack_read;
   wire ch0_count_ack_write;
-  wire ch0_count_check_read;
   wire ch0_count_check_write;
-  wire ch0_count_crc_read;
   wire ch0_count_crc_write;
-  wire ch0_count_cycle_read;
   wire ch0_count_cycle_write;
-  wire ch0_count_lc_read;
   wire ch0_count_lc_write;
-  wire ch0_count_line_read;
   wire ch0_count_line_write;
-  wire ch0_count_stop_read;
   wire ch0_count_stop_write;
   output ch0_ctrl_abort;
   reg ch0_ctrl_abort = 1'h0;
@@ -1932,7 +1848,6 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg ch0_ctrl_clear_counters = 1'h0;
   output ch0_ctrl_periodic;
   reg ch0_ctrl_periodic = 1'h0;
-  wire ch0_ctrl_read;
   output ch0_ctrl_start;
   reg ch0_ctrl_start = 1'h0;
   output ch0_ctrl_trigger_enable;
@@ -1943,13 +1858,12 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg ch0_irq_enable_access_done = 1'h0;
   reg ch0_irq_enable_done = 1'h0;
   reg ch0_irq_enable_error = 1'h0;
-  wire ch0_irq_enable_read;
   wire ch0_irq_enable_write;
   reg ch0_irq_status_access_done = 1'h0;
   reg ch0_irq_status_done = 1'h0;
   reg ch0_irq_status_error = 1'h0;
-  wire ch0_irq_status_read;
   wire ch0_irq_status_write;
+  reg [31:0] ch0_read_data = 32'd0;
   reg ch0_read_select_80 = 1'h0;
   reg ch0_read_select_81 = 1'h0;
   reg ch0_read_select_82 = 1'h0;
@@ -1983,7 +1897,6 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg ch0_read_select_c4 = 1'h0;
   reg ch0_read_select_c5 = 1'h0;
   reg [12:0] ch0_result_seq_line_delay_snapshot = 13'h0000;
-  wire ch0_result_seq_read;
   reg [15:0] ch0_result_seq_seq_snapshot = 16'h0000;
   wire ch0_result_seq_write;
   reg ch0_result_status_cds_snapshot = 1'h0;
@@ -1991,7 +1904,6 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg ch0_result_status_lc_skip_snapshot = 1'h0;
   reg [5:0] ch0_result_status_lc_snapshot = 6'h00;
   reg ch0_result_status_lc_zero_snapshot = 1'h0;
-  wire ch0_result_status_read;
   reg ch0_result_status_spw_mismatch_snapshot = 1'h0;
   reg [3:0] ch0_result_status_status_snapshot = 4'h0;
   reg ch0_result_status_w0_crc_ok_snapshot = 1'h0;
@@ -2001,23 +1913,18 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg ch0_result_status_w1_ne_snapshot = 1'h0;
   reg ch0_result_status_w1_nw_snapshot = 1'h0;
   wire ch0_result_status_write;
-  wire ch0_result_timestamp_read;
   reg [31:0] ch0_result_timestamp_time_snapshot = 32'd0;
   wire ch0_result_timestamp_write;
   reg [22:0] ch0_result_w0_hi_data_snapshot = 23'h000000;
-  wire ch0_result_w0_hi_read;
   wire ch0_result_w0_hi_write;
   reg [31:0] ch0_result_w0_lo_data_snapshot = 32'd0;
-  wire ch0_result_w0_lo_read;
   wire ch0_result_w0_lo_write;
   reg [7:0] ch0_result_w1_hi_data_snapshot = 8'h00;
-  wire ch0_result_w1_hi_read;
   wire ch0_result_w1_hi_write;
   reg [31:0] ch0_result_w1_lo_data_snapshot = 32'd0;
-  wire ch0_result_w1_lo_read;
   wire ch0_result_w1_lo_write;
-  wire ch0_state_read;
   wire ch0_state_write;
+  reg ch0_window0_read = 1'h0;
   (* init = 1'h0 *)
   wire ch1__abort_cycle;
   input ch1__busy;
@@ -2143,15 +2050,11 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire ch1__word1_ne;
   wire ch1__word1_nw;
   wire [39:0] ch1__word1_position;
-  wire ch1_ca_count_crc4_answer_read;
   wire ch1_ca_count_crc4_answer_write;
-  wire ch1_ca_count_data_fault_read;
   wire ch1_ca_count_data_fault_write;
-  wire ch1_ca_count_refused_aborted_read;
   wire ch1_ca_count_refused_aborted_write;
   output ch1_ca_ctrl_abort;
   reg ch1_ca_ctrl_abort = 1'h0;
-  wire ch1_ca_ctrl_read;
   output ch1_ca_ctrl_start;
   reg ch1_ca_ctrl_start = 1'h0;
   wire ch1_ca_ctrl_write;
@@ -2159,27 +2062,21 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg [6:0] ch1_ca_request_address = 7'h00;
   output [6:0] ch1_ca_request_count;
   reg [6:0] ch1_ca_request_count = 7'h00;
-  wire ch1_ca_request_read;
   output [2:0] ch1_ca_request_slave_id;
   reg [2:0] ch1_ca_request_slave_id = 3'h0;
   wire ch1_ca_request_write;
-  output \ch1_ca_request_write$186 ;
-  reg \ch1_ca_request_write$186  = 1'h0;
-  wire ch1_ca_state_read;
+  output \ch1_ca_request_write$221 ;
+  reg \ch1_ca_request_write$221  = 1'h0;
   wire ch1_ca_state_write;
-  wire ch1_caps_read;
   wire ch1_caps_write;
   output [23:0] ch1_cfg_ack_ack_limit;
   reg [23:0] ch1_cfg_ack_ack_limit = 24'h000000;
-  wire ch1_cfg_ack_read;
   wire ch1_cfg_ack_write;
   output [23:0] ch1_cfg_break_break_time;
   reg [23:0] ch1_cfg_break_break_time = 24'h000000;
-  wire ch1_cfg_break_read;
   wire ch1_cfg_break_write;
   output ch1_cfg_checks_end_check;
   reg ch1_cfg_checks_end_check = 1'h0;
-  wire ch1_cfg_checks_read;
   output ch1_cfg_checks_spw_check;
   reg ch1_cfg_checks_spw_check = 1'h0;
   output [7:0] ch1_cfg_checks_spw_tolerance;
@@ -2189,17 +2086,13 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg [11:0] ch1_cfg_ma_delay_limit = 12'h000;
   output [15:0] ch1_cfg_ma_ma_half_period;
   reg [15:0] ch1_cfg_ma_ma_half_period = 16'h0000;
-  wire ch1_cfg_ma_read;
   wire ch1_cfg_ma_write;
-  wire ch1_cfg_period_read;
   output [23:0] ch1_cfg_period_request_period;
   reg [23:0] ch1_cfg_period_request_period = 24'h000000;
   wire ch1_cfg_period_write;
-  wire ch1_cfg_timeout_read;
   output [23:0] ch1_cfg_timeout_timeout_limit;
   reg [23:0] ch1_cfg_timeout_timeout_limit = 24'h000000;
   wire ch1_cfg_timeout_write;
-  wire ch1_cfg_words_read;
   output [1:0] ch1_cfg_words_w0_crc;
   reg [1:0] ch1_cfg_words_w0_crc = 2'h0;
   output [5:0] ch1_cfg_words_w0_data_bits;
@@ -2219,19 +2112,12 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   output ch1_cfg_words_w1_nenw;
   reg ch1_cfg_words_w1_nenw = 1'h0;
   wire ch1_cfg_words_write;
-  wire ch1_count_ack_read;
   wire ch1_count_ack_write;
-  wire ch1_count_check_read;
   wire ch1_count_check_write;
-  wire ch1_count_crc_read;
   wire ch1_count_crc_write;
-  wire ch1_count_cycle_read;
   wire ch1_count_cycle_write;
-  wire ch1_count_lc_read;
   wire ch1_count_lc_write;
-  wire ch1_count_line_read;
   wire ch1_count_line_write;
-  wire ch1_count_stop_read;
   wire ch1_count_stop_write;
   output ch1_ctrl_abort;
   reg ch1_ctrl_abort = 1'h0;
@@ -2239,7 +2125,6 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg ch1_ctrl_clear_counters = 1'h0;
   output ch1_ctrl_periodic;
   reg ch1_ctrl_periodic = 1'h0;
-  wire ch1_ctrl_read;
   output ch1_ctrl_start;
   reg ch1_ctrl_start = 1'h0;
   output ch1_ctrl_trigger_enable;
@@ -2250,13 +2135,12 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg ch1_irq_enable_access_done = 1'h0;
   reg ch1_irq_enable_done = 1'h0;
   reg ch1_irq_enable_error = 1'h0;
-  wire ch1_irq_enable_read;
   wire ch1_irq_enable_write;
   reg ch1_irq_status_access_done = 1'h0;
   reg ch1_irq_status_done = 1'h0;
   reg ch1_irq_status_error = 1'h0;
-  wire ch1_irq_status_read;
   wire ch1_irq_status_write;
+  reg [31:0] ch1_read_data = 32'd0;
   reg ch1_read_select_100 = 1'h0;
   reg ch1_read_select_101 = 1'h0;
   reg ch1_read_select_102 = 1'h0;
@@ -2290,7 +2174,6 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg ch1_read_select_144 = 1'h0;
   reg ch1_read_select_145 = 1'h0;
   reg [12:0] ch1_result_seq_line_delay_snapshot = 13'h0000;
-  wire ch1_result_seq_read;
   reg [15:0] ch1_result_seq_seq_snapshot = 16'h0000;
   wire ch1_result_seq_write;
   reg ch1_result_status_cds_snapshot = 1'h0;
@@ -2298,7 +2181,6 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg ch1_result_status_lc_skip_snapshot = 1'h0;
   reg [5:0] ch1_result_status_lc_snapshot = 6'h00;
   reg ch1_result_status_lc_zero_snapshot = 1'h0;
-  wire ch1_result_status_read;
   reg ch1_result_status_spw_mismatch_snapshot = 1'h0;
   reg [3:0] ch1_result_status_status_snapshot = 4'h0;
   reg ch1_result_status_w0_crc_ok_snapshot = 1'h0;
@@ -2308,729 +2190,524 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg ch1_result_status_w1_ne_snapshot = 1'h0;
   reg ch1_result_status_w1_nw_snapshot = 1'h0;
   wire ch1_result_status_write;
-  wire ch1_result_timestamp_read;
   reg [31:0] ch1_result_timestamp_time_snapshot = 32'd0;
   wire ch1_result_timestamp_write;
   reg [22:0] ch1_result_w0_hi_data_snapshot = 23'h000000;
-  wire ch1_result_w0_hi_read;
   wire ch1_result_w0_hi_write;
   reg [31:0] ch1_result_w0_lo_data_snapshot = 32'd0;
-  wire ch1_result_w0_lo_read;
   wire ch1_result_w0_lo_write;
   reg [7:0] ch1_result_w1_hi_data_snapshot = 8'h00;
-  wire ch1_result_w1_hi_read;
   wire ch1_result_w1_hi_write;
   reg [31:0] ch1_result_w1_lo_data_snapshot = 32'd0;
-  wire ch1_result_w1_lo_read;
   wire ch1_result_w1_lo_write;
-  wire ch1_state_read;
   wire ch1_state_write;
+  reg ch1_window0_read = 1'h0;
   input clk;
   wire clk;
-  wire g_channels_read;
   wire g_channels_write;
-  wire g_id_read;
   wire g_id_write;
   wire g_irq;
-  wire g_irq_pending_read;
   wire g_irq_pending_write;
+  reg [31:0] g_read_data = 32'd0;
   reg g_read_select_0 = 1'h0;
   reg g_read_select_1 = 1'h0;
   reg g_read_select_2 = 1'h0;
   reg g_read_select_3 = 1'h0;
   reg g_read_select_4 = 1'h0;
-  wire g_trigger_read;
   output g_trigger_start;
   reg g_trigger_start = 1'h0;
   wire g_trigger_write;
-  wire g_version_read;
   wire g_version_write;
   wire [3:0] glob__channels;
   wire [7:0] glob__irq_pending;
   (* init = 1'h0 *)
   wire glob__trigger;
   wire [1:0] irq;
-  input [160:0] \port$4258$0 ;
-  wire [160:0] \port$4258$0 ;
-  input [287:0] \port$4265$0 ;
-  wire [287:0] \port$4265$0 ;
-  input [9:0] \port$4379$0 ;
-  wire [9:0] \port$4379$0 ;
-  input [160:0] \port$4726$0 ;
-  wire [160:0] \port$4726$0 ;
-  input [287:0] \port$4733$0 ;
-  wire [287:0] \port$4733$0 ;
-  input [9:0] \port$4847$0 ;
-  wire [9:0] \port$4847$0 ;
-  output [31:0] read_data;
-  reg [31:0] read_data = 32'd0;
+  input [160:0] \port$4137$0 ;
+  wire [160:0] \port$4137$0 ;
+  input [287:0] \port$4150$0 ;
+  wire [287:0] \port$4150$0 ;
+  input [9:0] \port$4264$0 ;
+  wire [9:0] \port$4264$0 ;
+  input [160:0] \port$4615$0 ;
+  wire [160:0] \port$4615$0 ;
+  input [287:0] \port$4628$0 ;
+  wire [287:0] \port$4628$0 ;
+  input [9:0] \port$4742$0 ;
+  wire [9:0] \port$4742$0 ;
   input rst;
   wire rst;
-  reg window0_read = 1'h0;
-  reg window1_read = 1'h0;
   reg [10:0] write_addr = 11'h000;
   output [31:0] write_data;
   reg [31:0] write_data = 32'd0;
   reg write_en = 1'h0;
   reg [3:0] write_strb = 4'h0;
-  assign \$329  = bus__r_addr == 2'h2;
-  assign g_channels_read = bus__r_en & \$329 ;
-  assign \$330  = write_addr == 2'h3;
-  assign g_trigger_write = write_en & \$330 ;
-  assign \$331  = bus__r_addr == 2'h3;
-  assign g_trigger_read = bus__r_en & \$331 ;
-  assign \$332  = write_addr == 3'h4;
-  assign g_irq_pending_write = write_en & \$332 ;
-  assign \$333  = bus__r_addr == 3'h4;
-  assign g_irq_pending_read = bus__r_en & \$333 ;
-  assign \$334  = write_addr == 8'h80;
-  assign ch0_ctrl_write = write_en & \$334 ;
-  assign \$335  = bus__r_addr == 8'h80;
-  assign ch0_ctrl_read = bus__r_en & \$335 ;
-  assign \$336  = write_addr == 8'h81;
-  assign ch0_state_write = write_en & \$336 ;
-  assign \$337  = bus__r_addr == 8'h81;
-  assign ch0_state_read = bus__r_en & \$337 ;
-  assign \$338  = write_addr == 8'h82;
-  assign ch0_caps_write = write_en & \$338 ;
-  assign \$339  = bus__r_addr == 8'h82;
-  assign ch0_caps_read = bus__r_en & \$339 ;
-  assign \$340  = write_addr == 8'h84;
-  assign ch0_irq_status_write = write_en & \$340 ;
-  assign \$341  = bus__r_addr == 8'h84;
-  assign ch0_irq_status_read = bus__r_en & \$341 ;
-  assign \$342  = write_addr == 8'h85;
-  assign ch0_irq_enable_write = write_en & \$342 ;
-  assign \$343  = bus__r_addr == 8'h85;
-  assign ch0_irq_enable_read = bus__r_en & \$343 ;
-  assign \$344  = write_addr == 8'h88;
-  assign ch0_cfg_ma_write = write_en & \$344 ;
-  assign \$345  = bus__r_addr == 8'h88;
-  assign ch0_cfg_ma_read = bus__r_en & \$345 ;
-  assign \$346  = write_addr == 8'h89;
-  assign ch0_cfg_period_write = write_en & \$346 ;
-  assign \$347  = bus__r_addr == 8'h89;
-  assign ch0_cfg_period_read = bus__r_en & \$347 ;
-  assign \$348  = write_addr == 8'h8a;
-  assign ch0_cfg_break_write = write_en & \$348 ;
-  assign \$349  = bus__r_addr == 8'h8a;
-  assign ch0_cfg_break_read = bus__r_en & \$349 ;
-  assign \$350  = write_addr == 8'h8b;
-  assign ch0_cfg_ack_write = write_en & \$350 ;
-  assign \$351  = bus__r_addr == 8'h8b;
-  assign ch0_cfg_ack_read = bus__r_en & \$351 ;
-  assign \$352  = write_addr == 8'h8c;
-  assign ch0_cfg_timeout_write = write_en & \$352 ;
-  assign \$353  = bus__r_addr == 8'h8c;
-  assign ch0_cfg_timeout_read = bus__r_en & \$353 ;
-  assign \$354  = write_addr == 8'h8d;
-  assign ch0_cfg_words_write = write_en & \$354 ;
-  assign \$355  = bus__r_addr == 8'h8d;
-  assign ch0_cfg_words_read = bus__r_en & \$355 ;
-  assign \$356  = write_addr == 8'h8e;
-  assign ch0_cfg_checks_write = write_en & \$356 ;
-  assign \$357  = bus__r_addr == 8'h8e;
-  assign ch0_cfg_checks_read = bus__r_en & \$357 ;
-  assign \$358  = write_addr == 8'h90;
-  assign ch0_result_status_write = write_en & \$358 ;
-  assign \$359  = bus__r_addr == 8'h90;
-  assign ch0_result_status_read = bus__r_en & \$359 ;
-  assign \$360  = write_addr == 8'h91;
-  assign ch0_result_seq_write = write_en & \$360 ;
-  assign \$361  = bus__r_addr == 8'h91;
-  assign ch0_result_seq_read = bus__r_en & \$361 ;
-  assign \$362  = write_addr == 8'h92;
-  assign ch0_result_w0_lo_write = write_en & \$362 ;
-  assign \$363  = bus__r_addr == 8'h92;
-  assign ch0_result_w0_lo_read = bus__r_en & \$363 ;
-  assign \$364  = write_addr == 8'h93;
-  assign ch0_result_w0_hi_write = write_en & \$364 ;
-  assign \$365  = bus__r_addr == 8'h93;
-  assign ch0_result_w0_hi_read = bus__r_en & \$365 ;
-  assign \$366  = write_addr == 8'h94;
-  assign ch0_result_w1_lo_write = write_en & \$366 ;
-  assign \$367  = bus__r_addr == 8'h94;
-  assign ch0_result_w1_lo_read = bus__r_en & \$367 ;
-  assign \$368  = write_addr == 8'h95;
-  assign ch0_result_w1_hi_write = write_en & \$368 ;
-  assign \$369  = bus__r_addr == 8'h95;
-  assign ch0_result_w1_hi_read = bus__r_en & \$369 ;
-  assign \$370  = write_addr == 8'h96;
-  assign ch0_result_timestamp_write = write_en & \$370 ;
-  assign \$371  = bus__r_addr == 8'h96;
-  assign ch0_result_timestamp_read = bus__r_en & \$371 ;
-  assign \$372  = write_addr == 8'h98;
-  assign ch0_count_crc_write = write_en & \$372 ;
-  assign \$373  = bus__r_addr == 8'h98;
-  assign ch0_count_crc_read = bus__r_en & \$373 ;
-  assign \$374  = write_addr == 8'h99;
-  assign ch0_count_ack_write = write_en & \$374 ;
-  assign \$375  = bus__r_addr == 8'h99;
-  assign ch0_count_ack_read = bus__r_en & \$375 ;
-  assign \$376  = write_addr == 8'h9a;
-  assign ch0_count_line_write = write_en & \$376 ;
-  assign \$377  = bus__r_addr == 8'h9a;
-  assign ch0_count_line_read = bus__r_en & \$377 ;
-  assign \$378  = write_addr == 8'h9b;
-  assign ch0_count_lc_write = write_en & \$378 ;
-  assign \$379  = bus__r_addr == 8'h9b;
-  assign ch0_count_lc_read = bus__r_en & \$379 ;
-  assign \$380  = write_addr == 8'h9c;
-  assign ch0_count_check_write = write_en & \$380 ;
-  assign \$381  = bus__r_addr == 8'h9c;
-  assign ch0_count_check_read = bus__r_en & \$381 ;
-  assign \$382  = write_addr == 8'h9d;
-  assign ch0_count_cycle_write = write_en & \$382 ;
-  assign \$383  = bus__r_addr == 8'h9d;
-  assign ch0_count_cycle_read = bus__r_en & \$383 ;
-  assign \$384  = write_addr == 8'h9e;
-  assign ch0_count_stop_write = write_en & \$384 ;
-  assign \$385  = bus__r_addr == 8'h9e;
-  assign ch0_count_stop_read = bus__r_en & \$385 ;
-  assign \$386  = write_addr == 8'hc0;
-  assign ch0_ca_request_write = write_en & \$386 ;
-  assign \$387  = bus__r_addr == 8'hc0;
-  assign ch0_ca_request_read = bus__r_en & \$387 ;
-  assign \$388  = write_addr == 8'hc1;
-  assign ch0_ca_ctrl_write = write_en & \$388 ;
-  assign \$389  = bus__r_addr == 8'hc1;
-  assign ch0_ca_ctrl_read = bus__r_en & \$389 ;
-  assign \$390  = write_addr == 8'hc2;
-  assign ch0_ca_state_write = write_en & \$390 ;
-  assign \$391  = bus__r_addr == 8'hc2;
-  assign ch0_ca_state_read = bus__r_en & \$391 ;
-  assign \$392  = write_addr == 8'hc3;
-  assign ch0_ca_count_crc4_answer_write = write_en & \$392 ;
-  assign \$393  = bus__r_addr == 8'hc3;
-  assign ch0_ca_count_crc4_answer_read = bus__r_en & \$393 ;
-  assign \$394  = write_addr == 8'hc4;
-  assign ch0_ca_count_refused_aborted_write = write_en & \$394 ;
-  assign \$395  = bus__r_addr == 8'hc4;
-  assign ch0_ca_count_refused_aborted_read = bus__r_en & \$395 ;
-  assign \$396  = write_addr == 8'hc5;
-  assign ch0_ca_count_data_fault_write = write_en & \$396 ;
-  assign \$397  = bus__r_addr == 8'hc5;
-  assign ch0_ca_count_data_fault_read = bus__r_en & \$397 ;
-  assign \$398  = write_addr[10:4] == 4'hd;
-  assign \$399  = write_en & \$398 ;
-  assign ch0__ca_wbuf_en = \$399  ? write_strb : 4'h0;
-  assign \$400  = bus__r_addr[10:4] == 4'he;
-  assign ch0__ca_rbuf_en = bus__r_en & \$400 ;
-  assign \$401  = ch0_irq_status_done & ch0_irq_enable_done;
-  assign \$403  = ch0_irq_status_error & ch0_irq_enable_error;
-  assign \$405  = ch0_irq_status_access_done & ch0_irq_enable_access_done;
-  assign ch0_irq = | { \$406 , \$404 , \$402  };
-  assign \$407  = write_addr == 9'h100;
-  assign ch1_ctrl_write = write_en & \$407 ;
-  assign \$408  = bus__r_addr == 9'h100;
-  assign ch1_ctrl_read = bus__r_en & \$408 ;
-  assign \$409  = write_addr == 9'h101;
-  assign ch1_state_write = write_en & \$409 ;
-  assign \$410  = bus__r_addr == 9'h101;
-  assign ch1_state_read = bus__r_en & \$410 ;
-  assign \$411  = write_addr == 9'h102;
-  assign ch1_caps_write = write_en & \$411 ;
-  assign \$412  = bus__r_addr == 9'h102;
-  assign ch1_caps_read = bus__r_en & \$412 ;
-  assign \$413  = write_addr == 9'h104;
-  assign ch1_irq_status_write = write_en & \$413 ;
-  assign \$414  = bus__r_addr == 9'h104;
-  assign ch1_irq_status_read = bus__r_en & \$414 ;
-  assign \$415  = write_addr == 9'h105;
-  assign ch1_irq_enable_write = write_en & \$415 ;
-  assign \$416  = bus__r_addr == 9'h105;
-  assign ch1_irq_enable_read = bus__r_en & \$416 ;
-  assign \$417  = write_addr == 9'h108;
-  assign ch1_cfg_ma_write = write_en & \$417 ;
-  assign \$418  = bus__r_addr == 9'h108;
-  assign ch1_cfg_ma_read = bus__r_en & \$418 ;
-  assign \$419  = write_addr == 9'h109;
-  assign ch1_cfg_period_write = write_en & \$419 ;
-  assign \$420  = bus__r_addr == 9'h109;
-  assign ch1_cfg_period_read = bus__r_en & \$420 ;
-  assign \$421  = write_addr == 9'h10a;
-  assign ch1_cfg_break_write = write_en & \$421 ;
-  assign \$422  = bus__r_addr == 9'h10a;
-  assign ch1_cfg_break_read = bus__r_en & \$422 ;
-  assign \$423  = write_addr == 9'h10b;
-  assign ch1_cfg_ack_write = write_en & \$423 ;
-  assign \$424  = bus__r_addr == 9'h10b;
-  assign ch1_cfg_ack_read = bus__r_en & \$424 ;
-  assign \$425  = write_addr == 9'h10c;
-  assign ch1_cfg_timeout_write = write_en & \$425 ;
-  assign \$426  = bus__r_addr == 9'h10c;
-  assign ch1_cfg_timeout_read = bus__r_en & \$426 ;
-  assign \$427  = write_addr == 9'h10d;
-  assign ch1_cfg_words_write = write_en & \$427 ;
-  assign \$428  = bus__r_addr == 9'h10d;
-  assign ch1_cfg_words_read = bus__r_en & \$428 ;
-  assign \$429  = write_addr == 9'h10e;
-  assign ch1_cfg_checks_write = write_en & \$429 ;
-  assign \$430  = bus__r_addr == 9'h10e;
-  assign ch1_cfg_checks_read = bus__r_en & \$430 ;
-  assign \$431  = write_addr == 9'h110;
-  assign ch1_result_status_write = write_en & \$431 ;
-  assign \$432  = bus__r_addr == 9'h110;
-  assign ch1_result_status_read = bus__r_en & \$432 ;
-  assign \$433  = write_addr == 9'h111;
-  assign ch1_result_seq_write = write_en & \$433 ;
-  assign \$434  = bus__r_addr == 9'h111;
-  assign ch1_result_seq_read = bus__r_en & \$434 ;
-  assign \$435  = write_addr == 9'h112;
-  assign ch1_result_w0_lo_write = write_en & \$435 ;
-  assign \$436  = bus__r_addr == 9'h112;
-  assign ch1_result_w0_lo_read = bus__r_en & \$436 ;
-  assign \$437  = write_addr == 9'h113;
-  assign ch1_result_w0_hi_write = write_en & \$437 ;
-  assign \$438  = bus__r_addr == 9'h113;
-  assign ch1_result_w0_hi_read = bus__r_en & \$438 ;
-  assign \$439  = write_addr == 9'h114;
-  assign ch1_result_w1_lo_write = write_en & \$439 ;
-  assign \$440  = bus__r_addr == 9'h114;
-  assign ch1_result_w1_lo_read = bus__r_en & \$440 ;
-  assign \$441  = write_addr == 9'h115;
-  assign ch1_result_w1_hi_write = write_en & \$441 ;
-  assign \$442  = bus__r_addr == 9'h115;
-  assign ch1_result_w1_hi_read = bus__r_en & \$442 ;
-  assign \$443  = write_addr == 9'h116;
-  assign ch1_result_timestamp_write = write_en & \$443 ;
-  assign \$444  = bus__r_addr == 9'h116;
-  assign ch1_result_timestamp_read = bus__r_en & \$444 ;
-  assign \$445  = write_addr == 9'h118;
-  assign ch1_count_crc_write = write_en & \$445 ;
-  assign \$446  = bus__r_addr == 9'h118;
-  assign ch1_count_crc_read = bus__r_en & \$446 ;
-  assign \$447  = write_addr == 9'h119;
-  assign ch1_count_ack_write = write_en & \$447 ;
-  assign \$448  = bus__r_addr == 9'h119;
-  assign ch1_count_ack_read = bus__r_en & \$448 ;
-  assign \$449  = write_addr == 9'h11a;
-  assign ch1_count_line_write = write_en & \$449 ;
-  assign \$450  = bus__r_addr == 9'h11a;
-  assign ch1_count_line_read = bus__r_en & \$450 ;
-  assign \$451  = write_addr == 9'h11b;
-  assign ch1_count_lc_write = write_en & \$451 ;
-  assign \$452  = bus__r_addr == 9'h11b;
-  assign ch1_count_lc_read = bus__r_en & \$452 ;
-  assign \$453  = write_addr == 9'h11c;
-  assign ch1_count_check_write = write_en & \$453 ;
-  assign \$454  = bus__r_addr == 9'h11c;
-  assign ch1_count_check_read = bus__r_en & \$454 ;
-  assign \$455  = write_addr == 9'h11d;
-  assign ch1_count_cycle_write = write_en & \$455 ;
-  assign \$456  = bus__r_addr == 9'h11d;
-  assign ch1_count_cycle_read = bus__r_en & \$456 ;
-  assign \$457  = write_addr == 9'h11e;
-  assign ch1_count_stop_write = write_en & \$457 ;
-  assign \$458  = bus__r_addr == 9'h11e;
-  assign ch1_count_stop_read = bus__r_en & \$458 ;
-  assign \$459  = write_addr == 9'h140;
-  assign ch1_ca_request_write = write_en & \$459 ;
-  assign \$460  = bus__r_addr == 9'h140;
-  assign ch1_ca_request_read = bus__r_en & \$460 ;
-  assign \$461  = write_addr == 9'h141;
-  assign ch1_ca_ctrl_write = write_en & \$461 ;
-  assign \$462  = bus__r_addr == 9'h141;
-  assign ch1_ca_ctrl_read = bus__r_en & \$462 ;
-  assign \$463  = write_addr == 9'h142;
-  assign ch1_ca_state_write = write_en & \$463 ;
-  assign \$464  = bus__r_addr == 9'h142;
-  assign ch1_ca_state_read = bus__r_en & \$464 ;
-  assign \$465  = write_addr == 9'h143;
-  assign ch1_ca_count_crc4_answer_write = write_en & \$465 ;
-  assign \$466  = bus__r_addr == 9'h143;
-  assign ch1_ca_count_crc4_answer_read = bus__r_en & \$466 ;
-  assign \$467  = write_addr == 9'h144;
-  assign ch1_ca_count_refused_aborted_write = write_en & \$467 ;
-  assign \$468  = bus__r_addr == 9'h144;
-  assign ch1_ca_count_refused_aborted_read = bus__r_en & \$468 ;
-  assign \$469  = write_addr == 9'h145;
-  assign ch1_ca_count_data_fault_write = write_en & \$469 ;
-  assign \$470  = bus__r_addr == 9'h145;
-  assign ch1_ca_count_data_fault_read = bus__r_en & \$470 ;
-  assign \$471  = write_addr[10:4] == 5'h15;
-  assign \$472  = write_en & \$471 ;
-  assign ch1__ca_wbuf_en = \$472  ? write_strb : 4'h0;
-  assign \$473  = bus__r_addr[10:4] == 5'h16;
-  assign ch1__ca_rbuf_en = bus__r_en & \$473 ;
-  assign \$474  = ch1_irq_status_done & ch1_irq_enable_done;
-  assign \$476  = ch1_irq_status_error & ch1_irq_enable_error;
-  assign \$478  = ch1_irq_status_access_done & ch1_irq_enable_access_done;
-  assign ch1_irq = | { \$479 , \$477 , \$475  };
-  always @(posedge clk)
-    write_en <= \$480 ;
-  always @(posedge clk)
-    write_addr <= \$481 ;
-  always @(posedge clk)
-    write_data <= \$482 ;
-  always @(posedge clk)
-    write_strb <= \$483 ;
-  always @(posedge clk)
-    g_trigger_start <= \$484 ;
-  always @(posedge clk)
-    g_read_select_0 <= \$485 ;
-  always @(posedge clk)
-    g_read_select_1 <= \$486 ;
-  always @(posedge clk)
-    g_read_select_2 <= \$487 ;
-  always @(posedge clk)
-    g_read_select_3 <= \$488 ;
-  always @(posedge clk)
-    g_read_select_4 <= \$489 ;
-  always @(posedge clk)
-    ch0_ctrl_start <= \$490 ;
-  always @(posedge clk)
-    ch0_ctrl_abort <= \$491 ;
-  always @(posedge clk)
-    ch0_ctrl_clear_counters <= \$492 ;
-  always @(posedge clk)
-    ch0_ctrl_periodic <= \$493 ;
-  always @(posedge clk)
-    ch0_ctrl_trigger_enable <= \$494 ;
-  always @(posedge clk)
-    ch0_irq_status_done <= \$495 ;
-  always @(posedge clk)
-    ch0_irq_status_error <= \$496 ;
-  always @(posedge clk)
-    ch0_irq_status_access_done <= \$497 ;
-  always @(posedge clk)
-    ch0_irq_enable_done <= \$498 ;
-  always @(posedge clk)
-    ch0_irq_enable_error <= \$499 ;
-  always @(posedge clk)
-    ch0_irq_enable_access_done <= \$500 ;
-  always @(posedge clk)
-    ch0_cfg_ma_ma_half_period <= \$501 ;
-  always @(posedge clk)
-    ch0_cfg_ma_delay_limit <= \$502 ;
-  always @(posedge clk)
-    ch0_cfg_period_request_period <= \$503 ;
-  always @(posedge clk)
-    ch0_cfg_break_break_time <= \$504 ;
-  always @(posedge clk)
-    ch0_cfg_ack_ack_limit <= \$505 ;
-  always @(posedge clk)
-    ch0_cfg_timeout_timeout_limit <= \$506 ;
-  always @(posedge clk)
-    ch0_cfg_words_w0_data_bits <= \$507 ;
-  always @(posedge clk)
-    ch0_cfg_words_w0_nenw <= \$508 ;
-  always @(posedge clk)
-    ch0_cfg_words_w0_lc <= \$509 ;
-  always @(posedge clk)
-    ch0_cfg_words_w0_crc <= \$510 ;
-  always @(posedge clk)
-    ch0_cfg_words_w1_data_bits <= \$511 ;
-  always @(posedge clk)
-    ch0_cfg_words_w1_nenw <= \$512 ;
-  always @(posedge clk)
-    ch0_cfg_words_w1_lc <= \$513 ;
-  always @(posedge clk)
-    ch0_cfg_words_w1_crc <= \$514 ;
-  always @(posedge clk)
-    ch0_cfg_words_w1_enable <= \$515 ;
-  always @(posedge clk)
-    ch0_cfg_checks_end_check <= \$516 ;
-  always @(posedge clk)
-    ch0_cfg_checks_spw_check <= \$517 ;
-  always @(posedge clk)
-    ch0_cfg_checks_spw_tolerance <= \$518 ;
-  always @(posedge clk)
-    ch0_ca_request_slave_id <= \$519 ;
-  always @(posedge clk)
-    ch0_ca_request_address <= \$520 ;
-  always @(posedge clk)
-    ch0_ca_request_count <= \$521 ;
+  assign \$361  = write_addr == 8'hc4;
+  assign ch0_ca_count_refused_aborted_write = write_en & \$361 ;
+  assign \$362  = write_addr == 8'hc5;
+  assign ch0_ca_count_data_fault_write = write_en & \$362 ;
+  assign \$363  = write_addr[10:4] == 4'hd;
+  assign \$364  = write_en & \$363 ;
+  assign ch0__ca_wbuf_en = \$364  ? write_strb : 4'h0;
+  assign \$365  = bus__r_addr[10:4] == 4'he;
+  assign ch0__ca_rbuf_en = bus__r_en & \$365 ;
+  assign \$366  = ch0_irq_status_done & ch0_irq_enable_done;
+  assign \$368  = ch0_irq_status_error & ch0_irq_enable_error;
+  assign \$370  = ch0_irq_status_access_done & ch0_irq_enable_access_done;
+  assign ch0_irq = | { \$371 , \$369 , \$367  };
+  assign \$372  = write_addr == 9'h100;
+  assign ch1_ctrl_write = write_en & \$372 ;
+  assign \$373  = write_addr == 9'h101;
+  assign ch1_state_write = write_en & \$373 ;
+  assign \$374  = write_addr == 9'h102;
+  assign ch1_caps_write = write_en & \$374 ;
+  assign \$375  = write_addr == 9'h104;
+  assign ch1_irq_status_write = write_en & \$375 ;
+  assign \$376  = write_addr == 9'h105;
+  assign ch1_irq_enable_write = write_en & \$376 ;
+  assign \$377  = write_addr == 9'h108;
+  assign ch1_cfg_ma_write = write_en & \$377 ;
+  assign \$378  = write_addr == 9'h109;
+  assign ch1_cfg_period_write = write_en & \$378 ;
+  assign \$379  = write_addr == 9'h10a;
+  assign ch1_cfg_break_write = write_en & \$379 ;
+  assign \$380  = write_addr == 9'h10b;
+  assign ch1_cfg_ack_write = write_en & \$380 ;
+  assign \$381  = write_addr == 9'h10c;
+  assign ch1_cfg_timeout_write = write_en & \$381 ;
+  assign \$382  = write_addr == 9'h10d;
+  assign ch1_cfg_words_write = write_en & \$382 ;
+  assign \$383  = write_addr == 9'h10e;
+  assign ch1_cfg_checks_write = write_en & \$383 ;
+  assign \$384  = write_addr == 9'h110;
+  assign ch1_result_status_write = write_en & \$384 ;
+  assign \$385  = write_addr == 9'h111;
+  assign ch1_result_seq_write = write_en & \$385 ;
+  assign \$386  = write_addr == 9'h112;
+  assign ch1_result_w0_lo_write = write_en & \$386 ;
+  assign \$387  = write_addr == 9'h113;
+  assign ch1_result_w0_hi_write = write_en & \$387 ;
+  assign \$388  = write_addr == 9'h114;
+  assign ch1_result_w1_lo_write = write_en & \$388 ;
+  assign \$389  = write_addr == 9'h115;
+  assign ch1_result_w1_hi_write = write_en & \$389 ;
+  assign \$390  = write_addr == 9'h116;
+  assign ch1_result_timestamp_write = write_en & \$390 ;
+  assign \$391  = write_addr == 9'h118;
+  assign ch1_count_crc_write = write_en & \$391 ;
+  assign \$392  = write_addr == 9'h119;
+  assign ch1_count_ack_write = write_en & \$392 ;
+  assign \$393  = write_addr == 9'h11a;
+  assign ch1_count_line_write = write_en & \$393 ;
+  assign \$394  = write_addr == 9'h11b;
+  assign ch1_count_lc_write = write_en & \$394 ;
+  assign \$395  = write_addr == 9'h11c;
+  assign ch1_count_check_write = write_en & \$395 ;
+  assign \$396  = write_addr == 9'h11d;
+  assign ch1_count_cycle_write = write_en & \$396 ;
+  assign \$397  = write_addr == 9'h11e;
+  assign ch1_count_stop_write = write_en & \$397 ;
+  assign \$398  = write_addr == 9'h140;
+  assign ch1_ca_request_write = write_en & \$398 ;
+  assign \$399  = write_addr == 9'h141;
+  assign ch1_ca_ctrl_write = write_en & \$399 ;
+  assign \$400  = write_addr == 9'h142;
+  assign ch1_ca_state_write = write_en & \$400 ;
+  assign \$401  = write_addr == 9'h143;
+  assign ch1_ca_count_crc4_answer_write = write_en & \$401 ;
+  assign \$402  = write_addr == 9'h144;
+  assign ch1_ca_count_refused_aborted_write = write_en & \$402 ;
+  assign \$403  = write_addr == 9'h145;
+  assign ch1_ca_count_data_fault_write = write_en & \$403 ;
+  assign \$404  = write_addr[10:4] == 5'h15;
+  assign \$405  = write_en & \$404 ;
+  assign ch1__ca_wbuf_en = \$405  ? write_strb : 4'h0;
+  assign \$406  = bus__r_addr[10:4] == 5'h16;
+  assign ch1__ca_rbuf_en = bus__r_en & \$406 ;
+  assign \$407  = ch1_irq_status_done & ch1_irq_enable_done;
+  assign \$409  = ch1_irq_status_error & ch1_irq_enable_error;
+  assign \$411  = ch1_irq_status_access_done & ch1_irq_enable_access_done;
+  assign ch1_irq = | { \$412 , \$410 , \$408  };
+  assign \$414  = \$413  | ch0_read_data;
+  assign bus__r_data = \$414  | ch1_read_data;
   always @(posedge clk)
-    \ch0_ca_request_write$65  <= \$522 ;
+    write_en <= \$415 ;
   always @(posedge clk)
-    ch0_ca_ctrl_start <= \$523 ;
+    write_addr <= \$416 ;
   always @(posedge clk)
-    ch0_ca_ctrl_abort <= \$524 ;
+    write_data <= \$417 ;
   always @(posedge clk)
-    ch0_result_status_status_snapshot <= \$525 ;
+    write_strb <= \$418 ;
   always @(posedge clk)
-    ch0_result_status_cds_snapshot <= \$526 ;
+    g_trigger_start <= \$419 ;
   always @(posedge clk)
-    ch0_result_status_w0_ne_snapshot <= \$527 ;
+    g_read_select_0 <= \$420 ;
   always @(posedge clk)
-    ch0_result_status_w0_nw_snapshot <= \$528 ;
+    g_read_select_1 <= \$421 ;
   always @(posedge clk)
-    ch0_result_status_w0_crc_ok_snapshot <= \$529 ;
+    g_read_select_2 <= \$422 ;
   always @(posedge clk)
-    ch0_result_status_w1_ne_snapshot <= \$530 ;
+    g_read_select_3 <= \$423 ;
   always @(posedge clk)
-    ch0_result_status_w1_nw_snapshot <= \$531 ;
+    g_read_select_4 <= \$424 ;
   always @(posedge clk)
-    ch0_result_status_w1_crc_ok_snapshot <= \$532 ;
+    g_read_data <= \$425 ;
   always @(posedge clk)
-    ch0_result_status_lc_repeat_snapshot <= \$533 ;
+    ch0_ctrl_start <= \$426 ;
   always @(posedge clk)
-    ch0_result_status_lc_skip_snapshot <= \$534 ;
+    ch0_ctrl_abort <= \$427 ;
   always @(posedge clk)
-    ch0_result_status_lc_zero_snapshot <= \$535 ;
+    ch0_ctrl_clear_counters <= \$428 ;
   always @(posedge clk)
-    ch0_result_status_spw_mismatch_snapshot <= \$536 ;
+    ch0_ctrl_periodic <= \$429 ;
   always @(posedge clk)
-    ch0_result_status_lc_snapshot <= \$537 ;
+    ch0_ctrl_trigger_enable <= \$430 ;
   always @(posedge clk)
-    ch0_result_seq_seq_snapshot <= \$538 ;
+    ch0_irq_status_done <= \$431 ;
   always @(posedge clk)
-    ch0_result_seq_line_delay_snapshot <= \$539 ;
+    ch0_irq_status_error <= \$432 ;
   always @(posedge clk)
-    ch0_result_w0_lo_data_snapshot <= \$540 ;
+    ch0_irq_status_access_done <= \$433 ;
   always @(posedge clk)
-    ch0_result_w0_hi_data_snapshot <= \$541 ;
+    ch0_irq_enable_done <= \$434 ;
   always @(posedge clk)
-    ch0_result_w1_lo_data_snapshot <= \$542 ;
+    ch0_irq_enable_error <= \$435 ;
   always @(posedge clk)
-    ch0_result_w1_hi_data_snapshot <= \$543 ;
+    ch0_irq_enable_access_done <= \$436 ;
   always @(posedge clk)
-    ch0_result_timestamp_time_snapshot <= \$544 ;
+    ch0_cfg_ma_ma_half_period <= \$437 ;
   always @(posedge clk)
-    ch0_read_select_80 <= \$545 ;
+    ch0_cfg_ma_delay_limit <= \$438 ;
   always @(posedge clk)
-    ch0_read_select_81 <= \$546 ;
+    ch0_cfg_period_request_period <= \$439 ;
   always @(posedge clk)
-    ch0_read_select_82 <= \$547 ;
+    ch0_cfg_break_break_time <= \$440 ;
   always @(posedge clk)
-    ch0_read_select_84 <= \$548 ;
+    ch0_cfg_ack_ack_limit <= \$441 ;
   always @(posedge clk)
-    ch0_read_select_85 <= \$549 ;
+    ch0_cfg_timeout_timeout_limit <= \$442 ;
   always @(posedge clk)
-    ch0_read_select_88 <= \$550 ;
+    ch0_cfg_words_w0_data_bits <= \$443 ;
   always @(posedge clk)
-    ch0_read_select_89 <= \$551 ;
+    ch0_cfg_words_w0_nenw <= \$444 ;
   always @(posedge clk)
-    ch0_read_select_8a <= \$552 ;
+    ch0_cfg_words_w0_lc <= \$445 ;
   always @(posedge clk)
-    ch0_read_select_8b <= \$553 ;
+    ch0_cfg_words_w0_crc <= \$446 ;
   always @(posedge clk)
-    ch0_read_select_8c <= \$554 ;
+    ch0_cfg_words_w1_data_bits <= \$447 ;
   always @(posedge clk)
-    ch0_read_select_8d <= \$555 ;
+    ch0_cfg_words_w1_nenw <= \$448 ;
   always @(posedge clk)
-    ch0_read_select_8e <= \$556 ;
+    ch0_cfg_words_w1_lc <= \$449 ;
   always @(posedge clk)
-    ch0_read_select_90 <= \$557 ;
+    ch0_cfg_words_w1_crc <= \$450 ;
   always @(posedge clk)
-    ch0_read_select_91 <= \$558 ;
+    ch0_cfg_words_w1_enable <= \$451 ;
   always @(posedge clk)
-    ch0_read_select_92 <= \$559 ;
+    ch0_cfg_checks_end_check <= \$452 ;
   always @(posedge clk)
-    ch0_read_select_93 <= \$560 ;
+    ch0_cfg_checks_spw_check <= \$453 ;
   always @(posedge clk)
-    ch0_read_select_94 <= \$561 ;
+    ch0_cfg_checks_spw_tolerance <= \$454 ;
   always @(posedge clk)
-    ch0_read_select_95 <= \$562 ;
+    ch0_ca_request_slave_id <= \$455 ;
   always @(posedge clk)
-    ch0_read_select_96 <= \$563 ;
+    ch0_ca_request_address <= \$456 ;
   always @(posedge clk)
-    ch0_read_select_98 <= \$564 ;
+    ch0_ca_request_count <= \$457 ;
   always @(posedge clk)
-    ch0_read_select_99 <= \$565 ;
+    \ch0_ca_request_write$69  <= \$458 ;
   always @(posedge clk)
-    ch0_read_select_9a <= \$566 ;
+    ch0_ca_ctrl_start <= \$459 ;
   always @(posedge clk)
-    ch0_read_select_9b <= \$567 ;
+    ch0_ca_ctrl_abort <= \$460 ;
   always @(posedge clk)
-    ch0_read_select_9c <= \$568 ;
+    ch0_read_select_80 <= \$461 ;
   always @(posedge clk)
-    ch0_read_select_9d <= \$569 ;
+    ch0_read_select_81 <= \$462 ;
   always @(posedge clk)
-    ch0_read_select_9e <= \$570 ;
+    ch0_read_select_82 <= \$463 ;
   always @(posedge clk)
-    ch0_read_select_c0 <= \$571 ;
+    ch0_read_select_84 <= \$464 ;
   always @(posedge clk)
-    ch0_read_select_c1 <= \$572 ;
+    ch0_read_select_85 <= \$465 ;
   always @(posedge clk)
-    ch0_read_select_c2 <= \$573 ;
+    ch0_read_select_88 <= \$466 ;
   always @(posedge clk)
-    ch0_read_select_c3 <= \$574 ;
+    ch0_read_select_89 <= \$467 ;
   always @(posedge clk)
-    ch0_read_select_c4 <= \$575 ;
+    ch0_read_select_8a <= \$468 ;
   always @(posedge clk)
-    ch0_read_select_c5 <= \$576 ;
+    ch0_read_select_8b <= \$469 ;
   always @(posedge clk)
-    ch1_ctrl_start <= \$577 ;
+    ch0_read_select_8c <= \$470 ;
   always @(posedge clk)
-    ch1_ctrl_abort <= \$578 ;
+    ch0_read_select_8d <= \$471 ;
   always @(posedge clk)
-    ch1_ctrl_clear_counters <= \$579 ;
+    ch0_read_select_8e <= \$472 ;
   always @(posedge clk)
-    ch1_ctrl_periodic <= \$580 ;
+    ch0_read_select_90 <= \$473 ;
   always @(posedge clk)
-    ch1_ctrl_trigger_enable <= \$581 ;
+    ch0_read_select_91 <= \$474 ;
   always @(posedge clk)
-    ch1_irq_status_done <= \$582 ;
+    ch0_read_select_92 <= \$475 ;
   always @(posedge clk)
-    ch1_irq_status_error <= \$583 ;
+    ch0_read_select_93 <= \$476 ;
   always @(posedge clk)
-    ch1_irq_status_access_done <= \$584 ;
+    ch0_read_select_94 <= \$477 ;
   always @(posedge clk)
-    ch1_irq_enable_done <= \$585 ;
+    ch0_read_select_95 <= \$478 ;
   always @(posedge clk)
-    ch1_irq_enable_error <= \$586 ;
+    ch0_read_select_96 <= \$479 ;
   always @(posedge clk)
-    ch1_irq_enable_access_done <= \$587 ;
+    ch0_read_select_98 <= \$480 ;
   always @(posedge clk)
-    ch1_cfg_ma_ma_half_period <= \$588 ;
+    ch0_read_select_99 <= \$481 ;
   always @(posedge clk)
-    ch1_cfg_ma_delay_limit <= \$589 ;
+    ch0_read_select_9a <= \$482 ;
   always @(posedge clk)
-    ch1_cfg_period_request_period <= \$590 ;
+    ch0_read_select_9b <= \$483 ;
   always @(posedge clk)
-    ch1_cfg_break_break_time <= \$591 ;
+    ch0_read_select_9c <= \$484 ;
   always @(posedge clk)
-    ch1_cfg_ack_ack_limit <= \$592 ;
+    ch0_read_select_9d <= \$485 ;
   always @(posedge clk)
-    ch1_cfg_timeout_timeout_limit <= \$593 ;
+    ch0_read_select_9e <= \$486 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_data_bits <= \$594 ;
+    ch0_read_select_c0 <= \$487 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_nenw <= \$595 ;
+    ch0_read_select_c1 <= \$488 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_lc <= \$596 ;
+    ch0_read_select_c2 <= \$489 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_crc <= \$597 ;
+    ch0_read_select_c3 <= \$490 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_data_bits <= \$598 ;
+    ch0_read_select_c4 <= \$491 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_nenw <= \$599 ;
+    ch0_read_select_c5 <= \$492 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_lc <= \$600 ;
+    ch0_result_status_status_snapshot <= \$493 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_crc <= \$601 ;
+    ch0_result_status_cds_snapshot <= \$494 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_enable <= \$602 ;
+    ch0_result_status_w0_ne_snapshot <= \$495 ;
   always @(posedge clk)
-    ch1_cfg_checks_end_check <= \$603 ;
+    ch0_result_status_w0_nw_snapshot <= \$496 ;
   always @(posedge clk)
-    ch1_cfg_checks_spw_check <= \$604 ;
+    ch0_result_status_w0_crc_ok_snapshot <= \$497 ;
   always @(posedge clk)
-    ch1_cfg_checks_spw_tolerance <= \$605 ;
+    ch0_result_status_w1_ne_snapshot <= \$498 ;
   always @(posedge clk)
-    ch1_ca_request_slave_id <= \$606 ;
+    ch0_result_status_w1_nw_snapshot <= \$499 ;
   always @(posedge clk)
-    ch1_ca_request_address <= \$607 ;
+    ch0_result_status_w1_crc_ok_snapshot <= \$500 ;
   always @(posedge clk)
-    ch1_ca_request_count <= \$608 ;
+    ch0_result_status_lc_repeat_snapshot <= \$501 ;
   always @(posedge clk)
-    \ch1_ca_request_write$186  <= \$609 ;
+    ch0_result_status_lc_skip_snapshot <= \$502 ;
   always @(posedge clk)
-    ch1_ca_ctrl_start <= \$610 ;
+    ch0_result_status_lc_zero_snapshot <= \$503 ;
   always @(posedge clk)
-    ch1_ca_ctrl_abort <= \$611 ;
+    ch0_result_status_spw_mismatch_snapshot <= \$504 ;
   always @(posedge clk)
-    ch1_result_status_status_snapshot <= \$612 ;
+    ch0_result_status_lc_snapshot <= \$505 ;
   always @(posedge clk)
-    ch1_result_status_cds_snapshot <= \$613 ;
+    ch0_result_seq_seq_snapshot <= \$506 ;
   always @(posedge clk)
-    ch1_result_status_w0_ne_snapshot <= \$614 ;
+    ch0_result_seq_line_delay_snapshot <= \$507 ;
   always @(posedge clk)
-    ch1_result_status_w0_nw_snapshot <= \$615 ;
+    ch0_result_w0_lo_data_snapshot <= \$508 ;
   always @(posedge clk)
-    ch1_result_status_w0_crc_ok_snapshot <= \$616 ;
+    ch0_result_w0_hi_data_snapshot <= \$509 ;
   always @(posedge clk)
-    ch1_result_status_w1_ne_snapshot <= \$617 ;
+    ch0_result_w1_lo_data_snapshot <= \$510 ;
   always @(posedge clk)
-    ch1_result_status_w1_nw_snapshot <= \$618 ;
+    ch0_result_w1_hi_data_snapshot <= \$511 ;
   always @(posedge clk)
-    ch1_result_status_w1_crc_ok_snapshot <= \$619 ;
+    ch0_result_timestamp_time_snapshot <= \$512 ;
   always @(posedge clk)
-    ch1_result_status_lc_repeat_snapshot <= \$620 ;
+    ch0_window0_read <= \$513 ;
   always @(posedge clk)
-    ch1_result_status_lc_skip_snapshot <= \$621 ;
+    ch0_read_data <= \$514 ;
   always @(posedge clk)
-    ch1_result_status_lc_zero_snapshot <= \$622 ;
+    ch1_ctrl_start <= \$515 ;
   always @(posedge clk)
-    ch1_result_status_spw_mismatch_snapshot <= \$623 ;
+    ch1_ctrl_abort <= \$516 ;
   always @(posedge clk)
-    ch1_result_status_lc_snapshot <= \$624 ;
+    ch1_ctrl_clear_counters <= \$517 ;
   always @(posedge clk)
-    ch1_result_seq_seq_snapshot <= \$625 ;
+    ch1_ctrl_periodic <= \$518 ;
   always @(posedge clk)
-    ch1_result_seq_line_delay_snapshot <= \$626 ;
+    ch1_ctrl_trigger_enable <= \$519 ;
   always @(posedge clk)
-    ch1_result_w0_lo_data_snapshot <= \$627 ;
+    ch1_irq_status_done <= \$520 ;
   always @(posedge clk)
-    ch1_result_w0_hi_data_snapshot <= \$628 ;
+    ch1_irq_status_error <= \$521 ;
   always @(posedge clk)
-    ch1_result_w1_lo_data_snapshot <= \$629 ;
+    ch1_irq_status_access_done <= \$522 ;
   always @(posedge clk)
-    ch1_result_w1_hi_data_snapshot <= \$630 ;
+    ch1_irq_enable_done <= \$523 ;
   always @(posedge clk)
-    ch1_result_timestamp_time_snapshot <= \$631 ;
+    ch1_irq_enable_error <= \$524 ;
   always @(posedge clk)
-    ch1_read_select_100 <= \$632 ;
+    ch1_irq_enable_access_done <= \$525 ;
   always @(posedge clk)
-    ch1_read_select_101 <= \$633 ;
+    ch1_cfg_ma_ma_half_period <= \$526 ;
   always @(posedge clk)
-    ch1_read_select_102 <= \$634 ;
+    ch1_cfg_ma_delay_limit <= \$527 ;
   always @(posedge clk)
-    ch1_read_select_104 <= \$635 ;
+    ch1_cfg_period_request_period <= \$528 ;
   always @(posedge clk)
-    ch1_read_select_105 <= \$636 ;
+    ch1_cfg_break_break_time <= \$529 ;
   always @(posedge clk)
-    ch1_read_select_108 <= \$637 ;
+    ch1_cfg_ack_ack_limit <= \$530 ;
   always @(posedge clk)
-    ch1_read_select_109 <= \$638 ;
+    ch1_cfg_timeout_timeout_limit <= \$531 ;
   always @(posedge clk)
-    ch1_read_select_10a <= \$639 ;
+    ch1_cfg_words_w0_data_bits <= \$532 ;
   always @(posedge clk)
-    ch1_read_select_10b <= \$640 ;
+    ch1_cfg_words_w0_nenw <= \$533 ;
   always @(posedge clk)
-    ch1_read_select_10c <= \$641 ;
+    ch1_cfg_words_w0_lc <= \$534 ;
   always @(posedge clk)
-    ch1_read_select_10d <= \$642 ;
+    ch1_cfg_words_w0_crc <= \$535 ;
   always @(posedge clk)
-    ch1_read_select_10e <= \$643 ;
+    ch1_cfg_words_w1_data_bits <= \$536 ;
   always @(posedge clk)
-    ch1_read_select_110 <= \$644 ;
+    ch1_cfg_words_w1_nenw <= \$537 ;
   always @(posedge clk)
-    ch1_read_select_111 <= \$645 ;
+    ch1_cfg_words_w1_lc <= \$538 ;
   always @(posedge clk)
-    ch1_read_select_112 <= \$646 ;
+    ch1_cfg_words_w1_crc <= \$539 ;
   always @(posedge clk)
-    ch1_read_select_113 <= \$647 ;
+    ch1_cfg_words_w1_enable <= \$540 ;
   always @(posedge clk)
-    ch1_read_select_114 <= \$648 ;
+    ch1_cfg_checks_end_check <= \$541 ;
   always @(posedge clk)
-    ch1_read_select_115 <= \$649 ;
+    ch1_cfg_checks_spw_check <= \$542 ;
   always @(posedge clk)
-    ch1_read_select_116 <= \$650 ;
+    ch1_cfg_checks_spw_tolerance <= \$543 ;
   always @(posedge clk)
-    ch1_read_select_118 <= \$651 ;
+    ch1_ca_request_slave_id <= \$544 ;
   always @(posedge clk)
-    ch1_read_select_119 <= \$652 ;
+    ch1_ca_request_address <= \$545 ;
   always @(posedge clk)
-    ch1_read_select_11a <= \$653 ;
+    ch1_ca_request_count <= \$546 ;
   always @(posedge clk)
-    ch1_read_select_11b <= \$654 ;
+    \ch1_ca_request_write$221  <= \$547 ;
   always @(posedge clk)
-    ch1_read_select_11c <= \$655 ;
+    ch1_ca_ctrl_start <= \$548 ;
   always @(posedge clk)
-    ch1_read_select_11d <= \$656 ;
+    ch1_ca_ctrl_abort <= \$549 ;
   always @(posedge clk)
-    ch1_read_select_11e <= \$657 ;
+    ch1_read_select_100 <= \$550 ;
   always @(posedge clk)
-    ch1_read_select_140 <= \$658 ;
+    ch1_read_select_101 <= \$551 ;
   always @(posedge clk)
-    ch1_read_select_141 <= \$659 ;
+    ch1_read_select_102 <= \$552 ;
   always @(posedge clk)
-    ch1_read_select_142 <= \$660 ;
+    ch1_read_select_104 <= \$553 ;
   always @(posedge clk)
-    ch1_read_select_143 <= \$661 ;
+    ch1_read_select_105 <= \$554 ;
   always @(posedge clk)
-    ch1_read_select_144 <= \$662 ;
+    ch1_read_select_108 <= \$555 ;
   always @(posedge clk)
-    ch1_read_select_145 <= \$663 ;
+    ch1_read_select_109 <= \$556 ;
   always @(posedge clk)
-    window0_read <= \$664 ;
+    ch1_read_select_10a <= \$557 ;
   always @(posedge clk)
-    window1_read <= \$665 ;
+    ch1_read_select_10b <= \$558 ;
   always @(posedge clk)
-    read_data <= \$666 ;
+    ch1_read_select_10c <= \$559 ;
+  always @(posedge clk)
+    ch1_read_select_10d <= \$560 ;
+  always @(posedge clk)
+    ch1_read_select_10e <= \$561 ;
+  always @(posedge clk)
+    ch1_read_select_110 <= \$562 ;
+  always @(posedge clk)
+    ch1_read_select_111 <= \$563 ;
+  always @(posedge clk)
+    ch1_read_select_112 <= \$564 ;
+  always @(posedge clk)
+    ch1_read_select_113 <= \$565 ;
+  always @(posedge clk)
+    ch1_read_select_114 <= \$566 ;
+  always @(posedge clk)
+    ch1_read_select_115 <= \$567 ;
+  always @(posedge clk)
+    ch1_read_select_116 <= \$568 ;
+  always @(posedge clk)
+    ch1_read_select_118 <= \$569 ;
+  always @(posedge clk)
+    ch1_read_select_119 <= \$570 ;
+  always @(posedge clk)
+    ch1_read_select_11a <= \$571 ;
+  always @(posedge clk)
+    ch1_read_select_11b <= \$572 ;
+  always @(posedge clk)
+    ch1_read_select_11c <= \$573 ;
+  always @(posedge clk)
+    ch1_read_select_11d <= \$574 ;
+  always @(posedge clk)
+    ch1_read_select_11e <= \$575 ;
+  always @(posedge clk)
+    ch1_read_select_140 <= \$576 ;
+  always @(posedge clk)
+    ch1_read_select_141 <= \$577 ;
+  always @(posedge clk)
+    ch1_read_select_142 <= \$578 ;
+  always @(posedge clk)
+    ch1_read_select_143 <= \$579 ;
+  always @(posedge clk)
+    ch1_read_select_144 <= \$580 ;
+  always @(posedge clk)
+    ch1_read_select_145 <= \$581 ;
+  always @(posedge clk)
+    ch1_result_status_status_snapshot <= \$582 ;
+  always @(posedge clk)
+    ch1_result_status_cds_snapshot <= \$583 ;
+  always @(posedge clk)
+    ch1_result_status_w0_ne_snapshot <= \$584 ;
+  always @(posedge clk)
+    ch1_result_status_w0_nw_snapshot <= \$585 ;
+  always @(posedge clk)
+    ch1_result_status_w0_crc_ok_snapshot <= \$586 ;
+  always @(posedge clk)
+    ch1_result_status_w1_ne_snapshot <= \$587 ;
+  always @(posedge clk)
+    ch1_result_status_w1_nw_snapshot <= \$588 ;
+  always @(posedge clk)
+    ch1_result_status_w1_crc_ok_snapshot <= \$589 ;
+  always @(posedge clk)
+    ch1_result_status_lc_repeat_snapshot <= \$590 ;
+  always @(posedge clk)
+    ch1_result_status_lc_skip_snapshot <= \$591 ;
+  always @(posedge clk)
+    ch1_result_status_lc_zero_snapshot <= \$592 ;
+  always @(posedge clk)
+    ch1_result_status_spw_mismatch_snapshot <= \$593 ;
+  always @(posedge clk)
+    ch1_result_status_lc_snapshot <= \$594 ;
+  always @(posedge clk)
+    ch1_result_seq_seq_snapshot <= \$595 ;
+  always @(posedge clk)
+    ch1_result_seq_line_delay_snapshot <= \$596 ;
+  always @(posedge clk)
+    ch1_result_w0_lo_data_snapshot <= \$597 ;
+  always @(posedge clk)
+    ch1_result_w0_hi_data_snapshot <= \$598 ;
+  always @(posedge clk)
+    ch1_result_w1_lo_data_snapshot <= \$599 ;
+  always @(posedge clk)
+    ch1_result_w1_hi_data_snapshot <= \$600 ;
+  always @(posedge clk)
+    ch1_result_timestamp_time_snapshot <= \$601 ;
+  always @(posedge clk)
+    ch1_window0_read <= \$602 ;
+  always @(posedge clk)
+    ch1_read_data <= \$603 ;
   assign \$1  = write_data[0] & write_strb[0];
   assign \$2  = g_trigger_write ? \$1  : 1'h0;
   assign \$3  = ! bus__r_addr;
@@ -3038,374 +2715,1105 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign \$5  = bus__r_addr == 2'h2;
   assign \$6  = bus__r_addr == 2'h3;
   assign \$7  = bus__r_addr == 3'h4;
-  assign \$8  = write_data[0] & write_strb[0];
-  assign \$9  = ch0_ctrl_write ? \$8  : 1'h0;
-  assign \$10  = write_data[1] & write_strb[0];
-  assign \$11  = ch0_ctrl_write ? \$10  : 1'h0;
-  assign \$12  = write_data[2] & write_strb[0];
-  assign \$13  = ch0_ctrl_write ? \$12  : 1'h0;
-  assign \$14  = ch0_ctrl_write & write_strb[1];
-  assign \$15  = ch0_ctrl_write & write_strb[1];
-  assign \$16  = write_data[0] & write_strb[0];
-  assign \$17  = ch0_irq_status_write ? \$16  : 1'h0;
-  assign \$18  = write_data[1] & write_strb[0];
-  assign \$19  = ch0_irq_status_write ? \$18  : 1'h0;
-  assign \$20  = write_data[2] & write_strb[0];
-  assign \$21  = ch0_irq_status_write ? \$20  : 1'h0;
-  assign \$22  = ch0_irq_enable_write & write_strb[0];
-  assign \$23  = ch0_irq_enable_write & write_strb[0];
-  assign \$24  = ch0_irq_enable_write & write_strb[0];
-  assign \$25  = ch0_cfg_ma_write & write_strb[0];
-  assign \$26  = ch0_cfg_ma_write & write_strb[1];
-  assign \$27  = ch0_cfg_ma_write & write_strb[2];
-  assign \$28  = ch0_cfg_ma_write & write_strb[3];
-  assign \$29  = ch0_cfg_period_write & write_strb[0];
-  assign \$30  = ch0_cfg_period_write & write_strb[1];
-  assign \$31  = ch0_cfg_period_write & write_strb[2];
-  assign \$32  = ch0_cfg_break_write & write_strb[0];
-  assign \$33  = ch0_cfg_break_write & write_strb[1];
-  assign \$34  = ch0_cfg_break_write & write_strb[2];
-  assign \$35  = ch0_cfg_ack_write & write_strb[0];
-  assign \$36  = ch0_cfg_ack_write & write_strb[1];
-  assign \$37  = ch0_cfg_ack_write & write_strb[2];
-  assign \$38  = ch0_cfg_timeout_write & write_strb[0];
-  assign \$39  = ch0_cfg_timeout_write & write_strb[1];
-  assign \$40  = ch0_cfg_timeout_write & write_strb[2];
-  assign \$41  = ch0_cfg_words_write & write_strb[0];
-  assign \$42  = ch0_cfg_words_write & write_strb[0];
-  assign \$43  = ch0_cfg_words_write & write_strb[0];
-  assign \$44  = ch0_cfg_words_write & write_strb[1];
-  assign \$45  = ch0_cfg_words_write & write_strb[2];
-  assign \$46  = ch0_cfg_words_write & write_strb[2];
-  assign \$47  = ch0_cfg_words_write & write_strb[2];
-  assign \$48  = ch0_cfg_words_write & write_strb[3];
-  assign \$49  = ch0_cfg_words_write & write_strb[3];
-  assign \$50  = ch0_cfg_checks_write & write_strb[0];
-  assign \$51  = ch0_cfg_checks_write & write_strb[0];
-  assign \$52  = ch0_cfg_checks_write & write_strb[1];
-  assign \$53  = ch0_ca_request_write & write_strb[0];
-  assign \$54  = ch0_ca_request_write & write_strb[1];
-  assign \$55  = ch0_ca_request_write & write_strb[2];
-  assign \$56  = ch0_ca_request_write & write_strb[3];
-  assign \$57  = write_data[0] & write_strb[0];
-  assign \$58  = ch0_ca_ctrl_write ? \$57  : 1'h0;
-  assign \$59  = write_data[1] & write_strb[0];
-  assign \$60  = ch0_ca_ctrl_write ? \$59  : 1'h0;
-  assign \$61  = bus__r_addr == 8'h80;
-  assign \$62  = bus__r_addr == 8'h81;
-  assign \$63  = bus__r_addr == 8'h82;
-  assign \$64  = bus__r_addr == 8'h84;
-  assign \$65  = bus__r_addr == 8'h85;
-  assign \$66  = bus__r_addr == 8'h88;
-  assign \$67  = bus__r_addr == 8'h89;
-  assign \$68  = bus__r_addr == 8'h8a;
-  assign \$69  = bus__r_addr == 8'h8b;
-  assign \$70  = bus__r_addr == 8'h8c;
-  assign \$71  = bus__r_addr == 8'h8d;
-  assign \$72  = bus__r_addr == 8'h8e;
-  assign \$73  = bus__r_addr == 8'h90;
-  assign \$74  = bus__r_addr == 8'h91;
-  assign \$75  = bus__r_addr == 8'h92;
-  assign \$76  = bus__r_addr == 8'h93;
-  assign \$77  = bus__r_addr == 8'h94;
-  assign \$78  = bus__r_addr == 8'h95;
-  assign \$79  = bus__r_addr == 8'h96;
-  assign \$80  = bus__r_addr == 8'h98;
-  assign \$81  = bus__r_addr == 8'h99;
-  assign \$82  = bus__r_addr == 8'h9a;
-  assign \$83  = bus__r_addr == 8'h9b;
-  assign \$84  = bus__r_addr == 8'h9c;
-  assign \$85  = bus__r_addr == 8'h9d;
-  assign \$86  = bus__r_addr == 8'h9e;
-  assign \$87  = bus__r_addr == 8'hc0;
-  assign \$88  = bus__r_addr == 8'hc1;
-  assign \$89  = bus__r_addr == 8'hc2;
-  assign \$90  = bus__r_addr == 8'hc3;
-  assign \$91  = bus__r_addr == 8'hc4;
-  assign \$92  = bus__r_addr == 8'hc5;
-  assign \$93  = write_data[0] & write_strb[0];
-  assign \$94  = ch1_ctrl_write ? \$93  : 1'h0;
-  assign \$95  = write_data[1] & write_strb[0];
-  assign \$96  = ch1_ctrl_write ? \$95  : 1'h0;
-  assign \$97  = write_data[2] & write_strb[0];
-  assign \$98  = ch1_ctrl_write ? \$97  : 1'h0;
-  assign \$99  = ch1_ctrl_write & write_strb[1];
-  assign \$100  = ch1_ctrl_write & write_strb[1];
-  assign \$101  = write_data[0] & write_strb[0];
-  assign \$102  = ch1_irq_status_write ? \$101  : 1'h0;
-  assign \$103  = write_data[1] & write_strb[0];
-  assign \$104  = ch1_irq_status_write ? \$103  : 1'h0;
-  assign \$105  = write_data[2] & write_strb[0];
-  assign \$106  = ch1_irq_status_write ? \$105  : 1'h0;
-  assign \$107  = ch1_irq_enable_write & write_strb[0];
-  assign \$108  = ch1_irq_enable_write & write_strb[0];
-  assign \$109  = ch1_irq_enable_write & write_strb[0];
-  assign \$110  = ch1_cfg_ma_write & write_strb[0];
-  assign \$111  = ch1_cfg_ma_write & write_strb[1];
-  assign \$112  = ch1_cfg_ma_write & write_strb[2];
-  assign \$113  = ch1_cfg_ma_write & write_strb[3];
-  assign \$114  = ch1_cfg_period_write & write_strb[0];
-  assign \$115  = ch1_cfg_period_write & write_strb[1];
-  assign \$116  = ch1_cfg_period_write & write_strb[2];
-  assign \$117  = ch1_cfg_break_write & write_strb[0];
-  assign \$118  = ch1_cfg_break_write & write_strb[1];
-  assign \$119  = ch1_cfg_break_write & write_strb[2];
-  assign \$120  = ch1_cfg_ack_write & write_strb[0];
-  assign \$121  = ch1_cfg_ack_write & write_strb[1];
-  assign \$122  = ch1_cfg_ack_write & write_strb[2];
-  assign \$123  = ch1_cfg_timeout_write & write_strb[0];
-  assign \$124  = ch1_cfg_timeout_write & write_strb[1];
-  assign \$125  = ch1_cfg_timeout_write & write_strb[2];
-  assign \$126  = ch1_cfg_words_write & write_strb[0];
-  assign \$127  = ch1_cfg_words_write & write_strb[0];
-  assign \$128  = ch1_cfg_words_write & write_strb[0];
-  assign \$129  = ch1_cfg_words_write & write_strb[1];
-  assign \$130  = ch1_cfg_words_write & write_strb[2];
-  assign \$131  = ch1_cfg_words_write & write_strb[2];
-  assign \$132  = ch1_cfg_words_write & write_strb[2];
-  assign \$133  = ch1_cfg_words_write & write_strb[3];
-  assign \$134  = ch1_cfg_words_write & write_strb[3];
-  assign \$135  = ch1_cfg_checks_write & write_strb[0];
-  assign \$136  = ch1_cfg_checks_write & write_strb[0];
-  assign \$137  = ch1_cfg_checks_write & write_strb[1];
-  assign \$138  = ch1_ca_request_write & write_strb[0];
-  assign \$139  = ch1_ca_request_write & write_strb[1];
-  assign \$140  = ch1_ca_request_write & write_strb[2];
-  assign \$141  = ch1_ca_request_write & write_strb[3];
-  assign \$142  = write_data[0] & write_strb[0];
-  assign \$143  = ch1_ca_ctrl_write ? \$142  : 1'h0;
-  assign \$144  = write_data[1] & write_strb[0];
-  assign \$145  = ch1_ca_ctrl_write ? \$144  : 1'h0;
-  assign \$146  = bus__r_addr == 9'h100;
-  assign \$147  = bus__r_addr == 9'h101;
-  assign \$148  = bus__r_addr == 9'h102;
-  assign \$149  = bus__r_addr == 9'h104;
-  assign \$150  = bus__r_addr == 9'h105;
-  assign \$151  = bus__r_addr == 9'h108;
-  assign \$152  = bus__r_addr == 9'h109;
-  assign \$153  = bus__r_addr == 9'h10a;
-  assign \$154  = bus__r_addr == 9'h10b;
-  assign \$155  = bus__r_addr == 9'h10c;
-  assign \$156  = bus__r_addr == 9'h10d;
-  assign \$157  = bus__r_addr == 9'h10e;
-  assign \$158  = bus__r_addr == 9'h110;
-  assign \$159  = bus__r_addr == 9'h111;
-  assign \$160  = bus__r_addr == 9'h112;
-  assign \$161  = bus__r_addr == 9'h113;
-  assign \$162  = bus__r_addr == 9'h114;
-  assign \$163  = bus__r_addr == 9'h115;
-  assign \$164  = bus__r_addr == 9'h116;
-  assign \$165  = bus__r_addr == 9'h118;
-  assign \$166  = bus__r_addr == 9'h119;
-  assign \$167  = bus__r_addr == 9'h11a;
-  assign \$168  = bus__r_addr == 9'h11b;
-  assign \$169  = bus__r_addr == 9'h11c;
-  assign \$170  = bus__r_addr == 9'h11d;
-  assign \$171  = bus__r_addr == 9'h11e;
-  assign \$172  = bus__r_addr == 9'h140;
-  assign \$173  = bus__r_addr == 9'h141;
-  assign \$174  = bus__r_addr == 9'h142;
-  assign \$175  = bus__r_addr == 9'h143;
-  assign \$176  = bus__r_addr == 9'h144;
-  assign \$177  = bus__r_addr == 9'h145;
-  assign \$178  = bus__r_addr[10:4] == 4'he;
-  assign \$179  = bus__r_en & \$178 ;
-  assign \$180  = bus__r_addr[10:4] == 5'h16;
-  assign \$181  = bus__r_en & \$180 ;
-  assign \$182  = g_read_select_0 ? 32'd1114198867 : 32'd0;
-  assign \$184  = g_read_select_1 ? 32'd65537 : 32'd0;
-  assign \$185  = \$183  | \$184 ;
-  assign \$186  = g_read_select_2 ? 32'd2 : 32'd0;
-  assign \$187  = \$185  | \$186 ;
-  assign \$190  = g_read_select_4 ? { 30'h00000000, ch1_irq, ch0_irq } : 32'd0;
-  assign \$191  = \$189  | \$190 ;
-  assign \$192  = ch0_read_select_80 ? { 22'h000000, ch0_ctrl_trigger_enable, ch0_ctrl_periodic, 8'h00 } : 32'd0;
-  assign \$193  = \$191  | \$192 ;
-  assign \$194  = ch0_read_select_81 ? { 30'h00000000, ch0__config_error, ch0__busy } : 32'd0;
-  assign \$195  = \$193  | \$194 ;
-  assign \$196  = ch0_read_select_82 ? 32'd119023671 : 32'd0;
-  assign \$197  = \$195  | \$196 ;
-  assign \$198  = ch0_read_select_84 ? { 29'h00000000, ch0_irq_status_access_done, ch0_irq_status_error, ch0_irq_status_done } : 32'd0;
-  assign \$199  = \$197  | \$198 ;
-  assign \$200  = ch0_read_select_85 ? { 29'h00000000, ch0_irq_enable_access_done, ch0_irq_enable_error, ch0_irq_enable_done } : 32'd0;
-  assign \$201  = \$199  | \$200 ;
-  assign \$202  = ch0_read_select_88 ? { 4'h0, ch0_cfg_ma_delay_limit, ch0_cfg_ma_ma_half_period } : 32'd0;
-  assign \$203  = \$201  | \$202 ;
-  assign \$204  = ch0_read_select_89 ? { 8'h00, ch0_cfg_period_request_period } : 32'd0;
-  assign \$205  = \$203  | \$204 ;
-  assign \$206  = ch0_read_select_8a ? { 8'h00, ch0_cfg_break_break_time } : 32'd0;
-  assign \$207  = \$205  | \$206 ;
-  assign \$208  = ch0_read_select_8b ? { 8'h00, ch0_cfg_ack_ack_limit } : 32'd0;
-  assign \$209  = \$207  | \$208 ;
-  assign \$210  = ch0_read_select_8c ? { 8'h00, ch0_cfg_timeout_timeout_limit } : 32'd0;
-  assign \$211  = \$209  | \$210 ;
-  assign \$212  = ch0_read_select_8d ? { ch0_cfg_words_w1_enable, 5'h00, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_data_bits, 6'h00, ch0_cfg_words_w0_crc, ch0_cfg_words_w0_lc, ch0_cfg_words_w0_nenw, ch0_cfg_words_w0_data_bits } : 32'd0;
-  assign \$213  = \$211  | \$212 ;
-  assign \$214  = ch0_read_select_8e ? { 16'h0000, ch0_cfg_checks_spw_tolerance, 6'h00, ch0_cfg_checks_spw_check, ch0_cfg_checks_end_check } : 32'd0;
-  assign \$215  = \$213  | \$214 ;
-  assign \$216  = ch0_read_select_90 ? { 2'h0, ch0_result_status_lc_snapshot, 4'h0, ch0_result_status_spw_mismatch_snapshot, ch0_result_status_lc_zero_snapshot, ch0_result_status_lc_skip_snapshot, ch0_result_status_lc_repeat_snapshot, 1'h0, ch0_result_status_w1_crc_ok_snapshot, ch0_result_status_w1_nw_snapshot, ch0_result_status_w1_ne_snapshot, 1'h0, ch0_result_status_w0_crc_ok_snapshot, ch0_result_status_w0_nw_snapshot, ch0_result_status_w0_ne_snapshot, 3'h0, ch0_result_status_cds_snapshot, ch0_result_status_status_snapshot } : 32'd0;
-  assign \$217  = \$215  | \$216 ;
-  assign \$218  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
-  assign \$219  = \$217  | \$218 ;
-  assign \$220  = ch0_read_select_92 ? ch0_result_w0_lo_data_snapshot : 32'd0;
-  assign \$221  = \$219  | \$220 ;
-  assign \$222  = ch0_read_select_93 ? { 9'h000, ch0_result_w0_hi_data_snapshot } : 32'd0;
-  assign \$223  = \$221  | \$222 ;
-  assign \$224  = ch0_read_select_94 ? ch0_result_w1_lo_data_snapshot : 32'd0;
-  assign \$225  = \$223  | \$224 ;
-  assign \$226  = ch0_read_select_95 ? { 24'h000000, ch0_result_w1_hi_data_snapshot } : 32'd0;
-  assign \$227  = \$225  | \$226 ;
-  assign \$228  = ch0_read_select_96 ? ch0_result_timestamp_time_snapshot : 32'd0;
-  assign \$229  = \$227  | \$228 ;
-  assign \$230  = ch0_read_select_98 ? \port$4265$0 [31:0] : 32'd0;
-  assign \$231  = \$229  | \$230 ;
-  assign \$232  = ch0_read_select_99 ? \port$4265$0 [63:32] : 32'd0;
-  assign \$233  = \$231  | \$232 ;
-  assign \$234  = ch0_read_select_9a ? \port$4265$0 [95:64] : 32'd0;
-  assign \$235  = \$233  | \$234 ;
-  assign \$236  = ch0_read_select_9b ? \port$4265$0 [127:96] : 32'd0;
-  assign \$237  = \$235  | \$236 ;
-  assign \$238  = ch0_read_select_9c ? \port$4265$0 [159:128] : 32'd0;
-  assign \$239  = \$237  | \$238 ;
-  assign \$240  = ch0_read_select_9d ? \port$4265$0 [191:160] : 32'd0;
-  assign \$241  = \$239  | \$240 ;
-  assign \$242  = ch0_read_select_9e ? { 16'h0000, \port$4265$0 [207:192] } : 32'd0;
-  assign \$243  = \$241  | \$242 ;
-  assign \$244  = ch0_read_select_c0 ? { 7'h00, \ch0_ca_request_write$65 , 1'h0, ch0_ca_request_count, 1'h0, ch0_ca_request_address, 5'h00, ch0_ca_request_slave_id } : 32'd0;
-  assign \$245  = \$243  | \$244 ;
-  assign \$248  = ch0_read_select_c2 ? { 17'h00000, \port$4379$0 [9:3], 1'h0, \port$4379$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
-  assign \$249  = \$247  | \$248 ;
-  assign \$250  = ch0_read_select_c3 ? \port$4265$0 [239:208] : 32'd0;
-  assign \$251  = \$249  | \$250 ;
-  assign \$252  = ch0_read_select_c4 ? \port$4265$0 [271:240] : 32'd0;
-  assign \$253  = \$251  | \$252 ;
-  assign \$254  = ch0_read_select_c5 ? { 16'h0000, \port$4265$0 [287:272] } : 32'd0;
-  assign \$255  = \$253  | \$254 ;
-  assign \$256  = ch1_read_select_100 ? { 22'h000000, ch1_ctrl_trigger_enable, ch1_ctrl_periodic, 8'h00 } : 32'd0;
-  assign \$257  = \$255  | \$256 ;
-  assign \$258  = ch1_read_select_101 ? { 30'h00000000, ch1__config_error, ch1__busy } : 32'd0;
-  assign \$259  = \$257  | \$258 ;
-  assign \$260  = ch1_read_select_102 ? 32'd119023671 : 32'd0;
-  assign \$261  = \$259  | \$260 ;
-  assign \$262  = ch1_read_select_104 ? { 29'h00000000, ch1_irq_status_access_done, ch1_irq_status_error, ch1_irq_status_done } : 32'd0;
+  assign \$8  = g_read_select_0 ? 32'd1114198867 : 32'd0;
+  assign \$10  = g_read_select_1 ? 32'd65537 : 32'd0;
+  assign \$11  = \$9  | \$10 ;
+  assign \$12  = g_read_select_2 ? 32'd2 : 32'd0;
+  assign \$13  = \$11  | \$12 ;
+  assign \$16  = g_read_select_4 ? { 30'h00000000, ch1_irq, ch0_irq } : 32'd0;
+  assign \$17  = \$15  | \$16 ;
+  assign \$18  = write_data[0] & write_strb[0];
+  assign \$19  = ch0_ctrl_write ? \$18  : 1'h0;
+  assign \$20  = write_data[1] & write_strb[0];
+  assign \$21  = ch0_ctrl_write ? \$20  : 1'h0;
+  assign \$22  = write_data[2] & write_strb[0];
+  assign \$23  = ch0_ctrl_write ? \$22  : 1'h0;
+  assign \$24  = ch0_ctrl_write & write_strb[1];
+  assign \$25  = ch0_ctrl_write & write_strb[1];
+  assign \$26  = write_data[0] & write_strb[0];
+  assign \$27  = ch0_irq_status_write ? \$26  : 1'h0;
+  assign \$28  = write_data[1] & write_strb[0];
+  assign \$29  = ch0_irq_status_write ? \$28  : 1'h0;
+  assign \$30  = write_data[2] & write_strb[0];
+  assign \$31  = ch0_irq_status_write ? \$30  : 1'h0;
+  assign \$32  = ch0_irq_enable_write & write_strb[0];
+  assign \$33  = ch0_irq_enable_write & write_strb[0];
+  assign \$34  = ch0_irq_enable_write & write_strb[0];
+  assign \$35  = ch0_cfg_ma_write & write_strb[0];
+  assign \$36  = ch0_cfg_ma_write & write_strb[1];
+  assign \$37  = ch0_cfg_ma_write & write_strb[2];
+  assign \$38  = ch0_cfg_ma_write & write_strb[3];
+  assign \$39  = ch0_cfg_period_write & write_strb[0];
+  assign \$40  = ch0_cfg_period_write & write_strb[1];
+  assign \$41  = ch0_cfg_period_write & write_strb[2];
+  assign \$42  = ch0_cfg_break_write & write_strb[0];
+  assign \$43  = ch0_cfg_break_write & write_strb[1];
+  assign \$44  = ch0_cfg_break_write & write_strb[2];
+  assign \$45  = ch0_cfg_ack_write & write_strb[0];
+  assign \$46  = ch0_cfg_ack_write & write_strb[1];
+  assign \$47  = ch0_cfg_ack_write & write_strb[2];
+  assign \$48  = ch0_cfg_timeout_write & write_strb[0];
+  assign \$49  = ch0_cfg_timeout_write & write_strb[1];
+  assign \$50  = ch0_cfg_timeout_write & write_strb[2];
+  assign \$51  = ch0_cfg_words_write & write_strb[0];
+  assign \$52  = ch0_cfg_words_write & write_strb[0];
+  assign \$53  = ch0_cfg_words_write & write_strb[0];
+  assign \$54  = ch0_cfg_words_write & write_strb[1];
+  assign \$55  = ch0_cfg_words_write & write_strb[2];
+  assign \$56  = ch0_cfg_words_write & write_strb[2];
+  assign \$57  = ch0_cfg_words_write & write_strb[2];
+  assign \$58  = ch0_cfg_words_write & write_strb[3];
+  assign \$59  = ch0_cfg_words_write & write_strb[3];
+  assign \$60  = ch0_cfg_checks_write & write_strb[0];
+  assign \$61  = ch0_cfg_checks_write & write_strb[0];
+  assign \$62  = ch0_cfg_checks_write & write_strb[1];
+  assign \$63  = ch0_ca_request_write & write_strb[0];
+  assign \$64  = ch0_ca_request_write & write_strb[1];
+  assign \$65  = ch0_ca_request_write & write_strb[2];
+  assign \$66  = ch0_ca_request_write & write_strb[3];
+  assign \$67  = write_data[0] & write_strb[0];
+  assign \$68  = ch0_ca_ctrl_write ? \$67  : 1'h0;
+  assign \$69  = write_data[1] & write_strb[0];
+  assign \$70  = ch0_ca_ctrl_write ? \$69  : 1'h0;
+  assign \$71  = bus__r_addr == 8'h80;
+  assign \$72  = bus__r_addr == 8'h81;
+  assign \$73  = bus__r_addr == 8'h82;
+  assign \$74  = bus__r_addr == 8'h84;
+  assign \$75  = bus__r_addr == 8'h85;
+  assign \$76  = bus__r_addr == 8'h88;
+  assign \$77  = bus__r_addr == 8'h89;
+  assign \$78  = bus__r_addr == 8'h8a;
+  assign \$79  = bus__r_addr == 8'h8b;
+  assign \$80  = bus__r_addr == 8'h8c;
+  assign \$81  = bus__r_addr == 8'h8d;
+  assign \$82  = bus__r_addr == 8'h8e;
+  assign \$83  = bus__r_addr == 8'h90;
+  assign \$84  = bus__r_addr == 8'h91;
+  assign \$85  = bus__r_addr == 8'h92;
+  assign \$86  = bus__r_addr == 8'h93;
+  assign \$87  = bus__r_addr == 8'h94;
+  assign \$88  = bus__r_addr == 8'h95;
+  assign \$89  = bus__r_addr == 8'h96;
+  assign \$90  = bus__r_addr == 8'h98;
+  assign \$91  = bus__r_addr == 8'h99;
+  assign \$92  = bus__r_addr == 8'h9a;
+  assign \$93  = bus__r_addr == 8'h9b;
+  assign \$94  = bus__r_addr == 8'h9c;
+  assign \$95  = bus__r_addr == 8'h9d;
+  assign \$96  = bus__r_addr == 8'h9e;
+  assign \$97  = bus__r_addr == 8'hc0;
+  assign \$98  = bus__r_addr == 8'hc1;
+  assign \$99  = bus__r_addr == 8'hc2;
+  assign \$100  = bus__r_addr == 8'hc3;
+  assign \$101  = bus__r_addr == 8'hc4;
+  assign \$102  = bus__r_addr == 8'hc5;
+  assign \$103  = ch0_read_select_90 & bus__r_load;
+  assign \$104  = bus__r_addr[10:4] == 4'he;
+  assign \$105  = bus__r_en & \$104 ;
+  assign \$106  = ch0_read_select_80 ? { 22'h000000, ch0_ctrl_trigger_enable, ch0_ctrl_periodic, 8'h00 } : 32'd0;
+  assign \$108  = ch0_read_select_81 ? { 30'h00000000, ch0__config_error, ch0__busy } : 32'd0;
+  assign \$109  = \$107  | \$108 ;
+  assign \$110  = ch0_read_select_82 ? 32'd119023671 : 32'd0;
+  assign \$111  = \$109  | \$110 ;
+  assign \$112  = ch0_read_select_84 ? { 29'h00000000, ch0_irq_status_access_done, ch0_irq_status_error, ch0_irq_status_done } : 32'd0;
+  assign \$113  = \$111  | \$112 ;
+  assign \$114  = ch0_read_select_85 ? { 29'h00000000, ch0_irq_enable_access_done, ch0_irq_enable_error, ch0_irq_enable_done } : 32'd0;
+  assign \$115  = \$113  | \$114 ;
+  assign \$116  = ch0_read_select_88 ? { 4'h0, ch0_cfg_ma_delay_limit, ch0_cfg_ma_ma_half_period } : 32'd0;
+  assign \$117  = \$115  | \$116 ;
+  assign \$118  = ch0_read_select_89 ? { 8'h00, ch0_cfg_period_request_period } : 32'd0;
+  assign \$119  = \$117  | \$118 ;
+  assign \$120  = ch0_read_select_8a ? { 8'h00, ch0_cfg_break_break_time } : 32'd0;
+  assign \$121  = \$119  | \$120 ;
+  assign \$122  = ch0_read_select_8b ? { 8'h00, ch0_cfg_ack_ack_limit } : 32'd0;
+  assign \$123  = \$121  | \$122 ;
+  assign \$124  = ch0_read_select_8c ? { 8'h00, ch0_cfg_timeout_timeout_limit } : 32'd0;
+  assign \$125  = \$123  | \$124 ;
+  assign \$126  = ch0_read_select_8d ? { ch0_cfg_words_w1_enable, 5'h00, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_data_bits, 6'h00, ch0_cfg_words_w0_crc, ch0_cfg_words_w0_lc, ch0_cfg_words_w0_nenw, ch0_cfg_words_w0_data_bits } : 32'd0;
+  assign \$127  = \$125  | \$126 ;
+  assign \$128  = ch0_read_select_8e ? { 16'h0000, ch0_cfg_checks_spw_tolerance, 6'h00, ch0_cfg_checks_spw_check, ch0_cfg_checks_end_check } : 32'd0;
+  assign \$129  = \$127  | \$128 ;
+  assign \$130  = ch0_read_select_90 ? { 2'h0, \port$4137$0 [156:151], 4'h0, \port$4137$0 [160:157], 1'h0, \port$4137$0 [150:148], 1'h0, \port$4137$0 [107:105], 3'h0, \port$4137$0 [49], \port$4137$0 [3:0] } : 32'd0;
+  assign \$131  = \$129  | \$130 ;
+  assign \$132  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
+  assign \$133  = \$131  | \$132 ;
+  assign \$134  = ch0_read_select_92 ? ch0_result_w0_lo_data_snapshot : 32'd0;
+  assign \$135  = \$133  | \$134 ;
+  assign \$136  = ch0_read_select_93 ? { 9'h000, ch0_result_w0_hi_data_snapshot } : 32'd0;
+  assign \$137  = \$135  | \$136 ;
+  assign \$138  = ch0_read_select_94 ? ch0_result_w1_lo_data_snapshot : 32'd0;
+  assign \$139  = \$137  | \$138 ;
+  assign \$140  = ch0_read_select_95 ? { 24'h000000, ch0_result_w1_hi_data_snapshot } : 32'd0;
+  assign \$141  = \$139  | \$140 ;
+  assign \$142  = ch0_read_select_96 ? ch0_result_timestamp_time_snapshot : 32'd0;
+  assign \$143  = \$141  | \$142 ;
+  assign \$144  = ch0_read_select_98 ? \port$4150$0 [31:0] : 32'd0;
+  assign \$145  = \$143  | \$144 ;
+  assign \$146  = ch0_read_select_99 ? \port$4150$0 [63:32] : 32'd0;
+  assign \$147  = \$145  | \$146 ;
+  assign \$148  = ch0_read_select_9a ? \port$4150$0 [95:64] : 32'd0;
+  assign \$149  = \$147  | \$148 ;
+  assign \$150  = ch0_read_select_9b ? \port$4150$0 [127:96] : 32'd0;
+  assign \$151  = \$149  | \$150 ;
+  assign \$152  = ch0_read_select_9c ? \port$4150$0 [159:128] : 32'd0;
+  assign \$153  = \$151  | \$152 ;
+  assign \$154  = ch0_read_select_9d ? \port$4150$0 [191:160] : 32'd0;
+  assign \$155  = \$153  | \$154 ;
+  assign \$156  = ch0_read_select_9e ? { 16'h0000, \port$4150$0 [207:192] } : 32'd0;
+  assign \$157  = \$155  | \$156 ;
+  assign \$158  = ch0_read_select_c0 ? { 7'h00, \ch0_ca_request_write$69 , 1'h0, ch0_ca_request_count, 1'h0, ch0_ca_request_address, 5'h00, ch0_ca_request_slave_id } : 32'd0;
+  assign \$159  = \$157  | \$158 ;
+  assign \$162  = ch0_read_select_c2 ? { 17'h00000, \port$4264$0 [9:3], 1'h0, \port$4264$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
+  assign \$163  = \$161  | \$162 ;
+  assign \$164  = ch0_read_select_c3 ? \port$4150$0 [239:208] : 32'd0;
+  assign \$165  = \$163  | \$164 ;
+  assign \$166  = ch0_read_select_c4 ? \port$4150$0 [271:240] : 32'd0;
+  assign \$167  = \$165  | \$166 ;
+  assign \$168  = ch0_read_select_c5 ? { 16'h0000, \port$4150$0 [287:272] } : 32'd0;
+  assign \$169  = \$167  | \$168 ;
+  assign \$170  = ch0_window0_read ? ch0__ca_rbuf_data : 32'd0;
+  assign \$171  = \$169  | \$170 ;
+  assign \$172  = write_data[0] & write_strb[0];
+  assign \$173  = ch1_ctrl_write ? \$172  : 1'h0;
+  assign \$174  = write_data[1] & write_strb[0];
+  assign \$175  = ch1_ctrl_write ? \$174  : 1'h0;
+  assign \$176  = write_data[2] & write_strb[0];
+  assign \$177  = ch1_ctrl_write ? \$176  : 1'h0;
+  assign \$178  = ch1_ctrl_write & write_strb[1];
+  assign \$179  = ch1_ctrl_write & write_strb[1];
+  assign \$180  = write_data[0] & write_strb[0];
+  assign \$181  = ch1_irq_status_write ? \$180  : 1'h0;
+  assign \$182  = write_data[1] & write_strb[0];
+  assign \$183  = ch1_irq_status_write ? \$182  : 1'h0;
+  assign \$184  = write_data[2] & write_strb[0];
+  assign \$185  = ch1_irq_status_write ? \$184  : 1'h0;
+  assign \$186  = ch1_irq_enable_write & write_strb[0];
+  assign \$187  = ch1_irq_enable_write & write_strb[0];
+  assign \$188  = ch1_irq_enable_write & write_strb[0];
+  assign \$189  = ch1_cfg_ma_write & write_strb[0];
+  assign \$190  = ch1_cfg_ma_write & write_strb[1];
+  assign \$191  = ch1_cfg_ma_write & write_strb[2];
+  assign \$192  = ch1_cfg_ma_write & write_strb[3];
+  assign \$193  = ch1_cfg_period_write & write_strb[0];
+  assign \$194  = ch1_cfg_period_write & write_strb[1];
+  assign \$195  = ch1_cfg_period_write & write_strb[2];
+  assign \$196  = ch1_cfg_break_write & write_strb[0];
+  assign \$197  = ch1_cfg_break_write & write_strb[1];
+  assign \$198  = ch1_cfg_break_write & write_strb[2];
+  assign \$199  = ch1_cfg_ack_write & write_strb[0];
+  assign \$200  = ch1_cfg_ack_write & write_strb[1];
+  assign \$201  = ch1_cfg_ack_write & write_strb[2];
+  assign \$202  = ch1_cfg_timeout_write & write_strb[0];
+  assign \$203  = ch1_cfg_timeout_write & write_strb[1];
+  assign \$204  = ch1_cfg_timeout_write & write_strb[2];
+  assign \$205  = ch1_cfg_words_write & write_strb[0];
+  assign \$206  = ch1_cfg_words_write & write_strb[0];
+  assign \$207  = ch1_cfg_words_write & write_strb[0];
+  assign \$208  = ch1_cfg_words_write & write_strb[1];
+  assign \$209  = ch1_cfg_words_write & write_strb[2];
+  assign \$210  = ch1_cfg_words_write & write_strb[2];
+  assign \$211  = ch1_cfg_words_write & write_strb[2];
+  assign \$212  = ch1_cfg_words_write & write_strb[3];
+  assign \$213  = ch1_cfg_words_write & write_strb[3];
+  assign \$214  = ch1_cfg_checks_write & write_strb[0];
+  assign \$215  = ch1_cfg_checks_write & write_strb[0];
+  assign \$216  = ch1_cfg_checks_write & write_strb[1];
+  assign \$217  = ch1_ca_request_write & write_strb[0];
+  assign \$218  = ch1_ca_request_write & write_strb[1];
+  assign \$219  = ch1_ca_request_write & write_strb[2];
+  assign \$220  = ch1_ca_request_write & write_strb[3];
+  assign \$221  = write_data[0] & write_strb[0];
+  assign \$222  = ch1_ca_ctrl_write ? \$221  : 1'h0;
+  assign \$223  = write_data[1] & write_strb[0];
+  assign \$224  = ch1_ca_ctrl_write ? \$223  : 1'h0;
+  assign \$225  = bus__r_addr == 9'h100;
+  assign \$226  = bus__r_addr == 9'h101;
+  assign \$227  = bus__r_addr == 9'h102;
+  assign \$228  = bus__r_addr == 9'h104;
+  assign \$229  = bus__r_addr == 9'h105;
+  assign \$230  = bus__r_addr == 9'h108;
+  assign \$231  = bus__r_addr == 9'h109;
+  assign \$232  = bus__r_addr == 9'h10a;
+  assign \$233  = bus__r_addr == 9'h10b;
+  assign \$234  = bus__r_addr == 9'h10c;
+  assign \$235  = bus__r_addr == 9'h10d;
+  assign \$236  = bus__r_addr == 9'h10e;
+  assign \$237  = bus__r_addr == 9'h110;
+  assign \$238  = bus__r_addr == 9'h111;
+  assign \$239  = bus__r_addr == 9'h112;
+  assign \$240  = bus__r_addr == 9'h113;
+  assign \$241  = bus__r_addr == 9'h114;
+  assign \$242  = bus__r_addr == 9'h115;
+  assign \$243  = bus__r_addr == 9'h116;
+  assign \$244  = bus__r_addr == 9'h118;
+  assign \$245  = bus__r_addr == 9'h119;
+  assign \$246  = bus__r_addr == 9'h11a;
+  assign \$247  = bus__r_addr == 9'h11b;
+  assign \$248  = bus__r_addr == 9'h11c;
+  assign \$249  = bus__r_addr == 9'h11d;
+  assign \$250  = bus__r_addr == 9'h11e;
+  assign \$251  = bus__r_addr == 9'h140;
+  assign \$252  = bus__r_addr == 9'h141;
+  assign \$253  = bus__r_addr == 9'h142;
+  assign \$254  = bus__r_addr == 9'h143;
+  assign \$255  = bus__r_addr == 9'h144;
+  assign \$256  = bus__r_addr == 9'h145;
+  assign \$257  = ch1_read_select_110 & bus__r_load;
+  assign \$258  = bus__r_addr[10:4] == 5'h16;
+  assign \$259  = bus__r_en & \$258 ;
+  assign \$260  = ch1_read_select_100 ? { 22'h000000, ch1_ctrl_trigger_enable, ch1_ctrl_periodic, 8'h00 } : 32'd0;
+  assign \$262  = ch1_read_select_101 ? { 30'h00000000, ch1__config_error, ch1__busy } : 32'd0;
   assign \$263  = \$261  | \$262 ;
-  assign \$264  = ch1_read_select_105 ? { 29'h00000000, ch1_irq_enable_access_done, ch1_irq_enable_error, ch1_irq_enable_done } : 32'd0;
+  assign \$264  = ch1_read_select_102 ? 32'd119023671 : 32'd0;
   assign \$265  = \$263  | \$264 ;
-  assign \$266  = ch1_read_select_108 ? { 4'h0, ch1_cfg_ma_delay_limit, ch1_cfg_ma_ma_half_period } : 32'd0;
+  assign \$266  = ch1_read_select_104 ? { 29'h00000000, ch1_irq_status_access_done, ch1_irq_status_error, ch1_irq_status_done } : 32'd0;
   assign \$267  = \$265  | \$266 ;
-  assign \$268  = ch1_read_select_109 ? { 8'h00, ch1_cfg_period_request_period } : 32'd0;
+  assign \$268  = ch1_read_select_105 ? { 29'h00000000, ch1_irq_enable_access_done, ch1_irq_enable_error, ch1_irq_enable_done } : 32'd0;
   assign \$269  = \$267  | \$268 ;
-  assign \$270  = ch1_read_select_10a ? { 8'h00, ch1_cfg_break_break_time } : 32'd0;
+  assign \$270  = ch1_read_select_108 ? { 4'h0, ch1_cfg_ma_delay_limit, ch1_cfg_ma_ma_half_period } : 32'd0;
   assign \$271  = \$269  | \$270 ;
-  assign \$272  = ch1_read_select_10b ? { 8'h00, ch1_cfg_ack_ack_limit } : 32'd0;
+  assign \$272  = ch1_read_select_109 ? { 8'h00, ch1_cfg_period_request_period } : 32'd0;
   assign \$273  = \$271  | \$272 ;
-  assign \$274  = ch1_read_select_10c ? { 8'h00, ch1_cfg_timeout_timeout_limit } : 32'd0;
+  assign \$274  = ch1_read_select_10a ? { 8'h00, ch1_cfg_break_break_time } : 32'd0;
   assign \$275  = \$273  | \$274 ;
-  assign \$276  = ch1_read_select_10d ? { ch1_cfg_words_w1_enable, 5'h00, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_data_bits, 6'h00, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_data_bits } : 32'd0;
+  assign \$276  = ch1_read_select_10b ? { 8'h00, ch1_cfg_ack_ack_limit } : 32'd0;
   assign \$277  = \$275  | \$276 ;
-  assign \$278  = ch1_read_select_10e ? { 16'h0000, ch1_cfg_checks_spw_tolerance, 6'h00, ch1_cfg_checks_spw_check, ch1_cfg_checks_end_check } : 32'd0;
+  assign \$278  = ch1_read_select_10c ? { 8'h00, ch1_cfg_timeout_timeout_limit } : 32'd0;
   assign \$279  = \$277  | \$278 ;
-  assign \$280  = ch1_read_select_110 ? { 2'h0, ch1_result_status_lc_snapshot, 4'h0, ch1_result_status_spw_mismatch_snapshot, ch1_result_status_lc_zero_snapshot, ch1_result_status_lc_skip_snapshot, ch1_result_status_lc_repeat_snapshot, 1'h0, ch1_result_status_w1_crc_ok_snapshot, ch1_result_status_w1_nw_snapshot, ch1_result_status_w1_ne_snapshot, 1'h0, ch1_result_status_w0_crc_ok_snapshot, ch1_result_status_w0_nw_snapshot, ch1_result_status_w0_ne_snapshot, 3'h0, ch1_result_status_cds_snapshot, ch1_result_status_status_snapshot } : 32'd0;
+  assign \$280  = ch1_read_select_10d ? { ch1_cfg_words_w1_enable, 5'h00, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_data_bits, 6'h00, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_data_bits } : 32'd0;
   assign \$281  = \$279  | \$280 ;
-  assign \$282  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
+  assign \$282  = ch1_read_select_10e ? { 16'h0000, ch1_cfg_checks_spw_tolerance, 6'h00, ch1_cfg_checks_spw_check, ch1_cfg_checks_end_check } : 32'd0;
   assign \$283  = \$281  | \$282 ;
-  assign \$284  = ch1_read_select_112 ? ch1_result_w0_lo_data_snapshot : 32'd0;
+  assign \$284  = ch1_read_select_110 ? { 2'h0, \port$4615$0 [156:151], 4'h0, \port$4615$0 [160:157], 1'h0, \port$4615$0 [150:148], 1'h0, \port$4615$0 [107:105], 3'h0, \port$4615$0 [49], \port$4615$0 [3:0] } : 32'd0;
   assign \$285  = \$283  | \$284 ;
-  assign \$286  = ch1_read_select_113 ? { 9'h000, ch1_result_w0_hi_data_snapshot } : 32'd0;
+  assign \$286  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
   assign \$287  = \$285  | \$286 ;
-  assign \$288  = ch1_read_select_114 ? ch1_result_w1_lo_data_snapshot : 32'd0;
+  assign \$288  = ch1_read_select_112 ? ch1_result_w0_lo_data_snapshot : 32'd0;
   assign \$289  = \$287  | \$288 ;
-  assign \$290  = ch1_read_select_115 ? { 24'h000000, ch1_result_w1_hi_data_snapshot } : 32'd0;
+  assign \$290  = ch1_read_select_113 ? { 9'h000, ch1_result_w0_hi_data_snapshot } : 32'd0;
   assign \$291  = \$289  | \$290 ;
-  assign \$292  = ch1_read_select_116 ? ch1_result_timestamp_time_snapshot : 32'd0;
+  assign \$292  = ch1_read_select_114 ? ch1_result_w1_lo_data_snapshot : 32'd0;
   assign \$293  = \$291  | \$292 ;
-  assign \$294  = ch1_read_select_118 ? \port$4733$0 [31:0] : 32'd0;
+  assign \$294  = ch1_read_select_115 ? { 24'h000000, ch1_result_w1_hi_data_snapshot } : 32'd0;
   assign \$295  = \$293  | \$294 ;
-  assign \$296  = ch1_read_select_119 ? \port$4733$0 [63:32] : 32'd0;
+  assign \$296  = ch1_read_select_116 ? ch1_result_timestamp_time_snapshot : 32'd0;
   assign \$297  = \$295  | \$296 ;
-  assign \$298  = ch1_read_select_11a ? \port$4733$0 [95:64] : 32'd0;
+  assign \$298  = ch1_read_select_118 ? \port$4628$0 [31:0] : 32'd0;
   assign \$299  = \$297  | \$298 ;
-  assign \$300  = ch1_read_select_11b ? \port$4733$0 [127:96] : 32'd0;
+  assign \$300  = ch1_read_select_119 ? \port$4628$0 [63:32] : 32'd0;
   assign \$301  = \$299  | \$300 ;
-  assign \$302  = ch1_read_select_11c ? \port$4733$0 [159:128] : 32'd0;
+  assign \$302  = ch1_read_select_11a ? \port$4628$0 [95:64] : 32'd0;
   assign \$303  = \$301  | \$302 ;
-  assign \$304  = ch1_read_select_11d ? \port$4733$0 [191:160] : 32'd0;
+  assign \$304  = ch1_read_select_11b ? \port$4628$0 [127:96] : 32'd0;
   assign \$305  = \$303  | \$304 ;
-  assign \$306  = ch1_read_select_11e ? { 16'h0000, \port$4733$0 [207:192] } : 32'd0;
+  assign \$306  = ch1_read_select_11c ? \port$4628$0 [159:128] : 32'd0;
   assign \$307  = \$305  | \$306 ;
-  assign \$308  = ch1_read_select_140 ? { 7'h00, \ch1_ca_request_write$186 , 1'h0, ch1_ca_request_count, 1'h0, ch1_ca_request_address, 5'h00, ch1_ca_request_slave_id } : 32'd0;
+  assign \$308  = ch1_read_select_11d ? \port$4628$0 [191:160] : 32'd0;
   assign \$309  = \$307  | \$308 ;
-  assign \$312  = ch1_read_select_142 ? { 17'h00000, \port$4847$0 [9:3], 1'h0, \port$4847$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
+  assign \$310  = ch1_read_select_11e ? { 16'h0000, \port$4628$0 [207:192] } : 32'd0;
+  assign \$311  = \$309  | \$310 ;
+  assign \$312  = ch1_read_select_140 ? { 7'h00, \ch1_ca_request_write$221 , 1'h0, ch1_ca_request_count, 1'h0, ch1_ca_request_address, 5'h00, ch1_ca_request_slave_id } : 32'd0;
   assign \$313  = \$311  | \$312 ;
-  assign \$314  = ch1_read_select_143 ? \port$4733$0 [239:208] : 32'd0;
-  assign \$315  = \$313  | \$314 ;
-  assign \$316  = ch1_read_select_144 ? \port$4733$0 [271:240] : 32'd0;
+  assign \$316  = ch1_read_select_142 ? { 17'h00000, \port$4742$0 [9:3], 1'h0, \port$4742$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
   assign \$317  = \$315  | \$316 ;
-  assign \$318  = ch1_read_select_145 ? { 16'h0000, \port$4733$0 [287:272] } : 32'd0;
+  assign \$318  = ch1_read_select_143 ? \port$4628$0 [239:208] : 32'd0;
   assign \$319  = \$317  | \$318 ;
-  assign \$320  = window0_read ? ch0__ca_rbuf_data : 32'd0;
+  assign \$320  = ch1_read_select_144 ? \port$4628$0 [271:240] : 32'd0;
   assign \$321  = \$319  | \$320 ;
-  assign \$322  = window1_read ? ch1__ca_rbuf_data : 32'd0;
+  assign \$322  = ch1_read_select_145 ? { 16'h0000, \port$4628$0 [287:272] } : 32'd0;
   assign \$323  = \$321  | \$322 ;
-  assign \$324  = ! write_addr;
-  assign g_id_write = write_en & \$324 ;
-  assign \$325  = ! bus__r_addr;
-  assign g_id_read = bus__r_en & \$325 ;
-  assign \$326  = write_addr == 1'h1;
-  assign g_version_write = write_en & \$326 ;
-  assign \$327  = bus__r_addr == 1'h1;
-  assign g_version_read = bus__r_en & \$327 ;
+  assign \$324  = ch1_window0_read ? ch1__ca_rbuf_data : 32'd0;
+  assign \$325  = \$323  | \$324 ;
+  assign \$326  = ! write_addr;
+  assign g_id_write = write_en & \$326 ;
+  assign \$327  = write_addr == 1'h1;
+  assign g_version_write = write_en & \$327 ;
   assign \$328  = write_addr == 2'h2;
   assign g_channels_write = write_en & \$328 ;
+  assign \$329  = write_addr == 2'h3;
+  assign g_trigger_write = write_en & \$329 ;
+  assign \$330  = write_addr == 3'h4;
+  assign g_irq_pending_write = write_en & \$330 ;
+  assign \$331  = write_addr == 8'h80;
+  assign ch0_ctrl_write = write_en & \$331 ;
+  assign \$332  = write_addr == 8'h81;
+  assign ch0_state_write = write_en & \$332 ;
+  assign \$333  = write_addr == 8'h82;
+  assign ch0_caps_write = write_en & \$333 ;
+  assign \$334  = write_addr == 8'h84;
+  assign ch0_irq_status_write = write_en & \$334 ;
+  assign \$335  = write_addr == 8'h85;
+  assign ch0_irq_enable_write = write_en & \$335 ;
+  assign \$336  = write_addr == 8'h88;
+  assign ch0_cfg_ma_write = write_en & \$336 ;
+  assign \$337  = write_addr == 8'h89;
+  assign ch0_cfg_period_write = write_en & \$337 ;
+  assign \$338  = write_addr == 8'h8a;
+  assign ch0_cfg_break_write = write_en & \$338 ;
+  assign \$339  = write_addr == 8'h8b;
+  assign ch0_cfg_ack_write = write_en & \$339 ;
+  assign \$340  = write_addr == 8'h8c;
+  assign ch0_cfg_timeout_write = write_en & \$340 ;
+  assign \$341  = write_addr == 8'h8d;
+  assign ch0_cfg_words_write = write_en & \$341 ;
+  assign \$342  = write_addr == 8'h8e;
+  assign ch0_cfg_checks_write = write_en & \$342 ;
+  assign \$343  = write_addr == 8'h90;
+  assign ch0_result_status_write = write_en & \$343 ;
+  assign \$344  = write_addr == 8'h91;
+  assign ch0_result_seq_write = write_en & \$344 ;
+  assign \$345  = write_addr == 8'h92;
+  assign ch0_result_w0_lo_write = write_en & \$345 ;
+  assign \$346  = write_addr == 8'h93;
+  assign ch0_result_w0_hi_write = write_en & \$346 ;
+  assign \$347  = write_addr == 8'h94;
+  assign ch0_result_w1_lo_write = write_en & \$347 ;
+  assign \$348  = write_addr == 8'h95;
+  assign ch0_result_w1_hi_write = write_en & \$348 ;
+  assign \$349  = write_addr == 8'h96;
+  assign ch0_result_timestamp_write = write_en & \$349 ;
+  assign \$350  = write_addr == 8'h98;
+  assign ch0_count_crc_write = write_en & \$350 ;
+  assign \$351  = write_addr == 8'h99;
+  assign ch0_count_ack_write = write_en & \$351 ;
+  assign \$352  = write_addr == 8'h9a;
+  assign ch0_count_line_write = write_en & \$352 ;
+  assign \$353  = write_addr == 8'h9b;
+  assign ch0_count_lc_write = write_en & \$353 ;
+  assign \$354  = write_addr == 8'h9c;
+  assign ch0_count_check_write = write_en & \$354 ;
+  assign \$355  = write_addr == 8'h9d;
+  assign ch0_count_cycle_write = write_en & \$355 ;
+  assign \$356  = write_addr == 8'h9e;
+  assign ch0_count_stop_write = write_en & \$356 ;
+  assign \$357  = write_addr == 8'hc0;
+  assign ch0_ca_request_write = write_en & \$357 ;
+  assign \$358  = write_addr == 8'hc1;
+  assign ch0_ca_ctrl_write = write_en & \$358 ;
+  assign \$359  = write_addr == 8'hc2;
+  assign ch0_ca_state_write = write_en & \$359 ;
+  assign \$360  = write_addr == 8'hc3;
+  assign ch0_ca_count_crc4_answer_write = write_en & \$360 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$480  = bus__w_en;
+    \$415  = bus__w_en;
+    if (rst) begin
+      \$415  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$416  = write_addr;
+    if (bus__w_en) begin
+      \$416  = bus__w_addr;
+    end
+    if (rst) begin
+      \$416  = 11'h000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$417  = write_data;
+    if (bus__w_en) begin
+      \$417  = bus__w_data;
+    end
+    if (rst) begin
+      \$417  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$418  = write_strb;
+    if (bus__w_en) begin
+      \$418  = bus__w_strb;
+    end
+    if (rst) begin
+      \$418  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$419  = \$2 ;
+    if (rst) begin
+      \$419  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$420  = g_read_select_0;
+    if (bus__r_en) begin
+      \$420  = \$3 ;
+    end
+    if (rst) begin
+      \$420  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$421  = g_read_select_1;
+    if (bus__r_en) begin
+      \$421  = \$4 ;
+    end
+    if (rst) begin
+      \$421  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$422  = g_read_select_2;
+    if (bus__r_en) begin
+      \$422  = \$5 ;
+    end
+    if (rst) begin
+      \$422  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$423  = g_read_select_3;
+    if (bus__r_en) begin
+      \$423  = \$6 ;
+    end
+    if (rst) begin
+      \$423  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$424  = g_read_select_4;
+    if (bus__r_en) begin
+      \$424  = \$7 ;
+    end
+    if (rst) begin
+      \$424  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$425  = g_read_data;
+    if (bus__r_load) begin
+      \$425  = \$17 ;
+    end
+    if (rst) begin
+      \$425  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$426  = \$19 ;
+    if (rst) begin
+      \$426  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$427  = \$21 ;
+    if (rst) begin
+      \$427  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$428  = \$23 ;
+    if (rst) begin
+      \$428  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$429  = ch0_ctrl_periodic;
+    if (\$24 ) begin
+      \$429  = write_data[8];
+    end
+    if (rst) begin
+      \$429  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$430  = ch0_ctrl_trigger_enable;
+    if (\$25 ) begin
+      \$430  = write_data[9];
+    end
+    if (rst) begin
+      \$430  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$431  = ch0_irq_status_done;
+    if (ch0__done) begin
+      \$431  = 1'h1;
+    end else if (\$27 ) begin
+      \$431  = 1'h0;
+    end
+    if (rst) begin
+      \$431  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$432  = ch0_irq_status_error;
+    if (ch0__frame_error) begin
+      \$432  = 1'h1;
+    end else if (\$29 ) begin
+      \$432  = 1'h0;
+    end
+    if (rst) begin
+      \$432  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$433  = ch0_irq_status_access_done;
+    if (ch0__ca_done) begin
+      \$433  = 1'h1;
+    end else if (\$31 ) begin
+      \$433  = 1'h0;
+    end
+    if (rst) begin
+      \$433  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$434  = ch0_irq_enable_done;
+    if (\$32 ) begin
+      \$434  = write_data[0];
+    end
+    if (rst) begin
+      \$434  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$435  = ch0_irq_enable_error;
+    if (\$33 ) begin
+      \$435  = write_data[1];
+    end
+    if (rst) begin
+      \$435  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$436  = ch0_irq_enable_access_done;
+    if (\$34 ) begin
+      \$436  = write_data[2];
+    end
+    if (rst) begin
+      \$436  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$437  = ch0_cfg_ma_ma_half_period;
+    if (\$35 ) begin
+      \$437 [7:0] = write_data[7:0];
+    end
+    if (\$36 ) begin
+      \$437 [15:8] = write_data[15:8];
+    end
+    if (rst) begin
+      \$437  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$438  = ch0_cfg_ma_delay_limit;
+    if (\$37 ) begin
+      \$438 [7:0] = write_data[23:16];
+    end
+    if (\$38 ) begin
+      \$438 [11:8] = write_data[27:24];
+    end
+    if (rst) begin
+      \$438  = 12'h000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$439  = ch0_cfg_period_request_period;
+    if (\$39 ) begin
+      \$439 [7:0] = write_data[7:0];
+    end
+    if (\$40 ) begin
+      \$439 [15:8] = write_data[15:8];
+    end
+    if (\$41 ) begin
+      \$439 [23:16] = write_data[23:16];
+    end
+    if (rst) begin
+      \$439  = 24'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$440  = ch0_cfg_break_break_time;
+    if (\$42 ) begin
+      \$440 [7:0] = write_data[7:0];
+    end
+    if (\$43 ) begin
+      \$440 [15:8] = write_data[15:8];
+    end
+    if (\$44 ) begin
+      \$440 [23:16] = write_data[23:16];
+    end
+    if (rst) begin
+      \$440  = 24'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$441  = ch0_cfg_ack_ack_limit;
+    if (\$45 ) begin
+      \$441 [7:0] = write_data[7:0];
+    end
+    if (\$46 ) begin
+      \$441 [15:8] = write_data[15:8];
+    end
+    if (\$47 ) begin
+      \$441 [23:16] = write_data[23:16];
+    end
+    if (rst) begin
+      \$441  = 24'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$442  = ch0_cfg_timeout_timeout_limit;
+    if (\$48 ) begin
+      \$442 [7:0] = write_data[7:0];
+    end
+    if (\$49 ) begin
+      \$442 [15:8] = write_data[15:8];
+    end
+    if (\$50 ) begin
+      \$442 [23:16] = write_data[23:16];
+    end
+    if (rst) begin
+      \$442  = 24'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$443  = ch0_cfg_words_w0_data_bits;
+    if (\$51 ) begin
+      \$443  = write_data[5:0];
+    end
+    if (rst) begin
+      \$443  = 6'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$444  = ch0_cfg_words_w0_nenw;
+    if (\$52 ) begin
+      \$444  = write_data[6];
+    end
+    if (rst) begin
+      \$444  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$445  = ch0_cfg_words_w0_lc;
+    if (\$53 ) begin
+      \$445  = write_data[7];
+    end
+    if (rst) begin
+      \$445  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$446  = ch0_cfg_words_w0_crc;
+    if (\$54 ) begin
+      \$446  = write_data[9:8];
+    end
+    if (rst) begin
+      \$446  = 2'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$447  = ch0_cfg_words_w1_data_bits;
+    if (\$55 ) begin
+      \$447  = write_data[21:16];
+    end
+    if (rst) begin
+      \$447  = 6'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$448  = ch0_cfg_words_w1_nenw;
+    if (\$56 ) begin
+      \$448  = write_data[22];
+    end
+    if (rst) begin
+      \$448  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$449  = ch0_cfg_words_w1_lc;
+    if (\$57 ) begin
+      \$449  = write_data[23];
+    end
+    if (rst) begin
+      \$449  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$450  = ch0_cfg_words_w1_crc;
+    if (\$58 ) begin
+      \$450  = write_data[25:24];
+    end
+    if (rst) begin
+      \$450  = 2'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$451  = ch0_cfg_words_w1_enable;
+    if (\$59 ) begin
+      \$451  = write_data[31];
+    end
+    if (rst) begin
+      \$451  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$452  = ch0_cfg_checks_end_check;
+    if (\$60 ) begin
+      \$452  = write_data[0];
+    end
+    if (rst) begin
+      \$452  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$453  = ch0_cfg_checks_spw_check;
+    if (\$61 ) begin
+      \$453  = write_data[1];
+    end
+    if (rst) begin
+      \$453  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$454  = ch0_cfg_checks_spw_tolerance;
+    if (\$62 ) begin
+      \$454  = write_data[15:8];
+    end
+    if (rst) begin
+      \$454  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$455  = ch0_ca_request_slave_id;
+    if (\$63 ) begin
+      \$455  = write_data[2:0];
+    end
+    if (rst) begin
+      \$455  = 3'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$456  = ch0_ca_request_address;
+    if (\$64 ) begin
+      \$456  = write_data[14:8];
+    end
+    if (rst) begin
+      \$456  = 7'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$457  = ch0_ca_request_count;
+    if (\$65 ) begin
+      \$457  = write_data[22:16];
+    end
+    if (rst) begin
+      \$457  = 7'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$458  = \ch0_ca_request_write$69 ;
+    if (\$66 ) begin
+      \$458  = write_data[24];
+    end
+    if (rst) begin
+      \$458  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$459  = \$68 ;
+    if (rst) begin
+      \$459  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$460  = \$70 ;
+    if (rst) begin
+      \$460  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$461  = ch0_read_select_80;
+    if (bus__r_en) begin
+      \$461  = \$71 ;
+    end
+    if (rst) begin
+      \$461  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$462  = ch0_read_select_81;
+    if (bus__r_en) begin
+      \$462  = \$72 ;
+    end
+    if (rst) begin
+      \$462  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$463  = ch0_read_select_82;
+    if (bus__r_en) begin
+      \$463  = \$73 ;
+    end
+    if (rst) begin
+      \$463  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$464  = ch0_read_select_84;
+    if (bus__r_en) begin
+      \$464  = \$74 ;
+    end
+    if (rst) begin
+      \$464  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$465  = ch0_read_select_85;
+    if (bus__r_en) begin
+      \$465  = \$75 ;
+    end
+    if (rst) begin
+      \$465  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$466  = ch0_read_select_88;
+    if (bus__r_en) begin
+      \$466  = \$76 ;
+    end
+    if (rst) begin
+      \$466  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$467  = ch0_read_select_89;
+    if (bus__r_en) begin
+      \$467  = \$77 ;
+    end
+    if (rst) begin
+      \$467  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$468  = ch0_read_select_8a;
+    if (bus__r_en) begin
+      \$468  = \$78 ;
+    end
+    if (rst) begin
+      \$468  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$469  = ch0_read_select_8b;
+    if (bus__r_en) begin
+      \$469  = \$79 ;
+    end
+    if (rst) begin
+      \$469  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$470  = ch0_read_select_8c;
+    if (bus__r_en) begin
+      \$470  = \$80 ;
+    end
+    if (rst) begin
+      \$470  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$471  = ch0_read_select_8d;
+    if (bus__r_en) begin
+      \$471  = \$81 ;
+    end
+    if (rst) begin
+      \$471  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$472  = ch0_read_select_8e;
+    if (bus__r_en) begin
+      \$472  = \$82 ;
+    end
+    if (rst) begin
+      \$472  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$473  = ch0_read_select_90;
+    if (bus__r_en) begin
+      \$473  = \$83 ;
+    end
+    if (rst) begin
+      \$473  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$474  = ch0_read_select_91;
+    if (bus__r_en) begin
+      \$474  = \$84 ;
+    end
+    if (rst) begin
+      \$474  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$475  = ch0_read_select_92;
+    if (bus__r_en) begin
+      \$475  = \$85 ;
+    end
+    if (rst) begin
+      \$475  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$476  = ch0_read_select_93;
+    if (bus__r_en) begin
+      \$476  = \$86 ;
+    end
+    if (rst) begin
+      \$476  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$477  = ch0_read_select_94;
+    if (bus__r_en) begin
+      \$477  = \$87 ;
+    end
+    if (rst) begin
+      \$477  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$478  = ch0_read_select_95;
+    if (bus__r_en) begin
+      \$478  = \$88 ;
+    end
+    if (rst) begin
+      \$478  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$479  = ch0_read_select_96;
+    if (bus__r_en) begin
+      \$479  = \$89 ;
+    end
+    if (rst) begin
+      \$479  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$480  = ch0_read_select_98;
+    if (bus__r_en) begin
+      \$480  = \$90 ;
+    end
     if (rst) begin
       \$480  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$481  = write_addr;
-    if (bus__w_en) begin
-      \$481  = bus__w_addr;
+    \$481  = ch0_read_select_99;
+    if (bus__r_en) begin
+      \$481  = \$91 ;
     end
     if (rst) begin
-      \$481  = 11'h000;
+      \$481  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$482  = write_data;
-    if (bus__w_en) begin
-      \$482  = bus__w_data;
+    \$482  = ch0_read_select_9a;
+    if (bus__r_en) begin
+      \$482  = \$92 ;
     end
     if (rst) begin
-      \$482  = 32'd0;
+      \$482  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$483  = write_strb;
-    if (bus__w_en) begin
-      \$483  = bus__w_strb;
+    \$483  = ch0_read_select_9b;
+    if (bus__r_en) begin
+      \$483  = \$93 ;
     end
     if (rst) begin
-      \$483  = 4'h0;
+      \$483  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$484  = \$2 ;
+    \$484  = ch0_read_select_9c;
+    if (bus__r_en) begin
+      \$484  = \$94 ;
+    end
     if (rst) begin
       \$484  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$485  = g_read_select_0;
+    \$485  = ch0_read_select_9d;
     if (bus__r_en) begin
-      \$485  = \$3 ;
+      \$485  = \$95 ;
     end
     if (rst) begin
       \$485  = 1'h0;
@@ -3413,9 +3821,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$486  = g_read_select_1;
+    \$486  = ch0_read_select_9e;
     if (bus__r_en) begin
-      \$486  = \$4 ;
+      \$486  = \$96 ;
     end
     if (rst) begin
       \$486  = 1'h0;
@@ -3423,9 +3831,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$487  = g_read_select_2;
+    \$487  = ch0_read_select_c0;
     if (bus__r_en) begin
-      \$487  = \$5 ;
+      \$487  = \$97 ;
     end
     if (rst) begin
       \$487  = 1'h0;
@@ -3433,9 +3841,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$488  = g_read_select_3;
+    \$488  = ch0_read_select_c1;
     if (bus__r_en) begin
-      \$488  = \$6 ;
+      \$488  = \$98 ;
     end
     if (rst) begin
       \$488  = 1'h0;
@@ -3443,9 +3851,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$489  = g_read_select_4;
+    \$489  = ch0_read_select_c2;
     if (bus__r_en) begin
-      \$489  = \$7 ;
+      \$489  = \$99 ;
     end
     if (rst) begin
       \$489  = 1'h0;
@@ -3453,40 +3861,49 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$490  = \$9 ;
+    \$490  = ch0_read_select_c3;
+    if (bus__r_en) begin
+      \$490  = \$100 ;
+    end
     if (rst) begin
       \$490  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$491  = \$11 ;
+    \$491  = ch0_read_select_c4;
+    if (bus__r_en) begin
+      \$491  = \$101 ;
+    end
     if (rst) begin
       \$491  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$492  = \$13 ;
+    \$492  = ch0_read_select_c5;
+    if (bus__r_en) begin
+      \$492  = \$102 ;
+    end
     if (rst) begin
       \$492  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$493  = ch0_ctrl_periodic;
-    if (\$14 ) begin
-      \$493  = write_data[8];
+    \$493  = ch0_result_status_status_snapshot;
+    if (\$103 ) begin
+      \$493  = \port$4137$0 [3:0];
     end
     if (rst) begin
-      \$493  = 1'h0;
+      \$493  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$494  = ch0_ctrl_trigger_enable;
-    if (\$15 ) begin
-      \$494  = write_data[9];
+    \$494  = ch0_result_status_cds_snapshot;
+    if (\$103 ) begin
+      \$494  = \port$4137$0 [49];
     end
     if (rst) begin
       \$494  = 1'h0;
@@ -3494,11 +3911,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$495  = ch0_irq_status_done;
-    if (ch0__done) begin
-      \$495  = 1'h1;
-    end else if (\$17 ) begin
-      \$495  = 1'h0;
+    \$495  = ch0_result_status_w0_ne_snapshot;
+    if (\$103 ) begin
+      \$495  = \port$4137$0 [105];
     end
     if (rst) begin
       \$495  = 1'h0;
@@ -3506,11 +3921,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$496  = ch0_irq_status_error;
-    if (ch0__frame_error) begin
-      \$496  = 1'h1;
-    end else if (\$19 ) begin
-      \$496  = 1'h0;
+    \$496  = ch0_result_status_w0_nw_snapshot;
+    if (\$103 ) begin
+      \$496  = \port$4137$0 [106];
     end
     if (rst) begin
       \$496  = 1'h0;
@@ -3518,11 +3931,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$497  = ch0_irq_status_access_done;
-    if (ch0__ca_done) begin
-      \$497  = 1'h1;
-    end else if (\$21 ) begin
-      \$497  = 1'h0;
+    \$497  = ch0_result_status_w0_crc_ok_snapshot;
+    if (\$103 ) begin
+      \$497  = \port$4137$0 [107];
     end
     if (rst) begin
       \$497  = 1'h0;
@@ -3530,9 +3941,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$498  = ch0_irq_enable_done;
-    if (\$22 ) begin
-      \$498  = write_data[0];
+    \$498  = ch0_result_status_w1_ne_snapshot;
+    if (\$103 ) begin
+      \$498  = \port$4137$0 [148];
     end
     if (rst) begin
       \$498  = 1'h0;
@@ -3540,9 +3951,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$499  = ch0_irq_enable_error;
-    if (\$23 ) begin
-      \$499  = write_data[1];
+    \$499  = ch0_result_status_w1_nw_snapshot;
+    if (\$103 ) begin
+      \$499  = \port$4137$0 [149];
     end
     if (rst) begin
       \$499  = 1'h0;
@@ -3550,9 +3961,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$500  = ch0_irq_enable_access_done;
-    if (\$24 ) begin
-      \$500  = write_data[2];
+    \$500  = ch0_result_status_w1_crc_ok_snapshot;
+    if (\$103 ) begin
+      \$500  = \port$4137$0 [150];
     end
     if (rst) begin
       \$500  = 1'h0;
@@ -3560,159 +3971,129 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$501  = ch0_cfg_ma_ma_half_period;
-    if (\$25 ) begin
-      \$501 [7:0] = write_data[7:0];
-    end
-    if (\$26 ) begin
-      \$501 [15:8] = write_data[15:8];
+    \$501  = ch0_result_status_lc_repeat_snapshot;
+    if (\$103 ) begin
+      \$501  = \port$4137$0 [157];
     end
     if (rst) begin
-      \$501  = 16'h0000;
+      \$501  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$502  = ch0_cfg_ma_delay_limit;
-    if (\$27 ) begin
-      \$502 [7:0] = write_data[23:16];
-    end
-    if (\$28 ) begin
-      \$502 [11:8] = write_data[27:24];
+    \$502  = ch0_result_status_lc_skip_snapshot;
+    if (\$103 ) begin
+      \$502  = \port$4137$0 [158];
     end
     if (rst) begin
-      \$502  = 12'h000;
+      \$502  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$503  = ch0_cfg_period_request_period;
-    if (\$29 ) begin
-      \$503 [7:0] = write_data[7:0];
-    end
-    if (\$30 ) begin
-      \$503 [15:8] = write_data[15:8];
-    end
-    if (\$31 ) begin
-      \$503 [23:16] = write_data[23:16];
+    \$503  = ch0_result_status_lc_zero_snapshot;
+    if (\$103 ) begin
+      \$503  = \port$4137$0 [159];
     end
     if (rst) begin
-      \$503  = 24'h000000;
+      \$503  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$504  = ch0_cfg_break_break_time;
-    if (\$32 ) begin
-      \$504 [7:0] = write_data[7:0];
-    end
-    if (\$33 ) begin
-      \$504 [15:8] = write_data[15:8];
-    end
-    if (\$34 ) begin
-      \$504 [23:16] = write_data[23:16];
+    \$504  = ch0_result_status_spw_mismatch_snapshot;
+    if (\$103 ) begin
+      \$504  = \port$4137$0 [160];
     end
     if (rst) begin
-      \$504  = 24'h000000;
+      \$504  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$505  = ch0_cfg_ack_ack_limit;
-    if (\$35 ) begin
-      \$505 [7:0] = write_data[7:0];
-    end
-    if (\$36 ) begin
-      \$505 [15:8] = write_data[15:8];
-    end
-    if (\$37 ) begin
-      \$505 [23:16] = write_data[23:16];
+    \$505  = ch0_result_status_lc_snapshot;
+    if (\$103 ) begin
+      \$505  = \port$4137$0 [156:151];
     end
     if (rst) begin
-      \$505  = 24'h000000;
+      \$505  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$506  = ch0_cfg_timeout_timeout_limit;
-    if (\$38 ) begin
-      \$506 [7:0] = write_data[7:0];
-    end
-    if (\$39 ) begin
-      \$506 [15:8] = write_data[15:8];
-    end
-    if (\$40 ) begin
-      \$506 [23:16] = write_data[23:16];
+    \$506  = ch0_result_seq_seq_snapshot;
+    if (\$103 ) begin
+      \$506  = ch0__done_count;
     end
     if (rst) begin
-      \$506  = 24'h000000;
+      \$506  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$507  = ch0_cfg_words_w0_data_bits;
-    if (\$41 ) begin
-      \$507  = write_data[5:0];
+    \$507  = ch0_result_seq_line_delay_snapshot;
+    if (\$103 ) begin
+      \$507  = \port$4137$0 [48:36];
     end
     if (rst) begin
-      \$507  = 6'h00;
+      \$507  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$508  = ch0_cfg_words_w0_nenw;
-    if (\$42 ) begin
-      \$508  = write_data[6];
+    \$508  = ch0_result_w0_lo_data_snapshot;
+    if (\$103 ) begin
+      \$508  = \port$4137$0 [81:50];
     end
     if (rst) begin
-      \$508  = 1'h0;
+      \$508  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$509  = ch0_cfg_words_w0_lc;
-    if (\$43 ) begin
-      \$509  = write_data[7];
+    \$509  = ch0_result_w0_hi_data_snapshot;
+    if (\$103 ) begin
+      \$509  = \port$4137$0 [104:82];
     end
     if (rst) begin
-      \$509  = 1'h0;
+      \$509  = 23'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$510  = ch0_cfg_words_w0_crc;
-    if (\$44 ) begin
-      \$510  = write_data[9:8];
+    \$510  = ch0_result_w1_lo_data_snapshot;
+    if (\$103 ) begin
+      \$510  = \port$4137$0 [139:108];
     end
     if (rst) begin
-      \$510  = 2'h0;
+      \$510  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$511  = ch0_cfg_words_w1_data_bits;
-    if (\$45 ) begin
-      \$511  = write_data[21:16];
+    \$511  = ch0_result_w1_hi_data_snapshot;
+    if (\$103 ) begin
+      \$511  = \port$4137$0 [147:140];
     end
     if (rst) begin
-      \$511  = 6'h00;
+      \$511  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$512  = ch0_cfg_words_w1_nenw;
-    if (\$46 ) begin
-      \$512  = write_data[22];
+    \$512  = ch0_result_timestamp_time_snapshot;
+    if (\$103 ) begin
+      \$512  = \port$4137$0 [35:4];
     end
     if (rst) begin
-      \$512  = 1'h0;
+      \$512  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$513  = ch0_cfg_words_w1_lc;
-    if (\$47 ) begin
-      \$513  = write_data[23];
+    \$513  = ch0_window0_read;
+    if (bus__r_en) begin
+      \$513  = \$105 ;
     end
     if (rst) begin
       \$513  = 1'h0;
@@ -3720,89 +4101,86 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$514  = ch0_cfg_words_w1_crc;
-    if (\$48 ) begin
-      \$514  = write_data[25:24];
+    \$514  = ch0_read_data;
+    if (bus__r_load) begin
+      \$514  = \$171 ;
     end
     if (rst) begin
-      \$514  = 2'h0;
+      \$514  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$515  = ch0_cfg_words_w1_enable;
-    if (\$49 ) begin
-      \$515  = write_data[31];
-    end
+    \$515  = \$173 ;
     if (rst) begin
       \$515  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$516  = ch0_cfg_checks_end_check;
-    if (\$50 ) begin
-      \$516  = write_data[0];
-    end
+    \$516  = \$175 ;
     if (rst) begin
       \$516  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$517  = ch0_cfg_checks_spw_check;
-    if (\$51 ) begin
-      \$517  = write_data[1];
-    end
+    \$517  = \$177 ;
     if (rst) begin
       \$517  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$518  = ch0_cfg_checks_spw_tolerance;
-    if (\$52 ) begin
-      \$518  = write_data[15:8];
+    \$518  = ch1_ctrl_periodic;
+    if (\$178 ) begin
+      \$518  = write_data[8];
     end
     if (rst) begin
-      \$518  = 8'h00;
+      \$518  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$519  = ch0_ca_request_slave_id;
-    if (\$53 ) begin
-      \$519  = write_data[2:0];
+    \$519  = ch1_ctrl_trigger_enable;
+    if (\$179 ) begin
+      \$519  = write_data[9];
     end
     if (rst) begin
-      \$519  = 3'h0;
+      \$519  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$520  = ch0_ca_request_address;
-    if (\$54 ) begin
-      \$520  = write_data[14:8];
+    \$520  = ch1_irq_status_done;
+    if (ch1__done) begin
+      \$520  = 1'h1;
+    end else if (\$181 ) begin
+      \$520  = 1'h0;
     end
     if (rst) begin
-      \$520  = 7'h00;
+      \$520  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$521  = ch0_ca_request_count;
-    if (\$55 ) begin
-      \$521  = write_data[22:16];
+    \$521  = ch1_irq_status_error;
+    if (ch1__frame_error) begin
+      \$521  = 1'h1;
+    end else if (\$183 ) begin
+      \$521  = 1'h0;
     end
     if (rst) begin
-      \$521  = 7'h00;
+      \$521  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$522  = \ch0_ca_request_write$65 ;
-    if (\$56 ) begin
-      \$522  = write_data[24];
+    \$522  = ch1_irq_status_access_done;
+    if (ch1__ca_done) begin
+      \$522  = 1'h1;
+    end else if (\$185 ) begin
+      \$522  = 1'h0;
     end
     if (rst) begin
       \$522  = 1'h0;
@@ -3810,103 +4188,139 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$523  = \$58 ;
+    \$523  = ch1_irq_enable_done;
+    if (\$186 ) begin
+      \$523  = write_data[0];
+    end
     if (rst) begin
       \$523  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$524  = \$60 ;
+    \$524  = ch1_irq_enable_error;
+    if (\$187 ) begin
+      \$524  = write_data[1];
+    end
     if (rst) begin
       \$524  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$525  = ch0_result_status_status_snapshot;
-    if (ch0_result_status_read) begin
-      \$525  = \port$4258$0 [3:0];
+    \$525  = ch1_irq_enable_access_done;
+    if (\$188 ) begin
+      \$525  = write_data[2];
     end
     if (rst) begin
-      \$525  = 4'h0;
+      \$525  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$526  = ch0_result_status_cds_snapshot;
-    if (ch0_result_status_read) begin
-      \$526  = \port$4258$0 [49];
+    \$526  = ch1_cfg_ma_ma_half_period;
+    if (\$189 ) begin
+      \$526 [7:0] = write_data[7:0];
+    end
+    if (\$190 ) begin
+      \$526 [15:8] = write_data[15:8];
     end
     if (rst) begin
-      \$526  = 1'h0;
+      \$526  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$527  = ch0_result_status_w0_ne_snapshot;
-    if (ch0_result_status_read) begin
-      \$527  = \port$4258$0 [105];
+    \$527  = ch1_cfg_ma_delay_limit;
+    if (\$191 ) begin
+      \$527 [7:0] = write_data[23:16];
+    end
+    if (\$192 ) begin
+      \$527 [11:8] = write_data[27:24];
     end
     if (rst) begin
-      \$527  = 1'h0;
+      \$527  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$528  = ch0_result_status_w0_nw_snapshot;
-    if (ch0_result_status_read) begin
-      \$528  = \port$4258$0 [106];
+    \$528  = ch1_cfg_period_request_period;
+    if (\$193 ) begin
+      \$528 [7:0] = write_data[7:0];
+    end
+    if (\$194 ) begin
+      \$528 [15:8] = write_data[15:8];
+    end
+    if (\$195 ) begin
+      \$528 [23:16] = write_data[23:16];
     end
     if (rst) begin
-      \$528  = 1'h0;
+      \$528  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$529  = ch0_result_status_w0_crc_ok_snapshot;
-    if (ch0_result_status_read) begin
-      \$529  = \port$4258$0 [107];
+    \$529  = ch1_cfg_break_break_time;
+    if (\$196 ) begin
+      \$529 [7:0] = write_data[7:0];
+    end
+    if (\$197 ) begin
+      \$529 [15:8] = write_data[15:8];
+    end
+    if (\$198 ) begin
+      \$529 [23:16] = write_data[23:16];
     end
     if (rst) begin
-      \$529  = 1'h0;
+      \$529  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$530  = ch0_result_status_w1_ne_snapshot;
-    if (ch0_result_status_read) begin
-      \$530  = \port$4258$0 [148];
+    \$530  = ch1_cfg_ack_ack_limit;
+    if (\$199 ) begin
+      \$530 [7:0] = write_data[7:0];
+    end
+    if (\$200 ) begin
+      \$530 [15:8] = write_data[15:8];
+    end
+    if (\$201 ) begin
+      \$530 [23:16] = write_data[23:16];
     end
     if (rst) begin
-      \$530  = 1'h0;
+      \$530  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$531  = ch0_result_status_w1_nw_snapshot;
-    if (ch0_result_status_read) begin
-      \$531  = \port$4258$0 [149];
+    \$531  = ch1_cfg_timeout_timeout_limit;
+    if (\$202 ) begin
+      \$531 [7:0] = write_data[7:0];
+    end
+    if (\$203 ) begin
+      \$531 [15:8] = write_data[15:8];
+    end
+    if (\$204 ) begin
+      \$531 [23:16] = write_data[23:16];
     end
     if (rst) begin
-      \$531  = 1'h0;
+      \$531  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$532  = ch0_result_status_w1_crc_ok_snapshot;
-    if (ch0_result_status_read) begin
-      \$532  = \port$4258$0 [150];
+    \$532  = ch1_cfg_words_w0_data_bits;
+    if (\$205 ) begin
+      \$532  = write_data[5:0];
     end
     if (rst) begin
-      \$532  = 1'h0;
+      \$532  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$533  = ch0_result_status_lc_repeat_snapshot;
-    if (ch0_result_status_read) begin
-      \$533  = \port$4258$0 [157];
+    \$533  = ch1_cfg_words_w0_nenw;
+    if (\$206 ) begin
+      \$533  = write_data[6];
     end
     if (rst) begin
       \$533  = 1'h0;
@@ -3914,9 +4328,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$534  = ch0_result_status_lc_skip_snapshot;
-    if (ch0_result_status_read) begin
-      \$534  = \port$4258$0 [158];
+    \$534  = ch1_cfg_words_w0_lc;
+    if (\$207 ) begin
+      \$534  = write_data[7];
     end
     if (rst) begin
       \$534  = 1'h0;
@@ -3924,89 +4338,89 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$535  = ch0_result_status_lc_zero_snapshot;
-    if (ch0_result_status_read) begin
-      \$535  = \port$4258$0 [159];
+    \$535  = ch1_cfg_words_w0_crc;
+    if (\$208 ) begin
+      \$535  = write_data[9:8];
     end
     if (rst) begin
-      \$535  = 1'h0;
+      \$535  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$536  = ch0_result_status_spw_mismatch_snapshot;
-    if (ch0_result_status_read) begin
-      \$536  = \port$4258$0 [160];
+    \$536  = ch1_cfg_words_w1_data_bits;
+    if (\$209 ) begin
+      \$536  = write_data[21:16];
     end
     if (rst) begin
-      \$536  = 1'h0;
+      \$536  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$537  = ch0_result_status_lc_snapshot;
-    if (ch0_result_status_read) begin
-      \$537  = \port$4258$0 [156:151];
+    \$537  = ch1_cfg_words_w1_nenw;
+    if (\$210 ) begin
+      \$537  = write_data[22];
     end
     if (rst) begin
-      \$537  = 6'h00;
+      \$537  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$538  = ch0_result_seq_seq_snapshot;
-    if (ch0_result_status_read) begin
-      \$538  = ch0__done_count;
+    \$538  = ch1_cfg_words_w1_lc;
+    if (\$211 ) begin
+      \$538  = write_data[23];
     end
     if (rst) begin
-      \$538  = 16'h0000;
+      \$538  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$539  = ch0_result_seq_line_delay_snapshot;
-    if (ch0_result_status_read) begin
-      \$539  = \port$4258$0 [48:36];
+    \$539  = ch1_cfg_words_w1_crc;
+    if (\$212 ) begin
+      \$539  = write_data[25:24];
     end
     if (rst) begin
-      \$539  = 13'h0000;
+      \$539  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$540  = ch0_result_w0_lo_data_snapshot;
-    if (ch0_result_status_read) begin
-      \$540  = \port$4258$0 [81:50];
+    \$540  = ch1_cfg_words_w1_enable;
+    if (\$213 ) begin
+      \$540  = write_data[31];
     end
     if (rst) begin
-      \$540  = 32'd0;
+      \$540  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$541  = ch0_result_w0_hi_data_snapshot;
-    if (ch0_result_status_read) begin
-      \$541  = \port$4258$0 [104:82];
+    \$541  = ch1_cfg_checks_end_check;
+    if (\$214 ) begin
+      \$541  = write_data[0];
     end
     if (rst) begin
-      \$541  = 23'h000000;
+      \$541  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$542  = ch0_result_w1_lo_data_snapshot;
-    if (ch0_result_status_read) begin
-      \$542  = \port$4258$0 [139:108];
+    \$542  = ch1_cfg_checks_spw_check;
+    if (\$215 ) begin
+      \$542  = write_data[1];
     end
     if (rst) begin
-      \$542  = 32'd0;
+      \$542  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$543  = ch0_result_w1_hi_data_snapshot;
-    if (ch0_result_status_read) begin
-      \$543  = \port$4258$0 [147:140];
+    \$543  = ch1_cfg_checks_spw_tolerance;
+    if (\$216 ) begin
+      \$543  = write_data[15:8];
     end
     if (rst) begin
       \$543  = 8'h00;
@@ -4014,39 +4428,39 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$544  = ch0_result_timestamp_time_snapshot;
-    if (ch0_result_status_read) begin
-      \$544  = \port$4258$0 [35:4];
+    \$544  = ch1_ca_request_slave_id;
+    if (\$217 ) begin
+      \$544  = write_data[2:0];
     end
     if (rst) begin
-      \$544  = 32'd0;
+      \$544  = 3'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$545  = ch0_read_select_80;
-    if (bus__r_en) begin
-      \$545  = \$61 ;
+    \$545  = ch1_ca_request_address;
+    if (\$218 ) begin
+      \$545  = write_data[14:8];
     end
     if (rst) begin
-      \$545  = 1'h0;
+      \$545  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$546  = ch0_read_select_81;
-    if (bus__r_en) begin
-      \$546  = \$62 ;
+    \$546  = ch1_ca_request_count;
+    if (\$219 ) begin
+      \$546  = write_data[22:16];
     end
     if (rst) begin
-      \$546  = 1'h0;
+      \$546  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$547  = ch0_read_select_82;
-    if (bus__r_en) begin
-      \$547  = \$63 ;
+    \$547  = \ch1_ca_request_write$221 ;
+    if (\$220 ) begin
+      \$547  = write_data[24];
     end
     if (rst) begin
       \$547  = 1'h0;
@@ -4054,29 +4468,23 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$548  = ch0_read_select_84;
-    if (bus__r_en) begin
-      \$548  = \$64 ;
-    end
+    \$548  = \$222 ;
     if (rst) begin
       \$548  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$549  = ch0_read_select_85;
-    if (bus__r_en) begin
-      \$549  = \$65 ;
-    end
+    \$549  = \$224 ;
     if (rst) begin
       \$549  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$550  = ch0_read_select_88;
+    \$550  = ch1_read_select_100;
     if (bus__r_en) begin
-      \$550  = \$66 ;
+      \$550  = \$225 ;
     end
     if (rst) begin
       \$550  = 1'h0;
@@ -4084,9 +4492,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$551  = ch0_read_select_89;
+    \$551  = ch1_read_select_101;
     if (bus__r_en) begin
-      \$551  = \$67 ;
+      \$551  = \$226 ;
     end
     if (rst) begin
       \$551  = 1'h0;
@@ -4094,9 +4502,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$552  = ch0_read_select_8a;
+    \$552  = ch1_read_select_102;
     if (bus__r_en) begin
-      \$552  = \$68 ;
+      \$552  = \$227 ;
     end
     if (rst) begin
       \$552  = 1'h0;
@@ -4104,9 +4512,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$553  = ch0_read_select_8b;
+    \$553  = ch1_read_select_104;
     if (bus__r_en) begin
-      \$553  = \$69 ;
+      \$553  = \$228 ;
     end
     if (rst) begin
       \$553  = 1'h0;
@@ -4114,9 +4522,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$554  = ch0_read_select_8c;
+    \$554  = ch1_read_select_105;
     if (bus__r_en) begin
-      \$554  = \$70 ;
+      \$554  = \$229 ;
     end
     if (rst) begin
       \$554  = 1'h0;
@@ -4124,9 +4532,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$555  = ch0_read_select_8d;
+    \$555  = ch1_read_select_108;
     if (bus__r_en) begin
-      \$555  = \$71 ;
+      \$555  = \$230 ;
     end
     if (rst) begin
       \$555  = 1'h0;
@@ -4134,9 +4542,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$556  = ch0_read_select_8e;
+    \$556  = ch1_read_select_109;
     if (bus__r_en) begin
-      \$556  = \$72 ;
+      \$556  = \$231 ;
     end
     if (rst) begin
       \$556  = 1'h0;
@@ -4144,9 +4552,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$557  = ch0_read_select_90;
+    \$557  = ch1_read_select_10a;
     if (bus__r_en) begin
-      \$557  = \$73 ;
+      \$557  = \$232 ;
     end
     if (rst) begin
       \$557  = 1'h0;
@@ -4154,9 +4562,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$558  = ch0_read_select_91;
+    \$558  = ch1_read_select_10b;
     if (bus__r_en) begin
-      \$558  = \$74 ;
+      \$558  = \$233 ;
     end
     if (rst) begin
       \$558  = 1'h0;
@@ -4164,9 +4572,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$559  = ch0_read_select_92;
+    \$559  = ch1_read_select_10c;
     if (bus__r_en) begin
-      \$559  = \$75 ;
+      \$559  = \$234 ;
     end
     if (rst) begin
       \$559  = 1'h0;
@@ -4174,9 +4582,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$560  = ch0_read_select_93;
+    \$560  = ch1_read_select_10d;
     if (bus__r_en) begin
-      \$560  = \$76 ;
+      \$560  = \$235 ;
     end
     if (rst) begin
       \$560  = 1'h0;
@@ -4184,9 +4592,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$561  = ch0_read_select_94;
+    \$561  = ch1_read_select_10e;
     if (bus__r_en) begin
-      \$561  = \$77 ;
+      \$561  = \$236 ;
     end
     if (rst) begin
       \$561  = 1'h0;
@@ -4194,9 +4602,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$562  = ch0_read_select_95;
+    \$562  = ch1_read_select_110;
     if (bus__r_en) begin
-      \$562  = \$78 ;
+      \$562  = \$237 ;
     end
     if (rst) begin
       \$562  = 1'h0;
@@ -4204,9 +4612,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$563  = ch0_read_select_96;
+    \$563  = ch1_read_select_111;
     if (bus__r_en) begin
-      \$563  = \$79 ;
+      \$563  = \$238 ;
     end
     if (rst) begin
       \$563  = 1'h0;
@@ -4214,9 +4622,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$564  = ch0_read_select_98;
+    \$564  = ch1_read_select_112;
     if (bus__r_en) begin
-      \$564  = \$80 ;
+      \$564  = \$239 ;
     end
     if (rst) begin
       \$564  = 1'h0;
@@ -4224,9 +4632,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$565  = ch0_read_select_99;
+    \$565  = ch1_read_select_113;
     if (bus__r_en) begin
-      \$565  = \$81 ;
+      \$565  = \$240 ;
     end
     if (rst) begin
       \$565  = 1'h0;
@@ -4234,9 +4642,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$566  = ch0_read_select_9a;
+    \$566  = ch1_read_select_114;
     if (bus__r_en) begin
-      \$566  = \$82 ;
+      \$566  = \$241 ;
     end
     if (rst) begin
       \$566  = 1'h0;
@@ -4244,9 +4652,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$567  = ch0_read_select_9b;
+    \$567  = ch1_read_select_115;
     if (bus__r_en) begin
-      \$567  = \$83 ;
+      \$567  = \$242 ;
     end
     if (rst) begin
       \$567  = 1'h0;
@@ -4254,9 +4662,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$568  = ch0_read_select_9c;
+    \$568  = ch1_read_select_116;
     if (bus__r_en) begin
-      \$568  = \$84 ;
+      \$568  = \$243 ;
     end
     if (rst) begin
       \$568  = 1'h0;
@@ -4264,9 +4672,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$569  = ch0_read_select_9d;
+    \$569  = ch1_read_select_118;
     if (bus__r_en) begin
-      \$569  = \$85 ;
+      \$569  = \$244 ;
     end
     if (rst) begin
       \$569  = 1'h0;
@@ -4274,9 +4682,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$570  = ch0_read_select_9e;
+    \$570  = ch1_read_select_119;
     if (bus__r_en) begin
-      \$570  = \$86 ;
+      \$570  = \$245 ;
     end
     if (rst) begin
       \$570  = 1'h0;
@@ -4284,9 +4692,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$571  = ch0_read_select_c0;
+    \$571  = ch1_read_select_11a;
     if (bus__r_en) begin
-      \$571  = \$87 ;
+      \$571  = \$246 ;
     end
     if (rst) begin
       \$571  = 1'h0;
@@ -4294,9 +4702,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$572  = ch0_read_select_c1;
+    \$572  = ch1_read_select_11b;
     if (bus__r_en) begin
-      \$572  = \$88 ;
+      \$572  = \$247 ;
     end
     if (rst) begin
       \$572  = 1'h0;
@@ -4304,9 +4712,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$573  = ch0_read_select_c2;
+    \$573  = ch1_read_select_11c;
     if (bus__r_en) begin
-      \$573  = \$89 ;
+      \$573  = \$248 ;
     end
     if (rst) begin
       \$573  = 1'h0;
@@ -4314,9 +4722,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$574  = ch0_read_select_c3;
+    \$574  = ch1_read_select_11d;
     if (bus__r_en) begin
-      \$574  = \$90 ;
+      \$574  = \$249 ;
     end
     if (rst) begin
       \$574  = 1'h0;
@@ -4324,9 +4732,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$575  = ch0_read_select_c4;
+    \$575  = ch1_read_select_11e;
     if (bus__r_en) begin
-      \$575  = \$91 ;
+      \$575  = \$250 ;
     end
     if (rst) begin
       \$575  = 1'h0;
@@ -4334,9 +4742,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$576  = ch0_read_select_c5;
+    \$576  = ch1_read_select_140;
     if (bus__r_en) begin
-      \$576  = \$92 ;
+      \$576  = \$251 ;
     end
     if (rst) begin
       \$576  = 1'h0;
@@ -4344,30 +4752,39 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$577  = \$94 ;
+    \$577  = ch1_read_select_141;
+    if (bus__r_en) begin
+      \$577  = \$252 ;
+    end
     if (rst) begin
       \$577  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$578  = \$96 ;
+    \$578  = ch1_read_select_142;
+    if (bus__r_en) begin
+      \$578  = \$253 ;
+    end
     if (rst) begin
       \$578  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$579  = \$98 ;
+    \$579  = ch1_read_select_143;
+    if (bus__r_en) begin
+      \$579  = \$254 ;
+    end
     if (rst) begin
       \$579  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$580  = ch1_ctrl_periodic;
-    if (\$99 ) begin
-      \$580  = write_data[8];
+    \$580  = ch1_read_select_144;
+    if (bus__r_en) begin
+      \$580  = \$255 ;
     end
     if (rst) begin
       \$580  = 1'h0;
@@ -4375,9 +4792,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$581  = ch1_ctrl_trigger_enable;
-    if (\$100 ) begin
-      \$581  = write_data[9];
+    \$581  = ch1_read_select_145;
+    if (bus__r_en) begin
+      \$581  = \$256 ;
     end
     if (rst) begin
       \$581  = 1'h0;
@@ -4385,23 +4802,19 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$582  = ch1_irq_status_done;
-    if (ch1__done) begin
-      \$582  = 1'h1;
-    end else if (\$102 ) begin
-      \$582  = 1'h0;
+    \$582  = ch1_result_status_status_snapshot;
+    if (\$257 ) begin
+      \$582  = \port$4615$0 [3:0];
     end
     if (rst) begin
-      \$582  = 1'h0;
+      \$582  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$583  = ch1_irq_status_error;
-    if (ch1__frame_error) begin
-      \$583  = 1'h1;
-    end else if (\$104 ) begin
-      \$583  = 1'h0;
+    \$583  = ch1_result_status_cds_snapshot;
+    if (\$257 ) begin
+      \$583  = \port$4615$0 [49];
     end
     if (rst) begin
       \$583  = 1'h0;
@@ -4409,11 +4822,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$584  = ch1_irq_status_access_done;
-    if (ch1__ca_done) begin
-      \$584  = 1'h1;
-    end else if (\$106 ) begin
-      \$584  = 1'h0;
+    \$584  = ch1_result_status_w0_ne_snapshot;
+    if (\$257 ) begin
+      \$584  = \port$4615$0 [105];
     end
     if (rst) begin
       \$584  = 1'h0;
@@ -4421,9 +4832,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$585  = ch1_irq_enable_done;
-    if (\$107 ) begin
-      \$585  = write_data[0];
+    \$585  = ch1_result_status_w0_nw_snapshot;
+    if (\$257 ) begin
+      \$585  = \port$4615$0 [106];
     end
     if (rst) begin
       \$585  = 1'h0;
@@ -4431,9 +4842,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$586  = ch1_irq_enable_error;
-    if (\$108 ) begin
-      \$586  = write_data[1];
+    \$586  = ch1_result_status_w0_crc_ok_snapshot;
+    if (\$257 ) begin
+      \$586  = \port$4615$0 [107];
     end
     if (rst) begin
       \$586  = 1'h0;
@@ -4441,9 +4852,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$587  = ch1_irq_enable_access_done;
-    if (\$109 ) begin
-      \$587  = write_data[2];
+    \$587  = ch1_result_status_w1_ne_snapshot;
+    if (\$257 ) begin
+      \$587  = \port$4615$0 [148];
     end
     if (rst) begin
       \$587  = 1'h0;
@@ -4451,99 +4862,69 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$588  = ch1_cfg_ma_ma_half_period;
-    if (\$110 ) begin
-      \$588 [7:0] = write_data[7:0];
-    end
-    if (\$111 ) begin
-      \$588 [15:8] = write_data[15:8];
+    \$588  = ch1_result_status_w1_nw_snapshot;
+    if (\$257 ) begin
+      \$588  = \port$4615$0 [149];
     end
     if (rst) begin
-      \$588  = 16'h0000;
+      \$588  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$589  = ch1_cfg_ma_delay_limit;
-    if (\$112 ) begin
-      \$589 [7:0] = write_data[23:16];
-    end
-    if (\$113 ) begin
-      \$589 [11:8] = write_data[27:24];
+    \$589  = ch1_result_status_w1_crc_ok_snapshot;
+    if (\$257 ) begin
+      \$589  = \port$4615$0 [150];
     end
     if (rst) begin
-      \$589  = 12'h000;
+      \$589  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$590  = ch1_cfg_period_request_period;
-    if (\$114 ) begin
-      \$590 [7:0] = write_data[7:0];
-    end
-    if (\$115 ) begin
-      \$590 [15:8] = write_data[15:8];
-    end
-    if (\$116 ) begin
-      \$590 [23:16] = write_data[23:16];
+    \$590  = ch1_result_status_lc_repeat_snapshot;
+    if (\$257 ) begin
+      \$590  = \port$4615$0 [157];
     end
     if (rst) begin
-      \$590  = 24'h000000;
+      \$590  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$591  = ch1_cfg_break_break_time;
-    if (\$117 ) begin
-      \$591 [7:0] = write_data[7:0];
-    end
-    if (\$118 ) begin
-      \$591 [15:8] = write_data[15:8];
-    end
-    if (\$119 ) begin
-      \$591 [23:16] = write_data[23:16];
+    \$591  = ch1_result_status_lc_skip_snapshot;
+    if (\$257 ) begin
+      \$591  = \port$4615$0 [158];
     end
     if (rst) begin
-      \$591  = 24'h000000;
+      \$591  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$592  = ch1_cfg_ack_ack_limit;
-    if (\$120 ) begin
-      \$592 [7:0] = write_data[7:0];
-    end
-    if (\$121 ) begin
-      \$592 [15:8] = write_data[15:8];
-    end
-    if (\$122 ) begin
-      \$592 [23:16] = write_data[23:16];
+    \$592  = ch1_result_status_lc_zero_snapshot;
+    if (\$257 ) begin
+      \$592  = \port$4615$0 [159];
     end
     if (rst) begin
-      \$592  = 24'h000000;
+      \$592  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$593  = ch1_cfg_timeout_timeout_limit;
-    if (\$123 ) begin
-      \$593 [7:0] = write_data[7:0];
-    end
-    if (\$124 ) begin
-      \$593 [15:8] = write_data[15:8];
-    end
-    if (\$125 ) begin
-      \$593 [23:16] = write_data[23:16];
+    \$593  = ch1_result_status_spw_mismatch_snapshot;
+    if (\$257 ) begin
+      \$593  = \port$4615$0 [160];
     end
     if (rst) begin
-      \$593  = 24'h000000;
+      \$593  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$594  = ch1_cfg_words_w0_data_bits;
-    if (\$126 ) begin
-      \$594  = write_data[5:0];
+    \$594  = ch1_result_status_lc_snapshot;
+    if (\$257 ) begin
+      \$594  = \port$4615$0 [156:151];
     end
     if (rst) begin
       \$594  = 6'h00;
@@ -4551,79 +4932,79 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$595  = ch1_cfg_words_w0_nenw;
-    if (\$127 ) begin
-      \$595  = write_data[6];
+    \$595  = ch1_result_seq_seq_snapshot;
+    if (\$257 ) begin
+      \$595  = ch1__done_count;
     end
     if (rst) begin
-      \$595  = 1'h0;
+      \$595  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$596  = ch1_cfg_words_w0_lc;
-    if (\$128 ) begin
-      \$596  = write_data[7];
+    \$596  = ch1_result_seq_line_delay_snapshot;
+    if (\$257 ) begin
+      \$596  = \port$4615$0 [48:36];
     end
     if (rst) begin
-      \$596  = 1'h0;
+      \$596  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$597  = ch1_cfg_words_w0_crc;
-    if (\$129 ) begin
-      \$597  = write_data[9:8];
+    \$597  = ch1_result_w0_lo_data_snapshot;
+    if (\$257 ) begin
+      \$597  = \port$4615$0 [81:50];
     end
     if (rst) begin
-      \$597  = 2'h0;
+      \$597  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$598  = ch1_cfg_words_w1_data_bits;
-    if (\$130 ) begin
-      \$598  = write_data[21:16];
+    \$598  = ch1_result_w0_hi_data_snapshot;
+    if (\$257 ) begin
+      \$598  = \port$4615$0 [104:82];
     end
     if (rst) begin
-      \$598  = 6'h00;
+      \$598  = 23'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$599  = ch1_cfg_words_w1_nenw;
-    if (\$131 ) begin
-      \$599  = write_data[22];
+    \$599  = ch1_result_w1_lo_data_snapshot;
+    if (\$257 ) begin
+      \$599  = \port$4615$0 [139:108];
     end
     if (rst) begin
-      \$599  = 1'h0;
+      \$599  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$600  = ch1_cfg_words_w1_lc;
-    if (\$132 ) begin
-      \$600  = write_data[23];
+    \$600  = ch1_result_w1_hi_data_snapshot;
+    if (\$257 ) begin
+      \$600  = \port$4615$0 [147:140];
     end
     if (rst) begin
-      \$600  = 1'h0;
+      \$600  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$601  = ch1_cfg_words_w1_crc;
-    if (\$133 ) begin
-      \$601  = write_data[25:24];
+    \$601  = ch1_result_timestamp_time_snapshot;
+    if (\$257 ) begin
+      \$601  = \port$4615$0 [35:4];
     end
     if (rst) begin
-      \$601  = 2'h0;
+      \$601  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$602  = ch1_cfg_words_w1_enable;
-    if (\$134 ) begin
-      \$602  = write_data[31];
+    \$602  = ch1_window0_read;
+    if (bus__r_en) begin
+      \$602  = \$259 ;
     end
     if (rst) begin
       \$602  = 1'h0;
@@ -4631,726 +5012,102 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$603  = ch1_cfg_checks_end_check;
-    if (\$135 ) begin
-      \$603  = write_data[0];
-    end
-    if (rst) begin
-      \$603  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$604  = ch1_cfg_checks_spw_check;
-    if (\$136 ) begin
-      \$604  = write_data[1];
-    end
-    if (rst) begin
-      \$604  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$605  = ch1_cfg_checks_spw_tolerance;
-    if (\$137 ) begin
-      \$605  = write_data[15:8];
-    end
-    if (rst) begin
-      \$605  = 8'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$606  = ch1_ca_request_slave_id;
-    if (\$138 ) begin
-      \$606  = write_data[2:0];
-    end
-    if (rst) begin
-      \$606  = 3'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$607  = ch1_ca_request_address;
-    if (\$139 ) begin
-      \$607  = write_data[14:8];
-    end
-    if (rst) begin
-      \$607  = 7'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$608  = ch1_ca_request_count;
-    if (\$140 ) begin
-      \$608  = write_data[22:16];
-    end
-    if (rst) begin
-      \$608  = 7'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$609  = \ch1_ca_request_write$186 ;
-    if (\$141 ) begin
-      \$609  = write_data[24];
-    end
-    if (rst) begin
-      \$609  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$610  = \$143 ;
-    if (rst) begin
-      \$610  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$611  = \$145 ;
-    if (rst) begin
-      \$611  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$612  = ch1_result_status_status_snapshot;
-    if (ch1_result_status_read) begin
-      \$612  = \port$4726$0 [3:0];
-    end
-    if (rst) begin
-      \$612  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$613  = ch1_result_status_cds_snapshot;
-    if (ch1_result_status_read) begin
-      \$613  = \port$4726$0 [49];
-    end
-    if (rst) begin
-      \$613  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$614  = ch1_result_status_w0_ne_snapshot;
-    if (ch1_result_status_read) begin
-      \$614  = \port$4726$0 [105];
-    end
-    if (rst) begin
-      \$614  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$615  = ch1_result_status_w0_nw_snapshot;
-    if (ch1_result_status_read) begin
-      \$615  = \port$4726$0 [106];
-    end
-    if (rst) begin
-      \$615  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$616  = ch1_result_status_w0_crc_ok_snapshot;
-    if (ch1_result_status_read) begin
-      \$616  = \port$4726$0 [107];
-    end
-    if (rst) begin
-      \$616  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$617  = ch1_result_status_w1_ne_snapshot;
-    if (ch1_result_status_read) begin
-      \$617  = \port$4726$0 [148];
-    end
-    if (rst) begin
-      \$617  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$618  = ch1_result_status_w1_nw_snapshot;
-    if (ch1_result_status_read) begin
-      \$618  = \port$4726$0 [149];
-    end
-    if (rst) begin
-      \$618  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$619  = ch1_result_status_w1_crc_ok_snapshot;
-    if (ch1_result_status_read) begin
-      \$619  = \port$4726$0 [150];
-    end
-    if (rst) begin
-      \$619  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$620  = ch1_result_status_lc_repeat_snapshot;
-    if (ch1_result_status_read) begin
-      \$620  = \port$4726$0 [157];
-    end
-    if (rst) begin
-      \$620  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$621  = ch1_result_status_lc_skip_snapshot;
-    if (ch1_result_status_read) begin
-      \$621  = \port$4726$0 [158];
-    end
-    if (rst) begin
-      \$621  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$622  = ch1_result_status_lc_zero_snapshot;
-    if (ch1_result_status_read) begin
-      \$622  = \port$4726$0 [159];
-    end
-    if (rst) begin
-      \$622  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$623  = ch1_result_status_spw_mismatch_snapshot;
-    if (ch1_result_status_read) begin
-      \$623  = \port$4726$0 [160];
-    end
-    if (rst) begin
-      \$623  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$624  = ch1_result_status_lc_snapshot;
-    if (ch1_result_status_read) begin
-      \$624  = \port$4726$0 [156:151];
-    end
-    if (rst) begin
-      \$624  = 6'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$625  = ch1_result_seq_seq_snapshot;
-    if (ch1_result_status_read) begin
-      \$625  = ch1__done_count;
-    end
-    if (rst) begin
-      \$625  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$626  = ch1_result_seq_line_delay_snapshot;
-    if (ch1_result_status_read) begin
-      \$626  = \port$4726$0 [48:36];
-    end
-    if (rst) begin
-      \$626  = 13'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$627  = ch1_result_w0_lo_data_snapshot;
-    if (ch1_result_status_read) begin
-      \$627  = \port$4726$0 [81:50];
-    end
-    if (rst) begin
-      \$627  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$628  = ch1_result_w0_hi_data_snapshot;
-    if (ch1_result_status_read) begin
-      \$628  = \port$4726$0 [104:82];
-    end
-    if (rst) begin
-      \$628  = 23'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$629  = ch1_result_w1_lo_data_snapshot;
-    if (ch1_result_status_read) begin
-      \$629  = \port$4726$0 [139:108];
-    end
-    if (rst) begin
-      \$629  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$630  = ch1_result_w1_hi_data_snapshot;
-    if (ch1_result_status_read) begin
-      \$630  = \port$4726$0 [147:140];
-    end
-    if (rst) begin
-      \$630  = 8'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$631  = ch1_result_timestamp_time_snapshot;
-    if (ch1_result_status_read) begin
-      \$631  = \port$4726$0 [35:4];
-    end
-    if (rst) begin
-      \$631  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$632  = ch1_read_select_100;
-    if (bus__r_en) begin
-      \$632  = \$146 ;
-    end
-    if (rst) begin
-      \$632  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$633  = ch1_read_select_101;
-    if (bus__r_en) begin
-      \$633  = \$147 ;
-    end
-    if (rst) begin
-      \$633  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$634  = ch1_read_select_102;
-    if (bus__r_en) begin
-      \$634  = \$148 ;
-    end
-    if (rst) begin
-      \$634  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$635  = ch1_read_select_104;
-    if (bus__r_en) begin
-      \$635  = \$149 ;
-    end
-    if (rst) begin
-      \$635  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$636  = ch1_read_select_105;
-    if (bus__r_en) begin
-      \$636  = \$150 ;
-    end
-    if (rst) begin
-      \$636  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$637  = ch1_read_select_108;
-    if (bus__r_en) begin
-      \$637  = \$151 ;
-    end
-    if (rst) begin
-      \$637  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$638  = ch1_read_select_109;
-    if (bus__r_en) begin
-      \$638  = \$152 ;
-    end
-    if (rst) begin
-      \$638  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$639  = ch1_read_select_10a;
-    if (bus__r_en) begin
-      \$639  = \$153 ;
-    end
-    if (rst) begin
-      \$639  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$640  = ch1_read_select_10b;
-    if (bus__r_en) begin
-      \$640  = \$154 ;
-    end
-    if (rst) begin
-      \$640  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$641  = ch1_read_select_10c;
-    if (bus__r_en) begin
-      \$641  = \$155 ;
-    end
-    if (rst) begin
-      \$641  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$642  = ch1_read_select_10d;
-    if (bus__r_en) begin
-      \$642  = \$156 ;
-    end
-    if (rst) begin
-      \$642  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$643  = ch1_read_select_10e;
-    if (bus__r_en) begin
-      \$643  = \$157 ;
-    end
-    if (rst) begin
-      \$643  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$644  = ch1_read_select_110;
-    if (bus__r_en) begin
-      \$644  = \$158 ;
-    end
-    if (rst) begin
-      \$644  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$645  = ch1_read_select_111;
-    if (bus__r_en) begin
-      \$645  = \$159 ;
-    end
-    if (rst) begin
-      \$645  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$646  = ch1_read_select_112;
-    if (bus__r_en) begin
-      \$646  = \$160 ;
-    end
-    if (rst) begin
-      \$646  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$647  = ch1_read_select_113;
-    if (bus__r_en) begin
-      \$647  = \$161 ;
-    end
-    if (rst) begin
-      \$647  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$648  = ch1_read_select_114;
-    if (bus__r_en) begin
-      \$648  = \$162 ;
-    end
-    if (rst) begin
-      \$648  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$649  = ch1_read_select_115;
-    if (bus__r_en) begin
-      \$649  = \$163 ;
-    end
-    if (rst) begin
-      \$649  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$650  = ch1_read_select_116;
-    if (bus__r_en) begin
-      \$650  = \$164 ;
-    end
-    if (rst) begin
-      \$650  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$651  = ch1_read_select_118;
-    if (bus__r_en) begin
-      \$651  = \$165 ;
-    end
-    if (rst) begin
-      \$651  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$652  = ch1_read_select_119;
-    if (bus__r_en) begin
-      \$652  = \$166 ;
-    end
-    if (rst) begin
-      \$652  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$653  = ch1_read_select_11a;
-    if (bus__r_en) begin
-      \$653  = \$167 ;
-    end
-    if (rst) begin
-      \$653  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$654  = ch1_read_select_11b;
-    if (bus__r_en) begin
-      \$654  = \$168 ;
-    end
-    if (rst) begin
-      \$654  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$655  = ch1_read_select_11c;
-    if (bus__r_en) begin
-      \$655  = \$169 ;
-    end
-    if (rst) begin
-      \$655  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$656  = ch1_read_select_11d;
-    if (bus__r_en) begin
-      \$656  = \$170 ;
-    end
-    if (rst) begin
-      \$656  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$657  = ch1_read_select_11e;
-    if (bus__r_en) begin
-      \$657  = \$171 ;
-    end
-    if (rst) begin
-      \$657  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$658  = ch1_read_select_140;
-    if (bus__r_en) begin
-      \$658  = \$172 ;
-    end
-    if (rst) begin
-      \$658  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$659  = ch1_read_select_141;
-    if (bus__r_en) begin
-      \$659  = \$173 ;
-    end
-    if (rst) begin
-      \$659  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$660  = ch1_read_select_142;
-    if (bus__r_en) begin
-      \$660  = \$174 ;
-    end
-    if (rst) begin
-      \$660  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$661  = ch1_read_select_143;
-    if (bus__r_en) begin
-      \$661  = \$175 ;
-    end
-    if (rst) begin
-      \$661  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$662  = ch1_read_select_144;
-    if (bus__r_en) begin
-      \$662  = \$176 ;
-    end
-    if (rst) begin
-      \$662  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$663  = ch1_read_select_145;
-    if (bus__r_en) begin
-      \$663  = \$177 ;
-    end
-    if (rst) begin
-      \$663  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$664  = window0_read;
-    if (bus__r_en) begin
-      \$664  = \$179 ;
-    end
-    if (rst) begin
-      \$664  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$665  = window1_read;
-    if (bus__r_en) begin
-      \$665  = \$181 ;
-    end
-    if (rst) begin
-      \$665  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$666  = read_data;
+    \$603  = ch1_read_data;
     if (bus__r_load) begin
-      \$666  = \$323 ;
+      \$603  = \$325 ;
     end
     if (rst) begin
-      \$666  = 32'd0;
+      \$603  = 32'd0;
     end
   end
-  assign ch0__status = \port$4258$0 [3:0];
-  assign ch0__cds = \port$4258$0 [49];
-  assign ch0__word0_ne = \port$4258$0 [105];
-  assign ch0__word0_nw = \port$4258$0 [106];
-  assign ch0__word0_crc_ok = \port$4258$0 [107];
-  assign ch0__word1_ne = \port$4258$0 [148];
-  assign ch0__word1_nw = \port$4258$0 [149];
-  assign ch0__word1_crc_ok = \port$4258$0 [150];
-  assign ch0__lc_repeat = \port$4258$0 [157];
-  assign ch0__lc_skip = \port$4258$0 [158];
-  assign ch0__lc_zero = \port$4258$0 [159];
-  assign ch0__spw_mismatch = \port$4258$0 [160];
-  assign ch0__lc = \port$4258$0 [156:151];
-  assign ch0__line_delay = \port$4258$0 [48:36];
-  assign ch0__word0_position = \port$4258$0 [104:50];
-  assign ch0__word1_position = \port$4258$0 [147:108];
-  assign ch0__timestamp = \port$4258$0 [35:4];
-  assign ch1__status = \port$4726$0 [3:0];
-  assign ch1__cds = \port$4726$0 [49];
-  assign ch1__word0_ne = \port$4726$0 [105];
-  assign ch1__word0_nw = \port$4726$0 [106];
-  assign ch1__word0_crc_ok = \port$4726$0 [107];
-  assign ch1__word1_ne = \port$4726$0 [148];
-  assign ch1__word1_nw = \port$4726$0 [149];
-  assign ch1__word1_crc_ok = \port$4726$0 [150];
-  assign ch1__lc_repeat = \port$4726$0 [157];
-  assign ch1__lc_skip = \port$4726$0 [158];
-  assign ch1__lc_zero = \port$4726$0 [159];
-  assign ch1__spw_mismatch = \port$4726$0 [160];
-  assign ch1__lc = \port$4726$0 [156:151];
-  assign ch1__line_delay = \port$4726$0 [48:36];
-  assign ch1__word0_position = \port$4726$0 [104:50];
-  assign ch1__word1_position = \port$4726$0 [147:108];
-  assign ch1__timestamp = \port$4726$0 [35:4];
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, ch1_irq, ch0_irq };
+  assign ch0__status = \port$4137$0 [3:0];
+  assign ch0__cds = \port$4137$0 [49];
+  assign ch0__word0_ne = \port$4137$0 [105];
+  assign ch0__word0_nw = \port$4137$0 [106];
+  assign ch0__word0_crc_ok = \port$4137$0 [107];
+  assign ch0__word1_ne = \port$4137$0 [148];
+  assign ch0__word1_nw = \port$4137$0 [149];
+  assign ch0__word1_crc_ok = \port$4137$0 [150];
+  assign ch0__lc_repeat = \port$4137$0 [157];
+  assign ch0__lc_skip = \port$4137$0 [158];
+  assign ch0__lc_zero = \port$4137$0 [159];
+  assign ch0__spw_mismatch = \port$4137$0 [160];
+  assign ch0__lc = \port$4137$0 [156:151];
+  assign ch0__line_delay = \port$4137$0 [48:36];
+  assign ch0__word0_position = \port$4137$0 [104:50];
+  assign ch0__word1_position = \port$4137$0 [147:108];
+  assign ch0__timestamp = \port$4137$0 [35:4];
   assign ch0__cap_data_bits_w0 = 6'h37;
   assign ch0__cap_data_bits_w1 = 6'h28;
   assign ch0__cap_timer_width = 6'h18;
   assign ch0__cap_counters = 1'h1;
   assign ch0__cap_timestamp = 1'h1;
   assign ch0__cap_register_access = 1'h1;
-  assign ch0__count_crc_word0 = \port$4265$0 [15:0];
-  assign ch0__count_crc_word1 = \port$4265$0 [31:16];
-  assign ch0__count_no_ack = \port$4265$0 [47:32];
-  assign ch0__count_no_start = \port$4265$0 [63:48];
-  assign ch0__count_delay_range = \port$4265$0 [79:64];
-  assign ch0__count_slo_stuck_low = \port$4265$0 [95:80];
-  assign ch0__count_lc_repeat = \port$4265$0 [111:96];
-  assign ch0__count_lc_skip = \port$4265$0 [127:112];
-  assign ch0__count_lc_zero = \port$4265$0 [143:128];
-  assign ch0__count_spw_mismatch = \port$4265$0 [159:144];
-  assign ch0__count_overrun = \port$4265$0 [175:160];
-  assign ch0__count_aborted = \port$4265$0 [191:176];
-  assign ch0__count_no_stop = \port$4265$0 [207:192];
-  assign ch0__ca_status = \port$4379$0 [2:0];
-  assign ch0__ca_bytes_done = \port$4379$0 [9:3];
-  assign ch0__count_ca_crc4_error = \port$4265$0 [223:208];
-  assign ch0__count_ca_no_answer = \port$4265$0 [239:224];
-  assign ch0__count_ca_refused = \port$4265$0 [255:240];
-  assign ch0__count_ca_aborted = \port$4265$0 [271:256];
-  assign ch0__count_ca_data_fault = \port$4265$0 [287:272];
+  assign ch0__count_crc_word0 = \port$4150$0 [15:0];
+  assign ch0__count_crc_word1 = \port$4150$0 [31:16];
+  assign ch0__count_no_ack = \port$4150$0 [47:32];
+  assign ch0__count_no_start = \port$4150$0 [63:48];
+  assign ch0__count_delay_range = \port$4150$0 [79:64];
+  assign ch0__count_slo_stuck_low = \port$4150$0 [95:80];
+  assign ch0__count_lc_repeat = \port$4150$0 [111:96];
+  assign ch0__count_lc_skip = \port$4150$0 [127:112];
+  assign ch0__count_lc_zero = \port$4150$0 [143:128];
+  assign ch0__count_spw_mismatch = \port$4150$0 [159:144];
+  assign ch0__count_overrun = \port$4150$0 [175:160];
+  assign ch0__count_aborted = \port$4150$0 [191:176];
+  assign ch0__count_no_stop = \port$4150$0 [207:192];
+  assign ch0__ca_status = \port$4264$0 [2:0];
+  assign ch0__ca_bytes_done = \port$4264$0 [9:3];
+  assign ch0__count_ca_crc4_error = \port$4150$0 [223:208];
+  assign ch0__count_ca_no_answer = \port$4150$0 [239:224];
+  assign ch0__count_ca_refused = \port$4150$0 [255:240];
+  assign ch0__count_ca_aborted = \port$4150$0 [271:256];
+  assign ch0__count_ca_data_fault = \port$4150$0 [287:272];
+  assign ch1__status = \port$4615$0 [3:0];
+  assign ch1__cds = \port$4615$0 [49];
+  assign ch1__word0_ne = \port$4615$0 [105];
+  assign ch1__word0_nw = \port$4615$0 [106];
+  assign ch1__word0_crc_ok = \port$4615$0 [107];
+  assign ch1__word1_ne = \port$4615$0 [148];
+  assign ch1__word1_nw = \port$4615$0 [149];
+  assign ch1__word1_crc_ok = \port$4615$0 [150];
+  assign ch1__lc_repeat = \port$4615$0 [157];
+  assign ch1__lc_skip = \port$4615$0 [158];
+  assign ch1__lc_zero = \port$4615$0 [159];
+  assign ch1__spw_mismatch = \port$4615$0 [160];
+  assign ch1__lc = \port$4615$0 [156:151];
+  assign ch1__line_delay = \port$4615$0 [48:36];
+  assign ch1__word0_position = \port$4615$0 [104:50];
+  assign ch1__word1_position = \port$4615$0 [147:108];
+  assign ch1__timestamp = \port$4615$0 [35:4];
   assign ch1__cap_data_bits_w0 = 6'h37;
   assign ch1__cap_data_bits_w1 = 6'h28;
   assign ch1__cap_timer_width = 6'h18;
   assign ch1__cap_counters = 1'h1;
   assign ch1__cap_timestamp = 1'h1;
   assign ch1__cap_register_access = 1'h1;
-  assign ch1__count_crc_word0 = \port$4733$0 [15:0];
-  assign ch1__count_crc_word1 = \port$4733$0 [31:16];
-  assign ch1__count_no_ack = \port$4733$0 [47:32];
-  assign ch1__count_no_start = \port$4733$0 [63:48];
-  assign ch1__count_delay_range = \port$4733$0 [79:64];
-  assign ch1__count_slo_stuck_low = \port$4733$0 [95:80];
-  assign ch1__count_lc_repeat = \port$4733$0 [111:96];
-  assign ch1__count_lc_skip = \port$4733$0 [127:112];
-  assign ch1__count_lc_zero = \port$4733$0 [143:128];
-  assign ch1__count_spw_mismatch = \port$4733$0 [159:144];
-  assign ch1__count_overrun = \port$4733$0 [175:160];
-  assign ch1__count_aborted = \port$4733$0 [191:176];
-  assign ch1__count_no_stop = \port$4733$0 [207:192];
-  assign ch1__ca_status = \port$4847$0 [2:0];
-  assign ch1__ca_bytes_done = \port$4847$0 [9:3];
-  assign ch1__count_ca_crc4_error = \port$4733$0 [223:208];
-  assign ch1__count_ca_no_answer = \port$4733$0 [239:224];
-  assign ch1__count_ca_refused = \port$4733$0 [255:240];
-  assign ch1__count_ca_aborted = \port$4733$0 [271:256];
-  assign ch1__count_ca_data_fault = \port$4733$0 [287:272];
+  assign ch1__count_crc_word0 = \port$4628$0 [15:0];
+  assign ch1__count_crc_word1 = \port$4628$0 [31:16];
+  assign ch1__count_no_ack = \port$4628$0 [47:32];
+  assign ch1__count_no_start = \port$4628$0 [63:48];
+  assign ch1__count_delay_range = \port$4628$0 [79:64];
+  assign ch1__count_slo_stuck_low = \port$4628$0 [95:80];
+  assign ch1__count_lc_repeat = \port$4628$0 [111:96];
+  assign ch1__count_lc_skip = \port$4628$0 [127:112];
+  assign ch1__count_lc_zero = \port$4628$0 [143:128];
+  assign ch1__count_spw_mismatch = \port$4628$0 [159:144];
+  assign ch1__count_overrun = \port$4628$0 [175:160];
+  assign ch1__count_aborted = \port$4628$0 [191:176];
+  assign ch1__count_no_stop = \port$4628$0 [207:192];
+  assign ch1__ca_status = \port$4742$0 [2:0];
+  assign ch1__ca_bytes_done = \port$4742$0 [9:3];
+  assign ch1__count_ca_crc4_error = \port$4628$0 [223:208];
+  assign ch1__count_ca_no_answer = \port$4628$0 [239:224];
+  assign ch1__count_ca_refused = \port$4628$0 [255:240];
+  assign ch1__count_ca_aborted = \port$4628$0 [271:256];
+  assign ch1__count_ca_data_fault = \port$4628$0 [287:272];
   assign glob__trigger = g_trigger_start;
   assign ch0__start = ch0_ctrl_start;
   assign ch0__abort_cycle = ch0_ctrl_abort;
@@ -5378,7 +5135,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign ch0__ca_slave_id = ch0_ca_request_slave_id;
   assign ch0__ca_address = ch0_ca_request_address;
   assign ch0__ca_count = ch0_ca_request_count;
-  assign ch0__ca_write = \ch0_ca_request_write$65 ;
+  assign ch0__ca_write = \ch0_ca_request_write$69 ;
   assign ch0__ca_start = ch0_ca_ctrl_start;
   assign ch0__ca_abort = ch0_ca_ctrl_abort;
   assign ch0__ca_wbuf_data = write_data;
@@ -5409,34 +5166,36 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign ch1__ca_slave_id = ch1_ca_request_slave_id;
   assign ch1__ca_address = ch1_ca_request_address;
   assign ch1__ca_count = ch1_ca_request_count;
-  assign ch1__ca_write = \ch1_ca_request_write$186 ;
+  assign ch1__ca_write = \ch1_ca_request_write$221 ;
   assign ch1__ca_start = ch1_ca_ctrl_start;
   assign ch1__ca_abort = ch1_ca_ctrl_abort;
   assign ch1__ca_wbuf_addr = write_addr[3:0];
   assign ch1__ca_wbuf_data = write_data;
   assign ch1__ca_rbuf_addr = bus__r_addr[3:0];
   assign irq = { ch1_irq, ch0_irq };
-  assign bus__r_data = read_data;
   assign ch0__ca_wbuf_addr = write_addr[3:0];
-  assign \$183  = \$182 ;
-  assign \$188  = 32'd0;
-  assign \$189  = \$187 ;
-  assign \$402  = \$401 ;
-  assign \$404  = \$403 ;
-  assign \$406  = \$405 ;
-  assign \$475  = \$474 ;
-  assign \$477  = \$476 ;
-  assign \$479  = \$478 ;
-  assign \$246  = 32'd0;
-  assign \$247  = \$245 ;
-  assign \$310  = 32'd0;
-  assign \$311  = \$309 ;
+  assign \$9  = \$8 ;
+  assign \$14  = 32'd0;
+  assign \$15  = \$13 ;
+  assign \$367  = \$366 ;
+  assign \$369  = \$368 ;
+  assign \$371  = \$370 ;
+  assign \$408  = \$407 ;
+  assign \$410  = \$409 ;
+  assign \$412  = \$411 ;
+  assign \$107  = \$106 ;
+  assign \$160  = 32'd0;
+  assign \$161  = \$159 ;
+  assign \$261  = \$260 ;
+  assign \$314  = 32'd0;
+  assign \$315  = \$313 ;
   assign g_irq = 1'h0;
+  assign \$413  = g_read_data;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.bus (axil__awvalid, axil__wdata, axil__wstrb, axil__wvalid, axil__bready, axil__araddr, axil__arvalid, axil__rready, clk, rst, axil__awready, axil__wready, regs__w_en, axil__arready, regs__r_en, regs__r_load, regs__w_addr, regs__w_data, regs__w_strb, axil__bvalid, rvalid
-, axil__rdata, axil__awaddr);
+module \biss_master_axil.bus (axil__awvalid, axil__wdata, axil__wstrb, axil__wvalid, axil__bready, axil__araddr, axil__arvalid, axil__rready, clk, rst, axil__awready, axil__wready, regs__w_en, axil__arready, regs__r_en, regs__r_load, axil__rdata, regs__w_addr, regs__w_data, regs__w_strb, axil__bvalid
+, rvalid, axil__awaddr);
   reg \$auto$verilog_backend.cc:2355:dump_module$27  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -5681,7 +5440,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__ca_busy, regs__ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period
 , cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort
-, regs__done_count, ma, regs__done, \port$4258$0 , \port$4265$0 , regs__ca_done, \port$4379$0 , ca_rbuf_addr);
+, regs__done_count, ma, regs__done, \port$4137$0 , \port$4150$0 , regs__ca_done, \port$4264$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$28  = 0;
   wire \$1 ;
   wire [16:0] \$2 ;
@@ -5806,12 +5565,12 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_
   wire \ma$164 ;
   input periodic;
   wire periodic;
-  output [160:0] \port$4258$0 ;
-  wire [160:0] \port$4258$0 ;
-  output [287:0] \port$4265$0 ;
-  wire [287:0] \port$4265$0 ;
-  output [9:0] \port$4379$0 ;
-  wire [9:0] \port$4379$0 ;
+  output [160:0] \port$4137$0 ;
+  wire [160:0] \port$4137$0 ;
+  output [287:0] \port$4150$0 ;
+  wire [287:0] \port$4150$0 ;
+  output [9:0] \port$4264$0 ;
+  wire [9:0] \port$4264$0 ;
   wire regs__abort_cycle;
   output regs__busy;
   wire regs__busy;
@@ -6137,9 +5896,9 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_
   assign regs__ca_rbuf_en = ca_rbuf_en;
   assign \ma$164  = ma;
   assign \slo$166  = slo;
-  assign \port$4258$0  = \$4 ;
-  assign \port$4265$0  = \$5 ;
-  assign \port$4379$0  = \$6 ;
+  assign \port$4137$0  = \$4 ;
+  assign \port$4150$0  = \$5 ;
+  assign \port$4264$0  = \$6 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -6991,7 +6750,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$3984$0 (\bit ),
+    .\port$3859$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -7048,7 +6807,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .lc_skip_seen(lc_skip_seen),
     .lc_zero(lc_zero),
     .lc_zero_seen(lc_zero_seen),
-    .\port$1728$0 (\$16 ),
+    .\port$1597$0 (\$16 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -9068,46 +8827,68 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.counters (rst, clear, events, counts, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$35  = 0;
+  reg [17:0] \$1 ;
+  reg \$2 ;
   input clear;
   wire clear;
-  wire \clear$10 ;
-  wire \clear$13 ;
-  wire \clear$16 ;
-  wire \clear$19 ;
-  wire \clear$22 ;
-  wire \clear$25 ;
-  wire \clear$28 ;
-  wire \clear$3 ;
-  wire \clear$31 ;
-  wire \clear$34 ;
-  wire \clear$37 ;
-  wire \clear$40 ;
-  wire \clear$43 ;
-  wire \clear$46 ;
-  wire \clear$49 ;
-  wire \clear$52 ;
-  wire \clear$55 ;
+  (* init = 1'h0 *)
+  wire \clear$11 ;
+  (* init = 1'h0 *)
+  wire \clear$14 ;
+  (* init = 1'h0 *)
+  wire \clear$17 ;
+  (* init = 1'h0 *)
+  wire \clear$20 ;
+  (* init = 1'h0 *)
+  wire \clear$23 ;
+  (* init = 1'h0 *)
+  wire \clear$26 ;
+  (* init = 1'h0 *)
+  wire \clear$29 ;
+  (* init = 1'h0 *)
+  wire \clear$32 ;
+  (* init = 1'h0 *)
+  wire \clear$35 ;
+  (* init = 1'h0 *)
+  wire \clear$38 ;
+  (* init = 1'h0 *)
+  wire \clear$41 ;
+  (* init = 1'h0 *)
+  wire \clear$44 ;
+  (* init = 1'h0 *)
+  wire \clear$47 ;
+  (* init = 1'h0 *)
+  wire \clear$50 ;
+  (* init = 1'h0 *)
+  wire \clear$53 ;
+  (* init = 1'h0 *)
+  wire \clear$56 ;
+  (* init = 1'h0 *)
+  wire \clear$59 ;
+  (* init = 1'h0 *)
   wire \clear$7 ;
+  reg clear_reg = 1'h0;
   input clk;
   wire clk;
   wire [15:0] count;
-  wire [15:0] \count$11 ;
-  wire [15:0] \count$14 ;
-  wire [15:0] \count$17 ;
-  wire [15:0] \count$20 ;
-  wire [15:0] \count$23 ;
-  wire [15:0] \count$26 ;
-  wire [15:0] \count$29 ;
-  wire [15:0] \count$32 ;
-  wire [15:0] \count$35 ;
-  wire [15:0] \count$38 ;
-  wire [15:0] \count$41 ;
-  wire [15:0] \count$44 ;
-  wire [15:0] \count$47 ;
-  wire [15:0] \count$50 ;
-  wire [15:0] \count$53 ;
-  wire [15:0] \count$56 ;
-  wire [15:0] \count$8 ;
+  wire [15:0] \count$12 ;
+  wire [15:0] \count$15 ;
+  wire [15:0] \count$18 ;
+  wire [15:0] \count$21 ;
+  wire [15:0] \count$24 ;
+  wire [15:0] \count$27 ;
+  wire [15:0] \count$30 ;
+  wire [15:0] \count$33 ;
+  wire [15:0] \count$36 ;
+  wire [15:0] \count$39 ;
+  wire [15:0] \count$42 ;
+  wire [15:0] \count$45 ;
+  wire [15:0] \count$48 ;
+  wire [15:0] \count$51 ;
+  wire [15:0] \count$54 ;
+  wire [15:0] \count$57 ;
+  wire [15:0] \count$60 ;
   output [287:0] counts;
   wire [287:0] counts;
   wire [15:0] \counts.aborted ;
@@ -9148,188 +8929,243 @@ module \biss_master_axil.ch0.core.counters (rst, clear, events, counts, clk);
   wire \events.overrun ;
   wire \events.slo_stuck_low ;
   wire \events.spw_mismatch ;
+  reg [17:0] events_reg = 18'h00000;
+  wire \events_reg.aborted ;
+  wire \events_reg.ca_aborted ;
+  wire \events_reg.ca_crc4_error ;
+  wire \events_reg.ca_data_fault ;
+  wire \events_reg.ca_no_answer ;
+  wire \events_reg.ca_refused ;
+  wire \events_reg.crc_word0 ;
+  wire \events_reg.crc_word1 ;
+  wire \events_reg.delay_range ;
+  wire \events_reg.lc_repeat ;
+  wire \events_reg.lc_skip ;
+  wire \events_reg.lc_zero ;
+  wire \events_reg.no_ack ;
+  wire \events_reg.no_start ;
+  wire \events_reg.no_stop ;
+  wire \events_reg.overrun ;
+  wire \events_reg.slo_stuck_low ;
+  wire \events_reg.spw_mismatch ;
   wire inc;
-  wire \inc$12 ;
-  wire \inc$15 ;
-  wire \inc$18 ;
-  wire \inc$21 ;
-  wire \inc$24 ;
-  wire \inc$27 ;
-  wire \inc$30 ;
-  wire \inc$33 ;
-  wire \inc$36 ;
-  wire \inc$39 ;
-  wire \inc$42 ;
-  wire \inc$45 ;
-  wire \inc$48 ;
-  wire \inc$51 ;
-  wire \inc$54 ;
-  wire \inc$6 ;
-  wire \inc$9 ;
+  wire \inc$10 ;
+  wire \inc$13 ;
+  wire \inc$16 ;
+  wire \inc$19 ;
+  wire \inc$22 ;
+  wire \inc$25 ;
+  wire \inc$28 ;
+  wire \inc$31 ;
+  wire \inc$34 ;
+  wire \inc$37 ;
+  wire \inc$40 ;
+  wire \inc$43 ;
+  wire \inc$46 ;
+  wire \inc$49 ;
+  wire \inc$52 ;
+  wire \inc$55 ;
+  wire \inc$58 ;
   input rst;
   wire rst;
+  always @(posedge clk)
+    events_reg <= \$1 ;
+  always @(posedge clk)
+    clear_reg <= \$2 ;
   \biss_master_axil.ch0.core.counters.count_aborted  count_aborted (
-    .clear(clear),
+    .clear(clear_reg),
     .clk(clk),
-    .count(\count$38 ),
-    .inc(events[11]),
+    .count(\count$42 ),
+    .inc(events_reg[11]),
     .rst(rst)
   );
   \biss_master_axil.ch0.core.counters.count_ca_aborted  count_ca_aborted (
-    .clear(clear),
+    .clear(clear_reg),
     .clk(clk),
-    .count(\count$53 ),
-    .inc(events[16]),
+    .count(\count$57 ),
+    .inc(events_reg[16]),
     .rst(rst)
   );
   \biss_master_axil.ch0.core.counters.count_ca_crc4_error  count_ca_crc4_error (
-    .clear(clear),
+    .clear(clear_reg),
     .clk(clk),
-    .count(\count$44 ),
-    .inc(events[13]),
+    .count(\count$48 ),
+    .inc(events_reg[13]),
     .rst(rst)
   );
   \biss_master_axil.ch0.core.counters.count_ca_data_fault  count_ca_data_fault (
-    .clear(clear),
+    .clear(clear_reg),
     .clk(clk),
-    .count(\count$56 ),
-    .inc(events[17]),
+    .count(\count$60 ),
+    .inc(events_reg[17]),
     .rst(rst)
   );
   \biss_master_axil.ch0.core.counters.count_ca_no_answer  count_ca_no_answer (
-    .clear(clear),
+    .clear(clear_reg),
     .clk(clk),
-    .count(\count$47 ),
-    .inc(events[14]),
+    .count(\count$51 ),
+    .inc(events_reg[14]),
     .rst(rst)
   );
   \biss_master_axil.ch0.core.counters.count_ca_refused  count_ca_refused (
-    .clear(clear),
+    .clear(clear_reg),
     .clk(clk),
-    .count(\count$50 ),
-    .inc(events[15]),
+    .count(\count$54 ),
+    .inc(events_reg[15]),
     .rst(rst)
   );
   \biss_master_axil.ch0.core.counters.count_crc_word0  count_crc_word0 (
-    .clear(clear),
+    .clear(clear_reg),
     .clk(clk),
     .count(count),
-    .inc(events[0]),
+    .inc(events_reg[0]),
     .rst(rst)
   );
   \biss_master_axil.ch0.core.counters.count_crc_word1  count_crc_word1 (
-    .clear(clear),
+    .clear(clear_reg),
     .clk(clk),
-    .count(\count$8 ),
-    .inc(events[1]),
+    .count(\count$12 ),
+    .inc(events_reg[1]),
     .rst(rst)
   );
   \biss_master_axil.ch0.core.counters.count_delay_range  count_delay_range (
-    .clear(clear),
+    .clear(clear_reg),
     .clk(clk),
-    .count(\count$17 ),
-    .inc(events[4]),
+    .count(\count$21 ),
+    .inc(events_reg[4]),
     .rst(rst)
   );
   \biss_master_axil.ch0.core.counters.count_lc_repeat  count_lc_repeat (
-    .clear(clear),
+    .clear(clear_reg),
     .clk(clk),
-    .count(\count$23 ),
-    .inc(events[6]),
+    .count(\count$27 ),
+    .inc(events_reg[6]),
     .rst(rst)
   );
   \biss_master_axil.ch0.core.counters.count_lc_skip  count_lc_skip (
-    .clear(clear),
+    .clear(clear_reg),
     .clk(clk),
-    .count(\count$26 ),
-    .inc(events[7]),
+    .count(\count$30 ),
+    .inc(events_reg[7]),
     .rst(rst)
   );
   \biss_master_axil.ch0.core.counters.count_lc_zero  count_lc_zero (
-    .clear(clear),
+    .clear(clear_reg),
     .clk(clk),
-    .count(\count$29 ),
-    .inc(events[8]),
+    .count(\count$33 ),
+    .inc(events_reg[8]),
     .rst(rst)
   );
   \biss_master_axil.ch0.core.counters.count_no_ack  count_no_ack (
-    .clear(clear),
+    .clear(clear_reg),
     .clk(clk),
-    .count(\count$11 ),
-    .inc(events[2]),
+    .count(\count$15 ),
+    .inc(events_reg[2]),
     .rst(rst)
   );
   \biss_master_axil.ch0.core.counters.count_no_start  count_no_start (
-    .clear(clear),
+    .clear(clear_reg),
     .clk(clk),
-    .count(\count$14 ),
-    .inc(events[3]),
+    .count(\count$18 ),
+    .inc(events_reg[3]),
     .rst(rst)
   );
   \biss_master_axil.ch0.core.counters.count_no_stop  count_no_stop (
-    .clear(clear),
+    .clear(clear_reg),
     .clk(clk),
-    .count(\count$41 ),
-    .inc(events[12]),
+    .count(\count$45 ),
+    .inc(events_reg[12]),
     .rst(rst)
   );
   \biss_master_axil.ch0.core.counters.count_overrun  count_overrun (
-    .clear(clear),
+    .clear(clear_reg),
     .clk(clk),
-    .count(\count$35 ),
-    .inc(events[10]),
+    .count(\count$39 ),
+    .inc(events_reg[10]),
     .rst(rst)
   );
   \biss_master_axil.ch0.core.counters.count_slo_stuck_low  count_slo_stuck_low (
-    .clear(clear),
+    .clear(clear_reg),
     .clk(clk),
-    .count(\count$20 ),
-    .inc(events[5]),
+    .count(\count$24 ),
+    .inc(events_reg[5]),
     .rst(rst)
   );
   \biss_master_axil.ch0.core.counters.count_spw_mismatch  count_spw_mismatch (
-    .clear(clear),
+    .clear(clear_reg),
     .clk(clk),
-    .count(\count$32 ),
-    .inc(events[9]),
+    .count(\count$36 ),
+    .inc(events_reg[9]),
     .rst(rst)
   );
-  assign inc = events[0];
-  assign \clear$3  = clear;
-  assign \inc$6  = events[1];
-  assign \clear$7  = clear;
-  assign \inc$9  = events[2];
-  assign \clear$10  = clear;
-  assign \inc$12  = events[3];
-  assign \clear$13  = clear;
-  assign \inc$15  = events[4];
-  assign \clear$16  = clear;
-  assign \inc$18  = events[5];
-  assign \clear$19  = clear;
-  assign \inc$21  = events[6];
-  assign \clear$22  = clear;
-  assign \inc$24  = events[7];
-  assign \clear$25  = clear;
-  assign \inc$27  = events[8];
-  assign \clear$28  = clear;
-  assign \inc$30  = events[9];
-  assign \clear$31  = clear;
-  assign \inc$33  = events[10];
-  assign \clear$34  = clear;
-  assign \inc$36  = events[11];
-  assign \clear$37  = clear;
-  assign \inc$39  = events[12];
-  assign \clear$40  = clear;
-  assign \inc$42  = events[13];
-  assign \clear$43  = clear;
-  assign \inc$45  = events[14];
-  assign \clear$46  = clear;
-  assign \inc$48  = events[15];
-  assign \clear$49  = clear;
-  assign \inc$51  = events[16];
-  assign \clear$52  = clear;
-  assign \inc$54  = events[17];
-  assign \clear$55  = clear;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    \$1  = events;
+    if (rst) begin
+      \$1  = 18'h00000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    \$2  = clear;
+    if (rst) begin
+      \$2  = 1'h0;
+    end
+  end
+  assign inc = events_reg[0];
+  assign \clear$7  = clear_reg;
+  assign \inc$10  = events_reg[1];
+  assign \clear$11  = clear_reg;
+  assign \inc$13  = events_reg[2];
+  assign \clear$14  = clear_reg;
+  assign \inc$16  = events_reg[3];
+  assign \clear$17  = clear_reg;
+  assign \inc$19  = events_reg[4];
+  assign \clear$20  = clear_reg;
+  assign \inc$22  = events_reg[5];
+  assign \clear$23  = clear_reg;
+  assign \inc$25  = events_reg[6];
+  assign \clear$26  = clear_reg;
+  assign \inc$28  = events_reg[7];
+  assign \clear$29  = clear_reg;
+  assign \inc$31  = events_reg[8];
+  assign \clear$32  = clear_reg;
+  assign \inc$34  = events_reg[9];
+  assign \clear$35  = clear_reg;
+  assign \inc$37  = events_reg[10];
+  assign \clear$38  = clear_reg;
+  assign \inc$40  = events_reg[11];
+  assign \clear$41  = clear_reg;
+  assign \inc$43  = events_reg[12];
+  assign \clear$44  = clear_reg;
+  assign \inc$46  = events_reg[13];
+  assign \clear$47  = clear_reg;
+  assign \inc$49  = events_reg[14];
+  assign \clear$50  = clear_reg;
+  assign \inc$52  = events_reg[15];
+  assign \clear$53  = clear_reg;
+  assign \inc$55  = events_reg[16];
+  assign \clear$56  = clear_reg;
+  assign \inc$58  = events_reg[17];
+  assign \clear$59  = clear_reg;
+  assign \events_reg.crc_word0  = events_reg[0];
+  assign \events_reg.crc_word1  = events_reg[1];
+  assign \events_reg.no_ack  = events_reg[2];
+  assign \events_reg.no_start  = events_reg[3];
+  assign \events_reg.delay_range  = events_reg[4];
+  assign \events_reg.slo_stuck_low  = events_reg[5];
+  assign \events_reg.lc_repeat  = events_reg[6];
+  assign \events_reg.lc_skip  = events_reg[7];
+  assign \events_reg.lc_zero  = events_reg[8];
+  assign \events_reg.spw_mismatch  = events_reg[9];
+  assign \events_reg.overrun  = events_reg[10];
+  assign \events_reg.aborted  = events_reg[11];
+  assign \events_reg.no_stop  = events_reg[12];
+  assign \events_reg.ca_crc4_error  = events_reg[13];
+  assign \events_reg.ca_no_answer  = events_reg[14];
+  assign \events_reg.ca_refused  = events_reg[15];
+  assign \events_reg.ca_aborted  = events_reg[16];
+  assign \events_reg.ca_data_fault  = events_reg[17];
   assign \events.crc_word0  = events[0];
   assign \events.crc_word1  = events[1];
   assign \events.no_ack  = events[2];
@@ -9366,82 +9202,28 @@ module \biss_master_axil.ch0.core.counters (rst, clear, events, counts, clk);
   assign \counts.ca_refused  = counts[255:240];
   assign \counts.ca_aborted  = counts[271:256];
   assign \counts.ca_data_fault  = counts[287:272];
-  assign counts[287:272] = \count$56 ;
-  assign counts[271:256] = \count$53 ;
-  assign counts[255:240] = \count$50 ;
-  assign counts[239:224] = \count$47 ;
-  assign counts[223:208] = \count$44 ;
-  assign counts[207:192] = \count$41 ;
-  assign counts[191:176] = \count$38 ;
-  assign counts[175:160] = \count$35 ;
-  assign counts[159:144] = \count$32 ;
-  assign counts[143:128] = \count$29 ;
-  assign counts[127:112] = \count$26 ;
-  assign counts[111:96] = \count$23 ;
-  assign counts[95:80] = \count$20 ;
-  assign counts[79:64] = \count$17 ;
-  assign counts[63:48] = \count$14 ;
-  assign counts[47:32] = \count$11 ;
-  assign counts[31:16] = \count$8 ;
+  assign counts[287:272] = \count$60 ;
+  assign counts[271:256] = \count$57 ;
+  assign counts[255:240] = \count$54 ;
+  assign counts[239:224] = \count$51 ;
+  assign counts[223:208] = \count$48 ;
+  assign counts[207:192] = \count$45 ;
+  assign counts[191:176] = \count$42 ;
+  assign counts[175:160] = \count$39 ;
+  assign counts[159:144] = \count$36 ;
+  assign counts[143:128] = \count$33 ;
+  assign counts[127:112] = \count$30 ;
+  assign counts[111:96] = \count$27 ;
+  assign counts[95:80] = \count$24 ;
+  assign counts[79:64] = \count$21 ;
+  assign counts[63:48] = \count$18 ;
+  assign counts[47:32] = \count$15 ;
+  assign counts[31:16] = \count$12 ;
   assign counts[15:0] = count;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_aborted (rst, clear, inc, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$35  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_ca_aborted (rst, clear, inc, count, clk);
+module \biss_master_axil.ch0.core.counters.count_aborted (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$36  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -9495,7 +9277,7 @@ module \biss_master_axil.ch0.core.counters.count_ca_aborted (rst, clear, inc, co
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_ca_crc4_error (rst, clear, inc, count, clk);
+module \biss_master_axil.ch0.core.counters.count_ca_aborted (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$37  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -9549,7 +9331,7 @@ module \biss_master_axil.ch0.core.counters.count_ca_crc4_error (rst, clear, inc,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_ca_data_fault (rst, clear, inc, count, clk);
+module \biss_master_axil.ch0.core.counters.count_ca_crc4_error (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$38  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -9603,7 +9385,7 @@ module \biss_master_axil.ch0.core.counters.count_ca_data_fault (rst, clear, inc,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_ca_no_answer (rst, clear, inc, count, clk);
+module \biss_master_axil.ch0.core.counters.count_ca_data_fault (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$39  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -9657,7 +9439,7 @@ module \biss_master_axil.ch0.core.counters.count_ca_no_answer (rst, clear, inc, 
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_ca_refused (rst, clear, inc, count, clk);
+module \biss_master_axil.ch0.core.counters.count_ca_no_answer (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$40  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -9711,7 +9493,7 @@ module \biss_master_axil.ch0.core.counters.count_ca_refused (rst, clear, inc, co
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_crc_word0 (rst, clear, inc, count, clk);
+module \biss_master_axil.ch0.core.counters.count_ca_refused (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$41  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -9765,7 +9547,7 @@ module \biss_master_axil.ch0.core.counters.count_crc_word0 (rst, clear, inc, cou
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_crc_word1 (rst, clear, inc, count, clk);
+module \biss_master_axil.ch0.core.counters.count_crc_word0 (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$42  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -9819,7 +9601,7 @@ module \biss_master_axil.ch0.core.counters.count_crc_word1 (rst, clear, inc, cou
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_delay_range (rst, clear, inc, count, clk);
+module \biss_master_axil.ch0.core.counters.count_crc_word1 (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$43  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -9873,7 +9655,7 @@ module \biss_master_axil.ch0.core.counters.count_delay_range (rst, clear, inc, c
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_lc_repeat (rst, clear, inc, count, clk);
+module \biss_master_axil.ch0.core.counters.count_delay_range (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$44  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -9927,7 +9709,7 @@ module \biss_master_axil.ch0.core.counters.count_lc_repeat (rst, clear, inc, cou
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_lc_skip (rst, clear, inc, count, clk);
+module \biss_master_axil.ch0.core.counters.count_lc_repeat (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$45  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -9981,7 +9763,7 @@ module \biss_master_axil.ch0.core.counters.count_lc_skip (rst, clear, inc, count
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_lc_zero (rst, clear, inc, count, clk);
+module \biss_master_axil.ch0.core.counters.count_lc_skip (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$46  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -10035,7 +9817,7 @@ module \biss_master_axil.ch0.core.counters.count_lc_zero (rst, clear, inc, count
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_no_ack (rst, clear, inc, count, clk);
+module \biss_master_axil.ch0.core.counters.count_lc_zero (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$47  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -10089,7 +9871,7 @@ module \biss_master_axil.ch0.core.counters.count_no_ack (rst, clear, inc, count,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_no_start (rst, clear, inc, count, clk);
+module \biss_master_axil.ch0.core.counters.count_no_ack (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$48  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -10143,7 +9925,7 @@ module \biss_master_axil.ch0.core.counters.count_no_start (rst, clear, inc, coun
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_no_stop (rst, clear, inc, count, clk);
+module \biss_master_axil.ch0.core.counters.count_no_start (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$49  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -10197,7 +9979,7 @@ module \biss_master_axil.ch0.core.counters.count_no_stop (rst, clear, inc, count
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_overrun (rst, clear, inc, count, clk);
+module \biss_master_axil.ch0.core.counters.count_no_stop (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$50  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -10251,7 +10033,7 @@ module \biss_master_axil.ch0.core.counters.count_overrun (rst, clear, inc, count
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_slo_stuck_low (rst, clear, inc, count, clk);
+module \biss_master_axil.ch0.core.counters.count_overrun (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -10305,7 +10087,7 @@ module \biss_master_axil.ch0.core.counters.count_slo_stuck_low (rst, clear, inc,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_spw_mismatch (rst, clear, inc, count, clk);
+module \biss_master_axil.ch0.core.counters.count_slo_stuck_low (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$52  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -10359,9 +10141,63 @@ module \biss_master_axil.ch0.core.counters.count_spw_mismatch (rst, clear, inc, 
 endmodule
 
 (* generator = "Amaranth" *)
+module \biss_master_axil.ch0.core.counters.count_spw_mismatch (rst, inc, clear, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$53  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, sample, \bit , receiver_clear, done, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1, lc, cpw_top, crc_ok
 , clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$53  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$54  = 0;
   wire [6:0] \$1 ;
   wire [1:0] \$10 ;
   reg [2:0] \$100 ;
@@ -10744,7 +10580,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     .valid(\valid$52 )
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     (* full_case = 32'd1 *)
     casez (words[6])
       1'h0:
@@ -10754,7 +10590,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -10768,7 +10604,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     (* full_case = 32'd1 *)
     casez (words[9:6])
       4'h0:
@@ -10806,7 +10642,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -10820,7 +10656,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     (* full_case = 32'd1 *)
     casez (words[16])
       1'h0:
@@ -10830,7 +10666,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     (* full_case = 32'd1 *)
     casez (words[17:16])
       2'h0:
@@ -10844,7 +10680,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:16])
       4'h0:
@@ -10882,7 +10718,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     (* full_case = 32'd1 *)
     casez (words[17:16])
       2'h0:
@@ -10896,7 +10732,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$94  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -10920,7 +10756,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$95  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -10942,7 +10778,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$96  = slots;
     if (\$34 ) begin
       \$96  = \$35 [15:0];
@@ -10955,7 +10791,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$97  = slots_full;
     if (\$34 ) begin
       \$97  = \$36 ;
@@ -10968,7 +10804,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$98  = started;
     casez (decoder_fsm_state)
       3'h0:
@@ -10984,7 +10820,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$99  = start_slot;
     casez (decoder_fsm_state)
       3'h0:
@@ -11000,7 +10836,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$100  = decoder_fsm_state;
     casez (decoder_fsm_state)
       3'h0:
@@ -11032,7 +10868,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$101  = cds;
     casez (decoder_fsm_state)
       3'h0:
@@ -11050,7 +10886,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$102  = idx;
     casez (decoder_fsm_state)
       3'h0:
@@ -11075,7 +10911,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$103  = in_data;
     casez (decoder_fsm_state)
       3'h0:
@@ -11100,7 +10936,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$104  = in_lc;
     casez (decoder_fsm_state)
       3'h0:
@@ -11125,7 +10961,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$105  = in_top;
     casez (decoder_fsm_state)
       3'h0:
@@ -11150,7 +10986,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$106  = word;
     casez (decoder_fsm_state)
       3'h0:
@@ -11178,7 +11014,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$107  = stop_bit;
     casez (decoder_fsm_state)
       3'h0:
@@ -11200,7 +11036,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$108  = data0;
     if (\$58 ) begin
       \$108  = { data0[53:0], \bit  };
@@ -11213,7 +11049,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$109  = ne;
     if (\$59 ) begin
       \$109 [0] = 1'h1;
@@ -11233,7 +11069,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$110  = nw;
     if (\$59 ) begin
       \$110 [0] = 1'h1;
@@ -11255,7 +11091,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$111  = data1;
     if (\$70 ) begin
       \$111  = { data1[38:0], \bit  };
@@ -11268,7 +11104,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$112  = lc;
     if (lc_load) begin
       \$112  = { lc[4:0], \bit  };
@@ -11281,7 +11117,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$113  = cpw_top;
     if (\$80 ) begin
       \$113  = { cpw_top[38:0], \bit  };
@@ -11294,7 +11130,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     in_word = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -11331,7 +11167,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.decoder.crc0 (rst, start, valid, kind, \bit , receiver_clear, ok, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$54  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$55  = 0;
   wire [5:0] \$1 ;
   wire \$10 ;
   wire [5:0] \$11 ;
@@ -11425,7 +11261,7 @@ module \biss_master_axil.ch0.core.decoder.crc0 (rst, start, valid, kind, \bit , 
   assign \$auto$rtlil.cc:2739:Not$22  = ~ { crc6_reg[0], 1'h0 };
   assign \$auto$rtlil.cc:2739:Not$24  = ~ { crc16_reg[14], crc16_reg[11], crc16_reg[6:5], crc16_reg[3:2], 1'h0 };
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$31  = crc6_reg;
     if (valid) begin
       \$31  = \$5 ;
@@ -11440,7 +11276,7 @@ module \biss_master_axil.ch0.core.decoder.crc0 (rst, start, valid, kind, \bit , 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$32  = crc6_match;
     if (valid) begin
       \$32  = \$15 ;
@@ -11455,7 +11291,7 @@ module \biss_master_axil.ch0.core.decoder.crc0 (rst, start, valid, kind, \bit , 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$33  = crc16_reg;
     if (valid) begin
       \$33  = \$20 ;
@@ -11470,7 +11306,7 @@ module \biss_master_axil.ch0.core.decoder.crc0 (rst, start, valid, kind, \bit , 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$34  = crc16_match;
     if (valid) begin
       \$34  = \$30 ;
@@ -11485,7 +11321,7 @@ module \biss_master_axil.ch0.core.decoder.crc0 (rst, start, valid, kind, \bit , 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     ok = 1'h0;
     casez (kind)
       2'h0:
@@ -11506,7 +11342,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.decoder.crc1 (rst, start, valid, kind, \bit , receiver_clear, ok, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$55  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$56  = 0;
   wire [5:0] \$1 ;
   wire \$10 ;
   wire [5:0] \$11 ;
@@ -11600,7 +11436,7 @@ module \biss_master_axil.ch0.core.decoder.crc1 (rst, start, valid, kind, \bit , 
   assign \$auto$rtlil.cc:2739:Not$18  = ~ { crc6_reg[0], 1'h0 };
   assign \$auto$rtlil.cc:2739:Not$20  = ~ { crc16_reg[14], crc16_reg[11], crc16_reg[6:5], crc16_reg[3:2], 1'h0 };
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
     \$31  = crc6_reg;
     if (valid) begin
       \$31  = \$5 ;
@@ -11615,7 +11451,7 @@ module \biss_master_axil.ch0.core.decoder.crc1 (rst, start, valid, kind, \bit , 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
     \$32  = crc6_match;
     if (valid) begin
       \$32  = \$15 ;
@@ -11630,7 +11466,7 @@ module \biss_master_axil.ch0.core.decoder.crc1 (rst, start, valid, kind, \bit , 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
     \$33  = crc16_reg;
     if (valid) begin
       \$33  = \$20 ;
@@ -11645,7 +11481,7 @@ module \biss_master_axil.ch0.core.decoder.crc1 (rst, start, valid, kind, \bit , 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
     \$34  = crc16_match;
     if (valid) begin
       \$34  = \$30 ;
@@ -11660,7 +11496,7 @@ module \biss_master_axil.ch0.core.decoder.crc1 (rst, start, valid, kind, \bit , 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
     ok = 1'h0;
     casez (kind)
       2'h0:
@@ -11681,7 +11517,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, hold, first_rise, second_rise, ma, rises, busy, held, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$56  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$57  = 0;
   wire [16:0] \$1 ;
   wire \$10 ;
   wire [16:0] \$11 ;
@@ -11806,7 +11642,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
   always @(posedge clk)
     released <= \$42 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$34  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -11821,7 +11657,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$35  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -11836,7 +11672,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$36  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -11851,7 +11687,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$37  = ma;
     casez (ma_fsm_state)
       3'h0:
@@ -11880,7 +11716,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$38  = phase_left;
     casez (ma_fsm_state)
       3'h0:
@@ -11922,7 +11758,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$39  = last_clock;
     casez (ma_fsm_state)
       3'h0:
@@ -11964,7 +11800,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$40  = rises;
     casez (ma_fsm_state)
       3'h0:
@@ -11983,7 +11819,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$41  = ma_fsm_state;
     casez (ma_fsm_state)
       3'h0:
@@ -12019,7 +11855,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$42  = released;
     casez (ma_fsm_state)
       3'h0:
@@ -12043,7 +11879,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     busy = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -12059,7 +11895,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     held = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -12076,7 +11912,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.ma_stop (rst, words, w1_enable, clear, rises, enough, \started$10 , start_slot, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$57  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$58  = 0;
   reg [7:0] \$1 ;
   reg [7:0] \$10 ;
   wire [8:0] \$11 ;
@@ -12157,7 +11993,7 @@ module \biss_master_axil.ch0.core.ma_stop (rst, words, w1_enable, clear, rises, 
   always @(posedge clk)
     word1_len <= \$17 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     (* full_case = 32'd1 *)
     casez (words[9:6])
       4'h0:
@@ -12195,7 +12031,7 @@ module \biss_master_axil.ch0.core.ma_stop (rst, words, w1_enable, clear, rises, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:16])
       4'h0:
@@ -12233,42 +12069,42 @@ module \biss_master_axil.ch0.core.ma_stop (rst, words, w1_enable, clear, rises, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     \$12  = \$2 [7:0];
     if (rst) begin
       \$12  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     \$13  = \$4 ;
     if (rst) begin
       \$13  = 9'h000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     \$14  = \$5 ;
     if (rst) begin
       \$14  = 17'h00000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     \$15  = \started$10 ;
     if (rst) begin
       \$15  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     \$16  = \$9 ;
     if (rst) begin
       \$16  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     \$17  = \$11 [7:0];
     if (rst) begin
       \$17  = 8'h00;
@@ -12580,7 +12416,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.register_access.buffers (clk, rst, host_read__en, byte_to_send, rbuf_data, wbuf, index, store, byte_received, host_read__addr);
-  reg \$auto$verilog_backend.cc:2355:dump_module$58  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$59  = 0;
   wire \$1 ;
   wire \$2 ;
   wire \$3 ;
@@ -12697,21 +12533,21 @@ module \biss_master_axil.ch0.core.register_access.buffers (clk, rst, host_read__
   assign \$1  = ! index[1:0];
   assign \$2  = index[1:0] == 1'h1;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     byte_received__addr = 4'h0;
     if (store) begin
       byte_received__addr = index[5:2];
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     byte_received__data = 32'd0;
     if (store) begin
       byte_received__data = { byte_received, byte_received, byte_received, byte_received };
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     byte_received__en = 4'h0;
     if (store) begin
       byte_received__en = { \$4 , \$3 , \$2 , \$1  };
@@ -12731,7 +12567,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.register_access.checker (rst, crc_ok, echo_ok, cds, control__take_data, start, control__take_crc, sent, \byte , clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$59  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$60  = 0;
   reg [7:0] \$1 ;
   reg [2:0] \$2 ;
   output [7:0] \byte ;
@@ -12774,7 +12610,7 @@ module \biss_master_axil.ch0.core.register_access.checker (rst, crc_ok, echo_ok,
     .valid(control__take_data)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
     \$1  = \byte ;
     if (control__take_data) begin
       \$1  = { \byte [6:0], cds };
@@ -12784,7 +12620,7 @@ module \biss_master_axil.ch0.core.register_access.checker (rst, crc_ok, echo_ok,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
     \$2  = got_crc;
     if (control__take_crc) begin
       \$2  = { got_crc[1:0], cds };
@@ -12800,7 +12636,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.register_access.checker.rx_crc (rst, crc, data_in, valid, start, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$60  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$61  = 0;
   wire [3:0] \$1 ;
   wire \$10 ;
   wire [3:0] \$11 ;
@@ -12843,7 +12679,7 @@ module \biss_master_axil.ch0.core.register_access.checker.rx_crc (rst, crc, data
     crc_reg <= \$13 ;
   assign \$auto$rtlil.cc:2739:Not$14  = ~ crc_reg;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
     \$13  = crc_reg;
     if (valid) begin
       \$13 [0] = \$3 ;
@@ -12867,7 +12703,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.register_access.idle (rst, frame_end, frame_ok, run_enough, seen_enough, frame_cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$61  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$62  = 0;
   wire \$1 ;
   wire [4:0] \$10 ;
   wire \$11 ;
@@ -12937,7 +12773,7 @@ module \biss_master_axil.ch0.core.register_access.idle (rst, frame_end, frame_ok
   always @(posedge clk)
     idle_seen <= \$24 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
     \$23  = idle_run;
     if (frame_end) begin
       \$23  = \$4 [3:0];
@@ -12947,7 +12783,7 @@ module \biss_master_axil.ch0.core.register_access.idle (rst, frame_end, frame_ok
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
     \$24  = idle_seen;
     if (frame_end) begin
       \$24  = \$10 [3:0];
@@ -12960,7 +12796,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.register_access.sender (rst, \byte , request, control__load_header, control__source, control__crc_bit, control__shift_header, start, valid, control__load_byte, control__shift_byte, sent, cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$62  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$63  = 0;
   wire \$1 ;
   wire [18:0] \$2 ;
   wire [8:0] \$3 ;
@@ -13032,7 +12868,7 @@ module \biss_master_axil.ch0.core.register_access.sender (rst, \byte , request, 
     .valid(valid)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
     \$6  = header;
     if (control__load_header) begin
       \$6  = { 2'h3, request[2:0], request[9:3], 4'h0, \$1 , request[17] };
@@ -13045,7 +12881,7 @@ module \biss_master_axil.ch0.core.register_access.sender (rst, \byte , request, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
     \$7  = to_send;
     if (control__load_byte) begin
       \$7  = \byte ;
@@ -13058,7 +12894,7 @@ module \biss_master_axil.ch0.core.register_access.sender (rst, \byte , request, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
     \$8  = sent;
     if (control__load_byte) begin
       \$8  = \byte ;
@@ -13068,7 +12904,7 @@ module \biss_master_axil.ch0.core.register_access.sender (rst, \byte , request, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
     cdm = 1'h0;
     casez (control__source)
       3'h1:
@@ -13093,7 +12929,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.register_access.sender.tx_crc (rst, data_in, crc, start, valid, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$63  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$64  = 0;
   wire [3:0] \$1 ;
   wire \$10 ;
   wire [3:0] \$11 ;
@@ -13136,7 +12972,7 @@ module \biss_master_axil.ch0.core.register_access.sender.tx_crc (rst, data_in, c
     crc_reg <= \$13 ;
   assign \$auto$rtlil.cc:2739:Not$16  = ~ crc_reg;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     \$13  = crc_reg;
     if (valid) begin
       \$13 [0] = \$3 ;
@@ -13161,7 +12997,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, frame_ok, busy, crc_ok, echo_ok, run_enough, seen_enough, start, abort, request, frame_cdm, frame_cds, done, result, index, send__load_header, send__source, send__crc_bit, send__shift_header, send__crc_start
 , send__crc_valid, send__load_byte, send__shift_byte, check__take_data, check__first, check__take_crc, store, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$64  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$65  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$100 ;
@@ -13517,7 +13353,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
   always @(posedge clk)
     waited <= \$125 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     \$118  = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -13555,7 +13391,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     \$119  = result;
     casez (access_fsm_state)
       3'h0:
@@ -13609,7 +13445,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     \$120  = access_fsm_state;
     casez (access_fsm_state)
       3'h0:
@@ -13706,7 +13542,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     \$121  = req;
     casez (access_fsm_state)
       3'h0:
@@ -13723,7 +13559,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     \$122  = index;
     casez (access_fsm_state)
       3'h0:
@@ -13762,7 +13598,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     \$123  = step;
     casez (access_fsm_state)
       3'h0:
@@ -13820,7 +13656,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     \$124  = ending;
     casez (access_fsm_state)
       3'h0:
@@ -13887,7 +13723,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     \$125  = waited;
     casez (access_fsm_state)
       3'h0:
@@ -13919,7 +13755,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     send__load_header = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -13933,7 +13769,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     send__source = 3'h0;
     casez (access_fsm_state)
       3'h0:
@@ -13960,7 +13796,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     send__crc_bit = 2'h0;
     casez (access_fsm_state)
       3'h0:
@@ -13980,7 +13816,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     send__shift_header = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -13999,7 +13835,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     send__crc_start = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -14028,7 +13864,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     send__crc_valid = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -14049,7 +13885,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     send__load_byte = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -14071,7 +13907,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     send__shift_byte = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -14092,7 +13928,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     check__take_data = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -14114,7 +13950,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     check__first = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -14136,7 +13972,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     check__take_crc = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -14160,7 +13996,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     store = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -14199,7 +14035,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.results (rst, report_delay, report, valid, frame, report_frame, done, valid_out, result, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$65  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$66  = 0;
   reg \$1 ;
   reg \$2 ;
   reg [160:0] \$3 ;
@@ -14296,21 +14132,21 @@ module \biss_master_axil.ch0.core.results (rst, report_delay, report, valid, fra
   always @(posedge clk)
     result <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$1  = report;
     if (rst) begin
       \$1  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$2  = valid;
     if (rst) begin
       \$2  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$3  = result;
     if (report) begin
       \$3 [3:0] = frame[3:0];
@@ -14375,7 +14211,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receiver_clear, arm, early, locked, delay, sample, level, slo);
-  reg \$auto$verilog_backend.cc:2355:dump_module$66  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$67  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -14613,7 +14449,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     .stage1(level)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
     \$63  = level;
     if (receiver_clear) begin
       \$63  = 1'h1;
@@ -14623,7 +14459,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
     \$64  = mid_delay;
     if (odd) begin
       \$64  = \$8 [12:0];
@@ -14648,7 +14484,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
     \$65  = mid_slot;
     (* full_case = 32'd1 *)
     if (odd) begin
@@ -14675,7 +14511,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
     \$66  = \$10 ;
     casez (sampler_fsm_state)
       2'h0:
@@ -14697,7 +14533,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
     \$67  = elapsed;
     casez (sampler_fsm_state)
       2'h0:
@@ -14721,7 +14557,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
     \$68  = early;
     casez (sampler_fsm_state)
       2'h0:
@@ -14737,7 +14573,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
     \$69  = locked;
     casez (sampler_fsm_state)
       2'h0:
@@ -14763,7 +14599,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
     \$70  = gap;
     casez (sampler_fsm_state)
       2'h0:
@@ -14794,7 +14630,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
     \$71  = sampler_fsm_state;
     casez (sampler_fsm_state)
       2'h0:
@@ -14825,7 +14661,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
     \$72  = slot_left;
     casez (sampler_fsm_state)
       2'h0:
@@ -14875,7 +14711,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
     \$73  = slot_zero;
     casez (sampler_fsm_state)
       2'h0:
@@ -14925,7 +14761,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
     \$74  = vote1;
     casez (sampler_fsm_state)
       2'h0:
@@ -14955,7 +14791,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
     \$75  = vote2;
     casez (sampler_fsm_state)
       2'h0:
@@ -14983,7 +14819,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
     \$76  = first_slot;
     casez (sampler_fsm_state)
       2'h0:
@@ -15009,7 +14845,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
     \$77  = delay;
     casez (sampler_fsm_state)
       2'h0:
@@ -15032,7 +14868,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
     \$78  = phase;
     casez (sampler_fsm_state)
       2'h0:
@@ -15072,7 +14908,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
     sample = \$44 ;
     casez (sampler_fsm_state)
       2'h0:
@@ -15090,7 +14926,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
     decided = 1'h0;
     casez (sampler_fsm_state)
       2'h0:
@@ -15140,7 +14976,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.scheduler (rst, trigger, periodic, request, overrun, start, abort, period, idle, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$67  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$68  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -15224,7 +15060,7 @@ module \biss_master_axil.ch0.core.scheduler (rst, trigger, periodic, request, ov
   always @(posedge clk)
     period_start <= \$28 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$27  = 24'h000001;
@@ -15236,7 +15072,7 @@ module \biss_master_axil.ch0.core.scheduler (rst, trigger, periodic, request, ov
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$28  = 1'h1;
@@ -15250,29 +15086,33 @@ module \biss_master_axil.ch0.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$3984$0 , resync, lc, is_zero, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$68  = 0;
+module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$3859$0 , resync, lc, is_zero, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$69  = 0;
   wire \$1 ;
-  wire \$10 ;
+  wire [6:0] \$10 ;
   wire \$11 ;
   wire \$12 ;
   wire \$13 ;
   wire \$14 ;
   wire \$15 ;
-  reg \$16 ;
-  reg \$17 ;
+  wire \$16 ;
+  wire \$17 ;
   reg \$18 ;
-  reg [5:0] \$19 ;
+  reg \$19 ;
   wire \$2 ;
-  reg [5:0] \$20 ;
+  reg \$20 ;
   reg \$21 ;
+  reg [5:0] \$22 ;
+  reg [5:0] \$23 ;
+  reg [5:0] \$24 ;
+  reg \$25 ;
   wire \$3 ;
   wire \$4 ;
   wire \$5 ;
   wire \$6 ;
-  wire [6:0] \$7 ;
-  wire [6:0] \$8 ;
-  wire \$9 ;
+  wire \$7 ;
+  wire \$8 ;
+  wire [6:0] \$9 ;
   input check;
   wire check;
   input clk;
@@ -15288,8 +15128,8 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$3984$0 ;
-  wire \port$3984$0 ;
+  input \port$3859$0 ;
+  wire \port$3859$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -15298,108 +15138,130 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   wire rst;
   output skip;
   wire skip;
+  reg store = 1'h0;
+  reg [5:0] store_lc = 6'h00;
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$3984$0  };
-  assign \$2  = { lc[4:0], \port$3984$0  } == last;
-  assign \$3  = { lc[4:0], \port$3984$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$3859$0  };
+  assign \$2  = { lc[4:0], \port$3859$0  } == last;
+  assign \$3  = { lc[4:0], \port$3859$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
-  assign \$6  = lc == 6'h3f;
-  assign \$7  = lc + 1'h1;
-  assign \$8  = \$6  ? 7'h01 : \$7 ;
-  assign \$9  = ~ is_zero;
-  assign \$10  = synced & \$9 ;
-  assign \repeat  = \$10  & is_last;
+  assign \$6  = ~ resync;
+  assign \$7  = \$5  & \$6 ;
+  assign \$8  = store_lc == 6'h3f;
+  assign \$9  = store_lc + 1'h1;
+  assign \$10  = \$8  ? 7'h01 : \$9 ;
   assign \$11  = ~ is_zero;
   assign \$12  = synced & \$11 ;
-  assign \$13  = ~ is_last;
-  assign \$14  = \$12  & \$13 ;
-  assign \$15  = ~ is_expected;
-  assign skip = \$14  & \$15 ;
+  assign \repeat  = \$12  & is_last;
+  assign \$13  = ~ is_zero;
+  assign \$14  = synced & \$13 ;
+  assign \$15  = ~ is_last;
+  assign \$16  = \$14  & \$15 ;
+  assign \$17  = ~ is_expected;
+  assign skip = \$16  & \$17 ;
   always @(posedge clk)
-    is_zero <= \$16 ;
+    is_zero <= \$18 ;
   always @(posedge clk)
-    is_last <= \$17 ;
+    is_last <= \$19 ;
   always @(posedge clk)
-    is_expected <= \$18 ;
+    is_expected <= \$20 ;
   always @(posedge clk)
-    last <= \$19 ;
+    store <= \$21 ;
   always @(posedge clk)
-    expected <= \$20 ;
+    store_lc <= \$22 ;
   always @(posedge clk)
-    synced <= \$21 ;
+    last <= \$23 ;
+  always @(posedge clk)
+    expected <= \$24 ;
+  always @(posedge clk)
+    synced <= \$25 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
-    \$16  = is_zero;
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    \$18  = is_zero;
     if (load) begin
-      \$16  = \$1 ;
-    end
-    if (rst) begin
-      \$16  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
-    \$17  = is_last;
-    if (load) begin
-      \$17  = \$2 ;
-    end
-    if (rst) begin
-      \$17  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
-    \$18  = is_expected;
-    if (load) begin
-      \$18  = \$3 ;
+      \$18  = \$1 ;
     end
     if (rst) begin
       \$18  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
-    \$19  = last;
-    if (\$5 ) begin
-      \$19  = lc;
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    \$19  = is_last;
+    if (load) begin
+      \$19  = \$2 ;
     end
     if (rst) begin
-      \$19  = 6'h00;
+      \$19  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
-    \$20  = expected;
-    if (\$5 ) begin
-      \$20  = \$8 [5:0];
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    \$20  = is_expected;
+    if (load) begin
+      \$20  = \$3 ;
     end
     if (rst) begin
-      \$20  = 6'h01;
+      \$20  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
-    \$21  = synced;
-    if (\$5 ) begin
-      \$21  = 1'h1;
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    \$21  = \$7 ;
+    if (rst) begin
+      \$21  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    \$22  = lc;
+    if (rst) begin
+      \$22  = 6'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    \$23  = last;
+    if (store) begin
+      \$23  = store_lc;
+    end
+    if (rst) begin
+      \$23  = 6'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    \$24  = expected;
+    if (store) begin
+      \$24  = \$10 [5:0];
+    end
+    if (rst) begin
+      \$24  = 6'h01;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    \$25  = synced;
+    if (store) begin
+      \$25  = 1'h1;
     end
     if (resync) begin
-      \$21  = 1'h0;
+      \$25  = 1'h0;
     end
     if (rst) begin
-      \$21  = 1'h0;
+      \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$3984$0  };
+  assign lc_next = { lc[4:0], \port$3859$0  };
   assign zero = is_zero;
 endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.spw_check (rst, bits, \tolerance$8 , spw, cpw_top, match, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$69  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$70  = 0;
   wire [40:0] \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -15604,28 +15466,28 @@ module \biss_master_axil.ch0.core.spw_check (rst, bits, \tolerance$8 , spw, cpw_
   assign \$7  = bits > 3'h5;
   assign \$8  = bits > 3'h6;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     \$88  = \$42 ;
     if (rst) begin
       \$88  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     \$89  = \$84 ;
     if (rst) begin
       \$89  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     \$90  = \tolerance$8 ;
     if (rst) begin
       \$90  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     \$91  = \$87 ;
     if (rst) begin
       \$91  = 1'h0;
@@ -15635,7 +15497,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.time_base (rst, first_rise, first_rise_time, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$70  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$71  = 0;
   wire [32:0] \$1 ;
   reg [31:0] \$2 ;
   reg [31:0] \$3 ;
@@ -15654,14 +15516,14 @@ module \biss_master_axil.ch0.core.time_base (rst, first_rise, first_rise_time, c
   always @(posedge clk)
     first_rise_time <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
     \$2  = \$1 [31:0];
     if (rst) begin
       \$2  = 32'd0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
     \$3  = first_rise_time;
     if (first_rise) begin
       \$3  = now;
@@ -15674,7 +15536,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.timers (rst, restart, ma_busy, break_time, timeout_live, ack_limit, timeout_limit, delay_limit, no_start_limit, clear, in_clock, slo_stuck, slo_stuck_live, break_over, ack_expired, no_start_expired, delay_over, delay, slo, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$71  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$72  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -15812,7 +15674,7 @@ module \biss_master_axil.ch0.core.timers (rst, restart, ma_busy, break_time, tim
   always @(posedge clk)
     delay_over <= \$43 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     \$36  = slo_low_time_p1;
     if (\$1 ) begin
       \$36  = 25'h0000001;
@@ -15824,49 +15686,49 @@ module \biss_master_axil.ch0.core.timers (rst, restart, ma_busy, break_time, tim
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     \$37  = \$8 ;
     if (rst) begin
       \$37  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     \$38  = \$16 ;
     if (rst) begin
       \$38  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     \$39  = \$20 [24:0];
     if (rst) begin
       \$39  = 25'h0000001;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     \$40  = \$26 ;
     if (rst) begin
       \$40  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     \$41  = \$30 ;
     if (rst) begin
       \$41  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     \$42  = \$34 ;
     if (rst) begin
       \$42  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     \$43  = \$35 ;
     if (rst) begin
       \$43  = 1'h0;
@@ -15875,8 +15737,8 @@ module \biss_master_axil.ch0.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.verdict (lc_skip_seen, \port$1728$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
-  reg \$auto$verilog_backend.cc:2355:dump_module$72  = 0;
+module \biss_master_axil.ch0.core.verdict (lc_skip_seen, \port$1597$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
+  reg \$auto$verilog_backend.cc:2355:dump_module$73  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -15989,8 +15851,8 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, \port$1728$0 , lc_check
   wire lc_zero;
   input lc_zero_seen;
   wire lc_zero_seen;
-  output \port$1728$0 ;
-  wire \port$1728$0 ;
+  output \port$1597$0 ;
+  wire \port$1597$0 ;
   output report;
   wire report;
   input report_frame;
@@ -16058,7 +15920,7 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, \port$1728$0 , lc_check
   assign \$29  = ~ { \$2 , crc_ok[0] };
   assign crc_error = report_frame ? \$29  : 2'h0;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
     (* full_case = 32'd1 *)
     if (\$13 ) begin
       frame_status = 4'h3;
@@ -16075,7 +15937,7 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, \port$1728$0 , lc_check
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$1728$0  = \$2 ;
+  assign \port$1597$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -16101,8 +15963,8 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__ca_busy, regs__ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period
 , cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort
-, regs__done_count, ma, regs__done, \port$4726$0 , \port$4733$0 , regs__ca_done, \port$4847$0 , ca_rbuf_addr);
-  reg \$auto$verilog_backend.cc:2355:dump_module$73  = 0;
+, regs__done_count, ma, regs__done, \port$4615$0 , \port$4628$0 , regs__ca_done, \port$4742$0 , ca_rbuf_addr);
+  reg \$auto$verilog_backend.cc:2355:dump_module$74  = 0;
   wire \$1 ;
   wire [16:0] \$2 ;
   reg [15:0] \$3 ;
@@ -16226,12 +16088,12 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_
   wire \ma$164 ;
   input periodic;
   wire periodic;
-  output [160:0] \port$4726$0 ;
-  wire [160:0] \port$4726$0 ;
-  output [287:0] \port$4733$0 ;
-  wire [287:0] \port$4733$0 ;
-  output [9:0] \port$4847$0 ;
-  wire [9:0] \port$4847$0 ;
+  output [160:0] \port$4615$0 ;
+  wire [160:0] \port$4615$0 ;
+  output [287:0] \port$4628$0 ;
+  wire [287:0] \port$4628$0 ;
+  output [9:0] \port$4742$0 ;
+  wire [9:0] \port$4742$0 ;
   wire regs__abort_cycle;
   output regs__busy;
   wire regs__busy;
@@ -16427,7 +16289,7 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_
     .\valid$242 (valid)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
     \$3  = regs__done_count;
     if (regs__done) begin
       \$3  = \$2 [15:0];
@@ -16557,16 +16419,16 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_
   assign regs__ca_rbuf_en = ca_rbuf_en;
   assign \ma$164  = ma;
   assign \slo$166  = slo;
-  assign \port$4726$0  = \$4 ;
-  assign \port$4733$0  = \$5 ;
-  assign \port$4847$0  = \$6 ;
+  assign \port$4615$0  = \$4 ;
+  assign \port$4628$0  = \$5 ;
+  assign \port$4742$0  = \$6 ;
 endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy$237 , config_error, frames, ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, abort, \clear$214 , \periodic$24 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit
 , cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, \start$185 , \abort$187 , ma, \done$240 
 , \valid$242 , \result$245 , counts, ca_done, result, rbuf_addr);
-  reg \$auto$verilog_backend.cc:2355:dump_module$74  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$75  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -17411,7 +17273,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$4452$0 (\bit ),
+    .\port$4337$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -17468,7 +17330,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .lc_skip_seen(lc_skip_seen),
     .lc_zero(lc_zero),
     .lc_zero_seen(lc_zero_seen),
-    .\port$3088$0 (\$16 ),
+    .\port$2959$0 (\$16 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -17477,14 +17339,14 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .valid(valid)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
     \$14  = \$13 ;
     if (rst) begin
       \$14  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
     \$15  = \bit$265 ;
     if (rst) begin
       \$15  = 1'h0;
@@ -17863,7 +17725,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_limit, timeout_limit, delay_limit, no_start_limit, idle, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$75  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$76  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -18044,21 +17906,21 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   always @(posedge clk)
     delay_limit <= \$46 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
     \$47  = \$41 ;
     if (rst) begin
       \$47  = 25'h0000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
     \$42  = \$34 ;
     if (rst) begin
       \$42  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
     \$43  = cycle;
     if (idle) begin
       \$43  = live;
@@ -18068,7 +17930,7 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
     \$44  = ack_limit;
     if (idle) begin
       \$44  = \$36 ;
@@ -18078,7 +17940,7 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
     \$45  = timeout_limit;
     if (idle) begin
       \$45  = \$38 ;
@@ -18088,7 +17950,7 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
     \$46  = delay_limit;
     if (idle) begin
       \$46  = \$40 ;
@@ -18142,7 +18004,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, report_delay, frame_doubtful, abort, config_ok, end_check, resync, timer_clear, fault, fault_status, ma_run, in_clock, report_frame, idle, receiver_clear, faults, cdm_cycle, ma_hold, slo_stuck
 , slo_stuck_live, break_over, ack_expired, no_start_expired, delay_over, ma_arm, ma_busy, ma_held, ma_enough, early, locked, slo, frame_done, stopped, slots_full, started, stop_bit, cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$76  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$77  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -18459,7 +18321,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
     .report_frame(report_frame)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
     resync = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -18467,7 +18329,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
     timer_clear = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -18514,7 +18376,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
     clear = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -18526,7 +18388,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
     fault = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -18575,7 +18437,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
     fault_status = 4'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -18624,7 +18486,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
     ma_run = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -18640,7 +18502,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
     in_clock = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -18654,7 +18516,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
     watch = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -18668,7 +18530,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
     framing = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -18684,7 +18546,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
     report_frame = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -18715,7 +18577,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
     delay = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -18733,7 +18595,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
     holding = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -18756,14 +18618,14 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
     \$27  = idle;
     if (rst) begin
       \$27  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
     \$28  = cycle_fsm_state;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -18854,7 +18716,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
     \$29  = idle;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -18945,7 +18807,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
     \$30  = receiver_clear;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -19036,7 +18898,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
     \$31  = pause;
     casez (cycle_fsm_state)
       3'h0:
@@ -19103,7 +18965,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.controller.cdm_hold (rst, abort, framing, holding, idle, cdm_cycle, ma_hold, slo_stuck, slo, cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$77  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$78  = 0;
   wire \$1 ;
   wire \$2 ;
   wire \$3 ;
@@ -19142,7 +19004,7 @@ module \biss_master_axil.ch1.core.controller.cdm_hold (rst, abort, framing, hold
   assign \$1  = ~ abort;
   assign \$2  = cdm_cycle & \$1 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
     \$7  = cdm_cycle;
     if (idle) begin
       \$7  = cdm;
@@ -19152,7 +19014,7 @@ module \biss_master_axil.ch1.core.controller.cdm_hold (rst, abort, framing, hold
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
     ma_hold = 1'h0;
     if (framing) begin
       ma_hold = \$2 ;
@@ -19164,7 +19026,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.controller.line_faults (rst, restart_timer, clear, watch, fault, status, delay, ack_expired, no_start_expired, delay_over, ma_arm, early, locked, slots_full, started, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$78  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$79  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -19259,7 +19121,7 @@ module \biss_master_axil.ch1.core.controller.line_faults (rst, restart_timer, cl
   always @(posedge clk)
     locked_seen <= \$21 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$79 ) begin end
     \$20  = armed;
     if (clear) begin
       \$20  = 1'h0;
@@ -19272,7 +19134,7 @@ module \biss_master_axil.ch1.core.controller.line_faults (rst, restart_timer, cl
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$79 ) begin end
     \$21  = locked_seen;
     if (clear) begin
       \$21  = 1'h0;
@@ -19285,7 +19147,7 @@ module \biss_master_axil.ch1.core.controller.line_faults (rst, restart_timer, cl
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$79 ) begin end
     fault = 1'h0;
     if (\$7 ) begin
       fault = 1'h1;
@@ -19298,7 +19160,7 @@ module \biss_master_axil.ch1.core.controller.line_faults (rst, restart_timer, cl
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$79 ) begin end
     status = 4'h0;
     if (\$7 ) begin
       status = 4'h8;
@@ -19311,7 +19173,7 @@ module \biss_master_axil.ch1.core.controller.line_faults (rst, restart_timer, cl
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$79 ) begin end
     delay = 1'h0;
     if (\$7 ) begin
     end else if (\$12 ) begin
@@ -19323,7 +19185,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.controller.ready_check (config_ok, first_clock, bad_config, aborted, ready, stuck_low, slo_stuck, slo_stuck_live, slo, abort);
-  reg \$auto$verilog_backend.cc:2355:dump_module$79  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$80  = 0;
   wire \$1 ;
   wire \$2 ;
   wire \$3 ;
@@ -19351,7 +19213,7 @@ module \biss_master_axil.ch1.core.controller.ready_check (config_ok, first_clock
   assign \$2  = first_clock & \$1 ;
   assign \$3  = first_clock ? slo_stuck_live : slo_stuck;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$79 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$80 ) begin end
     stuck_low = 1'h0;
     if (\$2 ) begin
     end else if (abort) begin
@@ -19361,14 +19223,14 @@ module \biss_master_axil.ch1.core.controller.ready_check (config_ok, first_clock
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$79 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$80 ) begin end
     bad_config = 1'h0;
     if (\$2 ) begin
       bad_config = 1'h1;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$79 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$80 ) begin end
     aborted = 1'h0;
     if (\$2 ) begin
     end else if (abort) begin
@@ -19376,7 +19238,7 @@ module \biss_master_axil.ch1.core.controller.ready_check (config_ok, first_clock
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$79 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$80 ) begin end
     ready = 1'h0;
     if (\$2 ) begin
     end else if (abort) begin
@@ -19488,46 +19350,68 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.counters (rst, clear, events, counts, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$81  = 0;
+  reg [17:0] \$1 ;
+  reg \$2 ;
   input clear;
   wire clear;
-  wire \clear$10 ;
-  wire \clear$13 ;
-  wire \clear$16 ;
-  wire \clear$19 ;
-  wire \clear$22 ;
-  wire \clear$25 ;
-  wire \clear$28 ;
-  wire \clear$3 ;
-  wire \clear$31 ;
-  wire \clear$34 ;
-  wire \clear$37 ;
-  wire \clear$40 ;
-  wire \clear$43 ;
-  wire \clear$46 ;
-  wire \clear$49 ;
-  wire \clear$52 ;
-  wire \clear$55 ;
+  (* init = 1'h0 *)
+  wire \clear$11 ;
+  (* init = 1'h0 *)
+  wire \clear$14 ;
+  (* init = 1'h0 *)
+  wire \clear$17 ;
+  (* init = 1'h0 *)
+  wire \clear$20 ;
+  (* init = 1'h0 *)
+  wire \clear$23 ;
+  (* init = 1'h0 *)
+  wire \clear$26 ;
+  (* init = 1'h0 *)
+  wire \clear$29 ;
+  (* init = 1'h0 *)
+  wire \clear$32 ;
+  (* init = 1'h0 *)
+  wire \clear$35 ;
+  (* init = 1'h0 *)
+  wire \clear$38 ;
+  (* init = 1'h0 *)
+  wire \clear$41 ;
+  (* init = 1'h0 *)
+  wire \clear$44 ;
+  (* init = 1'h0 *)
+  wire \clear$47 ;
+  (* init = 1'h0 *)
+  wire \clear$50 ;
+  (* init = 1'h0 *)
+  wire \clear$53 ;
+  (* init = 1'h0 *)
+  wire \clear$56 ;
+  (* init = 1'h0 *)
+  wire \clear$59 ;
+  (* init = 1'h0 *)
   wire \clear$7 ;
+  reg clear_reg = 1'h0;
   input clk;
   wire clk;
   wire [15:0] count;
-  wire [15:0] \count$11 ;
-  wire [15:0] \count$14 ;
-  wire [15:0] \count$17 ;
-  wire [15:0] \count$20 ;
-  wire [15:0] \count$23 ;
-  wire [15:0] \count$26 ;
-  wire [15:0] \count$29 ;
-  wire [15:0] \count$32 ;
-  wire [15:0] \count$35 ;
-  wire [15:0] \count$38 ;
-  wire [15:0] \count$41 ;
-  wire [15:0] \count$44 ;
-  wire [15:0] \count$47 ;
-  wire [15:0] \count$50 ;
-  wire [15:0] \count$53 ;
-  wire [15:0] \count$56 ;
-  wire [15:0] \count$8 ;
+  wire [15:0] \count$12 ;
+  wire [15:0] \count$15 ;
+  wire [15:0] \count$18 ;
+  wire [15:0] \count$21 ;
+  wire [15:0] \count$24 ;
+  wire [15:0] \count$27 ;
+  wire [15:0] \count$30 ;
+  wire [15:0] \count$33 ;
+  wire [15:0] \count$36 ;
+  wire [15:0] \count$39 ;
+  wire [15:0] \count$42 ;
+  wire [15:0] \count$45 ;
+  wire [15:0] \count$48 ;
+  wire [15:0] \count$51 ;
+  wire [15:0] \count$54 ;
+  wire [15:0] \count$57 ;
+  wire [15:0] \count$60 ;
   output [287:0] counts;
   wire [287:0] counts;
   wire [15:0] \counts.aborted ;
@@ -19568,188 +19452,243 @@ module \biss_master_axil.ch1.core.counters (rst, clear, events, counts, clk);
   wire \events.overrun ;
   wire \events.slo_stuck_low ;
   wire \events.spw_mismatch ;
+  reg [17:0] events_reg = 18'h00000;
+  wire \events_reg.aborted ;
+  wire \events_reg.ca_aborted ;
+  wire \events_reg.ca_crc4_error ;
+  wire \events_reg.ca_data_fault ;
+  wire \events_reg.ca_no_answer ;
+  wire \events_reg.ca_refused ;
+  wire \events_reg.crc_word0 ;
+  wire \events_reg.crc_word1 ;
+  wire \events_reg.delay_range ;
+  wire \events_reg.lc_repeat ;
+  wire \events_reg.lc_skip ;
+  wire \events_reg.lc_zero ;
+  wire \events_reg.no_ack ;
+  wire \events_reg.no_start ;
+  wire \events_reg.no_stop ;
+  wire \events_reg.overrun ;
+  wire \events_reg.slo_stuck_low ;
+  wire \events_reg.spw_mismatch ;
   wire inc;
-  wire \inc$12 ;
-  wire \inc$15 ;
-  wire \inc$18 ;
-  wire \inc$21 ;
-  wire \inc$24 ;
-  wire \inc$27 ;
-  wire \inc$30 ;
-  wire \inc$33 ;
-  wire \inc$36 ;
-  wire \inc$39 ;
-  wire \inc$42 ;
-  wire \inc$45 ;
-  wire \inc$48 ;
-  wire \inc$51 ;
-  wire \inc$54 ;
-  wire \inc$6 ;
-  wire \inc$9 ;
+  wire \inc$10 ;
+  wire \inc$13 ;
+  wire \inc$16 ;
+  wire \inc$19 ;
+  wire \inc$22 ;
+  wire \inc$25 ;
+  wire \inc$28 ;
+  wire \inc$31 ;
+  wire \inc$34 ;
+  wire \inc$37 ;
+  wire \inc$40 ;
+  wire \inc$43 ;
+  wire \inc$46 ;
+  wire \inc$49 ;
+  wire \inc$52 ;
+  wire \inc$55 ;
+  wire \inc$58 ;
   input rst;
   wire rst;
+  always @(posedge clk)
+    events_reg <= \$1 ;
+  always @(posedge clk)
+    clear_reg <= \$2 ;
   \biss_master_axil.ch1.core.counters.count_aborted  count_aborted (
-    .clear(clear),
+    .clear(clear_reg),
     .clk(clk),
-    .count(\count$38 ),
-    .inc(events[11]),
+    .count(\count$42 ),
+    .inc(events_reg[11]),
     .rst(rst)
   );
   \biss_master_axil.ch1.core.counters.count_ca_aborted  count_ca_aborted (
-    .clear(clear),
+    .clear(clear_reg),
     .clk(clk),
-    .count(\count$53 ),
-    .inc(events[16]),
+    .count(\count$57 ),
+    .inc(events_reg[16]),
     .rst(rst)
   );
   \biss_master_axil.ch1.core.counters.count_ca_crc4_error  count_ca_crc4_error (
-    .clear(clear),
+    .clear(clear_reg),
     .clk(clk),
-    .count(\count$44 ),
-    .inc(events[13]),
+    .count(\count$48 ),
+    .inc(events_reg[13]),
     .rst(rst)
   );
   \biss_master_axil.ch1.core.counters.count_ca_data_fault  count_ca_data_fault (
-    .clear(clear),
+    .clear(clear_reg),
     .clk(clk),
-    .count(\count$56 ),
-    .inc(events[17]),
+    .count(\count$60 ),
+    .inc(events_reg[17]),
     .rst(rst)
   );
   \biss_master_axil.ch1.core.counters.count_ca_no_answer  count_ca_no_answer (
-    .clear(clear),
+    .clear(clear_reg),
     .clk(clk),
-    .count(\count$47 ),
-    .inc(events[14]),
+    .count(\count$51 ),
+    .inc(events_reg[14]),
     .rst(rst)
   );
   \biss_master_axil.ch1.core.counters.count_ca_refused  count_ca_refused (
-    .clear(clear),
+    .clear(clear_reg),
     .clk(clk),
-    .count(\count$50 ),
-    .inc(events[15]),
+    .count(\count$54 ),
+    .inc(events_reg[15]),
     .rst(rst)
   );
   \biss_master_axil.ch1.core.counters.count_crc_word0  count_crc_word0 (
-    .clear(clear),
+    .clear(clear_reg),
     .clk(clk),
     .count(count),
-    .inc(events[0]),
+    .inc(events_reg[0]),
     .rst(rst)
   );
   \biss_master_axil.ch1.core.counters.count_crc_word1  count_crc_word1 (
-    .clear(clear),
+    .clear(clear_reg),
     .clk(clk),
-    .count(\count$8 ),
-    .inc(events[1]),
+    .count(\count$12 ),
+    .inc(events_reg[1]),
     .rst(rst)
   );
   \biss_master_axil.ch1.core.counters.count_delay_range  count_delay_range (
-    .clear(clear),
+    .clear(clear_reg),
     .clk(clk),
-    .count(\count$17 ),
-    .inc(events[4]),
+    .count(\count$21 ),
+    .inc(events_reg[4]),
     .rst(rst)
   );
   \biss_master_axil.ch1.core.counters.count_lc_repeat  count_lc_repeat (
-    .clear(clear),
+    .clear(clear_reg),
     .clk(clk),
-    .count(\count$23 ),
-    .inc(events[6]),
+    .count(\count$27 ),
+    .inc(events_reg[6]),
     .rst(rst)
   );
   \biss_master_axil.ch1.core.counters.count_lc_skip  count_lc_skip (
-    .clear(clear),
+    .clear(clear_reg),
     .clk(clk),
-    .count(\count$26 ),
-    .inc(events[7]),
+    .count(\count$30 ),
+    .inc(events_reg[7]),
     .rst(rst)
   );
   \biss_master_axil.ch1.core.counters.count_lc_zero  count_lc_zero (
-    .clear(clear),
+    .clear(clear_reg),
     .clk(clk),
-    .count(\count$29 ),
-    .inc(events[8]),
+    .count(\count$33 ),
+    .inc(events_reg[8]),
     .rst(rst)
   );
   \biss_master_axil.ch1.core.counters.count_no_ack  count_no_ack (
-    .clear(clear),
+    .clear(clear_reg),
     .clk(clk),
-    .count(\count$11 ),
-    .inc(events[2]),
+    .count(\count$15 ),
+    .inc(events_reg[2]),
     .rst(rst)
   );
   \biss_master_axil.ch1.core.counters.count_no_start  count_no_start (
-    .clear(clear),
+    .clear(clear_reg),
     .clk(clk),
-    .count(\count$14 ),
-    .inc(events[3]),
+    .count(\count$18 ),
+    .inc(events_reg[3]),
     .rst(rst)
   );
   \biss_master_axil.ch1.core.counters.count_no_stop  count_no_stop (
-    .clear(clear),
+    .clear(clear_reg),
     .clk(clk),
-    .count(\count$41 ),
-    .inc(events[12]),
+    .count(\count$45 ),
+    .inc(events_reg[12]),
     .rst(rst)
   );
   \biss_master_axil.ch1.core.counters.count_overrun  count_overrun (
-    .clear(clear),
+    .clear(clear_reg),
     .clk(clk),
-    .count(\count$35 ),
-    .inc(events[10]),
+    .count(\count$39 ),
+    .inc(events_reg[10]),
     .rst(rst)
   );
   \biss_master_axil.ch1.core.counters.count_slo_stuck_low  count_slo_stuck_low (
-    .clear(clear),
+    .clear(clear_reg),
     .clk(clk),
-    .count(\count$20 ),
-    .inc(events[5]),
+    .count(\count$24 ),
+    .inc(events_reg[5]),
     .rst(rst)
   );
   \biss_master_axil.ch1.core.counters.count_spw_mismatch  count_spw_mismatch (
-    .clear(clear),
+    .clear(clear_reg),
     .clk(clk),
-    .count(\count$32 ),
-    .inc(events[9]),
+    .count(\count$36 ),
+    .inc(events_reg[9]),
     .rst(rst)
   );
-  assign inc = events[0];
-  assign \clear$3  = clear;
-  assign \inc$6  = events[1];
-  assign \clear$7  = clear;
-  assign \inc$9  = events[2];
-  assign \clear$10  = clear;
-  assign \inc$12  = events[3];
-  assign \clear$13  = clear;
-  assign \inc$15  = events[4];
-  assign \clear$16  = clear;
-  assign \inc$18  = events[5];
-  assign \clear$19  = clear;
-  assign \inc$21  = events[6];
-  assign \clear$22  = clear;
-  assign \inc$24  = events[7];
-  assign \clear$25  = clear;
-  assign \inc$27  = events[8];
-  assign \clear$28  = clear;
-  assign \inc$30  = events[9];
-  assign \clear$31  = clear;
-  assign \inc$33  = events[10];
-  assign \clear$34  = clear;
-  assign \inc$36  = events[11];
-  assign \clear$37  = clear;
-  assign \inc$39  = events[12];
-  assign \clear$40  = clear;
-  assign \inc$42  = events[13];
-  assign \clear$43  = clear;
-  assign \inc$45  = events[14];
-  assign \clear$46  = clear;
-  assign \inc$48  = events[15];
-  assign \clear$49  = clear;
-  assign \inc$51  = events[16];
-  assign \clear$52  = clear;
-  assign \inc$54  = events[17];
-  assign \clear$55  = clear;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$81 ) begin end
+    \$1  = events;
+    if (rst) begin
+      \$1  = 18'h00000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$81 ) begin end
+    \$2  = clear;
+    if (rst) begin
+      \$2  = 1'h0;
+    end
+  end
+  assign inc = events_reg[0];
+  assign \clear$7  = clear_reg;
+  assign \inc$10  = events_reg[1];
+  assign \clear$11  = clear_reg;
+  assign \inc$13  = events_reg[2];
+  assign \clear$14  = clear_reg;
+  assign \inc$16  = events_reg[3];
+  assign \clear$17  = clear_reg;
+  assign \inc$19  = events_reg[4];
+  assign \clear$20  = clear_reg;
+  assign \inc$22  = events_reg[5];
+  assign \clear$23  = clear_reg;
+  assign \inc$25  = events_reg[6];
+  assign \clear$26  = clear_reg;
+  assign \inc$28  = events_reg[7];
+  assign \clear$29  = clear_reg;
+  assign \inc$31  = events_reg[8];
+  assign \clear$32  = clear_reg;
+  assign \inc$34  = events_reg[9];
+  assign \clear$35  = clear_reg;
+  assign \inc$37  = events_reg[10];
+  assign \clear$38  = clear_reg;
+  assign \inc$40  = events_reg[11];
+  assign \clear$41  = clear_reg;
+  assign \inc$43  = events_reg[12];
+  assign \clear$44  = clear_reg;
+  assign \inc$46  = events_reg[13];
+  assign \clear$47  = clear_reg;
+  assign \inc$49  = events_reg[14];
+  assign \clear$50  = clear_reg;
+  assign \inc$52  = events_reg[15];
+  assign \clear$53  = clear_reg;
+  assign \inc$55  = events_reg[16];
+  assign \clear$56  = clear_reg;
+  assign \inc$58  = events_reg[17];
+  assign \clear$59  = clear_reg;
+  assign \events_reg.crc_word0  = events_reg[0];
+  assign \events_reg.crc_word1  = events_reg[1];
+  assign \events_reg.no_ack  = events_reg[2];
+  assign \events_reg.no_start  = events_reg[3];
+  assign \events_reg.delay_range  = events_reg[4];
+  assign \events_reg.slo_stuck_low  = events_reg[5];
+  assign \events_reg.lc_repeat  = events_reg[6];
+  assign \events_reg.lc_skip  = events_reg[7];
+  assign \events_reg.lc_zero  = events_reg[8];
+  assign \events_reg.spw_mismatch  = events_reg[9];
+  assign \events_reg.overrun  = events_reg[10];
+  assign \events_reg.aborted  = events_reg[11];
+  assign \events_reg.no_stop  = events_reg[12];
+  assign \events_reg.ca_crc4_error  = events_reg[13];
+  assign \events_reg.ca_no_answer  = events_reg[14];
+  assign \events_reg.ca_refused  = events_reg[15];
+  assign \events_reg.ca_aborted  = events_reg[16];
+  assign \events_reg.ca_data_fault  = events_reg[17];
   assign \events.crc_word0  = events[0];
   assign \events.crc_word1  = events[1];
   assign \events.no_ack  = events[2];
@@ -19786,136 +19725,28 @@ module \biss_master_axil.ch1.core.counters (rst, clear, events, counts, clk);
   assign \counts.ca_refused  = counts[255:240];
   assign \counts.ca_aborted  = counts[271:256];
   assign \counts.ca_data_fault  = counts[287:272];
-  assign counts[287:272] = \count$56 ;
-  assign counts[271:256] = \count$53 ;
-  assign counts[255:240] = \count$50 ;
-  assign counts[239:224] = \count$47 ;
-  assign counts[223:208] = \count$44 ;
-  assign counts[207:192] = \count$41 ;
-  assign counts[191:176] = \count$38 ;
-  assign counts[175:160] = \count$35 ;
-  assign counts[159:144] = \count$32 ;
-  assign counts[143:128] = \count$29 ;
-  assign counts[127:112] = \count$26 ;
-  assign counts[111:96] = \count$23 ;
-  assign counts[95:80] = \count$20 ;
-  assign counts[79:64] = \count$17 ;
-  assign counts[63:48] = \count$14 ;
-  assign counts[47:32] = \count$11 ;
-  assign counts[31:16] = \count$8 ;
+  assign counts[287:272] = \count$60 ;
+  assign counts[271:256] = \count$57 ;
+  assign counts[255:240] = \count$54 ;
+  assign counts[239:224] = \count$51 ;
+  assign counts[223:208] = \count$48 ;
+  assign counts[207:192] = \count$45 ;
+  assign counts[191:176] = \count$42 ;
+  assign counts[175:160] = \count$39 ;
+  assign counts[159:144] = \count$36 ;
+  assign counts[143:128] = \count$33 ;
+  assign counts[127:112] = \count$30 ;
+  assign counts[111:96] = \count$27 ;
+  assign counts[95:80] = \count$24 ;
+  assign counts[79:64] = \count$21 ;
+  assign counts[63:48] = \count$18 ;
+  assign counts[47:32] = \count$15 ;
+  assign counts[31:16] = \count$12 ;
   assign counts[15:0] = count;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_aborted (rst, clear, inc, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$80  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$80 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$80 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_ca_aborted (rst, clear, inc, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$81  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$81 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$81 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_ca_crc4_error (rst, clear, inc, count, clk);
+module \biss_master_axil.ch1.core.counters.count_aborted (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$82  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -19969,7 +19800,7 @@ module \biss_master_axil.ch1.core.counters.count_ca_crc4_error (rst, clear, inc,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_ca_data_fault (rst, clear, inc, count, clk);
+module \biss_master_axil.ch1.core.counters.count_ca_aborted (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$83  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -20023,7 +19854,7 @@ module \biss_master_axil.ch1.core.counters.count_ca_data_fault (rst, clear, inc,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_ca_no_answer (rst, clear, inc, count, clk);
+module \biss_master_axil.ch1.core.counters.count_ca_crc4_error (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$84  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -20077,7 +19908,7 @@ module \biss_master_axil.ch1.core.counters.count_ca_no_answer (rst, clear, inc, 
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_ca_refused (rst, clear, inc, count, clk);
+module \biss_master_axil.ch1.core.counters.count_ca_data_fault (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$85  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -20131,7 +19962,7 @@ module \biss_master_axil.ch1.core.counters.count_ca_refused (rst, clear, inc, co
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_crc_word0 (rst, clear, inc, count, clk);
+module \biss_master_axil.ch1.core.counters.count_ca_no_answer (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$86  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -20185,7 +20016,7 @@ module \biss_master_axil.ch1.core.counters.count_crc_word0 (rst, clear, inc, cou
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_crc_word1 (rst, clear, inc, count, clk);
+module \biss_master_axil.ch1.core.counters.count_ca_refused (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$87  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -20239,7 +20070,7 @@ module \biss_master_axil.ch1.core.counters.count_crc_word1 (rst, clear, inc, cou
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_delay_range (rst, clear, inc, count, clk);
+module \biss_master_axil.ch1.core.counters.count_crc_word0 (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$88  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -20293,7 +20124,7 @@ module \biss_master_axil.ch1.core.counters.count_delay_range (rst, clear, inc, c
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_lc_repeat (rst, clear, inc, count, clk);
+module \biss_master_axil.ch1.core.counters.count_crc_word1 (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$89  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -20347,7 +20178,7 @@ module \biss_master_axil.ch1.core.counters.count_lc_repeat (rst, clear, inc, cou
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_lc_skip (rst, clear, inc, count, clk);
+module \biss_master_axil.ch1.core.counters.count_delay_range (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$90  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -20401,7 +20232,7 @@ module \biss_master_axil.ch1.core.counters.count_lc_skip (rst, clear, inc, count
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_lc_zero (rst, clear, inc, count, clk);
+module \biss_master_axil.ch1.core.counters.count_lc_repeat (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$91  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -20455,7 +20286,7 @@ module \biss_master_axil.ch1.core.counters.count_lc_zero (rst, clear, inc, count
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_no_ack (rst, clear, inc, count, clk);
+module \biss_master_axil.ch1.core.counters.count_lc_skip (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$92  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -20509,7 +20340,7 @@ module \biss_master_axil.ch1.core.counters.count_no_ack (rst, clear, inc, count,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_no_start (rst, clear, inc, count, clk);
+module \biss_master_axil.ch1.core.counters.count_lc_zero (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$93  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -20563,7 +20394,7 @@ module \biss_master_axil.ch1.core.counters.count_no_start (rst, clear, inc, coun
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_no_stop (rst, clear, inc, count, clk);
+module \biss_master_axil.ch1.core.counters.count_no_ack (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$94  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -20617,7 +20448,7 @@ module \biss_master_axil.ch1.core.counters.count_no_stop (rst, clear, inc, count
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_overrun (rst, clear, inc, count, clk);
+module \biss_master_axil.ch1.core.counters.count_no_start (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$95  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -20671,7 +20502,7 @@ module \biss_master_axil.ch1.core.counters.count_overrun (rst, clear, inc, count
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_slo_stuck_low (rst, clear, inc, count, clk);
+module \biss_master_axil.ch1.core.counters.count_no_stop (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$96  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -20725,7 +20556,7 @@ module \biss_master_axil.ch1.core.counters.count_slo_stuck_low (rst, clear, inc,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_spw_mismatch (rst, clear, inc, count, clk);
+module \biss_master_axil.ch1.core.counters.count_overrun (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$97  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -20779,9 +20610,117 @@ module \biss_master_axil.ch1.core.counters.count_spw_mismatch (rst, clear, inc, 
 endmodule
 
 (* generator = "Amaranth" *)
+module \biss_master_axil.ch1.core.counters.count_slo_stuck_low (rst, inc, clear, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$98  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_axil.ch1.core.counters.count_spw_mismatch (rst, inc, clear, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$99  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, sample, \bit , receiver_clear, done, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1, lc, cpw_top, crc_ok
 , clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$98  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$100  = 0;
   wire [6:0] \$1 ;
   wire [1:0] \$10 ;
   reg [2:0] \$100 ;
@@ -21164,7 +21103,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     .valid(\valid$52 )
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     (* full_case = 32'd1 *)
     casez (words[6])
       1'h0:
@@ -21174,7 +21113,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -21188,7 +21127,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     (* full_case = 32'd1 *)
     casez (words[9:6])
       4'h0:
@@ -21226,7 +21165,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -21240,7 +21179,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     (* full_case = 32'd1 *)
     casez (words[16])
       1'h0:
@@ -21250,7 +21189,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     (* full_case = 32'd1 *)
     casez (words[17:16])
       2'h0:
@@ -21264,7 +21203,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:16])
       4'h0:
@@ -21302,7 +21241,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     (* full_case = 32'd1 *)
     casez (words[17:16])
       2'h0:
@@ -21316,7 +21255,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     \$94  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -21340,7 +21279,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     \$95  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -21362,7 +21301,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     \$96  = slots;
     if (\$34 ) begin
       \$96  = \$35 [15:0];
@@ -21375,7 +21314,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     \$97  = slots_full;
     if (\$34 ) begin
       \$97  = \$36 ;
@@ -21388,7 +21327,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     \$98  = started;
     casez (decoder_fsm_state)
       3'h0:
@@ -21404,7 +21343,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     \$99  = start_slot;
     casez (decoder_fsm_state)
       3'h0:
@@ -21420,7 +21359,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     \$100  = decoder_fsm_state;
     casez (decoder_fsm_state)
       3'h0:
@@ -21452,7 +21391,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     \$101  = cds;
     casez (decoder_fsm_state)
       3'h0:
@@ -21470,7 +21409,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     \$102  = idx;
     casez (decoder_fsm_state)
       3'h0:
@@ -21495,7 +21434,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     \$103  = in_data;
     casez (decoder_fsm_state)
       3'h0:
@@ -21520,7 +21459,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     \$104  = in_lc;
     casez (decoder_fsm_state)
       3'h0:
@@ -21545,7 +21484,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     \$105  = in_top;
     casez (decoder_fsm_state)
       3'h0:
@@ -21570,7 +21509,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     \$106  = word;
     casez (decoder_fsm_state)
       3'h0:
@@ -21598,7 +21537,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     \$107  = stop_bit;
     casez (decoder_fsm_state)
       3'h0:
@@ -21620,7 +21559,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     \$108  = data0;
     if (\$58 ) begin
       \$108  = { data0[53:0], \bit  };
@@ -21633,7 +21572,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     \$109  = ne;
     if (\$59 ) begin
       \$109 [0] = 1'h1;
@@ -21653,7 +21592,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     \$110  = nw;
     if (\$59 ) begin
       \$110 [0] = 1'h1;
@@ -21675,7 +21614,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     \$111  = data1;
     if (\$70 ) begin
       \$111  = { data1[38:0], \bit  };
@@ -21688,7 +21627,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     \$112  = lc;
     if (lc_load) begin
       \$112  = { lc[4:0], \bit  };
@@ -21701,7 +21640,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     \$113  = cpw_top;
     if (\$80 ) begin
       \$113  = { cpw_top[38:0], \bit  };
@@ -21714,7 +21653,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     in_word = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -21751,7 +21690,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.decoder.crc0 (rst, start, valid, kind, \bit , receiver_clear, ok, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$99  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$101  = 0;
   wire [5:0] \$1 ;
   wire \$10 ;
   wire [5:0] \$11 ;
@@ -21845,7 +21784,7 @@ module \biss_master_axil.ch1.core.decoder.crc0 (rst, start, valid, kind, \bit , 
   assign \$auto$rtlil.cc:2739:Not$12  = ~ { crc16_reg[14], crc16_reg[11], crc16_reg[6:5], crc16_reg[3:2], 1'h0 };
   assign \$auto$rtlil.cc:2739:Not$10  = ~ { crc6_reg[0], 1'h0 };
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
     \$31  = crc6_reg;
     if (valid) begin
       \$31  = \$5 ;
@@ -21860,7 +21799,7 @@ module \biss_master_axil.ch1.core.decoder.crc0 (rst, start, valid, kind, \bit , 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
     \$32  = crc6_match;
     if (valid) begin
       \$32  = \$15 ;
@@ -21875,7 +21814,7 @@ module \biss_master_axil.ch1.core.decoder.crc0 (rst, start, valid, kind, \bit , 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
     \$33  = crc16_reg;
     if (valid) begin
       \$33  = \$20 ;
@@ -21890,7 +21829,7 @@ module \biss_master_axil.ch1.core.decoder.crc0 (rst, start, valid, kind, \bit , 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
     \$34  = crc16_match;
     if (valid) begin
       \$34  = \$30 ;
@@ -21905,7 +21844,7 @@ module \biss_master_axil.ch1.core.decoder.crc0 (rst, start, valid, kind, \bit , 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
     ok = 1'h0;
     casez (kind)
       2'h0:
@@ -21926,7 +21865,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.decoder.crc1 (rst, start, valid, kind, \bit , receiver_clear, ok, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$100  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$102  = 0;
   wire [5:0] \$1 ;
   wire \$10 ;
   wire [5:0] \$11 ;
@@ -22020,7 +21959,7 @@ module \biss_master_axil.ch1.core.decoder.crc1 (rst, start, valid, kind, \bit , 
   assign \$auto$rtlil.cc:2739:Not$6  = ~ { crc6_reg[0], 1'h0 };
   assign \$auto$rtlil.cc:2739:Not$8  = ~ { crc16_reg[14], crc16_reg[11], crc16_reg[6:5], crc16_reg[3:2], 1'h0 };
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
     \$31  = crc6_reg;
     if (valid) begin
       \$31  = \$5 ;
@@ -22035,7 +21974,7 @@ module \biss_master_axil.ch1.core.decoder.crc1 (rst, start, valid, kind, \bit , 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
     \$32  = crc6_match;
     if (valid) begin
       \$32  = \$15 ;
@@ -22050,7 +21989,7 @@ module \biss_master_axil.ch1.core.decoder.crc1 (rst, start, valid, kind, \bit , 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
     \$33  = crc16_reg;
     if (valid) begin
       \$33  = \$20 ;
@@ -22065,7 +22004,7 @@ module \biss_master_axil.ch1.core.decoder.crc1 (rst, start, valid, kind, \bit , 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
     \$34  = crc16_match;
     if (valid) begin
       \$34  = \$30 ;
@@ -22080,7 +22019,7 @@ module \biss_master_axil.ch1.core.decoder.crc1 (rst, start, valid, kind, \bit , 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
     ok = 1'h0;
     casez (kind)
       2'h0:
@@ -22101,7 +22040,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, hold, first_rise, second_rise, ma, rises, busy, held, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$101  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$103  = 0;
   wire [16:0] \$1 ;
   wire \$10 ;
   wire [16:0] \$11 ;
@@ -22226,7 +22165,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
   always @(posedge clk)
     released <= \$42 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     \$34  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -22241,7 +22180,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     \$35  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -22256,7 +22195,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     \$36  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -22271,7 +22210,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     \$37  = ma;
     casez (ma_fsm_state)
       3'h0:
@@ -22300,7 +22239,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     \$38  = phase_left;
     casez (ma_fsm_state)
       3'h0:
@@ -22342,7 +22281,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     \$39  = last_clock;
     casez (ma_fsm_state)
       3'h0:
@@ -22384,7 +22323,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     \$40  = rises;
     casez (ma_fsm_state)
       3'h0:
@@ -22403,7 +22342,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     \$41  = ma_fsm_state;
     casez (ma_fsm_state)
       3'h0:
@@ -22439,7 +22378,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     \$42  = released;
     casez (ma_fsm_state)
       3'h0:
@@ -22463,7 +22402,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     busy = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -22479,7 +22418,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     held = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -22496,7 +22435,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.ma_stop (rst, words, w1_enable, clear, rises, enough, \started$10 , start_slot, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$102  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$104  = 0;
   reg [7:0] \$1 ;
   reg [7:0] \$10 ;
   wire [8:0] \$11 ;
@@ -22577,7 +22516,7 @@ module \biss_master_axil.ch1.core.ma_stop (rst, words, w1_enable, clear, rises, 
   always @(posedge clk)
     word1_len <= \$17 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$104 ) begin end
     (* full_case = 32'd1 *)
     casez (words[9:6])
       4'h0:
@@ -22615,7 +22554,7 @@ module \biss_master_axil.ch1.core.ma_stop (rst, words, w1_enable, clear, rises, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$104 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:16])
       4'h0:
@@ -22653,42 +22592,42 @@ module \biss_master_axil.ch1.core.ma_stop (rst, words, w1_enable, clear, rises, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$104 ) begin end
     \$12  = \$2 [7:0];
     if (rst) begin
       \$12  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$104 ) begin end
     \$13  = \$4 ;
     if (rst) begin
       \$13  = 9'h000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$104 ) begin end
     \$14  = \$5 ;
     if (rst) begin
       \$14  = 17'h00000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$104 ) begin end
     \$15  = \started$10 ;
     if (rst) begin
       \$15  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$104 ) begin end
     \$16  = \$9 ;
     if (rst) begin
       \$16  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$104 ) begin end
     \$17  = \$11 [7:0];
     if (rst) begin
       \$17  = 8'h00;
@@ -23000,7 +22939,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.register_access.buffers (clk, rst, host_read__en, byte_to_send, rbuf_data, wbuf, index, store, byte_received, host_read__addr);
-  reg \$auto$verilog_backend.cc:2355:dump_module$103  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$105  = 0;
   wire \$1 ;
   wire \$2 ;
   wire \$3 ;
@@ -23117,21 +23056,21 @@ module \biss_master_axil.ch1.core.register_access.buffers (clk, rst, host_read__
   assign \$1  = ! index[1:0];
   assign \$2  = index[1:0] == 1'h1;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
     byte_received__addr = 4'h0;
     if (store) begin
       byte_received__addr = index[5:2];
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
     byte_received__data = 32'd0;
     if (store) begin
       byte_received__data = { byte_received, byte_received, byte_received, byte_received };
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
     byte_received__en = 4'h0;
     if (store) begin
       byte_received__en = { \$4 , \$3 , \$2 , \$1  };
@@ -23151,7 +23090,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.register_access.checker (rst, crc_ok, echo_ok, cds, control__take_data, start, control__take_crc, sent, \byte , clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$104  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$106  = 0;
   reg [7:0] \$1 ;
   reg [2:0] \$2 ;
   output [7:0] \byte ;
@@ -23194,7 +23133,7 @@ module \biss_master_axil.ch1.core.register_access.checker (rst, crc_ok, echo_ok,
     .valid(control__take_data)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$104 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$106 ) begin end
     \$1  = \byte ;
     if (control__take_data) begin
       \$1  = { \byte [6:0], cds };
@@ -23204,7 +23143,7 @@ module \biss_master_axil.ch1.core.register_access.checker (rst, crc_ok, echo_ok,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$104 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$106 ) begin end
     \$2  = got_crc;
     if (control__take_crc) begin
       \$2  = { got_crc[1:0], cds };
@@ -23220,7 +23159,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.register_access.checker.rx_crc (rst, crc, data_in, valid, start, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$105  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$107  = 0;
   wire [3:0] \$1 ;
   wire \$10 ;
   wire [3:0] \$11 ;
@@ -23263,7 +23202,7 @@ module \biss_master_axil.ch1.core.register_access.checker.rx_crc (rst, crc, data
     crc_reg <= \$13 ;
   assign \$auto$rtlil.cc:2739:Not$2  = ~ crc_reg;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$107 ) begin end
     \$13  = crc_reg;
     if (valid) begin
       \$13 [0] = \$3 ;
@@ -23287,7 +23226,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.register_access.idle (rst, frame_end, frame_ok, run_enough, seen_enough, frame_cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$106  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$108  = 0;
   wire \$1 ;
   wire [4:0] \$10 ;
   wire \$11 ;
@@ -23357,7 +23296,7 @@ module \biss_master_axil.ch1.core.register_access.idle (rst, frame_end, frame_ok
   always @(posedge clk)
     idle_seen <= \$24 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$106 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
     \$23  = idle_run;
     if (frame_end) begin
       \$23  = \$4 [3:0];
@@ -23367,7 +23306,7 @@ module \biss_master_axil.ch1.core.register_access.idle (rst, frame_end, frame_ok
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$106 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
     \$24  = idle_seen;
     if (frame_end) begin
       \$24  = \$10 [3:0];
@@ -23380,7 +23319,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.register_access.sender (rst, \byte , request, control__load_header, control__source, control__crc_bit, control__shift_header, start, valid, control__load_byte, control__shift_byte, sent, cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$107  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$109  = 0;
   wire \$1 ;
   wire [18:0] \$2 ;
   wire [8:0] \$3 ;
@@ -23452,7 +23391,7 @@ module \biss_master_axil.ch1.core.register_access.sender (rst, \byte , request, 
     .valid(valid)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$107 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
     \$6  = header;
     if (control__load_header) begin
       \$6  = { 2'h3, request[2:0], request[9:3], 4'h0, \$1 , request[17] };
@@ -23465,7 +23404,7 @@ module \biss_master_axil.ch1.core.register_access.sender (rst, \byte , request, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$107 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
     \$7  = to_send;
     if (control__load_byte) begin
       \$7  = \byte ;
@@ -23478,7 +23417,7 @@ module \biss_master_axil.ch1.core.register_access.sender (rst, \byte , request, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$107 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
     \$8  = sent;
     if (control__load_byte) begin
       \$8  = \byte ;
@@ -23488,7 +23427,7 @@ module \biss_master_axil.ch1.core.register_access.sender (rst, \byte , request, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$107 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
     cdm = 1'h0;
     casez (control__source)
       3'h1:
@@ -23513,7 +23452,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.register_access.sender.tx_crc (rst, data_in, crc, start, valid, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$108  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$110  = 0;
   wire [3:0] \$1 ;
   wire \$10 ;
   wire [3:0] \$11 ;
@@ -23556,7 +23495,7 @@ module \biss_master_axil.ch1.core.register_access.sender.tx_crc (rst, data_in, c
     crc_reg <= \$13 ;
   assign \$auto$rtlil.cc:2739:Not$4  = ~ crc_reg;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$110 ) begin end
     \$13  = crc_reg;
     if (valid) begin
       \$13 [0] = \$3 ;
@@ -23581,7 +23520,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, frame_ok, busy, crc_ok, echo_ok, run_enough, seen_enough, start, abort, request, frame_cdm, frame_cds, done, result, index, send__load_header, send__source, send__crc_bit, send__shift_header, send__crc_start
 , send__crc_valid, send__load_byte, send__shift_byte, check__take_data, check__first, check__take_crc, store, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$109  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$111  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$100 ;
@@ -23937,7 +23876,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
   always @(posedge clk)
     waited <= \$125 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
     \$118  = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -23975,7 +23914,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
     \$119  = result;
     casez (access_fsm_state)
       3'h0:
@@ -24029,7 +23968,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
     \$120  = access_fsm_state;
     casez (access_fsm_state)
       3'h0:
@@ -24126,7 +24065,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
     \$121  = req;
     casez (access_fsm_state)
       3'h0:
@@ -24143,7 +24082,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
     \$122  = index;
     casez (access_fsm_state)
       3'h0:
@@ -24182,7 +24121,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
     \$123  = step;
     casez (access_fsm_state)
       3'h0:
@@ -24240,7 +24179,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
     \$124  = ending;
     casez (access_fsm_state)
       3'h0:
@@ -24307,7 +24246,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
     \$125  = waited;
     casez (access_fsm_state)
       3'h0:
@@ -24339,7 +24278,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
     send__load_header = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -24353,7 +24292,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
     send__source = 3'h0;
     casez (access_fsm_state)
       3'h0:
@@ -24380,7 +24319,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
     send__crc_bit = 2'h0;
     casez (access_fsm_state)
       3'h0:
@@ -24400,7 +24339,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
     send__shift_header = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -24419,7 +24358,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
     send__crc_start = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -24448,7 +24387,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
     send__crc_valid = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -24469,7 +24408,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
     send__load_byte = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -24491,7 +24430,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
     send__shift_byte = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -24512,7 +24451,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
     check__take_data = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -24534,7 +24473,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
     check__first = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -24556,7 +24495,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
     check__take_crc = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -24580,7 +24519,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
     store = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -24619,7 +24558,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.results (rst, report_delay, report, valid, frame, report_frame, done, valid_out, result, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$110  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$112  = 0;
   reg \$1 ;
   reg \$2 ;
   reg [160:0] \$3 ;
@@ -24716,21 +24655,21 @@ module \biss_master_axil.ch1.core.results (rst, report_delay, report, valid, fra
   always @(posedge clk)
     result <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$110 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$112 ) begin end
     \$1  = report;
     if (rst) begin
       \$1  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$110 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$112 ) begin end
     \$2  = valid;
     if (rst) begin
       \$2  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$110 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$112 ) begin end
     \$3  = result;
     if (report) begin
       \$3 [3:0] = frame[3:0];
@@ -24795,7 +24734,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receiver_clear, arm, early, locked, delay, sample, level, slo);
-  reg \$auto$verilog_backend.cc:2355:dump_module$111  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$113  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -25033,7 +24972,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     .stage1(level)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
     \$63  = level;
     if (receiver_clear) begin
       \$63  = 1'h1;
@@ -25043,7 +24982,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
     \$64  = mid_delay;
     if (odd) begin
       \$64  = \$8 [12:0];
@@ -25068,7 +25007,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
     \$65  = mid_slot;
     (* full_case = 32'd1 *)
     if (odd) begin
@@ -25095,7 +25034,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
     \$66  = \$10 ;
     casez (sampler_fsm_state)
       2'h0:
@@ -25117,7 +25056,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
     \$67  = elapsed;
     casez (sampler_fsm_state)
       2'h0:
@@ -25141,7 +25080,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
     \$68  = early;
     casez (sampler_fsm_state)
       2'h0:
@@ -25157,7 +25096,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
     \$69  = locked;
     casez (sampler_fsm_state)
       2'h0:
@@ -25183,7 +25122,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
     \$70  = gap;
     casez (sampler_fsm_state)
       2'h0:
@@ -25214,7 +25153,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
     \$71  = sampler_fsm_state;
     casez (sampler_fsm_state)
       2'h0:
@@ -25245,7 +25184,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
     \$72  = slot_left;
     casez (sampler_fsm_state)
       2'h0:
@@ -25295,7 +25234,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
     \$73  = slot_zero;
     casez (sampler_fsm_state)
       2'h0:
@@ -25345,7 +25284,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
     \$74  = vote1;
     casez (sampler_fsm_state)
       2'h0:
@@ -25375,7 +25314,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
     \$75  = vote2;
     casez (sampler_fsm_state)
       2'h0:
@@ -25403,7 +25342,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
     \$76  = first_slot;
     casez (sampler_fsm_state)
       2'h0:
@@ -25429,7 +25368,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
     \$77  = delay;
     casez (sampler_fsm_state)
       2'h0:
@@ -25452,7 +25391,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
     \$78  = phase;
     casez (sampler_fsm_state)
       2'h0:
@@ -25492,7 +25431,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
     sample = \$44 ;
     casez (sampler_fsm_state)
       2'h0:
@@ -25510,7 +25449,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
     decided = 1'h0;
     casez (sampler_fsm_state)
       2'h0:
@@ -25560,7 +25499,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.scheduler (rst, trigger, periodic, request, overrun, start, abort, period, idle, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$112  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$114  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -25644,7 +25583,7 @@ module \biss_master_axil.ch1.core.scheduler (rst, trigger, periodic, request, ov
   always @(posedge clk)
     period_start <= \$28 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$112 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$27  = 24'h000001;
@@ -25656,7 +25595,7 @@ module \biss_master_axil.ch1.core.scheduler (rst, trigger, periodic, request, ov
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$112 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$28  = 1'h1;
@@ -25670,29 +25609,33 @@ module \biss_master_axil.ch1.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$4452$0 , resync, lc, is_zero, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$113  = 0;
+module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$4337$0 , resync, lc, is_zero, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$115  = 0;
   wire \$1 ;
-  wire \$10 ;
+  wire [6:0] \$10 ;
   wire \$11 ;
   wire \$12 ;
   wire \$13 ;
   wire \$14 ;
   wire \$15 ;
-  reg \$16 ;
-  reg \$17 ;
+  wire \$16 ;
+  wire \$17 ;
   reg \$18 ;
-  reg [5:0] \$19 ;
+  reg \$19 ;
   wire \$2 ;
-  reg [5:0] \$20 ;
+  reg \$20 ;
   reg \$21 ;
+  reg [5:0] \$22 ;
+  reg [5:0] \$23 ;
+  reg [5:0] \$24 ;
+  reg \$25 ;
   wire \$3 ;
   wire \$4 ;
   wire \$5 ;
   wire \$6 ;
-  wire [6:0] \$7 ;
-  wire [6:0] \$8 ;
-  wire \$9 ;
+  wire \$7 ;
+  wire \$8 ;
+  wire [6:0] \$9 ;
   input check;
   wire check;
   input clk;
@@ -25708,8 +25651,8 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$4452$0 ;
-  wire \port$4452$0 ;
+  input \port$4337$0 ;
+  wire \port$4337$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -25718,108 +25661,130 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   wire rst;
   output skip;
   wire skip;
+  reg store = 1'h0;
+  reg [5:0] store_lc = 6'h00;
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$4452$0  };
-  assign \$2  = { lc[4:0], \port$4452$0  } == last;
-  assign \$3  = { lc[4:0], \port$4452$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$4337$0  };
+  assign \$2  = { lc[4:0], \port$4337$0  } == last;
+  assign \$3  = { lc[4:0], \port$4337$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
-  assign \$6  = lc == 6'h3f;
-  assign \$7  = lc + 1'h1;
-  assign \$8  = \$6  ? 7'h01 : \$7 ;
-  assign \$9  = ~ is_zero;
-  assign \$10  = synced & \$9 ;
-  assign \repeat  = \$10  & is_last;
+  assign \$6  = ~ resync;
+  assign \$7  = \$5  & \$6 ;
+  assign \$8  = store_lc == 6'h3f;
+  assign \$9  = store_lc + 1'h1;
+  assign \$10  = \$8  ? 7'h01 : \$9 ;
   assign \$11  = ~ is_zero;
   assign \$12  = synced & \$11 ;
-  assign \$13  = ~ is_last;
-  assign \$14  = \$12  & \$13 ;
-  assign \$15  = ~ is_expected;
-  assign skip = \$14  & \$15 ;
+  assign \repeat  = \$12  & is_last;
+  assign \$13  = ~ is_zero;
+  assign \$14  = synced & \$13 ;
+  assign \$15  = ~ is_last;
+  assign \$16  = \$14  & \$15 ;
+  assign \$17  = ~ is_expected;
+  assign skip = \$16  & \$17 ;
   always @(posedge clk)
-    is_zero <= \$16 ;
+    is_zero <= \$18 ;
   always @(posedge clk)
-    is_last <= \$17 ;
+    is_last <= \$19 ;
   always @(posedge clk)
-    is_expected <= \$18 ;
+    is_expected <= \$20 ;
   always @(posedge clk)
-    last <= \$19 ;
+    store <= \$21 ;
   always @(posedge clk)
-    expected <= \$20 ;
+    store_lc <= \$22 ;
   always @(posedge clk)
-    synced <= \$21 ;
+    last <= \$23 ;
+  always @(posedge clk)
+    expected <= \$24 ;
+  always @(posedge clk)
+    synced <= \$25 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
-    \$16  = is_zero;
+    if (\$auto$verilog_backend.cc:2355:dump_module$115 ) begin end
+    \$18  = is_zero;
     if (load) begin
-      \$16  = \$1 ;
-    end
-    if (rst) begin
-      \$16  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
-    \$17  = is_last;
-    if (load) begin
-      \$17  = \$2 ;
-    end
-    if (rst) begin
-      \$17  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
-    \$18  = is_expected;
-    if (load) begin
-      \$18  = \$3 ;
+      \$18  = \$1 ;
     end
     if (rst) begin
       \$18  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
-    \$19  = last;
-    if (\$5 ) begin
-      \$19  = lc;
+    if (\$auto$verilog_backend.cc:2355:dump_module$115 ) begin end
+    \$19  = is_last;
+    if (load) begin
+      \$19  = \$2 ;
     end
     if (rst) begin
-      \$19  = 6'h00;
+      \$19  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
-    \$20  = expected;
-    if (\$5 ) begin
-      \$20  = \$8 [5:0];
+    if (\$auto$verilog_backend.cc:2355:dump_module$115 ) begin end
+    \$20  = is_expected;
+    if (load) begin
+      \$20  = \$3 ;
     end
     if (rst) begin
-      \$20  = 6'h01;
+      \$20  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
-    \$21  = synced;
-    if (\$5 ) begin
-      \$21  = 1'h1;
+    if (\$auto$verilog_backend.cc:2355:dump_module$115 ) begin end
+    \$21  = \$7 ;
+    if (rst) begin
+      \$21  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$115 ) begin end
+    \$22  = lc;
+    if (rst) begin
+      \$22  = 6'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$115 ) begin end
+    \$23  = last;
+    if (store) begin
+      \$23  = store_lc;
+    end
+    if (rst) begin
+      \$23  = 6'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$115 ) begin end
+    \$24  = expected;
+    if (store) begin
+      \$24  = \$10 [5:0];
+    end
+    if (rst) begin
+      \$24  = 6'h01;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$115 ) begin end
+    \$25  = synced;
+    if (store) begin
+      \$25  = 1'h1;
     end
     if (resync) begin
-      \$21  = 1'h0;
+      \$25  = 1'h0;
     end
     if (rst) begin
-      \$21  = 1'h0;
+      \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$4452$0  };
+  assign lc_next = { lc[4:0], \port$4337$0  };
   assign zero = is_zero;
 endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.spw_check (rst, bits, \tolerance$8 , spw, cpw_top, match, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$114  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$116  = 0;
   wire [40:0] \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -26024,28 +25989,28 @@ module \biss_master_axil.ch1.core.spw_check (rst, bits, \tolerance$8 , spw, cpw_
   assign \$7  = bits > 3'h5;
   assign \$8  = bits > 3'h6;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$116 ) begin end
     \$88  = \$42 ;
     if (rst) begin
       \$88  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$116 ) begin end
     \$89  = \$84 ;
     if (rst) begin
       \$89  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$116 ) begin end
     \$90  = \tolerance$8 ;
     if (rst) begin
       \$90  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$116 ) begin end
     \$91  = \$87 ;
     if (rst) begin
       \$91  = 1'h0;
@@ -26055,7 +26020,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.time_base (rst, first_rise, first_rise_time, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$115  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$117  = 0;
   wire [32:0] \$1 ;
   reg [31:0] \$2 ;
   reg [31:0] \$3 ;
@@ -26074,14 +26039,14 @@ module \biss_master_axil.ch1.core.time_base (rst, first_rise, first_rise_time, c
   always @(posedge clk)
     first_rise_time <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$115 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$117 ) begin end
     \$2  = \$1 [31:0];
     if (rst) begin
       \$2  = 32'd0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$115 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$117 ) begin end
     \$3  = first_rise_time;
     if (first_rise) begin
       \$3  = now;
@@ -26094,7 +26059,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.timers (rst, restart, ma_busy, break_time, timeout_live, ack_limit, timeout_limit, delay_limit, no_start_limit, clear, in_clock, slo_stuck, slo_stuck_live, break_over, ack_expired, no_start_expired, delay_over, delay, slo, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$116  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$118  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -26232,7 +26197,7 @@ module \biss_master_axil.ch1.core.timers (rst, restart, ma_busy, break_time, tim
   always @(posedge clk)
     delay_over <= \$43 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$116 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$118 ) begin end
     \$36  = slo_low_time_p1;
     if (\$1 ) begin
       \$36  = 25'h0000001;
@@ -26244,49 +26209,49 @@ module \biss_master_axil.ch1.core.timers (rst, restart, ma_busy, break_time, tim
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$116 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$118 ) begin end
     \$37  = \$8 ;
     if (rst) begin
       \$37  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$116 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$118 ) begin end
     \$38  = \$16 ;
     if (rst) begin
       \$38  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$116 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$118 ) begin end
     \$39  = \$20 [24:0];
     if (rst) begin
       \$39  = 25'h0000001;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$116 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$118 ) begin end
     \$40  = \$26 ;
     if (rst) begin
       \$40  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$116 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$118 ) begin end
     \$41  = \$30 ;
     if (rst) begin
       \$41  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$116 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$118 ) begin end
     \$42  = \$34 ;
     if (rst) begin
       \$42  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$116 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$118 ) begin end
     \$43  = \$35 ;
     if (rst) begin
       \$43  = 1'h0;
@@ -26295,8 +26260,8 @@ module \biss_master_axil.ch1.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.verdict (lc_skip_seen, \port$3088$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
-  reg \$auto$verilog_backend.cc:2355:dump_module$117  = 0;
+module \biss_master_axil.ch1.core.verdict (lc_skip_seen, \port$2959$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
+  reg \$auto$verilog_backend.cc:2355:dump_module$119  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -26409,8 +26374,8 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, \port$3088$0 , lc_check
   wire lc_zero;
   input lc_zero_seen;
   wire lc_zero_seen;
-  output \port$3088$0 ;
-  wire \port$3088$0 ;
+  output \port$2959$0 ;
+  wire \port$2959$0 ;
   output report;
   wire report;
   input report_frame;
@@ -26478,7 +26443,7 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, \port$3088$0 , lc_check
   assign \$29  = ~ { \$2 , crc_ok[0] };
   assign crc_error = report_frame ? \$29  : 2'h0;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$117 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$119 ) begin end
     (* full_case = 32'd1 *)
     if (\$13 ) begin
       frame_status = 4'h3;
@@ -26495,7 +26460,7 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, \port$3088$0 , lc_check
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$3088$0  = \$2 ;
+  assign \port$2959$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

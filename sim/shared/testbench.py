@@ -53,7 +53,7 @@ def half_period_for(ma_hz):
 
 @dataclass
 class Result:
-    """All result ports, read right after ``done``."""
+    """All result ports, read right after ``done`` (the counters a clock later)."""
     status: int
     valid: int
     fields: dict
@@ -212,6 +212,12 @@ class Testbench:
         # past the read-only phase so the caller may drive inputs again.
         await ReadOnly()
         res = self.read()
+        if self.has_counters:
+            # The counters count a cycle one clock after its done (docs/ports.md, Counters):
+            # read them at the next edge.
+            await RisingEdge(self.dut.clk)
+            await ReadOnly()
+            res.counters = self.read().counters
         await Timer(1, "ps")
         if FRAME_LOG:                   # optional tally of ended cycles (for reports)
             with open(FRAME_LOG, "a") as f:

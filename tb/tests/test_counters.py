@@ -42,14 +42,28 @@ def test_saturating_counter_counts_saturates_and_clear_wins():
 
 # -- CounterBank ---------------------------------------------------------------------------------
 
+#: The bank's register stage: a count changes this many clocks after its event or clear.
+LAG = 1
+
+
 def _bank(names, width, steps):
     """Drive ``events`` (a dict per clock) and ``clear``; returns the counts per clock, each the
-    value after the edge that ended the step's clock."""
+    value ``LAG`` clocks after the edge that ended the step's clock."""
     trace = run_clocks(CounterBank(names, width),
                        [{**{f"events.{n}": e.get(n, 0) for n in names}, "clear": c}
-                        for e, c in steps + [({}, 0)]],
+                        for e, c in steps + [({}, 0)] * (1 + LAG)],
                        [f"counts.{n}" for n in names])
-    return [{n: x[f"counts.{n}"] for n in names} for x in trace[1:]]
+    return [{n: x[f"counts.{n}"] for n in names} for x in trace[1 + LAG:]]
+
+
+def test_counter_bank_counts_one_clock_after_the_event_and_the_clear():
+    # Read in the clocks themselves: nothing changes at the edge that ends the event's (or the
+    # clear's) clock, the count does at the next.
+    trace = run_clocks(CounterBank(COUNTERS[:1], 4),
+                       [{"events." + COUNTERS[0]: e, "clear": c}
+                        for e, c in [(1, 0), (0, 0), (0, 0), (0, 1), (0, 0), (0, 0)]],
+                       ["counts." + COUNTERS[0]])
+    assert [row["counts." + COUNTERS[0]] for row in trace] == [0, 0, 1, 1, 1, 0]
 
 
 @pytest.mark.parametrize("name", COUNTERS)

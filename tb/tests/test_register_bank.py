@@ -200,8 +200,9 @@ def test_axil_reads_back_to_back_and_write_with_address_after_data():
 def test_axil_read_backpressure_reads_each_register_once():
     """Reads issued back to back while rready follows a pattern: every read's data comes once,
     in order, held while rready is low; arready is low while a read waits behind held data.
-    The snapshot (reading result.status) is taken once, at its AR handshake: the position
-    changed afterwards is not what result.w0_lo reads."""
+    The snapshot (reading result.status) is taken once, in the clock its data is loaded (the
+    clock before its rvalid): the position changed after the AR handshake but before that is
+    what result.w0_lo and w0_hi read, the one changed after it is not."""
     reads = [0, offset("result.status"), offset("result.w0_lo"), offset("result.w0_hi"), 4,
              offset("result.w0_lo")]
     ready = [0, 0, 0, 1, 0, 1, 1, 0, 0, 1, 0, 1, 1, 1, 0, 1] + [1] * 8
@@ -209,7 +210,7 @@ def test_axil_read_backpressure_reads_each_register_once():
     async def bench(ctx, bus, bank):
         ctx.set(bank.ch0.word0_position, 0x12_3456_789A)
         ctx.set(bank.ch0.status, 3)
-        issued, got, held = 0, [], None
+        issued, got, held, status_seen = 0, [], None, False
         for r in ready:
             ctx.set(bus.arvalid, issued < len(reads))
             ctx.set(bus.araddr, reads[issued] if issued < len(reads) else 0)
@@ -226,11 +227,15 @@ def test_axil_read_backpressure_reads_each_register_once():
             await ctx.tick()
             if took:
                 if reads[issued] == offset("result.status"):
-                    ctx.set(bank.ch0.word0_position, 0x7F_FFFF_FFFF)
+                    ctx.set(bank.ch0.word0_position, 0x55_0000_00AA)
                 issued += 1
-        assert issued == len(reads)
+            # The word on R now is the (len(got))th: those before it were all taken.
+            if ctx.get(bus.rvalid) and len(got) == 1 and not status_seen:
+                status_seen = True                      # result.status's data is out
+                ctx.set(bank.ch0.word0_position, 0x7F_FFFF_FFFF)
+        assert issued == len(reads) and status_seen
         assert [g & 0xF if n == 1 else g for n, g in enumerate(got)] == [
-            0x42695353, 3, 0x3456_789A, 0x12, 0x00010001, 0x3456_789A]
+            0x42695353, 3, 0x0000_00AA, 0x55, 0x00010001, 0x0000_00AA]
 
     run_adapter(AxiLiteAdapter, bench)
 

@@ -274,6 +274,46 @@ def test_sign_of_life_early_compares_each_loaded_value_one_clock_later():
 
     simulate(dut, tb)
     zero, skip, ok = (0, 0, 1), (0, 1, 0), (0, 0, 0)
-    # First: 10 itself, compared when loaded against the value stored before it (none yet):
-    # stale once 10 is stored, as documented (the master checks once per frame, after the LC).
-    assert got == [skip, zero, zero, skip, skip, skip] + [ok] * 4
+    # First: the clock after the check. The store is registered, so 10 is stored only at the
+    # end of this clock: not synced yet, nothing flagged (the flags are stale here anyway, as
+    # documented: the master checks once per frame, after the LC).
+    assert got == [ok, zero, zero, skip, skip, skip] + [ok] * 4
+
+
+@pytest.mark.parametrize("same_clock", (True, False), ids=("resync_with_check", "resync_after"))
+def test_sign_of_life_early_resync_around_the_registered_store(same_clock):
+    # A resync in the clock of a check, or in the clock after it, leaves the block unsynced:
+    # the next LC, even the same value again, is accepted as it is (no repeat).
+    dut = SignOfLife(early=True)
+    got = []
+
+    async def tb(ctx):
+        async def shift_in(lc):
+            reg = 0
+            for i in reversed(range(LC_BITS)):
+                reg = (reg << 1) | (lc >> i) & 1
+                ctx.set(dut.lc_next, reg)
+                ctx.set(dut.load, 1)
+                await ctx.tick()
+            ctx.set(dut.load, 0)
+            ctx.set(dut.lc, lc)
+
+        for lc in (20, 21):                     # synced on 21
+            await shift_in(lc)
+            ctx.set(dut.check, 1)
+            await ctx.tick()
+            ctx.set(dut.check, 0)
+        await shift_in(22)
+        ctx.set(dut.check, 1)
+        ctx.set(dut.resync, int(same_clock))
+        await ctx.tick()
+        ctx.set(dut.check, 0)
+        ctx.set(dut.resync, int(not same_clock))
+        await ctx.tick()
+        ctx.set(dut.resync, 0)
+        got.append(ctx.get(dut.synced))
+        await shift_in(22)
+        got.append((ctx.get(dut.repeat), ctx.get(dut.skip), ctx.get(dut.zero)))
+
+    simulate(dut, tb)
+    assert got == [0, (0, 0, 0)]
