@@ -11,7 +11,11 @@ class RequestScheduler(wiring.Component):
     With ``periodic`` high a tick comes every ``period`` clocks (the first in the clock
     ``periodic`` rises, then ``period`` clocks apart, start to start); ``period`` = 0 asks for a
     cycle in every clock (as fast as the encoder allows: the controller takes the next one as
-    soon as it is idle again). ``period`` is read live.
+    soon as it is idle again). ``period`` is read live, with a lag: whether a tick comes in a
+    clock is decided on the ``period`` of two clocks before, whether requests come in every
+    clock on the one of the clock before. Both decisions are registered, so that neither the
+    period compare nor the zero test sits in front of the period counter (with several cores
+    behind a bus that loop was the critical path, docs/performance.md).
 
     A ``start`` or a tick that the controller cannot take (it is not idle, or an abort is being
     handled) is an ``overrun``; the request is dropped, never queued. A continuous request
@@ -51,19 +55,28 @@ class RequestScheduler(wiring.Component):
         m = Module()
         start = self.start | self.trigger
 
-        # Clocks since the last tick, plus one: the period restarts when it reaches the live
-        # period (one compare, no "- 1" in front of it). It never exceeds 2**width - 1: it only
-        # counts up while below the period.
-        count_p1 = Signal(len(self.period), init=1)
-        # ``count_p1 == 1``, kept as a register (written with it; the count never wraps to 1):
+        # Clocks since the last tick, plus two. The period restarts in a clock whose ``wrap``
+        # is set: ``wrap`` is "clocks since the last tick + 1 >= period", registered from the
+        # clock before (count_p2 there), so the compare ends in one flip-flop and only that
+        # flip-flop fans out to the counter. The count only goes on while below a period, so
+        # count_p2 never exceeds 2**width (one bit wider than the period).
+        count_p2 = Signal(len(self.period) + 1, init=2)
+        wrap = Signal()
+        # ``count_p2 == 2``, kept as a register (written with it; the count never wraps to 2):
         # no wide compare in front of the request decode.
         period_start = Signal(init=1)
-        as_fast_as_possible = self.periodic & (self.period == 0)
+        # ``period == 0``, registered: continuous requests from the clock after the period
+        # becomes 0.
+        period_zero = Signal()
+        m.d.sync += period_zero.eq(self.period == 0)
+        as_fast_as_possible = self.periodic & period_zero
         tick = self.periodic & ~as_fast_as_possible & period_start
-        with m.If(~self.periodic | as_fast_as_possible | (count_p1 >= self.period)):
-            m.d.sync += [count_p1.eq(1), period_start.eq(1)]
+        restart = ~self.periodic | as_fast_as_possible | wrap
+        with m.If(restart):
+            m.d.sync += [count_p2.eq(2), period_start.eq(1), wrap.eq(self.period <= 1)]
         with m.Else():
-            m.d.sync += [count_p1.eq(count_p1 + 1), period_start.eq(0)]
+            m.d.sync += [count_p2.eq(count_p2 + 1), period_start.eq(0),
+                         wrap.eq(count_p2 >= self.period)]
 
         m.d.comb += [
             self.request.eq(start | tick | as_fast_as_possible),

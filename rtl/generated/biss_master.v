@@ -895,7 +895,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .is_zero(lc_zero_seen),
     .lc(\lc$174 ),
     .load(load),
-    .\port$1369$0 (\bit ),
+    .\port$1367$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -952,7 +952,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .lc_skip_seen(lc_skip_seen),
     .lc_zero(\lc_zero$222 ),
     .lc_zero_seen(lc_zero_seen),
-    .\port$877$0 (\$16 ),
+    .\port$875$0 (\$16 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -9138,22 +9138,22 @@ module \biss_master.scheduler (abort, period, clk, rst, periodic, request, overr
   wire \$22 ;
   wire \$23 ;
   wire \$24 ;
-  wire \$25 ;
-  wire \$26 ;
-  reg [23:0] \$27 ;
+  reg \$25 ;
+  reg [24:0] \$26 ;
+  reg \$27 ;
   reg \$28 ;
   wire \$3 ;
   wire \$4 ;
   wire \$5 ;
   wire \$6 ;
-  wire [24:0] \$7 ;
+  wire [25:0] \$7 ;
   wire \$8 ;
   wire \$9 ;
   input abort;
   wire abort;
   input clk;
   wire clk;
-  reg [23:0] count_p1 = 24'h000001;
+  reg [24:0] count_p2 = 25'h0000002;
   input idle;
   wire idle;
   output overrun;
@@ -9161,6 +9161,7 @@ module \biss_master.scheduler (abort, period, clk, rst, periodic, request, overr
   input [23:0] period;
   wire [23:0] period;
   reg period_start = 1'h1;
+  reg period_zero = 1'h0;
   input periodic;
   wire periodic;
   output request;
@@ -9170,67 +9171,89 @@ module \biss_master.scheduler (abort, period, clk, rst, periodic, request, overr
   input start;
   wire start;
   wire trigger;
-  assign \$1  = ~ periodic;
-  assign \$2  = ! period;
-  assign \$3  = periodic & \$2 ;
-  assign \$4  = \$1  | \$3 ;
-  assign \$5  = count_p1 >= period;
-  assign \$6  = \$4  | \$5 ;
-  assign \$7  = count_p1 + 1'h1;
-  assign \$9  = ! period;
-  assign \$10  = periodic & \$9 ;
+  reg wrap = 1'h0;
+  assign \$1  = ! period;
+  assign \$2  = ~ periodic;
+  assign \$3  = periodic & period_zero;
+  assign \$4  = \$2  | \$3 ;
+  assign \$5  = \$4  | wrap;
+  assign \$6  = period <= 1'h1;
+  assign \$7  = count_p2 + 1'h1;
+  assign \$8  = count_p2 >= period;
+  assign \$10  = periodic & period_zero;
   assign \$11  = ~ \$10 ;
   assign \$12  = periodic & \$11 ;
   assign \$13  = \$12  & period_start;
-  assign \$14  = \$8  | \$13 ;
-  assign \$15  = ! period;
-  assign \$16  = periodic & \$15 ;
-  assign request = \$14  | \$16 ;
-  assign \$18  = ! period;
+  assign \$14  = \$9  | \$13 ;
+  assign \$15  = periodic & period_zero;
+  assign request = \$14  | \$15 ;
+  assign \$17  = periodic & period_zero;
+  assign \$18  = ~ \$17 ;
   assign \$19  = periodic & \$18 ;
-  assign \$20  = ~ \$19 ;
-  assign \$21  = periodic & \$20 ;
-  assign \$22  = \$21  & period_start;
-  assign \$23  = \$17  | \$22 ;
-  assign \$24  = ~ abort;
-  assign \$25  = idle & \$24 ;
-  assign \$26  = ~ \$25 ;
-  assign overrun = \$23  & \$26 ;
+  assign \$20  = \$19  & period_start;
+  assign \$21  = \$16  | \$20 ;
+  assign \$22  = ~ abort;
+  assign \$23  = idle & \$22 ;
+  assign \$24  = ~ \$23 ;
+  assign overrun = \$21  & \$24 ;
   always @(posedge clk)
-    count_p1 <= \$27 ;
+    period_zero <= \$25 ;
   always @(posedge clk)
-    period_start <= \$28 ;
+    count_p2 <= \$26 ;
+  always @(posedge clk)
+    period_start <= \$27 ;
+  always @(posedge clk)
+    wrap <= \$28 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
-    (* full_case = 32'd1 *)
-    if (\$6 ) begin
-      \$27  = 24'h000001;
-    end else begin
-      \$27  = \$7 [23:0];
-    end
+    \$25  = \$1 ;
     if (rst) begin
-      \$27  = 24'h000001;
+      \$25  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
     (* full_case = 32'd1 *)
-    if (\$6 ) begin
-      \$28  = 1'h1;
+    if (\$5 ) begin
+      \$26  = 25'h0000002;
     end else begin
-      \$28  = 1'h0;
+      \$26  = \$7 [24:0];
     end
     if (rst) begin
-      \$28  = 1'h1;
+      \$26  = 25'h0000002;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    (* full_case = 32'd1 *)
+    if (\$5 ) begin
+      \$27  = 1'h1;
+    end else begin
+      \$27  = 1'h0;
+    end
+    if (rst) begin
+      \$27  = 1'h1;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    (* full_case = 32'd1 *)
+    if (\$5 ) begin
+      \$28  = \$6 ;
+    end else begin
+      \$28  = \$8 ;
+    end
+    if (rst) begin
+      \$28  = 1'h0;
     end
   end
   assign trigger = 1'h0;
-  assign \$8  = start;
-  assign \$17  = start;
+  assign \$9  = start;
+  assign \$16  = start;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1369$0 , resync, lc, is_zero, clk);
+module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1367$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$53  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -9272,8 +9295,8 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1369$0
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$1369$0 ;
-  wire \port$1369$0 ;
+  input \port$1367$0 ;
+  wire \port$1367$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -9287,9 +9310,9 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1369$0
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$1369$0  };
-  assign \$2  = { lc[4:0], \port$1369$0  } == last;
-  assign \$3  = { lc[4:0], \port$1369$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$1367$0  };
+  assign \$2  = { lc[4:0], \port$1367$0  } == last;
+  assign \$3  = { lc[4:0], \port$1367$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -9399,7 +9422,7 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1369$0
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$1369$0  };
+  assign lc_next = { lc[4:0], \port$1367$0  };
   assign zero = is_zero;
 endmodule
 
@@ -9881,7 +9904,7 @@ module \biss_master.timers (timeout_live, clk, rst, restart, ma_busy, ack_limit,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.verdict (lc_skip_seen, \port$877$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
+module \biss_master.verdict (lc_skip_seen, \port$875$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$57  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -9995,8 +10018,8 @@ module \biss_master.verdict (lc_skip_seen, \port$877$0 , lc_check, lc_repeat, lc
   wire lc_zero;
   input lc_zero_seen;
   wire lc_zero_seen;
-  output \port$877$0 ;
-  wire \port$877$0 ;
+  output \port$875$0 ;
+  wire \port$875$0 ;
   output report;
   wire report;
   input report_frame;
@@ -10081,7 +10104,7 @@ module \biss_master.verdict (lc_skip_seen, \port$877$0 , lc_check, lc_repeat, lc
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$877$0  = \$2 ;
+  assign \port$875$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

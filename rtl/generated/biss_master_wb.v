@@ -546,9 +546,9 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .\port$4108$0 (\$8 ),
     .\port$4121$0 (\$9 ),
     .\port$4235$0 (\$10 ),
-    .\port$4586$0 (\$11 ),
-    .\port$4599$0 (\$12 ),
-    .\port$4713$0 (\$13 ),
+    .\port$4590$0 (\$11 ),
+    .\port$4603$0 (\$12 ),
+    .\port$4717$0 (\$13 ),
     .rst(rst),
     .write_data(regs__ca_wbuf_data)
   );
@@ -655,9 +655,9 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .clk(clk),
     .ma(ch1_ma),
     .periodic(\regs__periodic$360 ),
-    .\port$4586$0 (\$11 ),
-    .\port$4599$0 (\$12 ),
-    .\port$4713$0 (\$13 ),
+    .\port$4590$0 (\$11 ),
+    .\port$4603$0 (\$12 ),
+    .\port$4717$0 (\$13 ),
     .regs__busy(ch1__busy),
     .regs__ca_busy(ch1__ca_busy),
     .regs__ca_done(ch1__ca_done),
@@ -984,7 +984,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
 , ch1__ca_busy, ch1__ca_rbuf_data, bus__r_load, ch0__ca_wbuf_addr, write_data, g_trigger_start, ch0_ctrl_start, ch0_ctrl_abort, ch0_ctrl_clear_counters, ch0_ctrl_periodic, ch0_ctrl_trigger_enable, ch0_cfg_ma_ma_half_period, ch0_cfg_ma_delay_limit, ch0_cfg_period_request_period, ch0_cfg_break_break_time, ch0_cfg_ack_ack_limit, ch0_cfg_timeout_timeout_limit, ch0_cfg_words_w0_data_bits, ch0_cfg_words_w0_nenw, ch0_cfg_words_w0_lc, ch0_cfg_words_w0_crc
 , ch0_cfg_words_w1_data_bits, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_enable, ch0_cfg_checks_end_check, ch0_cfg_checks_spw_check, ch0_cfg_checks_spw_tolerance, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$69 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort, ch1_ctrl_start, ch1_ctrl_abort, ch1_ctrl_clear_counters, ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit
 , ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_enable, ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$221 , ch1_ca_ctrl_start
-, ch1_ca_ctrl_abort, ch0__done_count, ch0__done, \port$4108$0 , \port$4121$0 , ch0__ca_done, \port$4235$0 , ch1__done_count, ch1__done, \port$4586$0 , \port$4599$0 , ch1__ca_done, \port$4713$0 , bus__w_addr);
+, ch1_ca_ctrl_abort, ch0__done_count, ch0__done, \port$4108$0 , \port$4121$0 , ch0__ca_done, \port$4235$0 , ch1__done_count, ch1__done, \port$4590$0 , \port$4603$0 , ch1__ca_done, \port$4717$0 , bus__w_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$26  = 0;
   wire \$1 ;
   wire [31:0] \$10 ;
@@ -2186,12 +2186,12 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire [287:0] \port$4121$0 ;
   input [9:0] \port$4235$0 ;
   wire [9:0] \port$4235$0 ;
-  input [160:0] \port$4586$0 ;
-  wire [160:0] \port$4586$0 ;
-  input [287:0] \port$4599$0 ;
-  wire [287:0] \port$4599$0 ;
-  input [9:0] \port$4713$0 ;
-  wire [9:0] \port$4713$0 ;
+  input [160:0] \port$4590$0 ;
+  wire [160:0] \port$4590$0 ;
+  input [287:0] \port$4603$0 ;
+  wire [287:0] \port$4603$0 ;
+  input [9:0] \port$4717$0 ;
+  wire [9:0] \port$4717$0 ;
   input rst;
   wire rst;
   reg [10:0] write_addr = 11'h000;
@@ -2941,7 +2941,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$281  = \$279  | \$280 ;
   assign \$282  = ch1_read_select_10e ? { 16'h0000, ch1_cfg_checks_spw_tolerance, 6'h00, ch1_cfg_checks_spw_check, ch1_cfg_checks_end_check } : 32'd0;
   assign \$283  = \$281  | \$282 ;
-  assign \$284  = ch1_read_select_110 ? { 2'h0, \port$4586$0 [156:151], 4'h0, \port$4586$0 [160:157], 1'h0, \port$4586$0 [150:148], 1'h0, \port$4586$0 [107:105], 3'h0, \port$4586$0 [49], \port$4586$0 [3:0] } : 32'd0;
+  assign \$284  = ch1_read_select_110 ? { 2'h0, \port$4590$0 [156:151], 4'h0, \port$4590$0 [160:157], 1'h0, \port$4590$0 [150:148], 1'h0, \port$4590$0 [107:105], 3'h0, \port$4590$0 [49], \port$4590$0 [3:0] } : 32'd0;
   assign \$285  = \$283  | \$284 ;
   assign \$286  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
   assign \$287  = \$285  | \$286 ;
@@ -2955,29 +2955,29 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$295  = \$293  | \$294 ;
   assign \$296  = ch1_read_select_116 ? ch1_result_timestamp_time_snapshot : 32'd0;
   assign \$297  = \$295  | \$296 ;
-  assign \$298  = ch1_read_select_118 ? \port$4599$0 [31:0] : 32'd0;
+  assign \$298  = ch1_read_select_118 ? \port$4603$0 [31:0] : 32'd0;
   assign \$299  = \$297  | \$298 ;
-  assign \$300  = ch1_read_select_119 ? \port$4599$0 [63:32] : 32'd0;
+  assign \$300  = ch1_read_select_119 ? \port$4603$0 [63:32] : 32'd0;
   assign \$301  = \$299  | \$300 ;
-  assign \$302  = ch1_read_select_11a ? \port$4599$0 [95:64] : 32'd0;
+  assign \$302  = ch1_read_select_11a ? \port$4603$0 [95:64] : 32'd0;
   assign \$303  = \$301  | \$302 ;
-  assign \$304  = ch1_read_select_11b ? \port$4599$0 [127:96] : 32'd0;
+  assign \$304  = ch1_read_select_11b ? \port$4603$0 [127:96] : 32'd0;
   assign \$305  = \$303  | \$304 ;
-  assign \$306  = ch1_read_select_11c ? \port$4599$0 [159:128] : 32'd0;
+  assign \$306  = ch1_read_select_11c ? \port$4603$0 [159:128] : 32'd0;
   assign \$307  = \$305  | \$306 ;
-  assign \$308  = ch1_read_select_11d ? \port$4599$0 [191:160] : 32'd0;
+  assign \$308  = ch1_read_select_11d ? \port$4603$0 [191:160] : 32'd0;
   assign \$309  = \$307  | \$308 ;
-  assign \$310  = ch1_read_select_11e ? { 16'h0000, \port$4599$0 [207:192] } : 32'd0;
+  assign \$310  = ch1_read_select_11e ? { 16'h0000, \port$4603$0 [207:192] } : 32'd0;
   assign \$311  = \$309  | \$310 ;
   assign \$312  = ch1_read_select_140 ? { 7'h00, \ch1_ca_request_write$221 , 1'h0, ch1_ca_request_count, 1'h0, ch1_ca_request_address, 5'h00, ch1_ca_request_slave_id } : 32'd0;
   assign \$313  = \$311  | \$312 ;
-  assign \$316  = ch1_read_select_142 ? { 17'h00000, \port$4713$0 [9:3], 1'h0, \port$4713$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
+  assign \$316  = ch1_read_select_142 ? { 17'h00000, \port$4717$0 [9:3], 1'h0, \port$4717$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
   assign \$317  = \$315  | \$316 ;
-  assign \$318  = ch1_read_select_143 ? \port$4599$0 [239:208] : 32'd0;
+  assign \$318  = ch1_read_select_143 ? \port$4603$0 [239:208] : 32'd0;
   assign \$319  = \$317  | \$318 ;
-  assign \$320  = ch1_read_select_144 ? \port$4599$0 [271:240] : 32'd0;
+  assign \$320  = ch1_read_select_144 ? \port$4603$0 [271:240] : 32'd0;
   assign \$321  = \$319  | \$320 ;
-  assign \$322  = ch1_read_select_145 ? { 16'h0000, \port$4599$0 [287:272] } : 32'd0;
+  assign \$322  = ch1_read_select_145 ? { 16'h0000, \port$4603$0 [287:272] } : 32'd0;
   assign \$323  = \$321  | \$322 ;
   assign \$324  = ch1_window0_read ? ch1__ca_rbuf_data : 32'd0;
   assign \$325  = \$323  | \$324 ;
@@ -4761,7 +4761,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$582  = ch1_result_status_status_snapshot;
     if (\$257 ) begin
-      \$582  = \port$4586$0 [3:0];
+      \$582  = \port$4590$0 [3:0];
     end
     if (rst) begin
       \$582  = 4'h0;
@@ -4771,7 +4771,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$583  = ch1_result_status_cds_snapshot;
     if (\$257 ) begin
-      \$583  = \port$4586$0 [49];
+      \$583  = \port$4590$0 [49];
     end
     if (rst) begin
       \$583  = 1'h0;
@@ -4781,7 +4781,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$584  = ch1_result_status_w0_ne_snapshot;
     if (\$257 ) begin
-      \$584  = \port$4586$0 [105];
+      \$584  = \port$4590$0 [105];
     end
     if (rst) begin
       \$584  = 1'h0;
@@ -4791,7 +4791,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$585  = ch1_result_status_w0_nw_snapshot;
     if (\$257 ) begin
-      \$585  = \port$4586$0 [106];
+      \$585  = \port$4590$0 [106];
     end
     if (rst) begin
       \$585  = 1'h0;
@@ -4801,7 +4801,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$586  = ch1_result_status_w0_crc_ok_snapshot;
     if (\$257 ) begin
-      \$586  = \port$4586$0 [107];
+      \$586  = \port$4590$0 [107];
     end
     if (rst) begin
       \$586  = 1'h0;
@@ -4811,7 +4811,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$587  = ch1_result_status_w1_ne_snapshot;
     if (\$257 ) begin
-      \$587  = \port$4586$0 [148];
+      \$587  = \port$4590$0 [148];
     end
     if (rst) begin
       \$587  = 1'h0;
@@ -4821,7 +4821,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$588  = ch1_result_status_w1_nw_snapshot;
     if (\$257 ) begin
-      \$588  = \port$4586$0 [149];
+      \$588  = \port$4590$0 [149];
     end
     if (rst) begin
       \$588  = 1'h0;
@@ -4831,7 +4831,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$589  = ch1_result_status_w1_crc_ok_snapshot;
     if (\$257 ) begin
-      \$589  = \port$4586$0 [150];
+      \$589  = \port$4590$0 [150];
     end
     if (rst) begin
       \$589  = 1'h0;
@@ -4841,7 +4841,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$590  = ch1_result_status_lc_repeat_snapshot;
     if (\$257 ) begin
-      \$590  = \port$4586$0 [157];
+      \$590  = \port$4590$0 [157];
     end
     if (rst) begin
       \$590  = 1'h0;
@@ -4851,7 +4851,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$591  = ch1_result_status_lc_skip_snapshot;
     if (\$257 ) begin
-      \$591  = \port$4586$0 [158];
+      \$591  = \port$4590$0 [158];
     end
     if (rst) begin
       \$591  = 1'h0;
@@ -4861,7 +4861,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$592  = ch1_result_status_lc_zero_snapshot;
     if (\$257 ) begin
-      \$592  = \port$4586$0 [159];
+      \$592  = \port$4590$0 [159];
     end
     if (rst) begin
       \$592  = 1'h0;
@@ -4871,7 +4871,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$593  = ch1_result_status_spw_mismatch_snapshot;
     if (\$257 ) begin
-      \$593  = \port$4586$0 [160];
+      \$593  = \port$4590$0 [160];
     end
     if (rst) begin
       \$593  = 1'h0;
@@ -4881,7 +4881,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$594  = ch1_result_status_lc_snapshot;
     if (\$257 ) begin
-      \$594  = \port$4586$0 [156:151];
+      \$594  = \port$4590$0 [156:151];
     end
     if (rst) begin
       \$594  = 6'h00;
@@ -4901,7 +4901,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$596  = ch1_result_seq_line_delay_snapshot;
     if (\$257 ) begin
-      \$596  = \port$4586$0 [48:36];
+      \$596  = \port$4590$0 [48:36];
     end
     if (rst) begin
       \$596  = 13'h0000;
@@ -4911,7 +4911,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$597  = ch1_result_w0_lo_data_snapshot;
     if (\$257 ) begin
-      \$597  = \port$4586$0 [81:50];
+      \$597  = \port$4590$0 [81:50];
     end
     if (rst) begin
       \$597  = 32'd0;
@@ -4921,7 +4921,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$598  = ch1_result_w0_hi_data_snapshot;
     if (\$257 ) begin
-      \$598  = \port$4586$0 [104:82];
+      \$598  = \port$4590$0 [104:82];
     end
     if (rst) begin
       \$598  = 23'h000000;
@@ -4931,7 +4931,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$599  = ch1_result_w1_lo_data_snapshot;
     if (\$257 ) begin
-      \$599  = \port$4586$0 [139:108];
+      \$599  = \port$4590$0 [139:108];
     end
     if (rst) begin
       \$599  = 32'd0;
@@ -4941,7 +4941,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$600  = ch1_result_w1_hi_data_snapshot;
     if (\$257 ) begin
-      \$600  = \port$4586$0 [147:140];
+      \$600  = \port$4590$0 [147:140];
     end
     if (rst) begin
       \$600  = 8'h00;
@@ -4951,7 +4951,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$601  = ch1_result_timestamp_time_snapshot;
     if (\$257 ) begin
-      \$601  = \port$4586$0 [35:4];
+      \$601  = \port$4590$0 [35:4];
     end
     if (rst) begin
       \$601  = 32'd0;
@@ -5023,49 +5023,49 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign ch0__count_ca_refused = \port$4121$0 [255:240];
   assign ch0__count_ca_aborted = \port$4121$0 [271:256];
   assign ch0__count_ca_data_fault = \port$4121$0 [287:272];
-  assign ch1__status = \port$4586$0 [3:0];
-  assign ch1__cds = \port$4586$0 [49];
-  assign ch1__word0_ne = \port$4586$0 [105];
-  assign ch1__word0_nw = \port$4586$0 [106];
-  assign ch1__word0_crc_ok = \port$4586$0 [107];
-  assign ch1__word1_ne = \port$4586$0 [148];
-  assign ch1__word1_nw = \port$4586$0 [149];
-  assign ch1__word1_crc_ok = \port$4586$0 [150];
-  assign ch1__lc_repeat = \port$4586$0 [157];
-  assign ch1__lc_skip = \port$4586$0 [158];
-  assign ch1__lc_zero = \port$4586$0 [159];
-  assign ch1__spw_mismatch = \port$4586$0 [160];
-  assign ch1__lc = \port$4586$0 [156:151];
-  assign ch1__line_delay = \port$4586$0 [48:36];
-  assign ch1__word0_position = \port$4586$0 [104:50];
-  assign ch1__word1_position = \port$4586$0 [147:108];
-  assign ch1__timestamp = \port$4586$0 [35:4];
+  assign ch1__status = \port$4590$0 [3:0];
+  assign ch1__cds = \port$4590$0 [49];
+  assign ch1__word0_ne = \port$4590$0 [105];
+  assign ch1__word0_nw = \port$4590$0 [106];
+  assign ch1__word0_crc_ok = \port$4590$0 [107];
+  assign ch1__word1_ne = \port$4590$0 [148];
+  assign ch1__word1_nw = \port$4590$0 [149];
+  assign ch1__word1_crc_ok = \port$4590$0 [150];
+  assign ch1__lc_repeat = \port$4590$0 [157];
+  assign ch1__lc_skip = \port$4590$0 [158];
+  assign ch1__lc_zero = \port$4590$0 [159];
+  assign ch1__spw_mismatch = \port$4590$0 [160];
+  assign ch1__lc = \port$4590$0 [156:151];
+  assign ch1__line_delay = \port$4590$0 [48:36];
+  assign ch1__word0_position = \port$4590$0 [104:50];
+  assign ch1__word1_position = \port$4590$0 [147:108];
+  assign ch1__timestamp = \port$4590$0 [35:4];
   assign ch1__cap_data_bits_w0 = 6'h37;
   assign ch1__cap_data_bits_w1 = 6'h28;
   assign ch1__cap_timer_width = 6'h18;
   assign ch1__cap_counters = 1'h1;
   assign ch1__cap_timestamp = 1'h1;
   assign ch1__cap_register_access = 1'h1;
-  assign ch1__count_crc_word0 = \port$4599$0 [15:0];
-  assign ch1__count_crc_word1 = \port$4599$0 [31:16];
-  assign ch1__count_no_ack = \port$4599$0 [47:32];
-  assign ch1__count_no_start = \port$4599$0 [63:48];
-  assign ch1__count_delay_range = \port$4599$0 [79:64];
-  assign ch1__count_slo_stuck_low = \port$4599$0 [95:80];
-  assign ch1__count_lc_repeat = \port$4599$0 [111:96];
-  assign ch1__count_lc_skip = \port$4599$0 [127:112];
-  assign ch1__count_lc_zero = \port$4599$0 [143:128];
-  assign ch1__count_spw_mismatch = \port$4599$0 [159:144];
-  assign ch1__count_overrun = \port$4599$0 [175:160];
-  assign ch1__count_aborted = \port$4599$0 [191:176];
-  assign ch1__count_no_stop = \port$4599$0 [207:192];
-  assign ch1__ca_status = \port$4713$0 [2:0];
-  assign ch1__ca_bytes_done = \port$4713$0 [9:3];
-  assign ch1__count_ca_crc4_error = \port$4599$0 [223:208];
-  assign ch1__count_ca_no_answer = \port$4599$0 [239:224];
-  assign ch1__count_ca_refused = \port$4599$0 [255:240];
-  assign ch1__count_ca_aborted = \port$4599$0 [271:256];
-  assign ch1__count_ca_data_fault = \port$4599$0 [287:272];
+  assign ch1__count_crc_word0 = \port$4603$0 [15:0];
+  assign ch1__count_crc_word1 = \port$4603$0 [31:16];
+  assign ch1__count_no_ack = \port$4603$0 [47:32];
+  assign ch1__count_no_start = \port$4603$0 [63:48];
+  assign ch1__count_delay_range = \port$4603$0 [79:64];
+  assign ch1__count_slo_stuck_low = \port$4603$0 [95:80];
+  assign ch1__count_lc_repeat = \port$4603$0 [111:96];
+  assign ch1__count_lc_skip = \port$4603$0 [127:112];
+  assign ch1__count_lc_zero = \port$4603$0 [143:128];
+  assign ch1__count_spw_mismatch = \port$4603$0 [159:144];
+  assign ch1__count_overrun = \port$4603$0 [175:160];
+  assign ch1__count_aborted = \port$4603$0 [191:176];
+  assign ch1__count_no_stop = \port$4603$0 [207:192];
+  assign ch1__ca_status = \port$4717$0 [2:0];
+  assign ch1__ca_bytes_done = \port$4717$0 [9:3];
+  assign ch1__count_ca_crc4_error = \port$4603$0 [223:208];
+  assign ch1__count_ca_no_answer = \port$4603$0 [239:224];
+  assign ch1__count_ca_refused = \port$4603$0 [255:240];
+  assign ch1__count_ca_aborted = \port$4603$0 [271:256];
+  assign ch1__count_ca_data_fault = \port$4603$0 [287:272];
   assign glob__trigger = g_trigger_start;
   assign ch0__start = ch0_ctrl_start;
   assign ch0__abort_cycle = ch0_ctrl_abort;
@@ -6578,7 +6578,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$3830$0 (\bit ),
+    .\port$3826$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -6635,7 +6635,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
     .lc_skip_seen(lc_skip_seen),
     .lc_zero(lc_zero),
     .lc_zero_seen(lc_zero_seen),
-    .\port$1580$0 (\$16 ),
+    .\port$1578$0 (\$16 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -14822,22 +14822,22 @@ module \biss_master_wb.ch0.core.scheduler (rst, trigger, periodic, request, over
   wire \$22 ;
   wire \$23 ;
   wire \$24 ;
-  wire \$25 ;
-  wire \$26 ;
-  reg [23:0] \$27 ;
+  reg \$25 ;
+  reg [24:0] \$26 ;
+  reg \$27 ;
   reg \$28 ;
   wire \$3 ;
   wire \$4 ;
   wire \$5 ;
   wire \$6 ;
-  wire [24:0] \$7 ;
+  wire [25:0] \$7 ;
   wire \$8 ;
   wire \$9 ;
   input abort;
   wire abort;
   input clk;
   wire clk;
-  reg [23:0] count_p1 = 24'h000001;
+  reg [24:0] count_p2 = 25'h0000002;
   input idle;
   wire idle;
   output overrun;
@@ -14845,6 +14845,7 @@ module \biss_master_wb.ch0.core.scheduler (rst, trigger, periodic, request, over
   input [23:0] period;
   wire [23:0] period;
   reg period_start = 1'h1;
+  reg period_zero = 1'h0;
   input periodic;
   wire periodic;
   output request;
@@ -14855,66 +14856,88 @@ module \biss_master_wb.ch0.core.scheduler (rst, trigger, periodic, request, over
   wire start;
   input trigger;
   wire trigger;
-  assign \$1  = ~ periodic;
-  assign \$2  = ! period;
-  assign \$3  = periodic & \$2 ;
-  assign \$4  = \$1  | \$3 ;
-  assign \$5  = count_p1 >= period;
-  assign \$6  = \$4  | \$5 ;
-  assign \$7  = count_p1 + 1'h1;
-  assign \$8  = start | trigger;
-  assign \$9  = ! period;
-  assign \$10  = periodic & \$9 ;
+  reg wrap = 1'h0;
+  assign \$1  = ! period;
+  assign \$2  = ~ periodic;
+  assign \$3  = periodic & period_zero;
+  assign \$4  = \$2  | \$3 ;
+  assign \$5  = \$4  | wrap;
+  assign \$6  = period <= 1'h1;
+  assign \$7  = count_p2 + 1'h1;
+  assign \$8  = count_p2 >= period;
+  assign \$9  = start | trigger;
+  assign \$10  = periodic & period_zero;
   assign \$11  = ~ \$10 ;
   assign \$12  = periodic & \$11 ;
   assign \$13  = \$12  & period_start;
-  assign \$14  = \$8  | \$13 ;
-  assign \$15  = ! period;
-  assign \$16  = periodic & \$15 ;
-  assign request = \$14  | \$16 ;
-  assign \$17  = start | trigger;
-  assign \$18  = ! period;
+  assign \$14  = \$9  | \$13 ;
+  assign \$15  = periodic & period_zero;
+  assign request = \$14  | \$15 ;
+  assign \$16  = start | trigger;
+  assign \$17  = periodic & period_zero;
+  assign \$18  = ~ \$17 ;
   assign \$19  = periodic & \$18 ;
-  assign \$20  = ~ \$19 ;
-  assign \$21  = periodic & \$20 ;
-  assign \$22  = \$21  & period_start;
-  assign \$23  = \$17  | \$22 ;
-  assign \$24  = ~ abort;
-  assign \$25  = idle & \$24 ;
-  assign \$26  = ~ \$25 ;
-  assign overrun = \$23  & \$26 ;
+  assign \$20  = \$19  & period_start;
+  assign \$21  = \$16  | \$20 ;
+  assign \$22  = ~ abort;
+  assign \$23  = idle & \$22 ;
+  assign \$24  = ~ \$23 ;
+  assign overrun = \$21  & \$24 ;
   always @(posedge clk)
-    count_p1 <= \$27 ;
+    period_zero <= \$25 ;
   always @(posedge clk)
-    period_start <= \$28 ;
+    count_p2 <= \$26 ;
+  always @(posedge clk)
+    period_start <= \$27 ;
+  always @(posedge clk)
+    wrap <= \$28 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
-    (* full_case = 32'd1 *)
-    if (\$6 ) begin
-      \$27  = 24'h000001;
-    end else begin
-      \$27  = \$7 [23:0];
-    end
+    \$25  = \$1 ;
     if (rst) begin
-      \$27  = 24'h000001;
+      \$25  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     (* full_case = 32'd1 *)
-    if (\$6 ) begin
-      \$28  = 1'h1;
+    if (\$5 ) begin
+      \$26  = 25'h0000002;
     end else begin
-      \$28  = 1'h0;
+      \$26  = \$7 [24:0];
     end
     if (rst) begin
-      \$28  = 1'h1;
+      \$26  = 25'h0000002;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    (* full_case = 32'd1 *)
+    if (\$5 ) begin
+      \$27  = 1'h1;
+    end else begin
+      \$27  = 1'h0;
+    end
+    if (rst) begin
+      \$27  = 1'h1;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    (* full_case = 32'd1 *)
+    if (\$5 ) begin
+      \$28  = \$6 ;
+    end else begin
+      \$28  = \$8 ;
+    end
+    if (rst) begin
+      \$28  = 1'h0;
     end
   end
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$3830$0 , resync, lc, is_zero, clk);
+module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$3826$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$69  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -14956,8 +14979,8 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$3830$0 ;
-  wire \port$3830$0 ;
+  input \port$3826$0 ;
+  wire \port$3826$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -14971,9 +14994,9 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$3830$0  };
-  assign \$2  = { lc[4:0], \port$3830$0  } == last;
-  assign \$3  = { lc[4:0], \port$3830$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$3826$0  };
+  assign \$2  = { lc[4:0], \port$3826$0  } == last;
+  assign \$3  = { lc[4:0], \port$3826$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -15083,7 +15106,7 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$3830$0  };
+  assign lc_next = { lc[4:0], \port$3826$0  };
   assign zero = is_zero;
 endmodule
 
@@ -15565,7 +15588,7 @@ module \biss_master_wb.ch0.core.timers (rst, restart, ma_busy, break_time, timeo
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.verdict (lc_skip_seen, \port$1580$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
+module \biss_master_wb.ch0.core.verdict (lc_skip_seen, \port$1578$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$73  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -15679,8 +15702,8 @@ module \biss_master_wb.ch0.core.verdict (lc_skip_seen, \port$1580$0 , lc_check, 
   wire lc_zero;
   input lc_zero_seen;
   wire lc_zero_seen;
-  output \port$1580$0 ;
-  wire \port$1580$0 ;
+  output \port$1578$0 ;
+  wire \port$1578$0 ;
   output report;
   wire report;
   input report_frame;
@@ -15765,7 +15788,7 @@ module \biss_master_wb.ch0.core.verdict (lc_skip_seen, \port$1580$0 , lc_check, 
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$1580$0  = \$2 ;
+  assign \port$1578$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -15791,7 +15814,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__ca_busy, regs__ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period
 , cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort
-, regs__done_count, ma, regs__done, \port$4586$0 , \port$4599$0 , regs__ca_done, \port$4713$0 , ca_rbuf_addr);
+, regs__done_count, ma, regs__done, \port$4590$0 , \port$4603$0 , regs__ca_done, \port$4717$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$74  = 0;
   wire \$1 ;
   wire [16:0] \$2 ;
@@ -15916,12 +15939,12 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_en
   wire \ma$164 ;
   input periodic;
   wire periodic;
-  output [160:0] \port$4586$0 ;
-  wire [160:0] \port$4586$0 ;
-  output [287:0] \port$4599$0 ;
-  wire [287:0] \port$4599$0 ;
-  output [9:0] \port$4713$0 ;
-  wire [9:0] \port$4713$0 ;
+  output [160:0] \port$4590$0 ;
+  wire [160:0] \port$4590$0 ;
+  output [287:0] \port$4603$0 ;
+  wire [287:0] \port$4603$0 ;
+  output [9:0] \port$4717$0 ;
+  wire [9:0] \port$4717$0 ;
   wire regs__abort_cycle;
   output regs__busy;
   wire regs__busy;
@@ -16247,9 +16270,9 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_en
   assign regs__ca_rbuf_en = ca_rbuf_en;
   assign \ma$164  = ma;
   assign \slo$166  = slo;
-  assign \port$4586$0  = \$4 ;
-  assign \port$4599$0  = \$5 ;
-  assign \port$4713$0  = \$6 ;
+  assign \port$4590$0  = \$4 ;
+  assign \port$4603$0  = \$5 ;
+  assign \port$4717$0  = \$6 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -17158,7 +17181,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
     .lc_skip_seen(lc_skip_seen),
     .lc_zero(lc_zero),
     .lc_zero_seen(lc_zero_seen),
-    .\port$2942$0 (\$16 ),
+    .\port$2938$0 (\$16 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -25345,22 +25368,22 @@ module \biss_master_wb.ch1.core.scheduler (rst, trigger, periodic, request, over
   wire \$22 ;
   wire \$23 ;
   wire \$24 ;
-  wire \$25 ;
-  wire \$26 ;
-  reg [23:0] \$27 ;
+  reg \$25 ;
+  reg [24:0] \$26 ;
+  reg \$27 ;
   reg \$28 ;
   wire \$3 ;
   wire \$4 ;
   wire \$5 ;
   wire \$6 ;
-  wire [24:0] \$7 ;
+  wire [25:0] \$7 ;
   wire \$8 ;
   wire \$9 ;
   input abort;
   wire abort;
   input clk;
   wire clk;
-  reg [23:0] count_p1 = 24'h000001;
+  reg [24:0] count_p2 = 25'h0000002;
   input idle;
   wire idle;
   output overrun;
@@ -25368,6 +25391,7 @@ module \biss_master_wb.ch1.core.scheduler (rst, trigger, periodic, request, over
   input [23:0] period;
   wire [23:0] period;
   reg period_start = 1'h1;
+  reg period_zero = 1'h0;
   input periodic;
   wire periodic;
   output request;
@@ -25378,60 +25402,82 @@ module \biss_master_wb.ch1.core.scheduler (rst, trigger, periodic, request, over
   wire start;
   input trigger;
   wire trigger;
-  assign \$1  = ~ periodic;
-  assign \$2  = ! period;
-  assign \$3  = periodic & \$2 ;
-  assign \$4  = \$1  | \$3 ;
-  assign \$5  = count_p1 >= period;
-  assign \$6  = \$4  | \$5 ;
-  assign \$7  = count_p1 + 1'h1;
-  assign \$8  = start | trigger;
-  assign \$9  = ! period;
-  assign \$10  = periodic & \$9 ;
+  reg wrap = 1'h0;
+  assign \$1  = ! period;
+  assign \$2  = ~ periodic;
+  assign \$3  = periodic & period_zero;
+  assign \$4  = \$2  | \$3 ;
+  assign \$5  = \$4  | wrap;
+  assign \$6  = period <= 1'h1;
+  assign \$7  = count_p2 + 1'h1;
+  assign \$8  = count_p2 >= period;
+  assign \$9  = start | trigger;
+  assign \$10  = periodic & period_zero;
   assign \$11  = ~ \$10 ;
   assign \$12  = periodic & \$11 ;
   assign \$13  = \$12  & period_start;
-  assign \$14  = \$8  | \$13 ;
-  assign \$15  = ! period;
-  assign \$16  = periodic & \$15 ;
-  assign request = \$14  | \$16 ;
-  assign \$17  = start | trigger;
-  assign \$18  = ! period;
+  assign \$14  = \$9  | \$13 ;
+  assign \$15  = periodic & period_zero;
+  assign request = \$14  | \$15 ;
+  assign \$16  = start | trigger;
+  assign \$17  = periodic & period_zero;
+  assign \$18  = ~ \$17 ;
   assign \$19  = periodic & \$18 ;
-  assign \$20  = ~ \$19 ;
-  assign \$21  = periodic & \$20 ;
-  assign \$22  = \$21  & period_start;
-  assign \$23  = \$17  | \$22 ;
-  assign \$24  = ~ abort;
-  assign \$25  = idle & \$24 ;
-  assign \$26  = ~ \$25 ;
-  assign overrun = \$23  & \$26 ;
+  assign \$20  = \$19  & period_start;
+  assign \$21  = \$16  | \$20 ;
+  assign \$22  = ~ abort;
+  assign \$23  = idle & \$22 ;
+  assign \$24  = ~ \$23 ;
+  assign overrun = \$21  & \$24 ;
   always @(posedge clk)
-    count_p1 <= \$27 ;
+    period_zero <= \$25 ;
   always @(posedge clk)
-    period_start <= \$28 ;
+    count_p2 <= \$26 ;
+  always @(posedge clk)
+    period_start <= \$27 ;
+  always @(posedge clk)
+    wrap <= \$28 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
-    (* full_case = 32'd1 *)
-    if (\$6 ) begin
-      \$27  = 24'h000001;
-    end else begin
-      \$27  = \$7 [23:0];
-    end
+    \$25  = \$1 ;
     if (rst) begin
-      \$27  = 24'h000001;
+      \$25  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
     (* full_case = 32'd1 *)
-    if (\$6 ) begin
-      \$28  = 1'h1;
+    if (\$5 ) begin
+      \$26  = 25'h0000002;
     end else begin
-      \$28  = 1'h0;
+      \$26  = \$7 [24:0];
     end
     if (rst) begin
-      \$28  = 1'h1;
+      \$26  = 25'h0000002;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
+    (* full_case = 32'd1 *)
+    if (\$5 ) begin
+      \$27  = 1'h1;
+    end else begin
+      \$27  = 1'h0;
+    end
+    if (rst) begin
+      \$27  = 1'h1;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
+    (* full_case = 32'd1 *)
+    if (\$5 ) begin
+      \$28  = \$6 ;
+    end else begin
+      \$28  = \$8 ;
+    end
+    if (rst) begin
+      \$28  = 1'h0;
     end
   end
 endmodule
@@ -26088,7 +26134,7 @@ module \biss_master_wb.ch1.core.timers (rst, restart, ma_busy, break_time, timeo
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.verdict (lc_skip_seen, \port$2942$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
+module \biss_master_wb.ch1.core.verdict (lc_skip_seen, \port$2938$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$119  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -26202,8 +26248,8 @@ module \biss_master_wb.ch1.core.verdict (lc_skip_seen, \port$2942$0 , lc_check, 
   wire lc_zero;
   input lc_zero_seen;
   wire lc_zero_seen;
-  output \port$2942$0 ;
-  wire \port$2942$0 ;
+  output \port$2938$0 ;
+  wire \port$2938$0 ;
   output report;
   wire report;
   input report_frame;
@@ -26288,7 +26334,7 @@ module \biss_master_wb.ch1.core.verdict (lc_skip_seen, \port$2942$0 , lc_check, 
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$2942$0  = \$2 ;
+  assign \port$2938$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

@@ -1,5 +1,5 @@
 """RequestScheduler on Amaranth's simulator: single shot, periodic ticks, as fast as possible,
-overrun, the period read live.
+overrun, the period read live (with a lag of one and two clocks).
 
 Cycle conventions and where expected values come from: ``block_sim.py``. The periodic timing is
 docs/ports.md (``periodic``, ``cfg_request_period``, "Request period" and "Overrun" rows): the
@@ -23,17 +23,20 @@ QUIET = {"start": 0, "trigger": 0, "periodic": 0, "period": 0, "abort": 0, "idle
 
 def reference(steps):
     """(request, overrun) per clock. A tick comes in the first clock of ``periodic`` (with a
-    period), then in the first clock at least ``period`` clocks after the last tick, the period
-    read live (as for the break, the decision is on the value of the clock before)."""
+    period), then in the first clock at least ``period`` clocks after the last tick. The period
+    is read live with a lag (docs/ports.md): the tick is decided on the period of two clocks
+    before, "a request in every clock" (period 0) on the one of the clock before; none is
+    known before reset (no tick in the first clock after a tick there, no period 0)."""
     out, last = [], None
+    period = lambda t: {**QUIET, **steps[t]}["period"] if t >= 0 else None
     for t, s in enumerate(steps):
         s = {**QUIET, **s}
         tick = 0
-        if not s["periodic"] or s["period"] == 0:
+        continuous = s["periodic"] and period(t - 1) == 0
+        if not s["periodic"] or continuous:
             last = None
-        elif last is None or t - last >= {**QUIET, **steps[t - 1]}["period"]:
+        elif last is None or (period(t - 2) is not None and t - last >= period(t - 2)):
             tick, last = 1, t
-        continuous = s["periodic"] and s["period"] == 0
         single = s["start"] or s["trigger"]
         taken = s["idle"] and not s["abort"]
         out.append({"request": int(bool(single or tick or continuous)),
@@ -99,7 +102,10 @@ LIVE = [
     ("longer_mid_interval", [(0, 10), (19, 20)], [2, 12, 32]),
     ("longer_in_the_tick_clock", [(0, 10), (12, 15)], [2, 12, 27, 42]),
     ("shorter_in_the_tick_clock", [(0, 10), (12, 3)], [2, 12, 15, 18, 21, 24, 27, 30, 33, 36, 39, 42]),
-    ("to_zero_and_back", [(0, 10), (14, 0), (20, 6)], [2, 12, 20, 26, 32, 38, 44]),
+    # Period 0 from clock 14 on: a request in every clock from 15 (the clock after) up to 20
+    # (the period is 6 again from 20, seen in 21), whose request is the last of them; then
+    # the first tick of the new period in 21, as when periodic rises.
+    ("to_zero_and_back", [(0, 10), (14, 0), (20, 6)], [2, 12, 20, 21, 27, 33, 39]),
 ]
 
 
