@@ -26,6 +26,12 @@ BUSES = {
 CHANNEL_GLUE = ("trigger_enable", "frame_error", "done_count", "cap_data_bits_w0",
                 "cap_data_bits_w1", "cap_timer_width", "cap_counters", "cap_timestamp",
                 "cap_register_access")
+#: Pulses of the bank taken into a flip-flop beside the core, so they reach it one clock
+#: later: the bank's pulse register sits by the bank, and with several channels the route from
+#: ``ctrl.abort``'s into a core's controller and timers was the critical path
+#: (docs/performance.md). Not ``start`` (it would delay every request; the trigger pin's path
+#: does not pass the bank), not ``clear_counters`` (the core's counter bank registers it).
+RETIMED_PULSES = ("abort_cycle",)
 #: Global signals of the register map, made by the top.
 GLOBAL_SIGNALS = ("channels", "trigger", "irq_pending")
 
@@ -99,6 +105,8 @@ class BusChannel(wiring.Component):
             if name in glue:
                 if glue[name] is not None:
                     m.d.comb += signal.eq(glue[name])
+            elif name in RETIMED_PULSES and hasattr(core, name):
+                m.d.sync += getattr(core, name).eq(signal)
             elif hasattr(core, name):
                 port = getattr(core, name)
                 m.d.comb += port.eq(signal) if member.flow == In else signal.eq(port)

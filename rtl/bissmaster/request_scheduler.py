@@ -11,11 +11,14 @@ class RequestScheduler(wiring.Component):
     With ``periodic`` high a tick comes every ``period`` clocks (the first in the clock
     ``periodic`` rises, then ``period`` clocks apart, start to start); ``period`` = 0 asks for a
     cycle in every clock (as fast as the encoder allows: the controller takes the next one as
-    soon as it is idle again). ``period`` is read live, with a lag: whether a tick comes in a
-    clock is decided on the ``period`` of two clocks before, whether requests come in every
-    clock on the one of the clock before. Both decisions are registered, so that neither the
-    period compare nor the zero test sits in front of the period counter (with several cores
-    behind a bus that loop was the critical path, docs/performance.md).
+    soon as it is idle again). Each of those requests counts as a tick: when the period becomes
+    non-zero again, the next tick comes a period after the last of them (and never in the clock
+    right after it: at least two clocks later). ``period`` is read
+    live, with a lag: whether a tick comes in a clock is decided on the ``period`` of two
+    clocks before, whether requests come in every clock on the one of the clock before. Both
+    decisions are registered, so that neither the period compare nor the zero test sits in
+    front of the period counter (with several cores behind a bus that loop was the critical
+    path, docs/performance.md).
 
     A ``start`` or a tick that the controller cannot take (it is not idle, or an abort is being
     handled) is an ``overrun``; the request is dropped, never queued. A continuous request
@@ -71,9 +74,12 @@ class RequestScheduler(wiring.Component):
         m.d.sync += period_zero.eq(self.period == 0)
         as_fast_as_possible = self.periodic & period_zero
         tick = self.periodic & ~as_fast_as_possible & period_start
-        restart = ~self.periodic | as_fast_as_possible | wrap
-        with m.If(restart):
+        with m.If(~self.periodic | (wrap & ~as_fast_as_possible)):
+            # The period restarts: a tick in the next clock.
             m.d.sync += [count_p2.eq(2), period_start.eq(1), wrap.eq(self.period <= 1)]
+        with m.Elif(as_fast_as_possible):
+            # A continuous request is a tick: the next clock is the one after a tick.
+            m.d.sync += [count_p2.eq(3), period_start.eq(0), wrap.eq(self.period <= 2)]
         with m.Else():
             m.d.sync += [count_p2.eq(count_p2 + 1), period_start.eq(0),
                          wrap.eq(count_p2 >= self.period)]

@@ -895,7 +895,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .is_zero(lc_zero_seen),
     .lc(\lc$174 ),
     .load(load),
-    .\port$1367$0 (\bit ),
+    .\port$1371$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -952,7 +952,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .lc_skip_seen(lc_skip_seen),
     .lc_zero(\lc_zero$222 ),
     .lc_zero_seen(lc_zero_seen),
-    .\port$875$0 (\$16 ),
+    .\port$879$0 (\$16 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -9122,7 +9122,7 @@ endmodule
 module \biss_master.scheduler (abort, period, clk, rst, periodic, request, overrun, idle, start);
   reg \$auto$verilog_backend.cc:2355:dump_module$52  = 0;
   wire \$1 ;
-  wire \$10 ;
+  wire [25:0] \$10 ;
   wire \$11 ;
   wire \$12 ;
   wire \$13 ;
@@ -9138,15 +9138,18 @@ module \biss_master.scheduler (abort, period, clk, rst, periodic, request, overr
   wire \$22 ;
   wire \$23 ;
   wire \$24 ;
-  reg \$25 ;
-  reg [24:0] \$26 ;
-  reg \$27 ;
+  wire \$25 ;
+  wire \$26 ;
+  wire \$27 ;
   reg \$28 ;
+  reg [24:0] \$29 ;
   wire \$3 ;
+  reg \$30 ;
+  reg \$31 ;
   wire \$4 ;
   wire \$5 ;
   wire \$6 ;
-  wire [25:0] \$7 ;
+  wire \$7 ;
   wire \$8 ;
   wire \$9 ;
   input abort;
@@ -9175,85 +9178,94 @@ module \biss_master.scheduler (abort, period, clk, rst, periodic, request, overr
   assign \$1  = ! period;
   assign \$2  = ~ periodic;
   assign \$3  = periodic & period_zero;
-  assign \$4  = \$2  | \$3 ;
-  assign \$5  = \$4  | wrap;
-  assign \$6  = period <= 1'h1;
-  assign \$7  = count_p2 + 1'h1;
-  assign \$8  = count_p2 >= period;
-  assign \$10  = periodic & period_zero;
-  assign \$11  = ~ \$10 ;
-  assign \$12  = periodic & \$11 ;
-  assign \$13  = \$12  & period_start;
-  assign \$14  = \$9  | \$13 ;
-  assign \$15  = periodic & period_zero;
-  assign request = \$14  | \$15 ;
-  assign \$17  = periodic & period_zero;
-  assign \$18  = ~ \$17 ;
-  assign \$19  = periodic & \$18 ;
-  assign \$20  = \$19  & period_start;
-  assign \$21  = \$16  | \$20 ;
-  assign \$22  = ~ abort;
-  assign \$23  = idle & \$22 ;
-  assign \$24  = ~ \$23 ;
-  assign overrun = \$21  & \$24 ;
+  assign \$4  = ~ \$3 ;
+  assign \$5  = wrap & \$4 ;
+  assign \$6  = \$2  | \$5 ;
+  assign \$7  = periodic & period_zero;
+  assign \$8  = period <= 1'h1;
+  assign \$9  = period <= 2'h2;
+  assign \$10  = count_p2 + 1'h1;
+  assign \$11  = count_p2 >= period;
+  assign \$13  = periodic & period_zero;
+  assign \$14  = ~ \$13 ;
+  assign \$15  = periodic & \$14 ;
+  assign \$16  = \$15  & period_start;
+  assign \$17  = \$12  | \$16 ;
+  assign \$18  = periodic & period_zero;
+  assign request = \$17  | \$18 ;
+  assign \$20  = periodic & period_zero;
+  assign \$21  = ~ \$20 ;
+  assign \$22  = periodic & \$21 ;
+  assign \$23  = \$22  & period_start;
+  assign \$24  = \$19  | \$23 ;
+  assign \$25  = ~ abort;
+  assign \$26  = idle & \$25 ;
+  assign \$27  = ~ \$26 ;
+  assign overrun = \$24  & \$27 ;
   always @(posedge clk)
-    period_zero <= \$25 ;
+    period_zero <= \$28 ;
   always @(posedge clk)
-    count_p2 <= \$26 ;
+    count_p2 <= \$29 ;
   always @(posedge clk)
-    period_start <= \$27 ;
+    period_start <= \$30 ;
   always @(posedge clk)
-    wrap <= \$28 ;
+    wrap <= \$31 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
-    \$25  = \$1 ;
-    if (rst) begin
-      \$25  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
-    (* full_case = 32'd1 *)
-    if (\$5 ) begin
-      \$26  = 25'h0000002;
-    end else begin
-      \$26  = \$7 [24:0];
-    end
-    if (rst) begin
-      \$26  = 25'h0000002;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
-    (* full_case = 32'd1 *)
-    if (\$5 ) begin
-      \$27  = 1'h1;
-    end else begin
-      \$27  = 1'h0;
-    end
-    if (rst) begin
-      \$27  = 1'h1;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
-    (* full_case = 32'd1 *)
-    if (\$5 ) begin
-      \$28  = \$6 ;
-    end else begin
-      \$28  = \$8 ;
-    end
+    \$28  = \$1 ;
     if (rst) begin
       \$28  = 1'h0;
     end
   end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    (* full_case = 32'd1 *)
+    if (\$6 ) begin
+      \$29  = 25'h0000002;
+    end else if (\$7 ) begin
+      \$29  = 25'h0000003;
+    end else begin
+      \$29  = \$10 [24:0];
+    end
+    if (rst) begin
+      \$29  = 25'h0000002;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    (* full_case = 32'd1 *)
+    if (\$6 ) begin
+      \$30  = 1'h1;
+    end else if (\$7 ) begin
+      \$30  = 1'h0;
+    end else begin
+      \$30  = 1'h0;
+    end
+    if (rst) begin
+      \$30  = 1'h1;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    (* full_case = 32'd1 *)
+    if (\$6 ) begin
+      \$31  = \$8 ;
+    end else if (\$7 ) begin
+      \$31  = \$9 ;
+    end else begin
+      \$31  = \$11 ;
+    end
+    if (rst) begin
+      \$31  = 1'h0;
+    end
+  end
   assign trigger = 1'h0;
-  assign \$9  = start;
-  assign \$16  = start;
+  assign \$12  = start;
+  assign \$19  = start;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1367$0 , resync, lc, is_zero, clk);
+module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1371$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$53  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -9295,8 +9307,8 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1367$0
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$1367$0 ;
-  wire \port$1367$0 ;
+  input \port$1371$0 ;
+  wire \port$1371$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -9310,9 +9322,9 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1367$0
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$1367$0  };
-  assign \$2  = { lc[4:0], \port$1367$0  } == last;
-  assign \$3  = { lc[4:0], \port$1367$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$1371$0  };
+  assign \$2  = { lc[4:0], \port$1371$0  } == last;
+  assign \$3  = { lc[4:0], \port$1371$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -9422,7 +9434,7 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1367$0
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$1367$0  };
+  assign lc_next = { lc[4:0], \port$1371$0  };
   assign zero = is_zero;
 endmodule
 
@@ -9904,7 +9916,7 @@ module \biss_master.timers (timeout_live, clk, rst, restart, ma_busy, ack_limit,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.verdict (lc_skip_seen, \port$875$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
+module \biss_master.verdict (lc_skip_seen, \port$879$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$57  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -10018,8 +10030,8 @@ module \biss_master.verdict (lc_skip_seen, \port$875$0 , lc_check, lc_repeat, lc
   wire lc_zero;
   input lc_zero_seen;
   wire lc_zero_seen;
-  output \port$875$0 ;
-  wire \port$875$0 ;
+  output \port$879$0 ;
+  wire \port$879$0 ;
   output report;
   wire report;
   input report_frame;
@@ -10104,7 +10116,7 @@ module \biss_master.verdict (lc_skip_seen, \port$875$0 , lc_check, lc_repeat, lc
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$875$0  = \$2 ;
+  assign \port$879$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

@@ -543,12 +543,12 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .ch1_irq(\$7 ),
     .clk(clk),
     .g_trigger_start(glob__trigger),
-    .\port$4108$0 (\$8 ),
-    .\port$4121$0 (\$9 ),
-    .\port$4235$0 (\$10 ),
-    .\port$4590$0 (\$11 ),
-    .\port$4603$0 (\$12 ),
-    .\port$4717$0 (\$13 ),
+    .\port$4118$0 (\$8 ),
+    .\port$4131$0 (\$9 ),
+    .\port$4245$0 (\$10 ),
+    .\port$4602$0 (\$11 ),
+    .\port$4615$0 (\$12 ),
+    .\port$4729$0 (\$13 ),
     .rst(rst),
     .write_data(regs__ca_wbuf_data)
   );
@@ -569,7 +569,6 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .wb__we(wb_we)
   );
   \biss_master_wb.ch0  ch0 (
-    .abort_cycle(regs__abort_cycle),
     .ca_abort(regs__ca_abort),
     .ca_address(regs__ca_address),
     .ca_count(regs__ca_count),
@@ -603,9 +602,10 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .clk(clk),
     .ma(ch0_ma),
     .periodic(regs__periodic),
-    .\port$4108$0 (\$8 ),
-    .\port$4121$0 (\$9 ),
-    .\port$4235$0 (\$10 ),
+    .\port$4118$0 (\$8 ),
+    .\port$4131$0 (\$9 ),
+    .\port$4245$0 (\$10 ),
+    .regs__abort_cycle(regs__abort_cycle),
     .regs__busy(ch0__busy),
     .regs__ca_busy(ch0__ca_busy),
     .regs__ca_done(ch0__ca_done),
@@ -618,10 +618,9 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .rst(rst),
     .slo(ch0_slo),
     .start(regs__start),
-    .\trigger$161 (\trigger$42 )
+    .\trigger$159 (\trigger$42 )
   );
   \biss_master_wb.ch1  ch1 (
-    .abort_cycle(\regs__abort_cycle$218 ),
     .ca_abort(\regs__ca_abort$222 ),
     .ca_address(\regs__ca_address$224 ),
     .ca_count(\regs__ca_count$230 ),
@@ -655,9 +654,10 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .clk(clk),
     .ma(ch1_ma),
     .periodic(\regs__periodic$360 ),
-    .\port$4590$0 (\$11 ),
-    .\port$4603$0 (\$12 ),
-    .\port$4717$0 (\$13 ),
+    .\port$4602$0 (\$11 ),
+    .\port$4615$0 (\$12 ),
+    .\port$4729$0 (\$13 ),
+    .regs__abort_cycle(\regs__abort_cycle$218 ),
     .regs__busy(ch1__busy),
     .regs__ca_busy(ch1__ca_busy),
     .regs__ca_done(ch1__ca_done),
@@ -670,7 +670,7 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .rst(rst),
     .slo(ch1_slo),
     .start(\regs__start$364 ),
-    .\trigger$161 (\trigger$42 )
+    .\trigger$159 (\trigger$42 )
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$25 ) begin end
@@ -984,7 +984,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
 , ch1__ca_busy, ch1__ca_rbuf_data, bus__r_load, ch0__ca_wbuf_addr, write_data, g_trigger_start, ch0_ctrl_start, ch0_ctrl_abort, ch0_ctrl_clear_counters, ch0_ctrl_periodic, ch0_ctrl_trigger_enable, ch0_cfg_ma_ma_half_period, ch0_cfg_ma_delay_limit, ch0_cfg_period_request_period, ch0_cfg_break_break_time, ch0_cfg_ack_ack_limit, ch0_cfg_timeout_timeout_limit, ch0_cfg_words_w0_data_bits, ch0_cfg_words_w0_nenw, ch0_cfg_words_w0_lc, ch0_cfg_words_w0_crc
 , ch0_cfg_words_w1_data_bits, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_enable, ch0_cfg_checks_end_check, ch0_cfg_checks_spw_check, ch0_cfg_checks_spw_tolerance, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$69 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort, ch1_ctrl_start, ch1_ctrl_abort, ch1_ctrl_clear_counters, ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit
 , ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_enable, ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$221 , ch1_ca_ctrl_start
-, ch1_ca_ctrl_abort, ch0__done_count, ch0__done, \port$4108$0 , \port$4121$0 , ch0__ca_done, \port$4235$0 , ch1__done_count, ch1__done, \port$4590$0 , \port$4603$0 , ch1__ca_done, \port$4717$0 , bus__w_addr);
+, ch1_ca_ctrl_abort, ch0__done_count, ch0__done, \port$4118$0 , \port$4131$0 , ch0__ca_done, \port$4245$0 , ch1__done_count, ch1__done, \port$4602$0 , \port$4615$0 , ch1__ca_done, \port$4729$0 , bus__w_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$26  = 0;
   wire \$1 ;
   wire [31:0] \$10 ;
@@ -2180,18 +2180,18 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   (* init = 1'h0 *)
   wire glob__trigger;
   wire [1:0] irq;
-  input [160:0] \port$4108$0 ;
-  wire [160:0] \port$4108$0 ;
-  input [287:0] \port$4121$0 ;
-  wire [287:0] \port$4121$0 ;
-  input [9:0] \port$4235$0 ;
-  wire [9:0] \port$4235$0 ;
-  input [160:0] \port$4590$0 ;
-  wire [160:0] \port$4590$0 ;
-  input [287:0] \port$4603$0 ;
-  wire [287:0] \port$4603$0 ;
-  input [9:0] \port$4717$0 ;
-  wire [9:0] \port$4717$0 ;
+  input [160:0] \port$4118$0 ;
+  wire [160:0] \port$4118$0 ;
+  input [287:0] \port$4131$0 ;
+  wire [287:0] \port$4131$0 ;
+  input [9:0] \port$4245$0 ;
+  wire [9:0] \port$4245$0 ;
+  input [160:0] \port$4602$0 ;
+  wire [160:0] \port$4602$0 ;
+  input [287:0] \port$4615$0 ;
+  wire [287:0] \port$4615$0 ;
+  input [9:0] \port$4729$0 ;
+  wire [9:0] \port$4729$0 ;
   input rst;
   wire rst;
   reg [10:0] write_addr = 11'h000;
@@ -2790,7 +2790,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$127  = \$125  | \$126 ;
   assign \$128  = ch0_read_select_8e ? { 16'h0000, ch0_cfg_checks_spw_tolerance, 6'h00, ch0_cfg_checks_spw_check, ch0_cfg_checks_end_check } : 32'd0;
   assign \$129  = \$127  | \$128 ;
-  assign \$130  = ch0_read_select_90 ? { 2'h0, \port$4108$0 [156:151], 4'h0, \port$4108$0 [160:157], 1'h0, \port$4108$0 [150:148], 1'h0, \port$4108$0 [107:105], 3'h0, \port$4108$0 [49], \port$4108$0 [3:0] } : 32'd0;
+  assign \$130  = ch0_read_select_90 ? { 2'h0, \port$4118$0 [156:151], 4'h0, \port$4118$0 [160:157], 1'h0, \port$4118$0 [150:148], 1'h0, \port$4118$0 [107:105], 3'h0, \port$4118$0 [49], \port$4118$0 [3:0] } : 32'd0;
   assign \$131  = \$129  | \$130 ;
   assign \$132  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
   assign \$133  = \$131  | \$132 ;
@@ -2804,29 +2804,29 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$141  = \$139  | \$140 ;
   assign \$142  = ch0_read_select_96 ? ch0_result_timestamp_time_snapshot : 32'd0;
   assign \$143  = \$141  | \$142 ;
-  assign \$144  = ch0_read_select_98 ? \port$4121$0 [31:0] : 32'd0;
+  assign \$144  = ch0_read_select_98 ? \port$4131$0 [31:0] : 32'd0;
   assign \$145  = \$143  | \$144 ;
-  assign \$146  = ch0_read_select_99 ? \port$4121$0 [63:32] : 32'd0;
+  assign \$146  = ch0_read_select_99 ? \port$4131$0 [63:32] : 32'd0;
   assign \$147  = \$145  | \$146 ;
-  assign \$148  = ch0_read_select_9a ? \port$4121$0 [95:64] : 32'd0;
+  assign \$148  = ch0_read_select_9a ? \port$4131$0 [95:64] : 32'd0;
   assign \$149  = \$147  | \$148 ;
-  assign \$150  = ch0_read_select_9b ? \port$4121$0 [127:96] : 32'd0;
+  assign \$150  = ch0_read_select_9b ? \port$4131$0 [127:96] : 32'd0;
   assign \$151  = \$149  | \$150 ;
-  assign \$152  = ch0_read_select_9c ? \port$4121$0 [159:128] : 32'd0;
+  assign \$152  = ch0_read_select_9c ? \port$4131$0 [159:128] : 32'd0;
   assign \$153  = \$151  | \$152 ;
-  assign \$154  = ch0_read_select_9d ? \port$4121$0 [191:160] : 32'd0;
+  assign \$154  = ch0_read_select_9d ? \port$4131$0 [191:160] : 32'd0;
   assign \$155  = \$153  | \$154 ;
-  assign \$156  = ch0_read_select_9e ? { 16'h0000, \port$4121$0 [207:192] } : 32'd0;
+  assign \$156  = ch0_read_select_9e ? { 16'h0000, \port$4131$0 [207:192] } : 32'd0;
   assign \$157  = \$155  | \$156 ;
   assign \$158  = ch0_read_select_c0 ? { 7'h00, \ch0_ca_request_write$69 , 1'h0, ch0_ca_request_count, 1'h0, ch0_ca_request_address, 5'h00, ch0_ca_request_slave_id } : 32'd0;
   assign \$159  = \$157  | \$158 ;
-  assign \$162  = ch0_read_select_c2 ? { 17'h00000, \port$4235$0 [9:3], 1'h0, \port$4235$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
+  assign \$162  = ch0_read_select_c2 ? { 17'h00000, \port$4245$0 [9:3], 1'h0, \port$4245$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
   assign \$163  = \$161  | \$162 ;
-  assign \$164  = ch0_read_select_c3 ? \port$4121$0 [239:208] : 32'd0;
+  assign \$164  = ch0_read_select_c3 ? \port$4131$0 [239:208] : 32'd0;
   assign \$165  = \$163  | \$164 ;
-  assign \$166  = ch0_read_select_c4 ? \port$4121$0 [271:240] : 32'd0;
+  assign \$166  = ch0_read_select_c4 ? \port$4131$0 [271:240] : 32'd0;
   assign \$167  = \$165  | \$166 ;
-  assign \$168  = ch0_read_select_c5 ? { 16'h0000, \port$4121$0 [287:272] } : 32'd0;
+  assign \$168  = ch0_read_select_c5 ? { 16'h0000, \port$4131$0 [287:272] } : 32'd0;
   assign \$169  = \$167  | \$168 ;
   assign \$170  = ch0_window0_read ? ch0__ca_rbuf_data : 32'd0;
   assign \$171  = \$169  | \$170 ;
@@ -2941,7 +2941,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$281  = \$279  | \$280 ;
   assign \$282  = ch1_read_select_10e ? { 16'h0000, ch1_cfg_checks_spw_tolerance, 6'h00, ch1_cfg_checks_spw_check, ch1_cfg_checks_end_check } : 32'd0;
   assign \$283  = \$281  | \$282 ;
-  assign \$284  = ch1_read_select_110 ? { 2'h0, \port$4590$0 [156:151], 4'h0, \port$4590$0 [160:157], 1'h0, \port$4590$0 [150:148], 1'h0, \port$4590$0 [107:105], 3'h0, \port$4590$0 [49], \port$4590$0 [3:0] } : 32'd0;
+  assign \$284  = ch1_read_select_110 ? { 2'h0, \port$4602$0 [156:151], 4'h0, \port$4602$0 [160:157], 1'h0, \port$4602$0 [150:148], 1'h0, \port$4602$0 [107:105], 3'h0, \port$4602$0 [49], \port$4602$0 [3:0] } : 32'd0;
   assign \$285  = \$283  | \$284 ;
   assign \$286  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
   assign \$287  = \$285  | \$286 ;
@@ -2955,29 +2955,29 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$295  = \$293  | \$294 ;
   assign \$296  = ch1_read_select_116 ? ch1_result_timestamp_time_snapshot : 32'd0;
   assign \$297  = \$295  | \$296 ;
-  assign \$298  = ch1_read_select_118 ? \port$4603$0 [31:0] : 32'd0;
+  assign \$298  = ch1_read_select_118 ? \port$4615$0 [31:0] : 32'd0;
   assign \$299  = \$297  | \$298 ;
-  assign \$300  = ch1_read_select_119 ? \port$4603$0 [63:32] : 32'd0;
+  assign \$300  = ch1_read_select_119 ? \port$4615$0 [63:32] : 32'd0;
   assign \$301  = \$299  | \$300 ;
-  assign \$302  = ch1_read_select_11a ? \port$4603$0 [95:64] : 32'd0;
+  assign \$302  = ch1_read_select_11a ? \port$4615$0 [95:64] : 32'd0;
   assign \$303  = \$301  | \$302 ;
-  assign \$304  = ch1_read_select_11b ? \port$4603$0 [127:96] : 32'd0;
+  assign \$304  = ch1_read_select_11b ? \port$4615$0 [127:96] : 32'd0;
   assign \$305  = \$303  | \$304 ;
-  assign \$306  = ch1_read_select_11c ? \port$4603$0 [159:128] : 32'd0;
+  assign \$306  = ch1_read_select_11c ? \port$4615$0 [159:128] : 32'd0;
   assign \$307  = \$305  | \$306 ;
-  assign \$308  = ch1_read_select_11d ? \port$4603$0 [191:160] : 32'd0;
+  assign \$308  = ch1_read_select_11d ? \port$4615$0 [191:160] : 32'd0;
   assign \$309  = \$307  | \$308 ;
-  assign \$310  = ch1_read_select_11e ? { 16'h0000, \port$4603$0 [207:192] } : 32'd0;
+  assign \$310  = ch1_read_select_11e ? { 16'h0000, \port$4615$0 [207:192] } : 32'd0;
   assign \$311  = \$309  | \$310 ;
   assign \$312  = ch1_read_select_140 ? { 7'h00, \ch1_ca_request_write$221 , 1'h0, ch1_ca_request_count, 1'h0, ch1_ca_request_address, 5'h00, ch1_ca_request_slave_id } : 32'd0;
   assign \$313  = \$311  | \$312 ;
-  assign \$316  = ch1_read_select_142 ? { 17'h00000, \port$4717$0 [9:3], 1'h0, \port$4717$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
+  assign \$316  = ch1_read_select_142 ? { 17'h00000, \port$4729$0 [9:3], 1'h0, \port$4729$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
   assign \$317  = \$315  | \$316 ;
-  assign \$318  = ch1_read_select_143 ? \port$4603$0 [239:208] : 32'd0;
+  assign \$318  = ch1_read_select_143 ? \port$4615$0 [239:208] : 32'd0;
   assign \$319  = \$317  | \$318 ;
-  assign \$320  = ch1_read_select_144 ? \port$4603$0 [271:240] : 32'd0;
+  assign \$320  = ch1_read_select_144 ? \port$4615$0 [271:240] : 32'd0;
   assign \$321  = \$319  | \$320 ;
-  assign \$322  = ch1_read_select_145 ? { 16'h0000, \port$4603$0 [287:272] } : 32'd0;
+  assign \$322  = ch1_read_select_145 ? { 16'h0000, \port$4615$0 [287:272] } : 32'd0;
   assign \$323  = \$321  | \$322 ;
   assign \$324  = ch1_window0_read ? ch1__ca_rbuf_data : 32'd0;
   assign \$325  = \$323  | \$324 ;
@@ -3850,7 +3850,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$493  = ch0_result_status_status_snapshot;
     if (\$103 ) begin
-      \$493  = \port$4108$0 [3:0];
+      \$493  = \port$4118$0 [3:0];
     end
     if (rst) begin
       \$493  = 4'h0;
@@ -3860,7 +3860,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$494  = ch0_result_status_cds_snapshot;
     if (\$103 ) begin
-      \$494  = \port$4108$0 [49];
+      \$494  = \port$4118$0 [49];
     end
     if (rst) begin
       \$494  = 1'h0;
@@ -3870,7 +3870,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$495  = ch0_result_status_w0_ne_snapshot;
     if (\$103 ) begin
-      \$495  = \port$4108$0 [105];
+      \$495  = \port$4118$0 [105];
     end
     if (rst) begin
       \$495  = 1'h0;
@@ -3880,7 +3880,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$496  = ch0_result_status_w0_nw_snapshot;
     if (\$103 ) begin
-      \$496  = \port$4108$0 [106];
+      \$496  = \port$4118$0 [106];
     end
     if (rst) begin
       \$496  = 1'h0;
@@ -3890,7 +3890,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$497  = ch0_result_status_w0_crc_ok_snapshot;
     if (\$103 ) begin
-      \$497  = \port$4108$0 [107];
+      \$497  = \port$4118$0 [107];
     end
     if (rst) begin
       \$497  = 1'h0;
@@ -3900,7 +3900,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$498  = ch0_result_status_w1_ne_snapshot;
     if (\$103 ) begin
-      \$498  = \port$4108$0 [148];
+      \$498  = \port$4118$0 [148];
     end
     if (rst) begin
       \$498  = 1'h0;
@@ -3910,7 +3910,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$499  = ch0_result_status_w1_nw_snapshot;
     if (\$103 ) begin
-      \$499  = \port$4108$0 [149];
+      \$499  = \port$4118$0 [149];
     end
     if (rst) begin
       \$499  = 1'h0;
@@ -3920,7 +3920,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$500  = ch0_result_status_w1_crc_ok_snapshot;
     if (\$103 ) begin
-      \$500  = \port$4108$0 [150];
+      \$500  = \port$4118$0 [150];
     end
     if (rst) begin
       \$500  = 1'h0;
@@ -3930,7 +3930,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$501  = ch0_result_status_lc_repeat_snapshot;
     if (\$103 ) begin
-      \$501  = \port$4108$0 [157];
+      \$501  = \port$4118$0 [157];
     end
     if (rst) begin
       \$501  = 1'h0;
@@ -3940,7 +3940,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$502  = ch0_result_status_lc_skip_snapshot;
     if (\$103 ) begin
-      \$502  = \port$4108$0 [158];
+      \$502  = \port$4118$0 [158];
     end
     if (rst) begin
       \$502  = 1'h0;
@@ -3950,7 +3950,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$503  = ch0_result_status_lc_zero_snapshot;
     if (\$103 ) begin
-      \$503  = \port$4108$0 [159];
+      \$503  = \port$4118$0 [159];
     end
     if (rst) begin
       \$503  = 1'h0;
@@ -3960,7 +3960,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$504  = ch0_result_status_spw_mismatch_snapshot;
     if (\$103 ) begin
-      \$504  = \port$4108$0 [160];
+      \$504  = \port$4118$0 [160];
     end
     if (rst) begin
       \$504  = 1'h0;
@@ -3970,7 +3970,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$505  = ch0_result_status_lc_snapshot;
     if (\$103 ) begin
-      \$505  = \port$4108$0 [156:151];
+      \$505  = \port$4118$0 [156:151];
     end
     if (rst) begin
       \$505  = 6'h00;
@@ -3990,7 +3990,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$507  = ch0_result_seq_line_delay_snapshot;
     if (\$103 ) begin
-      \$507  = \port$4108$0 [48:36];
+      \$507  = \port$4118$0 [48:36];
     end
     if (rst) begin
       \$507  = 13'h0000;
@@ -4000,7 +4000,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$508  = ch0_result_w0_lo_data_snapshot;
     if (\$103 ) begin
-      \$508  = \port$4108$0 [81:50];
+      \$508  = \port$4118$0 [81:50];
     end
     if (rst) begin
       \$508  = 32'd0;
@@ -4010,7 +4010,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$509  = ch0_result_w0_hi_data_snapshot;
     if (\$103 ) begin
-      \$509  = \port$4108$0 [104:82];
+      \$509  = \port$4118$0 [104:82];
     end
     if (rst) begin
       \$509  = 23'h000000;
@@ -4020,7 +4020,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$510  = ch0_result_w1_lo_data_snapshot;
     if (\$103 ) begin
-      \$510  = \port$4108$0 [139:108];
+      \$510  = \port$4118$0 [139:108];
     end
     if (rst) begin
       \$510  = 32'd0;
@@ -4030,7 +4030,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$511  = ch0_result_w1_hi_data_snapshot;
     if (\$103 ) begin
-      \$511  = \port$4108$0 [147:140];
+      \$511  = \port$4118$0 [147:140];
     end
     if (rst) begin
       \$511  = 8'h00;
@@ -4040,7 +4040,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$512  = ch0_result_timestamp_time_snapshot;
     if (\$103 ) begin
-      \$512  = \port$4108$0 [35:4];
+      \$512  = \port$4118$0 [35:4];
     end
     if (rst) begin
       \$512  = 32'd0;
@@ -4761,7 +4761,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$582  = ch1_result_status_status_snapshot;
     if (\$257 ) begin
-      \$582  = \port$4590$0 [3:0];
+      \$582  = \port$4602$0 [3:0];
     end
     if (rst) begin
       \$582  = 4'h0;
@@ -4771,7 +4771,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$583  = ch1_result_status_cds_snapshot;
     if (\$257 ) begin
-      \$583  = \port$4590$0 [49];
+      \$583  = \port$4602$0 [49];
     end
     if (rst) begin
       \$583  = 1'h0;
@@ -4781,7 +4781,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$584  = ch1_result_status_w0_ne_snapshot;
     if (\$257 ) begin
-      \$584  = \port$4590$0 [105];
+      \$584  = \port$4602$0 [105];
     end
     if (rst) begin
       \$584  = 1'h0;
@@ -4791,7 +4791,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$585  = ch1_result_status_w0_nw_snapshot;
     if (\$257 ) begin
-      \$585  = \port$4590$0 [106];
+      \$585  = \port$4602$0 [106];
     end
     if (rst) begin
       \$585  = 1'h0;
@@ -4801,7 +4801,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$586  = ch1_result_status_w0_crc_ok_snapshot;
     if (\$257 ) begin
-      \$586  = \port$4590$0 [107];
+      \$586  = \port$4602$0 [107];
     end
     if (rst) begin
       \$586  = 1'h0;
@@ -4811,7 +4811,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$587  = ch1_result_status_w1_ne_snapshot;
     if (\$257 ) begin
-      \$587  = \port$4590$0 [148];
+      \$587  = \port$4602$0 [148];
     end
     if (rst) begin
       \$587  = 1'h0;
@@ -4821,7 +4821,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$588  = ch1_result_status_w1_nw_snapshot;
     if (\$257 ) begin
-      \$588  = \port$4590$0 [149];
+      \$588  = \port$4602$0 [149];
     end
     if (rst) begin
       \$588  = 1'h0;
@@ -4831,7 +4831,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$589  = ch1_result_status_w1_crc_ok_snapshot;
     if (\$257 ) begin
-      \$589  = \port$4590$0 [150];
+      \$589  = \port$4602$0 [150];
     end
     if (rst) begin
       \$589  = 1'h0;
@@ -4841,7 +4841,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$590  = ch1_result_status_lc_repeat_snapshot;
     if (\$257 ) begin
-      \$590  = \port$4590$0 [157];
+      \$590  = \port$4602$0 [157];
     end
     if (rst) begin
       \$590  = 1'h0;
@@ -4851,7 +4851,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$591  = ch1_result_status_lc_skip_snapshot;
     if (\$257 ) begin
-      \$591  = \port$4590$0 [158];
+      \$591  = \port$4602$0 [158];
     end
     if (rst) begin
       \$591  = 1'h0;
@@ -4861,7 +4861,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$592  = ch1_result_status_lc_zero_snapshot;
     if (\$257 ) begin
-      \$592  = \port$4590$0 [159];
+      \$592  = \port$4602$0 [159];
     end
     if (rst) begin
       \$592  = 1'h0;
@@ -4871,7 +4871,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$593  = ch1_result_status_spw_mismatch_snapshot;
     if (\$257 ) begin
-      \$593  = \port$4590$0 [160];
+      \$593  = \port$4602$0 [160];
     end
     if (rst) begin
       \$593  = 1'h0;
@@ -4881,7 +4881,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$594  = ch1_result_status_lc_snapshot;
     if (\$257 ) begin
-      \$594  = \port$4590$0 [156:151];
+      \$594  = \port$4602$0 [156:151];
     end
     if (rst) begin
       \$594  = 6'h00;
@@ -4901,7 +4901,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$596  = ch1_result_seq_line_delay_snapshot;
     if (\$257 ) begin
-      \$596  = \port$4590$0 [48:36];
+      \$596  = \port$4602$0 [48:36];
     end
     if (rst) begin
       \$596  = 13'h0000;
@@ -4911,7 +4911,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$597  = ch1_result_w0_lo_data_snapshot;
     if (\$257 ) begin
-      \$597  = \port$4590$0 [81:50];
+      \$597  = \port$4602$0 [81:50];
     end
     if (rst) begin
       \$597  = 32'd0;
@@ -4921,7 +4921,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$598  = ch1_result_w0_hi_data_snapshot;
     if (\$257 ) begin
-      \$598  = \port$4590$0 [104:82];
+      \$598  = \port$4602$0 [104:82];
     end
     if (rst) begin
       \$598  = 23'h000000;
@@ -4931,7 +4931,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$599  = ch1_result_w1_lo_data_snapshot;
     if (\$257 ) begin
-      \$599  = \port$4590$0 [139:108];
+      \$599  = \port$4602$0 [139:108];
     end
     if (rst) begin
       \$599  = 32'd0;
@@ -4941,7 +4941,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$600  = ch1_result_w1_hi_data_snapshot;
     if (\$257 ) begin
-      \$600  = \port$4590$0 [147:140];
+      \$600  = \port$4602$0 [147:140];
     end
     if (rst) begin
       \$600  = 8'h00;
@@ -4951,7 +4951,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$601  = ch1_result_timestamp_time_snapshot;
     if (\$257 ) begin
-      \$601  = \port$4590$0 [35:4];
+      \$601  = \port$4602$0 [35:4];
     end
     if (rst) begin
       \$601  = 32'd0;
@@ -4980,92 +4980,92 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign bus__r_addr = bus__w_addr;
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, ch1_irq, ch0_irq };
-  assign ch0__status = \port$4108$0 [3:0];
-  assign ch0__cds = \port$4108$0 [49];
-  assign ch0__word0_ne = \port$4108$0 [105];
-  assign ch0__word0_nw = \port$4108$0 [106];
-  assign ch0__word0_crc_ok = \port$4108$0 [107];
-  assign ch0__word1_ne = \port$4108$0 [148];
-  assign ch0__word1_nw = \port$4108$0 [149];
-  assign ch0__word1_crc_ok = \port$4108$0 [150];
-  assign ch0__lc_repeat = \port$4108$0 [157];
-  assign ch0__lc_skip = \port$4108$0 [158];
-  assign ch0__lc_zero = \port$4108$0 [159];
-  assign ch0__spw_mismatch = \port$4108$0 [160];
-  assign ch0__lc = \port$4108$0 [156:151];
-  assign ch0__line_delay = \port$4108$0 [48:36];
-  assign ch0__word0_position = \port$4108$0 [104:50];
-  assign ch0__word1_position = \port$4108$0 [147:108];
-  assign ch0__timestamp = \port$4108$0 [35:4];
+  assign ch0__status = \port$4118$0 [3:0];
+  assign ch0__cds = \port$4118$0 [49];
+  assign ch0__word0_ne = \port$4118$0 [105];
+  assign ch0__word0_nw = \port$4118$0 [106];
+  assign ch0__word0_crc_ok = \port$4118$0 [107];
+  assign ch0__word1_ne = \port$4118$0 [148];
+  assign ch0__word1_nw = \port$4118$0 [149];
+  assign ch0__word1_crc_ok = \port$4118$0 [150];
+  assign ch0__lc_repeat = \port$4118$0 [157];
+  assign ch0__lc_skip = \port$4118$0 [158];
+  assign ch0__lc_zero = \port$4118$0 [159];
+  assign ch0__spw_mismatch = \port$4118$0 [160];
+  assign ch0__lc = \port$4118$0 [156:151];
+  assign ch0__line_delay = \port$4118$0 [48:36];
+  assign ch0__word0_position = \port$4118$0 [104:50];
+  assign ch0__word1_position = \port$4118$0 [147:108];
+  assign ch0__timestamp = \port$4118$0 [35:4];
   assign ch0__cap_data_bits_w0 = 6'h37;
   assign ch0__cap_data_bits_w1 = 6'h28;
   assign ch0__cap_timer_width = 6'h18;
   assign ch0__cap_counters = 1'h1;
   assign ch0__cap_timestamp = 1'h1;
   assign ch0__cap_register_access = 1'h1;
-  assign ch0__count_crc_word0 = \port$4121$0 [15:0];
-  assign ch0__count_crc_word1 = \port$4121$0 [31:16];
-  assign ch0__count_no_ack = \port$4121$0 [47:32];
-  assign ch0__count_no_start = \port$4121$0 [63:48];
-  assign ch0__count_delay_range = \port$4121$0 [79:64];
-  assign ch0__count_slo_stuck_low = \port$4121$0 [95:80];
-  assign ch0__count_lc_repeat = \port$4121$0 [111:96];
-  assign ch0__count_lc_skip = \port$4121$0 [127:112];
-  assign ch0__count_lc_zero = \port$4121$0 [143:128];
-  assign ch0__count_spw_mismatch = \port$4121$0 [159:144];
-  assign ch0__count_overrun = \port$4121$0 [175:160];
-  assign ch0__count_aborted = \port$4121$0 [191:176];
-  assign ch0__count_no_stop = \port$4121$0 [207:192];
-  assign ch0__ca_status = \port$4235$0 [2:0];
-  assign ch0__ca_bytes_done = \port$4235$0 [9:3];
-  assign ch0__count_ca_crc4_error = \port$4121$0 [223:208];
-  assign ch0__count_ca_no_answer = \port$4121$0 [239:224];
-  assign ch0__count_ca_refused = \port$4121$0 [255:240];
-  assign ch0__count_ca_aborted = \port$4121$0 [271:256];
-  assign ch0__count_ca_data_fault = \port$4121$0 [287:272];
-  assign ch1__status = \port$4590$0 [3:0];
-  assign ch1__cds = \port$4590$0 [49];
-  assign ch1__word0_ne = \port$4590$0 [105];
-  assign ch1__word0_nw = \port$4590$0 [106];
-  assign ch1__word0_crc_ok = \port$4590$0 [107];
-  assign ch1__word1_ne = \port$4590$0 [148];
-  assign ch1__word1_nw = \port$4590$0 [149];
-  assign ch1__word1_crc_ok = \port$4590$0 [150];
-  assign ch1__lc_repeat = \port$4590$0 [157];
-  assign ch1__lc_skip = \port$4590$0 [158];
-  assign ch1__lc_zero = \port$4590$0 [159];
-  assign ch1__spw_mismatch = \port$4590$0 [160];
-  assign ch1__lc = \port$4590$0 [156:151];
-  assign ch1__line_delay = \port$4590$0 [48:36];
-  assign ch1__word0_position = \port$4590$0 [104:50];
-  assign ch1__word1_position = \port$4590$0 [147:108];
-  assign ch1__timestamp = \port$4590$0 [35:4];
+  assign ch0__count_crc_word0 = \port$4131$0 [15:0];
+  assign ch0__count_crc_word1 = \port$4131$0 [31:16];
+  assign ch0__count_no_ack = \port$4131$0 [47:32];
+  assign ch0__count_no_start = \port$4131$0 [63:48];
+  assign ch0__count_delay_range = \port$4131$0 [79:64];
+  assign ch0__count_slo_stuck_low = \port$4131$0 [95:80];
+  assign ch0__count_lc_repeat = \port$4131$0 [111:96];
+  assign ch0__count_lc_skip = \port$4131$0 [127:112];
+  assign ch0__count_lc_zero = \port$4131$0 [143:128];
+  assign ch0__count_spw_mismatch = \port$4131$0 [159:144];
+  assign ch0__count_overrun = \port$4131$0 [175:160];
+  assign ch0__count_aborted = \port$4131$0 [191:176];
+  assign ch0__count_no_stop = \port$4131$0 [207:192];
+  assign ch0__ca_status = \port$4245$0 [2:0];
+  assign ch0__ca_bytes_done = \port$4245$0 [9:3];
+  assign ch0__count_ca_crc4_error = \port$4131$0 [223:208];
+  assign ch0__count_ca_no_answer = \port$4131$0 [239:224];
+  assign ch0__count_ca_refused = \port$4131$0 [255:240];
+  assign ch0__count_ca_aborted = \port$4131$0 [271:256];
+  assign ch0__count_ca_data_fault = \port$4131$0 [287:272];
+  assign ch1__status = \port$4602$0 [3:0];
+  assign ch1__cds = \port$4602$0 [49];
+  assign ch1__word0_ne = \port$4602$0 [105];
+  assign ch1__word0_nw = \port$4602$0 [106];
+  assign ch1__word0_crc_ok = \port$4602$0 [107];
+  assign ch1__word1_ne = \port$4602$0 [148];
+  assign ch1__word1_nw = \port$4602$0 [149];
+  assign ch1__word1_crc_ok = \port$4602$0 [150];
+  assign ch1__lc_repeat = \port$4602$0 [157];
+  assign ch1__lc_skip = \port$4602$0 [158];
+  assign ch1__lc_zero = \port$4602$0 [159];
+  assign ch1__spw_mismatch = \port$4602$0 [160];
+  assign ch1__lc = \port$4602$0 [156:151];
+  assign ch1__line_delay = \port$4602$0 [48:36];
+  assign ch1__word0_position = \port$4602$0 [104:50];
+  assign ch1__word1_position = \port$4602$0 [147:108];
+  assign ch1__timestamp = \port$4602$0 [35:4];
   assign ch1__cap_data_bits_w0 = 6'h37;
   assign ch1__cap_data_bits_w1 = 6'h28;
   assign ch1__cap_timer_width = 6'h18;
   assign ch1__cap_counters = 1'h1;
   assign ch1__cap_timestamp = 1'h1;
   assign ch1__cap_register_access = 1'h1;
-  assign ch1__count_crc_word0 = \port$4603$0 [15:0];
-  assign ch1__count_crc_word1 = \port$4603$0 [31:16];
-  assign ch1__count_no_ack = \port$4603$0 [47:32];
-  assign ch1__count_no_start = \port$4603$0 [63:48];
-  assign ch1__count_delay_range = \port$4603$0 [79:64];
-  assign ch1__count_slo_stuck_low = \port$4603$0 [95:80];
-  assign ch1__count_lc_repeat = \port$4603$0 [111:96];
-  assign ch1__count_lc_skip = \port$4603$0 [127:112];
-  assign ch1__count_lc_zero = \port$4603$0 [143:128];
-  assign ch1__count_spw_mismatch = \port$4603$0 [159:144];
-  assign ch1__count_overrun = \port$4603$0 [175:160];
-  assign ch1__count_aborted = \port$4603$0 [191:176];
-  assign ch1__count_no_stop = \port$4603$0 [207:192];
-  assign ch1__ca_status = \port$4717$0 [2:0];
-  assign ch1__ca_bytes_done = \port$4717$0 [9:3];
-  assign ch1__count_ca_crc4_error = \port$4603$0 [223:208];
-  assign ch1__count_ca_no_answer = \port$4603$0 [239:224];
-  assign ch1__count_ca_refused = \port$4603$0 [255:240];
-  assign ch1__count_ca_aborted = \port$4603$0 [271:256];
-  assign ch1__count_ca_data_fault = \port$4603$0 [287:272];
+  assign ch1__count_crc_word0 = \port$4615$0 [15:0];
+  assign ch1__count_crc_word1 = \port$4615$0 [31:16];
+  assign ch1__count_no_ack = \port$4615$0 [47:32];
+  assign ch1__count_no_start = \port$4615$0 [63:48];
+  assign ch1__count_delay_range = \port$4615$0 [79:64];
+  assign ch1__count_slo_stuck_low = \port$4615$0 [95:80];
+  assign ch1__count_lc_repeat = \port$4615$0 [111:96];
+  assign ch1__count_lc_skip = \port$4615$0 [127:112];
+  assign ch1__count_lc_zero = \port$4615$0 [143:128];
+  assign ch1__count_spw_mismatch = \port$4615$0 [159:144];
+  assign ch1__count_overrun = \port$4615$0 [175:160];
+  assign ch1__count_aborted = \port$4615$0 [191:176];
+  assign ch1__count_no_stop = \port$4615$0 [207:192];
+  assign ch1__ca_status = \port$4729$0 [2:0];
+  assign ch1__ca_bytes_done = \port$4729$0 [9:3];
+  assign ch1__count_ca_crc4_error = \port$4615$0 [223:208];
+  assign ch1__count_ca_no_answer = \port$4615$0 [239:224];
+  assign ch1__count_ca_refused = \port$4615$0 [255:240];
+  assign ch1__count_ca_aborted = \port$4615$0 [271:256];
+  assign ch1__count_ca_data_fault = \port$4615$0 [287:272];
   assign glob__trigger = g_trigger_start;
   assign ch0__start = ch0_ctrl_start;
   assign ch0__abort_cycle = ch0_ctrl_abort;
@@ -5266,18 +5266,18 @@ module \biss_master_wb.bus (wb__stb, wb__we, regs__r_addr, regs__w_data, regs__w
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__ca_busy, regs__ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period
+module \biss_master_wb.ch0 (slo, clk, rst, \trigger$159 , ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__ca_busy, regs__ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period
 , cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort
-, regs__done_count, ma, regs__done, \port$4108$0 , \port$4121$0 , regs__ca_done, \port$4235$0 , ca_rbuf_addr);
+, regs__done_count, ma, regs__done, \port$4118$0 , \port$4131$0 , regs__ca_done, \port$4245$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$28  = 0;
   wire \$1 ;
   wire [16:0] \$2 ;
-  reg [15:0] \$3 ;
-  wire [160:0] \$4 ;
-  wire [287:0] \$5 ;
-  wire [9:0] \$6 ;
-  input abort_cycle;
-  wire abort_cycle;
+  reg \$3 ;
+  reg [15:0] \$4 ;
+  wire [160:0] \$5 ;
+  wire [287:0] \$6 ;
+  wire [9:0] \$7 ;
+  reg abort_cycle = 1'h0;
   wire busy;
   input ca_abort;
   wire ca_abort;
@@ -5390,15 +5390,16 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_en
   wire [12:0] line_delay;
   output ma;
   wire ma;
-  wire \ma$164 ;
+  wire \ma$162 ;
   input periodic;
   wire periodic;
-  output [160:0] \port$4108$0 ;
-  wire [160:0] \port$4108$0 ;
-  output [287:0] \port$4121$0 ;
-  wire [287:0] \port$4121$0 ;
-  output [9:0] \port$4235$0 ;
-  wire [9:0] \port$4235$0 ;
+  output [160:0] \port$4118$0 ;
+  wire [160:0] \port$4118$0 ;
+  output [287:0] \port$4131$0 ;
+  wire [287:0] \port$4131$0 ;
+  output [9:0] \port$4245$0 ;
+  wire [9:0] \port$4245$0 ;
+  input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
   wire regs__busy;
@@ -5505,7 +5506,7 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_en
   wire rst;
   input slo;
   wire slo;
-  wire \slo$166 ;
+  wire \slo$164 ;
   wire spw_mismatch;
   input start;
   wire start;
@@ -5526,8 +5527,8 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_en
   wire [3:0] status;
   wire [31:0] timestamp;
   wire trigger;
-  input \trigger$161 ;
-  wire \trigger$161 ;
+  input \trigger$159 ;
+  wire \trigger$159 ;
   wire valid;
   wire word0_crc_ok;
   wire word0_ne;
@@ -5537,12 +5538,14 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_en
   wire word1_ne;
   wire word1_nw;
   wire [39:0] word1_position;
+  assign trigger = \trigger$159  & regs__trigger_enable;
   assign \$2  = regs__done_count + 1'h1;
   always @(posedge clk)
-    regs__done_count <= \$3 ;
+    abort_cycle <= \$3 ;
+  always @(posedge clk)
+    regs__done_count <= \$4 ;
   assign \$1  = ~ valid;
   assign regs__frame_error = regs__done & \$1 ;
-  assign trigger = \trigger$161  & regs__trigger_enable;
   \biss_master_wb.ch0.core  core (
     .abort(abort_cycle),
     .\abort$187 (ca_abort),
@@ -5577,15 +5580,15 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_en
     .\clear$214 (clear_counters),
     .clk(clk),
     .config_error(regs__config_error),
-    .counts(\$5 ),
+    .counts(\$6 ),
     .\done$240 (regs__done),
     .frames(regs__ca_busy),
     .ma(ma),
     .\periodic$24 (periodic),
     .rbuf_addr(ca_rbuf_addr),
     .rbuf_en(ca_rbuf_en),
-    .result(\$6 ),
-    .\result$245 (\$4 ),
+    .result(\$7 ),
+    .\result$245 (\$5 ),
     .rst(rst),
     .slo(slo),
     .start(start),
@@ -5595,16 +5598,22 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_en
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
-    \$3  = regs__done_count;
+    \$3  = regs__abort_cycle;
+    if (rst) begin
+      \$3  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
+    \$4  = regs__done_count;
     if (regs__done) begin
-      \$3  = \$2 [15:0];
+      \$4  = \$2 [15:0];
     end
     if (rst) begin
-      \$3  = 16'h0000;
+      \$4  = 16'h0000;
     end
   end
   assign regs__start = start;
-  assign regs__abort_cycle = abort_cycle;
   assign regs__clear_counters = clear_counters;
   assign regs__periodic = periodic;
   assign busy = regs__busy;
@@ -5635,66 +5644,66 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_en
   assign regs__cfg_end_check = cfg_end_check;
   assign regs__cfg_spw_check = cfg_spw_check;
   assign regs__cfg_spw_tolerance = cfg_spw_tolerance;
-  assign regs__status = \$4 [3:0];
-  assign status = \$4 [3:0];
-  assign regs__cds = \$4 [49];
-  assign cds = \$4 [49];
-  assign regs__word0_ne = \$4 [105];
-  assign word0_ne = \$4 [105];
-  assign regs__word0_nw = \$4 [106];
-  assign word0_nw = \$4 [106];
-  assign regs__word0_crc_ok = \$4 [107];
-  assign word0_crc_ok = \$4 [107];
-  assign regs__word1_ne = \$4 [148];
-  assign word1_ne = \$4 [148];
-  assign regs__word1_nw = \$4 [149];
-  assign word1_nw = \$4 [149];
-  assign regs__word1_crc_ok = \$4 [150];
-  assign word1_crc_ok = \$4 [150];
-  assign regs__lc_repeat = \$4 [157];
-  assign lc_repeat = \$4 [157];
-  assign regs__lc_skip = \$4 [158];
-  assign lc_skip = \$4 [158];
-  assign regs__lc_zero = \$4 [159];
-  assign lc_zero = \$4 [159];
-  assign regs__spw_mismatch = \$4 [160];
-  assign spw_mismatch = \$4 [160];
-  assign regs__lc = \$4 [156:151];
-  assign lc = \$4 [156:151];
-  assign regs__line_delay = \$4 [48:36];
-  assign line_delay = \$4 [48:36];
-  assign regs__word0_position = \$4 [104:50];
-  assign word0_position = \$4 [104:50];
-  assign regs__word1_position = \$4 [147:108];
-  assign word1_position = \$4 [147:108];
-  assign regs__timestamp = \$4 [35:4];
-  assign timestamp = \$4 [35:4];
-  assign regs__count_crc_word0 = \$5 [15:0];
-  assign count_crc_word0 = \$5 [15:0];
-  assign regs__count_crc_word1 = \$5 [31:16];
-  assign count_crc_word1 = \$5 [31:16];
-  assign regs__count_no_ack = \$5 [47:32];
-  assign count_no_ack = \$5 [47:32];
-  assign regs__count_no_start = \$5 [63:48];
-  assign count_no_start = \$5 [63:48];
-  assign regs__count_delay_range = \$5 [79:64];
-  assign count_delay_range = \$5 [79:64];
-  assign regs__count_slo_stuck_low = \$5 [95:80];
-  assign count_slo_stuck_low = \$5 [95:80];
-  assign regs__count_lc_repeat = \$5 [111:96];
-  assign count_lc_repeat = \$5 [111:96];
-  assign regs__count_lc_skip = \$5 [127:112];
-  assign count_lc_skip = \$5 [127:112];
-  assign regs__count_lc_zero = \$5 [143:128];
-  assign count_lc_zero = \$5 [143:128];
-  assign regs__count_spw_mismatch = \$5 [159:144];
-  assign count_spw_mismatch = \$5 [159:144];
-  assign regs__count_overrun = \$5 [175:160];
-  assign count_overrun = \$5 [175:160];
-  assign regs__count_aborted = \$5 [191:176];
-  assign count_aborted = \$5 [191:176];
-  assign regs__count_no_stop = \$5 [207:192];
-  assign count_no_stop = \$5 [207:192];
+  assign regs__status = \$5 [3:0];
+  assign status = \$5 [3:0];
+  assign regs__cds = \$5 [49];
+  assign cds = \$5 [49];
+  assign regs__word0_ne = \$5 [105];
+  assign word0_ne = \$5 [105];
+  assign regs__word0_nw = \$5 [106];
+  assign word0_nw = \$5 [106];
+  assign regs__word0_crc_ok = \$5 [107];
+  assign word0_crc_ok = \$5 [107];
+  assign regs__word1_ne = \$5 [148];
+  assign word1_ne = \$5 [148];
+  assign regs__word1_nw = \$5 [149];
+  assign word1_nw = \$5 [149];
+  assign regs__word1_crc_ok = \$5 [150];
+  assign word1_crc_ok = \$5 [150];
+  assign regs__lc_repeat = \$5 [157];
+  assign lc_repeat = \$5 [157];
+  assign regs__lc_skip = \$5 [158];
+  assign lc_skip = \$5 [158];
+  assign regs__lc_zero = \$5 [159];
+  assign lc_zero = \$5 [159];
+  assign regs__spw_mismatch = \$5 [160];
+  assign spw_mismatch = \$5 [160];
+  assign regs__lc = \$5 [156:151];
+  assign lc = \$5 [156:151];
+  assign regs__line_delay = \$5 [48:36];
+  assign line_delay = \$5 [48:36];
+  assign regs__word0_position = \$5 [104:50];
+  assign word0_position = \$5 [104:50];
+  assign regs__word1_position = \$5 [147:108];
+  assign word1_position = \$5 [147:108];
+  assign regs__timestamp = \$5 [35:4];
+  assign timestamp = \$5 [35:4];
+  assign regs__count_crc_word0 = \$6 [15:0];
+  assign count_crc_word0 = \$6 [15:0];
+  assign regs__count_crc_word1 = \$6 [31:16];
+  assign count_crc_word1 = \$6 [31:16];
+  assign regs__count_no_ack = \$6 [47:32];
+  assign count_no_ack = \$6 [47:32];
+  assign regs__count_no_start = \$6 [63:48];
+  assign count_no_start = \$6 [63:48];
+  assign regs__count_delay_range = \$6 [79:64];
+  assign count_delay_range = \$6 [79:64];
+  assign regs__count_slo_stuck_low = \$6 [95:80];
+  assign count_slo_stuck_low = \$6 [95:80];
+  assign regs__count_lc_repeat = \$6 [111:96];
+  assign count_lc_repeat = \$6 [111:96];
+  assign regs__count_lc_skip = \$6 [127:112];
+  assign count_lc_skip = \$6 [127:112];
+  assign regs__count_lc_zero = \$6 [143:128];
+  assign count_lc_zero = \$6 [143:128];
+  assign regs__count_spw_mismatch = \$6 [159:144];
+  assign count_spw_mismatch = \$6 [159:144];
+  assign regs__count_overrun = \$6 [175:160];
+  assign count_overrun = \$6 [175:160];
+  assign regs__count_aborted = \$6 [191:176];
+  assign count_aborted = \$6 [191:176];
+  assign regs__count_no_stop = \$6 [207:192];
+  assign count_no_stop = \$6 [207:192];
   assign regs__ca_slave_id = ca_slave_id;
   assign regs__ca_address = ca_address;
   assign regs__ca_count = ca_count;
@@ -5702,36 +5711,36 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_en
   assign regs__ca_start = ca_start;
   assign regs__ca_abort = ca_abort;
   assign ca_busy = regs__ca_busy;
-  assign regs__ca_status = \$6 [2:0];
-  assign ca_status = \$6 [2:0];
-  assign regs__ca_bytes_done = \$6 [9:3];
-  assign ca_bytes_done = \$6 [9:3];
-  assign regs__count_ca_crc4_error = \$5 [223:208];
-  assign count_ca_crc4_error = \$5 [223:208];
-  assign regs__count_ca_no_answer = \$5 [239:224];
-  assign count_ca_no_answer = \$5 [239:224];
-  assign regs__count_ca_refused = \$5 [255:240];
-  assign count_ca_refused = \$5 [255:240];
-  assign regs__count_ca_aborted = \$5 [271:256];
-  assign count_ca_aborted = \$5 [271:256];
-  assign regs__count_ca_data_fault = \$5 [287:272];
-  assign count_ca_data_fault = \$5 [287:272];
+  assign regs__ca_status = \$7 [2:0];
+  assign ca_status = \$7 [2:0];
+  assign regs__ca_bytes_done = \$7 [9:3];
+  assign ca_bytes_done = \$7 [9:3];
+  assign regs__count_ca_crc4_error = \$6 [223:208];
+  assign count_ca_crc4_error = \$6 [223:208];
+  assign regs__count_ca_no_answer = \$6 [239:224];
+  assign count_ca_no_answer = \$6 [239:224];
+  assign regs__count_ca_refused = \$6 [255:240];
+  assign count_ca_refused = \$6 [255:240];
+  assign regs__count_ca_aborted = \$6 [271:256];
+  assign count_ca_aborted = \$6 [271:256];
+  assign regs__count_ca_data_fault = \$6 [287:272];
+  assign count_ca_data_fault = \$6 [287:272];
   assign regs__ca_wbuf_addr = ca_wbuf_addr;
   assign regs__ca_wbuf_data = ca_wbuf_data;
   assign regs__ca_wbuf_en = ca_wbuf_en;
   assign regs__ca_rbuf_addr = ca_rbuf_addr;
   assign ca_rbuf_data = regs__ca_rbuf_data;
   assign regs__ca_rbuf_en = ca_rbuf_en;
-  assign \ma$164  = ma;
-  assign \slo$166  = slo;
-  assign \port$4108$0  = \$4 ;
-  assign \port$4121$0  = \$5 ;
-  assign \port$4235$0  = \$6 ;
+  assign \ma$162  = ma;
+  assign \slo$164  = slo;
+  assign \port$4118$0  = \$5 ;
+  assign \port$4131$0  = \$6 ;
+  assign \port$4245$0  = \$7 ;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy$237 , config_error, frames, ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, abort, \clear$214 , \periodic$24 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit
-, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, \start$185 , \abort$187 , ma, \done$240 
+module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy$237 , config_error, frames, ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, \clear$214 , \periodic$24 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit
+, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, \start$185 , \abort$187 , abort, ma, \done$240 
 , \valid$242 , \result$245 , counts, ca_done, result, rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$29  = 0;
   wire \$1 ;
@@ -6578,7 +6587,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$3826$0 (\bit ),
+    .\port$3836$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -6635,7 +6644,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
     .lc_skip_seen(lc_skip_seen),
     .lc_zero(lc_zero),
     .lc_zero_seen(lc_zero_seen),
-    .\port$1578$0 (\$16 ),
+    .\port$1582$0 (\$16 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -14803,10 +14812,10 @@ module \biss_master_wb.ch0.core.sampler.sync (clk, rst, receiver_clear, stage1, 
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.scheduler (rst, trigger, periodic, request, overrun, start, abort, period, idle, clk);
+module \biss_master_wb.ch0.core.scheduler (rst, trigger, periodic, request, overrun, start, period, abort, idle, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$68  = 0;
   wire \$1 ;
-  wire \$10 ;
+  wire [25:0] \$10 ;
   wire \$11 ;
   wire \$12 ;
   wire \$13 ;
@@ -14822,15 +14831,18 @@ module \biss_master_wb.ch0.core.scheduler (rst, trigger, periodic, request, over
   wire \$22 ;
   wire \$23 ;
   wire \$24 ;
-  reg \$25 ;
-  reg [24:0] \$26 ;
-  reg \$27 ;
+  wire \$25 ;
+  wire \$26 ;
+  wire \$27 ;
   reg \$28 ;
+  reg [24:0] \$29 ;
   wire \$3 ;
+  reg \$30 ;
+  reg \$31 ;
   wire \$4 ;
   wire \$5 ;
   wire \$6 ;
-  wire [25:0] \$7 ;
+  wire \$7 ;
   wire \$8 ;
   wire \$9 ;
   input abort;
@@ -14860,84 +14872,93 @@ module \biss_master_wb.ch0.core.scheduler (rst, trigger, periodic, request, over
   assign \$1  = ! period;
   assign \$2  = ~ periodic;
   assign \$3  = periodic & period_zero;
-  assign \$4  = \$2  | \$3 ;
-  assign \$5  = \$4  | wrap;
-  assign \$6  = period <= 1'h1;
-  assign \$7  = count_p2 + 1'h1;
-  assign \$8  = count_p2 >= period;
-  assign \$9  = start | trigger;
-  assign \$10  = periodic & period_zero;
-  assign \$11  = ~ \$10 ;
-  assign \$12  = periodic & \$11 ;
-  assign \$13  = \$12  & period_start;
-  assign \$14  = \$9  | \$13 ;
-  assign \$15  = periodic & period_zero;
-  assign request = \$14  | \$15 ;
-  assign \$16  = start | trigger;
-  assign \$17  = periodic & period_zero;
-  assign \$18  = ~ \$17 ;
-  assign \$19  = periodic & \$18 ;
-  assign \$20  = \$19  & period_start;
-  assign \$21  = \$16  | \$20 ;
-  assign \$22  = ~ abort;
-  assign \$23  = idle & \$22 ;
-  assign \$24  = ~ \$23 ;
-  assign overrun = \$21  & \$24 ;
+  assign \$4  = ~ \$3 ;
+  assign \$5  = wrap & \$4 ;
+  assign \$6  = \$2  | \$5 ;
+  assign \$7  = periodic & period_zero;
+  assign \$8  = period <= 1'h1;
+  assign \$9  = period <= 2'h2;
+  assign \$10  = count_p2 + 1'h1;
+  assign \$11  = count_p2 >= period;
+  assign \$12  = start | trigger;
+  assign \$13  = periodic & period_zero;
+  assign \$14  = ~ \$13 ;
+  assign \$15  = periodic & \$14 ;
+  assign \$16  = \$15  & period_start;
+  assign \$17  = \$12  | \$16 ;
+  assign \$18  = periodic & period_zero;
+  assign request = \$17  | \$18 ;
+  assign \$19  = start | trigger;
+  assign \$20  = periodic & period_zero;
+  assign \$21  = ~ \$20 ;
+  assign \$22  = periodic & \$21 ;
+  assign \$23  = \$22  & period_start;
+  assign \$24  = \$19  | \$23 ;
+  assign \$25  = ~ abort;
+  assign \$26  = idle & \$25 ;
+  assign \$27  = ~ \$26 ;
+  assign overrun = \$24  & \$27 ;
   always @(posedge clk)
-    period_zero <= \$25 ;
+    period_zero <= \$28 ;
   always @(posedge clk)
-    count_p2 <= \$26 ;
+    count_p2 <= \$29 ;
   always @(posedge clk)
-    period_start <= \$27 ;
+    period_start <= \$30 ;
   always @(posedge clk)
-    wrap <= \$28 ;
+    wrap <= \$31 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
-    \$25  = \$1 ;
-    if (rst) begin
-      \$25  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
-    (* full_case = 32'd1 *)
-    if (\$5 ) begin
-      \$26  = 25'h0000002;
-    end else begin
-      \$26  = \$7 [24:0];
-    end
-    if (rst) begin
-      \$26  = 25'h0000002;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
-    (* full_case = 32'd1 *)
-    if (\$5 ) begin
-      \$27  = 1'h1;
-    end else begin
-      \$27  = 1'h0;
-    end
-    if (rst) begin
-      \$27  = 1'h1;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
-    (* full_case = 32'd1 *)
-    if (\$5 ) begin
-      \$28  = \$6 ;
-    end else begin
-      \$28  = \$8 ;
-    end
+    \$28  = \$1 ;
     if (rst) begin
       \$28  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    (* full_case = 32'd1 *)
+    if (\$6 ) begin
+      \$29  = 25'h0000002;
+    end else if (\$7 ) begin
+      \$29  = 25'h0000003;
+    end else begin
+      \$29  = \$10 [24:0];
+    end
+    if (rst) begin
+      \$29  = 25'h0000002;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    (* full_case = 32'd1 *)
+    if (\$6 ) begin
+      \$30  = 1'h1;
+    end else if (\$7 ) begin
+      \$30  = 1'h0;
+    end else begin
+      \$30  = 1'h0;
+    end
+    if (rst) begin
+      \$30  = 1'h1;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    (* full_case = 32'd1 *)
+    if (\$6 ) begin
+      \$31  = \$8 ;
+    end else if (\$7 ) begin
+      \$31  = \$9 ;
+    end else begin
+      \$31  = \$11 ;
+    end
+    if (rst) begin
+      \$31  = 1'h0;
     end
   end
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$3826$0 , resync, lc, is_zero, clk);
+module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$3836$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$69  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -14979,8 +15000,8 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$3826$0 ;
-  wire \port$3826$0 ;
+  input \port$3836$0 ;
+  wire \port$3836$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -14994,9 +15015,9 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$3826$0  };
-  assign \$2  = { lc[4:0], \port$3826$0  } == last;
-  assign \$3  = { lc[4:0], \port$3826$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$3836$0  };
+  assign \$2  = { lc[4:0], \port$3836$0  } == last;
+  assign \$3  = { lc[4:0], \port$3836$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -15106,7 +15127,7 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$3826$0  };
+  assign lc_next = { lc[4:0], \port$3836$0  };
   assign zero = is_zero;
 endmodule
 
@@ -15588,7 +15609,7 @@ module \biss_master_wb.ch0.core.timers (rst, restart, ma_busy, break_time, timeo
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.verdict (lc_skip_seen, \port$1578$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
+module \biss_master_wb.ch0.core.verdict (lc_skip_seen, \port$1582$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$73  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -15702,8 +15723,8 @@ module \biss_master_wb.ch0.core.verdict (lc_skip_seen, \port$1578$0 , lc_check, 
   wire lc_zero;
   input lc_zero_seen;
   wire lc_zero_seen;
-  output \port$1578$0 ;
-  wire \port$1578$0 ;
+  output \port$1582$0 ;
+  wire \port$1582$0 ;
   output report;
   wire report;
   input report_frame;
@@ -15788,7 +15809,7 @@ module \biss_master_wb.ch0.core.verdict (lc_skip_seen, \port$1578$0 , lc_check, 
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$1578$0  = \$2 ;
+  assign \port$1582$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -15812,18 +15833,18 @@ module \biss_master_wb.ch0.core.verdict (lc_skip_seen, \port$1578$0 , lc_check, 
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__ca_busy, regs__ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period
+module \biss_master_wb.ch1 (slo, clk, rst, \trigger$159 , ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__ca_busy, regs__ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period
 , cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort
-, regs__done_count, ma, regs__done, \port$4590$0 , \port$4603$0 , regs__ca_done, \port$4717$0 , ca_rbuf_addr);
+, regs__done_count, ma, regs__done, \port$4602$0 , \port$4615$0 , regs__ca_done, \port$4729$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$74  = 0;
   wire \$1 ;
   wire [16:0] \$2 ;
-  reg [15:0] \$3 ;
-  wire [160:0] \$4 ;
-  wire [287:0] \$5 ;
-  wire [9:0] \$6 ;
-  input abort_cycle;
-  wire abort_cycle;
+  reg \$3 ;
+  reg [15:0] \$4 ;
+  wire [160:0] \$5 ;
+  wire [287:0] \$6 ;
+  wire [9:0] \$7 ;
+  reg abort_cycle = 1'h0;
   wire busy;
   input ca_abort;
   wire ca_abort;
@@ -15936,15 +15957,16 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_en
   wire [12:0] line_delay;
   output ma;
   wire ma;
-  wire \ma$164 ;
+  wire \ma$162 ;
   input periodic;
   wire periodic;
-  output [160:0] \port$4590$0 ;
-  wire [160:0] \port$4590$0 ;
-  output [287:0] \port$4603$0 ;
-  wire [287:0] \port$4603$0 ;
-  output [9:0] \port$4717$0 ;
-  wire [9:0] \port$4717$0 ;
+  output [160:0] \port$4602$0 ;
+  wire [160:0] \port$4602$0 ;
+  output [287:0] \port$4615$0 ;
+  wire [287:0] \port$4615$0 ;
+  output [9:0] \port$4729$0 ;
+  wire [9:0] \port$4729$0 ;
+  input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
   wire regs__busy;
@@ -16051,7 +16073,7 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_en
   wire rst;
   input slo;
   wire slo;
-  wire \slo$166 ;
+  wire \slo$164 ;
   wire spw_mismatch;
   input start;
   wire start;
@@ -16072,8 +16094,8 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_en
   wire [3:0] status;
   wire [31:0] timestamp;
   wire trigger;
-  input \trigger$161 ;
-  wire \trigger$161 ;
+  input \trigger$159 ;
+  wire \trigger$159 ;
   wire valid;
   wire word0_crc_ok;
   wire word0_ne;
@@ -16083,12 +16105,14 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_en
   wire word1_ne;
   wire word1_nw;
   wire [39:0] word1_position;
+  assign trigger = \trigger$159  & regs__trigger_enable;
   assign \$2  = regs__done_count + 1'h1;
   always @(posedge clk)
-    regs__done_count <= \$3 ;
+    abort_cycle <= \$3 ;
+  always @(posedge clk)
+    regs__done_count <= \$4 ;
   assign \$1  = ~ valid;
   assign regs__frame_error = regs__done & \$1 ;
-  assign trigger = \trigger$161  & regs__trigger_enable;
   \biss_master_wb.ch1.core  core (
     .abort(abort_cycle),
     .\abort$187 (ca_abort),
@@ -16123,15 +16147,15 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_en
     .\clear$214 (clear_counters),
     .clk(clk),
     .config_error(regs__config_error),
-    .counts(\$5 ),
+    .counts(\$6 ),
     .\done$240 (regs__done),
     .frames(regs__ca_busy),
     .ma(ma),
     .\periodic$24 (periodic),
     .rbuf_addr(ca_rbuf_addr),
     .rbuf_en(ca_rbuf_en),
-    .result(\$6 ),
-    .\result$245 (\$4 ),
+    .result(\$7 ),
+    .\result$245 (\$5 ),
     .rst(rst),
     .slo(slo),
     .start(start),
@@ -16141,16 +16165,22 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_en
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
-    \$3  = regs__done_count;
+    \$3  = regs__abort_cycle;
+    if (rst) begin
+      \$3  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    \$4  = regs__done_count;
     if (regs__done) begin
-      \$3  = \$2 [15:0];
+      \$4  = \$2 [15:0];
     end
     if (rst) begin
-      \$3  = 16'h0000;
+      \$4  = 16'h0000;
     end
   end
   assign regs__start = start;
-  assign regs__abort_cycle = abort_cycle;
   assign regs__clear_counters = clear_counters;
   assign regs__periodic = periodic;
   assign busy = regs__busy;
@@ -16181,66 +16211,66 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_en
   assign regs__cfg_end_check = cfg_end_check;
   assign regs__cfg_spw_check = cfg_spw_check;
   assign regs__cfg_spw_tolerance = cfg_spw_tolerance;
-  assign regs__status = \$4 [3:0];
-  assign status = \$4 [3:0];
-  assign regs__cds = \$4 [49];
-  assign cds = \$4 [49];
-  assign regs__word0_ne = \$4 [105];
-  assign word0_ne = \$4 [105];
-  assign regs__word0_nw = \$4 [106];
-  assign word0_nw = \$4 [106];
-  assign regs__word0_crc_ok = \$4 [107];
-  assign word0_crc_ok = \$4 [107];
-  assign regs__word1_ne = \$4 [148];
-  assign word1_ne = \$4 [148];
-  assign regs__word1_nw = \$4 [149];
-  assign word1_nw = \$4 [149];
-  assign regs__word1_crc_ok = \$4 [150];
-  assign word1_crc_ok = \$4 [150];
-  assign regs__lc_repeat = \$4 [157];
-  assign lc_repeat = \$4 [157];
-  assign regs__lc_skip = \$4 [158];
-  assign lc_skip = \$4 [158];
-  assign regs__lc_zero = \$4 [159];
-  assign lc_zero = \$4 [159];
-  assign regs__spw_mismatch = \$4 [160];
-  assign spw_mismatch = \$4 [160];
-  assign regs__lc = \$4 [156:151];
-  assign lc = \$4 [156:151];
-  assign regs__line_delay = \$4 [48:36];
-  assign line_delay = \$4 [48:36];
-  assign regs__word0_position = \$4 [104:50];
-  assign word0_position = \$4 [104:50];
-  assign regs__word1_position = \$4 [147:108];
-  assign word1_position = \$4 [147:108];
-  assign regs__timestamp = \$4 [35:4];
-  assign timestamp = \$4 [35:4];
-  assign regs__count_crc_word0 = \$5 [15:0];
-  assign count_crc_word0 = \$5 [15:0];
-  assign regs__count_crc_word1 = \$5 [31:16];
-  assign count_crc_word1 = \$5 [31:16];
-  assign regs__count_no_ack = \$5 [47:32];
-  assign count_no_ack = \$5 [47:32];
-  assign regs__count_no_start = \$5 [63:48];
-  assign count_no_start = \$5 [63:48];
-  assign regs__count_delay_range = \$5 [79:64];
-  assign count_delay_range = \$5 [79:64];
-  assign regs__count_slo_stuck_low = \$5 [95:80];
-  assign count_slo_stuck_low = \$5 [95:80];
-  assign regs__count_lc_repeat = \$5 [111:96];
-  assign count_lc_repeat = \$5 [111:96];
-  assign regs__count_lc_skip = \$5 [127:112];
-  assign count_lc_skip = \$5 [127:112];
-  assign regs__count_lc_zero = \$5 [143:128];
-  assign count_lc_zero = \$5 [143:128];
-  assign regs__count_spw_mismatch = \$5 [159:144];
-  assign count_spw_mismatch = \$5 [159:144];
-  assign regs__count_overrun = \$5 [175:160];
-  assign count_overrun = \$5 [175:160];
-  assign regs__count_aborted = \$5 [191:176];
-  assign count_aborted = \$5 [191:176];
-  assign regs__count_no_stop = \$5 [207:192];
-  assign count_no_stop = \$5 [207:192];
+  assign regs__status = \$5 [3:0];
+  assign status = \$5 [3:0];
+  assign regs__cds = \$5 [49];
+  assign cds = \$5 [49];
+  assign regs__word0_ne = \$5 [105];
+  assign word0_ne = \$5 [105];
+  assign regs__word0_nw = \$5 [106];
+  assign word0_nw = \$5 [106];
+  assign regs__word0_crc_ok = \$5 [107];
+  assign word0_crc_ok = \$5 [107];
+  assign regs__word1_ne = \$5 [148];
+  assign word1_ne = \$5 [148];
+  assign regs__word1_nw = \$5 [149];
+  assign word1_nw = \$5 [149];
+  assign regs__word1_crc_ok = \$5 [150];
+  assign word1_crc_ok = \$5 [150];
+  assign regs__lc_repeat = \$5 [157];
+  assign lc_repeat = \$5 [157];
+  assign regs__lc_skip = \$5 [158];
+  assign lc_skip = \$5 [158];
+  assign regs__lc_zero = \$5 [159];
+  assign lc_zero = \$5 [159];
+  assign regs__spw_mismatch = \$5 [160];
+  assign spw_mismatch = \$5 [160];
+  assign regs__lc = \$5 [156:151];
+  assign lc = \$5 [156:151];
+  assign regs__line_delay = \$5 [48:36];
+  assign line_delay = \$5 [48:36];
+  assign regs__word0_position = \$5 [104:50];
+  assign word0_position = \$5 [104:50];
+  assign regs__word1_position = \$5 [147:108];
+  assign word1_position = \$5 [147:108];
+  assign regs__timestamp = \$5 [35:4];
+  assign timestamp = \$5 [35:4];
+  assign regs__count_crc_word0 = \$6 [15:0];
+  assign count_crc_word0 = \$6 [15:0];
+  assign regs__count_crc_word1 = \$6 [31:16];
+  assign count_crc_word1 = \$6 [31:16];
+  assign regs__count_no_ack = \$6 [47:32];
+  assign count_no_ack = \$6 [47:32];
+  assign regs__count_no_start = \$6 [63:48];
+  assign count_no_start = \$6 [63:48];
+  assign regs__count_delay_range = \$6 [79:64];
+  assign count_delay_range = \$6 [79:64];
+  assign regs__count_slo_stuck_low = \$6 [95:80];
+  assign count_slo_stuck_low = \$6 [95:80];
+  assign regs__count_lc_repeat = \$6 [111:96];
+  assign count_lc_repeat = \$6 [111:96];
+  assign regs__count_lc_skip = \$6 [127:112];
+  assign count_lc_skip = \$6 [127:112];
+  assign regs__count_lc_zero = \$6 [143:128];
+  assign count_lc_zero = \$6 [143:128];
+  assign regs__count_spw_mismatch = \$6 [159:144];
+  assign count_spw_mismatch = \$6 [159:144];
+  assign regs__count_overrun = \$6 [175:160];
+  assign count_overrun = \$6 [175:160];
+  assign regs__count_aborted = \$6 [191:176];
+  assign count_aborted = \$6 [191:176];
+  assign regs__count_no_stop = \$6 [207:192];
+  assign count_no_stop = \$6 [207:192];
   assign regs__ca_slave_id = ca_slave_id;
   assign regs__ca_address = ca_address;
   assign regs__ca_count = ca_count;
@@ -16248,36 +16278,36 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$161 , ca_wbuf_en, ca_rbuf_en
   assign regs__ca_start = ca_start;
   assign regs__ca_abort = ca_abort;
   assign ca_busy = regs__ca_busy;
-  assign regs__ca_status = \$6 [2:0];
-  assign ca_status = \$6 [2:0];
-  assign regs__ca_bytes_done = \$6 [9:3];
-  assign ca_bytes_done = \$6 [9:3];
-  assign regs__count_ca_crc4_error = \$5 [223:208];
-  assign count_ca_crc4_error = \$5 [223:208];
-  assign regs__count_ca_no_answer = \$5 [239:224];
-  assign count_ca_no_answer = \$5 [239:224];
-  assign regs__count_ca_refused = \$5 [255:240];
-  assign count_ca_refused = \$5 [255:240];
-  assign regs__count_ca_aborted = \$5 [271:256];
-  assign count_ca_aborted = \$5 [271:256];
-  assign regs__count_ca_data_fault = \$5 [287:272];
-  assign count_ca_data_fault = \$5 [287:272];
+  assign regs__ca_status = \$7 [2:0];
+  assign ca_status = \$7 [2:0];
+  assign regs__ca_bytes_done = \$7 [9:3];
+  assign ca_bytes_done = \$7 [9:3];
+  assign regs__count_ca_crc4_error = \$6 [223:208];
+  assign count_ca_crc4_error = \$6 [223:208];
+  assign regs__count_ca_no_answer = \$6 [239:224];
+  assign count_ca_no_answer = \$6 [239:224];
+  assign regs__count_ca_refused = \$6 [255:240];
+  assign count_ca_refused = \$6 [255:240];
+  assign regs__count_ca_aborted = \$6 [271:256];
+  assign count_ca_aborted = \$6 [271:256];
+  assign regs__count_ca_data_fault = \$6 [287:272];
+  assign count_ca_data_fault = \$6 [287:272];
   assign regs__ca_wbuf_addr = ca_wbuf_addr;
   assign regs__ca_wbuf_data = ca_wbuf_data;
   assign regs__ca_wbuf_en = ca_wbuf_en;
   assign regs__ca_rbuf_addr = ca_rbuf_addr;
   assign ca_rbuf_data = regs__ca_rbuf_data;
   assign regs__ca_rbuf_en = ca_rbuf_en;
-  assign \ma$164  = ma;
-  assign \slo$166  = slo;
-  assign \port$4590$0  = \$4 ;
-  assign \port$4603$0  = \$5 ;
-  assign \port$4717$0  = \$6 ;
+  assign \ma$162  = ma;
+  assign \slo$164  = slo;
+  assign \port$4602$0  = \$5 ;
+  assign \port$4615$0  = \$6 ;
+  assign \port$4729$0  = \$7 ;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy$237 , config_error, frames, ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, abort, \clear$214 , \periodic$24 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit
-, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, \start$185 , \abort$187 , ma, \done$240 
+module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy$237 , config_error, frames, ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, \clear$214 , \periodic$24 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit
+, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, \start$185 , \abort$187 , abort, ma, \done$240 
 , \valid$242 , \result$245 , counts, ca_done, result, rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$75  = 0;
   wire \$1 ;
@@ -17124,7 +17154,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$4308$0 (\bit ),
+    .\port$4320$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -17181,7 +17211,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
     .lc_skip_seen(lc_skip_seen),
     .lc_zero(lc_zero),
     .lc_zero_seen(lc_zero_seen),
-    .\port$2938$0 (\$16 ),
+    .\port$2946$0 (\$16 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -25349,10 +25379,10 @@ module \biss_master_wb.ch1.core.sampler.sync (clk, rst, receiver_clear, stage1, 
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.scheduler (rst, trigger, periodic, request, overrun, start, abort, period, idle, clk);
+module \biss_master_wb.ch1.core.scheduler (rst, trigger, periodic, request, overrun, start, period, abort, idle, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$114  = 0;
   wire \$1 ;
-  wire \$10 ;
+  wire [25:0] \$10 ;
   wire \$11 ;
   wire \$12 ;
   wire \$13 ;
@@ -25368,15 +25398,18 @@ module \biss_master_wb.ch1.core.scheduler (rst, trigger, periodic, request, over
   wire \$22 ;
   wire \$23 ;
   wire \$24 ;
-  reg \$25 ;
-  reg [24:0] \$26 ;
-  reg \$27 ;
+  wire \$25 ;
+  wire \$26 ;
+  wire \$27 ;
   reg \$28 ;
+  reg [24:0] \$29 ;
   wire \$3 ;
+  reg \$30 ;
+  reg \$31 ;
   wire \$4 ;
   wire \$5 ;
   wire \$6 ;
-  wire [25:0] \$7 ;
+  wire \$7 ;
   wire \$8 ;
   wire \$9 ;
   input abort;
@@ -25406,84 +25439,93 @@ module \biss_master_wb.ch1.core.scheduler (rst, trigger, periodic, request, over
   assign \$1  = ! period;
   assign \$2  = ~ periodic;
   assign \$3  = periodic & period_zero;
-  assign \$4  = \$2  | \$3 ;
-  assign \$5  = \$4  | wrap;
-  assign \$6  = period <= 1'h1;
-  assign \$7  = count_p2 + 1'h1;
-  assign \$8  = count_p2 >= period;
-  assign \$9  = start | trigger;
-  assign \$10  = periodic & period_zero;
-  assign \$11  = ~ \$10 ;
-  assign \$12  = periodic & \$11 ;
-  assign \$13  = \$12  & period_start;
-  assign \$14  = \$9  | \$13 ;
-  assign \$15  = periodic & period_zero;
-  assign request = \$14  | \$15 ;
-  assign \$16  = start | trigger;
-  assign \$17  = periodic & period_zero;
-  assign \$18  = ~ \$17 ;
-  assign \$19  = periodic & \$18 ;
-  assign \$20  = \$19  & period_start;
-  assign \$21  = \$16  | \$20 ;
-  assign \$22  = ~ abort;
-  assign \$23  = idle & \$22 ;
-  assign \$24  = ~ \$23 ;
-  assign overrun = \$21  & \$24 ;
+  assign \$4  = ~ \$3 ;
+  assign \$5  = wrap & \$4 ;
+  assign \$6  = \$2  | \$5 ;
+  assign \$7  = periodic & period_zero;
+  assign \$8  = period <= 1'h1;
+  assign \$9  = period <= 2'h2;
+  assign \$10  = count_p2 + 1'h1;
+  assign \$11  = count_p2 >= period;
+  assign \$12  = start | trigger;
+  assign \$13  = periodic & period_zero;
+  assign \$14  = ~ \$13 ;
+  assign \$15  = periodic & \$14 ;
+  assign \$16  = \$15  & period_start;
+  assign \$17  = \$12  | \$16 ;
+  assign \$18  = periodic & period_zero;
+  assign request = \$17  | \$18 ;
+  assign \$19  = start | trigger;
+  assign \$20  = periodic & period_zero;
+  assign \$21  = ~ \$20 ;
+  assign \$22  = periodic & \$21 ;
+  assign \$23  = \$22  & period_start;
+  assign \$24  = \$19  | \$23 ;
+  assign \$25  = ~ abort;
+  assign \$26  = idle & \$25 ;
+  assign \$27  = ~ \$26 ;
+  assign overrun = \$24  & \$27 ;
   always @(posedge clk)
-    period_zero <= \$25 ;
+    period_zero <= \$28 ;
   always @(posedge clk)
-    count_p2 <= \$26 ;
+    count_p2 <= \$29 ;
   always @(posedge clk)
-    period_start <= \$27 ;
+    period_start <= \$30 ;
   always @(posedge clk)
-    wrap <= \$28 ;
+    wrap <= \$31 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
-    \$25  = \$1 ;
-    if (rst) begin
-      \$25  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
-    (* full_case = 32'd1 *)
-    if (\$5 ) begin
-      \$26  = 25'h0000002;
-    end else begin
-      \$26  = \$7 [24:0];
-    end
-    if (rst) begin
-      \$26  = 25'h0000002;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
-    (* full_case = 32'd1 *)
-    if (\$5 ) begin
-      \$27  = 1'h1;
-    end else begin
-      \$27  = 1'h0;
-    end
-    if (rst) begin
-      \$27  = 1'h1;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
-    (* full_case = 32'd1 *)
-    if (\$5 ) begin
-      \$28  = \$6 ;
-    end else begin
-      \$28  = \$8 ;
-    end
+    \$28  = \$1 ;
     if (rst) begin
       \$28  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
+    (* full_case = 32'd1 *)
+    if (\$6 ) begin
+      \$29  = 25'h0000002;
+    end else if (\$7 ) begin
+      \$29  = 25'h0000003;
+    end else begin
+      \$29  = \$10 [24:0];
+    end
+    if (rst) begin
+      \$29  = 25'h0000002;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
+    (* full_case = 32'd1 *)
+    if (\$6 ) begin
+      \$30  = 1'h1;
+    end else if (\$7 ) begin
+      \$30  = 1'h0;
+    end else begin
+      \$30  = 1'h0;
+    end
+    if (rst) begin
+      \$30  = 1'h1;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
+    (* full_case = 32'd1 *)
+    if (\$6 ) begin
+      \$31  = \$8 ;
+    end else if (\$7 ) begin
+      \$31  = \$9 ;
+    end else begin
+      \$31  = \$11 ;
+    end
+    if (rst) begin
+      \$31  = 1'h0;
     end
   end
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$4308$0 , resync, lc, is_zero, clk);
+module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$4320$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$115  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -25525,8 +25567,8 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, 
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$4308$0 ;
-  wire \port$4308$0 ;
+  input \port$4320$0 ;
+  wire \port$4320$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -25540,9 +25582,9 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, 
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$4308$0  };
-  assign \$2  = { lc[4:0], \port$4308$0  } == last;
-  assign \$3  = { lc[4:0], \port$4308$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$4320$0  };
+  assign \$2  = { lc[4:0], \port$4320$0  } == last;
+  assign \$3  = { lc[4:0], \port$4320$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -25652,7 +25694,7 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, 
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$4308$0  };
+  assign lc_next = { lc[4:0], \port$4320$0  };
   assign zero = is_zero;
 endmodule
 
@@ -26134,7 +26176,7 @@ module \biss_master_wb.ch1.core.timers (rst, restart, ma_busy, break_time, timeo
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.verdict (lc_skip_seen, \port$2938$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
+module \biss_master_wb.ch1.core.verdict (lc_skip_seen, \port$2946$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$119  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -26248,8 +26290,8 @@ module \biss_master_wb.ch1.core.verdict (lc_skip_seen, \port$2938$0 , lc_check, 
   wire lc_zero;
   input lc_zero_seen;
   wire lc_zero_seen;
-  output \port$2938$0 ;
-  wire \port$2938$0 ;
+  output \port$2946$0 ;
+  wire \port$2946$0 ;
   output report;
   wire report;
   input report_frame;
@@ -26334,7 +26376,7 @@ module \biss_master_wb.ch1.core.verdict (lc_skip_seen, \port$2938$0 , lc_check, 
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$2938$0  = \$2 ;
+  assign \port$2946$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

@@ -26,16 +26,21 @@ def reference(steps):
     period), then in the first clock at least ``period`` clocks after the last tick. The period
     is read live with a lag (docs/ports.md): the tick is decided on the period of two clocks
     before, "a request in every clock" (period 0) on the one of the clock before; none is
-    known before reset (no tick in the first clock after a tick there, no period 0)."""
+    known before reset (no tick in the first clock after a tick there, no period 0). Each
+    request of "every clock" counts as a tick, and the clock after it has none."""
     out, last = [], None
     period = lambda t: {**QUIET, **steps[t]}["period"] if t >= 0 else None
     for t, s in enumerate(steps):
         s = {**QUIET, **s}
         tick = 0
         continuous = s["periodic"] and period(t - 1) == 0
-        if not s["periodic"] or continuous:
+        if not s["periodic"]:
             last = None
-        elif last is None or (period(t - 2) is not None and t - last >= period(t - 2)):
+        elif continuous:
+            last = t
+        elif last is None or period(t - 2) not in (None, 0) and t - last >= period(t - 2):
+            # (A period of 0 two clocks before: the clock before was the last request of
+            # "every clock", and the period counts from there.)
             tick, last = 1, t
         single = s["start"] or s["trigger"]
         taken = s["idle"] and not s["abort"]
@@ -103,9 +108,12 @@ LIVE = [
     ("longer_in_the_tick_clock", [(0, 10), (12, 15)], [2, 12, 27, 42]),
     ("shorter_in_the_tick_clock", [(0, 10), (12, 3)], [2, 12, 15, 18, 21, 24, 27, 30, 33, 36, 39, 42]),
     # Period 0 from clock 14 on: a request in every clock from 15 (the clock after) up to 20
-    # (the period is 6 again from 20, seen in 21), whose request is the last of them; then
-    # the first tick of the new period in 21, as when periodic rises.
-    ("to_zero_and_back", [(0, 10), (14, 0), (20, 6)], [2, 12, 20, 21, 27, 33, 39]),
+    # (the period is 6 again from 20, seen in 21); the last of them, in 20, counts as a tick,
+    # so the next comes 6 clocks later.
+    ("to_zero_and_back", [(0, 10), (14, 0), (20, 6)], [2, 12, 20, 26, 32, 38, 44]),
+    # Periodic rises in the clock the period leaves 0 (seen as 0 there): one request of
+    # "every clock", then the period counts from it, no extra tick in the clock after.
+    ("from_zero_as_periodic_rises", [(0, 0), (2, 7)], [2, 9, 16, 23, 30, 37, 44]),
 ]
 
 
