@@ -26,8 +26,9 @@ class RegisterBus(wiring.Signature):
     clock: the address is decoded into a one-hot select, and a window's read enable acts
     then. ``r_load`` high in a later clock, at the latest the clock of the next ``r_en``: the
     selected register's value in that clock goes to ``r_data``, which holds it from the next
-    clock until the clock after the next ``r_load``; a snapshot is taken then. So reads run one per clock (each ``r_load`` with the next ``r_en``), and the
-    initiator can hold a word while the next read waits in the first step. A read and a write
+    clock until the clock after the next ``r_load``; a snapshot is taken then. So reads run
+    one per clock (each ``r_load`` with the next ``r_en``), and the initiator can hold a word
+    while the next read waits in the first step. A read and a write
     may come in the same clock; they are not ordered: the read returns the value of its
     ``r_load`` clock, the one before the write when ``r_load`` follows ``r_en`` at once.
     """

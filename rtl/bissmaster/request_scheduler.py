@@ -13,12 +13,11 @@ class RequestScheduler(wiring.Component):
     cycle in every clock (as fast as the encoder allows: the controller takes the next one as
     soon as it is idle again). Each of those requests counts as a tick: when the period becomes
     non-zero again, the next tick comes a period after the last of them (and never in the clock
-    right after it: at least two clocks later). ``period`` is read
-    live, with a lag: whether a tick comes in a clock is decided on the ``period`` of two
-    clocks before, whether requests come in every clock on the one of the clock before. Both
-    decisions are registered, so that neither the period compare nor the zero test sits in
-    front of the period counter (with several cores behind a bus that loop was the critical
-    path, docs/performance.md).
+    right after it: at least two clocks later). ``period`` is read live, with a lag: whether a
+    tick comes in a clock is decided on the ``period`` of two clocks before, whether requests
+    come in every clock on the one of the clock before. Both decisions are registered, so that
+    neither the period compare nor the zero test sits in front of the period counter (with
+    several cores behind a bus that loop was the critical path, docs/performance.md).
 
     A ``start`` or a tick that the controller cannot take (it is not idle, or an abort is being
     handled) is an ``overrun``; the request is dropped, never queued. A continuous request
