@@ -20,8 +20,9 @@ class RegisterBus(wiring.Signature):
     """The bank's internal bus, as the initiator (a bus adapter) sees it.
 
     Word addresses. A write is issued by ``w_en`` high for one clock, byte lanes chosen by
-    ``w_strb``; the bank registers it and it acts in the next clock (its registers hold the
-    new value from the second clock after ``w_en``). A read takes two steps, so that the
+    ``w_strb``; the bank registers it and it acts in the next clock (a pulse is high in the
+    second clock after ``w_en``; a configuration register, one stage later, holds the new
+    value from the third clock after ``w_en``, unless it holds pulses too). A read takes two steps, so that the
     address decode and the word select each have a clock of their own. ``r_en`` high in one
     clock: the address is decoded into a one-hot select, and a window's read enable acts
     then. ``r_load`` high in a later clock, at the latest the clock of the next ``r_en``: the
@@ -76,8 +77,10 @@ class RegisterBank(wiring.Component):
     at ``r_load``, as a register's word does (the port must hold it until its next read).
 
     Writes: the request (``w_en``, address, data, strobes) is registered, and every write
-    decodes from those flip-flops in the next clock. CONFIG fields are written lane by lane,
-    each byte lane's strobe the enable of its flip-flops. The read path is two register
+    decodes from those flip-flops in the next clock. CONFIG fields are written one clock later
+    still, lane by lane, from a per-register write flip-flop and a second copy of the data and
+    strobes, each byte lane's strobe the enable of its flip-flops; those of a register that
+    holds pulses too (``ctrl``) are written with its pulses, in one stage. The read path is two register
     stages (:class:`RegisterBus`): at ``r_en`` one select flip-flop per register (and per
     read window) registers whether the address is the register's; at ``r_load`` each block
     (the globals, each channel) registers the AND-OR of its registers' words with their
@@ -128,6 +131,14 @@ class RegisterBank(wiring.Component):
         with m.If(bus.w_en):
             m.d.sync += [self._w_addr.eq(bus.w_addr), self._w_data.eq(bus.w_data),
                          self._w_strb.eq(bus.w_strb)]
+        # CONFIG fields are written one clock later still, from a second copy of the data and
+        # strobes and a per-register write flip-flop decoded from the first stage: with several
+        # channels the shared word decode in front of every configuration register's enable
+        # was a critical path (docs/performance.md).
+        self._w2_data = Signal.like(bus.w_data, name="config_write_data")
+        self._w2_strb = Signal.like(bus.w_strb, name="config_write_strb")
+        with m.If(self._w_en):
+            m.d.sync += [self._w2_data.eq(self._w_data), self._w2_strb.eq(self._w_strb)]
         partials = []                  # each block's registered share of the read data
         irqs = []
         for port, base, registers, prefix in blocks:
@@ -169,6 +180,13 @@ class RegisterBank(wiring.Component):
                 continue
             write = Signal(name=f"{prefix}_{reg.path.replace('.', '_')}_write")
             m.d.comb += write.eq(w_en & (w_addr == word))
+            # A register that holds pulses too (``ctrl``) is written in one stage, so that a
+            # write of it acts all at once (``start`` with ``periodic``).
+            staged = not any(f.kind == Kind.PULSE for f in reg.fields)
+            config_write = None
+            if staged and any(f.kind == Kind.CONFIG for f in reg.fields):
+                config_write = Signal(name=f"{prefix}_{reg.path.replace('.', '_')}_config_write")
+                m.d.sync += config_write.eq(write)
             parts = []                 # (lsb, the field's read value)
             for f in reg.fields:
                 name = f"{prefix}_{reg.path.replace('.', '_')}_{f.name}"
@@ -179,8 +197,13 @@ class RegisterBank(wiring.Component):
                     reg_bits = Signal(f.width, init=f.reset, name=name)
                     storage[f"{reg.path}.{f.name}"] = reg_bits
                     # Lane by lane: each lane's strobe enables its flip-flops, no logic per bit.
+                    if staged:
+                        en, strb = config_write, self._w2_strb
+                        data = self._w2_data[f.lsb:f.lsb + f.width]
+                    else:
+                        en, strb = write, w_strb
                     for lo, hi, lane in self._lanes(f):
-                        with m.If(write & w_strb[lane]):
+                        with m.If(en & strb[lane]):
                             m.d.sync += reg_bits[lo:hi].eq(data[lo:hi])
                     parts.append((f.lsb, reg_bits))
                     if f.signal:

@@ -502,7 +502,7 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .ch0_ca_request_address(regs__ca_address),
     .ch0_ca_request_count(regs__ca_count),
     .ch0_ca_request_slave_id(regs__ca_slave_id),
-    .\ch0_ca_request_write$69 (regs__ca_write),
+    .\ch0_ca_request_write$80 (regs__ca_write),
     .ch0_cfg_ack_ack_limit(regs__cfg_ack_limit),
     .ch0_cfg_break_break_time(regs__cfg_break_time),
     .ch0_cfg_checks_end_check(regs__cfg_end_check),
@@ -542,7 +542,7 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .ch1_ca_request_address(\regs__ca_address$240 ),
     .ch1_ca_request_count(\regs__ca_count$246 ),
     .ch1_ca_request_slave_id(\regs__ca_slave_id$256 ),
-    .\ch1_ca_request_write$221 (\regs__ca_write$268 ),
+    .\ch1_ca_request_write$241 (\regs__ca_write$268 ),
     .ch1_cfg_ack_ack_limit(\regs__cfg_ack_limit$284 ),
     .ch1_cfg_break_break_time(\regs__cfg_break_time$286 ),
     .ch1_cfg_checks_end_check(\regs__cfg_end_check$290 ),
@@ -569,12 +569,12 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .ch1_irq(\$7 ),
     .clk(clk),
     .g_trigger_start(glob__trigger),
-    .\port$4147$0 (\$8 ),
-    .\port$4160$0 (\$9 ),
-    .\port$4274$0 (\$10 ),
-    .\port$4631$0 (\$11 ),
-    .\port$4644$0 (\$12 ),
-    .\port$4758$0 (\$13 ),
+    .\port$4189$0 (\$8 ),
+    .\port$4202$0 (\$9 ),
+    .\port$4316$0 (\$10 ),
+    .\port$4673$0 (\$11 ),
+    .\port$4686$0 (\$12 ),
+    .\port$4800$0 (\$13 ),
     .rst(rst),
     .write_data(regs__ca_wbuf_data)
   );
@@ -637,9 +637,9 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .clk(clk),
     .ma(ch0_ma),
     .periodic(regs__periodic),
-    .\port$4147$0 (\$8 ),
-    .\port$4160$0 (\$9 ),
-    .\port$4274$0 (\$10 ),
+    .\port$4189$0 (\$8 ),
+    .\port$4202$0 (\$9 ),
+    .\port$4316$0 (\$10 ),
     .regs__abort_cycle(regs__abort_cycle),
     .regs__busy(ch0__busy),
     .regs__ca_busy(ch0__ca_busy),
@@ -689,9 +689,9 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .clk(clk),
     .ma(ch1_ma),
     .periodic(\regs__periodic$376 ),
-    .\port$4631$0 (\$11 ),
-    .\port$4644$0 (\$12 ),
-    .\port$4758$0 (\$13 ),
+    .\port$4673$0 (\$11 ),
+    .\port$4686$0 (\$12 ),
+    .\port$4800$0 (\$13 ),
     .regs__abort_cycle(\regs__abort_cycle$234 ),
     .regs__busy(ch1__busy),
     .regs__ca_busy(ch1__ca_busy),
@@ -1024,9 +1024,9 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, ch1__ca_wbuf_en, ch1__ca_rbuf_en, ch1_irq, bus__r_data, ch0__frame_error, ch0__busy, ch0__config_error, ch0__ca_busy, ch0__ca_rbuf_data, ch1__frame_error, ch1__busy, ch1__config_error, ch1__ca_busy
 , ch1__ca_rbuf_data, bus__w_addr, bus__w_data, bus__w_strb, ch0__ca_wbuf_addr, write_data, g_trigger_start, ch0_ctrl_start, ch0_ctrl_abort, ch0_ctrl_clear_counters, ch0_ctrl_periodic, ch0_ctrl_trigger_enable, ch0_cfg_ma_ma_half_period, ch0_cfg_ma_delay_limit, ch0_cfg_period_request_period, ch0_cfg_break_break_time, ch0_cfg_ack_ack_limit, ch0_cfg_timeout_timeout_limit, ch0_cfg_words_w0_data_bits, ch0_cfg_words_w0_nenw, ch0_cfg_words_w0_lc
-, ch0_cfg_words_w0_crc, ch0_cfg_words_w1_data_bits, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_enable, ch0_cfg_checks_end_check, ch0_cfg_checks_spw_check, ch0_cfg_checks_spw_tolerance, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$69 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort, ch1_ctrl_start, ch1_ctrl_abort, ch1_ctrl_clear_counters, ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period
-, ch1_cfg_ma_delay_limit, ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_enable, ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$221 
-, ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__done_count, ch0__done, \port$4147$0 , \port$4160$0 , ch0__ca_done, \port$4274$0 , ch1__done_count, ch1__done, \port$4631$0 , \port$4644$0 , ch1__ca_done, \port$4758$0 , bus__r_addr);
+, ch0_cfg_words_w0_crc, ch0_cfg_words_w1_data_bits, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_enable, ch0_cfg_checks_end_check, ch0_cfg_checks_spw_check, ch0_cfg_checks_spw_tolerance, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$80 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort, ch1_ctrl_start, ch1_ctrl_abort, ch1_ctrl_clear_counters, ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period
+, ch1_cfg_ma_delay_limit, ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_enable, ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$241 
+, ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__done_count, ch0__done, \port$4189$0 , \port$4202$0 , ch0__ca_done, \port$4316$0 , ch1__done_count, ch1__done, \port$4673$0 , \port$4686$0 , ch1__ca_done, \port$4800$0 , bus__r_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$26  = 0;
   wire \$1 ;
   wire [31:0] \$10 ;
@@ -1383,16 +1383,16 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg [10:0] \$416 ;
   reg [31:0] \$417 ;
   reg [3:0] \$418 ;
-  reg \$419 ;
+  reg [31:0] \$419 ;
   wire \$42 ;
-  reg \$420 ;
+  reg [3:0] \$420 ;
   reg \$421 ;
   reg \$422 ;
   reg \$423 ;
   reg \$424 ;
-  reg [31:0] \$425 ;
+  reg \$425 ;
   reg \$426 ;
-  reg \$427 ;
+  reg [31:0] \$427 ;
   reg \$428 ;
   reg \$429 ;
   wire \$43 ;
@@ -1403,41 +1403,41 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg \$434 ;
   reg \$435 ;
   reg \$436 ;
-  reg [15:0] \$437 ;
-  reg [11:0] \$438 ;
-  reg [23:0] \$439 ;
+  reg \$437 ;
+  reg \$438 ;
+  reg \$439 ;
   wire \$44 ;
-  reg [23:0] \$440 ;
-  reg [23:0] \$441 ;
-  reg [23:0] \$442 ;
-  reg [5:0] \$443 ;
-  reg \$444 ;
+  reg \$440 ;
+  reg [15:0] \$441 ;
+  reg [11:0] \$442 ;
+  reg \$443 ;
+  reg [23:0] \$444 ;
   reg \$445 ;
-  reg [1:0] \$446 ;
-  reg [5:0] \$447 ;
-  reg \$448 ;
+  reg [23:0] \$446 ;
+  reg \$447 ;
+  reg [23:0] \$448 ;
   reg \$449 ;
   wire \$45 ;
-  reg [1:0] \$450 ;
+  reg [23:0] \$450 ;
   reg \$451 ;
-  reg \$452 ;
+  reg [5:0] \$452 ;
   reg \$453 ;
-  reg [7:0] \$454 ;
-  reg [2:0] \$455 ;
-  reg [6:0] \$456 ;
-  reg [6:0] \$457 ;
+  reg \$454 ;
+  reg [1:0] \$455 ;
+  reg [5:0] \$456 ;
+  reg \$457 ;
   reg \$458 ;
-  reg \$459 ;
+  reg [1:0] \$459 ;
   wire \$46 ;
   reg \$460 ;
   reg \$461 ;
   reg \$462 ;
   reg \$463 ;
-  reg \$464 ;
+  reg [7:0] \$464 ;
   reg \$465 ;
-  reg \$466 ;
-  reg \$467 ;
-  reg \$468 ;
+  reg [2:0] \$466 ;
+  reg [6:0] \$467 ;
+  reg [6:0] \$468 ;
   reg \$469 ;
   wire \$47 ;
   reg \$470 ;
@@ -1465,7 +1465,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg \$490 ;
   reg \$491 ;
   reg \$492 ;
-  reg [3:0] \$493 ;
+  reg \$493 ;
   reg \$494 ;
   reg \$495 ;
   reg \$496 ;
@@ -1478,75 +1478,75 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg \$501 ;
   reg \$502 ;
   reg \$503 ;
-  reg \$504 ;
-  reg [5:0] \$505 ;
-  reg [15:0] \$506 ;
-  reg [12:0] \$507 ;
-  reg [31:0] \$508 ;
-  reg [22:0] \$509 ;
+  reg [3:0] \$504 ;
+  reg \$505 ;
+  reg \$506 ;
+  reg \$507 ;
+  reg \$508 ;
+  reg \$509 ;
   wire \$51 ;
-  reg [31:0] \$510 ;
-  reg [7:0] \$511 ;
-  reg [31:0] \$512 ;
+  reg \$510 ;
+  reg \$511 ;
+  reg \$512 ;
   reg \$513 ;
-  reg [31:0] \$514 ;
+  reg \$514 ;
   reg \$515 ;
-  reg \$516 ;
-  reg \$517 ;
-  reg \$518 ;
-  reg \$519 ;
+  reg [5:0] \$516 ;
+  reg [15:0] \$517 ;
+  reg [12:0] \$518 ;
+  reg [31:0] \$519 ;
   wire \$52 ;
-  reg \$520 ;
-  reg \$521 ;
-  reg \$522 ;
-  reg \$523 ;
+  reg [22:0] \$520 ;
+  reg [31:0] \$521 ;
+  reg [7:0] \$522 ;
+  reg [31:0] \$523 ;
   reg \$524 ;
-  reg \$525 ;
-  reg [15:0] \$526 ;
-  reg [11:0] \$527 ;
-  reg [23:0] \$528 ;
-  reg [23:0] \$529 ;
+  reg [31:0] \$525 ;
+  reg \$526 ;
+  reg \$527 ;
+  reg \$528 ;
+  reg \$529 ;
   wire \$53 ;
-  reg [23:0] \$530 ;
-  reg [23:0] \$531 ;
-  reg [5:0] \$532 ;
+  reg \$530 ;
+  reg \$531 ;
+  reg \$532 ;
   reg \$533 ;
   reg \$534 ;
-  reg [1:0] \$535 ;
-  reg [5:0] \$536 ;
+  reg \$535 ;
+  reg \$536 ;
   reg \$537 ;
   reg \$538 ;
-  reg [1:0] \$539 ;
+  reg [15:0] \$539 ;
   wire \$54 ;
-  reg \$540 ;
+  reg [11:0] \$540 ;
   reg \$541 ;
-  reg \$542 ;
-  reg [7:0] \$543 ;
-  reg [2:0] \$544 ;
-  reg [6:0] \$545 ;
-  reg [6:0] \$546 ;
+  reg [23:0] \$542 ;
+  reg \$543 ;
+  reg [23:0] \$544 ;
+  reg \$545 ;
+  reg [23:0] \$546 ;
   reg \$547 ;
-  reg \$548 ;
+  reg [23:0] \$548 ;
   reg \$549 ;
   wire \$55 ;
-  reg \$550 ;
+  reg [5:0] \$550 ;
   reg \$551 ;
   reg \$552 ;
-  reg \$553 ;
-  reg \$554 ;
+  reg [1:0] \$553 ;
+  reg [5:0] \$554 ;
   reg \$555 ;
   reg \$556 ;
-  reg \$557 ;
+  reg [1:0] \$557 ;
   reg \$558 ;
   reg \$559 ;
   wire \$56 ;
   reg \$560 ;
   reg \$561 ;
-  reg \$562 ;
+  reg [7:0] \$562 ;
   reg \$563 ;
-  reg \$564 ;
-  reg \$565 ;
-  reg \$566 ;
+  reg [2:0] \$564 ;
+  reg [6:0] \$565 ;
+  reg [6:0] \$566 ;
   reg \$567 ;
   reg \$568 ;
   reg \$569 ;
@@ -1564,7 +1564,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire \$58 ;
   reg \$580 ;
   reg \$581 ;
-  reg [3:0] \$582 ;
+  reg \$582 ;
   reg \$583 ;
   reg \$584 ;
   reg \$585 ;
@@ -1577,20 +1577,40 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg \$591 ;
   reg \$592 ;
   reg \$593 ;
-  reg [5:0] \$594 ;
-  reg [15:0] \$595 ;
-  reg [12:0] \$596 ;
-  reg [31:0] \$597 ;
-  reg [22:0] \$598 ;
-  reg [31:0] \$599 ;
+  reg \$594 ;
+  reg \$595 ;
+  reg \$596 ;
+  reg \$597 ;
+  reg \$598 ;
+  reg \$599 ;
   wire \$6 ;
   wire \$60 ;
-  reg [7:0] \$600 ;
-  reg [31:0] \$601 ;
-  reg \$602 ;
-  reg [31:0] \$603 ;
+  reg \$600 ;
+  reg \$601 ;
+  reg [3:0] \$602 ;
+  reg \$603 ;
+  reg \$604 ;
+  reg \$605 ;
+  reg \$606 ;
+  reg \$607 ;
+  reg \$608 ;
+  reg \$609 ;
   wire \$61 ;
+  reg \$610 ;
+  reg \$611 ;
+  reg \$612 ;
+  reg \$613 ;
+  reg [5:0] \$614 ;
+  reg [15:0] \$615 ;
+  reg [12:0] \$616 ;
+  reg [31:0] \$617 ;
+  reg [22:0] \$618 ;
+  reg [31:0] \$619 ;
   wire \$62 ;
+  reg [7:0] \$620 ;
+  reg [31:0] \$621 ;
+  reg \$622 ;
+  reg [31:0] \$623 ;
   wire \$63 ;
   wire \$64 ;
   wire \$65 ;
@@ -1783,21 +1803,25 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire ch0_ca_ctrl_write;
   output [6:0] ch0_ca_request_address;
   reg [6:0] ch0_ca_request_address = 7'h00;
+  reg ch0_ca_request_config_write = 1'h0;
   output [6:0] ch0_ca_request_count;
   reg [6:0] ch0_ca_request_count = 7'h00;
   output [2:0] ch0_ca_request_slave_id;
   reg [2:0] ch0_ca_request_slave_id = 3'h0;
   wire ch0_ca_request_write;
-  output \ch0_ca_request_write$69 ;
-  reg \ch0_ca_request_write$69  = 1'h0;
+  output \ch0_ca_request_write$80 ;
+  reg \ch0_ca_request_write$80  = 1'h0;
   wire ch0_ca_state_write;
   wire ch0_caps_write;
   output [23:0] ch0_cfg_ack_ack_limit;
   reg [23:0] ch0_cfg_ack_ack_limit = 24'h000000;
+  reg ch0_cfg_ack_config_write = 1'h0;
   wire ch0_cfg_ack_write;
   output [23:0] ch0_cfg_break_break_time;
   reg [23:0] ch0_cfg_break_break_time = 24'h000000;
+  reg ch0_cfg_break_config_write = 1'h0;
   wire ch0_cfg_break_write;
+  reg ch0_cfg_checks_config_write = 1'h0;
   output ch0_cfg_checks_end_check;
   reg ch0_cfg_checks_end_check = 1'h0;
   output ch0_cfg_checks_spw_check;
@@ -1805,17 +1829,21 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   output [7:0] ch0_cfg_checks_spw_tolerance;
   reg [7:0] ch0_cfg_checks_spw_tolerance = 8'h00;
   wire ch0_cfg_checks_write;
+  reg ch0_cfg_ma_config_write = 1'h0;
   output [11:0] ch0_cfg_ma_delay_limit;
   reg [11:0] ch0_cfg_ma_delay_limit = 12'h000;
   output [15:0] ch0_cfg_ma_ma_half_period;
   reg [15:0] ch0_cfg_ma_ma_half_period = 16'h0000;
   wire ch0_cfg_ma_write;
+  reg ch0_cfg_period_config_write = 1'h0;
   output [23:0] ch0_cfg_period_request_period;
   reg [23:0] ch0_cfg_period_request_period = 24'h000000;
   wire ch0_cfg_period_write;
+  reg ch0_cfg_timeout_config_write = 1'h0;
   output [23:0] ch0_cfg_timeout_timeout_limit;
   reg [23:0] ch0_cfg_timeout_timeout_limit = 24'h000000;
   wire ch0_cfg_timeout_write;
+  reg ch0_cfg_words_config_write = 1'h0;
   output [1:0] ch0_cfg_words_w0_crc;
   reg [1:0] ch0_cfg_words_w0_crc = 2'h0;
   output [5:0] ch0_cfg_words_w0_data_bits;
@@ -1856,6 +1884,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   output ch0_irq;
   wire ch0_irq;
   reg ch0_irq_enable_access_done = 1'h0;
+  reg ch0_irq_enable_config_write = 1'h0;
   reg ch0_irq_enable_done = 1'h0;
   reg ch0_irq_enable_error = 1'h0;
   wire ch0_irq_enable_write;
@@ -2060,21 +2089,25 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire ch1_ca_ctrl_write;
   output [6:0] ch1_ca_request_address;
   reg [6:0] ch1_ca_request_address = 7'h00;
+  reg ch1_ca_request_config_write = 1'h0;
   output [6:0] ch1_ca_request_count;
   reg [6:0] ch1_ca_request_count = 7'h00;
   output [2:0] ch1_ca_request_slave_id;
   reg [2:0] ch1_ca_request_slave_id = 3'h0;
   wire ch1_ca_request_write;
-  output \ch1_ca_request_write$221 ;
-  reg \ch1_ca_request_write$221  = 1'h0;
+  output \ch1_ca_request_write$241 ;
+  reg \ch1_ca_request_write$241  = 1'h0;
   wire ch1_ca_state_write;
   wire ch1_caps_write;
   output [23:0] ch1_cfg_ack_ack_limit;
   reg [23:0] ch1_cfg_ack_ack_limit = 24'h000000;
+  reg ch1_cfg_ack_config_write = 1'h0;
   wire ch1_cfg_ack_write;
   output [23:0] ch1_cfg_break_break_time;
   reg [23:0] ch1_cfg_break_break_time = 24'h000000;
+  reg ch1_cfg_break_config_write = 1'h0;
   wire ch1_cfg_break_write;
+  reg ch1_cfg_checks_config_write = 1'h0;
   output ch1_cfg_checks_end_check;
   reg ch1_cfg_checks_end_check = 1'h0;
   output ch1_cfg_checks_spw_check;
@@ -2082,17 +2115,21 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   output [7:0] ch1_cfg_checks_spw_tolerance;
   reg [7:0] ch1_cfg_checks_spw_tolerance = 8'h00;
   wire ch1_cfg_checks_write;
+  reg ch1_cfg_ma_config_write = 1'h0;
   output [11:0] ch1_cfg_ma_delay_limit;
   reg [11:0] ch1_cfg_ma_delay_limit = 12'h000;
   output [15:0] ch1_cfg_ma_ma_half_period;
   reg [15:0] ch1_cfg_ma_ma_half_period = 16'h0000;
   wire ch1_cfg_ma_write;
+  reg ch1_cfg_period_config_write = 1'h0;
   output [23:0] ch1_cfg_period_request_period;
   reg [23:0] ch1_cfg_period_request_period = 24'h000000;
   wire ch1_cfg_period_write;
+  reg ch1_cfg_timeout_config_write = 1'h0;
   output [23:0] ch1_cfg_timeout_timeout_limit;
   reg [23:0] ch1_cfg_timeout_timeout_limit = 24'h000000;
   wire ch1_cfg_timeout_write;
+  reg ch1_cfg_words_config_write = 1'h0;
   output [1:0] ch1_cfg_words_w0_crc;
   reg [1:0] ch1_cfg_words_w0_crc = 2'h0;
   output [5:0] ch1_cfg_words_w0_data_bits;
@@ -2133,6 +2170,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   output ch1_irq;
   wire ch1_irq;
   reg ch1_irq_enable_access_done = 1'h0;
+  reg ch1_irq_enable_config_write = 1'h0;
   reg ch1_irq_enable_done = 1'h0;
   reg ch1_irq_enable_error = 1'h0;
   wire ch1_irq_enable_write;
@@ -2204,6 +2242,8 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg ch1_window0_read = 1'h0;
   input clk;
   wire clk;
+  reg [31:0] config_write_data = 32'd0;
+  reg [3:0] config_write_strb = 4'h0;
   wire g_channels_write;
   wire g_id_write;
   wire g_irq;
@@ -2223,18 +2263,18 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   (* init = 1'h0 *)
   wire glob__trigger;
   wire [1:0] irq;
-  input [160:0] \port$4147$0 ;
-  wire [160:0] \port$4147$0 ;
-  input [287:0] \port$4160$0 ;
-  wire [287:0] \port$4160$0 ;
-  input [9:0] \port$4274$0 ;
-  wire [9:0] \port$4274$0 ;
-  input [160:0] \port$4631$0 ;
-  wire [160:0] \port$4631$0 ;
-  input [287:0] \port$4644$0 ;
-  wire [287:0] \port$4644$0 ;
-  input [9:0] \port$4758$0 ;
-  wire [9:0] \port$4758$0 ;
+  input [160:0] \port$4189$0 ;
+  wire [160:0] \port$4189$0 ;
+  input [287:0] \port$4202$0 ;
+  wire [287:0] \port$4202$0 ;
+  input [9:0] \port$4316$0 ;
+  wire [9:0] \port$4316$0 ;
+  input [160:0] \port$4673$0 ;
+  wire [160:0] \port$4673$0 ;
+  input [287:0] \port$4686$0 ;
+  wire [287:0] \port$4686$0 ;
+  input [9:0] \port$4800$0 ;
+  wire [9:0] \port$4800$0 ;
   input rst;
   wire rst;
   reg [10:0] write_addr = 11'h000;
@@ -2242,6 +2282,26 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg [31:0] write_data = 32'd0;
   reg write_en = 1'h0;
   reg [3:0] write_strb = 4'h0;
+  assign \$351  = write_addr == 8'h99;
+  assign ch0_count_ack_write = write_en & \$351 ;
+  assign \$352  = write_addr == 8'h9a;
+  assign ch0_count_line_write = write_en & \$352 ;
+  assign \$353  = write_addr == 8'h9b;
+  assign ch0_count_lc_write = write_en & \$353 ;
+  assign \$354  = write_addr == 8'h9c;
+  assign ch0_count_check_write = write_en & \$354 ;
+  assign \$355  = write_addr == 8'h9d;
+  assign ch0_count_cycle_write = write_en & \$355 ;
+  assign \$356  = write_addr == 8'h9e;
+  assign ch0_count_stop_write = write_en & \$356 ;
+  assign \$357  = write_addr == 8'hc0;
+  assign ch0_ca_request_write = write_en & \$357 ;
+  assign \$358  = write_addr == 8'hc1;
+  assign ch0_ca_ctrl_write = write_en & \$358 ;
+  assign \$359  = write_addr == 8'hc2;
+  assign ch0_ca_state_write = write_en & \$359 ;
+  assign \$360  = write_addr == 8'hc3;
+  assign ch0_ca_count_crc4_answer_write = write_en & \$360 ;
   assign \$361  = write_addr == 8'hc4;
   assign ch0_ca_count_refused_aborted_write = write_en & \$361 ;
   assign \$362  = write_addr == 8'hc5;
@@ -2339,375 +2399,415 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   always @(posedge clk)
     write_strb <= \$418 ;
   always @(posedge clk)
-    g_trigger_start <= \$419 ;
+    config_write_data <= \$419 ;
   always @(posedge clk)
-    g_read_select_0 <= \$420 ;
+    config_write_strb <= \$420 ;
   always @(posedge clk)
-    g_read_select_1 <= \$421 ;
+    g_trigger_start <= \$421 ;
   always @(posedge clk)
-    g_read_select_2 <= \$422 ;
+    g_read_select_0 <= \$422 ;
   always @(posedge clk)
-    g_read_select_3 <= \$423 ;
+    g_read_select_1 <= \$423 ;
   always @(posedge clk)
-    g_read_select_4 <= \$424 ;
+    g_read_select_2 <= \$424 ;
   always @(posedge clk)
-    g_read_data <= \$425 ;
+    g_read_select_3 <= \$425 ;
   always @(posedge clk)
-    ch0_ctrl_start <= \$426 ;
+    g_read_select_4 <= \$426 ;
   always @(posedge clk)
-    ch0_ctrl_abort <= \$427 ;
+    g_read_data <= \$427 ;
   always @(posedge clk)
-    ch0_ctrl_clear_counters <= \$428 ;
+    ch0_ctrl_start <= \$428 ;
   always @(posedge clk)
-    ch0_ctrl_periodic <= \$429 ;
+    ch0_ctrl_abort <= \$429 ;
   always @(posedge clk)
-    ch0_ctrl_trigger_enable <= \$430 ;
+    ch0_ctrl_clear_counters <= \$430 ;
   always @(posedge clk)
-    ch0_irq_status_done <= \$431 ;
+    ch0_ctrl_periodic <= \$431 ;
   always @(posedge clk)
-    ch0_irq_status_error <= \$432 ;
+    ch0_ctrl_trigger_enable <= \$432 ;
   always @(posedge clk)
-    ch0_irq_status_access_done <= \$433 ;
+    ch0_irq_status_done <= \$433 ;
   always @(posedge clk)
-    ch0_irq_enable_done <= \$434 ;
+    ch0_irq_status_error <= \$434 ;
   always @(posedge clk)
-    ch0_irq_enable_error <= \$435 ;
+    ch0_irq_status_access_done <= \$435 ;
   always @(posedge clk)
-    ch0_irq_enable_access_done <= \$436 ;
+    ch0_irq_enable_config_write <= \$436 ;
   always @(posedge clk)
-    ch0_cfg_ma_ma_half_period <= \$437 ;
+    ch0_irq_enable_done <= \$437 ;
   always @(posedge clk)
-    ch0_cfg_ma_delay_limit <= \$438 ;
+    ch0_irq_enable_error <= \$438 ;
   always @(posedge clk)
-    ch0_cfg_period_request_period <= \$439 ;
+    ch0_irq_enable_access_done <= \$439 ;
   always @(posedge clk)
-    ch0_cfg_break_break_time <= \$440 ;
+    ch0_cfg_ma_config_write <= \$440 ;
   always @(posedge clk)
-    ch0_cfg_ack_ack_limit <= \$441 ;
+    ch0_cfg_ma_ma_half_period <= \$441 ;
   always @(posedge clk)
-    ch0_cfg_timeout_timeout_limit <= \$442 ;
+    ch0_cfg_ma_delay_limit <= \$442 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_data_bits <= \$443 ;
+    ch0_cfg_period_config_write <= \$443 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_nenw <= \$444 ;
+    ch0_cfg_period_request_period <= \$444 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_lc <= \$445 ;
+    ch0_cfg_break_config_write <= \$445 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_crc <= \$446 ;
+    ch0_cfg_break_break_time <= \$446 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_data_bits <= \$447 ;
+    ch0_cfg_ack_config_write <= \$447 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_nenw <= \$448 ;
+    ch0_cfg_ack_ack_limit <= \$448 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_lc <= \$449 ;
+    ch0_cfg_timeout_config_write <= \$449 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_crc <= \$450 ;
+    ch0_cfg_timeout_timeout_limit <= \$450 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_enable <= \$451 ;
+    ch0_cfg_words_config_write <= \$451 ;
   always @(posedge clk)
-    ch0_cfg_checks_end_check <= \$452 ;
+    ch0_cfg_words_w0_data_bits <= \$452 ;
   always @(posedge clk)
-    ch0_cfg_checks_spw_check <= \$453 ;
+    ch0_cfg_words_w0_nenw <= \$453 ;
   always @(posedge clk)
-    ch0_cfg_checks_spw_tolerance <= \$454 ;
+    ch0_cfg_words_w0_lc <= \$454 ;
   always @(posedge clk)
-    ch0_ca_request_slave_id <= \$455 ;
+    ch0_cfg_words_w0_crc <= \$455 ;
   always @(posedge clk)
-    ch0_ca_request_address <= \$456 ;
+    ch0_cfg_words_w1_data_bits <= \$456 ;
   always @(posedge clk)
-    ch0_ca_request_count <= \$457 ;
+    ch0_cfg_words_w1_nenw <= \$457 ;
   always @(posedge clk)
-    \ch0_ca_request_write$69  <= \$458 ;
+    ch0_cfg_words_w1_lc <= \$458 ;
   always @(posedge clk)
-    ch0_ca_ctrl_start <= \$459 ;
+    ch0_cfg_words_w1_crc <= \$459 ;
   always @(posedge clk)
-    ch0_ca_ctrl_abort <= \$460 ;
+    ch0_cfg_words_w1_enable <= \$460 ;
   always @(posedge clk)
-    ch0_read_select_80 <= \$461 ;
+    ch0_cfg_checks_config_write <= \$461 ;
   always @(posedge clk)
-    ch0_read_select_81 <= \$462 ;
+    ch0_cfg_checks_end_check <= \$462 ;
   always @(posedge clk)
-    ch0_read_select_82 <= \$463 ;
+    ch0_cfg_checks_spw_check <= \$463 ;
   always @(posedge clk)
-    ch0_read_select_84 <= \$464 ;
+    ch0_cfg_checks_spw_tolerance <= \$464 ;
   always @(posedge clk)
-    ch0_read_select_85 <= \$465 ;
+    ch0_ca_request_config_write <= \$465 ;
   always @(posedge clk)
-    ch0_read_select_88 <= \$466 ;
+    ch0_ca_request_slave_id <= \$466 ;
   always @(posedge clk)
-    ch0_read_select_89 <= \$467 ;
+    ch0_ca_request_address <= \$467 ;
   always @(posedge clk)
-    ch0_read_select_8a <= \$468 ;
+    ch0_ca_request_count <= \$468 ;
   always @(posedge clk)
-    ch0_read_select_8b <= \$469 ;
+    \ch0_ca_request_write$80  <= \$469 ;
   always @(posedge clk)
-    ch0_read_select_8c <= \$470 ;
+    ch0_ca_ctrl_start <= \$470 ;
   always @(posedge clk)
-    ch0_read_select_8d <= \$471 ;
+    ch0_ca_ctrl_abort <= \$471 ;
   always @(posedge clk)
-    ch0_read_select_8e <= \$472 ;
+    ch0_read_select_80 <= \$472 ;
   always @(posedge clk)
-    ch0_read_select_90 <= \$473 ;
+    ch0_read_select_81 <= \$473 ;
   always @(posedge clk)
-    ch0_read_select_91 <= \$474 ;
+    ch0_read_select_82 <= \$474 ;
   always @(posedge clk)
-    ch0_read_select_92 <= \$475 ;
+    ch0_read_select_84 <= \$475 ;
   always @(posedge clk)
-    ch0_read_select_93 <= \$476 ;
+    ch0_read_select_85 <= \$476 ;
   always @(posedge clk)
-    ch0_read_select_94 <= \$477 ;
+    ch0_read_select_88 <= \$477 ;
   always @(posedge clk)
-    ch0_read_select_95 <= \$478 ;
+    ch0_read_select_89 <= \$478 ;
   always @(posedge clk)
-    ch0_read_select_96 <= \$479 ;
+    ch0_read_select_8a <= \$479 ;
   always @(posedge clk)
-    ch0_read_select_98 <= \$480 ;
+    ch0_read_select_8b <= \$480 ;
   always @(posedge clk)
-    ch0_read_select_99 <= \$481 ;
+    ch0_read_select_8c <= \$481 ;
   always @(posedge clk)
-    ch0_read_select_9a <= \$482 ;
+    ch0_read_select_8d <= \$482 ;
   always @(posedge clk)
-    ch0_read_select_9b <= \$483 ;
+    ch0_read_select_8e <= \$483 ;
   always @(posedge clk)
-    ch0_read_select_9c <= \$484 ;
+    ch0_read_select_90 <= \$484 ;
   always @(posedge clk)
-    ch0_read_select_9d <= \$485 ;
+    ch0_read_select_91 <= \$485 ;
   always @(posedge clk)
-    ch0_read_select_9e <= \$486 ;
+    ch0_read_select_92 <= \$486 ;
   always @(posedge clk)
-    ch0_read_select_c0 <= \$487 ;
+    ch0_read_select_93 <= \$487 ;
   always @(posedge clk)
-    ch0_read_select_c1 <= \$488 ;
+    ch0_read_select_94 <= \$488 ;
   always @(posedge clk)
-    ch0_read_select_c2 <= \$489 ;
+    ch0_read_select_95 <= \$489 ;
   always @(posedge clk)
-    ch0_read_select_c3 <= \$490 ;
+    ch0_read_select_96 <= \$490 ;
   always @(posedge clk)
-    ch0_read_select_c4 <= \$491 ;
+    ch0_read_select_98 <= \$491 ;
   always @(posedge clk)
-    ch0_read_select_c5 <= \$492 ;
+    ch0_read_select_99 <= \$492 ;
   always @(posedge clk)
-    ch0_result_status_status_snapshot <= \$493 ;
+    ch0_read_select_9a <= \$493 ;
   always @(posedge clk)
-    ch0_result_status_cds_snapshot <= \$494 ;
+    ch0_read_select_9b <= \$494 ;
   always @(posedge clk)
-    ch0_result_status_w0_ne_snapshot <= \$495 ;
+    ch0_read_select_9c <= \$495 ;
   always @(posedge clk)
-    ch0_result_status_w0_nw_snapshot <= \$496 ;
+    ch0_read_select_9d <= \$496 ;
   always @(posedge clk)
-    ch0_result_status_w0_crc_ok_snapshot <= \$497 ;
+    ch0_read_select_9e <= \$497 ;
   always @(posedge clk)
-    ch0_result_status_w1_ne_snapshot <= \$498 ;
+    ch0_read_select_c0 <= \$498 ;
   always @(posedge clk)
-    ch0_result_status_w1_nw_snapshot <= \$499 ;
+    ch0_read_select_c1 <= \$499 ;
   always @(posedge clk)
-    ch0_result_status_w1_crc_ok_snapshot <= \$500 ;
+    ch0_read_select_c2 <= \$500 ;
   always @(posedge clk)
-    ch0_result_status_lc_repeat_snapshot <= \$501 ;
+    ch0_read_select_c3 <= \$501 ;
   always @(posedge clk)
-    ch0_result_status_lc_skip_snapshot <= \$502 ;
+    ch0_read_select_c4 <= \$502 ;
   always @(posedge clk)
-    ch0_result_status_lc_zero_snapshot <= \$503 ;
+    ch0_read_select_c5 <= \$503 ;
   always @(posedge clk)
-    ch0_result_status_spw_mismatch_snapshot <= \$504 ;
+    ch0_result_status_status_snapshot <= \$504 ;
   always @(posedge clk)
-    ch0_result_status_lc_snapshot <= \$505 ;
+    ch0_result_status_cds_snapshot <= \$505 ;
   always @(posedge clk)
-    ch0_result_seq_seq_snapshot <= \$506 ;
+    ch0_result_status_w0_ne_snapshot <= \$506 ;
   always @(posedge clk)
-    ch0_result_seq_line_delay_snapshot <= \$507 ;
+    ch0_result_status_w0_nw_snapshot <= \$507 ;
   always @(posedge clk)
-    ch0_result_w0_lo_data_snapshot <= \$508 ;
+    ch0_result_status_w0_crc_ok_snapshot <= \$508 ;
   always @(posedge clk)
-    ch0_result_w0_hi_data_snapshot <= \$509 ;
+    ch0_result_status_w1_ne_snapshot <= \$509 ;
   always @(posedge clk)
-    ch0_result_w1_lo_data_snapshot <= \$510 ;
+    ch0_result_status_w1_nw_snapshot <= \$510 ;
   always @(posedge clk)
-    ch0_result_w1_hi_data_snapshot <= \$511 ;
+    ch0_result_status_w1_crc_ok_snapshot <= \$511 ;
   always @(posedge clk)
-    ch0_result_timestamp_time_snapshot <= \$512 ;
+    ch0_result_status_lc_repeat_snapshot <= \$512 ;
   always @(posedge clk)
-    ch0_window0_read <= \$513 ;
+    ch0_result_status_lc_skip_snapshot <= \$513 ;
   always @(posedge clk)
-    ch0_read_data <= \$514 ;
+    ch0_result_status_lc_zero_snapshot <= \$514 ;
   always @(posedge clk)
-    ch1_ctrl_start <= \$515 ;
+    ch0_result_status_spw_mismatch_snapshot <= \$515 ;
   always @(posedge clk)
-    ch1_ctrl_abort <= \$516 ;
+    ch0_result_status_lc_snapshot <= \$516 ;
   always @(posedge clk)
-    ch1_ctrl_clear_counters <= \$517 ;
+    ch0_result_seq_seq_snapshot <= \$517 ;
   always @(posedge clk)
-    ch1_ctrl_periodic <= \$518 ;
+    ch0_result_seq_line_delay_snapshot <= \$518 ;
   always @(posedge clk)
-    ch1_ctrl_trigger_enable <= \$519 ;
+    ch0_result_w0_lo_data_snapshot <= \$519 ;
   always @(posedge clk)
-    ch1_irq_status_done <= \$520 ;
+    ch0_result_w0_hi_data_snapshot <= \$520 ;
   always @(posedge clk)
-    ch1_irq_status_error <= \$521 ;
+    ch0_result_w1_lo_data_snapshot <= \$521 ;
   always @(posedge clk)
-    ch1_irq_status_access_done <= \$522 ;
+    ch0_result_w1_hi_data_snapshot <= \$522 ;
   always @(posedge clk)
-    ch1_irq_enable_done <= \$523 ;
+    ch0_result_timestamp_time_snapshot <= \$523 ;
   always @(posedge clk)
-    ch1_irq_enable_error <= \$524 ;
+    ch0_window0_read <= \$524 ;
   always @(posedge clk)
-    ch1_irq_enable_access_done <= \$525 ;
+    ch0_read_data <= \$525 ;
   always @(posedge clk)
-    ch1_cfg_ma_ma_half_period <= \$526 ;
+    ch1_ctrl_start <= \$526 ;
   always @(posedge clk)
-    ch1_cfg_ma_delay_limit <= \$527 ;
+    ch1_ctrl_abort <= \$527 ;
   always @(posedge clk)
-    ch1_cfg_period_request_period <= \$528 ;
+    ch1_ctrl_clear_counters <= \$528 ;
   always @(posedge clk)
-    ch1_cfg_break_break_time <= \$529 ;
+    ch1_ctrl_periodic <= \$529 ;
   always @(posedge clk)
-    ch1_cfg_ack_ack_limit <= \$530 ;
+    ch1_ctrl_trigger_enable <= \$530 ;
   always @(posedge clk)
-    ch1_cfg_timeout_timeout_limit <= \$531 ;
+    ch1_irq_status_done <= \$531 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_data_bits <= \$532 ;
+    ch1_irq_status_error <= \$532 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_nenw <= \$533 ;
+    ch1_irq_status_access_done <= \$533 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_lc <= \$534 ;
+    ch1_irq_enable_config_write <= \$534 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_crc <= \$535 ;
+    ch1_irq_enable_done <= \$535 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_data_bits <= \$536 ;
+    ch1_irq_enable_error <= \$536 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_nenw <= \$537 ;
+    ch1_irq_enable_access_done <= \$537 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_lc <= \$538 ;
+    ch1_cfg_ma_config_write <= \$538 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_crc <= \$539 ;
+    ch1_cfg_ma_ma_half_period <= \$539 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_enable <= \$540 ;
+    ch1_cfg_ma_delay_limit <= \$540 ;
   always @(posedge clk)
-    ch1_cfg_checks_end_check <= \$541 ;
+    ch1_cfg_period_config_write <= \$541 ;
   always @(posedge clk)
-    ch1_cfg_checks_spw_check <= \$542 ;
+    ch1_cfg_period_request_period <= \$542 ;
   always @(posedge clk)
-    ch1_cfg_checks_spw_tolerance <= \$543 ;
+    ch1_cfg_break_config_write <= \$543 ;
   always @(posedge clk)
-    ch1_ca_request_slave_id <= \$544 ;
+    ch1_cfg_break_break_time <= \$544 ;
   always @(posedge clk)
-    ch1_ca_request_address <= \$545 ;
+    ch1_cfg_ack_config_write <= \$545 ;
   always @(posedge clk)
-    ch1_ca_request_count <= \$546 ;
+    ch1_cfg_ack_ack_limit <= \$546 ;
   always @(posedge clk)
-    \ch1_ca_request_write$221  <= \$547 ;
+    ch1_cfg_timeout_config_write <= \$547 ;
   always @(posedge clk)
-    ch1_ca_ctrl_start <= \$548 ;
+    ch1_cfg_timeout_timeout_limit <= \$548 ;
   always @(posedge clk)
-    ch1_ca_ctrl_abort <= \$549 ;
+    ch1_cfg_words_config_write <= \$549 ;
   always @(posedge clk)
-    ch1_read_select_100 <= \$550 ;
+    ch1_cfg_words_w0_data_bits <= \$550 ;
   always @(posedge clk)
-    ch1_read_select_101 <= \$551 ;
+    ch1_cfg_words_w0_nenw <= \$551 ;
   always @(posedge clk)
-    ch1_read_select_102 <= \$552 ;
+    ch1_cfg_words_w0_lc <= \$552 ;
   always @(posedge clk)
-    ch1_read_select_104 <= \$553 ;
+    ch1_cfg_words_w0_crc <= \$553 ;
   always @(posedge clk)
-    ch1_read_select_105 <= \$554 ;
+    ch1_cfg_words_w1_data_bits <= \$554 ;
   always @(posedge clk)
-    ch1_read_select_108 <= \$555 ;
+    ch1_cfg_words_w1_nenw <= \$555 ;
   always @(posedge clk)
-    ch1_read_select_109 <= \$556 ;
+    ch1_cfg_words_w1_lc <= \$556 ;
   always @(posedge clk)
-    ch1_read_select_10a <= \$557 ;
+    ch1_cfg_words_w1_crc <= \$557 ;
   always @(posedge clk)
-    ch1_read_select_10b <= \$558 ;
+    ch1_cfg_words_w1_enable <= \$558 ;
   always @(posedge clk)
-    ch1_read_select_10c <= \$559 ;
+    ch1_cfg_checks_config_write <= \$559 ;
   always @(posedge clk)
-    ch1_read_select_10d <= \$560 ;
+    ch1_cfg_checks_end_check <= \$560 ;
   always @(posedge clk)
-    ch1_read_select_10e <= \$561 ;
+    ch1_cfg_checks_spw_check <= \$561 ;
   always @(posedge clk)
-    ch1_read_select_110 <= \$562 ;
+    ch1_cfg_checks_spw_tolerance <= \$562 ;
   always @(posedge clk)
-    ch1_read_select_111 <= \$563 ;
+    ch1_ca_request_config_write <= \$563 ;
   always @(posedge clk)
-    ch1_read_select_112 <= \$564 ;
+    ch1_ca_request_slave_id <= \$564 ;
   always @(posedge clk)
-    ch1_read_select_113 <= \$565 ;
+    ch1_ca_request_address <= \$565 ;
   always @(posedge clk)
-    ch1_read_select_114 <= \$566 ;
+    ch1_ca_request_count <= \$566 ;
   always @(posedge clk)
-    ch1_read_select_115 <= \$567 ;
+    \ch1_ca_request_write$241  <= \$567 ;
   always @(posedge clk)
-    ch1_read_select_116 <= \$568 ;
+    ch1_ca_ctrl_start <= \$568 ;
   always @(posedge clk)
-    ch1_read_select_118 <= \$569 ;
+    ch1_ca_ctrl_abort <= \$569 ;
   always @(posedge clk)
-    ch1_read_select_119 <= \$570 ;
+    ch1_read_select_100 <= \$570 ;
   always @(posedge clk)
-    ch1_read_select_11a <= \$571 ;
+    ch1_read_select_101 <= \$571 ;
   always @(posedge clk)
-    ch1_read_select_11b <= \$572 ;
+    ch1_read_select_102 <= \$572 ;
   always @(posedge clk)
-    ch1_read_select_11c <= \$573 ;
+    ch1_read_select_104 <= \$573 ;
   always @(posedge clk)
-    ch1_read_select_11d <= \$574 ;
+    ch1_read_select_105 <= \$574 ;
   always @(posedge clk)
-    ch1_read_select_11e <= \$575 ;
+    ch1_read_select_108 <= \$575 ;
   always @(posedge clk)
-    ch1_read_select_140 <= \$576 ;
+    ch1_read_select_109 <= \$576 ;
   always @(posedge clk)
-    ch1_read_select_141 <= \$577 ;
+    ch1_read_select_10a <= \$577 ;
   always @(posedge clk)
-    ch1_read_select_142 <= \$578 ;
+    ch1_read_select_10b <= \$578 ;
   always @(posedge clk)
-    ch1_read_select_143 <= \$579 ;
+    ch1_read_select_10c <= \$579 ;
   always @(posedge clk)
-    ch1_read_select_144 <= \$580 ;
+    ch1_read_select_10d <= \$580 ;
   always @(posedge clk)
-    ch1_read_select_145 <= \$581 ;
+    ch1_read_select_10e <= \$581 ;
   always @(posedge clk)
-    ch1_result_status_status_snapshot <= \$582 ;
+    ch1_read_select_110 <= \$582 ;
   always @(posedge clk)
-    ch1_result_status_cds_snapshot <= \$583 ;
+    ch1_read_select_111 <= \$583 ;
   always @(posedge clk)
-    ch1_result_status_w0_ne_snapshot <= \$584 ;
+    ch1_read_select_112 <= \$584 ;
   always @(posedge clk)
-    ch1_result_status_w0_nw_snapshot <= \$585 ;
+    ch1_read_select_113 <= \$585 ;
   always @(posedge clk)
-    ch1_result_status_w0_crc_ok_snapshot <= \$586 ;
+    ch1_read_select_114 <= \$586 ;
   always @(posedge clk)
-    ch1_result_status_w1_ne_snapshot <= \$587 ;
+    ch1_read_select_115 <= \$587 ;
   always @(posedge clk)
-    ch1_result_status_w1_nw_snapshot <= \$588 ;
+    ch1_read_select_116 <= \$588 ;
   always @(posedge clk)
-    ch1_result_status_w1_crc_ok_snapshot <= \$589 ;
+    ch1_read_select_118 <= \$589 ;
   always @(posedge clk)
-    ch1_result_status_lc_repeat_snapshot <= \$590 ;
+    ch1_read_select_119 <= \$590 ;
   always @(posedge clk)
-    ch1_result_status_lc_skip_snapshot <= \$591 ;
+    ch1_read_select_11a <= \$591 ;
   always @(posedge clk)
-    ch1_result_status_lc_zero_snapshot <= \$592 ;
+    ch1_read_select_11b <= \$592 ;
   always @(posedge clk)
-    ch1_result_status_spw_mismatch_snapshot <= \$593 ;
+    ch1_read_select_11c <= \$593 ;
   always @(posedge clk)
-    ch1_result_status_lc_snapshot <= \$594 ;
+    ch1_read_select_11d <= \$594 ;
   always @(posedge clk)
-    ch1_result_seq_seq_snapshot <= \$595 ;
+    ch1_read_select_11e <= \$595 ;
   always @(posedge clk)
-    ch1_result_seq_line_delay_snapshot <= \$596 ;
+    ch1_read_select_140 <= \$596 ;
   always @(posedge clk)
-    ch1_result_w0_lo_data_snapshot <= \$597 ;
+    ch1_read_select_141 <= \$597 ;
   always @(posedge clk)
-    ch1_result_w0_hi_data_snapshot <= \$598 ;
+    ch1_read_select_142 <= \$598 ;
   always @(posedge clk)
-    ch1_result_w1_lo_data_snapshot <= \$599 ;
+    ch1_read_select_143 <= \$599 ;
   always @(posedge clk)
-    ch1_result_w1_hi_data_snapshot <= \$600 ;
+    ch1_read_select_144 <= \$600 ;
   always @(posedge clk)
-    ch1_result_timestamp_time_snapshot <= \$601 ;
+    ch1_read_select_145 <= \$601 ;
   always @(posedge clk)
-    ch1_window0_read <= \$602 ;
+    ch1_result_status_status_snapshot <= \$602 ;
   always @(posedge clk)
-    ch1_read_data <= \$603 ;
+    ch1_result_status_cds_snapshot <= \$603 ;
+  always @(posedge clk)
+    ch1_result_status_w0_ne_snapshot <= \$604 ;
+  always @(posedge clk)
+    ch1_result_status_w0_nw_snapshot <= \$605 ;
+  always @(posedge clk)
+    ch1_result_status_w0_crc_ok_snapshot <= \$606 ;
+  always @(posedge clk)
+    ch1_result_status_w1_ne_snapshot <= \$607 ;
+  always @(posedge clk)
+    ch1_result_status_w1_nw_snapshot <= \$608 ;
+  always @(posedge clk)
+    ch1_result_status_w1_crc_ok_snapshot <= \$609 ;
+  always @(posedge clk)
+    ch1_result_status_lc_repeat_snapshot <= \$610 ;
+  always @(posedge clk)
+    ch1_result_status_lc_skip_snapshot <= \$611 ;
+  always @(posedge clk)
+    ch1_result_status_lc_zero_snapshot <= \$612 ;
+  always @(posedge clk)
+    ch1_result_status_spw_mismatch_snapshot <= \$613 ;
+  always @(posedge clk)
+    ch1_result_status_lc_snapshot <= \$614 ;
+  always @(posedge clk)
+    ch1_result_seq_seq_snapshot <= \$615 ;
+  always @(posedge clk)
+    ch1_result_seq_line_delay_snapshot <= \$616 ;
+  always @(posedge clk)
+    ch1_result_w0_lo_data_snapshot <= \$617 ;
+  always @(posedge clk)
+    ch1_result_w0_hi_data_snapshot <= \$618 ;
+  always @(posedge clk)
+    ch1_result_w1_lo_data_snapshot <= \$619 ;
+  always @(posedge clk)
+    ch1_result_w1_hi_data_snapshot <= \$620 ;
+  always @(posedge clk)
+    ch1_result_timestamp_time_snapshot <= \$621 ;
+  always @(posedge clk)
+    ch1_window0_read <= \$622 ;
+  always @(posedge clk)
+    ch1_read_data <= \$623 ;
   assign \$1  = write_data[0] & write_strb[0];
   assign \$2  = g_trigger_write ? \$1  : 1'h0;
   assign \$3  = ! bus__r_addr;
@@ -2736,41 +2836,41 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign \$29  = ch0_irq_status_write ? \$28  : 1'h0;
   assign \$30  = write_data[2] & write_strb[0];
   assign \$31  = ch0_irq_status_write ? \$30  : 1'h0;
-  assign \$32  = ch0_irq_enable_write & write_strb[0];
-  assign \$33  = ch0_irq_enable_write & write_strb[0];
-  assign \$34  = ch0_irq_enable_write & write_strb[0];
-  assign \$35  = ch0_cfg_ma_write & write_strb[0];
-  assign \$36  = ch0_cfg_ma_write & write_strb[1];
-  assign \$37  = ch0_cfg_ma_write & write_strb[2];
-  assign \$38  = ch0_cfg_ma_write & write_strb[3];
-  assign \$39  = ch0_cfg_period_write & write_strb[0];
-  assign \$40  = ch0_cfg_period_write & write_strb[1];
-  assign \$41  = ch0_cfg_period_write & write_strb[2];
-  assign \$42  = ch0_cfg_break_write & write_strb[0];
-  assign \$43  = ch0_cfg_break_write & write_strb[1];
-  assign \$44  = ch0_cfg_break_write & write_strb[2];
-  assign \$45  = ch0_cfg_ack_write & write_strb[0];
-  assign \$46  = ch0_cfg_ack_write & write_strb[1];
-  assign \$47  = ch0_cfg_ack_write & write_strb[2];
-  assign \$48  = ch0_cfg_timeout_write & write_strb[0];
-  assign \$49  = ch0_cfg_timeout_write & write_strb[1];
-  assign \$50  = ch0_cfg_timeout_write & write_strb[2];
-  assign \$51  = ch0_cfg_words_write & write_strb[0];
-  assign \$52  = ch0_cfg_words_write & write_strb[0];
-  assign \$53  = ch0_cfg_words_write & write_strb[0];
-  assign \$54  = ch0_cfg_words_write & write_strb[1];
-  assign \$55  = ch0_cfg_words_write & write_strb[2];
-  assign \$56  = ch0_cfg_words_write & write_strb[2];
-  assign \$57  = ch0_cfg_words_write & write_strb[2];
-  assign \$58  = ch0_cfg_words_write & write_strb[3];
-  assign \$59  = ch0_cfg_words_write & write_strb[3];
-  assign \$60  = ch0_cfg_checks_write & write_strb[0];
-  assign \$61  = ch0_cfg_checks_write & write_strb[0];
-  assign \$62  = ch0_cfg_checks_write & write_strb[1];
-  assign \$63  = ch0_ca_request_write & write_strb[0];
-  assign \$64  = ch0_ca_request_write & write_strb[1];
-  assign \$65  = ch0_ca_request_write & write_strb[2];
-  assign \$66  = ch0_ca_request_write & write_strb[3];
+  assign \$32  = ch0_irq_enable_config_write & config_write_strb[0];
+  assign \$33  = ch0_irq_enable_config_write & config_write_strb[0];
+  assign \$34  = ch0_irq_enable_config_write & config_write_strb[0];
+  assign \$35  = ch0_cfg_ma_config_write & config_write_strb[0];
+  assign \$36  = ch0_cfg_ma_config_write & config_write_strb[1];
+  assign \$37  = ch0_cfg_ma_config_write & config_write_strb[2];
+  assign \$38  = ch0_cfg_ma_config_write & config_write_strb[3];
+  assign \$39  = ch0_cfg_period_config_write & config_write_strb[0];
+  assign \$40  = ch0_cfg_period_config_write & config_write_strb[1];
+  assign \$41  = ch0_cfg_period_config_write & config_write_strb[2];
+  assign \$42  = ch0_cfg_break_config_write & config_write_strb[0];
+  assign \$43  = ch0_cfg_break_config_write & config_write_strb[1];
+  assign \$44  = ch0_cfg_break_config_write & config_write_strb[2];
+  assign \$45  = ch0_cfg_ack_config_write & config_write_strb[0];
+  assign \$46  = ch0_cfg_ack_config_write & config_write_strb[1];
+  assign \$47  = ch0_cfg_ack_config_write & config_write_strb[2];
+  assign \$48  = ch0_cfg_timeout_config_write & config_write_strb[0];
+  assign \$49  = ch0_cfg_timeout_config_write & config_write_strb[1];
+  assign \$50  = ch0_cfg_timeout_config_write & config_write_strb[2];
+  assign \$51  = ch0_cfg_words_config_write & config_write_strb[0];
+  assign \$52  = ch0_cfg_words_config_write & config_write_strb[0];
+  assign \$53  = ch0_cfg_words_config_write & config_write_strb[0];
+  assign \$54  = ch0_cfg_words_config_write & config_write_strb[1];
+  assign \$55  = ch0_cfg_words_config_write & config_write_strb[2];
+  assign \$56  = ch0_cfg_words_config_write & config_write_strb[2];
+  assign \$57  = ch0_cfg_words_config_write & config_write_strb[2];
+  assign \$58  = ch0_cfg_words_config_write & config_write_strb[3];
+  assign \$59  = ch0_cfg_words_config_write & config_write_strb[3];
+  assign \$60  = ch0_cfg_checks_config_write & config_write_strb[0];
+  assign \$61  = ch0_cfg_checks_config_write & config_write_strb[0];
+  assign \$62  = ch0_cfg_checks_config_write & config_write_strb[1];
+  assign \$63  = ch0_ca_request_config_write & config_write_strb[0];
+  assign \$64  = ch0_ca_request_config_write & config_write_strb[1];
+  assign \$65  = ch0_ca_request_config_write & config_write_strb[2];
+  assign \$66  = ch0_ca_request_config_write & config_write_strb[3];
   assign \$67  = write_data[0] & write_strb[0];
   assign \$68  = ch0_ca_ctrl_write ? \$67  : 1'h0;
   assign \$69  = write_data[1] & write_strb[0];
@@ -2833,7 +2933,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign \$127  = \$125  | \$126 ;
   assign \$128  = ch0_read_select_8e ? { 16'h0000, ch0_cfg_checks_spw_tolerance, 6'h00, ch0_cfg_checks_spw_check, ch0_cfg_checks_end_check } : 32'd0;
   assign \$129  = \$127  | \$128 ;
-  assign \$130  = ch0_read_select_90 ? { 2'h0, \port$4147$0 [156:151], 4'h0, \port$4147$0 [160:157], 1'h0, \port$4147$0 [150:148], 1'h0, \port$4147$0 [107:105], 3'h0, \port$4147$0 [49], \port$4147$0 [3:0] } : 32'd0;
+  assign \$130  = ch0_read_select_90 ? { 2'h0, \port$4189$0 [156:151], 4'h0, \port$4189$0 [160:157], 1'h0, \port$4189$0 [150:148], 1'h0, \port$4189$0 [107:105], 3'h0, \port$4189$0 [49], \port$4189$0 [3:0] } : 32'd0;
   assign \$131  = \$129  | \$130 ;
   assign \$132  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
   assign \$133  = \$131  | \$132 ;
@@ -2847,29 +2947,29 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign \$141  = \$139  | \$140 ;
   assign \$142  = ch0_read_select_96 ? ch0_result_timestamp_time_snapshot : 32'd0;
   assign \$143  = \$141  | \$142 ;
-  assign \$144  = ch0_read_select_98 ? \port$4160$0 [31:0] : 32'd0;
+  assign \$144  = ch0_read_select_98 ? \port$4202$0 [31:0] : 32'd0;
   assign \$145  = \$143  | \$144 ;
-  assign \$146  = ch0_read_select_99 ? \port$4160$0 [63:32] : 32'd0;
+  assign \$146  = ch0_read_select_99 ? \port$4202$0 [63:32] : 32'd0;
   assign \$147  = \$145  | \$146 ;
-  assign \$148  = ch0_read_select_9a ? \port$4160$0 [95:64] : 32'd0;
+  assign \$148  = ch0_read_select_9a ? \port$4202$0 [95:64] : 32'd0;
   assign \$149  = \$147  | \$148 ;
-  assign \$150  = ch0_read_select_9b ? \port$4160$0 [127:96] : 32'd0;
+  assign \$150  = ch0_read_select_9b ? \port$4202$0 [127:96] : 32'd0;
   assign \$151  = \$149  | \$150 ;
-  assign \$152  = ch0_read_select_9c ? \port$4160$0 [159:128] : 32'd0;
+  assign \$152  = ch0_read_select_9c ? \port$4202$0 [159:128] : 32'd0;
   assign \$153  = \$151  | \$152 ;
-  assign \$154  = ch0_read_select_9d ? \port$4160$0 [191:160] : 32'd0;
+  assign \$154  = ch0_read_select_9d ? \port$4202$0 [191:160] : 32'd0;
   assign \$155  = \$153  | \$154 ;
-  assign \$156  = ch0_read_select_9e ? { 16'h0000, \port$4160$0 [207:192] } : 32'd0;
+  assign \$156  = ch0_read_select_9e ? { 16'h0000, \port$4202$0 [207:192] } : 32'd0;
   assign \$157  = \$155  | \$156 ;
-  assign \$158  = ch0_read_select_c0 ? { 7'h00, \ch0_ca_request_write$69 , 1'h0, ch0_ca_request_count, 1'h0, ch0_ca_request_address, 5'h00, ch0_ca_request_slave_id } : 32'd0;
+  assign \$158  = ch0_read_select_c0 ? { 7'h00, \ch0_ca_request_write$80 , 1'h0, ch0_ca_request_count, 1'h0, ch0_ca_request_address, 5'h00, ch0_ca_request_slave_id } : 32'd0;
   assign \$159  = \$157  | \$158 ;
-  assign \$162  = ch0_read_select_c2 ? { 17'h00000, \port$4274$0 [9:3], 1'h0, \port$4274$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
+  assign \$162  = ch0_read_select_c2 ? { 17'h00000, \port$4316$0 [9:3], 1'h0, \port$4316$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
   assign \$163  = \$161  | \$162 ;
-  assign \$164  = ch0_read_select_c3 ? \port$4160$0 [239:208] : 32'd0;
+  assign \$164  = ch0_read_select_c3 ? \port$4202$0 [239:208] : 32'd0;
   assign \$165  = \$163  | \$164 ;
-  assign \$166  = ch0_read_select_c4 ? \port$4160$0 [271:240] : 32'd0;
+  assign \$166  = ch0_read_select_c4 ? \port$4202$0 [271:240] : 32'd0;
   assign \$167  = \$165  | \$166 ;
-  assign \$168  = ch0_read_select_c5 ? { 16'h0000, \port$4160$0 [287:272] } : 32'd0;
+  assign \$168  = ch0_read_select_c5 ? { 16'h0000, \port$4202$0 [287:272] } : 32'd0;
   assign \$169  = \$167  | \$168 ;
   assign \$170  = ch0_window0_read ? ch0__ca_rbuf_data : 32'd0;
   assign \$171  = \$169  | \$170 ;
@@ -2887,41 +2987,41 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign \$183  = ch1_irq_status_write ? \$182  : 1'h0;
   assign \$184  = write_data[2] & write_strb[0];
   assign \$185  = ch1_irq_status_write ? \$184  : 1'h0;
-  assign \$186  = ch1_irq_enable_write & write_strb[0];
-  assign \$187  = ch1_irq_enable_write & write_strb[0];
-  assign \$188  = ch1_irq_enable_write & write_strb[0];
-  assign \$189  = ch1_cfg_ma_write & write_strb[0];
-  assign \$190  = ch1_cfg_ma_write & write_strb[1];
-  assign \$191  = ch1_cfg_ma_write & write_strb[2];
-  assign \$192  = ch1_cfg_ma_write & write_strb[3];
-  assign \$193  = ch1_cfg_period_write & write_strb[0];
-  assign \$194  = ch1_cfg_period_write & write_strb[1];
-  assign \$195  = ch1_cfg_period_write & write_strb[2];
-  assign \$196  = ch1_cfg_break_write & write_strb[0];
-  assign \$197  = ch1_cfg_break_write & write_strb[1];
-  assign \$198  = ch1_cfg_break_write & write_strb[2];
-  assign \$199  = ch1_cfg_ack_write & write_strb[0];
-  assign \$200  = ch1_cfg_ack_write & write_strb[1];
-  assign \$201  = ch1_cfg_ack_write & write_strb[2];
-  assign \$202  = ch1_cfg_timeout_write & write_strb[0];
-  assign \$203  = ch1_cfg_timeout_write & write_strb[1];
-  assign \$204  = ch1_cfg_timeout_write & write_strb[2];
-  assign \$205  = ch1_cfg_words_write & write_strb[0];
-  assign \$206  = ch1_cfg_words_write & write_strb[0];
-  assign \$207  = ch1_cfg_words_write & write_strb[0];
-  assign \$208  = ch1_cfg_words_write & write_strb[1];
-  assign \$209  = ch1_cfg_words_write & write_strb[2];
-  assign \$210  = ch1_cfg_words_write & write_strb[2];
-  assign \$211  = ch1_cfg_words_write & write_strb[2];
-  assign \$212  = ch1_cfg_words_write & write_strb[3];
-  assign \$213  = ch1_cfg_words_write & write_strb[3];
-  assign \$214  = ch1_cfg_checks_write & write_strb[0];
-  assign \$215  = ch1_cfg_checks_write & write_strb[0];
-  assign \$216  = ch1_cfg_checks_write & write_strb[1];
-  assign \$217  = ch1_ca_request_write & write_strb[0];
-  assign \$218  = ch1_ca_request_write & write_strb[1];
-  assign \$219  = ch1_ca_request_write & write_strb[2];
-  assign \$220  = ch1_ca_request_write & write_strb[3];
+  assign \$186  = ch1_irq_enable_config_write & config_write_strb[0];
+  assign \$187  = ch1_irq_enable_config_write & config_write_strb[0];
+  assign \$188  = ch1_irq_enable_config_write & config_write_strb[0];
+  assign \$189  = ch1_cfg_ma_config_write & config_write_strb[0];
+  assign \$190  = ch1_cfg_ma_config_write & config_write_strb[1];
+  assign \$191  = ch1_cfg_ma_config_write & config_write_strb[2];
+  assign \$192  = ch1_cfg_ma_config_write & config_write_strb[3];
+  assign \$193  = ch1_cfg_period_config_write & config_write_strb[0];
+  assign \$194  = ch1_cfg_period_config_write & config_write_strb[1];
+  assign \$195  = ch1_cfg_period_config_write & config_write_strb[2];
+  assign \$196  = ch1_cfg_break_config_write & config_write_strb[0];
+  assign \$197  = ch1_cfg_break_config_write & config_write_strb[1];
+  assign \$198  = ch1_cfg_break_config_write & config_write_strb[2];
+  assign \$199  = ch1_cfg_ack_config_write & config_write_strb[0];
+  assign \$200  = ch1_cfg_ack_config_write & config_write_strb[1];
+  assign \$201  = ch1_cfg_ack_config_write & config_write_strb[2];
+  assign \$202  = ch1_cfg_timeout_config_write & config_write_strb[0];
+  assign \$203  = ch1_cfg_timeout_config_write & config_write_strb[1];
+  assign \$204  = ch1_cfg_timeout_config_write & config_write_strb[2];
+  assign \$205  = ch1_cfg_words_config_write & config_write_strb[0];
+  assign \$206  = ch1_cfg_words_config_write & config_write_strb[0];
+  assign \$207  = ch1_cfg_words_config_write & config_write_strb[0];
+  assign \$208  = ch1_cfg_words_config_write & config_write_strb[1];
+  assign \$209  = ch1_cfg_words_config_write & config_write_strb[2];
+  assign \$210  = ch1_cfg_words_config_write & config_write_strb[2];
+  assign \$211  = ch1_cfg_words_config_write & config_write_strb[2];
+  assign \$212  = ch1_cfg_words_config_write & config_write_strb[3];
+  assign \$213  = ch1_cfg_words_config_write & config_write_strb[3];
+  assign \$214  = ch1_cfg_checks_config_write & config_write_strb[0];
+  assign \$215  = ch1_cfg_checks_config_write & config_write_strb[0];
+  assign \$216  = ch1_cfg_checks_config_write & config_write_strb[1];
+  assign \$217  = ch1_ca_request_config_write & config_write_strb[0];
+  assign \$218  = ch1_ca_request_config_write & config_write_strb[1];
+  assign \$219  = ch1_ca_request_config_write & config_write_strb[2];
+  assign \$220  = ch1_ca_request_config_write & config_write_strb[3];
   assign \$221  = write_data[0] & write_strb[0];
   assign \$222  = ch1_ca_ctrl_write ? \$221  : 1'h0;
   assign \$223  = write_data[1] & write_strb[0];
@@ -2984,7 +3084,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign \$281  = \$279  | \$280 ;
   assign \$282  = ch1_read_select_10e ? { 16'h0000, ch1_cfg_checks_spw_tolerance, 6'h00, ch1_cfg_checks_spw_check, ch1_cfg_checks_end_check } : 32'd0;
   assign \$283  = \$281  | \$282 ;
-  assign \$284  = ch1_read_select_110 ? { 2'h0, \port$4631$0 [156:151], 4'h0, \port$4631$0 [160:157], 1'h0, \port$4631$0 [150:148], 1'h0, \port$4631$0 [107:105], 3'h0, \port$4631$0 [49], \port$4631$0 [3:0] } : 32'd0;
+  assign \$284  = ch1_read_select_110 ? { 2'h0, \port$4673$0 [156:151], 4'h0, \port$4673$0 [160:157], 1'h0, \port$4673$0 [150:148], 1'h0, \port$4673$0 [107:105], 3'h0, \port$4673$0 [49], \port$4673$0 [3:0] } : 32'd0;
   assign \$285  = \$283  | \$284 ;
   assign \$286  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
   assign \$287  = \$285  | \$286 ;
@@ -2998,29 +3098,29 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign \$295  = \$293  | \$294 ;
   assign \$296  = ch1_read_select_116 ? ch1_result_timestamp_time_snapshot : 32'd0;
   assign \$297  = \$295  | \$296 ;
-  assign \$298  = ch1_read_select_118 ? \port$4644$0 [31:0] : 32'd0;
+  assign \$298  = ch1_read_select_118 ? \port$4686$0 [31:0] : 32'd0;
   assign \$299  = \$297  | \$298 ;
-  assign \$300  = ch1_read_select_119 ? \port$4644$0 [63:32] : 32'd0;
+  assign \$300  = ch1_read_select_119 ? \port$4686$0 [63:32] : 32'd0;
   assign \$301  = \$299  | \$300 ;
-  assign \$302  = ch1_read_select_11a ? \port$4644$0 [95:64] : 32'd0;
+  assign \$302  = ch1_read_select_11a ? \port$4686$0 [95:64] : 32'd0;
   assign \$303  = \$301  | \$302 ;
-  assign \$304  = ch1_read_select_11b ? \port$4644$0 [127:96] : 32'd0;
+  assign \$304  = ch1_read_select_11b ? \port$4686$0 [127:96] : 32'd0;
   assign \$305  = \$303  | \$304 ;
-  assign \$306  = ch1_read_select_11c ? \port$4644$0 [159:128] : 32'd0;
+  assign \$306  = ch1_read_select_11c ? \port$4686$0 [159:128] : 32'd0;
   assign \$307  = \$305  | \$306 ;
-  assign \$308  = ch1_read_select_11d ? \port$4644$0 [191:160] : 32'd0;
+  assign \$308  = ch1_read_select_11d ? \port$4686$0 [191:160] : 32'd0;
   assign \$309  = \$307  | \$308 ;
-  assign \$310  = ch1_read_select_11e ? { 16'h0000, \port$4644$0 [207:192] } : 32'd0;
+  assign \$310  = ch1_read_select_11e ? { 16'h0000, \port$4686$0 [207:192] } : 32'd0;
   assign \$311  = \$309  | \$310 ;
-  assign \$312  = ch1_read_select_140 ? { 7'h00, \ch1_ca_request_write$221 , 1'h0, ch1_ca_request_count, 1'h0, ch1_ca_request_address, 5'h00, ch1_ca_request_slave_id } : 32'd0;
+  assign \$312  = ch1_read_select_140 ? { 7'h00, \ch1_ca_request_write$241 , 1'h0, ch1_ca_request_count, 1'h0, ch1_ca_request_address, 5'h00, ch1_ca_request_slave_id } : 32'd0;
   assign \$313  = \$311  | \$312 ;
-  assign \$316  = ch1_read_select_142 ? { 17'h00000, \port$4758$0 [9:3], 1'h0, \port$4758$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
+  assign \$316  = ch1_read_select_142 ? { 17'h00000, \port$4800$0 [9:3], 1'h0, \port$4800$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
   assign \$317  = \$315  | \$316 ;
-  assign \$318  = ch1_read_select_143 ? \port$4644$0 [239:208] : 32'd0;
+  assign \$318  = ch1_read_select_143 ? \port$4686$0 [239:208] : 32'd0;
   assign \$319  = \$317  | \$318 ;
-  assign \$320  = ch1_read_select_144 ? \port$4644$0 [271:240] : 32'd0;
+  assign \$320  = ch1_read_select_144 ? \port$4686$0 [271:240] : 32'd0;
   assign \$321  = \$319  | \$320 ;
-  assign \$322  = ch1_read_select_145 ? { 16'h0000, \port$4644$0 [287:272] } : 32'd0;
+  assign \$322  = ch1_read_select_145 ? { 16'h0000, \port$4686$0 [287:272] } : 32'd0;
   assign \$323  = \$321  | \$322 ;
   assign \$324  = ch1_window0_read ? ch1__ca_rbuf_data : 32'd0;
   assign \$325  = \$323  | \$324 ;
@@ -3074,26 +3174,6 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign ch0_result_timestamp_write = write_en & \$349 ;
   assign \$350  = write_addr == 8'h98;
   assign ch0_count_crc_write = write_en & \$350 ;
-  assign \$351  = write_addr == 8'h99;
-  assign ch0_count_ack_write = write_en & \$351 ;
-  assign \$352  = write_addr == 8'h9a;
-  assign ch0_count_line_write = write_en & \$352 ;
-  assign \$353  = write_addr == 8'h9b;
-  assign ch0_count_lc_write = write_en & \$353 ;
-  assign \$354  = write_addr == 8'h9c;
-  assign ch0_count_check_write = write_en & \$354 ;
-  assign \$355  = write_addr == 8'h9d;
-  assign ch0_count_cycle_write = write_en & \$355 ;
-  assign \$356  = write_addr == 8'h9e;
-  assign ch0_count_stop_write = write_en & \$356 ;
-  assign \$357  = write_addr == 8'hc0;
-  assign ch0_ca_request_write = write_en & \$357 ;
-  assign \$358  = write_addr == 8'hc1;
-  assign ch0_ca_ctrl_write = write_en & \$358 ;
-  assign \$359  = write_addr == 8'hc2;
-  assign ch0_ca_state_write = write_en & \$359 ;
-  assign \$360  = write_addr == 8'hc3;
-  assign ch0_ca_count_crc4_answer_write = write_en & \$360 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$415  = bus__w_en;
@@ -3133,36 +3213,36 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$419  = \$2 ;
+    \$419  = config_write_data;
+    if (write_en) begin
+      \$419  = write_data;
+    end
     if (rst) begin
-      \$419  = 1'h0;
+      \$419  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$420  = g_read_select_0;
-    if (bus__r_en) begin
-      \$420  = \$3 ;
+    \$420  = config_write_strb;
+    if (write_en) begin
+      \$420  = write_strb;
     end
     if (rst) begin
-      \$420  = 1'h0;
+      \$420  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$421  = g_read_select_1;
-    if (bus__r_en) begin
-      \$421  = \$4 ;
-    end
+    \$421  = \$2 ;
     if (rst) begin
       \$421  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$422  = g_read_select_2;
+    \$422  = g_read_select_0;
     if (bus__r_en) begin
-      \$422  = \$5 ;
+      \$422  = \$3 ;
     end
     if (rst) begin
       \$422  = 1'h0;
@@ -3170,9 +3250,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$423  = g_read_select_3;
+    \$423  = g_read_select_1;
     if (bus__r_en) begin
-      \$423  = \$6 ;
+      \$423  = \$4 ;
     end
     if (rst) begin
       \$423  = 1'h0;
@@ -3180,9 +3260,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$424  = g_read_select_4;
+    \$424  = g_read_select_2;
     if (bus__r_en) begin
-      \$424  = \$7 ;
+      \$424  = \$5 ;
     end
     if (rst) begin
       \$424  = 1'h0;
@@ -3190,85 +3270,81 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$425  = g_read_data;
-    if (bus__r_load) begin
-      \$425  = \$17 ;
+    \$425  = g_read_select_3;
+    if (bus__r_en) begin
+      \$425  = \$6 ;
     end
     if (rst) begin
-      \$425  = 32'd0;
+      \$425  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$426  = \$19 ;
+    \$426  = g_read_select_4;
+    if (bus__r_en) begin
+      \$426  = \$7 ;
+    end
     if (rst) begin
       \$426  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$427  = \$21 ;
+    \$427  = g_read_data;
+    if (bus__r_load) begin
+      \$427  = \$17 ;
+    end
     if (rst) begin
-      \$427  = 1'h0;
+      \$427  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$428  = \$23 ;
+    \$428  = \$19 ;
     if (rst) begin
       \$428  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$429  = ch0_ctrl_periodic;
-    if (\$24 ) begin
-      \$429  = write_data[8];
-    end
+    \$429  = \$21 ;
     if (rst) begin
       \$429  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$430  = ch0_ctrl_trigger_enable;
-    if (\$25 ) begin
-      \$430  = write_data[9];
-    end
+    \$430  = \$23 ;
     if (rst) begin
       \$430  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$431  = ch0_irq_status_done;
+    \$431  = ch0_ctrl_periodic;
+    if (\$24 ) begin
+      \$431  = write_data[8];
+    end
+    if (rst) begin
+      \$431  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$432  = ch0_ctrl_trigger_enable;
+    if (\$25 ) begin
+      \$432  = write_data[9];
+    end
+    if (rst) begin
+      \$432  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$433  = ch0_irq_status_done;
     if (ch0__done) begin
-      \$431  = 1'h1;
-    end else if (\$27 ) begin
-      \$431  = 1'h0;
-    end
-    if (rst) begin
-      \$431  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$432  = ch0_irq_status_error;
-    if (ch0__frame_error) begin
-      \$432  = 1'h1;
-    end else if (\$29 ) begin
-      \$432  = 1'h0;
-    end
-    if (rst) begin
-      \$432  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$433  = ch0_irq_status_access_done;
-    if (ch0__ca_done) begin
       \$433  = 1'h1;
-    end else if (\$31 ) begin
+    end else if (\$27 ) begin
       \$433  = 1'h0;
     end
     if (rst) begin
@@ -3277,9 +3353,11 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$434  = ch0_irq_enable_done;
-    if (\$32 ) begin
-      \$434  = write_data[0];
+    \$434  = ch0_irq_status_error;
+    if (ch0__frame_error) begin
+      \$434  = 1'h1;
+    end else if (\$29 ) begin
+      \$434  = 1'h0;
     end
     if (rst) begin
       \$434  = 1'h0;
@@ -3287,9 +3365,11 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$435  = ch0_irq_enable_error;
-    if (\$33 ) begin
-      \$435  = write_data[1];
+    \$435  = ch0_irq_status_access_done;
+    if (ch0__ca_done) begin
+      \$435  = 1'h1;
+    end else if (\$31 ) begin
+      \$435  = 1'h0;
     end
     if (rst) begin
       \$435  = 1'h0;
@@ -3297,209 +3377,188 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$436  = ch0_irq_enable_access_done;
-    if (\$34 ) begin
-      \$436  = write_data[2];
-    end
+    \$436  = ch0_irq_enable_write;
     if (rst) begin
       \$436  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$437  = ch0_cfg_ma_ma_half_period;
+    \$437  = ch0_irq_enable_done;
+    if (\$32 ) begin
+      \$437  = config_write_data[0];
+    end
+    if (rst) begin
+      \$437  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$438  = ch0_irq_enable_error;
+    if (\$33 ) begin
+      \$438  = config_write_data[1];
+    end
+    if (rst) begin
+      \$438  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$439  = ch0_irq_enable_access_done;
+    if (\$34 ) begin
+      \$439  = config_write_data[2];
+    end
+    if (rst) begin
+      \$439  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$440  = ch0_cfg_ma_write;
+    if (rst) begin
+      \$440  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$441  = ch0_cfg_ma_ma_half_period;
     if (\$35 ) begin
-      \$437 [7:0] = write_data[7:0];
+      \$441 [7:0] = config_write_data[7:0];
     end
     if (\$36 ) begin
-      \$437 [15:8] = write_data[15:8];
+      \$441 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$437  = 16'h0000;
+      \$441  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$438  = ch0_cfg_ma_delay_limit;
+    \$442  = ch0_cfg_ma_delay_limit;
     if (\$37 ) begin
-      \$438 [7:0] = write_data[23:16];
+      \$442 [7:0] = config_write_data[23:16];
     end
     if (\$38 ) begin
-      \$438 [11:8] = write_data[27:24];
+      \$442 [11:8] = config_write_data[27:24];
     end
     if (rst) begin
-      \$438  = 12'h000;
+      \$442  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$439  = ch0_cfg_period_request_period;
+    \$443  = ch0_cfg_period_write;
+    if (rst) begin
+      \$443  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$444  = ch0_cfg_period_request_period;
     if (\$39 ) begin
-      \$439 [7:0] = write_data[7:0];
+      \$444 [7:0] = config_write_data[7:0];
     end
     if (\$40 ) begin
-      \$439 [15:8] = write_data[15:8];
+      \$444 [15:8] = config_write_data[15:8];
     end
     if (\$41 ) begin
-      \$439 [23:16] = write_data[23:16];
+      \$444 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$439  = 24'h000000;
+      \$444  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$440  = ch0_cfg_break_break_time;
-    if (\$42 ) begin
-      \$440 [7:0] = write_data[7:0];
-    end
-    if (\$43 ) begin
-      \$440 [15:8] = write_data[15:8];
-    end
-    if (\$44 ) begin
-      \$440 [23:16] = write_data[23:16];
-    end
-    if (rst) begin
-      \$440  = 24'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$441  = ch0_cfg_ack_ack_limit;
-    if (\$45 ) begin
-      \$441 [7:0] = write_data[7:0];
-    end
-    if (\$46 ) begin
-      \$441 [15:8] = write_data[15:8];
-    end
-    if (\$47 ) begin
-      \$441 [23:16] = write_data[23:16];
-    end
-    if (rst) begin
-      \$441  = 24'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$442  = ch0_cfg_timeout_timeout_limit;
-    if (\$48 ) begin
-      \$442 [7:0] = write_data[7:0];
-    end
-    if (\$49 ) begin
-      \$442 [15:8] = write_data[15:8];
-    end
-    if (\$50 ) begin
-      \$442 [23:16] = write_data[23:16];
-    end
-    if (rst) begin
-      \$442  = 24'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$443  = ch0_cfg_words_w0_data_bits;
-    if (\$51 ) begin
-      \$443  = write_data[5:0];
-    end
-    if (rst) begin
-      \$443  = 6'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$444  = ch0_cfg_words_w0_nenw;
-    if (\$52 ) begin
-      \$444  = write_data[6];
-    end
-    if (rst) begin
-      \$444  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$445  = ch0_cfg_words_w0_lc;
-    if (\$53 ) begin
-      \$445  = write_data[7];
-    end
+    \$445  = ch0_cfg_break_write;
     if (rst) begin
       \$445  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$446  = ch0_cfg_words_w0_crc;
-    if (\$54 ) begin
-      \$446  = write_data[9:8];
+    \$446  = ch0_cfg_break_break_time;
+    if (\$42 ) begin
+      \$446 [7:0] = config_write_data[7:0];
+    end
+    if (\$43 ) begin
+      \$446 [15:8] = config_write_data[15:8];
+    end
+    if (\$44 ) begin
+      \$446 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$446  = 2'h0;
+      \$446  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$447  = ch0_cfg_words_w1_data_bits;
-    if (\$55 ) begin
-      \$447  = write_data[21:16];
-    end
+    \$447  = ch0_cfg_ack_write;
     if (rst) begin
-      \$447  = 6'h00;
+      \$447  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$448  = ch0_cfg_words_w1_nenw;
-    if (\$56 ) begin
-      \$448  = write_data[22];
+    \$448  = ch0_cfg_ack_ack_limit;
+    if (\$45 ) begin
+      \$448 [7:0] = config_write_data[7:0];
+    end
+    if (\$46 ) begin
+      \$448 [15:8] = config_write_data[15:8];
+    end
+    if (\$47 ) begin
+      \$448 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$448  = 1'h0;
+      \$448  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$449  = ch0_cfg_words_w1_lc;
-    if (\$57 ) begin
-      \$449  = write_data[23];
-    end
+    \$449  = ch0_cfg_timeout_write;
     if (rst) begin
       \$449  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$450  = ch0_cfg_words_w1_crc;
-    if (\$58 ) begin
-      \$450  = write_data[25:24];
+    \$450  = ch0_cfg_timeout_timeout_limit;
+    if (\$48 ) begin
+      \$450 [7:0] = config_write_data[7:0];
+    end
+    if (\$49 ) begin
+      \$450 [15:8] = config_write_data[15:8];
+    end
+    if (\$50 ) begin
+      \$450 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$450  = 2'h0;
+      \$450  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$451  = ch0_cfg_words_w1_enable;
-    if (\$59 ) begin
-      \$451  = write_data[31];
-    end
+    \$451  = ch0_cfg_words_write;
     if (rst) begin
       \$451  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$452  = ch0_cfg_checks_end_check;
-    if (\$60 ) begin
-      \$452  = write_data[0];
+    \$452  = ch0_cfg_words_w0_data_bits;
+    if (\$51 ) begin
+      \$452  = config_write_data[5:0];
     end
     if (rst) begin
-      \$452  = 1'h0;
+      \$452  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$453  = ch0_cfg_checks_spw_check;
-    if (\$61 ) begin
-      \$453  = write_data[1];
+    \$453  = ch0_cfg_words_w0_nenw;
+    if (\$52 ) begin
+      \$453  = config_write_data[6];
     end
     if (rst) begin
       \$453  = 1'h0;
@@ -3507,49 +3566,49 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$454  = ch0_cfg_checks_spw_tolerance;
-    if (\$62 ) begin
-      \$454  = write_data[15:8];
+    \$454  = ch0_cfg_words_w0_lc;
+    if (\$53 ) begin
+      \$454  = config_write_data[7];
     end
     if (rst) begin
-      \$454  = 8'h00;
+      \$454  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$455  = ch0_ca_request_slave_id;
-    if (\$63 ) begin
-      \$455  = write_data[2:0];
+    \$455  = ch0_cfg_words_w0_crc;
+    if (\$54 ) begin
+      \$455  = config_write_data[9:8];
     end
     if (rst) begin
-      \$455  = 3'h0;
+      \$455  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$456  = ch0_ca_request_address;
-    if (\$64 ) begin
-      \$456  = write_data[14:8];
+    \$456  = ch0_cfg_words_w1_data_bits;
+    if (\$55 ) begin
+      \$456  = config_write_data[21:16];
     end
     if (rst) begin
-      \$456  = 7'h00;
+      \$456  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$457  = ch0_ca_request_count;
-    if (\$65 ) begin
-      \$457  = write_data[22:16];
+    \$457  = ch0_cfg_words_w1_nenw;
+    if (\$56 ) begin
+      \$457  = config_write_data[22];
     end
     if (rst) begin
-      \$457  = 7'h00;
+      \$457  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$458  = \ch0_ca_request_write$69 ;
-    if (\$66 ) begin
-      \$458  = write_data[24];
+    \$458  = ch0_cfg_words_w1_lc;
+    if (\$57 ) begin
+      \$458  = config_write_data[23];
     end
     if (rst) begin
       \$458  = 1'h0;
@@ -3557,33 +3616,36 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$459  = \$68 ;
+    \$459  = ch0_cfg_words_w1_crc;
+    if (\$58 ) begin
+      \$459  = config_write_data[25:24];
+    end
     if (rst) begin
-      \$459  = 1'h0;
+      \$459  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$460  = \$70 ;
+    \$460  = ch0_cfg_words_w1_enable;
+    if (\$59 ) begin
+      \$460  = config_write_data[31];
+    end
     if (rst) begin
       \$460  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$461  = ch0_read_select_80;
-    if (bus__r_en) begin
-      \$461  = \$71 ;
-    end
+    \$461  = ch0_cfg_checks_write;
     if (rst) begin
       \$461  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$462  = ch0_read_select_81;
-    if (bus__r_en) begin
-      \$462  = \$72 ;
+    \$462  = ch0_cfg_checks_end_check;
+    if (\$60 ) begin
+      \$462  = config_write_data[0];
     end
     if (rst) begin
       \$462  = 1'h0;
@@ -3591,9 +3653,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$463  = ch0_read_select_82;
-    if (bus__r_en) begin
-      \$463  = \$73 ;
+    \$463  = ch0_cfg_checks_spw_check;
+    if (\$61 ) begin
+      \$463  = config_write_data[1];
     end
     if (rst) begin
       \$463  = 1'h0;
@@ -3601,59 +3663,56 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$464  = ch0_read_select_84;
-    if (bus__r_en) begin
-      \$464  = \$74 ;
+    \$464  = ch0_cfg_checks_spw_tolerance;
+    if (\$62 ) begin
+      \$464  = config_write_data[15:8];
     end
     if (rst) begin
-      \$464  = 1'h0;
+      \$464  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$465  = ch0_read_select_85;
-    if (bus__r_en) begin
-      \$465  = \$75 ;
-    end
+    \$465  = ch0_ca_request_write;
     if (rst) begin
       \$465  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$466  = ch0_read_select_88;
-    if (bus__r_en) begin
-      \$466  = \$76 ;
+    \$466  = ch0_ca_request_slave_id;
+    if (\$63 ) begin
+      \$466  = config_write_data[2:0];
     end
     if (rst) begin
-      \$466  = 1'h0;
+      \$466  = 3'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$467  = ch0_read_select_89;
-    if (bus__r_en) begin
-      \$467  = \$77 ;
+    \$467  = ch0_ca_request_address;
+    if (\$64 ) begin
+      \$467  = config_write_data[14:8];
     end
     if (rst) begin
-      \$467  = 1'h0;
+      \$467  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$468  = ch0_read_select_8a;
-    if (bus__r_en) begin
-      \$468  = \$78 ;
+    \$468  = ch0_ca_request_count;
+    if (\$65 ) begin
+      \$468  = config_write_data[22:16];
     end
     if (rst) begin
-      \$468  = 1'h0;
+      \$468  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$469  = ch0_read_select_8b;
-    if (bus__r_en) begin
-      \$469  = \$79 ;
+    \$469  = \ch0_ca_request_write$80 ;
+    if (\$66 ) begin
+      \$469  = config_write_data[24];
     end
     if (rst) begin
       \$469  = 1'h0;
@@ -3661,29 +3720,23 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$470  = ch0_read_select_8c;
-    if (bus__r_en) begin
-      \$470  = \$80 ;
-    end
+    \$470  = \$68 ;
     if (rst) begin
       \$470  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$471  = ch0_read_select_8d;
-    if (bus__r_en) begin
-      \$471  = \$81 ;
-    end
+    \$471  = \$70 ;
     if (rst) begin
       \$471  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$472  = ch0_read_select_8e;
+    \$472  = ch0_read_select_80;
     if (bus__r_en) begin
-      \$472  = \$82 ;
+      \$472  = \$71 ;
     end
     if (rst) begin
       \$472  = 1'h0;
@@ -3691,9 +3744,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$473  = ch0_read_select_90;
+    \$473  = ch0_read_select_81;
     if (bus__r_en) begin
-      \$473  = \$83 ;
+      \$473  = \$72 ;
     end
     if (rst) begin
       \$473  = 1'h0;
@@ -3701,9 +3754,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$474  = ch0_read_select_91;
+    \$474  = ch0_read_select_82;
     if (bus__r_en) begin
-      \$474  = \$84 ;
+      \$474  = \$73 ;
     end
     if (rst) begin
       \$474  = 1'h0;
@@ -3711,9 +3764,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$475  = ch0_read_select_92;
+    \$475  = ch0_read_select_84;
     if (bus__r_en) begin
-      \$475  = \$85 ;
+      \$475  = \$74 ;
     end
     if (rst) begin
       \$475  = 1'h0;
@@ -3721,9 +3774,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$476  = ch0_read_select_93;
+    \$476  = ch0_read_select_85;
     if (bus__r_en) begin
-      \$476  = \$86 ;
+      \$476  = \$75 ;
     end
     if (rst) begin
       \$476  = 1'h0;
@@ -3731,9 +3784,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$477  = ch0_read_select_94;
+    \$477  = ch0_read_select_88;
     if (bus__r_en) begin
-      \$477  = \$87 ;
+      \$477  = \$76 ;
     end
     if (rst) begin
       \$477  = 1'h0;
@@ -3741,9 +3794,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$478  = ch0_read_select_95;
+    \$478  = ch0_read_select_89;
     if (bus__r_en) begin
-      \$478  = \$88 ;
+      \$478  = \$77 ;
     end
     if (rst) begin
       \$478  = 1'h0;
@@ -3751,9 +3804,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$479  = ch0_read_select_96;
+    \$479  = ch0_read_select_8a;
     if (bus__r_en) begin
-      \$479  = \$89 ;
+      \$479  = \$78 ;
     end
     if (rst) begin
       \$479  = 1'h0;
@@ -3761,9 +3814,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$480  = ch0_read_select_98;
+    \$480  = ch0_read_select_8b;
     if (bus__r_en) begin
-      \$480  = \$90 ;
+      \$480  = \$79 ;
     end
     if (rst) begin
       \$480  = 1'h0;
@@ -3771,9 +3824,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$481  = ch0_read_select_99;
+    \$481  = ch0_read_select_8c;
     if (bus__r_en) begin
-      \$481  = \$91 ;
+      \$481  = \$80 ;
     end
     if (rst) begin
       \$481  = 1'h0;
@@ -3781,9 +3834,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$482  = ch0_read_select_9a;
+    \$482  = ch0_read_select_8d;
     if (bus__r_en) begin
-      \$482  = \$92 ;
+      \$482  = \$81 ;
     end
     if (rst) begin
       \$482  = 1'h0;
@@ -3791,9 +3844,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$483  = ch0_read_select_9b;
+    \$483  = ch0_read_select_8e;
     if (bus__r_en) begin
-      \$483  = \$93 ;
+      \$483  = \$82 ;
     end
     if (rst) begin
       \$483  = 1'h0;
@@ -3801,9 +3854,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$484  = ch0_read_select_9c;
+    \$484  = ch0_read_select_90;
     if (bus__r_en) begin
-      \$484  = \$94 ;
+      \$484  = \$83 ;
     end
     if (rst) begin
       \$484  = 1'h0;
@@ -3811,9 +3864,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$485  = ch0_read_select_9d;
+    \$485  = ch0_read_select_91;
     if (bus__r_en) begin
-      \$485  = \$95 ;
+      \$485  = \$84 ;
     end
     if (rst) begin
       \$485  = 1'h0;
@@ -3821,9 +3874,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$486  = ch0_read_select_9e;
+    \$486  = ch0_read_select_92;
     if (bus__r_en) begin
-      \$486  = \$96 ;
+      \$486  = \$85 ;
     end
     if (rst) begin
       \$486  = 1'h0;
@@ -3831,9 +3884,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$487  = ch0_read_select_c0;
+    \$487  = ch0_read_select_93;
     if (bus__r_en) begin
-      \$487  = \$97 ;
+      \$487  = \$86 ;
     end
     if (rst) begin
       \$487  = 1'h0;
@@ -3841,9 +3894,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$488  = ch0_read_select_c1;
+    \$488  = ch0_read_select_94;
     if (bus__r_en) begin
-      \$488  = \$98 ;
+      \$488  = \$87 ;
     end
     if (rst) begin
       \$488  = 1'h0;
@@ -3851,9 +3904,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$489  = ch0_read_select_c2;
+    \$489  = ch0_read_select_95;
     if (bus__r_en) begin
-      \$489  = \$99 ;
+      \$489  = \$88 ;
     end
     if (rst) begin
       \$489  = 1'h0;
@@ -3861,9 +3914,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$490  = ch0_read_select_c3;
+    \$490  = ch0_read_select_96;
     if (bus__r_en) begin
-      \$490  = \$100 ;
+      \$490  = \$89 ;
     end
     if (rst) begin
       \$490  = 1'h0;
@@ -3871,9 +3924,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$491  = ch0_read_select_c4;
+    \$491  = ch0_read_select_98;
     if (bus__r_en) begin
-      \$491  = \$101 ;
+      \$491  = \$90 ;
     end
     if (rst) begin
       \$491  = 1'h0;
@@ -3881,9 +3934,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$492  = ch0_read_select_c5;
+    \$492  = ch0_read_select_99;
     if (bus__r_en) begin
-      \$492  = \$102 ;
+      \$492  = \$91 ;
     end
     if (rst) begin
       \$492  = 1'h0;
@@ -3891,19 +3944,19 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$493  = ch0_result_status_status_snapshot;
-    if (\$103 ) begin
-      \$493  = \port$4147$0 [3:0];
+    \$493  = ch0_read_select_9a;
+    if (bus__r_en) begin
+      \$493  = \$92 ;
     end
     if (rst) begin
-      \$493  = 4'h0;
+      \$493  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$494  = ch0_result_status_cds_snapshot;
-    if (\$103 ) begin
-      \$494  = \port$4147$0 [49];
+    \$494  = ch0_read_select_9b;
+    if (bus__r_en) begin
+      \$494  = \$93 ;
     end
     if (rst) begin
       \$494  = 1'h0;
@@ -3911,9 +3964,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$495  = ch0_result_status_w0_ne_snapshot;
-    if (\$103 ) begin
-      \$495  = \port$4147$0 [105];
+    \$495  = ch0_read_select_9c;
+    if (bus__r_en) begin
+      \$495  = \$94 ;
     end
     if (rst) begin
       \$495  = 1'h0;
@@ -3921,9 +3974,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$496  = ch0_result_status_w0_nw_snapshot;
-    if (\$103 ) begin
-      \$496  = \port$4147$0 [106];
+    \$496  = ch0_read_select_9d;
+    if (bus__r_en) begin
+      \$496  = \$95 ;
     end
     if (rst) begin
       \$496  = 1'h0;
@@ -3931,9 +3984,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$497  = ch0_result_status_w0_crc_ok_snapshot;
-    if (\$103 ) begin
-      \$497  = \port$4147$0 [107];
+    \$497  = ch0_read_select_9e;
+    if (bus__r_en) begin
+      \$497  = \$96 ;
     end
     if (rst) begin
       \$497  = 1'h0;
@@ -3941,9 +3994,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$498  = ch0_result_status_w1_ne_snapshot;
-    if (\$103 ) begin
-      \$498  = \port$4147$0 [148];
+    \$498  = ch0_read_select_c0;
+    if (bus__r_en) begin
+      \$498  = \$97 ;
     end
     if (rst) begin
       \$498  = 1'h0;
@@ -3951,9 +4004,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$499  = ch0_result_status_w1_nw_snapshot;
-    if (\$103 ) begin
-      \$499  = \port$4147$0 [149];
+    \$499  = ch0_read_select_c1;
+    if (bus__r_en) begin
+      \$499  = \$98 ;
     end
     if (rst) begin
       \$499  = 1'h0;
@@ -3961,9 +4014,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$500  = ch0_result_status_w1_crc_ok_snapshot;
-    if (\$103 ) begin
-      \$500  = \port$4147$0 [150];
+    \$500  = ch0_read_select_c2;
+    if (bus__r_en) begin
+      \$500  = \$99 ;
     end
     if (rst) begin
       \$500  = 1'h0;
@@ -3971,9 +4024,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$501  = ch0_result_status_lc_repeat_snapshot;
-    if (\$103 ) begin
-      \$501  = \port$4147$0 [157];
+    \$501  = ch0_read_select_c3;
+    if (bus__r_en) begin
+      \$501  = \$100 ;
     end
     if (rst) begin
       \$501  = 1'h0;
@@ -3981,9 +4034,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$502  = ch0_result_status_lc_skip_snapshot;
-    if (\$103 ) begin
-      \$502  = \port$4147$0 [158];
+    \$502  = ch0_read_select_c4;
+    if (bus__r_en) begin
+      \$502  = \$101 ;
     end
     if (rst) begin
       \$502  = 1'h0;
@@ -3991,9 +4044,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$503  = ch0_result_status_lc_zero_snapshot;
-    if (\$103 ) begin
-      \$503  = \port$4147$0 [159];
+    \$503  = ch0_read_select_c5;
+    if (bus__r_en) begin
+      \$503  = \$102 ;
     end
     if (rst) begin
       \$503  = 1'h0;
@@ -4001,99 +4054,99 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$504  = ch0_result_status_spw_mismatch_snapshot;
+    \$504  = ch0_result_status_status_snapshot;
     if (\$103 ) begin
-      \$504  = \port$4147$0 [160];
+      \$504  = \port$4189$0 [3:0];
     end
     if (rst) begin
-      \$504  = 1'h0;
+      \$504  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$505  = ch0_result_status_lc_snapshot;
+    \$505  = ch0_result_status_cds_snapshot;
     if (\$103 ) begin
-      \$505  = \port$4147$0 [156:151];
+      \$505  = \port$4189$0 [49];
     end
     if (rst) begin
-      \$505  = 6'h00;
+      \$505  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$506  = ch0_result_seq_seq_snapshot;
+    \$506  = ch0_result_status_w0_ne_snapshot;
     if (\$103 ) begin
-      \$506  = ch0__done_count;
+      \$506  = \port$4189$0 [105];
     end
     if (rst) begin
-      \$506  = 16'h0000;
+      \$506  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$507  = ch0_result_seq_line_delay_snapshot;
+    \$507  = ch0_result_status_w0_nw_snapshot;
     if (\$103 ) begin
-      \$507  = \port$4147$0 [48:36];
+      \$507  = \port$4189$0 [106];
     end
     if (rst) begin
-      \$507  = 13'h0000;
+      \$507  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$508  = ch0_result_w0_lo_data_snapshot;
+    \$508  = ch0_result_status_w0_crc_ok_snapshot;
     if (\$103 ) begin
-      \$508  = \port$4147$0 [81:50];
+      \$508  = \port$4189$0 [107];
     end
     if (rst) begin
-      \$508  = 32'd0;
+      \$508  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$509  = ch0_result_w0_hi_data_snapshot;
+    \$509  = ch0_result_status_w1_ne_snapshot;
     if (\$103 ) begin
-      \$509  = \port$4147$0 [104:82];
+      \$509  = \port$4189$0 [148];
     end
     if (rst) begin
-      \$509  = 23'h000000;
+      \$509  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$510  = ch0_result_w1_lo_data_snapshot;
+    \$510  = ch0_result_status_w1_nw_snapshot;
     if (\$103 ) begin
-      \$510  = \port$4147$0 [139:108];
+      \$510  = \port$4189$0 [149];
     end
     if (rst) begin
-      \$510  = 32'd0;
+      \$510  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$511  = ch0_result_w1_hi_data_snapshot;
+    \$511  = ch0_result_status_w1_crc_ok_snapshot;
     if (\$103 ) begin
-      \$511  = \port$4147$0 [147:140];
+      \$511  = \port$4189$0 [150];
     end
     if (rst) begin
-      \$511  = 8'h00;
+      \$511  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$512  = ch0_result_timestamp_time_snapshot;
+    \$512  = ch0_result_status_lc_repeat_snapshot;
     if (\$103 ) begin
-      \$512  = \port$4147$0 [35:4];
+      \$512  = \port$4189$0 [157];
     end
     if (rst) begin
-      \$512  = 32'd0;
+      \$512  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$513  = ch0_window0_read;
-    if (bus__r_en) begin
-      \$513  = \$105 ;
+    \$513  = ch0_result_status_lc_skip_snapshot;
+    if (\$103 ) begin
+      \$513  = \port$4189$0 [158];
     end
     if (rst) begin
       \$513  = 1'h0;
@@ -4101,106 +4154,109 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$514  = ch0_read_data;
-    if (bus__r_load) begin
-      \$514  = \$171 ;
+    \$514  = ch0_result_status_lc_zero_snapshot;
+    if (\$103 ) begin
+      \$514  = \port$4189$0 [159];
     end
     if (rst) begin
-      \$514  = 32'd0;
+      \$514  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$515  = \$173 ;
+    \$515  = ch0_result_status_spw_mismatch_snapshot;
+    if (\$103 ) begin
+      \$515  = \port$4189$0 [160];
+    end
     if (rst) begin
       \$515  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$516  = \$175 ;
+    \$516  = ch0_result_status_lc_snapshot;
+    if (\$103 ) begin
+      \$516  = \port$4189$0 [156:151];
+    end
     if (rst) begin
-      \$516  = 1'h0;
+      \$516  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$517  = \$177 ;
+    \$517  = ch0_result_seq_seq_snapshot;
+    if (\$103 ) begin
+      \$517  = ch0__done_count;
+    end
     if (rst) begin
-      \$517  = 1'h0;
+      \$517  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$518  = ch1_ctrl_periodic;
-    if (\$178 ) begin
-      \$518  = write_data[8];
+    \$518  = ch0_result_seq_line_delay_snapshot;
+    if (\$103 ) begin
+      \$518  = \port$4189$0 [48:36];
     end
     if (rst) begin
-      \$518  = 1'h0;
+      \$518  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$519  = ch1_ctrl_trigger_enable;
-    if (\$179 ) begin
-      \$519  = write_data[9];
+    \$519  = ch0_result_w0_lo_data_snapshot;
+    if (\$103 ) begin
+      \$519  = \port$4189$0 [81:50];
     end
     if (rst) begin
-      \$519  = 1'h0;
+      \$519  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$520  = ch1_irq_status_done;
-    if (ch1__done) begin
-      \$520  = 1'h1;
-    end else if (\$181 ) begin
-      \$520  = 1'h0;
+    \$520  = ch0_result_w0_hi_data_snapshot;
+    if (\$103 ) begin
+      \$520  = \port$4189$0 [104:82];
     end
     if (rst) begin
-      \$520  = 1'h0;
+      \$520  = 23'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$521  = ch1_irq_status_error;
-    if (ch1__frame_error) begin
-      \$521  = 1'h1;
-    end else if (\$183 ) begin
-      \$521  = 1'h0;
+    \$521  = ch0_result_w1_lo_data_snapshot;
+    if (\$103 ) begin
+      \$521  = \port$4189$0 [139:108];
     end
     if (rst) begin
-      \$521  = 1'h0;
+      \$521  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$522  = ch1_irq_status_access_done;
-    if (ch1__ca_done) begin
-      \$522  = 1'h1;
-    end else if (\$185 ) begin
-      \$522  = 1'h0;
+    \$522  = ch0_result_w1_hi_data_snapshot;
+    if (\$103 ) begin
+      \$522  = \port$4189$0 [147:140];
     end
     if (rst) begin
-      \$522  = 1'h0;
+      \$522  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$523  = ch1_irq_enable_done;
-    if (\$186 ) begin
-      \$523  = write_data[0];
+    \$523  = ch0_result_timestamp_time_snapshot;
+    if (\$103 ) begin
+      \$523  = \port$4189$0 [35:4];
     end
     if (rst) begin
-      \$523  = 1'h0;
+      \$523  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$524  = ch1_irq_enable_error;
-    if (\$187 ) begin
-      \$524  = write_data[1];
+    \$524  = ch0_window0_read;
+    if (bus__r_en) begin
+      \$524  = \$105 ;
     end
     if (rst) begin
       \$524  = 1'h0;
@@ -4208,119 +4264,86 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$525  = ch1_irq_enable_access_done;
-    if (\$188 ) begin
-      \$525  = write_data[2];
+    \$525  = ch0_read_data;
+    if (bus__r_load) begin
+      \$525  = \$171 ;
     end
     if (rst) begin
-      \$525  = 1'h0;
+      \$525  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$526  = ch1_cfg_ma_ma_half_period;
-    if (\$189 ) begin
-      \$526 [7:0] = write_data[7:0];
-    end
-    if (\$190 ) begin
-      \$526 [15:8] = write_data[15:8];
-    end
+    \$526  = \$173 ;
     if (rst) begin
-      \$526  = 16'h0000;
+      \$526  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$527  = ch1_cfg_ma_delay_limit;
-    if (\$191 ) begin
-      \$527 [7:0] = write_data[23:16];
-    end
-    if (\$192 ) begin
-      \$527 [11:8] = write_data[27:24];
-    end
+    \$527  = \$175 ;
     if (rst) begin
-      \$527  = 12'h000;
+      \$527  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$528  = ch1_cfg_period_request_period;
-    if (\$193 ) begin
-      \$528 [7:0] = write_data[7:0];
-    end
-    if (\$194 ) begin
-      \$528 [15:8] = write_data[15:8];
-    end
-    if (\$195 ) begin
-      \$528 [23:16] = write_data[23:16];
-    end
+    \$528  = \$177 ;
     if (rst) begin
-      \$528  = 24'h000000;
+      \$528  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$529  = ch1_cfg_break_break_time;
-    if (\$196 ) begin
-      \$529 [7:0] = write_data[7:0];
-    end
-    if (\$197 ) begin
-      \$529 [15:8] = write_data[15:8];
-    end
-    if (\$198 ) begin
-      \$529 [23:16] = write_data[23:16];
+    \$529  = ch1_ctrl_periodic;
+    if (\$178 ) begin
+      \$529  = write_data[8];
     end
     if (rst) begin
-      \$529  = 24'h000000;
+      \$529  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$530  = ch1_cfg_ack_ack_limit;
-    if (\$199 ) begin
-      \$530 [7:0] = write_data[7:0];
-    end
-    if (\$200 ) begin
-      \$530 [15:8] = write_data[15:8];
-    end
-    if (\$201 ) begin
-      \$530 [23:16] = write_data[23:16];
+    \$530  = ch1_ctrl_trigger_enable;
+    if (\$179 ) begin
+      \$530  = write_data[9];
     end
     if (rst) begin
-      \$530  = 24'h000000;
+      \$530  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$531  = ch1_cfg_timeout_timeout_limit;
-    if (\$202 ) begin
-      \$531 [7:0] = write_data[7:0];
-    end
-    if (\$203 ) begin
-      \$531 [15:8] = write_data[15:8];
-    end
-    if (\$204 ) begin
-      \$531 [23:16] = write_data[23:16];
+    \$531  = ch1_irq_status_done;
+    if (ch1__done) begin
+      \$531  = 1'h1;
+    end else if (\$181 ) begin
+      \$531  = 1'h0;
     end
     if (rst) begin
-      \$531  = 24'h000000;
+      \$531  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$532  = ch1_cfg_words_w0_data_bits;
-    if (\$205 ) begin
-      \$532  = write_data[5:0];
+    \$532  = ch1_irq_status_error;
+    if (ch1__frame_error) begin
+      \$532  = 1'h1;
+    end else if (\$183 ) begin
+      \$532  = 1'h0;
     end
     if (rst) begin
-      \$532  = 6'h00;
+      \$532  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$533  = ch1_cfg_words_w0_nenw;
-    if (\$206 ) begin
-      \$533  = write_data[6];
+    \$533  = ch1_irq_status_access_done;
+    if (ch1__ca_done) begin
+      \$533  = 1'h1;
+    end else if (\$185 ) begin
+      \$533  = 1'h0;
     end
     if (rst) begin
       \$533  = 1'h0;
@@ -4328,39 +4351,36 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$534  = ch1_cfg_words_w0_lc;
-    if (\$207 ) begin
-      \$534  = write_data[7];
-    end
+    \$534  = ch1_irq_enable_write;
     if (rst) begin
       \$534  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$535  = ch1_cfg_words_w0_crc;
-    if (\$208 ) begin
-      \$535  = write_data[9:8];
+    \$535  = ch1_irq_enable_done;
+    if (\$186 ) begin
+      \$535  = config_write_data[0];
     end
     if (rst) begin
-      \$535  = 2'h0;
+      \$535  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$536  = ch1_cfg_words_w1_data_bits;
-    if (\$209 ) begin
-      \$536  = write_data[21:16];
+    \$536  = ch1_irq_enable_error;
+    if (\$187 ) begin
+      \$536  = config_write_data[1];
     end
     if (rst) begin
-      \$536  = 6'h00;
+      \$536  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$537  = ch1_cfg_words_w1_nenw;
-    if (\$210 ) begin
-      \$537  = write_data[22];
+    \$537  = ch1_irq_enable_access_done;
+    if (\$188 ) begin
+      \$537  = config_write_data[2];
     end
     if (rst) begin
       \$537  = 1'h0;
@@ -4368,133 +4388,151 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$538  = ch1_cfg_words_w1_lc;
-    if (\$211 ) begin
-      \$538  = write_data[23];
-    end
+    \$538  = ch1_cfg_ma_write;
     if (rst) begin
       \$538  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$539  = ch1_cfg_words_w1_crc;
-    if (\$212 ) begin
-      \$539  = write_data[25:24];
+    \$539  = ch1_cfg_ma_ma_half_period;
+    if (\$189 ) begin
+      \$539 [7:0] = config_write_data[7:0];
+    end
+    if (\$190 ) begin
+      \$539 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$539  = 2'h0;
+      \$539  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$540  = ch1_cfg_words_w1_enable;
-    if (\$213 ) begin
-      \$540  = write_data[31];
+    \$540  = ch1_cfg_ma_delay_limit;
+    if (\$191 ) begin
+      \$540 [7:0] = config_write_data[23:16];
+    end
+    if (\$192 ) begin
+      \$540 [11:8] = config_write_data[27:24];
     end
     if (rst) begin
-      \$540  = 1'h0;
+      \$540  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$541  = ch1_cfg_checks_end_check;
-    if (\$214 ) begin
-      \$541  = write_data[0];
-    end
+    \$541  = ch1_cfg_period_write;
     if (rst) begin
       \$541  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$542  = ch1_cfg_checks_spw_check;
-    if (\$215 ) begin
-      \$542  = write_data[1];
+    \$542  = ch1_cfg_period_request_period;
+    if (\$193 ) begin
+      \$542 [7:0] = config_write_data[7:0];
+    end
+    if (\$194 ) begin
+      \$542 [15:8] = config_write_data[15:8];
+    end
+    if (\$195 ) begin
+      \$542 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$542  = 1'h0;
+      \$542  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$543  = ch1_cfg_checks_spw_tolerance;
-    if (\$216 ) begin
-      \$543  = write_data[15:8];
-    end
+    \$543  = ch1_cfg_break_write;
     if (rst) begin
-      \$543  = 8'h00;
+      \$543  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$544  = ch1_ca_request_slave_id;
-    if (\$217 ) begin
-      \$544  = write_data[2:0];
+    \$544  = ch1_cfg_break_break_time;
+    if (\$196 ) begin
+      \$544 [7:0] = config_write_data[7:0];
+    end
+    if (\$197 ) begin
+      \$544 [15:8] = config_write_data[15:8];
+    end
+    if (\$198 ) begin
+      \$544 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$544  = 3'h0;
+      \$544  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$545  = ch1_ca_request_address;
-    if (\$218 ) begin
-      \$545  = write_data[14:8];
-    end
+    \$545  = ch1_cfg_ack_write;
     if (rst) begin
-      \$545  = 7'h00;
+      \$545  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$546  = ch1_ca_request_count;
-    if (\$219 ) begin
-      \$546  = write_data[22:16];
+    \$546  = ch1_cfg_ack_ack_limit;
+    if (\$199 ) begin
+      \$546 [7:0] = config_write_data[7:0];
+    end
+    if (\$200 ) begin
+      \$546 [15:8] = config_write_data[15:8];
+    end
+    if (\$201 ) begin
+      \$546 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$546  = 7'h00;
+      \$546  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$547  = \ch1_ca_request_write$221 ;
-    if (\$220 ) begin
-      \$547  = write_data[24];
-    end
+    \$547  = ch1_cfg_timeout_write;
     if (rst) begin
       \$547  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$548  = \$222 ;
+    \$548  = ch1_cfg_timeout_timeout_limit;
+    if (\$202 ) begin
+      \$548 [7:0] = config_write_data[7:0];
+    end
+    if (\$203 ) begin
+      \$548 [15:8] = config_write_data[15:8];
+    end
+    if (\$204 ) begin
+      \$548 [23:16] = config_write_data[23:16];
+    end
     if (rst) begin
-      \$548  = 1'h0;
+      \$548  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$549  = \$224 ;
+    \$549  = ch1_cfg_words_write;
     if (rst) begin
       \$549  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$550  = ch1_read_select_100;
-    if (bus__r_en) begin
-      \$550  = \$225 ;
+    \$550  = ch1_cfg_words_w0_data_bits;
+    if (\$205 ) begin
+      \$550  = config_write_data[5:0];
     end
     if (rst) begin
-      \$550  = 1'h0;
+      \$550  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$551  = ch1_read_select_101;
-    if (bus__r_en) begin
-      \$551  = \$226 ;
+    \$551  = ch1_cfg_words_w0_nenw;
+    if (\$206 ) begin
+      \$551  = config_write_data[6];
     end
     if (rst) begin
       \$551  = 1'h0;
@@ -4502,9 +4540,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$552  = ch1_read_select_102;
-    if (bus__r_en) begin
-      \$552  = \$227 ;
+    \$552  = ch1_cfg_words_w0_lc;
+    if (\$207 ) begin
+      \$552  = config_write_data[7];
     end
     if (rst) begin
       \$552  = 1'h0;
@@ -4512,29 +4550,29 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$553  = ch1_read_select_104;
-    if (bus__r_en) begin
-      \$553  = \$228 ;
+    \$553  = ch1_cfg_words_w0_crc;
+    if (\$208 ) begin
+      \$553  = config_write_data[9:8];
     end
     if (rst) begin
-      \$553  = 1'h0;
+      \$553  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$554  = ch1_read_select_105;
-    if (bus__r_en) begin
-      \$554  = \$229 ;
+    \$554  = ch1_cfg_words_w1_data_bits;
+    if (\$209 ) begin
+      \$554  = config_write_data[21:16];
     end
     if (rst) begin
-      \$554  = 1'h0;
+      \$554  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$555  = ch1_read_select_108;
-    if (bus__r_en) begin
-      \$555  = \$230 ;
+    \$555  = ch1_cfg_words_w1_nenw;
+    if (\$210 ) begin
+      \$555  = config_write_data[22];
     end
     if (rst) begin
       \$555  = 1'h0;
@@ -4542,9 +4580,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$556  = ch1_read_select_109;
-    if (bus__r_en) begin
-      \$556  = \$231 ;
+    \$556  = ch1_cfg_words_w1_lc;
+    if (\$211 ) begin
+      \$556  = config_write_data[23];
     end
     if (rst) begin
       \$556  = 1'h0;
@@ -4552,19 +4590,19 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$557  = ch1_read_select_10a;
-    if (bus__r_en) begin
-      \$557  = \$232 ;
+    \$557  = ch1_cfg_words_w1_crc;
+    if (\$212 ) begin
+      \$557  = config_write_data[25:24];
     end
     if (rst) begin
-      \$557  = 1'h0;
+      \$557  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$558  = ch1_read_select_10b;
-    if (bus__r_en) begin
-      \$558  = \$233 ;
+    \$558  = ch1_cfg_words_w1_enable;
+    if (\$213 ) begin
+      \$558  = config_write_data[31];
     end
     if (rst) begin
       \$558  = 1'h0;
@@ -4572,19 +4610,16 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$559  = ch1_read_select_10c;
-    if (bus__r_en) begin
-      \$559  = \$234 ;
-    end
+    \$559  = ch1_cfg_checks_write;
     if (rst) begin
       \$559  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$560  = ch1_read_select_10d;
-    if (bus__r_en) begin
-      \$560  = \$235 ;
+    \$560  = ch1_cfg_checks_end_check;
+    if (\$214 ) begin
+      \$560  = config_write_data[0];
     end
     if (rst) begin
       \$560  = 1'h0;
@@ -4592,9 +4627,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$561  = ch1_read_select_10e;
-    if (bus__r_en) begin
-      \$561  = \$236 ;
+    \$561  = ch1_cfg_checks_spw_check;
+    if (\$215 ) begin
+      \$561  = config_write_data[1];
     end
     if (rst) begin
       \$561  = 1'h0;
@@ -4602,59 +4637,56 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$562  = ch1_read_select_110;
-    if (bus__r_en) begin
-      \$562  = \$237 ;
+    \$562  = ch1_cfg_checks_spw_tolerance;
+    if (\$216 ) begin
+      \$562  = config_write_data[15:8];
     end
     if (rst) begin
-      \$562  = 1'h0;
+      \$562  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$563  = ch1_read_select_111;
-    if (bus__r_en) begin
-      \$563  = \$238 ;
-    end
+    \$563  = ch1_ca_request_write;
     if (rst) begin
       \$563  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$564  = ch1_read_select_112;
-    if (bus__r_en) begin
-      \$564  = \$239 ;
+    \$564  = ch1_ca_request_slave_id;
+    if (\$217 ) begin
+      \$564  = config_write_data[2:0];
     end
     if (rst) begin
-      \$564  = 1'h0;
+      \$564  = 3'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$565  = ch1_read_select_113;
-    if (bus__r_en) begin
-      \$565  = \$240 ;
+    \$565  = ch1_ca_request_address;
+    if (\$218 ) begin
+      \$565  = config_write_data[14:8];
     end
     if (rst) begin
-      \$565  = 1'h0;
+      \$565  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$566  = ch1_read_select_114;
-    if (bus__r_en) begin
-      \$566  = \$241 ;
+    \$566  = ch1_ca_request_count;
+    if (\$219 ) begin
+      \$566  = config_write_data[22:16];
     end
     if (rst) begin
-      \$566  = 1'h0;
+      \$566  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$567  = ch1_read_select_115;
-    if (bus__r_en) begin
-      \$567  = \$242 ;
+    \$567  = \ch1_ca_request_write$241 ;
+    if (\$220 ) begin
+      \$567  = config_write_data[24];
     end
     if (rst) begin
       \$567  = 1'h0;
@@ -4662,29 +4694,23 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$568  = ch1_read_select_116;
-    if (bus__r_en) begin
-      \$568  = \$243 ;
-    end
+    \$568  = \$222 ;
     if (rst) begin
       \$568  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$569  = ch1_read_select_118;
-    if (bus__r_en) begin
-      \$569  = \$244 ;
-    end
+    \$569  = \$224 ;
     if (rst) begin
       \$569  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$570  = ch1_read_select_119;
+    \$570  = ch1_read_select_100;
     if (bus__r_en) begin
-      \$570  = \$245 ;
+      \$570  = \$225 ;
     end
     if (rst) begin
       \$570  = 1'h0;
@@ -4692,9 +4718,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$571  = ch1_read_select_11a;
+    \$571  = ch1_read_select_101;
     if (bus__r_en) begin
-      \$571  = \$246 ;
+      \$571  = \$226 ;
     end
     if (rst) begin
       \$571  = 1'h0;
@@ -4702,9 +4728,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$572  = ch1_read_select_11b;
+    \$572  = ch1_read_select_102;
     if (bus__r_en) begin
-      \$572  = \$247 ;
+      \$572  = \$227 ;
     end
     if (rst) begin
       \$572  = 1'h0;
@@ -4712,9 +4738,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$573  = ch1_read_select_11c;
+    \$573  = ch1_read_select_104;
     if (bus__r_en) begin
-      \$573  = \$248 ;
+      \$573  = \$228 ;
     end
     if (rst) begin
       \$573  = 1'h0;
@@ -4722,9 +4748,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$574  = ch1_read_select_11d;
+    \$574  = ch1_read_select_105;
     if (bus__r_en) begin
-      \$574  = \$249 ;
+      \$574  = \$229 ;
     end
     if (rst) begin
       \$574  = 1'h0;
@@ -4732,9 +4758,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$575  = ch1_read_select_11e;
+    \$575  = ch1_read_select_108;
     if (bus__r_en) begin
-      \$575  = \$250 ;
+      \$575  = \$230 ;
     end
     if (rst) begin
       \$575  = 1'h0;
@@ -4742,9 +4768,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$576  = ch1_read_select_140;
+    \$576  = ch1_read_select_109;
     if (bus__r_en) begin
-      \$576  = \$251 ;
+      \$576  = \$231 ;
     end
     if (rst) begin
       \$576  = 1'h0;
@@ -4752,9 +4778,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$577  = ch1_read_select_141;
+    \$577  = ch1_read_select_10a;
     if (bus__r_en) begin
-      \$577  = \$252 ;
+      \$577  = \$232 ;
     end
     if (rst) begin
       \$577  = 1'h0;
@@ -4762,9 +4788,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$578  = ch1_read_select_142;
+    \$578  = ch1_read_select_10b;
     if (bus__r_en) begin
-      \$578  = \$253 ;
+      \$578  = \$233 ;
     end
     if (rst) begin
       \$578  = 1'h0;
@@ -4772,9 +4798,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$579  = ch1_read_select_143;
+    \$579  = ch1_read_select_10c;
     if (bus__r_en) begin
-      \$579  = \$254 ;
+      \$579  = \$234 ;
     end
     if (rst) begin
       \$579  = 1'h0;
@@ -4782,9 +4808,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$580  = ch1_read_select_144;
+    \$580  = ch1_read_select_10d;
     if (bus__r_en) begin
-      \$580  = \$255 ;
+      \$580  = \$235 ;
     end
     if (rst) begin
       \$580  = 1'h0;
@@ -4792,9 +4818,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$581  = ch1_read_select_145;
+    \$581  = ch1_read_select_10e;
     if (bus__r_en) begin
-      \$581  = \$256 ;
+      \$581  = \$236 ;
     end
     if (rst) begin
       \$581  = 1'h0;
@@ -4802,19 +4828,19 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$582  = ch1_result_status_status_snapshot;
-    if (\$257 ) begin
-      \$582  = \port$4631$0 [3:0];
+    \$582  = ch1_read_select_110;
+    if (bus__r_en) begin
+      \$582  = \$237 ;
     end
     if (rst) begin
-      \$582  = 4'h0;
+      \$582  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$583  = ch1_result_status_cds_snapshot;
-    if (\$257 ) begin
-      \$583  = \port$4631$0 [49];
+    \$583  = ch1_read_select_111;
+    if (bus__r_en) begin
+      \$583  = \$238 ;
     end
     if (rst) begin
       \$583  = 1'h0;
@@ -4822,9 +4848,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$584  = ch1_result_status_w0_ne_snapshot;
-    if (\$257 ) begin
-      \$584  = \port$4631$0 [105];
+    \$584  = ch1_read_select_112;
+    if (bus__r_en) begin
+      \$584  = \$239 ;
     end
     if (rst) begin
       \$584  = 1'h0;
@@ -4832,9 +4858,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$585  = ch1_result_status_w0_nw_snapshot;
-    if (\$257 ) begin
-      \$585  = \port$4631$0 [106];
+    \$585  = ch1_read_select_113;
+    if (bus__r_en) begin
+      \$585  = \$240 ;
     end
     if (rst) begin
       \$585  = 1'h0;
@@ -4842,9 +4868,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$586  = ch1_result_status_w0_crc_ok_snapshot;
-    if (\$257 ) begin
-      \$586  = \port$4631$0 [107];
+    \$586  = ch1_read_select_114;
+    if (bus__r_en) begin
+      \$586  = \$241 ;
     end
     if (rst) begin
       \$586  = 1'h0;
@@ -4852,9 +4878,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$587  = ch1_result_status_w1_ne_snapshot;
-    if (\$257 ) begin
-      \$587  = \port$4631$0 [148];
+    \$587  = ch1_read_select_115;
+    if (bus__r_en) begin
+      \$587  = \$242 ;
     end
     if (rst) begin
       \$587  = 1'h0;
@@ -4862,9 +4888,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$588  = ch1_result_status_w1_nw_snapshot;
-    if (\$257 ) begin
-      \$588  = \port$4631$0 [149];
+    \$588  = ch1_read_select_116;
+    if (bus__r_en) begin
+      \$588  = \$243 ;
     end
     if (rst) begin
       \$588  = 1'h0;
@@ -4872,9 +4898,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$589  = ch1_result_status_w1_crc_ok_snapshot;
-    if (\$257 ) begin
-      \$589  = \port$4631$0 [150];
+    \$589  = ch1_read_select_118;
+    if (bus__r_en) begin
+      \$589  = \$244 ;
     end
     if (rst) begin
       \$589  = 1'h0;
@@ -4882,9 +4908,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$590  = ch1_result_status_lc_repeat_snapshot;
-    if (\$257 ) begin
-      \$590  = \port$4631$0 [157];
+    \$590  = ch1_read_select_119;
+    if (bus__r_en) begin
+      \$590  = \$245 ;
     end
     if (rst) begin
       \$590  = 1'h0;
@@ -4892,9 +4918,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$591  = ch1_result_status_lc_skip_snapshot;
-    if (\$257 ) begin
-      \$591  = \port$4631$0 [158];
+    \$591  = ch1_read_select_11a;
+    if (bus__r_en) begin
+      \$591  = \$246 ;
     end
     if (rst) begin
       \$591  = 1'h0;
@@ -4902,9 +4928,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$592  = ch1_result_status_lc_zero_snapshot;
-    if (\$257 ) begin
-      \$592  = \port$4631$0 [159];
+    \$592  = ch1_read_select_11b;
+    if (bus__r_en) begin
+      \$592  = \$247 ;
     end
     if (rst) begin
       \$592  = 1'h0;
@@ -4912,9 +4938,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$593  = ch1_result_status_spw_mismatch_snapshot;
-    if (\$257 ) begin
-      \$593  = \port$4631$0 [160];
+    \$593  = ch1_read_select_11c;
+    if (bus__r_en) begin
+      \$593  = \$248 ;
     end
     if (rst) begin
       \$593  = 1'h0;
@@ -4922,192 +4948,392 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$594  = ch1_result_status_lc_snapshot;
-    if (\$257 ) begin
-      \$594  = \port$4631$0 [156:151];
-    end
-    if (rst) begin
-      \$594  = 6'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$595  = ch1_result_seq_seq_snapshot;
-    if (\$257 ) begin
-      \$595  = ch1__done_count;
-    end
-    if (rst) begin
-      \$595  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$596  = ch1_result_seq_line_delay_snapshot;
-    if (\$257 ) begin
-      \$596  = \port$4631$0 [48:36];
-    end
-    if (rst) begin
-      \$596  = 13'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$597  = ch1_result_w0_lo_data_snapshot;
-    if (\$257 ) begin
-      \$597  = \port$4631$0 [81:50];
-    end
-    if (rst) begin
-      \$597  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$598  = ch1_result_w0_hi_data_snapshot;
-    if (\$257 ) begin
-      \$598  = \port$4631$0 [104:82];
-    end
-    if (rst) begin
-      \$598  = 23'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$599  = ch1_result_w1_lo_data_snapshot;
-    if (\$257 ) begin
-      \$599  = \port$4631$0 [139:108];
-    end
-    if (rst) begin
-      \$599  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$600  = ch1_result_w1_hi_data_snapshot;
-    if (\$257 ) begin
-      \$600  = \port$4631$0 [147:140];
-    end
-    if (rst) begin
-      \$600  = 8'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$601  = ch1_result_timestamp_time_snapshot;
-    if (\$257 ) begin
-      \$601  = \port$4631$0 [35:4];
-    end
-    if (rst) begin
-      \$601  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$602  = ch1_window0_read;
+    \$594  = ch1_read_select_11d;
     if (bus__r_en) begin
-      \$602  = \$259 ;
+      \$594  = \$249 ;
     end
     if (rst) begin
-      \$602  = 1'h0;
+      \$594  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$603  = ch1_read_data;
-    if (bus__r_load) begin
-      \$603  = \$325 ;
+    \$595  = ch1_read_select_11e;
+    if (bus__r_en) begin
+      \$595  = \$250 ;
     end
     if (rst) begin
-      \$603  = 32'd0;
+      \$595  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$596  = ch1_read_select_140;
+    if (bus__r_en) begin
+      \$596  = \$251 ;
+    end
+    if (rst) begin
+      \$596  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$597  = ch1_read_select_141;
+    if (bus__r_en) begin
+      \$597  = \$252 ;
+    end
+    if (rst) begin
+      \$597  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$598  = ch1_read_select_142;
+    if (bus__r_en) begin
+      \$598  = \$253 ;
+    end
+    if (rst) begin
+      \$598  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$599  = ch1_read_select_143;
+    if (bus__r_en) begin
+      \$599  = \$254 ;
+    end
+    if (rst) begin
+      \$599  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$600  = ch1_read_select_144;
+    if (bus__r_en) begin
+      \$600  = \$255 ;
+    end
+    if (rst) begin
+      \$600  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$601  = ch1_read_select_145;
+    if (bus__r_en) begin
+      \$601  = \$256 ;
+    end
+    if (rst) begin
+      \$601  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$602  = ch1_result_status_status_snapshot;
+    if (\$257 ) begin
+      \$602  = \port$4673$0 [3:0];
+    end
+    if (rst) begin
+      \$602  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$603  = ch1_result_status_cds_snapshot;
+    if (\$257 ) begin
+      \$603  = \port$4673$0 [49];
+    end
+    if (rst) begin
+      \$603  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$604  = ch1_result_status_w0_ne_snapshot;
+    if (\$257 ) begin
+      \$604  = \port$4673$0 [105];
+    end
+    if (rst) begin
+      \$604  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$605  = ch1_result_status_w0_nw_snapshot;
+    if (\$257 ) begin
+      \$605  = \port$4673$0 [106];
+    end
+    if (rst) begin
+      \$605  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$606  = ch1_result_status_w0_crc_ok_snapshot;
+    if (\$257 ) begin
+      \$606  = \port$4673$0 [107];
+    end
+    if (rst) begin
+      \$606  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$607  = ch1_result_status_w1_ne_snapshot;
+    if (\$257 ) begin
+      \$607  = \port$4673$0 [148];
+    end
+    if (rst) begin
+      \$607  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$608  = ch1_result_status_w1_nw_snapshot;
+    if (\$257 ) begin
+      \$608  = \port$4673$0 [149];
+    end
+    if (rst) begin
+      \$608  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$609  = ch1_result_status_w1_crc_ok_snapshot;
+    if (\$257 ) begin
+      \$609  = \port$4673$0 [150];
+    end
+    if (rst) begin
+      \$609  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$610  = ch1_result_status_lc_repeat_snapshot;
+    if (\$257 ) begin
+      \$610  = \port$4673$0 [157];
+    end
+    if (rst) begin
+      \$610  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$611  = ch1_result_status_lc_skip_snapshot;
+    if (\$257 ) begin
+      \$611  = \port$4673$0 [158];
+    end
+    if (rst) begin
+      \$611  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$612  = ch1_result_status_lc_zero_snapshot;
+    if (\$257 ) begin
+      \$612  = \port$4673$0 [159];
+    end
+    if (rst) begin
+      \$612  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$613  = ch1_result_status_spw_mismatch_snapshot;
+    if (\$257 ) begin
+      \$613  = \port$4673$0 [160];
+    end
+    if (rst) begin
+      \$613  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$614  = ch1_result_status_lc_snapshot;
+    if (\$257 ) begin
+      \$614  = \port$4673$0 [156:151];
+    end
+    if (rst) begin
+      \$614  = 6'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$615  = ch1_result_seq_seq_snapshot;
+    if (\$257 ) begin
+      \$615  = ch1__done_count;
+    end
+    if (rst) begin
+      \$615  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$616  = ch1_result_seq_line_delay_snapshot;
+    if (\$257 ) begin
+      \$616  = \port$4673$0 [48:36];
+    end
+    if (rst) begin
+      \$616  = 13'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$617  = ch1_result_w0_lo_data_snapshot;
+    if (\$257 ) begin
+      \$617  = \port$4673$0 [81:50];
+    end
+    if (rst) begin
+      \$617  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$618  = ch1_result_w0_hi_data_snapshot;
+    if (\$257 ) begin
+      \$618  = \port$4673$0 [104:82];
+    end
+    if (rst) begin
+      \$618  = 23'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$619  = ch1_result_w1_lo_data_snapshot;
+    if (\$257 ) begin
+      \$619  = \port$4673$0 [139:108];
+    end
+    if (rst) begin
+      \$619  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$620  = ch1_result_w1_hi_data_snapshot;
+    if (\$257 ) begin
+      \$620  = \port$4673$0 [147:140];
+    end
+    if (rst) begin
+      \$620  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$621  = ch1_result_timestamp_time_snapshot;
+    if (\$257 ) begin
+      \$621  = \port$4673$0 [35:4];
+    end
+    if (rst) begin
+      \$621  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$622  = ch1_window0_read;
+    if (bus__r_en) begin
+      \$622  = \$259 ;
+    end
+    if (rst) begin
+      \$622  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$623  = ch1_read_data;
+    if (bus__r_load) begin
+      \$623  = \$325 ;
+    end
+    if (rst) begin
+      \$623  = 32'd0;
     end
   end
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, ch1_irq, ch0_irq };
-  assign ch0__status = \port$4147$0 [3:0];
-  assign ch0__cds = \port$4147$0 [49];
-  assign ch0__word0_ne = \port$4147$0 [105];
-  assign ch0__word0_nw = \port$4147$0 [106];
-  assign ch0__word0_crc_ok = \port$4147$0 [107];
-  assign ch0__word1_ne = \port$4147$0 [148];
-  assign ch0__word1_nw = \port$4147$0 [149];
-  assign ch0__word1_crc_ok = \port$4147$0 [150];
-  assign ch0__lc_repeat = \port$4147$0 [157];
-  assign ch0__lc_skip = \port$4147$0 [158];
-  assign ch0__lc_zero = \port$4147$0 [159];
-  assign ch0__spw_mismatch = \port$4147$0 [160];
-  assign ch0__lc = \port$4147$0 [156:151];
-  assign ch0__line_delay = \port$4147$0 [48:36];
-  assign ch0__word0_position = \port$4147$0 [104:50];
-  assign ch0__word1_position = \port$4147$0 [147:108];
-  assign ch0__timestamp = \port$4147$0 [35:4];
+  assign ch0__status = \port$4189$0 [3:0];
+  assign ch0__cds = \port$4189$0 [49];
+  assign ch0__word0_ne = \port$4189$0 [105];
+  assign ch0__word0_nw = \port$4189$0 [106];
+  assign ch0__word0_crc_ok = \port$4189$0 [107];
+  assign ch0__word1_ne = \port$4189$0 [148];
+  assign ch0__word1_nw = \port$4189$0 [149];
+  assign ch0__word1_crc_ok = \port$4189$0 [150];
+  assign ch0__lc_repeat = \port$4189$0 [157];
+  assign ch0__lc_skip = \port$4189$0 [158];
+  assign ch0__lc_zero = \port$4189$0 [159];
+  assign ch0__spw_mismatch = \port$4189$0 [160];
+  assign ch0__lc = \port$4189$0 [156:151];
+  assign ch0__line_delay = \port$4189$0 [48:36];
+  assign ch0__word0_position = \port$4189$0 [104:50];
+  assign ch0__word1_position = \port$4189$0 [147:108];
+  assign ch0__timestamp = \port$4189$0 [35:4];
   assign ch0__cap_data_bits_w0 = 6'h37;
   assign ch0__cap_data_bits_w1 = 6'h28;
   assign ch0__cap_timer_width = 6'h18;
   assign ch0__cap_counters = 1'h1;
   assign ch0__cap_timestamp = 1'h1;
   assign ch0__cap_register_access = 1'h1;
-  assign ch0__count_crc_word0 = \port$4160$0 [15:0];
-  assign ch0__count_crc_word1 = \port$4160$0 [31:16];
-  assign ch0__count_no_ack = \port$4160$0 [47:32];
-  assign ch0__count_no_start = \port$4160$0 [63:48];
-  assign ch0__count_delay_range = \port$4160$0 [79:64];
-  assign ch0__count_slo_stuck_low = \port$4160$0 [95:80];
-  assign ch0__count_lc_repeat = \port$4160$0 [111:96];
-  assign ch0__count_lc_skip = \port$4160$0 [127:112];
-  assign ch0__count_lc_zero = \port$4160$0 [143:128];
-  assign ch0__count_spw_mismatch = \port$4160$0 [159:144];
-  assign ch0__count_overrun = \port$4160$0 [175:160];
-  assign ch0__count_aborted = \port$4160$0 [191:176];
-  assign ch0__count_no_stop = \port$4160$0 [207:192];
-  assign ch0__ca_status = \port$4274$0 [2:0];
-  assign ch0__ca_bytes_done = \port$4274$0 [9:3];
-  assign ch0__count_ca_crc4_error = \port$4160$0 [223:208];
-  assign ch0__count_ca_no_answer = \port$4160$0 [239:224];
-  assign ch0__count_ca_refused = \port$4160$0 [255:240];
-  assign ch0__count_ca_aborted = \port$4160$0 [271:256];
-  assign ch0__count_ca_data_fault = \port$4160$0 [287:272];
-  assign ch1__status = \port$4631$0 [3:0];
-  assign ch1__cds = \port$4631$0 [49];
-  assign ch1__word0_ne = \port$4631$0 [105];
-  assign ch1__word0_nw = \port$4631$0 [106];
-  assign ch1__word0_crc_ok = \port$4631$0 [107];
-  assign ch1__word1_ne = \port$4631$0 [148];
-  assign ch1__word1_nw = \port$4631$0 [149];
-  assign ch1__word1_crc_ok = \port$4631$0 [150];
-  assign ch1__lc_repeat = \port$4631$0 [157];
-  assign ch1__lc_skip = \port$4631$0 [158];
-  assign ch1__lc_zero = \port$4631$0 [159];
-  assign ch1__spw_mismatch = \port$4631$0 [160];
-  assign ch1__lc = \port$4631$0 [156:151];
-  assign ch1__line_delay = \port$4631$0 [48:36];
-  assign ch1__word0_position = \port$4631$0 [104:50];
-  assign ch1__word1_position = \port$4631$0 [147:108];
-  assign ch1__timestamp = \port$4631$0 [35:4];
+  assign ch0__count_crc_word0 = \port$4202$0 [15:0];
+  assign ch0__count_crc_word1 = \port$4202$0 [31:16];
+  assign ch0__count_no_ack = \port$4202$0 [47:32];
+  assign ch0__count_no_start = \port$4202$0 [63:48];
+  assign ch0__count_delay_range = \port$4202$0 [79:64];
+  assign ch0__count_slo_stuck_low = \port$4202$0 [95:80];
+  assign ch0__count_lc_repeat = \port$4202$0 [111:96];
+  assign ch0__count_lc_skip = \port$4202$0 [127:112];
+  assign ch0__count_lc_zero = \port$4202$0 [143:128];
+  assign ch0__count_spw_mismatch = \port$4202$0 [159:144];
+  assign ch0__count_overrun = \port$4202$0 [175:160];
+  assign ch0__count_aborted = \port$4202$0 [191:176];
+  assign ch0__count_no_stop = \port$4202$0 [207:192];
+  assign ch0__ca_status = \port$4316$0 [2:0];
+  assign ch0__ca_bytes_done = \port$4316$0 [9:3];
+  assign ch0__count_ca_crc4_error = \port$4202$0 [223:208];
+  assign ch0__count_ca_no_answer = \port$4202$0 [239:224];
+  assign ch0__count_ca_refused = \port$4202$0 [255:240];
+  assign ch0__count_ca_aborted = \port$4202$0 [271:256];
+  assign ch0__count_ca_data_fault = \port$4202$0 [287:272];
+  assign ch1__status = \port$4673$0 [3:0];
+  assign ch1__cds = \port$4673$0 [49];
+  assign ch1__word0_ne = \port$4673$0 [105];
+  assign ch1__word0_nw = \port$4673$0 [106];
+  assign ch1__word0_crc_ok = \port$4673$0 [107];
+  assign ch1__word1_ne = \port$4673$0 [148];
+  assign ch1__word1_nw = \port$4673$0 [149];
+  assign ch1__word1_crc_ok = \port$4673$0 [150];
+  assign ch1__lc_repeat = \port$4673$0 [157];
+  assign ch1__lc_skip = \port$4673$0 [158];
+  assign ch1__lc_zero = \port$4673$0 [159];
+  assign ch1__spw_mismatch = \port$4673$0 [160];
+  assign ch1__lc = \port$4673$0 [156:151];
+  assign ch1__line_delay = \port$4673$0 [48:36];
+  assign ch1__word0_position = \port$4673$0 [104:50];
+  assign ch1__word1_position = \port$4673$0 [147:108];
+  assign ch1__timestamp = \port$4673$0 [35:4];
   assign ch1__cap_data_bits_w0 = 6'h37;
   assign ch1__cap_data_bits_w1 = 6'h28;
   assign ch1__cap_timer_width = 6'h18;
   assign ch1__cap_counters = 1'h1;
   assign ch1__cap_timestamp = 1'h1;
   assign ch1__cap_register_access = 1'h1;
-  assign ch1__count_crc_word0 = \port$4644$0 [15:0];
-  assign ch1__count_crc_word1 = \port$4644$0 [31:16];
-  assign ch1__count_no_ack = \port$4644$0 [47:32];
-  assign ch1__count_no_start = \port$4644$0 [63:48];
-  assign ch1__count_delay_range = \port$4644$0 [79:64];
-  assign ch1__count_slo_stuck_low = \port$4644$0 [95:80];
-  assign ch1__count_lc_repeat = \port$4644$0 [111:96];
-  assign ch1__count_lc_skip = \port$4644$0 [127:112];
-  assign ch1__count_lc_zero = \port$4644$0 [143:128];
-  assign ch1__count_spw_mismatch = \port$4644$0 [159:144];
-  assign ch1__count_overrun = \port$4644$0 [175:160];
-  assign ch1__count_aborted = \port$4644$0 [191:176];
-  assign ch1__count_no_stop = \port$4644$0 [207:192];
-  assign ch1__ca_status = \port$4758$0 [2:0];
-  assign ch1__ca_bytes_done = \port$4758$0 [9:3];
-  assign ch1__count_ca_crc4_error = \port$4644$0 [223:208];
-  assign ch1__count_ca_no_answer = \port$4644$0 [239:224];
-  assign ch1__count_ca_refused = \port$4644$0 [255:240];
-  assign ch1__count_ca_aborted = \port$4644$0 [271:256];
-  assign ch1__count_ca_data_fault = \port$4644$0 [287:272];
+  assign ch1__count_crc_word0 = \port$4686$0 [15:0];
+  assign ch1__count_crc_word1 = \port$4686$0 [31:16];
+  assign ch1__count_no_ack = \port$4686$0 [47:32];
+  assign ch1__count_no_start = \port$4686$0 [63:48];
+  assign ch1__count_delay_range = \port$4686$0 [79:64];
+  assign ch1__count_slo_stuck_low = \port$4686$0 [95:80];
+  assign ch1__count_lc_repeat = \port$4686$0 [111:96];
+  assign ch1__count_lc_skip = \port$4686$0 [127:112];
+  assign ch1__count_lc_zero = \port$4686$0 [143:128];
+  assign ch1__count_spw_mismatch = \port$4686$0 [159:144];
+  assign ch1__count_overrun = \port$4686$0 [175:160];
+  assign ch1__count_aborted = \port$4686$0 [191:176];
+  assign ch1__count_no_stop = \port$4686$0 [207:192];
+  assign ch1__ca_status = \port$4800$0 [2:0];
+  assign ch1__ca_bytes_done = \port$4800$0 [9:3];
+  assign ch1__count_ca_crc4_error = \port$4686$0 [223:208];
+  assign ch1__count_ca_no_answer = \port$4686$0 [239:224];
+  assign ch1__count_ca_refused = \port$4686$0 [255:240];
+  assign ch1__count_ca_aborted = \port$4686$0 [271:256];
+  assign ch1__count_ca_data_fault = \port$4686$0 [287:272];
   assign glob__trigger = g_trigger_start;
   assign ch0__start = ch0_ctrl_start;
   assign ch0__abort_cycle = ch0_ctrl_abort;
@@ -5135,7 +5361,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign ch0__ca_slave_id = ch0_ca_request_slave_id;
   assign ch0__ca_address = ch0_ca_request_address;
   assign ch0__ca_count = ch0_ca_request_count;
-  assign ch0__ca_write = \ch0_ca_request_write$69 ;
+  assign ch0__ca_write = \ch0_ca_request_write$80 ;
   assign ch0__ca_start = ch0_ca_ctrl_start;
   assign ch0__ca_abort = ch0_ca_ctrl_abort;
   assign ch0__ca_wbuf_data = write_data;
@@ -5166,7 +5392,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign ch1__ca_slave_id = ch1_ca_request_slave_id;
   assign ch1__ca_address = ch1_ca_request_address;
   assign ch1__ca_count = ch1_ca_request_count;
-  assign ch1__ca_write = \ch1_ca_request_write$221 ;
+  assign ch1__ca_write = \ch1_ca_request_write$241 ;
   assign ch1__ca_start = ch1_ca_ctrl_start;
   assign ch1__ca_abort = ch1_ca_ctrl_abort;
   assign ch1__ca_wbuf_addr = write_addr[3:0];
@@ -5440,7 +5666,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0 (slo, clk, rst, \trigger$159 , ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__ca_busy, regs__ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period
 , cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort
-, regs__done_count, ma, regs__done, \port$4147$0 , \port$4160$0 , regs__ca_done, \port$4274$0 , ca_rbuf_addr);
+, regs__done_count, ma, regs__done, \port$4189$0 , \port$4202$0 , regs__ca_done, \port$4316$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$28  = 0;
   wire \$1 ;
   wire [16:0] \$2 ;
@@ -5565,12 +5791,12 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$159 , ca_wbuf_en, ca_rbuf_
   wire \ma$162 ;
   input periodic;
   wire periodic;
-  output [160:0] \port$4147$0 ;
-  wire [160:0] \port$4147$0 ;
-  output [287:0] \port$4160$0 ;
-  wire [287:0] \port$4160$0 ;
-  output [9:0] \port$4274$0 ;
-  wire [9:0] \port$4274$0 ;
+  output [160:0] \port$4189$0 ;
+  wire [160:0] \port$4189$0 ;
+  output [287:0] \port$4202$0 ;
+  wire [287:0] \port$4202$0 ;
+  output [9:0] \port$4316$0 ;
+  wire [9:0] \port$4316$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -5905,9 +6131,9 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$159 , ca_wbuf_en, ca_rbuf_
   assign regs__ca_rbuf_en = ca_rbuf_en;
   assign \ma$162  = ma;
   assign \slo$164  = slo;
-  assign \port$4147$0  = \$5 ;
-  assign \port$4160$0  = \$6 ;
-  assign \port$4274$0  = \$7 ;
+  assign \port$4189$0  = \$5 ;
+  assign \port$4202$0  = \$6 ;
+  assign \port$4316$0  = \$7 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -6759,7 +6985,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$3865$0 (\bit ),
+    .\port$3907$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -6816,7 +7042,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .lc_skip_seen(lc_skip_seen),
     .lc_zero(lc_zero),
     .lc_zero_seen(lc_zero_seen),
-    .\port$1599$0 (\$16 ),
+    .\port$1601$0 (\$16 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -15130,7 +15356,7 @@ module \biss_master_axil.ch0.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$3865$0 , resync, lc, is_zero, clk);
+module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$3907$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$69  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -15172,8 +15398,8 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$3865$0 ;
-  wire \port$3865$0 ;
+  input \port$3907$0 ;
+  wire \port$3907$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -15187,9 +15413,9 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$3865$0  };
-  assign \$2  = { lc[4:0], \port$3865$0  } == last;
-  assign \$3  = { lc[4:0], \port$3865$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$3907$0  };
+  assign \$2  = { lc[4:0], \port$3907$0  } == last;
+  assign \$3  = { lc[4:0], \port$3907$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -15299,7 +15525,7 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$3865$0  };
+  assign lc_next = { lc[4:0], \port$3907$0  };
   assign zero = is_zero;
 endmodule
 
@@ -15781,7 +16007,7 @@ module \biss_master_axil.ch0.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.verdict (lc_skip_seen, \port$1599$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
+module \biss_master_axil.ch0.core.verdict (lc_skip_seen, \port$1601$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$73  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -15895,8 +16121,8 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, \port$1599$0 , lc_check
   wire lc_zero;
   input lc_zero_seen;
   wire lc_zero_seen;
-  output \port$1599$0 ;
-  wire \port$1599$0 ;
+  output \port$1601$0 ;
+  wire \port$1601$0 ;
   output report;
   wire report;
   input report_frame;
@@ -15981,7 +16207,7 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, \port$1599$0 , lc_check
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$1599$0  = \$2 ;
+  assign \port$1601$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -16007,7 +16233,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1 (slo, clk, rst, \trigger$159 , ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__ca_busy, regs__ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period
 , cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort
-, regs__done_count, ma, regs__done, \port$4631$0 , \port$4644$0 , regs__ca_done, \port$4758$0 , ca_rbuf_addr);
+, regs__done_count, ma, regs__done, \port$4673$0 , \port$4686$0 , regs__ca_done, \port$4800$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$74  = 0;
   wire \$1 ;
   wire [16:0] \$2 ;
@@ -16132,12 +16358,12 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$159 , ca_wbuf_en, ca_rbuf_
   wire \ma$162 ;
   input periodic;
   wire periodic;
-  output [160:0] \port$4631$0 ;
-  wire [160:0] \port$4631$0 ;
-  output [287:0] \port$4644$0 ;
-  wire [287:0] \port$4644$0 ;
-  output [9:0] \port$4758$0 ;
-  wire [9:0] \port$4758$0 ;
+  output [160:0] \port$4673$0 ;
+  wire [160:0] \port$4673$0 ;
+  output [287:0] \port$4686$0 ;
+  wire [287:0] \port$4686$0 ;
+  output [9:0] \port$4800$0 ;
+  wire [9:0] \port$4800$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -16472,9 +16698,9 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$159 , ca_wbuf_en, ca_rbuf_
   assign regs__ca_rbuf_en = ca_rbuf_en;
   assign \ma$162  = ma;
   assign \slo$164  = slo;
-  assign \port$4631$0  = \$5 ;
-  assign \port$4644$0  = \$6 ;
-  assign \port$4758$0  = \$7 ;
+  assign \port$4673$0  = \$5 ;
+  assign \port$4686$0  = \$6 ;
+  assign \port$4800$0  = \$7 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -17326,7 +17552,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$4349$0 (\bit ),
+    .\port$4391$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -17383,7 +17609,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .lc_skip_seen(lc_skip_seen),
     .lc_zero(lc_zero),
     .lc_zero_seen(lc_zero_seen),
-    .\port$2963$0 (\$16 ),
+    .\port$2965$0 (\$16 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -25697,7 +25923,7 @@ module \biss_master_axil.ch1.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$4349$0 , resync, lc, is_zero, clk);
+module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$4391$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$115  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -25739,8 +25965,8 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$4349$0 ;
-  wire \port$4349$0 ;
+  input \port$4391$0 ;
+  wire \port$4391$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -25754,9 +25980,9 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$4349$0  };
-  assign \$2  = { lc[4:0], \port$4349$0  } == last;
-  assign \$3  = { lc[4:0], \port$4349$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$4391$0  };
+  assign \$2  = { lc[4:0], \port$4391$0  } == last;
+  assign \$3  = { lc[4:0], \port$4391$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -25866,7 +26092,7 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$4349$0  };
+  assign lc_next = { lc[4:0], \port$4391$0  };
   assign zero = is_zero;
 endmodule
 
@@ -26348,7 +26574,7 @@ module \biss_master_axil.ch1.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.verdict (lc_skip_seen, \port$2963$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
+module \biss_master_axil.ch1.core.verdict (lc_skip_seen, \port$2965$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$119  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -26462,8 +26688,8 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, \port$2963$0 , lc_check
   wire lc_zero;
   input lc_zero_seen;
   wire lc_zero_seen;
-  output \port$2963$0 ;
-  wire \port$2963$0 ;
+  output \port$2965$0 ;
+  wire \port$2965$0 ;
   output report;
   wire report;
   input report_frame;
@@ -26548,7 +26774,7 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, \port$2963$0 , lc_check
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$2963$0  = \$2 ;
+  assign \port$2965$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

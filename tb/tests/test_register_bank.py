@@ -66,13 +66,15 @@ def run_adapter(adapter, bench):
 
 async def write(ctx, bank, addr, value, strb=0xF):
     """A write: w_en for one clock; the bank registers the request and the write acts in the
-    next clock, so its result is there after two clock edges."""
+    next clock (a pulse, an interrupt clear), or a clock later for a configuration register,
+    so its result is there after three clock edges."""
     ctx.set(bank.bus.w_en, 1)
     ctx.set(bank.bus.w_addr, addr // 4)
     ctx.set(bank.bus.w_data, value)
     ctx.set(bank.bus.w_strb, strb)
     await ctx.tick()
     ctx.set(bank.bus.w_en, 0)
+    await ctx.tick()
     await ctx.tick()
 
 
@@ -101,6 +103,37 @@ def test_storage_lanes_and_unmapped():
             await write(ctx, bank, addr, 0xFFFFFFFF)
             assert await read(ctx, bank, addr) == 0
         assert await read(ctx, bank, 0) == 0x42695353           # id
+    run(bench)
+
+
+def test_configuration_register_holds_the_new_value_from_the_third_clock():
+    """A configuration register's write goes through a second register stage: the value is
+    there from the third clock after w_en (the clock after the bank's response to a bus write,
+    the earliest a bus read after the response could load it). ctrl, which holds pulses too,
+    is written in one stage with them."""
+    async def bench(ctx, bank):
+        ctx.set(bank.bus.w_en, 1)
+        ctx.set(bank.bus.w_addr, offset("cfg_period") // 4)
+        ctx.set(bank.bus.w_data, 0x123456)
+        ctx.set(bank.bus.w_strb, 0b0101)                # bytes 0 and 2 only
+        seen = []
+        for _ in range(4):
+            await ctx.tick()
+            ctx.set(bank.bus.w_en, 0)
+            ctx.set(bank.bus.w_data, 0xFFFFFF)          # the request is taken, not the bus
+            ctx.set(bank.bus.w_strb, 0xF)
+            seen.append(ctx.get(bank.ch0.cfg_request_period))
+        assert seen == [0, 0, 0x120056, 0x120056]
+        # ctrl holds pulses too: its configuration acts with them, in the second clock.
+        ctx.set(bank.bus.w_en, 1)
+        ctx.set(bank.bus.w_addr, offset("ctrl") // 4)
+        ctx.set(bank.bus.w_data, 0x101)                 # periodic, start
+        seen = []
+        for _ in range(3):
+            await ctx.tick()
+            ctx.set(bank.bus.w_en, 0)
+            seen.append((ctx.get(bank.ch0.periodic), ctx.get(bank.ch0.start)))
+        assert seen == [(0, 0), (1, 1), (1, 0)]
     run(bench)
 
 
