@@ -22,10 +22,10 @@ class RegisterBus(wiring.Signature):
     Word addresses. A write is issued by ``w_en`` high for one clock, byte lanes chosen by
     ``w_strb``; the bank registers it and it acts in the next clock (a pulse is high in the
     second clock after ``w_en``; a configuration register, one stage later, holds the new
-    value from the third clock after ``w_en``, unless it holds pulses too). A read takes two steps, so that the
-    address decode and the word select each have a clock of their own. ``r_en`` high in one
-    clock: the address is decoded into a one-hot select, and a window's read enable acts
-    then. ``r_load`` high in a later clock, at the latest the clock of the next ``r_en``: the
+    value from the third clock after ``w_en``, unless it holds pulses too). A read takes two
+    steps, so that the address decode and the word select each have a clock of their own.
+    ``r_en`` high in one clock: the address is decoded into a one-hot select, and a window's
+    read enable acts then. ``r_load`` high in a later clock, at the latest the clock of the next ``r_en``: the
     selected register's value in that clock goes to ``r_data``, which holds it from the next
     clock until the clock after the next ``r_load``; a snapshot is taken then. So reads run
     one per clock (each ``r_load`` with the next ``r_en``), and the initiator can hold a word
@@ -80,8 +80,8 @@ class RegisterBank(wiring.Component):
     decodes from those flip-flops in the next clock. CONFIG fields are written one clock later
     still, lane by lane, from a per-register write flip-flop and a second copy of the data and
     strobes, each byte lane's strobe the enable of its flip-flops; those of a register that
-    holds pulses too (``ctrl``) are written with its pulses, in one stage. The read path is two register
-    stages (:class:`RegisterBus`): at ``r_en`` one select flip-flop per register (and per
+    holds pulses too (``ctrl``) are written with its pulses, in one stage. The read path is two
+    register stages (:class:`RegisterBus`): at ``r_en`` one select flip-flop per register (and per
     read window) registers whether the address is the register's; at ``r_load`` each block
     (the globals, each channel) registers the AND-OR of its registers' words with their
     selects and the data of its window read, and ``r_data`` is the OR of the blocks'
