@@ -113,7 +113,10 @@ LINE_ALLOWED = {
     "slo_stuck_low": [*FRAME_STATUSES, "NO_START", "DELAY_RANGE", "SLO_STUCK_LOW"],
     "slo_stuck_high": [*FRAME_STATUSES, "NO_ACK", "NO_STOP"],
     "glitch": [*FRAME_STATUSES, "NO_ACK", "NO_START", "DELAY_RANGE", "NO_STOP"],
-    "jitter": list(FRAME_STATUSES),
+    # At the protocol's limit a bit's edge can reach its sample (the round trip is measured on
+    # the jittered Ack edge, to a clock): a data bit misread is a CRC error, the stop bit
+    # misread (end check on) NO_STOP. The soak found the second (seed 1001, cycle 11655).
+    "jitter": [*FRAME_STATUSES, "NO_STOP"],
 }
 
 
