@@ -8,6 +8,7 @@ channel's encoder model sent.
 
 import cocotb
 from cocotb.triggers import ClockCycles, FallingEdge, ReadOnly, RisingEdge, Timer
+from cocotb.utils import get_sim_time
 
 from encoder_model import frames
 from encoder_model.cocotb_encoder import Cable
@@ -329,6 +330,37 @@ async def bad_configuration_over_the_bus(dut):
         assert (await tb.read_fields("state", 0))["config_error"] == 0
         await tb.encoders_ready()
         tb.check_result(0, await tb.request(0))
+
+
+@cocotb.test()
+async def break_time_over_the_bus(dut):
+    """cfg_break.break_time written over the bus sets the break: an abort of an idle channel
+    starts a break, and state.busy stays high for the break time written, not for the default
+    (40 us, 4000 clocks). The break is timed by polling state.busy, for two break times on both
+    channels: the break lasts at least the time written, and the two differ by what the
+    settings differ by (to within the polling step)."""
+    tb = BusTestbench(dut)
+    await tb.start()
+    clk_ns = 1e9 / CLK_HZ
+    short, long = 300, 1300                 # clocks; both far under the default of 4000
+    for ch in range(CHANNELS):
+        lasted = {}
+        for ticks in (short, long):
+            await tb.write_fields("cfg_break", ch, break_time=ticks)
+            await tb.wait_idle(ch)
+            await tb.write_fields("ctrl", ch, abort=1)
+            t0 = get_sim_time("ns")
+            polls = 0
+            while (await tb.read_fields("state", ch))["busy"] or polls == 0:
+                polls += 1
+                assert polls < 10_000, f"ch{ch}: the break of {ticks} clocks never ended"
+            lasted[ticks] = (get_sim_time("ns") - t0) / clk_ns
+            step = lasted[ticks] / polls                    # clocks per poll
+            assert lasted[ticks] >= ticks, (ch, ticks, lasted[ticks])
+            assert lasted[ticks] <= ticks + 2 * step + 10, (ch, ticks, lasted[ticks])
+        dut._log.info("ch%d: breaks of %d and %d clocks lasted %.0f and %.0f clocks (polled)",
+                      ch, short, long, lasted[short], lasted[long])
+        assert abs(lasted[long] - lasted[short] - (long - short)) <= 2 * step + 2
 
 
 @cocotb.test()
