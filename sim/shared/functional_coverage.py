@@ -49,8 +49,9 @@ LEGAL = {
     "unplug": ["NO_ACK"],
     # a glitch on the Ack edge or in the Ack: NO_ACK, NO_START, DELAY_RANGE (see LINE_ALLOWED)
     "glitch": _LATE + _FRAME_ERR + ["NO_ACK", "NO_START", "DELAY_RANGE", "NO_STOP"],
-    # at +/-25 % the eye closes in the worst case: a rare bit error, caught by the CRC
-    "jitter": _LATE + _FRAME_ERR,
+    # at +/-25 % the eye closes in the worst case: a rare bit error, caught by the CRC, or on
+    # the stop bit NO_STOP (end check; the soak found one, see LINE_ALLOWED)
+    "jitter": _LATE + _FRAME_ERR + ["NO_STOP"],
     "delay_change": _LATE + ["DELAY_RANGE"],
     "abort": ["ABORTED"] + _LATE,                  # _LATE: the abort came after the verdict
     "no_response": ["NO_ACK"],
