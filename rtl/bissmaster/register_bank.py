@@ -25,11 +25,11 @@ class RegisterBus(wiring.Signature):
     value from the third clock after ``w_en``, unless it holds pulses too). A read takes two
     steps, so that the address decode and the word select each have a clock of their own.
     ``r_en`` high in one clock: the address is decoded into a one-hot select, and a window's
-    read enable acts then. ``r_load`` high in a later clock, at the latest the clock of the next ``r_en``: the
-    selected register's value in that clock goes to ``r_data``, which holds it from the next
-    clock until the clock after the next ``r_load``; a snapshot is taken then. So reads run
-    one per clock (each ``r_load`` with the next ``r_en``), and the initiator can hold a word
-    while the next read waits in the first step. A read and a write
+    read enable acts then. ``r_load`` high in a later clock, at the latest the clock of the
+    next ``r_en``: the selected register's value in that clock goes to ``r_data``, which holds
+    it from the next clock until the clock after the next ``r_load``; a snapshot is taken
+    then. So reads run one per clock (each ``r_load`` with the next ``r_en``), and the
+    initiator can hold a word while the next read waits in the first step. A read and a write
     may come in the same clock; they are not ordered: the read returns the value of its
     ``r_load`` clock, the one before the write when ``r_load`` follows ``r_en`` at once.
     """
@@ -81,8 +81,8 @@ class RegisterBank(wiring.Component):
     still, lane by lane, from a per-register write flip-flop and a second copy of the data and
     strobes, each byte lane's strobe the enable of its flip-flops; those of a register that
     holds pulses too (``ctrl``) are written with its pulses, in one stage. The read path is two
-    register stages (:class:`RegisterBus`): at ``r_en`` one select flip-flop per register (and per
-    read window) registers whether the address is the register's; at ``r_load`` each block
+    register stages (:class:`RegisterBus`): at ``r_en`` one select flip-flop per register (and
+    per read window) registers whether the address is the register's; at ``r_load`` each block
     (the globals, each channel) registers the AND-OR of its registers' words with their
     selects and the data of its window read, and ``r_data`` is the OR of the blocks'
     registers. A snapshot group is copied at the ``r_load`` of its first register, which
@@ -178,18 +178,19 @@ class RegisterBank(wiring.Component):
             if reg.window:
                 self._window(m, port, word, reg, windows)
                 continue
-            write = Signal(name=f"{prefix}_{reg.path.replace('.', '_')}_write")
+            reg_name = f"{prefix}_{reg.path.replace('.', '_')}"
+            write = Signal(name=f"{reg_name}_write")
             m.d.comb += write.eq(w_en & (w_addr == word))
             # A register that holds pulses too (``ctrl``) is written in one stage, so that a
             # write of it acts all at once (``start`` with ``periodic``).
             staged = not any(f.kind == Kind.PULSE for f in reg.fields)
             config_write = None
             if staged and any(f.kind == Kind.CONFIG for f in reg.fields):
-                config_write = Signal(name=f"{prefix}_{reg.path.replace('.', '_')}_config_write")
+                config_write = Signal(name=f"{reg_name}_config_write")
                 m.d.sync += config_write.eq(write)
             parts = []                 # (lsb, the field's read value)
             for f in reg.fields:
-                name = f"{prefix}_{reg.path.replace('.', '_')}_{f.name}"
+                name = f"{reg_name}_{f.name}"
                 data = w_data[f.lsb:f.lsb + f.width]
                 # Bit i of the field is written only if its byte lane's strobe is set.
                 lanes = Cat(w_strb[(f.lsb + i) // 8] for i in range(f.width))
