@@ -211,17 +211,26 @@ class Testbench:
         # updates of that time step are in (simulators order them differently), then step
         # past the read-only phase so the caller may drive inputs again.
         await ReadOnly()
-        res = self.read()
-        if self.has_counters:
-            # The counters count a cycle one clock after its done (docs/ports.md, Counters):
-            # read them at the next edge.
+
+        async def next_clock():
             await RisingEdge(self.dut.clk)
             await ReadOnly()
-            res.counters = self.read().counters
+
+        res = await self.read_done(next_clock)
         await Timer(1, "ps")
         if FRAME_LOG:                   # optional tally of ended cycles (for reports)
             with open(FRAME_LOG, "a") as f:
                 f.write(f"{res.status}\n")
+        return res
+
+    async def read_done(self, next_clock):
+        """The result ports, read in the clock of ``done``, with the counters read one clock
+        later (they count a cycle a clock after its ``done``, docs/ports.md, Counters).
+        ``next_clock``: a coroutine function that waits to the same point of the next clock."""
+        res = self.read()
+        if self.has_counters:
+            await next_clock()
+            res.counters = self.read().counters
         return res
 
     def read(self):
