@@ -8,6 +8,8 @@ SIM ?= verilator
 VERILOG := rtl/generated/biss_master.v
 BUS_TOPS := axil wb
 JOBS ?= 2
+# make synth: netlist variants per configuration (scripts/synth.py --variants).
+VARIANTS ?= 1
 # make test runs the three in one pytest session (conftest.py orders it: long items first).
 UNIT_TESTS := tb/tests
 SIM_TESTS := sim/test_regression.py sim/test_bus.py sim/test_driver.py
@@ -89,8 +91,8 @@ bench: setup  ## simulated performance: cycle overhead, verdict latency, line-de
 	$(PY) -m sim.tools.perf
 
 .PHONY: synth
-synth: setup  ## Yosys + nextpnr: LUT4/FF/carry and Fmax of the core presets, the AXI4-Lite bus top (1, 4 channels) and four cores without a bus (the control) on ECP5-25k and iCE40 UP5K (docs/performance.md)
-	$(PY) scripts/synth.py
+synth: setup  ## Yosys + nextpnr: LUT4/FF/carry and Fmax of the core presets, the AXI4-Lite bus top (1, 4 channels) and four cores without a bus (the control) on ECP5-25k and iCE40 UP5K (docs/performance.md); VARIANTS=n: n netlists each
+	$(PY) scripts/synth.py --variants $(VARIANTS)
 
 .PHONY: formal
 formal: setup  ## formal checks (Yosys SMT flow + Yices): MA never glitches, back to idle, CRC; FAST=1: the slice

