@@ -1,5 +1,5 @@
 """The project's scripts (scripts/): tool lookup in the venv, waveform names and save file,
-synth.py's harness.
+synth.py's harness and netlist variants, equiv.py's proof.
 
 Fast: no simulator; the design is only elaborated (the harness test synthesises a stand-in
 core of a few cells).
@@ -17,6 +17,7 @@ from amaranth.hdl import Elaboratable, Module, Signal
 from amaranth.lib import enum as hdl_enum
 
 # scripts/ is a folder of scripts, not a package: its modules import each other by file name.
+import equiv  # noqa: E402
 import synth  # noqa: E402
 import venvtools  # noqa: E402
 import waves  # noqa: E402
@@ -230,3 +231,20 @@ def test_netlist_variants_rename_only_the_timers_instances(top):
     assert len(names) == len(synth.VARIANT_PREFIX) - 1          # every variant its own name
     with pytest.raises(RuntimeError, match="no `timers` instance"):
         synth.netlist_variant(STUB, 2)
+
+
+# -- equiv.py -------------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("new_logic, proven", [
+    ("r <= {2{b}} ^ a[1:0];", True),                # the same function, written otherwise
+    ("r <= a[1:0] ^ {b, b};", True),
+    ("r <= a[1:0] & {2{b}};", False),               # another function
+    ("r <= a[1:0] ^ {b, 1'b0};", False),            # one bit differs
+])
+def test_equiv_proves_a_rewrite_and_rejects_a_change(new_logic, proven, tmp_path):
+    old, new = tmp_path / "old.v", tmp_path / "new.v"
+    old.write_text(STUB)
+    changed = STUB.replace("r <= a[1:0] ^ {2{b}};", new_logic)
+    assert changed != STUB
+    new.write_text(changed)
+    assert equiv.equivalent(old, new) is proven
