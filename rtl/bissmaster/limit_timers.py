@@ -17,7 +17,7 @@ class LimitTimers(wiring.Component):
     in which they are read:
 
     - ``break_over``: elapsed >= ``break_time`` (live; 0 -> ``break_default``). The next
-      elapsed time after a clear is 0, never >= a time >= 1, hence ``~clear``.
+      elapsed time after a clear is 0, never >= a time >= 1: a clear resets the flag.
     - ``ack_expired``: elapsed >= ``ack_limit``; ``no_start_expired``: elapsed >=
       ``no_start_limit``. Right only in CLOCK, after a clock that stays in CLOCK without
       ``restart`` (the controller clears the timer on ``restart``) or after WAIT_READY (timer
@@ -83,13 +83,21 @@ class LimitTimers(wiring.Component):
         ]
 
         # The cycle timer and its flags. Both break compares in parallel, then the default mux.
+        # The clear is written as the flag's synchronous reset, not as "~clear &" in front of
+        # it (the same function): Yosys then puts it on the flip-flop's reset input, as it does
+        # the timer's, and the controller's clear logic stays out of the compare's LUTs. The
+        # bus tops' Fmax came closer to the core's by it (docs/performance.md, "Netlist
+        # variants").
         timer = Signal(p.cycle_timer_width, init=1)
         m.d.sync += timer.eq(Mux(self.clear, 1, Mux(timer.all(), timer, timer + 1)))
         counting = self.in_clock & ~self.restart
+        with m.If(self.clear):
+            m.d.sync += self.break_over.eq(0)
+        with m.Else():
+            m.d.sync += self.break_over.eq(Mux(self.break_time == 0,
+                                               timer >= p.break_default,
+                                               timer >= self.break_time))
         m.d.sync += [
-            self.break_over.eq(~self.clear & Mux(self.break_time == 0,
-                                                 timer >= p.break_default,
-                                                 timer >= self.break_time)),
             self.ack_expired.eq(counting & (timer >= self.ack_limit)),
             self.no_start_expired.eq(counting & (timer >= self.no_start_limit)),
         ]

@@ -9743,17 +9743,15 @@ module \biss_master.timers (timeout_live, clk, rst, restart, ma_busy, ack_limit,
   wire \$31 ;
   wire \$32 ;
   wire \$33 ;
-  wire \$34 ;
-  wire \$35 ;
-  reg [24:0] \$36 ;
-  reg \$37 ;
+  reg [24:0] \$34 ;
+  reg \$35 ;
+  reg \$36 ;
+  reg [24:0] \$37 ;
   reg \$38 ;
-  reg [24:0] \$39 ;
+  reg \$39 ;
   wire \$4 ;
   reg \$40 ;
   reg \$41 ;
-  reg \$42 ;
-  reg \$43 ;
   wire \$5 ;
   wire \$6 ;
   wire \$7 ;
@@ -9821,96 +9819,99 @@ module \biss_master.timers (timeout_live, clk, rst, restart, ma_busy, ack_limit,
   assign \$18  = timer + 1'h1;
   assign \$19  = \$17  ? { 1'h0, timer } : \$18 ;
   assign \$20  = clear ? 26'h0000001 : \$19 ;
-  assign \$21  = ~ clear;
-  assign \$22  = ! break_time;
-  assign \$23  = timer >= 12'hfa0;
-  assign \$24  = timer >= break_time;
-  assign \$25  = \$22  ? \$23  : \$24 ;
-  assign \$26  = \$21  & \$25 ;
-  assign \$27  = ~ restart;
-  assign \$28  = in_clock & \$27 ;
-  assign \$29  = timer >= ack_limit;
-  assign \$30  = \$28  & \$29 ;
-  assign \$31  = ~ restart;
-  assign \$32  = in_clock & \$31 ;
-  assign \$33  = timer >= no_start_limit;
-  assign \$34  = \$32  & \$33 ;
-  assign \$35  = delay > delay_limit;
+  assign \$21  = ! break_time;
+  assign \$22  = timer >= 12'hfa0;
+  assign \$23  = timer >= break_time;
+  assign \$24  = \$21  ? \$22  : \$23 ;
+  assign \$25  = ~ restart;
+  assign \$26  = in_clock & \$25 ;
+  assign \$27  = timer >= ack_limit;
+  assign \$28  = \$26  & \$27 ;
+  assign \$29  = ~ restart;
+  assign \$30  = in_clock & \$29 ;
+  assign \$31  = timer >= no_start_limit;
+  assign \$32  = \$30  & \$31 ;
+  assign \$33  = delay > delay_limit;
   always @(posedge clk)
-    slo_low_time_p1 <= \$36 ;
+    slo_low_time_p1 <= \$34 ;
   always @(posedge clk)
-    slo_stuck <= \$37 ;
+    slo_stuck <= \$35 ;
   always @(posedge clk)
-    slo_stuck_live <= \$38 ;
+    slo_stuck_live <= \$36 ;
   always @(posedge clk)
-    timer <= \$39 ;
+    timer <= \$37 ;
   always @(posedge clk)
-    break_over <= \$40 ;
+    break_over <= \$38 ;
   always @(posedge clk)
-    ack_expired <= \$41 ;
+    ack_expired <= \$39 ;
   always @(posedge clk)
-    no_start_expired <= \$42 ;
+    no_start_expired <= \$40 ;
   always @(posedge clk)
-    delay_over <= \$43 ;
+    delay_over <= \$41 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
-    \$36  = slo_low_time_p1;
+    \$34  = slo_low_time_p1;
     if (\$1 ) begin
-      \$36  = 25'h0000001;
+      \$34  = 25'h0000001;
     end else if (\$2 ) begin
-      \$36  = \$3 [24:0];
+      \$34  = \$3 [24:0];
     end
     if (rst) begin
-      \$36  = 25'h0000001;
+      \$34  = 25'h0000001;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
-    \$37  = \$8 ;
+    \$35  = \$8 ;
     if (rst) begin
-      \$37  = 1'h0;
+      \$35  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
-    \$38  = \$16 ;
+    \$36  = \$16 ;
+    if (rst) begin
+      \$36  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    \$37  = \$20 [24:0];
+    if (rst) begin
+      \$37  = 25'h0000001;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    (* full_case = 32'd1 *)
+    if (clear) begin
+      \$38  = 1'h0;
+    end else begin
+      \$38  = \$24 ;
+    end
     if (rst) begin
       \$38  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
-    \$39  = \$20 [24:0];
+    \$39  = \$28 ;
     if (rst) begin
-      \$39  = 25'h0000001;
+      \$39  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
-    \$40  = \$26 ;
+    \$40  = \$32 ;
     if (rst) begin
       \$40  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
-    \$41  = \$30 ;
+    \$41  = \$33 ;
     if (rst) begin
       \$41  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
-    \$42  = \$34 ;
-    if (rst) begin
-      \$42  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
-    \$43  = \$35 ;
-    if (rst) begin
-      \$43  = 1'h0;
     end
   end
 endmodule
