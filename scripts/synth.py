@@ -29,9 +29,10 @@ copies of the core in one harness, without the bus: it separates what the channe
 ``--variants N`` places and routes N netlists of each configuration instead of one: the same
 logic, with the cycle timers' instance renamed (:data:`VARIANT_PREFIX`). The names move the
 block among its siblings and Yosys and ABC map a netlist in name order, so each variant is
-mapped and placed differently: an Fmax measured on one netlist carries that noise (several
-MHz between variants, as much as between seeds), and a comparison of two configurations, or of
-two versions of the RTL, is only as sure as it. The median is then over variants x seeds.
+mapped and placed differently: an Fmax measured on one netlist carries that noise (the ten-seed
+medians of six variants of one configuration spread over 3.5 to 4.5 MHz), and a comparison of
+two configurations, or of two versions of the RTL, is only as sure as it. The median is then
+over variants x seeds.
 
     python scripts/synth.py [--configs biss-c,axil-1] [--arch ecp5,ice40] [--seeds 1,2,3]
                             [--variants 1]
