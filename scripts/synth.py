@@ -284,7 +284,8 @@ def netlist_variant(verilog, variant):
 
 def place_and_route(cfg_dir, arch, seeds, in_bits, variants=1):
     """Synthesise the harness, then nextpnr once per seed; with ``variants`` > 1, that for each
-    netlist variant. Returns per-run results (seed, variant)."""
+    netlist variant. Returns per-run results (seed, variant) and the harness's cell counts
+    (those of variant 1, the netlist as generated)."""
     a = ARCHS[arch]
     results = []
     for variant in range(1, variants + 1):
@@ -658,8 +659,8 @@ def main(argv=None):
     OUT.mkdir(parents=True, exist_ok=True)
     (OUT / "report.md").write_text("\n".join(md) + "\n")
     (OUT / "report.json").write_text(json.dumps(
-        {"versions": vers, "seeds": seeds, "variants": args.variants, "panda": PANDA, "rows": rows, "bus_rows": bus_rows,
-         "multi_core_rows": multi_rows,
+        {"versions": vers, "seeds": seeds, "variants": args.variants, "panda": PANDA,
+         "rows": rows, "bus_rows": bus_rows, "multi_core_rows": multi_rows,
          "details": details, "seconds": round(elapsed, 1)}, indent=1) + "\n")
     if rows:
         log("")
