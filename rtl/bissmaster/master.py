@@ -6,25 +6,25 @@ from amaranth.hdl import *
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
-from .configuration import Configuration
-from .counters import CounterBank
-from .cycle_controller import CycleController
-from .frame_decoder import FrameDecoder
-from .frame_verdict import FrameVerdict
+from .core.configuration import Configuration
+from .core.counters import CounterBank
+from .core.cycle_controller import CycleController
+from .core.frame_decoder import FrameDecoder
+from .core.frame_verdict import FrameVerdict
 from .layouts import (BUFFER_LANES, BUFFER_WORD_BITS, access_request_layout, access_result_layout,
                       buffer_write_layout, config_ports, config_words, counter_names, field,
                       flat_fields, result_layout)
-from .limit_timers import LimitTimers
-from .ma_clock import MaClock
-from .ma_stop import MaStop
+from .core.limit_timers import LimitTimers
+from .core.ma_clock import MaClock
+from .core.ma_stop import MaStop
 from .params import AccessStatus, MasterParams
-from .register_access import RegisterAccess
-from .request_scheduler import RequestScheduler
-from .results import ResultRegisters
-from .sign_of_life import SignOfLife
-from .slo_sampler import SloSampler
-from .spw_check import SpwCheck
-from .time_base import TimeBase
+from .control.register_access import RegisterAccess
+from .core.request_scheduler import RequestScheduler
+from .core.results import ResultRegisters
+from .core.sign_of_life import SignOfLife
+from .core.slo_sampler import SloSampler
+from .core.spw_check import SpwCheck
+from .core.time_base import TimeBase
 
 
 class BissMaster(wiring.Component):

@@ -54,7 +54,7 @@ STATUS_WIDTH = Shape.cast(Status).width
 class AccessStatus(enum.IntEnum, shape=3):
     """Outcome of one register access (control channel), reported with ``ca_done``.
 
-    See :class:`~bissmaster.register_access.RegisterAccess` and docs/control.md.
+    See :class:`~bissmaster.control.register_access.RegisterAccess` and docs/control.md.
     """
     OK = 0
     CRC4_ERROR = 1      # a read byte's CRC-4 (or a write's echoed CRC-4) is wrong

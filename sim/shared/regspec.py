@@ -1,5 +1,5 @@
 """The register map as the test side reads it: straight from the SystemRDL source (the spec),
-with systemrdl-compiler, never from the register bank's Python (rtl/bissmaster/regmap.py).
+with systemrdl-compiler, never from the register bank's Python (rtl/bissmaster/bus/regmap.py).
 
 Every register is named by its path: a global one as ``"id"``, a channel's as
 ``"ctrl"``, ``"result.status"``; :meth:`RegSpec.address` places it. A register array (the
@@ -15,7 +15,7 @@ from systemrdl import RDLCompiler
 from systemrdl.node import RegNode
 
 ROOT = Path(__file__).resolve().parents[2]
-RDL = ROOT / "rtl" / "regmap" / "biss_master.rdl"
+RDL = ROOT / "rtl" / "bissmaster" / "bus" / "biss_master.rdl"
 
 
 @dataclass(frozen=True)

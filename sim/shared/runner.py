@@ -45,7 +45,7 @@ os.environ["PATH"] = os.pathsep.join(
 def python_path():
     """What the scenario modules import: the sim package (repository root), the encoder model,
     master_contract and protocol_facts (tb/); and rtl/, as on the pytest side, although nothing
-    that runs inside the simulator imports the RTL (tb/tests/test_protocol_facts.py checks)."""
+    that runs inside the simulator imports the RTL (tb/tests/model/test_protocol_facts.py checks)."""
     return os.pathsep.join(str(ROOT / d) for d in ("", "tb", "rtl"))
 
 

@@ -3,7 +3,7 @@
  *
  * Portable C99: needs <stdint.h>, <stdbool.h>, <stddef.h> and nothing else of the C library.
  * Every register offset and field mask comes from the generated biss_master_regs.h
- * (`make regmap`, from rtl/regmap/biss_master.rdl); this driver holds none of its own.
+ * (`make regmap`, from rtl/bissmaster/bus/biss_master.rdl); this driver holds none of its own.
  *
  * The driver never touches the bus itself: it calls the two hooks of a biss_bus_t (a 32-bit
  * read and a 32-bit write of a byte address) with the bus's context pointer, so the same code

@@ -31,12 +31,12 @@ from amaranth.hdl import (Assert, Assume, C, Cat, ClockDomain, Cover, Elaboratab
 from amaranth.lib import wiring
 
 import protocol_facts as facts
-from bissmaster.frame_decoder import FrameDecoder
-from bissmaster.ma_clock import MaClock
+from bissmaster.core.frame_decoder import FrameDecoder
+from bissmaster.core.ma_clock import MaClock
 from bissmaster.master import BissMaster
 from bissmaster.params import Crc
-from bissmaster.register_access import RegisterAccess
-from bissmaster.slo_sampler import SloSampler
+from bissmaster.control.register_access import RegisterAccess
+from bissmaster.core.slo_sampler import SloSampler
 from master_contract import CA_STATUS, FRAME_STATUSES, MA_HALF_PERIOD_MIN, STATUS
 
 from .flow import Internals

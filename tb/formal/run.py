@@ -56,7 +56,7 @@ LIVE_SLACK = 0       # the bound is exact to within one clock (README: liveness_
 CRC_LIMITS = LivenessLimits(data_bits_max=2, crcs=(Crc.NONE, Crc.CRC6))
 
 #: Register access: the engine built with a read's start-bit wait of 2 frames (the bound is
-#: proven for the shipped 16 as well). The bound is exact (tb/tests/test_register_access.py
+#: proven for the shipped 16 as well). The bound is exact (tb/tests/control/test_register_access.py
 #: simulates a write that takes all of it; a formal cover of it, 151 clocks deep, did not end
 #: within 30 minutes). ACCESS_TIGHT asks for a bound 7 frames smaller: from power-up the solver
 #: finds a read of 45 frames (step 90).

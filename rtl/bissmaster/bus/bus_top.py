@@ -1,0 +1,211 @@
+"""The bus tops: ``channels`` BiSS master cores behind one register bank and one bus.
+
+:class:`BusTop` only connects: the bus adapter (:class:`AxiLiteAdapter` or
+:class:`WishboneAdapter`), the :class:`~bissmaster.bus.register_bank.RegisterBank` built from the
+register map, and one :class:`BusChannel` per channel, each a
+:class:`~bissmaster.master.BissMaster` with its own MA/SLO pins.
+"""
+
+from amaranth.hdl import *
+from amaranth.lib import wiring
+from amaranth.lib.wiring import In, Out
+
+from . import regmap as regmap_mod
+from .bus_adapters import AxiLiteAdapter, AxiLiteSignature, WishboneAdapter, WishboneSignature
+from ..master import BissMaster
+from ..params import MasterParams
+from .register_bank import RegisterBank, block_signature
+
+#: The buses: adapter class, its bus member, the Verilog port prefix.
+BUSES = {
+    "axil": (AxiLiteAdapter, AxiLiteSignature, "axil", "s_axil_"),
+    "wb": (WishboneAdapter, WishboneSignature, "wb", "wb_"),
+}
+
+#: Channel signals of the register map that the channel makes itself (not core ports).
+CHANNEL_GLUE = ("trigger_enable", "frame_error", "done_count", "cap_data_bits_w0",
+                "cap_data_bits_w1", "cap_timer_width", "cap_counters", "cap_timestamp",
+                "cap_register_access")
+#: Pulses of the bank taken into a flip-flop beside the core, so they reach it one clock
+#: later: the bank's pulse register sits by the bank, and with several channels the route from
+#: ``ctrl.abort``'s into a core's controller and timers was the critical path
+#: (docs/performance.md). Not ``start`` (it would delay every request; the trigger pin's path
+#: does not pass the bank), not ``clear_counters`` (the core's counter bank registers it).
+RETIMED_PULSES = ("abort_cycle",)
+#: Global signals of the register map, made by the top.
+GLOBAL_SIGNALS = ("channels", "trigger", "irq_pending")
+
+
+class BusChannel(wiring.Component):
+    """One channel: a :class:`BissMaster` and the few signals the register map asks beyond the
+    core's ports.
+
+    Every signal of the map's channel block is connected by name to the core port of that
+    name (``cfg_ma_half_period``, ``start``, ``word0_position``, ``count_no_ack``, ...), or
+    made here (:data:`CHANNEL_GLUE`): the trigger gate, ``frame_error`` (``done`` with a
+    status other than OK), ``done_count`` and the build's capabilities. A signal that only
+    other builds of the core have (``word1_position`` in a one-word build, the ``ca_*`` ports
+    of the register-access engine in a build without it) reads 0 and its configuration is not
+    used.
+
+    Parameters
+    ----------
+    params : MasterParams
+    regs : wiring.Signature
+        The bank's channel block (:func:`~bissmaster.bus.register_bank.block_signature`).
+
+    Attributes
+    ----------
+    regs : In(regs)
+    trigger : In(1)
+        The global trigger; starts the core when ``trigger_enable`` is set.
+    ma : Out(1)
+    slo : In(1)
+    """
+
+    def __init__(self, params, regs):
+        self.params = params
+        full = BissMaster.ports(MasterParams())
+        core = BissMaster.ports(params)
+        for name, member in regs.members.items():
+            if name in CHANNEL_GLUE:
+                continue
+            if name not in full:
+                raise ValueError(f"the register map names {name!r}, which is neither a port "
+                                 f"of biss_master nor a signal of the bus channel")
+            if name in core and Shape.cast(core[name].shape).width > Shape.cast(member.shape).width:
+                raise ValueError(f"the register map holds {Shape.cast(member.shape).width} bits of {name}; "
+                                 f"this build's port has {Shape.cast(core[name].shape).width}")
+        super().__init__({
+            "regs": In(regs),
+            "trigger": In(1),
+            "ma": Out(1, init=1),
+            "slo": In(1, init=1),
+        })
+
+    def elaborate(self, platform):
+        m = Module()
+        p = self.params
+        m.submodules.core = core = BissMaster(p, trigger=True)
+        regs = self.regs
+        glue = {
+            "trigger_enable": None,
+            "frame_error": core.done & ~core.valid,
+            "done_count": None,
+            "cap_data_bits_w0": p.max_data_bits[0],
+            "cap_data_bits_w1": p.max_data_bits[1] if p.words == 2 else 0,
+            "cap_timer_width": p.timer_width,
+            "cap_counters": int(p.counters),
+            "cap_timestamp": int(p.timestamped),
+            "cap_register_access": int(p.register_access),
+        }
+        # The map's signals, by name: to and from the core's ports, or made here.
+        for name, member in regs.signature.members.items():
+            signal = getattr(regs, name)
+            if name in glue:
+                if glue[name] is not None:
+                    m.d.comb += signal.eq(glue[name])
+            elif name in RETIMED_PULSES and hasattr(core, name):
+                m.d.sync += getattr(core, name).eq(signal)
+            elif hasattr(core, name):
+                port = getattr(core, name)
+                m.d.comb += port.eq(signal) if member.flow == In else signal.eq(port)
+
+        # Every ended cycle counted, so a host sees a lost result.
+        with m.If(core.done):
+            m.d.sync += regs.done_count.eq(regs.done_count + 1)
+        # The global trigger starts the core only when enabled.
+        m.d.comb += [
+            core.trigger.eq(self.trigger & regs.trigger_enable),
+            self.ma.eq(core.ma),
+            core.slo.eq(self.slo),
+        ]
+        return m
+
+
+class BusTop(wiring.Component):
+    """``channels`` BiSS master cores behind AXI4-Lite (``bus="axil"``) or Wishbone B4
+    (``bus="wb"``), with one ``irq`` and a ``trigger`` input (docs/bus.md).
+
+    Parameters
+    ----------
+    bus : "axil" or "wb"
+    channels : int
+        1 .. 8 (the map's channel slots).
+    params : MasterParams, or a sequence of one per channel
+    regmap : RegisterMap
+        Default: :func:`bissmaster.bus.regmap.load` of ``rtl/bissmaster/bus/biss_master.rdl``.
+
+    Attributes
+    ----------
+    s_axil_* or wb_* : the bus (flat Verilog names)
+    trigger : In(1)
+        Synchronous to ``clk``: a rising edge starts every trigger-enabled channel, as a write
+        to the ``trigger`` register does.
+    irq : Out(1)
+        Registered: some channel has an enabled interrupt cause set.
+    ch<n>_ma : Out(1)
+    ch<n>_slo : In(1)
+        One MA/SLO pair per channel n (asynchronous SLO, synchronized in each core).
+    """
+
+    def __init__(self, bus="axil", channels=2, params=None, regmap=None):
+        if bus not in BUSES:
+            raise ValueError(f"bus must be one of {sorted(BUSES)}, not {bus!r}")
+        self.regmap = regmap or regmap_mod.load()
+        if not isinstance(channels, int) or not 1 <= channels <= self.regmap.channel_slots:
+            raise ValueError(f"channels must be an integer from 1 to "
+                             f"{self.regmap.channel_slots}, not {channels!r}")
+        if params is None or isinstance(params, MasterParams):
+            params = [params or MasterParams()] * channels
+        params = list(params)
+        if len(params) != channels or not all(isinstance(p, MasterParams) for p in params):
+            raise ValueError(f"params must be a MasterParams or one per channel ({channels})")
+        self.bus, self.channels, self.params = bus, channels, params
+        unknown = set(self.regmap.signals(self.regmap.globals)) - set(GLOBAL_SIGNALS)
+        if unknown:
+            raise ValueError(f"the register map's global signals {sorted(unknown)} are not "
+                             f"made by the bus top")
+        regs = block_signature(self.regmap, self.regmap.channel)
+        # Built here, so that a register map the cores cannot follow is refused at once.
+        self._channels = [BusChannel(p, regs) for p in params]
+        _, sig, _, prefix = BUSES[bus]
+        self._bus_members = list(sig(self.regmap.addr_width if bus == "axil"
+                                     else self.regmap.addr_width - 2).flip().members.flatten())
+        super().__init__({
+            **{prefix + path[-1]: member for path, member in self._bus_members},
+            "trigger": In(1),
+            "irq": Out(1),
+            **{f"ch{n}_{pin}": member for n in range(channels)
+               for pin, member in (("ma", Out(1, init=1)), ("slo", In(1, init=1)))},
+        })
+
+    def elaborate(self, platform):
+        m = Module()
+        adapter_cls, _, member, prefix = BUSES[self.bus]
+        m.submodules.bus = adapter = adapter_cls(self.regmap.addr_width)
+        m.submodules.bank = bank = RegisterBank(self.regmap, self.channels)
+        wiring.connect(m, adapter.regs, bank.bus)
+
+        # The bus pins, flat.
+        inner = getattr(adapter, member)
+        for path, mem in self._bus_members:
+            pin, sig = getattr(self, prefix + path[-1]), getattr(inner, path[-1])
+            m.d.comb += sig.eq(pin) if mem.flow == In else pin.eq(sig)
+
+        # The global trigger: the register's pulse or the input's rising edge.
+        trigger_in = Signal()
+        m.d.sync += trigger_in.eq(self.trigger)
+        trigger = Signal()
+        m.d.comb += trigger.eq(bank.glob.trigger | (self.trigger & ~trigger_in))
+
+        for n, channel in enumerate(self._channels):
+            m.submodules[f"ch{n}"] = channel
+            wiring.connect(m, getattr(bank, f"ch{n}"), channel.regs)
+            m.d.comb += [channel.trigger.eq(trigger),
+                         getattr(self, f"ch{n}_ma").eq(channel.ma),
+                         channel.slo.eq(getattr(self, f"ch{n}_slo"))]
+
+        m.d.comb += [bank.glob.channels.eq(self.channels), bank.glob.irq_pending.eq(bank.irq)]
+        m.d.sync += self.irq.eq(bank.irq.any())
+        return m

@@ -1,0 +1,336 @@
+"""The register bank of the bus tops, built from the register map (:mod:`bissmaster.bus.regmap`).
+
+Nothing here names a register: every register, field, reset value, access kind and the signal
+a field connects to come from the SystemRDL source, walked into a
+:class:`~bissmaster.bus.regmap.RegisterMap`. The bank has one simple internal bus
+(:class:`RegisterBus`, what the AXI4-Lite and Wishbone adapters drive) and, per channel and for
+the global registers, one interface whose members are the map's signals.
+"""
+
+from amaranth.hdl import *
+from amaranth.lib import wiring
+from amaranth.lib.wiring import In, Out
+
+from .regmap import DATA_WIDTH, Kind
+
+STROBES = DATA_WIDTH // 8
+
+
+class RegisterBus(wiring.Signature):
+    """The bank's internal bus, as the initiator (a bus adapter) sees it.
+
+    Word addresses. A write is issued by ``w_en`` high for one clock, byte lanes chosen by
+    ``w_strb``; the bank registers it and it acts in the next clock (a pulse is high in the
+    second clock after ``w_en``; a configuration register, one stage later, holds the new
+    value from the third clock after ``w_en``, unless it holds pulses too). A read takes two
+    steps, so that the address decode and the word select each have a clock of their own.
+    ``r_en`` high in one clock: the address is decoded into a one-hot select, and a window's
+    read enable acts then. ``r_load`` high in a later clock, at the latest the clock of the
+    next ``r_en``: the selected register's value in that clock goes to ``r_data``, which holds
+    it from the next clock until the clock after the next ``r_load``; a snapshot is taken
+    then. So reads run one per clock (each ``r_load`` with the next ``r_en``), and the
+    initiator can hold a word while the next read waits in the first step. A read and a write
+    may come in the same clock; they are not ordered: the read returns the value of its
+    ``r_load`` clock, the one before the write when ``r_load`` follows ``r_en`` at once.
+    """
+
+    def __init__(self, addr_width):
+        self.addr_width = addr_width
+        super().__init__({
+            "r_en": Out(1),
+            "r_addr": Out(addr_width),
+            "r_load": Out(1),
+            "r_data": In(DATA_WIDTH),
+            "w_en": Out(1),
+            "w_addr": Out(addr_width),
+            "w_data": Out(DATA_WIDTH),
+            "w_strb": Out(STROBES),
+        })
+
+
+def block_signature(regmap, registers):
+    """The hardware side of a block of registers, seen from the bank: a member per signal of
+    the map (:meth:`RegisterMap.signals`); the bank drives configuration and pulses, and reads
+    live values and interrupt events."""
+    members = {}
+    for name, (kind, width) in regmap.signals(registers).items():
+        members[name] = Out(width) if kind in (Kind.CONFIG, Kind.PULSE) else In(width)
+    for reg in registers:
+        if reg.window:
+            members.update({name: Out(width) if out else In(width)
+                            for name, (out, width) in reg.window_ports.items()})
+    return wiring.Signature(members)
+
+
+class RegisterBank(wiring.Component):
+    """The register map in hardware, for ``channels`` channel slots.
+
+    Field kinds (:class:`~bissmaster.bus.regmap.Kind`): CONFIG fields are registers with their
+    reset values, written per byte lane; PULSE fields give a registered one-clock pulse for
+    each 1 written and read 0; LIVE fields read their signal (a snapshot group reads a copy
+    taken when its first register is read); CONST fields read their reset value; IRQ fields
+    are sticky, set by their event and cleared by writing 1, a set winning over a clear in the
+    same clock. Unmapped addresses read 0 and ignore writes. A window (an external register
+    array) is a memory's port: a write of word ``i`` writes its strobed byte lanes to word ``i``
+    (``<window>_en`` = the strobes, in the clock of the write); a read of word ``i`` enables
+    the memory's registered read port in the ``r_en`` clock, and its data goes to ``r_data``
+    at ``r_load``, as a register's word does (the port must hold it until its next read).
+
+    Writes: the request (``w_en``, address, data, strobes) is registered, and every write
+    decodes from those flip-flops in the next clock. CONFIG fields are written one clock later
+    still, lane by lane, from a per-register write flip-flop and a second copy of the data and
+    strobes, each byte lane's strobe the enable of its flip-flops; those of a register that
+    holds pulses too (``ctrl``) are written with its pulses, in one stage. The read path is two
+    register stages (:class:`RegisterBus`): at ``r_en`` one select flip-flop per register (and
+    per read window) registers whether the address is the register's; at ``r_load`` each block
+    (the globals, each channel) registers the AND-OR of its registers' words with their
+    selects and the data of its window read, and ``r_data`` is the OR of the blocks'
+    registers. A snapshot group is copied at the ``r_load`` of its first register, which
+    reads the live values copied; the group's other registers read the copy, so every word of
+    the group read after the first belongs to the same snapshot.
+
+    Attributes
+    ----------
+    bus : In(RegisterBus)
+    glob : Out(block_signature)
+        The global registers' signals.
+    ch0 .. ch<channels-1> : Out(block_signature)
+        Each channel's signals.
+    irq : Out(channels)
+        Per channel: a cause is set in its IRQ fields and enabled.
+    """
+
+    def __init__(self, regmap, channels):
+        if not isinstance(channels, int) or not 1 <= channels <= regmap.channel_slots:
+            raise ValueError(f"channels must be an integer from 1 to {regmap.channel_slots}, "
+                             f"not {channels!r}")
+        self.regmap = regmap
+        self.channels = channels
+        members = {
+            "bus": In(RegisterBus(regmap.addr_width - 2)),
+            "glob": Out(block_signature(regmap, regmap.globals)),
+            **{f"ch{n}": Out(block_signature(regmap, regmap.channel)) for n in range(channels)},
+            "irq": Out(channels),
+        }
+        super().__init__(members)
+
+    def elaborate(self, platform):
+        m = Module()
+        rm = self.regmap
+        blocks = [(self.glob, 0, rm.globals, "g")]
+        blocks += [(getattr(self, f"ch{n}"), rm.channel_base + n * rm.channel_stride,
+                    rm.channel, f"ch{n}") for n in range(self.channels)]
+        # The write request, registered: every write decodes from these flip-flops, in the
+        # clock after w_en, so that no path runs from the bus through the decode.
+        bus = self.bus
+        self._w_en = Signal(name="write_en")
+        self._w_addr = Signal.like(bus.w_addr, name="write_addr")
+        self._w_data = Signal.like(bus.w_data, name="write_data")
+        self._w_strb = Signal.like(bus.w_strb, name="write_strb")
+        m.d.sync += self._w_en.eq(bus.w_en)
+        with m.If(bus.w_en):
+            m.d.sync += [self._w_addr.eq(bus.w_addr), self._w_data.eq(bus.w_data),
+                         self._w_strb.eq(bus.w_strb)]
+        # CONFIG fields are written one clock later still, from a second copy of the data and
+        # strobes and a per-register write flip-flop decoded from the first stage: with several
+        # channels the shared word decode in front of every configuration register's enable
+        # was a critical path (docs/performance.md).
+        self._w2_data = Signal.like(bus.w_data, name="config_write_data")
+        self._w2_strb = Signal.like(bus.w_strb, name="config_write_strb")
+        with m.If(self._w_en):
+            m.d.sync += [self._w2_data.eq(self._w_data), self._w2_strb.eq(self._w_strb)]
+        partials = []                  # each block's registered share of the read data
+        irqs = []
+        for port, base, registers, prefix in blocks:
+            read_words, windows, snapshots = {}, [], {}
+            irq = self._block(m, port, base, registers, prefix, read_words, windows, snapshots)
+            if prefix != "g":
+                irqs.append(irq)
+            selects = self._read_select(m, prefix, read_words)
+            # A snapshot group is copied at the r_load of its first register (its select
+            # flip-flop and r_load, no address decode in front of the copies' enable); that
+            # register reads the live values, the very ones copied.
+            for word, copies in snapshots.items():
+                with m.If(selects[word] & self.bus.r_load):
+                    m.d.sync += copies
+            partials.append(self._read_partial(m, prefix, selects, read_words, windows))
+        # Whole signals, never bit by bit: Icarus runs a combinational block written per bit
+        # only once an input changes, and would read X until then.
+        m.d.comb += self.irq.eq(Cat(irqs))
+        merged = 0
+        for partial in partials:
+            merged = merged | partial
+        m.d.comb += self.bus.r_data.eq(merged)
+        return m
+
+    def _block(self, m, port, base, registers, prefix, read_words, windows, snapshots):
+        """One block (the globals or a channel): storage, pulses, interrupts, windows and its
+        read words; ``snapshots`` gets, per snapshot group, the word address of the register
+        that takes it and the copies' assignments. Returns the block's interrupt request."""
+        bus = self.bus
+        w_en, w_addr, w_data, w_strb = self._w_en, self._w_addr, self._w_data, self._w_strb
+        storage = {}                   # "register.field" -> the Signal that holds it
+        irq_terms = []
+        groups = {}                    # group -> the copies' assignments
+        take = {}                      # group -> the word address of its first register
+        for reg in registers:
+            word = (base + reg.offset) // 4
+            if reg.window:
+                self._window(m, port, word, reg, windows)
+                continue
+            reg_name = f"{prefix}_{reg.path.replace('.', '_')}"
+            write = Signal(name=f"{reg_name}_write")
+            m.d.comb += write.eq(w_en & (w_addr == word))
+            # A register that holds pulses too (``ctrl``) is written in one stage, so that a
+            # write of it acts all at once (``start`` with ``periodic``).
+            staged = not any(f.kind == Kind.PULSE for f in reg.fields)
+            config_write = None
+            if staged and any(f.kind == Kind.CONFIG for f in reg.fields):
+                config_write = Signal(name=f"{reg_name}_config_write")
+                m.d.sync += config_write.eq(write)
+            parts = []                 # (lsb, the field's read value)
+            for f in reg.fields:
+                name = f"{reg_name}_{f.name}"
+                data = w_data[f.lsb:f.lsb + f.width]
+                # Bit i of the field is written only if its byte lane's strobe is set.
+                lanes = Cat(w_strb[(f.lsb + i) // 8] for i in range(f.width))
+                if f.kind == Kind.CONFIG:
+                    reg_bits = Signal(f.width, init=f.reset, name=name)
+                    storage[f"{reg.path}.{f.name}"] = reg_bits
+                    # Lane by lane: each lane's strobe enables its flip-flops, no logic per bit.
+                    if staged:
+                        en, strb = config_write, self._w2_strb
+                        data = self._w2_data[f.lsb:f.lsb + f.width]
+                    else:
+                        en, strb = write, w_strb
+                    for lo, hi, lane in self._lanes(f):
+                        with m.If(en & strb[lane]):
+                            m.d.sync += reg_bits[lo:hi].eq(data[lo:hi])
+                    parts.append((f.lsb, reg_bits))
+                    if f.signal:
+                        m.d.comb += self._signal(port, f).eq(reg_bits)
+                elif f.kind == Kind.PULSE:
+                    pulse = Signal(f.width, name=name)
+                    m.d.sync += pulse.eq(Mux(write, data & lanes, 0))
+                    m.d.comb += self._signal(port, f).eq(pulse)
+                elif f.kind == Kind.CONST:
+                    parts.append((f.lsb, C(f.reset, f.width)))
+                elif f.kind == Kind.IRQ:
+                    status = Signal(f.width, init=f.reset, name=name)
+                    event = self._signal(port, f) if f.signal else C(0, f.width)
+                    clear = Mux(write, data & lanes, 0)
+                    for i in range(f.width):
+                        # A set wins over a clear in the same clock. Conditions, not logic:
+                        # an event that reads X in a four-state simulator then sets nothing.
+                        with m.If(event[i]):
+                            m.d.sync += status[i].eq(1)
+                        with m.Elif(clear[i]):
+                            m.d.sync += status[i].eq(0)
+                    parts.append((f.lsb, status))
+                    irq_terms.append((status, f.enable))
+                elif f.kind == Kind.LIVE:
+                    live = self._signal(port, f)
+                    if reg.snapshot is None:
+                        parts.append((f.lsb, live))
+                    else:
+                        copy = Signal(f.width, init=f.reset, name=f"{name}_snapshot")
+                        groups.setdefault(reg.snapshot, []).append(copy.eq(live))
+                        # The register that takes the snapshot reads the live value, copied
+                        # in the clock it is read (r_load); the group's others read the copy.
+                        parts.append((f.lsb, live if reg.takes_snapshot else copy))
+            if reg.takes_snapshot:
+                take[reg.snapshot] = word
+            read_words[word] = self._word(parts)
+        for group, copies in groups.items():
+            snapshots[take[group]] = copies
+        # A cause requests an interrupt while set and enabled.
+        irq = Signal(name=f"{prefix}_irq")
+        m.d.comb += irq.eq(Cat((status & storage[enable]).any()
+                               for status, enable in irq_terms if enable).any())
+        return irq
+
+    def _read_select(self, m, prefix, read_words):
+        """Read stage 1 of one block: at ``r_en``, one flip-flop per register, set when the
+        address is the register's (all clear when no register is addressed). Returns
+        ``{word address: select}``.
+
+        One-hot selects and an AND-OR, not a switch on the address: Yosys maps a switch on the
+        address bits inside the block as a binary multiplexer tree twice as large, and the
+        decode then sits in the same clock as the AND-OR."""
+        selects = {}
+        for addr in read_words:
+            select = Signal(name=f"{prefix}_read_select_{addr:x}")
+            with m.If(self.bus.r_en):
+                m.d.sync += select.eq(self.bus.r_addr == addr)
+            selects[addr] = select
+        return selects
+
+    def _read_partial(self, m, prefix, selects, read_words, windows):
+        """Read stage 2 of one block: at ``r_load``, the word of the block's register selected
+        (a one-hot AND-OR; 0 when none is) or the registered data of the block's window that
+        was read, into the block's own flip-flops. The bank's read data is the OR of the
+        blocks' (at most one is not 0): one register per block instead of one AND-OR over
+        the whole bank in front of one register, so that with several channels no read path
+        spans every channel's registers."""
+        pairs = [(selects[addr], value) for addr, value in read_words.items()]
+        for n, (read, window_data) in enumerate(windows):
+            chosen = Signal(name=f"{prefix}_window{n}_read")
+            with m.If(self.bus.r_en):
+                m.d.sync += chosen.eq(read)
+            pairs.append((chosen, window_data))
+        merged = 0
+        for chosen, value in pairs:
+            merged = merged | Mux(chosen, value, 0)
+        partial = Signal(DATA_WIDTH, name=f"{prefix}_read_data")
+        with m.If(self.bus.r_load):
+            m.d.sync += partial.eq(merged)
+        return partial
+
+    def _window(self, m, port, word, reg, windows):
+        """A window: the bus's word address inside it, its strobes or read enable, its data."""
+        bus = self.bus
+        bits = (reg.count - 1).bit_length()
+        if reg.count != 1 << bits or word % reg.count:
+            raise ValueError(f"{reg.path}: a window has a power-of-two number of words and is "
+                             f"aligned to its size")
+        ports = {name[len(reg.window) + 1:]: getattr(port, name) for name in reg.window_ports}
+        if reg.writable:
+            hit = self._w_en & (self._w_addr[bits:] == word >> bits)
+            m.d.comb += [ports["addr"].eq(self._w_addr[:bits]), ports["data"].eq(self._w_data),
+                         ports["en"].eq(Mux(hit, self._w_strb, 0))]
+        else:
+            hit = bus.r_en & (bus.r_addr[bits:] == word >> bits)
+            m.d.comb += [ports["addr"].eq(bus.r_addr[:bits]), ports["en"].eq(hit)]
+            windows.append((hit, ports["data"]))
+
+    @staticmethod
+    def _signal(port, f):
+        """The bits of ``port``'s signal that field ``f`` holds (the signal itself when the
+        field holds all of it)."""
+        signal = getattr(port, f.signal)
+        if f.signal_lsb == 0 and f.width == len(signal):
+            return signal
+        return signal[f.signal_lsb:f.signal_lsb + f.width]
+
+    @staticmethod
+    def _lanes(f):
+        """``(lo, hi, lane)``: the bits ``lo:hi`` of field ``f`` that byte lane ``lane`` holds."""
+        at = 0
+        while at < f.width:
+            lane = (f.lsb + at) // 8
+            hi = min(f.width, (lane + 1) * 8 - f.lsb)
+            yield at, hi, lane
+            at = hi
+
+    @staticmethod
+    def _word(parts):
+        """A register's read value from its fields' ``(lsb, value)``, 0 between fields."""
+        pieces, at = [], 0
+        for lsb, value in sorted(parts, key=lambda p: p[0]):
+            if lsb > at:
+                pieces.append(C(0, lsb - at))
+            pieces.append(value)
+            at = lsb + len(value)
+        if at < DATA_WIDTH:
+            pieces.append(C(0, DATA_WIDTH - at))
+        return Cat(pieces)

@@ -1,0 +1,115 @@
+"""Runtime configuration: checked live, latched for the cycle, zero replaced by the defaults."""
+
+from amaranth.hdl import *
+from amaranth.lib import wiring
+from amaranth.lib.wiring import In, Out
+
+from .. import protocol
+from ..layouts import config_layout, config_words
+from ..params import Crc
+
+
+class Configuration(wiring.Component):
+    """The configuration a request cycle runs with.
+
+    The check is registered from the live inputs in every clock (``ok``, shown on the
+    ``config_error`` port inverted). While ``idle`` is high, ``cycle`` copies the live inputs in
+    every clock, so the last copy is the one of the accepted request (the clock the controller
+    leaves IDLE). In the cycle's first clock ``ok`` is therefore the verdict on exactly the
+    configuration the cycle latched: the controller refuses it there. Nothing reads ``cycle`` while
+    idle (MA stopped, receiver held in reset, no frame reported), so copying in every idle clock
+    is the same as latching on acceptance, without the request decode in the enable.
+
+    The time limits are resolved (0 -> protocol default) in the same latch, so that no default
+    mux sits in front of a comparator. Every default is >= 1, so each limit is >= 1.
+
+    Parameters
+    ----------
+    params : MasterParams
+
+    Attributes
+    ----------
+    live : In(config_layout)
+        The ``cfg_*`` ports.
+    idle : In(1)
+        The controller is in IDLE: copy ``live`` into ``cycle``.
+    ok : Out(1)
+        ``live`` of the previous clock is within what this hardware can do (registered).
+    cycle : Out(config_layout)
+        The cycle's configuration.
+    ack_limit, timeout_limit : Out(timer_width)
+        ``cfg_ack_limit`` and ``cfg_timeout_limit`` of the cycle, 0 replaced by the default.
+    delay_limit : Out(delay_limit_width)
+        ``cfg_delay_limit`` of the cycle, 0 replaced by ``max_line_delay``.
+    no_start_limit : Out(cycle_timer_width)
+        The Ack limit plus one MA period plus one clock (NO_START; the clock is the register
+        between sampler and decoder), registered from the latched values: valid
+        one clock after the latch (the controller reads it in CLOCK, after at least one clock in
+        WAIT_READY).
+    word_count : Out(range(1, words + 1))
+        Words in the cycle's frame.
+    """
+
+    def __init__(self, params):
+        self._params = p = params
+        tw = p.timer_width
+        super().__init__({
+            "live": In(config_layout(p)),
+            "idle": In(1),
+            "ok": Out(1),
+            "cycle": Out(config_layout(p)),
+            "ack_limit": Out(tw),
+            "timeout_limit": Out(tw),
+            "delay_limit": Out(p.delay_limit_width),
+            "no_start_limit": Out(p.cycle_timer_width),
+            "word_count": Out(range(1, p.words + 1)),
+        })
+
+    def valid(self, cfg):
+        """Combinational: is ``cfg`` within what this hardware can do?"""
+        p = self._params
+
+        def word_ok(word, w):
+            crc_ok = word.crc == Crc.NONE
+            for kind in p.word_crcs[w]:
+                crc_ok |= word.crc == kind
+            return word.data_bits.any() & (word.data_bits <= p.max_data_bits[w]) & crc_ok
+
+        words = config_words(cfg, p)
+        assert protocol.MA_HALF_PERIOD_MIN == 2
+        ok = cfg.ma_half_period[1:].any() & word_ok(words[0], 0)        # half period >= 2
+        if p.max_line_delay < 2**p.delay_limit_width - 1:
+            ok &= cfg.delay_limit <= p.max_line_delay
+        if p.words == 2:
+            w1 = cfg.w1_enable
+            ok &= ~w1 | word_ok(words[1], 1)
+            ok &= ~(w1 & cfg.w0.lc & cfg.w1.lc)            # one LC per frame
+            # The SPW check needs an SPW no longer than the CPW, and its CRC (the check is
+            # read after the CRC bits; see SpwCheck).
+            ok &= ~cfg.spw_check | (w1 & (cfg.w1.data_bits <= cfg.w0.data_bits)
+                                    & (cfg.w1.crc != Crc.NONE))
+        return ok
+
+    def elaborate(self, platform):
+        m = Module()
+        p = self._params
+        live, cycle = self.live, self.cycle
+
+        def or_default(value, default):
+            return Mux(value == 0, default, value)
+
+        # Check every clock; latch and resolve the limits while idle.
+        m.d.sync += self.ok.eq(self.valid(live))
+        with m.If(self.idle):
+            m.d.sync += [
+                cycle.eq(live),
+                self.ack_limit.eq(or_default(live.ack_limit, p.ack_limit_default)),
+                self.timeout_limit.eq(or_default(live.timeout_limit, p.timeout_limit_default)),
+                self.delay_limit.eq(or_default(live.delay_limit, p.max_line_delay)),
+            ]
+        # NO_START: the Ack limit plus one MA period (two half periods) plus one clock: the
+        # controller sees Start one clock later after its decision than the Ack's (the register
+        # between sampler and decoder), so the same decisions pass as with the Ack limit alone.
+        m.d.sync += self.no_start_limit.eq(self.ack_limit + Cat(C(1, 1), cycle.ma_half_period))
+        m.d.comb += self.word_count.eq((1 + cycle.w1_enable) if p.words == 2 else 1)
+        return m

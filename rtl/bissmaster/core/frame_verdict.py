@@ -1,0 +1,143 @@
+"""The verdict on a cycle: status priority, ``valid``, and the checks' flags for the results."""
+
+from amaranth.hdl import *
+from amaranth.lib import wiring
+from amaranth.lib.wiring import In, Out
+
+from ..layouts import config_layout
+from ..params import Status
+
+
+class FrameVerdict(wiring.Component):
+    """Judges the decoded frame when the controller reports it, and forwards a fault otherwise.
+
+    All combinational, from flip-flops: the CRC checkers', the sign-of-life tracker's and the
+    SPW check's outputs are registered in their blocks, so the verdict is one small decode.
+
+    A frame's status is the lowest-numbered that applies (docs/ports.md): a CRC error makes the
+    LC meaningless, an LC error makes the plausibility check moot. A word that is not in the
+    frame (word 1 with ``cfg_w1_enable`` = 0) counts as CRC-good.
+
+    The sign of life is judged (``lc_check``, which also stores the new LC in the tracker) only
+    for a reported frame whose LC-carrying word passed its CRC.
+
+    Parameters
+    ----------
+    params : MasterParams
+
+    Attributes
+    ----------
+    cfg : In(config_layout)
+        The cycle's configuration.
+    report_frame : In(1)
+        From the controller: report the decoded frame now.
+    fault : In(1)
+    fault_status : In(Status)
+        From the controller: the cycle ended without a frame, with this status.
+    crc_ok : In(words)
+        Each word's CRC checker.
+    lc_repeat_seen, lc_skip_seen, lc_zero_seen : In(1)
+        The sign-of-life tracker's flags for the frame's LC.
+    spw_match : In(1)
+        The SPW check (two-word builds).
+    lc_check : Out(1)
+        Judge and store the LC (to the tracker).
+    report : Out(1)
+        A cycle ends in this clock (``done`` one clock later).
+    status : Out(Status)
+        The status to report (valid with ``report``).
+    valid : Out(1)
+        ``report_frame`` with status OK.
+    doubtful : Out(1)
+        The frame's status will not be OK (a CRC, sign-of-life or plausibility fault): the frame
+        may have been misread, and the controller pauses before the next cycle. Not gated by
+        ``report_frame``: final from the decoder's ``done`` on, so the controller can register
+        it there (no verdict logic in front of its transitions).
+    word_crc_ok : Out(words)
+        Per word, the CRC verdict as reported (a word not in the frame is good).
+    lc_repeat, lc_skip, lc_zero, spw_mismatch : Out(1)
+        The flags as reported with the frame.
+    crc_error : Out(words)
+        Event strobes: a reported frame's word failed its CRC.
+    """
+
+    def __init__(self, params):
+        self._params = p = params
+        super().__init__({
+            "cfg": In(config_layout(p)),
+            "report_frame": In(1),
+            "fault": In(1),
+            "fault_status": In(Status),
+            "crc_ok": In(p.words),
+            "lc_repeat_seen": In(1),
+            "lc_skip_seen": In(1),
+            "lc_zero_seen": In(1),
+            "spw_match": In(1),
+            "lc_check": Out(1),
+            "report": Out(1),
+            "status": Out(Status),
+            "valid": Out(1),
+            "doubtful": Out(1),
+            "word_crc_ok": Out(p.words),
+            "lc_repeat": Out(1),
+            "lc_skip": Out(1),
+            "lc_zero": Out(1),
+            "spw_mismatch": Out(1),
+            "crc_error": Out(p.words),
+        })
+
+    def elaborate(self, platform):
+        m = Module()
+        p = self._params
+        cfg = self.cfg
+        two = p.words == 2
+
+        # CRCs: a word not in the frame is good.
+        word1_on = cfg.w1_enable if two else C(0)
+        if two:
+            m.d.comb += self.word_crc_ok.eq(Cat(self.crc_ok[0], self.crc_ok[1] | ~word1_on))
+        else:
+            m.d.comb += self.word_crc_ok.eq(self.crc_ok)
+        ok = self.word_crc_ok
+        crcs_ok = ok[0] & ok[-1]
+
+        # Sign of life: judged for the word that carries it, when its CRC is good.
+        lc_on = (cfg.w0.lc | (word1_on & cfg.w1.lc)) if two else cfg.w0.lc
+        lc_word_crc_ok = Mux(cfg.w0.lc, ok[0], ok[-1])
+        m.d.comb += [
+            self.lc_check.eq(self.report_frame & lc_on & lc_word_crc_ok),
+            self.lc_repeat.eq(self.lc_check & self.lc_repeat_seen),
+            self.lc_skip.eq(self.lc_check & self.lc_skip_seen),
+            self.lc_zero.eq(self.lc_check & self.lc_zero_seen),
+        ]
+
+        # Plausibility: only between two CRC-good words.
+        if two:
+            m.d.comb += self.spw_mismatch.eq(cfg.spw_check & word1_on & crcs_ok & ~self.spw_match)
+
+        # Status priority.
+        frame_status = Signal(Status)
+        with m.If(~ok[0] & ~ok[-1]):
+            m.d.comb += frame_status.eq(Status.CRC_ERROR_BOTH if two else Status.CRC_ERROR_WORD0)
+        with m.Elif(~ok[0]):
+            m.d.comb += frame_status.eq(Status.CRC_ERROR_WORD0)
+        with m.Elif(~ok[-1]):
+            m.d.comb += frame_status.eq(Status.CRC_ERROR_WORD1)
+        with m.Elif(self.lc_repeat | self.lc_skip | self.lc_zero):
+            m.d.comb += frame_status.eq(Status.SIGN_OF_LIFE)
+        with m.Elif(self.spw_mismatch):
+            m.d.comb += frame_status.eq(Status.SPW_MISMATCH)
+        with m.Else():
+            m.d.comb += frame_status.eq(Status.OK)
+
+        m.d.comb += [
+            self.report.eq(self.report_frame | self.fault),
+            self.status.eq(Mux(self.report_frame, frame_status, self.fault_status)),
+            self.valid.eq(self.report_frame & (frame_status == Status.OK)),   # faults never OK
+            # The same verdict without the report gate: final from the decoder's ``done`` on
+            # (CRCs, LC flags and the SPW check are registered and settled by then).
+            self.doubtful.eq(~crcs_ok | self.spw_mismatch | lc_on & lc_word_crc_ok
+                             & (self.lc_repeat_seen | self.lc_skip_seen | self.lc_zero_seen)),
+            self.crc_error.eq(Mux(self.report_frame, ~ok, 0)),
+        ]
+        return m

@@ -1,0 +1,80 @@
+"""When MA has clocked out enough rising edges for the whole frame."""
+
+from amaranth.hdl import *
+from amaranth.lib import data, wiring
+from amaranth.lib.wiring import In, Out
+
+from .frame_decoder import word_length
+from ..params import FRAME_LENGTH_WIDTH, SLOT_WIDTH, WORD_CONFIG
+
+
+#: Slot ``k`` is the bit the encoder puts on SLO at MA rising edge ``k + 2`` (SloSampler). Start
+#: in slot ``s`` comes at rise ``s + 2``, CDS at ``s + 3``, ``N`` word bits, and the stop bit at
+#: rise ``s + N + 4``: the frame needs ``s + N + 4`` rising edges.
+RISES_BEYOND_WORDS = 4
+
+
+class MaStop(wiring.Component):
+    """``enough``: MA has made every rising edge the frame needs; the controller stops MA.
+
+    Once Start is seen in slot ``start_slot``, the frame needs ``start_slot + words' bits + 4``
+    rising edges. The sum comes from the cycle's configuration in two register stages (valid two
+    clocks after the latch; first read when Start has been sampled) and the compare is
+    registered (a wide compare is too slow in front of the MA generator). The lag is harmless:
+    ``rises`` changes at a rising edge and the MA generator reads ``run`` only at the end of the
+    high phase, >= 2 clocks later. ``started`` and the target change together (both registered
+    from the decoder), so the flag sees them consistently, one clock late: when the round trip
+    is longer than the frame, MA may stop one clock (rarely one period) later. ``clear`` (the
+    receiver's clear, high before every cycle) keeps the flag 0 in a cycle's first clock.
+
+    Parameters
+    ----------
+    words : int
+        Words the build can decode (1 or 2).
+
+    Attributes
+    ----------
+    words : In(ArrayLayout(WORD_CONFIG, words))
+        The cycle's word settings.
+    w1_enable : In(1)
+        Word 1 is in the frame (two-word builds).
+    started : In(1)
+        The decoder has seen Start ...
+    start_slot : In(16)
+        ... in this slot.
+    rises : In(16)
+        MA rising edges so far (MaClock).
+    clear : In(1)
+    enough : Out(1)
+    """
+
+    def __init__(self, words):
+        self._words = words
+        super().__init__({
+            "words": In(data.ArrayLayout(WORD_CONFIG, words)),
+            "w1_enable": In(1),
+            "started": In(1),
+            "start_slot": In(SLOT_WIDTH),
+            "rises": In(SLOT_WIDTH),
+            "clear": In(1),
+            "enough": Out(1),
+        })
+
+    def elaborate(self, platform):
+        m = Module()
+        two = self._words == 2
+
+        word_len = [Signal(FRAME_LENGTH_WIDTH, name=f"word{w}_len") for w in range(self._words)]
+        frame_len = Signal(FRAME_LENGTH_WIDTH + 1)          # every word's bits + RISES_BEYOND_WORDS
+        target_rises = Signal(SLOT_WIDTH + 1)
+        started = Signal()
+        m.d.sync += [
+            word_len[0].eq(word_length(self.words[0], extra=RISES_BEYOND_WORDS, width=FRAME_LENGTH_WIDTH)),
+            frame_len.eq(word_len[0] + (Mux(self.w1_enable, word_len[1], 0) if two else 0)),
+            target_rises.eq(self.start_slot + frame_len),
+            started.eq(self.started),
+            self.enough.eq(started & (self.rises >= target_rises) & ~self.clear),
+        ]
+        if two:
+            m.d.sync += word_len[1].eq(word_length(self.words[1], width=FRAME_LENGTH_WIDTH))
+        return m

@@ -1,0 +1,261 @@
+"""SLO receiver with line-delay compensation."""
+
+from amaranth.hdl import *
+from amaranth.lib import cdc, wiring
+from amaranth.lib.wiring import In, Out
+
+from ..params import HALF_PERIOD_WIDTH
+
+
+#: Clocks between the SLO pin and the Ack-edge detector beyond the pin edge itself: the second
+#: synchronizer flop. The first flop's sampling uncertainty (< 1 clock) stays in the measurement,
+#: so the reported delay ``d`` satisfies ``true <= d < true + 1`` clock.
+SYNC_EXTRA_LATENCY = 1
+
+
+def vote_spacing(half_period):
+    """Clocks between the three votes of a slot, for a half period of ``half_period`` clocks:
+    a quarter bit (``half_period // 2``) where the eye allows it, none (a single sample) at
+    ``half_period`` = 2. A Python model of the rule the hardware applies, for documentation and
+    tools (tests derive the same rule themselves from docs/ports.md)."""
+    return half_period // 2 if half_period >= 3 else 0
+
+
+class SloSampler(wiring.Component):
+    """Measures the round trip and decides every SLO bit from three votes around its centre.
+
+    The round trip is counted from ``arm`` (the master's own second MA rising edge) to the
+    falling edge of Ack on the synchronized SLO. Every bit the encoder sends after that edge
+    arrives exactly one MA period after the previous one, shifted by the same round trip,
+    whatever its length: so the sampler does not follow MA at all. It runs its own period
+    timer, started at the Ack edge; the centre of slot ``k`` is ``half_period + 2 * half_period *
+    k`` clocks after the edge. That works for round trips of any number of bit periods; slot
+    ``k`` is the bit the encoder put on SLO at MA rising edge ``k + 2``.
+
+    **Votes (noise immunity).** Each slot is decided by the majority of three samples: ``v``
+    clocks before its centre, at its centre, and ``v`` clocks after it, with ``v`` =
+    :func:`vote_spacing` (``half_period // 2``; 0, a single sample, at a half period of 2). The
+    decision (``sample`` with ``bit``) comes with the third vote, ``v`` clocks after the centre.
+    A glitch (the line inverted for a while) can change a decision only by inverting two votes,
+    so one glitch shorter than ``v`` clocks never changes a decided bit, fakes a Start or ends an
+    Ack early.
+
+    **The Ack edge.** SLO must be low at slot 0 (it is inside the Ack), decided by the same
+    votes; slot 0 high by the majority means the edge was not an Ack edge, and the sampler waits
+    for the next one. SLO high again before slot 0's first vote (within ``u = half_period - v``
+    clocks of the fall; at a half period of 2: before its only sample) may mean a glitch was
+    taken for the edge: the sampler waits for the next fall, and if that comes within ``v``
+    clocks of the rise (one glitch right at the real edge, either a short low before it or a
+    short high after it: the two cannot be told apart), it takes the edge halfway between the
+    two falls, at most ``v`` clocks from the true one, and the votes keep every decision right.
+    Later high blips in slot 0 are votes like any other. So the delay is exact (``true <= delay
+    < true + 1``) unless a glitch starts within ``u`` clocks after the edge or ends within ``v``
+    clocks before it; then it is off by at most ``v`` clocks.
+
+    **Area.** The slot timer only counts down to zero and reloads, from four values kept as
+    reset-less registers (edge to first vote, vote to vote, third vote to the next slot's first,
+    and the halfway edge): no comparator on the timer's width anywhere.
+
+    SLO is asynchronous: it passes a two-flop synchronizer
+    (:class:`amaranth.lib.cdc.FFSynchronizer`) first, whose flops are reset-less, so the
+    master's reset between cycles (``ResetInserter``) does not touch them; ``level`` is the
+    synchronized line for the rest of the master. The measured delay is compensated for the
+    synchronizer's latency (:data:`SYNC_EXTRA_LATENCY`). ``synchronizer=False`` leaves the
+    flops out for block tests and formal harnesses of the sampler alone: they drive ``slo`` as
+    the output of such a synchronizer (the compensation stays).
+
+    Attributes
+    ----------
+    slo : In(1)
+        The SLO pin (with ``synchronizer=False``: the output of a two-flop synchronizer).
+    level : Out(1)
+        SLO after the synchronizer.
+    half_period : In(16)
+        MA half period in system clocks (constant during the cycle).
+    arm : In(1)
+        Strobe on the master's second MA rising edge: start measuring.
+    delay : Out(bits)
+        Round trip in system clocks, compensated for the synchronizer. Saturates.
+    early : Out(1)
+        SLO was already low when armed: it fell before the second MA rise could have caused it.
+    locked : Out(1)
+        Slot 0 was decided low: the Ack edge is confirmed; decisions are being produced (from
+        the clock after slot 0's decision).
+    sample : Out(1)
+        Strobe: ``bit`` is the decision of the next slot (``v`` clocks after its centre).
+    bit : Out(1)
+    """
+
+    def __init__(self, delay_width, *, synchronizer=True):
+        self._delay_width = delay_width
+        self._synchronizer = bool(synchronizer)
+        super().__init__({
+            "slo": In(1, init=1),
+            "level": Out(1, init=1),
+            "half_period": In(HALF_PERIOD_WIDTH),
+            "arm": In(1),
+            "delay": Out(delay_width),
+            "early": Out(1),
+            "locked": Out(1),
+            "sample": Out(1),
+            "bit": Out(1),
+        })
+
+    def elaborate(self, platform):
+        m = Module()
+        hp = self.half_period
+
+        if self._synchronizer:
+            m.submodules.sync = cdc.FFSynchronizer(self.slo, self.level, init=1, stages=2)
+        else:
+            m.d.comb += self.level.eq(self.slo)
+        slo = self.level
+
+        slo_prev = Signal(init=1)
+        m.d.sync += slo_prev.eq(slo)
+        fell = slo_prev & ~slo
+
+        # The vote spacing ``v`` and the slot timer's reload values, from the cycle's half
+        # period (constant within a cycle): reset-less registers that follow it in every clock,
+        # valid a few clocks after the configuration latch, long before the first edge. With
+        # ``u = hp - v``, a slot's events are: first vote ``u`` clocks after its start, the
+        # centre ``v`` later, the third vote (the decision) ``v`` later again, and the next
+        # slot's first vote ``2 * u`` after that (``2 * u + 2 * v`` = one MA period). The timer
+        # only ever counts down to zero and reloads: no wide compare anywhere.
+        vw = HALF_PERIOD_WIDTH - 1
+        vote = Signal(vw, reset_less=True)
+        single = Signal(reset_less=True)                        # one sample per slot (hp = 2)
+        first_load = Signal(HALF_PERIOD_WIDTH, reset_less=True)  # u - 1: edge to first vote
+        vote_load = Signal(vw, reset_less=True)                  # v - 1: vote to vote
+        vote_one = Signal(reset_less=True)                       # v == 1: vote_load is 0
+        period_load = Signal(HALF_PERIOD_WIDTH + 1, reset_less=True)  # 2u - 1: third to first
+        m.d.sync += [
+            vote.eq(Mux(hp >= 3, hp[1:], 0)),
+            single.eq(hp < 3),
+            first_load.eq(hp - vote - 1),
+            vote_load.eq(vote - 1),
+            vote_one.eq(vote == 1),
+            period_load.eq(Cat(C(1, 1), first_load)),
+        ]
+
+        elapsed = Signal(self._delay_width)        # clocks since arm
+        delay_max = (1 << self._delay_width) - 1
+        slot_left = Signal(HALF_PERIOD_WIDTH + 1)  # clocks to the slot's next event, minus one
+        # ``slot_left == 0`` kept as a register, written wherever ``slot_left`` is, from the
+        # value written: the event strobe needs no wide compare.
+        slot_zero = Signal(init=1)
+        phase = Signal(2)                           # next event: 0 first vote, 1 centre, 2 third
+        first_slot = Signal()                       # slot 0 (inside the Ack) not decided yet
+        vote1 = Signal()                            # the slot's first vote
+        vote2 = Signal()                            # its centre
+        # After SLO went high again right after the edge: the next fall within ``v`` clocks is
+        # ambiguous (the slot timer counts the window down).
+        gap = Signal()
+        # The edge halfway between the last fall and now, kept up to date clock by clock (so
+        # that no arithmetic sits between the fall and the registers it loads): with ``span``
+        # clocks since that fall, ``mid_slot`` = hp - 1 - ceil(span / 2) (the timer to the
+        # slot's centre had the edge been halfway) and ``mid_delay`` = its delay + floor(span /
+        # 2); ``odd`` = span % 2.
+        mid_slot = Signal(HALF_PERIOD_WIDTH + 1)
+        mid_delay = Signal(self._delay_width)
+        odd = Signal()
+        with m.If(odd):
+            m.d.sync += mid_delay.eq(mid_delay + 1)
+        with m.Else():
+            m.d.sync += mid_slot.eq(mid_slot - 1)
+        m.d.sync += odd.eq(~odd)
+
+        def load(value, zero):
+            m.d.sync += [slot_left.eq(value), slot_zero.eq(zero)]
+
+        majority = (vote1 & vote2) | (vote1 & slo) | (vote2 & slo)
+        decided = Signal()                          # a slot's decision in this clock
+        decision = Mux(single, slo, majority)
+        m.d.comb += [self.sample.eq(decided & ~first_slot), self.bit.eq(decision)]
+
+        with m.FSM(name="sampler_fsm"):
+            with m.State("IDLE"):
+                with m.If(self.arm):
+                    m.d.sync += [
+                        elapsed.eq(1),
+                        self.early.eq(~slo),
+                        self.locked.eq(0),
+                        gap.eq(0),
+                    ]
+                    m.next = "MEASURE"
+            with m.State("MEASURE"):
+                with m.If(elapsed != delay_max):
+                    m.d.sync += elapsed.eq(elapsed + 1)
+                with m.If(gap):
+                    # The ambiguity window after a rise right after the edge.
+                    load(slot_left - 1, slot_left == 1)
+                    with m.If(slot_zero):
+                        m.d.sync += gap.eq(0)
+                with m.If(fell):
+                    # The edge entered the second flop ``elapsed - 1`` clocks after the MA edge.
+                    # A saturated count stays saturated: above every limit.
+                    delay = Mux(elapsed == delay_max, delay_max, elapsed - SYNC_EXTRA_LATENCY)
+                    m.d.sync += [
+                        vote1.eq(0),
+                        vote2.eq(0),
+                        first_slot.eq(1),
+                        gap.eq(0),
+                    ]
+                    with m.If(gap):
+                        # One glitch right at the edge, a short low before it or a short high
+                        # after it (the two cannot be told apart): the edge is halfway between
+                        # the two falls. Its first vote is now or later: SLO is low, so the
+                        # vote is taken now and the timer runs to the centre.
+                        m.d.sync += [
+                            self.delay.eq(Mux(elapsed == delay_max, delay_max, mid_delay)),
+                            phase.eq(1),
+                        ]
+                        load(mid_slot, mid_slot == 0)
+                    with m.Else():
+                        m.d.sync += [
+                            self.delay.eq(delay),
+                            phase.eq(0),
+                            # Halfway values for a fall in the next clock (span 1).
+                            mid_slot.eq(hp - 2),
+                            mid_delay.eq(delay),
+                            odd.eq(1),
+                        ]
+                        load(first_load, 0)                 # u >= 2
+                    m.next = "SAMPLE"
+            with m.State("SAMPLE"):
+                with m.If(elapsed != delay_max):
+                    m.d.sync += elapsed.eq(elapsed + 1)
+                load(slot_left - 1, slot_left == 1)
+                with m.If(first_slot & (phase == 0) & slo):
+                    # SLO high before slot 0's first vote (at a half period of 2: before its
+                    # only sample): maybe a glitch was taken for the edge. Wait for the next
+                    # fall; if it comes within ``v`` clocks, it and this edge are one glitch at
+                    # the real edge.
+                    m.d.sync += gap.eq(~single)
+                    load(vote_load, vote_one)
+                    m.next = "MEASURE"
+                with m.Elif(slot_zero):
+                    with m.Switch(phase):
+                        with m.Case(0):
+                            with m.If(single):
+                                m.d.comb += decided.eq(1)
+                                load(period_load, 0)
+                            with m.Else():
+                                m.d.sync += [vote1.eq(slo), phase.eq(1)]
+                                load(vote_load, vote_one)
+                        with m.Case(1):
+                            m.d.sync += [vote2.eq(slo), phase.eq(2)]
+                            load(vote_load, vote_one)
+                        with m.Default():
+                            m.d.comb += decided.eq(1)
+                            m.d.sync += phase.eq(0)
+                            load(period_load, 0)
+                with m.If(decided & first_slot):
+                    with m.If(decision):
+                        # Slot 0 high: that was no Ack edge. Wait for the next one.
+                        m.next = "MEASURE"
+                    with m.Else():
+                        m.d.sync += [first_slot.eq(0), self.locked.eq(1)]
+                        m.d.comb += self.sample.eq(1)
+
+        return m

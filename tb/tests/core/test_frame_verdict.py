@@ -1,0 +1,169 @@
+"""FrameVerdict on Amaranth's simulator: exhaustive over its (small) input space.
+
+Cycle conventions and where expected values come from: ``block_sim.py``. The rules (the
+block's docstring, docs/ports.md "Status codes"): a frame's status is the lowest code that
+applies, CRC (both, word 0, word 1) > sign of life > SPW mismatch > OK; word 1 not in the frame
+counts as CRC-good; the LC is judged only for a reported frame whose LC-carrying word passed its
+CRC; the SPW check only between two CRC-good words with the check and word 1 enabled; without a
+frame the controller's fault status passes through; ``valid`` is a reported frame with OK.
+"""
+
+import itertools
+
+import pytest
+
+from bissmaster.core.frame_verdict import FrameVerdict
+from bissmaster.layouts import config_layout
+from bissmaster.params import Crc, MasterParams
+from master_contract import STATUS
+
+from testkit.block_sim import pack, run_clocks
+
+TWO = MasterParams()
+ONE = MasterParams(max_data_bits=(36,), word_crcs=((Crc.CRC6,),))
+OUTPUTS = ["doubtful", "lc_check", "report", "status", "valid", "word_crc_ok", "lc_repeat",
+           "lc_skip", "lc_zero", "spw_mismatch", "crc_error"]
+FAULT_NAMES = [name for name, code in STATUS.items() if code >= STATUS["NO_ACK"]]
+
+
+def _inputs(p, *, w0_lc=0, w1_lc=0, w1_enable=0, spw_check=0, report_frame=0, fault=0,
+            fault_status=0, crc_ok=0, seen=(0, 0, 0), spw_match=0):
+    cfg = {"ma_half_period": 5, "w0": {"data_bits": 20, "lc": w0_lc, "crc": 1}}
+    if p.words == 2:
+        cfg.update(w1_enable=w1_enable, spw_check=spw_check,
+                   w1={"data_bits": 20, "lc": w1_lc, "crc": 2})
+    step = {"cfg": pack(config_layout(p), cfg), "report_frame": report_frame, "fault": fault,
+            "fault_status": fault_status, "crc_ok": crc_ok, "lc_repeat_seen": seen[0],
+            "lc_skip_seen": seen[1], "lc_zero_seen": seen[2]}
+    if p.words == 2:
+        step["spw_match"] = spw_match
+    return step
+
+
+def reference(p, s, cfg):
+    """Every output for the inputs ``s`` and the settings ``cfg`` they were made from."""
+    two = p.words == 2
+    rf = s["report_frame"]
+    w1 = two and cfg.get("w1_enable", 0)
+    ok0 = s["crc_ok"] & 1
+    ok1 = ((s["crc_ok"] >> 1) & 1 or not w1) if two else ok0
+    if cfg.get("w0_lc"):
+        lc_word_ok = ok0
+    elif w1 and cfg.get("w1_lc"):
+        lc_word_ok = ok1
+    else:
+        lc_word_ok = None                           # no LC in the frame
+    lc_check = int(bool(rf and lc_word_ok))
+    flags = [lc_check & s[f"lc_{f}_seen"] for f in ("repeat", "skip", "zero")]
+    spw = int(bool(two and cfg.get("spw_check") and w1 and ok0 and ok1 and not s["spw_match"]))
+    if not ok0 and not ok1:
+        status = STATUS["CRC_ERROR_BOTH"] if two else STATUS["CRC_ERROR_WORD0"]
+    elif not ok0:
+        status = STATUS["CRC_ERROR_WORD0"]
+    elif not ok1:
+        status = STATUS["CRC_ERROR_WORD1"]
+    elif any(flags):
+        status = STATUS["SIGN_OF_LIFE"]
+    elif spw:
+        status = STATUS["SPW_MISMATCH"]
+    else:
+        status = STATUS["OK"]
+    ok_bits = ok0 | (int(ok1) << 1) if two else ok0
+    # The frame will not be OK (the pause after it): the same verdict, reported or not.
+    seen_any = any(s[f"lc_{f}_seen"] for f in ("repeat", "skip", "zero"))
+    doubtful = int(not ok0 or not ok1 or bool(lc_word_ok and seen_any) or bool(spw))
+    out = {"doubtful": doubtful, "lc_check": lc_check, "report": int(bool(rf or s["fault"])),
+           "valid": int(bool(rf and status == STATUS["OK"])), "word_crc_ok": ok_bits,
+           "lc_repeat": flags[0], "lc_skip": flags[1], "lc_zero": flags[2],
+           "crc_error": (~ok_bits & (2**p.words - 1)) if rf else 0}
+    if rf:
+        out["status"] = status
+        if two:
+            out["spw_mismatch"] = spw
+    elif s["fault"]:
+        out["status"] = s["fault_status"]
+    return out
+
+
+def _settings(p):
+    """Every valid combination of the settings the verdict reads (docs/ports.md: one LC per
+    frame; the SPW check needs word 1)."""
+    if p.words == 1:
+        return [{"w0_lc": lc} for lc in (0, 1)]
+    out = []
+    for w0_lc, w1_lc, w1_enable, spw_check in itertools.product((0, 1), repeat=4):
+        if (w1_enable and w0_lc and w1_lc) or (spw_check and not w1_enable):
+            continue
+        out.append({"w0_lc": w0_lc, "w1_lc": w1_lc, "w1_enable": w1_enable,
+                    "spw_check": spw_check})
+    return out
+
+
+def _check(p, cases):
+    trace = run_clocks(FrameVerdict(p), [_inputs(p, **cfg, **kw) for cfg, kw in cases], OUTPUTS)
+    for (cfg, kw), got in zip(cases, trace):
+        s = _inputs(p, **cfg, **kw)
+        want = reference(p, s, cfg)
+        assert {k: got[k] for k in want} == want, (cfg, kw)
+
+
+@pytest.mark.parametrize("p", (TWO, ONE), ids=("two_words", "one_word"))
+@pytest.mark.parametrize("report_frame", (1, 0), ids=("reported", "not_yet_reported"))
+def test_frame_verdict_reported_frame_exhaustive(p, report_frame):
+    cases = []
+    for cfg in _settings(p):
+        for crc_ok, seen, match in itertools.product(range(2**p.words),
+                                                     itertools.product((0, 1), repeat=3),
+                                                     (0, 1) if p.words == 2 else (0,)):
+            cases.append((cfg, {"report_frame": report_frame, "crc_ok": crc_ok, "seen": seen,
+                                "spw_match": match}))
+    _check(p, cases)
+
+
+@pytest.mark.parametrize("p", (TWO, ONE), ids=("two_words", "one_word"))
+@pytest.mark.parametrize("name", FAULT_NAMES)
+def test_frame_verdict_fault_passes_through(p, name):
+    # Whatever the frame inputs say: no LC judged, no CRC event, not valid.
+    cases = []
+    for cfg in _settings(p):
+        for crc_ok, seen, match in itertools.product(range(2**p.words), ((0, 0, 0), (1, 1, 1)),
+                                                     (0, 1)):
+            cases.append((cfg, {"fault": 1, "fault_status": STATUS[name], "crc_ok": crc_ok,
+                                "seen": seen, "spw_match": match}))
+    _check(p, cases)
+
+
+def test_frame_verdict_nothing_reported_in_a_quiet_clock():
+    cases = [(cfg, {"crc_ok": crc_ok, "seen": (1, 1, 1)}) for cfg in _settings(TWO)
+             for crc_ok in range(4)]
+    _check(TWO, cases)
+
+
+# Hand-picked (case id, settings, inputs, status name): the priority, spelled out.
+PRIORITY = [
+    ("crc_both_over_all", {"w1_enable": 1, "w1_lc": 1, "spw_check": 1},
+     {"crc_ok": 0b00, "seen": (1, 1, 1)}, "CRC_ERROR_BOTH"),
+    ("crc_word0_over_lc_and_spw", {"w1_enable": 1, "w1_lc": 1, "spw_check": 1},
+     {"crc_ok": 0b10, "seen": (1, 0, 0)}, "CRC_ERROR_WORD0"),
+    ("crc_word1_over_lc_in_word0", {"w1_enable": 1, "w0_lc": 1, "spw_check": 1},
+     {"crc_ok": 0b01, "seen": (0, 1, 0)}, "CRC_ERROR_WORD1"),
+    ("word1_off_counts_good", {"w1_enable": 0}, {"crc_ok": 0b01}, "OK"),
+    ("word1_off_crc0_bad_is_word0_only", {"w1_enable": 0}, {"crc_ok": 0b00}, "CRC_ERROR_WORD0"),
+    ("lc_over_spw", {"w1_enable": 1, "w1_lc": 1, "spw_check": 1},
+     {"crc_ok": 0b11, "seen": (0, 0, 1)}, "SIGN_OF_LIFE"),
+    ("lc_in_word0_with_bad_word1_not_judged_as_lc", {"w1_enable": 1, "w0_lc": 1},
+     {"crc_ok": 0b01, "seen": (1, 0, 0)}, "CRC_ERROR_WORD1"),
+    ("spw_mismatch", {"w1_enable": 1, "w1_lc": 1, "spw_check": 1}, {"crc_ok": 0b11},
+     "SPW_MISMATCH"),
+    ("spw_match_ok", {"w1_enable": 1, "w1_lc": 1, "spw_check": 1},
+     {"crc_ok": 0b11, "spw_match": 1}, "OK"),
+    ("no_spw_check_ok", {"w1_enable": 1, "w1_lc": 1}, {"crc_ok": 0b11}, "OK"),
+    ("lc_seen_but_no_lc_configured", {"w1_enable": 1}, {"crc_ok": 0b11, "seen": (1, 1, 1)}, "OK"),
+]
+
+
+@pytest.mark.parametrize("cfg, kw, name", [c[1:] for c in PRIORITY], ids=[c[0] for c in PRIORITY])
+def test_frame_verdict_priority_cases(cfg, kw, name):
+    trace = run_clocks(FrameVerdict(TWO), [_inputs(TWO, report_frame=1, **cfg, **kw)], OUTPUTS)
+    assert trace[0]["status"] == STATUS[name]
+    assert trace[0]["valid"] == int(name == "OK")

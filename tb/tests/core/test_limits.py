@@ -1,0 +1,377 @@
+"""Issue 11, "limits to the clock": every limit of ``biss_master`` probed at its boundary.
+
+Each test drives the stimulus (or, for NO_START, the setting) to the documented limit - 1, the
+limit and the limit + 1, and checks both sides against docs/ports.md and docs/timing.md
+("Limits to the clock"): status, the clock of ``done``, the counter, MA activity, and when the
+controller is ready again. The test ids name the probe and the outcome expected there.
+
+Clock references (all seen on the ports, see limits_bench.py for the cycle convention):
+  s   the 2nd MA rise: the first clock with MA high after the 2nd rising edge;
+  m   MA stopped: the last rise + hp, the clock in which MA would have fallen again;
+  ld  ``line_delay``; slot k is centred in clock s + ld + 1 + hp + 2*hp*k and decided v clocks
+      later, v = hp // 2 the vote spacing (0 at hp = 2; ports.md, "Noise immunity").
+
+Status codes and counter names come from tb/master_contract.py, protocol times from the spec
+digest (40 us at the bench's 1 MHz clock), frames from tb/encoder_model: nothing from rtl/.
+"""
+
+import pytest
+
+from encoder_model.frames import FrameFaults, FrameFormat, WordValue, build_frame
+from testkit.limits_bench import (FRAME, MAX_LINE_DELAY, POSITION, WORD, Encoder, base_config, clocks,
+                          simulate)
+from master_contract import STATUS
+
+HP = 2
+BREAK = 3                           # cfg_break_time of every test that is not about it
+FRAME_BITS = WORD.total_bits        # data + nE/nW + CRC: 12
+DEFAULT_BREAK = clocks(40e-6)       # spec section 9: the master pauses 40 us after an error
+DEFAULT_ACK = clocks(40e-6)         # spec section 9: processing time and line delay <= 40 us
+DEFAULT_TIMEOUT = 2 * clocks(40e-6)  # ports.md: twice the longest static slave timeout (40 us)
+
+
+def vote_spacing(hp):
+    """Clocks between the three votes of a slot (ports.md): a quarter bit, none at hp = 2."""
+    return hp // 2 if hp >= 3 else 0
+
+
+def sample_clock(s, ld, k, hp=HP):
+    """The clock in which slot k is decided (timing.md): its third vote, v after its centre."""
+    return s + ld + 1 + hp + 2 * hp * k + vote_spacing(hp)
+
+
+def target_rises(ack_slots):
+    """MA rising edges of a whole frame (ports.md): Ack slots + frame bits + 4."""
+    return ack_slots + FRAME_BITS + 4
+
+
+def busy_falls(run):
+    return [t for t in range(1, len(run.trace))
+            if not run.trace[t]["busy"] and run.trace[t - 1]["busy"]]
+
+
+def cycle_starts(run, hp=HP):
+    """The first MA fall of every cycle."""
+    return [f for i, f in enumerate(run.falls) if i == 0 or f - run.falls[i - 1] > 2 * hp]
+
+
+def start_at(*clocks_):
+    return lambda t, run: {"start": int(t in clocks_)}
+
+
+def assert_frame(run, s, ld, ack_slots, *, end_check_done=None, hp=HP):
+    """One frame, reported OK, at the documented clock (3 clocks after the last CRC bit's
+    decision: the decoder reads it one clock after the decision); MA made exactly the frame's
+    rises."""
+    done = end_check_done or sample_clock(s, ld, ack_slots + FRAME_BITS + 1, hp) + 3
+    assert run.dones == [(done, STATUS["OK"])]
+    assert run.trace[-1]["word0_position"] == POSITION
+    assert run.cycles("valid") == [run.dones[0][0]]
+    assert run.trace[-1]["line_delay"] == ld
+    assert len(run.rises) == target_rises(ack_slots)
+    assert not any(run.counts.values())
+
+
+def assert_fault(run, status, done, counter, hp=HP):
+    """One fault at ``done``, counted once; MA stops (no fall after done) and then stays high;
+    the break ends cfg_break_time + 1 clocks after BREAK's first clock with MA stopped."""
+    assert run.dones == [(done, STATUS[status])]
+    assert not run.cycles("valid")
+    assert {k: v for k, v in run.counts.items() if v} == {counter: 1}
+    assert all(f <= done for f in run.falls)
+    m = max(run.rises[-1] + hp, done)
+    assert all(x["ma"] for x in run.trace[m:])
+    assert busy_falls(run)[-1] == m + BREAK + 1
+
+
+# -- NO_ACK: cfg_ack_limit ---------------------------------------------------------------------
+
+@pytest.mark.parametrize("limit", (12, 0), ids=("cfg12", "cfg0_default40us"))
+@pytest.mark.parametrize("offset", (-1, 0, 1), ids=("A-1_frame", "A_frame", "A+1_NO_ACK"))
+def test_ack_limit_no_ack(limit, offset):
+    """The Ack's slot-0 sample (ld + hp + 1 clocks after s) comes at most A clocks after s."""
+    a = limit or DEFAULT_ACK
+    ld = a + offset - HP - 1                  # slot-0 sample at s + a + offset
+    cfg = base_config(HP, cfg_break_time=BREAK, cfg_ack_limit=limit)
+    run = simulate(cfg, Encoder(HP, FRAME, round_trip=ld - 1), 5 + a + 90, start_at(5))
+    s = run.rises[1]
+    assert sample_clock(s, ld, 0) == s + a + offset
+    if offset <= 0:
+        assert_frame(run, s, ld, 1)
+    else:
+        assert_fault(run, "NO_ACK", s + a + 2, "no_ack")
+        assert run.trace[-1]["line_delay"] == 0          # not updated by NO_ACK
+
+
+def test_no_ack_without_encoder_fires_at_a_plus_two():
+    """No encoder at all: NO_ACK in clock s + A + 2, like a late Ack."""
+    cfg = base_config(HP, cfg_break_time=BREAK, cfg_ack_limit=7)
+    run = simulate(cfg, Encoder(HP, FRAME, present=False), 40, start_at(5))
+    assert_fault(run, "NO_ACK", run.rises[1] + 7 + 2, "no_ack")
+
+
+# -- NO_START: cfg_ack_limit + one MA period ---------------------------------------------------
+
+@pytest.mark.parametrize("hp,ack_slots", ((2, 3), (3, 4)), ids=("hp2_acks3", "hp3_acks4"))
+@pytest.mark.parametrize("offset", (-1, 0, 1), ids=("L-1_frame", "L_frame", "L+1_NO_START"))
+def test_no_start_limit(hp, ack_slots, offset):
+    """Start must be sampled at most A + 2*hp + 1 clocks after the Ack's slot-0 sample. The
+    Start sample is 2*hp*acks after it, so the setting is the probe: that distance is put at
+    the limit + offset."""
+    a = 2 * hp * ack_slots - 2 * hp - 1 - offset
+    cfg = base_config(hp, cfg_break_time=BREAK, cfg_ack_limit=a)
+    run = simulate(cfg, Encoder(hp, FRAME, ack_slots=ack_slots), 5 + 2 * hp * 40,
+                   start_at(5))
+    s, ld = run.rises[1], 1
+    if offset <= 0:
+        assert_frame(run, s, ld, ack_slots, hp=hp)
+    else:
+        assert_fault(run, "NO_START", sample_clock(s, ld, 0, hp) + a + 2 * hp + 4, "no_start", hp)
+        assert len(run.rises) < target_rises(ack_slots)
+
+
+# -- DELAY_RANGE: cfg_delay_limit --------------------------------------------------------------
+
+@pytest.mark.parametrize("limit", (6, 0), ids=("cfg6", "cfg0_max_line_delay63"))
+@pytest.mark.parametrize("offset", (-1, 0, 1), ids=("D-1_frame", "D_frame", "D+1_DELAY_RANGE"))
+def test_delay_limit(limit, offset):
+    """line_delay <= D is accepted, D + 1 is DELAY_RANGE (line_delay shows the value)."""
+    d = limit or MAX_LINE_DELAY
+    ld = d + offset
+    hp = 3                  # a frame longer than the round trip: MA makes just the frame's rises
+    cfg = base_config(hp, cfg_break_time=BREAK, cfg_delay_limit=limit, cfg_ack_limit=200)
+    run = simulate(cfg, Encoder(hp, FRAME, round_trip=ld - 1), 5 + ld + 130, start_at(5))
+    s = run.rises[1]
+    if offset <= 0:
+        assert_frame(run, s, ld, 1, hp=hp)
+    else:
+        assert_fault(run, "DELAY_RANGE", sample_clock(s, ld, 0, hp) + 2, "delay_range", hp)
+        assert run.trace[-1]["line_delay"] == ld
+
+
+# -- SLO_STUCK_LOW before a cycle: cfg_timeout_limit -------------------------------------------
+
+def _second_request_when_idle(t, run):
+    """Start at clock 5, and again in the first idle clock after the first done."""
+    if t == 5:
+        return {"start": 1}
+    if run.dones and t > run.dones[0][0] and not run.trace[-1]["busy"] \
+            and "again" not in run.counts:
+        run.counts["again"] = t
+        return {"start": 1}
+    return {"start": 0}
+
+
+@pytest.mark.parametrize("limit", (12, 0), ids=("cfg12", "cfg0_default80us"))
+@pytest.mark.parametrize("offset", (-1, 0, 1), ids=("T-1_starts", "T_starts", "T+1_SLO_STUCK_LOW"))
+def test_timeout_limit_before_cycle(limit, offset):
+    """After a frame, the next request waits for SLO. SLO seen low (after the synchronizer,
+    i.e. the pin 2 clocks earlier) for T clocks from MA stopped: the cycle starts; for T + 1:
+    SLO_STUCK_LOW in clock m + T, done at m + T + 1, MA never moves."""
+    t_lim = limit or DEFAULT_TIMEOUT
+    low = t_lim + offset                      # clocks the master sees SLO low after m
+    cfg = base_config(HP, cfg_break_time=BREAK, cfg_timeout_limit=limit)
+    run = simulate(cfg, Encoder(HP, FRAME, release=low - 2), 5 + 80 + t_lim + 30,
+                   _second_request_when_idle)
+    again = run.counts.pop("again")
+    first_rises = run.rises[:target_rises(1)]
+    m = first_rises[-1] + HP
+    # Idle again in m + ld + 5 (ld = 1); the bench sees that one clock late.
+    assert again == m + 1 + 5 + 1
+    assert run.dones[0][1] == STATUS["OK"]
+    if offset <= 0:
+        # SLO seen high in clock m + low: CLOCK next, MA falls one clock later.
+        assert [f for f in run.falls if f > m][0] == m + low + 2
+        assert [s for _, s in run.dones] == [STATUS["OK"]] * len(run.dones)
+        assert run.counts["slo_stuck_low"] == 0
+    else:
+        assert run.dones[1:] == [(m + t_lim + 1, STATUS["SLO_STUCK_LOW"])]
+        assert run.counts["slo_stuck_low"] == 1
+        assert not [f for f in run.falls if f > m]
+        assert busy_falls(run)[-1] == m + t_lim + 1 + BREAK + 1
+
+
+# -- End check: SLO_STUCK_LOW in CONFIRM, and the confirm wait ---------------------------------
+
+@pytest.mark.parametrize("offset", (-1, 0, 1), ids=("T-1_frame", "T_frame", "T+1_SLO_STUCK_LOW"))
+def test_timeout_limit_end_check(offset):
+    """With the end check, the frame is reported 1 clock after SLO is seen high (the pin + 3)
+    if that is within T clocks of MA stopping; otherwise SLO_STUCK_LOW at m + T + 1."""
+    t_lim = 12
+    low = t_lim + offset
+    cfg = base_config(HP, cfg_break_time=BREAK, cfg_timeout_limit=t_lim, cfg_end_check=1)
+    run = simulate(cfg, Encoder(HP, FRAME, release=low - 2), 5 + 80 + t_lim + 15, start_at(5))
+    m = run.rises[-1] + HP
+    if offset <= 0:
+        assert_frame(run, run.rises[1], 1, 1, end_check_done=m + low + 1)
+        assert busy_falls(run)[-1] == m + low + 1         # IDLE with done, no break
+    else:
+        assert_fault(run, "SLO_STUCK_LOW", m + t_lim + 1, "slo_stuck_low")
+        assert run.cycles("valid") == []
+
+
+@pytest.mark.parametrize("round_trip", (0, 3), ids=("ld1", "ld4"))
+@pytest.mark.parametrize("offset", (-1, 0, 1), ids=("E-1_NO_STOP", "E_NO_STOP", "E+1_frame"))
+def test_end_check_stop_bit(round_trip, offset):
+    """The stop bit is sampled in clock m + ld + 1 (the pin at m + ld - 1): SLO must still be
+    low there. The encoder's timeout ending at the pin in clock m + ld - 1 + offset: 0 or
+    earlier is NO_STOP (done at m + ld + 4: the decoder reads the decision one clock later), 1
+    is a frame reported at m + ld + 5 (the earliest the confirm wait allows)."""
+    cfg = base_config(HP, cfg_break_time=BREAK, cfg_timeout_limit=20, cfg_end_check=1)
+    run = simulate(cfg, Encoder(HP, FRAME, round_trip=round_trip, release=offset), 120,
+                   start_at(5))
+    m, ld = run.rises[-1] + HP, round_trip + 1
+    if offset <= 0:
+        assert_fault(run, "NO_STOP", m + ld + 4, "no_stop")
+    else:
+        assert_frame(run, run.rises[1], ld, 1, end_check_done=m + ld + 5)
+
+
+# -- Break time: cfg_break_time -----------------------------------------------------------------
+
+@pytest.mark.parametrize("limit", (6, 0), ids=("cfg6", "cfg0_default40us"))
+@pytest.mark.parametrize("offset", (-1, 0, 1), ids=("B-1_overrun", "B_overrun", "B+1_accepted"))
+def test_break_time_after_power_on(limit, offset):
+    """Cycle 0 is BREAK's first clock (MA stopped, no abort). A request after B clocks of it
+    (in clock B) is an overrun; in clock B + 1 the controller is idle and accepts it."""
+    b = limit or DEFAULT_BREAK
+    q = b + offset
+    run = simulate(base_config(HP, cfg_break_time=limit), Encoder(HP, FRAME), q + 90,
+                   start_at(q))
+    assert busy_falls(run)[0] == b + 1
+    if offset <= 0:
+        assert run.cycles("overrun") == [q] and run.counts["overrun"] == 1
+        assert not run.falls and not run.dones
+    else:
+        assert not run.cycles("overrun")
+        assert run.falls[0] == q + 3
+        assert run.dones and run.dones[0][1] == STATUS["OK"]
+
+
+@pytest.mark.parametrize("offset", (-1, 0, 1), ids=("B-1_overrun", "B_overrun", "B+1_accepted"))
+def test_break_time_after_abort(offset):
+    """abort_cycle in IDLE, held 3 clocks: the break counts from the first clock with
+    abort_cycle low, B + 1 clocks to IDLE. No report."""
+    b = 5
+    q = 20 + b + offset                       # abort high in 17, 18, 19; low from 20
+
+    def drive(t, run):
+        return {"abort_cycle": int(17 <= t <= 19), "start": int(t == q)}
+
+    run = simulate(base_config(HP, cfg_break_time=b), Encoder(HP, FRAME), q + 90, drive)
+    assert busy_falls(run)[:2] == [b + 1, 20 + b + 1]
+    assert run.counts["aborted"] == 0
+    if offset <= 0:
+        assert run.cycles("overrun") == [q] and not run.falls and not run.dones
+    else:
+        assert not run.cycles("overrun") and run.falls[0] == q + 3
+
+
+# -- Request period and overrun -----------------------------------------------------------------
+
+def cycle_length(ld=1, ack_slots=1):
+    """Clocks from an accepted request to the first idle clock after its frame (no end check):
+    MA falls 3 clocks after the request, makes the frame's rises, and the controller is idle
+    again in m + ld + 5."""
+    return 3 + 2 * HP * target_rises(ack_slots) + ld + 5
+
+
+@pytest.mark.parametrize("offset", (-1, 0, 1), ids=("C-1_overrun", "C_spacing_P", "C+1_spacing_P"))
+def test_request_period(offset):
+    """periodic = 1: ticks in the clock periodic rises and every P clocks after. A tick in an
+    idle clock starts a cycle (MA falls 3 clocks later): start-to-start is exactly P. A tick
+    while busy is an overrun, dropped; the next tick comes P later."""
+    c = cycle_length()
+    p = c + offset
+    cfg = base_config(HP, cfg_break_time=BREAK, cfg_request_period=p)
+    run = simulate(cfg, Encoder(HP, FRAME, release=1), 10 + 2 * p + 15,
+                   lambda t, run: {"periodic": int(t >= 10)})
+    first_falls = cycle_starts(run)
+    assert busy_falls(run)[1] == 10 + c
+    if offset < 0:
+        assert run.cycles("overrun") == [10 + p] and run.counts["overrun"] == 1
+        assert first_falls == [13, 10 + 2 * p + 3]
+    else:
+        assert not run.cycles("overrun")
+        assert first_falls == [13, 13 + p, 13 + 2 * p]
+    assert all(s == STATUS["OK"] for _, s in run.dones)
+
+
+@pytest.mark.parametrize("offset", (-1, 0, 1), ids=("C-1_overrun", "C_accepted", "C+1_accepted"))
+def test_overrun_at_end_of_cycle(offset):
+    """A start in a busy clock is an overrun (counted, dropped); the cycle is busy for C clocks
+    from its request, so a start C clocks after it is the first one accepted."""
+    c = cycle_length()
+    q = 10 + c + offset
+    run = simulate(base_config(HP, cfg_break_time=BREAK), Encoder(HP, FRAME, release=1),
+                   q + 90, start_at(10, q))
+    assert busy_falls(run)[1] == 10 + c
+    if offset < 0:
+        assert run.cycles("overrun") == [q] and run.counts["overrun"] == 1
+        assert len(run.dones) == 1
+    else:
+        assert not run.cycles("overrun")
+        assert len(run.dones) == 2 and run.falls[target_rises(1)] == q + 3
+
+
+def test_overrun_start_held_two_clocks():
+    """The request clock itself goes to WAIT_READY: a start in the next clock is an overrun."""
+    run = simulate(base_config(HP, cfg_break_time=BREAK), Encoder(HP, FRAME, release=1), 100,
+                   start_at(10, 11))
+    assert run.cycles("overrun") == [11] and run.counts["overrun"] == 1
+    assert run.falls[0] == 13 and len(run.dones) == 1
+
+
+def test_timeout_limit_late_request_reports_at_once():
+    """A request that comes when SLO has already been seen low longer than T: SLO_STUCK_LOW in
+    the request's next clock, done 2 clocks after the request."""
+    t_lim = 12
+    cfg = base_config(HP, cfg_break_time=BREAK, cfg_timeout_limit=t_lim)
+    m = 5 + cycle_length() - 1 - 5            # first request at 5, ld = 1: idle in m + 6
+    q = m + t_lim + 4
+    run = simulate(cfg, Encoder(HP, FRAME, release=40), q + 10, start_at(5, q))
+    assert run.rises[-1] + HP == m
+    assert run.dones[1:] == [(q + 2, STATUS["SLO_STUCK_LOW"])]
+    assert run.counts["slo_stuck_low"] == 1 and len(run.falls) == target_rises(1)
+
+
+# -- The pause after a doubtful frame (issue 12) --------------------------------------------------
+
+BAD_CRC_FRAME = build_frame(FrameFormat("limits", (WORD,)), [WordValue(POSITION)],
+                            FrameFaults(crc_xor=(1,)))
+
+
+@pytest.mark.parametrize("end_check", (0, 1), ids=("end_check0", "end_check1"))
+@pytest.mark.parametrize("offset", (-1, 0, 1), ids=("I-1_overrun", "I_accepted", "I+1_accepted"))
+def test_pause_after_a_crc_error(end_check, offset):
+    """A frame with a CRC error is reported (done, CRC_ERROR_WORD0, counted), then the master
+    pauses for cfg_break_time clocks with MA high before it is idle again, so that the encoder's
+    timeout ends before the next cycle: idle (I) in m + ld + 5 + B without the end check (a good
+    frame: m + ld + 5), in done + B + 1 with it (a good frame: done). A start before I is an
+    overrun; the first one accepted starts a clean cycle."""
+    ld = 1
+    encoder = Encoder(HP, BAD_CRC_FRAME, release=1)
+    probe = {}
+
+    def idle_clock(run):
+        first_done = run.dones[0][0]
+        m = run.rises[target_rises(1) - 1] + HP
+        return first_done + BREAK + 1 if end_check else m + ld + 5 + BREAK
+
+    def drive(t, run):
+        if run.dones and "q" not in probe:
+            probe["q"] = idle_clock(run) + offset
+        return {"start": int(t == 10 or t == probe.get("q"))}
+
+    cfg = base_config(HP, cfg_break_time=BREAK, cfg_end_check=end_check)
+    run = simulate(cfg, encoder, 260, drive)
+    first_done, status = run.dones[0]
+    assert status == STATUS["CRC_ERROR_WORD0"] and run.counts["crc_word0"] >= 1
+    idle = idle_clock(run)
+    assert [f for f in busy_falls(run) if f > first_done][0] == idle
+    assert all(x["ma"] for x in run.trace[first_done:probe["q"] + 3])
+    if offset < 0:
+        assert run.cycles("overrun") == [probe["q"]] and len(run.dones) == 1
+    else:
+        assert not run.cycles("overrun") and len(run.dones) == 2
+        assert run.falls[target_rises(1)] == probe["q"] + 3

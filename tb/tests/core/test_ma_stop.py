@@ -1,0 +1,144 @@
+"""MaStop on Amaranth's simulator: MA has made every rising edge the frame needs.
+
+Cycle conventions and where expected values come from: ``block_sim.py``. The frame needs
+``start_slot + frame bits + 4`` rising edges (Start at rise ``start_slot + 2``, CDS, the word bits,
+the stop bit: docs/timing.md); a word's bits are counted by the encoder model's
+``WordFormat.total_bits`` (data, nE/nW, LC, CRC), word 1 only when it is enabled. The register
+stages of the block's docstring: ``enough`` in clock ``t`` compares ``rises`` of clock ``t - 1``
+with the target made from ``started`` / ``start_slot`` of clock ``t - 2``, from a configuration
+held since the receiver's clear; ``clear`` in clock ``t - 1`` forces it to 0.
+"""
+
+import random
+
+import pytest
+
+from bissmaster.core.ma_stop import MaStop
+from encoder_model.frames import CRC6, CRC16, CRC_NONE, PRESETS, WordFormat
+from master_contract import CRC_CODE
+
+from testkit.block_sim import run_clocks
+
+#: Rising edges beyond Start's slot and the words: Start, CDS, the stop bit, and the two MA
+#: rises before slot 0 (slot k is sent at rise k + 2).
+RISES_AROUND_WORDS = 4
+
+
+def _word_cfg(wf):
+    return {"data_bits": wf.data_bits, "nenw": int(wf.nenw), "lc": int(wf.lc),
+            "crc": CRC_CODE[wf.crc]}
+
+
+RSH = PRESETS["resolute_fs_rsh"].words
+# (case id, word formats as configured, word 1 enabled, frame bits)
+FRAMES = [
+    ("resolute_fs_rsh_both_words", RSH, 1, 96),
+    ("resolute_fs_rsh_word0_only", RSH, 0, 44),
+    ("cpw55_nenw_crc6_spw40_lc_crc16", (WordFormat(55), WordFormat(40, lc=True, crc=CRC16)), 1,
+     63 + 64),
+    ("7_bits_no_nenw_no_crc", (WordFormat(7, nenw=False, crc=CRC_NONE), RSH[1]), 0, 7),
+]
+
+
+def frame_bits(words, w1_enable):
+    return sum(wf.total_bits for wf in words[:1 + w1_enable])
+
+
+def scenario(words, w1_enable, start_slot, *, step, started_at, clears=4, extra=6):
+    """A cycle as the master runs it: the configuration set with the receiver's clear, MA rises
+    every ``step`` clocks, Start seen in clock ``started_at``; until ``extra`` clocks past the
+    target."""
+    target = start_slot + frame_bits(words, w1_enable) + RISES_AROUND_WORDS
+    cfg = {"words": [_word_cfg(wf) for wf in words], "w1_enable": w1_enable}
+    steps = [{**cfg, "clear": 1, "rises": 0, "started": 0, "start_slot": 0}] * clears
+    t, end = 0, None
+    while end is None or t < end:
+        rises = t // step
+        started = int(t >= started_at)
+        steps.append({**cfg, "clear": 0, "rises": rises, "started": started,
+                      "start_slot": start_slot if started else 0})
+        if end is None and rises >= target:
+            end = max(t, started_at) + extra
+        t += 1
+    return steps, target
+
+
+def reference(steps, targets):
+    """``enough`` per clock; ``targets[t]`` is the frame's rises beyond Start's slot in clock t."""
+    out = [0, 0]
+    for t in range(2, len(steps)):
+        two, one = steps[t - 2], steps[t - 1]
+        out.append(int(two["started"] and not one["clear"]
+                       and one["rises"] >= two["start_slot"] + targets[t - 2]))
+    return out
+
+
+def _run(words, steps):
+    return [x["enough"] for x in run_clocks(MaStop(words), steps, ["enough"])]
+
+
+def _first(trace):
+    return trace.index(1) if 1 in trace else None
+
+
+@pytest.mark.parametrize("words, w1_enable, bits", [f[1:] for f in FRAMES],
+                         ids=[f[0] for f in FRAMES])
+@pytest.mark.parametrize("start_slot", (1, 3, 17))
+def test_ma_stop_enough_at_start_slot_plus_frame_bits_plus_4(words, w1_enable, bits, start_slot):
+    assert frame_bits(words, w1_enable) == bits           # the cases as the old decoder test had
+    # MA rises every clock (the sharpest test of the clock) and every 4 clocks (hp = 2).
+    for step in (1, 4):
+        steps, target = scenario(words, w1_enable, start_slot, step=step, started_at=5)
+        trace = _run(2, steps)
+        first_at_target = next(t for t, s in enumerate(steps) if not s["clear"]
+                               and s["rises"] >= target)
+        assert target == start_slot + bits + 4
+        # The compare is registered: one clock after rises reaches the target.
+        assert _first(trace) == first_at_target + 1, step
+        assert all(trace[first_at_target + 1:]), step
+
+
+def test_ma_stop_one_word_build():
+    words = (WordFormat(36),)
+    for start_slot in (1, 2, 9):
+        steps, target = scenario(words, 0, start_slot, step=1, started_at=3)
+        trace = _run(1, steps)
+        assert target == start_slot + 36 + 2 + 6 + 4
+        assert _first(trace) == next(t for t, s in enumerate(steps) if s["rises"] >= target) + 1
+
+
+def test_ma_stop_start_seen_after_the_rises_it_needs():
+    # A round trip longer than the frame: the rises are already there when Start is seen.
+    # The flag follows Start by the block's two register stages.
+    words = (WordFormat(7, nenw=False, crc=CRC_NONE), RSH[1])
+    steps, _ = scenario(words, 0, 1, step=1, started_at=40)
+    trace = _run(2, steps)
+    assert _first(trace) == 4 + 40 + 2
+
+
+def test_ma_stop_clear_forces_zero():
+    words = RSH
+    steps, _ = scenario(words, 1, 2, step=1, started_at=5, extra=10)
+    steps[-5] = {**steps[-5], "clear": 1}
+    trace = _run(2, steps)
+    assert trace[-8:] == [1, 1, 1, 1, 0, 1, 1, 1]
+
+
+def test_ma_stop_random_formats_back_to_back():
+    rng = random.Random(7500)
+    steps, targets, firsts = [], [], []
+    for _ in range(40):
+        words = tuple(WordFormat(rng.randint(1, top), nenw=rng.random() < 0.5,
+                                 lc=rng.random() < 0.3, crc=rng.choice((CRC_NONE, CRC6, CRC16)))
+                      for top in (55, 40))
+        w1 = rng.randrange(2)
+        slot = rng.randint(1, 20)
+        part, target = scenario(words, w1, slot, step=rng.choice((1, 2, 4)),
+                                started_at=rng.randint(1, 30), clears=rng.randint(4, 6))
+        firsts.append((len(steps), target))
+        steps += part
+        targets += [target - slot] * len(part)
+    trace = _run(2, steps)
+    assert trace == reference(steps, targets)
+    for begin, target in firsts:
+        assert trace[begin + 1] == 0                    # cleared in the cycle's first clocks
