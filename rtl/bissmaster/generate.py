@@ -68,7 +68,7 @@ BUS_CHANNELS = 2
 
 def _bus_top(bus):
     """A :class:`Top` for ``bus`` (a :data:`~bissmaster.bus.bus_top.BUSES` name): ``channels`` cores
-    behind the register bank of rtl/regmap/biss_master.rdl. The cores are the preset's, the
+    behind the register bank of bissmaster/bus/biss_master.rdl. The cores are the preset's, the
     register-access engine included unless ``--register-access 0`` (the map's ``ca`` block then
     reads 0, ``caps.register_access`` says so)."""
     def build(params, channels=BUS_CHANNELS):
@@ -77,7 +77,7 @@ def _bus_top(bus):
     def describe(channels=BUS_CHANNELS):
         return [f"bus             = {'AXI4-Lite' if bus == 'axil' else 'Wishbone B4'}",
                 f"channels        = {channels}",
-                "register map    = rtl/regmap/biss_master.rdl (docs/registers.md, docs/bus.md)"]
+                "register map    = rtl/bissmaster/bus/biss_master.rdl (docs/registers.md)"]
 
     return Top(f"CHANNELS cores behind {'AXI4-Lite' if bus == 'axil' else 'Wishbone B4'} "
                f"(module biss_master_{bus}; register map docs/registers.md)",
