@@ -1,4 +1,4 @@
-"""The BiSS protocol facts of the test side, written from ``shared/spec/biss-protocol.md``.
+"""The BiSS protocol facts of the test side, written from ``docs/protocol.md``.
 
 Never imported from ``rtl/``: the RTL has its own table (``bissmaster.protocol``), and the two
 are written separately so that a wrong number in the RTL fails a test instead of hiding behind

@@ -1,7 +1,9 @@
 """BiSS protocol facts, in one place.
 
-Every number here comes from ``shared/spec/biss-protocol.md`` (the datasheet digest). This
-module is pure Python with no imports beyond the standard library, so that both the RTL and the
+Every number here comes from ``docs/protocol.md`` (the protocol facts in our words, with their
+sources; the section numbers below are its sections), except ``MA_HALF_PERIOD_MIN`` and
+``MA_HALF_PERIOD_MAX``, which are limits of the core's port (docs/ports.md). This module is pure
+Python with no imports beyond the standard library, so that both the RTL and the
 independent encoder model can name the same *facts* without sharing any *logic*.
 """
 

@@ -12,7 +12,7 @@ reference master's CDM layout after 14 idle cycles (``ControlChannel.access``).
 
 The encoder models here are BP3 encoders without the RESOLUTE 31.25 us rule, with a processing
 time of 1 .. 3 us and either a static timeout of 12.5 us or an adaptive one of 1.5 MA periods
-(spec section 9): a register access costs hundreds of cycles, and this keeps them affordable.
+(docs/protocol.md, section 9): a register access costs hundreds of cycles, and this keeps them affordable.
 Which rates, lengths and cables each scenario covers is in its docstring; the larger sets run
 on Verilator, a subset on Icarus (about six times slower on this core).
 """
@@ -37,7 +37,7 @@ STATIC_TIMEOUT_S = 12.5e-6
 
 
 def adaptive_timeout(ma_hz):
-    """An adaptive slave timeout: 1.5 MA periods (spec section 9)."""
+    """An adaptive slave timeout: 1.5 MA periods (docs/protocol.md, section 9)."""
     return 1.5 / ma_hz
 
 
@@ -418,7 +418,7 @@ def _queue(tb, **kwargs):
 @cocotb.test()
 @long_on_icarus
 async def idle_count_skips_missed_cycles(dut):
-    """The 14 idle frames before S must be frames the encoder saw (spec section 10: the slave
+    """The 14 idle frames before S must be frames the encoder saw (docs/protocol.md, section 10: the slave
     counts them). After a write (its P and final cycle are 2 of them), 12 request cycles that
     the encoder does not answer (no Ack: unplugged, or its MA broken) and, separately, 12
     requests refused as BAD_CONFIG (no cycle on the line at all), and a read cancelled with

@@ -26,7 +26,7 @@ RPM = 3000
 MA_HZ, CABLE_M = 10e6, 50
 POSITIONS = 8
 
-#: What each EDS field means (BP3 profile table, shared/spec/biss-protocol.md section 7).
+#: What each EDS field means (BP3 profile table, docs/protocol.md section 7).
 MEANING = {
     "bp_ver": "profile version", "bp_len": "profile length, banks", "bp_id": "profile ID (= 0x42)",
     "dl": "data length (= 0x43)", "fb1": "feedback bit 1", "fb2": "feedback bit 2",

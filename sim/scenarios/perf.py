@@ -358,7 +358,7 @@ async def sim_speed(dut):
 # -- 5. Register access: frames and time per access ------------------------------------------------
 #: A BP3 encoder with a 24-bit position (32 bits after CDS: position, nE, nW, CRC-6) at the
 #: protocol's fastest: 10 MHz, Start on the 3rd MA rise (the minimum processing time), the adaptive
-#: timeout of 1.5 MA periods (spec section 9), no 31.25 us rule; 100 m of cable.
+#: timeout of 1.5 MA periods (docs/protocol.md, section 9), no 31.25 us rule; 100 m of cable.
 CONTROL_DL_POS = 24
 CONTROL_MA_HZ = 10e6
 CONTROL_CABLE_M = 100

@@ -33,7 +33,7 @@ from master_contract import (CA_COUNTERS, CA_STATUS, CA_STATUS_NAME, DEFAULT_ACK
                              DEFAULT_BREAK_S, DEFAULT_TIMEOUT_LIMIT_S, STATUS, ca_frame_bound)
 from sim.shared.testbench import CLK_HZ
 
-#: CDM = 0 cycles before S (spec section 10).
+#: CDM = 0 cycles before S (docs/protocol.md, section 10).
 IDLE_FRAMES = 14
 #: The core's status for a cycle whose Response carried an encoder fault (docs/ports.md).
 FAULT_STATUS = {"no_response": "NO_ACK", "stuck_high": "NO_ACK", "ack_forever": "NO_START"}

@@ -1,6 +1,6 @@
 """Where a glitch lands on the SLO line, and what the master can read after it (issue 12).
 
-Written from the protocol (shared/spec/biss-protocol.md, sections 2 and 4) and the encoder model,
+Written from the protocol (docs/protocol.md, sections 2 and 4) and the encoder model,
 not from the RTL: the glitch campaign (sim/scenarios/campaigns.py) and the crafted noise
 scenarios (sim/scenarios/master.py) both use it.
 

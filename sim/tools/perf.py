@@ -52,7 +52,7 @@ TESTS_VERILATOR = ["request_cycle_overhead", "verdict_latency", "line_delay_erro
 TESTS_ICARUS = ["sim_speed"]
 LATENCY_GOAL_CLK = 3
 #: Frames a register access may take beyond the protocol's floor: the frame whose CDS brings the
-#: echo of P (spec section 10: the floor ends with P's CDM bit, its echo comes a frame later).
+#: echo of P (docs/protocol.md, section 10: the floor ends with P's CDM bit, its echo comes a frame later).
 ACCESS_EXTRA_FRAMES_GOAL = 1
 
 
@@ -410,8 +410,9 @@ def access_section(d, goals):
         f"{d['line_delay_s'] * 1e9:.1f} ns), Start on the 3rd MA rise, adaptive timeout "
         f"{d['timeout_s'] * 1e9:.0f} ns, cfg_request_period = 0; {d['checked']} cycles checked "
         "field by field. Floor: the CDM = 0 frames still missing of the "
-        f"{d['idle_frames']} before S + the control frame's CDM bits (spec section 10), each "
-        f"frame at the minimum cycle time of spec section 9, {floor_cycle * 1e6:.4f} us. "
+        f"{d['idle_frames']} before S + the control frame's CDM bits (docs/protocol.md, "
+        f"section 10), each frame at the minimum cycle time (section 9), "
+        f"{floor_cycle * 1e6:.4f} us. "
         f"Start-to-start measured: CDM = 0 cycles {span(c0)} ({len(c0)}), CDM = 1 cycles "
         f"{span(c1)} ({len(c1)}).")
     return out

@@ -1,7 +1,7 @@
 """cocotb model of a BiSS encoder (RESOLUTE / EVOLUTE / FORTiS style) plus the cable to it.
 
 The model follows the master's MA pin and drives the master's SLO pin, as a real encoder at the
-end of a cable would (shared/spec/biss-protocol.md sections 2, 3, 4 and 9):
+end of a cable would (docs/protocol.md sections 2, 3, 4 and 9):
 
 * MA edges reach the encoder ``Cable.m2e_s()`` later (plus per-edge jitter);
 * the encoder reacts in *encoder time* (Ack on the 2nd rising edge, Start on the first rising
@@ -54,7 +54,7 @@ Faults (``Response.fault``):
 ``force_slo(level)`` overrides the line at the master pin (broken / unplugged cable) on top of
 all that; ``force_slo(None)`` gives the pin back to the cable.
 
-Control channel (BiSS C CDM/CDS, spec section 10), only with ``control=ControlSlave(...)``
+Control channel (BiSS C CDM/CDS, docs/protocol.md, section 10), only with ``control=ControlSlave(...)``
 (``encoder_model.control``): the CDS slot of every frame (``bits[1]`` of the Response) is
 replaced by ``control.cds`` when ``respond`` is called, and at the end of every cycle (step 5)
 the encoder steps the control slave with that cycle's ``cdm`` (the inverted MA level when the

@@ -1,10 +1,10 @@
 """BiSS C control communication, slave side: CRC-4, a banked register file, a BP3 EDS bank and
-the CDM/CDS state machine of an encoder (shared/spec/biss-protocol.md sections 7 and 10).
+the CDM/CDS state machine of an encoder (docs/protocol.md sections 7 and 10).
 
 Written from the protocol description only; nothing here comes from ``rtl/`` (no ``bissmaster``
 import), because this is what the RTL's register-access engine is checked against.
 
-Frame alignment (spec section 10): after data frame ``n`` the master holds MA low through the
+Frame alignment (docs/protocol.md, section 10): after data frame ``n`` the master holds MA low through the
 encoder's timeout for CDM = 1 or leaves it high for CDM = 0; the encoder samples that bit at the
 end of its timeout and answers it in the CDS slot of frame ``n + 1``. :meth:`ControlSlave.step`
 is that moment: it takes the CDM of frame ``n`` and returns the CDS of frame ``n + 1``.
@@ -73,7 +73,7 @@ __all__ = [
     "RegisterFile", "Bp3Eds", "eds_checksum", "ControlFaults", "SlaveAccess", "ControlSlave",
 ]
 
-# -- protocol facts (spec section 10) ---------------------------------------------------------
+# -- protocol facts (docs/protocol.md, section 10) ---------------------------------------------------------
 IDLE_FRAMES = 14            # CDM = 0 frames before S; as many in a row cancel a control frame
 CRC4_WIDTH = 4
 CRC4_POLY = 0x3             # x^4 + x + 1 without its x^4 term (0x13 with it)
@@ -90,7 +90,7 @@ CTS_AT = 1
 HEADER_CRC_END = 15         # the last header CRC bit (s0+12 .. s0+15)
 R_AT, W_AT, SECOND_S_AT = 16, 17, 18
 
-# -- standard registers (spec sections 7 and 10) ----------------------------------------------
+# -- standard registers (docs/protocol.md, sections 7 and 10) ----------------------------------------------
 BANK_SIZE = 64                      # 0x00..0x3F show the selected bank
 BANK_SELECT = 0x40                  # R/W
 EDS_BANK = 0x41                     # read only: where the EDS starts; 0x00 / 0xFF = no EDS
@@ -102,7 +102,7 @@ DEVICE_ID = range(0x78, 0x7E)       # read only, raw bytes
 MANUFACTURER_ID = range(0x7E, 0x80)  # read only, raw bytes
 ADDRESS_COUNT = 1 << ADDRESS_BITS
 
-# -- BP3 profile (spec section 7) -------------------------------------------------------------
+# -- BP3 profile (docs/protocol.md, section 7) -------------------------------------------------------------
 BP3_ID = 0b0110
 BP3_VERSION = 1
 BP3_FEEDBACK_BITS = 2               # nE, nW: DL = DL_POS + 2
@@ -165,7 +165,7 @@ class RegisterFile:
     only; 0x48..0x77 are plain read/write registers (the model's "user registers"). Bank bytes
     are read only unless the bank is listed in ``writable_banks``; a bank that was never set
     reads 0x00. The multi-byte IDs are raw bytes at increasing addresses (byte order is the
-    manufacturer's, spec section 10).
+    manufacturer's, docs/protocol.md, section 10).
     """
 
     def __init__(self, *, eds_bank=0x00, profile_id=0x00, data_length=0x00,
@@ -240,7 +240,7 @@ class RegisterFile:
 
 
 # -- BP3 EDS bank ------------------------------------------------------------------------------
-_EDS_LAYOUT = (     # (field, address, bytes) from the table in spec section 7; U16/U32 big endian
+_EDS_LAYOUT = (     # (field, address, bytes) from the table in docs/protocol.md, section 7; U16/U32 big endian
     ("bp_ver", 0x00, 1), ("bp_len", 0x01, 1), ("bp_id", 0x02, 1), ("dl", 0x03, 1),
     ("fb1", 0x04, 1), ("fb2", 0x05, 1), ("pon_pdl", 0x06, 1), ("en_typ", 0x08, 1),
     ("pos_num", 0x09, 1), ("mt_len", 0x0A, 1), ("mt_fmt", 0x0B, 1), ("co_len", 0x0C, 1),
@@ -256,7 +256,7 @@ U32_MAX = 0xFFFFFFFF
 
 @dataclass(frozen=True)
 class Bp3Eds:
-    """The BP3 profile part of an EDS (one 64-byte bank), field names as in spec section 7.
+    """The BP3 profile part of an EDS (one 64-byte bank), field names as in docs/protocol.md, section 7.
 
     ``dl_pos`` and ``c`` decide BP_ID (0x60 | VER << 1 | C) and DL (DL_POS + 2, the nE/nW bits;
     the model uses the same rule for C = 1, unconfirmed). The other fields are plausible values

@@ -1,4 +1,4 @@
-"""BiSS C control communication, master side, as a test-side reference (spec section 10).
+"""BiSS C control communication, master side, as a test-side reference (docs/protocol.md, section 10).
 
 What a correct master sends (CDM, one bit per data frame) for a register read or write of one
 or more consecutive registers, and what it makes of the slave's answers (CDS): the expected

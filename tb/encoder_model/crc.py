@@ -4,7 +4,7 @@ The RTL computes its CRCs one received bit at a time; this module does the same 
 plain Python, written from the textbook shift-register definition (non-reflected, MSB first),
 so that a test can compare the two without the model sharing any code with the RTL. Only the
 protocol *numbers* (polynomials, widths, output inversion) come from the test side's own
-:mod:`protocol_facts` (tb/protocol_facts.py, written from the spec), never from ``rtl/``.
+:mod:`protocol_facts` (tb/protocol_facts.py, written from docs/protocol.md), never from ``rtl/``.
 """
 
 import protocol_facts as facts

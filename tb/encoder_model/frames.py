@@ -1,4 +1,4 @@
-"""Bit-exact model of what a BiSS encoder sends after Ack (spec sections 5, 6 and 10).
+"""Bit-exact model of what a BiSS encoder sends after Ack (docs/protocol.md, sections 5, 6 and 10).
 
 A frame is ``Start | CDS | word0 [| word1]``. Each word is ``Position | nE nW | LC | CRC``
 with optional fields, all MSB first. The model builds those bits from values, parses them back,
@@ -92,12 +92,12 @@ def bp3(dl_pos):
 
 
 PRESETS = {f.name: f for f in (
-    # BiSS Safety, spec 5.2 table: (CPW bits, SPW bits)
+    # BiSS Safety, docs/protocol.md, section 5.2 table: (CPW bits, SPW bits)
     _safety("resolute_fs_lmm", 32, 32),
     _safety("resolute_fs_rsm", 28, 24),
     _safety("resolute_fs_rsh", 36, 28),
     _safety("fortis_fs_rsh", 36, 28),
-    # BiSS C unidirectional single word, spec 5.1
+    # BiSS C unidirectional single word, docs/protocol.md, section 5.1
     *(_single(f"evolute_{n}", n) for n in (26, 32, 36)),
     *(_single(f"resolute_c_{n}", n) for n in (18, 26, 32, 36)),
     *(bp3(n) for n in (1, 24, facts.BP3_POSITION_BITS_MAX)),

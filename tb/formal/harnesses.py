@@ -9,7 +9,7 @@ outputs with counters and shift registers of its own, and states the property wi
 
 Expected values are never taken from the RTL: phase lengths are counted by the harness, the
 frame is parsed by the harness from its own reading of the configuration, and the CRCs are
-computed by a bit-serial LFSR written here from the protocol digest (section 6), not with
+computed by a bit-serial LFSR written here from docs/protocol.md (section 6), not with
 ``amaranth.lib.crc`` that the RTL uses.
 
 ``mutation`` names a deliberate weakening (an assumption dropped, a wrong reference) for which
@@ -830,7 +830,7 @@ class SamplerImmunityHarness(Harness):
 # (c) A frame with a CRC error is never reported valid
 # =============================================================================================
 
-#: The CRCs from the protocol digest, section 6 (tb/protocol_facts.py): register polynomial
+#: The CRCs from docs/protocol.md, section 6 (tb/protocol_facts.py): register polynomial
 #: without the top term, start 0, sent inverted, MSB first.
 CRC_SPEC = {Crc.CRC6: (facts.CRC6_WIDTH, facts.CRC6_POLY),
             Crc.CRC16: (facts.CRC16_WIDTH, facts.CRC16_POLY)}
@@ -1193,7 +1193,7 @@ class MasterCrcHarness(Harness):
 # =============================================================================================
 
 #: The control channel's frame counts, the harness's own reading of docs/control.md
-#: (spec section 10), never the RTL's: CDM = 0 frames before S, as many in a row cancel a
+#: (docs/protocol.md, section 10), never the RTL's: CDM = 0 frames before S, as many in a row cancel a
 #: control frame; the header's frames (S .. W); one register's frames (S .. P).
 CONTROL_IDLE_FRAMES = 14
 CONTROL_HEADER_FRAMES = 18

@@ -11,8 +11,8 @@ registered output read in cycle ``t`` is what the edge that *ended* cycle ``t - 
 combinational output read in cycle ``t`` already reflects the inputs set for cycle ``t``. An input
 set in cycle ``t`` is what the edge ending cycle ``t`` samples.
 
-The expected values are never taken from the RTL: they come from the protocol digest
-(``shared/spec/biss-protocol.md``), from the independent encoder model in ``tb/encoder_model``,
+The expected values are never taken from the RTL: they come from docs/protocol.md
+(``docs/protocol.md``), from the independent encoder model in ``tb/encoder_model``,
 from ``tb/master_contract.py`` (the documented codes), or from the small reference functions in
 the test files. The RTL is imported only for the blocks under test and ``MasterParams`` (and
 the ``Crc`` names it takes) to build them.
@@ -22,7 +22,7 @@ from amaranth.hdl import ClockDomain, Module
 from amaranth.lib import data
 from amaranth.sim import Simulator
 
-#: The slave's Start bit is a 1 (protocol digest, section 2).
+#: The slave's Start bit is a 1 (docs/protocol.md, section 2).
 START_BIT = 1
 
 CLOCK_PERIOD_S = 1e-8

@@ -2,7 +2,7 @@
 
 Python plays an ideal master on ``ma`` of the empty harness tb/testkit/hdl/ma_loopback.v and
 records every SLO transition the model drives. The expected SLO waveform is computed here from
-the master's own edge times with the rules of shared/spec/biss-protocol.md (written separately
+the master's own edge times with the rules of docs/protocol.md (written separately
 from the model's event machinery), and compared transition by transition, to the picosecond.
 
 Run by tb/tests/model/test_encoder_driver.py (Icarus, timescale 1ns/1ps).

@@ -7,8 +7,8 @@ Conventions (as in test_rtl_blocks.py): "cycle ``t``" is the stretch after the `
 edge; cycle 0 is the first clock after reset. A registered output read in cycle ``t`` is what the
 edge ending cycle ``t - 1`` stored; an input set in cycle ``t`` is sampled by the edge ending it.
 
-The encoder here is a tiny explicit stimulus written from the protocol digest
-(``shared/spec/biss-protocol.md`` section 2): SLO low from the 2nd MA rise (Ack) for
+The encoder here is a tiny explicit stimulus written from docs/protocol.md
+(``docs/protocol.md`` section 2): SLO low from the 2nd MA rise (Ack) for
 ``ack_slots`` rises, then Start, CDS and the word bits (built by the independent encoder model),
 then the stop bit, low, and SLO low through the encoder's timeout until ``release`` clocks after
 MA stopped. Nothing in it comes from ``rtl/``.

@@ -4,7 +4,7 @@ One :class:`amaranth.lib.crc.Algorithm` holds the parameters: the software model
 (:meth:`~amaranth.lib.crc.Parameters.compute`) and any hardware built later from the same
 object agree by construction, as :data:`bissmaster.core.word_crc.ALGORITHMS` does for the data CRCs.
 
-A register access carries two CRC-4s (protocol digest, section 10): one after the 11 bits CTS,
+A register access carries two CRC-4s (docs/protocol.md, section 10): one after the 11 bits CTS,
 ID[2:0], ADR[6:0] (the start bit S is not covered), and one after each 8-bit data byte, in both
 directions. Both are computed MSB first from start value 0 and sent inverted; the functions
 below return the 4 bits *as sent*, MSB first in bit 3.

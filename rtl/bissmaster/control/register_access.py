@@ -53,7 +53,7 @@ class RegisterAccess(wiring.Component):
     clock with ``rbuf_en`` high the word at ``rbuf_addr`` is read, ``rbuf_data`` holds it from
     the next clock until the next read).
 
-    **Frames** (spec section 10; f = 0 is the frame that carries S). Before S, CDM = 0 until 14
+    **Frames** (docs/protocol.md, section 10; f = 0 is the frame that carries S). Before S, CDM = 0 until 14
     consecutive cycles with CDM = 0 have delivered a good frame (so the encoder saw them: a
     cycle without an answer, NO_ACK, or a BAD_CONFIG report starts the count again; the count
     runs all the time, also between accesses, so an access that follows another does not

@@ -8,7 +8,7 @@ from ..params import Crc
 from .. import protocol
 
 
-#: The two BiSS CRCs: start 0, sent inverted, MSB first (section 6 of the protocol digest).
+#: The two BiSS CRCs: start 0, sent inverted, MSB first (section 6 of docs/protocol.md).
 ALGORITHMS = {
     Crc.CRC6: crc.Algorithm(crc_width=protocol.CRC6_WIDTH, polynomial=protocol.CRC6_POLY,
                             initial_crc=protocol.CRC_INIT, reflect_input=False,

@@ -8,7 +8,7 @@ biss_bp3_read_eds makes the same accesses in C, docs/driver.md);
 that fails raises a :class:`Bp3Error` that names the register, byte or field: no setting is ever
 derived from data that did not pass every check.
 
-Protocol facts: ``shared/spec/biss-protocol.md`` sections 6, 7 and 10.
+Protocol facts: ``docs/protocol.md`` sections 6, 7 and 10.
 
 Where the profile part of the EDS is (an assumption)
 ----------------------------------------------------
@@ -186,7 +186,7 @@ def decode_profile_id(reg_0x42, reg_0x43):
 
 # -- EDS bank ----------------------------------------------------------------------------------
 
-#: The BP3 EDS bank (digest section 7): symbol, byte address, :mod:`struct` code (big endian).
+#: The BP3 EDS bank (docs/protocol.md, section 7): symbol, byte address, :mod:`struct` code (big endian).
 #: Bytes 0x07 and 0x3A..0x3E are not fields (they count in CHKSUM only).
 EDS_LAYOUT = (
     ("BP_VER", 0x00, "B"), ("BP_LEN", 0x01, "B"), ("BP_ID", 0x02, "B"), ("DL", 0x03, "B"),
@@ -239,7 +239,7 @@ class Bp3Eds:
         Multiturn, coarse and fine length in bits.
     mt_fmt : Alignment
     co_fmt, fi_fmt : int
-        Coarse and fine format; the digest gives no codes for them, so they stay raw bytes.
+        Coarse and fine format; docs/protocol.md gives no codes for them, so they stay raw bytes.
     mt_cnt : int
         Distinguishable revolutions / periods.
     sip_cnt : int

@@ -130,7 +130,7 @@ def test_error_names_are_the_headers(lib):
     assert lib.biss_error_name(1).decode() == "?"
 
 
-# -- BP3: the decoders on banks built here from the spec's table (digest, section 7) --------
+# -- BP3: the decoders on banks built here from the spec's table (docs/protocol.md, section 7) --------
 #: (field, address, bytes) of the BP3 EDS bank; U16 / U32 big endian. Written from the spec's
 #: table, not from the driver or rtl/bissmaster.
 EDS_TABLE = (

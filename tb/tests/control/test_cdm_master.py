@@ -3,7 +3,7 @@ cycles, and MA clock by clock around every CDM = 1 hold.
 
 The encoder is the limits bench's (tb/testkit/limits_bench.py) with the control side of
 test_register_access.py's slave: the CDS slot of every frame is the slave's answer, and the
-slave reads the CDM as the inverted MA level in the clock its timeout ends (spec section 10).
+slave reads the CDM as the inverted MA level in the clock its timeout ends (docs/protocol.md, section 10).
 Expected timing from docs/timing.md ("CDM"): MA falls where the next period would have begun
 (m = last rise + hp), rises 3 clocks after the SLO pin is high again (2 synchronizer clocks,
 then the MaClock register), stays high one half period, and the next cycle's first fall comes

@@ -1,5 +1,5 @@
 """RegisterAccess on Amaranth's simulator: register reads and writes over the control channel,
-frame by frame, against a small slave written here from the spec digest (section 10).
+frame by frame, against a small slave written here from docs/protocol.md (section 10).
 
 Cycle conventions: ``block_sim.py``. The bench plays the master's side of the frame interface:
 a request cycle every few clocks, which takes the engine's ``cdm`` while "idle" (like the
@@ -52,7 +52,7 @@ class _Cancel(Exception):
 
 
 class Slave:
-    """A point-to-point BiSS slave's control side, from spec section 10 only.
+    """A point-to-point BiSS slave's control side, from docs/protocol.md, section 10 only.
 
     ``cds()`` is the CDS of the frame being sent; ``take(cdm)`` is the CDM of that frame (read
     at the end of the slave's timeout). 14 consecutive CDM = 0 cancel any control frame. Faults:

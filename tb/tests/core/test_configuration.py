@@ -2,7 +2,7 @@
 idle, 0 -> protocol defaults, the NO_START limit and the word count.
 
 Cycle conventions and where expected values come from: ``block_sim.py``. The rules and defaults
-are written here from docs/ports.md ("Configuration") and the protocol digest (40 us break and
+are written here from docs/ports.md ("Configuration") and docs/protocol.md (40 us break and
 Ack limit, timeout twice the longest static slave timeout of 40 us, delay limit 0 = the most the
 build measures).
 """

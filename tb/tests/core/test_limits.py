@@ -11,8 +11,8 @@ Clock references (all seen on the ports, see limits_bench.py for the cycle conve
   ld  ``line_delay``; slot k is centred in clock s + ld + 1 + hp + 2*hp*k and decided v clocks
       later, v = hp // 2 the vote spacing (0 at hp = 2; ports.md, "Noise immunity").
 
-Status codes and counter names come from tb/master_contract.py, protocol times from the spec
-digest (40 us at the bench's 1 MHz clock), frames from tb/encoder_model: nothing from rtl/.
+Status codes and counter names come from tb/master_contract.py, protocol times from docs/protocol.md
+(40 us at the bench's 1 MHz clock), frames from tb/encoder_model: nothing from rtl/.
 """
 
 import pytest
@@ -25,8 +25,8 @@ from master_contract import STATUS
 HP = 2
 BREAK = 3                           # cfg_break_time of every test that is not about it
 FRAME_BITS = WORD.total_bits        # data + nE/nW + CRC: 12
-DEFAULT_BREAK = clocks(40e-6)       # spec section 9: the master pauses 40 us after an error
-DEFAULT_ACK = clocks(40e-6)         # spec section 9: processing time and line delay <= 40 us
+DEFAULT_BREAK = clocks(40e-6)       # docs/protocol.md, section 9: the master pauses 40 us after an error
+DEFAULT_ACK = clocks(40e-6)         # docs/protocol.md, section 9: processing time and line delay <= 40 us
 DEFAULT_TIMEOUT = 2 * clocks(40e-6)  # ports.md: twice the longest static slave timeout (40 us)
 
 

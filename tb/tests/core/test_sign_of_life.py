@@ -18,7 +18,7 @@ from encoder_model.frames import SignOfLife as ModelSignOfLife
 
 from testkit.block_sim import simulate
 
-#: The LC field is 6 bits, sent MSB first (protocol digest, 5.2).
+#: The LC field is 6 bits, sent MSB first (docs/protocol.md, 5.2).
 LC_BITS = 6
 LC_MASK = (1 << LC_BITS) - 1
 
@@ -27,7 +27,7 @@ MODES = pytest.mark.parametrize("early", (True, False), ids=("early", "comb"))
 
 
 class RefSignOfLife:
-    """The LC rule of the protocol digest (5.2), independently: 1..63 then 1; 0 never valid."""
+    """The LC rule of docs/protocol.md (5.2), independently: 1..63 then 1; 0 never valid."""
 
     def __init__(self):
         self.last = None        # None = not synced

@@ -1,6 +1,6 @@
 """bissmaster.bp3: profile ID registers, the EDS bank, the derived settings, identify().
 
-Expected values are written here from the protocol digest (sections 7 and 10), the README's
+Expected values are written here from docs/protocol.md (sections 7 and 10), the README's
 port table and the committed port lists, not taken from the module: EDS banks are packed with
 :mod:`struct` at the table's addresses, and the encoder is a dict-backed fake register file.
 """
@@ -17,7 +17,7 @@ from master_contract import CRC_CODE
 
 from testkit import DATA
 
-# -- The EDS bank, from the digest's table ------------------------------------------------------
+# -- The EDS bank, from the table of docs/protocol.md ------------------------------------------------------
 
 #: Digest section 7: symbol (DL for the unnamed byte 0x03), address, struct code (big endian).
 SPEC_EDS = [
@@ -246,7 +246,7 @@ def test_derive_config_refuses(overrides, params, match):
 # -- identify() against a fake register file ------------------------------------------------------
 
 class FakeEncoder:
-    """Registers of a BP3 encoder as the digest describes them (section 10): 0x00..0x3F show the
+    """Registers of a BP3 encoder as docs/protocol.md describes them (section 10): 0x00..0x3F show the
     bank that 0x40 selects, 0x41 points to the EDS, 0x42/0x43 hold the profile ID. Every access
     is logged; a sequential access covers consecutive addresses."""
 

@@ -2,7 +2,7 @@
 
 CRC-4 against a published table and the table-driven algorithms of the same source, the
 amaranth library's CRC model and a polynomial long division; whole register accesses frame by
-frame against tables written out by hand from shared/spec/biss-protocol.md section 10; the
+frame against tables written out by hand from docs/protocol.md section 10; the
 idle and abort rules; slave ID; every fault; the BP3 EDS bank.
 """
 
@@ -130,7 +130,7 @@ def idle(n=IDLE_FRAMES):
 
 # -- whole accesses, frame by frame, against hand-written tables ------------------------------
 
-# Register read of 0x42 (BP3 profile ID 0x62) from slave 0, spec section 10. One row per frame
+# Register read of 0x42 (BP3 profile ID 0x62) from slave 0, docs/protocol.md, section 10. One row per frame
 # from s0 (the frame whose CDM is S): (offset, CDM sent after the frame, CDS in the frame).
 READ_0X42 = [
     (0, 1, 0),      # S                      | (idle)

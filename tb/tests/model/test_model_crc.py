@@ -43,7 +43,7 @@ BISS_CRCS = [
 
 @pytest.mark.parametrize("func, width, poly, xor_out", BISS_CRCS)
 def test_biss_crc_matches_amaranth_model(func, width, poly, xor_out):
-    # Literal parameters from spec section 6, not protocol_facts, so a wrong constant there fails.
+    # Literal parameters from docs/protocol.md, section 6, not protocol_facts, so a wrong constant there fails.
     params = _amaranth_params(width, poly, xor_out)
     for bits in _random_messages(seed=width):
         assert func(bits) == params.compute(bits), bits

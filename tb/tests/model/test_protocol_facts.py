@@ -1,7 +1,7 @@
 """The test side's protocol facts against the RTL's, and the rule that keeps them apart.
 
 The RTL names its protocol numbers in ``rtl/bissmaster/protocol.py``; the test side has its own,
-written separately from ``shared/spec/biss-protocol.md``: ``tb/protocol_facts.py`` (what the
+written separately from ``docs/protocol.md``: ``tb/protocol_facts.py`` (what the
 encoder model, the cocotb driver, the reference model and the model tests use),
 ``tb/master_contract.py`` (the one port fact among them, from docs/ports.md) and the control
 side's own table in ``tb/encoder_model/control.py``. Every RTL constant must agree with one of
