@@ -83,8 +83,8 @@ demo-bp3: setup  ## BP3 encoder model: identified over the control channel, its 
 	$(PY) -m sim.tools.demo --bp3 --sim $(SIM)
 
 waves: demo  ## the demo waveform, FSM states and status by name: one frame (FRAME=N, default 1) to sim_build/waves.png
-	$(PY) scripts/waves.py $$(ls sim_build/$(SIM)-waves-demo/dump.* | head -1) \
-	  --png sim_build/waves.png $(if $(FRAME),--frame $(FRAME))
+	dump=$$($(PY) -m sim.tools.demo --sim $(SIM) --waves-file) && \
+	  $(PY) scripts/waves.py "$$dump" --png sim_build/waves.png $(if $(FRAME),--frame $(FRAME))
 
 .PHONY: bench
 bench: setup  ## simulated performance: cycle overhead, verdict latency, line-delay error, sim speed, register-access cost, bus-top trigger -> result latency
