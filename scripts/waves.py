@@ -4,7 +4,9 @@ The signals to show are described below (VIEW) by name, not by hierarchical path
 up in the dump's own scope tree, so the save file follows the core's hierarchy as it changes.
 Every FSM of the design is shown with its state names and ``status`` with the ``Status`` names
 (translate filter files from scripts/wavenames.py). The view opens on one frame: from the
-first MA fall of frame N to its ``done`` strobe, found in the dump.
+first MA fall of frame N to its ``done`` strobe, found in the dump, with room after it for the
+results' values; the marker is on ``done``, so the signal pane (as wide as its longest
+name=value) shows the frame's results.
 
     python scripts/waves.py DUMP [--frame N] [--png out.png]
 
@@ -58,9 +60,25 @@ VIEW = (
 #: and the scroll bar leave of the width (both measured with GTKWave 3.3.118). Only the view of
 #: an interactive session depends on them: the PNG's window is set in grab.tcl.
 SIZE = (1600, 950)
-SIGNALS_WIDTH = 300
 SST_AND_MARGINS = 400
 ZOOM_UNIT = 0.005
+#: The signal pane (the save file's [signals_width]) is made as wide as its longest line: the
+#: name column (names and group labels, right-aligned), then "=" and the value at the marker,
+#: in GTKWave's fixed-width font of CHAR_PX pixels a character, after LEFT_PX and with SLACK_PX
+#: to spare; never narrower than MIN_SIGNALS_WIDTH. Measured on the PNG (GTKWave 3.3.118, xvfb).
+CHAR_PX = 8
+LEFT_PX = 4
+SLACK_PX = 16
+MIN_SIGNALS_WIDTH = 300
+#: The wave pane's font: CHAR_PX of a value drawn on its trace.
+WAVE_CHAR_PX = 6
+#: What the PNG's window leaves of its width besides the signal pane (pane border, scroll bar).
+WAVE_MARGINS_PX = 50
+#: The time window: PAD_BEFORE of the frame before its first MA fall; after its done strobe,
+#: room for the longest value (in the wave pane's font) and SLACK_CHARS characters more, so the
+#: frame's results are drawn in full, not cut by the window's right edge.
+PAD_BEFORE = 1 / 50
+SLACK_CHARS = 3
 
 
 # -- The dump ---------------------------------------------------------------------------------
@@ -195,11 +213,57 @@ def traces(variables, fsms, warn):
     return groups
 
 
-def write_savefile(path, dump, groups, filters, window):
+def alias(var, names):
+    """The name a trace is saved under: a filtered FSM by its place in the design."""
+    return ".".join(names.path + (var.name,)) if names is not None and names.path else None
+
+
+def shown_name(var, names):
+    """The name GTKWave shows in the signal pane: the last part of the alias or full name."""
+    return (alias(var, names) or var.gtkwave_name).split(".")[-1]
+
+
+def value_chars(var, fmt, names):
+    """The most characters a value of the trace takes: its longest state name, or the digits
+    of its widest value in the trace's radix."""
+    if names is not None:
+        return max([len(n) for n in names.states.values()] + [-(-var.width // 4)])
+    if fmt == "dec":
+        return len(str(2 ** var.width - 1))
+    return max(1, -(-var.width // 4))
+
+
+def signals_width(groups):
+    """[signals_width] for ``groups``: the longest name or label, "=" and the longest value."""
+    rows = [row for _, rows in groups for row in rows]
+    names = [len(label) for label, _ in groups] + [len(shown_name(v, n)) for v, _, n in rows]
+    values = [value_chars(*row) for row in rows] or [1]
+    width = LEFT_PX + CHAR_PX * (max(names) + 1 + max(values)) + SLACK_PX
+    return max(MIN_SIGNALS_WIDTH, width)
+
+
+def view(frame, groups):
+    """The time window (start, end) shown for ``frame`` (its first MA fall, its done strobe):
+    PAD_BEFORE of the frame before it; after it, the wave pane's pixels for the longest value
+    (plus SLACK_CHARS), converted to time at the scale the window itself sets."""
+    start, end = frame
+    before = int((end - start) * PAD_BEFORE)
+    rows = [row for _, rows in groups for row in rows]
+    text_px = WAVE_CHAR_PX * (max([value_chars(*row) for row in rows] or [1]) + SLACK_CHARS)
+    wave_px = SIZE[0] - signals_width(groups) - WAVE_MARGINS_PX
+    # The span s holds the frame, the pad and the text: s = core + s * text_px / wave_px.
+    core = end - start + before
+    span = core / (1 - text_px / wave_px)
+    return max(0, start - before), end + math.ceil(span - core)
+
+
+def write_savefile(path, dump, groups, filters, window, marker=None):
     """The GTKWave save file: the traces, each FSM and status through its filter, opened on
-    ``window`` (start, end)."""
+    ``window`` (start, end); the primary marker at ``marker`` (the values the signal pane
+    shows), if given."""
     start, end = window
-    wave_px = SIZE[0] - SIGNALS_WIDTH - SST_AND_MARGINS
+    width = signals_width(groups)
+    wave_px = SIZE[0] - width - SST_AND_MARGINS
     zoom = -math.log2((end - start) / (wave_px * ZOOM_UNIT))
     with open(path, "w") as f:
         save = GTKWSave(f)
@@ -210,22 +274,23 @@ def write_savefile(path, dump, groups, filters, window):
         save.timestart(start)
         save.size(*SIZE)
         save.pos(-1, -1)
-        save.zoom_markers(zoom, start)
-        save.signals_width(SIGNALS_WIDTH)
+        save.zoom_markers(zoom, start if marker is None else marker)
+        save.signals_width(width)
         save.sst_expanded(True)
         for label, rows in groups:
             save.blank(label)
             for var, fmt, names in rows:
-                alias = ".".join(names.path + (var.name,)) if names is not None and names.path \
-                    else None
-                save.trace(var.gtkwave_name, alias=alias, datafmt=fmt,
+                save.trace(var.gtkwave_name, alias=alias(var, names), datafmt=fmt,
                            translate_filter_file=str(filters[names.dotted]) if names else None)
 
 
-def render(dump, savefile, png, window):
-    """Headless GTKWave: the save file's view of ``window``, grabbed to ``png``."""
+def render(dump, savefile, png, window, marker=None):
+    """Headless GTKWave: the save file's view of ``window``, the marker at ``marker``, grabbed
+    to ``png``."""
     env = dict(os.environ, BISS_WAVES_PNG=str(Path(png).resolve()),
                BISS_WAVES_FROM=str(window[0]), BISS_WAVES_TO=str(window[1]))
+    if marker is not None:
+        env["BISS_WAVES_MARKER"] = str(marker)
     log = OUT / "gtkwave.log"
     with open(log, "w") as f:
         r = subprocess.run(
@@ -251,17 +316,18 @@ def main(argv=None):
     names = [*fsms, wavenames.status_names()]
     filters = {n.dotted: path for n, path in wavenames.write_filters(OUT / "filters", names)}
     groups = traces(variables, fsms, lambda msg: print(f"waves: warning: {msg}", file=sys.stderr))
-    window = frame_window(dump, variables, args.frame)
-    pad = (window[1] - window[0]) // 50
-    window = (max(0, window[0] - pad), window[1] + 2 * pad)
+    frame = frame_window(dump, variables, args.frame)
+    window = view(frame, groups)
+    marker = frame[1]           # the frame's done strobe: the signal pane shows its results
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
-    write_savefile(out, dump, groups, filters, window)
+    write_savefile(out, dump, groups, filters, window, marker)
     print(f"waves: {out.relative_to(ROOT) if out.is_relative_to(ROOT) else out}: "
           f"{sum(len(r) for _, r in groups)} traces, {len(fsms)} FSMs named, "
-          f"frame {args.frame} at {window[0]}..{window[1]} ({timescale})")
+          f"frame {args.frame} at {frame[0]}..{frame[1]}, shown {window[0]}..{window[1]}, "
+          f"marker at its done ({timescale})")
     if args.png:
-        render(dump, out, args.png, window)
+        render(dump, out, args.png, window, marker)
         print(f"waves: {args.png}")
     print(f"open it:  gtkwave {dump} {out}")
 

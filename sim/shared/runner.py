@@ -57,15 +57,35 @@ def _verilator_args(waves):
     return args
 
 
+def check_simulator(sim):
+    """Raise ValueError unless ``sim`` is one of SIMULATORS."""
+    if sim not in SIMULATORS:
+        raise ValueError(f"SIM must be one of {', '.join(SIMULATORS)}, not {sim!r}")
+
+
+def build_dir_of(sim, waves=False, tag=""):
+    """The build directory build() uses for these arguments."""
+    return BUILD / f"{sim}{'-waves' if waves else ''}{tag}"
+
+
+def waves_file(sim, build_dir, internal_clock=False, toplevel=TOPLEVEL):
+    """The waveform a run with ``waves=True`` writes into ``build_dir``; the one place that knows
+    its name. Verilator (built with --trace-fst, cocotb's C++ main) writes ``dump.fst``; Icarus
+    (cocotb's dump module, cocotb_iverilog_dump.v) writes ``<toplevel>.fst``."""
+    check_simulator(sim)
+    if sim == "verilator":
+        return Path(build_dir) / "dump.fst"
+    return Path(build_dir) / f"{fastclk.TOPLEVEL if internal_clock else toplevel}.fst"
+
+
 def build(sim, waves=False, verilog=VERILOG, tag="", internal_clock=False, toplevel=TOPLEVEL):
     """Build (incrementally) and return (runner, build_dir).
 
     ``internal_clock``: wrap the core so the simulator makes the clock (sim/shared/fastclk.py),
     about ten times faster on Verilator; run() then needs ``internal_clock=True`` too.
     """
-    if sim not in SIMULATORS:
-        raise ValueError(f"SIM must be one of {SIMULATORS}, not {sim!r}")
-    build_dir = BUILD / f"{sim}{'-waves' if waves else ''}{tag}"
+    check_simulator(sim)
+    build_dir = build_dir_of(sim, waves, tag)
     runner = get_runner(sim)
     sources = [str(verilog)]
     if internal_clock:

@@ -2,6 +2,7 @@
 
     python -m sim.tools.demo [--sim verilator|icarus]          RESOLUTE FS RSH frames + waveform
     python -m sim.tools.demo --bp3 [--sim verilator|icarus]    BP3 identification, EDS, positions
+    python -m sim.tools.demo --waves-file [--sim ...]          print the first demo's waveform path
 """
 
 import argparse
@@ -29,19 +30,34 @@ DEMOS = {
 }
 
 
+#: The demos' build trees: sim_build/<sim>-waves-demo (sim_build/icarus-demo: BP3 on Icarus).
+TAG = "-demo"
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--sim", default=os.environ.get("SIM", "verilator"), choices=runner.SIMULATORS)
     ap.add_argument("--bp3", action="store_true",
                     help="identify a BP3 encoder, print its EDS, configure from it, read positions")
+    ap.add_argument("--waves-file", action="store_true",
+                    help="print the path of the waveform the (first) demo writes, run nothing "
+                         "(make waves)")
     args = ap.parse_args()
     module, table_name, what, waves, notes = DEMOS[args.bp3]
+    dump = runner.waves_file(args.sim, runner.build_dir_of(args.sim, waves=True, tag=TAG))
+    if args.waves_file:
+        if not dump.exists():
+            sys.exit(f"demo: no waveform at {dump}; run make demo SIM={args.sim} first")
+        print(dump)
+        return
 
     out = runner.BUILD / "demo"
     out.mkdir(parents=True, exist_ok=True)
     table = out / table_name
     log = out / ("demo-bp3.log" if args.bp3 else "demo.log")
     table.unlink(missing_ok=True)
+    if waves:
+        dump.unlink(missing_ok=True)        # a waveform from an earlier run is not this one's
     print(f"Simulating biss_master ({args.sim}) with {what} ...", flush=True)
     try:
         with output_to(log):
@@ -49,7 +65,7 @@ def main():
             # the first demo's dump; it writes one only when the run asks). Icarus dumps
             # whenever the build has tracing, so the BP3 demo has a build without.
             traced = waves or args.sim == "verilator"
-            r, build_dir = runner.build(args.sim, waves=traced, tag="-demo")
+            r, build_dir = runner.build(args.sim, waves=traced, tag=TAG)
             xml = runner.run(r, build_dir, module, waves=waves,
                              extra_env={"BISS_DEMO_TABLE": str(table)})
         ok = all(not c.findall("failure") and not c.findall("error")
@@ -67,10 +83,9 @@ def main():
         print(line)
     if not waves:
         return
-    dumps = sorted(build_dir.glob("dump.*"))
-    if dumps:
-        print(f"\nWaveform: {dumps[0]}")
-        print(f"Open it:  make waves (one frame as a PNG), then gtkwave {dumps[0]} "
+    if dump.exists():
+        print(f"\nWaveform: {dump}")
+        print(f"Open it:  make waves SIM={args.sim} (one frame as a PNG), then gtkwave {dump} "
               "sim_build/waves/biss_master.gtkw")
     else:
         print(f"\n(no waveform was written; see {log})")

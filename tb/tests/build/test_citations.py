@@ -39,6 +39,8 @@ def test_every_cited_section_exists():
     assert {str(n) for n in range(1, 11)} | {"5.1", "5.2"} <= sections
     missing = {}
     for f in _tracked_text_files():
+        if f.name == "test_citations.py":       # its own examples
+            continue
         for m in CITE.finditer(f.read_text()):
             for n in re.split(r", | and ", m.group(1)):
                 if n.rstrip(".") not in sections:

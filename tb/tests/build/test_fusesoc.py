@@ -1,9 +1,10 @@
 """biss_master.core, the FuseSoC CAPI2 core of the committed Verilog: FuseSoC finds it under its
-VLNV, its version is the package's, every file it names exists, and its `lint` target runs
-Verilator (-Wall, rtl/lint.vlt) clean, offline, in a temporary build root.
+VLNV, its version is the package's, every file it names exists, its targets take the core and
+the two bus tops (biss_master_axil, biss_master_wb), and its lint targets (`lint`, `lint_axil`,
+`lint_wb`) run Verilator (-Wall, rtl/lint.vlt) clean, offline, in a temporary build root.
 
 FuseSoC's config, cache and data folders are pointed into the test's temporary folder, so
-nothing is written to the user's home or the checkout. About 5 s.
+nothing is written to the user's home or the checkout. About 10 s.
 """
 
 import re
@@ -22,6 +23,13 @@ import venvtools
 from testkit import REPO as ROOT
 CORE_FILE = ROOT / "biss_master.core"
 VLNV = f"bissmaster:ip:biss_master:{bissmaster.__version__}"
+#: target: (its Verilog, its top-level module); each has a lint target (lint, lint_<target>).
+TOPS = {
+    "default": ("rtl/generated/biss_master.v", "biss_master"),
+    "axil": ("rtl/generated/biss_master_axil.v", "biss_master_axil"),
+    "wb": ("rtl/generated/biss_master_wb.v", "biss_master_wb"),
+}
+LINT = {"default": "lint", "axil": "lint_axil", "wb": "lint_wb"}
 
 
 def _fusesoc(tmp_path, *args, cores_root=ROOT):
@@ -69,13 +77,34 @@ def test_targets_take_the_committed_verilog():
     assert [f["name"] for f in as_dependency] == files["default"]
 
 
-def test_lint_target_runs_verilator_clean(tmp_path):
-    run = _fusesoc(tmp_path, "run", "--build-root", str(tmp_path / "build"), "--target=lint",
-                   VLNV)
+@pytest.mark.parametrize("top", ["axil", "wb"])
+def test_bus_top_targets_take_the_committed_bus_top(top):
+    core = _core()
+    verilog, module = TOPS[top]
+    for target, files in ((top, [verilog]), (LINT[top], [verilog, "rtl/lint.vlt"])):
+        flags = {"target": target, "is_toplevel": True}
+        assert [f["name"] for f in core.get_files(flags)] == files
+        assert core.get_toplevel(flags) == module
+
+
+def test_every_committed_top_has_targets():
+    """Each top in rtl/generated/ (the core and every bus top) is some target's top level."""
+    tops = {p.stem for p in (ROOT / "rtl" / "generated").glob("biss_master*.v")}
+    assert tops == {module for _, module in TOPS.values()}
+    targets = set(yaml.safe_load(CORE_FILE.read_text().split("\n", 1)[1])["targets"])
+    assert targets == set(TOPS) | set(LINT.values())
+
+
+@pytest.mark.parametrize("top", TOPS)
+def test_lint_target_runs_verilator_clean(tmp_path, top):
+    run = _fusesoc(tmp_path, "run", "--build-root", str(tmp_path / "build"),
+                   f"--target={LINT[top]}", VLNV)
     assert run.returncode == 0, run.stdout + run.stderr
     (vc,) = (tmp_path / "build").rglob("*.vc")
     options = vc.read_text().split()
     assert "--lint-only" in options and "-Wall" in options
+    assert TOPS[top][0].split("/")[-1] in " ".join(options)
+    assert f"--top-module {TOPS[top][1]}" in " ".join(options)
     assert "VerilationReport" in run.stdout.replace(" ", "")      # Verilator did run
 
 

@@ -1,0 +1,40 @@
+# Vivado constraints for one instance of a multi-channel bus top, biss_master_axil or
+# biss_master_wb (rtl/generated/biss_master_axil.v, biss_master_wb.v: 2 channels as committed;
+# python -m bissmaster.generate --top axil|wb --channels N for 1..8). Each channel is one
+# complete core, instance ch<i>/core, with its own pins ch<i>_ma and ch<i>_slo: it gets the
+# three constraints of biss_master.xdc, on paths with ch<i>/core in front.
+# Not run through Vivado here (no vendor tools on the machine this was written on): check the
+# messages when you read it in. See constraints/README.md.
+#
+# Adapt these names to your design:
+#   bus_inst        : hierarchical path of the bus-top instance (no leading slash)
+#   ch<i>_ma_port   : your top-level output port driving channel i's MA transceiver
+#   ch<i>_slo_port  : your top-level input port from channel i's SLO transceiver
+# (the defaults are the bus top's own port names: right when it is your top level).
+# XDC files accept the Tcl commands set, list and expr, but no loop: one block per channel.
+# With more channels, copy a block and change the index (ch2, ch3, ...) everywhere in it.
+set bus_inst      u_biss_bus
+set ch0_ma_port   ch0_ma
+set ch0_slo_port  ch0_slo
+set ch1_ma_port   ch1_ma
+set ch1_slo_port  ch1_slo
+
+# The system clock (create_clock on clk) is defined by your design, not here.
+
+# ---------------------------------------------------------------------------------------------
+# Channel 0. (a) SLO synchronizer ch0/core/sampler/sync: stage0 -> stage1, asynchronous input,
+# no timing relation to clk (the pin-to-stage0 delay is part of the measured round trip).
+set_property ASYNC_REG TRUE [get_cells [list $bus_inst/ch0/core/sampler/sync/stage0_reg $bus_inst/ch0/core/sampler/sync/stage1_reg]]
+set_false_path -from [get_ports $ch0_slo_port] -to [get_cells $bus_inst/ch0/core/sampler/sync/stage0_reg]
+# set_max_delay -datapath_only -from [get_ports $ch0_slo_port] -to [get_cells $bus_inst/ch0/core/sampler/sync/stage0_reg] 5.000
+# (b) MA output: the register ch0/core/ma_clock/ma, straight to the pin, in the IOB.
+set_property IOB TRUE [get_cells $bus_inst/ch0/core/ma_clock/ma_reg]
+set_false_path -to [get_ports $ch0_ma_port]
+
+# ---------------------------------------------------------------------------------------------
+# Channel 1: the same on ch1.
+set_property ASYNC_REG TRUE [get_cells [list $bus_inst/ch1/core/sampler/sync/stage0_reg $bus_inst/ch1/core/sampler/sync/stage1_reg]]
+set_false_path -from [get_ports $ch1_slo_port] -to [get_cells $bus_inst/ch1/core/sampler/sync/stage0_reg]
+# set_max_delay -datapath_only -from [get_ports $ch1_slo_port] -to [get_cells $bus_inst/ch1/core/sampler/sync/stage0_reg] 5.000
+set_property IOB TRUE [get_cells $bus_inst/ch1/core/ma_clock/ma_reg]
+set_false_path -to [get_ports $ch1_ma_port]
