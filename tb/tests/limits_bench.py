@@ -1,7 +1,7 @@
 """A clock-by-clock bench for ``BissMaster`` on Amaranth's simulator, for the limit tests.
 
-Only the top's ports are used (``cfg_*``, ``start``, ``periodic``, ``abort_cycle``, ``ma``,
-``slo`` and the results), so the tests hold across any internal restructuring.
+Only the top's ports are used (``cfg_*``, ``start``, ``periodic``, ``abort_cycle``, ``rst``,
+``ma``, ``slo`` and the results), so the tests hold across any internal restructuring.
 
 Conventions (as in test_rtl_blocks.py): "cycle ``t``" is the stretch after the ``t``-th clock
 edge; cycle 0 is the first clock after reset. A registered output read in cycle ``t`` is what the
@@ -15,8 +15,9 @@ MA stopped. Nothing in it comes from ``rtl/``.
 """
 
 from collections import deque
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
+from amaranth.hdl import ClockDomain, Module
 from amaranth.sim import Simulator
 
 # The package's exports, not its module layout: the top may move between modules.
@@ -32,6 +33,10 @@ MAX_LINE_DELAY = 63                 # also the default of cfg_delay_limit = 0
 PARAMS = MasterParams(sys_clk_hz=SYS_CLK_HZ, max_data_bits=(8,), word_crcs=((Crc.CRC6,),),
                       max_line_delay=MAX_LINE_DELAY, timer_width=16, counter_width=8,
                       timestamp_width=0)
+#: The same build with the default build's line-delay port and timer width: ``max_line_delay``
+#: 4095 (``line_delay`` 13 bits wide) and 24-bit timers (an Ack limit long enough for round trips
+#: beyond 8191 clocks and for 65535 Ack slots).
+WIDE_PARAMS = replace(PARAMS, max_line_delay=4095, timer_width=24)
 #: Word 0 of every frame: 4 position bits, nE, nW and CRC-6 (12 frame bits).
 WORD = WordFormat(4, nenw=True, crc=CRC6)
 POSITION = 0b1011
@@ -78,6 +83,10 @@ class Encoder:
                  stop bit's rise + ``hp`` (the master stops MA right after the stop bit's rise).
                  May be negative, down to ``1 - hp``.
     present    : False: no encoder, SLO stays high.
+    timeout    : None, or the encoder's timeout for a frame cut short: MA high for this many
+                 clocks in a row ends whatever the encoder was sending (SLO high, the round trip
+                 later), as when the master stops clocking mid-frame (a reset). Keep it above
+                 ``hp + release`` so that it does not end a whole frame early.
     """
     hp: int
     bits: list
@@ -85,7 +94,9 @@ class Encoder:
     round_trip: int = 0
     release: int = 4
     present: bool = True
+    timeout: int | None = None
     _t: int = -1
+    _high: int = 0
     _ma_prev: int = 1
     _rises: int = 0
     _stop_rise: int | None = None
@@ -102,6 +113,9 @@ class Encoder:
             if self._rises - 2 == self.ack_slots + len(self.bits):
                 self._stop_rise = self._t
         self._ma_prev = ma
+        self._high = self._high + 1 if ma else 0
+        if self.timeout is not None and self._high >= self.timeout:
+            self._idle = True
         self._line.append(self._sent())
         return self._line.popleft() if len(self._line) > self.round_trip else 1
 
@@ -148,26 +162,37 @@ class Run:
         return [t for t in range(1, len(ma)) if not ma[t] and ma[t - 1]]
 
 
-def simulate(cfg, encoder, n_cycles, drive=None):
+def simulate(cfg, encoder, n_cycles, drive=None, params=None, trace=None):
     """Run ``n_cycles`` clocks. ``drive(t, run)`` returns the control inputs for cycle ``t``
-    (``start``, ``periodic``, ``abort_cycle``, or ``cfg_*`` changes); ``run`` holds the trace
-    so far. Inputs keep their value until changed."""
-    dut = BissMaster(PARAMS)
+    (``start``, ``periodic``, ``abort_cycle``, ``cfg_*`` changes, or ``rst``: the ``sync``
+    domain's synchronous reset, the core's ``rst`` port); ``run`` holds the trace so far. Inputs
+    keep their value until changed. ``params``: the build (default :data:`PARAMS`); ``trace``:
+    the outputs recorded in every cycle (default :data:`TRACE`). The counters are read at the
+    end in builds that have them."""
+    params = PARAMS if params is None else params
+    dut = BissMaster(params)
+    top = Module()
+    top.domains.sync = domain = ClockDomain("sync")
+    top.submodules.dut = dut
     run = Run([], {})
+
+    def pin(name):
+        return domain.rst if name == "rst" else getattr(dut, name)
 
     async def bench(ctx):
         for name, value in cfg.items():
             ctx.set(getattr(dut, name), value)
-        ports = {name: getattr(dut, name) for name in TRACE}
+        ports = {name: getattr(dut, name) for name in (TRACE if trace is None else trace)}
         for t in range(n_cycles):
             ctx.set(dut.slo, encoder.step(ctx.get(dut.ma)))
             for name, value in (drive(t, run) if drive else {}).items():
-                ctx.set(getattr(dut, name), value)
+                ctx.set(pin(name), value)
             run.trace.append({name: ctx.get(port) for name, port in ports.items()})
             await ctx.tick()
-        run.counts.update({name: ctx.get(getattr(dut, f"count_{name}")) for name in COUNTS})
+        if params.counters:
+            run.counts.update({name: ctx.get(getattr(dut, f"count_{name}")) for name in COUNTS})
 
-    sim = Simulator(dut)
+    sim = Simulator(top)
     sim.add_clock(1 / SYS_CLK_HZ)
     sim.add_testbench(bench)
     sim.run()
