@@ -18,8 +18,8 @@ digest (40 us at the bench's 1 MHz clock), frames from tb/encoder_model: nothing
 import pytest
 
 from encoder_model.frames import FrameFaults, FrameFormat, WordValue, build_frame
-from limits_bench import (FRAME, MAX_LINE_DELAY, POSITION, WORD, Encoder, base_config, clocks,
-                          simulate)
+from limits_bench import (FRAME, MAX_LINE_DELAY, POSITION, WIDE_PARAMS, WORD, Encoder, base_config,
+                          clocks, simulate)
 from master_contract import STATUS
 
 HP = 2
@@ -86,21 +86,46 @@ def assert_fault(run, status, done, counter, hp=HP):
 
 # -- NO_ACK: cfg_ack_limit ---------------------------------------------------------------------
 
-@pytest.mark.parametrize("limit", (12, 0), ids=("cfg12", "cfg0_default40us"))
+def ack_round_trip_max(a, hp):
+    """The largest accepted ``line_delay`` at Ack limit ``a`` (ports.md, ``cfg_ack_limit``):
+    ``line_delay`` + hp + v + 1 <= A, v the vote spacing."""
+    return a - hp - vote_spacing(hp) - 1
+
+
+@pytest.mark.parametrize("hp,limit", ((2, 12), (2, 0), (3, 20), (5, 30), (50, 1000)),
+                         ids=("hp2_cfg12", "hp2_cfg0_default40us", "hp3_cfg20", "hp5_cfg30",
+                              "hp50_cfg1000"))
 @pytest.mark.parametrize("offset", (-1, 0, 1), ids=("A-1_frame", "A_frame", "A+1_NO_ACK"))
-def test_ack_limit_no_ack(limit, offset):
-    """The Ack's slot-0 sample (ld + hp + 1 clocks after s) comes at most A clocks after s."""
+def test_ack_limit_no_ack(hp, limit, offset):
+    """The Ack's slot-0 decision (ld + hp + v + 1 clocks after s: the slot's centre half a
+    period after the edge, decided v later) comes at most A clocks after s. So the last
+    accepted round trip is ``line_delay`` = A - hp - v - 1 (hp 50, A 1000: 924, not the 949 of
+    a formula without v); one clock more is NO_ACK."""
     a = limit or DEFAULT_ACK
-    ld = a + offset - HP - 1                  # slot-0 sample at s + a + offset
-    cfg = base_config(HP, cfg_break_time=BREAK, cfg_ack_limit=limit)
-    run = simulate(cfg, Encoder(HP, FRAME, round_trip=ld - 1), 5 + a + 90, start_at(5))
+    ld = ack_round_trip_max(a, hp) + offset          # slot-0 decision at s + a + offset
+    params = WIDE_PARAMS if ld > MAX_LINE_DELAY else None
+    cfg = base_config(hp, cfg_break_time=BREAK, cfg_ack_limit=limit)
+    run = simulate(cfg, Encoder(hp, FRAME, round_trip=ld - 1), 5 + a + 2 * hp * 24,
+                   start_at(5), params=params)
     s = run.rises[1]
-    assert sample_clock(s, ld, 0) == s + a + offset
+    assert sample_clock(s, ld, 0, hp) == s + a + offset
     if offset <= 0:
-        assert_frame(run, s, ld, 1)
+        assert_frame(run, s, ld, 1, hp=hp)
     else:
-        assert_fault(run, "NO_ACK", s + a + 2, "no_ack")
+        assert_fault(run, "NO_ACK", s + a + 2, "no_ack", hp)
         assert run.trace[-1]["line_delay"] == 0          # not updated by NO_ACK
+
+
+def test_ack_limit_counts_the_vote_spacing():
+    """hp 50 (v 25), A 1000: a round trip of 941 clocks (940.5 at the pin) passes a limit
+    without the votes (941 + 50 + 1 <= 1000) but not the real one (941 + 50 + 25 + 1 > 1000):
+    NO_ACK in s + A + 2."""
+    hp, a, ld = 50, 1000, 941
+    assert ld + hp + 1 <= a < ld + hp + vote_spacing(hp) + 1
+    cfg = base_config(hp, cfg_break_time=BREAK, cfg_ack_limit=a)
+    run = simulate(cfg, Encoder(hp, FRAME, round_trip=ld - 1), 5 + a + 2 * hp * 24,
+                   start_at(5), params=WIDE_PARAMS)
+    assert_fault(run, "NO_ACK", run.rises[1] + a + 2, "no_ack", hp)
 
 
 def test_no_ack_without_encoder_fires_at_a_plus_two():
