@@ -18,8 +18,8 @@ digest (40 us at the bench's 1 MHz clock), frames from tb/encoder_model: nothing
 import pytest
 
 from encoder_model.frames import FrameFaults, FrameFormat, WordValue, build_frame
-from limits_bench import (FRAME, MAX_LINE_DELAY, POSITION, WIDE_PARAMS, WORD, Encoder, base_config,
-                          clocks, simulate)
+from limits_bench import (FRAME, MAX_LINE_DELAY, PARAMS, POSITION, WIDE_PARAMS, WORD, Encoder,
+                          base_config, clocks, simulate)
 from master_contract import STATUS
 
 HP = 2
@@ -172,6 +172,38 @@ def test_delay_limit(limit, offset):
     else:
         assert_fault(run, "DELAY_RANGE", sample_clock(s, ld, 0, hp) + 2, "delay_range", hp)
         assert run.trace[-1]["line_delay"] == ld
+
+
+def shown_line_delay(ld, max_line_delay):
+    """``line_delay`` as ports.md gives it: the port is wide enough for ``max_line_delay`` + 1
+    and saturates at its all-ones value F, which every round trip of F - 1 clocks or more
+    shows (F - 1 itself never shows)."""
+    full = 2 ** (max_line_delay + 1).bit_length() - 1
+    return ld if ld <= full - 2 else full
+
+
+@pytest.mark.parametrize("params,ld", (
+    (WIDE_PARAMS, 8189), (WIDE_PARAMS, 8190), (WIDE_PARAMS, 9001),
+    (None, 125), (None, 126), (None, 200),
+    # The longest round trip a 16-bit timer build can accept at hp 3: A = 2**16 - 1.
+    (None, 2**16 - 1 - 3 - 1 - 1),
+), ids=("w13_8189", "w13_8190_sat", "w13_9001_sat", "w7_125", "w7_126_sat", "w7_200_sat",
+        "w7_65530_sat"))
+def test_line_delay_saturates(params, ld):
+    """A round trip beyond the port: DELAY_RANGE at the usual clock (the sampler still samples
+    slot 0 at its real place), and ``line_delay`` saturated, never wrapped: 8191 on the 13-bit
+    port of the default build's ``max_line_delay`` (4095) from 8190 clocks on, 127 on the
+    bench's 7-bit port (63); the value below shows exactly."""
+    hp = 3
+    max_line_delay = (params or PARAMS).max_line_delay
+    a = min(ld + hp + vote_spacing(hp) + 1 + 10, 2**16 - 1)
+    assert ld <= ack_round_trip_max(a, hp)
+    cfg = base_config(hp, cfg_break_time=BREAK, cfg_ack_limit=a)
+    run = simulate(cfg, Encoder(hp, FRAME, round_trip=ld - 1), 5 + ld + 130, start_at(5),
+                   params=params)
+    s = run.rises[1]
+    assert_fault(run, "DELAY_RANGE", sample_clock(s, ld, 0, hp) + 2, "delay_range", hp)
+    assert run.trace[-1]["line_delay"] == shown_line_delay(ld, max_line_delay)
 
 
 # -- SLO_STUCK_LOW before a cycle: cfg_timeout_limit -------------------------------------------
