@@ -17,7 +17,7 @@ MA stopped. Nothing in it comes from ``rtl/``.
 from collections import deque
 from dataclasses import dataclass, field, replace
 
-from amaranth.hdl import ClockDomain, Module
+from amaranth.hdl import ClockDomain, Elaboratable, Module, Mux, Signal
 from amaranth.sim import Simulator
 
 # The package's exports, not its module layout: the top may move between modules.
@@ -197,3 +197,111 @@ def simulate(cfg, encoder, n_cycles, drive=None, params=None, trace=None):
     sim.add_testbench(bench)
     sim.run()
     return run
+
+
+class LogicEncoder(Elaboratable):
+    """:class:`Encoder`'s stimulus as logic, for runs too long for a Python step per clock (an
+    Ack of 65000 slots is 262k clocks at hp 2): the same SLO, clock for clock, for an
+    :class:`Encoder` with ``timeout`` set (the frame ends when MA has been high ``timeout``
+    clocks in a row: after the stop bit, or after a frame cut short) and ``release`` out of
+    play. ``ack_slots`` is a signal: the bench may change it between cycles.
+
+    Counts for the bench: ``cycle_rises``, the MA rising edges of the current (or last) cycle;
+    ``second_rise``, the clock (``now``) of its 2nd; ``last_rise``, the clock of its last.
+    """
+
+    def __init__(self, dut, bits, round_trip=0, timeout=16):
+        self.dut, self.bits, self.round_trip, self.timeout = dut, list(bits), round_trip, timeout
+        self.ack_slots = Signal(17)
+        self.now = Signal(32)
+        self.cycle_rises = Signal(20)
+        self.second_rise = Signal(32)
+        self.last_rise = Signal(32)
+
+    def elaborate(self, platform):
+        m = Module()
+        m.submodules.dut = dut = self.dut
+        ma = dut.ma
+        ma_prev = Signal(init=1)
+        idle = Signal(init=1)
+        high = Signal(range(self.timeout + 1))
+        new_cycle = idle & ma_prev & ~ma                      # MA falls: a new cycle
+        rise = ma & ~ma_prev
+        rises = Mux(new_cycle, 0, self.cycle_rises + rise)    # this clock's count, as step()
+        high_now = Mux(ma, Mux(high == self.timeout, high, high + 1), 0)
+        idle_now = (idle & ~new_cycle) | (high_now == self.timeout)
+        m.d.sync += [ma_prev.eq(ma), self.cycle_rises.eq(rises), high.eq(high_now),
+                     idle.eq(idle_now), self.now.eq(self.now + 1)]
+        with m.If(rise):
+            m.d.sync += self.last_rise.eq(self.now)
+            with m.If(rises == 2):
+                m.d.sync += self.second_rise.eq(self.now)
+        # The level sent: slot k at rise k + 2; Ack, Start .. CRC (``bits``), then low.
+        slot = Signal(21)
+        sent = Signal()
+        m.d.comb += slot.eq(rises - 2)
+        with m.If(idle_now | (rises < 2)):
+            m.d.comb += sent.eq(1)
+        with m.Elif(slot < self.ack_slots):
+            m.d.comb += sent.eq(0)
+        with m.Else():
+            with m.Switch(slot - self.ack_slots):
+                for k, bit in enumerate(self.bits):
+                    with m.Case(k):
+                        m.d.comb += sent.eq(bit)
+                with m.Default():
+                    m.d.comb += sent.eq(0)                    # the stop bit, the timeout
+        line = sent
+        for _ in range(self.round_trip):
+            delayed = Signal(init=1)
+            m.d.sync += delayed.eq(line)
+            line = delayed
+        m.d.comb += dut.slo.eq(line)
+        return m
+
+
+@dataclass
+class Frame:
+    """One cycle of :func:`simulate_frames`; clocks are ``LogicEncoder.now`` values."""
+    ack_slots: int
+    second_rise: int
+    done: int
+    status: int
+    position: int
+    line_delay: int
+    rises: int
+    last_rise: int
+    idle: int           # the first clock with ``busy`` = 0 again
+
+
+def simulate_frames(cfg, ack_slots, round_trip=0, timeout=16, params=None, bits=None):
+    """One request cycle for each entry of ``ack_slots`` (the Ack's length in slots), each
+    requested in the first idle clock after the previous one (the first after the power-up
+    break), with a :class:`LogicEncoder` sending ``bits`` (default :data:`FRAME`) and the build
+    ``params`` (default :data:`PARAMS`)."""
+    params = PARAMS if params is None else params
+    dut = BissMaster(params)
+    enc = LogicEncoder(dut, FRAME if bits is None else bits, round_trip, timeout)
+    frames = []
+
+    async def bench(ctx):
+        for name, value in cfg.items():
+            ctx.set(getattr(dut, name), value)
+        for n in ack_slots:
+            ctx.set(enc.ack_slots, n)
+            if ctx.get(dut.busy):
+                await ctx.tick().until(~dut.busy)
+            ctx.set(dut.start, 1)
+            await ctx.tick()
+            ctx.set(dut.start, 0)
+            done, status, position, line_delay = await ctx.tick().sample(
+                enc.now, dut.status, dut.word0_position, dut.line_delay).until(dut.done)
+            idle, = await ctx.tick().sample(enc.now).until(~dut.busy)
+            frames.append(Frame(n, ctx.get(enc.second_rise), done, status, position, line_delay,
+                                ctx.get(enc.cycle_rises), ctx.get(enc.last_rise), idle))
+
+    sim = Simulator(enc)
+    sim.add_clock(1 / SYS_CLK_HZ)
+    sim.add_testbench(bench)
+    sim.run()
+    return frames

@@ -15,11 +15,14 @@ Status codes and counter names come from tb/master_contract.py, protocol times f
 digest (40 us at the bench's 1 MHz clock), frames from tb/encoder_model: nothing from rtl/.
 """
 
+from dataclasses import replace
+
 import pytest
 
-from encoder_model.frames import FrameFaults, FrameFormat, WordValue, build_frame
+from encoder_model.frames import (CRC6, FrameFaults, FrameFormat, WordFormat, WordValue,
+                                  build_frame)
 from limits_bench import (FRAME, MAX_LINE_DELAY, PARAMS, POSITION, WIDE_PARAMS, WORD, Encoder,
-                          base_config, clocks, simulate)
+                          base_config, clocks, simulate, simulate_frames)
 from master_contract import STATUS
 
 HP = 2
@@ -204,6 +207,51 @@ def test_line_delay_saturates(params, ld):
     s = run.rises[1]
     assert_fault(run, "DELAY_RANGE", sample_clock(s, ld, 0, hp) + 2, "delay_range", hp)
     assert run.trace[-1]["line_delay"] == shown_line_delay(ld, max_line_delay)
+
+
+# -- MA rising edges of a frame near the 65535-slot limit --------------------------------------
+
+#: BiSS C with 36 position bits, nE/nW and CRC-6: 44 frame bits (ports.md's example).
+WORD36 = WordFormat(36, nenw=True, crc=CRC6)
+POSITION36 = 0x9_8765_4321
+FRAME36 = build_frame(FrameFormat("biss-c-36", (WORD36,)), [WordValue(POSITION36)])
+#: A 36-bit build with 24-bit timers (an Ack limit for 65535 slots); no counters and no
+#: register-access engine: a quarter faster.
+PARAMS36 = replace(WIDE_PARAMS, max_data_bits=(36,), counter_width=0, register_access=False)
+RISES_MAX = 2**16 - 1           # ports.md: MA's rising-edge count saturates at 65535
+
+
+def frame_rises(start_slot, frame_bits, ld, hp):
+    """MA rising edges of a frame (ports.md, "Number of MA rising edges per frame"): the target
+    start slot + frame bits + 4; a target above 65535 cannot be counted, and MA stops after the
+    stop bit's decision instead: ceil((line_delay + v + 5) / (2 hp)) edges more."""
+    target = start_slot + frame_bits + 4
+    if target <= RISES_MAX:
+        return target
+    return target + -(-(ld + vote_spacing(hp) + 5) // (2 * hp))
+
+
+@pytest.mark.parametrize("start_slot,round_trip", ((65487, 0), (65495, 0), (65520, 3)),
+                         ids=("S65487_target65535", "S65495_target65543_ld1",
+                              "S65520_target65568_ld4"))
+def test_ma_rises_near_the_slot_limit(start_slot, round_trip):
+    """Start in slot 65487 of a 44-bit frame: the target is 65535, MA makes exactly that many
+    rises. Beyond (65495, 65520), the target cannot be counted; MA makes the documented number
+    of rises, all after the stop bit's rise, the frame is reported OK at the usual clock (3
+    after the last CRC bit's decision), the master goes idle, and the next frame (1 Ack slot)
+    is a normal one. About 45 s each: 262k clocks."""
+    hp, ld, bits = 2, round_trip + 1, WORD36.total_bits
+    a = 2 * hp * start_slot + 100
+    cfg = base_config(hp, cfg_break_time=BREAK, cfg_ack_limit=a, cfg_w0_data_bits=36)
+    frames = simulate_frames(cfg, (start_slot, 1), round_trip, timeout=2 * hp + 4,
+                             params=PARAMS36, bits=FRAME36)
+    for f in frames:
+        s = f.second_rise
+        assert (f.status, f.position, f.line_delay) == (STATUS["OK"], POSITION36, ld)
+        assert f.done == sample_clock(s, ld, f.ack_slots + bits + 1, hp) + 3
+        assert f.rises == frame_rises(f.ack_slots, bits, ld, hp)
+        assert f.last_rise < f.idle
+    assert frames[1].rises == 1 + bits + 4
 
 
 # -- SLO_STUCK_LOW before a cycle: cfg_timeout_limit -------------------------------------------
