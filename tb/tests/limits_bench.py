@@ -18,6 +18,7 @@ from collections import deque
 from dataclasses import dataclass, field, replace
 
 from amaranth.hdl import ClockDomain, Elaboratable, Module, Mux, Signal
+from amaranth.lib.wiring import Out
 from amaranth.sim import Simulator
 
 # The package's exports, not its module layout: the top may move between modules.
@@ -167,8 +168,8 @@ def simulate(cfg, encoder, n_cycles, drive=None, params=None, trace=None):
     (``start``, ``periodic``, ``abort_cycle``, ``cfg_*`` changes, or ``rst``: the ``sync``
     domain's synchronous reset, the core's ``rst`` port); ``run`` holds the trace so far. Inputs
     keep their value until changed. ``params``: the build (default :data:`PARAMS`); ``trace``:
-    the outputs recorded in every cycle (default :data:`TRACE`). The counters are read at the
-    end in builds that have them."""
+    the outputs recorded in every cycle (default :data:`TRACE`; ``"outputs"``: every output
+    port). The counters are read at the end in builds that have them."""
     params = PARAMS if params is None else params
     dut = BissMaster(params)
     top = Module()
@@ -182,7 +183,12 @@ def simulate(cfg, encoder, n_cycles, drive=None, params=None, trace=None):
     async def bench(ctx):
         for name, value in cfg.items():
             ctx.set(getattr(dut, name), value)
-        ports = {name: getattr(dut, name) for name in (TRACE if trace is None else trace)}
+        if trace == "outputs":
+            names = [name for name, member in dut.signature.members.items()
+                     if member.flow == Out]
+        else:
+            names = TRACE if trace is None else trace
+        ports = {name: getattr(dut, name) for name in names}
         for t in range(n_cycles):
             ctx.set(dut.slo, encoder.step(ctx.get(dut.ma)))
             for name, value in (drive(t, run) if drive else {}).items():

@@ -480,3 +480,120 @@ def test_pause_after_a_crc_error(end_check, offset):
     else:
         assert not run.cycles("overrun") and len(run.dones) == 2
         assert run.falls[target_rises(1)] == probe["q"] + 3
+
+
+# -- Reset: rst for one clock ----------------------------------------------------------------------
+
+RESET_MIN = 1           # ports.md, "Clock and reset": one clock edge with rst high
+RESET_BREAK = 10
+
+
+def run_from_reset(make_encoder, cfg, after, n_after, reset_at=None, n_rst=RESET_MIN,
+                   before=None):
+    """Power-up (``reset_at`` None): ``after(t)`` drives the inputs from cycle 0. Otherwise
+    ``before(t)`` drives them, ``rst`` is high in clocks ``reset_at`` .. ``reset_at + n_rst - 1``
+    (the edges ending them reset the core), and ``after(t - r0)`` drives them from the release
+    r0 = ``reset_at + n_rst``: for the core, clock r0 is cycle 0 again. Every output recorded."""
+    r0 = 0 if reset_at is None else reset_at + n_rst
+
+    def drive(t, run):
+        inputs = dict(after(t - r0) if t >= r0 else before(t))
+        if reset_at is not None:
+            inputs["rst"] = int(reset_at <= t < r0)
+        return inputs
+
+    return simulate(cfg, make_encoder(), r0 + n_after, drive, trace="outputs"), r0
+
+
+def assert_as_after_power_up(run, r0, reset_at, power_up, ignore=()):
+    """From the release on, every output as after power-up, clock for clock; in the clocks after
+    a reset edge (rst still high or not), the power-up values of cycle 0."""
+    def outputs(x):
+        return {k: v for k, v in x.items() if k not in ignore}
+
+    for t in range(reset_at + 1, r0 + 1):
+        assert outputs(run.trace[t]) == outputs(power_up.trace[0]), t
+    for t, x in enumerate(power_up.trace):
+        assert outputs(run.trace[r0 + t]) == outputs(x), t
+
+
+def _frame_encoder():
+    # The encoder's timeout ends a frame cut by the reset (MA high 12 clocks), within the break.
+    return Encoder(HP, FRAME, round_trip=3, release=2, timeout=12)
+
+
+def _frame_at(q):
+    return lambda t: {"start": int(t == q)}
+
+
+@pytest.mark.parametrize("reset_at,n_rst,ma,busy", (
+    (4, RESET_MIN, 1, 1), (40, RESET_MIN, 0, 1), (42, RESET_MIN, 1, 1), (97, RESET_MIN, 1, 1),
+    (40, 7, 0, 1),
+), ids=("in_break", "mid_frame_ma_low", "mid_frame_ma_high", "after_done", "ma_low_held7"))
+def test_reset_mid_frame_is_power_up(reset_at, n_rst, ma, busy):
+    """``rst`` for one clock (or held longer) in the power-up break, in a frame with MA low or
+    high, or after the frame's done: from the release on the core behaves as after power-up,
+    every output clock for clock: the break (busy until B + 1), then the next request's frame
+    (MA falls 3 clocks after it, done OK). MA goes high in the clock after the first reset
+    edge, even within a phase."""
+    cfg = base_config(HP, cfg_break_time=RESET_BREAK)
+    power_up, _ = run_from_reset(_frame_encoder, cfg, _frame_at(30), 130)
+    assert busy_falls(power_up)[0] == RESET_BREAK + 1
+    assert power_up.falls[0] == 33 and [s for _, s in power_up.dones] == [STATUS["OK"]]
+    run, r0 = run_from_reset(_frame_encoder, cfg, _frame_at(30), 130, reset_at, n_rst,
+                             before=_frame_at(20))
+    assert (run.trace[reset_at]["ma"], run.trace[reset_at]["busy"]) == (ma, busy)
+    assert [d for d, _ in run.dones if d < reset_at] == ([95] if reset_at > 95 else [])
+    assert_as_after_power_up(run, r0, reset_at, power_up)
+
+
+def _access_encoder():
+    from test_cdm_master import RELEASE, ROUND_TRIP, ControlEncoder
+    from test_register_access import Slave
+    return ControlEncoder(hp=HP, bits=list(FRAME), ack_slots=1, round_trip=ROUND_TRIP,
+                          release=RELEASE, slave=Slave({0x42: 0x62}), timeout=20)
+
+
+def _access_at(q):
+    return lambda t: {"ca_address": 0x42, "ca_count": 1, "ca_start": int(t == q)}
+
+
+@pytest.mark.parametrize("reset_at,held", ((1355, True), (3000, False)),
+                         ids=("in_cdm_hold", "in_a_frame"))
+def test_reset_mid_register_access_is_power_up(reset_at, held):
+    """``rst`` for one clock during a register read (in a CDM = 1 hold, MA held low; in one of
+    its frames): the access is dropped without ``ca_done``, and from the release on every output
+    is as after power-up, the break and a whole new read (``ca_done`` OK, the byte) included,
+    except ``cds``: that is the encoder's own answer, and the encoder may still be in the
+    control frame the reset cut (until 14 frames of CDM = 0 cancel it)."""
+    cfg = base_config(HP, cfg_break_time=3)
+    power_up, _ = run_from_reset(_access_encoder, cfg, _access_at(60), 4000)
+    ca_done = [t for t, x in enumerate(power_up.trace) if x["ca_done"]]
+    assert len(ca_done) == 1 and power_up.trace[ca_done[0]]["ca_status"] == 0
+    run, r0 = run_from_reset(_access_encoder, cfg, _access_at(60), 4000, reset_at,
+                             before=_access_at(60))
+    x = run.trace[reset_at]
+    assert x["ca_busy"] and not x["ma"]
+    assert all(not y["ma"] for y in run.trace[reset_at - HP - 1:reset_at + 1]) == held  # > hp low
+    assert not any(y["ca_done"] for y in run.trace[:r0])
+    assert_as_after_power_up(run, r0, reset_at, power_up, ignore=("cds",))
+
+
+def test_reset_drops_requests():
+    """``start`` held high through a reset of 4 clocks (from clock 60; a frame at 20, the
+    start held from 50 and so overruns counted before): no request in the reset clocks
+    (``overrun`` strobes, combinationally, but is not counted; the counters read 0 from the
+    first reset edge on); from cycle 0 (64) on as after power-up: overruns counted in BREAK (the
+    one of cycle 0 two clocks later), the held start accepted in the first idle clock, B + 1 =
+    11 clocks after cycle 0, MA falling 3 clocks after that."""
+    cfg = base_config(HP, cfg_break_time=RESET_BREAK)
+    run = simulate(cfg, _frame_encoder(), 120,
+                   lambda t, r: {"start": int(t == 20 or t >= 50), "rst": int(60 <= t < 64)},
+                   trace="outputs")
+    r0 = 64
+    assert run.trace[60]["count_overrun"] > 0
+    assert all(x["overrun"] for x in run.trace[60:r0 + RESET_BREAK + 1])
+    assert [x["count_overrun"] for x in run.trace[61:r0 + 2]] == [0] * (r0 - 60 + 1)
+    assert run.trace[r0 + 2]["count_overrun"] == 1
+    assert busy_falls(run)[-1] == r0 + RESET_BREAK + 1
+    assert [f for f in run.falls if f > 60][0] == r0 + RESET_BREAK + 1 + 3
