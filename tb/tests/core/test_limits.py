@@ -15,11 +15,14 @@ Status codes and counter names come from tb/master_contract.py, protocol times f
 (40 us at the bench's 1 MHz clock), frames from tb/encoder_model: nothing from rtl/.
 """
 
+from dataclasses import replace
+
 import pytest
 
-from encoder_model.frames import FrameFaults, FrameFormat, WordValue, build_frame
-from testkit.limits_bench import (FRAME, MAX_LINE_DELAY, POSITION, WORD, Encoder, base_config, clocks,
-                          simulate)
+from encoder_model.frames import (CRC6, FrameFaults, FrameFormat, WordFormat, WordValue,
+                                  build_frame)
+from testkit.limits_bench import (FRAME, MAX_LINE_DELAY, PARAMS, POSITION, WIDE_PARAMS, WORD,
+                                  Encoder, base_config, clocks, simulate, simulate_frames)
 from master_contract import STATUS
 
 HP = 2
@@ -86,21 +89,46 @@ def assert_fault(run, status, done, counter, hp=HP):
 
 # -- NO_ACK: cfg_ack_limit ---------------------------------------------------------------------
 
-@pytest.mark.parametrize("limit", (12, 0), ids=("cfg12", "cfg0_default40us"))
+def ack_round_trip_max(a, hp):
+    """The largest accepted ``line_delay`` at Ack limit ``a`` (ports.md, ``cfg_ack_limit``):
+    ``line_delay`` + hp + v + 1 <= A, v the vote spacing."""
+    return a - hp - vote_spacing(hp) - 1
+
+
+@pytest.mark.parametrize("hp,limit", ((2, 12), (2, 0), (3, 20), (5, 30), (50, 1000)),
+                         ids=("hp2_cfg12", "hp2_cfg0_default40us", "hp3_cfg20", "hp5_cfg30",
+                              "hp50_cfg1000"))
 @pytest.mark.parametrize("offset", (-1, 0, 1), ids=("A-1_frame", "A_frame", "A+1_NO_ACK"))
-def test_ack_limit_no_ack(limit, offset):
-    """The Ack's slot-0 sample (ld + hp + 1 clocks after s) comes at most A clocks after s."""
+def test_ack_limit_no_ack(hp, limit, offset):
+    """The Ack's slot-0 decision (ld + hp + v + 1 clocks after s: the slot's centre half a
+    period after the edge, decided v later) comes at most A clocks after s. So the last
+    accepted round trip is ``line_delay`` = A - hp - v - 1 (hp 50, A 1000: 924, not the 949 of
+    a formula without v); one clock more is NO_ACK."""
     a = limit or DEFAULT_ACK
-    ld = a + offset - HP - 1                  # slot-0 sample at s + a + offset
-    cfg = base_config(HP, cfg_break_time=BREAK, cfg_ack_limit=limit)
-    run = simulate(cfg, Encoder(HP, FRAME, round_trip=ld - 1), 5 + a + 90, start_at(5))
+    ld = ack_round_trip_max(a, hp) + offset          # slot-0 decision at s + a + offset
+    params = WIDE_PARAMS if ld > MAX_LINE_DELAY else None
+    cfg = base_config(hp, cfg_break_time=BREAK, cfg_ack_limit=limit)
+    run = simulate(cfg, Encoder(hp, FRAME, round_trip=ld - 1), 5 + a + 2 * hp * 24,
+                   start_at(5), params=params)
     s = run.rises[1]
-    assert sample_clock(s, ld, 0) == s + a + offset
+    assert sample_clock(s, ld, 0, hp) == s + a + offset
     if offset <= 0:
-        assert_frame(run, s, ld, 1)
+        assert_frame(run, s, ld, 1, hp=hp)
     else:
-        assert_fault(run, "NO_ACK", s + a + 2, "no_ack")
+        assert_fault(run, "NO_ACK", s + a + 2, "no_ack", hp)
         assert run.trace[-1]["line_delay"] == 0          # not updated by NO_ACK
+
+
+def test_ack_limit_counts_the_vote_spacing():
+    """hp 50 (v 25), A 1000: a round trip of 941 clocks (940.5 at the pin) passes a limit
+    without the votes (941 + 50 + 1 <= 1000) but not the real one (941 + 50 + 25 + 1 > 1000):
+    NO_ACK in s + A + 2."""
+    hp, a, ld = 50, 1000, 941
+    assert ld + hp + 1 <= a < ld + hp + vote_spacing(hp) + 1
+    cfg = base_config(hp, cfg_break_time=BREAK, cfg_ack_limit=a)
+    run = simulate(cfg, Encoder(hp, FRAME, round_trip=ld - 1), 5 + a + 2 * hp * 24,
+                   start_at(5), params=WIDE_PARAMS)
+    assert_fault(run, "NO_ACK", run.rises[1] + a + 2, "no_ack", hp)
 
 
 def test_no_ack_without_encoder_fires_at_a_plus_two():
@@ -147,6 +175,83 @@ def test_delay_limit(limit, offset):
     else:
         assert_fault(run, "DELAY_RANGE", sample_clock(s, ld, 0, hp) + 2, "delay_range", hp)
         assert run.trace[-1]["line_delay"] == ld
+
+
+def shown_line_delay(ld, max_line_delay):
+    """``line_delay`` as ports.md gives it: the port is wide enough for ``max_line_delay`` + 1
+    and saturates at its all-ones value F, which every round trip of F - 1 clocks or more
+    shows (F - 1 itself never shows)."""
+    full = 2 ** (max_line_delay + 1).bit_length() - 1
+    return ld if ld <= full - 2 else full
+
+
+@pytest.mark.parametrize("params,ld", (
+    (WIDE_PARAMS, 8189), (WIDE_PARAMS, 8190), (WIDE_PARAMS, 9001),
+    (None, 125), (None, 126), (None, 200),
+    # The longest round trip a 16-bit timer build can accept at hp 3: A = 2**16 - 1.
+    (None, 2**16 - 1 - 3 - 1 - 1),
+), ids=("w13_8189", "w13_8190_sat", "w13_9001_sat", "w7_125", "w7_126_sat", "w7_200_sat",
+        "w7_65530_sat"))
+def test_line_delay_saturates(params, ld):
+    """A round trip beyond the port: DELAY_RANGE at the usual clock (the sampler still samples
+    slot 0 at its real place), and ``line_delay`` saturated, never wrapped: 8191 on the 13-bit
+    port of the default build's ``max_line_delay`` (4095) from 8190 clocks on, 127 on the
+    bench's 7-bit port (63); the value below shows exactly."""
+    hp = 3
+    max_line_delay = (params or PARAMS).max_line_delay
+    a = min(ld + hp + vote_spacing(hp) + 1 + 10, 2**16 - 1)
+    assert ld <= ack_round_trip_max(a, hp)
+    cfg = base_config(hp, cfg_break_time=BREAK, cfg_ack_limit=a)
+    run = simulate(cfg, Encoder(hp, FRAME, round_trip=ld - 1), 5 + ld + 130, start_at(5),
+                   params=params)
+    s = run.rises[1]
+    assert_fault(run, "DELAY_RANGE", sample_clock(s, ld, 0, hp) + 2, "delay_range", hp)
+    assert run.trace[-1]["line_delay"] == shown_line_delay(ld, max_line_delay)
+
+
+# -- MA rising edges of a frame near the 65535-slot limit --------------------------------------
+
+#: BiSS C with 36 position bits, nE/nW and CRC-6: 44 frame bits (ports.md's example).
+WORD36 = WordFormat(36, nenw=True, crc=CRC6)
+POSITION36 = 0x9_8765_4321
+FRAME36 = build_frame(FrameFormat("biss-c-36", (WORD36,)), [WordValue(POSITION36)])
+#: A 36-bit build with 24-bit timers (an Ack limit for 65535 slots); no counters and no
+#: register-access engine: a quarter faster.
+PARAMS36 = replace(WIDE_PARAMS, max_data_bits=(36,), counter_width=0, register_access=False)
+RISES_MAX = 2**16 - 1           # ports.md: MA's rising-edge count saturates at 65535
+
+
+def frame_rises(start_slot, frame_bits, ld, hp):
+    """MA rising edges of a frame (ports.md, "Number of MA rising edges per frame"): the target
+    start slot + frame bits + 4; a target above 65535 cannot be counted, and MA stops after the
+    stop bit's decision instead: ceil((line_delay + v + 5) / (2 hp)) edges more."""
+    target = start_slot + frame_bits + 4
+    if target <= RISES_MAX:
+        return target
+    return target + -(-(ld + vote_spacing(hp) + 5) // (2 * hp))
+
+
+@pytest.mark.parametrize("start_slot,round_trip", ((65487, 0), (65495, 0), (65520, 3)),
+                         ids=("S65487_target65535", "S65495_target65543_ld1",
+                              "S65520_target65568_ld4"))
+def test_ma_rises_near_the_slot_limit(start_slot, round_trip):
+    """Start in slot 65487 of a 44-bit frame: the target is 65535, MA makes exactly that many
+    rises. Beyond (65495, 65520), the target cannot be counted; MA makes the documented number
+    of rises, all after the stop bit's rise, the frame is reported OK at the usual clock (3
+    after the last CRC bit's decision), the master goes idle, and the next frame (1 Ack slot)
+    is a normal one. About 45 s each: 262k clocks."""
+    hp, ld, bits = 2, round_trip + 1, WORD36.total_bits
+    a = 2 * hp * start_slot + 100
+    cfg = base_config(hp, cfg_break_time=BREAK, cfg_ack_limit=a, cfg_w0_data_bits=36)
+    frames = simulate_frames(cfg, (start_slot, 1), round_trip, timeout=2 * hp + 4,
+                             params=PARAMS36, bits=FRAME36)
+    for f in frames:
+        s = f.second_rise
+        assert (f.status, f.position, f.line_delay) == (STATUS["OK"], POSITION36, ld)
+        assert f.done == sample_clock(s, ld, f.ack_slots + bits + 1, hp) + 3
+        assert f.rises == frame_rises(f.ack_slots, bits, ld, hp)
+        assert f.last_rise < f.idle
+    assert frames[1].rises == 1 + bits + 4
 
 
 # -- SLO_STUCK_LOW before a cycle: cfg_timeout_limit -------------------------------------------
@@ -375,3 +480,120 @@ def test_pause_after_a_crc_error(end_check, offset):
     else:
         assert not run.cycles("overrun") and len(run.dones) == 2
         assert run.falls[target_rises(1)] == probe["q"] + 3
+
+
+# -- Reset: rst for one clock ----------------------------------------------------------------------
+
+RESET_MIN = 1           # ports.md, "Clock and reset": one clock edge with rst high
+RESET_BREAK = 10
+
+
+def run_from_reset(make_encoder, cfg, after, n_after, reset_at=None, n_rst=RESET_MIN,
+                   before=None):
+    """Power-up (``reset_at`` None): ``after(t)`` drives the inputs from cycle 0. Otherwise
+    ``before(t)`` drives them, ``rst`` is high in clocks ``reset_at`` .. ``reset_at + n_rst - 1``
+    (the edges ending them reset the core), and ``after(t - r0)`` drives them from the release
+    r0 = ``reset_at + n_rst``: for the core, clock r0 is cycle 0 again. Every output recorded."""
+    r0 = 0 if reset_at is None else reset_at + n_rst
+
+    def drive(t, run):
+        inputs = dict(after(t - r0) if t >= r0 else before(t))
+        if reset_at is not None:
+            inputs["rst"] = int(reset_at <= t < r0)
+        return inputs
+
+    return simulate(cfg, make_encoder(), r0 + n_after, drive, trace="outputs"), r0
+
+
+def assert_as_after_power_up(run, r0, reset_at, power_up, ignore=()):
+    """From the release on, every output as after power-up, clock for clock; in the clocks after
+    a reset edge (rst still high or not), the power-up values of cycle 0."""
+    def outputs(x):
+        return {k: v for k, v in x.items() if k not in ignore}
+
+    for t in range(reset_at + 1, r0 + 1):
+        assert outputs(run.trace[t]) == outputs(power_up.trace[0]), t
+    for t, x in enumerate(power_up.trace):
+        assert outputs(run.trace[r0 + t]) == outputs(x), t
+
+
+def _frame_encoder():
+    # The encoder's timeout ends a frame cut by the reset (MA high 12 clocks), within the break.
+    return Encoder(HP, FRAME, round_trip=3, release=2, timeout=12)
+
+
+def _frame_at(q):
+    return lambda t: {"start": int(t == q)}
+
+
+@pytest.mark.parametrize("reset_at,n_rst,ma,busy", (
+    (4, RESET_MIN, 1, 1), (40, RESET_MIN, 0, 1), (42, RESET_MIN, 1, 1), (97, RESET_MIN, 1, 1),
+    (40, 7, 0, 1),
+), ids=("in_break", "mid_frame_ma_low", "mid_frame_ma_high", "after_done", "ma_low_held7"))
+def test_reset_mid_frame_is_power_up(reset_at, n_rst, ma, busy):
+    """``rst`` for one clock (or held longer) in the power-up break, in a frame with MA low or
+    high, or after the frame's done: from the release on the core behaves as after power-up,
+    every output clock for clock: the break (busy until B + 1), then the next request's frame
+    (MA falls 3 clocks after it, done OK). MA goes high in the clock after the first reset
+    edge, even within a phase."""
+    cfg = base_config(HP, cfg_break_time=RESET_BREAK)
+    power_up, _ = run_from_reset(_frame_encoder, cfg, _frame_at(30), 130)
+    assert busy_falls(power_up)[0] == RESET_BREAK + 1
+    assert power_up.falls[0] == 33 and [s for _, s in power_up.dones] == [STATUS["OK"]]
+    run, r0 = run_from_reset(_frame_encoder, cfg, _frame_at(30), 130, reset_at, n_rst,
+                             before=_frame_at(20))
+    assert (run.trace[reset_at]["ma"], run.trace[reset_at]["busy"]) == (ma, busy)
+    assert [d for d, _ in run.dones if d < reset_at] == ([95] if reset_at > 95 else [])
+    assert_as_after_power_up(run, r0, reset_at, power_up)
+
+
+def _access_encoder():
+    from test_cdm_master import RELEASE, ROUND_TRIP, ControlEncoder
+    from test_register_access import Slave
+    return ControlEncoder(hp=HP, bits=list(FRAME), ack_slots=1, round_trip=ROUND_TRIP,
+                          release=RELEASE, slave=Slave({0x42: 0x62}), timeout=20)
+
+
+def _access_at(q):
+    return lambda t: {"ca_address": 0x42, "ca_count": 1, "ca_start": int(t == q)}
+
+
+@pytest.mark.parametrize("reset_at,held", ((1355, True), (3000, False)),
+                         ids=("in_cdm_hold", "in_a_frame"))
+def test_reset_mid_register_access_is_power_up(reset_at, held):
+    """``rst`` for one clock during a register read (in a CDM = 1 hold, MA held low; in one of
+    its frames): the access is dropped without ``ca_done``, and from the release on every output
+    is as after power-up, the break and a whole new read (``ca_done`` OK, the byte) included,
+    except ``cds``: that is the encoder's own answer, and the encoder may still be in the
+    control frame the reset cut (until 14 frames of CDM = 0 cancel it)."""
+    cfg = base_config(HP, cfg_break_time=3)
+    power_up, _ = run_from_reset(_access_encoder, cfg, _access_at(60), 4000)
+    ca_done = [t for t, x in enumerate(power_up.trace) if x["ca_done"]]
+    assert len(ca_done) == 1 and power_up.trace[ca_done[0]]["ca_status"] == 0
+    run, r0 = run_from_reset(_access_encoder, cfg, _access_at(60), 4000, reset_at,
+                             before=_access_at(60))
+    x = run.trace[reset_at]
+    assert x["ca_busy"] and not x["ma"]
+    assert all(not y["ma"] for y in run.trace[reset_at - HP - 1:reset_at + 1]) == held  # > hp low
+    assert not any(y["ca_done"] for y in run.trace[:r0])
+    assert_as_after_power_up(run, r0, reset_at, power_up, ignore=("cds",))
+
+
+def test_reset_drops_requests():
+    """``start`` held high through a reset of 4 clocks (from clock 60; a frame at 20, the
+    start held from 50 and so overruns counted before): no request in the reset clocks
+    (``overrun`` strobes, combinationally, but is not counted; the counters read 0 from the
+    first reset edge on); from cycle 0 (64) on as after power-up: overruns counted in BREAK (the
+    one of cycle 0 two clocks later), the held start accepted in the first idle clock, B + 1 =
+    11 clocks after cycle 0, MA falling 3 clocks after that."""
+    cfg = base_config(HP, cfg_break_time=RESET_BREAK)
+    run = simulate(cfg, _frame_encoder(), 120,
+                   lambda t, r: {"start": int(t == 20 or t >= 50), "rst": int(60 <= t < 64)},
+                   trace="outputs")
+    r0 = 64
+    assert run.trace[60]["count_overrun"] > 0
+    assert all(x["overrun"] for x in run.trace[60:r0 + RESET_BREAK + 1])
+    assert [x["count_overrun"] for x in run.trace[61:r0 + 2]] == [0] * (r0 - 60 + 1)
+    assert run.trace[r0 + 2]["count_overrun"] == 1
+    assert busy_falls(run)[-1] == r0 + RESET_BREAK + 1
+    assert [f for f in run.falls if f > 60][0] == r0 + RESET_BREAK + 1 + 3
