@@ -54,7 +54,7 @@ def component():
 def test_committed_vendor_files_are_up_to_date(generated):
     for name, text in generated.items():
         assert (OUT / name).read_text() == text, \
-            f"rtl/generated/vendor/biss_master_axil/{name} is stale: run `make vendor` and commit it"
+            f"{OUT.relative_to(REPO)}/{name} is stale: run `make vendor` and commit it"
     assert sorted(p.name for p in OUT.iterdir()) == sorted(generated), "a stray file in the folder"
 
 
@@ -66,7 +66,8 @@ def test_ports_read_as_the_verilog_declares_them():
 
 
 def test_a_port_without_an_interface_is_refused():
-    text = VERILOG.read_text().replace("module biss_master_axil(", "module biss_master_axil(extra, ", 1)
+    text = VERILOG.read_text().replace("module biss_master_axil(",
+                                       "module biss_master_axil(extra, ", 1)
     text = text.replace("  input trigger;", "  input trigger;\n  input extra;", 1)
     with pytest.raises(ValueError, match="extra"):
         vendor_ip.classify(vendor_ip.ports(text))
@@ -124,7 +125,8 @@ def test_component_ports_are_the_verilog_ports(component):
         vector = port.find(f"{SPIRIT}wire/{SPIRIT}vector")
         width = 1 if vector is None else \
             int(vector.findtext(f"{SPIRIT}left")) - int(vector.findtext(f"{SPIRIT}right")) + 1
-        direction = {"in": "input", "out": "output"}[port.findtext(f"{SPIRIT}wire/{SPIRIT}direction")]
+        direction = port.findtext(f"{SPIRIT}wire/{SPIRIT}direction")
+        direction = {"in": "input", "out": "output"}[direction]
         got[_name(port)] = (direction, width)
     assert list(got.items()) == list(PORTS.items())
 
@@ -138,7 +140,8 @@ def test_component_bus_interfaces(component):
     assert ifs["clk"] == ("clock", "slave", {"CLK": "clk"},
                           {"ASSOCIATED_BUSIF": "s_axil", "ASSOCIATED_RESET": "rst"})
     assert ifs["rst"] == ("reset", "slave", {"RST": "rst"}, {"POLARITY": "ACTIVE_HIGH"})
-    assert ifs["irq"] == ("interrupt", "master", {"INTERRUPT": "irq"}, {"SENSITIVITY": "LEVEL_HIGH"})
+    assert ifs["irq"] == ("interrupt", "master", {"INTERRUPT": "irq"},
+                          {"SENSITIVITY": "LEVEL_HIGH"})
     # Every port in at most one bus interface; the rest are the plain ports.
     mapped = [p for _, _, m, _ in ifs.values() for p in m.values()]
     assert len(mapped) == len(set(mapped))
@@ -256,5 +259,6 @@ def test_hw_tcl_properties_and_fileset(qsys_calls):
     for _, name, kind, how, path, *attrs in files:
         assert (name, kind, how) == ("biss_master_axil.v", "VERILOG", "PATH")
         assert (OUT / path).resolve() == VERILOG
-    tops = {c[1]: c[3] for c in qsys_calls if c[0] == "set_fileset_property" and c[2] == "TOP_LEVEL"}
+    tops = {c[1]: c[3] for c in qsys_calls
+            if c[0] == "set_fileset_property" and c[2] == "TOP_LEVEL"}
     assert tops == {"QUARTUS_SYNTH": "biss_master_axil", "SIM_VERILOG": "biss_master_axil"}
