@@ -1,7 +1,8 @@
 """The vendor packages of the AXI4-Lite bus top (rtl/generated/vendor/biss_master_axil/,
 scripts/vendor_ip.py, docs/vendor.md): committed as generated, the IP-XACT valid against the
-IEEE 1685-2009 schema and true to the Verilog, the Platform Designer _hw.tcl run by tclsh with
-the qsys commands stubbed, every port of the Verilog in exactly one interface.
+IEEE 1685-2009 schema (and the register map's own export against 1685-2014) and true to the
+Verilog, the Platform Designer _hw.tcl run by tclsh with the qsys commands stubbed, every port
+of the Verilog in exactly one interface.
 
 Neither Vivado nor Quartus runs here: what they would make of the files is not checked.
 The port list each check compares with is read from the Verilog here, independently of the
@@ -86,6 +87,15 @@ def schema(standard):
 def test_component_is_valid_ieee_1685_2009(component):
     xsd = schema("ieee-1685-2009")
     assert xsd.validate(component), "\n".join(str(e) for e in xsd.error_log)
+
+
+def test_register_map_is_valid_ieee_1685_2014():
+    """PeakRDL's own export of the register map (``make regmap``), which the component's memory
+    map repeats in the 2009 form."""
+    from lxml import etree
+    xsd = schema("ieee-1685-2014")
+    regs = etree.parse(str(REPO / "rtl" / "generated" / "biss_master_regs.xml"))
+    assert xsd.validate(regs), "\n".join(str(e) for e in xsd.error_log)
 
 
 def test_schema_check_is_live(component):
