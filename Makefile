@@ -40,6 +40,10 @@ rtl: setup  ## regenerate rtl/generated/ (the core, the AXI4-Lite and Wishbone b
 	$(PY) -m bissmaster.generate -o $(VERILOG)
 	for bus in $(BUS_TOPS); do $(PY) -m bissmaster.generate --top $$bus -o rtl/generated/biss_master_$$bus.v; done
 
+.PHONY: vendor
+vendor: setup  ## the AXI4-Lite bus top packaged for Vivado (IP-XACT component.xml) and Platform Designer (_hw.tcl): rtl/generated/vendor/ (docs/vendor.md)
+	$(PY) scripts/vendor_ip.py
+
 .PHONY: driver
 driver:  ## the C driver (sw/, strict C99): sw/build/libbissmaster.so and .a, the example of docs/driver.md compiled
 	$(MAKE) -C sw

@@ -292,7 +292,7 @@ def write_markdown(root, path):
 
 def write_ipxact(root, path):
     from peakrdl_ipxact import IPXACTExporter
-    IPXACTExporter(vendor="github.com/biss-master", library="bissmaster",
+    IPXACTExporter(vendor="bissmaster", library="bissmaster",
                    version="1.0").export(root.top, str(path))
 
 
