@@ -687,6 +687,8 @@ static void identify(unsigned i, unsigned n, const options_t *o, setup_t *s)
 
 /* -- Frames --------------------------------------------------------------------------------- */
 
+/* One line; the frame fields (position, flags, timestamp) only when the status says a frame
+ * was decoded (statuses 0..5, docs/ports.md): after a fault they are the last frame's. */
 static void print_frame(unsigned long frame, unsigned n, const biss_result_t *r,
                         const biss_config_t *c, uint32_t clock_hz)
 {
@@ -703,7 +705,10 @@ static void print_frame(unsigned long frame, unsigned n, const biss_result_t *r,
     if (r->status <= BISS_STATUS_SPW_MISMATCH || r->status == BISS_STATUS_DELAY_RANGE)
         printf(" line_delay %u (%.0f ns)", (unsigned)r->line_delay,
                (double)r->line_delay * 1e9 / (double)clock_hz);
-    printf(" seq %u timestamp %" PRIu32 "\n", (unsigned)r->seq, r->timestamp);
+    printf(" seq %u", (unsigned)r->seq);
+    if (r->status <= BISS_STATUS_SPW_MISMATCH)
+        printf(" timestamp %" PRIu32, r->timestamp);
+    putchar('\n');
 }
 
 static void print_counters(unsigned n, biss_channel_t *ch)

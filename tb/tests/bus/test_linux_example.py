@@ -345,6 +345,8 @@ def test_frames_read_at_the_rate_then_counters(prog, tmp_path, preset, position,
 
 
 def test_two_channels_two_presets(prog, tmp_path):
+    """--channel 0,1 with a preset each: one trigger per frame, the channels' lines in order,
+    each channel configured from its own preset."""
     win = Window()
     win.frame(0, position=1000, seq=1)
     win.frame(1, position=2000, seq=2)
@@ -352,23 +354,26 @@ def test_two_channels_two_presets(prog, tmp_path):
     r = run(prog, "--file", path, "--channel", "0,1", "--preset", "resolute_c_26,resolute_fs_lmm",
             "--count", 2, "--period-us", 0)
     assert r.returncode == EXIT_OK, r.stderr
-    assert [line.split(" position ")[0] + " " + line.split()[7] for line in
-            frame_lines(r.stdout)] == ["frame 1 ch 0 status OK 1000", "frame 1 ch 1 status OK 2000",
-                                       "frame 2 ch 0 status OK 1000", "frame 2 ch 1 status OK 2000"]
+    assert [" ".join(line.split()[:8]) for line in frame_lines(r.stdout)] == [
+        f"frame {f} ch {ch} status OK position {pos}"
+        for f in (1, 2) for ch, pos in ((0, 1000), (1, 2000))]
     after = Window().load(path)
     assert_configured(after, 0, "resolute_c_26")
     assert_configured(after, 1, "resolute_fs_lmm")
 
 
-def test_frames_not_ok_exit_5(prog, tmp_path):
-    """Every frame ends NO_ACK: each printed with its status and no position (the frame fields
-    are the last decoded frame's), then exit 5 with the count on stderr."""
+@pytest.mark.parametrize("status,shown", [("NO_ACK", ""),
+                                          ("DELAY_RANGE", " line_delay 23 (230 ns)")])
+def test_frames_not_ok_exit_5(prog, tmp_path, status, shown):
+    """Every frame ends without a decoded frame: each printed with its status and seq (and the
+    line delay that DELAY_RANGE measured), no position or timestamp (the frame fields are the
+    last decoded frame's); then exit 5 with the count on stderr."""
     win = Window()
-    win.frame(0, status="NO_ACK", position=77, seq=9, line_delay=23)
+    win.frame(0, status=status, position=77, seq=9, line_delay=23, timestamp=5)
     r = run(prog, "--file", win.save(tmp_path / "w"), "--preset", "resolute_c_26",
             "--count", 3, "--period-us", 0)
     one_line_error(r, EXIT_ENCODER, "3 of 3 frames not OK")
-    assert frame_lines(r.stdout) == [f"frame {i} ch 0 status NO_ACK seq 9 timestamp 0"
+    assert frame_lines(r.stdout) == [f"frame {i} ch 0 status {status}{shown} seq 9"
                                      for i in (1, 2, 3)]
 
 
