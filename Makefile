@@ -41,7 +41,7 @@ rtl: setup  ## regenerate rtl/generated/ (the core, the AXI4-Lite and Wishbone b
 	for bus in $(BUS_TOPS); do $(PY) -m bissmaster.generate --top $$bus -o rtl/generated/biss_master_$$bus.v; done
 
 .PHONY: driver
-driver:  ## the C driver (sw/, strict C99): sw/build/libbissmaster.so and .a, the example of docs/driver.md compiled
+driver:  ## the C driver (sw/, strict C99): sw/build/libbissmaster.so and .a, the examples of docs/driver.md compiled, sw/build/biss_linux (Linux program) linked
 	$(MAKE) -C sw
 
 .PHONY: regmap
