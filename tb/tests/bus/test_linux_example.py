@@ -433,21 +433,29 @@ def test_mem_address_inside_a_file(prog, tmp_path):
     assert after.data[:0x1240] == bytes(0x1240), "a write outside the window"
 
 
-def test_interrupt_stops_cleanly(prog, tmp_path):
-    """--count 0 reads until SIGINT: exit 130, the counters printed, periodic requests
+@pytest.mark.parametrize("mode", ["trigger", "periodic"])
+def test_interrupt_stops_cleanly(prog, tmp_path, mode):
+    """--count 0 reads until SIGINT: exit 130 with one line, the counters printed. Trigger
+    mode: frames every millisecond until then. Periodic mode: waiting for a frame that does not
+    come (a 60 s timeout), the signal ends the wait at once and the periodic requests are
     stopped."""
     win = Window()
-    win.frame(0, position=1)
+    if mode == "trigger":
+        win.frame(0, position=1)
     path = win.save(tmp_path / "w")
+    args = ["--periodic", "--timeout-ms", "60000"] if mode == "periodic" else []
     p = subprocess.Popen([str(prog), "--file", str(path), "--preset", "resolute_c_26",
-                          "--periodic", "--count", "0", "--period-us", "1000"],
+                          "--count", "0", "--period-us", "1000", *args],
                          stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     time.sleep(0.3)
+    t0 = time.monotonic()
     p.send_signal(signal.SIGINT)
     out, err = p.communicate(timeout=BOUND_S)
+    assert time.monotonic() - t0 < 2
     assert p.returncode == EXIT_INTERRUPTED, err
     assert err.startswith("biss_linux: interrupted after ") and len(err.splitlines()) == 1
-    assert len(frame_lines(out)) > 10 and "ch 0 counters:" in out
+    assert "ch 0 counters:" in out
+    assert (len(frame_lines(out)) > 10) if mode == "trigger" else frame_lines(out) == []
     assert Window().load(path).get("ctrl", 0)["periodic"] == 0
 
 
