@@ -45,7 +45,7 @@ vendor: setup  ## the AXI4-Lite bus top packaged for Vivado (IP-XACT component.x
 	$(PY) scripts/vendor_ip.py
 
 .PHONY: driver
-driver:  ## the C driver (sw/, strict C99): sw/build/libbissmaster.so and .a, the example of docs/driver.md compiled
+driver:  ## the C driver (sw/, strict C99): sw/build/libbissmaster.so and .a, the examples of docs/driver.md compiled, sw/build/biss_linux (Linux program) linked
 	$(MAKE) -C sw
 
 .PHONY: regmap

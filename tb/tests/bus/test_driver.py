@@ -36,7 +36,8 @@ def lib(tmp_path_factory):
 
 def test_builds_strict_with_every_installed_compiler(tmp_path):
     """-std=c99 -pedantic -Wall -Wextra -Werror -Wconversion -Wshadow (sw/Makefile): the
-    library, the static library and the docs' example, with gcc and clang where installed."""
+    library, the static library, the docs' examples and the Linux example program (linked;
+    tested in test_linux_example.py), with gcc and clang where installed."""
     found = [cc for cc in COMPILERS if shutil.which(cc)]
     assert found, f"none of {COMPILERS} is installed"
     for cc in found:
@@ -45,7 +46,8 @@ def test_builds_strict_with_every_installed_compiler(tmp_path):
                            capture_output=True, text=True)
         assert r.returncode == 0, f"{cc}:\n{r.stdout}\n{r.stderr}"
         assert "warning" not in r.stderr, r.stderr
-        for name in ("libbissmaster.so", "libbissmaster.a", "two_axes.o", "bp3_identify.o"):
+        for name in ("libbissmaster.so", "libbissmaster.a", "two_axes.o", "bp3_identify.o",
+                     "biss_linux"):
             assert (out / name).is_file(), f"{cc}: no {name}"
 
 
