@@ -77,7 +77,9 @@ typedef enum {
     BISS_ERR_EDS_CHECKSUM = -32,    /* CHKSUM is not the sum of bytes 0x00..0x3E mod 256 */
     BISS_ERR_EDS_MISMATCH = -33,    /* BP_ID / DL differ from registers 0x42 / 0x43 */
     BISS_ERR_BANK_SELECT = -34,     /* the bank select reads back another bank */
-    BISS_ERR_UNSUPPORTED = -35      /* a valid BP3 encoder the core cannot read from its EDS */
+    BISS_ERR_UNSUPPORTED = -35,     /* a valid BP3 encoder the core cannot read from its EDS */
+    BISS_ERR_CA_SHORT = -36         /* the engine said OK with fewer bytes done than asked: a
+                                       broken or foreign register window; no byte is trusted */
 } biss_err_t;
 
 /* The name of an error code ("BISS_ERR_CRC"), "?" for an unknown one. */

@@ -80,6 +80,7 @@ const char *biss_error_name(int err)
         "BISS_ERR_CA_ABORTED", "BISS_ERR_CA_DATA_FAULT", "BISS_ERR_CA_BAD_REQUEST",
         "BISS_ERR_NOT_BP3", "BISS_ERR_BP3_FIELD", "BISS_ERR_NO_EDS", "BISS_ERR_EDS_CHECKSUM",
         "BISS_ERR_EDS_MISMATCH", "BISS_ERR_BANK_SELECT", "BISS_ERR_UNSUPPORTED",
+        "BISS_ERR_CA_SHORT",
     };
     if (err > 0 || (unsigned)-err >= sizeof names / sizeof names[0])
         return "?";
@@ -591,6 +592,8 @@ biss_err_t biss_reg_read(biss_channel_t *ch, unsigned slave_id, unsigned address
     err = ca_run(ch, slave_id, address, count, false, &got);
     if (got > count)
         got = count;
+    if (err == BISS_OK && got < count)
+        return BISS_ERR_CA_SHORT;   /* the engine's contract: OK means every byte (*done 0) */
     for (i = 0; i < got; i++) {
         if (i % sizeof(uint32_t) == 0)
             word = ch_rd(ch, CA_WORD_OFF(rbuf, i / sizeof(uint32_t)));
@@ -619,6 +622,8 @@ biss_err_t biss_reg_write(biss_channel_t *ch, unsigned slave_id, unsigned addres
         }
     }
     err = ca_run(ch, slave_id, address, count, true, &got);
+    if (err == BISS_OK && got < count)
+        return BISS_ERR_CA_SHORT;   /* the engine's contract: OK means every byte (*done 0) */
     if (done != NULL)
         *done = got > count ? count : got;
     return err;

@@ -324,6 +324,22 @@ def test_register_access_poll_limit_aborts(lib):
     assert bus.log[-1] == ("w", bus.map.address("ca.ctrl", 0), ctrl["abort"].put(0, 1))
 
 
+@pytest.mark.parametrize("fn", ("biss_reg_read", "biss_reg_write"))
+@pytest.mark.parametrize("bytes_done", (0, 3))
+def test_register_access_ok_with_bytes_missing_is_an_error(lib, fn, bytes_done):
+    """docs/control.md: status OK means every byte was done. A window that says OK with fewer
+    bytes (a broken or foreign map) gives BISS_ERR_CA_SHORT and *done 0: no byte is trusted,
+    so the BP3 decoders never see a buffer the engine did not fill."""
+    state = FakeEngine(lib).map.reg("ca.state", 0).fields
+    bus = FakeEngine(lib, done_after=1, state=state["bytes_done"].put(0, bytes_done),
+                     rbuf=bytes(range(1, 5)))
+    buf, done = (c_uint8 * 4)(0xEE, 0xEE, 0xEE, 0xEE), c_driver.c_uint(99)
+    err = getattr(lib, fn)(byref(bus.ch), 0, 0x48, buf, 4, byref(done))
+    assert (lib.biss_error_name(err).decode(), done.value) == ("BISS_ERR_CA_SHORT", 0)
+    if fn == "biss_reg_read":
+        assert bytes(buf) == b"\xee" * 4, "a short read copied bytes"
+
+
 def test_register_access_bytes_and_lanes(lib):
     """A 6-byte write: byte i in lane i % 4 of ca.wbuf[i / 4]; the request's fields; a 6-byte
     read with status OK takes the bytes from ca.rbuf the same way; a status of the engine
