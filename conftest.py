@@ -3,7 +3,7 @@ workers): the long items first (the formal checks, then the cocotb simulations a
 the many short unit tests last, so that they fill the workers' gaps and no worker is left
 alone with a long item at the end. It changes the order only, never what runs."""
 
-LONG_FIRST = ("tb/tests/build/test_formal.py", "tb/tests/core/test_limits.py", "sim/")
+LONG_FIRST = ("tb/tests/project/test_formal.py", "tb/tests/core/test_limits.py", "sim/")
 
 
 def pytest_collection_modifyitems(items):

@@ -7,7 +7,7 @@ cd "$(dirname "$0")/.."
 # -- Debian packages --------------------------------------------------------------------------
 # iverilog: the second simulator; g++/make/perl: Verilator's C++ build; liblz4-dev/zlib1g-dev:
 # FST waveforms; gtkwave/xvfb: the waveform viewer and its headless check; tcl: tclsh, which
-# runs the Platform Designer _hw.tcl with stubbed qsys commands (tb/tests/build/test_vendor_ip.py).
+# runs the Platform Designer _hw.tcl with stubbed qsys commands (tb/tests/project/test_vendor_ip.py).
 need=()
 for pkg in iverilog g++ make perl liblz4-dev zlib1g-dev gtkwave xvfb tcl; do
   dpkg-query -W -f='${Status}' "$pkg" 2>/dev/null | grep -q "install ok installed" || need+=("$pkg")

@@ -21,7 +21,7 @@ is read, never written here, so the packages cannot drift from the Verilog):
   and one for ``trigger``.
 
 Nothing here has been run through Vivado or Quartus (docs/vendor.md says what was checked).
-Deterministic: no dates, no checksums; ``tb/tests/build/test_vendor_ip.py`` regenerates every
+Deterministic: no dates, no checksums; ``tb/tests/project/test_vendor_ip.py`` regenerates every
 file and compares.
 
     python scripts/vendor_ip.py

@@ -1,7 +1,7 @@
 """BiSS C / BiSS Safety master IP core (Amaranth HDL).
 
 The package is laid out by concern; each subpackage's ``README.md`` says what it owns, what it
-may import and where a new block goes (``tb/tests/build/test_layering.py`` checks the imports):
+may import and where a new block goes (``tb/tests/project/test_layering.py`` checks the imports):
 
 ===============  ===============================================================================
 ``core``         the data channel: scheduler, controller, timers, MA, SLO sampler, decoder, CRCs,
@@ -21,7 +21,7 @@ thin re-exports of ``host.bp3`` and ``control.crc4``, kept as the public names.
 """
 
 #: The package's version, the one place it is written: pyproject.toml reads it from here, and
-#: biss_master.core's VLNV must match it (tb/tests/build/test_fusesoc.py).
+#: biss_master.core's VLNV must match it (tb/tests/project/test_fusesoc.py).
 __version__ = "0.1.0"
 
 _EXPORTS = {

@@ -36,7 +36,7 @@ def test_port_list_unchanged(preset, tmp_path):
     want = (DATA / f"ports_{preset}.txt").read_text().splitlines()
     got = generated_ports(preset, tmp_path)
     assert got == want, (f"preset {preset}: the port list changed; if on purpose, run "
-                         f"`PYTHONPATH=rtl .venv/bin/python tb/tests/build/test_port_list.py --update`")
+                         f"`PYTHONPATH=rtl .venv/bin/python tb/tests/project/test_port_list.py --update`")
 
 
 if __name__ == "__main__" and "--update" in sys.argv:
