@@ -54,14 +54,14 @@ regmap: setup  ## regenerate the register map's C header, docs/registers.md and 
 	  --ipxact rtl/generated/biss_master_regs.xml
 
 lint: setup  ## verilator --lint-only -Wall on the default Verilog, a BiSS-C-only and a lean build, the bus tops (waivers: rtl/lint.vlt)
-	verilator --lint-only -Wall rtl/lint.vlt $(VERILOG) --top-module biss_master
 	@mkdir -p sim_build
-	$(PY) -m bissmaster.generate --preset biss-c -o sim_build/biss_master_c36.v
-	verilator --lint-only -Wall rtl/lint.vlt sim_build/biss_master_c36.v --top-module biss_master
-	$(PY) -m bissmaster.generate --preset biss-c-lean -o sim_build/biss_master_lean.v
-	verilator --lint-only -Wall rtl/lint.vlt sim_build/biss_master_lean.v --top-module biss_master
-	for bus in $(BUS_TOPS); do \
-	  verilator --lint-only -Wall rtl/lint.vlt rtl/generated/biss_master_$$bus.v --top-module biss_master_$$bus || exit 1; done
+	@$(PY) -m bissmaster.generate --preset biss-c -o sim_build/biss_master_c36.v
+	@$(PY) -m bissmaster.generate --preset biss-c-lean -o sim_build/biss_master_lean.v
+	@for top in $(VERILOG):biss_master sim_build/biss_master_c36.v:biss_master \
+	    sim_build/biss_master_lean.v:biss_master \
+	    $(foreach bus,$(BUS_TOPS),rtl/generated/biss_master_$(bus).v:biss_master_$(bus)); do \
+	  echo "lint: verilator --lint-only -Wall rtl/lint.vlt $${top%%:*} --top-module $${top##*:}"; \
+	  verilator --lint-only -Wall --quiet-stats rtl/lint.vlt $${top%%:*} --top-module $${top##*:} || exit 1; done
 	@echo "lint: clean (default build, BiSS C 36-bit build, lean BiSS C build, AXI4-Lite and Wishbone bus tops)"
 
 unit: setup  ## fast tests: encoder model, RTL blocks (Amaranth simulator), generated Verilog up to date
