@@ -26,7 +26,7 @@ SIM_TESTS := sim/test_regression.py sim/test_bus.py sim/test_driver.py
 CAMPAIGN_TESTS := sim/test_reference.py sim/test_campaigns.py
 # Every tool imports the sim package, tb/ and rtl/ through the venv (setup.sh writes its .pth).
 
-.PHONY: help setup rtl lint unit sim sim-all sim-long campaigns soak test demo demo-bp3 waves clean
+.PHONY: help setup rtl lint unit sim sim-all sim-long campaigns soak noise test demo demo-bp3 waves clean
 
 help:  ## list the targets
 	@grep -E '^[a-z0-9-]+:.*## ' $(MAKEFILE_LIST) | awk -F':.*## ' '{printf "  make %-9s %s\n", $$1, $$2}'
@@ -84,6 +84,9 @@ campaigns: setup  ## reliability campaigns, fast slice (CRC, line faults, LC, co
 
 soak: setup  ## long soak: >= 100k random frames with random faults (Verilator) + every campaign x10
 	$(PY) -m sim.tools.soak --frames $(or $(FRAMES),100000) --scale $(or $(SCALE),10) --jobs $(JOBS)
+
+noise: setup  ## issue 28's baseline: continuous SLO noise through BiSS C frames, SCALE x 200 request cycles (default 50: 10,000); valid wrong positions counted, report in sim_build/campaign/noise_baseline/
+	$(PY) -m sim.tools.campaign noise_baseline --scale $(or $(SCALE),50)
 
 test: lint  ## everything CI runs: lint, then in one session unit tests, both simulators (not the long Icarus runs), campaign slice
 	rm -rf sim_build/campaign/slice

@@ -30,7 +30,7 @@ DELAY_RANGES = ["<0.5 bit", "0.5-2 bits", "2-8 bits", ">8 bits"]
 FAULTS = ["none", "crc_1bit", "crc_2bit", "crc_3to5bit", "crc_burst", "slo_stuck_low",
           "slo_stuck_high", "unplug", "glitch", "jitter", "delay_change", "abort",
           "no_response", "ack_forever", "timeout_stuck", "lc_repeat", "lc_skip", "lc_zero",
-          "lc_random", "spw_offset", "bad_config", "config_change", "after_glitch"]
+          "lc_random", "spw_offset", "bad_config", "config_change", "after_glitch", "noise"]
 
 _FRAME_ERR = ["CRC_ERROR_WORD0", "CRC_ERROR_WORD1", "CRC_ERROR_BOTH"]
 #: Which statuses each fault kind can legitimately end in: the bins of the fault x status cross.
@@ -68,6 +68,10 @@ LEGAL = {
     # the clean cycle requested right after a glitched one (glitch_immunity): it may clock the
     # tail of a slipped frame the encoder is still sending (issue 12)
     "after_glitch": _LATE + _FRAME_ERR + ["NO_ACK", "NO_START", "DELAY_RANGE", "NO_STOP"],
+    # continuous noise on a one-word BiSS C frame (noise_baseline, issue 28): a misread frame,
+    # a faked or hidden Ack or Start, a misread stop bit
+    "noise": ["OK", "CRC_ERROR_WORD0", "NO_ACK", "NO_START", "DELAY_RANGE", "SLO_STUCK_LOW",
+              "NO_STOP"],
 }
 
 

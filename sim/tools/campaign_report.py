@@ -87,6 +87,25 @@ def glitch_table(run, by=("class", "length", "ma_mhz")):
     return out
 
 
+def noise_table(run):
+    """noise_baseline: per end-check setting, cycles, statuses, valid right / wrong and the
+    valid-wrong rate's 95 % upper bound (issue 28)."""
+    setup = run["noise_setup"]
+    out = [f"{setup['preset']} at {setup['ma_hz'] / 1e6:g} MHz, {setup['cable_m']} m; pulses "
+           f"{setup['width_s'][0] * 1e9:.0f}..{setup['width_s'][1] * 1e9:.0f} ns, mean gap "
+           f"{setup['mean_gap_s'] * 1e6:g} us.", "",
+           "| setting | cycles | encoder answered | valid, right | **valid, wrong** | "
+           "wrong rate (95 % upper bound) | statuses | line delay of the wrong ones |",
+           "|---|---:|---:|---:|---:|---:|---|---|"]
+    for key, r in run["noise_table"].items():
+        statuses = ", ".join(f"{k} {v}" for k, v in sorted(r["statuses"].items()))
+        out.append(f"| {key} | {r['cycles']} | {r['encoder_answered']} | {r['valid_right']} | "
+                   f"**{r['valid_wrong']}** | {r['valid_wrong'] / r['cycles']:.2%} "
+                   f"({r['valid_wrong_rate_95']:.2%}) | {statuses} | "
+                   f"{', '.join(map(str, r['wrong_line_delays'])) or '-'} |")
+    return out
+
+
 def throughput(runs):
     out = ["| campaign | simulator | cycles | wall time | cycles/s |", "|---|---|---:|---:|---:|"]
     for name, run in sorted(runs.items()):
@@ -117,6 +136,8 @@ def main(argv=None):
             lines += [f"## Noise immunity, per class and glitch length ({name})", ""]
             lines += glitch_table(run, ("class", "length")) + [""]
             lines += [f"## Noise immunity, every class ({name})", ""] + glitch_table(run) + [""]
+        if "noise_table" in run:
+            lines += [f"## Continuous noise ({name})", ""] + noise_table(run) + [""]
     table, blind = fault_table(runs)
     lines += ["## Faults, outcomes and recovery (all campaigns)", ""] + table + [""]
     lines.append("CRC blind spots (a corrupted word the CRC cannot see, explained by the "
