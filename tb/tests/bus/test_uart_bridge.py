@@ -23,9 +23,11 @@ from bissmaster.bus import regmap
 from bissmaster.bus.bus_top import BusTop
 from bissmaster.bus.register_bank import RegisterBank
 from bissmaster.bus.uart import UartRx, UartTx, divider
+from bissmaster.bus import uart_bridge as bridge_mod
 from bissmaster.bus.uart_bridge import UartBridge
 from bissmaster.generate import main
 from bissmaster.params import MasterParams
+from testkit import REPO
 
 MAP = regmap.load()
 SYS_HZ = 100_000_000
@@ -88,6 +90,47 @@ def config_mask(path):
     reg = next(r for r in MAP.channel if r.path == path)
     return sum(((1 << f.width) - 1) << f.lsb for f in reg.fields
                if f.kind == regmap.Kind.CONFIG)
+
+
+def doc_table(first_header):
+    """The rows of the docs/uart_bridge.md table whose first header cell is ``first_header``."""
+    lines = (REPO / "docs" / "uart_bridge.md").read_text().splitlines()
+    split = lambda line: [c.strip().strip("`") for c in line.strip().strip("|").split("|")]
+    for i, line in enumerate(lines):
+        if line.startswith("|") and split(line)[0] == first_header:
+            head = split(line)
+            rows = []
+            for row in lines[i + 2:]:
+                if not row.startswith("|"):
+                    break
+                rows.append(dict(zip(head, split(row))))
+            return rows
+    raise AssertionError(f"docs/uart_bridge.md has no table headed {first_header!r}")
+
+
+def test_this_files_protocol_and_the_rtls_are_the_documented_ones():
+    """The RTL's constants (bus/uart_bridge.py) and this file's, against docs/uart_bridge.md
+    (the host's copy: tb/tests/host/test_link.py)."""
+    ops = {r["opcode"]: (int(r["code"], 16), int(r["request bytes"])) for r in doc_table("opcode")}
+    assert ops == {"PING": (PING, 3), "READ": (READ, 5), "WRITE": (WRITE, 9),
+                   "READ_BURST": (READ_BURST, 6)}
+    assert {op.name: (op.value, n) for op, n in bridge_mod.REQUEST_LENGTH.items()} == ops
+    assert {o.name for o in bridge_mod.Opcode} == set(ops)
+    statuses = {r["status"]: int(r["code"], 16) for r in doc_table("status")}
+    assert statuses == {"OK": OK, "BAD_CRC": BAD_CRC, "BAD_COMMAND": BAD_COMMAND,
+                        "BAD_ADDRESS": BAD_ADDRESS}
+    assert {s.name: s.value for s in bridge_mod.BridgeStatus} == statuses
+    consts = {r["constant"]: r["value"] for r in doc_table("constant")}
+    assert int(consts["SYNC_REQUEST"], 16) == SYNC_REQUEST == bridge_mod.SYNC_REQUEST
+    assert int(consts["SYNC_RESPONSE"], 16) == SYNC_RESPONSE == bridge_mod.SYNC_RESPONSE
+    crc = bridge_mod.CRC8
+    assert (crc.crc_width, crc.polynomial, crc.initial_crc, crc.xor_output) == (
+        8, int(consts["CRC polynomial"], 16), int(consts["CRC initial value"], 16),
+        int(consts["CRC final XOR"], 16))
+    assert not crc.reflect_input and not crc.reflect_output and consts["CRC reflected"] == "no"
+    assert crc().compute(b"123456789") == int(consts["CRC check"], 16) == crc8(b"123456789")
+    assert int(consts["lead"].split()[0]) == LEAD_BITS == bridge_mod.LEAD_BITS
+    assert int(consts["inter-byte timeout"].split()[0]) == bridge_mod.DEFAULT_TIMEOUT_BITS
 
 
 # -- The divider --------------------------------------------------------------------------------
