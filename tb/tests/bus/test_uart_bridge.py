@@ -497,6 +497,19 @@ def test_unknown_opcode_answer_waits_for_the_timeout_exactly():
     run_bridge(test, div=8, timeout_bits=timeout_bits)
 
 
+@pytest.mark.parametrize("div", [4, 33])
+def test_the_answer_follows_the_request_by_six_clocks(div):
+    """docs/uart_bridge.md, rule 5: the answer's start bit begins about 6 system clocks after
+    the middle of the request's last stop bit (synchronizer, byte end, check, first byte)."""
+    async def test(b):
+        b.send(request(READ, ID.offset, tag=1))
+        await b.flush()
+        middle = b.clock - b.div / 2                 # the last stop bit's middle
+        await b.run(90 * b.div)
+        assert 5 <= b.received[0][0] - middle <= 6.5
+    run_bridge(test, div=div)
+
+
 @pytest.mark.parametrize("address, count", [
     (0x222, None), (0x2000, None), (0xFFFC, None), (0x1FF8, 3), (0x0002, 1),
 ])
