@@ -16,7 +16,7 @@ $(error SIM=$(SIM) is not a simulator: use SIM=verilator or SIM=icarus)
 endif
 endif
 VERILOG := rtl/generated/biss_master.v
-BUS_TOPS := axil wb
+BUS_TOPS := axil wb uart
 JOBS ?= 2
 # make synth: netlist variants per configuration (scripts/synth.py --variants).
 VARIANTS ?= 1
@@ -36,7 +36,7 @@ help:  ## list the targets
 setup:  ## install Debian packages if missing and the pinned venv (.venv)
 	@scripts/setup.sh
 
-rtl: setup  ## regenerate rtl/generated/ (the core, the AXI4-Lite and Wishbone bus tops) from the Amaranth source
+rtl: setup  ## regenerate rtl/generated/ (the core, the AXI4-Lite, Wishbone and UART-bridge bus tops) from the Amaranth source
 	$(PY) -m bissmaster.generate -o $(VERILOG)
 	for bus in $(BUS_TOPS); do $(PY) -m bissmaster.generate --top $$bus -o rtl/generated/biss_master_$$bus.v; done
 
@@ -53,7 +53,7 @@ regmap: setup  ## regenerate the register map's C header, docs/registers.md and 
 	$(PY) -m bissmaster.bus.regmap --header sw/include/biss_master_regs.h --markdown docs/registers.md \
 	  --ipxact rtl/generated/biss_master_regs.xml
 
-lint: setup  ## verilator --lint-only -Wall on the default Verilog, a BiSS-C-only and a lean build, the bus tops (waivers: rtl/lint.vlt)
+lint: setup  ## verilator --lint-only -Wall on the default Verilog, a BiSS-C-only and a lean build, the three bus tops (waivers: rtl/lint.vlt)
 	@mkdir -p sim_build
 	@$(PY) -m bissmaster.generate --preset biss-c -o sim_build/biss_master_c36.v
 	@$(PY) -m bissmaster.generate --preset biss-c-lean -o sim_build/biss_master_lean.v
@@ -62,7 +62,7 @@ lint: setup  ## verilator --lint-only -Wall on the default Verilog, a BiSS-C-onl
 	    $(foreach bus,$(BUS_TOPS),rtl/generated/biss_master_$(bus).v:biss_master_$(bus)); do \
 	  echo "lint: verilator --lint-only -Wall rtl/lint.vlt $${top%%:*} --top-module $${top##*:}"; \
 	  verilator --lint-only -Wall --quiet-stats rtl/lint.vlt $${top%%:*} --top-module $${top##*:} || exit 1; done
-	@echo "lint: clean (default build, BiSS C 36-bit build, lean BiSS C build, AXI4-Lite and Wishbone bus tops)"
+	@echo "lint: clean (default build, BiSS C 36-bit build, lean BiSS C build, AXI4-Lite, Wishbone and UART-bridge bus tops)"
 
 unit: setup  ## fast tests: encoder model, RTL blocks (Amaranth simulator), generated Verilog up to date
 	$(PY) -m pytest $(UNIT_TESTS) -q -n $(JOBS) --dist worksteal

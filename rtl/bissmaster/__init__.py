@@ -8,8 +8,9 @@ may import and where a new block goes (``tb/tests/project/test_layering.py`` che
                  sign of life, CPW/SPW check, verdict, results, counters
 ``control``      the control channel: register access over CDM/CDS, its CRC-4 (``control.crc4``)
 ``bus``          the register map (SystemRDL), register bank, AXI4-Lite / Wishbone adapters, the
-                 multi-channel bus top
-``host``         software for a CPU or PC, no hardware: BP3 identification and EDS (``host.bp3``)
+                 UART bridge, the multi-channel bus top
+``host``         software for a CPU or PC, no hardware: BP3 identification and EDS (``host.bp3``),
+                 the UART bridge's host side (``host.link``)
 ===============  ===============================================================================
 
 At the top: ``protocol`` (the protocol facts; imports nothing, so the encoder model's side can

@@ -8,8 +8,9 @@ run Python; ``make rtl`` regenerates it and the test suite checks it is up to da
 
 What is built is a *top* (``--top``) made of cores of one configuration (``--preset`` and the
 core options): ``core`` is the module ``biss_master`` with every setting and result a port;
-``axil`` and ``wb`` put ``--channels`` cores behind AXI4-Lite or Wishbone and one register
-bank (:data:`TOPS`, each with its own options). The bus tops read their register map with
+``axil``, ``wb`` and ``uart`` put ``--channels`` cores behind AXI4-Lite, Wishbone or the UART
+bridge (``--baud``, docs/uart_bridge.md) and one register bank (:data:`TOPS`, each with its own
+options). The bus tops read their register map with
 systemrdl-compiler, the package's one optional dependency (``pip install 'bissmaster[bus]'``);
 without it they are refused in one line, and the core needs nothing more.
 """
@@ -66,24 +67,47 @@ BUS_EXTRA = "pip install 'bissmaster[bus]'"
 BUS_CHANNELS = 2
 
 
+#: The command-line options of the buses' own parameters (:attr:`~bissmaster.bus.bus_top.Bus.options`),
+#: by parameter: flags and argparse keywords (``default=None``: the bus's default applies).
+BUS_OPTIONS = {
+    "baud": (("--baud",), dict(type=int, default=None, metavar="BAUD",
+                               help="the UART's baud rate, 8N1; the divider round(sys_clk_hz / "
+                                    "BAUD) must be at least 4 and within 2 %% of it "
+                                    "(default 115200)")),
+    "timeout_bits": (("--uart-timeout-bits",),
+                     dict(type=int, default=None, metavar="BITS", dest="timeout_bits",
+                          help="the UART bridge's inter-byte timeout in bit times: a partial "
+                               "request is dropped after this long a quiet line (default "
+                               "1000)")),
+}
+
+
 def _bus_top(bus):
     """A :class:`Top` for ``bus`` (a :data:`~bissmaster.bus.bus_top.BUSES` name): ``channels`` cores
     behind the register bank of bissmaster/bus/biss_master.rdl. The cores are the preset's, the
     register-access engine included unless ``--register-access 0`` (the map's ``ca`` block then
-    reads 0, ``caps.register_access`` says so)."""
-    def build(params, channels=BUS_CHANNELS):
-        return BusTop(bus, channels, params)
+    reads 0, ``caps.register_access`` says so). The bus's own parameters (the UART's baud rate
+    and timeout) are options of their own (:data:`BUS_OPTIONS`)."""
+    spec = BUSES[bus]
 
-    def describe(channels=BUS_CHANNELS):
-        return [f"bus             = {'AXI4-Lite' if bus == 'axil' else 'Wishbone B4'}",
-                f"channels        = {channels}",
-                "register map    = rtl/bissmaster/bus/biss_master.rdl (docs/registers.md)"]
+    def build(params, channels=BUS_CHANNELS, **options):
+        return BusTop(bus, channels, params, **options)
 
-    return Top(f"CHANNELS cores behind {'AXI4-Lite' if bus == 'axil' else 'Wishbone B4'} "
+    def describe(channels=BUS_CHANNELS, **options):
+        lines = [f"bus             = {spec.title}", f"channels        = {channels}"]
+        if bus == "uart":
+            options = {**spec.options, **options}
+            lines += [f"baud            = {options['baud']} (docs/uart_bridge.md)",
+                      f"uart timeout    = {options['timeout_bits']} bit times"]
+        return lines + ["register map    = rtl/bissmaster/bus/biss_master.rdl (docs/registers.md)"]
+
+    what = {"uart": "the UART bridge (docs/uart_bridge.md)"}.get(bus, spec.title)
+    return Top(f"CHANNELS cores behind {what} "
                f"(module biss_master_{bus}; register map docs/registers.md)",
                f"biss_master_{bus}", build,
                options=((("--channels",), dict(type=int, default=None, metavar="N",
-                                               help=f"channels, 1..8 (default {BUS_CHANNELS})")),),
+                                               help=f"channels, 1..8 (default {BUS_CHANNELS})")),
+                        *(BUS_OPTIONS[name] for name in spec.options)),
                describe=describe)
 
 
@@ -95,9 +119,10 @@ TOPS = {
 }
 
 
-def generate_bus(bus="axil", channels=BUS_CHANNELS, params=None, name=None):
-    """The Verilog text of a bus top (``--top axil|wb --channels N``)."""
-    return generate(params, name, bus, channels=channels)
+def generate_bus(bus="axil", channels=BUS_CHANNELS, params=None, name=None, **options):
+    """The Verilog text of a bus top (``--top axil|wb|uart --channels N``; ``options``: the
+    bus's own, e.g. ``baud`` for ``uart``)."""
+    return generate(params, name, bus, channels=channels, **options)
 
 
 def generate(params=None, name=None, top="core", **options):
@@ -284,7 +309,10 @@ def main(argv=None):
         ap.error(f"--top {args.top} reads the register map with systemrdl-compiler, which is "
                  f"not installed: {BUS_EXTRA}")
     params = _params(ap, args)
-    text = generate(params, args.name, args.top, **options)
+    try:
+        text = generate(params, args.name, args.top, **options)
+    except ValueError as e:     # a top's parameters (channels, baud rate, ...) refused
+        ap.error(str(e))
     if args.output == "-":
         sys.stdout.write(text)
     else:

@@ -1,9 +1,11 @@
-"""cocotb scenarios of the bus tops (biss_master_axil, biss_master_wb), two channels.
+"""cocotb scenarios of the bus tops (biss_master_axil, biss_master_wb, biss_master_uart), two
+channels.
 
-Run through pytest (sim/test_bus.py) on Verilator and Icarus, each on both buses (the bus
-under test comes in ``BISS_BUS``). Registers, fields, reset values and access types are read
-from the SystemRDL source (sim/shared/regspec.py); positions are checked against what each
-channel's encoder model sent.
+Run through pytest (sim/test_bus.py) on Verilator and Icarus, each on the AXI4-Lite and
+Wishbone tops (the bus under test comes in ``BISS_BUS``); the ``uart_*`` scenarios run on the
+UART-bridge top, through the host software (``bissmaster.host.link``). Registers, fields, reset
+values and access types are read from the SystemRDL source (sim/shared/regspec.py); positions
+are checked against what each channel's encoder model sent.
 """
 
 import cocotb
@@ -499,3 +501,183 @@ async def register_access_over_wishbone(dut):
     assert got == data + b"\0", got.hex()
     await tb.bus.write(tb.addr("ca.rbuf", 0), 0xFFFFFFFF)
     assert await tb.bus.read(tb.addr("ca.rbuf", 0)) == int.from_bytes(data + b"\0", "little")
+
+
+# -- The UART bridge (biss_master_uart): the host software over a UART ------------------------
+# The bus is bissmaster.host.link.Link over a UART model (sim/shared/uart.py), the top built at
+# 3 Mbaud; what goes wrong on the line is put there by the transport's hooks.
+
+def _once(damage):
+    """A request hook: ``damage`` on the next packet written, the ones after it as they are."""
+    state = {"done": False}
+
+    def hook(data):
+        if state["done"]:
+            return data
+        state["done"] = True
+        return damage(data)
+    return hook
+
+
+def _answer_byte(transport, k, damage):
+    """A response hook: ``damage`` (byte -> bytes) on the ``k``-th byte received from now."""
+    target = transport.received + k
+
+    def hook(index, byte):
+        return damage(byte) if index == target else bytes([byte])
+    return hook
+
+
+#: What goes wrong on the way to the bridge (one packet each), and what Link sees.
+REQUEST_FAULTS = {
+    "a lost byte": lambda d: d[:4] + d[5:],
+    "a lost SYNC": lambda d: d[1:],
+    "a flipped bit": lambda d: d[:3] + bytes([d[3] ^ 0x08]) + d[4:],
+    "a framing error": lambda d: list(d[:3]) + [(d[3], 0)] + list(d[4:]),
+    "noise glued before the SYNC": lambda d: b"\x13\x37" + d,
+    "a byte too many": lambda d: d[:2] + b"\x00" + d[2:],
+}
+#: What goes wrong on the way back (a byte of the answer).
+ANSWER_FAULTS = {
+    "its echo lost": (1, lambda b: b""),
+    "its status flipped": (2, lambda b: bytes([b ^ 0x01])),
+    "its CRC lost": (3, lambda b: b""),
+    "noise in it": (2, lambda b: bytes([b, 0xA5])),
+}
+
+
+@cocotb.test()
+@only_on_buses("uart")
+async def uart_registers_through_the_link(dut):
+    """The host's Link on biss_master_uart: the global registers' reset values (the RDL's),
+    every configuration register of both channels written with a random word and read back
+    (its stored fields), a channel's configuration read again in one burst, an address beyond
+    the map refused (BridgeError, no retry). No access needed a retry on a clean line."""
+    from bissmaster.host.link import BridgeError      # the host software under test
+    tb = BusTestbench(dut, seed=11)
+    await tb.start()
+    m, link = tb.map, tb.bus.link
+    for path, spec in m.globals.items():
+        word = await tb.read(path)
+        for f in spec.fields.values():
+            if f.reset is not None:
+                assert f.get(word) == f.reset, f"{path}.{f.name}: {f.get(word):#x} != {f.reset:#x}"
+    assert (await tb.read_fields("channels"))["count"] == CHANNELS
+    cfg = sorted((p for p in m.channel if p.startswith("cfg_")), key=lambda p: tb.addr(p, 0))
+    expect = {}
+    for ch in range(CHANNELS):
+        for path in cfg:
+            value = tb.rng.getrandbits(32)
+            await tb.write(path, value, ch)
+            stored = sum(f.mask for f in m.channel[path].fields.values() if _stored(f))
+            expect[ch, path] = value & stored
+    for (ch, path), value in expect.items():
+        assert await tb.read(path, ch) == value, f"ch{ch} {path}"
+    first = tb.addr(cfg[0], 1)
+    assert [tb.addr(p, 1) for p in cfg] == [first + 4 * i for i in range(len(cfg))]
+    assert await tb.bus.read_burst(first, len(cfg)) == [expect[1, p] for p in cfg]
+    for addr in (0x2000, 0x0222):
+        try:
+            await tb.bus.read(addr)
+        except BridgeError as e:
+            assert e.status == "BAD_ADDRESS"
+        else:
+            raise AssertionError(f"{addr:#x} was not refused")
+    assert link.stats["attempts"] == link.stats["requests"], link.stats
+    dut._log.info("link: %s", link.stats)
+
+
+@cocotb.test()
+@only_on_buses("uart")
+@long_on_icarus
+async def uart_lost_and_damaged_bytes(dut):
+    """Bytes lost, flipped, added, a framing error on the way to the bridge; bytes lost,
+    flipped, added on the way back: Link retries each damaged access and every one comes out
+    right (each write read back, each read the value written). A register whose write must act
+    once (ctrl.start) with its answer lost: the retry is answered, not written again: one
+    frame, result.seq 1."""
+    tb = BusTestbench(dut, seed=12)
+    await tb.start([BISS_C])
+    link, transport = tb.bus.link, tb.bus.transport
+    addr = tb.addr("cfg_period", 0)                     # 24 stored bits
+    await tb.read("id")                                 # the PING and one clean access
+    value = 0x100
+    for name, damage in REQUEST_FAULTS.items():
+        for victim in ("write", "read"):
+            before = dict(link.stats)
+            value += 1
+            if victim == "write":
+                transport.requests = _once(damage)
+            await tb.bus.write(addr, value)
+            if victim == "read":
+                transport.requests = _once(damage)
+            got = await tb.bus.read(addr)
+            assert got == value, f"{name} in a {victim}: read {got:#x}, wrote {value:#x}"
+            retried = link.stats["attempts"] - before["attempts"] - 2
+            assert retried >= 1, f"{name} in a {victim}: not retried ({link.stats})"
+            transport.requests = None
+    for name, (k, damage) in ANSWER_FAULTS.items():
+        for victim in ("write", "read"):
+            before = dict(link.stats)
+            value += 1
+            if victim == "write":
+                transport.responses = _answer_byte(transport, k, damage)
+            await tb.bus.write(addr, value)
+            if victim == "read":
+                transport.responses = _answer_byte(transport, k, damage)
+            got = await tb.bus.read(addr)
+            assert got == value, f"answer with {name} to a {victim}: read {got:#x}"
+            assert link.stats["attempts"] - before["attempts"] >= 3, f"{name}: not retried"
+            transport.responses = None
+    assert transport.line.framing_errors == 0
+    dut._log.info("link after the faults: %s", link.stats)
+
+    # A pulse: ctrl.start, whose answer loses its CRC byte; the retry must not start again.
+    await tb.configure(0, BISS_C, 2.5e6)
+    await tb.encoders_ready()
+    await tb.wait_idle(0)
+    done = tb.map.channel["irq_status"].fields["done"]
+    await tb.write("irq_status", done.mask, 0)
+    attempts = link.stats["attempts"]
+    transport.responses = _answer_byte(transport, 3, lambda b: b"")
+    await tb.write_fields("ctrl", 0, start=1)
+    transport.responses = None
+    assert link.stats["attempts"] == attempts + 2, "the start's answer was lost: one retry"
+    await tb.wait_irq_status(0, "done")
+    res = await tb.result(0)
+    tb.check_result(0, res, seq=True)
+    await Timer(200, "us")                              # a second frame would be done by now
+    assert len(tb.channels[0].sent) == 1, f"{len(tb.channels[0].sent)} frames for one start"
+    assert res["seq"] == 1 and (await tb.read_fields("result.seq", 0))["seq"] == 1
+
+
+@cocotb.test()
+@only_on_buses("uart")
+async def uart_frame_results(dut):
+    """Both channels configured over the UART (channel 0 BiSS Safety, channel 1 BiSS C), one
+    request each by ctrl.start, the result read word by word and again in one READ_BURST of
+    the result block (one snapshot): both against what each encoder model sent."""
+    tb = BusTestbench(dut, seed=13)
+    await tb.start([SAFETY, BISS_C])
+    await tb.configure(0, SAFETY, 5e6)
+    await tb.configure(1, BISS_C, 2.5e6)
+    await tb.encoders_ready()
+    block = sorted((p for p in tb.map.channel if p.startswith("result.")),
+                   key=lambda p: tb.addr(p, 0))
+    for ch in range(CHANNELS):
+        for _ in range(2):
+            res = await tb.request(ch)
+            tb.check_result(ch, res)
+            assert [tb.addr(p, ch) for p in block] == \
+                [tb.addr(block[0], ch) + 4 * i for i in range(len(block))]
+            words = dict(zip(block, await tb.bus.read_burst(tb.addr(block[0], ch), len(block))))
+            # The burst's own snapshot (result.status first): the same frame, nothing new was
+            # started meanwhile.
+            burst = {}
+            for path in ("result.status", "result.seq", "result.timestamp"):
+                burst.update(tb.fields(path, words[path], ch))
+            for w in range(2):
+                burst[f"word{w}"] = words[f"result.w{w}_lo"] | words[f"result.w{w}_hi"] << 32
+            tb.check_result(ch, burst)
+            assert burst["time"] == res["time"] and burst["seq"] == res["seq"]
+    dut._log.info("link: %s", tb.bus.link.stats)

@@ -1,7 +1,9 @@
-"""cocotb testbench for the bus tops (``biss_master_axil``, ``biss_master_wb``).
+"""cocotb testbench for the bus tops (``biss_master_axil``, ``biss_master_wb``,
+``biss_master_uart``).
 
 The bus is driven by bus models (cocotbext-axi's AxiLiteMaster, cocotbext-wishbone's
-WishboneMaster), every address and field comes from the SystemRDL source through
+WishboneMaster; on the UART top the host software's ``Link`` over a UART model,
+sim/shared/uart.py), every address and field comes from the SystemRDL source through
 :mod:`sim.shared.regspec`, and each channel's MA/SLO pair has its own encoder model
 (tb/encoder_model). Expected results come from what each encoder sent, looked up by the
 result's timestamp (the clock count of the frame's first MA rise), never from the RTL.
@@ -138,7 +140,11 @@ class BusTestbench:
         self.dut = dut
         self.rng = random.Random(seed)
         self.map = regspec.load()
-        self.bus = AxiLiteBus(dut) if BUS == "axil" else WishboneBus(dut)
+        if BUS == "uart":
+            from sim.shared.uart import UartBus         # the host software: Link over the line
+            self.bus = UartBus(dut)
+        else:
+            self.bus = AxiLiteBus(dut) if BUS == "axil" else WishboneBus(dut)
         self.channels = {}
         self.t_clk0 = None
 

@@ -29,8 +29,12 @@ MASTER_SCENARIOS = "sim.scenarios.master"
 BUS_SCENARIOS = "sim.scenarios.bus"
 #: The C driver (sw/) against the AXI4-Lite bus top (sim/test_driver.py).
 DRIVER_SCENARIOS = "sim.scenarios.driver"
-#: The committed bus tops (bissmaster.generate --top axil|wb ...), by bus.
-BUSES = ("axil", "wb")
+#: The bus tops the bus scenarios run on (bissmaster.generate --top axil|wb|uart ...): the
+#: committed AXI4-Lite and Wishbone tops, and the UART-bridge top built at UART_BAUD (the
+#: committed one runs at 115200 baud, where one register access takes 1.1 ms of simulated time).
+BUSES = ("axil", "wb", "uart")
+UART_BAUD = 3_000_000
+UART_TIMEOUT_BITS = 1000
 CONTROL_SCENARIOS = "sim.scenarios.control_channel"
 #: The modules the regression (sim/test_regression.py) runs, every scenario of each.
 REGRESSION_SCENARIOS = (MASTER_SCENARIOS, CONTROL_SCENARIOS)
@@ -208,17 +212,35 @@ def build_once(sim, preset="default", *, internal_clock=False):
 
 
 def bus_top(bus):
-    """The committed Verilog and the module name of a bus top."""
+    """The Verilog the bus scenarios run and the module name of a bus top: the committed file,
+    but for ``uart`` the top generated at :data:`UART_BAUD` (``build_bus_once``)."""
+    if bus == "uart":
+        return BUILD / f"biss_master_uart_{UART_BAUD}.v", "biss_master_uart"
     return ROOT / "rtl" / "generated" / f"biss_master_{bus}.v", f"biss_master_{bus}"
 
 
+def bus_env(bus):
+    """The environment of a bus scenario's simulator: the bus, and the UART's parameters."""
+    env = {"BISS_BUS": bus}
+    if bus == "uart":
+        env.update(BISS_UART_BAUD=str(UART_BAUD), BISS_UART_TIMEOUT_BITS=str(UART_TIMEOUT_BITS))
+    return env
+
+
 def build_bus_once(sim, bus):
-    """Build the committed bus top once per process (the workers share it, ``_exclusive``);
-    returns (runner, build_dir)."""
+    """Build a bus top once per process (the workers share it, ``_exclusive``); returns
+    (runner, build_dir). The UART top is generated here first (the default cores, 2 channels,
+    :data:`UART_BAUD`)."""
     key = (sim, "bus", bus)
     if key not in _built:
         verilog, toplevel = bus_top(bus)
         with _exclusive(BUILD / f"{sim}-{bus}"):
+            if bus == "uart":
+                scratch = BUILD / f"{verilog.stem}.{os.getpid()}.v"
+                generate.main(["--top", "uart", "--baud", str(UART_BAUD),
+                               "--uart-timeout-bits", str(UART_TIMEOUT_BITS), "-o", str(scratch)])
+                _write_if_changed(verilog, scratch.read_text())
+                scratch.unlink()
             _built[key] = build(sim, verilog=verilog, tag=f"-{bus}", toplevel=toplevel)
     return _built[key]
 

@@ -1,10 +1,13 @@
 """The bus tops: ``channels`` BiSS master cores behind one register bank and one bus.
 
-:class:`BusTop` only connects: the bus adapter (:class:`AxiLiteAdapter` or
-:class:`WishboneAdapter`), the :class:`~bissmaster.bus.register_bank.RegisterBank` built from the
-register map, and one :class:`BusChannel` per channel, each a
-:class:`~bissmaster.master.BissMaster` with its own MA/SLO pins.
+:class:`BusTop` only connects: the bus adapter (:class:`AxiLiteAdapter`,
+:class:`WishboneAdapter` or the :class:`~bissmaster.bus.uart_bridge.UartBridge`), the
+:class:`~bissmaster.bus.register_bank.RegisterBank` built from the register map, and one
+:class:`BusChannel` per channel, each a :class:`~bissmaster.master.BissMaster` with its own
+MA/SLO pins.
 """
+
+from dataclasses import dataclass, field
 
 from amaranth.hdl import *
 from amaranth.lib import wiring
@@ -15,11 +18,46 @@ from .bus_adapters import AxiLiteAdapter, AxiLiteSignature, WishboneAdapter, Wis
 from ..master import BissMaster
 from ..params import MasterParams
 from .register_bank import RegisterBank, block_signature
+from .uart import divider as uart_divider
+from .uart_bridge import DEFAULT_TIMEOUT_BITS, UartBridge, UartSignature, check_timeout_bits
 
-#: The buses: adapter class, its bus member, the Verilog port prefix.
+
+@dataclass(frozen=True)
+class Bus:
+    """One bus a :class:`BusTop` can have in front of its register bank.
+
+    ``adapter(addr_width, sys_clk_hz, **options)`` builds the adapter onto the bank's
+    ``RegisterBus``; ``signature(addr_width)`` is the bus as its initiator sees it (the adapter's
+    member ``member`` is its flip), whose members become the top's pins as ``prefix + name``;
+    ``options`` are the bus's own elaboration parameters with their defaults, and
+    ``check(sys_clk_hz, **options)`` refuses bad ones (ValueError) when the top is made.
+    """
+    title: str
+    adapter: object
+    signature: object
+    member: str
+    prefix: str
+    options: dict = field(default_factory=dict)
+    check: object = field(default=lambda sys_clk_hz, **options: None)
+
+
+def _check_uart(sys_clk_hz, baud, timeout_bits):
+    uart_divider(sys_clk_hz, baud)
+    check_timeout_bits(timeout_bits)
+
+
+#: The buses, by the name ``--top`` gives them.
 BUSES = {
-    "axil": (AxiLiteAdapter, AxiLiteSignature, "axil", "s_axil_"),
-    "wb": (WishboneAdapter, WishboneSignature, "wb", "wb_"),
+    "axil": Bus("AXI4-Lite", lambda aw, clk: AxiLiteAdapter(aw), AxiLiteSignature, "axil",
+                "s_axil_"),
+    "wb": Bus("Wishbone B4", lambda aw, clk: WishboneAdapter(aw),
+              lambda aw: WishboneSignature(aw - 2), "wb", "wb_"),
+    "uart": Bus("UART bridge",
+                lambda aw, clk, baud, timeout_bits: UartBridge(
+                    aw, sys_clk_hz=clk, baud=baud, timeout_bits=timeout_bits),
+                lambda aw: UartSignature(), "uart", "uart_",
+                options={"baud": 115200, "timeout_bits": DEFAULT_TIMEOUT_BITS},
+                check=_check_uart),
 }
 
 #: Channel signals of the register map that the channel makes itself (not core ports).
@@ -124,21 +162,26 @@ class BusChannel(wiring.Component):
 
 
 class BusTop(wiring.Component):
-    """``channels`` BiSS master cores behind AXI4-Lite (``bus="axil"``) or Wishbone B4
-    (``bus="wb"``), with one ``irq`` and a ``trigger`` input (docs/bus.md).
+    """``channels`` BiSS master cores behind AXI4-Lite (``bus="axil"``), Wishbone B4
+    (``bus="wb"``) or the UART bridge (``bus="uart"``, docs/uart_bridge.md), with one ``irq``
+    and a ``trigger`` input (docs/bus.md).
 
     Parameters
     ----------
-    bus : "axil" or "wb"
+    bus : "axil", "wb" or "uart"
     channels : int
         1 .. 8 (the map's channel slots).
     params : MasterParams, or a sequence of one per channel
     regmap : RegisterMap
         Default: :func:`bissmaster.bus.regmap.load` of ``rtl/bissmaster/bus/biss_master.rdl``.
+    **options
+        The bus's own parameters (:attr:`Bus.options`): for ``"uart"``, ``baud`` (default
+        115200) and ``timeout_bits`` (the inter-byte timeout, default 1000), at the cores'
+        ``sys_clk_hz``, which every channel must then share.
 
     Attributes
     ----------
-    s_axil_* or wb_* : the bus (flat Verilog names)
+    s_axil_*, wb_* or uart_rx / uart_tx : the bus (flat Verilog names)
     trigger : In(1)
         Synchronous to ``clk``: a rising edge starts every trigger-enabled channel, as a write
         to the ``trigger`` register does.
@@ -149,9 +192,15 @@ class BusTop(wiring.Component):
         One MA/SLO pair per channel n (asynchronous SLO, synchronized in each core).
     """
 
-    def __init__(self, bus="axil", channels=2, params=None, regmap=None):
+    def __init__(self, bus="axil", channels=2, params=None, regmap=None, **options):
         if bus not in BUSES:
             raise ValueError(f"bus must be one of {sorted(BUSES)}, not {bus!r}")
+        spec = BUSES[bus]
+        unknown = set(options) - set(spec.options)
+        if unknown:
+            raise ValueError(f"bus {bus!r} has no option {sorted(unknown)[0]!r}"
+                             + (f" (it takes {', '.join(spec.options)})" if spec.options
+                                else ""))
         self.regmap = regmap or regmap_mod.load()
         if not isinstance(channels, int) or not 1 <= channels <= self.regmap.channel_slots:
             raise ValueError(f"channels must be an integer from 1 to "
@@ -162,6 +211,16 @@ class BusTop(wiring.Component):
         if len(params) != channels or not all(isinstance(p, MasterParams) for p in params):
             raise ValueError(f"params must be a MasterParams or one per channel ({channels})")
         self.bus, self.channels, self.params = bus, channels, params
+        self.options = {**spec.options, **options}
+        if spec.options:            # a bus with parameters of its own may count clocks
+            clocks = {p.sys_clk_hz for p in params}
+            if len(clocks) != 1:
+                raise ValueError(f"the channels of a {spec.title} top share one clock: "
+                                 f"sys_clk_hz {sorted(clocks)}")
+            self.sys_clk_hz = clocks.pop()
+        else:
+            self.sys_clk_hz = params[0].sys_clk_hz
+        spec.check(self.sys_clk_hz, **self.options)
         unknown = set(self.regmap.signals(self.regmap.globals)) - set(GLOBAL_SIGNALS)
         if unknown:
             raise ValueError(f"the register map's global signals {sorted(unknown)} are not "
@@ -169,11 +228,10 @@ class BusTop(wiring.Component):
         regs = block_signature(self.regmap, self.regmap.channel)
         # Built here, so that a register map the cores cannot follow is refused at once.
         self._channels = [BusChannel(p, regs) for p in params]
-        _, sig, _, prefix = BUSES[bus]
-        self._bus_members = list(sig(self.regmap.addr_width if bus == "axil"
-                                     else self.regmap.addr_width - 2).flip().members.flatten())
+        self._bus_members = list(spec.signature(self.regmap.addr_width).flip()
+                                 .members.flatten())
         super().__init__({
-            **{prefix + path[-1]: member for path, member in self._bus_members},
+            **{spec.prefix + path[-1]: member for path, member in self._bus_members},
             "trigger": In(1),
             "irq": Out(1),
             **{f"ch{n}_{pin}": member for n in range(channels)
@@ -182,8 +240,10 @@ class BusTop(wiring.Component):
 
     def elaborate(self, platform):
         m = Module()
-        adapter_cls, _, member, prefix = BUSES[self.bus]
-        m.submodules.bus = adapter = adapter_cls(self.regmap.addr_width)
+        spec = BUSES[self.bus]
+        member, prefix = spec.member, spec.prefix
+        m.submodules.bus = adapter = spec.adapter(self.regmap.addr_width, self.sys_clk_hz,
+                                                  **self.options)
         m.submodules.bank = bank = RegisterBank(self.regmap, self.channels)
         wiring.connect(m, adapter.regs, bank.bus)
 

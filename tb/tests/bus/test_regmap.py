@@ -35,7 +35,7 @@ def test_committed_regmap_outputs_are_up_to_date(kind, tmp_path):
         f"{committed} is stale: run `make regmap` and commit it"
 
 
-@pytest.mark.parametrize("bus", ["axil", "wb"])
+@pytest.mark.parametrize("bus", ["axil", "wb", "uart"])
 def test_committed_bus_tops_are_up_to_date(bus):
     committed = ROOT / "rtl" / "generated" / f"biss_master_{bus}.v"
     assert committed.read_text() == generate_bus(bus), \

@@ -1,7 +1,8 @@
 """biss_master.core, the FuseSoC CAPI2 core of the committed Verilog: FuseSoC finds it under its
 VLNV, its version is the package's, every file it names exists, its targets take the core and
-the two bus tops (biss_master_axil, biss_master_wb), and its lint targets (`lint`, `lint_axil`,
-`lint_wb`) run Verilator (-Wall, rtl/lint.vlt) clean, offline, in a temporary build root.
+the three bus tops (biss_master_axil, biss_master_wb, biss_master_uart), and its lint targets
+(`lint`, `lint_axil`, `lint_wb`, `lint_uart`) run Verilator (-Wall, rtl/lint.vlt) clean,
+offline, in a temporary build root.
 
 FuseSoC's config, cache and data folders are pointed into the test's temporary folder, so
 nothing is written to the user's home or the checkout. About 10 s.
@@ -28,8 +29,9 @@ TOPS = {
     "default": ("rtl/generated/biss_master.v", "biss_master"),
     "axil": ("rtl/generated/biss_master_axil.v", "biss_master_axil"),
     "wb": ("rtl/generated/biss_master_wb.v", "biss_master_wb"),
+    "uart": ("rtl/generated/biss_master_uart.v", "biss_master_uart"),
 }
-LINT = {"default": "lint", "axil": "lint_axil", "wb": "lint_wb"}
+LINT = {"default": "lint", "axil": "lint_axil", "wb": "lint_wb", "uart": "lint_uart"}
 
 
 def _fusesoc(tmp_path, *args, cores_root=ROOT):
@@ -77,7 +79,7 @@ def test_targets_take_the_committed_verilog():
     assert [f["name"] for f in as_dependency] == files["default"]
 
 
-@pytest.mark.parametrize("top", ["axil", "wb"])
+@pytest.mark.parametrize("top", ["axil", "wb", "uart"])
 def test_bus_top_targets_take_the_committed_bus_top(top):
     core = _core()
     verilog, module = TOPS[top]
