@@ -68,6 +68,8 @@ PRESET_CONFIGS = ("biss-c", "biss-c-lean", "safety", "bp3")
 BUS_CONFIGS = {
     "axil-1": ("axil", 1, "biss-c", ("ecp5", "ice40")),
     "axil-4": ("axil", 4, "biss-c", ("ecp5",)),
+    # the UART bridge instead of AXI4-Lite (a board's host link; docs/uart_bridge.md)
+    "uart-1": ("uart", 1, "biss-c", ("ecp5", "ice40")),
 }
 #: The control for the bus tops' Fmax: N copies of a preset core side by side in one harness,
 #: no bus (name -> (copies, core preset, archs)). Four cores fill the device about as much as
@@ -501,9 +503,9 @@ def main(argv=None):
         if name in BUS_CONFIGS:
             bus, channels, preset, bus_archs = BUS_CONFIGS[name]
             module = f"biss_master_{bus}"
+            behind = {"axil": "AXI4-Lite", "wb": "Wishbone B4", "uart": "the UART bridge"}[bus]
             desc = (f"`{module}`: {channels} channel{'s' if channels > 1 else ''} of the "
-                    f"`{preset}` core behind AXI4-Lite" if bus == "axil" else
-                    f"`{module}`: {channels} channels of `{preset}` behind Wishbone B4")
+                    f"`{preset}` core behind {behind}")
             opts = ["--top", bus, "--channels", str(channels), "--preset", preset]
             cfg_archs = [a for a in archs if a in bus_archs]
         elif name in MULTI_CORE_CONFIGS:
