@@ -5411,7 +5411,7 @@ module \biss_master_uart.bus (clk, rst, regs__r_data, uart__tx, regs__w_en, regs
     .tx_ready(tx_ready),
     .tx_valid(\valid$30 )
   );
-  \biss_master_uart.bus.rx$36  \rx$36  (
+  \biss_master_uart.bus.receiver  receiver (
     .busy(rx_busy),
     .clk(clk),
     .data(rx_data),
@@ -5420,7 +5420,7 @@ module \biss_master_uart.bus (clk, rst, regs__r_data, uart__tx, regs__w_en, regs
     .rx(rx),
     .valid(rx_valid)
   );
-  \biss_master_uart.bus.tx$37  \tx$37  (
+  \biss_master_uart.bus.transmitter  transmitter (
     .clk(clk),
     .data(\data$28 ),
     .ready(tx_ready),
@@ -7085,7 +7085,7 @@ module \biss_master_uart.bus.engine.tx_crc (rst, crc, data_in, valid, start, clk
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.bus.rx$36 (clk, rst, busy, valid, frame_error, data, rx);
+module \biss_master_uart.bus.receiver (clk, rst, busy, valid, frame_error, data, rx);
   reg \$auto$verilog_backend.cc:2355:dump_module$34  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -7156,7 +7156,7 @@ module \biss_master_uart.bus.rx$36 (clk, rst, busy, valid, frame_error, data, rx
     shift <= \$20 ;
   always @(posedge clk)
     data <= \$21 ;
-  \biss_master_uart.bus.rx$36.sync  sync (
+  \biss_master_uart.bus.receiver.sync  sync (
     .clk(clk),
     .rst(rst),
     .rx(rx),
@@ -7353,7 +7353,7 @@ module \biss_master_uart.bus.rx$36 (clk, rst, busy, valid, frame_error, data, rx
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.bus.rx$36.sync (clk, rst, stage1, rx);
+module \biss_master_uart.bus.receiver.sync (clk, rst, stage1, rx);
   input clk;
   wire clk;
   (* init = 1'h1 *)
@@ -7373,7 +7373,7 @@ module \biss_master_uart.bus.rx$36.sync (clk, rst, stage1, rx);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.bus.tx$37 (rst, ready, tx, data, valid, clk);
+module \biss_master_uart.bus.transmitter (rst, ready, tx, data, valid, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$35  = 0;
   wire \$1 ;
   wire \$10 ;

@@ -355,8 +355,10 @@ class UartBridge(wiring.Component):
 
     def elaborate(self, platform):
         m = Module()
-        m.submodules.rx = rx = UartRx(self.divider)
-        m.submodules.tx = tx = UartTx(self.divider)
+        # Not ``rx``/``tx``: the flattened ports of ``uart`` take those names, and Amaranth
+        # would rename the instances (rx$36), names the constraint files cannot rely on.
+        m.submodules.receiver = rx = UartRx(self.divider)
+        m.submodules.transmitter = tx = UartTx(self.divider)
         m.submodules.engine = engine = BridgeEngine(self.addr_width, self.divider,
                                                     self.timeout_bits)
         wiring.connect(m, wiring.flipped(self.regs), engine.regs)

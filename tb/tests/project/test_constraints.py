@@ -13,7 +13,8 @@ import pytest
 
 from testkit import REPO as ROOT
 CORE = "biss_master"
-BUS_TOPS = ("biss_master_axil", "biss_master_wb")
+BUS_TOPS = ("biss_master_axil", "biss_master_wb", "biss_master_uart")
+UART_TOP = "biss_master_uart"
 
 
 def _verilog(top):
@@ -54,6 +55,8 @@ XDC = _paths("biss_master.xdc", r"\$biss_inst/([\w/]+?)_reg\b", "/")
 SDC = _paths("biss_master.sdc", r"\$\{biss_inst\}\|([\w|]+)", "|")
 BUS_XDC = _paths("biss_master_bus.xdc", r"\$bus_inst/([\w/]+?)_reg\b", "/")
 BUS_SDC = _paths("biss_master_bus.sdc", r"\$\{bus_inst\}\|([\w|]+)", "|")
+UART_XDC = _paths("biss_master_uart.xdc", r"\$bus_inst/([\w/]+?)_reg\b", "/")
+UART_SDC = _paths("biss_master_uart.sdc", r"\$\{bus_inst\}\|([\w|]+)", "|")
 
 
 @pytest.mark.parametrize("path", XDC + SDC, ids=lambda p: "/".join(p))
@@ -108,3 +111,25 @@ def test_bus_pins_are_the_channels_ports(file, top):
         assert len(indices) <= 1, f"{file}: one line, two channels: {line}"
     used = set(re.findall(r"\$(ch\d+_(?:ma|slo)_port)", code))
     assert used == set(pins), f"{file}: a pin set but not constrained, or the reverse"
+
+
+# -- The UART-bridge top's host link -------------------------------------------------------------
+
+@pytest.mark.parametrize("path", UART_XDC + UART_SDC, ids=lambda p: "/".join(p))
+def test_uart_constrained_register_exists(path):
+    assert _register_exists(path, UART_TOP), f"constraints name {'/'.join(path)}, not in the Verilog"
+
+
+def test_uart_constraints_name_the_rx_synchronizer():
+    sync = ("bus", "receiver", "sync")
+    assert {(*sync, "stage0"), (*sync, "stage1")} <= set(UART_XDC)
+    assert (*sync, "stage0") in UART_SDC
+
+
+@pytest.mark.parametrize("file", ["biss_master_uart.xdc", "biss_master_uart.sdc"])
+def test_uart_pins_are_the_tops_ports(file):
+    code = _code(file)
+    pins = dict(re.findall(r"^set (uart_\w+_port)\s+(\w+)", code, re.M))
+    assert pins == {"uart_rx_port": "uart_rx", "uart_tx_port": "uart_tx"}
+    assert "uart_rx" in _ports(UART_TOP, "input") and "uart_tx" in _ports(UART_TOP, "output")
+    assert set(re.findall(r"\$(uart_\w+_port)", code)) == set(pins)

@@ -1,0 +1,19 @@
+# Quartus (Timing Analyzer) constraints for the host link of biss_master_uart
+# (rtl/generated/biss_master_uart.v, docs/uart_bridge.md), in addition to biss_master_bus.sdc,
+# which constrains its channels as for the other bus tops (use the same bus_inst in both).
+# Not run through Quartus here (no vendor tools on the machine this was written on). See
+# constraints/README.md; the .qsf assignments are there.
+#
+# Adapt these names to your design:
+#   bus_inst      : hierarchical instance path of the bus top, with | as separator
+#   uart_rx_port  : your top-level input port from the USB-serial chip's TXD
+#   uart_tx_port  : your top-level output port to the USB-serial chip's RXD
+# (the defaults are the top's own port names: right when it is your top level).
+set bus_inst      u_biss_bus
+set uart_rx_port  uart_rx
+set uart_tx_port  uart_tx
+
+# uart_rx is asynchronous to clk: registers bus|receiver|sync|stage0 -> stage1.
+set_false_path -from [get_ports $uart_rx_port] -to [get_registers "${bus_inst}|bus|receiver|sync|stage0"]
+# uart_tx comes straight from a flip-flop (bus|transmitter|tx).
+set_false_path -to [get_ports $uart_tx_port]
