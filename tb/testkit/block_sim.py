@@ -18,7 +18,8 @@ the test files. The RTL is imported only for the blocks under test and ``MasterP
 the ``Crc`` names it takes) to build them.
 """
 
-from amaranth.hdl import ClockDomain, Module
+import pytest
+from amaranth.hdl import ClockDomain, Elaboratable, Module
 from amaranth.lib import data
 from amaranth.sim import Simulator
 
@@ -108,3 +109,18 @@ def pack(layout, values):
 def protocol_clocks(microseconds, clk_hz):
     """A protocol time in whole system clocks, rounded up (the defaults: 40 us, 80 us)."""
     return -(-microseconds * clk_hz // 1_000_000)
+
+
+def refused(make, message):
+    """``make()`` raises ValueError(``message``). The components whose constructor raised (the
+    ``self`` of each frame of the traceback: a top, and a part it was building) were never
+    meant to be elaborated: Amaranth's per-object switch silences their UnusedElaboratable
+    warning, which they would give when collected."""
+    with pytest.raises(ValueError, match=message) as info:
+        make()
+    tb = info.value.__traceback__
+    while tb is not None:
+        obj = tb.tb_frame.f_locals.get("self")
+        if isinstance(obj, Elaboratable):
+            obj._MustUse__silence = True
+        tb = tb.tb_next

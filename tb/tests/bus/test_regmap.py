@@ -9,7 +9,6 @@ parameters are refused with a clear message.
 from pathlib import Path
 
 import pytest
-from amaranth.hdl import Elaboratable
 
 from bissmaster.bus import regmap
 from bissmaster.bus.bus_top import BusTop
@@ -19,6 +18,7 @@ from bissmaster.layouts import (access_request_layout, access_result_layout, con
 from bissmaster.params import Crc, MasterParams
 
 from testkit import REPO as ROOT
+from testkit.block_sim import refused
 OUTPUTS = {
     "header": ("sw/include/biss_master_regs.h", regmap.write_header),
     "markdown": ("docs/registers.md", regmap.write_markdown),
@@ -93,21 +93,6 @@ def test_map_layout():
     assert [r.path for r in snap if r.takes_snapshot] == ["result.status"]
     assert min(r.offset for r in snap) == rm.channel[[r.path for r in rm.channel]
                                                      .index("result.status")].offset
-
-
-def refused(make, message):
-    """``make()`` raises ValueError(``message``). The components whose constructor raised (the
-    ``self`` of each frame of the traceback: the BusTop, and a BusChannel it was building) were
-    never meant to be elaborated: Amaranth's per-object switch silences their
-    UnusedElaboratable warning, which they would give when collected."""
-    with pytest.raises(ValueError, match=message) as info:
-        make()
-    tb = info.value.__traceback__
-    while tb is not None:
-        obj = tb.tb_frame.f_locals.get("self")
-        if isinstance(obj, Elaboratable):
-            obj._MustUse__silence = True
-        tb = tb.tb_next
 
 
 @pytest.mark.parametrize("kwargs, message", [

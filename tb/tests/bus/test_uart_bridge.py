@@ -15,7 +15,7 @@ import warnings
 from collections import deque
 
 import pytest
-from amaranth.hdl import ClockDomain, Elaboratable, Module
+from amaranth.hdl import ClockDomain, Module
 from amaranth.lib import wiring
 from amaranth.sim import Simulator
 
@@ -28,6 +28,7 @@ from bissmaster.bus.uart_bridge import UartBridge
 from bissmaster.generate import main
 from bissmaster.params import MasterParams
 from testkit import REPO
+from testkit.block_sim import refused
 
 MAP = regmap.load()
 SYS_HZ = 100_000_000
@@ -154,19 +155,6 @@ def test_divider_refused(clk, baud, message):
     with pytest.raises(ValueError, match=message):
         divider(clk, baud)
 
-
-def refused(make, message):
-    """``make()`` raises ValueError(``message``); the components whose constructor raised were
-    never meant to be elaborated (their UnusedElaboratable warning silenced, as in
-    test_regmap.py)."""
-    with pytest.raises(ValueError, match=message) as info:
-        make()
-    tb = info.value.__traceback__
-    while tb is not None:
-        obj = tb.tb_frame.f_locals.get("self")
-        if isinstance(obj, Elaboratable):
-            obj._MustUse__silence = True
-        tb = tb.tb_next
 
 
 def test_bad_bridge_parameters_are_refused(capsys):
