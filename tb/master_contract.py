@@ -13,12 +13,15 @@ STATUS = {
     "OK": 0, "CRC_ERROR_WORD0": 1, "CRC_ERROR_WORD1": 2, "CRC_ERROR_BOTH": 3,
     "SIGN_OF_LIFE": 4, "SPW_MISMATCH": 5, "NO_ACK": 6, "NO_START": 7, "DELAY_RANGE": 8,
     "SLO_STUCK_LOW": 9, "ABORTED": 10, "BAD_CONFIG": 11, "NO_STOP": 12,
+    "NOISY_LINE": 13, "DELAY_JUMP": 14,
 }
 STATUS_NAME = {code: name for name, code in STATUS.items()}
 
 #: Statuses that judge a received frame (the frame fields are new with them).
 FRAME_STATUSES = ("OK", "CRC_ERROR_WORD0", "CRC_ERROR_WORD1", "CRC_ERROR_BOTH",
-                  "SIGN_OF_LIFE", "SPW_MISMATCH")
+                  "SIGN_OF_LIFE", "SPW_MISMATCH", "NOISY_LINE", "DELAY_JUMP")
+#: The line checks' statuses (docs/ports.md, "Noise"): a clean line never gives them.
+LINE_CHECK_STATUSES = ("NOISY_LINE", "DELAY_JUMP")
 
 #: ``cfg_wN_crc`` codes, keyed by the encoder model's CRC kinds (frames.CRC_NONE, CRC6, CRC16).
 CRC_CODE = {"none": 0, "crc6": 1, "crc16": 2}
@@ -26,7 +29,7 @@ CRC_CODE = {"none": 0, "crc6": 1, "crc16": 2}
 #: The ``count_<name>`` outputs of the default build, in port order.
 COUNTERS = ("crc_word0", "crc_word1", "no_ack", "no_start", "delay_range", "slo_stuck_low",
             "lc_repeat", "lc_skip", "lc_zero", "spw_mismatch", "overrun", "aborted",
-            "no_stop")
+            "no_stop", "noisy_line", "delay_jump", "noise_event")
 #: Counters a one-word build does not have.
 WORD1_COUNTERS = ("crc_word1", "spw_mismatch")
 
@@ -42,6 +45,13 @@ SYS_CLK_HZ = 100_000_000
 #: Shortest ``cfg_ma_half_period`` the core accepts (docs/ports.md, "Configuration": "Must be
 #: >= 2; otherwise the configuration is invalid"). A fact of the ports, not of the protocol.
 MA_HALF_PERIOD_MIN = 2
+
+#: The line checks' defaults (docs/ports.md, "Noise: the line checks"): SLO high for 1 us before
+#: MA starts (``cfg_quiet_time`` = 0), a tolerance of 2 clocks (``cfg_delay_tolerance`` = 0),
+#: 4 clean frames that agree settle (or move) the round trip.
+QUIET_TIME_S = 1e-6
+DELAY_TOLERANCE_DEFAULT = 2
+DELAY_SETTLE_FRAMES = 4
 
 # -- Register access (control channel), builds with the engine (the default build) ------------
 

@@ -16,13 +16,15 @@ from master_contract import STATUS, STATUS_NAME
 
 from testkit.block_sim import run_clocks
 
-FAULT_NAMES = [name for name, code in STATUS.items() if code >= STATUS["NO_ACK"]]
+FAULT_NAMES = [name for name, code in STATUS.items()
+               if STATUS["NO_ACK"] <= code <= STATUS["NO_STOP"]]
 QUIET = {"request": 0, "abort": 0, "config_ok": 1, "end_check": 0, "slo": 1, "ma_busy": 0,
          "ma_arm": 0, "ma_enough": 0, "locked": 0, "early": 0, "frame_done": 0, "started": 0,
          "slots_full": 0, "stopped": 0, "stop_bit": 0, "break_over": 0, "ack_expired": 0,
          "no_start_expired": 0, "slo_stuck": 0, "slo_stuck_live": 0, "delay_over": 0,
+         "quiet": 1, "quiet_live": 1,
          "frame_doubtful": 0}
-SIGNALS = ["idle", "first_clock", "receiver_clear", "resync", "timer_clear", "in_clock",
+SIGNALS = ["idle", "waiting", "first_clock", "receiver_clear", "resync", "timer_clear", "in_clock",
            "restart_timer", "ma_run", "report_frame", "report_delay", "fault", "fault_status"]
 OUTPUTS = SIGNALS + [f"faults.{name.lower()}" for name in FAULT_NAMES]
 
@@ -102,6 +104,8 @@ def test_cycle_controller_good_cycle_states_and_outputs():
         assert row["state"] == seen, (t, step)
         assert _outs(row, COLUMNS) == outs, (t, step)
         assert row["idle"] == int(seen == "IDLE"), t
+        # The noise watch: only while MA is stopped and the encoder may only raise SLO.
+        assert row["waiting"] == int(seen in ("IDLE", "WAIT_READY")), t
         assert not row["fault"], t
     # The frame is reported in the clock of ``frame_done``, with its line delay, and only there.
     assert [t for t, x in enumerate(trace) if x["report_frame"]] == [16]
@@ -166,6 +170,13 @@ FAULTS = [
     ("slo_stuck_live_ignored_after_first_clock", 0, "wait_later", {"slo": 0, "slo_stuck_live": 1},
      None, "WAIT_READY", 0, 1),
     ("slo_high_wins_over_stuck", 0, "wait_later", {"slo": 1, "slo_stuck": 1}, None, "CLOCK", 0, 1),
+    # SLO high, but not yet for the quiet time: wait on (and never stuck: SLO is high).
+    ("slo_high_not_quiet_waits", 0, "wait_later", {"slo": 1, "quiet": 0, "slo_stuck": 1}, None,
+     "WAIT_READY", 0, 1),
+    ("quiet_live_read_in_first_clock", 0, "wait_first", {"slo": 1, "quiet": 1, "quiet_live": 0},
+     None, "WAIT_READY", 0, 1),
+    ("quiet_latched_ignored_in_first_clock", 0, "wait_first", {"slo": 1, "quiet": 0,
+                                                                "quiet_live": 1}, None, "CLOCK", 0, 1),
     ("delay_range_early", 0, "armed", {"early": 1}, "DELAY_RANGE", "BREAK", 0, 0),
     ("early_before_arm_ignored", 0, "clock", {"early": 1}, None, "CLOCK", 0, 0),
     ("delay_range_on_lock", 0, "armed", {"locked": 1, "delay_over": 1}, "DELAY_RANGE", "BREAK",
