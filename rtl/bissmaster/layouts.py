@@ -9,7 +9,8 @@ each other; only :class:`~bissmaster.master.BissMaster` flattens them into Veril
 from amaranth.lib import data
 
 from . import protocol
-from .params import FAULTS, HALF_PERIOD_WIDTH, AccessStatus, Status, WORD_CONFIG
+from .params import (DELAY_SPREAD_WIDTH, FAULTS, HALF_PERIOD_WIDTH, LINE_CHECK_WIDTH, QUIET_WIDTH, AccessStatus,
+                     Status, WORD_CONFIG)
 
 
 def config_layout(params):
@@ -26,6 +27,9 @@ def config_layout(params):
         "timeout_limit": tw,
         "delay_limit": params.delay_limit_width,
         "end_check": 1,
+        "quiet_time": QUIET_WIDTH,
+        "noise_limit": LINE_CHECK_WIDTH,
+        "delay_tolerance": LINE_CHECK_WIDTH,
         "w0": WORD_CONFIG,
     }
     if params.words == 2:
@@ -62,7 +66,9 @@ def result_layout(params):
     members = {"status": Status}
     if params.timestamped:
         members["timestamp"] = params.timestamp_width
-    members.update({"line_delay": params.delay_width, "cds": 1})
+    members.update({"line_delay": params.delay_width, "cds": 1,
+                    "noise_events": LINE_CHECK_WIDTH, "delay_settled": 1,
+                    "settled_delay": params.delay_width, "delay_spread": DELAY_SPREAD_WIDTH})
     for w, bits in enumerate(params.max_data_bits):
         members[f"word{w}"] = word_result_layout(bits)
     members.update({"lc": protocol.LC_BITS, "lc_repeat": 1, "lc_skip": 1, "lc_zero": 1})
@@ -114,7 +120,7 @@ def buffer_write_layout():
 COUNTERS = (
     "crc_word0", "crc_word1", "no_ack", "no_start", "delay_range", "slo_stuck_low",
     "lc_repeat", "lc_skip", "lc_zero", "spw_mismatch", "overrun", "aborted",
-    "no_stop",
+    "no_stop", "noisy_line", "delay_jump", "noise_event",
     "ca_crc4_error", "ca_no_answer", "ca_refused", "ca_aborted", "ca_data_fault",
 )
 #: The counters that only a two-word build has.

@@ -9,15 +9,19 @@ from amaranth.lib.wiring import In, Out
 from .core.configuration import Configuration
 from .core.counters import CounterBank
 from .core.cycle_controller import CycleController
+from .core.delay_check import DelayCheck
 from .core.frame_decoder import FrameDecoder
 from .core.frame_verdict import FrameVerdict
 from .layouts import (BUFFER_LANES, BUFFER_WORD_BITS, access_request_layout, access_result_layout,
                       buffer_write_layout, config_ports, config_words, counter_names, field,
                       flat_fields, result_layout)
 from .core.limit_timers import LimitTimers
+from .core.line_noise import LineNoise
 from .core.ma_clock import MaClock
 from .core.ma_stop import MaStop
-from .params import AccessStatus, MasterParams
+from . import protocol
+from .params import (DELAY_SPREAD_WIDTH, HALF_PERIOD_WIDTH, LINE_CHECK_WIDTH, AccessStatus,
+                     MasterParams, Status)
 from .control.register_access import RegisterAccess
 from .core.request_scheduler import RequestScheduler
 from .core.results import ResultRegisters
@@ -41,8 +45,8 @@ class BissMaster(wiring.Component):
     The data flow: :class:`RequestScheduler` -> :class:`CycleController` (with
     :class:`Configuration`, :class:`LimitTimers`) -> :class:`MaClock` -> line ->
     :class:`SloSampler` -> :class:`FrameDecoder` (:class:`WordCrc` per word) ->
-    :class:`SignOfLife`, :class:`SpwCheck` -> :class:`FrameVerdict` -> :class:`ResultRegisters`,
-    :class:`CounterBank`. With ``register_access``, :class:`RegisterAccess` supplies each
+    :class:`SignOfLife`, :class:`SpwCheck`, :class:`LineNoise`, :class:`DelayCheck` ->
+    :class:`FrameVerdict` -> :class:`ResultRegisters`, :class:`CounterBank`. With ``register_access``, :class:`RegisterAccess` supplies each
     cycle's CDM bit to the controller (which holds MA low through the encoder's timeout for
     CDM = 1) and takes each frame's CDS (``ca_*`` ports, docs/control.md).
 
@@ -155,6 +159,10 @@ class BissMaster(wiring.Component):
         m.submodules.sign_of_life = sol = SignOfLife(early=True)
         if two:
             m.submodules.spw_check = spw_check = SpwCheck(p.max_data_bits[1])
+        m.submodules.line_noise = line_noise = LineNoise()
+        m.submodules.delay_check = delay_check = DelayCheck(
+            p.delay_width, settle_frames=protocol.DELAY_SETTLE_FRAMES,
+            tolerance_width=HALF_PERIOD_WIDTH + 1, spread_width=DELAY_SPREAD_WIDTH)
         m.submodules.verdict = verdict = FrameVerdict(p)
         m.submodules.results = results = ResultRegisters(p)
         if p.timestamped:
@@ -169,7 +177,8 @@ class BissMaster(wiring.Component):
         return SimpleNamespace(
             config=config, scheduler=scheduler, controller=controller, timers=timers,
             ma_clock=ma_clock, ma_stop=ma_stop, sampler=sampler, decoder=decoder, sol=sol,
-            spw_check=spw_check if two else None, verdict=verdict, results=results,
+            spw_check=spw_check if two else None, line_noise=line_noise,
+            delay_check=delay_check, verdict=verdict, results=results,
             time_base=time_base if p.timestamped else None,
             counters=counters if p.counters else None,
             access=access if cdm else None, cycle=cycle, words=words)
@@ -233,6 +242,10 @@ class BissMaster(wiring.Component):
             b.timers.no_start_limit.eq(b.config.no_start_limit),
             b.timers.delay.eq(b.sampler.delay),
             b.timers.delay_limit.eq(b.config.delay_limit),
+            b.timers.quiet_time_live.eq(self.cfg_quiet_time),
+            b.timers.quiet_limit.eq(b.config.quiet_time),
+            b.controller.quiet.eq(b.timers.quiet),
+            b.controller.quiet_live.eq(b.timers.quiet_live),
 
             b.ma_clock.run.eq(b.controller.ma_run),
             b.ma_clock.half_period.eq(b.cycle.ma_half_period),
@@ -265,6 +278,29 @@ class BissMaster(wiring.Component):
             b.sol.load.eq(b.decoder.lc_load),
             b.sol.check.eq(b.verdict.lc_check),
             b.sol.resync.eq(b.controller.resync),
+        ]
+        # The line checks (issue 28): noise events, and the round trip against the settled one,
+        # judged when Start is found: the delay is final from the Ack's lock on, at least one
+        # slot before, and the judgement (a clock later) is ready long before the frame's end.
+        off = 2**LINE_CHECK_WIDTH - 1
+        started_before = Signal()
+        m.d.sync += started_before.eq(b.decoder.started)
+        m.d.comb += [
+            b.line_noise.watch.eq(b.controller.waiting),
+            b.line_noise.level.eq(b.sampler.level),
+            b.line_noise.sampler_noise.eq(b.sampler.noise),
+            b.line_noise.close.eq(b.decoder.done),
+            b.line_noise.limit.eq(b.cycle.noise_limit),
+            b.delay_check.enable.eq(b.cycle.delay_tolerance != off),
+            b.delay_check.tolerance.eq(b.config.delay_tolerance),
+            # Writing 15 forgets the settled round trip at once, whatever the master is doing.
+            b.delay_check.rearm.eq(self.cfg_delay_tolerance == off),
+            b.delay_check.delay.eq(b.sampler.delay),
+            b.delay_check.check.eq(b.decoder.started & ~started_before),
+            b.delay_check.learn.eq(b.controller.report_frame),
+            b.delay_check.clean.eq(b.verdict.clean),
+            b.verdict.noisy.eq(b.line_noise.noisy),
+            b.verdict.delay_jump.eq(b.delay_check.jump),
         ]
         for w, word in enumerate(b.words):
             m.d.comb += [b.decoder.words[w].eq(word), b.ma_stop.words[w].eq(word)]
@@ -302,6 +338,10 @@ class BissMaster(wiring.Component):
             frame.status.eq(b.verdict.status),
             frame.line_delay.eq(b.sampler.delay),
             frame.cds.eq(b.decoder.cds),
+            frame.noise_events.eq(b.line_noise.events),
+            frame.delay_settled.eq(b.delay_check.settled),
+            frame.settled_delay.eq(b.delay_check.settled_delay),
+            frame.delay_spread.eq(b.delay_check.spread),
             frame.lc.eq(b.decoder.lc),
             frame.lc_repeat.eq(b.verdict.lc_repeat),
             frame.lc_skip.eq(b.verdict.lc_skip),
@@ -367,6 +407,9 @@ class BissMaster(wiring.Component):
             "overrun": b.scheduler.overrun,
             "aborted": faults.aborted,
             "no_stop": faults.no_stop,
+            "noisy_line": b.results.report_frame & (b.verdict.status == Status.NOISY_LINE),
+            "delay_jump": b.results.report_frame & (b.verdict.status == Status.DELAY_JUMP),
+            "noise_event": b.line_noise.event,
         }
         if b.access is not None:
             for status in (AccessStatus.CRC4_ERROR, AccessStatus.NO_ANSWER,

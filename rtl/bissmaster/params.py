@@ -27,11 +27,12 @@ CRC_WIDTH = {Crc.NONE: 0, Crc.CRC6: protocol.CRC6_WIDTH, Crc.CRC16: protocol.CRC
 class Status(enum.IntEnum, shape=4):
     """Outcome of one request cycle, reported with every ``done`` strobe.
 
-    Codes 0..5 judge a received frame: when several apply, the lowest-numbered wins (a CRC
-    error makes the LC meaningless, an LC error makes the plausibility check moot). Codes 6..12
-    end a cycle without a frame; with ``cfg_end_check``, NO_STOP and SLO_STUCK_LOW can end a
-    cycle whose frame was received, and then replace the frame's verdict (the frame is not
-    reported).
+    Codes 0..5, 13 and 14 judge a received frame: when several apply, the first in the order
+    1..5, 13, 14 wins (a CRC error makes the LC meaningless, an LC error makes the
+    plausibility check moot; the line checks of issue 28 come last, so that every frame the
+    protocol's checks refuse is counted as before). Codes 6..12 end a cycle without a frame;
+    with ``cfg_end_check``, NO_STOP and SLO_STUCK_LOW can end a cycle whose frame was received,
+    and then replace the frame's verdict (the frame is not reported).
     """
     OK = 0
     CRC_ERROR_WORD0 = 1     # CPW / single word
@@ -46,6 +47,8 @@ class Status(enum.IntEnum, shape=4):
     ABORTED = 10            # the abort input ended the cycle
     BAD_CONFIG = 11         # runtime configuration out of range; no cycle was started
     NO_STOP = 12            # cfg_end_check: SLO high at the stop bit (line stuck high, long frame)
+    NOISY_LINE = 13         # more noise events since the last frame than cfg_noise_limit
+    DELAY_JUMP = 14         # the round trip left the settled one by more than the tolerance
 
 
 STATUS_WIDTH = Shape.cast(Status).width
@@ -66,6 +69,14 @@ class AccessStatus(enum.IntEnum, shape=3):
 
 #: Width of the MA half-period setting, and of the timers that count within one MA phase.
 HALF_PERIOD_WIDTH = protocol.MA_HALF_PERIOD_MAX.bit_length()
+#: Width of ``cfg_quiet_time`` (clocks SLO must be high before MA starts; 0: the default).
+QUIET_WIDTH = 12
+#: Width of ``cfg_noise_limit``, ``noise_events`` and ``cfg_delay_tolerance``: 4 bits; the value
+#: 15 turns a check off (the noise count saturates at 15).
+LINE_CHECK_WIDTH = 4
+#: Width of ``delay_spread`` (clocks, saturating at 255): jitter alone spreads the Ack edge
+#: over a half period.
+DELAY_SPREAD_WIDTH = 8
 #: Width of the slot and MA-edge counters of one cycle (saturating): Ack slots plus the frame.
 #: 2**16 - 1 slots outlast every Ack limit the timers can hold at the shortest half period.
 SLOT_WIDTH = 16
@@ -77,7 +88,7 @@ FRAME_LENGTH_WIDTH = WORD_INDEX_WIDTH + 1
 
 #: The statuses that end a cycle without a frame verdict (codes 6..12): each has a one-clock
 #: event strobe in :func:`~bissmaster.layouts.fault_layout`.
-FAULTS = tuple(s for s in Status if s >= Status.NO_ACK)
+FAULTS = tuple(s for s in Status if Status.NO_ACK <= s <= Status.NO_STOP)
 
 #: Runtime description of one data word. ``data_bits`` counts the position/data bits only.
 WORD_CONFIG = data.StructLayout({
@@ -213,6 +224,13 @@ class MasterParams:
     def ack_limit_default(self):
         """Longest wait for the Ack edge, and for the Start bit after it: 40 us."""
         return _cycles(max(protocol.PROCESSING_TIME_MAX_S, protocol.LINE_DELAY_MAX_S), self.sys_clk_hz)
+
+    @property
+    def quiet_default(self):
+        """How long SLO must be high before MA starts (``cfg_quiet_time`` = 0): 1 us, longer than
+        the noise pulses a line typically picks up, short next to the encoder's timeout (12.5
+        us at least) and the request period (31.25 us at least); at most 4095 clocks."""
+        return min(_cycles(protocol.QUIET_TIME_S, self.sys_clk_hz), 2**QUIET_WIDTH - 1)
 
     @property
     def timeout_limit_default(self):

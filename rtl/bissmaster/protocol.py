@@ -29,6 +29,11 @@ LINE_DELAY_MAX_S = 40e-6
 BREAK_TIME_S = 40e-6                # MA held high after power-on, an error or an abort
 SLAVE_TIMEOUT_MAX_S = 40e-6         # static slave timeout is 12.5 .. 40 us
 
+# -- Line checks of this master (not protocol facts: docs/ports.md, Noise) --------------------
+QUIET_TIME_S = 1e-6             # default time SLO must be high before MA starts
+DELAY_TOLERANCE_DEFAULT = 2     # clocks a frame's round trip may leave the settled one
+DELAY_SETTLE_FRAMES = 4         # clean frames that agree settle (or move) the round trip
+
 # -- Frame (section 5) -----------------------------------------------------------------------
 START_BIT = 1
 ACK_LEVEL = 0

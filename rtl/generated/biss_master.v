@@ -15,20 +15,27 @@
 
 (* top =  1  *)
 (* generator = "Amaranth" *)
-module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_period, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_delay_limit, cfg_end_check, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_enable, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_spw_check
-, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, ca_wbuf_addr, ca_wbuf_data, ca_wbuf_en, ca_rbuf_addr, ca_rbuf_en, clk, rst, ma, busy, config_error, overrun, done, valid, status
-, timestamp, line_delay, cds, word0_position, word0_ne, word0_nw, word0_crc_ok, word1_position, word1_ne, word1_nw, word1_crc_ok, lc, lc_repeat, lc_skip, lc_zero, spw_mismatch, ca_rbuf_data, ca_busy, ca_done, ca_status, ca_bytes_done
-, count_crc_word0, count_crc_word1, count_no_ack, count_no_start, count_delay_range, count_slo_stuck_low, count_lc_repeat, count_lc_skip, count_lc_zero, count_spw_mismatch, count_overrun, count_aborted, count_no_stop, count_ca_crc4_error, count_ca_no_answer, count_ca_refused, count_ca_aborted, count_ca_data_fault, slo);
+module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_period, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_delay_limit, cfg_end_check, cfg_quiet_time, cfg_noise_limit, cfg_delay_tolerance, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_enable, cfg_w1_data_bits, cfg_w1_nenw
+, cfg_w1_lc, cfg_w1_crc, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, ca_wbuf_addr, ca_wbuf_data, ca_wbuf_en, ca_rbuf_addr, ca_rbuf_en, clk, rst, ma, busy, config_error, overrun
+, done, valid, status, timestamp, line_delay, cds, noise_events, delay_settled, settled_delay, delay_spread, word0_position, word0_ne, word0_nw, word0_crc_ok, word1_position, word1_ne, word1_nw, word1_crc_ok, lc, lc_repeat, lc_skip
+, lc_zero, spw_mismatch, ca_rbuf_data, ca_busy, ca_done, ca_status, ca_bytes_done, count_crc_word0, count_crc_word1, count_no_ack, count_no_start, count_delay_range, count_slo_stuck_low, count_lc_repeat, count_lc_skip, count_lc_zero, count_spw_mismatch, count_overrun, count_aborted, count_no_stop, count_noisy_line
+, count_delay_jump, count_noise_event, count_ca_crc4_error, count_ca_no_answer, count_ca_refused, count_ca_aborted, count_ca_data_fault, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$13  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
   wire \$12 ;
   wire \$13 ;
-  reg \$14 ;
-  reg \$15 ;
+  wire \$14 ;
+  wire \$15 ;
   wire \$16 ;
+  wire \$17 ;
+  wire \$18 ;
+  reg \$19 ;
   wire \$2 ;
+  reg \$20 ;
+  reg \$21 ;
+  wire \$22 ;
   wire \$3 ;
   wire \$4 ;
   wire \$5 ;
@@ -37,25 +44,25 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \$8 ;
   wire \$9 ;
   wire abort;
-  wire \abort$235 ;
-  wire \abort$94 ;
+  wire \abort$104 ;
+  wire \abort$277 ;
   input abort_cycle;
   wire abort_cycle;
   wire ack_expired;
-  wire \ack_expired$126 ;
+  wire \ack_expired$136 ;
   wire [23:0] ack_limit;
-  wire [23:0] \ack_limit$147 ;
+  wire [23:0] \ack_limit$157 ;
   wire arm;
   reg \bit  = 1'h0;
-  wire \bit$263 ;
+  wire \bit$306 ;
   wire [5:0] bits;
   wire break_over;
-  wire \break_over$124 ;
+  wire \break_over$134 ;
   wire [23:0] break_time;
   output busy;
   wire busy;
-  wire \busy$102 ;
-  wire \busy$239 ;
+  wire \busy$112 ;
+  wire \busy$281 ;
   input ca_abort;
   wire ca_abort;
   input [6:0] ca_address;
@@ -97,17 +104,20 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   input ca_write;
   wire ca_write;
   wire cdm;
-  wire \cdm$242 ;
+  wire \cdm$284 ;
   wire cdm_cycle;
   output cds;
   wire cds;
-  wire \cds$219 ;
-  wire [154:0] cfg;
+  wire \cds$257 ;
+  wire [174:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
   wire [11:0] \cfg.delay_limit ;
+  wire [3:0] \cfg.delay_tolerance ;
   wire \cfg.end_check ;
   wire [15:0] \cfg.ma_half_period ;
+  wire [3:0] \cfg.noise_limit ;
+  wire [11:0] \cfg.quiet_time ;
   wire [23:0] \cfg.request_period ;
   wire \cfg.spw_check ;
   wire [7:0] \cfg.spw_tolerance ;
@@ -137,10 +147,16 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire [23:0] cfg_break_time;
   input [11:0] cfg_delay_limit;
   wire [11:0] cfg_delay_limit;
+  input [3:0] cfg_delay_tolerance;
+  wire [3:0] cfg_delay_tolerance;
   input cfg_end_check;
   wire cfg_end_check;
   input [15:0] cfg_ma_half_period;
   wire [15:0] cfg_ma_half_period;
+  input [3:0] cfg_noise_limit;
+  wire [3:0] cfg_noise_limit;
+  input [11:0] cfg_quiet_time;
+  wire [11:0] cfg_quiet_time;
   input [23:0] cfg_request_period;
   wire [23:0] cfg_request_period;
   input cfg_spw_check;
@@ -176,14 +192,18 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   input cfg_w1_nenw;
   wire cfg_w1_nenw;
   wire check;
+  wire \check$213 ;
+  wire clean;
+  wire \clean$218 ;
   wire clear;
-  wire \clear$164 ;
-  wire \clear$256 ;
+  wire \clear$181 ;
+  wire \clear$299 ;
   input clear_counters;
   wire clear_counters;
   input clk;
   wire clk;
   wire \clocking ;
+  wire close;
   output config_error;
   wire config_error;
   wire config_ok;
@@ -203,6 +223,8 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire [15:0] count_crc_word0;
   output [15:0] count_crc_word1;
   wire [15:0] count_crc_word1;
+  output [15:0] count_delay_jump;
+  wire [15:0] count_delay_jump;
   output [15:0] count_delay_range;
   wire [15:0] count_delay_range;
   output [15:0] count_lc_repeat;
@@ -217,13 +239,17 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire [15:0] count_no_start;
   output [15:0] count_no_stop;
   wire [15:0] count_no_stop;
+  output [15:0] count_noise_event;
+  wire [15:0] count_noise_event;
+  output [15:0] count_noisy_line;
+  wire [15:0] count_noisy_line;
   output [15:0] count_overrun;
   wire [15:0] count_overrun;
   output [15:0] count_slo_stuck_low;
   wire [15:0] count_slo_stuck_low;
   output [15:0] count_spw_mismatch;
   wire [15:0] count_spw_mismatch;
-  wire [287:0] counts;
+  wire [335:0] counts;
   wire [15:0] \counts.aborted ;
   wire [15:0] \counts.ca_aborted ;
   wire [15:0] \counts.ca_crc4_error ;
@@ -232,6 +258,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire [15:0] \counts.ca_refused ;
   wire [15:0] \counts.crc_word0 ;
   wire [15:0] \counts.crc_word1 ;
+  wire [15:0] \counts.delay_jump ;
   wire [15:0] \counts.delay_range ;
   wire [15:0] \counts.lc_repeat ;
   wire [15:0] \counts.lc_skip ;
@@ -239,20 +266,25 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire [15:0] \counts.no_ack ;
   wire [15:0] \counts.no_start ;
   wire [15:0] \counts.no_stop ;
+  wire [15:0] \counts.noise_event ;
+  wire [15:0] \counts.noisy_line ;
   wire [15:0] \counts.overrun ;
   wire [15:0] \counts.slo_stuck_low ;
   wire [15:0] \counts.spw_mismatch ;
   wire [39:0] cpw_top;
-  wire [39:0] \cpw_top$188 ;
+  wire [39:0] \cpw_top$227 ;
   wire [1:0] crc_error;
   wire [1:0] crc_ok;
-  wire [1:0] \crc_ok$203 ;
-  wire [154:0] cycle;
+  wire [1:0] \crc_ok$241 ;
+  wire [174:0] cycle;
   wire [23:0] \cycle.ack_limit ;
   wire [23:0] \cycle.break_time ;
   wire [11:0] \cycle.delay_limit ;
+  wire [3:0] \cycle.delay_tolerance ;
   wire \cycle.end_check ;
   wire [15:0] \cycle.ma_half_period ;
+  wire [3:0] \cycle.noise_limit ;
+  wire [11:0] \cycle.quiet_time ;
   wire [23:0] \cycle.request_period ;
   wire \cycle.spw_check ;
   wire [7:0] \cycle.spw_tolerance ;
@@ -283,42 +315,55 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* init = 1'h0 *)
   wire decoder_sample;
   wire [12:0] delay;
-  wire [12:0] \delay$153 ;
+  wire [12:0] \delay$163 ;
+  wire [12:0] \delay$212 ;
+  wire delay_jump;
   wire [11:0] delay_limit;
-  wire [11:0] \delay_limit$155 ;
+  wire [11:0] \delay_limit$165 ;
   wire delay_over;
-  wire \delay_over$134 ;
+  wire \delay_over$144 ;
+  output delay_settled;
+  wire delay_settled;
+  output [7:0] delay_spread;
+  wire [7:0] delay_spread;
+  wire [16:0] delay_tolerance;
   output done;
   wire done;
-  wire \done$112 ;
-  wire \done$240 ;
-  wire \done$259 ;
+  wire \done$122 ;
+  wire \done$282 ;
+  wire \done$302 ;
   wire doubtful;
   wire early;
-  wire \early$110 ;
+  wire \early$120 ;
+  wire enable;
   wire end_check;
   wire enough;
-  wire [17:0] events;
-  wire \events.aborted ;
-  wire \events.ca_aborted ;
-  wire \events.ca_crc4_error ;
-  wire \events.ca_data_fault ;
-  wire \events.ca_no_answer ;
-  wire \events.ca_refused ;
-  wire \events.crc_word0 ;
-  wire \events.crc_word1 ;
-  wire \events.delay_range ;
-  wire \events.lc_repeat ;
-  wire \events.lc_skip ;
-  wire \events.lc_zero ;
-  wire \events.no_ack ;
-  wire \events.no_start ;
-  wire \events.no_stop ;
-  wire \events.overrun ;
-  wire \events.slo_stuck_low ;
-  wire \events.spw_mismatch ;
+  wire \event ;
+  wire [3:0] events;
+  wire [20:0] \events$294 ;
+  wire \events$294.aborted ;
+  wire \events$294.ca_aborted ;
+  wire \events$294.ca_crc4_error ;
+  wire \events$294.ca_data_fault ;
+  wire \events$294.ca_no_answer ;
+  wire \events$294.ca_refused ;
+  wire \events$294.crc_word0 ;
+  wire \events$294.crc_word1 ;
+  wire \events$294.delay_jump ;
+  wire \events$294.delay_range ;
+  wire \events$294.lc_repeat ;
+  wire \events$294.lc_skip ;
+  wire \events$294.lc_zero ;
+  wire \events$294.no_ack ;
+  wire \events$294.no_start ;
+  wire \events$294.no_stop ;
+  wire \events$294.noise_event ;
+  wire \events$294.noisy_line ;
+  wire \events$294.overrun ;
+  wire \events$294.slo_stuck_low ;
+  wire \events$294.spw_mismatch ;
   wire fault;
-  wire \fault$199 ;
+  wire \fault$237 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -333,6 +378,8 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
+  (* enum_value_1101 = "NOISY_LINE" *)
+  (* enum_value_1110 = "DELAY_JUMP" *)
   wire [3:0] fault_status;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
@@ -348,7 +395,9 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
-  wire [3:0] \fault_status$201 ;
+  (* enum_value_1101 = "NOISY_LINE" *)
+  (* enum_value_1110 = "DELAY_JUMP" *)
+  wire [3:0] \fault_status$239 ;
   wire [6:0] faults;
   wire \faults.aborted ;
   wire \faults.bad_config ;
@@ -358,15 +407,19 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \faults.no_stop ;
   wire \faults.slo_stuck_low ;
   wire first_rise;
-  wire \first_rise$229 ;
+  wire \first_rise$271 ;
   wire [31:0] first_rise_time;
-  wire [160:0] frame;
+  wire [186:0] frame;
   wire \frame.cds ;
+  wire \frame.delay_settled ;
+  wire [7:0] \frame.delay_spread ;
   wire [5:0] \frame.lc ;
   wire \frame.lc_repeat ;
   wire \frame.lc_skip ;
   wire \frame.lc_zero ;
   wire [12:0] \frame.line_delay ;
+  wire [3:0] \frame.noise_events ;
+  wire [12:0] \frame.settled_delay ;
   wire \frame.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
@@ -382,6 +435,8 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
+  (* enum_value_1101 = "NOISY_LINE" *)
+  (* enum_value_1110 = "DELAY_JUMP" *)
   wire [3:0] \frame.status ;
   wire [31:0] \frame.timestamp ;
   wire [57:0] \frame.word0 ;
@@ -402,43 +457,50 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire frame_ok;
   wire frames;
   wire [15:0] half_period;
-  wire [15:0] \half_period$170 ;
+  wire [15:0] \half_period$187 ;
   wire held;
   wire hold;
   wire idle;
-  wire \idle$84 ;
-  wire \idle$90 ;
+  wire \idle$100 ;
+  wire \idle$94 ;
   wire in_clock;
-  wire \in_clock$141 ;
+  wire \in_clock$151 ;
+  wire jump;
   output [5:0] lc;
   wire [5:0] lc;
-  wire [5:0] \lc$174 ;
-  wire [5:0] \lc$175 ;
+  wire [5:0] \lc$191 ;
+  wire [5:0] \lc$192 ;
   wire lc_check;
   wire lc_load;
   wire [5:0] lc_next;
-  wire [5:0] \lc_next$177 ;
+  wire [5:0] \lc_next$194 ;
   output lc_repeat;
   wire lc_repeat;
-  wire \lc_repeat$220 ;
+  wire \lc_repeat$262 ;
   wire lc_repeat_seen;
   output lc_skip;
   wire lc_skip;
-  wire \lc_skip$221 ;
+  wire \lc_skip$263 ;
   wire lc_skip_seen;
   output lc_zero;
   wire lc_zero;
-  wire \lc_zero$222 ;
+  wire \lc_zero$264 ;
   wire lc_zero_seen;
+  wire learn;
   wire level;
+  wire \level$203 ;
+  wire [3:0] limit;
   output [12:0] line_delay;
   wire [12:0] line_delay;
-  wire [154:0] live;
+  wire [174:0] live;
   wire [23:0] \live.ack_limit ;
   wire [23:0] \live.break_time ;
   wire [11:0] \live.delay_limit ;
+  wire [3:0] \live.delay_tolerance ;
   wire \live.end_check ;
   wire [15:0] \live.ma_half_period ;
+  wire [3:0] \live.noise_limit ;
+  wire [11:0] \live.quiet_time ;
   wire [23:0] \live.request_period ;
   wire \live.spw_check ;
   wire [7:0] \live.spw_tolerance ;
@@ -464,13 +526,13 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \live.w1_enable ;
   wire load;
   wire locked;
-  wire \locked$108 ;
+  wire \locked$118 ;
   output ma;
   wire ma;
-  wire \ma$258 ;
+  wire \ma$301 ;
   wire ma_arm;
   wire ma_busy;
-  wire \ma_busy$136 ;
+  wire \ma_busy$146 ;
   wire ma_enough;
   wire ma_held;
   wire ma_hold;
@@ -478,48 +540,65 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire match;
   wire [1:0] ne;
   wire no_start_expired;
-  wire \no_start_expired$128 ;
+  wire \no_start_expired$138 ;
   wire [24:0] no_start_limit;
-  wire [24:0] \no_start_limit$151 ;
+  wire [24:0] \no_start_limit$161 ;
+  wire noise;
+  output [3:0] noise_events;
+  wire [3:0] noise_events;
+  wire noisy;
+  wire \noisy$220 ;
   wire [1:0] nw;
   wire ok;
   output overrun;
   wire overrun;
-  wire \overrun$255 ;
+  wire \overrun$297 ;
   wire [23:0] period;
   input periodic;
   wire periodic;
-  wire \periodic$86 ;
+  wire \periodic$96 ;
+  wire quiet;
+  wire \quiet$170 ;
+  wire [11:0] quiet_limit;
+  wire quiet_live;
+  wire \quiet_live$172 ;
+  wire [11:0] quiet_time;
+  wire [11:0] quiet_time_live;
   wire [3:0] rbuf_addr;
   wire [31:0] rbuf_data;
   wire rbuf_en;
+  wire rearm;
   wire receiver_clear;
   wire \repeat ;
   wire report;
-  wire \report$211 ;
+  wire \report$249 ;
   wire report_delay;
-  wire \report_delay$214 ;
+  wire \report_delay$252 ;
   wire report_frame;
-  wire \report_frame$197 ;
-  wire \report_frame$212 ;
+  wire \report_frame$235 ;
+  wire \report_frame$250 ;
   wire request;
-  wire [17:0] \request$231 ;
-  wire [6:0] \request$231.address ;
-  wire [6:0] \request$231.count ;
-  wire [2:0] \request$231.slave_id ;
-  wire \request$231.write ;
-  wire \request$93 ;
+  wire \request$103 ;
+  wire [17:0] \request$273 ;
+  wire [6:0] \request$273.address ;
+  wire [6:0] \request$273.count ;
+  wire [2:0] \request$273.slave_id ;
+  wire \request$273.write ;
   wire restart;
   wire restart_timer;
   wire [9:0] result;
-  wire [160:0] \result$261 ;
-  wire \result$261.cds ;
-  wire [5:0] \result$261.lc ;
-  wire \result$261.lc_repeat ;
-  wire \result$261.lc_skip ;
-  wire \result$261.lc_zero ;
-  wire [12:0] \result$261.line_delay ;
-  wire \result$261.spw_mismatch ;
+  wire [186:0] \result$304 ;
+  wire \result$304.cds ;
+  wire \result$304.delay_settled ;
+  wire [7:0] \result$304.delay_spread ;
+  wire [5:0] \result$304.lc ;
+  wire \result$304.lc_repeat ;
+  wire \result$304.lc_skip ;
+  wire \result$304.lc_zero ;
+  wire [12:0] \result$304.line_delay ;
+  wire [3:0] \result$304.noise_events ;
+  wire [12:0] \result$304.settled_delay ;
+  wire \result$304.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -534,18 +613,20 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
-  wire [3:0] \result$261.status ;
-  wire [31:0] \result$261.timestamp ;
-  wire [57:0] \result$261.word0 ;
-  wire \result$261.word0.crc_ok ;
-  wire \result$261.word0.ne ;
-  wire \result$261.word0.nw ;
-  wire [54:0] \result$261.word0.position ;
-  wire [42:0] \result$261.word1 ;
-  wire \result$261.word1.crc_ok ;
-  wire \result$261.word1.ne ;
-  wire \result$261.word1.nw ;
-  wire [39:0] \result$261.word1.position ;
+  (* enum_value_1101 = "NOISY_LINE" *)
+  (* enum_value_1110 = "DELAY_JUMP" *)
+  wire [3:0] \result$304.status ;
+  wire [31:0] \result$304.timestamp ;
+  wire [57:0] \result$304.word0 ;
+  wire \result$304.word0.crc_ok ;
+  wire \result$304.word0.ne ;
+  wire \result$304.word0.nw ;
+  wire [54:0] \result$304.word0.position ;
+  wire [42:0] \result$304.word1 ;
+  wire \result$304.word1.crc_ok ;
+  wire \result$304.word1.ne ;
+  wire \result$304.word1.nw ;
+  wire [39:0] \result$304.word1.position ;
   wire [6:0] \result.bytes_done ;
   (* enum_base_type = "AccessStatus" *)
   (* enum_value_000 = "OK" *)
@@ -557,41 +638,48 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_110 = "BAD_REQUEST" *)
   wire [2:0] \result.status ;
   wire resync;
-  wire \resync$183 ;
+  wire \resync$200 ;
   wire [15:0] rises;
-  wire [15:0] \rises$163 ;
+  wire [15:0] \rises$180 ;
   input rst;
   wire rst;
   wire run;
   reg sample = 1'h0;
-  wire \sample$262 ;
+  wire \sample$305 ;
+  wire sampler_noise;
   wire second_rise;
+  wire settled;
+  output [12:0] settled_delay;
+  wire [12:0] settled_delay;
+  wire [12:0] \settled_delay$260 ;
   wire skip;
   input slo;
   wire slo;
-  wire \slo$135 ;
-  wire \slo$91 ;
-  wire \slo$99 ;
+  wire \slo$101 ;
+  wire \slo$109 ;
+  wire \slo$145 ;
   wire slo_stuck;
-  wire \slo_stuck$130 ;
+  wire \slo_stuck$140 ;
   wire slo_stuck_live;
-  wire \slo_stuck_live$132 ;
+  wire \slo_stuck_live$142 ;
   wire slots_full;
-  wire \slots_full$116 ;
+  wire \slots_full$126 ;
+  wire [7:0] spread;
   wire [39:0] spw;
   wire spw_match;
   output spw_mismatch;
   wire spw_mismatch;
-  wire \spw_mismatch$227 ;
+  wire \spw_mismatch$269 ;
   input start;
   wire start;
-  wire \start$234 ;
-  wire \start$85 ;
+  wire \start$276 ;
+  wire \start$95 ;
   wire [15:0] start_slot;
-  wire [15:0] \start_slot$161 ;
+  wire [15:0] \start_slot$178 ;
   wire started;
-  wire \started$114 ;
-  wire \started$159 ;
+  wire \started$124 ;
+  wire \started$176 ;
+  reg started_before = 1'h0;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -606,6 +694,8 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
+  (* enum_value_1101 = "NOISY_LINE" *)
+  (* enum_value_1110 = "DELAY_JUMP" *)
   output [3:0] status;
   wire [3:0] status;
   (* enum_base_type = "Status" *)
@@ -622,24 +712,29 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
-  wire [3:0] \status$218 ;
+  (* enum_value_1101 = "NOISY_LINE" *)
+  (* enum_value_1110 = "DELAY_JUMP" *)
+  wire [3:0] \status$256 ;
   wire stop_bit;
-  wire \stop_bit$120 ;
+  wire \stop_bit$130 ;
   wire stopped;
-  wire \stopped$118 ;
+  wire \stopped$128 ;
   wire [23:0] timeout_limit;
-  wire [23:0] \timeout_limit$149 ;
+  wire [23:0] \timeout_limit$159 ;
   wire [23:0] timeout_live;
   wire timer_clear;
   output [31:0] timestamp;
   wire [31:0] timestamp;
-  wire [7:0] tolerance;
+  wire [16:0] tolerance;
+  wire [7:0] \tolerance$231 ;
   output valid;
   wire valid;
-  wire \valid$215 ;
-  wire \valid$216 ;
+  wire \valid$253 ;
+  wire \valid$254 ;
   wire valid_out;
   wire w1_enable;
+  wire waiting;
+  wire watch;
   wire [39:0] wbuf;
   wire [3:0] \wbuf.addr ;
   wire [31:0] \wbuf.data ;
@@ -661,28 +756,28 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   output [39:0] word1_position;
   wire [39:0] word1_position;
   wire [1:0] word_count;
-  wire [1:0] \word_count$173 ;
+  wire [1:0] \word_count$190 ;
   wire [1:0] word_crc_ok;
   wire [19:0] words;
-  wire [19:0] \words$185 ;
-  wire [9:0] \words$185[0] ;
+  wire [19:0] \words$224 ;
+  wire [9:0] \words$224[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
-  wire [1:0] \words$185[0].crc ;
-  wire [5:0] \words$185[0].data_bits ;
-  wire \words$185[0].lc ;
-  wire \words$185[0].nenw ;
-  wire [9:0] \words$185[1] ;
+  wire [1:0] \words$224[0].crc ;
+  wire [5:0] \words$224[0].data_bits ;
+  wire \words$224[0].lc ;
+  wire \words$224[0].nenw ;
+  wire [9:0] \words$224[1] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
-  wire [1:0] \words$185[1].crc ;
-  wire [5:0] \words$185[1].data_bits ;
-  wire \words$185[1].lc ;
-  wire \words$185[1].nenw ;
+  wire [1:0] \words$224[1].crc ;
+  wire [5:0] \words$224[1].data_bits ;
+  wire \words$224[1].lc ;
+  wire \words$224[1].nenw ;
   wire [9:0] \words[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
@@ -702,35 +797,47 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \words[1].lc ;
   wire \words[1].nenw ;
   wire zero;
-  assign \periodic$86  = periodic | ca_busy;
-  assign \$1  = report_frame & \spw_mismatch$227 ;
-  assign \$2  = result[2:0] == 1'h1;
-  assign \$3  = ca_done & \$2 ;
-  assign \$4  = result[2:0] == 2'h2;
-  assign \$5  = ca_done & \$4 ;
-  assign \$6  = result[2:0] == 2'h3;
-  assign \$7  = ca_done & \$6 ;
-  assign \$8  = result[2:0] == 3'h4;
-  assign \$9  = ca_done & \$8 ;
-  assign \$10  = result[2:0] == 3'h5;
-  assign \$11  = ca_done & \$10 ;
+  assign \periodic$96  = periodic | ca_busy;
+  assign enable = cycle[144:141] != 4'hf;
+  assign rearm = cfg_delay_tolerance == 4'hf;
+  assign \$1  = ~ started_before;
+  assign \check$213  = started & \$1 ;
+  assign \$2  = learn & \spw_mismatch$269 ;
+  assign \$3  = \status$256  == 4'hd;
+  assign \$4  = learn & \$3 ;
+  assign \$5  = \status$256  == 4'he;
+  assign \$6  = learn & \$5 ;
+  assign \$7  = result[2:0] == 1'h1;
+  assign \$8  = ca_done & \$7 ;
+  assign \$9  = result[2:0] == 2'h2;
+  assign \$10  = ca_done & \$9 ;
+  assign \$11  = result[2:0] == 2'h3;
+  assign \$12  = ca_done & \$11 ;
+  assign \$13  = result[2:0] == 3'h4;
+  assign \$14  = ca_done & \$13 ;
+  assign \$15  = result[2:0] == 3'h5;
+  assign \$16  = ca_done & \$15 ;
   assign busy = ~ idle;
   assign config_error = ~ config_ok;
-  assign \$12  = ~ \clear$164 ;
-  assign \$13  = \sample$262  & \$12 ;
+  assign \$17  = ~ \clear$181 ;
+  assign \$18  = \sample$305  & \$17 ;
   always @(posedge clk)
-    sample <= \$14 ;
+    sample <= \$19 ;
   always @(posedge clk)
-    \bit  <= \$15 ;
+    \bit  <= \$20 ;
+  always @(posedge clk)
+    started_before <= \$21 ;
   \biss_master.config  \config  (
     .ack_limit(ack_limit),
     .clk(clk),
     .cycle(cycle),
     .delay_limit(delay_limit),
+    .delay_tolerance(tolerance),
     .idle(idle),
     .live(live),
     .no_start_limit(no_start_limit),
     .ok(config_ok),
+    .quiet_time(quiet_limit),
     .rst(rst),
     .timeout_limit(timeout_limit),
     .word_count(word_count)
@@ -761,43 +868,46 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .ma_hold(hold),
     .ma_run(run),
     .no_start_expired(no_start_expired),
-    .receiver_clear(\clear$164 ),
+    .quiet(quiet),
+    .quiet_live(quiet_live),
+    .receiver_clear(\clear$181 ),
     .report_delay(report_delay),
-    .report_frame(report_frame),
+    .report_frame(learn),
     .request(request),
     .restart_timer(restart),
     .resync(resync),
     .rst(rst),
-    .slo(\slo$99 ),
+    .slo(\slo$109 ),
     .slo_stuck(slo_stuck),
     .slo_stuck_live(slo_stuck_live),
     .slots_full(slots_full),
     .started(started),
     .stop_bit(stop_bit),
     .stopped(stopped),
-    .timer_clear(clear)
+    .timer_clear(clear),
+    .waiting(watch)
   );
   \biss_master.counters  counters (
     .clear(clear_counters),
     .clk(clk),
     .counts(counts),
-    .events(events),
+    .events(\events$294 ),
     .rst(rst)
   );
   \biss_master.decoder  decoder (
     .\bit (\bit ),
-    .cds(\cds$219 ),
+    .cds(\cds$257 ),
     .clk(clk),
     .cpw_top(cpw_top),
     .crc_ok(crc_ok),
     .data0(data0),
     .data1(spw),
     .done(frame_done),
-    .lc(\lc$174 ),
+    .lc(\lc$191 ),
     .lc_load(load),
     .ne(ne),
     .nw(nw),
-    .receiver_clear(\clear$164 ),
+    .receiver_clear(\clear$181 ),
     .rst(rst),
     .sample(sample),
     .slots_full(slots_full),
@@ -808,10 +918,37 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .word_count(word_count),
     .words(words)
   );
+  \biss_master.delay_check  delay_check (
+    .check(\check$213 ),
+    .clean(clean),
+    .clk(clk),
+    .delay(delay),
+    .enable(enable),
+    .jump(delay_jump),
+    .learn(learn),
+    .rearm(rearm),
+    .rst(rst),
+    .settled(settled),
+    .settled_delay(\settled_delay$260 ),
+    .spread(spread),
+    .\tolerance$8 (tolerance)
+  );
+  \biss_master.line_noise  line_noise (
+    .clk(clk),
+    .close(frame_done),
+    .\event (\event ),
+    .events(events),
+    .level(\slo$109 ),
+    .limit(cycle[140:137]),
+    .noisy(noisy),
+    .rst(rst),
+    .sampler_noise(sampler_noise),
+    .watch(watch)
+  );
   \biss_master.ma_clock  ma_clock (
     .busy(ma_busy),
     .clk(clk),
-    .\clocking (\ma_busy$136 ),
+    .\clocking (\ma_busy$146 ),
     .first_rise(first_rise),
     .half_period(cycle[15:0]),
     .held(ma_held),
@@ -823,15 +960,15 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .second_rise(ma_arm)
   );
   \biss_master.ma_stop  ma_stop (
-    .clear(\clear$164 ),
+    .clear(\clear$181 ),
     .clk(clk),
     .enough(ma_enough),
     .rises(rises),
     .rst(rst),
     .start_slot(start_slot),
     .\started$10 (started),
-    .w1_enable(cycle[135]),
-    .words(\words$185 )
+    .w1_enable(cycle[155]),
+    .words(\words$224 )
   );
   \biss_master.register_access  register_access (
     .abort(ca_abort),
@@ -840,13 +977,13 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .clk(clk),
     .done(ca_done),
     .frame_cdm(frame_cdm),
-    .frame_cds(\cds$219 ),
+    .frame_cds(\cds$257 ),
     .frame_end(report),
-    .frame_ok(\valid$215 ),
+    .frame_ok(\valid$253 ),
     .rbuf_addr(ca_rbuf_addr),
     .rbuf_data(ca_rbuf_data),
     .rbuf_en(ca_rbuf_en),
-    .request(\request$231 ),
+    .request(\request$273 ),
     .result(result),
     .rst(rst),
     .start(ca_start),
@@ -858,24 +995,25 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .frame(frame),
     .report(report),
     .report_delay(report_delay),
-    .report_frame(report_frame),
-    .result(\result$261 ),
+    .report_frame(learn),
+    .result(\result$304 ),
     .rst(rst),
-    .valid(\valid$215 ),
+    .valid(\valid$253 ),
     .valid_out(valid)
   );
   \biss_master.sampler  sampler (
     .arm(ma_arm),
-    .\bit (\bit$263 ),
+    .\bit (\bit$306 ),
     .clk(clk),
     .delay(delay),
     .early(early),
     .half_period(cycle[15:0]),
-    .level(\slo$99 ),
+    .level(\slo$109 ),
     .locked(locked),
-    .receiver_clear(\clear$164 ),
+    .noise(sampler_noise),
+    .receiver_clear(\clear$181 ),
     .rst(rst),
-    .sample(\sample$262 ),
+    .sample(\sample$305 ),
     .slo(slo)
   );
   \biss_master.scheduler  scheduler (
@@ -884,7 +1022,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .idle(idle),
     .overrun(overrun),
     .period(cfg_request_period),
-    .periodic(\periodic$86 ),
+    .periodic(\periodic$96 ),
     .request(request),
     .rst(rst),
     .start(start)
@@ -893,22 +1031,22 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .check(check),
     .clk(clk),
     .is_zero(lc_zero_seen),
-    .lc(\lc$174 ),
+    .lc(\lc$191 ),
     .load(load),
-    .\port$1371$0 (\bit ),
+    .\port$1563$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
     .skip(lc_skip_seen)
   );
   \biss_master.spw_check  spw_check (
-    .bits(cycle[141:136]),
+    .bits(cycle[161:156]),
     .clk(clk),
     .cpw_top(cpw_top),
     .match(spw_match),
     .rst(rst),
     .spw(spw),
-    .\tolerance$8 (cycle[154:147])
+    .\tolerance$8 (cycle[174:167])
   );
   \biss_master.time_base  time_base (
     .clk(clk),
@@ -927,12 +1065,16 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .delay_limit(delay_limit),
     .delay_over(delay_over),
     .in_clock(in_clock),
-    .ma_busy(\ma_busy$136 ),
+    .ma_busy(\ma_busy$146 ),
     .no_start_expired(no_start_expired),
     .no_start_limit(no_start_limit),
+    .quiet(quiet),
+    .quiet_limit(quiet_limit),
+    .quiet_live(quiet_live),
+    .quiet_time_live(cfg_quiet_time),
     .restart(restart),
     .rst(rst),
-    .slo(\slo$99 ),
+    .slo(\slo$109 ),
     .slo_stuck(slo_stuck),
     .slo_stuck_live(slo_stuck_live),
     .timeout_limit(timeout_limit),
@@ -940,154 +1082,183 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   );
   \biss_master.verdict  verdict (
     .cfg(cycle),
+    .clean(clean),
     .crc_error(crc_error),
     .crc_ok(crc_ok),
+    .delay_jump(delay_jump),
     .doubtful(frame_doubtful),
     .fault(fault),
     .fault_status(fault_status),
     .lc_check(check),
-    .lc_repeat(\lc_repeat$220 ),
+    .lc_repeat(\lc_repeat$262 ),
     .lc_repeat_seen(lc_repeat_seen),
-    .lc_skip(\lc_skip$221 ),
+    .lc_skip(\lc_skip$263 ),
     .lc_skip_seen(lc_skip_seen),
-    .lc_zero(\lc_zero$222 ),
+    .lc_zero(\lc_zero$264 ),
     .lc_zero_seen(lc_zero_seen),
-    .\port$879$0 (\$16 ),
+    .noisy(noisy),
+    .\port$1031$0 (\$22 ),
     .report(report),
-    .report_frame(report_frame),
+    .report_frame(learn),
     .spw_match(spw_match),
-    .spw_mismatch(\spw_mismatch$227 ),
-    .status(\status$218 ),
-    .valid(\valid$215 )
+    .spw_mismatch(\spw_mismatch$269 ),
+    .status(\status$256 ),
+    .valid(\valid$253 )
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
-    \$14  = \$13 ;
+    \$19  = \$18 ;
     if (rst) begin
-      \$14  = 1'h0;
+      \$19  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
-    \$15  = \bit$263 ;
+    \$20  = \bit$306 ;
     if (rst) begin
-      \$15  = 1'h0;
+      \$20  = 1'h0;
     end
   end
-  assign \idle$84  = idle;
-  assign \start$85  = start;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
+    \$21  = started;
+    if (rst) begin
+      \$21  = 1'h0;
+    end
+  end
+  assign \idle$94  = idle;
+  assign \start$95  = start;
   assign frames = ca_busy;
   assign period = cfg_request_period;
   assign abort = abort_cycle;
-  assign \idle$90  = idle;
-  assign \slo$91  = slo;
-  assign \request$93  = request;
-  assign \abort$94  = abort_cycle;
+  assign \idle$100  = idle;
+  assign \slo$101  = slo;
+  assign \request$103  = request;
+  assign \abort$104  = abort_cycle;
   assign ok = config_ok;
   assign end_check = cycle[124];
-  assign level = \slo$99 ;
-  assign \busy$102  = ma_busy;
+  assign level = \slo$109 ;
+  assign \busy$112  = ma_busy;
   assign second_rise = ma_arm;
   assign enough = ma_enough;
-  assign \locked$108  = locked;
-  assign \early$110  = early;
-  assign \done$112  = frame_done;
-  assign \started$114  = started;
-  assign \slots_full$116  = slots_full;
-  assign \stopped$118  = stopped;
-  assign \stop_bit$120  = stop_bit;
+  assign \locked$118  = locked;
+  assign \early$120  = early;
+  assign \done$122  = frame_done;
+  assign \started$124  = started;
+  assign \slots_full$126  = slots_full;
+  assign \stopped$128  = stopped;
+  assign \stop_bit$130  = stop_bit;
   assign doubtful = frame_doubtful;
-  assign \break_over$124  = break_over;
-  assign \ack_expired$126  = ack_expired;
-  assign \no_start_expired$128  = no_start_expired;
-  assign \slo_stuck$130  = slo_stuck;
-  assign \slo_stuck_live$132  = slo_stuck_live;
-  assign \delay_over$134  = delay_over;
-  assign \slo$135  = \slo$99 ;
-  assign \clocking  = \ma_busy$136 ;
+  assign \break_over$134  = break_over;
+  assign \ack_expired$136  = ack_expired;
+  assign \no_start_expired$138  = no_start_expired;
+  assign \slo_stuck$140  = slo_stuck;
+  assign \slo_stuck_live$142  = slo_stuck_live;
+  assign \delay_over$144  = delay_over;
+  assign \slo$145  = \slo$109 ;
+  assign \clocking  = \ma_busy$146 ;
   assign timer_clear = clear;
-  assign \in_clock$141  = in_clock;
+  assign \in_clock$151  = in_clock;
   assign restart_timer = restart;
   assign break_time = cfg_break_time;
   assign timeout_live = cfg_timeout_limit;
-  assign \ack_limit$147  = ack_limit;
-  assign \timeout_limit$149  = timeout_limit;
-  assign \no_start_limit$151  = no_start_limit;
-  assign \delay$153  = delay;
-  assign \delay_limit$155  = delay_limit;
+  assign \ack_limit$157  = ack_limit;
+  assign \timeout_limit$159  = timeout_limit;
+  assign \no_start_limit$161  = no_start_limit;
+  assign \delay$163  = delay;
+  assign \delay_limit$165  = delay_limit;
+  assign quiet_time_live = cfg_quiet_time;
+  assign quiet_time = quiet_limit;
+  assign \quiet$170  = quiet;
+  assign \quiet_live$172  = quiet_live;
   assign ma_run = run;
   assign half_period = cycle[15:0];
-  assign \started$159  = started;
-  assign \start_slot$161  = start_slot;
-  assign \rises$163  = rises;
-  assign receiver_clear = \clear$164 ;
+  assign \started$176  = started;
+  assign \start_slot$178  = start_slot;
+  assign \rises$180  = rises;
+  assign receiver_clear = \clear$181 ;
   assign decoder_sample = sample;
   assign decoder_bit = \bit ;
-  assign \half_period$170  = cycle[15:0];
+  assign \half_period$187  = cycle[15:0];
   assign arm = ma_arm;
-  assign \word_count$173  = word_count;
-  assign \lc$175  = \lc$174 ;
-  assign lc_next = { \lc$174 [4:0], \bit  };
-  assign \lc_next$177  = { \lc$174 [4:0], \bit  };
+  assign \word_count$190  = word_count;
+  assign \lc$192  = \lc$191 ;
+  assign lc_next = { \lc$191 [4:0], \bit  };
+  assign \lc_next$194  = { \lc$191 [4:0], \bit  };
   assign lc_load = load;
   assign lc_check = check;
-  assign \resync$183  = resync;
-  assign w1_enable = cycle[135];
-  assign \cpw_top$188  = cpw_top;
+  assign \resync$200  = resync;
+  assign waiting = watch;
+  assign \level$203  = \slo$109 ;
+  assign noise = sampler_noise;
+  assign close = frame_done;
+  assign limit = cycle[140:137];
+  assign delay_tolerance = tolerance;
+  assign \delay$212  = delay;
+  assign report_frame = learn;
+  assign \clean$218  = clean;
+  assign \noisy$220  = noisy;
+  assign jump = delay_jump;
+  assign w1_enable = cycle[155];
+  assign \cpw_top$227  = cpw_top;
   assign data1 = spw;
-  assign bits = cycle[141:136];
-  assign tolerance = cycle[154:147];
+  assign bits = cycle[161:156];
+  assign \tolerance$231  = cycle[174:167];
   assign match = spw_match;
   assign cfg = cycle;
-  assign \report_frame$197  = report_frame;
-  assign \fault$199  = fault;
-  assign \fault_status$201  = fault_status;
-  assign \crc_ok$203  = crc_ok;
+  assign \report_frame$235  = learn;
+  assign \fault$237  = fault;
+  assign \fault_status$239  = fault_status;
+  assign \crc_ok$241  = crc_ok;
   assign \repeat  = lc_repeat_seen;
   assign skip = lc_skip_seen;
   assign zero = lc_zero_seen;
-  assign \report$211  = report;
-  assign \report_frame$212  = report_frame;
-  assign \report_delay$214  = report_delay;
-  assign \valid$216  = \valid$215 ;
-  assign word_crc_ok = { \$16 , crc_ok[0] };
-  assign \first_rise$229  = first_rise;
-  assign \start$234  = ca_start;
-  assign \abort$235  = ca_abort;
+  assign \report$249  = report;
+  assign \report_frame$250  = learn;
+  assign \report_delay$252  = report_delay;
+  assign \valid$254  = \valid$253 ;
+  assign word_crc_ok = { \$22 , crc_ok[0] };
+  assign \first_rise$271  = first_rise;
+  assign \start$276  = ca_start;
+  assign \abort$277  = ca_abort;
   assign rbuf_addr = ca_rbuf_addr;
   assign rbuf_en = ca_rbuf_en;
   assign rbuf_data = ca_rbuf_data;
-  assign \busy$239  = ca_busy;
-  assign \done$240  = ca_done;
-  assign \cdm$242  = cdm;
+  assign \busy$281  = ca_busy;
+  assign \done$282  = ca_done;
+  assign \cdm$284  = cdm;
   assign held = ma_held;
   assign ma_hold = hold;
   assign frame_end = report;
-  assign frame_ok = \valid$215 ;
-  assign frame_cds = \cds$219 ;
+  assign frame_ok = \valid$253 ;
+  assign frame_cds = \cds$257 ;
   assign cdm_cycle = frame_cdm;
-  assign \overrun$255  = overrun;
-  assign \clear$256  = clear_counters;
-  assign \ma$258  = ma;
-  assign \done$259  = done;
+  assign \overrun$297  = overrun;
+  assign \clear$299  = clear_counters;
+  assign \ma$301  = ma;
+  assign \done$302  = done;
   assign valid_out = valid;
-  assign status = \result$261 [3:0];
-  assign timestamp = \result$261 [35:4];
-  assign line_delay = \result$261 [48:36];
-  assign cds = \result$261 [49];
-  assign word0_position = \result$261 [104:50];
-  assign word0_ne = \result$261 [105];
-  assign word0_nw = \result$261 [106];
-  assign word0_crc_ok = \result$261 [107];
-  assign word1_position = \result$261 [147:108];
-  assign word1_ne = \result$261 [148];
-  assign word1_nw = \result$261 [149];
-  assign word1_crc_ok = \result$261 [150];
-  assign lc = \result$261 [156:151];
-  assign lc_repeat = \result$261 [157];
-  assign lc_skip = \result$261 [158];
-  assign lc_zero = \result$261 [159];
-  assign spw_mismatch = \result$261 [160];
+  assign status = \result$304 [3:0];
+  assign timestamp = \result$304 [35:4];
+  assign line_delay = \result$304 [48:36];
+  assign cds = \result$304 [49];
+  assign noise_events = \result$304 [53:50];
+  assign delay_settled = \result$304 [54];
+  assign settled_delay = \result$304 [67:55];
+  assign delay_spread = \result$304 [75:68];
+  assign word0_position = \result$304 [130:76];
+  assign word0_ne = \result$304 [131];
+  assign word0_nw = \result$304 [132];
+  assign word0_crc_ok = \result$304 [133];
+  assign word1_position = \result$304 [173:134];
+  assign word1_ne = \result$304 [174];
+  assign word1_nw = \result$304 [175];
+  assign word1_crc_ok = \result$304 [176];
+  assign lc = \result$304 [182:177];
+  assign lc_repeat = \result$304 [183];
+  assign lc_skip = \result$304 [184];
+  assign lc_zero = \result$304 [185];
+  assign spw_mismatch = \result$304 [186];
   assign ca_status = result[2:0];
   assign ca_bytes_done = result[9:3];
   assign count_crc_word0 = counts[15:0];
@@ -1103,11 +1274,14 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign count_overrun = counts[175:160];
   assign count_aborted = counts[191:176];
   assign count_no_stop = counts[207:192];
-  assign count_ca_crc4_error = counts[223:208];
-  assign count_ca_no_answer = counts[239:224];
-  assign count_ca_refused = counts[255:240];
-  assign count_ca_aborted = counts[271:256];
-  assign count_ca_data_fault = counts[287:272];
+  assign count_noisy_line = counts[223:208];
+  assign count_delay_jump = counts[239:224];
+  assign count_noise_event = counts[255:240];
+  assign count_ca_crc4_error = counts[271:256];
+  assign count_ca_no_answer = counts[287:272];
+  assign count_ca_refused = counts[303:288];
+  assign count_ca_aborted = counts[319:304];
+  assign count_ca_data_fault = counts[335:320];
   assign \live.ma_half_period  = live[15:0];
   assign \live.request_period  = live[39:16];
   assign \live.break_time  = live[63:40];
@@ -1115,19 +1289,22 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \live.timeout_limit  = live[111:88];
   assign \live.delay_limit  = live[123:112];
   assign \live.end_check  = live[124];
-  assign \live.w0  = live[134:125];
-  assign \live.w0.data_bits  = live[130:125];
-  assign \live.w0.nenw  = live[131];
-  assign \live.w0.lc  = live[132];
-  assign \live.w0.crc  = live[134:133];
-  assign \live.w1_enable  = live[135];
-  assign \live.w1  = live[145:136];
-  assign \live.w1.data_bits  = live[141:136];
-  assign \live.w1.nenw  = live[142];
-  assign \live.w1.lc  = live[143];
-  assign \live.w1.crc  = live[145:144];
-  assign \live.spw_check  = live[146];
-  assign \live.spw_tolerance  = live[154:147];
+  assign \live.quiet_time  = live[136:125];
+  assign \live.noise_limit  = live[140:137];
+  assign \live.delay_tolerance  = live[144:141];
+  assign \live.w0  = live[154:145];
+  assign \live.w0.data_bits  = live[150:145];
+  assign \live.w0.nenw  = live[151];
+  assign \live.w0.lc  = live[152];
+  assign \live.w0.crc  = live[154:153];
+  assign \live.w1_enable  = live[155];
+  assign \live.w1  = live[165:156];
+  assign \live.w1.data_bits  = live[161:156];
+  assign \live.w1.nenw  = live[162];
+  assign \live.w1.lc  = live[163];
+  assign \live.w1.crc  = live[165:164];
+  assign \live.spw_check  = live[166];
+  assign \live.spw_tolerance  = live[174:167];
   assign \cycle.ma_half_period  = cycle[15:0];
   assign \cycle.request_period  = cycle[39:16];
   assign \cycle.break_time  = cycle[63:40];
@@ -1135,19 +1312,22 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \cycle.timeout_limit  = cycle[111:88];
   assign \cycle.delay_limit  = cycle[123:112];
   assign \cycle.end_check  = cycle[124];
-  assign \cycle.w0  = cycle[134:125];
-  assign \cycle.w0.data_bits  = cycle[130:125];
-  assign \cycle.w0.nenw  = cycle[131];
-  assign \cycle.w0.lc  = cycle[132];
-  assign \cycle.w0.crc  = cycle[134:133];
-  assign \cycle.w1_enable  = cycle[135];
-  assign \cycle.w1  = cycle[145:136];
-  assign \cycle.w1.data_bits  = cycle[141:136];
-  assign \cycle.w1.nenw  = cycle[142];
-  assign \cycle.w1.lc  = cycle[143];
-  assign \cycle.w1.crc  = cycle[145:144];
-  assign \cycle.spw_check  = cycle[146];
-  assign \cycle.spw_tolerance  = cycle[154:147];
+  assign \cycle.quiet_time  = cycle[136:125];
+  assign \cycle.noise_limit  = cycle[140:137];
+  assign \cycle.delay_tolerance  = cycle[144:141];
+  assign \cycle.w0  = cycle[154:145];
+  assign \cycle.w0.data_bits  = cycle[150:145];
+  assign \cycle.w0.nenw  = cycle[151];
+  assign \cycle.w0.lc  = cycle[152];
+  assign \cycle.w0.crc  = cycle[154:153];
+  assign \cycle.w1_enable  = cycle[155];
+  assign \cycle.w1  = cycle[165:156];
+  assign \cycle.w1.data_bits  = cycle[161:156];
+  assign \cycle.w1.nenw  = cycle[162];
+  assign \cycle.w1.lc  = cycle[163];
+  assign \cycle.w1.crc  = cycle[165:164];
+  assign \cycle.spw_check  = cycle[166];
+  assign \cycle.spw_tolerance  = cycle[174:167];
   assign \words[0]  = words[9:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -1158,16 +1338,16 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \words[1].nenw  = words[16];
   assign \words[1].lc  = words[17];
   assign \words[1].crc  = words[19:18];
-  assign \words$185[0]  = \words$185 [9:0];
-  assign \words$185[0].data_bits  = \words$185 [5:0];
-  assign \words$185[0].nenw  = \words$185 [6];
-  assign \words$185[0].lc  = \words$185 [7];
-  assign \words$185[0].crc  = \words$185 [9:8];
-  assign \words$185[1]  = \words$185 [19:10];
-  assign \words$185[1].data_bits  = \words$185 [15:10];
-  assign \words$185[1].nenw  = \words$185 [16];
-  assign \words$185[1].lc  = \words$185 [17];
-  assign \words$185[1].crc  = \words$185 [19:18];
+  assign \words$224[0]  = \words$224 [9:0];
+  assign \words$224[0].data_bits  = \words$224 [5:0];
+  assign \words$224[0].nenw  = \words$224 [6];
+  assign \words$224[0].lc  = \words$224 [7];
+  assign \words$224[0].crc  = \words$224 [9:8];
+  assign \words$224[1]  = \words$224 [19:10];
+  assign \words$224[1].data_bits  = \words$224 [15:10];
+  assign \words$224[1].nenw  = \words$224 [16];
+  assign \words$224[1].lc  = \words$224 [17];
+  assign \words$224[1].crc  = \words$224 [19:18];
   assign \cfg.ma_half_period  = cycle[15:0];
   assign \cfg.request_period  = cycle[39:16];
   assign \cfg.break_time  = cycle[63:40];
@@ -1175,65 +1355,75 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \cfg.timeout_limit  = cycle[111:88];
   assign \cfg.delay_limit  = cycle[123:112];
   assign \cfg.end_check  = cycle[124];
-  assign \cfg.w0  = cycle[134:125];
-  assign \cfg.w0.data_bits  = cycle[130:125];
-  assign \cfg.w0.nenw  = cycle[131];
-  assign \cfg.w0.lc  = cycle[132];
-  assign \cfg.w0.crc  = cycle[134:133];
-  assign \cfg.w1_enable  = cycle[135];
-  assign \cfg.w1  = cycle[145:136];
-  assign \cfg.w1.data_bits  = cycle[141:136];
-  assign \cfg.w1.nenw  = cycle[142];
-  assign \cfg.w1.lc  = cycle[143];
-  assign \cfg.w1.crc  = cycle[145:144];
-  assign \cfg.spw_check  = cycle[146];
-  assign \cfg.spw_tolerance  = cycle[154:147];
+  assign \cfg.quiet_time  = cycle[136:125];
+  assign \cfg.noise_limit  = cycle[140:137];
+  assign \cfg.delay_tolerance  = cycle[144:141];
+  assign \cfg.w0  = cycle[154:145];
+  assign \cfg.w0.data_bits  = cycle[150:145];
+  assign \cfg.w0.nenw  = cycle[151];
+  assign \cfg.w0.lc  = cycle[152];
+  assign \cfg.w0.crc  = cycle[154:153];
+  assign \cfg.w1_enable  = cycle[155];
+  assign \cfg.w1  = cycle[165:156];
+  assign \cfg.w1.data_bits  = cycle[161:156];
+  assign \cfg.w1.nenw  = cycle[162];
+  assign \cfg.w1.lc  = cycle[163];
+  assign \cfg.w1.crc  = cycle[165:164];
+  assign \cfg.spw_check  = cycle[166];
+  assign \cfg.spw_tolerance  = cycle[174:167];
   assign \frame.status  = frame[3:0];
   assign \frame.timestamp  = frame[35:4];
   assign \frame.line_delay  = frame[48:36];
   assign \frame.cds  = frame[49];
-  assign \frame.word0  = frame[107:50];
-  assign \frame.word0.position  = frame[104:50];
-  assign \frame.word0.ne  = frame[105];
-  assign \frame.word0.nw  = frame[106];
-  assign \frame.word0.crc_ok  = frame[107];
-  assign \frame.word1  = frame[150:108];
-  assign \frame.word1.position  = frame[147:108];
-  assign \frame.word1.ne  = frame[148];
-  assign \frame.word1.nw  = frame[149];
-  assign \frame.word1.crc_ok  = frame[150];
-  assign \frame.lc  = frame[156:151];
-  assign \frame.lc_repeat  = frame[157];
-  assign \frame.lc_skip  = frame[158];
-  assign \frame.lc_zero  = frame[159];
-  assign \frame.spw_mismatch  = frame[160];
-  assign \request$231.slave_id  = \request$231 [2:0];
-  assign \request$231.address  = \request$231 [9:3];
-  assign \request$231.count  = \request$231 [16:10];
-  assign \request$231.write  = \request$231 [17];
+  assign \frame.noise_events  = frame[53:50];
+  assign \frame.delay_settled  = frame[54];
+  assign \frame.settled_delay  = frame[67:55];
+  assign \frame.delay_spread  = frame[75:68];
+  assign \frame.word0  = frame[133:76];
+  assign \frame.word0.position  = frame[130:76];
+  assign \frame.word0.ne  = frame[131];
+  assign \frame.word0.nw  = frame[132];
+  assign \frame.word0.crc_ok  = frame[133];
+  assign \frame.word1  = frame[176:134];
+  assign \frame.word1.position  = frame[173:134];
+  assign \frame.word1.ne  = frame[174];
+  assign \frame.word1.nw  = frame[175];
+  assign \frame.word1.crc_ok  = frame[176];
+  assign \frame.lc  = frame[182:177];
+  assign \frame.lc_repeat  = frame[183];
+  assign \frame.lc_skip  = frame[184];
+  assign \frame.lc_zero  = frame[185];
+  assign \frame.spw_mismatch  = frame[186];
+  assign \request$273.slave_id  = \request$273 [2:0];
+  assign \request$273.address  = \request$273 [9:3];
+  assign \request$273.count  = \request$273 [16:10];
+  assign \request$273.write  = \request$273 [17];
   assign \wbuf.addr  = wbuf[3:0];
   assign \wbuf.data  = wbuf[35:4];
   assign \wbuf.en  = wbuf[39:36];
   assign \result.status  = result[2:0];
   assign \result.bytes_done  = result[9:3];
-  assign \events.crc_word0  = events[0];
-  assign \events.crc_word1  = events[1];
-  assign \events.no_ack  = events[2];
-  assign \events.no_start  = events[3];
-  assign \events.delay_range  = events[4];
-  assign \events.slo_stuck_low  = events[5];
-  assign \events.lc_repeat  = events[6];
-  assign \events.lc_skip  = events[7];
-  assign \events.lc_zero  = events[8];
-  assign \events.spw_mismatch  = events[9];
-  assign \events.overrun  = events[10];
-  assign \events.aborted  = events[11];
-  assign \events.no_stop  = events[12];
-  assign \events.ca_crc4_error  = events[13];
-  assign \events.ca_no_answer  = events[14];
-  assign \events.ca_refused  = events[15];
-  assign \events.ca_aborted  = events[16];
-  assign \events.ca_data_fault  = events[17];
+  assign \events$294.crc_word0  = \events$294 [0];
+  assign \events$294.crc_word1  = \events$294 [1];
+  assign \events$294.no_ack  = \events$294 [2];
+  assign \events$294.no_start  = \events$294 [3];
+  assign \events$294.delay_range  = \events$294 [4];
+  assign \events$294.slo_stuck_low  = \events$294 [5];
+  assign \events$294.lc_repeat  = \events$294 [6];
+  assign \events$294.lc_skip  = \events$294 [7];
+  assign \events$294.lc_zero  = \events$294 [8];
+  assign \events$294.spw_mismatch  = \events$294 [9];
+  assign \events$294.overrun  = \events$294 [10];
+  assign \events$294.aborted  = \events$294 [11];
+  assign \events$294.no_stop  = \events$294 [12];
+  assign \events$294.noisy_line  = \events$294 [13];
+  assign \events$294.delay_jump  = \events$294 [14];
+  assign \events$294.noise_event  = \events$294 [15];
+  assign \events$294.ca_crc4_error  = \events$294 [16];
+  assign \events$294.ca_no_answer  = \events$294 [17];
+  assign \events$294.ca_refused  = \events$294 [18];
+  assign \events$294.ca_aborted  = \events$294 [19];
+  assign \events$294.ca_data_fault  = \events$294 [20];
   assign \faults.no_ack  = faults[0];
   assign \faults.no_start  = faults[1];
   assign \faults.delay_range  = faults[2];
@@ -1254,87 +1444,104 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \counts.overrun  = counts[175:160];
   assign \counts.aborted  = counts[191:176];
   assign \counts.no_stop  = counts[207:192];
-  assign \counts.ca_crc4_error  = counts[223:208];
-  assign \counts.ca_no_answer  = counts[239:224];
-  assign \counts.ca_refused  = counts[255:240];
-  assign \counts.ca_aborted  = counts[271:256];
-  assign \counts.ca_data_fault  = counts[287:272];
-  assign \result$261.status  = \result$261 [3:0];
-  assign \result$261.timestamp  = \result$261 [35:4];
-  assign \result$261.line_delay  = \result$261 [48:36];
-  assign \result$261.cds  = \result$261 [49];
-  assign \result$261.word0  = \result$261 [107:50];
-  assign \result$261.word0.position  = \result$261 [104:50];
-  assign \result$261.word0.ne  = \result$261 [105];
-  assign \result$261.word0.nw  = \result$261 [106];
-  assign \result$261.word0.crc_ok  = \result$261 [107];
-  assign \result$261.word1  = \result$261 [150:108];
-  assign \result$261.word1.position  = \result$261 [147:108];
-  assign \result$261.word1.ne  = \result$261 [148];
-  assign \result$261.word1.nw  = \result$261 [149];
-  assign \result$261.word1.crc_ok  = \result$261 [150];
-  assign \result$261.lc  = \result$261 [156:151];
-  assign \result$261.lc_repeat  = \result$261 [157];
-  assign \result$261.lc_skip  = \result$261 [158];
-  assign \result$261.lc_zero  = \result$261 [159];
-  assign \result$261.spw_mismatch  = \result$261 [160];
-  assign events[17] = \$11 ;
-  assign events[16] = \$9 ;
-  assign events[15] = \$7 ;
-  assign events[14] = \$5 ;
-  assign events[13] = \$3 ;
-  assign events[12] = faults[6];
-  assign events[11] = faults[4];
-  assign events[10] = overrun;
-  assign events[9] = \$1 ;
-  assign events[8] = \lc_zero$222 ;
-  assign events[7] = \lc_skip$221 ;
-  assign events[6] = \lc_repeat$220 ;
-  assign events[5] = faults[3];
-  assign events[4] = faults[2];
-  assign events[3] = faults[1];
-  assign events[2] = faults[0];
-  assign events[1] = crc_error[1];
-  assign events[0] = crc_error[0];
+  assign \counts.noisy_line  = counts[223:208];
+  assign \counts.delay_jump  = counts[239:224];
+  assign \counts.noise_event  = counts[255:240];
+  assign \counts.ca_crc4_error  = counts[271:256];
+  assign \counts.ca_no_answer  = counts[287:272];
+  assign \counts.ca_refused  = counts[303:288];
+  assign \counts.ca_aborted  = counts[319:304];
+  assign \counts.ca_data_fault  = counts[335:320];
+  assign \result$304.status  = \result$304 [3:0];
+  assign \result$304.timestamp  = \result$304 [35:4];
+  assign \result$304.line_delay  = \result$304 [48:36];
+  assign \result$304.cds  = \result$304 [49];
+  assign \result$304.noise_events  = \result$304 [53:50];
+  assign \result$304.delay_settled  = \result$304 [54];
+  assign \result$304.settled_delay  = \result$304 [67:55];
+  assign \result$304.delay_spread  = \result$304 [75:68];
+  assign \result$304.word0  = \result$304 [133:76];
+  assign \result$304.word0.position  = \result$304 [130:76];
+  assign \result$304.word0.ne  = \result$304 [131];
+  assign \result$304.word0.nw  = \result$304 [132];
+  assign \result$304.word0.crc_ok  = \result$304 [133];
+  assign \result$304.word1  = \result$304 [176:134];
+  assign \result$304.word1.position  = \result$304 [173:134];
+  assign \result$304.word1.ne  = \result$304 [174];
+  assign \result$304.word1.nw  = \result$304 [175];
+  assign \result$304.word1.crc_ok  = \result$304 [176];
+  assign \result$304.lc  = \result$304 [182:177];
+  assign \result$304.lc_repeat  = \result$304 [183];
+  assign \result$304.lc_skip  = \result$304 [184];
+  assign \result$304.lc_zero  = \result$304 [185];
+  assign \result$304.spw_mismatch  = \result$304 [186];
+  assign \events$294 [20] = \$16 ;
+  assign \events$294 [19] = \$14 ;
+  assign \events$294 [18] = \$12 ;
+  assign \events$294 [17] = \$10 ;
+  assign \events$294 [16] = \$8 ;
+  assign \events$294 [15] = \event ;
+  assign \events$294 [14] = \$6 ;
+  assign \events$294 [13] = \$4 ;
+  assign \events$294 [12] = faults[6];
+  assign \events$294 [11] = faults[4];
+  assign \events$294 [10] = overrun;
+  assign \events$294 [9] = \$2 ;
+  assign \events$294 [8] = \lc_zero$264 ;
+  assign \events$294 [7] = \lc_skip$263 ;
+  assign \events$294 [6] = \lc_repeat$262 ;
+  assign \events$294 [5] = faults[3];
+  assign \events$294 [4] = faults[2];
+  assign \events$294 [3] = faults[1];
+  assign \events$294 [2] = faults[0];
+  assign \events$294 [1] = crc_error[1];
+  assign \events$294 [0] = crc_error[0];
   assign wbuf[39:36] = ca_wbuf_en;
   assign wbuf[35:4] = ca_wbuf_data;
   assign wbuf[3:0] = ca_wbuf_addr;
-  assign \request$231 [17] = ca_write;
-  assign \request$231 [16:10] = ca_count;
-  assign \request$231 [9:3] = ca_address;
-  assign \request$231 [2:0] = ca_slave_id;
+  assign \request$273 [17] = ca_write;
+  assign \request$273 [16:10] = ca_count;
+  assign \request$273 [9:3] = ca_address;
+  assign \request$273 [2:0] = ca_slave_id;
   assign frame[35:4] = first_rise_time;
-  assign frame[160] = \spw_mismatch$227 ;
-  assign frame[150] = \$16 ;
-  assign frame[149] = nw[1];
-  assign frame[148] = ne[1];
-  assign frame[147:108] = spw;
-  assign frame[107] = crc_ok[0];
-  assign frame[106] = nw[0];
-  assign frame[105] = ne[0];
-  assign frame[104:50] = data0;
-  assign frame[159] = \lc_zero$222 ;
-  assign frame[158] = \lc_skip$221 ;
-  assign frame[157] = \lc_repeat$220 ;
-  assign frame[156:151] = \lc$174 ;
-  assign frame[49] = \cds$219 ;
+  assign frame[186] = \spw_mismatch$269 ;
+  assign frame[176] = \$22 ;
+  assign frame[175] = nw[1];
+  assign frame[174] = ne[1];
+  assign frame[173:134] = spw;
+  assign frame[133] = crc_ok[0];
+  assign frame[132] = nw[0];
+  assign frame[131] = ne[0];
+  assign frame[130:76] = data0;
+  assign frame[185] = \lc_zero$264 ;
+  assign frame[184] = \lc_skip$263 ;
+  assign frame[183] = \lc_repeat$262 ;
+  assign frame[182:177] = \lc$191 ;
+  assign frame[75:68] = spread;
+  assign frame[67:55] = \settled_delay$260 ;
+  assign frame[54] = settled;
+  assign frame[53:50] = events;
+  assign frame[49] = \cds$257 ;
   assign frame[48:36] = delay;
-  assign frame[3:0] = \status$218 ;
-  assign \words$185 [19:10] = cycle[145:136];
-  assign \words$185 [9:0] = cycle[134:125];
-  assign words[19:10] = cycle[145:136];
-  assign words[9:0] = cycle[134:125];
-  assign live[154:147] = cfg_spw_tolerance;
-  assign live[146] = cfg_spw_check;
-  assign live[145:144] = cfg_w1_crc;
-  assign live[143] = cfg_w1_lc;
-  assign live[142] = cfg_w1_nenw;
-  assign live[141:136] = cfg_w1_data_bits;
-  assign live[135] = cfg_w1_enable;
-  assign live[134:133] = cfg_w0_crc;
-  assign live[132] = cfg_w0_lc;
-  assign live[131] = cfg_w0_nenw;
-  assign live[130:125] = cfg_w0_data_bits;
+  assign frame[3:0] = \status$256 ;
+  assign \words$224 [19:10] = cycle[165:156];
+  assign \words$224 [9:0] = cycle[154:145];
+  assign words[19:10] = cycle[165:156];
+  assign words[9:0] = cycle[154:145];
+  assign live[174:167] = cfg_spw_tolerance;
+  assign live[166] = cfg_spw_check;
+  assign live[165:164] = cfg_w1_crc;
+  assign live[163] = cfg_w1_lc;
+  assign live[162] = cfg_w1_nenw;
+  assign live[161:156] = cfg_w1_data_bits;
+  assign live[155] = cfg_w1_enable;
+  assign live[154:153] = cfg_w0_crc;
+  assign live[152] = cfg_w0_lc;
+  assign live[151] = cfg_w0_nenw;
+  assign live[150:145] = cfg_w0_data_bits;
+  assign live[144:141] = cfg_delay_tolerance;
+  assign live[140:137] = cfg_noise_limit;
+  assign live[136:125] = cfg_quiet_time;
   assign live[124] = cfg_end_check;
   assign live[123:112] = cfg_delay_limit;
   assign live[111:88] = cfg_timeout_limit;
@@ -1345,7 +1552,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout_limit, delay_limit, no_start_limit, idle, clk);
+module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout_limit, delay_limit, quiet_time, delay_tolerance, no_start_limit, idle, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$14  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -1382,14 +1589,21 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   wire \$39 ;
   wire \$4 ;
   wire [11:0] \$40 ;
-  wire [24:0] \$41 ;
-  reg \$42 ;
-  reg [154:0] \$43 ;
-  reg [23:0] \$44 ;
-  reg [23:0] \$45 ;
-  reg [11:0] \$46 ;
-  reg [24:0] \$47 ;
+  wire \$41 ;
+  wire [11:0] \$42 ;
+  wire \$43 ;
+  wire [3:0] \$44 ;
+  wire [16:0] \$45 ;
+  wire [24:0] \$46 ;
+  reg \$47 ;
+  reg [174:0] \$48 ;
+  reg [23:0] \$49 ;
   wire \$5 ;
+  reg [23:0] \$50 ;
+  reg [11:0] \$51 ;
+  reg [11:0] \$52 ;
+  reg [16:0] \$53 ;
+  reg [24:0] \$54 ;
   wire \$6 ;
   wire \$7 ;
   wire \$8 ;
@@ -1398,13 +1612,16 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   reg [23:0] ack_limit = 24'h000000;
   input clk;
   wire clk;
-  output [154:0] cycle;
-  reg [154:0] cycle = 155'h000000000000000000000000000000000000000;
+  output [174:0] cycle;
+  reg [174:0] cycle = 175'h00000000000000000000000000000000000000000000;
   wire [23:0] \cycle.ack_limit ;
   wire [23:0] \cycle.break_time ;
   wire [11:0] \cycle.delay_limit ;
+  wire [3:0] \cycle.delay_tolerance ;
   wire \cycle.end_check ;
   wire [15:0] \cycle.ma_half_period ;
+  wire [3:0] \cycle.noise_limit ;
+  wire [11:0] \cycle.quiet_time ;
   wire [23:0] \cycle.request_period ;
   wire \cycle.spw_check ;
   wire [7:0] \cycle.spw_tolerance ;
@@ -1430,15 +1647,20 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   wire \cycle.w1_enable ;
   output [11:0] delay_limit;
   reg [11:0] delay_limit = 12'h000;
+  output [16:0] delay_tolerance;
+  reg [16:0] delay_tolerance = 17'h00000;
   input idle;
   wire idle;
-  input [154:0] live;
-  wire [154:0] live;
+  input [174:0] live;
+  wire [174:0] live;
   wire [23:0] \live.ack_limit ;
   wire [23:0] \live.break_time ;
   wire [11:0] \live.delay_limit ;
+  wire [3:0] \live.delay_tolerance ;
   wire \live.end_check ;
   wire [15:0] \live.ma_half_period ;
+  wire [3:0] \live.noise_limit ;
+  wire [11:0] \live.quiet_time ;
   wire [23:0] \live.request_period ;
   wire \live.spw_check ;
   wire [7:0] \live.spw_tolerance ;
@@ -1466,45 +1688,63 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   reg [24:0] no_start_limit = 25'h0000000;
   output ok;
   reg ok = 1'h0;
+  output [11:0] quiet_time;
+  reg [11:0] quiet_time = 12'h000;
   input rst;
   wire rst;
   output [23:0] timeout_limit;
   reg [23:0] timeout_limit = 24'h000000;
   output [1:0] word_count;
   wire [1:0] word_count;
+  assign \$46  = ack_limit + { cycle[15:0], 1'h1 };
+  assign word_count = 1'h1 + cycle[155];
   always @(posedge clk)
-    no_start_limit <= \$47 ;
+    ok <= \$47 ;
+  always @(posedge clk)
+    cycle <= \$48 ;
+  always @(posedge clk)
+    ack_limit <= \$49 ;
+  always @(posedge clk)
+    timeout_limit <= \$50 ;
+  always @(posedge clk)
+    delay_limit <= \$51 ;
+  always @(posedge clk)
+    quiet_time <= \$52 ;
+  always @(posedge clk)
+    delay_tolerance <= \$53 ;
+  always @(posedge clk)
+    no_start_limit <= \$54 ;
   assign \$1  = | live[15:1];
-  assign \$2  = | live[130:125];
-  assign \$3  = live[130:125] <= 6'h37;
+  assign \$2  = | live[150:145];
+  assign \$3  = live[150:145] <= 6'h37;
   assign \$4  = \$2  & \$3 ;
-  assign \$5  = ! live[134:133];
-  assign \$6  = live[134:133] == 1'h1;
+  assign \$5  = ! live[154:153];
+  assign \$6  = live[154:153] == 1'h1;
   assign \$7  = \$5  | \$6 ;
-  assign \$8  = live[134:133] == 2'h2;
+  assign \$8  = live[154:153] == 2'h2;
   assign \$9  = \$7  | \$8 ;
   assign \$10  = \$4  & \$9 ;
   assign \$11  = \$1  & \$10 ;
-  assign \$12  = ~ live[135];
-  assign \$13  = | live[141:136];
-  assign \$14  = live[141:136] <= 6'h28;
+  assign \$12  = ~ live[155];
+  assign \$13  = | live[161:156];
+  assign \$14  = live[161:156] <= 6'h28;
   assign \$15  = \$13  & \$14 ;
-  assign \$16  = ! live[145:144];
-  assign \$17  = live[145:144] == 1'h1;
+  assign \$16  = ! live[165:164];
+  assign \$17  = live[165:164] == 1'h1;
   assign \$18  = \$16  | \$17 ;
-  assign \$19  = live[145:144] == 2'h2;
+  assign \$19  = live[165:164] == 2'h2;
   assign \$20  = \$18  | \$19 ;
   assign \$21  = \$15  & \$20 ;
   assign \$22  = \$12  | \$21 ;
   assign \$23  = \$11  & \$22 ;
-  assign \$24  = live[135] & live[132];
-  assign \$25  = \$24  & live[143];
+  assign \$24  = live[155] & live[152];
+  assign \$25  = \$24  & live[163];
   assign \$26  = ~ \$25 ;
   assign \$27  = \$23  & \$26 ;
-  assign \$28  = ~ live[146];
-  assign \$29  = live[141:136] <= live[130:125];
-  assign \$30  = live[135] & \$29 ;
-  assign \$31  = | live[145:144];
+  assign \$28  = ~ live[166];
+  assign \$29  = live[161:156] <= live[150:145];
+  assign \$30  = live[155] & \$29 ;
+  assign \$31  = | live[165:164];
   assign \$32  = \$30  & \$31 ;
   assign \$33  = \$28  | \$32 ;
   assign \$34  = \$27  & \$33 ;
@@ -1514,70 +1754,83 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   assign \$38  = \$37  ? 24'h001f40 : live[111:88];
   assign \$39  = ! live[123:112];
   assign \$40  = \$39  ? 12'hfff : live[123:112];
-  assign \$41  = ack_limit + { cycle[15:0], 1'h1 };
-  assign word_count = 1'h1 + cycle[135];
-  always @(posedge clk)
-    ok <= \$42 ;
-  always @(posedge clk)
-    cycle <= \$43 ;
-  always @(posedge clk)
-    ack_limit <= \$44 ;
-  always @(posedge clk)
-    timeout_limit <= \$45 ;
-  always @(posedge clk)
-    delay_limit <= \$46 ;
+  assign \$41  = ! live[136:125];
+  assign \$42  = \$41  ? 12'h064 : live[136:125];
+  assign \$43  = ! live[144:141];
+  assign \$44  = \$43  ? 4'h2 : live[144:141];
+  assign \$45  = live[15:0] + \$44 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$47  = \$41 ;
+    \$47  = \$34 ;
     if (rst) begin
-      \$47  = 25'h0000000;
+      \$47  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$42  = \$34 ;
-    if (rst) begin
-      \$42  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$43  = cycle;
+    \$48  = cycle;
     if (idle) begin
-      \$43  = live;
+      \$48  = live;
     end
     if (rst) begin
-      \$43  = 155'h000000000000000000000000000000000000000;
+      \$48  = 175'h00000000000000000000000000000000000000000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$44  = ack_limit;
+    \$49  = ack_limit;
     if (idle) begin
-      \$44  = \$36 ;
+      \$49  = \$36 ;
     end
     if (rst) begin
-      \$44  = 24'h000000;
+      \$49  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$45  = timeout_limit;
+    \$50  = timeout_limit;
     if (idle) begin
-      \$45  = \$38 ;
+      \$50  = \$38 ;
     end
     if (rst) begin
-      \$45  = 24'h000000;
+      \$50  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$46  = delay_limit;
+    \$51  = delay_limit;
     if (idle) begin
-      \$46  = \$40 ;
+      \$51  = \$40 ;
     end
     if (rst) begin
-      \$46  = 12'h000;
+      \$51  = 12'h000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$52  = quiet_time;
+    if (idle) begin
+      \$52  = \$42 ;
+    end
+    if (rst) begin
+      \$52  = 12'h000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$53  = delay_tolerance;
+    if (idle) begin
+      \$53  = \$45 ;
+    end
+    if (rst) begin
+      \$53  = 17'h00000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$54  = \$46 ;
+    if (rst) begin
+      \$54  = 25'h0000000;
     end
   end
   assign \live.ma_half_period  = live[15:0];
@@ -1587,19 +1840,22 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   assign \live.timeout_limit  = live[111:88];
   assign \live.delay_limit  = live[123:112];
   assign \live.end_check  = live[124];
-  assign \live.w0  = live[134:125];
-  assign \live.w0.data_bits  = live[130:125];
-  assign \live.w0.nenw  = live[131];
-  assign \live.w0.lc  = live[132];
-  assign \live.w0.crc  = live[134:133];
-  assign \live.w1_enable  = live[135];
-  assign \live.w1  = live[145:136];
-  assign \live.w1.data_bits  = live[141:136];
-  assign \live.w1.nenw  = live[142];
-  assign \live.w1.lc  = live[143];
-  assign \live.w1.crc  = live[145:144];
-  assign \live.spw_check  = live[146];
-  assign \live.spw_tolerance  = live[154:147];
+  assign \live.quiet_time  = live[136:125];
+  assign \live.noise_limit  = live[140:137];
+  assign \live.delay_tolerance  = live[144:141];
+  assign \live.w0  = live[154:145];
+  assign \live.w0.data_bits  = live[150:145];
+  assign \live.w0.nenw  = live[151];
+  assign \live.w0.lc  = live[152];
+  assign \live.w0.crc  = live[154:153];
+  assign \live.w1_enable  = live[155];
+  assign \live.w1  = live[165:156];
+  assign \live.w1.data_bits  = live[161:156];
+  assign \live.w1.nenw  = live[162];
+  assign \live.w1.lc  = live[163];
+  assign \live.w1.crc  = live[165:164];
+  assign \live.spw_check  = live[166];
+  assign \live.spw_tolerance  = live[174:167];
   assign \cycle.ma_half_period  = cycle[15:0];
   assign \cycle.request_period  = cycle[39:16];
   assign \cycle.break_time  = cycle[63:40];
@@ -1607,24 +1863,28 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   assign \cycle.timeout_limit  = cycle[111:88];
   assign \cycle.delay_limit  = cycle[123:112];
   assign \cycle.end_check  = cycle[124];
-  assign \cycle.w0  = cycle[134:125];
-  assign \cycle.w0.data_bits  = cycle[130:125];
-  assign \cycle.w0.nenw  = cycle[131];
-  assign \cycle.w0.lc  = cycle[132];
-  assign \cycle.w0.crc  = cycle[134:133];
-  assign \cycle.w1_enable  = cycle[135];
-  assign \cycle.w1  = cycle[145:136];
-  assign \cycle.w1.data_bits  = cycle[141:136];
-  assign \cycle.w1.nenw  = cycle[142];
-  assign \cycle.w1.lc  = cycle[143];
-  assign \cycle.w1.crc  = cycle[145:144];
-  assign \cycle.spw_check  = cycle[146];
-  assign \cycle.spw_tolerance  = cycle[154:147];
+  assign \cycle.quiet_time  = cycle[136:125];
+  assign \cycle.noise_limit  = cycle[140:137];
+  assign \cycle.delay_tolerance  = cycle[144:141];
+  assign \cycle.w0  = cycle[154:145];
+  assign \cycle.w0.data_bits  = cycle[150:145];
+  assign \cycle.w0.nenw  = cycle[151];
+  assign \cycle.w0.lc  = cycle[152];
+  assign \cycle.w0.crc  = cycle[154:153];
+  assign \cycle.w1_enable  = cycle[155];
+  assign \cycle.w1  = cycle[165:156];
+  assign \cycle.w1.data_bits  = cycle[161:156];
+  assign \cycle.w1.nenw  = cycle[162];
+  assign \cycle.w1.lc  = cycle[163];
+  assign \cycle.w1.crc  = cycle[165:164];
+  assign \cycle.spw_check  = cycle[166];
+  assign \cycle.spw_tolerance  = cycle[174:167];
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.controller (clk, rst, request, restart_timer, report_delay, frame_doubtful, config_ok, end_check, resync, timer_clear, fault, fault_status, ma_run, in_clock, report_frame, idle, receiver_clear, faults, cdm_cycle, ma_hold, slo_stuck
-, slo_stuck_live, break_over, ack_expired, no_start_expired, delay_over, ma_arm, ma_busy, ma_held, ma_enough, early, locked, slo, frame_done, stopped, slots_full, started, stop_bit, cdm, abort);
+module \biss_master.controller (clk, rst, request, restart_timer, report_delay, frame_doubtful, config_ok, end_check, resync, timer_clear, waiting, fault, fault_status, ma_run, in_clock, report_frame, idle, receiver_clear, faults, cdm_cycle, ma_hold
+, slo_stuck, slo_stuck_live, quiet, quiet_live, break_over, ack_expired, no_start_expired, delay_over, ma_arm, ma_busy, ma_held, ma_enough, early, locked, slo, frame_done, stopped, slots_full, started, stop_bit, cdm
+, abort);
   reg \$auto$verilog_backend.cc:2355:dump_module$15  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -1659,21 +1919,21 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
   wire \$9 ;
   input abort;
   wire abort;
-  wire \abort$46 ;
   wire \abort$5 ;
+  wire \abort$50 ;
   wire aborted;
   input ack_expired;
   wire ack_expired;
-  wire \ack_expired$23 ;
+  wire \ack_expired$27 ;
   wire bad_config;
   input break_over;
   wire break_over;
   input cdm;
   wire cdm;
-  wire \cdm$43 ;
+  wire \cdm$47 ;
   output cdm_cycle;
   wire cdm_cycle;
-  wire \cdm_cycle$48 ;
+  wire \cdm_cycle$52 ;
   reg clear;
   input clk;
   wire clk;
@@ -1682,20 +1942,20 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
   wire \config_ok$3 ;
   reg [2:0] cycle_fsm_state = 3'h0;
   reg delay;
-  wire \delay$73 ;
+  wire \delay$78 ;
   input delay_over;
   wire delay_over;
-  wire \delay_over$27 ;
+  wire \delay_over$31 ;
   input early;
   wire early;
-  wire \early$17 ;
+  wire \early$21 ;
   input end_check;
   wire end_check;
   wire fail;
   output fault;
   reg fault;
-  wire \fault$35 ;
-  wire \fault$69 ;
+  wire \fault$39 ;
+  wire \fault$74 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -1710,6 +1970,8 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
+  (* enum_value_1101 = "NOISY_LINE" *)
+  (* enum_value_1110 = "DELAY_JUMP" *)
   output [3:0] fault_status;
   reg [3:0] fault_status;
   (* enum_base_type = "Status" *)
@@ -1726,17 +1988,19 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
-  wire [3:0] \fault_status$37 ;
+  (* enum_value_1101 = "NOISY_LINE" *)
+  (* enum_value_1110 = "DELAY_JUMP" *)
+  wire [3:0] \fault_status$41 ;
   output [6:0] faults;
   wire [6:0] faults;
-  wire [6:0] \faults$39 ;
-  wire \faults$39.aborted ;
-  wire \faults$39.bad_config ;
-  wire \faults$39.delay_range ;
-  wire \faults$39.no_ack ;
-  wire \faults$39.no_start ;
-  wire \faults$39.no_stop ;
-  wire \faults$39.slo_stuck_low ;
+  wire [6:0] \faults$43 ;
+  wire \faults$43.aborted ;
+  wire \faults$43.bad_config ;
+  wire \faults$43.delay_range ;
+  wire \faults$43.no_ack ;
+  wire \faults$43.no_start ;
+  wire \faults$43.no_stop ;
+  wire \faults$43.slo_stuck_low ;
   wire \faults.aborted ;
   wire \faults.bad_config ;
   wire \faults.delay_range ;
@@ -1757,15 +2021,15 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
   output idle;
   reg idle = 1'h0;
   (* init = 1'h0 *)
-  wire \idle$41 ;
+  wire \idle$45 ;
   output in_clock;
   reg in_clock;
   input locked;
   wire locked;
-  wire \locked$15 ;
+  wire \locked$19 ;
   input ma_arm;
   wire ma_arm;
-  wire \ma_arm$13 ;
+  wire \ma_arm$17 ;
   input ma_busy;
   wire ma_busy;
   input ma_enough;
@@ -1774,48 +2038,54 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
   wire ma_held;
   output ma_hold;
   wire ma_hold;
-  wire \ma_hold$50 ;
+  wire \ma_hold$54 ;
   output ma_run;
   reg ma_run;
   input no_start_expired;
   wire no_start_expired;
-  wire \no_start_expired$25 ;
+  wire \no_start_expired$29 ;
   reg pause = 1'h0;
+  input quiet;
+  wire quiet;
+  wire \quiet$13 ;
+  input quiet_live;
+  wire quiet_live;
+  wire \quiet_live$15 ;
   wire ready;
   output receiver_clear;
   reg receiver_clear = 1'h1;
   output report_delay;
   wire report_delay;
-  wire \report_delay$33 ;
+  wire \report_delay$37 ;
   output report_frame;
   reg report_frame;
-  wire \report_frame$31 ;
+  wire \report_frame$35 ;
   input request;
   wire request;
   output restart_timer;
   wire restart_timer;
-  wire \restart_timer$29 ;
+  wire \restart_timer$33 ;
   output resync;
   reg resync;
   input rst;
   wire rst;
   input slo;
   wire slo;
-  wire \slo$44 ;
+  wire \slo$48 ;
   wire \slo$7 ;
   input slo_stuck;
   wire slo_stuck;
-  wire \slo_stuck$45 ;
+  wire \slo_stuck$49 ;
   wire \slo_stuck$9 ;
   input slo_stuck_live;
   wire slo_stuck_live;
   wire \slo_stuck_live$11 ;
   input slots_full;
   wire slots_full;
-  wire \slots_full$21 ;
+  wire \slots_full$25 ;
   input started;
   wire started;
-  wire \started$19 ;
+  wire \started$23 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -1830,6 +2100,8 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
+  (* enum_value_1101 = "NOISY_LINE" *)
+  (* enum_value_1110 = "DELAY_JUMP" *)
   wire [3:0] status;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
@@ -1845,7 +2117,9 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
-  wire [3:0] \status$74 ;
+  (* enum_value_1101 = "NOISY_LINE" *)
+  (* enum_value_1110 = "DELAY_JUMP" *)
+  wire [3:0] \status$79 ;
   input stop_bit;
   wire stop_bit;
   input stopped;
@@ -1853,6 +2127,8 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
   wire stuck_low;
   output timer_clear;
   reg timer_clear;
+  output waiting;
+  reg waiting;
   reg watch;
   assign \$1  = ma_busy | abort;
   assign \$2  = ~ ma_enough;
@@ -1907,10 +2183,10 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
     .ack_expired(ack_expired),
     .clear(clear),
     .clk(clk),
-    .delay(\delay$73 ),
+    .delay(\delay$78 ),
     .delay_over(delay_over),
     .early(early),
-    .fault(\fault$69 ),
+    .fault(\fault$74 ),
     .locked(locked),
     .ma_arm(ma_arm),
     .no_start_expired(no_start_expired),
@@ -1918,7 +2194,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
     .rst(rst),
     .slots_full(slots_full),
     .started(started),
-    .status(\status$74 ),
+    .status(\status$79 ),
     .watch(watch)
   );
   \biss_master.controller.ready_check  ready_check (
@@ -1927,6 +2203,8 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
     .bad_config(bad_config),
     .config_ok(config_ok),
     .first_clock(first_clock),
+    .quiet(quiet),
+    .quiet_live(quiet_live),
     .ready(ready),
     .slo(slo),
     .slo_stuck(slo_stuck),
@@ -1998,6 +2276,18 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
+    waiting = 1'h0;
+    casez (cycle_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          waiting = 1'h1;
+      3'h2:
+          waiting = 1'h1;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
     clear = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -2030,7 +2320,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
           if (abort) begin
             fault = 1'h1;
           end else if (frame_done) begin
-          end else if (\fault$69 ) begin
+          end else if (\fault$74 ) begin
             fault = 1'h1;
           end
       3'h4:
@@ -2079,8 +2369,8 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
           if (abort) begin
             fault_status = 4'ha;
           end else if (frame_done) begin
-          end else if (\fault$69 ) begin
-            fault_status = \status$74 ;
+          end else if (\fault$74 ) begin
+            fault_status = \status$79 ;
           end
       3'h4:
           if (abort) begin
@@ -2210,8 +2500,8 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
       3'h3:
           if (abort) begin
           end else if (frame_done) begin
-          end else if (\fault$69 ) begin
-            delay = \delay$73 ;
+          end else if (\fault$74 ) begin
+            delay = \delay$78 ;
           end
     endcase
   end
@@ -2279,7 +2569,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
             \$28  = 3'h0;
           end else if (frame_done) begin
             \$28  = 3'h4;
-          end else if (\fault$69 ) begin
+          end else if (\fault$74 ) begin
             \$28  = 3'h0;
           end
       3'h4:
@@ -2370,7 +2660,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
             \$29  = 1'h0;
           end else if (frame_done) begin
             \$29  = 1'h0;
-          end else if (\fault$69 ) begin
+          end else if (\fault$74 ) begin
             \$29  = 1'h0;
           end
       3'h4:
@@ -2461,7 +2751,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
             \$30  = 1'h1;
           end else if (frame_done) begin
             \$30  = 1'h0;
-          end else if (\fault$69 ) begin
+          end else if (\fault$74 ) begin
             \$30  = 1'h1;
           end
       3'h4:
@@ -2544,27 +2834,29 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
   assign \slo$7  = slo;
   assign \slo_stuck$9  = slo_stuck;
   assign \slo_stuck_live$11  = slo_stuck_live;
-  assign \ma_arm$13  = ma_arm;
-  assign \locked$15  = locked;
-  assign \early$17  = early;
-  assign \started$19  = started;
-  assign \slots_full$21  = slots_full;
-  assign \ack_expired$23  = ack_expired;
-  assign \no_start_expired$25  = no_start_expired;
-  assign \delay_over$27  = delay_over;
-  assign \restart_timer$29  = restart_timer;
-  assign \report_frame$31  = report_frame;
-  assign \report_delay$33  = report_delay;
-  assign \fault$35  = fault;
-  assign \fault_status$37  = fault_status;
-  assign \faults$39  = faults;
-  assign \idle$41  = idle;
-  assign \cdm$43  = cdm;
-  assign \slo$44  = slo;
-  assign \slo_stuck$45  = slo_stuck;
-  assign \abort$46  = abort;
-  assign \cdm_cycle$48  = cdm_cycle;
-  assign \ma_hold$50  = ma_hold;
+  assign \quiet$13  = quiet;
+  assign \quiet_live$15  = quiet_live;
+  assign \ma_arm$17  = ma_arm;
+  assign \locked$19  = locked;
+  assign \early$21  = early;
+  assign \started$23  = started;
+  assign \slots_full$25  = slots_full;
+  assign \ack_expired$27  = ack_expired;
+  assign \no_start_expired$29  = no_start_expired;
+  assign \delay_over$31  = delay_over;
+  assign \restart_timer$33  = restart_timer;
+  assign \report_frame$35  = report_frame;
+  assign \report_delay$37  = report_delay;
+  assign \fault$39  = fault;
+  assign \fault_status$41  = fault_status;
+  assign \faults$43  = faults;
+  assign \idle$45  = idle;
+  assign \cdm$47  = cdm;
+  assign \slo$48  = slo;
+  assign \slo_stuck$49  = slo_stuck;
+  assign \abort$50  = abort;
+  assign \cdm_cycle$52  = cdm_cycle;
+  assign \ma_hold$54  = ma_hold;
   assign fail = fault;
   assign status = fault_status;
   assign frame = report_frame;
@@ -2575,13 +2867,13 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
   assign \faults.aborted  = faults[4];
   assign \faults.bad_config  = faults[5];
   assign \faults.no_stop  = faults[6];
-  assign \faults$39.no_ack  = faults[0];
-  assign \faults$39.no_start  = faults[1];
-  assign \faults$39.delay_range  = faults[2];
-  assign \faults$39.slo_stuck_low  = faults[3];
-  assign \faults$39.aborted  = faults[4];
-  assign \faults$39.bad_config  = faults[5];
-  assign \faults$39.no_stop  = faults[6];
+  assign \faults$43.no_ack  = faults[0];
+  assign \faults$43.no_start  = faults[1];
+  assign \faults$43.delay_range  = faults[2];
+  assign \faults$43.slo_stuck_low  = faults[3];
+  assign \faults$43.aborted  = faults[4];
+  assign \faults$43.bad_config  = faults[5];
+  assign \faults$43.no_stop  = faults[6];
 endmodule
 
 (* generator = "Amaranth" *)
@@ -2713,6 +3005,8 @@ module \biss_master.controller.line_faults (rst, restart_timer, clear, watch, fa
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
+  (* enum_value_1101 = "NOISY_LINE" *)
+  (* enum_value_1110 = "DELAY_JUMP" *)
   output [3:0] status;
   reg [3:0] status;
   input watch;
@@ -2805,11 +3099,12 @@ module \biss_master.controller.line_faults (rst, restart_timer, clear, watch, fa
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.controller.ready_check (config_ok, first_clock, bad_config, aborted, ready, stuck_low, slo_stuck, slo_stuck_live, slo, abort);
+module \biss_master.controller.ready_check (config_ok, first_clock, bad_config, aborted, ready, stuck_low, slo_stuck, slo_stuck_live, quiet, quiet_live, slo, abort);
   reg \$auto$verilog_backend.cc:2355:dump_module$18  = 0;
   wire \$1 ;
   wire \$2 ;
   wire \$3 ;
+  wire \$4 ;
   input abort;
   wire abort;
   output aborted;
@@ -2820,6 +3115,10 @@ module \biss_master.controller.ready_check (config_ok, first_clock, bad_config, 
   wire config_ok;
   input first_clock;
   wire first_clock;
+  input quiet;
+  wire quiet;
+  input quiet_live;
+  wire quiet_live;
   output ready;
   reg ready;
   input slo;
@@ -2833,6 +3132,24 @@ module \biss_master.controller.ready_check (config_ok, first_clock, bad_config, 
   assign \$1  = ~ config_ok;
   assign \$2  = first_clock & \$1 ;
   assign \$3  = first_clock ? slo_stuck_live : slo_stuck;
+  assign \$4  = first_clock ? quiet_live : quiet;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    aborted = 1'h0;
+    if (\$2 ) begin
+    end else if (abort) begin
+      aborted = 1'h1;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    ready = 1'h0;
+    if (\$2 ) begin
+    end else if (abort) begin
+    end else if (slo) begin
+      ready = \$4 ;
+    end
+  end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
     stuck_low = 1'h0;
@@ -2848,23 +3165,6 @@ module \biss_master.controller.ready_check (config_ok, first_clock, bad_config, 
     bad_config = 1'h0;
     if (\$2 ) begin
       bad_config = 1'h1;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    aborted = 1'h0;
-    if (\$2 ) begin
-    end else if (abort) begin
-      aborted = 1'h1;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
-    ready = 1'h0;
-    if (\$2 ) begin
-    end else if (abort) begin
-    end else if (slo) begin
-      ready = 1'h1;
     end
   end
 endmodule
@@ -2904,6 +3204,8 @@ module \biss_master.controller.report (fault, fault_status, report_frame, delay,
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
+  (* enum_value_1101 = "NOISY_LINE" *)
+  (* enum_value_1110 = "DELAY_JUMP" *)
   input [3:0] fault_status;
   wire [3:0] fault_status;
   output [6:0] faults;
@@ -2934,6 +3236,8 @@ module \biss_master.controller.report (fault, fault_status, report_frame, delay,
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
+  (* enum_value_1101 = "NOISY_LINE" *)
+  (* enum_value_1110 = "DELAY_JUMP" *)
   wire [3:0] status;
   assign report_delay = report_frame | delay;
   assign \$1  = fault_status == 3'h6;
@@ -2972,7 +3276,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master.counters (clk, rst, events, counts, clear);
   reg \$auto$verilog_backend.cc:2355:dump_module$19  = 0;
-  reg [17:0] \$1 ;
+  reg [20:0] \$1 ;
   reg \$2 ;
   input clear;
   wire clear;
@@ -3011,6 +3315,12 @@ module \biss_master.counters (clk, rst, events, counts, clear);
   (* init = 1'h0 *)
   wire \clear$59 ;
   (* init = 1'h0 *)
+  wire \clear$62 ;
+  (* init = 1'h0 *)
+  wire \clear$65 ;
+  (* init = 1'h0 *)
+  wire \clear$68 ;
+  (* init = 1'h0 *)
   wire \clear$7 ;
   reg clear_reg = 1'h0;
   input clk;
@@ -3033,8 +3343,11 @@ module \biss_master.counters (clk, rst, events, counts, clear);
   wire [15:0] \count$54 ;
   wire [15:0] \count$57 ;
   wire [15:0] \count$60 ;
-  output [287:0] counts;
-  wire [287:0] counts;
+  wire [15:0] \count$63 ;
+  wire [15:0] \count$66 ;
+  wire [15:0] \count$69 ;
+  output [335:0] counts;
+  wire [335:0] counts;
   wire [15:0] \counts.aborted ;
   wire [15:0] \counts.ca_aborted ;
   wire [15:0] \counts.ca_crc4_error ;
@@ -3043,6 +3356,7 @@ module \biss_master.counters (clk, rst, events, counts, clear);
   wire [15:0] \counts.ca_refused ;
   wire [15:0] \counts.crc_word0 ;
   wire [15:0] \counts.crc_word1 ;
+  wire [15:0] \counts.delay_jump ;
   wire [15:0] \counts.delay_range ;
   wire [15:0] \counts.lc_repeat ;
   wire [15:0] \counts.lc_skip ;
@@ -3050,11 +3364,13 @@ module \biss_master.counters (clk, rst, events, counts, clear);
   wire [15:0] \counts.no_ack ;
   wire [15:0] \counts.no_start ;
   wire [15:0] \counts.no_stop ;
+  wire [15:0] \counts.noise_event ;
+  wire [15:0] \counts.noisy_line ;
   wire [15:0] \counts.overrun ;
   wire [15:0] \counts.slo_stuck_low ;
   wire [15:0] \counts.spw_mismatch ;
-  input [17:0] events;
-  wire [17:0] events;
+  input [20:0] events;
+  wire [20:0] events;
   wire \events.aborted ;
   wire \events.ca_aborted ;
   wire \events.ca_crc4_error ;
@@ -3063,6 +3379,7 @@ module \biss_master.counters (clk, rst, events, counts, clear);
   wire \events.ca_refused ;
   wire \events.crc_word0 ;
   wire \events.crc_word1 ;
+  wire \events.delay_jump ;
   wire \events.delay_range ;
   wire \events.lc_repeat ;
   wire \events.lc_skip ;
@@ -3070,10 +3387,12 @@ module \biss_master.counters (clk, rst, events, counts, clear);
   wire \events.no_ack ;
   wire \events.no_start ;
   wire \events.no_stop ;
+  wire \events.noise_event ;
+  wire \events.noisy_line ;
   wire \events.overrun ;
   wire \events.slo_stuck_low ;
   wire \events.spw_mismatch ;
-  reg [17:0] events_reg = 18'h00000;
+  reg [20:0] events_reg = 21'h000000;
   wire \events_reg.aborted ;
   wire \events_reg.ca_aborted ;
   wire \events_reg.ca_crc4_error ;
@@ -3082,6 +3401,7 @@ module \biss_master.counters (clk, rst, events, counts, clear);
   wire \events_reg.ca_refused ;
   wire \events_reg.crc_word0 ;
   wire \events_reg.crc_word1 ;
+  wire \events_reg.delay_jump ;
   wire \events_reg.delay_range ;
   wire \events_reg.lc_repeat ;
   wire \events_reg.lc_skip ;
@@ -3089,6 +3409,8 @@ module \biss_master.counters (clk, rst, events, counts, clear);
   wire \events_reg.no_ack ;
   wire \events_reg.no_start ;
   wire \events_reg.no_stop ;
+  wire \events_reg.noise_event ;
+  wire \events_reg.noisy_line ;
   wire \events_reg.overrun ;
   wire \events_reg.slo_stuck_low ;
   wire \events_reg.spw_mismatch ;
@@ -3110,6 +3432,9 @@ module \biss_master.counters (clk, rst, events, counts, clear);
   wire \inc$52 ;
   wire \inc$55 ;
   wire \inc$58 ;
+  wire \inc$61 ;
+  wire \inc$64 ;
+  wire \inc$67 ;
   input rst;
   wire rst;
   always @(posedge clk)
@@ -3126,36 +3451,36 @@ module \biss_master.counters (clk, rst, events, counts, clear);
   \biss_master.counters.count_ca_aborted  count_ca_aborted (
     .clear(clear_reg),
     .clk(clk),
-    .count(\count$57 ),
-    .inc(events_reg[16]),
+    .count(\count$66 ),
+    .inc(events_reg[19]),
     .rst(rst)
   );
   \biss_master.counters.count_ca_crc4_error  count_ca_crc4_error (
     .clear(clear_reg),
     .clk(clk),
-    .count(\count$48 ),
-    .inc(events_reg[13]),
+    .count(\count$57 ),
+    .inc(events_reg[16]),
     .rst(rst)
   );
   \biss_master.counters.count_ca_data_fault  count_ca_data_fault (
+    .clear(clear_reg),
+    .clk(clk),
+    .count(\count$69 ),
+    .inc(events_reg[20]),
+    .rst(rst)
+  );
+  \biss_master.counters.count_ca_no_answer  count_ca_no_answer (
     .clear(clear_reg),
     .clk(clk),
     .count(\count$60 ),
     .inc(events_reg[17]),
     .rst(rst)
   );
-  \biss_master.counters.count_ca_no_answer  count_ca_no_answer (
-    .clear(clear_reg),
-    .clk(clk),
-    .count(\count$51 ),
-    .inc(events_reg[14]),
-    .rst(rst)
-  );
   \biss_master.counters.count_ca_refused  count_ca_refused (
     .clear(clear_reg),
     .clk(clk),
-    .count(\count$54 ),
-    .inc(events_reg[15]),
+    .count(\count$63 ),
+    .inc(events_reg[18]),
     .rst(rst)
   );
   \biss_master.counters.count_crc_word0  count_crc_word0 (
@@ -3170,6 +3495,13 @@ module \biss_master.counters (clk, rst, events, counts, clear);
     .clk(clk),
     .count(\count$12 ),
     .inc(events_reg[1]),
+    .rst(rst)
+  );
+  \biss_master.counters.count_delay_jump  count_delay_jump (
+    .clear(clear_reg),
+    .clk(clk),
+    .count(\count$51 ),
+    .inc(events_reg[14]),
     .rst(rst)
   );
   \biss_master.counters.count_delay_range  count_delay_range (
@@ -3221,6 +3553,20 @@ module \biss_master.counters (clk, rst, events, counts, clear);
     .inc(events_reg[12]),
     .rst(rst)
   );
+  \biss_master.counters.count_noise_event  count_noise_event (
+    .clear(clear_reg),
+    .clk(clk),
+    .count(\count$54 ),
+    .inc(events_reg[15]),
+    .rst(rst)
+  );
+  \biss_master.counters.count_noisy_line  count_noisy_line (
+    .clear(clear_reg),
+    .clk(clk),
+    .count(\count$48 ),
+    .inc(events_reg[13]),
+    .rst(rst)
+  );
   \biss_master.counters.count_overrun  count_overrun (
     .clear(clear_reg),
     .clk(clk),
@@ -3246,7 +3592,7 @@ module \biss_master.counters (clk, rst, events, counts, clear);
     if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
     \$1  = events;
     if (rst) begin
-      \$1  = 18'h00000;
+      \$1  = 21'h000000;
     end
   end
   always @* begin
@@ -3292,6 +3638,12 @@ module \biss_master.counters (clk, rst, events, counts, clear);
   assign \clear$56  = clear_reg;
   assign \inc$58  = events_reg[17];
   assign \clear$59  = clear_reg;
+  assign \inc$61  = events_reg[18];
+  assign \clear$62  = clear_reg;
+  assign \inc$64  = events_reg[19];
+  assign \clear$65  = clear_reg;
+  assign \inc$67  = events_reg[20];
+  assign \clear$68  = clear_reg;
   assign \events_reg.crc_word0  = events_reg[0];
   assign \events_reg.crc_word1  = events_reg[1];
   assign \events_reg.no_ack  = events_reg[2];
@@ -3305,11 +3657,14 @@ module \biss_master.counters (clk, rst, events, counts, clear);
   assign \events_reg.overrun  = events_reg[10];
   assign \events_reg.aborted  = events_reg[11];
   assign \events_reg.no_stop  = events_reg[12];
-  assign \events_reg.ca_crc4_error  = events_reg[13];
-  assign \events_reg.ca_no_answer  = events_reg[14];
-  assign \events_reg.ca_refused  = events_reg[15];
-  assign \events_reg.ca_aborted  = events_reg[16];
-  assign \events_reg.ca_data_fault  = events_reg[17];
+  assign \events_reg.noisy_line  = events_reg[13];
+  assign \events_reg.delay_jump  = events_reg[14];
+  assign \events_reg.noise_event  = events_reg[15];
+  assign \events_reg.ca_crc4_error  = events_reg[16];
+  assign \events_reg.ca_no_answer  = events_reg[17];
+  assign \events_reg.ca_refused  = events_reg[18];
+  assign \events_reg.ca_aborted  = events_reg[19];
+  assign \events_reg.ca_data_fault  = events_reg[20];
   assign \events.crc_word0  = events[0];
   assign \events.crc_word1  = events[1];
   assign \events.no_ack  = events[2];
@@ -3323,11 +3678,14 @@ module \biss_master.counters (clk, rst, events, counts, clear);
   assign \events.overrun  = events[10];
   assign \events.aborted  = events[11];
   assign \events.no_stop  = events[12];
-  assign \events.ca_crc4_error  = events[13];
-  assign \events.ca_no_answer  = events[14];
-  assign \events.ca_refused  = events[15];
-  assign \events.ca_aborted  = events[16];
-  assign \events.ca_data_fault  = events[17];
+  assign \events.noisy_line  = events[13];
+  assign \events.delay_jump  = events[14];
+  assign \events.noise_event  = events[15];
+  assign \events.ca_crc4_error  = events[16];
+  assign \events.ca_no_answer  = events[17];
+  assign \events.ca_refused  = events[18];
+  assign \events.ca_aborted  = events[19];
+  assign \events.ca_data_fault  = events[20];
   assign \counts.crc_word0  = counts[15:0];
   assign \counts.crc_word1  = counts[31:16];
   assign \counts.no_ack  = counts[47:32];
@@ -3341,11 +3699,17 @@ module \biss_master.counters (clk, rst, events, counts, clear);
   assign \counts.overrun  = counts[175:160];
   assign \counts.aborted  = counts[191:176];
   assign \counts.no_stop  = counts[207:192];
-  assign \counts.ca_crc4_error  = counts[223:208];
-  assign \counts.ca_no_answer  = counts[239:224];
-  assign \counts.ca_refused  = counts[255:240];
-  assign \counts.ca_aborted  = counts[271:256];
-  assign \counts.ca_data_fault  = counts[287:272];
+  assign \counts.noisy_line  = counts[223:208];
+  assign \counts.delay_jump  = counts[239:224];
+  assign \counts.noise_event  = counts[255:240];
+  assign \counts.ca_crc4_error  = counts[271:256];
+  assign \counts.ca_no_answer  = counts[287:272];
+  assign \counts.ca_refused  = counts[303:288];
+  assign \counts.ca_aborted  = counts[319:304];
+  assign \counts.ca_data_fault  = counts[335:320];
+  assign counts[335:320] = \count$69 ;
+  assign counts[319:304] = \count$66 ;
+  assign counts[303:288] = \count$63 ;
   assign counts[287:272] = \count$60 ;
   assign counts[271:256] = \count$57 ;
   assign counts[255:240] = \count$54 ;
@@ -3799,7 +4163,7 @@ module \biss_master.counters.count_crc_word1 (rst, inc, clear, count, clk);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_delay_range (rst, inc, clear, count, clk);
+module \biss_master.counters.count_delay_jump (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$28  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -3853,7 +4217,7 @@ module \biss_master.counters.count_delay_range (rst, inc, clear, count, clk);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_lc_repeat (rst, inc, clear, count, clk);
+module \biss_master.counters.count_delay_range (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$29  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -3907,7 +4271,7 @@ module \biss_master.counters.count_lc_repeat (rst, inc, clear, count, clk);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_lc_skip (rst, inc, clear, count, clk);
+module \biss_master.counters.count_lc_repeat (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$30  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -3961,7 +4325,7 @@ module \biss_master.counters.count_lc_skip (rst, inc, clear, count, clk);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_lc_zero (rst, inc, clear, count, clk);
+module \biss_master.counters.count_lc_skip (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$31  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -4015,7 +4379,7 @@ module \biss_master.counters.count_lc_zero (rst, inc, clear, count, clk);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_no_ack (rst, inc, clear, count, clk);
+module \biss_master.counters.count_lc_zero (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$32  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -4069,7 +4433,7 @@ module \biss_master.counters.count_no_ack (rst, inc, clear, count, clk);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_no_start (rst, inc, clear, count, clk);
+module \biss_master.counters.count_no_ack (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$33  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -4123,7 +4487,7 @@ module \biss_master.counters.count_no_start (rst, inc, clear, count, clk);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_no_stop (rst, inc, clear, count, clk);
+module \biss_master.counters.count_no_start (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$34  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -4177,7 +4541,7 @@ module \biss_master.counters.count_no_stop (rst, inc, clear, count, clk);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_overrun (rst, inc, clear, count, clk);
+module \biss_master.counters.count_no_stop (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$35  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -4231,7 +4595,7 @@ module \biss_master.counters.count_overrun (rst, inc, clear, count, clk);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_slo_stuck_low (rst, inc, clear, count, clk);
+module \biss_master.counters.count_noise_event (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$36  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -4285,7 +4649,7 @@ module \biss_master.counters.count_slo_stuck_low (rst, inc, clear, count, clk);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_spw_mismatch (rst, inc, clear, count, clk);
+module \biss_master.counters.count_noisy_line (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$37  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -4339,9 +4703,171 @@ module \biss_master.counters.count_spw_mismatch (rst, inc, clear, count, clk);
 endmodule
 
 (* generator = "Amaranth" *)
+module \biss_master.counters.count_overrun (rst, inc, clear, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$38  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master.counters.count_slo_stuck_low (rst, inc, clear, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$39  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master.counters.count_spw_mismatch (rst, inc, clear, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$40  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
 module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , receiver_clear, done, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1, lc, cpw_top, crc_ok
 , clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$38  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$41  = 0;
   wire [6:0] \$1 ;
   wire [1:0] \$10 ;
   reg [2:0] \$100 ;
@@ -4724,7 +5250,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     .valid(\valid$52 )
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     (* full_case = 32'd1 *)
     casez (words[6])
       1'h0:
@@ -4734,7 +5260,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -4748,7 +5274,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     (* full_case = 32'd1 *)
     casez (words[9:6])
       4'h0:
@@ -4786,7 +5312,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -4800,7 +5326,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     (* full_case = 32'd1 *)
     casez (words[16])
       1'h0:
@@ -4810,7 +5336,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     (* full_case = 32'd1 *)
     casez (words[17:16])
       2'h0:
@@ -4824,7 +5350,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:16])
       4'h0:
@@ -4862,7 +5388,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     (* full_case = 32'd1 *)
     casez (words[17:16])
       2'h0:
@@ -4876,7 +5402,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     \$94  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -4900,7 +5426,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     \$95  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -4922,7 +5448,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     \$96  = slots;
     if (\$34 ) begin
       \$96  = \$35 [15:0];
@@ -4935,7 +5461,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     \$97  = slots_full;
     if (\$34 ) begin
       \$97  = \$36 ;
@@ -4948,7 +5474,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     \$98  = started;
     casez (decoder_fsm_state)
       3'h0:
@@ -4964,7 +5490,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     \$99  = start_slot;
     casez (decoder_fsm_state)
       3'h0:
@@ -4980,7 +5506,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     \$100  = decoder_fsm_state;
     casez (decoder_fsm_state)
       3'h0:
@@ -5012,7 +5538,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     \$101  = cds;
     casez (decoder_fsm_state)
       3'h0:
@@ -5030,7 +5556,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     \$102  = idx;
     casez (decoder_fsm_state)
       3'h0:
@@ -5055,7 +5581,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     \$103  = in_data;
     casez (decoder_fsm_state)
       3'h0:
@@ -5080,7 +5606,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     \$104  = in_lc;
     casez (decoder_fsm_state)
       3'h0:
@@ -5105,7 +5631,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     \$105  = in_top;
     casez (decoder_fsm_state)
       3'h0:
@@ -5130,7 +5656,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     \$106  = word;
     casez (decoder_fsm_state)
       3'h0:
@@ -5158,7 +5684,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     \$107  = stop_bit;
     casez (decoder_fsm_state)
       3'h0:
@@ -5180,7 +5706,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     \$108  = data0;
     if (\$58 ) begin
       \$108  = { data0[53:0], \bit  };
@@ -5193,7 +5719,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     \$109  = ne;
     if (\$59 ) begin
       \$109 [0] = 1'h1;
@@ -5213,7 +5739,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     \$110  = nw;
     if (\$59 ) begin
       \$110 [0] = 1'h1;
@@ -5235,7 +5761,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     \$111  = data1;
     if (\$70 ) begin
       \$111  = { data1[38:0], \bit  };
@@ -5248,7 +5774,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     \$112  = lc;
     if (lc_load) begin
       \$112  = { lc[4:0], \bit  };
@@ -5261,7 +5787,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     \$113  = cpw_top;
     if (\$80 ) begin
       \$113  = { cpw_top[38:0], \bit  };
@@ -5274,7 +5800,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     in_word = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -5311,7 +5837,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.decoder.crc0 (rst, start, valid, kind, \bit , receiver_clear, ok, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$39  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$42  = 0;
   wire [5:0] \$1 ;
   wire \$10 ;
   wire [5:0] \$11 ;
@@ -5405,7 +5931,7 @@ module \biss_master.decoder.crc0 (rst, start, valid, kind, \bit , receiver_clear
   assign \$auto$rtlil.cc:2739:Not$12  = ~ { crc16_reg[14], crc16_reg[11], crc16_reg[6:5], crc16_reg[3:2], 1'h0 };
   assign \$auto$rtlil.cc:2739:Not$10  = ~ { crc6_reg[0], 1'h0 };
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
     \$31  = crc6_reg;
     if (valid) begin
       \$31  = \$5 ;
@@ -5420,7 +5946,7 @@ module \biss_master.decoder.crc0 (rst, start, valid, kind, \bit , receiver_clear
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
     \$32  = crc6_match;
     if (valid) begin
       \$32  = \$15 ;
@@ -5435,7 +5961,7 @@ module \biss_master.decoder.crc0 (rst, start, valid, kind, \bit , receiver_clear
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
     \$33  = crc16_reg;
     if (valid) begin
       \$33  = \$20 ;
@@ -5450,7 +5976,7 @@ module \biss_master.decoder.crc0 (rst, start, valid, kind, \bit , receiver_clear
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
     \$34  = crc16_match;
     if (valid) begin
       \$34  = \$30 ;
@@ -5465,7 +5991,7 @@ module \biss_master.decoder.crc0 (rst, start, valid, kind, \bit , receiver_clear
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
     ok = 1'h0;
     casez (kind)
       2'h0:
@@ -5486,7 +6012,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.decoder.crc1 (rst, start, valid, kind, \bit , receiver_clear, ok, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$40  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$43  = 0;
   wire [5:0] \$1 ;
   wire \$10 ;
   wire [5:0] \$11 ;
@@ -5580,7 +6106,7 @@ module \biss_master.decoder.crc1 (rst, start, valid, kind, \bit , receiver_clear
   assign \$auto$rtlil.cc:2739:Not$6  = ~ { crc6_reg[0], 1'h0 };
   assign \$auto$rtlil.cc:2739:Not$8  = ~ { crc16_reg[14], crc16_reg[11], crc16_reg[6:5], crc16_reg[3:2], 1'h0 };
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     \$31  = crc6_reg;
     if (valid) begin
       \$31  = \$5 ;
@@ -5595,7 +6121,7 @@ module \biss_master.decoder.crc1 (rst, start, valid, kind, \bit , receiver_clear
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     \$32  = crc6_match;
     if (valid) begin
       \$32  = \$15 ;
@@ -5610,7 +6136,7 @@ module \biss_master.decoder.crc1 (rst, start, valid, kind, \bit , receiver_clear
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     \$33  = crc16_reg;
     if (valid) begin
       \$33  = \$20 ;
@@ -5625,7 +6151,7 @@ module \biss_master.decoder.crc1 (rst, start, valid, kind, \bit , receiver_clear
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     \$34  = crc16_match;
     if (valid) begin
       \$34  = \$30 ;
@@ -5640,7 +6166,7 @@ module \biss_master.decoder.crc1 (rst, start, valid, kind, \bit , receiver_clear
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     ok = 1'h0;
     casez (kind)
       2'h0:
@@ -5660,8 +6186,478 @@ module \biss_master.decoder.crc1 (rst, start, valid, kind, \bit , receiver_clear
 endmodule
 
 (* generator = "Amaranth" *)
+module \biss_master.delay_check (rst, enable, rearm, check, clean, \tolerance$8 , learn, delay, jump, spread, settled_delay, settled, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$44  = 0;
+  wire [13:0] \$1 ;
+  wire \$10 ;
+  wire \$11 ;
+  wire [12:0] \$12 ;
+  wire [12:0] \$13 ;
+  wire \$14 ;
+  wire [12:0] \$15 ;
+  wire [12:0] \$16 ;
+  wire \$17 ;
+  wire \$18 ;
+  wire \$19 ;
+  wire [13:0] \$2 ;
+  wire \$20 ;
+  wire [12:0] \$21 ;
+  wire [12:0] \$22 ;
+  wire \$23 ;
+  wire \$24 ;
+  wire [7:0] \$25 ;
+  wire \$26 ;
+  wire \$27 ;
+  wire \$28 ;
+  wire \$29 ;
+  wire \$3 ;
+  wire \$30 ;
+  wire \$31 ;
+  wire \$32 ;
+  wire \$33 ;
+  wire \$34 ;
+  wire \$35 ;
+  wire \$36 ;
+  wire \$37 ;
+  wire \$38 ;
+  wire \$39 ;
+  wire [12:0] \$4 ;
+  wire \$40 ;
+  wire [2:0] \$41 ;
+  wire \$42 ;
+  wire \$43 ;
+  wire [12:0] \$44 ;
+  wire [12:0] \$45 ;
+  reg [13:0] \$46 ;
+  reg [13:0] \$47 ;
+  reg [16:0] \$48 ;
+  reg \$49 ;
+  wire [12:0] \$5 ;
+  reg \$50 ;
+  reg \$51 ;
+  reg [7:0] \$52 ;
+  reg \$53 ;
+  reg \$54 ;
+  reg [1:0] \$55 ;
+  reg [7:0] \$56 ;
+  reg [12:0] \$57 ;
+  reg [12:0] \$58 ;
+  reg \$59 ;
+  wire \$6 ;
+  wire [12:0] \$7 ;
+  wire [12:0] \$8 ;
+  wire \$9 ;
+  reg [12:0] cand = 13'h0000;
+  input check;
+  wire check;
+  input clean;
+  wire clean;
+  input clk;
+  wire clk;
+  reg [1:0] count = 2'h0;
+  input [12:0] delay;
+  wire [12:0] delay;
+  reg [13:0] diff_cand = 14'h0000;
+  reg [13:0] diff_ref = 14'h0000;
+  input enable;
+  wire enable;
+  reg far_ref = 1'h0;
+  output jump;
+  reg jump = 1'h0;
+  input learn;
+  wire learn;
+  wire [8:0] low_sum;
+  reg [7:0] magnitude = 8'h00;
+  reg near_cand = 1'h0;
+  input rearm;
+  wire rearm;
+  reg resettled = 1'h0;
+  input rst;
+  wire rst;
+  reg saturated = 1'h0;
+  output settled;
+  reg settled = 1'h0;
+  output [12:0] settled_delay;
+  reg [12:0] settled_delay = 13'h0000;
+  output [7:0] spread;
+  reg [7:0] spread = 8'h00;
+  reg [16:0] tolerance = 17'h00000;
+  input [16:0] \tolerance$8 ;
+  wire [16:0] \tolerance$8 ;
+  assign \$41  = count + 1'h1;
+  assign \$42  = ~ enable;
+  assign \$43  = rearm | \$42 ;
+  assign \$44  = ~ diff_ref[12:0];
+  assign \$45  = diff_ref[13] ? \$44  : diff_ref[12:0];
+  assign low_sum = \$45 [7:0] + diff_ref[13];
+  always @(posedge clk)
+    diff_ref <= \$46 ;
+  always @(posedge clk)
+    diff_cand <= \$47 ;
+  always @(posedge clk)
+    tolerance <= \$48 ;
+  always @(posedge clk)
+    saturated <= \$49 ;
+  always @(posedge clk)
+    far_ref <= \$50 ;
+  always @(posedge clk)
+    near_cand <= \$51 ;
+  always @(posedge clk)
+    magnitude <= \$52 ;
+  always @(posedge clk)
+    resettled <= \$53 ;
+  always @(posedge clk)
+    jump <= \$54 ;
+  always @(posedge clk)
+    count <= \$55 ;
+  always @(posedge clk)
+    spread <= \$56 ;
+  always @(posedge clk)
+    cand <= \$57 ;
+  always @(posedge clk)
+    settled_delay <= \$58 ;
+  always @(posedge clk)
+    settled <= \$59 ;
+  assign \$1  = delay - settled_delay;
+  assign \$2  = delay - cand;
+  assign \$3  = delay == 13'h1fff;
+  assign \$4  = ~ diff_ref[12:0];
+  assign \$5  = diff_ref[13] ? \$4  : diff_ref[12:0];
+  assign \$6  = \$5  > tolerance;
+  assign \$7  = ~ diff_ref[12:0];
+  assign \$8  = diff_ref[13] ? \$7  : diff_ref[12:0];
+  assign \$9  = \$8  == tolerance;
+  assign \$10  = diff_ref[13] & \$9 ;
+  assign \$11  = \$6  | \$10 ;
+  assign \$12  = ~ diff_cand[12:0];
+  assign \$13  = diff_cand[13] ? \$12  : diff_cand[12:0];
+  assign \$14  = \$13  > tolerance;
+  assign \$15  = ~ diff_cand[12:0];
+  assign \$16  = diff_cand[13] ? \$15  : diff_cand[12:0];
+  assign \$17  = \$16  == tolerance;
+  assign \$18  = diff_cand[13] & \$17 ;
+  assign \$19  = \$14  | \$18 ;
+  assign \$20  = ~ \$19 ;
+  assign \$21  = ~ diff_ref[12:0];
+  assign \$22  = diff_ref[13] ? \$21  : diff_ref[12:0];
+  assign \$23  = | \$22 [12:8];
+  assign \$24  = \$23  | low_sum[8];
+  assign \$25  = \$24  ? 8'hff : low_sum[7:0];
+  assign \$26  = settled & far_ref;
+  assign \$27  = ~ saturated;
+  assign \$28  = clean & \$27 ;
+  assign \$29  = ~ \$28 ;
+  assign \$30  = ~ jump;
+  assign \$31  = settled & \$30 ;
+  assign \$32  = \$29  | \$31 ;
+  assign \$33  = ! count;
+  assign \$34  = ~ near_cand;
+  assign \$35  = \$33  | \$34 ;
+  assign \$36  = count == 2'h3;
+  assign \$37  = ~ saturated;
+  assign \$38  = clean & \$37 ;
+  assign \$39  = magnitude > spread;
+  assign \$40  = \$38  & \$39 ;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    \$46  = \$1 ;
+    if (rst) begin
+      \$46  = 14'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    \$47  = \$2 ;
+    if (rst) begin
+      \$47  = 14'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    \$48  = \tolerance$8 ;
+    if (rst) begin
+      \$48  = 17'h00000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    \$49  = \$3 ;
+    if (rst) begin
+      \$49  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    \$50  = \$11 ;
+    if (rst) begin
+      \$50  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    \$51  = \$20 ;
+    if (rst) begin
+      \$51  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    \$52  = \$25 ;
+    if (rst) begin
+      \$52  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    \$53  = 1'h0;
+    if (learn) begin
+      if (\$32 ) begin
+      end else if (\$35 ) begin
+      end else if (\$36 ) begin
+        \$53  = settled;
+      end
+    end
+    if (\$43 ) begin
+      \$53  = 1'h0;
+    end
+    if (rst) begin
+      \$53  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    \$54  = jump;
+    if (check) begin
+      \$54  = \$26 ;
+    end
+    if (\$43 ) begin
+      \$54  = 1'h0;
+    end
+    if (rst) begin
+      \$54  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    \$55  = count;
+    if (learn) begin
+      (* full_case = 32'd1 *)
+      if (\$32 ) begin
+        \$55  = 2'h0;
+      end else if (\$35 ) begin
+        \$55  = 2'h1;
+      end else if (\$36 ) begin
+        \$55  = 2'h0;
+      end else begin
+        \$55  = \$41 [1:0];
+      end
+    end
+    if (\$43 ) begin
+      \$55  = 2'h0;
+    end
+    if (rst) begin
+      \$55  = 2'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    \$56  = spread;
+    if (learn) begin
+      if (\$32 ) begin
+        if (\$40 ) begin
+          \$56  = magnitude;
+        end
+      end else if (\$35 ) begin
+      end else if (\$36 ) begin
+        \$56  = 8'h00;
+      end
+    end
+    if (\$43 ) begin
+      \$56  = 8'h00;
+    end
+    if (rst) begin
+      \$56  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    \$57  = cand;
+    if (learn) begin
+      if (\$32 ) begin
+      end else if (\$35 ) begin
+        \$57  = delay;
+      end
+    end
+    if (rst) begin
+      \$57  = 13'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    \$58  = settled_delay;
+    if (learn) begin
+      if (\$32 ) begin
+      end else if (\$35 ) begin
+      end else if (\$36 ) begin
+        \$58  = cand;
+      end
+    end
+    if (\$43 ) begin
+      \$58  = 13'h0000;
+    end
+    if (rst) begin
+      \$58  = 13'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    \$59  = settled;
+    if (learn) begin
+      if (\$32 ) begin
+      end else if (\$35 ) begin
+      end else if (\$36 ) begin
+        \$59  = 1'h1;
+      end
+    end
+    if (\$43 ) begin
+      \$59  = 1'h0;
+    end
+    if (rst) begin
+      \$59  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master.line_noise (rst, sampler_noise, \event , noisy, events, limit, watch, level, close, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$45  = 0;
+  wire \$1 ;
+  wire [4:0] \$10 ;
+  wire \$11 ;
+  wire \$12 ;
+  wire \$13 ;
+  wire \$14 ;
+  reg \$15 ;
+  reg \$16 ;
+  reg [3:0] \$17 ;
+  reg [3:0] \$18 ;
+  reg \$19 ;
+  wire \$2 ;
+  wire \$3 ;
+  wire \$4 ;
+  wire [4:0] \$5 ;
+  wire [4:0] \$6 ;
+  wire \$7 ;
+  wire \$8 ;
+  wire [4:0] \$9 ;
+  input clk;
+  wire clk;
+  input close;
+  wire close;
+  output \event ;
+  wire \event ;
+  output [3:0] events;
+  wire [3:0] events;
+  reg [3:0] held_events = 4'h0;
+  reg held_noisy = 1'h0;
+  input level;
+  wire level;
+  reg level_prev = 1'h1;
+  input [3:0] limit;
+  wire [3:0] limit;
+  output noisy;
+  wire noisy;
+  reg over = 1'h0;
+  input rst;
+  wire rst;
+  reg [3:0] running = 4'h0;
+  input sampler_noise;
+  wire sampler_noise;
+  input watch;
+  wire watch;
+  assign \$1  = ! limit;
+  assign \$2  = \event  & \$1 ;
+  assign \$3  = running != 4'hf;
+  assign \$4  = \event  & \$3 ;
+  assign \$5  = running + 1'h1;
+  assign \$6  = \$4  ? \$5  : { 1'h0, running };
+  assign \$7  = running != 4'hf;
+  assign \$8  = \event  & \$7 ;
+  assign \$9  = running + 1'h1;
+  assign \$10  = \$8  ? \$9  : { 1'h0, running };
+  assign \$11  = \$10  > limit;
+  assign \$12  = watch & level_prev;
+  assign \$13  = ~ level;
+  assign \$14  = \$12  & \$13 ;
+  assign \event  = sampler_noise | \$14 ;
+  assign noisy = close ? over : held_noisy;
+  assign events = close ? running : held_events;
+  always @(posedge clk)
+    level_prev <= \$15 ;
+  always @(posedge clk)
+    held_noisy <= \$16 ;
+  always @(posedge clk)
+    held_events <= \$17 ;
+  always @(posedge clk)
+    running <= \$18 ;
+  always @(posedge clk)
+    over <= \$19 ;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    \$15  = level;
+    if (rst) begin
+      \$15  = 1'h1;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    \$16  = held_noisy;
+    if (close) begin
+      \$16  = over;
+    end
+    if (rst) begin
+      \$16  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    \$17  = held_events;
+    if (close) begin
+      \$17  = running;
+    end
+    if (rst) begin
+      \$17  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    (* full_case = 32'd1 *)
+    if (close) begin
+      \$18  = { 3'h0, \event  };
+    end else begin
+      \$18  = \$6 [3:0];
+    end
+    if (rst) begin
+      \$18  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    (* full_case = 32'd1 *)
+    if (close) begin
+      \$19  = \$2 ;
+    end else begin
+      \$19  = \$11 ;
+    end
+    if (rst) begin
+      \$19  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
 module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_rise, second_rise, ma, rises, busy, held, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$41  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$46  = 0;
   wire [16:0] \$1 ;
   wire \$10 ;
   wire [16:0] \$11 ;
@@ -5786,7 +6782,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
   always @(posedge clk)
     released <= \$42 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     \$34  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -5801,7 +6797,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     \$35  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -5816,7 +6812,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     \$36  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -5831,7 +6827,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     \$37  = ma;
     casez (ma_fsm_state)
       3'h0:
@@ -5860,7 +6856,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     \$38  = phase_left;
     casez (ma_fsm_state)
       3'h0:
@@ -5902,7 +6898,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     \$39  = last_clock;
     casez (ma_fsm_state)
       3'h0:
@@ -5944,7 +6940,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     \$40  = rises;
     casez (ma_fsm_state)
       3'h0:
@@ -5963,7 +6959,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     \$41  = ma_fsm_state;
     casez (ma_fsm_state)
       3'h0:
@@ -5999,7 +6995,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     \$42  = released;
     casez (ma_fsm_state)
       3'h0:
@@ -6023,7 +7019,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     busy = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -6039,7 +7035,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     held = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -6056,7 +7052,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.ma_stop (rst, words, w1_enable, clear, rises, enough, \started$10 , start_slot, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$42  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$47  = 0;
   reg [7:0] \$1 ;
   reg [7:0] \$10 ;
   wire [8:0] \$11 ;
@@ -6137,7 +7133,7 @@ module \biss_master.ma_stop (rst, words, w1_enable, clear, rises, enough, \start
   always @(posedge clk)
     word1_len <= \$17 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     (* full_case = 32'd1 *)
     casez (words[9:6])
       4'h0:
@@ -6175,7 +7171,7 @@ module \biss_master.ma_stop (rst, words, w1_enable, clear, rises, enough, \start
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:16])
       4'h0:
@@ -6213,42 +7209,42 @@ module \biss_master.ma_stop (rst, words, w1_enable, clear, rises, enough, \start
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     \$12  = \$2 [7:0];
     if (rst) begin
       \$12  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     \$13  = \$4 ;
     if (rst) begin
       \$13  = 9'h000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     \$14  = \$5 ;
     if (rst) begin
       \$14  = 17'h00000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     \$15  = \started$10 ;
     if (rst) begin
       \$15  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     \$16  = \$9 ;
     if (rst) begin
       \$16  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     \$17  = \$11 [7:0];
     if (rst) begin
       \$17  = 8'h00;
@@ -6560,7 +7556,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.register_access.buffers (host_read__en, clk, rst, byte_to_send, rbuf_data, wbuf, index, store, byte_received, host_read__addr);
-  reg \$auto$verilog_backend.cc:2355:dump_module$43  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$48  = 0;
   wire \$1 ;
   wire \$2 ;
   wire \$3 ;
@@ -6677,21 +7673,21 @@ module \biss_master.register_access.buffers (host_read__en, clk, rst, byte_to_se
   assign \$1  = ! index[1:0];
   assign \$2  = index[1:0] == 1'h1;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     byte_received__addr = 4'h0;
     if (store) begin
       byte_received__addr = index[5:2];
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     byte_received__data = 32'd0;
     if (store) begin
       byte_received__data = { byte_received, byte_received, byte_received, byte_received };
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     byte_received__en = 4'h0;
     if (store) begin
       byte_received__en = { \$4 , \$3 , \$2 , \$1  };
@@ -6711,7 +7707,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.register_access.checker (rst, crc_ok, echo_ok, cds, control__take_data, start, control__take_crc, sent, \byte , clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$44  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$49  = 0;
   reg [7:0] \$1 ;
   reg [2:0] \$2 ;
   output [7:0] \byte ;
@@ -6754,7 +7750,7 @@ module \biss_master.register_access.checker (rst, crc_ok, echo_ok, cds, control_
     .valid(control__take_data)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$1  = \byte ;
     if (control__take_data) begin
       \$1  = { \byte [6:0], cds };
@@ -6764,7 +7760,7 @@ module \biss_master.register_access.checker (rst, crc_ok, echo_ok, cds, control_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$2  = got_crc;
     if (control__take_crc) begin
       \$2  = { got_crc[1:0], cds };
@@ -6780,7 +7776,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.register_access.checker.rx_crc (rst, crc, data_in, valid, start, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$45  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$50  = 0;
   wire [3:0] \$1 ;
   wire \$10 ;
   wire [3:0] \$11 ;
@@ -6823,7 +7819,7 @@ module \biss_master.register_access.checker.rx_crc (rst, crc, data_in, valid, st
     crc_reg <= \$13 ;
   assign \$auto$rtlil.cc:2739:Not$2  = ~ crc_reg;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$13  = crc_reg;
     if (valid) begin
       \$13 [0] = \$3 ;
@@ -6847,7 +7843,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.register_access.idle (rst, frame_end, frame_ok, run_enough, seen_enough, frame_cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$46  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
   wire \$1 ;
   wire [4:0] \$10 ;
   wire \$11 ;
@@ -6917,7 +7913,7 @@ module \biss_master.register_access.idle (rst, frame_end, frame_ok, run_enough, 
   always @(posedge clk)
     idle_seen <= \$24 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$23  = idle_run;
     if (frame_end) begin
       \$23  = \$4 [3:0];
@@ -6927,7 +7923,7 @@ module \biss_master.register_access.idle (rst, frame_end, frame_ok, run_enough, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$24  = idle_seen;
     if (frame_end) begin
       \$24  = \$10 [3:0];
@@ -6940,7 +7936,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.register_access.sender (rst, \byte , request, control__load_header, control__source, control__crc_bit, control__shift_header, start, valid, control__load_byte, control__shift_byte, sent, cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$47  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$52  = 0;
   wire \$1 ;
   wire [18:0] \$2 ;
   wire [8:0] \$3 ;
@@ -7012,7 +8008,7 @@ module \biss_master.register_access.sender (rst, \byte , request, control__load_
     .valid(valid)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
     \$6  = header;
     if (control__load_header) begin
       \$6  = { 2'h3, request[2:0], request[9:3], 4'h0, \$1 , request[17] };
@@ -7025,7 +8021,7 @@ module \biss_master.register_access.sender (rst, \byte , request, control__load_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
     \$7  = to_send;
     if (control__load_byte) begin
       \$7  = \byte ;
@@ -7038,7 +8034,7 @@ module \biss_master.register_access.sender (rst, \byte , request, control__load_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
     \$8  = sent;
     if (control__load_byte) begin
       \$8  = \byte ;
@@ -7048,7 +8044,7 @@ module \biss_master.register_access.sender (rst, \byte , request, control__load_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
     cdm = 1'h0;
     casez (control__source)
       3'h1:
@@ -7073,7 +8069,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.register_access.sender.tx_crc (rst, data_in, crc, start, valid, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$48  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$53  = 0;
   wire [3:0] \$1 ;
   wire \$10 ;
   wire [3:0] \$11 ;
@@ -7116,7 +8112,7 @@ module \biss_master.register_access.sender.tx_crc (rst, data_in, crc, start, val
     crc_reg <= \$13 ;
   assign \$auto$rtlil.cc:2739:Not$4  = ~ crc_reg;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$13  = crc_reg;
     if (valid) begin
       \$13 [0] = \$3 ;
@@ -7141,7 +8137,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame_ok, busy, crc_ok, echo_ok, run_enough, seen_enough, request, frame_cdm, frame_cds, done, result, index, send__load_header, send__source, send__crc_bit, send__shift_header, send__crc_start
 , send__crc_valid, send__load_byte, send__shift_byte, check__take_data, check__first, check__take_crc, store, start);
-  reg \$auto$verilog_backend.cc:2355:dump_module$49  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$54  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$100 ;
@@ -7497,7 +8493,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
   always @(posedge clk)
     waited <= \$125 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$118  = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -7535,7 +8531,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$119  = result;
     casez (access_fsm_state)
       3'h0:
@@ -7589,7 +8585,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$120  = access_fsm_state;
     casez (access_fsm_state)
       3'h0:
@@ -7686,7 +8682,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$121  = req;
     casez (access_fsm_state)
       3'h0:
@@ -7703,7 +8699,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$122  = index;
     casez (access_fsm_state)
       3'h0:
@@ -7742,7 +8738,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$123  = step;
     casez (access_fsm_state)
       3'h0:
@@ -7800,7 +8796,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$124  = ending;
     casez (access_fsm_state)
       3'h0:
@@ -7867,7 +8863,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$125  = waited;
     casez (access_fsm_state)
       3'h0:
@@ -7899,7 +8895,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     send__load_header = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -7913,7 +8909,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     send__source = 3'h0;
     casez (access_fsm_state)
       3'h0:
@@ -7940,7 +8936,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     send__crc_bit = 2'h0;
     casez (access_fsm_state)
       3'h0:
@@ -7960,7 +8956,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     send__shift_header = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -7979,7 +8975,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     send__crc_start = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -8008,7 +9004,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     send__crc_valid = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -8029,7 +9025,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     send__load_byte = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -8051,7 +9047,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     send__shift_byte = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -8072,7 +9068,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     check__take_data = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -8094,7 +9090,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     check__first = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -8116,7 +9112,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     check__take_crc = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -8140,7 +9136,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     store = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -8179,22 +9175,26 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.results (rst, report_delay, report, valid, frame, report_frame, done, valid_out, result, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$50  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$55  = 0;
   reg \$1 ;
   reg \$2 ;
-  reg [160:0] \$3 ;
+  reg [186:0] \$3 ;
   input clk;
   wire clk;
   output done;
   reg done = 1'h0;
-  input [160:0] frame;
-  wire [160:0] frame;
+  input [186:0] frame;
+  wire [186:0] frame;
   wire \frame.cds ;
+  wire \frame.delay_settled ;
+  wire [7:0] \frame.delay_spread ;
   wire [5:0] \frame.lc ;
   wire \frame.lc_repeat ;
   wire \frame.lc_skip ;
   wire \frame.lc_zero ;
   wire [12:0] \frame.line_delay ;
+  wire [3:0] \frame.noise_events ;
+  wire [12:0] \frame.settled_delay ;
   wire \frame.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
@@ -8210,6 +9210,8 @@ module \biss_master.results (rst, report_delay, report, valid, frame, report_fra
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
+  (* enum_value_1101 = "NOISY_LINE" *)
+  (* enum_value_1110 = "DELAY_JUMP" *)
   wire [3:0] \frame.status ;
   wire [31:0] \frame.timestamp ;
   wire [57:0] \frame.word0 ;
@@ -8228,14 +9230,18 @@ module \biss_master.results (rst, report_delay, report, valid, frame, report_fra
   wire report_delay;
   input report_frame;
   wire report_frame;
-  output [160:0] result;
-  reg [160:0] result = 161'h00000000000000000000000000000000000000000;
+  output [186:0] result;
+  reg [186:0] result = 187'h00000000000000000000000000000000000000000000000;
   wire \result.cds ;
+  wire \result.delay_settled ;
+  wire [7:0] \result.delay_spread ;
   wire [5:0] \result.lc ;
   wire \result.lc_repeat ;
   wire \result.lc_skip ;
   wire \result.lc_zero ;
   wire [12:0] \result.line_delay ;
+  wire [3:0] \result.noise_events ;
+  wire [12:0] \result.settled_delay ;
   wire \result.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
@@ -8251,6 +9257,8 @@ module \biss_master.results (rst, report_delay, report, valid, frame, report_fra
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
+  (* enum_value_1101 = "NOISY_LINE" *)
+  (* enum_value_1110 = "DELAY_JUMP" *)
   wire [3:0] \result.status ;
   wire [31:0] \result.timestamp ;
   wire [57:0] \result.word0 ;
@@ -8276,21 +9284,21 @@ module \biss_master.results (rst, report_delay, report, valid, frame, report_fra
   always @(posedge clk)
     result <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$1  = report;
     if (rst) begin
       \$1  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$2  = valid;
     if (rst) begin
       \$2  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$3  = result;
     if (report) begin
       \$3 [3:0] = frame[3:0];
@@ -8301,99 +9309,133 @@ module \biss_master.results (rst, report_delay, report, valid, frame, report_fra
     if (report_frame) begin
       \$3 [35:4] = frame[35:4];
       \$3 [49] = frame[49];
-      \$3 [107:50] = frame[107:50];
-      \$3 [150:108] = frame[150:108];
-      \$3 [156:151] = frame[156:151];
-      \$3 [157] = frame[157];
-      \$3 [158] = frame[158];
-      \$3 [159] = frame[159];
-      \$3 [160] = frame[160];
+      \$3 [53:50] = frame[53:50];
+      \$3 [54] = frame[54];
+      \$3 [67:55] = frame[67:55];
+      \$3 [75:68] = frame[75:68];
+      \$3 [133:76] = frame[133:76];
+      \$3 [176:134] = frame[176:134];
+      \$3 [182:177] = frame[182:177];
+      \$3 [183] = frame[183];
+      \$3 [184] = frame[184];
+      \$3 [185] = frame[185];
+      \$3 [186] = frame[186];
     end
     if (rst) begin
-      \$3  = 161'h00000000000000000000000000000000000000000;
+      \$3  = 187'h00000000000000000000000000000000000000000000000;
     end
   end
   assign \result.status  = result[3:0];
   assign \result.timestamp  = result[35:4];
   assign \result.line_delay  = result[48:36];
   assign \result.cds  = result[49];
-  assign \result.word0  = result[107:50];
-  assign \result.word0.position  = result[104:50];
-  assign \result.word0.ne  = result[105];
-  assign \result.word0.nw  = result[106];
-  assign \result.word0.crc_ok  = result[107];
-  assign \result.word1  = result[150:108];
-  assign \result.word1.position  = result[147:108];
-  assign \result.word1.ne  = result[148];
-  assign \result.word1.nw  = result[149];
-  assign \result.word1.crc_ok  = result[150];
-  assign \result.lc  = result[156:151];
-  assign \result.lc_repeat  = result[157];
-  assign \result.lc_skip  = result[158];
-  assign \result.lc_zero  = result[159];
-  assign \result.spw_mismatch  = result[160];
+  assign \result.noise_events  = result[53:50];
+  assign \result.delay_settled  = result[54];
+  assign \result.settled_delay  = result[67:55];
+  assign \result.delay_spread  = result[75:68];
+  assign \result.word0  = result[133:76];
+  assign \result.word0.position  = result[130:76];
+  assign \result.word0.ne  = result[131];
+  assign \result.word0.nw  = result[132];
+  assign \result.word0.crc_ok  = result[133];
+  assign \result.word1  = result[176:134];
+  assign \result.word1.position  = result[173:134];
+  assign \result.word1.ne  = result[174];
+  assign \result.word1.nw  = result[175];
+  assign \result.word1.crc_ok  = result[176];
+  assign \result.lc  = result[182:177];
+  assign \result.lc_repeat  = result[183];
+  assign \result.lc_skip  = result[184];
+  assign \result.lc_zero  = result[185];
+  assign \result.spw_mismatch  = result[186];
   assign \frame.status  = frame[3:0];
   assign \frame.timestamp  = frame[35:4];
   assign \frame.line_delay  = frame[48:36];
   assign \frame.cds  = frame[49];
-  assign \frame.word0  = frame[107:50];
-  assign \frame.word0.position  = frame[104:50];
-  assign \frame.word0.ne  = frame[105];
-  assign \frame.word0.nw  = frame[106];
-  assign \frame.word0.crc_ok  = frame[107];
-  assign \frame.word1  = frame[150:108];
-  assign \frame.word1.position  = frame[147:108];
-  assign \frame.word1.ne  = frame[148];
-  assign \frame.word1.nw  = frame[149];
-  assign \frame.word1.crc_ok  = frame[150];
-  assign \frame.lc  = frame[156:151];
-  assign \frame.lc_repeat  = frame[157];
-  assign \frame.lc_skip  = frame[158];
-  assign \frame.lc_zero  = frame[159];
-  assign \frame.spw_mismatch  = frame[160];
+  assign \frame.noise_events  = frame[53:50];
+  assign \frame.delay_settled  = frame[54];
+  assign \frame.settled_delay  = frame[67:55];
+  assign \frame.delay_spread  = frame[75:68];
+  assign \frame.word0  = frame[133:76];
+  assign \frame.word0.position  = frame[130:76];
+  assign \frame.word0.ne  = frame[131];
+  assign \frame.word0.nw  = frame[132];
+  assign \frame.word0.crc_ok  = frame[133];
+  assign \frame.word1  = frame[176:134];
+  assign \frame.word1.position  = frame[173:134];
+  assign \frame.word1.ne  = frame[174];
+  assign \frame.word1.nw  = frame[175];
+  assign \frame.word1.crc_ok  = frame[176];
+  assign \frame.lc  = frame[182:177];
+  assign \frame.lc_repeat  = frame[183];
+  assign \frame.lc_skip  = frame[184];
+  assign \frame.lc_zero  = frame[185];
+  assign \frame.spw_mismatch  = frame[186];
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, early, locked, delay, sample, level, slo);
-  reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
+module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear, arm, early, locked, delay, sample, level, slo);
+  reg \$auto$verilog_backend.cc:2355:dump_module$56  = 0;
   wire \$1 ;
   wire \$10 ;
+  wire \$100 ;
+  wire \$101 ;
+  wire \$102 ;
+  wire \$103 ;
+  reg \$104 ;
+  reg [12:0] \$105 ;
+  reg [16:0] \$106 ;
+  reg \$107 ;
+  reg \$108 ;
+  reg \$109 ;
   wire \$11 ;
+  reg [12:0] \$110 ;
+  reg \$111 ;
+  reg \$112 ;
+  reg \$113 ;
+  reg [1:0] \$114 ;
+  reg [16:0] \$115 ;
+  reg \$116 ;
+  reg \$117 ;
+  reg \$118 ;
+  reg \$119 ;
   wire \$12 ;
-  wire [13:0] \$13 ;
-  wire [17:0] \$14 ;
+  reg [12:0] \$120 ;
+  reg [1:0] \$121 ;
+  wire \$13 ;
+  wire \$14 ;
   wire \$15 ;
   wire \$16 ;
   wire \$17 ;
   wire \$18 ;
-  wire [12:0] \$19 ;
+  wire \$19 ;
   wire [14:0] \$2 ;
   wire \$20 ;
   wire \$21 ;
-  wire [13:0] \$22 ;
-  wire [13:0] \$23 ;
-  wire [16:0] \$24 ;
+  wire \$22 ;
+  wire \$23 ;
+  wire \$24 ;
   wire \$25 ;
   wire [13:0] \$26 ;
-  wire [13:0] \$27 ;
+  wire [17:0] \$27 ;
   wire \$28 ;
-  wire [13:0] \$29 ;
+  wire \$29 ;
   wire \$3 ;
-  wire [17:0] \$30 ;
+  wire \$30 ;
   wire \$31 ;
-  wire \$32 ;
+  wire [12:0] \$32 ;
   wire \$33 ;
   wire \$34 ;
-  wire \$35 ;
-  wire \$36 ;
-  wire \$37 ;
+  wire [13:0] \$35 ;
+  wire [13:0] \$36 ;
+  wire [16:0] \$37 ;
   wire \$38 ;
-  wire \$39 ;
+  wire [13:0] \$39 ;
   wire [16:0] \$4 ;
-  wire \$40 ;
+  wire [13:0] \$40 ;
   wire \$41 ;
-  wire \$42 ;
-  wire \$43 ;
+  wire [13:0] \$42 ;
+  wire [17:0] \$43 ;
   wire \$44 ;
   wire \$45 ;
   wire \$46 ;
@@ -8415,25 +9457,46 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
   wire \$60 ;
   wire \$61 ;
   wire \$62 ;
-  reg \$63 ;
-  reg [12:0] \$64 ;
-  reg [16:0] \$65 ;
-  reg \$66 ;
-  reg [12:0] \$67 ;
-  reg \$68 ;
-  reg \$69 ;
+  wire \$63 ;
+  wire \$64 ;
+  wire \$65 ;
+  wire \$66 ;
+  wire \$67 ;
+  wire \$68 ;
+  wire \$69 ;
   wire \$7 ;
-  reg \$70 ;
-  reg [1:0] \$71 ;
-  reg [16:0] \$72 ;
-  reg \$73 ;
-  reg \$74 ;
-  reg \$75 ;
-  reg \$76 ;
-  reg [12:0] \$77 ;
-  reg [1:0] \$78 ;
+  wire \$70 ;
+  wire \$71 ;
+  wire \$72 ;
+  wire \$73 ;
+  wire \$74 ;
+  wire \$75 ;
+  wire \$76 ;
+  wire \$77 ;
+  wire \$78 ;
+  wire \$79 ;
   wire [13:0] \$8 ;
+  wire \$80 ;
+  wire \$81 ;
+  wire \$82 ;
+  wire \$83 ;
+  wire \$84 ;
+  wire \$85 ;
+  wire \$86 ;
+  wire \$87 ;
+  wire \$88 ;
+  wire \$89 ;
   wire [17:0] \$9 ;
+  wire \$90 ;
+  wire \$91 ;
+  wire \$92 ;
+  wire \$93 ;
+  wire \$94 ;
+  wire \$95 ;
+  wire \$96 ;
+  wire \$97 ;
+  wire \$98 ;
+  wire \$99 ;
   input arm;
   wire arm;
   output \bit ;
@@ -8443,6 +9506,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
   reg decided;
   output [12:0] delay;
   reg [12:0] delay = 13'h0000;
+  reg dropped;
   output early;
   reg early = 1'h0;
   reg [12:0] elapsed = 13'h0000;
@@ -8451,12 +9515,15 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
   reg gap = 1'h0;
   input [15:0] half_period;
   wire [15:0] half_period;
+  reg last = 1'h0;
   output level;
   wire level;
   output locked;
   reg locked = 1'h0;
   reg [12:0] mid_delay = 13'h0000;
   reg [16:0] mid_slot = 17'h00000;
+  output noise;
+  wire noise;
   reg odd = 1'h0;
   reg [16:0] period_load = 17'h00000;
   reg [1:0] phase = 2'h0;
@@ -8473,55 +9540,119 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
   reg slo_prev = 1'h1;
   reg [16:0] slot_left = 17'h00000;
   reg slot_zero = 1'h1;
+  reg tail_odd = 1'h0;
   reg [14:0] vote = 15'h0000;
   reg vote1 = 1'h0;
   reg vote2 = 1'h0;
   reg [14:0] vote_load = 15'h0000;
   reg vote_one = 1'h0;
-  assign \$22  = elapsed - 1'h1;
-  assign \$23  = \$21  ? 14'h1fff : \$22 ;
-  assign \$24  = half_period - 2'h2;
-  assign \$25  = elapsed == 13'h1fff;
-  assign \$26  = elapsed - 1'h1;
-  assign \$27  = \$25  ? 14'h1fff : \$26 ;
-  assign \$28  = elapsed != 13'h1fff;
-  assign \$29  = elapsed + 1'h1;
-  assign \$30  = slot_left - 1'h1;
-  assign \$31  = slot_left == 1'h1;
-  assign \$32  = ! phase;
-  assign \$33  = first_slot & \$32 ;
-  assign \$34  = \$33  & level;
-  assign \$35  = ~ single;
-  assign \$36  = decided & first_slot;
-  assign \$37  = vote1 & vote2;
-  assign \$38  = vote1 & level;
-  assign \$39  = \$37  | \$38 ;
-  assign \$40  = vote2 & level;
-  assign \$41  = \$39  | \$40 ;
-  assign \$42  = single ? level : \$41 ;
-  assign \$43  = ~ first_slot;
-  assign \$44  = decided & \$43 ;
-  assign \$45  = vote1 & vote2;
-  assign \$46  = vote1 & level;
-  assign \$47  = \$45  | \$46 ;
-  assign \$48  = vote2 & level;
-  assign \$49  = \$47  | \$48 ;
-  assign \bit  = single ? level : \$49 ;
-  assign \$50  = ! phase;
-  assign \$51  = first_slot & \$50 ;
-  assign \$52  = \$51  & level;
-  assign \$53  = decided & first_slot;
-  assign \$54  = vote1 & vote2;
-  assign \$55  = vote1 & level;
-  assign \$56  = \$54  | \$55 ;
-  assign \$57  = vote2 & level;
-  assign \$58  = \$56  | \$57 ;
-  assign \$59  = single ? level : \$58 ;
-  assign \$60  = ! sampler_fsm_state;
-  assign \$61  = sampler_fsm_state == 1'h1;
-  assign \$62  = sampler_fsm_state == 2'h2;
+  assign \$1  = half_period >= 2'h3;
+  assign \$2  = \$1  ? half_period[15:1] : 15'h0000;
+  assign \$3  = half_period < 2'h3;
+  assign \$4  = half_period - vote;
+  assign \$5  = $signed(\$4 ) - $signed(2'h1);
+  assign \$6  = vote - 1'h1;
+  assign \$7  = vote == 1'h1;
+  assign \$8  = mid_delay + 1'h1;
+  assign \$9  = mid_slot - 1'h1;
+  assign \$10  = ~ odd;
+  assign \$11  = ~ single;
+  assign \$12  = decided & \$11 ;
+  assign \$13  = vote1 & vote2;
+  assign \$14  = vote1 & level;
+  assign \$15  = \$13  | \$14 ;
+  assign \$16  = vote2 & level;
+  assign \$17  = \$15  | \$16 ;
+  assign \$18  = vote1 & vote2;
+  assign \$19  = vote1 & level;
+  assign \$20  = \$18  | \$19 ;
+  assign \$21  = vote2 & level;
+  assign \$22  = \$20  | \$21 ;
+  assign \$23  = level != \$22 ;
+  assign \$24  = ~ level;
+  assign \$25  = elapsed != 13'h1fff;
+  assign \$26  = elapsed + 1'h1;
+  assign \$27  = slot_left - 1'h1;
+  assign \$28  = slot_left == 1'h1;
+  assign \$29  = ~ level;
+  assign \$30  = slo_prev & \$29 ;
+  assign \$31  = elapsed == 13'h1fff;
+  assign \$32  = \$31  ? 13'h1fff : mid_delay;
+  assign \$33  = ! mid_slot;
+  assign \$34  = elapsed == 13'h1fff;
+  assign \$35  = elapsed - 1'h1;
+  assign \$36  = \$34  ? 14'h1fff : \$35 ;
+  assign \$37  = half_period - 2'h2;
+  assign \$38  = elapsed == 13'h1fff;
+  assign \$39  = elapsed - 1'h1;
+  assign \$40  = \$38  ? 14'h1fff : \$39 ;
+  assign \$41  = elapsed != 13'h1fff;
+  assign \$42  = elapsed + 1'h1;
+  assign \$43  = slot_left - 1'h1;
+  assign \$44  = slot_left == 1'h1;
+  assign \$45  = ! phase;
+  assign \$46  = first_slot & \$45 ;
+  assign \$47  = \$46  & level;
+  assign \$48  = ~ single;
+  assign \$49  = decided & first_slot;
+  assign \$50  = vote1 & vote2;
+  assign \$51  = vote1 & level;
+  assign \$52  = \$50  | \$51 ;
+  assign \$53  = vote2 & level;
+  assign \$54  = \$52  | \$53 ;
+  assign \$55  = single ? level : \$54 ;
+  assign \$56  = ~ first_slot;
+  assign \$57  = decided & \$56 ;
+  assign \$58  = vote1 & vote2;
+  assign \$59  = vote1 & level;
+  assign \$60  = \$58  | \$59 ;
+  assign \$61  = vote2 & level;
+  assign \$62  = \$60  | \$61 ;
+  assign \bit  = single ? level : \$62 ;
+  assign \$63  = ~ single;
+  assign \$64  = decided & \$63 ;
+  assign \$65  = vote1 == level;
+  assign \$66  = vote2 != level;
+  assign \$67  = \$65  & \$66 ;
+  assign \$68  = vote1 & vote2;
+  assign \$69  = vote1 & level;
+  assign \$70  = \$68  | \$69 ;
+  assign \$71  = vote2 & level;
+  assign \$72  = \$70  | \$71 ;
+  assign \$73  = vote1 != \$72 ;
+  assign \$74  = vote1 & vote2;
+  assign \$75  = vote1 & level;
+  assign \$76  = \$74  | \$75 ;
+  assign \$77  = vote2 & level;
+  assign \$78  = \$76  | \$77 ;
+  assign \$79  = last == \$78 ;
+  assign \$80  = \$73  & \$79 ;
+  assign \$81  = \$67  | \$80 ;
+  assign \$82  = vote1 & vote2;
+  assign \$83  = vote1 & level;
+  assign \$84  = \$82  | \$83 ;
+  assign \$85  = vote2 & level;
+  assign \$86  = \$84  | \$85 ;
+  assign \$87  = last == \$86 ;
+  assign \$88  = tail_odd & \$87 ;
+  assign \$89  = \$81  | \$88 ;
+  assign \$90  = \$64  & \$89 ;
+  assign noise = dropped | \$90 ;
+  assign \$91  = ! phase;
+  assign \$92  = first_slot & \$91 ;
+  assign \$93  = \$92  & level;
+  assign \$94  = decided & first_slot;
+  assign \$95  = vote1 & vote2;
+  assign \$96  = vote1 & level;
+  assign \$97  = \$95  | \$96 ;
+  assign \$98  = vote2 & level;
+  assign \$99  = \$97  | \$98 ;
+  assign \$100  = single ? level : \$99 ;
+  assign \$101  = ! sampler_fsm_state;
+  assign \$102  = sampler_fsm_state == 1'h1;
+  assign \$103  = sampler_fsm_state == 2'h2;
   always @(posedge clk)
-    slo_prev <= \$63 ;
+    slo_prev <= \$104 ;
   always @(posedge clk)
     vote <= \$2 ;
   always @(posedge clk)
@@ -8535,56 +9666,39 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
   always @(posedge clk)
     period_load <= { first_load, 1'h1 };
   always @(posedge clk)
-    mid_delay <= \$64 ;
+    mid_delay <= \$105 ;
   always @(posedge clk)
-    mid_slot <= \$65 ;
+    mid_slot <= \$106 ;
   always @(posedge clk)
-    odd <= \$66 ;
+    odd <= \$107 ;
   always @(posedge clk)
-    elapsed <= \$67 ;
+    last <= \$108 ;
   always @(posedge clk)
-    early <= \$68 ;
+    tail_odd <= \$109 ;
   always @(posedge clk)
-    locked <= \$69 ;
+    elapsed <= \$110 ;
   always @(posedge clk)
-    gap <= \$70 ;
+    early <= \$111 ;
   always @(posedge clk)
-    sampler_fsm_state <= \$71 ;
+    locked <= \$112 ;
   always @(posedge clk)
-    slot_left <= \$72 ;
+    gap <= \$113 ;
   always @(posedge clk)
-    slot_zero <= \$73 ;
+    sampler_fsm_state <= \$114 ;
   always @(posedge clk)
-    vote1 <= \$74 ;
+    slot_left <= \$115 ;
   always @(posedge clk)
-    vote2 <= \$75 ;
+    slot_zero <= \$116 ;
   always @(posedge clk)
-    first_slot <= \$76 ;
+    vote1 <= \$117 ;
   always @(posedge clk)
-    delay <= \$77 ;
+    vote2 <= \$118 ;
   always @(posedge clk)
-    phase <= \$78 ;
-  assign \$1  = half_period >= 2'h3;
-  assign \$2  = \$1  ? half_period[15:1] : 15'h0000;
-  assign \$3  = half_period < 2'h3;
-  assign \$4  = half_period - vote;
-  assign \$5  = $signed(\$4 ) - $signed(2'h1);
-  assign \$6  = vote - 1'h1;
-  assign \$7  = vote == 1'h1;
-  assign \$8  = mid_delay + 1'h1;
-  assign \$9  = mid_slot - 1'h1;
-  assign \$10  = ~ odd;
-  assign \$11  = ~ level;
-  assign \$12  = elapsed != 13'h1fff;
-  assign \$13  = elapsed + 1'h1;
-  assign \$14  = slot_left - 1'h1;
-  assign \$15  = slot_left == 1'h1;
-  assign \$16  = ~ level;
-  assign \$17  = slo_prev & \$16 ;
-  assign \$18  = elapsed == 13'h1fff;
-  assign \$19  = \$18  ? 13'h1fff : mid_delay;
-  assign \$20  = ! mid_slot;
-  assign \$21  = elapsed == 13'h1fff;
+    first_slot <= \$119 ;
+  always @(posedge clk)
+    delay <= \$120 ;
+  always @(posedge clk)
+    phase <= \$121 ;
   \biss_master.sampler.sync  sync (
     .clk(clk),
     .receiver_clear(receiver_clear),
@@ -8593,441 +9707,483 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     .stage1(level)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
-    \$63  = level;
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    \$104  = level;
     if (receiver_clear) begin
-      \$63  = 1'h1;
+      \$104  = 1'h1;
     end
     if (rst) begin
-      \$63  = 1'h1;
+      \$104  = 1'h1;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
-    \$64  = mid_delay;
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    \$105  = mid_delay;
     if (odd) begin
-      \$64  = \$8 [12:0];
+      \$105  = \$8 [12:0];
     end
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$17 ) begin
+          if (\$30 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
             end else begin
-              \$64  = \$27 [12:0];
+              \$105  = \$40 [12:0];
             end
           end
     endcase
     if (receiver_clear) begin
-      \$64  = 13'h0000;
+      \$105  = 13'h0000;
     end
     if (rst) begin
-      \$64  = 13'h0000;
+      \$105  = 13'h0000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
-    \$65  = mid_slot;
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    \$106  = mid_slot;
     (* full_case = 32'd1 *)
     if (odd) begin
     end else begin
-      \$65  = \$9 [16:0];
+      \$106  = \$9 [16:0];
     end
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$17 ) begin
+          if (\$30 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
             end else begin
-              \$65  = \$24 ;
+              \$106  = \$37 ;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$65  = 17'h00000;
+      \$106  = 17'h00000;
     end
     if (rst) begin
-      \$65  = 17'h00000;
+      \$106  = 17'h00000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
-    \$66  = \$10 ;
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    \$107  = \$10 ;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$17 ) begin
+          if (\$30 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
             end else begin
-              \$66  = 1'h1;
+              \$107  = 1'h1;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$66  = 1'h0;
+      \$107  = 1'h0;
     end
     if (rst) begin
-      \$66  = 1'h0;
+      \$107  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
-    \$67  = elapsed;
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    \$108  = last;
+    if (\$12 ) begin
+      \$108  = \$17 ;
+    end
+    casez (sampler_fsm_state)
+      2'h0:
+          /* empty */;
+      2'h1:
+          if (\$30 ) begin
+            \$108  = 1'h0;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$108  = 1'h0;
+    end
+    if (rst) begin
+      \$108  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    \$109  = tail_odd;
+    if (\$12 ) begin
+      \$109  = \$23 ;
+    end
+    casez (sampler_fsm_state)
+      2'h0:
+          /* empty */;
+      2'h1:
+          if (\$30 ) begin
+            \$109  = 1'h0;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$109  = 1'h0;
+    end
+    if (rst) begin
+      \$109  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    \$110  = elapsed;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$67  = 13'h0001;
+            \$110  = 13'h0001;
           end
       2'h1:
-          if (\$12 ) begin
-            \$67  = \$13 [12:0];
+          if (\$25 ) begin
+            \$110  = \$26 [12:0];
           end
       2'h2:
-          if (\$28 ) begin
-            \$67  = \$29 [12:0];
+          if (\$41 ) begin
+            \$110  = \$42 [12:0];
           end
     endcase
     if (receiver_clear) begin
-      \$67  = 13'h0000;
+      \$110  = 13'h0000;
     end
     if (rst) begin
-      \$67  = 13'h0000;
+      \$110  = 13'h0000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
-    \$68  = early;
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    \$111  = early;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$68  = \$11 ;
+            \$111  = \$24 ;
           end
     endcase
     if (receiver_clear) begin
-      \$68  = 1'h0;
+      \$111  = 1'h0;
     end
     if (rst) begin
-      \$68  = 1'h0;
+      \$111  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
-    \$69  = locked;
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    \$112  = locked;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$69  = 1'h0;
+            \$112  = 1'h0;
           end
       2'h1:
           /* empty */;
       2'h2:
-          if (\$36 ) begin
+          if (\$49 ) begin
             (* full_case = 32'd1 *)
-            if (\$42 ) begin
+            if (\$55 ) begin
             end else begin
-              \$69  = 1'h1;
+              \$112  = 1'h1;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$69  = 1'h0;
+      \$112  = 1'h0;
     end
     if (rst) begin
-      \$69  = 1'h0;
+      \$112  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
-    \$70  = gap;
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    \$113  = gap;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$70  = 1'h0;
+            \$113  = 1'h0;
           end
       2'h1:
         begin
           if (gap) begin
             if (slot_zero) begin
-              \$70  = 1'h0;
+              \$113  = 1'h0;
             end
           end
-          if (\$17 ) begin
-            \$70  = 1'h0;
+          if (\$30 ) begin
+            \$113  = 1'h0;
           end
         end
       2'h2:
-          if (\$34 ) begin
-            \$70  = \$35 ;
+          if (\$47 ) begin
+            \$113  = \$48 ;
           end
     endcase
     if (receiver_clear) begin
-      \$70  = 1'h0;
+      \$113  = 1'h0;
     end
     if (rst) begin
-      \$70  = 1'h0;
+      \$113  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
-    \$71  = sampler_fsm_state;
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    \$114  = sampler_fsm_state;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$71  = 2'h1;
+            \$114  = 2'h1;
           end
       2'h1:
-          if (\$17 ) begin
-            \$71  = 2'h2;
+          if (\$30 ) begin
+            \$114  = 2'h2;
           end
       2'h2:
         begin
-          if (\$34 ) begin
-            \$71  = 2'h1;
+          if (\$47 ) begin
+            \$114  = 2'h1;
           end
-          if (\$36 ) begin
-            if (\$42 ) begin
-              \$71  = 2'h1;
+          if (\$49 ) begin
+            if (\$55 ) begin
+              \$114  = 2'h1;
             end
           end
         end
     endcase
     if (receiver_clear) begin
-      \$71  = 2'h0;
+      \$114  = 2'h0;
     end
     if (rst) begin
-      \$71  = 2'h0;
+      \$114  = 2'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
-    \$72  = slot_left;
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    \$115  = slot_left;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
         begin
           if (gap) begin
-            \$72  = \$14 [16:0];
+            \$115  = \$27 [16:0];
           end
-          if (\$17 ) begin
+          if (\$30 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
-              \$72  = mid_slot;
+              \$115  = mid_slot;
             end else begin
-              \$72  = { 1'h0, first_load };
+              \$115  = { 1'h0, first_load };
             end
           end
         end
       2'h2:
         begin
-          \$72  = \$30 [16:0];
-          if (\$34 ) begin
-            \$72  = { 2'h0, vote_load };
+          \$115  = \$43 [16:0];
+          if (\$47 ) begin
+            \$115  = { 2'h0, vote_load };
           end else if (slot_zero) begin
             (* full_case = 32'd1 *)
             casez (phase)
               2'h0:
                   (* full_case = 32'd1 *)
                   if (single) begin
-                    \$72  = period_load;
+                    \$115  = period_load;
                   end else begin
-                    \$72  = { 2'h0, vote_load };
+                    \$115  = { 2'h0, vote_load };
                   end
               2'h1:
-                  \$72  = { 2'h0, vote_load };
+                  \$115  = { 2'h0, vote_load };
               default:
-                  \$72  = period_load;
+                  \$115  = period_load;
             endcase
           end
         end
     endcase
     if (receiver_clear) begin
-      \$72  = 17'h00000;
+      \$115  = 17'h00000;
     end
     if (rst) begin
-      \$72  = 17'h00000;
+      \$115  = 17'h00000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
-    \$73  = slot_zero;
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    \$116  = slot_zero;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
         begin
           if (gap) begin
-            \$73  = \$15 ;
+            \$116  = \$28 ;
           end
-          if (\$17 ) begin
+          if (\$30 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
-              \$73  = \$20 ;
+              \$116  = \$33 ;
             end else begin
-              \$73  = 1'h0;
+              \$116  = 1'h0;
             end
           end
         end
       2'h2:
         begin
-          \$73  = \$31 ;
-          if (\$34 ) begin
-            \$73  = vote_one;
+          \$116  = \$44 ;
+          if (\$47 ) begin
+            \$116  = vote_one;
           end else if (slot_zero) begin
             (* full_case = 32'd1 *)
             casez (phase)
               2'h0:
                   (* full_case = 32'd1 *)
                   if (single) begin
-                    \$73  = 1'h0;
+                    \$116  = 1'h0;
                   end else begin
-                    \$73  = vote_one;
+                    \$116  = vote_one;
                   end
               2'h1:
-                  \$73  = vote_one;
+                  \$116  = vote_one;
               default:
-                  \$73  = 1'h0;
+                  \$116  = 1'h0;
             endcase
           end
         end
     endcase
     if (receiver_clear) begin
-      \$73  = 1'h1;
+      \$116  = 1'h1;
     end
     if (rst) begin
-      \$73  = 1'h1;
+      \$116  = 1'h1;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
-    \$74  = vote1;
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    \$117  = vote1;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$17 ) begin
-            \$74  = 1'h0;
+          if (\$30 ) begin
+            \$117  = 1'h0;
           end
       2'h2:
-          if (\$34 ) begin
+          if (\$47 ) begin
           end else if (slot_zero) begin
             casez (phase)
               2'h0:
                   (* full_case = 32'd1 *)
                   if (single) begin
                   end else begin
-                    \$74  = level;
+                    \$117  = level;
                   end
             endcase
           end
     endcase
     if (receiver_clear) begin
-      \$74  = 1'h0;
+      \$117  = 1'h0;
     end
     if (rst) begin
-      \$74  = 1'h0;
+      \$117  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
-    \$75  = vote2;
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    \$118  = vote2;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$17 ) begin
-            \$75  = 1'h0;
+          if (\$30 ) begin
+            \$118  = 1'h0;
           end
       2'h2:
-          if (\$34 ) begin
+          if (\$47 ) begin
           end else if (slot_zero) begin
             casez (phase)
               2'h0:
                   /* empty */;
               2'h1:
-                  \$75  = level;
+                  \$118  = level;
             endcase
           end
     endcase
     if (receiver_clear) begin
-      \$75  = 1'h0;
+      \$118  = 1'h0;
     end
     if (rst) begin
-      \$75  = 1'h0;
+      \$118  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
-    \$76  = first_slot;
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    \$119  = first_slot;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$17 ) begin
-            \$76  = 1'h1;
+          if (\$30 ) begin
+            \$119  = 1'h1;
           end
       2'h2:
-          if (\$36 ) begin
+          if (\$49 ) begin
             (* full_case = 32'd1 *)
-            if (\$42 ) begin
+            if (\$55 ) begin
             end else begin
-              \$76  = 1'h0;
+              \$119  = 1'h0;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$76  = 1'h0;
+      \$119  = 1'h0;
     end
     if (rst) begin
-      \$76  = 1'h0;
+      \$119  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
-    \$77  = delay;
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    \$120  = delay;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$17 ) begin
+          if (\$30 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
-              \$77  = \$19 ;
+              \$120  = \$32 ;
             end else begin
-              \$77  = \$23 [12:0];
+              \$120  = \$36 [12:0];
             end
           end
     endcase
     if (receiver_clear) begin
-      \$77  = 13'h0000;
+      \$120  = 13'h0000;
     end
     if (rst) begin
-      \$77  = 13'h0000;
+      \$120  = 13'h0000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
-    \$78  = phase;
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    \$121  = phase;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$17 ) begin
+          if (\$30 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
-              \$78  = 2'h1;
+              \$121  = 2'h1;
             end else begin
-              \$78  = 2'h0;
+              \$121  = 2'h0;
             end
           end
       2'h2:
-          if (\$34 ) begin
+          if (\$47 ) begin
           end else if (slot_zero) begin
             (* full_case = 32'd1 *)
             casez (phase)
@@ -9035,34 +10191,34 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
                   (* full_case = 32'd1 *)
                   if (single) begin
                   end else begin
-                    \$78  = 2'h1;
+                    \$121  = 2'h1;
                   end
               2'h1:
-                  \$78  = 2'h2;
+                  \$121  = 2'h2;
               default:
-                  \$78  = 2'h0;
+                  \$121  = 2'h0;
             endcase
           end
     endcase
     if (receiver_clear) begin
-      \$78  = 2'h0;
+      \$121  = 2'h0;
     end
     if (rst) begin
-      \$78  = 2'h0;
+      \$121  = 2'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
-    sample = \$44 ;
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    sample = \$57 ;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
           /* empty */;
       2'h2:
-          if (\$53 ) begin
+          if (\$94 ) begin
             (* full_case = 32'd1 *)
-            if (\$59 ) begin
+            if (\$100 ) begin
             end else begin
               sample = 1'h1;
             end
@@ -9070,7 +10226,28 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    dropped = 1'h0;
+    casez (sampler_fsm_state)
+      2'h0:
+          /* empty */;
+      2'h1:
+          /* empty */;
+      2'h2:
+        begin
+          if (\$93 ) begin
+            dropped = 1'h1;
+          end
+          if (\$94 ) begin
+            if (\$100 ) begin
+              dropped = 1'h1;
+            end
+          end
+        end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
     decided = 1'h0;
     casez (sampler_fsm_state)
       2'h0:
@@ -9078,7 +10255,7 @@ module \biss_master.sampler (clk, rst, \bit , half_period, receiver_clear, arm, 
       2'h1:
           /* empty */;
       2'h2:
-          if (\$52 ) begin
+          if (\$93 ) begin
           end else if (slot_zero) begin
             (* full_case = 32'd1 *)
             casez (phase)
@@ -9120,7 +10297,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.scheduler (abort, period, clk, rst, periodic, request, overrun, idle, start);
-  reg \$auto$verilog_backend.cc:2355:dump_module$52  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$57  = 0;
   wire \$1 ;
   wire [25:0] \$10 ;
   wire \$11 ;
@@ -9211,14 +10388,14 @@ module \biss_master.scheduler (abort, period, clk, rst, periodic, request, overr
   always @(posedge clk)
     wrap <= \$31 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$28  = \$1 ;
     if (rst) begin
       \$28  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$29  = 25'h0000002;
@@ -9232,7 +10409,7 @@ module \biss_master.scheduler (abort, period, clk, rst, periodic, request, overr
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$30  = 1'h1;
@@ -9246,7 +10423,7 @@ module \biss_master.scheduler (abort, period, clk, rst, periodic, request, overr
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$31  = \$8 ;
@@ -9265,8 +10442,8 @@ module \biss_master.scheduler (abort, period, clk, rst, periodic, request, overr
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1371$0 , resync, lc, is_zero, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$53  = 0;
+module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1563$0 , resync, lc, is_zero, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$58  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
   wire \$11 ;
@@ -9307,8 +10484,8 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1371$0
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$1371$0 ;
-  wire \port$1371$0 ;
+  input \port$1563$0 ;
+  wire \port$1563$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -9322,9 +10499,9 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1371$0
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$1371$0  };
-  assign \$2  = { lc[4:0], \port$1371$0  } == last;
-  assign \$3  = { lc[4:0], \port$1371$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$1563$0  };
+  assign \$2  = { lc[4:0], \port$1563$0  } == last;
+  assign \$3  = { lc[4:0], \port$1563$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -9358,7 +10535,7 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1371$0
   always @(posedge clk)
     synced <= \$25 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     \$18  = is_zero;
     if (load) begin
       \$18  = \$1 ;
@@ -9368,7 +10545,7 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1371$0
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     \$19  = is_last;
     if (load) begin
       \$19  = \$2 ;
@@ -9378,7 +10555,7 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1371$0
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     \$20  = is_expected;
     if (load) begin
       \$20  = \$3 ;
@@ -9388,21 +10565,21 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1371$0
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     \$21  = \$7 ;
     if (rst) begin
       \$21  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     \$22  = lc;
     if (rst) begin
       \$22  = 6'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     \$23  = last;
     if (store) begin
       \$23  = store_lc;
@@ -9412,7 +10589,7 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1371$0
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     \$24  = expected;
     if (store) begin
       \$24  = \$10 [5:0];
@@ -9422,7 +10599,7 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1371$0
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     \$25  = synced;
     if (store) begin
       \$25  = 1'h1;
@@ -9434,13 +10611,13 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1371$0
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$1371$0  };
+  assign lc_next = { lc[4:0], \port$1563$0  };
   assign zero = is_zero;
 endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.spw_check (rst, bits, \tolerance$8 , spw, cpw_top, match, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$54  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$59  = 0;
   wire [40:0] \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -9645,28 +10822,28 @@ module \biss_master.spw_check (rst, bits, \tolerance$8 , spw, cpw_top, match, cl
   assign \$7  = bits > 3'h5;
   assign \$8  = bits > 3'h6;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     \$88  = \$42 ;
     if (rst) begin
       \$88  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     \$89  = \$84 ;
     if (rst) begin
       \$89  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     \$90  = \tolerance$8 ;
     if (rst) begin
       \$90  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     \$91  = \$87 ;
     if (rst) begin
       \$91  = 1'h0;
@@ -9676,7 +10853,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.time_base (rst, first_rise, first_rise_time, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$55  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$60  = 0;
   wire [32:0] \$1 ;
   reg [31:0] \$2 ;
   reg [31:0] \$3 ;
@@ -9695,14 +10872,14 @@ module \biss_master.time_base (rst, first_rise, first_rise_time, clk);
   always @(posedge clk)
     first_rise_time <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
     \$2  = \$1 [31:0];
     if (rst) begin
       \$2  = 32'd0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
     \$3  = first_rise_time;
     if (first_rise) begin
       \$3  = now;
@@ -9714,8 +10891,9 @@ module \biss_master.time_base (rst, first_rise, first_rise_time, clk);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.timers (timeout_live, clk, rst, restart, ma_busy, ack_limit, timeout_limit, delay_limit, no_start_limit, clear, in_clock, slo_stuck, slo_stuck_live, break_over, ack_expired, no_start_expired, delay_over, delay, slo, break_time);
-  reg \$auto$verilog_backend.cc:2355:dump_module$56  = 0;
+module \biss_master.timers (timeout_live, quiet_time_live, clk, rst, restart, ma_busy, ack_limit, timeout_limit, delay_limit, quiet_limit, no_start_limit, clear, in_clock, slo_stuck, slo_stuck_live, quiet, quiet_live, break_over, ack_expired, no_start_expired, delay_over
+, delay, slo, break_time);
+  reg \$auto$verilog_backend.cc:2355:dump_module$61  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -9725,34 +10903,51 @@ module \biss_master.timers (timeout_live, clk, rst, restart, ma_busy, ack_limit,
   wire \$15 ;
   wire \$16 ;
   wire \$17 ;
-  wire [25:0] \$18 ;
-  wire [25:0] \$19 ;
+  wire \$18 ;
+  wire \$19 ;
   wire \$2 ;
-  wire [25:0] \$20 ;
+  wire [13:0] \$20 ;
   wire \$21 ;
   wire \$22 ;
   wire \$23 ;
   wire \$24 ;
-  wire \$25 ;
+  wire [11:0] \$25 ;
   wire \$26 ;
   wire \$27 ;
-  wire \$28 ;
+  wire [11:0] \$28 ;
   wire \$29 ;
-  wire [25:0] \$3 ;
+  wire \$3 ;
   wire \$30 ;
   wire \$31 ;
-  wire \$32 ;
-  wire \$33 ;
-  reg [24:0] \$34 ;
-  reg \$35 ;
-  reg \$36 ;
-  reg [24:0] \$37 ;
-  reg \$38 ;
-  reg \$39 ;
-  wire \$4 ;
-  reg \$40 ;
-  reg \$41 ;
+  wire [25:0] \$32 ;
+  wire [25:0] \$33 ;
+  wire [25:0] \$34 ;
+  wire \$35 ;
+  wire \$36 ;
+  wire \$37 ;
+  wire \$38 ;
+  wire \$39 ;
+  wire [25:0] \$4 ;
+  wire \$40 ;
+  wire \$41 ;
+  wire \$42 ;
+  wire \$43 ;
+  wire \$44 ;
+  wire \$45 ;
+  wire \$46 ;
+  wire \$47 ;
+  reg [24:0] \$48 ;
+  reg \$49 ;
   wire \$5 ;
+  reg \$50 ;
+  reg [12:0] \$51 ;
+  reg \$52 ;
+  reg \$53 ;
+  reg [24:0] \$54 ;
+  reg \$55 ;
+  reg \$56 ;
+  reg \$57 ;
+  reg \$58 ;
   wire \$6 ;
   wire \$7 ;
   wire \$8 ;
@@ -9775,6 +10970,7 @@ module \biss_master.timers (timeout_live, clk, rst, restart, ma_busy, ack_limit,
   wire [11:0] delay_limit;
   output delay_over;
   reg delay_over = 1'h0;
+  reg [12:0] high_p2 = 13'h0002;
   input in_clock;
   wire in_clock;
   input ma_busy;
@@ -9783,6 +10979,14 @@ module \biss_master.timers (timeout_live, clk, rst, restart, ma_busy, ack_limit,
   reg no_start_expired = 1'h0;
   input [24:0] no_start_limit;
   wire [24:0] no_start_limit;
+  output quiet;
+  reg quiet = 1'h0;
+  input [11:0] quiet_limit;
+  wire [11:0] quiet_limit;
+  output quiet_live;
+  reg quiet_live = 1'h0;
+  input [11:0] quiet_time_live;
+  wire [11:0] quiet_time_live;
   input restart;
   wire restart;
   input rst;
@@ -9799,126 +11003,173 @@ module \biss_master.timers (timeout_live, clk, rst, restart, ma_busy, ack_limit,
   input [23:0] timeout_live;
   wire [23:0] timeout_live;
   reg [24:0] timer = 25'h0000001;
-  assign \$1  = slo | ma_busy;
-  assign \$2  = ~ slo_low_time_p1[24];
-  assign \$3  = slo_low_time_p1 + 1'h1;
-  assign \$4  = ~ slo;
-  assign \$5  = ~ ma_busy;
-  assign \$6  = \$4  & \$5 ;
-  assign \$7  = slo_low_time_p1 >= timeout_limit;
-  assign \$8  = \$6  & \$7 ;
-  assign \$9  = ~ slo;
-  assign \$10  = ~ ma_busy;
-  assign \$11  = \$9  & \$10 ;
-  assign \$12  = ! timeout_live;
-  assign \$13  = slo_low_time_p1 >= 13'h1f40;
-  assign \$14  = slo_low_time_p1 >= timeout_live;
-  assign \$15  = \$12  ? \$13  : \$14 ;
-  assign \$16  = \$11  & \$15 ;
-  assign \$17  = & timer;
-  assign \$18  = timer + 1'h1;
-  assign \$19  = \$17  ? { 1'h0, timer } : \$18 ;
-  assign \$20  = clear ? 26'h0000001 : \$19 ;
-  assign \$21  = ! break_time;
-  assign \$22  = timer >= 12'hfa0;
-  assign \$23  = timer >= break_time;
-  assign \$24  = \$21  ? \$22  : \$23 ;
-  assign \$25  = ~ restart;
-  assign \$26  = in_clock & \$25 ;
-  assign \$27  = timer >= ack_limit;
-  assign \$28  = \$26  & \$27 ;
-  assign \$29  = ~ restart;
-  assign \$30  = in_clock & \$29 ;
-  assign \$31  = timer >= no_start_limit;
-  assign \$32  = \$30  & \$31 ;
-  assign \$33  = delay > delay_limit;
+  assign \$42  = \$40  & \$41 ;
+  assign \$43  = ~ restart;
+  assign \$44  = in_clock & \$43 ;
+  assign \$45  = timer >= no_start_limit;
+  assign \$46  = \$44  & \$45 ;
+  assign \$47  = delay > delay_limit;
   always @(posedge clk)
-    slo_low_time_p1 <= \$34 ;
+    slo_low_time_p1 <= \$48 ;
   always @(posedge clk)
-    slo_stuck <= \$35 ;
+    slo_stuck <= \$49 ;
   always @(posedge clk)
-    slo_stuck_live <= \$36 ;
+    slo_stuck_live <= \$50 ;
   always @(posedge clk)
-    timer <= \$37 ;
+    high_p2 <= \$51 ;
   always @(posedge clk)
-    break_over <= \$38 ;
+    quiet <= \$52 ;
   always @(posedge clk)
-    ack_expired <= \$39 ;
+    quiet_live <= \$53 ;
   always @(posedge clk)
-    no_start_expired <= \$40 ;
+    timer <= \$54 ;
   always @(posedge clk)
-    delay_over <= \$41 ;
+    break_over <= \$55 ;
+  always @(posedge clk)
+    ack_expired <= \$56 ;
+  always @(posedge clk)
+    no_start_expired <= \$57 ;
+  always @(posedge clk)
+    delay_over <= \$58 ;
+  assign \$1  = slo & quiet;
+  assign \$2  = \$1  | ma_busy;
+  assign \$3  = ~ slo_low_time_p1[24];
+  assign \$4  = slo_low_time_p1 + 1'h1;
+  assign \$5  = slo & quiet;
+  assign \$6  = \$5  | ma_busy;
+  assign \$7  = ~ \$6 ;
+  assign \$8  = slo_low_time_p1 >= timeout_limit;
+  assign \$9  = \$7  & \$8 ;
+  assign \$10  = slo & quiet;
+  assign \$11  = \$10  | ma_busy;
+  assign \$12  = ~ \$11 ;
+  assign \$13  = ! timeout_live;
+  assign \$14  = slo_low_time_p1 >= 13'h1f40;
+  assign \$15  = slo_low_time_p1 >= timeout_live;
+  assign \$16  = \$13  ? \$14  : \$15 ;
+  assign \$17  = \$12  & \$16 ;
+  assign \$18  = ~ slo;
+  assign \$19  = ~ high_p2[12];
+  assign \$20  = high_p2 + 1'h1;
+  assign \$21  = high_p2 >= quiet_limit;
+  assign \$22  = quiet_limit <= 1'h1;
+  assign \$23  = slo ? \$21  : \$22 ;
+  assign \$24  = ! quiet_time_live;
+  assign \$25  = \$24  ? 12'h064 : quiet_time_live;
+  assign \$26  = high_p2 >= \$25 ;
+  assign \$27  = ! quiet_time_live;
+  assign \$28  = \$27  ? 12'h064 : quiet_time_live;
+  assign \$29  = \$28  <= 1'h1;
+  assign \$30  = slo ? \$26  : \$29 ;
+  assign \$31  = & timer;
+  assign \$32  = timer + 1'h1;
+  assign \$33  = \$31  ? { 1'h0, timer } : \$32 ;
+  assign \$34  = clear ? 26'h0000001 : \$33 ;
+  assign \$35  = ! break_time;
+  assign \$36  = timer >= 12'hfa0;
+  assign \$37  = timer >= break_time;
+  assign \$38  = \$35  ? \$36  : \$37 ;
+  assign \$39  = ~ restart;
+  assign \$40  = in_clock & \$39 ;
+  assign \$41  = timer >= ack_limit;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
-    \$34  = slo_low_time_p1;
-    if (\$1 ) begin
-      \$34  = 25'h0000001;
-    end else if (\$2 ) begin
-      \$34  = \$3 [24:0];
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    \$48  = slo_low_time_p1;
+    if (\$2 ) begin
+      \$48  = 25'h0000001;
+    end else if (\$3 ) begin
+      \$48  = \$4 [24:0];
     end
     if (rst) begin
-      \$34  = 25'h0000001;
+      \$48  = 25'h0000001;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
-    \$35  = \$8 ;
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    \$49  = \$9 ;
     if (rst) begin
-      \$35  = 1'h0;
+      \$49  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
-    \$36  = \$16 ;
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    \$50  = \$17 ;
     if (rst) begin
-      \$36  = 1'h0;
+      \$50  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
-    \$37  = \$20 [24:0];
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    \$51  = high_p2;
+    if (\$18 ) begin
+      \$51  = 13'h0002;
+    end else if (\$19 ) begin
+      \$51  = \$20 [12:0];
+    end
     if (rst) begin
-      \$37  = 25'h0000001;
+      \$51  = 13'h0002;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    \$52  = \$23 ;
+    if (rst) begin
+      \$52  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    \$53  = \$30 ;
+    if (rst) begin
+      \$53  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    \$54  = \$34 [24:0];
+    if (rst) begin
+      \$54  = 25'h0000001;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
     (* full_case = 32'd1 *)
     if (clear) begin
-      \$38  = 1'h0;
+      \$55  = 1'h0;
     end else begin
-      \$38  = \$24 ;
+      \$55  = \$38 ;
     end
     if (rst) begin
-      \$38  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
-    \$39  = \$28 ;
-    if (rst) begin
-      \$39  = 1'h0;
+      \$55  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
-    \$40  = \$32 ;
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    \$56  = \$42 ;
     if (rst) begin
-      \$40  = 1'h0;
+      \$56  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
-    \$41  = \$33 ;
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    \$57  = \$46 ;
     if (rst) begin
-      \$41  = 1'h0;
+      \$57  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    \$58  = \$47 ;
+    if (rst) begin
+      \$58  = 1'h0;
     end
   end
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.verdict (lc_skip_seen, \port$879$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
-  reg \$auto$verilog_backend.cc:2355:dump_module$57  = 0;
+module \biss_master.verdict (lc_skip_seen, noisy, \port$1031$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
+, delay_jump, lc_repeat_seen);
+  reg \$auto$verilog_backend.cc:2355:dump_module$62  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -9940,21 +11191,34 @@ module \biss_master.verdict (lc_skip_seen, \port$879$0 , lc_check, lc_repeat, lc
   wire \$26 ;
   wire \$27 ;
   wire \$28 ;
-  wire [1:0] \$29 ;
+  wire \$29 ;
   wire \$3 ;
+  wire \$30 ;
+  wire \$31 ;
+  wire \$32 ;
+  wire \$33 ;
+  wire \$34 ;
+  wire \$35 ;
+  wire \$36 ;
+  wire \$37 ;
+  wire \$38 ;
+  wire [1:0] \$39 ;
   wire \$4 ;
   wire \$5 ;
   wire \$6 ;
   wire \$7 ;
   wire \$8 ;
   wire \$9 ;
-  input [154:0] cfg;
-  wire [154:0] cfg;
+  input [174:0] cfg;
+  wire [174:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
   wire [11:0] \cfg.delay_limit ;
+  wire [3:0] \cfg.delay_tolerance ;
   wire \cfg.end_check ;
   wire [15:0] \cfg.ma_half_period ;
+  wire [3:0] \cfg.noise_limit ;
+  wire [11:0] \cfg.quiet_time ;
   wire [23:0] \cfg.request_period ;
   wire \cfg.spw_check ;
   wire [7:0] \cfg.spw_tolerance ;
@@ -9978,10 +11242,14 @@ module \biss_master.verdict (lc_skip_seen, \port$879$0 , lc_check, lc_repeat, lc
   wire \cfg.w1.lc ;
   wire \cfg.w1.nenw ;
   wire \cfg.w1_enable ;
+  output clean;
+  wire clean;
   output [1:0] crc_error;
   wire [1:0] crc_error;
   input [1:0] crc_ok;
   wire [1:0] crc_ok;
+  input delay_jump;
+  wire delay_jump;
   output doubtful;
   wire doubtful;
   input fault;
@@ -10000,6 +11268,8 @@ module \biss_master.verdict (lc_skip_seen, \port$879$0 , lc_check, lc_repeat, lc
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
+  (* enum_value_1101 = "NOISY_LINE" *)
+  (* enum_value_1110 = "DELAY_JUMP" *)
   input [3:0] fault_status;
   wire [3:0] fault_status;
   (* enum_base_type = "Status" *)
@@ -10016,6 +11286,8 @@ module \biss_master.verdict (lc_skip_seen, \port$879$0 , lc_check, lc_repeat, lc
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
+  (* enum_value_1101 = "NOISY_LINE" *)
+  (* enum_value_1110 = "DELAY_JUMP" *)
   reg [3:0] frame_status;
   output lc_check;
   wire lc_check;
@@ -10031,8 +11303,10 @@ module \biss_master.verdict (lc_skip_seen, \port$879$0 , lc_check, lc_repeat, lc
   wire lc_zero;
   input lc_zero_seen;
   wire lc_zero_seen;
-  output \port$879$0 ;
-  wire \port$879$0 ;
+  input noisy;
+  wire noisy;
+  output \port$1031$0 ;
+  wire \port$1031$0 ;
   output report;
   wire report;
   input report_frame;
@@ -10055,33 +11329,35 @@ module \biss_master.verdict (lc_skip_seen, \port$879$0 , lc_check, lc_repeat, lc
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
+  (* enum_value_1101 = "NOISY_LINE" *)
+  (* enum_value_1110 = "DELAY_JUMP" *)
   output [3:0] status;
   wire [3:0] status;
   output valid;
   wire valid;
   wire [1:0] word_crc_ok;
-  assign \$1  = ~ cfg[135];
+  assign \$1  = ~ cfg[155];
   assign \$2  = crc_ok[1] | \$1 ;
-  assign \$3  = cfg[135] & cfg[143];
-  assign \$4  = cfg[132] | \$3 ;
+  assign \$3  = cfg[155] & cfg[163];
+  assign \$4  = cfg[152] | \$3 ;
   assign \$5  = report_frame & \$4 ;
-  assign \$6  = cfg[132] ? crc_ok[0] : \$2 ;
+  assign \$6  = cfg[152] ? crc_ok[0] : \$2 ;
   assign lc_check = \$5  & \$6 ;
   assign lc_repeat = lc_check & lc_repeat_seen;
   assign lc_skip = lc_check & lc_skip_seen;
   assign lc_zero = lc_check & lc_zero_seen;
-  assign \$7  = cfg[146] & cfg[135];
+  assign \$7  = cfg[166] & cfg[155];
   assign \$8  = crc_ok[0] & \$2 ;
   assign \$9  = \$7  & \$8 ;
   assign \$10  = ~ spw_match;
   assign spw_mismatch = \$9  & \$10 ;
-  assign \$11  = ~ crc_ok[0];
-  assign \$12  = ~ \$2 ;
-  assign \$13  = \$11  & \$12 ;
+  assign \$11  = lc_repeat | lc_skip;
+  assign \$12  = \$11  | lc_zero;
+  assign \$13  = ~ \$2 ;
   assign \$14  = ~ crc_ok[0];
-  assign \$15  = ~ \$2 ;
-  assign \$16  = lc_repeat | lc_skip;
-  assign \$17  = \$16  | lc_zero;
+  assign \$15  = ~ crc_ok[0];
+  assign \$16  = ~ \$2 ;
+  assign \$17  = \$15  & \$16 ;
   assign report = report_frame | fault;
   assign status = report_frame ? frame_status : fault_status;
   assign \$18  = ! frame_status;
@@ -10089,35 +11365,54 @@ module \biss_master.verdict (lc_skip_seen, \port$879$0 , lc_check, lc_repeat, lc
   assign \$19  = crc_ok[0] & \$2 ;
   assign \$20  = ~ \$19 ;
   assign \$21  = \$20  | spw_mismatch;
-  assign \$22  = cfg[135] & cfg[143];
-  assign \$23  = cfg[132] | \$22 ;
-  assign \$24  = cfg[132] ? crc_ok[0] : \$2 ;
+  assign \$22  = cfg[155] & cfg[163];
+  assign \$23  = cfg[152] | \$22 ;
+  assign \$24  = cfg[152] ? crc_ok[0] : \$2 ;
   assign \$25  = \$23  & \$24 ;
   assign \$26  = lc_repeat_seen | lc_skip_seen;
   assign \$27  = \$26  | lc_zero_seen;
   assign \$28  = \$25  & \$27 ;
-  assign doubtful = \$21  | \$28 ;
-  assign \$29  = ~ { \$2 , crc_ok[0] };
-  assign crc_error = report_frame ? \$29  : 2'h0;
+  assign \$29  = \$21  | \$28 ;
+  assign \$30  = \$29  | noisy;
+  assign doubtful = \$30  | delay_jump;
+  assign \$31  = crc_ok[0] & \$2 ;
+  assign \$32  = ~ spw_mismatch;
+  assign \$33  = \$31  & \$32 ;
+  assign \$34  = ~ noisy;
+  assign \$35  = \$33  & \$34 ;
+  assign \$36  = lc_repeat | lc_skip;
+  assign \$37  = \$36  | lc_zero;
+  assign \$38  = ~ \$37 ;
+  assign clean = \$35  & \$38 ;
+  assign \$39  = ~ { \$2 , crc_ok[0] };
+  assign crc_error = report_frame ? \$39  : 2'h0;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
-    (* full_case = 32'd1 *)
-    if (\$13 ) begin
-      frame_status = 4'h3;
-    end else if (\$14 ) begin
-      frame_status = 4'h1;
-    end else if (\$15 ) begin
-      frame_status = 4'h2;
-    end else if (\$17 ) begin
-      frame_status = 4'h4;
-    end else if (spw_mismatch) begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    frame_status = 4'h0;
+    if (delay_jump) begin
+      frame_status = 4'he;
+    end
+    if (noisy) begin
+      frame_status = 4'hd;
+    end
+    if (spw_mismatch) begin
       frame_status = 4'h5;
-    end else begin
-      frame_status = 4'h0;
+    end
+    if (\$12 ) begin
+      frame_status = 4'h4;
+    end
+    if (\$13 ) begin
+      frame_status = 4'h2;
+    end
+    if (\$14 ) begin
+      frame_status = 4'h1;
+    end
+    if (\$17 ) begin
+      frame_status = 4'h3;
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$879$0  = \$2 ;
+  assign \port$1031$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -10125,17 +11420,20 @@ module \biss_master.verdict (lc_skip_seen, \port$879$0 , lc_check, lc_repeat, lc
   assign \cfg.timeout_limit  = cfg[111:88];
   assign \cfg.delay_limit  = cfg[123:112];
   assign \cfg.end_check  = cfg[124];
-  assign \cfg.w0  = cfg[134:125];
-  assign \cfg.w0.data_bits  = cfg[130:125];
-  assign \cfg.w0.nenw  = cfg[131];
-  assign \cfg.w0.lc  = cfg[132];
-  assign \cfg.w0.crc  = cfg[134:133];
-  assign \cfg.w1_enable  = cfg[135];
-  assign \cfg.w1  = cfg[145:136];
-  assign \cfg.w1.data_bits  = cfg[141:136];
-  assign \cfg.w1.nenw  = cfg[142];
-  assign \cfg.w1.lc  = cfg[143];
-  assign \cfg.w1.crc  = cfg[145:144];
-  assign \cfg.spw_check  = cfg[146];
-  assign \cfg.spw_tolerance  = cfg[154:147];
+  assign \cfg.quiet_time  = cfg[136:125];
+  assign \cfg.noise_limit  = cfg[140:137];
+  assign \cfg.delay_tolerance  = cfg[144:141];
+  assign \cfg.w0  = cfg[154:145];
+  assign \cfg.w0.data_bits  = cfg[150:145];
+  assign \cfg.w0.nenw  = cfg[151];
+  assign \cfg.w0.lc  = cfg[152];
+  assign \cfg.w0.crc  = cfg[154:153];
+  assign \cfg.w1_enable  = cfg[155];
+  assign \cfg.w1  = cfg[165:156];
+  assign \cfg.w1.data_bits  = cfg[161:156];
+  assign \cfg.w1.nenw  = cfg[162];
+  assign \cfg.w1.lc  = cfg[163];
+  assign \cfg.w1.crc  = cfg[165:164];
+  assign \cfg.spw_check  = cfg[166];
+  assign \cfg.spw_tolerance  = cfg[174:167];
 endmodule

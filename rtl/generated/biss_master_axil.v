@@ -23,8 +23,8 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
   reg \$auto$verilog_backend.cc:2355:dump_module$25  = 0;
   wire \$1 ;
   wire [9:0] \$10 ;
-  wire [160:0] \$11 ;
-  wire [287:0] \$12 ;
+  wire [186:0] \$11 ;
+  wire [335:0] \$12 ;
   wire [9:0] \$13 ;
   wire \$2 ;
   wire \$3 ;
@@ -32,8 +32,8 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
   reg \$5 ;
   wire \$6 ;
   wire \$7 ;
-  wire [160:0] \$8 ;
-  wire [287:0] \$9 ;
+  wire [186:0] \$8 ;
+  wire [335:0] \$9 ;
   wire [12:0] axil__araddr;
   wire axil__arready;
   wire axil__arvalid;
@@ -87,8 +87,11 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
   wire [23:0] ch0__cfg_ack_limit;
   wire [23:0] ch0__cfg_break_time;
   wire [11:0] ch0__cfg_delay_limit;
+  wire [3:0] ch0__cfg_delay_tolerance;
   wire ch0__cfg_end_check;
   wire [15:0] ch0__cfg_ma_half_period;
+  wire [3:0] ch0__cfg_noise_limit;
+  wire [11:0] ch0__cfg_quiet_time;
   wire [23:0] ch0__cfg_request_period;
   wire ch0__cfg_spw_check;
   wire [7:0] ch0__cfg_spw_tolerance;
@@ -112,6 +115,7 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
   wire [15:0] ch0__count_ca_refused;
   wire [15:0] ch0__count_crc_word0;
   wire [15:0] ch0__count_crc_word1;
+  wire [15:0] ch0__count_delay_jump;
   wire [15:0] ch0__count_delay_range;
   wire [15:0] ch0__count_lc_repeat;
   wire [15:0] ch0__count_lc_skip;
@@ -119,9 +123,13 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
   wire [15:0] ch0__count_no_ack;
   wire [15:0] ch0__count_no_start;
   wire [15:0] ch0__count_no_stop;
+  wire [15:0] ch0__count_noise_event;
+  wire [15:0] ch0__count_noisy_line;
   wire [15:0] ch0__count_overrun;
   wire [15:0] ch0__count_slo_stuck_low;
   wire [15:0] ch0__count_spw_mismatch;
+  wire ch0__delay_settled;
+  wire [7:0] ch0__delay_spread;
   wire ch0__done;
   wire [15:0] ch0__done_count;
   wire ch0__frame_error;
@@ -130,7 +138,9 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
   wire ch0__lc_skip;
   wire ch0__lc_zero;
   wire [12:0] ch0__line_delay;
+  wire [3:0] ch0__noise_events;
   wire ch0__periodic;
+  wire [12:0] ch0__settled_delay;
   wire ch0__spw_mismatch;
   wire ch0__start;
   wire [3:0] ch0__status;
@@ -176,8 +186,11 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
   wire [23:0] ch1__cfg_ack_limit;
   wire [23:0] ch1__cfg_break_time;
   wire [11:0] ch1__cfg_delay_limit;
+  wire [3:0] ch1__cfg_delay_tolerance;
   wire ch1__cfg_end_check;
   wire [15:0] ch1__cfg_ma_half_period;
+  wire [3:0] ch1__cfg_noise_limit;
+  wire [11:0] ch1__cfg_quiet_time;
   wire [23:0] ch1__cfg_request_period;
   wire ch1__cfg_spw_check;
   wire [7:0] ch1__cfg_spw_tolerance;
@@ -201,6 +214,7 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
   wire [15:0] ch1__count_ca_refused;
   wire [15:0] ch1__count_crc_word0;
   wire [15:0] ch1__count_crc_word1;
+  wire [15:0] ch1__count_delay_jump;
   wire [15:0] ch1__count_delay_range;
   wire [15:0] ch1__count_lc_repeat;
   wire [15:0] ch1__count_lc_skip;
@@ -208,9 +222,13 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
   wire [15:0] ch1__count_no_ack;
   wire [15:0] ch1__count_no_start;
   wire [15:0] ch1__count_no_stop;
+  wire [15:0] ch1__count_noise_event;
+  wire [15:0] ch1__count_noisy_line;
   wire [15:0] ch1__count_overrun;
   wire [15:0] ch1__count_slo_stuck_low;
   wire [15:0] ch1__count_spw_mismatch;
+  wire ch1__delay_settled;
+  wire [7:0] ch1__delay_spread;
   wire ch1__done;
   wire [15:0] ch1__done_count;
   wire ch1__frame_error;
@@ -219,7 +237,9 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
   wire ch1__lc_skip;
   wire ch1__lc_zero;
   wire [12:0] ch1__line_delay;
+  wire [3:0] ch1__noise_events;
   wire ch1__periodic;
+  wire [12:0] ch1__settled_delay;
   wire ch1__spw_mismatch;
   wire ch1__start;
   wire [3:0] ch1__status;
@@ -244,187 +264,207 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
   wire glob__trigger;
   output irq;
   reg irq = 1'h0;
-  wire [1:0] \irq$409 ;
+  wire [1:0] \irq$449 ;
   wire ma;
-  wire \ma$405 ;
+  wire \ma$445 ;
   wire regs__abort_cycle;
-  wire \regs__abort_cycle$234 ;
+  wire \regs__abort_cycle$254 ;
   wire regs__busy;
-  wire \regs__busy$237 ;
+  wire \regs__busy$257 ;
   wire regs__ca_abort;
-  wire \regs__ca_abort$238 ;
+  wire \regs__ca_abort$258 ;
   wire [6:0] regs__ca_address;
-  wire [6:0] \regs__ca_address$240 ;
+  wire [6:0] \regs__ca_address$260 ;
   wire regs__ca_busy;
-  wire \regs__ca_busy$243 ;
+  wire \regs__ca_busy$263 ;
   wire [6:0] regs__ca_bytes_done;
-  wire [6:0] \regs__ca_bytes_done$245 ;
+  wire [6:0] \regs__ca_bytes_done$265 ;
   wire [6:0] regs__ca_count;
-  wire [6:0] \regs__ca_count$246 ;
+  wire [6:0] \regs__ca_count$266 ;
   wire regs__ca_done;
-  wire \regs__ca_done$249 ;
+  wire \regs__ca_done$269 ;
   wire [3:0] regs__ca_rbuf_addr;
-  wire [3:0] \regs__ca_rbuf_addr$250 ;
+  wire [3:0] \regs__ca_rbuf_addr$270 ;
   wire [31:0] regs__ca_rbuf_data;
-  wire [31:0] \regs__ca_rbuf_data$253 ;
+  wire [31:0] \regs__ca_rbuf_data$273 ;
   wire regs__ca_rbuf_en;
-  wire \regs__ca_rbuf_en$254 ;
+  wire \regs__ca_rbuf_en$274 ;
   wire [2:0] regs__ca_slave_id;
-  wire [2:0] \regs__ca_slave_id$256 ;
+  wire [2:0] \regs__ca_slave_id$276 ;
   wire regs__ca_start;
-  wire \regs__ca_start$258 ;
+  wire \regs__ca_start$278 ;
   wire [2:0] regs__ca_status;
-  wire [2:0] \regs__ca_status$261 ;
+  wire [2:0] \regs__ca_status$281 ;
   wire [3:0] regs__ca_wbuf_addr;
-  wire [3:0] \regs__ca_wbuf_addr$262 ;
+  wire [3:0] \regs__ca_wbuf_addr$282 ;
   wire [31:0] regs__ca_wbuf_data;
-  wire [31:0] \regs__ca_wbuf_data$264 ;
+  wire [31:0] \regs__ca_wbuf_data$284 ;
   wire [3:0] regs__ca_wbuf_en;
-  wire [3:0] \regs__ca_wbuf_en$266 ;
+  wire [3:0] \regs__ca_wbuf_en$286 ;
   wire regs__ca_write;
-  wire \regs__ca_write$268 ;
+  wire \regs__ca_write$288 ;
   wire regs__cap_counters;
-  wire \regs__cap_counters$271 ;
+  wire \regs__cap_counters$291 ;
   wire [5:0] regs__cap_data_bits_w0;
-  wire [5:0] \regs__cap_data_bits_w0$273 ;
+  wire [5:0] \regs__cap_data_bits_w0$293 ;
   wire [5:0] regs__cap_data_bits_w1;
-  wire [5:0] \regs__cap_data_bits_w1$275 ;
+  wire [5:0] \regs__cap_data_bits_w1$295 ;
   wire regs__cap_register_access;
-  wire \regs__cap_register_access$277 ;
+  wire \regs__cap_register_access$297 ;
   wire [5:0] regs__cap_timer_width;
-  wire [5:0] \regs__cap_timer_width$279 ;
+  wire [5:0] \regs__cap_timer_width$299 ;
   wire regs__cap_timestamp;
-  wire \regs__cap_timestamp$281 ;
+  wire \regs__cap_timestamp$301 ;
   wire regs__cds;
-  wire \regs__cds$283 ;
+  wire \regs__cds$303 ;
   wire [23:0] regs__cfg_ack_limit;
-  wire [23:0] \regs__cfg_ack_limit$284 ;
+  wire [23:0] \regs__cfg_ack_limit$304 ;
   wire [23:0] regs__cfg_break_time;
-  wire [23:0] \regs__cfg_break_time$286 ;
+  wire [23:0] \regs__cfg_break_time$306 ;
   wire [11:0] regs__cfg_delay_limit;
-  wire [11:0] \regs__cfg_delay_limit$288 ;
+  wire [11:0] \regs__cfg_delay_limit$308 ;
+  wire [3:0] regs__cfg_delay_tolerance;
+  wire [3:0] \regs__cfg_delay_tolerance$310 ;
   wire regs__cfg_end_check;
-  wire \regs__cfg_end_check$290 ;
+  wire \regs__cfg_end_check$312 ;
   wire [15:0] regs__cfg_ma_half_period;
-  wire [15:0] \regs__cfg_ma_half_period$292 ;
+  wire [15:0] \regs__cfg_ma_half_period$314 ;
+  wire [3:0] regs__cfg_noise_limit;
+  wire [3:0] \regs__cfg_noise_limit$316 ;
+  wire [11:0] regs__cfg_quiet_time;
+  wire [11:0] \regs__cfg_quiet_time$318 ;
   wire [23:0] regs__cfg_request_period;
-  wire [23:0] \regs__cfg_request_period$294 ;
+  wire [23:0] \regs__cfg_request_period$320 ;
   wire regs__cfg_spw_check;
-  wire \regs__cfg_spw_check$296 ;
+  wire \regs__cfg_spw_check$322 ;
   wire [7:0] regs__cfg_spw_tolerance;
-  wire [7:0] \regs__cfg_spw_tolerance$298 ;
+  wire [7:0] \regs__cfg_spw_tolerance$324 ;
   wire [23:0] regs__cfg_timeout_limit;
-  wire [23:0] \regs__cfg_timeout_limit$300 ;
+  wire [23:0] \regs__cfg_timeout_limit$326 ;
   wire [1:0] regs__cfg_w0_crc;
-  wire [1:0] \regs__cfg_w0_crc$302 ;
+  wire [1:0] \regs__cfg_w0_crc$328 ;
   wire [5:0] regs__cfg_w0_data_bits;
-  wire [5:0] \regs__cfg_w0_data_bits$304 ;
+  wire [5:0] \regs__cfg_w0_data_bits$330 ;
   wire regs__cfg_w0_lc;
-  wire \regs__cfg_w0_lc$306 ;
+  wire \regs__cfg_w0_lc$332 ;
   wire regs__cfg_w0_nenw;
-  wire \regs__cfg_w0_nenw$308 ;
+  wire \regs__cfg_w0_nenw$334 ;
   wire [1:0] regs__cfg_w1_crc;
-  wire [1:0] \regs__cfg_w1_crc$310 ;
+  wire [1:0] \regs__cfg_w1_crc$336 ;
   wire [5:0] regs__cfg_w1_data_bits;
-  wire [5:0] \regs__cfg_w1_data_bits$312 ;
+  wire [5:0] \regs__cfg_w1_data_bits$338 ;
   wire regs__cfg_w1_enable;
-  wire \regs__cfg_w1_enable$314 ;
+  wire \regs__cfg_w1_enable$340 ;
   wire regs__cfg_w1_lc;
-  wire \regs__cfg_w1_lc$316 ;
+  wire \regs__cfg_w1_lc$342 ;
   wire regs__cfg_w1_nenw;
-  wire \regs__cfg_w1_nenw$318 ;
+  wire \regs__cfg_w1_nenw$344 ;
   wire regs__clear_counters;
-  wire \regs__clear_counters$320 ;
+  wire \regs__clear_counters$346 ;
   wire regs__config_error;
-  wire \regs__config_error$323 ;
+  wire \regs__config_error$349 ;
   wire [15:0] regs__count_aborted;
-  wire [15:0] \regs__count_aborted$325 ;
+  wire [15:0] \regs__count_aborted$351 ;
   wire [15:0] regs__count_ca_aborted;
-  wire [15:0] \regs__count_ca_aborted$327 ;
+  wire [15:0] \regs__count_ca_aborted$353 ;
   wire [15:0] regs__count_ca_crc4_error;
-  wire [15:0] \regs__count_ca_crc4_error$329 ;
+  wire [15:0] \regs__count_ca_crc4_error$355 ;
   wire [15:0] regs__count_ca_data_fault;
-  wire [15:0] \regs__count_ca_data_fault$331 ;
+  wire [15:0] \regs__count_ca_data_fault$357 ;
   wire [15:0] regs__count_ca_no_answer;
-  wire [15:0] \regs__count_ca_no_answer$333 ;
+  wire [15:0] \regs__count_ca_no_answer$359 ;
   wire [15:0] regs__count_ca_refused;
-  wire [15:0] \regs__count_ca_refused$335 ;
+  wire [15:0] \regs__count_ca_refused$361 ;
   wire [15:0] regs__count_crc_word0;
-  wire [15:0] \regs__count_crc_word0$337 ;
+  wire [15:0] \regs__count_crc_word0$363 ;
   wire [15:0] regs__count_crc_word1;
-  wire [15:0] \regs__count_crc_word1$339 ;
+  wire [15:0] \regs__count_crc_word1$365 ;
+  wire [15:0] regs__count_delay_jump;
+  wire [15:0] \regs__count_delay_jump$367 ;
   wire [15:0] regs__count_delay_range;
-  wire [15:0] \regs__count_delay_range$341 ;
+  wire [15:0] \regs__count_delay_range$369 ;
   wire [15:0] regs__count_lc_repeat;
-  wire [15:0] \regs__count_lc_repeat$343 ;
+  wire [15:0] \regs__count_lc_repeat$371 ;
   wire [15:0] regs__count_lc_skip;
-  wire [15:0] \regs__count_lc_skip$345 ;
+  wire [15:0] \regs__count_lc_skip$373 ;
   wire [15:0] regs__count_lc_zero;
-  wire [15:0] \regs__count_lc_zero$347 ;
+  wire [15:0] \regs__count_lc_zero$375 ;
   wire [15:0] regs__count_no_ack;
-  wire [15:0] \regs__count_no_ack$349 ;
+  wire [15:0] \regs__count_no_ack$377 ;
   wire [15:0] regs__count_no_start;
-  wire [15:0] \regs__count_no_start$351 ;
+  wire [15:0] \regs__count_no_start$379 ;
   wire [15:0] regs__count_no_stop;
-  wire [15:0] \regs__count_no_stop$353 ;
+  wire [15:0] \regs__count_no_stop$381 ;
+  wire [15:0] regs__count_noise_event;
+  wire [15:0] \regs__count_noise_event$383 ;
+  wire [15:0] regs__count_noisy_line;
+  wire [15:0] \regs__count_noisy_line$385 ;
   wire [15:0] regs__count_overrun;
-  wire [15:0] \regs__count_overrun$355 ;
+  wire [15:0] \regs__count_overrun$387 ;
   wire [15:0] regs__count_slo_stuck_low;
-  wire [15:0] \regs__count_slo_stuck_low$357 ;
+  wire [15:0] \regs__count_slo_stuck_low$389 ;
   wire [15:0] regs__count_spw_mismatch;
-  wire [15:0] \regs__count_spw_mismatch$359 ;
+  wire [15:0] \regs__count_spw_mismatch$391 ;
+  wire regs__delay_settled;
+  wire \regs__delay_settled$393 ;
+  wire [7:0] regs__delay_spread;
+  wire [7:0] \regs__delay_spread$395 ;
   wire regs__done;
-  wire \regs__done$361 ;
+  wire \regs__done$397 ;
   wire [15:0] regs__done_count;
-  wire [15:0] \regs__done_count$363 ;
+  wire [15:0] \regs__done_count$399 ;
   wire regs__frame_error;
-  wire \regs__frame_error$365 ;
+  wire \regs__frame_error$401 ;
   wire [5:0] regs__lc;
-  wire [5:0] \regs__lc$367 ;
+  wire [5:0] \regs__lc$403 ;
   wire regs__lc_repeat;
-  wire \regs__lc_repeat$369 ;
+  wire \regs__lc_repeat$405 ;
   wire regs__lc_skip;
-  wire \regs__lc_skip$371 ;
+  wire \regs__lc_skip$407 ;
   wire regs__lc_zero;
-  wire \regs__lc_zero$373 ;
+  wire \regs__lc_zero$409 ;
   wire [12:0] regs__line_delay;
-  wire [12:0] \regs__line_delay$375 ;
+  wire [12:0] \regs__line_delay$411 ;
+  wire [3:0] regs__noise_events;
+  wire [3:0] \regs__noise_events$413 ;
   wire regs__periodic;
-  wire \regs__periodic$376 ;
+  wire \regs__periodic$414 ;
   wire [10:0] regs__r_addr;
   wire [31:0] regs__r_data;
   wire regs__r_en;
   wire regs__r_load;
+  wire [12:0] regs__settled_delay;
+  wire [12:0] \regs__settled_delay$417 ;
   wire regs__spw_mismatch;
-  wire \regs__spw_mismatch$379 ;
+  wire \regs__spw_mismatch$419 ;
   wire regs__start;
-  wire \regs__start$380 ;
+  wire \regs__start$420 ;
   wire [3:0] regs__status;
-  wire [3:0] \regs__status$383 ;
+  wire [3:0] \regs__status$423 ;
   wire [31:0] regs__timestamp;
-  wire [31:0] \regs__timestamp$385 ;
+  wire [31:0] \regs__timestamp$425 ;
   wire regs__trigger_enable;
-  wire \regs__trigger_enable$386 ;
+  wire \regs__trigger_enable$426 ;
   wire [10:0] regs__w_addr;
   wire [31:0] regs__w_data;
   wire regs__w_en;
   wire [3:0] regs__w_strb;
   wire regs__word0_crc_ok;
-  wire \regs__word0_crc_ok$389 ;
+  wire \regs__word0_crc_ok$429 ;
   wire regs__word0_ne;
-  wire \regs__word0_ne$391 ;
+  wire \regs__word0_ne$431 ;
   wire regs__word0_nw;
-  wire \regs__word0_nw$393 ;
+  wire \regs__word0_nw$433 ;
   wire [54:0] regs__word0_position;
-  wire [54:0] \regs__word0_position$395 ;
+  wire [54:0] \regs__word0_position$435 ;
   wire regs__word1_crc_ok;
-  wire \regs__word1_crc_ok$397 ;
+  wire \regs__word1_crc_ok$437 ;
   wire regs__word1_ne;
-  wire \regs__word1_ne$399 ;
+  wire \regs__word1_ne$439 ;
   wire regs__word1_nw;
-  wire \regs__word1_nw$401 ;
+  wire \regs__word1_nw$441 ;
   wire [39:0] regs__word1_position;
-  wire [39:0] \regs__word1_position$403 ;
+  wire [39:0] \regs__word1_position$443 ;
   input rst;
   wire rst;
   input [12:0] s_axil_araddr;
@@ -462,11 +502,11 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
   input s_axil_wvalid;
   wire s_axil_wvalid;
   wire slo;
-  wire \slo$406 ;
+  wire \slo$446 ;
   input trigger;
   wire trigger;
-  wire \trigger$231 ;
-  wire \trigger$404 ;
+  wire \trigger$251 ;
+  wire \trigger$444 ;
   wire \trigger$58 ;
   reg trigger_in = 1'h0;
   assign \$1  = ~ trigger_in;
@@ -502,15 +542,18 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .ch0_ca_request_address(regs__ca_address),
     .ch0_ca_request_count(regs__ca_count),
     .ch0_ca_request_slave_id(regs__ca_slave_id),
-    .\ch0_ca_request_write$80 (regs__ca_write),
+    .\ch0_ca_request_write$85 (regs__ca_write),
     .ch0_cfg_ack_ack_limit(regs__cfg_ack_limit),
     .ch0_cfg_break_break_time(regs__cfg_break_time),
+    .ch0_cfg_checks_delay_tolerance(regs__cfg_delay_tolerance),
     .ch0_cfg_checks_end_check(regs__cfg_end_check),
+    .ch0_cfg_checks_noise_limit(regs__cfg_noise_limit),
     .ch0_cfg_checks_spw_check(regs__cfg_spw_check),
     .ch0_cfg_checks_spw_tolerance(regs__cfg_spw_tolerance),
     .ch0_cfg_ma_delay_limit(regs__cfg_delay_limit),
     .ch0_cfg_ma_ma_half_period(regs__cfg_ma_half_period),
     .ch0_cfg_period_request_period(regs__cfg_request_period),
+    .ch0_cfg_quiet_quiet_time(regs__cfg_quiet_time),
     .ch0_cfg_timeout_timeout_limit(regs__cfg_timeout_limit),
     .ch0_cfg_words_w0_crc(regs__cfg_w0_crc),
     .ch0_cfg_words_w0_data_bits(regs__cfg_w0_data_bits),
@@ -531,50 +574,53 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .ch1__ca_busy(ch1__ca_busy),
     .ch1__ca_done(ch1__ca_done),
     .ch1__ca_rbuf_data(ch1__ca_rbuf_data),
-    .ch1__ca_rbuf_en(\regs__ca_rbuf_en$254 ),
-    .ch1__ca_wbuf_en(\regs__ca_wbuf_en$266 ),
+    .ch1__ca_rbuf_en(\regs__ca_rbuf_en$274 ),
+    .ch1__ca_wbuf_en(\regs__ca_wbuf_en$286 ),
     .ch1__config_error(ch1__config_error),
     .ch1__done(ch1__done),
     .ch1__done_count(ch1__done_count),
     .ch1__frame_error(ch1__frame_error),
-    .ch1_ca_ctrl_abort(\regs__ca_abort$238 ),
-    .ch1_ca_ctrl_start(\regs__ca_start$258 ),
-    .ch1_ca_request_address(\regs__ca_address$240 ),
-    .ch1_ca_request_count(\regs__ca_count$246 ),
-    .ch1_ca_request_slave_id(\regs__ca_slave_id$256 ),
-    .\ch1_ca_request_write$241 (\regs__ca_write$268 ),
-    .ch1_cfg_ack_ack_limit(\regs__cfg_ack_limit$284 ),
-    .ch1_cfg_break_break_time(\regs__cfg_break_time$286 ),
-    .ch1_cfg_checks_end_check(\regs__cfg_end_check$290 ),
-    .ch1_cfg_checks_spw_check(\regs__cfg_spw_check$296 ),
-    .ch1_cfg_checks_spw_tolerance(\regs__cfg_spw_tolerance$298 ),
-    .ch1_cfg_ma_delay_limit(\regs__cfg_delay_limit$288 ),
-    .ch1_cfg_ma_ma_half_period(\regs__cfg_ma_half_period$292 ),
-    .ch1_cfg_period_request_period(\regs__cfg_request_period$294 ),
-    .ch1_cfg_timeout_timeout_limit(\regs__cfg_timeout_limit$300 ),
-    .ch1_cfg_words_w0_crc(\regs__cfg_w0_crc$302 ),
-    .ch1_cfg_words_w0_data_bits(\regs__cfg_w0_data_bits$304 ),
-    .ch1_cfg_words_w0_lc(\regs__cfg_w0_lc$306 ),
-    .ch1_cfg_words_w0_nenw(\regs__cfg_w0_nenw$308 ),
-    .ch1_cfg_words_w1_crc(\regs__cfg_w1_crc$310 ),
-    .ch1_cfg_words_w1_data_bits(\regs__cfg_w1_data_bits$312 ),
-    .ch1_cfg_words_w1_enable(\regs__cfg_w1_enable$314 ),
-    .ch1_cfg_words_w1_lc(\regs__cfg_w1_lc$316 ),
-    .ch1_cfg_words_w1_nenw(\regs__cfg_w1_nenw$318 ),
-    .ch1_ctrl_abort(\regs__abort_cycle$234 ),
-    .ch1_ctrl_clear_counters(\regs__clear_counters$320 ),
-    .ch1_ctrl_periodic(\regs__periodic$376 ),
-    .ch1_ctrl_start(\regs__start$380 ),
-    .ch1_ctrl_trigger_enable(\regs__trigger_enable$386 ),
+    .ch1_ca_ctrl_abort(\regs__ca_abort$258 ),
+    .ch1_ca_ctrl_start(\regs__ca_start$278 ),
+    .ch1_ca_request_address(\regs__ca_address$260 ),
+    .ch1_ca_request_count(\regs__ca_count$266 ),
+    .ch1_ca_request_slave_id(\regs__ca_slave_id$276 ),
+    .\ch1_ca_request_write$265 (\regs__ca_write$288 ),
+    .ch1_cfg_ack_ack_limit(\regs__cfg_ack_limit$304 ),
+    .ch1_cfg_break_break_time(\regs__cfg_break_time$306 ),
+    .ch1_cfg_checks_delay_tolerance(\regs__cfg_delay_tolerance$310 ),
+    .ch1_cfg_checks_end_check(\regs__cfg_end_check$312 ),
+    .ch1_cfg_checks_noise_limit(\regs__cfg_noise_limit$316 ),
+    .ch1_cfg_checks_spw_check(\regs__cfg_spw_check$322 ),
+    .ch1_cfg_checks_spw_tolerance(\regs__cfg_spw_tolerance$324 ),
+    .ch1_cfg_ma_delay_limit(\regs__cfg_delay_limit$308 ),
+    .ch1_cfg_ma_ma_half_period(\regs__cfg_ma_half_period$314 ),
+    .ch1_cfg_period_request_period(\regs__cfg_request_period$320 ),
+    .ch1_cfg_quiet_quiet_time(\regs__cfg_quiet_time$318 ),
+    .ch1_cfg_timeout_timeout_limit(\regs__cfg_timeout_limit$326 ),
+    .ch1_cfg_words_w0_crc(\regs__cfg_w0_crc$328 ),
+    .ch1_cfg_words_w0_data_bits(\regs__cfg_w0_data_bits$330 ),
+    .ch1_cfg_words_w0_lc(\regs__cfg_w0_lc$332 ),
+    .ch1_cfg_words_w0_nenw(\regs__cfg_w0_nenw$334 ),
+    .ch1_cfg_words_w1_crc(\regs__cfg_w1_crc$336 ),
+    .ch1_cfg_words_w1_data_bits(\regs__cfg_w1_data_bits$338 ),
+    .ch1_cfg_words_w1_enable(\regs__cfg_w1_enable$340 ),
+    .ch1_cfg_words_w1_lc(\regs__cfg_w1_lc$342 ),
+    .ch1_cfg_words_w1_nenw(\regs__cfg_w1_nenw$344 ),
+    .ch1_ctrl_abort(\regs__abort_cycle$254 ),
+    .ch1_ctrl_clear_counters(\regs__clear_counters$346 ),
+    .ch1_ctrl_periodic(\regs__periodic$414 ),
+    .ch1_ctrl_start(\regs__start$420 ),
+    .ch1_ctrl_trigger_enable(\regs__trigger_enable$426 ),
     .ch1_irq(\$7 ),
     .clk(clk),
     .g_trigger_start(glob__trigger),
-    .\port$4189$0 (\$8 ),
-    .\port$4202$0 (\$9 ),
-    .\port$4316$0 (\$10 ),
-    .\port$4673$0 (\$11 ),
-    .\port$4686$0 (\$12 ),
-    .\port$4800$0 (\$13 ),
+    .\port$4731$0 (\$8 ),
+    .\port$4744$0 (\$9 ),
+    .\port$4876$0 (\$10 ),
+    .\port$5293$0 (\$11 ),
+    .\port$5306$0 (\$12 ),
+    .\port$5438$0 (\$13 ),
     .rst(rst),
     .write_data(regs__ca_wbuf_data)
   );
@@ -618,8 +664,11 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .cfg_ack_limit(regs__cfg_ack_limit),
     .cfg_break_time(regs__cfg_break_time),
     .cfg_delay_limit(regs__cfg_delay_limit),
+    .cfg_delay_tolerance(regs__cfg_delay_tolerance),
     .cfg_end_check(regs__cfg_end_check),
     .cfg_ma_half_period(regs__cfg_ma_half_period),
+    .cfg_noise_limit(regs__cfg_noise_limit),
+    .cfg_quiet_time(regs__cfg_quiet_time),
     .cfg_request_period(regs__cfg_request_period),
     .cfg_spw_check(regs__cfg_spw_check),
     .cfg_spw_tolerance(regs__cfg_spw_tolerance),
@@ -637,9 +686,9 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .clk(clk),
     .ma(ch0_ma),
     .periodic(regs__periodic),
-    .\port$4189$0 (\$8 ),
-    .\port$4202$0 (\$9 ),
-    .\port$4316$0 (\$10 ),
+    .\port$4731$0 (\$8 ),
+    .\port$4744$0 (\$9 ),
+    .\port$4876$0 (\$10 ),
     .regs__abort_cycle(regs__abort_cycle),
     .regs__busy(ch0__busy),
     .regs__ca_busy(ch0__ca_busy),
@@ -653,46 +702,49 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .rst(rst),
     .slo(ch0_slo),
     .start(regs__start),
-    .\trigger$159 (\trigger$58 )
+    .\trigger$179 (\trigger$58 )
   );
   \biss_master_axil.ch1  ch1 (
-    .ca_abort(\regs__ca_abort$238 ),
-    .ca_address(\regs__ca_address$240 ),
-    .ca_count(\regs__ca_count$246 ),
+    .ca_abort(\regs__ca_abort$258 ),
+    .ca_address(\regs__ca_address$260 ),
+    .ca_count(\regs__ca_count$266 ),
     .ca_rbuf_addr(s_axil_araddr[5:2]),
-    .ca_rbuf_en(\regs__ca_rbuf_en$254 ),
-    .ca_slave_id(\regs__ca_slave_id$256 ),
-    .ca_start(\regs__ca_start$258 ),
+    .ca_rbuf_en(\regs__ca_rbuf_en$274 ),
+    .ca_slave_id(\regs__ca_slave_id$276 ),
+    .ca_start(\regs__ca_start$278 ),
     .ca_wbuf_addr(regs__ca_wbuf_addr),
     .ca_wbuf_data(regs__ca_wbuf_data),
-    .ca_wbuf_en(\regs__ca_wbuf_en$266 ),
-    .ca_write(\regs__ca_write$268 ),
-    .cfg_ack_limit(\regs__cfg_ack_limit$284 ),
-    .cfg_break_time(\regs__cfg_break_time$286 ),
-    .cfg_delay_limit(\regs__cfg_delay_limit$288 ),
-    .cfg_end_check(\regs__cfg_end_check$290 ),
-    .cfg_ma_half_period(\regs__cfg_ma_half_period$292 ),
-    .cfg_request_period(\regs__cfg_request_period$294 ),
-    .cfg_spw_check(\regs__cfg_spw_check$296 ),
-    .cfg_spw_tolerance(\regs__cfg_spw_tolerance$298 ),
-    .cfg_timeout_limit(\regs__cfg_timeout_limit$300 ),
-    .cfg_w0_crc(\regs__cfg_w0_crc$302 ),
-    .cfg_w0_data_bits(\regs__cfg_w0_data_bits$304 ),
-    .cfg_w0_lc(\regs__cfg_w0_lc$306 ),
-    .cfg_w0_nenw(\regs__cfg_w0_nenw$308 ),
-    .cfg_w1_crc(\regs__cfg_w1_crc$310 ),
-    .cfg_w1_data_bits(\regs__cfg_w1_data_bits$312 ),
-    .cfg_w1_enable(\regs__cfg_w1_enable$314 ),
-    .cfg_w1_lc(\regs__cfg_w1_lc$316 ),
-    .cfg_w1_nenw(\regs__cfg_w1_nenw$318 ),
-    .clear_counters(\regs__clear_counters$320 ),
+    .ca_wbuf_en(\regs__ca_wbuf_en$286 ),
+    .ca_write(\regs__ca_write$288 ),
+    .cfg_ack_limit(\regs__cfg_ack_limit$304 ),
+    .cfg_break_time(\regs__cfg_break_time$306 ),
+    .cfg_delay_limit(\regs__cfg_delay_limit$308 ),
+    .cfg_delay_tolerance(\regs__cfg_delay_tolerance$310 ),
+    .cfg_end_check(\regs__cfg_end_check$312 ),
+    .cfg_ma_half_period(\regs__cfg_ma_half_period$314 ),
+    .cfg_noise_limit(\regs__cfg_noise_limit$316 ),
+    .cfg_quiet_time(\regs__cfg_quiet_time$318 ),
+    .cfg_request_period(\regs__cfg_request_period$320 ),
+    .cfg_spw_check(\regs__cfg_spw_check$322 ),
+    .cfg_spw_tolerance(\regs__cfg_spw_tolerance$324 ),
+    .cfg_timeout_limit(\regs__cfg_timeout_limit$326 ),
+    .cfg_w0_crc(\regs__cfg_w0_crc$328 ),
+    .cfg_w0_data_bits(\regs__cfg_w0_data_bits$330 ),
+    .cfg_w0_lc(\regs__cfg_w0_lc$332 ),
+    .cfg_w0_nenw(\regs__cfg_w0_nenw$334 ),
+    .cfg_w1_crc(\regs__cfg_w1_crc$336 ),
+    .cfg_w1_data_bits(\regs__cfg_w1_data_bits$338 ),
+    .cfg_w1_enable(\regs__cfg_w1_enable$340 ),
+    .cfg_w1_lc(\regs__cfg_w1_lc$342 ),
+    .cfg_w1_nenw(\regs__cfg_w1_nenw$344 ),
+    .clear_counters(\regs__clear_counters$346 ),
     .clk(clk),
     .ma(ch1_ma),
-    .periodic(\regs__periodic$376 ),
-    .\port$4673$0 (\$11 ),
-    .\port$4686$0 (\$12 ),
-    .\port$4800$0 (\$13 ),
-    .regs__abort_cycle(\regs__abort_cycle$234 ),
+    .periodic(\regs__periodic$414 ),
+    .\port$5293$0 (\$11 ),
+    .\port$5306$0 (\$12 ),
+    .\port$5438$0 (\$13 ),
+    .regs__abort_cycle(\regs__abort_cycle$254 ),
     .regs__busy(ch1__busy),
     .regs__ca_busy(ch1__ca_busy),
     .regs__ca_done(ch1__ca_done),
@@ -701,11 +753,11 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .regs__done(ch1__done),
     .regs__done_count(ch1__done_count),
     .regs__frame_error(ch1__frame_error),
-    .regs__trigger_enable(\regs__trigger_enable$386 ),
+    .regs__trigger_enable(\regs__trigger_enable$426 ),
     .rst(rst),
     .slo(ch1_slo),
-    .start(\regs__start$380 ),
-    .\trigger$159 (\trigger$58 )
+    .start(\regs__start$420 ),
+    .\trigger$179 (\trigger$58 )
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$25 ) begin end
@@ -786,8 +838,11 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
   assign ch0__cfg_ack_limit = regs__cfg_ack_limit;
   assign ch0__cfg_break_time = regs__cfg_break_time;
   assign ch0__cfg_delay_limit = regs__cfg_delay_limit;
+  assign ch0__cfg_delay_tolerance = regs__cfg_delay_tolerance;
   assign ch0__cfg_end_check = regs__cfg_end_check;
   assign ch0__cfg_ma_half_period = regs__cfg_ma_half_period;
+  assign ch0__cfg_noise_limit = regs__cfg_noise_limit;
+  assign ch0__cfg_quiet_time = regs__cfg_quiet_time;
   assign ch0__cfg_request_period = regs__cfg_request_period;
   assign ch0__cfg_spw_check = regs__cfg_spw_check;
   assign ch0__cfg_spw_tolerance = regs__cfg_spw_tolerance;
@@ -805,20 +860,22 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
   assign regs__config_error = ch0__config_error;
   assign ch0__count_aborted = \$9 [191:176];
   assign regs__count_aborted = \$9 [191:176];
-  assign ch0__count_ca_aborted = \$9 [271:256];
-  assign regs__count_ca_aborted = \$9 [271:256];
-  assign ch0__count_ca_crc4_error = \$9 [223:208];
-  assign regs__count_ca_crc4_error = \$9 [223:208];
-  assign ch0__count_ca_data_fault = \$9 [287:272];
-  assign regs__count_ca_data_fault = \$9 [287:272];
-  assign ch0__count_ca_no_answer = \$9 [239:224];
-  assign regs__count_ca_no_answer = \$9 [239:224];
-  assign ch0__count_ca_refused = \$9 [255:240];
-  assign regs__count_ca_refused = \$9 [255:240];
+  assign ch0__count_ca_aborted = \$9 [319:304];
+  assign regs__count_ca_aborted = \$9 [319:304];
+  assign ch0__count_ca_crc4_error = \$9 [271:256];
+  assign regs__count_ca_crc4_error = \$9 [271:256];
+  assign ch0__count_ca_data_fault = \$9 [335:320];
+  assign regs__count_ca_data_fault = \$9 [335:320];
+  assign ch0__count_ca_no_answer = \$9 [287:272];
+  assign regs__count_ca_no_answer = \$9 [287:272];
+  assign ch0__count_ca_refused = \$9 [303:288];
+  assign regs__count_ca_refused = \$9 [303:288];
   assign ch0__count_crc_word0 = \$9 [15:0];
   assign regs__count_crc_word0 = \$9 [15:0];
   assign ch0__count_crc_word1 = \$9 [31:16];
   assign regs__count_crc_word1 = \$9 [31:16];
+  assign ch0__count_delay_jump = \$9 [239:224];
+  assign regs__count_delay_jump = \$9 [239:224];
   assign ch0__count_delay_range = \$9 [79:64];
   assign regs__count_delay_range = \$9 [79:64];
   assign ch0__count_lc_repeat = \$9 [111:96];
@@ -833,190 +890,219 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
   assign regs__count_no_start = \$9 [63:48];
   assign ch0__count_no_stop = \$9 [207:192];
   assign regs__count_no_stop = \$9 [207:192];
+  assign ch0__count_noise_event = \$9 [255:240];
+  assign regs__count_noise_event = \$9 [255:240];
+  assign ch0__count_noisy_line = \$9 [223:208];
+  assign regs__count_noisy_line = \$9 [223:208];
   assign ch0__count_overrun = \$9 [175:160];
   assign regs__count_overrun = \$9 [175:160];
   assign ch0__count_slo_stuck_low = \$9 [95:80];
   assign regs__count_slo_stuck_low = \$9 [95:80];
   assign ch0__count_spw_mismatch = \$9 [159:144];
   assign regs__count_spw_mismatch = \$9 [159:144];
+  assign ch0__delay_settled = \$8 [54];
+  assign regs__delay_settled = \$8 [54];
+  assign ch0__delay_spread = \$8 [75:68];
+  assign regs__delay_spread = \$8 [75:68];
   assign regs__done = ch0__done;
   assign regs__done_count = ch0__done_count;
   assign regs__frame_error = ch0__frame_error;
-  assign ch0__lc = \$8 [156:151];
-  assign regs__lc = \$8 [156:151];
-  assign ch0__lc_repeat = \$8 [157];
-  assign regs__lc_repeat = \$8 [157];
-  assign ch0__lc_skip = \$8 [158];
-  assign regs__lc_skip = \$8 [158];
-  assign ch0__lc_zero = \$8 [159];
-  assign regs__lc_zero = \$8 [159];
+  assign ch0__lc = \$8 [182:177];
+  assign regs__lc = \$8 [182:177];
+  assign ch0__lc_repeat = \$8 [183];
+  assign regs__lc_repeat = \$8 [183];
+  assign ch0__lc_skip = \$8 [184];
+  assign regs__lc_skip = \$8 [184];
+  assign ch0__lc_zero = \$8 [185];
+  assign regs__lc_zero = \$8 [185];
   assign ch0__line_delay = \$8 [48:36];
   assign regs__line_delay = \$8 [48:36];
+  assign ch0__noise_events = \$8 [53:50];
+  assign regs__noise_events = \$8 [53:50];
   assign ch0__periodic = regs__periodic;
-  assign ch0__spw_mismatch = \$8 [160];
-  assign regs__spw_mismatch = \$8 [160];
+  assign ch0__settled_delay = \$8 [67:55];
+  assign regs__settled_delay = \$8 [67:55];
+  assign ch0__spw_mismatch = \$8 [186];
+  assign regs__spw_mismatch = \$8 [186];
   assign ch0__start = regs__start;
   assign ch0__status = \$8 [3:0];
   assign regs__status = \$8 [3:0];
   assign ch0__timestamp = \$8 [35:4];
   assign regs__timestamp = \$8 [35:4];
   assign ch0__trigger_enable = regs__trigger_enable;
-  assign ch0__word0_crc_ok = \$8 [107];
-  assign regs__word0_crc_ok = \$8 [107];
-  assign ch0__word0_ne = \$8 [105];
-  assign regs__word0_ne = \$8 [105];
-  assign ch0__word0_nw = \$8 [106];
-  assign regs__word0_nw = \$8 [106];
-  assign ch0__word0_position = \$8 [104:50];
-  assign regs__word0_position = \$8 [104:50];
-  assign ch0__word1_crc_ok = \$8 [150];
-  assign regs__word1_crc_ok = \$8 [150];
-  assign ch0__word1_ne = \$8 [148];
-  assign regs__word1_ne = \$8 [148];
-  assign ch0__word1_nw = \$8 [149];
-  assign regs__word1_nw = \$8 [149];
-  assign ch0__word1_position = \$8 [147:108];
-  assign regs__word1_position = \$8 [147:108];
-  assign \trigger$231  = \trigger$58 ;
+  assign ch0__word0_crc_ok = \$8 [133];
+  assign regs__word0_crc_ok = \$8 [133];
+  assign ch0__word0_ne = \$8 [131];
+  assign regs__word0_ne = \$8 [131];
+  assign ch0__word0_nw = \$8 [132];
+  assign regs__word0_nw = \$8 [132];
+  assign ch0__word0_position = \$8 [130:76];
+  assign regs__word0_position = \$8 [130:76];
+  assign ch0__word1_crc_ok = \$8 [176];
+  assign regs__word1_crc_ok = \$8 [176];
+  assign ch0__word1_ne = \$8 [174];
+  assign regs__word1_ne = \$8 [174];
+  assign ch0__word1_nw = \$8 [175];
+  assign regs__word1_nw = \$8 [175];
+  assign ch0__word1_position = \$8 [173:134];
+  assign regs__word1_position = \$8 [173:134];
+  assign \trigger$251  = \trigger$58 ;
   assign ma = ch0_ma;
   assign slo = ch0_slo;
-  assign ch1__abort_cycle = \regs__abort_cycle$234 ;
-  assign \regs__busy$237  = ch1__busy;
-  assign ch1__ca_abort = \regs__ca_abort$238 ;
-  assign ch1__ca_address = \regs__ca_address$240 ;
-  assign \regs__ca_busy$243  = ch1__ca_busy;
+  assign ch1__abort_cycle = \regs__abort_cycle$254 ;
+  assign \regs__busy$257  = ch1__busy;
+  assign ch1__ca_abort = \regs__ca_abort$258 ;
+  assign ch1__ca_address = \regs__ca_address$260 ;
+  assign \regs__ca_busy$263  = ch1__ca_busy;
   assign ch1__ca_bytes_done = \$13 [9:3];
-  assign \regs__ca_bytes_done$245  = \$13 [9:3];
-  assign ch1__ca_count = \regs__ca_count$246 ;
-  assign \regs__ca_done$249  = ch1__ca_done;
-  assign \regs__ca_rbuf_addr$250  = s_axil_araddr[5:2];
+  assign \regs__ca_bytes_done$265  = \$13 [9:3];
+  assign ch1__ca_count = \regs__ca_count$266 ;
+  assign \regs__ca_done$269  = ch1__ca_done;
+  assign \regs__ca_rbuf_addr$270  = s_axil_araddr[5:2];
   assign ch1__ca_rbuf_addr = s_axil_araddr[5:2];
-  assign \regs__ca_rbuf_data$253  = ch1__ca_rbuf_data;
-  assign ch1__ca_rbuf_en = \regs__ca_rbuf_en$254 ;
-  assign ch1__ca_slave_id = \regs__ca_slave_id$256 ;
-  assign ch1__ca_start = \regs__ca_start$258 ;
+  assign \regs__ca_rbuf_data$273  = ch1__ca_rbuf_data;
+  assign ch1__ca_rbuf_en = \regs__ca_rbuf_en$274 ;
+  assign ch1__ca_slave_id = \regs__ca_slave_id$276 ;
+  assign ch1__ca_start = \regs__ca_start$278 ;
   assign ch1__ca_status = \$13 [2:0];
-  assign \regs__ca_status$261  = \$13 [2:0];
-  assign \regs__ca_wbuf_addr$262  = regs__ca_wbuf_addr;
+  assign \regs__ca_status$281  = \$13 [2:0];
+  assign \regs__ca_wbuf_addr$282  = regs__ca_wbuf_addr;
   assign ch1__ca_wbuf_addr = regs__ca_wbuf_addr;
-  assign \regs__ca_wbuf_data$264  = regs__ca_wbuf_data;
+  assign \regs__ca_wbuf_data$284  = regs__ca_wbuf_data;
   assign ch1__ca_wbuf_data = regs__ca_wbuf_data;
-  assign ch1__ca_wbuf_en = \regs__ca_wbuf_en$266 ;
-  assign ch1__ca_write = \regs__ca_write$268 ;
+  assign ch1__ca_wbuf_en = \regs__ca_wbuf_en$286 ;
+  assign ch1__ca_write = \regs__ca_write$288 ;
   assign ch1__cap_counters = 1'h1;
-  assign \regs__cap_counters$271  = 1'h1;
+  assign \regs__cap_counters$291  = 1'h1;
   assign ch1__cap_data_bits_w0 = 6'h37;
-  assign \regs__cap_data_bits_w0$273  = 6'h37;
+  assign \regs__cap_data_bits_w0$293  = 6'h37;
   assign ch1__cap_data_bits_w1 = 6'h28;
-  assign \regs__cap_data_bits_w1$275  = 6'h28;
+  assign \regs__cap_data_bits_w1$295  = 6'h28;
   assign ch1__cap_register_access = 1'h1;
-  assign \regs__cap_register_access$277  = 1'h1;
+  assign \regs__cap_register_access$297  = 1'h1;
   assign ch1__cap_timer_width = 6'h18;
-  assign \regs__cap_timer_width$279  = 6'h18;
+  assign \regs__cap_timer_width$299  = 6'h18;
   assign ch1__cap_timestamp = 1'h1;
-  assign \regs__cap_timestamp$281  = 1'h1;
+  assign \regs__cap_timestamp$301  = 1'h1;
   assign ch1__cds = \$11 [49];
-  assign \regs__cds$283  = \$11 [49];
-  assign ch1__cfg_ack_limit = \regs__cfg_ack_limit$284 ;
-  assign ch1__cfg_break_time = \regs__cfg_break_time$286 ;
-  assign ch1__cfg_delay_limit = \regs__cfg_delay_limit$288 ;
-  assign ch1__cfg_end_check = \regs__cfg_end_check$290 ;
-  assign ch1__cfg_ma_half_period = \regs__cfg_ma_half_period$292 ;
-  assign ch1__cfg_request_period = \regs__cfg_request_period$294 ;
-  assign ch1__cfg_spw_check = \regs__cfg_spw_check$296 ;
-  assign ch1__cfg_spw_tolerance = \regs__cfg_spw_tolerance$298 ;
-  assign ch1__cfg_timeout_limit = \regs__cfg_timeout_limit$300 ;
-  assign ch1__cfg_w0_crc = \regs__cfg_w0_crc$302 ;
-  assign ch1__cfg_w0_data_bits = \regs__cfg_w0_data_bits$304 ;
-  assign ch1__cfg_w0_lc = \regs__cfg_w0_lc$306 ;
-  assign ch1__cfg_w0_nenw = \regs__cfg_w0_nenw$308 ;
-  assign ch1__cfg_w1_crc = \regs__cfg_w1_crc$310 ;
-  assign ch1__cfg_w1_data_bits = \regs__cfg_w1_data_bits$312 ;
-  assign ch1__cfg_w1_enable = \regs__cfg_w1_enable$314 ;
-  assign ch1__cfg_w1_lc = \regs__cfg_w1_lc$316 ;
-  assign ch1__cfg_w1_nenw = \regs__cfg_w1_nenw$318 ;
-  assign ch1__clear_counters = \regs__clear_counters$320 ;
-  assign \regs__config_error$323  = ch1__config_error;
+  assign \regs__cds$303  = \$11 [49];
+  assign ch1__cfg_ack_limit = \regs__cfg_ack_limit$304 ;
+  assign ch1__cfg_break_time = \regs__cfg_break_time$306 ;
+  assign ch1__cfg_delay_limit = \regs__cfg_delay_limit$308 ;
+  assign ch1__cfg_delay_tolerance = \regs__cfg_delay_tolerance$310 ;
+  assign ch1__cfg_end_check = \regs__cfg_end_check$312 ;
+  assign ch1__cfg_ma_half_period = \regs__cfg_ma_half_period$314 ;
+  assign ch1__cfg_noise_limit = \regs__cfg_noise_limit$316 ;
+  assign ch1__cfg_quiet_time = \regs__cfg_quiet_time$318 ;
+  assign ch1__cfg_request_period = \regs__cfg_request_period$320 ;
+  assign ch1__cfg_spw_check = \regs__cfg_spw_check$322 ;
+  assign ch1__cfg_spw_tolerance = \regs__cfg_spw_tolerance$324 ;
+  assign ch1__cfg_timeout_limit = \regs__cfg_timeout_limit$326 ;
+  assign ch1__cfg_w0_crc = \regs__cfg_w0_crc$328 ;
+  assign ch1__cfg_w0_data_bits = \regs__cfg_w0_data_bits$330 ;
+  assign ch1__cfg_w0_lc = \regs__cfg_w0_lc$332 ;
+  assign ch1__cfg_w0_nenw = \regs__cfg_w0_nenw$334 ;
+  assign ch1__cfg_w1_crc = \regs__cfg_w1_crc$336 ;
+  assign ch1__cfg_w1_data_bits = \regs__cfg_w1_data_bits$338 ;
+  assign ch1__cfg_w1_enable = \regs__cfg_w1_enable$340 ;
+  assign ch1__cfg_w1_lc = \regs__cfg_w1_lc$342 ;
+  assign ch1__cfg_w1_nenw = \regs__cfg_w1_nenw$344 ;
+  assign ch1__clear_counters = \regs__clear_counters$346 ;
+  assign \regs__config_error$349  = ch1__config_error;
   assign ch1__count_aborted = \$12 [191:176];
-  assign \regs__count_aborted$325  = \$12 [191:176];
-  assign ch1__count_ca_aborted = \$12 [271:256];
-  assign \regs__count_ca_aborted$327  = \$12 [271:256];
-  assign ch1__count_ca_crc4_error = \$12 [223:208];
-  assign \regs__count_ca_crc4_error$329  = \$12 [223:208];
-  assign ch1__count_ca_data_fault = \$12 [287:272];
-  assign \regs__count_ca_data_fault$331  = \$12 [287:272];
-  assign ch1__count_ca_no_answer = \$12 [239:224];
-  assign \regs__count_ca_no_answer$333  = \$12 [239:224];
-  assign ch1__count_ca_refused = \$12 [255:240];
-  assign \regs__count_ca_refused$335  = \$12 [255:240];
+  assign \regs__count_aborted$351  = \$12 [191:176];
+  assign ch1__count_ca_aborted = \$12 [319:304];
+  assign \regs__count_ca_aborted$353  = \$12 [319:304];
+  assign ch1__count_ca_crc4_error = \$12 [271:256];
+  assign \regs__count_ca_crc4_error$355  = \$12 [271:256];
+  assign ch1__count_ca_data_fault = \$12 [335:320];
+  assign \regs__count_ca_data_fault$357  = \$12 [335:320];
+  assign ch1__count_ca_no_answer = \$12 [287:272];
+  assign \regs__count_ca_no_answer$359  = \$12 [287:272];
+  assign ch1__count_ca_refused = \$12 [303:288];
+  assign \regs__count_ca_refused$361  = \$12 [303:288];
   assign ch1__count_crc_word0 = \$12 [15:0];
-  assign \regs__count_crc_word0$337  = \$12 [15:0];
+  assign \regs__count_crc_word0$363  = \$12 [15:0];
   assign ch1__count_crc_word1 = \$12 [31:16];
-  assign \regs__count_crc_word1$339  = \$12 [31:16];
+  assign \regs__count_crc_word1$365  = \$12 [31:16];
+  assign ch1__count_delay_jump = \$12 [239:224];
+  assign \regs__count_delay_jump$367  = \$12 [239:224];
   assign ch1__count_delay_range = \$12 [79:64];
-  assign \regs__count_delay_range$341  = \$12 [79:64];
+  assign \regs__count_delay_range$369  = \$12 [79:64];
   assign ch1__count_lc_repeat = \$12 [111:96];
-  assign \regs__count_lc_repeat$343  = \$12 [111:96];
+  assign \regs__count_lc_repeat$371  = \$12 [111:96];
   assign ch1__count_lc_skip = \$12 [127:112];
-  assign \regs__count_lc_skip$345  = \$12 [127:112];
+  assign \regs__count_lc_skip$373  = \$12 [127:112];
   assign ch1__count_lc_zero = \$12 [143:128];
-  assign \regs__count_lc_zero$347  = \$12 [143:128];
+  assign \regs__count_lc_zero$375  = \$12 [143:128];
   assign ch1__count_no_ack = \$12 [47:32];
-  assign \regs__count_no_ack$349  = \$12 [47:32];
+  assign \regs__count_no_ack$377  = \$12 [47:32];
   assign ch1__count_no_start = \$12 [63:48];
-  assign \regs__count_no_start$351  = \$12 [63:48];
+  assign \regs__count_no_start$379  = \$12 [63:48];
   assign ch1__count_no_stop = \$12 [207:192];
-  assign \regs__count_no_stop$353  = \$12 [207:192];
+  assign \regs__count_no_stop$381  = \$12 [207:192];
+  assign ch1__count_noise_event = \$12 [255:240];
+  assign \regs__count_noise_event$383  = \$12 [255:240];
+  assign ch1__count_noisy_line = \$12 [223:208];
+  assign \regs__count_noisy_line$385  = \$12 [223:208];
   assign ch1__count_overrun = \$12 [175:160];
-  assign \regs__count_overrun$355  = \$12 [175:160];
+  assign \regs__count_overrun$387  = \$12 [175:160];
   assign ch1__count_slo_stuck_low = \$12 [95:80];
-  assign \regs__count_slo_stuck_low$357  = \$12 [95:80];
+  assign \regs__count_slo_stuck_low$389  = \$12 [95:80];
   assign ch1__count_spw_mismatch = \$12 [159:144];
-  assign \regs__count_spw_mismatch$359  = \$12 [159:144];
-  assign \regs__done$361  = ch1__done;
-  assign \regs__done_count$363  = ch1__done_count;
-  assign \regs__frame_error$365  = ch1__frame_error;
-  assign ch1__lc = \$11 [156:151];
-  assign \regs__lc$367  = \$11 [156:151];
-  assign ch1__lc_repeat = \$11 [157];
-  assign \regs__lc_repeat$369  = \$11 [157];
-  assign ch1__lc_skip = \$11 [158];
-  assign \regs__lc_skip$371  = \$11 [158];
-  assign ch1__lc_zero = \$11 [159];
-  assign \regs__lc_zero$373  = \$11 [159];
+  assign \regs__count_spw_mismatch$391  = \$12 [159:144];
+  assign ch1__delay_settled = \$11 [54];
+  assign \regs__delay_settled$393  = \$11 [54];
+  assign ch1__delay_spread = \$11 [75:68];
+  assign \regs__delay_spread$395  = \$11 [75:68];
+  assign \regs__done$397  = ch1__done;
+  assign \regs__done_count$399  = ch1__done_count;
+  assign \regs__frame_error$401  = ch1__frame_error;
+  assign ch1__lc = \$11 [182:177];
+  assign \regs__lc$403  = \$11 [182:177];
+  assign ch1__lc_repeat = \$11 [183];
+  assign \regs__lc_repeat$405  = \$11 [183];
+  assign ch1__lc_skip = \$11 [184];
+  assign \regs__lc_skip$407  = \$11 [184];
+  assign ch1__lc_zero = \$11 [185];
+  assign \regs__lc_zero$409  = \$11 [185];
   assign ch1__line_delay = \$11 [48:36];
-  assign \regs__line_delay$375  = \$11 [48:36];
-  assign ch1__periodic = \regs__periodic$376 ;
-  assign ch1__spw_mismatch = \$11 [160];
-  assign \regs__spw_mismatch$379  = \$11 [160];
-  assign ch1__start = \regs__start$380 ;
+  assign \regs__line_delay$411  = \$11 [48:36];
+  assign ch1__noise_events = \$11 [53:50];
+  assign \regs__noise_events$413  = \$11 [53:50];
+  assign ch1__periodic = \regs__periodic$414 ;
+  assign ch1__settled_delay = \$11 [67:55];
+  assign \regs__settled_delay$417  = \$11 [67:55];
+  assign ch1__spw_mismatch = \$11 [186];
+  assign \regs__spw_mismatch$419  = \$11 [186];
+  assign ch1__start = \regs__start$420 ;
   assign ch1__status = \$11 [3:0];
-  assign \regs__status$383  = \$11 [3:0];
+  assign \regs__status$423  = \$11 [3:0];
   assign ch1__timestamp = \$11 [35:4];
-  assign \regs__timestamp$385  = \$11 [35:4];
-  assign ch1__trigger_enable = \regs__trigger_enable$386 ;
-  assign ch1__word0_crc_ok = \$11 [107];
-  assign \regs__word0_crc_ok$389  = \$11 [107];
-  assign ch1__word0_ne = \$11 [105];
-  assign \regs__word0_ne$391  = \$11 [105];
-  assign ch1__word0_nw = \$11 [106];
-  assign \regs__word0_nw$393  = \$11 [106];
-  assign ch1__word0_position = \$11 [104:50];
-  assign \regs__word0_position$395  = \$11 [104:50];
-  assign ch1__word1_crc_ok = \$11 [150];
-  assign \regs__word1_crc_ok$397  = \$11 [150];
-  assign ch1__word1_ne = \$11 [148];
-  assign \regs__word1_ne$399  = \$11 [148];
-  assign ch1__word1_nw = \$11 [149];
-  assign \regs__word1_nw$401  = \$11 [149];
-  assign ch1__word1_position = \$11 [147:108];
-  assign \regs__word1_position$403  = \$11 [147:108];
-  assign \trigger$404  = \trigger$58 ;
-  assign \ma$405  = ch1_ma;
-  assign \slo$406  = ch1_slo;
+  assign \regs__timestamp$425  = \$11 [35:4];
+  assign ch1__trigger_enable = \regs__trigger_enable$426 ;
+  assign ch1__word0_crc_ok = \$11 [133];
+  assign \regs__word0_crc_ok$429  = \$11 [133];
+  assign ch1__word0_ne = \$11 [131];
+  assign \regs__word0_ne$431  = \$11 [131];
+  assign ch1__word0_nw = \$11 [132];
+  assign \regs__word0_nw$433  = \$11 [132];
+  assign ch1__word0_position = \$11 [130:76];
+  assign \regs__word0_position$435  = \$11 [130:76];
+  assign ch1__word1_crc_ok = \$11 [176];
+  assign \regs__word1_crc_ok$437  = \$11 [176];
+  assign ch1__word1_ne = \$11 [174];
+  assign \regs__word1_ne$439  = \$11 [174];
+  assign ch1__word1_nw = \$11 [175];
+  assign \regs__word1_nw$441  = \$11 [175];
+  assign ch1__word1_position = \$11 [173:134];
+  assign \regs__word1_position$443  = \$11 [173:134];
+  assign \trigger$444  = \trigger$58 ;
+  assign \ma$445  = ch1_ma;
+  assign \slo$446  = ch1_slo;
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, \$7 , \$6  };
-  assign \irq$409  = { \$7 , \$6  };
+  assign \irq$449  = { \$7 , \$6  };
   assign s_axil_bresp = 2'h0;
   assign s_axil_rresp = 2'h0;
 endmodule
@@ -1024,9 +1110,10 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, ch1__ca_wbuf_en, ch1__ca_rbuf_en, ch1_irq, bus__r_data, ch0__frame_error, ch0__busy, ch0__config_error, ch0__ca_busy, ch0__ca_rbuf_data, ch1__frame_error, ch1__busy, ch1__config_error, ch1__ca_busy
 , ch1__ca_rbuf_data, bus__w_addr, bus__w_data, bus__w_strb, ch0__ca_wbuf_addr, write_data, g_trigger_start, ch0_ctrl_start, ch0_ctrl_abort, ch0_ctrl_clear_counters, ch0_ctrl_periodic, ch0_ctrl_trigger_enable, ch0_cfg_ma_ma_half_period, ch0_cfg_ma_delay_limit, ch0_cfg_period_request_period, ch0_cfg_break_break_time, ch0_cfg_ack_ack_limit, ch0_cfg_timeout_timeout_limit, ch0_cfg_words_w0_data_bits, ch0_cfg_words_w0_nenw, ch0_cfg_words_w0_lc
-, ch0_cfg_words_w0_crc, ch0_cfg_words_w1_data_bits, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_enable, ch0_cfg_checks_end_check, ch0_cfg_checks_spw_check, ch0_cfg_checks_spw_tolerance, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$80 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort, ch1_ctrl_start, ch1_ctrl_abort, ch1_ctrl_clear_counters, ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period
-, ch1_cfg_ma_delay_limit, ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_enable, ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$241 
-, ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__done_count, ch0__done, \port$4189$0 , \port$4202$0 , ch0__ca_done, \port$4316$0 , ch1__done_count, ch1__done, \port$4673$0 , \port$4686$0 , ch1__ca_done, \port$4800$0 , bus__r_addr);
+, ch0_cfg_words_w0_crc, ch0_cfg_words_w1_data_bits, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_enable, ch0_cfg_checks_end_check, ch0_cfg_checks_spw_check, ch0_cfg_checks_spw_tolerance, ch0_cfg_checks_noise_limit, ch0_cfg_checks_delay_tolerance, ch0_cfg_quiet_quiet_time, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$85 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort, ch1_ctrl_start, ch1_ctrl_abort, ch1_ctrl_clear_counters
+, ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit, ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_enable, ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_cfg_checks_noise_limit
+, ch1_cfg_checks_delay_tolerance, ch1_cfg_quiet_quiet_time, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$265 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__done_count, ch0__done, \port$4731$0 , \port$4744$0 , ch0__ca_done, \port$4876$0 , ch1__done_count, ch1__done, \port$5293$0 , \port$5306$0 , ch1__ca_done, \port$5438$0 , bus__r_addr
+);
   reg \$auto$verilog_backend.cc:2355:dump_module$26  = 0;
   wire \$1 ;
   wire [31:0] \$10 ;
@@ -1036,14 +1123,14 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire \$103 ;
   wire \$104 ;
   wire \$105 ;
-  wire [31:0] \$106 ;
-  wire [31:0] \$107 ;
-  wire [31:0] \$108 ;
-  wire [31:0] \$109 ;
+  wire \$106 ;
+  wire \$107 ;
+  wire \$108 ;
+  wire \$109 ;
   wire [31:0] \$11 ;
-  wire [31:0] \$110 ;
-  wire [31:0] \$111 ;
-  wire [31:0] \$112 ;
+  wire \$110 ;
+  wire \$111 ;
+  wire \$112 ;
   wire [31:0] \$113 ;
   wire [31:0] \$114 ;
   wire [31:0] \$115 ;
@@ -1109,20 +1196,20 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire [31:0] \$17 ;
   wire [31:0] \$170 ;
   wire [31:0] \$171 ;
-  wire \$172 ;
-  wire \$173 ;
-  wire \$174 ;
-  wire \$175 ;
-  wire \$176 ;
-  wire \$177 ;
-  wire \$178 ;
-  wire \$179 ;
+  wire [31:0] \$172 ;
+  wire [31:0] \$173 ;
+  wire [31:0] \$174 ;
+  wire [31:0] \$175 ;
+  wire [31:0] \$176 ;
+  wire [31:0] \$177 ;
+  wire [31:0] \$178 ;
+  wire [31:0] \$179 ;
   wire \$18 ;
-  wire \$180 ;
-  wire \$181 ;
-  wire \$182 ;
-  wire \$183 ;
-  wire \$184 ;
+  wire [31:0] \$180 ;
+  wire [31:0] \$181 ;
+  wire [31:0] \$182 ;
+  wire [31:0] \$183 ;
+  wire [31:0] \$184 ;
   wire \$185 ;
   wire \$186 ;
   wire \$187 ;
@@ -1207,27 +1294,27 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire \$258 ;
   wire \$259 ;
   wire \$26 ;
-  wire [31:0] \$260 ;
-  wire [31:0] \$261 ;
-  wire [31:0] \$262 ;
-  wire [31:0] \$263 ;
-  wire [31:0] \$264 ;
-  wire [31:0] \$265 ;
-  wire [31:0] \$266 ;
-  wire [31:0] \$267 ;
-  wire [31:0] \$268 ;
-  wire [31:0] \$269 ;
+  wire \$260 ;
+  wire \$261 ;
+  wire \$262 ;
+  wire \$263 ;
+  wire \$264 ;
+  wire \$265 ;
+  wire \$266 ;
+  wire \$267 ;
+  wire \$268 ;
+  wire \$269 ;
   wire \$27 ;
-  wire [31:0] \$270 ;
-  wire [31:0] \$271 ;
-  wire [31:0] \$272 ;
-  wire [31:0] \$273 ;
-  wire [31:0] \$274 ;
-  wire [31:0] \$275 ;
-  wire [31:0] \$276 ;
-  wire [31:0] \$277 ;
-  wire [31:0] \$278 ;
-  wire [31:0] \$279 ;
+  wire \$270 ;
+  wire \$271 ;
+  wire \$272 ;
+  wire \$273 ;
+  wire \$274 ;
+  wire \$275 ;
+  wire \$276 ;
+  wire \$277 ;
+  wire \$278 ;
+  wire \$279 ;
   wire \$28 ;
   wire [31:0] \$280 ;
   wire [31:0] \$281 ;
@@ -1280,35 +1367,35 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire [31:0] \$323 ;
   wire [31:0] \$324 ;
   wire [31:0] \$325 ;
-  wire \$326 ;
-  wire \$327 ;
-  wire \$328 ;
-  wire \$329 ;
+  wire [31:0] \$326 ;
+  wire [31:0] \$327 ;
+  wire [31:0] \$328 ;
+  wire [31:0] \$329 ;
   wire \$33 ;
-  wire \$330 ;
-  wire \$331 ;
-  wire \$332 ;
-  wire \$333 ;
-  wire \$334 ;
-  wire \$335 ;
-  wire \$336 ;
-  wire \$337 ;
-  wire \$338 ;
-  wire \$339 ;
+  wire [31:0] \$330 ;
+  wire [31:0] \$331 ;
+  wire [31:0] \$332 ;
+  wire [31:0] \$333 ;
+  wire [31:0] \$334 ;
+  wire [31:0] \$335 ;
+  wire [31:0] \$336 ;
+  wire [31:0] \$337 ;
+  wire [31:0] \$338 ;
+  wire [31:0] \$339 ;
   wire \$34 ;
-  wire \$340 ;
-  wire \$341 ;
-  wire \$342 ;
-  wire \$343 ;
-  wire \$344 ;
-  wire \$345 ;
-  wire \$346 ;
-  wire \$347 ;
-  wire \$348 ;
-  wire \$349 ;
+  wire [31:0] \$340 ;
+  wire [31:0] \$341 ;
+  wire [31:0] \$342 ;
+  wire [31:0] \$343 ;
+  wire [31:0] \$344 ;
+  wire [31:0] \$345 ;
+  wire [31:0] \$346 ;
+  wire [31:0] \$347 ;
+  wire [31:0] \$348 ;
+  wire [31:0] \$349 ;
   wire \$35 ;
-  wire \$350 ;
-  wire \$351 ;
+  wire [31:0] \$350 ;
+  wire [31:0] \$351 ;
   wire \$352 ;
   wire \$353 ;
   wire \$354 ;
@@ -1377,108 +1464,108 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire \$410 ;
   wire \$411 ;
   wire \$412 ;
-  wire [31:0] \$413 ;
-  wire [31:0] \$414 ;
-  reg \$415 ;
-  reg [10:0] \$416 ;
-  reg [31:0] \$417 ;
-  reg [3:0] \$418 ;
-  reg [31:0] \$419 ;
+  wire \$413 ;
+  wire \$414 ;
+  wire \$415 ;
+  wire \$416 ;
+  wire \$417 ;
+  wire \$418 ;
+  wire \$419 ;
   wire \$42 ;
-  reg [3:0] \$420 ;
-  reg \$421 ;
-  reg \$422 ;
-  reg \$423 ;
-  reg \$424 ;
-  reg \$425 ;
-  reg \$426 ;
-  reg [31:0] \$427 ;
-  reg \$428 ;
-  reg \$429 ;
+  wire \$420 ;
+  wire \$421 ;
+  wire \$422 ;
+  wire \$423 ;
+  wire \$424 ;
+  wire \$425 ;
+  wire \$426 ;
+  wire \$427 ;
+  wire \$428 ;
+  wire \$429 ;
   wire \$43 ;
-  reg \$430 ;
-  reg \$431 ;
-  reg \$432 ;
-  reg \$433 ;
-  reg \$434 ;
-  reg \$435 ;
-  reg \$436 ;
-  reg \$437 ;
-  reg \$438 ;
-  reg \$439 ;
+  wire \$430 ;
+  wire \$431 ;
+  wire \$432 ;
+  wire \$433 ;
+  wire \$434 ;
+  wire \$435 ;
+  wire \$436 ;
+  wire \$437 ;
+  wire \$438 ;
+  wire \$439 ;
   wire \$44 ;
-  reg \$440 ;
-  reg [15:0] \$441 ;
-  reg [11:0] \$442 ;
-  reg \$443 ;
-  reg [23:0] \$444 ;
-  reg \$445 ;
-  reg [23:0] \$446 ;
+  wire \$440 ;
+  wire \$441 ;
+  wire \$442 ;
+  wire \$443 ;
+  wire \$444 ;
+  wire [31:0] \$445 ;
+  wire [31:0] \$446 ;
   reg \$447 ;
-  reg [23:0] \$448 ;
-  reg \$449 ;
+  reg [10:0] \$448 ;
+  reg [31:0] \$449 ;
   wire \$45 ;
-  reg [23:0] \$450 ;
-  reg \$451 ;
-  reg [5:0] \$452 ;
+  reg [3:0] \$450 ;
+  reg [31:0] \$451 ;
+  reg [3:0] \$452 ;
   reg \$453 ;
   reg \$454 ;
-  reg [1:0] \$455 ;
-  reg [5:0] \$456 ;
+  reg \$455 ;
+  reg \$456 ;
   reg \$457 ;
   reg \$458 ;
-  reg [1:0] \$459 ;
+  reg [31:0] \$459 ;
   wire \$46 ;
   reg \$460 ;
   reg \$461 ;
   reg \$462 ;
   reg \$463 ;
-  reg [7:0] \$464 ;
+  reg \$464 ;
   reg \$465 ;
-  reg [2:0] \$466 ;
-  reg [6:0] \$467 ;
-  reg [6:0] \$468 ;
+  reg \$466 ;
+  reg \$467 ;
+  reg \$468 ;
   reg \$469 ;
   wire \$47 ;
   reg \$470 ;
   reg \$471 ;
   reg \$472 ;
-  reg \$473 ;
-  reg \$474 ;
+  reg [15:0] \$473 ;
+  reg [11:0] \$474 ;
   reg \$475 ;
-  reg \$476 ;
+  reg [23:0] \$476 ;
   reg \$477 ;
-  reg \$478 ;
+  reg [23:0] \$478 ;
   reg \$479 ;
   wire \$48 ;
-  reg \$480 ;
+  reg [23:0] \$480 ;
   reg \$481 ;
-  reg \$482 ;
+  reg [23:0] \$482 ;
   reg \$483 ;
-  reg \$484 ;
+  reg [5:0] \$484 ;
   reg \$485 ;
   reg \$486 ;
-  reg \$487 ;
-  reg \$488 ;
+  reg [1:0] \$487 ;
+  reg [5:0] \$488 ;
   reg \$489 ;
   wire \$49 ;
   reg \$490 ;
-  reg \$491 ;
+  reg [1:0] \$491 ;
   reg \$492 ;
   reg \$493 ;
   reg \$494 ;
   reg \$495 ;
-  reg \$496 ;
-  reg \$497 ;
-  reg \$498 ;
+  reg [7:0] \$496 ;
+  reg [3:0] \$497 ;
+  reg [3:0] \$498 ;
   reg \$499 ;
   wire \$5 ;
   wire \$50 ;
-  reg \$500 ;
+  reg [11:0] \$500 ;
   reg \$501 ;
-  reg \$502 ;
-  reg \$503 ;
-  reg [3:0] \$504 ;
+  reg [2:0] \$502 ;
+  reg [6:0] \$503 ;
+  reg [6:0] \$504 ;
   reg \$505 ;
   reg \$506 ;
   reg \$507 ;
@@ -1491,17 +1578,17 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg \$513 ;
   reg \$514 ;
   reg \$515 ;
-  reg [5:0] \$516 ;
-  reg [15:0] \$517 ;
-  reg [12:0] \$518 ;
-  reg [31:0] \$519 ;
+  reg \$516 ;
+  reg \$517 ;
+  reg \$518 ;
+  reg \$519 ;
   wire \$52 ;
-  reg [22:0] \$520 ;
-  reg [31:0] \$521 ;
-  reg [7:0] \$522 ;
-  reg [31:0] \$523 ;
+  reg \$520 ;
+  reg \$521 ;
+  reg \$522 ;
+  reg \$523 ;
   reg \$524 ;
-  reg [31:0] \$525 ;
+  reg \$525 ;
   reg \$526 ;
   reg \$527 ;
   reg \$528 ;
@@ -1516,39 +1603,39 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg \$536 ;
   reg \$537 ;
   reg \$538 ;
-  reg [15:0] \$539 ;
+  reg \$539 ;
   wire \$54 ;
-  reg [11:0] \$540 ;
+  reg \$540 ;
   reg \$541 ;
-  reg [23:0] \$542 ;
-  reg \$543 ;
-  reg [23:0] \$544 ;
+  reg \$542 ;
+  reg [3:0] \$543 ;
+  reg \$544 ;
   reg \$545 ;
-  reg [23:0] \$546 ;
+  reg \$546 ;
   reg \$547 ;
-  reg [23:0] \$548 ;
+  reg \$548 ;
   reg \$549 ;
   wire \$55 ;
-  reg [5:0] \$550 ;
+  reg \$550 ;
   reg \$551 ;
   reg \$552 ;
-  reg [1:0] \$553 ;
-  reg [5:0] \$554 ;
-  reg \$555 ;
-  reg \$556 ;
-  reg [1:0] \$557 ;
-  reg \$558 ;
-  reg \$559 ;
+  reg \$553 ;
+  reg \$554 ;
+  reg [5:0] \$555 ;
+  reg [15:0] \$556 ;
+  reg [12:0] \$557 ;
+  reg [31:0] \$558 ;
+  reg [22:0] \$559 ;
   wire \$56 ;
-  reg \$560 ;
-  reg \$561 ;
-  reg [7:0] \$562 ;
-  reg \$563 ;
-  reg [2:0] \$564 ;
-  reg [6:0] \$565 ;
-  reg [6:0] \$566 ;
+  reg [31:0] \$560 ;
+  reg [7:0] \$561 ;
+  reg [31:0] \$562 ;
+  reg [3:0] \$563 ;
+  reg \$564 ;
+  reg [7:0] \$565 ;
+  reg [12:0] \$566 ;
   reg \$567 ;
-  reg \$568 ;
+  reg [31:0] \$568 ;
   reg \$569 ;
   wire \$57 ;
   reg \$570 ;
@@ -1564,58 +1651,112 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire \$58 ;
   reg \$580 ;
   reg \$581 ;
-  reg \$582 ;
-  reg \$583 ;
+  reg [15:0] \$582 ;
+  reg [11:0] \$583 ;
   reg \$584 ;
-  reg \$585 ;
+  reg [23:0] \$585 ;
   reg \$586 ;
-  reg \$587 ;
+  reg [23:0] \$587 ;
   reg \$588 ;
-  reg \$589 ;
+  reg [23:0] \$589 ;
   wire \$59 ;
   reg \$590 ;
-  reg \$591 ;
+  reg [23:0] \$591 ;
   reg \$592 ;
-  reg \$593 ;
+  reg [5:0] \$593 ;
   reg \$594 ;
   reg \$595 ;
-  reg \$596 ;
-  reg \$597 ;
+  reg [1:0] \$596 ;
+  reg [5:0] \$597 ;
   reg \$598 ;
   reg \$599 ;
   wire \$6 ;
   wire \$60 ;
-  reg \$600 ;
+  reg [1:0] \$600 ;
   reg \$601 ;
-  reg [3:0] \$602 ;
+  reg \$602 ;
   reg \$603 ;
   reg \$604 ;
-  reg \$605 ;
-  reg \$606 ;
-  reg \$607 ;
+  reg [7:0] \$605 ;
+  reg [3:0] \$606 ;
+  reg [3:0] \$607 ;
   reg \$608 ;
-  reg \$609 ;
+  reg [11:0] \$609 ;
   wire \$61 ;
   reg \$610 ;
-  reg \$611 ;
-  reg \$612 ;
-  reg \$613 ;
-  reg [5:0] \$614 ;
-  reg [15:0] \$615 ;
-  reg [12:0] \$616 ;
-  reg [31:0] \$617 ;
-  reg [22:0] \$618 ;
-  reg [31:0] \$619 ;
+  reg [2:0] \$611 ;
+  reg [6:0] \$612 ;
+  reg [6:0] \$613 ;
+  reg \$614 ;
+  reg \$615 ;
+  reg \$616 ;
+  reg \$617 ;
+  reg \$618 ;
+  reg \$619 ;
   wire \$62 ;
-  reg [7:0] \$620 ;
-  reg [31:0] \$621 ;
+  reg \$620 ;
+  reg \$621 ;
   reg \$622 ;
-  reg [31:0] \$623 ;
+  reg \$623 ;
+  reg \$624 ;
+  reg \$625 ;
+  reg \$626 ;
+  reg \$627 ;
+  reg \$628 ;
+  reg \$629 ;
   wire \$63 ;
+  reg \$630 ;
+  reg \$631 ;
+  reg \$632 ;
+  reg \$633 ;
+  reg \$634 ;
+  reg \$635 ;
+  reg \$636 ;
+  reg \$637 ;
+  reg \$638 ;
+  reg \$639 ;
   wire \$64 ;
+  reg \$640 ;
+  reg \$641 ;
+  reg \$642 ;
+  reg \$643 ;
+  reg \$644 ;
+  reg \$645 ;
+  reg \$646 ;
+  reg \$647 ;
+  reg \$648 ;
+  reg \$649 ;
   wire \$65 ;
+  reg \$650 ;
+  reg \$651 ;
+  reg [3:0] \$652 ;
+  reg \$653 ;
+  reg \$654 ;
+  reg \$655 ;
+  reg \$656 ;
+  reg \$657 ;
+  reg \$658 ;
+  reg \$659 ;
   wire \$66 ;
+  reg \$660 ;
+  reg \$661 ;
+  reg \$662 ;
+  reg \$663 ;
+  reg [5:0] \$664 ;
+  reg [15:0] \$665 ;
+  reg [12:0] \$666 ;
+  reg [31:0] \$667 ;
+  reg [22:0] \$668 ;
+  reg [31:0] \$669 ;
   wire \$67 ;
+  reg [7:0] \$670 ;
+  reg [31:0] \$671 ;
+  reg [3:0] \$672 ;
+  reg \$673 ;
+  reg [7:0] \$674 ;
+  reg [12:0] \$675 ;
+  reg \$676 ;
+  reg [31:0] \$677 ;
   wire \$68 ;
   wire \$69 ;
   wire \$7 ;
@@ -1713,10 +1854,16 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire [23:0] ch0__cfg_break_time;
   (* init = 12'h000 *)
   wire [11:0] ch0__cfg_delay_limit;
+  (* init = 4'h0 *)
+  wire [3:0] ch0__cfg_delay_tolerance;
   (* init = 1'h0 *)
   wire ch0__cfg_end_check;
   (* init = 16'h0000 *)
   wire [15:0] ch0__cfg_ma_half_period;
+  (* init = 4'h0 *)
+  wire [3:0] ch0__cfg_noise_limit;
+  (* init = 12'h000 *)
+  wire [11:0] ch0__cfg_quiet_time;
   (* init = 24'h000000 *)
   wire [23:0] ch0__cfg_request_period;
   (* init = 1'h0 *)
@@ -1755,6 +1902,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire [15:0] ch0__count_ca_refused;
   wire [15:0] ch0__count_crc_word0;
   wire [15:0] ch0__count_crc_word1;
+  wire [15:0] ch0__count_delay_jump;
   wire [15:0] ch0__count_delay_range;
   wire [15:0] ch0__count_lc_repeat;
   wire [15:0] ch0__count_lc_skip;
@@ -1762,9 +1910,13 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire [15:0] ch0__count_no_ack;
   wire [15:0] ch0__count_no_start;
   wire [15:0] ch0__count_no_stop;
+  wire [15:0] ch0__count_noise_event;
+  wire [15:0] ch0__count_noisy_line;
   wire [15:0] ch0__count_overrun;
   wire [15:0] ch0__count_slo_stuck_low;
   wire [15:0] ch0__count_spw_mismatch;
+  wire ch0__delay_settled;
+  wire [7:0] ch0__delay_spread;
   input ch0__done;
   wire ch0__done;
   input [15:0] ch0__done_count;
@@ -1776,8 +1928,10 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire ch0__lc_skip;
   wire ch0__lc_zero;
   wire [12:0] ch0__line_delay;
+  wire [3:0] ch0__noise_events;
   (* init = 1'h0 *)
   wire ch0__periodic;
+  wire [12:0] ch0__settled_delay;
   wire ch0__spw_mismatch;
   (* init = 1'h0 *)
   wire ch0__start;
@@ -1809,8 +1963,8 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   output [2:0] ch0_ca_request_slave_id;
   reg [2:0] ch0_ca_request_slave_id = 3'h0;
   wire ch0_ca_request_write;
-  output \ch0_ca_request_write$80 ;
-  reg \ch0_ca_request_write$80  = 1'h0;
+  output \ch0_ca_request_write$85 ;
+  reg \ch0_ca_request_write$85  = 1'h0;
   wire ch0_ca_state_write;
   wire ch0_caps_write;
   output [23:0] ch0_cfg_ack_ack_limit;
@@ -1822,8 +1976,12 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg ch0_cfg_break_config_write = 1'h0;
   wire ch0_cfg_break_write;
   reg ch0_cfg_checks_config_write = 1'h0;
+  output [3:0] ch0_cfg_checks_delay_tolerance;
+  reg [3:0] ch0_cfg_checks_delay_tolerance = 4'h0;
   output ch0_cfg_checks_end_check;
   reg ch0_cfg_checks_end_check = 1'h0;
+  output [3:0] ch0_cfg_checks_noise_limit;
+  reg [3:0] ch0_cfg_checks_noise_limit = 4'h0;
   output ch0_cfg_checks_spw_check;
   reg ch0_cfg_checks_spw_check = 1'h0;
   output [7:0] ch0_cfg_checks_spw_tolerance;
@@ -1839,6 +1997,10 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   output [23:0] ch0_cfg_period_request_period;
   reg [23:0] ch0_cfg_period_request_period = 24'h000000;
   wire ch0_cfg_period_write;
+  reg ch0_cfg_quiet_config_write = 1'h0;
+  output [11:0] ch0_cfg_quiet_quiet_time;
+  reg [11:0] ch0_cfg_quiet_quiet_time = 12'h000;
+  wire ch0_cfg_quiet_write;
   reg ch0_cfg_timeout_config_write = 1'h0;
   output [23:0] ch0_cfg_timeout_timeout_limit;
   reg [23:0] ch0_cfg_timeout_timeout_limit = 24'h000000;
@@ -1869,6 +2031,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire ch0_count_cycle_write;
   wire ch0_count_lc_write;
   wire ch0_count_line_write;
+  wire ch0_count_noise_write;
   wire ch0_count_stop_write;
   output ch0_ctrl_abort;
   reg ch0_ctrl_abort = 1'h0;
@@ -1905,6 +2068,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg ch0_read_select_8c = 1'h0;
   reg ch0_read_select_8d = 1'h0;
   reg ch0_read_select_8e = 1'h0;
+  reg ch0_read_select_8f = 1'h0;
   reg ch0_read_select_90 = 1'h0;
   reg ch0_read_select_91 = 1'h0;
   reg ch0_read_select_92 = 1'h0;
@@ -1912,6 +2076,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg ch0_read_select_94 = 1'h0;
   reg ch0_read_select_95 = 1'h0;
   reg ch0_read_select_96 = 1'h0;
+  reg ch0_read_select_97 = 1'h0;
   reg ch0_read_select_98 = 1'h0;
   reg ch0_read_select_99 = 1'h0;
   reg ch0_read_select_9a = 1'h0;
@@ -1919,12 +2084,18 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg ch0_read_select_9c = 1'h0;
   reg ch0_read_select_9d = 1'h0;
   reg ch0_read_select_9e = 1'h0;
+  reg ch0_read_select_9f = 1'h0;
   reg ch0_read_select_c0 = 1'h0;
   reg ch0_read_select_c1 = 1'h0;
   reg ch0_read_select_c2 = 1'h0;
   reg ch0_read_select_c3 = 1'h0;
   reg ch0_read_select_c4 = 1'h0;
   reg ch0_read_select_c5 = 1'h0;
+  reg ch0_result_line_delay_settled_snapshot = 1'h0;
+  reg [7:0] ch0_result_line_delay_spread_snapshot = 8'h00;
+  reg [3:0] ch0_result_line_noise_events_snapshot = 4'h0;
+  reg [12:0] ch0_result_line_settled_delay_snapshot = 13'h0000;
+  wire ch0_result_line_write;
   reg [12:0] ch0_result_seq_line_delay_snapshot = 13'h0000;
   reg [15:0] ch0_result_seq_seq_snapshot = 16'h0000;
   wire ch0_result_seq_write;
@@ -1999,10 +2170,16 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire [23:0] ch1__cfg_break_time;
   (* init = 12'h000 *)
   wire [11:0] ch1__cfg_delay_limit;
+  (* init = 4'h0 *)
+  wire [3:0] ch1__cfg_delay_tolerance;
   (* init = 1'h0 *)
   wire ch1__cfg_end_check;
   (* init = 16'h0000 *)
   wire [15:0] ch1__cfg_ma_half_period;
+  (* init = 4'h0 *)
+  wire [3:0] ch1__cfg_noise_limit;
+  (* init = 12'h000 *)
+  wire [11:0] ch1__cfg_quiet_time;
   (* init = 24'h000000 *)
   wire [23:0] ch1__cfg_request_period;
   (* init = 1'h0 *)
@@ -2041,6 +2218,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire [15:0] ch1__count_ca_refused;
   wire [15:0] ch1__count_crc_word0;
   wire [15:0] ch1__count_crc_word1;
+  wire [15:0] ch1__count_delay_jump;
   wire [15:0] ch1__count_delay_range;
   wire [15:0] ch1__count_lc_repeat;
   wire [15:0] ch1__count_lc_skip;
@@ -2048,9 +2226,13 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire [15:0] ch1__count_no_ack;
   wire [15:0] ch1__count_no_start;
   wire [15:0] ch1__count_no_stop;
+  wire [15:0] ch1__count_noise_event;
+  wire [15:0] ch1__count_noisy_line;
   wire [15:0] ch1__count_overrun;
   wire [15:0] ch1__count_slo_stuck_low;
   wire [15:0] ch1__count_spw_mismatch;
+  wire ch1__delay_settled;
+  wire [7:0] ch1__delay_spread;
   input ch1__done;
   wire ch1__done;
   input [15:0] ch1__done_count;
@@ -2062,8 +2244,10 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire ch1__lc_skip;
   wire ch1__lc_zero;
   wire [12:0] ch1__line_delay;
+  wire [3:0] ch1__noise_events;
   (* init = 1'h0 *)
   wire ch1__periodic;
+  wire [12:0] ch1__settled_delay;
   wire ch1__spw_mismatch;
   (* init = 1'h0 *)
   wire ch1__start;
@@ -2095,8 +2279,8 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   output [2:0] ch1_ca_request_slave_id;
   reg [2:0] ch1_ca_request_slave_id = 3'h0;
   wire ch1_ca_request_write;
-  output \ch1_ca_request_write$241 ;
-  reg \ch1_ca_request_write$241  = 1'h0;
+  output \ch1_ca_request_write$265 ;
+  reg \ch1_ca_request_write$265  = 1'h0;
   wire ch1_ca_state_write;
   wire ch1_caps_write;
   output [23:0] ch1_cfg_ack_ack_limit;
@@ -2108,8 +2292,12 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg ch1_cfg_break_config_write = 1'h0;
   wire ch1_cfg_break_write;
   reg ch1_cfg_checks_config_write = 1'h0;
+  output [3:0] ch1_cfg_checks_delay_tolerance;
+  reg [3:0] ch1_cfg_checks_delay_tolerance = 4'h0;
   output ch1_cfg_checks_end_check;
   reg ch1_cfg_checks_end_check = 1'h0;
+  output [3:0] ch1_cfg_checks_noise_limit;
+  reg [3:0] ch1_cfg_checks_noise_limit = 4'h0;
   output ch1_cfg_checks_spw_check;
   reg ch1_cfg_checks_spw_check = 1'h0;
   output [7:0] ch1_cfg_checks_spw_tolerance;
@@ -2125,6 +2313,10 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   output [23:0] ch1_cfg_period_request_period;
   reg [23:0] ch1_cfg_period_request_period = 24'h000000;
   wire ch1_cfg_period_write;
+  reg ch1_cfg_quiet_config_write = 1'h0;
+  output [11:0] ch1_cfg_quiet_quiet_time;
+  reg [11:0] ch1_cfg_quiet_quiet_time = 12'h000;
+  wire ch1_cfg_quiet_write;
   reg ch1_cfg_timeout_config_write = 1'h0;
   output [23:0] ch1_cfg_timeout_timeout_limit;
   reg [23:0] ch1_cfg_timeout_timeout_limit = 24'h000000;
@@ -2155,6 +2347,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire ch1_count_cycle_write;
   wire ch1_count_lc_write;
   wire ch1_count_line_write;
+  wire ch1_count_noise_write;
   wire ch1_count_stop_write;
   output ch1_ctrl_abort;
   reg ch1_ctrl_abort = 1'h0;
@@ -2191,6 +2384,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg ch1_read_select_10c = 1'h0;
   reg ch1_read_select_10d = 1'h0;
   reg ch1_read_select_10e = 1'h0;
+  reg ch1_read_select_10f = 1'h0;
   reg ch1_read_select_110 = 1'h0;
   reg ch1_read_select_111 = 1'h0;
   reg ch1_read_select_112 = 1'h0;
@@ -2198,6 +2392,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg ch1_read_select_114 = 1'h0;
   reg ch1_read_select_115 = 1'h0;
   reg ch1_read_select_116 = 1'h0;
+  reg ch1_read_select_117 = 1'h0;
   reg ch1_read_select_118 = 1'h0;
   reg ch1_read_select_119 = 1'h0;
   reg ch1_read_select_11a = 1'h0;
@@ -2205,12 +2400,18 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg ch1_read_select_11c = 1'h0;
   reg ch1_read_select_11d = 1'h0;
   reg ch1_read_select_11e = 1'h0;
+  reg ch1_read_select_11f = 1'h0;
   reg ch1_read_select_140 = 1'h0;
   reg ch1_read_select_141 = 1'h0;
   reg ch1_read_select_142 = 1'h0;
   reg ch1_read_select_143 = 1'h0;
   reg ch1_read_select_144 = 1'h0;
   reg ch1_read_select_145 = 1'h0;
+  reg ch1_result_line_delay_settled_snapshot = 1'h0;
+  reg [7:0] ch1_result_line_delay_spread_snapshot = 8'h00;
+  reg [3:0] ch1_result_line_noise_events_snapshot = 4'h0;
+  reg [12:0] ch1_result_line_settled_delay_snapshot = 13'h0000;
+  wire ch1_result_line_write;
   reg [12:0] ch1_result_seq_line_delay_snapshot = 13'h0000;
   reg [15:0] ch1_result_seq_seq_snapshot = 16'h0000;
   wire ch1_result_seq_write;
@@ -2263,18 +2464,18 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   (* init = 1'h0 *)
   wire glob__trigger;
   wire [1:0] irq;
-  input [160:0] \port$4189$0 ;
-  wire [160:0] \port$4189$0 ;
-  input [287:0] \port$4202$0 ;
-  wire [287:0] \port$4202$0 ;
-  input [9:0] \port$4316$0 ;
-  wire [9:0] \port$4316$0 ;
-  input [160:0] \port$4673$0 ;
-  wire [160:0] \port$4673$0 ;
-  input [287:0] \port$4686$0 ;
-  wire [287:0] \port$4686$0 ;
-  input [9:0] \port$4800$0 ;
-  wire [9:0] \port$4800$0 ;
+  input [186:0] \port$4731$0 ;
+  wire [186:0] \port$4731$0 ;
+  input [335:0] \port$4744$0 ;
+  wire [335:0] \port$4744$0 ;
+  input [9:0] \port$4876$0 ;
+  wire [9:0] \port$4876$0 ;
+  input [186:0] \port$5293$0 ;
+  wire [186:0] \port$5293$0 ;
+  input [335:0] \port$5306$0 ;
+  wire [335:0] \port$5306$0 ;
+  input [9:0] \port$5438$0 ;
+  wire [9:0] \port$5438$0 ;
   input rst;
   wire rst;
   reg [10:0] write_addr = 11'h000;
@@ -2282,532 +2483,665 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg [31:0] write_data = 32'd0;
   reg write_en = 1'h0;
   reg [3:0] write_strb = 4'h0;
-  assign \$351  = write_addr == 8'h99;
-  assign ch0_count_ack_write = write_en & \$351 ;
-  assign \$352  = write_addr == 8'h9a;
-  assign ch0_count_line_write = write_en & \$352 ;
-  assign \$353  = write_addr == 8'h9b;
-  assign ch0_count_lc_write = write_en & \$353 ;
-  assign \$354  = write_addr == 8'h9c;
-  assign ch0_count_check_write = write_en & \$354 ;
-  assign \$355  = write_addr == 8'h9d;
-  assign ch0_count_cycle_write = write_en & \$355 ;
-  assign \$356  = write_addr == 8'h9e;
-  assign ch0_count_stop_write = write_en & \$356 ;
-  assign \$357  = write_addr == 8'hc0;
-  assign ch0_ca_request_write = write_en & \$357 ;
-  assign \$358  = write_addr == 8'hc1;
-  assign ch0_ca_ctrl_write = write_en & \$358 ;
-  assign \$359  = write_addr == 8'hc2;
-  assign ch0_ca_state_write = write_en & \$359 ;
-  assign \$360  = write_addr == 8'hc3;
-  assign ch0_ca_count_crc4_answer_write = write_en & \$360 ;
-  assign \$361  = write_addr == 8'hc4;
-  assign ch0_ca_count_refused_aborted_write = write_en & \$361 ;
-  assign \$362  = write_addr == 8'hc5;
-  assign ch0_ca_count_data_fault_write = write_en & \$362 ;
-  assign \$363  = write_addr[10:4] == 4'hd;
-  assign \$364  = write_en & \$363 ;
-  assign ch0__ca_wbuf_en = \$364  ? write_strb : 4'h0;
-  assign \$365  = bus__r_addr[10:4] == 4'he;
-  assign ch0__ca_rbuf_en = bus__r_en & \$365 ;
-  assign \$366  = ch0_irq_status_done & ch0_irq_enable_done;
-  assign \$368  = ch0_irq_status_error & ch0_irq_enable_error;
-  assign \$370  = ch0_irq_status_access_done & ch0_irq_enable_access_done;
-  assign ch0_irq = | { \$371 , \$369 , \$367  };
-  assign \$372  = write_addr == 9'h100;
-  assign ch1_ctrl_write = write_en & \$372 ;
-  assign \$373  = write_addr == 9'h101;
-  assign ch1_state_write = write_en & \$373 ;
-  assign \$374  = write_addr == 9'h102;
-  assign ch1_caps_write = write_en & \$374 ;
-  assign \$375  = write_addr == 9'h104;
-  assign ch1_irq_status_write = write_en & \$375 ;
-  assign \$376  = write_addr == 9'h105;
-  assign ch1_irq_enable_write = write_en & \$376 ;
-  assign \$377  = write_addr == 9'h108;
-  assign ch1_cfg_ma_write = write_en & \$377 ;
-  assign \$378  = write_addr == 9'h109;
-  assign ch1_cfg_period_write = write_en & \$378 ;
-  assign \$379  = write_addr == 9'h10a;
-  assign ch1_cfg_break_write = write_en & \$379 ;
-  assign \$380  = write_addr == 9'h10b;
-  assign ch1_cfg_ack_write = write_en & \$380 ;
-  assign \$381  = write_addr == 9'h10c;
-  assign ch1_cfg_timeout_write = write_en & \$381 ;
-  assign \$382  = write_addr == 9'h10d;
-  assign ch1_cfg_words_write = write_en & \$382 ;
-  assign \$383  = write_addr == 9'h10e;
-  assign ch1_cfg_checks_write = write_en & \$383 ;
-  assign \$384  = write_addr == 9'h110;
-  assign ch1_result_status_write = write_en & \$384 ;
-  assign \$385  = write_addr == 9'h111;
-  assign ch1_result_seq_write = write_en & \$385 ;
-  assign \$386  = write_addr == 9'h112;
-  assign ch1_result_w0_lo_write = write_en & \$386 ;
-  assign \$387  = write_addr == 9'h113;
-  assign ch1_result_w0_hi_write = write_en & \$387 ;
-  assign \$388  = write_addr == 9'h114;
-  assign ch1_result_w1_lo_write = write_en & \$388 ;
-  assign \$389  = write_addr == 9'h115;
-  assign ch1_result_w1_hi_write = write_en & \$389 ;
-  assign \$390  = write_addr == 9'h116;
-  assign ch1_result_timestamp_write = write_en & \$390 ;
-  assign \$391  = write_addr == 9'h118;
-  assign ch1_count_crc_write = write_en & \$391 ;
-  assign \$392  = write_addr == 9'h119;
-  assign ch1_count_ack_write = write_en & \$392 ;
-  assign \$393  = write_addr == 9'h11a;
-  assign ch1_count_line_write = write_en & \$393 ;
-  assign \$394  = write_addr == 9'h11b;
-  assign ch1_count_lc_write = write_en & \$394 ;
-  assign \$395  = write_addr == 9'h11c;
-  assign ch1_count_check_write = write_en & \$395 ;
-  assign \$396  = write_addr == 9'h11d;
-  assign ch1_count_cycle_write = write_en & \$396 ;
-  assign \$397  = write_addr == 9'h11e;
-  assign ch1_count_stop_write = write_en & \$397 ;
-  assign \$398  = write_addr == 9'h140;
-  assign ch1_ca_request_write = write_en & \$398 ;
-  assign \$399  = write_addr == 9'h141;
-  assign ch1_ca_ctrl_write = write_en & \$399 ;
-  assign \$400  = write_addr == 9'h142;
-  assign ch1_ca_state_write = write_en & \$400 ;
-  assign \$401  = write_addr == 9'h143;
-  assign ch1_ca_count_crc4_answer_write = write_en & \$401 ;
-  assign \$402  = write_addr == 9'h144;
-  assign ch1_ca_count_refused_aborted_write = write_en & \$402 ;
-  assign \$403  = write_addr == 9'h145;
-  assign ch1_ca_count_data_fault_write = write_en & \$403 ;
-  assign \$404  = write_addr[10:4] == 5'h15;
-  assign \$405  = write_en & \$404 ;
-  assign ch1__ca_wbuf_en = \$405  ? write_strb : 4'h0;
-  assign \$406  = bus__r_addr[10:4] == 5'h16;
-  assign ch1__ca_rbuf_en = bus__r_en & \$406 ;
-  assign \$407  = ch1_irq_status_done & ch1_irq_enable_done;
-  assign \$409  = ch1_irq_status_error & ch1_irq_enable_error;
-  assign \$411  = ch1_irq_status_access_done & ch1_irq_enable_access_done;
-  assign ch1_irq = | { \$412 , \$410 , \$408  };
-  assign \$414  = \$413  | ch0_read_data;
-  assign bus__r_data = \$414  | ch1_read_data;
+  assign \$323  = \$321  | \$322 ;
+  assign \$324  = ch1_read_select_119 ? \port$5306$0 [63:32] : 32'd0;
+  assign \$325  = \$323  | \$324 ;
+  assign \$326  = ch1_read_select_11a ? \port$5306$0 [95:64] : 32'd0;
+  assign \$327  = \$325  | \$326 ;
+  assign \$328  = ch1_read_select_11b ? \port$5306$0 [127:96] : 32'd0;
+  assign \$329  = \$327  | \$328 ;
+  assign \$330  = ch1_read_select_11c ? \port$5306$0 [159:128] : 32'd0;
+  assign \$331  = \$329  | \$330 ;
+  assign \$332  = ch1_read_select_11d ? \port$5306$0 [191:160] : 32'd0;
+  assign \$333  = \$331  | \$332 ;
+  assign \$334  = ch1_read_select_11e ? \port$5306$0 [223:192] : 32'd0;
+  assign \$335  = \$333  | \$334 ;
+  assign \$336  = ch1_read_select_11f ? \port$5306$0 [255:224] : 32'd0;
+  assign \$337  = \$335  | \$336 ;
+  assign \$338  = ch1_read_select_140 ? { 7'h00, \ch1_ca_request_write$265 , 1'h0, ch1_ca_request_count, 1'h0, ch1_ca_request_address, 5'h00, ch1_ca_request_slave_id } : 32'd0;
+  assign \$339  = \$337  | \$338 ;
+  assign \$342  = ch1_read_select_142 ? { 17'h00000, \port$5438$0 [9:3], 1'h0, \port$5438$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
+  assign \$343  = \$341  | \$342 ;
+  assign \$344  = ch1_read_select_143 ? \port$5306$0 [287:256] : 32'd0;
+  assign \$345  = \$343  | \$344 ;
+  assign \$346  = ch1_read_select_144 ? \port$5306$0 [319:288] : 32'd0;
+  assign \$347  = \$345  | \$346 ;
+  assign \$348  = ch1_read_select_145 ? { 16'h0000, \port$5306$0 [335:320] } : 32'd0;
+  assign \$349  = \$347  | \$348 ;
+  assign \$350  = ch1_window0_read ? ch1__ca_rbuf_data : 32'd0;
+  assign \$351  = \$349  | \$350 ;
+  assign \$352  = ! write_addr;
+  assign g_id_write = write_en & \$352 ;
+  assign \$353  = write_addr == 1'h1;
+  assign g_version_write = write_en & \$353 ;
+  assign \$354  = write_addr == 2'h2;
+  assign g_channels_write = write_en & \$354 ;
+  assign \$355  = write_addr == 2'h3;
+  assign g_trigger_write = write_en & \$355 ;
+  assign \$356  = write_addr == 3'h4;
+  assign g_irq_pending_write = write_en & \$356 ;
+  assign \$357  = write_addr == 8'h80;
+  assign ch0_ctrl_write = write_en & \$357 ;
+  assign \$358  = write_addr == 8'h81;
+  assign ch0_state_write = write_en & \$358 ;
+  assign \$359  = write_addr == 8'h82;
+  assign ch0_caps_write = write_en & \$359 ;
+  assign \$360  = write_addr == 8'h84;
+  assign ch0_irq_status_write = write_en & \$360 ;
+  assign \$361  = write_addr == 8'h85;
+  assign ch0_irq_enable_write = write_en & \$361 ;
+  assign \$362  = write_addr == 8'h88;
+  assign ch0_cfg_ma_write = write_en & \$362 ;
+  assign \$363  = write_addr == 8'h89;
+  assign ch0_cfg_period_write = write_en & \$363 ;
+  assign \$364  = write_addr == 8'h8a;
+  assign ch0_cfg_break_write = write_en & \$364 ;
+  assign \$365  = write_addr == 8'h8b;
+  assign ch0_cfg_ack_write = write_en & \$365 ;
+  assign \$366  = write_addr == 8'h8c;
+  assign ch0_cfg_timeout_write = write_en & \$366 ;
+  assign \$367  = write_addr == 8'h8d;
+  assign ch0_cfg_words_write = write_en & \$367 ;
+  assign \$368  = write_addr == 8'h8e;
+  assign ch0_cfg_checks_write = write_en & \$368 ;
+  assign \$369  = write_addr == 8'h8f;
+  assign ch0_cfg_quiet_write = write_en & \$369 ;
+  assign \$370  = write_addr == 8'h90;
+  assign ch0_result_status_write = write_en & \$370 ;
+  assign \$371  = write_addr == 8'h91;
+  assign ch0_result_seq_write = write_en & \$371 ;
+  assign \$372  = write_addr == 8'h92;
+  assign ch0_result_w0_lo_write = write_en & \$372 ;
+  assign \$373  = write_addr == 8'h93;
+  assign ch0_result_w0_hi_write = write_en & \$373 ;
+  assign \$374  = write_addr == 8'h94;
+  assign ch0_result_w1_lo_write = write_en & \$374 ;
+  assign \$375  = write_addr == 8'h95;
+  assign ch0_result_w1_hi_write = write_en & \$375 ;
+  assign \$376  = write_addr == 8'h96;
+  assign ch0_result_timestamp_write = write_en & \$376 ;
+  assign \$377  = write_addr == 8'h97;
+  assign ch0_result_line_write = write_en & \$377 ;
+  assign \$378  = write_addr == 8'h98;
+  assign ch0_count_crc_write = write_en & \$378 ;
+  assign \$379  = write_addr == 8'h99;
+  assign ch0_count_ack_write = write_en & \$379 ;
+  assign \$380  = write_addr == 8'h9a;
+  assign ch0_count_line_write = write_en & \$380 ;
+  assign \$381  = write_addr == 8'h9b;
+  assign ch0_count_lc_write = write_en & \$381 ;
+  assign \$382  = write_addr == 8'h9c;
+  assign ch0_count_check_write = write_en & \$382 ;
+  assign \$383  = write_addr == 8'h9d;
+  assign ch0_count_cycle_write = write_en & \$383 ;
+  assign \$384  = write_addr == 8'h9e;
+  assign ch0_count_stop_write = write_en & \$384 ;
+  assign \$385  = write_addr == 8'h9f;
+  assign ch0_count_noise_write = write_en & \$385 ;
+  assign \$386  = write_addr == 8'hc0;
+  assign ch0_ca_request_write = write_en & \$386 ;
+  assign \$387  = write_addr == 8'hc1;
+  assign ch0_ca_ctrl_write = write_en & \$387 ;
+  assign \$388  = write_addr == 8'hc2;
+  assign ch0_ca_state_write = write_en & \$388 ;
+  assign \$389  = write_addr == 8'hc3;
+  assign ch0_ca_count_crc4_answer_write = write_en & \$389 ;
+  assign \$390  = write_addr == 8'hc4;
+  assign ch0_ca_count_refused_aborted_write = write_en & \$390 ;
+  assign \$391  = write_addr == 8'hc5;
+  assign ch0_ca_count_data_fault_write = write_en & \$391 ;
+  assign \$392  = write_addr[10:4] == 4'hd;
+  assign \$393  = write_en & \$392 ;
+  assign ch0__ca_wbuf_en = \$393  ? write_strb : 4'h0;
+  assign \$394  = bus__r_addr[10:4] == 4'he;
+  assign ch0__ca_rbuf_en = bus__r_en & \$394 ;
+  assign \$395  = ch0_irq_status_done & ch0_irq_enable_done;
+  assign \$397  = ch0_irq_status_error & ch0_irq_enable_error;
+  assign \$399  = ch0_irq_status_access_done & ch0_irq_enable_access_done;
+  assign ch0_irq = | { \$400 , \$398 , \$396  };
+  assign \$401  = write_addr == 9'h100;
+  assign ch1_ctrl_write = write_en & \$401 ;
+  assign \$402  = write_addr == 9'h101;
+  assign ch1_state_write = write_en & \$402 ;
+  assign \$403  = write_addr == 9'h102;
+  assign ch1_caps_write = write_en & \$403 ;
+  assign \$404  = write_addr == 9'h104;
+  assign ch1_irq_status_write = write_en & \$404 ;
+  assign \$405  = write_addr == 9'h105;
+  assign ch1_irq_enable_write = write_en & \$405 ;
+  assign \$406  = write_addr == 9'h108;
+  assign ch1_cfg_ma_write = write_en & \$406 ;
+  assign \$407  = write_addr == 9'h109;
+  assign ch1_cfg_period_write = write_en & \$407 ;
+  assign \$408  = write_addr == 9'h10a;
+  assign ch1_cfg_break_write = write_en & \$408 ;
+  assign \$409  = write_addr == 9'h10b;
+  assign ch1_cfg_ack_write = write_en & \$409 ;
+  assign \$410  = write_addr == 9'h10c;
+  assign ch1_cfg_timeout_write = write_en & \$410 ;
+  assign \$411  = write_addr == 9'h10d;
+  assign ch1_cfg_words_write = write_en & \$411 ;
+  assign \$412  = write_addr == 9'h10e;
+  assign ch1_cfg_checks_write = write_en & \$412 ;
+  assign \$413  = write_addr == 9'h10f;
+  assign ch1_cfg_quiet_write = write_en & \$413 ;
+  assign \$414  = write_addr == 9'h110;
+  assign ch1_result_status_write = write_en & \$414 ;
+  assign \$415  = write_addr == 9'h111;
+  assign ch1_result_seq_write = write_en & \$415 ;
+  assign \$416  = write_addr == 9'h112;
+  assign ch1_result_w0_lo_write = write_en & \$416 ;
+  assign \$417  = write_addr == 9'h113;
+  assign ch1_result_w0_hi_write = write_en & \$417 ;
+  assign \$418  = write_addr == 9'h114;
+  assign ch1_result_w1_lo_write = write_en & \$418 ;
+  assign \$419  = write_addr == 9'h115;
+  assign ch1_result_w1_hi_write = write_en & \$419 ;
+  assign \$420  = write_addr == 9'h116;
+  assign ch1_result_timestamp_write = write_en & \$420 ;
+  assign \$421  = write_addr == 9'h117;
+  assign ch1_result_line_write = write_en & \$421 ;
+  assign \$422  = write_addr == 9'h118;
+  assign ch1_count_crc_write = write_en & \$422 ;
+  assign \$423  = write_addr == 9'h119;
+  assign ch1_count_ack_write = write_en & \$423 ;
+  assign \$424  = write_addr == 9'h11a;
+  assign ch1_count_line_write = write_en & \$424 ;
+  assign \$425  = write_addr == 9'h11b;
+  assign ch1_count_lc_write = write_en & \$425 ;
+  assign \$426  = write_addr == 9'h11c;
+  assign ch1_count_check_write = write_en & \$426 ;
+  assign \$427  = write_addr == 9'h11d;
+  assign ch1_count_cycle_write = write_en & \$427 ;
+  assign \$428  = write_addr == 9'h11e;
+  assign ch1_count_stop_write = write_en & \$428 ;
+  assign \$429  = write_addr == 9'h11f;
+  assign ch1_count_noise_write = write_en & \$429 ;
+  assign \$430  = write_addr == 9'h140;
+  assign ch1_ca_request_write = write_en & \$430 ;
+  assign \$431  = write_addr == 9'h141;
+  assign ch1_ca_ctrl_write = write_en & \$431 ;
+  assign \$432  = write_addr == 9'h142;
+  assign ch1_ca_state_write = write_en & \$432 ;
+  assign \$433  = write_addr == 9'h143;
+  assign ch1_ca_count_crc4_answer_write = write_en & \$433 ;
+  assign \$434  = write_addr == 9'h144;
+  assign ch1_ca_count_refused_aborted_write = write_en & \$434 ;
+  assign \$435  = write_addr == 9'h145;
+  assign ch1_ca_count_data_fault_write = write_en & \$435 ;
+  assign \$436  = write_addr[10:4] == 5'h15;
+  assign \$437  = write_en & \$436 ;
+  assign ch1__ca_wbuf_en = \$437  ? write_strb : 4'h0;
+  assign \$438  = bus__r_addr[10:4] == 5'h16;
+  assign ch1__ca_rbuf_en = bus__r_en & \$438 ;
+  assign \$439  = ch1_irq_status_done & ch1_irq_enable_done;
+  assign \$441  = ch1_irq_status_error & ch1_irq_enable_error;
+  assign \$443  = ch1_irq_status_access_done & ch1_irq_enable_access_done;
+  assign ch1_irq = | { \$444 , \$442 , \$440  };
+  assign \$446  = \$445  | ch0_read_data;
+  assign bus__r_data = \$446  | ch1_read_data;
   always @(posedge clk)
-    write_en <= \$415 ;
+    write_en <= \$447 ;
   always @(posedge clk)
-    write_addr <= \$416 ;
+    write_addr <= \$448 ;
   always @(posedge clk)
-    write_data <= \$417 ;
+    write_data <= \$449 ;
   always @(posedge clk)
-    write_strb <= \$418 ;
+    write_strb <= \$450 ;
   always @(posedge clk)
-    config_write_data <= \$419 ;
+    config_write_data <= \$451 ;
   always @(posedge clk)
-    config_write_strb <= \$420 ;
+    config_write_strb <= \$452 ;
   always @(posedge clk)
-    g_trigger_start <= \$421 ;
+    g_trigger_start <= \$453 ;
   always @(posedge clk)
-    g_read_select_0 <= \$422 ;
+    g_read_select_0 <= \$454 ;
   always @(posedge clk)
-    g_read_select_1 <= \$423 ;
+    g_read_select_1 <= \$455 ;
   always @(posedge clk)
-    g_read_select_2 <= \$424 ;
+    g_read_select_2 <= \$456 ;
   always @(posedge clk)
-    g_read_select_3 <= \$425 ;
+    g_read_select_3 <= \$457 ;
   always @(posedge clk)
-    g_read_select_4 <= \$426 ;
+    g_read_select_4 <= \$458 ;
   always @(posedge clk)
-    g_read_data <= \$427 ;
+    g_read_data <= \$459 ;
   always @(posedge clk)
-    ch0_ctrl_start <= \$428 ;
+    ch0_ctrl_start <= \$460 ;
   always @(posedge clk)
-    ch0_ctrl_abort <= \$429 ;
+    ch0_ctrl_abort <= \$461 ;
   always @(posedge clk)
-    ch0_ctrl_clear_counters <= \$430 ;
+    ch0_ctrl_clear_counters <= \$462 ;
   always @(posedge clk)
-    ch0_ctrl_periodic <= \$431 ;
+    ch0_ctrl_periodic <= \$463 ;
   always @(posedge clk)
-    ch0_ctrl_trigger_enable <= \$432 ;
+    ch0_ctrl_trigger_enable <= \$464 ;
   always @(posedge clk)
-    ch0_irq_status_done <= \$433 ;
+    ch0_irq_status_done <= \$465 ;
   always @(posedge clk)
-    ch0_irq_status_error <= \$434 ;
+    ch0_irq_status_error <= \$466 ;
   always @(posedge clk)
-    ch0_irq_status_access_done <= \$435 ;
+    ch0_irq_status_access_done <= \$467 ;
   always @(posedge clk)
-    ch0_irq_enable_config_write <= \$436 ;
+    ch0_irq_enable_config_write <= \$468 ;
   always @(posedge clk)
-    ch0_irq_enable_done <= \$437 ;
+    ch0_irq_enable_done <= \$469 ;
   always @(posedge clk)
-    ch0_irq_enable_error <= \$438 ;
+    ch0_irq_enable_error <= \$470 ;
   always @(posedge clk)
-    ch0_irq_enable_access_done <= \$439 ;
+    ch0_irq_enable_access_done <= \$471 ;
   always @(posedge clk)
-    ch0_cfg_ma_config_write <= \$440 ;
+    ch0_cfg_ma_config_write <= \$472 ;
   always @(posedge clk)
-    ch0_cfg_ma_ma_half_period <= \$441 ;
+    ch0_cfg_ma_ma_half_period <= \$473 ;
   always @(posedge clk)
-    ch0_cfg_ma_delay_limit <= \$442 ;
+    ch0_cfg_ma_delay_limit <= \$474 ;
   always @(posedge clk)
-    ch0_cfg_period_config_write <= \$443 ;
+    ch0_cfg_period_config_write <= \$475 ;
   always @(posedge clk)
-    ch0_cfg_period_request_period <= \$444 ;
+    ch0_cfg_period_request_period <= \$476 ;
   always @(posedge clk)
-    ch0_cfg_break_config_write <= \$445 ;
+    ch0_cfg_break_config_write <= \$477 ;
   always @(posedge clk)
-    ch0_cfg_break_break_time <= \$446 ;
+    ch0_cfg_break_break_time <= \$478 ;
   always @(posedge clk)
-    ch0_cfg_ack_config_write <= \$447 ;
+    ch0_cfg_ack_config_write <= \$479 ;
   always @(posedge clk)
-    ch0_cfg_ack_ack_limit <= \$448 ;
+    ch0_cfg_ack_ack_limit <= \$480 ;
   always @(posedge clk)
-    ch0_cfg_timeout_config_write <= \$449 ;
+    ch0_cfg_timeout_config_write <= \$481 ;
   always @(posedge clk)
-    ch0_cfg_timeout_timeout_limit <= \$450 ;
+    ch0_cfg_timeout_timeout_limit <= \$482 ;
   always @(posedge clk)
-    ch0_cfg_words_config_write <= \$451 ;
+    ch0_cfg_words_config_write <= \$483 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_data_bits <= \$452 ;
+    ch0_cfg_words_w0_data_bits <= \$484 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_nenw <= \$453 ;
+    ch0_cfg_words_w0_nenw <= \$485 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_lc <= \$454 ;
+    ch0_cfg_words_w0_lc <= \$486 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_crc <= \$455 ;
+    ch0_cfg_words_w0_crc <= \$487 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_data_bits <= \$456 ;
+    ch0_cfg_words_w1_data_bits <= \$488 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_nenw <= \$457 ;
+    ch0_cfg_words_w1_nenw <= \$489 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_lc <= \$458 ;
+    ch0_cfg_words_w1_lc <= \$490 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_crc <= \$459 ;
+    ch0_cfg_words_w1_crc <= \$491 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_enable <= \$460 ;
+    ch0_cfg_words_w1_enable <= \$492 ;
   always @(posedge clk)
-    ch0_cfg_checks_config_write <= \$461 ;
+    ch0_cfg_checks_config_write <= \$493 ;
   always @(posedge clk)
-    ch0_cfg_checks_end_check <= \$462 ;
+    ch0_cfg_checks_end_check <= \$494 ;
   always @(posedge clk)
-    ch0_cfg_checks_spw_check <= \$463 ;
+    ch0_cfg_checks_spw_check <= \$495 ;
   always @(posedge clk)
-    ch0_cfg_checks_spw_tolerance <= \$464 ;
+    ch0_cfg_checks_spw_tolerance <= \$496 ;
   always @(posedge clk)
-    ch0_ca_request_config_write <= \$465 ;
+    ch0_cfg_checks_noise_limit <= \$497 ;
   always @(posedge clk)
-    ch0_ca_request_slave_id <= \$466 ;
+    ch0_cfg_checks_delay_tolerance <= \$498 ;
   always @(posedge clk)
-    ch0_ca_request_address <= \$467 ;
+    ch0_cfg_quiet_config_write <= \$499 ;
   always @(posedge clk)
-    ch0_ca_request_count <= \$468 ;
+    ch0_cfg_quiet_quiet_time <= \$500 ;
   always @(posedge clk)
-    \ch0_ca_request_write$80  <= \$469 ;
+    ch0_ca_request_config_write <= \$501 ;
   always @(posedge clk)
-    ch0_ca_ctrl_start <= \$470 ;
+    ch0_ca_request_slave_id <= \$502 ;
   always @(posedge clk)
-    ch0_ca_ctrl_abort <= \$471 ;
+    ch0_ca_request_address <= \$503 ;
   always @(posedge clk)
-    ch0_read_select_80 <= \$472 ;
+    ch0_ca_request_count <= \$504 ;
   always @(posedge clk)
-    ch0_read_select_81 <= \$473 ;
+    \ch0_ca_request_write$85  <= \$505 ;
   always @(posedge clk)
-    ch0_read_select_82 <= \$474 ;
+    ch0_ca_ctrl_start <= \$506 ;
   always @(posedge clk)
-    ch0_read_select_84 <= \$475 ;
+    ch0_ca_ctrl_abort <= \$507 ;
   always @(posedge clk)
-    ch0_read_select_85 <= \$476 ;
+    ch0_read_select_80 <= \$508 ;
   always @(posedge clk)
-    ch0_read_select_88 <= \$477 ;
+    ch0_read_select_81 <= \$509 ;
   always @(posedge clk)
-    ch0_read_select_89 <= \$478 ;
+    ch0_read_select_82 <= \$510 ;
   always @(posedge clk)
-    ch0_read_select_8a <= \$479 ;
+    ch0_read_select_84 <= \$511 ;
   always @(posedge clk)
-    ch0_read_select_8b <= \$480 ;
+    ch0_read_select_85 <= \$512 ;
   always @(posedge clk)
-    ch0_read_select_8c <= \$481 ;
+    ch0_read_select_88 <= \$513 ;
   always @(posedge clk)
-    ch0_read_select_8d <= \$482 ;
+    ch0_read_select_89 <= \$514 ;
   always @(posedge clk)
-    ch0_read_select_8e <= \$483 ;
+    ch0_read_select_8a <= \$515 ;
   always @(posedge clk)
-    ch0_read_select_90 <= \$484 ;
+    ch0_read_select_8b <= \$516 ;
   always @(posedge clk)
-    ch0_read_select_91 <= \$485 ;
+    ch0_read_select_8c <= \$517 ;
   always @(posedge clk)
-    ch0_read_select_92 <= \$486 ;
+    ch0_read_select_8d <= \$518 ;
   always @(posedge clk)
-    ch0_read_select_93 <= \$487 ;
+    ch0_read_select_8e <= \$519 ;
   always @(posedge clk)
-    ch0_read_select_94 <= \$488 ;
+    ch0_read_select_8f <= \$520 ;
   always @(posedge clk)
-    ch0_read_select_95 <= \$489 ;
+    ch0_read_select_90 <= \$521 ;
   always @(posedge clk)
-    ch0_read_select_96 <= \$490 ;
+    ch0_read_select_91 <= \$522 ;
   always @(posedge clk)
-    ch0_read_select_98 <= \$491 ;
+    ch0_read_select_92 <= \$523 ;
   always @(posedge clk)
-    ch0_read_select_99 <= \$492 ;
+    ch0_read_select_93 <= \$524 ;
   always @(posedge clk)
-    ch0_read_select_9a <= \$493 ;
+    ch0_read_select_94 <= \$525 ;
   always @(posedge clk)
-    ch0_read_select_9b <= \$494 ;
+    ch0_read_select_95 <= \$526 ;
   always @(posedge clk)
-    ch0_read_select_9c <= \$495 ;
+    ch0_read_select_96 <= \$527 ;
   always @(posedge clk)
-    ch0_read_select_9d <= \$496 ;
+    ch0_read_select_97 <= \$528 ;
   always @(posedge clk)
-    ch0_read_select_9e <= \$497 ;
+    ch0_read_select_98 <= \$529 ;
   always @(posedge clk)
-    ch0_read_select_c0 <= \$498 ;
+    ch0_read_select_99 <= \$530 ;
   always @(posedge clk)
-    ch0_read_select_c1 <= \$499 ;
+    ch0_read_select_9a <= \$531 ;
   always @(posedge clk)
-    ch0_read_select_c2 <= \$500 ;
+    ch0_read_select_9b <= \$532 ;
   always @(posedge clk)
-    ch0_read_select_c3 <= \$501 ;
+    ch0_read_select_9c <= \$533 ;
   always @(posedge clk)
-    ch0_read_select_c4 <= \$502 ;
+    ch0_read_select_9d <= \$534 ;
   always @(posedge clk)
-    ch0_read_select_c5 <= \$503 ;
+    ch0_read_select_9e <= \$535 ;
   always @(posedge clk)
-    ch0_result_status_status_snapshot <= \$504 ;
+    ch0_read_select_9f <= \$536 ;
   always @(posedge clk)
-    ch0_result_status_cds_snapshot <= \$505 ;
+    ch0_read_select_c0 <= \$537 ;
   always @(posedge clk)
-    ch0_result_status_w0_ne_snapshot <= \$506 ;
+    ch0_read_select_c1 <= \$538 ;
   always @(posedge clk)
-    ch0_result_status_w0_nw_snapshot <= \$507 ;
+    ch0_read_select_c2 <= \$539 ;
   always @(posedge clk)
-    ch0_result_status_w0_crc_ok_snapshot <= \$508 ;
+    ch0_read_select_c3 <= \$540 ;
   always @(posedge clk)
-    ch0_result_status_w1_ne_snapshot <= \$509 ;
+    ch0_read_select_c4 <= \$541 ;
   always @(posedge clk)
-    ch0_result_status_w1_nw_snapshot <= \$510 ;
+    ch0_read_select_c5 <= \$542 ;
   always @(posedge clk)
-    ch0_result_status_w1_crc_ok_snapshot <= \$511 ;
+    ch0_result_status_status_snapshot <= \$543 ;
   always @(posedge clk)
-    ch0_result_status_lc_repeat_snapshot <= \$512 ;
+    ch0_result_status_cds_snapshot <= \$544 ;
   always @(posedge clk)
-    ch0_result_status_lc_skip_snapshot <= \$513 ;
+    ch0_result_status_w0_ne_snapshot <= \$545 ;
   always @(posedge clk)
-    ch0_result_status_lc_zero_snapshot <= \$514 ;
+    ch0_result_status_w0_nw_snapshot <= \$546 ;
   always @(posedge clk)
-    ch0_result_status_spw_mismatch_snapshot <= \$515 ;
+    ch0_result_status_w0_crc_ok_snapshot <= \$547 ;
   always @(posedge clk)
-    ch0_result_status_lc_snapshot <= \$516 ;
+    ch0_result_status_w1_ne_snapshot <= \$548 ;
   always @(posedge clk)
-    ch0_result_seq_seq_snapshot <= \$517 ;
+    ch0_result_status_w1_nw_snapshot <= \$549 ;
   always @(posedge clk)
-    ch0_result_seq_line_delay_snapshot <= \$518 ;
+    ch0_result_status_w1_crc_ok_snapshot <= \$550 ;
   always @(posedge clk)
-    ch0_result_w0_lo_data_snapshot <= \$519 ;
+    ch0_result_status_lc_repeat_snapshot <= \$551 ;
   always @(posedge clk)
-    ch0_result_w0_hi_data_snapshot <= \$520 ;
+    ch0_result_status_lc_skip_snapshot <= \$552 ;
   always @(posedge clk)
-    ch0_result_w1_lo_data_snapshot <= \$521 ;
+    ch0_result_status_lc_zero_snapshot <= \$553 ;
   always @(posedge clk)
-    ch0_result_w1_hi_data_snapshot <= \$522 ;
+    ch0_result_status_spw_mismatch_snapshot <= \$554 ;
   always @(posedge clk)
-    ch0_result_timestamp_time_snapshot <= \$523 ;
+    ch0_result_status_lc_snapshot <= \$555 ;
   always @(posedge clk)
-    ch0_window0_read <= \$524 ;
+    ch0_result_seq_seq_snapshot <= \$556 ;
   always @(posedge clk)
-    ch0_read_data <= \$525 ;
+    ch0_result_seq_line_delay_snapshot <= \$557 ;
   always @(posedge clk)
-    ch1_ctrl_start <= \$526 ;
+    ch0_result_w0_lo_data_snapshot <= \$558 ;
   always @(posedge clk)
-    ch1_ctrl_abort <= \$527 ;
+    ch0_result_w0_hi_data_snapshot <= \$559 ;
   always @(posedge clk)
-    ch1_ctrl_clear_counters <= \$528 ;
+    ch0_result_w1_lo_data_snapshot <= \$560 ;
   always @(posedge clk)
-    ch1_ctrl_periodic <= \$529 ;
+    ch0_result_w1_hi_data_snapshot <= \$561 ;
   always @(posedge clk)
-    ch1_ctrl_trigger_enable <= \$530 ;
+    ch0_result_timestamp_time_snapshot <= \$562 ;
   always @(posedge clk)
-    ch1_irq_status_done <= \$531 ;
+    ch0_result_line_noise_events_snapshot <= \$563 ;
   always @(posedge clk)
-    ch1_irq_status_error <= \$532 ;
+    ch0_result_line_delay_settled_snapshot <= \$564 ;
   always @(posedge clk)
-    ch1_irq_status_access_done <= \$533 ;
+    ch0_result_line_delay_spread_snapshot <= \$565 ;
   always @(posedge clk)
-    ch1_irq_enable_config_write <= \$534 ;
+    ch0_result_line_settled_delay_snapshot <= \$566 ;
   always @(posedge clk)
-    ch1_irq_enable_done <= \$535 ;
+    ch0_window0_read <= \$567 ;
   always @(posedge clk)
-    ch1_irq_enable_error <= \$536 ;
+    ch0_read_data <= \$568 ;
   always @(posedge clk)
-    ch1_irq_enable_access_done <= \$537 ;
+    ch1_ctrl_start <= \$569 ;
   always @(posedge clk)
-    ch1_cfg_ma_config_write <= \$538 ;
+    ch1_ctrl_abort <= \$570 ;
   always @(posedge clk)
-    ch1_cfg_ma_ma_half_period <= \$539 ;
+    ch1_ctrl_clear_counters <= \$571 ;
   always @(posedge clk)
-    ch1_cfg_ma_delay_limit <= \$540 ;
+    ch1_ctrl_periodic <= \$572 ;
   always @(posedge clk)
-    ch1_cfg_period_config_write <= \$541 ;
+    ch1_ctrl_trigger_enable <= \$573 ;
   always @(posedge clk)
-    ch1_cfg_period_request_period <= \$542 ;
+    ch1_irq_status_done <= \$574 ;
   always @(posedge clk)
-    ch1_cfg_break_config_write <= \$543 ;
+    ch1_irq_status_error <= \$575 ;
   always @(posedge clk)
-    ch1_cfg_break_break_time <= \$544 ;
+    ch1_irq_status_access_done <= \$576 ;
   always @(posedge clk)
-    ch1_cfg_ack_config_write <= \$545 ;
+    ch1_irq_enable_config_write <= \$577 ;
   always @(posedge clk)
-    ch1_cfg_ack_ack_limit <= \$546 ;
+    ch1_irq_enable_done <= \$578 ;
   always @(posedge clk)
-    ch1_cfg_timeout_config_write <= \$547 ;
+    ch1_irq_enable_error <= \$579 ;
   always @(posedge clk)
-    ch1_cfg_timeout_timeout_limit <= \$548 ;
+    ch1_irq_enable_access_done <= \$580 ;
   always @(posedge clk)
-    ch1_cfg_words_config_write <= \$549 ;
+    ch1_cfg_ma_config_write <= \$581 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_data_bits <= \$550 ;
+    ch1_cfg_ma_ma_half_period <= \$582 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_nenw <= \$551 ;
+    ch1_cfg_ma_delay_limit <= \$583 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_lc <= \$552 ;
+    ch1_cfg_period_config_write <= \$584 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_crc <= \$553 ;
+    ch1_cfg_period_request_period <= \$585 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_data_bits <= \$554 ;
+    ch1_cfg_break_config_write <= \$586 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_nenw <= \$555 ;
+    ch1_cfg_break_break_time <= \$587 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_lc <= \$556 ;
+    ch1_cfg_ack_config_write <= \$588 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_crc <= \$557 ;
+    ch1_cfg_ack_ack_limit <= \$589 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_enable <= \$558 ;
+    ch1_cfg_timeout_config_write <= \$590 ;
   always @(posedge clk)
-    ch1_cfg_checks_config_write <= \$559 ;
+    ch1_cfg_timeout_timeout_limit <= \$591 ;
   always @(posedge clk)
-    ch1_cfg_checks_end_check <= \$560 ;
+    ch1_cfg_words_config_write <= \$592 ;
   always @(posedge clk)
-    ch1_cfg_checks_spw_check <= \$561 ;
+    ch1_cfg_words_w0_data_bits <= \$593 ;
   always @(posedge clk)
-    ch1_cfg_checks_spw_tolerance <= \$562 ;
+    ch1_cfg_words_w0_nenw <= \$594 ;
   always @(posedge clk)
-    ch1_ca_request_config_write <= \$563 ;
+    ch1_cfg_words_w0_lc <= \$595 ;
   always @(posedge clk)
-    ch1_ca_request_slave_id <= \$564 ;
+    ch1_cfg_words_w0_crc <= \$596 ;
   always @(posedge clk)
-    ch1_ca_request_address <= \$565 ;
+    ch1_cfg_words_w1_data_bits <= \$597 ;
   always @(posedge clk)
-    ch1_ca_request_count <= \$566 ;
+    ch1_cfg_words_w1_nenw <= \$598 ;
   always @(posedge clk)
-    \ch1_ca_request_write$241  <= \$567 ;
+    ch1_cfg_words_w1_lc <= \$599 ;
   always @(posedge clk)
-    ch1_ca_ctrl_start <= \$568 ;
+    ch1_cfg_words_w1_crc <= \$600 ;
   always @(posedge clk)
-    ch1_ca_ctrl_abort <= \$569 ;
+    ch1_cfg_words_w1_enable <= \$601 ;
   always @(posedge clk)
-    ch1_read_select_100 <= \$570 ;
+    ch1_cfg_checks_config_write <= \$602 ;
   always @(posedge clk)
-    ch1_read_select_101 <= \$571 ;
+    ch1_cfg_checks_end_check <= \$603 ;
   always @(posedge clk)
-    ch1_read_select_102 <= \$572 ;
+    ch1_cfg_checks_spw_check <= \$604 ;
   always @(posedge clk)
-    ch1_read_select_104 <= \$573 ;
+    ch1_cfg_checks_spw_tolerance <= \$605 ;
   always @(posedge clk)
-    ch1_read_select_105 <= \$574 ;
+    ch1_cfg_checks_noise_limit <= \$606 ;
   always @(posedge clk)
-    ch1_read_select_108 <= \$575 ;
+    ch1_cfg_checks_delay_tolerance <= \$607 ;
   always @(posedge clk)
-    ch1_read_select_109 <= \$576 ;
+    ch1_cfg_quiet_config_write <= \$608 ;
   always @(posedge clk)
-    ch1_read_select_10a <= \$577 ;
+    ch1_cfg_quiet_quiet_time <= \$609 ;
   always @(posedge clk)
-    ch1_read_select_10b <= \$578 ;
+    ch1_ca_request_config_write <= \$610 ;
   always @(posedge clk)
-    ch1_read_select_10c <= \$579 ;
+    ch1_ca_request_slave_id <= \$611 ;
   always @(posedge clk)
-    ch1_read_select_10d <= \$580 ;
+    ch1_ca_request_address <= \$612 ;
   always @(posedge clk)
-    ch1_read_select_10e <= \$581 ;
+    ch1_ca_request_count <= \$613 ;
   always @(posedge clk)
-    ch1_read_select_110 <= \$582 ;
+    \ch1_ca_request_write$265  <= \$614 ;
   always @(posedge clk)
-    ch1_read_select_111 <= \$583 ;
+    ch1_ca_ctrl_start <= \$615 ;
   always @(posedge clk)
-    ch1_read_select_112 <= \$584 ;
+    ch1_ca_ctrl_abort <= \$616 ;
   always @(posedge clk)
-    ch1_read_select_113 <= \$585 ;
+    ch1_read_select_100 <= \$617 ;
   always @(posedge clk)
-    ch1_read_select_114 <= \$586 ;
+    ch1_read_select_101 <= \$618 ;
   always @(posedge clk)
-    ch1_read_select_115 <= \$587 ;
+    ch1_read_select_102 <= \$619 ;
   always @(posedge clk)
-    ch1_read_select_116 <= \$588 ;
+    ch1_read_select_104 <= \$620 ;
   always @(posedge clk)
-    ch1_read_select_118 <= \$589 ;
+    ch1_read_select_105 <= \$621 ;
   always @(posedge clk)
-    ch1_read_select_119 <= \$590 ;
+    ch1_read_select_108 <= \$622 ;
   always @(posedge clk)
-    ch1_read_select_11a <= \$591 ;
+    ch1_read_select_109 <= \$623 ;
   always @(posedge clk)
-    ch1_read_select_11b <= \$592 ;
+    ch1_read_select_10a <= \$624 ;
   always @(posedge clk)
-    ch1_read_select_11c <= \$593 ;
+    ch1_read_select_10b <= \$625 ;
   always @(posedge clk)
-    ch1_read_select_11d <= \$594 ;
+    ch1_read_select_10c <= \$626 ;
   always @(posedge clk)
-    ch1_read_select_11e <= \$595 ;
+    ch1_read_select_10d <= \$627 ;
   always @(posedge clk)
-    ch1_read_select_140 <= \$596 ;
+    ch1_read_select_10e <= \$628 ;
   always @(posedge clk)
-    ch1_read_select_141 <= \$597 ;
+    ch1_read_select_10f <= \$629 ;
   always @(posedge clk)
-    ch1_read_select_142 <= \$598 ;
+    ch1_read_select_110 <= \$630 ;
   always @(posedge clk)
-    ch1_read_select_143 <= \$599 ;
+    ch1_read_select_111 <= \$631 ;
   always @(posedge clk)
-    ch1_read_select_144 <= \$600 ;
+    ch1_read_select_112 <= \$632 ;
   always @(posedge clk)
-    ch1_read_select_145 <= \$601 ;
+    ch1_read_select_113 <= \$633 ;
   always @(posedge clk)
-    ch1_result_status_status_snapshot <= \$602 ;
+    ch1_read_select_114 <= \$634 ;
   always @(posedge clk)
-    ch1_result_status_cds_snapshot <= \$603 ;
+    ch1_read_select_115 <= \$635 ;
   always @(posedge clk)
-    ch1_result_status_w0_ne_snapshot <= \$604 ;
+    ch1_read_select_116 <= \$636 ;
   always @(posedge clk)
-    ch1_result_status_w0_nw_snapshot <= \$605 ;
+    ch1_read_select_117 <= \$637 ;
   always @(posedge clk)
-    ch1_result_status_w0_crc_ok_snapshot <= \$606 ;
+    ch1_read_select_118 <= \$638 ;
   always @(posedge clk)
-    ch1_result_status_w1_ne_snapshot <= \$607 ;
+    ch1_read_select_119 <= \$639 ;
   always @(posedge clk)
-    ch1_result_status_w1_nw_snapshot <= \$608 ;
+    ch1_read_select_11a <= \$640 ;
   always @(posedge clk)
-    ch1_result_status_w1_crc_ok_snapshot <= \$609 ;
+    ch1_read_select_11b <= \$641 ;
   always @(posedge clk)
-    ch1_result_status_lc_repeat_snapshot <= \$610 ;
+    ch1_read_select_11c <= \$642 ;
   always @(posedge clk)
-    ch1_result_status_lc_skip_snapshot <= \$611 ;
+    ch1_read_select_11d <= \$643 ;
   always @(posedge clk)
-    ch1_result_status_lc_zero_snapshot <= \$612 ;
+    ch1_read_select_11e <= \$644 ;
   always @(posedge clk)
-    ch1_result_status_spw_mismatch_snapshot <= \$613 ;
+    ch1_read_select_11f <= \$645 ;
   always @(posedge clk)
-    ch1_result_status_lc_snapshot <= \$614 ;
+    ch1_read_select_140 <= \$646 ;
   always @(posedge clk)
-    ch1_result_seq_seq_snapshot <= \$615 ;
+    ch1_read_select_141 <= \$647 ;
   always @(posedge clk)
-    ch1_result_seq_line_delay_snapshot <= \$616 ;
+    ch1_read_select_142 <= \$648 ;
   always @(posedge clk)
-    ch1_result_w0_lo_data_snapshot <= \$617 ;
+    ch1_read_select_143 <= \$649 ;
   always @(posedge clk)
-    ch1_result_w0_hi_data_snapshot <= \$618 ;
+    ch1_read_select_144 <= \$650 ;
   always @(posedge clk)
-    ch1_result_w1_lo_data_snapshot <= \$619 ;
+    ch1_read_select_145 <= \$651 ;
   always @(posedge clk)
-    ch1_result_w1_hi_data_snapshot <= \$620 ;
+    ch1_result_status_status_snapshot <= \$652 ;
   always @(posedge clk)
-    ch1_result_timestamp_time_snapshot <= \$621 ;
+    ch1_result_status_cds_snapshot <= \$653 ;
   always @(posedge clk)
-    ch1_window0_read <= \$622 ;
+    ch1_result_status_w0_ne_snapshot <= \$654 ;
   always @(posedge clk)
-    ch1_read_data <= \$623 ;
+    ch1_result_status_w0_nw_snapshot <= \$655 ;
+  always @(posedge clk)
+    ch1_result_status_w0_crc_ok_snapshot <= \$656 ;
+  always @(posedge clk)
+    ch1_result_status_w1_ne_snapshot <= \$657 ;
+  always @(posedge clk)
+    ch1_result_status_w1_nw_snapshot <= \$658 ;
+  always @(posedge clk)
+    ch1_result_status_w1_crc_ok_snapshot <= \$659 ;
+  always @(posedge clk)
+    ch1_result_status_lc_repeat_snapshot <= \$660 ;
+  always @(posedge clk)
+    ch1_result_status_lc_skip_snapshot <= \$661 ;
+  always @(posedge clk)
+    ch1_result_status_lc_zero_snapshot <= \$662 ;
+  always @(posedge clk)
+    ch1_result_status_spw_mismatch_snapshot <= \$663 ;
+  always @(posedge clk)
+    ch1_result_status_lc_snapshot <= \$664 ;
+  always @(posedge clk)
+    ch1_result_seq_seq_snapshot <= \$665 ;
+  always @(posedge clk)
+    ch1_result_seq_line_delay_snapshot <= \$666 ;
+  always @(posedge clk)
+    ch1_result_w0_lo_data_snapshot <= \$667 ;
+  always @(posedge clk)
+    ch1_result_w0_hi_data_snapshot <= \$668 ;
+  always @(posedge clk)
+    ch1_result_w1_lo_data_snapshot <= \$669 ;
+  always @(posedge clk)
+    ch1_result_w1_hi_data_snapshot <= \$670 ;
+  always @(posedge clk)
+    ch1_result_timestamp_time_snapshot <= \$671 ;
+  always @(posedge clk)
+    ch1_result_line_noise_events_snapshot <= \$672 ;
+  always @(posedge clk)
+    ch1_result_line_delay_settled_snapshot <= \$673 ;
+  always @(posedge clk)
+    ch1_result_line_delay_spread_snapshot <= \$674 ;
+  always @(posedge clk)
+    ch1_result_line_settled_delay_snapshot <= \$675 ;
+  always @(posedge clk)
+    ch1_window0_read <= \$676 ;
+  always @(posedge clk)
+    ch1_read_data <= \$677 ;
   assign \$1  = write_data[0] & write_strb[0];
   assign \$2  = g_trigger_write ? \$1  : 1'h0;
   assign \$3  = ! bus__r_addr;
@@ -2867,708 +3201,331 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign \$60  = ch0_cfg_checks_config_write & config_write_strb[0];
   assign \$61  = ch0_cfg_checks_config_write & config_write_strb[0];
   assign \$62  = ch0_cfg_checks_config_write & config_write_strb[1];
-  assign \$63  = ch0_ca_request_config_write & config_write_strb[0];
-  assign \$64  = ch0_ca_request_config_write & config_write_strb[1];
-  assign \$65  = ch0_ca_request_config_write & config_write_strb[2];
-  assign \$66  = ch0_ca_request_config_write & config_write_strb[3];
-  assign \$67  = write_data[0] & write_strb[0];
-  assign \$68  = ch0_ca_ctrl_write ? \$67  : 1'h0;
-  assign \$69  = write_data[1] & write_strb[0];
-  assign \$70  = ch0_ca_ctrl_write ? \$69  : 1'h0;
-  assign \$71  = bus__r_addr == 8'h80;
-  assign \$72  = bus__r_addr == 8'h81;
-  assign \$73  = bus__r_addr == 8'h82;
-  assign \$74  = bus__r_addr == 8'h84;
-  assign \$75  = bus__r_addr == 8'h85;
-  assign \$76  = bus__r_addr == 8'h88;
-  assign \$77  = bus__r_addr == 8'h89;
-  assign \$78  = bus__r_addr == 8'h8a;
-  assign \$79  = bus__r_addr == 8'h8b;
-  assign \$80  = bus__r_addr == 8'h8c;
-  assign \$81  = bus__r_addr == 8'h8d;
-  assign \$82  = bus__r_addr == 8'h8e;
-  assign \$83  = bus__r_addr == 8'h90;
-  assign \$84  = bus__r_addr == 8'h91;
-  assign \$85  = bus__r_addr == 8'h92;
-  assign \$86  = bus__r_addr == 8'h93;
-  assign \$87  = bus__r_addr == 8'h94;
-  assign \$88  = bus__r_addr == 8'h95;
-  assign \$89  = bus__r_addr == 8'h96;
-  assign \$90  = bus__r_addr == 8'h98;
-  assign \$91  = bus__r_addr == 8'h99;
-  assign \$92  = bus__r_addr == 8'h9a;
-  assign \$93  = bus__r_addr == 8'h9b;
-  assign \$94  = bus__r_addr == 8'h9c;
-  assign \$95  = bus__r_addr == 8'h9d;
-  assign \$96  = bus__r_addr == 8'h9e;
-  assign \$97  = bus__r_addr == 8'hc0;
-  assign \$98  = bus__r_addr == 8'hc1;
-  assign \$99  = bus__r_addr == 8'hc2;
-  assign \$100  = bus__r_addr == 8'hc3;
-  assign \$101  = bus__r_addr == 8'hc4;
-  assign \$102  = bus__r_addr == 8'hc5;
-  assign \$103  = ch0_read_select_90 & bus__r_load;
-  assign \$104  = bus__r_addr[10:4] == 4'he;
-  assign \$105  = bus__r_en & \$104 ;
-  assign \$106  = ch0_read_select_80 ? { 22'h000000, ch0_ctrl_trigger_enable, ch0_ctrl_periodic, 8'h00 } : 32'd0;
-  assign \$108  = ch0_read_select_81 ? { 30'h00000000, ch0__config_error, ch0__busy } : 32'd0;
-  assign \$109  = \$107  | \$108 ;
-  assign \$110  = ch0_read_select_82 ? 32'd119023671 : 32'd0;
-  assign \$111  = \$109  | \$110 ;
-  assign \$112  = ch0_read_select_84 ? { 29'h00000000, ch0_irq_status_access_done, ch0_irq_status_error, ch0_irq_status_done } : 32'd0;
-  assign \$113  = \$111  | \$112 ;
-  assign \$114  = ch0_read_select_85 ? { 29'h00000000, ch0_irq_enable_access_done, ch0_irq_enable_error, ch0_irq_enable_done } : 32'd0;
-  assign \$115  = \$113  | \$114 ;
-  assign \$116  = ch0_read_select_88 ? { 4'h0, ch0_cfg_ma_delay_limit, ch0_cfg_ma_ma_half_period } : 32'd0;
-  assign \$117  = \$115  | \$116 ;
-  assign \$118  = ch0_read_select_89 ? { 8'h00, ch0_cfg_period_request_period } : 32'd0;
-  assign \$119  = \$117  | \$118 ;
-  assign \$120  = ch0_read_select_8a ? { 8'h00, ch0_cfg_break_break_time } : 32'd0;
-  assign \$121  = \$119  | \$120 ;
-  assign \$122  = ch0_read_select_8b ? { 8'h00, ch0_cfg_ack_ack_limit } : 32'd0;
-  assign \$123  = \$121  | \$122 ;
-  assign \$124  = ch0_read_select_8c ? { 8'h00, ch0_cfg_timeout_timeout_limit } : 32'd0;
-  assign \$125  = \$123  | \$124 ;
-  assign \$126  = ch0_read_select_8d ? { ch0_cfg_words_w1_enable, 5'h00, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_data_bits, 6'h00, ch0_cfg_words_w0_crc, ch0_cfg_words_w0_lc, ch0_cfg_words_w0_nenw, ch0_cfg_words_w0_data_bits } : 32'd0;
-  assign \$127  = \$125  | \$126 ;
-  assign \$128  = ch0_read_select_8e ? { 16'h0000, ch0_cfg_checks_spw_tolerance, 6'h00, ch0_cfg_checks_spw_check, ch0_cfg_checks_end_check } : 32'd0;
-  assign \$129  = \$127  | \$128 ;
-  assign \$130  = ch0_read_select_90 ? { 2'h0, \port$4189$0 [156:151], 4'h0, \port$4189$0 [160:157], 1'h0, \port$4189$0 [150:148], 1'h0, \port$4189$0 [107:105], 3'h0, \port$4189$0 [49], \port$4189$0 [3:0] } : 32'd0;
-  assign \$131  = \$129  | \$130 ;
-  assign \$132  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
-  assign \$133  = \$131  | \$132 ;
-  assign \$134  = ch0_read_select_92 ? ch0_result_w0_lo_data_snapshot : 32'd0;
-  assign \$135  = \$133  | \$134 ;
-  assign \$136  = ch0_read_select_93 ? { 9'h000, ch0_result_w0_hi_data_snapshot } : 32'd0;
-  assign \$137  = \$135  | \$136 ;
-  assign \$138  = ch0_read_select_94 ? ch0_result_w1_lo_data_snapshot : 32'd0;
-  assign \$139  = \$137  | \$138 ;
-  assign \$140  = ch0_read_select_95 ? { 24'h000000, ch0_result_w1_hi_data_snapshot } : 32'd0;
-  assign \$141  = \$139  | \$140 ;
-  assign \$142  = ch0_read_select_96 ? ch0_result_timestamp_time_snapshot : 32'd0;
-  assign \$143  = \$141  | \$142 ;
-  assign \$144  = ch0_read_select_98 ? \port$4202$0 [31:0] : 32'd0;
-  assign \$145  = \$143  | \$144 ;
-  assign \$146  = ch0_read_select_99 ? \port$4202$0 [63:32] : 32'd0;
-  assign \$147  = \$145  | \$146 ;
-  assign \$148  = ch0_read_select_9a ? \port$4202$0 [95:64] : 32'd0;
-  assign \$149  = \$147  | \$148 ;
-  assign \$150  = ch0_read_select_9b ? \port$4202$0 [127:96] : 32'd0;
-  assign \$151  = \$149  | \$150 ;
-  assign \$152  = ch0_read_select_9c ? \port$4202$0 [159:128] : 32'd0;
-  assign \$153  = \$151  | \$152 ;
-  assign \$154  = ch0_read_select_9d ? \port$4202$0 [191:160] : 32'd0;
-  assign \$155  = \$153  | \$154 ;
-  assign \$156  = ch0_read_select_9e ? { 16'h0000, \port$4202$0 [207:192] } : 32'd0;
-  assign \$157  = \$155  | \$156 ;
-  assign \$158  = ch0_read_select_c0 ? { 7'h00, \ch0_ca_request_write$80 , 1'h0, ch0_ca_request_count, 1'h0, ch0_ca_request_address, 5'h00, ch0_ca_request_slave_id } : 32'd0;
-  assign \$159  = \$157  | \$158 ;
-  assign \$162  = ch0_read_select_c2 ? { 17'h00000, \port$4316$0 [9:3], 1'h0, \port$4316$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
-  assign \$163  = \$161  | \$162 ;
-  assign \$164  = ch0_read_select_c3 ? \port$4202$0 [239:208] : 32'd0;
-  assign \$165  = \$163  | \$164 ;
-  assign \$166  = ch0_read_select_c4 ? \port$4202$0 [271:240] : 32'd0;
-  assign \$167  = \$165  | \$166 ;
-  assign \$168  = ch0_read_select_c5 ? { 16'h0000, \port$4202$0 [287:272] } : 32'd0;
-  assign \$169  = \$167  | \$168 ;
-  assign \$170  = ch0_window0_read ? ch0__ca_rbuf_data : 32'd0;
-  assign \$171  = \$169  | \$170 ;
-  assign \$172  = write_data[0] & write_strb[0];
-  assign \$173  = ch1_ctrl_write ? \$172  : 1'h0;
-  assign \$174  = write_data[1] & write_strb[0];
-  assign \$175  = ch1_ctrl_write ? \$174  : 1'h0;
-  assign \$176  = write_data[2] & write_strb[0];
-  assign \$177  = ch1_ctrl_write ? \$176  : 1'h0;
-  assign \$178  = ch1_ctrl_write & write_strb[1];
-  assign \$179  = ch1_ctrl_write & write_strb[1];
-  assign \$180  = write_data[0] & write_strb[0];
-  assign \$181  = ch1_irq_status_write ? \$180  : 1'h0;
-  assign \$182  = write_data[1] & write_strb[0];
-  assign \$183  = ch1_irq_status_write ? \$182  : 1'h0;
-  assign \$184  = write_data[2] & write_strb[0];
-  assign \$185  = ch1_irq_status_write ? \$184  : 1'h0;
-  assign \$186  = ch1_irq_enable_config_write & config_write_strb[0];
-  assign \$187  = ch1_irq_enable_config_write & config_write_strb[0];
-  assign \$188  = ch1_irq_enable_config_write & config_write_strb[0];
-  assign \$189  = ch1_cfg_ma_config_write & config_write_strb[0];
-  assign \$190  = ch1_cfg_ma_config_write & config_write_strb[1];
-  assign \$191  = ch1_cfg_ma_config_write & config_write_strb[2];
-  assign \$192  = ch1_cfg_ma_config_write & config_write_strb[3];
-  assign \$193  = ch1_cfg_period_config_write & config_write_strb[0];
-  assign \$194  = ch1_cfg_period_config_write & config_write_strb[1];
-  assign \$195  = ch1_cfg_period_config_write & config_write_strb[2];
-  assign \$196  = ch1_cfg_break_config_write & config_write_strb[0];
-  assign \$197  = ch1_cfg_break_config_write & config_write_strb[1];
-  assign \$198  = ch1_cfg_break_config_write & config_write_strb[2];
-  assign \$199  = ch1_cfg_ack_config_write & config_write_strb[0];
-  assign \$200  = ch1_cfg_ack_config_write & config_write_strb[1];
-  assign \$201  = ch1_cfg_ack_config_write & config_write_strb[2];
-  assign \$202  = ch1_cfg_timeout_config_write & config_write_strb[0];
-  assign \$203  = ch1_cfg_timeout_config_write & config_write_strb[1];
-  assign \$204  = ch1_cfg_timeout_config_write & config_write_strb[2];
-  assign \$205  = ch1_cfg_words_config_write & config_write_strb[0];
-  assign \$206  = ch1_cfg_words_config_write & config_write_strb[0];
-  assign \$207  = ch1_cfg_words_config_write & config_write_strb[0];
-  assign \$208  = ch1_cfg_words_config_write & config_write_strb[1];
-  assign \$209  = ch1_cfg_words_config_write & config_write_strb[2];
-  assign \$210  = ch1_cfg_words_config_write & config_write_strb[2];
-  assign \$211  = ch1_cfg_words_config_write & config_write_strb[2];
-  assign \$212  = ch1_cfg_words_config_write & config_write_strb[3];
-  assign \$213  = ch1_cfg_words_config_write & config_write_strb[3];
-  assign \$214  = ch1_cfg_checks_config_write & config_write_strb[0];
-  assign \$215  = ch1_cfg_checks_config_write & config_write_strb[0];
-  assign \$216  = ch1_cfg_checks_config_write & config_write_strb[1];
-  assign \$217  = ch1_ca_request_config_write & config_write_strb[0];
-  assign \$218  = ch1_ca_request_config_write & config_write_strb[1];
-  assign \$219  = ch1_ca_request_config_write & config_write_strb[2];
-  assign \$220  = ch1_ca_request_config_write & config_write_strb[3];
-  assign \$221  = write_data[0] & write_strb[0];
-  assign \$222  = ch1_ca_ctrl_write ? \$221  : 1'h0;
-  assign \$223  = write_data[1] & write_strb[0];
-  assign \$224  = ch1_ca_ctrl_write ? \$223  : 1'h0;
-  assign \$225  = bus__r_addr == 9'h100;
-  assign \$226  = bus__r_addr == 9'h101;
-  assign \$227  = bus__r_addr == 9'h102;
-  assign \$228  = bus__r_addr == 9'h104;
-  assign \$229  = bus__r_addr == 9'h105;
-  assign \$230  = bus__r_addr == 9'h108;
-  assign \$231  = bus__r_addr == 9'h109;
-  assign \$232  = bus__r_addr == 9'h10a;
-  assign \$233  = bus__r_addr == 9'h10b;
-  assign \$234  = bus__r_addr == 9'h10c;
-  assign \$235  = bus__r_addr == 9'h10d;
-  assign \$236  = bus__r_addr == 9'h10e;
-  assign \$237  = bus__r_addr == 9'h110;
-  assign \$238  = bus__r_addr == 9'h111;
-  assign \$239  = bus__r_addr == 9'h112;
-  assign \$240  = bus__r_addr == 9'h113;
-  assign \$241  = bus__r_addr == 9'h114;
-  assign \$242  = bus__r_addr == 9'h115;
-  assign \$243  = bus__r_addr == 9'h116;
-  assign \$244  = bus__r_addr == 9'h118;
-  assign \$245  = bus__r_addr == 9'h119;
-  assign \$246  = bus__r_addr == 9'h11a;
-  assign \$247  = bus__r_addr == 9'h11b;
-  assign \$248  = bus__r_addr == 9'h11c;
-  assign \$249  = bus__r_addr == 9'h11d;
-  assign \$250  = bus__r_addr == 9'h11e;
-  assign \$251  = bus__r_addr == 9'h140;
-  assign \$252  = bus__r_addr == 9'h141;
-  assign \$253  = bus__r_addr == 9'h142;
-  assign \$254  = bus__r_addr == 9'h143;
-  assign \$255  = bus__r_addr == 9'h144;
-  assign \$256  = bus__r_addr == 9'h145;
-  assign \$257  = ch1_read_select_110 & bus__r_load;
-  assign \$258  = bus__r_addr[10:4] == 5'h16;
-  assign \$259  = bus__r_en & \$258 ;
-  assign \$260  = ch1_read_select_100 ? { 22'h000000, ch1_ctrl_trigger_enable, ch1_ctrl_periodic, 8'h00 } : 32'd0;
-  assign \$262  = ch1_read_select_101 ? { 30'h00000000, ch1__config_error, ch1__busy } : 32'd0;
-  assign \$263  = \$261  | \$262 ;
-  assign \$264  = ch1_read_select_102 ? 32'd119023671 : 32'd0;
-  assign \$265  = \$263  | \$264 ;
-  assign \$266  = ch1_read_select_104 ? { 29'h00000000, ch1_irq_status_access_done, ch1_irq_status_error, ch1_irq_status_done } : 32'd0;
-  assign \$267  = \$265  | \$266 ;
-  assign \$268  = ch1_read_select_105 ? { 29'h00000000, ch1_irq_enable_access_done, ch1_irq_enable_error, ch1_irq_enable_done } : 32'd0;
-  assign \$269  = \$267  | \$268 ;
-  assign \$270  = ch1_read_select_108 ? { 4'h0, ch1_cfg_ma_delay_limit, ch1_cfg_ma_ma_half_period } : 32'd0;
-  assign \$271  = \$269  | \$270 ;
-  assign \$272  = ch1_read_select_109 ? { 8'h00, ch1_cfg_period_request_period } : 32'd0;
-  assign \$273  = \$271  | \$272 ;
-  assign \$274  = ch1_read_select_10a ? { 8'h00, ch1_cfg_break_break_time } : 32'd0;
-  assign \$275  = \$273  | \$274 ;
-  assign \$276  = ch1_read_select_10b ? { 8'h00, ch1_cfg_ack_ack_limit } : 32'd0;
-  assign \$277  = \$275  | \$276 ;
-  assign \$278  = ch1_read_select_10c ? { 8'h00, ch1_cfg_timeout_timeout_limit } : 32'd0;
-  assign \$279  = \$277  | \$278 ;
-  assign \$280  = ch1_read_select_10d ? { ch1_cfg_words_w1_enable, 5'h00, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_data_bits, 6'h00, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_data_bits } : 32'd0;
-  assign \$281  = \$279  | \$280 ;
-  assign \$282  = ch1_read_select_10e ? { 16'h0000, ch1_cfg_checks_spw_tolerance, 6'h00, ch1_cfg_checks_spw_check, ch1_cfg_checks_end_check } : 32'd0;
+  assign \$63  = ch0_cfg_checks_config_write & config_write_strb[2];
+  assign \$64  = ch0_cfg_checks_config_write & config_write_strb[2];
+  assign \$65  = ch0_cfg_quiet_config_write & config_write_strb[0];
+  assign \$66  = ch0_cfg_quiet_config_write & config_write_strb[1];
+  assign \$67  = ch0_ca_request_config_write & config_write_strb[0];
+  assign \$68  = ch0_ca_request_config_write & config_write_strb[1];
+  assign \$69  = ch0_ca_request_config_write & config_write_strb[2];
+  assign \$70  = ch0_ca_request_config_write & config_write_strb[3];
+  assign \$71  = write_data[0] & write_strb[0];
+  assign \$72  = ch0_ca_ctrl_write ? \$71  : 1'h0;
+  assign \$73  = write_data[1] & write_strb[0];
+  assign \$74  = ch0_ca_ctrl_write ? \$73  : 1'h0;
+  assign \$75  = bus__r_addr == 8'h80;
+  assign \$76  = bus__r_addr == 8'h81;
+  assign \$77  = bus__r_addr == 8'h82;
+  assign \$78  = bus__r_addr == 8'h84;
+  assign \$79  = bus__r_addr == 8'h85;
+  assign \$80  = bus__r_addr == 8'h88;
+  assign \$81  = bus__r_addr == 8'h89;
+  assign \$82  = bus__r_addr == 8'h8a;
+  assign \$83  = bus__r_addr == 8'h8b;
+  assign \$84  = bus__r_addr == 8'h8c;
+  assign \$85  = bus__r_addr == 8'h8d;
+  assign \$86  = bus__r_addr == 8'h8e;
+  assign \$87  = bus__r_addr == 8'h8f;
+  assign \$88  = bus__r_addr == 8'h90;
+  assign \$89  = bus__r_addr == 8'h91;
+  assign \$90  = bus__r_addr == 8'h92;
+  assign \$91  = bus__r_addr == 8'h93;
+  assign \$92  = bus__r_addr == 8'h94;
+  assign \$93  = bus__r_addr == 8'h95;
+  assign \$94  = bus__r_addr == 8'h96;
+  assign \$95  = bus__r_addr == 8'h97;
+  assign \$96  = bus__r_addr == 8'h98;
+  assign \$97  = bus__r_addr == 8'h99;
+  assign \$98  = bus__r_addr == 8'h9a;
+  assign \$99  = bus__r_addr == 8'h9b;
+  assign \$100  = bus__r_addr == 8'h9c;
+  assign \$101  = bus__r_addr == 8'h9d;
+  assign \$102  = bus__r_addr == 8'h9e;
+  assign \$103  = bus__r_addr == 8'h9f;
+  assign \$104  = bus__r_addr == 8'hc0;
+  assign \$105  = bus__r_addr == 8'hc1;
+  assign \$106  = bus__r_addr == 8'hc2;
+  assign \$107  = bus__r_addr == 8'hc3;
+  assign \$108  = bus__r_addr == 8'hc4;
+  assign \$109  = bus__r_addr == 8'hc5;
+  assign \$110  = ch0_read_select_90 & bus__r_load;
+  assign \$111  = bus__r_addr[10:4] == 4'he;
+  assign \$112  = bus__r_en & \$111 ;
+  assign \$113  = ch0_read_select_80 ? { 22'h000000, ch0_ctrl_trigger_enable, ch0_ctrl_periodic, 8'h00 } : 32'd0;
+  assign \$115  = ch0_read_select_81 ? { 30'h00000000, ch0__config_error, ch0__busy } : 32'd0;
+  assign \$116  = \$114  | \$115 ;
+  assign \$117  = ch0_read_select_82 ? 32'd119023671 : 32'd0;
+  assign \$118  = \$116  | \$117 ;
+  assign \$119  = ch0_read_select_84 ? { 29'h00000000, ch0_irq_status_access_done, ch0_irq_status_error, ch0_irq_status_done } : 32'd0;
+  assign \$120  = \$118  | \$119 ;
+  assign \$121  = ch0_read_select_85 ? { 29'h00000000, ch0_irq_enable_access_done, ch0_irq_enable_error, ch0_irq_enable_done } : 32'd0;
+  assign \$122  = \$120  | \$121 ;
+  assign \$123  = ch0_read_select_88 ? { 4'h0, ch0_cfg_ma_delay_limit, ch0_cfg_ma_ma_half_period } : 32'd0;
+  assign \$124  = \$122  | \$123 ;
+  assign \$125  = ch0_read_select_89 ? { 8'h00, ch0_cfg_period_request_period } : 32'd0;
+  assign \$126  = \$124  | \$125 ;
+  assign \$127  = ch0_read_select_8a ? { 8'h00, ch0_cfg_break_break_time } : 32'd0;
+  assign \$128  = \$126  | \$127 ;
+  assign \$129  = ch0_read_select_8b ? { 8'h00, ch0_cfg_ack_ack_limit } : 32'd0;
+  assign \$130  = \$128  | \$129 ;
+  assign \$131  = ch0_read_select_8c ? { 8'h00, ch0_cfg_timeout_timeout_limit } : 32'd0;
+  assign \$132  = \$130  | \$131 ;
+  assign \$133  = ch0_read_select_8d ? { ch0_cfg_words_w1_enable, 5'h00, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_data_bits, 6'h00, ch0_cfg_words_w0_crc, ch0_cfg_words_w0_lc, ch0_cfg_words_w0_nenw, ch0_cfg_words_w0_data_bits } : 32'd0;
+  assign \$134  = \$132  | \$133 ;
+  assign \$135  = ch0_read_select_8e ? { 8'h00, ch0_cfg_checks_delay_tolerance, ch0_cfg_checks_noise_limit, ch0_cfg_checks_spw_tolerance, 6'h00, ch0_cfg_checks_spw_check, ch0_cfg_checks_end_check } : 32'd0;
+  assign \$136  = \$134  | \$135 ;
+  assign \$137  = ch0_read_select_8f ? { 20'h00000, ch0_cfg_quiet_quiet_time } : 32'd0;
+  assign \$138  = \$136  | \$137 ;
+  assign \$139  = ch0_read_select_90 ? { 2'h0, \port$4731$0 [182:177], 4'h0, \port$4731$0 [186:183], 1'h0, \port$4731$0 [176:174], 1'h0, \port$4731$0 [133:131], 3'h0, \port$4731$0 [49], \port$4731$0 [3:0] } : 32'd0;
+  assign \$140  = \$138  | \$139 ;
+  assign \$141  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
+  assign \$142  = \$140  | \$141 ;
+  assign \$143  = ch0_read_select_92 ? ch0_result_w0_lo_data_snapshot : 32'd0;
+  assign \$144  = \$142  | \$143 ;
+  assign \$145  = ch0_read_select_93 ? { 9'h000, ch0_result_w0_hi_data_snapshot } : 32'd0;
+  assign \$146  = \$144  | \$145 ;
+  assign \$147  = ch0_read_select_94 ? ch0_result_w1_lo_data_snapshot : 32'd0;
+  assign \$148  = \$146  | \$147 ;
+  assign \$149  = ch0_read_select_95 ? { 24'h000000, ch0_result_w1_hi_data_snapshot } : 32'd0;
+  assign \$150  = \$148  | \$149 ;
+  assign \$151  = ch0_read_select_96 ? ch0_result_timestamp_time_snapshot : 32'd0;
+  assign \$152  = \$150  | \$151 ;
+  assign \$153  = ch0_read_select_97 ? { 3'h0, ch0_result_line_settled_delay_snapshot, ch0_result_line_delay_spread_snapshot, 3'h0, ch0_result_line_delay_settled_snapshot, ch0_result_line_noise_events_snapshot } : 32'd0;
+  assign \$154  = \$152  | \$153 ;
+  assign \$155  = ch0_read_select_98 ? \port$4744$0 [31:0] : 32'd0;
+  assign \$156  = \$154  | \$155 ;
+  assign \$157  = ch0_read_select_99 ? \port$4744$0 [63:32] : 32'd0;
+  assign \$158  = \$156  | \$157 ;
+  assign \$159  = ch0_read_select_9a ? \port$4744$0 [95:64] : 32'd0;
+  assign \$160  = \$158  | \$159 ;
+  assign \$161  = ch0_read_select_9b ? \port$4744$0 [127:96] : 32'd0;
+  assign \$162  = \$160  | \$161 ;
+  assign \$163  = ch0_read_select_9c ? \port$4744$0 [159:128] : 32'd0;
+  assign \$164  = \$162  | \$163 ;
+  assign \$165  = ch0_read_select_9d ? \port$4744$0 [191:160] : 32'd0;
+  assign \$166  = \$164  | \$165 ;
+  assign \$167  = ch0_read_select_9e ? \port$4744$0 [223:192] : 32'd0;
+  assign \$168  = \$166  | \$167 ;
+  assign \$169  = ch0_read_select_9f ? \port$4744$0 [255:224] : 32'd0;
+  assign \$170  = \$168  | \$169 ;
+  assign \$171  = ch0_read_select_c0 ? { 7'h00, \ch0_ca_request_write$85 , 1'h0, ch0_ca_request_count, 1'h0, ch0_ca_request_address, 5'h00, ch0_ca_request_slave_id } : 32'd0;
+  assign \$172  = \$170  | \$171 ;
+  assign \$175  = ch0_read_select_c2 ? { 17'h00000, \port$4876$0 [9:3], 1'h0, \port$4876$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
+  assign \$176  = \$174  | \$175 ;
+  assign \$177  = ch0_read_select_c3 ? \port$4744$0 [287:256] : 32'd0;
+  assign \$178  = \$176  | \$177 ;
+  assign \$179  = ch0_read_select_c4 ? \port$4744$0 [319:288] : 32'd0;
+  assign \$180  = \$178  | \$179 ;
+  assign \$181  = ch0_read_select_c5 ? { 16'h0000, \port$4744$0 [335:320] } : 32'd0;
+  assign \$182  = \$180  | \$181 ;
+  assign \$183  = ch0_window0_read ? ch0__ca_rbuf_data : 32'd0;
+  assign \$184  = \$182  | \$183 ;
+  assign \$185  = write_data[0] & write_strb[0];
+  assign \$186  = ch1_ctrl_write ? \$185  : 1'h0;
+  assign \$187  = write_data[1] & write_strb[0];
+  assign \$188  = ch1_ctrl_write ? \$187  : 1'h0;
+  assign \$189  = write_data[2] & write_strb[0];
+  assign \$190  = ch1_ctrl_write ? \$189  : 1'h0;
+  assign \$191  = ch1_ctrl_write & write_strb[1];
+  assign \$192  = ch1_ctrl_write & write_strb[1];
+  assign \$193  = write_data[0] & write_strb[0];
+  assign \$194  = ch1_irq_status_write ? \$193  : 1'h0;
+  assign \$195  = write_data[1] & write_strb[0];
+  assign \$196  = ch1_irq_status_write ? \$195  : 1'h0;
+  assign \$197  = write_data[2] & write_strb[0];
+  assign \$198  = ch1_irq_status_write ? \$197  : 1'h0;
+  assign \$199  = ch1_irq_enable_config_write & config_write_strb[0];
+  assign \$200  = ch1_irq_enable_config_write & config_write_strb[0];
+  assign \$201  = ch1_irq_enable_config_write & config_write_strb[0];
+  assign \$202  = ch1_cfg_ma_config_write & config_write_strb[0];
+  assign \$203  = ch1_cfg_ma_config_write & config_write_strb[1];
+  assign \$204  = ch1_cfg_ma_config_write & config_write_strb[2];
+  assign \$205  = ch1_cfg_ma_config_write & config_write_strb[3];
+  assign \$206  = ch1_cfg_period_config_write & config_write_strb[0];
+  assign \$207  = ch1_cfg_period_config_write & config_write_strb[1];
+  assign \$208  = ch1_cfg_period_config_write & config_write_strb[2];
+  assign \$209  = ch1_cfg_break_config_write & config_write_strb[0];
+  assign \$210  = ch1_cfg_break_config_write & config_write_strb[1];
+  assign \$211  = ch1_cfg_break_config_write & config_write_strb[2];
+  assign \$212  = ch1_cfg_ack_config_write & config_write_strb[0];
+  assign \$213  = ch1_cfg_ack_config_write & config_write_strb[1];
+  assign \$214  = ch1_cfg_ack_config_write & config_write_strb[2];
+  assign \$215  = ch1_cfg_timeout_config_write & config_write_strb[0];
+  assign \$216  = ch1_cfg_timeout_config_write & config_write_strb[1];
+  assign \$217  = ch1_cfg_timeout_config_write & config_write_strb[2];
+  assign \$218  = ch1_cfg_words_config_write & config_write_strb[0];
+  assign \$219  = ch1_cfg_words_config_write & config_write_strb[0];
+  assign \$220  = ch1_cfg_words_config_write & config_write_strb[0];
+  assign \$221  = ch1_cfg_words_config_write & config_write_strb[1];
+  assign \$222  = ch1_cfg_words_config_write & config_write_strb[2];
+  assign \$223  = ch1_cfg_words_config_write & config_write_strb[2];
+  assign \$224  = ch1_cfg_words_config_write & config_write_strb[2];
+  assign \$225  = ch1_cfg_words_config_write & config_write_strb[3];
+  assign \$226  = ch1_cfg_words_config_write & config_write_strb[3];
+  assign \$227  = ch1_cfg_checks_config_write & config_write_strb[0];
+  assign \$228  = ch1_cfg_checks_config_write & config_write_strb[0];
+  assign \$229  = ch1_cfg_checks_config_write & config_write_strb[1];
+  assign \$230  = ch1_cfg_checks_config_write & config_write_strb[2];
+  assign \$231  = ch1_cfg_checks_config_write & config_write_strb[2];
+  assign \$232  = ch1_cfg_quiet_config_write & config_write_strb[0];
+  assign \$233  = ch1_cfg_quiet_config_write & config_write_strb[1];
+  assign \$234  = ch1_ca_request_config_write & config_write_strb[0];
+  assign \$235  = ch1_ca_request_config_write & config_write_strb[1];
+  assign \$236  = ch1_ca_request_config_write & config_write_strb[2];
+  assign \$237  = ch1_ca_request_config_write & config_write_strb[3];
+  assign \$238  = write_data[0] & write_strb[0];
+  assign \$239  = ch1_ca_ctrl_write ? \$238  : 1'h0;
+  assign \$240  = write_data[1] & write_strb[0];
+  assign \$241  = ch1_ca_ctrl_write ? \$240  : 1'h0;
+  assign \$242  = bus__r_addr == 9'h100;
+  assign \$243  = bus__r_addr == 9'h101;
+  assign \$244  = bus__r_addr == 9'h102;
+  assign \$245  = bus__r_addr == 9'h104;
+  assign \$246  = bus__r_addr == 9'h105;
+  assign \$247  = bus__r_addr == 9'h108;
+  assign \$248  = bus__r_addr == 9'h109;
+  assign \$249  = bus__r_addr == 9'h10a;
+  assign \$250  = bus__r_addr == 9'h10b;
+  assign \$251  = bus__r_addr == 9'h10c;
+  assign \$252  = bus__r_addr == 9'h10d;
+  assign \$253  = bus__r_addr == 9'h10e;
+  assign \$254  = bus__r_addr == 9'h10f;
+  assign \$255  = bus__r_addr == 9'h110;
+  assign \$256  = bus__r_addr == 9'h111;
+  assign \$257  = bus__r_addr == 9'h112;
+  assign \$258  = bus__r_addr == 9'h113;
+  assign \$259  = bus__r_addr == 9'h114;
+  assign \$260  = bus__r_addr == 9'h115;
+  assign \$261  = bus__r_addr == 9'h116;
+  assign \$262  = bus__r_addr == 9'h117;
+  assign \$263  = bus__r_addr == 9'h118;
+  assign \$264  = bus__r_addr == 9'h119;
+  assign \$265  = bus__r_addr == 9'h11a;
+  assign \$266  = bus__r_addr == 9'h11b;
+  assign \$267  = bus__r_addr == 9'h11c;
+  assign \$268  = bus__r_addr == 9'h11d;
+  assign \$269  = bus__r_addr == 9'h11e;
+  assign \$270  = bus__r_addr == 9'h11f;
+  assign \$271  = bus__r_addr == 9'h140;
+  assign \$272  = bus__r_addr == 9'h141;
+  assign \$273  = bus__r_addr == 9'h142;
+  assign \$274  = bus__r_addr == 9'h143;
+  assign \$275  = bus__r_addr == 9'h144;
+  assign \$276  = bus__r_addr == 9'h145;
+  assign \$277  = ch1_read_select_110 & bus__r_load;
+  assign \$278  = bus__r_addr[10:4] == 5'h16;
+  assign \$279  = bus__r_en & \$278 ;
+  assign \$280  = ch1_read_select_100 ? { 22'h000000, ch1_ctrl_trigger_enable, ch1_ctrl_periodic, 8'h00 } : 32'd0;
+  assign \$282  = ch1_read_select_101 ? { 30'h00000000, ch1__config_error, ch1__busy } : 32'd0;
   assign \$283  = \$281  | \$282 ;
-  assign \$284  = ch1_read_select_110 ? { 2'h0, \port$4673$0 [156:151], 4'h0, \port$4673$0 [160:157], 1'h0, \port$4673$0 [150:148], 1'h0, \port$4673$0 [107:105], 3'h0, \port$4673$0 [49], \port$4673$0 [3:0] } : 32'd0;
+  assign \$284  = ch1_read_select_102 ? 32'd119023671 : 32'd0;
   assign \$285  = \$283  | \$284 ;
-  assign \$286  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
+  assign \$286  = ch1_read_select_104 ? { 29'h00000000, ch1_irq_status_access_done, ch1_irq_status_error, ch1_irq_status_done } : 32'd0;
   assign \$287  = \$285  | \$286 ;
-  assign \$288  = ch1_read_select_112 ? ch1_result_w0_lo_data_snapshot : 32'd0;
+  assign \$288  = ch1_read_select_105 ? { 29'h00000000, ch1_irq_enable_access_done, ch1_irq_enable_error, ch1_irq_enable_done } : 32'd0;
   assign \$289  = \$287  | \$288 ;
-  assign \$290  = ch1_read_select_113 ? { 9'h000, ch1_result_w0_hi_data_snapshot } : 32'd0;
+  assign \$290  = ch1_read_select_108 ? { 4'h0, ch1_cfg_ma_delay_limit, ch1_cfg_ma_ma_half_period } : 32'd0;
   assign \$291  = \$289  | \$290 ;
-  assign \$292  = ch1_read_select_114 ? ch1_result_w1_lo_data_snapshot : 32'd0;
+  assign \$292  = ch1_read_select_109 ? { 8'h00, ch1_cfg_period_request_period } : 32'd0;
   assign \$293  = \$291  | \$292 ;
-  assign \$294  = ch1_read_select_115 ? { 24'h000000, ch1_result_w1_hi_data_snapshot } : 32'd0;
+  assign \$294  = ch1_read_select_10a ? { 8'h00, ch1_cfg_break_break_time } : 32'd0;
   assign \$295  = \$293  | \$294 ;
-  assign \$296  = ch1_read_select_116 ? ch1_result_timestamp_time_snapshot : 32'd0;
+  assign \$296  = ch1_read_select_10b ? { 8'h00, ch1_cfg_ack_ack_limit } : 32'd0;
   assign \$297  = \$295  | \$296 ;
-  assign \$298  = ch1_read_select_118 ? \port$4686$0 [31:0] : 32'd0;
+  assign \$298  = ch1_read_select_10c ? { 8'h00, ch1_cfg_timeout_timeout_limit } : 32'd0;
   assign \$299  = \$297  | \$298 ;
-  assign \$300  = ch1_read_select_119 ? \port$4686$0 [63:32] : 32'd0;
+  assign \$300  = ch1_read_select_10d ? { ch1_cfg_words_w1_enable, 5'h00, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_data_bits, 6'h00, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_data_bits } : 32'd0;
   assign \$301  = \$299  | \$300 ;
-  assign \$302  = ch1_read_select_11a ? \port$4686$0 [95:64] : 32'd0;
+  assign \$302  = ch1_read_select_10e ? { 8'h00, ch1_cfg_checks_delay_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_spw_tolerance, 6'h00, ch1_cfg_checks_spw_check, ch1_cfg_checks_end_check } : 32'd0;
   assign \$303  = \$301  | \$302 ;
-  assign \$304  = ch1_read_select_11b ? \port$4686$0 [127:96] : 32'd0;
+  assign \$304  = ch1_read_select_10f ? { 20'h00000, ch1_cfg_quiet_quiet_time } : 32'd0;
   assign \$305  = \$303  | \$304 ;
-  assign \$306  = ch1_read_select_11c ? \port$4686$0 [159:128] : 32'd0;
+  assign \$306  = ch1_read_select_110 ? { 2'h0, \port$5293$0 [182:177], 4'h0, \port$5293$0 [186:183], 1'h0, \port$5293$0 [176:174], 1'h0, \port$5293$0 [133:131], 3'h0, \port$5293$0 [49], \port$5293$0 [3:0] } : 32'd0;
   assign \$307  = \$305  | \$306 ;
-  assign \$308  = ch1_read_select_11d ? \port$4686$0 [191:160] : 32'd0;
+  assign \$308  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
   assign \$309  = \$307  | \$308 ;
-  assign \$310  = ch1_read_select_11e ? { 16'h0000, \port$4686$0 [207:192] } : 32'd0;
+  assign \$310  = ch1_read_select_112 ? ch1_result_w0_lo_data_snapshot : 32'd0;
   assign \$311  = \$309  | \$310 ;
-  assign \$312  = ch1_read_select_140 ? { 7'h00, \ch1_ca_request_write$241 , 1'h0, ch1_ca_request_count, 1'h0, ch1_ca_request_address, 5'h00, ch1_ca_request_slave_id } : 32'd0;
+  assign \$312  = ch1_read_select_113 ? { 9'h000, ch1_result_w0_hi_data_snapshot } : 32'd0;
   assign \$313  = \$311  | \$312 ;
-  assign \$316  = ch1_read_select_142 ? { 17'h00000, \port$4800$0 [9:3], 1'h0, \port$4800$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
+  assign \$314  = ch1_read_select_114 ? ch1_result_w1_lo_data_snapshot : 32'd0;
+  assign \$315  = \$313  | \$314 ;
+  assign \$316  = ch1_read_select_115 ? { 24'h000000, ch1_result_w1_hi_data_snapshot } : 32'd0;
   assign \$317  = \$315  | \$316 ;
-  assign \$318  = ch1_read_select_143 ? \port$4686$0 [239:208] : 32'd0;
+  assign \$318  = ch1_read_select_116 ? ch1_result_timestamp_time_snapshot : 32'd0;
   assign \$319  = \$317  | \$318 ;
-  assign \$320  = ch1_read_select_144 ? \port$4686$0 [271:240] : 32'd0;
+  assign \$320  = ch1_read_select_117 ? { 3'h0, ch1_result_line_settled_delay_snapshot, ch1_result_line_delay_spread_snapshot, 3'h0, ch1_result_line_delay_settled_snapshot, ch1_result_line_noise_events_snapshot } : 32'd0;
   assign \$321  = \$319  | \$320 ;
-  assign \$322  = ch1_read_select_145 ? { 16'h0000, \port$4686$0 [287:272] } : 32'd0;
-  assign \$323  = \$321  | \$322 ;
-  assign \$324  = ch1_window0_read ? ch1__ca_rbuf_data : 32'd0;
-  assign \$325  = \$323  | \$324 ;
-  assign \$326  = ! write_addr;
-  assign g_id_write = write_en & \$326 ;
-  assign \$327  = write_addr == 1'h1;
-  assign g_version_write = write_en & \$327 ;
-  assign \$328  = write_addr == 2'h2;
-  assign g_channels_write = write_en & \$328 ;
-  assign \$329  = write_addr == 2'h3;
-  assign g_trigger_write = write_en & \$329 ;
-  assign \$330  = write_addr == 3'h4;
-  assign g_irq_pending_write = write_en & \$330 ;
-  assign \$331  = write_addr == 8'h80;
-  assign ch0_ctrl_write = write_en & \$331 ;
-  assign \$332  = write_addr == 8'h81;
-  assign ch0_state_write = write_en & \$332 ;
-  assign \$333  = write_addr == 8'h82;
-  assign ch0_caps_write = write_en & \$333 ;
-  assign \$334  = write_addr == 8'h84;
-  assign ch0_irq_status_write = write_en & \$334 ;
-  assign \$335  = write_addr == 8'h85;
-  assign ch0_irq_enable_write = write_en & \$335 ;
-  assign \$336  = write_addr == 8'h88;
-  assign ch0_cfg_ma_write = write_en & \$336 ;
-  assign \$337  = write_addr == 8'h89;
-  assign ch0_cfg_period_write = write_en & \$337 ;
-  assign \$338  = write_addr == 8'h8a;
-  assign ch0_cfg_break_write = write_en & \$338 ;
-  assign \$339  = write_addr == 8'h8b;
-  assign ch0_cfg_ack_write = write_en & \$339 ;
-  assign \$340  = write_addr == 8'h8c;
-  assign ch0_cfg_timeout_write = write_en & \$340 ;
-  assign \$341  = write_addr == 8'h8d;
-  assign ch0_cfg_words_write = write_en & \$341 ;
-  assign \$342  = write_addr == 8'h8e;
-  assign ch0_cfg_checks_write = write_en & \$342 ;
-  assign \$343  = write_addr == 8'h90;
-  assign ch0_result_status_write = write_en & \$343 ;
-  assign \$344  = write_addr == 8'h91;
-  assign ch0_result_seq_write = write_en & \$344 ;
-  assign \$345  = write_addr == 8'h92;
-  assign ch0_result_w0_lo_write = write_en & \$345 ;
-  assign \$346  = write_addr == 8'h93;
-  assign ch0_result_w0_hi_write = write_en & \$346 ;
-  assign \$347  = write_addr == 8'h94;
-  assign ch0_result_w1_lo_write = write_en & \$347 ;
-  assign \$348  = write_addr == 8'h95;
-  assign ch0_result_w1_hi_write = write_en & \$348 ;
-  assign \$349  = write_addr == 8'h96;
-  assign ch0_result_timestamp_write = write_en & \$349 ;
-  assign \$350  = write_addr == 8'h98;
-  assign ch0_count_crc_write = write_en & \$350 ;
+  assign \$322  = ch1_read_select_118 ? \port$5306$0 [31:0] : 32'd0;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$415  = bus__w_en;
-    if (rst) begin
-      \$415  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$416  = write_addr;
-    if (bus__w_en) begin
-      \$416  = bus__w_addr;
-    end
-    if (rst) begin
-      \$416  = 11'h000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$417  = write_data;
-    if (bus__w_en) begin
-      \$417  = bus__w_data;
-    end
-    if (rst) begin
-      \$417  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$418  = write_strb;
-    if (bus__w_en) begin
-      \$418  = bus__w_strb;
-    end
-    if (rst) begin
-      \$418  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$419  = config_write_data;
-    if (write_en) begin
-      \$419  = write_data;
-    end
-    if (rst) begin
-      \$419  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$420  = config_write_strb;
-    if (write_en) begin
-      \$420  = write_strb;
-    end
-    if (rst) begin
-      \$420  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$421  = \$2 ;
-    if (rst) begin
-      \$421  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$422  = g_read_select_0;
-    if (bus__r_en) begin
-      \$422  = \$3 ;
-    end
-    if (rst) begin
-      \$422  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$423  = g_read_select_1;
-    if (bus__r_en) begin
-      \$423  = \$4 ;
-    end
-    if (rst) begin
-      \$423  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$424  = g_read_select_2;
-    if (bus__r_en) begin
-      \$424  = \$5 ;
-    end
-    if (rst) begin
-      \$424  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$425  = g_read_select_3;
-    if (bus__r_en) begin
-      \$425  = \$6 ;
-    end
-    if (rst) begin
-      \$425  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$426  = g_read_select_4;
-    if (bus__r_en) begin
-      \$426  = \$7 ;
-    end
-    if (rst) begin
-      \$426  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$427  = g_read_data;
-    if (bus__r_load) begin
-      \$427  = \$17 ;
-    end
-    if (rst) begin
-      \$427  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$428  = \$19 ;
-    if (rst) begin
-      \$428  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$429  = \$21 ;
-    if (rst) begin
-      \$429  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$430  = \$23 ;
-    if (rst) begin
-      \$430  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$431  = ch0_ctrl_periodic;
-    if (\$24 ) begin
-      \$431  = write_data[8];
-    end
-    if (rst) begin
-      \$431  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$432  = ch0_ctrl_trigger_enable;
-    if (\$25 ) begin
-      \$432  = write_data[9];
-    end
-    if (rst) begin
-      \$432  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$433  = ch0_irq_status_done;
-    if (ch0__done) begin
-      \$433  = 1'h1;
-    end else if (\$27 ) begin
-      \$433  = 1'h0;
-    end
-    if (rst) begin
-      \$433  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$434  = ch0_irq_status_error;
-    if (ch0__frame_error) begin
-      \$434  = 1'h1;
-    end else if (\$29 ) begin
-      \$434  = 1'h0;
-    end
-    if (rst) begin
-      \$434  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$435  = ch0_irq_status_access_done;
-    if (ch0__ca_done) begin
-      \$435  = 1'h1;
-    end else if (\$31 ) begin
-      \$435  = 1'h0;
-    end
-    if (rst) begin
-      \$435  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$436  = ch0_irq_enable_write;
-    if (rst) begin
-      \$436  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$437  = ch0_irq_enable_done;
-    if (\$32 ) begin
-      \$437  = config_write_data[0];
-    end
-    if (rst) begin
-      \$437  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$438  = ch0_irq_enable_error;
-    if (\$33 ) begin
-      \$438  = config_write_data[1];
-    end
-    if (rst) begin
-      \$438  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$439  = ch0_irq_enable_access_done;
-    if (\$34 ) begin
-      \$439  = config_write_data[2];
-    end
-    if (rst) begin
-      \$439  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$440  = ch0_cfg_ma_write;
-    if (rst) begin
-      \$440  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$441  = ch0_cfg_ma_ma_half_period;
-    if (\$35 ) begin
-      \$441 [7:0] = config_write_data[7:0];
-    end
-    if (\$36 ) begin
-      \$441 [15:8] = config_write_data[15:8];
-    end
-    if (rst) begin
-      \$441  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$442  = ch0_cfg_ma_delay_limit;
-    if (\$37 ) begin
-      \$442 [7:0] = config_write_data[23:16];
-    end
-    if (\$38 ) begin
-      \$442 [11:8] = config_write_data[27:24];
-    end
-    if (rst) begin
-      \$442  = 12'h000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$443  = ch0_cfg_period_write;
-    if (rst) begin
-      \$443  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$444  = ch0_cfg_period_request_period;
-    if (\$39 ) begin
-      \$444 [7:0] = config_write_data[7:0];
-    end
-    if (\$40 ) begin
-      \$444 [15:8] = config_write_data[15:8];
-    end
-    if (\$41 ) begin
-      \$444 [23:16] = config_write_data[23:16];
-    end
-    if (rst) begin
-      \$444  = 24'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$445  = ch0_cfg_break_write;
-    if (rst) begin
-      \$445  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$446  = ch0_cfg_break_break_time;
-    if (\$42 ) begin
-      \$446 [7:0] = config_write_data[7:0];
-    end
-    if (\$43 ) begin
-      \$446 [15:8] = config_write_data[15:8];
-    end
-    if (\$44 ) begin
-      \$446 [23:16] = config_write_data[23:16];
-    end
-    if (rst) begin
-      \$446  = 24'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$447  = ch0_cfg_ack_write;
+    \$447  = bus__w_en;
     if (rst) begin
       \$447  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$448  = ch0_cfg_ack_ack_limit;
-    if (\$45 ) begin
-      \$448 [7:0] = config_write_data[7:0];
-    end
-    if (\$46 ) begin
-      \$448 [15:8] = config_write_data[15:8];
-    end
-    if (\$47 ) begin
-      \$448 [23:16] = config_write_data[23:16];
+    \$448  = write_addr;
+    if (bus__w_en) begin
+      \$448  = bus__w_addr;
     end
     if (rst) begin
-      \$448  = 24'h000000;
+      \$448  = 11'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$449  = ch0_cfg_timeout_write;
+    \$449  = write_data;
+    if (bus__w_en) begin
+      \$449  = bus__w_data;
+    end
     if (rst) begin
-      \$449  = 1'h0;
+      \$449  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$450  = ch0_cfg_timeout_timeout_limit;
-    if (\$48 ) begin
-      \$450 [7:0] = config_write_data[7:0];
-    end
-    if (\$49 ) begin
-      \$450 [15:8] = config_write_data[15:8];
-    end
-    if (\$50 ) begin
-      \$450 [23:16] = config_write_data[23:16];
+    \$450  = write_strb;
+    if (bus__w_en) begin
+      \$450  = bus__w_strb;
     end
     if (rst) begin
-      \$450  = 24'h000000;
+      \$450  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$451  = ch0_cfg_words_write;
+    \$451  = config_write_data;
+    if (write_en) begin
+      \$451  = write_data;
+    end
     if (rst) begin
-      \$451  = 1'h0;
+      \$451  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$452  = ch0_cfg_words_w0_data_bits;
-    if (\$51 ) begin
-      \$452  = config_write_data[5:0];
+    \$452  = config_write_strb;
+    if (write_en) begin
+      \$452  = write_strb;
     end
     if (rst) begin
-      \$452  = 6'h00;
+      \$452  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$453  = ch0_cfg_words_w0_nenw;
-    if (\$52 ) begin
-      \$453  = config_write_data[6];
-    end
+    \$453  = \$2 ;
     if (rst) begin
       \$453  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$454  = ch0_cfg_words_w0_lc;
-    if (\$53 ) begin
-      \$454  = config_write_data[7];
+    \$454  = g_read_select_0;
+    if (bus__r_en) begin
+      \$454  = \$3 ;
     end
     if (rst) begin
       \$454  = 1'h0;
@@ -3576,29 +3533,29 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$455  = ch0_cfg_words_w0_crc;
-    if (\$54 ) begin
-      \$455  = config_write_data[9:8];
+    \$455  = g_read_select_1;
+    if (bus__r_en) begin
+      \$455  = \$4 ;
     end
     if (rst) begin
-      \$455  = 2'h0;
+      \$455  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$456  = ch0_cfg_words_w1_data_bits;
-    if (\$55 ) begin
-      \$456  = config_write_data[21:16];
+    \$456  = g_read_select_2;
+    if (bus__r_en) begin
+      \$456  = \$5 ;
     end
     if (rst) begin
-      \$456  = 6'h00;
+      \$456  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$457  = ch0_cfg_words_w1_nenw;
-    if (\$56 ) begin
-      \$457  = config_write_data[22];
+    \$457  = g_read_select_3;
+    if (bus__r_en) begin
+      \$457  = \$6 ;
     end
     if (rst) begin
       \$457  = 1'h0;
@@ -3606,9 +3563,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$458  = ch0_cfg_words_w1_lc;
-    if (\$57 ) begin
-      \$458  = config_write_data[23];
+    \$458  = g_read_select_4;
+    if (bus__r_en) begin
+      \$458  = \$7 ;
     end
     if (rst) begin
       \$458  = 1'h0;
@@ -3616,46 +3573,40 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$459  = ch0_cfg_words_w1_crc;
-    if (\$58 ) begin
-      \$459  = config_write_data[25:24];
+    \$459  = g_read_data;
+    if (bus__r_load) begin
+      \$459  = \$17 ;
     end
     if (rst) begin
-      \$459  = 2'h0;
+      \$459  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$460  = ch0_cfg_words_w1_enable;
-    if (\$59 ) begin
-      \$460  = config_write_data[31];
-    end
+    \$460  = \$19 ;
     if (rst) begin
       \$460  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$461  = ch0_cfg_checks_write;
+    \$461  = \$21 ;
     if (rst) begin
       \$461  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$462  = ch0_cfg_checks_end_check;
-    if (\$60 ) begin
-      \$462  = config_write_data[0];
-    end
+    \$462  = \$23 ;
     if (rst) begin
       \$462  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$463  = ch0_cfg_checks_spw_check;
-    if (\$61 ) begin
-      \$463  = config_write_data[1];
+    \$463  = ch0_ctrl_periodic;
+    if (\$24 ) begin
+      \$463  = write_data[8];
     end
     if (rst) begin
       \$463  = 1'h0;
@@ -3663,56 +3614,62 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$464  = ch0_cfg_checks_spw_tolerance;
-    if (\$62 ) begin
-      \$464  = config_write_data[15:8];
+    \$464  = ch0_ctrl_trigger_enable;
+    if (\$25 ) begin
+      \$464  = write_data[9];
     end
     if (rst) begin
-      \$464  = 8'h00;
+      \$464  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$465  = ch0_ca_request_write;
+    \$465  = ch0_irq_status_done;
+    if (ch0__done) begin
+      \$465  = 1'h1;
+    end else if (\$27 ) begin
+      \$465  = 1'h0;
+    end
     if (rst) begin
       \$465  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$466  = ch0_ca_request_slave_id;
-    if (\$63 ) begin
-      \$466  = config_write_data[2:0];
+    \$466  = ch0_irq_status_error;
+    if (ch0__frame_error) begin
+      \$466  = 1'h1;
+    end else if (\$29 ) begin
+      \$466  = 1'h0;
     end
     if (rst) begin
-      \$466  = 3'h0;
+      \$466  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$467  = ch0_ca_request_address;
-    if (\$64 ) begin
-      \$467  = config_write_data[14:8];
+    \$467  = ch0_irq_status_access_done;
+    if (ch0__ca_done) begin
+      \$467  = 1'h1;
+    end else if (\$31 ) begin
+      \$467  = 1'h0;
     end
     if (rst) begin
-      \$467  = 7'h00;
+      \$467  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$468  = ch0_ca_request_count;
-    if (\$65 ) begin
-      \$468  = config_write_data[22:16];
-    end
+    \$468  = ch0_irq_enable_write;
     if (rst) begin
-      \$468  = 7'h00;
+      \$468  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$469  = \ch0_ca_request_write$80 ;
-    if (\$66 ) begin
-      \$469  = config_write_data[24];
+    \$469  = ch0_irq_enable_done;
+    if (\$32 ) begin
+      \$469  = config_write_data[0];
     end
     if (rst) begin
       \$469  = 1'h0;
@@ -3720,153 +3677,171 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$470  = \$68 ;
+    \$470  = ch0_irq_enable_error;
+    if (\$33 ) begin
+      \$470  = config_write_data[1];
+    end
     if (rst) begin
       \$470  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$471  = \$70 ;
+    \$471  = ch0_irq_enable_access_done;
+    if (\$34 ) begin
+      \$471  = config_write_data[2];
+    end
     if (rst) begin
       \$471  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$472  = ch0_read_select_80;
-    if (bus__r_en) begin
-      \$472  = \$71 ;
-    end
+    \$472  = ch0_cfg_ma_write;
     if (rst) begin
       \$472  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$473  = ch0_read_select_81;
-    if (bus__r_en) begin
-      \$473  = \$72 ;
+    \$473  = ch0_cfg_ma_ma_half_period;
+    if (\$35 ) begin
+      \$473 [7:0] = config_write_data[7:0];
+    end
+    if (\$36 ) begin
+      \$473 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$473  = 1'h0;
+      \$473  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$474  = ch0_read_select_82;
-    if (bus__r_en) begin
-      \$474  = \$73 ;
+    \$474  = ch0_cfg_ma_delay_limit;
+    if (\$37 ) begin
+      \$474 [7:0] = config_write_data[23:16];
+    end
+    if (\$38 ) begin
+      \$474 [11:8] = config_write_data[27:24];
     end
     if (rst) begin
-      \$474  = 1'h0;
+      \$474  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$475  = ch0_read_select_84;
-    if (bus__r_en) begin
-      \$475  = \$74 ;
-    end
+    \$475  = ch0_cfg_period_write;
     if (rst) begin
       \$475  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$476  = ch0_read_select_85;
-    if (bus__r_en) begin
-      \$476  = \$75 ;
+    \$476  = ch0_cfg_period_request_period;
+    if (\$39 ) begin
+      \$476 [7:0] = config_write_data[7:0];
+    end
+    if (\$40 ) begin
+      \$476 [15:8] = config_write_data[15:8];
+    end
+    if (\$41 ) begin
+      \$476 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$476  = 1'h0;
+      \$476  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$477  = ch0_read_select_88;
-    if (bus__r_en) begin
-      \$477  = \$76 ;
-    end
+    \$477  = ch0_cfg_break_write;
     if (rst) begin
       \$477  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$478  = ch0_read_select_89;
-    if (bus__r_en) begin
-      \$478  = \$77 ;
+    \$478  = ch0_cfg_break_break_time;
+    if (\$42 ) begin
+      \$478 [7:0] = config_write_data[7:0];
+    end
+    if (\$43 ) begin
+      \$478 [15:8] = config_write_data[15:8];
+    end
+    if (\$44 ) begin
+      \$478 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$478  = 1'h0;
+      \$478  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$479  = ch0_read_select_8a;
-    if (bus__r_en) begin
-      \$479  = \$78 ;
-    end
+    \$479  = ch0_cfg_ack_write;
     if (rst) begin
       \$479  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$480  = ch0_read_select_8b;
-    if (bus__r_en) begin
-      \$480  = \$79 ;
+    \$480  = ch0_cfg_ack_ack_limit;
+    if (\$45 ) begin
+      \$480 [7:0] = config_write_data[7:0];
+    end
+    if (\$46 ) begin
+      \$480 [15:8] = config_write_data[15:8];
+    end
+    if (\$47 ) begin
+      \$480 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$480  = 1'h0;
+      \$480  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$481  = ch0_read_select_8c;
-    if (bus__r_en) begin
-      \$481  = \$80 ;
-    end
+    \$481  = ch0_cfg_timeout_write;
     if (rst) begin
       \$481  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$482  = ch0_read_select_8d;
-    if (bus__r_en) begin
-      \$482  = \$81 ;
+    \$482  = ch0_cfg_timeout_timeout_limit;
+    if (\$48 ) begin
+      \$482 [7:0] = config_write_data[7:0];
+    end
+    if (\$49 ) begin
+      \$482 [15:8] = config_write_data[15:8];
+    end
+    if (\$50 ) begin
+      \$482 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$482  = 1'h0;
+      \$482  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$483  = ch0_read_select_8e;
-    if (bus__r_en) begin
-      \$483  = \$82 ;
-    end
+    \$483  = ch0_cfg_words_write;
     if (rst) begin
       \$483  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$484  = ch0_read_select_90;
-    if (bus__r_en) begin
-      \$484  = \$83 ;
+    \$484  = ch0_cfg_words_w0_data_bits;
+    if (\$51 ) begin
+      \$484  = config_write_data[5:0];
     end
     if (rst) begin
-      \$484  = 1'h0;
+      \$484  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$485  = ch0_read_select_91;
-    if (bus__r_en) begin
-      \$485  = \$84 ;
+    \$485  = ch0_cfg_words_w0_nenw;
+    if (\$52 ) begin
+      \$485  = config_write_data[6];
     end
     if (rst) begin
       \$485  = 1'h0;
@@ -3874,9 +3849,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$486  = ch0_read_select_92;
-    if (bus__r_en) begin
-      \$486  = \$85 ;
+    \$486  = ch0_cfg_words_w0_lc;
+    if (\$53 ) begin
+      \$486  = config_write_data[7];
     end
     if (rst) begin
       \$486  = 1'h0;
@@ -3884,29 +3859,29 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$487  = ch0_read_select_93;
-    if (bus__r_en) begin
-      \$487  = \$86 ;
+    \$487  = ch0_cfg_words_w0_crc;
+    if (\$54 ) begin
+      \$487  = config_write_data[9:8];
     end
     if (rst) begin
-      \$487  = 1'h0;
+      \$487  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$488  = ch0_read_select_94;
-    if (bus__r_en) begin
-      \$488  = \$87 ;
+    \$488  = ch0_cfg_words_w1_data_bits;
+    if (\$55 ) begin
+      \$488  = config_write_data[21:16];
     end
     if (rst) begin
-      \$488  = 1'h0;
+      \$488  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$489  = ch0_read_select_95;
-    if (bus__r_en) begin
-      \$489  = \$88 ;
+    \$489  = ch0_cfg_words_w1_nenw;
+    if (\$56 ) begin
+      \$489  = config_write_data[22];
     end
     if (rst) begin
       \$489  = 1'h0;
@@ -3914,9 +3889,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$490  = ch0_read_select_96;
-    if (bus__r_en) begin
-      \$490  = \$89 ;
+    \$490  = ch0_cfg_words_w1_lc;
+    if (\$57 ) begin
+      \$490  = config_write_data[23];
     end
     if (rst) begin
       \$490  = 1'h0;
@@ -3924,19 +3899,19 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$491  = ch0_read_select_98;
-    if (bus__r_en) begin
-      \$491  = \$90 ;
+    \$491  = ch0_cfg_words_w1_crc;
+    if (\$58 ) begin
+      \$491  = config_write_data[25:24];
     end
     if (rst) begin
-      \$491  = 1'h0;
+      \$491  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$492  = ch0_read_select_99;
-    if (bus__r_en) begin
-      \$492  = \$91 ;
+    \$492  = ch0_cfg_words_w1_enable;
+    if (\$59 ) begin
+      \$492  = config_write_data[31];
     end
     if (rst) begin
       \$492  = 1'h0;
@@ -3944,19 +3919,16 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$493  = ch0_read_select_9a;
-    if (bus__r_en) begin
-      \$493  = \$92 ;
-    end
+    \$493  = ch0_cfg_checks_write;
     if (rst) begin
       \$493  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$494  = ch0_read_select_9b;
-    if (bus__r_en) begin
-      \$494  = \$93 ;
+    \$494  = ch0_cfg_checks_end_check;
+    if (\$60 ) begin
+      \$494  = config_write_data[0];
     end
     if (rst) begin
       \$494  = 1'h0;
@@ -3964,9 +3936,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$495  = ch0_read_select_9c;
-    if (bus__r_en) begin
-      \$495  = \$94 ;
+    \$495  = ch0_cfg_checks_spw_check;
+    if (\$61 ) begin
+      \$495  = config_write_data[1];
     end
     if (rst) begin
       \$495  = 1'h0;
@@ -3974,99 +3946,96 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$496  = ch0_read_select_9d;
-    if (bus__r_en) begin
-      \$496  = \$95 ;
+    \$496  = ch0_cfg_checks_spw_tolerance;
+    if (\$62 ) begin
+      \$496  = config_write_data[15:8];
     end
     if (rst) begin
-      \$496  = 1'h0;
+      \$496  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$497  = ch0_read_select_9e;
-    if (bus__r_en) begin
-      \$497  = \$96 ;
+    \$497  = ch0_cfg_checks_noise_limit;
+    if (\$63 ) begin
+      \$497  = config_write_data[19:16];
     end
     if (rst) begin
-      \$497  = 1'h0;
+      \$497  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$498  = ch0_read_select_c0;
-    if (bus__r_en) begin
-      \$498  = \$97 ;
+    \$498  = ch0_cfg_checks_delay_tolerance;
+    if (\$64 ) begin
+      \$498  = config_write_data[23:20];
     end
     if (rst) begin
-      \$498  = 1'h0;
+      \$498  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$499  = ch0_read_select_c1;
-    if (bus__r_en) begin
-      \$499  = \$98 ;
-    end
+    \$499  = ch0_cfg_quiet_write;
     if (rst) begin
       \$499  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$500  = ch0_read_select_c2;
-    if (bus__r_en) begin
-      \$500  = \$99 ;
+    \$500  = ch0_cfg_quiet_quiet_time;
+    if (\$65 ) begin
+      \$500 [7:0] = config_write_data[7:0];
+    end
+    if (\$66 ) begin
+      \$500 [11:8] = config_write_data[11:8];
     end
     if (rst) begin
-      \$500  = 1'h0;
+      \$500  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$501  = ch0_read_select_c3;
-    if (bus__r_en) begin
-      \$501  = \$100 ;
-    end
+    \$501  = ch0_ca_request_write;
     if (rst) begin
       \$501  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$502  = ch0_read_select_c4;
-    if (bus__r_en) begin
-      \$502  = \$101 ;
+    \$502  = ch0_ca_request_slave_id;
+    if (\$67 ) begin
+      \$502  = config_write_data[2:0];
     end
     if (rst) begin
-      \$502  = 1'h0;
+      \$502  = 3'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$503  = ch0_read_select_c5;
-    if (bus__r_en) begin
-      \$503  = \$102 ;
+    \$503  = ch0_ca_request_address;
+    if (\$68 ) begin
+      \$503  = config_write_data[14:8];
     end
     if (rst) begin
-      \$503  = 1'h0;
+      \$503  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$504  = ch0_result_status_status_snapshot;
-    if (\$103 ) begin
-      \$504  = \port$4189$0 [3:0];
+    \$504  = ch0_ca_request_count;
+    if (\$69 ) begin
+      \$504  = config_write_data[22:16];
     end
     if (rst) begin
-      \$504  = 4'h0;
+      \$504  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$505  = ch0_result_status_cds_snapshot;
-    if (\$103 ) begin
-      \$505  = \port$4189$0 [49];
+    \$505  = \ch0_ca_request_write$85 ;
+    if (\$70 ) begin
+      \$505  = config_write_data[24];
     end
     if (rst) begin
       \$505  = 1'h0;
@@ -4074,29 +4043,23 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$506  = ch0_result_status_w0_ne_snapshot;
-    if (\$103 ) begin
-      \$506  = \port$4189$0 [105];
-    end
+    \$506  = \$72 ;
     if (rst) begin
       \$506  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$507  = ch0_result_status_w0_nw_snapshot;
-    if (\$103 ) begin
-      \$507  = \port$4189$0 [106];
-    end
+    \$507  = \$74 ;
     if (rst) begin
       \$507  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$508  = ch0_result_status_w0_crc_ok_snapshot;
-    if (\$103 ) begin
-      \$508  = \port$4189$0 [107];
+    \$508  = ch0_read_select_80;
+    if (bus__r_en) begin
+      \$508  = \$75 ;
     end
     if (rst) begin
       \$508  = 1'h0;
@@ -4104,9 +4067,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$509  = ch0_result_status_w1_ne_snapshot;
-    if (\$103 ) begin
-      \$509  = \port$4189$0 [148];
+    \$509  = ch0_read_select_81;
+    if (bus__r_en) begin
+      \$509  = \$76 ;
     end
     if (rst) begin
       \$509  = 1'h0;
@@ -4114,9 +4077,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$510  = ch0_result_status_w1_nw_snapshot;
-    if (\$103 ) begin
-      \$510  = \port$4189$0 [149];
+    \$510  = ch0_read_select_82;
+    if (bus__r_en) begin
+      \$510  = \$77 ;
     end
     if (rst) begin
       \$510  = 1'h0;
@@ -4124,9 +4087,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$511  = ch0_result_status_w1_crc_ok_snapshot;
-    if (\$103 ) begin
-      \$511  = \port$4189$0 [150];
+    \$511  = ch0_read_select_84;
+    if (bus__r_en) begin
+      \$511  = \$78 ;
     end
     if (rst) begin
       \$511  = 1'h0;
@@ -4134,9 +4097,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$512  = ch0_result_status_lc_repeat_snapshot;
-    if (\$103 ) begin
-      \$512  = \port$4189$0 [157];
+    \$512  = ch0_read_select_85;
+    if (bus__r_en) begin
+      \$512  = \$79 ;
     end
     if (rst) begin
       \$512  = 1'h0;
@@ -4144,9 +4107,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$513  = ch0_result_status_lc_skip_snapshot;
-    if (\$103 ) begin
-      \$513  = \port$4189$0 [158];
+    \$513  = ch0_read_select_88;
+    if (bus__r_en) begin
+      \$513  = \$80 ;
     end
     if (rst) begin
       \$513  = 1'h0;
@@ -4154,9 +4117,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$514  = ch0_result_status_lc_zero_snapshot;
-    if (\$103 ) begin
-      \$514  = \port$4189$0 [159];
+    \$514  = ch0_read_select_89;
+    if (bus__r_en) begin
+      \$514  = \$81 ;
     end
     if (rst) begin
       \$514  = 1'h0;
@@ -4164,9 +4127,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$515  = ch0_result_status_spw_mismatch_snapshot;
-    if (\$103 ) begin
-      \$515  = \port$4189$0 [160];
+    \$515  = ch0_read_select_8a;
+    if (bus__r_en) begin
+      \$515  = \$82 ;
     end
     if (rst) begin
       \$515  = 1'h0;
@@ -4174,89 +4137,89 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$516  = ch0_result_status_lc_snapshot;
-    if (\$103 ) begin
-      \$516  = \port$4189$0 [156:151];
-    end
-    if (rst) begin
-      \$516  = 6'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$517  = ch0_result_seq_seq_snapshot;
-    if (\$103 ) begin
-      \$517  = ch0__done_count;
-    end
-    if (rst) begin
-      \$517  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$518  = ch0_result_seq_line_delay_snapshot;
-    if (\$103 ) begin
-      \$518  = \port$4189$0 [48:36];
-    end
-    if (rst) begin
-      \$518  = 13'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$519  = ch0_result_w0_lo_data_snapshot;
-    if (\$103 ) begin
-      \$519  = \port$4189$0 [81:50];
-    end
-    if (rst) begin
-      \$519  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$520  = ch0_result_w0_hi_data_snapshot;
-    if (\$103 ) begin
-      \$520  = \port$4189$0 [104:82];
-    end
-    if (rst) begin
-      \$520  = 23'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$521  = ch0_result_w1_lo_data_snapshot;
-    if (\$103 ) begin
-      \$521  = \port$4189$0 [139:108];
-    end
-    if (rst) begin
-      \$521  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$522  = ch0_result_w1_hi_data_snapshot;
-    if (\$103 ) begin
-      \$522  = \port$4189$0 [147:140];
-    end
-    if (rst) begin
-      \$522  = 8'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$523  = ch0_result_timestamp_time_snapshot;
-    if (\$103 ) begin
-      \$523  = \port$4189$0 [35:4];
-    end
-    if (rst) begin
-      \$523  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$524  = ch0_window0_read;
+    \$516  = ch0_read_select_8b;
     if (bus__r_en) begin
-      \$524  = \$105 ;
+      \$516  = \$83 ;
+    end
+    if (rst) begin
+      \$516  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$517  = ch0_read_select_8c;
+    if (bus__r_en) begin
+      \$517  = \$84 ;
+    end
+    if (rst) begin
+      \$517  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$518  = ch0_read_select_8d;
+    if (bus__r_en) begin
+      \$518  = \$85 ;
+    end
+    if (rst) begin
+      \$518  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$519  = ch0_read_select_8e;
+    if (bus__r_en) begin
+      \$519  = \$86 ;
+    end
+    if (rst) begin
+      \$519  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$520  = ch0_read_select_8f;
+    if (bus__r_en) begin
+      \$520  = \$87 ;
+    end
+    if (rst) begin
+      \$520  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$521  = ch0_read_select_90;
+    if (bus__r_en) begin
+      \$521  = \$88 ;
+    end
+    if (rst) begin
+      \$521  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$522  = ch0_read_select_91;
+    if (bus__r_en) begin
+      \$522  = \$89 ;
+    end
+    if (rst) begin
+      \$522  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$523  = ch0_read_select_92;
+    if (bus__r_en) begin
+      \$523  = \$90 ;
+    end
+    if (rst) begin
+      \$523  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$524  = ch0_read_select_93;
+    if (bus__r_en) begin
+      \$524  = \$91 ;
     end
     if (rst) begin
       \$524  = 1'h0;
@@ -4264,40 +4227,49 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$525  = ch0_read_data;
-    if (bus__r_load) begin
-      \$525  = \$171 ;
+    \$525  = ch0_read_select_94;
+    if (bus__r_en) begin
+      \$525  = \$92 ;
     end
     if (rst) begin
-      \$525  = 32'd0;
+      \$525  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$526  = \$173 ;
+    \$526  = ch0_read_select_95;
+    if (bus__r_en) begin
+      \$526  = \$93 ;
+    end
     if (rst) begin
       \$526  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$527  = \$175 ;
+    \$527  = ch0_read_select_96;
+    if (bus__r_en) begin
+      \$527  = \$94 ;
+    end
     if (rst) begin
       \$527  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$528  = \$177 ;
+    \$528  = ch0_read_select_97;
+    if (bus__r_en) begin
+      \$528  = \$95 ;
+    end
     if (rst) begin
       \$528  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$529  = ch1_ctrl_periodic;
-    if (\$178 ) begin
-      \$529  = write_data[8];
+    \$529  = ch0_read_select_98;
+    if (bus__r_en) begin
+      \$529  = \$96 ;
     end
     if (rst) begin
       \$529  = 1'h0;
@@ -4305,9 +4277,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$530  = ch1_ctrl_trigger_enable;
-    if (\$179 ) begin
-      \$530  = write_data[9];
+    \$530  = ch0_read_select_99;
+    if (bus__r_en) begin
+      \$530  = \$97 ;
     end
     if (rst) begin
       \$530  = 1'h0;
@@ -4315,11 +4287,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$531  = ch1_irq_status_done;
-    if (ch1__done) begin
-      \$531  = 1'h1;
-    end else if (\$181 ) begin
-      \$531  = 1'h0;
+    \$531  = ch0_read_select_9a;
+    if (bus__r_en) begin
+      \$531  = \$98 ;
     end
     if (rst) begin
       \$531  = 1'h0;
@@ -4327,11 +4297,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$532  = ch1_irq_status_error;
-    if (ch1__frame_error) begin
-      \$532  = 1'h1;
-    end else if (\$183 ) begin
-      \$532  = 1'h0;
+    \$532  = ch0_read_select_9b;
+    if (bus__r_en) begin
+      \$532  = \$99 ;
     end
     if (rst) begin
       \$532  = 1'h0;
@@ -4339,11 +4307,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$533  = ch1_irq_status_access_done;
-    if (ch1__ca_done) begin
-      \$533  = 1'h1;
-    end else if (\$185 ) begin
-      \$533  = 1'h0;
+    \$533  = ch0_read_select_9c;
+    if (bus__r_en) begin
+      \$533  = \$100 ;
     end
     if (rst) begin
       \$533  = 1'h0;
@@ -4351,16 +4317,19 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$534  = ch1_irq_enable_write;
+    \$534  = ch0_read_select_9d;
+    if (bus__r_en) begin
+      \$534  = \$101 ;
+    end
     if (rst) begin
       \$534  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$535  = ch1_irq_enable_done;
-    if (\$186 ) begin
-      \$535  = config_write_data[0];
+    \$535  = ch0_read_select_9e;
+    if (bus__r_en) begin
+      \$535  = \$102 ;
     end
     if (rst) begin
       \$535  = 1'h0;
@@ -4368,9 +4337,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$536  = ch1_irq_enable_error;
-    if (\$187 ) begin
-      \$536  = config_write_data[1];
+    \$536  = ch0_read_select_9f;
+    if (bus__r_en) begin
+      \$536  = \$103 ;
     end
     if (rst) begin
       \$536  = 1'h0;
@@ -4378,9 +4347,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$537  = ch1_irq_enable_access_done;
-    if (\$188 ) begin
-      \$537  = config_write_data[2];
+    \$537  = ch0_read_select_c0;
+    if (bus__r_en) begin
+      \$537  = \$104 ;
     end
     if (rst) begin
       \$537  = 1'h0;
@@ -4388,151 +4357,139 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$538  = ch1_cfg_ma_write;
+    \$538  = ch0_read_select_c1;
+    if (bus__r_en) begin
+      \$538  = \$105 ;
+    end
     if (rst) begin
       \$538  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$539  = ch1_cfg_ma_ma_half_period;
-    if (\$189 ) begin
-      \$539 [7:0] = config_write_data[7:0];
-    end
-    if (\$190 ) begin
-      \$539 [15:8] = config_write_data[15:8];
+    \$539  = ch0_read_select_c2;
+    if (bus__r_en) begin
+      \$539  = \$106 ;
     end
     if (rst) begin
-      \$539  = 16'h0000;
+      \$539  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$540  = ch1_cfg_ma_delay_limit;
-    if (\$191 ) begin
-      \$540 [7:0] = config_write_data[23:16];
-    end
-    if (\$192 ) begin
-      \$540 [11:8] = config_write_data[27:24];
+    \$540  = ch0_read_select_c3;
+    if (bus__r_en) begin
+      \$540  = \$107 ;
     end
     if (rst) begin
-      \$540  = 12'h000;
+      \$540  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$541  = ch1_cfg_period_write;
+    \$541  = ch0_read_select_c4;
+    if (bus__r_en) begin
+      \$541  = \$108 ;
+    end
     if (rst) begin
       \$541  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$542  = ch1_cfg_period_request_period;
-    if (\$193 ) begin
-      \$542 [7:0] = config_write_data[7:0];
-    end
-    if (\$194 ) begin
-      \$542 [15:8] = config_write_data[15:8];
-    end
-    if (\$195 ) begin
-      \$542 [23:16] = config_write_data[23:16];
+    \$542  = ch0_read_select_c5;
+    if (bus__r_en) begin
+      \$542  = \$109 ;
     end
     if (rst) begin
-      \$542  = 24'h000000;
+      \$542  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$543  = ch1_cfg_break_write;
+    \$543  = ch0_result_status_status_snapshot;
+    if (\$110 ) begin
+      \$543  = \port$4731$0 [3:0];
+    end
     if (rst) begin
-      \$543  = 1'h0;
+      \$543  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$544  = ch1_cfg_break_break_time;
-    if (\$196 ) begin
-      \$544 [7:0] = config_write_data[7:0];
-    end
-    if (\$197 ) begin
-      \$544 [15:8] = config_write_data[15:8];
-    end
-    if (\$198 ) begin
-      \$544 [23:16] = config_write_data[23:16];
+    \$544  = ch0_result_status_cds_snapshot;
+    if (\$110 ) begin
+      \$544  = \port$4731$0 [49];
     end
     if (rst) begin
-      \$544  = 24'h000000;
+      \$544  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$545  = ch1_cfg_ack_write;
+    \$545  = ch0_result_status_w0_ne_snapshot;
+    if (\$110 ) begin
+      \$545  = \port$4731$0 [131];
+    end
     if (rst) begin
       \$545  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$546  = ch1_cfg_ack_ack_limit;
-    if (\$199 ) begin
-      \$546 [7:0] = config_write_data[7:0];
-    end
-    if (\$200 ) begin
-      \$546 [15:8] = config_write_data[15:8];
-    end
-    if (\$201 ) begin
-      \$546 [23:16] = config_write_data[23:16];
+    \$546  = ch0_result_status_w0_nw_snapshot;
+    if (\$110 ) begin
+      \$546  = \port$4731$0 [132];
     end
     if (rst) begin
-      \$546  = 24'h000000;
+      \$546  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$547  = ch1_cfg_timeout_write;
+    \$547  = ch0_result_status_w0_crc_ok_snapshot;
+    if (\$110 ) begin
+      \$547  = \port$4731$0 [133];
+    end
     if (rst) begin
       \$547  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$548  = ch1_cfg_timeout_timeout_limit;
-    if (\$202 ) begin
-      \$548 [7:0] = config_write_data[7:0];
-    end
-    if (\$203 ) begin
-      \$548 [15:8] = config_write_data[15:8];
-    end
-    if (\$204 ) begin
-      \$548 [23:16] = config_write_data[23:16];
+    \$548  = ch0_result_status_w1_ne_snapshot;
+    if (\$110 ) begin
+      \$548  = \port$4731$0 [174];
     end
     if (rst) begin
-      \$548  = 24'h000000;
+      \$548  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$549  = ch1_cfg_words_write;
+    \$549  = ch0_result_status_w1_nw_snapshot;
+    if (\$110 ) begin
+      \$549  = \port$4731$0 [175];
+    end
     if (rst) begin
       \$549  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$550  = ch1_cfg_words_w0_data_bits;
-    if (\$205 ) begin
-      \$550  = config_write_data[5:0];
+    \$550  = ch0_result_status_w1_crc_ok_snapshot;
+    if (\$110 ) begin
+      \$550  = \port$4731$0 [176];
     end
     if (rst) begin
-      \$550  = 6'h00;
+      \$550  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$551  = ch1_cfg_words_w0_nenw;
-    if (\$206 ) begin
-      \$551  = config_write_data[6];
+    \$551  = ch0_result_status_lc_repeat_snapshot;
+    if (\$110 ) begin
+      \$551  = \port$4731$0 [183];
     end
     if (rst) begin
       \$551  = 1'h0;
@@ -4540,9 +4497,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$552  = ch1_cfg_words_w0_lc;
-    if (\$207 ) begin
-      \$552  = config_write_data[7];
+    \$552  = ch0_result_status_lc_skip_snapshot;
+    if (\$110 ) begin
+      \$552  = \port$4731$0 [184];
     end
     if (rst) begin
       \$552  = 1'h0;
@@ -4550,143 +4507,149 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$553  = ch1_cfg_words_w0_crc;
-    if (\$208 ) begin
-      \$553  = config_write_data[9:8];
+    \$553  = ch0_result_status_lc_zero_snapshot;
+    if (\$110 ) begin
+      \$553  = \port$4731$0 [185];
     end
     if (rst) begin
-      \$553  = 2'h0;
+      \$553  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$554  = ch1_cfg_words_w1_data_bits;
-    if (\$209 ) begin
-      \$554  = config_write_data[21:16];
+    \$554  = ch0_result_status_spw_mismatch_snapshot;
+    if (\$110 ) begin
+      \$554  = \port$4731$0 [186];
     end
     if (rst) begin
-      \$554  = 6'h00;
+      \$554  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$555  = ch1_cfg_words_w1_nenw;
-    if (\$210 ) begin
-      \$555  = config_write_data[22];
+    \$555  = ch0_result_status_lc_snapshot;
+    if (\$110 ) begin
+      \$555  = \port$4731$0 [182:177];
     end
     if (rst) begin
-      \$555  = 1'h0;
+      \$555  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$556  = ch1_cfg_words_w1_lc;
-    if (\$211 ) begin
-      \$556  = config_write_data[23];
+    \$556  = ch0_result_seq_seq_snapshot;
+    if (\$110 ) begin
+      \$556  = ch0__done_count;
     end
     if (rst) begin
-      \$556  = 1'h0;
+      \$556  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$557  = ch1_cfg_words_w1_crc;
-    if (\$212 ) begin
-      \$557  = config_write_data[25:24];
+    \$557  = ch0_result_seq_line_delay_snapshot;
+    if (\$110 ) begin
+      \$557  = \port$4731$0 [48:36];
     end
     if (rst) begin
-      \$557  = 2'h0;
+      \$557  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$558  = ch1_cfg_words_w1_enable;
-    if (\$213 ) begin
-      \$558  = config_write_data[31];
+    \$558  = ch0_result_w0_lo_data_snapshot;
+    if (\$110 ) begin
+      \$558  = \port$4731$0 [107:76];
     end
     if (rst) begin
-      \$558  = 1'h0;
+      \$558  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$559  = ch1_cfg_checks_write;
+    \$559  = ch0_result_w0_hi_data_snapshot;
+    if (\$110 ) begin
+      \$559  = \port$4731$0 [130:108];
+    end
     if (rst) begin
-      \$559  = 1'h0;
+      \$559  = 23'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$560  = ch1_cfg_checks_end_check;
-    if (\$214 ) begin
-      \$560  = config_write_data[0];
+    \$560  = ch0_result_w1_lo_data_snapshot;
+    if (\$110 ) begin
+      \$560  = \port$4731$0 [165:134];
     end
     if (rst) begin
-      \$560  = 1'h0;
+      \$560  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$561  = ch1_cfg_checks_spw_check;
-    if (\$215 ) begin
-      \$561  = config_write_data[1];
+    \$561  = ch0_result_w1_hi_data_snapshot;
+    if (\$110 ) begin
+      \$561  = \port$4731$0 [173:166];
     end
     if (rst) begin
-      \$561  = 1'h0;
+      \$561  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$562  = ch1_cfg_checks_spw_tolerance;
-    if (\$216 ) begin
-      \$562  = config_write_data[15:8];
+    \$562  = ch0_result_timestamp_time_snapshot;
+    if (\$110 ) begin
+      \$562  = \port$4731$0 [35:4];
     end
     if (rst) begin
-      \$562  = 8'h00;
+      \$562  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$563  = ch1_ca_request_write;
+    \$563  = ch0_result_line_noise_events_snapshot;
+    if (\$110 ) begin
+      \$563  = \port$4731$0 [53:50];
+    end
     if (rst) begin
-      \$563  = 1'h0;
+      \$563  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$564  = ch1_ca_request_slave_id;
-    if (\$217 ) begin
-      \$564  = config_write_data[2:0];
+    \$564  = ch0_result_line_delay_settled_snapshot;
+    if (\$110 ) begin
+      \$564  = \port$4731$0 [54];
     end
     if (rst) begin
-      \$564  = 3'h0;
+      \$564  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$565  = ch1_ca_request_address;
-    if (\$218 ) begin
-      \$565  = config_write_data[14:8];
+    \$565  = ch0_result_line_delay_spread_snapshot;
+    if (\$110 ) begin
+      \$565  = \port$4731$0 [75:68];
     end
     if (rst) begin
-      \$565  = 7'h00;
+      \$565  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$566  = ch1_ca_request_count;
-    if (\$219 ) begin
-      \$566  = config_write_data[22:16];
+    \$566  = ch0_result_line_settled_delay_snapshot;
+    if (\$110 ) begin
+      \$566  = \port$4731$0 [67:55];
     end
     if (rst) begin
-      \$566  = 7'h00;
+      \$566  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$567  = \ch1_ca_request_write$241 ;
-    if (\$220 ) begin
-      \$567  = config_write_data[24];
+    \$567  = ch0_window0_read;
+    if (bus__r_en) begin
+      \$567  = \$112 ;
     end
     if (rst) begin
       \$567  = 1'h0;
@@ -4694,43 +4657,40 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$568  = \$222 ;
+    \$568  = ch0_read_data;
+    if (bus__r_load) begin
+      \$568  = \$184 ;
+    end
     if (rst) begin
-      \$568  = 1'h0;
+      \$568  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$569  = \$224 ;
+    \$569  = \$186 ;
     if (rst) begin
       \$569  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$570  = ch1_read_select_100;
-    if (bus__r_en) begin
-      \$570  = \$225 ;
-    end
+    \$570  = \$188 ;
     if (rst) begin
       \$570  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$571  = ch1_read_select_101;
-    if (bus__r_en) begin
-      \$571  = \$226 ;
-    end
+    \$571  = \$190 ;
     if (rst) begin
       \$571  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$572  = ch1_read_select_102;
-    if (bus__r_en) begin
-      \$572  = \$227 ;
+    \$572  = ch1_ctrl_periodic;
+    if (\$191 ) begin
+      \$572  = write_data[8];
     end
     if (rst) begin
       \$572  = 1'h0;
@@ -4738,9 +4698,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$573  = ch1_read_select_104;
-    if (bus__r_en) begin
-      \$573  = \$228 ;
+    \$573  = ch1_ctrl_trigger_enable;
+    if (\$192 ) begin
+      \$573  = write_data[9];
     end
     if (rst) begin
       \$573  = 1'h0;
@@ -4748,9 +4708,11 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$574  = ch1_read_select_105;
-    if (bus__r_en) begin
-      \$574  = \$229 ;
+    \$574  = ch1_irq_status_done;
+    if (ch1__done) begin
+      \$574  = 1'h1;
+    end else if (\$194 ) begin
+      \$574  = 1'h0;
     end
     if (rst) begin
       \$574  = 1'h0;
@@ -4758,9 +4720,11 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$575  = ch1_read_select_108;
-    if (bus__r_en) begin
-      \$575  = \$230 ;
+    \$575  = ch1_irq_status_error;
+    if (ch1__frame_error) begin
+      \$575  = 1'h1;
+    end else if (\$196 ) begin
+      \$575  = 1'h0;
     end
     if (rst) begin
       \$575  = 1'h0;
@@ -4768,9 +4732,11 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$576  = ch1_read_select_109;
-    if (bus__r_en) begin
-      \$576  = \$231 ;
+    \$576  = ch1_irq_status_access_done;
+    if (ch1__ca_done) begin
+      \$576  = 1'h1;
+    end else if (\$198 ) begin
+      \$576  = 1'h0;
     end
     if (rst) begin
       \$576  = 1'h0;
@@ -4778,19 +4744,16 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$577  = ch1_read_select_10a;
-    if (bus__r_en) begin
-      \$577  = \$232 ;
-    end
+    \$577  = ch1_irq_enable_write;
     if (rst) begin
       \$577  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$578  = ch1_read_select_10b;
-    if (bus__r_en) begin
-      \$578  = \$233 ;
+    \$578  = ch1_irq_enable_done;
+    if (\$199 ) begin
+      \$578  = config_write_data[0];
     end
     if (rst) begin
       \$578  = 1'h0;
@@ -4798,9 +4761,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$579  = ch1_read_select_10c;
-    if (bus__r_en) begin
-      \$579  = \$234 ;
+    \$579  = ch1_irq_enable_error;
+    if (\$200 ) begin
+      \$579  = config_write_data[1];
     end
     if (rst) begin
       \$579  = 1'h0;
@@ -4808,9 +4771,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$580  = ch1_read_select_10d;
-    if (bus__r_en) begin
-      \$580  = \$235 ;
+    \$580  = ch1_irq_enable_access_done;
+    if (\$201 ) begin
+      \$580  = config_write_data[2];
     end
     if (rst) begin
       \$580  = 1'h0;
@@ -4818,139 +4781,151 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$581  = ch1_read_select_10e;
-    if (bus__r_en) begin
-      \$581  = \$236 ;
-    end
+    \$581  = ch1_cfg_ma_write;
     if (rst) begin
       \$581  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$582  = ch1_read_select_110;
-    if (bus__r_en) begin
-      \$582  = \$237 ;
+    \$582  = ch1_cfg_ma_ma_half_period;
+    if (\$202 ) begin
+      \$582 [7:0] = config_write_data[7:0];
+    end
+    if (\$203 ) begin
+      \$582 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$582  = 1'h0;
+      \$582  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$583  = ch1_read_select_111;
-    if (bus__r_en) begin
-      \$583  = \$238 ;
+    \$583  = ch1_cfg_ma_delay_limit;
+    if (\$204 ) begin
+      \$583 [7:0] = config_write_data[23:16];
+    end
+    if (\$205 ) begin
+      \$583 [11:8] = config_write_data[27:24];
     end
     if (rst) begin
-      \$583  = 1'h0;
+      \$583  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$584  = ch1_read_select_112;
-    if (bus__r_en) begin
-      \$584  = \$239 ;
-    end
+    \$584  = ch1_cfg_period_write;
     if (rst) begin
       \$584  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$585  = ch1_read_select_113;
-    if (bus__r_en) begin
-      \$585  = \$240 ;
+    \$585  = ch1_cfg_period_request_period;
+    if (\$206 ) begin
+      \$585 [7:0] = config_write_data[7:0];
+    end
+    if (\$207 ) begin
+      \$585 [15:8] = config_write_data[15:8];
+    end
+    if (\$208 ) begin
+      \$585 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$585  = 1'h0;
+      \$585  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$586  = ch1_read_select_114;
-    if (bus__r_en) begin
-      \$586  = \$241 ;
-    end
+    \$586  = ch1_cfg_break_write;
     if (rst) begin
       \$586  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$587  = ch1_read_select_115;
-    if (bus__r_en) begin
-      \$587  = \$242 ;
+    \$587  = ch1_cfg_break_break_time;
+    if (\$209 ) begin
+      \$587 [7:0] = config_write_data[7:0];
+    end
+    if (\$210 ) begin
+      \$587 [15:8] = config_write_data[15:8];
+    end
+    if (\$211 ) begin
+      \$587 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$587  = 1'h0;
+      \$587  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$588  = ch1_read_select_116;
-    if (bus__r_en) begin
-      \$588  = \$243 ;
-    end
+    \$588  = ch1_cfg_ack_write;
     if (rst) begin
       \$588  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$589  = ch1_read_select_118;
-    if (bus__r_en) begin
-      \$589  = \$244 ;
+    \$589  = ch1_cfg_ack_ack_limit;
+    if (\$212 ) begin
+      \$589 [7:0] = config_write_data[7:0];
+    end
+    if (\$213 ) begin
+      \$589 [15:8] = config_write_data[15:8];
+    end
+    if (\$214 ) begin
+      \$589 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$589  = 1'h0;
+      \$589  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$590  = ch1_read_select_119;
-    if (bus__r_en) begin
-      \$590  = \$245 ;
-    end
+    \$590  = ch1_cfg_timeout_write;
     if (rst) begin
       \$590  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$591  = ch1_read_select_11a;
-    if (bus__r_en) begin
-      \$591  = \$246 ;
+    \$591  = ch1_cfg_timeout_timeout_limit;
+    if (\$215 ) begin
+      \$591 [7:0] = config_write_data[7:0];
+    end
+    if (\$216 ) begin
+      \$591 [15:8] = config_write_data[15:8];
+    end
+    if (\$217 ) begin
+      \$591 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$591  = 1'h0;
+      \$591  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$592  = ch1_read_select_11b;
-    if (bus__r_en) begin
-      \$592  = \$247 ;
-    end
+    \$592  = ch1_cfg_words_write;
     if (rst) begin
       \$592  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$593  = ch1_read_select_11c;
-    if (bus__r_en) begin
-      \$593  = \$248 ;
+    \$593  = ch1_cfg_words_w0_data_bits;
+    if (\$218 ) begin
+      \$593  = config_write_data[5:0];
     end
     if (rst) begin
-      \$593  = 1'h0;
+      \$593  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$594  = ch1_read_select_11d;
-    if (bus__r_en) begin
-      \$594  = \$249 ;
+    \$594  = ch1_cfg_words_w0_nenw;
+    if (\$219 ) begin
+      \$594  = config_write_data[6];
     end
     if (rst) begin
       \$594  = 1'h0;
@@ -4958,9 +4933,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$595  = ch1_read_select_11e;
-    if (bus__r_en) begin
-      \$595  = \$250 ;
+    \$595  = ch1_cfg_words_w0_lc;
+    if (\$220 ) begin
+      \$595  = config_write_data[7];
     end
     if (rst) begin
       \$595  = 1'h0;
@@ -4968,29 +4943,29 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$596  = ch1_read_select_140;
-    if (bus__r_en) begin
-      \$596  = \$251 ;
+    \$596  = ch1_cfg_words_w0_crc;
+    if (\$221 ) begin
+      \$596  = config_write_data[9:8];
     end
     if (rst) begin
-      \$596  = 1'h0;
+      \$596  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$597  = ch1_read_select_141;
-    if (bus__r_en) begin
-      \$597  = \$252 ;
+    \$597  = ch1_cfg_words_w1_data_bits;
+    if (\$222 ) begin
+      \$597  = config_write_data[21:16];
     end
     if (rst) begin
-      \$597  = 1'h0;
+      \$597  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$598  = ch1_read_select_142;
-    if (bus__r_en) begin
-      \$598  = \$253 ;
+    \$598  = ch1_cfg_words_w1_nenw;
+    if (\$223 ) begin
+      \$598  = config_write_data[22];
     end
     if (rst) begin
       \$598  = 1'h0;
@@ -4998,9 +4973,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$599  = ch1_read_select_143;
-    if (bus__r_en) begin
-      \$599  = \$254 ;
+    \$599  = ch1_cfg_words_w1_lc;
+    if (\$224 ) begin
+      \$599  = config_write_data[23];
     end
     if (rst) begin
       \$599  = 1'h0;
@@ -5008,19 +4983,19 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$600  = ch1_read_select_144;
-    if (bus__r_en) begin
-      \$600  = \$255 ;
+    \$600  = ch1_cfg_words_w1_crc;
+    if (\$225 ) begin
+      \$600  = config_write_data[25:24];
     end
     if (rst) begin
-      \$600  = 1'h0;
+      \$600  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$601  = ch1_read_select_145;
-    if (bus__r_en) begin
-      \$601  = \$256 ;
+    \$601  = ch1_cfg_words_w1_enable;
+    if (\$226 ) begin
+      \$601  = config_write_data[31];
     end
     if (rst) begin
       \$601  = 1'h0;
@@ -5028,19 +5003,16 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$602  = ch1_result_status_status_snapshot;
-    if (\$257 ) begin
-      \$602  = \port$4673$0 [3:0];
-    end
+    \$602  = ch1_cfg_checks_write;
     if (rst) begin
-      \$602  = 4'h0;
+      \$602  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$603  = ch1_result_status_cds_snapshot;
-    if (\$257 ) begin
-      \$603  = \port$4673$0 [49];
+    \$603  = ch1_cfg_checks_end_check;
+    if (\$227 ) begin
+      \$603  = config_write_data[0];
     end
     if (rst) begin
       \$603  = 1'h0;
@@ -5048,9 +5020,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$604  = ch1_result_status_w0_ne_snapshot;
-    if (\$257 ) begin
-      \$604  = \port$4673$0 [105];
+    \$604  = ch1_cfg_checks_spw_check;
+    if (\$228 ) begin
+      \$604  = config_write_data[1];
     end
     if (rst) begin
       \$604  = 1'h0;
@@ -5058,179 +5030,170 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$605  = ch1_result_status_w0_nw_snapshot;
-    if (\$257 ) begin
-      \$605  = \port$4673$0 [106];
+    \$605  = ch1_cfg_checks_spw_tolerance;
+    if (\$229 ) begin
+      \$605  = config_write_data[15:8];
     end
     if (rst) begin
-      \$605  = 1'h0;
+      \$605  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$606  = ch1_result_status_w0_crc_ok_snapshot;
-    if (\$257 ) begin
-      \$606  = \port$4673$0 [107];
+    \$606  = ch1_cfg_checks_noise_limit;
+    if (\$230 ) begin
+      \$606  = config_write_data[19:16];
     end
     if (rst) begin
-      \$606  = 1'h0;
+      \$606  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$607  = ch1_result_status_w1_ne_snapshot;
-    if (\$257 ) begin
-      \$607  = \port$4673$0 [148];
+    \$607  = ch1_cfg_checks_delay_tolerance;
+    if (\$231 ) begin
+      \$607  = config_write_data[23:20];
     end
     if (rst) begin
-      \$607  = 1'h0;
+      \$607  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$608  = ch1_result_status_w1_nw_snapshot;
-    if (\$257 ) begin
-      \$608  = \port$4673$0 [149];
-    end
+    \$608  = ch1_cfg_quiet_write;
     if (rst) begin
       \$608  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$609  = ch1_result_status_w1_crc_ok_snapshot;
-    if (\$257 ) begin
-      \$609  = \port$4673$0 [150];
+    \$609  = ch1_cfg_quiet_quiet_time;
+    if (\$232 ) begin
+      \$609 [7:0] = config_write_data[7:0];
+    end
+    if (\$233 ) begin
+      \$609 [11:8] = config_write_data[11:8];
     end
     if (rst) begin
-      \$609  = 1'h0;
+      \$609  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$610  = ch1_result_status_lc_repeat_snapshot;
-    if (\$257 ) begin
-      \$610  = \port$4673$0 [157];
-    end
+    \$610  = ch1_ca_request_write;
     if (rst) begin
       \$610  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$611  = ch1_result_status_lc_skip_snapshot;
-    if (\$257 ) begin
-      \$611  = \port$4673$0 [158];
+    \$611  = ch1_ca_request_slave_id;
+    if (\$234 ) begin
+      \$611  = config_write_data[2:0];
     end
     if (rst) begin
-      \$611  = 1'h0;
+      \$611  = 3'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$612  = ch1_result_status_lc_zero_snapshot;
-    if (\$257 ) begin
-      \$612  = \port$4673$0 [159];
+    \$612  = ch1_ca_request_address;
+    if (\$235 ) begin
+      \$612  = config_write_data[14:8];
     end
     if (rst) begin
-      \$612  = 1'h0;
+      \$612  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$613  = ch1_result_status_spw_mismatch_snapshot;
-    if (\$257 ) begin
-      \$613  = \port$4673$0 [160];
+    \$613  = ch1_ca_request_count;
+    if (\$236 ) begin
+      \$613  = config_write_data[22:16];
     end
     if (rst) begin
-      \$613  = 1'h0;
+      \$613  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$614  = ch1_result_status_lc_snapshot;
-    if (\$257 ) begin
-      \$614  = \port$4673$0 [156:151];
+    \$614  = \ch1_ca_request_write$265 ;
+    if (\$237 ) begin
+      \$614  = config_write_data[24];
     end
     if (rst) begin
-      \$614  = 6'h00;
+      \$614  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$615  = ch1_result_seq_seq_snapshot;
-    if (\$257 ) begin
-      \$615  = ch1__done_count;
-    end
+    \$615  = \$239 ;
     if (rst) begin
-      \$615  = 16'h0000;
+      \$615  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$616  = ch1_result_seq_line_delay_snapshot;
-    if (\$257 ) begin
-      \$616  = \port$4673$0 [48:36];
-    end
+    \$616  = \$241 ;
     if (rst) begin
-      \$616  = 13'h0000;
+      \$616  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$617  = ch1_result_w0_lo_data_snapshot;
-    if (\$257 ) begin
-      \$617  = \port$4673$0 [81:50];
-    end
-    if (rst) begin
-      \$617  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$618  = ch1_result_w0_hi_data_snapshot;
-    if (\$257 ) begin
-      \$618  = \port$4673$0 [104:82];
-    end
-    if (rst) begin
-      \$618  = 23'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$619  = ch1_result_w1_lo_data_snapshot;
-    if (\$257 ) begin
-      \$619  = \port$4673$0 [139:108];
-    end
-    if (rst) begin
-      \$619  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$620  = ch1_result_w1_hi_data_snapshot;
-    if (\$257 ) begin
-      \$620  = \port$4673$0 [147:140];
-    end
-    if (rst) begin
-      \$620  = 8'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$621  = ch1_result_timestamp_time_snapshot;
-    if (\$257 ) begin
-      \$621  = \port$4673$0 [35:4];
-    end
-    if (rst) begin
-      \$621  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$622  = ch1_window0_read;
+    \$617  = ch1_read_select_100;
     if (bus__r_en) begin
-      \$622  = \$259 ;
+      \$617  = \$242 ;
+    end
+    if (rst) begin
+      \$617  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$618  = ch1_read_select_101;
+    if (bus__r_en) begin
+      \$618  = \$243 ;
+    end
+    if (rst) begin
+      \$618  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$619  = ch1_read_select_102;
+    if (bus__r_en) begin
+      \$619  = \$244 ;
+    end
+    if (rst) begin
+      \$619  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$620  = ch1_read_select_104;
+    if (bus__r_en) begin
+      \$620  = \$245 ;
+    end
+    if (rst) begin
+      \$620  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$621  = ch1_read_select_105;
+    if (bus__r_en) begin
+      \$621  = \$246 ;
+    end
+    if (rst) begin
+      \$621  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$622  = ch1_read_select_108;
+    if (bus__r_en) begin
+      \$622  = \$247 ;
     end
     if (rst) begin
       \$622  = 1'h0;
@@ -5238,102 +5201,656 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
-    \$623  = ch1_read_data;
-    if (bus__r_load) begin
-      \$623  = \$325 ;
+    \$623  = ch1_read_select_109;
+    if (bus__r_en) begin
+      \$623  = \$248 ;
     end
     if (rst) begin
-      \$623  = 32'd0;
+      \$623  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$624  = ch1_read_select_10a;
+    if (bus__r_en) begin
+      \$624  = \$249 ;
+    end
+    if (rst) begin
+      \$624  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$625  = ch1_read_select_10b;
+    if (bus__r_en) begin
+      \$625  = \$250 ;
+    end
+    if (rst) begin
+      \$625  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$626  = ch1_read_select_10c;
+    if (bus__r_en) begin
+      \$626  = \$251 ;
+    end
+    if (rst) begin
+      \$626  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$627  = ch1_read_select_10d;
+    if (bus__r_en) begin
+      \$627  = \$252 ;
+    end
+    if (rst) begin
+      \$627  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$628  = ch1_read_select_10e;
+    if (bus__r_en) begin
+      \$628  = \$253 ;
+    end
+    if (rst) begin
+      \$628  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$629  = ch1_read_select_10f;
+    if (bus__r_en) begin
+      \$629  = \$254 ;
+    end
+    if (rst) begin
+      \$629  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$630  = ch1_read_select_110;
+    if (bus__r_en) begin
+      \$630  = \$255 ;
+    end
+    if (rst) begin
+      \$630  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$631  = ch1_read_select_111;
+    if (bus__r_en) begin
+      \$631  = \$256 ;
+    end
+    if (rst) begin
+      \$631  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$632  = ch1_read_select_112;
+    if (bus__r_en) begin
+      \$632  = \$257 ;
+    end
+    if (rst) begin
+      \$632  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$633  = ch1_read_select_113;
+    if (bus__r_en) begin
+      \$633  = \$258 ;
+    end
+    if (rst) begin
+      \$633  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$634  = ch1_read_select_114;
+    if (bus__r_en) begin
+      \$634  = \$259 ;
+    end
+    if (rst) begin
+      \$634  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$635  = ch1_read_select_115;
+    if (bus__r_en) begin
+      \$635  = \$260 ;
+    end
+    if (rst) begin
+      \$635  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$636  = ch1_read_select_116;
+    if (bus__r_en) begin
+      \$636  = \$261 ;
+    end
+    if (rst) begin
+      \$636  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$637  = ch1_read_select_117;
+    if (bus__r_en) begin
+      \$637  = \$262 ;
+    end
+    if (rst) begin
+      \$637  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$638  = ch1_read_select_118;
+    if (bus__r_en) begin
+      \$638  = \$263 ;
+    end
+    if (rst) begin
+      \$638  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$639  = ch1_read_select_119;
+    if (bus__r_en) begin
+      \$639  = \$264 ;
+    end
+    if (rst) begin
+      \$639  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$640  = ch1_read_select_11a;
+    if (bus__r_en) begin
+      \$640  = \$265 ;
+    end
+    if (rst) begin
+      \$640  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$641  = ch1_read_select_11b;
+    if (bus__r_en) begin
+      \$641  = \$266 ;
+    end
+    if (rst) begin
+      \$641  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$642  = ch1_read_select_11c;
+    if (bus__r_en) begin
+      \$642  = \$267 ;
+    end
+    if (rst) begin
+      \$642  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$643  = ch1_read_select_11d;
+    if (bus__r_en) begin
+      \$643  = \$268 ;
+    end
+    if (rst) begin
+      \$643  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$644  = ch1_read_select_11e;
+    if (bus__r_en) begin
+      \$644  = \$269 ;
+    end
+    if (rst) begin
+      \$644  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$645  = ch1_read_select_11f;
+    if (bus__r_en) begin
+      \$645  = \$270 ;
+    end
+    if (rst) begin
+      \$645  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$646  = ch1_read_select_140;
+    if (bus__r_en) begin
+      \$646  = \$271 ;
+    end
+    if (rst) begin
+      \$646  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$647  = ch1_read_select_141;
+    if (bus__r_en) begin
+      \$647  = \$272 ;
+    end
+    if (rst) begin
+      \$647  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$648  = ch1_read_select_142;
+    if (bus__r_en) begin
+      \$648  = \$273 ;
+    end
+    if (rst) begin
+      \$648  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$649  = ch1_read_select_143;
+    if (bus__r_en) begin
+      \$649  = \$274 ;
+    end
+    if (rst) begin
+      \$649  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$650  = ch1_read_select_144;
+    if (bus__r_en) begin
+      \$650  = \$275 ;
+    end
+    if (rst) begin
+      \$650  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$651  = ch1_read_select_145;
+    if (bus__r_en) begin
+      \$651  = \$276 ;
+    end
+    if (rst) begin
+      \$651  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$652  = ch1_result_status_status_snapshot;
+    if (\$277 ) begin
+      \$652  = \port$5293$0 [3:0];
+    end
+    if (rst) begin
+      \$652  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$653  = ch1_result_status_cds_snapshot;
+    if (\$277 ) begin
+      \$653  = \port$5293$0 [49];
+    end
+    if (rst) begin
+      \$653  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$654  = ch1_result_status_w0_ne_snapshot;
+    if (\$277 ) begin
+      \$654  = \port$5293$0 [131];
+    end
+    if (rst) begin
+      \$654  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$655  = ch1_result_status_w0_nw_snapshot;
+    if (\$277 ) begin
+      \$655  = \port$5293$0 [132];
+    end
+    if (rst) begin
+      \$655  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$656  = ch1_result_status_w0_crc_ok_snapshot;
+    if (\$277 ) begin
+      \$656  = \port$5293$0 [133];
+    end
+    if (rst) begin
+      \$656  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$657  = ch1_result_status_w1_ne_snapshot;
+    if (\$277 ) begin
+      \$657  = \port$5293$0 [174];
+    end
+    if (rst) begin
+      \$657  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$658  = ch1_result_status_w1_nw_snapshot;
+    if (\$277 ) begin
+      \$658  = \port$5293$0 [175];
+    end
+    if (rst) begin
+      \$658  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$659  = ch1_result_status_w1_crc_ok_snapshot;
+    if (\$277 ) begin
+      \$659  = \port$5293$0 [176];
+    end
+    if (rst) begin
+      \$659  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$660  = ch1_result_status_lc_repeat_snapshot;
+    if (\$277 ) begin
+      \$660  = \port$5293$0 [183];
+    end
+    if (rst) begin
+      \$660  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$661  = ch1_result_status_lc_skip_snapshot;
+    if (\$277 ) begin
+      \$661  = \port$5293$0 [184];
+    end
+    if (rst) begin
+      \$661  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$662  = ch1_result_status_lc_zero_snapshot;
+    if (\$277 ) begin
+      \$662  = \port$5293$0 [185];
+    end
+    if (rst) begin
+      \$662  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$663  = ch1_result_status_spw_mismatch_snapshot;
+    if (\$277 ) begin
+      \$663  = \port$5293$0 [186];
+    end
+    if (rst) begin
+      \$663  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$664  = ch1_result_status_lc_snapshot;
+    if (\$277 ) begin
+      \$664  = \port$5293$0 [182:177];
+    end
+    if (rst) begin
+      \$664  = 6'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$665  = ch1_result_seq_seq_snapshot;
+    if (\$277 ) begin
+      \$665  = ch1__done_count;
+    end
+    if (rst) begin
+      \$665  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$666  = ch1_result_seq_line_delay_snapshot;
+    if (\$277 ) begin
+      \$666  = \port$5293$0 [48:36];
+    end
+    if (rst) begin
+      \$666  = 13'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$667  = ch1_result_w0_lo_data_snapshot;
+    if (\$277 ) begin
+      \$667  = \port$5293$0 [107:76];
+    end
+    if (rst) begin
+      \$667  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$668  = ch1_result_w0_hi_data_snapshot;
+    if (\$277 ) begin
+      \$668  = \port$5293$0 [130:108];
+    end
+    if (rst) begin
+      \$668  = 23'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$669  = ch1_result_w1_lo_data_snapshot;
+    if (\$277 ) begin
+      \$669  = \port$5293$0 [165:134];
+    end
+    if (rst) begin
+      \$669  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$670  = ch1_result_w1_hi_data_snapshot;
+    if (\$277 ) begin
+      \$670  = \port$5293$0 [173:166];
+    end
+    if (rst) begin
+      \$670  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$671  = ch1_result_timestamp_time_snapshot;
+    if (\$277 ) begin
+      \$671  = \port$5293$0 [35:4];
+    end
+    if (rst) begin
+      \$671  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$672  = ch1_result_line_noise_events_snapshot;
+    if (\$277 ) begin
+      \$672  = \port$5293$0 [53:50];
+    end
+    if (rst) begin
+      \$672  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$673  = ch1_result_line_delay_settled_snapshot;
+    if (\$277 ) begin
+      \$673  = \port$5293$0 [54];
+    end
+    if (rst) begin
+      \$673  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$674  = ch1_result_line_delay_spread_snapshot;
+    if (\$277 ) begin
+      \$674  = \port$5293$0 [75:68];
+    end
+    if (rst) begin
+      \$674  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$675  = ch1_result_line_settled_delay_snapshot;
+    if (\$277 ) begin
+      \$675  = \port$5293$0 [67:55];
+    end
+    if (rst) begin
+      \$675  = 13'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$676  = ch1_window0_read;
+    if (bus__r_en) begin
+      \$676  = \$279 ;
+    end
+    if (rst) begin
+      \$676  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$677  = ch1_read_data;
+    if (bus__r_load) begin
+      \$677  = \$351 ;
+    end
+    if (rst) begin
+      \$677  = 32'd0;
     end
   end
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, ch1_irq, ch0_irq };
-  assign ch0__status = \port$4189$0 [3:0];
-  assign ch0__cds = \port$4189$0 [49];
-  assign ch0__word0_ne = \port$4189$0 [105];
-  assign ch0__word0_nw = \port$4189$0 [106];
-  assign ch0__word0_crc_ok = \port$4189$0 [107];
-  assign ch0__word1_ne = \port$4189$0 [148];
-  assign ch0__word1_nw = \port$4189$0 [149];
-  assign ch0__word1_crc_ok = \port$4189$0 [150];
-  assign ch0__lc_repeat = \port$4189$0 [157];
-  assign ch0__lc_skip = \port$4189$0 [158];
-  assign ch0__lc_zero = \port$4189$0 [159];
-  assign ch0__spw_mismatch = \port$4189$0 [160];
-  assign ch0__lc = \port$4189$0 [156:151];
-  assign ch0__line_delay = \port$4189$0 [48:36];
-  assign ch0__word0_position = \port$4189$0 [104:50];
-  assign ch0__word1_position = \port$4189$0 [147:108];
-  assign ch0__timestamp = \port$4189$0 [35:4];
+  assign ch0__status = \port$4731$0 [3:0];
+  assign ch0__cds = \port$4731$0 [49];
+  assign ch0__word0_ne = \port$4731$0 [131];
+  assign ch0__word0_nw = \port$4731$0 [132];
+  assign ch0__word0_crc_ok = \port$4731$0 [133];
+  assign ch0__word1_ne = \port$4731$0 [174];
+  assign ch0__word1_nw = \port$4731$0 [175];
+  assign ch0__word1_crc_ok = \port$4731$0 [176];
+  assign ch0__lc_repeat = \port$4731$0 [183];
+  assign ch0__lc_skip = \port$4731$0 [184];
+  assign ch0__lc_zero = \port$4731$0 [185];
+  assign ch0__spw_mismatch = \port$4731$0 [186];
+  assign ch0__lc = \port$4731$0 [182:177];
+  assign ch0__line_delay = \port$4731$0 [48:36];
+  assign ch0__word0_position = \port$4731$0 [130:76];
+  assign ch0__word1_position = \port$4731$0 [173:134];
+  assign ch0__timestamp = \port$4731$0 [35:4];
+  assign ch0__noise_events = \port$4731$0 [53:50];
+  assign ch0__delay_settled = \port$4731$0 [54];
+  assign ch0__delay_spread = \port$4731$0 [75:68];
+  assign ch0__settled_delay = \port$4731$0 [67:55];
   assign ch0__cap_data_bits_w0 = 6'h37;
   assign ch0__cap_data_bits_w1 = 6'h28;
   assign ch0__cap_timer_width = 6'h18;
   assign ch0__cap_counters = 1'h1;
   assign ch0__cap_timestamp = 1'h1;
   assign ch0__cap_register_access = 1'h1;
-  assign ch0__count_crc_word0 = \port$4202$0 [15:0];
-  assign ch0__count_crc_word1 = \port$4202$0 [31:16];
-  assign ch0__count_no_ack = \port$4202$0 [47:32];
-  assign ch0__count_no_start = \port$4202$0 [63:48];
-  assign ch0__count_delay_range = \port$4202$0 [79:64];
-  assign ch0__count_slo_stuck_low = \port$4202$0 [95:80];
-  assign ch0__count_lc_repeat = \port$4202$0 [111:96];
-  assign ch0__count_lc_skip = \port$4202$0 [127:112];
-  assign ch0__count_lc_zero = \port$4202$0 [143:128];
-  assign ch0__count_spw_mismatch = \port$4202$0 [159:144];
-  assign ch0__count_overrun = \port$4202$0 [175:160];
-  assign ch0__count_aborted = \port$4202$0 [191:176];
-  assign ch0__count_no_stop = \port$4202$0 [207:192];
-  assign ch0__ca_status = \port$4316$0 [2:0];
-  assign ch0__ca_bytes_done = \port$4316$0 [9:3];
-  assign ch0__count_ca_crc4_error = \port$4202$0 [223:208];
-  assign ch0__count_ca_no_answer = \port$4202$0 [239:224];
-  assign ch0__count_ca_refused = \port$4202$0 [255:240];
-  assign ch0__count_ca_aborted = \port$4202$0 [271:256];
-  assign ch0__count_ca_data_fault = \port$4202$0 [287:272];
-  assign ch1__status = \port$4673$0 [3:0];
-  assign ch1__cds = \port$4673$0 [49];
-  assign ch1__word0_ne = \port$4673$0 [105];
-  assign ch1__word0_nw = \port$4673$0 [106];
-  assign ch1__word0_crc_ok = \port$4673$0 [107];
-  assign ch1__word1_ne = \port$4673$0 [148];
-  assign ch1__word1_nw = \port$4673$0 [149];
-  assign ch1__word1_crc_ok = \port$4673$0 [150];
-  assign ch1__lc_repeat = \port$4673$0 [157];
-  assign ch1__lc_skip = \port$4673$0 [158];
-  assign ch1__lc_zero = \port$4673$0 [159];
-  assign ch1__spw_mismatch = \port$4673$0 [160];
-  assign ch1__lc = \port$4673$0 [156:151];
-  assign ch1__line_delay = \port$4673$0 [48:36];
-  assign ch1__word0_position = \port$4673$0 [104:50];
-  assign ch1__word1_position = \port$4673$0 [147:108];
-  assign ch1__timestamp = \port$4673$0 [35:4];
+  assign ch0__count_crc_word0 = \port$4744$0 [15:0];
+  assign ch0__count_crc_word1 = \port$4744$0 [31:16];
+  assign ch0__count_no_ack = \port$4744$0 [47:32];
+  assign ch0__count_no_start = \port$4744$0 [63:48];
+  assign ch0__count_delay_range = \port$4744$0 [79:64];
+  assign ch0__count_slo_stuck_low = \port$4744$0 [95:80];
+  assign ch0__count_lc_repeat = \port$4744$0 [111:96];
+  assign ch0__count_lc_skip = \port$4744$0 [127:112];
+  assign ch0__count_lc_zero = \port$4744$0 [143:128];
+  assign ch0__count_spw_mismatch = \port$4744$0 [159:144];
+  assign ch0__count_overrun = \port$4744$0 [175:160];
+  assign ch0__count_aborted = \port$4744$0 [191:176];
+  assign ch0__count_no_stop = \port$4744$0 [207:192];
+  assign ch0__count_noisy_line = \port$4744$0 [223:208];
+  assign ch0__count_delay_jump = \port$4744$0 [239:224];
+  assign ch0__count_noise_event = \port$4744$0 [255:240];
+  assign ch0__ca_status = \port$4876$0 [2:0];
+  assign ch0__ca_bytes_done = \port$4876$0 [9:3];
+  assign ch0__count_ca_crc4_error = \port$4744$0 [271:256];
+  assign ch0__count_ca_no_answer = \port$4744$0 [287:272];
+  assign ch0__count_ca_refused = \port$4744$0 [303:288];
+  assign ch0__count_ca_aborted = \port$4744$0 [319:304];
+  assign ch0__count_ca_data_fault = \port$4744$0 [335:320];
+  assign ch1__status = \port$5293$0 [3:0];
+  assign ch1__cds = \port$5293$0 [49];
+  assign ch1__word0_ne = \port$5293$0 [131];
+  assign ch1__word0_nw = \port$5293$0 [132];
+  assign ch1__word0_crc_ok = \port$5293$0 [133];
+  assign ch1__word1_ne = \port$5293$0 [174];
+  assign ch1__word1_nw = \port$5293$0 [175];
+  assign ch1__word1_crc_ok = \port$5293$0 [176];
+  assign ch1__lc_repeat = \port$5293$0 [183];
+  assign ch1__lc_skip = \port$5293$0 [184];
+  assign ch1__lc_zero = \port$5293$0 [185];
+  assign ch1__spw_mismatch = \port$5293$0 [186];
+  assign ch1__lc = \port$5293$0 [182:177];
+  assign ch1__line_delay = \port$5293$0 [48:36];
+  assign ch1__word0_position = \port$5293$0 [130:76];
+  assign ch1__word1_position = \port$5293$0 [173:134];
+  assign ch1__timestamp = \port$5293$0 [35:4];
+  assign ch1__noise_events = \port$5293$0 [53:50];
+  assign ch1__delay_settled = \port$5293$0 [54];
+  assign ch1__delay_spread = \port$5293$0 [75:68];
+  assign ch1__settled_delay = \port$5293$0 [67:55];
   assign ch1__cap_data_bits_w0 = 6'h37;
   assign ch1__cap_data_bits_w1 = 6'h28;
   assign ch1__cap_timer_width = 6'h18;
   assign ch1__cap_counters = 1'h1;
   assign ch1__cap_timestamp = 1'h1;
   assign ch1__cap_register_access = 1'h1;
-  assign ch1__count_crc_word0 = \port$4686$0 [15:0];
-  assign ch1__count_crc_word1 = \port$4686$0 [31:16];
-  assign ch1__count_no_ack = \port$4686$0 [47:32];
-  assign ch1__count_no_start = \port$4686$0 [63:48];
-  assign ch1__count_delay_range = \port$4686$0 [79:64];
-  assign ch1__count_slo_stuck_low = \port$4686$0 [95:80];
-  assign ch1__count_lc_repeat = \port$4686$0 [111:96];
-  assign ch1__count_lc_skip = \port$4686$0 [127:112];
-  assign ch1__count_lc_zero = \port$4686$0 [143:128];
-  assign ch1__count_spw_mismatch = \port$4686$0 [159:144];
-  assign ch1__count_overrun = \port$4686$0 [175:160];
-  assign ch1__count_aborted = \port$4686$0 [191:176];
-  assign ch1__count_no_stop = \port$4686$0 [207:192];
-  assign ch1__ca_status = \port$4800$0 [2:0];
-  assign ch1__ca_bytes_done = \port$4800$0 [9:3];
-  assign ch1__count_ca_crc4_error = \port$4686$0 [223:208];
-  assign ch1__count_ca_no_answer = \port$4686$0 [239:224];
-  assign ch1__count_ca_refused = \port$4686$0 [255:240];
-  assign ch1__count_ca_aborted = \port$4686$0 [271:256];
-  assign ch1__count_ca_data_fault = \port$4686$0 [287:272];
+  assign ch1__count_crc_word0 = \port$5306$0 [15:0];
+  assign ch1__count_crc_word1 = \port$5306$0 [31:16];
+  assign ch1__count_no_ack = \port$5306$0 [47:32];
+  assign ch1__count_no_start = \port$5306$0 [63:48];
+  assign ch1__count_delay_range = \port$5306$0 [79:64];
+  assign ch1__count_slo_stuck_low = \port$5306$0 [95:80];
+  assign ch1__count_lc_repeat = \port$5306$0 [111:96];
+  assign ch1__count_lc_skip = \port$5306$0 [127:112];
+  assign ch1__count_lc_zero = \port$5306$0 [143:128];
+  assign ch1__count_spw_mismatch = \port$5306$0 [159:144];
+  assign ch1__count_overrun = \port$5306$0 [175:160];
+  assign ch1__count_aborted = \port$5306$0 [191:176];
+  assign ch1__count_no_stop = \port$5306$0 [207:192];
+  assign ch1__count_noisy_line = \port$5306$0 [223:208];
+  assign ch1__count_delay_jump = \port$5306$0 [239:224];
+  assign ch1__count_noise_event = \port$5306$0 [255:240];
+  assign ch1__ca_status = \port$5438$0 [2:0];
+  assign ch1__ca_bytes_done = \port$5438$0 [9:3];
+  assign ch1__count_ca_crc4_error = \port$5306$0 [271:256];
+  assign ch1__count_ca_no_answer = \port$5306$0 [287:272];
+  assign ch1__count_ca_refused = \port$5306$0 [303:288];
+  assign ch1__count_ca_aborted = \port$5306$0 [319:304];
+  assign ch1__count_ca_data_fault = \port$5306$0 [335:320];
   assign glob__trigger = g_trigger_start;
   assign ch0__start = ch0_ctrl_start;
   assign ch0__abort_cycle = ch0_ctrl_abort;
@@ -5358,10 +5875,13 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign ch0__cfg_end_check = ch0_cfg_checks_end_check;
   assign ch0__cfg_spw_check = ch0_cfg_checks_spw_check;
   assign ch0__cfg_spw_tolerance = ch0_cfg_checks_spw_tolerance;
+  assign ch0__cfg_noise_limit = ch0_cfg_checks_noise_limit;
+  assign ch0__cfg_delay_tolerance = ch0_cfg_checks_delay_tolerance;
+  assign ch0__cfg_quiet_time = ch0_cfg_quiet_quiet_time;
   assign ch0__ca_slave_id = ch0_ca_request_slave_id;
   assign ch0__ca_address = ch0_ca_request_address;
   assign ch0__ca_count = ch0_ca_request_count;
-  assign ch0__ca_write = \ch0_ca_request_write$80 ;
+  assign ch0__ca_write = \ch0_ca_request_write$85 ;
   assign ch0__ca_start = ch0_ca_ctrl_start;
   assign ch0__ca_abort = ch0_ca_ctrl_abort;
   assign ch0__ca_wbuf_data = write_data;
@@ -5389,10 +5909,13 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign ch1__cfg_end_check = ch1_cfg_checks_end_check;
   assign ch1__cfg_spw_check = ch1_cfg_checks_spw_check;
   assign ch1__cfg_spw_tolerance = ch1_cfg_checks_spw_tolerance;
+  assign ch1__cfg_noise_limit = ch1_cfg_checks_noise_limit;
+  assign ch1__cfg_delay_tolerance = ch1_cfg_checks_delay_tolerance;
+  assign ch1__cfg_quiet_time = ch1_cfg_quiet_quiet_time;
   assign ch1__ca_slave_id = ch1_ca_request_slave_id;
   assign ch1__ca_address = ch1_ca_request_address;
   assign ch1__ca_count = ch1_ca_request_count;
-  assign ch1__ca_write = \ch1_ca_request_write$241 ;
+  assign ch1__ca_write = \ch1_ca_request_write$265 ;
   assign ch1__ca_start = ch1_ca_ctrl_start;
   assign ch1__ca_abort = ch1_ca_ctrl_abort;
   assign ch1__ca_wbuf_addr = write_addr[3:0];
@@ -5403,20 +5926,20 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign \$9  = \$8 ;
   assign \$14  = 32'd0;
   assign \$15  = \$13 ;
-  assign \$367  = \$366 ;
-  assign \$369  = \$368 ;
-  assign \$371  = \$370 ;
-  assign \$408  = \$407 ;
-  assign \$410  = \$409 ;
-  assign \$412  = \$411 ;
-  assign \$107  = \$106 ;
-  assign \$160  = 32'd0;
-  assign \$161  = \$159 ;
-  assign \$261  = \$260 ;
-  assign \$314  = 32'd0;
-  assign \$315  = \$313 ;
+  assign \$396  = \$395 ;
+  assign \$398  = \$397 ;
+  assign \$400  = \$399 ;
+  assign \$440  = \$439 ;
+  assign \$442  = \$441 ;
+  assign \$444  = \$443 ;
+  assign \$114  = \$113 ;
+  assign \$173  = 32'd0;
+  assign \$174  = \$172 ;
+  assign \$281  = \$280 ;
+  assign \$340  = 32'd0;
+  assign \$341  = \$339 ;
   assign g_irq = 1'h0;
-  assign \$413  = g_read_data;
+  assign \$445  = g_read_data;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -5664,16 +6187,16 @@ module \biss_master_axil.bus (axil__awvalid, axil__wdata, axil__wstrb, axil__wva
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0 (slo, clk, rst, \trigger$159 , ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__ca_busy, regs__ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period
-, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort
-, regs__done_count, ma, regs__done, \port$4189$0 , \port$4202$0 , regs__ca_done, \port$4316$0 , ca_rbuf_addr);
+module \biss_master_axil.ch0 (slo, clk, rst, \trigger$179 , ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__ca_busy, regs__ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period
+, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_quiet_time, ca_slave_id, ca_address, ca_count
+, ca_write, ca_start, ca_abort, regs__done_count, ma, regs__done, \port$4731$0 , \port$4744$0 , regs__ca_done, \port$4876$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$28  = 0;
   wire \$1 ;
   wire [16:0] \$2 ;
   reg \$3 ;
   reg [15:0] \$4 ;
-  wire [160:0] \$5 ;
-  wire [287:0] \$6 ;
+  wire [186:0] \$5 ;
+  wire [335:0] \$6 ;
   wire [9:0] \$7 ;
   reg abort_cycle = 1'h0;
   wire busy;
@@ -5719,10 +6242,16 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$159 , ca_wbuf_en, ca_rbuf_
   wire [23:0] cfg_break_time;
   input [11:0] cfg_delay_limit;
   wire [11:0] cfg_delay_limit;
+  input [3:0] cfg_delay_tolerance;
+  wire [3:0] cfg_delay_tolerance;
   input cfg_end_check;
   wire cfg_end_check;
   input [15:0] cfg_ma_half_period;
   wire [15:0] cfg_ma_half_period;
+  input [3:0] cfg_noise_limit;
+  wire [3:0] cfg_noise_limit;
+  input [11:0] cfg_quiet_time;
+  wire [11:0] cfg_quiet_time;
   input [23:0] cfg_request_period;
   wire [23:0] cfg_request_period;
   input cfg_spw_check;
@@ -5770,6 +6299,7 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$159 , ca_wbuf_en, ca_rbuf_
   wire [15:0] count_ca_refused;
   wire [15:0] count_crc_word0;
   wire [15:0] count_crc_word1;
+  wire [15:0] count_delay_jump;
   wire [15:0] count_delay_range;
   wire [15:0] count_lc_repeat;
   wire [15:0] count_lc_skip;
@@ -5777,9 +6307,13 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$159 , ca_wbuf_en, ca_rbuf_
   wire [15:0] count_no_ack;
   wire [15:0] count_no_start;
   wire [15:0] count_no_stop;
+  wire [15:0] count_noise_event;
+  wire [15:0] count_noisy_line;
   wire [15:0] count_overrun;
   wire [15:0] count_slo_stuck_low;
   wire [15:0] count_spw_mismatch;
+  wire delay_settled;
+  wire [7:0] delay_spread;
   wire done;
   wire [5:0] lc;
   wire lc_repeat;
@@ -5788,15 +6322,16 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$159 , ca_wbuf_en, ca_rbuf_
   wire [12:0] line_delay;
   output ma;
   wire ma;
-  wire \ma$162 ;
+  wire \ma$182 ;
+  wire [3:0] noise_events;
   input periodic;
   wire periodic;
-  output [160:0] \port$4189$0 ;
-  wire [160:0] \port$4189$0 ;
-  output [287:0] \port$4202$0 ;
-  wire [287:0] \port$4202$0 ;
-  output [9:0] \port$4316$0 ;
-  wire [9:0] \port$4316$0 ;
+  output [186:0] \port$4731$0 ;
+  wire [186:0] \port$4731$0 ;
+  output [335:0] \port$4744$0 ;
+  wire [335:0] \port$4744$0 ;
+  output [9:0] \port$4876$0 ;
+  wire [9:0] \port$4876$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -5830,8 +6365,11 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$159 , ca_wbuf_en, ca_rbuf_
   wire [23:0] regs__cfg_ack_limit;
   wire [23:0] regs__cfg_break_time;
   wire [11:0] regs__cfg_delay_limit;
+  wire [3:0] regs__cfg_delay_tolerance;
   wire regs__cfg_end_check;
   wire [15:0] regs__cfg_ma_half_period;
+  wire [3:0] regs__cfg_noise_limit;
+  wire [11:0] regs__cfg_quiet_time;
   wire [23:0] regs__cfg_request_period;
   wire regs__cfg_spw_check;
   wire [7:0] regs__cfg_spw_tolerance;
@@ -5864,6 +6402,7 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$159 , ca_wbuf_en, ca_rbuf_
   wire [15:0] regs__count_ca_refused;
   wire [15:0] regs__count_crc_word0;
   wire [15:0] regs__count_crc_word1;
+  wire [15:0] regs__count_delay_jump;
   wire [15:0] regs__count_delay_range;
   wire [15:0] regs__count_lc_repeat;
   wire [15:0] regs__count_lc_skip;
@@ -5871,9 +6410,13 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$159 , ca_wbuf_en, ca_rbuf_
   wire [15:0] regs__count_no_ack;
   wire [15:0] regs__count_no_start;
   wire [15:0] regs__count_no_stop;
+  wire [15:0] regs__count_noise_event;
+  wire [15:0] regs__count_noisy_line;
   wire [15:0] regs__count_overrun;
   wire [15:0] regs__count_slo_stuck_low;
   wire [15:0] regs__count_spw_mismatch;
+  wire regs__delay_settled;
+  wire [7:0] regs__delay_spread;
   output regs__done;
   wire regs__done;
   output [15:0] regs__done_count;
@@ -5885,7 +6428,9 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$159 , ca_wbuf_en, ca_rbuf_
   wire regs__lc_skip;
   wire regs__lc_zero;
   wire [12:0] regs__line_delay;
+  wire [3:0] regs__noise_events;
   wire regs__periodic;
+  wire [12:0] regs__settled_delay;
   wire regs__spw_mismatch;
   wire regs__start;
   wire [3:0] regs__status;
@@ -5902,9 +6447,10 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$159 , ca_wbuf_en, ca_rbuf_
   wire [39:0] regs__word1_position;
   input rst;
   wire rst;
+  wire [12:0] settled_delay;
   input slo;
   wire slo;
-  wire \slo$164 ;
+  wire \slo$184 ;
   wire spw_mismatch;
   input start;
   wire start;
@@ -5922,11 +6468,13 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$159 , ca_wbuf_en, ca_rbuf_
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
+  (* enum_value_1101 = "NOISY_LINE" *)
+  (* enum_value_1110 = "DELAY_JUMP" *)
   wire [3:0] status;
   wire [31:0] timestamp;
   wire trigger;
-  input \trigger$159 ;
-  wire \trigger$159 ;
+  input \trigger$179 ;
+  wire \trigger$179 ;
   wire valid;
   wire word0_crc_ok;
   wire word0_ne;
@@ -5936,7 +6484,7 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$159 , ca_wbuf_en, ca_rbuf_
   wire word1_ne;
   wire word1_nw;
   wire [39:0] word1_position;
-  assign trigger = \trigger$159  & regs__trigger_enable;
+  assign trigger = \trigger$179  & regs__trigger_enable;
   assign \$2  = regs__done_count + 1'h1;
   always @(posedge clk)
     abort_cycle <= \$3 ;
@@ -5946,8 +6494,8 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$159 , ca_wbuf_en, ca_rbuf_
   assign regs__frame_error = regs__done & \$1 ;
   \biss_master_axil.ch0.core  core (
     .abort(abort_cycle),
-    .\abort$187 (ca_abort),
-    .\busy$237 (regs__busy),
+    .\abort$222 (ca_abort),
+    .\busy$276 (regs__busy),
     .ca_address(ca_address),
     .ca_count(ca_count),
     .ca_done(regs__ca_done),
@@ -5960,8 +6508,11 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$159 , ca_wbuf_en, ca_rbuf_
     .cfg_ack_limit(cfg_ack_limit),
     .cfg_break_time(cfg_break_time),
     .cfg_delay_limit(cfg_delay_limit),
+    .cfg_delay_tolerance(cfg_delay_tolerance),
     .cfg_end_check(cfg_end_check),
     .cfg_ma_half_period(cfg_ma_half_period),
+    .cfg_noise_limit(cfg_noise_limit),
+    .cfg_quiet_time(cfg_quiet_time),
     .cfg_request_period(cfg_request_period),
     .cfg_spw_check(cfg_spw_check),
     .cfg_spw_tolerance(cfg_spw_tolerance),
@@ -5975,24 +6526,24 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$159 , ca_wbuf_en, ca_rbuf_
     .cfg_w1_enable(cfg_w1_enable),
     .cfg_w1_lc(cfg_w1_lc),
     .cfg_w1_nenw(cfg_w1_nenw),
-    .\clear$214 (clear_counters),
+    .\clear$250 (clear_counters),
     .clk(clk),
     .config_error(regs__config_error),
     .counts(\$6 ),
-    .\done$240 (regs__done),
+    .\done$279 (regs__done),
     .frames(regs__ca_busy),
     .ma(ma),
-    .\periodic$24 (periodic),
+    .\periodic$27 (periodic),
     .rbuf_addr(ca_rbuf_addr),
     .rbuf_en(ca_rbuf_en),
     .result(\$7 ),
-    .\result$245 (\$5 ),
+    .\result$284 (\$5 ),
     .rst(rst),
     .slo(slo),
     .start(start),
-    .\start$185 (ca_start),
+    .\start$220 (ca_start),
     .trigger(trigger),
-    .\valid$242 (valid)
+    .\valid$281 (valid)
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
@@ -6042,40 +6593,51 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$159 , ca_wbuf_en, ca_rbuf_
   assign regs__cfg_end_check = cfg_end_check;
   assign regs__cfg_spw_check = cfg_spw_check;
   assign regs__cfg_spw_tolerance = cfg_spw_tolerance;
+  assign regs__cfg_noise_limit = cfg_noise_limit;
+  assign regs__cfg_delay_tolerance = cfg_delay_tolerance;
+  assign regs__cfg_quiet_time = cfg_quiet_time;
   assign regs__status = \$5 [3:0];
   assign status = \$5 [3:0];
   assign regs__cds = \$5 [49];
   assign cds = \$5 [49];
-  assign regs__word0_ne = \$5 [105];
-  assign word0_ne = \$5 [105];
-  assign regs__word0_nw = \$5 [106];
-  assign word0_nw = \$5 [106];
-  assign regs__word0_crc_ok = \$5 [107];
-  assign word0_crc_ok = \$5 [107];
-  assign regs__word1_ne = \$5 [148];
-  assign word1_ne = \$5 [148];
-  assign regs__word1_nw = \$5 [149];
-  assign word1_nw = \$5 [149];
-  assign regs__word1_crc_ok = \$5 [150];
-  assign word1_crc_ok = \$5 [150];
-  assign regs__lc_repeat = \$5 [157];
-  assign lc_repeat = \$5 [157];
-  assign regs__lc_skip = \$5 [158];
-  assign lc_skip = \$5 [158];
-  assign regs__lc_zero = \$5 [159];
-  assign lc_zero = \$5 [159];
-  assign regs__spw_mismatch = \$5 [160];
-  assign spw_mismatch = \$5 [160];
-  assign regs__lc = \$5 [156:151];
-  assign lc = \$5 [156:151];
+  assign regs__word0_ne = \$5 [131];
+  assign word0_ne = \$5 [131];
+  assign regs__word0_nw = \$5 [132];
+  assign word0_nw = \$5 [132];
+  assign regs__word0_crc_ok = \$5 [133];
+  assign word0_crc_ok = \$5 [133];
+  assign regs__word1_ne = \$5 [174];
+  assign word1_ne = \$5 [174];
+  assign regs__word1_nw = \$5 [175];
+  assign word1_nw = \$5 [175];
+  assign regs__word1_crc_ok = \$5 [176];
+  assign word1_crc_ok = \$5 [176];
+  assign regs__lc_repeat = \$5 [183];
+  assign lc_repeat = \$5 [183];
+  assign regs__lc_skip = \$5 [184];
+  assign lc_skip = \$5 [184];
+  assign regs__lc_zero = \$5 [185];
+  assign lc_zero = \$5 [185];
+  assign regs__spw_mismatch = \$5 [186];
+  assign spw_mismatch = \$5 [186];
+  assign regs__lc = \$5 [182:177];
+  assign lc = \$5 [182:177];
   assign regs__line_delay = \$5 [48:36];
   assign line_delay = \$5 [48:36];
-  assign regs__word0_position = \$5 [104:50];
-  assign word0_position = \$5 [104:50];
-  assign regs__word1_position = \$5 [147:108];
-  assign word1_position = \$5 [147:108];
+  assign regs__word0_position = \$5 [130:76];
+  assign word0_position = \$5 [130:76];
+  assign regs__word1_position = \$5 [173:134];
+  assign word1_position = \$5 [173:134];
   assign regs__timestamp = \$5 [35:4];
   assign timestamp = \$5 [35:4];
+  assign regs__noise_events = \$5 [53:50];
+  assign noise_events = \$5 [53:50];
+  assign regs__delay_settled = \$5 [54];
+  assign delay_settled = \$5 [54];
+  assign regs__delay_spread = \$5 [75:68];
+  assign delay_spread = \$5 [75:68];
+  assign regs__settled_delay = \$5 [67:55];
+  assign settled_delay = \$5 [67:55];
   assign regs__count_crc_word0 = \$6 [15:0];
   assign count_crc_word0 = \$6 [15:0];
   assign regs__count_crc_word1 = \$6 [31:16];
@@ -6102,6 +6664,12 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$159 , ca_wbuf_en, ca_rbuf_
   assign count_aborted = \$6 [191:176];
   assign regs__count_no_stop = \$6 [207:192];
   assign count_no_stop = \$6 [207:192];
+  assign regs__count_noisy_line = \$6 [223:208];
+  assign count_noisy_line = \$6 [223:208];
+  assign regs__count_delay_jump = \$6 [239:224];
+  assign count_delay_jump = \$6 [239:224];
+  assign regs__count_noise_event = \$6 [255:240];
+  assign count_noise_event = \$6 [255:240];
   assign regs__ca_slave_id = ca_slave_id;
   assign regs__ca_address = ca_address;
   assign regs__ca_count = ca_count;
@@ -6113,43 +6681,49 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$159 , ca_wbuf_en, ca_rbuf_
   assign ca_status = \$7 [2:0];
   assign regs__ca_bytes_done = \$7 [9:3];
   assign ca_bytes_done = \$7 [9:3];
-  assign regs__count_ca_crc4_error = \$6 [223:208];
-  assign count_ca_crc4_error = \$6 [223:208];
-  assign regs__count_ca_no_answer = \$6 [239:224];
-  assign count_ca_no_answer = \$6 [239:224];
-  assign regs__count_ca_refused = \$6 [255:240];
-  assign count_ca_refused = \$6 [255:240];
-  assign regs__count_ca_aborted = \$6 [271:256];
-  assign count_ca_aborted = \$6 [271:256];
-  assign regs__count_ca_data_fault = \$6 [287:272];
-  assign count_ca_data_fault = \$6 [287:272];
+  assign regs__count_ca_crc4_error = \$6 [271:256];
+  assign count_ca_crc4_error = \$6 [271:256];
+  assign regs__count_ca_no_answer = \$6 [287:272];
+  assign count_ca_no_answer = \$6 [287:272];
+  assign regs__count_ca_refused = \$6 [303:288];
+  assign count_ca_refused = \$6 [303:288];
+  assign regs__count_ca_aborted = \$6 [319:304];
+  assign count_ca_aborted = \$6 [319:304];
+  assign regs__count_ca_data_fault = \$6 [335:320];
+  assign count_ca_data_fault = \$6 [335:320];
   assign regs__ca_wbuf_addr = ca_wbuf_addr;
   assign regs__ca_wbuf_data = ca_wbuf_data;
   assign regs__ca_wbuf_en = ca_wbuf_en;
   assign regs__ca_rbuf_addr = ca_rbuf_addr;
   assign ca_rbuf_data = regs__ca_rbuf_data;
   assign regs__ca_rbuf_en = ca_rbuf_en;
-  assign \ma$162  = ma;
-  assign \slo$164  = slo;
-  assign \port$4189$0  = \$5 ;
-  assign \port$4202$0  = \$6 ;
-  assign \port$4316$0  = \$7 ;
+  assign \ma$182  = ma;
+  assign \slo$184  = slo;
+  assign \port$4731$0  = \$5 ;
+  assign \port$4744$0  = \$6 ;
+  assign \port$4876$0  = \$7 ;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy$237 , config_error, frames, ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, \clear$214 , \periodic$24 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit
-, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, \start$185 , \abort$187 , abort, ma, \done$240 
-, \valid$242 , \result$245 , counts, ca_done, result, rbuf_addr);
+module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy$276 , config_error, frames, ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, \clear$250 , \periodic$27 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit
+, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_quiet_time, ca_slave_id, ca_address, ca_count, ca_write, \start$220 , \abort$222 
+, abort, ma, \done$279 , \valid$281 , \result$284 , counts, ca_done, result, rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$29  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
   wire \$12 ;
   wire \$13 ;
-  reg \$14 ;
-  reg \$15 ;
+  wire \$14 ;
+  wire \$15 ;
   wire \$16 ;
+  wire \$17 ;
+  wire \$18 ;
+  reg \$19 ;
   wire \$2 ;
+  reg \$20 ;
+  reg \$21 ;
+  wire \$22 ;
   wire \$3 ;
   wire \$4 ;
   wire \$5 ;
@@ -6159,25 +6733,25 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire \$9 ;
   input abort;
   wire abort;
-  input \abort$187 ;
-  wire \abort$187 ;
-  wire \abort$36 ;
+  input \abort$222 ;
+  wire \abort$222 ;
+  wire \abort$39 ;
   wire abort_cycle;
   wire ack_expired;
-  wire \ack_expired$68 ;
+  wire \ack_expired$71 ;
   wire [23:0] ack_limit;
-  wire [23:0] \ack_limit$89 ;
+  wire [23:0] \ack_limit$92 ;
   wire arm;
   reg \bit  = 1'h0;
-  wire \bit$265 ;
+  wire \bit$308 ;
   wire [5:0] bits;
   wire break_over;
-  wire \break_over$66 ;
+  wire \break_over$69 ;
   wire [23:0] break_time;
   wire busy;
-  wire \busy$196 ;
-  output \busy$237 ;
-  wire \busy$237 ;
+  wire \busy$231 ;
+  output \busy$276 ;
+  wire \busy$276 ;
   wire ca_abort;
   input [6:0] ca_address;
   wire [6:0] ca_address;
@@ -6212,16 +6786,19 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   input ca_write;
   wire ca_write;
   wire cdm;
-  wire \cdm$200 ;
+  wire \cdm$235 ;
   wire cdm_cycle;
   wire cds;
-  wire \cds$248 ;
-  wire [154:0] cfg;
+  wire \cds$287 ;
+  wire [174:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
   wire [11:0] \cfg.delay_limit ;
+  wire [3:0] \cfg.delay_tolerance ;
   wire \cfg.end_check ;
   wire [15:0] \cfg.ma_half_period ;
+  wire [3:0] \cfg.noise_limit ;
+  wire [11:0] \cfg.quiet_time ;
   wire [23:0] \cfg.request_period ;
   wire \cfg.spw_check ;
   wire [7:0] \cfg.spw_tolerance ;
@@ -6251,10 +6828,16 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire [23:0] cfg_break_time;
   input [11:0] cfg_delay_limit;
   wire [11:0] cfg_delay_limit;
+  input [3:0] cfg_delay_tolerance;
+  wire [3:0] cfg_delay_tolerance;
   input cfg_end_check;
   wire cfg_end_check;
   input [15:0] cfg_ma_half_period;
   wire [15:0] cfg_ma_half_period;
+  input [3:0] cfg_noise_limit;
+  wire [3:0] cfg_noise_limit;
+  input [11:0] cfg_quiet_time;
+  wire [11:0] cfg_quiet_time;
   input [23:0] cfg_request_period;
   wire [23:0] cfg_request_period;
   input cfg_spw_check;
@@ -6290,14 +6873,18 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   input cfg_w1_nenw;
   wire cfg_w1_nenw;
   wire check;
+  wire \check$148 ;
+  wire clean;
+  wire \clean$153 ;
   wire clear;
-  wire \clear$106 ;
-  input \clear$214 ;
-  wire \clear$214 ;
+  wire \clear$116 ;
+  input \clear$250 ;
+  wire \clear$250 ;
   wire clear_counters;
   input clk;
   wire clk;
   wire \clocking ;
+  wire close;
   output config_error;
   wire config_error;
   wire config_ok;
@@ -6309,6 +6896,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire [15:0] count_ca_refused;
   wire [15:0] count_crc_word0;
   wire [15:0] count_crc_word1;
+  wire [15:0] count_delay_jump;
   wire [15:0] count_delay_range;
   wire [15:0] count_lc_repeat;
   wire [15:0] count_lc_skip;
@@ -6316,11 +6904,13 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire [15:0] count_no_ack;
   wire [15:0] count_no_start;
   wire [15:0] count_no_stop;
+  wire [15:0] count_noise_event;
+  wire [15:0] count_noisy_line;
   wire [15:0] count_overrun;
   wire [15:0] count_slo_stuck_low;
   wire [15:0] count_spw_mismatch;
-  output [287:0] counts;
-  wire [287:0] counts;
+  output [335:0] counts;
+  wire [335:0] counts;
   wire [15:0] \counts.aborted ;
   wire [15:0] \counts.ca_aborted ;
   wire [15:0] \counts.ca_crc4_error ;
@@ -6329,6 +6919,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire [15:0] \counts.ca_refused ;
   wire [15:0] \counts.crc_word0 ;
   wire [15:0] \counts.crc_word1 ;
+  wire [15:0] \counts.delay_jump ;
   wire [15:0] \counts.delay_range ;
   wire [15:0] \counts.lc_repeat ;
   wire [15:0] \counts.lc_skip ;
@@ -6336,20 +6927,25 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire [15:0] \counts.no_ack ;
   wire [15:0] \counts.no_start ;
   wire [15:0] \counts.no_stop ;
+  wire [15:0] \counts.noise_event ;
+  wire [15:0] \counts.noisy_line ;
   wire [15:0] \counts.overrun ;
   wire [15:0] \counts.slo_stuck_low ;
   wire [15:0] \counts.spw_mismatch ;
   wire [39:0] cpw_top;
-  wire [39:0] \cpw_top$130 ;
+  wire [39:0] \cpw_top$162 ;
   wire [1:0] crc_error;
   wire [1:0] crc_ok;
-  wire [1:0] \crc_ok$145 ;
-  wire [154:0] cycle;
+  wire [1:0] \crc_ok$176 ;
+  wire [174:0] cycle;
   wire [23:0] \cycle.ack_limit ;
   wire [23:0] \cycle.break_time ;
   wire [11:0] \cycle.delay_limit ;
+  wire [3:0] \cycle.delay_tolerance ;
   wire \cycle.end_check ;
   wire [15:0] \cycle.ma_half_period ;
+  wire [3:0] \cycle.noise_limit ;
+  wire [11:0] \cycle.quiet_time ;
   wire [23:0] \cycle.request_period ;
   wire \cycle.spw_check ;
   wire [7:0] \cycle.spw_tolerance ;
@@ -6380,42 +6976,53 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* init = 1'h0 *)
   wire decoder_sample;
   wire [12:0] delay;
-  wire [12:0] \delay$95 ;
+  wire [12:0] \delay$147 ;
+  wire [12:0] \delay$98 ;
+  wire delay_jump;
   wire [11:0] delay_limit;
-  wire [11:0] \delay_limit$97 ;
+  wire [11:0] \delay_limit$100 ;
   wire delay_over;
-  wire \delay_over$76 ;
+  wire \delay_over$79 ;
+  wire delay_settled;
+  wire [7:0] delay_spread;
+  wire [16:0] delay_tolerance;
   wire done;
-  wire \done$198 ;
-  output \done$240 ;
-  wire \done$240 ;
-  wire \done$241 ;
+  wire \done$233 ;
+  output \done$279 ;
+  wire \done$279 ;
+  wire \done$280 ;
   wire doubtful;
   wire early;
-  wire \early$52 ;
+  wire \early$55 ;
+  wire enable;
   wire end_check;
   wire enough;
-  wire [17:0] events;
-  wire \events.aborted ;
-  wire \events.ca_aborted ;
-  wire \events.ca_crc4_error ;
-  wire \events.ca_data_fault ;
-  wire \events.ca_no_answer ;
-  wire \events.ca_refused ;
-  wire \events.crc_word0 ;
-  wire \events.crc_word1 ;
-  wire \events.delay_range ;
-  wire \events.lc_repeat ;
-  wire \events.lc_skip ;
-  wire \events.lc_zero ;
-  wire \events.no_ack ;
-  wire \events.no_start ;
-  wire \events.no_stop ;
-  wire \events.overrun ;
-  wire \events.slo_stuck_low ;
-  wire \events.spw_mismatch ;
+  wire \event ;
+  wire [3:0] events;
+  wire [20:0] \events$245 ;
+  wire \events$245.aborted ;
+  wire \events$245.ca_aborted ;
+  wire \events$245.ca_crc4_error ;
+  wire \events$245.ca_data_fault ;
+  wire \events$245.ca_no_answer ;
+  wire \events$245.ca_refused ;
+  wire \events$245.crc_word0 ;
+  wire \events$245.crc_word1 ;
+  wire \events$245.delay_jump ;
+  wire \events$245.delay_range ;
+  wire \events$245.lc_repeat ;
+  wire \events$245.lc_skip ;
+  wire \events$245.lc_zero ;
+  wire \events$245.no_ack ;
+  wire \events$245.no_start ;
+  wire \events$245.no_stop ;
+  wire \events$245.noise_event ;
+  wire \events$245.noisy_line ;
+  wire \events$245.overrun ;
+  wire \events$245.slo_stuck_low ;
+  wire \events$245.spw_mismatch ;
   wire fault;
-  wire \fault$141 ;
+  wire \fault$172 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -6430,6 +7037,8 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
+  (* enum_value_1101 = "NOISY_LINE" *)
+  (* enum_value_1110 = "DELAY_JUMP" *)
   wire [3:0] fault_status;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
@@ -6445,7 +7054,9 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
-  wire [3:0] \fault_status$143 ;
+  (* enum_value_1101 = "NOISY_LINE" *)
+  (* enum_value_1110 = "DELAY_JUMP" *)
+  wire [3:0] \fault_status$174 ;
   wire [6:0] faults;
   wire \faults.aborted ;
   wire \faults.bad_config ;
@@ -6455,15 +7066,19 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire \faults.no_stop ;
   wire \faults.slo_stuck_low ;
   wire first_rise;
-  wire \first_rise$171 ;
+  wire \first_rise$206 ;
   wire [31:0] first_rise_time;
-  wire [160:0] frame;
+  wire [186:0] frame;
   wire \frame.cds ;
+  wire \frame.delay_settled ;
+  wire [7:0] \frame.delay_spread ;
   wire [5:0] \frame.lc ;
   wire \frame.lc_repeat ;
   wire \frame.lc_skip ;
   wire \frame.lc_zero ;
   wire [12:0] \frame.line_delay ;
+  wire [3:0] \frame.noise_events ;
+  wire [12:0] \frame.settled_delay ;
   wire \frame.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
@@ -6479,6 +7094,8 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
+  (* enum_value_1101 = "NOISY_LINE" *)
+  (* enum_value_1110 = "DELAY_JUMP" *)
   wire [3:0] \frame.status ;
   wire [31:0] \frame.timestamp ;
   wire [57:0] \frame.word0 ;
@@ -6500,38 +7117,45 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   output frames;
   wire frames;
   wire [15:0] half_period;
-  wire [15:0] \half_period$112 ;
+  wire [15:0] \half_period$122 ;
   wire held;
   wire hold;
   wire idle;
-  wire \idle$20 ;
-  wire \idle$29 ;
+  wire \idle$23 ;
+  wire \idle$32 ;
   wire in_clock;
-  wire \in_clock$83 ;
+  wire \in_clock$86 ;
+  wire jump;
   wire [5:0] lc;
-  wire [5:0] \lc$117 ;
-  wire [5:0] \lc$257 ;
+  wire [5:0] \lc$127 ;
+  wire [5:0] \lc$300 ;
   wire lc_check;
   wire lc_load;
   wire [5:0] lc_next;
-  wire [5:0] \lc_next$119 ;
+  wire [5:0] \lc_next$129 ;
   wire lc_repeat;
-  wire \lc_repeat$258 ;
+  wire \lc_repeat$301 ;
   wire lc_repeat_seen;
   wire lc_skip;
-  wire \lc_skip$259 ;
+  wire \lc_skip$302 ;
   wire lc_skip_seen;
   wire lc_zero;
-  wire \lc_zero$260 ;
+  wire \lc_zero$303 ;
   wire lc_zero_seen;
+  wire learn;
   wire level;
+  wire \level$138 ;
+  wire [3:0] limit;
   wire [12:0] line_delay;
-  wire [154:0] live;
+  wire [174:0] live;
   wire [23:0] \live.ack_limit ;
   wire [23:0] \live.break_time ;
   wire [11:0] \live.delay_limit ;
+  wire [3:0] \live.delay_tolerance ;
   wire \live.end_check ;
   wire [15:0] \live.ma_half_period ;
+  wire [3:0] \live.noise_limit ;
+  wire [11:0] \live.quiet_time ;
   wire [23:0] \live.request_period ;
   wire \live.spw_check ;
   wire [7:0] \live.spw_tolerance ;
@@ -6557,13 +7181,13 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire \live.w1_enable ;
   wire load;
   wire locked;
-  wire \locked$50 ;
+  wire \locked$53 ;
   output ma;
   wire ma;
-  wire \ma$236 ;
+  wire \ma$275 ;
   wire ma_arm;
   wire ma_busy;
-  wire \ma_busy$78 ;
+  wire \ma_busy$81 ;
   wire ma_enough;
   wire ma_held;
   wire ma_hold;
@@ -6571,51 +7195,67 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire match;
   wire [1:0] ne;
   wire no_start_expired;
-  wire \no_start_expired$70 ;
+  wire \no_start_expired$73 ;
   wire [24:0] no_start_limit;
-  wire [24:0] \no_start_limit$93 ;
+  wire [24:0] \no_start_limit$96 ;
+  wire noise;
+  wire [3:0] noise_events;
+  wire noisy;
+  wire \noisy$155 ;
   wire [1:0] nw;
   wire ok;
   wire overrun;
-  wire \overrun$239 ;
+  wire \overrun$278 ;
   wire [23:0] period;
   wire periodic;
-  input \periodic$24 ;
-  wire \periodic$24 ;
+  input \periodic$27 ;
+  wire \periodic$27 ;
+  wire quiet;
+  wire \quiet$105 ;
+  wire [11:0] quiet_limit;
+  wire quiet_live;
+  wire \quiet_live$107 ;
+  wire [11:0] quiet_time;
+  wire [11:0] quiet_time_live;
   input [3:0] rbuf_addr;
   wire [3:0] rbuf_addr;
   wire [31:0] rbuf_data;
   input rbuf_en;
   wire rbuf_en;
+  wire rearm;
   wire receiver_clear;
   wire \repeat ;
   wire report;
-  wire \report$153 ;
+  wire \report$184 ;
   wire report_delay;
-  wire \report_delay$156 ;
+  wire \report_delay$187 ;
   wire report_frame;
-  wire \report_frame$139 ;
-  wire \report_frame$154 ;
+  wire \report_frame$170 ;
+  wire \report_frame$185 ;
   wire request;
-  wire [17:0] \request$173 ;
-  wire [6:0] \request$173.address ;
-  wire [6:0] \request$173.count ;
-  wire [2:0] \request$173.slave_id ;
-  wire \request$173.write ;
-  wire \request$35 ;
+  wire [17:0] \request$208 ;
+  wire [6:0] \request$208.address ;
+  wire [6:0] \request$208.count ;
+  wire [2:0] \request$208.slave_id ;
+  wire \request$208.write ;
+  wire \request$38 ;
   wire restart;
   wire restart_timer;
   output [9:0] result;
   wire [9:0] result;
-  output [160:0] \result$245 ;
-  wire [160:0] \result$245 ;
-  wire \result$245.cds ;
-  wire [5:0] \result$245.lc ;
-  wire \result$245.lc_repeat ;
-  wire \result$245.lc_skip ;
-  wire \result$245.lc_zero ;
-  wire [12:0] \result$245.line_delay ;
-  wire \result$245.spw_mismatch ;
+  output [186:0] \result$284 ;
+  wire [186:0] \result$284 ;
+  wire \result$284.cds ;
+  wire \result$284.delay_settled ;
+  wire [7:0] \result$284.delay_spread ;
+  wire [5:0] \result$284.lc ;
+  wire \result$284.lc_repeat ;
+  wire \result$284.lc_skip ;
+  wire \result$284.lc_zero ;
+  wire [12:0] \result$284.line_delay ;
+  wire [3:0] \result$284.noise_events ;
+  wire [12:0] \result$284.settled_delay ;
+  wire \result$284.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -6630,18 +7270,20 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
-  wire [3:0] \result$245.status ;
-  wire [31:0] \result$245.timestamp ;
-  wire [57:0] \result$245.word0 ;
-  wire \result$245.word0.crc_ok ;
-  wire \result$245.word0.ne ;
-  wire \result$245.word0.nw ;
-  wire [54:0] \result$245.word0.position ;
-  wire [42:0] \result$245.word1 ;
-  wire \result$245.word1.crc_ok ;
-  wire \result$245.word1.ne ;
-  wire \result$245.word1.nw ;
-  wire [39:0] \result$245.word1.position ;
+  (* enum_value_1101 = "NOISY_LINE" *)
+  (* enum_value_1110 = "DELAY_JUMP" *)
+  wire [3:0] \result$284.status ;
+  wire [31:0] \result$284.timestamp ;
+  wire [57:0] \result$284.word0 ;
+  wire \result$284.word0.crc_ok ;
+  wire \result$284.word0.ne ;
+  wire \result$284.word0.nw ;
+  wire [54:0] \result$284.word0.position ;
+  wire [42:0] \result$284.word1 ;
+  wire \result$284.word1.crc_ok ;
+  wire \result$284.word1.ne ;
+  wire \result$284.word1.nw ;
+  wire [39:0] \result$284.word1.position ;
   wire [6:0] \result.bytes_done ;
   (* enum_base_type = "AccessStatus" *)
   (* enum_value_000 = "OK" *)
@@ -6653,41 +7295,47 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* enum_value_110 = "BAD_REQUEST" *)
   wire [2:0] \result.status ;
   wire resync;
-  wire \resync$125 ;
+  wire \resync$135 ;
   wire [15:0] rises;
-  wire [15:0] \rises$105 ;
+  wire [15:0] \rises$115 ;
   input rst;
   wire rst;
   wire run;
   reg sample = 1'h0;
-  wire \sample$264 ;
+  wire \sample$307 ;
+  wire sampler_noise;
   wire second_rise;
+  wire settled;
+  wire [12:0] settled_delay;
+  wire [12:0] \settled_delay$290 ;
   wire skip;
   input slo;
   wire slo;
-  wire \slo$31 ;
-  wire \slo$41 ;
-  wire \slo$77 ;
+  wire \slo$34 ;
+  wire \slo$44 ;
+  wire \slo$80 ;
   wire slo_stuck;
-  wire \slo_stuck$72 ;
+  wire \slo_stuck$75 ;
   wire slo_stuck_live;
-  wire \slo_stuck_live$74 ;
+  wire \slo_stuck_live$77 ;
   wire slots_full;
-  wire \slots_full$58 ;
+  wire \slots_full$61 ;
+  wire [7:0] spread;
   wire [39:0] spw;
   wire spw_match;
   wire spw_mismatch;
-  wire \spw_mismatch$261 ;
+  wire \spw_mismatch$304 ;
   input start;
   wire start;
-  input \start$185 ;
-  wire \start$185 ;
-  wire \start$22 ;
+  input \start$220 ;
+  wire \start$220 ;
+  wire \start$25 ;
   wire [15:0] start_slot;
-  wire [15:0] \start_slot$103 ;
+  wire [15:0] \start_slot$113 ;
   wire started;
-  wire \started$101 ;
-  wire \started$56 ;
+  wire \started$111 ;
+  wire \started$59 ;
+  reg started_before = 1'h0;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -6702,6 +7350,8 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
+  (* enum_value_1101 = "NOISY_LINE" *)
+  (* enum_value_1110 = "DELAY_JUMP" *)
   wire [3:0] status;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
@@ -6717,26 +7367,31 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
-  wire [3:0] \status$244 ;
+  (* enum_value_1101 = "NOISY_LINE" *)
+  (* enum_value_1110 = "DELAY_JUMP" *)
+  wire [3:0] \status$283 ;
   wire stop_bit;
-  wire \stop_bit$62 ;
+  wire \stop_bit$65 ;
   wire stopped;
-  wire \stopped$60 ;
+  wire \stopped$63 ;
   wire [23:0] timeout_limit;
-  wire [23:0] \timeout_limit$91 ;
+  wire [23:0] \timeout_limit$94 ;
   wire [23:0] timeout_live;
   wire timer_clear;
   wire [31:0] timestamp;
-  wire [7:0] tolerance;
+  wire [16:0] tolerance;
+  wire [7:0] \tolerance$166 ;
   input trigger;
   wire trigger;
-  wire \trigger$33 ;
+  wire \trigger$36 ;
   wire valid;
-  wire \valid$158 ;
-  output \valid$242 ;
-  wire \valid$242 ;
+  wire \valid$189 ;
+  output \valid$281 ;
+  wire \valid$281 ;
   wire valid_out;
   wire w1_enable;
+  wire waiting;
+  wire watch;
   wire [39:0] wbuf;
   wire [3:0] \wbuf.addr ;
   wire [31:0] \wbuf.data ;
@@ -6750,28 +7405,28 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire word1_nw;
   wire [39:0] word1_position;
   wire [1:0] word_count;
-  wire [1:0] \word_count$115 ;
+  wire [1:0] \word_count$125 ;
   wire [1:0] word_crc_ok;
   wire [19:0] words;
-  wire [19:0] \words$127 ;
-  wire [9:0] \words$127[0] ;
+  wire [19:0] \words$159 ;
+  wire [9:0] \words$159[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
-  wire [1:0] \words$127[0].crc ;
-  wire [5:0] \words$127[0].data_bits ;
-  wire \words$127[0].lc ;
-  wire \words$127[0].nenw ;
-  wire [9:0] \words$127[1] ;
+  wire [1:0] \words$159[0].crc ;
+  wire [5:0] \words$159[0].data_bits ;
+  wire \words$159[0].lc ;
+  wire \words$159[0].nenw ;
+  wire [9:0] \words$159[1] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
-  wire [1:0] \words$127[1].crc ;
-  wire [5:0] \words$127[1].data_bits ;
-  wire \words$127[1].lc ;
-  wire \words$127[1].nenw ;
+  wire [1:0] \words$159[1].crc ;
+  wire [5:0] \words$159[1].data_bits ;
+  wire \words$159[1].lc ;
+  wire \words$159[1].nenw ;
   wire [9:0] \words[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
@@ -6791,35 +7446,47 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire \words[1].lc ;
   wire \words[1].nenw ;
   wire zero;
-  assign periodic = \periodic$24  | frames;
-  assign \$1  = report_frame & spw_mismatch;
-  assign \$2  = result[2:0] == 1'h1;
-  assign \$3  = ca_done & \$2 ;
-  assign \$4  = result[2:0] == 2'h2;
-  assign \$5  = ca_done & \$4 ;
-  assign \$6  = result[2:0] == 2'h3;
-  assign \$7  = ca_done & \$6 ;
-  assign \$8  = result[2:0] == 3'h4;
-  assign \$9  = ca_done & \$8 ;
-  assign \$10  = result[2:0] == 3'h5;
-  assign \$11  = ca_done & \$10 ;
-  assign \busy$237  = ~ idle;
+  assign periodic = \periodic$27  | frames;
+  assign enable = cycle[144:141] != 4'hf;
+  assign rearm = cfg_delay_tolerance == 4'hf;
+  assign \$1  = ~ started_before;
+  assign \check$148  = started & \$1 ;
+  assign \$2  = learn & spw_mismatch;
+  assign \$3  = status == 4'hd;
+  assign \$4  = learn & \$3 ;
+  assign \$5  = status == 4'he;
+  assign \$6  = learn & \$5 ;
+  assign \$7  = result[2:0] == 1'h1;
+  assign \$8  = ca_done & \$7 ;
+  assign \$9  = result[2:0] == 2'h2;
+  assign \$10  = ca_done & \$9 ;
+  assign \$11  = result[2:0] == 2'h3;
+  assign \$12  = ca_done & \$11 ;
+  assign \$13  = result[2:0] == 3'h4;
+  assign \$14  = ca_done & \$13 ;
+  assign \$15  = result[2:0] == 3'h5;
+  assign \$16  = ca_done & \$15 ;
+  assign \busy$276  = ~ idle;
   assign config_error = ~ config_ok;
-  assign \$12  = ~ \clear$106 ;
-  assign \$13  = \sample$264  & \$12 ;
+  assign \$17  = ~ \clear$116 ;
+  assign \$18  = \sample$307  & \$17 ;
   always @(posedge clk)
-    sample <= \$14 ;
+    sample <= \$19 ;
   always @(posedge clk)
-    \bit  <= \$15 ;
+    \bit  <= \$20 ;
+  always @(posedge clk)
+    started_before <= \$21 ;
   \biss_master_axil.ch0.core.config  \config  (
     .ack_limit(ack_limit),
     .clk(clk),
     .cycle(cycle),
     .delay_limit(delay_limit),
+    .delay_tolerance(tolerance),
     .idle(idle),
     .live(live),
     .no_start_limit(no_start_limit),
     .ok(config_ok),
+    .quiet_time(quiet_limit),
     .rst(rst),
     .timeout_limit(timeout_limit),
     .word_count(word_count)
@@ -6850,27 +7517,30 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .ma_hold(hold),
     .ma_run(run),
     .no_start_expired(no_start_expired),
-    .receiver_clear(\clear$106 ),
+    .quiet(quiet),
+    .quiet_live(quiet_live),
+    .receiver_clear(\clear$116 ),
     .report_delay(report_delay),
-    .report_frame(report_frame),
+    .report_frame(learn),
     .request(request),
     .restart_timer(restart),
     .resync(resync),
     .rst(rst),
-    .slo(\slo$41 ),
+    .slo(\slo$44 ),
     .slo_stuck(slo_stuck),
     .slo_stuck_live(slo_stuck_live),
     .slots_full(slots_full),
     .started(started),
     .stop_bit(stop_bit),
     .stopped(stopped),
-    .timer_clear(clear)
+    .timer_clear(clear),
+    .waiting(watch)
   );
   \biss_master_axil.ch0.core.counters  counters (
-    .clear(\clear$214 ),
+    .clear(\clear$250 ),
     .clk(clk),
     .counts(counts),
-    .events(events),
+    .events(\events$245 ),
     .rst(rst)
   );
   \biss_master_axil.ch0.core.decoder  decoder (
@@ -6886,7 +7556,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .lc_load(load),
     .ne(ne),
     .nw(nw),
-    .receiver_clear(\clear$106 ),
+    .receiver_clear(\clear$116 ),
     .rst(rst),
     .sample(sample),
     .slots_full(slots_full),
@@ -6897,10 +7567,37 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .word_count(word_count),
     .words(words)
   );
+  \biss_master_axil.ch0.core.delay_check  delay_check (
+    .check(\check$148 ),
+    .clean(clean),
+    .clk(clk),
+    .delay(delay),
+    .enable(enable),
+    .jump(delay_jump),
+    .learn(learn),
+    .rearm(rearm),
+    .rst(rst),
+    .settled(settled),
+    .settled_delay(settled_delay),
+    .spread(spread),
+    .\tolerance$8 (tolerance)
+  );
+  \biss_master_axil.ch0.core.line_noise  line_noise (
+    .clk(clk),
+    .close(frame_done),
+    .\event (\event ),
+    .events(events),
+    .level(\slo$44 ),
+    .limit(cycle[140:137]),
+    .noisy(noisy),
+    .rst(rst),
+    .sampler_noise(sampler_noise),
+    .watch(watch)
+  );
   \biss_master_axil.ch0.core.ma_clock  ma_clock (
     .busy(ma_busy),
     .clk(clk),
-    .\clocking (\ma_busy$78 ),
+    .\clocking (\ma_busy$81 ),
     .first_rise(first_rise),
     .half_period(cycle[15:0]),
     .held(ma_held),
@@ -6912,18 +7609,18 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .second_rise(ma_arm)
   );
   \biss_master_axil.ch0.core.ma_stop  ma_stop (
-    .clear(\clear$106 ),
+    .clear(\clear$116 ),
     .clk(clk),
     .enough(ma_enough),
     .rises(rises),
     .rst(rst),
     .start_slot(start_slot),
     .\started$10 (started),
-    .w1_enable(cycle[135]),
-    .words(\words$127 )
+    .w1_enable(cycle[155]),
+    .words(\words$159 )
   );
   \biss_master_axil.ch0.core.register_access  register_access (
-    .abort(\abort$187 ),
+    .abort(\abort$222 ),
     .busy(frames),
     .cdm(cdm),
     .clk(clk),
@@ -6935,36 +7632,37 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .rbuf_addr(rbuf_addr),
     .rbuf_data(ca_rbuf_data),
     .rbuf_en(rbuf_en),
-    .request(\request$173 ),
+    .request(\request$208 ),
     .result(result),
     .rst(rst),
-    .start(\start$185 ),
+    .start(\start$220 ),
     .wbuf(wbuf)
   );
   \biss_master_axil.ch0.core.results  results (
     .clk(clk),
-    .done(\done$240 ),
+    .done(\done$279 ),
     .frame(frame),
     .report(report),
     .report_delay(report_delay),
-    .report_frame(report_frame),
-    .result(\result$245 ),
+    .report_frame(learn),
+    .result(\result$284 ),
     .rst(rst),
     .valid(valid),
-    .valid_out(\valid$242 )
+    .valid_out(\valid$281 )
   );
   \biss_master_axil.ch0.core.sampler  sampler (
     .arm(ma_arm),
-    .\bit (\bit$265 ),
+    .\bit (\bit$308 ),
     .clk(clk),
     .delay(delay),
     .early(early),
     .half_period(cycle[15:0]),
-    .level(\slo$41 ),
+    .level(\slo$44 ),
     .locked(locked),
-    .receiver_clear(\clear$106 ),
+    .noise(sampler_noise),
+    .receiver_clear(\clear$116 ),
     .rst(rst),
-    .sample(\sample$264 ),
+    .sample(\sample$307 ),
     .slo(slo)
   );
   \biss_master_axil.ch0.core.scheduler  scheduler (
@@ -6985,20 +7683,20 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$3907$0 (\bit ),
+    .\port$4389$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
     .skip(lc_skip_seen)
   );
   \biss_master_axil.ch0.core.spw_check  spw_check (
-    .bits(cycle[141:136]),
+    .bits(cycle[161:156]),
     .clk(clk),
     .cpw_top(cpw_top),
     .match(spw_match),
     .rst(rst),
     .spw(spw),
-    .\tolerance$8 (cycle[154:147])
+    .\tolerance$8 (cycle[174:167])
   );
   \biss_master_axil.ch0.core.time_base  time_base (
     .clk(clk),
@@ -7017,12 +7715,16 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .delay_limit(delay_limit),
     .delay_over(delay_over),
     .in_clock(in_clock),
-    .ma_busy(\ma_busy$78 ),
+    .ma_busy(\ma_busy$81 ),
     .no_start_expired(no_start_expired),
     .no_start_limit(no_start_limit),
+    .quiet(quiet),
+    .quiet_limit(quiet_limit),
+    .quiet_live(quiet_live),
+    .quiet_time_live(cfg_quiet_time),
     .restart(restart),
     .rst(rst),
-    .slo(\slo$41 ),
+    .slo(\slo$44 ),
     .slo_stuck(slo_stuck),
     .slo_stuck_live(slo_stuck_live),
     .timeout_limit(timeout_limit),
@@ -7030,8 +7732,10 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   );
   \biss_master_axil.ch0.core.verdict  verdict (
     .cfg(cycle),
+    .clean(clean),
     .crc_error(crc_error),
     .crc_ok(crc_ok),
+    .delay_jump(delay_jump),
     .doubtful(frame_doubtful),
     .fault(fault),
     .fault_status(fault_status),
@@ -7042,9 +7746,10 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .lc_skip_seen(lc_skip_seen),
     .lc_zero(lc_zero),
     .lc_zero_seen(lc_zero_seen),
-    .\port$1601$0 (\$16 ),
+    .noisy(noisy),
+    .\port$1807$0 (\$22 ),
     .report(report),
-    .report_frame(report_frame),
+    .report_frame(learn),
     .spw_match(spw_match),
     .spw_mismatch(spw_mismatch),
     .status(status),
@@ -7052,114 +7757,136 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
-    \$14  = \$13 ;
+    \$19  = \$18 ;
     if (rst) begin
-      \$14  = 1'h0;
+      \$19  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
-    \$15  = \bit$265 ;
+    \$20  = \bit$308 ;
     if (rst) begin
-      \$15  = 1'h0;
+      \$20  = 1'h0;
     end
   end
-  assign \idle$20  = idle;
-  assign \start$22  = start;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    \$21  = started;
+    if (rst) begin
+      \$21  = 1'h0;
+    end
+  end
+  assign \idle$23  = idle;
+  assign \start$25  = start;
   assign period = cfg_request_period;
   assign abort_cycle = abort;
-  assign \idle$29  = idle;
-  assign \slo$31  = slo;
-  assign \trigger$33  = trigger;
-  assign \request$35  = request;
-  assign \abort$36  = abort;
+  assign \idle$32  = idle;
+  assign \slo$34  = slo;
+  assign \trigger$36  = trigger;
+  assign \request$38  = request;
+  assign \abort$39  = abort;
   assign ok = config_ok;
   assign end_check = cycle[124];
-  assign level = \slo$41 ;
+  assign level = \slo$44 ;
   assign busy = ma_busy;
   assign second_rise = ma_arm;
   assign enough = ma_enough;
-  assign \locked$50  = locked;
-  assign \early$52  = early;
+  assign \locked$53  = locked;
+  assign \early$55  = early;
   assign done = frame_done;
-  assign \started$56  = started;
-  assign \slots_full$58  = slots_full;
-  assign \stopped$60  = stopped;
-  assign \stop_bit$62  = stop_bit;
+  assign \started$59  = started;
+  assign \slots_full$61  = slots_full;
+  assign \stopped$63  = stopped;
+  assign \stop_bit$65  = stop_bit;
   assign doubtful = frame_doubtful;
-  assign \break_over$66  = break_over;
-  assign \ack_expired$68  = ack_expired;
-  assign \no_start_expired$70  = no_start_expired;
-  assign \slo_stuck$72  = slo_stuck;
-  assign \slo_stuck_live$74  = slo_stuck_live;
-  assign \delay_over$76  = delay_over;
-  assign \slo$77  = \slo$41 ;
-  assign \clocking  = \ma_busy$78 ;
+  assign \break_over$69  = break_over;
+  assign \ack_expired$71  = ack_expired;
+  assign \no_start_expired$73  = no_start_expired;
+  assign \slo_stuck$75  = slo_stuck;
+  assign \slo_stuck_live$77  = slo_stuck_live;
+  assign \delay_over$79  = delay_over;
+  assign \slo$80  = \slo$44 ;
+  assign \clocking  = \ma_busy$81 ;
   assign timer_clear = clear;
-  assign \in_clock$83  = in_clock;
+  assign \in_clock$86  = in_clock;
   assign restart_timer = restart;
   assign break_time = cfg_break_time;
   assign timeout_live = cfg_timeout_limit;
-  assign \ack_limit$89  = ack_limit;
-  assign \timeout_limit$91  = timeout_limit;
-  assign \no_start_limit$93  = no_start_limit;
-  assign \delay$95  = delay;
-  assign \delay_limit$97  = delay_limit;
+  assign \ack_limit$92  = ack_limit;
+  assign \timeout_limit$94  = timeout_limit;
+  assign \no_start_limit$96  = no_start_limit;
+  assign \delay$98  = delay;
+  assign \delay_limit$100  = delay_limit;
+  assign quiet_time_live = cfg_quiet_time;
+  assign quiet_time = quiet_limit;
+  assign \quiet$105  = quiet;
+  assign \quiet_live$107  = quiet_live;
   assign ma_run = run;
   assign half_period = cycle[15:0];
-  assign \started$101  = started;
-  assign \start_slot$103  = start_slot;
-  assign \rises$105  = rises;
-  assign receiver_clear = \clear$106 ;
+  assign \started$111  = started;
+  assign \start_slot$113  = start_slot;
+  assign \rises$115  = rises;
+  assign receiver_clear = \clear$116 ;
   assign decoder_sample = sample;
   assign decoder_bit = \bit ;
-  assign \half_period$112  = cycle[15:0];
+  assign \half_period$122  = cycle[15:0];
   assign arm = ma_arm;
-  assign \word_count$115  = word_count;
-  assign \lc$117  = lc;
+  assign \word_count$125  = word_count;
+  assign \lc$127  = lc;
   assign lc_next = { lc[4:0], \bit  };
-  assign \lc_next$119  = { lc[4:0], \bit  };
+  assign \lc_next$129  = { lc[4:0], \bit  };
   assign lc_load = load;
   assign lc_check = check;
-  assign \resync$125  = resync;
-  assign w1_enable = cycle[135];
-  assign \cpw_top$130  = cpw_top;
+  assign \resync$135  = resync;
+  assign waiting = watch;
+  assign \level$138  = \slo$44 ;
+  assign noise = sampler_noise;
+  assign close = frame_done;
+  assign limit = cycle[140:137];
+  assign delay_tolerance = tolerance;
+  assign \delay$147  = delay;
+  assign report_frame = learn;
+  assign \clean$153  = clean;
+  assign \noisy$155  = noisy;
+  assign jump = delay_jump;
+  assign w1_enable = cycle[155];
+  assign \cpw_top$162  = cpw_top;
   assign data1 = spw;
-  assign bits = cycle[141:136];
-  assign tolerance = cycle[154:147];
+  assign bits = cycle[161:156];
+  assign \tolerance$166  = cycle[174:167];
   assign match = spw_match;
   assign cfg = cycle;
-  assign \report_frame$139  = report_frame;
-  assign \fault$141  = fault;
-  assign \fault_status$143  = fault_status;
-  assign \crc_ok$145  = crc_ok;
+  assign \report_frame$170  = learn;
+  assign \fault$172  = fault;
+  assign \fault_status$174  = fault_status;
+  assign \crc_ok$176  = crc_ok;
   assign \repeat  = lc_repeat_seen;
   assign skip = lc_skip_seen;
   assign zero = lc_zero_seen;
-  assign \report$153  = report;
-  assign \report_frame$154  = report_frame;
-  assign \report_delay$156  = report_delay;
-  assign \valid$158  = valid;
-  assign word_crc_ok = { \$16 , crc_ok[0] };
-  assign \first_rise$171  = first_rise;
+  assign \report$184  = report;
+  assign \report_frame$185  = learn;
+  assign \report_delay$187  = report_delay;
+  assign \valid$189  = valid;
+  assign word_crc_ok = { \$22 , crc_ok[0] };
+  assign \first_rise$206  = first_rise;
   assign ca_status = result[2:0];
   assign ca_bytes_done = result[9:3];
-  assign ca_start = \start$185 ;
-  assign ca_abort = \abort$187 ;
+  assign ca_start = \start$220 ;
+  assign ca_abort = \abort$222 ;
   assign ca_rbuf_addr = rbuf_addr;
   assign ca_rbuf_en = rbuf_en;
   assign rbuf_data = ca_rbuf_data;
   assign ca_busy = frames;
-  assign \busy$196  = frames;
-  assign \done$198  = ca_done;
-  assign \cdm$200  = cdm;
+  assign \busy$231  = frames;
+  assign \done$233  = ca_done;
+  assign \cdm$235  = cdm;
   assign held = ma_held;
   assign ma_hold = hold;
   assign frame_end = report;
   assign frame_ok = valid;
   assign frame_cds = cds;
   assign cdm_cycle = frame_cdm;
-  assign clear_counters = \clear$214 ;
+  assign clear_counters = \clear$250 ;
   assign count_crc_word0 = counts[15:0];
   assign count_crc_word1 = counts[31:16];
   assign count_no_ack = counts[47:32];
@@ -7173,32 +7900,39 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign count_overrun = counts[175:160];
   assign count_aborted = counts[191:176];
   assign count_no_stop = counts[207:192];
-  assign count_ca_crc4_error = counts[223:208];
-  assign count_ca_no_answer = counts[239:224];
-  assign count_ca_refused = counts[255:240];
-  assign count_ca_aborted = counts[271:256];
-  assign count_ca_data_fault = counts[287:272];
-  assign \ma$236  = ma;
-  assign \overrun$239  = overrun;
-  assign \done$241  = \done$240 ;
-  assign valid_out = \valid$242 ;
-  assign \status$244  = \result$245 [3:0];
-  assign timestamp = \result$245 [35:4];
-  assign line_delay = \result$245 [48:36];
-  assign \cds$248  = \result$245 [49];
-  assign word0_position = \result$245 [104:50];
-  assign word0_ne = \result$245 [105];
-  assign word0_nw = \result$245 [106];
-  assign word0_crc_ok = \result$245 [107];
-  assign word1_position = \result$245 [147:108];
-  assign word1_ne = \result$245 [148];
-  assign word1_nw = \result$245 [149];
-  assign word1_crc_ok = \result$245 [150];
-  assign \lc$257  = \result$245 [156:151];
-  assign \lc_repeat$258  = \result$245 [157];
-  assign \lc_skip$259  = \result$245 [158];
-  assign \lc_zero$260  = \result$245 [159];
-  assign \spw_mismatch$261  = \result$245 [160];
+  assign count_noisy_line = counts[223:208];
+  assign count_delay_jump = counts[239:224];
+  assign count_noise_event = counts[255:240];
+  assign count_ca_crc4_error = counts[271:256];
+  assign count_ca_no_answer = counts[287:272];
+  assign count_ca_refused = counts[303:288];
+  assign count_ca_aborted = counts[319:304];
+  assign count_ca_data_fault = counts[335:320];
+  assign \ma$275  = ma;
+  assign \overrun$278  = overrun;
+  assign \done$280  = \done$279 ;
+  assign valid_out = \valid$281 ;
+  assign \status$283  = \result$284 [3:0];
+  assign timestamp = \result$284 [35:4];
+  assign line_delay = \result$284 [48:36];
+  assign \cds$287  = \result$284 [49];
+  assign noise_events = \result$284 [53:50];
+  assign delay_settled = \result$284 [54];
+  assign \settled_delay$290  = \result$284 [67:55];
+  assign delay_spread = \result$284 [75:68];
+  assign word0_position = \result$284 [130:76];
+  assign word0_ne = \result$284 [131];
+  assign word0_nw = \result$284 [132];
+  assign word0_crc_ok = \result$284 [133];
+  assign word1_position = \result$284 [173:134];
+  assign word1_ne = \result$284 [174];
+  assign word1_nw = \result$284 [175];
+  assign word1_crc_ok = \result$284 [176];
+  assign \lc$300  = \result$284 [182:177];
+  assign \lc_repeat$301  = \result$284 [183];
+  assign \lc_skip$302  = \result$284 [184];
+  assign \lc_zero$303  = \result$284 [185];
+  assign \spw_mismatch$304  = \result$284 [186];
   assign \live.ma_half_period  = live[15:0];
   assign \live.request_period  = live[39:16];
   assign \live.break_time  = live[63:40];
@@ -7206,19 +7940,22 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign \live.timeout_limit  = live[111:88];
   assign \live.delay_limit  = live[123:112];
   assign \live.end_check  = live[124];
-  assign \live.w0  = live[134:125];
-  assign \live.w0.data_bits  = live[130:125];
-  assign \live.w0.nenw  = live[131];
-  assign \live.w0.lc  = live[132];
-  assign \live.w0.crc  = live[134:133];
-  assign \live.w1_enable  = live[135];
-  assign \live.w1  = live[145:136];
-  assign \live.w1.data_bits  = live[141:136];
-  assign \live.w1.nenw  = live[142];
-  assign \live.w1.lc  = live[143];
-  assign \live.w1.crc  = live[145:144];
-  assign \live.spw_check  = live[146];
-  assign \live.spw_tolerance  = live[154:147];
+  assign \live.quiet_time  = live[136:125];
+  assign \live.noise_limit  = live[140:137];
+  assign \live.delay_tolerance  = live[144:141];
+  assign \live.w0  = live[154:145];
+  assign \live.w0.data_bits  = live[150:145];
+  assign \live.w0.nenw  = live[151];
+  assign \live.w0.lc  = live[152];
+  assign \live.w0.crc  = live[154:153];
+  assign \live.w1_enable  = live[155];
+  assign \live.w1  = live[165:156];
+  assign \live.w1.data_bits  = live[161:156];
+  assign \live.w1.nenw  = live[162];
+  assign \live.w1.lc  = live[163];
+  assign \live.w1.crc  = live[165:164];
+  assign \live.spw_check  = live[166];
+  assign \live.spw_tolerance  = live[174:167];
   assign \cycle.ma_half_period  = cycle[15:0];
   assign \cycle.request_period  = cycle[39:16];
   assign \cycle.break_time  = cycle[63:40];
@@ -7226,19 +7963,22 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign \cycle.timeout_limit  = cycle[111:88];
   assign \cycle.delay_limit  = cycle[123:112];
   assign \cycle.end_check  = cycle[124];
-  assign \cycle.w0  = cycle[134:125];
-  assign \cycle.w0.data_bits  = cycle[130:125];
-  assign \cycle.w0.nenw  = cycle[131];
-  assign \cycle.w0.lc  = cycle[132];
-  assign \cycle.w0.crc  = cycle[134:133];
-  assign \cycle.w1_enable  = cycle[135];
-  assign \cycle.w1  = cycle[145:136];
-  assign \cycle.w1.data_bits  = cycle[141:136];
-  assign \cycle.w1.nenw  = cycle[142];
-  assign \cycle.w1.lc  = cycle[143];
-  assign \cycle.w1.crc  = cycle[145:144];
-  assign \cycle.spw_check  = cycle[146];
-  assign \cycle.spw_tolerance  = cycle[154:147];
+  assign \cycle.quiet_time  = cycle[136:125];
+  assign \cycle.noise_limit  = cycle[140:137];
+  assign \cycle.delay_tolerance  = cycle[144:141];
+  assign \cycle.w0  = cycle[154:145];
+  assign \cycle.w0.data_bits  = cycle[150:145];
+  assign \cycle.w0.nenw  = cycle[151];
+  assign \cycle.w0.lc  = cycle[152];
+  assign \cycle.w0.crc  = cycle[154:153];
+  assign \cycle.w1_enable  = cycle[155];
+  assign \cycle.w1  = cycle[165:156];
+  assign \cycle.w1.data_bits  = cycle[161:156];
+  assign \cycle.w1.nenw  = cycle[162];
+  assign \cycle.w1.lc  = cycle[163];
+  assign \cycle.w1.crc  = cycle[165:164];
+  assign \cycle.spw_check  = cycle[166];
+  assign \cycle.spw_tolerance  = cycle[174:167];
   assign \words[0]  = words[9:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -7249,16 +7989,16 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign \words[1].nenw  = words[16];
   assign \words[1].lc  = words[17];
   assign \words[1].crc  = words[19:18];
-  assign \words$127[0]  = \words$127 [9:0];
-  assign \words$127[0].data_bits  = \words$127 [5:0];
-  assign \words$127[0].nenw  = \words$127 [6];
-  assign \words$127[0].lc  = \words$127 [7];
-  assign \words$127[0].crc  = \words$127 [9:8];
-  assign \words$127[1]  = \words$127 [19:10];
-  assign \words$127[1].data_bits  = \words$127 [15:10];
-  assign \words$127[1].nenw  = \words$127 [16];
-  assign \words$127[1].lc  = \words$127 [17];
-  assign \words$127[1].crc  = \words$127 [19:18];
+  assign \words$159[0]  = \words$159 [9:0];
+  assign \words$159[0].data_bits  = \words$159 [5:0];
+  assign \words$159[0].nenw  = \words$159 [6];
+  assign \words$159[0].lc  = \words$159 [7];
+  assign \words$159[0].crc  = \words$159 [9:8];
+  assign \words$159[1]  = \words$159 [19:10];
+  assign \words$159[1].data_bits  = \words$159 [15:10];
+  assign \words$159[1].nenw  = \words$159 [16];
+  assign \words$159[1].lc  = \words$159 [17];
+  assign \words$159[1].crc  = \words$159 [19:18];
   assign \cfg.ma_half_period  = cycle[15:0];
   assign \cfg.request_period  = cycle[39:16];
   assign \cfg.break_time  = cycle[63:40];
@@ -7266,65 +8006,75 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign \cfg.timeout_limit  = cycle[111:88];
   assign \cfg.delay_limit  = cycle[123:112];
   assign \cfg.end_check  = cycle[124];
-  assign \cfg.w0  = cycle[134:125];
-  assign \cfg.w0.data_bits  = cycle[130:125];
-  assign \cfg.w0.nenw  = cycle[131];
-  assign \cfg.w0.lc  = cycle[132];
-  assign \cfg.w0.crc  = cycle[134:133];
-  assign \cfg.w1_enable  = cycle[135];
-  assign \cfg.w1  = cycle[145:136];
-  assign \cfg.w1.data_bits  = cycle[141:136];
-  assign \cfg.w1.nenw  = cycle[142];
-  assign \cfg.w1.lc  = cycle[143];
-  assign \cfg.w1.crc  = cycle[145:144];
-  assign \cfg.spw_check  = cycle[146];
-  assign \cfg.spw_tolerance  = cycle[154:147];
+  assign \cfg.quiet_time  = cycle[136:125];
+  assign \cfg.noise_limit  = cycle[140:137];
+  assign \cfg.delay_tolerance  = cycle[144:141];
+  assign \cfg.w0  = cycle[154:145];
+  assign \cfg.w0.data_bits  = cycle[150:145];
+  assign \cfg.w0.nenw  = cycle[151];
+  assign \cfg.w0.lc  = cycle[152];
+  assign \cfg.w0.crc  = cycle[154:153];
+  assign \cfg.w1_enable  = cycle[155];
+  assign \cfg.w1  = cycle[165:156];
+  assign \cfg.w1.data_bits  = cycle[161:156];
+  assign \cfg.w1.nenw  = cycle[162];
+  assign \cfg.w1.lc  = cycle[163];
+  assign \cfg.w1.crc  = cycle[165:164];
+  assign \cfg.spw_check  = cycle[166];
+  assign \cfg.spw_tolerance  = cycle[174:167];
   assign \frame.status  = frame[3:0];
   assign \frame.timestamp  = frame[35:4];
   assign \frame.line_delay  = frame[48:36];
   assign \frame.cds  = frame[49];
-  assign \frame.word0  = frame[107:50];
-  assign \frame.word0.position  = frame[104:50];
-  assign \frame.word0.ne  = frame[105];
-  assign \frame.word0.nw  = frame[106];
-  assign \frame.word0.crc_ok  = frame[107];
-  assign \frame.word1  = frame[150:108];
-  assign \frame.word1.position  = frame[147:108];
-  assign \frame.word1.ne  = frame[148];
-  assign \frame.word1.nw  = frame[149];
-  assign \frame.word1.crc_ok  = frame[150];
-  assign \frame.lc  = frame[156:151];
-  assign \frame.lc_repeat  = frame[157];
-  assign \frame.lc_skip  = frame[158];
-  assign \frame.lc_zero  = frame[159];
-  assign \frame.spw_mismatch  = frame[160];
-  assign \request$173.slave_id  = \request$173 [2:0];
-  assign \request$173.address  = \request$173 [9:3];
-  assign \request$173.count  = \request$173 [16:10];
-  assign \request$173.write  = \request$173 [17];
+  assign \frame.noise_events  = frame[53:50];
+  assign \frame.delay_settled  = frame[54];
+  assign \frame.settled_delay  = frame[67:55];
+  assign \frame.delay_spread  = frame[75:68];
+  assign \frame.word0  = frame[133:76];
+  assign \frame.word0.position  = frame[130:76];
+  assign \frame.word0.ne  = frame[131];
+  assign \frame.word0.nw  = frame[132];
+  assign \frame.word0.crc_ok  = frame[133];
+  assign \frame.word1  = frame[176:134];
+  assign \frame.word1.position  = frame[173:134];
+  assign \frame.word1.ne  = frame[174];
+  assign \frame.word1.nw  = frame[175];
+  assign \frame.word1.crc_ok  = frame[176];
+  assign \frame.lc  = frame[182:177];
+  assign \frame.lc_repeat  = frame[183];
+  assign \frame.lc_skip  = frame[184];
+  assign \frame.lc_zero  = frame[185];
+  assign \frame.spw_mismatch  = frame[186];
+  assign \request$208.slave_id  = \request$208 [2:0];
+  assign \request$208.address  = \request$208 [9:3];
+  assign \request$208.count  = \request$208 [16:10];
+  assign \request$208.write  = \request$208 [17];
   assign \wbuf.addr  = wbuf[3:0];
   assign \wbuf.data  = wbuf[35:4];
   assign \wbuf.en  = wbuf[39:36];
   assign \result.status  = result[2:0];
   assign \result.bytes_done  = result[9:3];
-  assign \events.crc_word0  = events[0];
-  assign \events.crc_word1  = events[1];
-  assign \events.no_ack  = events[2];
-  assign \events.no_start  = events[3];
-  assign \events.delay_range  = events[4];
-  assign \events.slo_stuck_low  = events[5];
-  assign \events.lc_repeat  = events[6];
-  assign \events.lc_skip  = events[7];
-  assign \events.lc_zero  = events[8];
-  assign \events.spw_mismatch  = events[9];
-  assign \events.overrun  = events[10];
-  assign \events.aborted  = events[11];
-  assign \events.no_stop  = events[12];
-  assign \events.ca_crc4_error  = events[13];
-  assign \events.ca_no_answer  = events[14];
-  assign \events.ca_refused  = events[15];
-  assign \events.ca_aborted  = events[16];
-  assign \events.ca_data_fault  = events[17];
+  assign \events$245.crc_word0  = \events$245 [0];
+  assign \events$245.crc_word1  = \events$245 [1];
+  assign \events$245.no_ack  = \events$245 [2];
+  assign \events$245.no_start  = \events$245 [3];
+  assign \events$245.delay_range  = \events$245 [4];
+  assign \events$245.slo_stuck_low  = \events$245 [5];
+  assign \events$245.lc_repeat  = \events$245 [6];
+  assign \events$245.lc_skip  = \events$245 [7];
+  assign \events$245.lc_zero  = \events$245 [8];
+  assign \events$245.spw_mismatch  = \events$245 [9];
+  assign \events$245.overrun  = \events$245 [10];
+  assign \events$245.aborted  = \events$245 [11];
+  assign \events$245.no_stop  = \events$245 [12];
+  assign \events$245.noisy_line  = \events$245 [13];
+  assign \events$245.delay_jump  = \events$245 [14];
+  assign \events$245.noise_event  = \events$245 [15];
+  assign \events$245.ca_crc4_error  = \events$245 [16];
+  assign \events$245.ca_no_answer  = \events$245 [17];
+  assign \events$245.ca_refused  = \events$245 [18];
+  assign \events$245.ca_aborted  = \events$245 [19];
+  assign \events$245.ca_data_fault  = \events$245 [20];
   assign \faults.no_ack  = faults[0];
   assign \faults.no_start  = faults[1];
   assign \faults.delay_range  = faults[2];
@@ -7345,87 +8095,104 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign \counts.overrun  = counts[175:160];
   assign \counts.aborted  = counts[191:176];
   assign \counts.no_stop  = counts[207:192];
-  assign \counts.ca_crc4_error  = counts[223:208];
-  assign \counts.ca_no_answer  = counts[239:224];
-  assign \counts.ca_refused  = counts[255:240];
-  assign \counts.ca_aborted  = counts[271:256];
-  assign \counts.ca_data_fault  = counts[287:272];
-  assign \result$245.status  = \result$245 [3:0];
-  assign \result$245.timestamp  = \result$245 [35:4];
-  assign \result$245.line_delay  = \result$245 [48:36];
-  assign \result$245.cds  = \result$245 [49];
-  assign \result$245.word0  = \result$245 [107:50];
-  assign \result$245.word0.position  = \result$245 [104:50];
-  assign \result$245.word0.ne  = \result$245 [105];
-  assign \result$245.word0.nw  = \result$245 [106];
-  assign \result$245.word0.crc_ok  = \result$245 [107];
-  assign \result$245.word1  = \result$245 [150:108];
-  assign \result$245.word1.position  = \result$245 [147:108];
-  assign \result$245.word1.ne  = \result$245 [148];
-  assign \result$245.word1.nw  = \result$245 [149];
-  assign \result$245.word1.crc_ok  = \result$245 [150];
-  assign \result$245.lc  = \result$245 [156:151];
-  assign \result$245.lc_repeat  = \result$245 [157];
-  assign \result$245.lc_skip  = \result$245 [158];
-  assign \result$245.lc_zero  = \result$245 [159];
-  assign \result$245.spw_mismatch  = \result$245 [160];
-  assign events[17] = \$11 ;
-  assign events[16] = \$9 ;
-  assign events[15] = \$7 ;
-  assign events[14] = \$5 ;
-  assign events[13] = \$3 ;
-  assign events[12] = faults[6];
-  assign events[11] = faults[4];
-  assign events[10] = overrun;
-  assign events[9] = \$1 ;
-  assign events[8] = lc_zero;
-  assign events[7] = lc_skip;
-  assign events[6] = lc_repeat;
-  assign events[5] = faults[3];
-  assign events[4] = faults[2];
-  assign events[3] = faults[1];
-  assign events[2] = faults[0];
-  assign events[1] = crc_error[1];
-  assign events[0] = crc_error[0];
+  assign \counts.noisy_line  = counts[223:208];
+  assign \counts.delay_jump  = counts[239:224];
+  assign \counts.noise_event  = counts[255:240];
+  assign \counts.ca_crc4_error  = counts[271:256];
+  assign \counts.ca_no_answer  = counts[287:272];
+  assign \counts.ca_refused  = counts[303:288];
+  assign \counts.ca_aborted  = counts[319:304];
+  assign \counts.ca_data_fault  = counts[335:320];
+  assign \result$284.status  = \result$284 [3:0];
+  assign \result$284.timestamp  = \result$284 [35:4];
+  assign \result$284.line_delay  = \result$284 [48:36];
+  assign \result$284.cds  = \result$284 [49];
+  assign \result$284.noise_events  = \result$284 [53:50];
+  assign \result$284.delay_settled  = \result$284 [54];
+  assign \result$284.settled_delay  = \result$284 [67:55];
+  assign \result$284.delay_spread  = \result$284 [75:68];
+  assign \result$284.word0  = \result$284 [133:76];
+  assign \result$284.word0.position  = \result$284 [130:76];
+  assign \result$284.word0.ne  = \result$284 [131];
+  assign \result$284.word0.nw  = \result$284 [132];
+  assign \result$284.word0.crc_ok  = \result$284 [133];
+  assign \result$284.word1  = \result$284 [176:134];
+  assign \result$284.word1.position  = \result$284 [173:134];
+  assign \result$284.word1.ne  = \result$284 [174];
+  assign \result$284.word1.nw  = \result$284 [175];
+  assign \result$284.word1.crc_ok  = \result$284 [176];
+  assign \result$284.lc  = \result$284 [182:177];
+  assign \result$284.lc_repeat  = \result$284 [183];
+  assign \result$284.lc_skip  = \result$284 [184];
+  assign \result$284.lc_zero  = \result$284 [185];
+  assign \result$284.spw_mismatch  = \result$284 [186];
+  assign \events$245 [20] = \$16 ;
+  assign \events$245 [19] = \$14 ;
+  assign \events$245 [18] = \$12 ;
+  assign \events$245 [17] = \$10 ;
+  assign \events$245 [16] = \$8 ;
+  assign \events$245 [15] = \event ;
+  assign \events$245 [14] = \$6 ;
+  assign \events$245 [13] = \$4 ;
+  assign \events$245 [12] = faults[6];
+  assign \events$245 [11] = faults[4];
+  assign \events$245 [10] = overrun;
+  assign \events$245 [9] = \$2 ;
+  assign \events$245 [8] = lc_zero;
+  assign \events$245 [7] = lc_skip;
+  assign \events$245 [6] = lc_repeat;
+  assign \events$245 [5] = faults[3];
+  assign \events$245 [4] = faults[2];
+  assign \events$245 [3] = faults[1];
+  assign \events$245 [2] = faults[0];
+  assign \events$245 [1] = crc_error[1];
+  assign \events$245 [0] = crc_error[0];
   assign wbuf[39:36] = ca_wbuf_en;
   assign wbuf[35:4] = ca_wbuf_data;
   assign wbuf[3:0] = ca_wbuf_addr;
-  assign \request$173 [17] = ca_write;
-  assign \request$173 [16:10] = ca_count;
-  assign \request$173 [9:3] = ca_address;
-  assign \request$173 [2:0] = ca_slave_id;
+  assign \request$208 [17] = ca_write;
+  assign \request$208 [16:10] = ca_count;
+  assign \request$208 [9:3] = ca_address;
+  assign \request$208 [2:0] = ca_slave_id;
   assign frame[35:4] = first_rise_time;
-  assign frame[160] = spw_mismatch;
-  assign frame[150] = \$16 ;
-  assign frame[149] = nw[1];
-  assign frame[148] = ne[1];
-  assign frame[147:108] = spw;
-  assign frame[107] = crc_ok[0];
-  assign frame[106] = nw[0];
-  assign frame[105] = ne[0];
-  assign frame[104:50] = data0;
-  assign frame[159] = lc_zero;
-  assign frame[158] = lc_skip;
-  assign frame[157] = lc_repeat;
-  assign frame[156:151] = lc;
+  assign frame[186] = spw_mismatch;
+  assign frame[176] = \$22 ;
+  assign frame[175] = nw[1];
+  assign frame[174] = ne[1];
+  assign frame[173:134] = spw;
+  assign frame[133] = crc_ok[0];
+  assign frame[132] = nw[0];
+  assign frame[131] = ne[0];
+  assign frame[130:76] = data0;
+  assign frame[185] = lc_zero;
+  assign frame[184] = lc_skip;
+  assign frame[183] = lc_repeat;
+  assign frame[182:177] = lc;
+  assign frame[75:68] = spread;
+  assign frame[67:55] = settled_delay;
+  assign frame[54] = settled;
+  assign frame[53:50] = events;
   assign frame[49] = cds;
   assign frame[48:36] = delay;
   assign frame[3:0] = status;
-  assign \words$127 [19:10] = cycle[145:136];
-  assign \words$127 [9:0] = cycle[134:125];
-  assign words[19:10] = cycle[145:136];
-  assign words[9:0] = cycle[134:125];
-  assign live[154:147] = cfg_spw_tolerance;
-  assign live[146] = cfg_spw_check;
-  assign live[145:144] = cfg_w1_crc;
-  assign live[143] = cfg_w1_lc;
-  assign live[142] = cfg_w1_nenw;
-  assign live[141:136] = cfg_w1_data_bits;
-  assign live[135] = cfg_w1_enable;
-  assign live[134:133] = cfg_w0_crc;
-  assign live[132] = cfg_w0_lc;
-  assign live[131] = cfg_w0_nenw;
-  assign live[130:125] = cfg_w0_data_bits;
+  assign \words$159 [19:10] = cycle[165:156];
+  assign \words$159 [9:0] = cycle[154:145];
+  assign words[19:10] = cycle[165:156];
+  assign words[9:0] = cycle[154:145];
+  assign live[174:167] = cfg_spw_tolerance;
+  assign live[166] = cfg_spw_check;
+  assign live[165:164] = cfg_w1_crc;
+  assign live[163] = cfg_w1_lc;
+  assign live[162] = cfg_w1_nenw;
+  assign live[161:156] = cfg_w1_data_bits;
+  assign live[155] = cfg_w1_enable;
+  assign live[154:153] = cfg_w0_crc;
+  assign live[152] = cfg_w0_lc;
+  assign live[151] = cfg_w0_nenw;
+  assign live[150:145] = cfg_w0_data_bits;
+  assign live[144:141] = cfg_delay_tolerance;
+  assign live[140:137] = cfg_noise_limit;
+  assign live[136:125] = cfg_quiet_time;
   assign live[124] = cfg_end_check;
   assign live[123:112] = cfg_delay_limit;
   assign live[111:88] = cfg_timeout_limit;
@@ -7436,7 +8203,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_limit, timeout_limit, delay_limit, no_start_limit, idle, clk);
+module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_limit, timeout_limit, delay_limit, quiet_time, delay_tolerance, no_start_limit, idle, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$30  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -7473,14 +8240,21 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   wire \$39 ;
   wire \$4 ;
   wire [11:0] \$40 ;
-  wire [24:0] \$41 ;
-  reg \$42 ;
-  reg [154:0] \$43 ;
-  reg [23:0] \$44 ;
-  reg [23:0] \$45 ;
-  reg [11:0] \$46 ;
-  reg [24:0] \$47 ;
+  wire \$41 ;
+  wire [11:0] \$42 ;
+  wire \$43 ;
+  wire [3:0] \$44 ;
+  wire [16:0] \$45 ;
+  wire [24:0] \$46 ;
+  reg \$47 ;
+  reg [174:0] \$48 ;
+  reg [23:0] \$49 ;
   wire \$5 ;
+  reg [23:0] \$50 ;
+  reg [11:0] \$51 ;
+  reg [11:0] \$52 ;
+  reg [16:0] \$53 ;
+  reg [24:0] \$54 ;
   wire \$6 ;
   wire \$7 ;
   wire \$8 ;
@@ -7489,13 +8263,16 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   reg [23:0] ack_limit = 24'h000000;
   input clk;
   wire clk;
-  output [154:0] cycle;
-  reg [154:0] cycle = 155'h000000000000000000000000000000000000000;
+  output [174:0] cycle;
+  reg [174:0] cycle = 175'h00000000000000000000000000000000000000000000;
   wire [23:0] \cycle.ack_limit ;
   wire [23:0] \cycle.break_time ;
   wire [11:0] \cycle.delay_limit ;
+  wire [3:0] \cycle.delay_tolerance ;
   wire \cycle.end_check ;
   wire [15:0] \cycle.ma_half_period ;
+  wire [3:0] \cycle.noise_limit ;
+  wire [11:0] \cycle.quiet_time ;
   wire [23:0] \cycle.request_period ;
   wire \cycle.spw_check ;
   wire [7:0] \cycle.spw_tolerance ;
@@ -7521,15 +8298,20 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   wire \cycle.w1_enable ;
   output [11:0] delay_limit;
   reg [11:0] delay_limit = 12'h000;
+  output [16:0] delay_tolerance;
+  reg [16:0] delay_tolerance = 17'h00000;
   input idle;
   wire idle;
-  input [154:0] live;
-  wire [154:0] live;
+  input [174:0] live;
+  wire [174:0] live;
   wire [23:0] \live.ack_limit ;
   wire [23:0] \live.break_time ;
   wire [11:0] \live.delay_limit ;
+  wire [3:0] \live.delay_tolerance ;
   wire \live.end_check ;
   wire [15:0] \live.ma_half_period ;
+  wire [3:0] \live.noise_limit ;
+  wire [11:0] \live.quiet_time ;
   wire [23:0] \live.request_period ;
   wire \live.spw_check ;
   wire [7:0] \live.spw_tolerance ;
@@ -7557,45 +8339,63 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   reg [24:0] no_start_limit = 25'h0000000;
   output ok;
   reg ok = 1'h0;
+  output [11:0] quiet_time;
+  reg [11:0] quiet_time = 12'h000;
   input rst;
   wire rst;
   output [23:0] timeout_limit;
   reg [23:0] timeout_limit = 24'h000000;
   output [1:0] word_count;
   wire [1:0] word_count;
+  assign \$46  = ack_limit + { cycle[15:0], 1'h1 };
+  assign word_count = 1'h1 + cycle[155];
   always @(posedge clk)
-    no_start_limit <= \$47 ;
+    ok <= \$47 ;
+  always @(posedge clk)
+    cycle <= \$48 ;
+  always @(posedge clk)
+    ack_limit <= \$49 ;
+  always @(posedge clk)
+    timeout_limit <= \$50 ;
+  always @(posedge clk)
+    delay_limit <= \$51 ;
+  always @(posedge clk)
+    quiet_time <= \$52 ;
+  always @(posedge clk)
+    delay_tolerance <= \$53 ;
+  always @(posedge clk)
+    no_start_limit <= \$54 ;
   assign \$1  = | live[15:1];
-  assign \$2  = | live[130:125];
-  assign \$3  = live[130:125] <= 6'h37;
+  assign \$2  = | live[150:145];
+  assign \$3  = live[150:145] <= 6'h37;
   assign \$4  = \$2  & \$3 ;
-  assign \$5  = ! live[134:133];
-  assign \$6  = live[134:133] == 1'h1;
+  assign \$5  = ! live[154:153];
+  assign \$6  = live[154:153] == 1'h1;
   assign \$7  = \$5  | \$6 ;
-  assign \$8  = live[134:133] == 2'h2;
+  assign \$8  = live[154:153] == 2'h2;
   assign \$9  = \$7  | \$8 ;
   assign \$10  = \$4  & \$9 ;
   assign \$11  = \$1  & \$10 ;
-  assign \$12  = ~ live[135];
-  assign \$13  = | live[141:136];
-  assign \$14  = live[141:136] <= 6'h28;
+  assign \$12  = ~ live[155];
+  assign \$13  = | live[161:156];
+  assign \$14  = live[161:156] <= 6'h28;
   assign \$15  = \$13  & \$14 ;
-  assign \$16  = ! live[145:144];
-  assign \$17  = live[145:144] == 1'h1;
+  assign \$16  = ! live[165:164];
+  assign \$17  = live[165:164] == 1'h1;
   assign \$18  = \$16  | \$17 ;
-  assign \$19  = live[145:144] == 2'h2;
+  assign \$19  = live[165:164] == 2'h2;
   assign \$20  = \$18  | \$19 ;
   assign \$21  = \$15  & \$20 ;
   assign \$22  = \$12  | \$21 ;
   assign \$23  = \$11  & \$22 ;
-  assign \$24  = live[135] & live[132];
-  assign \$25  = \$24  & live[143];
+  assign \$24  = live[155] & live[152];
+  assign \$25  = \$24  & live[163];
   assign \$26  = ~ \$25 ;
   assign \$27  = \$23  & \$26 ;
-  assign \$28  = ~ live[146];
-  assign \$29  = live[141:136] <= live[130:125];
-  assign \$30  = live[135] & \$29 ;
-  assign \$31  = | live[145:144];
+  assign \$28  = ~ live[166];
+  assign \$29  = live[161:156] <= live[150:145];
+  assign \$30  = live[155] & \$29 ;
+  assign \$31  = | live[165:164];
   assign \$32  = \$30  & \$31 ;
   assign \$33  = \$28  | \$32 ;
   assign \$34  = \$27  & \$33 ;
@@ -7605,70 +8405,83 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   assign \$38  = \$37  ? 24'h001f40 : live[111:88];
   assign \$39  = ! live[123:112];
   assign \$40  = \$39  ? 12'hfff : live[123:112];
-  assign \$41  = ack_limit + { cycle[15:0], 1'h1 };
-  assign word_count = 1'h1 + cycle[135];
-  always @(posedge clk)
-    ok <= \$42 ;
-  always @(posedge clk)
-    cycle <= \$43 ;
-  always @(posedge clk)
-    ack_limit <= \$44 ;
-  always @(posedge clk)
-    timeout_limit <= \$45 ;
-  always @(posedge clk)
-    delay_limit <= \$46 ;
+  assign \$41  = ! live[136:125];
+  assign \$42  = \$41  ? 12'h064 : live[136:125];
+  assign \$43  = ! live[144:141];
+  assign \$44  = \$43  ? 4'h2 : live[144:141];
+  assign \$45  = live[15:0] + \$44 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    \$47  = \$41 ;
+    \$47  = \$34 ;
     if (rst) begin
-      \$47  = 25'h0000000;
+      \$47  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    \$42  = \$34 ;
-    if (rst) begin
-      \$42  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    \$43  = cycle;
+    \$48  = cycle;
     if (idle) begin
-      \$43  = live;
+      \$48  = live;
     end
     if (rst) begin
-      \$43  = 155'h000000000000000000000000000000000000000;
+      \$48  = 175'h00000000000000000000000000000000000000000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    \$44  = ack_limit;
+    \$49  = ack_limit;
     if (idle) begin
-      \$44  = \$36 ;
+      \$49  = \$36 ;
     end
     if (rst) begin
-      \$44  = 24'h000000;
+      \$49  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    \$45  = timeout_limit;
+    \$50  = timeout_limit;
     if (idle) begin
-      \$45  = \$38 ;
+      \$50  = \$38 ;
     end
     if (rst) begin
-      \$45  = 24'h000000;
+      \$50  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    \$46  = delay_limit;
+    \$51  = delay_limit;
     if (idle) begin
-      \$46  = \$40 ;
+      \$51  = \$40 ;
     end
     if (rst) begin
-      \$46  = 12'h000;
+      \$51  = 12'h000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    \$52  = quiet_time;
+    if (idle) begin
+      \$52  = \$42 ;
+    end
+    if (rst) begin
+      \$52  = 12'h000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    \$53  = delay_tolerance;
+    if (idle) begin
+      \$53  = \$45 ;
+    end
+    if (rst) begin
+      \$53  = 17'h00000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    \$54  = \$46 ;
+    if (rst) begin
+      \$54  = 25'h0000000;
     end
   end
   assign \live.ma_half_period  = live[15:0];
@@ -7678,19 +8491,22 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   assign \live.timeout_limit  = live[111:88];
   assign \live.delay_limit  = live[123:112];
   assign \live.end_check  = live[124];
-  assign \live.w0  = live[134:125];
-  assign \live.w0.data_bits  = live[130:125];
-  assign \live.w0.nenw  = live[131];
-  assign \live.w0.lc  = live[132];
-  assign \live.w0.crc  = live[134:133];
-  assign \live.w1_enable  = live[135];
-  assign \live.w1  = live[145:136];
-  assign \live.w1.data_bits  = live[141:136];
-  assign \live.w1.nenw  = live[142];
-  assign \live.w1.lc  = live[143];
-  assign \live.w1.crc  = live[145:144];
-  assign \live.spw_check  = live[146];
-  assign \live.spw_tolerance  = live[154:147];
+  assign \live.quiet_time  = live[136:125];
+  assign \live.noise_limit  = live[140:137];
+  assign \live.delay_tolerance  = live[144:141];
+  assign \live.w0  = live[154:145];
+  assign \live.w0.data_bits  = live[150:145];
+  assign \live.w0.nenw  = live[151];
+  assign \live.w0.lc  = live[152];
+  assign \live.w0.crc  = live[154:153];
+  assign \live.w1_enable  = live[155];
+  assign \live.w1  = live[165:156];
+  assign \live.w1.data_bits  = live[161:156];
+  assign \live.w1.nenw  = live[162];
+  assign \live.w1.lc  = live[163];
+  assign \live.w1.crc  = live[165:164];
+  assign \live.spw_check  = live[166];
+  assign \live.spw_tolerance  = live[174:167];
   assign \cycle.ma_half_period  = cycle[15:0];
   assign \cycle.request_period  = cycle[39:16];
   assign \cycle.break_time  = cycle[63:40];
@@ -7698,24 +8514,28 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   assign \cycle.timeout_limit  = cycle[111:88];
   assign \cycle.delay_limit  = cycle[123:112];
   assign \cycle.end_check  = cycle[124];
-  assign \cycle.w0  = cycle[134:125];
-  assign \cycle.w0.data_bits  = cycle[130:125];
-  assign \cycle.w0.nenw  = cycle[131];
-  assign \cycle.w0.lc  = cycle[132];
-  assign \cycle.w0.crc  = cycle[134:133];
-  assign \cycle.w1_enable  = cycle[135];
-  assign \cycle.w1  = cycle[145:136];
-  assign \cycle.w1.data_bits  = cycle[141:136];
-  assign \cycle.w1.nenw  = cycle[142];
-  assign \cycle.w1.lc  = cycle[143];
-  assign \cycle.w1.crc  = cycle[145:144];
-  assign \cycle.spw_check  = cycle[146];
-  assign \cycle.spw_tolerance  = cycle[154:147];
+  assign \cycle.quiet_time  = cycle[136:125];
+  assign \cycle.noise_limit  = cycle[140:137];
+  assign \cycle.delay_tolerance  = cycle[144:141];
+  assign \cycle.w0  = cycle[154:145];
+  assign \cycle.w0.data_bits  = cycle[150:145];
+  assign \cycle.w0.nenw  = cycle[151];
+  assign \cycle.w0.lc  = cycle[152];
+  assign \cycle.w0.crc  = cycle[154:153];
+  assign \cycle.w1_enable  = cycle[155];
+  assign \cycle.w1  = cycle[165:156];
+  assign \cycle.w1.data_bits  = cycle[161:156];
+  assign \cycle.w1.nenw  = cycle[162];
+  assign \cycle.w1.lc  = cycle[163];
+  assign \cycle.w1.crc  = cycle[165:164];
+  assign \cycle.spw_check  = cycle[166];
+  assign \cycle.spw_tolerance  = cycle[174:167];
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, report_delay, frame_doubtful, abort, config_ok, end_check, resync, timer_clear, fault, fault_status, ma_run, in_clock, report_frame, idle, receiver_clear, faults, cdm_cycle, ma_hold, slo_stuck
-, slo_stuck_live, break_over, ack_expired, no_start_expired, delay_over, ma_arm, ma_busy, ma_held, ma_enough, early, locked, slo, frame_done, stopped, slots_full, started, stop_bit, cdm, clk);
+module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, report_delay, frame_doubtful, abort, config_ok, end_check, resync, timer_clear, waiting, fault, fault_status, ma_run, in_clock, report_frame, idle, receiver_clear, faults, cdm_cycle, ma_hold
+, slo_stuck, slo_stuck_live, quiet, quiet_live, break_over, ack_expired, no_start_expired, delay_over, ma_arm, ma_busy, ma_held, ma_enough, early, locked, slo, frame_done, stopped, slots_full, started, stop_bit, cdm
+, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$31  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -7750,21 +8570,21 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
   wire \$9 ;
   input abort;
   wire abort;
-  wire \abort$46 ;
   wire \abort$5 ;
+  wire \abort$50 ;
   wire aborted;
   input ack_expired;
   wire ack_expired;
-  wire \ack_expired$23 ;
+  wire \ack_expired$27 ;
   wire bad_config;
   input break_over;
   wire break_over;
   input cdm;
   wire cdm;
-  wire \cdm$43 ;
+  wire \cdm$47 ;
   output cdm_cycle;
   wire cdm_cycle;
-  wire \cdm_cycle$48 ;
+  wire \cdm_cycle$52 ;
   reg clear;
   input clk;
   wire clk;
@@ -7773,20 +8593,20 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
   wire \config_ok$3 ;
   reg [2:0] cycle_fsm_state = 3'h0;
   reg delay;
-  wire \delay$73 ;
+  wire \delay$78 ;
   input delay_over;
   wire delay_over;
-  wire \delay_over$27 ;
+  wire \delay_over$31 ;
   input early;
   wire early;
-  wire \early$17 ;
+  wire \early$21 ;
   input end_check;
   wire end_check;
   wire fail;
   output fault;
   reg fault;
-  wire \fault$35 ;
-  wire \fault$69 ;
+  wire \fault$39 ;
+  wire \fault$74 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -7801,6 +8621,8 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
+  (* enum_value_1101 = "NOISY_LINE" *)
+  (* enum_value_1110 = "DELAY_JUMP" *)
   output [3:0] fault_status;
   reg [3:0] fault_status;
   (* enum_base_type = "Status" *)
@@ -7817,17 +8639,19 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
-  wire [3:0] \fault_status$37 ;
+  (* enum_value_1101 = "NOISY_LINE" *)
+  (* enum_value_1110 = "DELAY_JUMP" *)
+  wire [3:0] \fault_status$41 ;
   output [6:0] faults;
   wire [6:0] faults;
-  wire [6:0] \faults$39 ;
-  wire \faults$39.aborted ;
-  wire \faults$39.bad_config ;
-  wire \faults$39.delay_range ;
-  wire \faults$39.no_ack ;
-  wire \faults$39.no_start ;
-  wire \faults$39.no_stop ;
-  wire \faults$39.slo_stuck_low ;
+  wire [6:0] \faults$43 ;
+  wire \faults$43.aborted ;
+  wire \faults$43.bad_config ;
+  wire \faults$43.delay_range ;
+  wire \faults$43.no_ack ;
+  wire \faults$43.no_start ;
+  wire \faults$43.no_stop ;
+  wire \faults$43.slo_stuck_low ;
   wire \faults.aborted ;
   wire \faults.bad_config ;
   wire \faults.delay_range ;
@@ -7848,15 +8672,15 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
   output idle;
   reg idle = 1'h0;
   (* init = 1'h0 *)
-  wire \idle$41 ;
+  wire \idle$45 ;
   output in_clock;
   reg in_clock;
   input locked;
   wire locked;
-  wire \locked$15 ;
+  wire \locked$19 ;
   input ma_arm;
   wire ma_arm;
-  wire \ma_arm$13 ;
+  wire \ma_arm$17 ;
   input ma_busy;
   wire ma_busy;
   input ma_enough;
@@ -7865,48 +8689,54 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
   wire ma_held;
   output ma_hold;
   wire ma_hold;
-  wire \ma_hold$50 ;
+  wire \ma_hold$54 ;
   output ma_run;
   reg ma_run;
   input no_start_expired;
   wire no_start_expired;
-  wire \no_start_expired$25 ;
+  wire \no_start_expired$29 ;
   reg pause = 1'h0;
+  input quiet;
+  wire quiet;
+  wire \quiet$13 ;
+  input quiet_live;
+  wire quiet_live;
+  wire \quiet_live$15 ;
   wire ready;
   output receiver_clear;
   reg receiver_clear = 1'h1;
   output report_delay;
   wire report_delay;
-  wire \report_delay$33 ;
+  wire \report_delay$37 ;
   output report_frame;
   reg report_frame;
-  wire \report_frame$31 ;
+  wire \report_frame$35 ;
   input request;
   wire request;
   output restart_timer;
   wire restart_timer;
-  wire \restart_timer$29 ;
+  wire \restart_timer$33 ;
   output resync;
   reg resync;
   input rst;
   wire rst;
   input slo;
   wire slo;
-  wire \slo$44 ;
+  wire \slo$48 ;
   wire \slo$7 ;
   input slo_stuck;
   wire slo_stuck;
-  wire \slo_stuck$45 ;
+  wire \slo_stuck$49 ;
   wire \slo_stuck$9 ;
   input slo_stuck_live;
   wire slo_stuck_live;
   wire \slo_stuck_live$11 ;
   input slots_full;
   wire slots_full;
-  wire \slots_full$21 ;
+  wire \slots_full$25 ;
   input started;
   wire started;
-  wire \started$19 ;
+  wire \started$23 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -7921,6 +8751,8 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
+  (* enum_value_1101 = "NOISY_LINE" *)
+  (* enum_value_1110 = "DELAY_JUMP" *)
   wire [3:0] status;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
@@ -7936,7 +8768,9 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
-  wire [3:0] \status$74 ;
+  (* enum_value_1101 = "NOISY_LINE" *)
+  (* enum_value_1110 = "DELAY_JUMP" *)
+  wire [3:0] \status$79 ;
   input stop_bit;
   wire stop_bit;
   input stopped;
@@ -7944,6 +8778,8 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
   wire stuck_low;
   output timer_clear;
   reg timer_clear;
+  output waiting;
+  reg waiting;
   reg watch;
   assign \$1  = ma_busy | abort;
   assign \$2  = ~ ma_enough;
@@ -7998,10 +8834,10 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
     .ack_expired(ack_expired),
     .clear(clear),
     .clk(clk),
-    .delay(\delay$73 ),
+    .delay(\delay$78 ),
     .delay_over(delay_over),
     .early(early),
-    .fault(\fault$69 ),
+    .fault(\fault$74 ),
     .locked(locked),
     .ma_arm(ma_arm),
     .no_start_expired(no_start_expired),
@@ -8009,7 +8845,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
     .rst(rst),
     .slots_full(slots_full),
     .started(started),
-    .status(\status$74 ),
+    .status(\status$79 ),
     .watch(watch)
   );
   \biss_master_axil.ch0.core.controller.ready_check  ready_check (
@@ -8018,6 +8854,8 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
     .bad_config(bad_config),
     .config_ok(config_ok),
     .first_clock(first_clock),
+    .quiet(quiet),
+    .quiet_live(quiet_live),
     .ready(ready),
     .slo(slo),
     .slo_stuck(slo_stuck),
@@ -8089,6 +8927,18 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
+    waiting = 1'h0;
+    casez (cycle_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          waiting = 1'h1;
+      3'h2:
+          waiting = 1'h1;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     clear = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -8121,7 +8971,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
           if (abort) begin
             fault = 1'h1;
           end else if (frame_done) begin
-          end else if (\fault$69 ) begin
+          end else if (\fault$74 ) begin
             fault = 1'h1;
           end
       3'h4:
@@ -8170,8 +9020,8 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
           if (abort) begin
             fault_status = 4'ha;
           end else if (frame_done) begin
-          end else if (\fault$69 ) begin
-            fault_status = \status$74 ;
+          end else if (\fault$74 ) begin
+            fault_status = \status$79 ;
           end
       3'h4:
           if (abort) begin
@@ -8301,8 +9151,8 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
       3'h3:
           if (abort) begin
           end else if (frame_done) begin
-          end else if (\fault$69 ) begin
-            delay = \delay$73 ;
+          end else if (\fault$74 ) begin
+            delay = \delay$78 ;
           end
     endcase
   end
@@ -8370,7 +9220,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
             \$28  = 3'h0;
           end else if (frame_done) begin
             \$28  = 3'h4;
-          end else if (\fault$69 ) begin
+          end else if (\fault$74 ) begin
             \$28  = 3'h0;
           end
       3'h4:
@@ -8461,7 +9311,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
             \$29  = 1'h0;
           end else if (frame_done) begin
             \$29  = 1'h0;
-          end else if (\fault$69 ) begin
+          end else if (\fault$74 ) begin
             \$29  = 1'h0;
           end
       3'h4:
@@ -8552,7 +9402,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
             \$30  = 1'h1;
           end else if (frame_done) begin
             \$30  = 1'h0;
-          end else if (\fault$69 ) begin
+          end else if (\fault$74 ) begin
             \$30  = 1'h1;
           end
       3'h4:
@@ -8635,27 +9485,29 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
   assign \slo$7  = slo;
   assign \slo_stuck$9  = slo_stuck;
   assign \slo_stuck_live$11  = slo_stuck_live;
-  assign \ma_arm$13  = ma_arm;
-  assign \locked$15  = locked;
-  assign \early$17  = early;
-  assign \started$19  = started;
-  assign \slots_full$21  = slots_full;
-  assign \ack_expired$23  = ack_expired;
-  assign \no_start_expired$25  = no_start_expired;
-  assign \delay_over$27  = delay_over;
-  assign \restart_timer$29  = restart_timer;
-  assign \report_frame$31  = report_frame;
-  assign \report_delay$33  = report_delay;
-  assign \fault$35  = fault;
-  assign \fault_status$37  = fault_status;
-  assign \faults$39  = faults;
-  assign \idle$41  = idle;
-  assign \cdm$43  = cdm;
-  assign \slo$44  = slo;
-  assign \slo_stuck$45  = slo_stuck;
-  assign \abort$46  = abort;
-  assign \cdm_cycle$48  = cdm_cycle;
-  assign \ma_hold$50  = ma_hold;
+  assign \quiet$13  = quiet;
+  assign \quiet_live$15  = quiet_live;
+  assign \ma_arm$17  = ma_arm;
+  assign \locked$19  = locked;
+  assign \early$21  = early;
+  assign \started$23  = started;
+  assign \slots_full$25  = slots_full;
+  assign \ack_expired$27  = ack_expired;
+  assign \no_start_expired$29  = no_start_expired;
+  assign \delay_over$31  = delay_over;
+  assign \restart_timer$33  = restart_timer;
+  assign \report_frame$35  = report_frame;
+  assign \report_delay$37  = report_delay;
+  assign \fault$39  = fault;
+  assign \fault_status$41  = fault_status;
+  assign \faults$43  = faults;
+  assign \idle$45  = idle;
+  assign \cdm$47  = cdm;
+  assign \slo$48  = slo;
+  assign \slo_stuck$49  = slo_stuck;
+  assign \abort$50  = abort;
+  assign \cdm_cycle$52  = cdm_cycle;
+  assign \ma_hold$54  = ma_hold;
   assign fail = fault;
   assign status = fault_status;
   assign frame = report_frame;
@@ -8666,13 +9518,13 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
   assign \faults.aborted  = faults[4];
   assign \faults.bad_config  = faults[5];
   assign \faults.no_stop  = faults[6];
-  assign \faults$39.no_ack  = faults[0];
-  assign \faults$39.no_start  = faults[1];
-  assign \faults$39.delay_range  = faults[2];
-  assign \faults$39.slo_stuck_low  = faults[3];
-  assign \faults$39.aborted  = faults[4];
-  assign \faults$39.bad_config  = faults[5];
-  assign \faults$39.no_stop  = faults[6];
+  assign \faults$43.no_ack  = faults[0];
+  assign \faults$43.no_start  = faults[1];
+  assign \faults$43.delay_range  = faults[2];
+  assign \faults$43.slo_stuck_low  = faults[3];
+  assign \faults$43.aborted  = faults[4];
+  assign \faults$43.bad_config  = faults[5];
+  assign \faults$43.no_stop  = faults[6];
 endmodule
 
 (* generator = "Amaranth" *)
@@ -8804,6 +9656,8 @@ module \biss_master_axil.ch0.core.controller.line_faults (rst, restart_timer, cl
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
+  (* enum_value_1101 = "NOISY_LINE" *)
+  (* enum_value_1110 = "DELAY_JUMP" *)
   output [3:0] status;
   reg [3:0] status;
   input watch;
@@ -8896,11 +9750,12 @@ module \biss_master_axil.ch0.core.controller.line_faults (rst, restart_timer, cl
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.controller.ready_check (config_ok, first_clock, bad_config, aborted, ready, stuck_low, slo_stuck, slo_stuck_live, slo, abort);
+module \biss_master_axil.ch0.core.controller.ready_check (config_ok, first_clock, bad_config, aborted, ready, stuck_low, slo_stuck, slo_stuck_live, quiet, quiet_live, slo, abort);
   reg \$auto$verilog_backend.cc:2355:dump_module$34  = 0;
   wire \$1 ;
   wire \$2 ;
   wire \$3 ;
+  wire \$4 ;
   input abort;
   wire abort;
   output aborted;
@@ -8911,6 +9766,10 @@ module \biss_master_axil.ch0.core.controller.ready_check (config_ok, first_clock
   wire config_ok;
   input first_clock;
   wire first_clock;
+  input quiet;
+  wire quiet;
+  input quiet_live;
+  wire quiet_live;
   output ready;
   reg ready;
   input slo;
@@ -8924,6 +9783,24 @@ module \biss_master_axil.ch0.core.controller.ready_check (config_ok, first_clock
   assign \$1  = ~ config_ok;
   assign \$2  = first_clock & \$1 ;
   assign \$3  = first_clock ? slo_stuck_live : slo_stuck;
+  assign \$4  = first_clock ? quiet_live : quiet;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    aborted = 1'h0;
+    if (\$2 ) begin
+    end else if (abort) begin
+      aborted = 1'h1;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    ready = 1'h0;
+    if (\$2 ) begin
+    end else if (abort) begin
+    end else if (slo) begin
+      ready = \$4 ;
+    end
+  end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     stuck_low = 1'h0;
@@ -8939,23 +9816,6 @@ module \biss_master_axil.ch0.core.controller.ready_check (config_ok, first_clock
     bad_config = 1'h0;
     if (\$2 ) begin
       bad_config = 1'h1;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    aborted = 1'h0;
-    if (\$2 ) begin
-    end else if (abort) begin
-      aborted = 1'h1;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    ready = 1'h0;
-    if (\$2 ) begin
-    end else if (abort) begin
-    end else if (slo) begin
-      ready = 1'h1;
     end
   end
 endmodule
@@ -8995,6 +9855,8 @@ module \biss_master_axil.ch0.core.controller.report (fault, fault_status, report
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
+  (* enum_value_1101 = "NOISY_LINE" *)
+  (* enum_value_1110 = "DELAY_JUMP" *)
   input [3:0] fault_status;
   wire [3:0] fault_status;
   output [6:0] faults;
@@ -9025,6 +9887,8 @@ module \biss_master_axil.ch0.core.controller.report (fault, fault_status, report
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
+  (* enum_value_1101 = "NOISY_LINE" *)
+  (* enum_value_1110 = "DELAY_JUMP" *)
   wire [3:0] status;
   assign report_delay = report_frame | delay;
   assign \$1  = fault_status == 3'h6;
@@ -9063,7 +9927,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.counters (rst, clear, events, counts, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$35  = 0;
-  reg [17:0] \$1 ;
+  reg [20:0] \$1 ;
   reg \$2 ;
   input clear;
   wire clear;
@@ -9102,6 +9966,12 @@ module \biss_master_axil.ch0.core.counters (rst, clear, events, counts, clk);
   (* init = 1'h0 *)
   wire \clear$59 ;
   (* init = 1'h0 *)
+  wire \clear$62 ;
+  (* init = 1'h0 *)
+  wire \clear$65 ;
+  (* init = 1'h0 *)
+  wire \clear$68 ;
+  (* init = 1'h0 *)
   wire \clear$7 ;
   reg clear_reg = 1'h0;
   input clk;
@@ -9124,8 +9994,11 @@ module \biss_master_axil.ch0.core.counters (rst, clear, events, counts, clk);
   wire [15:0] \count$54 ;
   wire [15:0] \count$57 ;
   wire [15:0] \count$60 ;
-  output [287:0] counts;
-  wire [287:0] counts;
+  wire [15:0] \count$63 ;
+  wire [15:0] \count$66 ;
+  wire [15:0] \count$69 ;
+  output [335:0] counts;
+  wire [335:0] counts;
   wire [15:0] \counts.aborted ;
   wire [15:0] \counts.ca_aborted ;
   wire [15:0] \counts.ca_crc4_error ;
@@ -9134,6 +10007,7 @@ module \biss_master_axil.ch0.core.counters (rst, clear, events, counts, clk);
   wire [15:0] \counts.ca_refused ;
   wire [15:0] \counts.crc_word0 ;
   wire [15:0] \counts.crc_word1 ;
+  wire [15:0] \counts.delay_jump ;
   wire [15:0] \counts.delay_range ;
   wire [15:0] \counts.lc_repeat ;
   wire [15:0] \counts.lc_skip ;
@@ -9141,11 +10015,13 @@ module \biss_master_axil.ch0.core.counters (rst, clear, events, counts, clk);
   wire [15:0] \counts.no_ack ;
   wire [15:0] \counts.no_start ;
   wire [15:0] \counts.no_stop ;
+  wire [15:0] \counts.noise_event ;
+  wire [15:0] \counts.noisy_line ;
   wire [15:0] \counts.overrun ;
   wire [15:0] \counts.slo_stuck_low ;
   wire [15:0] \counts.spw_mismatch ;
-  input [17:0] events;
-  wire [17:0] events;
+  input [20:0] events;
+  wire [20:0] events;
   wire \events.aborted ;
   wire \events.ca_aborted ;
   wire \events.ca_crc4_error ;
@@ -9154,6 +10030,7 @@ module \biss_master_axil.ch0.core.counters (rst, clear, events, counts, clk);
   wire \events.ca_refused ;
   wire \events.crc_word0 ;
   wire \events.crc_word1 ;
+  wire \events.delay_jump ;
   wire \events.delay_range ;
   wire \events.lc_repeat ;
   wire \events.lc_skip ;
@@ -9161,10 +10038,12 @@ module \biss_master_axil.ch0.core.counters (rst, clear, events, counts, clk);
   wire \events.no_ack ;
   wire \events.no_start ;
   wire \events.no_stop ;
+  wire \events.noise_event ;
+  wire \events.noisy_line ;
   wire \events.overrun ;
   wire \events.slo_stuck_low ;
   wire \events.spw_mismatch ;
-  reg [17:0] events_reg = 18'h00000;
+  reg [20:0] events_reg = 21'h000000;
   wire \events_reg.aborted ;
   wire \events_reg.ca_aborted ;
   wire \events_reg.ca_crc4_error ;
@@ -9173,6 +10052,7 @@ module \biss_master_axil.ch0.core.counters (rst, clear, events, counts, clk);
   wire \events_reg.ca_refused ;
   wire \events_reg.crc_word0 ;
   wire \events_reg.crc_word1 ;
+  wire \events_reg.delay_jump ;
   wire \events_reg.delay_range ;
   wire \events_reg.lc_repeat ;
   wire \events_reg.lc_skip ;
@@ -9180,6 +10060,8 @@ module \biss_master_axil.ch0.core.counters (rst, clear, events, counts, clk);
   wire \events_reg.no_ack ;
   wire \events_reg.no_start ;
   wire \events_reg.no_stop ;
+  wire \events_reg.noise_event ;
+  wire \events_reg.noisy_line ;
   wire \events_reg.overrun ;
   wire \events_reg.slo_stuck_low ;
   wire \events_reg.spw_mismatch ;
@@ -9201,6 +10083,9 @@ module \biss_master_axil.ch0.core.counters (rst, clear, events, counts, clk);
   wire \inc$52 ;
   wire \inc$55 ;
   wire \inc$58 ;
+  wire \inc$61 ;
+  wire \inc$64 ;
+  wire \inc$67 ;
   input rst;
   wire rst;
   always @(posedge clk)
@@ -9217,36 +10102,36 @@ module \biss_master_axil.ch0.core.counters (rst, clear, events, counts, clk);
   \biss_master_axil.ch0.core.counters.count_ca_aborted  count_ca_aborted (
     .clear(clear_reg),
     .clk(clk),
-    .count(\count$57 ),
-    .inc(events_reg[16]),
+    .count(\count$66 ),
+    .inc(events_reg[19]),
     .rst(rst)
   );
   \biss_master_axil.ch0.core.counters.count_ca_crc4_error  count_ca_crc4_error (
     .clear(clear_reg),
     .clk(clk),
-    .count(\count$48 ),
-    .inc(events_reg[13]),
+    .count(\count$57 ),
+    .inc(events_reg[16]),
     .rst(rst)
   );
   \biss_master_axil.ch0.core.counters.count_ca_data_fault  count_ca_data_fault (
+    .clear(clear_reg),
+    .clk(clk),
+    .count(\count$69 ),
+    .inc(events_reg[20]),
+    .rst(rst)
+  );
+  \biss_master_axil.ch0.core.counters.count_ca_no_answer  count_ca_no_answer (
     .clear(clear_reg),
     .clk(clk),
     .count(\count$60 ),
     .inc(events_reg[17]),
     .rst(rst)
   );
-  \biss_master_axil.ch0.core.counters.count_ca_no_answer  count_ca_no_answer (
-    .clear(clear_reg),
-    .clk(clk),
-    .count(\count$51 ),
-    .inc(events_reg[14]),
-    .rst(rst)
-  );
   \biss_master_axil.ch0.core.counters.count_ca_refused  count_ca_refused (
     .clear(clear_reg),
     .clk(clk),
-    .count(\count$54 ),
-    .inc(events_reg[15]),
+    .count(\count$63 ),
+    .inc(events_reg[18]),
     .rst(rst)
   );
   \biss_master_axil.ch0.core.counters.count_crc_word0  count_crc_word0 (
@@ -9261,6 +10146,13 @@ module \biss_master_axil.ch0.core.counters (rst, clear, events, counts, clk);
     .clk(clk),
     .count(\count$12 ),
     .inc(events_reg[1]),
+    .rst(rst)
+  );
+  \biss_master_axil.ch0.core.counters.count_delay_jump  count_delay_jump (
+    .clear(clear_reg),
+    .clk(clk),
+    .count(\count$51 ),
+    .inc(events_reg[14]),
     .rst(rst)
   );
   \biss_master_axil.ch0.core.counters.count_delay_range  count_delay_range (
@@ -9312,6 +10204,20 @@ module \biss_master_axil.ch0.core.counters (rst, clear, events, counts, clk);
     .inc(events_reg[12]),
     .rst(rst)
   );
+  \biss_master_axil.ch0.core.counters.count_noise_event  count_noise_event (
+    .clear(clear_reg),
+    .clk(clk),
+    .count(\count$54 ),
+    .inc(events_reg[15]),
+    .rst(rst)
+  );
+  \biss_master_axil.ch0.core.counters.count_noisy_line  count_noisy_line (
+    .clear(clear_reg),
+    .clk(clk),
+    .count(\count$48 ),
+    .inc(events_reg[13]),
+    .rst(rst)
+  );
   \biss_master_axil.ch0.core.counters.count_overrun  count_overrun (
     .clear(clear_reg),
     .clk(clk),
@@ -9337,7 +10243,7 @@ module \biss_master_axil.ch0.core.counters (rst, clear, events, counts, clk);
     if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     \$1  = events;
     if (rst) begin
-      \$1  = 18'h00000;
+      \$1  = 21'h000000;
     end
   end
   always @* begin
@@ -9383,6 +10289,12 @@ module \biss_master_axil.ch0.core.counters (rst, clear, events, counts, clk);
   assign \clear$56  = clear_reg;
   assign \inc$58  = events_reg[17];
   assign \clear$59  = clear_reg;
+  assign \inc$61  = events_reg[18];
+  assign \clear$62  = clear_reg;
+  assign \inc$64  = events_reg[19];
+  assign \clear$65  = clear_reg;
+  assign \inc$67  = events_reg[20];
+  assign \clear$68  = clear_reg;
   assign \events_reg.crc_word0  = events_reg[0];
   assign \events_reg.crc_word1  = events_reg[1];
   assign \events_reg.no_ack  = events_reg[2];
@@ -9396,11 +10308,14 @@ module \biss_master_axil.ch0.core.counters (rst, clear, events, counts, clk);
   assign \events_reg.overrun  = events_reg[10];
   assign \events_reg.aborted  = events_reg[11];
   assign \events_reg.no_stop  = events_reg[12];
-  assign \events_reg.ca_crc4_error  = events_reg[13];
-  assign \events_reg.ca_no_answer  = events_reg[14];
-  assign \events_reg.ca_refused  = events_reg[15];
-  assign \events_reg.ca_aborted  = events_reg[16];
-  assign \events_reg.ca_data_fault  = events_reg[17];
+  assign \events_reg.noisy_line  = events_reg[13];
+  assign \events_reg.delay_jump  = events_reg[14];
+  assign \events_reg.noise_event  = events_reg[15];
+  assign \events_reg.ca_crc4_error  = events_reg[16];
+  assign \events_reg.ca_no_answer  = events_reg[17];
+  assign \events_reg.ca_refused  = events_reg[18];
+  assign \events_reg.ca_aborted  = events_reg[19];
+  assign \events_reg.ca_data_fault  = events_reg[20];
   assign \events.crc_word0  = events[0];
   assign \events.crc_word1  = events[1];
   assign \events.no_ack  = events[2];
@@ -9414,11 +10329,14 @@ module \biss_master_axil.ch0.core.counters (rst, clear, events, counts, clk);
   assign \events.overrun  = events[10];
   assign \events.aborted  = events[11];
   assign \events.no_stop  = events[12];
-  assign \events.ca_crc4_error  = events[13];
-  assign \events.ca_no_answer  = events[14];
-  assign \events.ca_refused  = events[15];
-  assign \events.ca_aborted  = events[16];
-  assign \events.ca_data_fault  = events[17];
+  assign \events.noisy_line  = events[13];
+  assign \events.delay_jump  = events[14];
+  assign \events.noise_event  = events[15];
+  assign \events.ca_crc4_error  = events[16];
+  assign \events.ca_no_answer  = events[17];
+  assign \events.ca_refused  = events[18];
+  assign \events.ca_aborted  = events[19];
+  assign \events.ca_data_fault  = events[20];
   assign \counts.crc_word0  = counts[15:0];
   assign \counts.crc_word1  = counts[31:16];
   assign \counts.no_ack  = counts[47:32];
@@ -9432,11 +10350,17 @@ module \biss_master_axil.ch0.core.counters (rst, clear, events, counts, clk);
   assign \counts.overrun  = counts[175:160];
   assign \counts.aborted  = counts[191:176];
   assign \counts.no_stop  = counts[207:192];
-  assign \counts.ca_crc4_error  = counts[223:208];
-  assign \counts.ca_no_answer  = counts[239:224];
-  assign \counts.ca_refused  = counts[255:240];
-  assign \counts.ca_aborted  = counts[271:256];
-  assign \counts.ca_data_fault  = counts[287:272];
+  assign \counts.noisy_line  = counts[223:208];
+  assign \counts.delay_jump  = counts[239:224];
+  assign \counts.noise_event  = counts[255:240];
+  assign \counts.ca_crc4_error  = counts[271:256];
+  assign \counts.ca_no_answer  = counts[287:272];
+  assign \counts.ca_refused  = counts[303:288];
+  assign \counts.ca_aborted  = counts[319:304];
+  assign \counts.ca_data_fault  = counts[335:320];
+  assign counts[335:320] = \count$69 ;
+  assign counts[319:304] = \count$66 ;
+  assign counts[303:288] = \count$63 ;
   assign counts[287:272] = \count$60 ;
   assign counts[271:256] = \count$57 ;
   assign counts[255:240] = \count$54 ;
@@ -9890,7 +10814,7 @@ module \biss_master_axil.ch0.core.counters.count_crc_word1 (rst, inc, clear, cou
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_delay_range (rst, inc, clear, count, clk);
+module \biss_master_axil.ch0.core.counters.count_delay_jump (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$44  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -9944,7 +10868,7 @@ module \biss_master_axil.ch0.core.counters.count_delay_range (rst, inc, clear, c
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_lc_repeat (rst, inc, clear, count, clk);
+module \biss_master_axil.ch0.core.counters.count_delay_range (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$45  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -9998,7 +10922,7 @@ module \biss_master_axil.ch0.core.counters.count_lc_repeat (rst, inc, clear, cou
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_lc_skip (rst, inc, clear, count, clk);
+module \biss_master_axil.ch0.core.counters.count_lc_repeat (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$46  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -10052,7 +10976,7 @@ module \biss_master_axil.ch0.core.counters.count_lc_skip (rst, inc, clear, count
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_lc_zero (rst, inc, clear, count, clk);
+module \biss_master_axil.ch0.core.counters.count_lc_skip (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$47  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -10106,7 +11030,7 @@ module \biss_master_axil.ch0.core.counters.count_lc_zero (rst, inc, clear, count
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_no_ack (rst, inc, clear, count, clk);
+module \biss_master_axil.ch0.core.counters.count_lc_zero (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$48  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -10160,7 +11084,7 @@ module \biss_master_axil.ch0.core.counters.count_no_ack (rst, inc, clear, count,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_no_start (rst, inc, clear, count, clk);
+module \biss_master_axil.ch0.core.counters.count_no_ack (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$49  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -10214,7 +11138,7 @@ module \biss_master_axil.ch0.core.counters.count_no_start (rst, inc, clear, coun
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_no_stop (rst, inc, clear, count, clk);
+module \biss_master_axil.ch0.core.counters.count_no_start (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$50  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -10268,7 +11192,7 @@ module \biss_master_axil.ch0.core.counters.count_no_stop (rst, inc, clear, count
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_overrun (rst, inc, clear, count, clk);
+module \biss_master_axil.ch0.core.counters.count_no_stop (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -10322,7 +11246,7 @@ module \biss_master_axil.ch0.core.counters.count_overrun (rst, inc, clear, count
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_slo_stuck_low (rst, inc, clear, count, clk);
+module \biss_master_axil.ch0.core.counters.count_noise_event (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$52  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -10376,7 +11300,7 @@ module \biss_master_axil.ch0.core.counters.count_slo_stuck_low (rst, inc, clear,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_spw_mismatch (rst, inc, clear, count, clk);
+module \biss_master_axil.ch0.core.counters.count_noisy_line (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$53  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -10430,9 +11354,171 @@ module \biss_master_axil.ch0.core.counters.count_spw_mismatch (rst, inc, clear, 
 endmodule
 
 (* generator = "Amaranth" *)
+module \biss_master_axil.ch0.core.counters.count_overrun (rst, inc, clear, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$54  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_axil.ch0.core.counters.count_slo_stuck_low (rst, inc, clear, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$55  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_axil.ch0.core.counters.count_spw_mismatch (rst, inc, clear, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$56  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, sample, \bit , receiver_clear, done, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1, lc, cpw_top, crc_ok
 , clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$54  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$57  = 0;
   wire [6:0] \$1 ;
   wire [1:0] \$10 ;
   reg [2:0] \$100 ;
@@ -10815,7 +11901,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     .valid(\valid$52 )
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     (* full_case = 32'd1 *)
     casez (words[6])
       1'h0:
@@ -10825,7 +11911,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -10839,7 +11925,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     (* full_case = 32'd1 *)
     casez (words[9:6])
       4'h0:
@@ -10877,7 +11963,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -10891,7 +11977,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     (* full_case = 32'd1 *)
     casez (words[16])
       1'h0:
@@ -10901,7 +11987,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     (* full_case = 32'd1 *)
     casez (words[17:16])
       2'h0:
@@ -10915,7 +12001,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:16])
       4'h0:
@@ -10953,7 +12039,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     (* full_case = 32'd1 *)
     casez (words[17:16])
       2'h0:
@@ -10967,7 +12053,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$94  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -10991,7 +12077,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$95  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -11013,7 +12099,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$96  = slots;
     if (\$34 ) begin
       \$96  = \$35 [15:0];
@@ -11026,7 +12112,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$97  = slots_full;
     if (\$34 ) begin
       \$97  = \$36 ;
@@ -11039,7 +12125,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$98  = started;
     casez (decoder_fsm_state)
       3'h0:
@@ -11055,7 +12141,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$99  = start_slot;
     casez (decoder_fsm_state)
       3'h0:
@@ -11071,7 +12157,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$100  = decoder_fsm_state;
     casez (decoder_fsm_state)
       3'h0:
@@ -11103,7 +12189,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$101  = cds;
     casez (decoder_fsm_state)
       3'h0:
@@ -11121,7 +12207,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$102  = idx;
     casez (decoder_fsm_state)
       3'h0:
@@ -11146,7 +12232,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$103  = in_data;
     casez (decoder_fsm_state)
       3'h0:
@@ -11171,7 +12257,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$104  = in_lc;
     casez (decoder_fsm_state)
       3'h0:
@@ -11196,7 +12282,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$105  = in_top;
     casez (decoder_fsm_state)
       3'h0:
@@ -11221,7 +12307,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$106  = word;
     casez (decoder_fsm_state)
       3'h0:
@@ -11249,7 +12335,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$107  = stop_bit;
     casez (decoder_fsm_state)
       3'h0:
@@ -11271,7 +12357,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$108  = data0;
     if (\$58 ) begin
       \$108  = { data0[53:0], \bit  };
@@ -11284,7 +12370,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$109  = ne;
     if (\$59 ) begin
       \$109 [0] = 1'h1;
@@ -11304,7 +12390,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$110  = nw;
     if (\$59 ) begin
       \$110 [0] = 1'h1;
@@ -11326,7 +12412,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$111  = data1;
     if (\$70 ) begin
       \$111  = { data1[38:0], \bit  };
@@ -11339,7 +12425,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$112  = lc;
     if (lc_load) begin
       \$112  = { lc[4:0], \bit  };
@@ -11352,7 +12438,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$113  = cpw_top;
     if (\$80 ) begin
       \$113  = { cpw_top[38:0], \bit  };
@@ -11365,7 +12451,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     in_word = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -11402,7 +12488,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.decoder.crc0 (rst, start, valid, kind, \bit , receiver_clear, ok, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$55  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$58  = 0;
   wire [5:0] \$1 ;
   wire \$10 ;
   wire [5:0] \$11 ;
@@ -11496,7 +12582,7 @@ module \biss_master_axil.ch0.core.decoder.crc0 (rst, start, valid, kind, \bit , 
   assign \$auto$rtlil.cc:2739:Not$22  = ~ { crc6_reg[0], 1'h0 };
   assign \$auto$rtlil.cc:2739:Not$24  = ~ { crc16_reg[14], crc16_reg[11], crc16_reg[6:5], crc16_reg[3:2], 1'h0 };
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     \$31  = crc6_reg;
     if (valid) begin
       \$31  = \$5 ;
@@ -11511,7 +12597,7 @@ module \biss_master_axil.ch0.core.decoder.crc0 (rst, start, valid, kind, \bit , 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     \$32  = crc6_match;
     if (valid) begin
       \$32  = \$15 ;
@@ -11526,7 +12612,7 @@ module \biss_master_axil.ch0.core.decoder.crc0 (rst, start, valid, kind, \bit , 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     \$33  = crc16_reg;
     if (valid) begin
       \$33  = \$20 ;
@@ -11541,7 +12627,7 @@ module \biss_master_axil.ch0.core.decoder.crc0 (rst, start, valid, kind, \bit , 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     \$34  = crc16_match;
     if (valid) begin
       \$34  = \$30 ;
@@ -11556,7 +12642,7 @@ module \biss_master_axil.ch0.core.decoder.crc0 (rst, start, valid, kind, \bit , 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     ok = 1'h0;
     casez (kind)
       2'h0:
@@ -11577,7 +12663,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.decoder.crc1 (rst, start, valid, kind, \bit , receiver_clear, ok, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$56  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$59  = 0;
   wire [5:0] \$1 ;
   wire \$10 ;
   wire [5:0] \$11 ;
@@ -11671,7 +12757,7 @@ module \biss_master_axil.ch0.core.decoder.crc1 (rst, start, valid, kind, \bit , 
   assign \$auto$rtlil.cc:2739:Not$18  = ~ { crc6_reg[0], 1'h0 };
   assign \$auto$rtlil.cc:2739:Not$20  = ~ { crc16_reg[14], crc16_reg[11], crc16_reg[6:5], crc16_reg[3:2], 1'h0 };
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     \$31  = crc6_reg;
     if (valid) begin
       \$31  = \$5 ;
@@ -11686,7 +12772,7 @@ module \biss_master_axil.ch0.core.decoder.crc1 (rst, start, valid, kind, \bit , 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     \$32  = crc6_match;
     if (valid) begin
       \$32  = \$15 ;
@@ -11701,7 +12787,7 @@ module \biss_master_axil.ch0.core.decoder.crc1 (rst, start, valid, kind, \bit , 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     \$33  = crc16_reg;
     if (valid) begin
       \$33  = \$20 ;
@@ -11716,7 +12802,7 @@ module \biss_master_axil.ch0.core.decoder.crc1 (rst, start, valid, kind, \bit , 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     \$34  = crc16_match;
     if (valid) begin
       \$34  = \$30 ;
@@ -11731,7 +12817,7 @@ module \biss_master_axil.ch0.core.decoder.crc1 (rst, start, valid, kind, \bit , 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     ok = 1'h0;
     casez (kind)
       2'h0:
@@ -11751,8 +12837,478 @@ module \biss_master_axil.ch0.core.decoder.crc1 (rst, start, valid, kind, \bit , 
 endmodule
 
 (* generator = "Amaranth" *)
+module \biss_master_axil.ch0.core.delay_check (rst, enable, rearm, check, clean, \tolerance$8 , learn, delay, jump, spread, settled_delay, settled, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$60  = 0;
+  wire [13:0] \$1 ;
+  wire \$10 ;
+  wire \$11 ;
+  wire [12:0] \$12 ;
+  wire [12:0] \$13 ;
+  wire \$14 ;
+  wire [12:0] \$15 ;
+  wire [12:0] \$16 ;
+  wire \$17 ;
+  wire \$18 ;
+  wire \$19 ;
+  wire [13:0] \$2 ;
+  wire \$20 ;
+  wire [12:0] \$21 ;
+  wire [12:0] \$22 ;
+  wire \$23 ;
+  wire \$24 ;
+  wire [7:0] \$25 ;
+  wire \$26 ;
+  wire \$27 ;
+  wire \$28 ;
+  wire \$29 ;
+  wire \$3 ;
+  wire \$30 ;
+  wire \$31 ;
+  wire \$32 ;
+  wire \$33 ;
+  wire \$34 ;
+  wire \$35 ;
+  wire \$36 ;
+  wire \$37 ;
+  wire \$38 ;
+  wire \$39 ;
+  wire [12:0] \$4 ;
+  wire \$40 ;
+  wire [2:0] \$41 ;
+  wire \$42 ;
+  wire \$43 ;
+  wire [12:0] \$44 ;
+  wire [12:0] \$45 ;
+  reg [13:0] \$46 ;
+  reg [13:0] \$47 ;
+  reg [16:0] \$48 ;
+  reg \$49 ;
+  wire [12:0] \$5 ;
+  reg \$50 ;
+  reg \$51 ;
+  reg [7:0] \$52 ;
+  reg \$53 ;
+  reg \$54 ;
+  reg [1:0] \$55 ;
+  reg [7:0] \$56 ;
+  reg [12:0] \$57 ;
+  reg [12:0] \$58 ;
+  reg \$59 ;
+  wire \$6 ;
+  wire [12:0] \$7 ;
+  wire [12:0] \$8 ;
+  wire \$9 ;
+  reg [12:0] cand = 13'h0000;
+  input check;
+  wire check;
+  input clean;
+  wire clean;
+  input clk;
+  wire clk;
+  reg [1:0] count = 2'h0;
+  input [12:0] delay;
+  wire [12:0] delay;
+  reg [13:0] diff_cand = 14'h0000;
+  reg [13:0] diff_ref = 14'h0000;
+  input enable;
+  wire enable;
+  reg far_ref = 1'h0;
+  output jump;
+  reg jump = 1'h0;
+  input learn;
+  wire learn;
+  wire [8:0] low_sum;
+  reg [7:0] magnitude = 8'h00;
+  reg near_cand = 1'h0;
+  input rearm;
+  wire rearm;
+  reg resettled = 1'h0;
+  input rst;
+  wire rst;
+  reg saturated = 1'h0;
+  output settled;
+  reg settled = 1'h0;
+  output [12:0] settled_delay;
+  reg [12:0] settled_delay = 13'h0000;
+  output [7:0] spread;
+  reg [7:0] spread = 8'h00;
+  reg [16:0] tolerance = 17'h00000;
+  input [16:0] \tolerance$8 ;
+  wire [16:0] \tolerance$8 ;
+  assign \$41  = count + 1'h1;
+  assign \$42  = ~ enable;
+  assign \$43  = rearm | \$42 ;
+  assign \$44  = ~ diff_ref[12:0];
+  assign \$45  = diff_ref[13] ? \$44  : diff_ref[12:0];
+  assign low_sum = \$45 [7:0] + diff_ref[13];
+  always @(posedge clk)
+    diff_ref <= \$46 ;
+  always @(posedge clk)
+    diff_cand <= \$47 ;
+  always @(posedge clk)
+    tolerance <= \$48 ;
+  always @(posedge clk)
+    saturated <= \$49 ;
+  always @(posedge clk)
+    far_ref <= \$50 ;
+  always @(posedge clk)
+    near_cand <= \$51 ;
+  always @(posedge clk)
+    magnitude <= \$52 ;
+  always @(posedge clk)
+    resettled <= \$53 ;
+  always @(posedge clk)
+    jump <= \$54 ;
+  always @(posedge clk)
+    count <= \$55 ;
+  always @(posedge clk)
+    spread <= \$56 ;
+  always @(posedge clk)
+    cand <= \$57 ;
+  always @(posedge clk)
+    settled_delay <= \$58 ;
+  always @(posedge clk)
+    settled <= \$59 ;
+  assign \$1  = delay - settled_delay;
+  assign \$2  = delay - cand;
+  assign \$3  = delay == 13'h1fff;
+  assign \$4  = ~ diff_ref[12:0];
+  assign \$5  = diff_ref[13] ? \$4  : diff_ref[12:0];
+  assign \$6  = \$5  > tolerance;
+  assign \$7  = ~ diff_ref[12:0];
+  assign \$8  = diff_ref[13] ? \$7  : diff_ref[12:0];
+  assign \$9  = \$8  == tolerance;
+  assign \$10  = diff_ref[13] & \$9 ;
+  assign \$11  = \$6  | \$10 ;
+  assign \$12  = ~ diff_cand[12:0];
+  assign \$13  = diff_cand[13] ? \$12  : diff_cand[12:0];
+  assign \$14  = \$13  > tolerance;
+  assign \$15  = ~ diff_cand[12:0];
+  assign \$16  = diff_cand[13] ? \$15  : diff_cand[12:0];
+  assign \$17  = \$16  == tolerance;
+  assign \$18  = diff_cand[13] & \$17 ;
+  assign \$19  = \$14  | \$18 ;
+  assign \$20  = ~ \$19 ;
+  assign \$21  = ~ diff_ref[12:0];
+  assign \$22  = diff_ref[13] ? \$21  : diff_ref[12:0];
+  assign \$23  = | \$22 [12:8];
+  assign \$24  = \$23  | low_sum[8];
+  assign \$25  = \$24  ? 8'hff : low_sum[7:0];
+  assign \$26  = settled & far_ref;
+  assign \$27  = ~ saturated;
+  assign \$28  = clean & \$27 ;
+  assign \$29  = ~ \$28 ;
+  assign \$30  = ~ jump;
+  assign \$31  = settled & \$30 ;
+  assign \$32  = \$29  | \$31 ;
+  assign \$33  = ! count;
+  assign \$34  = ~ near_cand;
+  assign \$35  = \$33  | \$34 ;
+  assign \$36  = count == 2'h3;
+  assign \$37  = ~ saturated;
+  assign \$38  = clean & \$37 ;
+  assign \$39  = magnitude > spread;
+  assign \$40  = \$38  & \$39 ;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    \$46  = \$1 ;
+    if (rst) begin
+      \$46  = 14'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    \$47  = \$2 ;
+    if (rst) begin
+      \$47  = 14'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    \$48  = \tolerance$8 ;
+    if (rst) begin
+      \$48  = 17'h00000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    \$49  = \$3 ;
+    if (rst) begin
+      \$49  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    \$50  = \$11 ;
+    if (rst) begin
+      \$50  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    \$51  = \$20 ;
+    if (rst) begin
+      \$51  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    \$52  = \$25 ;
+    if (rst) begin
+      \$52  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    \$53  = 1'h0;
+    if (learn) begin
+      if (\$32 ) begin
+      end else if (\$35 ) begin
+      end else if (\$36 ) begin
+        \$53  = settled;
+      end
+    end
+    if (\$43 ) begin
+      \$53  = 1'h0;
+    end
+    if (rst) begin
+      \$53  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    \$54  = jump;
+    if (check) begin
+      \$54  = \$26 ;
+    end
+    if (\$43 ) begin
+      \$54  = 1'h0;
+    end
+    if (rst) begin
+      \$54  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    \$55  = count;
+    if (learn) begin
+      (* full_case = 32'd1 *)
+      if (\$32 ) begin
+        \$55  = 2'h0;
+      end else if (\$35 ) begin
+        \$55  = 2'h1;
+      end else if (\$36 ) begin
+        \$55  = 2'h0;
+      end else begin
+        \$55  = \$41 [1:0];
+      end
+    end
+    if (\$43 ) begin
+      \$55  = 2'h0;
+    end
+    if (rst) begin
+      \$55  = 2'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    \$56  = spread;
+    if (learn) begin
+      if (\$32 ) begin
+        if (\$40 ) begin
+          \$56  = magnitude;
+        end
+      end else if (\$35 ) begin
+      end else if (\$36 ) begin
+        \$56  = 8'h00;
+      end
+    end
+    if (\$43 ) begin
+      \$56  = 8'h00;
+    end
+    if (rst) begin
+      \$56  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    \$57  = cand;
+    if (learn) begin
+      if (\$32 ) begin
+      end else if (\$35 ) begin
+        \$57  = delay;
+      end
+    end
+    if (rst) begin
+      \$57  = 13'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    \$58  = settled_delay;
+    if (learn) begin
+      if (\$32 ) begin
+      end else if (\$35 ) begin
+      end else if (\$36 ) begin
+        \$58  = cand;
+      end
+    end
+    if (\$43 ) begin
+      \$58  = 13'h0000;
+    end
+    if (rst) begin
+      \$58  = 13'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    \$59  = settled;
+    if (learn) begin
+      if (\$32 ) begin
+      end else if (\$35 ) begin
+      end else if (\$36 ) begin
+        \$59  = 1'h1;
+      end
+    end
+    if (\$43 ) begin
+      \$59  = 1'h0;
+    end
+    if (rst) begin
+      \$59  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_axil.ch0.core.line_noise (rst, sampler_noise, \event , noisy, events, limit, watch, level, close, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$61  = 0;
+  wire \$1 ;
+  wire [4:0] \$10 ;
+  wire \$11 ;
+  wire \$12 ;
+  wire \$13 ;
+  wire \$14 ;
+  reg \$15 ;
+  reg \$16 ;
+  reg [3:0] \$17 ;
+  reg [3:0] \$18 ;
+  reg \$19 ;
+  wire \$2 ;
+  wire \$3 ;
+  wire \$4 ;
+  wire [4:0] \$5 ;
+  wire [4:0] \$6 ;
+  wire \$7 ;
+  wire \$8 ;
+  wire [4:0] \$9 ;
+  input clk;
+  wire clk;
+  input close;
+  wire close;
+  output \event ;
+  wire \event ;
+  output [3:0] events;
+  wire [3:0] events;
+  reg [3:0] held_events = 4'h0;
+  reg held_noisy = 1'h0;
+  input level;
+  wire level;
+  reg level_prev = 1'h1;
+  input [3:0] limit;
+  wire [3:0] limit;
+  output noisy;
+  wire noisy;
+  reg over = 1'h0;
+  input rst;
+  wire rst;
+  reg [3:0] running = 4'h0;
+  input sampler_noise;
+  wire sampler_noise;
+  input watch;
+  wire watch;
+  assign \$1  = ! limit;
+  assign \$2  = \event  & \$1 ;
+  assign \$3  = running != 4'hf;
+  assign \$4  = \event  & \$3 ;
+  assign \$5  = running + 1'h1;
+  assign \$6  = \$4  ? \$5  : { 1'h0, running };
+  assign \$7  = running != 4'hf;
+  assign \$8  = \event  & \$7 ;
+  assign \$9  = running + 1'h1;
+  assign \$10  = \$8  ? \$9  : { 1'h0, running };
+  assign \$11  = \$10  > limit;
+  assign \$12  = watch & level_prev;
+  assign \$13  = ~ level;
+  assign \$14  = \$12  & \$13 ;
+  assign \event  = sampler_noise | \$14 ;
+  assign noisy = close ? over : held_noisy;
+  assign events = close ? running : held_events;
+  always @(posedge clk)
+    level_prev <= \$15 ;
+  always @(posedge clk)
+    held_noisy <= \$16 ;
+  always @(posedge clk)
+    held_events <= \$17 ;
+  always @(posedge clk)
+    running <= \$18 ;
+  always @(posedge clk)
+    over <= \$19 ;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    \$15  = level;
+    if (rst) begin
+      \$15  = 1'h1;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    \$16  = held_noisy;
+    if (close) begin
+      \$16  = over;
+    end
+    if (rst) begin
+      \$16  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    \$17  = held_events;
+    if (close) begin
+      \$17  = running;
+    end
+    if (rst) begin
+      \$17  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    (* full_case = 32'd1 *)
+    if (close) begin
+      \$18  = { 3'h0, \event  };
+    end else begin
+      \$18  = \$6 [3:0];
+    end
+    if (rst) begin
+      \$18  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    (* full_case = 32'd1 *)
+    if (close) begin
+      \$19  = \$2 ;
+    end else begin
+      \$19  = \$11 ;
+    end
+    if (rst) begin
+      \$19  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, hold, first_rise, second_rise, ma, rises, busy, held, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$57  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$62  = 0;
   wire [16:0] \$1 ;
   wire \$10 ;
   wire [16:0] \$11 ;
@@ -11877,7 +13433,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
   always @(posedge clk)
     released <= \$42 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
     \$34  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -11892,7 +13448,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
     \$35  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -11907,7 +13463,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
     \$36  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -11922,7 +13478,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
     \$37  = ma;
     casez (ma_fsm_state)
       3'h0:
@@ -11951,7 +13507,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
     \$38  = phase_left;
     casez (ma_fsm_state)
       3'h0:
@@ -11993,7 +13549,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
     \$39  = last_clock;
     casez (ma_fsm_state)
       3'h0:
@@ -12035,7 +13591,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
     \$40  = rises;
     casez (ma_fsm_state)
       3'h0:
@@ -12054,7 +13610,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
     \$41  = ma_fsm_state;
     casez (ma_fsm_state)
       3'h0:
@@ -12090,7 +13646,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
     \$42  = released;
     casez (ma_fsm_state)
       3'h0:
@@ -12114,7 +13670,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
     busy = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -12130,7 +13686,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
     held = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -12147,7 +13703,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.ma_stop (rst, words, w1_enable, clear, rises, enough, \started$10 , start_slot, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$58  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$63  = 0;
   reg [7:0] \$1 ;
   reg [7:0] \$10 ;
   wire [8:0] \$11 ;
@@ -12228,7 +13784,7 @@ module \biss_master_axil.ch0.core.ma_stop (rst, words, w1_enable, clear, rises, 
   always @(posedge clk)
     word1_len <= \$17 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
     (* full_case = 32'd1 *)
     casez (words[9:6])
       4'h0:
@@ -12266,7 +13822,7 @@ module \biss_master_axil.ch0.core.ma_stop (rst, words, w1_enable, clear, rises, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:16])
       4'h0:
@@ -12304,42 +13860,42 @@ module \biss_master_axil.ch0.core.ma_stop (rst, words, w1_enable, clear, rises, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
     \$12  = \$2 [7:0];
     if (rst) begin
       \$12  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
     \$13  = \$4 ;
     if (rst) begin
       \$13  = 9'h000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
     \$14  = \$5 ;
     if (rst) begin
       \$14  = 17'h00000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
     \$15  = \started$10 ;
     if (rst) begin
       \$15  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
     \$16  = \$9 ;
     if (rst) begin
       \$16  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
     \$17  = \$11 [7:0];
     if (rst) begin
       \$17  = 8'h00;
@@ -12651,7 +14207,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.register_access.buffers (clk, rst, host_read__en, byte_to_send, rbuf_data, wbuf, index, store, byte_received, host_read__addr);
-  reg \$auto$verilog_backend.cc:2355:dump_module$59  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$64  = 0;
   wire \$1 ;
   wire \$2 ;
   wire \$3 ;
@@ -12768,21 +14324,21 @@ module \biss_master_axil.ch0.core.register_access.buffers (clk, rst, host_read__
   assign \$1  = ! index[1:0];
   assign \$2  = index[1:0] == 1'h1;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     byte_received__addr = 4'h0;
     if (store) begin
       byte_received__addr = index[5:2];
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     byte_received__data = 32'd0;
     if (store) begin
       byte_received__data = { byte_received, byte_received, byte_received, byte_received };
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     byte_received__en = 4'h0;
     if (store) begin
       byte_received__en = { \$4 , \$3 , \$2 , \$1  };
@@ -12802,7 +14358,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.register_access.checker (rst, crc_ok, echo_ok, cds, control__take_data, start, control__take_crc, sent, \byte , clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$60  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$65  = 0;
   reg [7:0] \$1 ;
   reg [2:0] \$2 ;
   output [7:0] \byte ;
@@ -12845,7 +14401,7 @@ module \biss_master_axil.ch0.core.register_access.checker (rst, crc_ok, echo_ok,
     .valid(control__take_data)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     \$1  = \byte ;
     if (control__take_data) begin
       \$1  = { \byte [6:0], cds };
@@ -12855,7 +14411,7 @@ module \biss_master_axil.ch0.core.register_access.checker (rst, crc_ok, echo_ok,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     \$2  = got_crc;
     if (control__take_crc) begin
       \$2  = { got_crc[1:0], cds };
@@ -12871,7 +14427,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.register_access.checker.rx_crc (rst, crc, data_in, valid, start, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$61  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$66  = 0;
   wire [3:0] \$1 ;
   wire \$10 ;
   wire [3:0] \$11 ;
@@ -12914,7 +14470,7 @@ module \biss_master_axil.ch0.core.register_access.checker.rx_crc (rst, crc, data
     crc_reg <= \$13 ;
   assign \$auto$rtlil.cc:2739:Not$14  = ~ crc_reg;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$13  = crc_reg;
     if (valid) begin
       \$13 [0] = \$3 ;
@@ -12938,7 +14494,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.register_access.idle (rst, frame_end, frame_ok, run_enough, seen_enough, frame_cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$62  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$67  = 0;
   wire \$1 ;
   wire [4:0] \$10 ;
   wire \$11 ;
@@ -13008,7 +14564,7 @@ module \biss_master_axil.ch0.core.register_access.idle (rst, frame_end, frame_ok
   always @(posedge clk)
     idle_seen <= \$24 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
     \$23  = idle_run;
     if (frame_end) begin
       \$23  = \$4 [3:0];
@@ -13018,7 +14574,7 @@ module \biss_master_axil.ch0.core.register_access.idle (rst, frame_end, frame_ok
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
     \$24  = idle_seen;
     if (frame_end) begin
       \$24  = \$10 [3:0];
@@ -13031,7 +14587,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.register_access.sender (rst, \byte , request, control__load_header, control__source, control__crc_bit, control__shift_header, start, valid, control__load_byte, control__shift_byte, sent, cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$63  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$68  = 0;
   wire \$1 ;
   wire [18:0] \$2 ;
   wire [8:0] \$3 ;
@@ -13103,7 +14659,7 @@ module \biss_master_axil.ch0.core.register_access.sender (rst, \byte , request, 
     .valid(valid)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     \$6  = header;
     if (control__load_header) begin
       \$6  = { 2'h3, request[2:0], request[9:3], 4'h0, \$1 , request[17] };
@@ -13116,7 +14672,7 @@ module \biss_master_axil.ch0.core.register_access.sender (rst, \byte , request, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     \$7  = to_send;
     if (control__load_byte) begin
       \$7  = \byte ;
@@ -13129,7 +14685,7 @@ module \biss_master_axil.ch0.core.register_access.sender (rst, \byte , request, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     \$8  = sent;
     if (control__load_byte) begin
       \$8  = \byte ;
@@ -13139,7 +14695,7 @@ module \biss_master_axil.ch0.core.register_access.sender (rst, \byte , request, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     cdm = 1'h0;
     casez (control__source)
       3'h1:
@@ -13164,7 +14720,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.register_access.sender.tx_crc (rst, data_in, crc, start, valid, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$64  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$69  = 0;
   wire [3:0] \$1 ;
   wire \$10 ;
   wire [3:0] \$11 ;
@@ -13207,7 +14763,7 @@ module \biss_master_axil.ch0.core.register_access.sender.tx_crc (rst, data_in, c
     crc_reg <= \$13 ;
   assign \$auto$rtlil.cc:2739:Not$16  = ~ crc_reg;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     \$13  = crc_reg;
     if (valid) begin
       \$13 [0] = \$3 ;
@@ -13232,7 +14788,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, frame_ok, busy, crc_ok, echo_ok, run_enough, seen_enough, start, abort, request, frame_cdm, frame_cds, done, result, index, send__load_header, send__source, send__crc_bit, send__shift_header, send__crc_start
 , send__crc_valid, send__load_byte, send__shift_byte, check__take_data, check__first, check__take_crc, store, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$65  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$70  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$100 ;
@@ -13588,7 +15144,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
   always @(posedge clk)
     waited <= \$125 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     \$118  = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -13626,7 +15182,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     \$119  = result;
     casez (access_fsm_state)
       3'h0:
@@ -13680,7 +15236,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     \$120  = access_fsm_state;
     casez (access_fsm_state)
       3'h0:
@@ -13777,7 +15333,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     \$121  = req;
     casez (access_fsm_state)
       3'h0:
@@ -13794,7 +15350,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     \$122  = index;
     casez (access_fsm_state)
       3'h0:
@@ -13833,7 +15389,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     \$123  = step;
     casez (access_fsm_state)
       3'h0:
@@ -13891,7 +15447,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     \$124  = ending;
     casez (access_fsm_state)
       3'h0:
@@ -13958,7 +15514,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     \$125  = waited;
     casez (access_fsm_state)
       3'h0:
@@ -13990,7 +15546,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     send__load_header = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -14004,7 +15560,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     send__source = 3'h0;
     casez (access_fsm_state)
       3'h0:
@@ -14031,7 +15587,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     send__crc_bit = 2'h0;
     casez (access_fsm_state)
       3'h0:
@@ -14051,7 +15607,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     send__shift_header = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -14070,7 +15626,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     send__crc_start = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -14099,7 +15655,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     send__crc_valid = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -14120,7 +15676,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     send__load_byte = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -14142,7 +15698,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     send__shift_byte = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -14163,7 +15719,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     check__take_data = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -14185,7 +15741,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     check__first = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -14207,7 +15763,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     check__take_crc = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -14231,7 +15787,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     store = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -14270,22 +15826,26 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.results (rst, report_delay, report, valid, frame, report_frame, done, valid_out, result, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$66  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$71  = 0;
   reg \$1 ;
   reg \$2 ;
-  reg [160:0] \$3 ;
+  reg [186:0] \$3 ;
   input clk;
   wire clk;
   output done;
   reg done = 1'h0;
-  input [160:0] frame;
-  wire [160:0] frame;
+  input [186:0] frame;
+  wire [186:0] frame;
   wire \frame.cds ;
+  wire \frame.delay_settled ;
+  wire [7:0] \frame.delay_spread ;
   wire [5:0] \frame.lc ;
   wire \frame.lc_repeat ;
   wire \frame.lc_skip ;
   wire \frame.lc_zero ;
   wire [12:0] \frame.line_delay ;
+  wire [3:0] \frame.noise_events ;
+  wire [12:0] \frame.settled_delay ;
   wire \frame.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
@@ -14301,6 +15861,8 @@ module \biss_master_axil.ch0.core.results (rst, report_delay, report, valid, fra
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
+  (* enum_value_1101 = "NOISY_LINE" *)
+  (* enum_value_1110 = "DELAY_JUMP" *)
   wire [3:0] \frame.status ;
   wire [31:0] \frame.timestamp ;
   wire [57:0] \frame.word0 ;
@@ -14319,14 +15881,18 @@ module \biss_master_axil.ch0.core.results (rst, report_delay, report, valid, fra
   wire report_delay;
   input report_frame;
   wire report_frame;
-  output [160:0] result;
-  reg [160:0] result = 161'h00000000000000000000000000000000000000000;
+  output [186:0] result;
+  reg [186:0] result = 187'h00000000000000000000000000000000000000000000000;
   wire \result.cds ;
+  wire \result.delay_settled ;
+  wire [7:0] \result.delay_spread ;
   wire [5:0] \result.lc ;
   wire \result.lc_repeat ;
   wire \result.lc_skip ;
   wire \result.lc_zero ;
   wire [12:0] \result.line_delay ;
+  wire [3:0] \result.noise_events ;
+  wire [12:0] \result.settled_delay ;
   wire \result.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
@@ -14342,6 +15908,8 @@ module \biss_master_axil.ch0.core.results (rst, report_delay, report, valid, fra
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
+  (* enum_value_1101 = "NOISY_LINE" *)
+  (* enum_value_1110 = "DELAY_JUMP" *)
   wire [3:0] \result.status ;
   wire [31:0] \result.timestamp ;
   wire [57:0] \result.word0 ;
@@ -14367,21 +15935,21 @@ module \biss_master_axil.ch0.core.results (rst, report_delay, report, valid, fra
   always @(posedge clk)
     result <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
     \$1  = report;
     if (rst) begin
       \$1  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
     \$2  = valid;
     if (rst) begin
       \$2  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
     \$3  = result;
     if (report) begin
       \$3 [3:0] = frame[3:0];
@@ -14392,99 +15960,133 @@ module \biss_master_axil.ch0.core.results (rst, report_delay, report, valid, fra
     if (report_frame) begin
       \$3 [35:4] = frame[35:4];
       \$3 [49] = frame[49];
-      \$3 [107:50] = frame[107:50];
-      \$3 [150:108] = frame[150:108];
-      \$3 [156:151] = frame[156:151];
-      \$3 [157] = frame[157];
-      \$3 [158] = frame[158];
-      \$3 [159] = frame[159];
-      \$3 [160] = frame[160];
+      \$3 [53:50] = frame[53:50];
+      \$3 [54] = frame[54];
+      \$3 [67:55] = frame[67:55];
+      \$3 [75:68] = frame[75:68];
+      \$3 [133:76] = frame[133:76];
+      \$3 [176:134] = frame[176:134];
+      \$3 [182:177] = frame[182:177];
+      \$3 [183] = frame[183];
+      \$3 [184] = frame[184];
+      \$3 [185] = frame[185];
+      \$3 [186] = frame[186];
     end
     if (rst) begin
-      \$3  = 161'h00000000000000000000000000000000000000000;
+      \$3  = 187'h00000000000000000000000000000000000000000000000;
     end
   end
   assign \result.status  = result[3:0];
   assign \result.timestamp  = result[35:4];
   assign \result.line_delay  = result[48:36];
   assign \result.cds  = result[49];
-  assign \result.word0  = result[107:50];
-  assign \result.word0.position  = result[104:50];
-  assign \result.word0.ne  = result[105];
-  assign \result.word0.nw  = result[106];
-  assign \result.word0.crc_ok  = result[107];
-  assign \result.word1  = result[150:108];
-  assign \result.word1.position  = result[147:108];
-  assign \result.word1.ne  = result[148];
-  assign \result.word1.nw  = result[149];
-  assign \result.word1.crc_ok  = result[150];
-  assign \result.lc  = result[156:151];
-  assign \result.lc_repeat  = result[157];
-  assign \result.lc_skip  = result[158];
-  assign \result.lc_zero  = result[159];
-  assign \result.spw_mismatch  = result[160];
+  assign \result.noise_events  = result[53:50];
+  assign \result.delay_settled  = result[54];
+  assign \result.settled_delay  = result[67:55];
+  assign \result.delay_spread  = result[75:68];
+  assign \result.word0  = result[133:76];
+  assign \result.word0.position  = result[130:76];
+  assign \result.word0.ne  = result[131];
+  assign \result.word0.nw  = result[132];
+  assign \result.word0.crc_ok  = result[133];
+  assign \result.word1  = result[176:134];
+  assign \result.word1.position  = result[173:134];
+  assign \result.word1.ne  = result[174];
+  assign \result.word1.nw  = result[175];
+  assign \result.word1.crc_ok  = result[176];
+  assign \result.lc  = result[182:177];
+  assign \result.lc_repeat  = result[183];
+  assign \result.lc_skip  = result[184];
+  assign \result.lc_zero  = result[185];
+  assign \result.spw_mismatch  = result[186];
   assign \frame.status  = frame[3:0];
   assign \frame.timestamp  = frame[35:4];
   assign \frame.line_delay  = frame[48:36];
   assign \frame.cds  = frame[49];
-  assign \frame.word0  = frame[107:50];
-  assign \frame.word0.position  = frame[104:50];
-  assign \frame.word0.ne  = frame[105];
-  assign \frame.word0.nw  = frame[106];
-  assign \frame.word0.crc_ok  = frame[107];
-  assign \frame.word1  = frame[150:108];
-  assign \frame.word1.position  = frame[147:108];
-  assign \frame.word1.ne  = frame[148];
-  assign \frame.word1.nw  = frame[149];
-  assign \frame.word1.crc_ok  = frame[150];
-  assign \frame.lc  = frame[156:151];
-  assign \frame.lc_repeat  = frame[157];
-  assign \frame.lc_skip  = frame[158];
-  assign \frame.lc_zero  = frame[159];
-  assign \frame.spw_mismatch  = frame[160];
+  assign \frame.noise_events  = frame[53:50];
+  assign \frame.delay_settled  = frame[54];
+  assign \frame.settled_delay  = frame[67:55];
+  assign \frame.delay_spread  = frame[75:68];
+  assign \frame.word0  = frame[133:76];
+  assign \frame.word0.position  = frame[130:76];
+  assign \frame.word0.ne  = frame[131];
+  assign \frame.word0.nw  = frame[132];
+  assign \frame.word0.crc_ok  = frame[133];
+  assign \frame.word1  = frame[176:134];
+  assign \frame.word1.position  = frame[173:134];
+  assign \frame.word1.ne  = frame[174];
+  assign \frame.word1.nw  = frame[175];
+  assign \frame.word1.crc_ok  = frame[176];
+  assign \frame.lc  = frame[182:177];
+  assign \frame.lc_repeat  = frame[183];
+  assign \frame.lc_skip  = frame[184];
+  assign \frame.lc_zero  = frame[185];
+  assign \frame.spw_mismatch  = frame[186];
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receiver_clear, arm, early, locked, delay, sample, level, slo);
-  reg \$auto$verilog_backend.cc:2355:dump_module$67  = 0;
+module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , noise, half_period, receiver_clear, arm, early, locked, delay, sample, level, slo);
+  reg \$auto$verilog_backend.cc:2355:dump_module$72  = 0;
   wire \$1 ;
   wire \$10 ;
+  wire \$100 ;
+  wire \$101 ;
+  wire \$102 ;
+  wire \$103 ;
+  reg \$104 ;
+  reg [12:0] \$105 ;
+  reg [16:0] \$106 ;
+  reg \$107 ;
+  reg \$108 ;
+  reg \$109 ;
   wire \$11 ;
+  reg [12:0] \$110 ;
+  reg \$111 ;
+  reg \$112 ;
+  reg \$113 ;
+  reg [1:0] \$114 ;
+  reg [16:0] \$115 ;
+  reg \$116 ;
+  reg \$117 ;
+  reg \$118 ;
+  reg \$119 ;
   wire \$12 ;
-  wire [13:0] \$13 ;
-  wire [17:0] \$14 ;
+  reg [12:0] \$120 ;
+  reg [1:0] \$121 ;
+  wire \$13 ;
+  wire \$14 ;
   wire \$15 ;
   wire \$16 ;
   wire \$17 ;
   wire \$18 ;
-  wire [12:0] \$19 ;
+  wire \$19 ;
   wire [14:0] \$2 ;
   wire \$20 ;
   wire \$21 ;
-  wire [13:0] \$22 ;
-  wire [13:0] \$23 ;
-  wire [16:0] \$24 ;
+  wire \$22 ;
+  wire \$23 ;
+  wire \$24 ;
   wire \$25 ;
   wire [13:0] \$26 ;
-  wire [13:0] \$27 ;
+  wire [17:0] \$27 ;
   wire \$28 ;
-  wire [13:0] \$29 ;
+  wire \$29 ;
   wire \$3 ;
-  wire [17:0] \$30 ;
+  wire \$30 ;
   wire \$31 ;
-  wire \$32 ;
+  wire [12:0] \$32 ;
   wire \$33 ;
   wire \$34 ;
-  wire \$35 ;
-  wire \$36 ;
-  wire \$37 ;
+  wire [13:0] \$35 ;
+  wire [13:0] \$36 ;
+  wire [16:0] \$37 ;
   wire \$38 ;
-  wire \$39 ;
+  wire [13:0] \$39 ;
   wire [16:0] \$4 ;
-  wire \$40 ;
+  wire [13:0] \$40 ;
   wire \$41 ;
-  wire \$42 ;
-  wire \$43 ;
+  wire [13:0] \$42 ;
+  wire [17:0] \$43 ;
   wire \$44 ;
   wire \$45 ;
   wire \$46 ;
@@ -14506,25 +16108,46 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
   wire \$60 ;
   wire \$61 ;
   wire \$62 ;
-  reg \$63 ;
-  reg [12:0] \$64 ;
-  reg [16:0] \$65 ;
-  reg \$66 ;
-  reg [12:0] \$67 ;
-  reg \$68 ;
-  reg \$69 ;
+  wire \$63 ;
+  wire \$64 ;
+  wire \$65 ;
+  wire \$66 ;
+  wire \$67 ;
+  wire \$68 ;
+  wire \$69 ;
   wire \$7 ;
-  reg \$70 ;
-  reg [1:0] \$71 ;
-  reg [16:0] \$72 ;
-  reg \$73 ;
-  reg \$74 ;
-  reg \$75 ;
-  reg \$76 ;
-  reg [12:0] \$77 ;
-  reg [1:0] \$78 ;
+  wire \$70 ;
+  wire \$71 ;
+  wire \$72 ;
+  wire \$73 ;
+  wire \$74 ;
+  wire \$75 ;
+  wire \$76 ;
+  wire \$77 ;
+  wire \$78 ;
+  wire \$79 ;
   wire [13:0] \$8 ;
+  wire \$80 ;
+  wire \$81 ;
+  wire \$82 ;
+  wire \$83 ;
+  wire \$84 ;
+  wire \$85 ;
+  wire \$86 ;
+  wire \$87 ;
+  wire \$88 ;
+  wire \$89 ;
   wire [17:0] \$9 ;
+  wire \$90 ;
+  wire \$91 ;
+  wire \$92 ;
+  wire \$93 ;
+  wire \$94 ;
+  wire \$95 ;
+  wire \$96 ;
+  wire \$97 ;
+  wire \$98 ;
+  wire \$99 ;
   input arm;
   wire arm;
   output \bit ;
@@ -14534,6 +16157,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
   reg decided;
   output [12:0] delay;
   reg [12:0] delay = 13'h0000;
+  reg dropped;
   output early;
   reg early = 1'h0;
   reg [12:0] elapsed = 13'h0000;
@@ -14542,12 +16166,15 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
   reg gap = 1'h0;
   input [15:0] half_period;
   wire [15:0] half_period;
+  reg last = 1'h0;
   output level;
   wire level;
   output locked;
   reg locked = 1'h0;
   reg [12:0] mid_delay = 13'h0000;
   reg [16:0] mid_slot = 17'h00000;
+  output noise;
+  wire noise;
   reg odd = 1'h0;
   reg [16:0] period_load = 17'h00000;
   reg [1:0] phase = 2'h0;
@@ -14564,55 +16191,119 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
   reg slo_prev = 1'h1;
   reg [16:0] slot_left = 17'h00000;
   reg slot_zero = 1'h1;
+  reg tail_odd = 1'h0;
   reg [14:0] vote = 15'h0000;
   reg vote1 = 1'h0;
   reg vote2 = 1'h0;
   reg [14:0] vote_load = 15'h0000;
   reg vote_one = 1'h0;
-  assign \$22  = elapsed - 1'h1;
-  assign \$23  = \$21  ? 14'h1fff : \$22 ;
-  assign \$24  = half_period - 2'h2;
-  assign \$25  = elapsed == 13'h1fff;
-  assign \$26  = elapsed - 1'h1;
-  assign \$27  = \$25  ? 14'h1fff : \$26 ;
-  assign \$28  = elapsed != 13'h1fff;
-  assign \$29  = elapsed + 1'h1;
-  assign \$30  = slot_left - 1'h1;
-  assign \$31  = slot_left == 1'h1;
-  assign \$32  = ! phase;
-  assign \$33  = first_slot & \$32 ;
-  assign \$34  = \$33  & level;
-  assign \$35  = ~ single;
-  assign \$36  = decided & first_slot;
-  assign \$37  = vote1 & vote2;
-  assign \$38  = vote1 & level;
-  assign \$39  = \$37  | \$38 ;
-  assign \$40  = vote2 & level;
-  assign \$41  = \$39  | \$40 ;
-  assign \$42  = single ? level : \$41 ;
-  assign \$43  = ~ first_slot;
-  assign \$44  = decided & \$43 ;
-  assign \$45  = vote1 & vote2;
-  assign \$46  = vote1 & level;
-  assign \$47  = \$45  | \$46 ;
-  assign \$48  = vote2 & level;
-  assign \$49  = \$47  | \$48 ;
-  assign \bit  = single ? level : \$49 ;
-  assign \$50  = ! phase;
-  assign \$51  = first_slot & \$50 ;
-  assign \$52  = \$51  & level;
-  assign \$53  = decided & first_slot;
-  assign \$54  = vote1 & vote2;
-  assign \$55  = vote1 & level;
-  assign \$56  = \$54  | \$55 ;
-  assign \$57  = vote2 & level;
-  assign \$58  = \$56  | \$57 ;
-  assign \$59  = single ? level : \$58 ;
-  assign \$60  = ! sampler_fsm_state;
-  assign \$61  = sampler_fsm_state == 1'h1;
-  assign \$62  = sampler_fsm_state == 2'h2;
+  assign \$1  = half_period >= 2'h3;
+  assign \$2  = \$1  ? half_period[15:1] : 15'h0000;
+  assign \$3  = half_period < 2'h3;
+  assign \$4  = half_period - vote;
+  assign \$5  = $signed(\$4 ) - $signed(2'h1);
+  assign \$6  = vote - 1'h1;
+  assign \$7  = vote == 1'h1;
+  assign \$8  = mid_delay + 1'h1;
+  assign \$9  = mid_slot - 1'h1;
+  assign \$10  = ~ odd;
+  assign \$11  = ~ single;
+  assign \$12  = decided & \$11 ;
+  assign \$13  = vote1 & vote2;
+  assign \$14  = vote1 & level;
+  assign \$15  = \$13  | \$14 ;
+  assign \$16  = vote2 & level;
+  assign \$17  = \$15  | \$16 ;
+  assign \$18  = vote1 & vote2;
+  assign \$19  = vote1 & level;
+  assign \$20  = \$18  | \$19 ;
+  assign \$21  = vote2 & level;
+  assign \$22  = \$20  | \$21 ;
+  assign \$23  = level != \$22 ;
+  assign \$24  = ~ level;
+  assign \$25  = elapsed != 13'h1fff;
+  assign \$26  = elapsed + 1'h1;
+  assign \$27  = slot_left - 1'h1;
+  assign \$28  = slot_left == 1'h1;
+  assign \$29  = ~ level;
+  assign \$30  = slo_prev & \$29 ;
+  assign \$31  = elapsed == 13'h1fff;
+  assign \$32  = \$31  ? 13'h1fff : mid_delay;
+  assign \$33  = ! mid_slot;
+  assign \$34  = elapsed == 13'h1fff;
+  assign \$35  = elapsed - 1'h1;
+  assign \$36  = \$34  ? 14'h1fff : \$35 ;
+  assign \$37  = half_period - 2'h2;
+  assign \$38  = elapsed == 13'h1fff;
+  assign \$39  = elapsed - 1'h1;
+  assign \$40  = \$38  ? 14'h1fff : \$39 ;
+  assign \$41  = elapsed != 13'h1fff;
+  assign \$42  = elapsed + 1'h1;
+  assign \$43  = slot_left - 1'h1;
+  assign \$44  = slot_left == 1'h1;
+  assign \$45  = ! phase;
+  assign \$46  = first_slot & \$45 ;
+  assign \$47  = \$46  & level;
+  assign \$48  = ~ single;
+  assign \$49  = decided & first_slot;
+  assign \$50  = vote1 & vote2;
+  assign \$51  = vote1 & level;
+  assign \$52  = \$50  | \$51 ;
+  assign \$53  = vote2 & level;
+  assign \$54  = \$52  | \$53 ;
+  assign \$55  = single ? level : \$54 ;
+  assign \$56  = ~ first_slot;
+  assign \$57  = decided & \$56 ;
+  assign \$58  = vote1 & vote2;
+  assign \$59  = vote1 & level;
+  assign \$60  = \$58  | \$59 ;
+  assign \$61  = vote2 & level;
+  assign \$62  = \$60  | \$61 ;
+  assign \bit  = single ? level : \$62 ;
+  assign \$63  = ~ single;
+  assign \$64  = decided & \$63 ;
+  assign \$65  = vote1 == level;
+  assign \$66  = vote2 != level;
+  assign \$67  = \$65  & \$66 ;
+  assign \$68  = vote1 & vote2;
+  assign \$69  = vote1 & level;
+  assign \$70  = \$68  | \$69 ;
+  assign \$71  = vote2 & level;
+  assign \$72  = \$70  | \$71 ;
+  assign \$73  = vote1 != \$72 ;
+  assign \$74  = vote1 & vote2;
+  assign \$75  = vote1 & level;
+  assign \$76  = \$74  | \$75 ;
+  assign \$77  = vote2 & level;
+  assign \$78  = \$76  | \$77 ;
+  assign \$79  = last == \$78 ;
+  assign \$80  = \$73  & \$79 ;
+  assign \$81  = \$67  | \$80 ;
+  assign \$82  = vote1 & vote2;
+  assign \$83  = vote1 & level;
+  assign \$84  = \$82  | \$83 ;
+  assign \$85  = vote2 & level;
+  assign \$86  = \$84  | \$85 ;
+  assign \$87  = last == \$86 ;
+  assign \$88  = tail_odd & \$87 ;
+  assign \$89  = \$81  | \$88 ;
+  assign \$90  = \$64  & \$89 ;
+  assign noise = dropped | \$90 ;
+  assign \$91  = ! phase;
+  assign \$92  = first_slot & \$91 ;
+  assign \$93  = \$92  & level;
+  assign \$94  = decided & first_slot;
+  assign \$95  = vote1 & vote2;
+  assign \$96  = vote1 & level;
+  assign \$97  = \$95  | \$96 ;
+  assign \$98  = vote2 & level;
+  assign \$99  = \$97  | \$98 ;
+  assign \$100  = single ? level : \$99 ;
+  assign \$101  = ! sampler_fsm_state;
+  assign \$102  = sampler_fsm_state == 1'h1;
+  assign \$103  = sampler_fsm_state == 2'h2;
   always @(posedge clk)
-    slo_prev <= \$63 ;
+    slo_prev <= \$104 ;
   always @(posedge clk)
     vote <= \$2 ;
   always @(posedge clk)
@@ -14626,56 +16317,39 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
   always @(posedge clk)
     period_load <= { first_load, 1'h1 };
   always @(posedge clk)
-    mid_delay <= \$64 ;
+    mid_delay <= \$105 ;
   always @(posedge clk)
-    mid_slot <= \$65 ;
+    mid_slot <= \$106 ;
   always @(posedge clk)
-    odd <= \$66 ;
+    odd <= \$107 ;
   always @(posedge clk)
-    elapsed <= \$67 ;
+    last <= \$108 ;
   always @(posedge clk)
-    early <= \$68 ;
+    tail_odd <= \$109 ;
   always @(posedge clk)
-    locked <= \$69 ;
+    elapsed <= \$110 ;
   always @(posedge clk)
-    gap <= \$70 ;
+    early <= \$111 ;
   always @(posedge clk)
-    sampler_fsm_state <= \$71 ;
+    locked <= \$112 ;
   always @(posedge clk)
-    slot_left <= \$72 ;
+    gap <= \$113 ;
   always @(posedge clk)
-    slot_zero <= \$73 ;
+    sampler_fsm_state <= \$114 ;
   always @(posedge clk)
-    vote1 <= \$74 ;
+    slot_left <= \$115 ;
   always @(posedge clk)
-    vote2 <= \$75 ;
+    slot_zero <= \$116 ;
   always @(posedge clk)
-    first_slot <= \$76 ;
+    vote1 <= \$117 ;
   always @(posedge clk)
-    delay <= \$77 ;
+    vote2 <= \$118 ;
   always @(posedge clk)
-    phase <= \$78 ;
-  assign \$1  = half_period >= 2'h3;
-  assign \$2  = \$1  ? half_period[15:1] : 15'h0000;
-  assign \$3  = half_period < 2'h3;
-  assign \$4  = half_period - vote;
-  assign \$5  = $signed(\$4 ) - $signed(2'h1);
-  assign \$6  = vote - 1'h1;
-  assign \$7  = vote == 1'h1;
-  assign \$8  = mid_delay + 1'h1;
-  assign \$9  = mid_slot - 1'h1;
-  assign \$10  = ~ odd;
-  assign \$11  = ~ level;
-  assign \$12  = elapsed != 13'h1fff;
-  assign \$13  = elapsed + 1'h1;
-  assign \$14  = slot_left - 1'h1;
-  assign \$15  = slot_left == 1'h1;
-  assign \$16  = ~ level;
-  assign \$17  = slo_prev & \$16 ;
-  assign \$18  = elapsed == 13'h1fff;
-  assign \$19  = \$18  ? 13'h1fff : mid_delay;
-  assign \$20  = ! mid_slot;
-  assign \$21  = elapsed == 13'h1fff;
+    first_slot <= \$119 ;
+  always @(posedge clk)
+    delay <= \$120 ;
+  always @(posedge clk)
+    phase <= \$121 ;
   \biss_master_axil.ch0.core.sampler.sync  sync (
     .clk(clk),
     .receiver_clear(receiver_clear),
@@ -14684,441 +16358,483 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     .stage1(level)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
-    \$63  = level;
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    \$104  = level;
     if (receiver_clear) begin
-      \$63  = 1'h1;
+      \$104  = 1'h1;
     end
     if (rst) begin
-      \$63  = 1'h1;
+      \$104  = 1'h1;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
-    \$64  = mid_delay;
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    \$105  = mid_delay;
     if (odd) begin
-      \$64  = \$8 [12:0];
+      \$105  = \$8 [12:0];
     end
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$17 ) begin
+          if (\$30 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
             end else begin
-              \$64  = \$27 [12:0];
+              \$105  = \$40 [12:0];
             end
           end
     endcase
     if (receiver_clear) begin
-      \$64  = 13'h0000;
+      \$105  = 13'h0000;
     end
     if (rst) begin
-      \$64  = 13'h0000;
+      \$105  = 13'h0000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
-    \$65  = mid_slot;
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    \$106  = mid_slot;
     (* full_case = 32'd1 *)
     if (odd) begin
     end else begin
-      \$65  = \$9 [16:0];
+      \$106  = \$9 [16:0];
     end
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$17 ) begin
+          if (\$30 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
             end else begin
-              \$65  = \$24 ;
+              \$106  = \$37 ;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$65  = 17'h00000;
+      \$106  = 17'h00000;
     end
     if (rst) begin
-      \$65  = 17'h00000;
+      \$106  = 17'h00000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
-    \$66  = \$10 ;
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    \$107  = \$10 ;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$17 ) begin
+          if (\$30 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
             end else begin
-              \$66  = 1'h1;
+              \$107  = 1'h1;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$66  = 1'h0;
+      \$107  = 1'h0;
     end
     if (rst) begin
-      \$66  = 1'h0;
+      \$107  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
-    \$67  = elapsed;
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    \$108  = last;
+    if (\$12 ) begin
+      \$108  = \$17 ;
+    end
+    casez (sampler_fsm_state)
+      2'h0:
+          /* empty */;
+      2'h1:
+          if (\$30 ) begin
+            \$108  = 1'h0;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$108  = 1'h0;
+    end
+    if (rst) begin
+      \$108  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    \$109  = tail_odd;
+    if (\$12 ) begin
+      \$109  = \$23 ;
+    end
+    casez (sampler_fsm_state)
+      2'h0:
+          /* empty */;
+      2'h1:
+          if (\$30 ) begin
+            \$109  = 1'h0;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$109  = 1'h0;
+    end
+    if (rst) begin
+      \$109  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    \$110  = elapsed;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$67  = 13'h0001;
+            \$110  = 13'h0001;
           end
       2'h1:
-          if (\$12 ) begin
-            \$67  = \$13 [12:0];
+          if (\$25 ) begin
+            \$110  = \$26 [12:0];
           end
       2'h2:
-          if (\$28 ) begin
-            \$67  = \$29 [12:0];
+          if (\$41 ) begin
+            \$110  = \$42 [12:0];
           end
     endcase
     if (receiver_clear) begin
-      \$67  = 13'h0000;
+      \$110  = 13'h0000;
     end
     if (rst) begin
-      \$67  = 13'h0000;
+      \$110  = 13'h0000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
-    \$68  = early;
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    \$111  = early;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$68  = \$11 ;
+            \$111  = \$24 ;
           end
     endcase
     if (receiver_clear) begin
-      \$68  = 1'h0;
+      \$111  = 1'h0;
     end
     if (rst) begin
-      \$68  = 1'h0;
+      \$111  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
-    \$69  = locked;
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    \$112  = locked;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$69  = 1'h0;
+            \$112  = 1'h0;
           end
       2'h1:
           /* empty */;
       2'h2:
-          if (\$36 ) begin
+          if (\$49 ) begin
             (* full_case = 32'd1 *)
-            if (\$42 ) begin
+            if (\$55 ) begin
             end else begin
-              \$69  = 1'h1;
+              \$112  = 1'h1;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$69  = 1'h0;
+      \$112  = 1'h0;
     end
     if (rst) begin
-      \$69  = 1'h0;
+      \$112  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
-    \$70  = gap;
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    \$113  = gap;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$70  = 1'h0;
+            \$113  = 1'h0;
           end
       2'h1:
         begin
           if (gap) begin
             if (slot_zero) begin
-              \$70  = 1'h0;
+              \$113  = 1'h0;
             end
           end
-          if (\$17 ) begin
-            \$70  = 1'h0;
+          if (\$30 ) begin
+            \$113  = 1'h0;
           end
         end
       2'h2:
-          if (\$34 ) begin
-            \$70  = \$35 ;
+          if (\$47 ) begin
+            \$113  = \$48 ;
           end
     endcase
     if (receiver_clear) begin
-      \$70  = 1'h0;
+      \$113  = 1'h0;
     end
     if (rst) begin
-      \$70  = 1'h0;
+      \$113  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
-    \$71  = sampler_fsm_state;
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    \$114  = sampler_fsm_state;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$71  = 2'h1;
+            \$114  = 2'h1;
           end
       2'h1:
-          if (\$17 ) begin
-            \$71  = 2'h2;
+          if (\$30 ) begin
+            \$114  = 2'h2;
           end
       2'h2:
         begin
-          if (\$34 ) begin
-            \$71  = 2'h1;
+          if (\$47 ) begin
+            \$114  = 2'h1;
           end
-          if (\$36 ) begin
-            if (\$42 ) begin
-              \$71  = 2'h1;
+          if (\$49 ) begin
+            if (\$55 ) begin
+              \$114  = 2'h1;
             end
           end
         end
     endcase
     if (receiver_clear) begin
-      \$71  = 2'h0;
+      \$114  = 2'h0;
     end
     if (rst) begin
-      \$71  = 2'h0;
+      \$114  = 2'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
-    \$72  = slot_left;
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    \$115  = slot_left;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
         begin
           if (gap) begin
-            \$72  = \$14 [16:0];
+            \$115  = \$27 [16:0];
           end
-          if (\$17 ) begin
+          if (\$30 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
-              \$72  = mid_slot;
+              \$115  = mid_slot;
             end else begin
-              \$72  = { 1'h0, first_load };
+              \$115  = { 1'h0, first_load };
             end
           end
         end
       2'h2:
         begin
-          \$72  = \$30 [16:0];
-          if (\$34 ) begin
-            \$72  = { 2'h0, vote_load };
+          \$115  = \$43 [16:0];
+          if (\$47 ) begin
+            \$115  = { 2'h0, vote_load };
           end else if (slot_zero) begin
             (* full_case = 32'd1 *)
             casez (phase)
               2'h0:
                   (* full_case = 32'd1 *)
                   if (single) begin
-                    \$72  = period_load;
+                    \$115  = period_load;
                   end else begin
-                    \$72  = { 2'h0, vote_load };
+                    \$115  = { 2'h0, vote_load };
                   end
               2'h1:
-                  \$72  = { 2'h0, vote_load };
+                  \$115  = { 2'h0, vote_load };
               default:
-                  \$72  = period_load;
+                  \$115  = period_load;
             endcase
           end
         end
     endcase
     if (receiver_clear) begin
-      \$72  = 17'h00000;
+      \$115  = 17'h00000;
     end
     if (rst) begin
-      \$72  = 17'h00000;
+      \$115  = 17'h00000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
-    \$73  = slot_zero;
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    \$116  = slot_zero;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
         begin
           if (gap) begin
-            \$73  = \$15 ;
+            \$116  = \$28 ;
           end
-          if (\$17 ) begin
+          if (\$30 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
-              \$73  = \$20 ;
+              \$116  = \$33 ;
             end else begin
-              \$73  = 1'h0;
+              \$116  = 1'h0;
             end
           end
         end
       2'h2:
         begin
-          \$73  = \$31 ;
-          if (\$34 ) begin
-            \$73  = vote_one;
+          \$116  = \$44 ;
+          if (\$47 ) begin
+            \$116  = vote_one;
           end else if (slot_zero) begin
             (* full_case = 32'd1 *)
             casez (phase)
               2'h0:
                   (* full_case = 32'd1 *)
                   if (single) begin
-                    \$73  = 1'h0;
+                    \$116  = 1'h0;
                   end else begin
-                    \$73  = vote_one;
+                    \$116  = vote_one;
                   end
               2'h1:
-                  \$73  = vote_one;
+                  \$116  = vote_one;
               default:
-                  \$73  = 1'h0;
+                  \$116  = 1'h0;
             endcase
           end
         end
     endcase
     if (receiver_clear) begin
-      \$73  = 1'h1;
+      \$116  = 1'h1;
     end
     if (rst) begin
-      \$73  = 1'h1;
+      \$116  = 1'h1;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
-    \$74  = vote1;
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    \$117  = vote1;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$17 ) begin
-            \$74  = 1'h0;
+          if (\$30 ) begin
+            \$117  = 1'h0;
           end
       2'h2:
-          if (\$34 ) begin
+          if (\$47 ) begin
           end else if (slot_zero) begin
             casez (phase)
               2'h0:
                   (* full_case = 32'd1 *)
                   if (single) begin
                   end else begin
-                    \$74  = level;
+                    \$117  = level;
                   end
             endcase
           end
     endcase
     if (receiver_clear) begin
-      \$74  = 1'h0;
+      \$117  = 1'h0;
     end
     if (rst) begin
-      \$74  = 1'h0;
+      \$117  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
-    \$75  = vote2;
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    \$118  = vote2;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$17 ) begin
-            \$75  = 1'h0;
+          if (\$30 ) begin
+            \$118  = 1'h0;
           end
       2'h2:
-          if (\$34 ) begin
+          if (\$47 ) begin
           end else if (slot_zero) begin
             casez (phase)
               2'h0:
                   /* empty */;
               2'h1:
-                  \$75  = level;
+                  \$118  = level;
             endcase
           end
     endcase
     if (receiver_clear) begin
-      \$75  = 1'h0;
+      \$118  = 1'h0;
     end
     if (rst) begin
-      \$75  = 1'h0;
+      \$118  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
-    \$76  = first_slot;
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    \$119  = first_slot;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$17 ) begin
-            \$76  = 1'h1;
+          if (\$30 ) begin
+            \$119  = 1'h1;
           end
       2'h2:
-          if (\$36 ) begin
+          if (\$49 ) begin
             (* full_case = 32'd1 *)
-            if (\$42 ) begin
+            if (\$55 ) begin
             end else begin
-              \$76  = 1'h0;
+              \$119  = 1'h0;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$76  = 1'h0;
+      \$119  = 1'h0;
     end
     if (rst) begin
-      \$76  = 1'h0;
+      \$119  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
-    \$77  = delay;
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    \$120  = delay;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$17 ) begin
+          if (\$30 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
-              \$77  = \$19 ;
+              \$120  = \$32 ;
             end else begin
-              \$77  = \$23 [12:0];
+              \$120  = \$36 [12:0];
             end
           end
     endcase
     if (receiver_clear) begin
-      \$77  = 13'h0000;
+      \$120  = 13'h0000;
     end
     if (rst) begin
-      \$77  = 13'h0000;
+      \$120  = 13'h0000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
-    \$78  = phase;
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    \$121  = phase;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$17 ) begin
+          if (\$30 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
-              \$78  = 2'h1;
+              \$121  = 2'h1;
             end else begin
-              \$78  = 2'h0;
+              \$121  = 2'h0;
             end
           end
       2'h2:
-          if (\$34 ) begin
+          if (\$47 ) begin
           end else if (slot_zero) begin
             (* full_case = 32'd1 *)
             casez (phase)
@@ -15126,34 +16842,34 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
                   (* full_case = 32'd1 *)
                   if (single) begin
                   end else begin
-                    \$78  = 2'h1;
+                    \$121  = 2'h1;
                   end
               2'h1:
-                  \$78  = 2'h2;
+                  \$121  = 2'h2;
               default:
-                  \$78  = 2'h0;
+                  \$121  = 2'h0;
             endcase
           end
     endcase
     if (receiver_clear) begin
-      \$78  = 2'h0;
+      \$121  = 2'h0;
     end
     if (rst) begin
-      \$78  = 2'h0;
+      \$121  = 2'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
-    sample = \$44 ;
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    sample = \$57 ;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
           /* empty */;
       2'h2:
-          if (\$53 ) begin
+          if (\$94 ) begin
             (* full_case = 32'd1 *)
-            if (\$59 ) begin
+            if (\$100 ) begin
             end else begin
               sample = 1'h1;
             end
@@ -15161,7 +16877,28 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    dropped = 1'h0;
+    casez (sampler_fsm_state)
+      2'h0:
+          /* empty */;
+      2'h1:
+          /* empty */;
+      2'h2:
+        begin
+          if (\$93 ) begin
+            dropped = 1'h1;
+          end
+          if (\$94 ) begin
+            if (\$100 ) begin
+              dropped = 1'h1;
+            end
+          end
+        end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     decided = 1'h0;
     casez (sampler_fsm_state)
       2'h0:
@@ -15169,7 +16906,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , half_period, receive
       2'h1:
           /* empty */;
       2'h2:
-          if (\$52 ) begin
+          if (\$93 ) begin
           end else if (slot_zero) begin
             (* full_case = 32'd1 *)
             casez (phase)
@@ -15211,7 +16948,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.scheduler (rst, trigger, periodic, request, overrun, start, period, abort, idle, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$68  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$73  = 0;
   wire \$1 ;
   wire [25:0] \$10 ;
   wire \$11 ;
@@ -15305,14 +17042,14 @@ module \biss_master_axil.ch0.core.scheduler (rst, trigger, periodic, request, ov
   always @(posedge clk)
     wrap <= \$31 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
     \$28  = \$1 ;
     if (rst) begin
       \$28  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$29  = 25'h0000002;
@@ -15326,7 +17063,7 @@ module \biss_master_axil.ch0.core.scheduler (rst, trigger, periodic, request, ov
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$30  = 1'h1;
@@ -15340,7 +17077,7 @@ module \biss_master_axil.ch0.core.scheduler (rst, trigger, periodic, request, ov
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$31  = \$8 ;
@@ -15356,8 +17093,8 @@ module \biss_master_axil.ch0.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$3907$0 , resync, lc, is_zero, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$69  = 0;
+module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$4389$0 , resync, lc, is_zero, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$74  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
   wire \$11 ;
@@ -15398,8 +17135,8 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$3907$0 ;
-  wire \port$3907$0 ;
+  input \port$4389$0 ;
+  wire \port$4389$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -15413,9 +17150,9 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$3907$0  };
-  assign \$2  = { lc[4:0], \port$3907$0  } == last;
-  assign \$3  = { lc[4:0], \port$3907$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$4389$0  };
+  assign \$2  = { lc[4:0], \port$4389$0  } == last;
+  assign \$3  = { lc[4:0], \port$4389$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -15449,7 +17186,7 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   always @(posedge clk)
     synced <= \$25 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
     \$18  = is_zero;
     if (load) begin
       \$18  = \$1 ;
@@ -15459,7 +17196,7 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
     \$19  = is_last;
     if (load) begin
       \$19  = \$2 ;
@@ -15469,7 +17206,7 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
     \$20  = is_expected;
     if (load) begin
       \$20  = \$3 ;
@@ -15479,21 +17216,21 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
     \$21  = \$7 ;
     if (rst) begin
       \$21  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
     \$22  = lc;
     if (rst) begin
       \$22  = 6'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
     \$23  = last;
     if (store) begin
       \$23  = store_lc;
@@ -15503,7 +17240,7 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
     \$24  = expected;
     if (store) begin
       \$24  = \$10 [5:0];
@@ -15513,7 +17250,7 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
     \$25  = synced;
     if (store) begin
       \$25  = 1'h1;
@@ -15525,13 +17262,13 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$3907$0  };
+  assign lc_next = { lc[4:0], \port$4389$0  };
   assign zero = is_zero;
 endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.spw_check (rst, bits, \tolerance$8 , spw, cpw_top, match, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$70  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$75  = 0;
   wire [40:0] \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -15736,28 +17473,28 @@ module \biss_master_axil.ch0.core.spw_check (rst, bits, \tolerance$8 , spw, cpw_
   assign \$7  = bits > 3'h5;
   assign \$8  = bits > 3'h6;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
     \$88  = \$42 ;
     if (rst) begin
       \$88  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
     \$89  = \$84 ;
     if (rst) begin
       \$89  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
     \$90  = \tolerance$8 ;
     if (rst) begin
       \$90  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
     \$91  = \$87 ;
     if (rst) begin
       \$91  = 1'h0;
@@ -15767,7 +17504,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.time_base (rst, first_rise, first_rise_time, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$71  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$76  = 0;
   wire [32:0] \$1 ;
   reg [31:0] \$2 ;
   reg [31:0] \$3 ;
@@ -15786,14 +17523,14 @@ module \biss_master_axil.ch0.core.time_base (rst, first_rise, first_rise_time, c
   always @(posedge clk)
     first_rise_time <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
     \$2  = \$1 [31:0];
     if (rst) begin
       \$2  = 32'd0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
     \$3  = first_rise_time;
     if (first_rise) begin
       \$3  = now;
@@ -15805,8 +17542,9 @@ module \biss_master_axil.ch0.core.time_base (rst, first_rise, first_rise_time, c
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.timers (rst, restart, ma_busy, break_time, timeout_live, ack_limit, timeout_limit, delay_limit, no_start_limit, clear, in_clock, slo_stuck, slo_stuck_live, break_over, ack_expired, no_start_expired, delay_over, delay, slo, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$72  = 0;
+module \biss_master_axil.ch0.core.timers (rst, restart, ma_busy, break_time, timeout_live, quiet_time_live, ack_limit, timeout_limit, delay_limit, quiet_limit, no_start_limit, clear, in_clock, slo_stuck, slo_stuck_live, quiet, quiet_live, break_over, ack_expired, no_start_expired, delay_over
+, delay, slo, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$77  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -15816,34 +17554,51 @@ module \biss_master_axil.ch0.core.timers (rst, restart, ma_busy, break_time, tim
   wire \$15 ;
   wire \$16 ;
   wire \$17 ;
-  wire [25:0] \$18 ;
-  wire [25:0] \$19 ;
+  wire \$18 ;
+  wire \$19 ;
   wire \$2 ;
-  wire [25:0] \$20 ;
+  wire [13:0] \$20 ;
   wire \$21 ;
   wire \$22 ;
   wire \$23 ;
   wire \$24 ;
-  wire \$25 ;
+  wire [11:0] \$25 ;
   wire \$26 ;
   wire \$27 ;
-  wire \$28 ;
+  wire [11:0] \$28 ;
   wire \$29 ;
-  wire [25:0] \$3 ;
+  wire \$3 ;
   wire \$30 ;
   wire \$31 ;
-  wire \$32 ;
-  wire \$33 ;
-  reg [24:0] \$34 ;
-  reg \$35 ;
-  reg \$36 ;
-  reg [24:0] \$37 ;
-  reg \$38 ;
-  reg \$39 ;
-  wire \$4 ;
-  reg \$40 ;
-  reg \$41 ;
+  wire [25:0] \$32 ;
+  wire [25:0] \$33 ;
+  wire [25:0] \$34 ;
+  wire \$35 ;
+  wire \$36 ;
+  wire \$37 ;
+  wire \$38 ;
+  wire \$39 ;
+  wire [25:0] \$4 ;
+  wire \$40 ;
+  wire \$41 ;
+  wire \$42 ;
+  wire \$43 ;
+  wire \$44 ;
+  wire \$45 ;
+  wire \$46 ;
+  wire \$47 ;
+  reg [24:0] \$48 ;
+  reg \$49 ;
   wire \$5 ;
+  reg \$50 ;
+  reg [12:0] \$51 ;
+  reg \$52 ;
+  reg \$53 ;
+  reg [24:0] \$54 ;
+  reg \$55 ;
+  reg \$56 ;
+  reg \$57 ;
+  reg \$58 ;
   wire \$6 ;
   wire \$7 ;
   wire \$8 ;
@@ -15866,6 +17621,7 @@ module \biss_master_axil.ch0.core.timers (rst, restart, ma_busy, break_time, tim
   wire [11:0] delay_limit;
   output delay_over;
   reg delay_over = 1'h0;
+  reg [12:0] high_p2 = 13'h0002;
   input in_clock;
   wire in_clock;
   input ma_busy;
@@ -15874,6 +17630,14 @@ module \biss_master_axil.ch0.core.timers (rst, restart, ma_busy, break_time, tim
   reg no_start_expired = 1'h0;
   input [24:0] no_start_limit;
   wire [24:0] no_start_limit;
+  output quiet;
+  reg quiet = 1'h0;
+  input [11:0] quiet_limit;
+  wire [11:0] quiet_limit;
+  output quiet_live;
+  reg quiet_live = 1'h0;
+  input [11:0] quiet_time_live;
+  wire [11:0] quiet_time_live;
   input restart;
   wire restart;
   input rst;
@@ -15890,126 +17654,173 @@ module \biss_master_axil.ch0.core.timers (rst, restart, ma_busy, break_time, tim
   input [23:0] timeout_live;
   wire [23:0] timeout_live;
   reg [24:0] timer = 25'h0000001;
-  assign \$1  = slo | ma_busy;
-  assign \$2  = ~ slo_low_time_p1[24];
-  assign \$3  = slo_low_time_p1 + 1'h1;
-  assign \$4  = ~ slo;
-  assign \$5  = ~ ma_busy;
-  assign \$6  = \$4  & \$5 ;
-  assign \$7  = slo_low_time_p1 >= timeout_limit;
-  assign \$8  = \$6  & \$7 ;
-  assign \$9  = ~ slo;
-  assign \$10  = ~ ma_busy;
-  assign \$11  = \$9  & \$10 ;
-  assign \$12  = ! timeout_live;
-  assign \$13  = slo_low_time_p1 >= 13'h1f40;
-  assign \$14  = slo_low_time_p1 >= timeout_live;
-  assign \$15  = \$12  ? \$13  : \$14 ;
-  assign \$16  = \$11  & \$15 ;
-  assign \$17  = & timer;
-  assign \$18  = timer + 1'h1;
-  assign \$19  = \$17  ? { 1'h0, timer } : \$18 ;
-  assign \$20  = clear ? 26'h0000001 : \$19 ;
-  assign \$21  = ! break_time;
-  assign \$22  = timer >= 12'hfa0;
-  assign \$23  = timer >= break_time;
-  assign \$24  = \$21  ? \$22  : \$23 ;
-  assign \$25  = ~ restart;
-  assign \$26  = in_clock & \$25 ;
-  assign \$27  = timer >= ack_limit;
-  assign \$28  = \$26  & \$27 ;
-  assign \$29  = ~ restart;
-  assign \$30  = in_clock & \$29 ;
-  assign \$31  = timer >= no_start_limit;
-  assign \$32  = \$30  & \$31 ;
-  assign \$33  = delay > delay_limit;
+  assign \$42  = \$40  & \$41 ;
+  assign \$43  = ~ restart;
+  assign \$44  = in_clock & \$43 ;
+  assign \$45  = timer >= no_start_limit;
+  assign \$46  = \$44  & \$45 ;
+  assign \$47  = delay > delay_limit;
   always @(posedge clk)
-    slo_low_time_p1 <= \$34 ;
+    slo_low_time_p1 <= \$48 ;
   always @(posedge clk)
-    slo_stuck <= \$35 ;
+    slo_stuck <= \$49 ;
   always @(posedge clk)
-    slo_stuck_live <= \$36 ;
+    slo_stuck_live <= \$50 ;
   always @(posedge clk)
-    timer <= \$37 ;
+    high_p2 <= \$51 ;
   always @(posedge clk)
-    break_over <= \$38 ;
+    quiet <= \$52 ;
   always @(posedge clk)
-    ack_expired <= \$39 ;
+    quiet_live <= \$53 ;
   always @(posedge clk)
-    no_start_expired <= \$40 ;
+    timer <= \$54 ;
   always @(posedge clk)
-    delay_over <= \$41 ;
+    break_over <= \$55 ;
+  always @(posedge clk)
+    ack_expired <= \$56 ;
+  always @(posedge clk)
+    no_start_expired <= \$57 ;
+  always @(posedge clk)
+    delay_over <= \$58 ;
+  assign \$1  = slo & quiet;
+  assign \$2  = \$1  | ma_busy;
+  assign \$3  = ~ slo_low_time_p1[24];
+  assign \$4  = slo_low_time_p1 + 1'h1;
+  assign \$5  = slo & quiet;
+  assign \$6  = \$5  | ma_busy;
+  assign \$7  = ~ \$6 ;
+  assign \$8  = slo_low_time_p1 >= timeout_limit;
+  assign \$9  = \$7  & \$8 ;
+  assign \$10  = slo & quiet;
+  assign \$11  = \$10  | ma_busy;
+  assign \$12  = ~ \$11 ;
+  assign \$13  = ! timeout_live;
+  assign \$14  = slo_low_time_p1 >= 13'h1f40;
+  assign \$15  = slo_low_time_p1 >= timeout_live;
+  assign \$16  = \$13  ? \$14  : \$15 ;
+  assign \$17  = \$12  & \$16 ;
+  assign \$18  = ~ slo;
+  assign \$19  = ~ high_p2[12];
+  assign \$20  = high_p2 + 1'h1;
+  assign \$21  = high_p2 >= quiet_limit;
+  assign \$22  = quiet_limit <= 1'h1;
+  assign \$23  = slo ? \$21  : \$22 ;
+  assign \$24  = ! quiet_time_live;
+  assign \$25  = \$24  ? 12'h064 : quiet_time_live;
+  assign \$26  = high_p2 >= \$25 ;
+  assign \$27  = ! quiet_time_live;
+  assign \$28  = \$27  ? 12'h064 : quiet_time_live;
+  assign \$29  = \$28  <= 1'h1;
+  assign \$30  = slo ? \$26  : \$29 ;
+  assign \$31  = & timer;
+  assign \$32  = timer + 1'h1;
+  assign \$33  = \$31  ? { 1'h0, timer } : \$32 ;
+  assign \$34  = clear ? 26'h0000001 : \$33 ;
+  assign \$35  = ! break_time;
+  assign \$36  = timer >= 12'hfa0;
+  assign \$37  = timer >= break_time;
+  assign \$38  = \$35  ? \$36  : \$37 ;
+  assign \$39  = ~ restart;
+  assign \$40  = in_clock & \$39 ;
+  assign \$41  = timer >= ack_limit;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
-    \$34  = slo_low_time_p1;
-    if (\$1 ) begin
-      \$34  = 25'h0000001;
-    end else if (\$2 ) begin
-      \$34  = \$3 [24:0];
+    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
+    \$48  = slo_low_time_p1;
+    if (\$2 ) begin
+      \$48  = 25'h0000001;
+    end else if (\$3 ) begin
+      \$48  = \$4 [24:0];
     end
     if (rst) begin
-      \$34  = 25'h0000001;
+      \$48  = 25'h0000001;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
-    \$35  = \$8 ;
+    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
+    \$49  = \$9 ;
     if (rst) begin
-      \$35  = 1'h0;
+      \$49  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
-    \$36  = \$16 ;
+    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
+    \$50  = \$17 ;
     if (rst) begin
-      \$36  = 1'h0;
+      \$50  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
-    \$37  = \$20 [24:0];
+    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
+    \$51  = high_p2;
+    if (\$18 ) begin
+      \$51  = 13'h0002;
+    end else if (\$19 ) begin
+      \$51  = \$20 [12:0];
+    end
     if (rst) begin
-      \$37  = 25'h0000001;
+      \$51  = 13'h0002;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
+    \$52  = \$23 ;
+    if (rst) begin
+      \$52  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
+    \$53  = \$30 ;
+    if (rst) begin
+      \$53  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
+    \$54  = \$34 [24:0];
+    if (rst) begin
+      \$54  = 25'h0000001;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
     (* full_case = 32'd1 *)
     if (clear) begin
-      \$38  = 1'h0;
+      \$55  = 1'h0;
     end else begin
-      \$38  = \$24 ;
+      \$55  = \$38 ;
     end
     if (rst) begin
-      \$38  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
-    \$39  = \$28 ;
-    if (rst) begin
-      \$39  = 1'h0;
+      \$55  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
-    \$40  = \$32 ;
+    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
+    \$56  = \$42 ;
     if (rst) begin
-      \$40  = 1'h0;
+      \$56  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
-    \$41  = \$33 ;
+    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
+    \$57  = \$46 ;
     if (rst) begin
-      \$41  = 1'h0;
+      \$57  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
+    \$58  = \$47 ;
+    if (rst) begin
+      \$58  = 1'h0;
     end
   end
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.verdict (lc_skip_seen, \port$1601$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
-  reg \$auto$verilog_backend.cc:2355:dump_module$73  = 0;
+module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$1807$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
+, delay_jump, lc_repeat_seen);
+  reg \$auto$verilog_backend.cc:2355:dump_module$78  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -16031,21 +17842,34 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, \port$1601$0 , lc_check
   wire \$26 ;
   wire \$27 ;
   wire \$28 ;
-  wire [1:0] \$29 ;
+  wire \$29 ;
   wire \$3 ;
+  wire \$30 ;
+  wire \$31 ;
+  wire \$32 ;
+  wire \$33 ;
+  wire \$34 ;
+  wire \$35 ;
+  wire \$36 ;
+  wire \$37 ;
+  wire \$38 ;
+  wire [1:0] \$39 ;
   wire \$4 ;
   wire \$5 ;
   wire \$6 ;
   wire \$7 ;
   wire \$8 ;
   wire \$9 ;
-  input [154:0] cfg;
-  wire [154:0] cfg;
+  input [174:0] cfg;
+  wire [174:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
   wire [11:0] \cfg.delay_limit ;
+  wire [3:0] \cfg.delay_tolerance ;
   wire \cfg.end_check ;
   wire [15:0] \cfg.ma_half_period ;
+  wire [3:0] \cfg.noise_limit ;
+  wire [11:0] \cfg.quiet_time ;
   wire [23:0] \cfg.request_period ;
   wire \cfg.spw_check ;
   wire [7:0] \cfg.spw_tolerance ;
@@ -16069,10 +17893,14 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, \port$1601$0 , lc_check
   wire \cfg.w1.lc ;
   wire \cfg.w1.nenw ;
   wire \cfg.w1_enable ;
+  output clean;
+  wire clean;
   output [1:0] crc_error;
   wire [1:0] crc_error;
   input [1:0] crc_ok;
   wire [1:0] crc_ok;
+  input delay_jump;
+  wire delay_jump;
   output doubtful;
   wire doubtful;
   input fault;
@@ -16091,6 +17919,8 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, \port$1601$0 , lc_check
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
+  (* enum_value_1101 = "NOISY_LINE" *)
+  (* enum_value_1110 = "DELAY_JUMP" *)
   input [3:0] fault_status;
   wire [3:0] fault_status;
   (* enum_base_type = "Status" *)
@@ -16107,6 +17937,8 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, \port$1601$0 , lc_check
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
+  (* enum_value_1101 = "NOISY_LINE" *)
+  (* enum_value_1110 = "DELAY_JUMP" *)
   reg [3:0] frame_status;
   output lc_check;
   wire lc_check;
@@ -16122,8 +17954,10 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, \port$1601$0 , lc_check
   wire lc_zero;
   input lc_zero_seen;
   wire lc_zero_seen;
-  output \port$1601$0 ;
-  wire \port$1601$0 ;
+  input noisy;
+  wire noisy;
+  output \port$1807$0 ;
+  wire \port$1807$0 ;
   output report;
   wire report;
   input report_frame;
@@ -16146,33 +17980,35 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, \port$1601$0 , lc_check
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
+  (* enum_value_1101 = "NOISY_LINE" *)
+  (* enum_value_1110 = "DELAY_JUMP" *)
   output [3:0] status;
   wire [3:0] status;
   output valid;
   wire valid;
   wire [1:0] word_crc_ok;
-  assign \$1  = ~ cfg[135];
+  assign \$1  = ~ cfg[155];
   assign \$2  = crc_ok[1] | \$1 ;
-  assign \$3  = cfg[135] & cfg[143];
-  assign \$4  = cfg[132] | \$3 ;
+  assign \$3  = cfg[155] & cfg[163];
+  assign \$4  = cfg[152] | \$3 ;
   assign \$5  = report_frame & \$4 ;
-  assign \$6  = cfg[132] ? crc_ok[0] : \$2 ;
+  assign \$6  = cfg[152] ? crc_ok[0] : \$2 ;
   assign lc_check = \$5  & \$6 ;
   assign lc_repeat = lc_check & lc_repeat_seen;
   assign lc_skip = lc_check & lc_skip_seen;
   assign lc_zero = lc_check & lc_zero_seen;
-  assign \$7  = cfg[146] & cfg[135];
+  assign \$7  = cfg[166] & cfg[155];
   assign \$8  = crc_ok[0] & \$2 ;
   assign \$9  = \$7  & \$8 ;
   assign \$10  = ~ spw_match;
   assign spw_mismatch = \$9  & \$10 ;
-  assign \$11  = ~ crc_ok[0];
-  assign \$12  = ~ \$2 ;
-  assign \$13  = \$11  & \$12 ;
+  assign \$11  = lc_repeat | lc_skip;
+  assign \$12  = \$11  | lc_zero;
+  assign \$13  = ~ \$2 ;
   assign \$14  = ~ crc_ok[0];
-  assign \$15  = ~ \$2 ;
-  assign \$16  = lc_repeat | lc_skip;
-  assign \$17  = \$16  | lc_zero;
+  assign \$15  = ~ crc_ok[0];
+  assign \$16  = ~ \$2 ;
+  assign \$17  = \$15  & \$16 ;
   assign report = report_frame | fault;
   assign status = report_frame ? frame_status : fault_status;
   assign \$18  = ! frame_status;
@@ -16180,35 +18016,54 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, \port$1601$0 , lc_check
   assign \$19  = crc_ok[0] & \$2 ;
   assign \$20  = ~ \$19 ;
   assign \$21  = \$20  | spw_mismatch;
-  assign \$22  = cfg[135] & cfg[143];
-  assign \$23  = cfg[132] | \$22 ;
-  assign \$24  = cfg[132] ? crc_ok[0] : \$2 ;
+  assign \$22  = cfg[155] & cfg[163];
+  assign \$23  = cfg[152] | \$22 ;
+  assign \$24  = cfg[152] ? crc_ok[0] : \$2 ;
   assign \$25  = \$23  & \$24 ;
   assign \$26  = lc_repeat_seen | lc_skip_seen;
   assign \$27  = \$26  | lc_zero_seen;
   assign \$28  = \$25  & \$27 ;
-  assign doubtful = \$21  | \$28 ;
-  assign \$29  = ~ { \$2 , crc_ok[0] };
-  assign crc_error = report_frame ? \$29  : 2'h0;
+  assign \$29  = \$21  | \$28 ;
+  assign \$30  = \$29  | noisy;
+  assign doubtful = \$30  | delay_jump;
+  assign \$31  = crc_ok[0] & \$2 ;
+  assign \$32  = ~ spw_mismatch;
+  assign \$33  = \$31  & \$32 ;
+  assign \$34  = ~ noisy;
+  assign \$35  = \$33  & \$34 ;
+  assign \$36  = lc_repeat | lc_skip;
+  assign \$37  = \$36  | lc_zero;
+  assign \$38  = ~ \$37 ;
+  assign clean = \$35  & \$38 ;
+  assign \$39  = ~ { \$2 , crc_ok[0] };
+  assign crc_error = report_frame ? \$39  : 2'h0;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
-    (* full_case = 32'd1 *)
-    if (\$13 ) begin
-      frame_status = 4'h3;
-    end else if (\$14 ) begin
-      frame_status = 4'h1;
-    end else if (\$15 ) begin
-      frame_status = 4'h2;
-    end else if (\$17 ) begin
-      frame_status = 4'h4;
-    end else if (spw_mismatch) begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
+    frame_status = 4'h0;
+    if (delay_jump) begin
+      frame_status = 4'he;
+    end
+    if (noisy) begin
+      frame_status = 4'hd;
+    end
+    if (spw_mismatch) begin
       frame_status = 4'h5;
-    end else begin
-      frame_status = 4'h0;
+    end
+    if (\$12 ) begin
+      frame_status = 4'h4;
+    end
+    if (\$13 ) begin
+      frame_status = 4'h2;
+    end
+    if (\$14 ) begin
+      frame_status = 4'h1;
+    end
+    if (\$17 ) begin
+      frame_status = 4'h3;
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$1601$0  = \$2 ;
+  assign \port$1807$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -16216,32 +18071,35 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, \port$1601$0 , lc_check
   assign \cfg.timeout_limit  = cfg[111:88];
   assign \cfg.delay_limit  = cfg[123:112];
   assign \cfg.end_check  = cfg[124];
-  assign \cfg.w0  = cfg[134:125];
-  assign \cfg.w0.data_bits  = cfg[130:125];
-  assign \cfg.w0.nenw  = cfg[131];
-  assign \cfg.w0.lc  = cfg[132];
-  assign \cfg.w0.crc  = cfg[134:133];
-  assign \cfg.w1_enable  = cfg[135];
-  assign \cfg.w1  = cfg[145:136];
-  assign \cfg.w1.data_bits  = cfg[141:136];
-  assign \cfg.w1.nenw  = cfg[142];
-  assign \cfg.w1.lc  = cfg[143];
-  assign \cfg.w1.crc  = cfg[145:144];
-  assign \cfg.spw_check  = cfg[146];
-  assign \cfg.spw_tolerance  = cfg[154:147];
+  assign \cfg.quiet_time  = cfg[136:125];
+  assign \cfg.noise_limit  = cfg[140:137];
+  assign \cfg.delay_tolerance  = cfg[144:141];
+  assign \cfg.w0  = cfg[154:145];
+  assign \cfg.w0.data_bits  = cfg[150:145];
+  assign \cfg.w0.nenw  = cfg[151];
+  assign \cfg.w0.lc  = cfg[152];
+  assign \cfg.w0.crc  = cfg[154:153];
+  assign \cfg.w1_enable  = cfg[155];
+  assign \cfg.w1  = cfg[165:156];
+  assign \cfg.w1.data_bits  = cfg[161:156];
+  assign \cfg.w1.nenw  = cfg[162];
+  assign \cfg.w1.lc  = cfg[163];
+  assign \cfg.w1.crc  = cfg[165:164];
+  assign \cfg.spw_check  = cfg[166];
+  assign \cfg.spw_tolerance  = cfg[174:167];
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1 (slo, clk, rst, \trigger$159 , ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__ca_busy, regs__ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period
-, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort
-, regs__done_count, ma, regs__done, \port$4673$0 , \port$4686$0 , regs__ca_done, \port$4800$0 , ca_rbuf_addr);
-  reg \$auto$verilog_backend.cc:2355:dump_module$74  = 0;
+module \biss_master_axil.ch1 (slo, clk, rst, \trigger$179 , ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__ca_busy, regs__ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period
+, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_quiet_time, ca_slave_id, ca_address, ca_count
+, ca_write, ca_start, ca_abort, regs__done_count, ma, regs__done, \port$5293$0 , \port$5306$0 , regs__ca_done, \port$5438$0 , ca_rbuf_addr);
+  reg \$auto$verilog_backend.cc:2355:dump_module$79  = 0;
   wire \$1 ;
   wire [16:0] \$2 ;
   reg \$3 ;
   reg [15:0] \$4 ;
-  wire [160:0] \$5 ;
-  wire [287:0] \$6 ;
+  wire [186:0] \$5 ;
+  wire [335:0] \$6 ;
   wire [9:0] \$7 ;
   reg abort_cycle = 1'h0;
   wire busy;
@@ -16287,10 +18145,16 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$159 , ca_wbuf_en, ca_rbuf_
   wire [23:0] cfg_break_time;
   input [11:0] cfg_delay_limit;
   wire [11:0] cfg_delay_limit;
+  input [3:0] cfg_delay_tolerance;
+  wire [3:0] cfg_delay_tolerance;
   input cfg_end_check;
   wire cfg_end_check;
   input [15:0] cfg_ma_half_period;
   wire [15:0] cfg_ma_half_period;
+  input [3:0] cfg_noise_limit;
+  wire [3:0] cfg_noise_limit;
+  input [11:0] cfg_quiet_time;
+  wire [11:0] cfg_quiet_time;
   input [23:0] cfg_request_period;
   wire [23:0] cfg_request_period;
   input cfg_spw_check;
@@ -16338,6 +18202,7 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$159 , ca_wbuf_en, ca_rbuf_
   wire [15:0] count_ca_refused;
   wire [15:0] count_crc_word0;
   wire [15:0] count_crc_word1;
+  wire [15:0] count_delay_jump;
   wire [15:0] count_delay_range;
   wire [15:0] count_lc_repeat;
   wire [15:0] count_lc_skip;
@@ -16345,9 +18210,13 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$159 , ca_wbuf_en, ca_rbuf_
   wire [15:0] count_no_ack;
   wire [15:0] count_no_start;
   wire [15:0] count_no_stop;
+  wire [15:0] count_noise_event;
+  wire [15:0] count_noisy_line;
   wire [15:0] count_overrun;
   wire [15:0] count_slo_stuck_low;
   wire [15:0] count_spw_mismatch;
+  wire delay_settled;
+  wire [7:0] delay_spread;
   wire done;
   wire [5:0] lc;
   wire lc_repeat;
@@ -16356,15 +18225,16 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$159 , ca_wbuf_en, ca_rbuf_
   wire [12:0] line_delay;
   output ma;
   wire ma;
-  wire \ma$162 ;
+  wire \ma$182 ;
+  wire [3:0] noise_events;
   input periodic;
   wire periodic;
-  output [160:0] \port$4673$0 ;
-  wire [160:0] \port$4673$0 ;
-  output [287:0] \port$4686$0 ;
-  wire [287:0] \port$4686$0 ;
-  output [9:0] \port$4800$0 ;
-  wire [9:0] \port$4800$0 ;
+  output [186:0] \port$5293$0 ;
+  wire [186:0] \port$5293$0 ;
+  output [335:0] \port$5306$0 ;
+  wire [335:0] \port$5306$0 ;
+  output [9:0] \port$5438$0 ;
+  wire [9:0] \port$5438$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -16398,8 +18268,11 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$159 , ca_wbuf_en, ca_rbuf_
   wire [23:0] regs__cfg_ack_limit;
   wire [23:0] regs__cfg_break_time;
   wire [11:0] regs__cfg_delay_limit;
+  wire [3:0] regs__cfg_delay_tolerance;
   wire regs__cfg_end_check;
   wire [15:0] regs__cfg_ma_half_period;
+  wire [3:0] regs__cfg_noise_limit;
+  wire [11:0] regs__cfg_quiet_time;
   wire [23:0] regs__cfg_request_period;
   wire regs__cfg_spw_check;
   wire [7:0] regs__cfg_spw_tolerance;
@@ -16432,6 +18305,7 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$159 , ca_wbuf_en, ca_rbuf_
   wire [15:0] regs__count_ca_refused;
   wire [15:0] regs__count_crc_word0;
   wire [15:0] regs__count_crc_word1;
+  wire [15:0] regs__count_delay_jump;
   wire [15:0] regs__count_delay_range;
   wire [15:0] regs__count_lc_repeat;
   wire [15:0] regs__count_lc_skip;
@@ -16439,9 +18313,13 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$159 , ca_wbuf_en, ca_rbuf_
   wire [15:0] regs__count_no_ack;
   wire [15:0] regs__count_no_start;
   wire [15:0] regs__count_no_stop;
+  wire [15:0] regs__count_noise_event;
+  wire [15:0] regs__count_noisy_line;
   wire [15:0] regs__count_overrun;
   wire [15:0] regs__count_slo_stuck_low;
   wire [15:0] regs__count_spw_mismatch;
+  wire regs__delay_settled;
+  wire [7:0] regs__delay_spread;
   output regs__done;
   wire regs__done;
   output [15:0] regs__done_count;
@@ -16453,7 +18331,9 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$159 , ca_wbuf_en, ca_rbuf_
   wire regs__lc_skip;
   wire regs__lc_zero;
   wire [12:0] regs__line_delay;
+  wire [3:0] regs__noise_events;
   wire regs__periodic;
+  wire [12:0] regs__settled_delay;
   wire regs__spw_mismatch;
   wire regs__start;
   wire [3:0] regs__status;
@@ -16470,9 +18350,10 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$159 , ca_wbuf_en, ca_rbuf_
   wire [39:0] regs__word1_position;
   input rst;
   wire rst;
+  wire [12:0] settled_delay;
   input slo;
   wire slo;
-  wire \slo$164 ;
+  wire \slo$184 ;
   wire spw_mismatch;
   input start;
   wire start;
@@ -16490,11 +18371,13 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$159 , ca_wbuf_en, ca_rbuf_
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
+  (* enum_value_1101 = "NOISY_LINE" *)
+  (* enum_value_1110 = "DELAY_JUMP" *)
   wire [3:0] status;
   wire [31:0] timestamp;
   wire trigger;
-  input \trigger$159 ;
-  wire \trigger$159 ;
+  input \trigger$179 ;
+  wire \trigger$179 ;
   wire valid;
   wire word0_crc_ok;
   wire word0_ne;
@@ -16504,7 +18387,7 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$159 , ca_wbuf_en, ca_rbuf_
   wire word1_ne;
   wire word1_nw;
   wire [39:0] word1_position;
-  assign trigger = \trigger$159  & regs__trigger_enable;
+  assign trigger = \trigger$179  & regs__trigger_enable;
   assign \$2  = regs__done_count + 1'h1;
   always @(posedge clk)
     abort_cycle <= \$3 ;
@@ -16514,8 +18397,8 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$159 , ca_wbuf_en, ca_rbuf_
   assign regs__frame_error = regs__done & \$1 ;
   \biss_master_axil.ch1.core  core (
     .abort(abort_cycle),
-    .\abort$187 (ca_abort),
-    .\busy$237 (regs__busy),
+    .\abort$222 (ca_abort),
+    .\busy$276 (regs__busy),
     .ca_address(ca_address),
     .ca_count(ca_count),
     .ca_done(regs__ca_done),
@@ -16528,8 +18411,11 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$159 , ca_wbuf_en, ca_rbuf_
     .cfg_ack_limit(cfg_ack_limit),
     .cfg_break_time(cfg_break_time),
     .cfg_delay_limit(cfg_delay_limit),
+    .cfg_delay_tolerance(cfg_delay_tolerance),
     .cfg_end_check(cfg_end_check),
     .cfg_ma_half_period(cfg_ma_half_period),
+    .cfg_noise_limit(cfg_noise_limit),
+    .cfg_quiet_time(cfg_quiet_time),
     .cfg_request_period(cfg_request_period),
     .cfg_spw_check(cfg_spw_check),
     .cfg_spw_tolerance(cfg_spw_tolerance),
@@ -16543,34 +18429,34 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$159 , ca_wbuf_en, ca_rbuf_
     .cfg_w1_enable(cfg_w1_enable),
     .cfg_w1_lc(cfg_w1_lc),
     .cfg_w1_nenw(cfg_w1_nenw),
-    .\clear$214 (clear_counters),
+    .\clear$250 (clear_counters),
     .clk(clk),
     .config_error(regs__config_error),
     .counts(\$6 ),
-    .\done$240 (regs__done),
+    .\done$279 (regs__done),
     .frames(regs__ca_busy),
     .ma(ma),
-    .\periodic$24 (periodic),
+    .\periodic$27 (periodic),
     .rbuf_addr(ca_rbuf_addr),
     .rbuf_en(ca_rbuf_en),
     .result(\$7 ),
-    .\result$245 (\$5 ),
+    .\result$284 (\$5 ),
     .rst(rst),
     .slo(slo),
     .start(start),
-    .\start$185 (ca_start),
+    .\start$220 (ca_start),
     .trigger(trigger),
-    .\valid$242 (valid)
+    .\valid$281 (valid)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$79 ) begin end
     \$3  = regs__abort_cycle;
     if (rst) begin
       \$3  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$79 ) begin end
     \$4  = regs__done_count;
     if (regs__done) begin
       \$4  = \$2 [15:0];
@@ -16610,40 +18496,51 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$159 , ca_wbuf_en, ca_rbuf_
   assign regs__cfg_end_check = cfg_end_check;
   assign regs__cfg_spw_check = cfg_spw_check;
   assign regs__cfg_spw_tolerance = cfg_spw_tolerance;
+  assign regs__cfg_noise_limit = cfg_noise_limit;
+  assign regs__cfg_delay_tolerance = cfg_delay_tolerance;
+  assign regs__cfg_quiet_time = cfg_quiet_time;
   assign regs__status = \$5 [3:0];
   assign status = \$5 [3:0];
   assign regs__cds = \$5 [49];
   assign cds = \$5 [49];
-  assign regs__word0_ne = \$5 [105];
-  assign word0_ne = \$5 [105];
-  assign regs__word0_nw = \$5 [106];
-  assign word0_nw = \$5 [106];
-  assign regs__word0_crc_ok = \$5 [107];
-  assign word0_crc_ok = \$5 [107];
-  assign regs__word1_ne = \$5 [148];
-  assign word1_ne = \$5 [148];
-  assign regs__word1_nw = \$5 [149];
-  assign word1_nw = \$5 [149];
-  assign regs__word1_crc_ok = \$5 [150];
-  assign word1_crc_ok = \$5 [150];
-  assign regs__lc_repeat = \$5 [157];
-  assign lc_repeat = \$5 [157];
-  assign regs__lc_skip = \$5 [158];
-  assign lc_skip = \$5 [158];
-  assign regs__lc_zero = \$5 [159];
-  assign lc_zero = \$5 [159];
-  assign regs__spw_mismatch = \$5 [160];
-  assign spw_mismatch = \$5 [160];
-  assign regs__lc = \$5 [156:151];
-  assign lc = \$5 [156:151];
+  assign regs__word0_ne = \$5 [131];
+  assign word0_ne = \$5 [131];
+  assign regs__word0_nw = \$5 [132];
+  assign word0_nw = \$5 [132];
+  assign regs__word0_crc_ok = \$5 [133];
+  assign word0_crc_ok = \$5 [133];
+  assign regs__word1_ne = \$5 [174];
+  assign word1_ne = \$5 [174];
+  assign regs__word1_nw = \$5 [175];
+  assign word1_nw = \$5 [175];
+  assign regs__word1_crc_ok = \$5 [176];
+  assign word1_crc_ok = \$5 [176];
+  assign regs__lc_repeat = \$5 [183];
+  assign lc_repeat = \$5 [183];
+  assign regs__lc_skip = \$5 [184];
+  assign lc_skip = \$5 [184];
+  assign regs__lc_zero = \$5 [185];
+  assign lc_zero = \$5 [185];
+  assign regs__spw_mismatch = \$5 [186];
+  assign spw_mismatch = \$5 [186];
+  assign regs__lc = \$5 [182:177];
+  assign lc = \$5 [182:177];
   assign regs__line_delay = \$5 [48:36];
   assign line_delay = \$5 [48:36];
-  assign regs__word0_position = \$5 [104:50];
-  assign word0_position = \$5 [104:50];
-  assign regs__word1_position = \$5 [147:108];
-  assign word1_position = \$5 [147:108];
+  assign regs__word0_position = \$5 [130:76];
+  assign word0_position = \$5 [130:76];
+  assign regs__word1_position = \$5 [173:134];
+  assign word1_position = \$5 [173:134];
   assign regs__timestamp = \$5 [35:4];
   assign timestamp = \$5 [35:4];
+  assign regs__noise_events = \$5 [53:50];
+  assign noise_events = \$5 [53:50];
+  assign regs__delay_settled = \$5 [54];
+  assign delay_settled = \$5 [54];
+  assign regs__delay_spread = \$5 [75:68];
+  assign delay_spread = \$5 [75:68];
+  assign regs__settled_delay = \$5 [67:55];
+  assign settled_delay = \$5 [67:55];
   assign regs__count_crc_word0 = \$6 [15:0];
   assign count_crc_word0 = \$6 [15:0];
   assign regs__count_crc_word1 = \$6 [31:16];
@@ -16670,6 +18567,12 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$159 , ca_wbuf_en, ca_rbuf_
   assign count_aborted = \$6 [191:176];
   assign regs__count_no_stop = \$6 [207:192];
   assign count_no_stop = \$6 [207:192];
+  assign regs__count_noisy_line = \$6 [223:208];
+  assign count_noisy_line = \$6 [223:208];
+  assign regs__count_delay_jump = \$6 [239:224];
+  assign count_delay_jump = \$6 [239:224];
+  assign regs__count_noise_event = \$6 [255:240];
+  assign count_noise_event = \$6 [255:240];
   assign regs__ca_slave_id = ca_slave_id;
   assign regs__ca_address = ca_address;
   assign regs__ca_count = ca_count;
@@ -16681,43 +18584,49 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$159 , ca_wbuf_en, ca_rbuf_
   assign ca_status = \$7 [2:0];
   assign regs__ca_bytes_done = \$7 [9:3];
   assign ca_bytes_done = \$7 [9:3];
-  assign regs__count_ca_crc4_error = \$6 [223:208];
-  assign count_ca_crc4_error = \$6 [223:208];
-  assign regs__count_ca_no_answer = \$6 [239:224];
-  assign count_ca_no_answer = \$6 [239:224];
-  assign regs__count_ca_refused = \$6 [255:240];
-  assign count_ca_refused = \$6 [255:240];
-  assign regs__count_ca_aborted = \$6 [271:256];
-  assign count_ca_aborted = \$6 [271:256];
-  assign regs__count_ca_data_fault = \$6 [287:272];
-  assign count_ca_data_fault = \$6 [287:272];
+  assign regs__count_ca_crc4_error = \$6 [271:256];
+  assign count_ca_crc4_error = \$6 [271:256];
+  assign regs__count_ca_no_answer = \$6 [287:272];
+  assign count_ca_no_answer = \$6 [287:272];
+  assign regs__count_ca_refused = \$6 [303:288];
+  assign count_ca_refused = \$6 [303:288];
+  assign regs__count_ca_aborted = \$6 [319:304];
+  assign count_ca_aborted = \$6 [319:304];
+  assign regs__count_ca_data_fault = \$6 [335:320];
+  assign count_ca_data_fault = \$6 [335:320];
   assign regs__ca_wbuf_addr = ca_wbuf_addr;
   assign regs__ca_wbuf_data = ca_wbuf_data;
   assign regs__ca_wbuf_en = ca_wbuf_en;
   assign regs__ca_rbuf_addr = ca_rbuf_addr;
   assign ca_rbuf_data = regs__ca_rbuf_data;
   assign regs__ca_rbuf_en = ca_rbuf_en;
-  assign \ma$162  = ma;
-  assign \slo$164  = slo;
-  assign \port$4673$0  = \$5 ;
-  assign \port$4686$0  = \$6 ;
-  assign \port$4800$0  = \$7 ;
+  assign \ma$182  = ma;
+  assign \slo$184  = slo;
+  assign \port$5293$0  = \$5 ;
+  assign \port$5306$0  = \$6 ;
+  assign \port$5438$0  = \$7 ;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy$237 , config_error, frames, ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, \clear$214 , \periodic$24 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit
-, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, \start$185 , \abort$187 , abort, ma, \done$240 
-, \valid$242 , \result$245 , counts, ca_done, result, rbuf_addr);
-  reg \$auto$verilog_backend.cc:2355:dump_module$75  = 0;
+module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy$276 , config_error, frames, ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, \clear$250 , \periodic$27 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit
+, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_quiet_time, ca_slave_id, ca_address, ca_count, ca_write, \start$220 , \abort$222 
+, abort, ma, \done$279 , \valid$281 , \result$284 , counts, ca_done, result, rbuf_addr);
+  reg \$auto$verilog_backend.cc:2355:dump_module$80  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
   wire \$12 ;
   wire \$13 ;
-  reg \$14 ;
-  reg \$15 ;
+  wire \$14 ;
+  wire \$15 ;
   wire \$16 ;
+  wire \$17 ;
+  wire \$18 ;
+  reg \$19 ;
   wire \$2 ;
+  reg \$20 ;
+  reg \$21 ;
+  wire \$22 ;
   wire \$3 ;
   wire \$4 ;
   wire \$5 ;
@@ -16727,25 +18636,25 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire \$9 ;
   input abort;
   wire abort;
-  input \abort$187 ;
-  wire \abort$187 ;
-  wire \abort$36 ;
+  input \abort$222 ;
+  wire \abort$222 ;
+  wire \abort$39 ;
   wire abort_cycle;
   wire ack_expired;
-  wire \ack_expired$68 ;
+  wire \ack_expired$71 ;
   wire [23:0] ack_limit;
-  wire [23:0] \ack_limit$89 ;
+  wire [23:0] \ack_limit$92 ;
   wire arm;
   reg \bit  = 1'h0;
-  wire \bit$265 ;
+  wire \bit$308 ;
   wire [5:0] bits;
   wire break_over;
-  wire \break_over$66 ;
+  wire \break_over$69 ;
   wire [23:0] break_time;
   wire busy;
-  wire \busy$196 ;
-  output \busy$237 ;
-  wire \busy$237 ;
+  wire \busy$231 ;
+  output \busy$276 ;
+  wire \busy$276 ;
   wire ca_abort;
   input [6:0] ca_address;
   wire [6:0] ca_address;
@@ -16780,16 +18689,19 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   input ca_write;
   wire ca_write;
   wire cdm;
-  wire \cdm$200 ;
+  wire \cdm$235 ;
   wire cdm_cycle;
   wire cds;
-  wire \cds$248 ;
-  wire [154:0] cfg;
+  wire \cds$287 ;
+  wire [174:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
   wire [11:0] \cfg.delay_limit ;
+  wire [3:0] \cfg.delay_tolerance ;
   wire \cfg.end_check ;
   wire [15:0] \cfg.ma_half_period ;
+  wire [3:0] \cfg.noise_limit ;
+  wire [11:0] \cfg.quiet_time ;
   wire [23:0] \cfg.request_period ;
   wire \cfg.spw_check ;
   wire [7:0] \cfg.spw_tolerance ;
@@ -16819,10 +18731,16 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire [23:0] cfg_break_time;
   input [11:0] cfg_delay_limit;
   wire [11:0] cfg_delay_limit;
+  input [3:0] cfg_delay_tolerance;
+  wire [3:0] cfg_delay_tolerance;
   input cfg_end_check;
   wire cfg_end_check;
   input [15:0] cfg_ma_half_period;
   wire [15:0] cfg_ma_half_period;
+  input [3:0] cfg_noise_limit;
+  wire [3:0] cfg_noise_limit;
+  input [11:0] cfg_quiet_time;
+  wire [11:0] cfg_quiet_time;
   input [23:0] cfg_request_period;
   wire [23:0] cfg_request_period;
   input cfg_spw_check;
@@ -16858,14 +18776,18 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   input cfg_w1_nenw;
   wire cfg_w1_nenw;
   wire check;
+  wire \check$148 ;
+  wire clean;
+  wire \clean$153 ;
   wire clear;
-  wire \clear$106 ;
-  input \clear$214 ;
-  wire \clear$214 ;
+  wire \clear$116 ;
+  input \clear$250 ;
+  wire \clear$250 ;
   wire clear_counters;
   input clk;
   wire clk;
   wire \clocking ;
+  wire close;
   output config_error;
   wire config_error;
   wire config_ok;
@@ -16877,6 +18799,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire [15:0] count_ca_refused;
   wire [15:0] count_crc_word0;
   wire [15:0] count_crc_word1;
+  wire [15:0] count_delay_jump;
   wire [15:0] count_delay_range;
   wire [15:0] count_lc_repeat;
   wire [15:0] count_lc_skip;
@@ -16884,11 +18807,13 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire [15:0] count_no_ack;
   wire [15:0] count_no_start;
   wire [15:0] count_no_stop;
+  wire [15:0] count_noise_event;
+  wire [15:0] count_noisy_line;
   wire [15:0] count_overrun;
   wire [15:0] count_slo_stuck_low;
   wire [15:0] count_spw_mismatch;
-  output [287:0] counts;
-  wire [287:0] counts;
+  output [335:0] counts;
+  wire [335:0] counts;
   wire [15:0] \counts.aborted ;
   wire [15:0] \counts.ca_aborted ;
   wire [15:0] \counts.ca_crc4_error ;
@@ -16897,6 +18822,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire [15:0] \counts.ca_refused ;
   wire [15:0] \counts.crc_word0 ;
   wire [15:0] \counts.crc_word1 ;
+  wire [15:0] \counts.delay_jump ;
   wire [15:0] \counts.delay_range ;
   wire [15:0] \counts.lc_repeat ;
   wire [15:0] \counts.lc_skip ;
@@ -16904,20 +18830,25 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire [15:0] \counts.no_ack ;
   wire [15:0] \counts.no_start ;
   wire [15:0] \counts.no_stop ;
+  wire [15:0] \counts.noise_event ;
+  wire [15:0] \counts.noisy_line ;
   wire [15:0] \counts.overrun ;
   wire [15:0] \counts.slo_stuck_low ;
   wire [15:0] \counts.spw_mismatch ;
   wire [39:0] cpw_top;
-  wire [39:0] \cpw_top$130 ;
+  wire [39:0] \cpw_top$162 ;
   wire [1:0] crc_error;
   wire [1:0] crc_ok;
-  wire [1:0] \crc_ok$145 ;
-  wire [154:0] cycle;
+  wire [1:0] \crc_ok$176 ;
+  wire [174:0] cycle;
   wire [23:0] \cycle.ack_limit ;
   wire [23:0] \cycle.break_time ;
   wire [11:0] \cycle.delay_limit ;
+  wire [3:0] \cycle.delay_tolerance ;
   wire \cycle.end_check ;
   wire [15:0] \cycle.ma_half_period ;
+  wire [3:0] \cycle.noise_limit ;
+  wire [11:0] \cycle.quiet_time ;
   wire [23:0] \cycle.request_period ;
   wire \cycle.spw_check ;
   wire [7:0] \cycle.spw_tolerance ;
@@ -16948,42 +18879,53 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* init = 1'h0 *)
   wire decoder_sample;
   wire [12:0] delay;
-  wire [12:0] \delay$95 ;
+  wire [12:0] \delay$147 ;
+  wire [12:0] \delay$98 ;
+  wire delay_jump;
   wire [11:0] delay_limit;
-  wire [11:0] \delay_limit$97 ;
+  wire [11:0] \delay_limit$100 ;
   wire delay_over;
-  wire \delay_over$76 ;
+  wire \delay_over$79 ;
+  wire delay_settled;
+  wire [7:0] delay_spread;
+  wire [16:0] delay_tolerance;
   wire done;
-  wire \done$198 ;
-  output \done$240 ;
-  wire \done$240 ;
-  wire \done$241 ;
+  wire \done$233 ;
+  output \done$279 ;
+  wire \done$279 ;
+  wire \done$280 ;
   wire doubtful;
   wire early;
-  wire \early$52 ;
+  wire \early$55 ;
+  wire enable;
   wire end_check;
   wire enough;
-  wire [17:0] events;
-  wire \events.aborted ;
-  wire \events.ca_aborted ;
-  wire \events.ca_crc4_error ;
-  wire \events.ca_data_fault ;
-  wire \events.ca_no_answer ;
-  wire \events.ca_refused ;
-  wire \events.crc_word0 ;
-  wire \events.crc_word1 ;
-  wire \events.delay_range ;
-  wire \events.lc_repeat ;
-  wire \events.lc_skip ;
-  wire \events.lc_zero ;
-  wire \events.no_ack ;
-  wire \events.no_start ;
-  wire \events.no_stop ;
-  wire \events.overrun ;
-  wire \events.slo_stuck_low ;
-  wire \events.spw_mismatch ;
+  wire \event ;
+  wire [3:0] events;
+  wire [20:0] \events$245 ;
+  wire \events$245.aborted ;
+  wire \events$245.ca_aborted ;
+  wire \events$245.ca_crc4_error ;
+  wire \events$245.ca_data_fault ;
+  wire \events$245.ca_no_answer ;
+  wire \events$245.ca_refused ;
+  wire \events$245.crc_word0 ;
+  wire \events$245.crc_word1 ;
+  wire \events$245.delay_jump ;
+  wire \events$245.delay_range ;
+  wire \events$245.lc_repeat ;
+  wire \events$245.lc_skip ;
+  wire \events$245.lc_zero ;
+  wire \events$245.no_ack ;
+  wire \events$245.no_start ;
+  wire \events$245.no_stop ;
+  wire \events$245.noise_event ;
+  wire \events$245.noisy_line ;
+  wire \events$245.overrun ;
+  wire \events$245.slo_stuck_low ;
+  wire \events$245.spw_mismatch ;
   wire fault;
-  wire \fault$141 ;
+  wire \fault$172 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -16998,6 +18940,8 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
+  (* enum_value_1101 = "NOISY_LINE" *)
+  (* enum_value_1110 = "DELAY_JUMP" *)
   wire [3:0] fault_status;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
@@ -17013,7 +18957,9 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
-  wire [3:0] \fault_status$143 ;
+  (* enum_value_1101 = "NOISY_LINE" *)
+  (* enum_value_1110 = "DELAY_JUMP" *)
+  wire [3:0] \fault_status$174 ;
   wire [6:0] faults;
   wire \faults.aborted ;
   wire \faults.bad_config ;
@@ -17023,15 +18969,19 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire \faults.no_stop ;
   wire \faults.slo_stuck_low ;
   wire first_rise;
-  wire \first_rise$171 ;
+  wire \first_rise$206 ;
   wire [31:0] first_rise_time;
-  wire [160:0] frame;
+  wire [186:0] frame;
   wire \frame.cds ;
+  wire \frame.delay_settled ;
+  wire [7:0] \frame.delay_spread ;
   wire [5:0] \frame.lc ;
   wire \frame.lc_repeat ;
   wire \frame.lc_skip ;
   wire \frame.lc_zero ;
   wire [12:0] \frame.line_delay ;
+  wire [3:0] \frame.noise_events ;
+  wire [12:0] \frame.settled_delay ;
   wire \frame.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
@@ -17047,6 +18997,8 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
+  (* enum_value_1101 = "NOISY_LINE" *)
+  (* enum_value_1110 = "DELAY_JUMP" *)
   wire [3:0] \frame.status ;
   wire [31:0] \frame.timestamp ;
   wire [57:0] \frame.word0 ;
@@ -17068,38 +19020,45 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   output frames;
   wire frames;
   wire [15:0] half_period;
-  wire [15:0] \half_period$112 ;
+  wire [15:0] \half_period$122 ;
   wire held;
   wire hold;
   wire idle;
-  wire \idle$20 ;
-  wire \idle$29 ;
+  wire \idle$23 ;
+  wire \idle$32 ;
   wire in_clock;
-  wire \in_clock$83 ;
+  wire \in_clock$86 ;
+  wire jump;
   wire [5:0] lc;
-  wire [5:0] \lc$117 ;
-  wire [5:0] \lc$257 ;
+  wire [5:0] \lc$127 ;
+  wire [5:0] \lc$300 ;
   wire lc_check;
   wire lc_load;
   wire [5:0] lc_next;
-  wire [5:0] \lc_next$119 ;
+  wire [5:0] \lc_next$129 ;
   wire lc_repeat;
-  wire \lc_repeat$258 ;
+  wire \lc_repeat$301 ;
   wire lc_repeat_seen;
   wire lc_skip;
-  wire \lc_skip$259 ;
+  wire \lc_skip$302 ;
   wire lc_skip_seen;
   wire lc_zero;
-  wire \lc_zero$260 ;
+  wire \lc_zero$303 ;
   wire lc_zero_seen;
+  wire learn;
   wire level;
+  wire \level$138 ;
+  wire [3:0] limit;
   wire [12:0] line_delay;
-  wire [154:0] live;
+  wire [174:0] live;
   wire [23:0] \live.ack_limit ;
   wire [23:0] \live.break_time ;
   wire [11:0] \live.delay_limit ;
+  wire [3:0] \live.delay_tolerance ;
   wire \live.end_check ;
   wire [15:0] \live.ma_half_period ;
+  wire [3:0] \live.noise_limit ;
+  wire [11:0] \live.quiet_time ;
   wire [23:0] \live.request_period ;
   wire \live.spw_check ;
   wire [7:0] \live.spw_tolerance ;
@@ -17125,13 +19084,13 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire \live.w1_enable ;
   wire load;
   wire locked;
-  wire \locked$50 ;
+  wire \locked$53 ;
   output ma;
   wire ma;
-  wire \ma$236 ;
+  wire \ma$275 ;
   wire ma_arm;
   wire ma_busy;
-  wire \ma_busy$78 ;
+  wire \ma_busy$81 ;
   wire ma_enough;
   wire ma_held;
   wire ma_hold;
@@ -17139,51 +19098,67 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire match;
   wire [1:0] ne;
   wire no_start_expired;
-  wire \no_start_expired$70 ;
+  wire \no_start_expired$73 ;
   wire [24:0] no_start_limit;
-  wire [24:0] \no_start_limit$93 ;
+  wire [24:0] \no_start_limit$96 ;
+  wire noise;
+  wire [3:0] noise_events;
+  wire noisy;
+  wire \noisy$155 ;
   wire [1:0] nw;
   wire ok;
   wire overrun;
-  wire \overrun$239 ;
+  wire \overrun$278 ;
   wire [23:0] period;
   wire periodic;
-  input \periodic$24 ;
-  wire \periodic$24 ;
+  input \periodic$27 ;
+  wire \periodic$27 ;
+  wire quiet;
+  wire \quiet$105 ;
+  wire [11:0] quiet_limit;
+  wire quiet_live;
+  wire \quiet_live$107 ;
+  wire [11:0] quiet_time;
+  wire [11:0] quiet_time_live;
   input [3:0] rbuf_addr;
   wire [3:0] rbuf_addr;
   wire [31:0] rbuf_data;
   input rbuf_en;
   wire rbuf_en;
+  wire rearm;
   wire receiver_clear;
   wire \repeat ;
   wire report;
-  wire \report$153 ;
+  wire \report$184 ;
   wire report_delay;
-  wire \report_delay$156 ;
+  wire \report_delay$187 ;
   wire report_frame;
-  wire \report_frame$139 ;
-  wire \report_frame$154 ;
+  wire \report_frame$170 ;
+  wire \report_frame$185 ;
   wire request;
-  wire [17:0] \request$173 ;
-  wire [6:0] \request$173.address ;
-  wire [6:0] \request$173.count ;
-  wire [2:0] \request$173.slave_id ;
-  wire \request$173.write ;
-  wire \request$35 ;
+  wire [17:0] \request$208 ;
+  wire [6:0] \request$208.address ;
+  wire [6:0] \request$208.count ;
+  wire [2:0] \request$208.slave_id ;
+  wire \request$208.write ;
+  wire \request$38 ;
   wire restart;
   wire restart_timer;
   output [9:0] result;
   wire [9:0] result;
-  output [160:0] \result$245 ;
-  wire [160:0] \result$245 ;
-  wire \result$245.cds ;
-  wire [5:0] \result$245.lc ;
-  wire \result$245.lc_repeat ;
-  wire \result$245.lc_skip ;
-  wire \result$245.lc_zero ;
-  wire [12:0] \result$245.line_delay ;
-  wire \result$245.spw_mismatch ;
+  output [186:0] \result$284 ;
+  wire [186:0] \result$284 ;
+  wire \result$284.cds ;
+  wire \result$284.delay_settled ;
+  wire [7:0] \result$284.delay_spread ;
+  wire [5:0] \result$284.lc ;
+  wire \result$284.lc_repeat ;
+  wire \result$284.lc_skip ;
+  wire \result$284.lc_zero ;
+  wire [12:0] \result$284.line_delay ;
+  wire [3:0] \result$284.noise_events ;
+  wire [12:0] \result$284.settled_delay ;
+  wire \result$284.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -17198,18 +19173,20 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
-  wire [3:0] \result$245.status ;
-  wire [31:0] \result$245.timestamp ;
-  wire [57:0] \result$245.word0 ;
-  wire \result$245.word0.crc_ok ;
-  wire \result$245.word0.ne ;
-  wire \result$245.word0.nw ;
-  wire [54:0] \result$245.word0.position ;
-  wire [42:0] \result$245.word1 ;
-  wire \result$245.word1.crc_ok ;
-  wire \result$245.word1.ne ;
-  wire \result$245.word1.nw ;
-  wire [39:0] \result$245.word1.position ;
+  (* enum_value_1101 = "NOISY_LINE" *)
+  (* enum_value_1110 = "DELAY_JUMP" *)
+  wire [3:0] \result$284.status ;
+  wire [31:0] \result$284.timestamp ;
+  wire [57:0] \result$284.word0 ;
+  wire \result$284.word0.crc_ok ;
+  wire \result$284.word0.ne ;
+  wire \result$284.word0.nw ;
+  wire [54:0] \result$284.word0.position ;
+  wire [42:0] \result$284.word1 ;
+  wire \result$284.word1.crc_ok ;
+  wire \result$284.word1.ne ;
+  wire \result$284.word1.nw ;
+  wire [39:0] \result$284.word1.position ;
   wire [6:0] \result.bytes_done ;
   (* enum_base_type = "AccessStatus" *)
   (* enum_value_000 = "OK" *)
@@ -17221,41 +19198,47 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* enum_value_110 = "BAD_REQUEST" *)
   wire [2:0] \result.status ;
   wire resync;
-  wire \resync$125 ;
+  wire \resync$135 ;
   wire [15:0] rises;
-  wire [15:0] \rises$105 ;
+  wire [15:0] \rises$115 ;
   input rst;
   wire rst;
   wire run;
   reg sample = 1'h0;
-  wire \sample$264 ;
+  wire \sample$307 ;
+  wire sampler_noise;
   wire second_rise;
+  wire settled;
+  wire [12:0] settled_delay;
+  wire [12:0] \settled_delay$290 ;
   wire skip;
   input slo;
   wire slo;
-  wire \slo$31 ;
-  wire \slo$41 ;
-  wire \slo$77 ;
+  wire \slo$34 ;
+  wire \slo$44 ;
+  wire \slo$80 ;
   wire slo_stuck;
-  wire \slo_stuck$72 ;
+  wire \slo_stuck$75 ;
   wire slo_stuck_live;
-  wire \slo_stuck_live$74 ;
+  wire \slo_stuck_live$77 ;
   wire slots_full;
-  wire \slots_full$58 ;
+  wire \slots_full$61 ;
+  wire [7:0] spread;
   wire [39:0] spw;
   wire spw_match;
   wire spw_mismatch;
-  wire \spw_mismatch$261 ;
+  wire \spw_mismatch$304 ;
   input start;
   wire start;
-  input \start$185 ;
-  wire \start$185 ;
-  wire \start$22 ;
+  input \start$220 ;
+  wire \start$220 ;
+  wire \start$25 ;
   wire [15:0] start_slot;
-  wire [15:0] \start_slot$103 ;
+  wire [15:0] \start_slot$113 ;
   wire started;
-  wire \started$101 ;
-  wire \started$56 ;
+  wire \started$111 ;
+  wire \started$59 ;
+  reg started_before = 1'h0;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -17270,6 +19253,8 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
+  (* enum_value_1101 = "NOISY_LINE" *)
+  (* enum_value_1110 = "DELAY_JUMP" *)
   wire [3:0] status;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
@@ -17285,26 +19270,31 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
-  wire [3:0] \status$244 ;
+  (* enum_value_1101 = "NOISY_LINE" *)
+  (* enum_value_1110 = "DELAY_JUMP" *)
+  wire [3:0] \status$283 ;
   wire stop_bit;
-  wire \stop_bit$62 ;
+  wire \stop_bit$65 ;
   wire stopped;
-  wire \stopped$60 ;
+  wire \stopped$63 ;
   wire [23:0] timeout_limit;
-  wire [23:0] \timeout_limit$91 ;
+  wire [23:0] \timeout_limit$94 ;
   wire [23:0] timeout_live;
   wire timer_clear;
   wire [31:0] timestamp;
-  wire [7:0] tolerance;
+  wire [16:0] tolerance;
+  wire [7:0] \tolerance$166 ;
   input trigger;
   wire trigger;
-  wire \trigger$33 ;
+  wire \trigger$36 ;
   wire valid;
-  wire \valid$158 ;
-  output \valid$242 ;
-  wire \valid$242 ;
+  wire \valid$189 ;
+  output \valid$281 ;
+  wire \valid$281 ;
   wire valid_out;
   wire w1_enable;
+  wire waiting;
+  wire watch;
   wire [39:0] wbuf;
   wire [3:0] \wbuf.addr ;
   wire [31:0] \wbuf.data ;
@@ -17318,28 +19308,28 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire word1_nw;
   wire [39:0] word1_position;
   wire [1:0] word_count;
-  wire [1:0] \word_count$115 ;
+  wire [1:0] \word_count$125 ;
   wire [1:0] word_crc_ok;
   wire [19:0] words;
-  wire [19:0] \words$127 ;
-  wire [9:0] \words$127[0] ;
+  wire [19:0] \words$159 ;
+  wire [9:0] \words$159[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
-  wire [1:0] \words$127[0].crc ;
-  wire [5:0] \words$127[0].data_bits ;
-  wire \words$127[0].lc ;
-  wire \words$127[0].nenw ;
-  wire [9:0] \words$127[1] ;
+  wire [1:0] \words$159[0].crc ;
+  wire [5:0] \words$159[0].data_bits ;
+  wire \words$159[0].lc ;
+  wire \words$159[0].nenw ;
+  wire [9:0] \words$159[1] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
-  wire [1:0] \words$127[1].crc ;
-  wire [5:0] \words$127[1].data_bits ;
-  wire \words$127[1].lc ;
-  wire \words$127[1].nenw ;
+  wire [1:0] \words$159[1].crc ;
+  wire [5:0] \words$159[1].data_bits ;
+  wire \words$159[1].lc ;
+  wire \words$159[1].nenw ;
   wire [9:0] \words[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
@@ -17359,35 +19349,47 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire \words[1].lc ;
   wire \words[1].nenw ;
   wire zero;
-  assign periodic = \periodic$24  | frames;
-  assign \$1  = report_frame & spw_mismatch;
-  assign \$2  = result[2:0] == 1'h1;
-  assign \$3  = ca_done & \$2 ;
-  assign \$4  = result[2:0] == 2'h2;
-  assign \$5  = ca_done & \$4 ;
-  assign \$6  = result[2:0] == 2'h3;
-  assign \$7  = ca_done & \$6 ;
-  assign \$8  = result[2:0] == 3'h4;
-  assign \$9  = ca_done & \$8 ;
-  assign \$10  = result[2:0] == 3'h5;
-  assign \$11  = ca_done & \$10 ;
-  assign \busy$237  = ~ idle;
+  assign periodic = \periodic$27  | frames;
+  assign enable = cycle[144:141] != 4'hf;
+  assign rearm = cfg_delay_tolerance == 4'hf;
+  assign \$1  = ~ started_before;
+  assign \check$148  = started & \$1 ;
+  assign \$2  = learn & spw_mismatch;
+  assign \$3  = status == 4'hd;
+  assign \$4  = learn & \$3 ;
+  assign \$5  = status == 4'he;
+  assign \$6  = learn & \$5 ;
+  assign \$7  = result[2:0] == 1'h1;
+  assign \$8  = ca_done & \$7 ;
+  assign \$9  = result[2:0] == 2'h2;
+  assign \$10  = ca_done & \$9 ;
+  assign \$11  = result[2:0] == 2'h3;
+  assign \$12  = ca_done & \$11 ;
+  assign \$13  = result[2:0] == 3'h4;
+  assign \$14  = ca_done & \$13 ;
+  assign \$15  = result[2:0] == 3'h5;
+  assign \$16  = ca_done & \$15 ;
+  assign \busy$276  = ~ idle;
   assign config_error = ~ config_ok;
-  assign \$12  = ~ \clear$106 ;
-  assign \$13  = \sample$264  & \$12 ;
+  assign \$17  = ~ \clear$116 ;
+  assign \$18  = \sample$307  & \$17 ;
   always @(posedge clk)
-    sample <= \$14 ;
+    sample <= \$19 ;
   always @(posedge clk)
-    \bit  <= \$15 ;
+    \bit  <= \$20 ;
+  always @(posedge clk)
+    started_before <= \$21 ;
   \biss_master_axil.ch1.core.config  \config  (
     .ack_limit(ack_limit),
     .clk(clk),
     .cycle(cycle),
     .delay_limit(delay_limit),
+    .delay_tolerance(tolerance),
     .idle(idle),
     .live(live),
     .no_start_limit(no_start_limit),
     .ok(config_ok),
+    .quiet_time(quiet_limit),
     .rst(rst),
     .timeout_limit(timeout_limit),
     .word_count(word_count)
@@ -17418,27 +19420,30 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .ma_hold(hold),
     .ma_run(run),
     .no_start_expired(no_start_expired),
-    .receiver_clear(\clear$106 ),
+    .quiet(quiet),
+    .quiet_live(quiet_live),
+    .receiver_clear(\clear$116 ),
     .report_delay(report_delay),
-    .report_frame(report_frame),
+    .report_frame(learn),
     .request(request),
     .restart_timer(restart),
     .resync(resync),
     .rst(rst),
-    .slo(\slo$41 ),
+    .slo(\slo$44 ),
     .slo_stuck(slo_stuck),
     .slo_stuck_live(slo_stuck_live),
     .slots_full(slots_full),
     .started(started),
     .stop_bit(stop_bit),
     .stopped(stopped),
-    .timer_clear(clear)
+    .timer_clear(clear),
+    .waiting(watch)
   );
   \biss_master_axil.ch1.core.counters  counters (
-    .clear(\clear$214 ),
+    .clear(\clear$250 ),
     .clk(clk),
     .counts(counts),
-    .events(events),
+    .events(\events$245 ),
     .rst(rst)
   );
   \biss_master_axil.ch1.core.decoder  decoder (
@@ -17454,7 +19459,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .lc_load(load),
     .ne(ne),
     .nw(nw),
-    .receiver_clear(\clear$106 ),
+    .receiver_clear(\clear$116 ),
     .rst(rst),
     .sample(sample),
     .slots_full(slots_full),
@@ -17465,10 +19470,37 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .word_count(word_count),
     .words(words)
   );
+  \biss_master_axil.ch1.core.delay_check  delay_check (
+    .check(\check$148 ),
+    .clean(clean),
+    .clk(clk),
+    .delay(delay),
+    .enable(enable),
+    .jump(delay_jump),
+    .learn(learn),
+    .rearm(rearm),
+    .rst(rst),
+    .settled(settled),
+    .settled_delay(settled_delay),
+    .spread(spread),
+    .\tolerance$8 (tolerance)
+  );
+  \biss_master_axil.ch1.core.line_noise  line_noise (
+    .clk(clk),
+    .close(frame_done),
+    .\event (\event ),
+    .events(events),
+    .level(\slo$44 ),
+    .limit(cycle[140:137]),
+    .noisy(noisy),
+    .rst(rst),
+    .sampler_noise(sampler_noise),
+    .watch(watch)
+  );
   \biss_master_axil.ch1.core.ma_clock  ma_clock (
     .busy(ma_busy),
     .clk(clk),
-    .\clocking (\ma_busy$78 ),
+    .\clocking (\ma_busy$81 ),
     .first_rise(first_rise),
     .half_period(cycle[15:0]),
     .held(ma_held),
@@ -17480,18 +19512,18 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .second_rise(ma_arm)
   );
   \biss_master_axil.ch1.core.ma_stop  ma_stop (
-    .clear(\clear$106 ),
+    .clear(\clear$116 ),
     .clk(clk),
     .enough(ma_enough),
     .rises(rises),
     .rst(rst),
     .start_slot(start_slot),
     .\started$10 (started),
-    .w1_enable(cycle[135]),
-    .words(\words$127 )
+    .w1_enable(cycle[155]),
+    .words(\words$159 )
   );
   \biss_master_axil.ch1.core.register_access  register_access (
-    .abort(\abort$187 ),
+    .abort(\abort$222 ),
     .busy(frames),
     .cdm(cdm),
     .clk(clk),
@@ -17503,36 +19535,37 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .rbuf_addr(rbuf_addr),
     .rbuf_data(ca_rbuf_data),
     .rbuf_en(rbuf_en),
-    .request(\request$173 ),
+    .request(\request$208 ),
     .result(result),
     .rst(rst),
-    .start(\start$185 ),
+    .start(\start$220 ),
     .wbuf(wbuf)
   );
   \biss_master_axil.ch1.core.results  results (
     .clk(clk),
-    .done(\done$240 ),
+    .done(\done$279 ),
     .frame(frame),
     .report(report),
     .report_delay(report_delay),
-    .report_frame(report_frame),
-    .result(\result$245 ),
+    .report_frame(learn),
+    .result(\result$284 ),
     .rst(rst),
     .valid(valid),
-    .valid_out(\valid$242 )
+    .valid_out(\valid$281 )
   );
   \biss_master_axil.ch1.core.sampler  sampler (
     .arm(ma_arm),
-    .\bit (\bit$265 ),
+    .\bit (\bit$308 ),
     .clk(clk),
     .delay(delay),
     .early(early),
     .half_period(cycle[15:0]),
-    .level(\slo$41 ),
+    .level(\slo$44 ),
     .locked(locked),
-    .receiver_clear(\clear$106 ),
+    .noise(sampler_noise),
+    .receiver_clear(\clear$116 ),
     .rst(rst),
-    .sample(\sample$264 ),
+    .sample(\sample$307 ),
     .slo(slo)
   );
   \biss_master_axil.ch1.core.scheduler  scheduler (
@@ -17553,20 +19586,20 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$4391$0 (\bit ),
+    .\port$4951$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
     .skip(lc_skip_seen)
   );
   \biss_master_axil.ch1.core.spw_check  spw_check (
-    .bits(cycle[141:136]),
+    .bits(cycle[161:156]),
     .clk(clk),
     .cpw_top(cpw_top),
     .match(spw_match),
     .rst(rst),
     .spw(spw),
-    .\tolerance$8 (cycle[154:147])
+    .\tolerance$8 (cycle[174:167])
   );
   \biss_master_axil.ch1.core.time_base  time_base (
     .clk(clk),
@@ -17585,12 +19618,16 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .delay_limit(delay_limit),
     .delay_over(delay_over),
     .in_clock(in_clock),
-    .ma_busy(\ma_busy$78 ),
+    .ma_busy(\ma_busy$81 ),
     .no_start_expired(no_start_expired),
     .no_start_limit(no_start_limit),
+    .quiet(quiet),
+    .quiet_limit(quiet_limit),
+    .quiet_live(quiet_live),
+    .quiet_time_live(cfg_quiet_time),
     .restart(restart),
     .rst(rst),
-    .slo(\slo$41 ),
+    .slo(\slo$44 ),
     .slo_stuck(slo_stuck),
     .slo_stuck_live(slo_stuck_live),
     .timeout_limit(timeout_limit),
@@ -17598,8 +19635,10 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   );
   \biss_master_axil.ch1.core.verdict  verdict (
     .cfg(cycle),
+    .clean(clean),
     .crc_error(crc_error),
     .crc_ok(crc_ok),
+    .delay_jump(delay_jump),
     .doubtful(frame_doubtful),
     .fault(fault),
     .fault_status(fault_status),
@@ -17610,124 +19649,147 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .lc_skip_seen(lc_skip_seen),
     .lc_zero(lc_zero),
     .lc_zero_seen(lc_zero_seen),
-    .\port$2965$0 (\$16 ),
+    .noisy(noisy),
+    .\port$3363$0 (\$22 ),
     .report(report),
-    .report_frame(report_frame),
+    .report_frame(learn),
     .spw_match(spw_match),
     .spw_mismatch(spw_mismatch),
     .status(status),
     .valid(valid)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
-    \$14  = \$13 ;
+    if (\$auto$verilog_backend.cc:2355:dump_module$80 ) begin end
+    \$19  = \$18 ;
     if (rst) begin
-      \$14  = 1'h0;
+      \$19  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
-    \$15  = \bit$265 ;
+    if (\$auto$verilog_backend.cc:2355:dump_module$80 ) begin end
+    \$20  = \bit$308 ;
     if (rst) begin
-      \$15  = 1'h0;
+      \$20  = 1'h0;
     end
   end
-  assign \idle$20  = idle;
-  assign \start$22  = start;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$80 ) begin end
+    \$21  = started;
+    if (rst) begin
+      \$21  = 1'h0;
+    end
+  end
+  assign \idle$23  = idle;
+  assign \start$25  = start;
   assign period = cfg_request_period;
   assign abort_cycle = abort;
-  assign \idle$29  = idle;
-  assign \slo$31  = slo;
-  assign \trigger$33  = trigger;
-  assign \request$35  = request;
-  assign \abort$36  = abort;
+  assign \idle$32  = idle;
+  assign \slo$34  = slo;
+  assign \trigger$36  = trigger;
+  assign \request$38  = request;
+  assign \abort$39  = abort;
   assign ok = config_ok;
   assign end_check = cycle[124];
-  assign level = \slo$41 ;
+  assign level = \slo$44 ;
   assign busy = ma_busy;
   assign second_rise = ma_arm;
   assign enough = ma_enough;
-  assign \locked$50  = locked;
-  assign \early$52  = early;
+  assign \locked$53  = locked;
+  assign \early$55  = early;
   assign done = frame_done;
-  assign \started$56  = started;
-  assign \slots_full$58  = slots_full;
-  assign \stopped$60  = stopped;
-  assign \stop_bit$62  = stop_bit;
+  assign \started$59  = started;
+  assign \slots_full$61  = slots_full;
+  assign \stopped$63  = stopped;
+  assign \stop_bit$65  = stop_bit;
   assign doubtful = frame_doubtful;
-  assign \break_over$66  = break_over;
-  assign \ack_expired$68  = ack_expired;
-  assign \no_start_expired$70  = no_start_expired;
-  assign \slo_stuck$72  = slo_stuck;
-  assign \slo_stuck_live$74  = slo_stuck_live;
-  assign \delay_over$76  = delay_over;
-  assign \slo$77  = \slo$41 ;
-  assign \clocking  = \ma_busy$78 ;
+  assign \break_over$69  = break_over;
+  assign \ack_expired$71  = ack_expired;
+  assign \no_start_expired$73  = no_start_expired;
+  assign \slo_stuck$75  = slo_stuck;
+  assign \slo_stuck_live$77  = slo_stuck_live;
+  assign \delay_over$79  = delay_over;
+  assign \slo$80  = \slo$44 ;
+  assign \clocking  = \ma_busy$81 ;
   assign timer_clear = clear;
-  assign \in_clock$83  = in_clock;
+  assign \in_clock$86  = in_clock;
   assign restart_timer = restart;
   assign break_time = cfg_break_time;
   assign timeout_live = cfg_timeout_limit;
-  assign \ack_limit$89  = ack_limit;
-  assign \timeout_limit$91  = timeout_limit;
-  assign \no_start_limit$93  = no_start_limit;
-  assign \delay$95  = delay;
-  assign \delay_limit$97  = delay_limit;
+  assign \ack_limit$92  = ack_limit;
+  assign \timeout_limit$94  = timeout_limit;
+  assign \no_start_limit$96  = no_start_limit;
+  assign \delay$98  = delay;
+  assign \delay_limit$100  = delay_limit;
+  assign quiet_time_live = cfg_quiet_time;
+  assign quiet_time = quiet_limit;
+  assign \quiet$105  = quiet;
+  assign \quiet_live$107  = quiet_live;
   assign ma_run = run;
   assign half_period = cycle[15:0];
-  assign \started$101  = started;
-  assign \start_slot$103  = start_slot;
-  assign \rises$105  = rises;
-  assign receiver_clear = \clear$106 ;
+  assign \started$111  = started;
+  assign \start_slot$113  = start_slot;
+  assign \rises$115  = rises;
+  assign receiver_clear = \clear$116 ;
   assign decoder_sample = sample;
   assign decoder_bit = \bit ;
-  assign \half_period$112  = cycle[15:0];
+  assign \half_period$122  = cycle[15:0];
   assign arm = ma_arm;
-  assign \word_count$115  = word_count;
-  assign \lc$117  = lc;
+  assign \word_count$125  = word_count;
+  assign \lc$127  = lc;
   assign lc_next = { lc[4:0], \bit  };
-  assign \lc_next$119  = { lc[4:0], \bit  };
+  assign \lc_next$129  = { lc[4:0], \bit  };
   assign lc_load = load;
   assign lc_check = check;
-  assign \resync$125  = resync;
-  assign w1_enable = cycle[135];
-  assign \cpw_top$130  = cpw_top;
+  assign \resync$135  = resync;
+  assign waiting = watch;
+  assign \level$138  = \slo$44 ;
+  assign noise = sampler_noise;
+  assign close = frame_done;
+  assign limit = cycle[140:137];
+  assign delay_tolerance = tolerance;
+  assign \delay$147  = delay;
+  assign report_frame = learn;
+  assign \clean$153  = clean;
+  assign \noisy$155  = noisy;
+  assign jump = delay_jump;
+  assign w1_enable = cycle[155];
+  assign \cpw_top$162  = cpw_top;
   assign data1 = spw;
-  assign bits = cycle[141:136];
-  assign tolerance = cycle[154:147];
+  assign bits = cycle[161:156];
+  assign \tolerance$166  = cycle[174:167];
   assign match = spw_match;
   assign cfg = cycle;
-  assign \report_frame$139  = report_frame;
-  assign \fault$141  = fault;
-  assign \fault_status$143  = fault_status;
-  assign \crc_ok$145  = crc_ok;
+  assign \report_frame$170  = learn;
+  assign \fault$172  = fault;
+  assign \fault_status$174  = fault_status;
+  assign \crc_ok$176  = crc_ok;
   assign \repeat  = lc_repeat_seen;
   assign skip = lc_skip_seen;
   assign zero = lc_zero_seen;
-  assign \report$153  = report;
-  assign \report_frame$154  = report_frame;
-  assign \report_delay$156  = report_delay;
-  assign \valid$158  = valid;
-  assign word_crc_ok = { \$16 , crc_ok[0] };
-  assign \first_rise$171  = first_rise;
+  assign \report$184  = report;
+  assign \report_frame$185  = learn;
+  assign \report_delay$187  = report_delay;
+  assign \valid$189  = valid;
+  assign word_crc_ok = { \$22 , crc_ok[0] };
+  assign \first_rise$206  = first_rise;
   assign ca_status = result[2:0];
   assign ca_bytes_done = result[9:3];
-  assign ca_start = \start$185 ;
-  assign ca_abort = \abort$187 ;
+  assign ca_start = \start$220 ;
+  assign ca_abort = \abort$222 ;
   assign ca_rbuf_addr = rbuf_addr;
   assign ca_rbuf_en = rbuf_en;
   assign rbuf_data = ca_rbuf_data;
   assign ca_busy = frames;
-  assign \busy$196  = frames;
-  assign \done$198  = ca_done;
-  assign \cdm$200  = cdm;
+  assign \busy$231  = frames;
+  assign \done$233  = ca_done;
+  assign \cdm$235  = cdm;
   assign held = ma_held;
   assign ma_hold = hold;
   assign frame_end = report;
   assign frame_ok = valid;
   assign frame_cds = cds;
   assign cdm_cycle = frame_cdm;
-  assign clear_counters = \clear$214 ;
+  assign clear_counters = \clear$250 ;
   assign count_crc_word0 = counts[15:0];
   assign count_crc_word1 = counts[31:16];
   assign count_no_ack = counts[47:32];
@@ -17741,32 +19803,39 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign count_overrun = counts[175:160];
   assign count_aborted = counts[191:176];
   assign count_no_stop = counts[207:192];
-  assign count_ca_crc4_error = counts[223:208];
-  assign count_ca_no_answer = counts[239:224];
-  assign count_ca_refused = counts[255:240];
-  assign count_ca_aborted = counts[271:256];
-  assign count_ca_data_fault = counts[287:272];
-  assign \ma$236  = ma;
-  assign \overrun$239  = overrun;
-  assign \done$241  = \done$240 ;
-  assign valid_out = \valid$242 ;
-  assign \status$244  = \result$245 [3:0];
-  assign timestamp = \result$245 [35:4];
-  assign line_delay = \result$245 [48:36];
-  assign \cds$248  = \result$245 [49];
-  assign word0_position = \result$245 [104:50];
-  assign word0_ne = \result$245 [105];
-  assign word0_nw = \result$245 [106];
-  assign word0_crc_ok = \result$245 [107];
-  assign word1_position = \result$245 [147:108];
-  assign word1_ne = \result$245 [148];
-  assign word1_nw = \result$245 [149];
-  assign word1_crc_ok = \result$245 [150];
-  assign \lc$257  = \result$245 [156:151];
-  assign \lc_repeat$258  = \result$245 [157];
-  assign \lc_skip$259  = \result$245 [158];
-  assign \lc_zero$260  = \result$245 [159];
-  assign \spw_mismatch$261  = \result$245 [160];
+  assign count_noisy_line = counts[223:208];
+  assign count_delay_jump = counts[239:224];
+  assign count_noise_event = counts[255:240];
+  assign count_ca_crc4_error = counts[271:256];
+  assign count_ca_no_answer = counts[287:272];
+  assign count_ca_refused = counts[303:288];
+  assign count_ca_aborted = counts[319:304];
+  assign count_ca_data_fault = counts[335:320];
+  assign \ma$275  = ma;
+  assign \overrun$278  = overrun;
+  assign \done$280  = \done$279 ;
+  assign valid_out = \valid$281 ;
+  assign \status$283  = \result$284 [3:0];
+  assign timestamp = \result$284 [35:4];
+  assign line_delay = \result$284 [48:36];
+  assign \cds$287  = \result$284 [49];
+  assign noise_events = \result$284 [53:50];
+  assign delay_settled = \result$284 [54];
+  assign \settled_delay$290  = \result$284 [67:55];
+  assign delay_spread = \result$284 [75:68];
+  assign word0_position = \result$284 [130:76];
+  assign word0_ne = \result$284 [131];
+  assign word0_nw = \result$284 [132];
+  assign word0_crc_ok = \result$284 [133];
+  assign word1_position = \result$284 [173:134];
+  assign word1_ne = \result$284 [174];
+  assign word1_nw = \result$284 [175];
+  assign word1_crc_ok = \result$284 [176];
+  assign \lc$300  = \result$284 [182:177];
+  assign \lc_repeat$301  = \result$284 [183];
+  assign \lc_skip$302  = \result$284 [184];
+  assign \lc_zero$303  = \result$284 [185];
+  assign \spw_mismatch$304  = \result$284 [186];
   assign \live.ma_half_period  = live[15:0];
   assign \live.request_period  = live[39:16];
   assign \live.break_time  = live[63:40];
@@ -17774,19 +19843,22 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign \live.timeout_limit  = live[111:88];
   assign \live.delay_limit  = live[123:112];
   assign \live.end_check  = live[124];
-  assign \live.w0  = live[134:125];
-  assign \live.w0.data_bits  = live[130:125];
-  assign \live.w0.nenw  = live[131];
-  assign \live.w0.lc  = live[132];
-  assign \live.w0.crc  = live[134:133];
-  assign \live.w1_enable  = live[135];
-  assign \live.w1  = live[145:136];
-  assign \live.w1.data_bits  = live[141:136];
-  assign \live.w1.nenw  = live[142];
-  assign \live.w1.lc  = live[143];
-  assign \live.w1.crc  = live[145:144];
-  assign \live.spw_check  = live[146];
-  assign \live.spw_tolerance  = live[154:147];
+  assign \live.quiet_time  = live[136:125];
+  assign \live.noise_limit  = live[140:137];
+  assign \live.delay_tolerance  = live[144:141];
+  assign \live.w0  = live[154:145];
+  assign \live.w0.data_bits  = live[150:145];
+  assign \live.w0.nenw  = live[151];
+  assign \live.w0.lc  = live[152];
+  assign \live.w0.crc  = live[154:153];
+  assign \live.w1_enable  = live[155];
+  assign \live.w1  = live[165:156];
+  assign \live.w1.data_bits  = live[161:156];
+  assign \live.w1.nenw  = live[162];
+  assign \live.w1.lc  = live[163];
+  assign \live.w1.crc  = live[165:164];
+  assign \live.spw_check  = live[166];
+  assign \live.spw_tolerance  = live[174:167];
   assign \cycle.ma_half_period  = cycle[15:0];
   assign \cycle.request_period  = cycle[39:16];
   assign \cycle.break_time  = cycle[63:40];
@@ -17794,19 +19866,22 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign \cycle.timeout_limit  = cycle[111:88];
   assign \cycle.delay_limit  = cycle[123:112];
   assign \cycle.end_check  = cycle[124];
-  assign \cycle.w0  = cycle[134:125];
-  assign \cycle.w0.data_bits  = cycle[130:125];
-  assign \cycle.w0.nenw  = cycle[131];
-  assign \cycle.w0.lc  = cycle[132];
-  assign \cycle.w0.crc  = cycle[134:133];
-  assign \cycle.w1_enable  = cycle[135];
-  assign \cycle.w1  = cycle[145:136];
-  assign \cycle.w1.data_bits  = cycle[141:136];
-  assign \cycle.w1.nenw  = cycle[142];
-  assign \cycle.w1.lc  = cycle[143];
-  assign \cycle.w1.crc  = cycle[145:144];
-  assign \cycle.spw_check  = cycle[146];
-  assign \cycle.spw_tolerance  = cycle[154:147];
+  assign \cycle.quiet_time  = cycle[136:125];
+  assign \cycle.noise_limit  = cycle[140:137];
+  assign \cycle.delay_tolerance  = cycle[144:141];
+  assign \cycle.w0  = cycle[154:145];
+  assign \cycle.w0.data_bits  = cycle[150:145];
+  assign \cycle.w0.nenw  = cycle[151];
+  assign \cycle.w0.lc  = cycle[152];
+  assign \cycle.w0.crc  = cycle[154:153];
+  assign \cycle.w1_enable  = cycle[155];
+  assign \cycle.w1  = cycle[165:156];
+  assign \cycle.w1.data_bits  = cycle[161:156];
+  assign \cycle.w1.nenw  = cycle[162];
+  assign \cycle.w1.lc  = cycle[163];
+  assign \cycle.w1.crc  = cycle[165:164];
+  assign \cycle.spw_check  = cycle[166];
+  assign \cycle.spw_tolerance  = cycle[174:167];
   assign \words[0]  = words[9:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -17817,16 +19892,16 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign \words[1].nenw  = words[16];
   assign \words[1].lc  = words[17];
   assign \words[1].crc  = words[19:18];
-  assign \words$127[0]  = \words$127 [9:0];
-  assign \words$127[0].data_bits  = \words$127 [5:0];
-  assign \words$127[0].nenw  = \words$127 [6];
-  assign \words$127[0].lc  = \words$127 [7];
-  assign \words$127[0].crc  = \words$127 [9:8];
-  assign \words$127[1]  = \words$127 [19:10];
-  assign \words$127[1].data_bits  = \words$127 [15:10];
-  assign \words$127[1].nenw  = \words$127 [16];
-  assign \words$127[1].lc  = \words$127 [17];
-  assign \words$127[1].crc  = \words$127 [19:18];
+  assign \words$159[0]  = \words$159 [9:0];
+  assign \words$159[0].data_bits  = \words$159 [5:0];
+  assign \words$159[0].nenw  = \words$159 [6];
+  assign \words$159[0].lc  = \words$159 [7];
+  assign \words$159[0].crc  = \words$159 [9:8];
+  assign \words$159[1]  = \words$159 [19:10];
+  assign \words$159[1].data_bits  = \words$159 [15:10];
+  assign \words$159[1].nenw  = \words$159 [16];
+  assign \words$159[1].lc  = \words$159 [17];
+  assign \words$159[1].crc  = \words$159 [19:18];
   assign \cfg.ma_half_period  = cycle[15:0];
   assign \cfg.request_period  = cycle[39:16];
   assign \cfg.break_time  = cycle[63:40];
@@ -17834,65 +19909,75 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign \cfg.timeout_limit  = cycle[111:88];
   assign \cfg.delay_limit  = cycle[123:112];
   assign \cfg.end_check  = cycle[124];
-  assign \cfg.w0  = cycle[134:125];
-  assign \cfg.w0.data_bits  = cycle[130:125];
-  assign \cfg.w0.nenw  = cycle[131];
-  assign \cfg.w0.lc  = cycle[132];
-  assign \cfg.w0.crc  = cycle[134:133];
-  assign \cfg.w1_enable  = cycle[135];
-  assign \cfg.w1  = cycle[145:136];
-  assign \cfg.w1.data_bits  = cycle[141:136];
-  assign \cfg.w1.nenw  = cycle[142];
-  assign \cfg.w1.lc  = cycle[143];
-  assign \cfg.w1.crc  = cycle[145:144];
-  assign \cfg.spw_check  = cycle[146];
-  assign \cfg.spw_tolerance  = cycle[154:147];
+  assign \cfg.quiet_time  = cycle[136:125];
+  assign \cfg.noise_limit  = cycle[140:137];
+  assign \cfg.delay_tolerance  = cycle[144:141];
+  assign \cfg.w0  = cycle[154:145];
+  assign \cfg.w0.data_bits  = cycle[150:145];
+  assign \cfg.w0.nenw  = cycle[151];
+  assign \cfg.w0.lc  = cycle[152];
+  assign \cfg.w0.crc  = cycle[154:153];
+  assign \cfg.w1_enable  = cycle[155];
+  assign \cfg.w1  = cycle[165:156];
+  assign \cfg.w1.data_bits  = cycle[161:156];
+  assign \cfg.w1.nenw  = cycle[162];
+  assign \cfg.w1.lc  = cycle[163];
+  assign \cfg.w1.crc  = cycle[165:164];
+  assign \cfg.spw_check  = cycle[166];
+  assign \cfg.spw_tolerance  = cycle[174:167];
   assign \frame.status  = frame[3:0];
   assign \frame.timestamp  = frame[35:4];
   assign \frame.line_delay  = frame[48:36];
   assign \frame.cds  = frame[49];
-  assign \frame.word0  = frame[107:50];
-  assign \frame.word0.position  = frame[104:50];
-  assign \frame.word0.ne  = frame[105];
-  assign \frame.word0.nw  = frame[106];
-  assign \frame.word0.crc_ok  = frame[107];
-  assign \frame.word1  = frame[150:108];
-  assign \frame.word1.position  = frame[147:108];
-  assign \frame.word1.ne  = frame[148];
-  assign \frame.word1.nw  = frame[149];
-  assign \frame.word1.crc_ok  = frame[150];
-  assign \frame.lc  = frame[156:151];
-  assign \frame.lc_repeat  = frame[157];
-  assign \frame.lc_skip  = frame[158];
-  assign \frame.lc_zero  = frame[159];
-  assign \frame.spw_mismatch  = frame[160];
-  assign \request$173.slave_id  = \request$173 [2:0];
-  assign \request$173.address  = \request$173 [9:3];
-  assign \request$173.count  = \request$173 [16:10];
-  assign \request$173.write  = \request$173 [17];
+  assign \frame.noise_events  = frame[53:50];
+  assign \frame.delay_settled  = frame[54];
+  assign \frame.settled_delay  = frame[67:55];
+  assign \frame.delay_spread  = frame[75:68];
+  assign \frame.word0  = frame[133:76];
+  assign \frame.word0.position  = frame[130:76];
+  assign \frame.word0.ne  = frame[131];
+  assign \frame.word0.nw  = frame[132];
+  assign \frame.word0.crc_ok  = frame[133];
+  assign \frame.word1  = frame[176:134];
+  assign \frame.word1.position  = frame[173:134];
+  assign \frame.word1.ne  = frame[174];
+  assign \frame.word1.nw  = frame[175];
+  assign \frame.word1.crc_ok  = frame[176];
+  assign \frame.lc  = frame[182:177];
+  assign \frame.lc_repeat  = frame[183];
+  assign \frame.lc_skip  = frame[184];
+  assign \frame.lc_zero  = frame[185];
+  assign \frame.spw_mismatch  = frame[186];
+  assign \request$208.slave_id  = \request$208 [2:0];
+  assign \request$208.address  = \request$208 [9:3];
+  assign \request$208.count  = \request$208 [16:10];
+  assign \request$208.write  = \request$208 [17];
   assign \wbuf.addr  = wbuf[3:0];
   assign \wbuf.data  = wbuf[35:4];
   assign \wbuf.en  = wbuf[39:36];
   assign \result.status  = result[2:0];
   assign \result.bytes_done  = result[9:3];
-  assign \events.crc_word0  = events[0];
-  assign \events.crc_word1  = events[1];
-  assign \events.no_ack  = events[2];
-  assign \events.no_start  = events[3];
-  assign \events.delay_range  = events[4];
-  assign \events.slo_stuck_low  = events[5];
-  assign \events.lc_repeat  = events[6];
-  assign \events.lc_skip  = events[7];
-  assign \events.lc_zero  = events[8];
-  assign \events.spw_mismatch  = events[9];
-  assign \events.overrun  = events[10];
-  assign \events.aborted  = events[11];
-  assign \events.no_stop  = events[12];
-  assign \events.ca_crc4_error  = events[13];
-  assign \events.ca_no_answer  = events[14];
-  assign \events.ca_refused  = events[15];
-  assign \events.ca_aborted  = events[16];
-  assign \events.ca_data_fault  = events[17];
+  assign \events$245.crc_word0  = \events$245 [0];
+  assign \events$245.crc_word1  = \events$245 [1];
+  assign \events$245.no_ack  = \events$245 [2];
+  assign \events$245.no_start  = \events$245 [3];
+  assign \events$245.delay_range  = \events$245 [4];
+  assign \events$245.slo_stuck_low  = \events$245 [5];
+  assign \events$245.lc_repeat  = \events$245 [6];
+  assign \events$245.lc_skip  = \events$245 [7];
+  assign \events$245.lc_zero  = \events$245 [8];
+  assign \events$245.spw_mismatch  = \events$245 [9];
+  assign \events$245.overrun  = \events$245 [10];
+  assign \events$245.aborted  = \events$245 [11];
+  assign \events$245.no_stop  = \events$245 [12];
+  assign \events$245.noisy_line  = \events$245 [13];
+  assign \events$245.delay_jump  = \events$245 [14];
+  assign \events$245.noise_event  = \events$245 [15];
+  assign \events$245.ca_crc4_error  = \events$245 [16];
+  assign \events$245.ca_no_answer  = \events$245 [17];
+  assign \events$245.ca_refused  = \events$245 [18];
+  assign \events$245.ca_aborted  = \events$245 [19];
+  assign \events$245.ca_data_fault  = \events$245 [20];
   assign \faults.no_ack  = faults[0];
   assign \faults.no_start  = faults[1];
   assign \faults.delay_range  = faults[2];
@@ -17913,87 +19998,104 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign \counts.overrun  = counts[175:160];
   assign \counts.aborted  = counts[191:176];
   assign \counts.no_stop  = counts[207:192];
-  assign \counts.ca_crc4_error  = counts[223:208];
-  assign \counts.ca_no_answer  = counts[239:224];
-  assign \counts.ca_refused  = counts[255:240];
-  assign \counts.ca_aborted  = counts[271:256];
-  assign \counts.ca_data_fault  = counts[287:272];
-  assign \result$245.status  = \result$245 [3:0];
-  assign \result$245.timestamp  = \result$245 [35:4];
-  assign \result$245.line_delay  = \result$245 [48:36];
-  assign \result$245.cds  = \result$245 [49];
-  assign \result$245.word0  = \result$245 [107:50];
-  assign \result$245.word0.position  = \result$245 [104:50];
-  assign \result$245.word0.ne  = \result$245 [105];
-  assign \result$245.word0.nw  = \result$245 [106];
-  assign \result$245.word0.crc_ok  = \result$245 [107];
-  assign \result$245.word1  = \result$245 [150:108];
-  assign \result$245.word1.position  = \result$245 [147:108];
-  assign \result$245.word1.ne  = \result$245 [148];
-  assign \result$245.word1.nw  = \result$245 [149];
-  assign \result$245.word1.crc_ok  = \result$245 [150];
-  assign \result$245.lc  = \result$245 [156:151];
-  assign \result$245.lc_repeat  = \result$245 [157];
-  assign \result$245.lc_skip  = \result$245 [158];
-  assign \result$245.lc_zero  = \result$245 [159];
-  assign \result$245.spw_mismatch  = \result$245 [160];
-  assign events[17] = \$11 ;
-  assign events[16] = \$9 ;
-  assign events[15] = \$7 ;
-  assign events[14] = \$5 ;
-  assign events[13] = \$3 ;
-  assign events[12] = faults[6];
-  assign events[11] = faults[4];
-  assign events[10] = overrun;
-  assign events[9] = \$1 ;
-  assign events[8] = lc_zero;
-  assign events[7] = lc_skip;
-  assign events[6] = lc_repeat;
-  assign events[5] = faults[3];
-  assign events[4] = faults[2];
-  assign events[3] = faults[1];
-  assign events[2] = faults[0];
-  assign events[1] = crc_error[1];
-  assign events[0] = crc_error[0];
+  assign \counts.noisy_line  = counts[223:208];
+  assign \counts.delay_jump  = counts[239:224];
+  assign \counts.noise_event  = counts[255:240];
+  assign \counts.ca_crc4_error  = counts[271:256];
+  assign \counts.ca_no_answer  = counts[287:272];
+  assign \counts.ca_refused  = counts[303:288];
+  assign \counts.ca_aborted  = counts[319:304];
+  assign \counts.ca_data_fault  = counts[335:320];
+  assign \result$284.status  = \result$284 [3:0];
+  assign \result$284.timestamp  = \result$284 [35:4];
+  assign \result$284.line_delay  = \result$284 [48:36];
+  assign \result$284.cds  = \result$284 [49];
+  assign \result$284.noise_events  = \result$284 [53:50];
+  assign \result$284.delay_settled  = \result$284 [54];
+  assign \result$284.settled_delay  = \result$284 [67:55];
+  assign \result$284.delay_spread  = \result$284 [75:68];
+  assign \result$284.word0  = \result$284 [133:76];
+  assign \result$284.word0.position  = \result$284 [130:76];
+  assign \result$284.word0.ne  = \result$284 [131];
+  assign \result$284.word0.nw  = \result$284 [132];
+  assign \result$284.word0.crc_ok  = \result$284 [133];
+  assign \result$284.word1  = \result$284 [176:134];
+  assign \result$284.word1.position  = \result$284 [173:134];
+  assign \result$284.word1.ne  = \result$284 [174];
+  assign \result$284.word1.nw  = \result$284 [175];
+  assign \result$284.word1.crc_ok  = \result$284 [176];
+  assign \result$284.lc  = \result$284 [182:177];
+  assign \result$284.lc_repeat  = \result$284 [183];
+  assign \result$284.lc_skip  = \result$284 [184];
+  assign \result$284.lc_zero  = \result$284 [185];
+  assign \result$284.spw_mismatch  = \result$284 [186];
+  assign \events$245 [20] = \$16 ;
+  assign \events$245 [19] = \$14 ;
+  assign \events$245 [18] = \$12 ;
+  assign \events$245 [17] = \$10 ;
+  assign \events$245 [16] = \$8 ;
+  assign \events$245 [15] = \event ;
+  assign \events$245 [14] = \$6 ;
+  assign \events$245 [13] = \$4 ;
+  assign \events$245 [12] = faults[6];
+  assign \events$245 [11] = faults[4];
+  assign \events$245 [10] = overrun;
+  assign \events$245 [9] = \$2 ;
+  assign \events$245 [8] = lc_zero;
+  assign \events$245 [7] = lc_skip;
+  assign \events$245 [6] = lc_repeat;
+  assign \events$245 [5] = faults[3];
+  assign \events$245 [4] = faults[2];
+  assign \events$245 [3] = faults[1];
+  assign \events$245 [2] = faults[0];
+  assign \events$245 [1] = crc_error[1];
+  assign \events$245 [0] = crc_error[0];
   assign wbuf[39:36] = ca_wbuf_en;
   assign wbuf[35:4] = ca_wbuf_data;
   assign wbuf[3:0] = ca_wbuf_addr;
-  assign \request$173 [17] = ca_write;
-  assign \request$173 [16:10] = ca_count;
-  assign \request$173 [9:3] = ca_address;
-  assign \request$173 [2:0] = ca_slave_id;
+  assign \request$208 [17] = ca_write;
+  assign \request$208 [16:10] = ca_count;
+  assign \request$208 [9:3] = ca_address;
+  assign \request$208 [2:0] = ca_slave_id;
   assign frame[35:4] = first_rise_time;
-  assign frame[160] = spw_mismatch;
-  assign frame[150] = \$16 ;
-  assign frame[149] = nw[1];
-  assign frame[148] = ne[1];
-  assign frame[147:108] = spw;
-  assign frame[107] = crc_ok[0];
-  assign frame[106] = nw[0];
-  assign frame[105] = ne[0];
-  assign frame[104:50] = data0;
-  assign frame[159] = lc_zero;
-  assign frame[158] = lc_skip;
-  assign frame[157] = lc_repeat;
-  assign frame[156:151] = lc;
+  assign frame[186] = spw_mismatch;
+  assign frame[176] = \$22 ;
+  assign frame[175] = nw[1];
+  assign frame[174] = ne[1];
+  assign frame[173:134] = spw;
+  assign frame[133] = crc_ok[0];
+  assign frame[132] = nw[0];
+  assign frame[131] = ne[0];
+  assign frame[130:76] = data0;
+  assign frame[185] = lc_zero;
+  assign frame[184] = lc_skip;
+  assign frame[183] = lc_repeat;
+  assign frame[182:177] = lc;
+  assign frame[75:68] = spread;
+  assign frame[67:55] = settled_delay;
+  assign frame[54] = settled;
+  assign frame[53:50] = events;
   assign frame[49] = cds;
   assign frame[48:36] = delay;
   assign frame[3:0] = status;
-  assign \words$127 [19:10] = cycle[145:136];
-  assign \words$127 [9:0] = cycle[134:125];
-  assign words[19:10] = cycle[145:136];
-  assign words[9:0] = cycle[134:125];
-  assign live[154:147] = cfg_spw_tolerance;
-  assign live[146] = cfg_spw_check;
-  assign live[145:144] = cfg_w1_crc;
-  assign live[143] = cfg_w1_lc;
-  assign live[142] = cfg_w1_nenw;
-  assign live[141:136] = cfg_w1_data_bits;
-  assign live[135] = cfg_w1_enable;
-  assign live[134:133] = cfg_w0_crc;
-  assign live[132] = cfg_w0_lc;
-  assign live[131] = cfg_w0_nenw;
-  assign live[130:125] = cfg_w0_data_bits;
+  assign \words$159 [19:10] = cycle[165:156];
+  assign \words$159 [9:0] = cycle[154:145];
+  assign words[19:10] = cycle[165:156];
+  assign words[9:0] = cycle[154:145];
+  assign live[174:167] = cfg_spw_tolerance;
+  assign live[166] = cfg_spw_check;
+  assign live[165:164] = cfg_w1_crc;
+  assign live[163] = cfg_w1_lc;
+  assign live[162] = cfg_w1_nenw;
+  assign live[161:156] = cfg_w1_data_bits;
+  assign live[155] = cfg_w1_enable;
+  assign live[154:153] = cfg_w0_crc;
+  assign live[152] = cfg_w0_lc;
+  assign live[151] = cfg_w0_nenw;
+  assign live[150:145] = cfg_w0_data_bits;
+  assign live[144:141] = cfg_delay_tolerance;
+  assign live[140:137] = cfg_noise_limit;
+  assign live[136:125] = cfg_quiet_time;
   assign live[124] = cfg_end_check;
   assign live[123:112] = cfg_delay_limit;
   assign live[111:88] = cfg_timeout_limit;
@@ -18004,8 +20106,8 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_limit, timeout_limit, delay_limit, no_start_limit, idle, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$76  = 0;
+module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_limit, timeout_limit, delay_limit, quiet_time, delay_tolerance, no_start_limit, idle, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$81  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -18041,14 +20143,21 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   wire \$39 ;
   wire \$4 ;
   wire [11:0] \$40 ;
-  wire [24:0] \$41 ;
-  reg \$42 ;
-  reg [154:0] \$43 ;
-  reg [23:0] \$44 ;
-  reg [23:0] \$45 ;
-  reg [11:0] \$46 ;
-  reg [24:0] \$47 ;
+  wire \$41 ;
+  wire [11:0] \$42 ;
+  wire \$43 ;
+  wire [3:0] \$44 ;
+  wire [16:0] \$45 ;
+  wire [24:0] \$46 ;
+  reg \$47 ;
+  reg [174:0] \$48 ;
+  reg [23:0] \$49 ;
   wire \$5 ;
+  reg [23:0] \$50 ;
+  reg [11:0] \$51 ;
+  reg [11:0] \$52 ;
+  reg [16:0] \$53 ;
+  reg [24:0] \$54 ;
   wire \$6 ;
   wire \$7 ;
   wire \$8 ;
@@ -18057,13 +20166,16 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   reg [23:0] ack_limit = 24'h000000;
   input clk;
   wire clk;
-  output [154:0] cycle;
-  reg [154:0] cycle = 155'h000000000000000000000000000000000000000;
+  output [174:0] cycle;
+  reg [174:0] cycle = 175'h00000000000000000000000000000000000000000000;
   wire [23:0] \cycle.ack_limit ;
   wire [23:0] \cycle.break_time ;
   wire [11:0] \cycle.delay_limit ;
+  wire [3:0] \cycle.delay_tolerance ;
   wire \cycle.end_check ;
   wire [15:0] \cycle.ma_half_period ;
+  wire [3:0] \cycle.noise_limit ;
+  wire [11:0] \cycle.quiet_time ;
   wire [23:0] \cycle.request_period ;
   wire \cycle.spw_check ;
   wire [7:0] \cycle.spw_tolerance ;
@@ -18089,15 +20201,20 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   wire \cycle.w1_enable ;
   output [11:0] delay_limit;
   reg [11:0] delay_limit = 12'h000;
+  output [16:0] delay_tolerance;
+  reg [16:0] delay_tolerance = 17'h00000;
   input idle;
   wire idle;
-  input [154:0] live;
-  wire [154:0] live;
+  input [174:0] live;
+  wire [174:0] live;
   wire [23:0] \live.ack_limit ;
   wire [23:0] \live.break_time ;
   wire [11:0] \live.delay_limit ;
+  wire [3:0] \live.delay_tolerance ;
   wire \live.end_check ;
   wire [15:0] \live.ma_half_period ;
+  wire [3:0] \live.noise_limit ;
+  wire [11:0] \live.quiet_time ;
   wire [23:0] \live.request_period ;
   wire \live.spw_check ;
   wire [7:0] \live.spw_tolerance ;
@@ -18125,45 +20242,63 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   reg [24:0] no_start_limit = 25'h0000000;
   output ok;
   reg ok = 1'h0;
+  output [11:0] quiet_time;
+  reg [11:0] quiet_time = 12'h000;
   input rst;
   wire rst;
   output [23:0] timeout_limit;
   reg [23:0] timeout_limit = 24'h000000;
   output [1:0] word_count;
   wire [1:0] word_count;
+  assign \$46  = ack_limit + { cycle[15:0], 1'h1 };
+  assign word_count = 1'h1 + cycle[155];
   always @(posedge clk)
-    no_start_limit <= \$47 ;
+    ok <= \$47 ;
+  always @(posedge clk)
+    cycle <= \$48 ;
+  always @(posedge clk)
+    ack_limit <= \$49 ;
+  always @(posedge clk)
+    timeout_limit <= \$50 ;
+  always @(posedge clk)
+    delay_limit <= \$51 ;
+  always @(posedge clk)
+    quiet_time <= \$52 ;
+  always @(posedge clk)
+    delay_tolerance <= \$53 ;
+  always @(posedge clk)
+    no_start_limit <= \$54 ;
   assign \$1  = | live[15:1];
-  assign \$2  = | live[130:125];
-  assign \$3  = live[130:125] <= 6'h37;
+  assign \$2  = | live[150:145];
+  assign \$3  = live[150:145] <= 6'h37;
   assign \$4  = \$2  & \$3 ;
-  assign \$5  = ! live[134:133];
-  assign \$6  = live[134:133] == 1'h1;
+  assign \$5  = ! live[154:153];
+  assign \$6  = live[154:153] == 1'h1;
   assign \$7  = \$5  | \$6 ;
-  assign \$8  = live[134:133] == 2'h2;
+  assign \$8  = live[154:153] == 2'h2;
   assign \$9  = \$7  | \$8 ;
   assign \$10  = \$4  & \$9 ;
   assign \$11  = \$1  & \$10 ;
-  assign \$12  = ~ live[135];
-  assign \$13  = | live[141:136];
-  assign \$14  = live[141:136] <= 6'h28;
+  assign \$12  = ~ live[155];
+  assign \$13  = | live[161:156];
+  assign \$14  = live[161:156] <= 6'h28;
   assign \$15  = \$13  & \$14 ;
-  assign \$16  = ! live[145:144];
-  assign \$17  = live[145:144] == 1'h1;
+  assign \$16  = ! live[165:164];
+  assign \$17  = live[165:164] == 1'h1;
   assign \$18  = \$16  | \$17 ;
-  assign \$19  = live[145:144] == 2'h2;
+  assign \$19  = live[165:164] == 2'h2;
   assign \$20  = \$18  | \$19 ;
   assign \$21  = \$15  & \$20 ;
   assign \$22  = \$12  | \$21 ;
   assign \$23  = \$11  & \$22 ;
-  assign \$24  = live[135] & live[132];
-  assign \$25  = \$24  & live[143];
+  assign \$24  = live[155] & live[152];
+  assign \$25  = \$24  & live[163];
   assign \$26  = ~ \$25 ;
   assign \$27  = \$23  & \$26 ;
-  assign \$28  = ~ live[146];
-  assign \$29  = live[141:136] <= live[130:125];
-  assign \$30  = live[135] & \$29 ;
-  assign \$31  = | live[145:144];
+  assign \$28  = ~ live[166];
+  assign \$29  = live[161:156] <= live[150:145];
+  assign \$30  = live[155] & \$29 ;
+  assign \$31  = | live[165:164];
   assign \$32  = \$30  & \$31 ;
   assign \$33  = \$28  | \$32 ;
   assign \$34  = \$27  & \$33 ;
@@ -18173,70 +20308,83 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   assign \$38  = \$37  ? 24'h001f40 : live[111:88];
   assign \$39  = ! live[123:112];
   assign \$40  = \$39  ? 12'hfff : live[123:112];
-  assign \$41  = ack_limit + { cycle[15:0], 1'h1 };
-  assign word_count = 1'h1 + cycle[135];
-  always @(posedge clk)
-    ok <= \$42 ;
-  always @(posedge clk)
-    cycle <= \$43 ;
-  always @(posedge clk)
-    ack_limit <= \$44 ;
-  always @(posedge clk)
-    timeout_limit <= \$45 ;
-  always @(posedge clk)
-    delay_limit <= \$46 ;
+  assign \$41  = ! live[136:125];
+  assign \$42  = \$41  ? 12'h064 : live[136:125];
+  assign \$43  = ! live[144:141];
+  assign \$44  = \$43  ? 4'h2 : live[144:141];
+  assign \$45  = live[15:0] + \$44 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
-    \$47  = \$41 ;
+    if (\$auto$verilog_backend.cc:2355:dump_module$81 ) begin end
+    \$47  = \$34 ;
     if (rst) begin
-      \$47  = 25'h0000000;
+      \$47  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
-    \$42  = \$34 ;
-    if (rst) begin
-      \$42  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
-    \$43  = cycle;
+    if (\$auto$verilog_backend.cc:2355:dump_module$81 ) begin end
+    \$48  = cycle;
     if (idle) begin
-      \$43  = live;
+      \$48  = live;
     end
     if (rst) begin
-      \$43  = 155'h000000000000000000000000000000000000000;
+      \$48  = 175'h00000000000000000000000000000000000000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
-    \$44  = ack_limit;
+    if (\$auto$verilog_backend.cc:2355:dump_module$81 ) begin end
+    \$49  = ack_limit;
     if (idle) begin
-      \$44  = \$36 ;
+      \$49  = \$36 ;
     end
     if (rst) begin
-      \$44  = 24'h000000;
+      \$49  = 24'h000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
-    \$45  = timeout_limit;
+    if (\$auto$verilog_backend.cc:2355:dump_module$81 ) begin end
+    \$50  = timeout_limit;
     if (idle) begin
-      \$45  = \$38 ;
+      \$50  = \$38 ;
     end
     if (rst) begin
-      \$45  = 24'h000000;
+      \$50  = 24'h000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
-    \$46  = delay_limit;
+    if (\$auto$verilog_backend.cc:2355:dump_module$81 ) begin end
+    \$51  = delay_limit;
     if (idle) begin
-      \$46  = \$40 ;
+      \$51  = \$40 ;
     end
     if (rst) begin
-      \$46  = 12'h000;
+      \$51  = 12'h000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$81 ) begin end
+    \$52  = quiet_time;
+    if (idle) begin
+      \$52  = \$42 ;
+    end
+    if (rst) begin
+      \$52  = 12'h000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$81 ) begin end
+    \$53  = delay_tolerance;
+    if (idle) begin
+      \$53  = \$45 ;
+    end
+    if (rst) begin
+      \$53  = 17'h00000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$81 ) begin end
+    \$54  = \$46 ;
+    if (rst) begin
+      \$54  = 25'h0000000;
     end
   end
   assign \live.ma_half_period  = live[15:0];
@@ -18246,19 +20394,22 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   assign \live.timeout_limit  = live[111:88];
   assign \live.delay_limit  = live[123:112];
   assign \live.end_check  = live[124];
-  assign \live.w0  = live[134:125];
-  assign \live.w0.data_bits  = live[130:125];
-  assign \live.w0.nenw  = live[131];
-  assign \live.w0.lc  = live[132];
-  assign \live.w0.crc  = live[134:133];
-  assign \live.w1_enable  = live[135];
-  assign \live.w1  = live[145:136];
-  assign \live.w1.data_bits  = live[141:136];
-  assign \live.w1.nenw  = live[142];
-  assign \live.w1.lc  = live[143];
-  assign \live.w1.crc  = live[145:144];
-  assign \live.spw_check  = live[146];
-  assign \live.spw_tolerance  = live[154:147];
+  assign \live.quiet_time  = live[136:125];
+  assign \live.noise_limit  = live[140:137];
+  assign \live.delay_tolerance  = live[144:141];
+  assign \live.w0  = live[154:145];
+  assign \live.w0.data_bits  = live[150:145];
+  assign \live.w0.nenw  = live[151];
+  assign \live.w0.lc  = live[152];
+  assign \live.w0.crc  = live[154:153];
+  assign \live.w1_enable  = live[155];
+  assign \live.w1  = live[165:156];
+  assign \live.w1.data_bits  = live[161:156];
+  assign \live.w1.nenw  = live[162];
+  assign \live.w1.lc  = live[163];
+  assign \live.w1.crc  = live[165:164];
+  assign \live.spw_check  = live[166];
+  assign \live.spw_tolerance  = live[174:167];
   assign \cycle.ma_half_period  = cycle[15:0];
   assign \cycle.request_period  = cycle[39:16];
   assign \cycle.break_time  = cycle[63:40];
@@ -18266,25 +20417,29 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   assign \cycle.timeout_limit  = cycle[111:88];
   assign \cycle.delay_limit  = cycle[123:112];
   assign \cycle.end_check  = cycle[124];
-  assign \cycle.w0  = cycle[134:125];
-  assign \cycle.w0.data_bits  = cycle[130:125];
-  assign \cycle.w0.nenw  = cycle[131];
-  assign \cycle.w0.lc  = cycle[132];
-  assign \cycle.w0.crc  = cycle[134:133];
-  assign \cycle.w1_enable  = cycle[135];
-  assign \cycle.w1  = cycle[145:136];
-  assign \cycle.w1.data_bits  = cycle[141:136];
-  assign \cycle.w1.nenw  = cycle[142];
-  assign \cycle.w1.lc  = cycle[143];
-  assign \cycle.w1.crc  = cycle[145:144];
-  assign \cycle.spw_check  = cycle[146];
-  assign \cycle.spw_tolerance  = cycle[154:147];
+  assign \cycle.quiet_time  = cycle[136:125];
+  assign \cycle.noise_limit  = cycle[140:137];
+  assign \cycle.delay_tolerance  = cycle[144:141];
+  assign \cycle.w0  = cycle[154:145];
+  assign \cycle.w0.data_bits  = cycle[150:145];
+  assign \cycle.w0.nenw  = cycle[151];
+  assign \cycle.w0.lc  = cycle[152];
+  assign \cycle.w0.crc  = cycle[154:153];
+  assign \cycle.w1_enable  = cycle[155];
+  assign \cycle.w1  = cycle[165:156];
+  assign \cycle.w1.data_bits  = cycle[161:156];
+  assign \cycle.w1.nenw  = cycle[162];
+  assign \cycle.w1.lc  = cycle[163];
+  assign \cycle.w1.crc  = cycle[165:164];
+  assign \cycle.spw_check  = cycle[166];
+  assign \cycle.spw_tolerance  = cycle[174:167];
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, report_delay, frame_doubtful, abort, config_ok, end_check, resync, timer_clear, fault, fault_status, ma_run, in_clock, report_frame, idle, receiver_clear, faults, cdm_cycle, ma_hold, slo_stuck
-, slo_stuck_live, break_over, ack_expired, no_start_expired, delay_over, ma_arm, ma_busy, ma_held, ma_enough, early, locked, slo, frame_done, stopped, slots_full, started, stop_bit, cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$77  = 0;
+module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, report_delay, frame_doubtful, abort, config_ok, end_check, resync, timer_clear, waiting, fault, fault_status, ma_run, in_clock, report_frame, idle, receiver_clear, faults, cdm_cycle, ma_hold
+, slo_stuck, slo_stuck_live, quiet, quiet_live, break_over, ack_expired, no_start_expired, delay_over, ma_arm, ma_busy, ma_held, ma_enough, early, locked, slo, frame_done, stopped, slots_full, started, stop_bit, cdm
+, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$82  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -18318,21 +20473,21 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
   wire \$9 ;
   input abort;
   wire abort;
-  wire \abort$46 ;
   wire \abort$5 ;
+  wire \abort$50 ;
   wire aborted;
   input ack_expired;
   wire ack_expired;
-  wire \ack_expired$23 ;
+  wire \ack_expired$27 ;
   wire bad_config;
   input break_over;
   wire break_over;
   input cdm;
   wire cdm;
-  wire \cdm$43 ;
+  wire \cdm$47 ;
   output cdm_cycle;
   wire cdm_cycle;
-  wire \cdm_cycle$48 ;
+  wire \cdm_cycle$52 ;
   reg clear;
   input clk;
   wire clk;
@@ -18341,20 +20496,20 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
   wire \config_ok$3 ;
   reg [2:0] cycle_fsm_state = 3'h0;
   reg delay;
-  wire \delay$73 ;
+  wire \delay$78 ;
   input delay_over;
   wire delay_over;
-  wire \delay_over$27 ;
+  wire \delay_over$31 ;
   input early;
   wire early;
-  wire \early$17 ;
+  wire \early$21 ;
   input end_check;
   wire end_check;
   wire fail;
   output fault;
   reg fault;
-  wire \fault$35 ;
-  wire \fault$69 ;
+  wire \fault$39 ;
+  wire \fault$74 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -18369,6 +20524,8 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
+  (* enum_value_1101 = "NOISY_LINE" *)
+  (* enum_value_1110 = "DELAY_JUMP" *)
   output [3:0] fault_status;
   reg [3:0] fault_status;
   (* enum_base_type = "Status" *)
@@ -18385,17 +20542,19 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
-  wire [3:0] \fault_status$37 ;
+  (* enum_value_1101 = "NOISY_LINE" *)
+  (* enum_value_1110 = "DELAY_JUMP" *)
+  wire [3:0] \fault_status$41 ;
   output [6:0] faults;
   wire [6:0] faults;
-  wire [6:0] \faults$39 ;
-  wire \faults$39.aborted ;
-  wire \faults$39.bad_config ;
-  wire \faults$39.delay_range ;
-  wire \faults$39.no_ack ;
-  wire \faults$39.no_start ;
-  wire \faults$39.no_stop ;
-  wire \faults$39.slo_stuck_low ;
+  wire [6:0] \faults$43 ;
+  wire \faults$43.aborted ;
+  wire \faults$43.bad_config ;
+  wire \faults$43.delay_range ;
+  wire \faults$43.no_ack ;
+  wire \faults$43.no_start ;
+  wire \faults$43.no_stop ;
+  wire \faults$43.slo_stuck_low ;
   wire \faults.aborted ;
   wire \faults.bad_config ;
   wire \faults.delay_range ;
@@ -18416,15 +20575,15 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
   output idle;
   reg idle = 1'h0;
   (* init = 1'h0 *)
-  wire \idle$41 ;
+  wire \idle$45 ;
   output in_clock;
   reg in_clock;
   input locked;
   wire locked;
-  wire \locked$15 ;
+  wire \locked$19 ;
   input ma_arm;
   wire ma_arm;
-  wire \ma_arm$13 ;
+  wire \ma_arm$17 ;
   input ma_busy;
   wire ma_busy;
   input ma_enough;
@@ -18433,48 +20592,54 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
   wire ma_held;
   output ma_hold;
   wire ma_hold;
-  wire \ma_hold$50 ;
+  wire \ma_hold$54 ;
   output ma_run;
   reg ma_run;
   input no_start_expired;
   wire no_start_expired;
-  wire \no_start_expired$25 ;
+  wire \no_start_expired$29 ;
   reg pause = 1'h0;
+  input quiet;
+  wire quiet;
+  wire \quiet$13 ;
+  input quiet_live;
+  wire quiet_live;
+  wire \quiet_live$15 ;
   wire ready;
   output receiver_clear;
   reg receiver_clear = 1'h1;
   output report_delay;
   wire report_delay;
-  wire \report_delay$33 ;
+  wire \report_delay$37 ;
   output report_frame;
   reg report_frame;
-  wire \report_frame$31 ;
+  wire \report_frame$35 ;
   input request;
   wire request;
   output restart_timer;
   wire restart_timer;
-  wire \restart_timer$29 ;
+  wire \restart_timer$33 ;
   output resync;
   reg resync;
   input rst;
   wire rst;
   input slo;
   wire slo;
-  wire \slo$44 ;
+  wire \slo$48 ;
   wire \slo$7 ;
   input slo_stuck;
   wire slo_stuck;
-  wire \slo_stuck$45 ;
+  wire \slo_stuck$49 ;
   wire \slo_stuck$9 ;
   input slo_stuck_live;
   wire slo_stuck_live;
   wire \slo_stuck_live$11 ;
   input slots_full;
   wire slots_full;
-  wire \slots_full$21 ;
+  wire \slots_full$25 ;
   input started;
   wire started;
-  wire \started$19 ;
+  wire \started$23 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -18489,6 +20654,8 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
+  (* enum_value_1101 = "NOISY_LINE" *)
+  (* enum_value_1110 = "DELAY_JUMP" *)
   wire [3:0] status;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
@@ -18504,7 +20671,9 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
-  wire [3:0] \status$74 ;
+  (* enum_value_1101 = "NOISY_LINE" *)
+  (* enum_value_1110 = "DELAY_JUMP" *)
+  wire [3:0] \status$79 ;
   input stop_bit;
   wire stop_bit;
   input stopped;
@@ -18512,6 +20681,8 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
   wire stuck_low;
   output timer_clear;
   reg timer_clear;
+  output waiting;
+  reg waiting;
   reg watch;
   assign \$1  = ma_busy | abort;
   assign \$2  = ~ ma_enough;
@@ -18566,10 +20737,10 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
     .ack_expired(ack_expired),
     .clear(clear),
     .clk(clk),
-    .delay(\delay$73 ),
+    .delay(\delay$78 ),
     .delay_over(delay_over),
     .early(early),
-    .fault(\fault$69 ),
+    .fault(\fault$74 ),
     .locked(locked),
     .ma_arm(ma_arm),
     .no_start_expired(no_start_expired),
@@ -18577,7 +20748,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
     .rst(rst),
     .slots_full(slots_full),
     .started(started),
-    .status(\status$74 ),
+    .status(\status$79 ),
     .watch(watch)
   );
   \biss_master_axil.ch1.core.controller.ready_check  ready_check (
@@ -18586,6 +20757,8 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
     .bad_config(bad_config),
     .config_ok(config_ok),
     .first_clock(first_clock),
+    .quiet(quiet),
+    .quiet_live(quiet_live),
     .ready(ready),
     .slo(slo),
     .slo_stuck(slo_stuck),
@@ -18601,7 +20774,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
     .report_frame(report_frame)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
     resync = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -18609,7 +20782,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
     timer_clear = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -18656,7 +20829,19 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    waiting = 1'h0;
+    casez (cycle_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          waiting = 1'h1;
+      3'h2:
+          waiting = 1'h1;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
     clear = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -18668,7 +20853,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
     fault = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -18689,7 +20874,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
           if (abort) begin
             fault = 1'h1;
           end else if (frame_done) begin
-          end else if (\fault$69 ) begin
+          end else if (\fault$74 ) begin
             fault = 1'h1;
           end
       3'h4:
@@ -18717,7 +20902,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
     fault_status = 4'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -18738,8 +20923,8 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
           if (abort) begin
             fault_status = 4'ha;
           end else if (frame_done) begin
-          end else if (\fault$69 ) begin
-            fault_status = \status$74 ;
+          end else if (\fault$74 ) begin
+            fault_status = \status$79 ;
           end
       3'h4:
           if (abort) begin
@@ -18766,7 +20951,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
     ma_run = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -18782,7 +20967,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
     in_clock = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -18796,7 +20981,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
     watch = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -18810,7 +20995,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
     framing = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -18826,7 +21011,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
     report_frame = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -18857,7 +21042,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
     delay = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -18869,13 +21054,13 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
       3'h3:
           if (abort) begin
           end else if (frame_done) begin
-          end else if (\fault$69 ) begin
-            delay = \delay$73 ;
+          end else if (\fault$74 ) begin
+            delay = \delay$78 ;
           end
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
     holding = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -18898,14 +21083,14 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
     \$27  = idle;
     if (rst) begin
       \$27  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
     \$28  = cycle_fsm_state;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -18938,7 +21123,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
             \$28  = 3'h0;
           end else if (frame_done) begin
             \$28  = 3'h4;
-          end else if (\fault$69 ) begin
+          end else if (\fault$74 ) begin
             \$28  = 3'h0;
           end
       3'h4:
@@ -18996,7 +21181,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
     \$29  = idle;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -19029,7 +21214,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
             \$29  = 1'h0;
           end else if (frame_done) begin
             \$29  = 1'h0;
-          end else if (\fault$69 ) begin
+          end else if (\fault$74 ) begin
             \$29  = 1'h0;
           end
       3'h4:
@@ -19087,7 +21272,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
     \$30  = receiver_clear;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -19120,7 +21305,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
             \$30  = 1'h1;
           end else if (frame_done) begin
             \$30  = 1'h0;
-          end else if (\fault$69 ) begin
+          end else if (\fault$74 ) begin
             \$30  = 1'h1;
           end
       3'h4:
@@ -19178,7 +21363,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
     \$31  = pause;
     casez (cycle_fsm_state)
       3'h0:
@@ -19203,27 +21388,29 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
   assign \slo$7  = slo;
   assign \slo_stuck$9  = slo_stuck;
   assign \slo_stuck_live$11  = slo_stuck_live;
-  assign \ma_arm$13  = ma_arm;
-  assign \locked$15  = locked;
-  assign \early$17  = early;
-  assign \started$19  = started;
-  assign \slots_full$21  = slots_full;
-  assign \ack_expired$23  = ack_expired;
-  assign \no_start_expired$25  = no_start_expired;
-  assign \delay_over$27  = delay_over;
-  assign \restart_timer$29  = restart_timer;
-  assign \report_frame$31  = report_frame;
-  assign \report_delay$33  = report_delay;
-  assign \fault$35  = fault;
-  assign \fault_status$37  = fault_status;
-  assign \faults$39  = faults;
-  assign \idle$41  = idle;
-  assign \cdm$43  = cdm;
-  assign \slo$44  = slo;
-  assign \slo_stuck$45  = slo_stuck;
-  assign \abort$46  = abort;
-  assign \cdm_cycle$48  = cdm_cycle;
-  assign \ma_hold$50  = ma_hold;
+  assign \quiet$13  = quiet;
+  assign \quiet_live$15  = quiet_live;
+  assign \ma_arm$17  = ma_arm;
+  assign \locked$19  = locked;
+  assign \early$21  = early;
+  assign \started$23  = started;
+  assign \slots_full$25  = slots_full;
+  assign \ack_expired$27  = ack_expired;
+  assign \no_start_expired$29  = no_start_expired;
+  assign \delay_over$31  = delay_over;
+  assign \restart_timer$33  = restart_timer;
+  assign \report_frame$35  = report_frame;
+  assign \report_delay$37  = report_delay;
+  assign \fault$39  = fault;
+  assign \fault_status$41  = fault_status;
+  assign \faults$43  = faults;
+  assign \idle$45  = idle;
+  assign \cdm$47  = cdm;
+  assign \slo$48  = slo;
+  assign \slo_stuck$49  = slo_stuck;
+  assign \abort$50  = abort;
+  assign \cdm_cycle$52  = cdm_cycle;
+  assign \ma_hold$54  = ma_hold;
   assign fail = fault;
   assign status = fault_status;
   assign frame = report_frame;
@@ -19234,18 +21421,18 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
   assign \faults.aborted  = faults[4];
   assign \faults.bad_config  = faults[5];
   assign \faults.no_stop  = faults[6];
-  assign \faults$39.no_ack  = faults[0];
-  assign \faults$39.no_start  = faults[1];
-  assign \faults$39.delay_range  = faults[2];
-  assign \faults$39.slo_stuck_low  = faults[3];
-  assign \faults$39.aborted  = faults[4];
-  assign \faults$39.bad_config  = faults[5];
-  assign \faults$39.no_stop  = faults[6];
+  assign \faults$43.no_ack  = faults[0];
+  assign \faults$43.no_start  = faults[1];
+  assign \faults$43.delay_range  = faults[2];
+  assign \faults$43.slo_stuck_low  = faults[3];
+  assign \faults$43.aborted  = faults[4];
+  assign \faults$43.bad_config  = faults[5];
+  assign \faults$43.no_stop  = faults[6];
 endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.controller.cdm_hold (rst, abort, framing, holding, idle, cdm_cycle, ma_hold, slo_stuck, slo, cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$78  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$83  = 0;
   wire \$1 ;
   wire \$2 ;
   wire \$3 ;
@@ -19284,7 +21471,7 @@ module \biss_master_axil.ch1.core.controller.cdm_hold (rst, abort, framing, hold
   assign \$1  = ~ abort;
   assign \$2  = cdm_cycle & \$1 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$83 ) begin end
     \$7  = cdm_cycle;
     if (idle) begin
       \$7  = cdm;
@@ -19294,7 +21481,7 @@ module \biss_master_axil.ch1.core.controller.cdm_hold (rst, abort, framing, hold
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$83 ) begin end
     ma_hold = 1'h0;
     if (framing) begin
       ma_hold = \$2 ;
@@ -19306,7 +21493,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.controller.line_faults (rst, restart_timer, clear, watch, fault, status, delay, ack_expired, no_start_expired, delay_over, ma_arm, early, locked, slots_full, started, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$79  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$84  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -19372,6 +21559,8 @@ module \biss_master_axil.ch1.core.controller.line_faults (rst, restart_timer, cl
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
+  (* enum_value_1101 = "NOISY_LINE" *)
+  (* enum_value_1110 = "DELAY_JUMP" *)
   output [3:0] status;
   reg [3:0] status;
   input watch;
@@ -19401,7 +21590,7 @@ module \biss_master_axil.ch1.core.controller.line_faults (rst, restart_timer, cl
   always @(posedge clk)
     locked_seen <= \$21 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$79 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
     \$20  = armed;
     if (clear) begin
       \$20  = 1'h0;
@@ -19414,7 +21603,7 @@ module \biss_master_axil.ch1.core.controller.line_faults (rst, restart_timer, cl
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$79 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
     \$21  = locked_seen;
     if (clear) begin
       \$21  = 1'h0;
@@ -19427,7 +21616,7 @@ module \biss_master_axil.ch1.core.controller.line_faults (rst, restart_timer, cl
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$79 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
     fault = 1'h0;
     if (\$7 ) begin
       fault = 1'h1;
@@ -19440,7 +21629,7 @@ module \biss_master_axil.ch1.core.controller.line_faults (rst, restart_timer, cl
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$79 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
     status = 4'h0;
     if (\$7 ) begin
       status = 4'h8;
@@ -19453,7 +21642,7 @@ module \biss_master_axil.ch1.core.controller.line_faults (rst, restart_timer, cl
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$79 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
     delay = 1'h0;
     if (\$7 ) begin
     end else if (\$12 ) begin
@@ -19464,11 +21653,12 @@ module \biss_master_axil.ch1.core.controller.line_faults (rst, restart_timer, cl
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.controller.ready_check (config_ok, first_clock, bad_config, aborted, ready, stuck_low, slo_stuck, slo_stuck_live, slo, abort);
-  reg \$auto$verilog_backend.cc:2355:dump_module$80  = 0;
+module \biss_master_axil.ch1.core.controller.ready_check (config_ok, first_clock, bad_config, aborted, ready, stuck_low, slo_stuck, slo_stuck_live, quiet, quiet_live, slo, abort);
+  reg \$auto$verilog_backend.cc:2355:dump_module$85  = 0;
   wire \$1 ;
   wire \$2 ;
   wire \$3 ;
+  wire \$4 ;
   input abort;
   wire abort;
   output aborted;
@@ -19479,6 +21669,10 @@ module \biss_master_axil.ch1.core.controller.ready_check (config_ok, first_clock
   wire config_ok;
   input first_clock;
   wire first_clock;
+  input quiet;
+  wire quiet;
+  input quiet_live;
+  wire quiet_live;
   output ready;
   reg ready;
   input slo;
@@ -19492,8 +21686,26 @@ module \biss_master_axil.ch1.core.controller.ready_check (config_ok, first_clock
   assign \$1  = ~ config_ok;
   assign \$2  = first_clock & \$1 ;
   assign \$3  = first_clock ? slo_stuck_live : slo_stuck;
+  assign \$4  = first_clock ? quiet_live : quiet;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$80 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$85 ) begin end
+    aborted = 1'h0;
+    if (\$2 ) begin
+    end else if (abort) begin
+      aborted = 1'h1;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$85 ) begin end
+    ready = 1'h0;
+    if (\$2 ) begin
+    end else if (abort) begin
+    end else if (slo) begin
+      ready = \$4 ;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$85 ) begin end
     stuck_low = 1'h0;
     if (\$2 ) begin
     end else if (abort) begin
@@ -19503,27 +21715,10 @@ module \biss_master_axil.ch1.core.controller.ready_check (config_ok, first_clock
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$80 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$85 ) begin end
     bad_config = 1'h0;
     if (\$2 ) begin
       bad_config = 1'h1;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$80 ) begin end
-    aborted = 1'h0;
-    if (\$2 ) begin
-    end else if (abort) begin
-      aborted = 1'h1;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$80 ) begin end
-    ready = 1'h0;
-    if (\$2 ) begin
-    end else if (abort) begin
-    end else if (slo) begin
-      ready = 1'h1;
     end
   end
 endmodule
@@ -19563,6 +21758,8 @@ module \biss_master_axil.ch1.core.controller.report (fault, fault_status, report
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
+  (* enum_value_1101 = "NOISY_LINE" *)
+  (* enum_value_1110 = "DELAY_JUMP" *)
   input [3:0] fault_status;
   wire [3:0] fault_status;
   output [6:0] faults;
@@ -19593,6 +21790,8 @@ module \biss_master_axil.ch1.core.controller.report (fault, fault_status, report
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
+  (* enum_value_1101 = "NOISY_LINE" *)
+  (* enum_value_1110 = "DELAY_JUMP" *)
   wire [3:0] status;
   assign report_delay = report_frame | delay;
   assign \$1  = fault_status == 3'h6;
@@ -19630,8 +21829,8 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.counters (rst, clear, events, counts, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$81  = 0;
-  reg [17:0] \$1 ;
+  reg \$auto$verilog_backend.cc:2355:dump_module$86  = 0;
+  reg [20:0] \$1 ;
   reg \$2 ;
   input clear;
   wire clear;
@@ -19670,6 +21869,12 @@ module \biss_master_axil.ch1.core.counters (rst, clear, events, counts, clk);
   (* init = 1'h0 *)
   wire \clear$59 ;
   (* init = 1'h0 *)
+  wire \clear$62 ;
+  (* init = 1'h0 *)
+  wire \clear$65 ;
+  (* init = 1'h0 *)
+  wire \clear$68 ;
+  (* init = 1'h0 *)
   wire \clear$7 ;
   reg clear_reg = 1'h0;
   input clk;
@@ -19692,8 +21897,11 @@ module \biss_master_axil.ch1.core.counters (rst, clear, events, counts, clk);
   wire [15:0] \count$54 ;
   wire [15:0] \count$57 ;
   wire [15:0] \count$60 ;
-  output [287:0] counts;
-  wire [287:0] counts;
+  wire [15:0] \count$63 ;
+  wire [15:0] \count$66 ;
+  wire [15:0] \count$69 ;
+  output [335:0] counts;
+  wire [335:0] counts;
   wire [15:0] \counts.aborted ;
   wire [15:0] \counts.ca_aborted ;
   wire [15:0] \counts.ca_crc4_error ;
@@ -19702,6 +21910,7 @@ module \biss_master_axil.ch1.core.counters (rst, clear, events, counts, clk);
   wire [15:0] \counts.ca_refused ;
   wire [15:0] \counts.crc_word0 ;
   wire [15:0] \counts.crc_word1 ;
+  wire [15:0] \counts.delay_jump ;
   wire [15:0] \counts.delay_range ;
   wire [15:0] \counts.lc_repeat ;
   wire [15:0] \counts.lc_skip ;
@@ -19709,11 +21918,13 @@ module \biss_master_axil.ch1.core.counters (rst, clear, events, counts, clk);
   wire [15:0] \counts.no_ack ;
   wire [15:0] \counts.no_start ;
   wire [15:0] \counts.no_stop ;
+  wire [15:0] \counts.noise_event ;
+  wire [15:0] \counts.noisy_line ;
   wire [15:0] \counts.overrun ;
   wire [15:0] \counts.slo_stuck_low ;
   wire [15:0] \counts.spw_mismatch ;
-  input [17:0] events;
-  wire [17:0] events;
+  input [20:0] events;
+  wire [20:0] events;
   wire \events.aborted ;
   wire \events.ca_aborted ;
   wire \events.ca_crc4_error ;
@@ -19722,6 +21933,7 @@ module \biss_master_axil.ch1.core.counters (rst, clear, events, counts, clk);
   wire \events.ca_refused ;
   wire \events.crc_word0 ;
   wire \events.crc_word1 ;
+  wire \events.delay_jump ;
   wire \events.delay_range ;
   wire \events.lc_repeat ;
   wire \events.lc_skip ;
@@ -19729,10 +21941,12 @@ module \biss_master_axil.ch1.core.counters (rst, clear, events, counts, clk);
   wire \events.no_ack ;
   wire \events.no_start ;
   wire \events.no_stop ;
+  wire \events.noise_event ;
+  wire \events.noisy_line ;
   wire \events.overrun ;
   wire \events.slo_stuck_low ;
   wire \events.spw_mismatch ;
-  reg [17:0] events_reg = 18'h00000;
+  reg [20:0] events_reg = 21'h000000;
   wire \events_reg.aborted ;
   wire \events_reg.ca_aborted ;
   wire \events_reg.ca_crc4_error ;
@@ -19741,6 +21955,7 @@ module \biss_master_axil.ch1.core.counters (rst, clear, events, counts, clk);
   wire \events_reg.ca_refused ;
   wire \events_reg.crc_word0 ;
   wire \events_reg.crc_word1 ;
+  wire \events_reg.delay_jump ;
   wire \events_reg.delay_range ;
   wire \events_reg.lc_repeat ;
   wire \events_reg.lc_skip ;
@@ -19748,6 +21963,8 @@ module \biss_master_axil.ch1.core.counters (rst, clear, events, counts, clk);
   wire \events_reg.no_ack ;
   wire \events_reg.no_start ;
   wire \events_reg.no_stop ;
+  wire \events_reg.noise_event ;
+  wire \events_reg.noisy_line ;
   wire \events_reg.overrun ;
   wire \events_reg.slo_stuck_low ;
   wire \events_reg.spw_mismatch ;
@@ -19769,6 +21986,9 @@ module \biss_master_axil.ch1.core.counters (rst, clear, events, counts, clk);
   wire \inc$52 ;
   wire \inc$55 ;
   wire \inc$58 ;
+  wire \inc$61 ;
+  wire \inc$64 ;
+  wire \inc$67 ;
   input rst;
   wire rst;
   always @(posedge clk)
@@ -19785,36 +22005,36 @@ module \biss_master_axil.ch1.core.counters (rst, clear, events, counts, clk);
   \biss_master_axil.ch1.core.counters.count_ca_aborted  count_ca_aborted (
     .clear(clear_reg),
     .clk(clk),
-    .count(\count$57 ),
-    .inc(events_reg[16]),
+    .count(\count$66 ),
+    .inc(events_reg[19]),
     .rst(rst)
   );
   \biss_master_axil.ch1.core.counters.count_ca_crc4_error  count_ca_crc4_error (
     .clear(clear_reg),
     .clk(clk),
-    .count(\count$48 ),
-    .inc(events_reg[13]),
+    .count(\count$57 ),
+    .inc(events_reg[16]),
     .rst(rst)
   );
   \biss_master_axil.ch1.core.counters.count_ca_data_fault  count_ca_data_fault (
+    .clear(clear_reg),
+    .clk(clk),
+    .count(\count$69 ),
+    .inc(events_reg[20]),
+    .rst(rst)
+  );
+  \biss_master_axil.ch1.core.counters.count_ca_no_answer  count_ca_no_answer (
     .clear(clear_reg),
     .clk(clk),
     .count(\count$60 ),
     .inc(events_reg[17]),
     .rst(rst)
   );
-  \biss_master_axil.ch1.core.counters.count_ca_no_answer  count_ca_no_answer (
-    .clear(clear_reg),
-    .clk(clk),
-    .count(\count$51 ),
-    .inc(events_reg[14]),
-    .rst(rst)
-  );
   \biss_master_axil.ch1.core.counters.count_ca_refused  count_ca_refused (
     .clear(clear_reg),
     .clk(clk),
-    .count(\count$54 ),
-    .inc(events_reg[15]),
+    .count(\count$63 ),
+    .inc(events_reg[18]),
     .rst(rst)
   );
   \biss_master_axil.ch1.core.counters.count_crc_word0  count_crc_word0 (
@@ -19829,6 +22049,13 @@ module \biss_master_axil.ch1.core.counters (rst, clear, events, counts, clk);
     .clk(clk),
     .count(\count$12 ),
     .inc(events_reg[1]),
+    .rst(rst)
+  );
+  \biss_master_axil.ch1.core.counters.count_delay_jump  count_delay_jump (
+    .clear(clear_reg),
+    .clk(clk),
+    .count(\count$51 ),
+    .inc(events_reg[14]),
     .rst(rst)
   );
   \biss_master_axil.ch1.core.counters.count_delay_range  count_delay_range (
@@ -19880,6 +22107,20 @@ module \biss_master_axil.ch1.core.counters (rst, clear, events, counts, clk);
     .inc(events_reg[12]),
     .rst(rst)
   );
+  \biss_master_axil.ch1.core.counters.count_noise_event  count_noise_event (
+    .clear(clear_reg),
+    .clk(clk),
+    .count(\count$54 ),
+    .inc(events_reg[15]),
+    .rst(rst)
+  );
+  \biss_master_axil.ch1.core.counters.count_noisy_line  count_noisy_line (
+    .clear(clear_reg),
+    .clk(clk),
+    .count(\count$48 ),
+    .inc(events_reg[13]),
+    .rst(rst)
+  );
   \biss_master_axil.ch1.core.counters.count_overrun  count_overrun (
     .clear(clear_reg),
     .clk(clk),
@@ -19902,14 +22143,14 @@ module \biss_master_axil.ch1.core.counters (rst, clear, events, counts, clk);
     .rst(rst)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$81 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
     \$1  = events;
     if (rst) begin
-      \$1  = 18'h00000;
+      \$1  = 21'h000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$81 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
     \$2  = clear;
     if (rst) begin
       \$2  = 1'h0;
@@ -19951,6 +22192,12 @@ module \biss_master_axil.ch1.core.counters (rst, clear, events, counts, clk);
   assign \clear$56  = clear_reg;
   assign \inc$58  = events_reg[17];
   assign \clear$59  = clear_reg;
+  assign \inc$61  = events_reg[18];
+  assign \clear$62  = clear_reg;
+  assign \inc$64  = events_reg[19];
+  assign \clear$65  = clear_reg;
+  assign \inc$67  = events_reg[20];
+  assign \clear$68  = clear_reg;
   assign \events_reg.crc_word0  = events_reg[0];
   assign \events_reg.crc_word1  = events_reg[1];
   assign \events_reg.no_ack  = events_reg[2];
@@ -19964,11 +22211,14 @@ module \biss_master_axil.ch1.core.counters (rst, clear, events, counts, clk);
   assign \events_reg.overrun  = events_reg[10];
   assign \events_reg.aborted  = events_reg[11];
   assign \events_reg.no_stop  = events_reg[12];
-  assign \events_reg.ca_crc4_error  = events_reg[13];
-  assign \events_reg.ca_no_answer  = events_reg[14];
-  assign \events_reg.ca_refused  = events_reg[15];
-  assign \events_reg.ca_aborted  = events_reg[16];
-  assign \events_reg.ca_data_fault  = events_reg[17];
+  assign \events_reg.noisy_line  = events_reg[13];
+  assign \events_reg.delay_jump  = events_reg[14];
+  assign \events_reg.noise_event  = events_reg[15];
+  assign \events_reg.ca_crc4_error  = events_reg[16];
+  assign \events_reg.ca_no_answer  = events_reg[17];
+  assign \events_reg.ca_refused  = events_reg[18];
+  assign \events_reg.ca_aborted  = events_reg[19];
+  assign \events_reg.ca_data_fault  = events_reg[20];
   assign \events.crc_word0  = events[0];
   assign \events.crc_word1  = events[1];
   assign \events.no_ack  = events[2];
@@ -19982,11 +22232,14 @@ module \biss_master_axil.ch1.core.counters (rst, clear, events, counts, clk);
   assign \events.overrun  = events[10];
   assign \events.aborted  = events[11];
   assign \events.no_stop  = events[12];
-  assign \events.ca_crc4_error  = events[13];
-  assign \events.ca_no_answer  = events[14];
-  assign \events.ca_refused  = events[15];
-  assign \events.ca_aborted  = events[16];
-  assign \events.ca_data_fault  = events[17];
+  assign \events.noisy_line  = events[13];
+  assign \events.delay_jump  = events[14];
+  assign \events.noise_event  = events[15];
+  assign \events.ca_crc4_error  = events[16];
+  assign \events.ca_no_answer  = events[17];
+  assign \events.ca_refused  = events[18];
+  assign \events.ca_aborted  = events[19];
+  assign \events.ca_data_fault  = events[20];
   assign \counts.crc_word0  = counts[15:0];
   assign \counts.crc_word1  = counts[31:16];
   assign \counts.no_ack  = counts[47:32];
@@ -20000,11 +22253,17 @@ module \biss_master_axil.ch1.core.counters (rst, clear, events, counts, clk);
   assign \counts.overrun  = counts[175:160];
   assign \counts.aborted  = counts[191:176];
   assign \counts.no_stop  = counts[207:192];
-  assign \counts.ca_crc4_error  = counts[223:208];
-  assign \counts.ca_no_answer  = counts[239:224];
-  assign \counts.ca_refused  = counts[255:240];
-  assign \counts.ca_aborted  = counts[271:256];
-  assign \counts.ca_data_fault  = counts[287:272];
+  assign \counts.noisy_line  = counts[223:208];
+  assign \counts.delay_jump  = counts[239:224];
+  assign \counts.noise_event  = counts[255:240];
+  assign \counts.ca_crc4_error  = counts[271:256];
+  assign \counts.ca_no_answer  = counts[287:272];
+  assign \counts.ca_refused  = counts[303:288];
+  assign \counts.ca_aborted  = counts[319:304];
+  assign \counts.ca_data_fault  = counts[335:320];
+  assign counts[335:320] = \count$69 ;
+  assign counts[319:304] = \count$66 ;
+  assign counts[303:288] = \count$63 ;
   assign counts[287:272] = \count$60 ;
   assign counts[271:256] = \count$57 ;
   assign counts[255:240] = \count$54 ;
@@ -20027,276 +22286,6 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.counters.count_aborted (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$82  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_ca_aborted (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$83  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$83 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$83 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_ca_crc4_error (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$84  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_ca_data_fault (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$85  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$85 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$85 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_ca_no_answer (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$86  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_ca_refused (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$87  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -20350,7 +22339,7 @@ module \biss_master_axil.ch1.core.counters.count_ca_refused (rst, inc, clear, co
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_crc_word0 (rst, inc, clear, count, clk);
+module \biss_master_axil.ch1.core.counters.count_ca_aborted (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$88  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -20404,7 +22393,7 @@ module \biss_master_axil.ch1.core.counters.count_crc_word0 (rst, inc, clear, cou
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_crc_word1 (rst, inc, clear, count, clk);
+module \biss_master_axil.ch1.core.counters.count_ca_crc4_error (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$89  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -20458,7 +22447,7 @@ module \biss_master_axil.ch1.core.counters.count_crc_word1 (rst, inc, clear, cou
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_delay_range (rst, inc, clear, count, clk);
+module \biss_master_axil.ch1.core.counters.count_ca_data_fault (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$90  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -20512,7 +22501,7 @@ module \biss_master_axil.ch1.core.counters.count_delay_range (rst, inc, clear, c
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_lc_repeat (rst, inc, clear, count, clk);
+module \biss_master_axil.ch1.core.counters.count_ca_no_answer (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$91  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -20566,7 +22555,7 @@ module \biss_master_axil.ch1.core.counters.count_lc_repeat (rst, inc, clear, cou
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_lc_skip (rst, inc, clear, count, clk);
+module \biss_master_axil.ch1.core.counters.count_ca_refused (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$92  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -20620,7 +22609,7 @@ module \biss_master_axil.ch1.core.counters.count_lc_skip (rst, inc, clear, count
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_lc_zero (rst, inc, clear, count, clk);
+module \biss_master_axil.ch1.core.counters.count_crc_word0 (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$93  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -20674,7 +22663,7 @@ module \biss_master_axil.ch1.core.counters.count_lc_zero (rst, inc, clear, count
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_no_ack (rst, inc, clear, count, clk);
+module \biss_master_axil.ch1.core.counters.count_crc_word1 (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$94  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -20728,7 +22717,7 @@ module \biss_master_axil.ch1.core.counters.count_no_ack (rst, inc, clear, count,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_no_start (rst, inc, clear, count, clk);
+module \biss_master_axil.ch1.core.counters.count_delay_jump (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$95  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -20782,7 +22771,7 @@ module \biss_master_axil.ch1.core.counters.count_no_start (rst, inc, clear, coun
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_no_stop (rst, inc, clear, count, clk);
+module \biss_master_axil.ch1.core.counters.count_delay_range (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$96  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -20836,7 +22825,7 @@ module \biss_master_axil.ch1.core.counters.count_no_stop (rst, inc, clear, count
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_overrun (rst, inc, clear, count, clk);
+module \biss_master_axil.ch1.core.counters.count_lc_repeat (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$97  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -20890,7 +22879,7 @@ module \biss_master_axil.ch1.core.counters.count_overrun (rst, inc, clear, count
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_slo_stuck_low (rst, inc, clear, count, clk);
+module \biss_master_axil.ch1.core.counters.count_lc_skip (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$98  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -20944,7 +22933,7 @@ module \biss_master_axil.ch1.core.counters.count_slo_stuck_low (rst, inc, clear,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_spw_mismatch (rst, inc, clear, count, clk);
+module \biss_master_axil.ch1.core.counters.count_lc_zero (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$99  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -20998,9 +22987,441 @@ module \biss_master_axil.ch1.core.counters.count_spw_mismatch (rst, inc, clear, 
 endmodule
 
 (* generator = "Amaranth" *)
+module \biss_master_axil.ch1.core.counters.count_no_ack (rst, inc, clear, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$100  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_axil.ch1.core.counters.count_no_start (rst, inc, clear, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$101  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_axil.ch1.core.counters.count_no_stop (rst, inc, clear, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$102  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_axil.ch1.core.counters.count_noise_event (rst, inc, clear, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$103  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_axil.ch1.core.counters.count_noisy_line (rst, inc, clear, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$104  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$104 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$104 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_axil.ch1.core.counters.count_overrun (rst, inc, clear, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$105  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_axil.ch1.core.counters.count_slo_stuck_low (rst, inc, clear, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$106  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$106 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$106 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_axil.ch1.core.counters.count_spw_mismatch (rst, inc, clear, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$107  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$107 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$107 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, sample, \bit , receiver_clear, done, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1, lc, cpw_top, crc_ok
 , clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$100  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$108  = 0;
   wire [6:0] \$1 ;
   wire [1:0] \$10 ;
   reg [2:0] \$100 ;
@@ -21383,7 +23804,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     .valid(\valid$52 )
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
     (* full_case = 32'd1 *)
     casez (words[6])
       1'h0:
@@ -21393,7 +23814,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -21407,7 +23828,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
     (* full_case = 32'd1 *)
     casez (words[9:6])
       4'h0:
@@ -21445,7 +23866,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -21459,7 +23880,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
     (* full_case = 32'd1 *)
     casez (words[16])
       1'h0:
@@ -21469,7 +23890,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
     (* full_case = 32'd1 *)
     casez (words[17:16])
       2'h0:
@@ -21483,7 +23904,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:16])
       4'h0:
@@ -21521,7 +23942,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
     (* full_case = 32'd1 *)
     casez (words[17:16])
       2'h0:
@@ -21535,7 +23956,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
     \$94  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -21559,7 +23980,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
     \$95  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -21581,7 +24002,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
     \$96  = slots;
     if (\$34 ) begin
       \$96  = \$35 [15:0];
@@ -21594,7 +24015,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
     \$97  = slots_full;
     if (\$34 ) begin
       \$97  = \$36 ;
@@ -21607,7 +24028,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
     \$98  = started;
     casez (decoder_fsm_state)
       3'h0:
@@ -21623,7 +24044,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
     \$99  = start_slot;
     casez (decoder_fsm_state)
       3'h0:
@@ -21639,7 +24060,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
     \$100  = decoder_fsm_state;
     casez (decoder_fsm_state)
       3'h0:
@@ -21671,7 +24092,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
     \$101  = cds;
     casez (decoder_fsm_state)
       3'h0:
@@ -21689,7 +24110,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
     \$102  = idx;
     casez (decoder_fsm_state)
       3'h0:
@@ -21714,7 +24135,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
     \$103  = in_data;
     casez (decoder_fsm_state)
       3'h0:
@@ -21739,7 +24160,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
     \$104  = in_lc;
     casez (decoder_fsm_state)
       3'h0:
@@ -21764,7 +24185,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
     \$105  = in_top;
     casez (decoder_fsm_state)
       3'h0:
@@ -21789,7 +24210,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
     \$106  = word;
     casez (decoder_fsm_state)
       3'h0:
@@ -21817,7 +24238,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
     \$107  = stop_bit;
     casez (decoder_fsm_state)
       3'h0:
@@ -21839,7 +24260,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
     \$108  = data0;
     if (\$58 ) begin
       \$108  = { data0[53:0], \bit  };
@@ -21852,7 +24273,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
     \$109  = ne;
     if (\$59 ) begin
       \$109 [0] = 1'h1;
@@ -21872,7 +24293,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
     \$110  = nw;
     if (\$59 ) begin
       \$110 [0] = 1'h1;
@@ -21894,7 +24315,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
     \$111  = data1;
     if (\$70 ) begin
       \$111  = { data1[38:0], \bit  };
@@ -21907,7 +24328,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
     \$112  = lc;
     if (lc_load) begin
       \$112  = { lc[4:0], \bit  };
@@ -21920,7 +24341,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
     \$113  = cpw_top;
     if (\$80 ) begin
       \$113  = { cpw_top[38:0], \bit  };
@@ -21933,7 +24354,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
     in_word = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -21970,7 +24391,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.decoder.crc0 (rst, start, valid, kind, \bit , receiver_clear, ok, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$101  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$109  = 0;
   wire [5:0] \$1 ;
   wire \$10 ;
   wire [5:0] \$11 ;
@@ -22064,7 +24485,7 @@ module \biss_master_axil.ch1.core.decoder.crc0 (rst, start, valid, kind, \bit , 
   assign \$auto$rtlil.cc:2739:Not$12  = ~ { crc16_reg[14], crc16_reg[11], crc16_reg[6:5], crc16_reg[3:2], 1'h0 };
   assign \$auto$rtlil.cc:2739:Not$10  = ~ { crc6_reg[0], 1'h0 };
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
     \$31  = crc6_reg;
     if (valid) begin
       \$31  = \$5 ;
@@ -22079,7 +24500,7 @@ module \biss_master_axil.ch1.core.decoder.crc0 (rst, start, valid, kind, \bit , 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
     \$32  = crc6_match;
     if (valid) begin
       \$32  = \$15 ;
@@ -22094,7 +24515,7 @@ module \biss_master_axil.ch1.core.decoder.crc0 (rst, start, valid, kind, \bit , 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
     \$33  = crc16_reg;
     if (valid) begin
       \$33  = \$20 ;
@@ -22109,7 +24530,7 @@ module \biss_master_axil.ch1.core.decoder.crc0 (rst, start, valid, kind, \bit , 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
     \$34  = crc16_match;
     if (valid) begin
       \$34  = \$30 ;
@@ -22124,7 +24545,7 @@ module \biss_master_axil.ch1.core.decoder.crc0 (rst, start, valid, kind, \bit , 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
     ok = 1'h0;
     casez (kind)
       2'h0:
@@ -22145,7 +24566,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.decoder.crc1 (rst, start, valid, kind, \bit , receiver_clear, ok, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$102  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$110  = 0;
   wire [5:0] \$1 ;
   wire \$10 ;
   wire [5:0] \$11 ;
@@ -22239,7 +24660,7 @@ module \biss_master_axil.ch1.core.decoder.crc1 (rst, start, valid, kind, \bit , 
   assign \$auto$rtlil.cc:2739:Not$6  = ~ { crc6_reg[0], 1'h0 };
   assign \$auto$rtlil.cc:2739:Not$8  = ~ { crc16_reg[14], crc16_reg[11], crc16_reg[6:5], crc16_reg[3:2], 1'h0 };
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$110 ) begin end
     \$31  = crc6_reg;
     if (valid) begin
       \$31  = \$5 ;
@@ -22254,7 +24675,7 @@ module \biss_master_axil.ch1.core.decoder.crc1 (rst, start, valid, kind, \bit , 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$110 ) begin end
     \$32  = crc6_match;
     if (valid) begin
       \$32  = \$15 ;
@@ -22269,7 +24690,7 @@ module \biss_master_axil.ch1.core.decoder.crc1 (rst, start, valid, kind, \bit , 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$110 ) begin end
     \$33  = crc16_reg;
     if (valid) begin
       \$33  = \$20 ;
@@ -22284,7 +24705,7 @@ module \biss_master_axil.ch1.core.decoder.crc1 (rst, start, valid, kind, \bit , 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$110 ) begin end
     \$34  = crc16_match;
     if (valid) begin
       \$34  = \$30 ;
@@ -22299,7 +24720,7 @@ module \biss_master_axil.ch1.core.decoder.crc1 (rst, start, valid, kind, \bit , 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$110 ) begin end
     ok = 1'h0;
     casez (kind)
       2'h0:
@@ -22319,8 +24740,478 @@ module \biss_master_axil.ch1.core.decoder.crc1 (rst, start, valid, kind, \bit , 
 endmodule
 
 (* generator = "Amaranth" *)
+module \biss_master_axil.ch1.core.delay_check (rst, enable, rearm, check, clean, \tolerance$8 , learn, delay, jump, spread, settled_delay, settled, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$111  = 0;
+  wire [13:0] \$1 ;
+  wire \$10 ;
+  wire \$11 ;
+  wire [12:0] \$12 ;
+  wire [12:0] \$13 ;
+  wire \$14 ;
+  wire [12:0] \$15 ;
+  wire [12:0] \$16 ;
+  wire \$17 ;
+  wire \$18 ;
+  wire \$19 ;
+  wire [13:0] \$2 ;
+  wire \$20 ;
+  wire [12:0] \$21 ;
+  wire [12:0] \$22 ;
+  wire \$23 ;
+  wire \$24 ;
+  wire [7:0] \$25 ;
+  wire \$26 ;
+  wire \$27 ;
+  wire \$28 ;
+  wire \$29 ;
+  wire \$3 ;
+  wire \$30 ;
+  wire \$31 ;
+  wire \$32 ;
+  wire \$33 ;
+  wire \$34 ;
+  wire \$35 ;
+  wire \$36 ;
+  wire \$37 ;
+  wire \$38 ;
+  wire \$39 ;
+  wire [12:0] \$4 ;
+  wire \$40 ;
+  wire [2:0] \$41 ;
+  wire \$42 ;
+  wire \$43 ;
+  wire [12:0] \$44 ;
+  wire [12:0] \$45 ;
+  reg [13:0] \$46 ;
+  reg [13:0] \$47 ;
+  reg [16:0] \$48 ;
+  reg \$49 ;
+  wire [12:0] \$5 ;
+  reg \$50 ;
+  reg \$51 ;
+  reg [7:0] \$52 ;
+  reg \$53 ;
+  reg \$54 ;
+  reg [1:0] \$55 ;
+  reg [7:0] \$56 ;
+  reg [12:0] \$57 ;
+  reg [12:0] \$58 ;
+  reg \$59 ;
+  wire \$6 ;
+  wire [12:0] \$7 ;
+  wire [12:0] \$8 ;
+  wire \$9 ;
+  reg [12:0] cand = 13'h0000;
+  input check;
+  wire check;
+  input clean;
+  wire clean;
+  input clk;
+  wire clk;
+  reg [1:0] count = 2'h0;
+  input [12:0] delay;
+  wire [12:0] delay;
+  reg [13:0] diff_cand = 14'h0000;
+  reg [13:0] diff_ref = 14'h0000;
+  input enable;
+  wire enable;
+  reg far_ref = 1'h0;
+  output jump;
+  reg jump = 1'h0;
+  input learn;
+  wire learn;
+  wire [8:0] low_sum;
+  reg [7:0] magnitude = 8'h00;
+  reg near_cand = 1'h0;
+  input rearm;
+  wire rearm;
+  reg resettled = 1'h0;
+  input rst;
+  wire rst;
+  reg saturated = 1'h0;
+  output settled;
+  reg settled = 1'h0;
+  output [12:0] settled_delay;
+  reg [12:0] settled_delay = 13'h0000;
+  output [7:0] spread;
+  reg [7:0] spread = 8'h00;
+  reg [16:0] tolerance = 17'h00000;
+  input [16:0] \tolerance$8 ;
+  wire [16:0] \tolerance$8 ;
+  assign \$41  = count + 1'h1;
+  assign \$42  = ~ enable;
+  assign \$43  = rearm | \$42 ;
+  assign \$44  = ~ diff_ref[12:0];
+  assign \$45  = diff_ref[13] ? \$44  : diff_ref[12:0];
+  assign low_sum = \$45 [7:0] + diff_ref[13];
+  always @(posedge clk)
+    diff_ref <= \$46 ;
+  always @(posedge clk)
+    diff_cand <= \$47 ;
+  always @(posedge clk)
+    tolerance <= \$48 ;
+  always @(posedge clk)
+    saturated <= \$49 ;
+  always @(posedge clk)
+    far_ref <= \$50 ;
+  always @(posedge clk)
+    near_cand <= \$51 ;
+  always @(posedge clk)
+    magnitude <= \$52 ;
+  always @(posedge clk)
+    resettled <= \$53 ;
+  always @(posedge clk)
+    jump <= \$54 ;
+  always @(posedge clk)
+    count <= \$55 ;
+  always @(posedge clk)
+    spread <= \$56 ;
+  always @(posedge clk)
+    cand <= \$57 ;
+  always @(posedge clk)
+    settled_delay <= \$58 ;
+  always @(posedge clk)
+    settled <= \$59 ;
+  assign \$1  = delay - settled_delay;
+  assign \$2  = delay - cand;
+  assign \$3  = delay == 13'h1fff;
+  assign \$4  = ~ diff_ref[12:0];
+  assign \$5  = diff_ref[13] ? \$4  : diff_ref[12:0];
+  assign \$6  = \$5  > tolerance;
+  assign \$7  = ~ diff_ref[12:0];
+  assign \$8  = diff_ref[13] ? \$7  : diff_ref[12:0];
+  assign \$9  = \$8  == tolerance;
+  assign \$10  = diff_ref[13] & \$9 ;
+  assign \$11  = \$6  | \$10 ;
+  assign \$12  = ~ diff_cand[12:0];
+  assign \$13  = diff_cand[13] ? \$12  : diff_cand[12:0];
+  assign \$14  = \$13  > tolerance;
+  assign \$15  = ~ diff_cand[12:0];
+  assign \$16  = diff_cand[13] ? \$15  : diff_cand[12:0];
+  assign \$17  = \$16  == tolerance;
+  assign \$18  = diff_cand[13] & \$17 ;
+  assign \$19  = \$14  | \$18 ;
+  assign \$20  = ~ \$19 ;
+  assign \$21  = ~ diff_ref[12:0];
+  assign \$22  = diff_ref[13] ? \$21  : diff_ref[12:0];
+  assign \$23  = | \$22 [12:8];
+  assign \$24  = \$23  | low_sum[8];
+  assign \$25  = \$24  ? 8'hff : low_sum[7:0];
+  assign \$26  = settled & far_ref;
+  assign \$27  = ~ saturated;
+  assign \$28  = clean & \$27 ;
+  assign \$29  = ~ \$28 ;
+  assign \$30  = ~ jump;
+  assign \$31  = settled & \$30 ;
+  assign \$32  = \$29  | \$31 ;
+  assign \$33  = ! count;
+  assign \$34  = ~ near_cand;
+  assign \$35  = \$33  | \$34 ;
+  assign \$36  = count == 2'h3;
+  assign \$37  = ~ saturated;
+  assign \$38  = clean & \$37 ;
+  assign \$39  = magnitude > spread;
+  assign \$40  = \$38  & \$39 ;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    \$46  = \$1 ;
+    if (rst) begin
+      \$46  = 14'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    \$47  = \$2 ;
+    if (rst) begin
+      \$47  = 14'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    \$48  = \tolerance$8 ;
+    if (rst) begin
+      \$48  = 17'h00000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    \$49  = \$3 ;
+    if (rst) begin
+      \$49  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    \$50  = \$11 ;
+    if (rst) begin
+      \$50  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    \$51  = \$20 ;
+    if (rst) begin
+      \$51  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    \$52  = \$25 ;
+    if (rst) begin
+      \$52  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    \$53  = 1'h0;
+    if (learn) begin
+      if (\$32 ) begin
+      end else if (\$35 ) begin
+      end else if (\$36 ) begin
+        \$53  = settled;
+      end
+    end
+    if (\$43 ) begin
+      \$53  = 1'h0;
+    end
+    if (rst) begin
+      \$53  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    \$54  = jump;
+    if (check) begin
+      \$54  = \$26 ;
+    end
+    if (\$43 ) begin
+      \$54  = 1'h0;
+    end
+    if (rst) begin
+      \$54  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    \$55  = count;
+    if (learn) begin
+      (* full_case = 32'd1 *)
+      if (\$32 ) begin
+        \$55  = 2'h0;
+      end else if (\$35 ) begin
+        \$55  = 2'h1;
+      end else if (\$36 ) begin
+        \$55  = 2'h0;
+      end else begin
+        \$55  = \$41 [1:0];
+      end
+    end
+    if (\$43 ) begin
+      \$55  = 2'h0;
+    end
+    if (rst) begin
+      \$55  = 2'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    \$56  = spread;
+    if (learn) begin
+      if (\$32 ) begin
+        if (\$40 ) begin
+          \$56  = magnitude;
+        end
+      end else if (\$35 ) begin
+      end else if (\$36 ) begin
+        \$56  = 8'h00;
+      end
+    end
+    if (\$43 ) begin
+      \$56  = 8'h00;
+    end
+    if (rst) begin
+      \$56  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    \$57  = cand;
+    if (learn) begin
+      if (\$32 ) begin
+      end else if (\$35 ) begin
+        \$57  = delay;
+      end
+    end
+    if (rst) begin
+      \$57  = 13'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    \$58  = settled_delay;
+    if (learn) begin
+      if (\$32 ) begin
+      end else if (\$35 ) begin
+      end else if (\$36 ) begin
+        \$58  = cand;
+      end
+    end
+    if (\$43 ) begin
+      \$58  = 13'h0000;
+    end
+    if (rst) begin
+      \$58  = 13'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    \$59  = settled;
+    if (learn) begin
+      if (\$32 ) begin
+      end else if (\$35 ) begin
+      end else if (\$36 ) begin
+        \$59  = 1'h1;
+      end
+    end
+    if (\$43 ) begin
+      \$59  = 1'h0;
+    end
+    if (rst) begin
+      \$59  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_axil.ch1.core.line_noise (rst, sampler_noise, \event , noisy, events, limit, watch, level, close, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$112  = 0;
+  wire \$1 ;
+  wire [4:0] \$10 ;
+  wire \$11 ;
+  wire \$12 ;
+  wire \$13 ;
+  wire \$14 ;
+  reg \$15 ;
+  reg \$16 ;
+  reg [3:0] \$17 ;
+  reg [3:0] \$18 ;
+  reg \$19 ;
+  wire \$2 ;
+  wire \$3 ;
+  wire \$4 ;
+  wire [4:0] \$5 ;
+  wire [4:0] \$6 ;
+  wire \$7 ;
+  wire \$8 ;
+  wire [4:0] \$9 ;
+  input clk;
+  wire clk;
+  input close;
+  wire close;
+  output \event ;
+  wire \event ;
+  output [3:0] events;
+  wire [3:0] events;
+  reg [3:0] held_events = 4'h0;
+  reg held_noisy = 1'h0;
+  input level;
+  wire level;
+  reg level_prev = 1'h1;
+  input [3:0] limit;
+  wire [3:0] limit;
+  output noisy;
+  wire noisy;
+  reg over = 1'h0;
+  input rst;
+  wire rst;
+  reg [3:0] running = 4'h0;
+  input sampler_noise;
+  wire sampler_noise;
+  input watch;
+  wire watch;
+  assign \$1  = ! limit;
+  assign \$2  = \event  & \$1 ;
+  assign \$3  = running != 4'hf;
+  assign \$4  = \event  & \$3 ;
+  assign \$5  = running + 1'h1;
+  assign \$6  = \$4  ? \$5  : { 1'h0, running };
+  assign \$7  = running != 4'hf;
+  assign \$8  = \event  & \$7 ;
+  assign \$9  = running + 1'h1;
+  assign \$10  = \$8  ? \$9  : { 1'h0, running };
+  assign \$11  = \$10  > limit;
+  assign \$12  = watch & level_prev;
+  assign \$13  = ~ level;
+  assign \$14  = \$12  & \$13 ;
+  assign \event  = sampler_noise | \$14 ;
+  assign noisy = close ? over : held_noisy;
+  assign events = close ? running : held_events;
+  always @(posedge clk)
+    level_prev <= \$15 ;
+  always @(posedge clk)
+    held_noisy <= \$16 ;
+  always @(posedge clk)
+    held_events <= \$17 ;
+  always @(posedge clk)
+    running <= \$18 ;
+  always @(posedge clk)
+    over <= \$19 ;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$112 ) begin end
+    \$15  = level;
+    if (rst) begin
+      \$15  = 1'h1;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$112 ) begin end
+    \$16  = held_noisy;
+    if (close) begin
+      \$16  = over;
+    end
+    if (rst) begin
+      \$16  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$112 ) begin end
+    \$17  = held_events;
+    if (close) begin
+      \$17  = running;
+    end
+    if (rst) begin
+      \$17  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$112 ) begin end
+    (* full_case = 32'd1 *)
+    if (close) begin
+      \$18  = { 3'h0, \event  };
+    end else begin
+      \$18  = \$6 [3:0];
+    end
+    if (rst) begin
+      \$18  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$112 ) begin end
+    (* full_case = 32'd1 *)
+    if (close) begin
+      \$19  = \$2 ;
+    end else begin
+      \$19  = \$11 ;
+    end
+    if (rst) begin
+      \$19  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, hold, first_rise, second_rise, ma, rises, busy, held, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$103  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$113  = 0;
   wire [16:0] \$1 ;
   wire \$10 ;
   wire [16:0] \$11 ;
@@ -22445,7 +25336,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
   always @(posedge clk)
     released <= \$42 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
     \$34  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -22460,7 +25351,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
     \$35  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -22475,7 +25366,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
     \$36  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -22490,7 +25381,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
     \$37  = ma;
     casez (ma_fsm_state)
       3'h0:
@@ -22519,7 +25410,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
     \$38  = phase_left;
     casez (ma_fsm_state)
       3'h0:
@@ -22561,7 +25452,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
     \$39  = last_clock;
     casez (ma_fsm_state)
       3'h0:
@@ -22603,7 +25494,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
     \$40  = rises;
     casez (ma_fsm_state)
       3'h0:
@@ -22622,7 +25513,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
     \$41  = ma_fsm_state;
     casez (ma_fsm_state)
       3'h0:
@@ -22658,7 +25549,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
     \$42  = released;
     casez (ma_fsm_state)
       3'h0:
@@ -22682,7 +25573,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
     busy = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -22698,7 +25589,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
     held = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -22715,7 +25606,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.ma_stop (rst, words, w1_enable, clear, rises, enough, \started$10 , start_slot, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$104  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$114  = 0;
   reg [7:0] \$1 ;
   reg [7:0] \$10 ;
   wire [8:0] \$11 ;
@@ -22796,7 +25687,7 @@ module \biss_master_axil.ch1.core.ma_stop (rst, words, w1_enable, clear, rises, 
   always @(posedge clk)
     word1_len <= \$17 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$104 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
     (* full_case = 32'd1 *)
     casez (words[9:6])
       4'h0:
@@ -22834,7 +25725,7 @@ module \biss_master_axil.ch1.core.ma_stop (rst, words, w1_enable, clear, rises, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$104 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:16])
       4'h0:
@@ -22872,42 +25763,42 @@ module \biss_master_axil.ch1.core.ma_stop (rst, words, w1_enable, clear, rises, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$104 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
     \$12  = \$2 [7:0];
     if (rst) begin
       \$12  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$104 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
     \$13  = \$4 ;
     if (rst) begin
       \$13  = 9'h000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$104 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
     \$14  = \$5 ;
     if (rst) begin
       \$14  = 17'h00000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$104 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
     \$15  = \started$10 ;
     if (rst) begin
       \$15  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$104 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
     \$16  = \$9 ;
     if (rst) begin
       \$16  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$104 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
     \$17  = \$11 [7:0];
     if (rst) begin
       \$17  = 8'h00;
@@ -23219,7 +26110,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.register_access.buffers (clk, rst, host_read__en, byte_to_send, rbuf_data, wbuf, index, store, byte_received, host_read__addr);
-  reg \$auto$verilog_backend.cc:2355:dump_module$105  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$115  = 0;
   wire \$1 ;
   wire \$2 ;
   wire \$3 ;
@@ -23336,21 +26227,21 @@ module \biss_master_axil.ch1.core.register_access.buffers (clk, rst, host_read__
   assign \$1  = ! index[1:0];
   assign \$2  = index[1:0] == 1'h1;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$115 ) begin end
     byte_received__addr = 4'h0;
     if (store) begin
       byte_received__addr = index[5:2];
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$115 ) begin end
     byte_received__data = 32'd0;
     if (store) begin
       byte_received__data = { byte_received, byte_received, byte_received, byte_received };
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$115 ) begin end
     byte_received__en = 4'h0;
     if (store) begin
       byte_received__en = { \$4 , \$3 , \$2 , \$1  };
@@ -23370,7 +26261,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.register_access.checker (rst, crc_ok, echo_ok, cds, control__take_data, start, control__take_crc, sent, \byte , clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$106  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$116  = 0;
   reg [7:0] \$1 ;
   reg [2:0] \$2 ;
   output [7:0] \byte ;
@@ -23413,7 +26304,7 @@ module \biss_master_axil.ch1.core.register_access.checker (rst, crc_ok, echo_ok,
     .valid(control__take_data)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$106 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$116 ) begin end
     \$1  = \byte ;
     if (control__take_data) begin
       \$1  = { \byte [6:0], cds };
@@ -23423,7 +26314,7 @@ module \biss_master_axil.ch1.core.register_access.checker (rst, crc_ok, echo_ok,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$106 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$116 ) begin end
     \$2  = got_crc;
     if (control__take_crc) begin
       \$2  = { got_crc[1:0], cds };
@@ -23439,7 +26330,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.register_access.checker.rx_crc (rst, crc, data_in, valid, start, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$107  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$117  = 0;
   wire [3:0] \$1 ;
   wire \$10 ;
   wire [3:0] \$11 ;
@@ -23482,7 +26373,7 @@ module \biss_master_axil.ch1.core.register_access.checker.rx_crc (rst, crc, data
     crc_reg <= \$13 ;
   assign \$auto$rtlil.cc:2739:Not$2  = ~ crc_reg;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$107 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$117 ) begin end
     \$13  = crc_reg;
     if (valid) begin
       \$13 [0] = \$3 ;
@@ -23506,7 +26397,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.register_access.idle (rst, frame_end, frame_ok, run_enough, seen_enough, frame_cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$108  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$118  = 0;
   wire \$1 ;
   wire [4:0] \$10 ;
   wire \$11 ;
@@ -23576,7 +26467,7 @@ module \biss_master_axil.ch1.core.register_access.idle (rst, frame_end, frame_ok
   always @(posedge clk)
     idle_seen <= \$24 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$118 ) begin end
     \$23  = idle_run;
     if (frame_end) begin
       \$23  = \$4 [3:0];
@@ -23586,7 +26477,7 @@ module \biss_master_axil.ch1.core.register_access.idle (rst, frame_end, frame_ok
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$118 ) begin end
     \$24  = idle_seen;
     if (frame_end) begin
       \$24  = \$10 [3:0];
@@ -23599,7 +26490,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.register_access.sender (rst, \byte , request, control__load_header, control__source, control__crc_bit, control__shift_header, start, valid, control__load_byte, control__shift_byte, sent, cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$109  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$119  = 0;
   wire \$1 ;
   wire [18:0] \$2 ;
   wire [8:0] \$3 ;
@@ -23671,7 +26562,7 @@ module \biss_master_axil.ch1.core.register_access.sender (rst, \byte , request, 
     .valid(valid)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$119 ) begin end
     \$6  = header;
     if (control__load_header) begin
       \$6  = { 2'h3, request[2:0], request[9:3], 4'h0, \$1 , request[17] };
@@ -23684,7 +26575,7 @@ module \biss_master_axil.ch1.core.register_access.sender (rst, \byte , request, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$119 ) begin end
     \$7  = to_send;
     if (control__load_byte) begin
       \$7  = \byte ;
@@ -23697,7 +26588,7 @@ module \biss_master_axil.ch1.core.register_access.sender (rst, \byte , request, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$119 ) begin end
     \$8  = sent;
     if (control__load_byte) begin
       \$8  = \byte ;
@@ -23707,7 +26598,7 @@ module \biss_master_axil.ch1.core.register_access.sender (rst, \byte , request, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$119 ) begin end
     cdm = 1'h0;
     casez (control__source)
       3'h1:
@@ -23732,7 +26623,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.register_access.sender.tx_crc (rst, data_in, crc, start, valid, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$110  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$120  = 0;
   wire [3:0] \$1 ;
   wire \$10 ;
   wire [3:0] \$11 ;
@@ -23775,7 +26666,7 @@ module \biss_master_axil.ch1.core.register_access.sender.tx_crc (rst, data_in, c
     crc_reg <= \$13 ;
   assign \$auto$rtlil.cc:2739:Not$4  = ~ crc_reg;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$110 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$120 ) begin end
     \$13  = crc_reg;
     if (valid) begin
       \$13 [0] = \$3 ;
@@ -23800,7 +26691,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, frame_ok, busy, crc_ok, echo_ok, run_enough, seen_enough, start, abort, request, frame_cdm, frame_cds, done, result, index, send__load_header, send__source, send__crc_bit, send__shift_header, send__crc_start
 , send__crc_valid, send__load_byte, send__shift_byte, check__take_data, check__first, check__take_crc, store, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$111  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$121  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$100 ;
@@ -24156,7 +27047,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
   always @(posedge clk)
     waited <= \$125 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$121 ) begin end
     \$118  = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -24194,7 +27085,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$121 ) begin end
     \$119  = result;
     casez (access_fsm_state)
       3'h0:
@@ -24248,7 +27139,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$121 ) begin end
     \$120  = access_fsm_state;
     casez (access_fsm_state)
       3'h0:
@@ -24345,7 +27236,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$121 ) begin end
     \$121  = req;
     casez (access_fsm_state)
       3'h0:
@@ -24362,7 +27253,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$121 ) begin end
     \$122  = index;
     casez (access_fsm_state)
       3'h0:
@@ -24401,7 +27292,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$121 ) begin end
     \$123  = step;
     casez (access_fsm_state)
       3'h0:
@@ -24459,7 +27350,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$121 ) begin end
     \$124  = ending;
     casez (access_fsm_state)
       3'h0:
@@ -24526,7 +27417,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$121 ) begin end
     \$125  = waited;
     casez (access_fsm_state)
       3'h0:
@@ -24558,7 +27449,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$121 ) begin end
     send__load_header = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -24572,7 +27463,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$121 ) begin end
     send__source = 3'h0;
     casez (access_fsm_state)
       3'h0:
@@ -24599,7 +27490,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$121 ) begin end
     send__crc_bit = 2'h0;
     casez (access_fsm_state)
       3'h0:
@@ -24619,7 +27510,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$121 ) begin end
     send__shift_header = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -24638,7 +27529,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$121 ) begin end
     send__crc_start = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -24667,7 +27558,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$121 ) begin end
     send__crc_valid = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -24688,7 +27579,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$121 ) begin end
     send__load_byte = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -24710,7 +27601,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$121 ) begin end
     send__shift_byte = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -24731,7 +27622,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$121 ) begin end
     check__take_data = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -24753,7 +27644,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$121 ) begin end
     check__first = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -24775,7 +27666,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$121 ) begin end
     check__take_crc = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -24799,7 +27690,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$121 ) begin end
     store = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -24838,22 +27729,26 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.results (rst, report_delay, report, valid, frame, report_frame, done, valid_out, result, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$112  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$122  = 0;
   reg \$1 ;
   reg \$2 ;
-  reg [160:0] \$3 ;
+  reg [186:0] \$3 ;
   input clk;
   wire clk;
   output done;
   reg done = 1'h0;
-  input [160:0] frame;
-  wire [160:0] frame;
+  input [186:0] frame;
+  wire [186:0] frame;
   wire \frame.cds ;
+  wire \frame.delay_settled ;
+  wire [7:0] \frame.delay_spread ;
   wire [5:0] \frame.lc ;
   wire \frame.lc_repeat ;
   wire \frame.lc_skip ;
   wire \frame.lc_zero ;
   wire [12:0] \frame.line_delay ;
+  wire [3:0] \frame.noise_events ;
+  wire [12:0] \frame.settled_delay ;
   wire \frame.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
@@ -24869,6 +27764,8 @@ module \biss_master_axil.ch1.core.results (rst, report_delay, report, valid, fra
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
+  (* enum_value_1101 = "NOISY_LINE" *)
+  (* enum_value_1110 = "DELAY_JUMP" *)
   wire [3:0] \frame.status ;
   wire [31:0] \frame.timestamp ;
   wire [57:0] \frame.word0 ;
@@ -24887,14 +27784,18 @@ module \biss_master_axil.ch1.core.results (rst, report_delay, report, valid, fra
   wire report_delay;
   input report_frame;
   wire report_frame;
-  output [160:0] result;
-  reg [160:0] result = 161'h00000000000000000000000000000000000000000;
+  output [186:0] result;
+  reg [186:0] result = 187'h00000000000000000000000000000000000000000000000;
   wire \result.cds ;
+  wire \result.delay_settled ;
+  wire [7:0] \result.delay_spread ;
   wire [5:0] \result.lc ;
   wire \result.lc_repeat ;
   wire \result.lc_skip ;
   wire \result.lc_zero ;
   wire [12:0] \result.line_delay ;
+  wire [3:0] \result.noise_events ;
+  wire [12:0] \result.settled_delay ;
   wire \result.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
@@ -24910,6 +27811,8 @@ module \biss_master_axil.ch1.core.results (rst, report_delay, report, valid, fra
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
+  (* enum_value_1101 = "NOISY_LINE" *)
+  (* enum_value_1110 = "DELAY_JUMP" *)
   wire [3:0] \result.status ;
   wire [31:0] \result.timestamp ;
   wire [57:0] \result.word0 ;
@@ -24935,21 +27838,21 @@ module \biss_master_axil.ch1.core.results (rst, report_delay, report, valid, fra
   always @(posedge clk)
     result <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$112 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$122 ) begin end
     \$1  = report;
     if (rst) begin
       \$1  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$112 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$122 ) begin end
     \$2  = valid;
     if (rst) begin
       \$2  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$112 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$122 ) begin end
     \$3  = result;
     if (report) begin
       \$3 [3:0] = frame[3:0];
@@ -24960,99 +27863,133 @@ module \biss_master_axil.ch1.core.results (rst, report_delay, report, valid, fra
     if (report_frame) begin
       \$3 [35:4] = frame[35:4];
       \$3 [49] = frame[49];
-      \$3 [107:50] = frame[107:50];
-      \$3 [150:108] = frame[150:108];
-      \$3 [156:151] = frame[156:151];
-      \$3 [157] = frame[157];
-      \$3 [158] = frame[158];
-      \$3 [159] = frame[159];
-      \$3 [160] = frame[160];
+      \$3 [53:50] = frame[53:50];
+      \$3 [54] = frame[54];
+      \$3 [67:55] = frame[67:55];
+      \$3 [75:68] = frame[75:68];
+      \$3 [133:76] = frame[133:76];
+      \$3 [176:134] = frame[176:134];
+      \$3 [182:177] = frame[182:177];
+      \$3 [183] = frame[183];
+      \$3 [184] = frame[184];
+      \$3 [185] = frame[185];
+      \$3 [186] = frame[186];
     end
     if (rst) begin
-      \$3  = 161'h00000000000000000000000000000000000000000;
+      \$3  = 187'h00000000000000000000000000000000000000000000000;
     end
   end
   assign \result.status  = result[3:0];
   assign \result.timestamp  = result[35:4];
   assign \result.line_delay  = result[48:36];
   assign \result.cds  = result[49];
-  assign \result.word0  = result[107:50];
-  assign \result.word0.position  = result[104:50];
-  assign \result.word0.ne  = result[105];
-  assign \result.word0.nw  = result[106];
-  assign \result.word0.crc_ok  = result[107];
-  assign \result.word1  = result[150:108];
-  assign \result.word1.position  = result[147:108];
-  assign \result.word1.ne  = result[148];
-  assign \result.word1.nw  = result[149];
-  assign \result.word1.crc_ok  = result[150];
-  assign \result.lc  = result[156:151];
-  assign \result.lc_repeat  = result[157];
-  assign \result.lc_skip  = result[158];
-  assign \result.lc_zero  = result[159];
-  assign \result.spw_mismatch  = result[160];
+  assign \result.noise_events  = result[53:50];
+  assign \result.delay_settled  = result[54];
+  assign \result.settled_delay  = result[67:55];
+  assign \result.delay_spread  = result[75:68];
+  assign \result.word0  = result[133:76];
+  assign \result.word0.position  = result[130:76];
+  assign \result.word0.ne  = result[131];
+  assign \result.word0.nw  = result[132];
+  assign \result.word0.crc_ok  = result[133];
+  assign \result.word1  = result[176:134];
+  assign \result.word1.position  = result[173:134];
+  assign \result.word1.ne  = result[174];
+  assign \result.word1.nw  = result[175];
+  assign \result.word1.crc_ok  = result[176];
+  assign \result.lc  = result[182:177];
+  assign \result.lc_repeat  = result[183];
+  assign \result.lc_skip  = result[184];
+  assign \result.lc_zero  = result[185];
+  assign \result.spw_mismatch  = result[186];
   assign \frame.status  = frame[3:0];
   assign \frame.timestamp  = frame[35:4];
   assign \frame.line_delay  = frame[48:36];
   assign \frame.cds  = frame[49];
-  assign \frame.word0  = frame[107:50];
-  assign \frame.word0.position  = frame[104:50];
-  assign \frame.word0.ne  = frame[105];
-  assign \frame.word0.nw  = frame[106];
-  assign \frame.word0.crc_ok  = frame[107];
-  assign \frame.word1  = frame[150:108];
-  assign \frame.word1.position  = frame[147:108];
-  assign \frame.word1.ne  = frame[148];
-  assign \frame.word1.nw  = frame[149];
-  assign \frame.word1.crc_ok  = frame[150];
-  assign \frame.lc  = frame[156:151];
-  assign \frame.lc_repeat  = frame[157];
-  assign \frame.lc_skip  = frame[158];
-  assign \frame.lc_zero  = frame[159];
-  assign \frame.spw_mismatch  = frame[160];
+  assign \frame.noise_events  = frame[53:50];
+  assign \frame.delay_settled  = frame[54];
+  assign \frame.settled_delay  = frame[67:55];
+  assign \frame.delay_spread  = frame[75:68];
+  assign \frame.word0  = frame[133:76];
+  assign \frame.word0.position  = frame[130:76];
+  assign \frame.word0.ne  = frame[131];
+  assign \frame.word0.nw  = frame[132];
+  assign \frame.word0.crc_ok  = frame[133];
+  assign \frame.word1  = frame[176:134];
+  assign \frame.word1.position  = frame[173:134];
+  assign \frame.word1.ne  = frame[174];
+  assign \frame.word1.nw  = frame[175];
+  assign \frame.word1.crc_ok  = frame[176];
+  assign \frame.lc  = frame[182:177];
+  assign \frame.lc_repeat  = frame[183];
+  assign \frame.lc_skip  = frame[184];
+  assign \frame.lc_zero  = frame[185];
+  assign \frame.spw_mismatch  = frame[186];
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receiver_clear, arm, early, locked, delay, sample, level, slo);
-  reg \$auto$verilog_backend.cc:2355:dump_module$113  = 0;
+module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , noise, half_period, receiver_clear, arm, early, locked, delay, sample, level, slo);
+  reg \$auto$verilog_backend.cc:2355:dump_module$123  = 0;
   wire \$1 ;
   wire \$10 ;
+  wire \$100 ;
+  wire \$101 ;
+  wire \$102 ;
+  wire \$103 ;
+  reg \$104 ;
+  reg [12:0] \$105 ;
+  reg [16:0] \$106 ;
+  reg \$107 ;
+  reg \$108 ;
+  reg \$109 ;
   wire \$11 ;
+  reg [12:0] \$110 ;
+  reg \$111 ;
+  reg \$112 ;
+  reg \$113 ;
+  reg [1:0] \$114 ;
+  reg [16:0] \$115 ;
+  reg \$116 ;
+  reg \$117 ;
+  reg \$118 ;
+  reg \$119 ;
   wire \$12 ;
-  wire [13:0] \$13 ;
-  wire [17:0] \$14 ;
+  reg [12:0] \$120 ;
+  reg [1:0] \$121 ;
+  wire \$13 ;
+  wire \$14 ;
   wire \$15 ;
   wire \$16 ;
   wire \$17 ;
   wire \$18 ;
-  wire [12:0] \$19 ;
+  wire \$19 ;
   wire [14:0] \$2 ;
   wire \$20 ;
   wire \$21 ;
-  wire [13:0] \$22 ;
-  wire [13:0] \$23 ;
-  wire [16:0] \$24 ;
+  wire \$22 ;
+  wire \$23 ;
+  wire \$24 ;
   wire \$25 ;
   wire [13:0] \$26 ;
-  wire [13:0] \$27 ;
+  wire [17:0] \$27 ;
   wire \$28 ;
-  wire [13:0] \$29 ;
+  wire \$29 ;
   wire \$3 ;
-  wire [17:0] \$30 ;
+  wire \$30 ;
   wire \$31 ;
-  wire \$32 ;
+  wire [12:0] \$32 ;
   wire \$33 ;
   wire \$34 ;
-  wire \$35 ;
-  wire \$36 ;
-  wire \$37 ;
+  wire [13:0] \$35 ;
+  wire [13:0] \$36 ;
+  wire [16:0] \$37 ;
   wire \$38 ;
-  wire \$39 ;
+  wire [13:0] \$39 ;
   wire [16:0] \$4 ;
-  wire \$40 ;
+  wire [13:0] \$40 ;
   wire \$41 ;
-  wire \$42 ;
-  wire \$43 ;
+  wire [13:0] \$42 ;
+  wire [17:0] \$43 ;
   wire \$44 ;
   wire \$45 ;
   wire \$46 ;
@@ -25074,25 +28011,46 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
   wire \$60 ;
   wire \$61 ;
   wire \$62 ;
-  reg \$63 ;
-  reg [12:0] \$64 ;
-  reg [16:0] \$65 ;
-  reg \$66 ;
-  reg [12:0] \$67 ;
-  reg \$68 ;
-  reg \$69 ;
+  wire \$63 ;
+  wire \$64 ;
+  wire \$65 ;
+  wire \$66 ;
+  wire \$67 ;
+  wire \$68 ;
+  wire \$69 ;
   wire \$7 ;
-  reg \$70 ;
-  reg [1:0] \$71 ;
-  reg [16:0] \$72 ;
-  reg \$73 ;
-  reg \$74 ;
-  reg \$75 ;
-  reg \$76 ;
-  reg [12:0] \$77 ;
-  reg [1:0] \$78 ;
+  wire \$70 ;
+  wire \$71 ;
+  wire \$72 ;
+  wire \$73 ;
+  wire \$74 ;
+  wire \$75 ;
+  wire \$76 ;
+  wire \$77 ;
+  wire \$78 ;
+  wire \$79 ;
   wire [13:0] \$8 ;
+  wire \$80 ;
+  wire \$81 ;
+  wire \$82 ;
+  wire \$83 ;
+  wire \$84 ;
+  wire \$85 ;
+  wire \$86 ;
+  wire \$87 ;
+  wire \$88 ;
+  wire \$89 ;
   wire [17:0] \$9 ;
+  wire \$90 ;
+  wire \$91 ;
+  wire \$92 ;
+  wire \$93 ;
+  wire \$94 ;
+  wire \$95 ;
+  wire \$96 ;
+  wire \$97 ;
+  wire \$98 ;
+  wire \$99 ;
   input arm;
   wire arm;
   output \bit ;
@@ -25102,6 +28060,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
   reg decided;
   output [12:0] delay;
   reg [12:0] delay = 13'h0000;
+  reg dropped;
   output early;
   reg early = 1'h0;
   reg [12:0] elapsed = 13'h0000;
@@ -25110,12 +28069,15 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
   reg gap = 1'h0;
   input [15:0] half_period;
   wire [15:0] half_period;
+  reg last = 1'h0;
   output level;
   wire level;
   output locked;
   reg locked = 1'h0;
   reg [12:0] mid_delay = 13'h0000;
   reg [16:0] mid_slot = 17'h00000;
+  output noise;
+  wire noise;
   reg odd = 1'h0;
   reg [16:0] period_load = 17'h00000;
   reg [1:0] phase = 2'h0;
@@ -25132,55 +28094,119 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
   reg slo_prev = 1'h1;
   reg [16:0] slot_left = 17'h00000;
   reg slot_zero = 1'h1;
+  reg tail_odd = 1'h0;
   reg [14:0] vote = 15'h0000;
   reg vote1 = 1'h0;
   reg vote2 = 1'h0;
   reg [14:0] vote_load = 15'h0000;
   reg vote_one = 1'h0;
-  assign \$22  = elapsed - 1'h1;
-  assign \$23  = \$21  ? 14'h1fff : \$22 ;
-  assign \$24  = half_period - 2'h2;
-  assign \$25  = elapsed == 13'h1fff;
-  assign \$26  = elapsed - 1'h1;
-  assign \$27  = \$25  ? 14'h1fff : \$26 ;
-  assign \$28  = elapsed != 13'h1fff;
-  assign \$29  = elapsed + 1'h1;
-  assign \$30  = slot_left - 1'h1;
-  assign \$31  = slot_left == 1'h1;
-  assign \$32  = ! phase;
-  assign \$33  = first_slot & \$32 ;
-  assign \$34  = \$33  & level;
-  assign \$35  = ~ single;
-  assign \$36  = decided & first_slot;
-  assign \$37  = vote1 & vote2;
-  assign \$38  = vote1 & level;
-  assign \$39  = \$37  | \$38 ;
-  assign \$40  = vote2 & level;
-  assign \$41  = \$39  | \$40 ;
-  assign \$42  = single ? level : \$41 ;
-  assign \$43  = ~ first_slot;
-  assign \$44  = decided & \$43 ;
-  assign \$45  = vote1 & vote2;
-  assign \$46  = vote1 & level;
-  assign \$47  = \$45  | \$46 ;
-  assign \$48  = vote2 & level;
-  assign \$49  = \$47  | \$48 ;
-  assign \bit  = single ? level : \$49 ;
-  assign \$50  = ! phase;
-  assign \$51  = first_slot & \$50 ;
-  assign \$52  = \$51  & level;
-  assign \$53  = decided & first_slot;
-  assign \$54  = vote1 & vote2;
-  assign \$55  = vote1 & level;
-  assign \$56  = \$54  | \$55 ;
-  assign \$57  = vote2 & level;
-  assign \$58  = \$56  | \$57 ;
-  assign \$59  = single ? level : \$58 ;
-  assign \$60  = ! sampler_fsm_state;
-  assign \$61  = sampler_fsm_state == 1'h1;
-  assign \$62  = sampler_fsm_state == 2'h2;
+  assign \$1  = half_period >= 2'h3;
+  assign \$2  = \$1  ? half_period[15:1] : 15'h0000;
+  assign \$3  = half_period < 2'h3;
+  assign \$4  = half_period - vote;
+  assign \$5  = $signed(\$4 ) - $signed(2'h1);
+  assign \$6  = vote - 1'h1;
+  assign \$7  = vote == 1'h1;
+  assign \$8  = mid_delay + 1'h1;
+  assign \$9  = mid_slot - 1'h1;
+  assign \$10  = ~ odd;
+  assign \$11  = ~ single;
+  assign \$12  = decided & \$11 ;
+  assign \$13  = vote1 & vote2;
+  assign \$14  = vote1 & level;
+  assign \$15  = \$13  | \$14 ;
+  assign \$16  = vote2 & level;
+  assign \$17  = \$15  | \$16 ;
+  assign \$18  = vote1 & vote2;
+  assign \$19  = vote1 & level;
+  assign \$20  = \$18  | \$19 ;
+  assign \$21  = vote2 & level;
+  assign \$22  = \$20  | \$21 ;
+  assign \$23  = level != \$22 ;
+  assign \$24  = ~ level;
+  assign \$25  = elapsed != 13'h1fff;
+  assign \$26  = elapsed + 1'h1;
+  assign \$27  = slot_left - 1'h1;
+  assign \$28  = slot_left == 1'h1;
+  assign \$29  = ~ level;
+  assign \$30  = slo_prev & \$29 ;
+  assign \$31  = elapsed == 13'h1fff;
+  assign \$32  = \$31  ? 13'h1fff : mid_delay;
+  assign \$33  = ! mid_slot;
+  assign \$34  = elapsed == 13'h1fff;
+  assign \$35  = elapsed - 1'h1;
+  assign \$36  = \$34  ? 14'h1fff : \$35 ;
+  assign \$37  = half_period - 2'h2;
+  assign \$38  = elapsed == 13'h1fff;
+  assign \$39  = elapsed - 1'h1;
+  assign \$40  = \$38  ? 14'h1fff : \$39 ;
+  assign \$41  = elapsed != 13'h1fff;
+  assign \$42  = elapsed + 1'h1;
+  assign \$43  = slot_left - 1'h1;
+  assign \$44  = slot_left == 1'h1;
+  assign \$45  = ! phase;
+  assign \$46  = first_slot & \$45 ;
+  assign \$47  = \$46  & level;
+  assign \$48  = ~ single;
+  assign \$49  = decided & first_slot;
+  assign \$50  = vote1 & vote2;
+  assign \$51  = vote1 & level;
+  assign \$52  = \$50  | \$51 ;
+  assign \$53  = vote2 & level;
+  assign \$54  = \$52  | \$53 ;
+  assign \$55  = single ? level : \$54 ;
+  assign \$56  = ~ first_slot;
+  assign \$57  = decided & \$56 ;
+  assign \$58  = vote1 & vote2;
+  assign \$59  = vote1 & level;
+  assign \$60  = \$58  | \$59 ;
+  assign \$61  = vote2 & level;
+  assign \$62  = \$60  | \$61 ;
+  assign \bit  = single ? level : \$62 ;
+  assign \$63  = ~ single;
+  assign \$64  = decided & \$63 ;
+  assign \$65  = vote1 == level;
+  assign \$66  = vote2 != level;
+  assign \$67  = \$65  & \$66 ;
+  assign \$68  = vote1 & vote2;
+  assign \$69  = vote1 & level;
+  assign \$70  = \$68  | \$69 ;
+  assign \$71  = vote2 & level;
+  assign \$72  = \$70  | \$71 ;
+  assign \$73  = vote1 != \$72 ;
+  assign \$74  = vote1 & vote2;
+  assign \$75  = vote1 & level;
+  assign \$76  = \$74  | \$75 ;
+  assign \$77  = vote2 & level;
+  assign \$78  = \$76  | \$77 ;
+  assign \$79  = last == \$78 ;
+  assign \$80  = \$73  & \$79 ;
+  assign \$81  = \$67  | \$80 ;
+  assign \$82  = vote1 & vote2;
+  assign \$83  = vote1 & level;
+  assign \$84  = \$82  | \$83 ;
+  assign \$85  = vote2 & level;
+  assign \$86  = \$84  | \$85 ;
+  assign \$87  = last == \$86 ;
+  assign \$88  = tail_odd & \$87 ;
+  assign \$89  = \$81  | \$88 ;
+  assign \$90  = \$64  & \$89 ;
+  assign noise = dropped | \$90 ;
+  assign \$91  = ! phase;
+  assign \$92  = first_slot & \$91 ;
+  assign \$93  = \$92  & level;
+  assign \$94  = decided & first_slot;
+  assign \$95  = vote1 & vote2;
+  assign \$96  = vote1 & level;
+  assign \$97  = \$95  | \$96 ;
+  assign \$98  = vote2 & level;
+  assign \$99  = \$97  | \$98 ;
+  assign \$100  = single ? level : \$99 ;
+  assign \$101  = ! sampler_fsm_state;
+  assign \$102  = sampler_fsm_state == 1'h1;
+  assign \$103  = sampler_fsm_state == 2'h2;
   always @(posedge clk)
-    slo_prev <= \$63 ;
+    slo_prev <= \$104 ;
   always @(posedge clk)
     vote <= \$2 ;
   always @(posedge clk)
@@ -25194,56 +28220,39 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
   always @(posedge clk)
     period_load <= { first_load, 1'h1 };
   always @(posedge clk)
-    mid_delay <= \$64 ;
+    mid_delay <= \$105 ;
   always @(posedge clk)
-    mid_slot <= \$65 ;
+    mid_slot <= \$106 ;
   always @(posedge clk)
-    odd <= \$66 ;
+    odd <= \$107 ;
   always @(posedge clk)
-    elapsed <= \$67 ;
+    last <= \$108 ;
   always @(posedge clk)
-    early <= \$68 ;
+    tail_odd <= \$109 ;
   always @(posedge clk)
-    locked <= \$69 ;
+    elapsed <= \$110 ;
   always @(posedge clk)
-    gap <= \$70 ;
+    early <= \$111 ;
   always @(posedge clk)
-    sampler_fsm_state <= \$71 ;
+    locked <= \$112 ;
   always @(posedge clk)
-    slot_left <= \$72 ;
+    gap <= \$113 ;
   always @(posedge clk)
-    slot_zero <= \$73 ;
+    sampler_fsm_state <= \$114 ;
   always @(posedge clk)
-    vote1 <= \$74 ;
+    slot_left <= \$115 ;
   always @(posedge clk)
-    vote2 <= \$75 ;
+    slot_zero <= \$116 ;
   always @(posedge clk)
-    first_slot <= \$76 ;
+    vote1 <= \$117 ;
   always @(posedge clk)
-    delay <= \$77 ;
+    vote2 <= \$118 ;
   always @(posedge clk)
-    phase <= \$78 ;
-  assign \$1  = half_period >= 2'h3;
-  assign \$2  = \$1  ? half_period[15:1] : 15'h0000;
-  assign \$3  = half_period < 2'h3;
-  assign \$4  = half_period - vote;
-  assign \$5  = $signed(\$4 ) - $signed(2'h1);
-  assign \$6  = vote - 1'h1;
-  assign \$7  = vote == 1'h1;
-  assign \$8  = mid_delay + 1'h1;
-  assign \$9  = mid_slot - 1'h1;
-  assign \$10  = ~ odd;
-  assign \$11  = ~ level;
-  assign \$12  = elapsed != 13'h1fff;
-  assign \$13  = elapsed + 1'h1;
-  assign \$14  = slot_left - 1'h1;
-  assign \$15  = slot_left == 1'h1;
-  assign \$16  = ~ level;
-  assign \$17  = slo_prev & \$16 ;
-  assign \$18  = elapsed == 13'h1fff;
-  assign \$19  = \$18  ? 13'h1fff : mid_delay;
-  assign \$20  = ! mid_slot;
-  assign \$21  = elapsed == 13'h1fff;
+    first_slot <= \$119 ;
+  always @(posedge clk)
+    delay <= \$120 ;
+  always @(posedge clk)
+    phase <= \$121 ;
   \biss_master_axil.ch1.core.sampler.sync  sync (
     .clk(clk),
     .receiver_clear(receiver_clear),
@@ -25252,441 +28261,483 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     .stage1(level)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
-    \$63  = level;
+    if (\$auto$verilog_backend.cc:2355:dump_module$123 ) begin end
+    \$104  = level;
     if (receiver_clear) begin
-      \$63  = 1'h1;
+      \$104  = 1'h1;
     end
     if (rst) begin
-      \$63  = 1'h1;
+      \$104  = 1'h1;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
-    \$64  = mid_delay;
+    if (\$auto$verilog_backend.cc:2355:dump_module$123 ) begin end
+    \$105  = mid_delay;
     if (odd) begin
-      \$64  = \$8 [12:0];
+      \$105  = \$8 [12:0];
     end
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$17 ) begin
+          if (\$30 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
             end else begin
-              \$64  = \$27 [12:0];
+              \$105  = \$40 [12:0];
             end
           end
     endcase
     if (receiver_clear) begin
-      \$64  = 13'h0000;
+      \$105  = 13'h0000;
     end
     if (rst) begin
-      \$64  = 13'h0000;
+      \$105  = 13'h0000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
-    \$65  = mid_slot;
+    if (\$auto$verilog_backend.cc:2355:dump_module$123 ) begin end
+    \$106  = mid_slot;
     (* full_case = 32'd1 *)
     if (odd) begin
     end else begin
-      \$65  = \$9 [16:0];
+      \$106  = \$9 [16:0];
     end
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$17 ) begin
+          if (\$30 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
             end else begin
-              \$65  = \$24 ;
+              \$106  = \$37 ;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$65  = 17'h00000;
+      \$106  = 17'h00000;
     end
     if (rst) begin
-      \$65  = 17'h00000;
+      \$106  = 17'h00000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
-    \$66  = \$10 ;
+    if (\$auto$verilog_backend.cc:2355:dump_module$123 ) begin end
+    \$107  = \$10 ;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$17 ) begin
+          if (\$30 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
             end else begin
-              \$66  = 1'h1;
+              \$107  = 1'h1;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$66  = 1'h0;
+      \$107  = 1'h0;
     end
     if (rst) begin
-      \$66  = 1'h0;
+      \$107  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
-    \$67  = elapsed;
+    if (\$auto$verilog_backend.cc:2355:dump_module$123 ) begin end
+    \$108  = last;
+    if (\$12 ) begin
+      \$108  = \$17 ;
+    end
+    casez (sampler_fsm_state)
+      2'h0:
+          /* empty */;
+      2'h1:
+          if (\$30 ) begin
+            \$108  = 1'h0;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$108  = 1'h0;
+    end
+    if (rst) begin
+      \$108  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$123 ) begin end
+    \$109  = tail_odd;
+    if (\$12 ) begin
+      \$109  = \$23 ;
+    end
+    casez (sampler_fsm_state)
+      2'h0:
+          /* empty */;
+      2'h1:
+          if (\$30 ) begin
+            \$109  = 1'h0;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$109  = 1'h0;
+    end
+    if (rst) begin
+      \$109  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$123 ) begin end
+    \$110  = elapsed;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$67  = 13'h0001;
+            \$110  = 13'h0001;
           end
       2'h1:
-          if (\$12 ) begin
-            \$67  = \$13 [12:0];
+          if (\$25 ) begin
+            \$110  = \$26 [12:0];
           end
       2'h2:
-          if (\$28 ) begin
-            \$67  = \$29 [12:0];
+          if (\$41 ) begin
+            \$110  = \$42 [12:0];
           end
     endcase
     if (receiver_clear) begin
-      \$67  = 13'h0000;
+      \$110  = 13'h0000;
     end
     if (rst) begin
-      \$67  = 13'h0000;
+      \$110  = 13'h0000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
-    \$68  = early;
+    if (\$auto$verilog_backend.cc:2355:dump_module$123 ) begin end
+    \$111  = early;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$68  = \$11 ;
+            \$111  = \$24 ;
           end
     endcase
     if (receiver_clear) begin
-      \$68  = 1'h0;
+      \$111  = 1'h0;
     end
     if (rst) begin
-      \$68  = 1'h0;
+      \$111  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
-    \$69  = locked;
+    if (\$auto$verilog_backend.cc:2355:dump_module$123 ) begin end
+    \$112  = locked;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$69  = 1'h0;
+            \$112  = 1'h0;
           end
       2'h1:
           /* empty */;
       2'h2:
-          if (\$36 ) begin
+          if (\$49 ) begin
             (* full_case = 32'd1 *)
-            if (\$42 ) begin
+            if (\$55 ) begin
             end else begin
-              \$69  = 1'h1;
+              \$112  = 1'h1;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$69  = 1'h0;
+      \$112  = 1'h0;
     end
     if (rst) begin
-      \$69  = 1'h0;
+      \$112  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
-    \$70  = gap;
+    if (\$auto$verilog_backend.cc:2355:dump_module$123 ) begin end
+    \$113  = gap;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$70  = 1'h0;
+            \$113  = 1'h0;
           end
       2'h1:
         begin
           if (gap) begin
             if (slot_zero) begin
-              \$70  = 1'h0;
+              \$113  = 1'h0;
             end
           end
-          if (\$17 ) begin
-            \$70  = 1'h0;
+          if (\$30 ) begin
+            \$113  = 1'h0;
           end
         end
       2'h2:
-          if (\$34 ) begin
-            \$70  = \$35 ;
+          if (\$47 ) begin
+            \$113  = \$48 ;
           end
     endcase
     if (receiver_clear) begin
-      \$70  = 1'h0;
+      \$113  = 1'h0;
     end
     if (rst) begin
-      \$70  = 1'h0;
+      \$113  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
-    \$71  = sampler_fsm_state;
+    if (\$auto$verilog_backend.cc:2355:dump_module$123 ) begin end
+    \$114  = sampler_fsm_state;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$71  = 2'h1;
+            \$114  = 2'h1;
           end
       2'h1:
-          if (\$17 ) begin
-            \$71  = 2'h2;
+          if (\$30 ) begin
+            \$114  = 2'h2;
           end
       2'h2:
         begin
-          if (\$34 ) begin
-            \$71  = 2'h1;
+          if (\$47 ) begin
+            \$114  = 2'h1;
           end
-          if (\$36 ) begin
-            if (\$42 ) begin
-              \$71  = 2'h1;
+          if (\$49 ) begin
+            if (\$55 ) begin
+              \$114  = 2'h1;
             end
           end
         end
     endcase
     if (receiver_clear) begin
-      \$71  = 2'h0;
+      \$114  = 2'h0;
     end
     if (rst) begin
-      \$71  = 2'h0;
+      \$114  = 2'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
-    \$72  = slot_left;
+    if (\$auto$verilog_backend.cc:2355:dump_module$123 ) begin end
+    \$115  = slot_left;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
         begin
           if (gap) begin
-            \$72  = \$14 [16:0];
+            \$115  = \$27 [16:0];
           end
-          if (\$17 ) begin
+          if (\$30 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
-              \$72  = mid_slot;
+              \$115  = mid_slot;
             end else begin
-              \$72  = { 1'h0, first_load };
+              \$115  = { 1'h0, first_load };
             end
           end
         end
       2'h2:
         begin
-          \$72  = \$30 [16:0];
-          if (\$34 ) begin
-            \$72  = { 2'h0, vote_load };
+          \$115  = \$43 [16:0];
+          if (\$47 ) begin
+            \$115  = { 2'h0, vote_load };
           end else if (slot_zero) begin
             (* full_case = 32'd1 *)
             casez (phase)
               2'h0:
                   (* full_case = 32'd1 *)
                   if (single) begin
-                    \$72  = period_load;
+                    \$115  = period_load;
                   end else begin
-                    \$72  = { 2'h0, vote_load };
+                    \$115  = { 2'h0, vote_load };
                   end
               2'h1:
-                  \$72  = { 2'h0, vote_load };
+                  \$115  = { 2'h0, vote_load };
               default:
-                  \$72  = period_load;
+                  \$115  = period_load;
             endcase
           end
         end
     endcase
     if (receiver_clear) begin
-      \$72  = 17'h00000;
+      \$115  = 17'h00000;
     end
     if (rst) begin
-      \$72  = 17'h00000;
+      \$115  = 17'h00000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
-    \$73  = slot_zero;
+    if (\$auto$verilog_backend.cc:2355:dump_module$123 ) begin end
+    \$116  = slot_zero;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
         begin
           if (gap) begin
-            \$73  = \$15 ;
+            \$116  = \$28 ;
           end
-          if (\$17 ) begin
+          if (\$30 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
-              \$73  = \$20 ;
+              \$116  = \$33 ;
             end else begin
-              \$73  = 1'h0;
+              \$116  = 1'h0;
             end
           end
         end
       2'h2:
         begin
-          \$73  = \$31 ;
-          if (\$34 ) begin
-            \$73  = vote_one;
+          \$116  = \$44 ;
+          if (\$47 ) begin
+            \$116  = vote_one;
           end else if (slot_zero) begin
             (* full_case = 32'd1 *)
             casez (phase)
               2'h0:
                   (* full_case = 32'd1 *)
                   if (single) begin
-                    \$73  = 1'h0;
+                    \$116  = 1'h0;
                   end else begin
-                    \$73  = vote_one;
+                    \$116  = vote_one;
                   end
               2'h1:
-                  \$73  = vote_one;
+                  \$116  = vote_one;
               default:
-                  \$73  = 1'h0;
+                  \$116  = 1'h0;
             endcase
           end
         end
     endcase
     if (receiver_clear) begin
-      \$73  = 1'h1;
+      \$116  = 1'h1;
     end
     if (rst) begin
-      \$73  = 1'h1;
+      \$116  = 1'h1;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
-    \$74  = vote1;
+    if (\$auto$verilog_backend.cc:2355:dump_module$123 ) begin end
+    \$117  = vote1;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$17 ) begin
-            \$74  = 1'h0;
+          if (\$30 ) begin
+            \$117  = 1'h0;
           end
       2'h2:
-          if (\$34 ) begin
+          if (\$47 ) begin
           end else if (slot_zero) begin
             casez (phase)
               2'h0:
                   (* full_case = 32'd1 *)
                   if (single) begin
                   end else begin
-                    \$74  = level;
+                    \$117  = level;
                   end
             endcase
           end
     endcase
     if (receiver_clear) begin
-      \$74  = 1'h0;
+      \$117  = 1'h0;
     end
     if (rst) begin
-      \$74  = 1'h0;
+      \$117  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
-    \$75  = vote2;
+    if (\$auto$verilog_backend.cc:2355:dump_module$123 ) begin end
+    \$118  = vote2;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$17 ) begin
-            \$75  = 1'h0;
+          if (\$30 ) begin
+            \$118  = 1'h0;
           end
       2'h2:
-          if (\$34 ) begin
+          if (\$47 ) begin
           end else if (slot_zero) begin
             casez (phase)
               2'h0:
                   /* empty */;
               2'h1:
-                  \$75  = level;
+                  \$118  = level;
             endcase
           end
     endcase
     if (receiver_clear) begin
-      \$75  = 1'h0;
+      \$118  = 1'h0;
     end
     if (rst) begin
-      \$75  = 1'h0;
+      \$118  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
-    \$76  = first_slot;
+    if (\$auto$verilog_backend.cc:2355:dump_module$123 ) begin end
+    \$119  = first_slot;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$17 ) begin
-            \$76  = 1'h1;
+          if (\$30 ) begin
+            \$119  = 1'h1;
           end
       2'h2:
-          if (\$36 ) begin
+          if (\$49 ) begin
             (* full_case = 32'd1 *)
-            if (\$42 ) begin
+            if (\$55 ) begin
             end else begin
-              \$76  = 1'h0;
+              \$119  = 1'h0;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$76  = 1'h0;
+      \$119  = 1'h0;
     end
     if (rst) begin
-      \$76  = 1'h0;
+      \$119  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
-    \$77  = delay;
+    if (\$auto$verilog_backend.cc:2355:dump_module$123 ) begin end
+    \$120  = delay;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$17 ) begin
+          if (\$30 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
-              \$77  = \$19 ;
+              \$120  = \$32 ;
             end else begin
-              \$77  = \$23 [12:0];
+              \$120  = \$36 [12:0];
             end
           end
     endcase
     if (receiver_clear) begin
-      \$77  = 13'h0000;
+      \$120  = 13'h0000;
     end
     if (rst) begin
-      \$77  = 13'h0000;
+      \$120  = 13'h0000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
-    \$78  = phase;
+    if (\$auto$verilog_backend.cc:2355:dump_module$123 ) begin end
+    \$121  = phase;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$17 ) begin
+          if (\$30 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
-              \$78  = 2'h1;
+              \$121  = 2'h1;
             end else begin
-              \$78  = 2'h0;
+              \$121  = 2'h0;
             end
           end
       2'h2:
-          if (\$34 ) begin
+          if (\$47 ) begin
           end else if (slot_zero) begin
             (* full_case = 32'd1 *)
             casez (phase)
@@ -25694,34 +28745,34 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
                   (* full_case = 32'd1 *)
                   if (single) begin
                   end else begin
-                    \$78  = 2'h1;
+                    \$121  = 2'h1;
                   end
               2'h1:
-                  \$78  = 2'h2;
+                  \$121  = 2'h2;
               default:
-                  \$78  = 2'h0;
+                  \$121  = 2'h0;
             endcase
           end
     endcase
     if (receiver_clear) begin
-      \$78  = 2'h0;
+      \$121  = 2'h0;
     end
     if (rst) begin
-      \$78  = 2'h0;
+      \$121  = 2'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
-    sample = \$44 ;
+    if (\$auto$verilog_backend.cc:2355:dump_module$123 ) begin end
+    sample = \$57 ;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
           /* empty */;
       2'h2:
-          if (\$53 ) begin
+          if (\$94 ) begin
             (* full_case = 32'd1 *)
-            if (\$59 ) begin
+            if (\$100 ) begin
             end else begin
               sample = 1'h1;
             end
@@ -25729,7 +28780,28 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$123 ) begin end
+    dropped = 1'h0;
+    casez (sampler_fsm_state)
+      2'h0:
+          /* empty */;
+      2'h1:
+          /* empty */;
+      2'h2:
+        begin
+          if (\$93 ) begin
+            dropped = 1'h1;
+          end
+          if (\$94 ) begin
+            if (\$100 ) begin
+              dropped = 1'h1;
+            end
+          end
+        end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$123 ) begin end
     decided = 1'h0;
     casez (sampler_fsm_state)
       2'h0:
@@ -25737,7 +28809,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , half_period, receive
       2'h1:
           /* empty */;
       2'h2:
-          if (\$52 ) begin
+          if (\$93 ) begin
           end else if (slot_zero) begin
             (* full_case = 32'd1 *)
             casez (phase)
@@ -25779,7 +28851,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.scheduler (rst, trigger, periodic, request, overrun, start, period, abort, idle, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$114  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$124  = 0;
   wire \$1 ;
   wire [25:0] \$10 ;
   wire \$11 ;
@@ -25873,14 +28945,14 @@ module \biss_master_axil.ch1.core.scheduler (rst, trigger, periodic, request, ov
   always @(posedge clk)
     wrap <= \$31 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$124 ) begin end
     \$28  = \$1 ;
     if (rst) begin
       \$28  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$124 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$29  = 25'h0000002;
@@ -25894,7 +28966,7 @@ module \biss_master_axil.ch1.core.scheduler (rst, trigger, periodic, request, ov
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$124 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$30  = 1'h1;
@@ -25908,7 +28980,7 @@ module \biss_master_axil.ch1.core.scheduler (rst, trigger, periodic, request, ov
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$124 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$31  = \$8 ;
@@ -25924,8 +28996,8 @@ module \biss_master_axil.ch1.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$4391$0 , resync, lc, is_zero, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$115  = 0;
+module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$4951$0 , resync, lc, is_zero, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$125  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
   wire \$11 ;
@@ -25966,8 +29038,8 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$4391$0 ;
-  wire \port$4391$0 ;
+  input \port$4951$0 ;
+  wire \port$4951$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -25981,9 +29053,9 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$4391$0  };
-  assign \$2  = { lc[4:0], \port$4391$0  } == last;
-  assign \$3  = { lc[4:0], \port$4391$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$4951$0  };
+  assign \$2  = { lc[4:0], \port$4951$0  } == last;
+  assign \$3  = { lc[4:0], \port$4951$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -26017,7 +29089,7 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   always @(posedge clk)
     synced <= \$25 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$115 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$125 ) begin end
     \$18  = is_zero;
     if (load) begin
       \$18  = \$1 ;
@@ -26027,7 +29099,7 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$115 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$125 ) begin end
     \$19  = is_last;
     if (load) begin
       \$19  = \$2 ;
@@ -26037,7 +29109,7 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$115 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$125 ) begin end
     \$20  = is_expected;
     if (load) begin
       \$20  = \$3 ;
@@ -26047,21 +29119,21 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$115 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$125 ) begin end
     \$21  = \$7 ;
     if (rst) begin
       \$21  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$115 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$125 ) begin end
     \$22  = lc;
     if (rst) begin
       \$22  = 6'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$115 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$125 ) begin end
     \$23  = last;
     if (store) begin
       \$23  = store_lc;
@@ -26071,7 +29143,7 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$115 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$125 ) begin end
     \$24  = expected;
     if (store) begin
       \$24  = \$10 [5:0];
@@ -26081,7 +29153,7 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$115 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$125 ) begin end
     \$25  = synced;
     if (store) begin
       \$25  = 1'h1;
@@ -26093,13 +29165,13 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$4391$0  };
+  assign lc_next = { lc[4:0], \port$4951$0  };
   assign zero = is_zero;
 endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.spw_check (rst, bits, \tolerance$8 , spw, cpw_top, match, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$116  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$126  = 0;
   wire [40:0] \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -26304,28 +29376,28 @@ module \biss_master_axil.ch1.core.spw_check (rst, bits, \tolerance$8 , spw, cpw_
   assign \$7  = bits > 3'h5;
   assign \$8  = bits > 3'h6;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$116 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$126 ) begin end
     \$88  = \$42 ;
     if (rst) begin
       \$88  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$116 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$126 ) begin end
     \$89  = \$84 ;
     if (rst) begin
       \$89  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$116 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$126 ) begin end
     \$90  = \tolerance$8 ;
     if (rst) begin
       \$90  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$116 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$126 ) begin end
     \$91  = \$87 ;
     if (rst) begin
       \$91  = 1'h0;
@@ -26335,7 +29407,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.time_base (rst, first_rise, first_rise_time, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$117  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$127  = 0;
   wire [32:0] \$1 ;
   reg [31:0] \$2 ;
   reg [31:0] \$3 ;
@@ -26354,14 +29426,14 @@ module \biss_master_axil.ch1.core.time_base (rst, first_rise, first_rise_time, c
   always @(posedge clk)
     first_rise_time <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$117 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$127 ) begin end
     \$2  = \$1 [31:0];
     if (rst) begin
       \$2  = 32'd0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$117 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$127 ) begin end
     \$3  = first_rise_time;
     if (first_rise) begin
       \$3  = now;
@@ -26373,8 +29445,9 @@ module \biss_master_axil.ch1.core.time_base (rst, first_rise, first_rise_time, c
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.timers (rst, restart, ma_busy, break_time, timeout_live, ack_limit, timeout_limit, delay_limit, no_start_limit, clear, in_clock, slo_stuck, slo_stuck_live, break_over, ack_expired, no_start_expired, delay_over, delay, slo, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$118  = 0;
+module \biss_master_axil.ch1.core.timers (rst, restart, ma_busy, break_time, timeout_live, quiet_time_live, ack_limit, timeout_limit, delay_limit, quiet_limit, no_start_limit, clear, in_clock, slo_stuck, slo_stuck_live, quiet, quiet_live, break_over, ack_expired, no_start_expired, delay_over
+, delay, slo, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$128  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -26384,34 +29457,51 @@ module \biss_master_axil.ch1.core.timers (rst, restart, ma_busy, break_time, tim
   wire \$15 ;
   wire \$16 ;
   wire \$17 ;
-  wire [25:0] \$18 ;
-  wire [25:0] \$19 ;
+  wire \$18 ;
+  wire \$19 ;
   wire \$2 ;
-  wire [25:0] \$20 ;
+  wire [13:0] \$20 ;
   wire \$21 ;
   wire \$22 ;
   wire \$23 ;
   wire \$24 ;
-  wire \$25 ;
+  wire [11:0] \$25 ;
   wire \$26 ;
   wire \$27 ;
-  wire \$28 ;
+  wire [11:0] \$28 ;
   wire \$29 ;
-  wire [25:0] \$3 ;
+  wire \$3 ;
   wire \$30 ;
   wire \$31 ;
-  wire \$32 ;
-  wire \$33 ;
-  reg [24:0] \$34 ;
-  reg \$35 ;
-  reg \$36 ;
-  reg [24:0] \$37 ;
-  reg \$38 ;
-  reg \$39 ;
-  wire \$4 ;
-  reg \$40 ;
-  reg \$41 ;
+  wire [25:0] \$32 ;
+  wire [25:0] \$33 ;
+  wire [25:0] \$34 ;
+  wire \$35 ;
+  wire \$36 ;
+  wire \$37 ;
+  wire \$38 ;
+  wire \$39 ;
+  wire [25:0] \$4 ;
+  wire \$40 ;
+  wire \$41 ;
+  wire \$42 ;
+  wire \$43 ;
+  wire \$44 ;
+  wire \$45 ;
+  wire \$46 ;
+  wire \$47 ;
+  reg [24:0] \$48 ;
+  reg \$49 ;
   wire \$5 ;
+  reg \$50 ;
+  reg [12:0] \$51 ;
+  reg \$52 ;
+  reg \$53 ;
+  reg [24:0] \$54 ;
+  reg \$55 ;
+  reg \$56 ;
+  reg \$57 ;
+  reg \$58 ;
   wire \$6 ;
   wire \$7 ;
   wire \$8 ;
@@ -26434,6 +29524,7 @@ module \biss_master_axil.ch1.core.timers (rst, restart, ma_busy, break_time, tim
   wire [11:0] delay_limit;
   output delay_over;
   reg delay_over = 1'h0;
+  reg [12:0] high_p2 = 13'h0002;
   input in_clock;
   wire in_clock;
   input ma_busy;
@@ -26442,6 +29533,14 @@ module \biss_master_axil.ch1.core.timers (rst, restart, ma_busy, break_time, tim
   reg no_start_expired = 1'h0;
   input [24:0] no_start_limit;
   wire [24:0] no_start_limit;
+  output quiet;
+  reg quiet = 1'h0;
+  input [11:0] quiet_limit;
+  wire [11:0] quiet_limit;
+  output quiet_live;
+  reg quiet_live = 1'h0;
+  input [11:0] quiet_time_live;
+  wire [11:0] quiet_time_live;
   input restart;
   wire restart;
   input rst;
@@ -26458,126 +29557,173 @@ module \biss_master_axil.ch1.core.timers (rst, restart, ma_busy, break_time, tim
   input [23:0] timeout_live;
   wire [23:0] timeout_live;
   reg [24:0] timer = 25'h0000001;
-  assign \$1  = slo | ma_busy;
-  assign \$2  = ~ slo_low_time_p1[24];
-  assign \$3  = slo_low_time_p1 + 1'h1;
-  assign \$4  = ~ slo;
-  assign \$5  = ~ ma_busy;
-  assign \$6  = \$4  & \$5 ;
-  assign \$7  = slo_low_time_p1 >= timeout_limit;
-  assign \$8  = \$6  & \$7 ;
-  assign \$9  = ~ slo;
-  assign \$10  = ~ ma_busy;
-  assign \$11  = \$9  & \$10 ;
-  assign \$12  = ! timeout_live;
-  assign \$13  = slo_low_time_p1 >= 13'h1f40;
-  assign \$14  = slo_low_time_p1 >= timeout_live;
-  assign \$15  = \$12  ? \$13  : \$14 ;
-  assign \$16  = \$11  & \$15 ;
-  assign \$17  = & timer;
-  assign \$18  = timer + 1'h1;
-  assign \$19  = \$17  ? { 1'h0, timer } : \$18 ;
-  assign \$20  = clear ? 26'h0000001 : \$19 ;
-  assign \$21  = ! break_time;
-  assign \$22  = timer >= 12'hfa0;
-  assign \$23  = timer >= break_time;
-  assign \$24  = \$21  ? \$22  : \$23 ;
-  assign \$25  = ~ restart;
-  assign \$26  = in_clock & \$25 ;
-  assign \$27  = timer >= ack_limit;
-  assign \$28  = \$26  & \$27 ;
-  assign \$29  = ~ restart;
-  assign \$30  = in_clock & \$29 ;
-  assign \$31  = timer >= no_start_limit;
-  assign \$32  = \$30  & \$31 ;
-  assign \$33  = delay > delay_limit;
+  assign \$42  = \$40  & \$41 ;
+  assign \$43  = ~ restart;
+  assign \$44  = in_clock & \$43 ;
+  assign \$45  = timer >= no_start_limit;
+  assign \$46  = \$44  & \$45 ;
+  assign \$47  = delay > delay_limit;
   always @(posedge clk)
-    slo_low_time_p1 <= \$34 ;
+    slo_low_time_p1 <= \$48 ;
   always @(posedge clk)
-    slo_stuck <= \$35 ;
+    slo_stuck <= \$49 ;
   always @(posedge clk)
-    slo_stuck_live <= \$36 ;
+    slo_stuck_live <= \$50 ;
   always @(posedge clk)
-    timer <= \$37 ;
+    high_p2 <= \$51 ;
   always @(posedge clk)
-    break_over <= \$38 ;
+    quiet <= \$52 ;
   always @(posedge clk)
-    ack_expired <= \$39 ;
+    quiet_live <= \$53 ;
   always @(posedge clk)
-    no_start_expired <= \$40 ;
+    timer <= \$54 ;
   always @(posedge clk)
-    delay_over <= \$41 ;
+    break_over <= \$55 ;
+  always @(posedge clk)
+    ack_expired <= \$56 ;
+  always @(posedge clk)
+    no_start_expired <= \$57 ;
+  always @(posedge clk)
+    delay_over <= \$58 ;
+  assign \$1  = slo & quiet;
+  assign \$2  = \$1  | ma_busy;
+  assign \$3  = ~ slo_low_time_p1[24];
+  assign \$4  = slo_low_time_p1 + 1'h1;
+  assign \$5  = slo & quiet;
+  assign \$6  = \$5  | ma_busy;
+  assign \$7  = ~ \$6 ;
+  assign \$8  = slo_low_time_p1 >= timeout_limit;
+  assign \$9  = \$7  & \$8 ;
+  assign \$10  = slo & quiet;
+  assign \$11  = \$10  | ma_busy;
+  assign \$12  = ~ \$11 ;
+  assign \$13  = ! timeout_live;
+  assign \$14  = slo_low_time_p1 >= 13'h1f40;
+  assign \$15  = slo_low_time_p1 >= timeout_live;
+  assign \$16  = \$13  ? \$14  : \$15 ;
+  assign \$17  = \$12  & \$16 ;
+  assign \$18  = ~ slo;
+  assign \$19  = ~ high_p2[12];
+  assign \$20  = high_p2 + 1'h1;
+  assign \$21  = high_p2 >= quiet_limit;
+  assign \$22  = quiet_limit <= 1'h1;
+  assign \$23  = slo ? \$21  : \$22 ;
+  assign \$24  = ! quiet_time_live;
+  assign \$25  = \$24  ? 12'h064 : quiet_time_live;
+  assign \$26  = high_p2 >= \$25 ;
+  assign \$27  = ! quiet_time_live;
+  assign \$28  = \$27  ? 12'h064 : quiet_time_live;
+  assign \$29  = \$28  <= 1'h1;
+  assign \$30  = slo ? \$26  : \$29 ;
+  assign \$31  = & timer;
+  assign \$32  = timer + 1'h1;
+  assign \$33  = \$31  ? { 1'h0, timer } : \$32 ;
+  assign \$34  = clear ? 26'h0000001 : \$33 ;
+  assign \$35  = ! break_time;
+  assign \$36  = timer >= 12'hfa0;
+  assign \$37  = timer >= break_time;
+  assign \$38  = \$35  ? \$36  : \$37 ;
+  assign \$39  = ~ restart;
+  assign \$40  = in_clock & \$39 ;
+  assign \$41  = timer >= ack_limit;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$118 ) begin end
-    \$34  = slo_low_time_p1;
-    if (\$1 ) begin
-      \$34  = 25'h0000001;
-    end else if (\$2 ) begin
-      \$34  = \$3 [24:0];
+    if (\$auto$verilog_backend.cc:2355:dump_module$128 ) begin end
+    \$48  = slo_low_time_p1;
+    if (\$2 ) begin
+      \$48  = 25'h0000001;
+    end else if (\$3 ) begin
+      \$48  = \$4 [24:0];
     end
     if (rst) begin
-      \$34  = 25'h0000001;
+      \$48  = 25'h0000001;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$118 ) begin end
-    \$35  = \$8 ;
+    if (\$auto$verilog_backend.cc:2355:dump_module$128 ) begin end
+    \$49  = \$9 ;
     if (rst) begin
-      \$35  = 1'h0;
+      \$49  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$118 ) begin end
-    \$36  = \$16 ;
+    if (\$auto$verilog_backend.cc:2355:dump_module$128 ) begin end
+    \$50  = \$17 ;
     if (rst) begin
-      \$36  = 1'h0;
+      \$50  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$118 ) begin end
-    \$37  = \$20 [24:0];
+    if (\$auto$verilog_backend.cc:2355:dump_module$128 ) begin end
+    \$51  = high_p2;
+    if (\$18 ) begin
+      \$51  = 13'h0002;
+    end else if (\$19 ) begin
+      \$51  = \$20 [12:0];
+    end
     if (rst) begin
-      \$37  = 25'h0000001;
+      \$51  = 13'h0002;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$118 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$128 ) begin end
+    \$52  = \$23 ;
+    if (rst) begin
+      \$52  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$128 ) begin end
+    \$53  = \$30 ;
+    if (rst) begin
+      \$53  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$128 ) begin end
+    \$54  = \$34 [24:0];
+    if (rst) begin
+      \$54  = 25'h0000001;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$128 ) begin end
     (* full_case = 32'd1 *)
     if (clear) begin
-      \$38  = 1'h0;
+      \$55  = 1'h0;
     end else begin
-      \$38  = \$24 ;
+      \$55  = \$38 ;
     end
     if (rst) begin
-      \$38  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$118 ) begin end
-    \$39  = \$28 ;
-    if (rst) begin
-      \$39  = 1'h0;
+      \$55  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$118 ) begin end
-    \$40  = \$32 ;
+    if (\$auto$verilog_backend.cc:2355:dump_module$128 ) begin end
+    \$56  = \$42 ;
     if (rst) begin
-      \$40  = 1'h0;
+      \$56  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$118 ) begin end
-    \$41  = \$33 ;
+    if (\$auto$verilog_backend.cc:2355:dump_module$128 ) begin end
+    \$57  = \$46 ;
     if (rst) begin
-      \$41  = 1'h0;
+      \$57  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$128 ) begin end
+    \$58  = \$47 ;
+    if (rst) begin
+      \$58  = 1'h0;
     end
   end
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.verdict (lc_skip_seen, \port$2965$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match, lc_repeat_seen);
-  reg \$auto$verilog_backend.cc:2355:dump_module$119  = 0;
+module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$3363$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
+, delay_jump, lc_repeat_seen);
+  reg \$auto$verilog_backend.cc:2355:dump_module$129  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -26599,21 +29745,34 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, \port$2965$0 , lc_check
   wire \$26 ;
   wire \$27 ;
   wire \$28 ;
-  wire [1:0] \$29 ;
+  wire \$29 ;
   wire \$3 ;
+  wire \$30 ;
+  wire \$31 ;
+  wire \$32 ;
+  wire \$33 ;
+  wire \$34 ;
+  wire \$35 ;
+  wire \$36 ;
+  wire \$37 ;
+  wire \$38 ;
+  wire [1:0] \$39 ;
   wire \$4 ;
   wire \$5 ;
   wire \$6 ;
   wire \$7 ;
   wire \$8 ;
   wire \$9 ;
-  input [154:0] cfg;
-  wire [154:0] cfg;
+  input [174:0] cfg;
+  wire [174:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
   wire [11:0] \cfg.delay_limit ;
+  wire [3:0] \cfg.delay_tolerance ;
   wire \cfg.end_check ;
   wire [15:0] \cfg.ma_half_period ;
+  wire [3:0] \cfg.noise_limit ;
+  wire [11:0] \cfg.quiet_time ;
   wire [23:0] \cfg.request_period ;
   wire \cfg.spw_check ;
   wire [7:0] \cfg.spw_tolerance ;
@@ -26637,10 +29796,14 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, \port$2965$0 , lc_check
   wire \cfg.w1.lc ;
   wire \cfg.w1.nenw ;
   wire \cfg.w1_enable ;
+  output clean;
+  wire clean;
   output [1:0] crc_error;
   wire [1:0] crc_error;
   input [1:0] crc_ok;
   wire [1:0] crc_ok;
+  input delay_jump;
+  wire delay_jump;
   output doubtful;
   wire doubtful;
   input fault;
@@ -26659,6 +29822,8 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, \port$2965$0 , lc_check
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
+  (* enum_value_1101 = "NOISY_LINE" *)
+  (* enum_value_1110 = "DELAY_JUMP" *)
   input [3:0] fault_status;
   wire [3:0] fault_status;
   (* enum_base_type = "Status" *)
@@ -26675,6 +29840,8 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, \port$2965$0 , lc_check
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
+  (* enum_value_1101 = "NOISY_LINE" *)
+  (* enum_value_1110 = "DELAY_JUMP" *)
   reg [3:0] frame_status;
   output lc_check;
   wire lc_check;
@@ -26690,8 +29857,10 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, \port$2965$0 , lc_check
   wire lc_zero;
   input lc_zero_seen;
   wire lc_zero_seen;
-  output \port$2965$0 ;
-  wire \port$2965$0 ;
+  input noisy;
+  wire noisy;
+  output \port$3363$0 ;
+  wire \port$3363$0 ;
   output report;
   wire report;
   input report_frame;
@@ -26714,33 +29883,35 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, \port$2965$0 , lc_check
   (* enum_value_1010 = "ABORTED" *)
   (* enum_value_1011 = "BAD_CONFIG" *)
   (* enum_value_1100 = "NO_STOP" *)
+  (* enum_value_1101 = "NOISY_LINE" *)
+  (* enum_value_1110 = "DELAY_JUMP" *)
   output [3:0] status;
   wire [3:0] status;
   output valid;
   wire valid;
   wire [1:0] word_crc_ok;
-  assign \$1  = ~ cfg[135];
+  assign \$1  = ~ cfg[155];
   assign \$2  = crc_ok[1] | \$1 ;
-  assign \$3  = cfg[135] & cfg[143];
-  assign \$4  = cfg[132] | \$3 ;
+  assign \$3  = cfg[155] & cfg[163];
+  assign \$4  = cfg[152] | \$3 ;
   assign \$5  = report_frame & \$4 ;
-  assign \$6  = cfg[132] ? crc_ok[0] : \$2 ;
+  assign \$6  = cfg[152] ? crc_ok[0] : \$2 ;
   assign lc_check = \$5  & \$6 ;
   assign lc_repeat = lc_check & lc_repeat_seen;
   assign lc_skip = lc_check & lc_skip_seen;
   assign lc_zero = lc_check & lc_zero_seen;
-  assign \$7  = cfg[146] & cfg[135];
+  assign \$7  = cfg[166] & cfg[155];
   assign \$8  = crc_ok[0] & \$2 ;
   assign \$9  = \$7  & \$8 ;
   assign \$10  = ~ spw_match;
   assign spw_mismatch = \$9  & \$10 ;
-  assign \$11  = ~ crc_ok[0];
-  assign \$12  = ~ \$2 ;
-  assign \$13  = \$11  & \$12 ;
+  assign \$11  = lc_repeat | lc_skip;
+  assign \$12  = \$11  | lc_zero;
+  assign \$13  = ~ \$2 ;
   assign \$14  = ~ crc_ok[0];
-  assign \$15  = ~ \$2 ;
-  assign \$16  = lc_repeat | lc_skip;
-  assign \$17  = \$16  | lc_zero;
+  assign \$15  = ~ crc_ok[0];
+  assign \$16  = ~ \$2 ;
+  assign \$17  = \$15  & \$16 ;
   assign report = report_frame | fault;
   assign status = report_frame ? frame_status : fault_status;
   assign \$18  = ! frame_status;
@@ -26748,35 +29919,54 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, \port$2965$0 , lc_check
   assign \$19  = crc_ok[0] & \$2 ;
   assign \$20  = ~ \$19 ;
   assign \$21  = \$20  | spw_mismatch;
-  assign \$22  = cfg[135] & cfg[143];
-  assign \$23  = cfg[132] | \$22 ;
-  assign \$24  = cfg[132] ? crc_ok[0] : \$2 ;
+  assign \$22  = cfg[155] & cfg[163];
+  assign \$23  = cfg[152] | \$22 ;
+  assign \$24  = cfg[152] ? crc_ok[0] : \$2 ;
   assign \$25  = \$23  & \$24 ;
   assign \$26  = lc_repeat_seen | lc_skip_seen;
   assign \$27  = \$26  | lc_zero_seen;
   assign \$28  = \$25  & \$27 ;
-  assign doubtful = \$21  | \$28 ;
-  assign \$29  = ~ { \$2 , crc_ok[0] };
-  assign crc_error = report_frame ? \$29  : 2'h0;
+  assign \$29  = \$21  | \$28 ;
+  assign \$30  = \$29  | noisy;
+  assign doubtful = \$30  | delay_jump;
+  assign \$31  = crc_ok[0] & \$2 ;
+  assign \$32  = ~ spw_mismatch;
+  assign \$33  = \$31  & \$32 ;
+  assign \$34  = ~ noisy;
+  assign \$35  = \$33  & \$34 ;
+  assign \$36  = lc_repeat | lc_skip;
+  assign \$37  = \$36  | lc_zero;
+  assign \$38  = ~ \$37 ;
+  assign clean = \$35  & \$38 ;
+  assign \$39  = ~ { \$2 , crc_ok[0] };
+  assign crc_error = report_frame ? \$39  : 2'h0;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$119 ) begin end
-    (* full_case = 32'd1 *)
-    if (\$13 ) begin
-      frame_status = 4'h3;
-    end else if (\$14 ) begin
-      frame_status = 4'h1;
-    end else if (\$15 ) begin
-      frame_status = 4'h2;
-    end else if (\$17 ) begin
-      frame_status = 4'h4;
-    end else if (spw_mismatch) begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$129 ) begin end
+    frame_status = 4'h0;
+    if (delay_jump) begin
+      frame_status = 4'he;
+    end
+    if (noisy) begin
+      frame_status = 4'hd;
+    end
+    if (spw_mismatch) begin
       frame_status = 4'h5;
-    end else begin
-      frame_status = 4'h0;
+    end
+    if (\$12 ) begin
+      frame_status = 4'h4;
+    end
+    if (\$13 ) begin
+      frame_status = 4'h2;
+    end
+    if (\$14 ) begin
+      frame_status = 4'h1;
+    end
+    if (\$17 ) begin
+      frame_status = 4'h3;
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$2965$0  = \$2 ;
+  assign \port$3363$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -26784,17 +29974,20 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, \port$2965$0 , lc_check
   assign \cfg.timeout_limit  = cfg[111:88];
   assign \cfg.delay_limit  = cfg[123:112];
   assign \cfg.end_check  = cfg[124];
-  assign \cfg.w0  = cfg[134:125];
-  assign \cfg.w0.data_bits  = cfg[130:125];
-  assign \cfg.w0.nenw  = cfg[131];
-  assign \cfg.w0.lc  = cfg[132];
-  assign \cfg.w0.crc  = cfg[134:133];
-  assign \cfg.w1_enable  = cfg[135];
-  assign \cfg.w1  = cfg[145:136];
-  assign \cfg.w1.data_bits  = cfg[141:136];
-  assign \cfg.w1.nenw  = cfg[142];
-  assign \cfg.w1.lc  = cfg[143];
-  assign \cfg.w1.crc  = cfg[145:144];
-  assign \cfg.spw_check  = cfg[146];
-  assign \cfg.spw_tolerance  = cfg[154:147];
+  assign \cfg.quiet_time  = cfg[136:125];
+  assign \cfg.noise_limit  = cfg[140:137];
+  assign \cfg.delay_tolerance  = cfg[144:141];
+  assign \cfg.w0  = cfg[154:145];
+  assign \cfg.w0.data_bits  = cfg[150:145];
+  assign \cfg.w0.nenw  = cfg[151];
+  assign \cfg.w0.lc  = cfg[152];
+  assign \cfg.w0.crc  = cfg[154:153];
+  assign \cfg.w1_enable  = cfg[155];
+  assign \cfg.w1  = cfg[165:156];
+  assign \cfg.w1.data_bits  = cfg[161:156];
+  assign \cfg.w1.nenw  = cfg[162];
+  assign \cfg.w1.lc  = cfg[163];
+  assign \cfg.w1.crc  = cfg[165:164];
+  assign \cfg.spw_check  = cfg[166];
+  assign \cfg.spw_tolerance  = cfg[174:167];
 endmodule

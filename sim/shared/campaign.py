@@ -110,6 +110,7 @@ class Campaign:
         master would sample the stop bit on the old delay and start early)."""
         await self.settle()
         self.tb.encoder.set_cable(cable)
+        self.tb.rearm = True            # a new cable: re-armed, as a user does
         limits = self.line_limits(cable)
         self.cfg.update(limits)
         for name, value in limits.items():

@@ -24,7 +24,8 @@ FRAME_LOG = os.environ.get("BISS_FRAME_LOG")
 INTERNAL_CLOCK = bool(os.environ.get("BISS_INTERNAL_CLOCK"))
 
 CFG_PORTS = ["cfg_ma_half_period", "cfg_request_period", "cfg_break_time", "cfg_ack_limit",
-             "cfg_timeout_limit", "cfg_delay_limit", "cfg_end_check", "cfg_w1_enable", "cfg_spw_check",
+             "cfg_timeout_limit", "cfg_delay_limit", "cfg_end_check", "cfg_quiet_time",
+             "cfg_noise_limit", "cfg_delay_tolerance", "cfg_w1_enable", "cfg_spw_check",
              "cfg_spw_tolerance"] + [f"cfg_w{w}_{f}" for w in range(2)
                                      for f in ("data_bits", "nenw", "lc", "crc")]
 
@@ -173,6 +174,20 @@ class Testbench:
         self.half_period = hp
         self.source = frames.EncoderFrameSource(fmt, self._position_at,
                                                  sign_of_life=self.sign_of_life)
+        # A new setup is a new encoder or cable for the core: re-arm its round-trip check
+        # before the next request, as a user does (docs/ports.md, "Noise: the line checks").
+        self.rearm = True
+
+    async def rearm_delay_check(self):
+        """Forget the settled round trip (``cfg_delay_tolerance`` = 15 for one clock, then back:
+        docs/ports.md)."""
+        dut = self.dut
+        await RisingEdge(dut.clk)
+        keep = dut.cfg_delay_tolerance.value
+        dut.cfg_delay_tolerance.value = 15
+        await RisingEdge(dut.clk)
+        dut.cfg_delay_tolerance.value = keep
+        self.rearm = False
 
     def _position_at(self, t):
         return self.rng.getrandbits(self.fmt.words[0].data_bits)
@@ -196,6 +211,8 @@ class Testbench:
     async def request(self, limit_s=3e-3):
         """Wait until idle, pulse start, wait for done, return the Result."""
         dut = self.dut
+        if self.rearm:
+            await self.rearm_delay_check()
         await self.wait_idle()
         dut.start.value = 1
         # Wait for done from now on: a bad configuration answers on the very next edge.

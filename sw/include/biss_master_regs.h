@@ -212,6 +212,20 @@ extern "C" {
 #define BISS_MASTER_REGS__CHANNELX__CFG_CHECKS__SPW_TOLERANCE_bp 8
 #define BISS_MASTER_REGS__CHANNELX__CFG_CHECKS__SPW_TOLERANCE_bw 8
 #define BISS_MASTER_REGS__CHANNELX__CFG_CHECKS__SPW_TOLERANCE_reset 0x0
+#define BISS_MASTER_REGS__CHANNELX__CFG_CHECKS__NOISE_LIMIT_bm 0xf0000
+#define BISS_MASTER_REGS__CHANNELX__CFG_CHECKS__NOISE_LIMIT_bp 16
+#define BISS_MASTER_REGS__CHANNELX__CFG_CHECKS__NOISE_LIMIT_bw 4
+#define BISS_MASTER_REGS__CHANNELX__CFG_CHECKS__NOISE_LIMIT_reset 0x0
+#define BISS_MASTER_REGS__CHANNELX__CFG_CHECKS__DELAY_TOLERANCE_bm 0xf00000
+#define BISS_MASTER_REGS__CHANNELX__CFG_CHECKS__DELAY_TOLERANCE_bp 20
+#define BISS_MASTER_REGS__CHANNELX__CFG_CHECKS__DELAY_TOLERANCE_bw 4
+#define BISS_MASTER_REGS__CHANNELX__CFG_CHECKS__DELAY_TOLERANCE_reset 0x0
+
+// reg - biss_master_regs.channel[].cfg_quiet
+#define BISS_MASTER_REGS__CHANNELX__CFG_QUIET__QUIET_TIME_bm 0xfff
+#define BISS_MASTER_REGS__CHANNELX__CFG_QUIET__QUIET_TIME_bp 0
+#define BISS_MASTER_REGS__CHANNELX__CFG_QUIET__QUIET_TIME_bw 12
+#define BISS_MASTER_REGS__CHANNELX__CFG_QUIET__QUIET_TIME_reset 0x0
 
 // reg - biss_master_regs.channel[].result.status
 #define BISS_MASTER_REGS__CHANNELX__RESULT__STATUS__STATUS_bm 0xf
@@ -307,6 +321,24 @@ extern "C" {
 #define BISS_MASTER_REGS__CHANNELX__RESULT__TIMESTAMP__TIME_bw 32
 #define BISS_MASTER_REGS__CHANNELX__RESULT__TIMESTAMP__TIME_reset 0x0
 
+// reg - biss_master_regs.channel[].result.line
+#define BISS_MASTER_REGS__CHANNELX__RESULT__LINE__NOISE_EVENTS_bm 0xf
+#define BISS_MASTER_REGS__CHANNELX__RESULT__LINE__NOISE_EVENTS_bp 0
+#define BISS_MASTER_REGS__CHANNELX__RESULT__LINE__NOISE_EVENTS_bw 4
+#define BISS_MASTER_REGS__CHANNELX__RESULT__LINE__NOISE_EVENTS_reset 0x0
+#define BISS_MASTER_REGS__CHANNELX__RESULT__LINE__DELAY_SETTLED_bm 0x10
+#define BISS_MASTER_REGS__CHANNELX__RESULT__LINE__DELAY_SETTLED_bp 4
+#define BISS_MASTER_REGS__CHANNELX__RESULT__LINE__DELAY_SETTLED_bw 1
+#define BISS_MASTER_REGS__CHANNELX__RESULT__LINE__DELAY_SETTLED_reset 0x0
+#define BISS_MASTER_REGS__CHANNELX__RESULT__LINE__DELAY_SPREAD_bm 0xff00
+#define BISS_MASTER_REGS__CHANNELX__RESULT__LINE__DELAY_SPREAD_bp 8
+#define BISS_MASTER_REGS__CHANNELX__RESULT__LINE__DELAY_SPREAD_bw 8
+#define BISS_MASTER_REGS__CHANNELX__RESULT__LINE__DELAY_SPREAD_reset 0x0
+#define BISS_MASTER_REGS__CHANNELX__RESULT__LINE__SETTLED_DELAY_bm 0x1fff0000
+#define BISS_MASTER_REGS__CHANNELX__RESULT__LINE__SETTLED_DELAY_bp 16
+#define BISS_MASTER_REGS__CHANNELX__RESULT__LINE__SETTLED_DELAY_bw 13
+#define BISS_MASTER_REGS__CHANNELX__RESULT__LINE__SETTLED_DELAY_reset 0x0
+
 // regfile - biss_master_regs.channel[].result
 typedef struct __attribute__ ((__packed__)) {
     uint32_t status;
@@ -316,6 +348,7 @@ typedef struct __attribute__ ((__packed__)) {
     uint32_t w1_lo;
     uint32_t w1_hi;
     uint32_t timestamp;
+    uint32_t line;
 } biss_master_regs__channelx__result_t;
 
 // reg - biss_master_regs.channel[].count_crc
@@ -383,6 +416,20 @@ typedef struct __attribute__ ((__packed__)) {
 #define BISS_MASTER_REGS__CHANNELX__COUNT_STOP__NO_STOP_bp 0
 #define BISS_MASTER_REGS__CHANNELX__COUNT_STOP__NO_STOP_bw 16
 #define BISS_MASTER_REGS__CHANNELX__COUNT_STOP__NO_STOP_reset 0x0
+#define BISS_MASTER_REGS__CHANNELX__COUNT_STOP__NOISY_LINE_bm 0xffff0000
+#define BISS_MASTER_REGS__CHANNELX__COUNT_STOP__NOISY_LINE_bp 16
+#define BISS_MASTER_REGS__CHANNELX__COUNT_STOP__NOISY_LINE_bw 16
+#define BISS_MASTER_REGS__CHANNELX__COUNT_STOP__NOISY_LINE_reset 0x0
+
+// reg - biss_master_regs.channel[].count_noise
+#define BISS_MASTER_REGS__CHANNELX__COUNT_NOISE__DELAY_JUMP_bm 0xffff
+#define BISS_MASTER_REGS__CHANNELX__COUNT_NOISE__DELAY_JUMP_bp 0
+#define BISS_MASTER_REGS__CHANNELX__COUNT_NOISE__DELAY_JUMP_bw 16
+#define BISS_MASTER_REGS__CHANNELX__COUNT_NOISE__DELAY_JUMP_reset 0x0
+#define BISS_MASTER_REGS__CHANNELX__COUNT_NOISE__NOISE_EVENT_bm 0xffff0000
+#define BISS_MASTER_REGS__CHANNELX__COUNT_NOISE__NOISE_EVENT_bp 16
+#define BISS_MASTER_REGS__CHANNELX__COUNT_NOISE__NOISE_EVENT_bw 16
+#define BISS_MASTER_REGS__CHANNELX__COUNT_NOISE__NOISE_EVENT_reset 0x0
 
 // reg - biss_master_regs.channel[].ca.request
 #define BISS_MASTER_REGS__CHANNELX__CA__REQUEST__SLAVE_ID_bm 0x7
@@ -509,9 +556,8 @@ typedef struct __attribute__ ((__packed__)) {
     uint32_t cfg_timeout;
     uint32_t cfg_words;
     uint32_t cfg_checks;
-    uint8_t RESERVED_3c_3f[0x4];
+    uint32_t cfg_quiet;
     biss_master_regs__channelx__result_t result;
-    uint8_t RESERVED_5c_5f[0x4];
     uint32_t count_crc;
     uint32_t count_ack;
     uint32_t count_line;
@@ -519,7 +565,8 @@ typedef struct __attribute__ ((__packed__)) {
     uint32_t count_check;
     uint32_t count_cycle;
     uint32_t count_stop;
-    uint8_t RESERVED_7c_ff[0x84];
+    uint32_t count_noise;
+    uint8_t RESERVED_80_ff[0x80];
     biss_master_regs__channelx__ca_t ca;
     uint8_t RESERVED_1c0_1ff[0x40];
 } biss_master_regs__channelx__stride200_t;

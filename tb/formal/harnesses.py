@@ -484,6 +484,7 @@ class LivenessLimits:
     nenw: bool = False
     lc: bool = False
     crcs: tuple = (Crc.NONE,)
+    quiet_max: int = 2
 
     def assume(self, m, dut, words, *, time_min=0, crcs=True):
         """Assume the master's live settings within these limits. ``time_min`` 1 excludes
@@ -496,6 +497,9 @@ class LivenessLimits:
                    & (dut.cfg_timeout_limit <= self.timeout_max)),
             Assume((dut.cfg_break_time >= time_min) & (dut.cfg_break_time <= self.break_max)),
         ]
+        if hasattr(dut, "cfg_quiet_time"):
+            # The quiet time (docs/ports.md): 1 .. quiet_max clocks, never the 1 us default.
+            m.d.comb += Assume((dut.cfg_quiet_time >= 1) & (dut.cfg_quiet_time <= self.quiet_max))
         for w in range(words):
             cfg = {name: getattr(dut, f"cfg_w{w}_{name}") for name in ("data_bits", "nenw", "lc", "crc")}
             m.d.comb += Assume(cfg["data_bits"] <= self.data_bits_max)
@@ -515,7 +519,7 @@ class LivenessLimits:
 
     def max_bound(self, words, slack):
         h = self.hp_max
-        return (1 + (self.timeout_max + 1) + (3 * h + 1) + (self.ack_max + 1)
+        return (1 + (self.timeout_max + self.quiet_max + 1) + (3 * h + 1) + (self.ack_max + 1)
                 + (self.ack_max + 2 * h) + (self.max_frame_bits(words) + 1) * 2 * h + 3 + slack
                 + 3 * h + (self.timeout_max + 1) + 2)        # the end check
 
@@ -568,7 +572,7 @@ class MasterLivenessHarness(Harness):
             frame_bits = frame_bits + Mux(dut.cfg_w1_enable, _word_bits(dut, 1), 0)
         tw = p.timer_width
         live = Cat(dut.cfg_ma_half_period, dut.cfg_ack_limit, dut.cfg_timeout_limit,
-                   frame_bits[:8], dut.cfg_end_check)
+                   frame_bits[:8], dut.cfg_end_check, dut.cfg_quiet_time[:4])
         snapshot = Signal(len(live))
         could_accept = Signal()
         m.d.sync += [snapshot.eq(live), could_accept.eq(~dut.busy & ~dut.abort_cycle)]
@@ -576,9 +580,12 @@ class MasterLivenessHarness(Harness):
         m.d.comb += accepted.eq(could_accept & dut.busy)
         hp, ack, timeout, bits = (snapshot[:16], snapshot[16:16 + tw], snapshot[16 + tw:16 + 2 * tw],
                                   snapshot[16 + 2 * tw:16 + 2 * tw + 8])
-        end_check = snapshot[-1]
+        end_check = snapshot[16 + 2 * tw + 8]
+        quiet = snapshot[-4:]
 
-        # The bound, clock by clock: 1 to leave IDLE; WAIT_READY up to the timeout limit + 1;
+        # The bound, clock by clock: 1 to leave IDLE; WAIT_READY up to the timeout limit + the
+        # quiet time + 1 (SLO high pulses shorter than the quiet time do not end the low time:
+        # the timeout limit is reached, or SLO stays high for the quiet time);
         # MA to its second rise (3 half periods + 1: the sampler is armed); the Ack edge and the
         # slot-0 sample up to the Ack limit + 1; the Start sample up to the Ack limit + one MA
         # period after that (the NO_START limit on the sampler's decisions); CDS and the frame
@@ -590,7 +597,7 @@ class MasterLivenessHarness(Harness):
         # factors per value (a product of two variables would slow the solver down a lot).
         def formula(h):
             per_bit = 0 if self.mutation == "tight" else 2 * h
-            return (1 + (timeout + 1) + (3 * h + 1) + (ack + 1) + (ack + 2 * h)
+            return (1 + (timeout + quiet + 1) + (3 * h + 1) + (ack + 1) + (ack + 2 * h)
                     + (bits + 1) * per_bit + 3 + self.slack
                     + Mux(end_check, 3 * h + (timeout + 1) + 2, 0))
         bound = formula(lim.hp_max)

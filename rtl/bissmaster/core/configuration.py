@@ -6,7 +6,7 @@ from amaranth.lib.wiring import In, Out
 
 from .. import protocol
 from ..layouts import config_layout, config_words
-from ..params import Crc
+from ..params import HALF_PERIOD_WIDTH, QUIET_WIDTH, Crc
 
 
 class Configuration(wiring.Component):
@@ -41,6 +41,12 @@ class Configuration(wiring.Component):
         ``cfg_ack_limit`` and ``cfg_timeout_limit`` of the cycle, 0 replaced by the default.
     delay_limit : Out(delay_limit_width)
         ``cfg_delay_limit`` of the cycle, 0 replaced by ``max_line_delay``.
+    quiet_time : Out(12)
+        ``cfg_quiet_time`` of the cycle, 0 replaced by ``quiet_default``.
+    delay_tolerance : Out(17)
+        The round-trip check's tolerance for the cycle: its half period plus
+        ``cfg_delay_tolerance`` (0 replaced by the default, 2 clocks): a jittered Ack edge moves
+        by up to a quarter MA period each way (docs/ports.md, "Noise: the line checks").
     no_start_limit : Out(cycle_timer_width)
         The Ack limit plus one MA period plus one clock (NO_START; the clock is the register
         between sampler and decoder), registered from the latched values: valid
@@ -61,6 +67,8 @@ class Configuration(wiring.Component):
             "ack_limit": Out(tw),
             "timeout_limit": Out(tw),
             "delay_limit": Out(p.delay_limit_width),
+            "quiet_time": Out(QUIET_WIDTH),
+            "delay_tolerance": Out(HALF_PERIOD_WIDTH + 1),
             "no_start_limit": Out(p.cycle_timer_width),
             "word_count": Out(range(1, p.words + 1)),
         })
@@ -106,6 +114,10 @@ class Configuration(wiring.Component):
                 self.ack_limit.eq(or_default(live.ack_limit, p.ack_limit_default)),
                 self.timeout_limit.eq(or_default(live.timeout_limit, p.timeout_limit_default)),
                 self.delay_limit.eq(or_default(live.delay_limit, p.max_line_delay)),
+                self.quiet_time.eq(or_default(live.quiet_time, p.quiet_default)),
+                self.delay_tolerance.eq(live.ma_half_period
+                                        + or_default(live.delay_tolerance,
+                                                     protocol.DELAY_TOLERANCE_DEFAULT)),
             ]
         # NO_START: the Ack limit plus one MA period (two half periods) plus one clock: the
         # controller sees Start one clock later after its decision than the Ack's (the register

@@ -37,7 +37,8 @@ class CycleController(wiring.Component):
     - IDLE: wait for a request; the configuration is copied (``idle``).
     - WAIT_READY: one clock or more. A configuration refused by the check ends the request with
       BAD_CONFIG (nothing reaches the line); never start while the encoder holds SLO low (its
-      timeout is still running); SLO low past the timeout limit is SLO_STUCK_LOW.
+      timeout is still running), nor before SLO has been high for the quiet time (a noise
+      pulse is not the end of the timeout); SLO low past the timeout limit is SLO_STUCK_LOW.
     - CLOCK: MA runs; the sampler and decoder follow SLO, the line delay behind. Line faults:
       NO_ACK, DELAY_RANGE, NO_START.
     - TAIL: clock out the stop bit and let the sampler see it. Without the end check the frame
@@ -92,7 +93,11 @@ class CycleController(wiring.Component):
         From the verdict: the frame's status will not be OK (registered with ``frame_done``).
     break_over, ack_expired, no_start_expired, slo_stuck, slo_stuck_live, delay_over : In(1)
         From the limit timers.
+    quiet, quiet_live : In(1)
+        From the limit timers: SLO high for the quiet time (WAIT_READY).
     idle : Out(1)
+    waiting : Out(1)
+        IDLE or WAIT_READY: MA stopped, the encoder's SLO may only rise (for the noise watch).
     first_clock : Out(1)
         The previous clock was IDLE: in WAIT_READY, its first clock.
     receiver_clear, resync : Out(1)
@@ -149,7 +154,10 @@ class CycleController(wiring.Component):
             "slo_stuck": In(1),
             "slo_stuck_live": In(1),
             "delay_over": In(1),
+            "quiet": In(1),
+            "quiet_live": In(1),
             "idle": Out(1),
+            "waiting": Out(1),
             "first_clock": Out(1),
             "receiver_clear": Out(1, init=1),
             "resync": Out(1),
@@ -182,7 +190,7 @@ class CycleController(wiring.Component):
             return [getattr(block, name).eq(getattr(self, name)) for name in names]
 
         m.d.comb += inputs(ready, "first_clock", "config_ok", "abort", "slo", "slo_stuck",
-                           "slo_stuck_live")
+                           "slo_stuck_live", "quiet", "quiet_live")
         m.d.comb += inputs(line, "ma_arm", "locked", "early", "started", "slots_full",
                            "ack_expired", "no_start_expired", "delay_over")
         m.d.comb += [self.restart_timer.eq(line.restart_timer),
@@ -221,6 +229,7 @@ class CycleController(wiring.Component):
                     goto("IDLE")
 
             with m.State("IDLE"):
+                m.d.comb += self.waiting.eq(1)
                 # The timer is not read in IDLE, and every way out of it (BREAK, WAIT_READY)
                 # starts from 0: hold it at 0 here, whatever the request decode says.
                 m.d.comb += self.timer_clear.eq(1)
@@ -230,7 +239,7 @@ class CycleController(wiring.Component):
                     goto("WAIT_READY")
 
             with m.State("WAIT_READY"):
-                m.d.comb += [self.timer_clear.eq(1), line.clear.eq(1)]
+                m.d.comb += [self.timer_clear.eq(1), line.clear.eq(1), self.waiting.eq(1)]
                 with m.If(ready.bad_config):
                     # Nothing has reached the line. An abort now is handled as IDLE would have.
                     fault(Status.BAD_CONFIG, "IDLE")

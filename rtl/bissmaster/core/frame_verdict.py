@@ -40,8 +40,16 @@ class FrameVerdict(wiring.Component):
         The sign-of-life tracker's flags for the frame's LC.
     spw_match : In(1)
         The SPW check (two-word builds).
+    noisy : In(1)
+        The line-noise judgement of the frame (:class:`~bissmaster.core.line_noise.LineNoise`),
+        final from the decoder's ``done`` on.
+    delay_jump : In(1)
+        The round trip left the settled one (:class:`~bissmaster.core.delay_check.DelayCheck`),
+        final long before ``done``.
     lc_check : Out(1)
         Judge and store the LC (to the tracker).
+    clean : Out(1)
+        Every check but the round trip's passes (to the delay check, with ``report_frame``).
     report : Out(1)
         A cycle ends in this clock (``done`` one clock later).
     status : Out(Status)
@@ -49,7 +57,7 @@ class FrameVerdict(wiring.Component):
     valid : Out(1)
         ``report_frame`` with status OK.
     doubtful : Out(1)
-        The frame's status will not be OK (a CRC, sign-of-life or plausibility fault): the frame
+        The frame's status will not be OK (a CRC, sign-of-life, plausibility or line fault): the frame
         may have been misread, and the controller pauses before the next cycle. Not gated by
         ``report_frame``: final from the decoder's ``done`` on, so the controller can register
         it there (no verdict logic in front of its transitions).
@@ -73,7 +81,10 @@ class FrameVerdict(wiring.Component):
             "lc_skip_seen": In(1),
             "lc_zero_seen": In(1),
             "spw_match": In(1),
+            "noisy": In(1),
+            "delay_jump": In(1),
             "lc_check": Out(1),
+            "clean": Out(1),
             "report": Out(1),
             "status": Out(Status),
             "valid": Out(1),
@@ -115,20 +126,23 @@ class FrameVerdict(wiring.Component):
         if two:
             m.d.comb += self.spw_mismatch.eq(cfg.spw_check & word1_on & crcs_ok & ~self.spw_match)
 
-        # Status priority.
+        # Status priority: the first condition that holds (a one-word build has one CRC).
+        if two:
+            crc_order = [(~ok[0] & ~ok[1], Status.CRC_ERROR_BOTH),
+                         (~ok[0], Status.CRC_ERROR_WORD0), (~ok[1], Status.CRC_ERROR_WORD1)]
+        else:
+            crc_order = [(~ok[0], Status.CRC_ERROR_WORD0)]
+        order = crc_order + [
+            (self.lc_repeat | self.lc_skip | self.lc_zero, Status.SIGN_OF_LIFE),
+            (self.spw_mismatch, Status.SPW_MISMATCH),
+            (self.noisy, Status.NOISY_LINE),
+            (self.delay_jump, Status.DELAY_JUMP),
+        ]
         frame_status = Signal(Status)
-        with m.If(~ok[0] & ~ok[-1]):
-            m.d.comb += frame_status.eq(Status.CRC_ERROR_BOTH if two else Status.CRC_ERROR_WORD0)
-        with m.Elif(~ok[0]):
-            m.d.comb += frame_status.eq(Status.CRC_ERROR_WORD0)
-        with m.Elif(~ok[-1]):
-            m.d.comb += frame_status.eq(Status.CRC_ERROR_WORD1)
-        with m.Elif(self.lc_repeat | self.lc_skip | self.lc_zero):
-            m.d.comb += frame_status.eq(Status.SIGN_OF_LIFE)
-        with m.Elif(self.spw_mismatch):
-            m.d.comb += frame_status.eq(Status.SPW_MISMATCH)
-        with m.Else():
-            m.d.comb += frame_status.eq(Status.OK)
+        m.d.comb += frame_status.eq(Status.OK)
+        for condition, status in reversed(order):      # the last assignment wins
+            with m.If(condition):
+                m.d.comb += frame_status.eq(status)
 
         m.d.comb += [
             self.report.eq(self.report_frame | self.fault),
@@ -137,7 +151,10 @@ class FrameVerdict(wiring.Component):
             # The same verdict without the report gate: final from the decoder's ``done`` on
             # (CRCs, LC flags and the SPW check are registered and settled by then).
             self.doubtful.eq(~crcs_ok | self.spw_mismatch | lc_on & lc_word_crc_ok
-                             & (self.lc_repeat_seen | self.lc_skip_seen | self.lc_zero_seen)),
+                             & (self.lc_repeat_seen | self.lc_skip_seen | self.lc_zero_seen)
+                             | self.noisy | self.delay_jump),
+            self.clean.eq(crcs_ok & ~self.spw_mismatch & ~self.noisy
+                          & ~(self.lc_repeat | self.lc_skip | self.lc_zero)),
             self.crc_error.eq(Mux(self.report_frame, ~ok, 0)),
         ]
         return m

@@ -4,6 +4,8 @@ from amaranth.hdl import *
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
+from ..params import QUIET_WIDTH
+
 
 class LimitTimers(wiring.Component):
     """Two timers and the compares the cycle controller decides on, all registered.
@@ -24,12 +26,19 @@ class LimitTimers(wiring.Component):
       cleared). The limits are constant from the latch on.
 
     **The SLO-low timer** counts how long the synchronized SLO has been low, plus one,
-    saturating at ``2**width``, and only while MA is idle: the encoder's timeout starts when MA
-    stops, and the trailing zero bits of a frame (up to 6 CRC bits and the stop bit, 90 us at
+    saturating at ``2**width``, and only while MA is idle: it restarts with MA running and with
+    SLO high for the quiet time (below), and runs on through shorter high pulses (noise is not
+    the end of the encoder's timeout). The encoder's timeout starts when MA stops, and the trailing zero bits of a frame (up to 6 CRC bits and the stop bit, 90 us at
     80 kHz) must not count. ``slo_stuck`` (latched ``timeout_limit``) and ``slo_stuck_live``
     (live ``timeout_live``, 0 -> ``timeout_default``; for the cycle's first clock, before the
     latched limit is valid) flag SLO-low time >= the limit, registered one clock ahead like the
     cycle timer's flags.
+
+    **The SLO-high timer** counts how long the synchronized SLO has been high, saturating at
+    ``2**12``. ``quiet`` (latched ``quiet_limit``) and ``quiet_live`` (live ``quiet_time_live``,
+    0 -> ``quiet_default``; for the cycle's first clock) flag that SLO has been high for at
+    least the quiet time, this clock included, registered one clock ahead: read in a clock in
+    which SLO is high, each is exact for that clock.
 
     ``delay_over``: the measured round trip is above ``delay_limit``, registered (the delay is
     final at least two clocks before the controller reads this).
@@ -55,12 +64,16 @@ class LimitTimers(wiring.Component):
             "no_start_limit": In(p.cycle_timer_width),
             "delay": In(p.delay_width),
             "delay_limit": In(p.delay_limit_width),
+            "quiet_time_live": In(QUIET_WIDTH),
+            "quiet_limit": In(QUIET_WIDTH),
             "break_over": Out(1),
             "ack_expired": Out(1),
             "no_start_expired": Out(1),
             "slo_stuck": Out(1),
             "slo_stuck_live": Out(1),
             "delay_over": Out(1),
+            "quiet": Out(1),
+            "quiet_live": Out(1),
         })
 
     def elaborate(self, platform):
@@ -69,17 +82,36 @@ class LimitTimers(wiring.Component):
         tw = p.timer_width
 
         # The SLO-low timer and its two flags.
+        # It restarts when MA runs, or when SLO has been high for the quiet time: a shorter high
+        # pulse (noise) does not restart it, so a line that toggles without ever being quiet
+        # still ends in SLO_STUCK_LOW, and WAIT_READY, which waits for a quiet high, never hangs.
         slo_low_time_p1 = Signal(tw + 1, init=1)
-        with m.If(self.slo | self.ma_busy):
+        restart_low = self.slo & self.quiet | self.ma_busy
+        with m.If(restart_low):
             m.d.sync += slo_low_time_p1.eq(1)
         with m.Elif(~slo_low_time_p1[tw]):
             m.d.sync += slo_low_time_p1.eq(slo_low_time_p1 + 1)
-        low_idle = ~self.slo & ~self.ma_busy
+        low_idle = ~restart_low
         m.d.sync += [
             self.slo_stuck.eq(low_idle & (slo_low_time_p1 >= self.timeout_limit)),
             self.slo_stuck_live.eq(low_idle & Mux(self.timeout_live == 0,
                                                   slo_low_time_p1 >= p.timeout_limit_default,
                                                   slo_low_time_p1 >= self.timeout_live)),
+        ]
+
+        # The SLO-high timer, plus two: ``high_p2`` is one more than the clocks SLO will have
+        # been high in the next clock if it stays high, so each flag compares it with the quiet
+        # time directly (every quiet time is >= 1: a clock in which SLO was low leaves only the
+        # quiet time 1 met).
+        high_p2 = Signal(QUIET_WIDTH + 1, init=2)
+        with m.If(~self.slo):
+            m.d.sync += high_p2.eq(2)
+        with m.Elif(~high_p2[QUIET_WIDTH]):
+            m.d.sync += high_p2.eq(high_p2 + 1)
+        quiet_live = Mux(self.quiet_time_live == 0, p.quiet_default, self.quiet_time_live)
+        m.d.sync += [
+            self.quiet.eq(Mux(self.slo, high_p2 >= self.quiet_limit, self.quiet_limit <= 1)),
+            self.quiet_live.eq(Mux(self.slo, high_p2 >= quiet_live, quiet_live <= 1)),
         ]
 
         # The cycle timer and its flags. Both break compares in parallel, then the default mux.

@@ -14,7 +14,9 @@ class ReadyCheck(wiring.Component):
        the request is refused (``config_ok`` low): the request ends with BAD_CONFIG, nothing
        reaches the line;
     2. ``aborted``: ``abort`` is high;
-    3. ``ready``: SLO is high (the encoder's timeout has ended): MA may start;
+    3. ``ready``: SLO is high and has been for the quiet time (the encoder's timeout has ended,
+       and no noise pulse is taken for its end): MA may start. In the first clock the flag
+       computed from the live setting (``quiet_live``) is used, ``quiet`` afterwards;
     4. ``stuck_low``: SLO has been low for the timeout limit: SLO_STUCK_LOW. In the first clock
        the latched limit is not valid yet, so the flag computed from the live setting
        (``slo_stuck_live``) is used there, ``slo_stuck`` afterwards.
@@ -31,6 +33,8 @@ class ReadyCheck(wiring.Component):
         ``abort_cycle``.
     slo : In(1)
         Synchronized SLO.
+    quiet, quiet_live : In(1)
+        From the limit timers: SLO high for the latched / the live quiet time.
     slo_stuck, slo_stuck_live : In(1)
         From the limit timers: SLO low for the latched / the live timeout limit.
     bad_config, aborted, ready, stuck_low : Out(1)
@@ -43,6 +47,8 @@ class ReadyCheck(wiring.Component):
             "config_ok": In(1),
             "abort": In(1),
             "slo": In(1),
+            "quiet": In(1),
+            "quiet_live": In(1),
             "slo_stuck": In(1),
             "slo_stuck_live": In(1),
             "bad_config": Out(1),
@@ -59,7 +65,8 @@ class ReadyCheck(wiring.Component):
         with m.Elif(self.abort):
             m.d.comb += self.aborted.eq(1)
         with m.Elif(self.slo):
-            m.d.comb += self.ready.eq(1)
+            # High but not yet for the quiet time: wait on (never stuck: SLO is high).
+            m.d.comb += self.ready.eq(Mux(self.first_clock, self.quiet_live, self.quiet))
         with m.Elif(slo_stuck):
             m.d.comb += self.stuck_low.eq(1)
         return m

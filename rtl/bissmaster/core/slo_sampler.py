@@ -52,6 +52,19 @@ class SloSampler(wiring.Component):
     < true + 1``) unless a glitch starts within ``u`` clocks after the edge or ends within ``v``
     clocks before it; then it is off by at most ``v`` clocks.
 
+    **Noise (``noise``).** The votes also tell a noisy line from a clean one. A clean line
+    changes at most once between two slot centres, near their boundary: however far a jittered
+    edge moves towards a slot, its first vote can differ from the decision only when the slot
+    before was decided the other way (a change at the slot's start), its third only when the
+    slot after is (a change at its end), and its centre never differs from both. ``noise``
+    strobes for each pattern no clean line gives: the centre vote against the two outer ones;
+    the first vote against the decision while the slot before was decided the same; the third
+    vote against the decision while the slot after is decided the same (strobed with the slot
+    after's decision); and an edge the sampler dropped (slot 0 decided high, or SLO high again
+    before slot 0's first vote). A glitch shorter than ``v`` that lands between two votes, or
+    noise edges only near the slots' boundaries, give no strobe: ``noise`` sees part of the
+    noise, never a clean line. No strobes at a half period of 2 (one sample per slot).
+
     **Area.** The slot timer only counts down to zero and reloads, from four values kept as
     reset-less registers (edge to first vote, vote to vote, third vote to the next slot's first,
     and the halfway edge): no comparator on the timer's width anywhere.
@@ -84,6 +97,8 @@ class SloSampler(wiring.Component):
     sample : Out(1)
         Strobe: ``bit`` is the decision of the next slot (``v`` clocks after its centre).
     bit : Out(1)
+    noise : Out(1)
+        Strobe: a vote pattern or an edge no clean line gives (see *Noise*).
     """
 
     def __init__(self, delay_width, *, synchronizer=True):
@@ -99,6 +114,7 @@ class SloSampler(wiring.Component):
             "locked": Out(1),
             "sample": Out(1),
             "bit": Out(1),
+            "noise": Out(1),
         })
 
     def elaborate(self, platform):
@@ -173,6 +189,19 @@ class SloSampler(wiring.Component):
         decision = Mux(single, slo, majority)
         m.d.comb += [self.sample.eq(decided & ~first_slot), self.bit.eq(decision)]
 
+        # Noise: the vote patterns a clean line cannot give (see the docstring), judged at each
+        # decision; ``last`` is the slot before's decision (0 for slot 0: the Ack is low from
+        # the edge on) and ``tail_odd`` its third vote against it, to be judged now.
+        last = Signal()
+        tail_odd = Signal()
+        dropped = Signal()                          # an edge dropped in this clock
+        centre_odd = (vote1 == slo) & (vote2 != slo)
+        head_odd = (vote1 != majority) & (last == majority)
+        tail_late = tail_odd & (last == majority)
+        with m.If(decided & ~single):
+            m.d.sync += [last.eq(majority), tail_odd.eq(slo != majority)]
+        m.d.comb += self.noise.eq(dropped | decided & ~single & (centre_odd | head_odd | tail_late))
+
         with m.FSM(name="sampler_fsm"):
             with m.State("IDLE"):
                 with m.If(self.arm):
@@ -200,6 +229,8 @@ class SloSampler(wiring.Component):
                         vote2.eq(0),
                         first_slot.eq(1),
                         gap.eq(0),
+                        last.eq(0),
+                        tail_odd.eq(0),
                     ]
                     with m.If(gap):
                         # One glitch right at the edge, a short low before it or a short high
@@ -232,6 +263,7 @@ class SloSampler(wiring.Component):
                     # fall; if it comes within ``v`` clocks, it and this edge are one glitch at
                     # the real edge.
                     m.d.sync += gap.eq(~single)
+                    m.d.comb += dropped.eq(1)
                     load(vote_load, vote_one)
                     m.next = "MEASURE"
                 with m.Elif(slot_zero):
@@ -253,6 +285,7 @@ class SloSampler(wiring.Component):
                 with m.If(decided & first_slot):
                     with m.If(decision):
                         # Slot 0 high: that was no Ack edge. Wait for the next one.
+                        m.d.comb += dropped.eq(1)
                         m.next = "MEASURE"
                     with m.Else():
                         m.d.sync += [first_slot.eq(0), self.locked.eq(1)]

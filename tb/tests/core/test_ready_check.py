@@ -2,8 +2,9 @@
 
 The decision of WAIT_READY (docs/timing.md, "States"; the block's docstring): a configuration
 refused in the wait's first clock ends the request (BAD_CONFIG) before anything else, then an
-abort, then SLO high starts the cycle, then SLO low past the timeout limit is SLO_STUCK_LOW, the
-limit taken from the live setting in the first clock (the latched one is not valid yet).
+abort, then SLO high for the quiet time starts the cycle (SLO high for less: wait on, never
+stuck), then SLO low past the timeout limit is SLO_STUCK_LOW; both limits taken from the live
+setting in the first clock (the latched one is not valid yet).
 """
 
 import itertools
@@ -12,18 +13,19 @@ from bissmaster.core.ready_check import ReadyCheck
 
 from testkit.block_sim import run_clocks
 
-INPUTS = ["first_clock", "config_ok", "abort", "slo", "slo_stuck", "slo_stuck_live"]
+INPUTS = ["first_clock", "config_ok", "abort", "slo", "slo_stuck", "slo_stuck_live", "quiet",
+          "quiet_live"]
 OUTPUTS = ["bad_config", "aborted", "ready", "stuck_low"]
 
 
-def expected(first_clock, config_ok, abort, slo, slo_stuck, slo_stuck_live):
+def expected(first_clock, config_ok, abort, slo, slo_stuck, slo_stuck_live, quiet, quiet_live):
     """The one way the wait ends in this clock, or None (wait on)."""
     if first_clock and not config_ok:
         return "bad_config"
     if abort:
         return "aborted"
     if slo:
-        return "ready"
+        return "ready" if (quiet_live if first_clock else quiet) else None
     if (slo_stuck_live if first_clock else slo_stuck):
         return "stuck_low"
     return None

@@ -35,7 +35,8 @@ RTL = _constants(protocol)
 FACTS = _constants(protocol_facts)
 
 #: Port facts in tb/master_contract.py that the RTL keeps in protocol.py.
-CONTRACT_NAMES = ("MA_HALF_PERIOD_MIN",)
+CONTRACT_NAMES = ("MA_HALF_PERIOD_MIN", "QUIET_TIME_S", "DELAY_TOLERANCE_DEFAULT",
+                  "DELAY_SETTLE_FRAMES")
 
 #: The control side's own table (tb/encoder_model/control.py), under its own names:
 #: ``RTL name: control.py's value``.

@@ -1,0 +1,82 @@
+"""Noise on SLO: the events a clean line never gives, counted from one frame to the next."""
+
+from amaranth.hdl import *
+from amaranth.lib import wiring
+from amaranth.lib.wiring import In, Out
+
+from ..params import LINE_CHECK_WIDTH as NOISE_COUNT_WIDTH    # the counts saturate at 15
+
+
+class LineNoise(wiring.Component):
+    """Counts noise events and judges a frame by them (issue 28; docs/ports.md, *Noise*).
+
+    A noise event is a strobe of ``sampler_noise`` (a vote pattern or an Ack edge no clean line
+    gives: :class:`~bissmaster.core.slo_sampler.SloSampler`) or a fall of SLO while the master
+    waits (``watch``: IDLE and WAIT_READY, with MA stopped and the encoder's timeout over or
+    running: a clean encoder's SLO then only rises, once). The count runs from one frame's end
+    (``close``, the decoder's ``done``) to the next, across cycles that end without a frame: a
+    fault leaves the evidence of a noisy line for the next frame to be judged by. It saturates
+    at 15.
+
+    At ``close`` the frame is ``noisy`` when its count (the events up to the clock before) is
+    above ``limit``; ``noisy`` and ``events`` hold that frame's judgement and count from
+    ``close`` (combinational in that clock, registered after it) to the next ``close``, so the
+    verdict reads them in the clock of ``done`` (its ``doubtful``) and at the report (end check:
+    later). The count starts again from 0 (or 1, for an event in the clock of ``close``).
+
+    Attributes
+    ----------
+    watch : In(1)
+        The master waits for a request or for the encoder (IDLE, WAIT_READY).
+    level : In(1)
+        Synchronized SLO.
+    sampler_noise : In(1)
+        The sampler's ``noise`` strobe.
+    close : In(1)
+        The decoder's ``done``: a frame ends.
+    limit : In(4)
+        Events a frame may have and be judged clean (``cfg_noise_limit``; 15: never noisy).
+        Read in the clock before ``close`` (the master's is the cycle's, constant from the
+        request on).
+    noisy : Out(1)
+        The frame's count is above ``limit``.
+    events : Out(4)
+        The frame's count.
+    event : Out(1)
+        Strobe: an event (for the counter).
+    """
+
+    def __init__(self):
+        super().__init__({
+            "watch": In(1),
+            "level": In(1),
+            "sampler_noise": In(1),
+            "close": In(1),
+            "limit": In(NOISE_COUNT_WIDTH),
+            "noisy": Out(1),
+            "events": Out(NOISE_COUNT_WIDTH),
+            "event": Out(1),
+        })
+
+    def elaborate(self, platform):
+        m = Module()
+        level_prev = Signal(init=1)
+        m.d.sync += level_prev.eq(self.level)
+        m.d.comb += self.event.eq(self.sampler_noise | self.watch & level_prev & ~self.level)
+
+        top = 2**NOISE_COUNT_WIDTH - 1
+        running = Signal(NOISE_COUNT_WIDTH)
+        # ``running > limit``, kept as a register from the values written, so that the judgement
+        # at ``close`` is one flip-flop.
+        over = Signal()
+        held_noisy = Signal()
+        held_events = Signal(NOISE_COUNT_WIDTH)
+        bumped = Mux(self.event & (running != top), running + 1, running)
+        with m.If(self.close):
+            m.d.sync += [held_noisy.eq(over), held_events.eq(running),
+                         running.eq(self.event), over.eq(self.event & (self.limit == 0))]
+        with m.Else():
+            m.d.sync += [running.eq(bumped), over.eq(bumped > self.limit)]
+        m.d.comb += [self.noisy.eq(Mux(self.close, over, held_noisy)),
+                     self.events.eq(Mux(self.close, running, held_events))]
+        return m
