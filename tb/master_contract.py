@@ -13,8 +13,14 @@ STATUS = {
     "OK": 0, "CRC_ERROR_WORD0": 1, "CRC_ERROR_WORD1": 2, "CRC_ERROR_BOTH": 3,
     "SIGN_OF_LIFE": 4, "SPW_MISMATCH": 5, "NO_ACK": 6, "NO_START": 7, "DELAY_RANGE": 8,
     "SLO_STUCK_LOW": 9, "ABORTED": 10, "BAD_CONFIG": 11, "NO_STOP": 12,
+    # Issue 28's noise defences: noise seen on SLO in the cycle (more events than
+    # cfg_noise_limit), and a round trip off the settled one by more than cfg_delay_tolerance.
+    "NOISY_LINE": 13, "DELAY_JUMP": 14,
 }
 STATUS_NAME = {code: name for name, code in STATUS.items()}
+#: The statuses of issue 28's noise defences: only a core with the ``cfg_noise_check`` port
+#: reports them, and the blocks and the C driver that predate it do not name them.
+NOISE_STATUSES = ("NOISY_LINE", "DELAY_JUMP")
 
 #: Statuses that judge a received frame (the frame fields are new with them).
 FRAME_STATUSES = ("OK", "CRC_ERROR_WORD0", "CRC_ERROR_WORD1", "CRC_ERROR_BOTH",
@@ -29,6 +35,22 @@ COUNTERS = ("crc_word0", "crc_word1", "no_ack", "no_start", "delay_range", "slo_
             "no_stop")
 #: Counters a one-word build does not have.
 WORD1_COUNTERS = ("crc_word1", "spw_mismatch")
+#: The counters of issue 28's noise defences (a core with ``count_noisy_line``): one per
+#: NOISY_LINE, one per DELAY_JUMP, and the noise events seen.
+NOISE_COUNTERS = ("noisy_line", "delay_jump", "noise_event")
+
+
+def noise_config_defaults(clk_hz):
+    """The noise defences' configuration ports (issue 28) at their defaults, times in clocks of
+    ``clk_hz``: the vote-pattern and idle-fall check on, any event rejects the frame, SLO high
+    for 1 us before MA starts, the round-trip check on with a tolerance of 2 clocks."""
+    return {"cfg_noise_check": 1, "cfg_noise_limit": 0, "cfg_quiet_time": round(1e-6 * clk_hz),
+            "cfg_delay_check": 1, "cfg_delay_tolerance": 2}
+
+
+#: The noise defences' result ports (issue 28): events in the cycle (saturating), whether the
+#: round trip has settled, the settled round trip and its spread (clocks).
+NOISE_FIELDS = ("noise_events", "delay_settled", "settled_delay", "delay_spread")
 
 #: The named encoder presets of the issue (keys of tb/encoder_model/frames.PRESETS): BiSS
 #: Safety, EVOLUTE and RESOLUTE BiSS C. BP3 lengths are named ``bp3_N`` and chosen per use.

@@ -12,11 +12,14 @@ enough rises; TAIL runs MA as well; END and CONFIRM drive nothing. Status codes 
 import pytest
 
 from bissmaster.core.cycle_controller import CycleController
-from master_contract import STATUS, STATUS_NAME
+from master_contract import NOISE_STATUSES, STATUS, STATUS_NAME
 
 from testkit.block_sim import run_clocks
 
-FAULT_NAMES = [name for name, code in STATUS.items() if code >= STATUS["NO_ACK"]]
+#: The line faults this block reports (issue 28's NOISY_LINE and DELAY_JUMP come with the
+#: noise defences, whose RTL names where they are raised).
+FAULT_NAMES = [name for name, code in STATUS.items()
+               if code >= STATUS["NO_ACK"] and name not in NOISE_STATUSES]
 QUIET = {"request": 0, "abort": 0, "config_ok": 1, "end_check": 0, "slo": 1, "ma_busy": 0,
          "ma_arm": 0, "ma_enough": 0, "locked": 0, "early": 0, "frame_done": 0, "started": 0,
          "slots_full": 0, "stopped": 0, "stop_bit": 0, "break_over": 0, "ack_expired": 0,

@@ -15,7 +15,7 @@ import pytest
 from bissmaster.core.frame_verdict import FrameVerdict
 from bissmaster.layouts import config_layout
 from bissmaster.params import Crc, MasterParams
-from master_contract import STATUS
+from master_contract import NOISE_STATUSES, STATUS
 
 from testkit.block_sim import pack, run_clocks
 
@@ -23,7 +23,10 @@ TWO = MasterParams()
 ONE = MasterParams(max_data_bits=(36,), word_crcs=((Crc.CRC6,),))
 OUTPUTS = ["doubtful", "lc_check", "report", "status", "valid", "word_crc_ok", "lc_repeat",
            "lc_skip", "lc_zero", "spw_mismatch", "crc_error"]
-FAULT_NAMES = [name for name, code in STATUS.items() if code >= STATUS["NO_ACK"]]
+#: The line faults this block reports (issue 28's NOISY_LINE and DELAY_JUMP come with the
+#: noise defences, whose RTL names where they are raised).
+FAULT_NAMES = [name for name, code in STATUS.items()
+               if code >= STATUS["NO_ACK"] and name not in NOISE_STATUSES]
 
 
 def _inputs(p, *, w0_lc=0, w1_lc=0, w1_enable=0, spw_check=0, report_frame=0, fault=0,
