@@ -82,11 +82,12 @@ campaigns: setup  ## reliability campaigns, fast slice (CRC, line faults, LC, co
 	$(PY) -m pytest $(CAMPAIGN_TESTS) -q -n $(JOBS) --dist worksteal
 	$(PY) -m sim.tools.campaign_report sim_build/campaign/slice
 
-soak: setup  ## long soak: >= 100k random frames with random faults (Verilator) + every campaign x10
+soak: setup  ## long soak: >= 100k random frames with random faults and >= 100k clean jittered frames for issue 28's false alarms (FRAMES, Verilator) + every other campaign x10
 	$(PY) -m sim.tools.soak --frames $(or $(FRAMES),100000) --scale $(or $(SCALE),10) --jobs $(JOBS)
 
-noise: setup  ## issue 28's baseline: continuous SLO noise through BiSS C frames, SCALE x 200 request cycles (default 50: 10,000); valid wrong positions counted, report in sim_build/campaign/noise_baseline/
-	$(PY) -m sim.tools.campaign noise_baseline --scale $(or $(SCALE),50)
+noise: setup  ## issue 28's proof campaigns at SCALE (default 50): noise_immunity (10,200 noisy cycles), glitch_cost, cable_step, and noise_baseline (the defences off, 10,000); report in sim_build/campaign/noise/
+	$(PY) -m sim.tools.campaign noise_immunity glitch_cost cable_step noise_baseline \
+	  --scale $(or $(SCALE),50) --out sim_build/campaign/noise
 
 test: lint  ## everything CI runs: lint, then in one session unit tests, both simulators (not the long Icarus runs), campaign slice
 	rm -rf sim_build/campaign/slice

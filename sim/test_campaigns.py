@@ -13,8 +13,9 @@ import pytest
 from sim.shared import discovery, runner
 
 RESULTS = runner.BUILD / "campaign" / "slice"
+# A campaign marked ``expected_to_fail`` (an open issue) is a strict xfail here too.
 CASES = [pytest.param(s.name, build, id=s.name if build == discovery.DEFAULT_BUILD
-                      else f"{build}-{s.name}")
+                      else f"{build}-{s.name}", marks=discovery.pytest_marks(s, "verilator"))
          for s in discovery.scenarios(runner.CAMPAIGN_SCENARIOS) for build in s.builds]
 
 

@@ -13,15 +13,18 @@ STATUS = {
     "OK": 0, "CRC_ERROR_WORD0": 1, "CRC_ERROR_WORD1": 2, "CRC_ERROR_BOTH": 3,
     "SIGN_OF_LIFE": 4, "SPW_MISMATCH": 5, "NO_ACK": 6, "NO_START": 7, "DELAY_RANGE": 8,
     "SLO_STUCK_LOW": 9, "ABORTED": 10, "BAD_CONFIG": 11, "NO_STOP": 12,
+    # Issue 28's line checks (docs/ports.md, "Noise: the line checks"): more noise events than
+    # cfg_noise_limit, and a round trip off the settled one by more than the tolerance.
     "NOISY_LINE": 13, "DELAY_JUMP": 14,
 }
 STATUS_NAME = {code: name for name, code in STATUS.items()}
+#: The line checks' statuses (docs/ports.md, "Noise: the line checks"): a clean line never
+#: gives them.
+NOISE_STATUSES = ("NOISY_LINE", "DELAY_JUMP")
 
 #: Statuses that judge a received frame (the frame fields are new with them).
 FRAME_STATUSES = ("OK", "CRC_ERROR_WORD0", "CRC_ERROR_WORD1", "CRC_ERROR_BOTH",
                   "SIGN_OF_LIFE", "SPW_MISMATCH", "NOISY_LINE", "DELAY_JUMP")
-#: The line checks' statuses (docs/ports.md, "Noise"): a clean line never gives them.
-LINE_CHECK_STATUSES = ("NOISY_LINE", "DELAY_JUMP")
 
 #: ``cfg_wN_crc`` codes, keyed by the encoder model's CRC kinds (frames.CRC_NONE, CRC6, CRC16).
 CRC_CODE = {"none": 0, "crc6": 1, "crc16": 2}
@@ -32,6 +35,27 @@ COUNTERS = ("crc_word0", "crc_word1", "no_ack", "no_start", "delay_range", "slo_
             "no_stop", "noisy_line", "delay_jump", "noise_event")
 #: Counters a one-word build does not have.
 WORD1_COUNTERS = ("crc_word1", "spw_mismatch")
+#: The counters of issue 28's noise defences (a core with ``count_noisy_line``): one per
+#: NOISY_LINE, one per DELAY_JUMP, and the noise events seen.
+NOISE_COUNTERS = ("noisy_line", "delay_jump", "noise_event")
+
+
+def noise_config_defaults(clk_hz):
+    """The line checks' configuration ports (docs/ports.md) at their defaults: every one 0
+    (any noise event rejects the frame, SLO high for 1 us before MA starts, the round-trip
+    tolerance the half period + 2 clocks). ``clk_hz`` is not needed: 0 means the default at
+    any clock."""
+    return {"cfg_noise_limit": 0, "cfg_quiet_time": 0, "cfg_delay_tolerance": 0}
+
+
+#: ``cfg_noise_limit`` and ``cfg_delay_tolerance`` value that turns the check off (the noise
+#: count saturates at 15; 15 also forgets the settled round trip).
+CHECK_OFF = 15
+
+
+#: The noise defences' result ports (issue 28): events in the cycle (saturating), whether the
+#: round trip has settled, the settled round trip and its spread (clocks).
+NOISE_FIELDS = ("noise_events", "delay_settled", "settled_delay", "delay_spread")
 
 #: The named encoder presets of the issue (keys of tb/encoder_model/frames.PRESETS): BiSS
 #: Safety, EVOLUTE and RESOLUTE BiSS C. BP3 lengths are named ``bp3_N`` and chosen per use.

@@ -16,8 +16,9 @@ from cocotb.triggers import ClockCycles, FallingEdge, RisingEdge, Timer
 
 from encoder_model import frames
 from encoder_model.cocotb_encoder import Cable
-from master_contract import FRAME_STATUSES, STATUS, STATUS_NAME
+from master_contract import CHECK_OFF, FRAME_STATUSES, NOISE_STATUSES, STATUS, STATUS_NAME
 from sim.shared import glitch
+from sim.shared.discovery import expected_to_fail
 from sim.shared.campaign import WATCHDOG_S, Campaign, CampaignFailure, scaled
 from sim.shared.functional_coverage import PRESETS
 from sim.shared.reference import FRAME_STATUS_CODES, config_valid, format_of
@@ -112,7 +113,8 @@ FAST_RATES = (1e6, 2.5e6, 5e6, 10e6)
 LINE_ALLOWED = {
     "slo_stuck_low": [*FRAME_STATUSES, "NO_START", "DELAY_RANGE", "SLO_STUCK_LOW"],
     "slo_stuck_high": [*FRAME_STATUSES, "NO_ACK", "NO_STOP"],
-    "glitch": [*FRAME_STATUSES, "NO_ACK", "NO_START", "DELAY_RANGE", "NO_STOP"],
+    # Issue 28's checks may reject a glitched frame: noise seen, a round trip off the settled one.
+    "glitch": [*FRAME_STATUSES, "NO_ACK", "NO_START", "DELAY_RANGE", "NO_STOP", *NOISE_STATUSES],
     # At the protocol's limit a bit's edge can reach its sample (the round trip is measured on
     # the jittered Ack edge, to a clock): a data bit misread is a CRC error, the stop bit
     # misread (end check on) NO_STOP. The soak found the second (seed 1001, cycle 11655).
@@ -168,7 +170,7 @@ async def random_setup(c, names=LINE_PRESETS, rates=FAST_RATES, cable_m=None):
     name = c.rng.choice(names)
     ma_hz = c.rng.choice(rates)
     length = c.rng.choice((0, 10, 50, 100)) if cable_m is None else cable_m
-    await c.set_cable(Cable(length_m=length))
+    await c.set_cable(Cable(length_m=length), power_up=True)
     # Half the cycles with the end check (docs/ports.md, cfg_end_check).
     c.setup(name, ma_hz, cfg_end_check=int(c.rng.random() < 0.5))
 
@@ -256,7 +258,7 @@ async def do_delay_change(c):
     length = c.rng.choice((0, 1, 5, 20, 50, 100, 200, 300))
     extra = c.rng.choice((0, 0, c.rng.uniform(0, 30e-6)))
     cable = Cable(length_m=length, extra_round_trip_s=extra)
-    await c.set_cable(cable)
+    await c.set_cable(cable, power_up=True)
     rt = cable.round_trip_s() * CLK_HZ
     limit = 0
     if c.rng.random() < 0.4:
@@ -585,7 +587,7 @@ async def random_mix(dut):
         length = c.rng.choice((0, 0, 10, 50, 100, 200))
         extra = c.rng.choice((0, 0, 0, c.rng.uniform(0, 36e-6)))
         cable = Cable(length_m=length, extra_round_trip_s=extra)
-        await c.set_cable(cable)
+        await c.set_cable(cable, power_up=True)
         c.setup(name, ma_hz, cfg_end_check=int(c.rng.random() < 0.5))
         for _ in range(c.rng.randint(1, 4)):
             _, kind, fn = c.rng.choices(actions, weights)[0]
@@ -631,7 +633,7 @@ ACK_ON_SAMPLE = "ack, on a sample"
 GLITCH_CLASSES = (glitch.SLOT_CLASSES[0], ACK_ON_SAMPLE, *glitch.SLOT_CLASSES[1:])
 #: The cycle right after a glitched one, requested at once (no pause): issue 12's second
 #: mechanism, the master reading the tail of a frame the encoder is still sending.
-GLITCH_AFTER_ALLOWED = [*FRAME_STATUSES, "NO_ACK", "NO_START", "DELAY_RANGE", "NO_STOP"]
+GLITCH_AFTER_ALLOWED = LINE_ALLOWED["glitch"]
 
 
 def glitch_width_s(c, bucket):
@@ -747,12 +749,8 @@ async def after_glitch(c, table):
         name = STATUS_NAME[res.status]
         c.expect(name in GLITCH_AFTER_ALLOWED, f"{c.where('after_glitch')}: status {name}")
         c.expect(res.valid == int(res.status == STATUS["OK"]), "after_glitch: valid")
-        # The master stored whatever CRC-good LC it read (the reference follows it).
-        lc_word = next((w for w, wf in enumerate(c.fmt.words) if wf.lc), None)
-        if (res.status in FRAME_STATUS_CODES and lc_word is not None
-                and res.fields[f"word{lc_word}_crc_ok"] and res.fields["lc"]):
-            c.ref.last_lc = res.fields["lc"]
         c.count_outcome(res)
+        follow_lc(c, res)
         outcome, sent = f"{name} (tail of the glitched frame)", None
         c.stats["after_glitch_read_the_tail"] += 1
     c.note("after_glitch", res, c.tb.encoder.cable.round_trip_s(), outcome)
@@ -798,17 +796,40 @@ async def glitch_immunity(dut):
     c.save({"glitch_table": table.rows})
 
 
-# -- Continuous noise (issue 28's baseline) -----------------------------------------------------
-#: Pulse widths of the noise and the mean gap between pulses (exponential): the line a new user
-#: tried (issue 28): pulses of 20 to 600 ns at random through whole frames, and between them.
+# -- Continuous noise and the noise defences (issue 28) -----------------------------------------
+NOISE_MA_HZ = 10e6                      # 10 MHz from 100 MHz: 5 clocks a half period
+NOISE_CABLE_M = 10
+#: The issue's line (noise_baseline): pulses of 20 to 600 ns, 2 us apart on average.
 NOISE_WIDTH_S = (20e-9, 600e-9)
 NOISE_MEAN_GAP_S = 2e-6
 NOISE_PRESET = "resolute_c_36"          # BiSS C, 36 bits, CRC-6: the issue's frame
-NOISE_MA_HZ = 10e6
-#: Every status a noisy line can give a one-word BiSS C frame (docs/ports.md): a misread frame
-#: (OK or a CRC error), a faked or hidden Ack or Start, a misread stop bit (end check).
-NOISE_ALLOWED = ["OK", "CRC_ERROR_WORD0", "NO_ACK", "NO_START", "DELAY_RANGE", "SLO_STUCK_LOW",
-                 "NO_STOP"]
+#: noise_immunity's pulse-width ranges: (label, (shortest, longest) s, mean gap s): within the
+#: votes' immunity (20 ns at 10 MHz, docs/ports.md); the issue's line (up to 6 bits); whole runs
+#: of bits (up to 30), rarer.
+NOISE_RANGES = (("2-20 ns", (2e-9, 20e-9), 0.5e-6),
+                ("20-600 ns", NOISE_WIDTH_S, NOISE_MEAN_GAP_S),
+                ("0.6-3 us", (0.6e-6, 3e-6), 8e-6))
+#: A CRC-6 word (BiSS C 36) and a CRC-16 word (BiSS Safety RSH: a CRC-6 CPW and a CRC-16 SPW
+#: carrying the LC).
+NOISE_PRESETS = ("resolute_c_36", "resolute_fs_rsh")
+#: The line faults every noisy cycle may end in besides a frame status (docs/ports.md): a faked
+#: or hidden Ack or Start, a misread stop bit (end check), and issue 28's two statuses.
+NOISE_LINE_STATUSES = ["NO_ACK", "NO_START", "DELAY_RANGE", "SLO_STUCK_LOW", "NO_STOP",
+                       *NOISE_STATUSES]
+#: The noise defences all off (issue 28): noise_baseline measures the line without them.
+NOISE_DEFENCES_OFF = {"cfg_noise_limit": CHECK_OFF, "cfg_quiet_time": 1,
+                      "cfg_delay_tolerance": CHECK_OFF}
+
+
+def noise_allowed(fmt):
+    """Every status a noisy line can give a frame of ``fmt``: any frame status the format has
+    (a one-word frame: OK or a CRC error, a sign-of-life finding if it carries an LC), and
+    NOISE_LINE_STATUSES."""
+    if len(fmt.words) == 2:
+        frame = list(FRAME_STATUSES)
+    else:
+        frame = ["OK", "CRC_ERROR_WORD0"] + (["SIGN_OF_LIFE"] if fmt.words[0].lc else [])
+    return frame + NOISE_LINE_STATUSES
 
 
 def upper_bound_95(k, n):
@@ -822,59 +843,477 @@ def upper_bound_95(k, n):
     return min(1.0, (centre + spread) / (1 + z * z / n))
 
 
+def crc_floor(fmt):
+    """The rate at which random bits pass every CRC of ``fmt``: 2^-(CRC bits of all words)."""
+    return 2.0 ** -sum(w.crc_bits for w in fmt.words)
+
+
+def defences(dut):
+    """Whether the core has issue 28's noise defences (its ``cfg_noise_limit`` port)."""
+    return hasattr(dut, "cfg_noise_limit")
+
+
+class SloNoise:
+    """Random noise on SLO from :meth:`start` to :meth:`stop`: pulses (the pin inverted) of a
+    width drawn uniformly from ``width_s``, at exponential gaps of mean ``mean_gap_s``, through
+    frames, Acks, timeouts and the waits between them. The encoder model sees none of it."""
+
+    def __init__(self, c, width_s, mean_gap_s):
+        self.c, self.width_s, self.mean_gap_s = c, width_s, mean_gap_s
+        self.pulses = 0
+        self._on = False
+        self._task = None
+
+    def start(self):
+        self._on = True
+        self._task = cocotb.start_soon(self._run())
+
+    async def stop(self):
+        """Stop after the pulse under way (the line is clean when this returns)."""
+        self._on = False
+        await self._task
+
+    async def _run(self):
+        rng, encoder = self.c.rng, self.c.tb.encoder
+        while self._on:
+            await Timer(max(1, round(rng.expovariate(1 / self.mean_gap_s) * 1e12)), "ps")
+            await encoder.glitch_slo(rng.uniform(*self.width_s))
+            self.pulses += 1
+
+
+def noise_row(**setup):
+    """One row of a noise table: its setup, then what its cycles ended in."""
+    return {**setup, "cycles": 0, "statuses": {}, "valid_right": 0, "valid_wrong": 0,
+            "encoder_answered": 0, "wrong_line_delays": [], "wrong_examples": []}
+
+
+def follow_lc(c, res):
+    """After a cycle whose received bits are not known: the master stored whatever CRC-good LC
+    it read, and the reference follows it."""
+    lc_word = next((w for w, wf in enumerate(c.fmt.words) if wf.lc), None)
+    if (res.status in FRAME_STATUS_CODES and lc_word is not None
+            and res.fields[f"word{lc_word}_crc_ok"] and res.fields["lc"]):
+        c.ref.last_lc = res.fields["lc"]
+
+
+def positions(c, res):
+    return [hex(res.fields[f"word{w}_position"]) for w in range(len(c.fmt.words))]
+
+
+async def noisy_request(c, row, allowed, fault="noise", note=True):
+    """One request on a line that may be noisy: the status one of ``allowed``, ``valid`` only
+    with OK, every counter counting it (sim/shared/campaign.py), never a hang (watchdog).
+    Counted in ``row`` (None: not counted): the status, whether the encoder answered, valid
+    with the position it sent or with another one (``valid_wrong``; if the encoder latched
+    nothing in this cycle, every valid result is wrong). Returns (result, valid wrong)."""
+    n_sent = len(c.tb.sent)
+    c.queue(processing_time_s=c.processing())
+    res = await c.tb.request(limit_s=WATCHDOG_S)
+    name = STATUS_NAME[res.status]
+    c.expect(name in allowed, f"{c.where(fault)}: status {name}, allowed {allowed}")
+    c.expect(res.valid == int(res.status == STATUS["OK"]),
+             f"{c.where(fault)}: valid {res.valid} with status {name}")
+    answered = len(c.tb.sent) == n_sent + 1
+    sent = c.tb.sent[-1] if answered else None
+    wrong = valid_wrong(c, res, sent)
+    c.count_outcome(res)
+    follow_lc(c, res)
+    if note:
+        c.note(fault, res, c.tb.encoder.cable.round_trip_s(),
+               f"{name} (wrong position)" if wrong else None)
+    if row is not None:
+        row["cycles"] += 1
+        row["statuses"][name] = row["statuses"].get(name, 0) + 1
+        row["encoder_answered"] += int(answered)
+        row["valid_right"] += int(res.valid and not wrong)
+        row["valid_wrong"] += int(wrong)
+        if wrong:
+            row["wrong_line_delays"].append(res.fields["line_delay"])
+            if len(row["wrong_examples"]) < 10:
+                sent_pos = None if sent is None else [
+                    hex(w["position"]) for w in frames.parse_frame(c.fmt, sent.bits)["words"]]
+                row["wrong_examples"].append({
+                    "cycle": c.stats["cycles"], "read": positions(c, res), "sent": sent_pos,
+                    "line_delay": res.fields["line_delay"],
+                    "true_round_trip_clocks": round(c.tb.encoder.cable.round_trip_s() * CLK_HZ,
+                                                    1)})
+    return res, wrong
+
+
+async def recover_from_noise(c, allowed, fault="noise", limit=8):
+    """Clean requests after noise until one is valid, judged as on a noisy line (the first may
+    still be rejected: the pause after a doubtful frame, the round-trip check re-settling);
+    a valid wrong position here is a defect. Tallied like Campaign.recover."""
+    await c.settle()
+    for n in range(1, limit + 1):
+        res, wrong = await noisy_request(c, None, allowed, fault, note=False)
+        c.expect(not wrong, f"{c.where(fault)}: valid with a wrong position on a clean line")
+        if res.valid:
+            c.recovery[fault][n] += 1
+            return n
+    raise CampaignFailure(f"{c.where(fault)}: no valid frame {limit} clean cycles after noise")
+
+
+async def noisy_rows(c, row, noise, cycles):
+    """``cycles`` requests back to back under ``noise`` counted in ``row``, then the line clean
+    and a valid frame again."""
+    allowed = noise_allowed(c.fmt)
+    noise.start()
+    for _ in range(cycles):
+        await noisy_request(c, row, allowed)
+    await noise.stop()
+    row["pulses"] = row.get("pulses", 0) + noise.pulses
+    await recover_from_noise(c, allowed)
+
+
+def finish_noise_rows(c, rows):
+    for key, row in rows.items():
+        row["valid_wrong_rate_95"] = upper_bound_95(row["valid_wrong"], row["cycles"])
+        c.stats[f"noise_valid_wrong, {key}"] = row["valid_wrong"]
+
+
+def noise_setup(c, **extra):
+    return {"ma_hz": NOISE_MA_HZ, "cable_m": NOISE_CABLE_M, "defences_in_core": defences(c.dut),
+            **extra}
+
+
 @cocotb.test()
 async def noise_baseline(dut):
     """Continuous random noise on SLO (the line inverted for 20..600 ns, exponential gaps of 2 us
     on average: through frames, Acks, timeouts and the waits between them), BiSS C 36 bits
-    CRC-6 at 10 MHz, requests back to back, end check off then on. Counts every status and the
-    results that are *valid with a position the encoder did not send in that cycle*, with the
-    rate's 95 % upper bound: issue 28's baseline, recorded, not failed (yet); a status outside
-    NOISE_ALLOWED, a valid flag that disagrees with the status, a counter off by one or a hang
-    fails as in every campaign."""
+    CRC-6 at 10 MHz, requests back to back, end check off then on, **issue 28's defences off**
+    where the core has them: the line as a core without them sees it, the control for
+    noise_immunity. Counts every status and the results that are *valid with a position the
+    encoder did not send in that cycle*, with the rate's 95 % upper bound: recorded, not failed;
+    a status outside noise_allowed, a valid flag that disagrees with the status, a counter off
+    by one or a hang fails as in every campaign."""
     c = Campaign(dut, "noise_baseline", seed=2801)
-    await c.start(cable=Cable(length_m=10))
+    await c.start(cable=Cable(length_m=NOISE_CABLE_M))
     rows = {}
     for end_check in (0, 1):
-        c.setup(NOISE_PRESET, NOISE_MA_HZ, cfg_end_check=end_check)
+        c.setup(NOISE_PRESET, NOISE_MA_HZ, cfg_end_check=end_check, **NOISE_DEFENCES_OFF)
         await c.settle()
-        noisy = True
+        row = rows.setdefault(f"end check {'on' if end_check else 'off'}", noise_row(
+            crc_floor=crc_floor(c.fmt)))
+        await noisy_rows(c, row, SloNoise(c, NOISE_WIDTH_S, NOISE_MEAN_GAP_S), scaled(100))
+    finish_noise_rows(c, rows)
+    c.save({"noise_table": rows, "noise_setup": noise_setup(
+        c, preset=NOISE_PRESET, width_s=NOISE_WIDTH_S, mean_gap_s=NOISE_MEAN_GAP_S,
+        defences="off")})
 
-        async def noise():
-            while noisy:
-                await Timer(max(1, round(c.rng.expovariate(1 / NOISE_MEAN_GAP_S) * 1e12)), "ps")
-                await c.tb.encoder.glitch_slo(c.rng.uniform(*NOISE_WIDTH_S))
 
-        task = cocotb.start_soon(noise())
-        row = rows.setdefault(f"end check {'on' if end_check else 'off'}", {
-            "cycles": 0, "statuses": {}, "valid_right": 0, "valid_wrong": 0,
-            "encoder_answered": 0, "wrong_line_delays": []})
-        for _ in range(scaled(100)):
-            n_sent = len(c.tb.sent)
+@cocotb.test()
+@expected_to_fail("issue 28: without the noise defences a noisy line gives valid wrong "
+                  "positions (the slice, seed 2802: 1 of 204 cycles on 9afe10f's RTL)")
+async def noise_immunity(dut):
+    """Issue 28's proof: continuous random SLO noise (SloNoise) through whole frames, for each
+    pulse-width range of NOISE_RANGES, the end check off and on, a CRC-6 word (BiSS C 36) and a
+    CRC-16 word (BiSS Safety RSH), at 10 MHz from 100 MHz, requests back to back, the noise
+    defences at their defaults. Per row: cycles, statuses, valid right, **valid wrong** and its
+    rate's 95 % upper bound against the CRC's floor. Fails if any cycle ends valid with a
+    position the encoder did not send (after saving the table), or in a status outside
+    noise_allowed (at once)."""
+    c = Campaign(dut, "noise_immunity", seed=2802)
+    await c.start(cable=Cable(length_m=NOISE_CABLE_M))
+    rows = {}
+    per_row = scaled(17)            # 12 rows: 204 cycles at scale 1, 10,200 at make noise's 50
+    for name in NOISE_PRESETS:
+        for end_check in (0, 1):
+            for label, width_s, gap_s in NOISE_RANGES:
+                c.setup(name, NOISE_MA_HZ, cfg_end_check=end_check)
+                await c.settle()
+                row = rows.setdefault(
+                    f"{name} | {label} | end check {'on' if end_check else 'off'}",
+                    noise_row(preset=name, width_s=width_s, mean_gap_s=gap_s,
+                              end_check=end_check, crc_floor=crc_floor(c.fmt)))
+                await noisy_rows(c, row, SloNoise(c, width_s, gap_s), per_row)
+    finish_noise_rows(c, rows)
+    c.save({"noise_table": rows, "noise_setup": noise_setup(c, defences="defaults")})
+    wrong = sum(r["valid_wrong"] for r in rows.values())
+    cycles = sum(r["cycles"] for r in rows.values())
+    first = next((r["wrong_examples"][0] | {"row": k} for k, r in rows.items()
+                  if r["wrong_examples"]), None)
+    state = ("at their defaults" if defences(dut)
+             else "not in this core: no cfg_noise_limit port")
+    c.expect(wrong == 0, (
+        f"issue 28: {wrong} of {cycles} noisy cycles ended valid with a position the encoder "
+        f"did not send (noise defences {state}); per row: "
+        f"{({k: r['valid_wrong'] for k, r in rows.items() if r['valid_wrong']})}; "
+        f"first: {first}"))
+
+
+# -- No false alarm: clean frames at the jitter limit (issue 28) --------------------------------
+#: Frames per block (one cable, one preset, one rate, from a reset: a power-up on that cable).
+FALSE_ALARM_BLOCK = (8, 24)
+#: Frames at scale 1 (make test's slice); sim/tools/soak.py scales it to --frames.
+FALSE_ALARM_FRAMES_AT_SCALE_1 = 200
+#: Weights of MA_RATES_HZ (250 kHz .. 10 MHz) per block.
+FALSE_ALARM_RATE_WEIGHTS = (2, 8, 20, 30, 40)
+
+
+@cocotb.test()
+async def no_false_alarm(dut):
+    """Clean frames with the edges jittered +/-25 % (do_jitter's cable), every preset of the
+    setup cross at every MA rate, 0..100 m of cable drawn per block, each block from a reset
+    (a power-up on that cable: the round-trip check settles afresh), requests back to back or
+    (a third of the blocks) at a relaxed rate. Issue 28's checks must reject none: 0 NOISY_LINE, 0 DELAY_JUMP (failed
+    at the end, after the table is saved); the other statuses as at the jitter limit
+    (LINE_ALLOWED["jitter"]). Records, per MA rate, the spread of the measured round trip within
+    a block (the room the delay tolerance needs)."""
+    seed = int(__import__("os").environ.get("BISS_SOAK_SEED", "2805"))
+    c = Campaign(dut, f"no_false_alarm_s{seed}", seed=seed)
+    await c.start()
+    allowed = [*LINE_ALLOWED["jitter"], *NOISE_STATUSES]
+    table = {}
+    target = scaled(FALSE_ALARM_FRAMES_AT_SCALE_1)
+    frames_n = 0
+    while frames_n < target:
+        name = c.rng.choice(PRESETS)
+        # A 250 kHz frame costs 40 times the simulation of a 10 MHz one: drawn less often.
+        ma_hz = c.rng.choices(MA_RATES_HZ, weights=FALSE_ALARM_RATE_WEIGHTS)[0]
+        length = c.rng.uniform(0, 100)
+        relaxed = c.rng.random() < 1 / 3
+        await c.set_cable(Cable(length_m=length, jitter_s=0.125 / ma_hz))
+        c.setup(name, ma_hz, cfg_end_check=int(c.rng.random() < 0.5))
+        await c.power_cycle()
+        row = table.setdefault(f"{ma_hz / 1e6:g} MHz", {
+            "ma_mhz": ma_hz / 1e6, "blocks": 0, "frames": 0, "relaxed_frames": 0,
+            "statuses": {}, "delay_spread_max": 0, "jitter_ns": 0.125e9 / ma_hz})
+        row["blocks"] += 1
+        delays = []
+        for _ in range(c.rng.randint(*FALSE_ALARM_BLOCK)):
+            if relaxed:             # a pause of 0.5..2 frame times between requests
+                await Timer(round(c.rng.uniform(0.5, 2) * cycle_time_s(c) * 1e9), "ns")
             c.queue(processing_time_s=c.processing())
             res = await c.tb.request(limit_s=WATCHDOG_S)
-            name = STATUS_NAME[res.status]
-            c.expect(name in NOISE_ALLOWED, f"{c.where('noise')}: status {name}")
-            c.expect(res.valid == int(res.status == STATUS["OK"]), f"{c.where('noise')}: valid")
-            answered = len(c.tb.sent) == n_sent + 1
-            sent = c.tb.sent[-1] if answered else None
-            wrong = valid_wrong(c, res, sent)
-            c.count_outcome(res)
-            c.note("noise", res, c.tb.encoder.cable.round_trip_s(),
-                   f"{name} (wrong position)" if wrong else None)
-            row["cycles"] += 1
-            row["statuses"][name] = row["statuses"].get(name, 0) + 1
-            row["encoder_answered"] += int(answered)
-            row["valid_right"] += int(res.valid and not wrong)
-            row["valid_wrong"] += int(wrong)
-            if wrong:
-                row["wrong_line_delays"].append(res.fields["line_delay"])
-        noisy = False
-        await task
-        await c.settle()
-        await c.recover("noise")
-    for key, row in rows.items():
-        row["valid_wrong_rate_95"] = upper_bound_95(row["valid_wrong"], row["cycles"])
-        c.stats[f"noise_valid_wrong, {key}"] = row["valid_wrong"]
-    c.save({"noise_table": rows, "noise_setup": {
-        "preset": NOISE_PRESET, "ma_hz": NOISE_MA_HZ, "width_s": NOISE_WIDTH_S,
-        "mean_gap_s": NOISE_MEAN_GAP_S, "cable_m": 10}})
+            record = c.tb.encoder.records[-1]
+            outcome = c.judge_faulted(res, "jitter", allowed, explain=flips)
+            c.note("jitter", res, record.round_trip_s, outcome)
+            status = STATUS_NAME[res.status]
+            row["statuses"][status] = row["statuses"].get(status, 0) + 1
+            row["frames"] += 1
+            row["relaxed_frames"] += int(relaxed)
+            frames_n += 1
+            if status in ("OK", "SIGN_OF_LIFE"):
+                c.check_delay(res, record, "no_false_alarm")
+            if status not in NOISE_STATUSES:
+                delays.append(res.fields["line_delay"])
+            if status in NOISE_STATUSES:
+                c.stats[f"false_alarm_{status}"] += 1
+        row["delay_spread_max"] = max(row["delay_spread_max"], max(delays, default=0) -
+                                      min(delays, default=0))
+        await c.set_cable(Cable(length_m=length))
+        await c.recover("jitter")
+    c.save({"false_alarm_table": table, "false_alarm_setup": {
+        "defences_in_core": defences(dut), "cable_m": [0, 100], "jitter": "+/-12.5 % of a "
+        "period per edge and direction (+/-25 % MA to SLO)"}})
+    alarms = {s: c.stats[f"false_alarm_{s}"] for s in NOISE_STATUSES}
+    per_rate = {k: {s: r["statuses"].get(s, 0) for s in NOISE_STATUSES}
+                for k, r in table.items()}
+    c.expect(not any(alarms.values()),
+             f"issue 28: the noise defences rejected clean frames at the jitter limit: "
+             f"{alarms} in {frames_n} frames; per rate: {per_rate}")
+
+
+# -- A cable that changes length while powered (issue 28) ---------------------------------------
+CABLE_S_PER_M = Cable(length_m=1).round_trip_s() - Cable().round_trip_s()   # 10 ns
+#: A step of 10..25 m: 10..25 clocks of round trip at 100 MHz, beyond the tolerance at 10 MHz
+#: (the half period, 5, plus 2 clocks: docs/ports.md) with the jitter-free edge of this model.
+CABLE_STEP_M = (10, 25)
+#: A re-seated connector or a flexing cable: within 1 m (1 clock) of the settled length.
+CABLE_WOBBLE_M = 1
+DELAY_SETTLE_FRAMES = 4         # docs/ports.md: DELAY_JUMP settles after 4 frames that agree
+DELAY_TOLERANCE = 2             # cfg_delay_tolerance's default
+
+
+async def step_frame(c, row, want, what):
+    """One request on a clean line that must end ``want`` (OK: every field as the reference
+    says; DELAY_JUMP: not valid, the round trip reported as measured); never a valid wrong
+    position. ``what`` names the frame in a failure."""
+    c.queue(processing_time_s=c.processing())
+    n_sent = len(c.tb.sent)
+    res = await c.tb.request(limit_s=WATCHDOG_S)
+    where = f"{c.where('cable_step')}: {what}"
+    c.expect(len(c.tb.sent) == n_sent + 1, f"{where}: the encoder did not answer")
+    sent, record = c.tb.sent[-1], c.tb.encoder.records[-1]
+    name = STATUS_NAME[res.status]
+    c.expect(not valid_wrong(c, res, sent), f"{where}: valid with a wrong position "
+             f"{positions(c, res)}")
+    c.expect(name == want, f"{where}: status {name}, expected {want} (line delay "
+             f"{res.fields['line_delay']}, settled {res.fields.get('settled_delay')})")
+    if want == "OK":
+        c.check_verdict(res, c.ref.judge(c.fmt, sent.bits, **c.spw_opts()), record, "cable_step")
+    else:
+        c.expect(res.valid == 0, f"{where}: valid with status {name}")
+        c.check_delay(res, record, where)
+    c.count_outcome(res)
+    c.note("cable_step", res, record.round_trip_s)
+    row["frames"] += 1
+    row["statuses"][name] = row["statuses"].get(name, 0) + 1
+    return res
+
+
+def check_settled(c, res, what, settled=None):
+    """The result ports of the round-trip check, where the core has them: settled, on this
+    frame's delay within the tolerance (or on ``settled``, the value before a step)."""
+    f = res.fields
+    if "delay_settled" not in f:
+        return
+    where = f"{c.where('cable_step')}: {what}"
+    c.expect(f["delay_settled"] == 1, f"{where}: delay_settled 0")
+    if settled is None:
+        c.expect(abs(f["settled_delay"] - f["line_delay"]) <= DELAY_TOLERANCE,
+                 f"{where}: settled_delay {f['settled_delay']}, line delay {f['line_delay']}")
+    else:
+        c.expect(f["settled_delay"] == settled,
+                 f"{where}: settled_delay {f['settled_delay']} moved from {settled} before "
+                 f"the new delay settled")
+    c.stats["settled_delay_checked"] += 1
+
+
+@cocotb.test()
+async def cable_step(dut):
+    """A cable that changes length while powered, between cycles: steps of 5..20 m (5..20
+    clocks of round trip at 100 MHz) up or down within 0..100 m, and wobbles within 1 m of the
+    settled length, BiSS C 36 at 10 MHz. With the round-trip check at its defaults: after a
+    step exactly 4 frames DELAY_JUMP, then OK again (the check re-settled on the new delay); a
+    wobble never DELAY_JUMP; delay_settled / settled_delay follow. With cfg_delay_tolerance = 15
+    (the check off): no
+    DELAY_JUMP ever. Never a valid wrong position. On a core without the check (no
+    cfg_delay_tolerance port) every frame must be OK."""
+    c = Campaign(dut, "cable_step", seed=2803)
+    await c.start(cable=Cable(length_m=50))
+    has_check = hasattr(dut, "cfg_delay_tolerance")
+    table = {}
+    for delay_check in (1, 0):
+        jumps_expected = DELAY_SETTLE_FRAMES if has_check and delay_check else 0
+        c.setup("resolute_c_36", 10e6, cfg_end_check=1,
+                cfg_delay_tolerance=0 if delay_check else CHECK_OFF)
+        await c.power_cycle()
+        row = table.setdefault(f"delay check {'on' if delay_check else 'off'}", {
+            "check_in_core": has_check, "steps": 0, "wobbles": 0, "frames": 0,
+            "step_clocks": [], "delay_jump_frames": 0, "statuses": {}})
+        settled_m = c.tb.encoder.cable.length_m
+        for k in range(DELAY_SETTLE_FRAMES + 1):        # power-up: settles after 4 frames
+            res = await step_frame(c, row, "OK", f"frame {k + 1} after power-up")
+        if delay_check:
+            check_settled(c, res, "after power-up")
+        for _ in range(scaled(12)):
+            wobble = c.rng.random() < 0.25
+            if wobble:
+                length = settled_m + c.rng.uniform(-CABLE_WOBBLE_M, CABLE_WOBBLE_M)
+                length = max(0.0, length)
+            else:
+                step = c.rng.uniform(*CABLE_STEP_M) * c.rng.choice((-1, 1))
+                if not 0 <= settled_m + step <= 100:
+                    step = -step
+                length = settled_m + step
+            before = res.fields.get("settled_delay")
+            await c.set_cable(Cable(length_m=length))
+            what = (f"{'wobble' if wobble else 'step'} {settled_m:.1f} -> {length:.1f} m "
+                    f"({(length - settled_m) * CABLE_S_PER_M * 1e9:+.1f} ns of round trip)")
+            n_jump = 0 if wobble else jumps_expected
+            for k in range(n_jump):
+                res = await step_frame(c, row, "DELAY_JUMP", f"{what}, frame {k + 1}")
+                if k < n_jump - 1:
+                    check_settled(c, res, f"{what}, frame {k + 1}", settled=before)
+            for k in range(c.rng.randint(1, 3)):
+                res = await step_frame(c, row, "OK", f"{what}, frame {n_jump + k + 1}")
+                if delay_check:
+                    check_settled(c, res, f"{what}, frame {n_jump + k + 1}")
+            if not wobble:
+                settled_m = length
+                row["step_clocks"].append(round(abs(step) * CABLE_S_PER_M * CLK_HZ, 1))
+            row["wobbles" if wobble else "steps"] += 1
+        clocks = row.pop("step_clocks")
+        row["step_clocks_min_max"] = [min(clocks, default=0), max(clocks, default=0)]
+        row["delay_jump_frames"] = row["statuses"].get("DELAY_JUMP", 0)
+    c.save({"cable_step_table": table})
+
+
+# -- What one short glitch costs (issue 28, item 5) ---------------------------------------------
+GLITCH_COST_WIDTH_S = (1e-9, 20e-9)
+GLITCH_COST_LIMITS = (0, 1)             # cfg_noise_limit: any event rejects; one is forgiven
+#: Cycles after a glitch until a valid frame, beyond which the campaign calls it a hang.
+GLITCH_COST_MAX = 8
+
+
+async def cycle_period_s(c):
+    """Start to start of clean requests back to back at the current setup (two of them)."""
+    await c.tb.wait_idle(limit_s=WATCHDOG_S)
+    t0 = get_sim_time("step")
+    for _ in range(2):
+        await c.frame("none", record_cov=False)
+        await c.tb.wait_idle(limit_s=WATCHDOG_S)
+    return (get_sim_time("step") - t0) / 2 * 1e-12
+
+
+@cocotb.test()
+async def glitch_cost(dut):
+    """One 1..20 ns glitch per cycle at a moment drawn uniformly over the whole cycle (start to
+    the next start: the frame, the Ack, the timeout, the break and the wait), BiSS C 36 at
+    10 MHz, requests back to back, cfg_noise_limit 0 and 1, the end check off and on. Records,
+    per setting, the status of the cycle the glitch hit and how many cycles it cost (results
+    not valid until the next valid one; a glitch after a cycle's verdict is charged to the
+    next). Fails on a valid wrong position or a hang, on nothing else: issue 28 sets the bound
+    (a glitch costs at most 1 cycle in 100) from these figures."""
+    c = Campaign(dut, "glitch_cost", seed=2804)
+    await c.start(cable=Cable(length_m=NOISE_CABLE_M))
+    table = {}
+    has_limit = hasattr(dut, "cfg_noise_limit")
+    for limit in GLITCH_COST_LIMITS:
+        for end_check in (0, 1):
+            c.setup(NOISE_PRESET, NOISE_MA_HZ, cfg_end_check=end_check, cfg_noise_limit=limit)
+            await c.settle()
+            allowed = noise_allowed(c.fmt)
+            period = await cycle_period_s(c)
+            row = table.setdefault(
+                f"noise limit {limit} | end check {'on' if end_check else 'off'}",
+                noise_row(noise_limit=limit, limit_in_core=has_limit, end_check=end_check,
+                          period_ns=round(period * 1e9), cost={}, glitch_after_verdict=0,
+                          costly_examples=[]))
+            for _ in range(scaled(40)):
+                await c.tb.wait_idle(limit_s=WATCHDOG_S)
+                t0 = get_sim_time("step")
+                at = round(c.rng.uniform(0, period) * 1e12)
+                width = c.rng.uniform(*GLITCH_COST_WIDTH_S)
+
+                async def one_glitch():
+                    await Timer(max(1, at), "step")
+                    await c.tb.encoder.glitch_slo(width)
+
+                task = cocotb.start_soon(one_glitch())
+                res, wrong = await noisy_request(c, None, allowed, "glitch_cost")
+                row["valid_wrong"] += int(wrong)
+                await task
+                # A glitch after the verdict (in the break or the wait) hits the next cycle.
+                after = t0 + at > round(res.t_done_s * 1e12)
+                row["glitch_after_verdict"] += int(after)
+                if after:
+                    res, wrong = await noisy_request(c, None, allowed, "glitch_cost")
+                    row["valid_wrong"] += int(wrong)
+                name = STATUS_NAME[res.status]
+                row["cycles"] += 1
+                row["statuses"][name] = row["statuses"].get(name, 0) + 1
+                row["valid_right"] += int(res.valid and not wrong)
+                cost, hit = 0, res
+                while not hit.valid:
+                    cost += 1
+                    c.expect(cost < GLITCH_COST_MAX, f"{c.where('glitch_cost')}: no valid "
+                             f"frame in {GLITCH_COST_MAX} cycles after one glitch")
+                    hit, wrong = await noisy_request(c, None, allowed, "glitch_cost")
+                    row["valid_wrong"] += int(wrong)
+                row["cost"][str(cost)] = row["cost"].get(str(cost), 0) + 1
+                if cost and len(row["costly_examples"]) < 20:
+                    row["costly_examples"].append({
+                        "at_ns": round(at / 1e3, 1), "width_ns": round(width * 1e9, 1),
+                        "status": name, "after_verdict": after,
+                        "cost": cost})
+    for row in table.values():
+        row["glitches"] = sum(row["cost"].values())
+        row["cost_rate"] = sum(int(k) * v for k, v in row["cost"].items()) / row["glitches"]
+    c.save({"glitch_cost_table": table, "glitch_cost_setup": {
+        "preset": NOISE_PRESET, "ma_hz": NOISE_MA_HZ, "cable_m": NOISE_CABLE_M,
+        "width_s": GLITCH_COST_WIDTH_S, "defences_in_core": defences(dut)}})
+    wrong = {k: r["valid_wrong"] for k, r in table.items() if r["valid_wrong"]}
+    c.expect(not wrong, f"glitch_cost: valid with a wrong position after one glitch: {wrong}")

@@ -30,12 +30,14 @@ DELAY_RANGES = ["<0.5 bit", "0.5-2 bits", "2-8 bits", ">8 bits"]
 FAULTS = ["none", "crc_1bit", "crc_2bit", "crc_3to5bit", "crc_burst", "slo_stuck_low",
           "slo_stuck_high", "unplug", "glitch", "jitter", "delay_change", "abort",
           "no_response", "ack_forever", "timeout_stuck", "lc_repeat", "lc_skip", "lc_zero",
-          "lc_random", "spw_offset", "bad_config", "config_change", "after_glitch", "noise"]
+          "lc_random", "spw_offset", "bad_config", "config_change", "after_glitch", "noise",
+          "cable_step", "glitch_cost"]
 
 _FRAME_ERR = ["CRC_ERROR_WORD0", "CRC_ERROR_WORD1", "CRC_ERROR_BOTH"]
 #: Which statuses each fault kind can legitimately end in: the bins of the fault x status cross.
 _SOL = "SIGN_OF_LIFE"   # any frame after a lost or faulty LC frame may show it as a skip
 _LATE = ["OK", _SOL]     # a fault that came after the verdict leaves the frame as it was
+_NOISE = ["NOISY_LINE", "DELAY_JUMP"]   # issue 28's checks: noise seen, a round trip off
 LEGAL = {
     "none": ["OK", _SOL],
     "crc_1bit": _FRAME_ERR[:2],                    # errors sit in one word: never both
@@ -48,7 +50,7 @@ LEGAL = {
     "slo_stuck_high": _LATE + _FRAME_ERR + ["NO_ACK", "NO_STOP"],     # NO_STOP: end check
     "unplug": ["NO_ACK"],
     # a glitch on the Ack edge or in the Ack: NO_ACK, NO_START, DELAY_RANGE (see LINE_ALLOWED)
-    "glitch": _LATE + _FRAME_ERR + ["NO_ACK", "NO_START", "DELAY_RANGE", "NO_STOP"],
+    "glitch": _LATE + _FRAME_ERR + ["NO_ACK", "NO_START", "DELAY_RANGE", "NO_STOP"] + _NOISE,
     # at +/-25 % the eye closes in the worst case: a rare bit error, caught by the CRC, or on
     # the stop bit NO_STOP (end check; the soak found one, see LINE_ALLOWED)
     "jitter": _LATE + _FRAME_ERR + ["NO_STOP"],
@@ -67,11 +69,18 @@ LEGAL = {
     "config_change": ["OK"],
     # the clean cycle requested right after a glitched one (glitch_immunity): it may clock the
     # tail of a slipped frame the encoder is still sending (issue 12)
-    "after_glitch": _LATE + _FRAME_ERR + ["NO_ACK", "NO_START", "DELAY_RANGE", "NO_STOP"],
-    # continuous noise on a one-word BiSS C frame (noise_baseline, issue 28): a misread frame,
-    # a faked or hidden Ack or Start, a misread stop bit
-    "noise": ["OK", "CRC_ERROR_WORD0", "NO_ACK", "NO_START", "DELAY_RANGE", "SLO_STUCK_LOW",
-              "NO_STOP"],
+    "after_glitch": _LATE + _FRAME_ERR + ["NO_ACK", "NO_START", "DELAY_RANGE", "NO_STOP"]
+    + _NOISE,
+    # continuous noise (noise_baseline, noise_immunity; issue 28) on BiSS C 36 and BiSS Safety
+    # RSH: a misread frame (the SPW and LC checks too), a faked or hidden Ack or Start, a
+    # misread stop bit, issue 28's checks
+    "noise": ["OK", _SOL, "SPW_MISMATCH"] + _FRAME_ERR + ["NO_ACK", "NO_START", "DELAY_RANGE",
+                                                          "SLO_STUCK_LOW", "NO_STOP"] + _NOISE,
+    # a cable that changes length between cycles (cable_step): 4 frames DELAY_JUMP, then OK
+    "cable_step": ["OK", "DELAY_JUMP"],
+    # one 1..20 ns glitch per cycle (glitch_cost, BiSS C 36): the cycle it hit and the next
+    "glitch_cost": ["OK", "CRC_ERROR_WORD0", "NO_ACK", "NO_START", "DELAY_RANGE",
+                    "SLO_STUCK_LOW", "NO_STOP"] + _NOISE,
 }
 
 

@@ -16,7 +16,8 @@ from cocotb.triggers import ClockCycles, FallingEdge, ReadOnly, RisingEdge, Time
 
 from encoder_model import frames
 from encoder_model.cocotb_encoder import BissEncoder, Cable, Response
-from master_contract import CA_COUNTERS, COUNTERS, CRC_CODE, STATUS, SYS_CLK_HZ
+from master_contract import (CA_COUNTERS, COUNTERS, CRC_CODE, NOISE_COUNTERS, NOISE_FIELDS,
+                             STATUS, SYS_CLK_HZ, noise_config_defaults)
 
 CLK_HZ = int(os.environ.get("BISS_CLK_HZ", str(SYS_CLK_HZ)))
 CLK_NS = 1e9 / CLK_HZ
@@ -89,6 +90,12 @@ class Testbench:
         self.has_counters = hasattr(dut, "clear_counters")
         self.has_timestamp = hasattr(dut, "timestamp")
         self.has_register_access = hasattr(dut, "ca_start")      # the default build's engine
+        # Issue 28's noise defences: their ports only where the core has them, so every
+        # scenario runs on a core with them and on one without.
+        self.noise_defaults = {n: v for n, v in noise_config_defaults(CLK_HZ).items()
+                               if hasattr(dut, n)}
+        self.noise_fields = [n for n in NOISE_FIELDS if hasattr(dut, n)]
+        self.noise_counters = [n for n in NOISE_COUNTERS if hasattr(dut, f"count_{n}")]
         #: The encoder's processing time (Ack to Start) is drawn from this range per frame,
         #: unless a queued Response gives it.
         self.processing_s = (2e-6, 16e-6)
@@ -112,6 +119,7 @@ class Testbench:
             getattr(dut, name).value = 0
         for name in self._ports(CFG_PORTS):
             getattr(dut, name).value = 0
+        self._drive_noise_config(self.noise_defaults)
         # The register-access engine's inputs (builds with it): no access unless a test asks.
         for name in ("ca_slave_id", "ca_address", "ca_count", "ca_write", "ca_start", "ca_abort",
                      "ca_wbuf_addr", "ca_wbuf_data", "ca_wbuf_en", "ca_rbuf_addr", "ca_rbuf_en"):
@@ -167,10 +175,13 @@ class Testbench:
             word = fmt.words[w] if w < len(fmt.words) else frames.WordFormat(1)
             ports.update({f"cfg_w{w}_data_bits": word.data_bits, f"cfg_w{w}_nenw": int(word.nenw),
                           f"cfg_w{w}_lc": int(word.lc), f"cfg_w{w}_crc": CRC_CODE[word.crc]})
+        noise = {**self.noise_defaults, **{n: cfg.pop(n) for n in list(cfg)
+                                           if n in noise_config_defaults(CLK_HZ)}}
         ports.update(cfg)
         assert len(fmt.words) <= self.words, f"{fmt.name} needs a two-word build"
         for name in self._ports(ports):
             getattr(dut, name).value = ports[name]
+        self._drive_noise_config(noise)
         self.half_period = hp
         self.source = frames.EncoderFrameSource(fmt, self._position_at,
                                                  sign_of_life=self.sign_of_life)
@@ -188,6 +199,15 @@ class Testbench:
         await RisingEdge(dut.clk)
         dut.cfg_delay_tolerance.value = keep
         self.rearm = False
+
+    def _drive_noise_config(self, values):
+        """Issue 28's configuration ports, those the core has (the others are ignored: a core
+        without the defences runs the same scenario without them); a value wider than its port
+        (the 1 us quiet time at a fast clock) is clamped to the port's largest."""
+        for name, value in values.items():
+            if hasattr(self.dut, name):
+                port = getattr(self.dut, name)
+                port.value = min(value, (1 << len(port)) - 1)
 
     def _position_at(self, t):
         return self.rng.getrandbits(self.fmt.words[0].data_bits)
@@ -262,7 +282,8 @@ class Testbench:
         # and its crc_ok reads X. Read as None; check_frame accepts it only for such a word.
         fields.update({n: int(v) if (v := getattr(dut, n).value).is_resolvable else None
                        for n in self._ports(names) if n.endswith("crc_ok")})
-        names = self._ports(COUNTERS) if self.has_counters else []
+        fields.update({n: _int(dut, n) for n in self.noise_fields})
+        names = self._ports(COUNTERS) + self.noise_counters if self.has_counters else []
         if self.has_counters and self.has_register_access:
             names += list(CA_COUNTERS.values())
         counters = {n: _int(dut, f"count_{n}") for n in names}

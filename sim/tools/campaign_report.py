@@ -2,8 +2,9 @@
 
     python -m sim.tools.campaign_report [DIR]     (default: sim_build/campaign/slice)
 
-Prints Markdown tables (CRC detection, noise immunity, line faults and recovery, sign-of-life,
-configuration fuzz, throughput, functional coverage with its holes) and writes them to DIR/report.md.
+Prints Markdown tables (CRC detection, noise immunity, continuous noise, a glitch's cost, a
+changing cable, false alarms, line faults and recovery, sign-of-life, configuration fuzz,
+throughput, functional coverage with its holes) and writes them to DIR/report.md.
 Exits non-zero if a coverage sample shows a fault ending in a status outside the legal table.
 """
 
@@ -88,21 +89,85 @@ def glitch_table(run, by=("class", "length", "ma_mhz")):
 
 
 def noise_table(run):
-    """noise_baseline: per end-check setting, cycles, statuses, valid right / wrong and the
-    valid-wrong rate's 95 % upper bound (issue 28)."""
+    """noise_baseline and noise_immunity (issue 28): per row (its preset, pulse widths and end
+    check), cycles, statuses, valid right / wrong, the valid-wrong rate with its 95 % upper
+    bound, against the rate at which random bits pass the frame's CRCs."""
     setup = run["noise_setup"]
-    out = [f"{setup['preset']} at {setup['ma_hz'] / 1e6:g} MHz, {setup['cable_m']} m; pulses "
-           f"{setup['width_s'][0] * 1e9:.0f}..{setup['width_s'][1] * 1e9:.0f} ns, mean gap "
-           f"{setup['mean_gap_s'] * 1e6:g} us.", "",
+    out = [f"{setup.get('preset', 'per row')} at {setup['ma_hz'] / 1e6:g} MHz, "
+           f"{setup['cable_m']} m; noise defences {setup.get('defences', 'defaults')} "
+           f"({'in this core' if setup.get('defences_in_core') else 'not in this core'})"
+           + (f"; pulses {setup['width_s'][0] * 1e9:.0f}..{setup['width_s'][1] * 1e9:.0f} ns, "
+              f"mean gap {setup['mean_gap_s'] * 1e6:g} us." if "width_s" in setup else "."), "",
            "| setting | cycles | encoder answered | valid, right | **valid, wrong** | "
-           "wrong rate (95 % upper bound) | statuses | line delay of the wrong ones |",
-           "|---|---:|---:|---:|---:|---:|---|---|"]
+           "wrong rate (95 % upper bound) | CRC floor | statuses | line delay of the wrong ones |",
+           "|---|---:|---:|---:|---:|---:|---:|---|---|"]
+    total = Counter()
     for key, r in run["noise_table"].items():
         statuses = ", ".join(f"{k} {v}" for k, v in sorted(r["statuses"].items()))
+        floor = f"{r['crc_floor']:.1e}" if "crc_floor" in r else "-"
         out.append(f"| {key} | {r['cycles']} | {r['encoder_answered']} | {r['valid_right']} | "
-                   f"**{r['valid_wrong']}** | {r['valid_wrong'] / r['cycles']:.2%} "
-                   f"({r['valid_wrong_rate_95']:.2%}) | {statuses} | "
+                   f"**{r['valid_wrong']}** | {r['valid_wrong'] / max(1, r['cycles']):.2%} "
+                   f"({r['valid_wrong_rate_95']:.2%}) | {floor} | {statuses} | "
                    f"{', '.join(map(str, r['wrong_line_delays'])) or '-'} |")
+        total.update(cycles=r["cycles"], valid_wrong=r["valid_wrong"])
+    out.append(f"| **all** | {total['cycles']} | | | **{total['valid_wrong']}** | | | | |")
+    return out
+
+
+def glitch_cost_table(run):
+    """glitch_cost (issue 28, item 5): per setting, the status of the cycle one short glitch
+    hit and how many cycles it cost."""
+    setup = run["glitch_cost_setup"]
+    out = [f"{setup['preset']} at {setup['ma_hz'] / 1e6:g} MHz, {setup['cable_m']} m; one "
+           f"{setup['width_s'][0] * 1e9:g}..{setup['width_s'][1] * 1e9:g} ns glitch per cycle "
+           f"(noise defences {'in' if setup['defences_in_core'] else 'not in'} this core).", "",
+           "| setting | glitches | after the verdict | cycles lost per glitch | cost (cycles: "
+           "glitches) | status of the cycle hit | valid, wrong |",
+           "|---|---:|---:|---:|---|---|---:|"]
+    for key, r in run["glitch_cost_table"].items():
+        cost = ", ".join(f"{k}: {v}" for k, v in sorted(r["cost"].items(), key=lambda kv:
+                                                           int(kv[0])))
+        statuses = ", ".join(f"{k} {v}" for k, v in sorted(r["statuses"].items()))
+        out.append(f"| {key} | {r['glitches']} | {r['glitch_after_verdict']} | "
+                   f"{r['cost_rate']:.3f} | {cost} | {statuses} | {r['valid_wrong']} |")
+    return out
+
+
+def cable_step_table(run):
+    out = ["| setting | check in core | steps (clocks) | wobbles | frames | DELAY_JUMP | "
+           "statuses |", "|---|---|---:|---:|---:|---:|---|"]
+    for key, r in run["cable_step_table"].items():
+        lo, hi = r["step_clocks_min_max"]
+        statuses = ", ".join(f"{k} {v}" for k, v in sorted(r["statuses"].items()))
+        out.append(f"| {key} | {'yes' if r['check_in_core'] else 'no'} | {r['steps']} "
+                   f"({lo:g}..{hi:g}) | {r['wobbles']} | {r['frames']} | "
+                   f"{r['delay_jump_frames']} | {statuses} |")
+    return out
+
+
+def false_alarm_table(runs):
+    """no_false_alarm, its runs merged (the soak splits it over processes): per MA rate."""
+    rows = {}
+    for run in runs:
+        for key, r in run["false_alarm_table"].items():
+            row = rows.setdefault(r["ma_mhz"], {"blocks": 0, "frames": 0, "relaxed_frames": 0,
+                                                "statuses": Counter(), "delay_spread_max": 0,
+                                                "jitter_ns": r["jitter_ns"]})
+            for k in ("blocks", "frames", "relaxed_frames"):
+                row[k] += r[k]
+            row["statuses"].update(r["statuses"])
+            row["delay_spread_max"] = max(row["delay_spread_max"], r["delay_spread_max"])
+    out = ["| MA (MHz) | jitter per edge | blocks | frames | at a relaxed rate | **NOISY_LINE** "
+           "| **DELAY_JUMP** | other statuses | round-trip spread in a block (clocks, max) |",
+           "|---:|---:|---:|---:|---:|---:|---:|---|---:|"]
+    for mhz in sorted(rows):
+        r = rows[mhz]
+        st = r["statuses"]
+        other = ", ".join(f"{k} {v}" for k, v in sorted(st.items())
+                          if k not in ("NOISY_LINE", "DELAY_JUMP"))
+        out.append(f"| {mhz:g} | +/-{r['jitter_ns']:g} ns | {r['blocks']} | {r['frames']} | "
+                   f"{r['relaxed_frames']} | **{st['NOISY_LINE']}** | **{st['DELAY_JUMP']}** | "
+                   f"{other} | {r['delay_spread_max']} |")
     return out
 
 
@@ -138,6 +203,16 @@ def main(argv=None):
             lines += [f"## Noise immunity, every class ({name})", ""] + glitch_table(run) + [""]
         if "noise_table" in run:
             lines += [f"## Continuous noise ({name})", ""] + noise_table(run) + [""]
+        if "glitch_cost_table" in run:
+            lines += [f"## What one short glitch costs ({name})", ""] + glitch_cost_table(run)
+            lines += [""]
+        if "cable_step_table" in run:
+            lines += [f"## A cable that changes length ({name})", ""] + cable_step_table(run)
+            lines += [""]
+    alarms = [run for run in runs.values() if "false_alarm_table" in run]
+    if alarms:
+        lines += ["## No false alarm: clean frames at the jitter limit (no_false_alarm)", ""]
+        lines += false_alarm_table(alarms) + [""]
     table, blind = fault_table(runs)
     lines += ["## Faults, outcomes and recovery (all campaigns)", ""] + table + [""]
     lines.append("CRC blind spots (a corrupted word the CRC cannot see, explained by the "

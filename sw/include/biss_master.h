@@ -78,8 +78,10 @@ typedef enum {
     BISS_ERR_EDS_MISMATCH = -33,    /* BP_ID / DL differ from registers 0x42 / 0x43 */
     BISS_ERR_BANK_SELECT = -34,     /* the bank select reads back another bank */
     BISS_ERR_UNSUPPORTED = -35,     /* a valid BP3 encoder the core cannot read from its EDS */
-    BISS_ERR_CA_SHORT = -36         /* the engine said OK with fewer bytes done than asked: a
+    BISS_ERR_CA_SHORT = -36,        /* the engine said OK with fewer bytes done than asked: a
                                        broken or foreign register window; no byte is trusted */
+    BISS_ERR_LINE_CHECK = -37       /* quiet time, noise limit or delay tolerance wider than
+                                       its field */
 } biss_err_t;
 
 /* The name of an error code ("BISS_ERR_CRC"), "?" for an unknown one. */
@@ -169,6 +171,10 @@ typedef struct {
     bool end_check;                 /* report a frame only after its stop bit and timeout */
     bool spw_check;                 /* check the SPW against the CPW */
     uint8_t spw_tolerance;          /* largest accepted SPW/CPW distance, SPW LSBs */
+    /* The line checks (docs/ports.md, "Noise: the line checks"); 0 is each one's default. */
+    uint16_t quiet_time;            /* clocks SLO high before MA starts; 0: 1 us; 1: off */
+    uint8_t noise_limit;            /* noise events a valid frame may have; 0: none; 15: off */
+    uint8_t delay_tolerance;        /* clocks beyond the half period; 0: 2; 15: off */
 } biss_config_t;
 
 /* A named encoder: its frame format. */
@@ -198,6 +204,11 @@ biss_err_t biss_config_check(const biss_channel_t *ch, const biss_config_t *cfg)
  * Refused while periodic requests run (BISS_ERR_RUNNING): a frame must not start on half a
  * configuration. */
 biss_err_t biss_configure(biss_channel_t *ch, const biss_config_t *cfg);
+
+/* Forget the settled round trip (the round-trip check settles again on the next 4 good
+ * frames): after changing the cable or the encoder on purpose (docs/ports.md, "Noise: the
+ * line checks"). Writes cfg_checks.delay_tolerance = 15, then the setting back. */
+biss_err_t biss_rearm_delay_check(biss_channel_t *ch);
 
 /* biss_config_from_preset + biss_configure. */
 biss_err_t biss_configure_preset(biss_channel_t *ch, const char *name, uint32_t clk_hz,
@@ -244,7 +255,9 @@ typedef enum {
     BISS_STATUS_SLO_STUCK_LOW = 9,
     BISS_STATUS_ABORTED = 10,
     BISS_STATUS_BAD_CONFIG = 11,
-    BISS_STATUS_NO_STOP = 12
+    BISS_STATUS_NO_STOP = 12,
+    BISS_STATUS_NOISY_LINE = 13,    /* more noise events than noise_limit (docs/ports.md) */
+    BISS_STATUS_DELAY_JUMP = 14     /* the round trip left the settled one */
 } biss_status_t;
 
 /* The name of a status code without the prefix ("NO_ACK"), "?" for an unknown one. */
@@ -262,6 +275,11 @@ typedef struct {
     bool w0_ne, w0_nw, w0_crc_ok;   /* nE, nW: 1 = no error / no warning */
     bool w1_ne, w1_nw, w1_crc_ok;
     bool lc_repeat, lc_skip, lc_zero, spw_mismatch;
+    /* The line checks as the frame was judged (docs/ports.md, "Noise: the line checks"). */
+    uint8_t noise_events;           /* since the frame before, saturating at 15 */
+    bool delay_settled;             /* a round trip had settled: DELAY_JUMP judged */
+    uint16_t settled_delay;         /* the settled round trip, clocks */
+    uint8_t delay_spread;           /* largest accepted distance from it, saturating at 255 */
 } biss_result_t;
 
 /* The last result, all of one frame: result.status is read first (it takes the snapshot,
@@ -272,6 +290,7 @@ biss_err_t biss_read_result(biss_channel_t *ch, biss_result_t *res);
 typedef struct {
     uint16_t crc_word0, crc_word1, no_ack, no_start, delay_range, slo_stuck_low;
     uint16_t lc_repeat, lc_skip, lc_zero, spw_mismatch, overrun, aborted, no_stop;
+    uint16_t noisy_line, delay_jump, noise_event;   /* the line checks' statuses, events */
 } biss_counters_t;
 
 biss_err_t biss_read_counters(biss_channel_t *ch, biss_counters_t *cnt);

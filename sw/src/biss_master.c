@@ -80,7 +80,7 @@ const char *biss_error_name(int err)
         "BISS_ERR_CA_ABORTED", "BISS_ERR_CA_DATA_FAULT", "BISS_ERR_CA_BAD_REQUEST",
         "BISS_ERR_NOT_BP3", "BISS_ERR_BP3_FIELD", "BISS_ERR_NO_EDS", "BISS_ERR_EDS_CHECKSUM",
         "BISS_ERR_EDS_MISMATCH", "BISS_ERR_BANK_SELECT", "BISS_ERR_UNSUPPORTED",
-        "BISS_ERR_CA_SHORT",
+        "BISS_ERR_CA_SHORT", "BISS_ERR_LINE_CHECK",
     };
     if (err > 0 || (unsigned)-err >= sizeof names / sizeof names[0])
         return "?";
@@ -92,7 +92,7 @@ const char *biss_status_name(unsigned status)
     static const char *const names[] = {
         "OK", "CRC_ERROR_WORD0", "CRC_ERROR_WORD1", "CRC_ERROR_BOTH", "SIGN_OF_LIFE",
         "SPW_MISMATCH", "NO_ACK", "NO_START", "DELAY_RANGE", "SLO_STUCK_LOW", "ABORTED",
-        "BAD_CONFIG", "NO_STOP",
+        "BAD_CONFIG", "NO_STOP", "NOISY_LINE", "DELAY_JUMP",
     };
     return status < sizeof names / sizeof names[0] ? names[status] : "?";
 }
@@ -296,6 +296,10 @@ biss_err_t biss_config_check(const biss_channel_t *ch, const biss_config_t *cfg)
         return BISS_ERR_SPW_CHECK;
     if (!fits(cfg->spw_tolerance, MAX(CH(CFG_CHECKS__SPW_TOLERANCE))))
         return BISS_ERR_SPW_CHECK;
+    if (!fits(cfg->quiet_time, MAX(CH(CFG_QUIET__QUIET_TIME)))
+        || !fits(cfg->noise_limit, MAX(CH(CFG_CHECKS__NOISE_LIMIT)))
+        || !fits(cfg->delay_tolerance, MAX(CH(CFG_CHECKS__DELAY_TOLERANCE))))
+        return BISS_ERR_LINE_CHECK;
     return BISS_OK;
 }
 
@@ -326,9 +330,28 @@ biss_err_t biss_configure(biss_channel_t *ch, const biss_config_t *cfg)
     ch_wr(ch, CHANNEL_OFF(cfg_words), words);
     ch_wr(ch, CHANNEL_OFF(cfg_checks), PUT(cfg->end_check, CH(CFG_CHECKS__END_CHECK))
                                      | PUT(cfg->spw_check, CH(CFG_CHECKS__SPW_CHECK))
-                                     | PUT(cfg->spw_tolerance, CH(CFG_CHECKS__SPW_TOLERANCE)));
+                                     | PUT(cfg->spw_tolerance, CH(CFG_CHECKS__SPW_TOLERANCE))
+                                     | PUT(cfg->noise_limit, CH(CFG_CHECKS__NOISE_LIMIT))
+                                     | PUT(cfg->delay_tolerance,
+                                           CH(CFG_CHECKS__DELAY_TOLERANCE)));
+    ch_wr(ch, CHANNEL_OFF(cfg_quiet), PUT(cfg->quiet_time, CH(CFG_QUIET__QUIET_TIME)));
     if (GET(ch_rd(ch, CHANNEL_OFF(state)), CH(STATE__CONFIG_ERROR)))
         return BISS_ERR_REFUSED;
+    return BISS_OK;
+}
+
+biss_err_t biss_rearm_delay_check(biss_channel_t *ch)
+{
+    uint32_t checks;
+    if (!channel_ok(ch))
+        return BISS_ERR_ARG;
+    /* Tolerance 15 forgets the settled round trip in the clock it is written (docs/ports.md);
+     * the next write restores the setting. */
+    checks = ch_rd(ch, CHANNEL_OFF(cfg_checks));
+    ch_wr(ch, CHANNEL_OFF(cfg_checks), (checks & ~(uint32_t)CH(CFG_CHECKS__DELAY_TOLERANCE_bm))
+                                     | PUT(MAX(CH(CFG_CHECKS__DELAY_TOLERANCE)),
+                                           CH(CFG_CHECKS__DELAY_TOLERANCE)));
+    ch_wr(ch, CHANNEL_OFF(cfg_checks), checks);
     return BISS_OK;
 }
 
@@ -423,7 +446,7 @@ biss_err_t biss_wait_done(biss_channel_t *ch, uint32_t max_polls)
 
 biss_err_t biss_read_result(biss_channel_t *ch, biss_result_t *res)
 {
-    uint32_t s, seq, lo, hi;
+    uint32_t s, seq, lo, hi, line;
     if (!channel_ok(ch) || res == NULL)
         return BISS_ERR_ARG;
     /* result.status first: reading it takes the snapshot the other registers return. */
@@ -451,6 +474,11 @@ biss_err_t biss_read_result(biss_channel_t *ch, biss_result_t *res)
     hi = GET(ch_rd(ch, CHANNEL_OFF(result.w1_hi)), CH(RESULT__W1_HI__DATA));
     res->word1 = (uint64_t)hi << CH(RESULT__W1_LO__DATA_bw) | lo;
     res->timestamp = GET(ch_rd(ch, CHANNEL_OFF(result.timestamp)), CH(RESULT__TIMESTAMP__TIME));
+    line = ch_rd(ch, CHANNEL_OFF(result.line));
+    res->noise_events = (uint8_t)GET(line, CH(RESULT__LINE__NOISE_EVENTS));
+    res->delay_settled = GET(line, CH(RESULT__LINE__DELAY_SETTLED)) != 0;
+    res->settled_delay = (uint16_t)GET(line, CH(RESULT__LINE__SETTLED_DELAY));
+    res->delay_spread = (uint8_t)GET(line, CH(RESULT__LINE__DELAY_SPREAD));
     return BISS_OK;
 }
 
@@ -479,6 +507,10 @@ biss_err_t biss_read_counters(biss_channel_t *ch, biss_counters_t *cnt)
     cnt->aborted = (uint16_t)GET(w, CH(COUNT_CYCLE__ABORTED));
     w = ch_rd(ch, CHANNEL_OFF(count_stop));
     cnt->no_stop = (uint16_t)GET(w, CH(COUNT_STOP__NO_STOP));
+    cnt->noisy_line = (uint16_t)GET(w, CH(COUNT_STOP__NOISY_LINE));
+    w = ch_rd(ch, CHANNEL_OFF(count_noise));
+    cnt->delay_jump = (uint16_t)GET(w, CH(COUNT_NOISE__DELAY_JUMP));
+    cnt->noise_event = (uint16_t)GET(w, CH(COUNT_NOISE__NOISE_EVENT));
     return BISS_OK;
 }
 

@@ -12,7 +12,10 @@ from master_contract import STATUS
 
 from testkit.block_sim import run_clocks
 
-FAULT_NAMES = [name for name, code in STATUS.items() if code >= STATUS["NO_ACK"]]
+#: The line faults this block reports (issue 28's NOISY_LINE and DELAY_JUMP come with the
+#: noise defences, whose RTL names where they are raised).
+FAULT_NAMES = [name for name, code in STATUS.items()
+               if STATUS["NO_ACK"] <= code <= STATUS["NO_STOP"]]
 OUTPUTS = (["report_frame", "report_delay", "fault", "fault_status"]
            + [f"faults.{name.lower()}" for name in FAULT_NAMES])
 
