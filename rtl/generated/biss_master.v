@@ -10980,11 +10980,11 @@ module \biss_master.timers (timeout_live, quiet_time_live, clk, rst, restart, ma
   input [24:0] no_start_limit;
   wire [24:0] no_start_limit;
   output quiet;
-  reg quiet = 1'h0;
+  reg quiet = 1'h1;
   input [11:0] quiet_limit;
   wire [11:0] quiet_limit;
   output quiet_live;
-  reg quiet_live = 1'h0;
+  reg quiet_live = 1'h1;
   input [11:0] quiet_time_live;
   wire [11:0] quiet_time_live;
   input restart;
@@ -11114,14 +11114,14 @@ module \biss_master.timers (timeout_live, quiet_time_live, clk, rst, restart, ma
     if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
     \$52  = \$23 ;
     if (rst) begin
-      \$52  = 1'h0;
+      \$52  = 1'h1;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
     \$53  = \$30 ;
     if (rst) begin
-      \$53  = 1'h0;
+      \$53  = 1'h1;
     end
   end
   always @* begin

@@ -17631,11 +17631,11 @@ module \biss_master_axil.ch0.core.timers (rst, restart, ma_busy, break_time, tim
   input [24:0] no_start_limit;
   wire [24:0] no_start_limit;
   output quiet;
-  reg quiet = 1'h0;
+  reg quiet = 1'h1;
   input [11:0] quiet_limit;
   wire [11:0] quiet_limit;
   output quiet_live;
-  reg quiet_live = 1'h0;
+  reg quiet_live = 1'h1;
   input [11:0] quiet_time_live;
   wire [11:0] quiet_time_live;
   input restart;
@@ -17765,14 +17765,14 @@ module \biss_master_axil.ch0.core.timers (rst, restart, ma_busy, break_time, tim
     if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
     \$52  = \$23 ;
     if (rst) begin
-      \$52  = 1'h0;
+      \$52  = 1'h1;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
     \$53  = \$30 ;
     if (rst) begin
-      \$53  = 1'h0;
+      \$53  = 1'h1;
     end
   end
   always @* begin
@@ -29534,11 +29534,11 @@ module \biss_master_axil.ch1.core.timers (rst, restart, ma_busy, break_time, tim
   input [24:0] no_start_limit;
   wire [24:0] no_start_limit;
   output quiet;
-  reg quiet = 1'h0;
+  reg quiet = 1'h1;
   input [11:0] quiet_limit;
   wire [11:0] quiet_limit;
   output quiet_live;
-  reg quiet_live = 1'h0;
+  reg quiet_live = 1'h1;
   input [11:0] quiet_time_live;
   wire [11:0] quiet_time_live;
   input restart;
@@ -29668,14 +29668,14 @@ module \biss_master_axil.ch1.core.timers (rst, restart, ma_busy, break_time, tim
     if (\$auto$verilog_backend.cc:2355:dump_module$128 ) begin end
     \$52  = \$23 ;
     if (rst) begin
-      \$52  = 1'h0;
+      \$52  = 1'h1;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$128 ) begin end
     \$53  = \$30 ;
     if (rst) begin
-      \$53  = 1'h0;
+      \$53  = 1'h1;
     end
   end
   always @* begin

@@ -17458,11 +17458,11 @@ module \biss_master_wb.ch0.core.timers (rst, restart, ma_busy, break_time, timeo
   input [24:0] no_start_limit;
   wire [24:0] no_start_limit;
   output quiet;
-  reg quiet = 1'h0;
+  reg quiet = 1'h1;
   input [11:0] quiet_limit;
   wire [11:0] quiet_limit;
   output quiet_live;
-  reg quiet_live = 1'h0;
+  reg quiet_live = 1'h1;
   input [11:0] quiet_time_live;
   wire [11:0] quiet_time_live;
   input restart;
@@ -17592,14 +17592,14 @@ module \biss_master_wb.ch0.core.timers (rst, restart, ma_busy, break_time, timeo
     if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
     \$52  = \$23 ;
     if (rst) begin
-      \$52  = 1'h0;
+      \$52  = 1'h1;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
     \$53  = \$30 ;
     if (rst) begin
-      \$53  = 1'h0;
+      \$53  = 1'h1;
     end
   end
   always @* begin
@@ -29361,11 +29361,11 @@ module \biss_master_wb.ch1.core.timers (rst, restart, ma_busy, break_time, timeo
   input [24:0] no_start_limit;
   wire [24:0] no_start_limit;
   output quiet;
-  reg quiet = 1'h0;
+  reg quiet = 1'h1;
   input [11:0] quiet_limit;
   wire [11:0] quiet_limit;
   output quiet_live;
-  reg quiet_live = 1'h0;
+  reg quiet_live = 1'h1;
   input [11:0] quiet_time_live;
   wire [11:0] quiet_time_live;
   input restart;
@@ -29495,14 +29495,14 @@ module \biss_master_wb.ch1.core.timers (rst, restart, ma_busy, break_time, timeo
     if (\$auto$verilog_backend.cc:2355:dump_module$128 ) begin end
     \$52  = \$23 ;
     if (rst) begin
-      \$52  = 1'h0;
+      \$52  = 1'h1;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$128 ) begin end
     \$53  = \$30 ;
     if (rst) begin
-      \$53  = 1'h0;
+      \$53  = 1'h1;
     end
   end
   always @* begin

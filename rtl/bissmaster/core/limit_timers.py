@@ -38,7 +38,8 @@ class LimitTimers(wiring.Component):
     ``2**12``. ``quiet`` (latched ``quiet_limit``) and ``quiet_live`` (live ``quiet_time_live``,
     0 -> ``quiet_default``; for the cycle's first clock) flag that SLO has been high for at
     least the quiet time, this clock included, registered one clock ahead: read in a clock in
-    which SLO is high, each is exact for that clock.
+    which SLO is high, each is exact for that clock. Both are 1 after reset (the line idles
+    high), until the first clock's inputs are in.
 
     ``delay_over``: the measured round trip is above ``delay_limit``, registered (the delay is
     final at least two clocks before the controller reads this).
@@ -72,8 +73,8 @@ class LimitTimers(wiring.Component):
             "slo_stuck": Out(1),
             "slo_stuck_live": Out(1),
             "delay_over": Out(1),
-            "quiet": Out(1),
-            "quiet_live": Out(1),
+            "quiet": Out(1, init=1),
+            "quiet_live": Out(1, init=1),
         })
 
     def elaborate(self, platform):

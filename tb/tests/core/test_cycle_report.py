@@ -12,8 +12,8 @@ from master_contract import STATUS
 
 from testkit.block_sim import run_clocks
 
-#: The line faults this block reports (issue 28's NOISY_LINE and DELAY_JUMP come with the
-#: noise defences, whose RTL names where they are raised).
+#: The statuses that end a cycle without a frame (docs/ports.md: codes 6..12); NOISY_LINE and
+#: DELAY_JUMP judge a frame (FrameVerdict).
 FAULT_NAMES = [name for name, code in STATUS.items()
                if STATUS["NO_ACK"] <= code <= STATUS["NO_STOP"]]
 OUTPUTS = (["report_frame", "report_delay", "fault", "fault_status"]

@@ -5,9 +5,13 @@ Cycle conventions and where expected values come from: ``block_sim.py``. The tim
 (the block's docstring, docs/ports.md "Limits to the clock"): after the last clock ``c`` with
 ``clear`` high, the elapsed time is 0 in clock ``c + 1`` and one more in every clock after; a flag
 read in clock ``t`` is exact for the elapsed time of clock ``t``, with the live inputs (break time,
-gates) of clock ``t - 1``. The SLO-low time in clock ``t`` is the number of clocks right before
-``t`` with SLO low and MA idle; a flag is up when it is >= the limit. Defaults: 40 us break,
-80 us timeout (twice the slave's longest static timeout).
+gates) of clock ``t - 1``. The SLO-high time in clock ``t`` is the number of clocks up to
+``t`` with SLO high; ``quiet`` in a clock with SLO high is that time >= the quiet time (of the
+clock before; 0 -> 1 us for ``quiet_live``), and 1 in the first clock after reset. The SLO-low
+time in clock ``t`` is the number of clocks right before ``t`` in which neither MA was busy nor
+SLO high and quiet (a high pulse shorter than the quiet time does not restart it); a flag is up
+when it is >= the limit. Defaults: 40 us break, 80 us timeout (twice the slave's longest static
+timeout), 1 us quiet time.
 """
 
 import random
@@ -23,11 +27,12 @@ from testkit.block_sim import protocol_clocks, run_clocks, simulate
 PARAMS = MasterParams(sys_clk_hz=1_000_000, timer_width=16, max_line_delay=100)
 BREAK_DEFAULT = protocol_clocks(40, PARAMS.sys_clk_hz)
 TIMEOUT_DEFAULT = protocol_clocks(80, PARAMS.sys_clk_hz)
+QUIET_DEFAULT = protocol_clocks(1, PARAMS.sys_clk_hz)
 FLAGS = ["break_over", "ack_expired", "no_start_expired", "slo_stuck", "slo_stuck_live",
-         "delay_over"]
+         "delay_over", "quiet", "quiet_live"]
 QUIET = {"slo": 1, "ma_busy": 0, "clear": 0, "in_clock": 0, "restart": 0, "break_time": 1000,
          "timeout_live": 1000, "ack_limit": 1000, "timeout_limit": 1000, "no_start_limit": 1000,
-         "delay": 0, "delay_limit": 50}
+         "delay": 0, "delay_limit": 50, "quiet_limit": 0, "quiet_time_live": 0}
 
 
 def reference(steps):
@@ -35,6 +40,7 @@ def reference(steps):
     out = []
     elapsed = None              # unknown until the first clear
     low = 0                     # SLO-low time
+    high = 0                    # SLO-high time up to the clock before
     prev = None
     for s in ({**QUIET, **s} for s in steps):
         row = dict.fromkeys(FLAGS, 0)
@@ -44,13 +50,23 @@ def reference(steps):
             counting = prev["in_clock"] and not prev["restart"]
             row["ack_expired"] = int(counting and elapsed >= prev["ack_limit"])
             row["no_start_expired"] = int(counting and elapsed >= prev["no_start_limit"])
+        # The quiet flags: exact in a clock with SLO high (registered from the clock before, and
+        # written in every clock: in a low clock, what they would be had SLO gone high).
+        if prev is None:
+            row["quiet"] = row["quiet_live"] = 1
+        else:
+            run = high + 1 if prev["slo"] else 1
+            row["quiet"] = int(run >= prev["quiet_limit"])
+            row["quiet_live"] = int(run >= (prev["quiet_time_live"] or QUIET_DEFAULT))
         if prev is not None:
             row["slo_stuck"] = int(low >= prev["timeout_limit"])
             row["slo_stuck_live"] = int(low >= (prev["timeout_live"] or TIMEOUT_DEFAULT))
             row["delay_over"] = int(prev["delay"] > prev["delay_limit"])
         out.append(row)
         elapsed = 0 if s["clear"] else (None if elapsed is None else elapsed + 1)
-        low = low + 1 if not s["slo"] and not s["ma_busy"] else 0
+        restart = (s["slo"] and row["quiet"]) or s["ma_busy"]
+        low = 0 if restart else low + 1
+        high = high + 1 if s["slo"] else 0
         prev = s
     return out
 
@@ -204,7 +220,10 @@ def test_limit_timers_saturate_instead_of_wrapping():
         cycle_up, low_up = int(elapsed >= 2**tw - 1), int(elapsed + 1 >= 2**tw - 1)
         expected = {"break_over": cycle_up, "ack_expired": cycle_up, "slo_stuck": low_up,
                     "slo_stuck_live": low_up, "delay_over": 0,
-                    "no_start_expired": int(elapsed >= 2**(tw + 1) - 1)}
+                    "no_start_expired": int(elapsed >= 2**(tw + 1) - 1),
+                    # SLO low, a quiet time of 0 (latched) and 1 us = 1 clock (live): a high
+                    # clock now would already be quiet.
+                    "quiet": 1, "quiet_live": int(QUIET_DEFAULT <= 1)}
         assert flags == expected, elapsed
 
 
@@ -229,3 +248,46 @@ def test_limit_timers_no_start_limit_above_17_bits_on_a_16_bit_build():
 
     simulate(dut, tb)
     assert seen == {2**17 - 1: 0, limit - 1: 0, limit: 1, limit + 1: 1}
+
+
+@pytest.mark.parametrize("flag, setting, quiet",
+                         [("quiet", 1, 1), ("quiet", 4, 4), ("quiet", 30, 30),
+                          ("quiet_live", 3, 3), ("quiet_live", 0, QUIET_DEFAULT)])
+def test_limit_timers_quiet_flag_after_the_quiet_time(flag, setting, quiet):
+    """SLO high for quiet - 1, quiet and quiet + 1 clocks, low in between: the flag reads 1 in a
+    high clock exactly from the quiet-th high clock on."""
+    limit_input = "quiet_limit" if flag == "quiet" else "quiet_time_live"
+    steps = []
+    for high in (quiet - 1, quiet, quiet + 1):
+        steps += [{"slo": 0}] * 3 + [{"slo": 1}] * high
+    steps = [{**s, limit_input: setting} for s in steps] + [{"slo": 0, limit_input: setting}]
+    trace = _run(steps)
+    assert [x[flag] for x in trace] == [x[flag] for x in reference(steps)]
+    quiet_high = [t for t, (s, x) in enumerate(zip(steps, trace)) if s["slo"] and x[flag]]
+    start = 3 + (quiet - 1) + 3
+    assert quiet_high[0] == start + quiet - 1 if quiet > 1 else quiet_high
+
+
+def test_limit_timers_slo_low_time_runs_through_high_pulses_shorter_than_the_quiet_time():
+    """A toggling line (noise) never restarts the SLO-low timer unless SLO stays high for the
+    quiet time: SLO_STUCK_LOW comes although SLO is never low for the limit in one piece, so
+    WAIT_READY cannot wait forever."""
+    t = {"timeout_limit": 12, "timeout_live": 12, "quiet_limit": 4, "quiet_time_live": 4}
+    steps = [{**t, "slo": 1}] * 6 + ([{**t, "slo": 0}] * 2 + [{**t, "slo": 1}] * 3) * 6
+    trace = _run(steps)
+    for flag in ("slo_stuck", "slo_stuck_live", "quiet"):
+        assert [x[flag] for x in trace] == [x[flag] for x in reference(steps)], flag
+    assert any(x["slo_stuck"] for x in trace)
+    # High for the quiet time restarts it.
+    steps = [{**t, "slo": 1}] * 6 + ([{**t, "slo": 0}] * 2 + [{**t, "slo": 1}] * 4) * 6
+    trace = _run(steps)
+    assert [x["slo_stuck"] for x in trace] == [x["slo_stuck"] for x in reference(steps)]
+    assert not any(x["slo_stuck"] for x in trace)
+
+
+def test_limit_timers_slo_high_time_saturates():
+    """SLO high far longer than the widest quiet time (2**12 - 1 clocks): still quiet."""
+    steps = [{"slo": 0, "quiet_limit": 4095}] + [{"slo": 1, "quiet_limit": 4095}] * 4200
+    trace = _run(steps)
+    ups = [t for t, x in enumerate(trace) if x["quiet"]]
+    assert ups[1:] == list(range(4095, 4201))
