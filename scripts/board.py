@@ -54,6 +54,12 @@ def log(msg):
     print(msg, flush=True)
 
 
+def rel(path):
+    """``path`` relative to the repository when it is inside it (for messages)."""
+    path = Path(path)
+    return path.relative_to(ROOT) if path.is_relative_to(ROOT) else path
+
+
 def yosys_cells(rpt):
     """{cell type: count} of the last ``stat`` in Yosys's log (the end of synth_*): the design
     hierarchy's totals, submodules included, when it prints them."""
@@ -105,8 +111,8 @@ def write_plan(board, seed):
     p = plan(board, board.name, seed)
     p.extract(where)
     p.archive(OUT / f"{board.name}-plan.zip")
-    log(f"board: {board.name}: build plan (no tool run) in {where.relative_to(ROOT)}/ and "
-        f"{(OUT / f'{board.name}-plan.zip').relative_to(ROOT)}: {', '.join(sorted(p.files))}")
+    log(f"board: {board.name}: build plan (no tool run) in {rel(where)}/ and "
+        f"{rel(OUT / f'{board.name}-plan.zip')}: {', '.join(sorted(p.files))}")
     if board.family == "xilinx":
         log("board: Vivado builds it with `vivado -mode batch -source top.tcl` in that folder "
             "(or sh build_top.sh)")
@@ -122,7 +128,7 @@ def build(board, seed):
         f"{' (PLL from ' + format(board.clock_hz / 1e6, 'g') + ' MHz)' if board.pll else ''}, "
         f"{len(board.channels)} channel(s) of preset {board.preset}, UART {board.baud} baud")
     log(f"board: Yosys, nextpnr (seed {seed}), {TOOLS[board.family][list(TOOLS[board.family])[-1]]}"
-        f" in {where.relative_to(ROOT)}/")
+        f" in {rel(where)}/")
     t0 = time.time()
     p = plan(board, board.name, seed)
     try:
@@ -157,7 +163,7 @@ def build(board, seed):
         "constraint_mhz": {name: v["constraint"] for name, v in fmax.items()},
     }
     bitstream = where / BITSTREAM[board.family]
-    figures["bitstream"] = str(bitstream.relative_to(ROOT)) if bitstream.exists() else None
+    figures["bitstream"] = str(rel(bitstream)) if bitstream.exists() else None
     (where / "figures.json").write_text(json.dumps(figures, indent=2) + "\n")
 
     log(f"board: Yosys: {figures['lut4']} LUT4, {figures['ff']} FF, {figures['carry']} carry")
@@ -172,9 +178,9 @@ def build(board, seed):
         for name in failed:
             log("\n".join(critical_path(where / "top.tim", name)))
         sys.exit(f"board: {board.name}: timing not met at the board clock ({', '.join(failed)}); "
-                 f"the critical path above, the whole log in {(where / 'top.tim').relative_to(ROOT)}")
+                 f"the critical path above, the whole log in {rel(where / 'top.tim')}")
     if figures["bitstream"] is None:
-        sys.exit(f"board: no bitstream {bitstream.relative_to(ROOT)}")
+        sys.exit(f"board: no bitstream {rel(bitstream)}")
     log(f"board: {board.name}: timing met; bitstream {figures['bitstream']} "
         f"({bitstream.stat().st_size} bytes, {seconds:.0f} s)")
 

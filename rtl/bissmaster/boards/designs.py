@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 
 from amaranth.build import Attrs, DiffPairs, Pins, PinsN, Resource, Subsignal
 from amaranth.hdl import *
+from amaranth.lib import io
 from amaranth.lib.cdc import ResetSynchronizer
 
 from ..generate import preset_params
@@ -124,47 +125,56 @@ class BoardTop(Elaboratable):
     def elaborate(self, platform):
         b = self.board
         m = Module()
+
+        def buffer(name, direction, port):
+            """An I/O buffer (amaranth.lib.io.Buffer: the platform's, e.g. IBUFDS for a pair)."""
+            m.submodules[name] = buf = io.Buffer(direction, port)
+            return buf
+
         m.domains.sync = cd_sync = ClockDomain("sync")
         pll = b.pll
         locked = Signal()
+        clock = platform.request(b.clock, 0, dir="-")
         if pll is None:
-            m.d.comb += [cd_sync.clk.eq(platform.request(b.clock, 0).i), locked.eq(1)]
+            m.d.comb += [cd_sync.clk.eq(buffer("clk_buf", "i", clock).i), locked.eq(1)]
         elif b.family == "ice40":
             # SB_PLL40_PAD takes the clock pin itself (no input buffer in front of it).
-            pad = platform.request(b.clock, 0, dir="-")
-            m.submodules.pll = pll.instance(pad, cd_sync.clk, locked)
+            m.submodules.pll = pll.instance(clock, cd_sync.clk, locked)
         else:
-            m.submodules.pll = pll.instance(platform.request(b.clock, 0).i, cd_sync.clk, locked)
+            m.submodules.pll = pll.instance(buffer("clk_buf", "i", clock).i, cd_sync.clk, locked)
         # No clock constraint on the PLL's output: nextpnr derives it from the input pin's
         # (the platform's Clock on the oscillator) and the PLL's dividers, and
         # scripts/board.py checks that the design's clock was timed at sys_clk_hz. (Amaranth
         # names the net by one of the fragments that use it, a name Yosys does not keep.)
+
         # Reset while the PLL has not locked or the button is pressed; asserted at once,
         # released on the clock (amaranth.lib.cdc.ResetSynchronizer).
         arst = Signal()
         m.d.comb += arst.eq(~locked)
         if b.reset is not None:
-            m.d.comb += arst.eq(~locked | platform.request(*b.reset).i)
+            button = buffer("reset_buf", "i", platform.request(*b.reset, dir="-"))
+            m.d.comb += arst.eq(~locked | button.i)
         m.submodules.reset_sync = ResetSynchronizer(arst, domain="sync")
 
         m.submodules.logic = logic = self.logic
-        uart = platform.request("uart", 0)
-        m.d.comb += [logic.uart_rx.eq(uart.rx.i), uart.tx.o.eq(logic.uart_tx)]
+        uart = platform.request("uart", 0, dir="-")
+        m.d.comb += [logic.uart_rx.eq(buffer("uart_rx_buf", "i", uart.rx).i),
+                     buffer("uart_tx_buf", "o", uart.tx).o.eq(logic.uart_tx)]
         for n in range(len(b.channels)):
-            pins = platform.request("biss", n)
-            m.d.comb += [pins.ma.o.eq(getattr(logic, f"ch{n}_ma")),
-                         getattr(logic, f"ch{n}_slo").eq(pins.slo.i),
-                         pins.de.o.eq(getattr(logic, f"ch{n}_de"))]
+            pins = platform.request("biss", n, dir="-")
+            m.d.comb += [buffer(f"ch{n}_ma_buf", "o", pins.ma).o.eq(getattr(logic, f"ch{n}_ma")),
+                         getattr(logic, f"ch{n}_slo").eq(buffer(f"ch{n}_slo_buf", "i", pins.slo).i),
+                         buffer(f"ch{n}_de_buf", "o", pins.de).o.eq(getattr(logic, f"ch{n}_de"))]
             if hasattr(pins, "re"):
-                m.d.comb += pins.re.o.eq(getattr(logic, f"ch{n}_re"))
+                m.d.comb += buffer(f"ch{n}_re_buf", "o", pins.re).o.eq(getattr(logic, f"ch{n}_re"))
         requested = {}
         for signal, (name, number, *sub) in b.leds.items():
             if (name, number) not in requested:       # an RGB LED: once for its colours
-                requested[name, number] = platform.request(name, number)
-            led = requested[name, number]
+                requested[name, number] = platform.request(name, number, dir="-")
+            port = requested[name, number]
             if sub:
-                led = getattr(led, sub[0])
-            m.d.comb += led.o.eq(getattr(logic, signal))
+                port = getattr(port, sub[0])
+            m.d.comb += buffer(f"{signal}_buf", "o", port).o.eq(getattr(logic, signal))
         return m
 
 
