@@ -176,7 +176,11 @@ def build(board, seed):
             f"{'FAILED' if name in failed else 'met'}")
     if failed:
         for name in failed:
+            # (its "Defined in" lines name the Amaranth source line of each cell)
             log("\n".join(critical_path(where / "top.tim", name)))
+        # nextpnr finished (--timing-allow-fail) and the packer ran: no bitstream of a design
+        # that misses its clock is left to be programmed.
+        bitstream.unlink(missing_ok=True)
         sys.exit(f"board: {board.name}: timing not met at the board clock ({', '.join(failed)}); "
                  f"the critical path above, the whole log in {rel(where / 'top.tim')}")
     if figures["bitstream"] is None:
