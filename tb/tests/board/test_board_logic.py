@@ -1,17 +1,20 @@
 """A board design's logic in the Amaranth simulator, at the board's own clock and baud rate
 (iCEBreaker: 24 MHz, 115200 baud, 208 clocks per bit): it answers a PING and a READ of the
 register map's ``id`` over its UART pins, byte for byte as docs/uart_bridge.md frames them, and
-its transceiver enables are off in reset and on after it. Everything of the board but the PLL
-and the I/O buffers (tb/tests/board/test_board_designs.py elaborates those)."""
+its transceiver enables are off in reset and on after it; with a faster UART, its status LEDs
+follow a frame from an encoder and a cycle without one. Everything of the board but the PLL and
+the I/O buffers (tb/tests/board/test_board_designs.py elaborates those)."""
 
 import pytest
 from amaranth.hdl import ClockDomain, Module
 from amaranth.sim import Simulator
 
-from bissmaster.boards import BOARDS
+from bissmaster.boards import BOARDS, BoardLogic
 from bissmaster.boards.logic import PulseStretcher, heartbeat_half_clocks, led_hold_clocks
 from bissmaster.bus import regmap
 from bissmaster.host.link import crc8, encode_request
+from master_contract import CRC_CODE
+from testkit.limits_bench import FRAME, Encoder
 
 MAP = regmap.load()
 ID = next(r for r in MAP.globals if r.path == "id")
@@ -137,3 +140,72 @@ def test_led_times_at_the_board_clock():
     assert led_hold_clocks(80_000_000) == 4_000_000           # 50 ms
     assert heartbeat_half_clocks(80_000_000) == 40_000_000    # 0.5 s
     assert heartbeat_half_clocks(24_000_000) == 12_000_000
+
+
+# -- The status LEDs against frames -------------------------------------------------------------
+
+def _field(path, name, value):
+    reg = next(r for r in MAP.channel if r.path == path)
+    return value << reg.field(name).lsb
+
+
+def _channel_address(path):
+    return MAP.channel_address(0, next(r for r in MAP.channel if r.path == path))
+
+
+def test_leds_follow_the_frames():
+    """The iCEBreaker's logic (its clock and core), the UART at 4 clocks per bit to keep the run
+    short: configured over the UART for a 4-bit BiSS C word with nE/nW and CRC-6, a cycle with
+    an encoder (limits_bench.Encoder, frame bits from the independent encoder model) lights the
+    valid LED and not the fault LED; a cycle with no encoder (SLO idle high) then lights the
+    fault LED. Every register access is answered OK."""
+    board = BOARDS["icebreaker"]
+    div = 4
+    logic = BoardLogic(len(board.channels), board.params, baud=board.sys_clk_hz // div)
+    m = Module()
+    m.domains.sync = ClockDomain()
+    m.submodules.logic = logic
+    sim = Simulator(m)
+    sim.add_clock(1 / board.sys_clk_hz)
+    hp = 4
+    encoder = Encoder(hp=hp, bits=FRAME)
+    seen = {}
+
+    async def bench(ctx):
+        line = Line(div)
+
+        async def step():
+            ctx.set(logic.ch0_slo, encoder.step(ctx.get(logic.ch0_ma)))
+            line.sample(ctx.get(logic.uart_tx))
+            await ctx.tick()
+
+        async def write(tag, address, value):
+            before = len(line.bytes)
+            for level in [1] * 25 * div + uart_levels(encode_request("WRITE", tag, address, value), div):
+                ctx.set(logic.uart_rx, level)
+                await step()
+            for _ in range(60 * div):
+                await step()
+            body = bytes([0x5A, tag << 4 | 0x2, 0x00])
+            assert bytes(line.bytes[before:]) == body + bytes([crc8(body)]), hex(address)
+
+        async def cycle():
+            for _ in range(2000):
+                await step()
+
+        await write(1, _channel_address("cfg_ma"), _field("cfg_ma", "ma_half_period", hp))
+        await write(2, _channel_address("cfg_words"),
+                    _field("cfg_words", "w0_data_bits", 4) | _field("cfg_words", "w0_nenw", 1)
+                    | _field("cfg_words", "w0_crc", CRC_CODE["crc6"]))
+        await write(3, _channel_address("ctrl"), _field("ctrl", "start", 1))
+        await cycle()
+        seen["after_frame"] = (ctx.get(logic.ch0_valid_led), ctx.get(logic.ch0_fault_led))
+        encoder.present = False
+        await write(4, _channel_address("ctrl"), _field("ctrl", "start", 1))
+        await cycle()
+        seen["after_no_encoder"] = (ctx.get(logic.ch0_valid_led), ctx.get(logic.ch0_fault_led))
+
+    sim.add_testbench(bench)
+    sim.run()
+    assert seen["after_frame"] == (1, 0)
+    assert seen["after_no_encoder"] == (1, 1)      # valid still held from the first frame
