@@ -113,6 +113,11 @@ bench: setup  ## simulated performance: cycle overhead, verdict latency, line-de
 synth: setup  ## Yosys + nextpnr: LUT4/FF/carry and Fmax of the core presets, the AXI4-Lite bus top (1, 4 channels) and four cores without a bus (the control) on ECP5-25k and iCE40 UP5K (docs/performance.md); VARIANTS=n: n netlists each
 	$(PY) scripts/synth.py --variants $(VARIANTS)
 
+.PHONY: board
+board: setup  ## a board design (docs/bench.md), BOARD=ulx3s-85f|ulx3s-25f|icebreaker: Yosys + nextpnr + packer, fails unless timing is met at the board clock; BOARD=arty-a7-35 PLAN=1: the Vivado build plan (TCL, XDC), no tool run
+	@test -n "$(BOARD)" || { echo "make board: give BOARD=<name> (ulx3s-85f, ulx3s-25f, icebreaker; arty-a7-35 with PLAN=1)"; exit 2; }
+	$(PY) scripts/board.py $(BOARD) $(if $(PLAN),--plan) $(if $(SEED),--seed $(SEED))
+
 .PHONY: formal
 formal: setup  ## formal checks (Yosys SMT flow + Yices): MA never glitches, back to idle, CRC; FAST=1: the slice
 	$(PY) tb/formal/run.py $(if $(FAST),--fast)

@@ -18,7 +18,7 @@ without it they are refused in one line, and the core needs nothing more.
 import argparse
 import importlib.util
 import sys
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from importlib import metadata
 
 from amaranth.back import verilog
@@ -273,6 +273,17 @@ def _params(ap, args):
                             start_wait_frames=args.start_wait_frames)
     except ValueError as e:
         ap.error(str(e))
+
+
+def preset_params(preset="default", **overrides):
+    """The :class:`MasterParams` of ``--preset preset`` (a :data:`PRESETS` name), with
+    ``overrides`` (MasterParams fields, e.g. ``sys_clk_hz``) on top: what the command line
+    builds for ``--preset preset`` and those options (the board designs use it)."""
+    if preset not in PRESETS:
+        raise ValueError(f"preset must be one of {', '.join(PRESETS)}, not {preset!r}")
+    ap = _parser()[0]
+    params = _params(ap, ap.parse_args(PRESETS[preset][1]))
+    return replace(params, **overrides)
 
 
 def list_presets(ap=None):

@@ -99,10 +99,14 @@ class BusChannel(wiring.Component):
         The global trigger; starts the core when ``trigger_enable`` is set.
     ma : Out(1)
     slo : In(1)
+    frame_valid, frame_error : Out(1)
+        Only with ``status=True`` (a board's LEDs): one-clock pulses when a cycle ends with a
+        valid frame, or with any other status (``frame_error`` of the register map).
     """
 
-    def __init__(self, params, regs):
+    def __init__(self, params, regs, status=False):
         self.params = params
+        self.status = status
         full = BissMaster.ports(MasterParams())
         core = BissMaster.ports(params)
         for name, member in regs.members.items():
@@ -119,6 +123,7 @@ class BusChannel(wiring.Component):
             "trigger": In(1),
             "ma": Out(1, init=1),
             "slo": In(1, init=1),
+            **({"frame_valid": Out(1), "frame_error": Out(1)} if status else {}),
         })
 
     def elaborate(self, platform):
@@ -158,6 +163,9 @@ class BusChannel(wiring.Component):
             self.ma.eq(core.ma),
             core.slo.eq(self.slo),
         ]
+        if self.status:
+            m.d.comb += [self.frame_valid.eq(core.done & core.valid),
+                         self.frame_error.eq(core.done & ~core.valid)]
         return m
 
 
@@ -178,6 +186,10 @@ class BusTop(wiring.Component):
         The bus's own parameters (:attr:`Bus.options`): for ``"uart"``, ``baud`` (default
         115200) and ``timeout_bits`` (the inter-byte timeout, default 1000), at the cores'
         ``sys_clk_hz``, which every channel must then share.
+    status : bool
+        Add the ports ``ch<n>_frame_valid`` and ``ch<n>_frame_error`` (one-clock pulses at the
+        end of each cycle: a valid frame, or any other status), for a board's status LEDs
+        (``bissmaster.boards``). Off by default: the generated bus tops do not have them.
 
     Attributes
     ----------
@@ -192,7 +204,8 @@ class BusTop(wiring.Component):
         One MA/SLO pair per channel n (asynchronous SLO, synchronized in each core).
     """
 
-    def __init__(self, bus="axil", channels=2, params=None, regmap=None, **options):
+    def __init__(self, bus="axil", channels=2, params=None, regmap=None, status=False,
+                 **options):
         if bus not in BUSES:
             raise ValueError(f"bus must be one of {sorted(BUSES)}, not {bus!r}")
         spec = BUSES[bus]
@@ -227,7 +240,8 @@ class BusTop(wiring.Component):
                              f"made by the bus top")
         regs = block_signature(self.regmap, self.regmap.channel)
         # Built here, so that a register map the cores cannot follow is refused at once.
-        self._channels = [BusChannel(p, regs) for p in params]
+        self.status = status
+        self._channels = [BusChannel(p, regs, status) for p in params]
         self._bus_members = list(spec.signature(self.regmap.addr_width).flip()
                                  .members.flatten())
         super().__init__({
@@ -236,6 +250,8 @@ class BusTop(wiring.Component):
             "irq": Out(1),
             **{f"ch{n}_{pin}": member for n in range(channels)
                for pin, member in (("ma", Out(1, init=1)), ("slo", In(1, init=1)))},
+            **{f"ch{n}_{pin}": Out(1) for n in range(channels) if status
+               for pin in ("frame_valid", "frame_error")},
         })
 
     def elaborate(self, platform):
@@ -265,6 +281,9 @@ class BusTop(wiring.Component):
             m.d.comb += [channel.trigger.eq(trigger),
                          getattr(self, f"ch{n}_ma").eq(channel.ma),
                          channel.slo.eq(getattr(self, f"ch{n}_slo"))]
+            if self.status:
+                m.d.comb += [getattr(self, f"ch{n}_frame_valid").eq(channel.frame_valid),
+                             getattr(self, f"ch{n}_frame_error").eq(channel.frame_error)]
 
         m.d.comb += [bank.glob.channels.eq(self.channels), bank.glob.irq_pending.eq(bank.irq)]
         m.d.sync += self.irq.eq(bank.irq.any())

@@ -4,7 +4,8 @@ The shared definitions (``protocol``, ``params``, ``layouts``) import only each 
 channel (``core``) and the control channel (``control``) import the shared definitions and
 themselves; ``master`` connects the two; the bus side (``bus``) builds on ``master``; host
 software (``host``) imports no hardware at all. Every import of every module is checked,
-function-level imports included, by reading the source (nothing is imported here).
+function-level imports included, by reading the source (nothing is imported here). The board
+designs (``boards``) build on the bus top and the generator's presets.
 """
 
 import ast
@@ -28,6 +29,8 @@ ALLOWED = {
     "bus": {"shared", "master", "bus"},
     "host": {"shared", "host"},
     "generate": {"api", "shared", "master", "bus"},
+    # The board designs: the bus top and a preset's parameters, on a board's platform.
+    "boards": {"shared", "bus", "generate"},
     # The thin re-exports of the old public names: each may import its new home only.
     "reexport:bp3": {"host"},
     "reexport:control_crc": {"control"},
@@ -44,7 +47,7 @@ def layer(module):
     head = parts[1]
     if head in SHARED:
         return "shared"
-    if head in ("core", "control", "bus", "host", "master", "generate"):
+    if head in ("core", "control", "bus", "host", "master", "generate", "boards"):
         return head
     if head in ("bp3", "control_crc"):
         return f"reexport:{head}"
@@ -103,11 +106,12 @@ def test_imports_run_one_way():
 def test_every_module_has_a_layer():
     modules = [module_name(p, PACKAGE) for p in PACKAGE.rglob("*.py")]
     assert len(modules) > 30
-    assert {layer(m) for m in modules} >= {"shared", "core", "control", "bus", "host", "master"}
+    assert {layer(m) for m in modules} >= {"shared", "core", "control", "bus", "host", "master",
+                                           "boards"}
 
 
 def test_each_subpackage_says_what_it_owns_and_may_import():
-    for sub in ("core", "control", "bus", "host"):
+    for sub in ("core", "control", "bus", "host", "boards"):
         text = (PACKAGE / sub / "README.md").read_text()
         assert "May import" in text and "Never" in text, sub
 
@@ -128,6 +132,8 @@ def _fake_package(tmp_path, files):
     ("core/a.py", "import bissmaster.control.b\n"),
     ("core/a.py", "def f():\n    from ..control.b import X\n"),
     ("host/h.py", "from ..core.a import A\n"),
+    ("boards/b.py", "from ..core.a import A\n"),
+    ("bus/x.py", "from ..boards import b\n"),
     ("params.py", "from .core import a\n"),
 ])
 def test_a_wrong_way_import_is_found(tmp_path, rel, source):

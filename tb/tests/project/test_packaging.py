@@ -85,7 +85,9 @@ def test_wheel_metadata_version_and_pinned_amaranth(wheel):
     requires = [line.split(":", 1)[1].strip() for line in meta.splitlines()
                 if line.startswith("Requires-Dist:")]
     assert requires == [_requirement("amaranth"),      # the same pins as the venv
-                        f"{_requirement('systemrdl-compiler')}; extra == \"bus\""]
+                        f"{_requirement('systemrdl-compiler')}; extra == \"bus\"",
+                        f"{_requirement('amaranth-boards')}; extra == \"boards\"",
+                        f"{_requirement('systemrdl-compiler')}; extra == \"boards\""]
 
 
 def test_wheel_declares_the_console_script(wheel):

@@ -1,0 +1,211 @@
+"""A board design's logic in the Amaranth simulator, at the board's own clock and baud rate
+(iCEBreaker: 24 MHz, 115200 baud, 208 clocks per bit): it answers a PING and a READ of the
+register map's ``id`` over its UART pins, byte for byte as docs/uart_bridge.md frames them, and
+its transceiver enables are off in reset and on after it; with a faster UART, its status LEDs
+follow a frame from an encoder and a cycle without one. Everything of the board but the PLL and
+the I/O buffers (tb/tests/board/test_board_designs.py elaborates those)."""
+
+import pytest
+from amaranth.hdl import ClockDomain, Module
+from amaranth.sim import Simulator
+
+from bissmaster.boards import BOARDS, BoardLogic
+from bissmaster.boards.logic import PulseStretcher, heartbeat_half_clocks, led_hold_clocks
+from bissmaster.bus import regmap
+from bissmaster.host.link import crc8, encode_request
+from master_contract import CRC_CODE
+from testkit.limits_bench import FRAME, Encoder
+
+MAP = regmap.load()
+ID = next(r for r in MAP.globals if r.path == "id")
+ID_VALUE = sum(f.reset << f.lsb for f in ID.fields)
+ID_ADDRESS = ID.offset          # a global register: its offset is its byte address
+
+
+def uart_levels(data, div):
+    """8N1 line levels, one per clock, ``div`` clocks per bit."""
+    out = []
+    for byte in data:
+        for bit in [0] + [(byte >> i) & 1 for i in range(8)] + [1]:
+            out += [bit] * div
+    return out
+
+
+class Line:
+    """Receives the design's ``uart_tx``: samples each bit in its middle."""
+
+    def __init__(self, div):
+        self.div, self.start, self.bits, self.bytes, self.clock = div, None, [], [], 0
+
+    def sample(self, level):
+        if self.start is None:
+            if level == 0:
+                self.start, self.bits = self.clock, []
+        else:
+            offset = self.clock - self.start
+            if offset % self.div == self.div // 2 and offset > self.div:
+                self.bits.append(level)
+                if len(self.bits) == 9:
+                    assert self.bits[8] == 1, "stop bit 0"
+                    self.bytes.append(sum(b << i for i, b in enumerate(self.bits[:8])))
+                    self.start = None
+        self.clock += 1
+
+
+@pytest.fixture(scope="module")
+def icebreaker_session():
+    """One simulation of the iCEBreaker's logic: reset, a PING, a READ of ``id``; what the
+    design answered and the enables it showed."""
+    board = BOARDS["icebreaker"]
+    logic = board.logic()
+    div = round(board.sys_clk_hz / board.baud)
+    m = Module()
+    m.domains.sync = sync = ClockDomain()
+    m.submodules.logic = logic
+    sim = Simulator(m)
+    sim.add_clock(1 / board.sys_clk_hz)
+    seen = {"div": div, "answers": []}
+
+    async def bench(ctx):
+        line = Line(div)
+        ctx.set(sync.rst, 1)
+        for _ in range(3):
+            await ctx.tick()
+        seen["enables_in_reset"] = (ctx.get(logic.ch0_de), ctx.get(logic.ch0_re))
+        ctx.set(sync.rst, 0)
+        for _ in range(3):
+            await ctx.tick()
+        seen["enables_running"] = (ctx.get(logic.ch0_de), ctx.get(logic.ch0_re))
+        seen["ma_idle"] = ctx.get(logic.ch0_ma)
+        for request, length in ((encode_request("PING", 3), 4),
+                                (encode_request("READ", 4, ID_ADDRESS), 8)):
+            before = len(line.bytes)
+            for level in [1] * 25 * div + uart_levels(request, div):
+                ctx.set(logic.uart_rx, level)
+                line.sample(ctx.get(logic.uart_tx))
+                await ctx.tick()
+            for _ in range(12 * length * div):
+                line.sample(ctx.get(logic.uart_tx))
+                await ctx.tick()
+                if len(line.bytes) - before == length and line.start is None:
+                    break
+            seen["answers"].append(bytes(line.bytes[before:]))
+
+    sim.add_testbench(bench)
+    sim.run()
+    return seen
+
+
+def test_board_answers_ping_over_its_uart_pins(icebreaker_session):
+    answer = icebreaker_session["answers"][0]
+    body = bytes([0x5A, 3 << 4 | 0x0, 0x00])          # SYNC_RESPONSE, tag 3 PING, OK
+    assert answer == body + bytes([crc8(body)])
+
+
+def test_board_reads_the_register_map_id(icebreaker_session):
+    answer = icebreaker_session["answers"][1]
+    body = bytes([0x5A, 4 << 4 | 0x1, 0x00]) + ID_VALUE.to_bytes(4, "little")
+    assert ID_VALUE != 0
+    assert answer == body + bytes([crc8(body)])
+
+
+def test_transceiver_enabled_only_out_of_reset(icebreaker_session):
+    assert icebreaker_session["enables_in_reset"] == (0, 0)
+    assert icebreaker_session["enables_running"] == (1, 1)
+    assert icebreaker_session["ma_idle"] == 1
+
+
+def test_led_stretcher_holds_for_its_clocks():
+    m = Module()
+    m.domains.sync = ClockDomain()
+    m.submodules.s = s = PulseStretcher(5)
+    sim = Simulator(m)
+    sim.add_clock(1e-8)
+    trace = []
+
+    async def bench(ctx):
+        ctx.set(s.i, 1)
+        await ctx.tick()
+        ctx.set(s.i, 0)
+        for _ in range(8):
+            trace.append(ctx.get(s.o))
+            await ctx.tick()
+    sim.add_testbench(bench)
+    sim.run()
+    assert trace == [1] * 5 + [0] * 3
+
+
+def test_led_times_at_the_board_clock():
+    assert BOARDS["ulx3s-85f"].sys_clk_hz == 80_000_000
+    assert led_hold_clocks(80_000_000) == 4_000_000           # 50 ms
+    assert heartbeat_half_clocks(80_000_000) == 40_000_000    # 0.5 s
+    assert heartbeat_half_clocks(24_000_000) == 12_000_000
+
+
+# -- The status LEDs against frames -------------------------------------------------------------
+
+def _field(path, name, value):
+    reg = next(r for r in MAP.channel if r.path == path)
+    return value << reg.field(name).lsb
+
+
+def _channel_address(path):
+    return MAP.channel_address(0, next(r for r in MAP.channel if r.path == path))
+
+
+def test_leds_follow_the_frames():
+    """The iCEBreaker's logic (its clock and core), the UART at 4 clocks per bit to keep the run
+    short: configured over the UART for a 4-bit BiSS C word with nE/nW and CRC-6, a cycle with
+    an encoder (limits_bench.Encoder, frame bits from the independent encoder model) lights the
+    valid LED and not the fault LED; a cycle with no encoder (SLO idle high) then lights the
+    fault LED. Every register access is answered OK."""
+    board = BOARDS["icebreaker"]
+    div = 4
+    logic = BoardLogic(len(board.channels), board.params, baud=board.sys_clk_hz // div)
+    m = Module()
+    m.domains.sync = ClockDomain()
+    m.submodules.logic = logic
+    sim = Simulator(m)
+    sim.add_clock(1 / board.sys_clk_hz)
+    hp = 4
+    encoder = Encoder(hp=hp, bits=FRAME)
+    seen = {}
+
+    async def bench(ctx):
+        line = Line(div)
+
+        async def step():
+            ctx.set(logic.ch0_slo, encoder.step(ctx.get(logic.ch0_ma)))
+            line.sample(ctx.get(logic.uart_tx))
+            await ctx.tick()
+
+        async def write(tag, address, value):
+            before = len(line.bytes)
+            for level in [1] * 25 * div + uart_levels(encode_request("WRITE", tag, address, value), div):
+                ctx.set(logic.uart_rx, level)
+                await step()
+            for _ in range(60 * div):
+                await step()
+            body = bytes([0x5A, tag << 4 | 0x2, 0x00])
+            assert bytes(line.bytes[before:]) == body + bytes([crc8(body)]), hex(address)
+
+        async def cycle():
+            for _ in range(2000):
+                await step()
+
+        await write(1, _channel_address("cfg_ma"), _field("cfg_ma", "ma_half_period", hp))
+        await write(2, _channel_address("cfg_words"),
+                    _field("cfg_words", "w0_data_bits", 4) | _field("cfg_words", "w0_nenw", 1)
+                    | _field("cfg_words", "w0_crc", CRC_CODE["crc6"]))
+        await write(3, _channel_address("ctrl"), _field("ctrl", "start", 1))
+        await cycle()
+        seen["after_frame"] = (ctx.get(logic.ch0_valid_led), ctx.get(logic.ch0_fault_led))
+        encoder.present = False
+        await write(4, _channel_address("ctrl"), _field("ctrl", "start", 1))
+        await cycle()
+        seen["after_no_encoder"] = (ctx.get(logic.ch0_valid_led), ctx.get(logic.ch0_fault_led))
+
+    sim.add_testbench(bench)
+    sim.run()
+    assert seen["after_frame"] == (1, 0)
+    assert seen["after_no_encoder"] == (1, 1)      # valid still held from the first frame
