@@ -141,6 +141,9 @@ async def trigger_starts_channels_in_the_same_clock(dut):
     await tb.wait_idle(1)
 
     async def both(fire):
+        # Both lines quiet for the quiet time (1 us, docs/ports.md): a channel whose encoder
+        # has just become ready waits that long before its MA starts.
+        await Timer(1.5, "us")
         await fire()
         res = []
         for ch in range(CHANNELS):

@@ -267,7 +267,8 @@ async def abort_and_break(dut):
     for delay_us in (0.5, 3, 20, 60):
         before = tb.read().counters["aborted"]
         await tb.wait_idle()
-        await tb.encoder_ready()             # so that the abort hits a clocking cycle
+        await tb.encoder_ready()             # so that the abort hits a clocking cycle: the
+        await Timer(1.2, "us")               # encoder ready, SLO high for the quiet time
         await RisingEdge(dut.clk)
         dut.start.value = 1
         await RisingEdge(dut.clk)
@@ -350,13 +351,27 @@ async def periodic_requests_and_overrun(dut):
     records = tb.encoder.records[first:]
     starts = [r.t_first_fall_s for r in records]
     assert min(b - a for a, b in zip(starts, starts[1:])) >= 31.25e-6 - 1e-9
-    # The master's own dead time: from SLO high at its pin to its next MA fall, at most one
-    # MA period (0.1 us) beyond the two synchronizer flops and the controller's decisions.
+    # The master's own dead time: from SLO high at its pin to its next MA fall, the quiet time
+    # (1 us by default: SLO must stay high that long, docs/ports.md) plus at most one MA period
+    # (0.1 us) for the two synchronizer flops and the controller's decisions; with the quiet
+    # time at 1 clock (the check off), that MA period alone.
     cable = Cable(length_m=100)
-    for prev, nxt in zip(records, records[1:]):
-        slo_high_at_master = prev.t_ready_s + 42.5e-9 + cable.e2m_s()
-        dead = nxt.t_first_fall_s - slo_high_at_master
-        assert 0 < dead <= 0.1e-6, f"dead time {dead * 1e9:.1f} ns"
+
+    def dead_times(recs):
+        for prev, nxt in zip(recs, recs[1:]):
+            slo_high_at_master = prev.t_ready_s + 42.5e-9 + cable.e2m_s()
+            yield nxt.t_first_fall_s - slo_high_at_master
+
+    for dead in dead_times(records):
+        assert 1e-6 < dead <= 1.1e-6, f"dead time {dead * 1e9:.1f} ns"
+    dut.cfg_quiet_time.value = 1
+    first = len(tb.encoder.records)
+    for _ in range(4):
+        res = await tb.wait_done()
+        tb.check_frame(res)
+    for dead in list(dead_times(tb.encoder.records[first:]))[1:]:
+        assert 0 < dead <= 0.1e-6, f"dead time {dead * 1e9:.1f} ns (quiet time 1 clock)"
+    dut.cfg_quiet_time.value = 0
     assert res.counters["overrun"] == 0
     assert not tb.encoder.ignored_falls
     # A fixed period of 50 us: one frame per period, start-to-start exact.
@@ -367,8 +382,9 @@ async def periodic_requests_and_overrun(dut):
     first = len(tb.encoder.records)
     for _ in range(5):
         tb.check_frame(await tb.wait_done())
-    # The first request of the new period may wait for the encoder (SLO low): skip it.
-    starts = [r.t_first_fall_s for r in tb.encoder.records[first + 1:]]
+    # The first request of the new period may wait for the encoder (SLO low), and the second
+    # for the quiet time after the first's timeout (docs/ports.md): skip them.
+    starts = [r.t_first_fall_s for r in tb.encoder.records[first + 2:]]
     gaps = {round((b - a) * 1e9) for a, b in zip(starts, starts[1:])}
     assert gaps == {50_000}, gaps
     # A period shorter than the frame: requests are reported as overruns, not dropped silently.

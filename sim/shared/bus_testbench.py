@@ -232,7 +232,7 @@ class BusTestbench:
     async def result(self, ch):
         """The last result: ``result.status`` first (it takes the snapshot), then the rest."""
         res = await self.read_fields("result.status", ch)
-        for path in ("result.seq", "result.timestamp"):
+        for path in ("result.seq", "result.timestamp", "result.line"):
             res.update(await self.read_fields(path, ch))
         for w in range(2):
             lo = await self.read(f"result.w{w}_lo", ch)

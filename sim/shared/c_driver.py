@@ -41,7 +41,8 @@ class Config(Structure):
                 ("request_period", c_uint32), ("break_time", c_uint32),
                 ("ack_limit", c_uint32), ("timeout_limit", c_uint32),
                 ("word", WordFormat * 2), ("word1_enable", c_bool), ("end_check", c_bool),
-                ("spw_check", c_bool), ("spw_tolerance", c_uint8)]
+                ("spw_check", c_bool), ("spw_tolerance", c_uint8),
+                ("quiet_time", c_uint16), ("noise_limit", c_uint8), ("delay_tolerance", c_uint8)]
 
 
 class Preset(Structure):
@@ -58,7 +59,9 @@ class Result(Structure):
                 ("seq", c_uint16), ("line_delay", c_uint16), ("status", c_uint8),
                 ("lc", c_uint8)] + [(n, c_bool) for n in (
                     "cds", "w0_ne", "w0_nw", "w0_crc_ok", "w1_ne", "w1_nw", "w1_crc_ok",
-                    "lc_repeat", "lc_skip", "lc_zero", "spw_mismatch")]
+                    "lc_repeat", "lc_skip", "lc_zero", "spw_mismatch")] + [
+                ("noise_events", c_uint8), ("delay_settled", c_bool), ("settled_delay", c_uint16),
+                ("delay_spread", c_uint8)]
 
     def as_dict(self):
         """The keys of ``BusTestbench.result`` (``time`` for the timestamp), so that
@@ -72,7 +75,7 @@ class Result(Structure):
 #: biss_counters_t, in its field order.
 COUNTER_FIELDS = ("crc_word0", "crc_word1", "no_ack", "no_start", "delay_range", "slo_stuck_low",
                   "lc_repeat", "lc_skip", "lc_zero", "spw_mismatch", "overrun", "aborted",
-                  "no_stop")
+                  "no_stop", "noisy_line", "delay_jump", "noise_event")
 
 
 class Counters(Structure):

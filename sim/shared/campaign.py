@@ -132,7 +132,7 @@ class Campaign:
         await self.settle()
         self.tb.encoder.set_cable(cable)
         if power_up:
-            self.tb.rearm = True
+            self.tb.rearm_delay_check()
         limits = self.line_limits(cable)
         self.cfg.update(limits)
         for name, value in limits.items():

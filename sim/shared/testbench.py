@@ -84,6 +84,7 @@ class Testbench:
         self.encoder = None
         self.pending = []             # MA-rise checks waiting for the encoder to end the cycle
         self.sign_of_life = frames.SignOfLife()     # one encoder: its LC runs on across configs
+        self.delay_tolerance = 0      # cfg_delay_tolerance as configured (rearm_delay_check)
         # A one-word build (BiSS C only) has no word-1, SPW or CRC-16-word ports; a lean
         # build (bissmaster.generate --preset biss-c-lean) no counters and no timestamp.
         self.words = 2 if hasattr(dut, "word1_position") else 1
@@ -185,20 +186,24 @@ class Testbench:
         self.half_period = hp
         self.source = frames.EncoderFrameSource(fmt, self._position_at,
                                                  sign_of_life=self.sign_of_life)
-        # A new setup is a new encoder or cable for the core: re-arm its round-trip check
-        # before the next request, as a user does (docs/ports.md, "Noise: the line checks").
-        self.rearm = True
+        # A new setup is a new encoder or cable for the core: re-arm its round-trip check, as
+        # a user does (docs/ports.md, "Noise: the line checks").
+        self.delay_tolerance = ports.get("cfg_delay_tolerance", 0)
+        self.rearm_delay_check()
 
-    async def rearm_delay_check(self):
-        """Forget the settled round trip (``cfg_delay_tolerance`` = 15 for one clock, then back:
-        docs/ports.md)."""
+    def rearm_delay_check(self):
+        """Forget the settled round trip: ``cfg_delay_tolerance`` = 15 for two clocks, then the
+        configured setting back (docs/ports.md). Returns at once; the restore runs on its own
+        (a value written now reads back only after this time step, hence the stored one)."""
         dut = self.dut
-        await RisingEdge(dut.clk)
-        keep = dut.cfg_delay_tolerance.value
+        keep = self.delay_tolerance
         dut.cfg_delay_tolerance.value = 15
-        await RisingEdge(dut.clk)
-        dut.cfg_delay_tolerance.value = keep
-        self.rearm = False
+
+        async def restore():
+            await ClockCycles(dut.clk, 2)
+            dut.cfg_delay_tolerance.value = keep
+
+        cocotb.start_soon(restore())
 
     def _drive_noise_config(self, values):
         """Issue 28's configuration ports, those the core has (the others are ignored: a core
@@ -231,8 +236,6 @@ class Testbench:
     async def request(self, limit_s=3e-3):
         """Wait until idle, pulse start, wait for done, return the Result."""
         dut = self.dut
-        if self.rearm:
-            await self.rearm_delay_check()
         await self.wait_idle()
         dut.start.value = 1
         # Wait for done from now on: a bad configuration answers on the very next edge.
