@@ -121,6 +121,8 @@ class RegisterModel:
             return self.pack("caps", **self.caps)
         if path.startswith("result."):
             if path == "result.status":
+                if self.ctrl(ch)["periodic"]:
+                    self.cycle(ch)          # periodic requests: a cycle ended since the last read
                 self.snapshot[ch] = dict(self.live[ch])
             snap = self.snapshot.get(ch, self._empty_result())
             return {"result.status": self.pack("result.status", **snap["status"]),

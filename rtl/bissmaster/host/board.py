@@ -55,12 +55,15 @@ class AccessError(BoardError):
 
 # -- Results ----------------------------------------------------------------------------------
 
+#: Statuses of the host's own, beside the core's: a triggered cycle whose ``done`` did not come
+#: in time; in free-running mode, a sample without a cycle ended since the previous one.
+NO_RESULT = ("TIMEOUT", "NO_NEW_RESULT")
+
 @dataclass
 class Result:
     """One result of a channel (the result block, one snapshot), and when the host took it.
 
-    ``status`` is the status's name (``"TIMEOUT"``: the cycle was requested but no ``done``
-    came in time). The frame fields (positions, nE/nW, CRC verdicts, LC, line delay) are new
+    ``status`` is the status's name, or one of :data:`NO_RESULT`. The frame fields (positions, nE/nW, CRC verdicts, LC, line delay) are new
     only when :attr:`frame` is true; otherwise they are the last decoded frame's.
     """
     channel: int
@@ -86,7 +89,7 @@ class Result:
 
     @property
     def encoder_silent(self):
-        return self.status in regmap.NO_ENCODER_STATUSES or self.status == "TIMEOUT"
+        return self.status in regmap.NO_ENCODER_STATUSES or self.status in NO_RESULT
 
 
 def decode_result(channel, words, time_s, two_words):

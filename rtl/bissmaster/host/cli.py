@@ -19,6 +19,7 @@ matplotlib by ``plot``, the BP3 decoder (and with it Amaranth, for the settings'
 """
 
 import argparse
+import contextlib
 import csv
 import os
 import sys
@@ -275,6 +276,7 @@ def sample(board, args, on_sample):
             raise UsageError(f"channel {ch} runs periodic requests (ctrl.periodic 1): read it "
                              f"with --free-run, or stop them: bissmaster config --set periodic=0")
     taken = []
+    last_seq = {}
     try:
         for ch in chans:
             if args.free_run is None:
@@ -282,6 +284,7 @@ def sample(board, args, on_sample):
             else:
                 period = round(args.free_run * 1e-6 * args.clock_hz)
                 period_before[ch] = board.read_fields("cfg_period", ch)["request_period"]
+                last_seq[ch] = board.read_fields("result.seq", ch)["seq"]
                 try:
                     board.configure(ch, {"request_period": period})
                 except ValueError as e:
@@ -297,6 +300,10 @@ def sample(board, args, on_sample):
                 results = board.trigger_and_read(chans, args.cycle_timeout, two_words)
             else:
                 results = [board.result(ch, two_words[ch]) for ch in chans]
+                for r in results:
+                    if r.seq == last_seq[r.channel]:
+                        r.status = "NO_NEW_RESULT"      # no cycle ended since the last sample
+                    last_seq[r.channel] = r.seq
             for r in results:
                 r.time_s -= start
             taken += results
@@ -726,7 +733,8 @@ def main(argv=None, *, transport=None, stdout=None, stderr=None):
     err = stderr or sys.stderr
     parser = build_parser()
     try:
-        args = parser.parse_args(argv)
+        with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+            args = parser.parse_args(argv)
     except SystemExit as e:             # argparse: --help (0) or a usage error (2)
         return e.code if isinstance(e.code, int) else EXIT_CODES["bad argument"]
 
