@@ -683,16 +683,24 @@ async def uart_frame_results(dut):
     dut._log.info("link: %s", tb.bus.link.stats)
 
 
+#: The host tool's scenario: a BiSS C encoder turning at a steady rate over 50 m of cable.
+HOST_TOOL_CABLE_M = 50
+HOST_TOOL_COUNTS_PER_S = 2e9
+
+
 @cocotb.test()
 @only_on_buses("uart")
 @long_on_icarus
 async def uart_host_tool_read_and_counters(dut):
     """The host tool itself (``bissmaster``, bissmaster.host.cli.main, in a bridge thread over
-    the simulated UART) on biss_master_uart with a BiSS C encoder model on channel 0: `config
-    --preset` writes the channel's configuration (checked register by register from the RDL),
-    `read` triggers one frame per sample (the software trigger) and prints each position the
-    encoder sent, in order, with status OK, nE/nW 1 and CRC ok; `counters` prints every counter
-    0; exit codes 0."""
+    the simulated UART) on biss_master_uart with a BiSS C encoder model on channel 0 (50 m of
+    cable, turning): `config --preset` writes the channel's configuration (checked register by
+    register from the RDL); `read` triggers one frame per sample (the software trigger) and
+    prints each position the encoder sent, in order, with status OK, nE/nW 1 and CRC ok;
+    `log` writes the same as CSV (positions, timestamps and line delays against the frames
+    sent; the CSV is kept in the build folder, bissmaster_log.csv, the source of the example
+    plot of docs/bench.md); `counters` prints every counter 0; every exit code 0."""
+    import csv
     import io
 
     from cocotb.task import bridge
@@ -700,7 +708,8 @@ async def uart_host_tool_read_and_counters(dut):
     from bissmaster.host import cli         # the host software under test
     from sim.shared.uart import BAUD, TIMEOUT_BITS
     tb = BusTestbench(dut, seed=14)
-    await tb.start([BISS_C])
+    await tb.start([BISS_C], [Cable(length_m=HOST_TOOL_CABLE_M)],
+                   [lambda t: int(t * HOST_TOOL_COUNTS_PER_S) % 2**BISS_C.words[0].data_bits])
     transport = tb.bus.transport
     common = ["--baud", str(BAUD), "--timeout-bits", str(TIMEOUT_BITS),
               "--clock-hz", str(CLK_HZ), "--latency", "2e-6"]
@@ -713,6 +722,11 @@ async def uart_host_tool_read_and_counters(dut):
                       err.getvalue())
         return code, out.getvalue(), err.getvalue()
 
+    def sent_frames():
+        chan = tb.channels[0]
+        return [(t, frames.parse_frame(BISS_C, chan.sent[t])["words"][0])
+                for t in sorted(chan.sent)]
+
     code, _, err = await tool("config", "--preset", BISS_C.name, "--ma-hz", "2.5e6")
     assert code == 0, err
     words = await tb.read_fields("cfg_words", 0)
@@ -722,18 +736,33 @@ async def uart_host_tool_read_and_counters(dut):
     assert (await tb.read_fields("cfg_ma", 0))["ma_half_period"] == CLK_HZ // (2 * 2.5e6)
     await tb.encoders_ready()
 
-    code, out, err = await tool("read", "--count", "3", "--rate", "2000")
+    code, out, err = await tool("read", "--count", "3", "--rate", "5000")
     assert code == 0, err
     rows = [line.split() for line in out.splitlines()[1:]]
-    sent = [frames.parse_frame(BISS_C, tb.channels[0].sent[t])["words"][0]
-            for t in sorted(tb.channels[0].sent)]
+    sent = sent_frames()
     assert len(rows) == len(sent) == 3, (rows, len(sent))
-    for row, frame in zip(rows, sent):
+    for row, (_, frame) in zip(rows, sent):
         assert row[1] == "0" and row[3] == "OK", row
         assert int(row[4]) == frame["position"], (row, frame)
         assert (int(row[5]), int(row[6]), row[7]) == (frame["ne"], frame["nw"], "ok"), row
     assert [int(r[2]) for r in rows] == [1, 2, 3], "result.seq: one cycle per sample"
     assert (await tb.read_fields("ctrl", 0))["trigger_enable"] == 0, "left as it was"
+
+    code, out, err = await tool("log", "--count", "10", "--rate", "5000")
+    assert code == 0, err
+    logged = list(csv.DictReader(io.StringIO(out)))
+    sent = sent_frames()[3:]
+    assert len(logged) == len(sent) == 10
+    round_trip = tb.channels[0].spec.cable.round_trip_s()
+    for row, (timestamp, frame) in zip(logged, sent):
+        assert (row["status"], int(row["timestamp"])) == ("OK", timestamp), row
+        assert (int(row["position"]), int(row["ne"]), int(row["nw"]), int(row["crc_ok"])) == \
+            (frame["position"], frame["ne"], frame["nw"], 1), (row, frame)
+        # The line delay: the cable's round trip, measured to within a few clocks.
+        assert abs(float(row["line_delay_ns"]) * 1e-9 - round_trip) < 50e-9, \
+            (row["line_delay_ns"], round_trip)
+    with open("bissmaster_log.csv", "w") as f:
+        f.write(out)
 
     code, out, err = await tool("counters")
     assert code == 0, err

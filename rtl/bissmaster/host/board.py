@@ -262,21 +262,28 @@ class Board:
         self.update("ctrl", ch, clear_counters=1)
 
     # -- Requesting cycles --------------------------------------------------------------------
-    def trigger_and_read(self, channels, timeout_s, two_words):
+    def trigger_and_read(self, channels, timeout_s, two_words, seqs):
         """One cycle on every channel of ``channels`` at once (``trigger.start``; each must have
-        ``ctrl.trigger_enable`` set), each waited for (``irq_status.done``) up to
-        ``timeout_s``, and its result. ``two_words``: {channel: bool}."""
-        clear = regmap.put("irq_status", done=1, error=1)
-        for ch in channels:
-            self.write("irq_status", clear, ch)
+        ``ctrl.trigger_enable`` set) and its result. A cycle has ended when ``result.seq``
+        (every ended cycle counts) differs from ``seqs[ch]``, the last one seen: the result
+        block is read (one burst, one snapshot) until it does, up to ``timeout_s`` (then the
+        result is TIMEOUT). Two accesses per channel and sample when the cycle is over by the
+        time its result is asked for, as on a serial line it is. ``two_words``: {channel:
+        bool}; ``seqs`` is updated."""
         self.write_fields("trigger", start=1)
+        deadline = self.now() + timeout_s
         results = []
         for ch in channels:
-            if self._wait_field("irq_status", ch, "done", timeout_s):
-                self.write("irq_status", clear, ch)
-                results.append(self.result(ch, two_words[ch]))
-            else:
-                results.append(Result(ch, self.now(), "TIMEOUT"))
+            while True:
+                r = self.result(ch, two_words[ch])
+                if r.seq != seqs[ch]:
+                    seqs[ch] = r.seq
+                    break
+                if self.now() >= deadline:
+                    r = Result(ch, self.now(), "TIMEOUT")
+                    break
+                self.sleep(self.poll_s)
+            results.append(r)
         return results
 
     def _wait_field(self, register, ch, field, timeout_s):

@@ -279,12 +279,12 @@ def sample(board, args, on_sample):
     last_seq = {}
     try:
         for ch in chans:
+            last_seq[ch] = board.result(ch, two_words[ch]).seq   # (result.status first)
             if args.free_run is None:
                 board.update("ctrl", ch, trigger_enable=1)
             else:
                 period = round(args.free_run * 1e-6 * args.clock_hz)
                 period_before[ch] = board.read_fields("cfg_period", ch)["request_period"]
-                last_seq[ch] = board.read_fields("result.seq", ch)["seq"]
                 try:
                     board.configure(ch, {"request_period": period})
                 except ValueError as e:
@@ -296,8 +296,9 @@ def sample(board, args, on_sample):
             wait = start + i / args.rate - board.now()
             if wait > 0:
                 board.sleep(wait)
+            t = board.now()
             if args.free_run is None:
-                results = board.trigger_and_read(chans, args.cycle_timeout, two_words)
+                results = board.trigger_and_read(chans, args.cycle_timeout, two_words, last_seq)
             else:
                 results = [board.result(ch, two_words[ch]) for ch in chans]
                 for r in results:
@@ -305,7 +306,7 @@ def sample(board, args, on_sample):
                         r.status = "NO_NEW_RESULT"      # no cycle ended since the last sample
                     last_seq[r.channel] = r.seq
             for r in results:
-                r.time_s -= start
+                r.time_s = t - start
             taken += results
             on_sample(i, results)
             i += 1
@@ -480,6 +481,7 @@ def make_figure(results, clock_hz, title="bissmaster"):
     """The plot's figure (matplotlib, no pyplot): position against time per channel, a
     histogram of the line delay, the count of each status other than OK. Axes in that order."""
     from matplotlib.figure import Figure
+    from matplotlib.ticker import MaxNLocator
     fig = Figure(figsize=(8, 9), dpi=100)
     pos, hist, errs = fig.subplots(3, 1)
     chans = sorted({r.channel for r in results})
@@ -492,8 +494,18 @@ def make_figure(results, clock_hz, title="bissmaster"):
     pos.set_title(title)
     if chans:
         pos.legend(loc="best")
+    # The line delay is counted in clocks: one bin per clock, a few clocks of margin.
+    step = 1e9 / clock_hz
     delays = [_ns(r.line_delay, clock_hz) for r in results if r.frame]
-    hist.hist(delays, bins=min(50, max(1, len(set(delays)))))
+    if delays:
+        lo, hi = min(delays), max(delays)
+        n = round((hi - lo) / step) + 1
+        if n <= 200:
+            hist.hist(delays, bins=[lo + (i - 0.5) * step for i in range(n + 1)])
+        else:
+            hist.hist(delays, bins=100)
+        margin = max(3 * step, (hi - lo) * 0.05)
+        hist.set_xlim(lo - margin, hi + margin)
     hist.set_xlabel("line delay (ns)")
     hist.set_ylabel("samples")
     counts = {}
@@ -503,6 +515,8 @@ def make_figure(results, clock_hz, title="bissmaster"):
     names = sorted(counts) or ["none"]
     errs.bar(range(len(names)), [counts.get(n, 0) for n in names])
     errs.set_xticks(range(len(names)), names, rotation=20, fontsize=8)
+    errs.set_ylim(0, max([1, *counts.values()]) * 1.15)
+    errs.yaxis.set_major_locator(MaxNLocator(integer=True))
     errs.set_xlabel("status")
     errs.set_ylabel("samples not OK")
     errs.set_title(f"{len(results) - sum(counts.values())} of {len(results)} results OK")
@@ -511,15 +525,14 @@ def make_figure(results, clock_hz, title="bissmaster"):
 
 
 def cmd_plot(board, args, out, err):
-    if args.input:
-        results = read_csv(args.input)
-        code = EXIT_CODES["ok"]
-    else:
-        results = sample(board, args, lambda i, r: None)
-        code = verdict(results, err)
-    fig = make_figure(results, args.clock_hz)
-    with _open_output(args.output, "wb") as f:
-        fig.savefig(f, format="png")
+    with _open_output(args.output, "wb") as f:       # before sampling: a bad path fails first
+        if args.input:
+            results = read_csv(args.input)
+            code = EXIT_CODES["ok"]
+        else:
+            results = sample(board, args, lambda i, r: None)
+            code = verdict(results, err)
+        make_figure(results, args.clock_hz).savefig(f, format="png")
     print(f"{len(results)} results plotted to {args.output}", file=out)
     return code
 
@@ -605,6 +618,11 @@ def print_identification(ident, ch, slave, out):
 
 def cmd_regs(board, args, out, err):
     ch = _one_channel(args)
+    if board.read_fields("state", ch)["config_error"]:
+        raise UsageError(f"channel {ch} is not configured (state.config_error 1): a register "
+                         f"access needs data-channel cycles that end OK; configure the channel "
+                         f"for the encoder's frame first (bissmaster config --preset ..., or "
+                         f"bissmaster identify --apply)")
     if args.op == "read":
         if args.address + args.n - 1 > 0x7F:
             raise UsageError(f"registers {args.address:#04x}..{args.address + args.n - 1:#04x}: "

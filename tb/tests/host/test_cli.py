@@ -66,6 +66,11 @@ def test_read_triggers_one_cycle_per_sample_and_prints_one_line_each():
         assert row[5:8] == ["1", "1", "ok"]
         assert row[8:] == ["37", "370.0"]                           # 37 clocks at 100 MHz
     assert len(writes(model, "trigger", None)) == 5                 # the software trigger
+    # Per sample: the trigger and one burst of the result block (result.status first); the
+    # end of the cycle seen in result.seq, no interrupt status touched.
+    assert [e for e in model.log if e[1] in ("trigger", "result.status")] == \
+        [("r", "result.status", 0)] + [("w", "trigger", None), ("r", "result.status", 0)] * 5
+    assert not writes(model, "irq_status")
     assert model.encoders[0].cycles == 5
     assert ctrl(model)["trigger_enable"] == 0, "trigger_enable left as it was"
     assert "\x1b[" not in out
@@ -380,6 +385,23 @@ def test_regs_errors():
     assert code == EXIT["encoder errors"] and "configure the channel" in err
     bridge.model.encoders[0].access_status = "CRC4_ERROR"
     assert run(["regs", "read", "0x10"], bridge)[0] == EXIT["encoder errors"]
+
+
+def test_regs_on_an_unconfigured_channel():
+    bridge, _ = bp3_board()
+    bridge.model.configure(0, ma_half_period=0)
+    code, _, err = run(["regs", "read", "0x40"], bridge)
+    assert code == EXIT["bad argument"] and "not configured" in err
+    assert bridge.model.encoders[0].accesses == [], "no access started"
+
+
+def test_an_output_that_cannot_be_written(tmp_path):
+    bridge = biss_c_board()
+    for argv in (["plot", "-o", str(tmp_path / "no" / "a.png")],
+                 ["log", "-o", str(tmp_path / "no" / "a.csv")]):
+        code, _, err = run(argv, bridge)
+        assert code == EXIT["bad argument"] and "cannot write" in err, argv
+    assert bridge.model.encoders.get(0) is None or bridge.model.encoders[0].cycles == 0
 
 
 def test_a_register_access_that_never_ends_is_aborted():
