@@ -122,7 +122,7 @@ class Board:
         Pause between two polls of a register that waits for the hardware.
     """
 
-    def __init__(self, link, *, sleep=None, now=None, poll_s=1e-3):
+    def __init__(self, link, *, sleep=None, now=None, poll_s=2e-4):
         self.link = link
         transport = link.transport
         self.poll_s = poll_s
