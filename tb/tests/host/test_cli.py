@@ -564,3 +564,47 @@ def test_the_entry_point_and_python_m():
     run_ = subprocess.run([sys.executable, "-m", "bissmaster.host.cli", "counters", "--port",
                            "/dev/ttyNONEXISTENT7"], capture_output=True, text=True, timeout=60)
     assert run_.returncode == EXIT["port"], run_.stderr
+
+
+def test_the_board_takes_its_clock_from_the_transport():
+    """Virtual time (MemoryBridge's ``now`` attribute: sleeping advances it), a simulator's
+    (``now()`` and ``sleep``), else the computer's."""
+    from bissmaster.host.board import Board
+    from bissmaster.host.link import Link
+    bridge = biss_c_board()
+    board = Board(Link(bridge))
+    t0 = board.now()
+    board.sleep(2.5)
+    assert board.now() - t0 == pytest.approx(2.5) and bridge.now - t0 == pytest.approx(2.5)
+
+    class Sim:
+        def __init__(self):
+            self.slept = []
+            self.t = 7.0
+
+        def write(self, data):
+            pass
+
+        def read(self, n, timeout):
+            return b""
+
+        def now(self):
+            return self.t
+
+        def sleep(self, s):
+            self.slept.append(s)
+            self.t += s
+    sim = Sim()
+    board = Board(Link(sim))
+    board.sleep(0.25)
+    assert sim.slept == [0.25] and board.now() == 7.25
+    import time
+
+    class Plain:
+        def write(self, data):
+            pass
+
+        def read(self, n, timeout):
+            return b""
+    board = Board(Link(Plain()))
+    assert board.sleep is time.sleep and board.now is time.monotonic
