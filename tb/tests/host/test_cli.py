@@ -8,6 +8,7 @@ Pure Python, virtual time: a sampling run at 10 Hz takes no wall-clock time.
 
 import csv
 import io
+import re
 import struct
 import subprocess
 import sys
@@ -608,3 +609,19 @@ def test_the_board_takes_its_clock_from_the_transport():
             return b""
     board = Board(Link(Plain()))
     assert board.sleep is time.sleep and board.now is time.monotonic
+
+
+def test_docs_bench_md_gives_every_exit_code_command_and_column():
+    text = (REPO / "docs" / "bench.md").read_text()
+    assert text.startswith("## Host tool: bissmaster\n")
+    table = text.split("### Exit codes", 1)[1]
+    codes = {int(m) for m in re.findall(r"^\| (\d+) \|", table, flags=re.M)}
+    assert codes == {0} | set(EXIT.values())
+    for command in ("read", "log", "plot", "identify", "regs read", "regs write", "counters",
+                    "config", "config --preset", "config --set"):
+        assert f"| `{command}" in text, command
+    csv_text = text.split("**The CSV of `log`**", 1)[1].split("\n\n", 1)[0]
+    for column in cli.CSV_COLUMNS:
+        assert f"`{column}`" in csv_text, column
+    for column in cli.Table(io.StringIO(), False, CLOCK_HZ, True).header().split():
+        assert f"`{column}`" in text, column
