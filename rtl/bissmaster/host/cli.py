@@ -260,10 +260,11 @@ def _one_channel(args):
 
 # -- Sampling (read, log, plot) ---------------------------------------------------------------
 
-def sample(board, args, on_sample):
+def sample(board, args, on_sample, keep=True):
     """Take ``args.count`` samples (0: until Ctrl-C) of ``args.channel`` at ``args.rate``,
-    calling ``on_sample(index, results)``; every result taken is returned. The channels are
-    left as they were (trigger_enable, periodic, cfg_period), also on Ctrl-C."""
+    calling ``on_sample(index, results)``. Returns ``(results, counts)``: every result taken
+    (with ``keep``; else an empty list, for a run without end) and ``{status: number}``. The
+    channels are left as they were (trigger_enable, periodic, cfg_period), also on Ctrl-C."""
     chans = args.channel
     two_words, ctrl_before, period_before = {}, {}, {}
     for ch in chans:
@@ -275,7 +276,7 @@ def sample(board, args, on_sample):
         if args.free_run is None and ctrl_before[ch]["periodic"]:
             raise UsageError(f"channel {ch} runs periodic requests (ctrl.periodic 1): read it "
                              f"with --free-run, or stop them: bissmaster config --set periodic=0")
-    taken = []
+    taken, counts = [], {}
     last_seq = {}
     try:
         for ch in chans:
@@ -307,7 +308,9 @@ def sample(board, args, on_sample):
                     last_seq[r.channel] = r.seq
             for r in results:
                 r.time_s = t - start
-            taken += results
+                counts[r.status] = counts.get(r.status, 0) + 1
+            if keep:
+                taken += results
             on_sample(i, results)
             i += 1
     finally:
@@ -321,24 +324,24 @@ def sample(board, args, on_sample):
                     board.configure(ch, {"request_period": period_before[ch]})
         except LinkError:
             pass                # the error that stopped the sampling is the one to report
-    return taken
+    return taken, counts
 
 
-def verdict(results, err):
-    """The exit code of a run's results, with one line on ``err`` if not all are OK."""
-    bad = [r for r in results if r.status != "OK"]
+def verdict(counts, err):
+    """The exit code of a run from its ``{status: number}``, with one line on ``err`` if not
+    every result was OK."""
+    total = sum(counts.values())
+    bad = {name: n for name, n in counts.items() if name != "OK"}
     if not bad:
         return EXIT_CODES["ok"]
-    counts = {}
-    for r in bad:
-        counts[r.status] = counts.get(r.status, 0) + 1
-    listed = ", ".join(f"{name} {n}" for name, n in sorted(counts.items()))
-    if any(r.encoder_silent for r in bad):
-        print(f"bissmaster: {len(bad)} of {len(results)} results not OK ({listed}): the encoder "
+    listed = ", ".join(f"{name} {n}" for name, n in sorted(bad.items()))
+    nbad = sum(bad.values())
+    if any(Result(0, 0.0, name).encoder_silent for name in bad):
+        print(f"bissmaster: {nbad} of {total} results not OK ({listed}): the encoder "
               f"does not answer as it should (power, cable, transceiver, MA rate, "
               f"configuration)", file=err)
         return EXIT_CODES["no encoder"]
-    print(f"bissmaster: {len(bad)} of {len(results)} results not OK ({listed}): the encoder "
+    print(f"bissmaster: {nbad} of {total} results not OK ({listed}): the encoder "
           f"answers with errors (noise, cable, a wrong frame configuration)", file=err)
     return EXIT_CODES["encoder errors"]
 
@@ -402,8 +405,8 @@ class Table:
 def cmd_read(board, args, out, err):
     two = any(board.read_fields("cfg_words", ch)["w1_enable"] for ch in args.channel)
     table = Table(out, _isatty(out), args.clock_hz, two)
-    results = sample(board, args, table.show)
-    return verdict(results, err)
+    _, counts = sample(board, args, table.show, keep=False)
+    return verdict(counts, err)
 
 
 def _isatty(stream):
@@ -461,13 +464,13 @@ def cmd_log(board, args, out, err):
             for r in results:
                 writer.writerow(csv_row(r, args.clock_hz))
             f.flush()
-        results = sample(board, args, on_sample)
+        _, counts = sample(board, args, on_sample, keep=False)
     finally:
         if f is not out:
             f.close()
     if args.output != "-":
-        print(f"{len(results)} results to {args.output}", file=out)
-    return verdict(results, err)
+        print(f"{sum(counts.values())} results to {args.output}", file=out)
+    return verdict(counts, err)
 
 
 def _open_output(path, mode, **kw):
@@ -530,8 +533,8 @@ def cmd_plot(board, args, out, err):
             results = read_csv(args.input)
             code = EXIT_CODES["ok"]
         else:
-            results = sample(board, args, lambda i, r: None)
-            code = verdict(results, err)
+            results, counts = sample(board, args, lambda i, r: None)
+            code = verdict(counts, err)
         make_figure(results, args.clock_hz).savefig(f, format="png")
     print(f"{len(results)} results plotted to {args.output}", file=out)
     return code

@@ -250,7 +250,8 @@ def test_plot_figure_content():
     board = Board(Link(bridge))
     board.probe()
     args = cli.build_parser().parse_args(["read", "--count", "10"])
-    cli.sample(board, args, keep)
+    kept, counts = cli.sample(board, args, keep)
+    assert kept == results and counts == {"OK": 9, "NO_ACK": 1}
     fig = cli.make_figure(results, CLOCK_HZ)
     pos, hist, errs = fig.axes
     assert (pos.get_xlabel(), pos.get_ylabel()) == ("time (s)", "position (counts)")
