@@ -3,7 +3,7 @@
 Written here from docs/registers.md (generated from ``bus/biss_master.rdl``) and the status
 tables of docs/ports.md and docs/control.md, never read from the RDL or the RTL at run time
 (host code runs where neither the RDL compiler nor an FPGA build is; ``host/README.md``).
-tb/tests/host/test_regmap.py checks every address, field, status and counter name here
+tb/tests/host/test_host_regmap.py checks every address, field, status and counter name here
 against the SystemRDL source (through the test side's own reader, sim/shared/regspec.py) and
 the test side's contract (tb/master_contract.py).
 
