@@ -20,7 +20,7 @@ from bissmaster.host import cli
 from bissmaster.host.link import MemoryBridge
 from encoder_model.control import USER_REGISTERS, Bp3Eds, RegisterFile
 from testkit import REPO
-from testkit.fake_board import MAP, FakeBridge, FakeEncoder, RegisterModel, biss_c_board
+from testkit.fake_board import FakeBridge, FakeEncoder, RegisterModel, biss_c_board
 
 #: The exit codes docs/bench.md gives (the test's own copy).
 EXIT = {"ok": 0, "bad argument": 2, "port": 3, "no board": 4, "link": 5, "no encoder": 6,
