@@ -864,8 +864,9 @@ async def uart_host_tool_identify(dut):
     rows = {line.split()[0]: line.split() for line in out.splitlines()
             if line.startswith("  ") and len(line.split()) >= 4}
     raw = eds.to_bytes()
-    assert int(rows["BP_ID"][-1], 16) == raw[2] and int(rows["DL"][-1], 16) == raw[3]
-    assert int(rows["CPOLY"][-1], 16) == eds.cpoly
+    # field, byte, value, hex, note
+    assert int(rows["BP_ID"][3], 16) == raw[2] and int(rows["DL"][3], 16) == raw[3]
+    assert int(rows["CPOLY"][3], 16) == eds.cpoly
     assert registers.bank_select == 0, "bank select restored"
     words = await tb.read_fields("cfg_words", 0)
     assert (words["w0_data_bits"], words["w0_nenw"], words["w0_lc"], words["w0_crc"],

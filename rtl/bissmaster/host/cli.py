@@ -607,11 +607,23 @@ def print_identification(ident, ch, slave, out):
     print(f"EDS: pointer (register 0x41) bank {ident.eds_bank:#04x}, BP3 bank "
           f"{ident.profile_bank:#04x}", file=out)
     from .bp3 import EDS_LAYOUT
-    print(f"  {'field':<8} {'byte':>4}  {'value':>12}  hex", file=out)
+    eds = ident.eds
+    notes = {
+        "PON_PDL": "ms until position data after power-on",
+        "MT_CNT": "revolutions (periods) counted", "SIP_CNT": "signal periods per revolution "
+        "(linear: period in nm)", "SIP_RES": "steps per signal period",
+        "CPOLY": f"CRC polynomial {eds.crc_polynomial:#x}", "CSTART": "CRC start value",
+        "SPD_MAX": "1/min (linear: m/min)",
+        "TMP_MIN": f"K ({eds.tmp_min - 273.15:.1f} C)",
+        "TMP_MAX": f"K ({eds.tmp_max - 273.15:.1f} C)",
+        "VLT_MIN": "mV", "VLT_MAX": "mV", "CUR_MAX": "mA", "CHKSUM": "checked",
+    }
+    print(f"  {'field':<8} {'byte':>4}  {'value':>12}  {'hex':<10} note", file=out)
     for symbol, addr, _ in EDS_LAYOUT:
-        value = getattr(ident.eds, symbol.lower())
+        value = getattr(eds, symbol.lower())
         shown = f"{value.name} ({int(value)})" if hasattr(value, "name") else str(value)
-        print(f"  {symbol:<8} {addr:#04x}  {shown:>12}  {int(value):#x}", file=out)
+        print(f"  {symbol:<8} {addr:#04x}  {shown:>12}  {f'{int(value):#x}':<10} "
+              f"{notes.get(symbol, '')}".rstrip(), file=out)
     print("derived configuration:", file=out)
     for port, value in ident.config.items():
         print(f"  {port[4:] if port.startswith('cfg_') else port:<14} {value}", file=out)

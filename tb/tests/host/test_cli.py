@@ -303,6 +303,8 @@ def test_identify_prints_the_profile_the_eds_and_the_derived_config():
     assert eds_rows["BP_ID"][1:3] == ["0x02", "98"]                 # 0x62
     assert eds_rows["CPOLY"][2] == "33"                             # 0x21: CRC-6 0x43
     assert eds_rows["FB1"][2:4] == ["ERROR", "(1)"]
+    assert eds_rows["CPOLY"][3:] == ["0x21", "CRC", "polynomial", "0x43"]
+    assert eds_rows["TMP_MIN"][2:] == ["233", "0xe9", "K", "(-40.1", "C)"]
     assert "w0_data_bits   24" in out and "w0_crc         1" in out
     assert "not applied" in out
     assert bridge.model.cfg(0) == before, "the channel is left as it was"
