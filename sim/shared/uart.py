@@ -78,7 +78,8 @@ class SimTransport(link.Transport):
     ``requests(data)``: the bytes of one ``write`` as they go on the line (bytes, or items for
     :meth:`UartLine.send`), to lose, damage or break some. ``responses(index, byte)``: each byte
     received (``index`` counts them from 0), as the host gets it (bytes: none, one, or more).
-    ``now`` is simulated time in seconds, so Link's deadlines are simulated time.
+    ``now`` is simulated time in seconds, so Link's deadlines are simulated time; ``sleep(s)``
+lets simulated time pass.
     """
 
     def __init__(self, dut, baud=BAUD):
@@ -90,6 +91,7 @@ class SimTransport(link.Transport):
         self.line = UartLine(dut.uart_rx, dut.uart_tx, baud, self._on_byte)
         self.write = resume(self._write)
         self.read = resume(self._read)
+        self.sleep = resume(self._sleep)
 
     def _on_byte(self, byte, stop):
         index, self.received = self.received, self.received + 1
@@ -99,6 +101,12 @@ class SimTransport(link.Transport):
     @property
     def now(self):
         return get_sim_time("ns") * 1e-9
+
+    async def _sleep(self, seconds):
+        """Let ``seconds`` of simulated time pass (the host tool's pauses: bissmaster.host.board
+        uses a transport's ``sleep`` when it has one)."""
+        if seconds > 0:
+            await Timer(max(round(seconds * 1e9), 1), "ns")
 
     async def _write(self, data):
         items = self.requests(bytes(data)) if self.requests else bytes(data)

@@ -174,17 +174,19 @@ PROTOCOL_IMPORT_ALLOWED = {"tb/tests/model/test_protocol_facts.py"}
 MODEL_SIDE = ("tb/encoder_model", "tb/master_contract.py", "tb/protocol_facts.py", "sim")
 #: Exempt, with what it may import: the runner generates the Verilog under test; the
 #: control-channel and BP3 demo scenarios run bissmaster.bp3; the UART top's scenarios run
-#: bissmaster.host.link.
+#: bissmaster.host.link and the host tool bissmaster.host.cli.
 MODEL_SIDE_EXEMPT = {"sim/shared/runner.py": {"bissmaster", "bissmaster.generate"},
                      # The host software under test, run against the simulated core as a user
                      # runs it against the hardware; expected values still come from the model.
                      "sim/scenarios/control_channel.py": {"bissmaster", "bissmaster.bp3"},
                      "sim/scenarios/demo_bp3.py": {"bissmaster", "bissmaster.bp3"},
                      # The UART top's bus is the host's Link (bissmaster.host.link) over a
-                     # UART model; the scenarios' expected values come from the map's source.
+                     # UART model, and the host tool (bissmaster.host.cli) runs on it; the
+                     # scenarios' expected values come from the map's source and the model.
                      "sim/shared/uart.py": {"bissmaster.host", "bissmaster.host.link"},
                      "sim/scenarios/bus.py": {"bissmaster.host.link",
-                                              "bissmaster.host.link.BridgeError"}}
+                                              "bissmaster.host.link.BridgeError",
+                                              "bissmaster.host", "bissmaster.host.cli"}}
 # Not on the model side: block tests (tb/tests/*/test_*.py, tb/testkit/) and the
 # formal harnesses (tb/formal/) import the blocks they test. They take protocol *values* from
 # tb/protocol_facts.py and tb/master_contract.py: the first guard covers them too.

@@ -1,6 +1,6 @@
 """`pip install .`: the wheel built from pyproject.toml holds the whole `bissmaster` package
-(the RTL source and the host-side modules), the `bissmaster-generate` entry point and the
-pinned Amaranth, and the package runs from the wheel alone.
+(the RTL source and the host-side modules), the `bissmaster-generate` and `bissmaster` entry
+points and the pinned Amaranth, and the package runs from the wheel alone.
 
 Offline: the wheel is built with the venv's setuptools (`--no-build-isolation --no-index`),
 from a copy of the files pyproject.toml names, so nothing is written into the checkout.
@@ -87,13 +87,16 @@ def test_wheel_metadata_version_and_pinned_amaranth(wheel):
     assert requires == [_requirement("amaranth"),      # the same pins as the venv
                         f"{_requirement('systemrdl-compiler')}; extra == \"bus\"",
                         f"{_requirement('amaranth-boards')}; extra == \"boards\"",
-                        f"{_requirement('systemrdl-compiler')}; extra == \"boards\""]
+                        f"{_requirement('systemrdl-compiler')}; extra == \"boards\"",
+                        f"{_requirement('pyserial')}; extra == \"host\"",
+                        f"{_requirement('matplotlib')}; extra == \"host\""]
 
 
 def test_wheel_declares_the_console_script(wheel):
     entry = configparser.ConfigParser()
     entry.read_string(_dist_info(wheel, "entry_points.txt"))
-    assert dict(entry["console_scripts"]) == {"bissmaster-generate": "bissmaster.generate:main"}
+    assert dict(entry["console_scripts"]) == {"bissmaster-generate": "bissmaster.generate:main",
+                                              "bissmaster": "bissmaster.host.cli:main"}
 
 
 def test_console_script_function_matches_python_m(wheel, tmp_path):

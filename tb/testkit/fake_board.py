@@ -1,0 +1,271 @@
+"""A board for the host tool's tests: ``MemoryBridge`` (the UART bridge in software) in front of
+a small model of the bus top's register map, in virtual time.
+
+The registers behave as docs/bus.md says where the host tool depends on it: ``id``,
+``version``, ``channels`` constants; ``ctrl`` with its pulses (``start``, ``clear_counters``)
+and stored fields; ``trigger.start`` starting every trigger-enabled channel; ``irq_status``
+sticky, cleared by writing 1; the configuration registers stored, ``state.config_error`` while
+the MA half period is below 2; ``result.status`` taking the snapshot of the result block;
+the counters; the register-access engine answering from an encoder's register file
+(``encoder_model.control.RegisterFile``) with ``ca.state``, ``ca.rbuf`` and
+``irq_status.access_done``.
+
+Addresses and fields come from the SystemRDL source through the test side's own reader
+(sim/shared/regspec.py), never from the host code under test. A cycle ends the moment it is
+started (``done`` at once); what it reports is the channel's :class:`FakeEncoder`'s.
+"""
+
+from dataclasses import dataclass, field
+
+from bissmaster.host.link import MemoryBridge
+from encoder_model.control import RegisterFile
+from master_contract import CA_STATUS, STATUS
+from sim.shared import regspec
+
+MAP = regspec.load()
+ID = 0x42695353
+FRAME = ("OK", "CRC_ERROR_WORD0", "CRC_ERROR_WORD1", "CRC_ERROR_BOTH", "SIGN_OF_LIFE",
+         "SPW_MISMATCH")
+
+
+@dataclass
+class FakeEncoder:
+    """What a channel's cycles report. ``positions``: position of cycle n (n from 0);
+    ``statuses``: status name of cycle n (default OK); ``line_delay`` in clocks; ``word1``:
+    word 1 of cycle n (two-word configurations). ``registers``: an encoder register file for
+    the register-access engine (None: NO_ANSWER); ``access_status``: a forced ca status name
+    for every access."""
+    positions: object = lambda n: 1000 + 7 * n
+    statuses: object = lambda n: "OK"
+    line_delay: int = 37
+    word1: object = None
+    registers: RegisterFile | None = None
+    access_status: str | None = None
+    cycles: int = 0
+    accesses: list = field(default_factory=list)
+
+
+class RegisterModel:
+    """The register map's behaviour, as the mapping MemoryBridge reads (``get``) and writes."""
+
+    def __init__(self, channels=2, encoders=None, caps=None):
+        self.n = channels
+        self.encoders = encoders or {}
+        self.words = {}                     # stored registers by address
+        self.snapshot = {}
+        self.live = {ch: self._empty_result() for ch in range(channels)}
+        self.counters = {ch: {} for ch in range(channels)}
+        self.rbuf = {ch: bytearray(64) for ch in range(channels)}
+        self.wbuf = {ch: bytearray(64) for ch in range(channels)}
+        self.caps = {"data_bits_w0": 55, "data_bits_w1": 40, "timer_width": 24, "counters": 1,
+                     "timestamp": 1, "register_access": 1, **(caps or {})}
+        self.time = 0
+        self.log = []                       # (kind, register path, channel)
+
+    # -- Helpers -----------------------------------------------------------------------------
+    @staticmethod
+    def _empty_result():
+        return {"status": {}, "seq": {}, "w0": 0, "w1": 0, "time": 0}
+
+    def where(self, address):
+        """(path, channel or None, index) of a byte address, or None if unmapped."""
+        for path, spec in MAP.globals.items():
+            if spec.offset == address:
+                return path, None, 0
+        ch, off = divmod(address - MAP.channel_base, MAP.channel_stride)
+        if address < MAP.channel_base or not 0 <= ch < self.n:
+            return None
+        for path, spec in MAP.channel.items():
+            if spec.offset <= off < spec.offset + 4 * spec.count:
+                return path, ch, (off - spec.offset) // 4
+        return None
+
+    def fields(self, path, ch, word):
+        return {n: f.get(word) for n, f in MAP.reg(path, ch).fields.items()}
+
+    def pack(self, path, **values):
+        word = 0
+        for name, value in values.items():
+            word = MAP.channel[path].fields[name].put(word, value)
+        return word
+
+    def stored(self, path, ch):
+        return self.words.get(MAP.address(path, ch), 0)
+
+    def cfg(self, ch):
+        out = {}
+        for path in ("cfg_ma", "cfg_period", "cfg_break", "cfg_ack", "cfg_timeout",
+                     "cfg_words", "cfg_checks"):
+            out.update(self.fields(path, ch, self.stored(path, ch)))
+        return out
+
+    def ctrl(self, ch):
+        return self.fields("ctrl", ch, self.stored("ctrl", ch))
+
+    def count(self, ch, name):
+        self.counters[ch][name] = min(self.counters[ch].get(name, 0) + 1, 0xFFFF)
+
+    # -- The mapping MemoryBridge uses --------------------------------------------------------
+    def get(self, address, default=0):
+        hit = self.where(address)
+        if hit is None:
+            return 0
+        path, ch, index = hit
+        self.log.append(("r", path, ch))
+        if ch is None:
+            return {"id": ID, "version": (1 << 16) | 1, "channels": self.n}.get(path, 0)
+        if path == "state":
+            return self.pack("state", busy=0,
+                             config_error=int(self.cfg(ch)["ma_half_period"] < 2))
+        if path == "caps":
+            return self.pack("caps", **self.caps)
+        if path.startswith("result."):
+            if path == "result.status":
+                if self.ctrl(ch)["periodic"]:
+                    self.cycle(ch)          # periodic requests: a cycle ended since the last read
+                self.snapshot[ch] = dict(self.live[ch])
+            snap = self.snapshot.get(ch, self._empty_result())
+            return {"result.status": self.pack("result.status", **snap["status"]),
+                    "result.seq": self.pack("result.seq", **snap["seq"]),
+                    "result.w0_lo": snap["w0"] & 0xFFFFFFFF, "result.w0_hi": snap["w0"] >> 32,
+                    "result.w1_lo": snap["w1"] & 0xFFFFFFFF, "result.w1_hi": snap["w1"] >> 32,
+                    "result.timestamp": snap["time"]}[path]
+        if path.startswith("count_") or path.startswith("ca.count_"):
+            prefix = "ca_" if path.startswith("ca.") else ""
+            return self.pack(path, **{n: self.counters[ch].get(prefix + n, 0)
+                                      for n in MAP.channel[path].fields})
+        if path == "ca.rbuf":
+            return int.from_bytes(self.rbuf[ch][4 * index:4 * index + 4], "little")
+        if path == "ca.wbuf":
+            return 0
+        spec = MAP.channel[path]
+        keep = sum(f.mask for f in spec.fields.values() if not f.singlepulse)
+        return self.words.get(address, 0) & keep
+
+    def __setitem__(self, address, value):
+        hit = self.where(address)
+        if hit is None:
+            return
+        path, ch, index = hit
+        self.log.append(("w", path, ch))
+        if ch is None:
+            if path == "trigger" and value & 1:
+                for c in range(self.n):
+                    if self.ctrl(c)["trigger_enable"]:
+                        self.cycle(c)
+            return
+        if path == "irq_status":
+            self.words[address] = self.words.get(address, 0) & ~value
+            return
+        if path == "ca.wbuf":
+            self.wbuf[ch][4 * index:4 * index + 4] = value.to_bytes(4, "little")
+            return
+        if path == "ca.ctrl":
+            if self.fields("ca.ctrl", ch, value)["start"]:
+                self.access(ch)
+            return
+        self.words[address] = value
+        if path == "ctrl":
+            f = self.fields("ctrl", ch, value)
+            if f["clear_counters"]:
+                self.counters[ch] = {}
+            if f["start"]:
+                self.cycle(ch)
+
+    # -- Behaviour ---------------------------------------------------------------------------
+    def _irq(self, ch, **causes):
+        a = MAP.address("irq_status", ch)
+        self.words[a] = self.words.get(a, 0) | self.pack("irq_status", **causes)
+
+    def cycle(self, ch):
+        """One request cycle of channel ``ch``, ended at once."""
+        enc = self.encoders.setdefault(ch, FakeEncoder())
+        n = enc.cycles
+        enc.cycles += 1
+        self.time += 10_000
+        status = enc.statuses(n)
+        cfg = self.cfg(ch)
+        if cfg["ma_half_period"] < 2:
+            status = "BAD_CONFIG"
+        live = self.live[ch]
+        live["seq"] = {"seq": enc.cycles & 0xFFFF,
+                       "line_delay": live["seq"].get("line_delay", 0)}
+        st = dict(live["status"], status=STATUS[status])
+        if status in FRAME:
+            two = cfg["w1_enable"]
+            st.update(w0_ne=1, w0_nw=1,
+                      w0_crc_ok=int(status not in ("CRC_ERROR_WORD0", "CRC_ERROR_BOTH")),
+                      w1_ne=two, w1_nw=two,
+                      w1_crc_ok=int(bool(two) and status not in ("CRC_ERROR_WORD1",
+                                                                 "CRC_ERROR_BOTH")),
+                      lc=n % 64 if two else 0)
+            live["w0"] = enc.positions(n) & ((1 << cfg["w0_data_bits"]) - 1)
+            live["w1"] = enc.word1(n) if (two and enc.word1) else 0
+            live["seq"]["line_delay"] = enc.line_delay
+            live["time"] = self.time
+        counter = {"CRC_ERROR_WORD0": "crc_word0", "CRC_ERROR_BOTH": "crc_word0",
+                   "NO_ACK": "no_ack", "SLO_STUCK_LOW": "slo_stuck_low",
+                   "NO_START": "no_start"}.get(status)
+        if counter:
+            self.count(ch, counter)
+        live["status"] = st
+        self._irq(ch, done=1, error=int(status != "OK"))
+
+    def access(self, ch):
+        """One register access of ``ca.request``, ended at once."""
+        enc = self.encoders.setdefault(ch, FakeEncoder())
+        req = self.fields("ca.request", ch, self.stored("ca.request", ch))
+        enc.accesses.append(dict(req, cfg=self.cfg(ch)))
+        done = 0
+        if not 1 <= req["count"] <= 64 or req["address"] + req["count"] - 1 > 0x7F:
+            status = "BAD_REQUEST"
+        elif self.cfg(ch)["ma_half_period"] < 2:
+            status = "DATA_FAULT"
+        elif enc.access_status:
+            status = enc.access_status
+        elif enc.registers is None:
+            status = "NO_ANSWER"
+        else:
+            status, done = "OK", req["count"]
+            for i in range(req["count"]):
+                if req["write"]:
+                    if not enc.registers.write(req["address"] + i, self.wbuf[ch][i]):
+                        status, done = "REFUSED", i
+                        break
+                else:
+                    self.rbuf[ch][i] = enc.registers.read(req["address"] + i)
+        if status not in ("OK", "BAD_REQUEST"):
+            self.count(ch, {"NO_ANSWER": "ca_no_answer", "REFUSED": "ca_refused",
+                            "CRC4_ERROR": "ca_crc4_error", "DATA_FAULT": "ca_data_fault",
+                            "ABORTED": "ca_aborted"}[status])
+        a = MAP.address("ca.state", ch)
+        self.words[a] = self.pack("ca.state", busy=0, status=CA_STATUS[status],
+                                  bytes_done=done)
+        self._irq(ch, access_done=1)
+
+    def configure(self, ch, **values):
+        """Set configuration (and ctrl) fields directly: the test's own setup."""
+        for path in ("cfg_ma", "cfg_period", "cfg_break", "cfg_ack", "cfg_timeout",
+                     "cfg_words", "cfg_checks", "ctrl"):
+            mine = {k: v for k, v in values.items() if k in MAP.channel[path].fields}
+            if mine:
+                a = MAP.address(path, ch)
+                word = self.words.get(a, 0)
+                for k, v in mine.items():
+                    word = MAP.channel[path].fields[k].put(word, v)
+                self.words[a] = word
+
+
+class FakeBridge(MemoryBridge):
+    """MemoryBridge on a :class:`RegisterModel` (``model``)."""
+
+    def __init__(self, model=None, **kw):
+        super().__init__(timeout_s=1000 / 115200, **kw)
+        self.model = self.registers = model or RegisterModel()
+
+
+def biss_c_board(bits=26, ma_half_period=50, **model_kw):
+    """A fake board whose channel 0 is configured for a BiSS C word of ``bits``."""
+    model = RegisterModel(**model_kw)
+    model.configure(0, ma_half_period=ma_half_period, w0_data_bits=bits, w0_nenw=1, w0_crc=1)
+    return FakeBridge(model)
