@@ -65,7 +65,7 @@ class RegisterModel:
     # -- Helpers -----------------------------------------------------------------------------
     @staticmethod
     def _empty_result():
-        return {"status": {}, "seq": {}, "w0": 0, "w1": 0, "time": 0}
+        return {"status": {}, "seq": {}, "w0": 0, "w1": 0, "time": 0, "line": {}}
 
     def where(self, address):
         """(path, channel or None, index) of a byte address, or None if unmapped."""
@@ -129,7 +129,8 @@ class RegisterModel:
                     "result.seq": self.pack("result.seq", **snap["seq"]),
                     "result.w0_lo": snap["w0"] & 0xFFFFFFFF, "result.w0_hi": snap["w0"] >> 32,
                     "result.w1_lo": snap["w1"] & 0xFFFFFFFF, "result.w1_hi": snap["w1"] >> 32,
-                    "result.timestamp": snap["time"]}[path]
+                    "result.timestamp": snap["time"],
+                    "result.line": self.pack("result.line", **snap.get("line", {}))}[path]
         if path.startswith("count_") or path.startswith("ca.count_"):
             prefix = "ca_" if path.startswith("ca.") else ""
             return self.pack(path, **{n: self.counters[ch].get(prefix + n, 0)

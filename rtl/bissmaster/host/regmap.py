@@ -43,6 +43,7 @@ CHANNEL = {
     "cfg_timeout": 0x030,
     "cfg_words": 0x034,
     "cfg_checks": 0x038,
+    "cfg_quiet": 0x03C,
     "result.status": 0x040,
     "result.seq": 0x044,
     "result.w0_lo": 0x048,
@@ -50,6 +51,7 @@ CHANNEL = {
     "result.w1_lo": 0x050,
     "result.w1_hi": 0x054,
     "result.timestamp": 0x058,
+    "result.line": 0x05C,
     "count_crc": 0x060,
     "count_ack": 0x064,
     "count_line": 0x068,
@@ -57,6 +59,7 @@ CHANNEL = {
     "count_check": 0x070,
     "count_cycle": 0x074,
     "count_stop": 0x078,
+    "count_noise": 0x07C,
     "ca.request": 0x100,
     "ca.ctrl": 0x104,
     "ca.state": 0x108,
@@ -92,7 +95,9 @@ FIELDS = {
     "cfg_words": {"w0_data_bits": (0, 6), "w0_nenw": (6, 1), "w0_lc": (7, 1), "w0_crc": (8, 2),
                   "w1_data_bits": (16, 6), "w1_nenw": (22, 1), "w1_lc": (23, 1),
                   "w1_crc": (24, 2), "w1_enable": (31, 1)},
-    "cfg_checks": {"end_check": (0, 1), "spw_check": (1, 1), "spw_tolerance": (8, 8)},
+    "cfg_checks": {"end_check": (0, 1), "spw_check": (1, 1), "spw_tolerance": (8, 8),
+                   "noise_limit": (16, 4), "delay_tolerance": (20, 4)},
+    "cfg_quiet": {"quiet_time": (0, 12)},
     "result.status": {"status": (0, 4), "cds": (4, 1), "w0_ne": (8, 1), "w0_nw": (9, 1),
                       "w0_crc_ok": (10, 1), "w1_ne": (12, 1), "w1_nw": (13, 1),
                       "w1_crc_ok": (14, 1), "lc_repeat": (16, 1), "lc_skip": (17, 1),
@@ -103,13 +108,16 @@ FIELDS = {
     "result.w1_lo": {"data": (0, 32)},
     "result.w1_hi": {"data": (0, 8)},
     "result.timestamp": {"time": (0, 32)},
+    "result.line": {"noise_events": (0, 4), "delay_settled": (4, 1), "delay_spread": (8, 8),
+                    "settled_delay": (16, 13)},
     "count_crc": {"crc_word0": (0, 16), "crc_word1": (16, 16)},
     "count_ack": {"no_ack": (0, 16), "no_start": (16, 16)},
     "count_line": {"delay_range": (0, 16), "slo_stuck_low": (16, 16)},
     "count_lc": {"lc_repeat": (0, 16), "lc_skip": (16, 16)},
     "count_check": {"lc_zero": (0, 16), "spw_mismatch": (16, 16)},
     "count_cycle": {"overrun": (0, 16), "aborted": (16, 16)},
-    "count_stop": {"no_stop": (0, 16)},
+    "count_stop": {"no_stop": (0, 16), "noisy_line": (16, 16)},
+    "count_noise": {"delay_jump": (0, 16), "noise_event": (16, 16)},
     "ca.request": {"slave_id": (0, 3), "address": (8, 7), "count": (16, 7), "write": (24, 1)},
     "ca.ctrl": {"start": (0, 1), "abort": (1, 1)},
     "ca.state": {"busy": (0, 1), "status": (4, 3), "bytes_done": (8, 7)},
@@ -118,16 +126,16 @@ FIELDS = {
     "ca.count_data_fault": {"data_fault": (0, 16)},
 }
 
-#: The configuration registers, in address order (the seven ``cfg_*`` of a channel).
+#: The configuration registers, in address order (the eight ``cfg_*`` of a channel).
 CONFIG_REGISTERS = ("cfg_ma", "cfg_period", "cfg_break", "cfg_ack", "cfg_timeout",
-                    "cfg_words", "cfg_checks")
+                    "cfg_words", "cfg_checks", "cfg_quiet")
 #: The result block, in address order: one READ_BURST of these reads one snapshot (the first,
 #: result.status, takes it).
 RESULT_REGISTERS = ("result.status", "result.seq", "result.w0_lo", "result.w0_hi",
-                    "result.w1_lo", "result.w1_hi", "result.timestamp")
+                    "result.w1_lo", "result.w1_hi", "result.timestamp", "result.line")
 #: The data channel's error counters, in address order (count_crc .. count_stop).
 COUNTER_REGISTERS = ("count_crc", "count_ack", "count_line", "count_lc", "count_check",
-                     "count_cycle", "count_stop")
+                     "count_cycle", "count_stop", "count_noise")
 #: The register-access engine's counters, in address order.
 CA_COUNTER_REGISTERS = ("ca.count_crc4_answer", "ca.count_refused_aborted",
                         "ca.count_data_fault")
@@ -137,11 +145,12 @@ STATUS = {
     "OK": 0, "CRC_ERROR_WORD0": 1, "CRC_ERROR_WORD1": 2, "CRC_ERROR_BOTH": 3,
     "SIGN_OF_LIFE": 4, "SPW_MISMATCH": 5, "NO_ACK": 6, "NO_START": 7, "DELAY_RANGE": 8,
     "SLO_STUCK_LOW": 9, "ABORTED": 10, "BAD_CONFIG": 11, "NO_STOP": 12,
+    "NOISY_LINE": 13, "DELAY_JUMP": 14,
 }
 STATUS_NAME = {code: name for name, code in STATUS.items()}
 #: Statuses of a received frame (its position, nE/nW, CRC verdicts and line delay are new).
 FRAME_STATUSES = frozenset(("OK", "CRC_ERROR_WORD0", "CRC_ERROR_WORD1", "CRC_ERROR_BOTH",
-                            "SIGN_OF_LIFE", "SPW_MISMATCH"))
+                            "SIGN_OF_LIFE", "SPW_MISMATCH", "NOISY_LINE", "DELAY_JUMP"))
 #: Statuses that say the encoder did not answer as an encoder does (no frame, or a line that
 #: never goes back to idle): unplugged, unpowered, a broken wire, a wrong MA rate.
 NO_ENCODER_STATUSES = frozenset(("NO_ACK", "NO_START", "DELAY_RANGE", "SLO_STUCK_LOW",
