@@ -290,6 +290,7 @@ class BissMaster(wiring.Component):
             b.line_noise.level.eq(b.sampler.level),
             b.line_noise.sampler_noise.eq(b.sampler.noise),
             b.line_noise.close.eq(b.decoder.done),
+            b.line_noise.restart.eq(b.controller.fault),
             b.line_noise.limit.eq(b.cycle.noise_limit),
             b.delay_check.enable.eq(b.cycle.delay_tolerance != off),
             b.delay_check.tolerance.eq(b.config.delay_tolerance),

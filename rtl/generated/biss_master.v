@@ -45,7 +45,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \$9 ;
   wire abort;
   wire \abort$104 ;
-  wire \abort$277 ;
+  wire \abort$278 ;
   input abort_cycle;
   wire abort_cycle;
   wire ack_expired;
@@ -54,7 +54,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire [23:0] \ack_limit$157 ;
   wire arm;
   reg \bit  = 1'h0;
-  wire \bit$306 ;
+  wire \bit$307 ;
   wire [5:0] bits;
   wire break_over;
   wire \break_over$134 ;
@@ -62,7 +62,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   output busy;
   wire busy;
   wire \busy$112 ;
-  wire \busy$281 ;
+  wire \busy$282 ;
   input ca_abort;
   wire ca_abort;
   input [6:0] ca_address;
@@ -104,11 +104,11 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   input ca_write;
   wire ca_write;
   wire cdm;
-  wire \cdm$284 ;
+  wire \cdm$285 ;
   wire cdm_cycle;
   output cds;
   wire cds;
-  wire \cds$257 ;
+  wire \cds$258 ;
   wire [174:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
@@ -192,12 +192,12 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   input cfg_w1_nenw;
   wire cfg_w1_nenw;
   wire check;
-  wire \check$213 ;
+  wire \check$215 ;
   wire clean;
-  wire \clean$218 ;
+  wire \clean$220 ;
   wire clear;
   wire \clear$181 ;
-  wire \clear$299 ;
+  wire \clear$300 ;
   input clear_counters;
   wire clear_counters;
   input clk;
@@ -272,10 +272,10 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire [15:0] \counts.slo_stuck_low ;
   wire [15:0] \counts.spw_mismatch ;
   wire [39:0] cpw_top;
-  wire [39:0] \cpw_top$227 ;
+  wire [39:0] \cpw_top$229 ;
   wire [1:0] crc_error;
   wire [1:0] crc_ok;
-  wire [1:0] \crc_ok$241 ;
+  wire [1:0] \crc_ok$242 ;
   wire [174:0] cycle;
   wire [23:0] \cycle.ack_limit ;
   wire [23:0] \cycle.break_time ;
@@ -316,7 +316,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire decoder_sample;
   wire [12:0] delay;
   wire [12:0] \delay$163 ;
-  wire [12:0] \delay$212 ;
+  wire [12:0] \delay$214 ;
   wire delay_jump;
   wire [11:0] delay_limit;
   wire [11:0] \delay_limit$165 ;
@@ -330,8 +330,8 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   output done;
   wire done;
   wire \done$122 ;
-  wire \done$282 ;
-  wire \done$302 ;
+  wire \done$283 ;
+  wire \done$303 ;
   wire doubtful;
   wire early;
   wire \early$120 ;
@@ -340,30 +340,30 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire enough;
   wire \event ;
   wire [3:0] events;
-  wire [20:0] \events$294 ;
-  wire \events$294.aborted ;
-  wire \events$294.ca_aborted ;
-  wire \events$294.ca_crc4_error ;
-  wire \events$294.ca_data_fault ;
-  wire \events$294.ca_no_answer ;
-  wire \events$294.ca_refused ;
-  wire \events$294.crc_word0 ;
-  wire \events$294.crc_word1 ;
-  wire \events$294.delay_jump ;
-  wire \events$294.delay_range ;
-  wire \events$294.lc_repeat ;
-  wire \events$294.lc_skip ;
-  wire \events$294.lc_zero ;
-  wire \events$294.no_ack ;
-  wire \events$294.no_start ;
-  wire \events$294.no_stop ;
-  wire \events$294.noise_event ;
-  wire \events$294.noisy_line ;
-  wire \events$294.overrun ;
-  wire \events$294.slo_stuck_low ;
-  wire \events$294.spw_mismatch ;
+  wire [20:0] \events$295 ;
+  wire \events$295.aborted ;
+  wire \events$295.ca_aborted ;
+  wire \events$295.ca_crc4_error ;
+  wire \events$295.ca_data_fault ;
+  wire \events$295.ca_no_answer ;
+  wire \events$295.ca_refused ;
+  wire \events$295.crc_word0 ;
+  wire \events$295.crc_word1 ;
+  wire \events$295.delay_jump ;
+  wire \events$295.delay_range ;
+  wire \events$295.lc_repeat ;
+  wire \events$295.lc_skip ;
+  wire \events$295.lc_zero ;
+  wire \events$295.no_ack ;
+  wire \events$295.no_start ;
+  wire \events$295.no_stop ;
+  wire \events$295.noise_event ;
+  wire \events$295.noisy_line ;
+  wire \events$295.overrun ;
+  wire \events$295.slo_stuck_low ;
+  wire \events$295.spw_mismatch ;
   wire fault;
-  wire \fault$237 ;
+  wire \fault$238 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -397,7 +397,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \fault_status$239 ;
+  wire [3:0] \fault_status$240 ;
   wire [6:0] faults;
   wire \faults.aborted ;
   wire \faults.bad_config ;
@@ -407,7 +407,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \faults.no_stop ;
   wire \faults.slo_stuck_low ;
   wire first_rise;
-  wire \first_rise$271 ;
+  wire \first_rise$272 ;
   wire [31:0] first_rise_time;
   wire [186:0] frame;
   wire \frame.cds ;
@@ -476,15 +476,15 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire [5:0] \lc_next$194 ;
   output lc_repeat;
   wire lc_repeat;
-  wire \lc_repeat$262 ;
+  wire \lc_repeat$263 ;
   wire lc_repeat_seen;
   output lc_skip;
   wire lc_skip;
-  wire \lc_skip$263 ;
+  wire \lc_skip$264 ;
   wire lc_skip_seen;
   output lc_zero;
   wire lc_zero;
-  wire \lc_zero$264 ;
+  wire \lc_zero$265 ;
   wire lc_zero_seen;
   wire learn;
   wire level;
@@ -529,7 +529,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \locked$118 ;
   output ma;
   wire ma;
-  wire \ma$301 ;
+  wire \ma$302 ;
   wire ma_arm;
   wire ma_busy;
   wire \ma_busy$146 ;
@@ -547,12 +547,12 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   output [3:0] noise_events;
   wire [3:0] noise_events;
   wire noisy;
-  wire \noisy$220 ;
+  wire \noisy$222 ;
   wire [1:0] nw;
   wire ok;
   output overrun;
   wire overrun;
-  wire \overrun$297 ;
+  wire \overrun$298 ;
   wire [23:0] period;
   input periodic;
   wire periodic;
@@ -571,34 +571,35 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire receiver_clear;
   wire \repeat ;
   wire report;
-  wire \report$249 ;
+  wire \report$250 ;
   wire report_delay;
-  wire \report_delay$252 ;
+  wire \report_delay$253 ;
   wire report_frame;
-  wire \report_frame$235 ;
-  wire \report_frame$250 ;
+  wire \report_frame$237 ;
+  wire \report_frame$251 ;
   wire request;
   wire \request$103 ;
-  wire [17:0] \request$273 ;
-  wire [6:0] \request$273.address ;
-  wire [6:0] \request$273.count ;
-  wire [2:0] \request$273.slave_id ;
-  wire \request$273.write ;
+  wire [17:0] \request$274 ;
+  wire [6:0] \request$274.address ;
+  wire [6:0] \request$274.count ;
+  wire [2:0] \request$274.slave_id ;
+  wire \request$274.write ;
   wire restart;
+  wire \restart$207 ;
   wire restart_timer;
   wire [9:0] result;
-  wire [186:0] \result$304 ;
-  wire \result$304.cds ;
-  wire \result$304.delay_settled ;
-  wire [7:0] \result$304.delay_spread ;
-  wire [5:0] \result$304.lc ;
-  wire \result$304.lc_repeat ;
-  wire \result$304.lc_skip ;
-  wire \result$304.lc_zero ;
-  wire [12:0] \result$304.line_delay ;
-  wire [3:0] \result$304.noise_events ;
-  wire [12:0] \result$304.settled_delay ;
-  wire \result$304.spw_mismatch ;
+  wire [186:0] \result$305 ;
+  wire \result$305.cds ;
+  wire \result$305.delay_settled ;
+  wire [7:0] \result$305.delay_spread ;
+  wire [5:0] \result$305.lc ;
+  wire \result$305.lc_repeat ;
+  wire \result$305.lc_skip ;
+  wire \result$305.lc_zero ;
+  wire [12:0] \result$305.line_delay ;
+  wire [3:0] \result$305.noise_events ;
+  wire [12:0] \result$305.settled_delay ;
+  wire \result$305.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -615,18 +616,18 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \result$304.status ;
-  wire [31:0] \result$304.timestamp ;
-  wire [57:0] \result$304.word0 ;
-  wire \result$304.word0.crc_ok ;
-  wire \result$304.word0.ne ;
-  wire \result$304.word0.nw ;
-  wire [54:0] \result$304.word0.position ;
-  wire [42:0] \result$304.word1 ;
-  wire \result$304.word1.crc_ok ;
-  wire \result$304.word1.ne ;
-  wire \result$304.word1.nw ;
-  wire [39:0] \result$304.word1.position ;
+  wire [3:0] \result$305.status ;
+  wire [31:0] \result$305.timestamp ;
+  wire [57:0] \result$305.word0 ;
+  wire \result$305.word0.crc_ok ;
+  wire \result$305.word0.ne ;
+  wire \result$305.word0.nw ;
+  wire [54:0] \result$305.word0.position ;
+  wire [42:0] \result$305.word1 ;
+  wire \result$305.word1.crc_ok ;
+  wire \result$305.word1.ne ;
+  wire \result$305.word1.nw ;
+  wire [39:0] \result$305.word1.position ;
   wire [6:0] \result.bytes_done ;
   (* enum_base_type = "AccessStatus" *)
   (* enum_value_000 = "OK" *)
@@ -645,13 +646,13 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire rst;
   wire run;
   reg sample = 1'h0;
-  wire \sample$305 ;
+  wire \sample$306 ;
   wire sampler_noise;
   wire second_rise;
   wire settled;
   output [12:0] settled_delay;
   wire [12:0] settled_delay;
-  wire [12:0] \settled_delay$260 ;
+  wire [12:0] \settled_delay$261 ;
   wire skip;
   input slo;
   wire slo;
@@ -669,10 +670,10 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire spw_match;
   output spw_mismatch;
   wire spw_mismatch;
-  wire \spw_mismatch$269 ;
+  wire \spw_mismatch$270 ;
   input start;
   wire start;
-  wire \start$276 ;
+  wire \start$277 ;
   wire \start$95 ;
   wire [15:0] start_slot;
   wire [15:0] \start_slot$178 ;
@@ -714,7 +715,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \status$256 ;
+  wire [3:0] \status$257 ;
   wire stop_bit;
   wire \stop_bit$130 ;
   wire stopped;
@@ -726,11 +727,11 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   output [31:0] timestamp;
   wire [31:0] timestamp;
   wire [16:0] tolerance;
-  wire [7:0] \tolerance$231 ;
+  wire [7:0] \tolerance$233 ;
   output valid;
   wire valid;
-  wire \valid$253 ;
   wire \valid$254 ;
+  wire \valid$255 ;
   wire valid_out;
   wire w1_enable;
   wire waiting;
@@ -759,25 +760,25 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire [1:0] \word_count$190 ;
   wire [1:0] word_crc_ok;
   wire [19:0] words;
-  wire [19:0] \words$224 ;
-  wire [9:0] \words$224[0] ;
+  wire [19:0] \words$226 ;
+  wire [9:0] \words$226[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
-  wire [1:0] \words$224[0].crc ;
-  wire [5:0] \words$224[0].data_bits ;
-  wire \words$224[0].lc ;
-  wire \words$224[0].nenw ;
-  wire [9:0] \words$224[1] ;
+  wire [1:0] \words$226[0].crc ;
+  wire [5:0] \words$226[0].data_bits ;
+  wire \words$226[0].lc ;
+  wire \words$226[0].nenw ;
+  wire [9:0] \words$226[1] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
-  wire [1:0] \words$224[1].crc ;
-  wire [5:0] \words$224[1].data_bits ;
-  wire \words$224[1].lc ;
-  wire \words$224[1].nenw ;
+  wire [1:0] \words$226[1].crc ;
+  wire [5:0] \words$226[1].data_bits ;
+  wire \words$226[1].lc ;
+  wire \words$226[1].nenw ;
   wire [9:0] \words[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
@@ -801,11 +802,11 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign enable = cycle[144:141] != 4'hf;
   assign rearm = cfg_delay_tolerance == 4'hf;
   assign \$1  = ~ started_before;
-  assign \check$213  = started & \$1 ;
-  assign \$2  = learn & \spw_mismatch$269 ;
-  assign \$3  = \status$256  == 4'hd;
+  assign \check$215  = started & \$1 ;
+  assign \$2  = learn & \spw_mismatch$270 ;
+  assign \$3  = \status$257  == 4'hd;
   assign \$4  = learn & \$3 ;
-  assign \$5  = \status$256  == 4'he;
+  assign \$5  = \status$257  == 4'he;
   assign \$6  = learn & \$5 ;
   assign \$7  = result[2:0] == 1'h1;
   assign \$8  = ca_done & \$7 ;
@@ -820,7 +821,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign busy = ~ idle;
   assign config_error = ~ config_ok;
   assign \$17  = ~ \clear$181 ;
-  assign \$18  = \sample$305  & \$17 ;
+  assign \$18  = \sample$306  & \$17 ;
   always @(posedge clk)
     sample <= \$19 ;
   always @(posedge clk)
@@ -853,7 +854,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .delay_over(delay_over),
     .early(early),
     .end_check(cycle[124]),
-    .fault(fault),
+    .fault(\restart$207 ),
     .fault_status(fault_status),
     .faults(faults),
     .frame_done(frame_done),
@@ -891,12 +892,12 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .clear(clear_counters),
     .clk(clk),
     .counts(counts),
-    .events(\events$294 ),
+    .events(\events$295 ),
     .rst(rst)
   );
   \biss_master.decoder  decoder (
     .\bit (\bit ),
-    .cds(\cds$257 ),
+    .cds(\cds$258 ),
     .clk(clk),
     .cpw_top(cpw_top),
     .crc_ok(crc_ok),
@@ -919,7 +920,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .words(words)
   );
   \biss_master.delay_check  delay_check (
-    .check(\check$213 ),
+    .check(\check$215 ),
     .clean(clean),
     .clk(clk),
     .delay(delay),
@@ -929,7 +930,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .rearm(rearm),
     .rst(rst),
     .settled(settled),
-    .settled_delay(\settled_delay$260 ),
+    .settled_delay(\settled_delay$261 ),
     .spread(spread),
     .\tolerance$8 (tolerance)
   );
@@ -941,6 +942,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .level(\slo$109 ),
     .limit(cycle[140:137]),
     .noisy(noisy),
+    .restart(\restart$207 ),
     .rst(rst),
     .sampler_noise(sampler_noise),
     .watch(watch)
@@ -968,7 +970,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .start_slot(start_slot),
     .\started$10 (started),
     .w1_enable(cycle[155]),
-    .words(\words$224 )
+    .words(\words$226 )
   );
   \biss_master.register_access  register_access (
     .abort(ca_abort),
@@ -977,13 +979,13 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .clk(clk),
     .done(ca_done),
     .frame_cdm(frame_cdm),
-    .frame_cds(\cds$257 ),
+    .frame_cds(\cds$258 ),
     .frame_end(report),
-    .frame_ok(\valid$253 ),
+    .frame_ok(\valid$254 ),
     .rbuf_addr(ca_rbuf_addr),
     .rbuf_data(ca_rbuf_data),
     .rbuf_en(ca_rbuf_en),
-    .request(\request$273 ),
+    .request(\request$274 ),
     .result(result),
     .rst(rst),
     .start(ca_start),
@@ -996,14 +998,14 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .report(report),
     .report_delay(report_delay),
     .report_frame(learn),
-    .result(\result$304 ),
+    .result(\result$305 ),
     .rst(rst),
-    .valid(\valid$253 ),
+    .valid(\valid$254 ),
     .valid_out(valid)
   );
   \biss_master.sampler  sampler (
     .arm(ma_arm),
-    .\bit (\bit$306 ),
+    .\bit (\bit$307 ),
     .clk(clk),
     .delay(delay),
     .early(early),
@@ -1013,7 +1015,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .noise(sampler_noise),
     .receiver_clear(\clear$181 ),
     .rst(rst),
-    .sample(\sample$305 ),
+    .sample(\sample$306 ),
     .slo(slo)
   );
   \biss_master.scheduler  scheduler (
@@ -1033,7 +1035,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .is_zero(lc_zero_seen),
     .lc(\lc$191 ),
     .load(load),
-    .\port$1563$0 (\bit ),
+    .\port$1564$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -1087,23 +1089,23 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .crc_ok(crc_ok),
     .delay_jump(delay_jump),
     .doubtful(frame_doubtful),
-    .fault(fault),
+    .fault(\restart$207 ),
     .fault_status(fault_status),
     .lc_check(check),
-    .lc_repeat(\lc_repeat$262 ),
+    .lc_repeat(\lc_repeat$263 ),
     .lc_repeat_seen(lc_repeat_seen),
-    .lc_skip(\lc_skip$263 ),
+    .lc_skip(\lc_skip$264 ),
     .lc_skip_seen(lc_skip_seen),
-    .lc_zero(\lc_zero$264 ),
+    .lc_zero(\lc_zero$265 ),
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
-    .\port$1031$0 (\$22 ),
+    .\port$1032$0 (\$22 ),
     .report(report),
     .report_frame(learn),
     .spw_match(spw_match),
-    .spw_mismatch(\spw_mismatch$269 ),
-    .status(\status$256 ),
-    .valid(\valid$253 )
+    .spw_mismatch(\spw_mismatch$270 ),
+    .status(\status$257 ),
+    .valid(\valid$254 )
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
@@ -1114,7 +1116,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
-    \$20  = \bit$306 ;
+    \$20  = \bit$307 ;
     if (rst) begin
       \$20  = 1'h0;
     end
@@ -1192,73 +1194,74 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \level$203  = \slo$109 ;
   assign noise = sampler_noise;
   assign close = frame_done;
+  assign fault = \restart$207 ;
   assign limit = cycle[140:137];
   assign delay_tolerance = tolerance;
-  assign \delay$212  = delay;
+  assign \delay$214  = delay;
   assign report_frame = learn;
-  assign \clean$218  = clean;
-  assign \noisy$220  = noisy;
+  assign \clean$220  = clean;
+  assign \noisy$222  = noisy;
   assign jump = delay_jump;
   assign w1_enable = cycle[155];
-  assign \cpw_top$227  = cpw_top;
+  assign \cpw_top$229  = cpw_top;
   assign data1 = spw;
   assign bits = cycle[161:156];
-  assign \tolerance$231  = cycle[174:167];
+  assign \tolerance$233  = cycle[174:167];
   assign match = spw_match;
   assign cfg = cycle;
-  assign \report_frame$235  = learn;
-  assign \fault$237  = fault;
-  assign \fault_status$239  = fault_status;
-  assign \crc_ok$241  = crc_ok;
+  assign \report_frame$237  = learn;
+  assign \fault$238  = \restart$207 ;
+  assign \fault_status$240  = fault_status;
+  assign \crc_ok$242  = crc_ok;
   assign \repeat  = lc_repeat_seen;
   assign skip = lc_skip_seen;
   assign zero = lc_zero_seen;
-  assign \report$249  = report;
-  assign \report_frame$250  = learn;
-  assign \report_delay$252  = report_delay;
-  assign \valid$254  = \valid$253 ;
+  assign \report$250  = report;
+  assign \report_frame$251  = learn;
+  assign \report_delay$253  = report_delay;
+  assign \valid$255  = \valid$254 ;
   assign word_crc_ok = { \$22 , crc_ok[0] };
-  assign \first_rise$271  = first_rise;
-  assign \start$276  = ca_start;
-  assign \abort$277  = ca_abort;
+  assign \first_rise$272  = first_rise;
+  assign \start$277  = ca_start;
+  assign \abort$278  = ca_abort;
   assign rbuf_addr = ca_rbuf_addr;
   assign rbuf_en = ca_rbuf_en;
   assign rbuf_data = ca_rbuf_data;
-  assign \busy$281  = ca_busy;
-  assign \done$282  = ca_done;
-  assign \cdm$284  = cdm;
+  assign \busy$282  = ca_busy;
+  assign \done$283  = ca_done;
+  assign \cdm$285  = cdm;
   assign held = ma_held;
   assign ma_hold = hold;
   assign frame_end = report;
-  assign frame_ok = \valid$253 ;
-  assign frame_cds = \cds$257 ;
+  assign frame_ok = \valid$254 ;
+  assign frame_cds = \cds$258 ;
   assign cdm_cycle = frame_cdm;
-  assign \overrun$297  = overrun;
-  assign \clear$299  = clear_counters;
-  assign \ma$301  = ma;
-  assign \done$302  = done;
+  assign \overrun$298  = overrun;
+  assign \clear$300  = clear_counters;
+  assign \ma$302  = ma;
+  assign \done$303  = done;
   assign valid_out = valid;
-  assign status = \result$304 [3:0];
-  assign timestamp = \result$304 [35:4];
-  assign line_delay = \result$304 [48:36];
-  assign cds = \result$304 [49];
-  assign noise_events = \result$304 [53:50];
-  assign delay_settled = \result$304 [54];
-  assign settled_delay = \result$304 [67:55];
-  assign delay_spread = \result$304 [75:68];
-  assign word0_position = \result$304 [130:76];
-  assign word0_ne = \result$304 [131];
-  assign word0_nw = \result$304 [132];
-  assign word0_crc_ok = \result$304 [133];
-  assign word1_position = \result$304 [173:134];
-  assign word1_ne = \result$304 [174];
-  assign word1_nw = \result$304 [175];
-  assign word1_crc_ok = \result$304 [176];
-  assign lc = \result$304 [182:177];
-  assign lc_repeat = \result$304 [183];
-  assign lc_skip = \result$304 [184];
-  assign lc_zero = \result$304 [185];
-  assign spw_mismatch = \result$304 [186];
+  assign status = \result$305 [3:0];
+  assign timestamp = \result$305 [35:4];
+  assign line_delay = \result$305 [48:36];
+  assign cds = \result$305 [49];
+  assign noise_events = \result$305 [53:50];
+  assign delay_settled = \result$305 [54];
+  assign settled_delay = \result$305 [67:55];
+  assign delay_spread = \result$305 [75:68];
+  assign word0_position = \result$305 [130:76];
+  assign word0_ne = \result$305 [131];
+  assign word0_nw = \result$305 [132];
+  assign word0_crc_ok = \result$305 [133];
+  assign word1_position = \result$305 [173:134];
+  assign word1_ne = \result$305 [174];
+  assign word1_nw = \result$305 [175];
+  assign word1_crc_ok = \result$305 [176];
+  assign lc = \result$305 [182:177];
+  assign lc_repeat = \result$305 [183];
+  assign lc_skip = \result$305 [184];
+  assign lc_zero = \result$305 [185];
+  assign spw_mismatch = \result$305 [186];
   assign ca_status = result[2:0];
   assign ca_bytes_done = result[9:3];
   assign count_crc_word0 = counts[15:0];
@@ -1338,16 +1341,16 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \words[1].nenw  = words[16];
   assign \words[1].lc  = words[17];
   assign \words[1].crc  = words[19:18];
-  assign \words$224[0]  = \words$224 [9:0];
-  assign \words$224[0].data_bits  = \words$224 [5:0];
-  assign \words$224[0].nenw  = \words$224 [6];
-  assign \words$224[0].lc  = \words$224 [7];
-  assign \words$224[0].crc  = \words$224 [9:8];
-  assign \words$224[1]  = \words$224 [19:10];
-  assign \words$224[1].data_bits  = \words$224 [15:10];
-  assign \words$224[1].nenw  = \words$224 [16];
-  assign \words$224[1].lc  = \words$224 [17];
-  assign \words$224[1].crc  = \words$224 [19:18];
+  assign \words$226[0]  = \words$226 [9:0];
+  assign \words$226[0].data_bits  = \words$226 [5:0];
+  assign \words$226[0].nenw  = \words$226 [6];
+  assign \words$226[0].lc  = \words$226 [7];
+  assign \words$226[0].crc  = \words$226 [9:8];
+  assign \words$226[1]  = \words$226 [19:10];
+  assign \words$226[1].data_bits  = \words$226 [15:10];
+  assign \words$226[1].nenw  = \words$226 [16];
+  assign \words$226[1].lc  = \words$226 [17];
+  assign \words$226[1].crc  = \words$226 [19:18];
   assign \cfg.ma_half_period  = cycle[15:0];
   assign \cfg.request_period  = cycle[39:16];
   assign \cfg.break_time  = cycle[63:40];
@@ -1394,36 +1397,36 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \frame.lc_skip  = frame[184];
   assign \frame.lc_zero  = frame[185];
   assign \frame.spw_mismatch  = frame[186];
-  assign \request$273.slave_id  = \request$273 [2:0];
-  assign \request$273.address  = \request$273 [9:3];
-  assign \request$273.count  = \request$273 [16:10];
-  assign \request$273.write  = \request$273 [17];
+  assign \request$274.slave_id  = \request$274 [2:0];
+  assign \request$274.address  = \request$274 [9:3];
+  assign \request$274.count  = \request$274 [16:10];
+  assign \request$274.write  = \request$274 [17];
   assign \wbuf.addr  = wbuf[3:0];
   assign \wbuf.data  = wbuf[35:4];
   assign \wbuf.en  = wbuf[39:36];
   assign \result.status  = result[2:0];
   assign \result.bytes_done  = result[9:3];
-  assign \events$294.crc_word0  = \events$294 [0];
-  assign \events$294.crc_word1  = \events$294 [1];
-  assign \events$294.no_ack  = \events$294 [2];
-  assign \events$294.no_start  = \events$294 [3];
-  assign \events$294.delay_range  = \events$294 [4];
-  assign \events$294.slo_stuck_low  = \events$294 [5];
-  assign \events$294.lc_repeat  = \events$294 [6];
-  assign \events$294.lc_skip  = \events$294 [7];
-  assign \events$294.lc_zero  = \events$294 [8];
-  assign \events$294.spw_mismatch  = \events$294 [9];
-  assign \events$294.overrun  = \events$294 [10];
-  assign \events$294.aborted  = \events$294 [11];
-  assign \events$294.no_stop  = \events$294 [12];
-  assign \events$294.noisy_line  = \events$294 [13];
-  assign \events$294.delay_jump  = \events$294 [14];
-  assign \events$294.noise_event  = \events$294 [15];
-  assign \events$294.ca_crc4_error  = \events$294 [16];
-  assign \events$294.ca_no_answer  = \events$294 [17];
-  assign \events$294.ca_refused  = \events$294 [18];
-  assign \events$294.ca_aborted  = \events$294 [19];
-  assign \events$294.ca_data_fault  = \events$294 [20];
+  assign \events$295.crc_word0  = \events$295 [0];
+  assign \events$295.crc_word1  = \events$295 [1];
+  assign \events$295.no_ack  = \events$295 [2];
+  assign \events$295.no_start  = \events$295 [3];
+  assign \events$295.delay_range  = \events$295 [4];
+  assign \events$295.slo_stuck_low  = \events$295 [5];
+  assign \events$295.lc_repeat  = \events$295 [6];
+  assign \events$295.lc_skip  = \events$295 [7];
+  assign \events$295.lc_zero  = \events$295 [8];
+  assign \events$295.spw_mismatch  = \events$295 [9];
+  assign \events$295.overrun  = \events$295 [10];
+  assign \events$295.aborted  = \events$295 [11];
+  assign \events$295.no_stop  = \events$295 [12];
+  assign \events$295.noisy_line  = \events$295 [13];
+  assign \events$295.delay_jump  = \events$295 [14];
+  assign \events$295.noise_event  = \events$295 [15];
+  assign \events$295.ca_crc4_error  = \events$295 [16];
+  assign \events$295.ca_no_answer  = \events$295 [17];
+  assign \events$295.ca_refused  = \events$295 [18];
+  assign \events$295.ca_aborted  = \events$295 [19];
+  assign \events$295.ca_data_fault  = \events$295 [20];
   assign \faults.no_ack  = faults[0];
   assign \faults.no_start  = faults[1];
   assign \faults.delay_range  = faults[2];
@@ -1452,59 +1455,59 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \counts.ca_refused  = counts[303:288];
   assign \counts.ca_aborted  = counts[319:304];
   assign \counts.ca_data_fault  = counts[335:320];
-  assign \result$304.status  = \result$304 [3:0];
-  assign \result$304.timestamp  = \result$304 [35:4];
-  assign \result$304.line_delay  = \result$304 [48:36];
-  assign \result$304.cds  = \result$304 [49];
-  assign \result$304.noise_events  = \result$304 [53:50];
-  assign \result$304.delay_settled  = \result$304 [54];
-  assign \result$304.settled_delay  = \result$304 [67:55];
-  assign \result$304.delay_spread  = \result$304 [75:68];
-  assign \result$304.word0  = \result$304 [133:76];
-  assign \result$304.word0.position  = \result$304 [130:76];
-  assign \result$304.word0.ne  = \result$304 [131];
-  assign \result$304.word0.nw  = \result$304 [132];
-  assign \result$304.word0.crc_ok  = \result$304 [133];
-  assign \result$304.word1  = \result$304 [176:134];
-  assign \result$304.word1.position  = \result$304 [173:134];
-  assign \result$304.word1.ne  = \result$304 [174];
-  assign \result$304.word1.nw  = \result$304 [175];
-  assign \result$304.word1.crc_ok  = \result$304 [176];
-  assign \result$304.lc  = \result$304 [182:177];
-  assign \result$304.lc_repeat  = \result$304 [183];
-  assign \result$304.lc_skip  = \result$304 [184];
-  assign \result$304.lc_zero  = \result$304 [185];
-  assign \result$304.spw_mismatch  = \result$304 [186];
-  assign \events$294 [20] = \$16 ;
-  assign \events$294 [19] = \$14 ;
-  assign \events$294 [18] = \$12 ;
-  assign \events$294 [17] = \$10 ;
-  assign \events$294 [16] = \$8 ;
-  assign \events$294 [15] = \event ;
-  assign \events$294 [14] = \$6 ;
-  assign \events$294 [13] = \$4 ;
-  assign \events$294 [12] = faults[6];
-  assign \events$294 [11] = faults[4];
-  assign \events$294 [10] = overrun;
-  assign \events$294 [9] = \$2 ;
-  assign \events$294 [8] = \lc_zero$264 ;
-  assign \events$294 [7] = \lc_skip$263 ;
-  assign \events$294 [6] = \lc_repeat$262 ;
-  assign \events$294 [5] = faults[3];
-  assign \events$294 [4] = faults[2];
-  assign \events$294 [3] = faults[1];
-  assign \events$294 [2] = faults[0];
-  assign \events$294 [1] = crc_error[1];
-  assign \events$294 [0] = crc_error[0];
+  assign \result$305.status  = \result$305 [3:0];
+  assign \result$305.timestamp  = \result$305 [35:4];
+  assign \result$305.line_delay  = \result$305 [48:36];
+  assign \result$305.cds  = \result$305 [49];
+  assign \result$305.noise_events  = \result$305 [53:50];
+  assign \result$305.delay_settled  = \result$305 [54];
+  assign \result$305.settled_delay  = \result$305 [67:55];
+  assign \result$305.delay_spread  = \result$305 [75:68];
+  assign \result$305.word0  = \result$305 [133:76];
+  assign \result$305.word0.position  = \result$305 [130:76];
+  assign \result$305.word0.ne  = \result$305 [131];
+  assign \result$305.word0.nw  = \result$305 [132];
+  assign \result$305.word0.crc_ok  = \result$305 [133];
+  assign \result$305.word1  = \result$305 [176:134];
+  assign \result$305.word1.position  = \result$305 [173:134];
+  assign \result$305.word1.ne  = \result$305 [174];
+  assign \result$305.word1.nw  = \result$305 [175];
+  assign \result$305.word1.crc_ok  = \result$305 [176];
+  assign \result$305.lc  = \result$305 [182:177];
+  assign \result$305.lc_repeat  = \result$305 [183];
+  assign \result$305.lc_skip  = \result$305 [184];
+  assign \result$305.lc_zero  = \result$305 [185];
+  assign \result$305.spw_mismatch  = \result$305 [186];
+  assign \events$295 [20] = \$16 ;
+  assign \events$295 [19] = \$14 ;
+  assign \events$295 [18] = \$12 ;
+  assign \events$295 [17] = \$10 ;
+  assign \events$295 [16] = \$8 ;
+  assign \events$295 [15] = \event ;
+  assign \events$295 [14] = \$6 ;
+  assign \events$295 [13] = \$4 ;
+  assign \events$295 [12] = faults[6];
+  assign \events$295 [11] = faults[4];
+  assign \events$295 [10] = overrun;
+  assign \events$295 [9] = \$2 ;
+  assign \events$295 [8] = \lc_zero$265 ;
+  assign \events$295 [7] = \lc_skip$264 ;
+  assign \events$295 [6] = \lc_repeat$263 ;
+  assign \events$295 [5] = faults[3];
+  assign \events$295 [4] = faults[2];
+  assign \events$295 [3] = faults[1];
+  assign \events$295 [2] = faults[0];
+  assign \events$295 [1] = crc_error[1];
+  assign \events$295 [0] = crc_error[0];
   assign wbuf[39:36] = ca_wbuf_en;
   assign wbuf[35:4] = ca_wbuf_data;
   assign wbuf[3:0] = ca_wbuf_addr;
-  assign \request$273 [17] = ca_write;
-  assign \request$273 [16:10] = ca_count;
-  assign \request$273 [9:3] = ca_address;
-  assign \request$273 [2:0] = ca_slave_id;
+  assign \request$274 [17] = ca_write;
+  assign \request$274 [16:10] = ca_count;
+  assign \request$274 [9:3] = ca_address;
+  assign \request$274 [2:0] = ca_slave_id;
   assign frame[35:4] = first_rise_time;
-  assign frame[186] = \spw_mismatch$269 ;
+  assign frame[186] = \spw_mismatch$270 ;
   assign frame[176] = \$22 ;
   assign frame[175] = nw[1];
   assign frame[174] = ne[1];
@@ -1513,19 +1516,19 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign frame[132] = nw[0];
   assign frame[131] = ne[0];
   assign frame[130:76] = data0;
-  assign frame[185] = \lc_zero$264 ;
-  assign frame[184] = \lc_skip$263 ;
-  assign frame[183] = \lc_repeat$262 ;
+  assign frame[185] = \lc_zero$265 ;
+  assign frame[184] = \lc_skip$264 ;
+  assign frame[183] = \lc_repeat$263 ;
   assign frame[182:177] = \lc$191 ;
   assign frame[75:68] = spread;
-  assign frame[67:55] = \settled_delay$260 ;
+  assign frame[67:55] = \settled_delay$261 ;
   assign frame[54] = settled;
   assign frame[53:50] = events;
-  assign frame[49] = \cds$257 ;
+  assign frame[49] = \cds$258 ;
   assign frame[48:36] = delay;
-  assign frame[3:0] = \status$256 ;
-  assign \words$224 [19:10] = cycle[165:156];
-  assign \words$224 [9:0] = cycle[154:145];
+  assign frame[3:0] = \status$257 ;
+  assign \words$226 [19:10] = cycle[165:156];
+  assign \words$226 [9:0] = cycle[154:145];
   assign words[19:10] = cycle[165:156];
   assign words[9:0] = cycle[154:145];
   assign live[174:167] = cfg_spw_tolerance;
@@ -6529,7 +6532,7 @@ module \biss_master.delay_check (rst, enable, rearm, check, clean, \tolerance$8 
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.line_noise (rst, sampler_noise, \event , noisy, events, limit, watch, level, close, clk);
+module \biss_master.line_noise (rst, sampler_noise, \event , noisy, events, limit, watch, restart, level, close, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$45  = 0;
   wire \$1 ;
   wire [4:0] \$10 ;
@@ -6568,6 +6571,8 @@ module \biss_master.line_noise (rst, sampler_noise, \event , noisy, events, limi
   output noisy;
   wire noisy;
   reg over = 1'h0;
+  input restart;
+  wire restart;
   input rst;
   wire rst;
   reg [3:0] running = 4'h0;
@@ -6634,6 +6639,8 @@ module \biss_master.line_noise (rst, sampler_noise, \event , noisy, events, limi
     (* full_case = 32'd1 *)
     if (close) begin
       \$18  = { 3'h0, \event  };
+    end else if (restart) begin
+      \$18  = 4'h0;
     end else begin
       \$18  = \$6 [3:0];
     end
@@ -6646,6 +6653,8 @@ module \biss_master.line_noise (rst, sampler_noise, \event , noisy, events, limi
     (* full_case = 32'd1 *)
     if (close) begin
       \$19  = \$2 ;
+    end else if (restart) begin
+      \$19  = 1'h0;
     end else begin
       \$19  = \$11 ;
     end
@@ -10442,7 +10451,7 @@ module \biss_master.scheduler (abort, period, clk, rst, periodic, request, overr
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1563$0 , resync, lc, is_zero, clk);
+module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1564$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$58  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -10484,8 +10493,8 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1563$0
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$1563$0 ;
-  wire \port$1563$0 ;
+  input \port$1564$0 ;
+  wire \port$1564$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -10499,9 +10508,9 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1563$0
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$1563$0  };
-  assign \$2  = { lc[4:0], \port$1563$0  } == last;
-  assign \$3  = { lc[4:0], \port$1563$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$1564$0  };
+  assign \$2  = { lc[4:0], \port$1564$0  } == last;
+  assign \$3  = { lc[4:0], \port$1564$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -10611,7 +10620,7 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1563$0
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$1563$0  };
+  assign lc_next = { lc[4:0], \port$1564$0  };
   assign zero = is_zero;
 endmodule
 
@@ -11167,7 +11176,7 @@ module \biss_master.timers (timeout_live, quiet_time_live, clk, rst, restart, ma
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.verdict (lc_skip_seen, noisy, \port$1031$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
+module \biss_master.verdict (lc_skip_seen, noisy, \port$1032$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
 , delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$62  = 0;
   wire \$1 ;
@@ -11305,8 +11314,8 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$1031$0 , lc_check, lc_re
   wire lc_zero_seen;
   input noisy;
   wire noisy;
-  output \port$1031$0 ;
-  wire \port$1031$0 ;
+  output \port$1032$0 ;
+  wire \port$1032$0 ;
   output report;
   wire report;
   input report_frame;
@@ -11412,7 +11421,7 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$1031$0 , lc_check, lc_re
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$1031$0  = \$2 ;
+  assign \port$1032$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

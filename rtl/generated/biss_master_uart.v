@@ -570,12 +570,12 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .ch1_irq(\$7 ),
     .clk(clk),
     .g_trigger_start(glob__trigger),
-    .\port$5229$0 (\$8 ),
-    .\port$5242$0 (\$9 ),
-    .\port$5374$0 (\$10 ),
-    .\port$5791$0 (\$11 ),
-    .\port$5804$0 (\$12 ),
-    .\port$5936$0 (\$13 ),
+    .\port$5231$0 (\$8 ),
+    .\port$5244$0 (\$9 ),
+    .\port$5376$0 (\$10 ),
+    .\port$5793$0 (\$11 ),
+    .\port$5806$0 (\$12 ),
+    .\port$5938$0 (\$13 ),
     .rst(rst),
     .write_data(regs__ca_wbuf_data)
   );
@@ -629,9 +629,9 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .clk(clk),
     .ma(ch0_ma),
     .periodic(regs__periodic),
-    .\port$5229$0 (\$8 ),
-    .\port$5242$0 (\$9 ),
-    .\port$5374$0 (\$10 ),
+    .\port$5231$0 (\$8 ),
+    .\port$5244$0 (\$9 ),
+    .\port$5376$0 (\$10 ),
     .regs__abort_cycle(regs__abort_cycle),
     .regs__busy(ch0__busy),
     .regs__ca_busy(ch0__ca_busy),
@@ -684,9 +684,9 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .clk(clk),
     .ma(ch1_ma),
     .periodic(\regs__periodic$384 ),
-    .\port$5791$0 (\$11 ),
-    .\port$5804$0 (\$12 ),
-    .\port$5936$0 (\$13 ),
+    .\port$5793$0 (\$11 ),
+    .\port$5806$0 (\$12 ),
+    .\port$5938$0 (\$13 ),
     .regs__abort_cycle(\regs__abort_cycle$224 ),
     .regs__busy(ch1__busy),
     .regs__ca_busy(ch1__ca_busy),
@@ -1037,7 +1037,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
 , bus__w_addr, bus__w_data, bus__r_addr, ch0__ca_wbuf_addr, write_data, g_trigger_start, ch0_ctrl_start, ch0_ctrl_abort, ch0_ctrl_clear_counters, ch0_ctrl_periodic, ch0_ctrl_trigger_enable, ch0_cfg_ma_ma_half_period, ch0_cfg_ma_delay_limit, ch0_cfg_period_request_period, ch0_cfg_break_break_time, ch0_cfg_ack_ack_limit, ch0_cfg_timeout_timeout_limit, ch0_cfg_words_w0_data_bits, ch0_cfg_words_w0_nenw, ch0_cfg_words_w0_lc, ch0_cfg_words_w0_crc
 , ch0_cfg_words_w1_data_bits, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_enable, ch0_cfg_checks_end_check, ch0_cfg_checks_spw_check, ch0_cfg_checks_spw_tolerance, ch0_cfg_checks_noise_limit, ch0_cfg_checks_delay_tolerance, ch0_cfg_quiet_quiet_time, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$85 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort, ch1_ctrl_start, ch1_ctrl_abort, ch1_ctrl_clear_counters, ch1_ctrl_periodic
 , ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit, ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_enable, ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_delay_tolerance
-, ch1_cfg_quiet_quiet_time, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$265 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__done_count, ch0__done, \port$5229$0 , \port$5242$0 , ch0__ca_done, \port$5374$0 , ch1__done_count, ch1__done, \port$5791$0 , \port$5804$0 , ch1__ca_done, \port$5936$0 , clk);
+, ch1_cfg_quiet_quiet_time, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$265 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__done_count, ch0__done, \port$5231$0 , \port$5244$0 , ch0__ca_done, \port$5376$0 , ch1__done_count, ch1__done, \port$5793$0 , \port$5806$0 , ch1__ca_done, \port$5938$0 , clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$30  = 0;
   wire \$1 ;
   wire [31:0] \$10 ;
@@ -2387,18 +2387,18 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   (* init = 1'h0 *)
   wire glob__trigger;
   wire [1:0] irq;
-  input [186:0] \port$5229$0 ;
-  wire [186:0] \port$5229$0 ;
-  input [335:0] \port$5242$0 ;
-  wire [335:0] \port$5242$0 ;
-  input [9:0] \port$5374$0 ;
-  wire [9:0] \port$5374$0 ;
-  input [186:0] \port$5791$0 ;
-  wire [186:0] \port$5791$0 ;
-  input [335:0] \port$5804$0 ;
-  wire [335:0] \port$5804$0 ;
-  input [9:0] \port$5936$0 ;
-  wire [9:0] \port$5936$0 ;
+  input [186:0] \port$5231$0 ;
+  wire [186:0] \port$5231$0 ;
+  input [335:0] \port$5244$0 ;
+  wire [335:0] \port$5244$0 ;
+  input [9:0] \port$5376$0 ;
+  wire [9:0] \port$5376$0 ;
+  input [186:0] \port$5793$0 ;
+  wire [186:0] \port$5793$0 ;
+  input [335:0] \port$5806$0 ;
+  wire [335:0] \port$5806$0 ;
+  input [9:0] \port$5938$0 ;
+  wire [9:0] \port$5938$0 ;
   input rst;
   wire rst;
   reg [10:0] write_addr = 11'h000;
@@ -2407,29 +2407,29 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   reg write_en = 1'h0;
   reg [3:0] write_strb = 4'h0;
   assign \$323  = \$321  | \$322 ;
-  assign \$324  = ch1_read_select_119 ? \port$5804$0 [63:32] : 32'd0;
+  assign \$324  = ch1_read_select_119 ? \port$5806$0 [63:32] : 32'd0;
   assign \$325  = \$323  | \$324 ;
-  assign \$326  = ch1_read_select_11a ? \port$5804$0 [95:64] : 32'd0;
+  assign \$326  = ch1_read_select_11a ? \port$5806$0 [95:64] : 32'd0;
   assign \$327  = \$325  | \$326 ;
-  assign \$328  = ch1_read_select_11b ? \port$5804$0 [127:96] : 32'd0;
+  assign \$328  = ch1_read_select_11b ? \port$5806$0 [127:96] : 32'd0;
   assign \$329  = \$327  | \$328 ;
-  assign \$330  = ch1_read_select_11c ? \port$5804$0 [159:128] : 32'd0;
+  assign \$330  = ch1_read_select_11c ? \port$5806$0 [159:128] : 32'd0;
   assign \$331  = \$329  | \$330 ;
-  assign \$332  = ch1_read_select_11d ? \port$5804$0 [191:160] : 32'd0;
+  assign \$332  = ch1_read_select_11d ? \port$5806$0 [191:160] : 32'd0;
   assign \$333  = \$331  | \$332 ;
-  assign \$334  = ch1_read_select_11e ? \port$5804$0 [223:192] : 32'd0;
+  assign \$334  = ch1_read_select_11e ? \port$5806$0 [223:192] : 32'd0;
   assign \$335  = \$333  | \$334 ;
-  assign \$336  = ch1_read_select_11f ? \port$5804$0 [255:224] : 32'd0;
+  assign \$336  = ch1_read_select_11f ? \port$5806$0 [255:224] : 32'd0;
   assign \$337  = \$335  | \$336 ;
   assign \$338  = ch1_read_select_140 ? { 7'h00, \ch1_ca_request_write$265 , 1'h0, ch1_ca_request_count, 1'h0, ch1_ca_request_address, 5'h00, ch1_ca_request_slave_id } : 32'd0;
   assign \$339  = \$337  | \$338 ;
-  assign \$342  = ch1_read_select_142 ? { 17'h00000, \port$5936$0 [9:3], 1'h0, \port$5936$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
+  assign \$342  = ch1_read_select_142 ? { 17'h00000, \port$5938$0 [9:3], 1'h0, \port$5938$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
   assign \$343  = \$341  | \$342 ;
-  assign \$344  = ch1_read_select_143 ? \port$5804$0 [287:256] : 32'd0;
+  assign \$344  = ch1_read_select_143 ? \port$5806$0 [287:256] : 32'd0;
   assign \$345  = \$343  | \$344 ;
-  assign \$346  = ch1_read_select_144 ? \port$5804$0 [319:288] : 32'd0;
+  assign \$346  = ch1_read_select_144 ? \port$5806$0 [319:288] : 32'd0;
   assign \$347  = \$345  | \$346 ;
-  assign \$348  = ch1_read_select_145 ? { 16'h0000, \port$5804$0 [335:320] } : 32'd0;
+  assign \$348  = ch1_read_select_145 ? { 16'h0000, \port$5806$0 [335:320] } : 32'd0;
   assign \$349  = \$347  | \$348 ;
   assign \$350  = ch1_window0_read ? ch1__ca_rbuf_data : 32'd0;
   assign \$351  = \$349  | \$350 ;
@@ -3199,7 +3199,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   assign \$136  = \$134  | \$135 ;
   assign \$137  = ch0_read_select_8f ? { 20'h00000, ch0_cfg_quiet_quiet_time } : 32'd0;
   assign \$138  = \$136  | \$137 ;
-  assign \$139  = ch0_read_select_90 ? { 2'h0, \port$5229$0 [182:177], 4'h0, \port$5229$0 [186:183], 1'h0, \port$5229$0 [176:174], 1'h0, \port$5229$0 [133:131], 3'h0, \port$5229$0 [49], \port$5229$0 [3:0] } : 32'd0;
+  assign \$139  = ch0_read_select_90 ? { 2'h0, \port$5231$0 [182:177], 4'h0, \port$5231$0 [186:183], 1'h0, \port$5231$0 [176:174], 1'h0, \port$5231$0 [133:131], 3'h0, \port$5231$0 [49], \port$5231$0 [3:0] } : 32'd0;
   assign \$140  = \$138  | \$139 ;
   assign \$141  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
   assign \$142  = \$140  | \$141 ;
@@ -3215,31 +3215,31 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   assign \$152  = \$150  | \$151 ;
   assign \$153  = ch0_read_select_97 ? { 3'h0, ch0_result_line_settled_delay_snapshot, ch0_result_line_delay_spread_snapshot, 3'h0, ch0_result_line_delay_settled_snapshot, ch0_result_line_noise_events_snapshot } : 32'd0;
   assign \$154  = \$152  | \$153 ;
-  assign \$155  = ch0_read_select_98 ? \port$5242$0 [31:0] : 32'd0;
+  assign \$155  = ch0_read_select_98 ? \port$5244$0 [31:0] : 32'd0;
   assign \$156  = \$154  | \$155 ;
-  assign \$157  = ch0_read_select_99 ? \port$5242$0 [63:32] : 32'd0;
+  assign \$157  = ch0_read_select_99 ? \port$5244$0 [63:32] : 32'd0;
   assign \$158  = \$156  | \$157 ;
-  assign \$159  = ch0_read_select_9a ? \port$5242$0 [95:64] : 32'd0;
+  assign \$159  = ch0_read_select_9a ? \port$5244$0 [95:64] : 32'd0;
   assign \$160  = \$158  | \$159 ;
-  assign \$161  = ch0_read_select_9b ? \port$5242$0 [127:96] : 32'd0;
+  assign \$161  = ch0_read_select_9b ? \port$5244$0 [127:96] : 32'd0;
   assign \$162  = \$160  | \$161 ;
-  assign \$163  = ch0_read_select_9c ? \port$5242$0 [159:128] : 32'd0;
+  assign \$163  = ch0_read_select_9c ? \port$5244$0 [159:128] : 32'd0;
   assign \$164  = \$162  | \$163 ;
-  assign \$165  = ch0_read_select_9d ? \port$5242$0 [191:160] : 32'd0;
+  assign \$165  = ch0_read_select_9d ? \port$5244$0 [191:160] : 32'd0;
   assign \$166  = \$164  | \$165 ;
-  assign \$167  = ch0_read_select_9e ? \port$5242$0 [223:192] : 32'd0;
+  assign \$167  = ch0_read_select_9e ? \port$5244$0 [223:192] : 32'd0;
   assign \$168  = \$166  | \$167 ;
-  assign \$169  = ch0_read_select_9f ? \port$5242$0 [255:224] : 32'd0;
+  assign \$169  = ch0_read_select_9f ? \port$5244$0 [255:224] : 32'd0;
   assign \$170  = \$168  | \$169 ;
   assign \$171  = ch0_read_select_c0 ? { 7'h00, \ch0_ca_request_write$85 , 1'h0, ch0_ca_request_count, 1'h0, ch0_ca_request_address, 5'h00, ch0_ca_request_slave_id } : 32'd0;
   assign \$172  = \$170  | \$171 ;
-  assign \$175  = ch0_read_select_c2 ? { 17'h00000, \port$5374$0 [9:3], 1'h0, \port$5374$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
+  assign \$175  = ch0_read_select_c2 ? { 17'h00000, \port$5376$0 [9:3], 1'h0, \port$5376$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
   assign \$176  = \$174  | \$175 ;
-  assign \$177  = ch0_read_select_c3 ? \port$5242$0 [287:256] : 32'd0;
+  assign \$177  = ch0_read_select_c3 ? \port$5244$0 [287:256] : 32'd0;
   assign \$178  = \$176  | \$177 ;
-  assign \$179  = ch0_read_select_c4 ? \port$5242$0 [319:288] : 32'd0;
+  assign \$179  = ch0_read_select_c4 ? \port$5244$0 [319:288] : 32'd0;
   assign \$180  = \$178  | \$179 ;
-  assign \$181  = ch0_read_select_c5 ? { 16'h0000, \port$5242$0 [335:320] } : 32'd0;
+  assign \$181  = ch0_read_select_c5 ? { 16'h0000, \port$5244$0 [335:320] } : 32'd0;
   assign \$182  = \$180  | \$181 ;
   assign \$183  = ch0_window0_read ? ch0__ca_rbuf_data : 32'd0;
   assign \$184  = \$182  | \$183 ;
@@ -3363,7 +3363,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   assign \$303  = \$301  | \$302 ;
   assign \$304  = ch1_read_select_10f ? { 20'h00000, ch1_cfg_quiet_quiet_time } : 32'd0;
   assign \$305  = \$303  | \$304 ;
-  assign \$306  = ch1_read_select_110 ? { 2'h0, \port$5791$0 [182:177], 4'h0, \port$5791$0 [186:183], 1'h0, \port$5791$0 [176:174], 1'h0, \port$5791$0 [133:131], 3'h0, \port$5791$0 [49], \port$5791$0 [3:0] } : 32'd0;
+  assign \$306  = ch1_read_select_110 ? { 2'h0, \port$5793$0 [182:177], 4'h0, \port$5793$0 [186:183], 1'h0, \port$5793$0 [176:174], 1'h0, \port$5793$0 [133:131], 3'h0, \port$5793$0 [49], \port$5793$0 [3:0] } : 32'd0;
   assign \$307  = \$305  | \$306 ;
   assign \$308  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
   assign \$309  = \$307  | \$308 ;
@@ -3379,7 +3379,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   assign \$319  = \$317  | \$318 ;
   assign \$320  = ch1_read_select_117 ? { 3'h0, ch1_result_line_settled_delay_snapshot, ch1_result_line_delay_spread_snapshot, 3'h0, ch1_result_line_delay_settled_snapshot, ch1_result_line_noise_events_snapshot } : 32'd0;
   assign \$321  = \$319  | \$320 ;
-  assign \$322  = ch1_read_select_118 ? \port$5804$0 [31:0] : 32'd0;
+  assign \$322  = ch1_read_select_118 ? \port$5806$0 [31:0] : 32'd0;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$447  = bus__w_en;
@@ -4332,7 +4332,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$543  = ch0_result_status_status_snapshot;
     if (\$110 ) begin
-      \$543  = \port$5229$0 [3:0];
+      \$543  = \port$5231$0 [3:0];
     end
     if (rst) begin
       \$543  = 4'h0;
@@ -4342,7 +4342,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$544  = ch0_result_status_cds_snapshot;
     if (\$110 ) begin
-      \$544  = \port$5229$0 [49];
+      \$544  = \port$5231$0 [49];
     end
     if (rst) begin
       \$544  = 1'h0;
@@ -4352,7 +4352,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$545  = ch0_result_status_w0_ne_snapshot;
     if (\$110 ) begin
-      \$545  = \port$5229$0 [131];
+      \$545  = \port$5231$0 [131];
     end
     if (rst) begin
       \$545  = 1'h0;
@@ -4362,7 +4362,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$546  = ch0_result_status_w0_nw_snapshot;
     if (\$110 ) begin
-      \$546  = \port$5229$0 [132];
+      \$546  = \port$5231$0 [132];
     end
     if (rst) begin
       \$546  = 1'h0;
@@ -4372,7 +4372,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$547  = ch0_result_status_w0_crc_ok_snapshot;
     if (\$110 ) begin
-      \$547  = \port$5229$0 [133];
+      \$547  = \port$5231$0 [133];
     end
     if (rst) begin
       \$547  = 1'h0;
@@ -4382,7 +4382,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$548  = ch0_result_status_w1_ne_snapshot;
     if (\$110 ) begin
-      \$548  = \port$5229$0 [174];
+      \$548  = \port$5231$0 [174];
     end
     if (rst) begin
       \$548  = 1'h0;
@@ -4392,7 +4392,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$549  = ch0_result_status_w1_nw_snapshot;
     if (\$110 ) begin
-      \$549  = \port$5229$0 [175];
+      \$549  = \port$5231$0 [175];
     end
     if (rst) begin
       \$549  = 1'h0;
@@ -4402,7 +4402,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$550  = ch0_result_status_w1_crc_ok_snapshot;
     if (\$110 ) begin
-      \$550  = \port$5229$0 [176];
+      \$550  = \port$5231$0 [176];
     end
     if (rst) begin
       \$550  = 1'h0;
@@ -4412,7 +4412,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$551  = ch0_result_status_lc_repeat_snapshot;
     if (\$110 ) begin
-      \$551  = \port$5229$0 [183];
+      \$551  = \port$5231$0 [183];
     end
     if (rst) begin
       \$551  = 1'h0;
@@ -4422,7 +4422,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$552  = ch0_result_status_lc_skip_snapshot;
     if (\$110 ) begin
-      \$552  = \port$5229$0 [184];
+      \$552  = \port$5231$0 [184];
     end
     if (rst) begin
       \$552  = 1'h0;
@@ -4432,7 +4432,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$553  = ch0_result_status_lc_zero_snapshot;
     if (\$110 ) begin
-      \$553  = \port$5229$0 [185];
+      \$553  = \port$5231$0 [185];
     end
     if (rst) begin
       \$553  = 1'h0;
@@ -4442,7 +4442,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$554  = ch0_result_status_spw_mismatch_snapshot;
     if (\$110 ) begin
-      \$554  = \port$5229$0 [186];
+      \$554  = \port$5231$0 [186];
     end
     if (rst) begin
       \$554  = 1'h0;
@@ -4452,7 +4452,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$555  = ch0_result_status_lc_snapshot;
     if (\$110 ) begin
-      \$555  = \port$5229$0 [182:177];
+      \$555  = \port$5231$0 [182:177];
     end
     if (rst) begin
       \$555  = 6'h00;
@@ -4472,7 +4472,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$557  = ch0_result_seq_line_delay_snapshot;
     if (\$110 ) begin
-      \$557  = \port$5229$0 [48:36];
+      \$557  = \port$5231$0 [48:36];
     end
     if (rst) begin
       \$557  = 13'h0000;
@@ -4482,7 +4482,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$558  = ch0_result_w0_lo_data_snapshot;
     if (\$110 ) begin
-      \$558  = \port$5229$0 [107:76];
+      \$558  = \port$5231$0 [107:76];
     end
     if (rst) begin
       \$558  = 32'd0;
@@ -4492,7 +4492,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$559  = ch0_result_w0_hi_data_snapshot;
     if (\$110 ) begin
-      \$559  = \port$5229$0 [130:108];
+      \$559  = \port$5231$0 [130:108];
     end
     if (rst) begin
       \$559  = 23'h000000;
@@ -4502,7 +4502,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$560  = ch0_result_w1_lo_data_snapshot;
     if (\$110 ) begin
-      \$560  = \port$5229$0 [165:134];
+      \$560  = \port$5231$0 [165:134];
     end
     if (rst) begin
       \$560  = 32'd0;
@@ -4512,7 +4512,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$561  = ch0_result_w1_hi_data_snapshot;
     if (\$110 ) begin
-      \$561  = \port$5229$0 [173:166];
+      \$561  = \port$5231$0 [173:166];
     end
     if (rst) begin
       \$561  = 8'h00;
@@ -4522,7 +4522,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$562  = ch0_result_timestamp_time_snapshot;
     if (\$110 ) begin
-      \$562  = \port$5229$0 [35:4];
+      \$562  = \port$5231$0 [35:4];
     end
     if (rst) begin
       \$562  = 32'd0;
@@ -4532,7 +4532,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$563  = ch0_result_line_noise_events_snapshot;
     if (\$110 ) begin
-      \$563  = \port$5229$0 [53:50];
+      \$563  = \port$5231$0 [53:50];
     end
     if (rst) begin
       \$563  = 4'h0;
@@ -4542,7 +4542,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$564  = ch0_result_line_delay_settled_snapshot;
     if (\$110 ) begin
-      \$564  = \port$5229$0 [54];
+      \$564  = \port$5231$0 [54];
     end
     if (rst) begin
       \$564  = 1'h0;
@@ -4552,7 +4552,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$565  = ch0_result_line_delay_spread_snapshot;
     if (\$110 ) begin
-      \$565  = \port$5229$0 [75:68];
+      \$565  = \port$5231$0 [75:68];
     end
     if (rst) begin
       \$565  = 8'h00;
@@ -4562,7 +4562,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$566  = ch0_result_line_settled_delay_snapshot;
     if (\$110 ) begin
-      \$566  = \port$5229$0 [67:55];
+      \$566  = \port$5231$0 [67:55];
     end
     if (rst) begin
       \$566  = 13'h0000;
@@ -5416,7 +5416,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$652  = ch1_result_status_status_snapshot;
     if (\$277 ) begin
-      \$652  = \port$5791$0 [3:0];
+      \$652  = \port$5793$0 [3:0];
     end
     if (rst) begin
       \$652  = 4'h0;
@@ -5426,7 +5426,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$653  = ch1_result_status_cds_snapshot;
     if (\$277 ) begin
-      \$653  = \port$5791$0 [49];
+      \$653  = \port$5793$0 [49];
     end
     if (rst) begin
       \$653  = 1'h0;
@@ -5436,7 +5436,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$654  = ch1_result_status_w0_ne_snapshot;
     if (\$277 ) begin
-      \$654  = \port$5791$0 [131];
+      \$654  = \port$5793$0 [131];
     end
     if (rst) begin
       \$654  = 1'h0;
@@ -5446,7 +5446,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$655  = ch1_result_status_w0_nw_snapshot;
     if (\$277 ) begin
-      \$655  = \port$5791$0 [132];
+      \$655  = \port$5793$0 [132];
     end
     if (rst) begin
       \$655  = 1'h0;
@@ -5456,7 +5456,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$656  = ch1_result_status_w0_crc_ok_snapshot;
     if (\$277 ) begin
-      \$656  = \port$5791$0 [133];
+      \$656  = \port$5793$0 [133];
     end
     if (rst) begin
       \$656  = 1'h0;
@@ -5466,7 +5466,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$657  = ch1_result_status_w1_ne_snapshot;
     if (\$277 ) begin
-      \$657  = \port$5791$0 [174];
+      \$657  = \port$5793$0 [174];
     end
     if (rst) begin
       \$657  = 1'h0;
@@ -5476,7 +5476,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$658  = ch1_result_status_w1_nw_snapshot;
     if (\$277 ) begin
-      \$658  = \port$5791$0 [175];
+      \$658  = \port$5793$0 [175];
     end
     if (rst) begin
       \$658  = 1'h0;
@@ -5486,7 +5486,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$659  = ch1_result_status_w1_crc_ok_snapshot;
     if (\$277 ) begin
-      \$659  = \port$5791$0 [176];
+      \$659  = \port$5793$0 [176];
     end
     if (rst) begin
       \$659  = 1'h0;
@@ -5496,7 +5496,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$660  = ch1_result_status_lc_repeat_snapshot;
     if (\$277 ) begin
-      \$660  = \port$5791$0 [183];
+      \$660  = \port$5793$0 [183];
     end
     if (rst) begin
       \$660  = 1'h0;
@@ -5506,7 +5506,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$661  = ch1_result_status_lc_skip_snapshot;
     if (\$277 ) begin
-      \$661  = \port$5791$0 [184];
+      \$661  = \port$5793$0 [184];
     end
     if (rst) begin
       \$661  = 1'h0;
@@ -5516,7 +5516,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$662  = ch1_result_status_lc_zero_snapshot;
     if (\$277 ) begin
-      \$662  = \port$5791$0 [185];
+      \$662  = \port$5793$0 [185];
     end
     if (rst) begin
       \$662  = 1'h0;
@@ -5526,7 +5526,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$663  = ch1_result_status_spw_mismatch_snapshot;
     if (\$277 ) begin
-      \$663  = \port$5791$0 [186];
+      \$663  = \port$5793$0 [186];
     end
     if (rst) begin
       \$663  = 1'h0;
@@ -5536,7 +5536,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$664  = ch1_result_status_lc_snapshot;
     if (\$277 ) begin
-      \$664  = \port$5791$0 [182:177];
+      \$664  = \port$5793$0 [182:177];
     end
     if (rst) begin
       \$664  = 6'h00;
@@ -5556,7 +5556,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$666  = ch1_result_seq_line_delay_snapshot;
     if (\$277 ) begin
-      \$666  = \port$5791$0 [48:36];
+      \$666  = \port$5793$0 [48:36];
     end
     if (rst) begin
       \$666  = 13'h0000;
@@ -5566,7 +5566,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$667  = ch1_result_w0_lo_data_snapshot;
     if (\$277 ) begin
-      \$667  = \port$5791$0 [107:76];
+      \$667  = \port$5793$0 [107:76];
     end
     if (rst) begin
       \$667  = 32'd0;
@@ -5576,7 +5576,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$668  = ch1_result_w0_hi_data_snapshot;
     if (\$277 ) begin
-      \$668  = \port$5791$0 [130:108];
+      \$668  = \port$5793$0 [130:108];
     end
     if (rst) begin
       \$668  = 23'h000000;
@@ -5586,7 +5586,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$669  = ch1_result_w1_lo_data_snapshot;
     if (\$277 ) begin
-      \$669  = \port$5791$0 [165:134];
+      \$669  = \port$5793$0 [165:134];
     end
     if (rst) begin
       \$669  = 32'd0;
@@ -5596,7 +5596,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$670  = ch1_result_w1_hi_data_snapshot;
     if (\$277 ) begin
-      \$670  = \port$5791$0 [173:166];
+      \$670  = \port$5793$0 [173:166];
     end
     if (rst) begin
       \$670  = 8'h00;
@@ -5606,7 +5606,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$671  = ch1_result_timestamp_time_snapshot;
     if (\$277 ) begin
-      \$671  = \port$5791$0 [35:4];
+      \$671  = \port$5793$0 [35:4];
     end
     if (rst) begin
       \$671  = 32'd0;
@@ -5616,7 +5616,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$672  = ch1_result_line_noise_events_snapshot;
     if (\$277 ) begin
-      \$672  = \port$5791$0 [53:50];
+      \$672  = \port$5793$0 [53:50];
     end
     if (rst) begin
       \$672  = 4'h0;
@@ -5626,7 +5626,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$673  = ch1_result_line_delay_settled_snapshot;
     if (\$277 ) begin
-      \$673  = \port$5791$0 [54];
+      \$673  = \port$5793$0 [54];
     end
     if (rst) begin
       \$673  = 1'h0;
@@ -5636,7 +5636,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$674  = ch1_result_line_delay_spread_snapshot;
     if (\$277 ) begin
-      \$674  = \port$5791$0 [75:68];
+      \$674  = \port$5793$0 [75:68];
     end
     if (rst) begin
       \$674  = 8'h00;
@@ -5646,7 +5646,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$675  = ch1_result_line_settled_delay_snapshot;
     if (\$277 ) begin
-      \$675  = \port$5791$0 [67:55];
+      \$675  = \port$5793$0 [67:55];
     end
     if (rst) begin
       \$675  = 13'h0000;
@@ -5675,106 +5675,106 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   assign bus__w_strb = 4'hf;
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, ch1_irq, ch0_irq };
-  assign ch0__status = \port$5229$0 [3:0];
-  assign ch0__cds = \port$5229$0 [49];
-  assign ch0__word0_ne = \port$5229$0 [131];
-  assign ch0__word0_nw = \port$5229$0 [132];
-  assign ch0__word0_crc_ok = \port$5229$0 [133];
-  assign ch0__word1_ne = \port$5229$0 [174];
-  assign ch0__word1_nw = \port$5229$0 [175];
-  assign ch0__word1_crc_ok = \port$5229$0 [176];
-  assign ch0__lc_repeat = \port$5229$0 [183];
-  assign ch0__lc_skip = \port$5229$0 [184];
-  assign ch0__lc_zero = \port$5229$0 [185];
-  assign ch0__spw_mismatch = \port$5229$0 [186];
-  assign ch0__lc = \port$5229$0 [182:177];
-  assign ch0__line_delay = \port$5229$0 [48:36];
-  assign ch0__word0_position = \port$5229$0 [130:76];
-  assign ch0__word1_position = \port$5229$0 [173:134];
-  assign ch0__timestamp = \port$5229$0 [35:4];
-  assign ch0__noise_events = \port$5229$0 [53:50];
-  assign ch0__delay_settled = \port$5229$0 [54];
-  assign ch0__delay_spread = \port$5229$0 [75:68];
-  assign ch0__settled_delay = \port$5229$0 [67:55];
+  assign ch0__status = \port$5231$0 [3:0];
+  assign ch0__cds = \port$5231$0 [49];
+  assign ch0__word0_ne = \port$5231$0 [131];
+  assign ch0__word0_nw = \port$5231$0 [132];
+  assign ch0__word0_crc_ok = \port$5231$0 [133];
+  assign ch0__word1_ne = \port$5231$0 [174];
+  assign ch0__word1_nw = \port$5231$0 [175];
+  assign ch0__word1_crc_ok = \port$5231$0 [176];
+  assign ch0__lc_repeat = \port$5231$0 [183];
+  assign ch0__lc_skip = \port$5231$0 [184];
+  assign ch0__lc_zero = \port$5231$0 [185];
+  assign ch0__spw_mismatch = \port$5231$0 [186];
+  assign ch0__lc = \port$5231$0 [182:177];
+  assign ch0__line_delay = \port$5231$0 [48:36];
+  assign ch0__word0_position = \port$5231$0 [130:76];
+  assign ch0__word1_position = \port$5231$0 [173:134];
+  assign ch0__timestamp = \port$5231$0 [35:4];
+  assign ch0__noise_events = \port$5231$0 [53:50];
+  assign ch0__delay_settled = \port$5231$0 [54];
+  assign ch0__delay_spread = \port$5231$0 [75:68];
+  assign ch0__settled_delay = \port$5231$0 [67:55];
   assign ch0__cap_data_bits_w0 = 6'h37;
   assign ch0__cap_data_bits_w1 = 6'h28;
   assign ch0__cap_timer_width = 6'h18;
   assign ch0__cap_counters = 1'h1;
   assign ch0__cap_timestamp = 1'h1;
   assign ch0__cap_register_access = 1'h1;
-  assign ch0__count_crc_word0 = \port$5242$0 [15:0];
-  assign ch0__count_crc_word1 = \port$5242$0 [31:16];
-  assign ch0__count_no_ack = \port$5242$0 [47:32];
-  assign ch0__count_no_start = \port$5242$0 [63:48];
-  assign ch0__count_delay_range = \port$5242$0 [79:64];
-  assign ch0__count_slo_stuck_low = \port$5242$0 [95:80];
-  assign ch0__count_lc_repeat = \port$5242$0 [111:96];
-  assign ch0__count_lc_skip = \port$5242$0 [127:112];
-  assign ch0__count_lc_zero = \port$5242$0 [143:128];
-  assign ch0__count_spw_mismatch = \port$5242$0 [159:144];
-  assign ch0__count_overrun = \port$5242$0 [175:160];
-  assign ch0__count_aborted = \port$5242$0 [191:176];
-  assign ch0__count_no_stop = \port$5242$0 [207:192];
-  assign ch0__count_noisy_line = \port$5242$0 [223:208];
-  assign ch0__count_delay_jump = \port$5242$0 [239:224];
-  assign ch0__count_noise_event = \port$5242$0 [255:240];
-  assign ch0__ca_status = \port$5374$0 [2:0];
-  assign ch0__ca_bytes_done = \port$5374$0 [9:3];
-  assign ch0__count_ca_crc4_error = \port$5242$0 [271:256];
-  assign ch0__count_ca_no_answer = \port$5242$0 [287:272];
-  assign ch0__count_ca_refused = \port$5242$0 [303:288];
-  assign ch0__count_ca_aborted = \port$5242$0 [319:304];
-  assign ch0__count_ca_data_fault = \port$5242$0 [335:320];
-  assign ch1__status = \port$5791$0 [3:0];
-  assign ch1__cds = \port$5791$0 [49];
-  assign ch1__word0_ne = \port$5791$0 [131];
-  assign ch1__word0_nw = \port$5791$0 [132];
-  assign ch1__word0_crc_ok = \port$5791$0 [133];
-  assign ch1__word1_ne = \port$5791$0 [174];
-  assign ch1__word1_nw = \port$5791$0 [175];
-  assign ch1__word1_crc_ok = \port$5791$0 [176];
-  assign ch1__lc_repeat = \port$5791$0 [183];
-  assign ch1__lc_skip = \port$5791$0 [184];
-  assign ch1__lc_zero = \port$5791$0 [185];
-  assign ch1__spw_mismatch = \port$5791$0 [186];
-  assign ch1__lc = \port$5791$0 [182:177];
-  assign ch1__line_delay = \port$5791$0 [48:36];
-  assign ch1__word0_position = \port$5791$0 [130:76];
-  assign ch1__word1_position = \port$5791$0 [173:134];
-  assign ch1__timestamp = \port$5791$0 [35:4];
-  assign ch1__noise_events = \port$5791$0 [53:50];
-  assign ch1__delay_settled = \port$5791$0 [54];
-  assign ch1__delay_spread = \port$5791$0 [75:68];
-  assign ch1__settled_delay = \port$5791$0 [67:55];
+  assign ch0__count_crc_word0 = \port$5244$0 [15:0];
+  assign ch0__count_crc_word1 = \port$5244$0 [31:16];
+  assign ch0__count_no_ack = \port$5244$0 [47:32];
+  assign ch0__count_no_start = \port$5244$0 [63:48];
+  assign ch0__count_delay_range = \port$5244$0 [79:64];
+  assign ch0__count_slo_stuck_low = \port$5244$0 [95:80];
+  assign ch0__count_lc_repeat = \port$5244$0 [111:96];
+  assign ch0__count_lc_skip = \port$5244$0 [127:112];
+  assign ch0__count_lc_zero = \port$5244$0 [143:128];
+  assign ch0__count_spw_mismatch = \port$5244$0 [159:144];
+  assign ch0__count_overrun = \port$5244$0 [175:160];
+  assign ch0__count_aborted = \port$5244$0 [191:176];
+  assign ch0__count_no_stop = \port$5244$0 [207:192];
+  assign ch0__count_noisy_line = \port$5244$0 [223:208];
+  assign ch0__count_delay_jump = \port$5244$0 [239:224];
+  assign ch0__count_noise_event = \port$5244$0 [255:240];
+  assign ch0__ca_status = \port$5376$0 [2:0];
+  assign ch0__ca_bytes_done = \port$5376$0 [9:3];
+  assign ch0__count_ca_crc4_error = \port$5244$0 [271:256];
+  assign ch0__count_ca_no_answer = \port$5244$0 [287:272];
+  assign ch0__count_ca_refused = \port$5244$0 [303:288];
+  assign ch0__count_ca_aborted = \port$5244$0 [319:304];
+  assign ch0__count_ca_data_fault = \port$5244$0 [335:320];
+  assign ch1__status = \port$5793$0 [3:0];
+  assign ch1__cds = \port$5793$0 [49];
+  assign ch1__word0_ne = \port$5793$0 [131];
+  assign ch1__word0_nw = \port$5793$0 [132];
+  assign ch1__word0_crc_ok = \port$5793$0 [133];
+  assign ch1__word1_ne = \port$5793$0 [174];
+  assign ch1__word1_nw = \port$5793$0 [175];
+  assign ch1__word1_crc_ok = \port$5793$0 [176];
+  assign ch1__lc_repeat = \port$5793$0 [183];
+  assign ch1__lc_skip = \port$5793$0 [184];
+  assign ch1__lc_zero = \port$5793$0 [185];
+  assign ch1__spw_mismatch = \port$5793$0 [186];
+  assign ch1__lc = \port$5793$0 [182:177];
+  assign ch1__line_delay = \port$5793$0 [48:36];
+  assign ch1__word0_position = \port$5793$0 [130:76];
+  assign ch1__word1_position = \port$5793$0 [173:134];
+  assign ch1__timestamp = \port$5793$0 [35:4];
+  assign ch1__noise_events = \port$5793$0 [53:50];
+  assign ch1__delay_settled = \port$5793$0 [54];
+  assign ch1__delay_spread = \port$5793$0 [75:68];
+  assign ch1__settled_delay = \port$5793$0 [67:55];
   assign ch1__cap_data_bits_w0 = 6'h37;
   assign ch1__cap_data_bits_w1 = 6'h28;
   assign ch1__cap_timer_width = 6'h18;
   assign ch1__cap_counters = 1'h1;
   assign ch1__cap_timestamp = 1'h1;
   assign ch1__cap_register_access = 1'h1;
-  assign ch1__count_crc_word0 = \port$5804$0 [15:0];
-  assign ch1__count_crc_word1 = \port$5804$0 [31:16];
-  assign ch1__count_no_ack = \port$5804$0 [47:32];
-  assign ch1__count_no_start = \port$5804$0 [63:48];
-  assign ch1__count_delay_range = \port$5804$0 [79:64];
-  assign ch1__count_slo_stuck_low = \port$5804$0 [95:80];
-  assign ch1__count_lc_repeat = \port$5804$0 [111:96];
-  assign ch1__count_lc_skip = \port$5804$0 [127:112];
-  assign ch1__count_lc_zero = \port$5804$0 [143:128];
-  assign ch1__count_spw_mismatch = \port$5804$0 [159:144];
-  assign ch1__count_overrun = \port$5804$0 [175:160];
-  assign ch1__count_aborted = \port$5804$0 [191:176];
-  assign ch1__count_no_stop = \port$5804$0 [207:192];
-  assign ch1__count_noisy_line = \port$5804$0 [223:208];
-  assign ch1__count_delay_jump = \port$5804$0 [239:224];
-  assign ch1__count_noise_event = \port$5804$0 [255:240];
-  assign ch1__ca_status = \port$5936$0 [2:0];
-  assign ch1__ca_bytes_done = \port$5936$0 [9:3];
-  assign ch1__count_ca_crc4_error = \port$5804$0 [271:256];
-  assign ch1__count_ca_no_answer = \port$5804$0 [287:272];
-  assign ch1__count_ca_refused = \port$5804$0 [303:288];
-  assign ch1__count_ca_aborted = \port$5804$0 [319:304];
-  assign ch1__count_ca_data_fault = \port$5804$0 [335:320];
+  assign ch1__count_crc_word0 = \port$5806$0 [15:0];
+  assign ch1__count_crc_word1 = \port$5806$0 [31:16];
+  assign ch1__count_no_ack = \port$5806$0 [47:32];
+  assign ch1__count_no_start = \port$5806$0 [63:48];
+  assign ch1__count_delay_range = \port$5806$0 [79:64];
+  assign ch1__count_slo_stuck_low = \port$5806$0 [95:80];
+  assign ch1__count_lc_repeat = \port$5806$0 [111:96];
+  assign ch1__count_lc_skip = \port$5806$0 [127:112];
+  assign ch1__count_lc_zero = \port$5806$0 [143:128];
+  assign ch1__count_spw_mismatch = \port$5806$0 [159:144];
+  assign ch1__count_overrun = \port$5806$0 [175:160];
+  assign ch1__count_aborted = \port$5806$0 [191:176];
+  assign ch1__count_no_stop = \port$5806$0 [207:192];
+  assign ch1__count_noisy_line = \port$5806$0 [223:208];
+  assign ch1__count_delay_jump = \port$5806$0 [239:224];
+  assign ch1__count_noise_event = \port$5806$0 [255:240];
+  assign ch1__ca_status = \port$5938$0 [2:0];
+  assign ch1__ca_bytes_done = \port$5938$0 [9:3];
+  assign ch1__count_ca_crc4_error = \port$5806$0 [271:256];
+  assign ch1__count_ca_no_answer = \port$5806$0 [287:272];
+  assign ch1__count_ca_refused = \port$5806$0 [303:288];
+  assign ch1__count_ca_aborted = \port$5806$0 [319:304];
+  assign ch1__count_ca_data_fault = \port$5806$0 [335:320];
   assign glob__trigger = g_trigger_start;
   assign ch0__start = ch0_ctrl_start;
   assign ch0__abort_cycle = ch0_ctrl_abort;
@@ -8017,7 +8017,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch0 (clk, rst, \trigger$179 , ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__ca_busy, regs__ca_rbuf_data, ca_rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period
 , cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_quiet_time, ca_slave_id, ca_address, ca_count
-, ca_write, ca_start, ca_abort, regs__done_count, ma, regs__done, \port$5229$0 , \port$5242$0 , regs__ca_done, \port$5374$0 , slo);
+, ca_write, ca_start, ca_abort, regs__done_count, ma, regs__done, \port$5231$0 , \port$5244$0 , regs__ca_done, \port$5376$0 , slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$36  = 0;
   wire \$1 ;
   wire [16:0] \$2 ;
@@ -8154,12 +8154,12 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$179 , ca_wbuf_en, ca_rbuf_en, r
   wire [3:0] noise_events;
   input periodic;
   wire periodic;
-  output [186:0] \port$5229$0 ;
-  wire [186:0] \port$5229$0 ;
-  output [335:0] \port$5242$0 ;
-  wire [335:0] \port$5242$0 ;
-  output [9:0] \port$5374$0 ;
-  wire [9:0] \port$5374$0 ;
+  output [186:0] \port$5231$0 ;
+  wire [186:0] \port$5231$0 ;
+  output [335:0] \port$5244$0 ;
+  wire [335:0] \port$5244$0 ;
+  output [9:0] \port$5376$0 ;
+  wire [9:0] \port$5376$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -8322,8 +8322,8 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$179 , ca_wbuf_en, ca_rbuf_en, r
   assign regs__frame_error = regs__done & \$1 ;
   \biss_master_uart.ch0.core  core (
     .abort(abort_cycle),
-    .\abort$222 (ca_abort),
-    .\busy$276 (regs__busy),
+    .\abort$223 (ca_abort),
+    .\busy$277 (regs__busy),
     .ca_address(ca_address),
     .ca_count(ca_count),
     .ca_done(regs__ca_done),
@@ -8354,24 +8354,24 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$179 , ca_wbuf_en, ca_rbuf_en, r
     .cfg_w1_enable(cfg_w1_enable),
     .cfg_w1_lc(cfg_w1_lc),
     .cfg_w1_nenw(cfg_w1_nenw),
-    .\clear$250 (clear_counters),
+    .\clear$251 (clear_counters),
     .clk(clk),
     .config_error(regs__config_error),
     .counts(\$6 ),
-    .\done$279 (regs__done),
+    .\done$280 (regs__done),
     .frames(regs__ca_busy),
     .ma(ma),
     .\periodic$27 (periodic),
     .rbuf_addr(ca_rbuf_addr),
     .rbuf_en(ca_rbuf_en),
     .result(\$7 ),
-    .\result$284 (\$5 ),
+    .\result$285 (\$5 ),
     .rst(rst),
     .slo(slo),
     .start(start),
-    .\start$220 (ca_start),
+    .\start$221 (ca_start),
     .trigger(trigger),
-    .\valid$281 (valid)
+    .\valid$282 (valid)
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
@@ -8527,15 +8527,15 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$179 , ca_wbuf_en, ca_rbuf_en, r
   assign regs__ca_rbuf_en = ca_rbuf_en;
   assign \ma$182  = ma;
   assign \slo$184  = slo;
-  assign \port$5229$0  = \$5 ;
-  assign \port$5242$0  = \$6 ;
-  assign \port$5374$0  = \$7 ;
+  assign \port$5231$0  = \$5 ;
+  assign \port$5244$0  = \$6 ;
+  assign \port$5376$0  = \$7 ;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy$276 , config_error, frames, ca_rbuf_data, rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, \clear$250 , \periodic$27 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit
-, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_quiet_time, ca_slave_id, ca_address, ca_count, ca_write, \start$220 , \abort$222 
-, abort, ma, \done$279 , \valid$281 , \result$284 , counts, ca_done, result, slo);
+module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy$277 , config_error, frames, ca_rbuf_data, rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, \clear$251 , \periodic$27 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit
+, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_quiet_time, ca_slave_id, ca_address, ca_count, ca_write, \start$221 , \abort$223 
+, abort, ma, \done$280 , \valid$282 , \result$285 , counts, ca_done, result, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$37  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -8561,8 +8561,8 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire \$9 ;
   input abort;
   wire abort;
-  input \abort$222 ;
-  wire \abort$222 ;
+  input \abort$223 ;
+  wire \abort$223 ;
   wire \abort$39 ;
   wire abort_cycle;
   wire ack_expired;
@@ -8571,15 +8571,15 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire [23:0] \ack_limit$92 ;
   wire arm;
   reg \bit  = 1'h0;
-  wire \bit$308 ;
+  wire \bit$309 ;
   wire [5:0] bits;
   wire break_over;
   wire \break_over$69 ;
   wire [23:0] break_time;
   wire busy;
-  wire \busy$231 ;
-  output \busy$276 ;
-  wire \busy$276 ;
+  wire \busy$232 ;
+  output \busy$277 ;
+  wire \busy$277 ;
   wire ca_abort;
   input [6:0] ca_address;
   wire [6:0] ca_address;
@@ -8614,10 +8614,10 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   input ca_write;
   wire ca_write;
   wire cdm;
-  wire \cdm$235 ;
+  wire \cdm$236 ;
   wire cdm_cycle;
   wire cds;
-  wire \cds$287 ;
+  wire \cds$288 ;
   wire [174:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
@@ -8701,13 +8701,13 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   input cfg_w1_nenw;
   wire cfg_w1_nenw;
   wire check;
-  wire \check$148 ;
+  wire \check$150 ;
   wire clean;
-  wire \clean$153 ;
+  wire \clean$155 ;
   wire clear;
   wire \clear$116 ;
-  input \clear$250 ;
-  wire \clear$250 ;
+  input \clear$251 ;
+  wire \clear$251 ;
   wire clear_counters;
   input clk;
   wire clk;
@@ -8761,10 +8761,10 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire [15:0] \counts.slo_stuck_low ;
   wire [15:0] \counts.spw_mismatch ;
   wire [39:0] cpw_top;
-  wire [39:0] \cpw_top$162 ;
+  wire [39:0] \cpw_top$164 ;
   wire [1:0] crc_error;
   wire [1:0] crc_ok;
-  wire [1:0] \crc_ok$176 ;
+  wire [1:0] \crc_ok$177 ;
   wire [174:0] cycle;
   wire [23:0] \cycle.ack_limit ;
   wire [23:0] \cycle.break_time ;
@@ -8804,7 +8804,7 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   (* init = 1'h0 *)
   wire decoder_sample;
   wire [12:0] delay;
-  wire [12:0] \delay$147 ;
+  wire [12:0] \delay$149 ;
   wire [12:0] \delay$98 ;
   wire delay_jump;
   wire [11:0] delay_limit;
@@ -8815,10 +8815,10 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire [7:0] delay_spread;
   wire [16:0] delay_tolerance;
   wire done;
-  wire \done$233 ;
-  output \done$279 ;
-  wire \done$279 ;
+  wire \done$234 ;
+  output \done$280 ;
   wire \done$280 ;
+  wire \done$281 ;
   wire doubtful;
   wire early;
   wire \early$55 ;
@@ -8827,30 +8827,30 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire enough;
   wire \event ;
   wire [3:0] events;
-  wire [20:0] \events$245 ;
-  wire \events$245.aborted ;
-  wire \events$245.ca_aborted ;
-  wire \events$245.ca_crc4_error ;
-  wire \events$245.ca_data_fault ;
-  wire \events$245.ca_no_answer ;
-  wire \events$245.ca_refused ;
-  wire \events$245.crc_word0 ;
-  wire \events$245.crc_word1 ;
-  wire \events$245.delay_jump ;
-  wire \events$245.delay_range ;
-  wire \events$245.lc_repeat ;
-  wire \events$245.lc_skip ;
-  wire \events$245.lc_zero ;
-  wire \events$245.no_ack ;
-  wire \events$245.no_start ;
-  wire \events$245.no_stop ;
-  wire \events$245.noise_event ;
-  wire \events$245.noisy_line ;
-  wire \events$245.overrun ;
-  wire \events$245.slo_stuck_low ;
-  wire \events$245.spw_mismatch ;
+  wire [20:0] \events$246 ;
+  wire \events$246.aborted ;
+  wire \events$246.ca_aborted ;
+  wire \events$246.ca_crc4_error ;
+  wire \events$246.ca_data_fault ;
+  wire \events$246.ca_no_answer ;
+  wire \events$246.ca_refused ;
+  wire \events$246.crc_word0 ;
+  wire \events$246.crc_word1 ;
+  wire \events$246.delay_jump ;
+  wire \events$246.delay_range ;
+  wire \events$246.lc_repeat ;
+  wire \events$246.lc_skip ;
+  wire \events$246.lc_zero ;
+  wire \events$246.no_ack ;
+  wire \events$246.no_start ;
+  wire \events$246.no_stop ;
+  wire \events$246.noise_event ;
+  wire \events$246.noisy_line ;
+  wire \events$246.overrun ;
+  wire \events$246.slo_stuck_low ;
+  wire \events$246.spw_mismatch ;
   wire fault;
-  wire \fault$172 ;
+  wire \fault$173 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -8884,7 +8884,7 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \fault_status$174 ;
+  wire [3:0] \fault_status$175 ;
   wire [6:0] faults;
   wire \faults.aborted ;
   wire \faults.bad_config ;
@@ -8894,7 +8894,7 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire \faults.no_stop ;
   wire \faults.slo_stuck_low ;
   wire first_rise;
-  wire \first_rise$206 ;
+  wire \first_rise$207 ;
   wire [31:0] first_rise_time;
   wire [186:0] frame;
   wire \frame.cds ;
@@ -8956,19 +8956,19 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire jump;
   wire [5:0] lc;
   wire [5:0] \lc$127 ;
-  wire [5:0] \lc$300 ;
+  wire [5:0] \lc$301 ;
   wire lc_check;
   wire lc_load;
   wire [5:0] lc_next;
   wire [5:0] \lc_next$129 ;
   wire lc_repeat;
-  wire \lc_repeat$301 ;
+  wire \lc_repeat$302 ;
   wire lc_repeat_seen;
   wire lc_skip;
-  wire \lc_skip$302 ;
+  wire \lc_skip$303 ;
   wire lc_skip_seen;
   wire lc_zero;
-  wire \lc_zero$303 ;
+  wire \lc_zero$304 ;
   wire lc_zero_seen;
   wire learn;
   wire level;
@@ -9012,7 +9012,7 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire \locked$53 ;
   output ma;
   wire ma;
-  wire \ma$275 ;
+  wire \ma$276 ;
   wire ma_arm;
   wire ma_busy;
   wire \ma_busy$81 ;
@@ -9029,11 +9029,11 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire noise;
   wire [3:0] noise_events;
   wire noisy;
-  wire \noisy$155 ;
+  wire \noisy$157 ;
   wire [1:0] nw;
   wire ok;
   wire overrun;
-  wire \overrun$278 ;
+  wire \overrun$279 ;
   wire [23:0] period;
   wire periodic;
   input \periodic$27 ;
@@ -9054,36 +9054,37 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire receiver_clear;
   wire \repeat ;
   wire report;
-  wire \report$184 ;
+  wire \report$185 ;
   wire report_delay;
-  wire \report_delay$187 ;
+  wire \report_delay$188 ;
   wire report_frame;
-  wire \report_frame$170 ;
-  wire \report_frame$185 ;
+  wire \report_frame$172 ;
+  wire \report_frame$186 ;
   wire request;
-  wire [17:0] \request$208 ;
-  wire [6:0] \request$208.address ;
-  wire [6:0] \request$208.count ;
-  wire [2:0] \request$208.slave_id ;
-  wire \request$208.write ;
+  wire [17:0] \request$209 ;
+  wire [6:0] \request$209.address ;
+  wire [6:0] \request$209.count ;
+  wire [2:0] \request$209.slave_id ;
+  wire \request$209.write ;
   wire \request$38 ;
   wire restart;
+  wire \restart$142 ;
   wire restart_timer;
   output [9:0] result;
   wire [9:0] result;
-  output [186:0] \result$284 ;
-  wire [186:0] \result$284 ;
-  wire \result$284.cds ;
-  wire \result$284.delay_settled ;
-  wire [7:0] \result$284.delay_spread ;
-  wire [5:0] \result$284.lc ;
-  wire \result$284.lc_repeat ;
-  wire \result$284.lc_skip ;
-  wire \result$284.lc_zero ;
-  wire [12:0] \result$284.line_delay ;
-  wire [3:0] \result$284.noise_events ;
-  wire [12:0] \result$284.settled_delay ;
-  wire \result$284.spw_mismatch ;
+  output [186:0] \result$285 ;
+  wire [186:0] \result$285 ;
+  wire \result$285.cds ;
+  wire \result$285.delay_settled ;
+  wire [7:0] \result$285.delay_spread ;
+  wire [5:0] \result$285.lc ;
+  wire \result$285.lc_repeat ;
+  wire \result$285.lc_skip ;
+  wire \result$285.lc_zero ;
+  wire [12:0] \result$285.line_delay ;
+  wire [3:0] \result$285.noise_events ;
+  wire [12:0] \result$285.settled_delay ;
+  wire \result$285.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -9100,18 +9101,18 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \result$284.status ;
-  wire [31:0] \result$284.timestamp ;
-  wire [57:0] \result$284.word0 ;
-  wire \result$284.word0.crc_ok ;
-  wire \result$284.word0.ne ;
-  wire \result$284.word0.nw ;
-  wire [54:0] \result$284.word0.position ;
-  wire [42:0] \result$284.word1 ;
-  wire \result$284.word1.crc_ok ;
-  wire \result$284.word1.ne ;
-  wire \result$284.word1.nw ;
-  wire [39:0] \result$284.word1.position ;
+  wire [3:0] \result$285.status ;
+  wire [31:0] \result$285.timestamp ;
+  wire [57:0] \result$285.word0 ;
+  wire \result$285.word0.crc_ok ;
+  wire \result$285.word0.ne ;
+  wire \result$285.word0.nw ;
+  wire [54:0] \result$285.word0.position ;
+  wire [42:0] \result$285.word1 ;
+  wire \result$285.word1.crc_ok ;
+  wire \result$285.word1.ne ;
+  wire \result$285.word1.nw ;
+  wire [39:0] \result$285.word1.position ;
   wire [6:0] \result.bytes_done ;
   (* enum_base_type = "AccessStatus" *)
   (* enum_value_000 = "OK" *)
@@ -9130,12 +9131,12 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire rst;
   wire run;
   reg sample = 1'h0;
-  wire \sample$307 ;
+  wire \sample$308 ;
   wire sampler_noise;
   wire second_rise;
   wire settled;
   wire [12:0] settled_delay;
-  wire [12:0] \settled_delay$290 ;
+  wire [12:0] \settled_delay$291 ;
   wire skip;
   input slo;
   wire slo;
@@ -9152,11 +9153,11 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire [39:0] spw;
   wire spw_match;
   wire spw_mismatch;
-  wire \spw_mismatch$304 ;
+  wire \spw_mismatch$305 ;
   input start;
   wire start;
-  input \start$220 ;
-  wire \start$220 ;
+  input \start$221 ;
+  wire \start$221 ;
   wire \start$25 ;
   wire [15:0] start_slot;
   wire [15:0] \start_slot$113 ;
@@ -9197,7 +9198,7 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \status$283 ;
+  wire [3:0] \status$284 ;
   wire stop_bit;
   wire \stop_bit$65 ;
   wire stopped;
@@ -9208,14 +9209,14 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire timer_clear;
   wire [31:0] timestamp;
   wire [16:0] tolerance;
-  wire [7:0] \tolerance$166 ;
+  wire [7:0] \tolerance$168 ;
   input trigger;
   wire trigger;
   wire \trigger$36 ;
   wire valid;
-  wire \valid$189 ;
-  output \valid$281 ;
-  wire \valid$281 ;
+  wire \valid$190 ;
+  output \valid$282 ;
+  wire \valid$282 ;
   wire valid_out;
   wire w1_enable;
   wire waiting;
@@ -9236,25 +9237,25 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire [1:0] \word_count$125 ;
   wire [1:0] word_crc_ok;
   wire [19:0] words;
-  wire [19:0] \words$159 ;
-  wire [9:0] \words$159[0] ;
+  wire [19:0] \words$161 ;
+  wire [9:0] \words$161[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
-  wire [1:0] \words$159[0].crc ;
-  wire [5:0] \words$159[0].data_bits ;
-  wire \words$159[0].lc ;
-  wire \words$159[0].nenw ;
-  wire [9:0] \words$159[1] ;
+  wire [1:0] \words$161[0].crc ;
+  wire [5:0] \words$161[0].data_bits ;
+  wire \words$161[0].lc ;
+  wire \words$161[0].nenw ;
+  wire [9:0] \words$161[1] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
-  wire [1:0] \words$159[1].crc ;
-  wire [5:0] \words$159[1].data_bits ;
-  wire \words$159[1].lc ;
-  wire \words$159[1].nenw ;
+  wire [1:0] \words$161[1].crc ;
+  wire [5:0] \words$161[1].data_bits ;
+  wire \words$161[1].lc ;
+  wire \words$161[1].nenw ;
   wire [9:0] \words[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
@@ -9278,7 +9279,7 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   assign enable = cycle[144:141] != 4'hf;
   assign rearm = cfg_delay_tolerance == 4'hf;
   assign \$1  = ~ started_before;
-  assign \check$148  = started & \$1 ;
+  assign \check$150  = started & \$1 ;
   assign \$2  = learn & spw_mismatch;
   assign \$3  = status == 4'hd;
   assign \$4  = learn & \$3 ;
@@ -9294,10 +9295,10 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   assign \$14  = ca_done & \$13 ;
   assign \$15  = result[2:0] == 3'h5;
   assign \$16  = ca_done & \$15 ;
-  assign \busy$276  = ~ idle;
+  assign \busy$277  = ~ idle;
   assign config_error = ~ config_ok;
   assign \$17  = ~ \clear$116 ;
-  assign \$18  = \sample$307  & \$17 ;
+  assign \$18  = \sample$308  & \$17 ;
   always @(posedge clk)
     sample <= \$19 ;
   always @(posedge clk)
@@ -9330,7 +9331,7 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .delay_over(delay_over),
     .early(early),
     .end_check(cycle[124]),
-    .fault(fault),
+    .fault(\restart$142 ),
     .fault_status(fault_status),
     .faults(faults),
     .frame_done(frame_done),
@@ -9365,10 +9366,10 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .waiting(watch)
   );
   \biss_master_uart.ch0.core.counters  counters (
-    .clear(\clear$250 ),
+    .clear(\clear$251 ),
     .clk(clk),
     .counts(counts),
-    .events(\events$245 ),
+    .events(\events$246 ),
     .rst(rst)
   );
   \biss_master_uart.ch0.core.decoder  decoder (
@@ -9396,7 +9397,7 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .words(words)
   );
   \biss_master_uart.ch0.core.delay_check  delay_check (
-    .check(\check$148 ),
+    .check(\check$150 ),
     .clean(clean),
     .clk(clk),
     .delay(delay),
@@ -9418,6 +9419,7 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .level(\slo$44 ),
     .limit(cycle[140:137]),
     .noisy(noisy),
+    .restart(\restart$142 ),
     .rst(rst),
     .sampler_noise(sampler_noise),
     .watch(watch)
@@ -9445,10 +9447,10 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .start_slot(start_slot),
     .\started$10 (started),
     .w1_enable(cycle[155]),
-    .words(\words$159 )
+    .words(\words$161 )
   );
   \biss_master_uart.ch0.core.register_access  register_access (
-    .abort(\abort$222 ),
+    .abort(\abort$223 ),
     .busy(frames),
     .cdm(cdm),
     .clk(clk),
@@ -9460,27 +9462,27 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .rbuf_addr(rbuf_addr),
     .rbuf_data(ca_rbuf_data),
     .rbuf_en(rbuf_en),
-    .request(\request$208 ),
+    .request(\request$209 ),
     .result(result),
     .rst(rst),
-    .start(\start$220 ),
+    .start(\start$221 ),
     .wbuf(wbuf)
   );
   \biss_master_uart.ch0.core.results  results (
     .clk(clk),
-    .done(\done$279 ),
+    .done(\done$280 ),
     .frame(frame),
     .report(report),
     .report_delay(report_delay),
     .report_frame(learn),
-    .result(\result$284 ),
+    .result(\result$285 ),
     .rst(rst),
     .valid(valid),
-    .valid_out(\valid$281 )
+    .valid_out(\valid$282 )
   );
   \biss_master_uart.ch0.core.sampler  sampler (
     .arm(ma_arm),
-    .\bit (\bit$308 ),
+    .\bit (\bit$309 ),
     .clk(clk),
     .delay(delay),
     .early(early),
@@ -9490,7 +9492,7 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .noise(sampler_noise),
     .receiver_clear(\clear$116 ),
     .rst(rst),
-    .sample(\sample$307 ),
+    .sample(\sample$308 ),
     .slo(slo)
   );
   \biss_master_uart.ch0.core.scheduler  scheduler (
@@ -9511,7 +9513,7 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$4887$0 (\bit ),
+    .\port$4889$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -9565,7 +9567,7 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .crc_ok(crc_ok),
     .delay_jump(delay_jump),
     .doubtful(frame_doubtful),
-    .fault(fault),
+    .fault(\restart$142 ),
     .fault_status(fault_status),
     .lc_check(check),
     .lc_repeat(lc_repeat),
@@ -9575,7 +9577,7 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .lc_zero(lc_zero),
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
-    .\port$2233$0 (\$22 ),
+    .\port$2234$0 (\$22 ),
     .report(report),
     .report_frame(learn),
     .spw_match(spw_match),
@@ -9592,7 +9594,7 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
-    \$20  = \bit$308 ;
+    \$20  = \bit$309 ;
     if (rst) begin
       \$20  = 1'h0;
     end
@@ -9670,51 +9672,52 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   assign \level$138  = \slo$44 ;
   assign noise = sampler_noise;
   assign close = frame_done;
+  assign fault = \restart$142 ;
   assign limit = cycle[140:137];
   assign delay_tolerance = tolerance;
-  assign \delay$147  = delay;
+  assign \delay$149  = delay;
   assign report_frame = learn;
-  assign \clean$153  = clean;
-  assign \noisy$155  = noisy;
+  assign \clean$155  = clean;
+  assign \noisy$157  = noisy;
   assign jump = delay_jump;
   assign w1_enable = cycle[155];
-  assign \cpw_top$162  = cpw_top;
+  assign \cpw_top$164  = cpw_top;
   assign data1 = spw;
   assign bits = cycle[161:156];
-  assign \tolerance$166  = cycle[174:167];
+  assign \tolerance$168  = cycle[174:167];
   assign match = spw_match;
   assign cfg = cycle;
-  assign \report_frame$170  = learn;
-  assign \fault$172  = fault;
-  assign \fault_status$174  = fault_status;
-  assign \crc_ok$176  = crc_ok;
+  assign \report_frame$172  = learn;
+  assign \fault$173  = \restart$142 ;
+  assign \fault_status$175  = fault_status;
+  assign \crc_ok$177  = crc_ok;
   assign \repeat  = lc_repeat_seen;
   assign skip = lc_skip_seen;
   assign zero = lc_zero_seen;
-  assign \report$184  = report;
-  assign \report_frame$185  = learn;
-  assign \report_delay$187  = report_delay;
-  assign \valid$189  = valid;
+  assign \report$185  = report;
+  assign \report_frame$186  = learn;
+  assign \report_delay$188  = report_delay;
+  assign \valid$190  = valid;
   assign word_crc_ok = { \$22 , crc_ok[0] };
-  assign \first_rise$206  = first_rise;
+  assign \first_rise$207  = first_rise;
   assign ca_status = result[2:0];
   assign ca_bytes_done = result[9:3];
-  assign ca_start = \start$220 ;
-  assign ca_abort = \abort$222 ;
+  assign ca_start = \start$221 ;
+  assign ca_abort = \abort$223 ;
   assign ca_rbuf_addr = rbuf_addr;
   assign ca_rbuf_en = rbuf_en;
   assign rbuf_data = ca_rbuf_data;
   assign ca_busy = frames;
-  assign \busy$231  = frames;
-  assign \done$233  = ca_done;
-  assign \cdm$235  = cdm;
+  assign \busy$232  = frames;
+  assign \done$234  = ca_done;
+  assign \cdm$236  = cdm;
   assign held = ma_held;
   assign ma_hold = hold;
   assign frame_end = report;
   assign frame_ok = valid;
   assign frame_cds = cds;
   assign cdm_cycle = frame_cdm;
-  assign clear_counters = \clear$250 ;
+  assign clear_counters = \clear$251 ;
   assign count_crc_word0 = counts[15:0];
   assign count_crc_word1 = counts[31:16];
   assign count_no_ack = counts[47:32];
@@ -9736,31 +9739,31 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   assign count_ca_refused = counts[303:288];
   assign count_ca_aborted = counts[319:304];
   assign count_ca_data_fault = counts[335:320];
-  assign \ma$275  = ma;
-  assign \overrun$278  = overrun;
-  assign \done$280  = \done$279 ;
-  assign valid_out = \valid$281 ;
-  assign \status$283  = \result$284 [3:0];
-  assign timestamp = \result$284 [35:4];
-  assign line_delay = \result$284 [48:36];
-  assign \cds$287  = \result$284 [49];
-  assign noise_events = \result$284 [53:50];
-  assign delay_settled = \result$284 [54];
-  assign \settled_delay$290  = \result$284 [67:55];
-  assign delay_spread = \result$284 [75:68];
-  assign word0_position = \result$284 [130:76];
-  assign word0_ne = \result$284 [131];
-  assign word0_nw = \result$284 [132];
-  assign word0_crc_ok = \result$284 [133];
-  assign word1_position = \result$284 [173:134];
-  assign word1_ne = \result$284 [174];
-  assign word1_nw = \result$284 [175];
-  assign word1_crc_ok = \result$284 [176];
-  assign \lc$300  = \result$284 [182:177];
-  assign \lc_repeat$301  = \result$284 [183];
-  assign \lc_skip$302  = \result$284 [184];
-  assign \lc_zero$303  = \result$284 [185];
-  assign \spw_mismatch$304  = \result$284 [186];
+  assign \ma$276  = ma;
+  assign \overrun$279  = overrun;
+  assign \done$281  = \done$280 ;
+  assign valid_out = \valid$282 ;
+  assign \status$284  = \result$285 [3:0];
+  assign timestamp = \result$285 [35:4];
+  assign line_delay = \result$285 [48:36];
+  assign \cds$288  = \result$285 [49];
+  assign noise_events = \result$285 [53:50];
+  assign delay_settled = \result$285 [54];
+  assign \settled_delay$291  = \result$285 [67:55];
+  assign delay_spread = \result$285 [75:68];
+  assign word0_position = \result$285 [130:76];
+  assign word0_ne = \result$285 [131];
+  assign word0_nw = \result$285 [132];
+  assign word0_crc_ok = \result$285 [133];
+  assign word1_position = \result$285 [173:134];
+  assign word1_ne = \result$285 [174];
+  assign word1_nw = \result$285 [175];
+  assign word1_crc_ok = \result$285 [176];
+  assign \lc$301  = \result$285 [182:177];
+  assign \lc_repeat$302  = \result$285 [183];
+  assign \lc_skip$303  = \result$285 [184];
+  assign \lc_zero$304  = \result$285 [185];
+  assign \spw_mismatch$305  = \result$285 [186];
   assign \live.ma_half_period  = live[15:0];
   assign \live.request_period  = live[39:16];
   assign \live.break_time  = live[63:40];
@@ -9817,16 +9820,16 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   assign \words[1].nenw  = words[16];
   assign \words[1].lc  = words[17];
   assign \words[1].crc  = words[19:18];
-  assign \words$159[0]  = \words$159 [9:0];
-  assign \words$159[0].data_bits  = \words$159 [5:0];
-  assign \words$159[0].nenw  = \words$159 [6];
-  assign \words$159[0].lc  = \words$159 [7];
-  assign \words$159[0].crc  = \words$159 [9:8];
-  assign \words$159[1]  = \words$159 [19:10];
-  assign \words$159[1].data_bits  = \words$159 [15:10];
-  assign \words$159[1].nenw  = \words$159 [16];
-  assign \words$159[1].lc  = \words$159 [17];
-  assign \words$159[1].crc  = \words$159 [19:18];
+  assign \words$161[0]  = \words$161 [9:0];
+  assign \words$161[0].data_bits  = \words$161 [5:0];
+  assign \words$161[0].nenw  = \words$161 [6];
+  assign \words$161[0].lc  = \words$161 [7];
+  assign \words$161[0].crc  = \words$161 [9:8];
+  assign \words$161[1]  = \words$161 [19:10];
+  assign \words$161[1].data_bits  = \words$161 [15:10];
+  assign \words$161[1].nenw  = \words$161 [16];
+  assign \words$161[1].lc  = \words$161 [17];
+  assign \words$161[1].crc  = \words$161 [19:18];
   assign \cfg.ma_half_period  = cycle[15:0];
   assign \cfg.request_period  = cycle[39:16];
   assign \cfg.break_time  = cycle[63:40];
@@ -9873,36 +9876,36 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   assign \frame.lc_skip  = frame[184];
   assign \frame.lc_zero  = frame[185];
   assign \frame.spw_mismatch  = frame[186];
-  assign \request$208.slave_id  = \request$208 [2:0];
-  assign \request$208.address  = \request$208 [9:3];
-  assign \request$208.count  = \request$208 [16:10];
-  assign \request$208.write  = \request$208 [17];
+  assign \request$209.slave_id  = \request$209 [2:0];
+  assign \request$209.address  = \request$209 [9:3];
+  assign \request$209.count  = \request$209 [16:10];
+  assign \request$209.write  = \request$209 [17];
   assign \wbuf.addr  = wbuf[3:0];
   assign \wbuf.data  = wbuf[35:4];
   assign \wbuf.en  = wbuf[39:36];
   assign \result.status  = result[2:0];
   assign \result.bytes_done  = result[9:3];
-  assign \events$245.crc_word0  = \events$245 [0];
-  assign \events$245.crc_word1  = \events$245 [1];
-  assign \events$245.no_ack  = \events$245 [2];
-  assign \events$245.no_start  = \events$245 [3];
-  assign \events$245.delay_range  = \events$245 [4];
-  assign \events$245.slo_stuck_low  = \events$245 [5];
-  assign \events$245.lc_repeat  = \events$245 [6];
-  assign \events$245.lc_skip  = \events$245 [7];
-  assign \events$245.lc_zero  = \events$245 [8];
-  assign \events$245.spw_mismatch  = \events$245 [9];
-  assign \events$245.overrun  = \events$245 [10];
-  assign \events$245.aborted  = \events$245 [11];
-  assign \events$245.no_stop  = \events$245 [12];
-  assign \events$245.noisy_line  = \events$245 [13];
-  assign \events$245.delay_jump  = \events$245 [14];
-  assign \events$245.noise_event  = \events$245 [15];
-  assign \events$245.ca_crc4_error  = \events$245 [16];
-  assign \events$245.ca_no_answer  = \events$245 [17];
-  assign \events$245.ca_refused  = \events$245 [18];
-  assign \events$245.ca_aborted  = \events$245 [19];
-  assign \events$245.ca_data_fault  = \events$245 [20];
+  assign \events$246.crc_word0  = \events$246 [0];
+  assign \events$246.crc_word1  = \events$246 [1];
+  assign \events$246.no_ack  = \events$246 [2];
+  assign \events$246.no_start  = \events$246 [3];
+  assign \events$246.delay_range  = \events$246 [4];
+  assign \events$246.slo_stuck_low  = \events$246 [5];
+  assign \events$246.lc_repeat  = \events$246 [6];
+  assign \events$246.lc_skip  = \events$246 [7];
+  assign \events$246.lc_zero  = \events$246 [8];
+  assign \events$246.spw_mismatch  = \events$246 [9];
+  assign \events$246.overrun  = \events$246 [10];
+  assign \events$246.aborted  = \events$246 [11];
+  assign \events$246.no_stop  = \events$246 [12];
+  assign \events$246.noisy_line  = \events$246 [13];
+  assign \events$246.delay_jump  = \events$246 [14];
+  assign \events$246.noise_event  = \events$246 [15];
+  assign \events$246.ca_crc4_error  = \events$246 [16];
+  assign \events$246.ca_no_answer  = \events$246 [17];
+  assign \events$246.ca_refused  = \events$246 [18];
+  assign \events$246.ca_aborted  = \events$246 [19];
+  assign \events$246.ca_data_fault  = \events$246 [20];
   assign \faults.no_ack  = faults[0];
   assign \faults.no_start  = faults[1];
   assign \faults.delay_range  = faults[2];
@@ -9931,57 +9934,57 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   assign \counts.ca_refused  = counts[303:288];
   assign \counts.ca_aborted  = counts[319:304];
   assign \counts.ca_data_fault  = counts[335:320];
-  assign \result$284.status  = \result$284 [3:0];
-  assign \result$284.timestamp  = \result$284 [35:4];
-  assign \result$284.line_delay  = \result$284 [48:36];
-  assign \result$284.cds  = \result$284 [49];
-  assign \result$284.noise_events  = \result$284 [53:50];
-  assign \result$284.delay_settled  = \result$284 [54];
-  assign \result$284.settled_delay  = \result$284 [67:55];
-  assign \result$284.delay_spread  = \result$284 [75:68];
-  assign \result$284.word0  = \result$284 [133:76];
-  assign \result$284.word0.position  = \result$284 [130:76];
-  assign \result$284.word0.ne  = \result$284 [131];
-  assign \result$284.word0.nw  = \result$284 [132];
-  assign \result$284.word0.crc_ok  = \result$284 [133];
-  assign \result$284.word1  = \result$284 [176:134];
-  assign \result$284.word1.position  = \result$284 [173:134];
-  assign \result$284.word1.ne  = \result$284 [174];
-  assign \result$284.word1.nw  = \result$284 [175];
-  assign \result$284.word1.crc_ok  = \result$284 [176];
-  assign \result$284.lc  = \result$284 [182:177];
-  assign \result$284.lc_repeat  = \result$284 [183];
-  assign \result$284.lc_skip  = \result$284 [184];
-  assign \result$284.lc_zero  = \result$284 [185];
-  assign \result$284.spw_mismatch  = \result$284 [186];
-  assign \events$245 [20] = \$16 ;
-  assign \events$245 [19] = \$14 ;
-  assign \events$245 [18] = \$12 ;
-  assign \events$245 [17] = \$10 ;
-  assign \events$245 [16] = \$8 ;
-  assign \events$245 [15] = \event ;
-  assign \events$245 [14] = \$6 ;
-  assign \events$245 [13] = \$4 ;
-  assign \events$245 [12] = faults[6];
-  assign \events$245 [11] = faults[4];
-  assign \events$245 [10] = overrun;
-  assign \events$245 [9] = \$2 ;
-  assign \events$245 [8] = lc_zero;
-  assign \events$245 [7] = lc_skip;
-  assign \events$245 [6] = lc_repeat;
-  assign \events$245 [5] = faults[3];
-  assign \events$245 [4] = faults[2];
-  assign \events$245 [3] = faults[1];
-  assign \events$245 [2] = faults[0];
-  assign \events$245 [1] = crc_error[1];
-  assign \events$245 [0] = crc_error[0];
+  assign \result$285.status  = \result$285 [3:0];
+  assign \result$285.timestamp  = \result$285 [35:4];
+  assign \result$285.line_delay  = \result$285 [48:36];
+  assign \result$285.cds  = \result$285 [49];
+  assign \result$285.noise_events  = \result$285 [53:50];
+  assign \result$285.delay_settled  = \result$285 [54];
+  assign \result$285.settled_delay  = \result$285 [67:55];
+  assign \result$285.delay_spread  = \result$285 [75:68];
+  assign \result$285.word0  = \result$285 [133:76];
+  assign \result$285.word0.position  = \result$285 [130:76];
+  assign \result$285.word0.ne  = \result$285 [131];
+  assign \result$285.word0.nw  = \result$285 [132];
+  assign \result$285.word0.crc_ok  = \result$285 [133];
+  assign \result$285.word1  = \result$285 [176:134];
+  assign \result$285.word1.position  = \result$285 [173:134];
+  assign \result$285.word1.ne  = \result$285 [174];
+  assign \result$285.word1.nw  = \result$285 [175];
+  assign \result$285.word1.crc_ok  = \result$285 [176];
+  assign \result$285.lc  = \result$285 [182:177];
+  assign \result$285.lc_repeat  = \result$285 [183];
+  assign \result$285.lc_skip  = \result$285 [184];
+  assign \result$285.lc_zero  = \result$285 [185];
+  assign \result$285.spw_mismatch  = \result$285 [186];
+  assign \events$246 [20] = \$16 ;
+  assign \events$246 [19] = \$14 ;
+  assign \events$246 [18] = \$12 ;
+  assign \events$246 [17] = \$10 ;
+  assign \events$246 [16] = \$8 ;
+  assign \events$246 [15] = \event ;
+  assign \events$246 [14] = \$6 ;
+  assign \events$246 [13] = \$4 ;
+  assign \events$246 [12] = faults[6];
+  assign \events$246 [11] = faults[4];
+  assign \events$246 [10] = overrun;
+  assign \events$246 [9] = \$2 ;
+  assign \events$246 [8] = lc_zero;
+  assign \events$246 [7] = lc_skip;
+  assign \events$246 [6] = lc_repeat;
+  assign \events$246 [5] = faults[3];
+  assign \events$246 [4] = faults[2];
+  assign \events$246 [3] = faults[1];
+  assign \events$246 [2] = faults[0];
+  assign \events$246 [1] = crc_error[1];
+  assign \events$246 [0] = crc_error[0];
   assign wbuf[39:36] = ca_wbuf_en;
   assign wbuf[35:4] = ca_wbuf_data;
   assign wbuf[3:0] = ca_wbuf_addr;
-  assign \request$208 [17] = ca_write;
-  assign \request$208 [16:10] = ca_count;
-  assign \request$208 [9:3] = ca_address;
-  assign \request$208 [2:0] = ca_slave_id;
+  assign \request$209 [17] = ca_write;
+  assign \request$209 [16:10] = ca_count;
+  assign \request$209 [9:3] = ca_address;
+  assign \request$209 [2:0] = ca_slave_id;
   assign frame[35:4] = first_rise_time;
   assign frame[186] = spw_mismatch;
   assign frame[176] = \$22 ;
@@ -10003,8 +10006,8 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   assign frame[49] = cds;
   assign frame[48:36] = delay;
   assign frame[3:0] = status;
-  assign \words$159 [19:10] = cycle[165:156];
-  assign \words$159 [9:0] = cycle[154:145];
+  assign \words$161 [19:10] = cycle[165:156];
+  assign \words$161 [9:0] = cycle[154:145];
   assign words[19:10] = cycle[165:156];
   assign words[9:0] = cycle[154:145];
   assign live[174:167] = cfg_spw_tolerance;
@@ -15008,7 +15011,7 @@ module \biss_master_uart.ch0.core.delay_check (rst, enable, rearm, check, clean,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.line_noise (rst, sampler_noise, \event , noisy, events, limit, watch, level, close, clk);
+module \biss_master_uart.ch0.core.line_noise (rst, sampler_noise, \event , noisy, events, limit, watch, restart, level, close, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$69  = 0;
   wire \$1 ;
   wire [4:0] \$10 ;
@@ -15047,6 +15050,8 @@ module \biss_master_uart.ch0.core.line_noise (rst, sampler_noise, \event , noisy
   output noisy;
   wire noisy;
   reg over = 1'h0;
+  input restart;
+  wire restart;
   input rst;
   wire rst;
   reg [3:0] running = 4'h0;
@@ -15113,6 +15118,8 @@ module \biss_master_uart.ch0.core.line_noise (rst, sampler_noise, \event , noisy
     (* full_case = 32'd1 *)
     if (close) begin
       \$18  = { 3'h0, \event  };
+    end else if (restart) begin
+      \$18  = 4'h0;
     end else begin
       \$18  = \$6 [3:0];
     end
@@ -15125,6 +15132,8 @@ module \biss_master_uart.ch0.core.line_noise (rst, sampler_noise, \event , noisy
     (* full_case = 32'd1 *)
     if (close) begin
       \$19  = \$2 ;
+    end else if (restart) begin
+      \$19  = 1'h0;
     end else begin
       \$19  = \$11 ;
     end
@@ -18921,7 +18930,7 @@ module \biss_master_uart.ch0.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$4887$0 , resync, lc, is_zero, clk);
+module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$4889$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$82  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -18963,8 +18972,8 @@ module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$4887$0 ;
-  wire \port$4887$0 ;
+  input \port$4889$0 ;
+  wire \port$4889$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -18978,9 +18987,9 @@ module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$4887$0  };
-  assign \$2  = { lc[4:0], \port$4887$0  } == last;
-  assign \$3  = { lc[4:0], \port$4887$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$4889$0  };
+  assign \$2  = { lc[4:0], \port$4889$0  } == last;
+  assign \$3  = { lc[4:0], \port$4889$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -19090,7 +19099,7 @@ module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$4887$0  };
+  assign lc_next = { lc[4:0], \port$4889$0  };
   assign zero = is_zero;
 endmodule
 
@@ -19646,7 +19655,7 @@ module \biss_master_uart.ch0.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$2233$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
+module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$2234$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
 , delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$86  = 0;
   wire \$1 ;
@@ -19784,8 +19793,8 @@ module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$2233$0 , l
   wire lc_zero_seen;
   input noisy;
   wire noisy;
-  output \port$2233$0 ;
-  wire \port$2233$0 ;
+  output \port$2234$0 ;
+  wire \port$2234$0 ;
   output report;
   wire report;
   input report_frame;
@@ -19891,7 +19900,7 @@ module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$2233$0 , l
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$2233$0  = \$2 ;
+  assign \port$2234$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -19920,7 +19929,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1 (clk, rst, \trigger$179 , ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__ca_busy, regs__ca_rbuf_data, ca_rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period
 , cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_quiet_time, ca_slave_id, ca_address, ca_count
-, ca_write, ca_start, ca_abort, regs__done_count, ma, regs__done, \port$5791$0 , \port$5804$0 , regs__ca_done, \port$5936$0 , slo);
+, ca_write, ca_start, ca_abort, regs__done_count, ma, regs__done, \port$5793$0 , \port$5806$0 , regs__ca_done, \port$5938$0 , slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$87  = 0;
   wire \$1 ;
   wire [16:0] \$2 ;
@@ -20057,12 +20066,12 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$179 , ca_wbuf_en, ca_rbuf_en, r
   wire [3:0] noise_events;
   input periodic;
   wire periodic;
-  output [186:0] \port$5791$0 ;
-  wire [186:0] \port$5791$0 ;
-  output [335:0] \port$5804$0 ;
-  wire [335:0] \port$5804$0 ;
-  output [9:0] \port$5936$0 ;
-  wire [9:0] \port$5936$0 ;
+  output [186:0] \port$5793$0 ;
+  wire [186:0] \port$5793$0 ;
+  output [335:0] \port$5806$0 ;
+  wire [335:0] \port$5806$0 ;
+  output [9:0] \port$5938$0 ;
+  wire [9:0] \port$5938$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -20225,8 +20234,8 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$179 , ca_wbuf_en, ca_rbuf_en, r
   assign regs__frame_error = regs__done & \$1 ;
   \biss_master_uart.ch1.core  core (
     .abort(abort_cycle),
-    .\abort$222 (ca_abort),
-    .\busy$276 (regs__busy),
+    .\abort$223 (ca_abort),
+    .\busy$277 (regs__busy),
     .ca_address(ca_address),
     .ca_count(ca_count),
     .ca_done(regs__ca_done),
@@ -20257,24 +20266,24 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$179 , ca_wbuf_en, ca_rbuf_en, r
     .cfg_w1_enable(cfg_w1_enable),
     .cfg_w1_lc(cfg_w1_lc),
     .cfg_w1_nenw(cfg_w1_nenw),
-    .\clear$250 (clear_counters),
+    .\clear$251 (clear_counters),
     .clk(clk),
     .config_error(regs__config_error),
     .counts(\$6 ),
-    .\done$279 (regs__done),
+    .\done$280 (regs__done),
     .frames(regs__ca_busy),
     .ma(ma),
     .\periodic$27 (periodic),
     .rbuf_addr(ca_rbuf_addr),
     .rbuf_en(ca_rbuf_en),
     .result(\$7 ),
-    .\result$284 (\$5 ),
+    .\result$285 (\$5 ),
     .rst(rst),
     .slo(slo),
     .start(start),
-    .\start$220 (ca_start),
+    .\start$221 (ca_start),
     .trigger(trigger),
-    .\valid$281 (valid)
+    .\valid$282 (valid)
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$87 ) begin end
@@ -20430,15 +20439,15 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$179 , ca_wbuf_en, ca_rbuf_en, r
   assign regs__ca_rbuf_en = ca_rbuf_en;
   assign \ma$182  = ma;
   assign \slo$184  = slo;
-  assign \port$5791$0  = \$5 ;
-  assign \port$5804$0  = \$6 ;
-  assign \port$5936$0  = \$7 ;
+  assign \port$5793$0  = \$5 ;
+  assign \port$5806$0  = \$6 ;
+  assign \port$5938$0  = \$7 ;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy$276 , config_error, frames, ca_rbuf_data, rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, \clear$250 , \periodic$27 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit
-, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_quiet_time, ca_slave_id, ca_address, ca_count, ca_write, \start$220 , \abort$222 
-, abort, ma, \done$279 , \valid$281 , \result$284 , counts, ca_done, result, slo);
+module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy$277 , config_error, frames, ca_rbuf_data, rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, \clear$251 , \periodic$27 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit
+, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_quiet_time, ca_slave_id, ca_address, ca_count, ca_write, \start$221 , \abort$223 
+, abort, ma, \done$280 , \valid$282 , \result$285 , counts, ca_done, result, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$88  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -20464,8 +20473,8 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire \$9 ;
   input abort;
   wire abort;
-  input \abort$222 ;
-  wire \abort$222 ;
+  input \abort$223 ;
+  wire \abort$223 ;
   wire \abort$39 ;
   wire abort_cycle;
   wire ack_expired;
@@ -20474,15 +20483,15 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire [23:0] \ack_limit$92 ;
   wire arm;
   reg \bit  = 1'h0;
-  wire \bit$308 ;
+  wire \bit$309 ;
   wire [5:0] bits;
   wire break_over;
   wire \break_over$69 ;
   wire [23:0] break_time;
   wire busy;
-  wire \busy$231 ;
-  output \busy$276 ;
-  wire \busy$276 ;
+  wire \busy$232 ;
+  output \busy$277 ;
+  wire \busy$277 ;
   wire ca_abort;
   input [6:0] ca_address;
   wire [6:0] ca_address;
@@ -20517,10 +20526,10 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   input ca_write;
   wire ca_write;
   wire cdm;
-  wire \cdm$235 ;
+  wire \cdm$236 ;
   wire cdm_cycle;
   wire cds;
-  wire \cds$287 ;
+  wire \cds$288 ;
   wire [174:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
@@ -20604,13 +20613,13 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   input cfg_w1_nenw;
   wire cfg_w1_nenw;
   wire check;
-  wire \check$148 ;
+  wire \check$150 ;
   wire clean;
-  wire \clean$153 ;
+  wire \clean$155 ;
   wire clear;
   wire \clear$116 ;
-  input \clear$250 ;
-  wire \clear$250 ;
+  input \clear$251 ;
+  wire \clear$251 ;
   wire clear_counters;
   input clk;
   wire clk;
@@ -20664,10 +20673,10 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire [15:0] \counts.slo_stuck_low ;
   wire [15:0] \counts.spw_mismatch ;
   wire [39:0] cpw_top;
-  wire [39:0] \cpw_top$162 ;
+  wire [39:0] \cpw_top$164 ;
   wire [1:0] crc_error;
   wire [1:0] crc_ok;
-  wire [1:0] \crc_ok$176 ;
+  wire [1:0] \crc_ok$177 ;
   wire [174:0] cycle;
   wire [23:0] \cycle.ack_limit ;
   wire [23:0] \cycle.break_time ;
@@ -20707,7 +20716,7 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   (* init = 1'h0 *)
   wire decoder_sample;
   wire [12:0] delay;
-  wire [12:0] \delay$147 ;
+  wire [12:0] \delay$149 ;
   wire [12:0] \delay$98 ;
   wire delay_jump;
   wire [11:0] delay_limit;
@@ -20718,10 +20727,10 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire [7:0] delay_spread;
   wire [16:0] delay_tolerance;
   wire done;
-  wire \done$233 ;
-  output \done$279 ;
-  wire \done$279 ;
+  wire \done$234 ;
+  output \done$280 ;
   wire \done$280 ;
+  wire \done$281 ;
   wire doubtful;
   wire early;
   wire \early$55 ;
@@ -20730,30 +20739,30 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire enough;
   wire \event ;
   wire [3:0] events;
-  wire [20:0] \events$245 ;
-  wire \events$245.aborted ;
-  wire \events$245.ca_aborted ;
-  wire \events$245.ca_crc4_error ;
-  wire \events$245.ca_data_fault ;
-  wire \events$245.ca_no_answer ;
-  wire \events$245.ca_refused ;
-  wire \events$245.crc_word0 ;
-  wire \events$245.crc_word1 ;
-  wire \events$245.delay_jump ;
-  wire \events$245.delay_range ;
-  wire \events$245.lc_repeat ;
-  wire \events$245.lc_skip ;
-  wire \events$245.lc_zero ;
-  wire \events$245.no_ack ;
-  wire \events$245.no_start ;
-  wire \events$245.no_stop ;
-  wire \events$245.noise_event ;
-  wire \events$245.noisy_line ;
-  wire \events$245.overrun ;
-  wire \events$245.slo_stuck_low ;
-  wire \events$245.spw_mismatch ;
+  wire [20:0] \events$246 ;
+  wire \events$246.aborted ;
+  wire \events$246.ca_aborted ;
+  wire \events$246.ca_crc4_error ;
+  wire \events$246.ca_data_fault ;
+  wire \events$246.ca_no_answer ;
+  wire \events$246.ca_refused ;
+  wire \events$246.crc_word0 ;
+  wire \events$246.crc_word1 ;
+  wire \events$246.delay_jump ;
+  wire \events$246.delay_range ;
+  wire \events$246.lc_repeat ;
+  wire \events$246.lc_skip ;
+  wire \events$246.lc_zero ;
+  wire \events$246.no_ack ;
+  wire \events$246.no_start ;
+  wire \events$246.no_stop ;
+  wire \events$246.noise_event ;
+  wire \events$246.noisy_line ;
+  wire \events$246.overrun ;
+  wire \events$246.slo_stuck_low ;
+  wire \events$246.spw_mismatch ;
   wire fault;
-  wire \fault$172 ;
+  wire \fault$173 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -20787,7 +20796,7 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \fault_status$174 ;
+  wire [3:0] \fault_status$175 ;
   wire [6:0] faults;
   wire \faults.aborted ;
   wire \faults.bad_config ;
@@ -20797,7 +20806,7 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire \faults.no_stop ;
   wire \faults.slo_stuck_low ;
   wire first_rise;
-  wire \first_rise$206 ;
+  wire \first_rise$207 ;
   wire [31:0] first_rise_time;
   wire [186:0] frame;
   wire \frame.cds ;
@@ -20859,19 +20868,19 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire jump;
   wire [5:0] lc;
   wire [5:0] \lc$127 ;
-  wire [5:0] \lc$300 ;
+  wire [5:0] \lc$301 ;
   wire lc_check;
   wire lc_load;
   wire [5:0] lc_next;
   wire [5:0] \lc_next$129 ;
   wire lc_repeat;
-  wire \lc_repeat$301 ;
+  wire \lc_repeat$302 ;
   wire lc_repeat_seen;
   wire lc_skip;
-  wire \lc_skip$302 ;
+  wire \lc_skip$303 ;
   wire lc_skip_seen;
   wire lc_zero;
-  wire \lc_zero$303 ;
+  wire \lc_zero$304 ;
   wire lc_zero_seen;
   wire learn;
   wire level;
@@ -20915,7 +20924,7 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire \locked$53 ;
   output ma;
   wire ma;
-  wire \ma$275 ;
+  wire \ma$276 ;
   wire ma_arm;
   wire ma_busy;
   wire \ma_busy$81 ;
@@ -20932,11 +20941,11 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire noise;
   wire [3:0] noise_events;
   wire noisy;
-  wire \noisy$155 ;
+  wire \noisy$157 ;
   wire [1:0] nw;
   wire ok;
   wire overrun;
-  wire \overrun$278 ;
+  wire \overrun$279 ;
   wire [23:0] period;
   wire periodic;
   input \periodic$27 ;
@@ -20957,36 +20966,37 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire receiver_clear;
   wire \repeat ;
   wire report;
-  wire \report$184 ;
+  wire \report$185 ;
   wire report_delay;
-  wire \report_delay$187 ;
+  wire \report_delay$188 ;
   wire report_frame;
-  wire \report_frame$170 ;
-  wire \report_frame$185 ;
+  wire \report_frame$172 ;
+  wire \report_frame$186 ;
   wire request;
-  wire [17:0] \request$208 ;
-  wire [6:0] \request$208.address ;
-  wire [6:0] \request$208.count ;
-  wire [2:0] \request$208.slave_id ;
-  wire \request$208.write ;
+  wire [17:0] \request$209 ;
+  wire [6:0] \request$209.address ;
+  wire [6:0] \request$209.count ;
+  wire [2:0] \request$209.slave_id ;
+  wire \request$209.write ;
   wire \request$38 ;
   wire restart;
+  wire \restart$142 ;
   wire restart_timer;
   output [9:0] result;
   wire [9:0] result;
-  output [186:0] \result$284 ;
-  wire [186:0] \result$284 ;
-  wire \result$284.cds ;
-  wire \result$284.delay_settled ;
-  wire [7:0] \result$284.delay_spread ;
-  wire [5:0] \result$284.lc ;
-  wire \result$284.lc_repeat ;
-  wire \result$284.lc_skip ;
-  wire \result$284.lc_zero ;
-  wire [12:0] \result$284.line_delay ;
-  wire [3:0] \result$284.noise_events ;
-  wire [12:0] \result$284.settled_delay ;
-  wire \result$284.spw_mismatch ;
+  output [186:0] \result$285 ;
+  wire [186:0] \result$285 ;
+  wire \result$285.cds ;
+  wire \result$285.delay_settled ;
+  wire [7:0] \result$285.delay_spread ;
+  wire [5:0] \result$285.lc ;
+  wire \result$285.lc_repeat ;
+  wire \result$285.lc_skip ;
+  wire \result$285.lc_zero ;
+  wire [12:0] \result$285.line_delay ;
+  wire [3:0] \result$285.noise_events ;
+  wire [12:0] \result$285.settled_delay ;
+  wire \result$285.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -21003,18 +21013,18 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \result$284.status ;
-  wire [31:0] \result$284.timestamp ;
-  wire [57:0] \result$284.word0 ;
-  wire \result$284.word0.crc_ok ;
-  wire \result$284.word0.ne ;
-  wire \result$284.word0.nw ;
-  wire [54:0] \result$284.word0.position ;
-  wire [42:0] \result$284.word1 ;
-  wire \result$284.word1.crc_ok ;
-  wire \result$284.word1.ne ;
-  wire \result$284.word1.nw ;
-  wire [39:0] \result$284.word1.position ;
+  wire [3:0] \result$285.status ;
+  wire [31:0] \result$285.timestamp ;
+  wire [57:0] \result$285.word0 ;
+  wire \result$285.word0.crc_ok ;
+  wire \result$285.word0.ne ;
+  wire \result$285.word0.nw ;
+  wire [54:0] \result$285.word0.position ;
+  wire [42:0] \result$285.word1 ;
+  wire \result$285.word1.crc_ok ;
+  wire \result$285.word1.ne ;
+  wire \result$285.word1.nw ;
+  wire [39:0] \result$285.word1.position ;
   wire [6:0] \result.bytes_done ;
   (* enum_base_type = "AccessStatus" *)
   (* enum_value_000 = "OK" *)
@@ -21033,12 +21043,12 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire rst;
   wire run;
   reg sample = 1'h0;
-  wire \sample$307 ;
+  wire \sample$308 ;
   wire sampler_noise;
   wire second_rise;
   wire settled;
   wire [12:0] settled_delay;
-  wire [12:0] \settled_delay$290 ;
+  wire [12:0] \settled_delay$291 ;
   wire skip;
   input slo;
   wire slo;
@@ -21055,11 +21065,11 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire [39:0] spw;
   wire spw_match;
   wire spw_mismatch;
-  wire \spw_mismatch$304 ;
+  wire \spw_mismatch$305 ;
   input start;
   wire start;
-  input \start$220 ;
-  wire \start$220 ;
+  input \start$221 ;
+  wire \start$221 ;
   wire \start$25 ;
   wire [15:0] start_slot;
   wire [15:0] \start_slot$113 ;
@@ -21100,7 +21110,7 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \status$283 ;
+  wire [3:0] \status$284 ;
   wire stop_bit;
   wire \stop_bit$65 ;
   wire stopped;
@@ -21111,14 +21121,14 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire timer_clear;
   wire [31:0] timestamp;
   wire [16:0] tolerance;
-  wire [7:0] \tolerance$166 ;
+  wire [7:0] \tolerance$168 ;
   input trigger;
   wire trigger;
   wire \trigger$36 ;
   wire valid;
-  wire \valid$189 ;
-  output \valid$281 ;
-  wire \valid$281 ;
+  wire \valid$190 ;
+  output \valid$282 ;
+  wire \valid$282 ;
   wire valid_out;
   wire w1_enable;
   wire waiting;
@@ -21139,25 +21149,25 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire [1:0] \word_count$125 ;
   wire [1:0] word_crc_ok;
   wire [19:0] words;
-  wire [19:0] \words$159 ;
-  wire [9:0] \words$159[0] ;
+  wire [19:0] \words$161 ;
+  wire [9:0] \words$161[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
-  wire [1:0] \words$159[0].crc ;
-  wire [5:0] \words$159[0].data_bits ;
-  wire \words$159[0].lc ;
-  wire \words$159[0].nenw ;
-  wire [9:0] \words$159[1] ;
+  wire [1:0] \words$161[0].crc ;
+  wire [5:0] \words$161[0].data_bits ;
+  wire \words$161[0].lc ;
+  wire \words$161[0].nenw ;
+  wire [9:0] \words$161[1] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
-  wire [1:0] \words$159[1].crc ;
-  wire [5:0] \words$159[1].data_bits ;
-  wire \words$159[1].lc ;
-  wire \words$159[1].nenw ;
+  wire [1:0] \words$161[1].crc ;
+  wire [5:0] \words$161[1].data_bits ;
+  wire \words$161[1].lc ;
+  wire \words$161[1].nenw ;
   wire [9:0] \words[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
@@ -21181,7 +21191,7 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   assign enable = cycle[144:141] != 4'hf;
   assign rearm = cfg_delay_tolerance == 4'hf;
   assign \$1  = ~ started_before;
-  assign \check$148  = started & \$1 ;
+  assign \check$150  = started & \$1 ;
   assign \$2  = learn & spw_mismatch;
   assign \$3  = status == 4'hd;
   assign \$4  = learn & \$3 ;
@@ -21197,10 +21207,10 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   assign \$14  = ca_done & \$13 ;
   assign \$15  = result[2:0] == 3'h5;
   assign \$16  = ca_done & \$15 ;
-  assign \busy$276  = ~ idle;
+  assign \busy$277  = ~ idle;
   assign config_error = ~ config_ok;
   assign \$17  = ~ \clear$116 ;
-  assign \$18  = \sample$307  & \$17 ;
+  assign \$18  = \sample$308  & \$17 ;
   always @(posedge clk)
     sample <= \$19 ;
   always @(posedge clk)
@@ -21233,7 +21243,7 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .delay_over(delay_over),
     .early(early),
     .end_check(cycle[124]),
-    .fault(fault),
+    .fault(\restart$142 ),
     .fault_status(fault_status),
     .faults(faults),
     .frame_done(frame_done),
@@ -21268,10 +21278,10 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .waiting(watch)
   );
   \biss_master_uart.ch1.core.counters  counters (
-    .clear(\clear$250 ),
+    .clear(\clear$251 ),
     .clk(clk),
     .counts(counts),
-    .events(\events$245 ),
+    .events(\events$246 ),
     .rst(rst)
   );
   \biss_master_uart.ch1.core.decoder  decoder (
@@ -21299,7 +21309,7 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .words(words)
   );
   \biss_master_uart.ch1.core.delay_check  delay_check (
-    .check(\check$148 ),
+    .check(\check$150 ),
     .clean(clean),
     .clk(clk),
     .delay(delay),
@@ -21321,6 +21331,7 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .level(\slo$44 ),
     .limit(cycle[140:137]),
     .noisy(noisy),
+    .restart(\restart$142 ),
     .rst(rst),
     .sampler_noise(sampler_noise),
     .watch(watch)
@@ -21348,10 +21359,10 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .start_slot(start_slot),
     .\started$10 (started),
     .w1_enable(cycle[155]),
-    .words(\words$159 )
+    .words(\words$161 )
   );
   \biss_master_uart.ch1.core.register_access  register_access (
-    .abort(\abort$222 ),
+    .abort(\abort$223 ),
     .busy(frames),
     .cdm(cdm),
     .clk(clk),
@@ -21363,27 +21374,27 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .rbuf_addr(rbuf_addr),
     .rbuf_data(ca_rbuf_data),
     .rbuf_en(rbuf_en),
-    .request(\request$208 ),
+    .request(\request$209 ),
     .result(result),
     .rst(rst),
-    .start(\start$220 ),
+    .start(\start$221 ),
     .wbuf(wbuf)
   );
   \biss_master_uart.ch1.core.results  results (
     .clk(clk),
-    .done(\done$279 ),
+    .done(\done$280 ),
     .frame(frame),
     .report(report),
     .report_delay(report_delay),
     .report_frame(learn),
-    .result(\result$284 ),
+    .result(\result$285 ),
     .rst(rst),
     .valid(valid),
-    .valid_out(\valid$281 )
+    .valid_out(\valid$282 )
   );
   \biss_master_uart.ch1.core.sampler  sampler (
     .arm(ma_arm),
-    .\bit (\bit$308 ),
+    .\bit (\bit$309 ),
     .clk(clk),
     .delay(delay),
     .early(early),
@@ -21393,7 +21404,7 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .noise(sampler_noise),
     .receiver_clear(\clear$116 ),
     .rst(rst),
-    .sample(\sample$307 ),
+    .sample(\sample$308 ),
     .slo(slo)
   );
   \biss_master_uart.ch1.core.scheduler  scheduler (
@@ -21414,7 +21425,7 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$5449$0 (\bit ),
+    .\port$5451$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -21468,7 +21479,7 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .crc_ok(crc_ok),
     .delay_jump(delay_jump),
     .doubtful(frame_doubtful),
-    .fault(fault),
+    .fault(\restart$142 ),
     .fault_status(fault_status),
     .lc_check(check),
     .lc_repeat(lc_repeat),
@@ -21478,7 +21489,7 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .lc_zero(lc_zero),
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
-    .\port$3789$0 (\$22 ),
+    .\port$3791$0 (\$22 ),
     .report(report),
     .report_frame(learn),
     .spw_match(spw_match),
@@ -21495,7 +21506,7 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
-    \$20  = \bit$308 ;
+    \$20  = \bit$309 ;
     if (rst) begin
       \$20  = 1'h0;
     end
@@ -21573,51 +21584,52 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   assign \level$138  = \slo$44 ;
   assign noise = sampler_noise;
   assign close = frame_done;
+  assign fault = \restart$142 ;
   assign limit = cycle[140:137];
   assign delay_tolerance = tolerance;
-  assign \delay$147  = delay;
+  assign \delay$149  = delay;
   assign report_frame = learn;
-  assign \clean$153  = clean;
-  assign \noisy$155  = noisy;
+  assign \clean$155  = clean;
+  assign \noisy$157  = noisy;
   assign jump = delay_jump;
   assign w1_enable = cycle[155];
-  assign \cpw_top$162  = cpw_top;
+  assign \cpw_top$164  = cpw_top;
   assign data1 = spw;
   assign bits = cycle[161:156];
-  assign \tolerance$166  = cycle[174:167];
+  assign \tolerance$168  = cycle[174:167];
   assign match = spw_match;
   assign cfg = cycle;
-  assign \report_frame$170  = learn;
-  assign \fault$172  = fault;
-  assign \fault_status$174  = fault_status;
-  assign \crc_ok$176  = crc_ok;
+  assign \report_frame$172  = learn;
+  assign \fault$173  = \restart$142 ;
+  assign \fault_status$175  = fault_status;
+  assign \crc_ok$177  = crc_ok;
   assign \repeat  = lc_repeat_seen;
   assign skip = lc_skip_seen;
   assign zero = lc_zero_seen;
-  assign \report$184  = report;
-  assign \report_frame$185  = learn;
-  assign \report_delay$187  = report_delay;
-  assign \valid$189  = valid;
+  assign \report$185  = report;
+  assign \report_frame$186  = learn;
+  assign \report_delay$188  = report_delay;
+  assign \valid$190  = valid;
   assign word_crc_ok = { \$22 , crc_ok[0] };
-  assign \first_rise$206  = first_rise;
+  assign \first_rise$207  = first_rise;
   assign ca_status = result[2:0];
   assign ca_bytes_done = result[9:3];
-  assign ca_start = \start$220 ;
-  assign ca_abort = \abort$222 ;
+  assign ca_start = \start$221 ;
+  assign ca_abort = \abort$223 ;
   assign ca_rbuf_addr = rbuf_addr;
   assign ca_rbuf_en = rbuf_en;
   assign rbuf_data = ca_rbuf_data;
   assign ca_busy = frames;
-  assign \busy$231  = frames;
-  assign \done$233  = ca_done;
-  assign \cdm$235  = cdm;
+  assign \busy$232  = frames;
+  assign \done$234  = ca_done;
+  assign \cdm$236  = cdm;
   assign held = ma_held;
   assign ma_hold = hold;
   assign frame_end = report;
   assign frame_ok = valid;
   assign frame_cds = cds;
   assign cdm_cycle = frame_cdm;
-  assign clear_counters = \clear$250 ;
+  assign clear_counters = \clear$251 ;
   assign count_crc_word0 = counts[15:0];
   assign count_crc_word1 = counts[31:16];
   assign count_no_ack = counts[47:32];
@@ -21639,31 +21651,31 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   assign count_ca_refused = counts[303:288];
   assign count_ca_aborted = counts[319:304];
   assign count_ca_data_fault = counts[335:320];
-  assign \ma$275  = ma;
-  assign \overrun$278  = overrun;
-  assign \done$280  = \done$279 ;
-  assign valid_out = \valid$281 ;
-  assign \status$283  = \result$284 [3:0];
-  assign timestamp = \result$284 [35:4];
-  assign line_delay = \result$284 [48:36];
-  assign \cds$287  = \result$284 [49];
-  assign noise_events = \result$284 [53:50];
-  assign delay_settled = \result$284 [54];
-  assign \settled_delay$290  = \result$284 [67:55];
-  assign delay_spread = \result$284 [75:68];
-  assign word0_position = \result$284 [130:76];
-  assign word0_ne = \result$284 [131];
-  assign word0_nw = \result$284 [132];
-  assign word0_crc_ok = \result$284 [133];
-  assign word1_position = \result$284 [173:134];
-  assign word1_ne = \result$284 [174];
-  assign word1_nw = \result$284 [175];
-  assign word1_crc_ok = \result$284 [176];
-  assign \lc$300  = \result$284 [182:177];
-  assign \lc_repeat$301  = \result$284 [183];
-  assign \lc_skip$302  = \result$284 [184];
-  assign \lc_zero$303  = \result$284 [185];
-  assign \spw_mismatch$304  = \result$284 [186];
+  assign \ma$276  = ma;
+  assign \overrun$279  = overrun;
+  assign \done$281  = \done$280 ;
+  assign valid_out = \valid$282 ;
+  assign \status$284  = \result$285 [3:0];
+  assign timestamp = \result$285 [35:4];
+  assign line_delay = \result$285 [48:36];
+  assign \cds$288  = \result$285 [49];
+  assign noise_events = \result$285 [53:50];
+  assign delay_settled = \result$285 [54];
+  assign \settled_delay$291  = \result$285 [67:55];
+  assign delay_spread = \result$285 [75:68];
+  assign word0_position = \result$285 [130:76];
+  assign word0_ne = \result$285 [131];
+  assign word0_nw = \result$285 [132];
+  assign word0_crc_ok = \result$285 [133];
+  assign word1_position = \result$285 [173:134];
+  assign word1_ne = \result$285 [174];
+  assign word1_nw = \result$285 [175];
+  assign word1_crc_ok = \result$285 [176];
+  assign \lc$301  = \result$285 [182:177];
+  assign \lc_repeat$302  = \result$285 [183];
+  assign \lc_skip$303  = \result$285 [184];
+  assign \lc_zero$304  = \result$285 [185];
+  assign \spw_mismatch$305  = \result$285 [186];
   assign \live.ma_half_period  = live[15:0];
   assign \live.request_period  = live[39:16];
   assign \live.break_time  = live[63:40];
@@ -21720,16 +21732,16 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   assign \words[1].nenw  = words[16];
   assign \words[1].lc  = words[17];
   assign \words[1].crc  = words[19:18];
-  assign \words$159[0]  = \words$159 [9:0];
-  assign \words$159[0].data_bits  = \words$159 [5:0];
-  assign \words$159[0].nenw  = \words$159 [6];
-  assign \words$159[0].lc  = \words$159 [7];
-  assign \words$159[0].crc  = \words$159 [9:8];
-  assign \words$159[1]  = \words$159 [19:10];
-  assign \words$159[1].data_bits  = \words$159 [15:10];
-  assign \words$159[1].nenw  = \words$159 [16];
-  assign \words$159[1].lc  = \words$159 [17];
-  assign \words$159[1].crc  = \words$159 [19:18];
+  assign \words$161[0]  = \words$161 [9:0];
+  assign \words$161[0].data_bits  = \words$161 [5:0];
+  assign \words$161[0].nenw  = \words$161 [6];
+  assign \words$161[0].lc  = \words$161 [7];
+  assign \words$161[0].crc  = \words$161 [9:8];
+  assign \words$161[1]  = \words$161 [19:10];
+  assign \words$161[1].data_bits  = \words$161 [15:10];
+  assign \words$161[1].nenw  = \words$161 [16];
+  assign \words$161[1].lc  = \words$161 [17];
+  assign \words$161[1].crc  = \words$161 [19:18];
   assign \cfg.ma_half_period  = cycle[15:0];
   assign \cfg.request_period  = cycle[39:16];
   assign \cfg.break_time  = cycle[63:40];
@@ -21776,36 +21788,36 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   assign \frame.lc_skip  = frame[184];
   assign \frame.lc_zero  = frame[185];
   assign \frame.spw_mismatch  = frame[186];
-  assign \request$208.slave_id  = \request$208 [2:0];
-  assign \request$208.address  = \request$208 [9:3];
-  assign \request$208.count  = \request$208 [16:10];
-  assign \request$208.write  = \request$208 [17];
+  assign \request$209.slave_id  = \request$209 [2:0];
+  assign \request$209.address  = \request$209 [9:3];
+  assign \request$209.count  = \request$209 [16:10];
+  assign \request$209.write  = \request$209 [17];
   assign \wbuf.addr  = wbuf[3:0];
   assign \wbuf.data  = wbuf[35:4];
   assign \wbuf.en  = wbuf[39:36];
   assign \result.status  = result[2:0];
   assign \result.bytes_done  = result[9:3];
-  assign \events$245.crc_word0  = \events$245 [0];
-  assign \events$245.crc_word1  = \events$245 [1];
-  assign \events$245.no_ack  = \events$245 [2];
-  assign \events$245.no_start  = \events$245 [3];
-  assign \events$245.delay_range  = \events$245 [4];
-  assign \events$245.slo_stuck_low  = \events$245 [5];
-  assign \events$245.lc_repeat  = \events$245 [6];
-  assign \events$245.lc_skip  = \events$245 [7];
-  assign \events$245.lc_zero  = \events$245 [8];
-  assign \events$245.spw_mismatch  = \events$245 [9];
-  assign \events$245.overrun  = \events$245 [10];
-  assign \events$245.aborted  = \events$245 [11];
-  assign \events$245.no_stop  = \events$245 [12];
-  assign \events$245.noisy_line  = \events$245 [13];
-  assign \events$245.delay_jump  = \events$245 [14];
-  assign \events$245.noise_event  = \events$245 [15];
-  assign \events$245.ca_crc4_error  = \events$245 [16];
-  assign \events$245.ca_no_answer  = \events$245 [17];
-  assign \events$245.ca_refused  = \events$245 [18];
-  assign \events$245.ca_aborted  = \events$245 [19];
-  assign \events$245.ca_data_fault  = \events$245 [20];
+  assign \events$246.crc_word0  = \events$246 [0];
+  assign \events$246.crc_word1  = \events$246 [1];
+  assign \events$246.no_ack  = \events$246 [2];
+  assign \events$246.no_start  = \events$246 [3];
+  assign \events$246.delay_range  = \events$246 [4];
+  assign \events$246.slo_stuck_low  = \events$246 [5];
+  assign \events$246.lc_repeat  = \events$246 [6];
+  assign \events$246.lc_skip  = \events$246 [7];
+  assign \events$246.lc_zero  = \events$246 [8];
+  assign \events$246.spw_mismatch  = \events$246 [9];
+  assign \events$246.overrun  = \events$246 [10];
+  assign \events$246.aborted  = \events$246 [11];
+  assign \events$246.no_stop  = \events$246 [12];
+  assign \events$246.noisy_line  = \events$246 [13];
+  assign \events$246.delay_jump  = \events$246 [14];
+  assign \events$246.noise_event  = \events$246 [15];
+  assign \events$246.ca_crc4_error  = \events$246 [16];
+  assign \events$246.ca_no_answer  = \events$246 [17];
+  assign \events$246.ca_refused  = \events$246 [18];
+  assign \events$246.ca_aborted  = \events$246 [19];
+  assign \events$246.ca_data_fault  = \events$246 [20];
   assign \faults.no_ack  = faults[0];
   assign \faults.no_start  = faults[1];
   assign \faults.delay_range  = faults[2];
@@ -21834,57 +21846,57 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   assign \counts.ca_refused  = counts[303:288];
   assign \counts.ca_aborted  = counts[319:304];
   assign \counts.ca_data_fault  = counts[335:320];
-  assign \result$284.status  = \result$284 [3:0];
-  assign \result$284.timestamp  = \result$284 [35:4];
-  assign \result$284.line_delay  = \result$284 [48:36];
-  assign \result$284.cds  = \result$284 [49];
-  assign \result$284.noise_events  = \result$284 [53:50];
-  assign \result$284.delay_settled  = \result$284 [54];
-  assign \result$284.settled_delay  = \result$284 [67:55];
-  assign \result$284.delay_spread  = \result$284 [75:68];
-  assign \result$284.word0  = \result$284 [133:76];
-  assign \result$284.word0.position  = \result$284 [130:76];
-  assign \result$284.word0.ne  = \result$284 [131];
-  assign \result$284.word0.nw  = \result$284 [132];
-  assign \result$284.word0.crc_ok  = \result$284 [133];
-  assign \result$284.word1  = \result$284 [176:134];
-  assign \result$284.word1.position  = \result$284 [173:134];
-  assign \result$284.word1.ne  = \result$284 [174];
-  assign \result$284.word1.nw  = \result$284 [175];
-  assign \result$284.word1.crc_ok  = \result$284 [176];
-  assign \result$284.lc  = \result$284 [182:177];
-  assign \result$284.lc_repeat  = \result$284 [183];
-  assign \result$284.lc_skip  = \result$284 [184];
-  assign \result$284.lc_zero  = \result$284 [185];
-  assign \result$284.spw_mismatch  = \result$284 [186];
-  assign \events$245 [20] = \$16 ;
-  assign \events$245 [19] = \$14 ;
-  assign \events$245 [18] = \$12 ;
-  assign \events$245 [17] = \$10 ;
-  assign \events$245 [16] = \$8 ;
-  assign \events$245 [15] = \event ;
-  assign \events$245 [14] = \$6 ;
-  assign \events$245 [13] = \$4 ;
-  assign \events$245 [12] = faults[6];
-  assign \events$245 [11] = faults[4];
-  assign \events$245 [10] = overrun;
-  assign \events$245 [9] = \$2 ;
-  assign \events$245 [8] = lc_zero;
-  assign \events$245 [7] = lc_skip;
-  assign \events$245 [6] = lc_repeat;
-  assign \events$245 [5] = faults[3];
-  assign \events$245 [4] = faults[2];
-  assign \events$245 [3] = faults[1];
-  assign \events$245 [2] = faults[0];
-  assign \events$245 [1] = crc_error[1];
-  assign \events$245 [0] = crc_error[0];
+  assign \result$285.status  = \result$285 [3:0];
+  assign \result$285.timestamp  = \result$285 [35:4];
+  assign \result$285.line_delay  = \result$285 [48:36];
+  assign \result$285.cds  = \result$285 [49];
+  assign \result$285.noise_events  = \result$285 [53:50];
+  assign \result$285.delay_settled  = \result$285 [54];
+  assign \result$285.settled_delay  = \result$285 [67:55];
+  assign \result$285.delay_spread  = \result$285 [75:68];
+  assign \result$285.word0  = \result$285 [133:76];
+  assign \result$285.word0.position  = \result$285 [130:76];
+  assign \result$285.word0.ne  = \result$285 [131];
+  assign \result$285.word0.nw  = \result$285 [132];
+  assign \result$285.word0.crc_ok  = \result$285 [133];
+  assign \result$285.word1  = \result$285 [176:134];
+  assign \result$285.word1.position  = \result$285 [173:134];
+  assign \result$285.word1.ne  = \result$285 [174];
+  assign \result$285.word1.nw  = \result$285 [175];
+  assign \result$285.word1.crc_ok  = \result$285 [176];
+  assign \result$285.lc  = \result$285 [182:177];
+  assign \result$285.lc_repeat  = \result$285 [183];
+  assign \result$285.lc_skip  = \result$285 [184];
+  assign \result$285.lc_zero  = \result$285 [185];
+  assign \result$285.spw_mismatch  = \result$285 [186];
+  assign \events$246 [20] = \$16 ;
+  assign \events$246 [19] = \$14 ;
+  assign \events$246 [18] = \$12 ;
+  assign \events$246 [17] = \$10 ;
+  assign \events$246 [16] = \$8 ;
+  assign \events$246 [15] = \event ;
+  assign \events$246 [14] = \$6 ;
+  assign \events$246 [13] = \$4 ;
+  assign \events$246 [12] = faults[6];
+  assign \events$246 [11] = faults[4];
+  assign \events$246 [10] = overrun;
+  assign \events$246 [9] = \$2 ;
+  assign \events$246 [8] = lc_zero;
+  assign \events$246 [7] = lc_skip;
+  assign \events$246 [6] = lc_repeat;
+  assign \events$246 [5] = faults[3];
+  assign \events$246 [4] = faults[2];
+  assign \events$246 [3] = faults[1];
+  assign \events$246 [2] = faults[0];
+  assign \events$246 [1] = crc_error[1];
+  assign \events$246 [0] = crc_error[0];
   assign wbuf[39:36] = ca_wbuf_en;
   assign wbuf[35:4] = ca_wbuf_data;
   assign wbuf[3:0] = ca_wbuf_addr;
-  assign \request$208 [17] = ca_write;
-  assign \request$208 [16:10] = ca_count;
-  assign \request$208 [9:3] = ca_address;
-  assign \request$208 [2:0] = ca_slave_id;
+  assign \request$209 [17] = ca_write;
+  assign \request$209 [16:10] = ca_count;
+  assign \request$209 [9:3] = ca_address;
+  assign \request$209 [2:0] = ca_slave_id;
   assign frame[35:4] = first_rise_time;
   assign frame[186] = spw_mismatch;
   assign frame[176] = \$22 ;
@@ -21906,8 +21918,8 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   assign frame[49] = cds;
   assign frame[48:36] = delay;
   assign frame[3:0] = status;
-  assign \words$159 [19:10] = cycle[165:156];
-  assign \words$159 [9:0] = cycle[154:145];
+  assign \words$161 [19:10] = cycle[165:156];
+  assign \words$161 [9:0] = cycle[154:145];
   assign words[19:10] = cycle[165:156];
   assign words[9:0] = cycle[154:145];
   assign live[174:167] = cfg_spw_tolerance;
@@ -26911,7 +26923,7 @@ module \biss_master_uart.ch1.core.delay_check (rst, enable, rearm, check, clean,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.line_noise (rst, sampler_noise, \event , noisy, events, limit, watch, level, close, clk);
+module \biss_master_uart.ch1.core.line_noise (rst, sampler_noise, \event , noisy, events, limit, watch, restart, level, close, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$120  = 0;
   wire \$1 ;
   wire [4:0] \$10 ;
@@ -26950,6 +26962,8 @@ module \biss_master_uart.ch1.core.line_noise (rst, sampler_noise, \event , noisy
   output noisy;
   wire noisy;
   reg over = 1'h0;
+  input restart;
+  wire restart;
   input rst;
   wire rst;
   reg [3:0] running = 4'h0;
@@ -27016,6 +27030,8 @@ module \biss_master_uart.ch1.core.line_noise (rst, sampler_noise, \event , noisy
     (* full_case = 32'd1 *)
     if (close) begin
       \$18  = { 3'h0, \event  };
+    end else if (restart) begin
+      \$18  = 4'h0;
     end else begin
       \$18  = \$6 [3:0];
     end
@@ -27028,6 +27044,8 @@ module \biss_master_uart.ch1.core.line_noise (rst, sampler_noise, \event , noisy
     (* full_case = 32'd1 *)
     if (close) begin
       \$19  = \$2 ;
+    end else if (restart) begin
+      \$19  = 1'h0;
     end else begin
       \$19  = \$11 ;
     end
@@ -30824,7 +30842,7 @@ module \biss_master_uart.ch1.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$5449$0 , resync, lc, is_zero, clk);
+module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$5451$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$133  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -30866,8 +30884,8 @@ module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$5449$0 ;
-  wire \port$5449$0 ;
+  input \port$5451$0 ;
+  wire \port$5451$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -30881,9 +30899,9 @@ module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$5449$0  };
-  assign \$2  = { lc[4:0], \port$5449$0  } == last;
-  assign \$3  = { lc[4:0], \port$5449$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$5451$0  };
+  assign \$2  = { lc[4:0], \port$5451$0  } == last;
+  assign \$3  = { lc[4:0], \port$5451$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -30993,7 +31011,7 @@ module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$5449$0  };
+  assign lc_next = { lc[4:0], \port$5451$0  };
   assign zero = is_zero;
 endmodule
 
@@ -31549,7 +31567,7 @@ module \biss_master_uart.ch1.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$3789$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
+module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$3791$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
 , delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$137  = 0;
   wire \$1 ;
@@ -31687,8 +31705,8 @@ module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$3789$0 , l
   wire lc_zero_seen;
   input noisy;
   wire noisy;
-  output \port$3789$0 ;
-  wire \port$3789$0 ;
+  output \port$3791$0 ;
+  wire \port$3791$0 ;
   output report;
   wire report;
   input report_frame;
@@ -31794,7 +31812,7 @@ module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$3789$0 , l
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$3789$0  = \$2 ;
+  assign \port$3791$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

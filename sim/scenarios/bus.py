@@ -770,7 +770,7 @@ async def uart_host_tool_read_and_counters(dut):
     code, out, err = await tool("counters")
     assert code == 0, err
     counts = {line.split()[0]: int(line.split()[1]) for line in out.splitlines()[1:]}
-    assert len(counts) == 18 and not any(counts.values()), counts
+    assert len(counts) == 21 and not any(counts.values()), counts
 
 
 @cocotb.test()

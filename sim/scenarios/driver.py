@@ -205,7 +205,8 @@ async def driver_refuses_bad_settings(dut):
     w0 = frames.PRESETS[PRESETS[1]].words[0]
     assert (good.word[0].data_bits, good.word[0].crc, good.word1_enable) == \
         (w0.data_bits, CRC_CODE[w0.crc], False)
-    field = {f"{r}.{f}": spec for r in ("cfg_ma", "cfg_period", "cfg_words", "cfg_checks")
+    field = {f"{r}.{f}": spec for r in ("cfg_ma", "cfg_period", "cfg_words", "cfg_checks",
+                                         "cfg_quiet")
              for f, spec in tb.map.channel[r].fields.items()}
 
     def width(path):
@@ -236,8 +237,12 @@ async def driver_refuses_bad_settings(dut):
                             word1={"data_bits": 8, "lc": True})),
         ("BISS_ERR_SPW_CHECK", cfg(spw_check=True)),                # no word 1
         ("BISS_ERR_SPW_CHECK", cfg(safety, word1={"data_bits": safety.word[0].data_bits + 1})),
+        ("BISS_ERR_LINE_CHECK", cfg(quiet_time=1 << width("cfg_quiet.quiet_time"))),
+        ("BISS_ERR_LINE_CHECK", cfg(noise_limit=1 << width("cfg_checks.noise_limit"))),
+        ("BISS_ERR_LINE_CHECK", cfg(delay_tolerance=1 << width("cfg_checks.delay_tolerance"))),
     ]
-    before = {r: await tb.read(r, 1) for r in ("cfg_ma", "cfg_period", "cfg_words", "cfg_checks")}
+    before = {r: await tb.read(r, 1) for r in ("cfg_ma", "cfg_period", "cfg_words", "cfg_checks",
+                                               "cfg_quiet")}
     for want, bad in cases:
         got = drv.error_name(await drv.call("biss_configure", byref(ch), byref(bad)))
         assert got == want, f"{want} expected, driver said {got}"

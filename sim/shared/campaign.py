@@ -325,8 +325,15 @@ class Campaign:
                 # if the core found that word's CRC good (then it is exactly what was sent).
                 rtl_ok = tuple(bool(f[f"word{w}_crc_ok"]) for w in range(len(self.fmt.words)))
                 v = self.ref.judge(self.fmt, sent.bits, received_ok=rtl_ok, **self.spw_opts())
-                self.expect(res.status == v.status,
-                            f"{where}: status {name}, expected {v.name} for crc_ok {rtl_ok}")
+                if name in NOISE_STATUSES and v.name == "OK" and fault != "jitter":
+                    # The protocol's checks pass; on a glitched or stuck line the core's line
+                    # checks may still reject the frame (docs/ports.md, "Noise: the line
+                    # checks"): safe, and counted. Jitter within the protocol's limit is a
+                    # clean line: never (no_false_alarm proves it at scale).
+                    self.stats[f"line_check_{name}_{fault}"] += 1
+                else:
+                    self.expect(res.status == v.status,
+                                f"{where}: status {name}, expected {v.name} for crc_ok {rtl_ok}")
             for flag in ("lc_repeat", "lc_skip", "lc_zero"):
                 self.expect(f[flag] == getattr(v, flag), f"{where}: {flag}")
             self.expect(res.valid == int(res.status == STATUS["OK"]), f"{where}: valid")

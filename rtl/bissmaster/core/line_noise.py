@@ -13,10 +13,10 @@ class LineNoise(wiring.Component):
     A noise event is a strobe of ``sampler_noise`` (a vote pattern or an Ack edge no clean line
     gives: :class:`~bissmaster.core.slo_sampler.SloSampler`) or a fall of SLO while the master
     waits (``watch``: IDLE and WAIT_READY, with MA stopped and the encoder's timeout over or
-    running: a clean encoder's SLO then only rises, once). The count runs from one frame's end
-    (``close``, the decoder's ``done``) to the next, across cycles that end without a frame: a
-    fault leaves the evidence of a noisy line for the next frame to be judged by. It saturates
-    at 15.
+    running: a clean encoder's SLO then only rises, once). The count runs from the end of the
+    cycle before (its frame's end, ``close``, the decoder's ``done``; or its fault,
+    ``restart``) to this frame's end: each frame is judged by the line since the cycle before
+    it, so a fault (which has its own status) costs no second frame. It saturates at 15.
 
     At ``close`` the frame is ``noisy`` when its count (the events up to the clock before) is
     above ``limit``; ``noisy`` and ``events`` hold that frame's judgement and count from
@@ -34,6 +34,9 @@ class LineNoise(wiring.Component):
         The sampler's ``noise`` strobe.
     close : In(1)
         The decoder's ``done``: a frame ends.
+    restart : In(1)
+        A cycle ended without a frame (the controller's ``fault``): the count starts again
+        (an event in the same clock is dropped with it).
     limit : In(4)
         Events a frame may have and be judged clean (``cfg_noise_limit``; 15: never noisy).
         Read in the clock before ``close`` (the master's is the cycle's, constant from the
@@ -52,6 +55,7 @@ class LineNoise(wiring.Component):
             "level": In(1),
             "sampler_noise": In(1),
             "close": In(1),
+            "restart": In(1),
             "limit": In(NOISE_COUNT_WIDTH),
             "noisy": Out(1),
             "events": Out(NOISE_COUNT_WIDTH),
@@ -75,6 +79,8 @@ class LineNoise(wiring.Component):
         with m.If(self.close):
             m.d.sync += [held_noisy.eq(over), held_events.eq(running),
                          running.eq(self.event), over.eq(self.event & (self.limit == 0))]
+        with m.Elif(self.restart):
+            m.d.sync += [running.eq(0), over.eq(0)]
         with m.Else():
             m.d.sync += [running.eq(bumped), over.eq(bumped > self.limit)]
         m.d.comb += [self.noisy.eq(Mux(self.close, over, held_noisy)),

@@ -1,8 +1,9 @@
 """LineNoise on Amaranth's simulator: noise events counted from frame to frame, the judgement.
 
 The contract (docs/ports.md, "Noise: the line checks"; the block's docstring): an event is the
-sampler's ``noise`` strobe or a fall of SLO while the master waits; events are counted from one
-frame's end to the next, saturating at 15; at a frame's end (``close``) the frame is noisy when
+sampler's ``noise`` strobe or a fall of SLO while the master waits; events are counted from the
+end of the cycle before (a frame's end, ``close``, or a fault, ``restart``: the count starts
+again, the event of that clock dropped) to this frame's end, saturating at 15; at a frame's end (``close``) the frame is noisy when
 its count (events up to the clock before) is above the limit (the limit of the clock before:
 in the master it is the cycle's, constant from the request on), and ``noisy`` / ``events`` hold
 that judgement from ``close`` to the next ``close``. Cycle conventions: ``block_sim.py``.
@@ -28,12 +29,15 @@ class Reference:
         self.held = (0, 0)          # (noisy, events) of the last closed frame
         self.limit_before = 0       # the judgement compares with the limit of the clock before
 
-    def step(self, watch, level, sampler_noise, close, limit):
+    def step(self, watch, level, sampler_noise, close, restart, limit):
         event = int(bool(sampler_noise or (watch and self.level_before and not level)))
         if close:
             noisy, events = int(self.running > self.limit_before), self.running
             self.held = (noisy, events)
             self.running = event
+        elif restart:
+            noisy, events = self.held
+            self.running = 0
         else:
             noisy, events = self.held
             self.running = min(TOP, self.running + event)
@@ -42,7 +46,7 @@ class Reference:
         return {"event": event, "noisy": noisy, "events": events}
 
 
-INPUTS = ("watch", "level", "sampler_noise", "close", "limit")
+INPUTS = ("watch", "level", "sampler_noise", "close", "restart", "limit")
 
 
 def _run(steps):
@@ -66,7 +70,8 @@ def test_line_noise_random_sequences_against_the_contract():
             level = 1 - level
         steps.append({"watch": int(rng.random() < 0.5), "level": level,
                       "sampler_noise": int(rng.random() < 0.08),
-                      "close": int(rng.random() < 0.02), "limit": limit})
+                      "close": int(rng.random() < 0.02), "restart": int(rng.random() < 0.01),
+                      "limit": limit})
     trace = _run(steps)
     # Not vacuous: frames judged noisy and clean, saturated counts, both kinds of event.
     closes = [row for step, row in zip(steps, trace) if step["close"]]
@@ -79,9 +84,9 @@ def test_line_noise_limit_is_the_largest_clean_count(limit):
     """k events then a close: noisy exactly when k > limit; limit 15 never (the count
     saturates at 15)."""
     for k in range(0, 18):
-        steps = [{"watch": 0, "level": 1, "sampler_noise": 0, "close": 1, "limit": limit}]
-        steps += [{"watch": 0, "level": 1, "sampler_noise": 1, "close": 0, "limit": limit}] * k
-        steps += [{"watch": 0, "level": 1, "sampler_noise": 0, "close": 1, "limit": limit}]
+        steps = [{"watch": 0, "level": 1, "sampler_noise": 0, "close": 1, "restart": 0, "limit": limit}]
+        steps += [{"watch": 0, "level": 1, "sampler_noise": 1, "close": 0, "restart": 0, "limit": limit}] * k
+        steps += [{"watch": 0, "level": 1, "sampler_noise": 0, "close": 1, "restart": 0, "limit": limit}]
         trace = _run(steps)
         assert trace[-1]["noisy"] == int(min(k, TOP) > limit), k
         assert trace[-1]["events"] == min(k, TOP)
@@ -90,7 +95,7 @@ def test_line_noise_limit_is_the_largest_clean_count(limit):
 def test_line_noise_only_falls_while_waiting_count():
     """A fall of SLO counts while ``watch`` is high, a rise never, a fall while not watching
     never (frames change SLO all the time)."""
-    base = {"sampler_noise": 0, "close": 0, "limit": 0}
+    base = {"sampler_noise": 0, "close": 0, "restart": 0, "limit": 0}
     steps = [{**base, "watch": w, "level": lv}
              for w, lv in ((1, 1), (1, 0), (1, 1), (0, 0), (0, 1), (1, 1), (1, 0), (1, 0))]
     trace = _run(steps)
