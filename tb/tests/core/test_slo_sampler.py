@@ -97,7 +97,7 @@ def _sampler_sim(width, hp, scenarios, *, extra=0):
                 trace.append({
                     "sample": ctx.get(sampler.sample), "bit": ctx.get(sampler.bit),
                     "delay": ctx.get(sampler.delay), "locked": ctx.get(sampler.locked),
-                    "early": ctx.get(sampler.early),
+                    "early": ctx.get(sampler.early), "noise": ctx.get(sampler.noise),
                 })
                 await ctx.tick()
             traces.append(trace)
@@ -407,37 +407,10 @@ def test_slo_sampler_a_glitch_longer_than_the_vote_spacing_can_change_a_decision
 # -- Noise (docs/ports.md, "Noise: the line checks") ------------------------------------------
 
 def _noise_sim(hp, scenarios):
-    """As _sampler_sim, with the ``noise`` strobe: per scenario, the cycles it strobes in and
-    the decided bits."""
-    sampler = SloSampler(SAMPLER_DELAY_WIDTH, synchronizer=False)
-    rst = Signal()
-    top = ResetInserter(rst)(sampler)
-    results = []
-
-    async def tb(ctx):
-        ctx.set(sampler.half_period, hp)
-        for enc, cycles in scenarios:
-            ctx.set(rst, 1)
-            ctx.set(sampler.arm, 0)
-            ctx.set(sampler.slo, 1)
-            await ctx.tick()
-            ctx.set(rst, 0)
-            for c in (-2, -1):
-                ctx.set(sampler.slo, enc.level(c))
-                await ctx.tick()
-            strobes, bits = [], []
-            for c in range(cycles):
-                ctx.set(sampler.arm, int(c == 0))
-                ctx.set(sampler.slo, enc.level(c))
-                if ctx.get(sampler.noise):
-                    strobes.append(c)
-                if ctx.get(sampler.sample):
-                    bits.append(ctx.get(sampler.bit))
-                await ctx.tick()
-            results.append((strobes, bits))
-
-    simulate(top, tb)
-    return results
+    """As _sampler_sim: per scenario, the cycles ``noise`` strobes in and the decided bits."""
+    return [([c for c, x in enumerate(trace) if x["noise"]],
+             [x["bit"] for x in trace if x["sample"]])
+            for trace in _sampler_sim(SAMPLER_DELAY_WIDTH, hp, scenarios)]
 
 
 class JitteredEncoder(DelayedEncoder):
