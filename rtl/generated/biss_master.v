@@ -1035,7 +1035,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .is_zero(lc_zero_seen),
     .lc(\lc$191 ),
     .load(load),
-    .\port$1564$0 (\bit ),
+    .\port$1559$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -1099,7 +1099,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .lc_zero(\lc_zero$265 ),
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
-    .\port$1032$0 (\$22 ),
+    .\port$1027$0 (\$22 ),
     .report(report),
     .report_frame(learn),
     .spw_match(spw_match),
@@ -6532,33 +6532,28 @@ module \biss_master.delay_check (rst, enable, rearm, check, clean, \tolerance$8 
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.line_noise (rst, sampler_noise, \event , noisy, events, limit, watch, restart, level, close, clk);
+module \biss_master.line_noise (rst, sampler_noise, noisy, events, limit, watch, restart, level, close, \event , clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$45  = 0;
   wire \$1 ;
-  wire [4:0] \$10 ;
-  wire \$11 ;
-  wire \$12 ;
-  wire \$13 ;
-  wire \$14 ;
-  reg \$15 ;
-  reg \$16 ;
-  reg [3:0] \$17 ;
-  reg [3:0] \$18 ;
-  reg \$19 ;
+  reg \$10 ;
+  reg \$11 ;
+  reg \$12 ;
+  reg [3:0] \$13 ;
+  reg [3:0] \$14 ;
   wire \$2 ;
   wire \$3 ;
   wire \$4 ;
-  wire [4:0] \$5 ;
-  wire [4:0] \$6 ;
+  wire \$5 ;
+  wire \$6 ;
   wire \$7 ;
-  wire \$8 ;
-  wire [4:0] \$9 ;
+  wire [4:0] \$8 ;
+  wire \$9 ;
   input clk;
   wire clk;
   input close;
   wire close;
   output \event ;
-  wire \event ;
+  reg \event  = 1'h0;
   output [3:0] events;
   wire [3:0] events;
   reg [3:0] held_events = 4'h0;
@@ -6570,7 +6565,6 @@ module \biss_master.line_noise (rst, sampler_noise, \event , noisy, events, limi
   wire [3:0] limit;
   output noisy;
   wire noisy;
-  reg over = 1'h0;
   input restart;
   wire restart;
   input rst;
@@ -6580,86 +6574,73 @@ module \biss_master.line_noise (rst, sampler_noise, \event , noisy, events, limi
   wire sampler_noise;
   input watch;
   wire watch;
-  assign \$1  = ! limit;
-  assign \$2  = \event  & \$1 ;
-  assign \$3  = running != 4'hf;
-  assign \$4  = \event  & \$3 ;
-  assign \$5  = running + 1'h1;
-  assign \$6  = \$4  ? \$5  : { 1'h0, running };
-  assign \$7  = running != 4'hf;
-  assign \$8  = \event  & \$7 ;
-  assign \$9  = running + 1'h1;
-  assign \$10  = \$8  ? \$9  : { 1'h0, running };
-  assign \$11  = \$10  > limit;
-  assign \$12  = watch & level_prev;
-  assign \$13  = ~ level;
-  assign \$14  = \$12  & \$13 ;
-  assign \event  = sampler_noise | \$14 ;
-  assign noisy = close ? over : held_noisy;
+  assign \$1  = watch & level_prev;
+  assign \$2  = ~ level;
+  assign \$3  = \$1  & \$2 ;
+  assign \$4  = sampler_noise | \$3 ;
+  assign \$5  = running != 4'hf;
+  assign \$6  = \event  & \$5 ;
+  assign \$7  = running > limit;
+  assign \$8  = running + 1'h1;
+  assign \$9  = running > limit;
+  assign noisy = close ? \$9  : held_noisy;
   assign events = close ? running : held_events;
   always @(posedge clk)
-    level_prev <= \$15 ;
+    level_prev <= \$10 ;
   always @(posedge clk)
-    held_noisy <= \$16 ;
+    \event  <= \$11 ;
   always @(posedge clk)
-    held_events <= \$17 ;
+    held_noisy <= \$12 ;
   always @(posedge clk)
-    running <= \$18 ;
+    held_events <= \$13 ;
   always @(posedge clk)
-    over <= \$19 ;
+    running <= \$14 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
-    \$15  = level;
+    \$10  = level;
     if (rst) begin
-      \$15  = 1'h1;
+      \$10  = 1'h1;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
-    \$16  = held_noisy;
-    if (close) begin
-      \$16  = over;
-    end
+    \$11  = \$4 ;
     if (rst) begin
-      \$16  = 1'h0;
+      \$11  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
-    \$17  = held_events;
+    \$12  = held_noisy;
     if (close) begin
-      \$17  = running;
+      \$12  = \$7 ;
     end
     if (rst) begin
-      \$17  = 4'h0;
+      \$12  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
-    (* full_case = 32'd1 *)
+    \$13  = held_events;
     if (close) begin
-      \$18  = { 3'h0, \event  };
+      \$13  = running;
+    end
+    if (rst) begin
+      \$13  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    \$14  = running;
+    if (close) begin
+      \$14  = { 3'h0, \event  };
     end else if (restart) begin
-      \$18  = 4'h0;
-    end else begin
-      \$18  = \$6 [3:0];
+      \$14  = 4'h0;
+    end else if (\$6 ) begin
+      \$14  = \$8 [3:0];
     end
     if (rst) begin
-      \$18  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
-    (* full_case = 32'd1 *)
-    if (close) begin
-      \$19  = \$2 ;
-    end else if (restart) begin
-      \$19  = 1'h0;
-    end else begin
-      \$19  = \$11 ;
-    end
-    if (rst) begin
-      \$19  = 1'h0;
+      \$14  = 4'h0;
     end
   end
 endmodule
@@ -10451,7 +10432,7 @@ module \biss_master.scheduler (abort, period, clk, rst, periodic, request, overr
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1564$0 , resync, lc, is_zero, clk);
+module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1559$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$58  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -10493,8 +10474,8 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1564$0
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$1564$0 ;
-  wire \port$1564$0 ;
+  input \port$1559$0 ;
+  wire \port$1559$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -10508,9 +10489,9 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1564$0
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$1564$0  };
-  assign \$2  = { lc[4:0], \port$1564$0  } == last;
-  assign \$3  = { lc[4:0], \port$1564$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$1559$0  };
+  assign \$2  = { lc[4:0], \port$1559$0  } == last;
+  assign \$3  = { lc[4:0], \port$1559$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -10620,7 +10601,7 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1564$0
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$1564$0  };
+  assign lc_next = { lc[4:0], \port$1559$0  };
   assign zero = is_zero;
 endmodule
 
@@ -11176,7 +11157,7 @@ module \biss_master.timers (timeout_live, quiet_time_live, clk, rst, restart, ma
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.verdict (lc_skip_seen, noisy, \port$1032$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
+module \biss_master.verdict (lc_skip_seen, noisy, \port$1027$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
 , delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$62  = 0;
   wire \$1 ;
@@ -11314,8 +11295,8 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$1032$0 , lc_check, lc_re
   wire lc_zero_seen;
   input noisy;
   wire noisy;
-  output \port$1032$0 ;
-  wire \port$1032$0 ;
+  output \port$1027$0 ;
+  wire \port$1027$0 ;
   output report;
   wire report;
   input report_frame;
@@ -11421,7 +11402,7 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$1032$0 , lc_check, lc_re
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$1032$0  = \$2 ;
+  assign \port$1027$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

@@ -589,12 +589,12 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .ch1_irq(\$7 ),
     .clk(clk),
     .g_trigger_start(glob__trigger),
-    .\port$4704$0 (\$8 ),
-    .\port$4717$0 (\$9 ),
-    .\port$4849$0 (\$10 ),
-    .\port$5266$0 (\$11 ),
-    .\port$5279$0 (\$12 ),
-    .\port$5411$0 (\$13 ),
+    .\port$4694$0 (\$8 ),
+    .\port$4707$0 (\$9 ),
+    .\port$4839$0 (\$10 ),
+    .\port$5256$0 (\$11 ),
+    .\port$5269$0 (\$12 ),
+    .\port$5401$0 (\$13 ),
     .rst(rst),
     .write_data(regs__ca_wbuf_data)
   );
@@ -651,9 +651,9 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .clk(clk),
     .ma(ch0_ma),
     .periodic(regs__periodic),
-    .\port$4704$0 (\$8 ),
-    .\port$4717$0 (\$9 ),
-    .\port$4849$0 (\$10 ),
+    .\port$4694$0 (\$8 ),
+    .\port$4707$0 (\$9 ),
+    .\port$4839$0 (\$10 ),
     .regs__abort_cycle(regs__abort_cycle),
     .regs__busy(ch0__busy),
     .regs__ca_busy(ch0__ca_busy),
@@ -706,9 +706,9 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .clk(clk),
     .ma(ch1_ma),
     .periodic(\regs__periodic$398 ),
-    .\port$5266$0 (\$11 ),
-    .\port$5279$0 (\$12 ),
-    .\port$5411$0 (\$13 ),
+    .\port$5256$0 (\$11 ),
+    .\port$5269$0 (\$12 ),
+    .\port$5401$0 (\$13 ),
     .regs__abort_cycle(\regs__abort_cycle$238 ),
     .regs__busy(ch1__busy),
     .regs__ca_busy(ch1__ca_busy),
@@ -1070,7 +1070,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
 , ch1__ca_busy, ch1__ca_rbuf_data, bus__r_load, ch0__ca_wbuf_addr, write_data, g_trigger_start, ch0_ctrl_start, ch0_ctrl_abort, ch0_ctrl_clear_counters, ch0_ctrl_periodic, ch0_ctrl_trigger_enable, ch0_cfg_ma_ma_half_period, ch0_cfg_ma_delay_limit, ch0_cfg_period_request_period, ch0_cfg_break_break_time, ch0_cfg_ack_ack_limit, ch0_cfg_timeout_timeout_limit, ch0_cfg_words_w0_data_bits, ch0_cfg_words_w0_nenw, ch0_cfg_words_w0_lc, ch0_cfg_words_w0_crc
 , ch0_cfg_words_w1_data_bits, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_enable, ch0_cfg_checks_end_check, ch0_cfg_checks_spw_check, ch0_cfg_checks_spw_tolerance, ch0_cfg_checks_noise_limit, ch0_cfg_checks_delay_tolerance, ch0_cfg_quiet_quiet_time, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$85 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort, ch1_ctrl_start, ch1_ctrl_abort, ch1_ctrl_clear_counters, ch1_ctrl_periodic
 , ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit, ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_enable, ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_delay_tolerance
-, ch1_cfg_quiet_quiet_time, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$265 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__done_count, ch0__done, \port$4704$0 , \port$4717$0 , ch0__ca_done, \port$4849$0 , ch1__done_count, ch1__done, \port$5266$0 , \port$5279$0 , ch1__ca_done, \port$5411$0 , bus__w_addr);
+, ch1_cfg_quiet_quiet_time, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$265 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__done_count, ch0__done, \port$4694$0 , \port$4707$0 , ch0__ca_done, \port$4839$0 , ch1__done_count, ch1__done, \port$5256$0 , \port$5269$0 , ch1__ca_done, \port$5401$0 , bus__w_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$26  = 0;
   wire \$1 ;
   wire [31:0] \$10 ;
@@ -2420,18 +2420,18 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   (* init = 1'h0 *)
   wire glob__trigger;
   wire [1:0] irq;
-  input [186:0] \port$4704$0 ;
-  wire [186:0] \port$4704$0 ;
-  input [335:0] \port$4717$0 ;
-  wire [335:0] \port$4717$0 ;
-  input [9:0] \port$4849$0 ;
-  wire [9:0] \port$4849$0 ;
-  input [186:0] \port$5266$0 ;
-  wire [186:0] \port$5266$0 ;
-  input [335:0] \port$5279$0 ;
-  wire [335:0] \port$5279$0 ;
-  input [9:0] \port$5411$0 ;
-  wire [9:0] \port$5411$0 ;
+  input [186:0] \port$4694$0 ;
+  wire [186:0] \port$4694$0 ;
+  input [335:0] \port$4707$0 ;
+  wire [335:0] \port$4707$0 ;
+  input [9:0] \port$4839$0 ;
+  wire [9:0] \port$4839$0 ;
+  input [186:0] \port$5256$0 ;
+  wire [186:0] \port$5256$0 ;
+  input [335:0] \port$5269$0 ;
+  wire [335:0] \port$5269$0 ;
+  input [9:0] \port$5401$0 ;
+  wire [9:0] \port$5401$0 ;
   input rst;
   wire rst;
   reg [10:0] write_addr = 11'h000;
@@ -2440,29 +2440,29 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   reg write_en = 1'h0;
   reg [3:0] write_strb = 4'h0;
   assign \$323  = \$321  | \$322 ;
-  assign \$324  = ch1_read_select_119 ? \port$5279$0 [63:32] : 32'd0;
+  assign \$324  = ch1_read_select_119 ? \port$5269$0 [63:32] : 32'd0;
   assign \$325  = \$323  | \$324 ;
-  assign \$326  = ch1_read_select_11a ? \port$5279$0 [95:64] : 32'd0;
+  assign \$326  = ch1_read_select_11a ? \port$5269$0 [95:64] : 32'd0;
   assign \$327  = \$325  | \$326 ;
-  assign \$328  = ch1_read_select_11b ? \port$5279$0 [127:96] : 32'd0;
+  assign \$328  = ch1_read_select_11b ? \port$5269$0 [127:96] : 32'd0;
   assign \$329  = \$327  | \$328 ;
-  assign \$330  = ch1_read_select_11c ? \port$5279$0 [159:128] : 32'd0;
+  assign \$330  = ch1_read_select_11c ? \port$5269$0 [159:128] : 32'd0;
   assign \$331  = \$329  | \$330 ;
-  assign \$332  = ch1_read_select_11d ? \port$5279$0 [191:160] : 32'd0;
+  assign \$332  = ch1_read_select_11d ? \port$5269$0 [191:160] : 32'd0;
   assign \$333  = \$331  | \$332 ;
-  assign \$334  = ch1_read_select_11e ? \port$5279$0 [223:192] : 32'd0;
+  assign \$334  = ch1_read_select_11e ? \port$5269$0 [223:192] : 32'd0;
   assign \$335  = \$333  | \$334 ;
-  assign \$336  = ch1_read_select_11f ? \port$5279$0 [255:224] : 32'd0;
+  assign \$336  = ch1_read_select_11f ? \port$5269$0 [255:224] : 32'd0;
   assign \$337  = \$335  | \$336 ;
   assign \$338  = ch1_read_select_140 ? { 7'h00, \ch1_ca_request_write$265 , 1'h0, ch1_ca_request_count, 1'h0, ch1_ca_request_address, 5'h00, ch1_ca_request_slave_id } : 32'd0;
   assign \$339  = \$337  | \$338 ;
-  assign \$342  = ch1_read_select_142 ? { 17'h00000, \port$5411$0 [9:3], 1'h0, \port$5411$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
+  assign \$342  = ch1_read_select_142 ? { 17'h00000, \port$5401$0 [9:3], 1'h0, \port$5401$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
   assign \$343  = \$341  | \$342 ;
-  assign \$344  = ch1_read_select_143 ? \port$5279$0 [287:256] : 32'd0;
+  assign \$344  = ch1_read_select_143 ? \port$5269$0 [287:256] : 32'd0;
   assign \$345  = \$343  | \$344 ;
-  assign \$346  = ch1_read_select_144 ? \port$5279$0 [319:288] : 32'd0;
+  assign \$346  = ch1_read_select_144 ? \port$5269$0 [319:288] : 32'd0;
   assign \$347  = \$345  | \$346 ;
-  assign \$348  = ch1_read_select_145 ? { 16'h0000, \port$5279$0 [335:320] } : 32'd0;
+  assign \$348  = ch1_read_select_145 ? { 16'h0000, \port$5269$0 [335:320] } : 32'd0;
   assign \$349  = \$347  | \$348 ;
   assign \$350  = ch1_window0_read ? ch1__ca_rbuf_data : 32'd0;
   assign \$351  = \$349  | \$350 ;
@@ -3232,7 +3232,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$136  = \$134  | \$135 ;
   assign \$137  = ch0_read_select_8f ? { 20'h00000, ch0_cfg_quiet_quiet_time } : 32'd0;
   assign \$138  = \$136  | \$137 ;
-  assign \$139  = ch0_read_select_90 ? { 2'h0, \port$4704$0 [182:177], 4'h0, \port$4704$0 [186:183], 1'h0, \port$4704$0 [176:174], 1'h0, \port$4704$0 [133:131], 3'h0, \port$4704$0 [49], \port$4704$0 [3:0] } : 32'd0;
+  assign \$139  = ch0_read_select_90 ? { 2'h0, \port$4694$0 [182:177], 4'h0, \port$4694$0 [186:183], 1'h0, \port$4694$0 [176:174], 1'h0, \port$4694$0 [133:131], 3'h0, \port$4694$0 [49], \port$4694$0 [3:0] } : 32'd0;
   assign \$140  = \$138  | \$139 ;
   assign \$141  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
   assign \$142  = \$140  | \$141 ;
@@ -3248,31 +3248,31 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$152  = \$150  | \$151 ;
   assign \$153  = ch0_read_select_97 ? { 3'h0, ch0_result_line_settled_delay_snapshot, ch0_result_line_delay_spread_snapshot, 3'h0, ch0_result_line_delay_settled_snapshot, ch0_result_line_noise_events_snapshot } : 32'd0;
   assign \$154  = \$152  | \$153 ;
-  assign \$155  = ch0_read_select_98 ? \port$4717$0 [31:0] : 32'd0;
+  assign \$155  = ch0_read_select_98 ? \port$4707$0 [31:0] : 32'd0;
   assign \$156  = \$154  | \$155 ;
-  assign \$157  = ch0_read_select_99 ? \port$4717$0 [63:32] : 32'd0;
+  assign \$157  = ch0_read_select_99 ? \port$4707$0 [63:32] : 32'd0;
   assign \$158  = \$156  | \$157 ;
-  assign \$159  = ch0_read_select_9a ? \port$4717$0 [95:64] : 32'd0;
+  assign \$159  = ch0_read_select_9a ? \port$4707$0 [95:64] : 32'd0;
   assign \$160  = \$158  | \$159 ;
-  assign \$161  = ch0_read_select_9b ? \port$4717$0 [127:96] : 32'd0;
+  assign \$161  = ch0_read_select_9b ? \port$4707$0 [127:96] : 32'd0;
   assign \$162  = \$160  | \$161 ;
-  assign \$163  = ch0_read_select_9c ? \port$4717$0 [159:128] : 32'd0;
+  assign \$163  = ch0_read_select_9c ? \port$4707$0 [159:128] : 32'd0;
   assign \$164  = \$162  | \$163 ;
-  assign \$165  = ch0_read_select_9d ? \port$4717$0 [191:160] : 32'd0;
+  assign \$165  = ch0_read_select_9d ? \port$4707$0 [191:160] : 32'd0;
   assign \$166  = \$164  | \$165 ;
-  assign \$167  = ch0_read_select_9e ? \port$4717$0 [223:192] : 32'd0;
+  assign \$167  = ch0_read_select_9e ? \port$4707$0 [223:192] : 32'd0;
   assign \$168  = \$166  | \$167 ;
-  assign \$169  = ch0_read_select_9f ? \port$4717$0 [255:224] : 32'd0;
+  assign \$169  = ch0_read_select_9f ? \port$4707$0 [255:224] : 32'd0;
   assign \$170  = \$168  | \$169 ;
   assign \$171  = ch0_read_select_c0 ? { 7'h00, \ch0_ca_request_write$85 , 1'h0, ch0_ca_request_count, 1'h0, ch0_ca_request_address, 5'h00, ch0_ca_request_slave_id } : 32'd0;
   assign \$172  = \$170  | \$171 ;
-  assign \$175  = ch0_read_select_c2 ? { 17'h00000, \port$4849$0 [9:3], 1'h0, \port$4849$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
+  assign \$175  = ch0_read_select_c2 ? { 17'h00000, \port$4839$0 [9:3], 1'h0, \port$4839$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
   assign \$176  = \$174  | \$175 ;
-  assign \$177  = ch0_read_select_c3 ? \port$4717$0 [287:256] : 32'd0;
+  assign \$177  = ch0_read_select_c3 ? \port$4707$0 [287:256] : 32'd0;
   assign \$178  = \$176  | \$177 ;
-  assign \$179  = ch0_read_select_c4 ? \port$4717$0 [319:288] : 32'd0;
+  assign \$179  = ch0_read_select_c4 ? \port$4707$0 [319:288] : 32'd0;
   assign \$180  = \$178  | \$179 ;
-  assign \$181  = ch0_read_select_c5 ? { 16'h0000, \port$4717$0 [335:320] } : 32'd0;
+  assign \$181  = ch0_read_select_c5 ? { 16'h0000, \port$4707$0 [335:320] } : 32'd0;
   assign \$182  = \$180  | \$181 ;
   assign \$183  = ch0_window0_read ? ch0__ca_rbuf_data : 32'd0;
   assign \$184  = \$182  | \$183 ;
@@ -3396,7 +3396,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$303  = \$301  | \$302 ;
   assign \$304  = ch1_read_select_10f ? { 20'h00000, ch1_cfg_quiet_quiet_time } : 32'd0;
   assign \$305  = \$303  | \$304 ;
-  assign \$306  = ch1_read_select_110 ? { 2'h0, \port$5266$0 [182:177], 4'h0, \port$5266$0 [186:183], 1'h0, \port$5266$0 [176:174], 1'h0, \port$5266$0 [133:131], 3'h0, \port$5266$0 [49], \port$5266$0 [3:0] } : 32'd0;
+  assign \$306  = ch1_read_select_110 ? { 2'h0, \port$5256$0 [182:177], 4'h0, \port$5256$0 [186:183], 1'h0, \port$5256$0 [176:174], 1'h0, \port$5256$0 [133:131], 3'h0, \port$5256$0 [49], \port$5256$0 [3:0] } : 32'd0;
   assign \$307  = \$305  | \$306 ;
   assign \$308  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
   assign \$309  = \$307  | \$308 ;
@@ -3412,7 +3412,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$319  = \$317  | \$318 ;
   assign \$320  = ch1_read_select_117 ? { 3'h0, ch1_result_line_settled_delay_snapshot, ch1_result_line_delay_spread_snapshot, 3'h0, ch1_result_line_delay_settled_snapshot, ch1_result_line_noise_events_snapshot } : 32'd0;
   assign \$321  = \$319  | \$320 ;
-  assign \$322  = ch1_read_select_118 ? \port$5279$0 [31:0] : 32'd0;
+  assign \$322  = ch1_read_select_118 ? \port$5269$0 [31:0] : 32'd0;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$447  = bus__w_en;
@@ -4365,7 +4365,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$543  = ch0_result_status_status_snapshot;
     if (\$110 ) begin
-      \$543  = \port$4704$0 [3:0];
+      \$543  = \port$4694$0 [3:0];
     end
     if (rst) begin
       \$543  = 4'h0;
@@ -4375,7 +4375,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$544  = ch0_result_status_cds_snapshot;
     if (\$110 ) begin
-      \$544  = \port$4704$0 [49];
+      \$544  = \port$4694$0 [49];
     end
     if (rst) begin
       \$544  = 1'h0;
@@ -4385,7 +4385,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$545  = ch0_result_status_w0_ne_snapshot;
     if (\$110 ) begin
-      \$545  = \port$4704$0 [131];
+      \$545  = \port$4694$0 [131];
     end
     if (rst) begin
       \$545  = 1'h0;
@@ -4395,7 +4395,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$546  = ch0_result_status_w0_nw_snapshot;
     if (\$110 ) begin
-      \$546  = \port$4704$0 [132];
+      \$546  = \port$4694$0 [132];
     end
     if (rst) begin
       \$546  = 1'h0;
@@ -4405,7 +4405,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$547  = ch0_result_status_w0_crc_ok_snapshot;
     if (\$110 ) begin
-      \$547  = \port$4704$0 [133];
+      \$547  = \port$4694$0 [133];
     end
     if (rst) begin
       \$547  = 1'h0;
@@ -4415,7 +4415,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$548  = ch0_result_status_w1_ne_snapshot;
     if (\$110 ) begin
-      \$548  = \port$4704$0 [174];
+      \$548  = \port$4694$0 [174];
     end
     if (rst) begin
       \$548  = 1'h0;
@@ -4425,7 +4425,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$549  = ch0_result_status_w1_nw_snapshot;
     if (\$110 ) begin
-      \$549  = \port$4704$0 [175];
+      \$549  = \port$4694$0 [175];
     end
     if (rst) begin
       \$549  = 1'h0;
@@ -4435,7 +4435,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$550  = ch0_result_status_w1_crc_ok_snapshot;
     if (\$110 ) begin
-      \$550  = \port$4704$0 [176];
+      \$550  = \port$4694$0 [176];
     end
     if (rst) begin
       \$550  = 1'h0;
@@ -4445,7 +4445,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$551  = ch0_result_status_lc_repeat_snapshot;
     if (\$110 ) begin
-      \$551  = \port$4704$0 [183];
+      \$551  = \port$4694$0 [183];
     end
     if (rst) begin
       \$551  = 1'h0;
@@ -4455,7 +4455,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$552  = ch0_result_status_lc_skip_snapshot;
     if (\$110 ) begin
-      \$552  = \port$4704$0 [184];
+      \$552  = \port$4694$0 [184];
     end
     if (rst) begin
       \$552  = 1'h0;
@@ -4465,7 +4465,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$553  = ch0_result_status_lc_zero_snapshot;
     if (\$110 ) begin
-      \$553  = \port$4704$0 [185];
+      \$553  = \port$4694$0 [185];
     end
     if (rst) begin
       \$553  = 1'h0;
@@ -4475,7 +4475,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$554  = ch0_result_status_spw_mismatch_snapshot;
     if (\$110 ) begin
-      \$554  = \port$4704$0 [186];
+      \$554  = \port$4694$0 [186];
     end
     if (rst) begin
       \$554  = 1'h0;
@@ -4485,7 +4485,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$555  = ch0_result_status_lc_snapshot;
     if (\$110 ) begin
-      \$555  = \port$4704$0 [182:177];
+      \$555  = \port$4694$0 [182:177];
     end
     if (rst) begin
       \$555  = 6'h00;
@@ -4505,7 +4505,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$557  = ch0_result_seq_line_delay_snapshot;
     if (\$110 ) begin
-      \$557  = \port$4704$0 [48:36];
+      \$557  = \port$4694$0 [48:36];
     end
     if (rst) begin
       \$557  = 13'h0000;
@@ -4515,7 +4515,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$558  = ch0_result_w0_lo_data_snapshot;
     if (\$110 ) begin
-      \$558  = \port$4704$0 [107:76];
+      \$558  = \port$4694$0 [107:76];
     end
     if (rst) begin
       \$558  = 32'd0;
@@ -4525,7 +4525,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$559  = ch0_result_w0_hi_data_snapshot;
     if (\$110 ) begin
-      \$559  = \port$4704$0 [130:108];
+      \$559  = \port$4694$0 [130:108];
     end
     if (rst) begin
       \$559  = 23'h000000;
@@ -4535,7 +4535,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$560  = ch0_result_w1_lo_data_snapshot;
     if (\$110 ) begin
-      \$560  = \port$4704$0 [165:134];
+      \$560  = \port$4694$0 [165:134];
     end
     if (rst) begin
       \$560  = 32'd0;
@@ -4545,7 +4545,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$561  = ch0_result_w1_hi_data_snapshot;
     if (\$110 ) begin
-      \$561  = \port$4704$0 [173:166];
+      \$561  = \port$4694$0 [173:166];
     end
     if (rst) begin
       \$561  = 8'h00;
@@ -4555,7 +4555,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$562  = ch0_result_timestamp_time_snapshot;
     if (\$110 ) begin
-      \$562  = \port$4704$0 [35:4];
+      \$562  = \port$4694$0 [35:4];
     end
     if (rst) begin
       \$562  = 32'd0;
@@ -4565,7 +4565,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$563  = ch0_result_line_noise_events_snapshot;
     if (\$110 ) begin
-      \$563  = \port$4704$0 [53:50];
+      \$563  = \port$4694$0 [53:50];
     end
     if (rst) begin
       \$563  = 4'h0;
@@ -4575,7 +4575,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$564  = ch0_result_line_delay_settled_snapshot;
     if (\$110 ) begin
-      \$564  = \port$4704$0 [54];
+      \$564  = \port$4694$0 [54];
     end
     if (rst) begin
       \$564  = 1'h0;
@@ -4585,7 +4585,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$565  = ch0_result_line_delay_spread_snapshot;
     if (\$110 ) begin
-      \$565  = \port$4704$0 [75:68];
+      \$565  = \port$4694$0 [75:68];
     end
     if (rst) begin
       \$565  = 8'h00;
@@ -4595,7 +4595,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$566  = ch0_result_line_settled_delay_snapshot;
     if (\$110 ) begin
-      \$566  = \port$4704$0 [67:55];
+      \$566  = \port$4694$0 [67:55];
     end
     if (rst) begin
       \$566  = 13'h0000;
@@ -5449,7 +5449,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$652  = ch1_result_status_status_snapshot;
     if (\$277 ) begin
-      \$652  = \port$5266$0 [3:0];
+      \$652  = \port$5256$0 [3:0];
     end
     if (rst) begin
       \$652  = 4'h0;
@@ -5459,7 +5459,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$653  = ch1_result_status_cds_snapshot;
     if (\$277 ) begin
-      \$653  = \port$5266$0 [49];
+      \$653  = \port$5256$0 [49];
     end
     if (rst) begin
       \$653  = 1'h0;
@@ -5469,7 +5469,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$654  = ch1_result_status_w0_ne_snapshot;
     if (\$277 ) begin
-      \$654  = \port$5266$0 [131];
+      \$654  = \port$5256$0 [131];
     end
     if (rst) begin
       \$654  = 1'h0;
@@ -5479,7 +5479,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$655  = ch1_result_status_w0_nw_snapshot;
     if (\$277 ) begin
-      \$655  = \port$5266$0 [132];
+      \$655  = \port$5256$0 [132];
     end
     if (rst) begin
       \$655  = 1'h0;
@@ -5489,7 +5489,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$656  = ch1_result_status_w0_crc_ok_snapshot;
     if (\$277 ) begin
-      \$656  = \port$5266$0 [133];
+      \$656  = \port$5256$0 [133];
     end
     if (rst) begin
       \$656  = 1'h0;
@@ -5499,7 +5499,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$657  = ch1_result_status_w1_ne_snapshot;
     if (\$277 ) begin
-      \$657  = \port$5266$0 [174];
+      \$657  = \port$5256$0 [174];
     end
     if (rst) begin
       \$657  = 1'h0;
@@ -5509,7 +5509,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$658  = ch1_result_status_w1_nw_snapshot;
     if (\$277 ) begin
-      \$658  = \port$5266$0 [175];
+      \$658  = \port$5256$0 [175];
     end
     if (rst) begin
       \$658  = 1'h0;
@@ -5519,7 +5519,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$659  = ch1_result_status_w1_crc_ok_snapshot;
     if (\$277 ) begin
-      \$659  = \port$5266$0 [176];
+      \$659  = \port$5256$0 [176];
     end
     if (rst) begin
       \$659  = 1'h0;
@@ -5529,7 +5529,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$660  = ch1_result_status_lc_repeat_snapshot;
     if (\$277 ) begin
-      \$660  = \port$5266$0 [183];
+      \$660  = \port$5256$0 [183];
     end
     if (rst) begin
       \$660  = 1'h0;
@@ -5539,7 +5539,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$661  = ch1_result_status_lc_skip_snapshot;
     if (\$277 ) begin
-      \$661  = \port$5266$0 [184];
+      \$661  = \port$5256$0 [184];
     end
     if (rst) begin
       \$661  = 1'h0;
@@ -5549,7 +5549,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$662  = ch1_result_status_lc_zero_snapshot;
     if (\$277 ) begin
-      \$662  = \port$5266$0 [185];
+      \$662  = \port$5256$0 [185];
     end
     if (rst) begin
       \$662  = 1'h0;
@@ -5559,7 +5559,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$663  = ch1_result_status_spw_mismatch_snapshot;
     if (\$277 ) begin
-      \$663  = \port$5266$0 [186];
+      \$663  = \port$5256$0 [186];
     end
     if (rst) begin
       \$663  = 1'h0;
@@ -5569,7 +5569,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$664  = ch1_result_status_lc_snapshot;
     if (\$277 ) begin
-      \$664  = \port$5266$0 [182:177];
+      \$664  = \port$5256$0 [182:177];
     end
     if (rst) begin
       \$664  = 6'h00;
@@ -5589,7 +5589,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$666  = ch1_result_seq_line_delay_snapshot;
     if (\$277 ) begin
-      \$666  = \port$5266$0 [48:36];
+      \$666  = \port$5256$0 [48:36];
     end
     if (rst) begin
       \$666  = 13'h0000;
@@ -5599,7 +5599,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$667  = ch1_result_w0_lo_data_snapshot;
     if (\$277 ) begin
-      \$667  = \port$5266$0 [107:76];
+      \$667  = \port$5256$0 [107:76];
     end
     if (rst) begin
       \$667  = 32'd0;
@@ -5609,7 +5609,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$668  = ch1_result_w0_hi_data_snapshot;
     if (\$277 ) begin
-      \$668  = \port$5266$0 [130:108];
+      \$668  = \port$5256$0 [130:108];
     end
     if (rst) begin
       \$668  = 23'h000000;
@@ -5619,7 +5619,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$669  = ch1_result_w1_lo_data_snapshot;
     if (\$277 ) begin
-      \$669  = \port$5266$0 [165:134];
+      \$669  = \port$5256$0 [165:134];
     end
     if (rst) begin
       \$669  = 32'd0;
@@ -5629,7 +5629,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$670  = ch1_result_w1_hi_data_snapshot;
     if (\$277 ) begin
-      \$670  = \port$5266$0 [173:166];
+      \$670  = \port$5256$0 [173:166];
     end
     if (rst) begin
       \$670  = 8'h00;
@@ -5639,7 +5639,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$671  = ch1_result_timestamp_time_snapshot;
     if (\$277 ) begin
-      \$671  = \port$5266$0 [35:4];
+      \$671  = \port$5256$0 [35:4];
     end
     if (rst) begin
       \$671  = 32'd0;
@@ -5649,7 +5649,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$672  = ch1_result_line_noise_events_snapshot;
     if (\$277 ) begin
-      \$672  = \port$5266$0 [53:50];
+      \$672  = \port$5256$0 [53:50];
     end
     if (rst) begin
       \$672  = 4'h0;
@@ -5659,7 +5659,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$673  = ch1_result_line_delay_settled_snapshot;
     if (\$277 ) begin
-      \$673  = \port$5266$0 [54];
+      \$673  = \port$5256$0 [54];
     end
     if (rst) begin
       \$673  = 1'h0;
@@ -5669,7 +5669,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$674  = ch1_result_line_delay_spread_snapshot;
     if (\$277 ) begin
-      \$674  = \port$5266$0 [75:68];
+      \$674  = \port$5256$0 [75:68];
     end
     if (rst) begin
       \$674  = 8'h00;
@@ -5679,7 +5679,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$675  = ch1_result_line_settled_delay_snapshot;
     if (\$277 ) begin
-      \$675  = \port$5266$0 [67:55];
+      \$675  = \port$5256$0 [67:55];
     end
     if (rst) begin
       \$675  = 13'h0000;
@@ -5708,106 +5708,106 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign bus__r_addr = bus__w_addr;
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, ch1_irq, ch0_irq };
-  assign ch0__status = \port$4704$0 [3:0];
-  assign ch0__cds = \port$4704$0 [49];
-  assign ch0__word0_ne = \port$4704$0 [131];
-  assign ch0__word0_nw = \port$4704$0 [132];
-  assign ch0__word0_crc_ok = \port$4704$0 [133];
-  assign ch0__word1_ne = \port$4704$0 [174];
-  assign ch0__word1_nw = \port$4704$0 [175];
-  assign ch0__word1_crc_ok = \port$4704$0 [176];
-  assign ch0__lc_repeat = \port$4704$0 [183];
-  assign ch0__lc_skip = \port$4704$0 [184];
-  assign ch0__lc_zero = \port$4704$0 [185];
-  assign ch0__spw_mismatch = \port$4704$0 [186];
-  assign ch0__lc = \port$4704$0 [182:177];
-  assign ch0__line_delay = \port$4704$0 [48:36];
-  assign ch0__word0_position = \port$4704$0 [130:76];
-  assign ch0__word1_position = \port$4704$0 [173:134];
-  assign ch0__timestamp = \port$4704$0 [35:4];
-  assign ch0__noise_events = \port$4704$0 [53:50];
-  assign ch0__delay_settled = \port$4704$0 [54];
-  assign ch0__delay_spread = \port$4704$0 [75:68];
-  assign ch0__settled_delay = \port$4704$0 [67:55];
+  assign ch0__status = \port$4694$0 [3:0];
+  assign ch0__cds = \port$4694$0 [49];
+  assign ch0__word0_ne = \port$4694$0 [131];
+  assign ch0__word0_nw = \port$4694$0 [132];
+  assign ch0__word0_crc_ok = \port$4694$0 [133];
+  assign ch0__word1_ne = \port$4694$0 [174];
+  assign ch0__word1_nw = \port$4694$0 [175];
+  assign ch0__word1_crc_ok = \port$4694$0 [176];
+  assign ch0__lc_repeat = \port$4694$0 [183];
+  assign ch0__lc_skip = \port$4694$0 [184];
+  assign ch0__lc_zero = \port$4694$0 [185];
+  assign ch0__spw_mismatch = \port$4694$0 [186];
+  assign ch0__lc = \port$4694$0 [182:177];
+  assign ch0__line_delay = \port$4694$0 [48:36];
+  assign ch0__word0_position = \port$4694$0 [130:76];
+  assign ch0__word1_position = \port$4694$0 [173:134];
+  assign ch0__timestamp = \port$4694$0 [35:4];
+  assign ch0__noise_events = \port$4694$0 [53:50];
+  assign ch0__delay_settled = \port$4694$0 [54];
+  assign ch0__delay_spread = \port$4694$0 [75:68];
+  assign ch0__settled_delay = \port$4694$0 [67:55];
   assign ch0__cap_data_bits_w0 = 6'h37;
   assign ch0__cap_data_bits_w1 = 6'h28;
   assign ch0__cap_timer_width = 6'h18;
   assign ch0__cap_counters = 1'h1;
   assign ch0__cap_timestamp = 1'h1;
   assign ch0__cap_register_access = 1'h1;
-  assign ch0__count_crc_word0 = \port$4717$0 [15:0];
-  assign ch0__count_crc_word1 = \port$4717$0 [31:16];
-  assign ch0__count_no_ack = \port$4717$0 [47:32];
-  assign ch0__count_no_start = \port$4717$0 [63:48];
-  assign ch0__count_delay_range = \port$4717$0 [79:64];
-  assign ch0__count_slo_stuck_low = \port$4717$0 [95:80];
-  assign ch0__count_lc_repeat = \port$4717$0 [111:96];
-  assign ch0__count_lc_skip = \port$4717$0 [127:112];
-  assign ch0__count_lc_zero = \port$4717$0 [143:128];
-  assign ch0__count_spw_mismatch = \port$4717$0 [159:144];
-  assign ch0__count_overrun = \port$4717$0 [175:160];
-  assign ch0__count_aborted = \port$4717$0 [191:176];
-  assign ch0__count_no_stop = \port$4717$0 [207:192];
-  assign ch0__count_noisy_line = \port$4717$0 [223:208];
-  assign ch0__count_delay_jump = \port$4717$0 [239:224];
-  assign ch0__count_noise_event = \port$4717$0 [255:240];
-  assign ch0__ca_status = \port$4849$0 [2:0];
-  assign ch0__ca_bytes_done = \port$4849$0 [9:3];
-  assign ch0__count_ca_crc4_error = \port$4717$0 [271:256];
-  assign ch0__count_ca_no_answer = \port$4717$0 [287:272];
-  assign ch0__count_ca_refused = \port$4717$0 [303:288];
-  assign ch0__count_ca_aborted = \port$4717$0 [319:304];
-  assign ch0__count_ca_data_fault = \port$4717$0 [335:320];
-  assign ch1__status = \port$5266$0 [3:0];
-  assign ch1__cds = \port$5266$0 [49];
-  assign ch1__word0_ne = \port$5266$0 [131];
-  assign ch1__word0_nw = \port$5266$0 [132];
-  assign ch1__word0_crc_ok = \port$5266$0 [133];
-  assign ch1__word1_ne = \port$5266$0 [174];
-  assign ch1__word1_nw = \port$5266$0 [175];
-  assign ch1__word1_crc_ok = \port$5266$0 [176];
-  assign ch1__lc_repeat = \port$5266$0 [183];
-  assign ch1__lc_skip = \port$5266$0 [184];
-  assign ch1__lc_zero = \port$5266$0 [185];
-  assign ch1__spw_mismatch = \port$5266$0 [186];
-  assign ch1__lc = \port$5266$0 [182:177];
-  assign ch1__line_delay = \port$5266$0 [48:36];
-  assign ch1__word0_position = \port$5266$0 [130:76];
-  assign ch1__word1_position = \port$5266$0 [173:134];
-  assign ch1__timestamp = \port$5266$0 [35:4];
-  assign ch1__noise_events = \port$5266$0 [53:50];
-  assign ch1__delay_settled = \port$5266$0 [54];
-  assign ch1__delay_spread = \port$5266$0 [75:68];
-  assign ch1__settled_delay = \port$5266$0 [67:55];
+  assign ch0__count_crc_word0 = \port$4707$0 [15:0];
+  assign ch0__count_crc_word1 = \port$4707$0 [31:16];
+  assign ch0__count_no_ack = \port$4707$0 [47:32];
+  assign ch0__count_no_start = \port$4707$0 [63:48];
+  assign ch0__count_delay_range = \port$4707$0 [79:64];
+  assign ch0__count_slo_stuck_low = \port$4707$0 [95:80];
+  assign ch0__count_lc_repeat = \port$4707$0 [111:96];
+  assign ch0__count_lc_skip = \port$4707$0 [127:112];
+  assign ch0__count_lc_zero = \port$4707$0 [143:128];
+  assign ch0__count_spw_mismatch = \port$4707$0 [159:144];
+  assign ch0__count_overrun = \port$4707$0 [175:160];
+  assign ch0__count_aborted = \port$4707$0 [191:176];
+  assign ch0__count_no_stop = \port$4707$0 [207:192];
+  assign ch0__count_noisy_line = \port$4707$0 [223:208];
+  assign ch0__count_delay_jump = \port$4707$0 [239:224];
+  assign ch0__count_noise_event = \port$4707$0 [255:240];
+  assign ch0__ca_status = \port$4839$0 [2:0];
+  assign ch0__ca_bytes_done = \port$4839$0 [9:3];
+  assign ch0__count_ca_crc4_error = \port$4707$0 [271:256];
+  assign ch0__count_ca_no_answer = \port$4707$0 [287:272];
+  assign ch0__count_ca_refused = \port$4707$0 [303:288];
+  assign ch0__count_ca_aborted = \port$4707$0 [319:304];
+  assign ch0__count_ca_data_fault = \port$4707$0 [335:320];
+  assign ch1__status = \port$5256$0 [3:0];
+  assign ch1__cds = \port$5256$0 [49];
+  assign ch1__word0_ne = \port$5256$0 [131];
+  assign ch1__word0_nw = \port$5256$0 [132];
+  assign ch1__word0_crc_ok = \port$5256$0 [133];
+  assign ch1__word1_ne = \port$5256$0 [174];
+  assign ch1__word1_nw = \port$5256$0 [175];
+  assign ch1__word1_crc_ok = \port$5256$0 [176];
+  assign ch1__lc_repeat = \port$5256$0 [183];
+  assign ch1__lc_skip = \port$5256$0 [184];
+  assign ch1__lc_zero = \port$5256$0 [185];
+  assign ch1__spw_mismatch = \port$5256$0 [186];
+  assign ch1__lc = \port$5256$0 [182:177];
+  assign ch1__line_delay = \port$5256$0 [48:36];
+  assign ch1__word0_position = \port$5256$0 [130:76];
+  assign ch1__word1_position = \port$5256$0 [173:134];
+  assign ch1__timestamp = \port$5256$0 [35:4];
+  assign ch1__noise_events = \port$5256$0 [53:50];
+  assign ch1__delay_settled = \port$5256$0 [54];
+  assign ch1__delay_spread = \port$5256$0 [75:68];
+  assign ch1__settled_delay = \port$5256$0 [67:55];
   assign ch1__cap_data_bits_w0 = 6'h37;
   assign ch1__cap_data_bits_w1 = 6'h28;
   assign ch1__cap_timer_width = 6'h18;
   assign ch1__cap_counters = 1'h1;
   assign ch1__cap_timestamp = 1'h1;
   assign ch1__cap_register_access = 1'h1;
-  assign ch1__count_crc_word0 = \port$5279$0 [15:0];
-  assign ch1__count_crc_word1 = \port$5279$0 [31:16];
-  assign ch1__count_no_ack = \port$5279$0 [47:32];
-  assign ch1__count_no_start = \port$5279$0 [63:48];
-  assign ch1__count_delay_range = \port$5279$0 [79:64];
-  assign ch1__count_slo_stuck_low = \port$5279$0 [95:80];
-  assign ch1__count_lc_repeat = \port$5279$0 [111:96];
-  assign ch1__count_lc_skip = \port$5279$0 [127:112];
-  assign ch1__count_lc_zero = \port$5279$0 [143:128];
-  assign ch1__count_spw_mismatch = \port$5279$0 [159:144];
-  assign ch1__count_overrun = \port$5279$0 [175:160];
-  assign ch1__count_aborted = \port$5279$0 [191:176];
-  assign ch1__count_no_stop = \port$5279$0 [207:192];
-  assign ch1__count_noisy_line = \port$5279$0 [223:208];
-  assign ch1__count_delay_jump = \port$5279$0 [239:224];
-  assign ch1__count_noise_event = \port$5279$0 [255:240];
-  assign ch1__ca_status = \port$5411$0 [2:0];
-  assign ch1__ca_bytes_done = \port$5411$0 [9:3];
-  assign ch1__count_ca_crc4_error = \port$5279$0 [271:256];
-  assign ch1__count_ca_no_answer = \port$5279$0 [287:272];
-  assign ch1__count_ca_refused = \port$5279$0 [303:288];
-  assign ch1__count_ca_aborted = \port$5279$0 [319:304];
-  assign ch1__count_ca_data_fault = \port$5279$0 [335:320];
+  assign ch1__count_crc_word0 = \port$5269$0 [15:0];
+  assign ch1__count_crc_word1 = \port$5269$0 [31:16];
+  assign ch1__count_no_ack = \port$5269$0 [47:32];
+  assign ch1__count_no_start = \port$5269$0 [63:48];
+  assign ch1__count_delay_range = \port$5269$0 [79:64];
+  assign ch1__count_slo_stuck_low = \port$5269$0 [95:80];
+  assign ch1__count_lc_repeat = \port$5269$0 [111:96];
+  assign ch1__count_lc_skip = \port$5269$0 [127:112];
+  assign ch1__count_lc_zero = \port$5269$0 [143:128];
+  assign ch1__count_spw_mismatch = \port$5269$0 [159:144];
+  assign ch1__count_overrun = \port$5269$0 [175:160];
+  assign ch1__count_aborted = \port$5269$0 [191:176];
+  assign ch1__count_no_stop = \port$5269$0 [207:192];
+  assign ch1__count_noisy_line = \port$5269$0 [223:208];
+  assign ch1__count_delay_jump = \port$5269$0 [239:224];
+  assign ch1__count_noise_event = \port$5269$0 [255:240];
+  assign ch1__ca_status = \port$5401$0 [2:0];
+  assign ch1__ca_bytes_done = \port$5401$0 [9:3];
+  assign ch1__count_ca_crc4_error = \port$5269$0 [271:256];
+  assign ch1__count_ca_no_answer = \port$5269$0 [287:272];
+  assign ch1__count_ca_refused = \port$5269$0 [303:288];
+  assign ch1__count_ca_aborted = \port$5269$0 [319:304];
+  assign ch1__count_ca_data_fault = \port$5269$0 [335:320];
   assign glob__trigger = g_trigger_start;
   assign ch0__start = ch0_ctrl_start;
   assign ch0__abort_cycle = ch0_ctrl_abort;
@@ -6016,7 +6016,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch0 (slo, clk, rst, \trigger$179 , ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__ca_busy, regs__ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period
 , cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_quiet_time, ca_slave_id, ca_address, ca_count
-, ca_write, ca_start, ca_abort, regs__done_count, ma, regs__done, \port$4704$0 , \port$4717$0 , regs__ca_done, \port$4849$0 , ca_rbuf_addr);
+, ca_write, ca_start, ca_abort, regs__done_count, ma, regs__done, \port$4694$0 , \port$4707$0 , regs__ca_done, \port$4839$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$28  = 0;
   wire \$1 ;
   wire [16:0] \$2 ;
@@ -6153,12 +6153,12 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$179 , ca_wbuf_en, ca_rbuf_en
   wire [3:0] noise_events;
   input periodic;
   wire periodic;
-  output [186:0] \port$4704$0 ;
-  wire [186:0] \port$4704$0 ;
-  output [335:0] \port$4717$0 ;
-  wire [335:0] \port$4717$0 ;
-  output [9:0] \port$4849$0 ;
-  wire [9:0] \port$4849$0 ;
+  output [186:0] \port$4694$0 ;
+  wire [186:0] \port$4694$0 ;
+  output [335:0] \port$4707$0 ;
+  wire [335:0] \port$4707$0 ;
+  output [9:0] \port$4839$0 ;
+  wire [9:0] \port$4839$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -6526,9 +6526,9 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$179 , ca_wbuf_en, ca_rbuf_en
   assign regs__ca_rbuf_en = ca_rbuf_en;
   assign \ma$182  = ma;
   assign \slo$184  = slo;
-  assign \port$4704$0  = \$5 ;
-  assign \port$4717$0  = \$6 ;
-  assign \port$4849$0  = \$7 ;
+  assign \port$4694$0  = \$5 ;
+  assign \port$4707$0  = \$6 ;
+  assign \port$4839$0  = \$7 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -7512,7 +7512,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$4362$0 (\bit ),
+    .\port$4352$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -7576,7 +7576,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
     .lc_zero(lc_zero),
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
-    .\port$1791$0 (\$22 ),
+    .\port$1786$0 (\$22 ),
     .report(report),
     .report_frame(learn),
     .spw_match(spw_match),
@@ -13010,33 +13010,28 @@ module \biss_master_wb.ch0.core.delay_check (rst, enable, rearm, check, clean, \
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.line_noise (rst, sampler_noise, \event , noisy, events, limit, watch, restart, level, close, clk);
+module \biss_master_wb.ch0.core.line_noise (rst, sampler_noise, noisy, events, limit, watch, restart, level, close, \event , clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$61  = 0;
   wire \$1 ;
-  wire [4:0] \$10 ;
-  wire \$11 ;
-  wire \$12 ;
-  wire \$13 ;
-  wire \$14 ;
-  reg \$15 ;
-  reg \$16 ;
-  reg [3:0] \$17 ;
-  reg [3:0] \$18 ;
-  reg \$19 ;
+  reg \$10 ;
+  reg \$11 ;
+  reg \$12 ;
+  reg [3:0] \$13 ;
+  reg [3:0] \$14 ;
   wire \$2 ;
   wire \$3 ;
   wire \$4 ;
-  wire [4:0] \$5 ;
-  wire [4:0] \$6 ;
+  wire \$5 ;
+  wire \$6 ;
   wire \$7 ;
-  wire \$8 ;
-  wire [4:0] \$9 ;
+  wire [4:0] \$8 ;
+  wire \$9 ;
   input clk;
   wire clk;
   input close;
   wire close;
   output \event ;
-  wire \event ;
+  reg \event  = 1'h0;
   output [3:0] events;
   wire [3:0] events;
   reg [3:0] held_events = 4'h0;
@@ -13048,7 +13043,6 @@ module \biss_master_wb.ch0.core.line_noise (rst, sampler_noise, \event , noisy, 
   wire [3:0] limit;
   output noisy;
   wire noisy;
-  reg over = 1'h0;
   input restart;
   wire restart;
   input rst;
@@ -13058,86 +13052,73 @@ module \biss_master_wb.ch0.core.line_noise (rst, sampler_noise, \event , noisy, 
   wire sampler_noise;
   input watch;
   wire watch;
-  assign \$1  = ! limit;
-  assign \$2  = \event  & \$1 ;
-  assign \$3  = running != 4'hf;
-  assign \$4  = \event  & \$3 ;
-  assign \$5  = running + 1'h1;
-  assign \$6  = \$4  ? \$5  : { 1'h0, running };
-  assign \$7  = running != 4'hf;
-  assign \$8  = \event  & \$7 ;
-  assign \$9  = running + 1'h1;
-  assign \$10  = \$8  ? \$9  : { 1'h0, running };
-  assign \$11  = \$10  > limit;
-  assign \$12  = watch & level_prev;
-  assign \$13  = ~ level;
-  assign \$14  = \$12  & \$13 ;
-  assign \event  = sampler_noise | \$14 ;
-  assign noisy = close ? over : held_noisy;
+  assign \$1  = watch & level_prev;
+  assign \$2  = ~ level;
+  assign \$3  = \$1  & \$2 ;
+  assign \$4  = sampler_noise | \$3 ;
+  assign \$5  = running != 4'hf;
+  assign \$6  = \event  & \$5 ;
+  assign \$7  = running > limit;
+  assign \$8  = running + 1'h1;
+  assign \$9  = running > limit;
+  assign noisy = close ? \$9  : held_noisy;
   assign events = close ? running : held_events;
   always @(posedge clk)
-    level_prev <= \$15 ;
+    level_prev <= \$10 ;
   always @(posedge clk)
-    held_noisy <= \$16 ;
+    \event  <= \$11 ;
   always @(posedge clk)
-    held_events <= \$17 ;
+    held_noisy <= \$12 ;
   always @(posedge clk)
-    running <= \$18 ;
+    held_events <= \$13 ;
   always @(posedge clk)
-    over <= \$19 ;
+    running <= \$14 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
-    \$15  = level;
+    \$10  = level;
     if (rst) begin
-      \$15  = 1'h1;
+      \$10  = 1'h1;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
-    \$16  = held_noisy;
-    if (close) begin
-      \$16  = over;
-    end
+    \$11  = \$4 ;
     if (rst) begin
-      \$16  = 1'h0;
+      \$11  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
-    \$17  = held_events;
+    \$12  = held_noisy;
     if (close) begin
-      \$17  = running;
+      \$12  = \$7 ;
     end
     if (rst) begin
-      \$17  = 4'h0;
+      \$12  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
-    (* full_case = 32'd1 *)
+    \$13  = held_events;
     if (close) begin
-      \$18  = { 3'h0, \event  };
+      \$13  = running;
+    end
+    if (rst) begin
+      \$13  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    \$14  = running;
+    if (close) begin
+      \$14  = { 3'h0, \event  };
     end else if (restart) begin
-      \$18  = 4'h0;
-    end else begin
-      \$18  = \$6 [3:0];
+      \$14  = 4'h0;
+    end else if (\$6 ) begin
+      \$14  = \$8 [3:0];
     end
     if (rst) begin
-      \$18  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
-    (* full_case = 32'd1 *)
-    if (close) begin
-      \$19  = \$2 ;
-    end else if (restart) begin
-      \$19  = 1'h0;
-    end else begin
-      \$19  = \$11 ;
-    end
-    if (rst) begin
-      \$19  = 1'h0;
+      \$14  = 4'h0;
     end
   end
 endmodule
@@ -16929,7 +16910,7 @@ module \biss_master_wb.ch0.core.scheduler (rst, trigger, periodic, request, over
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$4362$0 , resync, lc, is_zero, clk);
+module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$4352$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$74  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -16971,8 +16952,8 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$4362$0 ;
-  wire \port$4362$0 ;
+  input \port$4352$0 ;
+  wire \port$4352$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -16986,9 +16967,9 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$4362$0  };
-  assign \$2  = { lc[4:0], \port$4362$0  } == last;
-  assign \$3  = { lc[4:0], \port$4362$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$4352$0  };
+  assign \$2  = { lc[4:0], \port$4352$0  } == last;
+  assign \$3  = { lc[4:0], \port$4352$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -17098,7 +17079,7 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$4362$0  };
+  assign lc_next = { lc[4:0], \port$4352$0  };
   assign zero = is_zero;
 endmodule
 
@@ -17654,7 +17635,7 @@ module \biss_master_wb.ch0.core.timers (rst, restart, ma_busy, break_time, timeo
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$1791$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
+module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$1786$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
 , delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$78  = 0;
   wire \$1 ;
@@ -17792,8 +17773,8 @@ module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$1791$0 , lc_
   wire lc_zero_seen;
   input noisy;
   wire noisy;
-  output \port$1791$0 ;
-  wire \port$1791$0 ;
+  output \port$1786$0 ;
+  wire \port$1786$0 ;
   output report;
   wire report;
   input report_frame;
@@ -17899,7 +17880,7 @@ module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$1791$0 , lc_
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$1791$0  = \$2 ;
+  assign \port$1786$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -17928,7 +17909,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1 (slo, clk, rst, \trigger$179 , ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__ca_busy, regs__ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period
 , cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_quiet_time, ca_slave_id, ca_address, ca_count
-, ca_write, ca_start, ca_abort, regs__done_count, ma, regs__done, \port$5266$0 , \port$5279$0 , regs__ca_done, \port$5411$0 , ca_rbuf_addr);
+, ca_write, ca_start, ca_abort, regs__done_count, ma, regs__done, \port$5256$0 , \port$5269$0 , regs__ca_done, \port$5401$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$79  = 0;
   wire \$1 ;
   wire [16:0] \$2 ;
@@ -18065,12 +18046,12 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$179 , ca_wbuf_en, ca_rbuf_en
   wire [3:0] noise_events;
   input periodic;
   wire periodic;
-  output [186:0] \port$5266$0 ;
-  wire [186:0] \port$5266$0 ;
-  output [335:0] \port$5279$0 ;
-  wire [335:0] \port$5279$0 ;
-  output [9:0] \port$5411$0 ;
-  wire [9:0] \port$5411$0 ;
+  output [186:0] \port$5256$0 ;
+  wire [186:0] \port$5256$0 ;
+  output [335:0] \port$5269$0 ;
+  wire [335:0] \port$5269$0 ;
+  output [9:0] \port$5401$0 ;
+  wire [9:0] \port$5401$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -18438,9 +18419,9 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$179 , ca_wbuf_en, ca_rbuf_en
   assign regs__ca_rbuf_en = ca_rbuf_en;
   assign \ma$182  = ma;
   assign \slo$184  = slo;
-  assign \port$5266$0  = \$5 ;
-  assign \port$5279$0  = \$6 ;
-  assign \port$5411$0  = \$7 ;
+  assign \port$5256$0  = \$5 ;
+  assign \port$5269$0  = \$6 ;
+  assign \port$5401$0  = \$7 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -19424,7 +19405,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$4924$0 (\bit ),
+    .\port$4914$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -19488,7 +19469,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
     .lc_zero(lc_zero),
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
-    .\port$3348$0 (\$22 ),
+    .\port$3338$0 (\$22 ),
     .report(report),
     .report_frame(learn),
     .spw_match(spw_match),
@@ -24922,33 +24903,28 @@ module \biss_master_wb.ch1.core.delay_check (rst, enable, rearm, check, clean, \
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.line_noise (rst, sampler_noise, \event , noisy, events, limit, watch, restart, level, close, clk);
+module \biss_master_wb.ch1.core.line_noise (rst, sampler_noise, noisy, events, limit, watch, restart, level, close, \event , clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$112  = 0;
   wire \$1 ;
-  wire [4:0] \$10 ;
-  wire \$11 ;
-  wire \$12 ;
-  wire \$13 ;
-  wire \$14 ;
-  reg \$15 ;
-  reg \$16 ;
-  reg [3:0] \$17 ;
-  reg [3:0] \$18 ;
-  reg \$19 ;
+  reg \$10 ;
+  reg \$11 ;
+  reg \$12 ;
+  reg [3:0] \$13 ;
+  reg [3:0] \$14 ;
   wire \$2 ;
   wire \$3 ;
   wire \$4 ;
-  wire [4:0] \$5 ;
-  wire [4:0] \$6 ;
+  wire \$5 ;
+  wire \$6 ;
   wire \$7 ;
-  wire \$8 ;
-  wire [4:0] \$9 ;
+  wire [4:0] \$8 ;
+  wire \$9 ;
   input clk;
   wire clk;
   input close;
   wire close;
   output \event ;
-  wire \event ;
+  reg \event  = 1'h0;
   output [3:0] events;
   wire [3:0] events;
   reg [3:0] held_events = 4'h0;
@@ -24960,7 +24936,6 @@ module \biss_master_wb.ch1.core.line_noise (rst, sampler_noise, \event , noisy, 
   wire [3:0] limit;
   output noisy;
   wire noisy;
-  reg over = 1'h0;
   input restart;
   wire restart;
   input rst;
@@ -24970,86 +24945,73 @@ module \biss_master_wb.ch1.core.line_noise (rst, sampler_noise, \event , noisy, 
   wire sampler_noise;
   input watch;
   wire watch;
-  assign \$1  = ! limit;
-  assign \$2  = \event  & \$1 ;
-  assign \$3  = running != 4'hf;
-  assign \$4  = \event  & \$3 ;
-  assign \$5  = running + 1'h1;
-  assign \$6  = \$4  ? \$5  : { 1'h0, running };
-  assign \$7  = running != 4'hf;
-  assign \$8  = \event  & \$7 ;
-  assign \$9  = running + 1'h1;
-  assign \$10  = \$8  ? \$9  : { 1'h0, running };
-  assign \$11  = \$10  > limit;
-  assign \$12  = watch & level_prev;
-  assign \$13  = ~ level;
-  assign \$14  = \$12  & \$13 ;
-  assign \event  = sampler_noise | \$14 ;
-  assign noisy = close ? over : held_noisy;
+  assign \$1  = watch & level_prev;
+  assign \$2  = ~ level;
+  assign \$3  = \$1  & \$2 ;
+  assign \$4  = sampler_noise | \$3 ;
+  assign \$5  = running != 4'hf;
+  assign \$6  = \event  & \$5 ;
+  assign \$7  = running > limit;
+  assign \$8  = running + 1'h1;
+  assign \$9  = running > limit;
+  assign noisy = close ? \$9  : held_noisy;
   assign events = close ? running : held_events;
   always @(posedge clk)
-    level_prev <= \$15 ;
+    level_prev <= \$10 ;
   always @(posedge clk)
-    held_noisy <= \$16 ;
+    \event  <= \$11 ;
   always @(posedge clk)
-    held_events <= \$17 ;
+    held_noisy <= \$12 ;
   always @(posedge clk)
-    running <= \$18 ;
+    held_events <= \$13 ;
   always @(posedge clk)
-    over <= \$19 ;
+    running <= \$14 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$112 ) begin end
-    \$15  = level;
+    \$10  = level;
     if (rst) begin
-      \$15  = 1'h1;
+      \$10  = 1'h1;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$112 ) begin end
-    \$16  = held_noisy;
-    if (close) begin
-      \$16  = over;
-    end
+    \$11  = \$4 ;
     if (rst) begin
-      \$16  = 1'h0;
+      \$11  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$112 ) begin end
-    \$17  = held_events;
+    \$12  = held_noisy;
     if (close) begin
-      \$17  = running;
+      \$12  = \$7 ;
     end
     if (rst) begin
-      \$17  = 4'h0;
+      \$12  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$112 ) begin end
-    (* full_case = 32'd1 *)
+    \$13  = held_events;
     if (close) begin
-      \$18  = { 3'h0, \event  };
+      \$13  = running;
+    end
+    if (rst) begin
+      \$13  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$112 ) begin end
+    \$14  = running;
+    if (close) begin
+      \$14  = { 3'h0, \event  };
     end else if (restart) begin
-      \$18  = 4'h0;
-    end else begin
-      \$18  = \$6 [3:0];
+      \$14  = 4'h0;
+    end else if (\$6 ) begin
+      \$14  = \$8 [3:0];
     end
     if (rst) begin
-      \$18  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$112 ) begin end
-    (* full_case = 32'd1 *)
-    if (close) begin
-      \$19  = \$2 ;
-    end else if (restart) begin
-      \$19  = 1'h0;
-    end else begin
-      \$19  = \$11 ;
-    end
-    if (rst) begin
-      \$19  = 1'h0;
+      \$14  = 4'h0;
     end
   end
 endmodule
@@ -28841,7 +28803,7 @@ module \biss_master_wb.ch1.core.scheduler (rst, trigger, periodic, request, over
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$4924$0 , resync, lc, is_zero, clk);
+module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$4914$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$125  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -28883,8 +28845,8 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, 
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$4924$0 ;
-  wire \port$4924$0 ;
+  input \port$4914$0 ;
+  wire \port$4914$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -28898,9 +28860,9 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, 
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$4924$0  };
-  assign \$2  = { lc[4:0], \port$4924$0  } == last;
-  assign \$3  = { lc[4:0], \port$4924$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$4914$0  };
+  assign \$2  = { lc[4:0], \port$4914$0  } == last;
+  assign \$3  = { lc[4:0], \port$4914$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -29010,7 +28972,7 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, 
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$4924$0  };
+  assign lc_next = { lc[4:0], \port$4914$0  };
   assign zero = is_zero;
 endmodule
 
@@ -29566,7 +29528,7 @@ module \biss_master_wb.ch1.core.timers (rst, restart, ma_busy, break_time, timeo
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$3348$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
+module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$3338$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
 , delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$129  = 0;
   wire \$1 ;
@@ -29704,8 +29666,8 @@ module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$3348$0 , lc_
   wire lc_zero_seen;
   input noisy;
   wire noisy;
-  output \port$3348$0 ;
-  wire \port$3348$0 ;
+  output \port$3338$0 ;
+  wire \port$3338$0 ;
   output report;
   wire report;
   input report_frame;
@@ -29811,7 +29773,7 @@ module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$3348$0 , lc_
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$3348$0  = \$2 ;
+  assign \port$3338$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

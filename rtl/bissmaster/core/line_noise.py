@@ -18,8 +18,8 @@ class LineNoise(wiring.Component):
     ``restart``) to this frame's end: each frame is judged by the line since the cycle before
     it, so a fault (which has its own status) costs no second frame. It saturates at 15.
 
-    At ``close`` the frame is ``noisy`` when its count (the events up to the clock before) is
-    above ``limit``; ``noisy`` and ``events`` hold that frame's judgement and count from
+    At ``close`` the frame is ``noisy`` when its count (the events counted up to the clock
+    before) is above ``limit``; ``noisy`` and ``events`` hold that frame's judgement and count from
     ``close`` (combinational in that clock, registered after it) to the next ``close``, so the
     verdict reads them in the clock of ``done`` (its ``doubtful``) and at the report (end check:
     later). The count starts again from 0 (or 1, for an event in the clock of ``close``).
@@ -38,15 +38,16 @@ class LineNoise(wiring.Component):
         A cycle ended without a frame (the controller's ``fault``): the count starts again
         (an event in the same clock is dropped with it).
     limit : In(4)
-        Events a frame may have and be judged clean (``cfg_noise_limit``; 15: never noisy).
-        Read in the clock before ``close`` (the master's is the cycle's, constant from the
-        request on).
+        Events a frame may have and be judged clean (``cfg_noise_limit``; 15: never noisy),
+        read in the clock of ``close``.
     noisy : Out(1)
         The frame's count is above ``limit``.
     events : Out(4)
         The frame's count.
     event : Out(1)
-        Strobe: an event (for the counter).
+        Strobe: an event (for the counter), one clock after the input that makes it; it is
+        counted in that clock (``close`` in the clock after an input strobe still counts it
+        for the next frame).
     """
 
     def __init__(self):
@@ -66,23 +67,25 @@ class LineNoise(wiring.Component):
         m = Module()
         level_prev = Signal(init=1)
         m.d.sync += level_prev.eq(self.level)
-        m.d.comb += self.event.eq(self.sampler_noise | self.watch & level_prev & ~self.level)
+        # The event, registered: the sampler's vote decode stays out of the count's adder and
+        # compare (the core's critical path otherwise). An event is counted one clock after
+        # its strobe; the decoder's ``done`` comes two clocks after the last decision, so the
+        # frame's last event is in by then.
+        m.d.sync += self.event.eq(self.sampler_noise | self.watch & level_prev & ~self.level)
 
         top = 2**NOISE_COUNT_WIDTH - 1
         running = Signal(NOISE_COUNT_WIDTH)
-        # ``running > limit``, kept as a register from the values written, so that the judgement
-        # at ``close`` is one flip-flop.
-        over = Signal()
         held_noisy = Signal()
         held_events = Signal(NOISE_COUNT_WIDTH)
-        bumped = Mux(self.event & (running != top), running + 1, running)
+        # Judged from the registered count alone (a 4-bit compare): the event input is already
+        # a register, so no adder sits in front of the judgement.
+        over = running > self.limit
         with m.If(self.close):
-            m.d.sync += [held_noisy.eq(over), held_events.eq(running),
-                         running.eq(self.event), over.eq(self.event & (self.limit == 0))]
+            m.d.sync += [held_noisy.eq(over), held_events.eq(running), running.eq(self.event)]
         with m.Elif(self.restart):
-            m.d.sync += [running.eq(0), over.eq(0)]
-        with m.Else():
-            m.d.sync += [running.eq(bumped), over.eq(bumped > self.limit)]
+            m.d.sync += running.eq(0)
+        with m.Elif(self.event & (running != top)):
+            m.d.sync += running.eq(running + 1)
         m.d.comb += [self.noisy.eq(Mux(self.close, over, held_noisy)),
                      self.events.eq(Mux(self.close, running, held_events))]
         return m

@@ -1,11 +1,10 @@
 """LineNoise on Amaranth's simulator: noise events counted from frame to frame, the judgement.
 
 The contract (docs/ports.md, "Noise: the line checks"; the block's docstring): an event is the
-sampler's ``noise`` strobe or a fall of SLO while the master waits; events are counted from the
+sampler's ``noise`` strobe or a fall of SLO while the master waits, counted one clock after it; events are counted from the
 end of the cycle before (a frame's end, ``close``, or a fault, ``restart``: the count starts
 again, the event of that clock dropped) to this frame's end, saturating at 15; at a frame's end (``close``) the frame is noisy when
-its count (events up to the clock before) is above the limit (the limit of the clock before:
-in the master it is the cycle's, constant from the request on), and ``noisy`` / ``events`` hold
+its count (events counted up to the clock before) is above the limit (read in that clock), and ``noisy`` / ``events`` hold
 that judgement from ``close`` to the next ``close``. Cycle conventions: ``block_sim.py``.
 """
 
@@ -27,12 +26,13 @@ class Reference:
         self.level_before = 1
         self.running = 0
         self.held = (0, 0)          # (noisy, events) of the last closed frame
-        self.limit_before = 0       # the judgement compares with the limit of the clock before
+        self.event = 0              # the event of the clock before (registered)
 
     def step(self, watch, level, sampler_noise, close, restart, limit):
-        event = int(bool(sampler_noise or (watch and self.level_before and not level)))
+        event = self.event          # counted one clock after its input
+        self.event = int(bool(sampler_noise or (watch and self.level_before and not level)))
         if close:
-            noisy, events = int(self.running > self.limit_before), self.running
+            noisy, events = int(self.running > limit), self.running
             self.held = (noisy, events)
             self.running = event
         elif restart:
@@ -42,7 +42,6 @@ class Reference:
             noisy, events = self.held
             self.running = min(TOP, self.running + event)
         self.level_before = level
-        self.limit_before = limit
         return {"event": event, "noisy": noisy, "events": events}
 
 
@@ -86,6 +85,9 @@ def test_line_noise_limit_is_the_largest_clean_count(limit):
     for k in range(0, 18):
         steps = [{"watch": 0, "level": 1, "sampler_noise": 0, "close": 1, "restart": 0, "limit": limit}]
         steps += [{"watch": 0, "level": 1, "sampler_noise": 1, "close": 0, "restart": 0, "limit": limit}] * k
+        # One clock between the last event and the close, as in the master (the decoder's
+        # ``done`` comes two clocks after the last decision): the event is counted a clock late.
+        steps += [{"watch": 0, "level": 1, "sampler_noise": 0, "close": 0, "restart": 0, "limit": limit}]
         steps += [{"watch": 0, "level": 1, "sampler_noise": 0, "close": 1, "restart": 0, "limit": limit}]
         trace = _run(steps)
         assert trace[-1]["noisy"] == int(min(k, TOP) > limit), k
@@ -99,4 +101,4 @@ def test_line_noise_only_falls_while_waiting_count():
     steps = [{**base, "watch": w, "level": lv}
              for w, lv in ((1, 1), (1, 0), (1, 1), (0, 0), (0, 1), (1, 1), (1, 0), (1, 0))]
     trace = _run(steps)
-    assert [r["event"] for r in trace] == [0, 1, 0, 0, 0, 0, 1, 0]
+    assert [r["event"] for r in trace] == [0, 0, 1, 0, 0, 0, 0, 1]        # a clock later
