@@ -63,6 +63,7 @@ class Board:
     diff_attrs: dict = field(default_factory=dict)
     resources: tuple = ()           # extra resource lists of the platform to add (names)
     plan_only: bool = False
+    overrides: dict = field(default_factory=dict)   # MasterParams fields on top of the preset
 
     @property
     def pll(self):
@@ -75,7 +76,7 @@ class Board:
 
     @property
     def params(self):
-        return preset_params(self.preset, sys_clk_hz=self.sys_clk_hz)
+        return preset_params(self.preset, sys_clk_hz=self.sys_clk_hz, **self.overrides)
 
     def make_platform(self):
         """The amaranth-boards platform, with this design's channel resources added."""
@@ -210,7 +211,10 @@ BOARDS = {b.name: b for b in [
         leds={"heartbeat": ("led_g", 1), "ch0_valid_led": ("led_g", 0),
               "ch0_fault_led": ("led_r", 0)},
         reset=("button", 0), resources=("break_off_pmod",),
-        io_attrs={"IO_STANDARD": "SB_LVCMOS"}, slo_attrs={"PULLUP": 1}),
+        io_attrs={"IO_STANDARD": "SB_LVCMOS"}, slo_attrs={"PULLUP": 1},
+        # The UP5K is full: 16-bit time settings (655 us at 100 MHz, 2.7 ms at 24 MHz: every
+        # limit the protocol needs) and no timestamp make room for the line checks (issue 28).
+        overrides={"timer_width": 16, "timestamp_width": 0}),
     Board(
         "arty-a7-35", "Digilent Arty A7-35T (Artix-7), FT2232H USB-serial: vendor plan only",
         "arty_a7:ArtyA7_35Platform", "xilinx", "clk100", 100_000_000, 100_000_000,
