@@ -40,12 +40,10 @@ WORD1_COUNTERS = ("crc_word1", "spw_mismatch")
 NOISE_COUNTERS = ("noisy_line", "delay_jump", "noise_event")
 
 
-def noise_config_defaults(clk_hz):
-    """The line checks' configuration ports (docs/ports.md) at their defaults: every one 0
-    (any noise event rejects the frame, SLO high for 1 us before MA starts, the round-trip
-    tolerance the half period + 2 clocks). ``clk_hz`` is not needed: 0 means the default at
-    any clock."""
-    return {"cfg_noise_limit": 0, "cfg_quiet_time": 0, "cfg_delay_tolerance": 0}
+#: The line checks' configuration ports (docs/ports.md) at their defaults: every one 0 (any
+#: noise event rejects the frame, SLO high for 1 us before MA starts, the round-trip tolerance
+#: the half period + 2 clocks), whatever the clock.
+NOISE_CONFIG_DEFAULTS = {"cfg_noise_limit": 0, "cfg_quiet_time": 0, "cfg_delay_tolerance": 0}
 
 
 #: ``cfg_noise_limit`` and ``cfg_delay_tolerance`` value that turns the check off (the noise

@@ -17,7 +17,7 @@ from cocotb.triggers import ClockCycles, FallingEdge, ReadOnly, RisingEdge, Time
 from encoder_model import frames
 from encoder_model.cocotb_encoder import BissEncoder, Cable, Response
 from master_contract import (CA_COUNTERS, COUNTERS, CRC_CODE, NOISE_COUNTERS, NOISE_FIELDS,
-                             STATUS, SYS_CLK_HZ, noise_config_defaults)
+                             STATUS, SYS_CLK_HZ, NOISE_CONFIG_DEFAULTS)
 
 CLK_HZ = int(os.environ.get("BISS_CLK_HZ", str(SYS_CLK_HZ)))
 CLK_NS = 1e9 / CLK_HZ
@@ -93,7 +93,7 @@ class Testbench:
         self.has_register_access = hasattr(dut, "ca_start")      # the default build's engine
         # Issue 28's noise defences: their ports only where the core has them, so every
         # scenario runs on a core with them and on one without.
-        self.noise_defaults = {n: v for n, v in noise_config_defaults(CLK_HZ).items()
+        self.noise_defaults = {n: v for n, v in NOISE_CONFIG_DEFAULTS.items()
                                if hasattr(dut, n)}
         self.noise_fields = [n for n in NOISE_FIELDS if hasattr(dut, n)]
         self.noise_counters = [n for n in NOISE_COUNTERS if hasattr(dut, f"count_{n}")]
@@ -177,7 +177,7 @@ class Testbench:
             ports.update({f"cfg_w{w}_data_bits": word.data_bits, f"cfg_w{w}_nenw": int(word.nenw),
                           f"cfg_w{w}_lc": int(word.lc), f"cfg_w{w}_crc": CRC_CODE[word.crc]})
         noise = {**self.noise_defaults, **{n: cfg.pop(n) for n in list(cfg)
-                                           if n in noise_config_defaults(CLK_HZ)}}
+                                           if n in NOISE_CONFIG_DEFAULTS}}
         ports.update(cfg)
         assert len(fmt.words) <= self.words, f"{fmt.name} needs a two-word build"
         for name in self._ports(ports):

@@ -7,7 +7,6 @@ misses the board clock. The builds themselves (``make board``) run outside the t
 
 import re
 import subprocess
-import sys
 import zipfile
 
 import pytest
@@ -16,9 +15,8 @@ from bissmaster.boards import BOARDS, BoardTop
 from bissmaster.boards.clocking import MHZ, ecp5_pll, ice40_pll
 from testkit import REPO
 
-sys.path.insert(0, str(REPO / "scripts"))
-import board as board_script  # noqa: E402  scripts/board.py
-from venvtools import tool  # noqa: E402
+import board as board_script  # scripts/board.py (scripts/ is on pytest's pythonpath)
+from venvtools import tool
 
 BENCH = REPO / "docs" / "bench.md"
 #: The constraint file of each family's plan and how it places a port on a pin.
