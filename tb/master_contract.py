@@ -26,8 +26,11 @@ NOISE_STATUSES = ("NOISY_LINE", "DELAY_JUMP")
 FRAME_STATUSES = ("OK", "CRC_ERROR_WORD0", "CRC_ERROR_WORD1", "CRC_ERROR_BOTH",
                   "SIGN_OF_LIFE", "SPW_MISMATCH", "NOISY_LINE", "DELAY_JUMP")
 
-#: ``cfg_wN_crc`` codes, keyed by the encoder model's CRC kinds (frames.CRC_NONE, CRC6, CRC16).
-CRC_CODE = {"none": 0, "crc6": 1, "crc16": 2}
+#: ``cfg_wN_crc`` codes, keyed by the encoder model's CRC kinds (frames.CRC_NONE, CRC6, CRC16);
+#: "custom": the word's own CRC from its ``cfg_wN_crc_width/_poly/_start/_inverted`` ports.
+CRC_CODE = {"none": 0, "crc6": 1, "crc16": 2, "custom": 3}
+#: The widest CRC a word may have (docs/ports.md, ``cfg_w0_crc_width``).
+CRC_MAX_WIDTH = 16
 
 #: The ``count_<name>`` outputs of the default build, in port order.
 COUNTERS = ("crc_word0", "crc_word1", "no_ack", "no_start", "delay_range", "slo_stuck_low",
@@ -120,3 +123,28 @@ DEFAULT_TIMEOUT_LIMIT_S = 80e-6
 #: The longest word 0 and word 1 of the default build, in data bits (docs/ports.md:
 #: ``max_data_bits = [55, 40]``; ``cfg_w0_data_bits`` 1 .. 55, ``cfg_w1_data_bits`` 1 .. 40).
 MAX_DATA_BITS = (55, 40)
+
+
+def crc_config(crc):
+    """A word's CRC as the master's configuration names it: ``(cfg_wN_crc code, {width, poly,
+    start, inverted})`` for an encoder-model CRC (frames.CRC_NONE, CRC6, CRC16 or a
+    frames.CustomCrc). A named CRC leaves the custom settings 0; a custom one is code 3 with
+    its own settings (docs/ports.md, ``cfg_w0_crc_*``)."""
+    if isinstance(crc, str):
+        return CRC_CODE[crc], {"width": 0, "poly": 0, "start": 0, "inverted": 0}
+    return CRC_CODE["custom"], {"width": crc.width, "poly": crc.poly, "start": crc.start,
+                                "inverted": int(crc.inverted)}
+
+
+def crc_settings(crc):
+    """The CRC the master runs for a word (its code resolved): ``{width, poly, start,
+    inverted}``; the named ones as docs/protocol.md section 6 gives them (start 0, sent
+    inverted), width 0 for none."""
+    import protocol_facts as facts
+    named = {"none": (0, 0, 0, 0),
+             "crc6": (facts.CRC6_WIDTH, facts.CRC6_POLY, facts.CRC_INIT, 1),
+             "crc16": (facts.CRC16_WIDTH, facts.CRC16_POLY, facts.CRC_INIT, 1)}
+    if isinstance(crc, str):
+        width, poly, start, inverted = named[crc]
+        return {"width": width, "poly": poly, "start": start, "inverted": inverted}
+    return crc_config(crc)[1]

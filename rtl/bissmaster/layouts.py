@@ -9,8 +9,8 @@ each other; only :class:`~bissmaster.master.BissMaster` flattens them into Veril
 from amaranth.lib import data
 
 from . import protocol
-from .params import (DELAY_SPREAD_WIDTH, FAULTS, HALF_PERIOD_WIDTH, LINE_CHECK_WIDTH, QUIET_WIDTH, AccessStatus,
-                     Status, WORD_CONFIG)
+from .params import (CRC_SETTINGS, DELAY_SPREAD_WIDTH, FAULTS, HALF_PERIOD_WIDTH, LINE_CHECK_WIDTH,
+                     QUIET_WIDTH, AccessStatus, Status, WORD_CONFIG)
 
 
 def config_layout(params):
@@ -32,8 +32,15 @@ def config_layout(params):
         "delay_tolerance": LINE_CHECK_WIDTH,
         "w0": WORD_CONFIG,
     }
+    # A custom CRC per word (``cfg_w0_crc`` = 3): ``cfg_w0_crc_width``, ``_poly``, ``_start``,
+    # ``_inverted``.
+    if params.custom_crc:
+        members["w0_crc"] = CRC_SETTINGS
     if params.words == 2:
-        members.update({"w1_enable": 1, "w1": WORD_CONFIG, "spw_check": 1, "spw_tolerance": 8})
+        members.update({"w1_enable": 1, "w1": WORD_CONFIG})
+        if params.custom_crc:
+            members["w1_crc"] = CRC_SETTINGS
+        members.update({"spw_check": 1, "spw_tolerance": 8})
     return data.StructLayout(members)
 
 
@@ -50,6 +57,14 @@ def config_ports(params):
 def config_words(cfg, params):
     """The per-word settings of a :func:`config_layout` view, word 0 first."""
     return [cfg.w0, cfg.w1] if params.words == 2 else [cfg.w0]
+
+
+def config_custom_crcs(cfg, params):
+    """The per-word custom CRC settings of a :func:`config_layout` view, word 0 first (an
+    empty list in builds without ``custom_crc``)."""
+    if not params.custom_crc:
+        return []
+    return [cfg.w0_crc, cfg.w1_crc] if params.words == 2 else [cfg.w0_crc]
 
 
 def word_result_layout(bits):

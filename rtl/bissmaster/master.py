@@ -305,6 +305,7 @@ class BissMaster(wiring.Component):
         ]
         for w, word in enumerate(b.words):
             m.d.comb += [b.decoder.words[w].eq(word), b.ma_stop.words[w].eq(word)]
+        m.d.comb += [b.decoder.crcs.eq(b.config.crcs), b.ma_stop.crcs.eq(b.config.crcs)]
         if two:
             m.d.comb += [
                 b.ma_stop.w1_enable.eq(b.cycle.w1_enable),

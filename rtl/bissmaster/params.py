@@ -15,13 +15,29 @@ from . import protocol
 
 
 class Crc(enum.IntEnum, shape=2):
-    """CRC of a data word (runtime code, 2 bits)."""
+    """CRC of a data word (runtime code ``cfg_wN_crc``, 2 bits)."""
     NONE = 0
     CRC6 = 1    # 0x43, BiSS C / CPW / BP3
     CRC16 = 2   # 0x190D9, BiSS Safety SPW
+    CUSTOM = 3  # the word's own CRC: the cfg_wN_crc_* ports (builds with custom_crc)
 
 
+#: Widths of the named CRCs (the custom CRC's width is a setting).
 CRC_WIDTH = {Crc.NONE: 0, Crc.CRC6: protocol.CRC6_WIDTH, Crc.CRC16: protocol.CRC16_WIDTH}
+#: The widest CRC the engine checks.
+CRC_MAX_WIDTH = 16
+
+#: A word's CRC as the engine runs it (:class:`~bissmaster.core.crc_engine.CrcEngine`), and the
+#: ``cfg_wN_crc_*`` ports of a custom CRC. ``poly`` is the register polynomial without its top
+#: term (x^6 + x + 1 is 0x03), right-aligned in ``width`` bits, as is ``start``; the CRC runs
+#: MSB first, not reflected, over every bit of the word before it; ``inverted``: the encoder
+#: sends the complement of the register. ``width`` 0: no CRC.
+CRC_SETTINGS = data.StructLayout({
+    "width": range(CRC_MAX_WIDTH + 1),
+    "poly": CRC_MAX_WIDTH,
+    "start": CRC_MAX_WIDTH,
+    "inverted": 1,
+})
 
 
 class Status(enum.IntEnum, shape=4):
@@ -116,8 +132,10 @@ class MasterParams:
         Longest data field per word; its length (1 or 2) is the number of words the core can
         decode. Default: 55 (BP3 DL_POS maximum) for word 0, 40 for the SPW.
     word_crcs : tuple of tuple of Crc
-        The CRC checkers built for each word. A runtime choice outside this set is a
-        configuration error. :attr:`Crc.NONE` is always accepted.
+        The named CRCs (:attr:`Crc.CRC6`, :attr:`Crc.CRC16`) each word accepts. A runtime
+        choice outside this set is a configuration error. :attr:`Crc.NONE` is always accepted.
+        One programmable engine checks every word's CRC in turn; this only sets which codes
+        the configuration check lets through.
     max_line_delay : int
         Longest round trip the delay counter can measure, in system clocks.
     timer_width : int
@@ -127,6 +145,10 @@ class MasterParams:
         no ``clear_counters``), for the smallest core.
     timestamp_width : int
         Width of the free-running time base behind the ``timestamp`` output; 0 builds neither.
+    custom_crc : bool
+        Accept :attr:`Crc.CUSTOM`: each word's CRC may be any of width 1..16, polynomial,
+        start value and inversion, set on its ``cfg_wN_crc_*`` ports (latched per cycle).
+        Without it those ports are not built and code 3 is a configuration error.
     register_access : bool
         Build the register-access engine (control channel, CDM/CDS; the ``ca_*`` ports) and
         the CDM hold of MA. Without it MA is never held low after a frame.
@@ -141,6 +163,7 @@ class MasterParams:
     timer_width: int = 24
     counter_width: int = 16
     timestamp_width: int = 32
+    custom_crc: bool = True
     register_access: bool = True
     start_wait_frames: int = 16
 
@@ -176,6 +199,8 @@ class MasterParams:
                 self.timestamp_width == 0 or 16 <= self.timestamp_width <= 64):
             raise ValueError(f"timestamp_width must be 0 (no timestamp) or an integer from 16 "
                              f"to 64, not {self.timestamp_width!r}")
+        if not isinstance(self.custom_crc, bool):
+            raise ValueError(f"custom_crc must be a bool, not {self.custom_crc!r}")
         if not isinstance(self.register_access, bool):
             raise ValueError(f"register_access must be a bool, not {self.register_access!r}")
         if not isinstance(self.start_wait_frames, int) or not 1 <= self.start_wait_frames <= 255:
@@ -242,7 +267,8 @@ class MasterParams:
         return [
             f"sys_clk_hz      = {self.sys_clk_hz}",
             f"max_data_bits   = {list(self.max_data_bits)}",
-            f"word_crcs       = {[[k.name for k in w] for w in self.word_crcs]}",
+            f"word_crcs       = {[[k.name for k in w] for w in self.word_crcs]}"
+            + (" and CUSTOM (cfg_wN_crc_*)" if self.custom_crc else ""),
             f"max_line_delay  = {self.max_line_delay} clocks",
             f"timer_width     = {self.timer_width}",
             f"counter_width   = {self.counter_width}" + ("" if self.counters else " (no counters)"),

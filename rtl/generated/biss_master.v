@@ -3,7 +3,7 @@
 // Parameters:
 //   sys_clk_hz      = 100000000
 //   max_data_bits   = [55, 40]
-//   word_crcs       = [['CRC6', 'CRC16'], ['CRC6', 'CRC16']]
+//   word_crcs       = [['CRC6', 'CRC16'], ['CRC6', 'CRC16']] and CUSTOM (cfg_wN_crc_*)
 //   max_line_delay  = 4095 clocks
 //   timer_width     = 24
 //   counter_width   = 16
@@ -15,12 +15,12 @@
 
 (* top =  1  *)
 (* generator = "Amaranth" *)
-module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_period, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_delay_limit, cfg_end_check, cfg_quiet_time, cfg_noise_limit, cfg_delay_tolerance, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_enable, cfg_w1_data_bits, cfg_w1_nenw
-, cfg_w1_lc, cfg_w1_crc, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, ca_wbuf_addr, ca_wbuf_data, ca_wbuf_en, ca_rbuf_addr, ca_rbuf_en, clk, rst, ma, busy, config_error, overrun
-, done, valid, status, timestamp, line_delay, cds, noise_events, delay_settled, settled_delay, delay_spread, word0_position, word0_ne, word0_nw, word0_crc_ok, word1_position, word1_ne, word1_nw, word1_crc_ok, lc, lc_repeat, lc_skip
-, lc_zero, spw_mismatch, ca_rbuf_data, ca_busy, ca_done, ca_status, ca_bytes_done, count_crc_word0, count_crc_word1, count_no_ack, count_no_start, count_delay_range, count_slo_stuck_low, count_lc_repeat, count_lc_skip, count_lc_zero, count_spw_mismatch, count_overrun, count_aborted, count_no_stop, count_noisy_line
-, count_delay_jump, count_noise_event, count_ca_crc4_error, count_ca_no_answer, count_ca_refused, count_ca_aborted, count_ca_data_fault, slo);
-  reg \$auto$verilog_backend.cc:2355:dump_module$13  = 0;
+module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_period, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_delay_limit, cfg_end_check, cfg_quiet_time, cfg_noise_limit, cfg_delay_tolerance, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_crc_width, cfg_w0_crc_poly, cfg_w0_crc_start
+, cfg_w0_crc_inverted, cfg_w1_enable, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_crc_width, cfg_w1_crc_poly, cfg_w1_crc_start, cfg_w1_crc_inverted, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, ca_wbuf_addr, ca_wbuf_data, ca_wbuf_en
+, ca_rbuf_addr, ca_rbuf_en, clk, rst, ma, busy, config_error, overrun, done, valid, status, timestamp, line_delay, cds, noise_events, delay_settled, settled_delay, delay_spread, word0_position, word0_ne, word0_nw
+, word0_crc_ok, word1_position, word1_ne, word1_nw, word1_crc_ok, lc, lc_repeat, lc_skip, lc_zero, spw_mismatch, ca_rbuf_data, ca_busy, ca_done, ca_status, ca_bytes_done, count_crc_word0, count_crc_word1, count_no_ack, count_no_start, count_delay_range, count_slo_stuck_low
+, count_lc_repeat, count_lc_skip, count_lc_zero, count_spw_mismatch, count_overrun, count_aborted, count_no_stop, count_noisy_line, count_delay_jump, count_noise_event, count_ca_crc4_error, count_ca_no_answer, count_ca_refused, count_ca_aborted, count_ca_data_fault, slo);
+  reg \$auto$verilog_backend.cc:2355:dump_module$5  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -44,25 +44,25 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \$8 ;
   wire \$9 ;
   wire abort;
-  wire \abort$104 ;
-  wire \abort$278 ;
+  wire \abort$112 ;
+  wire \abort$289 ;
   input abort_cycle;
   wire abort_cycle;
   wire ack_expired;
-  wire \ack_expired$136 ;
+  wire \ack_expired$144 ;
   wire [23:0] ack_limit;
-  wire [23:0] \ack_limit$157 ;
+  wire [23:0] \ack_limit$165 ;
   wire arm;
   reg \bit  = 1'h0;
-  wire \bit$307 ;
+  wire \bit$318 ;
   wire [5:0] bits;
   wire break_over;
-  wire \break_over$134 ;
+  wire \break_over$142 ;
   wire [23:0] break_time;
   output busy;
   wire busy;
-  wire \busy$112 ;
-  wire \busy$282 ;
+  wire \busy$120 ;
+  wire \busy$293 ;
   input ca_abort;
   wire ca_abort;
   input [6:0] ca_address;
@@ -104,12 +104,12 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   input ca_write;
   wire ca_write;
   wire cdm;
-  wire \cdm$285 ;
+  wire \cdm$296 ;
   wire cdm_cycle;
   output cds;
   wire cds;
-  wire \cds$258 ;
-  wire [174:0] cfg;
+  wire \cds$269 ;
+  wire [250:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
   wire [11:0] \cfg.delay_limit ;
@@ -127,19 +127,31 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \cfg.w0.crc ;
   wire [5:0] \cfg.w0.data_bits ;
   wire \cfg.w0.lc ;
   wire \cfg.w0.nenw ;
+  wire [37:0] \cfg.w0_crc ;
+  wire \cfg.w0_crc.inverted ;
+  wire [15:0] \cfg.w0_crc.poly ;
+  wire [15:0] \cfg.w0_crc.start ;
+  wire [4:0] \cfg.w0_crc.width ;
   wire [9:0] \cfg.w1 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \cfg.w1.crc ;
   wire [5:0] \cfg.w1.data_bits ;
   wire \cfg.w1.lc ;
   wire \cfg.w1.nenw ;
+  wire [37:0] \cfg.w1_crc ;
+  wire \cfg.w1_crc.inverted ;
+  wire [15:0] \cfg.w1_crc.poly ;
+  wire [15:0] \cfg.w1_crc.start ;
+  wire [4:0] \cfg.w1_crc.width ;
   wire \cfg.w1_enable ;
   input [23:0] cfg_ack_limit;
   wire [23:0] cfg_ack_limit;
@@ -169,8 +181,17 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
   input [1:0] cfg_w0_crc;
   wire [1:0] cfg_w0_crc;
+  input cfg_w0_crc_inverted;
+  wire cfg_w0_crc_inverted;
+  input [15:0] cfg_w0_crc_poly;
+  wire [15:0] cfg_w0_crc_poly;
+  input [15:0] cfg_w0_crc_start;
+  wire [15:0] cfg_w0_crc_start;
+  input [4:0] cfg_w0_crc_width;
+  wire [4:0] cfg_w0_crc_width;
   input [5:0] cfg_w0_data_bits;
   wire [5:0] cfg_w0_data_bits;
   input cfg_w0_lc;
@@ -181,8 +202,17 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
   input [1:0] cfg_w1_crc;
   wire [1:0] cfg_w1_crc;
+  input cfg_w1_crc_inverted;
+  wire cfg_w1_crc_inverted;
+  input [15:0] cfg_w1_crc_poly;
+  wire [15:0] cfg_w1_crc_poly;
+  input [15:0] cfg_w1_crc_start;
+  wire [15:0] cfg_w1_crc_start;
+  input [4:0] cfg_w1_crc_width;
+  wire [4:0] cfg_w1_crc_width;
   input [5:0] cfg_w1_data_bits;
   wire [5:0] cfg_w1_data_bits;
   input cfg_w1_enable;
@@ -192,12 +222,12 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   input cfg_w1_nenw;
   wire cfg_w1_nenw;
   wire check;
-  wire \check$215 ;
+  wire \check$223 ;
   wire clean;
-  wire \clean$220 ;
+  wire \clean$228 ;
   wire clear;
-  wire \clear$181 ;
-  wire \clear$300 ;
+  wire \clear$189 ;
+  wire \clear$311 ;
   input clear_counters;
   wire clear_counters;
   input clk;
@@ -272,11 +302,44 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire [15:0] \counts.slo_stuck_low ;
   wire [15:0] \counts.spw_mismatch ;
   wire [39:0] cpw_top;
-  wire [39:0] \cpw_top$229 ;
+  wire [39:0] \cpw_top$240 ;
   wire [1:0] crc_error;
   wire [1:0] crc_ok;
-  wire [1:0] \crc_ok$242 ;
-  wire [174:0] cycle;
+  wire [1:0] \crc_ok$253 ;
+  wire [75:0] crcs;
+  wire [75:0] \crcs$236 ;
+  wire [37:0] \crcs$236[0] ;
+  wire \crcs$236[0].inverted ;
+  wire [15:0] \crcs$236[0].poly ;
+  wire [15:0] \crcs$236[0].start ;
+  wire [4:0] \crcs$236[0].width ;
+  wire [37:0] \crcs$236[1] ;
+  wire \crcs$236[1].inverted ;
+  wire [15:0] \crcs$236[1].poly ;
+  wire [15:0] \crcs$236[1].start ;
+  wire [4:0] \crcs$236[1].width ;
+  wire [75:0] \crcs$237 ;
+  wire [37:0] \crcs$237[0] ;
+  wire \crcs$237[0].inverted ;
+  wire [15:0] \crcs$237[0].poly ;
+  wire [15:0] \crcs$237[0].start ;
+  wire [4:0] \crcs$237[0].width ;
+  wire [37:0] \crcs$237[1] ;
+  wire \crcs$237[1].inverted ;
+  wire [15:0] \crcs$237[1].poly ;
+  wire [15:0] \crcs$237[1].start ;
+  wire [4:0] \crcs$237[1].width ;
+  wire [37:0] \crcs[0] ;
+  wire \crcs[0].inverted ;
+  wire [15:0] \crcs[0].poly ;
+  wire [15:0] \crcs[0].start ;
+  wire [4:0] \crcs[0].width ;
+  wire [37:0] \crcs[1] ;
+  wire \crcs[1].inverted ;
+  wire [15:0] \crcs[1].poly ;
+  wire [15:0] \crcs[1].start ;
+  wire [4:0] \crcs[1].width ;
+  wire [250:0] cycle;
   wire [23:0] \cycle.ack_limit ;
   wire [23:0] \cycle.break_time ;
   wire [11:0] \cycle.delay_limit ;
@@ -294,19 +357,31 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \cycle.w0.crc ;
   wire [5:0] \cycle.w0.data_bits ;
   wire \cycle.w0.lc ;
   wire \cycle.w0.nenw ;
+  wire [37:0] \cycle.w0_crc ;
+  wire \cycle.w0_crc.inverted ;
+  wire [15:0] \cycle.w0_crc.poly ;
+  wire [15:0] \cycle.w0_crc.start ;
+  wire [4:0] \cycle.w0_crc.width ;
   wire [9:0] \cycle.w1 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \cycle.w1.crc ;
   wire [5:0] \cycle.w1.data_bits ;
   wire \cycle.w1.lc ;
   wire \cycle.w1.nenw ;
+  wire [37:0] \cycle.w1_crc ;
+  wire \cycle.w1_crc.inverted ;
+  wire [15:0] \cycle.w1_crc.poly ;
+  wire [15:0] \cycle.w1_crc.start ;
+  wire [4:0] \cycle.w1_crc.width ;
   wire \cycle.w1_enable ;
   wire [54:0] data0;
   wire [39:0] data1;
@@ -315,13 +390,13 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* init = 1'h0 *)
   wire decoder_sample;
   wire [12:0] delay;
-  wire [12:0] \delay$163 ;
-  wire [12:0] \delay$214 ;
+  wire [12:0] \delay$171 ;
+  wire [12:0] \delay$222 ;
   wire delay_jump;
   wire [11:0] delay_limit;
-  wire [11:0] \delay_limit$165 ;
+  wire [11:0] \delay_limit$173 ;
   wire delay_over;
-  wire \delay_over$144 ;
+  wire \delay_over$152 ;
   output delay_settled;
   wire delay_settled;
   output [7:0] delay_spread;
@@ -329,41 +404,41 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire [16:0] delay_tolerance;
   output done;
   wire done;
-  wire \done$122 ;
-  wire \done$283 ;
-  wire \done$303 ;
+  wire \done$130 ;
+  wire \done$294 ;
+  wire \done$314 ;
   wire doubtful;
   wire early;
-  wire \early$120 ;
+  wire \early$128 ;
   wire enable;
   wire end_check;
   wire enough;
   wire \event ;
   wire [3:0] events;
-  wire [20:0] \events$295 ;
-  wire \events$295.aborted ;
-  wire \events$295.ca_aborted ;
-  wire \events$295.ca_crc4_error ;
-  wire \events$295.ca_data_fault ;
-  wire \events$295.ca_no_answer ;
-  wire \events$295.ca_refused ;
-  wire \events$295.crc_word0 ;
-  wire \events$295.crc_word1 ;
-  wire \events$295.delay_jump ;
-  wire \events$295.delay_range ;
-  wire \events$295.lc_repeat ;
-  wire \events$295.lc_skip ;
-  wire \events$295.lc_zero ;
-  wire \events$295.no_ack ;
-  wire \events$295.no_start ;
-  wire \events$295.no_stop ;
-  wire \events$295.noise_event ;
-  wire \events$295.noisy_line ;
-  wire \events$295.overrun ;
-  wire \events$295.slo_stuck_low ;
-  wire \events$295.spw_mismatch ;
+  wire [20:0] \events$306 ;
+  wire \events$306.aborted ;
+  wire \events$306.ca_aborted ;
+  wire \events$306.ca_crc4_error ;
+  wire \events$306.ca_data_fault ;
+  wire \events$306.ca_no_answer ;
+  wire \events$306.ca_refused ;
+  wire \events$306.crc_word0 ;
+  wire \events$306.crc_word1 ;
+  wire \events$306.delay_jump ;
+  wire \events$306.delay_range ;
+  wire \events$306.lc_repeat ;
+  wire \events$306.lc_skip ;
+  wire \events$306.lc_zero ;
+  wire \events$306.no_ack ;
+  wire \events$306.no_start ;
+  wire \events$306.no_stop ;
+  wire \events$306.noise_event ;
+  wire \events$306.noisy_line ;
+  wire \events$306.overrun ;
+  wire \events$306.slo_stuck_low ;
+  wire \events$306.spw_mismatch ;
   wire fault;
-  wire \fault$238 ;
+  wire \fault$249 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -397,7 +472,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \fault_status$240 ;
+  wire [3:0] \fault_status$251 ;
   wire [6:0] faults;
   wire \faults.aborted ;
   wire \faults.bad_config ;
@@ -407,7 +482,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \faults.no_stop ;
   wire \faults.slo_stuck_low ;
   wire first_rise;
-  wire \first_rise$272 ;
+  wire \first_rise$283 ;
   wire [31:0] first_rise_time;
   wire [186:0] frame;
   wire \frame.cds ;
@@ -457,42 +532,42 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire frame_ok;
   wire frames;
   wire [15:0] half_period;
-  wire [15:0] \half_period$187 ;
+  wire [15:0] \half_period$195 ;
   wire held;
   wire hold;
   wire idle;
-  wire \idle$100 ;
-  wire \idle$94 ;
+  wire \idle$102 ;
+  wire \idle$108 ;
   wire in_clock;
-  wire \in_clock$151 ;
+  wire \in_clock$159 ;
   wire jump;
   output [5:0] lc;
   wire [5:0] lc;
-  wire [5:0] \lc$191 ;
-  wire [5:0] \lc$192 ;
+  wire [5:0] \lc$199 ;
+  wire [5:0] \lc$200 ;
   wire lc_check;
   wire lc_load;
   wire [5:0] lc_next;
-  wire [5:0] \lc_next$194 ;
+  wire [5:0] \lc_next$202 ;
   output lc_repeat;
   wire lc_repeat;
-  wire \lc_repeat$263 ;
+  wire \lc_repeat$274 ;
   wire lc_repeat_seen;
   output lc_skip;
   wire lc_skip;
-  wire \lc_skip$264 ;
+  wire \lc_skip$275 ;
   wire lc_skip_seen;
   output lc_zero;
   wire lc_zero;
-  wire \lc_zero$265 ;
+  wire \lc_zero$276 ;
   wire lc_zero_seen;
   wire learn;
   wire level;
-  wire \level$203 ;
+  wire \level$211 ;
   wire [3:0] limit;
   output [12:0] line_delay;
   wire [12:0] line_delay;
-  wire [174:0] live;
+  wire [250:0] live;
   wire [23:0] \live.ack_limit ;
   wire [23:0] \live.break_time ;
   wire [11:0] \live.delay_limit ;
@@ -510,29 +585,41 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \live.w0.crc ;
   wire [5:0] \live.w0.data_bits ;
   wire \live.w0.lc ;
   wire \live.w0.nenw ;
+  wire [37:0] \live.w0_crc ;
+  wire \live.w0_crc.inverted ;
+  wire [15:0] \live.w0_crc.poly ;
+  wire [15:0] \live.w0_crc.start ;
+  wire [4:0] \live.w0_crc.width ;
   wire [9:0] \live.w1 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \live.w1.crc ;
   wire [5:0] \live.w1.data_bits ;
   wire \live.w1.lc ;
   wire \live.w1.nenw ;
+  wire [37:0] \live.w1_crc ;
+  wire \live.w1_crc.inverted ;
+  wire [15:0] \live.w1_crc.poly ;
+  wire [15:0] \live.w1_crc.start ;
+  wire [4:0] \live.w1_crc.width ;
   wire \live.w1_enable ;
   wire load;
   wire locked;
-  wire \locked$118 ;
+  wire \locked$126 ;
   output ma;
   wire ma;
-  wire \ma$302 ;
+  wire \ma$313 ;
   wire ma_arm;
   wire ma_busy;
-  wire \ma_busy$146 ;
+  wire \ma_busy$154 ;
   wire ma_enough;
   wire ma_held;
   wire ma_hold;
@@ -540,28 +627,28 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire match;
   wire [1:0] ne;
   wire no_start_expired;
-  wire \no_start_expired$138 ;
+  wire \no_start_expired$146 ;
   wire [24:0] no_start_limit;
-  wire [24:0] \no_start_limit$161 ;
+  wire [24:0] \no_start_limit$169 ;
   wire noise;
   output [3:0] noise_events;
   wire [3:0] noise_events;
   wire noisy;
-  wire \noisy$222 ;
+  wire \noisy$230 ;
   wire [1:0] nw;
   wire ok;
   output overrun;
   wire overrun;
-  wire \overrun$298 ;
+  wire \overrun$309 ;
   wire [23:0] period;
   input periodic;
   wire periodic;
-  wire \periodic$96 ;
+  wire \periodic$104 ;
   wire quiet;
-  wire \quiet$170 ;
+  wire \quiet$178 ;
   wire [11:0] quiet_limit;
   wire quiet_live;
-  wire \quiet_live$172 ;
+  wire \quiet_live$180 ;
   wire [11:0] quiet_time;
   wire [11:0] quiet_time_live;
   wire [3:0] rbuf_addr;
@@ -571,35 +658,35 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire receiver_clear;
   wire \repeat ;
   wire report;
-  wire \report$250 ;
+  wire \report$261 ;
   wire report_delay;
-  wire \report_delay$253 ;
+  wire \report_delay$264 ;
   wire report_frame;
-  wire \report_frame$237 ;
-  wire \report_frame$251 ;
+  wire \report_frame$248 ;
+  wire \report_frame$262 ;
   wire request;
-  wire \request$103 ;
-  wire [17:0] \request$274 ;
-  wire [6:0] \request$274.address ;
-  wire [6:0] \request$274.count ;
-  wire [2:0] \request$274.slave_id ;
-  wire \request$274.write ;
+  wire \request$111 ;
+  wire [17:0] \request$285 ;
+  wire [6:0] \request$285.address ;
+  wire [6:0] \request$285.count ;
+  wire [2:0] \request$285.slave_id ;
+  wire \request$285.write ;
   wire restart;
-  wire \restart$207 ;
+  wire \restart$215 ;
   wire restart_timer;
   wire [9:0] result;
-  wire [186:0] \result$305 ;
-  wire \result$305.cds ;
-  wire \result$305.delay_settled ;
-  wire [7:0] \result$305.delay_spread ;
-  wire [5:0] \result$305.lc ;
-  wire \result$305.lc_repeat ;
-  wire \result$305.lc_skip ;
-  wire \result$305.lc_zero ;
-  wire [12:0] \result$305.line_delay ;
-  wire [3:0] \result$305.noise_events ;
-  wire [12:0] \result$305.settled_delay ;
-  wire \result$305.spw_mismatch ;
+  wire [186:0] \result$316 ;
+  wire \result$316.cds ;
+  wire \result$316.delay_settled ;
+  wire [7:0] \result$316.delay_spread ;
+  wire [5:0] \result$316.lc ;
+  wire \result$316.lc_repeat ;
+  wire \result$316.lc_skip ;
+  wire \result$316.lc_zero ;
+  wire [12:0] \result$316.line_delay ;
+  wire [3:0] \result$316.noise_events ;
+  wire [12:0] \result$316.settled_delay ;
+  wire \result$316.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -616,18 +703,18 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \result$305.status ;
-  wire [31:0] \result$305.timestamp ;
-  wire [57:0] \result$305.word0 ;
-  wire \result$305.word0.crc_ok ;
-  wire \result$305.word0.ne ;
-  wire \result$305.word0.nw ;
-  wire [54:0] \result$305.word0.position ;
-  wire [42:0] \result$305.word1 ;
-  wire \result$305.word1.crc_ok ;
-  wire \result$305.word1.ne ;
-  wire \result$305.word1.nw ;
-  wire [39:0] \result$305.word1.position ;
+  wire [3:0] \result$316.status ;
+  wire [31:0] \result$316.timestamp ;
+  wire [57:0] \result$316.word0 ;
+  wire \result$316.word0.crc_ok ;
+  wire \result$316.word0.ne ;
+  wire \result$316.word0.nw ;
+  wire [54:0] \result$316.word0.position ;
+  wire [42:0] \result$316.word1 ;
+  wire \result$316.word1.crc_ok ;
+  wire \result$316.word1.ne ;
+  wire \result$316.word1.nw ;
+  wire [39:0] \result$316.word1.position ;
   wire [6:0] \result.bytes_done ;
   (* enum_base_type = "AccessStatus" *)
   (* enum_value_000 = "OK" *)
@@ -639,47 +726,47 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_110 = "BAD_REQUEST" *)
   wire [2:0] \result.status ;
   wire resync;
-  wire \resync$200 ;
+  wire \resync$208 ;
   wire [15:0] rises;
-  wire [15:0] \rises$180 ;
+  wire [15:0] \rises$188 ;
   input rst;
   wire rst;
   wire run;
   reg sample = 1'h0;
-  wire \sample$306 ;
+  wire \sample$317 ;
   wire sampler_noise;
   wire second_rise;
   wire settled;
   output [12:0] settled_delay;
   wire [12:0] settled_delay;
-  wire [12:0] \settled_delay$261 ;
+  wire [12:0] \settled_delay$272 ;
   wire skip;
   input slo;
   wire slo;
-  wire \slo$101 ;
   wire \slo$109 ;
-  wire \slo$145 ;
+  wire \slo$117 ;
+  wire \slo$153 ;
   wire slo_stuck;
-  wire \slo_stuck$140 ;
+  wire \slo_stuck$148 ;
   wire slo_stuck_live;
-  wire \slo_stuck_live$142 ;
+  wire \slo_stuck_live$150 ;
   wire slots_full;
-  wire \slots_full$126 ;
+  wire \slots_full$134 ;
   wire [7:0] spread;
   wire [39:0] spw;
   wire spw_match;
   output spw_mismatch;
   wire spw_mismatch;
-  wire \spw_mismatch$270 ;
+  wire \spw_mismatch$281 ;
   input start;
   wire start;
-  wire \start$277 ;
-  wire \start$95 ;
+  wire \start$103 ;
+  wire \start$288 ;
   wire [15:0] start_slot;
-  wire [15:0] \start_slot$178 ;
+  wire [15:0] \start_slot$186 ;
   wire started;
-  wire \started$124 ;
-  wire \started$176 ;
+  wire \started$132 ;
+  wire \started$184 ;
   reg started_before = 1'h0;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
@@ -715,23 +802,23 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \status$257 ;
+  wire [3:0] \status$268 ;
   wire stop_bit;
-  wire \stop_bit$130 ;
+  wire \stop_bit$138 ;
   wire stopped;
-  wire \stopped$128 ;
+  wire \stopped$136 ;
   wire [23:0] timeout_limit;
-  wire [23:0] \timeout_limit$159 ;
+  wire [23:0] \timeout_limit$167 ;
   wire [23:0] timeout_live;
   wire timer_clear;
   output [31:0] timestamp;
   wire [31:0] timestamp;
   wire [16:0] tolerance;
-  wire [7:0] \tolerance$233 ;
+  wire [7:0] \tolerance$244 ;
   output valid;
   wire valid;
-  wire \valid$254 ;
-  wire \valid$255 ;
+  wire \valid$265 ;
+  wire \valid$266 ;
   wire valid_out;
   wire w1_enable;
   wire waiting;
@@ -757,33 +844,36 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   output [39:0] word1_position;
   wire [39:0] word1_position;
   wire [1:0] word_count;
-  wire [1:0] \word_count$190 ;
+  wire [1:0] \word_count$198 ;
   wire [1:0] word_crc_ok;
   wire [19:0] words;
-  wire [19:0] \words$226 ;
-  wire [9:0] \words$226[0] ;
+  wire [19:0] \words$234 ;
+  wire [9:0] \words$234[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
-  wire [1:0] \words$226[0].crc ;
-  wire [5:0] \words$226[0].data_bits ;
-  wire \words$226[0].lc ;
-  wire \words$226[0].nenw ;
-  wire [9:0] \words$226[1] ;
+  (* enum_value_11 = "CUSTOM" *)
+  wire [1:0] \words$234[0].crc ;
+  wire [5:0] \words$234[0].data_bits ;
+  wire \words$234[0].lc ;
+  wire \words$234[0].nenw ;
+  wire [9:0] \words$234[1] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
-  wire [1:0] \words$226[1].crc ;
-  wire [5:0] \words$226[1].data_bits ;
-  wire \words$226[1].lc ;
-  wire \words$226[1].nenw ;
+  (* enum_value_11 = "CUSTOM" *)
+  wire [1:0] \words$234[1].crc ;
+  wire [5:0] \words$234[1].data_bits ;
+  wire \words$234[1].lc ;
+  wire \words$234[1].nenw ;
   wire [9:0] \words[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \words[0].crc ;
   wire [5:0] \words[0].data_bits ;
   wire \words[0].lc ;
@@ -793,20 +883,21 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \words[1].crc ;
   wire [5:0] \words[1].data_bits ;
   wire \words[1].lc ;
   wire \words[1].nenw ;
   wire zero;
-  assign \periodic$96  = periodic | ca_busy;
+  assign \periodic$104  = periodic | ca_busy;
   assign enable = cycle[144:141] != 4'hf;
   assign rearm = cfg_delay_tolerance == 4'hf;
   assign \$1  = ~ started_before;
-  assign \check$215  = started & \$1 ;
-  assign \$2  = learn & \spw_mismatch$270 ;
-  assign \$3  = \status$257  == 4'hd;
+  assign \check$223  = started & \$1 ;
+  assign \$2  = learn & \spw_mismatch$281 ;
+  assign \$3  = \status$268  == 4'hd;
   assign \$4  = learn & \$3 ;
-  assign \$5  = \status$257  == 4'he;
+  assign \$5  = \status$268  == 4'he;
   assign \$6  = learn & \$5 ;
   assign \$7  = result[2:0] == 1'h1;
   assign \$8  = ca_done & \$7 ;
@@ -820,8 +911,8 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \$16  = ca_done & \$15 ;
   assign busy = ~ idle;
   assign config_error = ~ config_ok;
-  assign \$17  = ~ \clear$181 ;
-  assign \$18  = \sample$306  & \$17 ;
+  assign \$17  = ~ \clear$189 ;
+  assign \$18  = \sample$317  & \$17 ;
   always @(posedge clk)
     sample <= \$19 ;
   always @(posedge clk)
@@ -831,6 +922,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   \biss_master.config  \config  (
     .ack_limit(ack_limit),
     .clk(clk),
+    .crcs(crcs),
     .cycle(cycle),
     .delay_limit(delay_limit),
     .delay_tolerance(tolerance),
@@ -854,7 +946,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .delay_over(delay_over),
     .early(early),
     .end_check(cycle[124]),
-    .fault(\restart$207 ),
+    .fault(\restart$215 ),
     .fault_status(fault_status),
     .faults(faults),
     .frame_done(frame_done),
@@ -871,14 +963,14 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .no_start_expired(no_start_expired),
     .quiet(quiet),
     .quiet_live(quiet_live),
-    .receiver_clear(\clear$181 ),
+    .receiver_clear(\clear$189 ),
     .report_delay(report_delay),
     .report_frame(learn),
     .request(request),
     .restart_timer(restart),
     .resync(resync),
     .rst(rst),
-    .slo(\slo$109 ),
+    .slo(\slo$117 ),
     .slo_stuck(slo_stuck),
     .slo_stuck_live(slo_stuck_live),
     .slots_full(slots_full),
@@ -892,23 +984,24 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .clear(clear_counters),
     .clk(clk),
     .counts(counts),
-    .events(\events$295 ),
+    .events(\events$306 ),
     .rst(rst)
   );
   \biss_master.decoder  decoder (
     .\bit (\bit ),
-    .cds(\cds$258 ),
+    .cds(\cds$269 ),
     .clk(clk),
     .cpw_top(cpw_top),
     .crc_ok(crc_ok),
+    .crcs(crcs),
     .data0(data0),
     .data1(spw),
     .done(frame_done),
-    .lc(\lc$191 ),
+    .lc(\lc$199 ),
     .lc_load(load),
     .ne(ne),
     .nw(nw),
-    .receiver_clear(\clear$181 ),
+    .receiver_clear(\clear$189 ),
     .rst(rst),
     .sample(sample),
     .slots_full(slots_full),
@@ -920,7 +1013,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .words(words)
   );
   \biss_master.delay_check  delay_check (
-    .check(\check$215 ),
+    .check(\check$223 ),
     .clean(clean),
     .clk(clk),
     .delay(delay),
@@ -930,7 +1023,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .rearm(rearm),
     .rst(rst),
     .settled(settled),
-    .settled_delay(\settled_delay$261 ),
+    .settled_delay(\settled_delay$272 ),
     .spread(spread),
     .\tolerance$8 (tolerance)
   );
@@ -939,10 +1032,10 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .close(frame_done),
     .\event (\event ),
     .events(events),
-    .level(\slo$109 ),
+    .level(\slo$117 ),
     .limit(cycle[140:137]),
     .noisy(noisy),
-    .restart(\restart$207 ),
+    .restart(\restart$215 ),
     .rst(rst),
     .sampler_noise(sampler_noise),
     .watch(watch)
@@ -950,7 +1043,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   \biss_master.ma_clock  ma_clock (
     .busy(ma_busy),
     .clk(clk),
-    .\clocking (\ma_busy$146 ),
+    .\clocking (\ma_busy$154 ),
     .first_rise(first_rise),
     .half_period(cycle[15:0]),
     .held(ma_held),
@@ -962,15 +1055,16 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .second_rise(ma_arm)
   );
   \biss_master.ma_stop  ma_stop (
-    .clear(\clear$181 ),
+    .clear(\clear$189 ),
     .clk(clk),
+    .crcs(crcs),
     .enough(ma_enough),
     .rises(rises),
     .rst(rst),
     .start_slot(start_slot),
-    .\started$10 (started),
-    .w1_enable(cycle[155]),
-    .words(\words$226 )
+    .\started$11 (started),
+    .w1_enable(cycle[193]),
+    .words(\words$234 )
   );
   \biss_master.register_access  register_access (
     .abort(ca_abort),
@@ -979,13 +1073,13 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .clk(clk),
     .done(ca_done),
     .frame_cdm(frame_cdm),
-    .frame_cds(\cds$258 ),
+    .frame_cds(\cds$269 ),
     .frame_end(report),
-    .frame_ok(\valid$254 ),
+    .frame_ok(\valid$265 ),
     .rbuf_addr(ca_rbuf_addr),
     .rbuf_data(ca_rbuf_data),
     .rbuf_en(ca_rbuf_en),
-    .request(\request$274 ),
+    .request(\request$285 ),
     .result(result),
     .rst(rst),
     .start(ca_start),
@@ -998,24 +1092,24 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .report(report),
     .report_delay(report_delay),
     .report_frame(learn),
-    .result(\result$305 ),
+    .result(\result$316 ),
     .rst(rst),
-    .valid(\valid$254 ),
+    .valid(\valid$265 ),
     .valid_out(valid)
   );
   \biss_master.sampler  sampler (
     .arm(ma_arm),
-    .\bit (\bit$307 ),
+    .\bit (\bit$318 ),
     .clk(clk),
     .delay(delay),
     .early(early),
     .half_period(cycle[15:0]),
-    .level(\slo$109 ),
+    .level(\slo$117 ),
     .locked(locked),
     .noise(sampler_noise),
-    .receiver_clear(\clear$181 ),
+    .receiver_clear(\clear$189 ),
     .rst(rst),
-    .sample(\sample$306 ),
+    .sample(\sample$317 ),
     .slo(slo)
   );
   \biss_master.scheduler  scheduler (
@@ -1024,7 +1118,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .idle(idle),
     .overrun(overrun),
     .period(cfg_request_period),
-    .periodic(\periodic$96 ),
+    .periodic(\periodic$104 ),
     .request(request),
     .rst(rst),
     .start(start)
@@ -1033,22 +1127,22 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .check(check),
     .clk(clk),
     .is_zero(lc_zero_seen),
-    .lc(\lc$191 ),
+    .lc(\lc$199 ),
     .load(load),
-    .\port$1559$0 (\bit ),
+    .\port$1521$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
     .skip(lc_skip_seen)
   );
   \biss_master.spw_check  spw_check (
-    .bits(cycle[161:156]),
+    .bits(cycle[199:194]),
     .clk(clk),
     .cpw_top(cpw_top),
     .match(spw_match),
     .rst(rst),
     .spw(spw),
-    .\tolerance$8 (cycle[174:167])
+    .\tolerance$8 (cycle[250:243])
   );
   \biss_master.time_base  time_base (
     .clk(clk),
@@ -1067,7 +1161,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .delay_limit(delay_limit),
     .delay_over(delay_over),
     .in_clock(in_clock),
-    .ma_busy(\ma_busy$146 ),
+    .ma_busy(\ma_busy$154 ),
     .no_start_expired(no_start_expired),
     .no_start_limit(no_start_limit),
     .quiet(quiet),
@@ -1076,7 +1170,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .quiet_time_live(cfg_quiet_time),
     .restart(restart),
     .rst(rst),
-    .slo(\slo$109 ),
+    .slo(\slo$117 ),
     .slo_stuck(slo_stuck),
     .slo_stuck_live(slo_stuck_live),
     .timeout_limit(timeout_limit),
@@ -1089,179 +1183,181 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .crc_ok(crc_ok),
     .delay_jump(delay_jump),
     .doubtful(frame_doubtful),
-    .fault(\restart$207 ),
+    .fault(\restart$215 ),
     .fault_status(fault_status),
     .lc_check(check),
-    .lc_repeat(\lc_repeat$263 ),
+    .lc_repeat(\lc_repeat$274 ),
     .lc_repeat_seen(lc_repeat_seen),
-    .lc_skip(\lc_skip$264 ),
+    .lc_skip(\lc_skip$275 ),
     .lc_skip_seen(lc_skip_seen),
-    .lc_zero(\lc_zero$265 ),
+    .lc_zero(\lc_zero$276 ),
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
-    .\port$1027$0 (\$22 ),
+    .\port$989$0 (\$22 ),
     .report(report),
     .report_frame(learn),
     .spw_match(spw_match),
-    .spw_mismatch(\spw_mismatch$270 ),
-    .status(\status$257 ),
-    .valid(\valid$254 )
+    .spw_mismatch(\spw_mismatch$281 ),
+    .status(\status$268 ),
+    .valid(\valid$265 )
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$5 ) begin end
     \$19  = \$18 ;
     if (rst) begin
       \$19  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
-    \$20  = \bit$307 ;
+    if (\$auto$verilog_backend.cc:2355:dump_module$5 ) begin end
+    \$20  = \bit$318 ;
     if (rst) begin
       \$20  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$5 ) begin end
     \$21  = started;
     if (rst) begin
       \$21  = 1'h0;
     end
   end
-  assign \idle$94  = idle;
-  assign \start$95  = start;
+  assign \idle$102  = idle;
+  assign \start$103  = start;
   assign frames = ca_busy;
   assign period = cfg_request_period;
   assign abort = abort_cycle;
-  assign \idle$100  = idle;
-  assign \slo$101  = slo;
-  assign \request$103  = request;
-  assign \abort$104  = abort_cycle;
+  assign \idle$108  = idle;
+  assign \slo$109  = slo;
+  assign \request$111  = request;
+  assign \abort$112  = abort_cycle;
   assign ok = config_ok;
   assign end_check = cycle[124];
-  assign level = \slo$109 ;
-  assign \busy$112  = ma_busy;
+  assign level = \slo$117 ;
+  assign \busy$120  = ma_busy;
   assign second_rise = ma_arm;
   assign enough = ma_enough;
-  assign \locked$118  = locked;
-  assign \early$120  = early;
-  assign \done$122  = frame_done;
-  assign \started$124  = started;
-  assign \slots_full$126  = slots_full;
-  assign \stopped$128  = stopped;
-  assign \stop_bit$130  = stop_bit;
+  assign \locked$126  = locked;
+  assign \early$128  = early;
+  assign \done$130  = frame_done;
+  assign \started$132  = started;
+  assign \slots_full$134  = slots_full;
+  assign \stopped$136  = stopped;
+  assign \stop_bit$138  = stop_bit;
   assign doubtful = frame_doubtful;
-  assign \break_over$134  = break_over;
-  assign \ack_expired$136  = ack_expired;
-  assign \no_start_expired$138  = no_start_expired;
-  assign \slo_stuck$140  = slo_stuck;
-  assign \slo_stuck_live$142  = slo_stuck_live;
-  assign \delay_over$144  = delay_over;
-  assign \slo$145  = \slo$109 ;
-  assign \clocking  = \ma_busy$146 ;
+  assign \break_over$142  = break_over;
+  assign \ack_expired$144  = ack_expired;
+  assign \no_start_expired$146  = no_start_expired;
+  assign \slo_stuck$148  = slo_stuck;
+  assign \slo_stuck_live$150  = slo_stuck_live;
+  assign \delay_over$152  = delay_over;
+  assign \slo$153  = \slo$117 ;
+  assign \clocking  = \ma_busy$154 ;
   assign timer_clear = clear;
-  assign \in_clock$151  = in_clock;
+  assign \in_clock$159  = in_clock;
   assign restart_timer = restart;
   assign break_time = cfg_break_time;
   assign timeout_live = cfg_timeout_limit;
-  assign \ack_limit$157  = ack_limit;
-  assign \timeout_limit$159  = timeout_limit;
-  assign \no_start_limit$161  = no_start_limit;
-  assign \delay$163  = delay;
-  assign \delay_limit$165  = delay_limit;
+  assign \ack_limit$165  = ack_limit;
+  assign \timeout_limit$167  = timeout_limit;
+  assign \no_start_limit$169  = no_start_limit;
+  assign \delay$171  = delay;
+  assign \delay_limit$173  = delay_limit;
   assign quiet_time_live = cfg_quiet_time;
   assign quiet_time = quiet_limit;
-  assign \quiet$170  = quiet;
-  assign \quiet_live$172  = quiet_live;
+  assign \quiet$178  = quiet;
+  assign \quiet_live$180  = quiet_live;
   assign ma_run = run;
   assign half_period = cycle[15:0];
-  assign \started$176  = started;
-  assign \start_slot$178  = start_slot;
-  assign \rises$180  = rises;
-  assign receiver_clear = \clear$181 ;
+  assign \started$184  = started;
+  assign \start_slot$186  = start_slot;
+  assign \rises$188  = rises;
+  assign receiver_clear = \clear$189 ;
   assign decoder_sample = sample;
   assign decoder_bit = \bit ;
-  assign \half_period$187  = cycle[15:0];
+  assign \half_period$195  = cycle[15:0];
   assign arm = ma_arm;
-  assign \word_count$190  = word_count;
-  assign \lc$192  = \lc$191 ;
-  assign lc_next = { \lc$191 [4:0], \bit  };
-  assign \lc_next$194  = { \lc$191 [4:0], \bit  };
+  assign \word_count$198  = word_count;
+  assign \lc$200  = \lc$199 ;
+  assign lc_next = { \lc$199 [4:0], \bit  };
+  assign \lc_next$202  = { \lc$199 [4:0], \bit  };
   assign lc_load = load;
   assign lc_check = check;
-  assign \resync$200  = resync;
+  assign \resync$208  = resync;
   assign waiting = watch;
-  assign \level$203  = \slo$109 ;
+  assign \level$211  = \slo$117 ;
   assign noise = sampler_noise;
   assign close = frame_done;
-  assign fault = \restart$207 ;
+  assign fault = \restart$215 ;
   assign limit = cycle[140:137];
   assign delay_tolerance = tolerance;
-  assign \delay$214  = delay;
+  assign \delay$222  = delay;
   assign report_frame = learn;
-  assign \clean$220  = clean;
-  assign \noisy$222  = noisy;
+  assign \clean$228  = clean;
+  assign \noisy$230  = noisy;
   assign jump = delay_jump;
-  assign w1_enable = cycle[155];
-  assign \cpw_top$229  = cpw_top;
+  assign \crcs$236  = crcs;
+  assign \crcs$237  = crcs;
+  assign w1_enable = cycle[193];
+  assign \cpw_top$240  = cpw_top;
   assign data1 = spw;
-  assign bits = cycle[161:156];
-  assign \tolerance$233  = cycle[174:167];
+  assign bits = cycle[199:194];
+  assign \tolerance$244  = cycle[250:243];
   assign match = spw_match;
   assign cfg = cycle;
-  assign \report_frame$237  = learn;
-  assign \fault$238  = \restart$207 ;
-  assign \fault_status$240  = fault_status;
-  assign \crc_ok$242  = crc_ok;
+  assign \report_frame$248  = learn;
+  assign \fault$249  = \restart$215 ;
+  assign \fault_status$251  = fault_status;
+  assign \crc_ok$253  = crc_ok;
   assign \repeat  = lc_repeat_seen;
   assign skip = lc_skip_seen;
   assign zero = lc_zero_seen;
-  assign \report$250  = report;
-  assign \report_frame$251  = learn;
-  assign \report_delay$253  = report_delay;
-  assign \valid$255  = \valid$254 ;
+  assign \report$261  = report;
+  assign \report_frame$262  = learn;
+  assign \report_delay$264  = report_delay;
+  assign \valid$266  = \valid$265 ;
   assign word_crc_ok = { \$22 , crc_ok[0] };
-  assign \first_rise$272  = first_rise;
-  assign \start$277  = ca_start;
-  assign \abort$278  = ca_abort;
+  assign \first_rise$283  = first_rise;
+  assign \start$288  = ca_start;
+  assign \abort$289  = ca_abort;
   assign rbuf_addr = ca_rbuf_addr;
   assign rbuf_en = ca_rbuf_en;
   assign rbuf_data = ca_rbuf_data;
-  assign \busy$282  = ca_busy;
-  assign \done$283  = ca_done;
-  assign \cdm$285  = cdm;
+  assign \busy$293  = ca_busy;
+  assign \done$294  = ca_done;
+  assign \cdm$296  = cdm;
   assign held = ma_held;
   assign ma_hold = hold;
   assign frame_end = report;
-  assign frame_ok = \valid$254 ;
-  assign frame_cds = \cds$258 ;
+  assign frame_ok = \valid$265 ;
+  assign frame_cds = \cds$269 ;
   assign cdm_cycle = frame_cdm;
-  assign \overrun$298  = overrun;
-  assign \clear$300  = clear_counters;
-  assign \ma$302  = ma;
-  assign \done$303  = done;
+  assign \overrun$309  = overrun;
+  assign \clear$311  = clear_counters;
+  assign \ma$313  = ma;
+  assign \done$314  = done;
   assign valid_out = valid;
-  assign status = \result$305 [3:0];
-  assign timestamp = \result$305 [35:4];
-  assign line_delay = \result$305 [48:36];
-  assign cds = \result$305 [49];
-  assign noise_events = \result$305 [53:50];
-  assign delay_settled = \result$305 [54];
-  assign settled_delay = \result$305 [67:55];
-  assign delay_spread = \result$305 [75:68];
-  assign word0_position = \result$305 [130:76];
-  assign word0_ne = \result$305 [131];
-  assign word0_nw = \result$305 [132];
-  assign word0_crc_ok = \result$305 [133];
-  assign word1_position = \result$305 [173:134];
-  assign word1_ne = \result$305 [174];
-  assign word1_nw = \result$305 [175];
-  assign word1_crc_ok = \result$305 [176];
-  assign lc = \result$305 [182:177];
-  assign lc_repeat = \result$305 [183];
-  assign lc_skip = \result$305 [184];
-  assign lc_zero = \result$305 [185];
-  assign spw_mismatch = \result$305 [186];
+  assign status = \result$316 [3:0];
+  assign timestamp = \result$316 [35:4];
+  assign line_delay = \result$316 [48:36];
+  assign cds = \result$316 [49];
+  assign noise_events = \result$316 [53:50];
+  assign delay_settled = \result$316 [54];
+  assign settled_delay = \result$316 [67:55];
+  assign delay_spread = \result$316 [75:68];
+  assign word0_position = \result$316 [130:76];
+  assign word0_ne = \result$316 [131];
+  assign word0_nw = \result$316 [132];
+  assign word0_crc_ok = \result$316 [133];
+  assign word1_position = \result$316 [173:134];
+  assign word1_ne = \result$316 [174];
+  assign word1_nw = \result$316 [175];
+  assign word1_crc_ok = \result$316 [176];
+  assign lc = \result$316 [182:177];
+  assign lc_repeat = \result$316 [183];
+  assign lc_skip = \result$316 [184];
+  assign lc_zero = \result$316 [185];
+  assign spw_mismatch = \result$316 [186];
   assign ca_status = result[2:0];
   assign ca_bytes_done = result[9:3];
   assign count_crc_word0 = counts[15:0];
@@ -1300,14 +1396,24 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \live.w0.nenw  = live[151];
   assign \live.w0.lc  = live[152];
   assign \live.w0.crc  = live[154:153];
-  assign \live.w1_enable  = live[155];
-  assign \live.w1  = live[165:156];
-  assign \live.w1.data_bits  = live[161:156];
-  assign \live.w1.nenw  = live[162];
-  assign \live.w1.lc  = live[163];
-  assign \live.w1.crc  = live[165:164];
-  assign \live.spw_check  = live[166];
-  assign \live.spw_tolerance  = live[174:167];
+  assign \live.w0_crc  = live[192:155];
+  assign \live.w0_crc.width  = live[159:155];
+  assign \live.w0_crc.poly  = live[175:160];
+  assign \live.w0_crc.start  = live[191:176];
+  assign \live.w0_crc.inverted  = live[192];
+  assign \live.w1_enable  = live[193];
+  assign \live.w1  = live[203:194];
+  assign \live.w1.data_bits  = live[199:194];
+  assign \live.w1.nenw  = live[200];
+  assign \live.w1.lc  = live[201];
+  assign \live.w1.crc  = live[203:202];
+  assign \live.w1_crc  = live[241:204];
+  assign \live.w1_crc.width  = live[208:204];
+  assign \live.w1_crc.poly  = live[224:209];
+  assign \live.w1_crc.start  = live[240:225];
+  assign \live.w1_crc.inverted  = live[241];
+  assign \live.spw_check  = live[242];
+  assign \live.spw_tolerance  = live[250:243];
   assign \cycle.ma_half_period  = cycle[15:0];
   assign \cycle.request_period  = cycle[39:16];
   assign \cycle.break_time  = cycle[63:40];
@@ -1323,14 +1429,24 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \cycle.w0.nenw  = cycle[151];
   assign \cycle.w0.lc  = cycle[152];
   assign \cycle.w0.crc  = cycle[154:153];
-  assign \cycle.w1_enable  = cycle[155];
-  assign \cycle.w1  = cycle[165:156];
-  assign \cycle.w1.data_bits  = cycle[161:156];
-  assign \cycle.w1.nenw  = cycle[162];
-  assign \cycle.w1.lc  = cycle[163];
-  assign \cycle.w1.crc  = cycle[165:164];
-  assign \cycle.spw_check  = cycle[166];
-  assign \cycle.spw_tolerance  = cycle[174:167];
+  assign \cycle.w0_crc  = cycle[192:155];
+  assign \cycle.w0_crc.width  = cycle[159:155];
+  assign \cycle.w0_crc.poly  = cycle[175:160];
+  assign \cycle.w0_crc.start  = cycle[191:176];
+  assign \cycle.w0_crc.inverted  = cycle[192];
+  assign \cycle.w1_enable  = cycle[193];
+  assign \cycle.w1  = cycle[203:194];
+  assign \cycle.w1.data_bits  = cycle[199:194];
+  assign \cycle.w1.nenw  = cycle[200];
+  assign \cycle.w1.lc  = cycle[201];
+  assign \cycle.w1.crc  = cycle[203:202];
+  assign \cycle.w1_crc  = cycle[241:204];
+  assign \cycle.w1_crc.width  = cycle[208:204];
+  assign \cycle.w1_crc.poly  = cycle[224:209];
+  assign \cycle.w1_crc.start  = cycle[240:225];
+  assign \cycle.w1_crc.inverted  = cycle[241];
+  assign \cycle.spw_check  = cycle[242];
+  assign \cycle.spw_tolerance  = cycle[250:243];
   assign \words[0]  = words[9:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -1341,16 +1457,46 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \words[1].nenw  = words[16];
   assign \words[1].lc  = words[17];
   assign \words[1].crc  = words[19:18];
-  assign \words$226[0]  = \words$226 [9:0];
-  assign \words$226[0].data_bits  = \words$226 [5:0];
-  assign \words$226[0].nenw  = \words$226 [6];
-  assign \words$226[0].lc  = \words$226 [7];
-  assign \words$226[0].crc  = \words$226 [9:8];
-  assign \words$226[1]  = \words$226 [19:10];
-  assign \words$226[1].data_bits  = \words$226 [15:10];
-  assign \words$226[1].nenw  = \words$226 [16];
-  assign \words$226[1].lc  = \words$226 [17];
-  assign \words$226[1].crc  = \words$226 [19:18];
+  assign \words$234[0]  = \words$234 [9:0];
+  assign \words$234[0].data_bits  = \words$234 [5:0];
+  assign \words$234[0].nenw  = \words$234 [6];
+  assign \words$234[0].lc  = \words$234 [7];
+  assign \words$234[0].crc  = \words$234 [9:8];
+  assign \words$234[1]  = \words$234 [19:10];
+  assign \words$234[1].data_bits  = \words$234 [15:10];
+  assign \words$234[1].nenw  = \words$234 [16];
+  assign \words$234[1].lc  = \words$234 [17];
+  assign \words$234[1].crc  = \words$234 [19:18];
+  assign \crcs[0]  = crcs[37:0];
+  assign \crcs[0].width  = crcs[4:0];
+  assign \crcs[0].poly  = crcs[20:5];
+  assign \crcs[0].start  = crcs[36:21];
+  assign \crcs[0].inverted  = crcs[37];
+  assign \crcs[1]  = crcs[75:38];
+  assign \crcs[1].width  = crcs[42:38];
+  assign \crcs[1].poly  = crcs[58:43];
+  assign \crcs[1].start  = crcs[74:59];
+  assign \crcs[1].inverted  = crcs[75];
+  assign \crcs$236[0]  = crcs[37:0];
+  assign \crcs$236[0].width  = crcs[4:0];
+  assign \crcs$236[0].poly  = crcs[20:5];
+  assign \crcs$236[0].start  = crcs[36:21];
+  assign \crcs$236[0].inverted  = crcs[37];
+  assign \crcs$236[1]  = crcs[75:38];
+  assign \crcs$236[1].width  = crcs[42:38];
+  assign \crcs$236[1].poly  = crcs[58:43];
+  assign \crcs$236[1].start  = crcs[74:59];
+  assign \crcs$236[1].inverted  = crcs[75];
+  assign \crcs$237[0]  = crcs[37:0];
+  assign \crcs$237[0].width  = crcs[4:0];
+  assign \crcs$237[0].poly  = crcs[20:5];
+  assign \crcs$237[0].start  = crcs[36:21];
+  assign \crcs$237[0].inverted  = crcs[37];
+  assign \crcs$237[1]  = crcs[75:38];
+  assign \crcs$237[1].width  = crcs[42:38];
+  assign \crcs$237[1].poly  = crcs[58:43];
+  assign \crcs$237[1].start  = crcs[74:59];
+  assign \crcs$237[1].inverted  = crcs[75];
   assign \cfg.ma_half_period  = cycle[15:0];
   assign \cfg.request_period  = cycle[39:16];
   assign \cfg.break_time  = cycle[63:40];
@@ -1366,14 +1512,24 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \cfg.w0.nenw  = cycle[151];
   assign \cfg.w0.lc  = cycle[152];
   assign \cfg.w0.crc  = cycle[154:153];
-  assign \cfg.w1_enable  = cycle[155];
-  assign \cfg.w1  = cycle[165:156];
-  assign \cfg.w1.data_bits  = cycle[161:156];
-  assign \cfg.w1.nenw  = cycle[162];
-  assign \cfg.w1.lc  = cycle[163];
-  assign \cfg.w1.crc  = cycle[165:164];
-  assign \cfg.spw_check  = cycle[166];
-  assign \cfg.spw_tolerance  = cycle[174:167];
+  assign \cfg.w0_crc  = cycle[192:155];
+  assign \cfg.w0_crc.width  = cycle[159:155];
+  assign \cfg.w0_crc.poly  = cycle[175:160];
+  assign \cfg.w0_crc.start  = cycle[191:176];
+  assign \cfg.w0_crc.inverted  = cycle[192];
+  assign \cfg.w1_enable  = cycle[193];
+  assign \cfg.w1  = cycle[203:194];
+  assign \cfg.w1.data_bits  = cycle[199:194];
+  assign \cfg.w1.nenw  = cycle[200];
+  assign \cfg.w1.lc  = cycle[201];
+  assign \cfg.w1.crc  = cycle[203:202];
+  assign \cfg.w1_crc  = cycle[241:204];
+  assign \cfg.w1_crc.width  = cycle[208:204];
+  assign \cfg.w1_crc.poly  = cycle[224:209];
+  assign \cfg.w1_crc.start  = cycle[240:225];
+  assign \cfg.w1_crc.inverted  = cycle[241];
+  assign \cfg.spw_check  = cycle[242];
+  assign \cfg.spw_tolerance  = cycle[250:243];
   assign \frame.status  = frame[3:0];
   assign \frame.timestamp  = frame[35:4];
   assign \frame.line_delay  = frame[48:36];
@@ -1397,36 +1553,36 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \frame.lc_skip  = frame[184];
   assign \frame.lc_zero  = frame[185];
   assign \frame.spw_mismatch  = frame[186];
-  assign \request$274.slave_id  = \request$274 [2:0];
-  assign \request$274.address  = \request$274 [9:3];
-  assign \request$274.count  = \request$274 [16:10];
-  assign \request$274.write  = \request$274 [17];
+  assign \request$285.slave_id  = \request$285 [2:0];
+  assign \request$285.address  = \request$285 [9:3];
+  assign \request$285.count  = \request$285 [16:10];
+  assign \request$285.write  = \request$285 [17];
   assign \wbuf.addr  = wbuf[3:0];
   assign \wbuf.data  = wbuf[35:4];
   assign \wbuf.en  = wbuf[39:36];
   assign \result.status  = result[2:0];
   assign \result.bytes_done  = result[9:3];
-  assign \events$295.crc_word0  = \events$295 [0];
-  assign \events$295.crc_word1  = \events$295 [1];
-  assign \events$295.no_ack  = \events$295 [2];
-  assign \events$295.no_start  = \events$295 [3];
-  assign \events$295.delay_range  = \events$295 [4];
-  assign \events$295.slo_stuck_low  = \events$295 [5];
-  assign \events$295.lc_repeat  = \events$295 [6];
-  assign \events$295.lc_skip  = \events$295 [7];
-  assign \events$295.lc_zero  = \events$295 [8];
-  assign \events$295.spw_mismatch  = \events$295 [9];
-  assign \events$295.overrun  = \events$295 [10];
-  assign \events$295.aborted  = \events$295 [11];
-  assign \events$295.no_stop  = \events$295 [12];
-  assign \events$295.noisy_line  = \events$295 [13];
-  assign \events$295.delay_jump  = \events$295 [14];
-  assign \events$295.noise_event  = \events$295 [15];
-  assign \events$295.ca_crc4_error  = \events$295 [16];
-  assign \events$295.ca_no_answer  = \events$295 [17];
-  assign \events$295.ca_refused  = \events$295 [18];
-  assign \events$295.ca_aborted  = \events$295 [19];
-  assign \events$295.ca_data_fault  = \events$295 [20];
+  assign \events$306.crc_word0  = \events$306 [0];
+  assign \events$306.crc_word1  = \events$306 [1];
+  assign \events$306.no_ack  = \events$306 [2];
+  assign \events$306.no_start  = \events$306 [3];
+  assign \events$306.delay_range  = \events$306 [4];
+  assign \events$306.slo_stuck_low  = \events$306 [5];
+  assign \events$306.lc_repeat  = \events$306 [6];
+  assign \events$306.lc_skip  = \events$306 [7];
+  assign \events$306.lc_zero  = \events$306 [8];
+  assign \events$306.spw_mismatch  = \events$306 [9];
+  assign \events$306.overrun  = \events$306 [10];
+  assign \events$306.aborted  = \events$306 [11];
+  assign \events$306.no_stop  = \events$306 [12];
+  assign \events$306.noisy_line  = \events$306 [13];
+  assign \events$306.delay_jump  = \events$306 [14];
+  assign \events$306.noise_event  = \events$306 [15];
+  assign \events$306.ca_crc4_error  = \events$306 [16];
+  assign \events$306.ca_no_answer  = \events$306 [17];
+  assign \events$306.ca_refused  = \events$306 [18];
+  assign \events$306.ca_aborted  = \events$306 [19];
+  assign \events$306.ca_data_fault  = \events$306 [20];
   assign \faults.no_ack  = faults[0];
   assign \faults.no_start  = faults[1];
   assign \faults.delay_range  = faults[2];
@@ -1455,59 +1611,59 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \counts.ca_refused  = counts[303:288];
   assign \counts.ca_aborted  = counts[319:304];
   assign \counts.ca_data_fault  = counts[335:320];
-  assign \result$305.status  = \result$305 [3:0];
-  assign \result$305.timestamp  = \result$305 [35:4];
-  assign \result$305.line_delay  = \result$305 [48:36];
-  assign \result$305.cds  = \result$305 [49];
-  assign \result$305.noise_events  = \result$305 [53:50];
-  assign \result$305.delay_settled  = \result$305 [54];
-  assign \result$305.settled_delay  = \result$305 [67:55];
-  assign \result$305.delay_spread  = \result$305 [75:68];
-  assign \result$305.word0  = \result$305 [133:76];
-  assign \result$305.word0.position  = \result$305 [130:76];
-  assign \result$305.word0.ne  = \result$305 [131];
-  assign \result$305.word0.nw  = \result$305 [132];
-  assign \result$305.word0.crc_ok  = \result$305 [133];
-  assign \result$305.word1  = \result$305 [176:134];
-  assign \result$305.word1.position  = \result$305 [173:134];
-  assign \result$305.word1.ne  = \result$305 [174];
-  assign \result$305.word1.nw  = \result$305 [175];
-  assign \result$305.word1.crc_ok  = \result$305 [176];
-  assign \result$305.lc  = \result$305 [182:177];
-  assign \result$305.lc_repeat  = \result$305 [183];
-  assign \result$305.lc_skip  = \result$305 [184];
-  assign \result$305.lc_zero  = \result$305 [185];
-  assign \result$305.spw_mismatch  = \result$305 [186];
-  assign \events$295 [20] = \$16 ;
-  assign \events$295 [19] = \$14 ;
-  assign \events$295 [18] = \$12 ;
-  assign \events$295 [17] = \$10 ;
-  assign \events$295 [16] = \$8 ;
-  assign \events$295 [15] = \event ;
-  assign \events$295 [14] = \$6 ;
-  assign \events$295 [13] = \$4 ;
-  assign \events$295 [12] = faults[6];
-  assign \events$295 [11] = faults[4];
-  assign \events$295 [10] = overrun;
-  assign \events$295 [9] = \$2 ;
-  assign \events$295 [8] = \lc_zero$265 ;
-  assign \events$295 [7] = \lc_skip$264 ;
-  assign \events$295 [6] = \lc_repeat$263 ;
-  assign \events$295 [5] = faults[3];
-  assign \events$295 [4] = faults[2];
-  assign \events$295 [3] = faults[1];
-  assign \events$295 [2] = faults[0];
-  assign \events$295 [1] = crc_error[1];
-  assign \events$295 [0] = crc_error[0];
+  assign \result$316.status  = \result$316 [3:0];
+  assign \result$316.timestamp  = \result$316 [35:4];
+  assign \result$316.line_delay  = \result$316 [48:36];
+  assign \result$316.cds  = \result$316 [49];
+  assign \result$316.noise_events  = \result$316 [53:50];
+  assign \result$316.delay_settled  = \result$316 [54];
+  assign \result$316.settled_delay  = \result$316 [67:55];
+  assign \result$316.delay_spread  = \result$316 [75:68];
+  assign \result$316.word0  = \result$316 [133:76];
+  assign \result$316.word0.position  = \result$316 [130:76];
+  assign \result$316.word0.ne  = \result$316 [131];
+  assign \result$316.word0.nw  = \result$316 [132];
+  assign \result$316.word0.crc_ok  = \result$316 [133];
+  assign \result$316.word1  = \result$316 [176:134];
+  assign \result$316.word1.position  = \result$316 [173:134];
+  assign \result$316.word1.ne  = \result$316 [174];
+  assign \result$316.word1.nw  = \result$316 [175];
+  assign \result$316.word1.crc_ok  = \result$316 [176];
+  assign \result$316.lc  = \result$316 [182:177];
+  assign \result$316.lc_repeat  = \result$316 [183];
+  assign \result$316.lc_skip  = \result$316 [184];
+  assign \result$316.lc_zero  = \result$316 [185];
+  assign \result$316.spw_mismatch  = \result$316 [186];
+  assign \events$306 [20] = \$16 ;
+  assign \events$306 [19] = \$14 ;
+  assign \events$306 [18] = \$12 ;
+  assign \events$306 [17] = \$10 ;
+  assign \events$306 [16] = \$8 ;
+  assign \events$306 [15] = \event ;
+  assign \events$306 [14] = \$6 ;
+  assign \events$306 [13] = \$4 ;
+  assign \events$306 [12] = faults[6];
+  assign \events$306 [11] = faults[4];
+  assign \events$306 [10] = overrun;
+  assign \events$306 [9] = \$2 ;
+  assign \events$306 [8] = \lc_zero$276 ;
+  assign \events$306 [7] = \lc_skip$275 ;
+  assign \events$306 [6] = \lc_repeat$274 ;
+  assign \events$306 [5] = faults[3];
+  assign \events$306 [4] = faults[2];
+  assign \events$306 [3] = faults[1];
+  assign \events$306 [2] = faults[0];
+  assign \events$306 [1] = crc_error[1];
+  assign \events$306 [0] = crc_error[0];
   assign wbuf[39:36] = ca_wbuf_en;
   assign wbuf[35:4] = ca_wbuf_data;
   assign wbuf[3:0] = ca_wbuf_addr;
-  assign \request$274 [17] = ca_write;
-  assign \request$274 [16:10] = ca_count;
-  assign \request$274 [9:3] = ca_address;
-  assign \request$274 [2:0] = ca_slave_id;
+  assign \request$285 [17] = ca_write;
+  assign \request$285 [16:10] = ca_count;
+  assign \request$285 [9:3] = ca_address;
+  assign \request$285 [2:0] = ca_slave_id;
   assign frame[35:4] = first_rise_time;
-  assign frame[186] = \spw_mismatch$270 ;
+  assign frame[186] = \spw_mismatch$281 ;
   assign frame[176] = \$22 ;
   assign frame[175] = nw[1];
   assign frame[174] = ne[1];
@@ -1516,28 +1672,36 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign frame[132] = nw[0];
   assign frame[131] = ne[0];
   assign frame[130:76] = data0;
-  assign frame[185] = \lc_zero$265 ;
-  assign frame[184] = \lc_skip$264 ;
-  assign frame[183] = \lc_repeat$263 ;
-  assign frame[182:177] = \lc$191 ;
+  assign frame[185] = \lc_zero$276 ;
+  assign frame[184] = \lc_skip$275 ;
+  assign frame[183] = \lc_repeat$274 ;
+  assign frame[182:177] = \lc$199 ;
   assign frame[75:68] = spread;
-  assign frame[67:55] = \settled_delay$261 ;
+  assign frame[67:55] = \settled_delay$272 ;
   assign frame[54] = settled;
   assign frame[53:50] = events;
-  assign frame[49] = \cds$258 ;
+  assign frame[49] = \cds$269 ;
   assign frame[48:36] = delay;
-  assign frame[3:0] = \status$257 ;
-  assign \words$226 [19:10] = cycle[165:156];
-  assign \words$226 [9:0] = cycle[154:145];
-  assign words[19:10] = cycle[165:156];
+  assign frame[3:0] = \status$268 ;
+  assign \words$234 [19:10] = cycle[203:194];
+  assign \words$234 [9:0] = cycle[154:145];
+  assign words[19:10] = cycle[203:194];
   assign words[9:0] = cycle[154:145];
-  assign live[174:167] = cfg_spw_tolerance;
-  assign live[166] = cfg_spw_check;
-  assign live[165:164] = cfg_w1_crc;
-  assign live[163] = cfg_w1_lc;
-  assign live[162] = cfg_w1_nenw;
-  assign live[161:156] = cfg_w1_data_bits;
-  assign live[155] = cfg_w1_enable;
+  assign live[250:243] = cfg_spw_tolerance;
+  assign live[242] = cfg_spw_check;
+  assign live[241] = cfg_w1_crc_inverted;
+  assign live[240:225] = cfg_w1_crc_start;
+  assign live[224:209] = cfg_w1_crc_poly;
+  assign live[208:204] = cfg_w1_crc_width;
+  assign live[203:202] = cfg_w1_crc;
+  assign live[201] = cfg_w1_lc;
+  assign live[200] = cfg_w1_nenw;
+  assign live[199:194] = cfg_w1_data_bits;
+  assign live[193] = cfg_w1_enable;
+  assign live[192] = cfg_w0_crc_inverted;
+  assign live[191:176] = cfg_w0_crc_start;
+  assign live[175:160] = cfg_w0_crc_poly;
+  assign live[159:155] = cfg_w0_crc_width;
   assign live[154:153] = cfg_w0_crc;
   assign live[152] = cfg_w0_lc;
   assign live[151] = cfg_w0_nenw;
@@ -1555,8 +1719,8 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout_limit, delay_limit, quiet_time, delay_tolerance, no_start_limit, idle, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$14  = 0;
+module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout_limit, delay_limit, quiet_time, delay_tolerance, crcs, no_start_limit, idle, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$6  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -1586,28 +1750,41 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   wire \$33 ;
   wire \$34 ;
   wire \$35 ;
-  wire [23:0] \$36 ;
+  wire \$36 ;
   wire \$37 ;
-  wire [23:0] \$38 ;
+  wire \$38 ;
   wire \$39 ;
   wire \$4 ;
-  wire [11:0] \$40 ;
+  wire \$40 ;
   wire \$41 ;
-  wire [11:0] \$42 ;
+  wire \$42 ;
   wire \$43 ;
-  wire [3:0] \$44 ;
-  wire [16:0] \$45 ;
-  wire [24:0] \$46 ;
-  reg \$47 ;
-  reg [174:0] \$48 ;
-  reg [23:0] \$49 ;
+  wire \$44 ;
+  wire \$45 ;
+  wire \$46 ;
+  wire \$47 ;
+  wire [23:0] \$48 ;
+  wire \$49 ;
   wire \$5 ;
-  reg [23:0] \$50 ;
-  reg [11:0] \$51 ;
-  reg [11:0] \$52 ;
-  reg [16:0] \$53 ;
-  reg [24:0] \$54 ;
+  wire [23:0] \$50 ;
+  wire \$51 ;
+  wire [11:0] \$52 ;
+  wire \$53 ;
+  wire [11:0] \$54 ;
+  wire \$55 ;
+  wire [3:0] \$56 ;
+  wire [16:0] \$57 ;
+  wire [24:0] \$58 ;
+  reg \$59 ;
   wire \$6 ;
+  reg [250:0] \$60 ;
+  reg [23:0] \$61 ;
+  reg [23:0] \$62 ;
+  reg [11:0] \$63 ;
+  reg [11:0] \$64 ;
+  reg [16:0] \$65 ;
+  reg [75:0] \$66 ;
+  reg [24:0] \$67 ;
   wire \$7 ;
   wire \$8 ;
   wire \$9 ;
@@ -1615,8 +1792,20 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   reg [23:0] ack_limit = 24'h000000;
   input clk;
   wire clk;
-  output [174:0] cycle;
-  reg [174:0] cycle = 175'h00000000000000000000000000000000000000000000;
+  output [75:0] crcs;
+  reg [75:0] crcs = 76'h0000000000000000000;
+  wire [37:0] \crcs[0] ;
+  wire \crcs[0].inverted ;
+  wire [15:0] \crcs[0].poly ;
+  wire [15:0] \crcs[0].start ;
+  wire [4:0] \crcs[0].width ;
+  wire [37:0] \crcs[1] ;
+  wire \crcs[1].inverted ;
+  wire [15:0] \crcs[1].poly ;
+  wire [15:0] \crcs[1].start ;
+  wire [4:0] \crcs[1].width ;
+  output [250:0] cycle;
+  reg [250:0] cycle = 251'h000000000000000000000000000000000000000000000000000000000000000;
   wire [23:0] \cycle.ack_limit ;
   wire [23:0] \cycle.break_time ;
   wire [11:0] \cycle.delay_limit ;
@@ -1634,19 +1823,31 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \cycle.w0.crc ;
   wire [5:0] \cycle.w0.data_bits ;
   wire \cycle.w0.lc ;
   wire \cycle.w0.nenw ;
+  wire [37:0] \cycle.w0_crc ;
+  wire \cycle.w0_crc.inverted ;
+  wire [15:0] \cycle.w0_crc.poly ;
+  wire [15:0] \cycle.w0_crc.start ;
+  wire [4:0] \cycle.w0_crc.width ;
   wire [9:0] \cycle.w1 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \cycle.w1.crc ;
   wire [5:0] \cycle.w1.data_bits ;
   wire \cycle.w1.lc ;
   wire \cycle.w1.nenw ;
+  wire [37:0] \cycle.w1_crc ;
+  wire \cycle.w1_crc.inverted ;
+  wire [15:0] \cycle.w1_crc.poly ;
+  wire [15:0] \cycle.w1_crc.start ;
+  wire [4:0] \cycle.w1_crc.width ;
   wire \cycle.w1_enable ;
   output [11:0] delay_limit;
   reg [11:0] delay_limit = 12'h000;
@@ -1654,8 +1855,8 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   reg [16:0] delay_tolerance = 17'h00000;
   input idle;
   wire idle;
-  input [174:0] live;
-  wire [174:0] live;
+  input [250:0] live;
+  wire [250:0] live;
   wire [23:0] \live.ack_limit ;
   wire [23:0] \live.break_time ;
   wire [11:0] \live.delay_limit ;
@@ -1673,19 +1874,31 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \live.w0.crc ;
   wire [5:0] \live.w0.data_bits ;
   wire \live.w0.lc ;
   wire \live.w0.nenw ;
+  wire [37:0] \live.w0_crc ;
+  wire \live.w0_crc.inverted ;
+  wire [15:0] \live.w0_crc.poly ;
+  wire [15:0] \live.w0_crc.start ;
+  wire [4:0] \live.w0_crc.width ;
   wire [9:0] \live.w1 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \live.w1.crc ;
   wire [5:0] \live.w1.data_bits ;
   wire \live.w1.lc ;
   wire \live.w1.nenw ;
+  wire [37:0] \live.w1_crc ;
+  wire \live.w1_crc.inverted ;
+  wire [15:0] \live.w1_crc.poly ;
+  wire [15:0] \live.w1_crc.start ;
+  wire [4:0] \live.w1_crc.width ;
   wire \live.w1_enable ;
   output [24:0] no_start_limit;
   reg [24:0] no_start_limit = 25'h0000000;
@@ -1699,24 +1912,51 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   reg [23:0] timeout_limit = 24'h000000;
   output [1:0] word_count;
   wire [1:0] word_count;
-  assign \$46  = ack_limit + { cycle[15:0], 1'h1 };
-  assign word_count = 1'h1 + cycle[155];
+  assign \$33  = \$21  & \$32 ;
+  assign \$34  = \$18  | \$33 ;
+  assign \$35  = \$17  & \$34 ;
+  assign \$36  = live[193] & live[152];
+  assign \$37  = \$36  & live[201];
+  assign \$38  = ~ \$37 ;
+  assign \$39  = \$35  & \$38 ;
+  assign \$40  = ~ live[242];
+  assign \$41  = live[199:194] <= live[150:145];
+  assign \$42  = live[193] & \$41 ;
+  assign \$43  = | live[203:202];
+  assign \$44  = \$42  & \$43 ;
+  assign \$45  = \$40  | \$44 ;
+  assign \$46  = \$39  & \$45 ;
+  assign \$47  = ! live[87:64];
+  assign \$48  = \$47  ? 24'h000fa0 : live[87:64];
+  assign \$49  = ! live[111:88];
+  assign \$50  = \$49  ? 24'h001f40 : live[111:88];
+  assign \$51  = ! live[123:112];
+  assign \$52  = \$51  ? 12'hfff : live[123:112];
+  assign \$53  = ! live[136:125];
+  assign \$54  = \$53  ? 12'h064 : live[136:125];
+  assign \$55  = ! live[144:141];
+  assign \$56  = \$55  ? 4'h2 : live[144:141];
+  assign \$57  = live[15:0] + \$56 ;
+  assign \$58  = ack_limit + { cycle[15:0], 1'h1 };
+  assign word_count = 1'h1 + cycle[193];
   always @(posedge clk)
-    ok <= \$47 ;
+    ok <= \$59 ;
   always @(posedge clk)
-    cycle <= \$48 ;
+    cycle <= \$60 ;
   always @(posedge clk)
-    ack_limit <= \$49 ;
+    ack_limit <= \$61 ;
   always @(posedge clk)
-    timeout_limit <= \$50 ;
+    timeout_limit <= \$62 ;
   always @(posedge clk)
-    delay_limit <= \$51 ;
+    delay_limit <= \$63 ;
   always @(posedge clk)
-    quiet_time <= \$52 ;
+    quiet_time <= \$64 ;
   always @(posedge clk)
-    delay_tolerance <= \$53 ;
+    delay_tolerance <= \$65 ;
   always @(posedge clk)
-    no_start_limit <= \$54 ;
+    crcs <= \$66 ;
+  always @(posedge clk)
+    no_start_limit <= \$67 ;
   assign \$1  = | live[15:1];
   assign \$2  = | live[150:145];
   assign \$3  = live[150:145] <= 6'h37;
@@ -1726,114 +1966,152 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   assign \$7  = \$5  | \$6 ;
   assign \$8  = live[154:153] == 2'h2;
   assign \$9  = \$7  | \$8 ;
-  assign \$10  = \$4  & \$9 ;
-  assign \$11  = \$1  & \$10 ;
-  assign \$12  = ~ live[155];
-  assign \$13  = | live[161:156];
-  assign \$14  = live[161:156] <= 6'h28;
-  assign \$15  = \$13  & \$14 ;
-  assign \$16  = ! live[165:164];
-  assign \$17  = live[165:164] == 1'h1;
-  assign \$18  = \$16  | \$17 ;
-  assign \$19  = live[165:164] == 2'h2;
-  assign \$20  = \$18  | \$19 ;
-  assign \$21  = \$15  & \$20 ;
-  assign \$22  = \$12  | \$21 ;
-  assign \$23  = \$11  & \$22 ;
-  assign \$24  = live[155] & live[152];
-  assign \$25  = \$24  & live[163];
-  assign \$26  = ~ \$25 ;
-  assign \$27  = \$23  & \$26 ;
-  assign \$28  = ~ live[166];
-  assign \$29  = live[161:156] <= live[150:145];
-  assign \$30  = live[155] & \$29 ;
-  assign \$31  = | live[165:164];
-  assign \$32  = \$30  & \$31 ;
-  assign \$33  = \$28  | \$32 ;
-  assign \$34  = \$27  & \$33 ;
-  assign \$35  = ! live[87:64];
-  assign \$36  = \$35  ? 24'h000fa0 : live[87:64];
-  assign \$37  = ! live[111:88];
-  assign \$38  = \$37  ? 24'h001f40 : live[111:88];
-  assign \$39  = ! live[123:112];
-  assign \$40  = \$39  ? 12'hfff : live[123:112];
-  assign \$41  = ! live[136:125];
-  assign \$42  = \$41  ? 12'h064 : live[136:125];
-  assign \$43  = ! live[144:141];
-  assign \$44  = \$43  ? 4'h2 : live[144:141];
-  assign \$45  = live[15:0] + \$44 ;
+  assign \$10  = live[154:153] == 2'h3;
+  assign \$11  = | live[159:155];
+  assign \$12  = \$10  & \$11 ;
+  assign \$13  = live[159:155] <= 5'h10;
+  assign \$14  = \$12  & \$13 ;
+  assign \$15  = \$9  | \$14 ;
+  assign \$16  = \$4  & \$15 ;
+  assign \$17  = \$1  & \$16 ;
+  assign \$18  = ~ live[193];
+  assign \$19  = | live[199:194];
+  assign \$20  = live[199:194] <= 6'h28;
+  assign \$21  = \$19  & \$20 ;
+  assign \$22  = ! live[203:202];
+  assign \$23  = live[203:202] == 1'h1;
+  assign \$24  = \$22  | \$23 ;
+  assign \$25  = live[203:202] == 2'h2;
+  assign \$26  = \$24  | \$25 ;
+  assign \$27  = live[203:202] == 2'h3;
+  assign \$28  = | live[208:204];
+  assign \$29  = \$27  & \$28 ;
+  assign \$30  = live[208:204] <= 5'h10;
+  assign \$31  = \$29  & \$30 ;
+  assign \$32  = \$26  | \$31 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$47  = \$34 ;
+    if (\$auto$verilog_backend.cc:2355:dump_module$6 ) begin end
+    \$59  = \$46 ;
     if (rst) begin
-      \$47  = 1'h0;
+      \$59  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$48  = cycle;
+    if (\$auto$verilog_backend.cc:2355:dump_module$6 ) begin end
+    \$60  = cycle;
     if (idle) begin
-      \$48  = live;
+      \$60  = live;
     end
     if (rst) begin
-      \$48  = 175'h00000000000000000000000000000000000000000000;
+      \$60  = 251'h000000000000000000000000000000000000000000000000000000000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$49  = ack_limit;
+    if (\$auto$verilog_backend.cc:2355:dump_module$6 ) begin end
+    \$61  = ack_limit;
     if (idle) begin
-      \$49  = \$36 ;
+      \$61  = \$48 ;
     end
     if (rst) begin
-      \$49  = 24'h000000;
+      \$61  = 24'h000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$50  = timeout_limit;
+    if (\$auto$verilog_backend.cc:2355:dump_module$6 ) begin end
+    \$62  = timeout_limit;
     if (idle) begin
-      \$50  = \$38 ;
+      \$62  = \$50 ;
     end
     if (rst) begin
-      \$50  = 24'h000000;
+      \$62  = 24'h000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$51  = delay_limit;
+    if (\$auto$verilog_backend.cc:2355:dump_module$6 ) begin end
+    \$63  = delay_limit;
     if (idle) begin
-      \$51  = \$40 ;
+      \$63  = \$52 ;
     end
     if (rst) begin
-      \$51  = 12'h000;
+      \$63  = 12'h000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$52  = quiet_time;
+    if (\$auto$verilog_backend.cc:2355:dump_module$6 ) begin end
+    \$64  = quiet_time;
     if (idle) begin
-      \$52  = \$42 ;
+      \$64  = \$54 ;
     end
     if (rst) begin
-      \$52  = 12'h000;
+      \$64  = 12'h000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$53  = delay_tolerance;
+    if (\$auto$verilog_backend.cc:2355:dump_module$6 ) begin end
+    \$65  = delay_tolerance;
     if (idle) begin
-      \$53  = \$45 ;
+      \$65  = \$57 ;
     end
     if (rst) begin
-      \$53  = 17'h00000;
+      \$65  = 17'h00000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$54  = \$46 ;
+    if (\$auto$verilog_backend.cc:2355:dump_module$6 ) begin end
+    \$66  = crcs;
+    if (idle) begin
+      (* full_case = 32'd1 *)
+      casez (live[154:153])
+        2'h1:
+          begin
+            \$66 [4:0] = 5'h06;
+            \$66 [20:5] = 16'h0003;
+            \$66 [36:21] = 16'h0000;
+            \$66 [37] = 1'h1;
+          end
+        2'h2:
+          begin
+            \$66 [4:0] = 5'h10;
+            \$66 [20:5] = 16'h90d9;
+            \$66 [36:21] = 16'h0000;
+            \$66 [37] = 1'h1;
+          end
+        2'h3:
+            \$66 [37:0] = live[192:155];
+        default:
+            \$66 [37:0] = 38'h0000000000;
+      endcase
+      (* full_case = 32'd1 *)
+      casez (live[203:202])
+        2'h1:
+          begin
+            \$66 [42:38] = 5'h06;
+            \$66 [58:43] = 16'h0003;
+            \$66 [74:59] = 16'h0000;
+            \$66 [75] = 1'h1;
+          end
+        2'h2:
+          begin
+            \$66 [42:38] = 5'h10;
+            \$66 [58:43] = 16'h90d9;
+            \$66 [74:59] = 16'h0000;
+            \$66 [75] = 1'h1;
+          end
+        2'h3:
+            \$66 [75:38] = live[241:204];
+        default:
+            \$66 [75:38] = 38'h0000000000;
+      endcase
+    end
     if (rst) begin
-      \$54  = 25'h0000000;
+      \$66  = 76'h0000000000000000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$6 ) begin end
+    \$67  = \$58 ;
+    if (rst) begin
+      \$67  = 25'h0000000;
     end
   end
   assign \live.ma_half_period  = live[15:0];
@@ -1851,14 +2129,24 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   assign \live.w0.nenw  = live[151];
   assign \live.w0.lc  = live[152];
   assign \live.w0.crc  = live[154:153];
-  assign \live.w1_enable  = live[155];
-  assign \live.w1  = live[165:156];
-  assign \live.w1.data_bits  = live[161:156];
-  assign \live.w1.nenw  = live[162];
-  assign \live.w1.lc  = live[163];
-  assign \live.w1.crc  = live[165:164];
-  assign \live.spw_check  = live[166];
-  assign \live.spw_tolerance  = live[174:167];
+  assign \live.w0_crc  = live[192:155];
+  assign \live.w0_crc.width  = live[159:155];
+  assign \live.w0_crc.poly  = live[175:160];
+  assign \live.w0_crc.start  = live[191:176];
+  assign \live.w0_crc.inverted  = live[192];
+  assign \live.w1_enable  = live[193];
+  assign \live.w1  = live[203:194];
+  assign \live.w1.data_bits  = live[199:194];
+  assign \live.w1.nenw  = live[200];
+  assign \live.w1.lc  = live[201];
+  assign \live.w1.crc  = live[203:202];
+  assign \live.w1_crc  = live[241:204];
+  assign \live.w1_crc.width  = live[208:204];
+  assign \live.w1_crc.poly  = live[224:209];
+  assign \live.w1_crc.start  = live[240:225];
+  assign \live.w1_crc.inverted  = live[241];
+  assign \live.spw_check  = live[242];
+  assign \live.spw_tolerance  = live[250:243];
   assign \cycle.ma_half_period  = cycle[15:0];
   assign \cycle.request_period  = cycle[39:16];
   assign \cycle.break_time  = cycle[63:40];
@@ -1874,21 +2162,41 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   assign \cycle.w0.nenw  = cycle[151];
   assign \cycle.w0.lc  = cycle[152];
   assign \cycle.w0.crc  = cycle[154:153];
-  assign \cycle.w1_enable  = cycle[155];
-  assign \cycle.w1  = cycle[165:156];
-  assign \cycle.w1.data_bits  = cycle[161:156];
-  assign \cycle.w1.nenw  = cycle[162];
-  assign \cycle.w1.lc  = cycle[163];
-  assign \cycle.w1.crc  = cycle[165:164];
-  assign \cycle.spw_check  = cycle[166];
-  assign \cycle.spw_tolerance  = cycle[174:167];
+  assign \cycle.w0_crc  = cycle[192:155];
+  assign \cycle.w0_crc.width  = cycle[159:155];
+  assign \cycle.w0_crc.poly  = cycle[175:160];
+  assign \cycle.w0_crc.start  = cycle[191:176];
+  assign \cycle.w0_crc.inverted  = cycle[192];
+  assign \cycle.w1_enable  = cycle[193];
+  assign \cycle.w1  = cycle[203:194];
+  assign \cycle.w1.data_bits  = cycle[199:194];
+  assign \cycle.w1.nenw  = cycle[200];
+  assign \cycle.w1.lc  = cycle[201];
+  assign \cycle.w1.crc  = cycle[203:202];
+  assign \cycle.w1_crc  = cycle[241:204];
+  assign \cycle.w1_crc.width  = cycle[208:204];
+  assign \cycle.w1_crc.poly  = cycle[224:209];
+  assign \cycle.w1_crc.start  = cycle[240:225];
+  assign \cycle.w1_crc.inverted  = cycle[241];
+  assign \cycle.spw_check  = cycle[242];
+  assign \cycle.spw_tolerance  = cycle[250:243];
+  assign \crcs[0]  = crcs[37:0];
+  assign \crcs[0].width  = crcs[4:0];
+  assign \crcs[0].poly  = crcs[20:5];
+  assign \crcs[0].start  = crcs[36:21];
+  assign \crcs[0].inverted  = crcs[37];
+  assign \crcs[1]  = crcs[75:38];
+  assign \crcs[1].width  = crcs[42:38];
+  assign \crcs[1].poly  = crcs[58:43];
+  assign \crcs[1].start  = crcs[74:59];
+  assign \crcs[1].inverted  = crcs[75];
 endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.controller (clk, rst, request, restart_timer, report_delay, frame_doubtful, config_ok, end_check, resync, timer_clear, waiting, fault, fault_status, ma_run, in_clock, report_frame, idle, receiver_clear, faults, cdm_cycle, ma_hold
 , slo_stuck, slo_stuck_live, quiet, quiet_live, break_over, ack_expired, no_start_expired, delay_over, ma_arm, ma_busy, ma_held, ma_enough, early, locked, slo, frame_done, stopped, slots_full, started, stop_bit, cdm
 , abort);
-  reg \$auto$verilog_backend.cc:2355:dump_module$15  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$7  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -2223,7 +2531,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
     .report_frame(report_frame)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$7 ) begin end
     resync = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -2231,7 +2539,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$7 ) begin end
     timer_clear = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -2278,7 +2586,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$7 ) begin end
     waiting = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -2290,7 +2598,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$7 ) begin end
     clear = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -2302,7 +2610,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$7 ) begin end
     fault = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -2351,7 +2659,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$7 ) begin end
     fault_status = 4'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -2400,7 +2708,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$7 ) begin end
     ma_run = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -2416,7 +2724,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$7 ) begin end
     in_clock = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -2430,7 +2738,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$7 ) begin end
     watch = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -2444,7 +2752,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$7 ) begin end
     framing = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -2460,7 +2768,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$7 ) begin end
     report_frame = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -2491,7 +2799,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$7 ) begin end
     delay = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -2509,7 +2817,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$7 ) begin end
     holding = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -2532,14 +2840,14 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$7 ) begin end
     \$27  = idle;
     if (rst) begin
       \$27  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$7 ) begin end
     \$28  = cycle_fsm_state;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -2630,7 +2938,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$7 ) begin end
     \$29  = idle;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -2721,7 +3029,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$7 ) begin end
     \$30  = receiver_clear;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -2812,7 +3120,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$7 ) begin end
     \$31  = pause;
     casez (cycle_fsm_state)
       3'h0:
@@ -2881,7 +3189,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.controller.cdm_hold (clk, rst, framing, holding, idle, cdm_cycle, ma_hold, slo_stuck, slo, cdm, abort);
-  reg \$auto$verilog_backend.cc:2355:dump_module$16  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$8  = 0;
   wire \$1 ;
   wire \$2 ;
   wire \$3 ;
@@ -2920,7 +3228,7 @@ module \biss_master.controller.cdm_hold (clk, rst, framing, holding, idle, cdm_c
   assign \$1  = ~ abort;
   assign \$2  = cdm_cycle & \$1 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$8 ) begin end
     \$7  = cdm_cycle;
     if (idle) begin
       \$7  = cdm;
@@ -2930,7 +3238,7 @@ module \biss_master.controller.cdm_hold (clk, rst, framing, holding, idle, cdm_c
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$8 ) begin end
     ma_hold = 1'h0;
     if (framing) begin
       ma_hold = \$2 ;
@@ -2942,7 +3250,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.controller.line_faults (rst, restart_timer, clear, watch, fault, status, delay, ack_expired, no_start_expired, delay_over, ma_arm, early, locked, slots_full, started, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$17  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$9  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -3039,7 +3347,7 @@ module \biss_master.controller.line_faults (rst, restart_timer, clear, watch, fa
   always @(posedge clk)
     locked_seen <= \$21 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$17 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
     \$20  = armed;
     if (clear) begin
       \$20  = 1'h0;
@@ -3052,7 +3360,7 @@ module \biss_master.controller.line_faults (rst, restart_timer, clear, watch, fa
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$17 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
     \$21  = locked_seen;
     if (clear) begin
       \$21  = 1'h0;
@@ -3065,7 +3373,7 @@ module \biss_master.controller.line_faults (rst, restart_timer, clear, watch, fa
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$17 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
     fault = 1'h0;
     if (\$7 ) begin
       fault = 1'h1;
@@ -3078,7 +3386,7 @@ module \biss_master.controller.line_faults (rst, restart_timer, clear, watch, fa
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$17 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
     status = 4'h0;
     if (\$7 ) begin
       status = 4'h8;
@@ -3091,7 +3399,7 @@ module \biss_master.controller.line_faults (rst, restart_timer, clear, watch, fa
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$17 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
     delay = 1'h0;
     if (\$7 ) begin
     end else if (\$12 ) begin
@@ -3103,7 +3411,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.controller.ready_check (config_ok, first_clock, bad_config, aborted, ready, stuck_low, slo_stuck, slo_stuck_live, quiet, quiet_live, slo, abort);
-  reg \$auto$verilog_backend.cc:2355:dump_module$18  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$10  = 0;
   wire \$1 ;
   wire \$2 ;
   wire \$3 ;
@@ -3137,7 +3445,7 @@ module \biss_master.controller.ready_check (config_ok, first_clock, bad_config, 
   assign \$3  = first_clock ? slo_stuck_live : slo_stuck;
   assign \$4  = first_clock ? quiet_live : quiet;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     aborted = 1'h0;
     if (\$2 ) begin
     end else if (abort) begin
@@ -3145,7 +3453,7 @@ module \biss_master.controller.ready_check (config_ok, first_clock, bad_config, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     ready = 1'h0;
     if (\$2 ) begin
     end else if (abort) begin
@@ -3154,7 +3462,7 @@ module \biss_master.controller.ready_check (config_ok, first_clock, bad_config, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     stuck_low = 1'h0;
     if (\$2 ) begin
     end else if (abort) begin
@@ -3164,7 +3472,7 @@ module \biss_master.controller.ready_check (config_ok, first_clock, bad_config, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     bad_config = 1'h0;
     if (\$2 ) begin
       bad_config = 1'h1;
@@ -3278,7 +3586,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.counters (clk, rst, events, counts, clear);
-  reg \$auto$verilog_backend.cc:2355:dump_module$19  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$11  = 0;
   reg [20:0] \$1 ;
   reg \$2 ;
   input clear;
@@ -3592,14 +3900,14 @@ module \biss_master.counters (clk, rst, events, counts, clear);
     .rst(rst)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$11 ) begin end
     \$1  = events;
     if (rst) begin
       \$1  = 21'h000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$11 ) begin end
     \$2  = clear;
     if (rst) begin
       \$2  = 1'h0;
@@ -3735,6 +4043,438 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.counters.count_aborted (rst, inc, clear, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$12  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$12 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$12 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master.counters.count_ca_aborted (rst, inc, clear, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$13  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master.counters.count_ca_crc4_error (rst, inc, clear, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$14  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master.counters.count_ca_data_fault (rst, inc, clear, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$15  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master.counters.count_ca_no_answer (rst, inc, clear, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$16  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master.counters.count_ca_refused (rst, inc, clear, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$17  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$17 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$17 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master.counters.count_crc_word0 (rst, inc, clear, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$18  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master.counters.count_crc_word1 (rst, inc, clear, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$19  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master.counters.count_delay_jump (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$20  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -3788,7 +4528,7 @@ module \biss_master.counters.count_aborted (rst, inc, clear, count, clk);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_ca_aborted (rst, inc, clear, count, clk);
+module \biss_master.counters.count_delay_range (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$21  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -3842,7 +4582,7 @@ module \biss_master.counters.count_ca_aborted (rst, inc, clear, count, clk);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_ca_crc4_error (rst, inc, clear, count, clk);
+module \biss_master.counters.count_lc_repeat (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$22  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -3896,7 +4636,7 @@ module \biss_master.counters.count_ca_crc4_error (rst, inc, clear, count, clk);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_ca_data_fault (rst, inc, clear, count, clk);
+module \biss_master.counters.count_lc_skip (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$23  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -3950,7 +4690,7 @@ module \biss_master.counters.count_ca_data_fault (rst, inc, clear, count, clk);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_ca_no_answer (rst, inc, clear, count, clk);
+module \biss_master.counters.count_lc_zero (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$24  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -4004,7 +4744,7 @@ module \biss_master.counters.count_ca_no_answer (rst, inc, clear, count, clk);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_ca_refused (rst, inc, clear, count, clk);
+module \biss_master.counters.count_no_ack (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$25  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -4058,7 +4798,7 @@ module \biss_master.counters.count_ca_refused (rst, inc, clear, count, clk);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_crc_word0 (rst, inc, clear, count, clk);
+module \biss_master.counters.count_no_start (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$26  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -4112,7 +4852,7 @@ module \biss_master.counters.count_crc_word0 (rst, inc, clear, count, clk);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_crc_word1 (rst, inc, clear, count, clk);
+module \biss_master.counters.count_no_stop (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$27  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -4166,7 +4906,7 @@ module \biss_master.counters.count_crc_word1 (rst, inc, clear, count, clk);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_delay_jump (rst, inc, clear, count, clk);
+module \biss_master.counters.count_noise_event (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$28  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -4220,7 +4960,7 @@ module \biss_master.counters.count_delay_jump (rst, inc, clear, count, clk);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_delay_range (rst, inc, clear, count, clk);
+module \biss_master.counters.count_noisy_line (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$29  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -4274,7 +5014,7 @@ module \biss_master.counters.count_delay_range (rst, inc, clear, count, clk);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_lc_repeat (rst, inc, clear, count, clk);
+module \biss_master.counters.count_overrun (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$30  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -4328,7 +5068,7 @@ module \biss_master.counters.count_lc_repeat (rst, inc, clear, count, clk);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_lc_skip (rst, inc, clear, count, clk);
+module \biss_master.counters.count_slo_stuck_low (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$31  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -4382,7 +5122,7 @@ module \biss_master.counters.count_lc_skip (rst, inc, clear, count, clk);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_lc_zero (rst, inc, clear, count, clk);
+module \biss_master.counters.count_spw_mismatch (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$32  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -4436,515 +5176,88 @@ module \biss_master.counters.count_lc_zero (rst, inc, clear, count, clk);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_no_ack (rst, inc, clear, count, clk);
+module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crcs, receiver_clear, done, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1, lc, cpw_top
+, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$33  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master.counters.count_no_start (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$34  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master.counters.count_no_stop (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$35  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master.counters.count_noise_event (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$36  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master.counters.count_noisy_line (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$37  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master.counters.count_overrun (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$38  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master.counters.count_slo_stuck_low (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$39  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master.counters.count_spw_mismatch (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$40  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , receiver_clear, done, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1, lc, cpw_top, crc_ok
-, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$41  = 0;
   wire [6:0] \$1 ;
-  wire [1:0] \$10 ;
-  reg [2:0] \$100 ;
+  wire \$10 ;
+  reg [15:0] \$100 ;
   reg \$101 ;
-  reg [6:0] \$102 ;
-  reg \$103 ;
-  reg \$104 ;
+  reg \$102 ;
+  reg [15:0] \$103 ;
+  reg [2:0] \$104 ;
   reg \$105 ;
-  reg \$106 ;
+  reg [6:0] \$106 ;
   reg \$107 ;
-  reg [54:0] \$108 ;
-  reg [1:0] \$109 ;
-  wire [6:0] \$11 ;
-  reg [1:0] \$110 ;
-  reg [39:0] \$111 ;
-  reg [5:0] \$112 ;
-  reg [39:0] \$113 ;
-  wire \$12 ;
-  reg [3:0] \$13 ;
-  wire [6:0] \$14 ;
-  wire \$15 ;
+  reg \$108 ;
+  reg \$109 ;
+  wire [1:0] \$11 ;
+  reg \$110 ;
+  reg \$111 ;
+  reg \$112 ;
+  reg [54:0] \$113 ;
+  reg [1:0] \$114 ;
+  reg [1:0] \$115 ;
+  reg [39:0] \$116 ;
+  reg [5:0] \$117 ;
+  reg [39:0] \$118 ;
+  wire [6:0] \$12 ;
+  wire \$13 ;
+  reg [3:0] \$14 ;
+  wire [6:0] \$15 ;
   wire \$16 ;
-  wire [6:0] \$17 ;
-  wire [7:0] \$18 ;
-  reg [6:0] \$19 ;
+  wire \$17 ;
+  wire [6:0] \$18 ;
+  wire [7:0] \$19 ;
   wire [7:0] \$2 ;
-  wire [7:0] \$20 ;
-  reg [6:0] \$21 ;
-  wire [7:0] \$22 ;
-  reg [6:0] \$23 ;
-  wire [7:0] \$24 ;
-  wire \$25 ;
-  wire [1:0] \$26 ;
-  wire [6:0] \$27 ;
-  wire \$28 ;
-  reg [3:0] \$29 ;
+  reg [6:0] \$20 ;
+  wire [7:0] \$21 ;
+  reg [6:0] \$22 ;
+  wire [7:0] \$23 ;
+  reg [6:0] \$24 ;
+  wire [7:0] \$25 ;
+  wire [7:0] \$26 ;
+  wire \$27 ;
+  wire [1:0] \$28 ;
+  wire [6:0] \$29 ;
   reg [6:0] \$3 ;
-  wire [6:0] \$30 ;
-  wire \$31 ;
-  wire \$32 ;
+  wire \$30 ;
+  reg [3:0] \$31 ;
+  wire [6:0] \$32 ;
   wire \$33 ;
   wire \$34 ;
-  wire [16:0] \$35 ;
+  wire \$35 ;
   wire \$36 ;
-  wire \$37 ;
+  wire [16:0] \$37 ;
   wire \$38 ;
-  wire [7:0] \$39 ;
+  wire \$39 ;
   wire [7:0] \$4 ;
-  wire [6:0] \$40 ;
-  wire \$41 ;
-  wire \$42 ;
-  wire [6:0] \$43 ;
+  wire \$40 ;
+  wire [7:0] \$41 ;
+  wire [6:0] \$42 ;
+  wire \$43 ;
   wire \$44 ;
-  wire \$45 ;
-  wire [6:0] \$46 ;
+  wire [6:0] \$45 ;
+  wire \$46 ;
   wire \$47 ;
-  wire \$48 ;
+  wire [6:0] \$48 ;
   wire \$49 ;
   reg [6:0] \$5 ;
   wire \$50 ;
   wire [6:0] \$51 ;
   wire \$52 ;
-  wire [2:0] \$53 ;
-  wire \$54 ;
-  wire [1:0] \$55 ;
+  wire \$53 ;
+  wire [6:0] \$54 ;
+  wire \$55 ;
   wire \$56 ;
   wire \$57 ;
   wire \$58 ;
-  wire \$59 ;
+  wire [6:0] \$59 ;
   wire [7:0] \$6 ;
   wire \$60 ;
-  wire \$61 ;
+  wire [2:0] \$61 ;
   wire \$62 ;
-  wire \$63 ;
+  wire [1:0] \$63 ;
   wire \$64 ;
   wire \$65 ;
   wire \$66 ;
@@ -4973,29 +5286,53 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
   wire \$87 ;
   wire \$88 ;
   wire \$89 ;
-  wire \$9 ;
+  wire [7:0] \$9 ;
   wire \$90 ;
-  wire \$91 ;
+  wire [6:0] \$91 ;
   wire \$92 ;
   wire \$93 ;
-  reg \$94 ;
-  reg \$95 ;
-  reg [15:0] \$96 ;
-  reg \$97 ;
+  wire \$94 ;
+  wire \$95 ;
+  wire \$96 ;
+  wire \$97 ;
   reg \$98 ;
-  reg [15:0] \$99 ;
+  reg \$99 ;
   input \bit ;
   wire \bit ;
-  wire \bit$47 ;
-  wire \bit$53 ;
+  wire \bit$51 ;
   output cds;
   reg cds = 1'h0;
+  wire check;
   input clk;
   wire clk;
+  wire \cover ;
   output [39:0] cpw_top;
   reg [39:0] cpw_top = 40'h0000000000;
   output [1:0] crc_ok;
   wire [1:0] crc_ok;
+  input [75:0] crcs;
+  wire [75:0] crcs;
+  wire [75:0] \crcs$46 ;
+  wire [37:0] \crcs$46[0] ;
+  wire \crcs$46[0].inverted ;
+  wire [15:0] \crcs$46[0].poly ;
+  wire [15:0] \crcs$46[0].start ;
+  wire [4:0] \crcs$46[0].width ;
+  wire [37:0] \crcs$46[1] ;
+  wire \crcs$46[1].inverted ;
+  wire [15:0] \crcs$46[1].poly ;
+  wire [15:0] \crcs$46[1].start ;
+  wire [4:0] \crcs$46[1].width ;
+  wire [37:0] \crcs[0] ;
+  wire \crcs[0].inverted ;
+  wire [15:0] \crcs[0].poly ;
+  wire [15:0] \crcs[0].start ;
+  wire [4:0] \crcs[0].width ;
+  wire [37:0] \crcs[1] ;
+  wire \crcs[1].inverted ;
+  wire [15:0] \crcs[1].poly ;
+  wire [15:0] \crcs[1].start ;
+  wire [4:0] \crcs[1].width ;
   output [54:0] data0;
   reg [54:0] data0 = 55'h00000000000000;
   output [39:0] data1;
@@ -5003,13 +5340,14 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
   reg [2:0] decoder_fsm_state = 3'h0;
   output done;
   reg done = 1'h0;
+  wire first;
   reg [6:0] idx = 7'h00;
+  reg in_crc = 1'h0;
   reg in_data = 1'h0;
   reg in_lc = 1'h0;
   reg in_top = 1'h0;
   reg in_word;
-  wire [1:0] kind;
-  wire [1:0] \kind$50 ;
+  wire last;
   output [5:0] lc;
   reg [5:0] lc = 6'h00;
   output lc_load;
@@ -5019,8 +5357,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
   reg [1:0] ne = 2'h0;
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
-  wire ok;
-  wire \ok$54 ;
+  wire [1:0] ok;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -5030,8 +5367,6 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
   reg [15:0] slots = 16'h0000;
   output slots_full;
   reg slots_full = 1'h0;
-  wire start;
-  wire \start$51 ;
   output [15:0] start_slot;
   reg [15:0] start_slot = 16'h0000;
   output started;
@@ -5040,8 +5375,6 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
   reg stop_bit = 1'h0;
   output stopped;
   reg stopped = 1'h0;
-  wire valid;
-  wire \valid$52 ;
   reg w0_data_at0 = 1'h0;
   reg [6:0] w0_data_end_m1 = 7'h00;
   reg [6:0] w0_data_end_p1 = 7'h00;
@@ -5057,6 +5390,8 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
   reg [6:0] w1_nenw_end_m1 = 7'h00;
   reg [6:0] w1_word_end_m1 = 7'h00;
   reg word = 1'h0;
+  (* init = 1'h0 *)
+  wire \word$54 ;
   input [1:0] word_count;
   wire [1:0] word_count;
   input [19:0] words;
@@ -5066,6 +5401,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \words[0].crc ;
   wire [5:0] \words[0].data_bits ;
   wire \words[0].lc ;
@@ -5075,6 +5411,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \words[1].crc ;
   wire [5:0] \words[1].data_bits ;
   wire \words[1].lc ;
@@ -5083,87 +5420,93 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
   assign \$2  = words[5:0] + 7'h7f;
   assign \$4  = words[5:0] + \$3 ;
   assign \$6  = words[5:0] + \$5 ;
-  assign \$8  = words[5:0] + \$7 ;
-  assign \$9  = | words[5:0];
-  assign \$10  = words[6] ? 2'h2 : 2'h0;
-  assign \$11  = words[5:0] + \$10 ;
-  assign \$12  = ! \$11 ;
-  assign \$14  = words[5:0] + \$13 ;
-  assign \$15  = | \$14 ;
-  assign \$16  = \$12  & \$15 ;
-  assign \$17  = words[15:10] + 1'h1;
-  assign \$18  = words[15:10] + 7'h7f;
-  assign \$20  = words[15:10] + \$19 ;
-  assign \$22  = words[15:10] + \$21 ;
-  assign \$24  = words[15:10] + \$23 ;
-  assign \$25  = | words[15:10];
-  assign \$26  = words[16] ? 2'h2 : 2'h0;
-  assign \$27  = words[15:10] + \$26 ;
-  assign \$28  = ! \$27 ;
-  assign \$30  = words[15:10] + \$29 ;
-  assign \$31  = | \$30 ;
-  assign \$32  = \$28  & \$31 ;
-  assign \$33  = ~ slots_full;
-  assign \$34  = sample & \$33 ;
-  assign \$35  = slots + 1'h1;
-  assign \$36  = slots == 16'hfffe;
-  assign \$37  = sample & \bit ;
-  assign \$38  = | words[15:10];
-  assign \$39  = idx + 1'h1;
-  assign \$40  = word ? w1_data_end_m1 : w0_data_end_m1;
-  assign \$41  = idx != \$40 ;
-  assign \$42  = in_data & \$41 ;
-  assign \$43  = word ? w1_nenw_end_m1 : w0_nenw_end_m1;
-  assign \$44  = idx == \$43 ;
-  assign \$45  = in_lc | \$44 ;
-  assign \$46  = word ? w1_lc_end_m1 : w0_lc_end_m1;
-  assign \$47  = idx != \$46 ;
-  assign \$48  = \$45  & \$47 ;
-  assign \$49  = idx != w1_data_end_m1;
-  assign \$50  = in_top & \$49 ;
-  assign \$51  = word ? w1_word_end_m1 : w0_word_end_m1;
+  assign \$8  = \$7  + crcs[4:0];
+  assign \$9  = words[5:0] + \$8 [6:0];
+  assign \$10  = | words[5:0];
+  assign \$11  = words[6] ? 2'h2 : 2'h0;
+  assign \$12  = words[5:0] + \$11 ;
+  assign \$13  = ! \$12 ;
+  assign \$15  = words[5:0] + \$14 ;
+  assign \$16  = | \$15 ;
+  assign \$17  = \$13  & \$16 ;
+  assign \$18  = words[15:10] + 1'h1;
+  assign \$19  = words[15:10] + 7'h7f;
+  assign \$21  = words[15:10] + \$20 ;
+  assign \$23  = words[15:10] + \$22 ;
+  assign \$25  = \$24  + crcs[42:38];
+  assign \$26  = words[15:10] + \$25 [6:0];
+  assign \$27  = | words[15:10];
+  assign \$28  = words[16] ? 2'h2 : 2'h0;
+  assign \$29  = words[15:10] + \$28 ;
+  assign \$30  = ! \$29 ;
+  assign \$32  = words[15:10] + \$31 ;
+  assign \$33  = | \$32 ;
+  assign \$34  = \$30  & \$33 ;
+  assign \$35  = ~ slots_full;
+  assign \$36  = sample & \$35 ;
+  assign \$37  = slots + 1'h1;
+  assign \$38  = slots == 16'hfffe;
+  assign \$39  = sample & \bit ;
+  assign \$40  = | words[15:10];
+  assign \$41  = idx + 1'h1;
+  assign \$42  = word ? w1_data_end_m1 : w0_data_end_m1;
+  assign \$43  = idx != \$42 ;
+  assign \$44  = in_data & \$43 ;
+  assign \$45  = word ? w1_nenw_end_m1 : w0_nenw_end_m1;
+  assign \$46  = idx == \$45 ;
+  assign \$47  = in_lc | \$46 ;
+  assign \$48  = word ? w1_lc_end_m1 : w0_lc_end_m1;
+  assign \$49  = idx != \$48 ;
+  assign \$50  = \$47  & \$49 ;
+  assign \$51  = word ? w1_lc_end_m1 : w0_lc_end_m1;
   assign \$52  = idx == \$51 ;
-  assign \$53  = word_count - 1'h1;
-  assign \$54  = word == \$53 ;
-  assign \$55  = word + 1'h1;
-  assign \$56  = ! word;
-  assign \$57  = in_word & \$56 ;
-  assign \$58  = \$57  & in_data;
-  assign \$59  = ~ words[6];
-  assign \$60  = ! word;
-  assign \$61  = in_word & \$60 ;
-  assign \$62  = idx == words[5:0];
-  assign \$63  = \$61  & \$62 ;
+  assign \$53  = in_crc | \$52 ;
+  assign \$54  = word ? w1_word_end_m1 : w0_word_end_m1;
+  assign \$55  = idx != \$54 ;
+  assign \$56  = \$53  & \$55 ;
+  assign \$57  = idx != w1_data_end_m1;
+  assign \$58  = in_top & \$57 ;
+  assign \$59  = word ? w1_word_end_m1 : w0_word_end_m1;
+  assign \$60  = idx == \$59 ;
+  assign \$61  = word_count - 1'h1;
+  assign \$62  = word == \$61 ;
+  assign \$63  = word + 1'h1;
   assign \$64  = ! word;
   assign \$65  = in_word & \$64 ;
-  assign \$66  = idx == w0_data_end_p1;
-  assign \$67  = \$65  & \$66 ;
+  assign \$66  = \$65  & in_data;
+  assign \$67  = ~ words[6];
+  assign \$68  = ! word;
   assign \$69  = in_word & \$68 ;
-  assign \$70  = \$69  & in_data;
-  assign \$71  = ~ words[16];
+  assign \$70  = idx == words[5:0];
+  assign \$71  = \$69  & \$70 ;
+  assign \$72  = ! word;
   assign \$73  = in_word & \$72 ;
-  assign \$74  = idx == words[15:10];
+  assign \$74  = idx == w0_data_end_p1;
   assign \$75  = \$73  & \$74 ;
   assign \$77  = in_word & \$76 ;
-  assign \$78  = idx == w1_data_end_p1;
-  assign \$79  = \$77  & \$78 ;
-  assign \$80  = in_word & in_top;
+  assign \$78  = \$77  & in_data;
+  assign \$79  = ~ words[16];
+  assign \$81  = in_word & \$80 ;
+  assign \$82  = idx == words[15:10];
+  assign \$83  = \$81  & \$82 ;
+  assign \$85  = in_word & \$84 ;
+  assign \$86  = idx == w1_data_end_p1;
+  assign \$87  = \$85  & \$86 ;
+  assign \$88  = in_word & in_top;
   assign lc_load = in_word & in_lc;
-  assign \$81  = ! word;
-  assign \$82  = in_word & \$81 ;
-  assign \$83  = ! idx;
-  assign start = \$82  & \$83 ;
-  assign \$84  = ! word;
-  assign valid = in_word & \$84 ;
-  assign \$86  = in_word & \$85 ;
-  assign \$87  = ! idx;
-  assign \start$51  = \$86  & \$87 ;
-  assign \valid$52  = in_word & \$88 ;
-  assign \$89  = ! decoder_fsm_state;
-  assign \$90  = decoder_fsm_state == 1'h1;
-  assign \$91  = decoder_fsm_state == 2'h2;
-  assign \$92  = decoder_fsm_state == 2'h3;
-  assign \$93  = decoder_fsm_state == 3'h4;
+  assign \$89  = ! idx;
+  assign first = in_word & \$89 ;
+  assign \$90  = ~ in_crc;
+  assign \cover  = in_word & \$90 ;
+  assign check = in_word & in_crc;
+  assign \$91  = word ? w1_word_end_m1 : w0_word_end_m1;
+  assign \$92  = idx == \$91 ;
+  assign last = in_word & \$92 ;
+  assign \$93  = ! decoder_fsm_state;
+  assign \$94  = decoder_fsm_state == 1'h1;
+  assign \$95  = decoder_fsm_state == 2'h2;
+  assign \$96  = decoder_fsm_state == 2'h3;
+  assign \$97  = decoder_fsm_state == 3'h4;
   always @(posedge clk)
     w0_data_end_p1 <= \$1 ;
   always @(posedge clk)
@@ -5173,87 +5516,82 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
   always @(posedge clk)
     w0_lc_end_m1 <= \$6 [6:0];
   always @(posedge clk)
-    w0_word_end_m1 <= \$8 [6:0];
+    w0_word_end_m1 <= \$9 [6:0];
   always @(posedge clk)
-    w0_data_at0 <= \$9 ;
+    w0_data_at0 <= \$10 ;
   always @(posedge clk)
-    w0_lc_at0 <= \$16 ;
+    w0_lc_at0 <= \$17 ;
   always @(posedge clk)
-    w1_data_end_p1 <= \$17 ;
+    w1_data_end_p1 <= \$18 ;
   always @(posedge clk)
-    w1_data_end_m1 <= \$18 [6:0];
+    w1_data_end_m1 <= \$19 [6:0];
   always @(posedge clk)
-    w1_nenw_end_m1 <= \$20 [6:0];
+    w1_nenw_end_m1 <= \$21 [6:0];
   always @(posedge clk)
-    w1_lc_end_m1 <= \$22 [6:0];
+    w1_lc_end_m1 <= \$23 [6:0];
   always @(posedge clk)
-    w1_word_end_m1 <= \$24 [6:0];
+    w1_word_end_m1 <= \$26 [6:0];
   always @(posedge clk)
-    w1_data_at0 <= \$25 ;
+    w1_data_at0 <= \$27 ;
   always @(posedge clk)
-    w1_lc_at0 <= \$32 ;
+    w1_lc_at0 <= \$34 ;
   always @(posedge clk)
-    done <= \$94 ;
+    done <= \$98 ;
   always @(posedge clk)
-    stopped <= \$95 ;
+    stopped <= \$99 ;
   always @(posedge clk)
-    slots <= \$96 ;
+    slots <= \$100 ;
   always @(posedge clk)
-    slots_full <= \$97 ;
+    slots_full <= \$101 ;
   always @(posedge clk)
-    started <= \$98 ;
+    started <= \$102 ;
   always @(posedge clk)
-    start_slot <= \$99 ;
+    start_slot <= \$103 ;
   always @(posedge clk)
-    decoder_fsm_state <= \$100 ;
+    decoder_fsm_state <= \$104 ;
   always @(posedge clk)
-    cds <= \$101 ;
+    cds <= \$105 ;
   always @(posedge clk)
-    idx <= \$102 ;
+    idx <= \$106 ;
   always @(posedge clk)
-    in_data <= \$103 ;
+    in_data <= \$107 ;
   always @(posedge clk)
-    in_lc <= \$104 ;
+    in_lc <= \$108 ;
   always @(posedge clk)
-    in_top <= \$105 ;
+    in_crc <= \$109 ;
   always @(posedge clk)
-    word <= \$106 ;
+    in_top <= \$110 ;
   always @(posedge clk)
-    stop_bit <= \$107 ;
+    word <= \$111 ;
   always @(posedge clk)
-    data0 <= \$108 ;
+    stop_bit <= \$112 ;
   always @(posedge clk)
-    ne <= \$109 ;
+    data0 <= \$113 ;
   always @(posedge clk)
-    nw <= \$110 ;
+    ne <= \$114 ;
   always @(posedge clk)
-    data1 <= \$111 ;
+    nw <= \$115 ;
   always @(posedge clk)
-    lc <= \$112 ;
+    data1 <= \$116 ;
   always @(posedge clk)
-    cpw_top <= \$113 ;
-  \biss_master.decoder.crc0  crc0 (
+    lc <= \$117 ;
+  always @(posedge clk)
+    cpw_top <= \$118 ;
+  \biss_master.decoder.crc  crc (
     .\bit (\bit ),
+    .check(check),
     .clk(clk),
-    .kind(words[9:8]),
-    .ok(ok),
+    .\cover (\cover ),
+    .crcs(crcs),
+    .first(first),
+    .last(last),
+    .ok(crc_ok),
     .receiver_clear(receiver_clear),
     .rst(rst),
-    .start(start),
-    .valid(valid)
-  );
-  \biss_master.decoder.crc1  crc1 (
-    .\bit (\bit ),
-    .clk(clk),
-    .kind(words[19:18]),
-    .ok(\ok$54 ),
-    .receiver_clear(receiver_clear),
-    .rst(rst),
-    .start(\start$51 ),
-    .valid(\valid$52 )
+    .word(word)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
     (* full_case = 32'd1 *)
     casez (words[6])
       1'h0:
@@ -5263,7 +5601,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -5277,136 +5615,88 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    (* full_case = 32'd1 *)
-    casez (words[9:6])
-      4'h0:
-          \$7  = 7'h7f;
-      4'h1:
-          \$7  = 7'h01;
-      4'h2:
-          \$7  = 7'h05;
-      4'h3:
-          \$7  = 7'h07;
-      4'h4:
-          \$7  = 7'h05;
-      4'h5:
-          \$7  = 7'h07;
-      4'h6:
-          \$7  = 7'h0b;
-      4'h7:
-          \$7  = 7'h0d;
-      4'h8:
-          \$7  = 7'h0f;
-      4'h9:
-          \$7  = 7'h11;
-      4'ha:
-          \$7  = 7'h15;
-      4'hb:
-          \$7  = 7'h17;
-      4'hc:
-          \$7  = 7'h7f;
-      4'hd:
-          \$7  = 7'h01;
-      4'he:
-          \$7  = 7'h05;
-      4'hf:
-          \$7  = 7'h07;
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
-          \$13  = 4'h0;
+          \$7  = 7'h7f;
       2'h1:
-          \$13  = 4'h2;
+          \$7  = 7'h01;
       2'h2:
-          \$13  = 4'h6;
+          \$7  = 7'h05;
       2'h3:
-          \$13  = 4'h8;
+          \$7  = 7'h07;
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    (* full_case = 32'd1 *)
+    casez (words[7:6])
+      2'h0:
+          \$14  = 4'h0;
+      2'h1:
+          \$14  = 4'h2;
+      2'h2:
+          \$14  = 4'h6;
+      2'h3:
+          \$14  = 4'h8;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
     (* full_case = 32'd1 *)
     casez (words[16])
       1'h0:
-          \$19  = 7'h7f;
+          \$20  = 7'h7f;
       1'h1:
-          \$19  = 7'h01;
+          \$20  = 7'h01;
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
     (* full_case = 32'd1 *)
     casez (words[17:16])
       2'h0:
-          \$21  = 7'h7f;
+          \$22  = 7'h7f;
       2'h1:
-          \$21  = 7'h01;
+          \$22  = 7'h01;
       2'h2:
-          \$21  = 7'h05;
+          \$22  = 7'h05;
       2'h3:
-          \$21  = 7'h07;
+          \$22  = 7'h07;
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    (* full_case = 32'd1 *)
-    casez (words[19:16])
-      4'h0:
-          \$23  = 7'h7f;
-      4'h1:
-          \$23  = 7'h01;
-      4'h2:
-          \$23  = 7'h05;
-      4'h3:
-          \$23  = 7'h07;
-      4'h4:
-          \$23  = 7'h05;
-      4'h5:
-          \$23  = 7'h07;
-      4'h6:
-          \$23  = 7'h0b;
-      4'h7:
-          \$23  = 7'h0d;
-      4'h8:
-          \$23  = 7'h0f;
-      4'h9:
-          \$23  = 7'h11;
-      4'ha:
-          \$23  = 7'h15;
-      4'hb:
-          \$23  = 7'h17;
-      4'hc:
-          \$23  = 7'h7f;
-      4'hd:
-          \$23  = 7'h01;
-      4'he:
-          \$23  = 7'h05;
-      4'hf:
-          \$23  = 7'h07;
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
     (* full_case = 32'd1 *)
     casez (words[17:16])
       2'h0:
-          \$29  = 4'h0;
+          \$24  = 7'h7f;
       2'h1:
-          \$29  = 4'h2;
+          \$24  = 7'h01;
       2'h2:
-          \$29  = 4'h6;
+          \$24  = 7'h05;
       2'h3:
-          \$29  = 4'h8;
+          \$24  = 7'h07;
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$94  = 1'h0;
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    (* full_case = 32'd1 *)
+    casez (words[17:16])
+      2'h0:
+          \$31  = 4'h0;
+      2'h1:
+          \$31  = 4'h2;
+      2'h2:
+          \$31  = 4'h6;
+      2'h3:
+          \$31  = 4'h8;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    \$98  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
@@ -5414,75 +5704,11 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
           /* empty */;
       3'h2:
           if (sample) begin
-            if (\$52 ) begin
-              if (\$54 ) begin
-                \$94  = 1'h1;
+            if (\$60 ) begin
+              if (\$62 ) begin
+                \$98  = 1'h1;
               end
             end
-          end
-    endcase
-    if (receiver_clear) begin
-      \$94  = 1'h0;
-    end
-    if (rst) begin
-      \$94  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$95  = 1'h0;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h3:
-          if (sample) begin
-            \$95  = 1'h1;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$95  = 1'h0;
-    end
-    if (rst) begin
-      \$95  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$96  = slots;
-    if (\$34 ) begin
-      \$96  = \$35 [15:0];
-    end
-    if (receiver_clear) begin
-      \$96  = 16'h0000;
-    end
-    if (rst) begin
-      \$96  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$97  = slots_full;
-    if (\$34 ) begin
-      \$97  = \$36 ;
-    end
-    if (receiver_clear) begin
-      \$97  = 1'h0;
-    end
-    if (rst) begin
-      \$97  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$98  = started;
-    casez (decoder_fsm_state)
-      3'h0:
-          if (\$37 ) begin
-            \$98  = 1'h1;
           end
     endcase
     if (receiver_clear) begin
@@ -5493,162 +5719,126 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$99  = start_slot;
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    \$99  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
-          if (\$37 ) begin
-            \$99  = slots;
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h3:
+          if (sample) begin
+            \$99  = 1'h1;
           end
     endcase
     if (receiver_clear) begin
-      \$99  = 16'h0000;
+      \$99  = 1'h0;
     end
     if (rst) begin
-      \$99  = 16'h0000;
+      \$99  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$100  = decoder_fsm_state;
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    \$100  = slots;
+    if (\$36 ) begin
+      \$100  = \$37 [15:0];
+    end
+    if (receiver_clear) begin
+      \$100  = 16'h0000;
+    end
+    if (rst) begin
+      \$100  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    \$101  = slots_full;
+    if (\$36 ) begin
+      \$101  = \$38 ;
+    end
+    if (receiver_clear) begin
+      \$101  = 1'h0;
+    end
+    if (rst) begin
+      \$101  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    \$102  = started;
     casez (decoder_fsm_state)
       3'h0:
-          if (\$37 ) begin
-            \$100  = 3'h1;
+          if (\$39 ) begin
+            \$102  = 1'h1;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$102  = 1'h0;
+    end
+    if (rst) begin
+      \$102  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    \$103  = start_slot;
+    casez (decoder_fsm_state)
+      3'h0:
+          if (\$39 ) begin
+            \$103  = slots;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$103  = 16'h0000;
+    end
+    if (rst) begin
+      \$103  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    \$104  = decoder_fsm_state;
+    casez (decoder_fsm_state)
+      3'h0:
+          if (\$39 ) begin
+            \$104  = 3'h1;
           end
       3'h1:
           if (sample) begin
-            \$100  = 3'h2;
+            \$104  = 3'h2;
           end
       3'h2:
           if (sample) begin
-            if (\$52 ) begin
-              if (\$54 ) begin
-                \$100  = 3'h3;
+            if (\$60 ) begin
+              if (\$62 ) begin
+                \$104  = 3'h3;
               end
             end
           end
       3'h3:
           if (sample) begin
-            \$100  = 3'h4;
+            \$104  = 3'h4;
           end
     endcase
     if (receiver_clear) begin
-      \$100  = 3'h0;
+      \$104  = 3'h0;
     end
     if (rst) begin
-      \$100  = 3'h0;
+      \$104  = 3'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$101  = cds;
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    \$105  = cds;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
       3'h1:
           if (sample) begin
-            \$101  = \bit ;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$101  = 1'h0;
-    end
-    if (rst) begin
-      \$101  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$102  = idx;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$102  = 7'h00;
-          end
-      3'h2:
-          if (sample) begin
-            \$102  = \$39 [6:0];
-            if (\$52 ) begin
-              \$102  = 7'h00;
-            end
-          end
-    endcase
-    if (receiver_clear) begin
-      \$102  = 7'h00;
-    end
-    if (rst) begin
-      \$102  = 7'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$103  = in_data;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$103  = w0_data_at0;
-          end
-      3'h2:
-          if (sample) begin
-            \$103  = \$42 ;
-            if (\$52 ) begin
-              \$103  = w1_data_at0;
-            end
-          end
-    endcase
-    if (receiver_clear) begin
-      \$103  = 1'h0;
-    end
-    if (rst) begin
-      \$103  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$104  = in_lc;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$104  = w0_lc_at0;
-          end
-      3'h2:
-          if (sample) begin
-            \$104  = \$48 ;
-            if (\$52 ) begin
-              \$104  = w1_lc_at0;
-            end
-          end
-    endcase
-    if (receiver_clear) begin
-      \$104  = 1'h0;
-    end
-    if (rst) begin
-      \$104  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$105  = in_top;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$105  = \$38 ;
-          end
-      3'h2:
-          if (sample) begin
-            \$105  = \$50 ;
-            if (\$52 ) begin
-              \$105  = 1'h0;
-            end
+            \$105  = \bit ;
           end
     endcase
     if (receiver_clear) begin
@@ -5659,36 +5849,158 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$106  = word;
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    \$106  = idx;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
       3'h1:
           if (sample) begin
-            \$106  = 1'h0;
+            \$106  = 7'h00;
           end
       3'h2:
           if (sample) begin
-            if (\$52 ) begin
+            \$106  = \$41 [6:0];
+            if (\$60 ) begin
+              \$106  = 7'h00;
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$106  = 7'h00;
+    end
+    if (rst) begin
+      \$106  = 7'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    \$107  = in_data;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$107  = w0_data_at0;
+          end
+      3'h2:
+          if (sample) begin
+            \$107  = \$44 ;
+            if (\$60 ) begin
+              \$107  = w1_data_at0;
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$107  = 1'h0;
+    end
+    if (rst) begin
+      \$107  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    \$108  = in_lc;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$108  = w0_lc_at0;
+          end
+      3'h2:
+          if (sample) begin
+            \$108  = \$50 ;
+            if (\$60 ) begin
+              \$108  = w1_lc_at0;
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$108  = 1'h0;
+    end
+    if (rst) begin
+      \$108  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    \$109  = in_crc;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$109  = 1'h0;
+          end
+      3'h2:
+          if (sample) begin
+            \$109  = \$56 ;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$109  = 1'h0;
+    end
+    if (rst) begin
+      \$109  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    \$110  = in_top;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$110  = \$40 ;
+          end
+      3'h2:
+          if (sample) begin
+            \$110  = \$58 ;
+            if (\$60 ) begin
+              \$110  = 1'h0;
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$110  = 1'h0;
+    end
+    if (rst) begin
+      \$110  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    \$111  = word;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$111  = 1'h0;
+          end
+      3'h2:
+          if (sample) begin
+            if (\$60 ) begin
               (* full_case = 32'd1 *)
-              if (\$54 ) begin
+              if (\$62 ) begin
               end else begin
-                \$106  = \$55 [0];
+                \$111  = \$63 [0];
               end
             end
           end
     endcase
     if (receiver_clear) begin
-      \$106  = 1'h0;
+      \$111  = 1'h0;
     end
     if (rst) begin
-      \$106  = 1'h0;
+      \$111  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$107  = stop_bit;
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    \$112  = stop_bit;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
@@ -5698,112 +6010,112 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
           /* empty */;
       3'h3:
           if (sample) begin
-            \$107  = \bit ;
+            \$112  = \bit ;
           end
     endcase
     if (receiver_clear) begin
-      \$107  = 1'h0;
+      \$112  = 1'h0;
     end
     if (rst) begin
-      \$107  = 1'h0;
+      \$112  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$108  = data0;
-    if (\$58 ) begin
-      \$108  = { data0[53:0], \bit  };
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    \$113  = data0;
+    if (\$66 ) begin
+      \$113  = { data0[53:0], \bit  };
     end
     if (receiver_clear) begin
-      \$108  = 55'h00000000000000;
+      \$113  = 55'h00000000000000;
     end
     if (rst) begin
-      \$108  = 55'h00000000000000;
+      \$113  = 55'h00000000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$109  = ne;
-    if (\$59 ) begin
-      \$109 [0] = 1'h1;
-    end else if (\$63 ) begin
-      \$109 [0] = \bit ;
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    \$114  = ne;
+    if (\$67 ) begin
+      \$114 [0] = 1'h1;
+    end else if (\$71 ) begin
+      \$114 [0] = \bit ;
     end
-    if (\$71 ) begin
-      \$109 [1] = 1'h1;
+    if (\$79 ) begin
+      \$114 [1] = 1'h1;
+    end else if (\$83 ) begin
+      \$114 [1] = \bit ;
+    end
+    if (receiver_clear) begin
+      \$114  = 2'h0;
+    end
+    if (rst) begin
+      \$114  = 2'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    \$115  = nw;
+    if (\$67 ) begin
+      \$115 [0] = 1'h1;
+    end else if (\$71 ) begin
     end else if (\$75 ) begin
-      \$109 [1] = \bit ;
+      \$115 [0] = \bit ;
+    end
+    if (\$79 ) begin
+      \$115 [1] = 1'h1;
+    end else if (\$83 ) begin
+    end else if (\$87 ) begin
+      \$115 [1] = \bit ;
     end
     if (receiver_clear) begin
-      \$109  = 2'h0;
+      \$115  = 2'h0;
     end
     if (rst) begin
-      \$109  = 2'h0;
+      \$115  = 2'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$110  = nw;
-    if (\$59 ) begin
-      \$110 [0] = 1'h1;
-    end else if (\$63 ) begin
-    end else if (\$67 ) begin
-      \$110 [0] = \bit ;
-    end
-    if (\$71 ) begin
-      \$110 [1] = 1'h1;
-    end else if (\$75 ) begin
-    end else if (\$79 ) begin
-      \$110 [1] = \bit ;
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    \$116  = data1;
+    if (\$78 ) begin
+      \$116  = { data1[38:0], \bit  };
     end
     if (receiver_clear) begin
-      \$110  = 2'h0;
+      \$116  = 40'h0000000000;
     end
     if (rst) begin
-      \$110  = 2'h0;
+      \$116  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$111  = data1;
-    if (\$70 ) begin
-      \$111  = { data1[38:0], \bit  };
-    end
-    if (receiver_clear) begin
-      \$111  = 40'h0000000000;
-    end
-    if (rst) begin
-      \$111  = 40'h0000000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$112  = lc;
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    \$117  = lc;
     if (lc_load) begin
-      \$112  = { lc[4:0], \bit  };
+      \$117  = { lc[4:0], \bit  };
     end
     if (receiver_clear) begin
-      \$112  = 6'h00;
+      \$117  = 6'h00;
     end
     if (rst) begin
-      \$112  = 6'h00;
+      \$117  = 6'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$113  = cpw_top;
-    if (\$80 ) begin
-      \$113  = { cpw_top[38:0], \bit  };
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    \$118  = cpw_top;
+    if (\$88 ) begin
+      \$118  = { cpw_top[38:0], \bit  };
     end
     if (receiver_clear) begin
-      \$113  = 40'h0000000000;
+      \$118  = 40'h0000000000;
     end
     if (rst) begin
-      \$113  = 40'h0000000000;
+      \$118  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
     in_word = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -5815,10 +6127,10 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
     endcase
   end
   assign lc_next = { lc[4:0], \bit  };
-  assign kind = words[9:8];
-  assign \bit$47  = \bit ;
-  assign \kind$50  = words[19:18];
-  assign \bit$53  = \bit ;
+  assign \crcs$46  = crcs;
+  assign \bit$51  = \bit ;
+  assign ok = crc_ok;
+  assign \word$54  = word;
   assign \words[0]  = words[9:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -5829,368 +6141,358 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , rec
   assign \words[1].nenw  = words[16];
   assign \words[1].lc  = words[17];
   assign \words[1].crc  = words[19:18];
-  assign crc_ok[1] = \ok$54 ;
-  assign crc_ok[0] = ok;
-  assign \$68  = word;
-  assign \$72  = word;
+  assign \crcs[0]  = crcs[37:0];
+  assign \crcs[0].width  = crcs[4:0];
+  assign \crcs[0].poly  = crcs[20:5];
+  assign \crcs[0].start  = crcs[36:21];
+  assign \crcs[0].inverted  = crcs[37];
+  assign \crcs[1]  = crcs[75:38];
+  assign \crcs[1].width  = crcs[42:38];
+  assign \crcs[1].poly  = crcs[58:43];
+  assign \crcs[1].start  = crcs[74:59];
+  assign \crcs[1].inverted  = crcs[75];
+  assign \crcs$46[0]  = crcs[37:0];
+  assign \crcs$46[0].width  = crcs[4:0];
+  assign \crcs$46[0].poly  = crcs[20:5];
+  assign \crcs$46[0].start  = crcs[36:21];
+  assign \crcs$46[0].inverted  = crcs[37];
+  assign \crcs$46[1]  = crcs[75:38];
+  assign \crcs$46[1].width  = crcs[42:38];
+  assign \crcs$46[1].poly  = crcs[58:43];
+  assign \crcs$46[1].start  = crcs[74:59];
+  assign \crcs$46[1].inverted  = crcs[75];
   assign \$76  = word;
-  assign \$85  = word;
-  assign \$88  = word;
+  assign \$80  = word;
+  assign \$84  = word;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.decoder.crc0 (rst, start, valid, kind, \bit , receiver_clear, ok, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$42  = 0;
-  wire [5:0] \$1 ;
-  wire \$10 ;
-  wire [5:0] \$11 ;
-  wire \$12 ;
+module \biss_master.decoder.crc (rst, first, \cover , check, last, \bit , crcs, receiver_clear, word, ok, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$34  = 0;
+  reg [15:0] \$1 ;
+  wire [15:0] \$10 ;
+  reg [15:0] \$11 ;
+  wire [15:0] \$12 ;
   wire \$13 ;
   wire \$14 ;
-  wire \$15 ;
+  reg [15:0] \$15 ;
   wire [15:0] \$16 ;
-  wire [15:0] \$17 ;
+  reg [4:0] \$17 ;
   wire \$18 ;
-  wire [15:0] \$19 ;
-  wire [5:0] \$2 ;
-  wire [15:0] \$20 ;
-  wire [15:0] \$21 ;
+  wire \$19 ;
+  wire [15:0] \$2 ;
+  reg \$20 ;
+  wire \$21 ;
   wire \$22 ;
   wire \$23 ;
-  wire [15:0] \$24 ;
+  wire \$24 ;
   wire \$25 ;
-  wire [15:0] \$26 ;
-  wire \$27 ;
-  wire \$28 ;
+  reg [15:0] \$26 ;
+  wire [15:0] \$27 ;
+  reg [4:0] \$28 ;
   wire \$29 ;
-  wire \$3 ;
+  reg [15:0] \$3 ;
   wire \$30 ;
-  reg [5:0] \$31 ;
-  reg \$32 ;
-  reg [15:0] \$33 ;
-  reg \$34 ;
-  wire [1:0] \$4 ;
-  wire [5:0] \$5 ;
-  wire [5:0] \$6 ;
+  reg \$31 ;
+  wire \$32 ;
+  wire \$33 ;
+  wire \$34 ;
+  wire \$35 ;
+  wire \$36 ;
+  wire \$37 ;
+  reg [15:0] \$38 ;
+  wire [15:0] \$39 ;
+  wire [15:0] \$4 ;
+  reg [4:0] \$40 ;
+  wire \$41 ;
+  wire \$42 ;
+  reg \$43 ;
+  wire \$44 ;
+  wire \$45 ;
+  wire \$46 ;
+  wire \$47 ;
+  reg [15:0] \$48 ;
+  reg \$49 ;
+  reg [4:0] \$5 ;
+  reg [1:0] \$50 ;
+  wire \$6 ;
   wire \$7 ;
-  wire \$8 ;
-  wire [5:0] \$9 ;
-  wire [1:0] \$auto$rtlil.cc:2739:Not$10 ;
-  wire [6:0] \$auto$rtlil.cc:2739:Not$12 ;
+  reg [15:0] \$8 ;
+  wire [15:0] \$9 ;
   input \bit ;
   wire \bit ;
+  input check;
+  wire check;
   input clk;
   wire clk;
-  reg crc16_match = 1'h0;
-  reg [15:0] crc16_reg = 16'h0000;
-  reg crc6_match = 1'h0;
-  reg [5:0] crc6_reg = 6'h00;
-  input [1:0] kind;
-  wire [1:0] kind;
-  output ok;
-  reg ok;
+  input \cover ;
+  wire \cover ;
+  input [75:0] crcs;
+  wire [75:0] crcs;
+  wire [37:0] \crcs[0] ;
+  wire \crcs[0].inverted ;
+  wire [15:0] \crcs[0].poly ;
+  wire [15:0] \crcs[0].start ;
+  wire [4:0] \crcs[0].width ;
+  wire [37:0] \crcs[1] ;
+  wire \crcs[1].inverted ;
+  wire [15:0] \crcs[1].poly ;
+  wire [15:0] \crcs[1].start ;
+  wire [4:0] \crcs[1].width ;
+  input first;
+  wire first;
+  input last;
+  wire last;
+  reg mismatch = 1'h0;
+  output [1:0] ok;
+  reg [1:0] ok = 2'h3;
   input receiver_clear;
   wire receiver_clear;
+  reg [15:0] \reg  = 16'h0000;
   input rst;
   wire rst;
-  input start;
-  wire start;
-  input valid;
-  wire valid;
-  assign \$1  = start ? 6'h00 : crc6_reg;
-  assign \$2  = start ? 6'h00 : crc6_reg;
-  assign \$3  = \$2 [5] ^ \bit ;
-  assign \$4  = \$3  ? 2'h3 : 2'h0;
-  assign \$5  = { \$1 [4:0], 1'h0 } ^ { 4'h0, \$4  };
-  assign \$6  = start ? 6'h00 : crc6_reg;
-  assign \$7  = \$6 [5] ^ \bit ;
-  assign \$9  = start ? 6'h00 : crc6_reg;
-  assign \$10  = \$9 [5] ^ \bit ;
-  assign \$12  = \$11  == 2'h2;
-  assign \$13  = crc6_reg[4:0] == 5'h01;
-  assign \$14  = \$10  ? \$12  : \$13 ;
-  assign \$15  = start ? 1'h0 : \$14 ;
-  assign \$16  = start ? 16'h0000 : crc16_reg;
-  assign \$17  = start ? 16'h0000 : crc16_reg;
-  assign \$18  = \$17 [15] ^ \bit ;
-  assign \$19  = \$18  ? 16'h90d9 : 16'h0000;
-  assign \$20  = { \$16 [14:0], 1'h0 } ^ \$19 ;
-  assign \$21  = start ? 16'h0000 : crc16_reg;
-  assign \$22  = \$21 [15] ^ \bit ;
-  assign \$24  = start ? 16'h0000 : crc16_reg;
-  assign \$25  = \$24 [15] ^ \bit ;
-  assign \$27  = \$26  == 16'he82e;
-  assign \$28  = crc16_reg[14:0] == 15'h7417;
-  assign \$29  = \$25  ? \$27  : \$28 ;
-  assign \$30  = start ? 1'h0 : \$29 ;
+  input word;
+  wire word;
   always @(posedge clk)
-    crc6_reg <= \$31 ;
+    mismatch <= \$49 ;
   always @(posedge clk)
-    crc6_match <= \$32 ;
+    ok <= \$50 ;
+  assign \$2  = first ? \$1  : \reg ;
+  assign \$4  = first ? \$3  : \reg ;
+  assign \$6  = { \$4 , 1'h0 } >> \$5 ;
+  assign \$7  = \$6  ^ \bit ;
+  assign \$9  = \$7  ? \$8  : 16'h0000;
+  assign \$10  = { \$2 [14:0], 1'h0 } ^ \$9 ;
+  assign \$12  = first ? \$11  : \reg ;
+  assign \$13  = \cover  | check;
+  assign \$14  = first ? 1'h0 : mismatch;
+  assign \$16  = first ? \$15  : \reg ;
+  assign \$18  = { \$16 , 1'h0 } >> \$17 ;
+  assign \$19  = \bit  ^ \$18 ;
+  assign \$21  = \$19  ^ \$20 ;
+  assign \$22  = check & \$21 ;
+  assign \$23  = \$14  | \$22 ;
+  assign \$24  = ! word;
+  assign \$25  = first ? 1'h0 : mismatch;
+  assign \$27  = first ? \$26  : \reg ;
+  assign \$29  = { \$27 , 1'h0 } >> \$28 ;
+  assign \$30  = \bit  ^ \$29 ;
+  assign \$32  = \$30  ^ \$31 ;
+  assign \$33  = check & \$32 ;
+  assign \$34  = \$25  | \$33 ;
+  assign \$35  = ~ \$34 ;
+  assign \$37  = first ? 1'h0 : mismatch;
+  assign \$39  = first ? \$38  : \reg ;
+  assign \$41  = { \$39 , 1'h0 } >> \$40 ;
+  assign \$42  = \bit  ^ \$41 ;
+  assign \$44  = \$42  ^ \$43 ;
+  assign \$45  = check & \$44 ;
+  assign \$46  = \$37  | \$45 ;
+  assign \$47  = ~ \$46 ;
   always @(posedge clk)
-    crc16_reg <= \$33 ;
-  always @(posedge clk)
-    crc16_match <= \$34 ;
-  assign \$auto$rtlil.cc:2739:Not$12  = ~ { crc16_reg[14], crc16_reg[11], crc16_reg[6:5], crc16_reg[3:2], 1'h0 };
-  assign \$auto$rtlil.cc:2739:Not$10  = ~ { crc6_reg[0], 1'h0 };
+    \reg  <= \$48 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
-    \$31  = crc6_reg;
-    if (valid) begin
-      \$31  = \$5 ;
-    end else if (start) begin
-      \$31  = 6'h00;
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    \$49  = mismatch;
+    if (\$13 ) begin
+      \$49  = \$23 ;
     end
     if (receiver_clear) begin
-      \$31  = 6'h00;
+      \$49  = 1'h0;
     end
     if (rst) begin
-      \$31  = 6'h00;
+      \$49  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
-    \$32  = crc6_match;
-    if (valid) begin
-      \$32  = \$15 ;
-    end else if (start) begin
-      \$32  = 1'h0;
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    \$50  = ok;
+    if (last) begin
+      if (\$24 ) begin
+        \$50 [0] = \$35 ;
+      end
+      if (\$36 ) begin
+        \$50 [1] = \$47 ;
+      end
     end
     if (receiver_clear) begin
-      \$32  = 1'h0;
+      \$50  = 2'h3;
     end
     if (rst) begin
-      \$32  = 1'h0;
+      \$50  = 2'h3;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
-    \$33  = crc16_reg;
-    if (valid) begin
-      \$33  = \$20 ;
-    end else if (start) begin
-      \$33  = 16'h0000;
-    end
-    if (receiver_clear) begin
-      \$33  = 16'h0000;
-    end
-    if (rst) begin
-      \$33  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
-    \$34  = crc16_match;
-    if (valid) begin
-      \$34  = \$30 ;
-    end else if (start) begin
-      \$34  = 1'h0;
-    end
-    if (receiver_clear) begin
-      \$34  = 1'h0;
-    end
-    if (rst) begin
-      \$34  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
-    ok = 1'h0;
-    casez (kind)
-      2'h0:
-          ok = 1'h1;
-      2'h1:
-          ok = crc6_match;
-      2'h2:
-          ok = crc16_match;
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    (* full_case = 32'd1 *)
+    casez (word)
+      1'h0:
+          \$1  = crcs[36:21];
+      1'h1:
+          \$1  = crcs[74:59];
     endcase
   end
-  assign \$8  = 1'h0;
-  assign \$11 [5:2] = crc6_reg[4:1];
-  assign \$11 [1:0] = \$auto$rtlil.cc:2739:Not$10 ;
-  assign \$23  = 1'h0;
-  assign { \$26 [14:13], \$26 [11:8], \$26 [5], \$26 [2:1] } = { crc16_reg[13:12], crc16_reg[10:7], crc16_reg[4], crc16_reg[1:0] };
-  assign { \$26 [15], \$26 [12], \$26 [7:6], \$26 [4:3], \$26 [0] } = \$auto$rtlil.cc:2739:Not$12 ;
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master.decoder.crc1 (rst, start, valid, kind, \bit , receiver_clear, ok, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$43  = 0;
-  wire [5:0] \$1 ;
-  wire \$10 ;
-  wire [5:0] \$11 ;
-  wire \$12 ;
-  wire \$13 ;
-  wire \$14 ;
-  wire \$15 ;
-  wire [15:0] \$16 ;
-  wire [15:0] \$17 ;
-  wire \$18 ;
-  wire [15:0] \$19 ;
-  wire [5:0] \$2 ;
-  wire [15:0] \$20 ;
-  wire [15:0] \$21 ;
-  wire \$22 ;
-  wire \$23 ;
-  wire [15:0] \$24 ;
-  wire \$25 ;
-  wire [15:0] \$26 ;
-  wire \$27 ;
-  wire \$28 ;
-  wire \$29 ;
-  wire \$3 ;
-  wire \$30 ;
-  reg [5:0] \$31 ;
-  reg \$32 ;
-  reg [15:0] \$33 ;
-  reg \$34 ;
-  wire [1:0] \$4 ;
-  wire [5:0] \$5 ;
-  wire [5:0] \$6 ;
-  wire \$7 ;
-  wire \$8 ;
-  wire [5:0] \$9 ;
-  wire [1:0] \$auto$rtlil.cc:2739:Not$6 ;
-  wire [6:0] \$auto$rtlil.cc:2739:Not$8 ;
-  input \bit ;
-  wire \bit ;
-  input clk;
-  wire clk;
-  reg crc16_match = 1'h0;
-  reg [15:0] crc16_reg = 16'h0000;
-  reg crc6_match = 1'h0;
-  reg [5:0] crc6_reg = 6'h00;
-  input [1:0] kind;
-  wire [1:0] kind;
-  output ok;
-  reg ok;
-  input receiver_clear;
-  wire receiver_clear;
-  input rst;
-  wire rst;
-  input start;
-  wire start;
-  input valid;
-  wire valid;
-  assign \$1  = start ? 6'h00 : crc6_reg;
-  assign \$2  = start ? 6'h00 : crc6_reg;
-  assign \$3  = \$2 [5] ^ \bit ;
-  assign \$4  = \$3  ? 2'h3 : 2'h0;
-  assign \$5  = { \$1 [4:0], 1'h0 } ^ { 4'h0, \$4  };
-  assign \$6  = start ? 6'h00 : crc6_reg;
-  assign \$7  = \$6 [5] ^ \bit ;
-  assign \$9  = start ? 6'h00 : crc6_reg;
-  assign \$10  = \$9 [5] ^ \bit ;
-  assign \$12  = \$11  == 2'h2;
-  assign \$13  = crc6_reg[4:0] == 5'h01;
-  assign \$14  = \$10  ? \$12  : \$13 ;
-  assign \$15  = start ? 1'h0 : \$14 ;
-  assign \$16  = start ? 16'h0000 : crc16_reg;
-  assign \$17  = start ? 16'h0000 : crc16_reg;
-  assign \$18  = \$17 [15] ^ \bit ;
-  assign \$19  = \$18  ? 16'h90d9 : 16'h0000;
-  assign \$20  = { \$16 [14:0], 1'h0 } ^ \$19 ;
-  assign \$21  = start ? 16'h0000 : crc16_reg;
-  assign \$22  = \$21 [15] ^ \bit ;
-  assign \$24  = start ? 16'h0000 : crc16_reg;
-  assign \$25  = \$24 [15] ^ \bit ;
-  assign \$27  = \$26  == 16'he82e;
-  assign \$28  = crc16_reg[14:0] == 15'h7417;
-  assign \$29  = \$25  ? \$27  : \$28 ;
-  assign \$30  = start ? 1'h0 : \$29 ;
-  always @(posedge clk)
-    crc6_reg <= \$31 ;
-  always @(posedge clk)
-    crc6_match <= \$32 ;
-  always @(posedge clk)
-    crc16_reg <= \$33 ;
-  always @(posedge clk)
-    crc16_match <= \$34 ;
-  assign \$auto$rtlil.cc:2739:Not$6  = ~ { crc6_reg[0], 1'h0 };
-  assign \$auto$rtlil.cc:2739:Not$8  = ~ { crc16_reg[14], crc16_reg[11], crc16_reg[6:5], crc16_reg[3:2], 1'h0 };
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
-    \$31  = crc6_reg;
-    if (valid) begin
-      \$31  = \$5 ;
-    end else if (start) begin
-      \$31  = 6'h00;
-    end
-    if (receiver_clear) begin
-      \$31  = 6'h00;
-    end
-    if (rst) begin
-      \$31  = 6'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
-    \$32  = crc6_match;
-    if (valid) begin
-      \$32  = \$15 ;
-    end else if (start) begin
-      \$32  = 1'h0;
-    end
-    if (receiver_clear) begin
-      \$32  = 1'h0;
-    end
-    if (rst) begin
-      \$32  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
-    \$33  = crc16_reg;
-    if (valid) begin
-      \$33  = \$20 ;
-    end else if (start) begin
-      \$33  = 16'h0000;
-    end
-    if (receiver_clear) begin
-      \$33  = 16'h0000;
-    end
-    if (rst) begin
-      \$33  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
-    \$34  = crc16_match;
-    if (valid) begin
-      \$34  = \$30 ;
-    end else if (start) begin
-      \$34  = 1'h0;
-    end
-    if (receiver_clear) begin
-      \$34  = 1'h0;
-    end
-    if (rst) begin
-      \$34  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
-    ok = 1'h0;
-    casez (kind)
-      2'h0:
-          ok = 1'h1;
-      2'h1:
-          ok = crc6_match;
-      2'h2:
-          ok = crc16_match;
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    (* full_case = 32'd1 *)
+    casez (word)
+      1'h0:
+          \$3  = crcs[36:21];
+      1'h1:
+          \$3  = crcs[74:59];
     endcase
   end
-  assign \$8  = 1'h0;
-  assign \$11 [5:2] = crc6_reg[4:1];
-  assign \$11 [1:0] = \$auto$rtlil.cc:2739:Not$6 ;
-  assign \$23  = 1'h0;
-  assign { \$26 [14:13], \$26 [11:8], \$26 [5], \$26 [2:1] } = { crc16_reg[13:12], crc16_reg[10:7], crc16_reg[4], crc16_reg[1:0] };
-  assign { \$26 [15], \$26 [12], \$26 [7:6], \$26 [4:3], \$26 [0] } = \$auto$rtlil.cc:2739:Not$8 ;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    (* full_case = 32'd1 *)
+    casez (word)
+      1'h0:
+          \$5  = crcs[4:0];
+      1'h1:
+          \$5  = crcs[42:38];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    (* full_case = 32'd1 *)
+    casez (word)
+      1'h0:
+          \$8  = crcs[20:5];
+      1'h1:
+          \$8  = crcs[58:43];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    (* full_case = 32'd1 *)
+    casez (word)
+      1'h0:
+          \$11  = crcs[36:21];
+      1'h1:
+          \$11  = crcs[74:59];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    (* full_case = 32'd1 *)
+    casez (word)
+      1'h0:
+          \$15  = crcs[36:21];
+      1'h1:
+          \$15  = crcs[74:59];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    (* full_case = 32'd1 *)
+    casez (word)
+      1'h0:
+          \$17  = crcs[4:0];
+      1'h1:
+          \$17  = crcs[42:38];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    (* full_case = 32'd1 *)
+    casez (word)
+      1'h0:
+          \$20  = crcs[37];
+      1'h1:
+          \$20  = crcs[75];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    (* full_case = 32'd1 *)
+    casez (word)
+      1'h0:
+          \$26  = crcs[36:21];
+      1'h1:
+          \$26  = crcs[74:59];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    (* full_case = 32'd1 *)
+    casez (word)
+      1'h0:
+          \$28  = crcs[4:0];
+      1'h1:
+          \$28  = crcs[42:38];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    (* full_case = 32'd1 *)
+    casez (word)
+      1'h0:
+          \$31  = crcs[37];
+      1'h1:
+          \$31  = crcs[75];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    (* full_case = 32'd1 *)
+    casez (word)
+      1'h0:
+          \$38  = crcs[36:21];
+      1'h1:
+          \$38  = crcs[74:59];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    (* full_case = 32'd1 *)
+    casez (word)
+      1'h0:
+          \$40  = crcs[4:0];
+      1'h1:
+          \$40  = crcs[42:38];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    (* full_case = 32'd1 *)
+    casez (word)
+      1'h0:
+          \$43  = crcs[37];
+      1'h1:
+          \$43  = crcs[75];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    \$48  = \reg ;
+    if (\cover ) begin
+      \$48  = \$10 ;
+    end else if (check) begin
+      \$48  = { \$12 [14:0], 1'h0 };
+    end
+    if (receiver_clear) begin
+      \$48  = 16'h0000;
+    end
+    if (rst) begin
+      \$48  = 16'h0000;
+    end
+  end
+  assign \crcs[0]  = crcs[37:0];
+  assign \crcs[0].width  = crcs[4:0];
+  assign \crcs[0].poly  = crcs[20:5];
+  assign \crcs[0].start  = crcs[36:21];
+  assign \crcs[0].inverted  = crcs[37];
+  assign \crcs[1]  = crcs[75:38];
+  assign \crcs[1].width  = crcs[42:38];
+  assign \crcs[1].poly  = crcs[58:43];
+  assign \crcs[1].start  = crcs[74:59];
+  assign \crcs[1].inverted  = crcs[75];
+  assign \$36  = word;
 endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.delay_check (rst, enable, rearm, check, clean, \tolerance$8 , learn, delay, jump, spread, settled_delay, settled, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$44  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$35  = 0;
   wire [13:0] \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -6362,56 +6664,56 @@ module \biss_master.delay_check (rst, enable, rearm, check, clean, \tolerance$8 
   assign \$39  = magnitude > spread;
   assign \$40  = \$38  & \$39 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     \$46  = \$1 ;
     if (rst) begin
       \$46  = 14'h0000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     \$47  = \$2 ;
     if (rst) begin
       \$47  = 14'h0000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     \$48  = \tolerance$8 ;
     if (rst) begin
       \$48  = 17'h00000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     \$49  = \$3 ;
     if (rst) begin
       \$49  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     \$50  = \$11 ;
     if (rst) begin
       \$50  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     \$51  = \$20 ;
     if (rst) begin
       \$51  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     \$52  = \$25 ;
     if (rst) begin
       \$52  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     \$53  = 1'h0;
     if (learn) begin
       if (\$32 ) begin
@@ -6428,7 +6730,7 @@ module \biss_master.delay_check (rst, enable, rearm, check, clean, \tolerance$8 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     \$54  = jump;
     if (check) begin
       \$54  = \$26 ;
@@ -6441,7 +6743,7 @@ module \biss_master.delay_check (rst, enable, rearm, check, clean, \tolerance$8 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     \$55  = count;
     if (learn) begin
       (* full_case = 32'd1 *)
@@ -6463,7 +6765,7 @@ module \biss_master.delay_check (rst, enable, rearm, check, clean, \tolerance$8 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     \$56  = spread;
     if (learn) begin
       if (\$32 ) begin
@@ -6483,7 +6785,7 @@ module \biss_master.delay_check (rst, enable, rearm, check, clean, \tolerance$8 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     \$57  = cand;
     if (learn) begin
       if (\$32 ) begin
@@ -6496,7 +6798,7 @@ module \biss_master.delay_check (rst, enable, rearm, check, clean, \tolerance$8 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     \$58  = settled_delay;
     if (learn) begin
       if (\$32 ) begin
@@ -6513,7 +6815,7 @@ module \biss_master.delay_check (rst, enable, rearm, check, clean, \tolerance$8 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     \$59  = settled;
     if (learn) begin
       if (\$32 ) begin
@@ -6533,7 +6835,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.line_noise (rst, sampler_noise, noisy, events, limit, watch, restart, level, close, \event , clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$45  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$36  = 0;
   wire \$1 ;
   reg \$10 ;
   reg \$11 ;
@@ -6596,21 +6898,21 @@ module \biss_master.line_noise (rst, sampler_noise, noisy, events, limit, watch,
   always @(posedge clk)
     running <= \$14 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
     \$10  = level;
     if (rst) begin
       \$10  = 1'h1;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
     \$11  = \$4 ;
     if (rst) begin
       \$11  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
     \$12  = held_noisy;
     if (close) begin
       \$12  = \$7 ;
@@ -6620,7 +6922,7 @@ module \biss_master.line_noise (rst, sampler_noise, noisy, events, limit, watch,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
     \$13  = held_events;
     if (close) begin
       \$13  = running;
@@ -6630,7 +6932,7 @@ module \biss_master.line_noise (rst, sampler_noise, noisy, events, limit, watch,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
     \$14  = running;
     if (close) begin
       \$14  = { 3'h0, \event  };
@@ -6647,7 +6949,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_rise, second_rise, ma, rises, busy, held, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$46  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$37  = 0;
   wire [16:0] \$1 ;
   wire \$10 ;
   wire [16:0] \$11 ;
@@ -6772,7 +7074,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
   always @(posedge clk)
     released <= \$42 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     \$34  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -6787,7 +7089,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     \$35  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -6802,7 +7104,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     \$36  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -6817,7 +7119,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     \$37  = ma;
     casez (ma_fsm_state)
       3'h0:
@@ -6846,7 +7148,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     \$38  = phase_left;
     casez (ma_fsm_state)
       3'h0:
@@ -6888,7 +7190,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     \$39  = last_clock;
     casez (ma_fsm_state)
       3'h0:
@@ -6930,7 +7232,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     \$40  = rises;
     casez (ma_fsm_state)
       3'h0:
@@ -6949,7 +7251,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     \$41  = ma_fsm_state;
     casez (ma_fsm_state)
       3'h0:
@@ -6985,7 +7287,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     \$42  = released;
     casez (ma_fsm_state)
       3'h0:
@@ -7009,7 +7311,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     busy = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -7025,7 +7327,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     held = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -7041,22 +7343,24 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.ma_stop (rst, words, w1_enable, clear, rises, enough, \started$10 , start_slot, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$47  = 0;
+module \biss_master.ma_stop (rst, words, w1_enable, crcs, clear, rises, enough, \started$11 , start_slot, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$38  = 0;
   reg [7:0] \$1 ;
-  reg [7:0] \$10 ;
-  wire [8:0] \$11 ;
-  reg [7:0] \$12 ;
-  reg [8:0] \$13 ;
-  reg [16:0] \$14 ;
-  reg \$15 ;
-  reg \$16 ;
-  reg [7:0] \$17 ;
+  wire \$10 ;
+  reg [7:0] \$11 ;
+  wire [8:0] \$12 ;
+  wire [8:0] \$13 ;
+  reg [7:0] \$14 ;
+  reg [8:0] \$15 ;
+  reg [16:0] \$16 ;
+  reg \$17 ;
+  reg \$18 ;
+  reg [7:0] \$19 ;
   wire [8:0] \$2 ;
-  wire [7:0] \$3 ;
-  wire [8:0] \$4 ;
-  wire [16:0] \$5 ;
-  wire \$6 ;
+  wire [8:0] \$3 ;
+  wire [7:0] \$4 ;
+  wire [8:0] \$5 ;
+  wire [16:0] \$6 ;
   wire \$7 ;
   wire \$8 ;
   wire \$9 ;
@@ -7064,6 +7368,18 @@ module \biss_master.ma_stop (rst, words, w1_enable, clear, rises, enough, \start
   wire clear;
   input clk;
   wire clk;
+  input [75:0] crcs;
+  wire [75:0] crcs;
+  wire [37:0] \crcs[0] ;
+  wire \crcs[0].inverted ;
+  wire [15:0] \crcs[0].poly ;
+  wire [15:0] \crcs[0].start ;
+  wire [4:0] \crcs[0].width ;
+  wire [37:0] \crcs[1] ;
+  wire \crcs[1].inverted ;
+  wire [15:0] \crcs[1].poly ;
+  wire [15:0] \crcs[1].start ;
+  wire [4:0] \crcs[1].width ;
   output enough;
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
@@ -7074,8 +7390,8 @@ module \biss_master.ma_stop (rst, words, w1_enable, clear, rises, enough, \start
   input [15:0] start_slot;
   wire [15:0] start_slot;
   reg started = 1'h0;
-  input \started$10 ;
-  wire \started$10 ;
+  input \started$11 ;
+  wire \started$11 ;
   reg [16:0] target_rises = 17'h00000;
   input w1_enable;
   wire w1_enable;
@@ -7088,6 +7404,7 @@ module \biss_master.ma_stop (rst, words, w1_enable, clear, rises, enough, \start
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \words[0].crc ;
   wire [5:0] \words[0].data_bits ;
   wire \words[0].lc ;
@@ -7097,147 +7414,102 @@ module \biss_master.ma_stop (rst, words, w1_enable, clear, rises, enough, \start
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \words[1].crc ;
   wire [5:0] \words[1].data_bits ;
   wire \words[1].lc ;
   wire \words[1].nenw ;
-  assign \$2  = words[5:0] + \$1 ;
-  assign \$3  = w1_enable ? word1_len : 8'h00;
-  assign \$4  = word0_len + \$3 ;
-  assign \$5  = start_slot + frame_len;
-  assign \$6  = rises >= target_rises;
-  assign \$7  = started & \$6 ;
-  assign \$8  = ~ clear;
-  assign \$9  = \$7  & \$8 ;
-  assign \$11  = words[15:10] + \$10 ;
+  assign \$2  = \$1  + crcs[4:0];
+  assign \$3  = words[5:0] + \$2 [7:0];
+  assign \$4  = w1_enable ? word1_len : 8'h00;
+  assign \$5  = word0_len + \$4 ;
+  assign \$6  = start_slot + frame_len;
+  assign \$7  = rises >= target_rises;
+  assign \$8  = started & \$7 ;
+  assign \$9  = ~ clear;
+  assign \$10  = \$8  & \$9 ;
+  assign \$12  = \$11  + crcs[42:38];
+  assign \$13  = words[15:10] + \$12 [7:0];
   always @(posedge clk)
-    word0_len <= \$12 ;
+    word0_len <= \$14 ;
   always @(posedge clk)
-    frame_len <= \$13 ;
+    frame_len <= \$15 ;
   always @(posedge clk)
-    target_rises <= \$14 ;
+    target_rises <= \$16 ;
   always @(posedge clk)
-    started <= \$15 ;
+    started <= \$17 ;
   always @(posedge clk)
-    enough <= \$16 ;
+    enough <= \$18 ;
   always @(posedge clk)
-    word1_len <= \$17 ;
+    word1_len <= \$19 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     (* full_case = 32'd1 *)
-    casez (words[9:6])
-      4'h0:
+    casez (words[7:6])
+      2'h0:
           \$1  = 8'h04;
-      4'h1:
+      2'h1:
           \$1  = 8'h06;
-      4'h2:
+      2'h2:
           \$1  = 8'h0a;
-      4'h3:
-          \$1  = 8'h0c;
-      4'h4:
-          \$1  = 8'h0a;
-      4'h5:
-          \$1  = 8'h0c;
-      4'h6:
-          \$1  = 8'h10;
-      4'h7:
-          \$1  = 8'h12;
-      4'h8:
-          \$1  = 8'h14;
-      4'h9:
-          \$1  = 8'h16;
-      4'ha:
-          \$1  = 8'h1a;
-      4'hb:
-          \$1  = 8'h1c;
-      4'hc:
-          \$1  = 8'h04;
-      4'hd:
-          \$1  = 8'h06;
-      4'he:
-          \$1  = 8'h0a;
-      4'hf:
+      2'h3:
           \$1  = 8'h0c;
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     (* full_case = 32'd1 *)
-    casez (words[19:16])
-      4'h0:
-          \$10  = 8'h00;
-      4'h1:
-          \$10  = 8'h02;
-      4'h2:
-          \$10  = 8'h06;
-      4'h3:
-          \$10  = 8'h08;
-      4'h4:
-          \$10  = 8'h06;
-      4'h5:
-          \$10  = 8'h08;
-      4'h6:
-          \$10  = 8'h0c;
-      4'h7:
-          \$10  = 8'h0e;
-      4'h8:
-          \$10  = 8'h10;
-      4'h9:
-          \$10  = 8'h12;
-      4'ha:
-          \$10  = 8'h16;
-      4'hb:
-          \$10  = 8'h18;
-      4'hc:
-          \$10  = 8'h00;
-      4'hd:
-          \$10  = 8'h02;
-      4'he:
-          \$10  = 8'h06;
-      4'hf:
-          \$10  = 8'h08;
+    casez (words[17:16])
+      2'h0:
+          \$11  = 8'h00;
+      2'h1:
+          \$11  = 8'h02;
+      2'h2:
+          \$11  = 8'h06;
+      2'h3:
+          \$11  = 8'h08;
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$12  = \$2 [7:0];
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    \$14  = \$3 [7:0];
     if (rst) begin
-      \$12  = 8'h00;
+      \$14  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$13  = \$4 ;
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    \$15  = \$5 ;
     if (rst) begin
-      \$13  = 9'h000;
+      \$15  = 9'h000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$14  = \$5 ;
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    \$16  = \$6 ;
     if (rst) begin
-      \$14  = 17'h00000;
+      \$16  = 17'h00000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$15  = \started$10 ;
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    \$17  = \started$11 ;
     if (rst) begin
-      \$15  = 1'h0;
+      \$17  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$16  = \$9 ;
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    \$18  = \$10 ;
     if (rst) begin
-      \$16  = 1'h0;
+      \$18  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$17  = \$11 [7:0];
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    \$19  = \$13 [7:0];
     if (rst) begin
-      \$17  = 8'h00;
+      \$19  = 8'h00;
     end
   end
   assign \words[0]  = words[9:0];
@@ -7250,6 +7522,16 @@ module \biss_master.ma_stop (rst, words, w1_enable, clear, rises, enough, \start
   assign \words[1].nenw  = words[16];
   assign \words[1].lc  = words[17];
   assign \words[1].crc  = words[19:18];
+  assign \crcs[0]  = crcs[37:0];
+  assign \crcs[0].width  = crcs[4:0];
+  assign \crcs[0].poly  = crcs[20:5];
+  assign \crcs[0].start  = crcs[36:21];
+  assign \crcs[0].inverted  = crcs[37];
+  assign \crcs[1]  = crcs[75:38];
+  assign \crcs[1].width  = crcs[42:38];
+  assign \crcs[1].poly  = crcs[58:43];
+  assign \crcs[1].start  = crcs[74:59];
+  assign \crcs[1].inverted  = crcs[75];
 endmodule
 
 (* generator = "Amaranth" *)
@@ -7546,7 +7828,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.register_access.buffers (host_read__en, clk, rst, byte_to_send, rbuf_data, wbuf, index, store, byte_received, host_read__addr);
-  reg \$auto$verilog_backend.cc:2355:dump_module$48  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$39  = 0;
   wire \$1 ;
   wire \$2 ;
   wire \$3 ;
@@ -7663,21 +7945,21 @@ module \biss_master.register_access.buffers (host_read__en, clk, rst, byte_to_se
   assign \$1  = ! index[1:0];
   assign \$2  = index[1:0] == 1'h1;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     byte_received__addr = 4'h0;
     if (store) begin
       byte_received__addr = index[5:2];
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     byte_received__data = 32'd0;
     if (store) begin
       byte_received__data = { byte_received, byte_received, byte_received, byte_received };
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     byte_received__en = 4'h0;
     if (store) begin
       byte_received__en = { \$4 , \$3 , \$2 , \$1  };
@@ -7697,7 +7979,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.register_access.checker (rst, crc_ok, echo_ok, cds, control__take_data, start, control__take_crc, sent, \byte , clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$49  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$40  = 0;
   reg [7:0] \$1 ;
   reg [2:0] \$2 ;
   output [7:0] \byte ;
@@ -7740,7 +8022,7 @@ module \biss_master.register_access.checker (rst, crc_ok, echo_ok, cds, control_
     .valid(control__take_data)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
     \$1  = \byte ;
     if (control__take_data) begin
       \$1  = { \byte [6:0], cds };
@@ -7750,7 +8032,7 @@ module \biss_master.register_access.checker (rst, crc_ok, echo_ok, cds, control_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
     \$2  = got_crc;
     if (control__take_crc) begin
       \$2  = { got_crc[1:0], cds };
@@ -7766,7 +8048,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.register_access.checker.rx_crc (rst, crc, data_in, valid, start, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$50  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$41  = 0;
   wire [3:0] \$1 ;
   wire \$10 ;
   wire [3:0] \$11 ;
@@ -7809,7 +8091,7 @@ module \biss_master.register_access.checker.rx_crc (rst, crc, data_in, valid, st
     crc_reg <= \$13 ;
   assign \$auto$rtlil.cc:2739:Not$2  = ~ crc_reg;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     \$13  = crc_reg;
     if (valid) begin
       \$13 [0] = \$3 ;
@@ -7833,7 +8115,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.register_access.idle (rst, frame_end, frame_ok, run_enough, seen_enough, frame_cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$42  = 0;
   wire \$1 ;
   wire [4:0] \$10 ;
   wire \$11 ;
@@ -7903,7 +8185,7 @@ module \biss_master.register_access.idle (rst, frame_end, frame_ok, run_enough, 
   always @(posedge clk)
     idle_seen <= \$24 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
     \$23  = idle_run;
     if (frame_end) begin
       \$23  = \$4 [3:0];
@@ -7913,7 +8195,7 @@ module \biss_master.register_access.idle (rst, frame_end, frame_ok, run_enough, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
     \$24  = idle_seen;
     if (frame_end) begin
       \$24  = \$10 [3:0];
@@ -7926,7 +8208,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.register_access.sender (rst, \byte , request, control__load_header, control__source, control__crc_bit, control__shift_header, start, valid, control__load_byte, control__shift_byte, sent, cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$52  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$43  = 0;
   wire \$1 ;
   wire [18:0] \$2 ;
   wire [8:0] \$3 ;
@@ -7998,7 +8280,7 @@ module \biss_master.register_access.sender (rst, \byte , request, control__load_
     .valid(valid)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     \$6  = header;
     if (control__load_header) begin
       \$6  = { 2'h3, request[2:0], request[9:3], 4'h0, \$1 , request[17] };
@@ -8011,7 +8293,7 @@ module \biss_master.register_access.sender (rst, \byte , request, control__load_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     \$7  = to_send;
     if (control__load_byte) begin
       \$7  = \byte ;
@@ -8024,7 +8306,7 @@ module \biss_master.register_access.sender (rst, \byte , request, control__load_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     \$8  = sent;
     if (control__load_byte) begin
       \$8  = \byte ;
@@ -8034,7 +8316,7 @@ module \biss_master.register_access.sender (rst, \byte , request, control__load_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     cdm = 1'h0;
     casez (control__source)
       3'h1:
@@ -8059,7 +8341,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.register_access.sender.tx_crc (rst, data_in, crc, start, valid, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$53  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$44  = 0;
   wire [3:0] \$1 ;
   wire \$10 ;
   wire [3:0] \$11 ;
@@ -8102,7 +8384,7 @@ module \biss_master.register_access.sender.tx_crc (rst, data_in, crc, start, val
     crc_reg <= \$13 ;
   assign \$auto$rtlil.cc:2739:Not$4  = ~ crc_reg;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
     \$13  = crc_reg;
     if (valid) begin
       \$13 [0] = \$3 ;
@@ -8127,7 +8409,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame_ok, busy, crc_ok, echo_ok, run_enough, seen_enough, request, frame_cdm, frame_cds, done, result, index, send__load_header, send__source, send__crc_bit, send__shift_header, send__crc_start
 , send__crc_valid, send__load_byte, send__shift_byte, check__take_data, check__first, check__take_crc, store, start);
-  reg \$auto$verilog_backend.cc:2355:dump_module$54  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$45  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$100 ;
@@ -8483,7 +8765,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
   always @(posedge clk)
     waited <= \$125 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
     \$118  = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -8521,7 +8803,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
     \$119  = result;
     casez (access_fsm_state)
       3'h0:
@@ -8575,7 +8857,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
     \$120  = access_fsm_state;
     casez (access_fsm_state)
       3'h0:
@@ -8672,7 +8954,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
     \$121  = req;
     casez (access_fsm_state)
       3'h0:
@@ -8689,7 +8971,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
     \$122  = index;
     casez (access_fsm_state)
       3'h0:
@@ -8728,7 +9010,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
     \$123  = step;
     casez (access_fsm_state)
       3'h0:
@@ -8786,7 +9068,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
     \$124  = ending;
     casez (access_fsm_state)
       3'h0:
@@ -8853,7 +9135,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
     \$125  = waited;
     casez (access_fsm_state)
       3'h0:
@@ -8885,7 +9167,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
     send__load_header = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -8899,7 +9181,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
     send__source = 3'h0;
     casez (access_fsm_state)
       3'h0:
@@ -8926,7 +9208,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
     send__crc_bit = 2'h0;
     casez (access_fsm_state)
       3'h0:
@@ -8946,7 +9228,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
     send__shift_header = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -8965,7 +9247,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
     send__crc_start = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -8994,7 +9276,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
     send__crc_valid = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -9015,7 +9297,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
     send__load_byte = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -9037,7 +9319,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
     send__shift_byte = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -9058,7 +9340,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
     check__take_data = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -9080,7 +9362,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
     check__first = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -9102,7 +9384,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
     check__take_crc = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -9126,7 +9408,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
     store = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -9165,7 +9447,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.results (rst, report_delay, report, valid, frame, report_frame, done, valid_out, result, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$55  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$46  = 0;
   reg \$1 ;
   reg \$2 ;
   reg [186:0] \$3 ;
@@ -9274,21 +9556,21 @@ module \biss_master.results (rst, report_delay, report, valid, frame, report_fra
   always @(posedge clk)
     result <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     \$1  = report;
     if (rst) begin
       \$1  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     \$2  = valid;
     if (rst) begin
       \$2  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     \$3  = result;
     if (report) begin
       \$3 [3:0] = frame[3:0];
@@ -9365,7 +9647,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear, arm, early, locked, delay, sample, level, slo);
-  reg \$auto$verilog_backend.cc:2355:dump_module$56  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$47  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$100 ;
@@ -9697,7 +9979,7 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
     .stage1(level)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     \$104  = level;
     if (receiver_clear) begin
       \$104  = 1'h1;
@@ -9707,7 +9989,7 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     \$105  = mid_delay;
     if (odd) begin
       \$105  = \$8 [12:0];
@@ -9732,7 +10014,7 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     \$106  = mid_slot;
     (* full_case = 32'd1 *)
     if (odd) begin
@@ -9759,7 +10041,7 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     \$107  = \$10 ;
     casez (sampler_fsm_state)
       2'h0:
@@ -9781,7 +10063,7 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     \$108  = last;
     if (\$12 ) begin
       \$108  = \$17 ;
@@ -9802,7 +10084,7 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     \$109  = tail_odd;
     if (\$12 ) begin
       \$109  = \$23 ;
@@ -9823,7 +10105,7 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     \$110  = elapsed;
     casez (sampler_fsm_state)
       2'h0:
@@ -9847,7 +10129,7 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     \$111  = early;
     casez (sampler_fsm_state)
       2'h0:
@@ -9863,7 +10145,7 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     \$112  = locked;
     casez (sampler_fsm_state)
       2'h0:
@@ -9889,7 +10171,7 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     \$113  = gap;
     casez (sampler_fsm_state)
       2'h0:
@@ -9920,7 +10202,7 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     \$114  = sampler_fsm_state;
     casez (sampler_fsm_state)
       2'h0:
@@ -9951,7 +10233,7 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     \$115  = slot_left;
     casez (sampler_fsm_state)
       2'h0:
@@ -10001,7 +10283,7 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     \$116  = slot_zero;
     casez (sampler_fsm_state)
       2'h0:
@@ -10051,7 +10333,7 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     \$117  = vote1;
     casez (sampler_fsm_state)
       2'h0:
@@ -10081,7 +10363,7 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     \$118  = vote2;
     casez (sampler_fsm_state)
       2'h0:
@@ -10109,7 +10391,7 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     \$119  = first_slot;
     casez (sampler_fsm_state)
       2'h0:
@@ -10135,7 +10417,7 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     \$120  = delay;
     casez (sampler_fsm_state)
       2'h0:
@@ -10158,7 +10440,7 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     \$121  = phase;
     casez (sampler_fsm_state)
       2'h0:
@@ -10198,7 +10480,7 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     sample = \$57 ;
     casez (sampler_fsm_state)
       2'h0:
@@ -10216,7 +10498,7 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     dropped = 1'h0;
     casez (sampler_fsm_state)
       2'h0:
@@ -10237,7 +10519,7 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     decided = 1'h0;
     casez (sampler_fsm_state)
       2'h0:
@@ -10287,7 +10569,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.scheduler (abort, period, clk, rst, periodic, request, overrun, idle, start);
-  reg \$auto$verilog_backend.cc:2355:dump_module$57  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$48  = 0;
   wire \$1 ;
   wire [25:0] \$10 ;
   wire \$11 ;
@@ -10378,14 +10660,14 @@ module \biss_master.scheduler (abort, period, clk, rst, periodic, request, overr
   always @(posedge clk)
     wrap <= \$31 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     \$28  = \$1 ;
     if (rst) begin
       \$28  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$29  = 25'h0000002;
@@ -10399,7 +10681,7 @@ module \biss_master.scheduler (abort, period, clk, rst, periodic, request, overr
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$30  = 1'h1;
@@ -10413,7 +10695,7 @@ module \biss_master.scheduler (abort, period, clk, rst, periodic, request, overr
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$31  = \$8 ;
@@ -10432,8 +10714,8 @@ module \biss_master.scheduler (abort, period, clk, rst, periodic, request, overr
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1559$0 , resync, lc, is_zero, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$58  = 0;
+module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1521$0 , resync, lc, is_zero, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$49  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
   wire \$11 ;
@@ -10474,8 +10756,8 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1559$0
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$1559$0 ;
-  wire \port$1559$0 ;
+  input \port$1521$0 ;
+  wire \port$1521$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -10489,9 +10771,9 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1559$0
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$1559$0  };
-  assign \$2  = { lc[4:0], \port$1559$0  } == last;
-  assign \$3  = { lc[4:0], \port$1559$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$1521$0  };
+  assign \$2  = { lc[4:0], \port$1521$0  } == last;
+  assign \$3  = { lc[4:0], \port$1521$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -10525,7 +10807,7 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1559$0
   always @(posedge clk)
     synced <= \$25 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$18  = is_zero;
     if (load) begin
       \$18  = \$1 ;
@@ -10535,7 +10817,7 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1559$0
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$19  = is_last;
     if (load) begin
       \$19  = \$2 ;
@@ -10545,7 +10827,7 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1559$0
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$20  = is_expected;
     if (load) begin
       \$20  = \$3 ;
@@ -10555,21 +10837,21 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1559$0
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$21  = \$7 ;
     if (rst) begin
       \$21  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$22  = lc;
     if (rst) begin
       \$22  = 6'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$23  = last;
     if (store) begin
       \$23  = store_lc;
@@ -10579,7 +10861,7 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1559$0
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$24  = expected;
     if (store) begin
       \$24  = \$10 [5:0];
@@ -10589,7 +10871,7 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1559$0
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$25  = synced;
     if (store) begin
       \$25  = 1'h1;
@@ -10601,13 +10883,13 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1559$0
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$1559$0  };
+  assign lc_next = { lc[4:0], \port$1521$0  };
   assign zero = is_zero;
 endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.spw_check (rst, bits, \tolerance$8 , spw, cpw_top, match, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$59  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$50  = 0;
   wire [40:0] \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -10812,28 +11094,28 @@ module \biss_master.spw_check (rst, bits, \tolerance$8 , spw, cpw_top, match, cl
   assign \$7  = bits > 3'h5;
   assign \$8  = bits > 3'h6;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$88  = \$42 ;
     if (rst) begin
       \$88  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$89  = \$84 ;
     if (rst) begin
       \$89  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$90  = \tolerance$8 ;
     if (rst) begin
       \$90  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$91  = \$87 ;
     if (rst) begin
       \$91  = 1'h0;
@@ -10843,7 +11125,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.time_base (rst, first_rise, first_rise_time, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$60  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
   wire [32:0] \$1 ;
   reg [31:0] \$2 ;
   reg [31:0] \$3 ;
@@ -10862,14 +11144,14 @@ module \biss_master.time_base (rst, first_rise, first_rise_time, clk);
   always @(posedge clk)
     first_rise_time <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$2  = \$1 [31:0];
     if (rst) begin
       \$2  = 32'd0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$3  = first_rise_time;
     if (first_rise) begin
       \$3  = now;
@@ -10883,7 +11165,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master.timers (timeout_live, quiet_time_live, clk, rst, restart, ma_busy, ack_limit, timeout_limit, delay_limit, quiet_limit, no_start_limit, clear, in_clock, slo_stuck, slo_stuck_live, quiet, quiet_live, break_over, ack_expired, no_start_expired, delay_over
 , delay, slo, break_time);
-  reg \$auto$verilog_backend.cc:2355:dump_module$61  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$52  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -11063,7 +11345,7 @@ module \biss_master.timers (timeout_live, quiet_time_live, clk, rst, restart, ma
   assign \$40  = in_clock & \$39 ;
   assign \$41  = timer >= ack_limit;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
     \$48  = slo_low_time_p1;
     if (\$2 ) begin
       \$48  = 25'h0000001;
@@ -11075,21 +11357,21 @@ module \biss_master.timers (timeout_live, quiet_time_live, clk, rst, restart, ma
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
     \$49  = \$9 ;
     if (rst) begin
       \$49  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
     \$50  = \$17 ;
     if (rst) begin
       \$50  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
     \$51  = high_p2;
     if (\$18 ) begin
       \$51  = 13'h0002;
@@ -11101,28 +11383,28 @@ module \biss_master.timers (timeout_live, quiet_time_live, clk, rst, restart, ma
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
     \$52  = \$23 ;
     if (rst) begin
       \$52  = 1'h1;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
     \$53  = \$30 ;
     if (rst) begin
       \$53  = 1'h1;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
     \$54  = \$34 [24:0];
     if (rst) begin
       \$54  = 25'h0000001;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
     (* full_case = 32'd1 *)
     if (clear) begin
       \$55  = 1'h0;
@@ -11134,21 +11416,21 @@ module \biss_master.timers (timeout_live, quiet_time_live, clk, rst, restart, ma
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
     \$56  = \$42 ;
     if (rst) begin
       \$56  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
     \$57  = \$46 ;
     if (rst) begin
       \$57  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
     \$58  = \$47 ;
     if (rst) begin
       \$58  = 1'h0;
@@ -11157,9 +11439,9 @@ module \biss_master.timers (timeout_live, quiet_time_live, clk, rst, restart, ma
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.verdict (lc_skip_seen, noisy, \port$1027$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
+module \biss_master.verdict (lc_skip_seen, noisy, \port$989$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
 , delay_jump, lc_repeat_seen);
-  reg \$auto$verilog_backend.cc:2355:dump_module$62  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$53  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -11199,8 +11481,8 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$1027$0 , lc_check, lc_re
   wire \$7 ;
   wire \$8 ;
   wire \$9 ;
-  input [174:0] cfg;
-  wire [174:0] cfg;
+  input [250:0] cfg;
+  wire [250:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
   wire [11:0] \cfg.delay_limit ;
@@ -11218,19 +11500,31 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$1027$0 , lc_check, lc_re
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \cfg.w0.crc ;
   wire [5:0] \cfg.w0.data_bits ;
   wire \cfg.w0.lc ;
   wire \cfg.w0.nenw ;
+  wire [37:0] \cfg.w0_crc ;
+  wire \cfg.w0_crc.inverted ;
+  wire [15:0] \cfg.w0_crc.poly ;
+  wire [15:0] \cfg.w0_crc.start ;
+  wire [4:0] \cfg.w0_crc.width ;
   wire [9:0] \cfg.w1 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \cfg.w1.crc ;
   wire [5:0] \cfg.w1.data_bits ;
   wire \cfg.w1.lc ;
   wire \cfg.w1.nenw ;
+  wire [37:0] \cfg.w1_crc ;
+  wire \cfg.w1_crc.inverted ;
+  wire [15:0] \cfg.w1_crc.poly ;
+  wire [15:0] \cfg.w1_crc.start ;
+  wire [4:0] \cfg.w1_crc.width ;
   wire \cfg.w1_enable ;
   output clean;
   wire clean;
@@ -11295,8 +11589,8 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$1027$0 , lc_check, lc_re
   wire lc_zero_seen;
   input noisy;
   wire noisy;
-  output \port$1027$0 ;
-  wire \port$1027$0 ;
+  output \port$989$0 ;
+  wire \port$989$0 ;
   output report;
   wire report;
   input report_frame;
@@ -11326,9 +11620,9 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$1027$0 , lc_check, lc_re
   output valid;
   wire valid;
   wire [1:0] word_crc_ok;
-  assign \$1  = ~ cfg[155];
+  assign \$1  = ~ cfg[193];
   assign \$2  = crc_ok[1] | \$1 ;
-  assign \$3  = cfg[155] & cfg[163];
+  assign \$3  = cfg[193] & cfg[201];
   assign \$4  = cfg[152] | \$3 ;
   assign \$5  = report_frame & \$4 ;
   assign \$6  = cfg[152] ? crc_ok[0] : \$2 ;
@@ -11336,7 +11630,7 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$1027$0 , lc_check, lc_re
   assign lc_repeat = lc_check & lc_repeat_seen;
   assign lc_skip = lc_check & lc_skip_seen;
   assign lc_zero = lc_check & lc_zero_seen;
-  assign \$7  = cfg[166] & cfg[155];
+  assign \$7  = cfg[242] & cfg[193];
   assign \$8  = crc_ok[0] & \$2 ;
   assign \$9  = \$7  & \$8 ;
   assign \$10  = ~ spw_match;
@@ -11355,7 +11649,7 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$1027$0 , lc_check, lc_re
   assign \$19  = crc_ok[0] & \$2 ;
   assign \$20  = ~ \$19 ;
   assign \$21  = \$20  | spw_mismatch;
-  assign \$22  = cfg[155] & cfg[163];
+  assign \$22  = cfg[193] & cfg[201];
   assign \$23  = cfg[152] | \$22 ;
   assign \$24  = cfg[152] ? crc_ok[0] : \$2 ;
   assign \$25  = \$23  & \$24 ;
@@ -11377,7 +11671,7 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$1027$0 , lc_check, lc_re
   assign \$39  = ~ { \$2 , crc_ok[0] };
   assign crc_error = report_frame ? \$39  : 2'h0;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     frame_status = 4'h0;
     if (delay_jump) begin
       frame_status = 4'he;
@@ -11402,7 +11696,7 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$1027$0 , lc_check, lc_re
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$1027$0  = \$2 ;
+  assign \port$989$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -11418,12 +11712,22 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$1027$0 , lc_check, lc_re
   assign \cfg.w0.nenw  = cfg[151];
   assign \cfg.w0.lc  = cfg[152];
   assign \cfg.w0.crc  = cfg[154:153];
-  assign \cfg.w1_enable  = cfg[155];
-  assign \cfg.w1  = cfg[165:156];
-  assign \cfg.w1.data_bits  = cfg[161:156];
-  assign \cfg.w1.nenw  = cfg[162];
-  assign \cfg.w1.lc  = cfg[163];
-  assign \cfg.w1.crc  = cfg[165:164];
-  assign \cfg.spw_check  = cfg[166];
-  assign \cfg.spw_tolerance  = cfg[174:167];
+  assign \cfg.w0_crc  = cfg[192:155];
+  assign \cfg.w0_crc.width  = cfg[159:155];
+  assign \cfg.w0_crc.poly  = cfg[175:160];
+  assign \cfg.w0_crc.start  = cfg[191:176];
+  assign \cfg.w0_crc.inverted  = cfg[192];
+  assign \cfg.w1_enable  = cfg[193];
+  assign \cfg.w1  = cfg[203:194];
+  assign \cfg.w1.data_bits  = cfg[199:194];
+  assign \cfg.w1.nenw  = cfg[200];
+  assign \cfg.w1.lc  = cfg[201];
+  assign \cfg.w1.crc  = cfg[203:202];
+  assign \cfg.w1_crc  = cfg[241:204];
+  assign \cfg.w1_crc.width  = cfg[208:204];
+  assign \cfg.w1_crc.poly  = cfg[224:209];
+  assign \cfg.w1_crc.start  = cfg[240:225];
+  assign \cfg.w1_crc.inverted  = cfg[241];
+  assign \cfg.spw_check  = cfg[242];
+  assign \cfg.spw_tolerance  = cfg[250:243];
 endmodule

@@ -3,7 +3,7 @@
 // Parameters:
 //   sys_clk_hz      = 100000000
 //   max_data_bits   = [55, 40]
-//   word_crcs       = [['CRC6', 'CRC16'], ['CRC6', 'CRC16']]
+//   word_crcs       = [['CRC6', 'CRC16'], ['CRC6', 'CRC16']] and CUSTOM (cfg_wN_crc_*)
 //   max_line_delay  = 4095 clocks
 //   timer_width     = 24
 //   counter_width   = 16
@@ -20,7 +20,7 @@
 (* generator = "Amaranth" *)
 module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvalid, s_axil_bready, s_axil_araddr, s_axil_arvalid, s_axil_rready, trigger, ch0_slo, ch1_slo, clk, rst, s_axil_awready, s_axil_wready, s_axil_bresp, s_axil_bvalid, s_axil_arready, s_axil_rdata, s_axil_rresp, s_axil_rvalid
 , irq, ch0_ma, ch1_ma, s_axil_awaddr);
-  reg \$auto$verilog_backend.cc:2355:dump_module$25  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$9  = 0;
   wire \$1 ;
   wire [9:0] \$10 ;
   wire [186:0] \$11 ;
@@ -615,12 +615,12 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .ch1_irq(\$7 ),
     .clk(clk),
     .g_trigger_start(glob__trigger),
-    .\port$4723$0 (\$8 ),
-    .\port$4736$0 (\$9 ),
-    .\port$4868$0 (\$10 ),
-    .\port$5285$0 (\$11 ),
-    .\port$5298$0 (\$12 ),
-    .\port$5430$0 (\$13 ),
+    .\port$4636$0 (\$8 ),
+    .\port$4649$0 (\$9 ),
+    .\port$4781$0 (\$10 ),
+    .\port$5187$0 (\$11 ),
+    .\port$5200$0 (\$12 ),
+    .\port$5332$0 (\$13 ),
     .rst(rst),
     .write_data(regs__ca_wbuf_data)
   );
@@ -686,9 +686,9 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .clk(clk),
     .ma(ch0_ma),
     .periodic(regs__periodic),
-    .\port$4723$0 (\$8 ),
-    .\port$4736$0 (\$9 ),
-    .\port$4868$0 (\$10 ),
+    .\port$4636$0 (\$8 ),
+    .\port$4649$0 (\$9 ),
+    .\port$4781$0 (\$10 ),
     .regs__abort_cycle(regs__abort_cycle),
     .regs__busy(ch0__busy),
     .regs__ca_busy(ch0__ca_busy),
@@ -741,9 +741,9 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .clk(clk),
     .ma(ch1_ma),
     .periodic(\regs__periodic$414 ),
-    .\port$5285$0 (\$11 ),
-    .\port$5298$0 (\$12 ),
-    .\port$5430$0 (\$13 ),
+    .\port$5187$0 (\$11 ),
+    .\port$5200$0 (\$12 ),
+    .\port$5332$0 (\$13 ),
     .regs__abort_cycle(\regs__abort_cycle$254 ),
     .regs__busy(ch1__busy),
     .regs__ca_busy(ch1__ca_busy),
@@ -760,14 +760,14 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .\trigger$179 (\trigger$58 )
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$25 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
     \$4  = trigger;
     if (rst) begin
       \$4  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$25 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
     \$5  = \$3 ;
     if (rst) begin
       \$5  = 1'h0;
@@ -1112,9 +1112,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
 , ch1__ca_rbuf_data, bus__w_addr, bus__w_data, bus__w_strb, ch0__ca_wbuf_addr, write_data, g_trigger_start, ch0_ctrl_start, ch0_ctrl_abort, ch0_ctrl_clear_counters, ch0_ctrl_periodic, ch0_ctrl_trigger_enable, ch0_cfg_ma_ma_half_period, ch0_cfg_ma_delay_limit, ch0_cfg_period_request_period, ch0_cfg_break_break_time, ch0_cfg_ack_ack_limit, ch0_cfg_timeout_timeout_limit, ch0_cfg_words_w0_data_bits, ch0_cfg_words_w0_nenw, ch0_cfg_words_w0_lc
 , ch0_cfg_words_w0_crc, ch0_cfg_words_w1_data_bits, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_enable, ch0_cfg_checks_end_check, ch0_cfg_checks_spw_check, ch0_cfg_checks_spw_tolerance, ch0_cfg_checks_noise_limit, ch0_cfg_checks_delay_tolerance, ch0_cfg_quiet_quiet_time, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$85 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort, ch1_ctrl_start, ch1_ctrl_abort, ch1_ctrl_clear_counters
 , ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit, ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_enable, ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_cfg_checks_noise_limit
-, ch1_cfg_checks_delay_tolerance, ch1_cfg_quiet_quiet_time, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$265 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__done_count, ch0__done, \port$4723$0 , \port$4736$0 , ch0__ca_done, \port$4868$0 , ch1__done_count, ch1__done, \port$5285$0 , \port$5298$0 , ch1__ca_done, \port$5430$0 , bus__r_addr
+, ch1_cfg_checks_delay_tolerance, ch1_cfg_quiet_quiet_time, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$265 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__done_count, ch0__done, \port$4636$0 , \port$4649$0 , ch0__ca_done, \port$4781$0 , ch1__done_count, ch1__done, \port$5187$0 , \port$5200$0 , ch1__ca_done, \port$5332$0 , bus__r_addr
 );
-  reg \$auto$verilog_backend.cc:2355:dump_module$26  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$10  = 0;
   wire \$1 ;
   wire [31:0] \$10 ;
   wire \$100 ;
@@ -2464,18 +2464,18 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   (* init = 1'h0 *)
   wire glob__trigger;
   wire [1:0] irq;
-  input [186:0] \port$4723$0 ;
-  wire [186:0] \port$4723$0 ;
-  input [335:0] \port$4736$0 ;
-  wire [335:0] \port$4736$0 ;
-  input [9:0] \port$4868$0 ;
-  wire [9:0] \port$4868$0 ;
-  input [186:0] \port$5285$0 ;
-  wire [186:0] \port$5285$0 ;
-  input [335:0] \port$5298$0 ;
-  wire [335:0] \port$5298$0 ;
-  input [9:0] \port$5430$0 ;
-  wire [9:0] \port$5430$0 ;
+  input [186:0] \port$4636$0 ;
+  wire [186:0] \port$4636$0 ;
+  input [335:0] \port$4649$0 ;
+  wire [335:0] \port$4649$0 ;
+  input [9:0] \port$4781$0 ;
+  wire [9:0] \port$4781$0 ;
+  input [186:0] \port$5187$0 ;
+  wire [186:0] \port$5187$0 ;
+  input [335:0] \port$5200$0 ;
+  wire [335:0] \port$5200$0 ;
+  input [9:0] \port$5332$0 ;
+  wire [9:0] \port$5332$0 ;
   input rst;
   wire rst;
   reg [10:0] write_addr = 11'h000;
@@ -2484,29 +2484,29 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg write_en = 1'h0;
   reg [3:0] write_strb = 4'h0;
   assign \$323  = \$321  | \$322 ;
-  assign \$324  = ch1_read_select_119 ? \port$5298$0 [63:32] : 32'd0;
+  assign \$324  = ch1_read_select_119 ? \port$5200$0 [63:32] : 32'd0;
   assign \$325  = \$323  | \$324 ;
-  assign \$326  = ch1_read_select_11a ? \port$5298$0 [95:64] : 32'd0;
+  assign \$326  = ch1_read_select_11a ? \port$5200$0 [95:64] : 32'd0;
   assign \$327  = \$325  | \$326 ;
-  assign \$328  = ch1_read_select_11b ? \port$5298$0 [127:96] : 32'd0;
+  assign \$328  = ch1_read_select_11b ? \port$5200$0 [127:96] : 32'd0;
   assign \$329  = \$327  | \$328 ;
-  assign \$330  = ch1_read_select_11c ? \port$5298$0 [159:128] : 32'd0;
+  assign \$330  = ch1_read_select_11c ? \port$5200$0 [159:128] : 32'd0;
   assign \$331  = \$329  | \$330 ;
-  assign \$332  = ch1_read_select_11d ? \port$5298$0 [191:160] : 32'd0;
+  assign \$332  = ch1_read_select_11d ? \port$5200$0 [191:160] : 32'd0;
   assign \$333  = \$331  | \$332 ;
-  assign \$334  = ch1_read_select_11e ? \port$5298$0 [223:192] : 32'd0;
+  assign \$334  = ch1_read_select_11e ? \port$5200$0 [223:192] : 32'd0;
   assign \$335  = \$333  | \$334 ;
-  assign \$336  = ch1_read_select_11f ? \port$5298$0 [255:224] : 32'd0;
+  assign \$336  = ch1_read_select_11f ? \port$5200$0 [255:224] : 32'd0;
   assign \$337  = \$335  | \$336 ;
   assign \$338  = ch1_read_select_140 ? { 7'h00, \ch1_ca_request_write$265 , 1'h0, ch1_ca_request_count, 1'h0, ch1_ca_request_address, 5'h00, ch1_ca_request_slave_id } : 32'd0;
   assign \$339  = \$337  | \$338 ;
-  assign \$342  = ch1_read_select_142 ? { 17'h00000, \port$5430$0 [9:3], 1'h0, \port$5430$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
+  assign \$342  = ch1_read_select_142 ? { 17'h00000, \port$5332$0 [9:3], 1'h0, \port$5332$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
   assign \$343  = \$341  | \$342 ;
-  assign \$344  = ch1_read_select_143 ? \port$5298$0 [287:256] : 32'd0;
+  assign \$344  = ch1_read_select_143 ? \port$5200$0 [287:256] : 32'd0;
   assign \$345  = \$343  | \$344 ;
-  assign \$346  = ch1_read_select_144 ? \port$5298$0 [319:288] : 32'd0;
+  assign \$346  = ch1_read_select_144 ? \port$5200$0 [319:288] : 32'd0;
   assign \$347  = \$345  | \$346 ;
-  assign \$348  = ch1_read_select_145 ? { 16'h0000, \port$5298$0 [335:320] } : 32'd0;
+  assign \$348  = ch1_read_select_145 ? { 16'h0000, \port$5200$0 [335:320] } : 32'd0;
   assign \$349  = \$347  | \$348 ;
   assign \$350  = ch1_window0_read ? ch1__ca_rbuf_data : 32'd0;
   assign \$351  = \$349  | \$350 ;
@@ -3276,7 +3276,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign \$136  = \$134  | \$135 ;
   assign \$137  = ch0_read_select_8f ? { 20'h00000, ch0_cfg_quiet_quiet_time } : 32'd0;
   assign \$138  = \$136  | \$137 ;
-  assign \$139  = ch0_read_select_90 ? { 2'h0, \port$4723$0 [182:177], 4'h0, \port$4723$0 [186:183], 1'h0, \port$4723$0 [176:174], 1'h0, \port$4723$0 [133:131], 3'h0, \port$4723$0 [49], \port$4723$0 [3:0] } : 32'd0;
+  assign \$139  = ch0_read_select_90 ? { 2'h0, \port$4636$0 [182:177], 4'h0, \port$4636$0 [186:183], 1'h0, \port$4636$0 [176:174], 1'h0, \port$4636$0 [133:131], 3'h0, \port$4636$0 [49], \port$4636$0 [3:0] } : 32'd0;
   assign \$140  = \$138  | \$139 ;
   assign \$141  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
   assign \$142  = \$140  | \$141 ;
@@ -3292,31 +3292,31 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign \$152  = \$150  | \$151 ;
   assign \$153  = ch0_read_select_97 ? { 3'h0, ch0_result_line_settled_delay_snapshot, ch0_result_line_delay_spread_snapshot, 3'h0, ch0_result_line_delay_settled_snapshot, ch0_result_line_noise_events_snapshot } : 32'd0;
   assign \$154  = \$152  | \$153 ;
-  assign \$155  = ch0_read_select_98 ? \port$4736$0 [31:0] : 32'd0;
+  assign \$155  = ch0_read_select_98 ? \port$4649$0 [31:0] : 32'd0;
   assign \$156  = \$154  | \$155 ;
-  assign \$157  = ch0_read_select_99 ? \port$4736$0 [63:32] : 32'd0;
+  assign \$157  = ch0_read_select_99 ? \port$4649$0 [63:32] : 32'd0;
   assign \$158  = \$156  | \$157 ;
-  assign \$159  = ch0_read_select_9a ? \port$4736$0 [95:64] : 32'd0;
+  assign \$159  = ch0_read_select_9a ? \port$4649$0 [95:64] : 32'd0;
   assign \$160  = \$158  | \$159 ;
-  assign \$161  = ch0_read_select_9b ? \port$4736$0 [127:96] : 32'd0;
+  assign \$161  = ch0_read_select_9b ? \port$4649$0 [127:96] : 32'd0;
   assign \$162  = \$160  | \$161 ;
-  assign \$163  = ch0_read_select_9c ? \port$4736$0 [159:128] : 32'd0;
+  assign \$163  = ch0_read_select_9c ? \port$4649$0 [159:128] : 32'd0;
   assign \$164  = \$162  | \$163 ;
-  assign \$165  = ch0_read_select_9d ? \port$4736$0 [191:160] : 32'd0;
+  assign \$165  = ch0_read_select_9d ? \port$4649$0 [191:160] : 32'd0;
   assign \$166  = \$164  | \$165 ;
-  assign \$167  = ch0_read_select_9e ? \port$4736$0 [223:192] : 32'd0;
+  assign \$167  = ch0_read_select_9e ? \port$4649$0 [223:192] : 32'd0;
   assign \$168  = \$166  | \$167 ;
-  assign \$169  = ch0_read_select_9f ? \port$4736$0 [255:224] : 32'd0;
+  assign \$169  = ch0_read_select_9f ? \port$4649$0 [255:224] : 32'd0;
   assign \$170  = \$168  | \$169 ;
   assign \$171  = ch0_read_select_c0 ? { 7'h00, \ch0_ca_request_write$85 , 1'h0, ch0_ca_request_count, 1'h0, ch0_ca_request_address, 5'h00, ch0_ca_request_slave_id } : 32'd0;
   assign \$172  = \$170  | \$171 ;
-  assign \$175  = ch0_read_select_c2 ? { 17'h00000, \port$4868$0 [9:3], 1'h0, \port$4868$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
+  assign \$175  = ch0_read_select_c2 ? { 17'h00000, \port$4781$0 [9:3], 1'h0, \port$4781$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
   assign \$176  = \$174  | \$175 ;
-  assign \$177  = ch0_read_select_c3 ? \port$4736$0 [287:256] : 32'd0;
+  assign \$177  = ch0_read_select_c3 ? \port$4649$0 [287:256] : 32'd0;
   assign \$178  = \$176  | \$177 ;
-  assign \$179  = ch0_read_select_c4 ? \port$4736$0 [319:288] : 32'd0;
+  assign \$179  = ch0_read_select_c4 ? \port$4649$0 [319:288] : 32'd0;
   assign \$180  = \$178  | \$179 ;
-  assign \$181  = ch0_read_select_c5 ? { 16'h0000, \port$4736$0 [335:320] } : 32'd0;
+  assign \$181  = ch0_read_select_c5 ? { 16'h0000, \port$4649$0 [335:320] } : 32'd0;
   assign \$182  = \$180  | \$181 ;
   assign \$183  = ch0_window0_read ? ch0__ca_rbuf_data : 32'd0;
   assign \$184  = \$182  | \$183 ;
@@ -3440,7 +3440,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign \$303  = \$301  | \$302 ;
   assign \$304  = ch1_read_select_10f ? { 20'h00000, ch1_cfg_quiet_quiet_time } : 32'd0;
   assign \$305  = \$303  | \$304 ;
-  assign \$306  = ch1_read_select_110 ? { 2'h0, \port$5285$0 [182:177], 4'h0, \port$5285$0 [186:183], 1'h0, \port$5285$0 [176:174], 1'h0, \port$5285$0 [133:131], 3'h0, \port$5285$0 [49], \port$5285$0 [3:0] } : 32'd0;
+  assign \$306  = ch1_read_select_110 ? { 2'h0, \port$5187$0 [182:177], 4'h0, \port$5187$0 [186:183], 1'h0, \port$5187$0 [176:174], 1'h0, \port$5187$0 [133:131], 3'h0, \port$5187$0 [49], \port$5187$0 [3:0] } : 32'd0;
   assign \$307  = \$305  | \$306 ;
   assign \$308  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
   assign \$309  = \$307  | \$308 ;
@@ -3456,16 +3456,16 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign \$319  = \$317  | \$318 ;
   assign \$320  = ch1_read_select_117 ? { 3'h0, ch1_result_line_settled_delay_snapshot, ch1_result_line_delay_spread_snapshot, 3'h0, ch1_result_line_delay_settled_snapshot, ch1_result_line_noise_events_snapshot } : 32'd0;
   assign \$321  = \$319  | \$320 ;
-  assign \$322  = ch1_read_select_118 ? \port$5298$0 [31:0] : 32'd0;
+  assign \$322  = ch1_read_select_118 ? \port$5200$0 [31:0] : 32'd0;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$447  = bus__w_en;
     if (rst) begin
       \$447  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$448  = write_addr;
     if (bus__w_en) begin
       \$448  = bus__w_addr;
@@ -3475,7 +3475,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$449  = write_data;
     if (bus__w_en) begin
       \$449  = bus__w_data;
@@ -3485,7 +3485,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$450  = write_strb;
     if (bus__w_en) begin
       \$450  = bus__w_strb;
@@ -3495,7 +3495,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$451  = config_write_data;
     if (write_en) begin
       \$451  = write_data;
@@ -3505,7 +3505,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$452  = config_write_strb;
     if (write_en) begin
       \$452  = write_strb;
@@ -3515,14 +3515,14 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$453  = \$2 ;
     if (rst) begin
       \$453  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$454  = g_read_select_0;
     if (bus__r_en) begin
       \$454  = \$3 ;
@@ -3532,7 +3532,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$455  = g_read_select_1;
     if (bus__r_en) begin
       \$455  = \$4 ;
@@ -3542,7 +3542,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$456  = g_read_select_2;
     if (bus__r_en) begin
       \$456  = \$5 ;
@@ -3552,7 +3552,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$457  = g_read_select_3;
     if (bus__r_en) begin
       \$457  = \$6 ;
@@ -3562,7 +3562,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$458  = g_read_select_4;
     if (bus__r_en) begin
       \$458  = \$7 ;
@@ -3572,7 +3572,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$459  = g_read_data;
     if (bus__r_load) begin
       \$459  = \$17 ;
@@ -3582,28 +3582,28 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$460  = \$19 ;
     if (rst) begin
       \$460  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$461  = \$21 ;
     if (rst) begin
       \$461  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$462  = \$23 ;
     if (rst) begin
       \$462  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$463  = ch0_ctrl_periodic;
     if (\$24 ) begin
       \$463  = write_data[8];
@@ -3613,7 +3613,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$464  = ch0_ctrl_trigger_enable;
     if (\$25 ) begin
       \$464  = write_data[9];
@@ -3623,7 +3623,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$465  = ch0_irq_status_done;
     if (ch0__done) begin
       \$465  = 1'h1;
@@ -3635,7 +3635,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$466  = ch0_irq_status_error;
     if (ch0__frame_error) begin
       \$466  = 1'h1;
@@ -3647,7 +3647,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$467  = ch0_irq_status_access_done;
     if (ch0__ca_done) begin
       \$467  = 1'h1;
@@ -3659,14 +3659,14 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$468  = ch0_irq_enable_write;
     if (rst) begin
       \$468  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$469  = ch0_irq_enable_done;
     if (\$32 ) begin
       \$469  = config_write_data[0];
@@ -3676,7 +3676,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$470  = ch0_irq_enable_error;
     if (\$33 ) begin
       \$470  = config_write_data[1];
@@ -3686,7 +3686,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$471  = ch0_irq_enable_access_done;
     if (\$34 ) begin
       \$471  = config_write_data[2];
@@ -3696,14 +3696,14 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$472  = ch0_cfg_ma_write;
     if (rst) begin
       \$472  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$473  = ch0_cfg_ma_ma_half_period;
     if (\$35 ) begin
       \$473 [7:0] = config_write_data[7:0];
@@ -3716,7 +3716,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$474  = ch0_cfg_ma_delay_limit;
     if (\$37 ) begin
       \$474 [7:0] = config_write_data[23:16];
@@ -3729,14 +3729,14 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$475  = ch0_cfg_period_write;
     if (rst) begin
       \$475  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$476  = ch0_cfg_period_request_period;
     if (\$39 ) begin
       \$476 [7:0] = config_write_data[7:0];
@@ -3752,14 +3752,14 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$477  = ch0_cfg_break_write;
     if (rst) begin
       \$477  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$478  = ch0_cfg_break_break_time;
     if (\$42 ) begin
       \$478 [7:0] = config_write_data[7:0];
@@ -3775,14 +3775,14 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$479  = ch0_cfg_ack_write;
     if (rst) begin
       \$479  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$480  = ch0_cfg_ack_ack_limit;
     if (\$45 ) begin
       \$480 [7:0] = config_write_data[7:0];
@@ -3798,14 +3798,14 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$481  = ch0_cfg_timeout_write;
     if (rst) begin
       \$481  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$482  = ch0_cfg_timeout_timeout_limit;
     if (\$48 ) begin
       \$482 [7:0] = config_write_data[7:0];
@@ -3821,14 +3821,14 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$483  = ch0_cfg_words_write;
     if (rst) begin
       \$483  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$484  = ch0_cfg_words_w0_data_bits;
     if (\$51 ) begin
       \$484  = config_write_data[5:0];
@@ -3838,7 +3838,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$485  = ch0_cfg_words_w0_nenw;
     if (\$52 ) begin
       \$485  = config_write_data[6];
@@ -3848,7 +3848,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$486  = ch0_cfg_words_w0_lc;
     if (\$53 ) begin
       \$486  = config_write_data[7];
@@ -3858,7 +3858,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$487  = ch0_cfg_words_w0_crc;
     if (\$54 ) begin
       \$487  = config_write_data[9:8];
@@ -3868,7 +3868,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$488  = ch0_cfg_words_w1_data_bits;
     if (\$55 ) begin
       \$488  = config_write_data[21:16];
@@ -3878,7 +3878,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$489  = ch0_cfg_words_w1_nenw;
     if (\$56 ) begin
       \$489  = config_write_data[22];
@@ -3888,7 +3888,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$490  = ch0_cfg_words_w1_lc;
     if (\$57 ) begin
       \$490  = config_write_data[23];
@@ -3898,7 +3898,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$491  = ch0_cfg_words_w1_crc;
     if (\$58 ) begin
       \$491  = config_write_data[25:24];
@@ -3908,7 +3908,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$492  = ch0_cfg_words_w1_enable;
     if (\$59 ) begin
       \$492  = config_write_data[31];
@@ -3918,14 +3918,14 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$493  = ch0_cfg_checks_write;
     if (rst) begin
       \$493  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$494  = ch0_cfg_checks_end_check;
     if (\$60 ) begin
       \$494  = config_write_data[0];
@@ -3935,7 +3935,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$495  = ch0_cfg_checks_spw_check;
     if (\$61 ) begin
       \$495  = config_write_data[1];
@@ -3945,7 +3945,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$496  = ch0_cfg_checks_spw_tolerance;
     if (\$62 ) begin
       \$496  = config_write_data[15:8];
@@ -3955,7 +3955,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$497  = ch0_cfg_checks_noise_limit;
     if (\$63 ) begin
       \$497  = config_write_data[19:16];
@@ -3965,7 +3965,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$498  = ch0_cfg_checks_delay_tolerance;
     if (\$64 ) begin
       \$498  = config_write_data[23:20];
@@ -3975,14 +3975,14 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$499  = ch0_cfg_quiet_write;
     if (rst) begin
       \$499  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$500  = ch0_cfg_quiet_quiet_time;
     if (\$65 ) begin
       \$500 [7:0] = config_write_data[7:0];
@@ -3995,14 +3995,14 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$501  = ch0_ca_request_write;
     if (rst) begin
       \$501  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$502  = ch0_ca_request_slave_id;
     if (\$67 ) begin
       \$502  = config_write_data[2:0];
@@ -4012,7 +4012,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$503  = ch0_ca_request_address;
     if (\$68 ) begin
       \$503  = config_write_data[14:8];
@@ -4022,7 +4022,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$504  = ch0_ca_request_count;
     if (\$69 ) begin
       \$504  = config_write_data[22:16];
@@ -4032,7 +4032,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$505  = \ch0_ca_request_write$85 ;
     if (\$70 ) begin
       \$505  = config_write_data[24];
@@ -4042,21 +4042,21 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$506  = \$72 ;
     if (rst) begin
       \$506  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$507  = \$74 ;
     if (rst) begin
       \$507  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$508  = ch0_read_select_80;
     if (bus__r_en) begin
       \$508  = \$75 ;
@@ -4066,7 +4066,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$509  = ch0_read_select_81;
     if (bus__r_en) begin
       \$509  = \$76 ;
@@ -4076,7 +4076,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$510  = ch0_read_select_82;
     if (bus__r_en) begin
       \$510  = \$77 ;
@@ -4086,7 +4086,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$511  = ch0_read_select_84;
     if (bus__r_en) begin
       \$511  = \$78 ;
@@ -4096,7 +4096,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$512  = ch0_read_select_85;
     if (bus__r_en) begin
       \$512  = \$79 ;
@@ -4106,7 +4106,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$513  = ch0_read_select_88;
     if (bus__r_en) begin
       \$513  = \$80 ;
@@ -4116,7 +4116,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$514  = ch0_read_select_89;
     if (bus__r_en) begin
       \$514  = \$81 ;
@@ -4126,7 +4126,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$515  = ch0_read_select_8a;
     if (bus__r_en) begin
       \$515  = \$82 ;
@@ -4136,7 +4136,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$516  = ch0_read_select_8b;
     if (bus__r_en) begin
       \$516  = \$83 ;
@@ -4146,7 +4146,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$517  = ch0_read_select_8c;
     if (bus__r_en) begin
       \$517  = \$84 ;
@@ -4156,7 +4156,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$518  = ch0_read_select_8d;
     if (bus__r_en) begin
       \$518  = \$85 ;
@@ -4166,7 +4166,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$519  = ch0_read_select_8e;
     if (bus__r_en) begin
       \$519  = \$86 ;
@@ -4176,7 +4176,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$520  = ch0_read_select_8f;
     if (bus__r_en) begin
       \$520  = \$87 ;
@@ -4186,7 +4186,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$521  = ch0_read_select_90;
     if (bus__r_en) begin
       \$521  = \$88 ;
@@ -4196,7 +4196,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$522  = ch0_read_select_91;
     if (bus__r_en) begin
       \$522  = \$89 ;
@@ -4206,7 +4206,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$523  = ch0_read_select_92;
     if (bus__r_en) begin
       \$523  = \$90 ;
@@ -4216,7 +4216,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$524  = ch0_read_select_93;
     if (bus__r_en) begin
       \$524  = \$91 ;
@@ -4226,7 +4226,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$525  = ch0_read_select_94;
     if (bus__r_en) begin
       \$525  = \$92 ;
@@ -4236,7 +4236,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$526  = ch0_read_select_95;
     if (bus__r_en) begin
       \$526  = \$93 ;
@@ -4246,7 +4246,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$527  = ch0_read_select_96;
     if (bus__r_en) begin
       \$527  = \$94 ;
@@ -4256,7 +4256,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$528  = ch0_read_select_97;
     if (bus__r_en) begin
       \$528  = \$95 ;
@@ -4266,7 +4266,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$529  = ch0_read_select_98;
     if (bus__r_en) begin
       \$529  = \$96 ;
@@ -4276,7 +4276,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$530  = ch0_read_select_99;
     if (bus__r_en) begin
       \$530  = \$97 ;
@@ -4286,7 +4286,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$531  = ch0_read_select_9a;
     if (bus__r_en) begin
       \$531  = \$98 ;
@@ -4296,7 +4296,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$532  = ch0_read_select_9b;
     if (bus__r_en) begin
       \$532  = \$99 ;
@@ -4306,7 +4306,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$533  = ch0_read_select_9c;
     if (bus__r_en) begin
       \$533  = \$100 ;
@@ -4316,7 +4316,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$534  = ch0_read_select_9d;
     if (bus__r_en) begin
       \$534  = \$101 ;
@@ -4326,7 +4326,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$535  = ch0_read_select_9e;
     if (bus__r_en) begin
       \$535  = \$102 ;
@@ -4336,7 +4336,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$536  = ch0_read_select_9f;
     if (bus__r_en) begin
       \$536  = \$103 ;
@@ -4346,7 +4346,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$537  = ch0_read_select_c0;
     if (bus__r_en) begin
       \$537  = \$104 ;
@@ -4356,7 +4356,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$538  = ch0_read_select_c1;
     if (bus__r_en) begin
       \$538  = \$105 ;
@@ -4366,7 +4366,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$539  = ch0_read_select_c2;
     if (bus__r_en) begin
       \$539  = \$106 ;
@@ -4376,7 +4376,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$540  = ch0_read_select_c3;
     if (bus__r_en) begin
       \$540  = \$107 ;
@@ -4386,7 +4386,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$541  = ch0_read_select_c4;
     if (bus__r_en) begin
       \$541  = \$108 ;
@@ -4396,7 +4396,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$542  = ch0_read_select_c5;
     if (bus__r_en) begin
       \$542  = \$109 ;
@@ -4406,137 +4406,137 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$543  = ch0_result_status_status_snapshot;
     if (\$110 ) begin
-      \$543  = \port$4723$0 [3:0];
+      \$543  = \port$4636$0 [3:0];
     end
     if (rst) begin
       \$543  = 4'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$544  = ch0_result_status_cds_snapshot;
     if (\$110 ) begin
-      \$544  = \port$4723$0 [49];
+      \$544  = \port$4636$0 [49];
     end
     if (rst) begin
       \$544  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$545  = ch0_result_status_w0_ne_snapshot;
     if (\$110 ) begin
-      \$545  = \port$4723$0 [131];
+      \$545  = \port$4636$0 [131];
     end
     if (rst) begin
       \$545  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$546  = ch0_result_status_w0_nw_snapshot;
     if (\$110 ) begin
-      \$546  = \port$4723$0 [132];
+      \$546  = \port$4636$0 [132];
     end
     if (rst) begin
       \$546  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$547  = ch0_result_status_w0_crc_ok_snapshot;
     if (\$110 ) begin
-      \$547  = \port$4723$0 [133];
+      \$547  = \port$4636$0 [133];
     end
     if (rst) begin
       \$547  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$548  = ch0_result_status_w1_ne_snapshot;
     if (\$110 ) begin
-      \$548  = \port$4723$0 [174];
+      \$548  = \port$4636$0 [174];
     end
     if (rst) begin
       \$548  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$549  = ch0_result_status_w1_nw_snapshot;
     if (\$110 ) begin
-      \$549  = \port$4723$0 [175];
+      \$549  = \port$4636$0 [175];
     end
     if (rst) begin
       \$549  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$550  = ch0_result_status_w1_crc_ok_snapshot;
     if (\$110 ) begin
-      \$550  = \port$4723$0 [176];
+      \$550  = \port$4636$0 [176];
     end
     if (rst) begin
       \$550  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$551  = ch0_result_status_lc_repeat_snapshot;
     if (\$110 ) begin
-      \$551  = \port$4723$0 [183];
+      \$551  = \port$4636$0 [183];
     end
     if (rst) begin
       \$551  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$552  = ch0_result_status_lc_skip_snapshot;
     if (\$110 ) begin
-      \$552  = \port$4723$0 [184];
+      \$552  = \port$4636$0 [184];
     end
     if (rst) begin
       \$552  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$553  = ch0_result_status_lc_zero_snapshot;
     if (\$110 ) begin
-      \$553  = \port$4723$0 [185];
+      \$553  = \port$4636$0 [185];
     end
     if (rst) begin
       \$553  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$554  = ch0_result_status_spw_mismatch_snapshot;
     if (\$110 ) begin
-      \$554  = \port$4723$0 [186];
+      \$554  = \port$4636$0 [186];
     end
     if (rst) begin
       \$554  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$555  = ch0_result_status_lc_snapshot;
     if (\$110 ) begin
-      \$555  = \port$4723$0 [182:177];
+      \$555  = \port$4636$0 [182:177];
     end
     if (rst) begin
       \$555  = 6'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$556  = ch0_result_seq_seq_snapshot;
     if (\$110 ) begin
       \$556  = ch0__done_count;
@@ -4546,107 +4546,107 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$557  = ch0_result_seq_line_delay_snapshot;
     if (\$110 ) begin
-      \$557  = \port$4723$0 [48:36];
+      \$557  = \port$4636$0 [48:36];
     end
     if (rst) begin
       \$557  = 13'h0000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$558  = ch0_result_w0_lo_data_snapshot;
     if (\$110 ) begin
-      \$558  = \port$4723$0 [107:76];
+      \$558  = \port$4636$0 [107:76];
     end
     if (rst) begin
       \$558  = 32'd0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$559  = ch0_result_w0_hi_data_snapshot;
     if (\$110 ) begin
-      \$559  = \port$4723$0 [130:108];
+      \$559  = \port$4636$0 [130:108];
     end
     if (rst) begin
       \$559  = 23'h000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$560  = ch0_result_w1_lo_data_snapshot;
     if (\$110 ) begin
-      \$560  = \port$4723$0 [165:134];
+      \$560  = \port$4636$0 [165:134];
     end
     if (rst) begin
       \$560  = 32'd0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$561  = ch0_result_w1_hi_data_snapshot;
     if (\$110 ) begin
-      \$561  = \port$4723$0 [173:166];
+      \$561  = \port$4636$0 [173:166];
     end
     if (rst) begin
       \$561  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$562  = ch0_result_timestamp_time_snapshot;
     if (\$110 ) begin
-      \$562  = \port$4723$0 [35:4];
+      \$562  = \port$4636$0 [35:4];
     end
     if (rst) begin
       \$562  = 32'd0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$563  = ch0_result_line_noise_events_snapshot;
     if (\$110 ) begin
-      \$563  = \port$4723$0 [53:50];
+      \$563  = \port$4636$0 [53:50];
     end
     if (rst) begin
       \$563  = 4'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$564  = ch0_result_line_delay_settled_snapshot;
     if (\$110 ) begin
-      \$564  = \port$4723$0 [54];
+      \$564  = \port$4636$0 [54];
     end
     if (rst) begin
       \$564  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$565  = ch0_result_line_delay_spread_snapshot;
     if (\$110 ) begin
-      \$565  = \port$4723$0 [75:68];
+      \$565  = \port$4636$0 [75:68];
     end
     if (rst) begin
       \$565  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$566  = ch0_result_line_settled_delay_snapshot;
     if (\$110 ) begin
-      \$566  = \port$4723$0 [67:55];
+      \$566  = \port$4636$0 [67:55];
     end
     if (rst) begin
       \$566  = 13'h0000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$567  = ch0_window0_read;
     if (bus__r_en) begin
       \$567  = \$112 ;
@@ -4656,7 +4656,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$568  = ch0_read_data;
     if (bus__r_load) begin
       \$568  = \$184 ;
@@ -4666,28 +4666,28 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$569  = \$186 ;
     if (rst) begin
       \$569  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$570  = \$188 ;
     if (rst) begin
       \$570  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$571  = \$190 ;
     if (rst) begin
       \$571  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$572  = ch1_ctrl_periodic;
     if (\$191 ) begin
       \$572  = write_data[8];
@@ -4697,7 +4697,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$573  = ch1_ctrl_trigger_enable;
     if (\$192 ) begin
       \$573  = write_data[9];
@@ -4707,7 +4707,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$574  = ch1_irq_status_done;
     if (ch1__done) begin
       \$574  = 1'h1;
@@ -4719,7 +4719,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$575  = ch1_irq_status_error;
     if (ch1__frame_error) begin
       \$575  = 1'h1;
@@ -4731,7 +4731,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$576  = ch1_irq_status_access_done;
     if (ch1__ca_done) begin
       \$576  = 1'h1;
@@ -4743,14 +4743,14 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$577  = ch1_irq_enable_write;
     if (rst) begin
       \$577  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$578  = ch1_irq_enable_done;
     if (\$199 ) begin
       \$578  = config_write_data[0];
@@ -4760,7 +4760,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$579  = ch1_irq_enable_error;
     if (\$200 ) begin
       \$579  = config_write_data[1];
@@ -4770,7 +4770,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$580  = ch1_irq_enable_access_done;
     if (\$201 ) begin
       \$580  = config_write_data[2];
@@ -4780,14 +4780,14 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$581  = ch1_cfg_ma_write;
     if (rst) begin
       \$581  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$582  = ch1_cfg_ma_ma_half_period;
     if (\$202 ) begin
       \$582 [7:0] = config_write_data[7:0];
@@ -4800,7 +4800,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$583  = ch1_cfg_ma_delay_limit;
     if (\$204 ) begin
       \$583 [7:0] = config_write_data[23:16];
@@ -4813,14 +4813,14 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$584  = ch1_cfg_period_write;
     if (rst) begin
       \$584  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$585  = ch1_cfg_period_request_period;
     if (\$206 ) begin
       \$585 [7:0] = config_write_data[7:0];
@@ -4836,14 +4836,14 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$586  = ch1_cfg_break_write;
     if (rst) begin
       \$586  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$587  = ch1_cfg_break_break_time;
     if (\$209 ) begin
       \$587 [7:0] = config_write_data[7:0];
@@ -4859,14 +4859,14 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$588  = ch1_cfg_ack_write;
     if (rst) begin
       \$588  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$589  = ch1_cfg_ack_ack_limit;
     if (\$212 ) begin
       \$589 [7:0] = config_write_data[7:0];
@@ -4882,14 +4882,14 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$590  = ch1_cfg_timeout_write;
     if (rst) begin
       \$590  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$591  = ch1_cfg_timeout_timeout_limit;
     if (\$215 ) begin
       \$591 [7:0] = config_write_data[7:0];
@@ -4905,14 +4905,14 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$592  = ch1_cfg_words_write;
     if (rst) begin
       \$592  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$593  = ch1_cfg_words_w0_data_bits;
     if (\$218 ) begin
       \$593  = config_write_data[5:0];
@@ -4922,7 +4922,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$594  = ch1_cfg_words_w0_nenw;
     if (\$219 ) begin
       \$594  = config_write_data[6];
@@ -4932,7 +4932,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$595  = ch1_cfg_words_w0_lc;
     if (\$220 ) begin
       \$595  = config_write_data[7];
@@ -4942,7 +4942,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$596  = ch1_cfg_words_w0_crc;
     if (\$221 ) begin
       \$596  = config_write_data[9:8];
@@ -4952,7 +4952,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$597  = ch1_cfg_words_w1_data_bits;
     if (\$222 ) begin
       \$597  = config_write_data[21:16];
@@ -4962,7 +4962,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$598  = ch1_cfg_words_w1_nenw;
     if (\$223 ) begin
       \$598  = config_write_data[22];
@@ -4972,7 +4972,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$599  = ch1_cfg_words_w1_lc;
     if (\$224 ) begin
       \$599  = config_write_data[23];
@@ -4982,7 +4982,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$600  = ch1_cfg_words_w1_crc;
     if (\$225 ) begin
       \$600  = config_write_data[25:24];
@@ -4992,7 +4992,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$601  = ch1_cfg_words_w1_enable;
     if (\$226 ) begin
       \$601  = config_write_data[31];
@@ -5002,14 +5002,14 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$602  = ch1_cfg_checks_write;
     if (rst) begin
       \$602  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$603  = ch1_cfg_checks_end_check;
     if (\$227 ) begin
       \$603  = config_write_data[0];
@@ -5019,7 +5019,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$604  = ch1_cfg_checks_spw_check;
     if (\$228 ) begin
       \$604  = config_write_data[1];
@@ -5029,7 +5029,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$605  = ch1_cfg_checks_spw_tolerance;
     if (\$229 ) begin
       \$605  = config_write_data[15:8];
@@ -5039,7 +5039,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$606  = ch1_cfg_checks_noise_limit;
     if (\$230 ) begin
       \$606  = config_write_data[19:16];
@@ -5049,7 +5049,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$607  = ch1_cfg_checks_delay_tolerance;
     if (\$231 ) begin
       \$607  = config_write_data[23:20];
@@ -5059,14 +5059,14 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$608  = ch1_cfg_quiet_write;
     if (rst) begin
       \$608  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$609  = ch1_cfg_quiet_quiet_time;
     if (\$232 ) begin
       \$609 [7:0] = config_write_data[7:0];
@@ -5079,14 +5079,14 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$610  = ch1_ca_request_write;
     if (rst) begin
       \$610  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$611  = ch1_ca_request_slave_id;
     if (\$234 ) begin
       \$611  = config_write_data[2:0];
@@ -5096,7 +5096,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$612  = ch1_ca_request_address;
     if (\$235 ) begin
       \$612  = config_write_data[14:8];
@@ -5106,7 +5106,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$613  = ch1_ca_request_count;
     if (\$236 ) begin
       \$613  = config_write_data[22:16];
@@ -5116,7 +5116,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$614  = \ch1_ca_request_write$265 ;
     if (\$237 ) begin
       \$614  = config_write_data[24];
@@ -5126,21 +5126,21 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$615  = \$239 ;
     if (rst) begin
       \$615  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$616  = \$241 ;
     if (rst) begin
       \$616  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$617  = ch1_read_select_100;
     if (bus__r_en) begin
       \$617  = \$242 ;
@@ -5150,7 +5150,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$618  = ch1_read_select_101;
     if (bus__r_en) begin
       \$618  = \$243 ;
@@ -5160,7 +5160,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$619  = ch1_read_select_102;
     if (bus__r_en) begin
       \$619  = \$244 ;
@@ -5170,7 +5170,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$620  = ch1_read_select_104;
     if (bus__r_en) begin
       \$620  = \$245 ;
@@ -5180,7 +5180,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$621  = ch1_read_select_105;
     if (bus__r_en) begin
       \$621  = \$246 ;
@@ -5190,7 +5190,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$622  = ch1_read_select_108;
     if (bus__r_en) begin
       \$622  = \$247 ;
@@ -5200,7 +5200,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$623  = ch1_read_select_109;
     if (bus__r_en) begin
       \$623  = \$248 ;
@@ -5210,7 +5210,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$624  = ch1_read_select_10a;
     if (bus__r_en) begin
       \$624  = \$249 ;
@@ -5220,7 +5220,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$625  = ch1_read_select_10b;
     if (bus__r_en) begin
       \$625  = \$250 ;
@@ -5230,7 +5230,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$626  = ch1_read_select_10c;
     if (bus__r_en) begin
       \$626  = \$251 ;
@@ -5240,7 +5240,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$627  = ch1_read_select_10d;
     if (bus__r_en) begin
       \$627  = \$252 ;
@@ -5250,7 +5250,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$628  = ch1_read_select_10e;
     if (bus__r_en) begin
       \$628  = \$253 ;
@@ -5260,7 +5260,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$629  = ch1_read_select_10f;
     if (bus__r_en) begin
       \$629  = \$254 ;
@@ -5270,7 +5270,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$630  = ch1_read_select_110;
     if (bus__r_en) begin
       \$630  = \$255 ;
@@ -5280,7 +5280,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$631  = ch1_read_select_111;
     if (bus__r_en) begin
       \$631  = \$256 ;
@@ -5290,7 +5290,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$632  = ch1_read_select_112;
     if (bus__r_en) begin
       \$632  = \$257 ;
@@ -5300,7 +5300,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$633  = ch1_read_select_113;
     if (bus__r_en) begin
       \$633  = \$258 ;
@@ -5310,7 +5310,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$634  = ch1_read_select_114;
     if (bus__r_en) begin
       \$634  = \$259 ;
@@ -5320,7 +5320,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$635  = ch1_read_select_115;
     if (bus__r_en) begin
       \$635  = \$260 ;
@@ -5330,7 +5330,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$636  = ch1_read_select_116;
     if (bus__r_en) begin
       \$636  = \$261 ;
@@ -5340,7 +5340,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$637  = ch1_read_select_117;
     if (bus__r_en) begin
       \$637  = \$262 ;
@@ -5350,7 +5350,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$638  = ch1_read_select_118;
     if (bus__r_en) begin
       \$638  = \$263 ;
@@ -5360,7 +5360,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$639  = ch1_read_select_119;
     if (bus__r_en) begin
       \$639  = \$264 ;
@@ -5370,7 +5370,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$640  = ch1_read_select_11a;
     if (bus__r_en) begin
       \$640  = \$265 ;
@@ -5380,7 +5380,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$641  = ch1_read_select_11b;
     if (bus__r_en) begin
       \$641  = \$266 ;
@@ -5390,7 +5390,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$642  = ch1_read_select_11c;
     if (bus__r_en) begin
       \$642  = \$267 ;
@@ -5400,7 +5400,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$643  = ch1_read_select_11d;
     if (bus__r_en) begin
       \$643  = \$268 ;
@@ -5410,7 +5410,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$644  = ch1_read_select_11e;
     if (bus__r_en) begin
       \$644  = \$269 ;
@@ -5420,7 +5420,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$645  = ch1_read_select_11f;
     if (bus__r_en) begin
       \$645  = \$270 ;
@@ -5430,7 +5430,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$646  = ch1_read_select_140;
     if (bus__r_en) begin
       \$646  = \$271 ;
@@ -5440,7 +5440,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$647  = ch1_read_select_141;
     if (bus__r_en) begin
       \$647  = \$272 ;
@@ -5450,7 +5450,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$648  = ch1_read_select_142;
     if (bus__r_en) begin
       \$648  = \$273 ;
@@ -5460,7 +5460,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$649  = ch1_read_select_143;
     if (bus__r_en) begin
       \$649  = \$274 ;
@@ -5470,7 +5470,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$650  = ch1_read_select_144;
     if (bus__r_en) begin
       \$650  = \$275 ;
@@ -5480,7 +5480,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$651  = ch1_read_select_145;
     if (bus__r_en) begin
       \$651  = \$276 ;
@@ -5490,137 +5490,137 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$652  = ch1_result_status_status_snapshot;
     if (\$277 ) begin
-      \$652  = \port$5285$0 [3:0];
+      \$652  = \port$5187$0 [3:0];
     end
     if (rst) begin
       \$652  = 4'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$653  = ch1_result_status_cds_snapshot;
     if (\$277 ) begin
-      \$653  = \port$5285$0 [49];
+      \$653  = \port$5187$0 [49];
     end
     if (rst) begin
       \$653  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$654  = ch1_result_status_w0_ne_snapshot;
     if (\$277 ) begin
-      \$654  = \port$5285$0 [131];
+      \$654  = \port$5187$0 [131];
     end
     if (rst) begin
       \$654  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$655  = ch1_result_status_w0_nw_snapshot;
     if (\$277 ) begin
-      \$655  = \port$5285$0 [132];
+      \$655  = \port$5187$0 [132];
     end
     if (rst) begin
       \$655  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$656  = ch1_result_status_w0_crc_ok_snapshot;
     if (\$277 ) begin
-      \$656  = \port$5285$0 [133];
+      \$656  = \port$5187$0 [133];
     end
     if (rst) begin
       \$656  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$657  = ch1_result_status_w1_ne_snapshot;
     if (\$277 ) begin
-      \$657  = \port$5285$0 [174];
+      \$657  = \port$5187$0 [174];
     end
     if (rst) begin
       \$657  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$658  = ch1_result_status_w1_nw_snapshot;
     if (\$277 ) begin
-      \$658  = \port$5285$0 [175];
+      \$658  = \port$5187$0 [175];
     end
     if (rst) begin
       \$658  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$659  = ch1_result_status_w1_crc_ok_snapshot;
     if (\$277 ) begin
-      \$659  = \port$5285$0 [176];
+      \$659  = \port$5187$0 [176];
     end
     if (rst) begin
       \$659  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$660  = ch1_result_status_lc_repeat_snapshot;
     if (\$277 ) begin
-      \$660  = \port$5285$0 [183];
+      \$660  = \port$5187$0 [183];
     end
     if (rst) begin
       \$660  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$661  = ch1_result_status_lc_skip_snapshot;
     if (\$277 ) begin
-      \$661  = \port$5285$0 [184];
+      \$661  = \port$5187$0 [184];
     end
     if (rst) begin
       \$661  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$662  = ch1_result_status_lc_zero_snapshot;
     if (\$277 ) begin
-      \$662  = \port$5285$0 [185];
+      \$662  = \port$5187$0 [185];
     end
     if (rst) begin
       \$662  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$663  = ch1_result_status_spw_mismatch_snapshot;
     if (\$277 ) begin
-      \$663  = \port$5285$0 [186];
+      \$663  = \port$5187$0 [186];
     end
     if (rst) begin
       \$663  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$664  = ch1_result_status_lc_snapshot;
     if (\$277 ) begin
-      \$664  = \port$5285$0 [182:177];
+      \$664  = \port$5187$0 [182:177];
     end
     if (rst) begin
       \$664  = 6'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$665  = ch1_result_seq_seq_snapshot;
     if (\$277 ) begin
       \$665  = ch1__done_count;
@@ -5630,107 +5630,107 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$666  = ch1_result_seq_line_delay_snapshot;
     if (\$277 ) begin
-      \$666  = \port$5285$0 [48:36];
+      \$666  = \port$5187$0 [48:36];
     end
     if (rst) begin
       \$666  = 13'h0000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$667  = ch1_result_w0_lo_data_snapshot;
     if (\$277 ) begin
-      \$667  = \port$5285$0 [107:76];
+      \$667  = \port$5187$0 [107:76];
     end
     if (rst) begin
       \$667  = 32'd0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$668  = ch1_result_w0_hi_data_snapshot;
     if (\$277 ) begin
-      \$668  = \port$5285$0 [130:108];
+      \$668  = \port$5187$0 [130:108];
     end
     if (rst) begin
       \$668  = 23'h000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$669  = ch1_result_w1_lo_data_snapshot;
     if (\$277 ) begin
-      \$669  = \port$5285$0 [165:134];
+      \$669  = \port$5187$0 [165:134];
     end
     if (rst) begin
       \$669  = 32'd0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$670  = ch1_result_w1_hi_data_snapshot;
     if (\$277 ) begin
-      \$670  = \port$5285$0 [173:166];
+      \$670  = \port$5187$0 [173:166];
     end
     if (rst) begin
       \$670  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$671  = ch1_result_timestamp_time_snapshot;
     if (\$277 ) begin
-      \$671  = \port$5285$0 [35:4];
+      \$671  = \port$5187$0 [35:4];
     end
     if (rst) begin
       \$671  = 32'd0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$672  = ch1_result_line_noise_events_snapshot;
     if (\$277 ) begin
-      \$672  = \port$5285$0 [53:50];
+      \$672  = \port$5187$0 [53:50];
     end
     if (rst) begin
       \$672  = 4'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$673  = ch1_result_line_delay_settled_snapshot;
     if (\$277 ) begin
-      \$673  = \port$5285$0 [54];
+      \$673  = \port$5187$0 [54];
     end
     if (rst) begin
       \$673  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$674  = ch1_result_line_delay_spread_snapshot;
     if (\$277 ) begin
-      \$674  = \port$5285$0 [75:68];
+      \$674  = \port$5187$0 [75:68];
     end
     if (rst) begin
       \$674  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$675  = ch1_result_line_settled_delay_snapshot;
     if (\$277 ) begin
-      \$675  = \port$5285$0 [67:55];
+      \$675  = \port$5187$0 [67:55];
     end
     if (rst) begin
       \$675  = 13'h0000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$676  = ch1_window0_read;
     if (bus__r_en) begin
       \$676  = \$279 ;
@@ -5740,7 +5740,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$677  = ch1_read_data;
     if (bus__r_load) begin
       \$677  = \$351 ;
@@ -5751,106 +5751,106 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, ch1_irq, ch0_irq };
-  assign ch0__status = \port$4723$0 [3:0];
-  assign ch0__cds = \port$4723$0 [49];
-  assign ch0__word0_ne = \port$4723$0 [131];
-  assign ch0__word0_nw = \port$4723$0 [132];
-  assign ch0__word0_crc_ok = \port$4723$0 [133];
-  assign ch0__word1_ne = \port$4723$0 [174];
-  assign ch0__word1_nw = \port$4723$0 [175];
-  assign ch0__word1_crc_ok = \port$4723$0 [176];
-  assign ch0__lc_repeat = \port$4723$0 [183];
-  assign ch0__lc_skip = \port$4723$0 [184];
-  assign ch0__lc_zero = \port$4723$0 [185];
-  assign ch0__spw_mismatch = \port$4723$0 [186];
-  assign ch0__lc = \port$4723$0 [182:177];
-  assign ch0__line_delay = \port$4723$0 [48:36];
-  assign ch0__word0_position = \port$4723$0 [130:76];
-  assign ch0__word1_position = \port$4723$0 [173:134];
-  assign ch0__timestamp = \port$4723$0 [35:4];
-  assign ch0__noise_events = \port$4723$0 [53:50];
-  assign ch0__delay_settled = \port$4723$0 [54];
-  assign ch0__delay_spread = \port$4723$0 [75:68];
-  assign ch0__settled_delay = \port$4723$0 [67:55];
+  assign ch0__status = \port$4636$0 [3:0];
+  assign ch0__cds = \port$4636$0 [49];
+  assign ch0__word0_ne = \port$4636$0 [131];
+  assign ch0__word0_nw = \port$4636$0 [132];
+  assign ch0__word0_crc_ok = \port$4636$0 [133];
+  assign ch0__word1_ne = \port$4636$0 [174];
+  assign ch0__word1_nw = \port$4636$0 [175];
+  assign ch0__word1_crc_ok = \port$4636$0 [176];
+  assign ch0__lc_repeat = \port$4636$0 [183];
+  assign ch0__lc_skip = \port$4636$0 [184];
+  assign ch0__lc_zero = \port$4636$0 [185];
+  assign ch0__spw_mismatch = \port$4636$0 [186];
+  assign ch0__lc = \port$4636$0 [182:177];
+  assign ch0__line_delay = \port$4636$0 [48:36];
+  assign ch0__word0_position = \port$4636$0 [130:76];
+  assign ch0__word1_position = \port$4636$0 [173:134];
+  assign ch0__timestamp = \port$4636$0 [35:4];
+  assign ch0__noise_events = \port$4636$0 [53:50];
+  assign ch0__delay_settled = \port$4636$0 [54];
+  assign ch0__delay_spread = \port$4636$0 [75:68];
+  assign ch0__settled_delay = \port$4636$0 [67:55];
   assign ch0__cap_data_bits_w0 = 6'h37;
   assign ch0__cap_data_bits_w1 = 6'h28;
   assign ch0__cap_timer_width = 6'h18;
   assign ch0__cap_counters = 1'h1;
   assign ch0__cap_timestamp = 1'h1;
   assign ch0__cap_register_access = 1'h1;
-  assign ch0__count_crc_word0 = \port$4736$0 [15:0];
-  assign ch0__count_crc_word1 = \port$4736$0 [31:16];
-  assign ch0__count_no_ack = \port$4736$0 [47:32];
-  assign ch0__count_no_start = \port$4736$0 [63:48];
-  assign ch0__count_delay_range = \port$4736$0 [79:64];
-  assign ch0__count_slo_stuck_low = \port$4736$0 [95:80];
-  assign ch0__count_lc_repeat = \port$4736$0 [111:96];
-  assign ch0__count_lc_skip = \port$4736$0 [127:112];
-  assign ch0__count_lc_zero = \port$4736$0 [143:128];
-  assign ch0__count_spw_mismatch = \port$4736$0 [159:144];
-  assign ch0__count_overrun = \port$4736$0 [175:160];
-  assign ch0__count_aborted = \port$4736$0 [191:176];
-  assign ch0__count_no_stop = \port$4736$0 [207:192];
-  assign ch0__count_noisy_line = \port$4736$0 [223:208];
-  assign ch0__count_delay_jump = \port$4736$0 [239:224];
-  assign ch0__count_noise_event = \port$4736$0 [255:240];
-  assign ch0__ca_status = \port$4868$0 [2:0];
-  assign ch0__ca_bytes_done = \port$4868$0 [9:3];
-  assign ch0__count_ca_crc4_error = \port$4736$0 [271:256];
-  assign ch0__count_ca_no_answer = \port$4736$0 [287:272];
-  assign ch0__count_ca_refused = \port$4736$0 [303:288];
-  assign ch0__count_ca_aborted = \port$4736$0 [319:304];
-  assign ch0__count_ca_data_fault = \port$4736$0 [335:320];
-  assign ch1__status = \port$5285$0 [3:0];
-  assign ch1__cds = \port$5285$0 [49];
-  assign ch1__word0_ne = \port$5285$0 [131];
-  assign ch1__word0_nw = \port$5285$0 [132];
-  assign ch1__word0_crc_ok = \port$5285$0 [133];
-  assign ch1__word1_ne = \port$5285$0 [174];
-  assign ch1__word1_nw = \port$5285$0 [175];
-  assign ch1__word1_crc_ok = \port$5285$0 [176];
-  assign ch1__lc_repeat = \port$5285$0 [183];
-  assign ch1__lc_skip = \port$5285$0 [184];
-  assign ch1__lc_zero = \port$5285$0 [185];
-  assign ch1__spw_mismatch = \port$5285$0 [186];
-  assign ch1__lc = \port$5285$0 [182:177];
-  assign ch1__line_delay = \port$5285$0 [48:36];
-  assign ch1__word0_position = \port$5285$0 [130:76];
-  assign ch1__word1_position = \port$5285$0 [173:134];
-  assign ch1__timestamp = \port$5285$0 [35:4];
-  assign ch1__noise_events = \port$5285$0 [53:50];
-  assign ch1__delay_settled = \port$5285$0 [54];
-  assign ch1__delay_spread = \port$5285$0 [75:68];
-  assign ch1__settled_delay = \port$5285$0 [67:55];
+  assign ch0__count_crc_word0 = \port$4649$0 [15:0];
+  assign ch0__count_crc_word1 = \port$4649$0 [31:16];
+  assign ch0__count_no_ack = \port$4649$0 [47:32];
+  assign ch0__count_no_start = \port$4649$0 [63:48];
+  assign ch0__count_delay_range = \port$4649$0 [79:64];
+  assign ch0__count_slo_stuck_low = \port$4649$0 [95:80];
+  assign ch0__count_lc_repeat = \port$4649$0 [111:96];
+  assign ch0__count_lc_skip = \port$4649$0 [127:112];
+  assign ch0__count_lc_zero = \port$4649$0 [143:128];
+  assign ch0__count_spw_mismatch = \port$4649$0 [159:144];
+  assign ch0__count_overrun = \port$4649$0 [175:160];
+  assign ch0__count_aborted = \port$4649$0 [191:176];
+  assign ch0__count_no_stop = \port$4649$0 [207:192];
+  assign ch0__count_noisy_line = \port$4649$0 [223:208];
+  assign ch0__count_delay_jump = \port$4649$0 [239:224];
+  assign ch0__count_noise_event = \port$4649$0 [255:240];
+  assign ch0__ca_status = \port$4781$0 [2:0];
+  assign ch0__ca_bytes_done = \port$4781$0 [9:3];
+  assign ch0__count_ca_crc4_error = \port$4649$0 [271:256];
+  assign ch0__count_ca_no_answer = \port$4649$0 [287:272];
+  assign ch0__count_ca_refused = \port$4649$0 [303:288];
+  assign ch0__count_ca_aborted = \port$4649$0 [319:304];
+  assign ch0__count_ca_data_fault = \port$4649$0 [335:320];
+  assign ch1__status = \port$5187$0 [3:0];
+  assign ch1__cds = \port$5187$0 [49];
+  assign ch1__word0_ne = \port$5187$0 [131];
+  assign ch1__word0_nw = \port$5187$0 [132];
+  assign ch1__word0_crc_ok = \port$5187$0 [133];
+  assign ch1__word1_ne = \port$5187$0 [174];
+  assign ch1__word1_nw = \port$5187$0 [175];
+  assign ch1__word1_crc_ok = \port$5187$0 [176];
+  assign ch1__lc_repeat = \port$5187$0 [183];
+  assign ch1__lc_skip = \port$5187$0 [184];
+  assign ch1__lc_zero = \port$5187$0 [185];
+  assign ch1__spw_mismatch = \port$5187$0 [186];
+  assign ch1__lc = \port$5187$0 [182:177];
+  assign ch1__line_delay = \port$5187$0 [48:36];
+  assign ch1__word0_position = \port$5187$0 [130:76];
+  assign ch1__word1_position = \port$5187$0 [173:134];
+  assign ch1__timestamp = \port$5187$0 [35:4];
+  assign ch1__noise_events = \port$5187$0 [53:50];
+  assign ch1__delay_settled = \port$5187$0 [54];
+  assign ch1__delay_spread = \port$5187$0 [75:68];
+  assign ch1__settled_delay = \port$5187$0 [67:55];
   assign ch1__cap_data_bits_w0 = 6'h37;
   assign ch1__cap_data_bits_w1 = 6'h28;
   assign ch1__cap_timer_width = 6'h18;
   assign ch1__cap_counters = 1'h1;
   assign ch1__cap_timestamp = 1'h1;
   assign ch1__cap_register_access = 1'h1;
-  assign ch1__count_crc_word0 = \port$5298$0 [15:0];
-  assign ch1__count_crc_word1 = \port$5298$0 [31:16];
-  assign ch1__count_no_ack = \port$5298$0 [47:32];
-  assign ch1__count_no_start = \port$5298$0 [63:48];
-  assign ch1__count_delay_range = \port$5298$0 [79:64];
-  assign ch1__count_slo_stuck_low = \port$5298$0 [95:80];
-  assign ch1__count_lc_repeat = \port$5298$0 [111:96];
-  assign ch1__count_lc_skip = \port$5298$0 [127:112];
-  assign ch1__count_lc_zero = \port$5298$0 [143:128];
-  assign ch1__count_spw_mismatch = \port$5298$0 [159:144];
-  assign ch1__count_overrun = \port$5298$0 [175:160];
-  assign ch1__count_aborted = \port$5298$0 [191:176];
-  assign ch1__count_no_stop = \port$5298$0 [207:192];
-  assign ch1__count_noisy_line = \port$5298$0 [223:208];
-  assign ch1__count_delay_jump = \port$5298$0 [239:224];
-  assign ch1__count_noise_event = \port$5298$0 [255:240];
-  assign ch1__ca_status = \port$5430$0 [2:0];
-  assign ch1__ca_bytes_done = \port$5430$0 [9:3];
-  assign ch1__count_ca_crc4_error = \port$5298$0 [271:256];
-  assign ch1__count_ca_no_answer = \port$5298$0 [287:272];
-  assign ch1__count_ca_refused = \port$5298$0 [303:288];
-  assign ch1__count_ca_aborted = \port$5298$0 [319:304];
-  assign ch1__count_ca_data_fault = \port$5298$0 [335:320];
+  assign ch1__count_crc_word0 = \port$5200$0 [15:0];
+  assign ch1__count_crc_word1 = \port$5200$0 [31:16];
+  assign ch1__count_no_ack = \port$5200$0 [47:32];
+  assign ch1__count_no_start = \port$5200$0 [63:48];
+  assign ch1__count_delay_range = \port$5200$0 [79:64];
+  assign ch1__count_slo_stuck_low = \port$5200$0 [95:80];
+  assign ch1__count_lc_repeat = \port$5200$0 [111:96];
+  assign ch1__count_lc_skip = \port$5200$0 [127:112];
+  assign ch1__count_lc_zero = \port$5200$0 [143:128];
+  assign ch1__count_spw_mismatch = \port$5200$0 [159:144];
+  assign ch1__count_overrun = \port$5200$0 [175:160];
+  assign ch1__count_aborted = \port$5200$0 [191:176];
+  assign ch1__count_no_stop = \port$5200$0 [207:192];
+  assign ch1__count_noisy_line = \port$5200$0 [223:208];
+  assign ch1__count_delay_jump = \port$5200$0 [239:224];
+  assign ch1__count_noise_event = \port$5200$0 [255:240];
+  assign ch1__ca_status = \port$5332$0 [2:0];
+  assign ch1__ca_bytes_done = \port$5332$0 [9:3];
+  assign ch1__count_ca_crc4_error = \port$5200$0 [271:256];
+  assign ch1__count_ca_no_answer = \port$5200$0 [287:272];
+  assign ch1__count_ca_refused = \port$5200$0 [303:288];
+  assign ch1__count_ca_aborted = \port$5200$0 [319:304];
+  assign ch1__count_ca_data_fault = \port$5200$0 [335:320];
   assign glob__trigger = g_trigger_start;
   assign ch0__start = ch0_ctrl_start;
   assign ch0__abort_cycle = ch0_ctrl_abort;
@@ -5945,7 +5945,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_axil.bus (axil__awvalid, axil__wdata, axil__wstrb, axil__wvalid, axil__bready, axil__araddr, axil__arvalid, axil__rready, clk, rst, axil__awready, axil__wready, regs__w_en, axil__arready, regs__r_en, regs__r_load, axil__rdata, regs__w_addr, regs__w_data, regs__w_strb, axil__bvalid
 , rvalid, axil__awaddr);
-  reg \$auto$verilog_backend.cc:2355:dump_module$27  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$11  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -6084,7 +6084,7 @@ module \biss_master_axil.bus (axil__awvalid, axil__wdata, axil__wstrb, axil__wva
   always @(posedge clk)
     rvalid <= \$30 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$11 ) begin end
     \$23  = \$signal ;
     if (\$10 ) begin
       \$23  = 1'h1;
@@ -6097,7 +6097,7 @@ module \biss_master_axil.bus (axil__awvalid, axil__wdata, axil__wstrb, axil__wva
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$11 ) begin end
     \$24  = regs__w_addr;
     if (\$10 ) begin
       \$24  = axil__awaddr[12:2];
@@ -6107,7 +6107,7 @@ module \biss_master_axil.bus (axil__awvalid, axil__wdata, axil__wstrb, axil__wva
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$11 ) begin end
     \$25  = w_held;
     if (\$11 ) begin
       \$25  = 1'h1;
@@ -6120,7 +6120,7 @@ module \biss_master_axil.bus (axil__awvalid, axil__wdata, axil__wstrb, axil__wva
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$11 ) begin end
     \$26  = regs__w_data;
     if (\$11 ) begin
       \$26  = axil__wdata;
@@ -6130,7 +6130,7 @@ module \biss_master_axil.bus (axil__awvalid, axil__wdata, axil__wstrb, axil__wva
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$11 ) begin end
     \$27  = regs__w_strb;
     if (\$11 ) begin
       \$27  = axil__wstrb;
@@ -6140,7 +6140,7 @@ module \biss_master_axil.bus (axil__awvalid, axil__wdata, axil__wstrb, axil__wva
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$11 ) begin end
     \$28  = axil__bvalid;
     if (\$15 ) begin
       \$28  = 1'h1;
@@ -6152,7 +6152,7 @@ module \biss_master_axil.bus (axil__awvalid, axil__wdata, axil__wstrb, axil__wva
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$11 ) begin end
     \$29  = \$signal$16 ;
     if (\$16 ) begin
       \$29  = 1'h1;
@@ -6164,7 +6164,7 @@ module \biss_master_axil.bus (axil__awvalid, axil__wdata, axil__wstrb, axil__wva
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$11 ) begin end
     \$30  = rvalid;
     if (\$22 ) begin
       \$30  = 1'h1;
@@ -6189,8 +6189,8 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0 (slo, clk, rst, \trigger$179 , ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__ca_busy, regs__ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period
 , cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_quiet_time, ca_slave_id, ca_address, ca_count
-, ca_write, ca_start, ca_abort, regs__done_count, ma, regs__done, \port$4723$0 , \port$4736$0 , regs__ca_done, \port$4868$0 , ca_rbuf_addr);
-  reg \$auto$verilog_backend.cc:2355:dump_module$28  = 0;
+, ca_write, ca_start, ca_abort, regs__done_count, ma, regs__done, \port$4636$0 , \port$4649$0 , regs__ca_done, \port$4781$0 , ca_rbuf_addr);
+  reg \$auto$verilog_backend.cc:2355:dump_module$12  = 0;
   wire \$1 ;
   wire [16:0] \$2 ;
   reg \$3 ;
@@ -6264,6 +6264,7 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$179 , ca_wbuf_en, ca_rbuf_
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
   input [1:0] cfg_w0_crc;
   wire [1:0] cfg_w0_crc;
   input [5:0] cfg_w0_data_bits;
@@ -6276,6 +6277,7 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$179 , ca_wbuf_en, ca_rbuf_
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
   input [1:0] cfg_w1_crc;
   wire [1:0] cfg_w1_crc;
   input [5:0] cfg_w1_data_bits;
@@ -6326,12 +6328,12 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$179 , ca_wbuf_en, ca_rbuf_
   wire [3:0] noise_events;
   input periodic;
   wire periodic;
-  output [186:0] \port$4723$0 ;
-  wire [186:0] \port$4723$0 ;
-  output [335:0] \port$4736$0 ;
-  wire [335:0] \port$4736$0 ;
-  output [9:0] \port$4868$0 ;
-  wire [9:0] \port$4868$0 ;
+  output [186:0] \port$4636$0 ;
+  wire [186:0] \port$4636$0 ;
+  output [335:0] \port$4649$0 ;
+  wire [335:0] \port$4649$0 ;
+  output [9:0] \port$4781$0 ;
+  wire [9:0] \port$4781$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -6378,6 +6380,7 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$179 , ca_wbuf_en, ca_rbuf_
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
   wire [1:0] regs__cfg_w0_crc;
   wire [5:0] regs__cfg_w0_data_bits;
   wire regs__cfg_w0_lc;
@@ -6386,6 +6389,7 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$179 , ca_wbuf_en, ca_rbuf_
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
   wire [1:0] regs__cfg_w1_crc;
   wire [5:0] regs__cfg_w1_data_bits;
   wire regs__cfg_w1_enable;
@@ -6494,8 +6498,8 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$179 , ca_wbuf_en, ca_rbuf_
   assign regs__frame_error = regs__done & \$1 ;
   \biss_master_axil.ch0.core  core (
     .abort(abort_cycle),
-    .\abort$223 (ca_abort),
-    .\busy$277 (regs__busy),
+    .\abort$234 (ca_abort),
+    .\busy$288 (regs__busy),
     .ca_address(ca_address),
     .ca_count(ca_count),
     .ca_done(regs__ca_done),
@@ -6526,34 +6530,34 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$179 , ca_wbuf_en, ca_rbuf_
     .cfg_w1_enable(cfg_w1_enable),
     .cfg_w1_lc(cfg_w1_lc),
     .cfg_w1_nenw(cfg_w1_nenw),
-    .\clear$251 (clear_counters),
+    .\clear$262 (clear_counters),
     .clk(clk),
     .config_error(regs__config_error),
     .counts(\$6 ),
-    .\done$280 (regs__done),
+    .\done$291 (regs__done),
     .frames(regs__ca_busy),
     .ma(ma),
-    .\periodic$27 (periodic),
+    .\periodic$35 (periodic),
     .rbuf_addr(ca_rbuf_addr),
     .rbuf_en(ca_rbuf_en),
     .result(\$7 ),
-    .\result$285 (\$5 ),
+    .\result$296 (\$5 ),
     .rst(rst),
     .slo(slo),
     .start(start),
-    .\start$221 (ca_start),
+    .\start$232 (ca_start),
     .trigger(trigger),
-    .\valid$282 (valid)
+    .\valid$293 (valid)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$12 ) begin end
     \$3  = regs__abort_cycle;
     if (rst) begin
       \$3  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$12 ) begin end
     \$4  = regs__done_count;
     if (regs__done) begin
       \$4  = \$2 [15:0];
@@ -6699,16 +6703,16 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$179 , ca_wbuf_en, ca_rbuf_
   assign regs__ca_rbuf_en = ca_rbuf_en;
   assign \ma$182  = ma;
   assign \slo$184  = slo;
-  assign \port$4723$0  = \$5 ;
-  assign \port$4736$0  = \$6 ;
-  assign \port$4868$0  = \$7 ;
+  assign \port$4636$0  = \$5 ;
+  assign \port$4649$0  = \$6 ;
+  assign \port$4781$0  = \$7 ;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy$277 , config_error, frames, ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, \clear$251 , \periodic$27 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit
-, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_quiet_time, ca_slave_id, ca_address, ca_count, ca_write, \start$221 , \abort$223 
-, abort, ma, \done$280 , \valid$282 , \result$285 , counts, ca_done, result, rbuf_addr);
-  reg \$auto$verilog_backend.cc:2355:dump_module$29  = 0;
+module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy$288 , config_error, frames, ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, \clear$262 , \periodic$35 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit
+, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_quiet_time, ca_slave_id, ca_address, ca_count, ca_write, \start$232 , \abort$234 
+, abort, ma, \done$291 , \valid$293 , \result$296 , counts, ca_done, result, rbuf_addr);
+  reg \$auto$verilog_backend.cc:2355:dump_module$13  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -6733,25 +6737,25 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire \$9 ;
   input abort;
   wire abort;
-  input \abort$223 ;
-  wire \abort$223 ;
-  wire \abort$39 ;
+  input \abort$234 ;
+  wire \abort$234 ;
+  wire \abort$47 ;
   wire abort_cycle;
   wire ack_expired;
-  wire \ack_expired$71 ;
+  wire \ack_expired$79 ;
   wire [23:0] ack_limit;
-  wire [23:0] \ack_limit$92 ;
+  wire [23:0] \ack_limit$100 ;
   wire arm;
   reg \bit  = 1'h0;
-  wire \bit$309 ;
+  wire \bit$320 ;
   wire [5:0] bits;
   wire break_over;
-  wire \break_over$69 ;
+  wire \break_over$77 ;
   wire [23:0] break_time;
   wire busy;
-  wire \busy$232 ;
-  output \busy$277 ;
-  wire \busy$277 ;
+  wire \busy$243 ;
+  output \busy$288 ;
+  wire \busy$288 ;
   wire ca_abort;
   input [6:0] ca_address;
   wire [6:0] ca_address;
@@ -6786,11 +6790,11 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   input ca_write;
   wire ca_write;
   wire cdm;
-  wire \cdm$236 ;
+  wire \cdm$247 ;
   wire cdm_cycle;
   wire cds;
-  wire \cds$288 ;
-  wire [174:0] cfg;
+  wire \cds$299 ;
+  wire [250:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
   wire [11:0] \cfg.delay_limit ;
@@ -6808,19 +6812,31 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \cfg.w0.crc ;
   wire [5:0] \cfg.w0.data_bits ;
   wire \cfg.w0.lc ;
   wire \cfg.w0.nenw ;
+  wire [37:0] \cfg.w0_crc ;
+  wire \cfg.w0_crc.inverted ;
+  wire [15:0] \cfg.w0_crc.poly ;
+  wire [15:0] \cfg.w0_crc.start ;
+  wire [4:0] \cfg.w0_crc.width ;
   wire [9:0] \cfg.w1 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \cfg.w1.crc ;
   wire [5:0] \cfg.w1.data_bits ;
   wire \cfg.w1.lc ;
   wire \cfg.w1.nenw ;
+  wire [37:0] \cfg.w1_crc ;
+  wire \cfg.w1_crc.inverted ;
+  wire [15:0] \cfg.w1_crc.poly ;
+  wire [15:0] \cfg.w1_crc.start ;
+  wire [4:0] \cfg.w1_crc.width ;
   wire \cfg.w1_enable ;
   input [23:0] cfg_ack_limit;
   wire [23:0] cfg_ack_limit;
@@ -6850,8 +6866,13 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
   input [1:0] cfg_w0_crc;
   wire [1:0] cfg_w0_crc;
+  wire cfg_w0_crc_inverted;
+  wire [15:0] cfg_w0_crc_poly;
+  wire [15:0] cfg_w0_crc_start;
+  wire [4:0] cfg_w0_crc_width;
   input [5:0] cfg_w0_data_bits;
   wire [5:0] cfg_w0_data_bits;
   input cfg_w0_lc;
@@ -6862,8 +6883,13 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
   input [1:0] cfg_w1_crc;
   wire [1:0] cfg_w1_crc;
+  wire cfg_w1_crc_inverted;
+  wire [15:0] cfg_w1_crc_poly;
+  wire [15:0] cfg_w1_crc_start;
+  wire [4:0] cfg_w1_crc_width;
   input [5:0] cfg_w1_data_bits;
   wire [5:0] cfg_w1_data_bits;
   input cfg_w1_enable;
@@ -6873,13 +6899,13 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   input cfg_w1_nenw;
   wire cfg_w1_nenw;
   wire check;
-  wire \check$150 ;
+  wire \check$158 ;
   wire clean;
-  wire \clean$155 ;
+  wire \clean$163 ;
   wire clear;
-  wire \clear$116 ;
-  input \clear$251 ;
-  wire \clear$251 ;
+  wire \clear$124 ;
+  input \clear$262 ;
+  wire \clear$262 ;
   wire clear_counters;
   input clk;
   wire clk;
@@ -6933,11 +6959,44 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire [15:0] \counts.slo_stuck_low ;
   wire [15:0] \counts.spw_mismatch ;
   wire [39:0] cpw_top;
-  wire [39:0] \cpw_top$164 ;
+  wire [39:0] \cpw_top$175 ;
   wire [1:0] crc_error;
   wire [1:0] crc_ok;
-  wire [1:0] \crc_ok$177 ;
-  wire [174:0] cycle;
+  wire [1:0] \crc_ok$188 ;
+  wire [75:0] crcs;
+  wire [75:0] \crcs$171 ;
+  wire [37:0] \crcs$171[0] ;
+  wire \crcs$171[0].inverted ;
+  wire [15:0] \crcs$171[0].poly ;
+  wire [15:0] \crcs$171[0].start ;
+  wire [4:0] \crcs$171[0].width ;
+  wire [37:0] \crcs$171[1] ;
+  wire \crcs$171[1].inverted ;
+  wire [15:0] \crcs$171[1].poly ;
+  wire [15:0] \crcs$171[1].start ;
+  wire [4:0] \crcs$171[1].width ;
+  wire [75:0] \crcs$172 ;
+  wire [37:0] \crcs$172[0] ;
+  wire \crcs$172[0].inverted ;
+  wire [15:0] \crcs$172[0].poly ;
+  wire [15:0] \crcs$172[0].start ;
+  wire [4:0] \crcs$172[0].width ;
+  wire [37:0] \crcs$172[1] ;
+  wire \crcs$172[1].inverted ;
+  wire [15:0] \crcs$172[1].poly ;
+  wire [15:0] \crcs$172[1].start ;
+  wire [4:0] \crcs$172[1].width ;
+  wire [37:0] \crcs[0] ;
+  wire \crcs[0].inverted ;
+  wire [15:0] \crcs[0].poly ;
+  wire [15:0] \crcs[0].start ;
+  wire [4:0] \crcs[0].width ;
+  wire [37:0] \crcs[1] ;
+  wire \crcs[1].inverted ;
+  wire [15:0] \crcs[1].poly ;
+  wire [15:0] \crcs[1].start ;
+  wire [4:0] \crcs[1].width ;
+  wire [250:0] cycle;
   wire [23:0] \cycle.ack_limit ;
   wire [23:0] \cycle.break_time ;
   wire [11:0] \cycle.delay_limit ;
@@ -6955,19 +7014,31 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \cycle.w0.crc ;
   wire [5:0] \cycle.w0.data_bits ;
   wire \cycle.w0.lc ;
   wire \cycle.w0.nenw ;
+  wire [37:0] \cycle.w0_crc ;
+  wire \cycle.w0_crc.inverted ;
+  wire [15:0] \cycle.w0_crc.poly ;
+  wire [15:0] \cycle.w0_crc.start ;
+  wire [4:0] \cycle.w0_crc.width ;
   wire [9:0] \cycle.w1 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \cycle.w1.crc ;
   wire [5:0] \cycle.w1.data_bits ;
   wire \cycle.w1.lc ;
   wire \cycle.w1.nenw ;
+  wire [37:0] \cycle.w1_crc ;
+  wire \cycle.w1_crc.inverted ;
+  wire [15:0] \cycle.w1_crc.poly ;
+  wire [15:0] \cycle.w1_crc.start ;
+  wire [4:0] \cycle.w1_crc.width ;
   wire \cycle.w1_enable ;
   wire [54:0] data0;
   wire [39:0] data1;
@@ -6976,53 +7047,53 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* init = 1'h0 *)
   wire decoder_sample;
   wire [12:0] delay;
-  wire [12:0] \delay$149 ;
-  wire [12:0] \delay$98 ;
+  wire [12:0] \delay$106 ;
+  wire [12:0] \delay$157 ;
   wire delay_jump;
   wire [11:0] delay_limit;
-  wire [11:0] \delay_limit$100 ;
+  wire [11:0] \delay_limit$108 ;
   wire delay_over;
-  wire \delay_over$79 ;
+  wire \delay_over$87 ;
   wire delay_settled;
   wire [7:0] delay_spread;
   wire [16:0] delay_tolerance;
   wire done;
-  wire \done$234 ;
-  output \done$280 ;
-  wire \done$280 ;
-  wire \done$281 ;
+  wire \done$245 ;
+  output \done$291 ;
+  wire \done$291 ;
+  wire \done$292 ;
   wire doubtful;
   wire early;
-  wire \early$55 ;
+  wire \early$63 ;
   wire enable;
   wire end_check;
   wire enough;
   wire \event ;
   wire [3:0] events;
-  wire [20:0] \events$246 ;
-  wire \events$246.aborted ;
-  wire \events$246.ca_aborted ;
-  wire \events$246.ca_crc4_error ;
-  wire \events$246.ca_data_fault ;
-  wire \events$246.ca_no_answer ;
-  wire \events$246.ca_refused ;
-  wire \events$246.crc_word0 ;
-  wire \events$246.crc_word1 ;
-  wire \events$246.delay_jump ;
-  wire \events$246.delay_range ;
-  wire \events$246.lc_repeat ;
-  wire \events$246.lc_skip ;
-  wire \events$246.lc_zero ;
-  wire \events$246.no_ack ;
-  wire \events$246.no_start ;
-  wire \events$246.no_stop ;
-  wire \events$246.noise_event ;
-  wire \events$246.noisy_line ;
-  wire \events$246.overrun ;
-  wire \events$246.slo_stuck_low ;
-  wire \events$246.spw_mismatch ;
+  wire [20:0] \events$257 ;
+  wire \events$257.aborted ;
+  wire \events$257.ca_aborted ;
+  wire \events$257.ca_crc4_error ;
+  wire \events$257.ca_data_fault ;
+  wire \events$257.ca_no_answer ;
+  wire \events$257.ca_refused ;
+  wire \events$257.crc_word0 ;
+  wire \events$257.crc_word1 ;
+  wire \events$257.delay_jump ;
+  wire \events$257.delay_range ;
+  wire \events$257.lc_repeat ;
+  wire \events$257.lc_skip ;
+  wire \events$257.lc_zero ;
+  wire \events$257.no_ack ;
+  wire \events$257.no_start ;
+  wire \events$257.no_stop ;
+  wire \events$257.noise_event ;
+  wire \events$257.noisy_line ;
+  wire \events$257.overrun ;
+  wire \events$257.slo_stuck_low ;
+  wire \events$257.spw_mismatch ;
   wire fault;
-  wire \fault$173 ;
+  wire \fault$184 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -7056,7 +7127,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \fault_status$175 ;
+  wire [3:0] \fault_status$186 ;
   wire [6:0] faults;
   wire \faults.aborted ;
   wire \faults.bad_config ;
@@ -7066,7 +7137,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire \faults.no_stop ;
   wire \faults.slo_stuck_low ;
   wire first_rise;
-  wire \first_rise$207 ;
+  wire \first_rise$218 ;
   wire [31:0] first_rise_time;
   wire [186:0] frame;
   wire \frame.cds ;
@@ -7117,37 +7188,37 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   output frames;
   wire frames;
   wire [15:0] half_period;
-  wire [15:0] \half_period$122 ;
+  wire [15:0] \half_period$130 ;
   wire held;
   wire hold;
   wire idle;
-  wire \idle$23 ;
-  wire \idle$32 ;
+  wire \idle$31 ;
+  wire \idle$40 ;
   wire in_clock;
-  wire \in_clock$86 ;
+  wire \in_clock$94 ;
   wire jump;
   wire [5:0] lc;
-  wire [5:0] \lc$127 ;
-  wire [5:0] \lc$301 ;
+  wire [5:0] \lc$135 ;
+  wire [5:0] \lc$312 ;
   wire lc_check;
   wire lc_load;
   wire [5:0] lc_next;
-  wire [5:0] \lc_next$129 ;
+  wire [5:0] \lc_next$137 ;
   wire lc_repeat;
-  wire \lc_repeat$302 ;
+  wire \lc_repeat$313 ;
   wire lc_repeat_seen;
   wire lc_skip;
-  wire \lc_skip$303 ;
+  wire \lc_skip$314 ;
   wire lc_skip_seen;
   wire lc_zero;
-  wire \lc_zero$304 ;
+  wire \lc_zero$315 ;
   wire lc_zero_seen;
   wire learn;
   wire level;
-  wire \level$138 ;
+  wire \level$146 ;
   wire [3:0] limit;
   wire [12:0] line_delay;
-  wire [174:0] live;
+  wire [250:0] live;
   wire [23:0] \live.ack_limit ;
   wire [23:0] \live.break_time ;
   wire [11:0] \live.delay_limit ;
@@ -7165,29 +7236,41 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \live.w0.crc ;
   wire [5:0] \live.w0.data_bits ;
   wire \live.w0.lc ;
   wire \live.w0.nenw ;
+  wire [37:0] \live.w0_crc ;
+  wire \live.w0_crc.inverted ;
+  wire [15:0] \live.w0_crc.poly ;
+  wire [15:0] \live.w0_crc.start ;
+  wire [4:0] \live.w0_crc.width ;
   wire [9:0] \live.w1 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \live.w1.crc ;
   wire [5:0] \live.w1.data_bits ;
   wire \live.w1.lc ;
   wire \live.w1.nenw ;
+  wire [37:0] \live.w1_crc ;
+  wire \live.w1_crc.inverted ;
+  wire [15:0] \live.w1_crc.poly ;
+  wire [15:0] \live.w1_crc.start ;
+  wire [4:0] \live.w1_crc.width ;
   wire \live.w1_enable ;
   wire load;
   wire locked;
-  wire \locked$53 ;
+  wire \locked$61 ;
   output ma;
   wire ma;
-  wire \ma$276 ;
+  wire \ma$287 ;
   wire ma_arm;
   wire ma_busy;
-  wire \ma_busy$81 ;
+  wire \ma_busy$89 ;
   wire ma_enough;
   wire ma_held;
   wire ma_hold;
@@ -7195,26 +7278,26 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire match;
   wire [1:0] ne;
   wire no_start_expired;
-  wire \no_start_expired$73 ;
+  wire \no_start_expired$81 ;
   wire [24:0] no_start_limit;
-  wire [24:0] \no_start_limit$96 ;
+  wire [24:0] \no_start_limit$104 ;
   wire noise;
   wire [3:0] noise_events;
   wire noisy;
-  wire \noisy$157 ;
+  wire \noisy$165 ;
   wire [1:0] nw;
   wire ok;
   wire overrun;
-  wire \overrun$279 ;
+  wire \overrun$290 ;
   wire [23:0] period;
   wire periodic;
-  input \periodic$27 ;
-  wire \periodic$27 ;
+  input \periodic$35 ;
+  wire \periodic$35 ;
   wire quiet;
-  wire \quiet$105 ;
+  wire \quiet$113 ;
   wire [11:0] quiet_limit;
   wire quiet_live;
-  wire \quiet_live$107 ;
+  wire \quiet_live$115 ;
   wire [11:0] quiet_time;
   wire [11:0] quiet_time_live;
   input [3:0] rbuf_addr;
@@ -7226,37 +7309,37 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire receiver_clear;
   wire \repeat ;
   wire report;
-  wire \report$185 ;
+  wire \report$196 ;
   wire report_delay;
-  wire \report_delay$188 ;
+  wire \report_delay$199 ;
   wire report_frame;
-  wire \report_frame$172 ;
-  wire \report_frame$186 ;
+  wire \report_frame$183 ;
+  wire \report_frame$197 ;
   wire request;
-  wire [17:0] \request$209 ;
-  wire [6:0] \request$209.address ;
-  wire [6:0] \request$209.count ;
-  wire [2:0] \request$209.slave_id ;
-  wire \request$209.write ;
-  wire \request$38 ;
+  wire [17:0] \request$220 ;
+  wire [6:0] \request$220.address ;
+  wire [6:0] \request$220.count ;
+  wire [2:0] \request$220.slave_id ;
+  wire \request$220.write ;
+  wire \request$46 ;
   wire restart;
-  wire \restart$142 ;
+  wire \restart$150 ;
   wire restart_timer;
   output [9:0] result;
   wire [9:0] result;
-  output [186:0] \result$285 ;
-  wire [186:0] \result$285 ;
-  wire \result$285.cds ;
-  wire \result$285.delay_settled ;
-  wire [7:0] \result$285.delay_spread ;
-  wire [5:0] \result$285.lc ;
-  wire \result$285.lc_repeat ;
-  wire \result$285.lc_skip ;
-  wire \result$285.lc_zero ;
-  wire [12:0] \result$285.line_delay ;
-  wire [3:0] \result$285.noise_events ;
-  wire [12:0] \result$285.settled_delay ;
-  wire \result$285.spw_mismatch ;
+  output [186:0] \result$296 ;
+  wire [186:0] \result$296 ;
+  wire \result$296.cds ;
+  wire \result$296.delay_settled ;
+  wire [7:0] \result$296.delay_spread ;
+  wire [5:0] \result$296.lc ;
+  wire \result$296.lc_repeat ;
+  wire \result$296.lc_skip ;
+  wire \result$296.lc_zero ;
+  wire [12:0] \result$296.line_delay ;
+  wire [3:0] \result$296.noise_events ;
+  wire [12:0] \result$296.settled_delay ;
+  wire \result$296.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -7273,18 +7356,18 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \result$285.status ;
-  wire [31:0] \result$285.timestamp ;
-  wire [57:0] \result$285.word0 ;
-  wire \result$285.word0.crc_ok ;
-  wire \result$285.word0.ne ;
-  wire \result$285.word0.nw ;
-  wire [54:0] \result$285.word0.position ;
-  wire [42:0] \result$285.word1 ;
-  wire \result$285.word1.crc_ok ;
-  wire \result$285.word1.ne ;
-  wire \result$285.word1.nw ;
-  wire [39:0] \result$285.word1.position ;
+  wire [3:0] \result$296.status ;
+  wire [31:0] \result$296.timestamp ;
+  wire [57:0] \result$296.word0 ;
+  wire \result$296.word0.crc_ok ;
+  wire \result$296.word0.ne ;
+  wire \result$296.word0.nw ;
+  wire [54:0] \result$296.word0.position ;
+  wire [42:0] \result$296.word1 ;
+  wire \result$296.word1.crc_ok ;
+  wire \result$296.word1.ne ;
+  wire \result$296.word1.nw ;
+  wire [39:0] \result$296.word1.position ;
   wire [6:0] \result.bytes_done ;
   (* enum_base_type = "AccessStatus" *)
   (* enum_value_000 = "OK" *)
@@ -7296,46 +7379,46 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* enum_value_110 = "BAD_REQUEST" *)
   wire [2:0] \result.status ;
   wire resync;
-  wire \resync$135 ;
+  wire \resync$143 ;
   wire [15:0] rises;
-  wire [15:0] \rises$115 ;
+  wire [15:0] \rises$123 ;
   input rst;
   wire rst;
   wire run;
   reg sample = 1'h0;
-  wire \sample$308 ;
+  wire \sample$319 ;
   wire sampler_noise;
   wire second_rise;
   wire settled;
   wire [12:0] settled_delay;
-  wire [12:0] \settled_delay$291 ;
+  wire [12:0] \settled_delay$302 ;
   wire skip;
   input slo;
   wire slo;
-  wire \slo$34 ;
-  wire \slo$44 ;
-  wire \slo$80 ;
+  wire \slo$42 ;
+  wire \slo$52 ;
+  wire \slo$88 ;
   wire slo_stuck;
-  wire \slo_stuck$75 ;
+  wire \slo_stuck$83 ;
   wire slo_stuck_live;
-  wire \slo_stuck_live$77 ;
+  wire \slo_stuck_live$85 ;
   wire slots_full;
-  wire \slots_full$61 ;
+  wire \slots_full$69 ;
   wire [7:0] spread;
   wire [39:0] spw;
   wire spw_match;
   wire spw_mismatch;
-  wire \spw_mismatch$305 ;
+  wire \spw_mismatch$316 ;
   input start;
   wire start;
-  input \start$221 ;
-  wire \start$221 ;
-  wire \start$25 ;
+  input \start$232 ;
+  wire \start$232 ;
+  wire \start$33 ;
   wire [15:0] start_slot;
-  wire [15:0] \start_slot$113 ;
+  wire [15:0] \start_slot$121 ;
   wire started;
-  wire \started$111 ;
-  wire \started$59 ;
+  wire \started$119 ;
+  wire \started$67 ;
   reg started_before = 1'h0;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
@@ -7370,25 +7453,25 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \status$284 ;
+  wire [3:0] \status$295 ;
   wire stop_bit;
-  wire \stop_bit$65 ;
+  wire \stop_bit$73 ;
   wire stopped;
-  wire \stopped$63 ;
+  wire \stopped$71 ;
   wire [23:0] timeout_limit;
-  wire [23:0] \timeout_limit$94 ;
+  wire [23:0] \timeout_limit$102 ;
   wire [23:0] timeout_live;
   wire timer_clear;
   wire [31:0] timestamp;
   wire [16:0] tolerance;
-  wire [7:0] \tolerance$168 ;
+  wire [7:0] \tolerance$179 ;
   input trigger;
   wire trigger;
-  wire \trigger$36 ;
+  wire \trigger$44 ;
   wire valid;
-  wire \valid$190 ;
-  output \valid$282 ;
-  wire \valid$282 ;
+  wire \valid$201 ;
+  output \valid$293 ;
+  wire \valid$293 ;
   wire valid_out;
   wire w1_enable;
   wire waiting;
@@ -7406,33 +7489,36 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire word1_nw;
   wire [39:0] word1_position;
   wire [1:0] word_count;
-  wire [1:0] \word_count$125 ;
+  wire [1:0] \word_count$133 ;
   wire [1:0] word_crc_ok;
   wire [19:0] words;
-  wire [19:0] \words$161 ;
-  wire [9:0] \words$161[0] ;
+  wire [19:0] \words$169 ;
+  wire [9:0] \words$169[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
-  wire [1:0] \words$161[0].crc ;
-  wire [5:0] \words$161[0].data_bits ;
-  wire \words$161[0].lc ;
-  wire \words$161[0].nenw ;
-  wire [9:0] \words$161[1] ;
+  (* enum_value_11 = "CUSTOM" *)
+  wire [1:0] \words$169[0].crc ;
+  wire [5:0] \words$169[0].data_bits ;
+  wire \words$169[0].lc ;
+  wire \words$169[0].nenw ;
+  wire [9:0] \words$169[1] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
-  wire [1:0] \words$161[1].crc ;
-  wire [5:0] \words$161[1].data_bits ;
-  wire \words$161[1].lc ;
-  wire \words$161[1].nenw ;
+  (* enum_value_11 = "CUSTOM" *)
+  wire [1:0] \words$169[1].crc ;
+  wire [5:0] \words$169[1].data_bits ;
+  wire \words$169[1].lc ;
+  wire \words$169[1].nenw ;
   wire [9:0] \words[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \words[0].crc ;
   wire [5:0] \words[0].data_bits ;
   wire \words[0].lc ;
@@ -7442,16 +7528,17 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \words[1].crc ;
   wire [5:0] \words[1].data_bits ;
   wire \words[1].lc ;
   wire \words[1].nenw ;
   wire zero;
-  assign periodic = \periodic$27  | frames;
+  assign periodic = \periodic$35  | frames;
   assign enable = cycle[144:141] != 4'hf;
   assign rearm = cfg_delay_tolerance == 4'hf;
   assign \$1  = ~ started_before;
-  assign \check$150  = started & \$1 ;
+  assign \check$158  = started & \$1 ;
   assign \$2  = learn & spw_mismatch;
   assign \$3  = status == 4'hd;
   assign \$4  = learn & \$3 ;
@@ -7467,10 +7554,10 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign \$14  = ca_done & \$13 ;
   assign \$15  = result[2:0] == 3'h5;
   assign \$16  = ca_done & \$15 ;
-  assign \busy$277  = ~ idle;
+  assign \busy$288  = ~ idle;
   assign config_error = ~ config_ok;
-  assign \$17  = ~ \clear$116 ;
-  assign \$18  = \sample$308  & \$17 ;
+  assign \$17  = ~ \clear$124 ;
+  assign \$18  = \sample$319  & \$17 ;
   always @(posedge clk)
     sample <= \$19 ;
   always @(posedge clk)
@@ -7480,6 +7567,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   \biss_master_axil.ch0.core.config  \config  (
     .ack_limit(ack_limit),
     .clk(clk),
+    .crcs(crcs),
     .cycle(cycle),
     .delay_limit(delay_limit),
     .delay_tolerance(tolerance),
@@ -7503,7 +7591,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .delay_over(delay_over),
     .early(early),
     .end_check(cycle[124]),
-    .fault(\restart$142 ),
+    .fault(\restart$150 ),
     .fault_status(fault_status),
     .faults(faults),
     .frame_done(frame_done),
@@ -7520,14 +7608,14 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .no_start_expired(no_start_expired),
     .quiet(quiet),
     .quiet_live(quiet_live),
-    .receiver_clear(\clear$116 ),
+    .receiver_clear(\clear$124 ),
     .report_delay(report_delay),
     .report_frame(learn),
     .request(request),
     .restart_timer(restart),
     .resync(resync),
     .rst(rst),
-    .slo(\slo$44 ),
+    .slo(\slo$52 ),
     .slo_stuck(slo_stuck),
     .slo_stuck_live(slo_stuck_live),
     .slots_full(slots_full),
@@ -7538,10 +7626,10 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .waiting(watch)
   );
   \biss_master_axil.ch0.core.counters  counters (
-    .clear(\clear$251 ),
+    .clear(\clear$262 ),
     .clk(clk),
     .counts(counts),
-    .events(\events$246 ),
+    .events(\events$257 ),
     .rst(rst)
   );
   \biss_master_axil.ch0.core.decoder  decoder (
@@ -7550,6 +7638,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .clk(clk),
     .cpw_top(cpw_top),
     .crc_ok(crc_ok),
+    .crcs(crcs),
     .data0(data0),
     .data1(spw),
     .done(frame_done),
@@ -7557,7 +7646,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .lc_load(load),
     .ne(ne),
     .nw(nw),
-    .receiver_clear(\clear$116 ),
+    .receiver_clear(\clear$124 ),
     .rst(rst),
     .sample(sample),
     .slots_full(slots_full),
@@ -7569,7 +7658,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .words(words)
   );
   \biss_master_axil.ch0.core.delay_check  delay_check (
-    .check(\check$150 ),
+    .check(\check$158 ),
     .clean(clean),
     .clk(clk),
     .delay(delay),
@@ -7588,10 +7677,10 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .close(frame_done),
     .\event (\event ),
     .events(events),
-    .level(\slo$44 ),
+    .level(\slo$52 ),
     .limit(cycle[140:137]),
     .noisy(noisy),
-    .restart(\restart$142 ),
+    .restart(\restart$150 ),
     .rst(rst),
     .sampler_noise(sampler_noise),
     .watch(watch)
@@ -7599,7 +7688,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   \biss_master_axil.ch0.core.ma_clock  ma_clock (
     .busy(ma_busy),
     .clk(clk),
-    .\clocking (\ma_busy$81 ),
+    .\clocking (\ma_busy$89 ),
     .first_rise(first_rise),
     .half_period(cycle[15:0]),
     .held(ma_held),
@@ -7611,18 +7700,19 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .second_rise(ma_arm)
   );
   \biss_master_axil.ch0.core.ma_stop  ma_stop (
-    .clear(\clear$116 ),
+    .clear(\clear$124 ),
     .clk(clk),
+    .crcs(crcs),
     .enough(ma_enough),
     .rises(rises),
     .rst(rst),
     .start_slot(start_slot),
-    .\started$10 (started),
-    .w1_enable(cycle[155]),
-    .words(\words$161 )
+    .\started$11 (started),
+    .w1_enable(cycle[193]),
+    .words(\words$169 )
   );
   \biss_master_axil.ch0.core.register_access  register_access (
-    .abort(\abort$223 ),
+    .abort(\abort$234 ),
     .busy(frames),
     .cdm(cdm),
     .clk(clk),
@@ -7634,37 +7724,37 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .rbuf_addr(rbuf_addr),
     .rbuf_data(ca_rbuf_data),
     .rbuf_en(rbuf_en),
-    .request(\request$209 ),
+    .request(\request$220 ),
     .result(result),
     .rst(rst),
-    .start(\start$221 ),
+    .start(\start$232 ),
     .wbuf(wbuf)
   );
   \biss_master_axil.ch0.core.results  results (
     .clk(clk),
-    .done(\done$280 ),
+    .done(\done$291 ),
     .frame(frame),
     .report(report),
     .report_delay(report_delay),
     .report_frame(learn),
-    .result(\result$285 ),
+    .result(\result$296 ),
     .rst(rst),
     .valid(valid),
-    .valid_out(\valid$282 )
+    .valid_out(\valid$293 )
   );
   \biss_master_axil.ch0.core.sampler  sampler (
     .arm(ma_arm),
-    .\bit (\bit$309 ),
+    .\bit (\bit$320 ),
     .clk(clk),
     .delay(delay),
     .early(early),
     .half_period(cycle[15:0]),
-    .level(\slo$44 ),
+    .level(\slo$52 ),
     .locked(locked),
     .noise(sampler_noise),
-    .receiver_clear(\clear$116 ),
+    .receiver_clear(\clear$124 ),
     .rst(rst),
-    .sample(\sample$308 ),
+    .sample(\sample$319 ),
     .slo(slo)
   );
   \biss_master_axil.ch0.core.scheduler  scheduler (
@@ -7685,20 +7775,20 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$4381$0 (\bit ),
+    .\port$4305$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
     .skip(lc_skip_seen)
   );
   \biss_master_axil.ch0.core.spw_check  spw_check (
-    .bits(cycle[161:156]),
+    .bits(cycle[199:194]),
     .clk(clk),
     .cpw_top(cpw_top),
     .match(spw_match),
     .rst(rst),
     .spw(spw),
-    .\tolerance$8 (cycle[174:167])
+    .\tolerance$8 (cycle[250:243])
   );
   \biss_master_axil.ch0.core.time_base  time_base (
     .clk(clk),
@@ -7717,7 +7807,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .delay_limit(delay_limit),
     .delay_over(delay_over),
     .in_clock(in_clock),
-    .ma_busy(\ma_busy$81 ),
+    .ma_busy(\ma_busy$89 ),
     .no_start_expired(no_start_expired),
     .no_start_limit(no_start_limit),
     .quiet(quiet),
@@ -7726,7 +7816,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .quiet_time_live(cfg_quiet_time),
     .restart(restart),
     .rst(rst),
-    .slo(\slo$44 ),
+    .slo(\slo$52 ),
     .slo_stuck(slo_stuck),
     .slo_stuck_live(slo_stuck_live),
     .timeout_limit(timeout_limit),
@@ -7739,7 +7829,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .crc_ok(crc_ok),
     .delay_jump(delay_jump),
     .doubtful(frame_doubtful),
-    .fault(\restart$142 ),
+    .fault(\restart$150 ),
     .fault_status(fault_status),
     .lc_check(check),
     .lc_repeat(lc_repeat),
@@ -7749,7 +7839,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .lc_zero(lc_zero),
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
-    .\port$1803$0 (\$22 ),
+    .\port$1765$0 (\$22 ),
     .report(report),
     .report_frame(learn),
     .spw_match(spw_match),
@@ -7758,138 +7848,148 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .valid(valid)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
     \$19  = \$18 ;
     if (rst) begin
       \$19  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
-    \$20  = \bit$309 ;
+    if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
+    \$20  = \bit$320 ;
     if (rst) begin
       \$20  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
     \$21  = started;
     if (rst) begin
       \$21  = 1'h0;
     end
   end
-  assign \idle$23  = idle;
-  assign \start$25  = start;
+  assign cfg_w0_crc_width = 5'h00;
+  assign cfg_w0_crc_poly = 16'h0000;
+  assign cfg_w0_crc_start = 16'h0000;
+  assign cfg_w0_crc_inverted = 1'h0;
+  assign cfg_w1_crc_width = 5'h00;
+  assign cfg_w1_crc_poly = 16'h0000;
+  assign cfg_w1_crc_start = 16'h0000;
+  assign cfg_w1_crc_inverted = 1'h0;
+  assign \idle$31  = idle;
+  assign \start$33  = start;
   assign period = cfg_request_period;
   assign abort_cycle = abort;
-  assign \idle$32  = idle;
-  assign \slo$34  = slo;
-  assign \trigger$36  = trigger;
-  assign \request$38  = request;
-  assign \abort$39  = abort;
+  assign \idle$40  = idle;
+  assign \slo$42  = slo;
+  assign \trigger$44  = trigger;
+  assign \request$46  = request;
+  assign \abort$47  = abort;
   assign ok = config_ok;
   assign end_check = cycle[124];
-  assign level = \slo$44 ;
+  assign level = \slo$52 ;
   assign busy = ma_busy;
   assign second_rise = ma_arm;
   assign enough = ma_enough;
-  assign \locked$53  = locked;
-  assign \early$55  = early;
+  assign \locked$61  = locked;
+  assign \early$63  = early;
   assign done = frame_done;
-  assign \started$59  = started;
-  assign \slots_full$61  = slots_full;
-  assign \stopped$63  = stopped;
-  assign \stop_bit$65  = stop_bit;
+  assign \started$67  = started;
+  assign \slots_full$69  = slots_full;
+  assign \stopped$71  = stopped;
+  assign \stop_bit$73  = stop_bit;
   assign doubtful = frame_doubtful;
-  assign \break_over$69  = break_over;
-  assign \ack_expired$71  = ack_expired;
-  assign \no_start_expired$73  = no_start_expired;
-  assign \slo_stuck$75  = slo_stuck;
-  assign \slo_stuck_live$77  = slo_stuck_live;
-  assign \delay_over$79  = delay_over;
-  assign \slo$80  = \slo$44 ;
-  assign \clocking  = \ma_busy$81 ;
+  assign \break_over$77  = break_over;
+  assign \ack_expired$79  = ack_expired;
+  assign \no_start_expired$81  = no_start_expired;
+  assign \slo_stuck$83  = slo_stuck;
+  assign \slo_stuck_live$85  = slo_stuck_live;
+  assign \delay_over$87  = delay_over;
+  assign \slo$88  = \slo$52 ;
+  assign \clocking  = \ma_busy$89 ;
   assign timer_clear = clear;
-  assign \in_clock$86  = in_clock;
+  assign \in_clock$94  = in_clock;
   assign restart_timer = restart;
   assign break_time = cfg_break_time;
   assign timeout_live = cfg_timeout_limit;
-  assign \ack_limit$92  = ack_limit;
-  assign \timeout_limit$94  = timeout_limit;
-  assign \no_start_limit$96  = no_start_limit;
-  assign \delay$98  = delay;
-  assign \delay_limit$100  = delay_limit;
+  assign \ack_limit$100  = ack_limit;
+  assign \timeout_limit$102  = timeout_limit;
+  assign \no_start_limit$104  = no_start_limit;
+  assign \delay$106  = delay;
+  assign \delay_limit$108  = delay_limit;
   assign quiet_time_live = cfg_quiet_time;
   assign quiet_time = quiet_limit;
-  assign \quiet$105  = quiet;
-  assign \quiet_live$107  = quiet_live;
+  assign \quiet$113  = quiet;
+  assign \quiet_live$115  = quiet_live;
   assign ma_run = run;
   assign half_period = cycle[15:0];
-  assign \started$111  = started;
-  assign \start_slot$113  = start_slot;
-  assign \rises$115  = rises;
-  assign receiver_clear = \clear$116 ;
+  assign \started$119  = started;
+  assign \start_slot$121  = start_slot;
+  assign \rises$123  = rises;
+  assign receiver_clear = \clear$124 ;
   assign decoder_sample = sample;
   assign decoder_bit = \bit ;
-  assign \half_period$122  = cycle[15:0];
+  assign \half_period$130  = cycle[15:0];
   assign arm = ma_arm;
-  assign \word_count$125  = word_count;
-  assign \lc$127  = lc;
+  assign \word_count$133  = word_count;
+  assign \lc$135  = lc;
   assign lc_next = { lc[4:0], \bit  };
-  assign \lc_next$129  = { lc[4:0], \bit  };
+  assign \lc_next$137  = { lc[4:0], \bit  };
   assign lc_load = load;
   assign lc_check = check;
-  assign \resync$135  = resync;
+  assign \resync$143  = resync;
   assign waiting = watch;
-  assign \level$138  = \slo$44 ;
+  assign \level$146  = \slo$52 ;
   assign noise = sampler_noise;
   assign close = frame_done;
-  assign fault = \restart$142 ;
+  assign fault = \restart$150 ;
   assign limit = cycle[140:137];
   assign delay_tolerance = tolerance;
-  assign \delay$149  = delay;
+  assign \delay$157  = delay;
   assign report_frame = learn;
-  assign \clean$155  = clean;
-  assign \noisy$157  = noisy;
+  assign \clean$163  = clean;
+  assign \noisy$165  = noisy;
   assign jump = delay_jump;
-  assign w1_enable = cycle[155];
-  assign \cpw_top$164  = cpw_top;
+  assign \crcs$171  = crcs;
+  assign \crcs$172  = crcs;
+  assign w1_enable = cycle[193];
+  assign \cpw_top$175  = cpw_top;
   assign data1 = spw;
-  assign bits = cycle[161:156];
-  assign \tolerance$168  = cycle[174:167];
+  assign bits = cycle[199:194];
+  assign \tolerance$179  = cycle[250:243];
   assign match = spw_match;
   assign cfg = cycle;
-  assign \report_frame$172  = learn;
-  assign \fault$173  = \restart$142 ;
-  assign \fault_status$175  = fault_status;
-  assign \crc_ok$177  = crc_ok;
+  assign \report_frame$183  = learn;
+  assign \fault$184  = \restart$150 ;
+  assign \fault_status$186  = fault_status;
+  assign \crc_ok$188  = crc_ok;
   assign \repeat  = lc_repeat_seen;
   assign skip = lc_skip_seen;
   assign zero = lc_zero_seen;
-  assign \report$185  = report;
-  assign \report_frame$186  = learn;
-  assign \report_delay$188  = report_delay;
-  assign \valid$190  = valid;
+  assign \report$196  = report;
+  assign \report_frame$197  = learn;
+  assign \report_delay$199  = report_delay;
+  assign \valid$201  = valid;
   assign word_crc_ok = { \$22 , crc_ok[0] };
-  assign \first_rise$207  = first_rise;
+  assign \first_rise$218  = first_rise;
   assign ca_status = result[2:0];
   assign ca_bytes_done = result[9:3];
-  assign ca_start = \start$221 ;
-  assign ca_abort = \abort$223 ;
+  assign ca_start = \start$232 ;
+  assign ca_abort = \abort$234 ;
   assign ca_rbuf_addr = rbuf_addr;
   assign ca_rbuf_en = rbuf_en;
   assign rbuf_data = ca_rbuf_data;
   assign ca_busy = frames;
-  assign \busy$232  = frames;
-  assign \done$234  = ca_done;
-  assign \cdm$236  = cdm;
+  assign \busy$243  = frames;
+  assign \done$245  = ca_done;
+  assign \cdm$247  = cdm;
   assign held = ma_held;
   assign ma_hold = hold;
   assign frame_end = report;
   assign frame_ok = valid;
   assign frame_cds = cds;
   assign cdm_cycle = frame_cdm;
-  assign clear_counters = \clear$251 ;
+  assign clear_counters = \clear$262 ;
   assign count_crc_word0 = counts[15:0];
   assign count_crc_word1 = counts[31:16];
   assign count_no_ack = counts[47:32];
@@ -7911,31 +8011,31 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign count_ca_refused = counts[303:288];
   assign count_ca_aborted = counts[319:304];
   assign count_ca_data_fault = counts[335:320];
-  assign \ma$276  = ma;
-  assign \overrun$279  = overrun;
-  assign \done$281  = \done$280 ;
-  assign valid_out = \valid$282 ;
-  assign \status$284  = \result$285 [3:0];
-  assign timestamp = \result$285 [35:4];
-  assign line_delay = \result$285 [48:36];
-  assign \cds$288  = \result$285 [49];
-  assign noise_events = \result$285 [53:50];
-  assign delay_settled = \result$285 [54];
-  assign \settled_delay$291  = \result$285 [67:55];
-  assign delay_spread = \result$285 [75:68];
-  assign word0_position = \result$285 [130:76];
-  assign word0_ne = \result$285 [131];
-  assign word0_nw = \result$285 [132];
-  assign word0_crc_ok = \result$285 [133];
-  assign word1_position = \result$285 [173:134];
-  assign word1_ne = \result$285 [174];
-  assign word1_nw = \result$285 [175];
-  assign word1_crc_ok = \result$285 [176];
-  assign \lc$301  = \result$285 [182:177];
-  assign \lc_repeat$302  = \result$285 [183];
-  assign \lc_skip$303  = \result$285 [184];
-  assign \lc_zero$304  = \result$285 [185];
-  assign \spw_mismatch$305  = \result$285 [186];
+  assign \ma$287  = ma;
+  assign \overrun$290  = overrun;
+  assign \done$292  = \done$291 ;
+  assign valid_out = \valid$293 ;
+  assign \status$295  = \result$296 [3:0];
+  assign timestamp = \result$296 [35:4];
+  assign line_delay = \result$296 [48:36];
+  assign \cds$299  = \result$296 [49];
+  assign noise_events = \result$296 [53:50];
+  assign delay_settled = \result$296 [54];
+  assign \settled_delay$302  = \result$296 [67:55];
+  assign delay_spread = \result$296 [75:68];
+  assign word0_position = \result$296 [130:76];
+  assign word0_ne = \result$296 [131];
+  assign word0_nw = \result$296 [132];
+  assign word0_crc_ok = \result$296 [133];
+  assign word1_position = \result$296 [173:134];
+  assign word1_ne = \result$296 [174];
+  assign word1_nw = \result$296 [175];
+  assign word1_crc_ok = \result$296 [176];
+  assign \lc$312  = \result$296 [182:177];
+  assign \lc_repeat$313  = \result$296 [183];
+  assign \lc_skip$314  = \result$296 [184];
+  assign \lc_zero$315  = \result$296 [185];
+  assign \spw_mismatch$316  = \result$296 [186];
   assign \live.ma_half_period  = live[15:0];
   assign \live.request_period  = live[39:16];
   assign \live.break_time  = live[63:40];
@@ -7951,14 +8051,24 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign \live.w0.nenw  = live[151];
   assign \live.w0.lc  = live[152];
   assign \live.w0.crc  = live[154:153];
-  assign \live.w1_enable  = live[155];
-  assign \live.w1  = live[165:156];
-  assign \live.w1.data_bits  = live[161:156];
-  assign \live.w1.nenw  = live[162];
-  assign \live.w1.lc  = live[163];
-  assign \live.w1.crc  = live[165:164];
-  assign \live.spw_check  = live[166];
-  assign \live.spw_tolerance  = live[174:167];
+  assign \live.w0_crc  = live[192:155];
+  assign \live.w0_crc.width  = live[159:155];
+  assign \live.w0_crc.poly  = live[175:160];
+  assign \live.w0_crc.start  = live[191:176];
+  assign \live.w0_crc.inverted  = live[192];
+  assign \live.w1_enable  = live[193];
+  assign \live.w1  = live[203:194];
+  assign \live.w1.data_bits  = live[199:194];
+  assign \live.w1.nenw  = live[200];
+  assign \live.w1.lc  = live[201];
+  assign \live.w1.crc  = live[203:202];
+  assign \live.w1_crc  = live[241:204];
+  assign \live.w1_crc.width  = live[208:204];
+  assign \live.w1_crc.poly  = live[224:209];
+  assign \live.w1_crc.start  = live[240:225];
+  assign \live.w1_crc.inverted  = live[241];
+  assign \live.spw_check  = live[242];
+  assign \live.spw_tolerance  = live[250:243];
   assign \cycle.ma_half_period  = cycle[15:0];
   assign \cycle.request_period  = cycle[39:16];
   assign \cycle.break_time  = cycle[63:40];
@@ -7974,14 +8084,24 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign \cycle.w0.nenw  = cycle[151];
   assign \cycle.w0.lc  = cycle[152];
   assign \cycle.w0.crc  = cycle[154:153];
-  assign \cycle.w1_enable  = cycle[155];
-  assign \cycle.w1  = cycle[165:156];
-  assign \cycle.w1.data_bits  = cycle[161:156];
-  assign \cycle.w1.nenw  = cycle[162];
-  assign \cycle.w1.lc  = cycle[163];
-  assign \cycle.w1.crc  = cycle[165:164];
-  assign \cycle.spw_check  = cycle[166];
-  assign \cycle.spw_tolerance  = cycle[174:167];
+  assign \cycle.w0_crc  = cycle[192:155];
+  assign \cycle.w0_crc.width  = cycle[159:155];
+  assign \cycle.w0_crc.poly  = cycle[175:160];
+  assign \cycle.w0_crc.start  = cycle[191:176];
+  assign \cycle.w0_crc.inverted  = cycle[192];
+  assign \cycle.w1_enable  = cycle[193];
+  assign \cycle.w1  = cycle[203:194];
+  assign \cycle.w1.data_bits  = cycle[199:194];
+  assign \cycle.w1.nenw  = cycle[200];
+  assign \cycle.w1.lc  = cycle[201];
+  assign \cycle.w1.crc  = cycle[203:202];
+  assign \cycle.w1_crc  = cycle[241:204];
+  assign \cycle.w1_crc.width  = cycle[208:204];
+  assign \cycle.w1_crc.poly  = cycle[224:209];
+  assign \cycle.w1_crc.start  = cycle[240:225];
+  assign \cycle.w1_crc.inverted  = cycle[241];
+  assign \cycle.spw_check  = cycle[242];
+  assign \cycle.spw_tolerance  = cycle[250:243];
   assign \words[0]  = words[9:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -7992,16 +8112,46 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign \words[1].nenw  = words[16];
   assign \words[1].lc  = words[17];
   assign \words[1].crc  = words[19:18];
-  assign \words$161[0]  = \words$161 [9:0];
-  assign \words$161[0].data_bits  = \words$161 [5:0];
-  assign \words$161[0].nenw  = \words$161 [6];
-  assign \words$161[0].lc  = \words$161 [7];
-  assign \words$161[0].crc  = \words$161 [9:8];
-  assign \words$161[1]  = \words$161 [19:10];
-  assign \words$161[1].data_bits  = \words$161 [15:10];
-  assign \words$161[1].nenw  = \words$161 [16];
-  assign \words$161[1].lc  = \words$161 [17];
-  assign \words$161[1].crc  = \words$161 [19:18];
+  assign \words$169[0]  = \words$169 [9:0];
+  assign \words$169[0].data_bits  = \words$169 [5:0];
+  assign \words$169[0].nenw  = \words$169 [6];
+  assign \words$169[0].lc  = \words$169 [7];
+  assign \words$169[0].crc  = \words$169 [9:8];
+  assign \words$169[1]  = \words$169 [19:10];
+  assign \words$169[1].data_bits  = \words$169 [15:10];
+  assign \words$169[1].nenw  = \words$169 [16];
+  assign \words$169[1].lc  = \words$169 [17];
+  assign \words$169[1].crc  = \words$169 [19:18];
+  assign \crcs[0]  = crcs[37:0];
+  assign \crcs[0].width  = crcs[4:0];
+  assign \crcs[0].poly  = crcs[20:5];
+  assign \crcs[0].start  = crcs[36:21];
+  assign \crcs[0].inverted  = crcs[37];
+  assign \crcs[1]  = crcs[75:38];
+  assign \crcs[1].width  = crcs[42:38];
+  assign \crcs[1].poly  = crcs[58:43];
+  assign \crcs[1].start  = crcs[74:59];
+  assign \crcs[1].inverted  = crcs[75];
+  assign \crcs$171[0]  = crcs[37:0];
+  assign \crcs$171[0].width  = crcs[4:0];
+  assign \crcs$171[0].poly  = crcs[20:5];
+  assign \crcs$171[0].start  = crcs[36:21];
+  assign \crcs$171[0].inverted  = crcs[37];
+  assign \crcs$171[1]  = crcs[75:38];
+  assign \crcs$171[1].width  = crcs[42:38];
+  assign \crcs$171[1].poly  = crcs[58:43];
+  assign \crcs$171[1].start  = crcs[74:59];
+  assign \crcs$171[1].inverted  = crcs[75];
+  assign \crcs$172[0]  = crcs[37:0];
+  assign \crcs$172[0].width  = crcs[4:0];
+  assign \crcs$172[0].poly  = crcs[20:5];
+  assign \crcs$172[0].start  = crcs[36:21];
+  assign \crcs$172[0].inverted  = crcs[37];
+  assign \crcs$172[1]  = crcs[75:38];
+  assign \crcs$172[1].width  = crcs[42:38];
+  assign \crcs$172[1].poly  = crcs[58:43];
+  assign \crcs$172[1].start  = crcs[74:59];
+  assign \crcs$172[1].inverted  = crcs[75];
   assign \cfg.ma_half_period  = cycle[15:0];
   assign \cfg.request_period  = cycle[39:16];
   assign \cfg.break_time  = cycle[63:40];
@@ -8017,14 +8167,24 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign \cfg.w0.nenw  = cycle[151];
   assign \cfg.w0.lc  = cycle[152];
   assign \cfg.w0.crc  = cycle[154:153];
-  assign \cfg.w1_enable  = cycle[155];
-  assign \cfg.w1  = cycle[165:156];
-  assign \cfg.w1.data_bits  = cycle[161:156];
-  assign \cfg.w1.nenw  = cycle[162];
-  assign \cfg.w1.lc  = cycle[163];
-  assign \cfg.w1.crc  = cycle[165:164];
-  assign \cfg.spw_check  = cycle[166];
-  assign \cfg.spw_tolerance  = cycle[174:167];
+  assign \cfg.w0_crc  = cycle[192:155];
+  assign \cfg.w0_crc.width  = cycle[159:155];
+  assign \cfg.w0_crc.poly  = cycle[175:160];
+  assign \cfg.w0_crc.start  = cycle[191:176];
+  assign \cfg.w0_crc.inverted  = cycle[192];
+  assign \cfg.w1_enable  = cycle[193];
+  assign \cfg.w1  = cycle[203:194];
+  assign \cfg.w1.data_bits  = cycle[199:194];
+  assign \cfg.w1.nenw  = cycle[200];
+  assign \cfg.w1.lc  = cycle[201];
+  assign \cfg.w1.crc  = cycle[203:202];
+  assign \cfg.w1_crc  = cycle[241:204];
+  assign \cfg.w1_crc.width  = cycle[208:204];
+  assign \cfg.w1_crc.poly  = cycle[224:209];
+  assign \cfg.w1_crc.start  = cycle[240:225];
+  assign \cfg.w1_crc.inverted  = cycle[241];
+  assign \cfg.spw_check  = cycle[242];
+  assign \cfg.spw_tolerance  = cycle[250:243];
   assign \frame.status  = frame[3:0];
   assign \frame.timestamp  = frame[35:4];
   assign \frame.line_delay  = frame[48:36];
@@ -8048,36 +8208,36 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign \frame.lc_skip  = frame[184];
   assign \frame.lc_zero  = frame[185];
   assign \frame.spw_mismatch  = frame[186];
-  assign \request$209.slave_id  = \request$209 [2:0];
-  assign \request$209.address  = \request$209 [9:3];
-  assign \request$209.count  = \request$209 [16:10];
-  assign \request$209.write  = \request$209 [17];
+  assign \request$220.slave_id  = \request$220 [2:0];
+  assign \request$220.address  = \request$220 [9:3];
+  assign \request$220.count  = \request$220 [16:10];
+  assign \request$220.write  = \request$220 [17];
   assign \wbuf.addr  = wbuf[3:0];
   assign \wbuf.data  = wbuf[35:4];
   assign \wbuf.en  = wbuf[39:36];
   assign \result.status  = result[2:0];
   assign \result.bytes_done  = result[9:3];
-  assign \events$246.crc_word0  = \events$246 [0];
-  assign \events$246.crc_word1  = \events$246 [1];
-  assign \events$246.no_ack  = \events$246 [2];
-  assign \events$246.no_start  = \events$246 [3];
-  assign \events$246.delay_range  = \events$246 [4];
-  assign \events$246.slo_stuck_low  = \events$246 [5];
-  assign \events$246.lc_repeat  = \events$246 [6];
-  assign \events$246.lc_skip  = \events$246 [7];
-  assign \events$246.lc_zero  = \events$246 [8];
-  assign \events$246.spw_mismatch  = \events$246 [9];
-  assign \events$246.overrun  = \events$246 [10];
-  assign \events$246.aborted  = \events$246 [11];
-  assign \events$246.no_stop  = \events$246 [12];
-  assign \events$246.noisy_line  = \events$246 [13];
-  assign \events$246.delay_jump  = \events$246 [14];
-  assign \events$246.noise_event  = \events$246 [15];
-  assign \events$246.ca_crc4_error  = \events$246 [16];
-  assign \events$246.ca_no_answer  = \events$246 [17];
-  assign \events$246.ca_refused  = \events$246 [18];
-  assign \events$246.ca_aborted  = \events$246 [19];
-  assign \events$246.ca_data_fault  = \events$246 [20];
+  assign \events$257.crc_word0  = \events$257 [0];
+  assign \events$257.crc_word1  = \events$257 [1];
+  assign \events$257.no_ack  = \events$257 [2];
+  assign \events$257.no_start  = \events$257 [3];
+  assign \events$257.delay_range  = \events$257 [4];
+  assign \events$257.slo_stuck_low  = \events$257 [5];
+  assign \events$257.lc_repeat  = \events$257 [6];
+  assign \events$257.lc_skip  = \events$257 [7];
+  assign \events$257.lc_zero  = \events$257 [8];
+  assign \events$257.spw_mismatch  = \events$257 [9];
+  assign \events$257.overrun  = \events$257 [10];
+  assign \events$257.aborted  = \events$257 [11];
+  assign \events$257.no_stop  = \events$257 [12];
+  assign \events$257.noisy_line  = \events$257 [13];
+  assign \events$257.delay_jump  = \events$257 [14];
+  assign \events$257.noise_event  = \events$257 [15];
+  assign \events$257.ca_crc4_error  = \events$257 [16];
+  assign \events$257.ca_no_answer  = \events$257 [17];
+  assign \events$257.ca_refused  = \events$257 [18];
+  assign \events$257.ca_aborted  = \events$257 [19];
+  assign \events$257.ca_data_fault  = \events$257 [20];
   assign \faults.no_ack  = faults[0];
   assign \faults.no_start  = faults[1];
   assign \faults.delay_range  = faults[2];
@@ -8106,57 +8266,57 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign \counts.ca_refused  = counts[303:288];
   assign \counts.ca_aborted  = counts[319:304];
   assign \counts.ca_data_fault  = counts[335:320];
-  assign \result$285.status  = \result$285 [3:0];
-  assign \result$285.timestamp  = \result$285 [35:4];
-  assign \result$285.line_delay  = \result$285 [48:36];
-  assign \result$285.cds  = \result$285 [49];
-  assign \result$285.noise_events  = \result$285 [53:50];
-  assign \result$285.delay_settled  = \result$285 [54];
-  assign \result$285.settled_delay  = \result$285 [67:55];
-  assign \result$285.delay_spread  = \result$285 [75:68];
-  assign \result$285.word0  = \result$285 [133:76];
-  assign \result$285.word0.position  = \result$285 [130:76];
-  assign \result$285.word0.ne  = \result$285 [131];
-  assign \result$285.word0.nw  = \result$285 [132];
-  assign \result$285.word0.crc_ok  = \result$285 [133];
-  assign \result$285.word1  = \result$285 [176:134];
-  assign \result$285.word1.position  = \result$285 [173:134];
-  assign \result$285.word1.ne  = \result$285 [174];
-  assign \result$285.word1.nw  = \result$285 [175];
-  assign \result$285.word1.crc_ok  = \result$285 [176];
-  assign \result$285.lc  = \result$285 [182:177];
-  assign \result$285.lc_repeat  = \result$285 [183];
-  assign \result$285.lc_skip  = \result$285 [184];
-  assign \result$285.lc_zero  = \result$285 [185];
-  assign \result$285.spw_mismatch  = \result$285 [186];
-  assign \events$246 [20] = \$16 ;
-  assign \events$246 [19] = \$14 ;
-  assign \events$246 [18] = \$12 ;
-  assign \events$246 [17] = \$10 ;
-  assign \events$246 [16] = \$8 ;
-  assign \events$246 [15] = \event ;
-  assign \events$246 [14] = \$6 ;
-  assign \events$246 [13] = \$4 ;
-  assign \events$246 [12] = faults[6];
-  assign \events$246 [11] = faults[4];
-  assign \events$246 [10] = overrun;
-  assign \events$246 [9] = \$2 ;
-  assign \events$246 [8] = lc_zero;
-  assign \events$246 [7] = lc_skip;
-  assign \events$246 [6] = lc_repeat;
-  assign \events$246 [5] = faults[3];
-  assign \events$246 [4] = faults[2];
-  assign \events$246 [3] = faults[1];
-  assign \events$246 [2] = faults[0];
-  assign \events$246 [1] = crc_error[1];
-  assign \events$246 [0] = crc_error[0];
+  assign \result$296.status  = \result$296 [3:0];
+  assign \result$296.timestamp  = \result$296 [35:4];
+  assign \result$296.line_delay  = \result$296 [48:36];
+  assign \result$296.cds  = \result$296 [49];
+  assign \result$296.noise_events  = \result$296 [53:50];
+  assign \result$296.delay_settled  = \result$296 [54];
+  assign \result$296.settled_delay  = \result$296 [67:55];
+  assign \result$296.delay_spread  = \result$296 [75:68];
+  assign \result$296.word0  = \result$296 [133:76];
+  assign \result$296.word0.position  = \result$296 [130:76];
+  assign \result$296.word0.ne  = \result$296 [131];
+  assign \result$296.word0.nw  = \result$296 [132];
+  assign \result$296.word0.crc_ok  = \result$296 [133];
+  assign \result$296.word1  = \result$296 [176:134];
+  assign \result$296.word1.position  = \result$296 [173:134];
+  assign \result$296.word1.ne  = \result$296 [174];
+  assign \result$296.word1.nw  = \result$296 [175];
+  assign \result$296.word1.crc_ok  = \result$296 [176];
+  assign \result$296.lc  = \result$296 [182:177];
+  assign \result$296.lc_repeat  = \result$296 [183];
+  assign \result$296.lc_skip  = \result$296 [184];
+  assign \result$296.lc_zero  = \result$296 [185];
+  assign \result$296.spw_mismatch  = \result$296 [186];
+  assign \events$257 [20] = \$16 ;
+  assign \events$257 [19] = \$14 ;
+  assign \events$257 [18] = \$12 ;
+  assign \events$257 [17] = \$10 ;
+  assign \events$257 [16] = \$8 ;
+  assign \events$257 [15] = \event ;
+  assign \events$257 [14] = \$6 ;
+  assign \events$257 [13] = \$4 ;
+  assign \events$257 [12] = faults[6];
+  assign \events$257 [11] = faults[4];
+  assign \events$257 [10] = overrun;
+  assign \events$257 [9] = \$2 ;
+  assign \events$257 [8] = lc_zero;
+  assign \events$257 [7] = lc_skip;
+  assign \events$257 [6] = lc_repeat;
+  assign \events$257 [5] = faults[3];
+  assign \events$257 [4] = faults[2];
+  assign \events$257 [3] = faults[1];
+  assign \events$257 [2] = faults[0];
+  assign \events$257 [1] = crc_error[1];
+  assign \events$257 [0] = crc_error[0];
   assign wbuf[39:36] = ca_wbuf_en;
   assign wbuf[35:4] = ca_wbuf_data;
   assign wbuf[3:0] = ca_wbuf_addr;
-  assign \request$209 [17] = ca_write;
-  assign \request$209 [16:10] = ca_count;
-  assign \request$209 [9:3] = ca_address;
-  assign \request$209 [2:0] = ca_slave_id;
+  assign \request$220 [17] = ca_write;
+  assign \request$220 [16:10] = ca_count;
+  assign \request$220 [9:3] = ca_address;
+  assign \request$220 [2:0] = ca_slave_id;
   assign frame[35:4] = first_rise_time;
   assign frame[186] = spw_mismatch;
   assign frame[176] = \$22 ;
@@ -8178,17 +8338,25 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign frame[49] = cds;
   assign frame[48:36] = delay;
   assign frame[3:0] = status;
-  assign \words$161 [19:10] = cycle[165:156];
-  assign \words$161 [9:0] = cycle[154:145];
-  assign words[19:10] = cycle[165:156];
+  assign \words$169 [19:10] = cycle[203:194];
+  assign \words$169 [9:0] = cycle[154:145];
+  assign words[19:10] = cycle[203:194];
   assign words[9:0] = cycle[154:145];
-  assign live[174:167] = cfg_spw_tolerance;
-  assign live[166] = cfg_spw_check;
-  assign live[165:164] = cfg_w1_crc;
-  assign live[163] = cfg_w1_lc;
-  assign live[162] = cfg_w1_nenw;
-  assign live[161:156] = cfg_w1_data_bits;
-  assign live[155] = cfg_w1_enable;
+  assign live[250:243] = cfg_spw_tolerance;
+  assign live[242] = cfg_spw_check;
+  assign live[241] = 1'h0;
+  assign live[240:225] = 16'h0000;
+  assign live[224:209] = 16'h0000;
+  assign live[208:204] = 5'h00;
+  assign live[203:202] = cfg_w1_crc;
+  assign live[201] = cfg_w1_lc;
+  assign live[200] = cfg_w1_nenw;
+  assign live[199:194] = cfg_w1_data_bits;
+  assign live[193] = cfg_w1_enable;
+  assign live[192] = 1'h0;
+  assign live[191:176] = 16'h0000;
+  assign live[175:160] = 16'h0000;
+  assign live[159:155] = 5'h00;
   assign live[154:153] = cfg_w0_crc;
   assign live[152] = cfg_w0_lc;
   assign live[151] = cfg_w0_nenw;
@@ -8206,8 +8374,8 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_limit, timeout_limit, delay_limit, quiet_time, delay_tolerance, no_start_limit, idle, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$30  = 0;
+module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_limit, timeout_limit, delay_limit, quiet_time, delay_tolerance, crcs, no_start_limit, idle, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$14  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -8237,28 +8405,41 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   wire \$33 ;
   wire \$34 ;
   wire \$35 ;
-  wire [23:0] \$36 ;
+  wire \$36 ;
   wire \$37 ;
-  wire [23:0] \$38 ;
+  wire \$38 ;
   wire \$39 ;
   wire \$4 ;
-  wire [11:0] \$40 ;
+  wire \$40 ;
   wire \$41 ;
-  wire [11:0] \$42 ;
+  wire \$42 ;
   wire \$43 ;
-  wire [3:0] \$44 ;
-  wire [16:0] \$45 ;
-  wire [24:0] \$46 ;
-  reg \$47 ;
-  reg [174:0] \$48 ;
-  reg [23:0] \$49 ;
+  wire \$44 ;
+  wire \$45 ;
+  wire \$46 ;
+  wire \$47 ;
+  wire [23:0] \$48 ;
+  wire \$49 ;
   wire \$5 ;
-  reg [23:0] \$50 ;
-  reg [11:0] \$51 ;
-  reg [11:0] \$52 ;
-  reg [16:0] \$53 ;
-  reg [24:0] \$54 ;
+  wire [23:0] \$50 ;
+  wire \$51 ;
+  wire [11:0] \$52 ;
+  wire \$53 ;
+  wire [11:0] \$54 ;
+  wire \$55 ;
+  wire [3:0] \$56 ;
+  wire [16:0] \$57 ;
+  wire [24:0] \$58 ;
+  reg \$59 ;
   wire \$6 ;
+  reg [250:0] \$60 ;
+  reg [23:0] \$61 ;
+  reg [23:0] \$62 ;
+  reg [11:0] \$63 ;
+  reg [11:0] \$64 ;
+  reg [16:0] \$65 ;
+  reg [75:0] \$66 ;
+  reg [24:0] \$67 ;
   wire \$7 ;
   wire \$8 ;
   wire \$9 ;
@@ -8266,8 +8447,20 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   reg [23:0] ack_limit = 24'h000000;
   input clk;
   wire clk;
-  output [174:0] cycle;
-  reg [174:0] cycle = 175'h00000000000000000000000000000000000000000000;
+  output [75:0] crcs;
+  reg [75:0] crcs = 76'h0000000000000000000;
+  wire [37:0] \crcs[0] ;
+  wire \crcs[0].inverted ;
+  wire [15:0] \crcs[0].poly ;
+  wire [15:0] \crcs[0].start ;
+  wire [4:0] \crcs[0].width ;
+  wire [37:0] \crcs[1] ;
+  wire \crcs[1].inverted ;
+  wire [15:0] \crcs[1].poly ;
+  wire [15:0] \crcs[1].start ;
+  wire [4:0] \crcs[1].width ;
+  output [250:0] cycle;
+  reg [250:0] cycle = 251'h000000000000000000000000000000000000000000000000000000000000000;
   wire [23:0] \cycle.ack_limit ;
   wire [23:0] \cycle.break_time ;
   wire [11:0] \cycle.delay_limit ;
@@ -8285,19 +8478,31 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \cycle.w0.crc ;
   wire [5:0] \cycle.w0.data_bits ;
   wire \cycle.w0.lc ;
   wire \cycle.w0.nenw ;
+  wire [37:0] \cycle.w0_crc ;
+  wire \cycle.w0_crc.inverted ;
+  wire [15:0] \cycle.w0_crc.poly ;
+  wire [15:0] \cycle.w0_crc.start ;
+  wire [4:0] \cycle.w0_crc.width ;
   wire [9:0] \cycle.w1 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \cycle.w1.crc ;
   wire [5:0] \cycle.w1.data_bits ;
   wire \cycle.w1.lc ;
   wire \cycle.w1.nenw ;
+  wire [37:0] \cycle.w1_crc ;
+  wire \cycle.w1_crc.inverted ;
+  wire [15:0] \cycle.w1_crc.poly ;
+  wire [15:0] \cycle.w1_crc.start ;
+  wire [4:0] \cycle.w1_crc.width ;
   wire \cycle.w1_enable ;
   output [11:0] delay_limit;
   reg [11:0] delay_limit = 12'h000;
@@ -8305,8 +8510,8 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   reg [16:0] delay_tolerance = 17'h00000;
   input idle;
   wire idle;
-  input [174:0] live;
-  wire [174:0] live;
+  input [250:0] live;
+  wire [250:0] live;
   wire [23:0] \live.ack_limit ;
   wire [23:0] \live.break_time ;
   wire [11:0] \live.delay_limit ;
@@ -8324,19 +8529,31 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \live.w0.crc ;
   wire [5:0] \live.w0.data_bits ;
   wire \live.w0.lc ;
   wire \live.w0.nenw ;
+  wire [37:0] \live.w0_crc ;
+  wire \live.w0_crc.inverted ;
+  wire [15:0] \live.w0_crc.poly ;
+  wire [15:0] \live.w0_crc.start ;
+  wire [4:0] \live.w0_crc.width ;
   wire [9:0] \live.w1 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \live.w1.crc ;
   wire [5:0] \live.w1.data_bits ;
   wire \live.w1.lc ;
   wire \live.w1.nenw ;
+  wire [37:0] \live.w1_crc ;
+  wire \live.w1_crc.inverted ;
+  wire [15:0] \live.w1_crc.poly ;
+  wire [15:0] \live.w1_crc.start ;
+  wire [4:0] \live.w1_crc.width ;
   wire \live.w1_enable ;
   output [24:0] no_start_limit;
   reg [24:0] no_start_limit = 25'h0000000;
@@ -8350,24 +8567,51 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   reg [23:0] timeout_limit = 24'h000000;
   output [1:0] word_count;
   wire [1:0] word_count;
-  assign \$46  = ack_limit + { cycle[15:0], 1'h1 };
-  assign word_count = 1'h1 + cycle[155];
+  assign \$33  = \$21  & \$32 ;
+  assign \$34  = \$18  | \$33 ;
+  assign \$35  = \$17  & \$34 ;
+  assign \$36  = live[193] & live[152];
+  assign \$37  = \$36  & live[201];
+  assign \$38  = ~ \$37 ;
+  assign \$39  = \$35  & \$38 ;
+  assign \$40  = ~ live[242];
+  assign \$41  = live[199:194] <= live[150:145];
+  assign \$42  = live[193] & \$41 ;
+  assign \$43  = | live[203:202];
+  assign \$44  = \$42  & \$43 ;
+  assign \$45  = \$40  | \$44 ;
+  assign \$46  = \$39  & \$45 ;
+  assign \$47  = ! live[87:64];
+  assign \$48  = \$47  ? 24'h000fa0 : live[87:64];
+  assign \$49  = ! live[111:88];
+  assign \$50  = \$49  ? 24'h001f40 : live[111:88];
+  assign \$51  = ! live[123:112];
+  assign \$52  = \$51  ? 12'hfff : live[123:112];
+  assign \$53  = ! live[136:125];
+  assign \$54  = \$53  ? 12'h064 : live[136:125];
+  assign \$55  = ! live[144:141];
+  assign \$56  = \$55  ? 4'h2 : live[144:141];
+  assign \$57  = live[15:0] + \$56 ;
+  assign \$58  = ack_limit + { cycle[15:0], 1'h1 };
+  assign word_count = 1'h1 + cycle[193];
   always @(posedge clk)
-    ok <= \$47 ;
+    ok <= \$59 ;
   always @(posedge clk)
-    cycle <= \$48 ;
+    cycle <= \$60 ;
   always @(posedge clk)
-    ack_limit <= \$49 ;
+    ack_limit <= \$61 ;
   always @(posedge clk)
-    timeout_limit <= \$50 ;
+    timeout_limit <= \$62 ;
   always @(posedge clk)
-    delay_limit <= \$51 ;
+    delay_limit <= \$63 ;
   always @(posedge clk)
-    quiet_time <= \$52 ;
+    quiet_time <= \$64 ;
   always @(posedge clk)
-    delay_tolerance <= \$53 ;
+    delay_tolerance <= \$65 ;
   always @(posedge clk)
-    no_start_limit <= \$54 ;
+    crcs <= \$66 ;
+  always @(posedge clk)
+    no_start_limit <= \$67 ;
   assign \$1  = | live[15:1];
   assign \$2  = | live[150:145];
   assign \$3  = live[150:145] <= 6'h37;
@@ -8377,114 +8621,152 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   assign \$7  = \$5  | \$6 ;
   assign \$8  = live[154:153] == 2'h2;
   assign \$9  = \$7  | \$8 ;
-  assign \$10  = \$4  & \$9 ;
-  assign \$11  = \$1  & \$10 ;
-  assign \$12  = ~ live[155];
-  assign \$13  = | live[161:156];
-  assign \$14  = live[161:156] <= 6'h28;
-  assign \$15  = \$13  & \$14 ;
-  assign \$16  = ! live[165:164];
-  assign \$17  = live[165:164] == 1'h1;
-  assign \$18  = \$16  | \$17 ;
-  assign \$19  = live[165:164] == 2'h2;
-  assign \$20  = \$18  | \$19 ;
-  assign \$21  = \$15  & \$20 ;
-  assign \$22  = \$12  | \$21 ;
-  assign \$23  = \$11  & \$22 ;
-  assign \$24  = live[155] & live[152];
-  assign \$25  = \$24  & live[163];
-  assign \$26  = ~ \$25 ;
-  assign \$27  = \$23  & \$26 ;
-  assign \$28  = ~ live[166];
-  assign \$29  = live[161:156] <= live[150:145];
-  assign \$30  = live[155] & \$29 ;
-  assign \$31  = | live[165:164];
-  assign \$32  = \$30  & \$31 ;
-  assign \$33  = \$28  | \$32 ;
-  assign \$34  = \$27  & \$33 ;
-  assign \$35  = ! live[87:64];
-  assign \$36  = \$35  ? 24'h000fa0 : live[87:64];
-  assign \$37  = ! live[111:88];
-  assign \$38  = \$37  ? 24'h001f40 : live[111:88];
-  assign \$39  = ! live[123:112];
-  assign \$40  = \$39  ? 12'hfff : live[123:112];
-  assign \$41  = ! live[136:125];
-  assign \$42  = \$41  ? 12'h064 : live[136:125];
-  assign \$43  = ! live[144:141];
-  assign \$44  = \$43  ? 4'h2 : live[144:141];
-  assign \$45  = live[15:0] + \$44 ;
+  assign \$10  = live[154:153] == 2'h3;
+  assign \$11  = | live[159:155];
+  assign \$12  = \$10  & \$11 ;
+  assign \$13  = live[159:155] <= 5'h10;
+  assign \$14  = \$12  & \$13 ;
+  assign \$15  = \$9  | \$14 ;
+  assign \$16  = \$4  & \$15 ;
+  assign \$17  = \$1  & \$16 ;
+  assign \$18  = ~ live[193];
+  assign \$19  = | live[199:194];
+  assign \$20  = live[199:194] <= 6'h28;
+  assign \$21  = \$19  & \$20 ;
+  assign \$22  = ! live[203:202];
+  assign \$23  = live[203:202] == 1'h1;
+  assign \$24  = \$22  | \$23 ;
+  assign \$25  = live[203:202] == 2'h2;
+  assign \$26  = \$24  | \$25 ;
+  assign \$27  = live[203:202] == 2'h3;
+  assign \$28  = | live[208:204];
+  assign \$29  = \$27  & \$28 ;
+  assign \$30  = live[208:204] <= 5'h10;
+  assign \$31  = \$29  & \$30 ;
+  assign \$32  = \$26  | \$31 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    \$47  = \$34 ;
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$59  = \$46 ;
     if (rst) begin
-      \$47  = 1'h0;
+      \$59  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    \$48  = cycle;
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$60  = cycle;
     if (idle) begin
-      \$48  = live;
+      \$60  = live;
     end
     if (rst) begin
-      \$48  = 175'h00000000000000000000000000000000000000000000;
+      \$60  = 251'h000000000000000000000000000000000000000000000000000000000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    \$49  = ack_limit;
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$61  = ack_limit;
     if (idle) begin
-      \$49  = \$36 ;
+      \$61  = \$48 ;
     end
     if (rst) begin
-      \$49  = 24'h000000;
+      \$61  = 24'h000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    \$50  = timeout_limit;
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$62  = timeout_limit;
     if (idle) begin
-      \$50  = \$38 ;
+      \$62  = \$50 ;
     end
     if (rst) begin
-      \$50  = 24'h000000;
+      \$62  = 24'h000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    \$51  = delay_limit;
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$63  = delay_limit;
     if (idle) begin
-      \$51  = \$40 ;
+      \$63  = \$52 ;
     end
     if (rst) begin
-      \$51  = 12'h000;
+      \$63  = 12'h000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    \$52  = quiet_time;
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$64  = quiet_time;
     if (idle) begin
-      \$52  = \$42 ;
+      \$64  = \$54 ;
     end
     if (rst) begin
-      \$52  = 12'h000;
+      \$64  = 12'h000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    \$53  = delay_tolerance;
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$65  = delay_tolerance;
     if (idle) begin
-      \$53  = \$45 ;
+      \$65  = \$57 ;
     end
     if (rst) begin
-      \$53  = 17'h00000;
+      \$65  = 17'h00000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    \$54  = \$46 ;
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$66  = crcs;
+    if (idle) begin
+      (* full_case = 32'd1 *)
+      casez (live[154:153])
+        2'h1:
+          begin
+            \$66 [4:0] = 5'h06;
+            \$66 [20:5] = 16'h0003;
+            \$66 [36:21] = 16'h0000;
+            \$66 [37] = 1'h1;
+          end
+        2'h2:
+          begin
+            \$66 [4:0] = 5'h10;
+            \$66 [20:5] = 16'h90d9;
+            \$66 [36:21] = 16'h0000;
+            \$66 [37] = 1'h1;
+          end
+        2'h3:
+            \$66 [37:0] = live[192:155];
+        default:
+            \$66 [37:0] = 38'h0000000000;
+      endcase
+      (* full_case = 32'd1 *)
+      casez (live[203:202])
+        2'h1:
+          begin
+            \$66 [42:38] = 5'h06;
+            \$66 [58:43] = 16'h0003;
+            \$66 [74:59] = 16'h0000;
+            \$66 [75] = 1'h1;
+          end
+        2'h2:
+          begin
+            \$66 [42:38] = 5'h10;
+            \$66 [58:43] = 16'h90d9;
+            \$66 [74:59] = 16'h0000;
+            \$66 [75] = 1'h1;
+          end
+        2'h3:
+            \$66 [75:38] = live[241:204];
+        default:
+            \$66 [75:38] = 38'h0000000000;
+      endcase
+    end
     if (rst) begin
-      \$54  = 25'h0000000;
+      \$66  = 76'h0000000000000000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$67  = \$58 ;
+    if (rst) begin
+      \$67  = 25'h0000000;
     end
   end
   assign \live.ma_half_period  = live[15:0];
@@ -8502,14 +8784,24 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   assign \live.w0.nenw  = live[151];
   assign \live.w0.lc  = live[152];
   assign \live.w0.crc  = live[154:153];
-  assign \live.w1_enable  = live[155];
-  assign \live.w1  = live[165:156];
-  assign \live.w1.data_bits  = live[161:156];
-  assign \live.w1.nenw  = live[162];
-  assign \live.w1.lc  = live[163];
-  assign \live.w1.crc  = live[165:164];
-  assign \live.spw_check  = live[166];
-  assign \live.spw_tolerance  = live[174:167];
+  assign \live.w0_crc  = live[192:155];
+  assign \live.w0_crc.width  = live[159:155];
+  assign \live.w0_crc.poly  = live[175:160];
+  assign \live.w0_crc.start  = live[191:176];
+  assign \live.w0_crc.inverted  = live[192];
+  assign \live.w1_enable  = live[193];
+  assign \live.w1  = live[203:194];
+  assign \live.w1.data_bits  = live[199:194];
+  assign \live.w1.nenw  = live[200];
+  assign \live.w1.lc  = live[201];
+  assign \live.w1.crc  = live[203:202];
+  assign \live.w1_crc  = live[241:204];
+  assign \live.w1_crc.width  = live[208:204];
+  assign \live.w1_crc.poly  = live[224:209];
+  assign \live.w1_crc.start  = live[240:225];
+  assign \live.w1_crc.inverted  = live[241];
+  assign \live.spw_check  = live[242];
+  assign \live.spw_tolerance  = live[250:243];
   assign \cycle.ma_half_period  = cycle[15:0];
   assign \cycle.request_period  = cycle[39:16];
   assign \cycle.break_time  = cycle[63:40];
@@ -8525,21 +8817,41 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   assign \cycle.w0.nenw  = cycle[151];
   assign \cycle.w0.lc  = cycle[152];
   assign \cycle.w0.crc  = cycle[154:153];
-  assign \cycle.w1_enable  = cycle[155];
-  assign \cycle.w1  = cycle[165:156];
-  assign \cycle.w1.data_bits  = cycle[161:156];
-  assign \cycle.w1.nenw  = cycle[162];
-  assign \cycle.w1.lc  = cycle[163];
-  assign \cycle.w1.crc  = cycle[165:164];
-  assign \cycle.spw_check  = cycle[166];
-  assign \cycle.spw_tolerance  = cycle[174:167];
+  assign \cycle.w0_crc  = cycle[192:155];
+  assign \cycle.w0_crc.width  = cycle[159:155];
+  assign \cycle.w0_crc.poly  = cycle[175:160];
+  assign \cycle.w0_crc.start  = cycle[191:176];
+  assign \cycle.w0_crc.inverted  = cycle[192];
+  assign \cycle.w1_enable  = cycle[193];
+  assign \cycle.w1  = cycle[203:194];
+  assign \cycle.w1.data_bits  = cycle[199:194];
+  assign \cycle.w1.nenw  = cycle[200];
+  assign \cycle.w1.lc  = cycle[201];
+  assign \cycle.w1.crc  = cycle[203:202];
+  assign \cycle.w1_crc  = cycle[241:204];
+  assign \cycle.w1_crc.width  = cycle[208:204];
+  assign \cycle.w1_crc.poly  = cycle[224:209];
+  assign \cycle.w1_crc.start  = cycle[240:225];
+  assign \cycle.w1_crc.inverted  = cycle[241];
+  assign \cycle.spw_check  = cycle[242];
+  assign \cycle.spw_tolerance  = cycle[250:243];
+  assign \crcs[0]  = crcs[37:0];
+  assign \crcs[0].width  = crcs[4:0];
+  assign \crcs[0].poly  = crcs[20:5];
+  assign \crcs[0].start  = crcs[36:21];
+  assign \crcs[0].inverted  = crcs[37];
+  assign \crcs[1]  = crcs[75:38];
+  assign \crcs[1].width  = crcs[42:38];
+  assign \crcs[1].poly  = crcs[58:43];
+  assign \crcs[1].start  = crcs[74:59];
+  assign \crcs[1].inverted  = crcs[75];
 endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, report_delay, frame_doubtful, abort, config_ok, end_check, resync, timer_clear, waiting, fault, fault_status, ma_run, in_clock, report_frame, idle, receiver_clear, faults, cdm_cycle, ma_hold
 , slo_stuck, slo_stuck_live, quiet, quiet_live, break_over, ack_expired, no_start_expired, delay_over, ma_arm, ma_busy, ma_held, ma_enough, early, locked, slo, frame_done, stopped, slots_full, started, stop_bit, cdm
 , clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$31  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$15  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -8874,7 +9186,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
     .report_frame(report_frame)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
     resync = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -8882,7 +9194,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
     timer_clear = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -8929,7 +9241,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
     waiting = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -8941,7 +9253,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
     clear = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -8953,7 +9265,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
     fault = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -9002,7 +9314,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
     fault_status = 4'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -9051,7 +9363,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
     ma_run = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -9067,7 +9379,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
     in_clock = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -9081,7 +9393,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
     watch = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -9095,7 +9407,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
     framing = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -9111,7 +9423,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
     report_frame = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -9142,7 +9454,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
     delay = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -9160,7 +9472,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
     holding = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -9183,14 +9495,14 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
     \$27  = idle;
     if (rst) begin
       \$27  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
     \$28  = cycle_fsm_state;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -9281,7 +9593,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
     \$29  = idle;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -9372,7 +9684,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
     \$30  = receiver_clear;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -9463,7 +9775,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
     \$31  = pause;
     casez (cycle_fsm_state)
       3'h0:
@@ -9532,7 +9844,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.controller.cdm_hold (rst, abort, framing, holding, idle, cdm_cycle, ma_hold, slo_stuck, slo, cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$32  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$16  = 0;
   wire \$1 ;
   wire \$2 ;
   wire \$3 ;
@@ -9571,7 +9883,7 @@ module \biss_master_axil.ch0.core.controller.cdm_hold (rst, abort, framing, hold
   assign \$1  = ~ abort;
   assign \$2  = cdm_cycle & \$1 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$32 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
     \$7  = cdm_cycle;
     if (idle) begin
       \$7  = cdm;
@@ -9581,7 +9893,7 @@ module \biss_master_axil.ch0.core.controller.cdm_hold (rst, abort, framing, hold
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$32 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
     ma_hold = 1'h0;
     if (framing) begin
       ma_hold = \$2 ;
@@ -9593,7 +9905,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.controller.line_faults (rst, restart_timer, clear, watch, fault, status, delay, ack_expired, no_start_expired, delay_over, ma_arm, early, locked, slots_full, started, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$33  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$17  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -9690,7 +10002,7 @@ module \biss_master_axil.ch0.core.controller.line_faults (rst, restart_timer, cl
   always @(posedge clk)
     locked_seen <= \$21 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$17 ) begin end
     \$20  = armed;
     if (clear) begin
       \$20  = 1'h0;
@@ -9703,7 +10015,7 @@ module \biss_master_axil.ch0.core.controller.line_faults (rst, restart_timer, cl
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$17 ) begin end
     \$21  = locked_seen;
     if (clear) begin
       \$21  = 1'h0;
@@ -9716,7 +10028,7 @@ module \biss_master_axil.ch0.core.controller.line_faults (rst, restart_timer, cl
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$17 ) begin end
     fault = 1'h0;
     if (\$7 ) begin
       fault = 1'h1;
@@ -9729,7 +10041,7 @@ module \biss_master_axil.ch0.core.controller.line_faults (rst, restart_timer, cl
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$17 ) begin end
     status = 4'h0;
     if (\$7 ) begin
       status = 4'h8;
@@ -9742,7 +10054,7 @@ module \biss_master_axil.ch0.core.controller.line_faults (rst, restart_timer, cl
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$17 ) begin end
     delay = 1'h0;
     if (\$7 ) begin
     end else if (\$12 ) begin
@@ -9754,7 +10066,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.controller.ready_check (config_ok, first_clock, bad_config, aborted, ready, stuck_low, slo_stuck, slo_stuck_live, quiet, quiet_live, slo, abort);
-  reg \$auto$verilog_backend.cc:2355:dump_module$34  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$18  = 0;
   wire \$1 ;
   wire \$2 ;
   wire \$3 ;
@@ -9788,7 +10100,7 @@ module \biss_master_axil.ch0.core.controller.ready_check (config_ok, first_clock
   assign \$3  = first_clock ? slo_stuck_live : slo_stuck;
   assign \$4  = first_clock ? quiet_live : quiet;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
     aborted = 1'h0;
     if (\$2 ) begin
     end else if (abort) begin
@@ -9796,7 +10108,7 @@ module \biss_master_axil.ch0.core.controller.ready_check (config_ok, first_clock
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
     ready = 1'h0;
     if (\$2 ) begin
     end else if (abort) begin
@@ -9805,7 +10117,7 @@ module \biss_master_axil.ch0.core.controller.ready_check (config_ok, first_clock
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
     stuck_low = 1'h0;
     if (\$2 ) begin
     end else if (abort) begin
@@ -9815,7 +10127,7 @@ module \biss_master_axil.ch0.core.controller.ready_check (config_ok, first_clock
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
     bad_config = 1'h0;
     if (\$2 ) begin
       bad_config = 1'h1;
@@ -9929,7 +10241,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.counters (rst, clear, events, counts, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$35  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$19  = 0;
   reg [20:0] \$1 ;
   reg \$2 ;
   input clear;
@@ -10243,14 +10555,14 @@ module \biss_master_axil.ch0.core.counters (rst, clear, events, counts, clk);
     .rst(rst)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
     \$1  = events;
     if (rst) begin
       \$1  = 21'h000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
     \$2  = clear;
     if (rst) begin
       \$2  = 1'h0;
@@ -10386,6 +10698,870 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.counters.count_aborted (rst, inc, clear, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$20  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$20 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$20 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_axil.ch0.core.counters.count_ca_aborted (rst, inc, clear, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$21  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$21 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$21 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_axil.ch0.core.counters.count_ca_crc4_error (rst, inc, clear, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$22  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_axil.ch0.core.counters.count_ca_data_fault (rst, inc, clear, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$23  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_axil.ch0.core.counters.count_ca_no_answer (rst, inc, clear, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$24  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_axil.ch0.core.counters.count_ca_refused (rst, inc, clear, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$25  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$25 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$25 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_axil.ch0.core.counters.count_crc_word0 (rst, inc, clear, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$26  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_axil.ch0.core.counters.count_crc_word1 (rst, inc, clear, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$27  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_axil.ch0.core.counters.count_delay_jump (rst, inc, clear, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$28  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_axil.ch0.core.counters.count_delay_range (rst, inc, clear, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$29  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_axil.ch0.core.counters.count_lc_repeat (rst, inc, clear, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$30  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_axil.ch0.core.counters.count_lc_skip (rst, inc, clear, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$31  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_axil.ch0.core.counters.count_lc_zero (rst, inc, clear, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$32  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$32 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$32 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_axil.ch0.core.counters.count_no_ack (rst, inc, clear, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$33  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_axil.ch0.core.counters.count_no_start (rst, inc, clear, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$34  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_axil.ch0.core.counters.count_no_stop (rst, inc, clear, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$35  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_axil.ch0.core.counters.count_noise_event (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$36  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -10439,7 +11615,7 @@ module \biss_master_axil.ch0.core.counters.count_aborted (rst, inc, clear, count
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_ca_aborted (rst, inc, clear, count, clk);
+module \biss_master_axil.ch0.core.counters.count_noisy_line (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$37  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -10493,7 +11669,7 @@ module \biss_master_axil.ch0.core.counters.count_ca_aborted (rst, inc, clear, co
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_ca_crc4_error (rst, inc, clear, count, clk);
+module \biss_master_axil.ch0.core.counters.count_overrun (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$38  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -10547,7 +11723,7 @@ module \biss_master_axil.ch0.core.counters.count_ca_crc4_error (rst, inc, clear,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_ca_data_fault (rst, inc, clear, count, clk);
+module \biss_master_axil.ch0.core.counters.count_slo_stuck_low (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$39  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -10601,7 +11777,7 @@ module \biss_master_axil.ch0.core.counters.count_ca_data_fault (rst, inc, clear,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_ca_no_answer (rst, inc, clear, count, clk);
+module \biss_master_axil.ch0.core.counters.count_spw_mismatch (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$40  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -10655,947 +11831,88 @@ module \biss_master_axil.ch0.core.counters.count_ca_no_answer (rst, inc, clear, 
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_ca_refused (rst, inc, clear, count, clk);
+module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, sample, \bit , crcs, receiver_clear, done, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1, lc, cpw_top
+, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$41  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_crc_word0 (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$42  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_crc_word1 (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$43  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_delay_jump (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$44  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_delay_range (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$45  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_lc_repeat (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$46  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_lc_skip (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$47  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_lc_zero (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$48  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_no_ack (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$49  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_no_start (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$50  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_no_stop (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_noise_event (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$52  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_noisy_line (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$53  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_overrun (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$54  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_slo_stuck_low (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$55  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_spw_mismatch (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$56  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, sample, \bit , receiver_clear, done, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1, lc, cpw_top, crc_ok
-, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$57  = 0;
   wire [6:0] \$1 ;
-  wire [1:0] \$10 ;
-  reg [2:0] \$100 ;
+  wire \$10 ;
+  reg [15:0] \$100 ;
   reg \$101 ;
-  reg [6:0] \$102 ;
-  reg \$103 ;
-  reg \$104 ;
+  reg \$102 ;
+  reg [15:0] \$103 ;
+  reg [2:0] \$104 ;
   reg \$105 ;
-  reg \$106 ;
+  reg [6:0] \$106 ;
   reg \$107 ;
-  reg [54:0] \$108 ;
-  reg [1:0] \$109 ;
-  wire [6:0] \$11 ;
-  reg [1:0] \$110 ;
-  reg [39:0] \$111 ;
-  reg [5:0] \$112 ;
-  reg [39:0] \$113 ;
-  wire \$12 ;
-  reg [3:0] \$13 ;
-  wire [6:0] \$14 ;
-  wire \$15 ;
+  reg \$108 ;
+  reg \$109 ;
+  wire [1:0] \$11 ;
+  reg \$110 ;
+  reg \$111 ;
+  reg \$112 ;
+  reg [54:0] \$113 ;
+  reg [1:0] \$114 ;
+  reg [1:0] \$115 ;
+  reg [39:0] \$116 ;
+  reg [5:0] \$117 ;
+  reg [39:0] \$118 ;
+  wire [6:0] \$12 ;
+  wire \$13 ;
+  reg [3:0] \$14 ;
+  wire [6:0] \$15 ;
   wire \$16 ;
-  wire [6:0] \$17 ;
-  wire [7:0] \$18 ;
-  reg [6:0] \$19 ;
+  wire \$17 ;
+  wire [6:0] \$18 ;
+  wire [7:0] \$19 ;
   wire [7:0] \$2 ;
-  wire [7:0] \$20 ;
-  reg [6:0] \$21 ;
-  wire [7:0] \$22 ;
-  reg [6:0] \$23 ;
-  wire [7:0] \$24 ;
-  wire \$25 ;
-  wire [1:0] \$26 ;
-  wire [6:0] \$27 ;
-  wire \$28 ;
-  reg [3:0] \$29 ;
+  reg [6:0] \$20 ;
+  wire [7:0] \$21 ;
+  reg [6:0] \$22 ;
+  wire [7:0] \$23 ;
+  reg [6:0] \$24 ;
+  wire [7:0] \$25 ;
+  wire [7:0] \$26 ;
+  wire \$27 ;
+  wire [1:0] \$28 ;
+  wire [6:0] \$29 ;
   reg [6:0] \$3 ;
-  wire [6:0] \$30 ;
-  wire \$31 ;
-  wire \$32 ;
+  wire \$30 ;
+  reg [3:0] \$31 ;
+  wire [6:0] \$32 ;
   wire \$33 ;
   wire \$34 ;
-  wire [16:0] \$35 ;
+  wire \$35 ;
   wire \$36 ;
-  wire \$37 ;
+  wire [16:0] \$37 ;
   wire \$38 ;
-  wire [7:0] \$39 ;
+  wire \$39 ;
   wire [7:0] \$4 ;
-  wire [6:0] \$40 ;
-  wire \$41 ;
-  wire \$42 ;
-  wire [6:0] \$43 ;
+  wire \$40 ;
+  wire [7:0] \$41 ;
+  wire [6:0] \$42 ;
+  wire \$43 ;
   wire \$44 ;
-  wire \$45 ;
-  wire [6:0] \$46 ;
+  wire [6:0] \$45 ;
+  wire \$46 ;
   wire \$47 ;
-  wire \$48 ;
+  wire [6:0] \$48 ;
   wire \$49 ;
   reg [6:0] \$5 ;
   wire \$50 ;
   wire [6:0] \$51 ;
   wire \$52 ;
-  wire [2:0] \$53 ;
-  wire \$54 ;
-  wire [1:0] \$55 ;
+  wire \$53 ;
+  wire [6:0] \$54 ;
+  wire \$55 ;
   wire \$56 ;
   wire \$57 ;
   wire \$58 ;
-  wire \$59 ;
+  wire [6:0] \$59 ;
   wire [7:0] \$6 ;
   wire \$60 ;
-  wire \$61 ;
+  wire [2:0] \$61 ;
   wire \$62 ;
-  wire \$63 ;
+  wire [1:0] \$63 ;
   wire \$64 ;
   wire \$65 ;
   wire \$66 ;
@@ -11624,29 +11941,53 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   wire \$87 ;
   wire \$88 ;
   wire \$89 ;
-  wire \$9 ;
+  wire [7:0] \$9 ;
   wire \$90 ;
-  wire \$91 ;
+  wire [6:0] \$91 ;
   wire \$92 ;
   wire \$93 ;
-  reg \$94 ;
-  reg \$95 ;
-  reg [15:0] \$96 ;
-  reg \$97 ;
+  wire \$94 ;
+  wire \$95 ;
+  wire \$96 ;
+  wire \$97 ;
   reg \$98 ;
-  reg [15:0] \$99 ;
+  reg \$99 ;
   input \bit ;
   wire \bit ;
-  wire \bit$47 ;
-  wire \bit$53 ;
+  wire \bit$51 ;
   output cds;
   reg cds = 1'h0;
+  wire check;
   input clk;
   wire clk;
+  wire \cover ;
   output [39:0] cpw_top;
   reg [39:0] cpw_top = 40'h0000000000;
   output [1:0] crc_ok;
   wire [1:0] crc_ok;
+  input [75:0] crcs;
+  wire [75:0] crcs;
+  wire [75:0] \crcs$46 ;
+  wire [37:0] \crcs$46[0] ;
+  wire \crcs$46[0].inverted ;
+  wire [15:0] \crcs$46[0].poly ;
+  wire [15:0] \crcs$46[0].start ;
+  wire [4:0] \crcs$46[0].width ;
+  wire [37:0] \crcs$46[1] ;
+  wire \crcs$46[1].inverted ;
+  wire [15:0] \crcs$46[1].poly ;
+  wire [15:0] \crcs$46[1].start ;
+  wire [4:0] \crcs$46[1].width ;
+  wire [37:0] \crcs[0] ;
+  wire \crcs[0].inverted ;
+  wire [15:0] \crcs[0].poly ;
+  wire [15:0] \crcs[0].start ;
+  wire [4:0] \crcs[0].width ;
+  wire [37:0] \crcs[1] ;
+  wire \crcs[1].inverted ;
+  wire [15:0] \crcs[1].poly ;
+  wire [15:0] \crcs[1].start ;
+  wire [4:0] \crcs[1].width ;
   output [54:0] data0;
   reg [54:0] data0 = 55'h00000000000000;
   output [39:0] data1;
@@ -11654,13 +11995,14 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   reg [2:0] decoder_fsm_state = 3'h0;
   output done;
   reg done = 1'h0;
+  wire first;
   reg [6:0] idx = 7'h00;
+  reg in_crc = 1'h0;
   reg in_data = 1'h0;
   reg in_lc = 1'h0;
   reg in_top = 1'h0;
   reg in_word;
-  wire [1:0] kind;
-  wire [1:0] \kind$50 ;
+  wire last;
   output [5:0] lc;
   reg [5:0] lc = 6'h00;
   output lc_load;
@@ -11670,8 +12012,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   reg [1:0] ne = 2'h0;
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
-  wire ok;
-  wire \ok$54 ;
+  wire [1:0] ok;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -11681,8 +12022,6 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   reg [15:0] slots = 16'h0000;
   output slots_full;
   reg slots_full = 1'h0;
-  wire start;
-  wire \start$51 ;
   output [15:0] start_slot;
   reg [15:0] start_slot = 16'h0000;
   output started;
@@ -11691,8 +12030,6 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   reg stop_bit = 1'h0;
   output stopped;
   reg stopped = 1'h0;
-  wire valid;
-  wire \valid$52 ;
   reg w0_data_at0 = 1'h0;
   reg [6:0] w0_data_end_m1 = 7'h00;
   reg [6:0] w0_data_end_p1 = 7'h00;
@@ -11708,6 +12045,8 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   reg [6:0] w1_nenw_end_m1 = 7'h00;
   reg [6:0] w1_word_end_m1 = 7'h00;
   reg word = 1'h0;
+  (* init = 1'h0 *)
+  wire \word$54 ;
   input [1:0] word_count;
   wire [1:0] word_count;
   input [19:0] words;
@@ -11717,6 +12056,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \words[0].crc ;
   wire [5:0] \words[0].data_bits ;
   wire \words[0].lc ;
@@ -11726,6 +12066,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \words[1].crc ;
   wire [5:0] \words[1].data_bits ;
   wire \words[1].lc ;
@@ -11734,87 +12075,93 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   assign \$2  = words[5:0] + 7'h7f;
   assign \$4  = words[5:0] + \$3 ;
   assign \$6  = words[5:0] + \$5 ;
-  assign \$8  = words[5:0] + \$7 ;
-  assign \$9  = | words[5:0];
-  assign \$10  = words[6] ? 2'h2 : 2'h0;
-  assign \$11  = words[5:0] + \$10 ;
-  assign \$12  = ! \$11 ;
-  assign \$14  = words[5:0] + \$13 ;
-  assign \$15  = | \$14 ;
-  assign \$16  = \$12  & \$15 ;
-  assign \$17  = words[15:10] + 1'h1;
-  assign \$18  = words[15:10] + 7'h7f;
-  assign \$20  = words[15:10] + \$19 ;
-  assign \$22  = words[15:10] + \$21 ;
-  assign \$24  = words[15:10] + \$23 ;
-  assign \$25  = | words[15:10];
-  assign \$26  = words[16] ? 2'h2 : 2'h0;
-  assign \$27  = words[15:10] + \$26 ;
-  assign \$28  = ! \$27 ;
-  assign \$30  = words[15:10] + \$29 ;
-  assign \$31  = | \$30 ;
-  assign \$32  = \$28  & \$31 ;
-  assign \$33  = ~ slots_full;
-  assign \$34  = sample & \$33 ;
-  assign \$35  = slots + 1'h1;
-  assign \$36  = slots == 16'hfffe;
-  assign \$37  = sample & \bit ;
-  assign \$38  = | words[15:10];
-  assign \$39  = idx + 1'h1;
-  assign \$40  = word ? w1_data_end_m1 : w0_data_end_m1;
-  assign \$41  = idx != \$40 ;
-  assign \$42  = in_data & \$41 ;
-  assign \$43  = word ? w1_nenw_end_m1 : w0_nenw_end_m1;
-  assign \$44  = idx == \$43 ;
-  assign \$45  = in_lc | \$44 ;
-  assign \$46  = word ? w1_lc_end_m1 : w0_lc_end_m1;
-  assign \$47  = idx != \$46 ;
-  assign \$48  = \$45  & \$47 ;
-  assign \$49  = idx != w1_data_end_m1;
-  assign \$50  = in_top & \$49 ;
-  assign \$51  = word ? w1_word_end_m1 : w0_word_end_m1;
+  assign \$8  = \$7  + crcs[4:0];
+  assign \$9  = words[5:0] + \$8 [6:0];
+  assign \$10  = | words[5:0];
+  assign \$11  = words[6] ? 2'h2 : 2'h0;
+  assign \$12  = words[5:0] + \$11 ;
+  assign \$13  = ! \$12 ;
+  assign \$15  = words[5:0] + \$14 ;
+  assign \$16  = | \$15 ;
+  assign \$17  = \$13  & \$16 ;
+  assign \$18  = words[15:10] + 1'h1;
+  assign \$19  = words[15:10] + 7'h7f;
+  assign \$21  = words[15:10] + \$20 ;
+  assign \$23  = words[15:10] + \$22 ;
+  assign \$25  = \$24  + crcs[42:38];
+  assign \$26  = words[15:10] + \$25 [6:0];
+  assign \$27  = | words[15:10];
+  assign \$28  = words[16] ? 2'h2 : 2'h0;
+  assign \$29  = words[15:10] + \$28 ;
+  assign \$30  = ! \$29 ;
+  assign \$32  = words[15:10] + \$31 ;
+  assign \$33  = | \$32 ;
+  assign \$34  = \$30  & \$33 ;
+  assign \$35  = ~ slots_full;
+  assign \$36  = sample & \$35 ;
+  assign \$37  = slots + 1'h1;
+  assign \$38  = slots == 16'hfffe;
+  assign \$39  = sample & \bit ;
+  assign \$40  = | words[15:10];
+  assign \$41  = idx + 1'h1;
+  assign \$42  = word ? w1_data_end_m1 : w0_data_end_m1;
+  assign \$43  = idx != \$42 ;
+  assign \$44  = in_data & \$43 ;
+  assign \$45  = word ? w1_nenw_end_m1 : w0_nenw_end_m1;
+  assign \$46  = idx == \$45 ;
+  assign \$47  = in_lc | \$46 ;
+  assign \$48  = word ? w1_lc_end_m1 : w0_lc_end_m1;
+  assign \$49  = idx != \$48 ;
+  assign \$50  = \$47  & \$49 ;
+  assign \$51  = word ? w1_lc_end_m1 : w0_lc_end_m1;
   assign \$52  = idx == \$51 ;
-  assign \$53  = word_count - 1'h1;
-  assign \$54  = word == \$53 ;
-  assign \$55  = word + 1'h1;
-  assign \$56  = ! word;
-  assign \$57  = in_word & \$56 ;
-  assign \$58  = \$57  & in_data;
-  assign \$59  = ~ words[6];
-  assign \$60  = ! word;
-  assign \$61  = in_word & \$60 ;
-  assign \$62  = idx == words[5:0];
-  assign \$63  = \$61  & \$62 ;
+  assign \$53  = in_crc | \$52 ;
+  assign \$54  = word ? w1_word_end_m1 : w0_word_end_m1;
+  assign \$55  = idx != \$54 ;
+  assign \$56  = \$53  & \$55 ;
+  assign \$57  = idx != w1_data_end_m1;
+  assign \$58  = in_top & \$57 ;
+  assign \$59  = word ? w1_word_end_m1 : w0_word_end_m1;
+  assign \$60  = idx == \$59 ;
+  assign \$61  = word_count - 1'h1;
+  assign \$62  = word == \$61 ;
+  assign \$63  = word + 1'h1;
   assign \$64  = ! word;
   assign \$65  = in_word & \$64 ;
-  assign \$66  = idx == w0_data_end_p1;
-  assign \$67  = \$65  & \$66 ;
+  assign \$66  = \$65  & in_data;
+  assign \$67  = ~ words[6];
+  assign \$68  = ! word;
   assign \$69  = in_word & \$68 ;
-  assign \$70  = \$69  & in_data;
-  assign \$71  = ~ words[16];
+  assign \$70  = idx == words[5:0];
+  assign \$71  = \$69  & \$70 ;
+  assign \$72  = ! word;
   assign \$73  = in_word & \$72 ;
-  assign \$74  = idx == words[15:10];
+  assign \$74  = idx == w0_data_end_p1;
   assign \$75  = \$73  & \$74 ;
   assign \$77  = in_word & \$76 ;
-  assign \$78  = idx == w1_data_end_p1;
-  assign \$79  = \$77  & \$78 ;
-  assign \$80  = in_word & in_top;
+  assign \$78  = \$77  & in_data;
+  assign \$79  = ~ words[16];
+  assign \$81  = in_word & \$80 ;
+  assign \$82  = idx == words[15:10];
+  assign \$83  = \$81  & \$82 ;
+  assign \$85  = in_word & \$84 ;
+  assign \$86  = idx == w1_data_end_p1;
+  assign \$87  = \$85  & \$86 ;
+  assign \$88  = in_word & in_top;
   assign lc_load = in_word & in_lc;
-  assign \$81  = ! word;
-  assign \$82  = in_word & \$81 ;
-  assign \$83  = ! idx;
-  assign start = \$82  & \$83 ;
-  assign \$84  = ! word;
-  assign valid = in_word & \$84 ;
-  assign \$86  = in_word & \$85 ;
-  assign \$87  = ! idx;
-  assign \start$51  = \$86  & \$87 ;
-  assign \valid$52  = in_word & \$88 ;
-  assign \$89  = ! decoder_fsm_state;
-  assign \$90  = decoder_fsm_state == 1'h1;
-  assign \$91  = decoder_fsm_state == 2'h2;
-  assign \$92  = decoder_fsm_state == 2'h3;
-  assign \$93  = decoder_fsm_state == 3'h4;
+  assign \$89  = ! idx;
+  assign first = in_word & \$89 ;
+  assign \$90  = ~ in_crc;
+  assign \cover  = in_word & \$90 ;
+  assign check = in_word & in_crc;
+  assign \$91  = word ? w1_word_end_m1 : w0_word_end_m1;
+  assign \$92  = idx == \$91 ;
+  assign last = in_word & \$92 ;
+  assign \$93  = ! decoder_fsm_state;
+  assign \$94  = decoder_fsm_state == 1'h1;
+  assign \$95  = decoder_fsm_state == 2'h2;
+  assign \$96  = decoder_fsm_state == 2'h3;
+  assign \$97  = decoder_fsm_state == 3'h4;
   always @(posedge clk)
     w0_data_end_p1 <= \$1 ;
   always @(posedge clk)
@@ -11824,87 +12171,82 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   always @(posedge clk)
     w0_lc_end_m1 <= \$6 [6:0];
   always @(posedge clk)
-    w0_word_end_m1 <= \$8 [6:0];
+    w0_word_end_m1 <= \$9 [6:0];
   always @(posedge clk)
-    w0_data_at0 <= \$9 ;
+    w0_data_at0 <= \$10 ;
   always @(posedge clk)
-    w0_lc_at0 <= \$16 ;
+    w0_lc_at0 <= \$17 ;
   always @(posedge clk)
-    w1_data_end_p1 <= \$17 ;
+    w1_data_end_p1 <= \$18 ;
   always @(posedge clk)
-    w1_data_end_m1 <= \$18 [6:0];
+    w1_data_end_m1 <= \$19 [6:0];
   always @(posedge clk)
-    w1_nenw_end_m1 <= \$20 [6:0];
+    w1_nenw_end_m1 <= \$21 [6:0];
   always @(posedge clk)
-    w1_lc_end_m1 <= \$22 [6:0];
+    w1_lc_end_m1 <= \$23 [6:0];
   always @(posedge clk)
-    w1_word_end_m1 <= \$24 [6:0];
+    w1_word_end_m1 <= \$26 [6:0];
   always @(posedge clk)
-    w1_data_at0 <= \$25 ;
+    w1_data_at0 <= \$27 ;
   always @(posedge clk)
-    w1_lc_at0 <= \$32 ;
+    w1_lc_at0 <= \$34 ;
   always @(posedge clk)
-    done <= \$94 ;
+    done <= \$98 ;
   always @(posedge clk)
-    stopped <= \$95 ;
+    stopped <= \$99 ;
   always @(posedge clk)
-    slots <= \$96 ;
+    slots <= \$100 ;
   always @(posedge clk)
-    slots_full <= \$97 ;
+    slots_full <= \$101 ;
   always @(posedge clk)
-    started <= \$98 ;
+    started <= \$102 ;
   always @(posedge clk)
-    start_slot <= \$99 ;
+    start_slot <= \$103 ;
   always @(posedge clk)
-    decoder_fsm_state <= \$100 ;
+    decoder_fsm_state <= \$104 ;
   always @(posedge clk)
-    cds <= \$101 ;
+    cds <= \$105 ;
   always @(posedge clk)
-    idx <= \$102 ;
+    idx <= \$106 ;
   always @(posedge clk)
-    in_data <= \$103 ;
+    in_data <= \$107 ;
   always @(posedge clk)
-    in_lc <= \$104 ;
+    in_lc <= \$108 ;
   always @(posedge clk)
-    in_top <= \$105 ;
+    in_crc <= \$109 ;
   always @(posedge clk)
-    word <= \$106 ;
+    in_top <= \$110 ;
   always @(posedge clk)
-    stop_bit <= \$107 ;
+    word <= \$111 ;
   always @(posedge clk)
-    data0 <= \$108 ;
+    stop_bit <= \$112 ;
   always @(posedge clk)
-    ne <= \$109 ;
+    data0 <= \$113 ;
   always @(posedge clk)
-    nw <= \$110 ;
+    ne <= \$114 ;
   always @(posedge clk)
-    data1 <= \$111 ;
+    nw <= \$115 ;
   always @(posedge clk)
-    lc <= \$112 ;
+    data1 <= \$116 ;
   always @(posedge clk)
-    cpw_top <= \$113 ;
-  \biss_master_axil.ch0.core.decoder.crc0  crc0 (
+    lc <= \$117 ;
+  always @(posedge clk)
+    cpw_top <= \$118 ;
+  \biss_master_axil.ch0.core.decoder.crc  crc (
     .\bit (\bit ),
+    .check(check),
     .clk(clk),
-    .kind(words[9:8]),
-    .ok(ok),
+    .\cover (\cover ),
+    .crcs(crcs),
+    .first(first),
+    .last(last),
+    .ok(crc_ok),
     .receiver_clear(receiver_clear),
     .rst(rst),
-    .start(start),
-    .valid(valid)
-  );
-  \biss_master_axil.ch0.core.decoder.crc1  crc1 (
-    .\bit (\bit ),
-    .clk(clk),
-    .kind(words[19:18]),
-    .ok(\ok$54 ),
-    .receiver_clear(receiver_clear),
-    .rst(rst),
-    .start(\start$51 ),
-    .valid(\valid$52 )
+    .word(word)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     (* full_case = 32'd1 *)
     casez (words[6])
       1'h0:
@@ -11914,7 +12256,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -11928,136 +12270,88 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
-    (* full_case = 32'd1 *)
-    casez (words[9:6])
-      4'h0:
-          \$7  = 7'h7f;
-      4'h1:
-          \$7  = 7'h01;
-      4'h2:
-          \$7  = 7'h05;
-      4'h3:
-          \$7  = 7'h07;
-      4'h4:
-          \$7  = 7'h05;
-      4'h5:
-          \$7  = 7'h07;
-      4'h6:
-          \$7  = 7'h0b;
-      4'h7:
-          \$7  = 7'h0d;
-      4'h8:
-          \$7  = 7'h0f;
-      4'h9:
-          \$7  = 7'h11;
-      4'ha:
-          \$7  = 7'h15;
-      4'hb:
-          \$7  = 7'h17;
-      4'hc:
-          \$7  = 7'h7f;
-      4'hd:
-          \$7  = 7'h01;
-      4'he:
-          \$7  = 7'h05;
-      4'hf:
-          \$7  = 7'h07;
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
-          \$13  = 4'h0;
+          \$7  = 7'h7f;
       2'h1:
-          \$13  = 4'h2;
+          \$7  = 7'h01;
       2'h2:
-          \$13  = 4'h6;
+          \$7  = 7'h05;
       2'h3:
-          \$13  = 4'h8;
+          \$7  = 7'h07;
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    (* full_case = 32'd1 *)
+    casez (words[7:6])
+      2'h0:
+          \$14  = 4'h0;
+      2'h1:
+          \$14  = 4'h2;
+      2'h2:
+          \$14  = 4'h6;
+      2'h3:
+          \$14  = 4'h8;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     (* full_case = 32'd1 *)
     casez (words[16])
       1'h0:
-          \$19  = 7'h7f;
+          \$20  = 7'h7f;
       1'h1:
-          \$19  = 7'h01;
+          \$20  = 7'h01;
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     (* full_case = 32'd1 *)
     casez (words[17:16])
       2'h0:
-          \$21  = 7'h7f;
+          \$22  = 7'h7f;
       2'h1:
-          \$21  = 7'h01;
+          \$22  = 7'h01;
       2'h2:
-          \$21  = 7'h05;
+          \$22  = 7'h05;
       2'h3:
-          \$21  = 7'h07;
+          \$22  = 7'h07;
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
-    (* full_case = 32'd1 *)
-    casez (words[19:16])
-      4'h0:
-          \$23  = 7'h7f;
-      4'h1:
-          \$23  = 7'h01;
-      4'h2:
-          \$23  = 7'h05;
-      4'h3:
-          \$23  = 7'h07;
-      4'h4:
-          \$23  = 7'h05;
-      4'h5:
-          \$23  = 7'h07;
-      4'h6:
-          \$23  = 7'h0b;
-      4'h7:
-          \$23  = 7'h0d;
-      4'h8:
-          \$23  = 7'h0f;
-      4'h9:
-          \$23  = 7'h11;
-      4'ha:
-          \$23  = 7'h15;
-      4'hb:
-          \$23  = 7'h17;
-      4'hc:
-          \$23  = 7'h7f;
-      4'hd:
-          \$23  = 7'h01;
-      4'he:
-          \$23  = 7'h05;
-      4'hf:
-          \$23  = 7'h07;
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     (* full_case = 32'd1 *)
     casez (words[17:16])
       2'h0:
-          \$29  = 4'h0;
+          \$24  = 7'h7f;
       2'h1:
-          \$29  = 4'h2;
+          \$24  = 7'h01;
       2'h2:
-          \$29  = 4'h6;
+          \$24  = 7'h05;
       2'h3:
-          \$29  = 4'h8;
+          \$24  = 7'h07;
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
-    \$94  = 1'h0;
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    (* full_case = 32'd1 *)
+    casez (words[17:16])
+      2'h0:
+          \$31  = 4'h0;
+      2'h1:
+          \$31  = 4'h2;
+      2'h2:
+          \$31  = 4'h6;
+      2'h3:
+          \$31  = 4'h8;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    \$98  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
@@ -12065,75 +12359,11 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
           /* empty */;
       3'h2:
           if (sample) begin
-            if (\$52 ) begin
-              if (\$54 ) begin
-                \$94  = 1'h1;
+            if (\$60 ) begin
+              if (\$62 ) begin
+                \$98  = 1'h1;
               end
             end
-          end
-    endcase
-    if (receiver_clear) begin
-      \$94  = 1'h0;
-    end
-    if (rst) begin
-      \$94  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
-    \$95  = 1'h0;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h3:
-          if (sample) begin
-            \$95  = 1'h1;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$95  = 1'h0;
-    end
-    if (rst) begin
-      \$95  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
-    \$96  = slots;
-    if (\$34 ) begin
-      \$96  = \$35 [15:0];
-    end
-    if (receiver_clear) begin
-      \$96  = 16'h0000;
-    end
-    if (rst) begin
-      \$96  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
-    \$97  = slots_full;
-    if (\$34 ) begin
-      \$97  = \$36 ;
-    end
-    if (receiver_clear) begin
-      \$97  = 1'h0;
-    end
-    if (rst) begin
-      \$97  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
-    \$98  = started;
-    casez (decoder_fsm_state)
-      3'h0:
-          if (\$37 ) begin
-            \$98  = 1'h1;
           end
     endcase
     if (receiver_clear) begin
@@ -12144,162 +12374,126 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
-    \$99  = start_slot;
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    \$99  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
-          if (\$37 ) begin
-            \$99  = slots;
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h3:
+          if (sample) begin
+            \$99  = 1'h1;
           end
     endcase
     if (receiver_clear) begin
-      \$99  = 16'h0000;
+      \$99  = 1'h0;
     end
     if (rst) begin
-      \$99  = 16'h0000;
+      \$99  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
-    \$100  = decoder_fsm_state;
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    \$100  = slots;
+    if (\$36 ) begin
+      \$100  = \$37 [15:0];
+    end
+    if (receiver_clear) begin
+      \$100  = 16'h0000;
+    end
+    if (rst) begin
+      \$100  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    \$101  = slots_full;
+    if (\$36 ) begin
+      \$101  = \$38 ;
+    end
+    if (receiver_clear) begin
+      \$101  = 1'h0;
+    end
+    if (rst) begin
+      \$101  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    \$102  = started;
     casez (decoder_fsm_state)
       3'h0:
-          if (\$37 ) begin
-            \$100  = 3'h1;
+          if (\$39 ) begin
+            \$102  = 1'h1;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$102  = 1'h0;
+    end
+    if (rst) begin
+      \$102  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    \$103  = start_slot;
+    casez (decoder_fsm_state)
+      3'h0:
+          if (\$39 ) begin
+            \$103  = slots;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$103  = 16'h0000;
+    end
+    if (rst) begin
+      \$103  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    \$104  = decoder_fsm_state;
+    casez (decoder_fsm_state)
+      3'h0:
+          if (\$39 ) begin
+            \$104  = 3'h1;
           end
       3'h1:
           if (sample) begin
-            \$100  = 3'h2;
+            \$104  = 3'h2;
           end
       3'h2:
           if (sample) begin
-            if (\$52 ) begin
-              if (\$54 ) begin
-                \$100  = 3'h3;
+            if (\$60 ) begin
+              if (\$62 ) begin
+                \$104  = 3'h3;
               end
             end
           end
       3'h3:
           if (sample) begin
-            \$100  = 3'h4;
+            \$104  = 3'h4;
           end
     endcase
     if (receiver_clear) begin
-      \$100  = 3'h0;
+      \$104  = 3'h0;
     end
     if (rst) begin
-      \$100  = 3'h0;
+      \$104  = 3'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
-    \$101  = cds;
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    \$105  = cds;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
       3'h1:
           if (sample) begin
-            \$101  = \bit ;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$101  = 1'h0;
-    end
-    if (rst) begin
-      \$101  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
-    \$102  = idx;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$102  = 7'h00;
-          end
-      3'h2:
-          if (sample) begin
-            \$102  = \$39 [6:0];
-            if (\$52 ) begin
-              \$102  = 7'h00;
-            end
-          end
-    endcase
-    if (receiver_clear) begin
-      \$102  = 7'h00;
-    end
-    if (rst) begin
-      \$102  = 7'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
-    \$103  = in_data;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$103  = w0_data_at0;
-          end
-      3'h2:
-          if (sample) begin
-            \$103  = \$42 ;
-            if (\$52 ) begin
-              \$103  = w1_data_at0;
-            end
-          end
-    endcase
-    if (receiver_clear) begin
-      \$103  = 1'h0;
-    end
-    if (rst) begin
-      \$103  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
-    \$104  = in_lc;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$104  = w0_lc_at0;
-          end
-      3'h2:
-          if (sample) begin
-            \$104  = \$48 ;
-            if (\$52 ) begin
-              \$104  = w1_lc_at0;
-            end
-          end
-    endcase
-    if (receiver_clear) begin
-      \$104  = 1'h0;
-    end
-    if (rst) begin
-      \$104  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
-    \$105  = in_top;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$105  = \$38 ;
-          end
-      3'h2:
-          if (sample) begin
-            \$105  = \$50 ;
-            if (\$52 ) begin
-              \$105  = 1'h0;
-            end
+            \$105  = \bit ;
           end
     endcase
     if (receiver_clear) begin
@@ -12310,36 +12504,158 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
-    \$106  = word;
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    \$106  = idx;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
       3'h1:
           if (sample) begin
-            \$106  = 1'h0;
+            \$106  = 7'h00;
           end
       3'h2:
           if (sample) begin
-            if (\$52 ) begin
+            \$106  = \$41 [6:0];
+            if (\$60 ) begin
+              \$106  = 7'h00;
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$106  = 7'h00;
+    end
+    if (rst) begin
+      \$106  = 7'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    \$107  = in_data;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$107  = w0_data_at0;
+          end
+      3'h2:
+          if (sample) begin
+            \$107  = \$44 ;
+            if (\$60 ) begin
+              \$107  = w1_data_at0;
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$107  = 1'h0;
+    end
+    if (rst) begin
+      \$107  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    \$108  = in_lc;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$108  = w0_lc_at0;
+          end
+      3'h2:
+          if (sample) begin
+            \$108  = \$50 ;
+            if (\$60 ) begin
+              \$108  = w1_lc_at0;
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$108  = 1'h0;
+    end
+    if (rst) begin
+      \$108  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    \$109  = in_crc;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$109  = 1'h0;
+          end
+      3'h2:
+          if (sample) begin
+            \$109  = \$56 ;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$109  = 1'h0;
+    end
+    if (rst) begin
+      \$109  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    \$110  = in_top;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$110  = \$40 ;
+          end
+      3'h2:
+          if (sample) begin
+            \$110  = \$58 ;
+            if (\$60 ) begin
+              \$110  = 1'h0;
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$110  = 1'h0;
+    end
+    if (rst) begin
+      \$110  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    \$111  = word;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$111  = 1'h0;
+          end
+      3'h2:
+          if (sample) begin
+            if (\$60 ) begin
               (* full_case = 32'd1 *)
-              if (\$54 ) begin
+              if (\$62 ) begin
               end else begin
-                \$106  = \$55 [0];
+                \$111  = \$63 [0];
               end
             end
           end
     endcase
     if (receiver_clear) begin
-      \$106  = 1'h0;
+      \$111  = 1'h0;
     end
     if (rst) begin
-      \$106  = 1'h0;
+      \$111  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
-    \$107  = stop_bit;
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    \$112  = stop_bit;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
@@ -12349,112 +12665,112 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
           /* empty */;
       3'h3:
           if (sample) begin
-            \$107  = \bit ;
+            \$112  = \bit ;
           end
     endcase
     if (receiver_clear) begin
-      \$107  = 1'h0;
+      \$112  = 1'h0;
     end
     if (rst) begin
-      \$107  = 1'h0;
+      \$112  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
-    \$108  = data0;
-    if (\$58 ) begin
-      \$108  = { data0[53:0], \bit  };
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    \$113  = data0;
+    if (\$66 ) begin
+      \$113  = { data0[53:0], \bit  };
     end
     if (receiver_clear) begin
-      \$108  = 55'h00000000000000;
+      \$113  = 55'h00000000000000;
     end
     if (rst) begin
-      \$108  = 55'h00000000000000;
+      \$113  = 55'h00000000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
-    \$109  = ne;
-    if (\$59 ) begin
-      \$109 [0] = 1'h1;
-    end else if (\$63 ) begin
-      \$109 [0] = \bit ;
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    \$114  = ne;
+    if (\$67 ) begin
+      \$114 [0] = 1'h1;
+    end else if (\$71 ) begin
+      \$114 [0] = \bit ;
     end
-    if (\$71 ) begin
-      \$109 [1] = 1'h1;
+    if (\$79 ) begin
+      \$114 [1] = 1'h1;
+    end else if (\$83 ) begin
+      \$114 [1] = \bit ;
+    end
+    if (receiver_clear) begin
+      \$114  = 2'h0;
+    end
+    if (rst) begin
+      \$114  = 2'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    \$115  = nw;
+    if (\$67 ) begin
+      \$115 [0] = 1'h1;
+    end else if (\$71 ) begin
     end else if (\$75 ) begin
-      \$109 [1] = \bit ;
+      \$115 [0] = \bit ;
+    end
+    if (\$79 ) begin
+      \$115 [1] = 1'h1;
+    end else if (\$83 ) begin
+    end else if (\$87 ) begin
+      \$115 [1] = \bit ;
     end
     if (receiver_clear) begin
-      \$109  = 2'h0;
+      \$115  = 2'h0;
     end
     if (rst) begin
-      \$109  = 2'h0;
+      \$115  = 2'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
-    \$110  = nw;
-    if (\$59 ) begin
-      \$110 [0] = 1'h1;
-    end else if (\$63 ) begin
-    end else if (\$67 ) begin
-      \$110 [0] = \bit ;
-    end
-    if (\$71 ) begin
-      \$110 [1] = 1'h1;
-    end else if (\$75 ) begin
-    end else if (\$79 ) begin
-      \$110 [1] = \bit ;
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    \$116  = data1;
+    if (\$78 ) begin
+      \$116  = { data1[38:0], \bit  };
     end
     if (receiver_clear) begin
-      \$110  = 2'h0;
+      \$116  = 40'h0000000000;
     end
     if (rst) begin
-      \$110  = 2'h0;
+      \$116  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
-    \$111  = data1;
-    if (\$70 ) begin
-      \$111  = { data1[38:0], \bit  };
-    end
-    if (receiver_clear) begin
-      \$111  = 40'h0000000000;
-    end
-    if (rst) begin
-      \$111  = 40'h0000000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
-    \$112  = lc;
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    \$117  = lc;
     if (lc_load) begin
-      \$112  = { lc[4:0], \bit  };
+      \$117  = { lc[4:0], \bit  };
     end
     if (receiver_clear) begin
-      \$112  = 6'h00;
+      \$117  = 6'h00;
     end
     if (rst) begin
-      \$112  = 6'h00;
+      \$117  = 6'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
-    \$113  = cpw_top;
-    if (\$80 ) begin
-      \$113  = { cpw_top[38:0], \bit  };
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    \$118  = cpw_top;
+    if (\$88 ) begin
+      \$118  = { cpw_top[38:0], \bit  };
     end
     if (receiver_clear) begin
-      \$113  = 40'h0000000000;
+      \$118  = 40'h0000000000;
     end
     if (rst) begin
-      \$113  = 40'h0000000000;
+      \$118  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     in_word = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -12466,10 +12782,10 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   assign lc_next = { lc[4:0], \bit  };
-  assign kind = words[9:8];
-  assign \bit$47  = \bit ;
-  assign \kind$50  = words[19:18];
-  assign \bit$53  = \bit ;
+  assign \crcs$46  = crcs;
+  assign \bit$51  = \bit ;
+  assign ok = crc_ok;
+  assign \word$54  = word;
   assign \words[0]  = words[9:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -12480,368 +12796,358 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   assign \words[1].nenw  = words[16];
   assign \words[1].lc  = words[17];
   assign \words[1].crc  = words[19:18];
-  assign crc_ok[1] = \ok$54 ;
-  assign crc_ok[0] = ok;
-  assign \$68  = word;
-  assign \$72  = word;
+  assign \crcs[0]  = crcs[37:0];
+  assign \crcs[0].width  = crcs[4:0];
+  assign \crcs[0].poly  = crcs[20:5];
+  assign \crcs[0].start  = crcs[36:21];
+  assign \crcs[0].inverted  = crcs[37];
+  assign \crcs[1]  = crcs[75:38];
+  assign \crcs[1].width  = crcs[42:38];
+  assign \crcs[1].poly  = crcs[58:43];
+  assign \crcs[1].start  = crcs[74:59];
+  assign \crcs[1].inverted  = crcs[75];
+  assign \crcs$46[0]  = crcs[37:0];
+  assign \crcs$46[0].width  = crcs[4:0];
+  assign \crcs$46[0].poly  = crcs[20:5];
+  assign \crcs$46[0].start  = crcs[36:21];
+  assign \crcs$46[0].inverted  = crcs[37];
+  assign \crcs$46[1]  = crcs[75:38];
+  assign \crcs$46[1].width  = crcs[42:38];
+  assign \crcs$46[1].poly  = crcs[58:43];
+  assign \crcs$46[1].start  = crcs[74:59];
+  assign \crcs$46[1].inverted  = crcs[75];
   assign \$76  = word;
-  assign \$85  = word;
-  assign \$88  = word;
+  assign \$80  = word;
+  assign \$84  = word;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.decoder.crc0 (rst, start, valid, kind, \bit , receiver_clear, ok, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$58  = 0;
-  wire [5:0] \$1 ;
-  wire \$10 ;
-  wire [5:0] \$11 ;
-  wire \$12 ;
+module \biss_master_axil.ch0.core.decoder.crc (rst, first, \cover , check, last, \bit , crcs, receiver_clear, word, ok, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$42  = 0;
+  reg [15:0] \$1 ;
+  wire [15:0] \$10 ;
+  reg [15:0] \$11 ;
+  wire [15:0] \$12 ;
   wire \$13 ;
   wire \$14 ;
-  wire \$15 ;
+  reg [15:0] \$15 ;
   wire [15:0] \$16 ;
-  wire [15:0] \$17 ;
+  reg [4:0] \$17 ;
   wire \$18 ;
-  wire [15:0] \$19 ;
-  wire [5:0] \$2 ;
-  wire [15:0] \$20 ;
-  wire [15:0] \$21 ;
+  wire \$19 ;
+  wire [15:0] \$2 ;
+  reg \$20 ;
+  wire \$21 ;
   wire \$22 ;
   wire \$23 ;
-  wire [15:0] \$24 ;
+  wire \$24 ;
   wire \$25 ;
-  wire [15:0] \$26 ;
-  wire \$27 ;
-  wire \$28 ;
+  reg [15:0] \$26 ;
+  wire [15:0] \$27 ;
+  reg [4:0] \$28 ;
   wire \$29 ;
-  wire \$3 ;
+  reg [15:0] \$3 ;
   wire \$30 ;
-  reg [5:0] \$31 ;
-  reg \$32 ;
-  reg [15:0] \$33 ;
-  reg \$34 ;
-  wire [1:0] \$4 ;
-  wire [5:0] \$5 ;
-  wire [5:0] \$6 ;
+  reg \$31 ;
+  wire \$32 ;
+  wire \$33 ;
+  wire \$34 ;
+  wire \$35 ;
+  wire \$36 ;
+  wire \$37 ;
+  reg [15:0] \$38 ;
+  wire [15:0] \$39 ;
+  wire [15:0] \$4 ;
+  reg [4:0] \$40 ;
+  wire \$41 ;
+  wire \$42 ;
+  reg \$43 ;
+  wire \$44 ;
+  wire \$45 ;
+  wire \$46 ;
+  wire \$47 ;
+  reg [15:0] \$48 ;
+  reg \$49 ;
+  reg [4:0] \$5 ;
+  reg [1:0] \$50 ;
+  wire \$6 ;
   wire \$7 ;
-  wire \$8 ;
-  wire [5:0] \$9 ;
-  wire [1:0] \$auto$rtlil.cc:2739:Not$22 ;
-  wire [6:0] \$auto$rtlil.cc:2739:Not$24 ;
+  reg [15:0] \$8 ;
+  wire [15:0] \$9 ;
   input \bit ;
   wire \bit ;
+  input check;
+  wire check;
   input clk;
   wire clk;
-  reg crc16_match = 1'h0;
-  reg [15:0] crc16_reg = 16'h0000;
-  reg crc6_match = 1'h0;
-  reg [5:0] crc6_reg = 6'h00;
-  input [1:0] kind;
-  wire [1:0] kind;
-  output ok;
-  reg ok;
+  input \cover ;
+  wire \cover ;
+  input [75:0] crcs;
+  wire [75:0] crcs;
+  wire [37:0] \crcs[0] ;
+  wire \crcs[0].inverted ;
+  wire [15:0] \crcs[0].poly ;
+  wire [15:0] \crcs[0].start ;
+  wire [4:0] \crcs[0].width ;
+  wire [37:0] \crcs[1] ;
+  wire \crcs[1].inverted ;
+  wire [15:0] \crcs[1].poly ;
+  wire [15:0] \crcs[1].start ;
+  wire [4:0] \crcs[1].width ;
+  input first;
+  wire first;
+  input last;
+  wire last;
+  reg mismatch = 1'h0;
+  output [1:0] ok;
+  reg [1:0] ok = 2'h3;
   input receiver_clear;
   wire receiver_clear;
+  reg [15:0] \reg  = 16'h0000;
   input rst;
   wire rst;
-  input start;
-  wire start;
-  input valid;
-  wire valid;
-  assign \$1  = start ? 6'h00 : crc6_reg;
-  assign \$2  = start ? 6'h00 : crc6_reg;
-  assign \$3  = \$2 [5] ^ \bit ;
-  assign \$4  = \$3  ? 2'h3 : 2'h0;
-  assign \$5  = { \$1 [4:0], 1'h0 } ^ { 4'h0, \$4  };
-  assign \$6  = start ? 6'h00 : crc6_reg;
-  assign \$7  = \$6 [5] ^ \bit ;
-  assign \$9  = start ? 6'h00 : crc6_reg;
-  assign \$10  = \$9 [5] ^ \bit ;
-  assign \$12  = \$11  == 2'h2;
-  assign \$13  = crc6_reg[4:0] == 5'h01;
-  assign \$14  = \$10  ? \$12  : \$13 ;
-  assign \$15  = start ? 1'h0 : \$14 ;
-  assign \$16  = start ? 16'h0000 : crc16_reg;
-  assign \$17  = start ? 16'h0000 : crc16_reg;
-  assign \$18  = \$17 [15] ^ \bit ;
-  assign \$19  = \$18  ? 16'h90d9 : 16'h0000;
-  assign \$20  = { \$16 [14:0], 1'h0 } ^ \$19 ;
-  assign \$21  = start ? 16'h0000 : crc16_reg;
-  assign \$22  = \$21 [15] ^ \bit ;
-  assign \$24  = start ? 16'h0000 : crc16_reg;
-  assign \$25  = \$24 [15] ^ \bit ;
-  assign \$27  = \$26  == 16'he82e;
-  assign \$28  = crc16_reg[14:0] == 15'h7417;
-  assign \$29  = \$25  ? \$27  : \$28 ;
-  assign \$30  = start ? 1'h0 : \$29 ;
+  input word;
+  wire word;
   always @(posedge clk)
-    crc6_reg <= \$31 ;
+    mismatch <= \$49 ;
   always @(posedge clk)
-    crc6_match <= \$32 ;
+    ok <= \$50 ;
+  assign \$2  = first ? \$1  : \reg ;
+  assign \$4  = first ? \$3  : \reg ;
+  assign \$6  = { \$4 , 1'h0 } >> \$5 ;
+  assign \$7  = \$6  ^ \bit ;
+  assign \$9  = \$7  ? \$8  : 16'h0000;
+  assign \$10  = { \$2 [14:0], 1'h0 } ^ \$9 ;
+  assign \$12  = first ? \$11  : \reg ;
+  assign \$13  = \cover  | check;
+  assign \$14  = first ? 1'h0 : mismatch;
+  assign \$16  = first ? \$15  : \reg ;
+  assign \$18  = { \$16 , 1'h0 } >> \$17 ;
+  assign \$19  = \bit  ^ \$18 ;
+  assign \$21  = \$19  ^ \$20 ;
+  assign \$22  = check & \$21 ;
+  assign \$23  = \$14  | \$22 ;
+  assign \$24  = ! word;
+  assign \$25  = first ? 1'h0 : mismatch;
+  assign \$27  = first ? \$26  : \reg ;
+  assign \$29  = { \$27 , 1'h0 } >> \$28 ;
+  assign \$30  = \bit  ^ \$29 ;
+  assign \$32  = \$30  ^ \$31 ;
+  assign \$33  = check & \$32 ;
+  assign \$34  = \$25  | \$33 ;
+  assign \$35  = ~ \$34 ;
+  assign \$37  = first ? 1'h0 : mismatch;
+  assign \$39  = first ? \$38  : \reg ;
+  assign \$41  = { \$39 , 1'h0 } >> \$40 ;
+  assign \$42  = \bit  ^ \$41 ;
+  assign \$44  = \$42  ^ \$43 ;
+  assign \$45  = check & \$44 ;
+  assign \$46  = \$37  | \$45 ;
+  assign \$47  = ~ \$46 ;
   always @(posedge clk)
-    crc16_reg <= \$33 ;
-  always @(posedge clk)
-    crc16_match <= \$34 ;
-  assign \$auto$rtlil.cc:2739:Not$22  = ~ { crc6_reg[0], 1'h0 };
-  assign \$auto$rtlil.cc:2739:Not$24  = ~ { crc16_reg[14], crc16_reg[11], crc16_reg[6:5], crc16_reg[3:2], 1'h0 };
+    \reg  <= \$48 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
-    \$31  = crc6_reg;
-    if (valid) begin
-      \$31  = \$5 ;
-    end else if (start) begin
-      \$31  = 6'h00;
+    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    \$49  = mismatch;
+    if (\$13 ) begin
+      \$49  = \$23 ;
     end
     if (receiver_clear) begin
-      \$31  = 6'h00;
+      \$49  = 1'h0;
     end
     if (rst) begin
-      \$31  = 6'h00;
+      \$49  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
-    \$32  = crc6_match;
-    if (valid) begin
-      \$32  = \$15 ;
-    end else if (start) begin
-      \$32  = 1'h0;
+    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    \$50  = ok;
+    if (last) begin
+      if (\$24 ) begin
+        \$50 [0] = \$35 ;
+      end
+      if (\$36 ) begin
+        \$50 [1] = \$47 ;
+      end
     end
     if (receiver_clear) begin
-      \$32  = 1'h0;
+      \$50  = 2'h3;
     end
     if (rst) begin
-      \$32  = 1'h0;
+      \$50  = 2'h3;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
-    \$33  = crc16_reg;
-    if (valid) begin
-      \$33  = \$20 ;
-    end else if (start) begin
-      \$33  = 16'h0000;
-    end
-    if (receiver_clear) begin
-      \$33  = 16'h0000;
-    end
-    if (rst) begin
-      \$33  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
-    \$34  = crc16_match;
-    if (valid) begin
-      \$34  = \$30 ;
-    end else if (start) begin
-      \$34  = 1'h0;
-    end
-    if (receiver_clear) begin
-      \$34  = 1'h0;
-    end
-    if (rst) begin
-      \$34  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
-    ok = 1'h0;
-    casez (kind)
-      2'h0:
-          ok = 1'h1;
-      2'h1:
-          ok = crc6_match;
-      2'h2:
-          ok = crc16_match;
+    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    (* full_case = 32'd1 *)
+    casez (word)
+      1'h0:
+          \$1  = crcs[36:21];
+      1'h1:
+          \$1  = crcs[74:59];
     endcase
   end
-  assign \$8  = 1'h0;
-  assign \$11 [5:2] = crc6_reg[4:1];
-  assign \$11 [1:0] = \$auto$rtlil.cc:2739:Not$22 ;
-  assign \$23  = 1'h0;
-  assign { \$26 [14:13], \$26 [11:8], \$26 [5], \$26 [2:1] } = { crc16_reg[13:12], crc16_reg[10:7], crc16_reg[4], crc16_reg[1:0] };
-  assign { \$26 [15], \$26 [12], \$26 [7:6], \$26 [4:3], \$26 [0] } = \$auto$rtlil.cc:2739:Not$24 ;
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.decoder.crc1 (rst, start, valid, kind, \bit , receiver_clear, ok, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$59  = 0;
-  wire [5:0] \$1 ;
-  wire \$10 ;
-  wire [5:0] \$11 ;
-  wire \$12 ;
-  wire \$13 ;
-  wire \$14 ;
-  wire \$15 ;
-  wire [15:0] \$16 ;
-  wire [15:0] \$17 ;
-  wire \$18 ;
-  wire [15:0] \$19 ;
-  wire [5:0] \$2 ;
-  wire [15:0] \$20 ;
-  wire [15:0] \$21 ;
-  wire \$22 ;
-  wire \$23 ;
-  wire [15:0] \$24 ;
-  wire \$25 ;
-  wire [15:0] \$26 ;
-  wire \$27 ;
-  wire \$28 ;
-  wire \$29 ;
-  wire \$3 ;
-  wire \$30 ;
-  reg [5:0] \$31 ;
-  reg \$32 ;
-  reg [15:0] \$33 ;
-  reg \$34 ;
-  wire [1:0] \$4 ;
-  wire [5:0] \$5 ;
-  wire [5:0] \$6 ;
-  wire \$7 ;
-  wire \$8 ;
-  wire [5:0] \$9 ;
-  wire [1:0] \$auto$rtlil.cc:2739:Not$18 ;
-  wire [6:0] \$auto$rtlil.cc:2739:Not$20 ;
-  input \bit ;
-  wire \bit ;
-  input clk;
-  wire clk;
-  reg crc16_match = 1'h0;
-  reg [15:0] crc16_reg = 16'h0000;
-  reg crc6_match = 1'h0;
-  reg [5:0] crc6_reg = 6'h00;
-  input [1:0] kind;
-  wire [1:0] kind;
-  output ok;
-  reg ok;
-  input receiver_clear;
-  wire receiver_clear;
-  input rst;
-  wire rst;
-  input start;
-  wire start;
-  input valid;
-  wire valid;
-  assign \$1  = start ? 6'h00 : crc6_reg;
-  assign \$2  = start ? 6'h00 : crc6_reg;
-  assign \$3  = \$2 [5] ^ \bit ;
-  assign \$4  = \$3  ? 2'h3 : 2'h0;
-  assign \$5  = { \$1 [4:0], 1'h0 } ^ { 4'h0, \$4  };
-  assign \$6  = start ? 6'h00 : crc6_reg;
-  assign \$7  = \$6 [5] ^ \bit ;
-  assign \$9  = start ? 6'h00 : crc6_reg;
-  assign \$10  = \$9 [5] ^ \bit ;
-  assign \$12  = \$11  == 2'h2;
-  assign \$13  = crc6_reg[4:0] == 5'h01;
-  assign \$14  = \$10  ? \$12  : \$13 ;
-  assign \$15  = start ? 1'h0 : \$14 ;
-  assign \$16  = start ? 16'h0000 : crc16_reg;
-  assign \$17  = start ? 16'h0000 : crc16_reg;
-  assign \$18  = \$17 [15] ^ \bit ;
-  assign \$19  = \$18  ? 16'h90d9 : 16'h0000;
-  assign \$20  = { \$16 [14:0], 1'h0 } ^ \$19 ;
-  assign \$21  = start ? 16'h0000 : crc16_reg;
-  assign \$22  = \$21 [15] ^ \bit ;
-  assign \$24  = start ? 16'h0000 : crc16_reg;
-  assign \$25  = \$24 [15] ^ \bit ;
-  assign \$27  = \$26  == 16'he82e;
-  assign \$28  = crc16_reg[14:0] == 15'h7417;
-  assign \$29  = \$25  ? \$27  : \$28 ;
-  assign \$30  = start ? 1'h0 : \$29 ;
-  always @(posedge clk)
-    crc6_reg <= \$31 ;
-  always @(posedge clk)
-    crc6_match <= \$32 ;
-  always @(posedge clk)
-    crc16_reg <= \$33 ;
-  always @(posedge clk)
-    crc16_match <= \$34 ;
-  assign \$auto$rtlil.cc:2739:Not$18  = ~ { crc6_reg[0], 1'h0 };
-  assign \$auto$rtlil.cc:2739:Not$20  = ~ { crc16_reg[14], crc16_reg[11], crc16_reg[6:5], crc16_reg[3:2], 1'h0 };
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
-    \$31  = crc6_reg;
-    if (valid) begin
-      \$31  = \$5 ;
-    end else if (start) begin
-      \$31  = 6'h00;
-    end
-    if (receiver_clear) begin
-      \$31  = 6'h00;
-    end
-    if (rst) begin
-      \$31  = 6'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
-    \$32  = crc6_match;
-    if (valid) begin
-      \$32  = \$15 ;
-    end else if (start) begin
-      \$32  = 1'h0;
-    end
-    if (receiver_clear) begin
-      \$32  = 1'h0;
-    end
-    if (rst) begin
-      \$32  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
-    \$33  = crc16_reg;
-    if (valid) begin
-      \$33  = \$20 ;
-    end else if (start) begin
-      \$33  = 16'h0000;
-    end
-    if (receiver_clear) begin
-      \$33  = 16'h0000;
-    end
-    if (rst) begin
-      \$33  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
-    \$34  = crc16_match;
-    if (valid) begin
-      \$34  = \$30 ;
-    end else if (start) begin
-      \$34  = 1'h0;
-    end
-    if (receiver_clear) begin
-      \$34  = 1'h0;
-    end
-    if (rst) begin
-      \$34  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
-    ok = 1'h0;
-    casez (kind)
-      2'h0:
-          ok = 1'h1;
-      2'h1:
-          ok = crc6_match;
-      2'h2:
-          ok = crc16_match;
+    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    (* full_case = 32'd1 *)
+    casez (word)
+      1'h0:
+          \$3  = crcs[36:21];
+      1'h1:
+          \$3  = crcs[74:59];
     endcase
   end
-  assign \$8  = 1'h0;
-  assign \$11 [5:2] = crc6_reg[4:1];
-  assign \$11 [1:0] = \$auto$rtlil.cc:2739:Not$18 ;
-  assign \$23  = 1'h0;
-  assign { \$26 [14:13], \$26 [11:8], \$26 [5], \$26 [2:1] } = { crc16_reg[13:12], crc16_reg[10:7], crc16_reg[4], crc16_reg[1:0] };
-  assign { \$26 [15], \$26 [12], \$26 [7:6], \$26 [4:3], \$26 [0] } = \$auto$rtlil.cc:2739:Not$20 ;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    (* full_case = 32'd1 *)
+    casez (word)
+      1'h0:
+          \$5  = crcs[4:0];
+      1'h1:
+          \$5  = crcs[42:38];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    (* full_case = 32'd1 *)
+    casez (word)
+      1'h0:
+          \$8  = crcs[20:5];
+      1'h1:
+          \$8  = crcs[58:43];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    (* full_case = 32'd1 *)
+    casez (word)
+      1'h0:
+          \$11  = crcs[36:21];
+      1'h1:
+          \$11  = crcs[74:59];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    (* full_case = 32'd1 *)
+    casez (word)
+      1'h0:
+          \$15  = crcs[36:21];
+      1'h1:
+          \$15  = crcs[74:59];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    (* full_case = 32'd1 *)
+    casez (word)
+      1'h0:
+          \$17  = crcs[4:0];
+      1'h1:
+          \$17  = crcs[42:38];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    (* full_case = 32'd1 *)
+    casez (word)
+      1'h0:
+          \$20  = crcs[37];
+      1'h1:
+          \$20  = crcs[75];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    (* full_case = 32'd1 *)
+    casez (word)
+      1'h0:
+          \$26  = crcs[36:21];
+      1'h1:
+          \$26  = crcs[74:59];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    (* full_case = 32'd1 *)
+    casez (word)
+      1'h0:
+          \$28  = crcs[4:0];
+      1'h1:
+          \$28  = crcs[42:38];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    (* full_case = 32'd1 *)
+    casez (word)
+      1'h0:
+          \$31  = crcs[37];
+      1'h1:
+          \$31  = crcs[75];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    (* full_case = 32'd1 *)
+    casez (word)
+      1'h0:
+          \$38  = crcs[36:21];
+      1'h1:
+          \$38  = crcs[74:59];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    (* full_case = 32'd1 *)
+    casez (word)
+      1'h0:
+          \$40  = crcs[4:0];
+      1'h1:
+          \$40  = crcs[42:38];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    (* full_case = 32'd1 *)
+    casez (word)
+      1'h0:
+          \$43  = crcs[37];
+      1'h1:
+          \$43  = crcs[75];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    \$48  = \reg ;
+    if (\cover ) begin
+      \$48  = \$10 ;
+    end else if (check) begin
+      \$48  = { \$12 [14:0], 1'h0 };
+    end
+    if (receiver_clear) begin
+      \$48  = 16'h0000;
+    end
+    if (rst) begin
+      \$48  = 16'h0000;
+    end
+  end
+  assign \crcs[0]  = crcs[37:0];
+  assign \crcs[0].width  = crcs[4:0];
+  assign \crcs[0].poly  = crcs[20:5];
+  assign \crcs[0].start  = crcs[36:21];
+  assign \crcs[0].inverted  = crcs[37];
+  assign \crcs[1]  = crcs[75:38];
+  assign \crcs[1].width  = crcs[42:38];
+  assign \crcs[1].poly  = crcs[58:43];
+  assign \crcs[1].start  = crcs[74:59];
+  assign \crcs[1].inverted  = crcs[75];
+  assign \$36  = word;
 endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.delay_check (rst, enable, rearm, check, clean, \tolerance$8 , learn, delay, jump, spread, settled_delay, settled, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$60  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$43  = 0;
   wire [13:0] \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -13013,56 +13319,56 @@ module \biss_master_axil.ch0.core.delay_check (rst, enable, rearm, check, clean,
   assign \$39  = magnitude > spread;
   assign \$40  = \$38  & \$39 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     \$46  = \$1 ;
     if (rst) begin
       \$46  = 14'h0000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     \$47  = \$2 ;
     if (rst) begin
       \$47  = 14'h0000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     \$48  = \tolerance$8 ;
     if (rst) begin
       \$48  = 17'h00000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     \$49  = \$3 ;
     if (rst) begin
       \$49  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     \$50  = \$11 ;
     if (rst) begin
       \$50  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     \$51  = \$20 ;
     if (rst) begin
       \$51  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     \$52  = \$25 ;
     if (rst) begin
       \$52  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     \$53  = 1'h0;
     if (learn) begin
       if (\$32 ) begin
@@ -13079,7 +13385,7 @@ module \biss_master_axil.ch0.core.delay_check (rst, enable, rearm, check, clean,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     \$54  = jump;
     if (check) begin
       \$54  = \$26 ;
@@ -13092,7 +13398,7 @@ module \biss_master_axil.ch0.core.delay_check (rst, enable, rearm, check, clean,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     \$55  = count;
     if (learn) begin
       (* full_case = 32'd1 *)
@@ -13114,7 +13420,7 @@ module \biss_master_axil.ch0.core.delay_check (rst, enable, rearm, check, clean,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     \$56  = spread;
     if (learn) begin
       if (\$32 ) begin
@@ -13134,7 +13440,7 @@ module \biss_master_axil.ch0.core.delay_check (rst, enable, rearm, check, clean,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     \$57  = cand;
     if (learn) begin
       if (\$32 ) begin
@@ -13147,7 +13453,7 @@ module \biss_master_axil.ch0.core.delay_check (rst, enable, rearm, check, clean,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     \$58  = settled_delay;
     if (learn) begin
       if (\$32 ) begin
@@ -13164,7 +13470,7 @@ module \biss_master_axil.ch0.core.delay_check (rst, enable, rearm, check, clean,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     \$59  = settled;
     if (learn) begin
       if (\$32 ) begin
@@ -13184,7 +13490,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.line_noise (rst, sampler_noise, noisy, events, limit, watch, restart, level, close, \event , clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$61  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$44  = 0;
   wire \$1 ;
   reg \$10 ;
   reg \$11 ;
@@ -13247,21 +13553,21 @@ module \biss_master_axil.ch0.core.line_noise (rst, sampler_noise, noisy, events,
   always @(posedge clk)
     running <= \$14 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
     \$10  = level;
     if (rst) begin
       \$10  = 1'h1;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
     \$11  = \$4 ;
     if (rst) begin
       \$11  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
     \$12  = held_noisy;
     if (close) begin
       \$12  = \$7 ;
@@ -13271,7 +13577,7 @@ module \biss_master_axil.ch0.core.line_noise (rst, sampler_noise, noisy, events,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
     \$13  = held_events;
     if (close) begin
       \$13  = running;
@@ -13281,7 +13587,7 @@ module \biss_master_axil.ch0.core.line_noise (rst, sampler_noise, noisy, events,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
     \$14  = running;
     if (close) begin
       \$14  = { 3'h0, \event  };
@@ -13298,7 +13604,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, hold, first_rise, second_rise, ma, rises, busy, held, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$62  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$45  = 0;
   wire [16:0] \$1 ;
   wire \$10 ;
   wire [16:0] \$11 ;
@@ -13423,7 +13729,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
   always @(posedge clk)
     released <= \$42 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
     \$34  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -13438,7 +13744,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
     \$35  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -13453,7 +13759,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
     \$36  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -13468,7 +13774,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
     \$37  = ma;
     casez (ma_fsm_state)
       3'h0:
@@ -13497,7 +13803,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
     \$38  = phase_left;
     casez (ma_fsm_state)
       3'h0:
@@ -13539,7 +13845,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
     \$39  = last_clock;
     casez (ma_fsm_state)
       3'h0:
@@ -13581,7 +13887,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
     \$40  = rises;
     casez (ma_fsm_state)
       3'h0:
@@ -13600,7 +13906,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
     \$41  = ma_fsm_state;
     casez (ma_fsm_state)
       3'h0:
@@ -13636,7 +13942,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
     \$42  = released;
     casez (ma_fsm_state)
       3'h0:
@@ -13660,7 +13966,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
     busy = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -13676,7 +13982,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
     held = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -13692,22 +13998,24 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.ma_stop (rst, words, w1_enable, clear, rises, enough, \started$10 , start_slot, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$63  = 0;
+module \biss_master_axil.ch0.core.ma_stop (rst, words, w1_enable, crcs, clear, rises, enough, \started$11 , start_slot, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$46  = 0;
   reg [7:0] \$1 ;
-  reg [7:0] \$10 ;
-  wire [8:0] \$11 ;
-  reg [7:0] \$12 ;
-  reg [8:0] \$13 ;
-  reg [16:0] \$14 ;
-  reg \$15 ;
-  reg \$16 ;
-  reg [7:0] \$17 ;
+  wire \$10 ;
+  reg [7:0] \$11 ;
+  wire [8:0] \$12 ;
+  wire [8:0] \$13 ;
+  reg [7:0] \$14 ;
+  reg [8:0] \$15 ;
+  reg [16:0] \$16 ;
+  reg \$17 ;
+  reg \$18 ;
+  reg [7:0] \$19 ;
   wire [8:0] \$2 ;
-  wire [7:0] \$3 ;
-  wire [8:0] \$4 ;
-  wire [16:0] \$5 ;
-  wire \$6 ;
+  wire [8:0] \$3 ;
+  wire [7:0] \$4 ;
+  wire [8:0] \$5 ;
+  wire [16:0] \$6 ;
   wire \$7 ;
   wire \$8 ;
   wire \$9 ;
@@ -13715,6 +14023,18 @@ module \biss_master_axil.ch0.core.ma_stop (rst, words, w1_enable, clear, rises, 
   wire clear;
   input clk;
   wire clk;
+  input [75:0] crcs;
+  wire [75:0] crcs;
+  wire [37:0] \crcs[0] ;
+  wire \crcs[0].inverted ;
+  wire [15:0] \crcs[0].poly ;
+  wire [15:0] \crcs[0].start ;
+  wire [4:0] \crcs[0].width ;
+  wire [37:0] \crcs[1] ;
+  wire \crcs[1].inverted ;
+  wire [15:0] \crcs[1].poly ;
+  wire [15:0] \crcs[1].start ;
+  wire [4:0] \crcs[1].width ;
   output enough;
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
@@ -13725,8 +14045,8 @@ module \biss_master_axil.ch0.core.ma_stop (rst, words, w1_enable, clear, rises, 
   input [15:0] start_slot;
   wire [15:0] start_slot;
   reg started = 1'h0;
-  input \started$10 ;
-  wire \started$10 ;
+  input \started$11 ;
+  wire \started$11 ;
   reg [16:0] target_rises = 17'h00000;
   input w1_enable;
   wire w1_enable;
@@ -13739,6 +14059,7 @@ module \biss_master_axil.ch0.core.ma_stop (rst, words, w1_enable, clear, rises, 
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \words[0].crc ;
   wire [5:0] \words[0].data_bits ;
   wire \words[0].lc ;
@@ -13748,147 +14069,102 @@ module \biss_master_axil.ch0.core.ma_stop (rst, words, w1_enable, clear, rises, 
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \words[1].crc ;
   wire [5:0] \words[1].data_bits ;
   wire \words[1].lc ;
   wire \words[1].nenw ;
-  assign \$2  = words[5:0] + \$1 ;
-  assign \$3  = w1_enable ? word1_len : 8'h00;
-  assign \$4  = word0_len + \$3 ;
-  assign \$5  = start_slot + frame_len;
-  assign \$6  = rises >= target_rises;
-  assign \$7  = started & \$6 ;
-  assign \$8  = ~ clear;
-  assign \$9  = \$7  & \$8 ;
-  assign \$11  = words[15:10] + \$10 ;
+  assign \$2  = \$1  + crcs[4:0];
+  assign \$3  = words[5:0] + \$2 [7:0];
+  assign \$4  = w1_enable ? word1_len : 8'h00;
+  assign \$5  = word0_len + \$4 ;
+  assign \$6  = start_slot + frame_len;
+  assign \$7  = rises >= target_rises;
+  assign \$8  = started & \$7 ;
+  assign \$9  = ~ clear;
+  assign \$10  = \$8  & \$9 ;
+  assign \$12  = \$11  + crcs[42:38];
+  assign \$13  = words[15:10] + \$12 [7:0];
   always @(posedge clk)
-    word0_len <= \$12 ;
+    word0_len <= \$14 ;
   always @(posedge clk)
-    frame_len <= \$13 ;
+    frame_len <= \$15 ;
   always @(posedge clk)
-    target_rises <= \$14 ;
+    target_rises <= \$16 ;
   always @(posedge clk)
-    started <= \$15 ;
+    started <= \$17 ;
   always @(posedge clk)
-    enough <= \$16 ;
+    enough <= \$18 ;
   always @(posedge clk)
-    word1_len <= \$17 ;
+    word1_len <= \$19 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     (* full_case = 32'd1 *)
-    casez (words[9:6])
-      4'h0:
+    casez (words[7:6])
+      2'h0:
           \$1  = 8'h04;
-      4'h1:
+      2'h1:
           \$1  = 8'h06;
-      4'h2:
+      2'h2:
           \$1  = 8'h0a;
-      4'h3:
-          \$1  = 8'h0c;
-      4'h4:
-          \$1  = 8'h0a;
-      4'h5:
-          \$1  = 8'h0c;
-      4'h6:
-          \$1  = 8'h10;
-      4'h7:
-          \$1  = 8'h12;
-      4'h8:
-          \$1  = 8'h14;
-      4'h9:
-          \$1  = 8'h16;
-      4'ha:
-          \$1  = 8'h1a;
-      4'hb:
-          \$1  = 8'h1c;
-      4'hc:
-          \$1  = 8'h04;
-      4'hd:
-          \$1  = 8'h06;
-      4'he:
-          \$1  = 8'h0a;
-      4'hf:
+      2'h3:
           \$1  = 8'h0c;
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     (* full_case = 32'd1 *)
-    casez (words[19:16])
-      4'h0:
-          \$10  = 8'h00;
-      4'h1:
-          \$10  = 8'h02;
-      4'h2:
-          \$10  = 8'h06;
-      4'h3:
-          \$10  = 8'h08;
-      4'h4:
-          \$10  = 8'h06;
-      4'h5:
-          \$10  = 8'h08;
-      4'h6:
-          \$10  = 8'h0c;
-      4'h7:
-          \$10  = 8'h0e;
-      4'h8:
-          \$10  = 8'h10;
-      4'h9:
-          \$10  = 8'h12;
-      4'ha:
-          \$10  = 8'h16;
-      4'hb:
-          \$10  = 8'h18;
-      4'hc:
-          \$10  = 8'h00;
-      4'hd:
-          \$10  = 8'h02;
-      4'he:
-          \$10  = 8'h06;
-      4'hf:
-          \$10  = 8'h08;
+    casez (words[17:16])
+      2'h0:
+          \$11  = 8'h00;
+      2'h1:
+          \$11  = 8'h02;
+      2'h2:
+          \$11  = 8'h06;
+      2'h3:
+          \$11  = 8'h08;
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
-    \$12  = \$2 [7:0];
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    \$14  = \$3 [7:0];
     if (rst) begin
-      \$12  = 8'h00;
+      \$14  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
-    \$13  = \$4 ;
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    \$15  = \$5 ;
     if (rst) begin
-      \$13  = 9'h000;
+      \$15  = 9'h000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
-    \$14  = \$5 ;
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    \$16  = \$6 ;
     if (rst) begin
-      \$14  = 17'h00000;
+      \$16  = 17'h00000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
-    \$15  = \started$10 ;
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    \$17  = \started$11 ;
     if (rst) begin
-      \$15  = 1'h0;
+      \$17  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
-    \$16  = \$9 ;
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    \$18  = \$10 ;
     if (rst) begin
-      \$16  = 1'h0;
+      \$18  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
-    \$17  = \$11 [7:0];
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    \$19  = \$13 [7:0];
     if (rst) begin
-      \$17  = 8'h00;
+      \$19  = 8'h00;
     end
   end
   assign \words[0]  = words[9:0];
@@ -13901,6 +14177,16 @@ module \biss_master_axil.ch0.core.ma_stop (rst, words, w1_enable, clear, rises, 
   assign \words[1].nenw  = words[16];
   assign \words[1].lc  = words[17];
   assign \words[1].crc  = words[19:18];
+  assign \crcs[0]  = crcs[37:0];
+  assign \crcs[0].width  = crcs[4:0];
+  assign \crcs[0].poly  = crcs[20:5];
+  assign \crcs[0].start  = crcs[36:21];
+  assign \crcs[0].inverted  = crcs[37];
+  assign \crcs[1]  = crcs[75:38];
+  assign \crcs[1].width  = crcs[42:38];
+  assign \crcs[1].poly  = crcs[58:43];
+  assign \crcs[1].start  = crcs[74:59];
+  assign \crcs[1].inverted  = crcs[75];
 endmodule
 
 (* generator = "Amaranth" *)
@@ -14197,7 +14483,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.register_access.buffers (clk, rst, host_read__en, byte_to_send, rbuf_data, wbuf, index, store, byte_received, host_read__addr);
-  reg \$auto$verilog_backend.cc:2355:dump_module$64  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$47  = 0;
   wire \$1 ;
   wire \$2 ;
   wire \$3 ;
@@ -14314,21 +14600,21 @@ module \biss_master_axil.ch0.core.register_access.buffers (clk, rst, host_read__
   assign \$1  = ! index[1:0];
   assign \$2  = index[1:0] == 1'h1;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     byte_received__addr = 4'h0;
     if (store) begin
       byte_received__addr = index[5:2];
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     byte_received__data = 32'd0;
     if (store) begin
       byte_received__data = { byte_received, byte_received, byte_received, byte_received };
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     byte_received__en = 4'h0;
     if (store) begin
       byte_received__en = { \$4 , \$3 , \$2 , \$1  };
@@ -14348,7 +14634,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.register_access.checker (rst, crc_ok, echo_ok, cds, control__take_data, start, control__take_crc, sent, \byte , clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$65  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$48  = 0;
   reg [7:0] \$1 ;
   reg [2:0] \$2 ;
   output [7:0] \byte ;
@@ -14391,7 +14677,7 @@ module \biss_master_axil.ch0.core.register_access.checker (rst, crc_ok, echo_ok,
     .valid(control__take_data)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     \$1  = \byte ;
     if (control__take_data) begin
       \$1  = { \byte [6:0], cds };
@@ -14401,7 +14687,7 @@ module \biss_master_axil.ch0.core.register_access.checker (rst, crc_ok, echo_ok,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     \$2  = got_crc;
     if (control__take_crc) begin
       \$2  = { got_crc[1:0], cds };
@@ -14417,7 +14703,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.register_access.checker.rx_crc (rst, crc, data_in, valid, start, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$66  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$49  = 0;
   wire [3:0] \$1 ;
   wire \$10 ;
   wire [3:0] \$11 ;
@@ -14431,7 +14717,7 @@ module \biss_master_axil.ch0.core.register_access.checker.rx_crc (rst, crc, data
   wire \$7 ;
   wire \$8 ;
   wire [3:0] \$9 ;
-  wire [3:0] \$auto$rtlil.cc:2739:Not$14 ;
+  wire [3:0] \$auto$rtlil.cc:2739:Not$6 ;
   input clk;
   wire clk;
   output [3:0] crc;
@@ -14458,9 +14744,9 @@ module \biss_master_axil.ch0.core.register_access.checker.rx_crc (rst, crc, data
   assign \$11  = start ? 4'h0 : crc_reg;
   always @(posedge clk)
     crc_reg <= \$13 ;
-  assign \$auto$rtlil.cc:2739:Not$14  = ~ crc_reg;
+  assign \$auto$rtlil.cc:2739:Not$6  = ~ crc_reg;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$13  = crc_reg;
     if (valid) begin
       \$13 [0] = \$3 ;
@@ -14475,7 +14761,7 @@ module \biss_master_axil.ch0.core.register_access.checker.rx_crc (rst, crc, data
     end
   end
   assign data = data_in;
-  assign crc = \$auto$rtlil.cc:2739:Not$14 ;
+  assign crc = \$auto$rtlil.cc:2739:Not$6 ;
   assign \$2  = \$1 [3];
   assign \$5  = \$4 [0];
   assign \$10  = \$9 [1];
@@ -14484,7 +14770,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.register_access.idle (rst, frame_end, frame_ok, run_enough, seen_enough, frame_cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$67  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$50  = 0;
   wire \$1 ;
   wire [4:0] \$10 ;
   wire \$11 ;
@@ -14554,7 +14840,7 @@ module \biss_master_axil.ch0.core.register_access.idle (rst, frame_end, frame_ok
   always @(posedge clk)
     idle_seen <= \$24 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$23  = idle_run;
     if (frame_end) begin
       \$23  = \$4 [3:0];
@@ -14564,7 +14850,7 @@ module \biss_master_axil.ch0.core.register_access.idle (rst, frame_end, frame_ok
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$24  = idle_seen;
     if (frame_end) begin
       \$24  = \$10 [3:0];
@@ -14577,7 +14863,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.register_access.sender (rst, \byte , request, control__load_header, control__source, control__crc_bit, control__shift_header, start, valid, control__load_byte, control__shift_byte, sent, cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$68  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
   wire \$1 ;
   wire [18:0] \$2 ;
   wire [8:0] \$3 ;
@@ -14649,7 +14935,7 @@ module \biss_master_axil.ch0.core.register_access.sender (rst, \byte , request, 
     .valid(valid)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$6  = header;
     if (control__load_header) begin
       \$6  = { 2'h3, request[2:0], request[9:3], 4'h0, \$1 , request[17] };
@@ -14662,7 +14948,7 @@ module \biss_master_axil.ch0.core.register_access.sender (rst, \byte , request, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$7  = to_send;
     if (control__load_byte) begin
       \$7  = \byte ;
@@ -14675,7 +14961,7 @@ module \biss_master_axil.ch0.core.register_access.sender (rst, \byte , request, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$8  = sent;
     if (control__load_byte) begin
       \$8  = \byte ;
@@ -14685,7 +14971,7 @@ module \biss_master_axil.ch0.core.register_access.sender (rst, \byte , request, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     cdm = 1'h0;
     casez (control__source)
       3'h1:
@@ -14710,7 +14996,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.register_access.sender.tx_crc (rst, data_in, crc, start, valid, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$69  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$52  = 0;
   wire [3:0] \$1 ;
   wire \$10 ;
   wire [3:0] \$11 ;
@@ -14724,7 +15010,7 @@ module \biss_master_axil.ch0.core.register_access.sender.tx_crc (rst, data_in, c
   wire \$7 ;
   wire \$8 ;
   wire [3:0] \$9 ;
-  wire [3:0] \$auto$rtlil.cc:2739:Not$16 ;
+  wire [3:0] \$auto$rtlil.cc:2739:Not$8 ;
   input clk;
   wire clk;
   output [3:0] crc;
@@ -14751,9 +15037,9 @@ module \biss_master_axil.ch0.core.register_access.sender.tx_crc (rst, data_in, c
   assign \$11  = start ? 4'h0 : crc_reg;
   always @(posedge clk)
     crc_reg <= \$13 ;
-  assign \$auto$rtlil.cc:2739:Not$16  = ~ crc_reg;
+  assign \$auto$rtlil.cc:2739:Not$8  = ~ crc_reg;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
     \$13  = crc_reg;
     if (valid) begin
       \$13 [0] = \$3 ;
@@ -14768,7 +15054,7 @@ module \biss_master_axil.ch0.core.register_access.sender.tx_crc (rst, data_in, c
     end
   end
   assign data = data_in;
-  assign crc = \$auto$rtlil.cc:2739:Not$16 ;
+  assign crc = \$auto$rtlil.cc:2739:Not$8 ;
   assign \$2  = \$1 [3];
   assign \$5  = \$4 [0];
   assign \$10  = \$9 [1];
@@ -14778,7 +15064,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, frame_ok, busy, crc_ok, echo_ok, run_enough, seen_enough, start, abort, request, frame_cdm, frame_cds, done, result, index, send__load_header, send__source, send__crc_bit, send__shift_header, send__crc_start
 , send__crc_valid, send__load_byte, send__shift_byte, check__take_data, check__first, check__take_crc, store, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$70  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$53  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$100 ;
@@ -15134,7 +15420,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
   always @(posedge clk)
     waited <= \$125 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$118  = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -15172,7 +15458,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$119  = result;
     casez (access_fsm_state)
       3'h0:
@@ -15226,7 +15512,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$120  = access_fsm_state;
     casez (access_fsm_state)
       3'h0:
@@ -15323,7 +15609,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$121  = req;
     casez (access_fsm_state)
       3'h0:
@@ -15340,7 +15626,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$122  = index;
     casez (access_fsm_state)
       3'h0:
@@ -15379,7 +15665,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$123  = step;
     casez (access_fsm_state)
       3'h0:
@@ -15437,7 +15723,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$124  = ending;
     casez (access_fsm_state)
       3'h0:
@@ -15504,7 +15790,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$125  = waited;
     casez (access_fsm_state)
       3'h0:
@@ -15536,7 +15822,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     send__load_header = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -15550,7 +15836,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     send__source = 3'h0;
     casez (access_fsm_state)
       3'h0:
@@ -15577,7 +15863,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     send__crc_bit = 2'h0;
     casez (access_fsm_state)
       3'h0:
@@ -15597,7 +15883,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     send__shift_header = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -15616,7 +15902,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     send__crc_start = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -15645,7 +15931,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     send__crc_valid = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -15666,7 +15952,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     send__load_byte = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -15688,7 +15974,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     send__shift_byte = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -15709,7 +15995,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     check__take_data = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -15731,7 +16017,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     check__first = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -15753,7 +16039,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     check__take_crc = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -15777,7 +16063,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     store = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -15816,7 +16102,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.results (rst, report_delay, report, valid, frame, report_frame, done, valid_out, result, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$71  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$54  = 0;
   reg \$1 ;
   reg \$2 ;
   reg [186:0] \$3 ;
@@ -15925,21 +16211,21 @@ module \biss_master_axil.ch0.core.results (rst, report_delay, report, valid, fra
   always @(posedge clk)
     result <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$1  = report;
     if (rst) begin
       \$1  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$2  = valid;
     if (rst) begin
       \$2  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$3  = result;
     if (report) begin
       \$3 [3:0] = frame[3:0];
@@ -16016,7 +16302,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , noise, half_period, receiver_clear, arm, early, locked, delay, sample, level, slo);
-  reg \$auto$verilog_backend.cc:2355:dump_module$72  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$55  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$100 ;
@@ -16348,7 +16634,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     .stage1(level)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$104  = level;
     if (receiver_clear) begin
       \$104  = 1'h1;
@@ -16358,7 +16644,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$105  = mid_delay;
     if (odd) begin
       \$105  = \$8 [12:0];
@@ -16383,7 +16669,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$106  = mid_slot;
     (* full_case = 32'd1 *)
     if (odd) begin
@@ -16410,7 +16696,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$107  = \$10 ;
     casez (sampler_fsm_state)
       2'h0:
@@ -16432,7 +16718,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$108  = last;
     if (\$12 ) begin
       \$108  = \$17 ;
@@ -16453,7 +16739,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$109  = tail_odd;
     if (\$12 ) begin
       \$109  = \$23 ;
@@ -16474,7 +16760,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$110  = elapsed;
     casez (sampler_fsm_state)
       2'h0:
@@ -16498,7 +16784,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$111  = early;
     casez (sampler_fsm_state)
       2'h0:
@@ -16514,7 +16800,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$112  = locked;
     casez (sampler_fsm_state)
       2'h0:
@@ -16540,7 +16826,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$113  = gap;
     casez (sampler_fsm_state)
       2'h0:
@@ -16571,7 +16857,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$114  = sampler_fsm_state;
     casez (sampler_fsm_state)
       2'h0:
@@ -16602,7 +16888,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$115  = slot_left;
     casez (sampler_fsm_state)
       2'h0:
@@ -16652,7 +16938,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$116  = slot_zero;
     casez (sampler_fsm_state)
       2'h0:
@@ -16702,7 +16988,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$117  = vote1;
     casez (sampler_fsm_state)
       2'h0:
@@ -16732,7 +17018,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$118  = vote2;
     casez (sampler_fsm_state)
       2'h0:
@@ -16760,7 +17046,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$119  = first_slot;
     casez (sampler_fsm_state)
       2'h0:
@@ -16786,7 +17072,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$120  = delay;
     casez (sampler_fsm_state)
       2'h0:
@@ -16809,7 +17095,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$121  = phase;
     casez (sampler_fsm_state)
       2'h0:
@@ -16849,7 +17135,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     sample = \$57 ;
     casez (sampler_fsm_state)
       2'h0:
@@ -16867,7 +17153,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     dropped = 1'h0;
     casez (sampler_fsm_state)
       2'h0:
@@ -16888,7 +17174,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     decided = 1'h0;
     casez (sampler_fsm_state)
       2'h0:
@@ -16938,7 +17224,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.scheduler (rst, trigger, periodic, request, overrun, start, period, abort, idle, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$73  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$56  = 0;
   wire \$1 ;
   wire [25:0] \$10 ;
   wire \$11 ;
@@ -17032,14 +17318,14 @@ module \biss_master_axil.ch0.core.scheduler (rst, trigger, periodic, request, ov
   always @(posedge clk)
     wrap <= \$31 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
     \$28  = \$1 ;
     if (rst) begin
       \$28  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$29  = 25'h0000002;
@@ -17053,7 +17339,7 @@ module \biss_master_axil.ch0.core.scheduler (rst, trigger, periodic, request, ov
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$30  = 1'h1;
@@ -17067,7 +17353,7 @@ module \biss_master_axil.ch0.core.scheduler (rst, trigger, periodic, request, ov
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$31  = \$8 ;
@@ -17083,8 +17369,8 @@ module \biss_master_axil.ch0.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$4381$0 , resync, lc, is_zero, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$74  = 0;
+module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$4305$0 , resync, lc, is_zero, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$57  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
   wire \$11 ;
@@ -17125,8 +17411,8 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$4381$0 ;
-  wire \port$4381$0 ;
+  input \port$4305$0 ;
+  wire \port$4305$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -17140,9 +17426,9 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$4381$0  };
-  assign \$2  = { lc[4:0], \port$4381$0  } == last;
-  assign \$3  = { lc[4:0], \port$4381$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$4305$0  };
+  assign \$2  = { lc[4:0], \port$4305$0  } == last;
+  assign \$3  = { lc[4:0], \port$4305$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -17176,7 +17462,7 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   always @(posedge clk)
     synced <= \$25 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$18  = is_zero;
     if (load) begin
       \$18  = \$1 ;
@@ -17186,7 +17472,7 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$19  = is_last;
     if (load) begin
       \$19  = \$2 ;
@@ -17196,7 +17482,7 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$20  = is_expected;
     if (load) begin
       \$20  = \$3 ;
@@ -17206,21 +17492,21 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$21  = \$7 ;
     if (rst) begin
       \$21  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$22  = lc;
     if (rst) begin
       \$22  = 6'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$23  = last;
     if (store) begin
       \$23  = store_lc;
@@ -17230,7 +17516,7 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$24  = expected;
     if (store) begin
       \$24  = \$10 [5:0];
@@ -17240,7 +17526,7 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$25  = synced;
     if (store) begin
       \$25  = 1'h1;
@@ -17252,13 +17538,13 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$4381$0  };
+  assign lc_next = { lc[4:0], \port$4305$0  };
   assign zero = is_zero;
 endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.spw_check (rst, bits, \tolerance$8 , spw, cpw_top, match, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$75  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$58  = 0;
   wire [40:0] \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -17463,28 +17749,28 @@ module \biss_master_axil.ch0.core.spw_check (rst, bits, \tolerance$8 , spw, cpw_
   assign \$7  = bits > 3'h5;
   assign \$8  = bits > 3'h6;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     \$88  = \$42 ;
     if (rst) begin
       \$88  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     \$89  = \$84 ;
     if (rst) begin
       \$89  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     \$90  = \tolerance$8 ;
     if (rst) begin
       \$90  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     \$91  = \$87 ;
     if (rst) begin
       \$91  = 1'h0;
@@ -17494,7 +17780,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.time_base (rst, first_rise, first_rise_time, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$76  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$59  = 0;
   wire [32:0] \$1 ;
   reg [31:0] \$2 ;
   reg [31:0] \$3 ;
@@ -17513,14 +17799,14 @@ module \biss_master_axil.ch0.core.time_base (rst, first_rise, first_rise_time, c
   always @(posedge clk)
     first_rise_time <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     \$2  = \$1 [31:0];
     if (rst) begin
       \$2  = 32'd0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     \$3  = first_rise_time;
     if (first_rise) begin
       \$3  = now;
@@ -17534,7 +17820,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.timers (rst, restart, ma_busy, break_time, timeout_live, quiet_time_live, ack_limit, timeout_limit, delay_limit, quiet_limit, no_start_limit, clear, in_clock, slo_stuck, slo_stuck_live, quiet, quiet_live, break_over, ack_expired, no_start_expired, delay_over
 , delay, slo, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$77  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$60  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -17714,7 +18000,7 @@ module \biss_master_axil.ch0.core.timers (rst, restart, ma_busy, break_time, tim
   assign \$40  = in_clock & \$39 ;
   assign \$41  = timer >= ack_limit;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
     \$48  = slo_low_time_p1;
     if (\$2 ) begin
       \$48  = 25'h0000001;
@@ -17726,21 +18012,21 @@ module \biss_master_axil.ch0.core.timers (rst, restart, ma_busy, break_time, tim
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
     \$49  = \$9 ;
     if (rst) begin
       \$49  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
     \$50  = \$17 ;
     if (rst) begin
       \$50  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
     \$51  = high_p2;
     if (\$18 ) begin
       \$51  = 13'h0002;
@@ -17752,28 +18038,28 @@ module \biss_master_axil.ch0.core.timers (rst, restart, ma_busy, break_time, tim
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
     \$52  = \$23 ;
     if (rst) begin
       \$52  = 1'h1;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
     \$53  = \$30 ;
     if (rst) begin
       \$53  = 1'h1;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
     \$54  = \$34 [24:0];
     if (rst) begin
       \$54  = 25'h0000001;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
     (* full_case = 32'd1 *)
     if (clear) begin
       \$55  = 1'h0;
@@ -17785,21 +18071,21 @@ module \biss_master_axil.ch0.core.timers (rst, restart, ma_busy, break_time, tim
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
     \$56  = \$42 ;
     if (rst) begin
       \$56  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
     \$57  = \$46 ;
     if (rst) begin
       \$57  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
     \$58  = \$47 ;
     if (rst) begin
       \$58  = 1'h0;
@@ -17808,9 +18094,9 @@ module \biss_master_axil.ch0.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$1803$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
+module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$1765$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
 , delay_jump, lc_repeat_seen);
-  reg \$auto$verilog_backend.cc:2355:dump_module$78  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$61  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -17850,8 +18136,8 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$1803$0 , l
   wire \$7 ;
   wire \$8 ;
   wire \$9 ;
-  input [174:0] cfg;
-  wire [174:0] cfg;
+  input [250:0] cfg;
+  wire [250:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
   wire [11:0] \cfg.delay_limit ;
@@ -17869,19 +18155,31 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$1803$0 , l
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \cfg.w0.crc ;
   wire [5:0] \cfg.w0.data_bits ;
   wire \cfg.w0.lc ;
   wire \cfg.w0.nenw ;
+  wire [37:0] \cfg.w0_crc ;
+  wire \cfg.w0_crc.inverted ;
+  wire [15:0] \cfg.w0_crc.poly ;
+  wire [15:0] \cfg.w0_crc.start ;
+  wire [4:0] \cfg.w0_crc.width ;
   wire [9:0] \cfg.w1 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \cfg.w1.crc ;
   wire [5:0] \cfg.w1.data_bits ;
   wire \cfg.w1.lc ;
   wire \cfg.w1.nenw ;
+  wire [37:0] \cfg.w1_crc ;
+  wire \cfg.w1_crc.inverted ;
+  wire [15:0] \cfg.w1_crc.poly ;
+  wire [15:0] \cfg.w1_crc.start ;
+  wire [4:0] \cfg.w1_crc.width ;
   wire \cfg.w1_enable ;
   output clean;
   wire clean;
@@ -17946,8 +18244,8 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$1803$0 , l
   wire lc_zero_seen;
   input noisy;
   wire noisy;
-  output \port$1803$0 ;
-  wire \port$1803$0 ;
+  output \port$1765$0 ;
+  wire \port$1765$0 ;
   output report;
   wire report;
   input report_frame;
@@ -17977,9 +18275,9 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$1803$0 , l
   output valid;
   wire valid;
   wire [1:0] word_crc_ok;
-  assign \$1  = ~ cfg[155];
+  assign \$1  = ~ cfg[193];
   assign \$2  = crc_ok[1] | \$1 ;
-  assign \$3  = cfg[155] & cfg[163];
+  assign \$3  = cfg[193] & cfg[201];
   assign \$4  = cfg[152] | \$3 ;
   assign \$5  = report_frame & \$4 ;
   assign \$6  = cfg[152] ? crc_ok[0] : \$2 ;
@@ -17987,7 +18285,7 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$1803$0 , l
   assign lc_repeat = lc_check & lc_repeat_seen;
   assign lc_skip = lc_check & lc_skip_seen;
   assign lc_zero = lc_check & lc_zero_seen;
-  assign \$7  = cfg[166] & cfg[155];
+  assign \$7  = cfg[242] & cfg[193];
   assign \$8  = crc_ok[0] & \$2 ;
   assign \$9  = \$7  & \$8 ;
   assign \$10  = ~ spw_match;
@@ -18006,7 +18304,7 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$1803$0 , l
   assign \$19  = crc_ok[0] & \$2 ;
   assign \$20  = ~ \$19 ;
   assign \$21  = \$20  | spw_mismatch;
-  assign \$22  = cfg[155] & cfg[163];
+  assign \$22  = cfg[193] & cfg[201];
   assign \$23  = cfg[152] | \$22 ;
   assign \$24  = cfg[152] ? crc_ok[0] : \$2 ;
   assign \$25  = \$23  & \$24 ;
@@ -18028,7 +18326,7 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$1803$0 , l
   assign \$39  = ~ { \$2 , crc_ok[0] };
   assign crc_error = report_frame ? \$39  : 2'h0;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
     frame_status = 4'h0;
     if (delay_jump) begin
       frame_status = 4'he;
@@ -18053,7 +18351,7 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$1803$0 , l
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$1803$0  = \$2 ;
+  assign \port$1765$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -18069,21 +18367,31 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$1803$0 , l
   assign \cfg.w0.nenw  = cfg[151];
   assign \cfg.w0.lc  = cfg[152];
   assign \cfg.w0.crc  = cfg[154:153];
-  assign \cfg.w1_enable  = cfg[155];
-  assign \cfg.w1  = cfg[165:156];
-  assign \cfg.w1.data_bits  = cfg[161:156];
-  assign \cfg.w1.nenw  = cfg[162];
-  assign \cfg.w1.lc  = cfg[163];
-  assign \cfg.w1.crc  = cfg[165:164];
-  assign \cfg.spw_check  = cfg[166];
-  assign \cfg.spw_tolerance  = cfg[174:167];
+  assign \cfg.w0_crc  = cfg[192:155];
+  assign \cfg.w0_crc.width  = cfg[159:155];
+  assign \cfg.w0_crc.poly  = cfg[175:160];
+  assign \cfg.w0_crc.start  = cfg[191:176];
+  assign \cfg.w0_crc.inverted  = cfg[192];
+  assign \cfg.w1_enable  = cfg[193];
+  assign \cfg.w1  = cfg[203:194];
+  assign \cfg.w1.data_bits  = cfg[199:194];
+  assign \cfg.w1.nenw  = cfg[200];
+  assign \cfg.w1.lc  = cfg[201];
+  assign \cfg.w1.crc  = cfg[203:202];
+  assign \cfg.w1_crc  = cfg[241:204];
+  assign \cfg.w1_crc.width  = cfg[208:204];
+  assign \cfg.w1_crc.poly  = cfg[224:209];
+  assign \cfg.w1_crc.start  = cfg[240:225];
+  assign \cfg.w1_crc.inverted  = cfg[241];
+  assign \cfg.spw_check  = cfg[242];
+  assign \cfg.spw_tolerance  = cfg[250:243];
 endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1 (slo, clk, rst, \trigger$179 , ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__ca_busy, regs__ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period
 , cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_quiet_time, ca_slave_id, ca_address, ca_count
-, ca_write, ca_start, ca_abort, regs__done_count, ma, regs__done, \port$5285$0 , \port$5298$0 , regs__ca_done, \port$5430$0 , ca_rbuf_addr);
-  reg \$auto$verilog_backend.cc:2355:dump_module$79  = 0;
+, ca_write, ca_start, ca_abort, regs__done_count, ma, regs__done, \port$5187$0 , \port$5200$0 , regs__ca_done, \port$5332$0 , ca_rbuf_addr);
+  reg \$auto$verilog_backend.cc:2355:dump_module$62  = 0;
   wire \$1 ;
   wire [16:0] \$2 ;
   reg \$3 ;
@@ -18157,6 +18465,7 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$179 , ca_wbuf_en, ca_rbuf_
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
   input [1:0] cfg_w0_crc;
   wire [1:0] cfg_w0_crc;
   input [5:0] cfg_w0_data_bits;
@@ -18169,6 +18478,7 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$179 , ca_wbuf_en, ca_rbuf_
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
   input [1:0] cfg_w1_crc;
   wire [1:0] cfg_w1_crc;
   input [5:0] cfg_w1_data_bits;
@@ -18219,12 +18529,12 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$179 , ca_wbuf_en, ca_rbuf_
   wire [3:0] noise_events;
   input periodic;
   wire periodic;
-  output [186:0] \port$5285$0 ;
-  wire [186:0] \port$5285$0 ;
-  output [335:0] \port$5298$0 ;
-  wire [335:0] \port$5298$0 ;
-  output [9:0] \port$5430$0 ;
-  wire [9:0] \port$5430$0 ;
+  output [186:0] \port$5187$0 ;
+  wire [186:0] \port$5187$0 ;
+  output [335:0] \port$5200$0 ;
+  wire [335:0] \port$5200$0 ;
+  output [9:0] \port$5332$0 ;
+  wire [9:0] \port$5332$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -18271,6 +18581,7 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$179 , ca_wbuf_en, ca_rbuf_
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
   wire [1:0] regs__cfg_w0_crc;
   wire [5:0] regs__cfg_w0_data_bits;
   wire regs__cfg_w0_lc;
@@ -18279,6 +18590,7 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$179 , ca_wbuf_en, ca_rbuf_
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
   wire [1:0] regs__cfg_w1_crc;
   wire [5:0] regs__cfg_w1_data_bits;
   wire regs__cfg_w1_enable;
@@ -18387,8 +18699,8 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$179 , ca_wbuf_en, ca_rbuf_
   assign regs__frame_error = regs__done & \$1 ;
   \biss_master_axil.ch1.core  core (
     .abort(abort_cycle),
-    .\abort$223 (ca_abort),
-    .\busy$277 (regs__busy),
+    .\abort$234 (ca_abort),
+    .\busy$288 (regs__busy),
     .ca_address(ca_address),
     .ca_count(ca_count),
     .ca_done(regs__ca_done),
@@ -18419,34 +18731,34 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$179 , ca_wbuf_en, ca_rbuf_
     .cfg_w1_enable(cfg_w1_enable),
     .cfg_w1_lc(cfg_w1_lc),
     .cfg_w1_nenw(cfg_w1_nenw),
-    .\clear$251 (clear_counters),
+    .\clear$262 (clear_counters),
     .clk(clk),
     .config_error(regs__config_error),
     .counts(\$6 ),
-    .\done$280 (regs__done),
+    .\done$291 (regs__done),
     .frames(regs__ca_busy),
     .ma(ma),
-    .\periodic$27 (periodic),
+    .\periodic$35 (periodic),
     .rbuf_addr(ca_rbuf_addr),
     .rbuf_en(ca_rbuf_en),
     .result(\$7 ),
-    .\result$285 (\$5 ),
+    .\result$296 (\$5 ),
     .rst(rst),
     .slo(slo),
     .start(start),
-    .\start$221 (ca_start),
+    .\start$232 (ca_start),
     .trigger(trigger),
-    .\valid$282 (valid)
+    .\valid$293 (valid)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$79 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
     \$3  = regs__abort_cycle;
     if (rst) begin
       \$3  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$79 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
     \$4  = regs__done_count;
     if (regs__done) begin
       \$4  = \$2 [15:0];
@@ -18592,16 +18904,16 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$179 , ca_wbuf_en, ca_rbuf_
   assign regs__ca_rbuf_en = ca_rbuf_en;
   assign \ma$182  = ma;
   assign \slo$184  = slo;
-  assign \port$5285$0  = \$5 ;
-  assign \port$5298$0  = \$6 ;
-  assign \port$5430$0  = \$7 ;
+  assign \port$5187$0  = \$5 ;
+  assign \port$5200$0  = \$6 ;
+  assign \port$5332$0  = \$7 ;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy$277 , config_error, frames, ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, \clear$251 , \periodic$27 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit
-, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_quiet_time, ca_slave_id, ca_address, ca_count, ca_write, \start$221 , \abort$223 
-, abort, ma, \done$280 , \valid$282 , \result$285 , counts, ca_done, result, rbuf_addr);
-  reg \$auto$verilog_backend.cc:2355:dump_module$80  = 0;
+module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy$288 , config_error, frames, ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, \clear$262 , \periodic$35 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit
+, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_quiet_time, ca_slave_id, ca_address, ca_count, ca_write, \start$232 , \abort$234 
+, abort, ma, \done$291 , \valid$293 , \result$296 , counts, ca_done, result, rbuf_addr);
+  reg \$auto$verilog_backend.cc:2355:dump_module$63  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -18626,25 +18938,25 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire \$9 ;
   input abort;
   wire abort;
-  input \abort$223 ;
-  wire \abort$223 ;
-  wire \abort$39 ;
+  input \abort$234 ;
+  wire \abort$234 ;
+  wire \abort$47 ;
   wire abort_cycle;
   wire ack_expired;
-  wire \ack_expired$71 ;
+  wire \ack_expired$79 ;
   wire [23:0] ack_limit;
-  wire [23:0] \ack_limit$92 ;
+  wire [23:0] \ack_limit$100 ;
   wire arm;
   reg \bit  = 1'h0;
-  wire \bit$309 ;
+  wire \bit$320 ;
   wire [5:0] bits;
   wire break_over;
-  wire \break_over$69 ;
+  wire \break_over$77 ;
   wire [23:0] break_time;
   wire busy;
-  wire \busy$232 ;
-  output \busy$277 ;
-  wire \busy$277 ;
+  wire \busy$243 ;
+  output \busy$288 ;
+  wire \busy$288 ;
   wire ca_abort;
   input [6:0] ca_address;
   wire [6:0] ca_address;
@@ -18679,11 +18991,11 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   input ca_write;
   wire ca_write;
   wire cdm;
-  wire \cdm$236 ;
+  wire \cdm$247 ;
   wire cdm_cycle;
   wire cds;
-  wire \cds$288 ;
-  wire [174:0] cfg;
+  wire \cds$299 ;
+  wire [250:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
   wire [11:0] \cfg.delay_limit ;
@@ -18701,19 +19013,31 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \cfg.w0.crc ;
   wire [5:0] \cfg.w0.data_bits ;
   wire \cfg.w0.lc ;
   wire \cfg.w0.nenw ;
+  wire [37:0] \cfg.w0_crc ;
+  wire \cfg.w0_crc.inverted ;
+  wire [15:0] \cfg.w0_crc.poly ;
+  wire [15:0] \cfg.w0_crc.start ;
+  wire [4:0] \cfg.w0_crc.width ;
   wire [9:0] \cfg.w1 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \cfg.w1.crc ;
   wire [5:0] \cfg.w1.data_bits ;
   wire \cfg.w1.lc ;
   wire \cfg.w1.nenw ;
+  wire [37:0] \cfg.w1_crc ;
+  wire \cfg.w1_crc.inverted ;
+  wire [15:0] \cfg.w1_crc.poly ;
+  wire [15:0] \cfg.w1_crc.start ;
+  wire [4:0] \cfg.w1_crc.width ;
   wire \cfg.w1_enable ;
   input [23:0] cfg_ack_limit;
   wire [23:0] cfg_ack_limit;
@@ -18743,8 +19067,13 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
   input [1:0] cfg_w0_crc;
   wire [1:0] cfg_w0_crc;
+  wire cfg_w0_crc_inverted;
+  wire [15:0] cfg_w0_crc_poly;
+  wire [15:0] cfg_w0_crc_start;
+  wire [4:0] cfg_w0_crc_width;
   input [5:0] cfg_w0_data_bits;
   wire [5:0] cfg_w0_data_bits;
   input cfg_w0_lc;
@@ -18755,8 +19084,13 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
   input [1:0] cfg_w1_crc;
   wire [1:0] cfg_w1_crc;
+  wire cfg_w1_crc_inverted;
+  wire [15:0] cfg_w1_crc_poly;
+  wire [15:0] cfg_w1_crc_start;
+  wire [4:0] cfg_w1_crc_width;
   input [5:0] cfg_w1_data_bits;
   wire [5:0] cfg_w1_data_bits;
   input cfg_w1_enable;
@@ -18766,13 +19100,13 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   input cfg_w1_nenw;
   wire cfg_w1_nenw;
   wire check;
-  wire \check$150 ;
+  wire \check$158 ;
   wire clean;
-  wire \clean$155 ;
+  wire \clean$163 ;
   wire clear;
-  wire \clear$116 ;
-  input \clear$251 ;
-  wire \clear$251 ;
+  wire \clear$124 ;
+  input \clear$262 ;
+  wire \clear$262 ;
   wire clear_counters;
   input clk;
   wire clk;
@@ -18826,11 +19160,44 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire [15:0] \counts.slo_stuck_low ;
   wire [15:0] \counts.spw_mismatch ;
   wire [39:0] cpw_top;
-  wire [39:0] \cpw_top$164 ;
+  wire [39:0] \cpw_top$175 ;
   wire [1:0] crc_error;
   wire [1:0] crc_ok;
-  wire [1:0] \crc_ok$177 ;
-  wire [174:0] cycle;
+  wire [1:0] \crc_ok$188 ;
+  wire [75:0] crcs;
+  wire [75:0] \crcs$171 ;
+  wire [37:0] \crcs$171[0] ;
+  wire \crcs$171[0].inverted ;
+  wire [15:0] \crcs$171[0].poly ;
+  wire [15:0] \crcs$171[0].start ;
+  wire [4:0] \crcs$171[0].width ;
+  wire [37:0] \crcs$171[1] ;
+  wire \crcs$171[1].inverted ;
+  wire [15:0] \crcs$171[1].poly ;
+  wire [15:0] \crcs$171[1].start ;
+  wire [4:0] \crcs$171[1].width ;
+  wire [75:0] \crcs$172 ;
+  wire [37:0] \crcs$172[0] ;
+  wire \crcs$172[0].inverted ;
+  wire [15:0] \crcs$172[0].poly ;
+  wire [15:0] \crcs$172[0].start ;
+  wire [4:0] \crcs$172[0].width ;
+  wire [37:0] \crcs$172[1] ;
+  wire \crcs$172[1].inverted ;
+  wire [15:0] \crcs$172[1].poly ;
+  wire [15:0] \crcs$172[1].start ;
+  wire [4:0] \crcs$172[1].width ;
+  wire [37:0] \crcs[0] ;
+  wire \crcs[0].inverted ;
+  wire [15:0] \crcs[0].poly ;
+  wire [15:0] \crcs[0].start ;
+  wire [4:0] \crcs[0].width ;
+  wire [37:0] \crcs[1] ;
+  wire \crcs[1].inverted ;
+  wire [15:0] \crcs[1].poly ;
+  wire [15:0] \crcs[1].start ;
+  wire [4:0] \crcs[1].width ;
+  wire [250:0] cycle;
   wire [23:0] \cycle.ack_limit ;
   wire [23:0] \cycle.break_time ;
   wire [11:0] \cycle.delay_limit ;
@@ -18848,19 +19215,31 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \cycle.w0.crc ;
   wire [5:0] \cycle.w0.data_bits ;
   wire \cycle.w0.lc ;
   wire \cycle.w0.nenw ;
+  wire [37:0] \cycle.w0_crc ;
+  wire \cycle.w0_crc.inverted ;
+  wire [15:0] \cycle.w0_crc.poly ;
+  wire [15:0] \cycle.w0_crc.start ;
+  wire [4:0] \cycle.w0_crc.width ;
   wire [9:0] \cycle.w1 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \cycle.w1.crc ;
   wire [5:0] \cycle.w1.data_bits ;
   wire \cycle.w1.lc ;
   wire \cycle.w1.nenw ;
+  wire [37:0] \cycle.w1_crc ;
+  wire \cycle.w1_crc.inverted ;
+  wire [15:0] \cycle.w1_crc.poly ;
+  wire [15:0] \cycle.w1_crc.start ;
+  wire [4:0] \cycle.w1_crc.width ;
   wire \cycle.w1_enable ;
   wire [54:0] data0;
   wire [39:0] data1;
@@ -18869,53 +19248,53 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* init = 1'h0 *)
   wire decoder_sample;
   wire [12:0] delay;
-  wire [12:0] \delay$149 ;
-  wire [12:0] \delay$98 ;
+  wire [12:0] \delay$106 ;
+  wire [12:0] \delay$157 ;
   wire delay_jump;
   wire [11:0] delay_limit;
-  wire [11:0] \delay_limit$100 ;
+  wire [11:0] \delay_limit$108 ;
   wire delay_over;
-  wire \delay_over$79 ;
+  wire \delay_over$87 ;
   wire delay_settled;
   wire [7:0] delay_spread;
   wire [16:0] delay_tolerance;
   wire done;
-  wire \done$234 ;
-  output \done$280 ;
-  wire \done$280 ;
-  wire \done$281 ;
+  wire \done$245 ;
+  output \done$291 ;
+  wire \done$291 ;
+  wire \done$292 ;
   wire doubtful;
   wire early;
-  wire \early$55 ;
+  wire \early$63 ;
   wire enable;
   wire end_check;
   wire enough;
   wire \event ;
   wire [3:0] events;
-  wire [20:0] \events$246 ;
-  wire \events$246.aborted ;
-  wire \events$246.ca_aborted ;
-  wire \events$246.ca_crc4_error ;
-  wire \events$246.ca_data_fault ;
-  wire \events$246.ca_no_answer ;
-  wire \events$246.ca_refused ;
-  wire \events$246.crc_word0 ;
-  wire \events$246.crc_word1 ;
-  wire \events$246.delay_jump ;
-  wire \events$246.delay_range ;
-  wire \events$246.lc_repeat ;
-  wire \events$246.lc_skip ;
-  wire \events$246.lc_zero ;
-  wire \events$246.no_ack ;
-  wire \events$246.no_start ;
-  wire \events$246.no_stop ;
-  wire \events$246.noise_event ;
-  wire \events$246.noisy_line ;
-  wire \events$246.overrun ;
-  wire \events$246.slo_stuck_low ;
-  wire \events$246.spw_mismatch ;
+  wire [20:0] \events$257 ;
+  wire \events$257.aborted ;
+  wire \events$257.ca_aborted ;
+  wire \events$257.ca_crc4_error ;
+  wire \events$257.ca_data_fault ;
+  wire \events$257.ca_no_answer ;
+  wire \events$257.ca_refused ;
+  wire \events$257.crc_word0 ;
+  wire \events$257.crc_word1 ;
+  wire \events$257.delay_jump ;
+  wire \events$257.delay_range ;
+  wire \events$257.lc_repeat ;
+  wire \events$257.lc_skip ;
+  wire \events$257.lc_zero ;
+  wire \events$257.no_ack ;
+  wire \events$257.no_start ;
+  wire \events$257.no_stop ;
+  wire \events$257.noise_event ;
+  wire \events$257.noisy_line ;
+  wire \events$257.overrun ;
+  wire \events$257.slo_stuck_low ;
+  wire \events$257.spw_mismatch ;
   wire fault;
-  wire \fault$173 ;
+  wire \fault$184 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -18949,7 +19328,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \fault_status$175 ;
+  wire [3:0] \fault_status$186 ;
   wire [6:0] faults;
   wire \faults.aborted ;
   wire \faults.bad_config ;
@@ -18959,7 +19338,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire \faults.no_stop ;
   wire \faults.slo_stuck_low ;
   wire first_rise;
-  wire \first_rise$207 ;
+  wire \first_rise$218 ;
   wire [31:0] first_rise_time;
   wire [186:0] frame;
   wire \frame.cds ;
@@ -19010,37 +19389,37 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   output frames;
   wire frames;
   wire [15:0] half_period;
-  wire [15:0] \half_period$122 ;
+  wire [15:0] \half_period$130 ;
   wire held;
   wire hold;
   wire idle;
-  wire \idle$23 ;
-  wire \idle$32 ;
+  wire \idle$31 ;
+  wire \idle$40 ;
   wire in_clock;
-  wire \in_clock$86 ;
+  wire \in_clock$94 ;
   wire jump;
   wire [5:0] lc;
-  wire [5:0] \lc$127 ;
-  wire [5:0] \lc$301 ;
+  wire [5:0] \lc$135 ;
+  wire [5:0] \lc$312 ;
   wire lc_check;
   wire lc_load;
   wire [5:0] lc_next;
-  wire [5:0] \lc_next$129 ;
+  wire [5:0] \lc_next$137 ;
   wire lc_repeat;
-  wire \lc_repeat$302 ;
+  wire \lc_repeat$313 ;
   wire lc_repeat_seen;
   wire lc_skip;
-  wire \lc_skip$303 ;
+  wire \lc_skip$314 ;
   wire lc_skip_seen;
   wire lc_zero;
-  wire \lc_zero$304 ;
+  wire \lc_zero$315 ;
   wire lc_zero_seen;
   wire learn;
   wire level;
-  wire \level$138 ;
+  wire \level$146 ;
   wire [3:0] limit;
   wire [12:0] line_delay;
-  wire [174:0] live;
+  wire [250:0] live;
   wire [23:0] \live.ack_limit ;
   wire [23:0] \live.break_time ;
   wire [11:0] \live.delay_limit ;
@@ -19058,29 +19437,41 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \live.w0.crc ;
   wire [5:0] \live.w0.data_bits ;
   wire \live.w0.lc ;
   wire \live.w0.nenw ;
+  wire [37:0] \live.w0_crc ;
+  wire \live.w0_crc.inverted ;
+  wire [15:0] \live.w0_crc.poly ;
+  wire [15:0] \live.w0_crc.start ;
+  wire [4:0] \live.w0_crc.width ;
   wire [9:0] \live.w1 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \live.w1.crc ;
   wire [5:0] \live.w1.data_bits ;
   wire \live.w1.lc ;
   wire \live.w1.nenw ;
+  wire [37:0] \live.w1_crc ;
+  wire \live.w1_crc.inverted ;
+  wire [15:0] \live.w1_crc.poly ;
+  wire [15:0] \live.w1_crc.start ;
+  wire [4:0] \live.w1_crc.width ;
   wire \live.w1_enable ;
   wire load;
   wire locked;
-  wire \locked$53 ;
+  wire \locked$61 ;
   output ma;
   wire ma;
-  wire \ma$276 ;
+  wire \ma$287 ;
   wire ma_arm;
   wire ma_busy;
-  wire \ma_busy$81 ;
+  wire \ma_busy$89 ;
   wire ma_enough;
   wire ma_held;
   wire ma_hold;
@@ -19088,26 +19479,26 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire match;
   wire [1:0] ne;
   wire no_start_expired;
-  wire \no_start_expired$73 ;
+  wire \no_start_expired$81 ;
   wire [24:0] no_start_limit;
-  wire [24:0] \no_start_limit$96 ;
+  wire [24:0] \no_start_limit$104 ;
   wire noise;
   wire [3:0] noise_events;
   wire noisy;
-  wire \noisy$157 ;
+  wire \noisy$165 ;
   wire [1:0] nw;
   wire ok;
   wire overrun;
-  wire \overrun$279 ;
+  wire \overrun$290 ;
   wire [23:0] period;
   wire periodic;
-  input \periodic$27 ;
-  wire \periodic$27 ;
+  input \periodic$35 ;
+  wire \periodic$35 ;
   wire quiet;
-  wire \quiet$105 ;
+  wire \quiet$113 ;
   wire [11:0] quiet_limit;
   wire quiet_live;
-  wire \quiet_live$107 ;
+  wire \quiet_live$115 ;
   wire [11:0] quiet_time;
   wire [11:0] quiet_time_live;
   input [3:0] rbuf_addr;
@@ -19119,37 +19510,37 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire receiver_clear;
   wire \repeat ;
   wire report;
-  wire \report$185 ;
+  wire \report$196 ;
   wire report_delay;
-  wire \report_delay$188 ;
+  wire \report_delay$199 ;
   wire report_frame;
-  wire \report_frame$172 ;
-  wire \report_frame$186 ;
+  wire \report_frame$183 ;
+  wire \report_frame$197 ;
   wire request;
-  wire [17:0] \request$209 ;
-  wire [6:0] \request$209.address ;
-  wire [6:0] \request$209.count ;
-  wire [2:0] \request$209.slave_id ;
-  wire \request$209.write ;
-  wire \request$38 ;
+  wire [17:0] \request$220 ;
+  wire [6:0] \request$220.address ;
+  wire [6:0] \request$220.count ;
+  wire [2:0] \request$220.slave_id ;
+  wire \request$220.write ;
+  wire \request$46 ;
   wire restart;
-  wire \restart$142 ;
+  wire \restart$150 ;
   wire restart_timer;
   output [9:0] result;
   wire [9:0] result;
-  output [186:0] \result$285 ;
-  wire [186:0] \result$285 ;
-  wire \result$285.cds ;
-  wire \result$285.delay_settled ;
-  wire [7:0] \result$285.delay_spread ;
-  wire [5:0] \result$285.lc ;
-  wire \result$285.lc_repeat ;
-  wire \result$285.lc_skip ;
-  wire \result$285.lc_zero ;
-  wire [12:0] \result$285.line_delay ;
-  wire [3:0] \result$285.noise_events ;
-  wire [12:0] \result$285.settled_delay ;
-  wire \result$285.spw_mismatch ;
+  output [186:0] \result$296 ;
+  wire [186:0] \result$296 ;
+  wire \result$296.cds ;
+  wire \result$296.delay_settled ;
+  wire [7:0] \result$296.delay_spread ;
+  wire [5:0] \result$296.lc ;
+  wire \result$296.lc_repeat ;
+  wire \result$296.lc_skip ;
+  wire \result$296.lc_zero ;
+  wire [12:0] \result$296.line_delay ;
+  wire [3:0] \result$296.noise_events ;
+  wire [12:0] \result$296.settled_delay ;
+  wire \result$296.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -19166,18 +19557,18 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \result$285.status ;
-  wire [31:0] \result$285.timestamp ;
-  wire [57:0] \result$285.word0 ;
-  wire \result$285.word0.crc_ok ;
-  wire \result$285.word0.ne ;
-  wire \result$285.word0.nw ;
-  wire [54:0] \result$285.word0.position ;
-  wire [42:0] \result$285.word1 ;
-  wire \result$285.word1.crc_ok ;
-  wire \result$285.word1.ne ;
-  wire \result$285.word1.nw ;
-  wire [39:0] \result$285.word1.position ;
+  wire [3:0] \result$296.status ;
+  wire [31:0] \result$296.timestamp ;
+  wire [57:0] \result$296.word0 ;
+  wire \result$296.word0.crc_ok ;
+  wire \result$296.word0.ne ;
+  wire \result$296.word0.nw ;
+  wire [54:0] \result$296.word0.position ;
+  wire [42:0] \result$296.word1 ;
+  wire \result$296.word1.crc_ok ;
+  wire \result$296.word1.ne ;
+  wire \result$296.word1.nw ;
+  wire [39:0] \result$296.word1.position ;
   wire [6:0] \result.bytes_done ;
   (* enum_base_type = "AccessStatus" *)
   (* enum_value_000 = "OK" *)
@@ -19189,46 +19580,46 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* enum_value_110 = "BAD_REQUEST" *)
   wire [2:0] \result.status ;
   wire resync;
-  wire \resync$135 ;
+  wire \resync$143 ;
   wire [15:0] rises;
-  wire [15:0] \rises$115 ;
+  wire [15:0] \rises$123 ;
   input rst;
   wire rst;
   wire run;
   reg sample = 1'h0;
-  wire \sample$308 ;
+  wire \sample$319 ;
   wire sampler_noise;
   wire second_rise;
   wire settled;
   wire [12:0] settled_delay;
-  wire [12:0] \settled_delay$291 ;
+  wire [12:0] \settled_delay$302 ;
   wire skip;
   input slo;
   wire slo;
-  wire \slo$34 ;
-  wire \slo$44 ;
-  wire \slo$80 ;
+  wire \slo$42 ;
+  wire \slo$52 ;
+  wire \slo$88 ;
   wire slo_stuck;
-  wire \slo_stuck$75 ;
+  wire \slo_stuck$83 ;
   wire slo_stuck_live;
-  wire \slo_stuck_live$77 ;
+  wire \slo_stuck_live$85 ;
   wire slots_full;
-  wire \slots_full$61 ;
+  wire \slots_full$69 ;
   wire [7:0] spread;
   wire [39:0] spw;
   wire spw_match;
   wire spw_mismatch;
-  wire \spw_mismatch$305 ;
+  wire \spw_mismatch$316 ;
   input start;
   wire start;
-  input \start$221 ;
-  wire \start$221 ;
-  wire \start$25 ;
+  input \start$232 ;
+  wire \start$232 ;
+  wire \start$33 ;
   wire [15:0] start_slot;
-  wire [15:0] \start_slot$113 ;
+  wire [15:0] \start_slot$121 ;
   wire started;
-  wire \started$111 ;
-  wire \started$59 ;
+  wire \started$119 ;
+  wire \started$67 ;
   reg started_before = 1'h0;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
@@ -19263,25 +19654,25 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \status$284 ;
+  wire [3:0] \status$295 ;
   wire stop_bit;
-  wire \stop_bit$65 ;
+  wire \stop_bit$73 ;
   wire stopped;
-  wire \stopped$63 ;
+  wire \stopped$71 ;
   wire [23:0] timeout_limit;
-  wire [23:0] \timeout_limit$94 ;
+  wire [23:0] \timeout_limit$102 ;
   wire [23:0] timeout_live;
   wire timer_clear;
   wire [31:0] timestamp;
   wire [16:0] tolerance;
-  wire [7:0] \tolerance$168 ;
+  wire [7:0] \tolerance$179 ;
   input trigger;
   wire trigger;
-  wire \trigger$36 ;
+  wire \trigger$44 ;
   wire valid;
-  wire \valid$190 ;
-  output \valid$282 ;
-  wire \valid$282 ;
+  wire \valid$201 ;
+  output \valid$293 ;
+  wire \valid$293 ;
   wire valid_out;
   wire w1_enable;
   wire waiting;
@@ -19299,33 +19690,36 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire word1_nw;
   wire [39:0] word1_position;
   wire [1:0] word_count;
-  wire [1:0] \word_count$125 ;
+  wire [1:0] \word_count$133 ;
   wire [1:0] word_crc_ok;
   wire [19:0] words;
-  wire [19:0] \words$161 ;
-  wire [9:0] \words$161[0] ;
+  wire [19:0] \words$169 ;
+  wire [9:0] \words$169[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
-  wire [1:0] \words$161[0].crc ;
-  wire [5:0] \words$161[0].data_bits ;
-  wire \words$161[0].lc ;
-  wire \words$161[0].nenw ;
-  wire [9:0] \words$161[1] ;
+  (* enum_value_11 = "CUSTOM" *)
+  wire [1:0] \words$169[0].crc ;
+  wire [5:0] \words$169[0].data_bits ;
+  wire \words$169[0].lc ;
+  wire \words$169[0].nenw ;
+  wire [9:0] \words$169[1] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
-  wire [1:0] \words$161[1].crc ;
-  wire [5:0] \words$161[1].data_bits ;
-  wire \words$161[1].lc ;
-  wire \words$161[1].nenw ;
+  (* enum_value_11 = "CUSTOM" *)
+  wire [1:0] \words$169[1].crc ;
+  wire [5:0] \words$169[1].data_bits ;
+  wire \words$169[1].lc ;
+  wire \words$169[1].nenw ;
   wire [9:0] \words[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \words[0].crc ;
   wire [5:0] \words[0].data_bits ;
   wire \words[0].lc ;
@@ -19335,16 +19729,17 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \words[1].crc ;
   wire [5:0] \words[1].data_bits ;
   wire \words[1].lc ;
   wire \words[1].nenw ;
   wire zero;
-  assign periodic = \periodic$27  | frames;
+  assign periodic = \periodic$35  | frames;
   assign enable = cycle[144:141] != 4'hf;
   assign rearm = cfg_delay_tolerance == 4'hf;
   assign \$1  = ~ started_before;
-  assign \check$150  = started & \$1 ;
+  assign \check$158  = started & \$1 ;
   assign \$2  = learn & spw_mismatch;
   assign \$3  = status == 4'hd;
   assign \$4  = learn & \$3 ;
@@ -19360,10 +19755,10 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign \$14  = ca_done & \$13 ;
   assign \$15  = result[2:0] == 3'h5;
   assign \$16  = ca_done & \$15 ;
-  assign \busy$277  = ~ idle;
+  assign \busy$288  = ~ idle;
   assign config_error = ~ config_ok;
-  assign \$17  = ~ \clear$116 ;
-  assign \$18  = \sample$308  & \$17 ;
+  assign \$17  = ~ \clear$124 ;
+  assign \$18  = \sample$319  & \$17 ;
   always @(posedge clk)
     sample <= \$19 ;
   always @(posedge clk)
@@ -19373,6 +19768,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   \biss_master_axil.ch1.core.config  \config  (
     .ack_limit(ack_limit),
     .clk(clk),
+    .crcs(crcs),
     .cycle(cycle),
     .delay_limit(delay_limit),
     .delay_tolerance(tolerance),
@@ -19396,7 +19792,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .delay_over(delay_over),
     .early(early),
     .end_check(cycle[124]),
-    .fault(\restart$142 ),
+    .fault(\restart$150 ),
     .fault_status(fault_status),
     .faults(faults),
     .frame_done(frame_done),
@@ -19413,14 +19809,14 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .no_start_expired(no_start_expired),
     .quiet(quiet),
     .quiet_live(quiet_live),
-    .receiver_clear(\clear$116 ),
+    .receiver_clear(\clear$124 ),
     .report_delay(report_delay),
     .report_frame(learn),
     .request(request),
     .restart_timer(restart),
     .resync(resync),
     .rst(rst),
-    .slo(\slo$44 ),
+    .slo(\slo$52 ),
     .slo_stuck(slo_stuck),
     .slo_stuck_live(slo_stuck_live),
     .slots_full(slots_full),
@@ -19431,10 +19827,10 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .waiting(watch)
   );
   \biss_master_axil.ch1.core.counters  counters (
-    .clear(\clear$251 ),
+    .clear(\clear$262 ),
     .clk(clk),
     .counts(counts),
-    .events(\events$246 ),
+    .events(\events$257 ),
     .rst(rst)
   );
   \biss_master_axil.ch1.core.decoder  decoder (
@@ -19443,6 +19839,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .clk(clk),
     .cpw_top(cpw_top),
     .crc_ok(crc_ok),
+    .crcs(crcs),
     .data0(data0),
     .data1(spw),
     .done(frame_done),
@@ -19450,7 +19847,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .lc_load(load),
     .ne(ne),
     .nw(nw),
-    .receiver_clear(\clear$116 ),
+    .receiver_clear(\clear$124 ),
     .rst(rst),
     .sample(sample),
     .slots_full(slots_full),
@@ -19462,7 +19859,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .words(words)
   );
   \biss_master_axil.ch1.core.delay_check  delay_check (
-    .check(\check$150 ),
+    .check(\check$158 ),
     .clean(clean),
     .clk(clk),
     .delay(delay),
@@ -19481,10 +19878,10 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .close(frame_done),
     .\event (\event ),
     .events(events),
-    .level(\slo$44 ),
+    .level(\slo$52 ),
     .limit(cycle[140:137]),
     .noisy(noisy),
-    .restart(\restart$142 ),
+    .restart(\restart$150 ),
     .rst(rst),
     .sampler_noise(sampler_noise),
     .watch(watch)
@@ -19492,7 +19889,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   \biss_master_axil.ch1.core.ma_clock  ma_clock (
     .busy(ma_busy),
     .clk(clk),
-    .\clocking (\ma_busy$81 ),
+    .\clocking (\ma_busy$89 ),
     .first_rise(first_rise),
     .half_period(cycle[15:0]),
     .held(ma_held),
@@ -19504,18 +19901,19 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .second_rise(ma_arm)
   );
   \biss_master_axil.ch1.core.ma_stop  ma_stop (
-    .clear(\clear$116 ),
+    .clear(\clear$124 ),
     .clk(clk),
+    .crcs(crcs),
     .enough(ma_enough),
     .rises(rises),
     .rst(rst),
     .start_slot(start_slot),
-    .\started$10 (started),
-    .w1_enable(cycle[155]),
-    .words(\words$161 )
+    .\started$11 (started),
+    .w1_enable(cycle[193]),
+    .words(\words$169 )
   );
   \biss_master_axil.ch1.core.register_access  register_access (
-    .abort(\abort$223 ),
+    .abort(\abort$234 ),
     .busy(frames),
     .cdm(cdm),
     .clk(clk),
@@ -19527,37 +19925,37 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .rbuf_addr(rbuf_addr),
     .rbuf_data(ca_rbuf_data),
     .rbuf_en(rbuf_en),
-    .request(\request$209 ),
+    .request(\request$220 ),
     .result(result),
     .rst(rst),
-    .start(\start$221 ),
+    .start(\start$232 ),
     .wbuf(wbuf)
   );
   \biss_master_axil.ch1.core.results  results (
     .clk(clk),
-    .done(\done$280 ),
+    .done(\done$291 ),
     .frame(frame),
     .report(report),
     .report_delay(report_delay),
     .report_frame(learn),
-    .result(\result$285 ),
+    .result(\result$296 ),
     .rst(rst),
     .valid(valid),
-    .valid_out(\valid$282 )
+    .valid_out(\valid$293 )
   );
   \biss_master_axil.ch1.core.sampler  sampler (
     .arm(ma_arm),
-    .\bit (\bit$309 ),
+    .\bit (\bit$320 ),
     .clk(clk),
     .delay(delay),
     .early(early),
     .half_period(cycle[15:0]),
-    .level(\slo$44 ),
+    .level(\slo$52 ),
     .locked(locked),
     .noise(sampler_noise),
-    .receiver_clear(\clear$116 ),
+    .receiver_clear(\clear$124 ),
     .rst(rst),
-    .sample(\sample$308 ),
+    .sample(\sample$319 ),
     .slo(slo)
   );
   \biss_master_axil.ch1.core.scheduler  scheduler (
@@ -19578,20 +19976,20 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$4943$0 (\bit ),
+    .\port$4856$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
     .skip(lc_skip_seen)
   );
   \biss_master_axil.ch1.core.spw_check  spw_check (
-    .bits(cycle[161:156]),
+    .bits(cycle[199:194]),
     .clk(clk),
     .cpw_top(cpw_top),
     .match(spw_match),
     .rst(rst),
     .spw(spw),
-    .\tolerance$8 (cycle[174:167])
+    .\tolerance$8 (cycle[250:243])
   );
   \biss_master_axil.ch1.core.time_base  time_base (
     .clk(clk),
@@ -19610,7 +20008,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .delay_limit(delay_limit),
     .delay_over(delay_over),
     .in_clock(in_clock),
-    .ma_busy(\ma_busy$81 ),
+    .ma_busy(\ma_busy$89 ),
     .no_start_expired(no_start_expired),
     .no_start_limit(no_start_limit),
     .quiet(quiet),
@@ -19619,7 +20017,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .quiet_time_live(cfg_quiet_time),
     .restart(restart),
     .rst(rst),
-    .slo(\slo$44 ),
+    .slo(\slo$52 ),
     .slo_stuck(slo_stuck),
     .slo_stuck_live(slo_stuck_live),
     .timeout_limit(timeout_limit),
@@ -19632,7 +20030,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .crc_ok(crc_ok),
     .delay_jump(delay_jump),
     .doubtful(frame_doubtful),
-    .fault(\restart$142 ),
+    .fault(\restart$150 ),
     .fault_status(fault_status),
     .lc_check(check),
     .lc_repeat(lc_repeat),
@@ -19642,7 +20040,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .lc_zero(lc_zero),
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
-    .\port$3355$0 (\$22 ),
+    .\port$3279$0 (\$22 ),
     .report(report),
     .report_frame(learn),
     .spw_match(spw_match),
@@ -19651,138 +20049,148 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .valid(valid)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$80 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
     \$19  = \$18 ;
     if (rst) begin
       \$19  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$80 ) begin end
-    \$20  = \bit$309 ;
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    \$20  = \bit$320 ;
     if (rst) begin
       \$20  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$80 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
     \$21  = started;
     if (rst) begin
       \$21  = 1'h0;
     end
   end
-  assign \idle$23  = idle;
-  assign \start$25  = start;
+  assign cfg_w0_crc_width = 5'h00;
+  assign cfg_w0_crc_poly = 16'h0000;
+  assign cfg_w0_crc_start = 16'h0000;
+  assign cfg_w0_crc_inverted = 1'h0;
+  assign cfg_w1_crc_width = 5'h00;
+  assign cfg_w1_crc_poly = 16'h0000;
+  assign cfg_w1_crc_start = 16'h0000;
+  assign cfg_w1_crc_inverted = 1'h0;
+  assign \idle$31  = idle;
+  assign \start$33  = start;
   assign period = cfg_request_period;
   assign abort_cycle = abort;
-  assign \idle$32  = idle;
-  assign \slo$34  = slo;
-  assign \trigger$36  = trigger;
-  assign \request$38  = request;
-  assign \abort$39  = abort;
+  assign \idle$40  = idle;
+  assign \slo$42  = slo;
+  assign \trigger$44  = trigger;
+  assign \request$46  = request;
+  assign \abort$47  = abort;
   assign ok = config_ok;
   assign end_check = cycle[124];
-  assign level = \slo$44 ;
+  assign level = \slo$52 ;
   assign busy = ma_busy;
   assign second_rise = ma_arm;
   assign enough = ma_enough;
-  assign \locked$53  = locked;
-  assign \early$55  = early;
+  assign \locked$61  = locked;
+  assign \early$63  = early;
   assign done = frame_done;
-  assign \started$59  = started;
-  assign \slots_full$61  = slots_full;
-  assign \stopped$63  = stopped;
-  assign \stop_bit$65  = stop_bit;
+  assign \started$67  = started;
+  assign \slots_full$69  = slots_full;
+  assign \stopped$71  = stopped;
+  assign \stop_bit$73  = stop_bit;
   assign doubtful = frame_doubtful;
-  assign \break_over$69  = break_over;
-  assign \ack_expired$71  = ack_expired;
-  assign \no_start_expired$73  = no_start_expired;
-  assign \slo_stuck$75  = slo_stuck;
-  assign \slo_stuck_live$77  = slo_stuck_live;
-  assign \delay_over$79  = delay_over;
-  assign \slo$80  = \slo$44 ;
-  assign \clocking  = \ma_busy$81 ;
+  assign \break_over$77  = break_over;
+  assign \ack_expired$79  = ack_expired;
+  assign \no_start_expired$81  = no_start_expired;
+  assign \slo_stuck$83  = slo_stuck;
+  assign \slo_stuck_live$85  = slo_stuck_live;
+  assign \delay_over$87  = delay_over;
+  assign \slo$88  = \slo$52 ;
+  assign \clocking  = \ma_busy$89 ;
   assign timer_clear = clear;
-  assign \in_clock$86  = in_clock;
+  assign \in_clock$94  = in_clock;
   assign restart_timer = restart;
   assign break_time = cfg_break_time;
   assign timeout_live = cfg_timeout_limit;
-  assign \ack_limit$92  = ack_limit;
-  assign \timeout_limit$94  = timeout_limit;
-  assign \no_start_limit$96  = no_start_limit;
-  assign \delay$98  = delay;
-  assign \delay_limit$100  = delay_limit;
+  assign \ack_limit$100  = ack_limit;
+  assign \timeout_limit$102  = timeout_limit;
+  assign \no_start_limit$104  = no_start_limit;
+  assign \delay$106  = delay;
+  assign \delay_limit$108  = delay_limit;
   assign quiet_time_live = cfg_quiet_time;
   assign quiet_time = quiet_limit;
-  assign \quiet$105  = quiet;
-  assign \quiet_live$107  = quiet_live;
+  assign \quiet$113  = quiet;
+  assign \quiet_live$115  = quiet_live;
   assign ma_run = run;
   assign half_period = cycle[15:0];
-  assign \started$111  = started;
-  assign \start_slot$113  = start_slot;
-  assign \rises$115  = rises;
-  assign receiver_clear = \clear$116 ;
+  assign \started$119  = started;
+  assign \start_slot$121  = start_slot;
+  assign \rises$123  = rises;
+  assign receiver_clear = \clear$124 ;
   assign decoder_sample = sample;
   assign decoder_bit = \bit ;
-  assign \half_period$122  = cycle[15:0];
+  assign \half_period$130  = cycle[15:0];
   assign arm = ma_arm;
-  assign \word_count$125  = word_count;
-  assign \lc$127  = lc;
+  assign \word_count$133  = word_count;
+  assign \lc$135  = lc;
   assign lc_next = { lc[4:0], \bit  };
-  assign \lc_next$129  = { lc[4:0], \bit  };
+  assign \lc_next$137  = { lc[4:0], \bit  };
   assign lc_load = load;
   assign lc_check = check;
-  assign \resync$135  = resync;
+  assign \resync$143  = resync;
   assign waiting = watch;
-  assign \level$138  = \slo$44 ;
+  assign \level$146  = \slo$52 ;
   assign noise = sampler_noise;
   assign close = frame_done;
-  assign fault = \restart$142 ;
+  assign fault = \restart$150 ;
   assign limit = cycle[140:137];
   assign delay_tolerance = tolerance;
-  assign \delay$149  = delay;
+  assign \delay$157  = delay;
   assign report_frame = learn;
-  assign \clean$155  = clean;
-  assign \noisy$157  = noisy;
+  assign \clean$163  = clean;
+  assign \noisy$165  = noisy;
   assign jump = delay_jump;
-  assign w1_enable = cycle[155];
-  assign \cpw_top$164  = cpw_top;
+  assign \crcs$171  = crcs;
+  assign \crcs$172  = crcs;
+  assign w1_enable = cycle[193];
+  assign \cpw_top$175  = cpw_top;
   assign data1 = spw;
-  assign bits = cycle[161:156];
-  assign \tolerance$168  = cycle[174:167];
+  assign bits = cycle[199:194];
+  assign \tolerance$179  = cycle[250:243];
   assign match = spw_match;
   assign cfg = cycle;
-  assign \report_frame$172  = learn;
-  assign \fault$173  = \restart$142 ;
-  assign \fault_status$175  = fault_status;
-  assign \crc_ok$177  = crc_ok;
+  assign \report_frame$183  = learn;
+  assign \fault$184  = \restart$150 ;
+  assign \fault_status$186  = fault_status;
+  assign \crc_ok$188  = crc_ok;
   assign \repeat  = lc_repeat_seen;
   assign skip = lc_skip_seen;
   assign zero = lc_zero_seen;
-  assign \report$185  = report;
-  assign \report_frame$186  = learn;
-  assign \report_delay$188  = report_delay;
-  assign \valid$190  = valid;
+  assign \report$196  = report;
+  assign \report_frame$197  = learn;
+  assign \report_delay$199  = report_delay;
+  assign \valid$201  = valid;
   assign word_crc_ok = { \$22 , crc_ok[0] };
-  assign \first_rise$207  = first_rise;
+  assign \first_rise$218  = first_rise;
   assign ca_status = result[2:0];
   assign ca_bytes_done = result[9:3];
-  assign ca_start = \start$221 ;
-  assign ca_abort = \abort$223 ;
+  assign ca_start = \start$232 ;
+  assign ca_abort = \abort$234 ;
   assign ca_rbuf_addr = rbuf_addr;
   assign ca_rbuf_en = rbuf_en;
   assign rbuf_data = ca_rbuf_data;
   assign ca_busy = frames;
-  assign \busy$232  = frames;
-  assign \done$234  = ca_done;
-  assign \cdm$236  = cdm;
+  assign \busy$243  = frames;
+  assign \done$245  = ca_done;
+  assign \cdm$247  = cdm;
   assign held = ma_held;
   assign ma_hold = hold;
   assign frame_end = report;
   assign frame_ok = valid;
   assign frame_cds = cds;
   assign cdm_cycle = frame_cdm;
-  assign clear_counters = \clear$251 ;
+  assign clear_counters = \clear$262 ;
   assign count_crc_word0 = counts[15:0];
   assign count_crc_word1 = counts[31:16];
   assign count_no_ack = counts[47:32];
@@ -19804,31 +20212,31 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign count_ca_refused = counts[303:288];
   assign count_ca_aborted = counts[319:304];
   assign count_ca_data_fault = counts[335:320];
-  assign \ma$276  = ma;
-  assign \overrun$279  = overrun;
-  assign \done$281  = \done$280 ;
-  assign valid_out = \valid$282 ;
-  assign \status$284  = \result$285 [3:0];
-  assign timestamp = \result$285 [35:4];
-  assign line_delay = \result$285 [48:36];
-  assign \cds$288  = \result$285 [49];
-  assign noise_events = \result$285 [53:50];
-  assign delay_settled = \result$285 [54];
-  assign \settled_delay$291  = \result$285 [67:55];
-  assign delay_spread = \result$285 [75:68];
-  assign word0_position = \result$285 [130:76];
-  assign word0_ne = \result$285 [131];
-  assign word0_nw = \result$285 [132];
-  assign word0_crc_ok = \result$285 [133];
-  assign word1_position = \result$285 [173:134];
-  assign word1_ne = \result$285 [174];
-  assign word1_nw = \result$285 [175];
-  assign word1_crc_ok = \result$285 [176];
-  assign \lc$301  = \result$285 [182:177];
-  assign \lc_repeat$302  = \result$285 [183];
-  assign \lc_skip$303  = \result$285 [184];
-  assign \lc_zero$304  = \result$285 [185];
-  assign \spw_mismatch$305  = \result$285 [186];
+  assign \ma$287  = ma;
+  assign \overrun$290  = overrun;
+  assign \done$292  = \done$291 ;
+  assign valid_out = \valid$293 ;
+  assign \status$295  = \result$296 [3:0];
+  assign timestamp = \result$296 [35:4];
+  assign line_delay = \result$296 [48:36];
+  assign \cds$299  = \result$296 [49];
+  assign noise_events = \result$296 [53:50];
+  assign delay_settled = \result$296 [54];
+  assign \settled_delay$302  = \result$296 [67:55];
+  assign delay_spread = \result$296 [75:68];
+  assign word0_position = \result$296 [130:76];
+  assign word0_ne = \result$296 [131];
+  assign word0_nw = \result$296 [132];
+  assign word0_crc_ok = \result$296 [133];
+  assign word1_position = \result$296 [173:134];
+  assign word1_ne = \result$296 [174];
+  assign word1_nw = \result$296 [175];
+  assign word1_crc_ok = \result$296 [176];
+  assign \lc$312  = \result$296 [182:177];
+  assign \lc_repeat$313  = \result$296 [183];
+  assign \lc_skip$314  = \result$296 [184];
+  assign \lc_zero$315  = \result$296 [185];
+  assign \spw_mismatch$316  = \result$296 [186];
   assign \live.ma_half_period  = live[15:0];
   assign \live.request_period  = live[39:16];
   assign \live.break_time  = live[63:40];
@@ -19844,14 +20252,24 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign \live.w0.nenw  = live[151];
   assign \live.w0.lc  = live[152];
   assign \live.w0.crc  = live[154:153];
-  assign \live.w1_enable  = live[155];
-  assign \live.w1  = live[165:156];
-  assign \live.w1.data_bits  = live[161:156];
-  assign \live.w1.nenw  = live[162];
-  assign \live.w1.lc  = live[163];
-  assign \live.w1.crc  = live[165:164];
-  assign \live.spw_check  = live[166];
-  assign \live.spw_tolerance  = live[174:167];
+  assign \live.w0_crc  = live[192:155];
+  assign \live.w0_crc.width  = live[159:155];
+  assign \live.w0_crc.poly  = live[175:160];
+  assign \live.w0_crc.start  = live[191:176];
+  assign \live.w0_crc.inverted  = live[192];
+  assign \live.w1_enable  = live[193];
+  assign \live.w1  = live[203:194];
+  assign \live.w1.data_bits  = live[199:194];
+  assign \live.w1.nenw  = live[200];
+  assign \live.w1.lc  = live[201];
+  assign \live.w1.crc  = live[203:202];
+  assign \live.w1_crc  = live[241:204];
+  assign \live.w1_crc.width  = live[208:204];
+  assign \live.w1_crc.poly  = live[224:209];
+  assign \live.w1_crc.start  = live[240:225];
+  assign \live.w1_crc.inverted  = live[241];
+  assign \live.spw_check  = live[242];
+  assign \live.spw_tolerance  = live[250:243];
   assign \cycle.ma_half_period  = cycle[15:0];
   assign \cycle.request_period  = cycle[39:16];
   assign \cycle.break_time  = cycle[63:40];
@@ -19867,14 +20285,24 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign \cycle.w0.nenw  = cycle[151];
   assign \cycle.w0.lc  = cycle[152];
   assign \cycle.w0.crc  = cycle[154:153];
-  assign \cycle.w1_enable  = cycle[155];
-  assign \cycle.w1  = cycle[165:156];
-  assign \cycle.w1.data_bits  = cycle[161:156];
-  assign \cycle.w1.nenw  = cycle[162];
-  assign \cycle.w1.lc  = cycle[163];
-  assign \cycle.w1.crc  = cycle[165:164];
-  assign \cycle.spw_check  = cycle[166];
-  assign \cycle.spw_tolerance  = cycle[174:167];
+  assign \cycle.w0_crc  = cycle[192:155];
+  assign \cycle.w0_crc.width  = cycle[159:155];
+  assign \cycle.w0_crc.poly  = cycle[175:160];
+  assign \cycle.w0_crc.start  = cycle[191:176];
+  assign \cycle.w0_crc.inverted  = cycle[192];
+  assign \cycle.w1_enable  = cycle[193];
+  assign \cycle.w1  = cycle[203:194];
+  assign \cycle.w1.data_bits  = cycle[199:194];
+  assign \cycle.w1.nenw  = cycle[200];
+  assign \cycle.w1.lc  = cycle[201];
+  assign \cycle.w1.crc  = cycle[203:202];
+  assign \cycle.w1_crc  = cycle[241:204];
+  assign \cycle.w1_crc.width  = cycle[208:204];
+  assign \cycle.w1_crc.poly  = cycle[224:209];
+  assign \cycle.w1_crc.start  = cycle[240:225];
+  assign \cycle.w1_crc.inverted  = cycle[241];
+  assign \cycle.spw_check  = cycle[242];
+  assign \cycle.spw_tolerance  = cycle[250:243];
   assign \words[0]  = words[9:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -19885,16 +20313,46 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign \words[1].nenw  = words[16];
   assign \words[1].lc  = words[17];
   assign \words[1].crc  = words[19:18];
-  assign \words$161[0]  = \words$161 [9:0];
-  assign \words$161[0].data_bits  = \words$161 [5:0];
-  assign \words$161[0].nenw  = \words$161 [6];
-  assign \words$161[0].lc  = \words$161 [7];
-  assign \words$161[0].crc  = \words$161 [9:8];
-  assign \words$161[1]  = \words$161 [19:10];
-  assign \words$161[1].data_bits  = \words$161 [15:10];
-  assign \words$161[1].nenw  = \words$161 [16];
-  assign \words$161[1].lc  = \words$161 [17];
-  assign \words$161[1].crc  = \words$161 [19:18];
+  assign \words$169[0]  = \words$169 [9:0];
+  assign \words$169[0].data_bits  = \words$169 [5:0];
+  assign \words$169[0].nenw  = \words$169 [6];
+  assign \words$169[0].lc  = \words$169 [7];
+  assign \words$169[0].crc  = \words$169 [9:8];
+  assign \words$169[1]  = \words$169 [19:10];
+  assign \words$169[1].data_bits  = \words$169 [15:10];
+  assign \words$169[1].nenw  = \words$169 [16];
+  assign \words$169[1].lc  = \words$169 [17];
+  assign \words$169[1].crc  = \words$169 [19:18];
+  assign \crcs[0]  = crcs[37:0];
+  assign \crcs[0].width  = crcs[4:0];
+  assign \crcs[0].poly  = crcs[20:5];
+  assign \crcs[0].start  = crcs[36:21];
+  assign \crcs[0].inverted  = crcs[37];
+  assign \crcs[1]  = crcs[75:38];
+  assign \crcs[1].width  = crcs[42:38];
+  assign \crcs[1].poly  = crcs[58:43];
+  assign \crcs[1].start  = crcs[74:59];
+  assign \crcs[1].inverted  = crcs[75];
+  assign \crcs$171[0]  = crcs[37:0];
+  assign \crcs$171[0].width  = crcs[4:0];
+  assign \crcs$171[0].poly  = crcs[20:5];
+  assign \crcs$171[0].start  = crcs[36:21];
+  assign \crcs$171[0].inverted  = crcs[37];
+  assign \crcs$171[1]  = crcs[75:38];
+  assign \crcs$171[1].width  = crcs[42:38];
+  assign \crcs$171[1].poly  = crcs[58:43];
+  assign \crcs$171[1].start  = crcs[74:59];
+  assign \crcs$171[1].inverted  = crcs[75];
+  assign \crcs$172[0]  = crcs[37:0];
+  assign \crcs$172[0].width  = crcs[4:0];
+  assign \crcs$172[0].poly  = crcs[20:5];
+  assign \crcs$172[0].start  = crcs[36:21];
+  assign \crcs$172[0].inverted  = crcs[37];
+  assign \crcs$172[1]  = crcs[75:38];
+  assign \crcs$172[1].width  = crcs[42:38];
+  assign \crcs$172[1].poly  = crcs[58:43];
+  assign \crcs$172[1].start  = crcs[74:59];
+  assign \crcs$172[1].inverted  = crcs[75];
   assign \cfg.ma_half_period  = cycle[15:0];
   assign \cfg.request_period  = cycle[39:16];
   assign \cfg.break_time  = cycle[63:40];
@@ -19910,14 +20368,24 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign \cfg.w0.nenw  = cycle[151];
   assign \cfg.w0.lc  = cycle[152];
   assign \cfg.w0.crc  = cycle[154:153];
-  assign \cfg.w1_enable  = cycle[155];
-  assign \cfg.w1  = cycle[165:156];
-  assign \cfg.w1.data_bits  = cycle[161:156];
-  assign \cfg.w1.nenw  = cycle[162];
-  assign \cfg.w1.lc  = cycle[163];
-  assign \cfg.w1.crc  = cycle[165:164];
-  assign \cfg.spw_check  = cycle[166];
-  assign \cfg.spw_tolerance  = cycle[174:167];
+  assign \cfg.w0_crc  = cycle[192:155];
+  assign \cfg.w0_crc.width  = cycle[159:155];
+  assign \cfg.w0_crc.poly  = cycle[175:160];
+  assign \cfg.w0_crc.start  = cycle[191:176];
+  assign \cfg.w0_crc.inverted  = cycle[192];
+  assign \cfg.w1_enable  = cycle[193];
+  assign \cfg.w1  = cycle[203:194];
+  assign \cfg.w1.data_bits  = cycle[199:194];
+  assign \cfg.w1.nenw  = cycle[200];
+  assign \cfg.w1.lc  = cycle[201];
+  assign \cfg.w1.crc  = cycle[203:202];
+  assign \cfg.w1_crc  = cycle[241:204];
+  assign \cfg.w1_crc.width  = cycle[208:204];
+  assign \cfg.w1_crc.poly  = cycle[224:209];
+  assign \cfg.w1_crc.start  = cycle[240:225];
+  assign \cfg.w1_crc.inverted  = cycle[241];
+  assign \cfg.spw_check  = cycle[242];
+  assign \cfg.spw_tolerance  = cycle[250:243];
   assign \frame.status  = frame[3:0];
   assign \frame.timestamp  = frame[35:4];
   assign \frame.line_delay  = frame[48:36];
@@ -19941,36 +20409,36 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign \frame.lc_skip  = frame[184];
   assign \frame.lc_zero  = frame[185];
   assign \frame.spw_mismatch  = frame[186];
-  assign \request$209.slave_id  = \request$209 [2:0];
-  assign \request$209.address  = \request$209 [9:3];
-  assign \request$209.count  = \request$209 [16:10];
-  assign \request$209.write  = \request$209 [17];
+  assign \request$220.slave_id  = \request$220 [2:0];
+  assign \request$220.address  = \request$220 [9:3];
+  assign \request$220.count  = \request$220 [16:10];
+  assign \request$220.write  = \request$220 [17];
   assign \wbuf.addr  = wbuf[3:0];
   assign \wbuf.data  = wbuf[35:4];
   assign \wbuf.en  = wbuf[39:36];
   assign \result.status  = result[2:0];
   assign \result.bytes_done  = result[9:3];
-  assign \events$246.crc_word0  = \events$246 [0];
-  assign \events$246.crc_word1  = \events$246 [1];
-  assign \events$246.no_ack  = \events$246 [2];
-  assign \events$246.no_start  = \events$246 [3];
-  assign \events$246.delay_range  = \events$246 [4];
-  assign \events$246.slo_stuck_low  = \events$246 [5];
-  assign \events$246.lc_repeat  = \events$246 [6];
-  assign \events$246.lc_skip  = \events$246 [7];
-  assign \events$246.lc_zero  = \events$246 [8];
-  assign \events$246.spw_mismatch  = \events$246 [9];
-  assign \events$246.overrun  = \events$246 [10];
-  assign \events$246.aborted  = \events$246 [11];
-  assign \events$246.no_stop  = \events$246 [12];
-  assign \events$246.noisy_line  = \events$246 [13];
-  assign \events$246.delay_jump  = \events$246 [14];
-  assign \events$246.noise_event  = \events$246 [15];
-  assign \events$246.ca_crc4_error  = \events$246 [16];
-  assign \events$246.ca_no_answer  = \events$246 [17];
-  assign \events$246.ca_refused  = \events$246 [18];
-  assign \events$246.ca_aborted  = \events$246 [19];
-  assign \events$246.ca_data_fault  = \events$246 [20];
+  assign \events$257.crc_word0  = \events$257 [0];
+  assign \events$257.crc_word1  = \events$257 [1];
+  assign \events$257.no_ack  = \events$257 [2];
+  assign \events$257.no_start  = \events$257 [3];
+  assign \events$257.delay_range  = \events$257 [4];
+  assign \events$257.slo_stuck_low  = \events$257 [5];
+  assign \events$257.lc_repeat  = \events$257 [6];
+  assign \events$257.lc_skip  = \events$257 [7];
+  assign \events$257.lc_zero  = \events$257 [8];
+  assign \events$257.spw_mismatch  = \events$257 [9];
+  assign \events$257.overrun  = \events$257 [10];
+  assign \events$257.aborted  = \events$257 [11];
+  assign \events$257.no_stop  = \events$257 [12];
+  assign \events$257.noisy_line  = \events$257 [13];
+  assign \events$257.delay_jump  = \events$257 [14];
+  assign \events$257.noise_event  = \events$257 [15];
+  assign \events$257.ca_crc4_error  = \events$257 [16];
+  assign \events$257.ca_no_answer  = \events$257 [17];
+  assign \events$257.ca_refused  = \events$257 [18];
+  assign \events$257.ca_aborted  = \events$257 [19];
+  assign \events$257.ca_data_fault  = \events$257 [20];
   assign \faults.no_ack  = faults[0];
   assign \faults.no_start  = faults[1];
   assign \faults.delay_range  = faults[2];
@@ -19999,57 +20467,57 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign \counts.ca_refused  = counts[303:288];
   assign \counts.ca_aborted  = counts[319:304];
   assign \counts.ca_data_fault  = counts[335:320];
-  assign \result$285.status  = \result$285 [3:0];
-  assign \result$285.timestamp  = \result$285 [35:4];
-  assign \result$285.line_delay  = \result$285 [48:36];
-  assign \result$285.cds  = \result$285 [49];
-  assign \result$285.noise_events  = \result$285 [53:50];
-  assign \result$285.delay_settled  = \result$285 [54];
-  assign \result$285.settled_delay  = \result$285 [67:55];
-  assign \result$285.delay_spread  = \result$285 [75:68];
-  assign \result$285.word0  = \result$285 [133:76];
-  assign \result$285.word0.position  = \result$285 [130:76];
-  assign \result$285.word0.ne  = \result$285 [131];
-  assign \result$285.word0.nw  = \result$285 [132];
-  assign \result$285.word0.crc_ok  = \result$285 [133];
-  assign \result$285.word1  = \result$285 [176:134];
-  assign \result$285.word1.position  = \result$285 [173:134];
-  assign \result$285.word1.ne  = \result$285 [174];
-  assign \result$285.word1.nw  = \result$285 [175];
-  assign \result$285.word1.crc_ok  = \result$285 [176];
-  assign \result$285.lc  = \result$285 [182:177];
-  assign \result$285.lc_repeat  = \result$285 [183];
-  assign \result$285.lc_skip  = \result$285 [184];
-  assign \result$285.lc_zero  = \result$285 [185];
-  assign \result$285.spw_mismatch  = \result$285 [186];
-  assign \events$246 [20] = \$16 ;
-  assign \events$246 [19] = \$14 ;
-  assign \events$246 [18] = \$12 ;
-  assign \events$246 [17] = \$10 ;
-  assign \events$246 [16] = \$8 ;
-  assign \events$246 [15] = \event ;
-  assign \events$246 [14] = \$6 ;
-  assign \events$246 [13] = \$4 ;
-  assign \events$246 [12] = faults[6];
-  assign \events$246 [11] = faults[4];
-  assign \events$246 [10] = overrun;
-  assign \events$246 [9] = \$2 ;
-  assign \events$246 [8] = lc_zero;
-  assign \events$246 [7] = lc_skip;
-  assign \events$246 [6] = lc_repeat;
-  assign \events$246 [5] = faults[3];
-  assign \events$246 [4] = faults[2];
-  assign \events$246 [3] = faults[1];
-  assign \events$246 [2] = faults[0];
-  assign \events$246 [1] = crc_error[1];
-  assign \events$246 [0] = crc_error[0];
+  assign \result$296.status  = \result$296 [3:0];
+  assign \result$296.timestamp  = \result$296 [35:4];
+  assign \result$296.line_delay  = \result$296 [48:36];
+  assign \result$296.cds  = \result$296 [49];
+  assign \result$296.noise_events  = \result$296 [53:50];
+  assign \result$296.delay_settled  = \result$296 [54];
+  assign \result$296.settled_delay  = \result$296 [67:55];
+  assign \result$296.delay_spread  = \result$296 [75:68];
+  assign \result$296.word0  = \result$296 [133:76];
+  assign \result$296.word0.position  = \result$296 [130:76];
+  assign \result$296.word0.ne  = \result$296 [131];
+  assign \result$296.word0.nw  = \result$296 [132];
+  assign \result$296.word0.crc_ok  = \result$296 [133];
+  assign \result$296.word1  = \result$296 [176:134];
+  assign \result$296.word1.position  = \result$296 [173:134];
+  assign \result$296.word1.ne  = \result$296 [174];
+  assign \result$296.word1.nw  = \result$296 [175];
+  assign \result$296.word1.crc_ok  = \result$296 [176];
+  assign \result$296.lc  = \result$296 [182:177];
+  assign \result$296.lc_repeat  = \result$296 [183];
+  assign \result$296.lc_skip  = \result$296 [184];
+  assign \result$296.lc_zero  = \result$296 [185];
+  assign \result$296.spw_mismatch  = \result$296 [186];
+  assign \events$257 [20] = \$16 ;
+  assign \events$257 [19] = \$14 ;
+  assign \events$257 [18] = \$12 ;
+  assign \events$257 [17] = \$10 ;
+  assign \events$257 [16] = \$8 ;
+  assign \events$257 [15] = \event ;
+  assign \events$257 [14] = \$6 ;
+  assign \events$257 [13] = \$4 ;
+  assign \events$257 [12] = faults[6];
+  assign \events$257 [11] = faults[4];
+  assign \events$257 [10] = overrun;
+  assign \events$257 [9] = \$2 ;
+  assign \events$257 [8] = lc_zero;
+  assign \events$257 [7] = lc_skip;
+  assign \events$257 [6] = lc_repeat;
+  assign \events$257 [5] = faults[3];
+  assign \events$257 [4] = faults[2];
+  assign \events$257 [3] = faults[1];
+  assign \events$257 [2] = faults[0];
+  assign \events$257 [1] = crc_error[1];
+  assign \events$257 [0] = crc_error[0];
   assign wbuf[39:36] = ca_wbuf_en;
   assign wbuf[35:4] = ca_wbuf_data;
   assign wbuf[3:0] = ca_wbuf_addr;
-  assign \request$209 [17] = ca_write;
-  assign \request$209 [16:10] = ca_count;
-  assign \request$209 [9:3] = ca_address;
-  assign \request$209 [2:0] = ca_slave_id;
+  assign \request$220 [17] = ca_write;
+  assign \request$220 [16:10] = ca_count;
+  assign \request$220 [9:3] = ca_address;
+  assign \request$220 [2:0] = ca_slave_id;
   assign frame[35:4] = first_rise_time;
   assign frame[186] = spw_mismatch;
   assign frame[176] = \$22 ;
@@ -20071,17 +20539,25 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign frame[49] = cds;
   assign frame[48:36] = delay;
   assign frame[3:0] = status;
-  assign \words$161 [19:10] = cycle[165:156];
-  assign \words$161 [9:0] = cycle[154:145];
-  assign words[19:10] = cycle[165:156];
+  assign \words$169 [19:10] = cycle[203:194];
+  assign \words$169 [9:0] = cycle[154:145];
+  assign words[19:10] = cycle[203:194];
   assign words[9:0] = cycle[154:145];
-  assign live[174:167] = cfg_spw_tolerance;
-  assign live[166] = cfg_spw_check;
-  assign live[165:164] = cfg_w1_crc;
-  assign live[163] = cfg_w1_lc;
-  assign live[162] = cfg_w1_nenw;
-  assign live[161:156] = cfg_w1_data_bits;
-  assign live[155] = cfg_w1_enable;
+  assign live[250:243] = cfg_spw_tolerance;
+  assign live[242] = cfg_spw_check;
+  assign live[241] = 1'h0;
+  assign live[240:225] = 16'h0000;
+  assign live[224:209] = 16'h0000;
+  assign live[208:204] = 5'h00;
+  assign live[203:202] = cfg_w1_crc;
+  assign live[201] = cfg_w1_lc;
+  assign live[200] = cfg_w1_nenw;
+  assign live[199:194] = cfg_w1_data_bits;
+  assign live[193] = cfg_w1_enable;
+  assign live[192] = 1'h0;
+  assign live[191:176] = 16'h0000;
+  assign live[175:160] = 16'h0000;
+  assign live[159:155] = 5'h00;
   assign live[154:153] = cfg_w0_crc;
   assign live[152] = cfg_w0_lc;
   assign live[151] = cfg_w0_nenw;
@@ -20099,8 +20575,8 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_limit, timeout_limit, delay_limit, quiet_time, delay_tolerance, no_start_limit, idle, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$81  = 0;
+module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_limit, timeout_limit, delay_limit, quiet_time, delay_tolerance, crcs, no_start_limit, idle, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$64  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -20130,28 +20606,41 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   wire \$33 ;
   wire \$34 ;
   wire \$35 ;
-  wire [23:0] \$36 ;
+  wire \$36 ;
   wire \$37 ;
-  wire [23:0] \$38 ;
+  wire \$38 ;
   wire \$39 ;
   wire \$4 ;
-  wire [11:0] \$40 ;
+  wire \$40 ;
   wire \$41 ;
-  wire [11:0] \$42 ;
+  wire \$42 ;
   wire \$43 ;
-  wire [3:0] \$44 ;
-  wire [16:0] \$45 ;
-  wire [24:0] \$46 ;
-  reg \$47 ;
-  reg [174:0] \$48 ;
-  reg [23:0] \$49 ;
+  wire \$44 ;
+  wire \$45 ;
+  wire \$46 ;
+  wire \$47 ;
+  wire [23:0] \$48 ;
+  wire \$49 ;
   wire \$5 ;
-  reg [23:0] \$50 ;
-  reg [11:0] \$51 ;
-  reg [11:0] \$52 ;
-  reg [16:0] \$53 ;
-  reg [24:0] \$54 ;
+  wire [23:0] \$50 ;
+  wire \$51 ;
+  wire [11:0] \$52 ;
+  wire \$53 ;
+  wire [11:0] \$54 ;
+  wire \$55 ;
+  wire [3:0] \$56 ;
+  wire [16:0] \$57 ;
+  wire [24:0] \$58 ;
+  reg \$59 ;
   wire \$6 ;
+  reg [250:0] \$60 ;
+  reg [23:0] \$61 ;
+  reg [23:0] \$62 ;
+  reg [11:0] \$63 ;
+  reg [11:0] \$64 ;
+  reg [16:0] \$65 ;
+  reg [75:0] \$66 ;
+  reg [24:0] \$67 ;
   wire \$7 ;
   wire \$8 ;
   wire \$9 ;
@@ -20159,8 +20648,20 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   reg [23:0] ack_limit = 24'h000000;
   input clk;
   wire clk;
-  output [174:0] cycle;
-  reg [174:0] cycle = 175'h00000000000000000000000000000000000000000000;
+  output [75:0] crcs;
+  reg [75:0] crcs = 76'h0000000000000000000;
+  wire [37:0] \crcs[0] ;
+  wire \crcs[0].inverted ;
+  wire [15:0] \crcs[0].poly ;
+  wire [15:0] \crcs[0].start ;
+  wire [4:0] \crcs[0].width ;
+  wire [37:0] \crcs[1] ;
+  wire \crcs[1].inverted ;
+  wire [15:0] \crcs[1].poly ;
+  wire [15:0] \crcs[1].start ;
+  wire [4:0] \crcs[1].width ;
+  output [250:0] cycle;
+  reg [250:0] cycle = 251'h000000000000000000000000000000000000000000000000000000000000000;
   wire [23:0] \cycle.ack_limit ;
   wire [23:0] \cycle.break_time ;
   wire [11:0] \cycle.delay_limit ;
@@ -20178,19 +20679,31 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \cycle.w0.crc ;
   wire [5:0] \cycle.w0.data_bits ;
   wire \cycle.w0.lc ;
   wire \cycle.w0.nenw ;
+  wire [37:0] \cycle.w0_crc ;
+  wire \cycle.w0_crc.inverted ;
+  wire [15:0] \cycle.w0_crc.poly ;
+  wire [15:0] \cycle.w0_crc.start ;
+  wire [4:0] \cycle.w0_crc.width ;
   wire [9:0] \cycle.w1 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \cycle.w1.crc ;
   wire [5:0] \cycle.w1.data_bits ;
   wire \cycle.w1.lc ;
   wire \cycle.w1.nenw ;
+  wire [37:0] \cycle.w1_crc ;
+  wire \cycle.w1_crc.inverted ;
+  wire [15:0] \cycle.w1_crc.poly ;
+  wire [15:0] \cycle.w1_crc.start ;
+  wire [4:0] \cycle.w1_crc.width ;
   wire \cycle.w1_enable ;
   output [11:0] delay_limit;
   reg [11:0] delay_limit = 12'h000;
@@ -20198,8 +20711,8 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   reg [16:0] delay_tolerance = 17'h00000;
   input idle;
   wire idle;
-  input [174:0] live;
-  wire [174:0] live;
+  input [250:0] live;
+  wire [250:0] live;
   wire [23:0] \live.ack_limit ;
   wire [23:0] \live.break_time ;
   wire [11:0] \live.delay_limit ;
@@ -20217,19 +20730,31 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \live.w0.crc ;
   wire [5:0] \live.w0.data_bits ;
   wire \live.w0.lc ;
   wire \live.w0.nenw ;
+  wire [37:0] \live.w0_crc ;
+  wire \live.w0_crc.inverted ;
+  wire [15:0] \live.w0_crc.poly ;
+  wire [15:0] \live.w0_crc.start ;
+  wire [4:0] \live.w0_crc.width ;
   wire [9:0] \live.w1 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \live.w1.crc ;
   wire [5:0] \live.w1.data_bits ;
   wire \live.w1.lc ;
   wire \live.w1.nenw ;
+  wire [37:0] \live.w1_crc ;
+  wire \live.w1_crc.inverted ;
+  wire [15:0] \live.w1_crc.poly ;
+  wire [15:0] \live.w1_crc.start ;
+  wire [4:0] \live.w1_crc.width ;
   wire \live.w1_enable ;
   output [24:0] no_start_limit;
   reg [24:0] no_start_limit = 25'h0000000;
@@ -20243,24 +20768,51 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   reg [23:0] timeout_limit = 24'h000000;
   output [1:0] word_count;
   wire [1:0] word_count;
-  assign \$46  = ack_limit + { cycle[15:0], 1'h1 };
-  assign word_count = 1'h1 + cycle[155];
+  assign \$33  = \$21  & \$32 ;
+  assign \$34  = \$18  | \$33 ;
+  assign \$35  = \$17  & \$34 ;
+  assign \$36  = live[193] & live[152];
+  assign \$37  = \$36  & live[201];
+  assign \$38  = ~ \$37 ;
+  assign \$39  = \$35  & \$38 ;
+  assign \$40  = ~ live[242];
+  assign \$41  = live[199:194] <= live[150:145];
+  assign \$42  = live[193] & \$41 ;
+  assign \$43  = | live[203:202];
+  assign \$44  = \$42  & \$43 ;
+  assign \$45  = \$40  | \$44 ;
+  assign \$46  = \$39  & \$45 ;
+  assign \$47  = ! live[87:64];
+  assign \$48  = \$47  ? 24'h000fa0 : live[87:64];
+  assign \$49  = ! live[111:88];
+  assign \$50  = \$49  ? 24'h001f40 : live[111:88];
+  assign \$51  = ! live[123:112];
+  assign \$52  = \$51  ? 12'hfff : live[123:112];
+  assign \$53  = ! live[136:125];
+  assign \$54  = \$53  ? 12'h064 : live[136:125];
+  assign \$55  = ! live[144:141];
+  assign \$56  = \$55  ? 4'h2 : live[144:141];
+  assign \$57  = live[15:0] + \$56 ;
+  assign \$58  = ack_limit + { cycle[15:0], 1'h1 };
+  assign word_count = 1'h1 + cycle[193];
   always @(posedge clk)
-    ok <= \$47 ;
+    ok <= \$59 ;
   always @(posedge clk)
-    cycle <= \$48 ;
+    cycle <= \$60 ;
   always @(posedge clk)
-    ack_limit <= \$49 ;
+    ack_limit <= \$61 ;
   always @(posedge clk)
-    timeout_limit <= \$50 ;
+    timeout_limit <= \$62 ;
   always @(posedge clk)
-    delay_limit <= \$51 ;
+    delay_limit <= \$63 ;
   always @(posedge clk)
-    quiet_time <= \$52 ;
+    quiet_time <= \$64 ;
   always @(posedge clk)
-    delay_tolerance <= \$53 ;
+    delay_tolerance <= \$65 ;
   always @(posedge clk)
-    no_start_limit <= \$54 ;
+    crcs <= \$66 ;
+  always @(posedge clk)
+    no_start_limit <= \$67 ;
   assign \$1  = | live[15:1];
   assign \$2  = | live[150:145];
   assign \$3  = live[150:145] <= 6'h37;
@@ -20270,114 +20822,152 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   assign \$7  = \$5  | \$6 ;
   assign \$8  = live[154:153] == 2'h2;
   assign \$9  = \$7  | \$8 ;
-  assign \$10  = \$4  & \$9 ;
-  assign \$11  = \$1  & \$10 ;
-  assign \$12  = ~ live[155];
-  assign \$13  = | live[161:156];
-  assign \$14  = live[161:156] <= 6'h28;
-  assign \$15  = \$13  & \$14 ;
-  assign \$16  = ! live[165:164];
-  assign \$17  = live[165:164] == 1'h1;
-  assign \$18  = \$16  | \$17 ;
-  assign \$19  = live[165:164] == 2'h2;
-  assign \$20  = \$18  | \$19 ;
-  assign \$21  = \$15  & \$20 ;
-  assign \$22  = \$12  | \$21 ;
-  assign \$23  = \$11  & \$22 ;
-  assign \$24  = live[155] & live[152];
-  assign \$25  = \$24  & live[163];
-  assign \$26  = ~ \$25 ;
-  assign \$27  = \$23  & \$26 ;
-  assign \$28  = ~ live[166];
-  assign \$29  = live[161:156] <= live[150:145];
-  assign \$30  = live[155] & \$29 ;
-  assign \$31  = | live[165:164];
-  assign \$32  = \$30  & \$31 ;
-  assign \$33  = \$28  | \$32 ;
-  assign \$34  = \$27  & \$33 ;
-  assign \$35  = ! live[87:64];
-  assign \$36  = \$35  ? 24'h000fa0 : live[87:64];
-  assign \$37  = ! live[111:88];
-  assign \$38  = \$37  ? 24'h001f40 : live[111:88];
-  assign \$39  = ! live[123:112];
-  assign \$40  = \$39  ? 12'hfff : live[123:112];
-  assign \$41  = ! live[136:125];
-  assign \$42  = \$41  ? 12'h064 : live[136:125];
-  assign \$43  = ! live[144:141];
-  assign \$44  = \$43  ? 4'h2 : live[144:141];
-  assign \$45  = live[15:0] + \$44 ;
+  assign \$10  = live[154:153] == 2'h3;
+  assign \$11  = | live[159:155];
+  assign \$12  = \$10  & \$11 ;
+  assign \$13  = live[159:155] <= 5'h10;
+  assign \$14  = \$12  & \$13 ;
+  assign \$15  = \$9  | \$14 ;
+  assign \$16  = \$4  & \$15 ;
+  assign \$17  = \$1  & \$16 ;
+  assign \$18  = ~ live[193];
+  assign \$19  = | live[199:194];
+  assign \$20  = live[199:194] <= 6'h28;
+  assign \$21  = \$19  & \$20 ;
+  assign \$22  = ! live[203:202];
+  assign \$23  = live[203:202] == 1'h1;
+  assign \$24  = \$22  | \$23 ;
+  assign \$25  = live[203:202] == 2'h2;
+  assign \$26  = \$24  | \$25 ;
+  assign \$27  = live[203:202] == 2'h3;
+  assign \$28  = | live[208:204];
+  assign \$29  = \$27  & \$28 ;
+  assign \$30  = live[208:204] <= 5'h10;
+  assign \$31  = \$29  & \$30 ;
+  assign \$32  = \$26  | \$31 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$81 ) begin end
-    \$47  = \$34 ;
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    \$59  = \$46 ;
     if (rst) begin
-      \$47  = 1'h0;
+      \$59  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$81 ) begin end
-    \$48  = cycle;
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    \$60  = cycle;
     if (idle) begin
-      \$48  = live;
+      \$60  = live;
     end
     if (rst) begin
-      \$48  = 175'h00000000000000000000000000000000000000000000;
+      \$60  = 251'h000000000000000000000000000000000000000000000000000000000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$81 ) begin end
-    \$49  = ack_limit;
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    \$61  = ack_limit;
     if (idle) begin
-      \$49  = \$36 ;
+      \$61  = \$48 ;
     end
     if (rst) begin
-      \$49  = 24'h000000;
+      \$61  = 24'h000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$81 ) begin end
-    \$50  = timeout_limit;
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    \$62  = timeout_limit;
     if (idle) begin
-      \$50  = \$38 ;
+      \$62  = \$50 ;
     end
     if (rst) begin
-      \$50  = 24'h000000;
+      \$62  = 24'h000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$81 ) begin end
-    \$51  = delay_limit;
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    \$63  = delay_limit;
     if (idle) begin
-      \$51  = \$40 ;
+      \$63  = \$52 ;
     end
     if (rst) begin
-      \$51  = 12'h000;
+      \$63  = 12'h000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$81 ) begin end
-    \$52  = quiet_time;
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    \$64  = quiet_time;
     if (idle) begin
-      \$52  = \$42 ;
+      \$64  = \$54 ;
     end
     if (rst) begin
-      \$52  = 12'h000;
+      \$64  = 12'h000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$81 ) begin end
-    \$53  = delay_tolerance;
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    \$65  = delay_tolerance;
     if (idle) begin
-      \$53  = \$45 ;
+      \$65  = \$57 ;
     end
     if (rst) begin
-      \$53  = 17'h00000;
+      \$65  = 17'h00000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$81 ) begin end
-    \$54  = \$46 ;
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    \$66  = crcs;
+    if (idle) begin
+      (* full_case = 32'd1 *)
+      casez (live[154:153])
+        2'h1:
+          begin
+            \$66 [4:0] = 5'h06;
+            \$66 [20:5] = 16'h0003;
+            \$66 [36:21] = 16'h0000;
+            \$66 [37] = 1'h1;
+          end
+        2'h2:
+          begin
+            \$66 [4:0] = 5'h10;
+            \$66 [20:5] = 16'h90d9;
+            \$66 [36:21] = 16'h0000;
+            \$66 [37] = 1'h1;
+          end
+        2'h3:
+            \$66 [37:0] = live[192:155];
+        default:
+            \$66 [37:0] = 38'h0000000000;
+      endcase
+      (* full_case = 32'd1 *)
+      casez (live[203:202])
+        2'h1:
+          begin
+            \$66 [42:38] = 5'h06;
+            \$66 [58:43] = 16'h0003;
+            \$66 [74:59] = 16'h0000;
+            \$66 [75] = 1'h1;
+          end
+        2'h2:
+          begin
+            \$66 [42:38] = 5'h10;
+            \$66 [58:43] = 16'h90d9;
+            \$66 [74:59] = 16'h0000;
+            \$66 [75] = 1'h1;
+          end
+        2'h3:
+            \$66 [75:38] = live[241:204];
+        default:
+            \$66 [75:38] = 38'h0000000000;
+      endcase
+    end
     if (rst) begin
-      \$54  = 25'h0000000;
+      \$66  = 76'h0000000000000000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    \$67  = \$58 ;
+    if (rst) begin
+      \$67  = 25'h0000000;
     end
   end
   assign \live.ma_half_period  = live[15:0];
@@ -20395,14 +20985,24 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   assign \live.w0.nenw  = live[151];
   assign \live.w0.lc  = live[152];
   assign \live.w0.crc  = live[154:153];
-  assign \live.w1_enable  = live[155];
-  assign \live.w1  = live[165:156];
-  assign \live.w1.data_bits  = live[161:156];
-  assign \live.w1.nenw  = live[162];
-  assign \live.w1.lc  = live[163];
-  assign \live.w1.crc  = live[165:164];
-  assign \live.spw_check  = live[166];
-  assign \live.spw_tolerance  = live[174:167];
+  assign \live.w0_crc  = live[192:155];
+  assign \live.w0_crc.width  = live[159:155];
+  assign \live.w0_crc.poly  = live[175:160];
+  assign \live.w0_crc.start  = live[191:176];
+  assign \live.w0_crc.inverted  = live[192];
+  assign \live.w1_enable  = live[193];
+  assign \live.w1  = live[203:194];
+  assign \live.w1.data_bits  = live[199:194];
+  assign \live.w1.nenw  = live[200];
+  assign \live.w1.lc  = live[201];
+  assign \live.w1.crc  = live[203:202];
+  assign \live.w1_crc  = live[241:204];
+  assign \live.w1_crc.width  = live[208:204];
+  assign \live.w1_crc.poly  = live[224:209];
+  assign \live.w1_crc.start  = live[240:225];
+  assign \live.w1_crc.inverted  = live[241];
+  assign \live.spw_check  = live[242];
+  assign \live.spw_tolerance  = live[250:243];
   assign \cycle.ma_half_period  = cycle[15:0];
   assign \cycle.request_period  = cycle[39:16];
   assign \cycle.break_time  = cycle[63:40];
@@ -20418,21 +21018,41 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   assign \cycle.w0.nenw  = cycle[151];
   assign \cycle.w0.lc  = cycle[152];
   assign \cycle.w0.crc  = cycle[154:153];
-  assign \cycle.w1_enable  = cycle[155];
-  assign \cycle.w1  = cycle[165:156];
-  assign \cycle.w1.data_bits  = cycle[161:156];
-  assign \cycle.w1.nenw  = cycle[162];
-  assign \cycle.w1.lc  = cycle[163];
-  assign \cycle.w1.crc  = cycle[165:164];
-  assign \cycle.spw_check  = cycle[166];
-  assign \cycle.spw_tolerance  = cycle[174:167];
+  assign \cycle.w0_crc  = cycle[192:155];
+  assign \cycle.w0_crc.width  = cycle[159:155];
+  assign \cycle.w0_crc.poly  = cycle[175:160];
+  assign \cycle.w0_crc.start  = cycle[191:176];
+  assign \cycle.w0_crc.inverted  = cycle[192];
+  assign \cycle.w1_enable  = cycle[193];
+  assign \cycle.w1  = cycle[203:194];
+  assign \cycle.w1.data_bits  = cycle[199:194];
+  assign \cycle.w1.nenw  = cycle[200];
+  assign \cycle.w1.lc  = cycle[201];
+  assign \cycle.w1.crc  = cycle[203:202];
+  assign \cycle.w1_crc  = cycle[241:204];
+  assign \cycle.w1_crc.width  = cycle[208:204];
+  assign \cycle.w1_crc.poly  = cycle[224:209];
+  assign \cycle.w1_crc.start  = cycle[240:225];
+  assign \cycle.w1_crc.inverted  = cycle[241];
+  assign \cycle.spw_check  = cycle[242];
+  assign \cycle.spw_tolerance  = cycle[250:243];
+  assign \crcs[0]  = crcs[37:0];
+  assign \crcs[0].width  = crcs[4:0];
+  assign \crcs[0].poly  = crcs[20:5];
+  assign \crcs[0].start  = crcs[36:21];
+  assign \crcs[0].inverted  = crcs[37];
+  assign \crcs[1]  = crcs[75:38];
+  assign \crcs[1].width  = crcs[42:38];
+  assign \crcs[1].poly  = crcs[58:43];
+  assign \crcs[1].start  = crcs[74:59];
+  assign \crcs[1].inverted  = crcs[75];
 endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, report_delay, frame_doubtful, abort, config_ok, end_check, resync, timer_clear, waiting, fault, fault_status, ma_run, in_clock, report_frame, idle, receiver_clear, faults, cdm_cycle, ma_hold
 , slo_stuck, slo_stuck_live, quiet, quiet_live, break_over, ack_expired, no_start_expired, delay_over, ma_arm, ma_busy, ma_held, ma_enough, early, locked, slo, frame_done, stopped, slots_full, started, stop_bit, cdm
 , clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$82  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$65  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -20767,7 +21387,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
     .report_frame(report_frame)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     resync = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -20775,7 +21395,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     timer_clear = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -20822,7 +21442,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     waiting = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -20834,7 +21454,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     clear = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -20846,7 +21466,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     fault = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -20895,7 +21515,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     fault_status = 4'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -20944,7 +21564,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     ma_run = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -20960,7 +21580,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     in_clock = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -20974,7 +21594,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     watch = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -20988,7 +21608,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     framing = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -21004,7 +21624,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     report_frame = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -21035,7 +21655,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     delay = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -21053,7 +21673,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     holding = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -21076,14 +21696,14 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     \$27  = idle;
     if (rst) begin
       \$27  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     \$28  = cycle_fsm_state;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -21174,7 +21794,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     \$29  = idle;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -21265,7 +21885,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     \$30  = receiver_clear;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -21356,7 +21976,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     \$31  = pause;
     casez (cycle_fsm_state)
       3'h0:
@@ -21425,7 +22045,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.controller.cdm_hold (rst, abort, framing, holding, idle, cdm_cycle, ma_hold, slo_stuck, slo, cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$83  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$66  = 0;
   wire \$1 ;
   wire \$2 ;
   wire \$3 ;
@@ -21464,7 +22084,7 @@ module \biss_master_axil.ch1.core.controller.cdm_hold (rst, abort, framing, hold
   assign \$1  = ~ abort;
   assign \$2  = cdm_cycle & \$1 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$83 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$7  = cdm_cycle;
     if (idle) begin
       \$7  = cdm;
@@ -21474,7 +22094,7 @@ module \biss_master_axil.ch1.core.controller.cdm_hold (rst, abort, framing, hold
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$83 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     ma_hold = 1'h0;
     if (framing) begin
       ma_hold = \$2 ;
@@ -21486,7 +22106,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.controller.line_faults (rst, restart_timer, clear, watch, fault, status, delay, ack_expired, no_start_expired, delay_over, ma_arm, early, locked, slots_full, started, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$84  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$67  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -21583,7 +22203,7 @@ module \biss_master_axil.ch1.core.controller.line_faults (rst, restart_timer, cl
   always @(posedge clk)
     locked_seen <= \$21 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
     \$20  = armed;
     if (clear) begin
       \$20  = 1'h0;
@@ -21596,7 +22216,7 @@ module \biss_master_axil.ch1.core.controller.line_faults (rst, restart_timer, cl
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
     \$21  = locked_seen;
     if (clear) begin
       \$21  = 1'h0;
@@ -21609,7 +22229,7 @@ module \biss_master_axil.ch1.core.controller.line_faults (rst, restart_timer, cl
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
     fault = 1'h0;
     if (\$7 ) begin
       fault = 1'h1;
@@ -21622,7 +22242,7 @@ module \biss_master_axil.ch1.core.controller.line_faults (rst, restart_timer, cl
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
     status = 4'h0;
     if (\$7 ) begin
       status = 4'h8;
@@ -21635,7 +22255,7 @@ module \biss_master_axil.ch1.core.controller.line_faults (rst, restart_timer, cl
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
     delay = 1'h0;
     if (\$7 ) begin
     end else if (\$12 ) begin
@@ -21647,7 +22267,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.controller.ready_check (config_ok, first_clock, bad_config, aborted, ready, stuck_low, slo_stuck, slo_stuck_live, quiet, quiet_live, slo, abort);
-  reg \$auto$verilog_backend.cc:2355:dump_module$85  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$68  = 0;
   wire \$1 ;
   wire \$2 ;
   wire \$3 ;
@@ -21681,7 +22301,7 @@ module \biss_master_axil.ch1.core.controller.ready_check (config_ok, first_clock
   assign \$3  = first_clock ? slo_stuck_live : slo_stuck;
   assign \$4  = first_clock ? quiet_live : quiet;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$85 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     aborted = 1'h0;
     if (\$2 ) begin
     end else if (abort) begin
@@ -21689,7 +22309,7 @@ module \biss_master_axil.ch1.core.controller.ready_check (config_ok, first_clock
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$85 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     ready = 1'h0;
     if (\$2 ) begin
     end else if (abort) begin
@@ -21698,7 +22318,7 @@ module \biss_master_axil.ch1.core.controller.ready_check (config_ok, first_clock
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$85 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     stuck_low = 1'h0;
     if (\$2 ) begin
     end else if (abort) begin
@@ -21708,7 +22328,7 @@ module \biss_master_axil.ch1.core.controller.ready_check (config_ok, first_clock
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$85 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     bad_config = 1'h0;
     if (\$2 ) begin
       bad_config = 1'h1;
@@ -21822,7 +22442,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.counters (rst, clear, events, counts, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$86  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$69  = 0;
   reg [20:0] \$1 ;
   reg \$2 ;
   input clear;
@@ -22136,14 +22756,14 @@ module \biss_master_axil.ch1.core.counters (rst, clear, events, counts, clk);
     .rst(rst)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     \$1  = events;
     if (rst) begin
       \$1  = 21'h000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     \$2  = clear;
     if (rst) begin
       \$2  = 1'h0;
@@ -22279,6 +22899,924 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.counters.count_aborted (rst, inc, clear, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$70  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_axil.ch1.core.counters.count_ca_aborted (rst, inc, clear, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$71  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_axil.ch1.core.counters.count_ca_crc4_error (rst, inc, clear, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$72  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_axil.ch1.core.counters.count_ca_data_fault (rst, inc, clear, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$73  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_axil.ch1.core.counters.count_ca_no_answer (rst, inc, clear, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$74  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_axil.ch1.core.counters.count_ca_refused (rst, inc, clear, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$75  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_axil.ch1.core.counters.count_crc_word0 (rst, inc, clear, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$76  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_axil.ch1.core.counters.count_crc_word1 (rst, inc, clear, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$77  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_axil.ch1.core.counters.count_delay_jump (rst, inc, clear, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$78  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_axil.ch1.core.counters.count_delay_range (rst, inc, clear, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$79  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$79 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$79 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_axil.ch1.core.counters.count_lc_repeat (rst, inc, clear, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$80  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$80 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$80 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_axil.ch1.core.counters.count_lc_skip (rst, inc, clear, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$81  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$81 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$81 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_axil.ch1.core.counters.count_lc_zero (rst, inc, clear, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$82  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_axil.ch1.core.counters.count_no_ack (rst, inc, clear, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$83  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$83 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$83 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_axil.ch1.core.counters.count_no_start (rst, inc, clear, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$84  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_axil.ch1.core.counters.count_no_stop (rst, inc, clear, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$85  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$85 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$85 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_axil.ch1.core.counters.count_noise_event (rst, inc, clear, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$86  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_axil.ch1.core.counters.count_noisy_line (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$87  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -22332,7 +23870,7 @@ module \biss_master_axil.ch1.core.counters.count_aborted (rst, inc, clear, count
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_ca_aborted (rst, inc, clear, count, clk);
+module \biss_master_axil.ch1.core.counters.count_overrun (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$88  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -22386,7 +23924,7 @@ module \biss_master_axil.ch1.core.counters.count_ca_aborted (rst, inc, clear, co
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_ca_crc4_error (rst, inc, clear, count, clk);
+module \biss_master_axil.ch1.core.counters.count_slo_stuck_low (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$89  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -22440,7 +23978,7 @@ module \biss_master_axil.ch1.core.counters.count_ca_crc4_error (rst, inc, clear,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_ca_data_fault (rst, inc, clear, count, clk);
+module \biss_master_axil.ch1.core.counters.count_spw_mismatch (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$90  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -22494,1001 +24032,88 @@ module \biss_master_axil.ch1.core.counters.count_ca_data_fault (rst, inc, clear,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_ca_no_answer (rst, inc, clear, count, clk);
+module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, sample, \bit , crcs, receiver_clear, done, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1, lc, cpw_top
+, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$91  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_ca_refused (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$92  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_crc_word0 (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$93  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_crc_word1 (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$94  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$94 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$94 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_delay_jump (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$95  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_delay_range (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$96  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$96 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$96 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_lc_repeat (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$97  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_lc_skip (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$98  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_lc_zero (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$99  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_no_ack (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$100  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_no_start (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$101  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_no_stop (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$102  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_noise_event (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$103  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_noisy_line (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$104  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$104 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$104 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_overrun (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$105  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_slo_stuck_low (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$106  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$106 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$106 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_spw_mismatch (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$107  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$107 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$107 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, sample, \bit , receiver_clear, done, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1, lc, cpw_top, crc_ok
-, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$108  = 0;
   wire [6:0] \$1 ;
-  wire [1:0] \$10 ;
-  reg [2:0] \$100 ;
+  wire \$10 ;
+  reg [15:0] \$100 ;
   reg \$101 ;
-  reg [6:0] \$102 ;
-  reg \$103 ;
-  reg \$104 ;
+  reg \$102 ;
+  reg [15:0] \$103 ;
+  reg [2:0] \$104 ;
   reg \$105 ;
-  reg \$106 ;
+  reg [6:0] \$106 ;
   reg \$107 ;
-  reg [54:0] \$108 ;
-  reg [1:0] \$109 ;
-  wire [6:0] \$11 ;
-  reg [1:0] \$110 ;
-  reg [39:0] \$111 ;
-  reg [5:0] \$112 ;
-  reg [39:0] \$113 ;
-  wire \$12 ;
-  reg [3:0] \$13 ;
-  wire [6:0] \$14 ;
-  wire \$15 ;
+  reg \$108 ;
+  reg \$109 ;
+  wire [1:0] \$11 ;
+  reg \$110 ;
+  reg \$111 ;
+  reg \$112 ;
+  reg [54:0] \$113 ;
+  reg [1:0] \$114 ;
+  reg [1:0] \$115 ;
+  reg [39:0] \$116 ;
+  reg [5:0] \$117 ;
+  reg [39:0] \$118 ;
+  wire [6:0] \$12 ;
+  wire \$13 ;
+  reg [3:0] \$14 ;
+  wire [6:0] \$15 ;
   wire \$16 ;
-  wire [6:0] \$17 ;
-  wire [7:0] \$18 ;
-  reg [6:0] \$19 ;
+  wire \$17 ;
+  wire [6:0] \$18 ;
+  wire [7:0] \$19 ;
   wire [7:0] \$2 ;
-  wire [7:0] \$20 ;
-  reg [6:0] \$21 ;
-  wire [7:0] \$22 ;
-  reg [6:0] \$23 ;
-  wire [7:0] \$24 ;
-  wire \$25 ;
-  wire [1:0] \$26 ;
-  wire [6:0] \$27 ;
-  wire \$28 ;
-  reg [3:0] \$29 ;
+  reg [6:0] \$20 ;
+  wire [7:0] \$21 ;
+  reg [6:0] \$22 ;
+  wire [7:0] \$23 ;
+  reg [6:0] \$24 ;
+  wire [7:0] \$25 ;
+  wire [7:0] \$26 ;
+  wire \$27 ;
+  wire [1:0] \$28 ;
+  wire [6:0] \$29 ;
   reg [6:0] \$3 ;
-  wire [6:0] \$30 ;
-  wire \$31 ;
-  wire \$32 ;
+  wire \$30 ;
+  reg [3:0] \$31 ;
+  wire [6:0] \$32 ;
   wire \$33 ;
   wire \$34 ;
-  wire [16:0] \$35 ;
+  wire \$35 ;
   wire \$36 ;
-  wire \$37 ;
+  wire [16:0] \$37 ;
   wire \$38 ;
-  wire [7:0] \$39 ;
+  wire \$39 ;
   wire [7:0] \$4 ;
-  wire [6:0] \$40 ;
-  wire \$41 ;
-  wire \$42 ;
-  wire [6:0] \$43 ;
+  wire \$40 ;
+  wire [7:0] \$41 ;
+  wire [6:0] \$42 ;
+  wire \$43 ;
   wire \$44 ;
-  wire \$45 ;
-  wire [6:0] \$46 ;
+  wire [6:0] \$45 ;
+  wire \$46 ;
   wire \$47 ;
-  wire \$48 ;
+  wire [6:0] \$48 ;
   wire \$49 ;
   reg [6:0] \$5 ;
   wire \$50 ;
   wire [6:0] \$51 ;
   wire \$52 ;
-  wire [2:0] \$53 ;
-  wire \$54 ;
-  wire [1:0] \$55 ;
+  wire \$53 ;
+  wire [6:0] \$54 ;
+  wire \$55 ;
   wire \$56 ;
   wire \$57 ;
   wire \$58 ;
-  wire \$59 ;
+  wire [6:0] \$59 ;
   wire [7:0] \$6 ;
   wire \$60 ;
-  wire \$61 ;
+  wire [2:0] \$61 ;
   wire \$62 ;
-  wire \$63 ;
+  wire [1:0] \$63 ;
   wire \$64 ;
   wire \$65 ;
   wire \$66 ;
@@ -23517,29 +24142,53 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   wire \$87 ;
   wire \$88 ;
   wire \$89 ;
-  wire \$9 ;
+  wire [7:0] \$9 ;
   wire \$90 ;
-  wire \$91 ;
+  wire [6:0] \$91 ;
   wire \$92 ;
   wire \$93 ;
-  reg \$94 ;
-  reg \$95 ;
-  reg [15:0] \$96 ;
-  reg \$97 ;
+  wire \$94 ;
+  wire \$95 ;
+  wire \$96 ;
+  wire \$97 ;
   reg \$98 ;
-  reg [15:0] \$99 ;
+  reg \$99 ;
   input \bit ;
   wire \bit ;
-  wire \bit$47 ;
-  wire \bit$53 ;
+  wire \bit$51 ;
   output cds;
   reg cds = 1'h0;
+  wire check;
   input clk;
   wire clk;
+  wire \cover ;
   output [39:0] cpw_top;
   reg [39:0] cpw_top = 40'h0000000000;
   output [1:0] crc_ok;
   wire [1:0] crc_ok;
+  input [75:0] crcs;
+  wire [75:0] crcs;
+  wire [75:0] \crcs$46 ;
+  wire [37:0] \crcs$46[0] ;
+  wire \crcs$46[0].inverted ;
+  wire [15:0] \crcs$46[0].poly ;
+  wire [15:0] \crcs$46[0].start ;
+  wire [4:0] \crcs$46[0].width ;
+  wire [37:0] \crcs$46[1] ;
+  wire \crcs$46[1].inverted ;
+  wire [15:0] \crcs$46[1].poly ;
+  wire [15:0] \crcs$46[1].start ;
+  wire [4:0] \crcs$46[1].width ;
+  wire [37:0] \crcs[0] ;
+  wire \crcs[0].inverted ;
+  wire [15:0] \crcs[0].poly ;
+  wire [15:0] \crcs[0].start ;
+  wire [4:0] \crcs[0].width ;
+  wire [37:0] \crcs[1] ;
+  wire \crcs[1].inverted ;
+  wire [15:0] \crcs[1].poly ;
+  wire [15:0] \crcs[1].start ;
+  wire [4:0] \crcs[1].width ;
   output [54:0] data0;
   reg [54:0] data0 = 55'h00000000000000;
   output [39:0] data1;
@@ -23547,13 +24196,14 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   reg [2:0] decoder_fsm_state = 3'h0;
   output done;
   reg done = 1'h0;
+  wire first;
   reg [6:0] idx = 7'h00;
+  reg in_crc = 1'h0;
   reg in_data = 1'h0;
   reg in_lc = 1'h0;
   reg in_top = 1'h0;
   reg in_word;
-  wire [1:0] kind;
-  wire [1:0] \kind$50 ;
+  wire last;
   output [5:0] lc;
   reg [5:0] lc = 6'h00;
   output lc_load;
@@ -23563,8 +24213,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   reg [1:0] ne = 2'h0;
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
-  wire ok;
-  wire \ok$54 ;
+  wire [1:0] ok;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -23574,8 +24223,6 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   reg [15:0] slots = 16'h0000;
   output slots_full;
   reg slots_full = 1'h0;
-  wire start;
-  wire \start$51 ;
   output [15:0] start_slot;
   reg [15:0] start_slot = 16'h0000;
   output started;
@@ -23584,8 +24231,6 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   reg stop_bit = 1'h0;
   output stopped;
   reg stopped = 1'h0;
-  wire valid;
-  wire \valid$52 ;
   reg w0_data_at0 = 1'h0;
   reg [6:0] w0_data_end_m1 = 7'h00;
   reg [6:0] w0_data_end_p1 = 7'h00;
@@ -23601,6 +24246,8 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   reg [6:0] w1_nenw_end_m1 = 7'h00;
   reg [6:0] w1_word_end_m1 = 7'h00;
   reg word = 1'h0;
+  (* init = 1'h0 *)
+  wire \word$54 ;
   input [1:0] word_count;
   wire [1:0] word_count;
   input [19:0] words;
@@ -23610,6 +24257,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \words[0].crc ;
   wire [5:0] \words[0].data_bits ;
   wire \words[0].lc ;
@@ -23619,6 +24267,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \words[1].crc ;
   wire [5:0] \words[1].data_bits ;
   wire \words[1].lc ;
@@ -23627,87 +24276,93 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   assign \$2  = words[5:0] + 7'h7f;
   assign \$4  = words[5:0] + \$3 ;
   assign \$6  = words[5:0] + \$5 ;
-  assign \$8  = words[5:0] + \$7 ;
-  assign \$9  = | words[5:0];
-  assign \$10  = words[6] ? 2'h2 : 2'h0;
-  assign \$11  = words[5:0] + \$10 ;
-  assign \$12  = ! \$11 ;
-  assign \$14  = words[5:0] + \$13 ;
-  assign \$15  = | \$14 ;
-  assign \$16  = \$12  & \$15 ;
-  assign \$17  = words[15:10] + 1'h1;
-  assign \$18  = words[15:10] + 7'h7f;
-  assign \$20  = words[15:10] + \$19 ;
-  assign \$22  = words[15:10] + \$21 ;
-  assign \$24  = words[15:10] + \$23 ;
-  assign \$25  = | words[15:10];
-  assign \$26  = words[16] ? 2'h2 : 2'h0;
-  assign \$27  = words[15:10] + \$26 ;
-  assign \$28  = ! \$27 ;
-  assign \$30  = words[15:10] + \$29 ;
-  assign \$31  = | \$30 ;
-  assign \$32  = \$28  & \$31 ;
-  assign \$33  = ~ slots_full;
-  assign \$34  = sample & \$33 ;
-  assign \$35  = slots + 1'h1;
-  assign \$36  = slots == 16'hfffe;
-  assign \$37  = sample & \bit ;
-  assign \$38  = | words[15:10];
-  assign \$39  = idx + 1'h1;
-  assign \$40  = word ? w1_data_end_m1 : w0_data_end_m1;
-  assign \$41  = idx != \$40 ;
-  assign \$42  = in_data & \$41 ;
-  assign \$43  = word ? w1_nenw_end_m1 : w0_nenw_end_m1;
-  assign \$44  = idx == \$43 ;
-  assign \$45  = in_lc | \$44 ;
-  assign \$46  = word ? w1_lc_end_m1 : w0_lc_end_m1;
-  assign \$47  = idx != \$46 ;
-  assign \$48  = \$45  & \$47 ;
-  assign \$49  = idx != w1_data_end_m1;
-  assign \$50  = in_top & \$49 ;
-  assign \$51  = word ? w1_word_end_m1 : w0_word_end_m1;
+  assign \$8  = \$7  + crcs[4:0];
+  assign \$9  = words[5:0] + \$8 [6:0];
+  assign \$10  = | words[5:0];
+  assign \$11  = words[6] ? 2'h2 : 2'h0;
+  assign \$12  = words[5:0] + \$11 ;
+  assign \$13  = ! \$12 ;
+  assign \$15  = words[5:0] + \$14 ;
+  assign \$16  = | \$15 ;
+  assign \$17  = \$13  & \$16 ;
+  assign \$18  = words[15:10] + 1'h1;
+  assign \$19  = words[15:10] + 7'h7f;
+  assign \$21  = words[15:10] + \$20 ;
+  assign \$23  = words[15:10] + \$22 ;
+  assign \$25  = \$24  + crcs[42:38];
+  assign \$26  = words[15:10] + \$25 [6:0];
+  assign \$27  = | words[15:10];
+  assign \$28  = words[16] ? 2'h2 : 2'h0;
+  assign \$29  = words[15:10] + \$28 ;
+  assign \$30  = ! \$29 ;
+  assign \$32  = words[15:10] + \$31 ;
+  assign \$33  = | \$32 ;
+  assign \$34  = \$30  & \$33 ;
+  assign \$35  = ~ slots_full;
+  assign \$36  = sample & \$35 ;
+  assign \$37  = slots + 1'h1;
+  assign \$38  = slots == 16'hfffe;
+  assign \$39  = sample & \bit ;
+  assign \$40  = | words[15:10];
+  assign \$41  = idx + 1'h1;
+  assign \$42  = word ? w1_data_end_m1 : w0_data_end_m1;
+  assign \$43  = idx != \$42 ;
+  assign \$44  = in_data & \$43 ;
+  assign \$45  = word ? w1_nenw_end_m1 : w0_nenw_end_m1;
+  assign \$46  = idx == \$45 ;
+  assign \$47  = in_lc | \$46 ;
+  assign \$48  = word ? w1_lc_end_m1 : w0_lc_end_m1;
+  assign \$49  = idx != \$48 ;
+  assign \$50  = \$47  & \$49 ;
+  assign \$51  = word ? w1_lc_end_m1 : w0_lc_end_m1;
   assign \$52  = idx == \$51 ;
-  assign \$53  = word_count - 1'h1;
-  assign \$54  = word == \$53 ;
-  assign \$55  = word + 1'h1;
-  assign \$56  = ! word;
-  assign \$57  = in_word & \$56 ;
-  assign \$58  = \$57  & in_data;
-  assign \$59  = ~ words[6];
-  assign \$60  = ! word;
-  assign \$61  = in_word & \$60 ;
-  assign \$62  = idx == words[5:0];
-  assign \$63  = \$61  & \$62 ;
+  assign \$53  = in_crc | \$52 ;
+  assign \$54  = word ? w1_word_end_m1 : w0_word_end_m1;
+  assign \$55  = idx != \$54 ;
+  assign \$56  = \$53  & \$55 ;
+  assign \$57  = idx != w1_data_end_m1;
+  assign \$58  = in_top & \$57 ;
+  assign \$59  = word ? w1_word_end_m1 : w0_word_end_m1;
+  assign \$60  = idx == \$59 ;
+  assign \$61  = word_count - 1'h1;
+  assign \$62  = word == \$61 ;
+  assign \$63  = word + 1'h1;
   assign \$64  = ! word;
   assign \$65  = in_word & \$64 ;
-  assign \$66  = idx == w0_data_end_p1;
-  assign \$67  = \$65  & \$66 ;
+  assign \$66  = \$65  & in_data;
+  assign \$67  = ~ words[6];
+  assign \$68  = ! word;
   assign \$69  = in_word & \$68 ;
-  assign \$70  = \$69  & in_data;
-  assign \$71  = ~ words[16];
+  assign \$70  = idx == words[5:0];
+  assign \$71  = \$69  & \$70 ;
+  assign \$72  = ! word;
   assign \$73  = in_word & \$72 ;
-  assign \$74  = idx == words[15:10];
+  assign \$74  = idx == w0_data_end_p1;
   assign \$75  = \$73  & \$74 ;
   assign \$77  = in_word & \$76 ;
-  assign \$78  = idx == w1_data_end_p1;
-  assign \$79  = \$77  & \$78 ;
-  assign \$80  = in_word & in_top;
+  assign \$78  = \$77  & in_data;
+  assign \$79  = ~ words[16];
+  assign \$81  = in_word & \$80 ;
+  assign \$82  = idx == words[15:10];
+  assign \$83  = \$81  & \$82 ;
+  assign \$85  = in_word & \$84 ;
+  assign \$86  = idx == w1_data_end_p1;
+  assign \$87  = \$85  & \$86 ;
+  assign \$88  = in_word & in_top;
   assign lc_load = in_word & in_lc;
-  assign \$81  = ! word;
-  assign \$82  = in_word & \$81 ;
-  assign \$83  = ! idx;
-  assign start = \$82  & \$83 ;
-  assign \$84  = ! word;
-  assign valid = in_word & \$84 ;
-  assign \$86  = in_word & \$85 ;
-  assign \$87  = ! idx;
-  assign \start$51  = \$86  & \$87 ;
-  assign \valid$52  = in_word & \$88 ;
-  assign \$89  = ! decoder_fsm_state;
-  assign \$90  = decoder_fsm_state == 1'h1;
-  assign \$91  = decoder_fsm_state == 2'h2;
-  assign \$92  = decoder_fsm_state == 2'h3;
-  assign \$93  = decoder_fsm_state == 3'h4;
+  assign \$89  = ! idx;
+  assign first = in_word & \$89 ;
+  assign \$90  = ~ in_crc;
+  assign \cover  = in_word & \$90 ;
+  assign check = in_word & in_crc;
+  assign \$91  = word ? w1_word_end_m1 : w0_word_end_m1;
+  assign \$92  = idx == \$91 ;
+  assign last = in_word & \$92 ;
+  assign \$93  = ! decoder_fsm_state;
+  assign \$94  = decoder_fsm_state == 1'h1;
+  assign \$95  = decoder_fsm_state == 2'h2;
+  assign \$96  = decoder_fsm_state == 2'h3;
+  assign \$97  = decoder_fsm_state == 3'h4;
   always @(posedge clk)
     w0_data_end_p1 <= \$1 ;
   always @(posedge clk)
@@ -23717,87 +24372,82 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   always @(posedge clk)
     w0_lc_end_m1 <= \$6 [6:0];
   always @(posedge clk)
-    w0_word_end_m1 <= \$8 [6:0];
+    w0_word_end_m1 <= \$9 [6:0];
   always @(posedge clk)
-    w0_data_at0 <= \$9 ;
+    w0_data_at0 <= \$10 ;
   always @(posedge clk)
-    w0_lc_at0 <= \$16 ;
+    w0_lc_at0 <= \$17 ;
   always @(posedge clk)
-    w1_data_end_p1 <= \$17 ;
+    w1_data_end_p1 <= \$18 ;
   always @(posedge clk)
-    w1_data_end_m1 <= \$18 [6:0];
+    w1_data_end_m1 <= \$19 [6:0];
   always @(posedge clk)
-    w1_nenw_end_m1 <= \$20 [6:0];
+    w1_nenw_end_m1 <= \$21 [6:0];
   always @(posedge clk)
-    w1_lc_end_m1 <= \$22 [6:0];
+    w1_lc_end_m1 <= \$23 [6:0];
   always @(posedge clk)
-    w1_word_end_m1 <= \$24 [6:0];
+    w1_word_end_m1 <= \$26 [6:0];
   always @(posedge clk)
-    w1_data_at0 <= \$25 ;
+    w1_data_at0 <= \$27 ;
   always @(posedge clk)
-    w1_lc_at0 <= \$32 ;
+    w1_lc_at0 <= \$34 ;
   always @(posedge clk)
-    done <= \$94 ;
+    done <= \$98 ;
   always @(posedge clk)
-    stopped <= \$95 ;
+    stopped <= \$99 ;
   always @(posedge clk)
-    slots <= \$96 ;
+    slots <= \$100 ;
   always @(posedge clk)
-    slots_full <= \$97 ;
+    slots_full <= \$101 ;
   always @(posedge clk)
-    started <= \$98 ;
+    started <= \$102 ;
   always @(posedge clk)
-    start_slot <= \$99 ;
+    start_slot <= \$103 ;
   always @(posedge clk)
-    decoder_fsm_state <= \$100 ;
+    decoder_fsm_state <= \$104 ;
   always @(posedge clk)
-    cds <= \$101 ;
+    cds <= \$105 ;
   always @(posedge clk)
-    idx <= \$102 ;
+    idx <= \$106 ;
   always @(posedge clk)
-    in_data <= \$103 ;
+    in_data <= \$107 ;
   always @(posedge clk)
-    in_lc <= \$104 ;
+    in_lc <= \$108 ;
   always @(posedge clk)
-    in_top <= \$105 ;
+    in_crc <= \$109 ;
   always @(posedge clk)
-    word <= \$106 ;
+    in_top <= \$110 ;
   always @(posedge clk)
-    stop_bit <= \$107 ;
+    word <= \$111 ;
   always @(posedge clk)
-    data0 <= \$108 ;
+    stop_bit <= \$112 ;
   always @(posedge clk)
-    ne <= \$109 ;
+    data0 <= \$113 ;
   always @(posedge clk)
-    nw <= \$110 ;
+    ne <= \$114 ;
   always @(posedge clk)
-    data1 <= \$111 ;
+    nw <= \$115 ;
   always @(posedge clk)
-    lc <= \$112 ;
+    data1 <= \$116 ;
   always @(posedge clk)
-    cpw_top <= \$113 ;
-  \biss_master_axil.ch1.core.decoder.crc0  crc0 (
+    lc <= \$117 ;
+  always @(posedge clk)
+    cpw_top <= \$118 ;
+  \biss_master_axil.ch1.core.decoder.crc  crc (
     .\bit (\bit ),
+    .check(check),
     .clk(clk),
-    .kind(words[9:8]),
-    .ok(ok),
+    .\cover (\cover ),
+    .crcs(crcs),
+    .first(first),
+    .last(last),
+    .ok(crc_ok),
     .receiver_clear(receiver_clear),
     .rst(rst),
-    .start(start),
-    .valid(valid)
-  );
-  \biss_master_axil.ch1.core.decoder.crc1  crc1 (
-    .\bit (\bit ),
-    .clk(clk),
-    .kind(words[19:18]),
-    .ok(\ok$54 ),
-    .receiver_clear(receiver_clear),
-    .rst(rst),
-    .start(\start$51 ),
-    .valid(\valid$52 )
+    .word(word)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
     (* full_case = 32'd1 *)
     casez (words[6])
       1'h0:
@@ -23807,7 +24457,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -23821,136 +24471,88 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
-    (* full_case = 32'd1 *)
-    casez (words[9:6])
-      4'h0:
-          \$7  = 7'h7f;
-      4'h1:
-          \$7  = 7'h01;
-      4'h2:
-          \$7  = 7'h05;
-      4'h3:
-          \$7  = 7'h07;
-      4'h4:
-          \$7  = 7'h05;
-      4'h5:
-          \$7  = 7'h07;
-      4'h6:
-          \$7  = 7'h0b;
-      4'h7:
-          \$7  = 7'h0d;
-      4'h8:
-          \$7  = 7'h0f;
-      4'h9:
-          \$7  = 7'h11;
-      4'ha:
-          \$7  = 7'h15;
-      4'hb:
-          \$7  = 7'h17;
-      4'hc:
-          \$7  = 7'h7f;
-      4'hd:
-          \$7  = 7'h01;
-      4'he:
-          \$7  = 7'h05;
-      4'hf:
-          \$7  = 7'h07;
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
-          \$13  = 4'h0;
+          \$7  = 7'h7f;
       2'h1:
-          \$13  = 4'h2;
+          \$7  = 7'h01;
       2'h2:
-          \$13  = 4'h6;
+          \$7  = 7'h05;
       2'h3:
-          \$13  = 4'h8;
+          \$7  = 7'h07;
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    (* full_case = 32'd1 *)
+    casez (words[7:6])
+      2'h0:
+          \$14  = 4'h0;
+      2'h1:
+          \$14  = 4'h2;
+      2'h2:
+          \$14  = 4'h6;
+      2'h3:
+          \$14  = 4'h8;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
     (* full_case = 32'd1 *)
     casez (words[16])
       1'h0:
-          \$19  = 7'h7f;
+          \$20  = 7'h7f;
       1'h1:
-          \$19  = 7'h01;
+          \$20  = 7'h01;
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
     (* full_case = 32'd1 *)
     casez (words[17:16])
       2'h0:
-          \$21  = 7'h7f;
+          \$22  = 7'h7f;
       2'h1:
-          \$21  = 7'h01;
+          \$22  = 7'h01;
       2'h2:
-          \$21  = 7'h05;
+          \$22  = 7'h05;
       2'h3:
-          \$21  = 7'h07;
+          \$22  = 7'h07;
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
-    (* full_case = 32'd1 *)
-    casez (words[19:16])
-      4'h0:
-          \$23  = 7'h7f;
-      4'h1:
-          \$23  = 7'h01;
-      4'h2:
-          \$23  = 7'h05;
-      4'h3:
-          \$23  = 7'h07;
-      4'h4:
-          \$23  = 7'h05;
-      4'h5:
-          \$23  = 7'h07;
-      4'h6:
-          \$23  = 7'h0b;
-      4'h7:
-          \$23  = 7'h0d;
-      4'h8:
-          \$23  = 7'h0f;
-      4'h9:
-          \$23  = 7'h11;
-      4'ha:
-          \$23  = 7'h15;
-      4'hb:
-          \$23  = 7'h17;
-      4'hc:
-          \$23  = 7'h7f;
-      4'hd:
-          \$23  = 7'h01;
-      4'he:
-          \$23  = 7'h05;
-      4'hf:
-          \$23  = 7'h07;
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
     (* full_case = 32'd1 *)
     casez (words[17:16])
       2'h0:
-          \$29  = 4'h0;
+          \$24  = 7'h7f;
       2'h1:
-          \$29  = 4'h2;
+          \$24  = 7'h01;
       2'h2:
-          \$29  = 4'h6;
+          \$24  = 7'h05;
       2'h3:
-          \$29  = 4'h8;
+          \$24  = 7'h07;
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
-    \$94  = 1'h0;
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    (* full_case = 32'd1 *)
+    casez (words[17:16])
+      2'h0:
+          \$31  = 4'h0;
+      2'h1:
+          \$31  = 4'h2;
+      2'h2:
+          \$31  = 4'h6;
+      2'h3:
+          \$31  = 4'h8;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$98  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
@@ -23958,75 +24560,11 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
           /* empty */;
       3'h2:
           if (sample) begin
-            if (\$52 ) begin
-              if (\$54 ) begin
-                \$94  = 1'h1;
+            if (\$60 ) begin
+              if (\$62 ) begin
+                \$98  = 1'h1;
               end
             end
-          end
-    endcase
-    if (receiver_clear) begin
-      \$94  = 1'h0;
-    end
-    if (rst) begin
-      \$94  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
-    \$95  = 1'h0;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h3:
-          if (sample) begin
-            \$95  = 1'h1;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$95  = 1'h0;
-    end
-    if (rst) begin
-      \$95  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
-    \$96  = slots;
-    if (\$34 ) begin
-      \$96  = \$35 [15:0];
-    end
-    if (receiver_clear) begin
-      \$96  = 16'h0000;
-    end
-    if (rst) begin
-      \$96  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
-    \$97  = slots_full;
-    if (\$34 ) begin
-      \$97  = \$36 ;
-    end
-    if (receiver_clear) begin
-      \$97  = 1'h0;
-    end
-    if (rst) begin
-      \$97  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
-    \$98  = started;
-    casez (decoder_fsm_state)
-      3'h0:
-          if (\$37 ) begin
-            \$98  = 1'h1;
           end
     endcase
     if (receiver_clear) begin
@@ -24037,162 +24575,126 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
-    \$99  = start_slot;
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$99  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
-          if (\$37 ) begin
-            \$99  = slots;
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h3:
+          if (sample) begin
+            \$99  = 1'h1;
           end
     endcase
     if (receiver_clear) begin
-      \$99  = 16'h0000;
+      \$99  = 1'h0;
     end
     if (rst) begin
-      \$99  = 16'h0000;
+      \$99  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
-    \$100  = decoder_fsm_state;
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$100  = slots;
+    if (\$36 ) begin
+      \$100  = \$37 [15:0];
+    end
+    if (receiver_clear) begin
+      \$100  = 16'h0000;
+    end
+    if (rst) begin
+      \$100  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$101  = slots_full;
+    if (\$36 ) begin
+      \$101  = \$38 ;
+    end
+    if (receiver_clear) begin
+      \$101  = 1'h0;
+    end
+    if (rst) begin
+      \$101  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$102  = started;
     casez (decoder_fsm_state)
       3'h0:
-          if (\$37 ) begin
-            \$100  = 3'h1;
+          if (\$39 ) begin
+            \$102  = 1'h1;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$102  = 1'h0;
+    end
+    if (rst) begin
+      \$102  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$103  = start_slot;
+    casez (decoder_fsm_state)
+      3'h0:
+          if (\$39 ) begin
+            \$103  = slots;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$103  = 16'h0000;
+    end
+    if (rst) begin
+      \$103  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$104  = decoder_fsm_state;
+    casez (decoder_fsm_state)
+      3'h0:
+          if (\$39 ) begin
+            \$104  = 3'h1;
           end
       3'h1:
           if (sample) begin
-            \$100  = 3'h2;
+            \$104  = 3'h2;
           end
       3'h2:
           if (sample) begin
-            if (\$52 ) begin
-              if (\$54 ) begin
-                \$100  = 3'h3;
+            if (\$60 ) begin
+              if (\$62 ) begin
+                \$104  = 3'h3;
               end
             end
           end
       3'h3:
           if (sample) begin
-            \$100  = 3'h4;
+            \$104  = 3'h4;
           end
     endcase
     if (receiver_clear) begin
-      \$100  = 3'h0;
+      \$104  = 3'h0;
     end
     if (rst) begin
-      \$100  = 3'h0;
+      \$104  = 3'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
-    \$101  = cds;
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$105  = cds;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
       3'h1:
           if (sample) begin
-            \$101  = \bit ;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$101  = 1'h0;
-    end
-    if (rst) begin
-      \$101  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
-    \$102  = idx;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$102  = 7'h00;
-          end
-      3'h2:
-          if (sample) begin
-            \$102  = \$39 [6:0];
-            if (\$52 ) begin
-              \$102  = 7'h00;
-            end
-          end
-    endcase
-    if (receiver_clear) begin
-      \$102  = 7'h00;
-    end
-    if (rst) begin
-      \$102  = 7'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
-    \$103  = in_data;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$103  = w0_data_at0;
-          end
-      3'h2:
-          if (sample) begin
-            \$103  = \$42 ;
-            if (\$52 ) begin
-              \$103  = w1_data_at0;
-            end
-          end
-    endcase
-    if (receiver_clear) begin
-      \$103  = 1'h0;
-    end
-    if (rst) begin
-      \$103  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
-    \$104  = in_lc;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$104  = w0_lc_at0;
-          end
-      3'h2:
-          if (sample) begin
-            \$104  = \$48 ;
-            if (\$52 ) begin
-              \$104  = w1_lc_at0;
-            end
-          end
-    endcase
-    if (receiver_clear) begin
-      \$104  = 1'h0;
-    end
-    if (rst) begin
-      \$104  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
-    \$105  = in_top;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$105  = \$38 ;
-          end
-      3'h2:
-          if (sample) begin
-            \$105  = \$50 ;
-            if (\$52 ) begin
-              \$105  = 1'h0;
-            end
+            \$105  = \bit ;
           end
     endcase
     if (receiver_clear) begin
@@ -24203,36 +24705,158 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
-    \$106  = word;
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$106  = idx;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
       3'h1:
           if (sample) begin
-            \$106  = 1'h0;
+            \$106  = 7'h00;
           end
       3'h2:
           if (sample) begin
-            if (\$52 ) begin
+            \$106  = \$41 [6:0];
+            if (\$60 ) begin
+              \$106  = 7'h00;
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$106  = 7'h00;
+    end
+    if (rst) begin
+      \$106  = 7'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$107  = in_data;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$107  = w0_data_at0;
+          end
+      3'h2:
+          if (sample) begin
+            \$107  = \$44 ;
+            if (\$60 ) begin
+              \$107  = w1_data_at0;
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$107  = 1'h0;
+    end
+    if (rst) begin
+      \$107  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$108  = in_lc;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$108  = w0_lc_at0;
+          end
+      3'h2:
+          if (sample) begin
+            \$108  = \$50 ;
+            if (\$60 ) begin
+              \$108  = w1_lc_at0;
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$108  = 1'h0;
+    end
+    if (rst) begin
+      \$108  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$109  = in_crc;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$109  = 1'h0;
+          end
+      3'h2:
+          if (sample) begin
+            \$109  = \$56 ;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$109  = 1'h0;
+    end
+    if (rst) begin
+      \$109  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$110  = in_top;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$110  = \$40 ;
+          end
+      3'h2:
+          if (sample) begin
+            \$110  = \$58 ;
+            if (\$60 ) begin
+              \$110  = 1'h0;
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$110  = 1'h0;
+    end
+    if (rst) begin
+      \$110  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$111  = word;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$111  = 1'h0;
+          end
+      3'h2:
+          if (sample) begin
+            if (\$60 ) begin
               (* full_case = 32'd1 *)
-              if (\$54 ) begin
+              if (\$62 ) begin
               end else begin
-                \$106  = \$55 [0];
+                \$111  = \$63 [0];
               end
             end
           end
     endcase
     if (receiver_clear) begin
-      \$106  = 1'h0;
+      \$111  = 1'h0;
     end
     if (rst) begin
-      \$106  = 1'h0;
+      \$111  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
-    \$107  = stop_bit;
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$112  = stop_bit;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
@@ -24242,112 +24866,112 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
           /* empty */;
       3'h3:
           if (sample) begin
-            \$107  = \bit ;
+            \$112  = \bit ;
           end
     endcase
     if (receiver_clear) begin
-      \$107  = 1'h0;
+      \$112  = 1'h0;
     end
     if (rst) begin
-      \$107  = 1'h0;
+      \$112  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
-    \$108  = data0;
-    if (\$58 ) begin
-      \$108  = { data0[53:0], \bit  };
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$113  = data0;
+    if (\$66 ) begin
+      \$113  = { data0[53:0], \bit  };
     end
     if (receiver_clear) begin
-      \$108  = 55'h00000000000000;
+      \$113  = 55'h00000000000000;
     end
     if (rst) begin
-      \$108  = 55'h00000000000000;
+      \$113  = 55'h00000000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
-    \$109  = ne;
-    if (\$59 ) begin
-      \$109 [0] = 1'h1;
-    end else if (\$63 ) begin
-      \$109 [0] = \bit ;
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$114  = ne;
+    if (\$67 ) begin
+      \$114 [0] = 1'h1;
+    end else if (\$71 ) begin
+      \$114 [0] = \bit ;
     end
-    if (\$71 ) begin
-      \$109 [1] = 1'h1;
+    if (\$79 ) begin
+      \$114 [1] = 1'h1;
+    end else if (\$83 ) begin
+      \$114 [1] = \bit ;
+    end
+    if (receiver_clear) begin
+      \$114  = 2'h0;
+    end
+    if (rst) begin
+      \$114  = 2'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$115  = nw;
+    if (\$67 ) begin
+      \$115 [0] = 1'h1;
+    end else if (\$71 ) begin
     end else if (\$75 ) begin
-      \$109 [1] = \bit ;
+      \$115 [0] = \bit ;
+    end
+    if (\$79 ) begin
+      \$115 [1] = 1'h1;
+    end else if (\$83 ) begin
+    end else if (\$87 ) begin
+      \$115 [1] = \bit ;
     end
     if (receiver_clear) begin
-      \$109  = 2'h0;
+      \$115  = 2'h0;
     end
     if (rst) begin
-      \$109  = 2'h0;
+      \$115  = 2'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
-    \$110  = nw;
-    if (\$59 ) begin
-      \$110 [0] = 1'h1;
-    end else if (\$63 ) begin
-    end else if (\$67 ) begin
-      \$110 [0] = \bit ;
-    end
-    if (\$71 ) begin
-      \$110 [1] = 1'h1;
-    end else if (\$75 ) begin
-    end else if (\$79 ) begin
-      \$110 [1] = \bit ;
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$116  = data1;
+    if (\$78 ) begin
+      \$116  = { data1[38:0], \bit  };
     end
     if (receiver_clear) begin
-      \$110  = 2'h0;
+      \$116  = 40'h0000000000;
     end
     if (rst) begin
-      \$110  = 2'h0;
+      \$116  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
-    \$111  = data1;
-    if (\$70 ) begin
-      \$111  = { data1[38:0], \bit  };
-    end
-    if (receiver_clear) begin
-      \$111  = 40'h0000000000;
-    end
-    if (rst) begin
-      \$111  = 40'h0000000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
-    \$112  = lc;
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$117  = lc;
     if (lc_load) begin
-      \$112  = { lc[4:0], \bit  };
+      \$117  = { lc[4:0], \bit  };
     end
     if (receiver_clear) begin
-      \$112  = 6'h00;
+      \$117  = 6'h00;
     end
     if (rst) begin
-      \$112  = 6'h00;
+      \$117  = 6'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
-    \$113  = cpw_top;
-    if (\$80 ) begin
-      \$113  = { cpw_top[38:0], \bit  };
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$118  = cpw_top;
+    if (\$88 ) begin
+      \$118  = { cpw_top[38:0], \bit  };
     end
     if (receiver_clear) begin
-      \$113  = 40'h0000000000;
+      \$118  = 40'h0000000000;
     end
     if (rst) begin
-      \$113  = 40'h0000000000;
+      \$118  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
     in_word = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -24359,10 +24983,10 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   assign lc_next = { lc[4:0], \bit  };
-  assign kind = words[9:8];
-  assign \bit$47  = \bit ;
-  assign \kind$50  = words[19:18];
-  assign \bit$53  = \bit ;
+  assign \crcs$46  = crcs;
+  assign \bit$51  = \bit ;
+  assign ok = crc_ok;
+  assign \word$54  = word;
   assign \words[0]  = words[9:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -24373,368 +24997,358 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   assign \words[1].nenw  = words[16];
   assign \words[1].lc  = words[17];
   assign \words[1].crc  = words[19:18];
-  assign crc_ok[1] = \ok$54 ;
-  assign crc_ok[0] = ok;
-  assign \$68  = word;
-  assign \$72  = word;
+  assign \crcs[0]  = crcs[37:0];
+  assign \crcs[0].width  = crcs[4:0];
+  assign \crcs[0].poly  = crcs[20:5];
+  assign \crcs[0].start  = crcs[36:21];
+  assign \crcs[0].inverted  = crcs[37];
+  assign \crcs[1]  = crcs[75:38];
+  assign \crcs[1].width  = crcs[42:38];
+  assign \crcs[1].poly  = crcs[58:43];
+  assign \crcs[1].start  = crcs[74:59];
+  assign \crcs[1].inverted  = crcs[75];
+  assign \crcs$46[0]  = crcs[37:0];
+  assign \crcs$46[0].width  = crcs[4:0];
+  assign \crcs$46[0].poly  = crcs[20:5];
+  assign \crcs$46[0].start  = crcs[36:21];
+  assign \crcs$46[0].inverted  = crcs[37];
+  assign \crcs$46[1]  = crcs[75:38];
+  assign \crcs$46[1].width  = crcs[42:38];
+  assign \crcs$46[1].poly  = crcs[58:43];
+  assign \crcs$46[1].start  = crcs[74:59];
+  assign \crcs$46[1].inverted  = crcs[75];
   assign \$76  = word;
-  assign \$85  = word;
-  assign \$88  = word;
+  assign \$80  = word;
+  assign \$84  = word;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.decoder.crc0 (rst, start, valid, kind, \bit , receiver_clear, ok, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$109  = 0;
-  wire [5:0] \$1 ;
-  wire \$10 ;
-  wire [5:0] \$11 ;
-  wire \$12 ;
+module \biss_master_axil.ch1.core.decoder.crc (rst, first, \cover , check, last, \bit , crcs, receiver_clear, word, ok, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$92  = 0;
+  reg [15:0] \$1 ;
+  wire [15:0] \$10 ;
+  reg [15:0] \$11 ;
+  wire [15:0] \$12 ;
   wire \$13 ;
   wire \$14 ;
-  wire \$15 ;
+  reg [15:0] \$15 ;
   wire [15:0] \$16 ;
-  wire [15:0] \$17 ;
+  reg [4:0] \$17 ;
   wire \$18 ;
-  wire [15:0] \$19 ;
-  wire [5:0] \$2 ;
-  wire [15:0] \$20 ;
-  wire [15:0] \$21 ;
+  wire \$19 ;
+  wire [15:0] \$2 ;
+  reg \$20 ;
+  wire \$21 ;
   wire \$22 ;
   wire \$23 ;
-  wire [15:0] \$24 ;
+  wire \$24 ;
   wire \$25 ;
-  wire [15:0] \$26 ;
-  wire \$27 ;
-  wire \$28 ;
+  reg [15:0] \$26 ;
+  wire [15:0] \$27 ;
+  reg [4:0] \$28 ;
   wire \$29 ;
-  wire \$3 ;
+  reg [15:0] \$3 ;
   wire \$30 ;
-  reg [5:0] \$31 ;
-  reg \$32 ;
-  reg [15:0] \$33 ;
-  reg \$34 ;
-  wire [1:0] \$4 ;
-  wire [5:0] \$5 ;
-  wire [5:0] \$6 ;
+  reg \$31 ;
+  wire \$32 ;
+  wire \$33 ;
+  wire \$34 ;
+  wire \$35 ;
+  wire \$36 ;
+  wire \$37 ;
+  reg [15:0] \$38 ;
+  wire [15:0] \$39 ;
+  wire [15:0] \$4 ;
+  reg [4:0] \$40 ;
+  wire \$41 ;
+  wire \$42 ;
+  reg \$43 ;
+  wire \$44 ;
+  wire \$45 ;
+  wire \$46 ;
+  wire \$47 ;
+  reg [15:0] \$48 ;
+  reg \$49 ;
+  reg [4:0] \$5 ;
+  reg [1:0] \$50 ;
+  wire \$6 ;
   wire \$7 ;
-  wire \$8 ;
-  wire [5:0] \$9 ;
-  wire [1:0] \$auto$rtlil.cc:2739:Not$10 ;
-  wire [6:0] \$auto$rtlil.cc:2739:Not$12 ;
+  reg [15:0] \$8 ;
+  wire [15:0] \$9 ;
   input \bit ;
   wire \bit ;
+  input check;
+  wire check;
   input clk;
   wire clk;
-  reg crc16_match = 1'h0;
-  reg [15:0] crc16_reg = 16'h0000;
-  reg crc6_match = 1'h0;
-  reg [5:0] crc6_reg = 6'h00;
-  input [1:0] kind;
-  wire [1:0] kind;
-  output ok;
-  reg ok;
+  input \cover ;
+  wire \cover ;
+  input [75:0] crcs;
+  wire [75:0] crcs;
+  wire [37:0] \crcs[0] ;
+  wire \crcs[0].inverted ;
+  wire [15:0] \crcs[0].poly ;
+  wire [15:0] \crcs[0].start ;
+  wire [4:0] \crcs[0].width ;
+  wire [37:0] \crcs[1] ;
+  wire \crcs[1].inverted ;
+  wire [15:0] \crcs[1].poly ;
+  wire [15:0] \crcs[1].start ;
+  wire [4:0] \crcs[1].width ;
+  input first;
+  wire first;
+  input last;
+  wire last;
+  reg mismatch = 1'h0;
+  output [1:0] ok;
+  reg [1:0] ok = 2'h3;
   input receiver_clear;
   wire receiver_clear;
+  reg [15:0] \reg  = 16'h0000;
   input rst;
   wire rst;
-  input start;
-  wire start;
-  input valid;
-  wire valid;
-  assign \$1  = start ? 6'h00 : crc6_reg;
-  assign \$2  = start ? 6'h00 : crc6_reg;
-  assign \$3  = \$2 [5] ^ \bit ;
-  assign \$4  = \$3  ? 2'h3 : 2'h0;
-  assign \$5  = { \$1 [4:0], 1'h0 } ^ { 4'h0, \$4  };
-  assign \$6  = start ? 6'h00 : crc6_reg;
-  assign \$7  = \$6 [5] ^ \bit ;
-  assign \$9  = start ? 6'h00 : crc6_reg;
-  assign \$10  = \$9 [5] ^ \bit ;
-  assign \$12  = \$11  == 2'h2;
-  assign \$13  = crc6_reg[4:0] == 5'h01;
-  assign \$14  = \$10  ? \$12  : \$13 ;
-  assign \$15  = start ? 1'h0 : \$14 ;
-  assign \$16  = start ? 16'h0000 : crc16_reg;
-  assign \$17  = start ? 16'h0000 : crc16_reg;
-  assign \$18  = \$17 [15] ^ \bit ;
-  assign \$19  = \$18  ? 16'h90d9 : 16'h0000;
-  assign \$20  = { \$16 [14:0], 1'h0 } ^ \$19 ;
-  assign \$21  = start ? 16'h0000 : crc16_reg;
-  assign \$22  = \$21 [15] ^ \bit ;
-  assign \$24  = start ? 16'h0000 : crc16_reg;
-  assign \$25  = \$24 [15] ^ \bit ;
-  assign \$27  = \$26  == 16'he82e;
-  assign \$28  = crc16_reg[14:0] == 15'h7417;
-  assign \$29  = \$25  ? \$27  : \$28 ;
-  assign \$30  = start ? 1'h0 : \$29 ;
+  input word;
+  wire word;
   always @(posedge clk)
-    crc6_reg <= \$31 ;
+    mismatch <= \$49 ;
   always @(posedge clk)
-    crc6_match <= \$32 ;
+    ok <= \$50 ;
+  assign \$2  = first ? \$1  : \reg ;
+  assign \$4  = first ? \$3  : \reg ;
+  assign \$6  = { \$4 , 1'h0 } >> \$5 ;
+  assign \$7  = \$6  ^ \bit ;
+  assign \$9  = \$7  ? \$8  : 16'h0000;
+  assign \$10  = { \$2 [14:0], 1'h0 } ^ \$9 ;
+  assign \$12  = first ? \$11  : \reg ;
+  assign \$13  = \cover  | check;
+  assign \$14  = first ? 1'h0 : mismatch;
+  assign \$16  = first ? \$15  : \reg ;
+  assign \$18  = { \$16 , 1'h0 } >> \$17 ;
+  assign \$19  = \bit  ^ \$18 ;
+  assign \$21  = \$19  ^ \$20 ;
+  assign \$22  = check & \$21 ;
+  assign \$23  = \$14  | \$22 ;
+  assign \$24  = ! word;
+  assign \$25  = first ? 1'h0 : mismatch;
+  assign \$27  = first ? \$26  : \reg ;
+  assign \$29  = { \$27 , 1'h0 } >> \$28 ;
+  assign \$30  = \bit  ^ \$29 ;
+  assign \$32  = \$30  ^ \$31 ;
+  assign \$33  = check & \$32 ;
+  assign \$34  = \$25  | \$33 ;
+  assign \$35  = ~ \$34 ;
+  assign \$37  = first ? 1'h0 : mismatch;
+  assign \$39  = first ? \$38  : \reg ;
+  assign \$41  = { \$39 , 1'h0 } >> \$40 ;
+  assign \$42  = \bit  ^ \$41 ;
+  assign \$44  = \$42  ^ \$43 ;
+  assign \$45  = check & \$44 ;
+  assign \$46  = \$37  | \$45 ;
+  assign \$47  = ~ \$46 ;
   always @(posedge clk)
-    crc16_reg <= \$33 ;
-  always @(posedge clk)
-    crc16_match <= \$34 ;
-  assign \$auto$rtlil.cc:2739:Not$12  = ~ { crc16_reg[14], crc16_reg[11], crc16_reg[6:5], crc16_reg[3:2], 1'h0 };
-  assign \$auto$rtlil.cc:2739:Not$10  = ~ { crc6_reg[0], 1'h0 };
+    \reg  <= \$48 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
-    \$31  = crc6_reg;
-    if (valid) begin
-      \$31  = \$5 ;
-    end else if (start) begin
-      \$31  = 6'h00;
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    \$49  = mismatch;
+    if (\$13 ) begin
+      \$49  = \$23 ;
     end
     if (receiver_clear) begin
-      \$31  = 6'h00;
+      \$49  = 1'h0;
     end
     if (rst) begin
-      \$31  = 6'h00;
+      \$49  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
-    \$32  = crc6_match;
-    if (valid) begin
-      \$32  = \$15 ;
-    end else if (start) begin
-      \$32  = 1'h0;
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    \$50  = ok;
+    if (last) begin
+      if (\$24 ) begin
+        \$50 [0] = \$35 ;
+      end
+      if (\$36 ) begin
+        \$50 [1] = \$47 ;
+      end
     end
     if (receiver_clear) begin
-      \$32  = 1'h0;
+      \$50  = 2'h3;
     end
     if (rst) begin
-      \$32  = 1'h0;
+      \$50  = 2'h3;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
-    \$33  = crc16_reg;
-    if (valid) begin
-      \$33  = \$20 ;
-    end else if (start) begin
-      \$33  = 16'h0000;
-    end
-    if (receiver_clear) begin
-      \$33  = 16'h0000;
-    end
-    if (rst) begin
-      \$33  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
-    \$34  = crc16_match;
-    if (valid) begin
-      \$34  = \$30 ;
-    end else if (start) begin
-      \$34  = 1'h0;
-    end
-    if (receiver_clear) begin
-      \$34  = 1'h0;
-    end
-    if (rst) begin
-      \$34  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
-    ok = 1'h0;
-    casez (kind)
-      2'h0:
-          ok = 1'h1;
-      2'h1:
-          ok = crc6_match;
-      2'h2:
-          ok = crc16_match;
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    (* full_case = 32'd1 *)
+    casez (word)
+      1'h0:
+          \$1  = crcs[36:21];
+      1'h1:
+          \$1  = crcs[74:59];
     endcase
   end
-  assign \$8  = 1'h0;
-  assign \$11 [5:2] = crc6_reg[4:1];
-  assign \$11 [1:0] = \$auto$rtlil.cc:2739:Not$10 ;
-  assign \$23  = 1'h0;
-  assign { \$26 [14:13], \$26 [11:8], \$26 [5], \$26 [2:1] } = { crc16_reg[13:12], crc16_reg[10:7], crc16_reg[4], crc16_reg[1:0] };
-  assign { \$26 [15], \$26 [12], \$26 [7:6], \$26 [4:3], \$26 [0] } = \$auto$rtlil.cc:2739:Not$12 ;
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.decoder.crc1 (rst, start, valid, kind, \bit , receiver_clear, ok, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$110  = 0;
-  wire [5:0] \$1 ;
-  wire \$10 ;
-  wire [5:0] \$11 ;
-  wire \$12 ;
-  wire \$13 ;
-  wire \$14 ;
-  wire \$15 ;
-  wire [15:0] \$16 ;
-  wire [15:0] \$17 ;
-  wire \$18 ;
-  wire [15:0] \$19 ;
-  wire [5:0] \$2 ;
-  wire [15:0] \$20 ;
-  wire [15:0] \$21 ;
-  wire \$22 ;
-  wire \$23 ;
-  wire [15:0] \$24 ;
-  wire \$25 ;
-  wire [15:0] \$26 ;
-  wire \$27 ;
-  wire \$28 ;
-  wire \$29 ;
-  wire \$3 ;
-  wire \$30 ;
-  reg [5:0] \$31 ;
-  reg \$32 ;
-  reg [15:0] \$33 ;
-  reg \$34 ;
-  wire [1:0] \$4 ;
-  wire [5:0] \$5 ;
-  wire [5:0] \$6 ;
-  wire \$7 ;
-  wire \$8 ;
-  wire [5:0] \$9 ;
-  wire [1:0] \$auto$rtlil.cc:2739:Not$6 ;
-  wire [6:0] \$auto$rtlil.cc:2739:Not$8 ;
-  input \bit ;
-  wire \bit ;
-  input clk;
-  wire clk;
-  reg crc16_match = 1'h0;
-  reg [15:0] crc16_reg = 16'h0000;
-  reg crc6_match = 1'h0;
-  reg [5:0] crc6_reg = 6'h00;
-  input [1:0] kind;
-  wire [1:0] kind;
-  output ok;
-  reg ok;
-  input receiver_clear;
-  wire receiver_clear;
-  input rst;
-  wire rst;
-  input start;
-  wire start;
-  input valid;
-  wire valid;
-  assign \$1  = start ? 6'h00 : crc6_reg;
-  assign \$2  = start ? 6'h00 : crc6_reg;
-  assign \$3  = \$2 [5] ^ \bit ;
-  assign \$4  = \$3  ? 2'h3 : 2'h0;
-  assign \$5  = { \$1 [4:0], 1'h0 } ^ { 4'h0, \$4  };
-  assign \$6  = start ? 6'h00 : crc6_reg;
-  assign \$7  = \$6 [5] ^ \bit ;
-  assign \$9  = start ? 6'h00 : crc6_reg;
-  assign \$10  = \$9 [5] ^ \bit ;
-  assign \$12  = \$11  == 2'h2;
-  assign \$13  = crc6_reg[4:0] == 5'h01;
-  assign \$14  = \$10  ? \$12  : \$13 ;
-  assign \$15  = start ? 1'h0 : \$14 ;
-  assign \$16  = start ? 16'h0000 : crc16_reg;
-  assign \$17  = start ? 16'h0000 : crc16_reg;
-  assign \$18  = \$17 [15] ^ \bit ;
-  assign \$19  = \$18  ? 16'h90d9 : 16'h0000;
-  assign \$20  = { \$16 [14:0], 1'h0 } ^ \$19 ;
-  assign \$21  = start ? 16'h0000 : crc16_reg;
-  assign \$22  = \$21 [15] ^ \bit ;
-  assign \$24  = start ? 16'h0000 : crc16_reg;
-  assign \$25  = \$24 [15] ^ \bit ;
-  assign \$27  = \$26  == 16'he82e;
-  assign \$28  = crc16_reg[14:0] == 15'h7417;
-  assign \$29  = \$25  ? \$27  : \$28 ;
-  assign \$30  = start ? 1'h0 : \$29 ;
-  always @(posedge clk)
-    crc6_reg <= \$31 ;
-  always @(posedge clk)
-    crc6_match <= \$32 ;
-  always @(posedge clk)
-    crc16_reg <= \$33 ;
-  always @(posedge clk)
-    crc16_match <= \$34 ;
-  assign \$auto$rtlil.cc:2739:Not$6  = ~ { crc6_reg[0], 1'h0 };
-  assign \$auto$rtlil.cc:2739:Not$8  = ~ { crc16_reg[14], crc16_reg[11], crc16_reg[6:5], crc16_reg[3:2], 1'h0 };
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$110 ) begin end
-    \$31  = crc6_reg;
-    if (valid) begin
-      \$31  = \$5 ;
-    end else if (start) begin
-      \$31  = 6'h00;
-    end
-    if (receiver_clear) begin
-      \$31  = 6'h00;
-    end
-    if (rst) begin
-      \$31  = 6'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$110 ) begin end
-    \$32  = crc6_match;
-    if (valid) begin
-      \$32  = \$15 ;
-    end else if (start) begin
-      \$32  = 1'h0;
-    end
-    if (receiver_clear) begin
-      \$32  = 1'h0;
-    end
-    if (rst) begin
-      \$32  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$110 ) begin end
-    \$33  = crc16_reg;
-    if (valid) begin
-      \$33  = \$20 ;
-    end else if (start) begin
-      \$33  = 16'h0000;
-    end
-    if (receiver_clear) begin
-      \$33  = 16'h0000;
-    end
-    if (rst) begin
-      \$33  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$110 ) begin end
-    \$34  = crc16_match;
-    if (valid) begin
-      \$34  = \$30 ;
-    end else if (start) begin
-      \$34  = 1'h0;
-    end
-    if (receiver_clear) begin
-      \$34  = 1'h0;
-    end
-    if (rst) begin
-      \$34  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$110 ) begin end
-    ok = 1'h0;
-    casez (kind)
-      2'h0:
-          ok = 1'h1;
-      2'h1:
-          ok = crc6_match;
-      2'h2:
-          ok = crc16_match;
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    (* full_case = 32'd1 *)
+    casez (word)
+      1'h0:
+          \$3  = crcs[36:21];
+      1'h1:
+          \$3  = crcs[74:59];
     endcase
   end
-  assign \$8  = 1'h0;
-  assign \$11 [5:2] = crc6_reg[4:1];
-  assign \$11 [1:0] = \$auto$rtlil.cc:2739:Not$6 ;
-  assign \$23  = 1'h0;
-  assign { \$26 [14:13], \$26 [11:8], \$26 [5], \$26 [2:1] } = { crc16_reg[13:12], crc16_reg[10:7], crc16_reg[4], crc16_reg[1:0] };
-  assign { \$26 [15], \$26 [12], \$26 [7:6], \$26 [4:3], \$26 [0] } = \$auto$rtlil.cc:2739:Not$8 ;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    (* full_case = 32'd1 *)
+    casez (word)
+      1'h0:
+          \$5  = crcs[4:0];
+      1'h1:
+          \$5  = crcs[42:38];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    (* full_case = 32'd1 *)
+    casez (word)
+      1'h0:
+          \$8  = crcs[20:5];
+      1'h1:
+          \$8  = crcs[58:43];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    (* full_case = 32'd1 *)
+    casez (word)
+      1'h0:
+          \$11  = crcs[36:21];
+      1'h1:
+          \$11  = crcs[74:59];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    (* full_case = 32'd1 *)
+    casez (word)
+      1'h0:
+          \$15  = crcs[36:21];
+      1'h1:
+          \$15  = crcs[74:59];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    (* full_case = 32'd1 *)
+    casez (word)
+      1'h0:
+          \$17  = crcs[4:0];
+      1'h1:
+          \$17  = crcs[42:38];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    (* full_case = 32'd1 *)
+    casez (word)
+      1'h0:
+          \$20  = crcs[37];
+      1'h1:
+          \$20  = crcs[75];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    (* full_case = 32'd1 *)
+    casez (word)
+      1'h0:
+          \$26  = crcs[36:21];
+      1'h1:
+          \$26  = crcs[74:59];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    (* full_case = 32'd1 *)
+    casez (word)
+      1'h0:
+          \$28  = crcs[4:0];
+      1'h1:
+          \$28  = crcs[42:38];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    (* full_case = 32'd1 *)
+    casez (word)
+      1'h0:
+          \$31  = crcs[37];
+      1'h1:
+          \$31  = crcs[75];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    (* full_case = 32'd1 *)
+    casez (word)
+      1'h0:
+          \$38  = crcs[36:21];
+      1'h1:
+          \$38  = crcs[74:59];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    (* full_case = 32'd1 *)
+    casez (word)
+      1'h0:
+          \$40  = crcs[4:0];
+      1'h1:
+          \$40  = crcs[42:38];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    (* full_case = 32'd1 *)
+    casez (word)
+      1'h0:
+          \$43  = crcs[37];
+      1'h1:
+          \$43  = crcs[75];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    \$48  = \reg ;
+    if (\cover ) begin
+      \$48  = \$10 ;
+    end else if (check) begin
+      \$48  = { \$12 [14:0], 1'h0 };
+    end
+    if (receiver_clear) begin
+      \$48  = 16'h0000;
+    end
+    if (rst) begin
+      \$48  = 16'h0000;
+    end
+  end
+  assign \crcs[0]  = crcs[37:0];
+  assign \crcs[0].width  = crcs[4:0];
+  assign \crcs[0].poly  = crcs[20:5];
+  assign \crcs[0].start  = crcs[36:21];
+  assign \crcs[0].inverted  = crcs[37];
+  assign \crcs[1]  = crcs[75:38];
+  assign \crcs[1].width  = crcs[42:38];
+  assign \crcs[1].poly  = crcs[58:43];
+  assign \crcs[1].start  = crcs[74:59];
+  assign \crcs[1].inverted  = crcs[75];
+  assign \$36  = word;
 endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.delay_check (rst, enable, rearm, check, clean, \tolerance$8 , learn, delay, jump, spread, settled_delay, settled, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$111  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$93  = 0;
   wire [13:0] \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -24906,56 +25520,56 @@ module \biss_master_axil.ch1.core.delay_check (rst, enable, rearm, check, clean,
   assign \$39  = magnitude > spread;
   assign \$40  = \$38  & \$39 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     \$46  = \$1 ;
     if (rst) begin
       \$46  = 14'h0000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     \$47  = \$2 ;
     if (rst) begin
       \$47  = 14'h0000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     \$48  = \tolerance$8 ;
     if (rst) begin
       \$48  = 17'h00000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     \$49  = \$3 ;
     if (rst) begin
       \$49  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     \$50  = \$11 ;
     if (rst) begin
       \$50  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     \$51  = \$20 ;
     if (rst) begin
       \$51  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     \$52  = \$25 ;
     if (rst) begin
       \$52  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     \$53  = 1'h0;
     if (learn) begin
       if (\$32 ) begin
@@ -24972,7 +25586,7 @@ module \biss_master_axil.ch1.core.delay_check (rst, enable, rearm, check, clean,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     \$54  = jump;
     if (check) begin
       \$54  = \$26 ;
@@ -24985,7 +25599,7 @@ module \biss_master_axil.ch1.core.delay_check (rst, enable, rearm, check, clean,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     \$55  = count;
     if (learn) begin
       (* full_case = 32'd1 *)
@@ -25007,7 +25621,7 @@ module \biss_master_axil.ch1.core.delay_check (rst, enable, rearm, check, clean,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     \$56  = spread;
     if (learn) begin
       if (\$32 ) begin
@@ -25027,7 +25641,7 @@ module \biss_master_axil.ch1.core.delay_check (rst, enable, rearm, check, clean,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     \$57  = cand;
     if (learn) begin
       if (\$32 ) begin
@@ -25040,7 +25654,7 @@ module \biss_master_axil.ch1.core.delay_check (rst, enable, rearm, check, clean,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     \$58  = settled_delay;
     if (learn) begin
       if (\$32 ) begin
@@ -25057,7 +25671,7 @@ module \biss_master_axil.ch1.core.delay_check (rst, enable, rearm, check, clean,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     \$59  = settled;
     if (learn) begin
       if (\$32 ) begin
@@ -25077,7 +25691,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.line_noise (rst, sampler_noise, noisy, events, limit, watch, restart, level, close, \event , clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$112  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$94  = 0;
   wire \$1 ;
   reg \$10 ;
   reg \$11 ;
@@ -25140,21 +25754,21 @@ module \biss_master_axil.ch1.core.line_noise (rst, sampler_noise, noisy, events,
   always @(posedge clk)
     running <= \$14 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$112 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$94 ) begin end
     \$10  = level;
     if (rst) begin
       \$10  = 1'h1;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$112 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$94 ) begin end
     \$11  = \$4 ;
     if (rst) begin
       \$11  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$112 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$94 ) begin end
     \$12  = held_noisy;
     if (close) begin
       \$12  = \$7 ;
@@ -25164,7 +25778,7 @@ module \biss_master_axil.ch1.core.line_noise (rst, sampler_noise, noisy, events,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$112 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$94 ) begin end
     \$13  = held_events;
     if (close) begin
       \$13  = running;
@@ -25174,7 +25788,7 @@ module \biss_master_axil.ch1.core.line_noise (rst, sampler_noise, noisy, events,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$112 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$94 ) begin end
     \$14  = running;
     if (close) begin
       \$14  = { 3'h0, \event  };
@@ -25191,7 +25805,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, hold, first_rise, second_rise, ma, rises, busy, held, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$113  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$95  = 0;
   wire [16:0] \$1 ;
   wire \$10 ;
   wire [16:0] \$11 ;
@@ -25316,7 +25930,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
   always @(posedge clk)
     released <= \$42 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
     \$34  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -25331,7 +25945,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
     \$35  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -25346,7 +25960,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
     \$36  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -25361,7 +25975,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
     \$37  = ma;
     casez (ma_fsm_state)
       3'h0:
@@ -25390,7 +26004,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
     \$38  = phase_left;
     casez (ma_fsm_state)
       3'h0:
@@ -25432,7 +26046,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
     \$39  = last_clock;
     casez (ma_fsm_state)
       3'h0:
@@ -25474,7 +26088,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
     \$40  = rises;
     casez (ma_fsm_state)
       3'h0:
@@ -25493,7 +26107,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
     \$41  = ma_fsm_state;
     casez (ma_fsm_state)
       3'h0:
@@ -25529,7 +26143,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
     \$42  = released;
     casez (ma_fsm_state)
       3'h0:
@@ -25553,7 +26167,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
     busy = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -25569,7 +26183,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
     held = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -25585,22 +26199,24 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.ma_stop (rst, words, w1_enable, clear, rises, enough, \started$10 , start_slot, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$114  = 0;
+module \biss_master_axil.ch1.core.ma_stop (rst, words, w1_enable, crcs, clear, rises, enough, \started$11 , start_slot, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$96  = 0;
   reg [7:0] \$1 ;
-  reg [7:0] \$10 ;
-  wire [8:0] \$11 ;
-  reg [7:0] \$12 ;
-  reg [8:0] \$13 ;
-  reg [16:0] \$14 ;
-  reg \$15 ;
-  reg \$16 ;
-  reg [7:0] \$17 ;
+  wire \$10 ;
+  reg [7:0] \$11 ;
+  wire [8:0] \$12 ;
+  wire [8:0] \$13 ;
+  reg [7:0] \$14 ;
+  reg [8:0] \$15 ;
+  reg [16:0] \$16 ;
+  reg \$17 ;
+  reg \$18 ;
+  reg [7:0] \$19 ;
   wire [8:0] \$2 ;
-  wire [7:0] \$3 ;
-  wire [8:0] \$4 ;
-  wire [16:0] \$5 ;
-  wire \$6 ;
+  wire [8:0] \$3 ;
+  wire [7:0] \$4 ;
+  wire [8:0] \$5 ;
+  wire [16:0] \$6 ;
   wire \$7 ;
   wire \$8 ;
   wire \$9 ;
@@ -25608,6 +26224,18 @@ module \biss_master_axil.ch1.core.ma_stop (rst, words, w1_enable, clear, rises, 
   wire clear;
   input clk;
   wire clk;
+  input [75:0] crcs;
+  wire [75:0] crcs;
+  wire [37:0] \crcs[0] ;
+  wire \crcs[0].inverted ;
+  wire [15:0] \crcs[0].poly ;
+  wire [15:0] \crcs[0].start ;
+  wire [4:0] \crcs[0].width ;
+  wire [37:0] \crcs[1] ;
+  wire \crcs[1].inverted ;
+  wire [15:0] \crcs[1].poly ;
+  wire [15:0] \crcs[1].start ;
+  wire [4:0] \crcs[1].width ;
   output enough;
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
@@ -25618,8 +26246,8 @@ module \biss_master_axil.ch1.core.ma_stop (rst, words, w1_enable, clear, rises, 
   input [15:0] start_slot;
   wire [15:0] start_slot;
   reg started = 1'h0;
-  input \started$10 ;
-  wire \started$10 ;
+  input \started$11 ;
+  wire \started$11 ;
   reg [16:0] target_rises = 17'h00000;
   input w1_enable;
   wire w1_enable;
@@ -25632,6 +26260,7 @@ module \biss_master_axil.ch1.core.ma_stop (rst, words, w1_enable, clear, rises, 
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \words[0].crc ;
   wire [5:0] \words[0].data_bits ;
   wire \words[0].lc ;
@@ -25641,147 +26270,102 @@ module \biss_master_axil.ch1.core.ma_stop (rst, words, w1_enable, clear, rises, 
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \words[1].crc ;
   wire [5:0] \words[1].data_bits ;
   wire \words[1].lc ;
   wire \words[1].nenw ;
-  assign \$2  = words[5:0] + \$1 ;
-  assign \$3  = w1_enable ? word1_len : 8'h00;
-  assign \$4  = word0_len + \$3 ;
-  assign \$5  = start_slot + frame_len;
-  assign \$6  = rises >= target_rises;
-  assign \$7  = started & \$6 ;
-  assign \$8  = ~ clear;
-  assign \$9  = \$7  & \$8 ;
-  assign \$11  = words[15:10] + \$10 ;
+  assign \$2  = \$1  + crcs[4:0];
+  assign \$3  = words[5:0] + \$2 [7:0];
+  assign \$4  = w1_enable ? word1_len : 8'h00;
+  assign \$5  = word0_len + \$4 ;
+  assign \$6  = start_slot + frame_len;
+  assign \$7  = rises >= target_rises;
+  assign \$8  = started & \$7 ;
+  assign \$9  = ~ clear;
+  assign \$10  = \$8  & \$9 ;
+  assign \$12  = \$11  + crcs[42:38];
+  assign \$13  = words[15:10] + \$12 [7:0];
   always @(posedge clk)
-    word0_len <= \$12 ;
+    word0_len <= \$14 ;
   always @(posedge clk)
-    frame_len <= \$13 ;
+    frame_len <= \$15 ;
   always @(posedge clk)
-    target_rises <= \$14 ;
+    target_rises <= \$16 ;
   always @(posedge clk)
-    started <= \$15 ;
+    started <= \$17 ;
   always @(posedge clk)
-    enough <= \$16 ;
+    enough <= \$18 ;
   always @(posedge clk)
-    word1_len <= \$17 ;
+    word1_len <= \$19 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$96 ) begin end
     (* full_case = 32'd1 *)
-    casez (words[9:6])
-      4'h0:
+    casez (words[7:6])
+      2'h0:
           \$1  = 8'h04;
-      4'h1:
+      2'h1:
           \$1  = 8'h06;
-      4'h2:
+      2'h2:
           \$1  = 8'h0a;
-      4'h3:
-          \$1  = 8'h0c;
-      4'h4:
-          \$1  = 8'h0a;
-      4'h5:
-          \$1  = 8'h0c;
-      4'h6:
-          \$1  = 8'h10;
-      4'h7:
-          \$1  = 8'h12;
-      4'h8:
-          \$1  = 8'h14;
-      4'h9:
-          \$1  = 8'h16;
-      4'ha:
-          \$1  = 8'h1a;
-      4'hb:
-          \$1  = 8'h1c;
-      4'hc:
-          \$1  = 8'h04;
-      4'hd:
-          \$1  = 8'h06;
-      4'he:
-          \$1  = 8'h0a;
-      4'hf:
+      2'h3:
           \$1  = 8'h0c;
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$96 ) begin end
     (* full_case = 32'd1 *)
-    casez (words[19:16])
-      4'h0:
-          \$10  = 8'h00;
-      4'h1:
-          \$10  = 8'h02;
-      4'h2:
-          \$10  = 8'h06;
-      4'h3:
-          \$10  = 8'h08;
-      4'h4:
-          \$10  = 8'h06;
-      4'h5:
-          \$10  = 8'h08;
-      4'h6:
-          \$10  = 8'h0c;
-      4'h7:
-          \$10  = 8'h0e;
-      4'h8:
-          \$10  = 8'h10;
-      4'h9:
-          \$10  = 8'h12;
-      4'ha:
-          \$10  = 8'h16;
-      4'hb:
-          \$10  = 8'h18;
-      4'hc:
-          \$10  = 8'h00;
-      4'hd:
-          \$10  = 8'h02;
-      4'he:
-          \$10  = 8'h06;
-      4'hf:
-          \$10  = 8'h08;
+    casez (words[17:16])
+      2'h0:
+          \$11  = 8'h00;
+      2'h1:
+          \$11  = 8'h02;
+      2'h2:
+          \$11  = 8'h06;
+      2'h3:
+          \$11  = 8'h08;
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
-    \$12  = \$2 [7:0];
+    if (\$auto$verilog_backend.cc:2355:dump_module$96 ) begin end
+    \$14  = \$3 [7:0];
     if (rst) begin
-      \$12  = 8'h00;
+      \$14  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
-    \$13  = \$4 ;
+    if (\$auto$verilog_backend.cc:2355:dump_module$96 ) begin end
+    \$15  = \$5 ;
     if (rst) begin
-      \$13  = 9'h000;
+      \$15  = 9'h000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
-    \$14  = \$5 ;
+    if (\$auto$verilog_backend.cc:2355:dump_module$96 ) begin end
+    \$16  = \$6 ;
     if (rst) begin
-      \$14  = 17'h00000;
+      \$16  = 17'h00000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
-    \$15  = \started$10 ;
+    if (\$auto$verilog_backend.cc:2355:dump_module$96 ) begin end
+    \$17  = \started$11 ;
     if (rst) begin
-      \$15  = 1'h0;
+      \$17  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
-    \$16  = \$9 ;
+    if (\$auto$verilog_backend.cc:2355:dump_module$96 ) begin end
+    \$18  = \$10 ;
     if (rst) begin
-      \$16  = 1'h0;
+      \$18  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
-    \$17  = \$11 [7:0];
+    if (\$auto$verilog_backend.cc:2355:dump_module$96 ) begin end
+    \$19  = \$13 [7:0];
     if (rst) begin
-      \$17  = 8'h00;
+      \$19  = 8'h00;
     end
   end
   assign \words[0]  = words[9:0];
@@ -25794,6 +26378,16 @@ module \biss_master_axil.ch1.core.ma_stop (rst, words, w1_enable, clear, rises, 
   assign \words[1].nenw  = words[16];
   assign \words[1].lc  = words[17];
   assign \words[1].crc  = words[19:18];
+  assign \crcs[0]  = crcs[37:0];
+  assign \crcs[0].width  = crcs[4:0];
+  assign \crcs[0].poly  = crcs[20:5];
+  assign \crcs[0].start  = crcs[36:21];
+  assign \crcs[0].inverted  = crcs[37];
+  assign \crcs[1]  = crcs[75:38];
+  assign \crcs[1].width  = crcs[42:38];
+  assign \crcs[1].poly  = crcs[58:43];
+  assign \crcs[1].start  = crcs[74:59];
+  assign \crcs[1].inverted  = crcs[75];
 endmodule
 
 (* generator = "Amaranth" *)
@@ -26090,7 +26684,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.register_access.buffers (clk, rst, host_read__en, byte_to_send, rbuf_data, wbuf, index, store, byte_received, host_read__addr);
-  reg \$auto$verilog_backend.cc:2355:dump_module$115  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$97  = 0;
   wire \$1 ;
   wire \$2 ;
   wire \$3 ;
@@ -26207,21 +26801,21 @@ module \biss_master_axil.ch1.core.register_access.buffers (clk, rst, host_read__
   assign \$1  = ! index[1:0];
   assign \$2  = index[1:0] == 1'h1;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$115 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
     byte_received__addr = 4'h0;
     if (store) begin
       byte_received__addr = index[5:2];
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$115 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
     byte_received__data = 32'd0;
     if (store) begin
       byte_received__data = { byte_received, byte_received, byte_received, byte_received };
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$115 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
     byte_received__en = 4'h0;
     if (store) begin
       byte_received__en = { \$4 , \$3 , \$2 , \$1  };
@@ -26241,7 +26835,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.register_access.checker (rst, crc_ok, echo_ok, cds, control__take_data, start, control__take_crc, sent, \byte , clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$116  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$98  = 0;
   reg [7:0] \$1 ;
   reg [2:0] \$2 ;
   output [7:0] \byte ;
@@ -26284,7 +26878,7 @@ module \biss_master_axil.ch1.core.register_access.checker (rst, crc_ok, echo_ok,
     .valid(control__take_data)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$116 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
     \$1  = \byte ;
     if (control__take_data) begin
       \$1  = { \byte [6:0], cds };
@@ -26294,7 +26888,7 @@ module \biss_master_axil.ch1.core.register_access.checker (rst, crc_ok, echo_ok,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$116 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
     \$2  = got_crc;
     if (control__take_crc) begin
       \$2  = { got_crc[1:0], cds };
@@ -26310,7 +26904,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.register_access.checker.rx_crc (rst, crc, data_in, valid, start, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$117  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$99  = 0;
   wire [3:0] \$1 ;
   wire \$10 ;
   wire [3:0] \$11 ;
@@ -26353,7 +26947,7 @@ module \biss_master_axil.ch1.core.register_access.checker.rx_crc (rst, crc, data
     crc_reg <= \$13 ;
   assign \$auto$rtlil.cc:2739:Not$2  = ~ crc_reg;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$117 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
     \$13  = crc_reg;
     if (valid) begin
       \$13 [0] = \$3 ;
@@ -26377,7 +26971,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.register_access.idle (rst, frame_end, frame_ok, run_enough, seen_enough, frame_cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$118  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$100  = 0;
   wire \$1 ;
   wire [4:0] \$10 ;
   wire \$11 ;
@@ -26447,7 +27041,7 @@ module \biss_master_axil.ch1.core.register_access.idle (rst, frame_end, frame_ok
   always @(posedge clk)
     idle_seen <= \$24 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$118 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     \$23  = idle_run;
     if (frame_end) begin
       \$23  = \$4 [3:0];
@@ -26457,7 +27051,7 @@ module \biss_master_axil.ch1.core.register_access.idle (rst, frame_end, frame_ok
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$118 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     \$24  = idle_seen;
     if (frame_end) begin
       \$24  = \$10 [3:0];
@@ -26470,7 +27064,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.register_access.sender (rst, \byte , request, control__load_header, control__source, control__crc_bit, control__shift_header, start, valid, control__load_byte, control__shift_byte, sent, cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$119  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$101  = 0;
   wire \$1 ;
   wire [18:0] \$2 ;
   wire [8:0] \$3 ;
@@ -26542,7 +27136,7 @@ module \biss_master_axil.ch1.core.register_access.sender (rst, \byte , request, 
     .valid(valid)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$119 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
     \$6  = header;
     if (control__load_header) begin
       \$6  = { 2'h3, request[2:0], request[9:3], 4'h0, \$1 , request[17] };
@@ -26555,7 +27149,7 @@ module \biss_master_axil.ch1.core.register_access.sender (rst, \byte , request, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$119 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
     \$7  = to_send;
     if (control__load_byte) begin
       \$7  = \byte ;
@@ -26568,7 +27162,7 @@ module \biss_master_axil.ch1.core.register_access.sender (rst, \byte , request, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$119 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
     \$8  = sent;
     if (control__load_byte) begin
       \$8  = \byte ;
@@ -26578,7 +27172,7 @@ module \biss_master_axil.ch1.core.register_access.sender (rst, \byte , request, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$119 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
     cdm = 1'h0;
     casez (control__source)
       3'h1:
@@ -26603,7 +27197,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.register_access.sender.tx_crc (rst, data_in, crc, start, valid, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$120  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$102  = 0;
   wire [3:0] \$1 ;
   wire \$10 ;
   wire [3:0] \$11 ;
@@ -26646,7 +27240,7 @@ module \biss_master_axil.ch1.core.register_access.sender.tx_crc (rst, data_in, c
     crc_reg <= \$13 ;
   assign \$auto$rtlil.cc:2739:Not$4  = ~ crc_reg;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$120 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
     \$13  = crc_reg;
     if (valid) begin
       \$13 [0] = \$3 ;
@@ -26671,7 +27265,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, frame_ok, busy, crc_ok, echo_ok, run_enough, seen_enough, start, abort, request, frame_cdm, frame_cds, done, result, index, send__load_header, send__source, send__crc_bit, send__shift_header, send__crc_start
 , send__crc_valid, send__load_byte, send__shift_byte, check__take_data, check__first, check__take_crc, store, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$121  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$103  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$100 ;
@@ -27027,7 +27621,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
   always @(posedge clk)
     waited <= \$125 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$121 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     \$118  = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -27065,7 +27659,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$121 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     \$119  = result;
     casez (access_fsm_state)
       3'h0:
@@ -27119,7 +27713,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$121 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     \$120  = access_fsm_state;
     casez (access_fsm_state)
       3'h0:
@@ -27216,7 +27810,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$121 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     \$121  = req;
     casez (access_fsm_state)
       3'h0:
@@ -27233,7 +27827,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$121 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     \$122  = index;
     casez (access_fsm_state)
       3'h0:
@@ -27272,7 +27866,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$121 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     \$123  = step;
     casez (access_fsm_state)
       3'h0:
@@ -27330,7 +27924,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$121 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     \$124  = ending;
     casez (access_fsm_state)
       3'h0:
@@ -27397,7 +27991,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$121 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     \$125  = waited;
     casez (access_fsm_state)
       3'h0:
@@ -27429,7 +28023,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$121 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     send__load_header = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -27443,7 +28037,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$121 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     send__source = 3'h0;
     casez (access_fsm_state)
       3'h0:
@@ -27470,7 +28064,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$121 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     send__crc_bit = 2'h0;
     casez (access_fsm_state)
       3'h0:
@@ -27490,7 +28084,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$121 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     send__shift_header = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -27509,7 +28103,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$121 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     send__crc_start = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -27538,7 +28132,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$121 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     send__crc_valid = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -27559,7 +28153,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$121 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     send__load_byte = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -27581,7 +28175,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$121 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     send__shift_byte = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -27602,7 +28196,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$121 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     check__take_data = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -27624,7 +28218,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$121 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     check__first = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -27646,7 +28240,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$121 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     check__take_crc = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -27670,7 +28264,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$121 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     store = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -27709,7 +28303,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.results (rst, report_delay, report, valid, frame, report_frame, done, valid_out, result, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$122  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$104  = 0;
   reg \$1 ;
   reg \$2 ;
   reg [186:0] \$3 ;
@@ -27818,21 +28412,21 @@ module \biss_master_axil.ch1.core.results (rst, report_delay, report, valid, fra
   always @(posedge clk)
     result <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$122 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$104 ) begin end
     \$1  = report;
     if (rst) begin
       \$1  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$122 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$104 ) begin end
     \$2  = valid;
     if (rst) begin
       \$2  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$122 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$104 ) begin end
     \$3  = result;
     if (report) begin
       \$3 [3:0] = frame[3:0];
@@ -27909,7 +28503,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , noise, half_period, receiver_clear, arm, early, locked, delay, sample, level, slo);
-  reg \$auto$verilog_backend.cc:2355:dump_module$123  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$105  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$100 ;
@@ -28241,7 +28835,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     .stage1(level)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$123 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
     \$104  = level;
     if (receiver_clear) begin
       \$104  = 1'h1;
@@ -28251,7 +28845,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$123 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
     \$105  = mid_delay;
     if (odd) begin
       \$105  = \$8 [12:0];
@@ -28276,7 +28870,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$123 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
     \$106  = mid_slot;
     (* full_case = 32'd1 *)
     if (odd) begin
@@ -28303,7 +28897,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$123 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
     \$107  = \$10 ;
     casez (sampler_fsm_state)
       2'h0:
@@ -28325,7 +28919,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$123 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
     \$108  = last;
     if (\$12 ) begin
       \$108  = \$17 ;
@@ -28346,7 +28940,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$123 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
     \$109  = tail_odd;
     if (\$12 ) begin
       \$109  = \$23 ;
@@ -28367,7 +28961,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$123 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
     \$110  = elapsed;
     casez (sampler_fsm_state)
       2'h0:
@@ -28391,7 +28985,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$123 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
     \$111  = early;
     casez (sampler_fsm_state)
       2'h0:
@@ -28407,7 +29001,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$123 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
     \$112  = locked;
     casez (sampler_fsm_state)
       2'h0:
@@ -28433,7 +29027,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$123 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
     \$113  = gap;
     casez (sampler_fsm_state)
       2'h0:
@@ -28464,7 +29058,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$123 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
     \$114  = sampler_fsm_state;
     casez (sampler_fsm_state)
       2'h0:
@@ -28495,7 +29089,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$123 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
     \$115  = slot_left;
     casez (sampler_fsm_state)
       2'h0:
@@ -28545,7 +29139,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$123 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
     \$116  = slot_zero;
     casez (sampler_fsm_state)
       2'h0:
@@ -28595,7 +29189,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$123 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
     \$117  = vote1;
     casez (sampler_fsm_state)
       2'h0:
@@ -28625,7 +29219,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$123 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
     \$118  = vote2;
     casez (sampler_fsm_state)
       2'h0:
@@ -28653,7 +29247,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$123 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
     \$119  = first_slot;
     casez (sampler_fsm_state)
       2'h0:
@@ -28679,7 +29273,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$123 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
     \$120  = delay;
     casez (sampler_fsm_state)
       2'h0:
@@ -28702,7 +29296,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$123 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
     \$121  = phase;
     casez (sampler_fsm_state)
       2'h0:
@@ -28742,7 +29336,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$123 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
     sample = \$57 ;
     casez (sampler_fsm_state)
       2'h0:
@@ -28760,7 +29354,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$123 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
     dropped = 1'h0;
     casez (sampler_fsm_state)
       2'h0:
@@ -28781,7 +29375,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$123 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
     decided = 1'h0;
     casez (sampler_fsm_state)
       2'h0:
@@ -28831,7 +29425,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.scheduler (rst, trigger, periodic, request, overrun, start, period, abort, idle, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$124  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$106  = 0;
   wire \$1 ;
   wire [25:0] \$10 ;
   wire \$11 ;
@@ -28925,14 +29519,14 @@ module \biss_master_axil.ch1.core.scheduler (rst, trigger, periodic, request, ov
   always @(posedge clk)
     wrap <= \$31 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$124 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$106 ) begin end
     \$28  = \$1 ;
     if (rst) begin
       \$28  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$124 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$106 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$29  = 25'h0000002;
@@ -28946,7 +29540,7 @@ module \biss_master_axil.ch1.core.scheduler (rst, trigger, periodic, request, ov
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$124 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$106 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$30  = 1'h1;
@@ -28960,7 +29554,7 @@ module \biss_master_axil.ch1.core.scheduler (rst, trigger, periodic, request, ov
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$124 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$106 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$31  = \$8 ;
@@ -28976,8 +29570,8 @@ module \biss_master_axil.ch1.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$4943$0 , resync, lc, is_zero, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$125  = 0;
+module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$4856$0 , resync, lc, is_zero, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$107  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
   wire \$11 ;
@@ -29018,8 +29612,8 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$4943$0 ;
-  wire \port$4943$0 ;
+  input \port$4856$0 ;
+  wire \port$4856$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -29033,9 +29627,9 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$4943$0  };
-  assign \$2  = { lc[4:0], \port$4943$0  } == last;
-  assign \$3  = { lc[4:0], \port$4943$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$4856$0  };
+  assign \$2  = { lc[4:0], \port$4856$0  } == last;
+  assign \$3  = { lc[4:0], \port$4856$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -29069,7 +29663,7 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   always @(posedge clk)
     synced <= \$25 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$125 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$107 ) begin end
     \$18  = is_zero;
     if (load) begin
       \$18  = \$1 ;
@@ -29079,7 +29673,7 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$125 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$107 ) begin end
     \$19  = is_last;
     if (load) begin
       \$19  = \$2 ;
@@ -29089,7 +29683,7 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$125 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$107 ) begin end
     \$20  = is_expected;
     if (load) begin
       \$20  = \$3 ;
@@ -29099,21 +29693,21 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$125 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$107 ) begin end
     \$21  = \$7 ;
     if (rst) begin
       \$21  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$125 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$107 ) begin end
     \$22  = lc;
     if (rst) begin
       \$22  = 6'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$125 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$107 ) begin end
     \$23  = last;
     if (store) begin
       \$23  = store_lc;
@@ -29123,7 +29717,7 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$125 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$107 ) begin end
     \$24  = expected;
     if (store) begin
       \$24  = \$10 [5:0];
@@ -29133,7 +29727,7 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$125 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$107 ) begin end
     \$25  = synced;
     if (store) begin
       \$25  = 1'h1;
@@ -29145,13 +29739,13 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$4943$0  };
+  assign lc_next = { lc[4:0], \port$4856$0  };
   assign zero = is_zero;
 endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.spw_check (rst, bits, \tolerance$8 , spw, cpw_top, match, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$126  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$108  = 0;
   wire [40:0] \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -29356,28 +29950,28 @@ module \biss_master_axil.ch1.core.spw_check (rst, bits, \tolerance$8 , spw, cpw_
   assign \$7  = bits > 3'h5;
   assign \$8  = bits > 3'h6;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$126 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
     \$88  = \$42 ;
     if (rst) begin
       \$88  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$126 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
     \$89  = \$84 ;
     if (rst) begin
       \$89  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$126 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
     \$90  = \tolerance$8 ;
     if (rst) begin
       \$90  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$126 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
     \$91  = \$87 ;
     if (rst) begin
       \$91  = 1'h0;
@@ -29387,7 +29981,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.time_base (rst, first_rise, first_rise_time, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$127  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$109  = 0;
   wire [32:0] \$1 ;
   reg [31:0] \$2 ;
   reg [31:0] \$3 ;
@@ -29406,14 +30000,14 @@ module \biss_master_axil.ch1.core.time_base (rst, first_rise, first_rise_time, c
   always @(posedge clk)
     first_rise_time <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$127 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
     \$2  = \$1 [31:0];
     if (rst) begin
       \$2  = 32'd0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$127 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
     \$3  = first_rise_time;
     if (first_rise) begin
       \$3  = now;
@@ -29427,7 +30021,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.timers (rst, restart, ma_busy, break_time, timeout_live, quiet_time_live, ack_limit, timeout_limit, delay_limit, quiet_limit, no_start_limit, clear, in_clock, slo_stuck, slo_stuck_live, quiet, quiet_live, break_over, ack_expired, no_start_expired, delay_over
 , delay, slo, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$128  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$110  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -29607,7 +30201,7 @@ module \biss_master_axil.ch1.core.timers (rst, restart, ma_busy, break_time, tim
   assign \$40  = in_clock & \$39 ;
   assign \$41  = timer >= ack_limit;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$128 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$110 ) begin end
     \$48  = slo_low_time_p1;
     if (\$2 ) begin
       \$48  = 25'h0000001;
@@ -29619,21 +30213,21 @@ module \biss_master_axil.ch1.core.timers (rst, restart, ma_busy, break_time, tim
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$128 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$110 ) begin end
     \$49  = \$9 ;
     if (rst) begin
       \$49  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$128 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$110 ) begin end
     \$50  = \$17 ;
     if (rst) begin
       \$50  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$128 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$110 ) begin end
     \$51  = high_p2;
     if (\$18 ) begin
       \$51  = 13'h0002;
@@ -29645,28 +30239,28 @@ module \biss_master_axil.ch1.core.timers (rst, restart, ma_busy, break_time, tim
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$128 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$110 ) begin end
     \$52  = \$23 ;
     if (rst) begin
       \$52  = 1'h1;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$128 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$110 ) begin end
     \$53  = \$30 ;
     if (rst) begin
       \$53  = 1'h1;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$128 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$110 ) begin end
     \$54  = \$34 [24:0];
     if (rst) begin
       \$54  = 25'h0000001;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$128 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$110 ) begin end
     (* full_case = 32'd1 *)
     if (clear) begin
       \$55  = 1'h0;
@@ -29678,21 +30272,21 @@ module \biss_master_axil.ch1.core.timers (rst, restart, ma_busy, break_time, tim
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$128 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$110 ) begin end
     \$56  = \$42 ;
     if (rst) begin
       \$56  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$128 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$110 ) begin end
     \$57  = \$46 ;
     if (rst) begin
       \$57  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$128 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$110 ) begin end
     \$58  = \$47 ;
     if (rst) begin
       \$58  = 1'h0;
@@ -29701,9 +30295,9 @@ module \biss_master_axil.ch1.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$3355$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
+module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$3279$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
 , delay_jump, lc_repeat_seen);
-  reg \$auto$verilog_backend.cc:2355:dump_module$129  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$111  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -29743,8 +30337,8 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$3355$0 , l
   wire \$7 ;
   wire \$8 ;
   wire \$9 ;
-  input [174:0] cfg;
-  wire [174:0] cfg;
+  input [250:0] cfg;
+  wire [250:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
   wire [11:0] \cfg.delay_limit ;
@@ -29762,19 +30356,31 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$3355$0 , l
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \cfg.w0.crc ;
   wire [5:0] \cfg.w0.data_bits ;
   wire \cfg.w0.lc ;
   wire \cfg.w0.nenw ;
+  wire [37:0] \cfg.w0_crc ;
+  wire \cfg.w0_crc.inverted ;
+  wire [15:0] \cfg.w0_crc.poly ;
+  wire [15:0] \cfg.w0_crc.start ;
+  wire [4:0] \cfg.w0_crc.width ;
   wire [9:0] \cfg.w1 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \cfg.w1.crc ;
   wire [5:0] \cfg.w1.data_bits ;
   wire \cfg.w1.lc ;
   wire \cfg.w1.nenw ;
+  wire [37:0] \cfg.w1_crc ;
+  wire \cfg.w1_crc.inverted ;
+  wire [15:0] \cfg.w1_crc.poly ;
+  wire [15:0] \cfg.w1_crc.start ;
+  wire [4:0] \cfg.w1_crc.width ;
   wire \cfg.w1_enable ;
   output clean;
   wire clean;
@@ -29839,8 +30445,8 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$3355$0 , l
   wire lc_zero_seen;
   input noisy;
   wire noisy;
-  output \port$3355$0 ;
-  wire \port$3355$0 ;
+  output \port$3279$0 ;
+  wire \port$3279$0 ;
   output report;
   wire report;
   input report_frame;
@@ -29870,9 +30476,9 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$3355$0 , l
   output valid;
   wire valid;
   wire [1:0] word_crc_ok;
-  assign \$1  = ~ cfg[155];
+  assign \$1  = ~ cfg[193];
   assign \$2  = crc_ok[1] | \$1 ;
-  assign \$3  = cfg[155] & cfg[163];
+  assign \$3  = cfg[193] & cfg[201];
   assign \$4  = cfg[152] | \$3 ;
   assign \$5  = report_frame & \$4 ;
   assign \$6  = cfg[152] ? crc_ok[0] : \$2 ;
@@ -29880,7 +30486,7 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$3355$0 , l
   assign lc_repeat = lc_check & lc_repeat_seen;
   assign lc_skip = lc_check & lc_skip_seen;
   assign lc_zero = lc_check & lc_zero_seen;
-  assign \$7  = cfg[166] & cfg[155];
+  assign \$7  = cfg[242] & cfg[193];
   assign \$8  = crc_ok[0] & \$2 ;
   assign \$9  = \$7  & \$8 ;
   assign \$10  = ~ spw_match;
@@ -29899,7 +30505,7 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$3355$0 , l
   assign \$19  = crc_ok[0] & \$2 ;
   assign \$20  = ~ \$19 ;
   assign \$21  = \$20  | spw_mismatch;
-  assign \$22  = cfg[155] & cfg[163];
+  assign \$22  = cfg[193] & cfg[201];
   assign \$23  = cfg[152] | \$22 ;
   assign \$24  = cfg[152] ? crc_ok[0] : \$2 ;
   assign \$25  = \$23  & \$24 ;
@@ -29921,7 +30527,7 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$3355$0 , l
   assign \$39  = ~ { \$2 , crc_ok[0] };
   assign crc_error = report_frame ? \$39  : 2'h0;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$129 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
     frame_status = 4'h0;
     if (delay_jump) begin
       frame_status = 4'he;
@@ -29946,7 +30552,7 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$3355$0 , l
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$3355$0  = \$2 ;
+  assign \port$3279$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -29962,12 +30568,22 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$3355$0 , l
   assign \cfg.w0.nenw  = cfg[151];
   assign \cfg.w0.lc  = cfg[152];
   assign \cfg.w0.crc  = cfg[154:153];
-  assign \cfg.w1_enable  = cfg[155];
-  assign \cfg.w1  = cfg[165:156];
-  assign \cfg.w1.data_bits  = cfg[161:156];
-  assign \cfg.w1.nenw  = cfg[162];
-  assign \cfg.w1.lc  = cfg[163];
-  assign \cfg.w1.crc  = cfg[165:164];
-  assign \cfg.spw_check  = cfg[166];
-  assign \cfg.spw_tolerance  = cfg[174:167];
+  assign \cfg.w0_crc  = cfg[192:155];
+  assign \cfg.w0_crc.width  = cfg[159:155];
+  assign \cfg.w0_crc.poly  = cfg[175:160];
+  assign \cfg.w0_crc.start  = cfg[191:176];
+  assign \cfg.w0_crc.inverted  = cfg[192];
+  assign \cfg.w1_enable  = cfg[193];
+  assign \cfg.w1  = cfg[203:194];
+  assign \cfg.w1.data_bits  = cfg[199:194];
+  assign \cfg.w1.nenw  = cfg[200];
+  assign \cfg.w1.lc  = cfg[201];
+  assign \cfg.w1.crc  = cfg[203:202];
+  assign \cfg.w1_crc  = cfg[241:204];
+  assign \cfg.w1_crc.width  = cfg[208:204];
+  assign \cfg.w1_crc.poly  = cfg[224:209];
+  assign \cfg.w1_crc.start  = cfg[240:225];
+  assign \cfg.w1_crc.inverted  = cfg[241];
+  assign \cfg.spw_check  = cfg[242];
+  assign \cfg.spw_tolerance  = cfg[250:243];
 endmodule

@@ -10,12 +10,43 @@ from dataclasses import dataclass
 
 import protocol_facts as facts
 
-from .crc import bits_to_int, crc6_biss, crc16_biss, int_to_bits
+from .crc import bits_to_int, crc6_biss, crc16_biss, crc_msb_first, int_to_bits
 
 CRC_NONE, CRC6, CRC16 = "none", "crc6", "crc16"
 
 CRC_WIDTHS = {CRC_NONE: 0, CRC6: facts.CRC6_WIDTH, CRC16: facts.CRC16_WIDTH}
 _CRC_FUNCS = {CRC6: crc6_biss, CRC16: crc16_biss}
+
+
+@dataclass(frozen=True)
+class CustomCrc:
+    """Any other CRC of a data word: ``width`` bits (1..16), register polynomial without its
+    top term, start value, and whether the encoder sends the register inverted. Non-reflected,
+    MSB first, over every bit of the word before it, like the BiSS CRCs (iC-MB4 and BP3's
+    CPOLY / CSTART name such CRCs)."""
+    width: int
+    poly: int
+    start: int = 0
+    inverted: bool = True
+
+    def __post_init__(self):
+        if not 1 <= self.width <= 16:
+            raise ValueError(f"a custom CRC is 1..16 bits wide, not {self.width}")
+        if not (0 <= self.poly < 1 << self.width and 0 <= self.start < 1 << self.width):
+            raise ValueError(f"poly and start must fit in {self.width} bits")
+
+    def __call__(self, bits):
+        return crc_msb_first(bits, width=self.width, poly=self.poly, init=self.start,
+                             xor_out=(1 << self.width) - 1 if self.inverted else 0)
+
+
+def crc_width(crc):
+    """Bits of a word's CRC field: a named kind or a :class:`CustomCrc`."""
+    return crc.width if isinstance(crc, CustomCrc) else CRC_WIDTHS[crc]
+
+
+def _crc_func(crc):
+    return crc if isinstance(crc, CustomCrc) else _CRC_FUNCS[crc]
 
 DATA_BITS_MAX = 64          # widest position field the model accepts (BiSS C data word limit)
 FRAME_HEADER_BITS = 2       # Start and CDS precede the first word
@@ -27,17 +58,18 @@ class WordFormat:
     data_bits: int
     nenw: bool = True
     lc: bool = False
-    crc: str = CRC6
+    crc: object = CRC6      # CRC_NONE, CRC6, CRC16 or a CustomCrc
 
     def __post_init__(self):
         if not 1 <= self.data_bits <= DATA_BITS_MAX:
             raise ValueError(f"data_bits must be 1..{DATA_BITS_MAX}, got {self.data_bits}")
-        if self.crc not in CRC_WIDTHS:
-            raise ValueError(f"crc must be one of {sorted(CRC_WIDTHS)}, got {self.crc!r}")
+        if not isinstance(self.crc, CustomCrc) and self.crc not in CRC_WIDTHS:
+            raise ValueError(f"crc must be one of {sorted(CRC_WIDTHS)} or a CustomCrc, "
+                             f"got {self.crc!r}")
 
     @property
     def crc_bits(self):
-        return CRC_WIDTHS[self.crc]
+        return crc_width(self.crc)
 
     @property
     def total_bits(self):
@@ -154,7 +186,7 @@ def word_bits(fmt, value, *, crc_xor=0):
             raise ValueError("crc_xor given for a word without CRC")
         return bits
     _check_field("crc_xor", crc_xor, fmt.crc_bits)
-    return bits + int_to_bits(_CRC_FUNCS[fmt.crc](bits) ^ crc_xor, fmt.crc_bits)
+    return bits + int_to_bits(_crc_func(fmt.crc)(bits) ^ crc_xor, fmt.crc_bits)
 
 
 def build_frame(fmt, words, faults=None):
@@ -209,7 +241,7 @@ def parse_frame(fmt, bits):
             covered += lc
         if wfmt.crc != CRC_NONE:
             word["crc"] = bits_to_int(take(wfmt.crc_bits))
-            word["crc_ok"] = word["crc"] == _CRC_FUNCS[wfmt.crc](covered)
+            word["crc_ok"] = word["crc"] == _crc_func(wfmt.crc)(covered)
         words.append(word)
     return {"start": bits[0], "cds": bits[1], "words": words,
             "crc_ok": all(w["crc_ok"] for w in words)}

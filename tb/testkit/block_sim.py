@@ -99,9 +99,10 @@ def pack(layout, values):
     """The raw bits of nested dicts of ints (missing fields 0) for a struct layout."""
     raw = 0
     for name, fld in layout:
-        value = values.get(name, 0)
         if isinstance(fld.shape, data.StructLayout):
-            value = pack(fld.shape, value)
+            value = pack(fld.shape, values.get(name, {}))
+        else:
+            value = values.get(name, 0)
         raw |= (value & ((1 << fld.width) - 1)) << fld.offset
     return raw
 

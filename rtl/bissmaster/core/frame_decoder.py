@@ -4,8 +4,8 @@ from amaranth.hdl import *
 from amaranth.lib import data, wiring
 from amaranth.lib.wiring import In, Out
 
-from ..params import CRC_WIDTH, SLOT_WIDTH, WORD_CONFIG, WORD_INDEX_WIDTH, Crc
-from .word_crc import WordCrc
+from ..params import CRC_SETTINGS, SLOT_WIDTH, WORD_CONFIG, WORD_INDEX_WIDTH
+from .crc_engine import CrcEngine
 from .. import protocol
 
 
@@ -15,22 +15,19 @@ def _table(index, values, width):
     return Array(C(v % 2**width, width) for v in values)[index]
 
 
-def tail_bits(word, extra=0, width=WORD_INDEX_WIDTH):
+def tail_bits(word, crc, extra=0, width=WORD_INDEX_WIDTH):
     """Bits after a word's data field (nE/nW, LC, CRC), plus ``extra``, modulo ``2**width``:
-    a table on the four configuration bits instead of three chained adders. CRC code 3 counts
-    as no CRC."""
-    values = []
-    for i in range(16):
-        nenw, lc, crc = i & 1, (i >> 1) & 1, i >> 2
-        values.append(nenw * protocol.NE_NW_BITS + lc * protocol.LC_BITS
-                      + (CRC_WIDTH[Crc(crc)] if crc != 3 else 0) + extra)
-    return _table(Cat(word.nenw, word.lc, word.crc), values, width)
+    a table on the two flag bits plus the CRC's width (a WORD_CONFIG and a CRC_SETTINGS
+    view)."""
+    values = [nenw * protocol.NE_NW_BITS + lc * protocol.LC_BITS + extra
+              for lc in (0, 1) for nenw in (0, 1)]
+    return (_table(Cat(word.nenw, word.lc), values, width) + crc.width)[:width]
 
 
-def word_length(word, extra=0, width=WORD_INDEX_WIDTH):
+def word_length(word, crc, extra=0, width=WORD_INDEX_WIDTH):
     """Bits of one word on the line (plus ``extra``), from its runtime configuration (a
-    WORD_CONFIG view)."""
-    return word.data_bits + tail_bits(word, extra, width)
+    WORD_CONFIG view and its resolved CRC_SETTINGS view)."""
+    return (word.data_bits + tail_bits(word, crc, extra, width))[:width]
 
 
 class FrameDecoder(wiring.Component):
@@ -41,9 +38,9 @@ class FrameDecoder(wiring.Component):
     (MSB first, right-justified in ``data``), nE, nW, LC and CRC. One more slot, the stop bit,
     ends the frame: the encoder's timeout has begun, so the master may look for SLO high again.
 
-    Each word feeds its own CRC checker, so the CPW CRC-6 and SPW CRC-16 run concurrently.
-    ``crc_ok`` comes from the checkers' flip-flops (one mux on the CRC kind): valid in the
-    clock after the word's last bit was sampled, and held until the next frame.
+    One :class:`~bissmaster.core.crc_engine.CrcEngine` checks every word's CRC in turn, each
+    with its own settings (``crcs``). ``crc_ok`` comes from the engine's flip-flops: valid in
+    the clock after the word's last bit was sampled, and held until the next frame.
 
     The master holds it in reset between cycles (``ResetInserter``), which also clears the
     data registers, so data fields are right-justified.
@@ -59,6 +56,7 @@ class FrameDecoder(wiring.Component):
             "sample": In(1),
             "bit": In(1),
             "words": In(data.ArrayLayout(WORD_CONFIG, words)),
+            "crcs": In(data.ArrayLayout(CRC_SETTINGS, words)),
             "word_count": In(range(1, words + 1)),
             "started": Out(1),
             "start_slot": Out(SLOT_WIDTH),
@@ -97,6 +95,7 @@ class FrameDecoder(wiring.Component):
             e = {name: Signal(WORD_INDEX_WIDTH, name=f"w{w}_{name}", reset_less=True)
                  for name in ("data_end_p1", "data_end_m1", "nenw_end_m1", "lc_end_m1",
                               "word_end_m1")}
+            wcrc = self.crcs[w]
             # The fields at bit 0 of the word (only with an invalid data_bits = 0).
             e["data_at0"] = Signal(name=f"w{w}_data_at0", reset_less=True)
             e["lc_at0"] = Signal(name=f"w{w}_lc_at0", reset_less=True)
@@ -116,7 +115,7 @@ class FrameDecoder(wiring.Component):
                 e["nenw_end_m1"].eq((wcfg.data_bits + nenw_m1)[:iw]),
                 e["lc_end_m1"].eq((wcfg.data_bits + nenw_lc_m1)[:iw]),
                 # data_bits >= 1, so "- 1" folded into the table (modulo 2**iw) never wraps.
-                e["word_end_m1"].eq((wcfg.data_bits + tail_bits(wcfg, extra=-1))[:iw]),
+                e["word_end_m1"].eq((wcfg.data_bits + tail_bits(wcfg, wcrc, extra=-1))[:iw]),
                 e["data_at0"].eq(wcfg.data_bits != 0),
                 e["lc_at0"].eq((wcfg.data_bits + nenw_bits == 0)
                                & (wcfg.data_bits + nenw_lc_bits != 0)),
@@ -135,6 +134,7 @@ class FrameDecoder(wiring.Component):
         in_data = Signal()      # idx < data_bits of this word
         in_lc = Signal()        # nenw_end <= idx < lc_end of this word
         in_top = Signal()       # word 0 and idx < data_bits of word 1 (cpw_top)
+        in_crc = Signal()       # lc_end <= idx: the word's received CRC bits
         in_word = Signal()
         m.d.sync += [self.done.eq(0), self.stopped.eq(0)]
 
@@ -149,7 +149,8 @@ class FrameDecoder(wiring.Component):
             with m.State("CDS"):
                 with m.If(self.sample):
                     m.d.sync += [self.cds.eq(self.bit), idx.eq(0),
-                                 in_data.eq(ends[0]["data_at0"]), in_lc.eq(ends[0]["lc_at0"])]
+                                 in_data.eq(ends[0]["data_at0"]), in_lc.eq(ends[0]["lc_at0"]),
+                                 in_crc.eq(0)]
                     if p.words > 1:
                         m.d.sync += in_top.eq(self.words[1].data_bits != 0)
                     if p.words > 1:
@@ -163,6 +164,7 @@ class FrameDecoder(wiring.Component):
                         in_data.eq(in_data & (idx != end("data_end_m1"))),
                         in_lc.eq((in_lc | (idx == end("nenw_end_m1")))
                                  & (idx != end("lc_end_m1"))),
+                        in_crc.eq((in_crc | (idx == end("lc_end_m1"))) & (idx != word_end_m1)),
                     ]
                     if p.words > 1:
                         m.d.sync += in_top.eq(in_top & (idx != ends[1]["data_end_m1"]))
@@ -208,15 +210,18 @@ class FrameDecoder(wiring.Component):
             with m.If(in_word & in_top):
                 m.d.sync += self.cpw_top.eq(Cat(self.bit, self.cpw_top))
 
-        # One CRC checker per word, fed every bit of that word (data and the CRC itself).
-        for w in range(p.words):
-            m.submodules[f"crc{w}"] = checker = WordCrc(p.word_crcs[w])
-            m.d.comb += [
-                checker.kind.eq(self.words[w].crc),
-                checker.start.eq(in_word & (word == w) & (idx == 0)),
-                checker.valid.eq(in_word & (word == w)),
-                checker.bit.eq(self.bit),
-                self.crc_ok[w].eq(checker.ok),
-            ]
+        # One CRC engine for every word in turn, fed each bit of the word (data and the CRC).
+        m.submodules.crc = engine = CrcEngine(p.words)
+        m.d.comb += [
+            engine.crcs.eq(self.crcs),
+            engine.first.eq(in_word & (idx == 0)),
+            engine.cover.eq(in_word & ~in_crc),
+            engine.check.eq(in_word & in_crc),
+            engine.last.eq(in_word & (idx == word_end_m1)),
+            engine.bit.eq(self.bit),
+            self.crc_ok.eq(engine.ok),
+        ]
+        if p.words > 1:
+            m.d.comb += engine.word.eq(word)
 
         return m

@@ -5,7 +5,7 @@ from amaranth.lib import data, wiring
 from amaranth.lib.wiring import In, Out
 
 from .frame_decoder import word_length
-from ..params import FRAME_LENGTH_WIDTH, SLOT_WIDTH, WORD_CONFIG
+from ..params import CRC_SETTINGS, FRAME_LENGTH_WIDTH, SLOT_WIDTH, WORD_CONFIG
 
 
 #: Slot ``k`` is the bit the encoder puts on SLO at MA rising edge ``k + 2`` (SloSampler). Start
@@ -36,6 +36,8 @@ class MaStop(wiring.Component):
     ----------
     words : In(ArrayLayout(WORD_CONFIG, words))
         The cycle's word settings.
+    crcs : In(ArrayLayout(CRC_SETTINGS, words))
+        Their CRCs (Configuration.crcs: the width counts).
     w1_enable : In(1)
         Word 1 is in the frame (two-word builds).
     started : In(1)
@@ -52,6 +54,7 @@ class MaStop(wiring.Component):
         self._words = words
         super().__init__({
             "words": In(data.ArrayLayout(WORD_CONFIG, words)),
+            "crcs": In(data.ArrayLayout(CRC_SETTINGS, words)),
             "w1_enable": In(1),
             "started": In(1),
             "start_slot": In(SLOT_WIDTH),
@@ -69,12 +72,12 @@ class MaStop(wiring.Component):
         target_rises = Signal(SLOT_WIDTH + 1)
         started = Signal()
         m.d.sync += [
-            word_len[0].eq(word_length(self.words[0], extra=RISES_BEYOND_WORDS, width=FRAME_LENGTH_WIDTH)),
+            word_len[0].eq(word_length(self.words[0], self.crcs[0], extra=RISES_BEYOND_WORDS, width=FRAME_LENGTH_WIDTH)),
             frame_len.eq(word_len[0] + (Mux(self.w1_enable, word_len[1], 0) if two else 0)),
             target_rises.eq(self.start_slot + frame_len),
             started.eq(self.started),
             self.enough.eq(started & (self.rises >= target_rises) & ~self.clear),
         ]
         if two:
-            m.d.sync += word_len[1].eq(word_length(self.words[1], width=FRAME_LENGTH_WIDTH))
+            m.d.sync += word_len[1].eq(word_length(self.words[1], self.crcs[1], width=FRAME_LENGTH_WIDTH))
         return m

@@ -14,7 +14,7 @@ import pytest
 from bissmaster.core.configuration import Configuration
 from bissmaster.layouts import config_layout
 from bissmaster.params import Crc, MasterParams
-from master_contract import CRC_CODE
+from master_contract import CRC_CODE, CRC_MAX_WIDTH
 
 from testkit.block_sim import pack, protocol_clocks, run_clocks, unpack
 
@@ -24,13 +24,17 @@ BUILDS = {
     "narrow": MasterParams(sys_clk_hz=33_333_333, word_crcs=((Crc.CRC6,), (Crc.CRC16,)),
                            max_line_delay=1000, timer_width=16),
     "one_word": MasterParams(max_data_bits=(36,), word_crcs=((Crc.CRC6,),)),
+    "no_custom": MasterParams(max_data_bits=(36,), word_crcs=((Crc.CRC6,),), custom_crc=False),
 }
 #: The CRC codes each build accepts per word (``none`` always).
 BUILT_CRCS = {
     "default": ({0, 1, 2}, {0, 1, 2}),
     "narrow": ({0, CRC_CODE["crc6"]}, {0, CRC_CODE["crc16"]}),
     "one_word": ({0, CRC_CODE["crc6"]},),
+    "no_custom": ({0, CRC_CODE["crc6"]},),
 }
+#: Builds that accept a custom CRC (code 3 with a width of 1..16).
+CUSTOM = {"default", "narrow", "one_word"}
 
 
 def reference_ok(build, cfg):
@@ -41,7 +45,9 @@ def reference_ok(build, cfg):
 
     def word_ok(w):
         word = cfg[f"w{w}"]
-        return 1 <= word["data_bits"] <= p.max_data_bits[w] and word["crc"] in crcs[w]
+        custom = (build in CUSTOM and word["crc"] == CRC_CODE["custom"]
+                  and 1 <= cfg[f"w{w}_crc"]["width"] <= CRC_MAX_WIDTH)
+        return 1 <= word["data_bits"] <= p.max_data_bits[w] and (word["crc"] in crcs[w] or custom)
 
     ok = cfg["ma_half_period"] >= 2 and word_ok(0) and cfg["delay_limit"] <= p.max_line_delay
     if p.words == 2:
@@ -68,7 +74,7 @@ def _with(base, **changes):
     for key, value in changes.items():
         if "__" in key:
             word, name = key.split("__")
-            cfg[word][name] = value
+            cfg.setdefault(word, {})[name] = value
         else:
             cfg[key] = value
     return cfg
@@ -95,8 +101,19 @@ RULES = [
     ("w1_bits_63_disabled", "default", _with(BASE, w1_enable=0, w1__data_bits=63, **NO_SPW), 1),
     ("w0_crc_none", "default", _with(BASE, w0__crc=0), 1),
     ("w0_crc_16", "default", _with(BASE, w0__crc=2), 1),
-    ("w0_crc_3", "default", _with(BASE, w0__crc=3), 0),
-    ("w1_crc_3", "default", _with(BASE, w1__crc=3, **NO_SPW), 0),
+    ("w0_custom_width_0", "default", _with(BASE, w0__crc=3), 0),
+    ("w1_custom_width_0", "default", _with(BASE, w1__crc=3, **NO_SPW), 0),
+    ("w0_custom_width_1", "default", _with(BASE, w0__crc=3, w0_crc__width=1), 1),
+    ("w0_custom_width_16", "default", _with(BASE, w0__crc=3, w0_crc__width=16), 1),
+    ("w0_custom_width_17", "default", _with(BASE, w0__crc=3, w0_crc__width=17), 0),
+    ("w0_custom_width_31", "default", _with(BASE, w0__crc=3, w0_crc__width=31), 0),
+    ("w1_custom_width_8_spw", "default", _with(BASE, w1__crc=3, w1_crc__width=8), 1),
+    ("w1_custom_width_17_disabled", "default",
+     _with(BASE, w1_enable=0, w1__crc=3, w1_crc__width=17, **NO_SPW), 1),
+    ("narrow_w1_custom_width_6", "narrow", _with(BASE, w1__crc=3, w1_crc__width=6), 1),
+    ("one_word_custom_width_5", "one_word", _with(BASE_ONE_WORD, w0__crc=3, w0_crc__width=5), 1),
+    ("no_custom_code_3", "no_custom", _with(BASE_ONE_WORD, w0__crc=3, w0_crc__width=5), 0),
+    ("no_custom_crc6", "no_custom", BASE_ONE_WORD, 1),
     ("w1_crc_3_disabled", "default", _with(BASE, w1_enable=0, w1__crc=3, **NO_SPW), 1),
     ("w1_crc_none_no_spw", "default", _with(BASE, w1__crc=0, **NO_SPW), 1),
     ("narrow_w0_crc6", "narrow", BASE, 1),
@@ -156,6 +173,8 @@ def test_configuration_check_random_sweep(build):
             word["data_bits"] = rng.choice((word["data_bits"], rng.randint(0, 3),
                                             p.max_data_bits[w] + rng.randint(-2, 1)))
             word["crc"] = rng.choice((word["crc"], rng.randrange(3)))
+            if f"w{w}_crc" in cfg:
+                cfg[f"w{w}_crc"]["width"] = rng.choice((cfg[f"w{w}_crc"]["width"], 0, 1, 16, 17))
         cfg["ma_half_period"] = rng.choice((cfg["ma_half_period"], rng.randrange(4)))
         cfg["delay_limit"] = rng.choice((cfg["delay_limit"], p.max_line_delay + rng.randint(-1, 1)))
         cfgs.append(cfg)
@@ -234,6 +253,45 @@ def test_configuration_no_start_limit_one_clock_after_the_latch():
     assert [x["ack_limit"] for x in trace] == [0, 100, 100, 100, 4000, 4000, 4000]
     assert [x["no_start_limit"] for x in trace] == [0, 1, 115, 115, 115, 4000 + 2 * 65535 + 1,
                                                     4000 + 2 * 65535 + 1]
+
+
+#: The named CRCs as docs/protocol.md section 6 gives them: (width, register polynomial, start,
+#: sent inverted).
+NAMED = {CRC_CODE["crc6"]: (6, 0x03, 0, 1), CRC_CODE["crc16"]: (16, 0x90D9, 0, 1)}
+
+
+@pytest.mark.parametrize("build", BUILDS)
+def test_configuration_crcs_resolved_from_the_code_and_latched_while_idle(build):
+    """``crcs``: per word the CRC the engine runs. A named code gives its protocol CRC, code 3
+    the word's ``cfg_wN_crc_*`` settings (in builds with custom CRCs), code 0 width 0; latched
+    while idle like ``cycle``."""
+    p = BUILDS[build]
+    layout = config_layout(p)
+    rng = random.Random(7300 + len(build))
+    steps = []
+    for t in range(300):
+        cfg = unpack(layout, rng.getrandbits(layout.size))
+        for w in range(p.words):
+            cfg[f"w{w}"]["crc"] = rng.choice(sorted(BUILT_CRCS[build][w])
+                                             + ([CRC_CODE["custom"]] if build in CUSTOM else []))
+        idle = 1 if t < 2 else int(rng.random() < 0.6)
+        steps.append({"live": pack(layout, cfg), "idle": idle})
+    trace = run_clocks(Configuration(p), steps, ["crcs"])
+    latched = None
+    for t in range(1, len(steps)):
+        if steps[t - 1]["idle"]:
+            latched = unpack(layout, steps[t - 1]["live"])
+        got = trace[t]["crcs"]
+        for w in range(p.words):
+            code = latched[f"w{w}"]["crc"]
+            if code == CRC_CODE["custom"]:
+                c = latched[f"w{w}_crc"]
+                want = (c["width"], c["poly"], c["start"], c["inverted"])
+            else:
+                want = NAMED.get(code, (0, 0, 0, 0))
+            entry = (got >> (38 * w)) & (2**38 - 1)
+            assert (entry & 31, (entry >> 5) & 0xFFFF, (entry >> 21) & 0xFFFF, entry >> 37) \
+                == want, (t, w)
 
 
 @pytest.mark.parametrize("ack_limit, half_period", ((65535, 65535), (60000, 40000), (1000, 65535)))

@@ -9,9 +9,9 @@ import pytest
 
 from bissmaster.core.frame_decoder import FrameDecoder
 from bissmaster.params import Crc, MasterParams
-from encoder_model.frames import (CRC16, PRESETS, FrameFaults, WordFormat, WordValue,
+from encoder_model.frames import (CRC16, PRESETS, CustomCrc, FrameFaults, FrameFormat, WordFormat, WordValue,
                                   bp3, build_frame)
-from master_contract import CRC_CODE
+from master_contract import crc_config, crc_settings
 
 from testkit.block_sim import simulate
 
@@ -20,7 +20,12 @@ def _cfg(wf):
     if wf is None:
         return {"data_bits": 0, "nenw": 0, "lc": 0, "crc": 0}
     return {"data_bits": wf.data_bits, "nenw": int(wf.nenw), "lc": int(wf.lc),
-            "crc": CRC_CODE[wf.crc]}
+            "crc": crc_config(wf.crc)[0]}
+
+
+def _crc(wf):
+    """The word's CRC as Configuration resolves it."""
+    return crc_settings("none" if wf is None else wf.crc)
 
 
 def _random_values(fmt, rng):
@@ -41,14 +46,17 @@ def _decode(params, fmt, values, *, acks, faults=None, hw_word1=None, seed=0):
     slots = [0] * acks + frame + [0] + [1, 1]
     dut = FrameDecoder(params)
     cfgs = [_cfg(w) for w in fmt.words]
+    crcs = [_crc(w) for w in fmt.words]
     if params.words == 2 and len(cfgs) == 1:
         cfgs.append(_cfg(hw_word1))
+        crcs.append(_crc(hw_word1))
     fields = ["done", "stopped", "started", "start_slot", "slots", "cds", "ne", "nw", "lc",
               "cpw_top", "crc_ok"] + [f"data{w}" for w in range(params.words)]
     trace, sample_cycles = [], []
 
     async def tb(ctx):
         ctx.set(dut.words, cfgs)
+        ctx.set(dut.crcs, crcs)
         ctx.set(dut.word_count, len(fmt.words))
         cycle = 0
 
@@ -77,6 +85,11 @@ def _decode(params, fmt, values, *, acks, faults=None, hw_word1=None, seed=0):
     return trace, sample_cycles, frame
 
 
+#: Two words with CRCs of the catalogue kind: CRC-8/SMBUS-like with a start value, sent plain;
+#: a 12-bit CRC (0x80F) over a word with LC, with a start value, sent inverted.
+CUSTOM_TWO = FrameFormat("custom_two", (WordFormat(30, crc=CustomCrc(8, 0x07, 0xA5, False)),
+                                        WordFormat(20, lc=True, crc=CustomCrc(12, 0x80F, 0x123, True))))
+
 DECODER_CASES = {
     # name: (params, format, acks, faults, hw word 1 config when the frame has one word)
     "resolute_fs_rsh": (MasterParams(), PRESETS["resolute_fs_rsh"], 1, None, None),
@@ -90,6 +103,15 @@ DECODER_CASES = {
                            2, FrameFaults(cds=1), None),
     "evolute_36_one_word_hw": (MasterParams(max_data_bits=(36,), word_crcs=((Crc.CRC6,),)),
                                PRESETS["evolute_36"], 1, None, None),
+    # Custom CRCs: each word its own width, polynomial, start value and inversion.
+    "custom_crc_two_words": (MasterParams(), CUSTOM_TWO, 2, None, None),
+    "custom_crc16_start_one_word_hw": (
+        MasterParams(max_data_bits=(40,), word_crcs=((Crc.CRC6,),)),
+        FrameFormat("custom16", (WordFormat(40, crc=CustomCrc(16, 0x1021, 0xFFFF, False)),)),
+        1, None, None),
+    "custom_crc3_word1_off": (MasterParams(),
+                              FrameFormat("custom3", (WordFormat(9, crc=CustomCrc(3, 0x3, 0, True)),)),
+                              1, None, WordFormat(5, crc=CustomCrc(11, 0x385, 0x1A, False))),
 }
 
 
@@ -140,9 +162,9 @@ def test_frame_decoder_fields_and_strobes(case):
         assert not any(x["done"] or x["stopped"] for x in trace[:last_bit_sample + 1])
 
 
+@pytest.mark.parametrize("fmt", (PRESETS["resolute_fs_rsh"], CUSTOM_TWO), ids=("rsh", "custom"))
 @pytest.mark.parametrize("word", (0, 1))
-def test_frame_decoder_flipped_bit_fails_only_that_words_crc(word):
-    fmt = PRESETS["resolute_fs_rsh"]
+def test_frame_decoder_flipped_bit_fails_only_that_words_crc(word, fmt):
     rng = random.Random(7000 + word)
     values = _random_values(fmt, rng)
     first = 2 + (0 if word == 0 else fmt.words[0].total_bits)

@@ -14,8 +14,8 @@ import random
 import pytest
 
 from bissmaster.core.ma_stop import MaStop
-from encoder_model.frames import CRC6, CRC16, CRC_NONE, PRESETS, WordFormat
-from master_contract import CRC_CODE
+from encoder_model.frames import CRC6, CRC16, CRC_NONE, PRESETS, CustomCrc, WordFormat
+from master_contract import crc_config, crc_settings
 
 from testkit.block_sim import run_clocks
 
@@ -26,7 +26,7 @@ RISES_AROUND_WORDS = 4
 
 def _word_cfg(wf):
     return {"data_bits": wf.data_bits, "nenw": int(wf.nenw), "lc": int(wf.lc),
-            "crc": CRC_CODE[wf.crc]}
+            "crc": crc_config(wf.crc)[0]}
 
 
 RSH = PRESETS["resolute_fs_rsh"].words
@@ -49,7 +49,8 @@ def scenario(words, w1_enable, start_slot, *, step, started_at, clears=4, extra=
     every ``step`` clocks, Start seen in clock ``started_at``; until ``extra`` clocks past the
     target."""
     target = start_slot + frame_bits(words, w1_enable) + RISES_AROUND_WORDS
-    cfg = {"words": [_word_cfg(wf) for wf in words], "w1_enable": w1_enable}
+    cfg = {"words": [_word_cfg(wf) for wf in words], "w1_enable": w1_enable,
+           "crcs": [crc_settings(wf.crc) for wf in words]}
     steps = [{**cfg, "clear": 1, "rises": 0, "started": 0, "start_slot": 0}] * clears
     t, end = 0, None
     while end is None or t < end:
@@ -129,7 +130,9 @@ def test_ma_stop_random_formats_back_to_back():
     steps, targets, firsts = [], [], []
     for _ in range(40):
         words = tuple(WordFormat(rng.randint(1, top), nenw=rng.random() < 0.5,
-                                 lc=rng.random() < 0.3, crc=rng.choice((CRC_NONE, CRC6, CRC16)))
+                                 lc=rng.random() < 0.3,
+                                 crc=rng.choice((CRC_NONE, CRC6, CRC16,
+                                                 CustomCrc(rng.randint(1, 16), 1))))
                       for top in (55, 40))
         w1 = rng.randrange(2)
         slot = rng.randint(1, 20)

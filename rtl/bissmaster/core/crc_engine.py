@@ -1,0 +1,92 @@
+"""One programmable CRC checker per channel, shared by the words of a frame in turn."""
+
+from amaranth.hdl import *
+from amaranth.lib import data, wiring
+from amaranth.lib.wiring import In, Out
+
+from ..params import CRC_MAX_WIDTH, CRC_SETTINGS
+
+
+class CrcEngine(wiring.Component):
+    """Checks each data word against the CRC that follows it, one received bit per clock.
+
+    The words of a frame follow each other on the line, so one bit-serial engine serves them
+    all: at a word's first bit it starts again from that word's settings (``crcs[word]``,
+    :data:`~bissmaster.params.CRC_SETTINGS`: width 0..16, register polynomial, start value,
+    inversion), which is what lets any word have any CRC at no cost per word.
+
+    Every bit of the word *before* its CRC field (``cover``: data, nE, nW, LC) goes through
+    the textbook shift register (MSB first, not reflected): feedback = register MSB xor bit,
+    then shift left and xor the polynomial when the feedback is 1. The received CRC bits
+    (``check``) are then compared one by one with the register's MSB (complemented when the
+    encoder sends the CRC inverted) while the register shifts on, so the engine needs no
+    residue table and works for every polynomial and start value. The register is
+    right-aligned in 16 bits; bits above the word's width are never read.
+
+    ``ok[w]`` is registered at word ``w``'s last bit (``last``), so it is final in the clock
+    after that bit was sampled, as the old fixed checkers' was, and held until the next frame
+    (the master resets the decoder, and this engine with it, between cycles: ``ok`` then reads
+    1, and every word's ``last`` writes it before the verdict reads it). A word with CRC width
+    0 has no ``check`` bits and ends with ``ok`` = 1.
+
+    Attributes
+    ----------
+    crcs : In(ArrayLayout(CRC_SETTINGS, words))
+        Each word's CRC, held for the cycle (Configuration.crcs).
+    word : In(range(words))
+        The word the current bit belongs to (builds of more than one word).
+    first : In(1)
+        The bit is its word's first: start from the word's start value.
+    cover : In(1)
+        The bit is covered by the CRC (every bit of the word before the CRC field).
+    check : In(1)
+        The bit is one of the word's received CRC bits.
+    last : In(1)
+        The bit is its word's last: register the verdict in ``ok[word]``.
+    bit : In(1)
+        The received bit (only read with ``cover`` or ``check``).
+    ok : Out(words)
+        Per word: every received CRC bit matched.
+    """
+
+    def __init__(self, words):
+        self._words = words
+        super().__init__({
+            "crcs": In(data.ArrayLayout(CRC_SETTINGS, words)),
+            **({"word": In(range(words))} if words > 1 else {}),
+            "first": In(1),
+            "cover": In(1),
+            "check": In(1),
+            "last": In(1),
+            "bit": In(1),
+            "ok": Out(words, init=2**words - 1),
+        })
+
+    def elaborate(self, platform):
+        m = Module()
+        n = self._words
+        word = self.word if n > 1 else C(0, 1)
+        crc = self.crcs[0] if n == 1 else Array(self.crcs[w] for w in range(n))[word]
+
+        reg = Signal(CRC_MAX_WIDTH)
+        mismatch = Signal()
+        source = Mux(self.first, crc.start, reg)
+        # The MSB of a ``width``-bit register: bit width - 1, i.e. bit ``width`` of the
+        # register with a 0 below it (width 0 reads that 0 and is never used).
+        msb = Cat(C(0, 1), source).bit_select(crc.width, 1)
+        shifted = Cat(C(0, 1), source[:-1])
+        feedback = msb ^ self.bit
+        wrong = self.check & (self.bit ^ msb ^ crc.inverted)
+        seen = Mux(self.first, 0, mismatch) | wrong
+
+        with m.If(self.cover):
+            m.d.sync += reg.eq(shifted ^ Mux(feedback, crc.poly, 0))
+        with m.Elif(self.check):
+            m.d.sync += reg.eq(shifted)
+        with m.If(self.cover | self.check):
+            m.d.sync += mismatch.eq(seen)
+        with m.If(self.last):
+            for w in range(n):
+                with m.If(word == w):
+                    m.d.sync += self.ok[w].eq(~seen)
+        return m

@@ -1,0 +1,176 @@
+"""CrcEngine on Amaranth's simulator: one programmable checker for every word of a frame.
+
+Expected values come from two places outside the RTL: published check values of the CRC
+catalogue (Greg Cook's "Catalogue of parametrised CRC algorithms", reveng: the CRC of the
+ASCII string "123456789", for the non-reflected CRCs whose output is the register or its
+complement), and the encoder model's textbook bit-serial CRC (tb/encoder_model/crc.py).
+Cycle conventions: ``block_sim.py``.
+"""
+
+import random
+
+import pytest
+
+from bissmaster.core.crc_engine import CrcEngine
+from encoder_model.crc import crc_msb_first, int_to_bits
+
+from testkit.block_sim import simulate
+
+#: (name, width, poly, init, xorout, check) from the reveng catalogue; xorout 0 or all ones.
+CATALOGUE = [
+    ("CRC-3/GSM", 3, 0x3, 0x0, 0x7, 0x4),
+    ("CRC-4/INTERLAKEN", 4, 0x3, 0xF, 0xF, 0xB),
+    ("CRC-5/EPC-C1G2", 5, 0x09, 0x09, 0x00, 0x00),
+    ("CRC-6/CDMA2000-A", 6, 0x27, 0x3F, 0x00, 0x0D),
+    ("CRC-6/GSM", 6, 0x2F, 0x00, 0x3F, 0x13),
+    ("CRC-7/MMC", 7, 0x09, 0x00, 0x00, 0x75),
+    ("CRC-8/SMBUS", 8, 0x07, 0x00, 0x00, 0xF4),
+    ("CRC-10/ATM", 10, 0x233, 0x000, 0x000, 0x199),
+    ("CRC-11/FLEXRAY", 11, 0x385, 0x01A, 0x000, 0x5A3),
+    ("CRC-12/DECT", 12, 0x80F, 0x000, 0x000, 0xF5B),
+    ("CRC-15/CAN", 15, 0x4599, 0x0000, 0x0000, 0x059E),
+    ("CRC-16/XMODEM", 16, 0x1021, 0x0000, 0x0000, 0x31C3),
+    ("CRC-16/IBM-3740", 16, 0x1021, 0xFFFF, 0x0000, 0x29B1),
+    ("CRC-16/GENIBUS", 16, 0x1021, 0xFFFF, 0xFFFF, 0xD64E),
+    ("CRC-16/DECT-X", 16, 0x0589, 0x0000, 0x0000, 0x007F),
+    ("CRC-16/CMS", 16, 0x8005, 0xFFFF, 0x0000, 0xAEE7),
+]
+#: The BiSS CRCs (docs/protocol.md, section 6): CRC-6 0x43 and CRC-16 0x190D9, start 0, inverted.
+BISS = [("BiSS CRC-6", 6, 0x03, 0, 0x3F), ("BiSS CRC-16", 16, 0x90D9, 0, 0xFFFF)]
+CHECK_MESSAGE = [(byte >> (7 - i)) & 1 for byte in b"123456789" for i in range(8)]
+
+
+def _settings(width, poly, start, inverted):
+    return {"width": width, "poly": poly, "start": start, "inverted": int(inverted)}
+
+
+def _run(words, jobs, seed):
+    """Each job is (word index, settings, covered bits, received CRC bits). The bits come one
+    per 1..3 clocks with junk between; ``crcs`` holds every word's settings from the job on.
+    Returns per job (ok[word] the clock after its last bit, ok[word] two idle clocks later)."""
+    rng = random.Random(seed)
+    dut = CrcEngine(words)
+    crcs = [_settings(0, 0, 0, 0)] * words
+    results = []
+
+    async def tb(ctx):
+        for word, settings, covered, received in jobs:
+            crcs[word] = settings
+            ctx.set(dut.crcs, crcs)
+            if words > 1:
+                ctx.set(dut.word, word)
+            bits = [(b, 1, 0) for b in covered] + [(b, 0, 1) for b in received]
+            for i, (b, cover, check) in enumerate(bits):
+                for _ in range(rng.randrange(3)):
+                    ctx.set(dut.first, 0)
+                    ctx.set(dut.cover, 0)
+                    ctx.set(dut.check, 0)
+                    ctx.set(dut.last, 0)
+                    ctx.set(dut.bit, rng.randrange(2))
+                    await ctx.tick()
+                ctx.set(dut.first, int(i == 0))
+                ctx.set(dut.cover, cover)
+                ctx.set(dut.check, check)
+                ctx.set(dut.last, int(i == len(bits) - 1))
+                ctx.set(dut.bit, b)
+                await ctx.tick()
+            for signal in (dut.first, dut.cover, dut.check, dut.last):
+                ctx.set(signal, 0)
+            ctx.set(dut.bit, rng.randrange(2))
+            now = (ctx.get(dut.ok) >> word) & 1
+            await ctx.tick()
+            await ctx.tick()
+            results.append((now, (ctx.get(dut.ok) >> word) & 1))
+
+    simulate(dut, tb)
+    return results
+
+
+@pytest.mark.parametrize("name, width, poly, init, xorout, check", CATALOGUE,
+                         ids=[c[0] for c in CATALOGUE])
+def test_crc_engine_catalogue_check_values(name, width, poly, init, xorout, check):
+    """The engine accepts "123456789" followed by the catalogue's check value, and refuses it
+    with any one check bit flipped or the check value off by one."""
+    assert xorout in (0, 2**width - 1)
+    settings = _settings(width, poly, init, xorout != 0)
+    good = int_to_bits(check, width)
+    jobs = [(0, settings, CHECK_MESSAGE, good)]
+    for i in range(width):
+        flipped = list(good)
+        flipped[i] ^= 1
+        jobs.append((0, settings, CHECK_MESSAGE, flipped))
+    jobs.append((0, settings, CHECK_MESSAGE, int_to_bits((check + 1) % 2**width, width)))
+    assert _run(1, jobs, seed=width) == [(1, 1)] + [(0, 0)] * (width + 1)
+
+
+def test_crc_engine_model_agrees_with_the_catalogue():
+    """The reference the random tests use gives the published values too."""
+    for _, width, poly, init, xorout, check in CATALOGUE + [(n, w, p, i, x, None)
+                                                              for n, w, p, i, x in BISS]:
+        if check is not None:
+            assert crc_msb_first(CHECK_MESSAGE, width=width, poly=poly, init=init,
+                                 xor_out=xorout) == check
+
+
+def _random_crc(rng):
+    width = rng.randint(1, 16)
+    return width, rng.randrange(2**width) | 1, rng.randrange(2**width), rng.random() < 0.5
+
+
+@pytest.mark.parametrize("words", (1, 2))
+def test_crc_engine_random_crcs_and_words_in_turn(words):
+    """Random CRCs (width 1..16, odd polynomial, any start, inverted or not), random lengths,
+    words in turn with their own settings: a correct CRC passes, one flipped bit anywhere
+    (covered data or the CRC) fails, and a word's verdict is held while other words run."""
+    rng = random.Random(8100 + words)
+    jobs, expected = [], []
+    for _ in range(120):
+        word = rng.randrange(words)
+        width, poly, start, inverted = _random_crc(rng)
+        covered = [rng.randrange(2) for _ in range(rng.randint(1, 80))]
+        crc = crc_msb_first(covered, width=width, poly=poly, init=start,
+                            xor_out=2**width - 1 if inverted else 0)
+        received = int_to_bits(crc, width)
+        flip = rng.random() < 0.5
+        if flip:
+            # Any single-bit error: the generator has an x^0 term (odd polynomial) and its top
+            # term, so it divides no x^k.
+            i = rng.randrange(len(covered) + width)
+            if i < len(covered):
+                covered = covered[:i] + [covered[i] ^ 1] + covered[i + 1:]
+            else:
+                j = i - len(covered)
+                received = received[:j] + [received[j] ^ 1] + received[j + 1:]
+        jobs.append((word, _settings(width, poly, start, inverted), covered, received))
+        expected.append((int(not flip),) * 2)
+    assert _run(words, jobs, seed=words) == expected
+
+
+def test_crc_engine_width_0_word_is_good_and_other_verdicts_hold():
+    """A word without CRC (width 0: no check bits) ends good; word 0's failed verdict stays
+    while word 1 runs, and word 1's good verdict is its own."""
+    rng = random.Random(8200)
+    covered = [rng.randrange(2) for _ in range(30)]
+    bad = int_to_bits(crc_msb_first(covered, width=6, poly=0x03, xor_out=0x3F) ^ 1, 6)
+    dut = CrcEngine(2)
+    seen = []
+
+    async def tb(ctx):
+        ctx.set(dut.crcs, [_settings(6, 0x03, 0, 1), _settings(0, 0, 0, 0)])
+        for word, bits in ((0, [(b, 1, 0) for b in covered] + [(b, 0, 1) for b in bad]),
+                           (1, [(b, 1, 0) for b in covered])):
+            ctx.set(dut.word, word)
+            for i, (b, cover, check) in enumerate(bits):
+                ctx.set(dut.first, int(i == 0))
+                ctx.set(dut.cover, cover)
+                ctx.set(dut.check, check)
+                ctx.set(dut.last, int(i == len(bits) - 1))
+                ctx.set(dut.bit, b)
+                await ctx.tick()
+            for signal in (dut.first, dut.cover, dut.check, dut.last):
+                ctx.set(signal, 0)
+            await ctx.tick()
+            seen.append(ctx.get(dut.ok))
+
+    simulate(dut, tb)
+    assert seen == [0b10, 0b10]
