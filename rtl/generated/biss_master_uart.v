@@ -81,10 +81,18 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
   wire [7:0] ch0__cfg_spw_tolerance;
   wire [23:0] ch0__cfg_timeout_limit;
   wire [1:0] ch0__cfg_w0_crc;
+  wire ch0__cfg_w0_crc_inverted;
+  wire [15:0] ch0__cfg_w0_crc_poly;
+  wire [15:0] ch0__cfg_w0_crc_start;
+  wire [4:0] ch0__cfg_w0_crc_width;
   wire [5:0] ch0__cfg_w0_data_bits;
   wire ch0__cfg_w0_lc;
   wire ch0__cfg_w0_nenw;
   wire [1:0] ch0__cfg_w1_crc;
+  wire ch0__cfg_w1_crc_inverted;
+  wire [15:0] ch0__cfg_w1_crc_poly;
+  wire [15:0] ch0__cfg_w1_crc_start;
+  wire [4:0] ch0__cfg_w1_crc_width;
   wire [5:0] ch0__cfg_w1_data_bits;
   wire ch0__cfg_w1_enable;
   wire ch0__cfg_w1_lc;
@@ -180,10 +188,18 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
   wire [7:0] ch1__cfg_spw_tolerance;
   wire [23:0] ch1__cfg_timeout_limit;
   wire [1:0] ch1__cfg_w0_crc;
+  wire ch1__cfg_w0_crc_inverted;
+  wire [15:0] ch1__cfg_w0_crc_poly;
+  wire [15:0] ch1__cfg_w0_crc_start;
+  wire [4:0] ch1__cfg_w0_crc_width;
   wire [5:0] ch1__cfg_w0_data_bits;
   wire ch1__cfg_w0_lc;
   wire ch1__cfg_w0_nenw;
   wire [1:0] ch1__cfg_w1_crc;
+  wire ch1__cfg_w1_crc_inverted;
+  wire [15:0] ch1__cfg_w1_crc_poly;
+  wire [15:0] ch1__cfg_w1_crc_start;
+  wire [4:0] ch1__cfg_w1_crc_width;
   wire [5:0] ch1__cfg_w1_data_bits;
   wire ch1__cfg_w1_enable;
   wire ch1__cfg_w1_lc;
@@ -248,216 +264,232 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
   wire glob__trigger;
   output irq;
   reg irq = 1'h0;
-  wire [1:0] \irq$419 ;
+  wire [1:0] \irq$451 ;
   wire ma;
-  wire \ma$415 ;
+  wire \ma$447 ;
   wire regs__abort_cycle;
-  wire \regs__abort_cycle$224 ;
+  wire \regs__abort_cycle$240 ;
   wire regs__busy;
-  wire \regs__busy$227 ;
+  wire \regs__busy$243 ;
   wire regs__ca_abort;
-  wire \regs__ca_abort$228 ;
+  wire \regs__ca_abort$244 ;
   wire [6:0] regs__ca_address;
-  wire [6:0] \regs__ca_address$230 ;
+  wire [6:0] \regs__ca_address$246 ;
   wire regs__ca_busy;
-  wire \regs__ca_busy$233 ;
+  wire \regs__ca_busy$249 ;
   wire [6:0] regs__ca_bytes_done;
-  wire [6:0] \regs__ca_bytes_done$235 ;
+  wire [6:0] \regs__ca_bytes_done$251 ;
   wire [6:0] regs__ca_count;
-  wire [6:0] \regs__ca_count$236 ;
+  wire [6:0] \regs__ca_count$252 ;
   wire regs__ca_done;
-  wire \regs__ca_done$239 ;
+  wire \regs__ca_done$255 ;
   wire [3:0] regs__ca_rbuf_addr;
-  wire [3:0] \regs__ca_rbuf_addr$240 ;
+  wire [3:0] \regs__ca_rbuf_addr$256 ;
   wire [31:0] regs__ca_rbuf_data;
-  wire [31:0] \regs__ca_rbuf_data$243 ;
+  wire [31:0] \regs__ca_rbuf_data$259 ;
   wire regs__ca_rbuf_en;
-  wire \regs__ca_rbuf_en$244 ;
+  wire \regs__ca_rbuf_en$260 ;
   wire [2:0] regs__ca_slave_id;
-  wire [2:0] \regs__ca_slave_id$246 ;
+  wire [2:0] \regs__ca_slave_id$262 ;
   wire regs__ca_start;
-  wire \regs__ca_start$248 ;
+  wire \regs__ca_start$264 ;
   wire [2:0] regs__ca_status;
-  wire [2:0] \regs__ca_status$251 ;
+  wire [2:0] \regs__ca_status$267 ;
   wire [3:0] regs__ca_wbuf_addr;
-  wire [3:0] \regs__ca_wbuf_addr$252 ;
+  wire [3:0] \regs__ca_wbuf_addr$268 ;
   wire [31:0] regs__ca_wbuf_data;
-  wire [31:0] \regs__ca_wbuf_data$254 ;
+  wire [31:0] \regs__ca_wbuf_data$270 ;
   wire [3:0] regs__ca_wbuf_en;
-  wire [3:0] \regs__ca_wbuf_en$256 ;
+  wire [3:0] \regs__ca_wbuf_en$272 ;
   wire regs__ca_write;
-  wire \regs__ca_write$258 ;
+  wire \regs__ca_write$274 ;
   wire regs__cap_counters;
-  wire \regs__cap_counters$261 ;
+  wire \regs__cap_counters$277 ;
   wire [5:0] regs__cap_data_bits_w0;
-  wire [5:0] \regs__cap_data_bits_w0$263 ;
+  wire [5:0] \regs__cap_data_bits_w0$279 ;
   wire [5:0] regs__cap_data_bits_w1;
-  wire [5:0] \regs__cap_data_bits_w1$265 ;
+  wire [5:0] \regs__cap_data_bits_w1$281 ;
   wire regs__cap_register_access;
-  wire \regs__cap_register_access$267 ;
+  wire \regs__cap_register_access$283 ;
   wire [5:0] regs__cap_timer_width;
-  wire [5:0] \regs__cap_timer_width$269 ;
+  wire [5:0] \regs__cap_timer_width$285 ;
   wire regs__cap_timestamp;
-  wire \regs__cap_timestamp$271 ;
+  wire \regs__cap_timestamp$287 ;
   wire regs__cds;
-  wire \regs__cds$273 ;
+  wire \regs__cds$289 ;
   wire [23:0] regs__cfg_ack_limit;
-  wire [23:0] \regs__cfg_ack_limit$274 ;
+  wire [23:0] \regs__cfg_ack_limit$290 ;
   wire [23:0] regs__cfg_break_time;
-  wire [23:0] \regs__cfg_break_time$276 ;
+  wire [23:0] \regs__cfg_break_time$292 ;
   wire [11:0] regs__cfg_delay_limit;
-  wire [11:0] \regs__cfg_delay_limit$278 ;
+  wire [11:0] \regs__cfg_delay_limit$294 ;
   wire [3:0] regs__cfg_delay_tolerance;
-  wire [3:0] \regs__cfg_delay_tolerance$280 ;
+  wire [3:0] \regs__cfg_delay_tolerance$296 ;
   wire regs__cfg_end_check;
-  wire \regs__cfg_end_check$282 ;
+  wire \regs__cfg_end_check$298 ;
   wire [15:0] regs__cfg_ma_half_period;
-  wire [15:0] \regs__cfg_ma_half_period$284 ;
+  wire [15:0] \regs__cfg_ma_half_period$300 ;
   wire [3:0] regs__cfg_noise_limit;
-  wire [3:0] \regs__cfg_noise_limit$286 ;
+  wire [3:0] \regs__cfg_noise_limit$302 ;
   wire [11:0] regs__cfg_quiet_time;
-  wire [11:0] \regs__cfg_quiet_time$288 ;
+  wire [11:0] \regs__cfg_quiet_time$304 ;
   wire [23:0] regs__cfg_request_period;
-  wire [23:0] \regs__cfg_request_period$290 ;
+  wire [23:0] \regs__cfg_request_period$306 ;
   wire regs__cfg_spw_check;
-  wire \regs__cfg_spw_check$292 ;
+  wire \regs__cfg_spw_check$308 ;
   wire [7:0] regs__cfg_spw_tolerance;
-  wire [7:0] \regs__cfg_spw_tolerance$294 ;
+  wire [7:0] \regs__cfg_spw_tolerance$310 ;
   wire [23:0] regs__cfg_timeout_limit;
-  wire [23:0] \regs__cfg_timeout_limit$296 ;
+  wire [23:0] \regs__cfg_timeout_limit$312 ;
   wire [1:0] regs__cfg_w0_crc;
-  wire [1:0] \regs__cfg_w0_crc$298 ;
+  wire [1:0] \regs__cfg_w0_crc$314 ;
+  wire regs__cfg_w0_crc_inverted;
+  wire \regs__cfg_w0_crc_inverted$316 ;
+  wire [15:0] regs__cfg_w0_crc_poly;
+  wire [15:0] \regs__cfg_w0_crc_poly$318 ;
+  wire [15:0] regs__cfg_w0_crc_start;
+  wire [15:0] \regs__cfg_w0_crc_start$320 ;
+  wire [4:0] regs__cfg_w0_crc_width;
+  wire [4:0] \regs__cfg_w0_crc_width$322 ;
   wire [5:0] regs__cfg_w0_data_bits;
-  wire [5:0] \regs__cfg_w0_data_bits$300 ;
+  wire [5:0] \regs__cfg_w0_data_bits$324 ;
   wire regs__cfg_w0_lc;
-  wire \regs__cfg_w0_lc$302 ;
+  wire \regs__cfg_w0_lc$326 ;
   wire regs__cfg_w0_nenw;
-  wire \regs__cfg_w0_nenw$304 ;
+  wire \regs__cfg_w0_nenw$328 ;
   wire [1:0] regs__cfg_w1_crc;
-  wire [1:0] \regs__cfg_w1_crc$306 ;
+  wire [1:0] \regs__cfg_w1_crc$330 ;
+  wire regs__cfg_w1_crc_inverted;
+  wire \regs__cfg_w1_crc_inverted$332 ;
+  wire [15:0] regs__cfg_w1_crc_poly;
+  wire [15:0] \regs__cfg_w1_crc_poly$334 ;
+  wire [15:0] regs__cfg_w1_crc_start;
+  wire [15:0] \regs__cfg_w1_crc_start$336 ;
+  wire [4:0] regs__cfg_w1_crc_width;
+  wire [4:0] \regs__cfg_w1_crc_width$338 ;
   wire [5:0] regs__cfg_w1_data_bits;
-  wire [5:0] \regs__cfg_w1_data_bits$308 ;
+  wire [5:0] \regs__cfg_w1_data_bits$340 ;
   wire regs__cfg_w1_enable;
-  wire \regs__cfg_w1_enable$310 ;
+  wire \regs__cfg_w1_enable$342 ;
   wire regs__cfg_w1_lc;
-  wire \regs__cfg_w1_lc$312 ;
+  wire \regs__cfg_w1_lc$344 ;
   wire regs__cfg_w1_nenw;
-  wire \regs__cfg_w1_nenw$314 ;
+  wire \regs__cfg_w1_nenw$346 ;
   wire regs__clear_counters;
-  wire \regs__clear_counters$316 ;
+  wire \regs__clear_counters$348 ;
   wire regs__config_error;
-  wire \regs__config_error$319 ;
+  wire \regs__config_error$351 ;
   wire [15:0] regs__count_aborted;
-  wire [15:0] \regs__count_aborted$321 ;
+  wire [15:0] \regs__count_aborted$353 ;
   wire [15:0] regs__count_ca_aborted;
-  wire [15:0] \regs__count_ca_aborted$323 ;
+  wire [15:0] \regs__count_ca_aborted$355 ;
   wire [15:0] regs__count_ca_crc4_error;
-  wire [15:0] \regs__count_ca_crc4_error$325 ;
+  wire [15:0] \regs__count_ca_crc4_error$357 ;
   wire [15:0] regs__count_ca_data_fault;
-  wire [15:0] \regs__count_ca_data_fault$327 ;
+  wire [15:0] \regs__count_ca_data_fault$359 ;
   wire [15:0] regs__count_ca_no_answer;
-  wire [15:0] \regs__count_ca_no_answer$329 ;
+  wire [15:0] \regs__count_ca_no_answer$361 ;
   wire [15:0] regs__count_ca_refused;
-  wire [15:0] \regs__count_ca_refused$331 ;
+  wire [15:0] \regs__count_ca_refused$363 ;
   wire [15:0] regs__count_crc_word0;
-  wire [15:0] \regs__count_crc_word0$333 ;
+  wire [15:0] \regs__count_crc_word0$365 ;
   wire [15:0] regs__count_crc_word1;
-  wire [15:0] \regs__count_crc_word1$335 ;
+  wire [15:0] \regs__count_crc_word1$367 ;
   wire [15:0] regs__count_delay_jump;
-  wire [15:0] \regs__count_delay_jump$337 ;
+  wire [15:0] \regs__count_delay_jump$369 ;
   wire [15:0] regs__count_delay_range;
-  wire [15:0] \regs__count_delay_range$339 ;
+  wire [15:0] \regs__count_delay_range$371 ;
   wire [15:0] regs__count_lc_repeat;
-  wire [15:0] \regs__count_lc_repeat$341 ;
+  wire [15:0] \regs__count_lc_repeat$373 ;
   wire [15:0] regs__count_lc_skip;
-  wire [15:0] \regs__count_lc_skip$343 ;
+  wire [15:0] \regs__count_lc_skip$375 ;
   wire [15:0] regs__count_lc_zero;
-  wire [15:0] \regs__count_lc_zero$345 ;
+  wire [15:0] \regs__count_lc_zero$377 ;
   wire [15:0] regs__count_no_ack;
-  wire [15:0] \regs__count_no_ack$347 ;
+  wire [15:0] \regs__count_no_ack$379 ;
   wire [15:0] regs__count_no_start;
-  wire [15:0] \regs__count_no_start$349 ;
+  wire [15:0] \regs__count_no_start$381 ;
   wire [15:0] regs__count_no_stop;
-  wire [15:0] \regs__count_no_stop$351 ;
+  wire [15:0] \regs__count_no_stop$383 ;
   wire [15:0] regs__count_noise_event;
-  wire [15:0] \regs__count_noise_event$353 ;
+  wire [15:0] \regs__count_noise_event$385 ;
   wire [15:0] regs__count_noisy_line;
-  wire [15:0] \regs__count_noisy_line$355 ;
+  wire [15:0] \regs__count_noisy_line$387 ;
   wire [15:0] regs__count_overrun;
-  wire [15:0] \regs__count_overrun$357 ;
+  wire [15:0] \regs__count_overrun$389 ;
   wire [15:0] regs__count_slo_stuck_low;
-  wire [15:0] \regs__count_slo_stuck_low$359 ;
+  wire [15:0] \regs__count_slo_stuck_low$391 ;
   wire [15:0] regs__count_spw_mismatch;
-  wire [15:0] \regs__count_spw_mismatch$361 ;
+  wire [15:0] \regs__count_spw_mismatch$393 ;
   wire regs__delay_settled;
-  wire \regs__delay_settled$363 ;
+  wire \regs__delay_settled$395 ;
   wire [7:0] regs__delay_spread;
-  wire [7:0] \regs__delay_spread$365 ;
+  wire [7:0] \regs__delay_spread$397 ;
   wire regs__done;
-  wire \regs__done$367 ;
+  wire \regs__done$399 ;
   wire [15:0] regs__done_count;
-  wire [15:0] \regs__done_count$369 ;
+  wire [15:0] \regs__done_count$401 ;
   wire regs__frame_error;
-  wire \regs__frame_error$371 ;
+  wire \regs__frame_error$403 ;
   wire [5:0] regs__lc;
-  wire [5:0] \regs__lc$373 ;
+  wire [5:0] \regs__lc$405 ;
   wire regs__lc_repeat;
-  wire \regs__lc_repeat$375 ;
+  wire \regs__lc_repeat$407 ;
   wire regs__lc_skip;
-  wire \regs__lc_skip$377 ;
+  wire \regs__lc_skip$409 ;
   wire regs__lc_zero;
-  wire \regs__lc_zero$379 ;
+  wire \regs__lc_zero$411 ;
   wire [12:0] regs__line_delay;
-  wire [12:0] \regs__line_delay$381 ;
+  wire [12:0] \regs__line_delay$413 ;
   wire [3:0] regs__noise_events;
-  wire [3:0] \regs__noise_events$383 ;
+  wire [3:0] \regs__noise_events$415 ;
   wire regs__periodic;
-  wire \regs__periodic$384 ;
+  wire \regs__periodic$416 ;
   wire [10:0] regs__r_addr;
   wire [31:0] regs__r_data;
   wire regs__r_en;
   wire regs__r_load;
   wire [12:0] regs__settled_delay;
-  wire [12:0] \regs__settled_delay$387 ;
+  wire [12:0] \regs__settled_delay$419 ;
   wire regs__spw_mismatch;
-  wire \regs__spw_mismatch$389 ;
+  wire \regs__spw_mismatch$421 ;
   wire regs__start;
-  wire \regs__start$390 ;
+  wire \regs__start$422 ;
   wire [3:0] regs__status;
-  wire [3:0] \regs__status$393 ;
+  wire [3:0] \regs__status$425 ;
   wire [31:0] regs__timestamp;
-  wire [31:0] \regs__timestamp$395 ;
+  wire [31:0] \regs__timestamp$427 ;
   wire regs__trigger_enable;
-  wire \regs__trigger_enable$396 ;
+  wire \regs__trigger_enable$428 ;
   wire [10:0] regs__w_addr;
   wire [31:0] regs__w_data;
   wire regs__w_en;
   wire [3:0] regs__w_strb;
   wire regs__word0_crc_ok;
-  wire \regs__word0_crc_ok$399 ;
+  wire \regs__word0_crc_ok$431 ;
   wire regs__word0_ne;
-  wire \regs__word0_ne$401 ;
+  wire \regs__word0_ne$433 ;
   wire regs__word0_nw;
-  wire \regs__word0_nw$403 ;
+  wire \regs__word0_nw$435 ;
   wire [54:0] regs__word0_position;
-  wire [54:0] \regs__word0_position$405 ;
+  wire [54:0] \regs__word0_position$437 ;
   wire regs__word1_crc_ok;
-  wire \regs__word1_crc_ok$407 ;
+  wire \regs__word1_crc_ok$439 ;
   wire regs__word1_ne;
-  wire \regs__word1_ne$409 ;
+  wire \regs__word1_ne$441 ;
   wire regs__word1_nw;
-  wire \regs__word1_nw$411 ;
+  wire \regs__word1_nw$443 ;
   wire [39:0] regs__word1_position;
-  wire [39:0] \regs__word1_position$413 ;
+  wire [39:0] \regs__word1_position$445 ;
   input rst;
   wire rst;
   wire slo;
-  wire \slo$416 ;
+  wire \slo$448 ;
   input trigger;
   wire trigger;
-  wire \trigger$221 ;
+  wire \trigger$237 ;
   wire \trigger$28 ;
-  wire \trigger$414 ;
+  wire \trigger$446 ;
   reg trigger_in = 1'h0;
   wire uart__rx;
   wire uart__tx;
@@ -497,7 +529,7 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .ch0_ca_request_address(regs__ca_address),
     .ch0_ca_request_count(regs__ca_count),
     .ch0_ca_request_slave_id(regs__ca_slave_id),
-    .\ch0_ca_request_write$85 (regs__ca_write),
+    .\ch0_ca_request_write$101 (regs__ca_write),
     .ch0_cfg_ack_ack_limit(regs__cfg_ack_limit),
     .ch0_cfg_break_break_time(regs__cfg_break_time),
     .ch0_cfg_checks_delay_tolerance(regs__cfg_delay_tolerance),
@@ -505,6 +537,14 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .ch0_cfg_checks_noise_limit(regs__cfg_noise_limit),
     .ch0_cfg_checks_spw_check(regs__cfg_spw_check),
     .ch0_cfg_checks_spw_tolerance(regs__cfg_spw_tolerance),
+    .ch0_cfg_crc0_inverted(regs__cfg_w0_crc_inverted),
+    .ch0_cfg_crc0_poly(regs__cfg_w0_crc_poly),
+    .ch0_cfg_crc0_start_start(regs__cfg_w0_crc_start),
+    .ch0_cfg_crc0_width(regs__cfg_w0_crc_width),
+    .ch0_cfg_crc1_inverted(regs__cfg_w1_crc_inverted),
+    .ch0_cfg_crc1_poly(regs__cfg_w1_crc_poly),
+    .ch0_cfg_crc1_start_start(regs__cfg_w1_crc_start),
+    .ch0_cfg_crc1_width(regs__cfg_w1_crc_width),
     .ch0_cfg_ma_delay_limit(regs__cfg_delay_limit),
     .ch0_cfg_ma_ma_half_period(regs__cfg_ma_half_period),
     .ch0_cfg_period_request_period(regs__cfg_request_period),
@@ -529,53 +569,61 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .ch1__ca_busy(ch1__ca_busy),
     .ch1__ca_done(ch1__ca_done),
     .ch1__ca_rbuf_data(ch1__ca_rbuf_data),
-    .ch1__ca_rbuf_en(\regs__ca_rbuf_en$244 ),
-    .ch1__ca_wbuf_en(\regs__ca_wbuf_en$256 ),
+    .ch1__ca_rbuf_en(\regs__ca_rbuf_en$260 ),
+    .ch1__ca_wbuf_en(\regs__ca_wbuf_en$272 ),
     .ch1__config_error(ch1__config_error),
     .ch1__done(ch1__done),
     .ch1__done_count(ch1__done_count),
     .ch1__frame_error(ch1__frame_error),
-    .ch1_ca_ctrl_abort(\regs__ca_abort$228 ),
-    .ch1_ca_ctrl_start(\regs__ca_start$248 ),
-    .ch1_ca_request_address(\regs__ca_address$230 ),
-    .ch1_ca_request_count(\regs__ca_count$236 ),
-    .ch1_ca_request_slave_id(\regs__ca_slave_id$246 ),
-    .\ch1_ca_request_write$265 (\regs__ca_write$258 ),
-    .ch1_cfg_ack_ack_limit(\regs__cfg_ack_limit$274 ),
-    .ch1_cfg_break_break_time(\regs__cfg_break_time$276 ),
-    .ch1_cfg_checks_delay_tolerance(\regs__cfg_delay_tolerance$280 ),
-    .ch1_cfg_checks_end_check(\regs__cfg_end_check$282 ),
-    .ch1_cfg_checks_noise_limit(\regs__cfg_noise_limit$286 ),
-    .ch1_cfg_checks_spw_check(\regs__cfg_spw_check$292 ),
-    .ch1_cfg_checks_spw_tolerance(\regs__cfg_spw_tolerance$294 ),
-    .ch1_cfg_ma_delay_limit(\regs__cfg_delay_limit$278 ),
-    .ch1_cfg_ma_ma_half_period(\regs__cfg_ma_half_period$284 ),
-    .ch1_cfg_period_request_period(\regs__cfg_request_period$290 ),
-    .ch1_cfg_quiet_quiet_time(\regs__cfg_quiet_time$288 ),
-    .ch1_cfg_timeout_timeout_limit(\regs__cfg_timeout_limit$296 ),
-    .ch1_cfg_words_w0_crc(\regs__cfg_w0_crc$298 ),
-    .ch1_cfg_words_w0_data_bits(\regs__cfg_w0_data_bits$300 ),
-    .ch1_cfg_words_w0_lc(\regs__cfg_w0_lc$302 ),
-    .ch1_cfg_words_w0_nenw(\regs__cfg_w0_nenw$304 ),
-    .ch1_cfg_words_w1_crc(\regs__cfg_w1_crc$306 ),
-    .ch1_cfg_words_w1_data_bits(\regs__cfg_w1_data_bits$308 ),
-    .ch1_cfg_words_w1_enable(\regs__cfg_w1_enable$310 ),
-    .ch1_cfg_words_w1_lc(\regs__cfg_w1_lc$312 ),
-    .ch1_cfg_words_w1_nenw(\regs__cfg_w1_nenw$314 ),
-    .ch1_ctrl_abort(\regs__abort_cycle$224 ),
-    .ch1_ctrl_clear_counters(\regs__clear_counters$316 ),
-    .ch1_ctrl_periodic(\regs__periodic$384 ),
-    .ch1_ctrl_start(\regs__start$390 ),
-    .ch1_ctrl_trigger_enable(\regs__trigger_enable$396 ),
+    .ch1_ca_ctrl_abort(\regs__ca_abort$244 ),
+    .ch1_ca_ctrl_start(\regs__ca_start$264 ),
+    .ch1_ca_request_address(\regs__ca_address$246 ),
+    .ch1_ca_request_count(\regs__ca_count$252 ),
+    .ch1_ca_request_slave_id(\regs__ca_slave_id$262 ),
+    .\ch1_ca_request_write$301 (\regs__ca_write$274 ),
+    .ch1_cfg_ack_ack_limit(\regs__cfg_ack_limit$290 ),
+    .ch1_cfg_break_break_time(\regs__cfg_break_time$292 ),
+    .ch1_cfg_checks_delay_tolerance(\regs__cfg_delay_tolerance$296 ),
+    .ch1_cfg_checks_end_check(\regs__cfg_end_check$298 ),
+    .ch1_cfg_checks_noise_limit(\regs__cfg_noise_limit$302 ),
+    .ch1_cfg_checks_spw_check(\regs__cfg_spw_check$308 ),
+    .ch1_cfg_checks_spw_tolerance(\regs__cfg_spw_tolerance$310 ),
+    .ch1_cfg_crc0_inverted(\regs__cfg_w0_crc_inverted$316 ),
+    .ch1_cfg_crc0_poly(\regs__cfg_w0_crc_poly$318 ),
+    .ch1_cfg_crc0_start_start(\regs__cfg_w0_crc_start$320 ),
+    .ch1_cfg_crc0_width(\regs__cfg_w0_crc_width$322 ),
+    .ch1_cfg_crc1_inverted(\regs__cfg_w1_crc_inverted$332 ),
+    .ch1_cfg_crc1_poly(\regs__cfg_w1_crc_poly$334 ),
+    .ch1_cfg_crc1_start_start(\regs__cfg_w1_crc_start$336 ),
+    .ch1_cfg_crc1_width(\regs__cfg_w1_crc_width$338 ),
+    .ch1_cfg_ma_delay_limit(\regs__cfg_delay_limit$294 ),
+    .ch1_cfg_ma_ma_half_period(\regs__cfg_ma_half_period$300 ),
+    .ch1_cfg_period_request_period(\regs__cfg_request_period$306 ),
+    .ch1_cfg_quiet_quiet_time(\regs__cfg_quiet_time$304 ),
+    .ch1_cfg_timeout_timeout_limit(\regs__cfg_timeout_limit$312 ),
+    .ch1_cfg_words_w0_crc(\regs__cfg_w0_crc$314 ),
+    .ch1_cfg_words_w0_data_bits(\regs__cfg_w0_data_bits$324 ),
+    .ch1_cfg_words_w0_lc(\regs__cfg_w0_lc$326 ),
+    .ch1_cfg_words_w0_nenw(\regs__cfg_w0_nenw$328 ),
+    .ch1_cfg_words_w1_crc(\regs__cfg_w1_crc$330 ),
+    .ch1_cfg_words_w1_data_bits(\regs__cfg_w1_data_bits$340 ),
+    .ch1_cfg_words_w1_enable(\regs__cfg_w1_enable$342 ),
+    .ch1_cfg_words_w1_lc(\regs__cfg_w1_lc$344 ),
+    .ch1_cfg_words_w1_nenw(\regs__cfg_w1_nenw$346 ),
+    .ch1_ctrl_abort(\regs__abort_cycle$240 ),
+    .ch1_ctrl_clear_counters(\regs__clear_counters$348 ),
+    .ch1_ctrl_periodic(\regs__periodic$416 ),
+    .ch1_ctrl_start(\regs__start$422 ),
+    .ch1_ctrl_trigger_enable(\regs__trigger_enable$428 ),
     .ch1_irq(\$7 ),
     .clk(clk),
     .g_trigger_start(glob__trigger),
-    .\port$5134$0 (\$8 ),
-    .\port$5147$0 (\$9 ),
-    .\port$5279$0 (\$10 ),
-    .\port$5685$0 (\$11 ),
-    .\port$5698$0 (\$12 ),
-    .\port$5830$0 (\$13 ),
+    .\port$5310$0 (\$8 ),
+    .\port$5323$0 (\$9 ),
+    .\port$5455$0 (\$10 ),
+    .\port$5861$0 (\$11 ),
+    .\port$5874$0 (\$12 ),
+    .\port$6006$0 (\$13 ),
     .rst(rst),
     .write_data(regs__ca_wbuf_data)
   );
@@ -617,10 +665,18 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .cfg_spw_tolerance(regs__cfg_spw_tolerance),
     .cfg_timeout_limit(regs__cfg_timeout_limit),
     .cfg_w0_crc(regs__cfg_w0_crc),
+    .cfg_w0_crc_inverted(regs__cfg_w0_crc_inverted),
+    .cfg_w0_crc_poly(regs__cfg_w0_crc_poly),
+    .cfg_w0_crc_start(regs__cfg_w0_crc_start),
+    .cfg_w0_crc_width(regs__cfg_w0_crc_width),
     .cfg_w0_data_bits(regs__cfg_w0_data_bits),
     .cfg_w0_lc(regs__cfg_w0_lc),
     .cfg_w0_nenw(regs__cfg_w0_nenw),
     .cfg_w1_crc(regs__cfg_w1_crc),
+    .cfg_w1_crc_inverted(regs__cfg_w1_crc_inverted),
+    .cfg_w1_crc_poly(regs__cfg_w1_crc_poly),
+    .cfg_w1_crc_start(regs__cfg_w1_crc_start),
+    .cfg_w1_crc_width(regs__cfg_w1_crc_width),
     .cfg_w1_data_bits(regs__cfg_w1_data_bits),
     .cfg_w1_enable(regs__cfg_w1_enable),
     .cfg_w1_lc(regs__cfg_w1_lc),
@@ -629,9 +685,9 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .clk(clk),
     .ma(ch0_ma),
     .periodic(regs__periodic),
-    .\port$5134$0 (\$8 ),
-    .\port$5147$0 (\$9 ),
-    .\port$5279$0 (\$10 ),
+    .\port$5310$0 (\$8 ),
+    .\port$5323$0 (\$9 ),
+    .\port$5455$0 (\$10 ),
     .regs__abort_cycle(regs__abort_cycle),
     .regs__busy(ch0__busy),
     .regs__ca_busy(ch0__ca_busy),
@@ -645,49 +701,57 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .rst(rst),
     .slo(ch0_slo),
     .start(regs__start),
-    .\trigger$179 (\trigger$28 )
+    .\trigger$195 (\trigger$28 )
   );
   \biss_master_uart.ch1  ch1 (
-    .ca_abort(\regs__ca_abort$228 ),
-    .ca_address(\regs__ca_address$230 ),
-    .ca_count(\regs__ca_count$236 ),
+    .ca_abort(\regs__ca_abort$244 ),
+    .ca_address(\regs__ca_address$246 ),
+    .ca_count(\regs__ca_count$252 ),
     .ca_rbuf_addr(bus__r_addr[3:0]),
-    .ca_rbuf_en(\regs__ca_rbuf_en$244 ),
-    .ca_slave_id(\regs__ca_slave_id$246 ),
-    .ca_start(\regs__ca_start$248 ),
+    .ca_rbuf_en(\regs__ca_rbuf_en$260 ),
+    .ca_slave_id(\regs__ca_slave_id$262 ),
+    .ca_start(\regs__ca_start$264 ),
     .ca_wbuf_addr(regs__ca_wbuf_addr),
     .ca_wbuf_data(regs__ca_wbuf_data),
-    .ca_wbuf_en(\regs__ca_wbuf_en$256 ),
-    .ca_write(\regs__ca_write$258 ),
-    .cfg_ack_limit(\regs__cfg_ack_limit$274 ),
-    .cfg_break_time(\regs__cfg_break_time$276 ),
-    .cfg_delay_limit(\regs__cfg_delay_limit$278 ),
-    .cfg_delay_tolerance(\regs__cfg_delay_tolerance$280 ),
-    .cfg_end_check(\regs__cfg_end_check$282 ),
-    .cfg_ma_half_period(\regs__cfg_ma_half_period$284 ),
-    .cfg_noise_limit(\regs__cfg_noise_limit$286 ),
-    .cfg_quiet_time(\regs__cfg_quiet_time$288 ),
-    .cfg_request_period(\regs__cfg_request_period$290 ),
-    .cfg_spw_check(\regs__cfg_spw_check$292 ),
-    .cfg_spw_tolerance(\regs__cfg_spw_tolerance$294 ),
-    .cfg_timeout_limit(\regs__cfg_timeout_limit$296 ),
-    .cfg_w0_crc(\regs__cfg_w0_crc$298 ),
-    .cfg_w0_data_bits(\regs__cfg_w0_data_bits$300 ),
-    .cfg_w0_lc(\regs__cfg_w0_lc$302 ),
-    .cfg_w0_nenw(\regs__cfg_w0_nenw$304 ),
-    .cfg_w1_crc(\regs__cfg_w1_crc$306 ),
-    .cfg_w1_data_bits(\regs__cfg_w1_data_bits$308 ),
-    .cfg_w1_enable(\regs__cfg_w1_enable$310 ),
-    .cfg_w1_lc(\regs__cfg_w1_lc$312 ),
-    .cfg_w1_nenw(\regs__cfg_w1_nenw$314 ),
-    .clear_counters(\regs__clear_counters$316 ),
+    .ca_wbuf_en(\regs__ca_wbuf_en$272 ),
+    .ca_write(\regs__ca_write$274 ),
+    .cfg_ack_limit(\regs__cfg_ack_limit$290 ),
+    .cfg_break_time(\regs__cfg_break_time$292 ),
+    .cfg_delay_limit(\regs__cfg_delay_limit$294 ),
+    .cfg_delay_tolerance(\regs__cfg_delay_tolerance$296 ),
+    .cfg_end_check(\regs__cfg_end_check$298 ),
+    .cfg_ma_half_period(\regs__cfg_ma_half_period$300 ),
+    .cfg_noise_limit(\regs__cfg_noise_limit$302 ),
+    .cfg_quiet_time(\regs__cfg_quiet_time$304 ),
+    .cfg_request_period(\regs__cfg_request_period$306 ),
+    .cfg_spw_check(\regs__cfg_spw_check$308 ),
+    .cfg_spw_tolerance(\regs__cfg_spw_tolerance$310 ),
+    .cfg_timeout_limit(\regs__cfg_timeout_limit$312 ),
+    .cfg_w0_crc(\regs__cfg_w0_crc$314 ),
+    .cfg_w0_crc_inverted(\regs__cfg_w0_crc_inverted$316 ),
+    .cfg_w0_crc_poly(\regs__cfg_w0_crc_poly$318 ),
+    .cfg_w0_crc_start(\regs__cfg_w0_crc_start$320 ),
+    .cfg_w0_crc_width(\regs__cfg_w0_crc_width$322 ),
+    .cfg_w0_data_bits(\regs__cfg_w0_data_bits$324 ),
+    .cfg_w0_lc(\regs__cfg_w0_lc$326 ),
+    .cfg_w0_nenw(\regs__cfg_w0_nenw$328 ),
+    .cfg_w1_crc(\regs__cfg_w1_crc$330 ),
+    .cfg_w1_crc_inverted(\regs__cfg_w1_crc_inverted$332 ),
+    .cfg_w1_crc_poly(\regs__cfg_w1_crc_poly$334 ),
+    .cfg_w1_crc_start(\regs__cfg_w1_crc_start$336 ),
+    .cfg_w1_crc_width(\regs__cfg_w1_crc_width$338 ),
+    .cfg_w1_data_bits(\regs__cfg_w1_data_bits$340 ),
+    .cfg_w1_enable(\regs__cfg_w1_enable$342 ),
+    .cfg_w1_lc(\regs__cfg_w1_lc$344 ),
+    .cfg_w1_nenw(\regs__cfg_w1_nenw$346 ),
+    .clear_counters(\regs__clear_counters$348 ),
     .clk(clk),
     .ma(ch1_ma),
-    .periodic(\regs__periodic$384 ),
-    .\port$5685$0 (\$11 ),
-    .\port$5698$0 (\$12 ),
-    .\port$5830$0 (\$13 ),
-    .regs__abort_cycle(\regs__abort_cycle$224 ),
+    .periodic(\regs__periodic$416 ),
+    .\port$5861$0 (\$11 ),
+    .\port$5874$0 (\$12 ),
+    .\port$6006$0 (\$13 ),
+    .regs__abort_cycle(\regs__abort_cycle$240 ),
     .regs__busy(ch1__busy),
     .regs__ca_busy(ch1__ca_busy),
     .regs__ca_done(ch1__ca_done),
@@ -696,11 +760,11 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .regs__done(ch1__done),
     .regs__done_count(ch1__done_count),
     .regs__frame_error(ch1__frame_error),
-    .regs__trigger_enable(\regs__trigger_enable$396 ),
+    .regs__trigger_enable(\regs__trigger_enable$428 ),
     .rst(rst),
     .slo(ch1_slo),
-    .start(\regs__start$390 ),
-    .\trigger$179 (\trigger$28 )
+    .start(\regs__start$422 ),
+    .\trigger$195 (\trigger$28 )
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
@@ -775,10 +839,18 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
   assign ch0__cfg_spw_tolerance = regs__cfg_spw_tolerance;
   assign ch0__cfg_timeout_limit = regs__cfg_timeout_limit;
   assign ch0__cfg_w0_crc = regs__cfg_w0_crc;
+  assign ch0__cfg_w0_crc_inverted = regs__cfg_w0_crc_inverted;
+  assign ch0__cfg_w0_crc_poly = regs__cfg_w0_crc_poly;
+  assign ch0__cfg_w0_crc_start = regs__cfg_w0_crc_start;
+  assign ch0__cfg_w0_crc_width = regs__cfg_w0_crc_width;
   assign ch0__cfg_w0_data_bits = regs__cfg_w0_data_bits;
   assign ch0__cfg_w0_lc = regs__cfg_w0_lc;
   assign ch0__cfg_w0_nenw = regs__cfg_w0_nenw;
   assign ch0__cfg_w1_crc = regs__cfg_w1_crc;
+  assign ch0__cfg_w1_crc_inverted = regs__cfg_w1_crc_inverted;
+  assign ch0__cfg_w1_crc_poly = regs__cfg_w1_crc_poly;
+  assign ch0__cfg_w1_crc_start = regs__cfg_w1_crc_start;
+  assign ch0__cfg_w1_crc_width = regs__cfg_w1_crc_width;
   assign ch0__cfg_w1_data_bits = regs__cfg_w1_data_bits;
   assign ch0__cfg_w1_enable = regs__cfg_w1_enable;
   assign ch0__cfg_w1_lc = regs__cfg_w1_lc;
@@ -873,171 +945,180 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
   assign regs__word1_nw = \$8 [175];
   assign ch0__word1_position = \$8 [173:134];
   assign regs__word1_position = \$8 [173:134];
-  assign \trigger$221  = \trigger$28 ;
+  assign \trigger$237  = \trigger$28 ;
   assign ma = ch0_ma;
   assign slo = ch0_slo;
-  assign ch1__abort_cycle = \regs__abort_cycle$224 ;
-  assign \regs__busy$227  = ch1__busy;
-  assign ch1__ca_abort = \regs__ca_abort$228 ;
-  assign ch1__ca_address = \regs__ca_address$230 ;
-  assign \regs__ca_busy$233  = ch1__ca_busy;
+  assign ch1__abort_cycle = \regs__abort_cycle$240 ;
+  assign \regs__busy$243  = ch1__busy;
+  assign ch1__ca_abort = \regs__ca_abort$244 ;
+  assign ch1__ca_address = \regs__ca_address$246 ;
+  assign \regs__ca_busy$249  = ch1__ca_busy;
   assign ch1__ca_bytes_done = \$13 [9:3];
-  assign \regs__ca_bytes_done$235  = \$13 [9:3];
-  assign ch1__ca_count = \regs__ca_count$236 ;
-  assign \regs__ca_done$239  = ch1__ca_done;
-  assign \regs__ca_rbuf_addr$240  = bus__r_addr[3:0];
+  assign \regs__ca_bytes_done$251  = \$13 [9:3];
+  assign ch1__ca_count = \regs__ca_count$252 ;
+  assign \regs__ca_done$255  = ch1__ca_done;
+  assign \regs__ca_rbuf_addr$256  = bus__r_addr[3:0];
   assign ch1__ca_rbuf_addr = bus__r_addr[3:0];
-  assign \regs__ca_rbuf_data$243  = ch1__ca_rbuf_data;
-  assign ch1__ca_rbuf_en = \regs__ca_rbuf_en$244 ;
-  assign ch1__ca_slave_id = \regs__ca_slave_id$246 ;
-  assign ch1__ca_start = \regs__ca_start$248 ;
+  assign \regs__ca_rbuf_data$259  = ch1__ca_rbuf_data;
+  assign ch1__ca_rbuf_en = \regs__ca_rbuf_en$260 ;
+  assign ch1__ca_slave_id = \regs__ca_slave_id$262 ;
+  assign ch1__ca_start = \regs__ca_start$264 ;
   assign ch1__ca_status = \$13 [2:0];
-  assign \regs__ca_status$251  = \$13 [2:0];
-  assign \regs__ca_wbuf_addr$252  = regs__ca_wbuf_addr;
+  assign \regs__ca_status$267  = \$13 [2:0];
+  assign \regs__ca_wbuf_addr$268  = regs__ca_wbuf_addr;
   assign ch1__ca_wbuf_addr = regs__ca_wbuf_addr;
-  assign \regs__ca_wbuf_data$254  = regs__ca_wbuf_data;
+  assign \regs__ca_wbuf_data$270  = regs__ca_wbuf_data;
   assign ch1__ca_wbuf_data = regs__ca_wbuf_data;
-  assign ch1__ca_wbuf_en = \regs__ca_wbuf_en$256 ;
-  assign ch1__ca_write = \regs__ca_write$258 ;
+  assign ch1__ca_wbuf_en = \regs__ca_wbuf_en$272 ;
+  assign ch1__ca_write = \regs__ca_write$274 ;
   assign ch1__cap_counters = 1'h1;
-  assign \regs__cap_counters$261  = 1'h1;
+  assign \regs__cap_counters$277  = 1'h1;
   assign ch1__cap_data_bits_w0 = 6'h37;
-  assign \regs__cap_data_bits_w0$263  = 6'h37;
+  assign \regs__cap_data_bits_w0$279  = 6'h37;
   assign ch1__cap_data_bits_w1 = 6'h28;
-  assign \regs__cap_data_bits_w1$265  = 6'h28;
+  assign \regs__cap_data_bits_w1$281  = 6'h28;
   assign ch1__cap_register_access = 1'h1;
-  assign \regs__cap_register_access$267  = 1'h1;
+  assign \regs__cap_register_access$283  = 1'h1;
   assign ch1__cap_timer_width = 6'h18;
-  assign \regs__cap_timer_width$269  = 6'h18;
+  assign \regs__cap_timer_width$285  = 6'h18;
   assign ch1__cap_timestamp = 1'h1;
-  assign \regs__cap_timestamp$271  = 1'h1;
+  assign \regs__cap_timestamp$287  = 1'h1;
   assign ch1__cds = \$11 [49];
-  assign \regs__cds$273  = \$11 [49];
-  assign ch1__cfg_ack_limit = \regs__cfg_ack_limit$274 ;
-  assign ch1__cfg_break_time = \regs__cfg_break_time$276 ;
-  assign ch1__cfg_delay_limit = \regs__cfg_delay_limit$278 ;
-  assign ch1__cfg_delay_tolerance = \regs__cfg_delay_tolerance$280 ;
-  assign ch1__cfg_end_check = \regs__cfg_end_check$282 ;
-  assign ch1__cfg_ma_half_period = \regs__cfg_ma_half_period$284 ;
-  assign ch1__cfg_noise_limit = \regs__cfg_noise_limit$286 ;
-  assign ch1__cfg_quiet_time = \regs__cfg_quiet_time$288 ;
-  assign ch1__cfg_request_period = \regs__cfg_request_period$290 ;
-  assign ch1__cfg_spw_check = \regs__cfg_spw_check$292 ;
-  assign ch1__cfg_spw_tolerance = \regs__cfg_spw_tolerance$294 ;
-  assign ch1__cfg_timeout_limit = \regs__cfg_timeout_limit$296 ;
-  assign ch1__cfg_w0_crc = \regs__cfg_w0_crc$298 ;
-  assign ch1__cfg_w0_data_bits = \regs__cfg_w0_data_bits$300 ;
-  assign ch1__cfg_w0_lc = \regs__cfg_w0_lc$302 ;
-  assign ch1__cfg_w0_nenw = \regs__cfg_w0_nenw$304 ;
-  assign ch1__cfg_w1_crc = \regs__cfg_w1_crc$306 ;
-  assign ch1__cfg_w1_data_bits = \regs__cfg_w1_data_bits$308 ;
-  assign ch1__cfg_w1_enable = \regs__cfg_w1_enable$310 ;
-  assign ch1__cfg_w1_lc = \regs__cfg_w1_lc$312 ;
-  assign ch1__cfg_w1_nenw = \regs__cfg_w1_nenw$314 ;
-  assign ch1__clear_counters = \regs__clear_counters$316 ;
-  assign \regs__config_error$319  = ch1__config_error;
+  assign \regs__cds$289  = \$11 [49];
+  assign ch1__cfg_ack_limit = \regs__cfg_ack_limit$290 ;
+  assign ch1__cfg_break_time = \regs__cfg_break_time$292 ;
+  assign ch1__cfg_delay_limit = \regs__cfg_delay_limit$294 ;
+  assign ch1__cfg_delay_tolerance = \regs__cfg_delay_tolerance$296 ;
+  assign ch1__cfg_end_check = \regs__cfg_end_check$298 ;
+  assign ch1__cfg_ma_half_period = \regs__cfg_ma_half_period$300 ;
+  assign ch1__cfg_noise_limit = \regs__cfg_noise_limit$302 ;
+  assign ch1__cfg_quiet_time = \regs__cfg_quiet_time$304 ;
+  assign ch1__cfg_request_period = \regs__cfg_request_period$306 ;
+  assign ch1__cfg_spw_check = \regs__cfg_spw_check$308 ;
+  assign ch1__cfg_spw_tolerance = \regs__cfg_spw_tolerance$310 ;
+  assign ch1__cfg_timeout_limit = \regs__cfg_timeout_limit$312 ;
+  assign ch1__cfg_w0_crc = \regs__cfg_w0_crc$314 ;
+  assign ch1__cfg_w0_crc_inverted = \regs__cfg_w0_crc_inverted$316 ;
+  assign ch1__cfg_w0_crc_poly = \regs__cfg_w0_crc_poly$318 ;
+  assign ch1__cfg_w0_crc_start = \regs__cfg_w0_crc_start$320 ;
+  assign ch1__cfg_w0_crc_width = \regs__cfg_w0_crc_width$322 ;
+  assign ch1__cfg_w0_data_bits = \regs__cfg_w0_data_bits$324 ;
+  assign ch1__cfg_w0_lc = \regs__cfg_w0_lc$326 ;
+  assign ch1__cfg_w0_nenw = \regs__cfg_w0_nenw$328 ;
+  assign ch1__cfg_w1_crc = \regs__cfg_w1_crc$330 ;
+  assign ch1__cfg_w1_crc_inverted = \regs__cfg_w1_crc_inverted$332 ;
+  assign ch1__cfg_w1_crc_poly = \regs__cfg_w1_crc_poly$334 ;
+  assign ch1__cfg_w1_crc_start = \regs__cfg_w1_crc_start$336 ;
+  assign ch1__cfg_w1_crc_width = \regs__cfg_w1_crc_width$338 ;
+  assign ch1__cfg_w1_data_bits = \regs__cfg_w1_data_bits$340 ;
+  assign ch1__cfg_w1_enable = \regs__cfg_w1_enable$342 ;
+  assign ch1__cfg_w1_lc = \regs__cfg_w1_lc$344 ;
+  assign ch1__cfg_w1_nenw = \regs__cfg_w1_nenw$346 ;
+  assign ch1__clear_counters = \regs__clear_counters$348 ;
+  assign \regs__config_error$351  = ch1__config_error;
   assign ch1__count_aborted = \$12 [191:176];
-  assign \regs__count_aborted$321  = \$12 [191:176];
+  assign \regs__count_aborted$353  = \$12 [191:176];
   assign ch1__count_ca_aborted = \$12 [319:304];
-  assign \regs__count_ca_aborted$323  = \$12 [319:304];
+  assign \regs__count_ca_aborted$355  = \$12 [319:304];
   assign ch1__count_ca_crc4_error = \$12 [271:256];
-  assign \regs__count_ca_crc4_error$325  = \$12 [271:256];
+  assign \regs__count_ca_crc4_error$357  = \$12 [271:256];
   assign ch1__count_ca_data_fault = \$12 [335:320];
-  assign \regs__count_ca_data_fault$327  = \$12 [335:320];
+  assign \regs__count_ca_data_fault$359  = \$12 [335:320];
   assign ch1__count_ca_no_answer = \$12 [287:272];
-  assign \regs__count_ca_no_answer$329  = \$12 [287:272];
+  assign \regs__count_ca_no_answer$361  = \$12 [287:272];
   assign ch1__count_ca_refused = \$12 [303:288];
-  assign \regs__count_ca_refused$331  = \$12 [303:288];
+  assign \regs__count_ca_refused$363  = \$12 [303:288];
   assign ch1__count_crc_word0 = \$12 [15:0];
-  assign \regs__count_crc_word0$333  = \$12 [15:0];
+  assign \regs__count_crc_word0$365  = \$12 [15:0];
   assign ch1__count_crc_word1 = \$12 [31:16];
-  assign \regs__count_crc_word1$335  = \$12 [31:16];
+  assign \regs__count_crc_word1$367  = \$12 [31:16];
   assign ch1__count_delay_jump = \$12 [239:224];
-  assign \regs__count_delay_jump$337  = \$12 [239:224];
+  assign \regs__count_delay_jump$369  = \$12 [239:224];
   assign ch1__count_delay_range = \$12 [79:64];
-  assign \regs__count_delay_range$339  = \$12 [79:64];
+  assign \regs__count_delay_range$371  = \$12 [79:64];
   assign ch1__count_lc_repeat = \$12 [111:96];
-  assign \regs__count_lc_repeat$341  = \$12 [111:96];
+  assign \regs__count_lc_repeat$373  = \$12 [111:96];
   assign ch1__count_lc_skip = \$12 [127:112];
-  assign \regs__count_lc_skip$343  = \$12 [127:112];
+  assign \regs__count_lc_skip$375  = \$12 [127:112];
   assign ch1__count_lc_zero = \$12 [143:128];
-  assign \regs__count_lc_zero$345  = \$12 [143:128];
+  assign \regs__count_lc_zero$377  = \$12 [143:128];
   assign ch1__count_no_ack = \$12 [47:32];
-  assign \regs__count_no_ack$347  = \$12 [47:32];
+  assign \regs__count_no_ack$379  = \$12 [47:32];
   assign ch1__count_no_start = \$12 [63:48];
-  assign \regs__count_no_start$349  = \$12 [63:48];
+  assign \regs__count_no_start$381  = \$12 [63:48];
   assign ch1__count_no_stop = \$12 [207:192];
-  assign \regs__count_no_stop$351  = \$12 [207:192];
+  assign \regs__count_no_stop$383  = \$12 [207:192];
   assign ch1__count_noise_event = \$12 [255:240];
-  assign \regs__count_noise_event$353  = \$12 [255:240];
+  assign \regs__count_noise_event$385  = \$12 [255:240];
   assign ch1__count_noisy_line = \$12 [223:208];
-  assign \regs__count_noisy_line$355  = \$12 [223:208];
+  assign \regs__count_noisy_line$387  = \$12 [223:208];
   assign ch1__count_overrun = \$12 [175:160];
-  assign \regs__count_overrun$357  = \$12 [175:160];
+  assign \regs__count_overrun$389  = \$12 [175:160];
   assign ch1__count_slo_stuck_low = \$12 [95:80];
-  assign \regs__count_slo_stuck_low$359  = \$12 [95:80];
+  assign \regs__count_slo_stuck_low$391  = \$12 [95:80];
   assign ch1__count_spw_mismatch = \$12 [159:144];
-  assign \regs__count_spw_mismatch$361  = \$12 [159:144];
+  assign \regs__count_spw_mismatch$393  = \$12 [159:144];
   assign ch1__delay_settled = \$11 [54];
-  assign \regs__delay_settled$363  = \$11 [54];
+  assign \regs__delay_settled$395  = \$11 [54];
   assign ch1__delay_spread = \$11 [75:68];
-  assign \regs__delay_spread$365  = \$11 [75:68];
-  assign \regs__done$367  = ch1__done;
-  assign \regs__done_count$369  = ch1__done_count;
-  assign \regs__frame_error$371  = ch1__frame_error;
+  assign \regs__delay_spread$397  = \$11 [75:68];
+  assign \regs__done$399  = ch1__done;
+  assign \regs__done_count$401  = ch1__done_count;
+  assign \regs__frame_error$403  = ch1__frame_error;
   assign ch1__lc = \$11 [182:177];
-  assign \regs__lc$373  = \$11 [182:177];
+  assign \regs__lc$405  = \$11 [182:177];
   assign ch1__lc_repeat = \$11 [183];
-  assign \regs__lc_repeat$375  = \$11 [183];
+  assign \regs__lc_repeat$407  = \$11 [183];
   assign ch1__lc_skip = \$11 [184];
-  assign \regs__lc_skip$377  = \$11 [184];
+  assign \regs__lc_skip$409  = \$11 [184];
   assign ch1__lc_zero = \$11 [185];
-  assign \regs__lc_zero$379  = \$11 [185];
+  assign \regs__lc_zero$411  = \$11 [185];
   assign ch1__line_delay = \$11 [48:36];
-  assign \regs__line_delay$381  = \$11 [48:36];
+  assign \regs__line_delay$413  = \$11 [48:36];
   assign ch1__noise_events = \$11 [53:50];
-  assign \regs__noise_events$383  = \$11 [53:50];
-  assign ch1__periodic = \regs__periodic$384 ;
+  assign \regs__noise_events$415  = \$11 [53:50];
+  assign ch1__periodic = \regs__periodic$416 ;
   assign ch1__settled_delay = \$11 [67:55];
-  assign \regs__settled_delay$387  = \$11 [67:55];
+  assign \regs__settled_delay$419  = \$11 [67:55];
   assign ch1__spw_mismatch = \$11 [186];
-  assign \regs__spw_mismatch$389  = \$11 [186];
-  assign ch1__start = \regs__start$390 ;
+  assign \regs__spw_mismatch$421  = \$11 [186];
+  assign ch1__start = \regs__start$422 ;
   assign ch1__status = \$11 [3:0];
-  assign \regs__status$393  = \$11 [3:0];
+  assign \regs__status$425  = \$11 [3:0];
   assign ch1__timestamp = \$11 [35:4];
-  assign \regs__timestamp$395  = \$11 [35:4];
-  assign ch1__trigger_enable = \regs__trigger_enable$396 ;
+  assign \regs__timestamp$427  = \$11 [35:4];
+  assign ch1__trigger_enable = \regs__trigger_enable$428 ;
   assign ch1__word0_crc_ok = \$11 [133];
-  assign \regs__word0_crc_ok$399  = \$11 [133];
+  assign \regs__word0_crc_ok$431  = \$11 [133];
   assign ch1__word0_ne = \$11 [131];
-  assign \regs__word0_ne$401  = \$11 [131];
+  assign \regs__word0_ne$433  = \$11 [131];
   assign ch1__word0_nw = \$11 [132];
-  assign \regs__word0_nw$403  = \$11 [132];
+  assign \regs__word0_nw$435  = \$11 [132];
   assign ch1__word0_position = \$11 [130:76];
-  assign \regs__word0_position$405  = \$11 [130:76];
+  assign \regs__word0_position$437  = \$11 [130:76];
   assign ch1__word1_crc_ok = \$11 [176];
-  assign \regs__word1_crc_ok$407  = \$11 [176];
+  assign \regs__word1_crc_ok$439  = \$11 [176];
   assign ch1__word1_ne = \$11 [174];
-  assign \regs__word1_ne$409  = \$11 [174];
+  assign \regs__word1_ne$441  = \$11 [174];
   assign ch1__word1_nw = \$11 [175];
-  assign \regs__word1_nw$411  = \$11 [175];
+  assign \regs__word1_nw$443  = \$11 [175];
   assign ch1__word1_position = \$11 [173:134];
-  assign \regs__word1_position$413  = \$11 [173:134];
-  assign \trigger$414  = \trigger$28 ;
-  assign \ma$415  = ch1_ma;
-  assign \slo$416  = ch1_slo;
+  assign \regs__word1_position$445  = \$11 [173:134];
+  assign \trigger$446  = \trigger$28 ;
+  assign \ma$447  = ch1_ma;
+  assign \slo$448  = ch1_slo;
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, \$7 , \$6  };
-  assign \irq$419  = { \$7 , \$6  };
+  assign \irq$451  = { \$7 , \$6  };
 endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, ch1__ca_wbuf_en, ch1__ca_rbuf_en, ch1_irq, bus__r_data, ch0__frame_error, ch0__busy, ch0__config_error, ch0__ca_busy, ch0__ca_rbuf_data, ch1__frame_error, ch1__busy, ch1__config_error, ch1__ca_busy, ch1__ca_rbuf_data, bus__w_en, bus__r_en, bus__r_load
 , bus__w_addr, bus__w_data, bus__r_addr, ch0__ca_wbuf_addr, write_data, g_trigger_start, ch0_ctrl_start, ch0_ctrl_abort, ch0_ctrl_clear_counters, ch0_ctrl_periodic, ch0_ctrl_trigger_enable, ch0_cfg_ma_ma_half_period, ch0_cfg_ma_delay_limit, ch0_cfg_period_request_period, ch0_cfg_break_break_time, ch0_cfg_ack_ack_limit, ch0_cfg_timeout_timeout_limit, ch0_cfg_words_w0_data_bits, ch0_cfg_words_w0_nenw, ch0_cfg_words_w0_lc, ch0_cfg_words_w0_crc
-, ch0_cfg_words_w1_data_bits, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_enable, ch0_cfg_checks_end_check, ch0_cfg_checks_spw_check, ch0_cfg_checks_spw_tolerance, ch0_cfg_checks_noise_limit, ch0_cfg_checks_delay_tolerance, ch0_cfg_quiet_quiet_time, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$85 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort, ch1_ctrl_start, ch1_ctrl_abort, ch1_ctrl_clear_counters, ch1_ctrl_periodic
-, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit, ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_enable, ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_delay_tolerance
-, ch1_cfg_quiet_quiet_time, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$265 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__done_count, ch0__done, \port$5134$0 , \port$5147$0 , ch0__ca_done, \port$5279$0 , ch1__done_count, ch1__done, \port$5685$0 , \port$5698$0 , ch1__ca_done, \port$5830$0 , clk);
+, ch0_cfg_words_w1_data_bits, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_enable, ch0_cfg_checks_end_check, ch0_cfg_checks_spw_check, ch0_cfg_checks_spw_tolerance, ch0_cfg_checks_noise_limit, ch0_cfg_checks_delay_tolerance, ch0_cfg_quiet_quiet_time, ch0_cfg_crc0_poly, ch0_cfg_crc0_width, ch0_cfg_crc0_inverted, ch0_cfg_crc0_start_start, ch0_cfg_crc1_poly, ch0_cfg_crc1_width, ch0_cfg_crc1_inverted, ch0_cfg_crc1_start_start, ch0_ca_request_slave_id, ch0_ca_request_address
+, ch0_ca_request_count, \ch0_ca_request_write$101 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort, ch1_ctrl_start, ch1_ctrl_abort, ch1_ctrl_clear_counters, ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit, ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw
+, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_enable, ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_delay_tolerance, ch1_cfg_quiet_quiet_time, ch1_cfg_crc0_poly, ch1_cfg_crc0_width, ch1_cfg_crc0_inverted, ch1_cfg_crc0_start_start, ch1_cfg_crc1_poly, ch1_cfg_crc1_width, ch1_cfg_crc1_inverted, ch1_cfg_crc1_start_start, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$301 
+, ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__done_count, ch0__done, \port$5310$0 , \port$5323$0 , ch0__ca_done, \port$5455$0 , ch1__done_count, ch1__done, \port$5861$0 , \port$5874$0 , ch1__ca_done, \port$6006$0 , clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$14  = 0;
   wire \$1 ;
   wire [31:0] \$10 ;
@@ -1055,23 +1136,23 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   wire \$110 ;
   wire \$111 ;
   wire \$112 ;
-  wire [31:0] \$113 ;
-  wire [31:0] \$114 ;
-  wire [31:0] \$115 ;
-  wire [31:0] \$116 ;
-  wire [31:0] \$117 ;
-  wire [31:0] \$118 ;
-  wire [31:0] \$119 ;
+  wire \$113 ;
+  wire \$114 ;
+  wire \$115 ;
+  wire \$116 ;
+  wire \$117 ;
+  wire \$118 ;
+  wire \$119 ;
   wire [31:0] \$12 ;
-  wire [31:0] \$120 ;
-  wire [31:0] \$121 ;
-  wire [31:0] \$122 ;
-  wire [31:0] \$123 ;
-  wire [31:0] \$124 ;
-  wire [31:0] \$125 ;
-  wire [31:0] \$126 ;
-  wire [31:0] \$127 ;
-  wire [31:0] \$128 ;
+  wire \$120 ;
+  wire \$121 ;
+  wire \$122 ;
+  wire \$123 ;
+  wire \$124 ;
+  wire \$125 ;
+  wire \$126 ;
+  wire \$127 ;
+  wire \$128 ;
   wire [31:0] \$129 ;
   wire [31:0] \$13 ;
   wire [31:0] \$130 ;
@@ -1134,33 +1215,33 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   wire [31:0] \$182 ;
   wire [31:0] \$183 ;
   wire [31:0] \$184 ;
-  wire \$185 ;
-  wire \$186 ;
-  wire \$187 ;
-  wire \$188 ;
-  wire \$189 ;
+  wire [31:0] \$185 ;
+  wire [31:0] \$186 ;
+  wire [31:0] \$187 ;
+  wire [31:0] \$188 ;
+  wire [31:0] \$189 ;
   wire \$19 ;
-  wire \$190 ;
-  wire \$191 ;
-  wire \$192 ;
-  wire \$193 ;
-  wire \$194 ;
-  wire \$195 ;
-  wire \$196 ;
-  wire \$197 ;
-  wire \$198 ;
-  wire \$199 ;
+  wire [31:0] \$190 ;
+  wire [31:0] \$191 ;
+  wire [31:0] \$192 ;
+  wire [31:0] \$193 ;
+  wire [31:0] \$194 ;
+  wire [31:0] \$195 ;
+  wire [31:0] \$196 ;
+  wire [31:0] \$197 ;
+  wire [31:0] \$198 ;
+  wire [31:0] \$199 ;
   wire \$2 ;
   wire \$20 ;
-  wire \$200 ;
-  wire \$201 ;
-  wire \$202 ;
-  wire \$203 ;
-  wire \$204 ;
-  wire \$205 ;
-  wire \$206 ;
-  wire \$207 ;
-  wire \$208 ;
+  wire [31:0] \$200 ;
+  wire [31:0] \$201 ;
+  wire [31:0] \$202 ;
+  wire [31:0] \$203 ;
+  wire [31:0] \$204 ;
+  wire [31:0] \$205 ;
+  wire [31:0] \$206 ;
+  wire [31:0] \$207 ;
+  wire [31:0] \$208 ;
   wire \$209 ;
   wire \$21 ;
   wire \$210 ;
@@ -1240,50 +1321,50 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   wire \$278 ;
   wire \$279 ;
   wire \$28 ;
-  wire [31:0] \$280 ;
-  wire [31:0] \$281 ;
-  wire [31:0] \$282 ;
-  wire [31:0] \$283 ;
-  wire [31:0] \$284 ;
-  wire [31:0] \$285 ;
-  wire [31:0] \$286 ;
-  wire [31:0] \$287 ;
-  wire [31:0] \$288 ;
-  wire [31:0] \$289 ;
+  wire \$280 ;
+  wire \$281 ;
+  wire \$282 ;
+  wire \$283 ;
+  wire \$284 ;
+  wire \$285 ;
+  wire \$286 ;
+  wire \$287 ;
+  wire \$288 ;
+  wire \$289 ;
   wire \$29 ;
-  wire [31:0] \$290 ;
-  wire [31:0] \$291 ;
-  wire [31:0] \$292 ;
-  wire [31:0] \$293 ;
-  wire [31:0] \$294 ;
-  wire [31:0] \$295 ;
-  wire [31:0] \$296 ;
-  wire [31:0] \$297 ;
-  wire [31:0] \$298 ;
-  wire [31:0] \$299 ;
+  wire \$290 ;
+  wire \$291 ;
+  wire \$292 ;
+  wire \$293 ;
+  wire \$294 ;
+  wire \$295 ;
+  wire \$296 ;
+  wire \$297 ;
+  wire \$298 ;
+  wire \$299 ;
   wire \$3 ;
   wire \$30 ;
-  wire [31:0] \$300 ;
-  wire [31:0] \$301 ;
-  wire [31:0] \$302 ;
-  wire [31:0] \$303 ;
-  wire [31:0] \$304 ;
-  wire [31:0] \$305 ;
-  wire [31:0] \$306 ;
-  wire [31:0] \$307 ;
-  wire [31:0] \$308 ;
-  wire [31:0] \$309 ;
+  wire \$300 ;
+  wire \$301 ;
+  wire \$302 ;
+  wire \$303 ;
+  wire \$304 ;
+  wire \$305 ;
+  wire \$306 ;
+  wire \$307 ;
+  wire \$308 ;
+  wire \$309 ;
   wire \$31 ;
-  wire [31:0] \$310 ;
-  wire [31:0] \$311 ;
-  wire [31:0] \$312 ;
-  wire [31:0] \$313 ;
-  wire [31:0] \$314 ;
-  wire [31:0] \$315 ;
-  wire [31:0] \$316 ;
-  wire [31:0] \$317 ;
-  wire [31:0] \$318 ;
-  wire [31:0] \$319 ;
+  wire \$310 ;
+  wire \$311 ;
+  wire \$312 ;
+  wire \$313 ;
+  wire \$314 ;
+  wire \$315 ;
+  wire \$316 ;
+  wire \$317 ;
+  wire \$318 ;
+  wire \$319 ;
   wire \$32 ;
   wire [31:0] \$320 ;
   wire [31:0] \$321 ;
@@ -1320,58 +1401,58 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   wire \$35 ;
   wire [31:0] \$350 ;
   wire [31:0] \$351 ;
-  wire \$352 ;
-  wire \$353 ;
-  wire \$354 ;
-  wire \$355 ;
-  wire \$356 ;
-  wire \$357 ;
-  wire \$358 ;
-  wire \$359 ;
+  wire [31:0] \$352 ;
+  wire [31:0] \$353 ;
+  wire [31:0] \$354 ;
+  wire [31:0] \$355 ;
+  wire [31:0] \$356 ;
+  wire [31:0] \$357 ;
+  wire [31:0] \$358 ;
+  wire [31:0] \$359 ;
   wire \$36 ;
-  wire \$360 ;
-  wire \$361 ;
-  wire \$362 ;
-  wire \$363 ;
-  wire \$364 ;
-  wire \$365 ;
-  wire \$366 ;
-  wire \$367 ;
-  wire \$368 ;
-  wire \$369 ;
+  wire [31:0] \$360 ;
+  wire [31:0] \$361 ;
+  wire [31:0] \$362 ;
+  wire [31:0] \$363 ;
+  wire [31:0] \$364 ;
+  wire [31:0] \$365 ;
+  wire [31:0] \$366 ;
+  wire [31:0] \$367 ;
+  wire [31:0] \$368 ;
+  wire [31:0] \$369 ;
   wire \$37 ;
-  wire \$370 ;
-  wire \$371 ;
-  wire \$372 ;
-  wire \$373 ;
-  wire \$374 ;
-  wire \$375 ;
-  wire \$376 ;
-  wire \$377 ;
-  wire \$378 ;
-  wire \$379 ;
+  wire [31:0] \$370 ;
+  wire [31:0] \$371 ;
+  wire [31:0] \$372 ;
+  wire [31:0] \$373 ;
+  wire [31:0] \$374 ;
+  wire [31:0] \$375 ;
+  wire [31:0] \$376 ;
+  wire [31:0] \$377 ;
+  wire [31:0] \$378 ;
+  wire [31:0] \$379 ;
   wire \$38 ;
-  wire \$380 ;
-  wire \$381 ;
-  wire \$382 ;
-  wire \$383 ;
-  wire \$384 ;
-  wire \$385 ;
-  wire \$386 ;
-  wire \$387 ;
-  wire \$388 ;
-  wire \$389 ;
+  wire [31:0] \$380 ;
+  wire [31:0] \$381 ;
+  wire [31:0] \$382 ;
+  wire [31:0] \$383 ;
+  wire [31:0] \$384 ;
+  wire [31:0] \$385 ;
+  wire [31:0] \$386 ;
+  wire [31:0] \$387 ;
+  wire [31:0] \$388 ;
+  wire [31:0] \$389 ;
   wire \$39 ;
-  wire \$390 ;
-  wire \$391 ;
-  wire \$392 ;
-  wire \$393 ;
-  wire \$394 ;
-  wire \$395 ;
-  wire \$396 ;
-  wire \$397 ;
-  wire \$398 ;
-  wire \$399 ;
+  wire [31:0] \$390 ;
+  wire [31:0] \$391 ;
+  wire [31:0] \$392 ;
+  wire [31:0] \$393 ;
+  wire [31:0] \$394 ;
+  wire [31:0] \$395 ;
+  wire [31:0] \$396 ;
+  wire [31:0] \$397 ;
+  wire [31:0] \$398 ;
+  wire [31:0] \$399 ;
   wire \$4 ;
   wire \$40 ;
   wire \$400 ;
@@ -1423,77 +1504,77 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   wire \$442 ;
   wire \$443 ;
   wire \$444 ;
-  wire [31:0] \$445 ;
-  wire [31:0] \$446 ;
-  reg \$447 ;
-  reg [10:0] \$448 ;
-  reg [31:0] \$449 ;
+  wire \$445 ;
+  wire \$446 ;
+  wire \$447 ;
+  wire \$448 ;
+  wire \$449 ;
   wire \$45 ;
-  reg [3:0] \$450 ;
-  reg [31:0] \$451 ;
-  reg [3:0] \$452 ;
-  reg \$453 ;
-  reg \$454 ;
-  reg \$455 ;
-  reg \$456 ;
-  reg \$457 ;
-  reg \$458 ;
-  reg [31:0] \$459 ;
+  wire \$450 ;
+  wire \$451 ;
+  wire \$452 ;
+  wire \$453 ;
+  wire \$454 ;
+  wire \$455 ;
+  wire \$456 ;
+  wire \$457 ;
+  wire \$458 ;
+  wire \$459 ;
   wire \$46 ;
-  reg \$460 ;
-  reg \$461 ;
-  reg \$462 ;
-  reg \$463 ;
-  reg \$464 ;
-  reg \$465 ;
-  reg \$466 ;
-  reg \$467 ;
-  reg \$468 ;
-  reg \$469 ;
+  wire \$460 ;
+  wire \$461 ;
+  wire \$462 ;
+  wire \$463 ;
+  wire \$464 ;
+  wire \$465 ;
+  wire \$466 ;
+  wire \$467 ;
+  wire \$468 ;
+  wire \$469 ;
   wire \$47 ;
-  reg \$470 ;
-  reg \$471 ;
-  reg \$472 ;
-  reg [15:0] \$473 ;
-  reg [11:0] \$474 ;
-  reg \$475 ;
-  reg [23:0] \$476 ;
-  reg \$477 ;
-  reg [23:0] \$478 ;
-  reg \$479 ;
+  wire \$470 ;
+  wire \$471 ;
+  wire \$472 ;
+  wire \$473 ;
+  wire \$474 ;
+  wire \$475 ;
+  wire \$476 ;
+  wire \$477 ;
+  wire \$478 ;
+  wire \$479 ;
   wire \$48 ;
-  reg [23:0] \$480 ;
-  reg \$481 ;
-  reg [23:0] \$482 ;
-  reg \$483 ;
-  reg [5:0] \$484 ;
-  reg \$485 ;
-  reg \$486 ;
-  reg [1:0] \$487 ;
-  reg [5:0] \$488 ;
-  reg \$489 ;
+  wire \$480 ;
+  wire \$481 ;
+  wire \$482 ;
+  wire \$483 ;
+  wire \$484 ;
+  wire \$485 ;
+  wire \$486 ;
+  wire \$487 ;
+  wire \$488 ;
+  wire \$489 ;
   wire \$49 ;
-  reg \$490 ;
-  reg [1:0] \$491 ;
-  reg \$492 ;
-  reg \$493 ;
-  reg \$494 ;
-  reg \$495 ;
-  reg [7:0] \$496 ;
-  reg [3:0] \$497 ;
-  reg [3:0] \$498 ;
-  reg \$499 ;
+  wire \$490 ;
+  wire \$491 ;
+  wire \$492 ;
+  wire \$493 ;
+  wire \$494 ;
+  wire \$495 ;
+  wire \$496 ;
+  wire \$497 ;
+  wire \$498 ;
+  wire \$499 ;
   wire \$5 ;
   wire \$50 ;
-  reg [11:0] \$500 ;
-  reg \$501 ;
-  reg [2:0] \$502 ;
-  reg [6:0] \$503 ;
-  reg [6:0] \$504 ;
-  reg \$505 ;
-  reg \$506 ;
-  reg \$507 ;
-  reg \$508 ;
+  wire \$500 ;
+  wire [31:0] \$501 ;
+  wire [31:0] \$502 ;
+  reg \$503 ;
+  reg [10:0] \$504 ;
+  reg [31:0] \$505 ;
+  reg [3:0] \$506 ;
+  reg [31:0] \$507 ;
+  reg [3:0] \$508 ;
   reg \$509 ;
   wire \$51 ;
   reg \$510 ;
@@ -1501,7 +1582,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   reg \$512 ;
   reg \$513 ;
   reg \$514 ;
-  reg \$515 ;
+  reg [31:0] \$515 ;
   reg \$516 ;
   reg \$517 ;
   reg \$518 ;
@@ -1516,55 +1597,55 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   reg \$526 ;
   reg \$527 ;
   reg \$528 ;
-  reg \$529 ;
+  reg [15:0] \$529 ;
   wire \$53 ;
-  reg \$530 ;
+  reg [11:0] \$530 ;
   reg \$531 ;
-  reg \$532 ;
+  reg [23:0] \$532 ;
   reg \$533 ;
-  reg \$534 ;
+  reg [23:0] \$534 ;
   reg \$535 ;
-  reg \$536 ;
+  reg [23:0] \$536 ;
   reg \$537 ;
-  reg \$538 ;
+  reg [23:0] \$538 ;
   reg \$539 ;
   wire \$54 ;
-  reg \$540 ;
+  reg [5:0] \$540 ;
   reg \$541 ;
   reg \$542 ;
-  reg [3:0] \$543 ;
-  reg \$544 ;
+  reg [1:0] \$543 ;
+  reg [5:0] \$544 ;
   reg \$545 ;
   reg \$546 ;
-  reg \$547 ;
+  reg [1:0] \$547 ;
   reg \$548 ;
   reg \$549 ;
   wire \$55 ;
   reg \$550 ;
   reg \$551 ;
-  reg \$552 ;
-  reg \$553 ;
-  reg \$554 ;
-  reg [5:0] \$555 ;
-  reg [15:0] \$556 ;
-  reg [12:0] \$557 ;
-  reg [31:0] \$558 ;
-  reg [22:0] \$559 ;
+  reg [7:0] \$552 ;
+  reg [3:0] \$553 ;
+  reg [3:0] \$554 ;
+  reg \$555 ;
+  reg [11:0] \$556 ;
+  reg \$557 ;
+  reg [15:0] \$558 ;
+  reg [4:0] \$559 ;
   wire \$56 ;
-  reg [31:0] \$560 ;
-  reg [7:0] \$561 ;
-  reg [31:0] \$562 ;
-  reg [3:0] \$563 ;
-  reg \$564 ;
-  reg [7:0] \$565 ;
-  reg [12:0] \$566 ;
+  reg \$560 ;
+  reg \$561 ;
+  reg [15:0] \$562 ;
+  reg \$563 ;
+  reg [15:0] \$564 ;
+  reg [4:0] \$565 ;
+  reg \$566 ;
   reg \$567 ;
-  reg [31:0] \$568 ;
+  reg [15:0] \$568 ;
   reg \$569 ;
   wire \$57 ;
-  reg \$570 ;
-  reg \$571 ;
-  reg \$572 ;
+  reg [2:0] \$570 ;
+  reg [6:0] \$571 ;
+  reg [6:0] \$572 ;
   reg \$573 ;
   reg \$574 ;
   reg \$575 ;
@@ -1575,44 +1656,44 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   wire \$58 ;
   reg \$580 ;
   reg \$581 ;
-  reg [15:0] \$582 ;
-  reg [11:0] \$583 ;
+  reg \$582 ;
+  reg \$583 ;
   reg \$584 ;
-  reg [23:0] \$585 ;
+  reg \$585 ;
   reg \$586 ;
-  reg [23:0] \$587 ;
+  reg \$587 ;
   reg \$588 ;
-  reg [23:0] \$589 ;
+  reg \$589 ;
   wire \$59 ;
   reg \$590 ;
-  reg [23:0] \$591 ;
+  reg \$591 ;
   reg \$592 ;
-  reg [5:0] \$593 ;
+  reg \$593 ;
   reg \$594 ;
   reg \$595 ;
-  reg [1:0] \$596 ;
-  reg [5:0] \$597 ;
+  reg \$596 ;
+  reg \$597 ;
   reg \$598 ;
   reg \$599 ;
   wire \$6 ;
   wire \$60 ;
-  reg [1:0] \$600 ;
+  reg \$600 ;
   reg \$601 ;
   reg \$602 ;
   reg \$603 ;
   reg \$604 ;
-  reg [7:0] \$605 ;
-  reg [3:0] \$606 ;
-  reg [3:0] \$607 ;
+  reg \$605 ;
+  reg \$606 ;
+  reg \$607 ;
   reg \$608 ;
-  reg [11:0] \$609 ;
+  reg \$609 ;
   wire \$61 ;
   reg \$610 ;
-  reg [2:0] \$611 ;
-  reg [6:0] \$612 ;
-  reg [6:0] \$613 ;
+  reg \$611 ;
+  reg \$612 ;
+  reg \$613 ;
   reg \$614 ;
-  reg \$615 ;
+  reg [3:0] \$615 ;
   reg \$616 ;
   reg \$617 ;
   reg \$618 ;
@@ -1625,22 +1706,22 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   reg \$624 ;
   reg \$625 ;
   reg \$626 ;
-  reg \$627 ;
-  reg \$628 ;
-  reg \$629 ;
+  reg [5:0] \$627 ;
+  reg [15:0] \$628 ;
+  reg [12:0] \$629 ;
   wire \$63 ;
-  reg \$630 ;
-  reg \$631 ;
-  reg \$632 ;
-  reg \$633 ;
-  reg \$634 ;
-  reg \$635 ;
+  reg [31:0] \$630 ;
+  reg [22:0] \$631 ;
+  reg [31:0] \$632 ;
+  reg [7:0] \$633 ;
+  reg [31:0] \$634 ;
+  reg [3:0] \$635 ;
   reg \$636 ;
-  reg \$637 ;
-  reg \$638 ;
+  reg [7:0] \$637 ;
+  reg [12:0] \$638 ;
   reg \$639 ;
   wire \$64 ;
-  reg \$640 ;
+  reg [31:0] \$640 ;
   reg \$641 ;
   reg \$642 ;
   reg \$643 ;
@@ -1653,44 +1734,132 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   wire \$65 ;
   reg \$650 ;
   reg \$651 ;
-  reg [3:0] \$652 ;
+  reg \$652 ;
   reg \$653 ;
-  reg \$654 ;
-  reg \$655 ;
+  reg [15:0] \$654 ;
+  reg [11:0] \$655 ;
   reg \$656 ;
-  reg \$657 ;
+  reg [23:0] \$657 ;
   reg \$658 ;
-  reg \$659 ;
+  reg [23:0] \$659 ;
   wire \$66 ;
   reg \$660 ;
-  reg \$661 ;
+  reg [23:0] \$661 ;
   reg \$662 ;
-  reg \$663 ;
-  reg [5:0] \$664 ;
-  reg [15:0] \$665 ;
-  reg [12:0] \$666 ;
-  reg [31:0] \$667 ;
-  reg [22:0] \$668 ;
-  reg [31:0] \$669 ;
+  reg [23:0] \$663 ;
+  reg \$664 ;
+  reg [5:0] \$665 ;
+  reg \$666 ;
+  reg \$667 ;
+  reg [1:0] \$668 ;
+  reg [5:0] \$669 ;
   wire \$67 ;
-  reg [7:0] \$670 ;
-  reg [31:0] \$671 ;
-  reg [3:0] \$672 ;
+  reg \$670 ;
+  reg \$671 ;
+  reg [1:0] \$672 ;
   reg \$673 ;
-  reg [7:0] \$674 ;
-  reg [12:0] \$675 ;
+  reg \$674 ;
+  reg \$675 ;
   reg \$676 ;
-  reg [31:0] \$677 ;
+  reg [7:0] \$677 ;
+  reg [3:0] \$678 ;
+  reg [3:0] \$679 ;
   wire \$68 ;
+  reg \$680 ;
+  reg [11:0] \$681 ;
+  reg \$682 ;
+  reg [15:0] \$683 ;
+  reg [4:0] \$684 ;
+  reg \$685 ;
+  reg \$686 ;
+  reg [15:0] \$687 ;
+  reg \$688 ;
+  reg [15:0] \$689 ;
   wire \$69 ;
+  reg [4:0] \$690 ;
+  reg \$691 ;
+  reg \$692 ;
+  reg [15:0] \$693 ;
+  reg \$694 ;
+  reg [2:0] \$695 ;
+  reg [6:0] \$696 ;
+  reg [6:0] \$697 ;
+  reg \$698 ;
+  reg \$699 ;
   wire \$7 ;
   wire \$70 ;
+  reg \$700 ;
+  reg \$701 ;
+  reg \$702 ;
+  reg \$703 ;
+  reg \$704 ;
+  reg \$705 ;
+  reg \$706 ;
+  reg \$707 ;
+  reg \$708 ;
+  reg \$709 ;
   wire \$71 ;
+  reg \$710 ;
+  reg \$711 ;
+  reg \$712 ;
+  reg \$713 ;
+  reg \$714 ;
+  reg \$715 ;
+  reg \$716 ;
+  reg \$717 ;
+  reg \$718 ;
+  reg \$719 ;
   wire \$72 ;
+  reg \$720 ;
+  reg \$721 ;
+  reg \$722 ;
+  reg \$723 ;
+  reg \$724 ;
+  reg \$725 ;
+  reg \$726 ;
+  reg \$727 ;
+  reg \$728 ;
+  reg \$729 ;
   wire \$73 ;
+  reg \$730 ;
+  reg \$731 ;
+  reg \$732 ;
+  reg \$733 ;
+  reg \$734 ;
+  reg \$735 ;
+  reg \$736 ;
+  reg \$737 ;
+  reg \$738 ;
+  reg \$739 ;
   wire \$74 ;
+  reg [3:0] \$740 ;
+  reg \$741 ;
+  reg \$742 ;
+  reg \$743 ;
+  reg \$744 ;
+  reg \$745 ;
+  reg \$746 ;
+  reg \$747 ;
+  reg \$748 ;
+  reg \$749 ;
   wire \$75 ;
+  reg \$750 ;
+  reg \$751 ;
+  reg [5:0] \$752 ;
+  reg [15:0] \$753 ;
+  reg [12:0] \$754 ;
+  reg [31:0] \$755 ;
+  reg [22:0] \$756 ;
+  reg [31:0] \$757 ;
+  reg [7:0] \$758 ;
+  reg [31:0] \$759 ;
   wire \$76 ;
+  reg [3:0] \$760 ;
+  reg \$761 ;
+  reg [7:0] \$762 ;
+  reg [12:0] \$763 ;
+  reg \$764 ;
+  reg [31:0] \$765 ;
   wire \$77 ;
   wire \$78 ;
   wire \$79 ;
@@ -1797,6 +1966,14 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   wire [23:0] ch0__cfg_timeout_limit;
   (* init = 2'h0 *)
   wire [1:0] ch0__cfg_w0_crc;
+  (* init = 1'h0 *)
+  wire ch0__cfg_w0_crc_inverted;
+  (* init = 16'h0000 *)
+  wire [15:0] ch0__cfg_w0_crc_poly;
+  (* init = 16'h0000 *)
+  wire [15:0] ch0__cfg_w0_crc_start;
+  (* init = 5'h00 *)
+  wire [4:0] ch0__cfg_w0_crc_width;
   (* init = 6'h00 *)
   wire [5:0] ch0__cfg_w0_data_bits;
   (* init = 1'h0 *)
@@ -1805,6 +1982,14 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   wire ch0__cfg_w0_nenw;
   (* init = 2'h0 *)
   wire [1:0] ch0__cfg_w1_crc;
+  (* init = 1'h0 *)
+  wire ch0__cfg_w1_crc_inverted;
+  (* init = 16'h0000 *)
+  wire [15:0] ch0__cfg_w1_crc_poly;
+  (* init = 16'h0000 *)
+  wire [15:0] ch0__cfg_w1_crc_start;
+  (* init = 5'h00 *)
+  wire [4:0] ch0__cfg_w1_crc_width;
   (* init = 6'h00 *)
   wire [5:0] ch0__cfg_w1_data_bits;
   (* init = 1'h0 *)
@@ -1886,8 +2071,8 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   output [2:0] ch0_ca_request_slave_id;
   reg [2:0] ch0_ca_request_slave_id = 3'h0;
   wire ch0_ca_request_write;
-  output \ch0_ca_request_write$85 ;
-  reg \ch0_ca_request_write$85  = 1'h0;
+  output \ch0_ca_request_write$101 ;
+  reg \ch0_ca_request_write$101  = 1'h0;
   wire ch0_ca_state_write;
   wire ch0_caps_write;
   output [23:0] ch0_cfg_ack_ack_limit;
@@ -1910,6 +2095,30 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   output [7:0] ch0_cfg_checks_spw_tolerance;
   reg [7:0] ch0_cfg_checks_spw_tolerance = 8'h00;
   wire ch0_cfg_checks_write;
+  reg ch0_cfg_crc0_config_write = 1'h0;
+  output ch0_cfg_crc0_inverted;
+  reg ch0_cfg_crc0_inverted = 1'h0;
+  output [15:0] ch0_cfg_crc0_poly;
+  reg [15:0] ch0_cfg_crc0_poly = 16'h0000;
+  reg ch0_cfg_crc0_start_config_write = 1'h0;
+  output [15:0] ch0_cfg_crc0_start_start;
+  reg [15:0] ch0_cfg_crc0_start_start = 16'h0000;
+  wire ch0_cfg_crc0_start_write;
+  output [4:0] ch0_cfg_crc0_width;
+  reg [4:0] ch0_cfg_crc0_width = 5'h00;
+  wire ch0_cfg_crc0_write;
+  reg ch0_cfg_crc1_config_write = 1'h0;
+  output ch0_cfg_crc1_inverted;
+  reg ch0_cfg_crc1_inverted = 1'h0;
+  output [15:0] ch0_cfg_crc1_poly;
+  reg [15:0] ch0_cfg_crc1_poly = 16'h0000;
+  reg ch0_cfg_crc1_start_config_write = 1'h0;
+  output [15:0] ch0_cfg_crc1_start_start;
+  reg [15:0] ch0_cfg_crc1_start_start = 16'h0000;
+  wire ch0_cfg_crc1_start_write;
+  output [4:0] ch0_cfg_crc1_width;
+  reg [4:0] ch0_cfg_crc1_width = 5'h00;
+  wire ch0_cfg_crc1_write;
   reg ch0_cfg_ma_config_write = 1'h0;
   output [11:0] ch0_cfg_ma_delay_limit;
   reg [11:0] ch0_cfg_ma_delay_limit = 12'h000;
@@ -2008,6 +2217,10 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   reg ch0_read_select_9d = 1'h0;
   reg ch0_read_select_9e = 1'h0;
   reg ch0_read_select_9f = 1'h0;
+  reg ch0_read_select_a0 = 1'h0;
+  reg ch0_read_select_a1 = 1'h0;
+  reg ch0_read_select_a2 = 1'h0;
+  reg ch0_read_select_a3 = 1'h0;
   reg ch0_read_select_c0 = 1'h0;
   reg ch0_read_select_c1 = 1'h0;
   reg ch0_read_select_c2 = 1'h0;
@@ -2113,6 +2326,14 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   wire [23:0] ch1__cfg_timeout_limit;
   (* init = 2'h0 *)
   wire [1:0] ch1__cfg_w0_crc;
+  (* init = 1'h0 *)
+  wire ch1__cfg_w0_crc_inverted;
+  (* init = 16'h0000 *)
+  wire [15:0] ch1__cfg_w0_crc_poly;
+  (* init = 16'h0000 *)
+  wire [15:0] ch1__cfg_w0_crc_start;
+  (* init = 5'h00 *)
+  wire [4:0] ch1__cfg_w0_crc_width;
   (* init = 6'h00 *)
   wire [5:0] ch1__cfg_w0_data_bits;
   (* init = 1'h0 *)
@@ -2121,6 +2342,14 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   wire ch1__cfg_w0_nenw;
   (* init = 2'h0 *)
   wire [1:0] ch1__cfg_w1_crc;
+  (* init = 1'h0 *)
+  wire ch1__cfg_w1_crc_inverted;
+  (* init = 16'h0000 *)
+  wire [15:0] ch1__cfg_w1_crc_poly;
+  (* init = 16'h0000 *)
+  wire [15:0] ch1__cfg_w1_crc_start;
+  (* init = 5'h00 *)
+  wire [4:0] ch1__cfg_w1_crc_width;
   (* init = 6'h00 *)
   wire [5:0] ch1__cfg_w1_data_bits;
   (* init = 1'h0 *)
@@ -2202,8 +2431,8 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   output [2:0] ch1_ca_request_slave_id;
   reg [2:0] ch1_ca_request_slave_id = 3'h0;
   wire ch1_ca_request_write;
-  output \ch1_ca_request_write$265 ;
-  reg \ch1_ca_request_write$265  = 1'h0;
+  output \ch1_ca_request_write$301 ;
+  reg \ch1_ca_request_write$301  = 1'h0;
   wire ch1_ca_state_write;
   wire ch1_caps_write;
   output [23:0] ch1_cfg_ack_ack_limit;
@@ -2226,6 +2455,30 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   output [7:0] ch1_cfg_checks_spw_tolerance;
   reg [7:0] ch1_cfg_checks_spw_tolerance = 8'h00;
   wire ch1_cfg_checks_write;
+  reg ch1_cfg_crc0_config_write = 1'h0;
+  output ch1_cfg_crc0_inverted;
+  reg ch1_cfg_crc0_inverted = 1'h0;
+  output [15:0] ch1_cfg_crc0_poly;
+  reg [15:0] ch1_cfg_crc0_poly = 16'h0000;
+  reg ch1_cfg_crc0_start_config_write = 1'h0;
+  output [15:0] ch1_cfg_crc0_start_start;
+  reg [15:0] ch1_cfg_crc0_start_start = 16'h0000;
+  wire ch1_cfg_crc0_start_write;
+  output [4:0] ch1_cfg_crc0_width;
+  reg [4:0] ch1_cfg_crc0_width = 5'h00;
+  wire ch1_cfg_crc0_write;
+  reg ch1_cfg_crc1_config_write = 1'h0;
+  output ch1_cfg_crc1_inverted;
+  reg ch1_cfg_crc1_inverted = 1'h0;
+  output [15:0] ch1_cfg_crc1_poly;
+  reg [15:0] ch1_cfg_crc1_poly = 16'h0000;
+  reg ch1_cfg_crc1_start_config_write = 1'h0;
+  output [15:0] ch1_cfg_crc1_start_start;
+  reg [15:0] ch1_cfg_crc1_start_start = 16'h0000;
+  wire ch1_cfg_crc1_start_write;
+  output [4:0] ch1_cfg_crc1_width;
+  reg [4:0] ch1_cfg_crc1_width = 5'h00;
+  wire ch1_cfg_crc1_write;
   reg ch1_cfg_ma_config_write = 1'h0;
   output [11:0] ch1_cfg_ma_delay_limit;
   reg [11:0] ch1_cfg_ma_delay_limit = 12'h000;
@@ -2324,6 +2577,10 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   reg ch1_read_select_11d = 1'h0;
   reg ch1_read_select_11e = 1'h0;
   reg ch1_read_select_11f = 1'h0;
+  reg ch1_read_select_120 = 1'h0;
+  reg ch1_read_select_121 = 1'h0;
+  reg ch1_read_select_122 = 1'h0;
+  reg ch1_read_select_123 = 1'h0;
   reg ch1_read_select_140 = 1'h0;
   reg ch1_read_select_141 = 1'h0;
   reg ch1_read_select_142 = 1'h0;
@@ -2387,18 +2644,18 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   (* init = 1'h0 *)
   wire glob__trigger;
   wire [1:0] irq;
-  input [186:0] \port$5134$0 ;
-  wire [186:0] \port$5134$0 ;
-  input [335:0] \port$5147$0 ;
-  wire [335:0] \port$5147$0 ;
-  input [9:0] \port$5279$0 ;
-  wire [9:0] \port$5279$0 ;
-  input [186:0] \port$5685$0 ;
-  wire [186:0] \port$5685$0 ;
-  input [335:0] \port$5698$0 ;
-  wire [335:0] \port$5698$0 ;
-  input [9:0] \port$5830$0 ;
-  wire [9:0] \port$5830$0 ;
+  input [186:0] \port$5310$0 ;
+  wire [186:0] \port$5310$0 ;
+  input [335:0] \port$5323$0 ;
+  wire [335:0] \port$5323$0 ;
+  input [9:0] \port$5455$0 ;
+  wire [9:0] \port$5455$0 ;
+  input [186:0] \port$5861$0 ;
+  wire [186:0] \port$5861$0 ;
+  input [335:0] \port$5874$0 ;
+  wire [335:0] \port$5874$0 ;
+  input [9:0] \port$6006$0 ;
+  wire [9:0] \port$6006$0 ;
   input rst;
   wire rst;
   reg [10:0] write_addr = 11'h000;
@@ -2406,665 +2663,880 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   reg [31:0] write_data = 32'd0;
   reg write_en = 1'h0;
   reg [3:0] write_strb = 4'h0;
+  assign \$235  = ch1_cfg_break_config_write & config_write_strb[2];
+  assign \$236  = ch1_cfg_ack_config_write & config_write_strb[0];
+  assign \$237  = ch1_cfg_ack_config_write & config_write_strb[1];
+  assign \$238  = ch1_cfg_ack_config_write & config_write_strb[2];
+  assign \$239  = ch1_cfg_timeout_config_write & config_write_strb[0];
+  assign \$240  = ch1_cfg_timeout_config_write & config_write_strb[1];
+  assign \$241  = ch1_cfg_timeout_config_write & config_write_strb[2];
+  assign \$242  = ch1_cfg_words_config_write & config_write_strb[0];
+  assign \$243  = ch1_cfg_words_config_write & config_write_strb[0];
+  assign \$244  = ch1_cfg_words_config_write & config_write_strb[0];
+  assign \$245  = ch1_cfg_words_config_write & config_write_strb[1];
+  assign \$246  = ch1_cfg_words_config_write & config_write_strb[2];
+  assign \$247  = ch1_cfg_words_config_write & config_write_strb[2];
+  assign \$248  = ch1_cfg_words_config_write & config_write_strb[2];
+  assign \$249  = ch1_cfg_words_config_write & config_write_strb[3];
+  assign \$250  = ch1_cfg_words_config_write & config_write_strb[3];
+  assign \$251  = ch1_cfg_checks_config_write & config_write_strb[0];
+  assign \$252  = ch1_cfg_checks_config_write & config_write_strb[0];
+  assign \$253  = ch1_cfg_checks_config_write & config_write_strb[1];
+  assign \$254  = ch1_cfg_checks_config_write & config_write_strb[2];
+  assign \$255  = ch1_cfg_checks_config_write & config_write_strb[2];
+  assign \$256  = ch1_cfg_quiet_config_write & config_write_strb[0];
+  assign \$257  = ch1_cfg_quiet_config_write & config_write_strb[1];
+  assign \$258  = ch1_cfg_crc0_config_write & config_write_strb[0];
+  assign \$259  = ch1_cfg_crc0_config_write & config_write_strb[1];
+  assign \$260  = ch1_cfg_crc0_config_write & config_write_strb[2];
+  assign \$261  = ch1_cfg_crc0_config_write & config_write_strb[3];
+  assign \$262  = ch1_cfg_crc0_start_config_write & config_write_strb[0];
+  assign \$263  = ch1_cfg_crc0_start_config_write & config_write_strb[1];
+  assign \$264  = ch1_cfg_crc1_config_write & config_write_strb[0];
+  assign \$265  = ch1_cfg_crc1_config_write & config_write_strb[1];
+  assign \$266  = ch1_cfg_crc1_config_write & config_write_strb[2];
+  assign \$267  = ch1_cfg_crc1_config_write & config_write_strb[3];
+  assign \$268  = ch1_cfg_crc1_start_config_write & config_write_strb[0];
+  assign \$269  = ch1_cfg_crc1_start_config_write & config_write_strb[1];
+  assign \$270  = ch1_ca_request_config_write & config_write_strb[0];
+  assign \$271  = ch1_ca_request_config_write & config_write_strb[1];
+  assign \$272  = ch1_ca_request_config_write & config_write_strb[2];
+  assign \$273  = ch1_ca_request_config_write & config_write_strb[3];
+  assign \$274  = write_data[0] & write_strb[0];
+  assign \$275  = ch1_ca_ctrl_write ? \$274  : 1'h0;
+  assign \$276  = write_data[1] & write_strb[0];
+  assign \$277  = ch1_ca_ctrl_write ? \$276  : 1'h0;
+  assign \$278  = bus__r_addr == 9'h100;
+  assign \$279  = bus__r_addr == 9'h101;
+  assign \$280  = bus__r_addr == 9'h102;
+  assign \$281  = bus__r_addr == 9'h104;
+  assign \$282  = bus__r_addr == 9'h105;
+  assign \$283  = bus__r_addr == 9'h108;
+  assign \$284  = bus__r_addr == 9'h109;
+  assign \$285  = bus__r_addr == 9'h10a;
+  assign \$286  = bus__r_addr == 9'h10b;
+  assign \$287  = bus__r_addr == 9'h10c;
+  assign \$288  = bus__r_addr == 9'h10d;
+  assign \$289  = bus__r_addr == 9'h10e;
+  assign \$290  = bus__r_addr == 9'h10f;
+  assign \$291  = bus__r_addr == 9'h110;
+  assign \$292  = bus__r_addr == 9'h111;
+  assign \$293  = bus__r_addr == 9'h112;
+  assign \$294  = bus__r_addr == 9'h113;
+  assign \$295  = bus__r_addr == 9'h114;
+  assign \$296  = bus__r_addr == 9'h115;
+  assign \$297  = bus__r_addr == 9'h116;
+  assign \$298  = bus__r_addr == 9'h117;
+  assign \$299  = bus__r_addr == 9'h118;
+  assign \$300  = bus__r_addr == 9'h119;
+  assign \$301  = bus__r_addr == 9'h11a;
+  assign \$302  = bus__r_addr == 9'h11b;
+  assign \$303  = bus__r_addr == 9'h11c;
+  assign \$304  = bus__r_addr == 9'h11d;
+  assign \$305  = bus__r_addr == 9'h11e;
+  assign \$306  = bus__r_addr == 9'h11f;
+  assign \$307  = bus__r_addr == 9'h120;
+  assign \$308  = bus__r_addr == 9'h121;
+  assign \$309  = bus__r_addr == 9'h122;
+  assign \$310  = bus__r_addr == 9'h123;
+  assign \$311  = bus__r_addr == 9'h140;
+  assign \$312  = bus__r_addr == 9'h141;
+  assign \$313  = bus__r_addr == 9'h142;
+  assign \$314  = bus__r_addr == 9'h143;
+  assign \$315  = bus__r_addr == 9'h144;
+  assign \$316  = bus__r_addr == 9'h145;
+  assign \$317  = ch1_read_select_110 & bus__r_load;
+  assign \$318  = bus__r_addr[10:4] == 5'h16;
+  assign \$319  = bus__r_en & \$318 ;
+  assign \$320  = ch1_read_select_100 ? { 22'h000000, ch1_ctrl_trigger_enable, ch1_ctrl_periodic, 8'h00 } : 32'd0;
+  assign \$322  = ch1_read_select_101 ? { 30'h00000000, ch1__config_error, ch1__busy } : 32'd0;
   assign \$323  = \$321  | \$322 ;
-  assign \$324  = ch1_read_select_119 ? \port$5698$0 [63:32] : 32'd0;
+  assign \$324  = ch1_read_select_102 ? 32'd119023671 : 32'd0;
   assign \$325  = \$323  | \$324 ;
-  assign \$326  = ch1_read_select_11a ? \port$5698$0 [95:64] : 32'd0;
+  assign \$326  = ch1_read_select_104 ? { 29'h00000000, ch1_irq_status_access_done, ch1_irq_status_error, ch1_irq_status_done } : 32'd0;
   assign \$327  = \$325  | \$326 ;
-  assign \$328  = ch1_read_select_11b ? \port$5698$0 [127:96] : 32'd0;
+  assign \$328  = ch1_read_select_105 ? { 29'h00000000, ch1_irq_enable_access_done, ch1_irq_enable_error, ch1_irq_enable_done } : 32'd0;
   assign \$329  = \$327  | \$328 ;
-  assign \$330  = ch1_read_select_11c ? \port$5698$0 [159:128] : 32'd0;
+  assign \$330  = ch1_read_select_108 ? { 4'h0, ch1_cfg_ma_delay_limit, ch1_cfg_ma_ma_half_period } : 32'd0;
   assign \$331  = \$329  | \$330 ;
-  assign \$332  = ch1_read_select_11d ? \port$5698$0 [191:160] : 32'd0;
+  assign \$332  = ch1_read_select_109 ? { 8'h00, ch1_cfg_period_request_period } : 32'd0;
   assign \$333  = \$331  | \$332 ;
-  assign \$334  = ch1_read_select_11e ? \port$5698$0 [223:192] : 32'd0;
+  assign \$334  = ch1_read_select_10a ? { 8'h00, ch1_cfg_break_break_time } : 32'd0;
   assign \$335  = \$333  | \$334 ;
-  assign \$336  = ch1_read_select_11f ? \port$5698$0 [255:224] : 32'd0;
+  assign \$336  = ch1_read_select_10b ? { 8'h00, ch1_cfg_ack_ack_limit } : 32'd0;
   assign \$337  = \$335  | \$336 ;
-  assign \$338  = ch1_read_select_140 ? { 7'h00, \ch1_ca_request_write$265 , 1'h0, ch1_ca_request_count, 1'h0, ch1_ca_request_address, 5'h00, ch1_ca_request_slave_id } : 32'd0;
+  assign \$338  = ch1_read_select_10c ? { 8'h00, ch1_cfg_timeout_timeout_limit } : 32'd0;
   assign \$339  = \$337  | \$338 ;
-  assign \$342  = ch1_read_select_142 ? { 17'h00000, \port$5830$0 [9:3], 1'h0, \port$5830$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
+  assign \$340  = ch1_read_select_10d ? { ch1_cfg_words_w1_enable, 5'h00, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_data_bits, 6'h00, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_data_bits } : 32'd0;
+  assign \$341  = \$339  | \$340 ;
+  assign \$342  = ch1_read_select_10e ? { 8'h00, ch1_cfg_checks_delay_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_spw_tolerance, 6'h00, ch1_cfg_checks_spw_check, ch1_cfg_checks_end_check } : 32'd0;
   assign \$343  = \$341  | \$342 ;
-  assign \$344  = ch1_read_select_143 ? \port$5698$0 [287:256] : 32'd0;
+  assign \$344  = ch1_read_select_10f ? { 20'h00000, ch1_cfg_quiet_quiet_time } : 32'd0;
   assign \$345  = \$343  | \$344 ;
-  assign \$346  = ch1_read_select_144 ? \port$5698$0 [319:288] : 32'd0;
+  assign \$346  = ch1_read_select_110 ? { 2'h0, \port$5861$0 [182:177], 4'h0, \port$5861$0 [186:183], 1'h0, \port$5861$0 [176:174], 1'h0, \port$5861$0 [133:131], 3'h0, \port$5861$0 [49], \port$5861$0 [3:0] } : 32'd0;
   assign \$347  = \$345  | \$346 ;
-  assign \$348  = ch1_read_select_145 ? { 16'h0000, \port$5698$0 [335:320] } : 32'd0;
+  assign \$348  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
   assign \$349  = \$347  | \$348 ;
-  assign \$350  = ch1_window0_read ? ch1__ca_rbuf_data : 32'd0;
+  assign \$350  = ch1_read_select_112 ? ch1_result_w0_lo_data_snapshot : 32'd0;
   assign \$351  = \$349  | \$350 ;
-  assign \$352  = ! write_addr;
-  assign g_id_write = write_en & \$352 ;
-  assign \$353  = write_addr == 1'h1;
-  assign g_version_write = write_en & \$353 ;
-  assign \$354  = write_addr == 2'h2;
-  assign g_channels_write = write_en & \$354 ;
-  assign \$355  = write_addr == 2'h3;
-  assign g_trigger_write = write_en & \$355 ;
-  assign \$356  = write_addr == 3'h4;
-  assign g_irq_pending_write = write_en & \$356 ;
-  assign \$357  = write_addr == 8'h80;
-  assign ch0_ctrl_write = write_en & \$357 ;
-  assign \$358  = write_addr == 8'h81;
-  assign ch0_state_write = write_en & \$358 ;
-  assign \$359  = write_addr == 8'h82;
-  assign ch0_caps_write = write_en & \$359 ;
-  assign \$360  = write_addr == 8'h84;
-  assign ch0_irq_status_write = write_en & \$360 ;
-  assign \$361  = write_addr == 8'h85;
-  assign ch0_irq_enable_write = write_en & \$361 ;
-  assign \$362  = write_addr == 8'h88;
-  assign ch0_cfg_ma_write = write_en & \$362 ;
-  assign \$363  = write_addr == 8'h89;
-  assign ch0_cfg_period_write = write_en & \$363 ;
-  assign \$364  = write_addr == 8'h8a;
-  assign ch0_cfg_break_write = write_en & \$364 ;
-  assign \$365  = write_addr == 8'h8b;
-  assign ch0_cfg_ack_write = write_en & \$365 ;
-  assign \$366  = write_addr == 8'h8c;
-  assign ch0_cfg_timeout_write = write_en & \$366 ;
-  assign \$367  = write_addr == 8'h8d;
-  assign ch0_cfg_words_write = write_en & \$367 ;
-  assign \$368  = write_addr == 8'h8e;
-  assign ch0_cfg_checks_write = write_en & \$368 ;
-  assign \$369  = write_addr == 8'h8f;
-  assign ch0_cfg_quiet_write = write_en & \$369 ;
-  assign \$370  = write_addr == 8'h90;
-  assign ch0_result_status_write = write_en & \$370 ;
-  assign \$371  = write_addr == 8'h91;
-  assign ch0_result_seq_write = write_en & \$371 ;
-  assign \$372  = write_addr == 8'h92;
-  assign ch0_result_w0_lo_write = write_en & \$372 ;
-  assign \$373  = write_addr == 8'h93;
-  assign ch0_result_w0_hi_write = write_en & \$373 ;
-  assign \$374  = write_addr == 8'h94;
-  assign ch0_result_w1_lo_write = write_en & \$374 ;
-  assign \$375  = write_addr == 8'h95;
-  assign ch0_result_w1_hi_write = write_en & \$375 ;
-  assign \$376  = write_addr == 8'h96;
-  assign ch0_result_timestamp_write = write_en & \$376 ;
-  assign \$377  = write_addr == 8'h97;
-  assign ch0_result_line_write = write_en & \$377 ;
-  assign \$378  = write_addr == 8'h98;
-  assign ch0_count_crc_write = write_en & \$378 ;
-  assign \$379  = write_addr == 8'h99;
-  assign ch0_count_ack_write = write_en & \$379 ;
-  assign \$380  = write_addr == 8'h9a;
-  assign ch0_count_line_write = write_en & \$380 ;
-  assign \$381  = write_addr == 8'h9b;
-  assign ch0_count_lc_write = write_en & \$381 ;
-  assign \$382  = write_addr == 8'h9c;
-  assign ch0_count_check_write = write_en & \$382 ;
-  assign \$383  = write_addr == 8'h9d;
-  assign ch0_count_cycle_write = write_en & \$383 ;
-  assign \$384  = write_addr == 8'h9e;
-  assign ch0_count_stop_write = write_en & \$384 ;
-  assign \$385  = write_addr == 8'h9f;
-  assign ch0_count_noise_write = write_en & \$385 ;
-  assign \$386  = write_addr == 8'hc0;
-  assign ch0_ca_request_write = write_en & \$386 ;
-  assign \$387  = write_addr == 8'hc1;
-  assign ch0_ca_ctrl_write = write_en & \$387 ;
-  assign \$388  = write_addr == 8'hc2;
-  assign ch0_ca_state_write = write_en & \$388 ;
-  assign \$389  = write_addr == 8'hc3;
-  assign ch0_ca_count_crc4_answer_write = write_en & \$389 ;
-  assign \$390  = write_addr == 8'hc4;
-  assign ch0_ca_count_refused_aborted_write = write_en & \$390 ;
-  assign \$391  = write_addr == 8'hc5;
-  assign ch0_ca_count_data_fault_write = write_en & \$391 ;
-  assign \$392  = write_addr[10:4] == 4'hd;
-  assign \$393  = write_en & \$392 ;
-  assign ch0__ca_wbuf_en = \$393  ? write_strb : 4'h0;
-  assign \$394  = bus__r_addr[10:4] == 4'he;
-  assign ch0__ca_rbuf_en = bus__r_en & \$394 ;
-  assign \$395  = ch0_irq_status_done & ch0_irq_enable_done;
-  assign \$397  = ch0_irq_status_error & ch0_irq_enable_error;
-  assign \$399  = ch0_irq_status_access_done & ch0_irq_enable_access_done;
-  assign ch0_irq = | { \$400 , \$398 , \$396  };
-  assign \$401  = write_addr == 9'h100;
-  assign ch1_ctrl_write = write_en & \$401 ;
-  assign \$402  = write_addr == 9'h101;
-  assign ch1_state_write = write_en & \$402 ;
-  assign \$403  = write_addr == 9'h102;
-  assign ch1_caps_write = write_en & \$403 ;
-  assign \$404  = write_addr == 9'h104;
-  assign ch1_irq_status_write = write_en & \$404 ;
-  assign \$405  = write_addr == 9'h105;
-  assign ch1_irq_enable_write = write_en & \$405 ;
-  assign \$406  = write_addr == 9'h108;
-  assign ch1_cfg_ma_write = write_en & \$406 ;
-  assign \$407  = write_addr == 9'h109;
-  assign ch1_cfg_period_write = write_en & \$407 ;
-  assign \$408  = write_addr == 9'h10a;
-  assign ch1_cfg_break_write = write_en & \$408 ;
-  assign \$409  = write_addr == 9'h10b;
-  assign ch1_cfg_ack_write = write_en & \$409 ;
-  assign \$410  = write_addr == 9'h10c;
-  assign ch1_cfg_timeout_write = write_en & \$410 ;
-  assign \$411  = write_addr == 9'h10d;
-  assign ch1_cfg_words_write = write_en & \$411 ;
-  assign \$412  = write_addr == 9'h10e;
-  assign ch1_cfg_checks_write = write_en & \$412 ;
-  assign \$413  = write_addr == 9'h10f;
-  assign ch1_cfg_quiet_write = write_en & \$413 ;
-  assign \$414  = write_addr == 9'h110;
-  assign ch1_result_status_write = write_en & \$414 ;
-  assign \$415  = write_addr == 9'h111;
-  assign ch1_result_seq_write = write_en & \$415 ;
-  assign \$416  = write_addr == 9'h112;
-  assign ch1_result_w0_lo_write = write_en & \$416 ;
-  assign \$417  = write_addr == 9'h113;
-  assign ch1_result_w0_hi_write = write_en & \$417 ;
-  assign \$418  = write_addr == 9'h114;
-  assign ch1_result_w1_lo_write = write_en & \$418 ;
-  assign \$419  = write_addr == 9'h115;
-  assign ch1_result_w1_hi_write = write_en & \$419 ;
-  assign \$420  = write_addr == 9'h116;
-  assign ch1_result_timestamp_write = write_en & \$420 ;
-  assign \$421  = write_addr == 9'h117;
-  assign ch1_result_line_write = write_en & \$421 ;
-  assign \$422  = write_addr == 9'h118;
-  assign ch1_count_crc_write = write_en & \$422 ;
-  assign \$423  = write_addr == 9'h119;
-  assign ch1_count_ack_write = write_en & \$423 ;
-  assign \$424  = write_addr == 9'h11a;
-  assign ch1_count_line_write = write_en & \$424 ;
-  assign \$425  = write_addr == 9'h11b;
-  assign ch1_count_lc_write = write_en & \$425 ;
-  assign \$426  = write_addr == 9'h11c;
-  assign ch1_count_check_write = write_en & \$426 ;
-  assign \$427  = write_addr == 9'h11d;
-  assign ch1_count_cycle_write = write_en & \$427 ;
-  assign \$428  = write_addr == 9'h11e;
-  assign ch1_count_stop_write = write_en & \$428 ;
-  assign \$429  = write_addr == 9'h11f;
-  assign ch1_count_noise_write = write_en & \$429 ;
-  assign \$430  = write_addr == 9'h140;
-  assign ch1_ca_request_write = write_en & \$430 ;
-  assign \$431  = write_addr == 9'h141;
-  assign ch1_ca_ctrl_write = write_en & \$431 ;
-  assign \$432  = write_addr == 9'h142;
-  assign ch1_ca_state_write = write_en & \$432 ;
-  assign \$433  = write_addr == 9'h143;
-  assign ch1_ca_count_crc4_answer_write = write_en & \$433 ;
-  assign \$434  = write_addr == 9'h144;
-  assign ch1_ca_count_refused_aborted_write = write_en & \$434 ;
-  assign \$435  = write_addr == 9'h145;
-  assign ch1_ca_count_data_fault_write = write_en & \$435 ;
-  assign \$436  = write_addr[10:4] == 5'h15;
-  assign \$437  = write_en & \$436 ;
-  assign ch1__ca_wbuf_en = \$437  ? write_strb : 4'h0;
-  assign \$438  = bus__r_addr[10:4] == 5'h16;
-  assign ch1__ca_rbuf_en = bus__r_en & \$438 ;
-  assign \$439  = ch1_irq_status_done & ch1_irq_enable_done;
-  assign \$441  = ch1_irq_status_error & ch1_irq_enable_error;
-  assign \$443  = ch1_irq_status_access_done & ch1_irq_enable_access_done;
-  assign ch1_irq = | { \$444 , \$442 , \$440  };
-  assign \$446  = \$445  | ch0_read_data;
-  assign bus__r_data = \$446  | ch1_read_data;
+  assign \$352  = ch1_read_select_113 ? { 9'h000, ch1_result_w0_hi_data_snapshot } : 32'd0;
+  assign \$353  = \$351  | \$352 ;
+  assign \$354  = ch1_read_select_114 ? ch1_result_w1_lo_data_snapshot : 32'd0;
+  assign \$355  = \$353  | \$354 ;
+  assign \$356  = ch1_read_select_115 ? { 24'h000000, ch1_result_w1_hi_data_snapshot } : 32'd0;
+  assign \$357  = \$355  | \$356 ;
+  assign \$358  = ch1_read_select_116 ? ch1_result_timestamp_time_snapshot : 32'd0;
+  assign \$359  = \$357  | \$358 ;
+  assign \$360  = ch1_read_select_117 ? { 3'h0, ch1_result_line_settled_delay_snapshot, ch1_result_line_delay_spread_snapshot, 3'h0, ch1_result_line_delay_settled_snapshot, ch1_result_line_noise_events_snapshot } : 32'd0;
+  assign \$361  = \$359  | \$360 ;
+  assign \$362  = ch1_read_select_118 ? \port$5874$0 [31:0] : 32'd0;
+  assign \$363  = \$361  | \$362 ;
+  assign \$364  = ch1_read_select_119 ? \port$5874$0 [63:32] : 32'd0;
+  assign \$365  = \$363  | \$364 ;
+  assign \$366  = ch1_read_select_11a ? \port$5874$0 [95:64] : 32'd0;
+  assign \$367  = \$365  | \$366 ;
+  assign \$368  = ch1_read_select_11b ? \port$5874$0 [127:96] : 32'd0;
+  assign \$369  = \$367  | \$368 ;
+  assign \$370  = ch1_read_select_11c ? \port$5874$0 [159:128] : 32'd0;
+  assign \$371  = \$369  | \$370 ;
+  assign \$372  = ch1_read_select_11d ? \port$5874$0 [191:160] : 32'd0;
+  assign \$373  = \$371  | \$372 ;
+  assign \$374  = ch1_read_select_11e ? \port$5874$0 [223:192] : 32'd0;
+  assign \$375  = \$373  | \$374 ;
+  assign \$376  = ch1_read_select_11f ? \port$5874$0 [255:224] : 32'd0;
+  assign \$377  = \$375  | \$376 ;
+  assign \$378  = ch1_read_select_120 ? { 7'h00, ch1_cfg_crc0_inverted, 3'h0, ch1_cfg_crc0_width, ch1_cfg_crc0_poly } : 32'd0;
+  assign \$379  = \$377  | \$378 ;
+  assign \$380  = ch1_read_select_121 ? { 16'h0000, ch1_cfg_crc0_start_start } : 32'd0;
+  assign \$381  = \$379  | \$380 ;
+  assign \$382  = ch1_read_select_122 ? { 7'h00, ch1_cfg_crc1_inverted, 3'h0, ch1_cfg_crc1_width, ch1_cfg_crc1_poly } : 32'd0;
+  assign \$383  = \$381  | \$382 ;
+  assign \$384  = ch1_read_select_123 ? { 16'h0000, ch1_cfg_crc1_start_start } : 32'd0;
+  assign \$385  = \$383  | \$384 ;
+  assign \$386  = ch1_read_select_140 ? { 7'h00, \ch1_ca_request_write$301 , 1'h0, ch1_ca_request_count, 1'h0, ch1_ca_request_address, 5'h00, ch1_ca_request_slave_id } : 32'd0;
+  assign \$387  = \$385  | \$386 ;
+  assign \$390  = ch1_read_select_142 ? { 17'h00000, \port$6006$0 [9:3], 1'h0, \port$6006$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
+  assign \$391  = \$389  | \$390 ;
+  assign \$392  = ch1_read_select_143 ? \port$5874$0 [287:256] : 32'd0;
+  assign \$393  = \$391  | \$392 ;
+  assign \$394  = ch1_read_select_144 ? \port$5874$0 [319:288] : 32'd0;
+  assign \$395  = \$393  | \$394 ;
+  assign \$396  = ch1_read_select_145 ? { 16'h0000, \port$5874$0 [335:320] } : 32'd0;
+  assign \$397  = \$395  | \$396 ;
+  assign \$398  = ch1_window0_read ? ch1__ca_rbuf_data : 32'd0;
+  assign \$399  = \$397  | \$398 ;
+  assign \$400  = ! write_addr;
+  assign g_id_write = write_en & \$400 ;
+  assign \$401  = write_addr == 1'h1;
+  assign g_version_write = write_en & \$401 ;
+  assign \$402  = write_addr == 2'h2;
+  assign g_channels_write = write_en & \$402 ;
+  assign \$403  = write_addr == 2'h3;
+  assign g_trigger_write = write_en & \$403 ;
+  assign \$404  = write_addr == 3'h4;
+  assign g_irq_pending_write = write_en & \$404 ;
+  assign \$405  = write_addr == 8'h80;
+  assign ch0_ctrl_write = write_en & \$405 ;
+  assign \$406  = write_addr == 8'h81;
+  assign ch0_state_write = write_en & \$406 ;
+  assign \$407  = write_addr == 8'h82;
+  assign ch0_caps_write = write_en & \$407 ;
+  assign \$408  = write_addr == 8'h84;
+  assign ch0_irq_status_write = write_en & \$408 ;
+  assign \$409  = write_addr == 8'h85;
+  assign ch0_irq_enable_write = write_en & \$409 ;
+  assign \$410  = write_addr == 8'h88;
+  assign ch0_cfg_ma_write = write_en & \$410 ;
+  assign \$411  = write_addr == 8'h89;
+  assign ch0_cfg_period_write = write_en & \$411 ;
+  assign \$412  = write_addr == 8'h8a;
+  assign ch0_cfg_break_write = write_en & \$412 ;
+  assign \$413  = write_addr == 8'h8b;
+  assign ch0_cfg_ack_write = write_en & \$413 ;
+  assign \$414  = write_addr == 8'h8c;
+  assign ch0_cfg_timeout_write = write_en & \$414 ;
+  assign \$415  = write_addr == 8'h8d;
+  assign ch0_cfg_words_write = write_en & \$415 ;
+  assign \$416  = write_addr == 8'h8e;
+  assign ch0_cfg_checks_write = write_en & \$416 ;
+  assign \$417  = write_addr == 8'h8f;
+  assign ch0_cfg_quiet_write = write_en & \$417 ;
+  assign \$418  = write_addr == 8'h90;
+  assign ch0_result_status_write = write_en & \$418 ;
+  assign \$419  = write_addr == 8'h91;
+  assign ch0_result_seq_write = write_en & \$419 ;
+  assign \$420  = write_addr == 8'h92;
+  assign ch0_result_w0_lo_write = write_en & \$420 ;
+  assign \$421  = write_addr == 8'h93;
+  assign ch0_result_w0_hi_write = write_en & \$421 ;
+  assign \$422  = write_addr == 8'h94;
+  assign ch0_result_w1_lo_write = write_en & \$422 ;
+  assign \$423  = write_addr == 8'h95;
+  assign ch0_result_w1_hi_write = write_en & \$423 ;
+  assign \$424  = write_addr == 8'h96;
+  assign ch0_result_timestamp_write = write_en & \$424 ;
+  assign \$425  = write_addr == 8'h97;
+  assign ch0_result_line_write = write_en & \$425 ;
+  assign \$426  = write_addr == 8'h98;
+  assign ch0_count_crc_write = write_en & \$426 ;
+  assign \$427  = write_addr == 8'h99;
+  assign ch0_count_ack_write = write_en & \$427 ;
+  assign \$428  = write_addr == 8'h9a;
+  assign ch0_count_line_write = write_en & \$428 ;
+  assign \$429  = write_addr == 8'h9b;
+  assign ch0_count_lc_write = write_en & \$429 ;
+  assign \$430  = write_addr == 8'h9c;
+  assign ch0_count_check_write = write_en & \$430 ;
+  assign \$431  = write_addr == 8'h9d;
+  assign ch0_count_cycle_write = write_en & \$431 ;
+  assign \$432  = write_addr == 8'h9e;
+  assign ch0_count_stop_write = write_en & \$432 ;
+  assign \$433  = write_addr == 8'h9f;
+  assign ch0_count_noise_write = write_en & \$433 ;
+  assign \$434  = write_addr == 8'ha0;
+  assign ch0_cfg_crc0_write = write_en & \$434 ;
+  assign \$435  = write_addr == 8'ha1;
+  assign ch0_cfg_crc0_start_write = write_en & \$435 ;
+  assign \$436  = write_addr == 8'ha2;
+  assign ch0_cfg_crc1_write = write_en & \$436 ;
+  assign \$437  = write_addr == 8'ha3;
+  assign ch0_cfg_crc1_start_write = write_en & \$437 ;
+  assign \$438  = write_addr == 8'hc0;
+  assign ch0_ca_request_write = write_en & \$438 ;
+  assign \$439  = write_addr == 8'hc1;
+  assign ch0_ca_ctrl_write = write_en & \$439 ;
+  assign \$440  = write_addr == 8'hc2;
+  assign ch0_ca_state_write = write_en & \$440 ;
+  assign \$441  = write_addr == 8'hc3;
+  assign ch0_ca_count_crc4_answer_write = write_en & \$441 ;
+  assign \$442  = write_addr == 8'hc4;
+  assign ch0_ca_count_refused_aborted_write = write_en & \$442 ;
+  assign \$443  = write_addr == 8'hc5;
+  assign ch0_ca_count_data_fault_write = write_en & \$443 ;
+  assign \$444  = write_addr[10:4] == 4'hd;
+  assign \$445  = write_en & \$444 ;
+  assign ch0__ca_wbuf_en = \$445  ? write_strb : 4'h0;
+  assign \$446  = bus__r_addr[10:4] == 4'he;
+  assign ch0__ca_rbuf_en = bus__r_en & \$446 ;
+  assign \$447  = ch0_irq_status_done & ch0_irq_enable_done;
+  assign \$449  = ch0_irq_status_error & ch0_irq_enable_error;
+  assign \$451  = ch0_irq_status_access_done & ch0_irq_enable_access_done;
+  assign ch0_irq = | { \$452 , \$450 , \$448  };
+  assign \$453  = write_addr == 9'h100;
+  assign ch1_ctrl_write = write_en & \$453 ;
+  assign \$454  = write_addr == 9'h101;
+  assign ch1_state_write = write_en & \$454 ;
+  assign \$455  = write_addr == 9'h102;
+  assign ch1_caps_write = write_en & \$455 ;
+  assign \$456  = write_addr == 9'h104;
+  assign ch1_irq_status_write = write_en & \$456 ;
+  assign \$457  = write_addr == 9'h105;
+  assign ch1_irq_enable_write = write_en & \$457 ;
+  assign \$458  = write_addr == 9'h108;
+  assign ch1_cfg_ma_write = write_en & \$458 ;
+  assign \$459  = write_addr == 9'h109;
+  assign ch1_cfg_period_write = write_en & \$459 ;
+  assign \$460  = write_addr == 9'h10a;
+  assign ch1_cfg_break_write = write_en & \$460 ;
+  assign \$461  = write_addr == 9'h10b;
+  assign ch1_cfg_ack_write = write_en & \$461 ;
+  assign \$462  = write_addr == 9'h10c;
+  assign ch1_cfg_timeout_write = write_en & \$462 ;
+  assign \$463  = write_addr == 9'h10d;
+  assign ch1_cfg_words_write = write_en & \$463 ;
+  assign \$464  = write_addr == 9'h10e;
+  assign ch1_cfg_checks_write = write_en & \$464 ;
+  assign \$465  = write_addr == 9'h10f;
+  assign ch1_cfg_quiet_write = write_en & \$465 ;
+  assign \$466  = write_addr == 9'h110;
+  assign ch1_result_status_write = write_en & \$466 ;
+  assign \$467  = write_addr == 9'h111;
+  assign ch1_result_seq_write = write_en & \$467 ;
+  assign \$468  = write_addr == 9'h112;
+  assign ch1_result_w0_lo_write = write_en & \$468 ;
+  assign \$469  = write_addr == 9'h113;
+  assign ch1_result_w0_hi_write = write_en & \$469 ;
+  assign \$470  = write_addr == 9'h114;
+  assign ch1_result_w1_lo_write = write_en & \$470 ;
+  assign \$471  = write_addr == 9'h115;
+  assign ch1_result_w1_hi_write = write_en & \$471 ;
+  assign \$472  = write_addr == 9'h116;
+  assign ch1_result_timestamp_write = write_en & \$472 ;
+  assign \$473  = write_addr == 9'h117;
+  assign ch1_result_line_write = write_en & \$473 ;
+  assign \$474  = write_addr == 9'h118;
+  assign ch1_count_crc_write = write_en & \$474 ;
+  assign \$475  = write_addr == 9'h119;
+  assign ch1_count_ack_write = write_en & \$475 ;
+  assign \$476  = write_addr == 9'h11a;
+  assign ch1_count_line_write = write_en & \$476 ;
+  assign \$477  = write_addr == 9'h11b;
+  assign ch1_count_lc_write = write_en & \$477 ;
+  assign \$478  = write_addr == 9'h11c;
+  assign ch1_count_check_write = write_en & \$478 ;
+  assign \$479  = write_addr == 9'h11d;
+  assign ch1_count_cycle_write = write_en & \$479 ;
+  assign \$480  = write_addr == 9'h11e;
+  assign ch1_count_stop_write = write_en & \$480 ;
+  assign \$481  = write_addr == 9'h11f;
+  assign ch1_count_noise_write = write_en & \$481 ;
+  assign \$482  = write_addr == 9'h120;
+  assign ch1_cfg_crc0_write = write_en & \$482 ;
+  assign \$483  = write_addr == 9'h121;
+  assign ch1_cfg_crc0_start_write = write_en & \$483 ;
+  assign \$484  = write_addr == 9'h122;
+  assign ch1_cfg_crc1_write = write_en & \$484 ;
+  assign \$485  = write_addr == 9'h123;
+  assign ch1_cfg_crc1_start_write = write_en & \$485 ;
+  assign \$486  = write_addr == 9'h140;
+  assign ch1_ca_request_write = write_en & \$486 ;
+  assign \$487  = write_addr == 9'h141;
+  assign ch1_ca_ctrl_write = write_en & \$487 ;
+  assign \$488  = write_addr == 9'h142;
+  assign ch1_ca_state_write = write_en & \$488 ;
+  assign \$489  = write_addr == 9'h143;
+  assign ch1_ca_count_crc4_answer_write = write_en & \$489 ;
+  assign \$490  = write_addr == 9'h144;
+  assign ch1_ca_count_refused_aborted_write = write_en & \$490 ;
+  assign \$491  = write_addr == 9'h145;
+  assign ch1_ca_count_data_fault_write = write_en & \$491 ;
+  assign \$492  = write_addr[10:4] == 5'h15;
+  assign \$493  = write_en & \$492 ;
+  assign ch1__ca_wbuf_en = \$493  ? write_strb : 4'h0;
+  assign \$494  = bus__r_addr[10:4] == 5'h16;
+  assign ch1__ca_rbuf_en = bus__r_en & \$494 ;
+  assign \$495  = ch1_irq_status_done & ch1_irq_enable_done;
+  assign \$497  = ch1_irq_status_error & ch1_irq_enable_error;
+  assign \$499  = ch1_irq_status_access_done & ch1_irq_enable_access_done;
+  assign ch1_irq = | { \$500 , \$498 , \$496  };
+  assign \$502  = \$501  | ch0_read_data;
+  assign bus__r_data = \$502  | ch1_read_data;
+  always @(posedge clk)
+    write_en <= \$503 ;
+  always @(posedge clk)
+    write_addr <= \$504 ;
+  always @(posedge clk)
+    write_data <= \$505 ;
+  always @(posedge clk)
+    write_strb <= \$506 ;
+  always @(posedge clk)
+    config_write_data <= \$507 ;
+  always @(posedge clk)
+    config_write_strb <= \$508 ;
+  always @(posedge clk)
+    g_trigger_start <= \$509 ;
+  always @(posedge clk)
+    g_read_select_0 <= \$510 ;
+  always @(posedge clk)
+    g_read_select_1 <= \$511 ;
+  always @(posedge clk)
+    g_read_select_2 <= \$512 ;
+  always @(posedge clk)
+    g_read_select_3 <= \$513 ;
+  always @(posedge clk)
+    g_read_select_4 <= \$514 ;
+  always @(posedge clk)
+    g_read_data <= \$515 ;
+  always @(posedge clk)
+    ch0_ctrl_start <= \$516 ;
+  always @(posedge clk)
+    ch0_ctrl_abort <= \$517 ;
+  always @(posedge clk)
+    ch0_ctrl_clear_counters <= \$518 ;
   always @(posedge clk)
-    write_en <= \$447 ;
+    ch0_ctrl_periodic <= \$519 ;
   always @(posedge clk)
-    write_addr <= \$448 ;
+    ch0_ctrl_trigger_enable <= \$520 ;
   always @(posedge clk)
-    write_data <= \$449 ;
+    ch0_irq_status_done <= \$521 ;
   always @(posedge clk)
-    write_strb <= \$450 ;
+    ch0_irq_status_error <= \$522 ;
   always @(posedge clk)
-    config_write_data <= \$451 ;
+    ch0_irq_status_access_done <= \$523 ;
   always @(posedge clk)
-    config_write_strb <= \$452 ;
+    ch0_irq_enable_config_write <= \$524 ;
   always @(posedge clk)
-    g_trigger_start <= \$453 ;
+    ch0_irq_enable_done <= \$525 ;
   always @(posedge clk)
-    g_read_select_0 <= \$454 ;
+    ch0_irq_enable_error <= \$526 ;
   always @(posedge clk)
-    g_read_select_1 <= \$455 ;
+    ch0_irq_enable_access_done <= \$527 ;
   always @(posedge clk)
-    g_read_select_2 <= \$456 ;
+    ch0_cfg_ma_config_write <= \$528 ;
   always @(posedge clk)
-    g_read_select_3 <= \$457 ;
+    ch0_cfg_ma_ma_half_period <= \$529 ;
   always @(posedge clk)
-    g_read_select_4 <= \$458 ;
+    ch0_cfg_ma_delay_limit <= \$530 ;
   always @(posedge clk)
-    g_read_data <= \$459 ;
+    ch0_cfg_period_config_write <= \$531 ;
   always @(posedge clk)
-    ch0_ctrl_start <= \$460 ;
+    ch0_cfg_period_request_period <= \$532 ;
   always @(posedge clk)
-    ch0_ctrl_abort <= \$461 ;
+    ch0_cfg_break_config_write <= \$533 ;
   always @(posedge clk)
-    ch0_ctrl_clear_counters <= \$462 ;
+    ch0_cfg_break_break_time <= \$534 ;
   always @(posedge clk)
-    ch0_ctrl_periodic <= \$463 ;
+    ch0_cfg_ack_config_write <= \$535 ;
   always @(posedge clk)
-    ch0_ctrl_trigger_enable <= \$464 ;
+    ch0_cfg_ack_ack_limit <= \$536 ;
   always @(posedge clk)
-    ch0_irq_status_done <= \$465 ;
+    ch0_cfg_timeout_config_write <= \$537 ;
   always @(posedge clk)
-    ch0_irq_status_error <= \$466 ;
+    ch0_cfg_timeout_timeout_limit <= \$538 ;
   always @(posedge clk)
-    ch0_irq_status_access_done <= \$467 ;
+    ch0_cfg_words_config_write <= \$539 ;
   always @(posedge clk)
-    ch0_irq_enable_config_write <= \$468 ;
+    ch0_cfg_words_w0_data_bits <= \$540 ;
   always @(posedge clk)
-    ch0_irq_enable_done <= \$469 ;
+    ch0_cfg_words_w0_nenw <= \$541 ;
   always @(posedge clk)
-    ch0_irq_enable_error <= \$470 ;
+    ch0_cfg_words_w0_lc <= \$542 ;
   always @(posedge clk)
-    ch0_irq_enable_access_done <= \$471 ;
+    ch0_cfg_words_w0_crc <= \$543 ;
   always @(posedge clk)
-    ch0_cfg_ma_config_write <= \$472 ;
+    ch0_cfg_words_w1_data_bits <= \$544 ;
   always @(posedge clk)
-    ch0_cfg_ma_ma_half_period <= \$473 ;
+    ch0_cfg_words_w1_nenw <= \$545 ;
   always @(posedge clk)
-    ch0_cfg_ma_delay_limit <= \$474 ;
+    ch0_cfg_words_w1_lc <= \$546 ;
   always @(posedge clk)
-    ch0_cfg_period_config_write <= \$475 ;
+    ch0_cfg_words_w1_crc <= \$547 ;
   always @(posedge clk)
-    ch0_cfg_period_request_period <= \$476 ;
+    ch0_cfg_words_w1_enable <= \$548 ;
   always @(posedge clk)
-    ch0_cfg_break_config_write <= \$477 ;
+    ch0_cfg_checks_config_write <= \$549 ;
   always @(posedge clk)
-    ch0_cfg_break_break_time <= \$478 ;
+    ch0_cfg_checks_end_check <= \$550 ;
   always @(posedge clk)
-    ch0_cfg_ack_config_write <= \$479 ;
+    ch0_cfg_checks_spw_check <= \$551 ;
   always @(posedge clk)
-    ch0_cfg_ack_ack_limit <= \$480 ;
+    ch0_cfg_checks_spw_tolerance <= \$552 ;
   always @(posedge clk)
-    ch0_cfg_timeout_config_write <= \$481 ;
+    ch0_cfg_checks_noise_limit <= \$553 ;
   always @(posedge clk)
-    ch0_cfg_timeout_timeout_limit <= \$482 ;
+    ch0_cfg_checks_delay_tolerance <= \$554 ;
   always @(posedge clk)
-    ch0_cfg_words_config_write <= \$483 ;
+    ch0_cfg_quiet_config_write <= \$555 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_data_bits <= \$484 ;
+    ch0_cfg_quiet_quiet_time <= \$556 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_nenw <= \$485 ;
+    ch0_cfg_crc0_config_write <= \$557 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_lc <= \$486 ;
+    ch0_cfg_crc0_poly <= \$558 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_crc <= \$487 ;
+    ch0_cfg_crc0_width <= \$559 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_data_bits <= \$488 ;
+    ch0_cfg_crc0_inverted <= \$560 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_nenw <= \$489 ;
+    ch0_cfg_crc0_start_config_write <= \$561 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_lc <= \$490 ;
+    ch0_cfg_crc0_start_start <= \$562 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_crc <= \$491 ;
+    ch0_cfg_crc1_config_write <= \$563 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_enable <= \$492 ;
+    ch0_cfg_crc1_poly <= \$564 ;
   always @(posedge clk)
-    ch0_cfg_checks_config_write <= \$493 ;
+    ch0_cfg_crc1_width <= \$565 ;
   always @(posedge clk)
-    ch0_cfg_checks_end_check <= \$494 ;
+    ch0_cfg_crc1_inverted <= \$566 ;
   always @(posedge clk)
-    ch0_cfg_checks_spw_check <= \$495 ;
+    ch0_cfg_crc1_start_config_write <= \$567 ;
   always @(posedge clk)
-    ch0_cfg_checks_spw_tolerance <= \$496 ;
+    ch0_cfg_crc1_start_start <= \$568 ;
   always @(posedge clk)
-    ch0_cfg_checks_noise_limit <= \$497 ;
+    ch0_ca_request_config_write <= \$569 ;
   always @(posedge clk)
-    ch0_cfg_checks_delay_tolerance <= \$498 ;
+    ch0_ca_request_slave_id <= \$570 ;
   always @(posedge clk)
-    ch0_cfg_quiet_config_write <= \$499 ;
+    ch0_ca_request_address <= \$571 ;
   always @(posedge clk)
-    ch0_cfg_quiet_quiet_time <= \$500 ;
+    ch0_ca_request_count <= \$572 ;
   always @(posedge clk)
-    ch0_ca_request_config_write <= \$501 ;
+    \ch0_ca_request_write$101  <= \$573 ;
   always @(posedge clk)
-    ch0_ca_request_slave_id <= \$502 ;
+    ch0_ca_ctrl_start <= \$574 ;
   always @(posedge clk)
-    ch0_ca_request_address <= \$503 ;
+    ch0_ca_ctrl_abort <= \$575 ;
   always @(posedge clk)
-    ch0_ca_request_count <= \$504 ;
+    ch0_read_select_80 <= \$576 ;
   always @(posedge clk)
-    \ch0_ca_request_write$85  <= \$505 ;
+    ch0_read_select_81 <= \$577 ;
   always @(posedge clk)
-    ch0_ca_ctrl_start <= \$506 ;
+    ch0_read_select_82 <= \$578 ;
   always @(posedge clk)
-    ch0_ca_ctrl_abort <= \$507 ;
+    ch0_read_select_84 <= \$579 ;
   always @(posedge clk)
-    ch0_read_select_80 <= \$508 ;
+    ch0_read_select_85 <= \$580 ;
   always @(posedge clk)
-    ch0_read_select_81 <= \$509 ;
+    ch0_read_select_88 <= \$581 ;
   always @(posedge clk)
-    ch0_read_select_82 <= \$510 ;
+    ch0_read_select_89 <= \$582 ;
   always @(posedge clk)
-    ch0_read_select_84 <= \$511 ;
+    ch0_read_select_8a <= \$583 ;
   always @(posedge clk)
-    ch0_read_select_85 <= \$512 ;
+    ch0_read_select_8b <= \$584 ;
   always @(posedge clk)
-    ch0_read_select_88 <= \$513 ;
+    ch0_read_select_8c <= \$585 ;
   always @(posedge clk)
-    ch0_read_select_89 <= \$514 ;
+    ch0_read_select_8d <= \$586 ;
   always @(posedge clk)
-    ch0_read_select_8a <= \$515 ;
+    ch0_read_select_8e <= \$587 ;
   always @(posedge clk)
-    ch0_read_select_8b <= \$516 ;
+    ch0_read_select_8f <= \$588 ;
   always @(posedge clk)
-    ch0_read_select_8c <= \$517 ;
+    ch0_read_select_90 <= \$589 ;
   always @(posedge clk)
-    ch0_read_select_8d <= \$518 ;
+    ch0_read_select_91 <= \$590 ;
   always @(posedge clk)
-    ch0_read_select_8e <= \$519 ;
+    ch0_read_select_92 <= \$591 ;
   always @(posedge clk)
-    ch0_read_select_8f <= \$520 ;
+    ch0_read_select_93 <= \$592 ;
   always @(posedge clk)
-    ch0_read_select_90 <= \$521 ;
+    ch0_read_select_94 <= \$593 ;
   always @(posedge clk)
-    ch0_read_select_91 <= \$522 ;
+    ch0_read_select_95 <= \$594 ;
   always @(posedge clk)
-    ch0_read_select_92 <= \$523 ;
+    ch0_read_select_96 <= \$595 ;
   always @(posedge clk)
-    ch0_read_select_93 <= \$524 ;
+    ch0_read_select_97 <= \$596 ;
   always @(posedge clk)
-    ch0_read_select_94 <= \$525 ;
+    ch0_read_select_98 <= \$597 ;
   always @(posedge clk)
-    ch0_read_select_95 <= \$526 ;
+    ch0_read_select_99 <= \$598 ;
   always @(posedge clk)
-    ch0_read_select_96 <= \$527 ;
+    ch0_read_select_9a <= \$599 ;
   always @(posedge clk)
-    ch0_read_select_97 <= \$528 ;
+    ch0_read_select_9b <= \$600 ;
   always @(posedge clk)
-    ch0_read_select_98 <= \$529 ;
+    ch0_read_select_9c <= \$601 ;
   always @(posedge clk)
-    ch0_read_select_99 <= \$530 ;
+    ch0_read_select_9d <= \$602 ;
   always @(posedge clk)
-    ch0_read_select_9a <= \$531 ;
+    ch0_read_select_9e <= \$603 ;
   always @(posedge clk)
-    ch0_read_select_9b <= \$532 ;
+    ch0_read_select_9f <= \$604 ;
   always @(posedge clk)
-    ch0_read_select_9c <= \$533 ;
+    ch0_read_select_a0 <= \$605 ;
   always @(posedge clk)
-    ch0_read_select_9d <= \$534 ;
+    ch0_read_select_a1 <= \$606 ;
   always @(posedge clk)
-    ch0_read_select_9e <= \$535 ;
+    ch0_read_select_a2 <= \$607 ;
   always @(posedge clk)
-    ch0_read_select_9f <= \$536 ;
+    ch0_read_select_a3 <= \$608 ;
   always @(posedge clk)
-    ch0_read_select_c0 <= \$537 ;
+    ch0_read_select_c0 <= \$609 ;
   always @(posedge clk)
-    ch0_read_select_c1 <= \$538 ;
+    ch0_read_select_c1 <= \$610 ;
   always @(posedge clk)
-    ch0_read_select_c2 <= \$539 ;
+    ch0_read_select_c2 <= \$611 ;
   always @(posedge clk)
-    ch0_read_select_c3 <= \$540 ;
+    ch0_read_select_c3 <= \$612 ;
   always @(posedge clk)
-    ch0_read_select_c4 <= \$541 ;
+    ch0_read_select_c4 <= \$613 ;
   always @(posedge clk)
-    ch0_read_select_c5 <= \$542 ;
+    ch0_read_select_c5 <= \$614 ;
   always @(posedge clk)
-    ch0_result_status_status_snapshot <= \$543 ;
+    ch0_result_status_status_snapshot <= \$615 ;
   always @(posedge clk)
-    ch0_result_status_cds_snapshot <= \$544 ;
+    ch0_result_status_cds_snapshot <= \$616 ;
   always @(posedge clk)
-    ch0_result_status_w0_ne_snapshot <= \$545 ;
+    ch0_result_status_w0_ne_snapshot <= \$617 ;
   always @(posedge clk)
-    ch0_result_status_w0_nw_snapshot <= \$546 ;
+    ch0_result_status_w0_nw_snapshot <= \$618 ;
   always @(posedge clk)
-    ch0_result_status_w0_crc_ok_snapshot <= \$547 ;
+    ch0_result_status_w0_crc_ok_snapshot <= \$619 ;
   always @(posedge clk)
-    ch0_result_status_w1_ne_snapshot <= \$548 ;
+    ch0_result_status_w1_ne_snapshot <= \$620 ;
   always @(posedge clk)
-    ch0_result_status_w1_nw_snapshot <= \$549 ;
+    ch0_result_status_w1_nw_snapshot <= \$621 ;
   always @(posedge clk)
-    ch0_result_status_w1_crc_ok_snapshot <= \$550 ;
+    ch0_result_status_w1_crc_ok_snapshot <= \$622 ;
   always @(posedge clk)
-    ch0_result_status_lc_repeat_snapshot <= \$551 ;
+    ch0_result_status_lc_repeat_snapshot <= \$623 ;
   always @(posedge clk)
-    ch0_result_status_lc_skip_snapshot <= \$552 ;
+    ch0_result_status_lc_skip_snapshot <= \$624 ;
   always @(posedge clk)
-    ch0_result_status_lc_zero_snapshot <= \$553 ;
+    ch0_result_status_lc_zero_snapshot <= \$625 ;
   always @(posedge clk)
-    ch0_result_status_spw_mismatch_snapshot <= \$554 ;
+    ch0_result_status_spw_mismatch_snapshot <= \$626 ;
   always @(posedge clk)
-    ch0_result_status_lc_snapshot <= \$555 ;
+    ch0_result_status_lc_snapshot <= \$627 ;
   always @(posedge clk)
-    ch0_result_seq_seq_snapshot <= \$556 ;
+    ch0_result_seq_seq_snapshot <= \$628 ;
   always @(posedge clk)
-    ch0_result_seq_line_delay_snapshot <= \$557 ;
+    ch0_result_seq_line_delay_snapshot <= \$629 ;
   always @(posedge clk)
-    ch0_result_w0_lo_data_snapshot <= \$558 ;
+    ch0_result_w0_lo_data_snapshot <= \$630 ;
   always @(posedge clk)
-    ch0_result_w0_hi_data_snapshot <= \$559 ;
+    ch0_result_w0_hi_data_snapshot <= \$631 ;
   always @(posedge clk)
-    ch0_result_w1_lo_data_snapshot <= \$560 ;
+    ch0_result_w1_lo_data_snapshot <= \$632 ;
   always @(posedge clk)
-    ch0_result_w1_hi_data_snapshot <= \$561 ;
+    ch0_result_w1_hi_data_snapshot <= \$633 ;
   always @(posedge clk)
-    ch0_result_timestamp_time_snapshot <= \$562 ;
+    ch0_result_timestamp_time_snapshot <= \$634 ;
   always @(posedge clk)
-    ch0_result_line_noise_events_snapshot <= \$563 ;
+    ch0_result_line_noise_events_snapshot <= \$635 ;
   always @(posedge clk)
-    ch0_result_line_delay_settled_snapshot <= \$564 ;
+    ch0_result_line_delay_settled_snapshot <= \$636 ;
   always @(posedge clk)
-    ch0_result_line_delay_spread_snapshot <= \$565 ;
+    ch0_result_line_delay_spread_snapshot <= \$637 ;
   always @(posedge clk)
-    ch0_result_line_settled_delay_snapshot <= \$566 ;
+    ch0_result_line_settled_delay_snapshot <= \$638 ;
   always @(posedge clk)
-    ch0_window0_read <= \$567 ;
+    ch0_window0_read <= \$639 ;
   always @(posedge clk)
-    ch0_read_data <= \$568 ;
+    ch0_read_data <= \$640 ;
   always @(posedge clk)
-    ch1_ctrl_start <= \$569 ;
+    ch1_ctrl_start <= \$641 ;
   always @(posedge clk)
-    ch1_ctrl_abort <= \$570 ;
+    ch1_ctrl_abort <= \$642 ;
   always @(posedge clk)
-    ch1_ctrl_clear_counters <= \$571 ;
+    ch1_ctrl_clear_counters <= \$643 ;
   always @(posedge clk)
-    ch1_ctrl_periodic <= \$572 ;
+    ch1_ctrl_periodic <= \$644 ;
   always @(posedge clk)
-    ch1_ctrl_trigger_enable <= \$573 ;
+    ch1_ctrl_trigger_enable <= \$645 ;
   always @(posedge clk)
-    ch1_irq_status_done <= \$574 ;
+    ch1_irq_status_done <= \$646 ;
   always @(posedge clk)
-    ch1_irq_status_error <= \$575 ;
+    ch1_irq_status_error <= \$647 ;
   always @(posedge clk)
-    ch1_irq_status_access_done <= \$576 ;
+    ch1_irq_status_access_done <= \$648 ;
   always @(posedge clk)
-    ch1_irq_enable_config_write <= \$577 ;
+    ch1_irq_enable_config_write <= \$649 ;
   always @(posedge clk)
-    ch1_irq_enable_done <= \$578 ;
+    ch1_irq_enable_done <= \$650 ;
   always @(posedge clk)
-    ch1_irq_enable_error <= \$579 ;
+    ch1_irq_enable_error <= \$651 ;
   always @(posedge clk)
-    ch1_irq_enable_access_done <= \$580 ;
+    ch1_irq_enable_access_done <= \$652 ;
   always @(posedge clk)
-    ch1_cfg_ma_config_write <= \$581 ;
+    ch1_cfg_ma_config_write <= \$653 ;
   always @(posedge clk)
-    ch1_cfg_ma_ma_half_period <= \$582 ;
+    ch1_cfg_ma_ma_half_period <= \$654 ;
   always @(posedge clk)
-    ch1_cfg_ma_delay_limit <= \$583 ;
+    ch1_cfg_ma_delay_limit <= \$655 ;
   always @(posedge clk)
-    ch1_cfg_period_config_write <= \$584 ;
+    ch1_cfg_period_config_write <= \$656 ;
   always @(posedge clk)
-    ch1_cfg_period_request_period <= \$585 ;
+    ch1_cfg_period_request_period <= \$657 ;
   always @(posedge clk)
-    ch1_cfg_break_config_write <= \$586 ;
+    ch1_cfg_break_config_write <= \$658 ;
   always @(posedge clk)
-    ch1_cfg_break_break_time <= \$587 ;
+    ch1_cfg_break_break_time <= \$659 ;
   always @(posedge clk)
-    ch1_cfg_ack_config_write <= \$588 ;
+    ch1_cfg_ack_config_write <= \$660 ;
   always @(posedge clk)
-    ch1_cfg_ack_ack_limit <= \$589 ;
+    ch1_cfg_ack_ack_limit <= \$661 ;
   always @(posedge clk)
-    ch1_cfg_timeout_config_write <= \$590 ;
+    ch1_cfg_timeout_config_write <= \$662 ;
   always @(posedge clk)
-    ch1_cfg_timeout_timeout_limit <= \$591 ;
+    ch1_cfg_timeout_timeout_limit <= \$663 ;
   always @(posedge clk)
-    ch1_cfg_words_config_write <= \$592 ;
+    ch1_cfg_words_config_write <= \$664 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_data_bits <= \$593 ;
+    ch1_cfg_words_w0_data_bits <= \$665 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_nenw <= \$594 ;
+    ch1_cfg_words_w0_nenw <= \$666 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_lc <= \$595 ;
+    ch1_cfg_words_w0_lc <= \$667 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_crc <= \$596 ;
+    ch1_cfg_words_w0_crc <= \$668 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_data_bits <= \$597 ;
+    ch1_cfg_words_w1_data_bits <= \$669 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_nenw <= \$598 ;
+    ch1_cfg_words_w1_nenw <= \$670 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_lc <= \$599 ;
+    ch1_cfg_words_w1_lc <= \$671 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_crc <= \$600 ;
+    ch1_cfg_words_w1_crc <= \$672 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_enable <= \$601 ;
+    ch1_cfg_words_w1_enable <= \$673 ;
   always @(posedge clk)
-    ch1_cfg_checks_config_write <= \$602 ;
+    ch1_cfg_checks_config_write <= \$674 ;
   always @(posedge clk)
-    ch1_cfg_checks_end_check <= \$603 ;
+    ch1_cfg_checks_end_check <= \$675 ;
   always @(posedge clk)
-    ch1_cfg_checks_spw_check <= \$604 ;
+    ch1_cfg_checks_spw_check <= \$676 ;
   always @(posedge clk)
-    ch1_cfg_checks_spw_tolerance <= \$605 ;
+    ch1_cfg_checks_spw_tolerance <= \$677 ;
   always @(posedge clk)
-    ch1_cfg_checks_noise_limit <= \$606 ;
+    ch1_cfg_checks_noise_limit <= \$678 ;
   always @(posedge clk)
-    ch1_cfg_checks_delay_tolerance <= \$607 ;
+    ch1_cfg_checks_delay_tolerance <= \$679 ;
   always @(posedge clk)
-    ch1_cfg_quiet_config_write <= \$608 ;
+    ch1_cfg_quiet_config_write <= \$680 ;
   always @(posedge clk)
-    ch1_cfg_quiet_quiet_time <= \$609 ;
+    ch1_cfg_quiet_quiet_time <= \$681 ;
   always @(posedge clk)
-    ch1_ca_request_config_write <= \$610 ;
+    ch1_cfg_crc0_config_write <= \$682 ;
   always @(posedge clk)
-    ch1_ca_request_slave_id <= \$611 ;
+    ch1_cfg_crc0_poly <= \$683 ;
   always @(posedge clk)
-    ch1_ca_request_address <= \$612 ;
+    ch1_cfg_crc0_width <= \$684 ;
   always @(posedge clk)
-    ch1_ca_request_count <= \$613 ;
+    ch1_cfg_crc0_inverted <= \$685 ;
   always @(posedge clk)
-    \ch1_ca_request_write$265  <= \$614 ;
+    ch1_cfg_crc0_start_config_write <= \$686 ;
   always @(posedge clk)
-    ch1_ca_ctrl_start <= \$615 ;
+    ch1_cfg_crc0_start_start <= \$687 ;
   always @(posedge clk)
-    ch1_ca_ctrl_abort <= \$616 ;
+    ch1_cfg_crc1_config_write <= \$688 ;
   always @(posedge clk)
-    ch1_read_select_100 <= \$617 ;
+    ch1_cfg_crc1_poly <= \$689 ;
   always @(posedge clk)
-    ch1_read_select_101 <= \$618 ;
+    ch1_cfg_crc1_width <= \$690 ;
   always @(posedge clk)
-    ch1_read_select_102 <= \$619 ;
+    ch1_cfg_crc1_inverted <= \$691 ;
   always @(posedge clk)
-    ch1_read_select_104 <= \$620 ;
+    ch1_cfg_crc1_start_config_write <= \$692 ;
   always @(posedge clk)
-    ch1_read_select_105 <= \$621 ;
+    ch1_cfg_crc1_start_start <= \$693 ;
   always @(posedge clk)
-    ch1_read_select_108 <= \$622 ;
+    ch1_ca_request_config_write <= \$694 ;
   always @(posedge clk)
-    ch1_read_select_109 <= \$623 ;
+    ch1_ca_request_slave_id <= \$695 ;
   always @(posedge clk)
-    ch1_read_select_10a <= \$624 ;
+    ch1_ca_request_address <= \$696 ;
   always @(posedge clk)
-    ch1_read_select_10b <= \$625 ;
+    ch1_ca_request_count <= \$697 ;
   always @(posedge clk)
-    ch1_read_select_10c <= \$626 ;
+    \ch1_ca_request_write$301  <= \$698 ;
   always @(posedge clk)
-    ch1_read_select_10d <= \$627 ;
+    ch1_ca_ctrl_start <= \$699 ;
   always @(posedge clk)
-    ch1_read_select_10e <= \$628 ;
+    ch1_ca_ctrl_abort <= \$700 ;
   always @(posedge clk)
-    ch1_read_select_10f <= \$629 ;
+    ch1_read_select_100 <= \$701 ;
   always @(posedge clk)
-    ch1_read_select_110 <= \$630 ;
+    ch1_read_select_101 <= \$702 ;
   always @(posedge clk)
-    ch1_read_select_111 <= \$631 ;
+    ch1_read_select_102 <= \$703 ;
   always @(posedge clk)
-    ch1_read_select_112 <= \$632 ;
+    ch1_read_select_104 <= \$704 ;
   always @(posedge clk)
-    ch1_read_select_113 <= \$633 ;
+    ch1_read_select_105 <= \$705 ;
   always @(posedge clk)
-    ch1_read_select_114 <= \$634 ;
+    ch1_read_select_108 <= \$706 ;
   always @(posedge clk)
-    ch1_read_select_115 <= \$635 ;
+    ch1_read_select_109 <= \$707 ;
   always @(posedge clk)
-    ch1_read_select_116 <= \$636 ;
+    ch1_read_select_10a <= \$708 ;
   always @(posedge clk)
-    ch1_read_select_117 <= \$637 ;
+    ch1_read_select_10b <= \$709 ;
   always @(posedge clk)
-    ch1_read_select_118 <= \$638 ;
+    ch1_read_select_10c <= \$710 ;
   always @(posedge clk)
-    ch1_read_select_119 <= \$639 ;
+    ch1_read_select_10d <= \$711 ;
   always @(posedge clk)
-    ch1_read_select_11a <= \$640 ;
+    ch1_read_select_10e <= \$712 ;
   always @(posedge clk)
-    ch1_read_select_11b <= \$641 ;
+    ch1_read_select_10f <= \$713 ;
   always @(posedge clk)
-    ch1_read_select_11c <= \$642 ;
+    ch1_read_select_110 <= \$714 ;
   always @(posedge clk)
-    ch1_read_select_11d <= \$643 ;
+    ch1_read_select_111 <= \$715 ;
   always @(posedge clk)
-    ch1_read_select_11e <= \$644 ;
+    ch1_read_select_112 <= \$716 ;
   always @(posedge clk)
-    ch1_read_select_11f <= \$645 ;
+    ch1_read_select_113 <= \$717 ;
   always @(posedge clk)
-    ch1_read_select_140 <= \$646 ;
+    ch1_read_select_114 <= \$718 ;
   always @(posedge clk)
-    ch1_read_select_141 <= \$647 ;
+    ch1_read_select_115 <= \$719 ;
   always @(posedge clk)
-    ch1_read_select_142 <= \$648 ;
+    ch1_read_select_116 <= \$720 ;
   always @(posedge clk)
-    ch1_read_select_143 <= \$649 ;
+    ch1_read_select_117 <= \$721 ;
   always @(posedge clk)
-    ch1_read_select_144 <= \$650 ;
+    ch1_read_select_118 <= \$722 ;
   always @(posedge clk)
-    ch1_read_select_145 <= \$651 ;
+    ch1_read_select_119 <= \$723 ;
   always @(posedge clk)
-    ch1_result_status_status_snapshot <= \$652 ;
+    ch1_read_select_11a <= \$724 ;
   always @(posedge clk)
-    ch1_result_status_cds_snapshot <= \$653 ;
+    ch1_read_select_11b <= \$725 ;
   always @(posedge clk)
-    ch1_result_status_w0_ne_snapshot <= \$654 ;
+    ch1_read_select_11c <= \$726 ;
   always @(posedge clk)
-    ch1_result_status_w0_nw_snapshot <= \$655 ;
+    ch1_read_select_11d <= \$727 ;
   always @(posedge clk)
-    ch1_result_status_w0_crc_ok_snapshot <= \$656 ;
+    ch1_read_select_11e <= \$728 ;
   always @(posedge clk)
-    ch1_result_status_w1_ne_snapshot <= \$657 ;
+    ch1_read_select_11f <= \$729 ;
   always @(posedge clk)
-    ch1_result_status_w1_nw_snapshot <= \$658 ;
+    ch1_read_select_120 <= \$730 ;
   always @(posedge clk)
-    ch1_result_status_w1_crc_ok_snapshot <= \$659 ;
+    ch1_read_select_121 <= \$731 ;
   always @(posedge clk)
-    ch1_result_status_lc_repeat_snapshot <= \$660 ;
+    ch1_read_select_122 <= \$732 ;
   always @(posedge clk)
-    ch1_result_status_lc_skip_snapshot <= \$661 ;
+    ch1_read_select_123 <= \$733 ;
   always @(posedge clk)
-    ch1_result_status_lc_zero_snapshot <= \$662 ;
+    ch1_read_select_140 <= \$734 ;
   always @(posedge clk)
-    ch1_result_status_spw_mismatch_snapshot <= \$663 ;
+    ch1_read_select_141 <= \$735 ;
   always @(posedge clk)
-    ch1_result_status_lc_snapshot <= \$664 ;
+    ch1_read_select_142 <= \$736 ;
   always @(posedge clk)
-    ch1_result_seq_seq_snapshot <= \$665 ;
+    ch1_read_select_143 <= \$737 ;
   always @(posedge clk)
-    ch1_result_seq_line_delay_snapshot <= \$666 ;
+    ch1_read_select_144 <= \$738 ;
   always @(posedge clk)
-    ch1_result_w0_lo_data_snapshot <= \$667 ;
+    ch1_read_select_145 <= \$739 ;
   always @(posedge clk)
-    ch1_result_w0_hi_data_snapshot <= \$668 ;
+    ch1_result_status_status_snapshot <= \$740 ;
   always @(posedge clk)
-    ch1_result_w1_lo_data_snapshot <= \$669 ;
+    ch1_result_status_cds_snapshot <= \$741 ;
   always @(posedge clk)
-    ch1_result_w1_hi_data_snapshot <= \$670 ;
+    ch1_result_status_w0_ne_snapshot <= \$742 ;
   always @(posedge clk)
-    ch1_result_timestamp_time_snapshot <= \$671 ;
+    ch1_result_status_w0_nw_snapshot <= \$743 ;
   always @(posedge clk)
-    ch1_result_line_noise_events_snapshot <= \$672 ;
+    ch1_result_status_w0_crc_ok_snapshot <= \$744 ;
   always @(posedge clk)
-    ch1_result_line_delay_settled_snapshot <= \$673 ;
+    ch1_result_status_w1_ne_snapshot <= \$745 ;
   always @(posedge clk)
-    ch1_result_line_delay_spread_snapshot <= \$674 ;
+    ch1_result_status_w1_nw_snapshot <= \$746 ;
   always @(posedge clk)
-    ch1_result_line_settled_delay_snapshot <= \$675 ;
+    ch1_result_status_w1_crc_ok_snapshot <= \$747 ;
   always @(posedge clk)
-    ch1_window0_read <= \$676 ;
+    ch1_result_status_lc_repeat_snapshot <= \$748 ;
   always @(posedge clk)
-    ch1_read_data <= \$677 ;
+    ch1_result_status_lc_skip_snapshot <= \$749 ;
+  always @(posedge clk)
+    ch1_result_status_lc_zero_snapshot <= \$750 ;
+  always @(posedge clk)
+    ch1_result_status_spw_mismatch_snapshot <= \$751 ;
+  always @(posedge clk)
+    ch1_result_status_lc_snapshot <= \$752 ;
+  always @(posedge clk)
+    ch1_result_seq_seq_snapshot <= \$753 ;
+  always @(posedge clk)
+    ch1_result_seq_line_delay_snapshot <= \$754 ;
+  always @(posedge clk)
+    ch1_result_w0_lo_data_snapshot <= \$755 ;
+  always @(posedge clk)
+    ch1_result_w0_hi_data_snapshot <= \$756 ;
+  always @(posedge clk)
+    ch1_result_w1_lo_data_snapshot <= \$757 ;
+  always @(posedge clk)
+    ch1_result_w1_hi_data_snapshot <= \$758 ;
+  always @(posedge clk)
+    ch1_result_timestamp_time_snapshot <= \$759 ;
+  always @(posedge clk)
+    ch1_result_line_noise_events_snapshot <= \$760 ;
+  always @(posedge clk)
+    ch1_result_line_delay_settled_snapshot <= \$761 ;
+  always @(posedge clk)
+    ch1_result_line_delay_spread_snapshot <= \$762 ;
+  always @(posedge clk)
+    ch1_result_line_settled_delay_snapshot <= \$763 ;
+  always @(posedge clk)
+    ch1_window0_read <= \$764 ;
+  always @(posedge clk)
+    ch1_read_data <= \$765 ;
   assign \$1  = write_data[0] & write_strb[0];
   assign \$2  = g_trigger_write ? \$1  : 1'h0;
   assign \$3  = ! bus__r_addr;
@@ -3128,881 +3600,240 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   assign \$64  = ch0_cfg_checks_config_write & config_write_strb[2];
   assign \$65  = ch0_cfg_quiet_config_write & config_write_strb[0];
   assign \$66  = ch0_cfg_quiet_config_write & config_write_strb[1];
-  assign \$67  = ch0_ca_request_config_write & config_write_strb[0];
-  assign \$68  = ch0_ca_request_config_write & config_write_strb[1];
-  assign \$69  = ch0_ca_request_config_write & config_write_strb[2];
-  assign \$70  = ch0_ca_request_config_write & config_write_strb[3];
-  assign \$71  = write_data[0] & write_strb[0];
-  assign \$72  = ch0_ca_ctrl_write ? \$71  : 1'h0;
-  assign \$73  = write_data[1] & write_strb[0];
-  assign \$74  = ch0_ca_ctrl_write ? \$73  : 1'h0;
-  assign \$75  = bus__r_addr == 8'h80;
-  assign \$76  = bus__r_addr == 8'h81;
-  assign \$77  = bus__r_addr == 8'h82;
-  assign \$78  = bus__r_addr == 8'h84;
-  assign \$79  = bus__r_addr == 8'h85;
-  assign \$80  = bus__r_addr == 8'h88;
-  assign \$81  = bus__r_addr == 8'h89;
-  assign \$82  = bus__r_addr == 8'h8a;
-  assign \$83  = bus__r_addr == 8'h8b;
-  assign \$84  = bus__r_addr == 8'h8c;
-  assign \$85  = bus__r_addr == 8'h8d;
-  assign \$86  = bus__r_addr == 8'h8e;
-  assign \$87  = bus__r_addr == 8'h8f;
-  assign \$88  = bus__r_addr == 8'h90;
-  assign \$89  = bus__r_addr == 8'h91;
-  assign \$90  = bus__r_addr == 8'h92;
-  assign \$91  = bus__r_addr == 8'h93;
-  assign \$92  = bus__r_addr == 8'h94;
-  assign \$93  = bus__r_addr == 8'h95;
-  assign \$94  = bus__r_addr == 8'h96;
-  assign \$95  = bus__r_addr == 8'h97;
-  assign \$96  = bus__r_addr == 8'h98;
-  assign \$97  = bus__r_addr == 8'h99;
-  assign \$98  = bus__r_addr == 8'h9a;
-  assign \$99  = bus__r_addr == 8'h9b;
-  assign \$100  = bus__r_addr == 8'h9c;
-  assign \$101  = bus__r_addr == 8'h9d;
-  assign \$102  = bus__r_addr == 8'h9e;
-  assign \$103  = bus__r_addr == 8'h9f;
-  assign \$104  = bus__r_addr == 8'hc0;
-  assign \$105  = bus__r_addr == 8'hc1;
-  assign \$106  = bus__r_addr == 8'hc2;
-  assign \$107  = bus__r_addr == 8'hc3;
-  assign \$108  = bus__r_addr == 8'hc4;
-  assign \$109  = bus__r_addr == 8'hc5;
-  assign \$110  = ch0_read_select_90 & bus__r_load;
-  assign \$111  = bus__r_addr[10:4] == 4'he;
-  assign \$112  = bus__r_en & \$111 ;
-  assign \$113  = ch0_read_select_80 ? { 22'h000000, ch0_ctrl_trigger_enable, ch0_ctrl_periodic, 8'h00 } : 32'd0;
-  assign \$115  = ch0_read_select_81 ? { 30'h00000000, ch0__config_error, ch0__busy } : 32'd0;
-  assign \$116  = \$114  | \$115 ;
-  assign \$117  = ch0_read_select_82 ? 32'd119023671 : 32'd0;
-  assign \$118  = \$116  | \$117 ;
-  assign \$119  = ch0_read_select_84 ? { 29'h00000000, ch0_irq_status_access_done, ch0_irq_status_error, ch0_irq_status_done } : 32'd0;
-  assign \$120  = \$118  | \$119 ;
-  assign \$121  = ch0_read_select_85 ? { 29'h00000000, ch0_irq_enable_access_done, ch0_irq_enable_error, ch0_irq_enable_done } : 32'd0;
-  assign \$122  = \$120  | \$121 ;
-  assign \$123  = ch0_read_select_88 ? { 4'h0, ch0_cfg_ma_delay_limit, ch0_cfg_ma_ma_half_period } : 32'd0;
-  assign \$124  = \$122  | \$123 ;
-  assign \$125  = ch0_read_select_89 ? { 8'h00, ch0_cfg_period_request_period } : 32'd0;
-  assign \$126  = \$124  | \$125 ;
-  assign \$127  = ch0_read_select_8a ? { 8'h00, ch0_cfg_break_break_time } : 32'd0;
-  assign \$128  = \$126  | \$127 ;
-  assign \$129  = ch0_read_select_8b ? { 8'h00, ch0_cfg_ack_ack_limit } : 32'd0;
-  assign \$130  = \$128  | \$129 ;
-  assign \$131  = ch0_read_select_8c ? { 8'h00, ch0_cfg_timeout_timeout_limit } : 32'd0;
+  assign \$67  = ch0_cfg_crc0_config_write & config_write_strb[0];
+  assign \$68  = ch0_cfg_crc0_config_write & config_write_strb[1];
+  assign \$69  = ch0_cfg_crc0_config_write & config_write_strb[2];
+  assign \$70  = ch0_cfg_crc0_config_write & config_write_strb[3];
+  assign \$71  = ch0_cfg_crc0_start_config_write & config_write_strb[0];
+  assign \$72  = ch0_cfg_crc0_start_config_write & config_write_strb[1];
+  assign \$73  = ch0_cfg_crc1_config_write & config_write_strb[0];
+  assign \$74  = ch0_cfg_crc1_config_write & config_write_strb[1];
+  assign \$75  = ch0_cfg_crc1_config_write & config_write_strb[2];
+  assign \$76  = ch0_cfg_crc1_config_write & config_write_strb[3];
+  assign \$77  = ch0_cfg_crc1_start_config_write & config_write_strb[0];
+  assign \$78  = ch0_cfg_crc1_start_config_write & config_write_strb[1];
+  assign \$79  = ch0_ca_request_config_write & config_write_strb[0];
+  assign \$80  = ch0_ca_request_config_write & config_write_strb[1];
+  assign \$81  = ch0_ca_request_config_write & config_write_strb[2];
+  assign \$82  = ch0_ca_request_config_write & config_write_strb[3];
+  assign \$83  = write_data[0] & write_strb[0];
+  assign \$84  = ch0_ca_ctrl_write ? \$83  : 1'h0;
+  assign \$85  = write_data[1] & write_strb[0];
+  assign \$86  = ch0_ca_ctrl_write ? \$85  : 1'h0;
+  assign \$87  = bus__r_addr == 8'h80;
+  assign \$88  = bus__r_addr == 8'h81;
+  assign \$89  = bus__r_addr == 8'h82;
+  assign \$90  = bus__r_addr == 8'h84;
+  assign \$91  = bus__r_addr == 8'h85;
+  assign \$92  = bus__r_addr == 8'h88;
+  assign \$93  = bus__r_addr == 8'h89;
+  assign \$94  = bus__r_addr == 8'h8a;
+  assign \$95  = bus__r_addr == 8'h8b;
+  assign \$96  = bus__r_addr == 8'h8c;
+  assign \$97  = bus__r_addr == 8'h8d;
+  assign \$98  = bus__r_addr == 8'h8e;
+  assign \$99  = bus__r_addr == 8'h8f;
+  assign \$100  = bus__r_addr == 8'h90;
+  assign \$101  = bus__r_addr == 8'h91;
+  assign \$102  = bus__r_addr == 8'h92;
+  assign \$103  = bus__r_addr == 8'h93;
+  assign \$104  = bus__r_addr == 8'h94;
+  assign \$105  = bus__r_addr == 8'h95;
+  assign \$106  = bus__r_addr == 8'h96;
+  assign \$107  = bus__r_addr == 8'h97;
+  assign \$108  = bus__r_addr == 8'h98;
+  assign \$109  = bus__r_addr == 8'h99;
+  assign \$110  = bus__r_addr == 8'h9a;
+  assign \$111  = bus__r_addr == 8'h9b;
+  assign \$112  = bus__r_addr == 8'h9c;
+  assign \$113  = bus__r_addr == 8'h9d;
+  assign \$114  = bus__r_addr == 8'h9e;
+  assign \$115  = bus__r_addr == 8'h9f;
+  assign \$116  = bus__r_addr == 8'ha0;
+  assign \$117  = bus__r_addr == 8'ha1;
+  assign \$118  = bus__r_addr == 8'ha2;
+  assign \$119  = bus__r_addr == 8'ha3;
+  assign \$120  = bus__r_addr == 8'hc0;
+  assign \$121  = bus__r_addr == 8'hc1;
+  assign \$122  = bus__r_addr == 8'hc2;
+  assign \$123  = bus__r_addr == 8'hc3;
+  assign \$124  = bus__r_addr == 8'hc4;
+  assign \$125  = bus__r_addr == 8'hc5;
+  assign \$126  = ch0_read_select_90 & bus__r_load;
+  assign \$127  = bus__r_addr[10:4] == 4'he;
+  assign \$128  = bus__r_en & \$127 ;
+  assign \$129  = ch0_read_select_80 ? { 22'h000000, ch0_ctrl_trigger_enable, ch0_ctrl_periodic, 8'h00 } : 32'd0;
+  assign \$131  = ch0_read_select_81 ? { 30'h00000000, ch0__config_error, ch0__busy } : 32'd0;
   assign \$132  = \$130  | \$131 ;
-  assign \$133  = ch0_read_select_8d ? { ch0_cfg_words_w1_enable, 5'h00, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_data_bits, 6'h00, ch0_cfg_words_w0_crc, ch0_cfg_words_w0_lc, ch0_cfg_words_w0_nenw, ch0_cfg_words_w0_data_bits } : 32'd0;
+  assign \$133  = ch0_read_select_82 ? 32'd119023671 : 32'd0;
   assign \$134  = \$132  | \$133 ;
-  assign \$135  = ch0_read_select_8e ? { 8'h00, ch0_cfg_checks_delay_tolerance, ch0_cfg_checks_noise_limit, ch0_cfg_checks_spw_tolerance, 6'h00, ch0_cfg_checks_spw_check, ch0_cfg_checks_end_check } : 32'd0;
+  assign \$135  = ch0_read_select_84 ? { 29'h00000000, ch0_irq_status_access_done, ch0_irq_status_error, ch0_irq_status_done } : 32'd0;
   assign \$136  = \$134  | \$135 ;
-  assign \$137  = ch0_read_select_8f ? { 20'h00000, ch0_cfg_quiet_quiet_time } : 32'd0;
+  assign \$137  = ch0_read_select_85 ? { 29'h00000000, ch0_irq_enable_access_done, ch0_irq_enable_error, ch0_irq_enable_done } : 32'd0;
   assign \$138  = \$136  | \$137 ;
-  assign \$139  = ch0_read_select_90 ? { 2'h0, \port$5134$0 [182:177], 4'h0, \port$5134$0 [186:183], 1'h0, \port$5134$0 [176:174], 1'h0, \port$5134$0 [133:131], 3'h0, \port$5134$0 [49], \port$5134$0 [3:0] } : 32'd0;
+  assign \$139  = ch0_read_select_88 ? { 4'h0, ch0_cfg_ma_delay_limit, ch0_cfg_ma_ma_half_period } : 32'd0;
   assign \$140  = \$138  | \$139 ;
-  assign \$141  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
+  assign \$141  = ch0_read_select_89 ? { 8'h00, ch0_cfg_period_request_period } : 32'd0;
   assign \$142  = \$140  | \$141 ;
-  assign \$143  = ch0_read_select_92 ? ch0_result_w0_lo_data_snapshot : 32'd0;
+  assign \$143  = ch0_read_select_8a ? { 8'h00, ch0_cfg_break_break_time } : 32'd0;
   assign \$144  = \$142  | \$143 ;
-  assign \$145  = ch0_read_select_93 ? { 9'h000, ch0_result_w0_hi_data_snapshot } : 32'd0;
+  assign \$145  = ch0_read_select_8b ? { 8'h00, ch0_cfg_ack_ack_limit } : 32'd0;
   assign \$146  = \$144  | \$145 ;
-  assign \$147  = ch0_read_select_94 ? ch0_result_w1_lo_data_snapshot : 32'd0;
+  assign \$147  = ch0_read_select_8c ? { 8'h00, ch0_cfg_timeout_timeout_limit } : 32'd0;
   assign \$148  = \$146  | \$147 ;
-  assign \$149  = ch0_read_select_95 ? { 24'h000000, ch0_result_w1_hi_data_snapshot } : 32'd0;
+  assign \$149  = ch0_read_select_8d ? { ch0_cfg_words_w1_enable, 5'h00, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_data_bits, 6'h00, ch0_cfg_words_w0_crc, ch0_cfg_words_w0_lc, ch0_cfg_words_w0_nenw, ch0_cfg_words_w0_data_bits } : 32'd0;
   assign \$150  = \$148  | \$149 ;
-  assign \$151  = ch0_read_select_96 ? ch0_result_timestamp_time_snapshot : 32'd0;
+  assign \$151  = ch0_read_select_8e ? { 8'h00, ch0_cfg_checks_delay_tolerance, ch0_cfg_checks_noise_limit, ch0_cfg_checks_spw_tolerance, 6'h00, ch0_cfg_checks_spw_check, ch0_cfg_checks_end_check } : 32'd0;
   assign \$152  = \$150  | \$151 ;
-  assign \$153  = ch0_read_select_97 ? { 3'h0, ch0_result_line_settled_delay_snapshot, ch0_result_line_delay_spread_snapshot, 3'h0, ch0_result_line_delay_settled_snapshot, ch0_result_line_noise_events_snapshot } : 32'd0;
+  assign \$153  = ch0_read_select_8f ? { 20'h00000, ch0_cfg_quiet_quiet_time } : 32'd0;
   assign \$154  = \$152  | \$153 ;
-  assign \$155  = ch0_read_select_98 ? \port$5147$0 [31:0] : 32'd0;
+  assign \$155  = ch0_read_select_90 ? { 2'h0, \port$5310$0 [182:177], 4'h0, \port$5310$0 [186:183], 1'h0, \port$5310$0 [176:174], 1'h0, \port$5310$0 [133:131], 3'h0, \port$5310$0 [49], \port$5310$0 [3:0] } : 32'd0;
   assign \$156  = \$154  | \$155 ;
-  assign \$157  = ch0_read_select_99 ? \port$5147$0 [63:32] : 32'd0;
+  assign \$157  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
   assign \$158  = \$156  | \$157 ;
-  assign \$159  = ch0_read_select_9a ? \port$5147$0 [95:64] : 32'd0;
+  assign \$159  = ch0_read_select_92 ? ch0_result_w0_lo_data_snapshot : 32'd0;
   assign \$160  = \$158  | \$159 ;
-  assign \$161  = ch0_read_select_9b ? \port$5147$0 [127:96] : 32'd0;
+  assign \$161  = ch0_read_select_93 ? { 9'h000, ch0_result_w0_hi_data_snapshot } : 32'd0;
   assign \$162  = \$160  | \$161 ;
-  assign \$163  = ch0_read_select_9c ? \port$5147$0 [159:128] : 32'd0;
+  assign \$163  = ch0_read_select_94 ? ch0_result_w1_lo_data_snapshot : 32'd0;
   assign \$164  = \$162  | \$163 ;
-  assign \$165  = ch0_read_select_9d ? \port$5147$0 [191:160] : 32'd0;
+  assign \$165  = ch0_read_select_95 ? { 24'h000000, ch0_result_w1_hi_data_snapshot } : 32'd0;
   assign \$166  = \$164  | \$165 ;
-  assign \$167  = ch0_read_select_9e ? \port$5147$0 [223:192] : 32'd0;
+  assign \$167  = ch0_read_select_96 ? ch0_result_timestamp_time_snapshot : 32'd0;
   assign \$168  = \$166  | \$167 ;
-  assign \$169  = ch0_read_select_9f ? \port$5147$0 [255:224] : 32'd0;
+  assign \$169  = ch0_read_select_97 ? { 3'h0, ch0_result_line_settled_delay_snapshot, ch0_result_line_delay_spread_snapshot, 3'h0, ch0_result_line_delay_settled_snapshot, ch0_result_line_noise_events_snapshot } : 32'd0;
   assign \$170  = \$168  | \$169 ;
-  assign \$171  = ch0_read_select_c0 ? { 7'h00, \ch0_ca_request_write$85 , 1'h0, ch0_ca_request_count, 1'h0, ch0_ca_request_address, 5'h00, ch0_ca_request_slave_id } : 32'd0;
+  assign \$171  = ch0_read_select_98 ? \port$5323$0 [31:0] : 32'd0;
   assign \$172  = \$170  | \$171 ;
-  assign \$175  = ch0_read_select_c2 ? { 17'h00000, \port$5279$0 [9:3], 1'h0, \port$5279$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
+  assign \$173  = ch0_read_select_99 ? \port$5323$0 [63:32] : 32'd0;
+  assign \$174  = \$172  | \$173 ;
+  assign \$175  = ch0_read_select_9a ? \port$5323$0 [95:64] : 32'd0;
   assign \$176  = \$174  | \$175 ;
-  assign \$177  = ch0_read_select_c3 ? \port$5147$0 [287:256] : 32'd0;
+  assign \$177  = ch0_read_select_9b ? \port$5323$0 [127:96] : 32'd0;
   assign \$178  = \$176  | \$177 ;
-  assign \$179  = ch0_read_select_c4 ? \port$5147$0 [319:288] : 32'd0;
+  assign \$179  = ch0_read_select_9c ? \port$5323$0 [159:128] : 32'd0;
   assign \$180  = \$178  | \$179 ;
-  assign \$181  = ch0_read_select_c5 ? { 16'h0000, \port$5147$0 [335:320] } : 32'd0;
+  assign \$181  = ch0_read_select_9d ? \port$5323$0 [191:160] : 32'd0;
   assign \$182  = \$180  | \$181 ;
-  assign \$183  = ch0_window0_read ? ch0__ca_rbuf_data : 32'd0;
+  assign \$183  = ch0_read_select_9e ? \port$5323$0 [223:192] : 32'd0;
   assign \$184  = \$182  | \$183 ;
-  assign \$185  = write_data[0] & write_strb[0];
-  assign \$186  = ch1_ctrl_write ? \$185  : 1'h0;
-  assign \$187  = write_data[1] & write_strb[0];
-  assign \$188  = ch1_ctrl_write ? \$187  : 1'h0;
-  assign \$189  = write_data[2] & write_strb[0];
-  assign \$190  = ch1_ctrl_write ? \$189  : 1'h0;
-  assign \$191  = ch1_ctrl_write & write_strb[1];
-  assign \$192  = ch1_ctrl_write & write_strb[1];
-  assign \$193  = write_data[0] & write_strb[0];
-  assign \$194  = ch1_irq_status_write ? \$193  : 1'h0;
-  assign \$195  = write_data[1] & write_strb[0];
-  assign \$196  = ch1_irq_status_write ? \$195  : 1'h0;
-  assign \$197  = write_data[2] & write_strb[0];
-  assign \$198  = ch1_irq_status_write ? \$197  : 1'h0;
-  assign \$199  = ch1_irq_enable_config_write & config_write_strb[0];
-  assign \$200  = ch1_irq_enable_config_write & config_write_strb[0];
-  assign \$201  = ch1_irq_enable_config_write & config_write_strb[0];
-  assign \$202  = ch1_cfg_ma_config_write & config_write_strb[0];
-  assign \$203  = ch1_cfg_ma_config_write & config_write_strb[1];
-  assign \$204  = ch1_cfg_ma_config_write & config_write_strb[2];
-  assign \$205  = ch1_cfg_ma_config_write & config_write_strb[3];
-  assign \$206  = ch1_cfg_period_config_write & config_write_strb[0];
-  assign \$207  = ch1_cfg_period_config_write & config_write_strb[1];
-  assign \$208  = ch1_cfg_period_config_write & config_write_strb[2];
-  assign \$209  = ch1_cfg_break_config_write & config_write_strb[0];
-  assign \$210  = ch1_cfg_break_config_write & config_write_strb[1];
-  assign \$211  = ch1_cfg_break_config_write & config_write_strb[2];
-  assign \$212  = ch1_cfg_ack_config_write & config_write_strb[0];
-  assign \$213  = ch1_cfg_ack_config_write & config_write_strb[1];
-  assign \$214  = ch1_cfg_ack_config_write & config_write_strb[2];
-  assign \$215  = ch1_cfg_timeout_config_write & config_write_strb[0];
-  assign \$216  = ch1_cfg_timeout_config_write & config_write_strb[1];
-  assign \$217  = ch1_cfg_timeout_config_write & config_write_strb[2];
-  assign \$218  = ch1_cfg_words_config_write & config_write_strb[0];
-  assign \$219  = ch1_cfg_words_config_write & config_write_strb[0];
-  assign \$220  = ch1_cfg_words_config_write & config_write_strb[0];
-  assign \$221  = ch1_cfg_words_config_write & config_write_strb[1];
-  assign \$222  = ch1_cfg_words_config_write & config_write_strb[2];
-  assign \$223  = ch1_cfg_words_config_write & config_write_strb[2];
-  assign \$224  = ch1_cfg_words_config_write & config_write_strb[2];
-  assign \$225  = ch1_cfg_words_config_write & config_write_strb[3];
-  assign \$226  = ch1_cfg_words_config_write & config_write_strb[3];
-  assign \$227  = ch1_cfg_checks_config_write & config_write_strb[0];
-  assign \$228  = ch1_cfg_checks_config_write & config_write_strb[0];
-  assign \$229  = ch1_cfg_checks_config_write & config_write_strb[1];
-  assign \$230  = ch1_cfg_checks_config_write & config_write_strb[2];
-  assign \$231  = ch1_cfg_checks_config_write & config_write_strb[2];
-  assign \$232  = ch1_cfg_quiet_config_write & config_write_strb[0];
-  assign \$233  = ch1_cfg_quiet_config_write & config_write_strb[1];
-  assign \$234  = ch1_ca_request_config_write & config_write_strb[0];
-  assign \$235  = ch1_ca_request_config_write & config_write_strb[1];
-  assign \$236  = ch1_ca_request_config_write & config_write_strb[2];
-  assign \$237  = ch1_ca_request_config_write & config_write_strb[3];
-  assign \$238  = write_data[0] & write_strb[0];
-  assign \$239  = ch1_ca_ctrl_write ? \$238  : 1'h0;
-  assign \$240  = write_data[1] & write_strb[0];
-  assign \$241  = ch1_ca_ctrl_write ? \$240  : 1'h0;
-  assign \$242  = bus__r_addr == 9'h100;
-  assign \$243  = bus__r_addr == 9'h101;
-  assign \$244  = bus__r_addr == 9'h102;
-  assign \$245  = bus__r_addr == 9'h104;
-  assign \$246  = bus__r_addr == 9'h105;
-  assign \$247  = bus__r_addr == 9'h108;
-  assign \$248  = bus__r_addr == 9'h109;
-  assign \$249  = bus__r_addr == 9'h10a;
-  assign \$250  = bus__r_addr == 9'h10b;
-  assign \$251  = bus__r_addr == 9'h10c;
-  assign \$252  = bus__r_addr == 9'h10d;
-  assign \$253  = bus__r_addr == 9'h10e;
-  assign \$254  = bus__r_addr == 9'h10f;
-  assign \$255  = bus__r_addr == 9'h110;
-  assign \$256  = bus__r_addr == 9'h111;
-  assign \$257  = bus__r_addr == 9'h112;
-  assign \$258  = bus__r_addr == 9'h113;
-  assign \$259  = bus__r_addr == 9'h114;
-  assign \$260  = bus__r_addr == 9'h115;
-  assign \$261  = bus__r_addr == 9'h116;
-  assign \$262  = bus__r_addr == 9'h117;
-  assign \$263  = bus__r_addr == 9'h118;
-  assign \$264  = bus__r_addr == 9'h119;
-  assign \$265  = bus__r_addr == 9'h11a;
-  assign \$266  = bus__r_addr == 9'h11b;
-  assign \$267  = bus__r_addr == 9'h11c;
-  assign \$268  = bus__r_addr == 9'h11d;
-  assign \$269  = bus__r_addr == 9'h11e;
-  assign \$270  = bus__r_addr == 9'h11f;
-  assign \$271  = bus__r_addr == 9'h140;
-  assign \$272  = bus__r_addr == 9'h141;
-  assign \$273  = bus__r_addr == 9'h142;
-  assign \$274  = bus__r_addr == 9'h143;
-  assign \$275  = bus__r_addr == 9'h144;
-  assign \$276  = bus__r_addr == 9'h145;
-  assign \$277  = ch1_read_select_110 & bus__r_load;
-  assign \$278  = bus__r_addr[10:4] == 5'h16;
-  assign \$279  = bus__r_en & \$278 ;
-  assign \$280  = ch1_read_select_100 ? { 22'h000000, ch1_ctrl_trigger_enable, ch1_ctrl_periodic, 8'h00 } : 32'd0;
-  assign \$282  = ch1_read_select_101 ? { 30'h00000000, ch1__config_error, ch1__busy } : 32'd0;
-  assign \$283  = \$281  | \$282 ;
-  assign \$284  = ch1_read_select_102 ? 32'd119023671 : 32'd0;
-  assign \$285  = \$283  | \$284 ;
-  assign \$286  = ch1_read_select_104 ? { 29'h00000000, ch1_irq_status_access_done, ch1_irq_status_error, ch1_irq_status_done } : 32'd0;
-  assign \$287  = \$285  | \$286 ;
-  assign \$288  = ch1_read_select_105 ? { 29'h00000000, ch1_irq_enable_access_done, ch1_irq_enable_error, ch1_irq_enable_done } : 32'd0;
-  assign \$289  = \$287  | \$288 ;
-  assign \$290  = ch1_read_select_108 ? { 4'h0, ch1_cfg_ma_delay_limit, ch1_cfg_ma_ma_half_period } : 32'd0;
-  assign \$291  = \$289  | \$290 ;
-  assign \$292  = ch1_read_select_109 ? { 8'h00, ch1_cfg_period_request_period } : 32'd0;
-  assign \$293  = \$291  | \$292 ;
-  assign \$294  = ch1_read_select_10a ? { 8'h00, ch1_cfg_break_break_time } : 32'd0;
-  assign \$295  = \$293  | \$294 ;
-  assign \$296  = ch1_read_select_10b ? { 8'h00, ch1_cfg_ack_ack_limit } : 32'd0;
-  assign \$297  = \$295  | \$296 ;
-  assign \$298  = ch1_read_select_10c ? { 8'h00, ch1_cfg_timeout_timeout_limit } : 32'd0;
-  assign \$299  = \$297  | \$298 ;
-  assign \$300  = ch1_read_select_10d ? { ch1_cfg_words_w1_enable, 5'h00, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_data_bits, 6'h00, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_data_bits } : 32'd0;
-  assign \$301  = \$299  | \$300 ;
-  assign \$302  = ch1_read_select_10e ? { 8'h00, ch1_cfg_checks_delay_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_spw_tolerance, 6'h00, ch1_cfg_checks_spw_check, ch1_cfg_checks_end_check } : 32'd0;
-  assign \$303  = \$301  | \$302 ;
-  assign \$304  = ch1_read_select_10f ? { 20'h00000, ch1_cfg_quiet_quiet_time } : 32'd0;
-  assign \$305  = \$303  | \$304 ;
-  assign \$306  = ch1_read_select_110 ? { 2'h0, \port$5685$0 [182:177], 4'h0, \port$5685$0 [186:183], 1'h0, \port$5685$0 [176:174], 1'h0, \port$5685$0 [133:131], 3'h0, \port$5685$0 [49], \port$5685$0 [3:0] } : 32'd0;
-  assign \$307  = \$305  | \$306 ;
-  assign \$308  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
-  assign \$309  = \$307  | \$308 ;
-  assign \$310  = ch1_read_select_112 ? ch1_result_w0_lo_data_snapshot : 32'd0;
-  assign \$311  = \$309  | \$310 ;
-  assign \$312  = ch1_read_select_113 ? { 9'h000, ch1_result_w0_hi_data_snapshot } : 32'd0;
-  assign \$313  = \$311  | \$312 ;
-  assign \$314  = ch1_read_select_114 ? ch1_result_w1_lo_data_snapshot : 32'd0;
-  assign \$315  = \$313  | \$314 ;
-  assign \$316  = ch1_read_select_115 ? { 24'h000000, ch1_result_w1_hi_data_snapshot } : 32'd0;
-  assign \$317  = \$315  | \$316 ;
-  assign \$318  = ch1_read_select_116 ? ch1_result_timestamp_time_snapshot : 32'd0;
-  assign \$319  = \$317  | \$318 ;
-  assign \$320  = ch1_read_select_117 ? { 3'h0, ch1_result_line_settled_delay_snapshot, ch1_result_line_delay_spread_snapshot, 3'h0, ch1_result_line_delay_settled_snapshot, ch1_result_line_noise_events_snapshot } : 32'd0;
-  assign \$321  = \$319  | \$320 ;
-  assign \$322  = ch1_read_select_118 ? \port$5698$0 [31:0] : 32'd0;
+  assign \$185  = ch0_read_select_9f ? \port$5323$0 [255:224] : 32'd0;
+  assign \$186  = \$184  | \$185 ;
+  assign \$187  = ch0_read_select_a0 ? { 7'h00, ch0_cfg_crc0_inverted, 3'h0, ch0_cfg_crc0_width, ch0_cfg_crc0_poly } : 32'd0;
+  assign \$188  = \$186  | \$187 ;
+  assign \$189  = ch0_read_select_a1 ? { 16'h0000, ch0_cfg_crc0_start_start } : 32'd0;
+  assign \$190  = \$188  | \$189 ;
+  assign \$191  = ch0_read_select_a2 ? { 7'h00, ch0_cfg_crc1_inverted, 3'h0, ch0_cfg_crc1_width, ch0_cfg_crc1_poly } : 32'd0;
+  assign \$192  = \$190  | \$191 ;
+  assign \$193  = ch0_read_select_a3 ? { 16'h0000, ch0_cfg_crc1_start_start } : 32'd0;
+  assign \$194  = \$192  | \$193 ;
+  assign \$195  = ch0_read_select_c0 ? { 7'h00, \ch0_ca_request_write$101 , 1'h0, ch0_ca_request_count, 1'h0, ch0_ca_request_address, 5'h00, ch0_ca_request_slave_id } : 32'd0;
+  assign \$196  = \$194  | \$195 ;
+  assign \$199  = ch0_read_select_c2 ? { 17'h00000, \port$5455$0 [9:3], 1'h0, \port$5455$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
+  assign \$200  = \$198  | \$199 ;
+  assign \$201  = ch0_read_select_c3 ? \port$5323$0 [287:256] : 32'd0;
+  assign \$202  = \$200  | \$201 ;
+  assign \$203  = ch0_read_select_c4 ? \port$5323$0 [319:288] : 32'd0;
+  assign \$204  = \$202  | \$203 ;
+  assign \$205  = ch0_read_select_c5 ? { 16'h0000, \port$5323$0 [335:320] } : 32'd0;
+  assign \$206  = \$204  | \$205 ;
+  assign \$207  = ch0_window0_read ? ch0__ca_rbuf_data : 32'd0;
+  assign \$208  = \$206  | \$207 ;
+  assign \$209  = write_data[0] & write_strb[0];
+  assign \$210  = ch1_ctrl_write ? \$209  : 1'h0;
+  assign \$211  = write_data[1] & write_strb[0];
+  assign \$212  = ch1_ctrl_write ? \$211  : 1'h0;
+  assign \$213  = write_data[2] & write_strb[0];
+  assign \$214  = ch1_ctrl_write ? \$213  : 1'h0;
+  assign \$215  = ch1_ctrl_write & write_strb[1];
+  assign \$216  = ch1_ctrl_write & write_strb[1];
+  assign \$217  = write_data[0] & write_strb[0];
+  assign \$218  = ch1_irq_status_write ? \$217  : 1'h0;
+  assign \$219  = write_data[1] & write_strb[0];
+  assign \$220  = ch1_irq_status_write ? \$219  : 1'h0;
+  assign \$221  = write_data[2] & write_strb[0];
+  assign \$222  = ch1_irq_status_write ? \$221  : 1'h0;
+  assign \$223  = ch1_irq_enable_config_write & config_write_strb[0];
+  assign \$224  = ch1_irq_enable_config_write & config_write_strb[0];
+  assign \$225  = ch1_irq_enable_config_write & config_write_strb[0];
+  assign \$226  = ch1_cfg_ma_config_write & config_write_strb[0];
+  assign \$227  = ch1_cfg_ma_config_write & config_write_strb[1];
+  assign \$228  = ch1_cfg_ma_config_write & config_write_strb[2];
+  assign \$229  = ch1_cfg_ma_config_write & config_write_strb[3];
+  assign \$230  = ch1_cfg_period_config_write & config_write_strb[0];
+  assign \$231  = ch1_cfg_period_config_write & config_write_strb[1];
+  assign \$232  = ch1_cfg_period_config_write & config_write_strb[2];
+  assign \$233  = ch1_cfg_break_config_write & config_write_strb[0];
+  assign \$234  = ch1_cfg_break_config_write & config_write_strb[1];
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$447  = bus__w_en;
+    \$503  = bus__w_en;
     if (rst) begin
-      \$447  = 1'h0;
+      \$503  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$448  = write_addr;
+    \$504  = write_addr;
     if (bus__w_en) begin
-      \$448  = bus__w_addr;
+      \$504  = bus__w_addr;
     end
     if (rst) begin
-      \$448  = 11'h000;
+      \$504  = 11'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$449  = write_data;
+    \$505  = write_data;
     if (bus__w_en) begin
-      \$449  = bus__w_data;
+      \$505  = bus__w_data;
     end
     if (rst) begin
-      \$449  = 32'd0;
+      \$505  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$450  = write_strb;
+    \$506  = write_strb;
     if (bus__w_en) begin
-      \$450  = 4'hf;
+      \$506  = 4'hf;
     end
     if (rst) begin
-      \$450  = 4'h0;
+      \$506  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$451  = config_write_data;
+    \$507  = config_write_data;
     if (write_en) begin
-      \$451  = write_data;
+      \$507  = write_data;
     end
     if (rst) begin
-      \$451  = 32'd0;
+      \$507  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$452  = config_write_strb;
+    \$508  = config_write_strb;
     if (write_en) begin
-      \$452  = write_strb;
+      \$508  = write_strb;
     end
     if (rst) begin
-      \$452  = 4'h0;
+      \$508  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$453  = \$2 ;
-    if (rst) begin
-      \$453  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$454  = g_read_select_0;
-    if (bus__r_en) begin
-      \$454  = \$3 ;
-    end
-    if (rst) begin
-      \$454  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$455  = g_read_select_1;
-    if (bus__r_en) begin
-      \$455  = \$4 ;
-    end
-    if (rst) begin
-      \$455  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$456  = g_read_select_2;
-    if (bus__r_en) begin
-      \$456  = \$5 ;
-    end
-    if (rst) begin
-      \$456  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$457  = g_read_select_3;
-    if (bus__r_en) begin
-      \$457  = \$6 ;
-    end
-    if (rst) begin
-      \$457  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$458  = g_read_select_4;
-    if (bus__r_en) begin
-      \$458  = \$7 ;
-    end
-    if (rst) begin
-      \$458  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$459  = g_read_data;
-    if (bus__r_load) begin
-      \$459  = \$17 ;
-    end
-    if (rst) begin
-      \$459  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$460  = \$19 ;
-    if (rst) begin
-      \$460  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$461  = \$21 ;
-    if (rst) begin
-      \$461  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$462  = \$23 ;
-    if (rst) begin
-      \$462  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$463  = ch0_ctrl_periodic;
-    if (\$24 ) begin
-      \$463  = write_data[8];
-    end
-    if (rst) begin
-      \$463  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$464  = ch0_ctrl_trigger_enable;
-    if (\$25 ) begin
-      \$464  = write_data[9];
-    end
-    if (rst) begin
-      \$464  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$465  = ch0_irq_status_done;
-    if (ch0__done) begin
-      \$465  = 1'h1;
-    end else if (\$27 ) begin
-      \$465  = 1'h0;
-    end
-    if (rst) begin
-      \$465  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$466  = ch0_irq_status_error;
-    if (ch0__frame_error) begin
-      \$466  = 1'h1;
-    end else if (\$29 ) begin
-      \$466  = 1'h0;
-    end
-    if (rst) begin
-      \$466  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$467  = ch0_irq_status_access_done;
-    if (ch0__ca_done) begin
-      \$467  = 1'h1;
-    end else if (\$31 ) begin
-      \$467  = 1'h0;
-    end
-    if (rst) begin
-      \$467  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$468  = ch0_irq_enable_write;
-    if (rst) begin
-      \$468  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$469  = ch0_irq_enable_done;
-    if (\$32 ) begin
-      \$469  = config_write_data[0];
-    end
-    if (rst) begin
-      \$469  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$470  = ch0_irq_enable_error;
-    if (\$33 ) begin
-      \$470  = config_write_data[1];
-    end
-    if (rst) begin
-      \$470  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$471  = ch0_irq_enable_access_done;
-    if (\$34 ) begin
-      \$471  = config_write_data[2];
-    end
-    if (rst) begin
-      \$471  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$472  = ch0_cfg_ma_write;
-    if (rst) begin
-      \$472  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$473  = ch0_cfg_ma_ma_half_period;
-    if (\$35 ) begin
-      \$473 [7:0] = config_write_data[7:0];
-    end
-    if (\$36 ) begin
-      \$473 [15:8] = config_write_data[15:8];
-    end
-    if (rst) begin
-      \$473  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$474  = ch0_cfg_ma_delay_limit;
-    if (\$37 ) begin
-      \$474 [7:0] = config_write_data[23:16];
-    end
-    if (\$38 ) begin
-      \$474 [11:8] = config_write_data[27:24];
-    end
-    if (rst) begin
-      \$474  = 12'h000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$475  = ch0_cfg_period_write;
-    if (rst) begin
-      \$475  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$476  = ch0_cfg_period_request_period;
-    if (\$39 ) begin
-      \$476 [7:0] = config_write_data[7:0];
-    end
-    if (\$40 ) begin
-      \$476 [15:8] = config_write_data[15:8];
-    end
-    if (\$41 ) begin
-      \$476 [23:16] = config_write_data[23:16];
-    end
-    if (rst) begin
-      \$476  = 24'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$477  = ch0_cfg_break_write;
-    if (rst) begin
-      \$477  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$478  = ch0_cfg_break_break_time;
-    if (\$42 ) begin
-      \$478 [7:0] = config_write_data[7:0];
-    end
-    if (\$43 ) begin
-      \$478 [15:8] = config_write_data[15:8];
-    end
-    if (\$44 ) begin
-      \$478 [23:16] = config_write_data[23:16];
-    end
-    if (rst) begin
-      \$478  = 24'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$479  = ch0_cfg_ack_write;
-    if (rst) begin
-      \$479  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$480  = ch0_cfg_ack_ack_limit;
-    if (\$45 ) begin
-      \$480 [7:0] = config_write_data[7:0];
-    end
-    if (\$46 ) begin
-      \$480 [15:8] = config_write_data[15:8];
-    end
-    if (\$47 ) begin
-      \$480 [23:16] = config_write_data[23:16];
-    end
-    if (rst) begin
-      \$480  = 24'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$481  = ch0_cfg_timeout_write;
-    if (rst) begin
-      \$481  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$482  = ch0_cfg_timeout_timeout_limit;
-    if (\$48 ) begin
-      \$482 [7:0] = config_write_data[7:0];
-    end
-    if (\$49 ) begin
-      \$482 [15:8] = config_write_data[15:8];
-    end
-    if (\$50 ) begin
-      \$482 [23:16] = config_write_data[23:16];
-    end
-    if (rst) begin
-      \$482  = 24'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$483  = ch0_cfg_words_write;
-    if (rst) begin
-      \$483  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$484  = ch0_cfg_words_w0_data_bits;
-    if (\$51 ) begin
-      \$484  = config_write_data[5:0];
-    end
-    if (rst) begin
-      \$484  = 6'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$485  = ch0_cfg_words_w0_nenw;
-    if (\$52 ) begin
-      \$485  = config_write_data[6];
-    end
-    if (rst) begin
-      \$485  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$486  = ch0_cfg_words_w0_lc;
-    if (\$53 ) begin
-      \$486  = config_write_data[7];
-    end
-    if (rst) begin
-      \$486  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$487  = ch0_cfg_words_w0_crc;
-    if (\$54 ) begin
-      \$487  = config_write_data[9:8];
-    end
-    if (rst) begin
-      \$487  = 2'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$488  = ch0_cfg_words_w1_data_bits;
-    if (\$55 ) begin
-      \$488  = config_write_data[21:16];
-    end
-    if (rst) begin
-      \$488  = 6'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$489  = ch0_cfg_words_w1_nenw;
-    if (\$56 ) begin
-      \$489  = config_write_data[22];
-    end
-    if (rst) begin
-      \$489  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$490  = ch0_cfg_words_w1_lc;
-    if (\$57 ) begin
-      \$490  = config_write_data[23];
-    end
-    if (rst) begin
-      \$490  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$491  = ch0_cfg_words_w1_crc;
-    if (\$58 ) begin
-      \$491  = config_write_data[25:24];
-    end
-    if (rst) begin
-      \$491  = 2'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$492  = ch0_cfg_words_w1_enable;
-    if (\$59 ) begin
-      \$492  = config_write_data[31];
-    end
-    if (rst) begin
-      \$492  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$493  = ch0_cfg_checks_write;
-    if (rst) begin
-      \$493  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$494  = ch0_cfg_checks_end_check;
-    if (\$60 ) begin
-      \$494  = config_write_data[0];
-    end
-    if (rst) begin
-      \$494  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$495  = ch0_cfg_checks_spw_check;
-    if (\$61 ) begin
-      \$495  = config_write_data[1];
-    end
-    if (rst) begin
-      \$495  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$496  = ch0_cfg_checks_spw_tolerance;
-    if (\$62 ) begin
-      \$496  = config_write_data[15:8];
-    end
-    if (rst) begin
-      \$496  = 8'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$497  = ch0_cfg_checks_noise_limit;
-    if (\$63 ) begin
-      \$497  = config_write_data[19:16];
-    end
-    if (rst) begin
-      \$497  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$498  = ch0_cfg_checks_delay_tolerance;
-    if (\$64 ) begin
-      \$498  = config_write_data[23:20];
-    end
-    if (rst) begin
-      \$498  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$499  = ch0_cfg_quiet_write;
-    if (rst) begin
-      \$499  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$500  = ch0_cfg_quiet_quiet_time;
-    if (\$65 ) begin
-      \$500 [7:0] = config_write_data[7:0];
-    end
-    if (\$66 ) begin
-      \$500 [11:8] = config_write_data[11:8];
-    end
-    if (rst) begin
-      \$500  = 12'h000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$501  = ch0_ca_request_write;
-    if (rst) begin
-      \$501  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$502  = ch0_ca_request_slave_id;
-    if (\$67 ) begin
-      \$502  = config_write_data[2:0];
-    end
-    if (rst) begin
-      \$502  = 3'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$503  = ch0_ca_request_address;
-    if (\$68 ) begin
-      \$503  = config_write_data[14:8];
-    end
-    if (rst) begin
-      \$503  = 7'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$504  = ch0_ca_request_count;
-    if (\$69 ) begin
-      \$504  = config_write_data[22:16];
-    end
-    if (rst) begin
-      \$504  = 7'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$505  = \ch0_ca_request_write$85 ;
-    if (\$70 ) begin
-      \$505  = config_write_data[24];
-    end
-    if (rst) begin
-      \$505  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$506  = \$72 ;
-    if (rst) begin
-      \$506  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$507  = \$74 ;
-    if (rst) begin
-      \$507  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$508  = ch0_read_select_80;
-    if (bus__r_en) begin
-      \$508  = \$75 ;
-    end
-    if (rst) begin
-      \$508  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$509  = ch0_read_select_81;
-    if (bus__r_en) begin
-      \$509  = \$76 ;
-    end
+    \$509  = \$2 ;
     if (rst) begin
       \$509  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$510  = ch0_read_select_82;
+    \$510  = g_read_select_0;
     if (bus__r_en) begin
-      \$510  = \$77 ;
+      \$510  = \$3 ;
     end
     if (rst) begin
       \$510  = 1'h0;
@@ -4010,9 +3841,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$511  = ch0_read_select_84;
+    \$511  = g_read_select_1;
     if (bus__r_en) begin
-      \$511  = \$78 ;
+      \$511  = \$4 ;
     end
     if (rst) begin
       \$511  = 1'h0;
@@ -4020,9 +3851,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$512  = ch0_read_select_85;
+    \$512  = g_read_select_2;
     if (bus__r_en) begin
-      \$512  = \$79 ;
+      \$512  = \$5 ;
     end
     if (rst) begin
       \$512  = 1'h0;
@@ -4030,9 +3861,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$513  = ch0_read_select_88;
+    \$513  = g_read_select_3;
     if (bus__r_en) begin
-      \$513  = \$80 ;
+      \$513  = \$6 ;
     end
     if (rst) begin
       \$513  = 1'h0;
@@ -4040,9 +3871,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$514  = ch0_read_select_89;
+    \$514  = g_read_select_4;
     if (bus__r_en) begin
-      \$514  = \$81 ;
+      \$514  = \$7 ;
     end
     if (rst) begin
       \$514  = 1'h0;
@@ -4050,49 +3881,40 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$515  = ch0_read_select_8a;
-    if (bus__r_en) begin
-      \$515  = \$82 ;
+    \$515  = g_read_data;
+    if (bus__r_load) begin
+      \$515  = \$17 ;
     end
     if (rst) begin
-      \$515  = 1'h0;
+      \$515  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$516  = ch0_read_select_8b;
-    if (bus__r_en) begin
-      \$516  = \$83 ;
-    end
+    \$516  = \$19 ;
     if (rst) begin
       \$516  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$517  = ch0_read_select_8c;
-    if (bus__r_en) begin
-      \$517  = \$84 ;
-    end
+    \$517  = \$21 ;
     if (rst) begin
       \$517  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$518  = ch0_read_select_8d;
-    if (bus__r_en) begin
-      \$518  = \$85 ;
-    end
+    \$518  = \$23 ;
     if (rst) begin
       \$518  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$519  = ch0_read_select_8e;
-    if (bus__r_en) begin
-      \$519  = \$86 ;
+    \$519  = ch0_ctrl_periodic;
+    if (\$24 ) begin
+      \$519  = write_data[8];
     end
     if (rst) begin
       \$519  = 1'h0;
@@ -4100,9 +3922,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$520  = ch0_read_select_8f;
-    if (bus__r_en) begin
-      \$520  = \$87 ;
+    \$520  = ch0_ctrl_trigger_enable;
+    if (\$25 ) begin
+      \$520  = write_data[9];
     end
     if (rst) begin
       \$520  = 1'h0;
@@ -4110,9 +3932,11 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$521  = ch0_read_select_90;
-    if (bus__r_en) begin
-      \$521  = \$88 ;
+    \$521  = ch0_irq_status_done;
+    if (ch0__done) begin
+      \$521  = 1'h1;
+    end else if (\$27 ) begin
+      \$521  = 1'h0;
     end
     if (rst) begin
       \$521  = 1'h0;
@@ -4120,9 +3944,11 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$522  = ch0_read_select_91;
-    if (bus__r_en) begin
-      \$522  = \$89 ;
+    \$522  = ch0_irq_status_error;
+    if (ch0__frame_error) begin
+      \$522  = 1'h1;
+    end else if (\$29 ) begin
+      \$522  = 1'h0;
     end
     if (rst) begin
       \$522  = 1'h0;
@@ -4130,9 +3956,11 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$523  = ch0_read_select_92;
-    if (bus__r_en) begin
-      \$523  = \$90 ;
+    \$523  = ch0_irq_status_access_done;
+    if (ch0__ca_done) begin
+      \$523  = 1'h1;
+    end else if (\$31 ) begin
+      \$523  = 1'h0;
     end
     if (rst) begin
       \$523  = 1'h0;
@@ -4140,19 +3968,16 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$524  = ch0_read_select_93;
-    if (bus__r_en) begin
-      \$524  = \$91 ;
-    end
+    \$524  = ch0_irq_enable_write;
     if (rst) begin
       \$524  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$525  = ch0_read_select_94;
-    if (bus__r_en) begin
-      \$525  = \$92 ;
+    \$525  = ch0_irq_enable_done;
+    if (\$32 ) begin
+      \$525  = config_write_data[0];
     end
     if (rst) begin
       \$525  = 1'h0;
@@ -4160,9 +3985,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$526  = ch0_read_select_95;
-    if (bus__r_en) begin
-      \$526  = \$93 ;
+    \$526  = ch0_irq_enable_error;
+    if (\$33 ) begin
+      \$526  = config_write_data[1];
     end
     if (rst) begin
       \$526  = 1'h0;
@@ -4170,9 +3995,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$527  = ch0_read_select_96;
-    if (bus__r_en) begin
-      \$527  = \$94 ;
+    \$527  = ch0_irq_enable_access_done;
+    if (\$34 ) begin
+      \$527  = config_write_data[2];
     end
     if (rst) begin
       \$527  = 1'h0;
@@ -4180,139 +4005,151 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$528  = ch0_read_select_97;
-    if (bus__r_en) begin
-      \$528  = \$95 ;
-    end
+    \$528  = ch0_cfg_ma_write;
     if (rst) begin
       \$528  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$529  = ch0_read_select_98;
-    if (bus__r_en) begin
-      \$529  = \$96 ;
+    \$529  = ch0_cfg_ma_ma_half_period;
+    if (\$35 ) begin
+      \$529 [7:0] = config_write_data[7:0];
+    end
+    if (\$36 ) begin
+      \$529 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$529  = 1'h0;
+      \$529  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$530  = ch0_read_select_99;
-    if (bus__r_en) begin
-      \$530  = \$97 ;
+    \$530  = ch0_cfg_ma_delay_limit;
+    if (\$37 ) begin
+      \$530 [7:0] = config_write_data[23:16];
+    end
+    if (\$38 ) begin
+      \$530 [11:8] = config_write_data[27:24];
     end
     if (rst) begin
-      \$530  = 1'h0;
+      \$530  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$531  = ch0_read_select_9a;
-    if (bus__r_en) begin
-      \$531  = \$98 ;
-    end
+    \$531  = ch0_cfg_period_write;
     if (rst) begin
       \$531  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$532  = ch0_read_select_9b;
-    if (bus__r_en) begin
-      \$532  = \$99 ;
+    \$532  = ch0_cfg_period_request_period;
+    if (\$39 ) begin
+      \$532 [7:0] = config_write_data[7:0];
+    end
+    if (\$40 ) begin
+      \$532 [15:8] = config_write_data[15:8];
+    end
+    if (\$41 ) begin
+      \$532 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$532  = 1'h0;
+      \$532  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$533  = ch0_read_select_9c;
-    if (bus__r_en) begin
-      \$533  = \$100 ;
-    end
+    \$533  = ch0_cfg_break_write;
     if (rst) begin
       \$533  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$534  = ch0_read_select_9d;
-    if (bus__r_en) begin
-      \$534  = \$101 ;
+    \$534  = ch0_cfg_break_break_time;
+    if (\$42 ) begin
+      \$534 [7:0] = config_write_data[7:0];
+    end
+    if (\$43 ) begin
+      \$534 [15:8] = config_write_data[15:8];
+    end
+    if (\$44 ) begin
+      \$534 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$534  = 1'h0;
+      \$534  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$535  = ch0_read_select_9e;
-    if (bus__r_en) begin
-      \$535  = \$102 ;
-    end
+    \$535  = ch0_cfg_ack_write;
     if (rst) begin
       \$535  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$536  = ch0_read_select_9f;
-    if (bus__r_en) begin
-      \$536  = \$103 ;
+    \$536  = ch0_cfg_ack_ack_limit;
+    if (\$45 ) begin
+      \$536 [7:0] = config_write_data[7:0];
+    end
+    if (\$46 ) begin
+      \$536 [15:8] = config_write_data[15:8];
+    end
+    if (\$47 ) begin
+      \$536 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$536  = 1'h0;
+      \$536  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$537  = ch0_read_select_c0;
-    if (bus__r_en) begin
-      \$537  = \$104 ;
-    end
+    \$537  = ch0_cfg_timeout_write;
     if (rst) begin
       \$537  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$538  = ch0_read_select_c1;
-    if (bus__r_en) begin
-      \$538  = \$105 ;
+    \$538  = ch0_cfg_timeout_timeout_limit;
+    if (\$48 ) begin
+      \$538 [7:0] = config_write_data[7:0];
+    end
+    if (\$49 ) begin
+      \$538 [15:8] = config_write_data[15:8];
+    end
+    if (\$50 ) begin
+      \$538 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$538  = 1'h0;
+      \$538  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$539  = ch0_read_select_c2;
-    if (bus__r_en) begin
-      \$539  = \$106 ;
-    end
+    \$539  = ch0_cfg_words_write;
     if (rst) begin
       \$539  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$540  = ch0_read_select_c3;
-    if (bus__r_en) begin
-      \$540  = \$107 ;
+    \$540  = ch0_cfg_words_w0_data_bits;
+    if (\$51 ) begin
+      \$540  = config_write_data[5:0];
     end
     if (rst) begin
-      \$540  = 1'h0;
+      \$540  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$541  = ch0_read_select_c4;
-    if (bus__r_en) begin
-      \$541  = \$108 ;
+    \$541  = ch0_cfg_words_w0_nenw;
+    if (\$52 ) begin
+      \$541  = config_write_data[6];
     end
     if (rst) begin
       \$541  = 1'h0;
@@ -4320,9 +4157,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$542  = ch0_read_select_c5;
-    if (bus__r_en) begin
-      \$542  = \$109 ;
+    \$542  = ch0_cfg_words_w0_lc;
+    if (\$53 ) begin
+      \$542  = config_write_data[7];
     end
     if (rst) begin
       \$542  = 1'h0;
@@ -4330,29 +4167,29 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$543  = ch0_result_status_status_snapshot;
-    if (\$110 ) begin
-      \$543  = \port$5134$0 [3:0];
+    \$543  = ch0_cfg_words_w0_crc;
+    if (\$54 ) begin
+      \$543  = config_write_data[9:8];
     end
     if (rst) begin
-      \$543  = 4'h0;
+      \$543  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$544  = ch0_result_status_cds_snapshot;
-    if (\$110 ) begin
-      \$544  = \port$5134$0 [49];
+    \$544  = ch0_cfg_words_w1_data_bits;
+    if (\$55 ) begin
+      \$544  = config_write_data[21:16];
     end
     if (rst) begin
-      \$544  = 1'h0;
+      \$544  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$545  = ch0_result_status_w0_ne_snapshot;
-    if (\$110 ) begin
-      \$545  = \port$5134$0 [131];
+    \$545  = ch0_cfg_words_w1_nenw;
+    if (\$56 ) begin
+      \$545  = config_write_data[22];
     end
     if (rst) begin
       \$545  = 1'h0;
@@ -4360,9 +4197,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$546  = ch0_result_status_w0_nw_snapshot;
-    if (\$110 ) begin
-      \$546  = \port$5134$0 [132];
+    \$546  = ch0_cfg_words_w1_lc;
+    if (\$57 ) begin
+      \$546  = config_write_data[23];
     end
     if (rst) begin
       \$546  = 1'h0;
@@ -4370,19 +4207,19 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$547  = ch0_result_status_w0_crc_ok_snapshot;
-    if (\$110 ) begin
-      \$547  = \port$5134$0 [133];
+    \$547  = ch0_cfg_words_w1_crc;
+    if (\$58 ) begin
+      \$547  = config_write_data[25:24];
     end
     if (rst) begin
-      \$547  = 1'h0;
+      \$547  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$548  = ch0_result_status_w1_ne_snapshot;
-    if (\$110 ) begin
-      \$548  = \port$5134$0 [174];
+    \$548  = ch0_cfg_words_w1_enable;
+    if (\$59 ) begin
+      \$548  = config_write_data[31];
     end
     if (rst) begin
       \$548  = 1'h0;
@@ -4390,19 +4227,16 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$549  = ch0_result_status_w1_nw_snapshot;
-    if (\$110 ) begin
-      \$549  = \port$5134$0 [175];
-    end
+    \$549  = ch0_cfg_checks_write;
     if (rst) begin
       \$549  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$550  = ch0_result_status_w1_crc_ok_snapshot;
-    if (\$110 ) begin
-      \$550  = \port$5134$0 [176];
+    \$550  = ch0_cfg_checks_end_check;
+    if (\$60 ) begin
+      \$550  = config_write_data[0];
     end
     if (rst) begin
       \$550  = 1'h0;
@@ -4410,9 +4244,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$551  = ch0_result_status_lc_repeat_snapshot;
-    if (\$110 ) begin
-      \$551  = \port$5134$0 [183];
+    \$551  = ch0_cfg_checks_spw_check;
+    if (\$61 ) begin
+      \$551  = config_write_data[1];
     end
     if (rst) begin
       \$551  = 1'h0;
@@ -4420,210 +4254,216 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$552  = ch0_result_status_lc_skip_snapshot;
-    if (\$110 ) begin
-      \$552  = \port$5134$0 [184];
+    \$552  = ch0_cfg_checks_spw_tolerance;
+    if (\$62 ) begin
+      \$552  = config_write_data[15:8];
     end
     if (rst) begin
-      \$552  = 1'h0;
+      \$552  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$553  = ch0_result_status_lc_zero_snapshot;
-    if (\$110 ) begin
-      \$553  = \port$5134$0 [185];
+    \$553  = ch0_cfg_checks_noise_limit;
+    if (\$63 ) begin
+      \$553  = config_write_data[19:16];
     end
     if (rst) begin
-      \$553  = 1'h0;
+      \$553  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$554  = ch0_result_status_spw_mismatch_snapshot;
-    if (\$110 ) begin
-      \$554  = \port$5134$0 [186];
+    \$554  = ch0_cfg_checks_delay_tolerance;
+    if (\$64 ) begin
+      \$554  = config_write_data[23:20];
     end
     if (rst) begin
-      \$554  = 1'h0;
+      \$554  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$555  = ch0_result_status_lc_snapshot;
-    if (\$110 ) begin
-      \$555  = \port$5134$0 [182:177];
-    end
+    \$555  = ch0_cfg_quiet_write;
     if (rst) begin
-      \$555  = 6'h00;
+      \$555  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$556  = ch0_result_seq_seq_snapshot;
-    if (\$110 ) begin
-      \$556  = ch0__done_count;
+    \$556  = ch0_cfg_quiet_quiet_time;
+    if (\$65 ) begin
+      \$556 [7:0] = config_write_data[7:0];
+    end
+    if (\$66 ) begin
+      \$556 [11:8] = config_write_data[11:8];
     end
     if (rst) begin
-      \$556  = 16'h0000;
+      \$556  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$557  = ch0_result_seq_line_delay_snapshot;
-    if (\$110 ) begin
-      \$557  = \port$5134$0 [48:36];
-    end
+    \$557  = ch0_cfg_crc0_write;
     if (rst) begin
-      \$557  = 13'h0000;
+      \$557  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$558  = ch0_result_w0_lo_data_snapshot;
-    if (\$110 ) begin
-      \$558  = \port$5134$0 [107:76];
+    \$558  = ch0_cfg_crc0_poly;
+    if (\$67 ) begin
+      \$558 [7:0] = config_write_data[7:0];
+    end
+    if (\$68 ) begin
+      \$558 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$558  = 32'd0;
+      \$558  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$559  = ch0_result_w0_hi_data_snapshot;
-    if (\$110 ) begin
-      \$559  = \port$5134$0 [130:108];
+    \$559  = ch0_cfg_crc0_width;
+    if (\$69 ) begin
+      \$559  = config_write_data[20:16];
     end
     if (rst) begin
-      \$559  = 23'h000000;
+      \$559  = 5'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$560  = ch0_result_w1_lo_data_snapshot;
-    if (\$110 ) begin
-      \$560  = \port$5134$0 [165:134];
+    \$560  = ch0_cfg_crc0_inverted;
+    if (\$70 ) begin
+      \$560  = config_write_data[24];
     end
     if (rst) begin
-      \$560  = 32'd0;
+      \$560  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$561  = ch0_result_w1_hi_data_snapshot;
-    if (\$110 ) begin
-      \$561  = \port$5134$0 [173:166];
-    end
+    \$561  = ch0_cfg_crc0_start_write;
     if (rst) begin
-      \$561  = 8'h00;
+      \$561  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$562  = ch0_result_timestamp_time_snapshot;
-    if (\$110 ) begin
-      \$562  = \port$5134$0 [35:4];
+    \$562  = ch0_cfg_crc0_start_start;
+    if (\$71 ) begin
+      \$562 [7:0] = config_write_data[7:0];
+    end
+    if (\$72 ) begin
+      \$562 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$562  = 32'd0;
+      \$562  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$563  = ch0_result_line_noise_events_snapshot;
-    if (\$110 ) begin
-      \$563  = \port$5134$0 [53:50];
-    end
+    \$563  = ch0_cfg_crc1_write;
     if (rst) begin
-      \$563  = 4'h0;
+      \$563  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$564  = ch0_result_line_delay_settled_snapshot;
-    if (\$110 ) begin
-      \$564  = \port$5134$0 [54];
+    \$564  = ch0_cfg_crc1_poly;
+    if (\$73 ) begin
+      \$564 [7:0] = config_write_data[7:0];
+    end
+    if (\$74 ) begin
+      \$564 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$564  = 1'h0;
+      \$564  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$565  = ch0_result_line_delay_spread_snapshot;
-    if (\$110 ) begin
-      \$565  = \port$5134$0 [75:68];
+    \$565  = ch0_cfg_crc1_width;
+    if (\$75 ) begin
+      \$565  = config_write_data[20:16];
     end
     if (rst) begin
-      \$565  = 8'h00;
+      \$565  = 5'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$566  = ch0_result_line_settled_delay_snapshot;
-    if (\$110 ) begin
-      \$566  = \port$5134$0 [67:55];
+    \$566  = ch0_cfg_crc1_inverted;
+    if (\$76 ) begin
+      \$566  = config_write_data[24];
     end
     if (rst) begin
-      \$566  = 13'h0000;
+      \$566  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$567  = ch0_window0_read;
-    if (bus__r_en) begin
-      \$567  = \$112 ;
-    end
+    \$567  = ch0_cfg_crc1_start_write;
     if (rst) begin
       \$567  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$568  = ch0_read_data;
-    if (bus__r_load) begin
-      \$568  = \$184 ;
+    \$568  = ch0_cfg_crc1_start_start;
+    if (\$77 ) begin
+      \$568 [7:0] = config_write_data[7:0];
+    end
+    if (\$78 ) begin
+      \$568 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$568  = 32'd0;
+      \$568  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$569  = \$186 ;
+    \$569  = ch0_ca_request_write;
     if (rst) begin
       \$569  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$570  = \$188 ;
+    \$570  = ch0_ca_request_slave_id;
+    if (\$79 ) begin
+      \$570  = config_write_data[2:0];
+    end
     if (rst) begin
-      \$570  = 1'h0;
+      \$570  = 3'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$571  = \$190 ;
+    \$571  = ch0_ca_request_address;
+    if (\$80 ) begin
+      \$571  = config_write_data[14:8];
+    end
     if (rst) begin
-      \$571  = 1'h0;
+      \$571  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$572  = ch1_ctrl_periodic;
-    if (\$191 ) begin
-      \$572  = write_data[8];
+    \$572  = ch0_ca_request_count;
+    if (\$81 ) begin
+      \$572  = config_write_data[22:16];
     end
     if (rst) begin
-      \$572  = 1'h0;
+      \$572  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$573  = ch1_ctrl_trigger_enable;
-    if (\$192 ) begin
-      \$573  = write_data[9];
+    \$573  = \ch0_ca_request_write$101 ;
+    if (\$82 ) begin
+      \$573  = config_write_data[24];
     end
     if (rst) begin
       \$573  = 1'h0;
@@ -4631,35 +4471,23 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$574  = ch1_irq_status_done;
-    if (ch1__done) begin
-      \$574  = 1'h1;
-    end else if (\$194 ) begin
-      \$574  = 1'h0;
-    end
+    \$574  = \$84 ;
     if (rst) begin
       \$574  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$575  = ch1_irq_status_error;
-    if (ch1__frame_error) begin
-      \$575  = 1'h1;
-    end else if (\$196 ) begin
-      \$575  = 1'h0;
-    end
+    \$575  = \$86 ;
     if (rst) begin
       \$575  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$576  = ch1_irq_status_access_done;
-    if (ch1__ca_done) begin
-      \$576  = 1'h1;
-    end else if (\$198 ) begin
-      \$576  = 1'h0;
+    \$576  = ch0_read_select_80;
+    if (bus__r_en) begin
+      \$576  = \$87 ;
     end
     if (rst) begin
       \$576  = 1'h0;
@@ -4667,16 +4495,19 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$577  = ch1_irq_enable_write;
+    \$577  = ch0_read_select_81;
+    if (bus__r_en) begin
+      \$577  = \$88 ;
+    end
     if (rst) begin
       \$577  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$578  = ch1_irq_enable_done;
-    if (\$199 ) begin
-      \$578  = config_write_data[0];
+    \$578  = ch0_read_select_82;
+    if (bus__r_en) begin
+      \$578  = \$89 ;
     end
     if (rst) begin
       \$578  = 1'h0;
@@ -4684,9 +4515,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$579  = ch1_irq_enable_error;
-    if (\$200 ) begin
-      \$579  = config_write_data[1];
+    \$579  = ch0_read_select_84;
+    if (bus__r_en) begin
+      \$579  = \$90 ;
     end
     if (rst) begin
       \$579  = 1'h0;
@@ -4694,9 +4525,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$580  = ch1_irq_enable_access_done;
-    if (\$201 ) begin
-      \$580  = config_write_data[2];
+    \$580  = ch0_read_select_85;
+    if (bus__r_en) begin
+      \$580  = \$91 ;
     end
     if (rst) begin
       \$580  = 1'h0;
@@ -4704,151 +4535,139 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$581  = ch1_cfg_ma_write;
+    \$581  = ch0_read_select_88;
+    if (bus__r_en) begin
+      \$581  = \$92 ;
+    end
     if (rst) begin
       \$581  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$582  = ch1_cfg_ma_ma_half_period;
-    if (\$202 ) begin
-      \$582 [7:0] = config_write_data[7:0];
-    end
-    if (\$203 ) begin
-      \$582 [15:8] = config_write_data[15:8];
+    \$582  = ch0_read_select_89;
+    if (bus__r_en) begin
+      \$582  = \$93 ;
     end
     if (rst) begin
-      \$582  = 16'h0000;
+      \$582  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$583  = ch1_cfg_ma_delay_limit;
-    if (\$204 ) begin
-      \$583 [7:0] = config_write_data[23:16];
-    end
-    if (\$205 ) begin
-      \$583 [11:8] = config_write_data[27:24];
+    \$583  = ch0_read_select_8a;
+    if (bus__r_en) begin
+      \$583  = \$94 ;
     end
     if (rst) begin
-      \$583  = 12'h000;
+      \$583  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$584  = ch1_cfg_period_write;
+    \$584  = ch0_read_select_8b;
+    if (bus__r_en) begin
+      \$584  = \$95 ;
+    end
     if (rst) begin
       \$584  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$585  = ch1_cfg_period_request_period;
-    if (\$206 ) begin
-      \$585 [7:0] = config_write_data[7:0];
-    end
-    if (\$207 ) begin
-      \$585 [15:8] = config_write_data[15:8];
-    end
-    if (\$208 ) begin
-      \$585 [23:16] = config_write_data[23:16];
+    \$585  = ch0_read_select_8c;
+    if (bus__r_en) begin
+      \$585  = \$96 ;
     end
     if (rst) begin
-      \$585  = 24'h000000;
+      \$585  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$586  = ch1_cfg_break_write;
+    \$586  = ch0_read_select_8d;
+    if (bus__r_en) begin
+      \$586  = \$97 ;
+    end
     if (rst) begin
       \$586  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$587  = ch1_cfg_break_break_time;
-    if (\$209 ) begin
-      \$587 [7:0] = config_write_data[7:0];
-    end
-    if (\$210 ) begin
-      \$587 [15:8] = config_write_data[15:8];
-    end
-    if (\$211 ) begin
-      \$587 [23:16] = config_write_data[23:16];
+    \$587  = ch0_read_select_8e;
+    if (bus__r_en) begin
+      \$587  = \$98 ;
     end
     if (rst) begin
-      \$587  = 24'h000000;
+      \$587  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$588  = ch1_cfg_ack_write;
+    \$588  = ch0_read_select_8f;
+    if (bus__r_en) begin
+      \$588  = \$99 ;
+    end
     if (rst) begin
       \$588  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$589  = ch1_cfg_ack_ack_limit;
-    if (\$212 ) begin
-      \$589 [7:0] = config_write_data[7:0];
-    end
-    if (\$213 ) begin
-      \$589 [15:8] = config_write_data[15:8];
-    end
-    if (\$214 ) begin
-      \$589 [23:16] = config_write_data[23:16];
+    \$589  = ch0_read_select_90;
+    if (bus__r_en) begin
+      \$589  = \$100 ;
     end
     if (rst) begin
-      \$589  = 24'h000000;
+      \$589  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$590  = ch1_cfg_timeout_write;
+    \$590  = ch0_read_select_91;
+    if (bus__r_en) begin
+      \$590  = \$101 ;
+    end
     if (rst) begin
       \$590  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$591  = ch1_cfg_timeout_timeout_limit;
-    if (\$215 ) begin
-      \$591 [7:0] = config_write_data[7:0];
-    end
-    if (\$216 ) begin
-      \$591 [15:8] = config_write_data[15:8];
-    end
-    if (\$217 ) begin
-      \$591 [23:16] = config_write_data[23:16];
+    \$591  = ch0_read_select_92;
+    if (bus__r_en) begin
+      \$591  = \$102 ;
     end
     if (rst) begin
-      \$591  = 24'h000000;
+      \$591  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$592  = ch1_cfg_words_write;
+    \$592  = ch0_read_select_93;
+    if (bus__r_en) begin
+      \$592  = \$103 ;
+    end
     if (rst) begin
       \$592  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$593  = ch1_cfg_words_w0_data_bits;
-    if (\$218 ) begin
-      \$593  = config_write_data[5:0];
+    \$593  = ch0_read_select_94;
+    if (bus__r_en) begin
+      \$593  = \$104 ;
     end
     if (rst) begin
-      \$593  = 6'h00;
+      \$593  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$594  = ch1_cfg_words_w0_nenw;
-    if (\$219 ) begin
-      \$594  = config_write_data[6];
+    \$594  = ch0_read_select_95;
+    if (bus__r_en) begin
+      \$594  = \$105 ;
     end
     if (rst) begin
       \$594  = 1'h0;
@@ -4856,9 +4675,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$595  = ch1_cfg_words_w0_lc;
-    if (\$220 ) begin
-      \$595  = config_write_data[7];
+    \$595  = ch0_read_select_96;
+    if (bus__r_en) begin
+      \$595  = \$106 ;
     end
     if (rst) begin
       \$595  = 1'h0;
@@ -4866,29 +4685,29 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$596  = ch1_cfg_words_w0_crc;
-    if (\$221 ) begin
-      \$596  = config_write_data[9:8];
+    \$596  = ch0_read_select_97;
+    if (bus__r_en) begin
+      \$596  = \$107 ;
     end
     if (rst) begin
-      \$596  = 2'h0;
+      \$596  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$597  = ch1_cfg_words_w1_data_bits;
-    if (\$222 ) begin
-      \$597  = config_write_data[21:16];
+    \$597  = ch0_read_select_98;
+    if (bus__r_en) begin
+      \$597  = \$108 ;
     end
     if (rst) begin
-      \$597  = 6'h00;
+      \$597  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$598  = ch1_cfg_words_w1_nenw;
-    if (\$223 ) begin
-      \$598  = config_write_data[22];
+    \$598  = ch0_read_select_99;
+    if (bus__r_en) begin
+      \$598  = \$109 ;
     end
     if (rst) begin
       \$598  = 1'h0;
@@ -4896,9 +4715,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$599  = ch1_cfg_words_w1_lc;
-    if (\$224 ) begin
-      \$599  = config_write_data[23];
+    \$599  = ch0_read_select_9a;
+    if (bus__r_en) begin
+      \$599  = \$110 ;
     end
     if (rst) begin
       \$599  = 1'h0;
@@ -4906,19 +4725,19 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$600  = ch1_cfg_words_w1_crc;
-    if (\$225 ) begin
-      \$600  = config_write_data[25:24];
+    \$600  = ch0_read_select_9b;
+    if (bus__r_en) begin
+      \$600  = \$111 ;
     end
     if (rst) begin
-      \$600  = 2'h0;
+      \$600  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$601  = ch1_cfg_words_w1_enable;
-    if (\$226 ) begin
-      \$601  = config_write_data[31];
+    \$601  = ch0_read_select_9c;
+    if (bus__r_en) begin
+      \$601  = \$112 ;
     end
     if (rst) begin
       \$601  = 1'h0;
@@ -4926,16 +4745,19 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$602  = ch1_cfg_checks_write;
+    \$602  = ch0_read_select_9d;
+    if (bus__r_en) begin
+      \$602  = \$113 ;
+    end
     if (rst) begin
       \$602  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$603  = ch1_cfg_checks_end_check;
-    if (\$227 ) begin
-      \$603  = config_write_data[0];
+    \$603  = ch0_read_select_9e;
+    if (bus__r_en) begin
+      \$603  = \$114 ;
     end
     if (rst) begin
       \$603  = 1'h0;
@@ -4943,9 +4765,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$604  = ch1_cfg_checks_spw_check;
-    if (\$228 ) begin
-      \$604  = config_write_data[1];
+    \$604  = ch0_read_select_9f;
+    if (bus__r_en) begin
+      \$604  = \$115 ;
     end
     if (rst) begin
       \$604  = 1'h0;
@@ -4953,96 +4775,99 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$605  = ch1_cfg_checks_spw_tolerance;
-    if (\$229 ) begin
-      \$605  = config_write_data[15:8];
+    \$605  = ch0_read_select_a0;
+    if (bus__r_en) begin
+      \$605  = \$116 ;
     end
     if (rst) begin
-      \$605  = 8'h00;
+      \$605  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$606  = ch1_cfg_checks_noise_limit;
-    if (\$230 ) begin
-      \$606  = config_write_data[19:16];
+    \$606  = ch0_read_select_a1;
+    if (bus__r_en) begin
+      \$606  = \$117 ;
     end
     if (rst) begin
-      \$606  = 4'h0;
+      \$606  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$607  = ch1_cfg_checks_delay_tolerance;
-    if (\$231 ) begin
-      \$607  = config_write_data[23:20];
+    \$607  = ch0_read_select_a2;
+    if (bus__r_en) begin
+      \$607  = \$118 ;
     end
     if (rst) begin
-      \$607  = 4'h0;
+      \$607  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$608  = ch1_cfg_quiet_write;
+    \$608  = ch0_read_select_a3;
+    if (bus__r_en) begin
+      \$608  = \$119 ;
+    end
     if (rst) begin
       \$608  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$609  = ch1_cfg_quiet_quiet_time;
-    if (\$232 ) begin
-      \$609 [7:0] = config_write_data[7:0];
-    end
-    if (\$233 ) begin
-      \$609 [11:8] = config_write_data[11:8];
+    \$609  = ch0_read_select_c0;
+    if (bus__r_en) begin
+      \$609  = \$120 ;
     end
     if (rst) begin
-      \$609  = 12'h000;
+      \$609  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$610  = ch1_ca_request_write;
+    \$610  = ch0_read_select_c1;
+    if (bus__r_en) begin
+      \$610  = \$121 ;
+    end
     if (rst) begin
       \$610  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$611  = ch1_ca_request_slave_id;
-    if (\$234 ) begin
-      \$611  = config_write_data[2:0];
+    \$611  = ch0_read_select_c2;
+    if (bus__r_en) begin
+      \$611  = \$122 ;
     end
     if (rst) begin
-      \$611  = 3'h0;
+      \$611  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$612  = ch1_ca_request_address;
-    if (\$235 ) begin
-      \$612  = config_write_data[14:8];
+    \$612  = ch0_read_select_c3;
+    if (bus__r_en) begin
+      \$612  = \$123 ;
     end
     if (rst) begin
-      \$612  = 7'h00;
+      \$612  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$613  = ch1_ca_request_count;
-    if (\$236 ) begin
-      \$613  = config_write_data[22:16];
+    \$613  = ch0_read_select_c4;
+    if (bus__r_en) begin
+      \$613  = \$124 ;
     end
     if (rst) begin
-      \$613  = 7'h00;
+      \$613  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$614  = \ch1_ca_request_write$265 ;
-    if (\$237 ) begin
-      \$614  = config_write_data[24];
+    \$614  = ch0_read_select_c5;
+    if (bus__r_en) begin
+      \$614  = \$125 ;
     end
     if (rst) begin
       \$614  = 1'h0;
@@ -5050,23 +4875,29 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$615  = \$239 ;
+    \$615  = ch0_result_status_status_snapshot;
+    if (\$126 ) begin
+      \$615  = \port$5310$0 [3:0];
+    end
     if (rst) begin
-      \$615  = 1'h0;
+      \$615  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$616  = \$241 ;
+    \$616  = ch0_result_status_cds_snapshot;
+    if (\$126 ) begin
+      \$616  = \port$5310$0 [49];
+    end
     if (rst) begin
       \$616  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$617  = ch1_read_select_100;
-    if (bus__r_en) begin
-      \$617  = \$242 ;
+    \$617  = ch0_result_status_w0_ne_snapshot;
+    if (\$126 ) begin
+      \$617  = \port$5310$0 [131];
     end
     if (rst) begin
       \$617  = 1'h0;
@@ -5074,9 +4905,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$618  = ch1_read_select_101;
-    if (bus__r_en) begin
-      \$618  = \$243 ;
+    \$618  = ch0_result_status_w0_nw_snapshot;
+    if (\$126 ) begin
+      \$618  = \port$5310$0 [132];
     end
     if (rst) begin
       \$618  = 1'h0;
@@ -5084,9 +4915,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$619  = ch1_read_select_102;
-    if (bus__r_en) begin
-      \$619  = \$244 ;
+    \$619  = ch0_result_status_w0_crc_ok_snapshot;
+    if (\$126 ) begin
+      \$619  = \port$5310$0 [133];
     end
     if (rst) begin
       \$619  = 1'h0;
@@ -5094,9 +4925,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$620  = ch1_read_select_104;
-    if (bus__r_en) begin
-      \$620  = \$245 ;
+    \$620  = ch0_result_status_w1_ne_snapshot;
+    if (\$126 ) begin
+      \$620  = \port$5310$0 [174];
     end
     if (rst) begin
       \$620  = 1'h0;
@@ -5104,9 +4935,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$621  = ch1_read_select_105;
-    if (bus__r_en) begin
-      \$621  = \$246 ;
+    \$621  = ch0_result_status_w1_nw_snapshot;
+    if (\$126 ) begin
+      \$621  = \port$5310$0 [175];
     end
     if (rst) begin
       \$621  = 1'h0;
@@ -5114,9 +4945,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$622  = ch1_read_select_108;
-    if (bus__r_en) begin
-      \$622  = \$247 ;
+    \$622  = ch0_result_status_w1_crc_ok_snapshot;
+    if (\$126 ) begin
+      \$622  = \port$5310$0 [176];
     end
     if (rst) begin
       \$622  = 1'h0;
@@ -5124,9 +4955,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$623  = ch1_read_select_109;
-    if (bus__r_en) begin
-      \$623  = \$248 ;
+    \$623  = ch0_result_status_lc_repeat_snapshot;
+    if (\$126 ) begin
+      \$623  = \port$5310$0 [183];
     end
     if (rst) begin
       \$623  = 1'h0;
@@ -5134,9 +4965,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$624  = ch1_read_select_10a;
-    if (bus__r_en) begin
-      \$624  = \$249 ;
+    \$624  = ch0_result_status_lc_skip_snapshot;
+    if (\$126 ) begin
+      \$624  = \port$5310$0 [184];
     end
     if (rst) begin
       \$624  = 1'h0;
@@ -5144,9 +4975,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$625  = ch1_read_select_10b;
-    if (bus__r_en) begin
-      \$625  = \$250 ;
+    \$625  = ch0_result_status_lc_zero_snapshot;
+    if (\$126 ) begin
+      \$625  = \port$5310$0 [185];
     end
     if (rst) begin
       \$625  = 1'h0;
@@ -5154,9 +4985,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$626  = ch1_read_select_10c;
-    if (bus__r_en) begin
-      \$626  = \$251 ;
+    \$626  = ch0_result_status_spw_mismatch_snapshot;
+    if (\$126 ) begin
+      \$626  = \port$5310$0 [186];
     end
     if (rst) begin
       \$626  = 1'h0;
@@ -5164,99 +4995,99 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$627  = ch1_read_select_10d;
-    if (bus__r_en) begin
-      \$627  = \$252 ;
+    \$627  = ch0_result_status_lc_snapshot;
+    if (\$126 ) begin
+      \$627  = \port$5310$0 [182:177];
     end
     if (rst) begin
-      \$627  = 1'h0;
+      \$627  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$628  = ch1_read_select_10e;
-    if (bus__r_en) begin
-      \$628  = \$253 ;
+    \$628  = ch0_result_seq_seq_snapshot;
+    if (\$126 ) begin
+      \$628  = ch0__done_count;
     end
     if (rst) begin
-      \$628  = 1'h0;
+      \$628  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$629  = ch1_read_select_10f;
-    if (bus__r_en) begin
-      \$629  = \$254 ;
+    \$629  = ch0_result_seq_line_delay_snapshot;
+    if (\$126 ) begin
+      \$629  = \port$5310$0 [48:36];
     end
     if (rst) begin
-      \$629  = 1'h0;
+      \$629  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$630  = ch1_read_select_110;
-    if (bus__r_en) begin
-      \$630  = \$255 ;
+    \$630  = ch0_result_w0_lo_data_snapshot;
+    if (\$126 ) begin
+      \$630  = \port$5310$0 [107:76];
     end
     if (rst) begin
-      \$630  = 1'h0;
+      \$630  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$631  = ch1_read_select_111;
-    if (bus__r_en) begin
-      \$631  = \$256 ;
+    \$631  = ch0_result_w0_hi_data_snapshot;
+    if (\$126 ) begin
+      \$631  = \port$5310$0 [130:108];
     end
     if (rst) begin
-      \$631  = 1'h0;
+      \$631  = 23'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$632  = ch1_read_select_112;
-    if (bus__r_en) begin
-      \$632  = \$257 ;
+    \$632  = ch0_result_w1_lo_data_snapshot;
+    if (\$126 ) begin
+      \$632  = \port$5310$0 [165:134];
     end
     if (rst) begin
-      \$632  = 1'h0;
+      \$632  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$633  = ch1_read_select_113;
-    if (bus__r_en) begin
-      \$633  = \$258 ;
+    \$633  = ch0_result_w1_hi_data_snapshot;
+    if (\$126 ) begin
+      \$633  = \port$5310$0 [173:166];
     end
     if (rst) begin
-      \$633  = 1'h0;
+      \$633  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$634  = ch1_read_select_114;
-    if (bus__r_en) begin
-      \$634  = \$259 ;
+    \$634  = ch0_result_timestamp_time_snapshot;
+    if (\$126 ) begin
+      \$634  = \port$5310$0 [35:4];
     end
     if (rst) begin
-      \$634  = 1'h0;
+      \$634  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$635  = ch1_read_select_115;
-    if (bus__r_en) begin
-      \$635  = \$260 ;
+    \$635  = ch0_result_line_noise_events_snapshot;
+    if (\$126 ) begin
+      \$635  = \port$5310$0 [53:50];
     end
     if (rst) begin
-      \$635  = 1'h0;
+      \$635  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$636  = ch1_read_select_116;
-    if (bus__r_en) begin
-      \$636  = \$261 ;
+    \$636  = ch0_result_line_delay_settled_snapshot;
+    if (\$126 ) begin
+      \$636  = \port$5310$0 [54];
     end
     if (rst) begin
       \$636  = 1'h0;
@@ -5264,29 +5095,29 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$637  = ch1_read_select_117;
-    if (bus__r_en) begin
-      \$637  = \$262 ;
+    \$637  = ch0_result_line_delay_spread_snapshot;
+    if (\$126 ) begin
+      \$637  = \port$5310$0 [75:68];
     end
     if (rst) begin
-      \$637  = 1'h0;
+      \$637  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$638  = ch1_read_select_118;
-    if (bus__r_en) begin
-      \$638  = \$263 ;
+    \$638  = ch0_result_line_settled_delay_snapshot;
+    if (\$126 ) begin
+      \$638  = \port$5310$0 [67:55];
     end
     if (rst) begin
-      \$638  = 1'h0;
+      \$638  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$639  = ch1_read_select_119;
+    \$639  = ch0_window0_read;
     if (bus__r_en) begin
-      \$639  = \$264 ;
+      \$639  = \$128 ;
     end
     if (rst) begin
       \$639  = 1'h0;
@@ -5294,49 +5125,40 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$640  = ch1_read_select_11a;
-    if (bus__r_en) begin
-      \$640  = \$265 ;
+    \$640  = ch0_read_data;
+    if (bus__r_load) begin
+      \$640  = \$208 ;
     end
     if (rst) begin
-      \$640  = 1'h0;
+      \$640  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$641  = ch1_read_select_11b;
-    if (bus__r_en) begin
-      \$641  = \$266 ;
-    end
+    \$641  = \$210 ;
     if (rst) begin
       \$641  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$642  = ch1_read_select_11c;
-    if (bus__r_en) begin
-      \$642  = \$267 ;
-    end
+    \$642  = \$212 ;
     if (rst) begin
       \$642  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$643  = ch1_read_select_11d;
-    if (bus__r_en) begin
-      \$643  = \$268 ;
-    end
+    \$643  = \$214 ;
     if (rst) begin
       \$643  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$644  = ch1_read_select_11e;
-    if (bus__r_en) begin
-      \$644  = \$269 ;
+    \$644  = ch1_ctrl_periodic;
+    if (\$215 ) begin
+      \$644  = write_data[8];
     end
     if (rst) begin
       \$644  = 1'h0;
@@ -5344,9 +5166,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$645  = ch1_read_select_11f;
-    if (bus__r_en) begin
-      \$645  = \$270 ;
+    \$645  = ch1_ctrl_trigger_enable;
+    if (\$216 ) begin
+      \$645  = write_data[9];
     end
     if (rst) begin
       \$645  = 1'h0;
@@ -5354,9 +5176,11 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$646  = ch1_read_select_140;
-    if (bus__r_en) begin
-      \$646  = \$271 ;
+    \$646  = ch1_irq_status_done;
+    if (ch1__done) begin
+      \$646  = 1'h1;
+    end else if (\$218 ) begin
+      \$646  = 1'h0;
     end
     if (rst) begin
       \$646  = 1'h0;
@@ -5364,9 +5188,11 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$647  = ch1_read_select_141;
-    if (bus__r_en) begin
-      \$647  = \$272 ;
+    \$647  = ch1_irq_status_error;
+    if (ch1__frame_error) begin
+      \$647  = 1'h1;
+    end else if (\$220 ) begin
+      \$647  = 1'h0;
     end
     if (rst) begin
       \$647  = 1'h0;
@@ -5374,9 +5200,11 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$648  = ch1_read_select_142;
-    if (bus__r_en) begin
-      \$648  = \$273 ;
+    \$648  = ch1_irq_status_access_done;
+    if (ch1__ca_done) begin
+      \$648  = 1'h1;
+    end else if (\$222 ) begin
+      \$648  = 1'h0;
     end
     if (rst) begin
       \$648  = 1'h0;
@@ -5384,19 +5212,16 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$649  = ch1_read_select_143;
-    if (bus__r_en) begin
-      \$649  = \$274 ;
-    end
+    \$649  = ch1_irq_enable_write;
     if (rst) begin
       \$649  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$650  = ch1_read_select_144;
-    if (bus__r_en) begin
-      \$650  = \$275 ;
+    \$650  = ch1_irq_enable_done;
+    if (\$223 ) begin
+      \$650  = config_write_data[0];
     end
     if (rst) begin
       \$650  = 1'h0;
@@ -5404,9 +5229,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$651  = ch1_read_select_145;
-    if (bus__r_en) begin
-      \$651  = \$276 ;
+    \$651  = ch1_irq_enable_error;
+    if (\$224 ) begin
+      \$651  = config_write_data[1];
     end
     if (rst) begin
       \$651  = 1'h0;
@@ -5414,219 +5239,231 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$652  = ch1_result_status_status_snapshot;
-    if (\$277 ) begin
-      \$652  = \port$5685$0 [3:0];
+    \$652  = ch1_irq_enable_access_done;
+    if (\$225 ) begin
+      \$652  = config_write_data[2];
     end
     if (rst) begin
-      \$652  = 4'h0;
+      \$652  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$653  = ch1_result_status_cds_snapshot;
-    if (\$277 ) begin
-      \$653  = \port$5685$0 [49];
-    end
+    \$653  = ch1_cfg_ma_write;
     if (rst) begin
       \$653  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$654  = ch1_result_status_w0_ne_snapshot;
-    if (\$277 ) begin
-      \$654  = \port$5685$0 [131];
+    \$654  = ch1_cfg_ma_ma_half_period;
+    if (\$226 ) begin
+      \$654 [7:0] = config_write_data[7:0];
+    end
+    if (\$227 ) begin
+      \$654 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$654  = 1'h0;
+      \$654  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$655  = ch1_result_status_w0_nw_snapshot;
-    if (\$277 ) begin
-      \$655  = \port$5685$0 [132];
+    \$655  = ch1_cfg_ma_delay_limit;
+    if (\$228 ) begin
+      \$655 [7:0] = config_write_data[23:16];
+    end
+    if (\$229 ) begin
+      \$655 [11:8] = config_write_data[27:24];
     end
     if (rst) begin
-      \$655  = 1'h0;
+      \$655  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$656  = ch1_result_status_w0_crc_ok_snapshot;
-    if (\$277 ) begin
-      \$656  = \port$5685$0 [133];
-    end
+    \$656  = ch1_cfg_period_write;
     if (rst) begin
       \$656  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$657  = ch1_result_status_w1_ne_snapshot;
-    if (\$277 ) begin
-      \$657  = \port$5685$0 [174];
+    \$657  = ch1_cfg_period_request_period;
+    if (\$230 ) begin
+      \$657 [7:0] = config_write_data[7:0];
+    end
+    if (\$231 ) begin
+      \$657 [15:8] = config_write_data[15:8];
+    end
+    if (\$232 ) begin
+      \$657 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$657  = 1'h0;
+      \$657  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$658  = ch1_result_status_w1_nw_snapshot;
-    if (\$277 ) begin
-      \$658  = \port$5685$0 [175];
-    end
+    \$658  = ch1_cfg_break_write;
     if (rst) begin
       \$658  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$659  = ch1_result_status_w1_crc_ok_snapshot;
-    if (\$277 ) begin
-      \$659  = \port$5685$0 [176];
+    \$659  = ch1_cfg_break_break_time;
+    if (\$233 ) begin
+      \$659 [7:0] = config_write_data[7:0];
+    end
+    if (\$234 ) begin
+      \$659 [15:8] = config_write_data[15:8];
+    end
+    if (\$235 ) begin
+      \$659 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$659  = 1'h0;
+      \$659  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$660  = ch1_result_status_lc_repeat_snapshot;
-    if (\$277 ) begin
-      \$660  = \port$5685$0 [183];
-    end
+    \$660  = ch1_cfg_ack_write;
     if (rst) begin
       \$660  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$661  = ch1_result_status_lc_skip_snapshot;
-    if (\$277 ) begin
-      \$661  = \port$5685$0 [184];
+    \$661  = ch1_cfg_ack_ack_limit;
+    if (\$236 ) begin
+      \$661 [7:0] = config_write_data[7:0];
+    end
+    if (\$237 ) begin
+      \$661 [15:8] = config_write_data[15:8];
+    end
+    if (\$238 ) begin
+      \$661 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$661  = 1'h0;
+      \$661  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$662  = ch1_result_status_lc_zero_snapshot;
-    if (\$277 ) begin
-      \$662  = \port$5685$0 [185];
-    end
+    \$662  = ch1_cfg_timeout_write;
     if (rst) begin
       \$662  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$663  = ch1_result_status_spw_mismatch_snapshot;
-    if (\$277 ) begin
-      \$663  = \port$5685$0 [186];
+    \$663  = ch1_cfg_timeout_timeout_limit;
+    if (\$239 ) begin
+      \$663 [7:0] = config_write_data[7:0];
+    end
+    if (\$240 ) begin
+      \$663 [15:8] = config_write_data[15:8];
+    end
+    if (\$241 ) begin
+      \$663 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$663  = 1'h0;
+      \$663  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$664  = ch1_result_status_lc_snapshot;
-    if (\$277 ) begin
-      \$664  = \port$5685$0 [182:177];
-    end
+    \$664  = ch1_cfg_words_write;
     if (rst) begin
-      \$664  = 6'h00;
+      \$664  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$665  = ch1_result_seq_seq_snapshot;
-    if (\$277 ) begin
-      \$665  = ch1__done_count;
+    \$665  = ch1_cfg_words_w0_data_bits;
+    if (\$242 ) begin
+      \$665  = config_write_data[5:0];
     end
     if (rst) begin
-      \$665  = 16'h0000;
+      \$665  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$666  = ch1_result_seq_line_delay_snapshot;
-    if (\$277 ) begin
-      \$666  = \port$5685$0 [48:36];
+    \$666  = ch1_cfg_words_w0_nenw;
+    if (\$243 ) begin
+      \$666  = config_write_data[6];
     end
     if (rst) begin
-      \$666  = 13'h0000;
+      \$666  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$667  = ch1_result_w0_lo_data_snapshot;
-    if (\$277 ) begin
-      \$667  = \port$5685$0 [107:76];
+    \$667  = ch1_cfg_words_w0_lc;
+    if (\$244 ) begin
+      \$667  = config_write_data[7];
     end
     if (rst) begin
-      \$667  = 32'd0;
+      \$667  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$668  = ch1_result_w0_hi_data_snapshot;
-    if (\$277 ) begin
-      \$668  = \port$5685$0 [130:108];
+    \$668  = ch1_cfg_words_w0_crc;
+    if (\$245 ) begin
+      \$668  = config_write_data[9:8];
     end
     if (rst) begin
-      \$668  = 23'h000000;
+      \$668  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$669  = ch1_result_w1_lo_data_snapshot;
-    if (\$277 ) begin
-      \$669  = \port$5685$0 [165:134];
+    \$669  = ch1_cfg_words_w1_data_bits;
+    if (\$246 ) begin
+      \$669  = config_write_data[21:16];
     end
     if (rst) begin
-      \$669  = 32'd0;
+      \$669  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$670  = ch1_result_w1_hi_data_snapshot;
-    if (\$277 ) begin
-      \$670  = \port$5685$0 [173:166];
+    \$670  = ch1_cfg_words_w1_nenw;
+    if (\$247 ) begin
+      \$670  = config_write_data[22];
     end
     if (rst) begin
-      \$670  = 8'h00;
+      \$670  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$671  = ch1_result_timestamp_time_snapshot;
-    if (\$277 ) begin
-      \$671  = \port$5685$0 [35:4];
+    \$671  = ch1_cfg_words_w1_lc;
+    if (\$248 ) begin
+      \$671  = config_write_data[23];
     end
     if (rst) begin
-      \$671  = 32'd0;
+      \$671  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$672  = ch1_result_line_noise_events_snapshot;
-    if (\$277 ) begin
-      \$672  = \port$5685$0 [53:50];
+    \$672  = ch1_cfg_words_w1_crc;
+    if (\$249 ) begin
+      \$672  = config_write_data[25:24];
     end
     if (rst) begin
-      \$672  = 4'h0;
+      \$672  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$673  = ch1_result_line_delay_settled_snapshot;
-    if (\$277 ) begin
-      \$673  = \port$5685$0 [54];
+    \$673  = ch1_cfg_words_w1_enable;
+    if (\$250 ) begin
+      \$673  = config_write_data[31];
     end
     if (rst) begin
       \$673  = 1'h0;
@@ -5634,29 +5471,26 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$674  = ch1_result_line_delay_spread_snapshot;
-    if (\$277 ) begin
-      \$674  = \port$5685$0 [75:68];
-    end
+    \$674  = ch1_cfg_checks_write;
     if (rst) begin
-      \$674  = 8'h00;
+      \$674  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$675  = ch1_result_line_settled_delay_snapshot;
-    if (\$277 ) begin
-      \$675  = \port$5685$0 [67:55];
+    \$675  = ch1_cfg_checks_end_check;
+    if (\$251 ) begin
+      \$675  = config_write_data[0];
     end
     if (rst) begin
-      \$675  = 13'h0000;
+      \$675  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$676  = ch1_window0_read;
-    if (bus__r_en) begin
-      \$676  = \$279 ;
+    \$676  = ch1_cfg_checks_spw_check;
+    if (\$252 ) begin
+      \$676  = config_write_data[1];
     end
     if (rst) begin
       \$676  = 1'h0;
@@ -5664,117 +5498,988 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$677  = ch1_read_data;
-    if (bus__r_load) begin
-      \$677  = \$351 ;
+    \$677  = ch1_cfg_checks_spw_tolerance;
+    if (\$253 ) begin
+      \$677  = config_write_data[15:8];
     end
     if (rst) begin
-      \$677  = 32'd0;
+      \$677  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$678  = ch1_cfg_checks_noise_limit;
+    if (\$254 ) begin
+      \$678  = config_write_data[19:16];
+    end
+    if (rst) begin
+      \$678  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$679  = ch1_cfg_checks_delay_tolerance;
+    if (\$255 ) begin
+      \$679  = config_write_data[23:20];
+    end
+    if (rst) begin
+      \$679  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$680  = ch1_cfg_quiet_write;
+    if (rst) begin
+      \$680  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$681  = ch1_cfg_quiet_quiet_time;
+    if (\$256 ) begin
+      \$681 [7:0] = config_write_data[7:0];
+    end
+    if (\$257 ) begin
+      \$681 [11:8] = config_write_data[11:8];
+    end
+    if (rst) begin
+      \$681  = 12'h000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$682  = ch1_cfg_crc0_write;
+    if (rst) begin
+      \$682  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$683  = ch1_cfg_crc0_poly;
+    if (\$258 ) begin
+      \$683 [7:0] = config_write_data[7:0];
+    end
+    if (\$259 ) begin
+      \$683 [15:8] = config_write_data[15:8];
+    end
+    if (rst) begin
+      \$683  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$684  = ch1_cfg_crc0_width;
+    if (\$260 ) begin
+      \$684  = config_write_data[20:16];
+    end
+    if (rst) begin
+      \$684  = 5'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$685  = ch1_cfg_crc0_inverted;
+    if (\$261 ) begin
+      \$685  = config_write_data[24];
+    end
+    if (rst) begin
+      \$685  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$686  = ch1_cfg_crc0_start_write;
+    if (rst) begin
+      \$686  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$687  = ch1_cfg_crc0_start_start;
+    if (\$262 ) begin
+      \$687 [7:0] = config_write_data[7:0];
+    end
+    if (\$263 ) begin
+      \$687 [15:8] = config_write_data[15:8];
+    end
+    if (rst) begin
+      \$687  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$688  = ch1_cfg_crc1_write;
+    if (rst) begin
+      \$688  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$689  = ch1_cfg_crc1_poly;
+    if (\$264 ) begin
+      \$689 [7:0] = config_write_data[7:0];
+    end
+    if (\$265 ) begin
+      \$689 [15:8] = config_write_data[15:8];
+    end
+    if (rst) begin
+      \$689  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$690  = ch1_cfg_crc1_width;
+    if (\$266 ) begin
+      \$690  = config_write_data[20:16];
+    end
+    if (rst) begin
+      \$690  = 5'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$691  = ch1_cfg_crc1_inverted;
+    if (\$267 ) begin
+      \$691  = config_write_data[24];
+    end
+    if (rst) begin
+      \$691  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$692  = ch1_cfg_crc1_start_write;
+    if (rst) begin
+      \$692  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$693  = ch1_cfg_crc1_start_start;
+    if (\$268 ) begin
+      \$693 [7:0] = config_write_data[7:0];
+    end
+    if (\$269 ) begin
+      \$693 [15:8] = config_write_data[15:8];
+    end
+    if (rst) begin
+      \$693  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$694  = ch1_ca_request_write;
+    if (rst) begin
+      \$694  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$695  = ch1_ca_request_slave_id;
+    if (\$270 ) begin
+      \$695  = config_write_data[2:0];
+    end
+    if (rst) begin
+      \$695  = 3'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$696  = ch1_ca_request_address;
+    if (\$271 ) begin
+      \$696  = config_write_data[14:8];
+    end
+    if (rst) begin
+      \$696  = 7'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$697  = ch1_ca_request_count;
+    if (\$272 ) begin
+      \$697  = config_write_data[22:16];
+    end
+    if (rst) begin
+      \$697  = 7'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$698  = \ch1_ca_request_write$301 ;
+    if (\$273 ) begin
+      \$698  = config_write_data[24];
+    end
+    if (rst) begin
+      \$698  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$699  = \$275 ;
+    if (rst) begin
+      \$699  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$700  = \$277 ;
+    if (rst) begin
+      \$700  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$701  = ch1_read_select_100;
+    if (bus__r_en) begin
+      \$701  = \$278 ;
+    end
+    if (rst) begin
+      \$701  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$702  = ch1_read_select_101;
+    if (bus__r_en) begin
+      \$702  = \$279 ;
+    end
+    if (rst) begin
+      \$702  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$703  = ch1_read_select_102;
+    if (bus__r_en) begin
+      \$703  = \$280 ;
+    end
+    if (rst) begin
+      \$703  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$704  = ch1_read_select_104;
+    if (bus__r_en) begin
+      \$704  = \$281 ;
+    end
+    if (rst) begin
+      \$704  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$705  = ch1_read_select_105;
+    if (bus__r_en) begin
+      \$705  = \$282 ;
+    end
+    if (rst) begin
+      \$705  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$706  = ch1_read_select_108;
+    if (bus__r_en) begin
+      \$706  = \$283 ;
+    end
+    if (rst) begin
+      \$706  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$707  = ch1_read_select_109;
+    if (bus__r_en) begin
+      \$707  = \$284 ;
+    end
+    if (rst) begin
+      \$707  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$708  = ch1_read_select_10a;
+    if (bus__r_en) begin
+      \$708  = \$285 ;
+    end
+    if (rst) begin
+      \$708  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$709  = ch1_read_select_10b;
+    if (bus__r_en) begin
+      \$709  = \$286 ;
+    end
+    if (rst) begin
+      \$709  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$710  = ch1_read_select_10c;
+    if (bus__r_en) begin
+      \$710  = \$287 ;
+    end
+    if (rst) begin
+      \$710  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$711  = ch1_read_select_10d;
+    if (bus__r_en) begin
+      \$711  = \$288 ;
+    end
+    if (rst) begin
+      \$711  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$712  = ch1_read_select_10e;
+    if (bus__r_en) begin
+      \$712  = \$289 ;
+    end
+    if (rst) begin
+      \$712  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$713  = ch1_read_select_10f;
+    if (bus__r_en) begin
+      \$713  = \$290 ;
+    end
+    if (rst) begin
+      \$713  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$714  = ch1_read_select_110;
+    if (bus__r_en) begin
+      \$714  = \$291 ;
+    end
+    if (rst) begin
+      \$714  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$715  = ch1_read_select_111;
+    if (bus__r_en) begin
+      \$715  = \$292 ;
+    end
+    if (rst) begin
+      \$715  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$716  = ch1_read_select_112;
+    if (bus__r_en) begin
+      \$716  = \$293 ;
+    end
+    if (rst) begin
+      \$716  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$717  = ch1_read_select_113;
+    if (bus__r_en) begin
+      \$717  = \$294 ;
+    end
+    if (rst) begin
+      \$717  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$718  = ch1_read_select_114;
+    if (bus__r_en) begin
+      \$718  = \$295 ;
+    end
+    if (rst) begin
+      \$718  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$719  = ch1_read_select_115;
+    if (bus__r_en) begin
+      \$719  = \$296 ;
+    end
+    if (rst) begin
+      \$719  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$720  = ch1_read_select_116;
+    if (bus__r_en) begin
+      \$720  = \$297 ;
+    end
+    if (rst) begin
+      \$720  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$721  = ch1_read_select_117;
+    if (bus__r_en) begin
+      \$721  = \$298 ;
+    end
+    if (rst) begin
+      \$721  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$722  = ch1_read_select_118;
+    if (bus__r_en) begin
+      \$722  = \$299 ;
+    end
+    if (rst) begin
+      \$722  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$723  = ch1_read_select_119;
+    if (bus__r_en) begin
+      \$723  = \$300 ;
+    end
+    if (rst) begin
+      \$723  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$724  = ch1_read_select_11a;
+    if (bus__r_en) begin
+      \$724  = \$301 ;
+    end
+    if (rst) begin
+      \$724  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$725  = ch1_read_select_11b;
+    if (bus__r_en) begin
+      \$725  = \$302 ;
+    end
+    if (rst) begin
+      \$725  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$726  = ch1_read_select_11c;
+    if (bus__r_en) begin
+      \$726  = \$303 ;
+    end
+    if (rst) begin
+      \$726  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$727  = ch1_read_select_11d;
+    if (bus__r_en) begin
+      \$727  = \$304 ;
+    end
+    if (rst) begin
+      \$727  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$728  = ch1_read_select_11e;
+    if (bus__r_en) begin
+      \$728  = \$305 ;
+    end
+    if (rst) begin
+      \$728  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$729  = ch1_read_select_11f;
+    if (bus__r_en) begin
+      \$729  = \$306 ;
+    end
+    if (rst) begin
+      \$729  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$730  = ch1_read_select_120;
+    if (bus__r_en) begin
+      \$730  = \$307 ;
+    end
+    if (rst) begin
+      \$730  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$731  = ch1_read_select_121;
+    if (bus__r_en) begin
+      \$731  = \$308 ;
+    end
+    if (rst) begin
+      \$731  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$732  = ch1_read_select_122;
+    if (bus__r_en) begin
+      \$732  = \$309 ;
+    end
+    if (rst) begin
+      \$732  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$733  = ch1_read_select_123;
+    if (bus__r_en) begin
+      \$733  = \$310 ;
+    end
+    if (rst) begin
+      \$733  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$734  = ch1_read_select_140;
+    if (bus__r_en) begin
+      \$734  = \$311 ;
+    end
+    if (rst) begin
+      \$734  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$735  = ch1_read_select_141;
+    if (bus__r_en) begin
+      \$735  = \$312 ;
+    end
+    if (rst) begin
+      \$735  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$736  = ch1_read_select_142;
+    if (bus__r_en) begin
+      \$736  = \$313 ;
+    end
+    if (rst) begin
+      \$736  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$737  = ch1_read_select_143;
+    if (bus__r_en) begin
+      \$737  = \$314 ;
+    end
+    if (rst) begin
+      \$737  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$738  = ch1_read_select_144;
+    if (bus__r_en) begin
+      \$738  = \$315 ;
+    end
+    if (rst) begin
+      \$738  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$739  = ch1_read_select_145;
+    if (bus__r_en) begin
+      \$739  = \$316 ;
+    end
+    if (rst) begin
+      \$739  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$740  = ch1_result_status_status_snapshot;
+    if (\$317 ) begin
+      \$740  = \port$5861$0 [3:0];
+    end
+    if (rst) begin
+      \$740  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$741  = ch1_result_status_cds_snapshot;
+    if (\$317 ) begin
+      \$741  = \port$5861$0 [49];
+    end
+    if (rst) begin
+      \$741  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$742  = ch1_result_status_w0_ne_snapshot;
+    if (\$317 ) begin
+      \$742  = \port$5861$0 [131];
+    end
+    if (rst) begin
+      \$742  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$743  = ch1_result_status_w0_nw_snapshot;
+    if (\$317 ) begin
+      \$743  = \port$5861$0 [132];
+    end
+    if (rst) begin
+      \$743  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$744  = ch1_result_status_w0_crc_ok_snapshot;
+    if (\$317 ) begin
+      \$744  = \port$5861$0 [133];
+    end
+    if (rst) begin
+      \$744  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$745  = ch1_result_status_w1_ne_snapshot;
+    if (\$317 ) begin
+      \$745  = \port$5861$0 [174];
+    end
+    if (rst) begin
+      \$745  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$746  = ch1_result_status_w1_nw_snapshot;
+    if (\$317 ) begin
+      \$746  = \port$5861$0 [175];
+    end
+    if (rst) begin
+      \$746  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$747  = ch1_result_status_w1_crc_ok_snapshot;
+    if (\$317 ) begin
+      \$747  = \port$5861$0 [176];
+    end
+    if (rst) begin
+      \$747  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$748  = ch1_result_status_lc_repeat_snapshot;
+    if (\$317 ) begin
+      \$748  = \port$5861$0 [183];
+    end
+    if (rst) begin
+      \$748  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$749  = ch1_result_status_lc_skip_snapshot;
+    if (\$317 ) begin
+      \$749  = \port$5861$0 [184];
+    end
+    if (rst) begin
+      \$749  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$750  = ch1_result_status_lc_zero_snapshot;
+    if (\$317 ) begin
+      \$750  = \port$5861$0 [185];
+    end
+    if (rst) begin
+      \$750  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$751  = ch1_result_status_spw_mismatch_snapshot;
+    if (\$317 ) begin
+      \$751  = \port$5861$0 [186];
+    end
+    if (rst) begin
+      \$751  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$752  = ch1_result_status_lc_snapshot;
+    if (\$317 ) begin
+      \$752  = \port$5861$0 [182:177];
+    end
+    if (rst) begin
+      \$752  = 6'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$753  = ch1_result_seq_seq_snapshot;
+    if (\$317 ) begin
+      \$753  = ch1__done_count;
+    end
+    if (rst) begin
+      \$753  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$754  = ch1_result_seq_line_delay_snapshot;
+    if (\$317 ) begin
+      \$754  = \port$5861$0 [48:36];
+    end
+    if (rst) begin
+      \$754  = 13'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$755  = ch1_result_w0_lo_data_snapshot;
+    if (\$317 ) begin
+      \$755  = \port$5861$0 [107:76];
+    end
+    if (rst) begin
+      \$755  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$756  = ch1_result_w0_hi_data_snapshot;
+    if (\$317 ) begin
+      \$756  = \port$5861$0 [130:108];
+    end
+    if (rst) begin
+      \$756  = 23'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$757  = ch1_result_w1_lo_data_snapshot;
+    if (\$317 ) begin
+      \$757  = \port$5861$0 [165:134];
+    end
+    if (rst) begin
+      \$757  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$758  = ch1_result_w1_hi_data_snapshot;
+    if (\$317 ) begin
+      \$758  = \port$5861$0 [173:166];
+    end
+    if (rst) begin
+      \$758  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$759  = ch1_result_timestamp_time_snapshot;
+    if (\$317 ) begin
+      \$759  = \port$5861$0 [35:4];
+    end
+    if (rst) begin
+      \$759  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$760  = ch1_result_line_noise_events_snapshot;
+    if (\$317 ) begin
+      \$760  = \port$5861$0 [53:50];
+    end
+    if (rst) begin
+      \$760  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$761  = ch1_result_line_delay_settled_snapshot;
+    if (\$317 ) begin
+      \$761  = \port$5861$0 [54];
+    end
+    if (rst) begin
+      \$761  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$762  = ch1_result_line_delay_spread_snapshot;
+    if (\$317 ) begin
+      \$762  = \port$5861$0 [75:68];
+    end
+    if (rst) begin
+      \$762  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$763  = ch1_result_line_settled_delay_snapshot;
+    if (\$317 ) begin
+      \$763  = \port$5861$0 [67:55];
+    end
+    if (rst) begin
+      \$763  = 13'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$764  = ch1_window0_read;
+    if (bus__r_en) begin
+      \$764  = \$319 ;
+    end
+    if (rst) begin
+      \$764  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$765  = ch1_read_data;
+    if (bus__r_load) begin
+      \$765  = \$399 ;
+    end
+    if (rst) begin
+      \$765  = 32'd0;
     end
   end
   assign bus__w_strb = 4'hf;
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, ch1_irq, ch0_irq };
-  assign ch0__status = \port$5134$0 [3:0];
-  assign ch0__cds = \port$5134$0 [49];
-  assign ch0__word0_ne = \port$5134$0 [131];
-  assign ch0__word0_nw = \port$5134$0 [132];
-  assign ch0__word0_crc_ok = \port$5134$0 [133];
-  assign ch0__word1_ne = \port$5134$0 [174];
-  assign ch0__word1_nw = \port$5134$0 [175];
-  assign ch0__word1_crc_ok = \port$5134$0 [176];
-  assign ch0__lc_repeat = \port$5134$0 [183];
-  assign ch0__lc_skip = \port$5134$0 [184];
-  assign ch0__lc_zero = \port$5134$0 [185];
-  assign ch0__spw_mismatch = \port$5134$0 [186];
-  assign ch0__lc = \port$5134$0 [182:177];
-  assign ch0__line_delay = \port$5134$0 [48:36];
-  assign ch0__word0_position = \port$5134$0 [130:76];
-  assign ch0__word1_position = \port$5134$0 [173:134];
-  assign ch0__timestamp = \port$5134$0 [35:4];
-  assign ch0__noise_events = \port$5134$0 [53:50];
-  assign ch0__delay_settled = \port$5134$0 [54];
-  assign ch0__delay_spread = \port$5134$0 [75:68];
-  assign ch0__settled_delay = \port$5134$0 [67:55];
+  assign ch0__status = \port$5310$0 [3:0];
+  assign ch0__cds = \port$5310$0 [49];
+  assign ch0__word0_ne = \port$5310$0 [131];
+  assign ch0__word0_nw = \port$5310$0 [132];
+  assign ch0__word0_crc_ok = \port$5310$0 [133];
+  assign ch0__word1_ne = \port$5310$0 [174];
+  assign ch0__word1_nw = \port$5310$0 [175];
+  assign ch0__word1_crc_ok = \port$5310$0 [176];
+  assign ch0__lc_repeat = \port$5310$0 [183];
+  assign ch0__lc_skip = \port$5310$0 [184];
+  assign ch0__lc_zero = \port$5310$0 [185];
+  assign ch0__spw_mismatch = \port$5310$0 [186];
+  assign ch0__lc = \port$5310$0 [182:177];
+  assign ch0__line_delay = \port$5310$0 [48:36];
+  assign ch0__word0_position = \port$5310$0 [130:76];
+  assign ch0__word1_position = \port$5310$0 [173:134];
+  assign ch0__timestamp = \port$5310$0 [35:4];
+  assign ch0__noise_events = \port$5310$0 [53:50];
+  assign ch0__delay_settled = \port$5310$0 [54];
+  assign ch0__delay_spread = \port$5310$0 [75:68];
+  assign ch0__settled_delay = \port$5310$0 [67:55];
   assign ch0__cap_data_bits_w0 = 6'h37;
   assign ch0__cap_data_bits_w1 = 6'h28;
   assign ch0__cap_timer_width = 6'h18;
   assign ch0__cap_counters = 1'h1;
   assign ch0__cap_timestamp = 1'h1;
   assign ch0__cap_register_access = 1'h1;
-  assign ch0__count_crc_word0 = \port$5147$0 [15:0];
-  assign ch0__count_crc_word1 = \port$5147$0 [31:16];
-  assign ch0__count_no_ack = \port$5147$0 [47:32];
-  assign ch0__count_no_start = \port$5147$0 [63:48];
-  assign ch0__count_delay_range = \port$5147$0 [79:64];
-  assign ch0__count_slo_stuck_low = \port$5147$0 [95:80];
-  assign ch0__count_lc_repeat = \port$5147$0 [111:96];
-  assign ch0__count_lc_skip = \port$5147$0 [127:112];
-  assign ch0__count_lc_zero = \port$5147$0 [143:128];
-  assign ch0__count_spw_mismatch = \port$5147$0 [159:144];
-  assign ch0__count_overrun = \port$5147$0 [175:160];
-  assign ch0__count_aborted = \port$5147$0 [191:176];
-  assign ch0__count_no_stop = \port$5147$0 [207:192];
-  assign ch0__count_noisy_line = \port$5147$0 [223:208];
-  assign ch0__count_delay_jump = \port$5147$0 [239:224];
-  assign ch0__count_noise_event = \port$5147$0 [255:240];
-  assign ch0__ca_status = \port$5279$0 [2:0];
-  assign ch0__ca_bytes_done = \port$5279$0 [9:3];
-  assign ch0__count_ca_crc4_error = \port$5147$0 [271:256];
-  assign ch0__count_ca_no_answer = \port$5147$0 [287:272];
-  assign ch0__count_ca_refused = \port$5147$0 [303:288];
-  assign ch0__count_ca_aborted = \port$5147$0 [319:304];
-  assign ch0__count_ca_data_fault = \port$5147$0 [335:320];
-  assign ch1__status = \port$5685$0 [3:0];
-  assign ch1__cds = \port$5685$0 [49];
-  assign ch1__word0_ne = \port$5685$0 [131];
-  assign ch1__word0_nw = \port$5685$0 [132];
-  assign ch1__word0_crc_ok = \port$5685$0 [133];
-  assign ch1__word1_ne = \port$5685$0 [174];
-  assign ch1__word1_nw = \port$5685$0 [175];
-  assign ch1__word1_crc_ok = \port$5685$0 [176];
-  assign ch1__lc_repeat = \port$5685$0 [183];
-  assign ch1__lc_skip = \port$5685$0 [184];
-  assign ch1__lc_zero = \port$5685$0 [185];
-  assign ch1__spw_mismatch = \port$5685$0 [186];
-  assign ch1__lc = \port$5685$0 [182:177];
-  assign ch1__line_delay = \port$5685$0 [48:36];
-  assign ch1__word0_position = \port$5685$0 [130:76];
-  assign ch1__word1_position = \port$5685$0 [173:134];
-  assign ch1__timestamp = \port$5685$0 [35:4];
-  assign ch1__noise_events = \port$5685$0 [53:50];
-  assign ch1__delay_settled = \port$5685$0 [54];
-  assign ch1__delay_spread = \port$5685$0 [75:68];
-  assign ch1__settled_delay = \port$5685$0 [67:55];
+  assign ch0__count_crc_word0 = \port$5323$0 [15:0];
+  assign ch0__count_crc_word1 = \port$5323$0 [31:16];
+  assign ch0__count_no_ack = \port$5323$0 [47:32];
+  assign ch0__count_no_start = \port$5323$0 [63:48];
+  assign ch0__count_delay_range = \port$5323$0 [79:64];
+  assign ch0__count_slo_stuck_low = \port$5323$0 [95:80];
+  assign ch0__count_lc_repeat = \port$5323$0 [111:96];
+  assign ch0__count_lc_skip = \port$5323$0 [127:112];
+  assign ch0__count_lc_zero = \port$5323$0 [143:128];
+  assign ch0__count_spw_mismatch = \port$5323$0 [159:144];
+  assign ch0__count_overrun = \port$5323$0 [175:160];
+  assign ch0__count_aborted = \port$5323$0 [191:176];
+  assign ch0__count_no_stop = \port$5323$0 [207:192];
+  assign ch0__count_noisy_line = \port$5323$0 [223:208];
+  assign ch0__count_delay_jump = \port$5323$0 [239:224];
+  assign ch0__count_noise_event = \port$5323$0 [255:240];
+  assign ch0__ca_status = \port$5455$0 [2:0];
+  assign ch0__ca_bytes_done = \port$5455$0 [9:3];
+  assign ch0__count_ca_crc4_error = \port$5323$0 [271:256];
+  assign ch0__count_ca_no_answer = \port$5323$0 [287:272];
+  assign ch0__count_ca_refused = \port$5323$0 [303:288];
+  assign ch0__count_ca_aborted = \port$5323$0 [319:304];
+  assign ch0__count_ca_data_fault = \port$5323$0 [335:320];
+  assign ch1__status = \port$5861$0 [3:0];
+  assign ch1__cds = \port$5861$0 [49];
+  assign ch1__word0_ne = \port$5861$0 [131];
+  assign ch1__word0_nw = \port$5861$0 [132];
+  assign ch1__word0_crc_ok = \port$5861$0 [133];
+  assign ch1__word1_ne = \port$5861$0 [174];
+  assign ch1__word1_nw = \port$5861$0 [175];
+  assign ch1__word1_crc_ok = \port$5861$0 [176];
+  assign ch1__lc_repeat = \port$5861$0 [183];
+  assign ch1__lc_skip = \port$5861$0 [184];
+  assign ch1__lc_zero = \port$5861$0 [185];
+  assign ch1__spw_mismatch = \port$5861$0 [186];
+  assign ch1__lc = \port$5861$0 [182:177];
+  assign ch1__line_delay = \port$5861$0 [48:36];
+  assign ch1__word0_position = \port$5861$0 [130:76];
+  assign ch1__word1_position = \port$5861$0 [173:134];
+  assign ch1__timestamp = \port$5861$0 [35:4];
+  assign ch1__noise_events = \port$5861$0 [53:50];
+  assign ch1__delay_settled = \port$5861$0 [54];
+  assign ch1__delay_spread = \port$5861$0 [75:68];
+  assign ch1__settled_delay = \port$5861$0 [67:55];
   assign ch1__cap_data_bits_w0 = 6'h37;
   assign ch1__cap_data_bits_w1 = 6'h28;
   assign ch1__cap_timer_width = 6'h18;
   assign ch1__cap_counters = 1'h1;
   assign ch1__cap_timestamp = 1'h1;
   assign ch1__cap_register_access = 1'h1;
-  assign ch1__count_crc_word0 = \port$5698$0 [15:0];
-  assign ch1__count_crc_word1 = \port$5698$0 [31:16];
-  assign ch1__count_no_ack = \port$5698$0 [47:32];
-  assign ch1__count_no_start = \port$5698$0 [63:48];
-  assign ch1__count_delay_range = \port$5698$0 [79:64];
-  assign ch1__count_slo_stuck_low = \port$5698$0 [95:80];
-  assign ch1__count_lc_repeat = \port$5698$0 [111:96];
-  assign ch1__count_lc_skip = \port$5698$0 [127:112];
-  assign ch1__count_lc_zero = \port$5698$0 [143:128];
-  assign ch1__count_spw_mismatch = \port$5698$0 [159:144];
-  assign ch1__count_overrun = \port$5698$0 [175:160];
-  assign ch1__count_aborted = \port$5698$0 [191:176];
-  assign ch1__count_no_stop = \port$5698$0 [207:192];
-  assign ch1__count_noisy_line = \port$5698$0 [223:208];
-  assign ch1__count_delay_jump = \port$5698$0 [239:224];
-  assign ch1__count_noise_event = \port$5698$0 [255:240];
-  assign ch1__ca_status = \port$5830$0 [2:0];
-  assign ch1__ca_bytes_done = \port$5830$0 [9:3];
-  assign ch1__count_ca_crc4_error = \port$5698$0 [271:256];
-  assign ch1__count_ca_no_answer = \port$5698$0 [287:272];
-  assign ch1__count_ca_refused = \port$5698$0 [303:288];
-  assign ch1__count_ca_aborted = \port$5698$0 [319:304];
-  assign ch1__count_ca_data_fault = \port$5698$0 [335:320];
+  assign ch1__count_crc_word0 = \port$5874$0 [15:0];
+  assign ch1__count_crc_word1 = \port$5874$0 [31:16];
+  assign ch1__count_no_ack = \port$5874$0 [47:32];
+  assign ch1__count_no_start = \port$5874$0 [63:48];
+  assign ch1__count_delay_range = \port$5874$0 [79:64];
+  assign ch1__count_slo_stuck_low = \port$5874$0 [95:80];
+  assign ch1__count_lc_repeat = \port$5874$0 [111:96];
+  assign ch1__count_lc_skip = \port$5874$0 [127:112];
+  assign ch1__count_lc_zero = \port$5874$0 [143:128];
+  assign ch1__count_spw_mismatch = \port$5874$0 [159:144];
+  assign ch1__count_overrun = \port$5874$0 [175:160];
+  assign ch1__count_aborted = \port$5874$0 [191:176];
+  assign ch1__count_no_stop = \port$5874$0 [207:192];
+  assign ch1__count_noisy_line = \port$5874$0 [223:208];
+  assign ch1__count_delay_jump = \port$5874$0 [239:224];
+  assign ch1__count_noise_event = \port$5874$0 [255:240];
+  assign ch1__ca_status = \port$6006$0 [2:0];
+  assign ch1__ca_bytes_done = \port$6006$0 [9:3];
+  assign ch1__count_ca_crc4_error = \port$5874$0 [271:256];
+  assign ch1__count_ca_no_answer = \port$5874$0 [287:272];
+  assign ch1__count_ca_refused = \port$5874$0 [303:288];
+  assign ch1__count_ca_aborted = \port$5874$0 [319:304];
+  assign ch1__count_ca_data_fault = \port$5874$0 [335:320];
   assign glob__trigger = g_trigger_start;
   assign ch0__start = ch0_ctrl_start;
   assign ch0__abort_cycle = ch0_ctrl_abort;
@@ -5802,10 +6507,18 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   assign ch0__cfg_noise_limit = ch0_cfg_checks_noise_limit;
   assign ch0__cfg_delay_tolerance = ch0_cfg_checks_delay_tolerance;
   assign ch0__cfg_quiet_time = ch0_cfg_quiet_quiet_time;
+  assign ch0__cfg_w0_crc_poly = ch0_cfg_crc0_poly;
+  assign ch0__cfg_w0_crc_width = ch0_cfg_crc0_width;
+  assign ch0__cfg_w0_crc_inverted = ch0_cfg_crc0_inverted;
+  assign ch0__cfg_w0_crc_start = ch0_cfg_crc0_start_start;
+  assign ch0__cfg_w1_crc_poly = ch0_cfg_crc1_poly;
+  assign ch0__cfg_w1_crc_width = ch0_cfg_crc1_width;
+  assign ch0__cfg_w1_crc_inverted = ch0_cfg_crc1_inverted;
+  assign ch0__cfg_w1_crc_start = ch0_cfg_crc1_start_start;
   assign ch0__ca_slave_id = ch0_ca_request_slave_id;
   assign ch0__ca_address = ch0_ca_request_address;
   assign ch0__ca_count = ch0_ca_request_count;
-  assign ch0__ca_write = \ch0_ca_request_write$85 ;
+  assign ch0__ca_write = \ch0_ca_request_write$101 ;
   assign ch0__ca_start = ch0_ca_ctrl_start;
   assign ch0__ca_abort = ch0_ca_ctrl_abort;
   assign ch0__ca_wbuf_data = write_data;
@@ -5836,10 +6549,18 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   assign ch1__cfg_noise_limit = ch1_cfg_checks_noise_limit;
   assign ch1__cfg_delay_tolerance = ch1_cfg_checks_delay_tolerance;
   assign ch1__cfg_quiet_time = ch1_cfg_quiet_quiet_time;
+  assign ch1__cfg_w0_crc_poly = ch1_cfg_crc0_poly;
+  assign ch1__cfg_w0_crc_width = ch1_cfg_crc0_width;
+  assign ch1__cfg_w0_crc_inverted = ch1_cfg_crc0_inverted;
+  assign ch1__cfg_w0_crc_start = ch1_cfg_crc0_start_start;
+  assign ch1__cfg_w1_crc_poly = ch1_cfg_crc1_poly;
+  assign ch1__cfg_w1_crc_width = ch1_cfg_crc1_width;
+  assign ch1__cfg_w1_crc_inverted = ch1_cfg_crc1_inverted;
+  assign ch1__cfg_w1_crc_start = ch1_cfg_crc1_start_start;
   assign ch1__ca_slave_id = ch1_ca_request_slave_id;
   assign ch1__ca_address = ch1_ca_request_address;
   assign ch1__ca_count = ch1_ca_request_count;
-  assign ch1__ca_write = \ch1_ca_request_write$265 ;
+  assign ch1__ca_write = \ch1_ca_request_write$301 ;
   assign ch1__ca_start = ch1_ca_ctrl_start;
   assign ch1__ca_abort = ch1_ca_ctrl_abort;
   assign ch1__ca_wbuf_addr = write_addr[3:0];
@@ -5850,20 +6571,20 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   assign \$9  = \$8 ;
   assign \$14  = 32'd0;
   assign \$15  = \$13 ;
-  assign \$396  = \$395 ;
-  assign \$398  = \$397 ;
-  assign \$400  = \$399 ;
-  assign \$440  = \$439 ;
-  assign \$442  = \$441 ;
-  assign \$444  = \$443 ;
-  assign \$114  = \$113 ;
-  assign \$173  = 32'd0;
-  assign \$174  = \$172 ;
-  assign \$281  = \$280 ;
-  assign \$340  = 32'd0;
-  assign \$341  = \$339 ;
+  assign \$448  = \$447 ;
+  assign \$450  = \$449 ;
+  assign \$452  = \$451 ;
+  assign \$496  = \$495 ;
+  assign \$498  = \$497 ;
+  assign \$500  = \$499 ;
+  assign \$130  = \$129 ;
+  assign \$197  = 32'd0;
+  assign \$198  = \$196 ;
+  assign \$321  = \$320 ;
+  assign \$388  = 32'd0;
+  assign \$389  = \$387 ;
   assign g_irq = 1'h0;
-  assign \$445  = g_read_data;
+  assign \$501  = g_read_data;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -8015,9 +8736,9 @@ module \biss_master_uart.bus.transmitter (rst, ready, tx, data, valid, clk);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0 (clk, rst, \trigger$179 , ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__ca_busy, regs__ca_rbuf_data, ca_rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period
-, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_quiet_time, ca_slave_id, ca_address, ca_count
-, ca_write, ca_start, ca_abort, regs__done_count, ma, regs__done, \port$5134$0 , \port$5147$0 , regs__ca_done, \port$5279$0 , slo);
+module \biss_master_uart.ch0 (clk, rst, \trigger$195 , ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__ca_busy, regs__ca_rbuf_data, ca_rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period
+, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted
+, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, regs__done_count, ma, regs__done, \port$5310$0 , \port$5323$0 , regs__ca_done, \port$5455$0 , slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$20  = 0;
   wire \$1 ;
   wire [16:0] \$2 ;
@@ -8095,6 +8816,14 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$179 , ca_wbuf_en, ca_rbuf_en, r
   (* enum_value_11 = "CUSTOM" *)
   input [1:0] cfg_w0_crc;
   wire [1:0] cfg_w0_crc;
+  input cfg_w0_crc_inverted;
+  wire cfg_w0_crc_inverted;
+  input [15:0] cfg_w0_crc_poly;
+  wire [15:0] cfg_w0_crc_poly;
+  input [15:0] cfg_w0_crc_start;
+  wire [15:0] cfg_w0_crc_start;
+  input [4:0] cfg_w0_crc_width;
+  wire [4:0] cfg_w0_crc_width;
   input [5:0] cfg_w0_data_bits;
   wire [5:0] cfg_w0_data_bits;
   input cfg_w0_lc;
@@ -8108,6 +8837,14 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$179 , ca_wbuf_en, ca_rbuf_en, r
   (* enum_value_11 = "CUSTOM" *)
   input [1:0] cfg_w1_crc;
   wire [1:0] cfg_w1_crc;
+  input cfg_w1_crc_inverted;
+  wire cfg_w1_crc_inverted;
+  input [15:0] cfg_w1_crc_poly;
+  wire [15:0] cfg_w1_crc_poly;
+  input [15:0] cfg_w1_crc_start;
+  wire [15:0] cfg_w1_crc_start;
+  input [4:0] cfg_w1_crc_width;
+  wire [4:0] cfg_w1_crc_width;
   input [5:0] cfg_w1_data_bits;
   wire [5:0] cfg_w1_data_bits;
   input cfg_w1_enable;
@@ -8152,16 +8889,16 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$179 , ca_wbuf_en, ca_rbuf_en, r
   wire [12:0] line_delay;
   output ma;
   wire ma;
-  wire \ma$182 ;
+  wire \ma$198 ;
   wire [3:0] noise_events;
   input periodic;
   wire periodic;
-  output [186:0] \port$5134$0 ;
-  wire [186:0] \port$5134$0 ;
-  output [335:0] \port$5147$0 ;
-  wire [335:0] \port$5147$0 ;
-  output [9:0] \port$5279$0 ;
-  wire [9:0] \port$5279$0 ;
+  output [186:0] \port$5310$0 ;
+  wire [186:0] \port$5310$0 ;
+  output [335:0] \port$5323$0 ;
+  wire [335:0] \port$5323$0 ;
+  output [9:0] \port$5455$0 ;
+  wire [9:0] \port$5455$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -8210,6 +8947,10 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$179 , ca_wbuf_en, ca_rbuf_en, r
   (* enum_value_10 = "CRC16" *)
   (* enum_value_11 = "CUSTOM" *)
   wire [1:0] regs__cfg_w0_crc;
+  wire regs__cfg_w0_crc_inverted;
+  wire [15:0] regs__cfg_w0_crc_poly;
+  wire [15:0] regs__cfg_w0_crc_start;
+  wire [4:0] regs__cfg_w0_crc_width;
   wire [5:0] regs__cfg_w0_data_bits;
   wire regs__cfg_w0_lc;
   wire regs__cfg_w0_nenw;
@@ -8219,6 +8960,10 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$179 , ca_wbuf_en, ca_rbuf_en, r
   (* enum_value_10 = "CRC16" *)
   (* enum_value_11 = "CUSTOM" *)
   wire [1:0] regs__cfg_w1_crc;
+  wire regs__cfg_w1_crc_inverted;
+  wire [15:0] regs__cfg_w1_crc_poly;
+  wire [15:0] regs__cfg_w1_crc_start;
+  wire [4:0] regs__cfg_w1_crc_width;
   wire [5:0] regs__cfg_w1_data_bits;
   wire regs__cfg_w1_enable;
   wire regs__cfg_w1_lc;
@@ -8282,7 +9027,7 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$179 , ca_wbuf_en, ca_rbuf_en, r
   wire [12:0] settled_delay;
   input slo;
   wire slo;
-  wire \slo$184 ;
+  wire \slo$200 ;
   wire spw_mismatch;
   input start;
   wire start;
@@ -8305,8 +9050,8 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$179 , ca_wbuf_en, ca_rbuf_en, r
   wire [3:0] status;
   wire [31:0] timestamp;
   wire trigger;
-  input \trigger$179 ;
-  wire \trigger$179 ;
+  input \trigger$195 ;
+  wire \trigger$195 ;
   wire valid;
   wire word0_crc_ok;
   wire word0_ne;
@@ -8316,7 +9061,7 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$179 , ca_wbuf_en, ca_rbuf_en, r
   wire word1_ne;
   wire word1_nw;
   wire [39:0] word1_position;
-  assign trigger = \trigger$179  & regs__trigger_enable;
+  assign trigger = \trigger$195  & regs__trigger_enable;
   assign \$2  = regs__done_count + 1'h1;
   always @(posedge clk)
     abort_cycle <= \$3 ;
@@ -8350,10 +9095,18 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$179 , ca_wbuf_en, ca_rbuf_en, r
     .cfg_spw_tolerance(cfg_spw_tolerance),
     .cfg_timeout_limit(cfg_timeout_limit),
     .cfg_w0_crc(cfg_w0_crc),
+    .cfg_w0_crc_inverted(cfg_w0_crc_inverted),
+    .cfg_w0_crc_poly(cfg_w0_crc_poly),
+    .cfg_w0_crc_start(cfg_w0_crc_start),
+    .cfg_w0_crc_width(cfg_w0_crc_width),
     .cfg_w0_data_bits(cfg_w0_data_bits),
     .cfg_w0_lc(cfg_w0_lc),
     .cfg_w0_nenw(cfg_w0_nenw),
     .cfg_w1_crc(cfg_w1_crc),
+    .cfg_w1_crc_inverted(cfg_w1_crc_inverted),
+    .cfg_w1_crc_poly(cfg_w1_crc_poly),
+    .cfg_w1_crc_start(cfg_w1_crc_start),
+    .cfg_w1_crc_width(cfg_w1_crc_width),
     .cfg_w1_data_bits(cfg_w1_data_bits),
     .cfg_w1_enable(cfg_w1_enable),
     .cfg_w1_lc(cfg_w1_lc),
@@ -8502,6 +9255,14 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$179 , ca_wbuf_en, ca_rbuf_en, r
   assign count_delay_jump = \$6 [239:224];
   assign regs__count_noise_event = \$6 [255:240];
   assign count_noise_event = \$6 [255:240];
+  assign regs__cfg_w0_crc_poly = cfg_w0_crc_poly;
+  assign regs__cfg_w0_crc_width = cfg_w0_crc_width;
+  assign regs__cfg_w0_crc_inverted = cfg_w0_crc_inverted;
+  assign regs__cfg_w0_crc_start = cfg_w0_crc_start;
+  assign regs__cfg_w1_crc_poly = cfg_w1_crc_poly;
+  assign regs__cfg_w1_crc_width = cfg_w1_crc_width;
+  assign regs__cfg_w1_crc_inverted = cfg_w1_crc_inverted;
+  assign regs__cfg_w1_crc_start = cfg_w1_crc_start;
   assign regs__ca_slave_id = ca_slave_id;
   assign regs__ca_address = ca_address;
   assign regs__ca_count = ca_count;
@@ -8529,17 +9290,17 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$179 , ca_wbuf_en, ca_rbuf_en, r
   assign regs__ca_rbuf_addr = ca_rbuf_addr;
   assign ca_rbuf_data = regs__ca_rbuf_data;
   assign regs__ca_rbuf_en = ca_rbuf_en;
-  assign \ma$182  = ma;
-  assign \slo$184  = slo;
-  assign \port$5134$0  = \$5 ;
-  assign \port$5147$0  = \$6 ;
-  assign \port$5279$0  = \$7 ;
+  assign \ma$198  = ma;
+  assign \slo$200  = slo;
+  assign \port$5310$0  = \$5 ;
+  assign \port$5323$0  = \$6 ;
+  assign \port$5455$0  = \$7 ;
 endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy$288 , config_error, frames, ca_rbuf_data, rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, \clear$262 , \periodic$35 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit
-, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_quiet_time, ca_slave_id, ca_address, ca_count, ca_write, \start$232 , \abort$234 
-, abort, ma, \done$291 , \valid$293 , \result$296 , counts, ca_done, result, slo);
+, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width
+, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, \start$232 , \abort$234 , abort, ma, \done$291 , \valid$293 , \result$296 , counts, ca_done, result, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$21  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -8697,9 +9458,13 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   (* enum_value_11 = "CUSTOM" *)
   input [1:0] cfg_w0_crc;
   wire [1:0] cfg_w0_crc;
+  input cfg_w0_crc_inverted;
   wire cfg_w0_crc_inverted;
+  input [15:0] cfg_w0_crc_poly;
   wire [15:0] cfg_w0_crc_poly;
+  input [15:0] cfg_w0_crc_start;
   wire [15:0] cfg_w0_crc_start;
+  input [4:0] cfg_w0_crc_width;
   wire [4:0] cfg_w0_crc_width;
   input [5:0] cfg_w0_data_bits;
   wire [5:0] cfg_w0_data_bits;
@@ -8714,9 +9479,13 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   (* enum_value_11 = "CUSTOM" *)
   input [1:0] cfg_w1_crc;
   wire [1:0] cfg_w1_crc;
+  input cfg_w1_crc_inverted;
   wire cfg_w1_crc_inverted;
+  input [15:0] cfg_w1_crc_poly;
   wire [15:0] cfg_w1_crc_poly;
+  input [15:0] cfg_w1_crc_start;
   wire [15:0] cfg_w1_crc_start;
+  input [4:0] cfg_w1_crc_width;
   wire [4:0] cfg_w1_crc_width;
   input [5:0] cfg_w1_data_bits;
   wire [5:0] cfg_w1_data_bits;
@@ -9603,7 +10372,7 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$4803$0 (\bit ),
+    .\port$4979$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -9667,7 +10436,7 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .lc_zero(lc_zero),
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
-    .\port$2191$0 (\$22 ),
+    .\port$2303$0 (\$22 ),
     .report(report),
     .report_frame(learn),
     .spw_match(spw_match),
@@ -9696,14 +10465,6 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
       \$21  = 1'h0;
     end
   end
-  assign cfg_w0_crc_width = 5'h00;
-  assign cfg_w0_crc_poly = 16'h0000;
-  assign cfg_w0_crc_start = 16'h0000;
-  assign cfg_w0_crc_inverted = 1'h0;
-  assign cfg_w1_crc_width = 5'h00;
-  assign cfg_w1_crc_poly = 16'h0000;
-  assign cfg_w1_crc_start = 16'h0000;
-  assign cfg_w1_crc_inverted = 1'h0;
   assign \idle$31  = idle;
   assign \start$33  = start;
   assign period = cfg_request_period;
@@ -10172,19 +10933,19 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   assign words[9:0] = cycle[154:145];
   assign live[250:243] = cfg_spw_tolerance;
   assign live[242] = cfg_spw_check;
-  assign live[241] = 1'h0;
-  assign live[240:225] = 16'h0000;
-  assign live[224:209] = 16'h0000;
-  assign live[208:204] = 5'h00;
+  assign live[241] = cfg_w1_crc_inverted;
+  assign live[240:225] = cfg_w1_crc_start;
+  assign live[224:209] = cfg_w1_crc_poly;
+  assign live[208:204] = cfg_w1_crc_width;
   assign live[203:202] = cfg_w1_crc;
   assign live[201] = cfg_w1_lc;
   assign live[200] = cfg_w1_nenw;
   assign live[199:194] = cfg_w1_data_bits;
   assign live[193] = cfg_w1_enable;
-  assign live[192] = 1'h0;
-  assign live[191:176] = 16'h0000;
-  assign live[175:160] = 16'h0000;
-  assign live[159:155] = 5'h00;
+  assign live[192] = cfg_w0_crc_inverted;
+  assign live[191:176] = cfg_w0_crc_start;
+  assign live[175:160] = cfg_w0_crc_poly;
+  assign live[159:155] = cfg_w0_crc_width;
   assign live[154:153] = cfg_w0_crc;
   assign live[152] = cfg_w0_lc;
   assign live[151] = cfg_w0_nenw;
@@ -19197,7 +19958,7 @@ module \biss_master_uart.ch0.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$4803$0 , resync, lc, is_zero, clk);
+module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$4979$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$65  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -19239,8 +20000,8 @@ module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$4803$0 ;
-  wire \port$4803$0 ;
+  input \port$4979$0 ;
+  wire \port$4979$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -19254,9 +20015,9 @@ module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$4803$0  };
-  assign \$2  = { lc[4:0], \port$4803$0  } == last;
-  assign \$3  = { lc[4:0], \port$4803$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$4979$0  };
+  assign \$2  = { lc[4:0], \port$4979$0  } == last;
+  assign \$3  = { lc[4:0], \port$4979$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -19366,7 +20127,7 @@ module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$4803$0  };
+  assign lc_next = { lc[4:0], \port$4979$0  };
   assign zero = is_zero;
 endmodule
 
@@ -19922,7 +20683,7 @@ module \biss_master_uart.ch0.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$2191$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
+module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$2303$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
 , delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$69  = 0;
   wire \$1 ;
@@ -20072,8 +20833,8 @@ module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$2191$0 , l
   wire lc_zero_seen;
   input noisy;
   wire noisy;
-  output \port$2191$0 ;
-  wire \port$2191$0 ;
+  output \port$2303$0 ;
+  wire \port$2303$0 ;
   output report;
   wire report;
   input report_frame;
@@ -20179,7 +20940,7 @@ module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$2191$0 , l
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$2191$0  = \$2 ;
+  assign \port$2303$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -20216,9 +20977,9 @@ module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$2191$0 , l
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1 (clk, rst, \trigger$179 , ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__ca_busy, regs__ca_rbuf_data, ca_rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period
-, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_quiet_time, ca_slave_id, ca_address, ca_count
-, ca_write, ca_start, ca_abort, regs__done_count, ma, regs__done, \port$5685$0 , \port$5698$0 , regs__ca_done, \port$5830$0 , slo);
+module \biss_master_uart.ch1 (clk, rst, \trigger$195 , ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__ca_busy, regs__ca_rbuf_data, ca_rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period
+, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted
+, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, regs__done_count, ma, regs__done, \port$5861$0 , \port$5874$0 , regs__ca_done, \port$6006$0 , slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$70  = 0;
   wire \$1 ;
   wire [16:0] \$2 ;
@@ -20296,6 +21057,14 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$179 , ca_wbuf_en, ca_rbuf_en, r
   (* enum_value_11 = "CUSTOM" *)
   input [1:0] cfg_w0_crc;
   wire [1:0] cfg_w0_crc;
+  input cfg_w0_crc_inverted;
+  wire cfg_w0_crc_inverted;
+  input [15:0] cfg_w0_crc_poly;
+  wire [15:0] cfg_w0_crc_poly;
+  input [15:0] cfg_w0_crc_start;
+  wire [15:0] cfg_w0_crc_start;
+  input [4:0] cfg_w0_crc_width;
+  wire [4:0] cfg_w0_crc_width;
   input [5:0] cfg_w0_data_bits;
   wire [5:0] cfg_w0_data_bits;
   input cfg_w0_lc;
@@ -20309,6 +21078,14 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$179 , ca_wbuf_en, ca_rbuf_en, r
   (* enum_value_11 = "CUSTOM" *)
   input [1:0] cfg_w1_crc;
   wire [1:0] cfg_w1_crc;
+  input cfg_w1_crc_inverted;
+  wire cfg_w1_crc_inverted;
+  input [15:0] cfg_w1_crc_poly;
+  wire [15:0] cfg_w1_crc_poly;
+  input [15:0] cfg_w1_crc_start;
+  wire [15:0] cfg_w1_crc_start;
+  input [4:0] cfg_w1_crc_width;
+  wire [4:0] cfg_w1_crc_width;
   input [5:0] cfg_w1_data_bits;
   wire [5:0] cfg_w1_data_bits;
   input cfg_w1_enable;
@@ -20353,16 +21130,16 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$179 , ca_wbuf_en, ca_rbuf_en, r
   wire [12:0] line_delay;
   output ma;
   wire ma;
-  wire \ma$182 ;
+  wire \ma$198 ;
   wire [3:0] noise_events;
   input periodic;
   wire periodic;
-  output [186:0] \port$5685$0 ;
-  wire [186:0] \port$5685$0 ;
-  output [335:0] \port$5698$0 ;
-  wire [335:0] \port$5698$0 ;
-  output [9:0] \port$5830$0 ;
-  wire [9:0] \port$5830$0 ;
+  output [186:0] \port$5861$0 ;
+  wire [186:0] \port$5861$0 ;
+  output [335:0] \port$5874$0 ;
+  wire [335:0] \port$5874$0 ;
+  output [9:0] \port$6006$0 ;
+  wire [9:0] \port$6006$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -20411,6 +21188,10 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$179 , ca_wbuf_en, ca_rbuf_en, r
   (* enum_value_10 = "CRC16" *)
   (* enum_value_11 = "CUSTOM" *)
   wire [1:0] regs__cfg_w0_crc;
+  wire regs__cfg_w0_crc_inverted;
+  wire [15:0] regs__cfg_w0_crc_poly;
+  wire [15:0] regs__cfg_w0_crc_start;
+  wire [4:0] regs__cfg_w0_crc_width;
   wire [5:0] regs__cfg_w0_data_bits;
   wire regs__cfg_w0_lc;
   wire regs__cfg_w0_nenw;
@@ -20420,6 +21201,10 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$179 , ca_wbuf_en, ca_rbuf_en, r
   (* enum_value_10 = "CRC16" *)
   (* enum_value_11 = "CUSTOM" *)
   wire [1:0] regs__cfg_w1_crc;
+  wire regs__cfg_w1_crc_inverted;
+  wire [15:0] regs__cfg_w1_crc_poly;
+  wire [15:0] regs__cfg_w1_crc_start;
+  wire [4:0] regs__cfg_w1_crc_width;
   wire [5:0] regs__cfg_w1_data_bits;
   wire regs__cfg_w1_enable;
   wire regs__cfg_w1_lc;
@@ -20483,7 +21268,7 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$179 , ca_wbuf_en, ca_rbuf_en, r
   wire [12:0] settled_delay;
   input slo;
   wire slo;
-  wire \slo$184 ;
+  wire \slo$200 ;
   wire spw_mismatch;
   input start;
   wire start;
@@ -20506,8 +21291,8 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$179 , ca_wbuf_en, ca_rbuf_en, r
   wire [3:0] status;
   wire [31:0] timestamp;
   wire trigger;
-  input \trigger$179 ;
-  wire \trigger$179 ;
+  input \trigger$195 ;
+  wire \trigger$195 ;
   wire valid;
   wire word0_crc_ok;
   wire word0_ne;
@@ -20517,7 +21302,7 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$179 , ca_wbuf_en, ca_rbuf_en, r
   wire word1_ne;
   wire word1_nw;
   wire [39:0] word1_position;
-  assign trigger = \trigger$179  & regs__trigger_enable;
+  assign trigger = \trigger$195  & regs__trigger_enable;
   assign \$2  = regs__done_count + 1'h1;
   always @(posedge clk)
     abort_cycle <= \$3 ;
@@ -20551,10 +21336,18 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$179 , ca_wbuf_en, ca_rbuf_en, r
     .cfg_spw_tolerance(cfg_spw_tolerance),
     .cfg_timeout_limit(cfg_timeout_limit),
     .cfg_w0_crc(cfg_w0_crc),
+    .cfg_w0_crc_inverted(cfg_w0_crc_inverted),
+    .cfg_w0_crc_poly(cfg_w0_crc_poly),
+    .cfg_w0_crc_start(cfg_w0_crc_start),
+    .cfg_w0_crc_width(cfg_w0_crc_width),
     .cfg_w0_data_bits(cfg_w0_data_bits),
     .cfg_w0_lc(cfg_w0_lc),
     .cfg_w0_nenw(cfg_w0_nenw),
     .cfg_w1_crc(cfg_w1_crc),
+    .cfg_w1_crc_inverted(cfg_w1_crc_inverted),
+    .cfg_w1_crc_poly(cfg_w1_crc_poly),
+    .cfg_w1_crc_start(cfg_w1_crc_start),
+    .cfg_w1_crc_width(cfg_w1_crc_width),
     .cfg_w1_data_bits(cfg_w1_data_bits),
     .cfg_w1_enable(cfg_w1_enable),
     .cfg_w1_lc(cfg_w1_lc),
@@ -20703,6 +21496,14 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$179 , ca_wbuf_en, ca_rbuf_en, r
   assign count_delay_jump = \$6 [239:224];
   assign regs__count_noise_event = \$6 [255:240];
   assign count_noise_event = \$6 [255:240];
+  assign regs__cfg_w0_crc_poly = cfg_w0_crc_poly;
+  assign regs__cfg_w0_crc_width = cfg_w0_crc_width;
+  assign regs__cfg_w0_crc_inverted = cfg_w0_crc_inverted;
+  assign regs__cfg_w0_crc_start = cfg_w0_crc_start;
+  assign regs__cfg_w1_crc_poly = cfg_w1_crc_poly;
+  assign regs__cfg_w1_crc_width = cfg_w1_crc_width;
+  assign regs__cfg_w1_crc_inverted = cfg_w1_crc_inverted;
+  assign regs__cfg_w1_crc_start = cfg_w1_crc_start;
   assign regs__ca_slave_id = ca_slave_id;
   assign regs__ca_address = ca_address;
   assign regs__ca_count = ca_count;
@@ -20730,17 +21531,17 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$179 , ca_wbuf_en, ca_rbuf_en, r
   assign regs__ca_rbuf_addr = ca_rbuf_addr;
   assign ca_rbuf_data = regs__ca_rbuf_data;
   assign regs__ca_rbuf_en = ca_rbuf_en;
-  assign \ma$182  = ma;
-  assign \slo$184  = slo;
-  assign \port$5685$0  = \$5 ;
-  assign \port$5698$0  = \$6 ;
-  assign \port$5830$0  = \$7 ;
+  assign \ma$198  = ma;
+  assign \slo$200  = slo;
+  assign \port$5861$0  = \$5 ;
+  assign \port$5874$0  = \$6 ;
+  assign \port$6006$0  = \$7 ;
 endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy$288 , config_error, frames, ca_rbuf_data, rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, \clear$262 , \periodic$35 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit
-, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_quiet_time, ca_slave_id, ca_address, ca_count, ca_write, \start$232 , \abort$234 
-, abort, ma, \done$291 , \valid$293 , \result$296 , counts, ca_done, result, slo);
+, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width
+, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, \start$232 , \abort$234 , abort, ma, \done$291 , \valid$293 , \result$296 , counts, ca_done, result, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$71  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -20898,9 +21699,13 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   (* enum_value_11 = "CUSTOM" *)
   input [1:0] cfg_w0_crc;
   wire [1:0] cfg_w0_crc;
+  input cfg_w0_crc_inverted;
   wire cfg_w0_crc_inverted;
+  input [15:0] cfg_w0_crc_poly;
   wire [15:0] cfg_w0_crc_poly;
+  input [15:0] cfg_w0_crc_start;
   wire [15:0] cfg_w0_crc_start;
+  input [4:0] cfg_w0_crc_width;
   wire [4:0] cfg_w0_crc_width;
   input [5:0] cfg_w0_data_bits;
   wire [5:0] cfg_w0_data_bits;
@@ -20915,9 +21720,13 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   (* enum_value_11 = "CUSTOM" *)
   input [1:0] cfg_w1_crc;
   wire [1:0] cfg_w1_crc;
+  input cfg_w1_crc_inverted;
   wire cfg_w1_crc_inverted;
+  input [15:0] cfg_w1_crc_poly;
   wire [15:0] cfg_w1_crc_poly;
+  input [15:0] cfg_w1_crc_start;
   wire [15:0] cfg_w1_crc_start;
+  input [4:0] cfg_w1_crc_width;
   wire [4:0] cfg_w1_crc_width;
   input [5:0] cfg_w1_data_bits;
   wire [5:0] cfg_w1_data_bits;
@@ -21804,7 +22613,7 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$5354$0 (\bit ),
+    .\port$5530$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -21868,7 +22677,7 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .lc_zero(lc_zero),
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
-    .\port$3705$0 (\$22 ),
+    .\port$3817$0 (\$22 ),
     .report(report),
     .report_frame(learn),
     .spw_match(spw_match),
@@ -21897,14 +22706,6 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
       \$21  = 1'h0;
     end
   end
-  assign cfg_w0_crc_width = 5'h00;
-  assign cfg_w0_crc_poly = 16'h0000;
-  assign cfg_w0_crc_start = 16'h0000;
-  assign cfg_w0_crc_inverted = 1'h0;
-  assign cfg_w1_crc_width = 5'h00;
-  assign cfg_w1_crc_poly = 16'h0000;
-  assign cfg_w1_crc_start = 16'h0000;
-  assign cfg_w1_crc_inverted = 1'h0;
   assign \idle$31  = idle;
   assign \start$33  = start;
   assign period = cfg_request_period;
@@ -22373,19 +23174,19 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   assign words[9:0] = cycle[154:145];
   assign live[250:243] = cfg_spw_tolerance;
   assign live[242] = cfg_spw_check;
-  assign live[241] = 1'h0;
-  assign live[240:225] = 16'h0000;
-  assign live[224:209] = 16'h0000;
-  assign live[208:204] = 5'h00;
+  assign live[241] = cfg_w1_crc_inverted;
+  assign live[240:225] = cfg_w1_crc_start;
+  assign live[224:209] = cfg_w1_crc_poly;
+  assign live[208:204] = cfg_w1_crc_width;
   assign live[203:202] = cfg_w1_crc;
   assign live[201] = cfg_w1_lc;
   assign live[200] = cfg_w1_nenw;
   assign live[199:194] = cfg_w1_data_bits;
   assign live[193] = cfg_w1_enable;
-  assign live[192] = 1'h0;
-  assign live[191:176] = 16'h0000;
-  assign live[175:160] = 16'h0000;
-  assign live[159:155] = 5'h00;
+  assign live[192] = cfg_w0_crc_inverted;
+  assign live[191:176] = cfg_w0_crc_start;
+  assign live[175:160] = cfg_w0_crc_poly;
+  assign live[159:155] = cfg_w0_crc_width;
   assign live[154:153] = cfg_w0_crc;
   assign live[152] = cfg_w0_lc;
   assign live[151] = cfg_w0_nenw;
@@ -31398,7 +32199,7 @@ module \biss_master_uart.ch1.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$5354$0 , resync, lc, is_zero, clk);
+module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$5530$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$115  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -31440,8 +32241,8 @@ module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$5354$0 ;
-  wire \port$5354$0 ;
+  input \port$5530$0 ;
+  wire \port$5530$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -31455,9 +32256,9 @@ module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$5354$0  };
-  assign \$2  = { lc[4:0], \port$5354$0  } == last;
-  assign \$3  = { lc[4:0], \port$5354$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$5530$0  };
+  assign \$2  = { lc[4:0], \port$5530$0  } == last;
+  assign \$3  = { lc[4:0], \port$5530$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -31567,7 +32368,7 @@ module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$5354$0  };
+  assign lc_next = { lc[4:0], \port$5530$0  };
   assign zero = is_zero;
 endmodule
 
@@ -32123,7 +32924,7 @@ module \biss_master_uart.ch1.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$3705$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
+module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$3817$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
 , delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$119  = 0;
   wire \$1 ;
@@ -32273,8 +33074,8 @@ module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$3705$0 , l
   wire lc_zero_seen;
   input noisy;
   wire noisy;
-  output \port$3705$0 ;
-  wire \port$3705$0 ;
+  output \port$3817$0 ;
+  wire \port$3817$0 ;
   output report;
   wire report;
   input report_frame;
@@ -32380,7 +33181,7 @@ module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$3705$0 , l
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$3705$0  = \$2 ;
+  assign \port$3817$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

@@ -431,6 +431,46 @@ typedef struct __attribute__ ((__packed__)) {
 #define BISS_MASTER_REGS__CHANNELX__COUNT_NOISE__NOISE_EVENT_bw 16
 #define BISS_MASTER_REGS__CHANNELX__COUNT_NOISE__NOISE_EVENT_reset 0x0
 
+// reg - biss_master_regs.channel[].cfg_crc0
+#define BISS_MASTER_REGS__CHANNELX__CFG_CRC0__POLY_bm 0xffff
+#define BISS_MASTER_REGS__CHANNELX__CFG_CRC0__POLY_bp 0
+#define BISS_MASTER_REGS__CHANNELX__CFG_CRC0__POLY_bw 16
+#define BISS_MASTER_REGS__CHANNELX__CFG_CRC0__POLY_reset 0x0
+#define BISS_MASTER_REGS__CHANNELX__CFG_CRC0__WIDTH_bm 0x1f0000
+#define BISS_MASTER_REGS__CHANNELX__CFG_CRC0__WIDTH_bp 16
+#define BISS_MASTER_REGS__CHANNELX__CFG_CRC0__WIDTH_bw 5
+#define BISS_MASTER_REGS__CHANNELX__CFG_CRC0__WIDTH_reset 0x0
+#define BISS_MASTER_REGS__CHANNELX__CFG_CRC0__INVERTED_bm 0x1000000
+#define BISS_MASTER_REGS__CHANNELX__CFG_CRC0__INVERTED_bp 24
+#define BISS_MASTER_REGS__CHANNELX__CFG_CRC0__INVERTED_bw 1
+#define BISS_MASTER_REGS__CHANNELX__CFG_CRC0__INVERTED_reset 0x0
+
+// reg - biss_master_regs.channel[].cfg_crc0_start
+#define BISS_MASTER_REGS__CHANNELX__CFG_CRC0_START__START_bm 0xffff
+#define BISS_MASTER_REGS__CHANNELX__CFG_CRC0_START__START_bp 0
+#define BISS_MASTER_REGS__CHANNELX__CFG_CRC0_START__START_bw 16
+#define BISS_MASTER_REGS__CHANNELX__CFG_CRC0_START__START_reset 0x0
+
+// reg - biss_master_regs.channel[].cfg_crc1
+#define BISS_MASTER_REGS__CHANNELX__CFG_CRC1__POLY_bm 0xffff
+#define BISS_MASTER_REGS__CHANNELX__CFG_CRC1__POLY_bp 0
+#define BISS_MASTER_REGS__CHANNELX__CFG_CRC1__POLY_bw 16
+#define BISS_MASTER_REGS__CHANNELX__CFG_CRC1__POLY_reset 0x0
+#define BISS_MASTER_REGS__CHANNELX__CFG_CRC1__WIDTH_bm 0x1f0000
+#define BISS_MASTER_REGS__CHANNELX__CFG_CRC1__WIDTH_bp 16
+#define BISS_MASTER_REGS__CHANNELX__CFG_CRC1__WIDTH_bw 5
+#define BISS_MASTER_REGS__CHANNELX__CFG_CRC1__WIDTH_reset 0x0
+#define BISS_MASTER_REGS__CHANNELX__CFG_CRC1__INVERTED_bm 0x1000000
+#define BISS_MASTER_REGS__CHANNELX__CFG_CRC1__INVERTED_bp 24
+#define BISS_MASTER_REGS__CHANNELX__CFG_CRC1__INVERTED_bw 1
+#define BISS_MASTER_REGS__CHANNELX__CFG_CRC1__INVERTED_reset 0x0
+
+// reg - biss_master_regs.channel[].cfg_crc1_start
+#define BISS_MASTER_REGS__CHANNELX__CFG_CRC1_START__START_bm 0xffff
+#define BISS_MASTER_REGS__CHANNELX__CFG_CRC1_START__START_bp 0
+#define BISS_MASTER_REGS__CHANNELX__CFG_CRC1_START__START_bw 16
+#define BISS_MASTER_REGS__CHANNELX__CFG_CRC1_START__START_reset 0x0
+
 // reg - biss_master_regs.channel[].ca.request
 #define BISS_MASTER_REGS__CHANNELX__CA__REQUEST__SLAVE_ID_bm 0x7
 #define BISS_MASTER_REGS__CHANNELX__CA__REQUEST__SLAVE_ID_bp 0
@@ -566,7 +606,11 @@ typedef struct __attribute__ ((__packed__)) {
     uint32_t count_cycle;
     uint32_t count_stop;
     uint32_t count_noise;
-    uint8_t RESERVED_80_ff[0x80];
+    uint32_t cfg_crc0;
+    uint32_t cfg_crc0_start;
+    uint32_t cfg_crc1;
+    uint32_t cfg_crc1_start;
+    uint8_t RESERVED_90_ff[0x70];
     biss_master_regs__channelx__ca_t ca;
     uint8_t RESERVED_1c0_1ff[0x40];
 } biss_master_regs__channelx__stride200_t;
