@@ -16,7 +16,7 @@ from cocotb.triggers import ClockCycles, FallingEdge, ReadOnly, RisingEdge, Time
 
 from encoder_model import frames
 from encoder_model.cocotb_encoder import BissEncoder, Cable, Response
-from master_contract import (CA_COUNTERS, COUNTERS, CRC_CODE, NOISE_COUNTERS, NOISE_FIELDS,
+from master_contract import (CA_COUNTERS, COUNTERS, CRC_CODE, crc_config, NOISE_COUNTERS, NOISE_FIELDS,
                              STATUS, SYS_CLK_HZ, NOISE_CONFIG_DEFAULTS)
 
 CLK_HZ = int(os.environ.get("BISS_CLK_HZ", str(SYS_CLK_HZ)))
@@ -29,6 +29,8 @@ CFG_PORTS = ["cfg_ma_half_period", "cfg_request_period", "cfg_break_time", "cfg_
              "cfg_noise_limit", "cfg_delay_tolerance", "cfg_w1_enable", "cfg_spw_check",
              "cfg_spw_tolerance"] + [f"cfg_w{w}_{f}" for w in range(2)
                                      for f in ("data_bits", "nenw", "lc", "crc")]
+#: A word's custom CRC (cfg_wN_crc = 3), in builds with custom CRCs.
+CUSTOM_CRC_PORTS = [f"cfg_w{w}_crc_{f}" for w in range(2) for f in ("width", "poly", "start", "inverted")]
 
 MA_RATES_HZ = (250e3, 1e6, 2.5e6, 5e6, 10e6)
 CABLES_M = (0, 20, 50, 100)
@@ -91,6 +93,7 @@ class Testbench:
         self.has_counters = hasattr(dut, "clear_counters")
         self.has_timestamp = hasattr(dut, "timestamp")
         self.has_register_access = hasattr(dut, "ca_start")      # the default build's engine
+        self.has_custom_crc = hasattr(dut, "cfg_w0_crc_width")   # not in biss-c-lean
         # Issue 28's noise defences: their ports only where the core has them, so every
         # scenario runs on a core with them and on one without.
         self.noise_defaults = {n: v for n, v in NOISE_CONFIG_DEFAULTS.items()
@@ -118,7 +121,7 @@ class Testbench:
         for name in ("start", "periodic", "abort_cycle") + (
                 ("clear_counters",) if self.has_counters else ()):
             getattr(dut, name).value = 0
-        for name in self._ports(CFG_PORTS):
+        for name in self._ports(CFG_PORTS + (CUSTOM_CRC_PORTS if self.has_custom_crc else [])):
             getattr(dut, name).value = 0
         self._drive_noise_config(self.noise_defaults)
         # The register-access engine's inputs (builds with it): no access unless a test asks.
@@ -174,8 +177,13 @@ class Testbench:
         }
         for w in range(2):
             word = fmt.words[w] if w < len(fmt.words) else frames.WordFormat(1)
+            code, custom = crc_config(word.crc)
             ports.update({f"cfg_w{w}_data_bits": word.data_bits, f"cfg_w{w}_nenw": int(word.nenw),
-                          f"cfg_w{w}_lc": int(word.lc), f"cfg_w{w}_crc": CRC_CODE[word.crc]})
+                          f"cfg_w{w}_lc": int(word.lc), f"cfg_w{w}_crc": code})
+            if self.has_custom_crc:
+                ports.update({f"cfg_w{w}_crc_{k}": v for k, v in custom.items()})
+            else:
+                assert code != CRC_CODE["custom"], "this build has no custom CRCs"
         noise = {**self.noise_defaults, **{n: cfg.pop(n) for n in list(cfg)
                                            if n in NOISE_CONFIG_DEFAULTS}}
         ports.update(cfg)
