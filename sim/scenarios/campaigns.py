@@ -465,10 +465,28 @@ def random_config(c, two_words):
         if rng.random() < 0.3:          # one field out of range
             field, value = rng.choice([("cfg_ma_half_period", rng.choice((0, 1))),
                                        ("cfg_w0_data_bits", rng.choice((0, 56, 63))),
-                                       ("cfg_w0_crc", 3), ("cfg_w1_crc", 3),
+                                       ("cfg_w0_crc_width", rng.choice((0, 17, 31))),
+                                       ("cfg_w1_crc_width", rng.choice((0, 17, 31))),
                                        ("cfg_w1_data_bits", rng.choice((0, 41)))])
             cfg[field] = value
+            if field.endswith("_crc_width"):        # a custom CRC too narrow or too wide
+                cfg[field[:-len("_width")]] = 3
+    if c.tb.has_custom_crc:
+        random_custom_crcs(rng, cfg)
     return cfg
+
+
+def random_custom_crcs(rng, cfg):
+    """Each word's custom CRC settings (read by the core only with code 3): any polynomial and
+    start value, bits above the width included; a width of 1..16 unless a field above broke
+    it on purpose. A third of the valid words with a named CRC get a custom one instead."""
+    for w in range(2):
+        cfg.setdefault(f"cfg_w{w}_crc_width", rng.randint(1, 16))
+        cfg.update({f"cfg_w{w}_crc_poly": rng.getrandbits(16),
+                    f"cfg_w{w}_crc_start": rng.choice((0, rng.getrandbits(16))),
+                    f"cfg_w{w}_crc_inverted": rng.getrandbits(1)})
+        if cfg[f"cfg_w{w}_crc"] in (1, 2) and rng.random() < 0.33:
+            cfg[f"cfg_w{w}_crc"] = 3
 
 
 def fuzz_timing(c, cfg):
@@ -506,6 +524,9 @@ async def config_fuzz(dut):
             cfg["cfg_ma_half_period"] = c.rng.randint(2, 150)
             stats["slow_ma_clamped"] += 1
         valid = config_valid(cfg)
+        if valid:
+            stats["custom_crc_words"] += sum(cfg[f"cfg_w{w}_crc"] == 3
+                                             for w in range(1 + (two and cfg["cfg_w1_enable"])))
         during = c.rng.random() < 0.25
         if during:
             await apply_config(c, last_valid)       # the cycle runs on the last valid one

@@ -18,7 +18,8 @@ from dataclasses import dataclass, field
 
 import protocol_facts as facts
 from encoder_model import frames
-from master_contract import CRC_CODE, FRAME_STATUSES, MA_HALF_PERIOD_MIN, STATUS, STATUS_NAME
+from master_contract import (CRC_CODE, CRC_MAX_WIDTH, FRAME_STATUSES, MA_HALF_PERIOD_MIN, STATUS,
+                             STATUS_NAME)
 
 #: Cycles that end in the break (MA high 40 us): the encoder restarts its LC check from scratch.
 BREAK_STATUSES = {STATUS[n] for n in ("NO_ACK", "NO_START", "DELAY_RANGE", "SLO_STUCK_LOW",
@@ -115,12 +116,15 @@ CRC_KIND = {code: kind for kind, code in CRC_CODE.items()}
 
 
 def config_valid(cfg, *, max_data_bits=(55, 40), word_crcs=((1, 2), (1, 2)),
-                 max_line_delay=4095):
-    """Is a dict of ``cfg_*`` values valid for a core built with these parameters?"""
+                 max_line_delay=4095, custom_crc=True):
+    """Is a dict of ``cfg_*`` values valid for a core built with these parameters? A custom
+    CRC (code 3) needs a build with them and a width of 1..CRC_MAX_WIDTH."""
     def word_ok(w):
         crc = cfg[f"cfg_w{w}_crc"]
+        custom = (custom_crc and crc == CRC_CODE["custom"]
+                  and 1 <= cfg.get(f"cfg_w{w}_crc_width", 0) <= CRC_MAX_WIDTH)
         return (1 <= cfg[f"cfg_w{w}_data_bits"] <= max_data_bits[w]
-                and (crc == 0 or crc in word_crcs[w]))
+                and (crc == 0 or crc in word_crcs[w] or custom))
 
     ok = cfg["cfg_ma_half_period"] >= MA_HALF_PERIOD_MIN and word_ok(0)
     ok = ok and cfg["cfg_delay_limit"] <= max_line_delay
@@ -134,13 +138,25 @@ def config_valid(cfg, *, max_data_bits=(55, 40), word_crcs=((1, 2), (1, 2)),
     return bool(ok)
 
 
+def _crc_of(cfg, w):
+    """The encoder model's CRC for word ``w`` of a valid configuration: a named kind, or a
+    CustomCrc whose polynomial and start are the ports' low ``width`` bits (the master reads
+    no bit above the width: docs/ports.md)."""
+    code = cfg[f"cfg_w{w}_crc"]
+    if code != CRC_CODE["custom"]:
+        return CRC_KIND[code]
+    width = cfg[f"cfg_w{w}_crc_width"]
+    mask = (1 << width) - 1
+    return frames.CustomCrc(width, cfg[f"cfg_w{w}_crc_poly"] & mask,
+                            cfg[f"cfg_w{w}_crc_start"] & mask, bool(cfg[f"cfg_w{w}_crc_inverted"]))
+
+
 def format_of(cfg, words=2):
     """The frame format a valid configuration describes (what the encoder must send)."""
     ws = []
     for w in range(2 if words == 2 and cfg["cfg_w1_enable"] else 1):
         ws.append(frames.WordFormat(cfg[f"cfg_w{w}_data_bits"], nenw=bool(cfg[f"cfg_w{w}_nenw"]),
-                                    lc=bool(cfg[f"cfg_w{w}_lc"]),
-                                    crc=CRC_KIND[cfg[f"cfg_w{w}_crc"]]))
+                                    lc=bool(cfg[f"cfg_w{w}_lc"]), crc=_crc_of(cfg, w)))
     return _LooseFormat("fuzz", tuple(ws))
 
 
